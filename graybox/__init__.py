@@ -1,0 +1,26 @@
+"""graybox: black- and gray-box identification of nonlinear dynamic systems.
+
+Polynomial NARMAX models, structure selection, static analysis and gray-box estimation
+with static-curve information, after Barbosa, Aguirre, Martinez & Braga (IEEE TCST 2011).
+"""
+
+from .evaluate import evaluate, fit_percent, j1, js, jsf, mse, rrse
+from .model import Model
+from .records import Dataset, Record, StaticPoints
+from .regressors import regressor_matrix, stacked_regressors
+from .simulation import DivergenceError, predict, simulate, simulate_many
+from .static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
+from .terms import Candidates, Structure, Term, parse_structure, parse_term
+from . import reference
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Candidates", "Structure", "Term", "parse_term", "parse_structure",
+    "Record", "StaticPoints", "Dataset",
+    "regressor_matrix", "stacked_regressors",
+    "Model", "predict", "simulate", "simulate_many", "DivergenceError",
+    "cluster_map", "equilibria", "static_curve", "static_gain", "Equilibrium",
+    "evaluate", "j1", "js", "jsf", "mse", "rrse", "fit_percent",
+    "reference",
+]

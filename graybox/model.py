@@ -1,0 +1,131 @@
+"""The polynomial NARMAX model as an immutable value."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from . import simulation, static
+from .records import Record
+from .terms import Structure
+
+__all__ = ["Model"]
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=float, copy=True)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """Structure + parameters of a polynomial NARMAX model.
+
+    Parameters
+    ----------
+    structure : Structure or sequence of str
+        Process (NARX) terms, in parameter order.
+    theta : array_like, shape (n_terms,)
+        Process parameters, engineering units.
+    noise_structure : Structure, optional
+        MA terms e(k-l) estimated with the model (e.g. by ELS); never used in simulation.
+    noise_theta : array_like, optional
+        Their parameters.
+    name : str, optional
+        Label for tables and plots.
+    """
+
+    structure: Structure
+    theta: np.ndarray
+    noise_structure: Structure = field(default_factory=lambda: Structure(()))
+    noise_theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        st = self.structure if isinstance(self.structure, Structure) else Structure(self.structure)
+        if any(t.is_noise for t in st):
+            raise ValueError("noise terms belong in noise_structure, not in the process structure")
+        ns = self.noise_structure if isinstance(self.noise_structure, Structure) else Structure(self.noise_structure)
+        object.__setattr__(self, "structure", st)
+        object.__setattr__(self, "noise_structure", ns)
+        object.__setattr__(self, "theta", _frozen(simulation.check_theta(st, self.theta)))
+        object.__setattr__(self, "noise_theta", _frozen(simulation.check_theta(ns, self.noise_theta, "noise_theta")))
+
+    # -- basic facts --------------------------------------------------------
+    @property
+    def n_params(self) -> int:
+        """N_p: number of process parameters (the MA part is not counted, as in Table I)."""
+        return len(self.structure)
+
+    @property
+    def max_lag(self) -> int:
+        """Largest lag of the process terms (number of initial conditions of a free run)."""
+        return self.structure.max_lag
+
+    def with_theta(self, theta: np.ndarray, name: str | None = None) -> "Model":
+        """The same structure with other parameters (the noise part is dropped)."""
+        return Model(self.structure, theta, name=self.name if name is None else name)
+
+    # -- dynamics -----------------------------------------------------------
+    def predict(self, record: Record) -> np.ndarray:
+        """One-step-ahead prediction over ``record``, shape (N,); see :func:`graybox.simulation.predict`."""
+        return simulation.predict(self.structure, self.theta, record)
+
+    def simulate(
+        self,
+        u: np.ndarray | Record,
+        y0: np.ndarray | None = None,
+        on_diverge: Literal["raise", "nan"] = "raise",
+    ) -> np.ndarray:
+        """Free run, shape (N,); see :func:`graybox.simulation.simulate`."""
+        return simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge)
+
+    # -- statics ------------------------------------------------------------
+    def clusters(self) -> dict[str, float]:
+        """Cluster coefficients by name (``{"Σ0": …, "Σy": …, "Σu": …}``), Σ = R θ."""
+        cm = static.cluster_map(self.structure)
+        return dict(zip(cm.names, (cm.R @ self.theta).tolist()))
+
+    def cluster_map(self) -> static.ClusterMap:
+        """The clusters and the 0/1 map R of this structure."""
+        return static.cluster_map(self.structure)
+
+    def static_curve(self, ubar: np.ndarray, y0: float | None = None, strict: bool = True) -> np.ndarray:
+        """Steady-state output at each ū, shape (M,); see :func:`graybox.static.static_curve`."""
+        return static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
+
+    def equilibria(self, ubar: float) -> list[static.Equilibrium]:
+        """Every real equilibrium at ū with its stability; see :func:`graybox.static.equilibria`."""
+        return static.equilibria(self.structure, self.theta, ubar)
+
+    def static_gain(self, ubar: np.ndarray, y0: float | None = None) -> np.ndarray:
+        """dȳ/dū along the static curve, shape (M,)."""
+        return static.static_gain(self.structure, self.theta, ubar, y0=y0)
+
+    @property
+    def is_rational(self) -> bool:
+        """True when the static function has the closed rational form of eq. (6)."""
+        return static.is_rational(self.structure)
+
+    # -- printing -----------------------------------------------------------
+    def equation(self, digits: int = 4) -> str:
+        """Paper-style equation, e.g. ``y(k) = 0.6303 y(k-1) - 0.0264 y(k-4) + …``."""
+        parts = []
+        for i, (th, t) in enumerate(zip(self.theta, self.structure)):
+            mag = f"{abs(th):.{digits}g}"
+            body = mag if t.is_constant else f"{mag} {t}"
+            sign = "-" if th < 0 else "+"
+            parts.append((f"-{body}" if sign == "-" else body) if i == 0 else f" {sign} {body}")
+        for th, t in zip(self.noise_theta, self.noise_structure):
+            parts.append(f" {'-' if th < 0 else '+'} {abs(th):.{digits}g} {t}")
+        return "y(k) = " + ("".join(parts) if parts else "0") + (" + e(k)" if len(self.noise_structure) else "")
+
+    def __str__(self) -> str:
+        head = f"{self.name}: " if self.name else ""
+        return head + self.equation()
+
+    def __repr__(self) -> str:
+        return f"Model(name={self.name!r}, n_params={self.n_params}, max_lag={self.max_lag})"

@@ -1,0 +1,151 @@
+"""One-step-ahead prediction and free-run simulation with validation at the boundary.
+
+Conventions (shared by the evaluator): a structure with largest lag L uses the
+first L measured samples as initial conditions; outputs are returned at full
+length N with those L samples copied from the data, and every error measure counts
+samples L … N-1 only.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+from .kernels import encode, simulate_batch, simulate_one
+from .records import Record, as_1d_finite
+from .regressors import regressor_matrix
+from .terms import Structure
+
+__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "check_theta"]
+
+
+class DivergenceError(ValueError):
+    """A free run left every reasonable bound (the model is unstable along this input)."""
+
+
+def check_theta(structure: Structure, theta: np.ndarray, name: str = "theta") -> np.ndarray:
+    """Return θ as a finite float array of length ``len(structure)`` or raise ``ValueError``."""
+    th = np.asarray(theta, dtype=float)
+    if th.ndim != 1:
+        raise ValueError(f"{name} must be 1-D, got shape {th.shape}")
+    if th.size != len(structure):
+        raise ValueError(f"{name} has {th.size} values but the structure has {len(structure)} terms")
+    if not np.all(np.isfinite(th)):
+        raise ValueError(f"{name} has non-finite values at {np.flatnonzero(~np.isfinite(th)).tolist()}")
+    return th
+
+
+def predict(structure: Structure, theta: np.ndarray, record: Record) -> np.ndarray:
+    """One-step-ahead prediction ŷ(k) = ψ(k)ᵀθ from measured data.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        ŷ; the first ``max_lag`` samples are the measured ones.
+    """
+    th = check_theta(structure, theta)
+    L = structure.max_lag
+    record.require_length(L)
+    yhat = record.y.copy()
+    yhat[L:] = regressor_matrix(structure, record.u, record.y, start=L) @ th
+    return yhat
+
+
+def _default_bound(y0: np.ndarray) -> float:
+    return 1e6 * (1.0 + float(np.max(np.abs(y0), initial=0.0)))
+
+
+def simulate(
+    structure: Structure,
+    theta: np.ndarray,
+    u: np.ndarray | Record,
+    y0: np.ndarray | None = None,
+    on_diverge: Literal["raise", "nan"] = "raise",
+    bound: float | None = None,
+) -> np.ndarray:
+    """Free-run simulation: the model feeds back its own past outputs.
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms (noise terms are not simulated).
+    theta : ndarray, shape (n_terms,)
+    u : ndarray, shape (N,), or Record
+        Input. With a Record, ``y0`` defaults to its first ``max_lag`` outputs.
+    y0 : ndarray, shape (>= max_lag,), optional
+        Initial outputs y(0) … y(L-1); only the first L = max_lag are used.
+    on_diverge : {"raise", "nan"}
+        When the output leaves ``bound``: raise :class:`DivergenceError` naming the sample,
+        or return NaN from that sample on.
+    bound : float, optional
+        Divergence bound on |y| (default 1e6 · (1 + max|y0|)).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+    """
+    th = check_theta(structure, theta)
+    L = structure.max_lag
+    if isinstance(u, Record):
+        if y0 is None:
+            y0 = u.y
+        u = u.u
+    else:
+        u = as_1d_finite(u, "u")
+        if y0 is None:
+            raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
+    y0 = as_1d_finite(y0, "y0")
+    if y0.size < L:
+        raise ValueError(f"y0 has {y0.size} samples, the structure needs max lag = {L}")
+    if u.size < L + 1:
+        raise ValueError(f"input has {u.size} samples, fewer than max lag + 1 = {L + 1}")
+    b = _default_bound(y0[:L]) if bound is None else float(bound)
+    y = simulate_one(*_code(structure), th, np.ascontiguousarray(u), np.ascontiguousarray(y0[:L]), L, b)
+    if on_diverge == "raise" and not np.isfinite(y[-1]):
+        k = int(np.flatnonzero(~np.isfinite(y))[0])
+        raise DivergenceError(f"free run diverged at sample {k} (|y| > {b:g}): the model is unstable along this input")
+    return y
+
+
+_CODES: dict[Structure, tuple] = {}
+
+
+def _code(structure: Structure) -> tuple:
+    """Encoded structure, cached: encoding costs more than a short free run."""
+    c = _CODES.get(structure)
+    if c is None:
+        if len(_CODES) > 512:
+            _CODES.clear()
+        c = _CODES[structure] = encode(structure)
+    return c
+
+
+def simulate_many(
+    structure: Structure,
+    thetas: np.ndarray,
+    record: Record,
+    threads: int = 1,
+) -> np.ndarray:
+    """Free runs of many parameter vectors of one structure over one record.
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    record : Record
+        Input and initial outputs (its first ``max_lag`` samples).
+    threads : int
+        Parallel blocks of the population (numba threads).
+
+    Returns
+    -------
+    ndarray, shape (P, N)
+        A diverging member has non-finite samples; this never raises for divergence.
+    """
+    th = np.asarray(thetas, dtype=float)
+    if th.ndim != 2 or th.shape[1] != len(structure):
+        raise ValueError(f"thetas must have shape (P, {len(structure)}), got {th.shape}")
+    L = structure.max_lag
+    record.require_length(L)
+    return simulate_batch(_code(structure), th, record.u, record.y[:L], L, threads)

@@ -1,0 +1,246 @@
+"""Polynomial NARMAX terms, structures and candidate sets.
+
+A :class:`Term` is a product of lagged signals with powers, e.g. ``u(k-2)y(k-6)``
+or ``u(k-6)^2``; the empty product is the constant term ``1``. Signals are named
+(``"y"`` output, ``"u"`` input, ``"e"`` noise/residual) so that further inputs can
+be added later without a rewrite. A :class:`Structure` is an ordered tuple of
+distinct terms. :func:`Candidates` enumerates every monomial up to a degree.
+
+Printing follows the paper (``"u(k-2)y(k-6)"``) and :func:`parse_term` reads it
+back; ``parse_term(str(t)) == t`` for every term.
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Iterable, Iterator, Sequence
+
+__all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS"]
+
+#: Signals a term may reference, in printing order (the paper writes u before y).
+SIGNALS: tuple[str, ...] = ("u", "y", "e")
+_SIGNAL_RANK = {s: i for i, s in enumerate(SIGNALS)}
+
+_FACTOR_RE = re.compile(r"\s*([a-zA-Z]\w*)\s*\(\s*k\s*-\s*(\d+)\s*\)\s*(?:\^\s*(\d+))?\s*\*?")
+
+
+@dataclass(frozen=True, order=False)
+class Term:
+    """A monomial in lagged signals.
+
+    Parameters
+    ----------
+    factors : tuple of (signal, lag, power)
+        ``signal`` in :data:`SIGNALS`, ``lag >= 1`` samples (``lag >= 0`` for ``e``,
+        not used here), ``power >= 1``. Stored in canonical order with repeated
+        (signal, lag) pairs merged. The empty tuple is the constant term.
+    """
+
+    factors: tuple[tuple[str, int, int], ...] = ()
+
+    def __post_init__(self) -> None:
+        merged: dict[tuple[str, int], int] = {}
+        for f in self.factors:
+            if len(f) != 3:
+                raise ValueError(f"a factor must be (signal, lag, power), got {f!r}")
+            sig, lag, power = f
+            if sig not in _SIGNAL_RANK:
+                raise ValueError(f"unknown signal {sig!r}; expected one of {SIGNALS}")
+            if int(lag) != lag or lag < 1:
+                raise ValueError(f"lag must be an integer >= 1, got {lag!r} in {sig}(k-{lag})")
+            if int(power) != power or power < 1:
+                raise ValueError(f"power must be an integer >= 1, got {power!r} for {sig}(k-{lag})")
+            key = (sig, int(lag))
+            merged[key] = merged.get(key, 0) + int(power)
+        canon = tuple(
+            (s, l, p) for (s, l), p in sorted(merged.items(), key=lambda kv: (_SIGNAL_RANK[kv[0][0]], kv[0][1]))
+        )
+        object.__setattr__(self, "factors", canon)
+
+    # -- properties -------------------------------------------------------
+    @property
+    def is_constant(self) -> bool:
+        """True for the constant term ``1``."""
+        return not self.factors
+
+    @property
+    def degree(self) -> int:
+        """Total degree (sum of powers)."""
+        return sum(p for _, _, p in self.factors)
+
+    def power_of(self, signal: str) -> int:
+        """Total power of ``signal`` in the term (e.g. 2 for ``y`` in ``u(k-1)y(k-2)^2``)."""
+        return sum(p for s, _, p in self.factors if s == signal)
+
+    @property
+    def max_lag(self) -> int:
+        """Largest lag in the term (0 for the constant)."""
+        return max((l for _, l, _ in self.factors), default=0)
+
+    @property
+    def is_noise(self) -> bool:
+        """True when the term involves the noise signal ``e``."""
+        return any(s == "e" for s, _, _ in self.factors)
+
+    def __str__(self) -> str:
+        if not self.factors:
+            return "1"
+        return "".join(f"{s}(k-{l})" + (f"^{p}" if p > 1 else "") for s, l, p in self.factors)
+
+    def __repr__(self) -> str:
+        return f"Term({str(self)!r})"
+
+    def sort_key(self) -> tuple:
+        """Key ordering terms by degree, then signals and lags (used for candidates)."""
+        return (self.degree, [(_SIGNAL_RANK[s], l, -p) for s, l, p in self.factors])
+
+
+def parse_term(text: str) -> Term:
+    """Parse a paper-style term such as ``"u(k-2)y(k-6)"``, ``"u(k-6)^2"`` or ``"1"``.
+
+    Factors may be separated by nothing, spaces or ``*``. Raises ``ValueError`` with the
+    offending text when it cannot be read.
+    """
+    if not isinstance(text, str):
+        raise ValueError(f"a term must be a string, got {type(text).__name__}")
+    s = text.strip()
+    if s == "1":
+        return Term(())
+    if not s:
+        raise ValueError("cannot parse an empty term")
+    factors = []
+    pos = 0
+    while pos < len(s):
+        m = _FACTOR_RE.match(s, pos)
+        if m is None or m.end() == pos:
+            raise ValueError(f"cannot parse term {text!r} at position {pos}: {s[pos:]!r}")
+        sig, lag, power = m.group(1), int(m.group(2)), int(m.group(3) or 1)
+        if sig not in _SIGNAL_RANK:
+            raise ValueError(f"cannot parse term {text!r}: unknown signal {sig!r} (expected one of {SIGNALS})")
+        factors.append((sig, lag, power))
+        pos = m.end()
+    try:
+        return Term(tuple(factors))
+    except ValueError as exc:
+        raise ValueError(f"cannot parse term {text!r}: {exc}") from None
+
+
+@dataclass(frozen=True)
+class Structure:
+    """An ordered tuple of distinct terms: the model's regressors in parameter order.
+
+    Parameters
+    ----------
+    terms : sequence of Term or str
+        Terms, or paper-style strings parsed with :func:`parse_term`.
+    """
+
+    terms: tuple[Term, ...]
+
+    def __init__(self, terms: Iterable[Term | str]):
+        ts = tuple(t if isinstance(t, Term) else parse_term(t) for t in terms)
+        seen: set[Term] = set()
+        for t in ts:
+            if t in seen:
+                raise ValueError(f"duplicated term {t} in structure")
+            seen.add(t)
+        object.__setattr__(self, "terms", ts)
+
+    def __len__(self) -> int:
+        return len(self.terms)
+
+    def __iter__(self) -> Iterator[Term]:
+        return iter(self.terms)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return Structure(self.terms[i])
+        return self.terms[i]
+
+    def __add__(self, other: "Structure") -> "Structure":
+        return Structure(self.terms + tuple(other))
+
+    def index(self, term: Term | str) -> int:
+        """Position of ``term`` (a Term or a string) in the structure."""
+        t = term if isinstance(term, Term) else parse_term(term)
+        return self.terms.index(t)
+
+    def __contains__(self, term: object) -> bool:
+        t = parse_term(term) if isinstance(term, str) else term
+        return t in self.terms
+
+    @cached_property
+    def max_lag(self) -> int:
+        """Largest lag over all terms (0 for a static structure)."""
+        return max((t.max_lag for t in self.terms), default=0)
+
+    @property
+    def process(self) -> "Structure":
+        """The terms without the noise signal (the NARX part)."""
+        return Structure(t for t in self.terms if not t.is_noise)
+
+    @property
+    def noise(self) -> "Structure":
+        """The terms that involve the noise signal (the MA part)."""
+        return Structure(t for t in self.terms if t.is_noise)
+
+    @property
+    def degree(self) -> int:
+        """Largest term degree."""
+        return max((t.degree for t in self.terms), default=0)
+
+    def __str__(self) -> str:
+        return " + ".join(str(t) for t in self.terms) if self.terms else "(empty)"
+
+    def __repr__(self) -> str:
+        return f"Structure([{', '.join(repr(str(t)) for t in self.terms)}])"
+
+
+def parse_structure(text: str | Sequence[str]) -> Structure:
+    """Parse ``"y(k-1) + u(k-2)y(k-6) + 1"`` (or a list of term strings) into a Structure."""
+    parts = text.split("+") if isinstance(text, str) else list(text)
+    return Structure(parse_term(p) for p in parts)
+
+
+def Candidates(ny: int, nu: int, ne: int = 0, degree: int = 2, delay: int = 1, constant: bool = True) -> Structure:
+    """Every monomial of degree <= ``degree`` in y(k-1..ny), u(k-delay..nu) (and e(k-1..ne)).
+
+    Parameters
+    ----------
+    ny, nu : int
+        Largest output and input lags (samples). ``nu`` is the largest input lag, so input
+        lags run from ``delay`` to ``nu``.
+    ne : int, optional
+        Largest noise lag. Noise terms are the linear ``e(k-1) … e(k-ne)`` only (the MA part
+        of the paper's models); they are appended after the process candidates.
+    degree : int, optional
+        Largest total degree (the paper's ℓ).
+    delay : int, optional
+        Smallest input lag (pure delay, samples), >= 1.
+    constant : bool, optional
+        Include the constant term.
+
+    Returns
+    -------
+    Structure
+        Process candidates ordered by degree, then noise terms. For ny = nu = 6, ne = 0 there
+        are 91 at degree 2 and 455 at degree 3 (constant included).
+    """
+    for name, v, lo in (("ny", ny, 0), ("nu", nu, 0), ("ne", ne, 0), ("degree", degree, 0), ("delay", delay, 1)):
+        if int(v) != v or v < lo:
+            raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
+    if nu and delay > nu:
+        raise ValueError(f"delay ({delay}) must not exceed nu ({nu})")
+    variables = [("y", i) for i in range(1, ny + 1)] + [("u", j) for j in range(delay, nu + 1)] if nu else [
+        ("y", i) for i in range(1, ny + 1)
+    ]
+    terms: list[Term] = [Term(())] if constant else []
+    for d in range(1, degree + 1):
+        for combo in itertools.combinations_with_replacement(variables, d):
+            terms.append(Term(tuple((s, l, 1) for s, l in combo)))
+    terms.sort(key=Term.sort_key)
+    terms += [Term((("e", l, 1),)) for l in range(1, ne + 1)]
+    return Structure(terms)
