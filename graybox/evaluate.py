@@ -115,3 +115,126 @@ def evaluate(
     df = pd.DataFrame.from_dict(rows, orient="index")
     df["N_p"] = df["N_p"].astype(int)
     return df
+
+
+def _stable_mask(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+    """(P, M) mask: is the equilibrium (ū_j, ȳ_pj) of member p locally stable?
+
+    Batched over members and points: the linearised recursion's companion matrices go to one
+    ``np.linalg.eigvals`` call.
+    """
+    P, M = ybar.shape
+    L = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
+    if L == 0:
+        return np.ones((P, M), bool)
+    # a_i(p, j) = Σ_t θ_pt · pw · ȳ^(p_t-1) · ū^(m_t) over terms with y(k-i)
+    a = np.zeros((P, M, L))
+    for t, term in enumerate(structure):
+        py, mu = term.power_of("y"), term.power_of("u")
+        for s, l, pw in term.factors:
+            if s == "y":
+                a[:, :, l - 1] += thetas[:, t, None] * pw * ybar ** (py - 1) * ubar[None, :] ** mu
+    comp = np.zeros((P, M, L, L))
+    comp[:, :, 0, :] = a
+    if L > 1:
+        idx = np.arange(L - 1)
+        comp[:, :, idx + 1, idx] = 1.0
+    ok = np.all(np.isfinite(comp), axis=(2, 3))
+    rho = np.full((P, M), np.inf)
+    if ok.any():
+        rho[ok] = np.max(np.abs(np.linalg.eigvals(comp[ok])), axis=-1)
+    return rho < 1.0
+
+
+def static_curves(structure, thetas: np.ndarray, ubar: np.ndarray, check_stability: bool = True) -> np.ndarray:
+    """Static curves of many parameter vectors, shape (P, M); NaN where undefined.
+
+    Rational structures use eq. (6) vectorised; others solve the polynomial per member.
+    With ``check_stability`` an equilibrium that is not locally stable is NaN too (the model
+    does not settle there), matching :meth:`Model.static_curve`.
+    """
+    from .static import cluster_map, is_rational, static_curve
+
+    th = np.atleast_2d(np.asarray(thetas, float))
+    ub = np.asarray(ubar, float)
+    if is_rational(structure):
+        cm = cluster_map(structure)
+        sig = th @ cm.R.T
+        num = np.zeros((th.shape[0], ub.size))
+        den = np.ones((th.shape[0], ub.size))
+        for c, (p, m) in enumerate(cm.keys):
+            if p == 0:
+                num += sig[:, c, None] * ub**m
+            else:
+                den -= sig[:, c, None] * ub**m
+        with np.errstate(divide="ignore", invalid="ignore"):
+            yb = np.where(np.abs(den) > 1e-12, num / den, np.nan)
+        if check_stability:
+            good = np.isfinite(yb)
+            st = _stable_mask(structure, th, ub, np.where(good, yb, 0.0))
+            yb = np.where(st & good, yb, np.nan)
+        return yb
+    out = np.empty((th.shape[0], ub.size))
+    for i, row in enumerate(th):
+        out[i] = static_curve(structure, row, ub, strict=False) if np.all(np.isfinite(row)) else np.nan
+    return out
+
+
+def evaluate_thetas(
+    structure,
+    thetas: np.ndarray,
+    record: Record | None = None,
+    static: StaticPoints | None = None,
+    one_step: bool = True,
+    threads: int = 1,
+    check_stability: bool = True,
+) -> dict[str, np.ndarray]:
+    """J_1, J_S and J_SF of many parameter vectors of one structure, vectorised.
+
+    The same definitions as :func:`j1`, :func:`js` and :func:`jsf` (counted from sample
+    max_lag on; inf where a free run diverges or the static curve is undefined), computed for a
+    whole front or GA population at once.
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    record : Record, optional
+        Dynamic data for J_1 and J_S.
+    static : StaticPoints, optional
+        Static points for J_SF.
+    one_step : bool
+        Compute J_1 too (needs the regressor matrix).
+    threads : int
+        Threads for the batch free run.
+    check_stability : bool
+        Whether J_SF treats an unstable equilibrium as undefined (inf).
+
+    Returns
+    -------
+    dict with keys among ``"J1"``, ``"JS"``, ``"JSF"``, each ndarray of shape (P,)
+    """
+    from .regressors import regressor_matrix
+    from .simulation import simulate_many
+
+    th = np.atleast_2d(np.asarray(thetas, float))
+    out: dict[str, np.ndarray] = {}
+    if record is not None:
+        L = structure.max_lag
+        if one_step:
+            psi = regressor_matrix(structure, record.u, record.y, start=L)
+            out["J1"] = np.mean((record.y[L:, None] - psi @ th.T) ** 2, axis=0)
+        Y = simulate_many(structure, th, record, threads=threads)
+        with np.errstate(over="ignore", invalid="ignore"):
+            e2 = (Y[:, L:] - record.y[None, L:]) ** 2
+            js_ = np.mean(e2, axis=1)
+        out["JS"] = np.where(np.isfinite(js_), js_, np.inf)
+    if static is not None:
+        yb = static_curves(structure, th, static.ubar, check_stability)
+        with np.errstate(over="ignore", invalid="ignore"):
+            jsf_ = np.mean((yb - static.ybar[None, :]) ** 2, axis=1)
+        out["JSF"] = np.where(np.isfinite(jsf_), jsf_, np.inf)
+    return out
+
+
+__all__ += ["evaluate_thetas", "static_curves"]

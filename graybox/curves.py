@@ -1,0 +1,95 @@
+"""Static curves ȳ = H(ū) as immutable values: polynomial, given or fitted to points."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .ls import scaled_lstsq
+from .records import StaticPoints, as_1d_finite
+
+__all__ = ["StaticCurve"]
+
+
+@dataclass(frozen=True)
+class StaticCurve:
+    """A polynomial static curve H(ū) = c0 + c1 ū + c2 ū² + … (engineering units).
+
+    Attributes
+    ----------
+    coefficients : ndarray, shape (degree + 1,)
+        Ascending powers: eq. (1) is ``[κ, α, β]``.
+    domain : (float, float) or None
+        The input range over which the curve is known (e.g. the measured ū range); None
+        when unknown. Constraints and evaluations outside it are refused.
+    name : str
+    """
+
+    coefficients: np.ndarray
+    domain: tuple[float, float] | None = None
+    name: str = "static curve"
+
+    def __post_init__(self) -> None:
+        c = np.array(as_1d_finite(self.coefficients, f"{self.name}: coefficients"))
+        if c.size == 0:
+            raise ValueError(f"{self.name}: a polynomial needs at least one coefficient")
+        c.setflags(write=False)
+        object.__setattr__(self, "coefficients", c)
+        if self.domain is not None:
+            lo, hi = (float(v) for v in self.domain)
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+                raise ValueError(f"{self.name}: domain must be (low, high) with low < high, got {self.domain}")
+            object.__setattr__(self, "domain", (lo, hi))
+
+    @classmethod
+    def polynomial(cls, coefficients, domain: tuple[float, float] | None = None, name: str = "static curve") -> "StaticCurve":
+        """A curve from ascending coefficients, e.g. ``StaticCurve.polynomial([κ, α, β])`` for eq. (1)."""
+        return cls(np.asarray(coefficients, float), domain, name)
+
+    @classmethod
+    def fit(cls, points: StaticPoints, degree: int = 2, name: str | None = None) -> "StaticCurve":
+        """Least-squares polynomial of ``degree`` through static points (columns scaled internally).
+
+        The domain is the points' ū range. Needs at least ``degree + 1`` points.
+        """
+        if int(degree) != degree or degree < 0:
+            raise ValueError(f"degree must be a non-negative integer, got {degree!r}")
+        if len(points) < degree + 1:
+            raise ValueError(f"fitting degree {degree} needs at least {degree + 1} static points, got {len(points)}")
+        V = np.vander(points.ubar, degree + 1, increasing=True)
+        c = scaled_lstsq(V, points.ybar)
+        return cls(c, (float(points.ubar.min()), float(points.ubar.max())), name or f"fit to {points.name}")
+
+    @property
+    def degree(self) -> int:
+        """Polynomial degree."""
+        return self.coefficients.size - 1
+
+    def check_domain(self, ubar: np.ndarray) -> None:
+        """Raise ``ValueError`` if any ū lies outside the curve's domain (when it has one)."""
+        if self.domain is None:
+            return
+        lo, hi = self.domain
+        ub = np.atleast_1d(ubar)
+        tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+        out = ub[(ub < lo - tol) | (ub > hi + tol)]
+        if out.size:
+            raise ValueError(f"ū = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")
+
+    def __call__(self, ubar: np.ndarray) -> np.ndarray:
+        """H(ū), same shape as ``ubar`` (checked against the domain)."""
+        ub = np.asarray(ubar, dtype=float)
+        self.check_domain(ub)
+        return np.polynomial.polynomial.polyval(ub, self.coefficients)
+
+    def gain(self, ubar: np.ndarray) -> np.ndarray:
+        """dH/dū at ``ubar``."""
+        ub = np.asarray(ubar, dtype=float)
+        self.check_domain(ub)
+        return np.polynomial.polynomial.polyval(ub, np.polynomial.polynomial.polyder(self.coefficients))
+
+    def points(self, ubar: np.ndarray) -> StaticPoints:
+        """The curve sampled at ``ubar`` as static points."""
+        ub = np.asarray(ubar, dtype=float)
+        return StaticPoints(ub, self(ub), name=self.name)
