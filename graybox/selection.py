@@ -1,0 +1,608 @@
+"""Structure selection by forward regression with orthogonal least squares (FROLS / ERR).
+
+The error reduction ratio of a candidate term is the fraction of the output energy
+``yᵀy`` that the term explains once it is made orthogonal to the terms already chosen
+(Billings, Korenberg & Chen 1988; the paper's Section III-A). FROLS picks, one at a time,
+the candidate with the largest ERR.
+
+How it is computed, and why
+---------------------------
+* Every candidate column is scaled to unit RMS before anything else. ERR is invariant to
+  column scale in exact arithmetic; scaling makes it so in floating point as well, and keeps
+  ``u(k-1)³ ≈ 1e9`` next to ``y(k-1) ≈ 10`` from wrecking the orthogonalisation.
+* Orthogonalisation is modified Gram–Schmidt applied to *all* remaining candidates at once:
+  after a term is chosen, every remaining column loses its component along the new
+  orthonormal vector (a rank-1 update of the N × n candidate matrix, fused with the norms
+  and inner products the next ERR needs into one compiled pass). The cost is O(N·n·k) for
+  k chosen terms out of n candidates on N rows.
+* A candidate whose orthogonalised norm falls below ``rank_tol`` of its original norm is
+  (numerically) a linear combination of the chosen terms. Its ERR would be round-off divided
+  by round-off, so it is dropped and reported, never chosen.
+* All-zero candidate columns (e.g. every term in ``u`` when the input is zero) and
+  candidates whose columns are proportional to an earlier candidate's (e.g. ``u(k-1)`` and
+  the constant when the input is constant, ``u(k-1)^2`` and the constant for a binary ±a
+  input) carry no information of their own on these data: they are skipped before the
+  search with a :class:`CandidateWarning` naming them. Asking for more terms than the
+  remaining independent candidates is a ``ValueError``.
+
+Noise terms
+-----------
+When the candidate structure contains noise terms ``e(k-l)`` (``Candidates(..., ne=2)``),
+FROLS selects among the process terms only (residuals do not exist before a model does) and
+carries the noise terms in :attr:`Selection.noise`. :func:`graybox.els.els` accepts the
+:class:`Selection` itself and then uses those noise terms for its MA part.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from typing import Literal, Sequence
+
+import numba as nb
+import numpy as np
+import pandas as pd
+
+from .model import Model
+from .records import Dataset, Record
+from .terms import Structure, Term
+
+__all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
+
+#: Information criteria understood by :func:`frols`.
+CRITERIA: tuple[str, ...] = ("aic", "bic", "fpe")
+
+#: Candidates shown by default when the criterion has no stopping role.
+_DEFAULT_MAX_TERMS = 50
+
+# Residual energy below this fraction of yᵀy is round-off, not signal: without a floor the
+# criterion curve of noise-free data keeps "improving" at the 1e-30 level and the penalty
+# loses to ln(round-off).
+_RSS_FLOOR = 1e-20
+
+
+class CandidateWarning(UserWarning):
+    """Candidates were skipped because the data cannot tell them apart from others."""
+
+
+def information_criterion(name: str, rss: np.ndarray, n_rows: int) -> np.ndarray:
+    """AIC, BIC or FPE of models of size 1, 2, … from their residual sums of squares.
+
+    Parameters
+    ----------
+    name : {"aic", "bic", "fpe"}
+    rss : ndarray, shape (K,)
+        Residual sum of squares of the model with the first ``k + 1`` terms (output units²).
+    n_rows : int
+        N, the number of regression rows.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        With σ²_k = rss_k / N: ``N ln σ² + 2k`` (AIC), ``N ln σ² + k ln N`` (BIC),
+        ``N ln σ² + N ln((N + k)/(N − k))`` (FPE, in its logarithmic form as in SysIdentPy).
+    """
+    if name not in CRITERIA:
+        raise ValueError(f"unknown criterion {name!r}; expected one of {CRITERIA}")
+    rss = np.asarray(rss, dtype=float)
+    k = np.arange(1, rss.size + 1, dtype=float)
+    N = float(n_rows)
+    if np.any(k >= N):
+        raise ValueError(f"criterion {name} needs fewer terms ({rss.size}) than rows ({n_rows})")
+    base = N * np.log(rss / N)
+    if name == "aic":
+        return base + 2.0 * k
+    if name == "bic":
+        return base + k * math.log(N)
+    return base + N * np.log((N + k) / (N - k))
+
+
+@dataclass(frozen=True, eq=False)
+class Selection:
+    """The result of :func:`frols`: an immutable value.
+
+    Attributes
+    ----------
+    structure : Structure
+        The selected process terms, in the order they were chosen.
+    err : ndarray, shape (n_selected,)
+        Each selected term's error reduction ratio (fraction of yᵀy, in [0, 1]).
+    theta : ndarray, shape (n_selected,)
+        Least-squares parameters of the selected terms on the selection data (engineering
+        units; no MA part: use :func:`graybox.els.els` for the paper's estimator).
+    noise : Structure
+        Noise terms ``e(k-l)`` carried over from the candidates (not selected; see the module
+        docstring).
+    evaluated : Structure
+        Every term FROLS ranked, in order: the selected ones first, then those only looked at
+        to draw the criterion curve (when stopping by a criterion).
+    err_evaluated : ndarray, shape (K,)
+        ERR of each evaluated term.
+    rss : ndarray, shape (K,)
+        Residual sum of squares after 1 … K terms (output units²).
+    criterion : str
+        The criterion of :attr:`criterion_curve` (``"aic"``, ``"bic"`` or ``"fpe"``).
+    criterion_curve : ndarray, shape (K,)
+        That criterion for models of 1 … K terms.
+    stop : str
+        Why selection stopped, in words (e.g. ``"n_terms = 17"``, ``"bic minimum at 12"``).
+    n_rows : int
+        Number of regression rows (samples after the max lag, summed over records).
+    n_candidates : int
+        Number of process candidates offered.
+    skipped : tuple of (Term, str)
+        Candidates left out and why (zero column, duplicate of another candidate, linear
+        combination of selected terms).
+    """
+
+    structure: Structure
+    err: np.ndarray
+    theta: np.ndarray
+    noise: Structure
+    evaluated: Structure
+    err_evaluated: np.ndarray
+    rss: np.ndarray
+    criterion: str
+    criterion_curve: np.ndarray
+    stop: str
+    n_rows: int
+    n_candidates: int
+    skipped: tuple[tuple[Term, str], ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        for name in ("err", "theta", "err_evaluated", "rss", "criterion_curve"):
+            a = np.array(getattr(self, name), dtype=float, copy=True)
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+
+    def __len__(self) -> int:
+        return len(self.structure)
+
+    @property
+    def n_terms(self) -> int:
+        """Number of selected terms."""
+        return len(self.structure)
+
+    @property
+    def err_total(self) -> float:
+        """Σ ERR of the selected terms: the fraction of yᵀy the selected model explains."""
+        return float(np.sum(self.err))
+
+    def model(self, name: str = "LS") -> Model:
+        """The selected structure with its least-squares parameters (no MA part)."""
+        return Model(self.structure, self.theta, name=name)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per evaluated term, in order.
+
+        Columns: ``term`` (str), ``ERR``, ``cumulative ERR``, the criterion (e.g. ``aic``,
+        value of the model made of this term and those above it), ``selected`` (bool),
+        ``theta`` (LS parameter, NaN when not selected). Index: rank 1 … K.
+        """
+        k = len(self.evaluated)
+        theta = np.full(k, np.nan)
+        theta[: self.n_terms] = self.theta
+        return pd.DataFrame(
+            {
+                "term": [str(t) for t in self.evaluated],
+                "ERR": self.err_evaluated,
+                "cumulative ERR": np.cumsum(self.err_evaluated),
+                self.criterion: self.criterion_curve,
+                "selected": np.arange(k) < self.n_terms,
+                "theta": theta,
+            },
+            index=pd.RangeIndex(1, k + 1, name="rank"),
+        )
+
+    def __str__(self) -> str:
+        width = max([len("term")] + [len(str(t)) for t in self.evaluated])
+        head = (
+            f"FROLS: {self.n_terms} of {self.n_candidates} candidate terms, {self.n_rows} rows; "
+            f"stop: {self.stop}; 1 - ΣERR = {1.0 - self.err_total:.3e}"
+        )
+        lines = [head]
+        if len(self.noise):
+            lines.append(f"noise terms carried for ELS: {self.noise}")
+        lines.append(f"{'rank':>4}  {'term':<{width}}  {'ERR':>11}  {'ΣERR':>11}  {self.criterion.upper():>12}  {'θ (LS)':>12}")
+        cum = np.cumsum(self.err_evaluated)
+        for i, t in enumerate(self.evaluated):
+            if i == self.n_terms:
+                lines.append(f"{'':>4}  {'-- not selected (criterion curve only) --':<{width}}")
+            th = f"{self.theta[i]:12.5g}" if i < self.n_terms else f"{'':>12}"
+            lines.append(
+                f"{i + 1:>4}  {str(t):<{width}}  {self.err_evaluated[i]:11.5e}  {cum[i]:11.8f}  "
+                f"{self.criterion_curve[i]:12.5g}  {th}"
+            )
+        if self.skipped:
+            lines.append("skipped: " + "; ".join(f"{t} ({why})" for t, why in self.skipped))
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"Selection(n_terms={self.n_terms}, n_candidates={self.n_candidates}, stop={self.stop!r})"
+
+
+# --------------------------------------------------------------------------------------
+# candidate matrix
+
+
+def _as_records(data: Record | Sequence[Record]) -> list[Record]:
+    if isinstance(data, Dataset):
+        raise ValueError("pass the identification record (e.g. data.ident), not the whole Dataset")
+    recs = [data] if isinstance(data, Record) else list(data)
+    if not recs:
+        raise ValueError("no records given")
+    for r in recs:
+        if not isinstance(r, Record):
+            raise ValueError(f"data must be a Record or a sequence of Records, got {type(r).__name__}")
+    return recs
+
+
+def _candidate_matrix(terms: Sequence[Term], records: list[Record], start: int) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate columns over all records, Fortran-ordered (rows, n), and the target.
+
+    Each monomial is one multiply of a lower-degree monomial (memoised) by a lagged signal,
+    so the whole matrix costs about one multiply per entry instead of one per factor.
+    """
+    rows = sum(len(r) - start for r in records)
+    W = np.empty((rows, len(terms)), order="F")
+    target = np.empty(rows)
+    r0 = 0
+    for rec in records:
+        rec.require_length(start)
+        n = len(rec)
+        r1 = r0 + n - start
+        sig = {"u": rec.u, "y": rec.y}
+        memo: dict[tuple, np.ndarray] = {(): np.ones(n - start)}
+
+        def column(vars_: tuple) -> np.ndarray:
+            c = memo.get(vars_)
+            if c is None:
+                s, lag = vars_[-1]
+                c = column(vars_[:-1]) * sig[s][start - lag : n - lag]
+                memo[vars_] = c
+            return c
+
+        for j, t in enumerate(terms):
+            vars_ = tuple((s, l) for s, l, p in t.factors for _ in range(p))
+            W[r0:r1, j] = column(vars_)
+        target[r0:r1] = rec.y[start:]
+        r0 = r1
+    return W, target
+
+
+def _duplicates(W: np.ndarray, active: np.ndarray) -> list[tuple[int, int]]:
+    """Pairs (kept, dropped) of active unit-RMS columns that are proportional (|cos| ≈ 1).
+
+    Cheap: a random projection puts proportional columns at equal |projection|; only
+    neighbours in that order are checked with an exact inner product.
+    """
+    idx = np.flatnonzero(active)
+    if idx.size < 2:
+        return []
+    z = np.random.default_rng(0).standard_normal(W.shape[0]) / math.sqrt(W.shape[0])
+    key = np.abs(z @ W[:, idx])
+    order = np.argsort(key, kind="stable")
+    pairs = []
+    N = W.shape[0]
+    for a, b in zip(order[:-1], order[1:]):
+        if abs(key[a] - key[b]) > 1e-8 * max(1.0, key[a]):
+            continue
+        ia, ib = idx[a], idx[b]
+        cos = abs(float(W[:, ia] @ W[:, ib])) / N
+        if cos > 1.0 - 1e-10:
+            pairs.append((min(ia, ib), max(ia, ib)))
+    return pairs
+
+
+# --------------------------------------------------------------------------------------
+# compiled MGS step
+
+
+@nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _mgs_update(W, q, r, active, coef, nrm, num):  # pragma: no cover - compiled
+    """For every active column w: c = qᵀw; w ← w − c q; then ‖w‖² and wᵀr, in one pass.
+
+    W is Fortran-ordered (columns contiguous). ``r`` is the output residual already
+    orthogonalised against ``q``.
+    """
+    N, n = W.shape
+    for j in range(n):
+        if not active[j]:
+            continue
+        c = 0.0
+        for i in range(N):
+            c += q[i] * W[i, j]
+        s1 = 0.0
+        s2 = 0.0
+        for i in range(N):
+            w = W[i, j] - c * q[i]
+            W[i, j] = w
+            s1 += w * w
+            s2 += w * r[i]
+        coef[j] = c
+        nrm[j] = s1
+        num[j] = s2
+
+
+@nb.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _norms_and_dots(W, r, nrm, num):  # pragma: no cover - compiled
+    """‖w_j‖² and w_jᵀr of every column (the state before the first selection)."""
+    N, n = W.shape
+    for j in range(n):
+        s1 = 0.0
+        s2 = 0.0
+        for i in range(N):
+            w = W[i, j]
+            s1 += w * w
+            s2 += w * r[i]
+        nrm[j] = s1
+        num[j] = s2
+
+
+# --------------------------------------------------------------------------------------
+# FROLS
+
+
+def frols(
+    candidates: Structure,
+    data: Record | Sequence[Record],
+    n_terms: int | None = None,
+    tol: float | None = None,
+    criterion: Literal["aic", "bic", "fpe"] | None = None,
+    max_terms: int | None = None,
+    rank_tol: float = 1e-7,
+) -> Selection:
+    """Select model terms by forward regression with orthogonal least squares (ERR).
+
+    Exactly one stopping rule applies:
+
+    * ``n_terms``: the first ``n_terms`` terms by ERR;
+    * ``tol``: the fewest terms with ``1 − ΣERR ≤ tol`` (at most ``max_terms``; a warning if
+      the tolerance is not reached);
+    * ``criterion``: the size with the global minimum of the criterion over sizes
+      1 … ``max_terms`` (a warning if the minimum is at ``max_terms``: the curve was still
+      falling). This is the default, with ``"bic"``, when neither ``n_terms`` nor ``tol`` is
+      given.
+
+    With ``n_terms`` or ``tol``, ``criterion`` (default ``"aic"``) only names the curve stored
+    in the result.
+
+    Parameters
+    ----------
+    candidates : Structure
+        Candidate terms, e.g. ``Candidates(ny=6, nu=6, ne=2, degree=2)``. Noise terms are not
+        selected; they are carried to :attr:`Selection.noise`.
+    data : Record or sequence of Record
+        Identification data (engineering units). Regression rows start at the candidates'
+        largest process lag in each record and never straddle two records.
+    n_terms : int, optional
+        Number of terms to select, 1 ≤ n_terms ≤ number of process candidates.
+    tol : float, optional
+        ERR tolerance in (0, 1): stop once the unexplained fraction ``1 − ΣERR`` of yᵀy is at
+        most ``tol``.
+    criterion : {"aic", "bic", "fpe"}, optional
+        Information criterion (see :func:`information_criterion`).
+    max_terms : int, optional
+        Largest model size looked at for ``tol`` (default: all candidates) and ``criterion``
+        (default: min(50, candidates)). Not allowed with ``n_terms``.
+    rank_tol : float, optional
+        A candidate whose orthogonalised norm is below ``rank_tol`` times its original norm
+        is treated as a linear combination of the selected terms and dropped.
+
+    Returns
+    -------
+    Selection
+
+    Raises
+    ------
+    ValueError
+        Conflicting or out-of-range arguments; no process candidates; an output that is
+        identically zero; more terms asked than independent candidates on these data.
+
+    Warns
+    -----
+    CandidateWarning
+        When candidates are skipped (all-zero, proportional to another candidate, or a linear
+        combination of selected terms). The result lists them in :attr:`Selection.skipped`.
+    RuntimeWarning
+        When ``tol`` is not reached within ``max_terms`` terms, or the criterion's minimum is
+        at the edge of the range.
+    """
+    # ---- validate arguments at the boundary ----
+    if not isinstance(candidates, Structure):
+        raise ValueError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+    process, noise = candidates.process, candidates.noise
+    n_cand = len(process)
+    if n_cand == 0:
+        raise ValueError("the candidate structure has no process terms to select from")
+    if n_terms is not None and tol is not None:
+        raise ValueError("give either n_terms or tol, not both")
+    if n_terms is not None:
+        if isinstance(n_terms, bool) or int(n_terms) != n_terms or n_terms < 1:
+            raise ValueError(f"n_terms must be a positive integer, got {n_terms!r}")
+        n_terms = int(n_terms)
+        if n_terms > n_cand:
+            raise ValueError(f"n_terms = {n_terms} is more than the {n_cand} process candidates")
+        if max_terms is not None:
+            raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
+    if tol is not None and not (np.isfinite(tol) and 0.0 < tol < 1.0):
+        raise ValueError(f"tol must lie in the open interval (0, 1), got {tol!r}")
+    if criterion is not None:
+        if not isinstance(criterion, str) or criterion.lower() not in CRITERIA:
+            raise ValueError(f"criterion must be one of {CRITERIA}, got {criterion!r}")
+        criterion = criterion.lower()  # type: ignore[assignment]
+    if max_terms is not None:
+        if isinstance(max_terms, bool) or int(max_terms) != max_terms or max_terms < 1:
+            raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
+        max_terms = int(max_terms)
+    if not (np.isfinite(rank_tol) and 0.0 < rank_tol < 1.0):
+        raise ValueError(f"rank_tol must lie in (0, 1), got {rank_tol!r}")
+    mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
+    if mode == "criterion" and criterion is None:
+        criterion = "bic"
+    curve_name = criterion or "aic"
+
+    records = _as_records(data)
+    start = process.max_lag
+    W, y = _candidate_matrix(process.terms, records, start)
+    N = W.shape[0]
+    if not np.all(np.isfinite(W)):
+        bad = [str(process[j]) for j in np.flatnonzero(~np.all(np.isfinite(W), axis=0))[:5]]
+        raise ValueError(f"candidate columns overflow to non-finite values (e.g. {', '.join(bad)})")
+    yy = float(y @ y)
+    if yy == 0.0:
+        raise ValueError("the output is identically zero on the regression rows: ERR is undefined")
+
+    # ---- scale to unit RMS; skip columns that carry no information of their own ----
+    scales = np.sqrt(np.einsum("ij,ij->j", W, W) / N)
+    active = scales > 0.0
+    skipped: list[tuple[Term, str]] = [(process[j], "all-zero column") for j in np.flatnonzero(~active)]
+    scales = np.where(active, scales, 1.0)
+    W /= scales
+    for kept, dropped in _duplicates(W, active):
+        if active[dropped]:
+            active[dropped] = False
+            skipped.append((process[dropped], f"proportional to {process[kept]}"))
+    if skipped:
+        warnings.warn(
+            f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
+            + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
+            + ("; …" if len(skipped) > 10 else ""),
+            CandidateWarning,
+            stacklevel=2,
+        )
+    n_usable = int(active.sum())
+    if n_terms is not None and n_terms > n_usable:
+        raise ValueError(
+            f"n_terms = {n_terms} but only {n_usable} of the {n_cand} candidates are usable on these data "
+            f"({len(skipped)} skipped: {', '.join(str(t) for t, _ in skipped[:5])}{', …' if len(skipped) > 5 else ''})"
+        )
+    if mode == "n_terms":
+        K = n_terms
+    elif mode == "tol":
+        K = min(n_usable, max_terms or n_usable)
+    else:
+        K = min(n_usable, max_terms or _DEFAULT_MAX_TERMS)
+    if mode == "criterion" and K >= N:
+        raise ValueError(f"criterion needs more rows ({N}) than model terms ({K}); lower max_terms")
+
+    # ---- forward selection by modified Gram-Schmidt ----
+    nrm0 = np.full(W.shape[1], float(N))  # unit-RMS columns: ‖s_j‖² = N
+    nrm = np.empty(W.shape[1])
+    num = np.empty(W.shape[1])
+    coef = np.zeros(W.shape[1])
+    r = y.copy()
+    _norms_and_dots(W, r, nrm, num)
+    C = np.zeros((K, W.shape[1]))  # C[i, j] = q_iᵀ s_j: the upper triangle of the QR factor
+    Q = np.empty((N, K))
+    g = np.empty(K)
+    chosen: list[int] = []
+    dependent_thr = rank_tol**2
+    n_dependent = 0
+    for k in range(K):
+        dep = active & (nrm <= dependent_thr * nrm0)
+        if dep.any():
+            for j in np.flatnonzero(dep):
+                skipped.append((process[j], "linear combination of the selected terms"))
+            active &= ~dep
+            n_dependent += int(dep.sum())
+        if not active.any():
+            if mode == "n_terms":
+                raise ValueError(
+                    f"only {k} independent terms could be selected on these data, n_terms = {n_terms} asked "
+                    f"(the remaining candidates are linear combinations of the selected ones)"
+                )
+            break
+        with np.errstate(divide="ignore", invalid="ignore"):
+            score = np.where(active, num * num / nrm, -1.0)
+        j = int(np.argmax(score))
+        # The chosen column is re-orthogonalised once against the previous q's: cheap (one
+        # column) and it keeps Q orthonormal to working precision, so ERR sums stay ≤ 1.
+        w = W[:, j].copy()
+        if k:
+            corr = Q[:, :k].T @ w
+            w -= Q[:, :k] @ corr
+            C[:k, j] += corr
+        norm_w = math.sqrt(float(w @ w))
+        q = w / norm_w
+        C[k, j] = norm_w
+        Q[:, k] = q
+        g[k] = float(q @ r)
+        r -= g[k] * q
+        chosen.append(j)
+        active[j] = False
+        if k + 1 < K:
+            _mgs_update(W, q, r, active, coef, nrm, num)
+            C[k, active] = coef[active]
+        if mode == "tol" and float(r @ r) / yy <= tol:
+            break
+    if n_dependent:
+        dep_terms = [t for t, why in skipped if why.startswith("linear")]
+        warnings.warn(
+            f"{n_dependent} candidate(s) dropped as linear combinations of selected terms on these data: "
+            + ", ".join(str(t) for t in dep_terms[:10]) + (", …" if len(dep_terms) > 10 else ""),
+            CandidateWarning,
+            stacklevel=2,
+        )
+    k_eval = len(chosen)
+    g = g[:k_eval]
+    err_eval = g**2 / yy
+    # RSS from the orthogonal decomposition, floored at round-off (see _RSS_FLOOR)
+    rss = np.maximum(yy - np.cumsum(g**2), _RSS_FLOOR * yy)
+    if k_eval >= N:
+        raise ValueError(f"more terms ({k_eval}) than regression rows ({N})")
+    curve = information_criterion(curve_name, rss, N)
+
+    if mode == "n_terms":
+        n_sel, stop = k_eval, f"n_terms = {n_terms}"
+    elif mode == "tol":
+        n_sel = k_eval
+        reached = 1.0 - err_eval.sum() <= tol
+        stop = f"1 - ΣERR ≤ {tol:g}" if reached else f"tol {tol:g} not reached in {k_eval} terms"
+        if not reached:
+            warnings.warn(
+                f"ERR tolerance {tol:g} not reached: 1 - ΣERR = {1.0 - err_eval.sum():.3e} after {k_eval} terms "
+                "(raise max_terms or tol)",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+    else:
+        n_sel = int(np.argmin(curve)) + 1
+        stop = f"{curve_name} minimum at {n_sel} of {k_eval} sizes"
+        if n_sel == k_eval and k_eval < n_usable:
+            warnings.warn(
+                f"{curve_name} is smallest at the largest size looked at ({k_eval} terms): the curve may still be "
+                "falling; raise max_terms",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+
+    # θ of the selected terms: back-substitution in the triangular factor, then undo scaling
+    idx = np.array(chosen[:n_sel], dtype=int)
+    R = C[:n_sel][:, idx]
+    theta_scaled = _back_substitute(np.triu(R), g[:n_sel])
+    theta = theta_scaled / scales[idx]
+    evaluated = Structure([process[j] for j in chosen])
+    return Selection(
+        structure=evaluated[:n_sel],
+        err=err_eval[:n_sel],
+        theta=theta,
+        noise=noise,
+        evaluated=evaluated,
+        err_evaluated=err_eval,
+        rss=rss,
+        criterion=curve_name,
+        criterion_curve=curve,
+        stop=stop,
+        n_rows=N,
+        n_candidates=n_cand,
+        skipped=tuple(skipped),
+    )
+
+
+def _back_substitute(R: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve the upper-triangular system R x = b."""
+    from scipy.linalg import solve_triangular
+
+    return solve_triangular(R, b, lower=False) if b.size else np.zeros(0)
