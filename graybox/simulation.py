@@ -87,21 +87,24 @@ def simulate(
     """
     th = check_theta(structure, theta)
     L = structure.max_lag
-    if isinstance(u, Record):
+    if isinstance(u, Record):  # already validated
         if y0 is None:
-            y0 = u.y
+            y0 = u.y[:L]
         u = u.u
     else:
         u = as_1d_finite(u, "u")
         if y0 is None:
             raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
-    y0 = as_1d_finite(y0, "y0")
+    y0 = np.asarray(y0, dtype=float)
+    if y0.ndim != 1:
+        raise ValueError(f"y0 must be 1-D, got shape {y0.shape}")
     if y0.size < L:
         raise ValueError(f"y0 has {y0.size} samples, the structure needs max lag = {L}")
+    y0 = as_1d_finite(y0[:L], "y0")
     if u.size < L + 1:
         raise ValueError(f"input has {u.size} samples, fewer than max lag + 1 = {L + 1}")
     b = _default_bound(y0[:L]) if bound is None else float(bound)
-    y = simulate_one(*_code(structure), th, np.ascontiguousarray(u), np.ascontiguousarray(y0[:L]), L, b)
+    y = simulate_one(_code(structure), th, np.ascontiguousarray(u), np.ascontiguousarray(y0[:L]), L, b)
     if on_diverge == "raise" and not np.isfinite(y[-1]):
         k = int(np.flatnonzero(~np.isfinite(y))[0])
         raise DivergenceError(f"free run diverged at sample {k} (|y| > {b:g}): the model is unstable along this input")

@@ -268,7 +268,7 @@ def _settle(structure: Structure, theta: np.ndarray, ubar: float, y0: float, can
     L = max(structure.max_lag, 1)
     n = L + 20000
     code = encode(structure)
-    y = simulate_one(*code, np.asarray(theta, float), np.full(n, ubar), np.full(L, y0), L, 1e300)
+    y = simulate_one(code, np.asarray(theta, float), np.full(n, ubar), np.full(L, y0), L, 1e300)
     end = y[-1]
     if not np.isfinite(end):
         raise ValueError(f"free run at ū = {ubar:g} from y0 = {y0:g} diverged")

@@ -152,6 +152,17 @@ class Structure:
     def __len__(self) -> int:
         return len(self.terms)
 
+    def __hash__(self) -> int:
+        # cached: structures key the compiled-code cache, and hashing 20 terms costs ~10 µs
+        h = self.__dict__.get("_hash")
+        if h is None:
+            h = hash(self.terms)
+            object.__setattr__(self, "_hash", h)
+        return h
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Structure) and (self is other or self.terms == other.terms)
+
     def __iter__(self) -> Iterator[Term]:
         return iter(self.terms)
 

@@ -1,0 +1,27 @@
+import numpy as np
+import pytest
+
+from graybox import Record
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(12345)
+
+
+def steps_input(n: int, rng, lo: float = 750.0, hi: float = 1650.0, hold: int = 60) -> np.ndarray:
+    """A piecewise-constant input in rpm, changing every ``hold`` samples."""
+    levels = rng.uniform(lo, hi, size=n // hold + 1)
+    return np.repeat(levels, hold)[:n]
+
+
+@pytest.fixture
+def paper_record(rng):
+    """A record simulated from the paper's ELS model (15) under step inputs."""
+    from graybox import reference
+
+    m = reference.paper_model(15)
+    u = steps_input(1200, rng)
+    y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
+    y = m.simulate(u, y0)
+    return Record(u, y, Ts=0.05, name="sim15")

@@ -1,0 +1,55 @@
+import numpy as np
+import pytest
+
+from graybox import Dataset, Record, evaluate, fit_percent, j1, js, jsf, reference, rrse
+from graybox.evaluate import evaluate_thetas
+
+
+def test_table_shape_and_values(paper_record):
+    m = reference.paper_model(15)
+    noise = 0.1 * np.sin(np.arange(len(paper_record)))
+    noise[:6] = 0.0  # keep the initial conditions exact so the free run is the noise-free one
+    noisy = Record(paper_record.u, paper_record.y + noise, Ts=0.05)
+    data = Dataset(noisy, noisy.slice(600), reference.eq1_points())
+    df = evaluate({"ELS (15)": m, "PE (15)": reference.paper_model(15, "PE")}, data)
+    assert list(df.columns[:4]) == ["J_S ident", "J_S valid", "J_SF", "N_p"]
+    assert df.loc["ELS (15)", "N_p"] == 17
+    assert df.loc["ELS (15)", "J_SF"] == pytest.approx(1.618, abs=1e-3)
+    # the noise is 0.1 sin(k): the model's own free run has MSE ≈ 0.005
+    assert df.loc["ELS (15)", "J_S ident"] == pytest.approx(np.mean(noise[6:] ** 2), rel=1e-9)
+
+
+def test_errors_count_from_max_lag(paper_record):
+    m = reference.paper_model(15)
+    assert j1(m, paper_record) < 1e-18 and js(m, paper_record) < 1e-18
+    y = paper_record.y.copy()
+    y[:6] += 100.0  # initial conditions change: the free run changes but errors before max lag are not counted
+    r = Record(paper_record.u, y)
+    assert js(m, r) > 0
+
+
+def test_fit_percent_matches_matlab_definition():
+    y = np.array([1.0, 2.0, 3.0, 4.0])
+    yh = np.array([1.0, 2.5, 2.5, 4.0])
+    assert rrse(y, yh) == pytest.approx(np.sqrt(0.5) / np.sqrt(5.0))
+    assert fit_percent(y, yh) == pytest.approx(100 * (1 - np.sqrt(0.5 / 5.0)))
+
+
+def test_vectorised_evaluator_matches_single(paper_record):
+    m15 = reference.paper_model(15)
+    thetas = np.array([reference.TABLE_II[c] for c in ("ELS", "CLS", "PE")])
+    pts = reference.eq1_points()
+    out = evaluate_thetas(m15.structure, thetas, paper_record, pts)
+    for i, th in enumerate(thetas):
+        mi = m15.with_theta(th)
+        assert out["J1"][i] == pytest.approx(j1(mi, paper_record), rel=1e-10)
+        assert out["JS"][i] == pytest.approx(js(mi, paper_record), rel=1e-10)
+        assert out["JSF"][i] == pytest.approx(jsf(mi, pts), rel=1e-10)
+
+
+def test_jsf_infinite_when_no_stable_equilibrium():
+    m = reference.paper_model(17, "PE")
+    with pytest.warns(RuntimeWarning, match="no stable equilibrium"):
+        assert jsf(m, reference.eq1_points()) == float("inf")
+    out = evaluate_thetas(m.structure, m.theta[None, :], static=reference.eq1_points())
+    assert out["JSF"][0] == float("inf")
