@@ -1,0 +1,33 @@
+"""Data sets: the bundled pumping-plant benchmark, the buck converter, and CSV loaders.
+
+- :func:`load_pumping` — simulated stand-in for the paper's rig (bundled, works after install);
+- :func:`load_buck` — real buck-converter measurements kept outside the project;
+- :func:`load_record_csv`, :func:`load_static_csv` — users' own files, columns chosen by name;
+- :mod:`graybox.datasets.pumping` — the plant simulator and the generator of the bundled files
+  (``python -m graybox.datasets.pumping`` rewrites them).
+"""
+
+from .loaders import (
+    BUCK_STATIC_CURVE,
+    find_buck_dir,
+    load_buck,
+    load_pumping,
+    load_record_csv,
+    load_static_csv,
+    pumping_data_dir,
+)
+from .pumping import PlantRun, PumpingPlant, speed_reference, static_experiment
+
+__all__ = [
+    "load_pumping",
+    "load_buck",
+    "load_record_csv",
+    "load_static_csv",
+    "find_buck_dir",
+    "pumping_data_dir",
+    "BUCK_STATIC_CURVE",
+    "PumpingPlant",
+    "PlantRun",
+    "speed_reference",
+    "static_experiment",
+]

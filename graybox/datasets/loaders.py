@@ -1,0 +1,402 @@
+"""Load data sets: the bundled pumping plant, the buck converter, and users' CSV files.
+
+CSV conventions (all loaders): comma separated, one header line naming the columns, one sample
+per line, numbers in any form Python's ``float`` reads. Columns are picked by name, so a file may
+hold other columns too. Every problem found is a ``ValueError`` naming the file and the line
+(1-based, the header is line 1) or the column: empty cells, NaN or inf, text where a number
+belongs, rows with too few fields, a missing column (with the closest existing names), time stamps
+that do not increase or are unevenly spaced, repeated static input levels.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import math
+import os
+from importlib import resources
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ..curves import StaticCurve
+from ..records import Dataset, Record, StaticPoints
+from ..reference import EQ1_COEFFICIENTS
+from .pumping import DEFAULT_SEED, DYNAMIC_COLUMNS, N_IDENT, STATIC_COLUMNS, PumpingPlant
+
+__all__ = [
+    "load_record_csv",
+    "load_static_csv",
+    "load_pumping",
+    "load_buck",
+    "find_buck_dir",
+    "pumping_data_dir",
+    "BUCK_ENV",
+    "BUCK_STATIC_CURVE",
+]
+
+#: Environment variable that points at the folder holding buck_id.csv and buck_valid.csv.
+BUCK_ENV = "GRAYBOX_BUCK_DIR"
+
+#: The buck converter's theoretical static function (supply Vd = 24 V): ȳ = 4 Vd/3 − (Vd/3) ū
+#: = (4 − ū)·8 volts, gain −8 V per unit of input. Its domain ū ∈ [1, 4] is where 0 ≤ ȳ ≤ Vd,
+#: the only outputs a buck converter can produce.
+BUCK_STATIC_CURVE = StaticCurve.polynomial([32.0, -8.0], domain=(1.0, 4.0),
+                                           name="buck theoretical static function (4 - u)*8")
+
+
+# ---------------------------------------------------------------------------
+# Generic CSV reading with row/column diagnostics
+# ---------------------------------------------------------------------------
+
+def _read_columns(path: str | os.PathLike, wanted: dict[str, str]) -> dict[str, np.ndarray]:
+    """Read the columns ``wanted`` (role -> column name) of a CSV file as finite float arrays.
+
+    Raises ``ValueError`` naming the file and the line or column of the first problem.
+    """
+    p = Path(path)
+    names = list(wanted.values())
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        roles = [r for r, n in wanted.items() if n in dup]
+        raise ValueError(f"{p}: {', '.join(roles)} all name the column {sorted(dup)[0]!r}; each must be a different column")
+    with p.open(newline="", encoding="utf-8-sig") as fh:  # -sig: tolerate a BOM from spreadsheet exports
+        reader = csv.reader(fh)
+        try:
+            header = next(reader)
+        except StopIteration:
+            raise ValueError(f"{p}: the file is empty (expected a header line naming the columns)") from None
+        header = [h.strip() for h in header]
+        index: dict[str, int] = {}
+        for role, col in wanted.items():
+            if col not in header:
+                raise ValueError(_missing_column_message(p, role, col, header))
+            if header.count(col) > 1:
+                raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
+            index[role] = header.index(col)
+        need = max(index.values()) + 1
+        values: dict[str, list[float]] = {role: [] for role in wanted}
+        lines: list[int] = []
+        for row in reader:
+            line = reader.line_num
+            if not row or all(not c.strip() for c in row):
+                continue  # blank line (e.g. a trailing newline): not a sample
+            if len(row) < need:
+                raise ValueError(f"{p}: line {line} has {len(row)} field(s), but column "
+                                 f"{header[need - 1]!r} is field {need}")
+            for role, i in index.items():
+                cell = row[i].strip()
+                col = wanted[role]
+                if cell == "":
+                    raise ValueError(f"{p}: line {line}, column {col!r}: empty cell")
+                try:
+                    v = float(cell)
+                except ValueError:
+                    raise ValueError(f"{p}: line {line}, column {col!r}: {cell!r} is not a number") from None
+                if not math.isfinite(v):
+                    raise ValueError(f"{p}: line {line}, column {col!r}: {cell!r} is not a finite number")
+                values[role].append(v)
+            lines.append(line)
+    if not lines:
+        raise ValueError(f"{p}: no data rows after the header")
+    out = {role: np.array(v) for role, v in values.items()}
+    out["_lines"] = np.array(lines)
+    return out
+
+
+def _missing_column_message(path: Path, role: str, col: str, header: Sequence[str]) -> str:
+    close = difflib.get_close_matches(col, header, n=3, cutoff=0.5)
+    close += [h for h in header if h.lower() == col.lower() and h not in close]
+    hint = f" Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+    return f"{path}: no column {col!r} (asked for as {role}).{hint} The columns are {list(header)}."
+
+
+def load_record_csv(
+    path: str | os.PathLike,
+    u: str,
+    y: str,
+    time: str | None = None,
+    Ts: float | None = None,
+    name: str | None = None,
+    units: tuple[str, str] = ("", ""),
+    time_rtol: float = 1e-3,
+) -> Record:
+    """A dynamic record (input, output, sampling period) from a CSV file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file (header line with column names, one sample per line).
+    u, y : str
+        Names of the input and output columns.
+    time : str, optional
+        Name of a time-stamp column (seconds). Stamps must increase strictly and evenly: every
+        step within ``time_rtol`` × (mean step) of the mean step. The sampling period is the mean
+        step, rounded to 12 significant digits. Records restart at t = 0 whatever the first stamp is.
+    Ts : float, optional
+        Sampling period in seconds. Required when there is no time column; when both are given
+        they must agree within ``time_rtol``.
+    name : str, optional
+        Record name (default: the file name without extension).
+    units : (str, str)
+        Units of (u, y), for display.
+    time_rtol : float
+        Relative tolerance on the time steps (default 1e-3: stamps printed with few digits pass,
+        a logger's jitter or a missing sample does not).
+
+    Returns
+    -------
+    Record
+        Arrays of shape (N,).
+
+    Raises
+    ------
+    ValueError
+        Naming the file and the line or column: a missing column (with close names), an empty
+        cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
+        with the stamps, or neither ``time`` nor ``Ts`` given.
+    """
+    p = Path(path)
+    if time is None and Ts is None:
+        raise ValueError(f"{p}: give the time-stamp column (time=...) or the sampling period (Ts=... seconds)")
+    if Ts is not None and not (isinstance(Ts, (int, float)) and math.isfinite(Ts) and Ts > 0):
+        raise ValueError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
+    if not (0 < time_rtol < 1):
+        raise ValueError(f"time_rtol must be in (0, 1), got {time_rtol!r}")
+    wanted = {"u": u, "y": y} | ({"time": time} if time is not None else {})
+    cols = _read_columns(p, wanted)
+    lines = cols["_lines"]
+    if time is not None:
+        Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
+    return Record(cols["u"], cols["y"], Ts=float(Ts), name=name or p.stem, units=tuple(units))
+
+
+def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float | None, rtol: float) -> float:
+    if t.size < 2:
+        raise ValueError(f"{p}: column {col!r} has a single time stamp; the sampling period needs two")
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0)
+    if bad.size:
+        i = int(bad[0])
+        raise ValueError(f"{p}: column {col!r}: time does not increase from line {lines[i]} ({t[i]:g} s) "
+                         f"to line {lines[i + 1]} ({t[i + 1]:g} s)")
+    step = (t[-1] - t[0]) / (t.size - 1)
+    off = np.abs(dt - step) > rtol * step
+    if off.any():
+        i = int(np.flatnonzero(off)[0])
+        raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s from line {lines[i]} to "
+                         f"line {lines[i + 1]}, but the mean step is {step:g} s (tolerance {rtol:g} relative); "
+                         "resample the data to a constant period first")
+    if Ts is not None and abs(Ts - step) > rtol * step:
+        raise ValueError(f"{p}: Ts = {Ts:g} s disagrees with column {col!r}, whose mean step is {step:g} s")
+    # Stamps are printed decimals, so the true step is a short decimal: drop the float noise of the
+    # division (e.g. 199.95 / 3999 = 0.049999999999999996 -> 0.05).
+    return float(f"{step:.12g}")
+
+
+def load_static_csv(
+    path: str | os.PathLike,
+    u: str,
+    y: str,
+    name: str | None = None,
+) -> StaticPoints:
+    """Measured static points (ū_i, ȳ_i) from a CSV file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file (header line with column names, one point per line).
+    u, y : str
+        Names of the columns holding the constant input level ū and the settled output ȳ.
+    name : str, optional
+        Name of the points (default: the file name without extension).
+
+    Returns
+    -------
+    StaticPoints
+        Arrays of shape (M,), in file order.
+
+    Raises
+    ------
+    ValueError
+        Naming the file and line or column: a missing column, an empty, NaN or non-numeric cell,
+        or two lines with the same ū (a steady state is one number per input level).
+    """
+    p = Path(path)
+    cols = _read_columns(p, {"u": u, "y": y})
+    ub, lines = cols["u"], cols["_lines"]
+    seen: dict[float, int] = {}
+    for v, line in zip(ub.tolist(), lines.tolist()):
+        if v in seen:
+            raise ValueError(f"{p}: column {u!r}: lines {seen[v]} and {line} have the same input level {v:g}; "
+                             "average repeated measurements into one point per level")
+        seen[v] = line
+    return StaticPoints(ub, cols["y"], name=name or p.stem)
+
+
+# ---------------------------------------------------------------------------
+# Bundled pumping plant
+# ---------------------------------------------------------------------------
+
+def pumping_data_dir() -> Path:
+    """The folder holding the bundled ``dynamic.csv`` and ``static.csv``.
+
+    An installed package carries them as package data ``graybox/data/pumping`` (mapped from the
+    repository's ``data/pumping`` by pyproject.toml); a source checkout (or an editable install)
+    reads ``<repo>/data/pumping`` directly.
+    """
+    tried = []
+    try:
+        cand = Path(str(resources.files("graybox.data") / "pumping"))
+        tried.append(cand)
+        if (cand / "dynamic.csv").is_file():
+            return cand
+    except ModuleNotFoundError:
+        pass
+    cand = Path(__file__).resolve().parents[2] / "data" / "pumping"
+    tried.append(cand)
+    if (cand / "dynamic.csv").is_file():
+        return cand
+    raise FileNotFoundError(f"the bundled pumping data are missing; looked in {[str(t) for t in tried]}. "
+                            "Reinstall graybox, or regenerate them with `python -m graybox.datasets.pumping`")
+
+
+PUMPING_DESCRIPTION = (
+    "Simulated stand-in for the hydraulic pumping plant of Barbosa, Aguirre, Martinez & Braga "
+    "(IEEE TCST 2011), whose measured data are not public. The data come from a lumped physical "
+    "model (graybox.datasets.pumping: drive and induction motors, two centrifugal pumps in parallel, "
+    "water column inertia, Francis turbine load) calibrated to the paper's published facts: static "
+    "curve eq. (1) over 750-1650 rpm, Ts = 0.05 s, 3200 identification + 800 validation samples of "
+    "speed-reference steps at several operating points and sizes, a time constant that varies with "
+    "the operating point (about 1.26 s at 750 rpm, 0.78 s at 1650 rpm), transmitter error +/-0.175 mlc "
+    "(95 % band), plus coloured process noise. The static points are means of settled noisy "
+    "stretches at 750, 850, ..., 1650 rpm. It is not the paper's plant: numbers computed on it will "
+    "not equal the paper's. Input: speed reference (rpm); output: pressure (mlc)."
+)
+
+
+def load_pumping() -> Dataset:
+    """The bundled benchmark: simulated pumping-plant data (a stand-in for the paper's rig).
+
+    Returns
+    -------
+    Dataset
+        ``ident``: first 3200 samples, ``valid``: last 800 (Records, Ts = 0.05 s, units
+        ("rpm", "mlc")); ``static``: 10 measured points at 750, 850, …, 1650 rpm;
+        ``description``: where the data come from (a simulated stand-in, said plainly);
+        ``extra``: ``"static_curve"`` — eq. (1) as a :class:`~graybox.curves.StaticCurve` on
+        [750, 1650] rpm (the curve the plant is calibrated to), ``"plant"`` — the
+        :class:`~graybox.datasets.pumping.PumpingPlant` that generated the data, ``"seed"``, and
+        ``"files"`` — the two CSV paths.
+    """
+    d = pumping_data_dir()
+    t_col, u_col, y_col = DYNAMIC_COLUMNS
+    rec = load_record_csv(d / "dynamic.csv", u=u_col, y=y_col, time=t_col, name="pumping",
+                          units=("rpm", "mlc"))
+    if len(rec) <= N_IDENT:
+        raise ValueError(f"{d / 'dynamic.csv'}: {len(rec)} samples, need more than {N_IDENT} to split ident/valid")
+    su, sy = STATIC_COLUMNS
+    static = load_static_csv(d / "static.csv", u=su, y=sy, name="pumping static points")
+    eq1 = StaticCurve.polynomial(EQ1_COEFFICIENTS, domain=(750.0, 1650.0), name="eq. (1)")
+    return Dataset(
+        ident=rec.slice(0, N_IDENT, name="pumping ident"),
+        valid=rec.slice(N_IDENT, None, name="pumping valid"),
+        static=static,
+        description=PUMPING_DESCRIPTION,
+        extra={"static_curve": eq1, "plant": PumpingPlant(), "seed": DEFAULT_SEED,
+               "files": (str(d / "dynamic.csv"), str(d / "static.csv"))},
+    )
+
+
+# ---------------------------------------------------------------------------
+# Buck converter (real measurements, kept outside the project)
+# ---------------------------------------------------------------------------
+
+_BUCK_FILES = ("buck_id.csv", "buck_valid.csv")
+
+
+def find_buck_dir(path: str | os.PathLike | None = None) -> Path:
+    """The folder with ``buck_id.csv`` and ``buck_valid.csv``.
+
+    Search order: ``path`` if given (nothing else is tried); the folder named by the environment
+    variable ``GRAYBOX_BUCK_DIR``; then ``shared/data/buck`` under the current directory and each
+    of its parents, and under each parent of the graybox package (so a checkout at
+    ``<work>/main`` finds ``<work>/shared/data/buck``, i.e. ``../shared/data/buck``).
+
+    Raises
+    ------
+    FileNotFoundError
+        Listing every folder tried.
+    """
+    def ok(d: Path) -> bool:
+        return all((d / f).is_file() for f in _BUCK_FILES)
+
+    if path is not None:
+        d = Path(path)
+        if not ok(d):
+            raise FileNotFoundError(f"{d}: expected {' and '.join(_BUCK_FILES)} in this folder")
+        return d
+    tried: list[Path] = []
+    env = os.environ.get(BUCK_ENV)
+    if env:
+        d = Path(env)
+        if ok(d):
+            return d
+        tried.append(d)
+    here = Path.cwd().resolve()
+    pkg = Path(__file__).resolve().parent
+    for base in [here, *here.parents, *pkg.parents]:
+        d = base / "shared" / "data" / "buck"
+        if d in tried:
+            continue
+        if ok(d):
+            return d
+        tried.append(d)
+    raise FileNotFoundError(
+        f"buck converter data not found (need {' and '.join(_BUCK_FILES)}); set {BUCK_ENV} or pass "
+        f"path=. Tried: {', '.join(str(t) for t in tried)}"
+    )
+
+
+def load_buck(path: str | os.PathLike | None = None) -> Dataset:
+    """The real DC-DC buck converter data (Aguirre et al. 2000; ../shared/data/buck).
+
+    Parameters
+    ----------
+    path : str or path-like, optional
+        Folder holding ``buck_id.csv`` and ``buck_valid.csv``; default: see :func:`find_buck_dir`.
+
+    Returns
+    -------
+    Dataset
+        ``ident`` (buck_id.csv, 1001 samples) and ``valid`` (buck_valid.csv, 999 samples), Ts from
+        the files' ``sampling_time`` column (1e-5 s), u = ``input`` (duty-cycle command, about
+        2.2–2.5), y = ``y`` (output voltage, V). No static points were measured: ``static`` holds
+        9 points *sampled from the theoretical static function* ȳ = (4 − ū)·8 at ū = 1.5, 1.75,
+        …, 3.5 (mostly outside the dynamic data's input range, which is what makes them useful
+        to gray-box estimation), and ``extra["static_curve"]`` is that function as a
+        :class:`~graybox.curves.StaticCurve` (domain ū ∈ [1, 4]).
+    """
+    d = find_buck_dir(path)
+    kw = dict(u="input", y="y", time="sampling_time", units=("", "V"))
+    ident = load_record_csv(d / _BUCK_FILES[0], name="buck ident", **kw)
+    valid = load_record_csv(d / _BUCK_FILES[1], name="buck valid", **kw)
+    if abs(ident.Ts - valid.Ts) > 1e-6 * ident.Ts:
+        raise ValueError(f"{d}: identification and validation files have different sampling periods "
+                         f"({ident.Ts:g} s and {valid.Ts:g} s)")
+    ubar = np.linspace(1.5, 3.5, 9)
+    static = StaticPoints(ubar, BUCK_STATIC_CURVE(ubar), name="buck theoretical static points")
+    return Dataset(
+        ident=ident,
+        valid=valid,
+        static=static,
+        description=(
+            "DC-DC buck converter measured in the laboratory (Aguirre, Donoso-Garcia & Santos-Filho, "
+            "IEEE TCS-I 2000), files from wilsonrljr/sysidentpy-data (MIT licence). Input: duty-cycle "
+            "command (about 2.2-2.5); output: voltage (V, 0.2 V resolution); Ts = 1e-5 s. No static "
+            "points were measured: the static points are sampled from the converter's theoretical "
+            "static function y = (4 - u)*8 (supply 24 V), which is also in extra['static_curve']."
+        ),
+        extra={"static_curve": BUCK_STATIC_CURVE, "folder": str(d)},
+    )

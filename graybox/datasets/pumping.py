@@ -1,0 +1,560 @@
+r"""A simulated two-pump hydraulic rig: the benchmark plant that stands in for the paper's data.
+
+The measured data of Barbosa et al. (2011) are not public. This module simulates a rig with the
+layout of their Section II and calibrates it to every fact the paper publishes:
+
+- static curve: the noise-free steady-state pressure equals eq. (1),
+  H(u) = β u² + α u + κ (β = 7.2652e-6, α = 1.4933e-3, κ = −1.3312), over 750–1650 rpm;
+- sampling time Ts = 0.05 s, 3200 identification + 800 validation samples, speed-reference steps
+  at several operating points and of several sizes (their Fig. 3);
+- a time constant that varies with the operating point (their ref. [5]);
+- pressure transmitter error ±0.175 mlc (read here as the 95 % band of Gaussian noise).
+
+Everything else (inertias, pipe length, pump curve, …) is a plausible choice for a 2 × 7.5 kW rig,
+not a measurement. The data it generates are a stand-in, not the paper's plant.
+
+Physical model
+--------------
+Units: speed n in rpm, flow Q in L/s, head and pressure in mlc (metres of liquid column), time in s.
+Both pump sets run at the same instantaneous speed (as in the paper), so one motor equation and
+one pump curve with Q/2 per pump describe both. State x = (n_c, n, Q):
+
+1. **Drive (VFD) reference path.** The speed reference r (the input u, held constant over each
+   sample) reaches the drive after a scan/fieldbus dead time θ and is smoothed by the drive's
+   reference filter: ``dn_c/dt = (r(t − θ) − n_c) / τ_v``.
+2. **Induction motor + pump rotor.** The drive's speed loop gives a torque proportional to the
+   speed error plus a feed-forward of the pump load torque at the commanded speed (slip
+   compensation, so the shaft settles exactly on the command); the pump absorbs T_p = c n²
+   (affinity law). With J' = J π/30 (N·m·s per rpm):
+   ``J' dn/dt = k_s (n_c − n) + c (n_c² − n²)``, i.e. a mechanical time constant
+   J' / (k_s + 2 c n) that *falls* as the speed rises.
+3. **Two centrifugal pumps in parallel** (affinity laws): each delivers Q/2 against the head
+   ``H_p(n, Q) = h_0 n² − h_2 (Q/2)²``.
+4. **Water column inertia** (rigid column of length L and area A, inertance I = L / (g A)):
+   ``I dQ/dt = H_p(n, Q) − R_f Q² − H_t(Q) + w(t)``, with R_f the pipe friction and w a head
+   disturbance (process noise: turbulence, pump pulsation).
+5. **Francis turbine load.** At fixed distributor opening (50 %, as in the paper) and synchronous
+   runner speed the turbine imposes a head–flow characteristic H_t(Q), which is also the measured
+   pressure p = H_t(Q). We do not know the real turbine's characteristic, so it is *defined* as the
+   one that makes the rig's steady state equal eq. (1): at equilibrium H_p(n, Q) − R_f Q² = H_t(Q)
+   and H_t(Q) = H(n), hence R Q² = (h_0 − β) n² − α n − κ with R = h_2/4 + R_f; inverting gives
+   n*(Q) (positive root) and ``H_t(Q) = H(n*(Q))``. The resulting characteristic rises with flow,
+   more steeply than Q², and is smooth over the operating range. The hydraulic time constant
+   I / (H_t'(Q) + 2 R Q) falls as the flow rises.
+
+Integration: classical RK4 with ``substeps`` steps per sample (default 10, i.e. 5 ms, against a
+fastest time constant of 80 ms). Sampling: y(k) is read at t = k Ts, then u(k) is applied over
+[k Ts, (k+1) Ts), so y(k) depends on u(k−1), u(k−2), …
+
+Measured dynamics of the default plant (noise-free 63.2 % rise after a ±20 rpm step, measured from
+the step instant; :meth:`PumpingPlant.step_time_constant`):
+
+- at  750 rpm: 1.26 s (about 25 samples),
+- at 1200 rpm: 0.97 s,
+- at 1650 rpm: 0.78 s (about 16 samples): the plant is about 1.6 times faster at high speed
+  (mostly the water column: I / (H_t'(Q) + 2 R Q) falls as the flow rises; the rotor lag too).
+
+Fastest effect of the reference: one sample after a step the pressure has moved by less than
+0.1 % of its final change, after two samples by 0.3–0.8 %, after four by 2–6 %: u(k−1) alone has
+almost no effect on y(k), as in the paper, whose ERR never selected a lag below 2.
+
+Noise: white Gaussian measurement noise of std 0.175/1.96 = 0.0893 mlc (95 % band ±0.175 mlc) and,
+by default, coloured process noise: w is AR(1) per sample (pole 0.8, stationary std 0.15 mlc),
+which reaches the pressure through the water column, so the equation error of a NARX model is
+coloured and least squares is biased (extended least squares has something to remove).
+
+Run ``python -m graybox.datasets.pumping`` to regenerate the bundled CSVs (see :func:`main`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ..records import Record, StaticPoints, as_1d_finite
+from ..reference import EQ1_COEFFICIENTS
+
+__all__ = [
+    "PumpingPlant",
+    "PlantRun",
+    "speed_reference",
+    "static_experiment",
+    "generate",
+    "write_csvs",
+    "main",
+    "TS",
+    "N_SAMPLES",
+    "N_IDENT",
+    "STATIC_SPEEDS",
+    "DEFAULT_SEED",
+    "NOISE_STD",
+]
+
+#: Sampling period of the rig (s).
+TS = 0.05
+#: Samples in the dynamic record; the first N_IDENT identify, the rest validate.
+N_SAMPLES = 4000
+N_IDENT = 3200
+#: Speeds of the static experiment (rpm): 750, 850, …, 1650.
+STATIC_SPEEDS = tuple(float(s) for s in range(750, 1651, 100))
+#: Seed of the bundled data.
+DEFAULT_SEED = 2011
+#: Transmitter noise std (mlc): the ±0.175 mlc error read as a 95 % band of Gaussian noise.
+NOISE_STD = 0.175 / 1.96
+
+
+@dataclass(frozen=True)
+class PlantRun:
+    """The result of one simulation, all arrays of shape (N,) sampled at t = k Ts.
+
+    Attributes
+    ----------
+    t : ndarray
+        Time stamps (s), starting at 0.
+    u : ndarray
+        Speed reference (rpm) applied over [t_k, t_k + Ts).
+    y : ndarray
+        Measured pressure (mlc): true pressure + transmitter noise.
+    pressure : ndarray
+        True pressure H_t(Q) (mlc), including the effect of process noise.
+    speed : ndarray
+        Shaft speed n (rpm).
+    flow : ndarray
+        Total flow Q (L/s).
+    Ts : float
+        Sampling period (s).
+    """
+
+    t: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    pressure: np.ndarray
+    speed: np.ndarray
+    flow: np.ndarray
+    Ts: float
+
+    def record(self, name: str = "pumping") -> Record:
+        """The measured input/output pair as a :class:`~graybox.records.Record` (rpm, mlc)."""
+        return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"))
+
+
+@dataclass(frozen=True)
+class PumpingPlant:
+    """Lumped physical model of the two-pump rig feeding a Francis turbine (see the module docs).
+
+    Parameters
+    ----------
+    Ts : float
+        Sampling period (s).
+    substeps : int
+        RK4 steps per sample.
+    dead_time : float
+        Reference scan / fieldbus delay θ (s); a multiple of ``Ts / substeps``, below ``Ts``.
+    drive_lag : float
+        Drive reference filter τ_v (s).
+    inertia : float
+        Moment of inertia J of one motor + pump set (kg·m²).
+    speed_stiffness : float
+        Drive speed-loop gain k_s (N·m per rpm of speed error).
+    pump_torque : float
+        Pump load-torque coefficient c in T_p = c n² (N·m/rpm²).
+    shutoff_head : float
+        Pump head coefficient h_0 in H_p = h_0 n² − h_2 q² (mlc/rpm²); must exceed β of eq. (1).
+    pump_drop : float
+        Pump head-drop coefficient h_2 (mlc/(L/s)², q = flow through one pump).
+    pipe_loss : float
+        Pipe friction R_f (mlc/(L/s)², total flow).
+    pipe_length, pipe_diameter : float
+        Water column length and diameter (m), giving the inertance I = L / (g A).
+    static_coefficients : tuple of float
+        (κ, α, β) of the static curve the rig is calibrated to (default: eq. (1)).
+    noise_std : float
+        Transmitter noise std (mlc); default 0.175/1.96 (95 % band ±0.175 mlc).
+    process_noise_std : float
+        Stationary std of the AR(1) head disturbance w (mlc); 0 switches it off.
+    process_noise_pole : float
+        AR(1) pole of w per sample, in [0, 1).
+    speed_range : tuple of float
+        References accepted by :meth:`simulate` (rpm); the turbine characteristic is calibrated
+        for the rig's 750–1650 rpm and extrapolates smoothly a little beyond.
+    """
+
+    Ts: float = TS
+    substeps: int = 10
+    dead_time: float = 0.02
+    drive_lag: float = 0.08
+    inertia: float = 0.15
+    speed_stiffness: float = 0.01
+    pump_torque: float = 1.34e-5
+    shutoff_head: float = 1.1e-5
+    pump_drop: float = 8.76e-3
+    pipe_loss: float = 4.0e-4
+    pipe_length: float = 60.0
+    pipe_diameter: float = 0.15
+    static_coefficients: tuple[float, float, float] = EQ1_COEFFICIENTS
+    noise_std: float = NOISE_STD
+    process_noise_std: float = 0.15
+    process_noise_pole: float = 0.8
+    speed_range: tuple[float, float] = (500.0, 1800.0)
+
+    def __post_init__(self) -> None:
+        positive = ("Ts", "drive_lag", "inertia", "speed_stiffness", "pump_torque", "shutoff_head",
+                    "pump_drop", "pipe_loss", "pipe_length", "pipe_diameter")
+        for name in positive:
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"PumpingPlant: {name} must be a positive finite number, got {v!r}")
+        if int(self.substeps) != self.substeps or self.substeps < 1:
+            raise ValueError(f"PumpingPlant: substeps must be a positive integer, got {self.substeps!r}")
+        dt = self.Ts / self.substeps
+        m = self.dead_time / dt
+        if not (0 <= self.dead_time < self.Ts and abs(m - round(m)) < 1e-9):
+            raise ValueError(f"PumpingPlant: dead_time must be a multiple of Ts/substeps = {dt:g} s in "
+                             f"[0, Ts), got {self.dead_time!r}")
+        if self.noise_std < 0 or self.process_noise_std < 0:
+            raise ValueError("PumpingPlant: noise standard deviations must be >= 0")
+        if not 0 <= self.process_noise_pole < 1:
+            raise ValueError(f"PumpingPlant: process_noise_pole must be in [0, 1), got {self.process_noise_pole!r}")
+        k, a, b = (float(c) for c in self.static_coefficients)
+        if not self.shutoff_head > b:
+            raise ValueError(f"PumpingPlant: shutoff_head ({self.shutoff_head:g}) must exceed β = {b:g}, "
+                             "or the pumps cannot reach the static curve")
+        lo, hi = self.speed_range
+        # The calibrated turbine needs R Q² = (h0 − β) n² − α n − κ > 0 and rising in n over the range.
+        g = self.shutoff_head - b
+        if not (0 < lo < hi and 2 * g * lo - a > 0 and g * lo * lo - a * lo - k > 0):
+            raise ValueError(f"PumpingPlant: the static curve cannot be calibrated over speed_range {self.speed_range}")
+
+    # -- derived constants --------------------------------------------------
+    @property
+    def inertance(self) -> float:
+        """I = L / (g A) in mlc per (L/s²): head needed to accelerate the column by 1 L/s per s."""
+        area = math.pi * self.pipe_diameter**2 / 4
+        return self.pipe_length / (9.81 * area) / 1000.0  # /1000: Q in L/s, not m³/s
+
+    @property
+    def loss(self) -> float:
+        """R = h_2/4 + R_f (mlc/(L/s)²): pump drop (Q/2 per pump) plus pipe friction."""
+        return self.pump_drop / 4 + self.pipe_loss
+
+    # -- statics ------------------------------------------------------------
+    def static_pressure(self, speed: np.ndarray | float) -> np.ndarray:
+        """The curve the rig is calibrated to, H(ū) = β ū² + α ū + κ (mlc), same shape as ``speed``."""
+        k, a, b = self.static_coefficients
+        n = np.asarray(speed, dtype=float)
+        return b * n**2 + a * n + k
+
+    def steady_flow(self, speed: np.ndarray | float) -> np.ndarray:
+        """Equilibrium flow Q̄ (L/s) at constant speed ū (rpm): R Q̄² = (h_0 − β) ū² − α ū − κ."""
+        k, a, b = self.static_coefficients
+        n = np.asarray(speed, dtype=float)
+        return np.sqrt(((self.shutoff_head - b) * n**2 - a * n - k) / self.loss)
+
+    def turbine_head(self, flow: float) -> float:
+        """H_t(Q) (mlc), the turbine characteristic calibrated so that the steady state is eq. (1)."""
+        k, a, b = self.static_coefficients
+        g = self.shutoff_head - b
+        R = self.loss
+        disc = a * a + 4 * g * (k + R * flow * flow)
+        if disc < 0:  # outside the calibrated characteristic: the flow collapsed (never in range)
+            raise ValueError(f"flow {flow:g} L/s is below the turbine characteristic's range")
+        n_star = (a + math.sqrt(disc)) / (2 * g)
+        return self.shutoff_head * n_star * n_star - R * flow * flow
+
+    def steady_state(self, speed: float) -> tuple[float, float, float]:
+        """Equilibrium state (n_c, n, Q) at constant reference ``speed`` (rpm)."""
+        s = float(speed)
+        return (s, s, float(self.steady_flow(s)))
+
+    # -- dynamics -----------------------------------------------------------
+    def _make_rhs(self):
+        """The ODE right-hand side as a closure over plain floats (the integrator's hot loop)."""
+        k0, a0, b0 = (float(c) for c in self.static_coefficients)
+        g = self.shutoff_head - b0
+        tv = self.drive_lag
+        jp = self.inertia * math.pi / 30.0  # J' in N·m·s/rpm (ω = n π/30)
+        ks, cp, h0, R, inert = self.speed_stiffness, self.pump_torque, self.shutoff_head, self.loss, self.inertance
+        sqrt = math.sqrt
+
+        def rhs(nc: float, n: float, q: float, r: float, w: float) -> tuple[float, float, float]:
+            rq2 = R * q * q
+            n_star = (a0 + sqrt(a0 * a0 + 4 * g * (k0 + rq2))) / (2 * g)
+            ht = h0 * n_star * n_star - rq2  # turbine_head(q), inlined
+            return (
+                (r - nc) / tv,
+                (ks * (nc - n) + cp * (nc * nc - n * n)) / jp,
+                (h0 * n * n - rq2 - ht + w) / inert,  # R Q² lumps pump drop and pipe friction
+            )
+
+        return rhs
+
+    def _check_reference(self, u: np.ndarray, what: str = "speed reference") -> None:
+        lo, hi = self.speed_range
+        bad = np.flatnonzero((u < lo) | (u > hi))
+        if bad.size:
+            raise ValueError(f"{what} must stay within {lo:g}–{hi:g} rpm (the calibrated range); "
+                             f"sample {bad[0]} is {u[bad[0]]:g} rpm")
+
+    def simulate(
+        self,
+        u: np.ndarray | Sequence[float],
+        rng: np.random.Generator | int | None = None,
+        noise: bool = True,
+        process_noise: bool = True,
+        x0: tuple[float, float, float] | None = None,
+    ) -> PlantRun:
+        """Simulate the rig for a sampled speed reference.
+
+        Parameters
+        ----------
+        u : array_like, shape (N,)
+            Speed reference (rpm), held constant over each sample.
+        rng : numpy Generator or int, optional
+            Source of noise (an int seeds ``np.random.default_rng``). Required when any noise is on.
+        noise : bool
+            Add transmitter noise (std ``noise_std``) to the measured pressure.
+        process_noise : bool
+            Add the AR(1) head disturbance (std ``process_noise_std``) to the water column.
+        x0 : (n_c, n, Q), optional
+            Initial state; default the equilibrium at ``u[0]``.
+
+        Returns
+        -------
+        PlantRun
+        """
+        u = as_1d_finite(u, "speed reference")
+        self._check_reference(u)
+        N = u.size
+        need_rng = (noise and self.noise_std > 0) or (process_noise and self.process_noise_std > 0)
+        if need_rng and rng is None:
+            raise ValueError("simulate: pass rng (a numpy Generator or a seed) or switch the noise off; "
+                             "the plant never draws unseeded noise")
+        gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
+        # Draw both noise sequences up front, always in this order, so a seed fixes the run.
+        eps_w = gen.standard_normal(N) if need_rng else np.zeros(N)
+        eps_v = gen.standard_normal(N) if need_rng else np.zeros(N)
+        w = np.zeros(N)
+        if process_noise and self.process_noise_std > 0:
+            phi, sw = self.process_noise_pole, self.process_noise_std
+            w[0] = sw * eps_w[0]  # start stationary
+            gain = sw * math.sqrt(1 - phi * phi)
+            for k in range(1, N):
+                w[k] = phi * w[k - 1] + gain * eps_w[k]
+        v = self.noise_std * eps_v if noise else np.zeros(N)
+
+        nc, n, q = self.steady_state(u[0]) if x0 is None else (float(x) for x in x0)
+        S = int(self.substeps)
+        dt = self.Ts / S
+        delay = int(round(self.dead_time / dt))  # substeps during which the previous reference still acts
+        rhs = self._make_rhs()
+        p = np.empty(N)
+        speed = np.empty(N)
+        flow = np.empty(N)
+        uu = u.tolist()
+        ww = w.tolist()
+        prev = uu[0]
+        for k in range(N):
+            p[k] = self.turbine_head(q)
+            speed[k] = n
+            flow[k] = q
+            wk = ww[k]
+            for j in range(S):
+                r = uu[k] if j >= delay else prev
+                a1, b1, c1 = rhs(nc, n, q, r, wk)
+                h = 0.5 * dt
+                a2, b2, c2 = rhs(nc + h * a1, n + h * b1, q + h * c1, r, wk)
+                a3, b3, c3 = rhs(nc + h * a2, n + h * b2, q + h * c2, r, wk)
+                a4, b4, c4 = rhs(nc + dt * a3, n + dt * b3, q + dt * c3, r, wk)
+                s6 = dt / 6.0
+                nc += s6 * (a1 + 2 * a2 + 2 * a3 + a4)
+                n += s6 * (b1 + 2 * b2 + 2 * b3 + b4)
+                q += s6 * (c1 + 2 * c2 + 2 * c3 + c4)
+            prev = uu[k]
+        t = np.arange(N) * self.Ts
+        return PlantRun(t=t, u=np.array(u), y=p + v, pressure=p, speed=speed, flow=flow, Ts=self.Ts)
+
+    # -- measured facts -----------------------------------------------------
+    def step_time_constant(self, speed: float, step: float = 20.0, horizon: float = 15.0) -> float:
+        """Time (s) for the noise-free pressure to cover 63.2 % of its change after a reference step.
+
+        The step of ``step`` rpm is applied at a settled ``speed``; the time is counted from the
+        step instant (so it includes the dead time and the drive and rotor lags).
+        """
+        n_hold = 10
+        n_total = n_hold + int(round(horizon / self.Ts))
+        u = np.r_[np.full(n_hold, float(speed)), np.full(n_total - n_hold, float(speed) + step)]
+        y = self.simulate(u, noise=False, process_noise=False).pressure
+        frac = (y[n_hold:] - y[n_hold - 1]) / (y[-1] - y[n_hold - 1])
+        if abs(frac[-1] - 1) > 1e-6 or abs(self.static_pressure(speed + step) - y[-1]) > 1e-6:
+            raise ValueError(f"the response did not settle within {horizon} s; increase horizon")
+        target = 1 - math.exp(-1)
+        i = int(np.argmax(frac >= target))
+        # linear interpolation between samples i-1 and i (frac[0] is the step instant, value 0)
+        return float((i - 1 + (target - frac[i - 1]) / (frac[i] - frac[i - 1])) * self.Ts)
+
+    def static_point_std(self, speed: float, n_samples: int) -> float:
+        """Std (mlc) of the mean of ``n_samples`` settled measurements at ``speed`` (linearised).
+
+        Transmitter noise is white: variance σ_v²/n. The head disturbance w is AR(1) with pole φ and
+        stationary std σ_w; the water column passes it to the pressure with static gain
+        G = H_t'(Q̄) / (H_t'(Q̄) + 2 R Q̄ ) (low-pass filtering does not change the zero-frequency
+        power), so the mean of n samples has variance ≈ G² σ_w² (1 + φ)/(1 − φ) / n. The two add.
+        """
+        n = float(speed)
+        q = float(self.steady_flow(n))
+        dq = 1e-4 * q
+        ht_slope = (self.turbine_head(q + dq) - self.turbine_head(q - dq)) / (2 * dq)
+        G = ht_slope / (ht_slope + 2 * self.loss * q)
+        phi = self.process_noise_pole
+        var = self.noise_std**2 + (G * self.process_noise_std) ** 2 * (1 + phi) / (1 - phi)
+        return math.sqrt(var / n_samples)
+
+
+# ---------------------------------------------------------------------------
+# The experiment: input design, static test, files
+# ---------------------------------------------------------------------------
+
+def speed_reference(n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed: int = DEFAULT_SEED,
+                    low: float = 750.0, high: float = 1650.0) -> np.ndarray:
+    """A staircase speed reference (rpm) like the paper's Fig. 3, shape (n_samples,).
+
+    Levels change every 4–9 s (3 to 11 time constants of the plant), by steps of three sizes
+    (small 40–150, medium 150–400, large 400–900 rpm, chosen at random), up or down so as to stay
+    in [``low``, ``high``]; levels are whole multiples of 10 rpm. The identification part
+    (``:n_ident``) and the validation part (``n_ident:``) are designed separately and each visits
+    both ends of the range (one hold is forced to within 50 rpm of ``low``, another of ``high``),
+    so both exercise the whole operating range.
+    """
+    if not (0 < n_ident < n_samples):
+        raise ValueError(f"need 0 < n_ident < n_samples, got {n_ident} and {n_samples}")
+    rng = np.random.default_rng([seed, 1])
+    parts = [_staircase(n_ident, rng, low, high), _staircase(n_samples - n_ident, rng, low, high)]
+    return np.concatenate(parts)
+
+
+def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.ndarray:
+    holds: list[int] = []
+    while sum(holds) < n:
+        holds.append(int(rng.integers(80, 181)))  # 4–9 s at Ts = 0.05 s
+    if len(holds) < 4:
+        raise ValueError(f"a part of {n} samples is too short for a staircase; need at least 4 holds")
+    levels = [float(rng.integers(int(low) // 10, int(high) // 10 + 1) * 10)]
+    for _ in holds[1:]:
+        kind = rng.integers(3)
+        size = [rng.uniform(40, 150), rng.uniform(150, 400), rng.uniform(400, 900)][kind]
+        up_room, down_room = high - levels[-1], levels[-1] - low
+        go_up = size <= up_room and (size > down_room or rng.random() < 0.5)
+        size = min(size, max(up_room, down_room))
+        nxt = levels[-1] + size if go_up else levels[-1] - size
+        levels.append(float(np.clip(round(nxt / 10) * 10, low, high)))
+    # Force both ends of the range into this part, at two distinct holds away from the first.
+    i_lo, i_hi = rng.choice(np.arange(1, len(holds)), size=2, replace=False)
+    levels[i_lo] = float(round(rng.uniform(low, low + 50) / 10) * 10)
+    levels[i_hi] = float(round(rng.uniform(high - 50, high) / 10) * 10)
+    return np.repeat(levels, holds)[:n]
+
+
+def static_experiment(
+    plant: PumpingPlant,
+    speeds: Sequence[float] = STATIC_SPEEDS,
+    rng: np.random.Generator | int | None = None,
+    settle: float = 8.0,
+    average: float = 6.0,
+) -> StaticPoints:
+    """The paper's static test: hold each speed, wait for transients to die out, average the pressure.
+
+    The speeds are visited in the given order as one continuous staircase (as on the rig); at each,
+    the first ``settle`` seconds (over 6 time constants at 750 rpm) are discarded and the next
+    ``average`` seconds of noisy measurements are averaged.
+
+    Returns
+    -------
+    StaticPoints
+        ū = ``speeds`` (rpm), ȳ = mean measured pressure (mlc).
+    """
+    sp = as_1d_finite(speeds, "speeds")
+    n_settle = int(round(settle / plant.Ts))
+    n_avg = int(round(average / plant.Ts))
+    if n_avg < 1:
+        raise ValueError(f"average must cover at least one sample, got {average} s")
+    u = np.repeat(sp, n_settle + n_avg)
+    run = plant.simulate(u, rng=rng)
+    y = run.y.reshape(sp.size, n_settle + n_avg)[:, n_settle:]
+    return StaticPoints(sp, y.mean(axis=1), name="pumping static points")
+
+
+def generate(seed: int = DEFAULT_SEED, plant: PumpingPlant | None = None) -> tuple[PlantRun, StaticPoints]:
+    """The bundled experiment: the 4000-sample dynamic run and the 10 static points.
+
+    Deterministic for a given ``seed``: the dynamic run uses stream ``[seed, 2]`` and the static
+    test stream ``[seed, 3]`` of ``np.random.default_rng`` (the input design uses ``[seed, 1]``).
+    """
+    plant = PumpingPlant() if plant is None else plant
+    u = speed_reference(seed=seed)
+    run = plant.simulate(u, rng=np.random.default_rng([seed, 2]))
+    static = static_experiment(plant, rng=np.random.default_rng([seed, 3]))
+    return run, static
+
+
+#: CSV column names of the bundled files.
+DYNAMIC_COLUMNS = ("time_s", "speed_ref_rpm", "pressure_mlc")
+STATIC_COLUMNS = ("speed_rpm", "pressure_mlc")
+
+
+def write_csvs(out_dir: str | Path, seed: int = DEFAULT_SEED) -> tuple[Path, Path]:
+    """Write ``dynamic.csv`` and ``static.csv`` of :func:`generate` into ``out_dir``.
+
+    Formatting: time with 2 decimals (exact multiples of 0.05 s), speed with 1 decimal (levels are
+    whole multiples of 10 rpm), pressure with 4 decimals (0.1 mm, 900 times finer than the
+    transmitter noise std), Unix newlines.
+
+    Returns
+    -------
+    (Path, Path)
+        The dynamic and static files.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    run, static = generate(seed)
+    dyn = out / "dynamic.csv"
+    sta = out / "static.csv"
+    lines = [",".join(DYNAMIC_COLUMNS)]
+    lines += [f"{t:.2f},{u:.1f},{y:.4f}" for t, u, y in zip(run.t, run.u, run.y)]
+    dyn.write_text("\n".join(lines) + "\n", encoding="utf-8", newline="\n")
+    lines = [",".join(STATIC_COLUMNS)]
+    lines += [f"{u:.1f},{y:.4f}" for u, y in zip(static.ubar, static.ybar)]
+    sta.write_text("\n".join(lines) + "\n", encoding="utf-8", newline="\n")
+    return dyn, sta
+
+
+def _source_data_dir() -> Path | None:
+    """``<repo>/data/pumping`` when running from a source checkout (else None)."""
+    root = Path(__file__).resolve().parents[2]
+    return root / "data" / "pumping" if (root / "pyproject.toml").is_file() else None
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m graybox.datasets.pumping [--out DIR] [--seed N]``: regenerate the bundled CSVs.
+
+    Without ``--out`` it writes into the source checkout's ``data/pumping`` (the bundled files).
+    """
+    ap = argparse.ArgumentParser(prog="python -m graybox.datasets.pumping", description=main.__doc__)
+    ap.add_argument("--out", type=Path, default=None, help="output folder (default: <repo>/data/pumping)")
+    ap.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"seed (default {DEFAULT_SEED})")
+    args = ap.parse_args(argv)
+    out = args.out if args.out is not None else _source_data_dir()
+    if out is None:
+        ap.error("not running from a source checkout: give --out DIR")
+    dyn, sta = write_csvs(out, args.seed)
+    print(f"wrote {dyn} and {sta}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
