@@ -274,24 +274,31 @@ def _candidate_matrix(terms: Sequence[Term], records: list[Record], start: int) 
 def _duplicates(W: np.ndarray, active: np.ndarray) -> list[tuple[int, int]]:
     """Pairs (kept, dropped) of active unit-RMS columns that are proportional (|cos| ≈ 1).
 
-    Cheap: a random projection puts proportional columns at equal |projection|; only
-    neighbours in that order are checked with an exact inner product.
+    Cheap: a random projection puts proportional columns at equal |projection|, so after
+    sorting by it each group of proportional columns is a run of neighbours; each run is
+    checked against its first member with an exact inner product. In every group the
+    candidate listed first is kept.
     """
     idx = np.flatnonzero(active)
     if idx.size < 2:
         return []
-    z = np.random.default_rng(0).standard_normal(W.shape[0]) / math.sqrt(W.shape[0])
+    N = W.shape[0]
+    z = np.random.default_rng(0).standard_normal(N) / math.sqrt(N)
     key = np.abs(z @ W[:, idx])
     order = np.argsort(key, kind="stable")
+    groups: list[list[int]] = [[int(idx[order[0]])]]
+    for a in order[1:]:
+        head = groups[-1][0]
+        ia = int(idx[a])
+        same_key = abs(key[a] - key[np.searchsorted(idx, head)]) <= 1e-8 * max(1.0, key[a])
+        if same_key and abs(float(W[:, ia] @ W[:, head])) / N > 1.0 - 1e-10:
+            groups[-1].append(ia)
+        else:
+            groups.append([ia])
     pairs = []
-    N = W.shape[0]
-    for a, b in zip(order[:-1], order[1:]):
-        if abs(key[a] - key[b]) > 1e-8 * max(1.0, key[a]):
-            continue
-        ia, ib = idx[a], idx[b]
-        cos = abs(float(W[:, ia] @ W[:, ib])) / N
-        if cos > 1.0 - 1e-10:
-            pairs.append((min(ia, ib), max(ia, ib)))
+    for g in groups:
+        kept = min(g)
+        pairs += [(kept, j) for j in sorted(g) if j != kept]
     return pairs
 
 
@@ -509,9 +516,11 @@ def frols(
             n_dependent += int(dep.sum())
         if not active.any():
             if mode == "n_terms":
+                dep_terms = [str(t) for t, why in skipped if why.startswith("linear")]
                 raise ValueError(
-                    f"only {k} independent terms could be selected on these data, n_terms = {n_terms} asked "
-                    f"(the remaining candidates are linear combinations of the selected ones)"
+                    f"only {k} independent terms could be selected on these data, n_terms = {n_terms} asked: "
+                    f"the remaining candidates are linear combinations of the selected ones "
+                    f"({', '.join(dep_terms[:8])}{', …' if len(dep_terms) > 8 else ''})"
                 )
             break
         with np.errstate(divide="ignore", invalid="ignore"):
