@@ -16,7 +16,18 @@ from .loaders import (
     load_static_csv,
     pumping_data_dir,
 )
-from .pumping import PlantRun, PumpingPlant, speed_reference, static_experiment
+
+_PUMPING_NAMES = ("PlantRun", "PumpingPlant", "speed_reference", "static_experiment")
+
+
+def __getattr__(name: str):
+    # The simulator's names are loaded on first use, not at import: `python -m
+    # graybox.datasets.pumping` would otherwise import that module twice (runpy warns).
+    if name in _PUMPING_NAMES:
+        from . import pumping
+
+        return getattr(pumping, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
     "load_pumping",

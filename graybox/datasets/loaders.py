@@ -23,7 +23,6 @@ import numpy as np
 from ..curves import StaticCurve
 from ..records import Dataset, Record, StaticPoints
 from ..reference import EQ1_COEFFICIENTS
-from .pumping import DEFAULT_SEED, DYNAMIC_COLUMNS, N_IDENT, STATIC_COLUMNS, PumpingPlant
 
 __all__ = [
     "load_record_csv",
@@ -290,6 +289,10 @@ def load_pumping() -> Dataset:
         :class:`~graybox.datasets.pumping.PumpingPlant` that generated the data, ``"seed"``, and
         ``"files"`` — the two CSV paths.
     """
+    # imported here, not at module level, so that `python -m graybox.datasets.pumping` does not
+    # import the module twice (once through this package, once as __main__)
+    from .pumping import DEFAULT_SEED, DYNAMIC_COLUMNS, N_IDENT, STATIC_COLUMNS, PumpingPlant
+
     d = pumping_data_dir()
     t_col, u_col, y_col = DYNAMIC_COLUMNS
     rec = load_record_csv(d / "dynamic.csv", u=u_col, y=y_col, time=t_col, name="pumping",

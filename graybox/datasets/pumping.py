@@ -425,10 +425,11 @@ def speed_reference(n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed: in
     """A staircase speed reference (rpm) like the paper's Fig. 3, shape (n_samples,).
 
     Levels change every 4–9 s (3 to 11 time constants of the plant), by steps of three sizes
-    (small 40–150, medium 150–400, large 400–900 rpm, chosen at random), up or down so as to stay
-    in [``low``, ``high``]; levels are whole multiples of 10 rpm. The identification part
+    (small 40–150, medium 150–400, large 400–900 rpm, with probabilities 0.4, 0.35, 0.25), up
+    or down at random, turned round (or shortened) where the range [``low``, ``high``] has no room;
+    levels are whole multiples of 10 rpm. The identification part
     (``:n_ident``) and the validation part (``n_ident:``) are designed separately and each visits
-    both ends of the range (one hold is forced to within 50 rpm of ``low``, another of ``high``),
+    both ends of the range (one hold is forced to within 30 rpm of ``low``, another of ``high``),
     so both exercise the whole operating range.
     """
     if not (0 < n_ident < n_samples):
@@ -444,19 +445,26 @@ def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.
         holds.append(int(rng.integers(80, 181)))  # 4–9 s at Ts = 0.05 s
     if len(holds) < 4:
         raise ValueError(f"a part of {n} samples is too short for a staircase; need at least 4 holds")
+    sizes = ((40.0, 150.0), (150.0, 400.0), (400.0, 900.0))  # small, medium, large (rpm)
     levels = [float(rng.integers(int(low) // 10, int(high) // 10 + 1) * 10)]
     for _ in holds[1:]:
-        kind = rng.integers(3)
-        size = [rng.uniform(40, 150), rng.uniform(150, 400), rng.uniform(400, 900)][kind]
-        up_room, down_room = high - levels[-1], levels[-1] - low
-        go_up = size <= up_room and (size > down_room or rng.random() < 0.5)
-        size = min(size, max(up_room, down_room))
-        nxt = levels[-1] + size if go_up else levels[-1] - size
+        cur = levels[-1]
+        lo_s, hi_s = sizes[int(rng.choice(3, p=[0.4, 0.35, 0.25]))]
+        size = rng.uniform(lo_s, hi_s)
+        up_room, down_room = high - cur, cur - low
+        go_up = rng.random() < 0.5
+        if size > (up_room if go_up else down_room):
+            go_up = not go_up  # no room this way: step the other way
+        room = up_room if go_up else down_room
+        if size > room:  # no room either way for this size: a step into the larger room
+            go_up = up_room >= down_room
+            size = rng.uniform(40.0, max(up_room, down_room))
+        nxt = cur + size if go_up else cur - size
         levels.append(float(np.clip(round(nxt / 10) * 10, low, high)))
     # Force both ends of the range into this part, at two distinct holds away from the first.
     i_lo, i_hi = rng.choice(np.arange(1, len(holds)), size=2, replace=False)
-    levels[i_lo] = float(round(rng.uniform(low, low + 50) / 10) * 10)
-    levels[i_hi] = float(round(rng.uniform(high - 50, high) / 10) * 10)
+    levels[i_lo] = float(round(rng.uniform(low, low + 30) / 10) * 10)
+    levels[i_hi] = float(round(rng.uniform(high - 30, high) / 10) * 10)
     return np.repeat(levels, holds)[:n]
 
 

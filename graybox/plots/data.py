@@ -1,0 +1,148 @@
+"""Pictures of data: the static curve with its points (the paper's Fig. 2) and a record (Fig. 3).
+
+The functions build figures with :class:`matplotlib.figure.Figure` directly, not through pyplot:
+they hold no global state, work with the Agg backend (servers, CI) and never open windows. Pass
+``ax`` to draw into an existing figure instead.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from ..curves import StaticCurve
+from ..records import Record, StaticPoints
+
+__all__ = ["plot_static_curve", "plot_record"]
+
+
+def _label(text: str, unit: str) -> str:
+    return f"{text} ({unit})" if unit else text
+
+
+def plot_static_curve(
+    points: StaticPoints | None = None,
+    curve: StaticCurve | Sequence[StaticCurve] | None = None,
+    ax: Axes | None = None,
+    xlabel: str = "Pump speed (rpm)",
+    ylabel: str = "Pressure (mlc)",
+    n_grid: int = 200,
+    margin: float = 0.05,
+) -> Figure:
+    """Static curve(s) drawn as lines and measured static points as asterisks (Fig. 2).
+
+    Parameters
+    ----------
+    points : StaticPoints, optional
+        Measured steady states (ū_i, ȳ_i), drawn as ``*`` markers without a line.
+    curve : StaticCurve or sequence of StaticCurve, optional
+        Curves drawn as lines over their domain (a curve without a domain is drawn over the
+        points' range, widened by ``margin``).
+    ax : matplotlib Axes, optional
+        Draw here; by default a new 6.4 × 4.2 in figure is made.
+    xlabel, ylabel : str
+        Axis labels (defaults: the pumping plant's).
+    n_grid : int
+        Points per curve.
+    margin : float
+        Relative widening of the points' range for curves without a domain.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One line per curve, then one marker-only line for the points; a legend when there is
+        anything to label.
+
+    Raises
+    ------
+    ValueError
+        When there is nothing to draw, or a curve has no domain and there are no points.
+    """
+    curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else list(curve))
+    if points is None and not curves:
+        raise ValueError("plot_static_curve: give static points, a curve, or both")
+    if n_grid < 2:
+        raise ValueError(f"n_grid must be at least 2, got {n_grid}")
+    fig, ax = _figure(ax, (6.4, 4.2))
+    for c in curves:
+        if c.domain is not None:
+            lo, hi = c.domain
+        elif points is not None:
+            lo, hi = float(points.ubar.min()), float(points.ubar.max())
+            pad = margin * (hi - lo)
+            lo, hi = lo - pad, hi + pad
+        else:
+            raise ValueError(f"plot_static_curve: {c.name} has no domain; give points to set the range")
+        ub = np.linspace(lo, hi, n_grid)
+        ax.plot(ub, c(ub), "-", label=c.name)
+    if points is not None:
+        ax.plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best")
+    return fig
+
+
+def plot_record(
+    record: Record,
+    input_label: str = "Pump speed reference",
+    output_label: str = "Pressure",
+    start: int = 0,
+    stop: int | None = None,
+    axes: Sequence[Axes] | None = None,
+) -> Figure:
+    """A record's input (top) and output (bottom) against time, sharing the time axis (Fig. 3).
+
+    Parameters
+    ----------
+    record : Record
+        Input and output of shape (N,), sampled every ``record.Ts`` seconds; the units in
+        ``record.units`` are appended to the labels.
+    input_label, output_label : str
+        Axis labels without units (defaults: the pumping plant's).
+    start, stop : int, optional
+        Sample range to draw (default: all); the time axis keeps the record's time.
+    axes : pair of Axes, optional
+        Draw here (input, output); by default a new 8 × 5 in figure with two rows is made.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two axes, one line each: the input drawn as steps held over each sample, the output as
+        a line through the samples.
+    """
+    n = len(record)
+    stop = n if stop is None else stop
+    if not (0 <= start < stop <= n):
+        raise ValueError(f"plot_record: need 0 <= start < stop <= {n}, got start={start}, stop={stop}")
+    if axes is None:
+        fig = Figure(figsize=(8.0, 5.0), layout="constrained")
+        ax_u, ax_y = fig.subplots(2, 1, sharex=True)
+    else:
+        if len(axes) != 2:
+            raise ValueError(f"plot_record: axes must be a pair (input, output), got {len(axes)}")
+        ax_u, ax_y = axes
+        fig = ax_u.figure
+    t = record.t[start:stop]
+    # the input is held over [t_k, t_k + Ts): draw it as steps, as the plant sees it
+    ax_u.step(t, record.u[start:stop], where="post", label=input_label)
+    ax_y.plot(t, record.y[start:stop], "-", linewidth=0.8, label=output_label)
+    u_unit, y_unit = record.units
+    ax_u.set_ylabel(_label(input_label, u_unit))
+    ax_y.set_ylabel(_label(output_label, y_unit))
+    ax_y.set_xlabel("Time (s)")
+    ax_u.set_title(record.name)
+    for a in (ax_u, ax_y):
+        a.grid(True, alpha=0.3)
+    return fig
+
+
+def _figure(ax: Axes | None, size: tuple[float, float]) -> tuple[Figure, Axes]:
+    if ax is not None:
+        return ax.figure, ax
+    fig = Figure(figsize=size, layout="constrained")
+    return fig, fig.add_subplot()
