@@ -306,3 +306,156 @@ def simulate_batch(
             _batch_parallel(thT, U, code.ny, code.ylag, Y, start, int(threads))
     # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
     return Y.T
+
+
+@nb.njit(cache=True, nogil=True)
+def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
+    # Same update as _batch_block, but the outputs live in a ring buffer of `ring` rows (a
+    # power of two > max lag) and only the squared free-run error is kept: the population's
+    # working set stays in L1 whatever N is.
+    n = U.shape[0]
+    P = thT.shape[1]
+    nt = thT.shape[0]
+    mask = ring - 1
+    Y = np.empty((ring, P))
+    for k in range(start):
+        for p in range(P):
+            Y[k & mask, p] = y[k]
+    sse = np.zeros(P)
+    acc = np.empty(P)
+    for k in range(start, n):
+        for p in range(P):
+            acc[p] = 0.0
+        for t in range(nt):
+            c = U[k, t]
+            m = ny[t]
+            if m == 0:
+                for p in range(P):
+                    acc[p] += thT[t, p] * c
+            elif m == 1:
+                a = (k - ylag[t, 0]) & mask
+                for p in range(P):
+                    acc[p] += thT[t, p] * c * Y[a, p]
+            elif m == 2:
+                a = (k - ylag[t, 0]) & mask
+                b = (k - ylag[t, 1]) & mask
+                for p in range(P):
+                    acc[p] += thT[t, p] * c * Y[a, p] * Y[b, p]
+            elif m == 3:
+                a = (k - ylag[t, 0]) & mask
+                b = (k - ylag[t, 1]) & mask
+                e = (k - ylag[t, 2]) & mask
+                for p in range(P):
+                    acc[p] += thT[t, p] * c * Y[a, p] * Y[b, p] * Y[e, p]
+            else:
+                for p in range(P):
+                    v = thT[t, p] * c
+                    for d in range(m):
+                        v *= Y[(k - ylag[t, d]) & mask, p]
+                    acc[p] += v
+        kk = k & mask
+        yk = y[k]
+        for p in range(P):
+            Y[kk, p] = acc[p]
+            e_ = acc[p] - yk
+            sse[p] += e_ * e_
+    return sse
+
+
+@nb.njit(cache=True, parallel=True)
+def _batch_sse_parallel(thT, U, ny, ylag, y, start, ring, nblocks):  # pragma: no cover - compiled
+    P = thT.shape[1]
+    out = np.empty(P)
+    step = (P + nblocks - 1) // nblocks
+    for b in nb.prange(nblocks):
+        p0 = b * step
+        p1 = min(P, p0 + step)
+        if p0 < p1:
+            out[p0:p1] = _batch_sse(np.ascontiguousarray(thT[:, p0:p1]), U, ny, ylag, y, start, ring)
+    return out
+
+
+def batch_sse(code: Code, thetas: np.ndarray, u: np.ndarray, y: np.ndarray, start: int, threads: int = 1) -> np.ndarray:
+    """Sum of squared free-run errors of P parameter vectors, samples ``start … N-1``.
+
+    The free run starts from the measured ``y[:start]``. Non-finite where a member diverges.
+
+    Parameters
+    ----------
+    code : Code
+    thetas : ndarray, shape (P, n_terms)
+    u, y : ndarray, shape (N,)
+        Input and measured output.
+    start : int
+        Number of initial conditions (>= the structure's max lag).
+    threads : int
+        Parallel population blocks.
+
+    Returns
+    -------
+    ndarray, shape (P,)
+    """
+    thT = np.ascontiguousarray(np.asarray(thetas, dtype=np.float64).T)
+    U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
+    ring = 1 << int(np.ceil(np.log2(start + 1)))
+    with np.errstate(all="ignore"):
+        if threads <= 1 or thT.shape[1] < 2 * threads:
+            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring)
+        return _batch_sse_parallel(thT, U, code.ny, code.ylag, y, start, ring, int(threads))
+
+
+@nb.njit(cache=True, nogil=True)
+def _sensitivity(fptr, fsig, flag, fpow, ny, ylag, theta, U, y0, start):  # pragma: no cover - compiled
+    # Forward sensitivity of the free run: S(k, j) = ∂ŷ(k)/∂θ_j obeys
+    #   S(k, :) = φ(k, :) + Σ_t θ_t Σ_{y(k-l) in t} ∂φ_t/∂y(k-l) · S(k-l, :),
+    # where φ(k, t) is term t evaluated on the simulated output.
+    n = U.shape[0]
+    nt = theta.shape[0]
+    yh = np.empty(n)
+    S = np.zeros((n, nt))
+    for k in range(start):
+        yh[k] = y0[k]
+    phi = np.empty(nt)
+    for k in range(start, n):
+        acc = 0.0
+        for t in range(nt):
+            v = U[k, t]
+            for d in range(ny[t]):
+                v *= yh[k - ylag[t, d]]
+            phi[t] = v
+            acc += theta[t] * v
+        yh[k] = acc
+        for j in range(nt):
+            S[k, j] = phi[j]
+        for t in range(nt):
+            m = ny[t]
+            if m == 0 or theta[t] == 0.0:
+                continue
+            for d in range(m):
+                # derivative of the product with respect to its d-th output factor
+                g = theta[t] * U[k, t]
+                for e in range(m):
+                    if e != d:
+                        g *= yh[k - ylag[t, e]]
+                r = k - ylag[t, d]
+                for j in range(nt):
+                    S[k, j] += g * S[r, j]
+    return yh, S
+
+
+def free_run_sensitivity(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int) -> tuple[np.ndarray, np.ndarray]:
+    """Free run and its Jacobian with respect to θ by forward sensitivity recursion.
+
+    Returns
+    -------
+    y : ndarray, shape (N,)
+    S : ndarray, shape (N, n_terms)
+        ∂y(k)/∂θ_j (zero for the initial samples).
+    """
+    U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
+    with np.errstate(all="ignore"):
+        return _sensitivity(code.fptr, code.fsig, code.flag, code.fpow, code.ny, code.ylag,
+                            np.asarray(theta, float), U, y0, start)
+
+
+__all__ += ["batch_sse", "free_run_sensitivity"]

@@ -297,3 +297,81 @@ def static_gain(
         if p:
             Fy += s * p * yb ** (p - 1) * ub**m
     return -Fu / Fy
+
+
+def local_static_curves(
+    structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ystart: np.ndarray, iterations: int = 30
+) -> np.ndarray:
+    """Equilibria near ``ystart`` for many parameter vectors at once, by Newton's method.
+
+    The optimisers' fast path for J_SF: for a rational structure the equilibrium is unique and
+    this is exact (one step suffices); otherwise it is the root Newton reaches from the measured
+    ȳ (not necessarily the stable one). Stability is not checked here: the shared evaluator does
+    that for the final members.
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    ubar : ndarray, shape (M,)
+    ystart : ndarray, shape (M,)
+        Starting points (usually the measured ȳ).
+    iterations : int
+        Newton steps for non-rational structures.
+
+    Returns
+    -------
+    ndarray, shape (P, M)
+        NaN where Newton did not converge (relative step > 1e-10) or the slope vanished.
+    """
+    cm = cluster_map(structure)
+    sig = np.atleast_2d(thetas) @ cm.R.T  # (P, C)
+    ub = np.asarray(ubar, float)
+    P = sig.shape[0]
+    # coefficient of ȳ^p at each ū: c[p] (P, M)
+    maxp = max(cm.max_y_power, 1)
+    coef = np.zeros((maxp + 1, P, ub.size))
+    for c, (p, m) in enumerate(cm.keys):
+        coef[p] += sig[:, c, None] * ub[None, :] ** m
+    coef[1] -= 1.0
+    with np.errstate(all="ignore"):
+        if maxp == 1:
+            y = np.where(coef[1] != 0, -coef[0] / coef[1], np.nan)
+            return y
+        y = np.broadcast_to(np.asarray(ystart, float), (P, ub.size)).copy()
+        ok = np.ones_like(y, bool)
+        for _ in range(iterations):
+            F = coef[maxp].copy()
+            dF = maxp * coef[maxp]
+            for p in range(maxp - 1, -1, -1):
+                F = F * y + coef[p]
+                if p >= 1:
+                    dF = dF * y + p * coef[p]
+            step = F / dF
+            y = y - step
+        ok = np.isfinite(y) & (np.abs(step) <= 1e-10 * (1.0 + np.abs(y)))
+        return np.where(ok, y, np.nan)
+
+
+def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+    """∂ȳ_i/∂θ_t at equilibria (ū_i, ȳ_i), by implicit differentiation of eq. (5).
+
+    F(ȳ, θ) = Σ_t θ_t ȳ^{p_t} ū^{m_t} − ȳ = 0 gives ∂ȳ/∂θ_t = −ȳ^{p_t} ū^{m_t} / F_ȳ.
+
+    Returns
+    -------
+    ndarray, shape (M, n_terms)
+    """
+    ub = np.asarray(ubar, float)
+    yb = np.asarray(ybar, float)
+    keys = [cluster_key(t) for t in structure]
+    basis = np.stack([yb**p * ub**m for p, m in keys], axis=1)  # (M, n)
+    Fy = -np.ones_like(yb)
+    for th, (p, m) in zip(theta, keys):
+        if p:
+            Fy += th * p * yb ** (p - 1) * ub**m
+    with np.errstate(all="ignore"):
+        return -basis / Fy[:, None]
+
+
+__all__ += ["local_static_curves", "static_theta_gradient"]

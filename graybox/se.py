@@ -1,0 +1,476 @@
+"""The simulation-error (SE) bi-objective, eq. (13): min λ1 J_S(θ) + λ2 J_SF(θ).
+
+Two solvers share one problem definition (:class:`SEProblem`):
+
+- :func:`ga_front` — the paper's genetic algorithm, faithfully: real-coded, stochastic
+  universal sampling, heuristic crossover (ratio 1.2, probability 0.9), Gaussian mutation
+  (probability 0.1, standard deviation 5 % of the gene), population 200, elitism; one run per
+  λ1 from λ1 = 1 down, each seeded with the previous run's best plus random individuals whose
+  θ is least squares on 30 randomly chosen samples.
+- :func:`gradient_front` — beyond the paper: ``scipy.optimize.least_squares`` on the stacked
+  residuals [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] with the Jacobian from the forward sensitivity
+  recursion of the compiled kernel, warm-started along the λ sweep.
+
+:func:`se_pareto` runs either and returns a :class:`graybox.pareto.ParetoSet` whose J's come
+from the shared evaluator. Long sweeps show a progress bar, write a checkpoint after each λ and
+resume from it; a checkpoint written for another problem is refused.
+
+Inside the optimisers J_S is computed by the fused batch kernel (same definition as
+:func:`graybox.evaluate.js`) and J_SF from the equilibrium near the measured ȳ_i
+(:func:`graybox.static.local_static_curves`: exact for rational structures; for others the root
+Newton's method reaches from ȳ_i). The reported front is re-evaluated by the shared evaluator,
+which takes the stable equilibrium the model reaches.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Literal, Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+from tqdm.auto import tqdm
+
+from .kernels import batch_sse, encode, free_run_sensitivity
+from .ls import column_scales, scaled_lstsq
+from .pareto import ParetoSet
+from .records import Dataset, Record, StaticPoints
+from .regressors import regressor_matrix
+from .static import local_static_curves, static_theta_gradient
+from .terms import Structure
+
+__all__ = ["SEProblem", "GAOptions", "ga_front", "gradient_front", "se_pareto", "check_lambdas"]
+
+
+def check_lambdas(lambdas: Sequence[float]) -> np.ndarray:
+    """λ1 values as a 1-D array in (0, 1], or ``ValueError`` naming the offending values."""
+    lam = np.asarray(lambdas, dtype=float).ravel()
+    if lam.size == 0:
+        raise ValueError("no λ1 values given")
+    bad = ~np.isfinite(lam) | (lam <= 0) | (lam > 1)
+    if bad.any():
+        raise ValueError(f"λ1 must lie in (0, 1]; got {lam[bad].tolist()}")
+    return lam
+
+
+class SEProblem:
+    """The data of one SE problem: structure, identification record, static points.
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms.
+    record : Record
+        Identification data (free run from its first max-lag samples).
+    static : StaticPoints
+        Measured steady states.
+    """
+
+    def __init__(self, structure: Structure, record: Record, static: StaticPoints):
+        if not isinstance(record, Record):
+            raise ValueError(f"record must be a Record, got {type(record).__name__}")
+        if not isinstance(static, StaticPoints):
+            raise ValueError(f"static must be StaticPoints, got {type(static).__name__}")
+        structure = structure if isinstance(structure, Structure) else Structure(structure)
+        if any(t.is_noise for t in structure):
+            structure = structure.process
+        self.structure = structure
+        self.record = record
+        self.static = static
+        self.L = structure.max_lag
+        record.require_length(self.L)
+        lo, hi = float(record.u.min()), float(record.u.max())
+        self.code = encode(structure)
+        self.n_dyn = len(record) - self.L
+        self.psi = regressor_matrix(structure, record.u, record.y, start=self.L)
+        self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
+        self.data_range = (lo, hi)
+
+    def fingerprint(self) -> str:
+        """A hash of everything that defines the problem (for checkpoints)."""
+        h = hashlib.sha256()
+        h.update(str(self.structure).encode())
+        for a in (self.record.u, self.record.y, self.static.ubar, self.static.ybar):
+            h.update(np.ascontiguousarray(a).tobytes())
+        return h.hexdigest()[:16]
+
+    # -- objectives -------------------------------------------------------------------
+    def js(self, thetas: np.ndarray, threads: int = 1) -> np.ndarray:
+        """J_S of each row of ``thetas`` (inf where the free run diverges), shape (P,)."""
+        sse = batch_sse(self.code, thetas, self.record.u, self.record.y, self.L, threads)
+        js = sse / self.n_dyn
+        return np.where(np.isfinite(js), js, np.inf)
+
+    def jsf(self, thetas: np.ndarray) -> np.ndarray:
+        """J_SF of each row (equilibrium near the measured ȳ; inf where none), shape (P,)."""
+        yb = local_static_curves(self.structure, thetas, self.static.ubar, self.static.ybar)
+        with np.errstate(all="ignore"):
+            v = np.mean((yb - self.static.ybar) ** 2, axis=1)
+        return np.where(np.isfinite(v), v, np.inf)
+
+    def cost(self, thetas: np.ndarray, lam1: float, threads: int = 1) -> np.ndarray:
+        """λ1 J_S + λ2 J_SF with λ2 = 1 − λ1, shape (P,); inf for a diverging member."""
+        js = self.js(thetas, threads)
+        c = lam1 * js
+        if lam1 < 1.0:
+            c = c + (1.0 - lam1) * self.jsf(thetas)
+        return np.where(np.isfinite(c), c, np.inf)
+
+    def ls_theta(self) -> np.ndarray:
+        """Least-squares (one-step) estimate on all samples."""
+        return scaled_lstsq(self.psi, self.record.y[self.L:])
+
+    def random_ls(self, rng: np.random.Generator, count: int, samples: int = 30) -> np.ndarray:
+        """``count`` θ's, each least squares on ``samples`` randomly chosen rows (the paper's seeds)."""
+        n = self.psi.shape[0]
+        if samples > n:
+            raise ValueError(f"cannot draw {samples} samples from {n} rows")
+        A = self.psi / self.scale
+        b = self.record.y[self.L:]
+        out = np.empty((count, self.psi.shape[1]))
+        for i in range(count):
+            rows = rng.choice(n, size=samples, replace=False)
+            z = np.linalg.lstsq(A[rows], b[rows], rcond=None)[0]
+            out[i] = z / self.scale
+        return out
+
+
+@dataclass(frozen=True)
+class GAOptions:
+    """Settings of the paper's genetic algorithm (defaults: the paper's, 50 generations).
+
+    Attributes
+    ----------
+    population : int
+        Individuals per generation (paper: 200).
+    generations : int
+        Generations per λ (the paper does not state it; 50 here). The run stops after this many
+        generations, or earlier when the best cost has not improved by a relative 1e-9 for
+        ``stall`` generations (``stall=None``: never early).
+    crossover_prob, crossover_ratio : float
+        Heuristic crossover: with probability 0.9 a pair (better p1, worse p2) gives the children
+        p2 + 1.2 (p1 − p2) and p2 + r (p1 − p2) with r ~ U(0, 1); otherwise the parents pass on.
+    mutation_prob, mutation_scale : float
+        Each gene mutates with probability 0.1 by adding N(0, (0.05 |gene|)²).
+    elite : int
+        Best individuals copied unchanged into the next generation.
+    random_samples : int
+        Samples of the identification record in each random individual's least squares (30).
+    selective_pressure : float
+        Linear ranking pressure in [1, 2] for the fitness that stochastic universal sampling uses.
+    """
+
+    population: int = 200
+    generations: int = 50
+    stall: int | None = None
+    crossover_prob: float = 0.9
+    crossover_ratio: float = 1.2
+    mutation_prob: float = 0.1
+    mutation_scale: float = 0.05
+    elite: int = 1
+    random_samples: int = 30
+    selective_pressure: float = 2.0
+
+    def __post_init__(self) -> None:
+        if self.population < 4 or self.generations < 1:
+            raise ValueError("population must be >= 4 and generations >= 1")
+        for name in ("crossover_prob", "mutation_prob"):
+            v = getattr(self, name)
+            if not 0 <= v <= 1:
+                raise ValueError(f"{name} must lie in [0, 1], got {v}")
+        if not 0 <= self.elite < self.population:
+            raise ValueError("elite must lie in [0, population)")
+        if not 1 <= self.selective_pressure <= 2:
+            raise ValueError("selective_pressure must lie in [1, 2]")
+
+
+def _sus(fitness: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    """Stochastic universal sampling (Baker 1987): n equally spaced pointers, one spin."""
+    cum = np.cumsum(fitness)
+    step = cum[-1] / n
+    pointers = rng.uniform(0, step) + step * np.arange(n)
+    idx = np.searchsorted(cum, pointers, side="right")
+    return np.minimum(idx, fitness.size - 1)
+
+
+def _ranking_fitness(cost: np.ndarray, sp: float) -> np.ndarray:
+    """Linear ranking: best gets sp, worst 2 − sp (infinite costs rank last)."""
+    n = cost.size
+    order = np.argsort(cost, kind="stable")
+    rank = np.empty(n)
+    rank[order] = np.arange(n)[::-1]  # best → n−1
+    return 2 - sp + 2 * (sp - 1) * rank / max(n - 1, 1)
+
+
+def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, rng: np.random.Generator,
+            threads: int) -> tuple[np.ndarray, float, int]:
+    """One GA run for one λ1; returns (best θ, its cost, generations run)."""
+    pop = init
+    cost = problem.cost(pop, lam1, threads)
+    best_hist = [np.min(cost)]
+    n = opts.population
+    g = 0
+    for g in range(1, opts.generations + 1):
+        order = np.argsort(cost, kind="stable")
+        elite = pop[order[: opts.elite]]
+        fit = _ranking_fitness(cost, opts.selective_pressure)
+        nsel = n - opts.elite
+        nsel += nsel % 2
+        parents = _sus(fit, nsel, rng)
+        rng.shuffle(parents)
+        a, b = parents[0::2], parents[1::2]
+        better = np.where((cost[a] <= cost[b])[:, None], pop[a], pop[b])
+        worse = np.where((cost[a] <= cost[b])[:, None], pop[b], pop[a])
+        cross = rng.random(a.size) < opts.crossover_prob
+        r = rng.random((a.size, 1))
+        c1 = np.where(cross[:, None], worse + opts.crossover_ratio * (better - worse), pop[a])
+        c2 = np.where(cross[:, None], worse + r * (better - worse), pop[b])
+        kids = np.vstack([c1, c2])[: n - opts.elite]
+        mut = rng.random(kids.shape) < opts.mutation_prob
+        kids = kids + mut * rng.standard_normal(kids.shape) * opts.mutation_scale * np.abs(kids)
+        pop = np.vstack([elite, kids])
+        cost = problem.cost(pop, lam1, threads)
+        best_hist.append(np.min(cost))
+        if opts.stall and g > opts.stall:
+            old = best_hist[-opts.stall - 1]
+            if old - best_hist[-1] <= 1e-9 * abs(old):
+                break
+    i = int(np.argmin(cost))
+    return pop[i].copy(), float(cost[i]), g
+
+
+# -- checkpoints ------------------------------------------------------------------------
+def _load_checkpoint(path: Path, meta: dict) -> dict:
+    with np.load(path, allow_pickle=False) as z:
+        stored = json.loads(str(z["meta"]))
+        if stored != meta:
+            diff = sorted(k for k in set(stored) | set(meta) if stored.get(k) != meta.get(k))
+            raise ValueError(
+                f"checkpoint {path} was written for another problem or settings (differs in: {', '.join(diff)}); "
+                "delete it or choose another checkpoint path"
+            )
+        return {"thetas": z["thetas"], "costs": z["costs"], "done": int(z["done"])}
+
+
+def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarray, done: int) -> None:
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez(tmp, meta=json.dumps(meta), thetas=thetas, costs=costs, done=done)
+    os.replace(tmp, path)  # atomic: a kill during the write never leaves a torn checkpoint
+
+
+def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, seed: int | None,
+           checkpoint: str | os.PathLike | None, progress: bool, step) -> tuple[np.ndarray, np.ndarray]:
+    """Run ``step(i, lam1, previous θ, rng)`` over the λ's with checkpoints and a progress bar."""
+    K = lam.size
+    n = len(problem.structure)
+    thetas = np.full((K, n), np.nan)
+    costs = np.full(K, np.nan)
+    done = 0
+    meta = {"problem": problem.fingerprint(), "method": method, "lambdas": lam.tolist(), "seed": seed,
+            "settings": settings}
+    path = Path(checkpoint) if checkpoint is not None else None
+    if path is not None and path.exists():
+        ck = _load_checkpoint(path, meta)
+        done = ck["done"]
+        thetas[:done], costs[:done] = ck["thetas"][:done], ck["costs"][:done]
+    prev = thetas[done - 1] if done else None
+    bar = tqdm(total=K, initial=done, desc=f"SE front ({method})", disable=not progress, leave=False)
+    try:
+        for i in range(done, K):
+            # one generator per λ index: a resumed sweep draws exactly what an uninterrupted one does
+            rng = np.random.default_rng([0 if seed is None else seed, i])
+            th, c = step(i, float(lam[i]), prev, rng)
+            thetas[i], costs[i] = th, c
+            prev = th
+            if path is not None:
+                _save_checkpoint(path, meta, thetas, costs, i + 1)
+            bar.update(1)
+    finally:
+        bar.close()
+    return thetas, costs
+
+
+def ga_front(
+    problem: SEProblem,
+    lambdas: Sequence[float] = tuple(np.logspace(-2, 0, 100)),
+    options: GAOptions = GAOptions(),
+    seed: int = 0,
+    checkpoint: str | os.PathLike | None = None,
+    progress: bool = True,
+    threads: int = 1,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The paper's GA over a λ1 sweep (run from λ1 = 1 down, whatever order is given).
+
+    Returns
+    -------
+    lambdas : ndarray, shape (K,)
+        λ1 in the order the runs were made (descending).
+    thetas : ndarray, shape (K, n_terms)
+    costs : ndarray, shape (K,)
+        The optimised weighted cost of each run's best individual.
+    """
+    lam = np.sort(check_lambdas(lambdas))[::-1]
+
+    def step(i, lam1, prev, rng):
+        nrand = options.population - (prev is not None)
+        init = problem.random_ls(rng, nrand, options.random_samples)
+        if prev is not None:
+            init = np.vstack([prev[None, :], init])
+        th, c, _ = _ga_run(problem, lam1, init, options, rng, threads)
+        return th, c
+
+    thetas, costs = _sweep(problem, lam, "ga", asdict(options), seed, checkpoint, progress, step)
+    return lam, thetas, costs
+
+
+def _residuals_and_jac(problem: SEProblem, z: np.ndarray, lam1: float, want_jac: bool):
+    th = z / problem.scale
+    rec = problem.record
+    L = problem.L
+    w1 = np.sqrt(lam1 / problem.n_dyn)
+    if want_jac:
+        y, S = free_run_sensitivity(problem.code, th, rec.u, rec.y[:L], L)
+    else:
+        from .kernels import simulate_one
+
+        y = simulate_one(problem.code, th, rec.u, rec.y[:L], L, 1e300)
+        S = None
+    r = [w1 * (y[L:] - rec.y[L:])]
+    J = [w1 * S[L:] / problem.scale] if want_jac else []
+    lam2 = 1.0 - lam1
+    if lam2 > 0:
+        sp = problem.static
+        w2 = np.sqrt(lam2 / len(sp))
+        yb = local_static_curves(problem.structure, th[None, :], sp.ubar, sp.ybar)[0]
+        r.append(w2 * (yb - sp.ybar))
+        if want_jac:
+            J.append(w2 * static_theta_gradient(problem.structure, th, sp.ubar, yb) / problem.scale)
+    r = np.concatenate(r)
+    if not np.all(np.isfinite(r)):
+        r = np.full_like(r, np.inf)  # diverged: least_squares shrinks its trust region
+    return r, (np.vstack(J) if want_jac else None)
+
+
+def gradient_front(
+    problem: SEProblem,
+    lambdas: Sequence[float] = tuple(np.logspace(-2, 0, 100)),
+    theta0: np.ndarray | None = None,
+    seed: int = 0,
+    checkpoint: str | os.PathLike | None = None,
+    progress: bool = True,
+    max_nfev: int = 50,
+    tol: float = 1e-8,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gradient SE front: ``least_squares`` (trust-region reflective) per λ1, warm-started.
+
+    Parameters
+    ----------
+    problem : SEProblem
+    lambdas : sequence of float in (0, 1]
+        Run from λ1 = 1 down.
+    theta0 : ndarray, optional
+        Start of the first run (default: least squares on all samples).
+    max_nfev, tol : int, float
+        Per-λ limits passed to ``least_squares`` (``ftol = xtol = gtol = tol``).
+
+    Returns
+    -------
+    lambdas, thetas, costs : as :func:`ga_front`
+    """
+    lam = np.sort(check_lambdas(lambdas))[::-1]
+    start = problem.ls_theta() if theta0 is None else np.asarray(theta0, float)
+    if start.shape != (len(problem.structure),):
+        raise ValueError(f"theta0 must have shape ({len(problem.structure)},), got {start.shape}")
+
+    def step(i, lam1, prev, rng):
+        th0 = start if prev is None else prev
+        cache: dict = {}
+
+        def fun(z):
+            r, J = _residuals_and_jac(problem, z, lam1, True)
+            cache["J"] = J
+            return r
+
+        def jac(z):
+            return cache["J"]
+
+        z0 = th0 * problem.scale
+        r0 = fun(z0)
+        if not np.all(np.isfinite(r0)):
+            raise ValueError(f"the starting model's free run diverges at λ1 = {lam1:g}; give a stable theta0")
+        res = least_squares(fun, z0, jac=jac, method="trf", x_scale="jac", max_nfev=max_nfev,
+                            ftol=tol, xtol=tol, gtol=tol)
+        th = res.x / problem.scale
+        return th, float(2 * res.cost)
+
+    thetas, costs = _sweep(problem, lam, "gradient", {"max_nfev": max_nfev, "tol": tol,
+                                                     "theta0": None if theta0 is None else list(map(float, start))},
+                           seed, checkpoint, progress, step)
+    return lam, thetas, costs
+
+
+def se_pareto(
+    structure: Structure,
+    data: Record | Dataset,
+    static: StaticPoints | None = None,
+    lambdas: Sequence[float] = tuple(np.logspace(-2, 0, 100)),
+    method: Literal["ga", "gradient"] = "ga",
+    seed: int = 0,
+    checkpoint: str | os.PathLike | None = None,
+    progress: bool = True,
+    threads: int = 1,
+    options: GAOptions | None = None,
+    **kwargs,
+) -> ParetoSet:
+    """SE Pareto set of eq. (13) by the paper's GA or the gradient method.
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms (noise terms are dropped: the SE problem has no MA part).
+    data : Record or Dataset
+        Identification record (a Dataset's ``ident``).
+    static : StaticPoints, optional
+        Static points (default: the Dataset's).
+    lambdas : sequence of float in (0, 1]
+        λ1 values (paper: logspace(-2, 0, 100)); runs go from λ1 = 1 down.
+    method : {"ga", "gradient"}
+    seed : int
+        Makes the GA (and its random initial individuals) reproducible.
+    checkpoint : path, optional
+        Written after each λ; an existing one for the same problem resumes the sweep.
+    progress : bool
+        Show a progress bar.
+    threads : int
+        Threads for the GA's population runs.
+    options : GAOptions, optional
+        GA settings.
+    **kwargs
+        Passed to :func:`gradient_front` (``theta0``, ``max_nfev``, ``tol``).
+
+    Returns
+    -------
+    ParetoSet
+        All members (one per λ) with J_1, J_S and J_SF from the shared evaluator; the optimised
+        cost is in ``extra["cost"]``. Use ``.nondominated()`` for the front proper.
+    """
+    rec = data.ident if isinstance(data, Dataset) else data
+    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
+    if sp is None:
+        raise ValueError("the SE problem needs static points: pass static= or a Dataset with static points")
+    problem = SEProblem(structure, rec, sp)
+    if method == "ga":
+        lam, th, cost = ga_front(problem, lambdas, options or GAOptions(), seed, checkpoint, progress, threads)
+    elif method == "gradient":
+        lam, th, cost = gradient_front(problem, lambdas, seed=seed, checkpoint=checkpoint, progress=progress, **kwargs)
+    else:
+        raise ValueError(f"method must be 'ga' or 'gradient', got {method!r}")
+    finite = np.all(np.isfinite(th), axis=1)
+    if not finite.any():
+        raise ValueError("the SE sweep produced no finite member")
+    return ParetoSet.from_thetas(problem.structure, th[finite], lam[finite], rec, sp,
+                                 method=f"SE ({method})", extra={"cost": cost[finite]}, threads=threads)
