@@ -37,13 +37,13 @@ ELS stops at the first iteration ``i`` with
 
 that is, when the residuals a fit produces equal (to that relative precision) the residuals
 it was given as regressors: the fixed point, after which no regressor or parameter
-changes. The measure is unit-free. After ``max_iter`` iterations without convergence
-ELS warns (:class:`ELSConvergenceWarning`) and returns the
-last iterate. Residuals of the first ``max_lag`` samples of each record, which have no
+changes. The measure is unit-free. After ``max_iter`` iterations without convergence ELS
+warns (:class:`ELSConvergenceWarning`) and returns the last iterate. Residuals of the first ``max_lag`` samples of each record, which have no
 regression row, are taken as zero.
 
-Every least-squares solve scales columns internally (:func:`graybox.ls.scaled_lstsq`), so
-parameters come back in engineering units without loss of precision.
+Every least-squares solve works on unit-RMS columns (:func:`graybox.ls.column_scales`; the
+process block is QR-factored once and reused), so parameters come back in engineering units
+without loss of precision.
 """
 
 from __future__ import annotations
@@ -55,7 +55,9 @@ from typing import Sequence
 
 import numpy as np
 
-from .ls import scaled_lstsq
+from scipy.linalg import solve_triangular
+
+from .ls import column_scales, scaled_lstsq
 from .model import Model
 from .records import Dataset, Record
 from .regressors import regressor_matrix, stacked_regressors
@@ -233,16 +235,31 @@ def els(
     if np.sqrt(np.mean(xi**2)) <= 1e-12 * np.sqrt(np.mean(y**2)):
         return done(theta_ls, np.zeros(len(ns)), 0, True, [], xi)
 
+    # Ψ is the same in every iteration: factor it once (scaled columns, Householder QR) and
+    # solve each extended problem by block elimination. The noise columns are made
+    # orthogonal to range(Ψ), c comes from that small problem and θ by back-substitution;
+    # each iteration then costs O(N·n·ne) instead of a fresh O(N·(n+ne)²) factorisation.
+    sp = column_scales(psi)
+    Q, R = np.linalg.qr(psi / sp)
+    y_perp = y - Q @ (Q.T @ y)
+    m_e = len(ns)
     hist: list[float] = []
-    phi = np.concatenate([theta_ls, np.zeros(len(ns))])
+    theta, c = theta_ls, np.zeros(m_e)
     converged = False
     for it in range(1, int(max_iter) + 1):
-        psi_e = np.vstack(
-            [regressor_matrix(ns, r.u, r.y, e, start=L) for r, e in zip(recs, per_record(xi))]
-        )
-        A = np.hstack([psi, psi_e])
-        phi = scaled_lstsq(A, y)
-        xi_fit = y - A @ phi
+        E = np.vstack([regressor_matrix(ns, r.u, r.y, e, start=L) for r, e in zip(recs, per_record(xi))])
+        se = column_scales(E)
+        Es = E / se
+        E_perp = Es - Q @ (Q.T @ Es)
+        cs, _, rank, _ = np.linalg.lstsq(E_perp, y_perp, rcond=None)
+        if rank < m_e:
+            raise ValueError(
+                f"ELS: the noise regressors {ns} are collinear with the process terms or each other "
+                f"(rank {rank} < {m_e}); the MA part is not identifiable from these data"
+            )
+        theta = solve_triangular(R, Q.T @ (y - Es @ cs), lower=False) / sp
+        c = cs / se
+        xi_fit = y_perp - E_perp @ cs  # = y − Ψθ − E c
         den = float(np.linalg.norm(xi_fit))
         delta = float(np.linalg.norm(xi_fit - xi)) / den if den > 0 else 0.0
         hist.append(delta)
@@ -258,7 +275,7 @@ def els(
             ELSConvergenceWarning,
             stacklevel=2,
         )
-    return done(phi[:n_p], phi[n_p:], len(hist), converged, hist, xi)
+    return done(theta, c, len(hist), converged, hist, xi)
 
 
 # --------------------------------------------------------------------------------------
