@@ -1,0 +1,791 @@
+"""Static-curve constraints on θ as small, composable, immutable objects.
+
+Every constraint here is a value: it holds its own settings (a curve, a band width, a ū
+range, cluster bounds, a user function) and, given the problem's data (a
+:class:`StaticContext`: structure, static points, static curve, reference Σ*_y, the input
+range of the dynamic data), yields
+
+- :meth:`StaticConstraint.affine`: rows ``A_eq θ = b_eq`` and ``A_ub θ <= b_ub`` in
+  engineering units (all built-in variants are affine in θ), which the estimators in
+  :mod:`graybox.convex` scale and normalise before handing them to a solver, and which the
+  closed forms use directly (equalities);
+- :meth:`StaticConstraint.constraints`: cvxpy constraints on a θ expression;
+- :meth:`StaticConstraint.violation`: how far a given θ is from satisfying it.
+
+Constraints combine with ``&`` (``band & gain & ClusterBounds(...)``) into :class:`AllOf`.
+
+Why the static error is affine in θ (eq. (12)): at a steady state every term
+``y^p(k-i) u^m(k-j)`` becomes ``ȳ^p ū^m``, so with the *measured* ȳ_i placed on the regressor
+side the right-hand side of the static equation is ``q_iᵀ R θ`` with
+``q_i = [ȳ_i^p ū_i^m for each cluster (p, m)]``, linear in θ. For a rational structure
+(no y power above 1) the residual ``ȳ_i − q_iᵀRθ`` equals ``D(ū_i) (ȳ_i − ȳ_model(ū_i))``
+with the denominator ``D(ū) = 1 − Σy − Σyu ū − …`` of eq. (6), which is also affine in θ.
+That identity turns the band ``|ȳ_model(ū_i) − ȳ_i| <= b`` into two affine inequalities
+(exactly, for rational structures) and the static-gain bounds into affine inequalities along
+a reference curve (see :class:`GainBounds` for the approximation).
+"""
+
+from __future__ import annotations
+
+import inspect
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable, Iterable, Iterator, Mapping, Sequence
+
+import cvxpy as cp
+import numpy as np
+
+from .curves import StaticCurve
+from .records import StaticPoints, as_1d_finite
+from .static import ClusterMap, cluster_map, cluster_name, is_rational
+from .terms import Structure
+
+__all__ = [
+    "InfeasibleError",
+    "StaticContext",
+    "AffineRows",
+    "StaticConstraint",
+    "CurveEquality",
+    "PassesThrough",
+    "StaticBand",
+    "GainBounds",
+    "ClusterBounds",
+    "UserConstraint",
+    "AllOf",
+    "as_constraint_list",
+    "static_rows",
+]
+
+
+class InfeasibleError(ValueError):
+    """The constraints admit no θ (or the solver could not find one); the message names them."""
+
+
+# --------------------------------------------------------------------------------------------
+# static rows (eq. (12)) and their derivatives
+# --------------------------------------------------------------------------------------------
+def static_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray, wrt: str | None = None) -> np.ndarray:
+    """Rows of Q in eq. (12) (or their derivatives) for the clusters of ``cm``.
+
+    Parameters
+    ----------
+    cm : ClusterMap
+        Cluster keys (p, m): output power p, input power m.
+    ubar, ybar : ndarray, shape (M,)
+        Input and output levels (engineering units); ȳ is the *measured* (or reference) level.
+    wrt : {None, "y", "u"}
+        None: ``Q[i, c] = ȳ_i^p ū_i^m`` (so the static prediction is ``Q R θ``);
+        ``"y"``: ``∂/∂ȳ = p ȳ^(p-1) ū^m``; ``"u"``: ``∂/∂ū = m ȳ^p ū^(m-1)``.
+
+    Returns
+    -------
+    ndarray, shape (M, n_clusters)
+    """
+    ub = np.asarray(ubar, float)[:, None]
+    yb = np.asarray(ybar, float)[:, None]
+    p = np.array([k[0] for k in cm.keys], float)[None, :]
+    m = np.array([k[1] for k in cm.keys], float)[None, :]
+    # np.power(0., 0.) == 1, which is what a missing factor means; negative exponents only
+    # appear multiplied by a zero power, so mask them instead of evaluating 0**-1.
+    if wrt is None:
+        return yb**p * ub**m
+    if wrt == "y":
+        return np.where(p > 0, p * yb ** np.maximum(p - 1, 0) * ub**m, 0.0)
+    if wrt == "u":
+        return np.where(m > 0, m * yb**p * ub ** np.maximum(m - 1, 0), 0.0)
+    raise ValueError(f"wrt must be None, 'y' or 'u', got {wrt!r}")
+
+
+# --------------------------------------------------------------------------------------------
+# problem data given to constraints
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class StaticContext:
+    """The problem's data as constraints see it.
+
+    Attributes
+    ----------
+    structure : Structure
+        Process terms, in parameter order.
+    points : StaticPoints or None
+        The problem's static points (measured steady states), if any.
+    curve : StaticCurve or None
+        The problem's static curve, if any.
+    sigma_y : float or None
+        Σ*_y of the reference model (eq. (22)); used by :class:`CurveEquality` when it is not
+        given its own value.
+    data_range : (float, float) or None
+        Smallest and largest input in the dynamic data (engineering units).
+    check_range : bool
+        When True, static ū levels outside ``data_range`` are refused (the dynamic data say
+        nothing there).
+    """
+
+    structure: Structure
+    points: StaticPoints | None = None
+    curve: StaticCurve | None = None
+    sigma_y: float | None = None
+    data_range: tuple[float, float] | None = None
+    check_range: bool = True
+
+    @cached_property
+    def cluster_map(self) -> ClusterMap:
+        """Clusters and the 0/1 map R of the structure."""
+        return cluster_map(self.structure)
+
+    @property
+    def n_terms(self) -> int:
+        """Number of parameters."""
+        return len(self.structure)
+
+    def check_ubar(self, ubar: np.ndarray, what: str) -> None:
+        """Raise ``ValueError`` when a static ū lies outside the dynamic data's input range."""
+        if not self.check_range or self.data_range is None:
+            return
+        lo, hi = self.data_range
+        ub = np.atleast_1d(np.asarray(ubar, float))
+        tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+        out = ub[(ub < lo - tol) | (ub > hi + tol)]
+        if out.size:
+            raise ValueError(
+                f"{what}: ū = {np.round(out, 6).tolist()} lies outside the input range "
+                f"[{lo:g}, {hi:g}] of the dynamic data, where the model is not identified; "
+                "pass check_range=False to impose it anyway"
+            )
+
+    def require_points(self, points: StaticPoints | None, what: str) -> StaticPoints:
+        """The constraint's own points, or the problem's, or a clear error."""
+        pts = points if points is not None else self.points
+        if pts is None:
+            raise ValueError(f"{what} needs static points: give them to the constraint or to the estimator")
+        return pts
+
+
+# --------------------------------------------------------------------------------------------
+# affine rows
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class AffineRows:
+    """``A_eq θ = b_eq`` and ``A_ub θ <= b_ub`` in engineering units.
+
+    Attributes
+    ----------
+    A_eq : ndarray, shape (k, n_terms)
+    b_eq : ndarray, shape (k,)
+    A_ub : ndarray, shape (j, n_terms)
+    b_ub : ndarray, shape (j,)
+    """
+
+    A_eq: np.ndarray
+    b_eq: np.ndarray
+    A_ub: np.ndarray
+    b_ub: np.ndarray
+
+    @classmethod
+    def make(cls, n: int, A_eq=None, b_eq=None, A_ub=None, b_ub=None) -> "AffineRows":
+        """Build with empty defaults and validated shapes."""
+        def two(A, b, what):
+            A = np.zeros((0, n)) if A is None else np.atleast_2d(np.asarray(A, float))
+            b = np.zeros(A.shape[0]) if b is None else np.atleast_1d(np.asarray(b, float))
+            if A.shape != (b.size, n):
+                raise ValueError(f"{what}: rows of shape {A.shape} do not match {b.size} bounds and {n} terms")
+            if not (np.all(np.isfinite(A)) and np.all(np.isfinite(b))):
+                raise ValueError(f"{what}: non-finite coefficients (check the static points and curve)")
+            A.setflags(write=False)
+            b.setflags(write=False)
+            return A, b
+
+        Ae, be = two(A_eq, b_eq, "equality")
+        Au, bu = two(A_ub, b_ub, "inequality")
+        return cls(Ae, be, Au, bu)
+
+    @property
+    def n_eq(self) -> int:
+        """Number of equality rows."""
+        return self.b_eq.size
+
+    @property
+    def n_ub(self) -> int:
+        """Number of inequality rows."""
+        return self.b_ub.size
+
+    def violation(self, theta: np.ndarray) -> float:
+        """Largest violation relative to the size of the row's terms (unit-free, >= 0).
+
+        Row ``a θ ≤ b`` is violated by ``max(a θ − b, 0) / (|b| + Σ_j |a_j θ_j|)``: the
+        denominator is the magnitude of the quantities being compared, so 1e-9 means "satisfied
+        to nine digits" whatever the units.
+        """
+        th = np.asarray(theta, float)
+        worst = 0.0
+        for A, b, eq in ((self.A_eq, self.b_eq, True), (self.A_ub, self.b_ub, False)):
+            if b.size == 0:
+                continue
+            r = A @ th - b
+            r = np.abs(r) if eq else np.maximum(r, 0.0)
+            scale = np.abs(b) + np.abs(A) @ np.abs(th)
+            worst = max(worst, float(np.max(r / np.where(scale > 0, scale, 1.0))))
+        return worst
+
+
+# --------------------------------------------------------------------------------------------
+# the base class
+# --------------------------------------------------------------------------------------------
+class StaticConstraint(ABC):
+    """A constraint on θ that depends on the problem's data; combine with ``&``."""
+
+    @abstractmethod
+    def describe(self) -> str:
+        """A short human-readable description used in error messages."""
+
+    def affine(self, ctx: StaticContext) -> AffineRows | None:
+        """Affine rows in engineering units, or None when the constraint is not affine."""
+        return None
+
+    def constraints(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
+        """cvxpy constraints on ``theta`` (an expression of shape (n_terms,), engineering units)."""
+        rows = self.affine(ctx)
+        if rows is None:  # pragma: no cover - subclasses that are not affine override this
+            raise NotImplementedError(f"{type(self).__name__} must implement constraints()")
+        out: list[cp.Constraint] = []
+        if rows.n_eq:
+            out.append(rows.A_eq @ theta == rows.b_eq)
+        if rows.n_ub:
+            out.append(rows.A_ub @ theta <= rows.b_ub)
+        return out
+
+    def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
+        """How far ``theta`` is from satisfying the constraint (0 when satisfied).
+
+        For affine constraints this is :meth:`AffineRows.violation` (relative, unit-free).
+        """
+        rows = self.affine(ctx)
+        if rows is None:  # pragma: no cover - overridden by non-affine subclasses
+            raise NotImplementedError
+        return rows.violation(theta)
+
+    def check(self, ctx: StaticContext) -> None:
+        """Validate against the problem's data (raises ``ValueError``); called before solving."""
+        self.affine(ctx)
+
+    def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
+        """Checks on the estimate that the rows cannot express (raises ``ValueError``)."""
+
+    def __iter__(self) -> Iterator["StaticConstraint"]:
+        yield self
+
+    def __and__(self, other: "StaticConstraint") -> "AllOf":
+        if not isinstance(other, StaticConstraint):
+            return NotImplemented
+        return AllOf((*self, *other))
+
+    def __repr__(self) -> str:
+        return f"<{self.describe()}>"
+
+
+def as_constraint_list(constraints: StaticConstraint | Iterable[StaticConstraint] | None) -> list[StaticConstraint]:
+    """Flatten ``None``, one constraint, an :class:`AllOf` or a sequence of them into a list."""
+    if constraints is None:
+        return []
+    if isinstance(constraints, StaticConstraint):
+        return list(constraints)
+    out: list[StaticConstraint] = []
+    for c in constraints:
+        if not isinstance(c, StaticConstraint):
+            raise ValueError(
+                f"constraints must be graybox.constraints objects, got {type(c).__name__}; "
+                "wrap a cvxpy function of θ in UserConstraint(fn)"
+            )
+        out.extend(c)
+    return out
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class AllOf(StaticConstraint):
+    """Several constraints imposed together (what ``a & b`` returns)."""
+
+    members: tuple[StaticConstraint, ...]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "members", tuple(as_constraint_list(self.members)))
+
+    def __iter__(self) -> Iterator[StaticConstraint]:
+        return iter(self.members)
+
+    def __len__(self) -> int:
+        return len(self.members)
+
+    def describe(self) -> str:
+        return " & ".join(c.describe() for c in self.members) or "no constraints"
+
+    def affine(self, ctx: StaticContext) -> AffineRows | None:
+        parts = [c.affine(ctx) for c in self.members]
+        if any(p is None for p in parts):
+            return None
+        n = ctx.n_terms
+        return AffineRows.make(
+            n,
+            np.vstack([np.zeros((0, n))] + [p.A_eq for p in parts]),
+            np.concatenate([np.zeros(0)] + [p.b_eq for p in parts]),
+            np.vstack([np.zeros((0, n))] + [p.A_ub for p in parts]),
+            np.concatenate([np.zeros(0)] + [p.b_ub for p in parts]),
+        )
+
+    def constraints(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
+        return [k for c in self.members for k in c.constraints(theta, ctx)]
+
+    def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
+        return max((c.violation(theta, ctx) for c in self.members), default=0.0)
+
+    def check(self, ctx: StaticContext) -> None:
+        for c in self.members:
+            c.check(ctx)
+
+    def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
+        for c in self.members:
+            c.after_solve(theta, ctx)
+
+
+# --------------------------------------------------------------------------------------------
+# (22): the rational static function equals a polynomial static curve
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False, repr=False)
+class CurveEquality(StaticConstraint):
+    """Eq. (22): the model's rational static function equals the polynomial curve H(ū).
+
+    With ȳ = N(ū)/D(ū) (eq. (6)) and H(ū) = Σ_m c_m ū^m, the identity N ≡ D·H is met by
+    making the denominator constant and matching the numerator:
+
+    - ``Σ_{y u^m} = 0`` for every cluster with m >= 1,
+    - ``Σ_y = Σ*_y``,
+    - ``Σ_{u^m} = (1 − Σ*_y) c_m`` for every numerator cluster (c_m = 0 above the curve's degree).
+
+    Σ*_y comes from a reference model (the paper: the ELS estimate; graybox's estimators pass
+    the LS estimate unless told otherwise) or is given here.
+
+    Parameters
+    ----------
+    curve : StaticCurve
+        Polynomial static curve (ascending coefficients), e.g. eq. (1).
+    sigma_y : float, optional
+        Σ*_y; default: the problem's (``StaticContext.sigma_y``).
+
+    Raises
+    ------
+    ValueError
+        The structure is not rational; the curve has a power of ū that no cluster carries;
+        Σ*_y = 1 (the static function would not exist).
+    """
+
+    curve: StaticCurve
+    sigma_y: float | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.curve, StaticCurve):
+            raise ValueError(f"CurveEquality needs a StaticCurve, got {type(self.curve).__name__}")
+        if self.sigma_y is not None and not np.isfinite(self.sigma_y):
+            raise ValueError(f"sigma_y must be finite, got {self.sigma_y!r}")
+
+    def describe(self) -> str:
+        s = "" if self.sigma_y is None else f", Σ*y = {self.sigma_y:.6g}"
+        return f"static curve equality (22) to {self.curve.name}{s}"
+
+    def resolved_sigma_y(self, ctx: StaticContext) -> float:
+        """Σ*_y used: this constraint's, else the context's; 0 when the structure has no Σy."""
+        cm = ctx.cluster_map
+        if (1, 0) not in cm.keys:
+            return 0.0  # no linear-in-y cluster: the denominator is 1 − Σ_{yu^m} ū^m → 1
+        s = self.sigma_y if self.sigma_y is not None else ctx.sigma_y
+        if s is None:
+            raise ValueError(f"{self.describe()}: Σ*_y is unknown; give sigma_y or a reference model")
+        return float(s)
+
+    def affine(self, ctx: StaticContext) -> AffineRows:
+        st = ctx.structure
+        if not is_rational(st):
+            raise ValueError(
+                "eq. (22) needs a rational static function (no term with y to a power above 1); "
+                f"this structure has {[str(t) for t in st if t.power_of('y') > 1]}. Use "
+                "PassesThrough(points) or a StaticBand / PE objective instead"
+            )
+        cm = ctx.cluster_map
+        sy = self.resolved_sigma_y(ctx)
+        if abs(1.0 - sy) < 1e-9:
+            raise ValueError(f"Σ*_y = {sy:.12g}: the denominator 1 − Σ*_y of eq. (22) vanishes, "
+                             "so no static function exists; use another reference model")
+        c = self.curve.coefficients
+        numer = {m for (p, m) in cm.keys if p == 0}
+        missing = [m for m, cm_ in enumerate(c) if cm_ != 0.0 and m not in numer]
+        if missing:
+            raise ValueError(
+                f"{self.curve.name} has ū^m terms with m = {missing} but the structure has no cluster "
+                f"{[cluster_name(0, m) for m in missing]}: its static function cannot equal the curve"
+            )
+        A, b = [], []
+        for k, (p, m) in enumerate(cm.keys):
+            if p == 1 and m >= 1:
+                target = 0.0
+            elif p == 1:
+                target = sy
+            else:
+                target = (1.0 - sy) * (c[m] if m < c.size else 0.0)
+            A.append(cm.R[k])
+            b.append(target)
+        return AffineRows.make(ctx.n_terms, A, b)
+
+
+# --------------------------------------------------------------------------------------------
+# the static function passes through given points
+# --------------------------------------------------------------------------------------------
+def _denominator_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """D_i(θ) = 1 − ∂(q_iᵀRθ)/∂ȳ as ``(1, d_i R)``: D_i = 1 − (d R θ)_i. Shapes (M,), (M, n)."""
+    d = static_rows(cm, ubar, ybar, wrt="y") @ cm.R
+    return np.ones(len(ubar)), d
+
+
+def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray, what: str) -> None:
+    """Refuse an estimate whose rational static function has a zero denominator at a static ū."""
+    if not is_rational(ctx.structure):
+        return
+    cm = ctx.cluster_map
+    sigma = cm.R @ theta
+    ub = np.asarray(ubar, float)
+    den = np.ones_like(ub)
+    scale = np.ones_like(ub)
+    for (p, m), s in zip(cm.keys, sigma):
+        if p == 1:
+            den -= s * ub**m
+            scale += abs(s) * np.abs(ub) ** m
+    bad = np.abs(den) <= 1e-9 * scale
+    if bad.any():
+        raise ValueError(
+            f"{what}: the estimated model's static function does not exist at ū = {ub[bad].tolist()} "
+            "(its denominator 1 − Σy − Σyu ū − … vanishes there, so the static equation holds as 0 = 0 "
+            "and the point is not matched); move the point or constrain the y clusters"
+        )
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class PassesThrough(StaticConstraint):
+    """The static equation holds at given points: ``ȳ_i = q_iᵀ R θ`` for every i.
+
+    For a rational structure this is ``ȳ_model(ū_i) = ȳ_i`` wherever the static function exists
+    (checked after solving). For higher y powers it makes ȳ_i *an* equilibrium at ū_i, not
+    necessarily the stable one the model settles on.
+
+    Parameters
+    ----------
+    points : StaticPoints, optional
+        The points; default: the problem's static points.
+    """
+
+    points: StaticPoints | None = None
+
+    def describe(self) -> str:
+        n = "the problem's" if self.points is None else f"{len(self.points)}"
+        return f"static function passes through {n} static points"
+
+    def affine(self, ctx: StaticContext) -> AffineRows:
+        pts = ctx.require_points(self.points, self.describe())
+        ctx.check_ubar(pts.ubar, self.describe())
+        cm = ctx.cluster_map
+        QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R
+        return AffineRows.make(ctx.n_terms, QR, pts.ybar)
+
+    def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
+        pts = ctx.require_points(self.points, self.describe())
+        _check_static_exists(ctx, theta, pts.ubar, self.describe())
+
+
+# --------------------------------------------------------------------------------------------
+# band |ȳ_model(ū_i) − ȳ_i| <= b
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False, repr=False)
+class StaticBand(StaticConstraint):
+    """The static function stays within ``b`` of each static point: the convex twin of D_SF.
+
+    ``form="exact"`` (default) imposes ``−b D_i(θ) <= ȳ_i − q_iᵀRθ <= b D_i(θ)`` with
+    ``D_i(θ) = 1 − ∂(q_iᵀRθ)/∂ȳ`` at the measured ȳ_i (both sides affine in θ). For a rational
+    structure D_i is the denominator of eq. (6) at ū_i and ``ȳ_i − q_iᵀRθ = D_i (ȳ_i −
+    ȳ_model(ū_i))``, so this is exactly ``|ȳ_model(ū_i) − ȳ_i| <= b`` with ``D_i >= 0`` (a
+    necessary condition for a stable equilibrium: 1 − Σ a_i > 0). With y powers above 1 it is
+    the first-order (Newton-step) version of the band at the measured ȳ_i.
+
+    ``form="residual"`` bounds the static-equation residual ``|ȳ_i − q_iᵀRθ| <= b`` instead;
+    it is looser by the factor 1/D (≈ 14 for the paper's model (15), whose D ≈ 0.07).
+
+    Parameters
+    ----------
+    b : float
+        Half-width of the band, output units (default 0.175 mlc: the transmitter's error).
+    points : StaticPoints, optional
+        Default: the problem's static points.
+    form : {"exact", "residual"}
+    """
+
+    b: float = 0.175
+    points: StaticPoints | None = None
+    form: str = "exact"
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.b) and self.b > 0):
+            raise ValueError(f"band half-width b must be a positive number, got {self.b!r}")
+        if self.form not in ("exact", "residual"):
+            raise ValueError(f"form must be 'exact' or 'residual', got {self.form!r}")
+
+    def describe(self) -> str:
+        n = "the problem's" if self.points is None else f"{len(self.points)}"
+        return f"static band ±{self.b:g} ({self.form}) at {n} static points"
+
+    def affine(self, ctx: StaticContext) -> AffineRows:
+        pts = ctx.require_points(self.points, self.describe())
+        ctx.check_ubar(pts.ubar, self.describe())
+        cm = ctx.cluster_map
+        QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R
+        if self.form == "exact":
+            one, dR = _denominator_rows(cm, pts.ubar, pts.ybar)
+        else:
+            one, dR = np.ones(len(pts)), np.zeros_like(QR)
+        b = self.b
+        # q θ − ȳ <= b (1 − dθ)   and   ȳ − q θ <= b (1 − dθ)
+        A = np.vstack([QR + b * dR, -QR + b * dR])
+        rhs = np.concatenate([pts.ybar + b * one, b * one - pts.ybar])
+        return AffineRows.make(ctx.n_terms, A_ub=A, b_ub=rhs)
+
+    def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
+        if self.form == "exact":
+            pts = ctx.require_points(self.points, self.describe())
+            _check_static_exists(ctx, theta, pts.ubar, self.describe())
+
+
+# --------------------------------------------------------------------------------------------
+# static-gain bounds over a ū range
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False, repr=False)
+class GainBounds(StaticConstraint):
+    """Bounds on the static gain dȳ/dū over a ū range (e.g. ``lower=0``: a monotone curve).
+
+    Implicit differentiation of the static equation ȳ = Σ_c Σ_c ȳ^p ū^m gives
+    ``dȳ/dū = G(θ)/D(θ)`` with ``G = Σ_c Σ_c m ȳ^p ū^(m−1)`` and ``D = 1 − Σ_c Σ_c p ȳ^(p−1) ū^m``.
+    Evaluated at a *reference* ȳ(ū) (a static curve, or the static points interpolated), both
+    are affine in θ, and with ``D >= min_denominator > 0`` the bounds become the affine rows
+    ``G − lower·D >= 0`` and ``G − upper·D <= 0``.
+
+    Approximation: the gain is that of the model's static equation *along the reference curve*;
+    it equals the model's own gain wherever the model's static curve passes through the
+    reference (e.g. with :class:`CurveEquality` or :class:`PassesThrough`), and exactly
+    everywhere when no cluster mixes y and u (then G does not depend on ȳ). The error is
+    ``(ȳ_model − ȳ_ref) Σ_{yu^m} m ū^(m−1) / D`` for rational structures.
+
+    Parameters
+    ----------
+    lower, upper : float, optional
+        Gain bounds, output units per input unit (at least one).
+    ubar_range : (float, float), optional
+        ū interval; default: the reference curve's domain, else the static points' range.
+    n : int
+        Number of equally spaced ū in the interval where the bounds are imposed.
+    reference : StaticCurve or callable ū ↦ ȳ, optional
+        Default: the problem's static curve, else the problem's static points interpolated
+        linearly.
+    min_denominator : float
+        D >= this (also a necessary condition for a stable equilibrium).
+    """
+
+    lower: float | None = None
+    upper: float | None = None
+    ubar_range: tuple[float, float] | None = None
+    n: int = 25
+    reference: StaticCurve | Callable[[np.ndarray], np.ndarray] | None = None
+    min_denominator: float = 1e-6
+
+    def __post_init__(self) -> None:
+        if self.lower is None and self.upper is None:
+            raise ValueError("GainBounds needs a lower or an upper bound")
+        for nm in ("lower", "upper"):
+            v = getattr(self, nm)
+            if v is not None and not np.isfinite(v):
+                raise ValueError(f"{nm} gain bound must be finite, got {v!r}")
+        if self.lower is not None and self.upper is not None and self.lower > self.upper:
+            raise ValueError(f"lower gain bound {self.lower} exceeds upper bound {self.upper}")
+        if int(self.n) != self.n or self.n < 1:
+            raise ValueError(f"n must be a positive integer, got {self.n!r}")
+        if self.ubar_range is not None:
+            lo, hi = (float(v) for v in self.ubar_range)
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+                raise ValueError(f"ubar_range must be (low, high) with low <= high, got {self.ubar_range}")
+            object.__setattr__(self, "ubar_range", (lo, hi))
+        if not (self.min_denominator > 0):
+            raise ValueError("min_denominator must be positive")
+
+    def describe(self) -> str:
+        lo = "-inf" if self.lower is None else f"{self.lower:g}"
+        hi = "inf" if self.upper is None else f"{self.upper:g}"
+        rng = "" if self.ubar_range is None else f" over ū in [{self.ubar_range[0]:g}, {self.ubar_range[1]:g}]"
+        return f"static gain in [{lo}, {hi}]{rng}"
+
+    def grid(self, ctx: StaticContext) -> tuple[np.ndarray, np.ndarray]:
+        """The ū grid and the reference ȳ on it, shapes (n,), (n,)."""
+        ref = self.reference if self.reference is not None else ctx.curve
+        rng = self.ubar_range
+        if rng is None:
+            if isinstance(ref, StaticCurve) and ref.domain is not None:
+                rng = ref.domain
+            elif ctx.points is not None:
+                rng = (float(ctx.points.ubar.min()), float(ctx.points.ubar.max()))
+            else:
+                raise ValueError(f"{self.describe()}: give ubar_range (no curve domain or static points to take it from)")
+        ub = np.linspace(rng[0], rng[1], int(self.n))
+        ctx.check_ubar(ub, self.describe())
+        if ref is None:
+            if ctx.points is None:
+                raise ValueError(f"{self.describe()} needs a reference ȳ(ū): a static curve or static points")
+            order = np.argsort(ctx.points.ubar)
+            pu, py = ctx.points.ubar[order], ctx.points.ybar[order]
+            if ub.min() < pu[0] - 1e-9 * abs(pu[0]) or ub.max() > pu[-1] + 1e-9 * abs(pu[-1]):
+                raise ValueError(f"{self.describe()}: the ū range [{ub.min():g}, {ub.max():g}] extends beyond the "
+                                 f"static points [{pu[0]:g}, {pu[-1]:g}] used as reference")
+            yb = np.interp(ub, pu, py)
+        else:
+            yb = np.asarray(ref(ub), float)  # a StaticCurve refuses ū outside its domain
+            if yb.shape != ub.shape or not np.all(np.isfinite(yb)):
+                raise ValueError(f"{self.describe()}: the reference must map ū of shape {ub.shape} to finite ȳ")
+        return ub, yb
+
+    def affine(self, ctx: StaticContext) -> AffineRows:
+        cm = ctx.cluster_map
+        ub, yb = self.grid(ctx)
+        G = static_rows(cm, ub, yb, wrt="u") @ cm.R
+        one, dR = _denominator_rows(cm, ub, yb)
+        rows, rhs = [], []
+        # D = 1 − dR θ >= min_denominator   ⇔   dR θ <= 1 − δ
+        rows.append(dR)
+        rhs.append(one - self.min_denominator)
+        if self.lower is not None:  # G − l D >= 0  ⇔  −G − l dR θ <= −l
+            rows.append(-G - self.lower * dR)
+            rhs.append(-self.lower * one)
+        if self.upper is not None:  # G − u D <= 0  ⇔  G + u dR θ <= u
+            rows.append(G + self.upper * dR)
+            rhs.append(self.upper * one)
+        return AffineRows.make(ctx.n_terms, A_ub=np.vstack(rows), b_ub=np.concatenate(rhs))
+
+
+# --------------------------------------------------------------------------------------------
+# bounds on named cluster coefficients
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False, repr=False)
+class ClusterBounds(StaticConstraint):
+    """Bounds on named cluster coefficients, e.g. ``ClusterBounds({"Σy": (None, 1 - 1e-3)})``.
+
+    Parameters
+    ----------
+    bounds : mapping name -> (lower, upper)
+        Cluster name (``"Σy"``, ``"Σyu"``, ``"Σu²"``, or ASCII ``"Sy"``, ``"Su^2"``) or key
+        (p, m); either bound may be None; equal bounds fix the cluster's value.
+    """
+
+    bounds: Mapping[str | tuple[int, int], tuple[float | None, float | None]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not self.bounds:
+            raise ValueError("ClusterBounds needs at least one cluster")
+        clean = {}
+        for k, v in dict(self.bounds).items():
+            try:
+                lo, hi = v
+            except (TypeError, ValueError):
+                raise ValueError(f"bounds for cluster {k!r} must be (lower, upper), got {v!r}") from None
+            for b in (lo, hi):
+                if b is not None and not np.isfinite(b):
+                    raise ValueError(f"bound {b!r} for cluster {k!r} must be finite or None")
+            if lo is None and hi is None:
+                raise ValueError(f"cluster {k!r}: give a lower or an upper bound")
+            if lo is not None and hi is not None and lo > hi:
+                raise ValueError(f"cluster {k!r}: lower bound {lo} exceeds upper bound {hi}")
+            clean[k] = (lo, hi)
+        object.__setattr__(self, "bounds", clean)
+
+    def describe(self) -> str:
+        parts = []
+        for k, (lo, hi) in self.bounds.items():
+            name = cluster_name(*k) if isinstance(k, tuple) else k
+            parts.append(f"{'' if lo is None else f'{lo:g} <= '}{name}{'' if hi is None else f' <= {hi:g}'}")
+        return "cluster bounds " + ", ".join(parts)
+
+    def affine(self, ctx: StaticContext) -> AffineRows:
+        cm = ctx.cluster_map
+        Ae, be, Au, bu = [], [], [], []
+        for k, (lo, hi) in self.bounds.items():
+            row = cm.R[cm.index(k)]
+            if lo is not None and hi is not None and lo == hi:
+                Ae.append(row)
+                be.append(lo)
+                continue
+            if hi is not None:
+                Au.append(row)
+                bu.append(hi)
+            if lo is not None:
+                Au.append(-row)
+                bu.append(-lo)
+        n = ctx.n_terms
+        return AffineRows.make(n, Ae or None, be or None, Au or None, bu or None)
+
+
+# --------------------------------------------------------------------------------------------
+# anything a user writes in cvxpy
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False, repr=False)
+class UserConstraint(StaticConstraint):
+    """Any convex constraint(s) written in cvxpy on θ (engineering units).
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(theta)`` or ``fn(theta, ctx)`` returning a cvxpy constraint or a sequence of them;
+        ``theta`` is a cvxpy expression of shape (n_terms,) in engineering units (internally an
+        affine function of the scaled variable the solver sees).
+    name : str
+        Used in error messages.
+
+    Notes
+    -----
+    Not usable with the closed forms (they handle equalities only, from affine rows).
+    """
+
+    fn: Callable[..., object]
+    name: str = "user constraint"
+
+    def __post_init__(self) -> None:
+        if not callable(self.fn):
+            raise ValueError(f"UserConstraint needs a callable θ ↦ constraint(s), got {type(self.fn).__name__}")
+
+    def describe(self) -> str:
+        return self.name
+
+    def _call(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
+        try:
+            n_args = len(inspect.signature(self.fn).parameters)
+        except (TypeError, ValueError):
+            n_args = 1
+        res = self.fn(theta, ctx) if n_args >= 2 else self.fn(theta)
+        out = [res] if isinstance(res, cp.constraints.constraint.Constraint) else list(res or [])
+        for c in out:
+            if not isinstance(c, cp.constraints.constraint.Constraint):
+                raise ValueError(f"{self.name}: the function must return cvxpy constraints, got {type(c).__name__}")
+            if not c.is_dcp():
+                raise ValueError(f"{self.name}: constraint {c} is not convex (DCP)")
+        return out
+
+    def constraints(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
+        return self._call(theta, ctx)
+
+    def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
+        """Largest cvxpy-reported violation at ``theta`` (in the constraint's own units)."""
+        v = cp.Variable(ctx.n_terms)
+        v.value = np.asarray(theta, float)
+        return max((float(np.max(c.violation())) for c in self._call(v, ctx)), default=0.0)
+
+    def check(self, ctx: StaticContext) -> None:
+        self._call(cp.Variable(ctx.n_terms), ctx)
+

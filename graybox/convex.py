@@ -1,0 +1,791 @@
+"""Gray-box convex estimation: CLS (eq. (22)) and the PE bi-objective problem (eqs. (9), (11)).
+
+Both problems are least squares in θ with static information that is affine in θ
+(eq. (12): ŷ_static = Q R θ with the measured ȳ on the regressor side):
+
+- **CLS**: min J_1(θ) subject to static equalities (the rational static function equals a
+  polynomial curve, eq. (22); or it passes through given points) and any of the constraint
+  objects of :mod:`graybox.constraints`.
+- **PE**: min λ1 J_1(θ) + λ2 J_SF^QR(θ), λ2 = 1 − λ1, over a sweep of λ1, with
+  ``J_1 = ‖Ψθ − y‖²/N`` and ``J_SF^QR = ‖QRθ − ȳ‖²/N_SF`` (the static-equation error that is
+  affine in θ; for a rational model it is the true static error times the denominator D(ū)).
+
+Each is solved as a cvxpy problem (Clarabel by default, OSQP selectable) and, when the
+constraints are equalities only, by a closed form (the KKT conditions by the null-space
+method; eq. (11) for PE). The closed forms are the cross-checks: tests hold the two to 1e-6.
+
+Numerics. Regressors in engineering units span many decades (u² ≈ 1e6 rpm², u³ ≈ 1e9), so the
+solver variable is ``z = s ⊙ θ`` with ``s`` the RMS of each column of Ψ (the static rows Q R
+hold the same monomials at steady state, so they come out near unit scale too); constraint rows
+are normalised to unit norm; θ is reported in engineering units. The dynamic data enter through
+the triangular factor of ``[Ψ/s, y]`` (a QR factorisation), so each solve has ``n_terms``
+residuals instead of N: the problem size does not grow with the record length, and λ enters as
+cvxpy Parameters (DPP), so a sweep compiles once and re-solves with warm starts.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Iterable, Mapping, NamedTuple, Sequence
+
+import cvxpy as cp
+import numpy as np
+import scipy.linalg
+import scipy.sparse
+
+from .constraints import (
+    AffineRows,
+    CurveEquality,
+    InfeasibleError,
+    PassesThrough,
+    StaticConstraint,
+    StaticContext,
+    as_constraint_list,
+    static_rows,
+)
+from .curves import StaticCurve
+from .ls import column_scales
+from .model import Model
+from .pareto import ParetoSet
+from .records import Dataset, Record, StaticPoints
+from .regressors import stacked_regressors
+from .static import cluster_map
+from .terms import Structure
+
+__all__ = [
+    "SOLVERS",
+    "static_matrices",
+    "static_prediction",
+    "qr_static_error",
+    "cls",
+    "pe_thetas",
+    "pe_pareto",
+    "Table1Gray",
+    "table1_graybox",
+]
+
+#: Accepted ``solver`` values: cvxpy with Clarabel or OSQP, or the closed form.
+SOLVERS = ("clarabel", "osqp", "closed")
+
+# Tight defaults: the closed forms and the QPs are compared to 1e-6 in θ, and the PE sweep
+# reaches λ1 = 1e-6 where the problem is ill-conditioned (see _Basis).
+_SOLVER_DEFAULTS: dict[str, dict] = {
+    "clarabel": dict(tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10, max_iter=400),
+    # ADMM needs tight stopping to reach 1e-6 in θ; a least-squares objective is never unbounded,
+    # so dual-infeasibility detection is switched off (it misfires at λ1 = 1e-6).
+    "osqp": dict(eps_abs=1e-12, eps_rel=1e-12, eps_prim_inf=1e-9, eps_dual_inf=1e-15, polishing=False,
+                 max_iter=200_000),
+}
+
+# --------------------------------------------------------------------------------------------
+# eq. (12)
+# --------------------------------------------------------------------------------------------
+def static_matrices(structure: Structure, points: StaticPoints) -> tuple[np.ndarray, np.ndarray]:
+    """Q and R of eq. (12) for any structure (clusters with any powers of y and u).
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms.
+    points : StaticPoints
+        Measured steady states (ū_i, ȳ_i), N_SF of them.
+
+    Returns
+    -------
+    Q : ndarray, shape (N_SF, n_clusters)
+        ``Q[i, c] = ȳ_i^p ū_i^m`` for cluster c = (p, m) (order of ``cluster_map(structure).keys``):
+        the measured ȳ sits on the regressor side, so ``Q R θ`` is affine in θ.
+    R : ndarray, shape (n_clusters, n_terms)
+        The 0/1 map from θ to the cluster coefficients, Σ = R θ.
+    """
+    st = _process_structure(structure)
+    cm = cluster_map(st)
+    return static_rows(cm, points.ubar, points.ybar), np.array(cm.R)
+
+
+def static_prediction(structure: Structure, thetas: np.ndarray, points: StaticPoints) -> np.ndarray:
+    """``Q R θ`` for one or many θ: the static equation's right-hand side at the measured ȳ.
+
+    Returns
+    -------
+    ndarray, shape (K, N_SF) (or (N_SF,) for one θ), output units.
+    """
+    Q, R = static_matrices(structure, points)
+    th = np.asarray(thetas, float)
+    return th @ (Q @ R).T
+
+
+def qr_static_error(structure: Structure, thetas: np.ndarray, points: StaticPoints) -> np.ndarray:
+    """J_SF^QR = mean((ȳ − Q R θ)²): the static error the PE problem minimises, output units².
+
+    For a rational model it is mean(D(ū_i)² (ȳ_i − ȳ_model(ū_i))²) with D the denominator of
+    eq. (6); it is what the weighted sum (9)/(11) trades against J_1.
+
+    Returns
+    -------
+    ndarray, shape (K,) (a float for one θ).
+    """
+    pred = static_prediction(structure, thetas, points)
+    return np.mean((pred - points.ybar) ** 2, axis=-1)
+
+
+# --------------------------------------------------------------------------------------------
+# input validation
+# --------------------------------------------------------------------------------------------
+def _process_structure(structure: Structure | Model | Sequence[str]) -> Structure:
+    if isinstance(structure, Model):
+        structure = structure.structure
+    st = structure if isinstance(structure, Structure) else Structure(structure)
+    if len(st) == 0:
+        raise ValueError("the structure has no terms")
+    noise = [str(t) for t in st if t.is_noise]
+    if noise:
+        raise ValueError(f"noise terms {noise} have no place in a gray-box estimate (the MA part is for ELS "
+                         "bias only); pass structure.process")
+    return st
+
+
+def _records(data: Record | Sequence[Record] | Dataset) -> list[Record]:
+    if isinstance(data, Dataset):
+        return [data.ident]
+    if isinstance(data, Record):
+        return [data]
+    recs = list(data)
+    if not recs or not all(isinstance(r, Record) for r in recs):
+        raise ValueError("data must be a Record, a sequence of Records or a Dataset (its ident record is used)")
+    return recs
+
+
+def _check_solver(solver: str) -> str:
+    s = str(solver).lower()
+    if s not in SOLVERS:
+        raise ValueError(f"solver must be one of {SOLVERS}, got {solver!r}")
+    return s
+
+
+# --------------------------------------------------------------------------------------------
+# the scaled, reduced problem data
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class _Data:
+    """Scaled least-squares data: J_1 = (‖R1 z − c1‖² + rss)/N with z = s ⊙ θ."""
+
+    structure: Structure
+    s: np.ndarray  # (n,) column RMS of Ψ
+    R1: np.ndarray  # (n, n) upper triangular
+    c1: np.ndarray  # (n,)
+    rss: float  # residual sum of squares of the unconstrained LS fit
+    N: int  # regression rows
+    data_range: tuple[float, float]
+
+
+def _dynamic(structure: Structure, records: list[Record]) -> _Data:
+    psi, y = stacked_regressors(structure, records)
+    n = len(structure)
+    if psi.shape[0] <= n:
+        raise ValueError(f"{psi.shape[0]} regression rows for {n} parameters: the data are too short")
+    if not (np.all(np.isfinite(psi)) and np.all(np.isfinite(y))):
+        raise ValueError("non-finite regressors (overflow of a high power of u or y?)")
+    s = column_scales(psi)
+    # R-factor of [Ψ/s, y]: its top-left block is Ψ's triangular factor, its last column Q1ᵀy and
+    # its corner the LS residual norm; Q itself is never formed.
+    Raug = np.linalg.qr(np.column_stack([psi / s, y]), mode="r")
+    u_all = np.concatenate([r.u for r in records])
+    return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0],
+                 (float(u_all.min()), float(u_all.max())))
+
+
+def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray, int]:
+    """Scaled static rows (R2, c2) with ‖QRθ − ȳ‖² = ‖R2 z − c2‖² + const, and N_SF."""
+    Q, R = static_matrices(d.structure, points)
+    A2 = (Q @ R) / d.s
+    if not np.all(np.isfinite(A2)):
+        raise ValueError("non-finite static rows: check the static points")
+    M = len(points)
+    n = A2.shape[1]
+    if M > n:  # reduce as for Ψ so the QP never grows with N_SF either
+        Raug = np.linalg.qr(np.column_stack([A2, points.ybar]), mode="r")
+        return Raug[:n, :n], Raug[:n, n], M
+    return A2, np.array(points.ybar), M
+
+
+def _ls_theta(d: _Data) -> np.ndarray:
+    """Unconstrained least squares, engineering units (rank checked)."""
+    diag = np.abs(np.diag(d.R1))
+    if diag.min() <= 1e-12 * diag.max():
+        raise ValueError("the regressor matrix is rank deficient: θ is not identifiable from these data")
+    return scipy.linalg.solve_triangular(d.R1, d.c1) / d.s
+
+
+def _sigma_y(d: _Data, reference: Model | np.ndarray | float | None) -> float | None:
+    """Σ*_y of the reference (eq. (22)): a Model, a θ of this structure, a number, or LS."""
+    cm = cluster_map(d.structure)
+    if (1, 0) not in cm.keys:
+        return None
+    if reference is None:
+        th = _ls_theta(d)
+    elif isinstance(reference, Model):
+        return float(reference.clusters().get("Σy", 0.0))
+    elif np.ndim(reference) == 0:
+        v = float(reference)
+        if not np.isfinite(v):
+            raise ValueError(f"reference Σ*_y must be finite, got {reference!r}")
+        return v
+    else:
+        th = np.asarray(reference, float)
+        if th.shape != (len(d.structure),):
+            raise ValueError(f"reference θ must have shape ({len(d.structure)},), got {th.shape}")
+    return float((cm.R @ th)[cm.index((1, 0))])
+
+
+# --------------------------------------------------------------------------------------------
+# constraint rows → scaled, normalised, reduced
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class _Rows:
+    """Constraint rows in the solver's coordinates y (z = T y, θ = z / s)."""
+
+    V: np.ndarray  # (r, n) orthonormal equality rows
+    g: np.ndarray  # (r,)
+    G: np.ndarray  # (j, n) unit-norm inequality rows
+    h: np.ndarray  # (j,)
+    user: tuple[StaticConstraint, ...]  # not affine: built as cvxpy constraints on θ(y)
+    names: tuple[str, ...]
+
+
+def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, T: np.ndarray | None = None) -> _Rows:
+    n = s.size
+    T = np.eye(n) if T is None else T
+    E, f, G, h, user, eq_names = [np.zeros((0, n))], [np.zeros(0)], [np.zeros((0, n))], [np.zeros(0)], [], []
+    for c in cons:
+        c.check(ctx)
+        r: AffineRows | None = c.affine(ctx)
+        if r is None:
+            user.append(c)
+            continue
+        if r.n_eq:
+            E.append((r.A_eq / s) @ T)
+            f.append(r.b_eq)
+            eq_names.append(c.describe())
+        if r.n_ub:
+            G.append((r.A_ub / s) @ T)
+            h.append(r.b_ub)
+    names = tuple(c.describe() for c in cons)
+    E, f, G, h = np.vstack(E), np.concatenate(f), np.vstack(G), np.concatenate(h)
+    G, h = _normalise_ub(G, h, names)
+    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(cluster_map(ctx.structure).keys))
+    return _Rows(V, g, G, h, tuple(user), names)
+
+
+def _normalise_ub(G: np.ndarray, h: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    norms = np.linalg.norm(G, axis=1)
+    zero = norms <= 1e-14 * max(1.0, norms.max(initial=0.0))
+    if np.any(h[zero] < 0):  # 0 <= h with h < 0: no θ can satisfy it
+        raise InfeasibleError(f"infeasible constraints (a row reads 0 <= {h[zero].min():g}): {list(names)}")
+    G, h, norms = G[~zero], h[~zero], norms[~zero]
+    return G / norms[:, None], h / norms
+
+
+def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Independent, orthonormal equality rows V y = g, or an error if the equalities disagree."""
+    n = E.shape[1]
+    if E.shape[0] == 0:
+        return np.zeros((0, n)), np.zeros(0)
+    norms = np.linalg.norm(E, axis=1)
+    ok = norms > 0
+    if np.any(np.abs(f[~ok]) > 0):
+        raise InfeasibleError(f"inconsistent equality constraints (a row reads 0 = {f[~ok][0]:g}): {names}")
+    E, f = E[ok] / norms[ok, None], f[ok] / norms[ok]
+    U, S, Vt = np.linalg.svd(E, full_matrices=False)
+    r = int(np.sum(S > 1e-10 * S[0]))
+    Ur = U[:, :r]
+    resid = f - Ur @ (Ur.T @ f)
+    if np.linalg.norm(resid) > 1e-8 * max(1.0, np.linalg.norm(f)):
+        more = ""
+        if E.shape[0] > r:
+            more = (f" ({E.shape[0]} equality rows but only {r} independent ones: the static function of this "
+                    f"structure has {cluster_count} cluster coefficients, so generic static points over-determine "
+                    "it; use fewer points, StaticCurve.fit + CurveEquality, a StaticBand or the PE problem)")
+        raise InfeasibleError(f"the equality constraints are inconsistent{more}: {names}")
+    return Vt[:r], (Ur.T @ f) / S[:r]
+
+
+# --------------------------------------------------------------------------------------------
+# the cvxpy problem (one per estimator call; λ as Parameters)
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class _Basis:
+    """Solver coordinates y with z = T y in which both quadratic forms are as simple as possible.
+
+    With Ψ of full rank, T = R1⁻¹ V (V from the SVD of the whitened static rows R2 R1⁻¹ = W Σ Vᵀ)
+    makes both the dynamic and the static Hessians diagonal (a generalised SVD): the objective
+    is w1 (‖y‖² − 2 g1ᵀy) + w2 (yᵀ diag(H2) y − 2 g2ᵀy) up to constants, whatever λ is. The
+    ill-conditioning of the data then lives in T (applied once, by backward-stable triangular
+    solves) instead of in the solver's KKT system, which is why Clarabel and OSQP reach the
+    closed form to ~1e-8 down to λ1 = 1e-6. Without full rank, T = I and the forms are dense.
+    """
+
+    T: np.ndarray  # (n, n)
+    H1: np.ndarray  # (n,) diagonal, or (n, n)
+    g1: np.ndarray  # (n,)
+    H2: np.ndarray | None
+    g2: np.ndarray | None
+
+
+def _basis(d: _Data, static: tuple[np.ndarray, np.ndarray] | None) -> _Basis:
+    n = d.s.size
+    diag = np.abs(np.diag(d.R1))
+    if diag.min() > 1e-12 * diag.max():
+        Rinv = scipy.linalg.solve_triangular(d.R1, np.eye(n))
+        if static is None:
+            return _Basis(Rinv, np.ones(n), d.c1.copy(), None, None)
+        R2, c2 = static
+        W, S, Vt = np.linalg.svd(R2 @ Rinv, full_matrices=True)
+        k = S.size
+        H2 = np.zeros(n)
+        H2[:k] = S**2
+        g2 = np.zeros(n)
+        g2[:k] = S * (W.T @ c2)[:k]
+        return _Basis(Rinv @ Vt.T, np.ones(n), Vt @ d.c1, H2, g2)
+    # rank-deficient Ψ (the constraints may still identify θ): plain normal forms
+    H2 = None if static is None else static[0].T @ static[0]
+    g2 = None if static is None else static[0].T @ static[1]
+    return _Basis(np.eye(n), d.R1.T @ d.R1, d.R1.T @ d.c1, H2, g2)
+
+
+def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
+    if H.ndim == 1:
+        if np.all(H == 1.0):
+            return cp.sum_squares(y)
+        # a constant matrix goes to the solver as P itself (no auxiliary variables)
+        return cp.quad_form(y, scipy.sparse.diags(H))
+    return cp.quad_form(y, cp.psd_wrap(H))
+
+
+class _QP:
+    """min w1 (yᵀH1y − 2g1ᵀy) + w2 (yᵀH2y − 2g2ᵀy)  s.t.  V y = g, G y <= h, user(θ(y)).
+
+    Built once; ``w1``, ``w2`` are nonnegative Parameters multiplying convex terms (DPP), so a
+    sweep re-solves the compiled problem (warm-started) instead of rebuilding it.
+    """
+
+    def __init__(self, d: _Data, static: tuple[np.ndarray, np.ndarray] | None, cons: list[StaticConstraint],
+                 ctx: StaticContext, solver: str, options: Mapping | None):
+        n = d.s.size
+        self.basis = b = _basis(d, static)
+        rows = _rows(cons, ctx, d.s, b.T)
+        self.y = cp.Variable(n, name="y")
+        theta = cp.multiply(1.0 / d.s, b.T @ self.y)  # engineering units, for user constraints
+        self.w1 = cp.Parameter(nonneg=True, name="w1")
+        self.w2 = cp.Parameter(nonneg=True, name="w2")
+        obj = self.w1 * (_quad(self.y, b.H1) - 2 * b.g1 @ self.y)
+        if b.H2 is not None:
+            obj = obj + self.w2 * (_quad(self.y, b.H2) - 2 * b.g2 @ self.y)
+        cons_cp: list[cp.Constraint] = []
+        if rows.V.shape[0]:
+            cons_cp.append(rows.V @ self.y == rows.g)
+        if rows.G.shape[0]:
+            cons_cp.append(rows.G @ self.y <= rows.h)
+        for c in rows.user:
+            cons_cp.extend(c.constraints(theta, ctx))
+        self.problem = cp.Problem(cp.Minimize(obj), cons_cp)
+        # First warm start: the unconstrained LS estimate (a first-order solver such as OSQP
+        # converges slowly from zero when λ1 is tiny; later solves start from the previous one).
+        self.y.value = b.g1 / b.H1 if b.H1.ndim == 1 else np.linalg.lstsq(b.H1, b.g1, rcond=None)[0]
+        if not self.problem.is_dcp(dpp=True):
+            raise ValueError("the problem is not convex (DCP/DPP): check the user constraints")
+        self.solver = solver
+        self.names = rows.names
+        self.options = dict(_SOLVER_DEFAULTS[solver])
+        self.options.update(options or {})
+
+    def solve(self, w1: float, w2: float, warm_start: bool = True) -> np.ndarray:
+        """z for one weight pair (the weights are normalised to sum 1: the argmin is unchanged)."""
+        tot = float(w1) + float(w2)
+        self.w1.value, self.w2.value = float(w1) / tot, float(w2) / tot
+        # Warm starts help OSQP (first order) only. Through cvxpy, a warm-started Clarabel re-uses
+        # its solver object and was measured to stop early, 3.7e-3 away from the optimum, on the
+        # PE sweep; an interior-point method gains nothing from a warm start anyway.
+        warm = warm_start and self.solver == "osqp"
+        try:
+            self.problem.solve(solver=self.solver.upper(), warm_start=warm, **self.options)
+        except cp.error.SolverError as exc:
+            raise InfeasibleError(f"solver {self.solver} failed ({exc}) with constraints {list(self.names)}") from exc
+        st = self.problem.status
+        if st in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
+            raise InfeasibleError(
+                f"the constraints admit no θ: solver {self.solver} reports status {st!r} for "
+                f"{list(self.names) or ['(none)']}"
+            )
+        if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.y.value is None:
+            raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
+        if st == cp.OPTIMAL_INACCURATE:
+            warnings.warn(f"solver {self.solver} reports an inaccurate optimum (w1={w1:g}, w2={w2:g})",
+                          RuntimeWarning, stacklevel=3)
+        return self.basis.T @ np.array(self.y.value, float)
+
+
+# --------------------------------------------------------------------------------------------
+# closed forms
+# --------------------------------------------------------------------------------------------
+def _closed_form(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, rows: _Rows,
+                 w1: np.ndarray, w2: np.ndarray) -> np.ndarray:
+    """argmin w1‖R1 z − c1‖² + w2‖R2 z − c2‖² s.t. V z = g, for K weight pairs at once.
+
+    The KKT conditions are solved by the null-space method: z = z_p + N w with V z_p = g and
+    V N = 0, then an unconstrained least squares in w. Without constraints this *is* eq. (11),
+    evaluated through a QR factorisation of the stacked, weighted factors instead of forming
+    [λ1 ΨᵀΨ + λ2 (QR)ᵀQR]⁻¹ (which squares the condition number). It works in the scaled
+    coordinates z directly (not in the solver basis of :class:`_Basis`), so comparing it with
+    the QPs checks two independent computations.
+
+    Returns
+    -------
+    ndarray, shape (K, n): z for each pair.
+    """
+    if rows.G.shape[0] or rows.user:
+        raise ValueError("the closed form handles equality constraints only; use solver='clarabel' or 'osqp' "
+                         f"for {[c.describe() for c in rows.user] or 'the inequality rows'}")
+    n = d.s.size
+    if rows.V.shape[0]:
+        z_p = rows.V.T @ rows.g  # V has orthonormal rows
+        Nb = scipy.linalg.null_space(rows.V)
+    else:
+        z_p, Nb = np.zeros(n), np.eye(n)
+    if Nb.shape[1] == 0:  # the equalities fix θ completely
+        return np.tile(z_p, (len(w1), 1))
+    blocks = [(d.R1, d.c1, w1)] + ([(static[0], static[1], w2)] if static is not None else [])
+    B = np.concatenate([np.sqrt(w)[:, None, None] * (A @ Nb)[None] for A, _, w in blocks], axis=1)
+    rhs = np.concatenate([np.sqrt(w)[:, None] * (c - A @ z_p)[None] for A, c, w in blocks], axis=1)
+    Qb, Rb = np.linalg.qr(B)
+    diag = np.abs(np.diagonal(Rb, axis1=1, axis2=2))
+    bad = diag.min(axis=1) <= 1e-13 * diag.max(axis=1)
+    if bad.any():
+        raise ValueError(
+            f"the closed form is singular for {int(bad.sum())} weight pair(s) (first w1 = {w1[bad][0]:g}): "
+            "θ is not identifiable from these data and constraints"
+        )
+    wv = np.linalg.solve(Rb, np.einsum("kij,ki->kj", Qb, rhs)[..., None])[..., 0]
+    return z_p[None, :] + wv @ Nb.T
+
+
+# --------------------------------------------------------------------------------------------
+# CLS
+# --------------------------------------------------------------------------------------------
+def cls(
+    structure: Structure | Model,
+    data: Record | Sequence[Record] | Dataset,
+    static: StaticCurve | StaticPoints | None = None,
+    *,
+    how: str = "auto",
+    reference: Model | np.ndarray | float | None = None,
+    constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
+    solver: str = "clarabel",
+    solver_options: Mapping | None = None,
+    check_range: bool = True,
+    name: str = "CLS",
+) -> Model:
+    """Constrained least squares: min J_1(θ) with the static information imposed exactly.
+
+    Parameters
+    ----------
+    structure : Structure or Model
+        Process terms (a Model's structure is used; noise terms are refused).
+    data : Record, sequence of Record, or Dataset
+        Dynamic identification data (a Dataset's ``ident`` record).
+    static : StaticCurve or StaticPoints, optional
+        What the static function must match:
+
+        - a polynomial curve → eq. (22) (:class:`~graybox.constraints.CurveEquality`), for a
+          structure whose static function is rational;
+        - points → "the static function passes through these points"
+          (:class:`~graybox.constraints.PassesThrough`), any structure;
+        - None → only ``constraints``.
+    how : {"auto", "curve", "points"}
+        ``"curve"`` with StaticPoints fits the polynomial the structure's numerator can carry
+        (degree = highest ū power of the Σ_{u^m} clusters) and imposes eq. (22); it needs at
+        least degree + 1 points.
+    reference : Model, ndarray, float, optional
+        Where Σ*_y of eq. (22) comes from: a reference model (the paper: ELS), its θ, or the
+        value itself. Default: the unconstrained least-squares estimate on ``data``.
+    constraints : constraint or iterable of constraints, optional
+        More constraints (band, gain, cluster bounds, user cvxpy constraints), combined with the
+        static ones.
+    solver : {"clarabel", "osqp", "closed"}
+        cvxpy with Clarabel (default) or OSQP, or the KKT closed form (equalities only).
+    solver_options : mapping, optional
+        Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults).
+    check_range : bool
+        Refuse static ū outside the input range of the dynamic data.
+    name : str
+        The returned model's name.
+
+    Returns
+    -------
+    Model
+        θ in engineering units.
+
+    Raises
+    ------
+    ValueError
+        Bad input (non-rational structure with a curve, too few points, ū outside the data's
+        range, a zero denominator of the estimated static function at a static point, …).
+    InfeasibleError
+        The constraints admit no θ; the message names them and the solver status.
+    """
+    st = _process_structure(structure)
+    solver = _check_solver(solver)
+    recs = _records(data)
+    d = _dynamic(st, recs)
+    cm = cluster_map(st)
+    static_cons: list[StaticConstraint] = []
+    points: StaticPoints | None = None
+    curve: StaticCurve | None = None
+    if how not in ("auto", "curve", "points"):
+        raise ValueError(f"how must be 'auto', 'curve' or 'points', got {how!r}")
+    if isinstance(static, StaticCurve):
+        if how == "points":
+            raise ValueError("how='points' needs StaticPoints; sample the curve with curve.points(ubar)")
+        curve = static
+    elif isinstance(static, StaticPoints):
+        points = static
+        if how == "curve":
+            degree = max((m for p, m in cm.keys if p == 0), default=0)
+            if len(points) < degree + 1:
+                raise ValueError(
+                    f"fewer static points than the constraints need: eq. (22) for this structure matches a "
+                    f"degree-{degree} curve, which needs at least {degree + 1} points; got {len(points)}"
+                )
+            curve = StaticCurve.fit(points, degree=degree)
+    elif static is not None:
+        raise ValueError(f"static must be a StaticCurve, StaticPoints or None, got {type(static).__name__}")
+    if curve is not None:
+        static_cons.append(CurveEquality(curve))
+    elif points is not None:
+        static_cons.append(PassesThrough(points))
+    ctx = StaticContext(st, points, curve, _sigma_y(d, reference), d.data_range, check_range)
+    if curve is not None and curve.domain is not None:
+        ctx.check_ubar(np.array(curve.domain), f"domain of {curve.name}")
+    cons = static_cons + as_constraint_list(constraints)
+    rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
+    if solver == "closed":
+        z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
+    else:
+        z = _QP(d, None, cons, ctx, solver, solver_options).solve(1.0, 0.0)
+    theta = z / d.s
+    for c in cons:
+        c.after_solve(theta, ctx)
+    return Model(st, theta, name=name)
+
+
+# --------------------------------------------------------------------------------------------
+# PE bi-objective
+# --------------------------------------------------------------------------------------------
+def _static_points(static: StaticPoints | StaticCurve, ubar: np.ndarray | None) -> StaticPoints:
+    if isinstance(static, StaticPoints):
+        if ubar is not None:
+            raise ValueError("ubar is for sampling a StaticCurve; static points carry their own ū")
+        return static
+    if isinstance(static, StaticCurve):
+        if ubar is None:
+            if static.domain is None:
+                raise ValueError("a StaticCurve without a domain needs ubar: where to sample it")
+            ubar = np.linspace(static.domain[0], static.domain[1], 10)
+        return static.points(np.asarray(ubar, float))
+    raise ValueError(f"static must be StaticPoints or a StaticCurve, got {type(static).__name__}")
+
+
+def _lambdas(lambdas: np.ndarray | Sequence[float] | float) -> np.ndarray:
+    lam = np.atleast_1d(np.asarray(lambdas, float))
+    if lam.ndim != 1 or lam.size == 0:
+        raise ValueError("lambdas must be a non-empty 1-D array of λ1 values")
+    if not np.all(np.isfinite(lam)) or lam.min() <= 0 or lam.max() > 1:
+        raise ValueError("every λ1 must lie in (0, 1] (λ2 = 1 − λ1; λ1 = 0 ignores the dynamic data, and "
+                         "θ is then not identifiable from the static points alone)")
+    return lam
+
+
+def _pe_setup(structure, data, static, constraints, weights, ubar, check_range):
+    st = _process_structure(structure)
+    if weights not in ("mse", "sum"):
+        raise ValueError(f"weights must be 'mse' or 'sum', got {weights!r}")
+    recs = _records(data)
+    d = _dynamic(st, recs)
+    pts = _static_points(static, ubar)
+    curve = static if isinstance(static, StaticCurve) else None
+    ctx = StaticContext(st, pts, curve, None, d.data_range, check_range)
+    ctx.check_ubar(pts.ubar, f"static points {pts.name!r}")
+    cons = as_constraint_list(constraints)
+    rows = _rows(cons, ctx, d.s)
+    R2, c2, M = _static_part(d, pts)
+    return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
+
+
+def pe_thetas(
+    structure: Structure | Model,
+    data: Record | Sequence[Record] | Dataset,
+    static: StaticPoints | StaticCurve,
+    lambdas: np.ndarray | Sequence[float] = np.logspace(-6, 0, 100),
+    *,
+    constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
+    solver: str = "clarabel",
+    solver_options: Mapping | None = None,
+    weights: str = "mse",
+    ubar: np.ndarray | None = None,
+    check_range: bool = True,
+    warm_start: bool = True,
+) -> np.ndarray:
+    """θ of the PE weighted sum (9) for each λ1 (λ2 = 1 − λ1), without evaluating them.
+
+    ``weights="mse"`` minimises ``λ1 ‖Ψθ − y‖²/N + λ2 ‖QRθ − ȳ‖²/N_SF`` (the paper's J_1 and
+    J_SF are mean squared errors); ``weights="sum"`` drops the 1/N, 1/N_SF as eq. (11) is
+    printed (the same front, reached at other λ). See :func:`pe_pareto` for the rest.
+
+    Returns
+    -------
+    ndarray, shape (K, n_terms), engineering units, in the order of ``lambdas``.
+    """
+    solver = _check_solver(solver)
+    lam = _lambdas(lambdas)
+    st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
+                                                            check_range)
+    w1 = lam / d.N if weights == "mse" else lam.copy()
+    w2 = (1.0 - lam) / M if weights == "mse" else 1.0 - lam
+    if solver == "closed":
+        Z = _closed_form(d, stat, rows, w1, w2)
+    else:
+        qp = _QP(d, stat, cons, ctx, solver, solver_options)
+        # sweep from λ1 = 1 (least squares) towards the static end, each solve warm-started from
+        # its neighbour; results are returned in the caller's order
+        Z = np.empty((lam.size, d.s.size))
+        for i in np.argsort(-lam, kind="stable"):
+            Z[i] = qp.solve(w1[i], w2[i], warm_start)
+    thetas = Z / d.s
+    for th in thetas:
+        for c in cons:
+            c.after_solve(th, ctx)
+    return thetas
+
+
+def pe_pareto(
+    structure: Structure | Model,
+    data: Record | Sequence[Record] | Dataset,
+    static: StaticPoints | StaticCurve,
+    lambdas: np.ndarray | Sequence[float] = np.logspace(-6, 0, 100),
+    *,
+    constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
+    solver: str = "clarabel",
+    solver_options: Mapping | None = None,
+    weights: str = "mse",
+    ubar: np.ndarray | None = None,
+    eval_static: StaticPoints | None = None,
+    check_range: bool = True,
+    warm_start: bool = True,
+    threads: int = 1,
+) -> ParetoSet:
+    """The PE bi-objective Pareto set (eq. (9)): one model per λ1, evaluated by the shared evaluator.
+
+    Parameters
+    ----------
+    structure : Structure or Model
+        Process terms ((15) without the MA part in the paper).
+    data : Record, sequence of Record, or Dataset
+        Dynamic identification data.
+    static : StaticPoints or StaticCurve
+        Static information; a curve is sampled at ``ubar`` (default: 10 points over its domain).
+    lambdas : array_like, shape (K,)
+        λ1 values in (0, 1]; λ2 = 1 − λ1. The paper: ``np.logspace(-6, 0, 100)``.
+    constraints : optional
+        Constraint objects imposed on every member (band, gain, clusters, user cvxpy).
+    solver : {"clarabel", "osqp", "closed"}
+        cvxpy (one Problem with λ as Parameters, re-solved with warm starts) or eq. (11)
+        (equality constraints only).
+    weights : {"mse", "sum"}
+        Objective normalisation (see :func:`pe_thetas`).
+    eval_static : StaticPoints, optional
+        Points for the members' J_SF (default: the static points used in the objective).
+    threads : int
+        Threads for the batch free runs of the evaluator.
+
+    Returns
+    -------
+    ParetoSet
+        θ, λ1, J_1 and J_S on ``data``, J_SF (true static-curve MSE, stable equilibria only) and,
+        in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²).
+    """
+    thetas = pe_thetas(structure, data, static, lambdas, constraints=constraints, solver=solver,
+                       solver_options=solver_options, weights=weights, ubar=ubar, check_range=check_range,
+                       warm_start=warm_start)
+    st = _process_structure(structure)
+    pts = _static_points(static, ubar)
+    ev = pts if eval_static is None else eval_static
+    return ParetoSet.from_thetas(
+        st, thetas, _lambdas(lambdas), data, ev, method=f"PE ({solver}, {weights})",
+        extra={"JSF_QR": qr_static_error(st, thetas, pts)}, threads=threads,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Table I rows for `graybox reproduce`
+# --------------------------------------------------------------------------------------------
+class Table1Gray(NamedTuple):
+    """The gray-box rows of Table I and what produced them."""
+
+    table: "object"  # pandas.DataFrame: rows "CLS (22)", "PE (D_SF)"; columns of graybox.evaluate.evaluate
+    cls: Model
+    pe: Model
+    pareto: ParetoSet
+    pe_index: int
+
+
+def table1_graybox(
+    data: Dataset,
+    reference: Model | None = None,
+    structure: Structure | None = None,
+    curve: StaticCurve | None = None,
+    lambdas: np.ndarray = np.logspace(-6, 0, 100),
+    band: float = 0.031,
+    solver: str = "clarabel",
+    fallback: str | None = "min_jsf",
+) -> Table1Gray:
+    """The CLS (22) and PE (D_SF) rows of Table I, for ``graybox reproduce``.
+
+    Parameters
+    ----------
+    data : Dataset
+        Identification and validation records and static points (e.g. ``load_pumping()``).
+    reference : Model, optional
+        The black-box model whose Σy is Σ*_y in eq. (22) and whose structure is used (the
+        paper: ELS (15)). Default: least squares on ``structure``.
+    structure : Structure, optional
+        Default: the reference's structure, else the paper's (15) (``reference.STRUCTURE_15``).
+    curve : StaticCurve, optional
+        The curve imposed by CLS; default: eq. (1).
+    lambdas : ndarray
+        λ1 sweep of the PE set (the paper: 100 values in logspace(-6, 0)).
+    band : float
+        D_SF's band B = [0, band] on J_SF, mlc² (0.031 = 0.175²).
+    fallback : str or None
+        Passed to :func:`graybox.decide.decide_dsf` when no member lies in the band.
+
+    Returns
+    -------
+    Table1Gray
+        ``table`` from :func:`graybox.evaluate.evaluate`, the two models, the PE set and the
+        index of the D_SF choice.
+    """
+    from . import reference as paper
+    from .decide import decide_dsf
+    from .evaluate import evaluate
+
+    if not isinstance(data, Dataset) or data.static is None:
+        raise ValueError("table1_graybox needs a Dataset with static points (e.g. graybox.datasets.load_pumping())")
+    st = structure if structure is not None else (reference.structure if reference is not None else paper.STRUCTURE_15)
+    cv = curve if curve is not None else StaticCurve.polynomial(paper.EQ1_COEFFICIENTS, name="eq. (1)")
+    cls_model = cls(st, data.ident, cv, reference=reference, solver=solver, name="CLS (22)")
+    front = pe_pareto(st, data.ident, data.static, lambdas, solver=solver)
+    pe_model, idx = decide_dsf(front, band=band, fallback=fallback, return_index=True)
+    pe_model = pe_model.with_theta(pe_model.theta, name="PE (D_SF)")
+    table = evaluate({"CLS (22)": cls_model, "PE (D_SF)": pe_model}, data)
+    return Table1Gray(table, cls_model, pe_model, front, idx)

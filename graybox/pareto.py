@@ -1,0 +1,208 @@
+"""Pareto sets as immutable data, and a non-dominated filter.
+
+A :class:`ParetoSet` holds the members of a bi-objective estimate (PE, SE, …) of one
+structure: θ, the weight λ1 that produced each, and the errors J_1, J_S and J_SF computed by
+the shared evaluator (:func:`graybox.evaluate.evaluate_thetas`), so every front is judged by the
+same definitions as Table I.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from .evaluate import evaluate_thetas
+from .model import Model
+from .records import Dataset, Record, StaticPoints
+from .terms import Structure
+
+__all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
+
+#: Objective names a ParetoSet carries (minimised).
+OBJECTIVES = ("J1", "JS", "JSF")
+
+
+def nondominated_mask(points: np.ndarray) -> np.ndarray:
+    """Which rows of ``points`` no other row dominates (all objectives minimised).
+
+    Row a dominates row b when a <= b in every objective and a < b in at least one. Equal rows
+    do not dominate each other (both are kept). A row with a NaN is never kept; ``inf`` is an
+    ordinary (worst) value.
+
+    Parameters
+    ----------
+    points : array_like, shape (K, m)
+
+    Returns
+    -------
+    ndarray of bool, shape (K,)
+    """
+    P = np.asarray(points, float)
+    if P.ndim != 2:
+        raise ValueError(f"points must be 2-D (members × objectives), got shape {P.shape}")
+    keep = ~np.isnan(P).any(axis=1)
+    # Visit in lexicographic order so strong members knock out many others early; a dominated
+    # member is skipped safely because whatever it dominates its dominator dominates too.
+    order = np.lexsort(P.T[::-1])
+    for i in order:
+        if not keep[i]:
+            continue
+        le = np.all(P[i] <= P, axis=1)
+        lt = np.any(P[i] < P, axis=1)
+        keep &= ~(le & lt)
+    return keep
+
+
+def _frozen(a, shape_name: str, dtype=float) -> np.ndarray:
+    x = np.array(a, dtype=dtype, copy=True)
+    x.setflags(write=False)
+    return x
+
+
+@dataclass(frozen=True, eq=False)
+class ParetoSet:
+    """Members of a bi-objective estimate of one structure.
+
+    Attributes
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (K, n_terms)
+        Parameters, engineering units.
+    lambdas : ndarray, shape (K,)
+        λ1 of each member (λ2 = 1 − λ1); NaN when a member came from no weight.
+    J1, JS, JSF : ndarray, shape (K,)
+        One-step-ahead MSE and free-run MSE on the identification data, static-function MSE at
+        the static points (output units²; inf where a free run diverges or the static curve is
+        undefined).
+    method : str
+        How the set was produced (e.g. ``"PE (clarabel, mse)"``).
+    extra : mapping str -> ndarray, shape (K,)
+        Further per-member values (e.g. ``"JSF_QR"``, the affine static error PE trades).
+    """
+
+    structure: Structure
+    thetas: np.ndarray
+    lambdas: np.ndarray
+    J1: np.ndarray
+    JS: np.ndarray
+    JSF: np.ndarray
+    method: str = ""
+    extra: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        th = _frozen(self.thetas, "thetas")
+        if th.ndim != 2 or th.shape[1] != len(self.structure):
+            raise ValueError(f"thetas must have shape (K, {len(self.structure)}), got {th.shape}")
+        if not np.all(np.isfinite(th)):
+            raise ValueError("thetas must be finite")
+        K = th.shape[0]
+        object.__setattr__(self, "thetas", th)
+        for nm in ("lambdas", "J1", "JS", "JSF"):
+            v = _frozen(getattr(self, nm), nm)
+            if v.shape != (K,):
+                raise ValueError(f"{nm} must have shape ({K},), got {v.shape}")
+            object.__setattr__(self, nm, v)
+        ex = {}
+        for k, v in dict(self.extra).items():
+            a = _frozen(v, k)
+            if a.shape != (K,):
+                raise ValueError(f"extra[{k!r}] must have shape ({K},), got {a.shape}")
+            ex[k] = a
+        object.__setattr__(self, "extra", MappingProxyType(ex))
+
+    # -- construction -------------------------------------------------------------------
+    @classmethod
+    def from_thetas(
+        cls,
+        structure: Structure,
+        thetas: np.ndarray,
+        lambdas: np.ndarray | None,
+        data: Record | Sequence[Record] | Dataset,
+        static: StaticPoints | None,
+        method: str = "",
+        extra: Mapping[str, np.ndarray] | None = None,
+        threads: int = 1,
+    ) -> "ParetoSet":
+        """Evaluate θs with :func:`graybox.evaluate.evaluate_thetas` and build the set.
+
+        With several records J_1 and J_S are the sample-weighted means over the records (each
+        counted from its own max-lag on). ``static=None`` leaves J_SF as NaN.
+        """
+        th = np.atleast_2d(np.asarray(thetas, float))
+        K = th.shape[0]
+        recs = [data.ident] if isinstance(data, Dataset) else [data] if isinstance(data, Record) else list(data)
+        if not recs:
+            raise ValueError("no records to evaluate the members on")
+        L = structure.max_lag
+        j1 = np.zeros(K)
+        js = np.zeros(K)
+        total = 0
+        for r in recs:
+            ev = evaluate_thetas(structure, th, r, None, one_step=True, threads=threads)
+            w = len(r) - L
+            j1 += w * ev["J1"]
+            with np.errstate(invalid="ignore"):
+                js += w * ev["JS"]
+            total += w
+        jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, th, None, static)["JSF"]
+        lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
+        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {})
+
+    # -- access -------------------------------------------------------------------------
+    def __len__(self) -> int:
+        return int(self.thetas.shape[0])
+
+    def objective(self, name: str) -> np.ndarray:
+        """One objective by name: ``"J1"``, ``"JS"``, ``"JSF"`` or a key of ``extra``."""
+        if name in OBJECTIVES:
+            return getattr(self, name)
+        if name in self.extra:
+            return self.extra[name]
+        raise ValueError(f"unknown objective {name!r}; this set has {list(OBJECTIVES) + list(self.extra)}")
+
+    def model(self, i: int, name: str | None = None) -> Model:
+        """Member ``i`` as a :class:`~graybox.model.Model`."""
+        K = len(self)
+        if not -K <= int(i) < K:
+            raise ValueError(f"member index {i} out of range for a set of {K}")
+        lam = self.lambdas[i]
+        label = name or (f"{self.method} λ1={lam:.3g}" if np.isfinite(lam) else f"{self.method} #{int(i) % K}")
+        return Model(self.structure, self.thetas[i], name=label)
+
+    def models(self) -> list[Model]:
+        """Every member as a Model, in order."""
+        return [self.model(i) for i in range(len(self))]
+
+    def subset(self, index: np.ndarray | Sequence[int]) -> "ParetoSet":
+        """The members at ``index`` (a boolean mask or integer indices), in that order."""
+        idx = np.asarray(index)
+        if idx.dtype == bool:
+            if idx.shape != (len(self),):
+                raise ValueError(f"mask must have shape ({len(self)},), got {idx.shape}")
+            idx = np.flatnonzero(idx)
+        return ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
+                         self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()})
+
+    def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
+        """The members that no other member dominates in ``objectives`` (order kept)."""
+        if len(objectives) < 1:
+            raise ValueError("give at least one objective")
+        pts = np.column_stack([self.objective(o) for o in objectives])
+        return self.subset(nondominated_mask(pts))
+
+    def to_frame(self, params: bool = False) -> pd.DataFrame:
+        """One row per member: ``lambda1``, ``J1``, ``JS``, ``JSF``, extras (and θ by term if ``params``)."""
+        cols = {"lambda1": self.lambdas, "J1": self.J1, "JS": self.JS, "JSF": self.JSF}
+        cols.update(self.extra)
+        df = pd.DataFrame(cols)
+        if params:
+            df = pd.concat([df, pd.DataFrame(self.thetas, columns=[str(t) for t in self.structure])], axis=1)
+        df.index.name = "member"
+        return df
+
+    def __repr__(self) -> str:
+        return f"ParetoSet(method={self.method!r}, members={len(self)}, n_terms={len(self.structure)})"
