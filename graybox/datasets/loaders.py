@@ -131,7 +131,7 @@ def load_record_csv(
         Names of the input and output columns.
     time : str, optional
         Name of a time-stamp column (seconds). Stamps must increase strictly and evenly: every
-        step within ``time_rtol`` × (mean step) of the mean step. The sampling period is the mean
+        step within ``time_rtol`` × (median step) of the median step. The sampling period is the mean
         step, rounded to 12 significant digits. Records restart at t = 0 whatever the first stamp is.
     Ts : float, optional
         Sampling period in seconds. Required when there is no time column; when both are given
@@ -180,13 +180,16 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
         i = int(bad[0])
         raise ValueError(f"{p}: column {col!r}: time does not increase from line {lines[i]} ({t[i]:g} s) "
                          f"to line {lines[i + 1]} ({t[i + 1]:g} s)")
-    step = (t[-1] - t[0]) / (t.size - 1)
-    off = np.abs(dt - step) > rtol * step
+    # The median step is the reference, so the message points at the odd step (a gap, a jitter),
+    # not at the first regular one.
+    ref = float(np.median(dt))
+    off = np.abs(dt - ref) > rtol * ref
     if off.any():
         i = int(np.flatnonzero(off)[0])
         raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s from line {lines[i]} to "
-                         f"line {lines[i + 1]}, but the mean step is {step:g} s (tolerance {rtol:g} relative); "
-                         "resample the data to a constant period first")
+                         f"line {lines[i + 1]}, but the usual (median) step is {ref:g} s (tolerance {rtol:g} "
+                         "relative); resample the data to a constant period first")
+    step = (t[-1] - t[0]) / (t.size - 1)
     if Ts is not None and abs(Ts - step) > rtol * step:
         raise ValueError(f"{p}: Ts = {Ts:g} s disagrees with column {col!r}, whose mean step is {step:g} s")
     # Stamps are printed decimals, so the true step is a short decimal: drop the float noise of the

@@ -1,0 +1,244 @@
+"""The benchmark pumping plant, its generator and the bundled data (issue 3, items 1–3)."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from graybox import Dataset, Record, StaticPoints, reference, regressor_matrix, simulate
+from graybox.datasets import load_pumping, pumping_data_dir
+from graybox.datasets.pumping import (
+    N_IDENT,
+    N_SAMPLES,
+    NOISE_STD,
+    STATIC_SPEEDS,
+    PumpingPlant,
+    main,
+    speed_reference,
+    static_experiment,
+    write_csvs,
+)
+from graybox.ls import scaled_lstsq
+
+REPO = Path(__file__).resolve().parents[1]
+PLANT = PumpingPlant()
+
+
+# -- the plant ---------------------------------------------------------------
+
+def test_steady_state_is_eq1_by_construction():
+    ub = np.linspace(750, 1650, 91)
+    q = PLANT.steady_flow(ub)
+    p = np.array([PLANT.turbine_head(x) for x in q])
+    np.testing.assert_allclose(p, reference.eq1(ub), atol=1e-9)
+    # and the pumps balance the load there: H_p − R_f Q² = H_t
+    hp = PLANT.shutoff_head * ub**2 - PLANT.pump_drop * (q / 2) ** 2 - PLANT.pipe_loss * q**2
+    np.testing.assert_allclose(hp, p, atol=1e-9)
+
+
+def test_noise_free_simulation_settles_on_eq1():
+    # A staircase over 750..1650 rpm started away from equilibrium: every level settles on eq. (1).
+    hold = 300  # 15 s, over 11 time constants at 750 rpm
+    u = np.repeat(np.array(STATIC_SPEEDS), hold)
+    x0 = (900.0, 800.0, 25.0)
+    run = PLANT.simulate(u, noise=False, process_noise=False, x0=x0)
+    settled = run.y.reshape(len(STATIC_SPEEDS), hold)[:, -1]
+    err = np.abs(settled - reference.eq1(np.array(STATIC_SPEEDS)))
+    assert err.max() < 0.05, err  # the requirement
+    assert err.max() < 1e-6  # what the model actually achieves
+    np.testing.assert_allclose(run.speed.reshape(len(STATIC_SPEEDS), hold)[:, -1], STATIC_SPEEDS, atol=1e-6)
+
+
+def test_integration_is_converged():
+    u = speed_reference()[:600]
+    a = PLANT.simulate(u, noise=False, process_noise=False).y
+    b = PumpingPlant(substeps=40).simulate(u, noise=False, process_noise=False).y
+    assert np.max(np.abs(a - b)) < 1e-6
+
+
+def test_time_constant_varies_with_operating_point():
+    tau_low = PLANT.step_time_constant(750.0)
+    tau_mid = PLANT.step_time_constant(1200.0)
+    tau_high = PLANT.step_time_constant(1650.0, step=-20.0)
+    # the values stated in the module docstring
+    assert tau_low == pytest.approx(1.26, abs=0.02)
+    assert tau_mid == pytest.approx(0.97, abs=0.02)
+    assert tau_high == pytest.approx(0.78, abs=0.02)
+    assert tau_low > tau_mid > tau_high
+    assert tau_low / tau_high > 1.4  # a meaningful variation, not rounding
+
+
+@pytest.mark.parametrize("speed", [750.0, 1650.0])
+def test_fastest_effect_after_two_samples(speed):
+    step = 20.0 if speed < 1600 else -20.0
+    u = np.r_[np.full(10, speed), np.full(300, speed + step)]
+    y = PLANT.simulate(u, noise=False, process_noise=False).y
+    frac = (y[10:] - y[9]) / (y[-1] - y[9])
+    assert frac[0] == 0.0  # y(k) never sees u(k)
+    assert abs(frac[1]) < 1e-3  # u(k-1) alone: under 0.1 % of the final change
+    assert 1e-3 < frac[2] < 1e-2  # u(k-2): a first visible effect
+    assert frac[4] > 0.02
+
+
+def test_measurement_noise_band():
+    u = np.full(8000, 1200.0)
+    run = PLANT.simulate(u, rng=1, process_noise=False)
+    v = run.y - run.pressure
+    assert NOISE_STD == pytest.approx(0.175 / 1.96)
+    assert np.std(v) == pytest.approx(NOISE_STD, rel=0.03)
+    inside = np.mean(np.abs(v) <= 0.175)
+    assert 0.94 < inside < 0.96  # 95 % band; binomial std 0.0024
+
+
+def test_process_noise_is_coloured_and_optional():
+    u = np.full(3000, 1200.0)
+    clean = PLANT.simulate(u, noise=False, process_noise=False).y
+    pn = PLANT.simulate(u, rng=2, noise=False).y - clean
+    assert 0.02 < np.std(pn) < 0.15
+    r1 = np.corrcoef(pn[:-1], pn[1:])[0, 1]
+    assert r1 > 0.8  # strongly coloured: passes through the water column
+    quiet = PumpingPlant(process_noise_std=0.0).simulate(u, rng=2, noise=False).y
+    np.testing.assert_array_equal(quiet, clean)
+
+
+def test_static_point_std_agrees_with_monte_carlo():
+    # The linearised formula used for the curve-fit tolerance (test_curves.py), against 40
+    # repetitions of one static point. The sample std of 40 values has a relative std of ~11 %.
+    reps = [static_experiment(PLANT, speeds=[1150.0], rng=np.random.default_rng([9, i])).ybar[0]
+            for i in range(40)]
+    expected = PLANT.static_point_std(1150.0, n_samples=120)
+    assert np.std(reps, ddof=1) == pytest.approx(expected, rel=0.35)
+    assert abs(np.mean(reps) - reference.eq1(1150.0)) < 4 * expected / math.sqrt(40)
+
+
+def test_simulate_validates_its_input():
+    with pytest.raises(ValueError, match="sample 3 is 2000 rpm"):
+        PLANT.simulate([1000, 1000, 1000, 2000], noise=False, process_noise=False)
+    with pytest.raises(ValueError, match="rng"):
+        PLANT.simulate([1000.0] * 5)
+    with pytest.raises(ValueError, match="non-finite"):
+        PLANT.simulate([1000.0, np.nan], noise=False, process_noise=False)
+    with pytest.raises(ValueError, match="dead_time"):
+        PumpingPlant(dead_time=0.0123)
+    with pytest.raises(ValueError, match="shutoff_head"):
+        PumpingPlant(shutoff_head=1e-6)
+    with pytest.raises(ValueError, match="inertia"):
+        PumpingPlant(inertia=-1.0)
+
+
+def test_simulation_is_seeded():
+    u = speed_reference()[:200]
+    a = PLANT.simulate(u, rng=5).y
+    b = PLANT.simulate(u, rng=np.random.default_rng(5)).y
+    c = PLANT.simulate(u, rng=6).y
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+# -- the experiment ----------------------------------------------------------
+
+def _levels(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    starts = np.r_[0, np.flatnonzero(np.diff(u)) + 1]
+    return u[starts], np.diff(np.r_[starts, u.size])
+
+
+def test_speed_reference_design():
+    u = speed_reference()
+    assert u.shape == (N_SAMPLES,)
+    assert np.all((u >= 750) & (u <= 1650)) and np.all(u % 10 == 0)
+    for part in (u[:N_IDENT], u[N_IDENT:]):  # both parts exercise the whole range
+        assert part.min() <= 780 and part.max() >= 1620
+    levels, holds = _levels(u[:N_IDENT])
+    assert np.all(holds[:-1] >= 80)  # >= 4 s, over 3 time constants (the last hold is cut)
+    sizes = np.abs(np.diff(levels))
+    assert (sizes < 150).sum() >= 3 and (sizes > 400).sum() >= 3  # several step sizes
+    assert len(np.unique(levels)) >= 15  # several operating points
+    np.testing.assert_array_equal(u, speed_reference())  # deterministic
+
+
+def test_regenerated_files_match_the_committed_ones(tmp_path):
+    # Both files are regenerated from the seed and compared with the bundled ones. Time and speed
+    # are printed exactly (multiples of 0.05 s and of 10 rpm). Pressures are printed with 4
+    # decimals: the simulation is plain IEEE float arithmetic and numpy's seeded normals, so on
+    # another platform a last-ulp difference could flip the rounding of a printed value by one
+    # unit of the last digit, never more: the tolerance is that unit, 1e-4 mlc.
+    dyn, sta = write_csvs(tmp_path)
+    committed = pumping_data_dir()
+    for new, old, ncols in ((dyn, committed / "dynamic.csv", 3), (sta, committed / "static.csv", 2)):
+        new_lines = new.read_text().splitlines()
+        old_lines = old.read_text().splitlines()
+        assert new_lines[0] == old_lines[0]
+        assert len(new_lines) == len(old_lines)
+        a = np.loadtxt(new_lines[1:], delimiter=",")
+        b = np.loadtxt(old_lines[1:], delimiter=",")
+        assert a.shape == b.shape and a.shape[1] == ncols
+        np.testing.assert_array_equal(a[:, :-1], b[:, :-1])
+        np.testing.assert_allclose(a[:, -1], b[:, -1], rtol=0, atol=1.01e-4)
+
+
+def test_main_writes_to_out(tmp_path, capsys):
+    assert main(["--out", str(tmp_path / "x"), "--seed", "3"]) == 0
+    assert (tmp_path / "x" / "dynamic.csv").is_file() and (tmp_path / "x" / "static.csv").is_file()
+    assert "wrote" in capsys.readouterr().out
+
+
+# -- the bundled data --------------------------------------------------------
+
+def test_load_pumping():
+    ds = load_pumping()
+    assert isinstance(ds, Dataset)
+    assert isinstance(ds.ident, Record) and isinstance(ds.valid, Record)
+    assert (len(ds.ident), len(ds.valid)) == (3200, 800)
+    assert ds.Ts == 0.05 and ds.valid.Ts == 0.05
+    assert ds.ident.units == ("rpm", "mlc") and ds.valid.units == ("rpm", "mlc")
+    assert ds.ident.name == "pumping ident" and ds.valid.name == "pumping valid"
+    assert isinstance(ds.static, StaticPoints)
+    np.testing.assert_array_equal(ds.static.ubar, np.arange(750.0, 1651.0, 100.0))
+    text = ds.description.lower()
+    assert "simulated stand-in" in text and "not the paper's plant" in text and "eq. (1)" in text
+    curve = ds.extra["static_curve"]
+    np.testing.assert_array_equal(curve.coefficients, reference.EQ1_COEFFICIENTS)
+    assert curve.domain == (750.0, 1650.0)
+    assert ds.extra["plant"] == PLANT
+    # the data are those the plant makes: ident continues into valid without a seam
+    np.testing.assert_array_equal(np.r_[ds.ident.u, ds.valid.u], speed_reference())
+
+
+def test_bundled_static_points_follow_eq1_within_noise():
+    ds = load_pumping()
+    sd = np.array([PLANT.static_point_std(s, 120) for s in ds.static.ubar])
+    z = (ds.static.ybar - reference.eq1(ds.static.ubar)) / sd
+    assert np.all(np.abs(z) < 4), z
+
+
+def test_least_squares_narx_on_bundled_data_is_free_run_stable():
+    # The paper's structure (15), degree 2, ny = nu = 6, fitted by plain least squares on the
+    # identification part: the free run must stay stable and be accurate on both parts.
+    ds = load_pumping()
+    s = reference.STRUCTURE_15
+    L = s.max_lag
+    theta = scaled_lstsq(regressor_matrix(s, ds.ident.u, ds.ident.y), ds.ident.y[L:])
+    for rec in (ds.ident, ds.valid):
+        ys = simulate(s, theta, rec, on_diverge="nan")
+        js = float(np.mean((rec.y[L:] - ys[L:]) ** 2))
+        assert np.isfinite(js) and js < 0.2, (rec.name, js)  # measured: 0.032 and 0.041 mlc²
+
+
+# -- packaging ---------------------------------------------------------------
+
+def test_pyproject_lists_every_subpackage():
+    # pyproject.toml lists packages explicitly (to map data/ into graybox.data); a subpackage
+    # missing from the list would be left out of a non-editable install.
+    conf = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
+    listed = set(conf["packages"])
+    found = {".".join(p.parent.relative_to(REPO).parts) for p in (REPO / "graybox").rglob("__init__.py")}
+    missing = found - listed
+    assert not missing, f"add {sorted(missing)} to [tool.setuptools] packages in pyproject.toml"
+    assert conf["package-dir"]["graybox.data"] == "data"
+    assert {"graybox.data", "graybox.data.pumping"} <= listed
+    assert (REPO / "data" / "pumping" / "dynamic.csv").is_file()
+    assert (REPO / "data" / "pumping" / "static.csv").is_file()
