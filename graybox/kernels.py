@@ -249,19 +249,29 @@ def _batch_block(thT, U, ny, ylag, Y, start):  # pragma: no cover - compiled
             Y[k, p] = acc[p]
 
 
-@nb.njit(cache=True, parallel=True)
-def _batch_parallel(thT, U, ny, ylag, Y, start, nblocks):  # pragma: no cover - compiled
-    n, P = Y.shape
-    step = (P + nblocks - 1) // nblocks
-    for b in nb.prange(nblocks):
-        p0 = b * step
-        p1 = min(P, p0 + step)
-        if p0 < p1:
-            # contiguous copies so the block kernel keeps its unit-stride, full-range loops
-            th_b = np.ascontiguousarray(thT[:, p0:p1])
-            Y_b = np.ascontiguousarray(Y[:, p0:p1])
-            _batch_block(th_b, U, ny, ylag, Y_b, start)
-            Y[:, p0:p1] = Y_b
+def _split_run(fn, thT: np.ndarray, threads: int, *args) -> list:
+    """Run ``fn(thT_block, *args)`` on contiguous population blocks in a thread pool.
+
+    The kernels are compiled with ``nogil=True``, so Python threads run them in parallel; this
+    avoids an OpenMP team whose spinning workers slowed everything down on a shared 2-core
+    machine.
+    """
+    P = thT.shape[1]
+    step = (P + threads - 1) // threads
+    blocks = [np.ascontiguousarray(thT[:, i : i + step]) for i in range(0, P, step)]
+    return list(_pool(threads).map(lambda blk: fn(blk, *args), blocks))
+
+
+_POOLS: dict = {}
+
+
+def _pool(threads: int):
+    from concurrent.futures import ThreadPoolExecutor
+
+    ex = _POOLS.get(threads)
+    if ex is None:
+        ex = _POOLS[threads] = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="graybox")
+    return ex
 
 
 def simulate_batch(
@@ -285,7 +295,7 @@ def simulate_batch(
     start : int
         Number of initial samples (>= the structure's max lag).
     threads : int
-        Population blocks run in parallel (numba threads); 1 runs in the calling thread.
+        Population blocks run in parallel (Python threads over nogil kernels); 1 runs in the calling thread.
 
     Returns
     -------
@@ -297,15 +307,21 @@ def simulate_batch(
     n = u.shape[0]
     thT = np.ascontiguousarray(thetas.T, dtype=np.float64)
     U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
-    Y = np.empty((n, P))
-    Y[:start, :] = y0[:start, None]
     with np.errstate(all="ignore"):
         if threads <= 1 or P < 2 * threads:
+            Y = np.empty((n, P))
+            Y[:start, :] = y0[:start, None]
             _batch_block(thT, U, code.ny, code.ylag, Y, start)
-        else:
-            _batch_parallel(thT, U, code.ny, code.ylag, Y, start, int(threads))
-    # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
-    return Y.T
+            # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
+            return Y.T
+
+        def run(th_b):
+            Yb = np.empty((n, th_b.shape[1]))
+            Yb[:start, :] = y0[:start, None]
+            _batch_block(th_b, U, code.ny, code.ylag, Yb, start)
+            return Yb.T
+
+        return np.vstack(_split_run(run, thT, int(threads)))
 
 
 @nb.njit(cache=True, nogil=True)
@@ -362,19 +378,6 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
     return sse
 
 
-@nb.njit(cache=True, parallel=True)
-def _batch_sse_parallel(thT, U, ny, ylag, y, start, ring, nblocks):  # pragma: no cover - compiled
-    P = thT.shape[1]
-    out = np.empty(P)
-    step = (P + nblocks - 1) // nblocks
-    for b in nb.prange(nblocks):
-        p0 = b * step
-        p1 = min(P, p0 + step)
-        if p0 < p1:
-            out[p0:p1] = _batch_sse(np.ascontiguousarray(thT[:, p0:p1]), U, ny, ylag, y, start, ring)
-    return out
-
-
 def batch_sse(code: Code, thetas: np.ndarray, u: np.ndarray, y: np.ndarray, start: int, threads: int = 1) -> np.ndarray:
     """Sum of squared free-run errors of P parameter vectors, samples ``start … N-1``.
 
@@ -401,7 +404,8 @@ def batch_sse(code: Code, thetas: np.ndarray, u: np.ndarray, y: np.ndarray, star
     with np.errstate(all="ignore"):
         if threads <= 1 or thT.shape[1] < 2 * threads:
             return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring)
-        return _batch_sse_parallel(thT, U, code.ny, code.ylag, y, start, ring, int(threads))
+        parts = _split_run(_batch_sse, thT, int(threads), U, code.ny, code.ylag, y, start, ring)
+        return np.concatenate(parts)
 
 
 @nb.njit(cache=True, nogil=True)
