@@ -36,7 +36,7 @@ def test_fig2_static_curve_with_points(tmp_path):
 
 def test_fig2_variants():
     ds = load_pumping()
-    fit = StaticCurve.fit(ds.static, 2)  # its domain is the points. range
+    fit = StaticCurve.fit(ds.static, 2)  # its domain is the points' range
     fig = plot_static_curve(ds.static, [ds.extra["static_curve"], fit])
     assert len(fig.axes[0].lines) == 3
     assert len(plot_static_curve(points=ds.static).axes[0].lines) == 1
