@@ -61,7 +61,7 @@ from .ls import column_scales, scaled_lstsq
 from .model import Model
 from .records import Dataset, Record
 from .regressors import regressor_matrix, stacked_regressors
-from .selection import Selection, frols
+from .selection import Selection, _as_records, frols
 from .terms import Candidates, Structure, Term
 
 __all__ = ["els", "ElsInfo", "ELSConvergenceWarning", "noise_terms", "black_box_models", "section_black_box"]
@@ -127,15 +127,6 @@ def _resolve(structure, noise) -> tuple[Structure, Structure]:
     return process, ns
 
 
-def _records(data: Record | Sequence[Record]) -> list[Record]:
-    if isinstance(data, Dataset):
-        raise ValueError("pass the identification record (e.g. data.ident), not the whole Dataset")
-    recs = [data] if isinstance(data, Record) else list(data)
-    if not recs or not all(isinstance(r, Record) for r in recs):
-        raise ValueError("data must be a Record or a non-empty sequence of Records")
-    return recs
-
-
 def els(
     structure: Structure | Selection | Sequence[str],
     data: Record | Sequence[Record],
@@ -198,7 +189,7 @@ def els(
         raise ValueError(f"tol must be a positive number, got {tol!r}")
     if not (np.isfinite(relaxation) and 0 < relaxation <= 1):
         raise ValueError(f"relaxation must lie in (0, 1], got {relaxation!r}")
-    recs = _records(data)
+    recs = _as_records(data)
     L = max(process.max_lag, ns.max_lag)
     psi, y = stacked_regressors(process, recs, start=L)
     n_p = len(process)

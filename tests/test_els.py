@@ -189,7 +189,8 @@ def _load_pumping():
 def test_plant_models_free_run_is_stable_on_validation(degree, n_terms):
     data = _load_pumping()
     sel = frols(Candidates(ny=6, nu=6, ne=2, degree=degree), data.ident, n_terms=n_terms)
-    m = els(sel, data.ident)
+    m, info = els(sel, data.ident, full_output=True)
+    assert info.converged
     assert m.n_params == n_terms and len(m.noise_structure) == 2
     y = m.simulate(data.valid)  # raises DivergenceError if the free run is unstable
     assert np.all(np.isfinite(y))
