@@ -130,6 +130,14 @@ def test_simulate_validates_its_input():
         PumpingPlant(inertia=-1.0)
 
 
+def test_run_is_an_immutable_value():
+    run = PLANT.simulate([1000.0] * 5, noise=False, process_noise=False)
+    with pytest.raises(ValueError):
+        run.y[0] = 0.0
+    rec = run.record("r")
+    assert rec.units == ("rpm", "mlc") and rec.Ts == 0.05 and len(rec) == 5
+
+
 def test_simulation_is_seeded():
     u = speed_reference()[:200]
     a = PLANT.simulate(u, rng=5).y

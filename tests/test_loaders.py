@@ -131,6 +131,11 @@ def test_bad_Ts(tmp_path):
         load_record_csv(write(tmp_path, GOOD), u="speed", y="pressure", Ts=-1)
 
 
+def test_bad_units(tmp_path):
+    with pytest.raises(ValueError, match="units must be a pair of strings"):
+        load_record_csv(write(tmp_path, GOOD), u="speed", y="pressure", Ts=1.0, units="rpm")
+
+
 def test_missing_file(tmp_path):
     with pytest.raises(FileNotFoundError):
         load_record_csv(tmp_path / "nope.csv", u="u", y="y", Ts=1.0)

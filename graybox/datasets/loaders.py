@@ -161,6 +161,8 @@ def load_record_csv(
         raise ValueError(f"{p}: give the time-stamp column (time=...) or the sampling period (Ts=... seconds)")
     if Ts is not None and not (isinstance(Ts, (int, float)) and math.isfinite(Ts) and Ts > 0):
         raise ValueError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
+    if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
+        raise ValueError(f"units must be a pair of strings (input unit, output unit), got {units!r}")
     if not (0 < time_rtol < 1):
         raise ValueError(f"time_rtol must be in (0, 1), got {time_rtol!r}")
     wanted = {"u": u, "y": y} | ({"time": time} if time is not None else {})
