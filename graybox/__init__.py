@@ -11,6 +11,9 @@ from .regressors import regressor_matrix, stacked_regressors
 from .simulation import DivergenceError, predict, simulate, simulate_many
 from .static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
 from .terms import Candidates, Structure, Term, parse_structure, parse_term
+from .selection import CandidateWarning, Selection, frols, information_criterion
+from .els import ELSConvergenceWarning, ElsInfo, els, noise_terms
+from .curves import StaticCurve
 from . import reference
 
 __version__ = "0.1.0"
@@ -22,5 +25,8 @@ __all__ = [
     "Model", "predict", "simulate", "simulate_many", "DivergenceError",
     "cluster_map", "equilibria", "static_curve", "static_gain", "Equilibrium",
     "evaluate", "j1", "js", "jsf", "mse", "rrse", "fit_percent",
+    "frols", "Selection", "CandidateWarning", "information_criterion",
+    "els", "ElsInfo", "ELSConvergenceWarning", "noise_terms",
+    "StaticCurve",
     "reference",
 ]

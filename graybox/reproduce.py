@@ -49,13 +49,17 @@ def section_reference_models(quick: bool = True, out: Path | None = None) -> str
     return "\n".join(lines)
 
 
-SECTIONS: list[Callable[..., str]] = [section_reference_models]
+def _sections() -> list[Callable[..., str]]:
+    # imported here so that `import graybox.reproduce` stays light
+    from .els import section_black_box
+
+    return [section_reference_models, section_black_box]
 
 
 def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout) -> None:
     """Run every section in order, printing each as it finishes."""
     if out is not None:
         Path(out).mkdir(parents=True, exist_ok=True)
-    for sec in SECTIONS:
+    for sec in _sections():
         print(sec(quick=quick, out=out), file=stream, flush=True)
         print(file=stream)
