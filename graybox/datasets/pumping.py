@@ -52,11 +52,14 @@ the step instant; :meth:`PumpingPlant.step_time_constant`):
 - at  750 rpm: 1.26 s (about 25 samples),
 - at 1200 rpm: 0.97 s,
 - at 1650 rpm: 0.78 s (about 16 samples): the plant is about 1.6 times faster at high speed
-  (mostly the water column: I / (H_t'(Q) + 2 R Q) falls as the flow rises; the rotor lag too).
+  Both lags speed up with the operating point: the water column's I / (H_t'(Q) + 2 R Q) from
+  0.56 s (Q = 30 L/s) to 0.34 s (Q = 59 L/s), the rotor's J' / (k_s + 2 c n) from 0.52 s to 0.29 s.
 
 Fastest effect of the reference: one sample after a step the pressure has moved by less than
 0.1 % of its final change, after two samples by 0.3–0.8 %, after four by 2–6 %: u(k−1) alone has
-almost no effect on y(k), as in the paper, whose ERR never selected a lag below 2.
+almost no effect on y(k), as in the paper, whose ERR never selected a lag below 2. (ERR on these
+data may still take a u(k−1) term late, with a small ERR, because under a staircase input u(k−1)
+is nearly collinear with u(k−2); a candidate set with delay 2 excludes such terms.)
 
 Noise: white Gaussian measurement noise of std 0.175/1.96 = 0.0893 mlc (95 % band ±0.175 mlc) and,
 by default, coloured process noise: w is AR(1) per sample (pole 0.8, stationary std 0.15 mlc),
