@@ -81,7 +81,7 @@ import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -287,7 +287,7 @@ class PumpingPlant:
         return (s, s, float(self.steady_flow(s)))
 
     # -- dynamics -----------------------------------------------------------
-    def _make_rhs(self):
+    def _make_rhs(self) -> Callable[[float, float, float, float, float], tuple[float, float, float]]:
         """The ODE right-hand side as a closure over plain floats (the integrator's hot loop)."""
         k0, a0, b0 = (float(c) for c in self.static_coefficients)
         g = self.shutoff_head - b0
