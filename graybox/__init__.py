@@ -14,7 +14,8 @@ from .terms import Candidates, Structure, Term, parse_structure, parse_term
 from .selection import CandidateWarning, Selection, frols, information_criterion
 from .els import ELSConvergenceWarning, ElsInfo, els, noise_terms
 from .curves import StaticCurve
-from . import reference
+from . import datasets, reference
+from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
 
 __version__ = "0.1.0"
 
@@ -28,5 +29,6 @@ __all__ = [
     "frols", "Selection", "CandidateWarning", "information_criterion",
     "els", "ElsInfo", "ELSConvergenceWarning", "noise_terms",
     "StaticCurve",
+    "datasets", "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
     "reference",
 ]
