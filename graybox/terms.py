@@ -216,7 +216,15 @@ def parse_structure(text: str | Sequence[str]) -> Structure:
     return Structure(parse_term(p) for p in parts)
 
 
-def Candidates(ny: int, nu: int, ne: int = 0, degree: int = 2, delay: int = 1, constant: bool = True) -> Structure:
+def Candidates(
+    ny: int,
+    nu: int,
+    ne: int = 0,
+    degree: int = 2,
+    delay: int = 1,
+    constant: bool = True,
+    max_y_power: int | None = None,
+) -> Structure:
     """Every monomial of degree <= ``degree`` in y(k-1..ny), u(k-delay..nu) (and e(k-1..ne)).
 
     Parameters
@@ -233,6 +241,9 @@ def Candidates(ny: int, nu: int, ne: int = 0, degree: int = 2, delay: int = 1, c
         Smallest input lag (pure delay, samples), >= 1.
     constant : bool, optional
         Include the constant term.
+    max_y_power : int, optional
+        Drop terms whose total output power exceeds this. ``max_y_power=1`` keeps only
+        structures with the rational static function of eq. (6) (what CLS with eq. (22) needs).
 
     Returns
     -------
@@ -252,6 +263,10 @@ def Candidates(ny: int, nu: int, ne: int = 0, degree: int = 2, delay: int = 1, c
     for d in range(1, degree + 1):
         for combo in itertools.combinations_with_replacement(variables, d):
             terms.append(Term(tuple((s, l, 1) for s, l in combo)))
+    if max_y_power is not None:
+        if int(max_y_power) != max_y_power or max_y_power < 0:
+            raise ValueError(f"max_y_power must be an integer >= 0, got {max_y_power!r}")
+        terms = [t for t in terms if t.power_of("y") <= max_y_power]
     terms.sort(key=Term.sort_key)
     terms += [Term((("e", l, 1),)) for l in range(1, ne + 1)]
     return Structure(terms)

@@ -51,3 +51,11 @@ def test_structure_basics():
 def test_unparsable_terms_raise(bad):
     with pytest.raises(ValueError):
         parse_term(bad)
+
+
+def test_rational_candidates():
+    c = Candidates(6, 6, 0, 2, max_y_power=1)
+    assert len(c) == 91 - 21  # the 21 products y(k-i)y(k-j) are gone
+    assert all(t.power_of("y") <= 1 for t in c)
+    with pytest.raises(ValueError, match="max_y_power"):
+        Candidates(2, 2, 0, 2, max_y_power=-1)
