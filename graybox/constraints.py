@@ -117,9 +117,12 @@ class StaticContext:
         given its own value.
     data_range : (float, float) or None
         Smallest and largest input in the dynamic data (engineering units).
-    check_range : bool
-        When True, static ū levels outside ``data_range`` are refused (the dynamic data say
-        nothing there).
+    range_margin : float or None
+        Static ū levels further than ``range_margin × (high − low)`` outside ``data_range``
+        are refused: the dynamic data say nothing there, and a static point far outside them
+        usually means mixed units or the wrong data. The default 0.1 admits static points a
+        little beyond the dynamic data (as with the plant: steps over 770–1620 rpm, static
+        points over 750–1650 rpm). None switches the check off.
     """
 
     structure: Structure
@@ -127,7 +130,11 @@ class StaticContext:
     curve: StaticCurve | None = None
     sigma_y: float | None = None
     data_range: tuple[float, float] | None = None
-    check_range: bool = True
+    range_margin: float | None = 0.1
+
+    def __post_init__(self) -> None:
+        if self.range_margin is not None and not (np.isfinite(self.range_margin) and self.range_margin >= 0):
+            raise ValueError(f"range_margin must be a non-negative number or None, got {self.range_margin!r}")
 
     @cached_property
     def cluster_map(self) -> ClusterMap:
@@ -140,18 +147,18 @@ class StaticContext:
         return len(self.structure)
 
     def check_ubar(self, ubar: np.ndarray, what: str) -> None:
-        """Raise ``ValueError`` when a static ū lies outside the dynamic data's input range."""
-        if not self.check_range or self.data_range is None:
+        """Raise ``ValueError`` when a static ū lies outside the dynamic data's input range (+ margin)."""
+        if self.range_margin is None or self.data_range is None:
             return
         lo, hi = self.data_range
+        pad = self.range_margin * (hi - lo) + 1e-9 * max(abs(lo), abs(hi), 1.0)
         ub = np.atleast_1d(np.asarray(ubar, float))
-        tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
-        out = ub[(ub < lo - tol) | (ub > hi + tol)]
+        out = ub[(ub < lo - pad) | (ub > hi + pad)]
         if out.size:
             raise ValueError(
-                f"{what}: ū = {np.round(out, 6).tolist()} lies outside the input range "
-                f"[{lo:g}, {hi:g}] of the dynamic data, where the model is not identified; "
-                "pass check_range=False to impose it anyway"
+                f"{what}: ū = {np.round(out, 6).tolist()} lies outside the input range [{lo:g}, {hi:g}] of the "
+                f"dynamic data (allowed margin {self.range_margin:g} of its width), where the model is not "
+                "identified; check the units, or pass range_margin=None to impose it anyway"
             )
 
     def require_points(self, points: StaticPoints | None, what: str) -> StaticPoints:
@@ -444,7 +451,7 @@ def _denominator_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray) -> tup
     return np.ones(len(ubar)), d
 
 
-def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray, what: str) -> None:
+def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray, what: str, hint: str = "") -> None:
     """Refuse an estimate whose rational static function has a zero denominator at a static ū."""
     if not is_rational(ctx.structure):
         return
@@ -462,7 +469,7 @@ def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray
         raise ValueError(
             f"{what}: the estimated model's static function does not exist at ū = {ub[bad].tolist()} "
             "(its denominator 1 − Σy − Σyu ū − … vanishes there, so the static equation holds as 0 = 0 "
-            "and the point is not matched); move the point or constrain the y clusters"
+            f"and the point is not matched){hint or '; move the point or constrain the y clusters'}"
         )
 
 
@@ -495,7 +502,16 @@ class PassesThrough(StaticConstraint):
 
     def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
         pts = ctx.require_points(self.points, self.describe())
-        _check_static_exists(ctx, theta, pts.ubar, self.describe())
+        k = len(ctx.cluster_map.keys)
+        hint = ""
+        if len(pts) >= k:
+            # ȳ_i itself is the Σy column of Q, so Σy = 1 with every other cluster 0 "passes
+            # through" any set of points as 0 = 0; with as many points as clusters that is
+            # usually the only way through them
+            hint = (f"; with {len(pts)} points and only {k} cluster coefficients the equalities are met by the "
+                    "degenerate Σy = 1, other clusters 0 (no static function at all): use fewer points than "
+                    "clusters, StaticCurve.fit + CurveEquality, a StaticBand or the PE problem")
+        _check_static_exists(ctx, theta, pts.ubar, self.describe(), hint)
 
 
 # --------------------------------------------------------------------------------------------

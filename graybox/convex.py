@@ -218,13 +218,19 @@ def _ls_theta(d: _Data) -> np.ndarray:
     return scipy.linalg.solve_triangular(d.R1, d.c1) / d.s
 
 
-def _sigma_y(d: _Data, reference: Model | np.ndarray | float | None) -> float | None:
-    """Σ*_y of the reference (eq. (22)): a Model, a θ of this structure, a number, or LS."""
+def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str | None) -> float | None:
+    """Σ*_y of eq. (22) from ``reference``: "ls" (default), "els", a Model, a θ of this structure, a number."""
     cm = cluster_map(d.structure)
     if (1, 0) not in cm.keys:
         return None
-    if reference is None:
+    if reference is None or (isinstance(reference, str) and reference == "ls"):
         th = _ls_theta(d)
+    elif isinstance(reference, str) and reference == "els":
+        from .els import els  # the paper's choice; imported here because ELS is another estimator
+
+        return float(els(d.structure, records).clusters().get("Σy", 0.0))
+    elif isinstance(reference, str):
+        raise ValueError(f"reference must be 'ls', 'els', a Model, a θ or a number, got {reference!r}")
     elif isinstance(reference, Model):
         return float(reference.clusters().get("Σy", 0.0))
     elif np.ndim(reference) == 0:
@@ -479,11 +485,11 @@ def cls(
     static: StaticCurve | StaticPoints | None = None,
     *,
     how: str = "auto",
-    reference: Model | np.ndarray | float | None = None,
+    reference: Model | np.ndarray | float | str = "ls",
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     solver: str = "clarabel",
     solver_options: Mapping | None = None,
-    check_range: bool = True,
+    range_margin: float | None = 0.1,
     name: str = "CLS",
 ) -> Model:
     """Constrained least squares: min J_1(θ) with the static information imposed exactly.
@@ -506,9 +512,11 @@ def cls(
         ``"curve"`` with StaticPoints fits the polynomial the structure's numerator can carry
         (degree = highest ū power of the Σ_{u^m} clusters) and imposes eq. (22); it needs at
         least degree + 1 points.
-    reference : Model, ndarray, float, optional
-        Where Σ*_y of eq. (22) comes from: a reference model (the paper: ELS), its θ, or the
-        value itself. Default: the unconstrained least-squares estimate on ``data``.
+    reference : {"ls", "els"}, Model, ndarray or float
+        Where Σ*_y of eq. (22) comes from: ``"ls"`` (default) the unconstrained least-squares
+        estimate on ``data``; ``"els"`` extended least squares on ``data`` (the paper's choice:
+        :func:`graybox.els.els` with its default MA(2)); a reference Model (its Σy); a θ of this
+        structure; or the value itself.
     constraints : constraint or iterable of constraints, optional
         More constraints (band, gain, cluster bounds, user cvxpy constraints), combined with the
         static ones.
@@ -516,8 +524,9 @@ def cls(
         cvxpy with Clarabel (default) or OSQP, or the KKT closed form (equalities only).
     solver_options : mapping, optional
         Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults).
-    check_range : bool
-        Refuse static ū outside the input range of the dynamic data.
+    range_margin : float or None
+        Refuse static ū further than this fraction of the dynamic data's input span outside
+        that span (None: no check); see :class:`~graybox.constraints.StaticContext`.
     name : str
         The returned model's name.
 
@@ -564,7 +573,8 @@ def cls(
         static_cons.append(CurveEquality(curve))
     elif points is not None:
         static_cons.append(PassesThrough(points))
-    ctx = StaticContext(st, points, curve, _sigma_y(d, reference), d.data_range, check_range)
+    sigma = _sigma_y(d, recs, reference) if curve is not None else None
+    ctx = StaticContext(st, points, curve, sigma, d.data_range, range_margin)
     if curve is not None and curve.domain is not None:
         ctx.check_ubar(np.array(curve.domain), f"domain of {curve.name}")
     cons = static_cons + as_constraint_list(constraints)
@@ -606,7 +616,7 @@ def _lambdas(lambdas: np.ndarray | Sequence[float] | float) -> np.ndarray:
     return lam
 
 
-def _pe_setup(structure, data, static, constraints, weights, ubar, check_range):
+def _pe_setup(structure, data, static, constraints, weights, ubar, range_margin):
     st = _process_structure(structure)
     if weights not in ("mse", "sum"):
         raise ValueError(f"weights must be 'mse' or 'sum', got {weights!r}")
@@ -614,7 +624,7 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, check_range):
     d = _dynamic(st, recs)
     pts = _static_points(static, ubar)
     curve = static if isinstance(static, StaticCurve) else None
-    ctx = StaticContext(st, pts, curve, None, d.data_range, check_range)
+    ctx = StaticContext(st, pts, curve, None, d.data_range, range_margin)
     ctx.check_ubar(pts.ubar, f"static points {pts.name!r}")
     cons = as_constraint_list(constraints)
     rows = _rows(cons, ctx, d.s)
@@ -633,7 +643,7 @@ def pe_thetas(
     solver_options: Mapping | None = None,
     weights: str = "mse",
     ubar: np.ndarray | None = None,
-    check_range: bool = True,
+    range_margin: float | None = 0.1,
     warm_start: bool = True,
 ) -> np.ndarray:
     """θ of the PE weighted sum (9) for each λ1 (λ2 = 1 − λ1), without evaluating them.
@@ -649,7 +659,7 @@ def pe_thetas(
     solver = _check_solver(solver)
     lam = _lambdas(lambdas)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
-                                                            check_range)
+                                                            range_margin)
     w1 = lam / d.N if weights == "mse" else lam.copy()
     w2 = (1.0 - lam) / M if weights == "mse" else 1.0 - lam
     if solver == "closed":
@@ -680,7 +690,7 @@ def pe_pareto(
     weights: str = "mse",
     ubar: np.ndarray | None = None,
     eval_static: StaticPoints | None = None,
-    check_range: bool = True,
+    range_margin: float | None = 0.1,
     warm_start: bool = True,
     threads: int = 1,
 ) -> ParetoSet:
@@ -715,7 +725,7 @@ def pe_pareto(
         in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²).
     """
     thetas = pe_thetas(structure, data, static, lambdas, constraints=constraints, solver=solver,
-                       solver_options=solver_options, weights=weights, ubar=ubar, check_range=check_range,
+                       solver_options=solver_options, weights=weights, ubar=ubar, range_margin=range_margin,
                        warm_start=warm_start)
     st = _process_structure(structure)
     pts = _static_points(static, ubar)
@@ -741,8 +751,8 @@ class Table1Gray(NamedTuple):
 
 def table1_graybox(
     data: Dataset,
-    reference: Model | None = None,
     structure: Structure | None = None,
+    reference: Model | str = "els",
     curve: StaticCurve | None = None,
     lambdas: np.ndarray = np.logspace(-6, 0, 100),
     band: float = 0.031,
@@ -751,29 +761,36 @@ def table1_graybox(
 ) -> Table1Gray:
     """The CLS (22) and PE (D_SF) rows of Table I, for ``graybox reproduce``.
 
+    As in Section IV-B: the structure of model (15) without its MA part; CLS imposes eq. (1)
+    through eq. (22) with Σ*_y from the ELS estimate of that structure; PE sweeps 100 λ1 in
+    logspace(-6, 0) against the static points, and D_SF (eq. (14)) picks the member with the
+    smallest J_S among those with J_SF in [0, 0.031] mlc².
+
     Parameters
     ----------
     data : Dataset
         Identification and validation records and static points (e.g. ``load_pumping()``).
-    reference : Model, optional
-        The black-box model whose Σy is Σ*_y in eq. (22) and whose structure is used (the
-        paper: ELS (15)). Default: least squares on ``structure``.
     structure : Structure, optional
-        Default: the reference's structure, else the paper's (15) (``reference.STRUCTURE_15``).
+        Default: the paper's (15) (``graybox.reference.STRUCTURE_15``; a structure selected by
+        FROLS on other data need not be rational, and eq. (22) needs a rational one).
+    reference : "els", "ls" or Model
+        Source of Σ*_y (see :func:`cls`); default: ELS on ``data.ident``, as in the paper.
     curve : StaticCurve, optional
-        The curve imposed by CLS; default: eq. (1).
+        The curve CLS imposes; default: eq. (1).
     lambdas : ndarray
-        λ1 sweep of the PE set (the paper: 100 values in logspace(-6, 0)).
+        λ1 sweep of the PE set.
     band : float
         D_SF's band B = [0, band] on J_SF, mlc² (0.031 = 0.175²).
+    solver : {"clarabel", "osqp", "closed"}
     fallback : str or None
-        Passed to :func:`graybox.decide.decide_dsf` when no member lies in the band.
+        Passed to :func:`graybox.decide.decide_dsf` when no member lies in the band (default
+        "min_jsf", so the reproduction always prints a row; the model's name says so).
 
     Returns
     -------
     Table1Gray
-        ``table`` from :func:`graybox.evaluate.evaluate`, the two models, the PE set and the
-        index of the D_SF choice.
+        ``table`` from :func:`graybox.evaluate.evaluate` (rows ``"CLS (22)"``, ``"PE (D_SF)"``),
+        the two models, the PE set and the index of the D_SF choice in it.
     """
     from . import reference as paper
     from .decide import decide_dsf
@@ -781,11 +798,10 @@ def table1_graybox(
 
     if not isinstance(data, Dataset) or data.static is None:
         raise ValueError("table1_graybox needs a Dataset with static points (e.g. graybox.datasets.load_pumping())")
-    st = structure if structure is not None else (reference.structure if reference is not None else paper.STRUCTURE_15)
+    st = _process_structure(structure if structure is not None else paper.STRUCTURE_15)
     cv = curve if curve is not None else StaticCurve.polynomial(paper.EQ1_COEFFICIENTS, name="eq. (1)")
     cls_model = cls(st, data.ident, cv, reference=reference, solver=solver, name="CLS (22)")
     front = pe_pareto(st, data.ident, data.static, lambdas, solver=solver)
     pe_model, idx = decide_dsf(front, band=band, fallback=fallback, return_index=True)
-    pe_model = pe_model.with_theta(pe_model.theta, name="PE (D_SF)")
-    table = evaluate({"CLS (22)": cls_model, "PE (D_SF)": pe_model}, data)
+    table = evaluate({"CLS (22)": cls_model, "PE (D_SF)": pe_model.with_theta(pe_model.theta, "PE (D_SF)")}, data)
     return Table1Gray(table, cls_model, pe_model, front, idx)

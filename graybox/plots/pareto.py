@@ -1,0 +1,121 @@
+"""Pareto fronts in the style of the paper's Figs. 5 and 7: J_SF against J_S.
+
+Each front is drawn as markers (its non-dominated members joined by a line), single models
+(ELS, CLS, a D_SF choice, …) as large labelled markers, and the uncertainty band B of D_SF as
+a shaded strip. Figures are built with :class:`matplotlib.figure.Figure` directly (no pyplot
+state); pass ``ax`` to draw into an existing figure.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from ..pareto import ParetoSet, nondominated_mask
+
+__all__ = ["plot_pareto"]
+
+_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*")
+
+
+def _points_of(points) -> dict[str, tuple[float, float]]:
+    """Accept {name: (J_S, J_SF)} or a Table-I DataFrame (columns "J_S ident", "J_SF")."""
+    if points is None:
+        return {}
+    if isinstance(points, pd.DataFrame):
+        missing = {"J_S ident", "J_SF"} - set(points.columns)
+        if missing:
+            raise ValueError(f"a table of models needs columns 'J_S ident' and 'J_SF'; missing {sorted(missing)}")
+        return {str(k): (float(r["J_S ident"]), float(r["J_SF"])) for k, r in points.iterrows()}
+    out = {}
+    for k, v in dict(points).items():
+        try:
+            js, jsf = (float(x) for x in v)
+        except (TypeError, ValueError):
+            raise ValueError(f"point {k!r} must be (J_S, J_SF), got {v!r}") from None
+        out[str(k)] = (js, jsf)
+    return out
+
+
+def plot_pareto(
+    fronts: ParetoSet | Mapping[str, ParetoSet],
+    points: Mapping[str, tuple[float, float]] | pd.DataFrame | None = None,
+    band: float | None = 0.031,
+    ax: Axes | None = None,
+    log: bool = True,
+    xlabel: str = "J_S (mlc²)",
+    ylabel: str = "J_SF (mlc²)",
+    title: str | None = None,
+) -> Figure:
+    """J_SF against J_S of Pareto sets and single models (Figs. 5 and 7).
+
+    Parameters
+    ----------
+    fronts : ParetoSet or mapping name -> ParetoSet
+        Sets to draw; every member is a small marker, the non-dominated ones (in J_S, J_SF)
+        are joined by a line. Members with an infinite J are left out (and counted in the
+        legend).
+    points : mapping name -> (J_S, J_SF), or DataFrame, optional
+        Single models such as ELS and CLS, drawn as large markers with their names; a table
+        from :func:`graybox.evaluate.evaluate` works too (its ``J_S ident`` and ``J_SF``).
+    band : float or None
+        Shade J_SF in B = [0, band] (D_SF's band, 0.031 mlc²); None draws no band.
+    ax : matplotlib Axes, optional
+        Draw here; by default a new 6.4 × 4.6 in figure is made.
+    log : bool
+        Logarithmic axes (the errors span decades).
+    xlabel, ylabel, title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    sets = {"": fronts} if isinstance(fronts, ParetoSet) else dict(fronts)
+    for k, v in sets.items():
+        if not isinstance(v, ParetoSet):
+            raise ValueError(f"front {k!r} must be a ParetoSet, got {type(v).__name__}")
+    pts = _points_of(points)
+    if not sets and not pts:
+        raise ValueError("nothing to plot: give at least one front or one point")
+    if ax is None:
+        fig = Figure(figsize=(6.4, 4.6))
+        ax = fig.add_subplot()
+    else:
+        fig = ax.figure
+    for i, (name, ps) in enumerate(sets.items()):
+        js, jsf = ps.JS, ps.JSF
+        ok = np.isfinite(js) & np.isfinite(jsf)
+        if log:
+            ok &= (js > 0) & (jsf > 0)
+        label = name or ps.method or "Pareto set"
+        if (~ok).any():
+            label += f" ({int((~ok).sum())} not drawn: J = inf)"
+        mk = _MARKERS[i % len(_MARKERS)]
+        line = ax.plot(js[ok], jsf[ok], mk, ms=4, alpha=0.45, label=label)[0]
+        if ok.any():
+            nd = nondominated_mask(np.column_stack([js[ok], jsf[ok]]))
+            order = np.argsort(js[ok][nd])
+            ax.plot(js[ok][nd][order], jsf[ok][nd][order], "-", color=line.get_color(), lw=1.2)
+    for j, (name, (js, jsf)) in enumerate(pts.items()):
+        ax.plot([js], [jsf], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k", label=name, zorder=5)
+        ax.annotate(name, (js, jsf), textcoords="offset points", xytext=(6, 6), fontsize=9)
+    if log:
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+    if band is not None:
+        if not (np.isfinite(band) and band > 0):
+            raise ValueError(f"band must be a positive number or None, got {band!r}")
+        lo, hi = ax.get_ylim()
+        ax.axhspan(lo if log else 0.0, band, color="0.85", zorder=0, label=f"B = [0, {band:g}]")
+        ax.set_ylim(lo, max(hi, band))
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    return fig

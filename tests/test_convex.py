@@ -1,0 +1,472 @@
+"""Gray-box convex estimation: eq. (12), CLS (22) and PE (9)/(11), QPs against closed forms."""
+
+import warnings
+
+import cvxpy as cp
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from graybox import Candidates, Model, Record, StaticPoints, Structure, reference
+from graybox import convex
+from graybox.constraints import InfeasibleError, StaticBand
+from graybox.convex import cls, pe_pareto, pe_thetas, qr_static_error, static_matrices, static_prediction
+from graybox.curves import StaticCurve
+from graybox.ls import column_scales, scaled_lstsq
+from graybox.regressors import stacked_regressors
+from graybox.static import cluster_map, rational_static_curve
+
+EQ1 = StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, name="eq. (1)")
+S15 = reference.STRUCTURE_15
+LAMBDAS = np.logspace(-6, 0, 100)
+
+
+def simulated(model: Model, n: int, seed: int, noise: float = 0.05, lo=750.0, hi=1650.0, hold=60) -> Record:
+    """A step-input record simulated from ``model`` plus white output noise (rpm, mlc)."""
+    rng = np.random.default_rng(seed)
+    levels = rng.uniform(lo, hi, size=n // hold + 1)
+    levels[:2] = lo, hi  # the record spans the static points' range
+    u = np.repeat(levels, hold)[:n]
+    y0 = np.full(model.max_lag, float(model.static_curve([u[0]])[0]))
+    y = model.simulate(u, y0) + noise * rng.standard_normal(n)
+    return Record(u, y, Ts=0.05, name=f"sim seed {seed}")
+
+
+@pytest.fixture(scope="module")
+def rec():
+    # data from the paper's ELS model (15): its static curve misses eq. (1) (J_SF ≈ 1.6), so the
+    # static information really pulls against the dynamic data
+    return simulated(reference.paper_model(15), 2400, seed=7)
+
+
+@pytest.fixture(scope="module")
+def scales(rec):
+    psi, _ = stacked_regressors(S15, rec)
+    return column_scales(psi)
+
+
+def rel_scaled(a, b, s):
+    """‖(a − b) ⊙ s‖ / ‖b ⊙ s‖ row-wise: relative error with each term at its data scale."""
+    a, b = np.atleast_2d(a), np.atleast_2d(b)
+    return np.linalg.norm((a - b) * s, axis=1) / np.linalg.norm(b * s, axis=1)
+
+
+# ---------------------------------------------------------------------------------------------
+# eq. (12)
+# ---------------------------------------------------------------------------------------------
+def test_static_matrices_reproduce_the_static_equation():
+    m = reference.paper_model(15)
+    ub = np.array([800.0, 1200.0, 1600.0])
+    pts = StaticPoints(ub, m.static_curve(ub))
+    Q, R = static_matrices(S15, pts)
+    cm = cluster_map(S15)
+    assert Q.shape == (3, len(cm.keys)) and R.shape == (len(cm.keys), 17)
+    # at the model's own equilibria the right-hand side Q R θ returns ȳ
+    np.testing.assert_allclose(Q @ R @ m.theta, pts.ybar, rtol=1e-10)
+    assert qr_static_error(S15, m.theta, pts) < 1e-18
+    # q_i = ȳ^p ū^m column by column
+    for c, (p, mm) in enumerate(cm.keys):
+        np.testing.assert_allclose(Q[:, c], pts.ybar**p * ub**mm)
+
+
+def test_static_matrices_any_powers():
+    s = Structure(["y(k-1)^2u(k-2)", "y(k-1)^3", "u(k-1)^3", "1", "y(k-2)"])
+    pts = StaticPoints([2.0, 3.0], [5.0, 7.0])
+    Q, R = static_matrices(s, pts)
+    keys = cluster_map(s).keys
+    assert Q[1, keys.index((2, 1))] == pytest.approx(7.0**2 * 3.0)
+    assert Q[0, keys.index((3, 0))] == pytest.approx(125.0)
+    assert Q[1, keys.index((0, 3))] == pytest.approx(27.0)
+    theta = np.array([0.1, 0.01, 0.001, 0.5, 0.3])
+    pred = static_prediction(s, theta, pts)
+    yb, ub = pts.ybar, pts.ubar
+    np.testing.assert_allclose(pred, 0.1 * yb**2 * ub + 0.01 * yb**3 + 0.001 * ub**3 + 0.5 + 0.3 * yb)
+
+
+# ---------------------------------------------------------------------------------------------
+# CLS
+# ---------------------------------------------------------------------------------------------
+def test_cls_qp_equals_kkt_closed_form(rec, scales):
+    closed = cls(S15, rec, EQ1, solver="closed")
+    for solver in ("clarabel", "osqp"):
+        qp = cls(S15, rec, EQ1, solver=solver)
+        assert rel_scaled(qp.theta, closed.theta, scales)[0] < 1e-6, solver
+        # and in engineering units, term by term
+        np.testing.assert_allclose(qp.theta, closed.theta, rtol=1e-5, atol=1e-6 * np.abs(closed.theta).max())
+
+
+def test_cls_static_curve_is_eq1(rec):
+    m = cls(S15, rec, EQ1)
+    ub = np.linspace(750.0, 1650.0, 91)
+    assert np.max(np.abs(rational_static_curve(S15, m.theta, ub) - EQ1(ub))) < 1e-6
+    assert np.max(np.abs(m.static_curve(ub) - EQ1(ub))) < 1e-6  # and it is the stable equilibrium
+    # the unconstrained estimate is far from it: the constraint did the work
+    ls = scaled_lstsq(*stacked_regressors(S15, rec))
+    assert np.max(np.abs(rational_static_curve(S15, ls, ub) - EQ1(ub))) > 0.1
+
+
+def test_cls_clusters_follow_eq22(rec):
+    ls = scaled_lstsq(*stacked_regressors(S15, rec))
+    sy_ls = float((cluster_map(S15).R @ ls)[cluster_map(S15).index("Σy")])
+    c = cls(S15, rec, EQ1).clusters()
+    k, a, b = reference.EQ1_COEFFICIENTS
+    assert abs(c["Σyu"]) < 1e-12
+    assert c["Σy"] == pytest.approx(sy_ls, rel=1e-9)
+    for name, coef in (("Σ0", k), ("Σu", a), ("Σu²", b)):
+        assert c[name] / coef == pytest.approx(1 - sy_ls, rel=1e-8)
+    # Σ*_y from a given reference: a Model, a number
+    c2 = cls(S15, rec, EQ1, reference=reference.paper_model(15)).clusters()
+    assert c2["Σy"] == pytest.approx(reference.paper_model(15).clusters()["Σy"], rel=1e-9)
+    c3 = cls(S15, rec, EQ1, reference=0.95, solver="closed").clusters()
+    assert c3["Σy"] == pytest.approx(0.95) and c3["Σ0"] == pytest.approx(0.05 * k)
+
+
+def test_cls_costs_one_step_error(rec):
+    psi, y = stacked_regressors(S15, rec)
+    ls = scaled_lstsq(psi, y)
+    m = cls(S15, rec, EQ1)
+    j = lambda th: np.mean((y - psi @ th) ** 2)  # noqa: E731
+    assert j(m.theta) > j(ls)  # constrained: never better than LS on J_1
+
+
+def test_cls_through_points_and_curve_from_points(rec, scales):
+    pts = EQ1.points(np.array([800.0, 1200.0, 1600.0]))
+    m = cls(S15, rec, pts)
+    np.testing.assert_allclose(rational_static_curve(S15, m.theta, pts.ubar), pts.ybar, atol=1e-8)
+    mc = cls(S15, rec, pts, solver="closed")
+    assert rel_scaled(m.theta, mc.theta, scales)[0] < 1e-6
+    # how="curve": fit the degree the numerator carries (2) and impose (22)
+    many = EQ1.points(np.linspace(750, 1650, 10))
+    fitted = cls(S15, rec, many, how="curve")
+    direct = cls(S15, rec, EQ1)
+    assert rel_scaled(fitted.theta, direct.theta, scales)[0] < 1e-6
+
+
+def test_cls_points_on_a_representable_curve_are_consistent(rec):
+    # ten points, five clusters: dependent rows, but consistent (they lie on a quadratic)
+    m = cls(S15, rec, EQ1.points(np.linspace(750, 1650, 10)))
+    ub = np.linspace(750, 1650, 10)
+    np.testing.assert_allclose(rational_static_curve(S15, m.theta, ub), EQ1(ub), atol=1e-7)
+
+
+def test_cls_multi_record_equals_its_parts(rec):
+    a, b = rec.slice(0, 1200, "a"), rec.slice(1200, None, "b")
+    m = cls(S15, [a, b], EQ1, solver="closed")
+    # by hand: stacked regressors of the two records, KKT with the (22) rows
+    psi, y = stacked_regressors(S15, [a, b])
+    s = column_scales(psi)
+    cm = cluster_map(S15)
+    sy = float((cm.R @ scaled_lstsq(psi, y))[cm.index("Σy")])
+    k, al, be = reference.EQ1_COEFFICIENTS
+    target = {(0, 0): (1 - sy) * k, (0, 1): (1 - sy) * al, (0, 2): (1 - sy) * be, (1, 0): sy, (1, 1): 0.0}
+    E = cm.R / s
+    f = np.array([target[key] for key in cm.keys])
+    A = psi / s
+    K = np.block([[2 * A.T @ A, E.T], [E, np.zeros((len(f), len(f)))]])
+    z = np.linalg.solve(K, np.concatenate([2 * A.T @ y, f]))[: len(s)]
+    np.testing.assert_allclose(m.theta * s, z, rtol=1e-6, atol=1e-8 * np.abs(z).max())
+
+
+def test_cls_on_the_plant_data():
+    """Issue 5: on the plant data, the CLS model of structure (15) has eq. (1) as static curve."""
+    datasets = pytest.importorskip("graybox.datasets")
+    data = datasets.load_pumping()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # ELS's own convergence warning is not under test here
+        m = cls(S15, data.ident, EQ1, reference="els")
+    ub = np.linspace(750.0, 1650.0, 91)
+    assert np.max(np.abs(m.static_curve(ub) - EQ1(ub))) < 1e-6
+    closed = cls(S15, data.ident, EQ1, reference=m.clusters()["Σy"], solver="closed")
+    s = column_scales(stacked_regressors(S15, data.ident)[0])
+    assert rel_scaled(m.theta, closed.theta, s)[0] < 1e-6
+
+
+def test_table1_rows_on_the_plant_data():
+    datasets = pytest.importorskip("graybox.datasets")
+    data = datasets.load_pumping()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        out = convex.table1_graybox(data, lambdas=np.logspace(-6, 0, 12))
+    assert list(out.table.index) == ["CLS (22)", "PE (D_SF)"]
+    assert {"J_S ident", "J_S valid", "J_SF", "N_p"} <= set(out.table.columns)
+    assert (out.table["N_p"] == 17).all()
+    assert len(out.pareto) == 12 and 0 <= out.pe_index < 12
+    np.testing.assert_array_equal(out.pe.theta, out.pareto.thetas[out.pe_index])
+    # D_SF: the chosen member has the smallest J_S among those in the band
+    inside = out.pareto.JSF <= 0.031
+    assert inside.any() and out.pareto.JS[out.pe_index] == out.pareto.JS[inside].min()
+
+
+# ---------------------------------------------------------------------------------------------
+# PE
+# ---------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def pe_closed(rec):
+    return pe_thetas(S15, rec, reference.eq1_points(), LAMBDAS, solver="closed")
+
+
+@pytest.mark.parametrize("solver", ["clarabel", "osqp"])
+def test_pe_qp_equals_closed_form_for_all_100_lambdas(rec, scales, pe_closed, solver):
+    th = pe_thetas(S15, rec, reference.eq1_points(), LAMBDAS, solver=solver)
+    err = rel_scaled(th, pe_closed, scales)
+    assert err.max() < 1e-6, (err.max(), LAMBDAS[err.argmax()])
+
+
+def test_pe_lambda1_one_is_least_squares(rec, scales):
+    ls = scaled_lstsq(*stacked_regressors(S15, rec))
+    for solver in ("closed", "clarabel"):
+        th = pe_thetas(S15, rec, reference.eq1_points(), [1.0], solver=solver)[0]
+        assert rel_scaled(th, ls, scales)[0] < 1e-7, solver
+
+
+def test_pe_closed_form_is_eq11(rec):
+    """Eq. (11) as printed (weights="sum"), evaluated literally in scaled units."""
+    pts = reference.eq1_points()
+    psi, y = stacked_regressors(S15, rec)
+    s = column_scales(psi)
+    Q, R = static_matrices(S15, pts)
+    A, B = psi / s, (Q @ R) / s
+    lam = np.array([0.02, 0.3, 0.9])
+    th = pe_thetas(S15, rec, pts, lam, solver="closed", weights="sum")
+    for l1, t in zip(lam, th):
+        l2 = 1 - l1
+        z = np.linalg.solve(l1 * A.T @ A + l2 * B.T @ B, l1 * A.T @ y + l2 * B.T @ pts.ybar)
+        np.testing.assert_allclose(t * s, z, rtol=1e-6, atol=1e-9 * np.abs(z).max())
+
+
+def test_pe_sum_and_mse_weights_trace_the_same_front(rec, scales):
+    pts = reference.eq1_points()
+    N = stacked_regressors(S15, rec)[0].shape[0]
+    M = len(pts)
+    lam_sum = np.array([1e-5, 1e-3, 0.5])
+    # λ1/(1−λ1) (sum) = (λ1'/N)/((1−λ1')/M) (mse)  ⇒  λ1' = r N / (M + r N) with r = λ1/(1−λ1) · M … solve:
+    r = lam_sum / (1 - lam_sum)
+    lam_mse = r * N / (M + r * N)
+    a = pe_thetas(S15, rec, pts, lam_sum, solver="closed", weights="sum")
+    b = pe_thetas(S15, rec, pts, lam_mse, solver="closed", weights="mse")
+    assert rel_scaled(a, b, scales).max() < 1e-8
+
+
+def test_pe_sweep_builds_one_dpp_problem(rec, monkeypatch):
+    built = []
+    original = convex._QP
+
+    class Counting(original):
+        def __init__(self, *a, **k):
+            super().__init__(*a, **k)
+            built.append(self)
+
+    monkeypatch.setattr(convex, "_QP", Counting)
+    pe_thetas(S15, rec, reference.eq1_points(), np.logspace(-4, 0, 15))
+    assert len(built) == 1
+    prob = built[0].problem
+    assert prob.is_dpp() and {p.name() for p in prob.parameters()} == {"w1", "w2"}
+    # problem size independent of N: n_terms variables (the data enter through a triangular factor)
+    assert sum(v.size for v in prob.variables()) == 17
+
+
+def test_pe_pareto_evaluates_with_the_shared_evaluator(rec, pe_closed):
+    from graybox.evaluate import evaluate_thetas
+
+    pts = reference.eq1_points()
+    ps = pe_pareto(S15, rec, pts, LAMBDAS[::10], solver="closed")
+    ev = evaluate_thetas(S15, pe_closed[::10], rec, pts)
+    for k in ("J1", "JS", "JSF"):
+        np.testing.assert_allclose(getattr(ps, k), ev[k], rtol=1e-12)
+    np.testing.assert_allclose(ps.extra["JSF_QR"], qr_static_error(S15, pe_closed[::10], pts))
+    np.testing.assert_array_equal(ps.lambdas, LAMBDAS[::10])
+    # the trade-off is real on these data: J_SF falls by decades, J_1 rises
+    assert ps.JSF[0] < 1e-2 * ps.JSF[-1] and ps.J1[0] > ps.J1[-1]
+
+
+def test_pe_sweep_is_monotone_in_the_objectives_it_trades(pe_closed, rec):
+    """As λ2 grows (λ1 falls) J_SF^QR never increases and J_1 never decreases."""
+    pts = reference.eq1_points()
+    jsf_qr = qr_static_error(S15, pe_closed, pts)
+    psi, y = stacked_regressors(S15, rec)
+    j1 = np.mean((y[:, None] - psi @ pe_closed.T) ** 2, axis=0)
+    # LAMBDAS increase: λ2 decreases along the array
+    assert np.all(np.diff(jsf_qr) >= -1e-9 * jsf_qr[1:] - 1e-24)
+    assert np.all(np.diff(j1) <= 1e-9 * j1[1:])
+
+
+# ---------------------------------------------------------------------------------------------
+# properties on random structures and data
+# ---------------------------------------------------------------------------------------------
+_POOL = [t for t in Candidates(ny=3, nu=3, degree=2)]
+
+
+def _random_problem(seed: int, n_terms: int, n_points: int, unit: float):
+    rng = np.random.default_rng(seed)
+    idx = rng.choice(len(_POOL), size=n_terms, replace=False)
+    structure = Structure([_POOL[i] for i in sorted(idx)])
+    n = 600
+    levels = rng.uniform(1.0, 3.0, n // 20 + 1)
+    levels[1:3] = 1.0, 3.0  # the record spans the static points' range
+    u = np.repeat(levels, 20)[:n]
+    y = np.zeros(n)
+    e = 0.02 * rng.standard_normal(n)
+    for k in range(2, n):  # a mildly nonlinear plant (not in the candidate structure's family)
+        y[k] = 0.6 * y[k - 1] - 0.1 * y[k - 2] + 0.3 * u[k - 1] + 0.05 * u[k - 2] ** 2 + e[k]
+    ub = np.sort(rng.uniform(1.0, 3.0, n_points))
+    yb = (0.3 * ub + 0.05 * ub**2) / 0.5 + 0.05 * rng.standard_normal(n_points)
+    # engineering-like units: u scaled by `unit` (e.g. rpm), the model must not care
+    return structure, Record(u * unit, y), StaticPoints(ub * unit, yb)
+
+
+problem_args = dict(
+    seed=st.integers(0, 10_000),
+    n_terms=st.integers(3, 9),
+    n_points=st.integers(3, 8),
+    unit=st.sampled_from([1.0, 1000.0]),
+)
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**problem_args, lam=st.lists(st.floats(1e-5, 1.0), min_size=1, max_size=4))
+def test_property_pe_closed_form_equals_qp(seed, n_terms, n_points, unit, lam):
+    structure, r, pts = _random_problem(seed, n_terms, n_points, unit)
+    s = column_scales(stacked_regressors(structure, r)[0])
+    a = pe_thetas(structure, r, pts, lam, solver="closed")
+    b = pe_thetas(structure, r, pts, lam, solver="clarabel")
+    assert rel_scaled(b, a, s).max() < 1e-6
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**problem_args)
+def test_property_cls_points_closed_form_equals_qp(seed, n_terms, n_points, unit):
+    structure, r, pts = _random_problem(seed, n_terms, n_points, unit)
+    n_cl = len(cluster_map(structure).keys)
+    k = max(1, min(len(pts), n_cl - 1))
+    sub = StaticPoints(pts.ubar[:k], pts.ybar[:k])
+    s = column_scales(stacked_regressors(structure, r)[0])
+    try:
+        a = cls(structure, r, sub, solver="closed")
+    except ValueError as exc:  # a random structure may not be able to pass through the points
+        assert "does not exist" in str(exc) or "inconsistent" in str(exc)
+        return
+    b = cls(structure, r, sub, solver="clarabel")
+    assert rel_scaled(b.theta, a.theta, s)[0] < 1e-6
+    np.testing.assert_allclose(static_prediction(structure, a.theta, sub), sub.ybar, atol=1e-7 * (1 + np.abs(sub.ybar).max()))
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**problem_args)
+def test_property_weighted_sum_sweep_is_monotone(seed, n_terms, n_points, unit):
+    """J_SF^QR (mean (ȳ − QRθ)², the static error PE optimises) never increases as λ2 grows."""
+    structure, r, pts = _random_problem(seed, n_terms, n_points, unit)
+    lam = np.logspace(-5, 0, 25)[::-1]  # λ2 grows along this array
+    th = pe_thetas(structure, r, pts, lam, solver="closed")
+    q = qr_static_error(structure, th, pts)
+    assert np.all(np.diff(q) <= 1e-9 * q[:-1] + 1e-20)
+    psi, y = stacked_regressors(structure, r)
+    j1 = np.mean((y[:, None] - psi @ th.T) ** 2, axis=0)
+    assert np.all(np.diff(j1) >= -1e-9 * j1[:-1])
+
+
+# ---------------------------------------------------------------------------------------------
+# bad input
+# ---------------------------------------------------------------------------------------------
+def test_non_rational_structure_refused_by_rational_cls(rec):
+    s = Structure(["y(k-1)", "y(k-1)^2", "u(k-1)", "1", "u(k-1)^2"])
+    with pytest.raises(ValueError, match="rational"):
+        cls(s, rec, EQ1)
+    # the general variant works for it
+    m = cls(s, rec, EQ1.points([900.0, 1400.0]))
+    np.testing.assert_allclose(static_prediction(s, m.theta, EQ1.points([900.0, 1400.0])), EQ1([900.0, 1400.0]),
+                               atol=1e-7)
+
+
+def test_fewer_points_than_needed(rec):
+    with pytest.raises(ValueError, match="fewer static points"):
+        cls(S15, rec, EQ1.points([800.0, 1500.0]), how="curve")
+
+
+def test_too_many_inconsistent_points(rec):
+    rng = np.random.default_rng(0)
+    ub = np.linspace(750, 1650, 10)
+    noisy = StaticPoints(ub, EQ1(ub) + 0.1 * rng.standard_normal(10))
+    # ȳ_i is itself a column of Q (Σy), so the only way through ten generic points is the
+    # degenerate Σy = 1 (no static function): refused, with the reason
+    with pytest.raises(ValueError, match="only 5 cluster coefficients"):
+        cls(S15, rec, noisy)
+    # without a Σy cluster the equalities are simply inconsistent
+    s = Structure(["u(k-1)", "1", "u(k-2)^2", "u(k-1)y(k-1)"])
+    with pytest.raises(InfeasibleError, match="inconsistent"):
+        cls(s, rec, noisy)
+
+
+def test_static_points_outside_the_data_range(rec):
+    far = StaticPoints([900.0, 3000.0], [6.0, 60.0])
+    with pytest.raises(ValueError, match="outside the input range"):
+        cls(S15, rec, far)
+    with pytest.raises(ValueError, match="outside the input range"):
+        pe_thetas(S15, rec, far, [0.5])
+    with pytest.raises(ValueError, match="outside the input range"):
+        cls(S15, rec, StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, domain=(100.0, 1650.0)))
+    # explicitly allowed
+    pe_thetas(S15, rec, far, [0.5], range_margin=None, solver="closed")
+
+
+def test_zero_denominator_at_a_static_point(rec):
+    from graybox.constraints import ClusterBounds
+
+    # fix the y clusters so that D(ū) = 1 − Σy − Σyu ū vanishes at ū = 1000: "passing" through
+    # a point there would read 0 = 0, and the static function does not exist
+    fix = ClusterBounds({"Σy": (0.5, 0.5), "Σyu": (5e-4, 5e-4)})
+    with pytest.raises(ValueError, match="does not exist at ū"):
+        cls(S15, rec, EQ1.points([1000.0]), constraints=fix)
+    with pytest.raises(ValueError, match="does not exist at ū"):
+        cls(S15, rec, EQ1.points([1000.0]), constraints=fix, solver="closed")
+
+
+def test_curve_the_structure_cannot_carry(rec):
+    cubic = StaticCurve.polynomial([0.0, 1e-3, 0.0, 1e-9])
+    with pytest.raises(ValueError, match="Σu³"):
+        cls(S15, rec, cubic)
+
+
+def test_reference_with_unit_sigma_y(rec):
+    with pytest.raises(ValueError, match="vanishes"):
+        cls(S15, rec, EQ1, reference=1.0)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(solver="gurobi"), "solver must be one of"),
+        (dict(how="both"), "how must be"),
+        (dict(reference="mle"), "reference must be"),
+    ],
+)
+def test_bad_arguments(rec, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        cls(S15, rec, EQ1, **kwargs)
+
+
+def test_bad_pe_arguments(rec):
+    pts = reference.eq1_points()
+    for lam in ([0.0, 0.5], [1.5], [], [np.nan]):
+        with pytest.raises(ValueError, match="λ1|lambdas"):
+            pe_thetas(S15, rec, pts, lam)
+    with pytest.raises(ValueError, match="weights"):
+        pe_thetas(S15, rec, pts, [0.5], weights="mean")
+    with pytest.raises(ValueError, match="equality constraints only"):
+        pe_thetas(S15, rec, pts, [0.5], solver="closed", constraints=StaticBand(0.2))
+    with pytest.raises(ValueError, match="noise terms"):
+        pe_thetas(Structure(["y(k-1)", "e(k-1)"]), rec, pts, [0.5])
+    with pytest.raises(ValueError, match="domain"):
+        pe_thetas(S15, rec, EQ1, [0.5])
+    with pytest.raises(ValueError, match="StaticPoints or a StaticCurve"):
+        pe_thetas(S15, rec, [1, 2, 3], [0.5])
+
+
+def test_results_are_immutable(rec):
+    m = cls(S15, rec, EQ1, solver="closed")
+    with pytest.raises(ValueError):
+        m.theta[0] = 1.0
+    ps = pe_pareto(S15, rec, reference.eq1_points(), [0.1, 0.9], solver="closed")
+    with pytest.raises(ValueError):
+        ps.thetas[0, 0] = 1.0
+    with pytest.raises(Exception):
+        ps.method = "x"
