@@ -49,10 +49,14 @@ def js(model: Model, record: Record) -> float:
     return mse(record.y, model.simulate(record, on_diverge="nan"), model.max_lag)
 
 
-def jsf(model: Model, static: StaticPoints, y0: float | None = None) -> float:
-    """J_SF: MSE of the model's static curve at the static points (inf with a warning if undefined)."""
+def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None) -> float:
+    """J_SF: MSE of the model's static curve at the static points (inf with a warning if undefined).
+
+    Where the model has several stable equilibria at ū_i, the one it settles on when started at
+    ``y0`` (default: the measured ȳ_i) counts.
+    """
     try:
-        yb = model.static_curve(static.ubar, y0=y0, strict=True)
+        yb = model.static_curve(static.ubar, y0=static.ybar if y0 is None else y0, strict=True)
     except (ValueError, DivergenceError) as exc:
         warnings.warn(f"J_SF of {model.name or 'model'} is infinite: {exc}", RuntimeWarning, stacklevel=2)
         return float("inf")
@@ -91,8 +95,8 @@ def evaluate(
         Identification and validation records (and static points, unless ``static`` is given).
     static : StaticPoints, optional
         Static points for J_SF (default ``data.static``).
-    y0 : float, optional
-        Initial output used to pick among several stable equilibria.
+    y0 : float or ndarray, optional
+        Initial output used to pick among several stable equilibria (default: the measured ȳ_i).
 
     Returns
     -------
@@ -146,10 +150,17 @@ def _stable_mask(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarr
     return rho < 1.0
 
 
-def static_curves(structure, thetas: np.ndarray, ubar: np.ndarray, check_stability: bool = True) -> np.ndarray:
+def static_curves(
+    structure,
+    thetas: np.ndarray,
+    ubar: np.ndarray,
+    check_stability: bool = True,
+    y0: np.ndarray | None = None,
+) -> np.ndarray:
     """Static curves of many parameter vectors, shape (P, M); NaN where undefined.
 
-    Rational structures use eq. (6) vectorised; others solve the polynomial per member.
+    Rational structures use eq. (6) vectorised; others solve the polynomial per member (with
+    ``y0``, shape (M,), choosing among several stable equilibria as in :func:`jsf`).
     With ``check_stability`` an equilibrium that is not locally stable is NaN too (the model
     does not settle there), matching :meth:`Model.static_curve`.
     """
@@ -176,7 +187,7 @@ def static_curves(structure, thetas: np.ndarray, ubar: np.ndarray, check_stabili
         return yb
     out = np.empty((th.shape[0], ub.size))
     for i, row in enumerate(th):
-        out[i] = static_curve(structure, row, ub, strict=False) if np.all(np.isfinite(row)) else np.nan
+        out[i] = static_curve(structure, row, ub, y0=y0, strict=False) if np.all(np.isfinite(row)) else np.nan
     return out
 
 
@@ -230,7 +241,7 @@ def evaluate_thetas(
             js_ = np.mean(e2, axis=1)
         out["JS"] = np.where(np.isfinite(js_), js_, np.inf)
     if static is not None:
-        yb = static_curves(structure, th, static.ubar, check_stability)
+        yb = static_curves(structure, th, static.ubar, check_stability, y0=static.ybar)
         with np.errstate(over="ignore", invalid="ignore"):
             jsf_ = np.mean((yb - static.ybar[None, :]) ** 2, axis=1)
         out["JSF"] = np.where(np.isfinite(jsf_), jsf_, np.inf)

@@ -302,8 +302,27 @@ def ga_front(
     checkpoint: str | os.PathLike | None = None,
     progress: bool = True,
     threads: int = 1,
+    theta0: np.ndarray | Literal["ls"] | None = "ls",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The paper's GA over a λ1 sweep (run from λ1 = 1 down, whatever order is given).
+
+    Parameters
+    ----------
+    problem : SEProblem
+    lambdas : sequence of float in (0, 1]
+    options : GAOptions
+    seed : int
+        Seeds every random draw; with a checkpoint, a resumed sweep equals an uninterrupted one.
+    checkpoint : path, optional
+    progress : bool
+    threads : int
+    theta0 : ndarray, "ls" or None
+        An individual added to the first run's initial population. The paper seeds its first
+        run with random individuals only (least squares on 30 samples); for structures with
+        cubic terms those almost never give a free run that stays bounded, and the run then has
+        nothing to select from. The default, ``"ls"``, adds the least-squares estimate on all
+        samples — one individual, in the spirit of the paper's seeds. ``None`` is the paper's
+        choice exactly.
 
     Returns
     -------
@@ -314,16 +333,26 @@ def ga_front(
         The optimised weighted cost of each run's best individual.
     """
     lam = np.sort(check_lambdas(lambdas))[::-1]
+    if isinstance(theta0, str):
+        if theta0 != "ls":
+            raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
+        first = problem.ls_theta()
+    else:
+        first = None if theta0 is None else np.asarray(theta0, float)
+        if first is not None and first.shape != (len(problem.structure),):
+            raise ValueError(f"theta0 must have shape ({len(problem.structure)},), got {first.shape}")
 
     def step(i, lam1, prev, rng):
-        nrand = options.population - (prev is not None)
+        carry = prev if prev is not None else first
+        nrand = options.population - (carry is not None)
         init = problem.random_ls(rng, nrand, options.random_samples)
-        if prev is not None:
-            init = np.vstack([prev[None, :], init])
+        if carry is not None:
+            init = np.vstack([carry[None, :], init])
         th, c, _ = _ga_run(problem, lam1, init, options, rng, threads)
         return th, c
 
-    thetas, costs = _sweep(problem, lam, "ga", asdict(options), seed, checkpoint, progress, step)
+    settings = dict(asdict(options), theta0=None if first is None else [float(v) for v in first])
+    thetas, costs = _sweep(problem, lam, "ga", settings, seed, checkpoint, progress, step)
     return lam, thetas, costs
 
 
@@ -450,7 +479,8 @@ def se_pareto(
     options : GAOptions, optional
         GA settings.
     **kwargs
-        Passed to :func:`gradient_front` (``theta0``, ``max_nfev``, ``tol``).
+        Passed to :func:`ga_front` (``theta0``) or :func:`gradient_front` (``theta0``, ``max_nfev``,
+        ``tol``).
 
     Returns
     -------
@@ -464,13 +494,17 @@ def se_pareto(
         raise ValueError("the SE problem needs static points: pass static= or a Dataset with static points")
     problem = SEProblem(structure, rec, sp)
     if method == "ga":
-        lam, th, cost = ga_front(problem, lambdas, options or GAOptions(), seed, checkpoint, progress, threads)
+        lam, th, cost = ga_front(problem, lambdas, options or GAOptions(), seed, checkpoint, progress, threads,
+                                 **kwargs)
     elif method == "gradient":
         lam, th, cost = gradient_front(problem, lambdas, seed=seed, checkpoint=checkpoint, progress=progress, **kwargs)
     else:
         raise ValueError(f"method must be 'ga' or 'gradient', got {method!r}")
-    finite = np.all(np.isfinite(th), axis=1)
+    finite = np.all(np.isfinite(th), axis=1) & np.isfinite(cost)
     if not finite.any():
-        raise ValueError("the SE sweep produced no finite member")
+        raise ValueError(
+            f"the SE sweep ({method}) produced no member with a finite cost: every candidate's free run "
+            "diverged or its static curve was undefined; try another structure, theta0 or more generations"
+        )
     return ParetoSet.from_thetas(problem.structure, th[finite], lam[finite], rec, sp,
                                  method=f"SE ({method})", extra={"cost": cost[finite]}, threads=threads)

@@ -214,22 +214,23 @@ def static_curve(
     structure: Structure,
     theta: np.ndarray,
     ubar: np.ndarray,
-    y0: float | None = None,
+    y0: float | np.ndarray | None = None,
     strict: bool = True,
 ) -> np.ndarray:
     """The steady state the model reaches at each constant input ``ubar``.
 
     At each ū the stable equilibrium is returned. When several are stable the one reached
     by a free run at constant ū from the constant initial output ``y0`` is returned (``y0``
-    is then required).
+    is then required; the evaluator passes the measured ȳ_i, so J_SF asks "started at the
+    plant's measured steady state, where does the model settle?").
 
     Parameters
     ----------
     structure : Structure
     theta : ndarray, shape (n_terms,)
     ubar : array_like, shape (M,)
-    y0 : float, optional
-        Initial output used to pick among several stable equilibria.
+    y0 : float or array_like of shape (M,), optional
+        Initial output (one for all ū, or one per ū) used to pick among several stable equilibria.
     strict : bool
         When True (default) a ū with no stable equilibrium raises ``ValueError``; when False
         its value is NaN (used inside optimisers, which turn it into an infinite cost).
@@ -239,6 +240,7 @@ def static_curve(
     ndarray, shape (M,)
     """
     ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
+    y0s = None if y0 is None else np.broadcast_to(np.asarray(y0, dtype=float), ub.shape)
     out = np.empty(ub.size)
     for i, u_ in enumerate(ub):
         stable = [e for e in equilibria(structure, theta, u_) if e.stable]
@@ -249,7 +251,7 @@ def static_curve(
                 raise ValueError(f"the model has no stable equilibrium at ū = {u_:g}")
             out[i] = np.nan
         else:
-            if y0 is None:
+            if y0s is None:
                 if strict:
                     raise ValueError(
                         f"the model has {len(stable)} stable equilibria at ū = {u_:g} "
@@ -257,7 +259,7 @@ def static_curve(
                     )
                 out[i] = np.nan
                 continue
-            out[i] = _settle(structure, theta, u_, float(y0), [e.ybar for e in stable])
+            out[i] = _settle(structure, theta, u_, float(y0s[i]), [e.ybar for e in stable])
     return out
 
 
@@ -276,7 +278,11 @@ def _settle(structure: Structure, theta: np.ndarray, ubar: float, y0: float, can
 
 
 def static_gain(
-    structure: Structure, theta: np.ndarray, ubar: np.ndarray, y0: float | None = None, strict: bool = True
+    structure: Structure,
+    theta: np.ndarray,
+    ubar: np.ndarray,
+    y0: float | np.ndarray | None = None,
+    strict: bool = True,
 ) -> np.ndarray:
     """dȳ/dū along the static curve, by implicit differentiation of eq. (5).
 

@@ -73,15 +73,31 @@ def test_diverging_individual_gets_infinite_cost(problem):
 
 def test_ga_is_reproducible_and_improves(problem):
     lam = [1.0, 0.3]
-    a = ga_front(problem, lam, SMALL, seed=11, progress=False)
-    b = ga_front(problem, lam, SMALL, seed=11, progress=False)
-    c = ga_front(problem, lam, SMALL, seed=12, progress=False)
+    a = ga_front(problem, lam, SMALL, seed=11, progress=False, theta0=None)  # the paper's seeding exactly
+    b = ga_front(problem, lam, SMALL, seed=11, progress=False, theta0=None)
+    c = ga_front(problem, lam, SMALL, seed=12, progress=False, theta0=None)
     np.testing.assert_array_equal(a[1], b[1])
     assert not np.array_equal(a[1], c[1])
     # the best of a run is never worse than its seed individual (elitism)
     rng = np.random.default_rng([11, 0])
     init = problem.random_ls(rng, SMALL.population, 30)
     assert a[2][0] <= np.min(problem.cost(init, 1.0))
+    # seeded with least squares (the default), the first run is never worse than LS
+    d = ga_front(problem, lam, SMALL, seed=11, progress=False)
+    assert d[2][0] <= problem.cost(problem.ls_theta()[None], 1.0)[0]
+
+
+def test_ga_with_no_bounded_individual_is_an_error(problem, monkeypatch):
+    bad = problem.ls_theta().copy()
+    bad[0] = 5.0  # the y(k-1) coefficient alone makes every free run diverge
+
+    def exploding(self, rng, count, samples=30):
+        return np.tile(bad, (count, 1)) * (1 + 0.01 * rng.standard_normal((count, bad.size)))
+
+    monkeypatch.setattr(SEProblem, "random_ls", exploding)
+    with pytest.raises(ValueError, match="no member with a finite cost"):
+        se_pareto(problem.structure, problem.record, problem.static, [1.0], method="ga", progress=False,
+                  options=SMALL, theta0=None)
 
 
 def test_gradient_front_beats_ls_and_tracks_lambda(problem):
