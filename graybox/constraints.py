@@ -31,6 +31,7 @@ import inspect
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
+from types import MappingProxyType
 from typing import Callable, Iterable, Iterator, Mapping, Sequence
 
 import cvxpy as cp
@@ -720,7 +721,7 @@ class ClusterBounds(StaticConstraint):
             if lo is not None and hi is not None and lo > hi:
                 raise ValueError(f"cluster {k!r}: lower bound {lo} exceeds upper bound {hi}")
             clean[k] = (lo, hi)
-        object.__setattr__(self, "bounds", clean)
+        object.__setattr__(self, "bounds", MappingProxyType(clean))  # read-only: the object is a value
 
     def describe(self) -> str:
         parts = []

@@ -370,7 +370,12 @@ def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
 
 
 class _QP:
-    """min w1 (yᵀH1y − 2g1ᵀy) + w2 (yᵀH2y − 2g2ᵀy)  s.t.  V y = g, G y <= h, user(θ(y)).
+    """min w1 (δᵀH1δ + 2l1ᵀδ) + w2 (δᵀH2δ + 2l2ᵀδ)  s.t.  V δ = g', G δ <= h', user(θ(δ)).
+
+    The variable is δ = y − y_LS, the step from the unconstrained least-squares estimate in the
+    solver basis. Centring matters: the objective is then the *change* of the weighted squared
+    errors (0 at the LS estimate), so the solvers' relative gap tolerances apply to what is being
+    traded instead of to ‖y‖² ≈ N·mean(y²), which would leave active constraints ~1e-6 loose.
 
     Built once; ``w1``, ``w2`` are nonnegative Parameters multiplying convex terms (DPP), so a
     sweep re-solves the compiled problem (warm-started) instead of rebuilding it.
@@ -381,24 +386,26 @@ class _QP:
         n = d.s.size
         self.basis = b = _basis(d, static)
         rows = _rows(cons, ctx, d.s, b.T)
-        self.y = cp.Variable(n, name="y")
-        theta = cp.multiply(1.0 / d.s, b.T @ self.y)  # engineering units, for user constraints
+        self.y0 = y0 = b.g1 / b.H1 if b.H1.ndim == 1 else np.linalg.lstsq(b.H1, b.g1, rcond=None)[0]
+        self.dy = cp.Variable(n, name="dy")
+        theta = cp.multiply(1.0 / d.s, b.T @ (y0 + self.dy))  # engineering units, for user constraints
         self.w1 = cp.Parameter(nonneg=True, name="w1")
         self.w2 = cp.Parameter(nonneg=True, name="w2")
-        obj = self.w1 * (_quad(self.y, b.H1) - 2 * b.g1 @ self.y)
+        Hy0 = (lambda H: H * y0 if H.ndim == 1 else H @ y0)
+        obj = self.w1 * (_quad(self.dy, b.H1) + 2 * (Hy0(b.H1) - b.g1) @ self.dy)
         if b.H2 is not None:
-            obj = obj + self.w2 * (_quad(self.y, b.H2) - 2 * b.g2 @ self.y)
+            obj = obj + self.w2 * (_quad(self.dy, b.H2) + 2 * (Hy0(b.H2) - b.g2) @ self.dy)
         cons_cp: list[cp.Constraint] = []
         if rows.V.shape[0]:
-            cons_cp.append(rows.V @ self.y == rows.g)
+            cons_cp.append(rows.V @ self.dy == rows.g - rows.V @ y0)
         if rows.G.shape[0]:
-            cons_cp.append(rows.G @ self.y <= rows.h)
+            cons_cp.append(rows.G @ self.dy <= rows.h - rows.G @ y0)
         for c in rows.user:
             cons_cp.extend(c.constraints(theta, ctx))
         self.problem = cp.Problem(cp.Minimize(obj), cons_cp)
-        # First warm start: the unconstrained LS estimate (a first-order solver such as OSQP
-        # converges slowly from zero when λ1 is tiny; later solves start from the previous one).
-        self.y.value = b.g1 / b.H1 if b.H1.ndim == 1 else np.linalg.lstsq(b.H1, b.g1, rcond=None)[0]
+        # First warm start: the LS estimate (OSQP converges slowly from elsewhere when λ1 is
+        # tiny); later solves start from the previous one.
+        self.dy.value = np.zeros(n)
         if not self.problem.is_dcp(dpp=True):
             raise ValueError("the problem is not convex (DCP/DPP): check the user constraints")
         self.solver = solver
@@ -424,12 +431,12 @@ class _QP:
                 f"the constraints admit no θ: solver {self.solver} reports status {st!r} for "
                 f"{list(self.names) or ['(none)']}"
             )
-        if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.y.value is None:
+        if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.dy.value is None:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
             warnings.warn(f"solver {self.solver} reports an inaccurate optimum (w1={w1:g}, w2={w2:g})",
                           RuntimeWarning, stacklevel=3)
-        return self.basis.T @ np.array(self.y.value, float)
+        return self.basis.T @ (self.y0 + np.array(self.dy.value, float))
 
 
 # --------------------------------------------------------------------------------------------
@@ -573,11 +580,10 @@ def cls(
         static_cons.append(CurveEquality(curve))
     elif points is not None:
         static_cons.append(PassesThrough(points))
-    sigma = _sigma_y(d, recs, reference) if curve is not None else None
-    ctx = StaticContext(st, points, curve, sigma, d.data_range, range_margin)
+    cons = static_cons + as_constraint_list(constraints)
+    ctx = StaticContext(st, points, curve, _needed_sigma_y(cons, d, recs, reference), d.data_range, range_margin)
     if curve is not None and curve.domain is not None:
         ctx.check_ubar(np.array(curve.domain), f"domain of {curve.name}")
-    cons = static_cons + as_constraint_list(constraints)
     rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
@@ -616,7 +622,14 @@ def _lambdas(lambdas: np.ndarray | Sequence[float] | float) -> np.ndarray:
     return lam
 
 
-def _pe_setup(structure, data, static, constraints, weights, ubar, range_margin):
+def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], reference) -> float | None:
+    """Σ*_y only when some CurveEquality will ask for it (ELS is not free)."""
+    if any(isinstance(c, CurveEquality) and c.sigma_y is None for c in cons):
+        return _sigma_y(d, recs, reference)
+    return None
+
+
+def _pe_setup(structure, data, static, constraints, weights, ubar, range_margin, reference="ls"):
     st = _process_structure(structure)
     if weights not in ("mse", "sum"):
         raise ValueError(f"weights must be 'mse' or 'sum', got {weights!r}")
@@ -624,9 +637,9 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, range_margin)
     d = _dynamic(st, recs)
     pts = _static_points(static, ubar)
     curve = static if isinstance(static, StaticCurve) else None
-    ctx = StaticContext(st, pts, curve, None, d.data_range, range_margin)
-    ctx.check_ubar(pts.ubar, f"static points {pts.name!r}")
     cons = as_constraint_list(constraints)
+    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), d.data_range, range_margin)
+    ctx.check_ubar(pts.ubar, f"static points {pts.name!r}")
     rows = _rows(cons, ctx, d.s)
     R2, c2, M = _static_part(d, pts)
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
@@ -645,6 +658,7 @@ def pe_thetas(
     ubar: np.ndarray | None = None,
     range_margin: float | None = 0.1,
     warm_start: bool = True,
+    reference: Model | np.ndarray | float | str = "ls",
 ) -> np.ndarray:
     """θ of the PE weighted sum (9) for each λ1 (λ2 = 1 − λ1), without evaluating them.
 
@@ -659,7 +673,7 @@ def pe_thetas(
     solver = _check_solver(solver)
     lam = _lambdas(lambdas)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
-                                                            range_margin)
+                                                            range_margin, reference)
     w1 = lam / d.N if weights == "mse" else lam.copy()
     w2 = (1.0 - lam) / M if weights == "mse" else 1.0 - lam
     if solver == "closed":
@@ -693,6 +707,7 @@ def pe_pareto(
     range_margin: float | None = 0.1,
     warm_start: bool = True,
     threads: int = 1,
+    reference: Model | np.ndarray | float | str = "ls",
 ) -> ParetoSet:
     """The PE bi-objective Pareto set (eq. (9)): one model per λ1, evaluated by the shared evaluator.
 
@@ -713,10 +728,20 @@ def pe_pareto(
         (equality constraints only).
     weights : {"mse", "sum"}
         Objective normalisation (see :func:`pe_thetas`).
+    solver_options : mapping, optional
+        Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults).
+    ubar : ndarray, optional
+        Where to sample a StaticCurve given as ``static``.
     eval_static : StaticPoints, optional
         Points for the members' J_SF (default: the static points used in the objective).
+    range_margin : float or None
+        Refuse static ū further than this fraction of the dynamic data's input span outside it.
+    warm_start : bool
+        Warm-start OSQP from the neighbouring λ (the sweep runs from λ1 = 1 downwards).
     threads : int
         Threads for the batch free runs of the evaluator.
+    reference : {"ls", "els"}, Model, ndarray or float
+        Σ*_y for a :class:`~graybox.constraints.CurveEquality` among ``constraints`` (see :func:`cls`).
 
     Returns
     -------
@@ -726,7 +751,7 @@ def pe_pareto(
     """
     thetas = pe_thetas(structure, data, static, lambdas, constraints=constraints, solver=solver,
                        solver_options=solver_options, weights=weights, ubar=ubar, range_margin=range_margin,
-                       warm_start=warm_start)
+                       warm_start=warm_start, reference=reference)
     st = _process_structure(structure)
     pts = _static_points(static, ubar)
     ev = pts if eval_static is None else eval_static

@@ -1,0 +1,320 @@
+"""Static-curve constraint objects: each variant, with CLS and PE, satisfied by the returned θ."""
+
+import dataclasses
+
+import cvxpy as cp
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from graybox import Model, Record, StaticPoints, Structure, reference
+from graybox.constraints import (
+    AllOf,
+    ClusterBounds,
+    CurveEquality,
+    GainBounds,
+    InfeasibleError,
+    PassesThrough,
+    StaticBand,
+    StaticContext,
+    UserConstraint,
+    as_constraint_list,
+    static_rows,
+)
+from graybox.convex import cls, pe_thetas, static_prediction
+from graybox.curves import StaticCurve
+from graybox.ls import scaled_lstsq
+from graybox.regressors import stacked_regressors
+from graybox.static import cluster_map, rational_static_curve, static_gain
+
+EQ1 = StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, name="eq. (1)")
+S15 = reference.STRUCTURE_15
+PTS = reference.eq1_points()
+
+
+def simulated(model: Model, n: int, seed: int, noise: float = 0.05) -> Record:
+    rng = np.random.default_rng(seed)
+    levels = rng.uniform(750.0, 1650.0, size=n // 60 + 1)
+    levels[:2] = 750.0, 1650.0
+    u = np.repeat(levels, 60)[:n]
+    y0 = np.full(model.max_lag, float(model.static_curve([u[0]])[0]))
+    return Record(u, model.simulate(u, y0) + noise * rng.standard_normal(n), Ts=0.05)
+
+
+@pytest.fixture(scope="module")
+def rec():
+    return simulated(reference.paper_model(15), 2400, seed=3)
+
+
+@pytest.fixture(scope="module")
+def ls(rec):
+    return scaled_lstsq(*stacked_regressors(S15, rec))
+
+
+def ctx_for(rec, structure=S15, points=PTS, curve=None, sigma_y=None):
+    return StaticContext(structure, points, curve, sigma_y, (float(rec.u.min()), float(rec.u.max())))
+
+
+def true_static_error(theta, pts=PTS):
+    return np.abs(rational_static_curve(S15, theta, pts.ubar) - pts.ybar)
+
+
+# ---------------------------------------------------------------------------------------------
+# band
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("solver", ["clarabel", "osqp"])
+def test_band_bounds_the_true_static_error_with_cls_and_pe(rec, ls, solver):
+    b = 0.175
+    assert true_static_error(ls).max() > 3 * b  # the data alone miss eq. (1) by far more
+    band = StaticBand(b)
+    for th in (
+        pe_thetas(S15, rec, PTS, [1.0], constraints=band, solver=solver)[0],  # λ1 = 1: LS + band
+        pe_thetas(S15, rec, PTS, [0.5], constraints=band, solver=solver)[0],
+        cls(S15, rec, None, constraints=StaticBand(b, PTS), solver=solver).theta,
+    ):
+        err = true_static_error(th)
+        assert err.max() <= b * (1 + 1e-6)
+        assert band.violation(th, ctx_for(rec)) < 1e-7
+    # at λ1 = 1 the band is active: the LS-optimal model sits on its edge somewhere
+    th = pe_thetas(S15, rec, PTS, [1.0], constraints=band, solver=solver)[0]
+    assert true_static_error(th).max() == pytest.approx(b, rel=1e-5)
+
+
+def test_band_residual_form_is_looser(rec):
+    b = 0.175
+    th = pe_thetas(S15, rec, PTS, [1.0], constraints=StaticBand(b, form="residual"))[0]
+    resid = np.abs(PTS.ybar - static_prediction(S15, th, PTS))
+    assert resid.max() <= b * (1 + 1e-6)
+    # bounding the residual D (ȳ − ȳ_model) with D ≈ 0.07 lets the true error reach ≈ b / D
+    assert true_static_error(th).max() > 2 * b
+
+
+# ---------------------------------------------------------------------------------------------
+# gain
+# ---------------------------------------------------------------------------------------------
+def test_gain_bounds_exact_without_mixed_clusters(rec):
+    # no y·u cluster: the gain of the static equation does not depend on ȳ, so the affine form
+    # is exact and the model's own static gain obeys the bounds everywhere on the grid
+    s = Structure(["y(k-1)", "y(k-2)", "1", "u(k-1)", "u(k-2)^2", "u(k-1)u(k-3)"])
+    g = GainBounds(lower=0.02, upper=0.024, ubar_range=(800.0, 1600.0), n=17, reference=EQ1)
+    m = cls(s, rec, None, constraints=g)
+    ub = np.linspace(800.0, 1600.0, 17)
+    gain = static_gain(s, m.theta, ub)
+    assert gain.min() >= 0.02 - 1e-8 and gain.max() <= 0.024 + 1e-8
+    unconstrained = static_gain(s, scaled_lstsq(*stacked_regressors(s, rec)), ub)
+    assert unconstrained.min() < 0.02 or unconstrained.max() > 0.024  # the bounds did bind
+
+
+def test_gain_bounds_with_the_curve_imposed_are_exact(rec):
+    # with eq. (22) the model's static curve is eq. (1), so the gain along it is the model's own
+    g = GainBounds(lower=0.012, ubar_range=(750.0, 1650.0), reference=EQ1)
+    m = cls(S15, rec, EQ1, constraints=g)
+    ub = np.linspace(750.0, 1650.0, 25)
+    np.testing.assert_allclose(m.static_gain(ub), EQ1.gain(ub), rtol=1e-6)
+    assert g.violation(m.theta, ctx_for(rec, curve=EQ1)) < 1e-9
+
+
+def test_gain_bounds_affine_rows_hold_with_pe(rec):
+    g = GainBounds(lower=0.0)  # monotone; reference: the problem's static points, interpolated
+    th = pe_thetas(S15, rec, PTS, [1.0, 0.01], constraints=g)
+    for t in th:
+        assert g.violation(t, ctx_for(rec)) < 1e-7
+
+
+def test_gain_bounds_incompatible_with_the_curve_are_infeasible(rec):
+    # eq. (1) has gain 0.0124 … 0.0255 mlc/rpm over 750–1650: an upper bound of 0.01 excludes it
+    g = GainBounds(upper=0.01, ubar_range=(750.0, 1650.0), reference=EQ1)
+    for solver in ("clarabel", "osqp"):
+        with pytest.raises(InfeasibleError) as exc:
+            cls(S15, rec, EQ1, constraints=g, solver=solver)
+        msg = str(exc.value)
+        assert "static gain in [-inf, 0.01]" in msg and "equality (22)" in msg and "status" in msg
+
+
+# ---------------------------------------------------------------------------------------------
+# cluster bounds
+# ---------------------------------------------------------------------------------------------
+def test_cluster_bounds_by_name_and_key(rec, ls):
+    cm = cluster_map(S15)
+    sy_ls = float((cm.R @ ls)[cm.index("Σy")])
+    cap = sy_ls - 0.02  # binding
+    for key in ("Σy", "Sy", (1, 0)):
+        th = pe_thetas(S15, rec, PTS, [1.0], constraints=ClusterBounds({key: (None, cap)}))[0]
+        sy = float((cm.R @ th)[cm.index("Σy")])
+        assert cap - 1e-6 <= sy <= cap + 1e-10  # active, met to the interior-point tolerance
+    m = cls(S15, rec, None, constraints=ClusterBounds({"Σyu": (0.0, 0.0), "Σu²": (1e-7, None)}))
+    c = m.clusters()
+    assert abs(c["Σyu"]) < 1e-12 and c["Σu²"] >= 1e-7 * (1 - 1e-8)
+
+
+def test_cluster_bounds_conflict_is_infeasible(rec):
+    both = ClusterBounds({"Σy": (0.95, None)}) & ClusterBounds({"Σy": (None, 0.9)})
+    for solver in ("clarabel", "osqp"):
+        with pytest.raises(InfeasibleError) as exc:
+            pe_thetas(S15, rec, PTS, [0.5], constraints=both, solver=solver)
+        msg = str(exc.value)
+        assert "0.95 <= Σy" in msg and "Σy <= 0.9" in msg and "status 'infeasible'" in msg and solver in msg
+    # two equalities that disagree are caught before any solver runs, closed form included
+    eq = ClusterBounds({"Σyu": (1e-5, 1e-5)}) & CurveEquality(EQ1)
+    for solver in ("closed", "clarabel"):
+        with pytest.raises(InfeasibleError, match="inconsistent"):
+            cls(S15, rec, None, constraints=eq, solver=solver)
+
+
+# ---------------------------------------------------------------------------------------------
+# user constraints
+# ---------------------------------------------------------------------------------------------
+def test_user_constraint_one_and_two_arguments(rec, ls):
+    assert ls[0] < 0.9
+    first = UserConstraint(lambda th: th[0] >= 0.9, name="θ1 >= 0.9")
+    th = pe_thetas(S15, rec, PTS, [1.0], constraints=first)[0]
+    assert th[0] == pytest.approx(0.9, abs=1e-8)
+
+    def sum_y(th, ctx):  # Σy through the context's R, as a list of constraints
+        r = ctx.cluster_map.R[ctx.cluster_map.index("Σy")]
+        return [r @ th <= 0.85, r @ th >= 0.5]
+
+    m = cls(S15, rec, None, constraints=UserConstraint(sum_y, name="Σy in [0.5, 0.85]"))
+    assert 0.5 - 1e-8 <= m.clusters()["Σy"] <= 0.85 + 1e-8
+    ctx = ctx_for(rec)
+    assert UserConstraint(sum_y).violation(m.theta, ctx) < 1e-8
+    assert UserConstraint(sum_y).violation(ls, ctx) > 0.01
+
+
+def test_user_constraint_errors(rec):
+    with pytest.raises(ValueError, match="callable"):
+        UserConstraint(3)
+    with pytest.raises(ValueError, match="must return cvxpy constraints"):
+        cls(S15, rec, None, constraints=UserConstraint(lambda th: [th[0]]))
+    with pytest.raises(ValueError, match="not convex"):
+        cls(S15, rec, None, constraints=UserConstraint(lambda th: cp.square(th[0]) >= 1))
+    with pytest.raises(ValueError, match="equality constraints only"):
+        cls(S15, rec, None, constraints=UserConstraint(lambda th: th[0] >= 0), solver="closed")
+    with pytest.raises(ValueError, match="UserConstraint"):
+        cls(S15, rec, None, constraints=[lambda th: th[0] >= 0])
+
+
+# ---------------------------------------------------------------------------------------------
+# composition and the objects themselves
+# ---------------------------------------------------------------------------------------------
+def test_composition_flattens_and_all_hold(rec):
+    a, b, c = StaticBand(0.3), ClusterBounds({"Σy": (None, 0.93)}), GainBounds(lower=0.0)
+    both = a & b & c
+    assert isinstance(both, AllOf) and len(both) == 3 and list(both) == [a, b, c]
+    assert as_constraint_list([a, b & c]) == [a, b, c] and as_constraint_list(None) == []
+    assert "static band" in both.describe() and "Σy <= 0.93" in both.describe()
+    th = pe_thetas(S15, rec, PTS, [1.0, 0.1], constraints=both)
+    ctx = ctx_for(rec)
+    for t in th:
+        assert both.violation(t, ctx) < 1e-7
+        assert true_static_error(t).max() <= 0.3 * (1 + 1e-6)
+    rows = both.affine(ctx)
+    assert rows.n_eq == 0 and rows.n_ub == 2 * len(PTS) + 1 + 2 * 25
+
+
+def test_objects_are_immutable_values():
+    band = StaticBand(0.2)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        band.b = 0.1
+    cb = ClusterBounds({"Σy": (None, 0.9)})
+    with pytest.raises(TypeError):
+        cb.bounds["Σu"] = (0, 1)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        CurveEquality(EQ1).curve = None
+
+
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda: StaticBand(0.0), "positive"),
+        (lambda: StaticBand(0.1, form="relative"), "form"),
+        (lambda: GainBounds(), "lower or an upper"),
+        (lambda: GainBounds(lower=1.0, upper=0.0), "exceeds"),
+        (lambda: GainBounds(lower=0.0, n=0), "positive integer"),
+        (lambda: GainBounds(lower=0.0, ubar_range=(2.0, 1.0)), "low <= high"),
+        (lambda: ClusterBounds({}), "at least one"),
+        (lambda: ClusterBounds({"Σy": 0.9}), r"\(lower, upper\)"),
+        (lambda: ClusterBounds({"Σy": (1.0, 0.5)}), "exceeds"),
+        (lambda: ClusterBounds({"Σy": (None, None)}), "lower or an upper"),
+        (lambda: CurveEquality([1.0, 2.0]), "StaticCurve"),
+        (lambda: StaticContext(S15, range_margin=-1.0), "range_margin"),
+    ],
+)
+def test_constructor_validation(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_errors_against_the_problem_data(rec):
+    ctx_nopts = ctx_for(rec, points=None)
+    with pytest.raises(ValueError, match="needs static points"):
+        StaticBand(0.2).affine(ctx_nopts)
+    with pytest.raises(ValueError, match="no cluster"):
+        ClusterBounds({"Σy²": (None, 1.0)}).affine(ctx_for(rec))
+    with pytest.raises(ValueError, match="ubar_range"):
+        GainBounds(lower=0.0).affine(ctx_nopts)
+    with pytest.raises(ValueError, match="outside the domain"):
+        GainBounds(lower=0.0, ubar_range=(700.0, 1600.0),
+                   reference=StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, domain=(750.0, 1650.0))).affine(
+            ctx_for(rec))
+    with pytest.raises(ValueError, match="Σ\\*_y is unknown"):
+        CurveEquality(EQ1).affine(ctx_for(rec))
+
+
+def test_curve_equality_rows():
+    rows = CurveEquality(EQ1, sigma_y=0.9).affine(StaticContext(S15))
+    cm = cluster_map(S15)
+    assert rows.n_eq == len(cm.keys) == 5 and rows.n_ub == 0
+    target = dict(zip(cm.keys, rows.b_eq))
+    k, a, b = reference.EQ1_COEFFICIENTS
+    assert target[(1, 1)] == 0 and target[(1, 0)] == 0.9
+    assert target[(0, 0)] == pytest.approx(0.1 * k) and target[(0, 2)] == pytest.approx(0.1 * b)
+    # no linear y cluster: Σ*_y is irrelevant (the denominator is made 1)
+    s = Structure(["1", "u(k-1)", "u(k-2)^2", "u(k-1)y(k-1)"])
+    rows = CurveEquality(EQ1).affine(StaticContext(s))
+    assert dict(zip(cluster_map(s).keys, rows.b_eq))[(0, 1)] == pytest.approx(a)
+
+
+# ---------------------------------------------------------------------------------------------
+# static rows and their derivatives
+# ---------------------------------------------------------------------------------------------
+@settings(max_examples=25, deadline=None)
+@given(u=st.floats(0.5, 3.0), y=st.floats(0.5, 3.0))
+def test_static_row_derivatives_match_finite_differences(u, y):
+    cm = cluster_map(Structure(["1", "y(k-1)", "u(k-1)", "y(k-1)^2u(k-2)", "u(k-1)^3", "y(k-2)^3", "u(k-1)y(k-1)"]))
+    q = lambda uu, yy: static_rows(cm, np.array([uu]), np.array([yy]))[0]  # noqa: E731
+    h = 1e-6
+    np.testing.assert_allclose(static_rows(cm, np.array([u]), np.array([y]), wrt="u")[0],
+                               (q(u + h, y) - q(u - h, y)) / (2 * h), rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(static_rows(cm, np.array([u]), np.array([y]), wrt="y")[0],
+                               (q(u, y + h) - q(u, y - h)) / (2 * h), rtol=1e-6, atol=1e-8)
+
+
+# ---------------------------------------------------------------------------------------------
+# property: every variant is satisfied by the returned θ, with CLS and with PE
+# ---------------------------------------------------------------------------------------------
+variant = st.one_of(
+    st.builds(lambda b: StaticBand(b, points=PTS), st.floats(0.1, 1.0)),
+    st.builds(lambda hi: ClusterBounds({"Σy": (None, hi)}), st.floats(0.85, 0.95)),
+    st.builds(lambda lo: GainBounds(lower=lo, ubar_range=(750.0, 1650.0), reference=EQ1), st.floats(0.0, 0.015)),
+    st.builds(lambda c: UserConstraint(lambda th: th[0] >= c, name=f"θ1 >= {c:.3g}"), st.floats(0.5, 1.0)),
+    st.builds(lambda k: PassesThrough(StaticPoints(PTS.ubar[k:k + 2], PTS.ybar[k:k + 2])), st.integers(0, 8)),
+)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(cons=st.lists(variant, min_size=1, max_size=3), lam=st.floats(1e-4, 1.0), use_cls=st.booleans())
+def test_property_every_variant_is_satisfied(rec, cons, lam, use_cls):
+    ctx = ctx_for(rec)
+    try:
+        if use_cls:
+            th = cls(S15, rec, None, constraints=cons).theta
+        else:
+            th = pe_thetas(S15, rec, PTS, [lam], constraints=cons)[0]
+    except InfeasibleError as exc:  # a random combination may be infeasible: then it must say so
+        assert "status" in str(exc) or "inconsistent" in str(exc)
+        return
+    for c in cons:
+        assert c.violation(th, ctx) < 1e-6, c.describe()
+        if isinstance(c, StaticBand):  # exact for this rational structure
+            assert true_static_error(th).max() <= c.b * (1 + 1e-5)
