@@ -1,0 +1,83 @@
+"""D_SF (eq. (14)): min J_S subject to J_SF in B = [0, band]."""
+
+import numpy as np
+import pytest
+
+from graybox import Model, reference
+from graybox.decide import decide_dsf
+from graybox.pareto import ParetoSet
+
+S15 = reference.STRUCTURE_15
+
+
+def front(js, jsf, lambdas=None):
+    k = len(js)
+    th = np.tile(reference.TABLE_II["ELS"], (k, 1)) * (1 + 0.01 * np.arange(k))[:, None]
+    lam = np.linspace(1.0, 0.1, k) if lambdas is None else lambdas
+    return ParetoSet(S15, th, lam, np.zeros(k), np.asarray(js, float), np.asarray(jsf, float), "PE")
+
+
+def test_picks_min_js_inside_the_band():
+    ps = front([1.0, 2.0, 3.0, 4.0], [0.5, 0.03, 0.01, 0.0])
+    m, i = decide_dsf(ps, return_index=True)
+    assert i == 1 and isinstance(m, Model)
+    np.testing.assert_array_equal(m.theta, ps.thetas[1])
+    assert "D_SF" in m.name
+    assert isinstance(decide_dsf(ps), Model)  # without the index: a Model, ready for evaluate()
+    # the band's edge is inside: B is closed
+    assert decide_dsf(front([1.0, 2.0], [0.031, 0.0]), return_index=True)[1] == 0
+
+
+def test_ties_and_divergent_members():
+    ps = front([2.0, 2.0, np.inf], [0.02, 0.01, 0.001])
+    # the diverging member (J_S = inf) is never chosen; among equal J_S the smaller J_SF wins
+    assert decide_dsf(ps, return_index=True)[1] == 1
+
+
+def test_band_as_interval():
+    ps = front([1.0, 2.0, 3.0], [0.02, 0.01, 0.001])
+    assert decide_dsf(ps, band=(0.005, 0.015), return_index=True)[1] == 1
+
+
+def test_no_member_in_the_band_is_an_error_unless_a_fallback_is_named():
+    ps = front([1.0, 2.0, 3.0], [0.5, 0.2, 0.1])
+    with pytest.raises(ValueError, match=r"no member .* J_SF in B = \[0, 0.031\].*smallest J_SF is 0.1.*fallback"):
+        decide_dsf(ps)
+    m, i = decide_dsf(ps, fallback="min_jsf", return_index=True)
+    assert i == 2 and "no member in B" in m.name
+    with pytest.raises(ValueError, match="fallback must be"):
+        decide_dsf(ps, fallback="nearest")
+
+
+@pytest.mark.parametrize("band", [-0.1, np.nan, (0.02, 0.01), (-1.0, 0.1)])
+def test_bad_band(band):
+    with pytest.raises(ValueError, match="band"):
+        decide_dsf(front([1.0], [0.0]), band=band)
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="ParetoSet"):
+        decide_dsf([1, 2, 3])
+    empty = ParetoSet(S15, np.zeros((0, 17)), [], [], [], [], "x")
+    with pytest.raises(ValueError, match="empty"):
+        decide_dsf(empty)
+    with pytest.raises(ValueError, match="every member"):
+        decide_dsf(front([1.0, 2.0], [np.inf, np.inf]), fallback="min_jsf")
+
+
+def test_on_a_pe_front():
+    """On a real PE sweep: the choice is in the band and no in-band member simulates better."""
+    from graybox import Record
+    from graybox.convex import pe_pareto
+
+    rng = np.random.default_rng(2)
+    m = reference.paper_model(15)
+    u = np.repeat(rng.uniform(750, 1650, 40), 40)[:1600]
+    u[:40], u[40:80] = 750.0, 1650.0
+    y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
+    rec = Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(1600), Ts=0.05)
+    ps = pe_pareto(S15, rec, reference.eq1_points(), np.logspace(-6, 0, 30), solver="closed")
+    chosen, i = decide_dsf(ps, return_index=True)
+    inside = ps.JSF <= 0.031
+    assert inside[i] and ps.JS[i] == ps.JS[inside].min()
+    assert not inside.all()  # the band did select: λ1 near 1 keeps the data's static error

@@ -1,0 +1,175 @@
+"""Pareto sets as data, the non-dominated filter and the Figs. 5/7 plot."""
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings, strategies as st
+from hypothesis.extra.numpy import arrays
+
+from graybox import Record, Structure, reference
+from graybox.evaluate import evaluate_thetas, j1, js, jsf
+from graybox.pareto import ParetoSet, nondominated_mask
+
+S15 = reference.STRUCTURE_15
+
+
+def dominates(a, b):
+    return bool(np.all(a <= b) and np.any(a < b))
+
+
+# ---------------------------------------------------------------------------------------------
+# the filter
+# ---------------------------------------------------------------------------------------------
+objective_values = st.one_of(st.floats(0, 10, allow_nan=False), st.sampled_from([0.0, 1.0, np.inf]))
+
+
+@settings(max_examples=30, deadline=None)
+@given(P=st.integers(1, 40).flatmap(
+    lambda k: st.integers(1, 3).flatmap(lambda m: arrays(float, (k, m), elements=objective_values))))
+def test_property_filter_keeps_exactly_the_nondominated(P):
+    keep = nondominated_mask(P)
+    for i in range(len(P)):
+        dominated = any(dominates(P[j], P[i]) for j in range(len(P)) if j != i)
+        assert keep[i] == (not dominated)
+    # every dropped member is dominated by a kept one (the front covers the set)
+    for i in np.flatnonzero(~keep):
+        assert any(dominates(P[j], P[i]) for j in np.flatnonzero(keep))
+
+
+def test_filter_details():
+    P = np.array([[1.0, 2.0], [1.0, 2.0], [2.0, 1.0], [2.0, 2.0], [np.nan, 0.0], [0.5, np.inf]])
+    np.testing.assert_array_equal(nondominated_mask(P), [True, True, True, False, False, True])
+    assert nondominated_mask(np.zeros((0, 2))).shape == (0,)
+    with pytest.raises(ValueError, match="2-D"):
+        nondominated_mask(np.ones(3))
+
+
+# ---------------------------------------------------------------------------------------------
+# ParetoSet
+# ---------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def record():
+    rng = np.random.default_rng(4)
+    m = reference.paper_model(15)
+    u = np.repeat(rng.uniform(750, 1650, 30), 50)[:1500]
+    y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
+    return Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(1500), Ts=0.05)
+
+
+@pytest.fixture(scope="module")
+def thetas():
+    return np.array([reference.TABLE_II[c] for c in ("ELS", "CLS", "PE")])
+
+
+@pytest.fixture(scope="module")
+def pset(record, thetas):
+    return ParetoSet.from_thetas(S15, thetas, [1.0, 0.5, 0.01], record, reference.eq1_points(), method="test",
+                                 extra={"tag": [1.0, 2.0, 3.0]})
+
+
+def test_from_thetas_uses_the_shared_evaluator(pset, record, thetas):
+    pts = reference.eq1_points()
+    ev = evaluate_thetas(S15, thetas, record, pts)
+    for k in ("J1", "JS", "JSF"):
+        np.testing.assert_array_equal(getattr(pset, k), ev[k])
+    for i, m in enumerate(pset.models()):
+        assert getattr(pset, "J1")[i] == pytest.approx(j1(m, record), rel=1e-10)
+        assert pset.JS[i] == pytest.approx(js(m, record), rel=1e-10)
+        assert pset.JSF[i] == pytest.approx(jsf(m, pts), rel=1e-8)
+    assert pset.JSF[0] == pytest.approx(1.618, abs=1e-3)  # ELS (15) against eq. (1), design.md
+
+
+def test_from_thetas_several_records(record, thetas):
+    a, b = record.slice(0, 700), record.slice(700, None)
+    ps = ParetoSet.from_thetas(S15, thetas, None, [a, b], None)
+    L = S15.max_lag
+    for i in range(len(thetas)):
+        ea = evaluate_thetas(S15, thetas[i:i + 1], a)
+        eb = evaluate_thetas(S15, thetas[i:i + 1], b)
+        wa, wb = len(a) - L, len(b) - L
+        assert ps.J1[i] == pytest.approx((wa * ea["J1"][0] + wb * eb["J1"][0]) / (wa + wb))
+        assert ps.JS[i] == pytest.approx((wa * ea["JS"][0] + wb * eb["JS"][0]) / (wa + wb))
+    assert np.isnan(ps.JSF).all() and np.isnan(ps.lambdas).all()
+
+
+def test_access_and_frame(pset, thetas):
+    assert len(pset) == 3
+    m = pset.model(1)
+    np.testing.assert_array_equal(m.theta, thetas[1])
+    assert "λ1=0.5" in m.name and pset.model(-1).name.endswith("0.01")
+    df = pset.to_frame()
+    assert list(df.columns) == ["lambda1", "J1", "JS", "JSF", "tag"] and len(df) == 3
+    dfp = pset.to_frame(params=True)
+    assert dfp.shape == (3, 5 + 17) and dfp["u(k-4)u(k-6)"].iloc[0] == thetas[0, 2]
+    np.testing.assert_array_equal(pset.objective("tag"), [1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="unknown objective"):
+        pset.objective("J2")
+    with pytest.raises(ValueError, match="out of range"):
+        pset.model(3)
+
+
+def test_nondominated_and_subset(pset):
+    nd = pset.nondominated()
+    pts = np.column_stack([pset.JS, pset.JSF])
+    keep = nondominated_mask(pts)
+    np.testing.assert_array_equal(nd.thetas, pset.thetas[keep])
+    np.testing.assert_array_equal(nd.extra["tag"], pset.extra["tag"][keep])
+    sub = pset.subset([2, 0])
+    np.testing.assert_array_equal(sub.lambdas, [0.01, 1.0])
+    one = pset.nondominated(objectives=("JSF",))
+    assert len(one) == 1 and one.JSF[0] == pset.JSF.min()
+    with pytest.raises(ValueError, match="mask"):
+        pset.subset(np.array([True, False]))
+
+
+def test_immutable(pset):
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        pset.method = "x"
+    for arr in (pset.thetas, pset.lambdas, pset.J1, pset.JS, pset.JSF, pset.extra["tag"]):
+        with pytest.raises(ValueError):
+            arr[0] = 0.0
+    with pytest.raises(TypeError):
+        pset.extra["new"] = np.zeros(3)
+
+
+def test_validation():
+    th = np.zeros((2, 17))
+    ok = dict(lambdas=[0.1, 0.2], J1=[1, 2], JS=[1, 2], JSF=[1, 2])
+    ParetoSet(S15, th, **ok)
+    with pytest.raises(ValueError, match="shape"):
+        ParetoSet(S15, np.zeros((2, 3)), **ok)
+    with pytest.raises(ValueError, match="JS must have shape"):
+        ParetoSet(S15, th, **{**ok, "JS": [1.0]})
+    with pytest.raises(ValueError, match="finite"):
+        ParetoSet(S15, np.full((2, 17), np.nan), **ok)
+    with pytest.raises(ValueError, match="extra"):
+        ParetoSet(S15, th, **ok, extra={"x": [1.0]})
+
+
+# ---------------------------------------------------------------------------------------------
+# Figs. 5 and 7
+# ---------------------------------------------------------------------------------------------
+def test_plot_pareto(pset):
+    from matplotlib.figure import Figure
+
+    from graybox.plots.pareto import plot_pareto
+
+    table = pd.DataFrame({"J_S ident": [2.6, 3.2], "J_SF": [1.6, 0.002]}, index=["ELS (15)", "CLS (22)"])
+    fig = plot_pareto({"PE": pset}, table, band=0.031)
+    assert isinstance(fig, Figure)
+    ax = fig.axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels[0] == "PE" and "ELS (15)" in labels and "CLS (22)" in labels and "B = [0, 0.031]" in labels
+    assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
+    # a set with a diverging member: left out and said so
+    bad = ParetoSet(S15, pset.thetas, pset.lambdas, pset.J1, np.array([1.0, np.inf, 2.0]), pset.JSF, "x")
+    fig2 = plot_pareto(bad, {"ELS": (2.0, 1.0)}, band=None, log=False)
+    assert "1 not drawn" in fig2.axes[0].get_legend().get_texts()[0].get_text()
+    with pytest.raises(ValueError, match="ParetoSet"):
+        plot_pareto({"x": [1, 2]})
+    with pytest.raises(ValueError, match="J_S, J_SF"):
+        plot_pareto(pset, {"ELS": 3.0})
+    with pytest.raises(ValueError, match="J_S ident"):
+        plot_pareto(pset, pd.DataFrame({"a": [1]}))
