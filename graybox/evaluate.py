@@ -164,20 +164,12 @@ def static_curves(
     With ``check_stability`` an equilibrium that is not locally stable is NaN too (the model
     does not settle there), matching :meth:`Model.static_curve`.
     """
-    from .static import cluster_map, is_rational, static_curve
+    from .static import is_rational, rational_parts, static_curve
 
     th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float)
     if is_rational(structure):
-        cm = cluster_map(structure)
-        sig = th @ cm.R.T
-        num = np.zeros((th.shape[0], ub.size))
-        den = np.ones((th.shape[0], ub.size))
-        for c, (p, m) in enumerate(cm.keys):
-            if p == 0:
-                num += sig[:, c, None] * ub**m
-            else:
-                den -= sig[:, c, None] * ub**m
+        num, den = rational_parts(structure, th, ub)
         with np.errstate(divide="ignore", invalid="ignore"):
             yb = np.where(np.abs(den) > 1e-12, num / den, np.nan)
         if check_stability:

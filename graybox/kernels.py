@@ -207,44 +207,52 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
     return _one(code.uptr, code.ulag, code.upow, code.grp, code.gny, code.gylag, theta, u, y0, start, bound)
 
 
-@nb.njit(cache=True, nogil=True)
-def _batch_block(thT, U, ny, ylag, Y, start):  # pragma: no cover - compiled
+@nb.njit(cache=True, nogil=True, inline="always")
+def _advance(thT, U, ny, ylag, Y, k, mask, acc):  # pragma: no cover - compiled
+    # acc[p] = ŷ_p(k) for every member p, reading past outputs from rows (k - lag) & mask of Y.
     # The accumulator is a separate array, every access is 2-D indexed and every population
     # loop runs over the whole second axis (range(P) with P = Y.shape[1]): in this form LLVM
     # vectorises each term update; a loop over a sub-range p0:p1 measured 5x slower.
-    n, P = Y.shape
+    P = Y.shape[1]
     nt = thT.shape[0]
+    for p in range(P):
+        acc[p] = 0.0
+    for t in range(nt):
+        c = U[k, t]
+        m = ny[t]
+        if m == 0:
+            for p in range(P):
+                acc[p] += thT[t, p] * c
+        elif m == 1:
+            a = (k - ylag[t, 0]) & mask
+            for p in range(P):
+                acc[p] += thT[t, p] * c * Y[a, p]
+        elif m == 2:
+            a = (k - ylag[t, 0]) & mask
+            b = (k - ylag[t, 1]) & mask
+            for p in range(P):
+                acc[p] += thT[t, p] * c * Y[a, p] * Y[b, p]
+        elif m == 3:
+            a = (k - ylag[t, 0]) & mask
+            b = (k - ylag[t, 1]) & mask
+            e = (k - ylag[t, 2]) & mask
+            for p in range(P):
+                acc[p] += thT[t, p] * c * Y[a, p] * Y[b, p] * Y[e, p]
+        else:
+            for p in range(P):
+                v = thT[t, p] * c
+                for d in range(m):
+                    v *= Y[(k - ylag[t, d]) & mask, p]
+                acc[p] += v
+
+
+@nb.njit(cache=True, nogil=True)
+def _batch_block(thT, U, ny, ylag, Y, start):  # pragma: no cover - compiled
+    n, P = Y.shape
+    mask = -1  # all ones: (k - lag) & mask == k - lag, the whole record is kept
     acc = np.empty(P)
     for k in range(start, n):
-        for p in range(P):
-            acc[p] = 0.0
-        for t in range(nt):
-            c = U[k, t]
-            m = ny[t]
-            if m == 0:
-                for p in range(P):
-                    acc[p] += thT[t, p] * c
-            elif m == 1:
-                a = k - ylag[t, 0]
-                for p in range(P):
-                    acc[p] += thT[t, p] * c * Y[a, p]
-            elif m == 2:
-                a = k - ylag[t, 0]
-                b = k - ylag[t, 1]
-                for p in range(P):
-                    acc[p] += thT[t, p] * c * Y[a, p] * Y[b, p]
-            elif m == 3:
-                a = k - ylag[t, 0]
-                b = k - ylag[t, 1]
-                e = k - ylag[t, 2]
-                for p in range(P):
-                    acc[p] += thT[t, p] * c * Y[a, p] * Y[b, p] * Y[e, p]
-            else:
-                for p in range(P):
-                    v = thT[t, p] * c
-                    for d in range(m):
-                        v *= Y[k - ylag[t, d], p]
-                    acc[p] += v
+        _advance(thT, U, ny, ylag, Y, k, mask, acc)
         for p in range(P):
             Y[k, p] = acc[p]
 
@@ -331,7 +339,6 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
     # working set stays in L1 whatever N is.
     n = U.shape[0]
     P = thT.shape[1]
-    nt = thT.shape[0]
     mask = ring - 1
     Y = np.empty((ring, P))
     for k in range(start):
@@ -340,35 +347,7 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
     sse = np.zeros(P)
     acc = np.empty(P)
     for k in range(start, n):
-        for p in range(P):
-            acc[p] = 0.0
-        for t in range(nt):
-            c = U[k, t]
-            m = ny[t]
-            if m == 0:
-                for p in range(P):
-                    acc[p] += thT[t, p] * c
-            elif m == 1:
-                a = (k - ylag[t, 0]) & mask
-                for p in range(P):
-                    acc[p] += thT[t, p] * c * Y[a, p]
-            elif m == 2:
-                a = (k - ylag[t, 0]) & mask
-                b = (k - ylag[t, 1]) & mask
-                for p in range(P):
-                    acc[p] += thT[t, p] * c * Y[a, p] * Y[b, p]
-            elif m == 3:
-                a = (k - ylag[t, 0]) & mask
-                b = (k - ylag[t, 1]) & mask
-                e = (k - ylag[t, 2]) & mask
-                for p in range(P):
-                    acc[p] += thT[t, p] * c * Y[a, p] * Y[b, p] * Y[e, p]
-            else:
-                for p in range(P):
-                    v = thT[t, p] * c
-                    for d in range(m):
-                        v *= Y[(k - ylag[t, d]) & mask, p]
-                    acc[p] += v
+        _advance(thT, U, ny, ylag, Y, k, mask, acc)
         kk = k & mask
         yk = y[k]
         for p in range(P):

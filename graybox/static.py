@@ -31,6 +31,7 @@ __all__ = [
     "static_gain",
     "is_rational",
     "rational_static_curve",
+    "rational_parts",
 ]
 
 _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -186,23 +187,46 @@ def is_rational(structure: Structure) -> bool:
     return all(t.power_of("y") <= 1 for t in structure if not t.is_noise)
 
 
+def rational_parts(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Numerator Σ0 + Σu ū + … and denominator 1 − Σy − Σyu ū − … of eq. (6).
+
+    Parameters
+    ----------
+    structure : Structure
+        A rational structure (no term with y to a power above 1).
+    thetas : ndarray, shape (n_terms,) or (P, n_terms)
+    ubar : ndarray, shape (M,)
+
+    Returns
+    -------
+    num, den : ndarray, shape (M,) or (P, M)
+    """
+    if not is_rational(structure):
+        raise ValueError("structure has a term with y to a power above 1: its static function is not rational")
+    cm = cluster_map(structure)
+    th = np.asarray(thetas, dtype=float)
+    sig = th @ cm.R.T  # (C,) or (P, C)
+    ub = np.asarray(ubar, dtype=float)
+    num = np.zeros(sig.shape[:-1] + ub.shape)
+    den = np.ones_like(num)
+    for c, (p, m) in enumerate(cm.keys):
+        term = sig[..., c, None] * ub**m
+        if p == 0:
+            num += term
+        else:
+            den -= term
+    return num, den
+
+
 def rational_static_curve(structure: Structure, theta: np.ndarray, ubar: np.ndarray) -> np.ndarray:
     """Eq. (6): ȳ = (Σ0 + Σu ū + Σu² ū² + …) / (1 − Σy − Σyu ū − …).
 
     Raises ``ValueError`` when the structure is not rational or the denominator vanishes.
     """
-    if not is_rational(structure):
-        raise ValueError("structure has a term with y to a power above 1: its static function is not rational")
     ub = np.atleast_1d(np.asarray(ubar, dtype=float))
+    num, den = rational_parts(structure, theta, ub)
     cm = cluster_map(structure)
     sigma = cm.R @ theta
-    num = np.zeros_like(ub)
-    den = np.ones_like(ub)
-    for (p, m), s in zip(cm.keys, sigma):
-        if p == 0:
-            num += s * ub**m
-        else:
-            den -= s * ub**m
     scale = 1.0 + sum(abs(s) * np.abs(ub) ** m for (p, m), s in zip(cm.keys, sigma) if p == 1)
     bad = np.abs(den) <= 1e-12 * scale
     if bad.any():
