@@ -14,23 +14,28 @@ Each is solved as a cvxpy problem (Clarabel by default, OSQP selectable) and, wh
 constraints are equalities only, by a closed form (the KKT conditions by the null-space
 method; eq. (11) for PE). The closed forms are the cross-checks: tests hold the two to 1e-6.
 
-Numerics. Regressors in engineering units span many decades (u² ≈ 1e6 rpm², u³ ≈ 1e9), so the
-solver variable is ``z = s ⊙ θ`` with ``s`` the RMS of each column of Ψ (the static rows Q R
-hold the same monomials at steady state, so they come out near unit scale too); constraint rows
-are normalised to unit norm; θ is reported in engineering units. The dynamic data enter through
-the triangular factor of ``[Ψ/s, y]`` (a QR factorisation), so each solve has ``n_terms``
-residuals instead of N: the problem size does not grow with the record length, and λ enters as
-cvxpy Parameters (DPP), so a sweep compiles once and re-solves with warm starts.
+Numerics. Regressors in engineering units span many decades (u² ≈ 1e6 rpm², u³ ≈ 1e9), so
+every path works in ``z = s ⊙ θ`` with ``s`` the RMS of each column of Ψ (the static rows Q R hold
+the same monomials at steady state, so they come out near unit scale too); constraint rows are
+normalised to unit norm; θ is reported in engineering units. The dynamic data enter through the
+triangular factor of ``[Ψ/s, y]``, so no solve grows with the record length N. The cvxpy problem
+goes one step further (:class:`_Basis`): its variable is the step from the least-squares estimate
+in a basis where both quadratic forms are diagonal (a generalised SVD of the two factors), so the
+ill-conditioning of a sweep down to λ1 = 1e-6 lives in a fixed change of variables rather than in
+the solver; λ enters as nonnegative cvxpy Parameters multiplying the two convex terms (DPP), so a
+sweep compiles once and re-solves (OSQP warm-started from the neighbouring λ).
 """
 
 from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Iterable, Mapping, NamedTuple, Sequence
 
 import cvxpy as cp
 import numpy as np
+import pandas as pd
 import scipy.linalg
 import scipy.linalg.lapack
 import scipy.sparse
@@ -64,6 +69,7 @@ __all__ = [
     "pe_pareto",
     "Table1Gray",
     "table1_graybox",
+    "section_graybox",
 ]
 
 #: Accepted ``solver`` values: cvxpy with Clarabel or OSQP, or the closed form.
@@ -799,11 +805,12 @@ def pe_pareto(
 class Table1Gray(NamedTuple):
     """The gray-box rows of Table I and what produced them."""
 
-    table: "object"  # pandas.DataFrame: rows "CLS (22)", "PE (D_SF)"; columns of graybox.evaluate.evaluate
+    table: pd.DataFrame  # rows "CLS (22)", "PE (D_SF)"; the columns of graybox.evaluate.evaluate
     cls: Model
     pe: Model
     pareto: ParetoSet
     pe_index: int
+    reference: Model | None  # the model Σ*_y came from (ELS of the structure), if any
 
 
 def table1_graybox(
@@ -831,7 +838,8 @@ def table1_graybox(
         Default: the paper's (15) (``graybox.reference.STRUCTURE_15``; a structure selected by
         FROLS on other data need not be rational, and eq. (22) needs a rational one).
     reference : "els", "ls" or Model
-        Source of Σ*_y (see :func:`cls`); default: ELS on ``data.ident``, as in the paper.
+        Source of Σ*_y (see :func:`cls`); default: ELS (MA(2)) of ``structure`` on ``data.ident``,
+        as in the paper.
     curve : StaticCurve, optional
         The curve CLS imposes; default: eq. (1).
     lambdas : ndarray
@@ -847,7 +855,7 @@ def table1_graybox(
     -------
     Table1Gray
         ``table`` from :func:`graybox.evaluate.evaluate` (rows ``"CLS (22)"``, ``"PE (D_SF)"``),
-        the two models, the PE set and the index of the D_SF choice in it.
+        the two models, the PE set, the index of the D_SF choice in it, and the reference model.
     """
     from . import reference as paper
     from .decide import decide_dsf
@@ -857,8 +865,53 @@ def table1_graybox(
         raise ValueError("table1_graybox needs a Dataset with static points (e.g. graybox.datasets.load_pumping())")
     st = _process_structure(structure if structure is not None else paper.STRUCTURE_15)
     cv = curve if curve is not None else StaticCurve.polynomial(paper.EQ1_COEFFICIENTS, name="eq. (1)")
-    cls_model = cls(st, data.ident, cv, reference=reference, solver=solver, name="CLS (22)")
+    ref_model = reference if isinstance(reference, Model) else None
+    if isinstance(reference, str) and reference == "els":
+        from .els import els
+
+        ref_model = els(st, data.ident, name="ELS")
+    cls_model = cls(st, data.ident, cv, reference=ref_model if ref_model is not None else reference,
+                    solver=solver, name="CLS (22)")
     front = pe_pareto(st, data.ident, data.static, lambdas, solver=solver)
     pe_model, idx = decide_dsf(front, band=band, fallback=fallback, return_index=True)
     table = evaluate({"CLS (22)": cls_model, "PE (D_SF)": pe_model.with_theta(pe_model.theta, "PE (D_SF)")}, data)
-    return Table1Gray(table, cls_model, pe_model, front, idx)
+    return Table1Gray(table, cls_model, pe_model, front, idx, ref_model)
+
+
+def section_graybox(quick: bool = True, out: Path | None = None, data: Dataset | None = None) -> str:
+    """``graybox reproduce`` section: the CLS (22) and PE (D_SF) rows of Table I and Fig. 5.
+
+    Prints the two rows (J_S ident, J_S valid, J_SF, N_p; MSE in mlc²), the reference ELS row
+    of structure (15) for comparison, the CLS clusters (eq. (22) check) and the D_SF choice;
+    with ``out`` writes ``fig5_pe_front.png`` (J_SF against J_S of the PE set with ELS, CLS and
+    the D_SF choice marked). ``quick`` is accepted for the common signature: this section is
+    fast (a few seconds) and runs in full either way.
+    """
+    from .evaluate import evaluate
+
+    if data is None:
+        from .datasets import load_pumping
+
+        data = load_pumping()
+    r = table1_graybox(data)
+    rows = r.table
+    if r.reference is not None:
+        rows = pd.concat([evaluate({"ELS (15 structure)": r.reference}, data), rows])
+    cl = ", ".join(f"{k} = {v:.5g}" for k, v in r.cls.clusters().items())
+    i = r.pe_index
+    lines = [
+        "== Gray-box models: CLS (eq. 22) and the PE bi-objective set with D_SF (Section IV-B) ==",
+        "Structure (15) without its MA part; CLS imposes eq. (1) with Σ*y from ELS; PE: 100 λ1 in "
+        "logspace(-6, 0), D_SF: min J_S with J_SF in [0, 0.031] mlc².",
+        rows[["J_S ident", "J_S valid", "J_SF", "N_p"]].to_string(float_format=lambda v: f"{v:.4f}"),
+        f"-- CLS clusters: {cl}",
+        f"-- D_SF picked member {i} of {len(r.pareto)} (λ1 = {r.pareto.lambdas[i]:.3g}): {r.pe.name}",
+    ]
+    if out is not None:
+        from .plots.pareto import plot_pareto
+
+        fig = plot_pareto({"PE set": r.pareto}, rows, title="PE Pareto set (cf. Fig. 5)")
+        path = Path(out) / "fig5_pe_front.png"
+        fig.savefig(path, dpi=120)
+        lines.append(f"-- wrote {path}")
+    return "\n".join(lines)

@@ -192,6 +192,7 @@ def test_table1_rows_on_the_plant_data():
     assert (out.table["N_p"] == 17).all()
     assert len(out.pareto) == 12 and 0 <= out.pe_index < 12
     np.testing.assert_array_equal(out.pe.theta, out.pareto.thetas[out.pe_index])
+    assert out.reference is not None and out.cls.clusters()["Σy"] == pytest.approx(out.reference.clusters()["Σy"])
     # D_SF: the chosen member has the smallest J_S among those in the band
     inside = out.pareto.JSF <= 0.031
     assert inside.any() and out.pareto.JS[out.pe_index] == out.pareto.JS[inside].min()
@@ -470,3 +471,13 @@ def test_results_are_immutable(rec):
         ps.thetas[0, 0] = 1.0
     with pytest.raises(Exception):
         ps.method = "x"
+
+
+def test_reproduce_section(tmp_path):
+    pytest.importorskip("graybox.datasets")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        text = convex.section_graybox(out=tmp_path)
+    for row in ("CLS (22)", "PE (D_SF)", "ELS (15 structure)", "Σyu = ", "D_SF picked member"):
+        assert row in text
+    assert (tmp_path / "fig5_pe_front.png").stat().st_size > 10_000
