@@ -32,13 +32,13 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
-from typing import Callable, Iterable, Iterator, Mapping, Sequence
+from typing import Callable, Iterable, Iterator, Mapping
 
 import cvxpy as cp
 import numpy as np
 
 from .curves import StaticCurve
-from .records import StaticPoints, as_1d_finite
+from .records import StaticPoints
 from .static import ClusterMap, cluster_map, cluster_name, is_rational
 from .terms import Structure
 

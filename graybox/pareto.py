@@ -57,8 +57,8 @@ def nondominated_mask(points: np.ndarray) -> np.ndarray:
     return keep
 
 
-def _frozen(a, shape_name: str, dtype=float) -> np.ndarray:
-    x = np.array(a, dtype=dtype, copy=True)
+def _frozen(a) -> np.ndarray:
+    x = np.array(a, dtype=float, copy=True)
     x.setflags(write=False)
     return x
 
@@ -94,7 +94,7 @@ class ParetoSet:
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        th = _frozen(self.thetas, "thetas")
+        th = _frozen(self.thetas)
         if th.ndim != 2 or th.shape[1] != len(self.structure):
             raise ValueError(f"thetas must have shape (K, {len(self.structure)}), got {th.shape}")
         if not np.all(np.isfinite(th)):
@@ -102,13 +102,13 @@ class ParetoSet:
         K = th.shape[0]
         object.__setattr__(self, "thetas", th)
         for nm in ("lambdas", "J1", "JS", "JSF"):
-            v = _frozen(getattr(self, nm), nm)
+            v = _frozen(getattr(self, nm))
             if v.shape != (K,):
                 raise ValueError(f"{nm} must have shape ({K},), got {v.shape}")
             object.__setattr__(self, nm, v)
         ex = {}
         for k, v in dict(self.extra).items():
-            a = _frozen(v, k)
+            a = _frozen(v)
             if a.shape != (K,):
                 raise ValueError(f"extra[{k!r}] must have shape ({K},), got {a.shape}")
             ex[k] = a

@@ -2,7 +2,6 @@
 
 import warnings
 
-import cvxpy as cp
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st

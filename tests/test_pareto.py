@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from graybox import Record, Structure, reference
+from graybox import Record, reference
 from graybox.evaluate import evaluate_thetas, j1, js, jsf
 from graybox.pareto import ParetoSet, nondominated_mask
 

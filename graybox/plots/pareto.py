@@ -8,7 +8,7 @@ state); pass ``ax`` to draw into an existing figure.
 
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+from typing import Mapping
 
 import numpy as np
 import pandas as pd
