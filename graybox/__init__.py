@@ -14,6 +14,14 @@ from .terms import Candidates, Structure, Term, parse_structure, parse_term
 from .selection import CandidateWarning, Selection, frols, information_criterion
 from .els import ELSConvergenceWarning, ElsInfo, els, noise_terms
 from .curves import StaticCurve
+from .constraints import (
+    ClusterBounds, CurveEquality, GainBounds, InfeasibleError, PassesThrough, StaticBand, UserConstraint,
+)
+from .convex import cls, pe_pareto, pe_thetas, qr_static_error, static_matrices
+from .pareto import ParetoSet, nondominated_mask
+from .decide import decide_dsf
+from .se import GAOptions, se_pareto
+from .neural import NeuralModel, NeuralTrainInfo, neural_narx
 from . import datasets, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
 
@@ -29,6 +37,12 @@ __all__ = [
     "frols", "Selection", "CandidateWarning", "information_criterion",
     "els", "ElsInfo", "ELSConvergenceWarning", "noise_terms",
     "StaticCurve",
+    "CurveEquality", "PassesThrough", "StaticBand", "GainBounds", "ClusterBounds", "UserConstraint",
+    "InfeasibleError",
+    "cls", "pe_pareto", "pe_thetas", "static_matrices", "qr_static_error",
+    "ParetoSet", "nondominated_mask", "decide_dsf",
+    "se_pareto", "GAOptions",
+    "neural_narx", "NeuralModel", "NeuralTrainInfo",
     "datasets", "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
     "reference",
 ]

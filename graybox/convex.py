@@ -129,6 +129,14 @@ def qr_static_error(structure: Structure, thetas: np.ndarray, points: StaticPoin
     For a rational model it is mean(D(ū_i)² (ȳ_i − ȳ_model(ū_i))²) with D the denominator of
     eq. (6); it is what the weighted sum (9)/(11) trades against J_1.
 
+    Parameters
+    ----------
+    structure : Structure
+        Process terms.
+    thetas : ndarray, shape (n_terms,) or (K, n_terms)
+    points : StaticPoints
+        Static points (ū_i, ȳ_i); ȳ_i enters Q.
+
     Returns
     -------
     ndarray, shape (K,) (a float for one θ).
@@ -702,7 +710,13 @@ def pe_thetas(
 
     ``weights="mse"`` minimises ``λ1 ‖Ψθ − y‖²/N + λ2 ‖QRθ − ȳ‖²/N_SF`` (the paper's J_1 and
     J_SF are mean squared errors); ``weights="sum"`` drops the 1/N, 1/N_SF as eq. (11) is
-    printed (the same front, reached at other λ). See :func:`pe_pareto` for the rest.
+    printed (the same front, reached at other λ).
+
+    Parameters
+    ----------
+    structure, data, static, lambdas, constraints, solver, solver_options, weights, ubar, range_margin, warm_start, reference
+        As for :func:`pe_pareto` (``reference``: where Σ*_y comes from when a constraint needs it,
+        as for :func:`cls`).
 
     Returns
     -------

@@ -11,6 +11,7 @@ import numpy as np
 
 from .model import Model
 from .pareto import ParetoSet
+from .records import Record
 
 __all__ = ["decide_dsf", "FALLBACKS"]
 
@@ -76,3 +77,62 @@ def decide_dsf(
         label = f"{pareto.method} min J_SF (no member in B)"
     model = pareto.model(i, name=label)
     return (model, i) if return_index else model
+
+
+def decide_min_correlation(
+    pareto: ParetoSet,
+    record: Record,
+    output: str = "free-run",
+    return_index: bool = False,
+) -> Model | tuple[Model, int]:
+    """The minimal-correlation decision maker (Barroso, Takahashi & Aguirre, J. Process Control, 2007).
+
+    As we read that paper: the chosen member is the one whose one-step residuals
+    ξ(k) = y(k) − ŷ₁(k) are least correlated with the model's output, ρ = |corr(ξ, ŷ)|, on the
+    identification data. With ``output="free-run"`` (default) ŷ is the free-run simulation; with
+    ``"one-step"`` it is ŷ₁ itself (then plain least squares, whose residuals are orthogonal to
+    its predictions when the structure has a constant term, is always a minimiser: that variant
+    is useful only for constrained sets). Members whose free run diverges are never chosen.
+
+    Parameters
+    ----------
+    pareto : ParetoSet
+    record : Record
+        Identification data, shape (N,) each; counted from sample max_lag on.
+    output : {"free-run", "one-step"}
+    return_index : bool
+        Also return the member's index.
+
+    Returns
+    -------
+    Model, or (Model, int) with ``return_index``
+    """
+    from .regressors import regressor_matrix
+    from .simulation import simulate_many
+
+    if not isinstance(pareto, ParetoSet):
+        raise ValueError(f"decide_min_correlation needs a ParetoSet, got {type(pareto).__name__}")
+    if output not in ("free-run", "one-step"):
+        raise ValueError(f"output must be 'free-run' or 'one-step', got {output!r}")
+    if len(pareto) == 0:
+        raise ValueError("the Pareto set is empty")
+    st = pareto.structure
+    L = st.max_lag
+    record.require_length(L)
+    y = record.y[L:]
+    Y1 = regressor_matrix(st, record.u, record.y, start=L) @ pareto.thetas.T  # (N-L, K)
+    xi = y[:, None] - Y1
+    Yo = Y1 if output == "one-step" else np.asarray(simulate_many(st, pareto.thetas, record)).T[L:]
+    with np.errstate(all="ignore"):
+        xc = xi - xi.mean(axis=0)
+        oc = Yo - Yo.mean(axis=0)
+        rho = np.abs(np.sum(xc * oc, axis=0)) / np.sqrt(np.sum(xc**2, axis=0) * np.sum(oc**2, axis=0))
+    rho = np.where(np.isfinite(rho) & np.all(np.isfinite(Yo), axis=0), rho, np.inf)
+    if not np.isfinite(rho).any():
+        raise ValueError("no member has a defined residual/output correlation (every free run diverged?)")
+    i = int(np.argmin(rho))
+    model = pareto.model(i, name=f"{pareto.method} min-corr (ρ = {rho[i]:.3g})")
+    return (model, i) if return_index else model
+
+
+__all__.append("decide_min_correlation")

@@ -40,12 +40,12 @@ def mse(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
 
 
 def j1(model: Model, record: Record) -> float:
-    """J_1: one-step-ahead prediction MSE over ``record`` (samples max_lag … N-1)."""
+    """J_1: one-step-ahead prediction MSE of ``model`` over ``record`` (samples max_lag … N-1)."""
     return mse(record.y, model.predict(record), model.max_lag)
 
 
 def js(model: Model, record: Record) -> float:
-    """J_S: free-run simulation MSE over ``record`` (inf when the run diverges)."""
+    """J_S: free-run simulation MSE of ``model`` over ``record`` (inf when the run diverges)."""
     return mse(record.y, model.simulate(record, on_diverge="nan"), model.max_lag)
 
 
@@ -64,7 +64,10 @@ def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None
 
 
 def rrse(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
-    """Root relative squared error ‖y − ŷ‖ / ‖y − mean(y)‖ over samples ``start …``."""
+    """Root relative squared error ‖y − ŷ‖ / ‖y − mean(y)‖ over samples ``start …``.
+
+    ``y`` is measured, ``yhat`` the model's output (inf when ``yhat`` is not finite).
+    """
     y = np.asarray(y)[start:]
     yhat = np.asarray(yhat)[start:]
     if not np.all(np.isfinite(yhat)):
@@ -76,7 +79,10 @@ def rrse(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
-    """MATLAB ``compare`` fit: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖), in percent."""
+    """MATLAB ``compare`` fit: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖), in percent.
+
+    ``y`` is measured, ``yhat`` the model's output, counted from sample ``start`` on.
+    """
     return 100.0 * (1.0 - rrse(y, yhat, start))
 
 

@@ -8,16 +8,10 @@ from typing import Literal
 import numpy as np
 
 from . import simulation, static
-from .records import Record
+from .records import Record, frozen
 from .terms import Structure
 
 __all__ = ["Model"]
-
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=float, copy=True)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,8 +45,8 @@ class Model:
         ns = self.noise_structure if isinstance(self.noise_structure, Structure) else Structure(self.noise_structure)
         object.__setattr__(self, "structure", st)
         object.__setattr__(self, "noise_structure", ns)
-        object.__setattr__(self, "theta", _frozen(simulation.check_theta(st, self.theta)))
-        object.__setattr__(self, "noise_theta", _frozen(simulation.check_theta(ns, self.noise_theta, "noise_theta")))
+        object.__setattr__(self, "theta", frozen(simulation.check_theta(st, self.theta)))
+        object.__setattr__(self, "noise_theta", frozen(simulation.check_theta(ns, self.noise_theta, "noise_theta")))
 
     # -- basic facts --------------------------------------------------------
     @property

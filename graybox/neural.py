@@ -81,7 +81,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from .records import Dataset, Record, as_1d_finite
+from .records import Dataset, Record, as_1d_finite, frozen
 from .simulation import DivergenceError
 from .static import Equilibrium
 
@@ -95,12 +95,11 @@ PAPER_ROW = {"J_S ident": 1.09, "J_S valid": 0.536, "J_SF": 0.0496, "N_p": 99}
 
 
 def _frozen(a: np.ndarray, name: str, shape: tuple[int, ...]) -> np.ndarray:
-    a = np.array(a, dtype=float, copy=True)
+    a = frozen(a)
     if a.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} has non-finite values")
-    a.setflags(write=False)
     return a
 
 

@@ -17,7 +17,7 @@ import pandas as pd
 
 from .evaluate import evaluate_thetas
 from .model import Model
-from .records import Dataset, Record, StaticPoints
+from .records import Dataset, Record, StaticPoints, frozen
 from .terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -57,12 +57,6 @@ def nondominated_mask(points: np.ndarray) -> np.ndarray:
     return keep
 
 
-def _frozen(a) -> np.ndarray:
-    x = np.array(a, dtype=float, copy=True)
-    x.setflags(write=False)
-    return x
-
-
 @dataclass(frozen=True, eq=False)
 class ParetoSet:
     """Members of a bi-objective estimate of one structure.
@@ -94,7 +88,7 @@ class ParetoSet:
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        th = _frozen(self.thetas)
+        th = frozen(self.thetas)
         if th.ndim != 2 or th.shape[1] != len(self.structure):
             raise ValueError(f"thetas must have shape (K, {len(self.structure)}), got {th.shape}")
         if not np.all(np.isfinite(th)):
@@ -102,13 +96,13 @@ class ParetoSet:
         K = th.shape[0]
         object.__setattr__(self, "thetas", th)
         for nm in ("lambdas", "J1", "JS", "JSF"):
-            v = _frozen(getattr(self, nm))
+            v = frozen(getattr(self, nm))
             if v.shape != (K,):
                 raise ValueError(f"{nm} must have shape ({K},), got {v.shape}")
             object.__setattr__(self, nm, v)
         ex = {}
         for k, v in dict(self.extra).items():
-            a = _frozen(v)
+            a = frozen(v)
             if a.shape != (K,):
                 raise ValueError(f"extra[{k!r}] must have shape ({K},), got {a.shape}")
             ex[k] = a

@@ -12,7 +12,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Record", "StaticPoints", "as_1d_finite"]
+__all__ = ["Record", "StaticPoints", "as_1d_finite", "frozen"]
+
+
+def frozen(a: object, dtype: type = float) -> np.ndarray:
+    """A read-only copy of ``a``: how every immutable value in graybox stores its arrays."""
+    x = np.array(a, dtype=dtype, copy=True)
+    x.setflags(write=False)
+    return x
 
 
 def as_1d_finite(x: object, name: str) -> np.ndarray:

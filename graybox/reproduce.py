@@ -154,8 +154,9 @@ def _dominance(fronts: dict) -> str:
 def _sections() -> list[Callable[..., str]]:
     # imported here so that `import graybox.reproduce` stays light
     from .els import section_black_box
+    from .neural import section_neural
 
-    return [section_reference_models, section_black_box, section_table1]
+    return [section_reference_models, section_black_box, section_neural, section_table1]
 
 
 def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout) -> None:

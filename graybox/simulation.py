@@ -39,6 +39,14 @@ def check_theta(structure: Structure, theta: np.ndarray, name: str = "theta") ->
 def predict(structure: Structure, theta: np.ndarray, record: Record) -> np.ndarray:
     """One-step-ahead prediction ŷ(k) = ψ(k)ᵀθ from measured data.
 
+    Parameters
+    ----------
+    structure : Structure
+        Process terms.
+    theta : ndarray, shape (n_terms,)
+    record : Record
+        Measured input and output, shape (N,) each.
+
     Returns
     -------
     ndarray, shape (N,)

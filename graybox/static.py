@@ -310,6 +310,15 @@ def static_gain(
 ) -> np.ndarray:
     """dȳ/dū along the static curve, by implicit differentiation of eq. (5).
 
+    Parameters
+    ----------
+    structure : Structure
+    theta : ndarray, shape (n_terms,)
+    ubar : array_like, shape (M,)
+        Input levels (engineering units).
+    y0, strict
+        As for :func:`static_curve`.
+
     Returns
     -------
     ndarray, shape (M,)

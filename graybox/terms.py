@@ -211,7 +211,13 @@ class Structure:
 
 
 def parse_structure(text: str | Sequence[str]) -> Structure:
-    """Parse ``"y(k-1) + u(k-2)y(k-6) + 1"`` (or a list of term strings) into a Structure."""
+    """Parse ``"y(k-1) + u(k-2)y(k-6) + 1"`` (or a list of term strings) into a Structure.
+
+    Parameters
+    ----------
+    text : str or sequence of str
+        Terms joined by ``+``, or one string per term.
+    """
     parts = text.split("+") if isinstance(text, str) else list(text)
     return Structure(parse_term(p) for p in parts)
 

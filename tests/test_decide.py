@@ -81,3 +81,30 @@ def test_on_a_pe_front():
     inside = ps.JSF <= 0.031
     assert inside[i] and ps.JS[i] == ps.JS[inside].min()
     assert not inside.all()  # the band did select: λ1 near 1 keeps the data's static error
+
+
+def test_min_correlation_picks_least_correlated_member():
+    from graybox import Record, reference
+    from graybox.decide import decide_min_correlation
+    from graybox.pareto import ParetoSet
+
+    rng = np.random.default_rng(4)
+    m = reference.paper_model(15, "PE")
+    u = np.repeat(rng.uniform(750, 1650, 12), 60)
+    y0 = np.full(6, float(m.static_curve([u[0]])[0]))
+    rec = Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(u.size))
+    thetas = np.vstack([m.theta, m.theta * (1 + 0.02 * rng.standard_normal(17)), m.theta * 1.001])
+    ps = ParetoSet.from_thetas(m.structure, thetas, [1.0, 0.5, 0.1], rec, reference.eq1_points())
+    best, i = decide_min_correlation(ps, rec, return_index=True)
+    # recompute ρ by hand for every member
+    L = 6
+    rhos = []
+    for th in thetas:
+        mm = m.with_theta(th)
+        xi = rec.y[L:] - mm.predict(rec)[L:]
+        ys = mm.simulate(rec)[L:]
+        rhos.append(abs(np.corrcoef(xi, ys)[0, 1]))
+    assert i == int(np.argmin(rhos))
+    assert "min-corr" in best.name
+    with pytest.raises(ValueError, match="output must be"):
+        decide_min_correlation(ps, rec, output="sideways")
