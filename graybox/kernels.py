@@ -357,7 +357,15 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
     return sse
 
 
-def batch_sse(code: Code, thetas: np.ndarray, u: np.ndarray, y: np.ndarray, start: int, threads: int = 1) -> np.ndarray:
+def batch_sse(
+    code: Code,
+    thetas: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    start: int,
+    threads: int = 1,
+    U: np.ndarray | None = None,
+) -> np.ndarray:
     """Sum of squared free-run errors of P parameter vectors, samples ``start … N-1``.
 
     The free run starts from the measured ``y[:start]``. Non-finite where a member diverges.
@@ -372,13 +380,16 @@ def batch_sse(code: Code, thetas: np.ndarray, u: np.ndarray, y: np.ndarray, star
         Number of initial conditions (>= the structure's max lag).
     threads : int
         Parallel population blocks.
+    U : ndarray, shape (N, n_terms), optional
+        :func:`input_products` of ``u``, when the caller keeps it across calls (a GA does).
 
     Returns
     -------
     ndarray, shape (P,)
     """
     thT = np.ascontiguousarray(np.asarray(thetas, dtype=np.float64).T)
-    U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
+    if U is None:
+        U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
     ring = 1 << int(np.ceil(np.log2(start + 1)))
     with np.errstate(all="ignore"):
         if threads <= 1 or thT.shape[1] < 2 * threads:

@@ -14,6 +14,7 @@ linearised recursion y(k) = Σ_i a_i y(k-i) with a_i = ∂f/∂y(k-i) at (ȳ, ū
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -92,8 +93,9 @@ class ClusterMap:
         return max((p for p, _ in self.keys), default=0)
 
 
+@lru_cache(maxsize=256)
 def cluster_map(structure: Structure) -> ClusterMap:
-    """Build the :class:`ClusterMap` of the process terms of ``structure``."""
+    """Build the :class:`ClusterMap` of the process terms of ``structure`` (cached: it is immutable)."""
     keys = [cluster_key(t) for t in structure]
     uniq = tuple(sorted(set(keys)))
     R = np.zeros((len(uniq), len(structure)))
