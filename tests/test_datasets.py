@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import math
 import tomllib
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from graybox import Dataset, Record, StaticPoints, reference, regressor_matrix, simulate
+from graybox import Candidates, Dataset, Record, StaticPoints, reference, regressor_matrix, simulate
 from graybox.datasets import load_pumping, pumping_data_dir
 from graybox.datasets.pumping import (
     N_IDENT,
@@ -22,7 +23,10 @@ from graybox.datasets.pumping import (
     static_experiment,
     write_csvs,
 )
+from graybox.els import els
+from graybox.evaluate import evaluate
 from graybox.ls import scaled_lstsq
+from graybox.selection import frols
 
 REPO = Path(__file__).resolve().parents[1]
 PLANT = PumpingPlant()
@@ -105,10 +109,52 @@ def test_process_noise_is_coloured_and_optional():
     np.testing.assert_array_equal(quiet, clean)
 
 
+def test_slow_disturbances_are_set_off_by_speed_changes():
+    u = np.r_[np.full(10, 1000.0), np.full(1200, 1500.0)]  # one 500 rpm step, then 60 s at rest
+    clean = PLANT.simulate(u, noise=False, process_noise=False)
+    runs = [PLANT.simulate(u, rng=np.random.default_rng([4, i]), noise=False) for i in range(12)]
+    for r in runs:
+        assert np.all(r.surge[:11] == 0) and np.all(r.air_loss[:11] == 0)  # at rest until the step
+        assert np.all(r.air_loss >= 0)  # air only ever costs head
+    after = 60  # 2.5 s after the step
+    s = np.array([r.surge[after] for r in runs])
+    a = np.array([r.air_loss[after] for r in runs])
+    assert (s > 0).any() and (s < 0).any()  # the surge's sign is random, not the step's
+    assert 0.8 < np.std(s) < 4.0  # mlc of head; about 2.0 for a 500 rpm step (module docs)
+    assert 0.015 < a.mean() < 0.07  # about 3.6 % of the pump head on average
+    # the air lowers the pressure; both decay (τ_s = 6 s, τ_a = 30 s): after 60 s at rest
+    dp = np.mean([r.pressure[after:after + 100] - clean.pressure[after:after + 100] for r in runs])
+    assert dp < -0.1
+    for r in runs:
+        assert r.air_loss[-1] < 0.2 * r.air_loss[after] and abs(r.surge[-1]) < 0.05 * np.max(np.abs(r.surge))
+    # process_noise=False switches them off with the rest of the process noise
+    off = PLANT.simulate(u, rng=1, noise=False, process_noise=False)
+    np.testing.assert_array_equal(off.pressure, clean.pressure)
+    assert not off.surge.any() and not off.air_loss.any()
+
+
+def test_static_experiment_waits_out_the_slow_disturbances():
+    # The bundled static test's staircase: in each averaging window the slow disturbances move the
+    # pressure by far less than the 0.03 mlc std of a point (module docs: under 0.001 mlc).
+    n_set, n_avg = 3600, 120  # the defaults of static_experiment: 180 s and 6 s
+    u = np.repeat(np.array(STATIC_SPEEDS), n_set + n_avg)
+    slow_off = PumpingPlant(surge_intensity=0.0, air_loss_per_rpm=0.0)
+    a = PLANT.simulate(u, rng=np.random.default_rng([2011, 3]))  # stream [seed, 3] of generate()
+    b = slow_off.simulate(u, rng=np.random.default_rng([2011, 3]))
+    assert a.air_loss.max() > 1e-3 and np.abs(a.surge).max() > 0.1  # the steps did excite them
+    effect = (a.pressure - b.pressure).reshape(len(STATIC_SPEEDS), -1)[:, n_set:]
+    assert np.abs(effect).max() < 1e-3
+    # this is the run behind the bundled static points (printed with 4 decimals)
+    y = a.y.reshape(len(STATIC_SPEEDS), -1)[:, n_set:].mean(axis=1)
+    np.testing.assert_allclose(load_pumping().static.ybar, y, rtol=0, atol=1.01e-4)
+
+
 def test_static_point_std_agrees_with_monte_carlo():
     # The linearised formula used for the curve-fit tolerance (test_curves.py), against 40
     # repetitions of one static point. The sample std of 40 values has a relative std of ~11 %.
-    reps = [static_experiment(PLANT, speeds=[1150.0], rng=np.random.default_rng([9, i])).ybar[0]
+    # One speed and no step: nothing excites the slow disturbances, so 8 s of settling (6 time
+    # constants at 750 rpm) suffice and keep the test fast; the averaging is the bundled one.
+    reps = [static_experiment(PLANT, speeds=[1150.0], rng=np.random.default_rng([9, i]), settle=8.0).ybar[0]
             for i in range(40)]
     expected = PLANT.static_point_std(1150.0, n_samples=120)
     assert np.std(reps, ddof=1) == pytest.approx(expected, rel=0.35)
@@ -128,12 +174,17 @@ def test_simulate_validates_its_input():
         PumpingPlant(shutoff_head=1e-6)
     with pytest.raises(ValueError, match="inertia"):
         PumpingPlant(inertia=-1.0)
+    with pytest.raises(ValueError, match="surge_intensity"):
+        PumpingPlant(surge_intensity=-1.0)
+    with pytest.raises(ValueError, match="air_vent_time"):
+        PumpingPlant(air_vent_time=0.0)
 
 
 def test_run_is_an_immutable_value():
     run = PLANT.simulate([1000.0] * 5, noise=False, process_noise=False)
-    with pytest.raises(ValueError):
-        run.y[0] = 0.0
+    for name in ("y", "surge", "air_loss"):
+        with pytest.raises(ValueError):
+            getattr(run, name)[0] = 0.0
     rec = run.record("r")
     assert rec.units == ("rpm", "mlc") and rec.Ts == 0.05 and len(rec) == 5
 
@@ -225,7 +276,8 @@ def test_bundled_static_points_follow_eq1_within_noise():
 
 def test_least_squares_narx_on_bundled_data_is_free_run_stable():
     # The paper's structure (15), degree 2, ny = nu = 6, fitted by plain least squares on the
-    # identification part: the free run must stay stable and be accurate on both parts.
+    # identification part: the free run must stay stable and follow the data on both parts (the
+    # slow disturbances, which no model of u can predict, set the floor of J_S).
     ds = load_pumping()
     s = reference.STRUCTURE_15
     L = s.max_lag
@@ -233,7 +285,30 @@ def test_least_squares_narx_on_bundled_data_is_free_run_stable():
     for rec in (ds.ident, ds.valid):
         ys = simulate(s, theta, rec, on_diverge="nan")
         js = float(np.mean((rec.y[L:] - ys[L:]) ** 2))
-        assert np.isfinite(js) and js < 0.2, (rec.name, js)  # measured: 0.032 and 0.041 mlc²
+        assert np.isfinite(js) and js < 1.5, (rec.name, js)  # measured: 0.86 and 0.68 mlc²
+        assert js < 0.1 * np.var(rec.y)  # var(y) is about 20 mlc²
+
+
+def test_bundled_data_are_calibrated_to_table1():
+    # The calibration target (module docs, "Disturbances"): black-box ERR + ELS models of the
+    # paper's two set-ups run free stably, with J_S of the order of 1 mlc² (Table I: 1.1-2.6), and
+    # the degree-2 model misses the bundled static points far outside the 0.031 mlc² band (Table
+    # I: J_SF = 1.6 for ELS (15)). Measured: J_S ident 0.86 / 0.88, valid 0.75 / 0.83, J_SF 0.87
+    # / 1.34 mlc² (degree 2 / 3).
+    ds = load_pumping()
+    models = {}
+    for degree, n_terms in ((2, 17), (3, 23)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # candidate and convergence notes are not under test
+            sel = frols(Candidates(ny=6, nu=6, ne=2, degree=degree), ds.ident, n_terms=n_terms)
+            models[degree] = els(sel, ds.ident)
+    table = evaluate(models, ds)
+    for degree in (2, 3):
+        row = table.loc[degree]
+        assert 0.3 < row["J_S ident"] < 3.0, row
+        assert 0.3 < row["J_S valid"] < 3.0, row
+    assert 0.2 < table.loc[2, "J_SF"] < 2.0  # D_SF's band is 0.031: black box alone is not enough
+    assert np.isfinite(table.loc[3, "J_SF"])
 
 
 # -- packaging ---------------------------------------------------------------

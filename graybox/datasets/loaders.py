@@ -274,9 +274,12 @@ PUMPING_DESCRIPTION = (
     "curve eq. (1) over 750-1650 rpm, Ts = 0.05 s, 3200 identification + 800 validation samples of "
     "speed-reference steps at several operating points and sizes, a time constant that varies with "
     "the operating point (about 1.26 s at 750 rpm, 0.78 s at 1650 rpm), transmitter error +/-0.175 mlc "
-    "(95 % band), plus coloured process noise. The static points are means of settled noisy "
-    "stretches at 750, 850, ..., 1650 rpm. It is not the paper's plant: numbers computed on it will "
-    "not equal the paper's. Input: speed reference (rpm); output: pressure (mlc)."
+    "(95 % band), plus coloured process noise and slow disturbances set off by speed changes "
+    "(surge in the open return circuit, air in the pumps) sized so that black-box models miss the "
+    "static curve, as in the paper's Table I. The static points are means of noisy stretches at "
+    "750, 850, ..., 1650 rpm, each recorded after waiting 180 s for those disturbances to die out. "
+    "It is not the paper's plant: numbers computed on it will not equal the paper's. "
+    "Input: speed reference (rpm); output: pressure (mlc)."
 )
 
 
