@@ -529,6 +529,10 @@ class StaticBand(StaticConstraint):
     necessary condition for a stable equilibrium: 1 − Σ a_i > 0). With y powers above 1 it is
     the first-order (Newton-step) version of the band at the measured ȳ_i.
 
+    The exact form also keeps ``D_i >= min_denominator``: the two band rows alone imply only
+    D_i >= 0, and as D_i → 0 they become vacuous (the residual bound b·D_i shrinks with the
+    error it is meant to bound), which other constraints can drive a solver into.
+
     ``form="residual"`` bounds the static-equation residual ``|ȳ_i − q_iᵀRθ| <= b`` instead;
     it is looser by the factor 1/D (≈ 14 for the paper's model (15), whose D ≈ 0.07).
 
@@ -539,17 +543,22 @@ class StaticBand(StaticConstraint):
     points : StaticPoints, optional
         Default: the problem's static points.
     form : {"exact", "residual"}
+    min_denominator : float
+        Smallest D_i allowed by the exact form (a stability margin: 1 − Σ a_i >= it).
     """
 
     b: float = 0.175
     points: StaticPoints | None = None
     form: str = "exact"
+    min_denominator: float = 1e-3
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.b) and self.b > 0):
             raise ValueError(f"band half-width b must be a positive number, got {self.b!r}")
         if self.form not in ("exact", "residual"):
             raise ValueError(f"form must be 'exact' or 'residual', got {self.form!r}")
+        if not (np.isfinite(self.min_denominator) and 0 < self.min_denominator < 1):
+            raise ValueError(f"min_denominator must lie in (0, 1), got {self.min_denominator!r}")
 
     def describe(self) -> str:
         n = "the problem's" if self.points is None else f"{len(self.points)}"
@@ -566,9 +575,12 @@ class StaticBand(StaticConstraint):
             one, dR = np.ones(len(pts)), np.zeros_like(QR)
         b = self.b
         # q θ − ȳ <= b (1 − dθ)   and   ȳ − q θ <= b (1 − dθ)
-        A = np.vstack([QR + b * dR, -QR + b * dR])
-        rhs = np.concatenate([pts.ybar + b * one, b * one - pts.ybar])
-        return AffineRows.make(ctx.n_terms, A_ub=A, b_ub=rhs)
+        A = [QR + b * dR, -QR + b * dR]
+        rhs = [pts.ybar + b * one, b * one - pts.ybar]
+        if self.form == "exact":
+            A.append(dR)  # 1 − dθ >= min_denominator
+            rhs.append(one - self.min_denominator)
+        return AffineRows.make(ctx.n_terms, A_ub=np.vstack(A), b_ub=np.concatenate(rhs))
 
     def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
         if self.form == "exact":

@@ -127,35 +127,6 @@ def evaluate(
     return df
 
 
-def _stable_mask(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
-    """(P, M) mask: is the equilibrium (ū_j, ȳ_pj) of member p locally stable?
-
-    Batched over members and points: the linearised recursion's companion matrices go to one
-    ``np.linalg.eigvals`` call.
-    """
-    P, M = ybar.shape
-    L = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
-    if L == 0:
-        return np.ones((P, M), bool)
-    # a_i(p, j) = Σ_t θ_pt · pw · ȳ^(p_t-1) · ū^(m_t) over terms with y(k-i)
-    a = np.zeros((P, M, L))
-    for t, term in enumerate(structure):
-        py, mu = term.power_of("y"), term.power_of("u")
-        for s, l, pw in term.factors:
-            if s == "y":
-                a[:, :, l - 1] += thetas[:, t, None] * pw * ybar ** (py - 1) * ubar[None, :] ** mu
-    comp = np.zeros((P, M, L, L))
-    comp[:, :, 0, :] = a
-    if L > 1:
-        idx = np.arange(L - 1)
-        comp[:, :, idx + 1, idx] = 1.0
-    ok = np.all(np.isfinite(comp), axis=(2, 3))
-    rho = np.full((P, M), np.inf)
-    if ok.any():
-        rho[ok] = np.max(np.abs(np.linalg.eigvals(comp[ok])), axis=-1)
-    return rho < 1.0
-
-
 def static_curves(
     structure,
     thetas: np.ndarray,
@@ -170,7 +141,7 @@ def static_curves(
     With ``check_stability`` an equilibrium that is not locally stable is NaN too (the model
     does not settle there), matching :meth:`Model.static_curve`.
     """
-    from .static import is_rational, rational_parts, static_curve
+    from .static import is_rational, rational_parts, stable_mask, static_curve
 
     th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float)
@@ -180,7 +151,7 @@ def static_curves(
             yb = np.where(np.abs(den) > 1e-12, num / den, np.nan)
         if check_stability:
             good = np.isfinite(yb)
-            st = _stable_mask(structure, th, ub, np.where(good, yb, 0.0))
+            st = stable_mask(structure, th, ub, np.where(good, yb, 0.0))
             yb = np.where(st & good, yb, np.nan)
         return yb
     out = np.empty((th.shape[0], ub.size))

@@ -17,9 +17,11 @@ resume from it; a checkpoint written for another problem is refused.
 
 Inside the optimisers J_S is computed by the fused batch kernel (same definition as
 :func:`graybox.evaluate.js`) and J_SF from the equilibrium near the measured ȳ_i
-(:func:`graybox.static.local_static_curves`: exact for rational structures; for others the root
-Newton's method reaches from ȳ_i). The reported front is re-evaluated by the shared evaluator,
-which takes the stable equilibrium the model reaches.
+(:func:`graybox.static.nearest_stable_equilibria`: exact for rational structures; for others the
+stable root nearest ȳ_i), counted as undefined (infinite cost) where no stable equilibrium exists —
+a model does not settle on an unstable equilibrium, so matching the static points there would be a
+false gain. The reported front is
+re-evaluated by the shared evaluator, which takes the stable equilibrium the model reaches.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from .ls import column_scales, scaled_lstsq
 from .pareto import ParetoSet
 from .records import Dataset, Record, StaticPoints
 from .regressors import regressor_matrix
-from .static import local_static_curves, static_theta_gradient
+from .static import nearest_stable_equilibria, static_theta_gradient
 from .terms import Structure
 
 __all__ = ["SEProblem", "GAOptions", "ga_front", "gradient_front", "se_pareto", "check_lambdas"]
@@ -107,9 +109,13 @@ class SEProblem:
         js = sse / self.n_dyn
         return np.where(np.isfinite(js), js, np.inf)
 
+    def static_outputs(self, thetas: np.ndarray) -> np.ndarray:
+        """Stable equilibrium nearest each measured ȳ_i (NaN where none), shape (P, M)."""
+        return nearest_stable_equilibria(self.structure, np.atleast_2d(thetas), self.static.ubar, self.static.ybar)
+
     def jsf(self, thetas: np.ndarray) -> np.ndarray:
-        """J_SF of each row (equilibrium near the measured ȳ; inf where none), shape (P,)."""
-        yb = local_static_curves(self.structure, thetas, self.static.ubar, self.static.ybar)
+        """J_SF of each row (stable equilibrium near the measured ȳ; inf where none), shape (P,)."""
+        yb = self.static_outputs(thetas)
         with np.errstate(all="ignore"):
             v = np.mean((yb - self.static.ybar) ** 2, axis=1)
         return np.where(np.isfinite(v), v, np.inf)
@@ -376,7 +382,9 @@ def _residuals_and_jac(problem: SEProblem, z: np.ndarray, lam1: float, want_jac:
     if lam2 > 0:
         sp = problem.static
         w2 = np.sqrt(lam2 / len(sp))
-        yb = local_static_curves(problem.structure, th[None, :], sp.ubar, sp.ybar)[0]
+        # an unstable equilibrium gives NaN here, hence inf residuals: least_squares treats the
+        # region as infeasible and shrinks its step, so the front never trades J_SF for stability
+        yb = problem.static_outputs(th)[0]
         r.append(w2 * (yb - sp.ybar))
         if want_jac:
             J.append(w2 * static_theta_gradient(problem.structure, th, sp.ubar, yb) / problem.scale)
@@ -418,7 +426,6 @@ def gradient_front(
         raise ValueError(f"theta0 must have shape ({len(problem.structure)},), got {start.shape}")
 
     def step(i, lam1, prev, rng):
-        th0 = start if prev is None else prev
         cache: dict = {}
 
         def fun(z):
@@ -429,12 +436,19 @@ def gradient_front(
         def jac(z):
             return cache["J"]
 
-        z0 = th0 * problem.scale
-        r0 = fun(z0)
-        if not np.all(np.isfinite(r0)):
-            raise ValueError(f"the starting model's free run diverges at λ1 = {lam1:g}; give a stable theta0")
-        res = least_squares(fun, z0, jac=jac, method="trf", x_scale="jac", max_nfev=max_nfev,
-                            ftol=tol, xtol=tol, gtol=tol)
+        # warm start from the previous λ; if its static equilibria are unstable (the λ1 = 1 run
+        # ignores statics) start again from theta0
+        for th0 in ([prev] if prev is not None else []) + [start]:
+            z0 = th0 * problem.scale
+            if np.all(np.isfinite(fun(z0))):
+                break
+        else:
+            why = ("its free run diverges" if not np.isfinite(problem.js(start[None]))[0]
+                   else "its equilibrium at some static point is unstable or undefined")
+            raise ValueError(f"cannot start the gradient SE fit at λ1 = {lam1:g}: {why}; give another theta0")
+        with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
+            res = least_squares(fun, z0, jac=jac, method="trf", x_scale="jac", max_nfev=max_nfev,
+                                ftol=tol, xtol=tol, gtol=tol)
         th = res.x / problem.scale
         return th, float(2 * res.cost)
 

@@ -46,7 +46,7 @@ import pandas as pd
 
 from .model import Model
 from .records import Dataset, Record
-from .terms import Structure, Term
+from .terms import Structure, Term, parse_term
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -359,6 +359,7 @@ def frols(
     criterion: Literal["aic", "bic", "fpe"] | None = None,
     max_terms: int | None = None,
     rank_tol: float = 1e-7,
+    include: Sequence[Term | str] = (),
 ) -> Selection:
     """Select model terms by forward regression with orthogonal least squares (ERR).
 
@@ -396,6 +397,10 @@ def frols(
     rank_tol : float, optional
         A candidate whose orthogonalised norm is below ``rank_tol`` times its original norm
         is treated as a linear combination of the selected terms and dropped.
+    include : sequence of Term or str, optional
+        Terms selected first, in this order, whatever their ERR (e.g. ``["1"]``: gray-box
+        estimation with eq. (22) needs the constant, which ERR may rank late when slow
+        disturbances dominate). They count towards ``n_terms`` and their ERR is reported.
 
     Returns
     -------
@@ -449,6 +454,17 @@ def frols(
     if mode == "criterion" and criterion is None:
         criterion = "bic"
     curve_name = criterion or "aic"
+
+    forced: list[int] = []
+    for t in include:
+        term = t if isinstance(t, Term) else parse_term(t)
+        if term not in process:
+            raise ValueError(f"included term {term} is not among the process candidates")
+        if process.index(term) in forced:
+            raise ValueError(f"included term {term} is given twice")
+        forced.append(process.index(term))
+    if n_terms is not None and n_terms < len(forced):
+        raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
 
     records = _as_records(data)
     start = process.max_lag
@@ -523,9 +539,15 @@ def frols(
                     f"({', '.join(dep_terms[:8])}{', …' if len(dep_terms) > 8 else ''})"
                 )
             break
-        with np.errstate(divide="ignore", invalid="ignore"):
-            score = np.where(active, num * num / nrm, -1.0)
-        j = int(np.argmax(score))
+        if k < len(forced):
+            j = forced[k]
+            if not active[j]:
+                why = next((w for t, w in skipped if t == process[j]), "skipped")
+                raise ValueError(f"included term {process[j]} cannot be used on these data: {why}")
+        else:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                score = np.where(active, num * num / nrm, -1.0)
+            j = int(np.argmax(score))
         # The chosen column is re-orthogonalised once against the previous q's: cheap (one
         # column) and it keeps Q orthonormal to working precision, so ERR sums stay ≤ 1.
         w = W[:, j].copy()

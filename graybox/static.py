@@ -33,6 +33,8 @@ __all__ = [
     "is_rational",
     "rational_static_curve",
     "rational_parts",
+    "stable_mask",
+    "linearisation",
 ]
 
 _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -340,58 +342,67 @@ def static_gain(
     return -Fu / Fy
 
 
-def local_static_curves(
-    structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ystart: np.ndarray, iterations: int = 30
+def nearest_stable_equilibria(
+    structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ytarget: np.ndarray
 ) -> np.ndarray:
-    """Equilibria near ``ystart`` for many parameter vectors at once, by Newton's method.
+    """For many parameter vectors at once: the stable equilibrium nearest ``ytarget`` at each ū.
 
-    The optimisers' fast path for J_SF: for a rational structure the equilibrium is unique and
-    this is exact (one step suffices); otherwise it is the root Newton reaches from the measured
-    ȳ (not necessarily the stable one). Stability is not checked here: the shared evaluator does
-    that for the final members.
+    The optimisers' fast path for J_SF. Rational structures have one equilibrium (eq. (6)),
+    kept when it is stable. Otherwise every real root of eq. (5) is found at once (batched
+    companion-matrix eigenvalues), the unstable ones are dropped (:func:`stable_mask`), and the
+    one nearest the measured ȳ_i is kept — where :func:`static_curve` would run the model from
+    ȳ_i to see which stable equilibrium it reaches. The two agree whenever a single stable
+    equilibrium exists (the usual case); the shared evaluator re-scores the final members.
 
     Parameters
     ----------
     structure : Structure
     thetas : ndarray, shape (P, n_terms)
     ubar : ndarray, shape (M,)
-    ystart : ndarray, shape (M,)
-        Starting points (usually the measured ȳ).
-    iterations : int
-        Newton steps for non-rational structures.
+    ytarget : ndarray, shape (M,)
+        Usually the measured ȳ_i.
 
     Returns
     -------
     ndarray, shape (P, M)
-        NaN where Newton did not converge (relative step > 1e-10) or the slope vanished.
+        NaN where there is no stable real equilibrium.
     """
-    cm = cluster_map(structure)
-    sig = np.atleast_2d(thetas) @ cm.R.T  # (P, C)
+    th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float)
-    P = sig.shape[0]
-    # coefficient of ȳ^p at each ū: c[p] (P, M)
-    maxp = max(cm.max_y_power, 1)
-    coef = np.zeros((maxp + 1, P, ub.size))
-    for c, (p, m) in enumerate(cm.keys):
-        coef[p] += sig[:, c, None] * ub[None, :] ** m
-    coef[1] -= 1.0
+    yt = np.broadcast_to(np.asarray(ytarget, float), ub.shape)
+    P, M = th.shape[0], ub.size
     with np.errstate(all="ignore"):
-        if maxp == 1:
-            y = np.where(coef[1] != 0, -coef[0] / coef[1], np.nan)
-            return y
-        y = np.broadcast_to(np.asarray(ystart, float), (P, ub.size)).copy()
-        ok = np.ones_like(y, bool)
-        for _ in range(iterations):
-            F = coef[maxp].copy()
-            dF = maxp * coef[maxp]
-            for p in range(maxp - 1, -1, -1):
-                F = F * y + coef[p]
-                if p >= 1:
-                    dF = dF * y + p * coef[p]
-            step = F / dF
-            y = y - step
-        ok = np.isfinite(y) & (np.abs(step) <= 1e-10 * (1.0 + np.abs(y)))
-        return np.where(ok, y, np.nan)
+        if is_rational(structure):
+            num, den = rational_parts(structure, th, ub)
+            yb = np.where(np.abs(den) > 1e-12, num / den, np.nan)
+            return np.where(stable_mask(structure, th, ub, yb), yb, np.nan)
+        cm = cluster_map(structure)
+        sig = th @ cm.R.T
+        D = cm.max_y_power
+        coef = np.zeros((D + 1, P, M))  # F(ȳ) = Σ_p coef[p] ȳ^p
+        for c, (p, m) in enumerate(cm.keys):
+            coef[p] += sig[:, c, None] * ub[None, :] ** m
+        coef[1] -= 1.0
+        lead = coef[D]
+        ok = np.isfinite(coef).all(axis=0) & (np.abs(lead) > 1e-300)
+        comp = np.zeros((P, M, D, D))
+        comp[..., 0, :] = -np.moveaxis(coef[D - 1 :: -1], 0, -1) / np.where(ok, lead, 1.0)[..., None]
+        if D > 1:
+            idx = np.arange(D - 1)
+            comp[..., idx + 1, idx] = 1.0
+        comp[~ok] = 0.0
+        roots = np.linalg.eigvals(comp)  # (P, M, D)
+        real = ok[..., None] & (np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real)))
+        best = np.full((P, M), np.nan)
+        dist = np.full((P, M), np.inf)
+        for d in range(D):
+            r = np.where(real[..., d], roots[..., d].real, np.nan)
+            good = real[..., d] & stable_mask(structure, th, ub, r)
+            dd = np.where(good, np.abs(r - yt[None, :]), np.inf)
+            take = dd < dist
+            best = np.where(take, r, best)
+            dist = np.where(take, dd, dist)
+        return best
 
 
 def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
@@ -415,4 +426,53 @@ def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndar
         return -basis / Fy[:, None]
 
 
-__all__ += ["local_static_curves", "static_theta_gradient"]
+__all__ += ["nearest_stable_equilibria", "static_theta_gradient"]
+
+
+def linearisation(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+    """a_i = ∂f/∂y(k-i) at equilibria, batched: shape (P, M, L) for thetas (P, n) and ybar (P, M)."""
+    th = np.atleast_2d(thetas)
+    L = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
+    ub = np.asarray(ubar, float)
+    a = np.zeros(ybar.shape + (L,))
+    for t, term in enumerate(structure):
+        py, mu = term.power_of("y"), term.power_of("u")
+        for s, l, pw in term.factors:
+            if s == "y":
+                a[:, :, l - 1] += th[:, t, None] * pw * ybar ** (py - 1) * ub[None, :] ** mu
+    return a
+
+
+def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+    """Is each equilibrium (ū_j, ȳ_pj) of member p locally stable? Shape (P, M), batched.
+
+    The characteristic polynomial z^L − a_1 z^(L−1) − … − a_L of the linearised recursion is
+    tested by the Schur–Cohn step-down recursion (all reflection coefficients inside the unit
+    interval): no eigenvalues are computed, which makes the test cheap enough for every
+    generation of a GA (about 1 ms for 200 members × 10 points, against 30 ms by eigvals).
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    ubar : ndarray, shape (M,)
+    ybar : ndarray, shape (P, M)
+        Equilibrium outputs (non-finite entries count as unstable).
+    """
+    yb = np.asarray(ybar, float)
+    finite = np.isfinite(yb)
+    a = linearisation(structure, thetas, ubar, np.where(finite, yb, 0.0))
+    L = a.shape[-1]
+    if L == 0:
+        return finite
+    # monic polynomial in z^-1: 1 + c_1 z^-1 + … + c_L z^-L with c_i = −a_i
+    c = np.concatenate([np.ones(a.shape[:-1] + (1,)), -a], axis=-1)
+    ok = finite & np.all(np.isfinite(c), axis=-1)
+    c = np.where(ok[..., None], c, 0.0)
+    with np.errstate(all="ignore"):
+        for m in range(L, 0, -1):
+            k = c[..., m]
+            ok &= np.abs(k) < 1.0
+            denom = np.where(ok, 1.0 - k * k, 1.0)
+            c = (c[..., :m] - k[..., None] * c[..., m:0:-1]) / denom[..., None]
+    return ok

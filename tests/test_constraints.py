@@ -209,7 +209,8 @@ def test_composition_flattens_and_all_hold(rec):
         assert both.violation(t, ctx) < 1e-7
         assert true_static_error(t).max() <= 0.3 * (1 + 1e-6)
     rows = both.affine(ctx)
-    assert rows.n_eq == 0 and rows.n_ub == 2 * len(PTS) + 1 + 2 * 25
+    # band: two rows per point plus the min-denominator row per point; cluster bound: 1; gain: 2 per grid point
+    assert rows.n_eq == 0 and rows.n_ub == 3 * len(PTS) + 1 + 2 * 25
 
 
 def test_objects_are_immutable_values():
@@ -318,3 +319,15 @@ def test_property_every_variant_is_satisfied(rec, cons, lam, use_cls):
         assert c.violation(th, ctx) < 1e-6, c.describe()
         if isinstance(c, StaticBand):  # exact for this rational structure
             assert true_static_error(th).max() <= c.b * (1 + 1e-5)
+
+
+def test_band_does_not_go_vacuous_as_the_denominator_vanishes(rec):
+    # the case hypothesis found: with a gain bound and two pass-through points, the band rows
+    # alone let D → 0, where b·D bounds nothing; min_denominator keeps the band meaningful
+    cons = [StaticBand(0.33203125, points=PTS), GainBounds(lower=0.015, ubar_range=(750.0, 1650.0), reference=EQ1),
+            PassesThrough(StaticPoints(PTS.ubar[0:2], PTS.ybar[0:2]))]
+    try:
+        th = pe_thetas(S15, rec, PTS, [1.0], constraints=cons)[0]
+    except InfeasibleError:
+        return
+    assert true_static_error(th).max() <= 0.33203125 * (1 + 1e-5)

@@ -327,7 +327,11 @@ problem_args = dict(
 def test_property_pe_closed_form_equals_qp(seed, n_terms, n_points, unit, lam):
     structure, r, pts = _random_problem(seed, n_terms, n_points, unit)
     s = column_scales(stacked_regressors(structure, r)[0])
-    a = pe_thetas(structure, r, pts, lam, solver="closed")
+    try:
+        a = pe_thetas(structure, r, pts, lam, solver="closed")
+    except ValueError as exc:  # a random structure on a few-level input can be unidentifiable:
+        assert "not identifiable" in str(exc)  # then θ is not unique and there is nothing to compare
+        return
     b = pe_thetas(structure, r, pts, lam, solver="clarabel")
     assert rel_scaled(b, a, s).max() < 1e-6
 

@@ -330,3 +330,21 @@ def test_edge_warnings():
     assert len(sel.structure) == 3 and "not reached" in sel.stop
     with pytest.warns(RuntimeWarning, match="still be"):
         frols(Candidates(3, 3, 0, 2), rec, criterion="aic", max_terms=3)
+
+
+def test_included_terms_come_first():
+    from graybox import Candidates, Record, frols
+
+    rng = np.random.default_rng(2)
+    u = rng.uniform(-1, 1, 400)
+    y = np.zeros(400)
+    for k in range(2, 400):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.3 * u[k - 2] * u[k - 1]
+    rec = Record(u, y)
+    sel = frols(Candidates(2, 2, 0, 2), rec, n_terms=4, include=["1", "y(k-2)"])
+    assert [str(t) for t in sel.structure][:2] == ["1", "y(k-2)"]
+    assert len(sel.structure) == 4 and len(sel.err) == 4
+    with pytest.raises(ValueError, match="not among the process candidates"):
+        frols(Candidates(2, 2, 0, 2), rec, n_terms=3, include=["y(k-5)"])
+    with pytest.raises(ValueError, match="fewer than the 2 included"):
+        frols(Candidates(2, 2, 0, 2), rec, n_terms=1, include=["1", "y(k-1)"])
