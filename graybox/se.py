@@ -35,7 +35,8 @@ from typing import Literal, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
-from tqdm.auto import tqdm
+from threadpoolctl import threadpool_limits
+from tqdm import tqdm
 
 from .kernels import batch_sse, encode, free_run_sensitivity, input_products
 from .ls import column_scales, scaled_lstsq
@@ -287,6 +288,10 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
         thetas[:done], costs[:done] = ck["thetas"][:done], ck["costs"][:done]
     prev = thetas[done - 1] if done else None
     bar = tqdm(total=K, initial=done, desc=f"SE front ({method})", disable=not progress, leave=False)
+    # The sweeps make thousands of small BLAS calls (a 3200 × n Jacobian's SVD, 30-row least
+    # squares): a multi-threaded BLAS only adds synchronisation, and on a loaded 2-core machine
+    # it measured 30x slower than one thread. Our own parallelism is the population threads.
+    limits = threadpool_limits(limits=1, user_api="blas")
     try:
         for i in range(done, K):
             # one generator per λ index: a resumed sweep draws exactly what an uninterrupted one does
@@ -299,6 +304,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
             bar.update(1)
     finally:
         bar.close()
+        limits.restore_original_limits()
     return thetas, costs
 
 
@@ -403,6 +409,7 @@ def gradient_front(
     progress: bool = True,
     max_nfev: int = 50,
     tol: float = 1e-8,
+    starts: Sequence[np.ndarray] = (),
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gradient SE front: ``least_squares`` (trust-region reflective) per λ1, warm-started.
 
@@ -415,6 +422,10 @@ def gradient_front(
         Start of the first run (default: least squares on all samples).
     max_nfev, tol : int, float
         Per-λ limits passed to ``least_squares`` (``ftol = xtol = gtol = tol``).
+    starts : sequence of ndarray
+        Further starting points tried, in order, when neither the previous λ's solution nor
+        ``theta0`` gives a finite cost (e.g. their static equilibria are unstable).
+        :func:`se_pareto` passes PE solutions (convex, with the static points weighted in).
 
     Returns
     -------
@@ -438,14 +449,15 @@ def gradient_front(
 
         # warm start from the previous λ; if its static equilibria are unstable (the λ1 = 1 run
         # ignores statics) start again from theta0
-        for th0 in ([prev] if prev is not None else []) + [start]:
+        for th0 in ([prev] if prev is not None else []) + [start] + [np.asarray(s, float) for s in starts]:
             z0 = th0 * problem.scale
             if np.all(np.isfinite(fun(z0))):
                 break
         else:
             why = ("its free run diverges" if not np.isfinite(problem.js(start[None]))[0]
                    else "its equilibrium at some static point is unstable or undefined")
-            raise ValueError(f"cannot start the gradient SE fit at λ1 = {lam1:g}: {why}; give another theta0")
+            raise ValueError(f"cannot start the gradient SE fit at λ1 = {lam1:g}: theta0 fails ({why}) and so "
+                             f"do the {len(starts)} further start(s); give another theta0")
         with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
             res = least_squares(fun, z0, jac=jac, method="trf", x_scale="jac", max_nfev=max_nfev,
                                 ftol=tol, xtol=tol, gtol=tol)
@@ -453,9 +465,22 @@ def gradient_front(
         return th, float(2 * res.cost)
 
     thetas, costs = _sweep(problem, lam, "gradient", {"max_nfev": max_nfev, "tol": tol,
-                                                     "theta0": None if theta0 is None else list(map(float, start))},
+                                                     "theta0": None if theta0 is None else list(map(float, start)),
+                                                     "starts": [list(map(float, s_)) for s_ in starts]},
                            seed, checkpoint, progress, step)
     return lam, thetas, costs
+
+
+def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
+    """PE solutions (closed form) leaning more and more on the static points: fallback starts."""
+    from .convex import pe_thetas
+
+    try:
+        with threadpool_limits(limits=1, user_api="blas"):
+            return list(pe_thetas(problem.structure, problem.record, problem.static, [1e-1, 1e-2, 1e-3, 1e-4],
+                                  solver="closed", range_margin=None))
+    except ValueError:  # e.g. not identifiable with the static rows: no fallback, theta0 only
+        return []
 
 
 def se_pareto(
@@ -513,6 +538,8 @@ def se_pareto(
         lam, th, cost = ga_front(problem, lambdas, options or GAOptions(), seed, checkpoint, progress, threads,
                                  **kwargs)
     elif method == "gradient":
+        if "starts" not in kwargs:
+            kwargs["starts"] = _pe_starts(problem)
         lam, th, cost = gradient_front(problem, lambdas, seed=seed, checkpoint=checkpoint, progress=progress, **kwargs)
     else:
         raise ValueError(f"method must be 'ga' or 'gradient', got {method!r}")
