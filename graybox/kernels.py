@@ -14,6 +14,7 @@ Nothing here validates input: callers in :mod:`graybox.simulation` do.
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import NamedTuple
 
 import numba as nb
@@ -35,7 +36,7 @@ class Code(NamedTuple):
     (0 = y, 1 = u), lag and power. ``ny[t]`` is the total output power of term t and
     ``ylag[t, :ny[t]]`` its output lags with repetition (y(k-2)^2 → [2, 2]).
 
-    ``uptr, ulag, upow``: the input factors only. ``grp[t]`` is the output monomial group of
+    ``mu[t]``: the total input power of term t. ``uptr, ulag, upow``: the input factors only. ``grp[t]`` is the output monomial group of
     term t (-1 for input-only terms); group g is the monomial with lags ``gylag[g, :gny[g]]``.
     Grouping lets the single free run treat y(k) = X(k) + Σ_g C_g(k) · m_g(y) as a recursion
     over a few monomials with coefficients precomputed from the input.
@@ -53,10 +54,12 @@ class Code(NamedTuple):
     grp: np.ndarray
     gny: np.ndarray
     gylag: np.ndarray
+    mu: np.ndarray
 
 
+@lru_cache(maxsize=512)
 def encode(structure: Structure) -> Code:
-    """Encode the process terms of ``structure`` for the kernels."""
+    """Encode the process terms of ``structure`` for the kernels (cached; arrays read-only)."""
     fptr = [0]
     fsig: list[int] = []
     flag: list[int] = []
@@ -100,10 +103,15 @@ def encode(structure: Structure) -> Code:
     gylag = np.zeros((len(groups), max(D, 1)), dtype=np.int64)
     for key, g in groups.items():
         gylag[g, : len(key)] = key
-    as_i = lambda a: np.asarray(a, dtype=np.int64)  # noqa: E731
+    def as_i(a):
+        x = np.array(a, dtype=np.int64)
+        x.setflags(write=False)  # shared by every caller through the cache
+        return x
+
     return Code(
-        as_i(fptr), as_i(fsig), as_i(flag), as_i(fpow), as_i([len(l) for l in ylags]), ylag,
-        as_i(uptr), as_i(ulag), as_i(upow), as_i(grp), as_i([len(k) for k in sorted(groups, key=groups.get)]), gylag,
+        as_i(fptr), as_i(fsig), as_i(flag), as_i(fpow), as_i([len(l) for l in ylags]), as_i(ylag),
+        as_i(uptr), as_i(ulag), as_i(upow), as_i(grp), as_i([len(k) for k in sorted(groups, key=groups.get)]),
+        as_i(gylag), as_i([t.power_of("u") for t in structure]),
     )
 
 
@@ -453,3 +461,57 @@ def free_run_sensitivity(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.nd
 
 
 __all__ += ["batch_sse", "free_run_sensitivity"]
+
+
+@nb.njit(cache=True, nogil=True)
+def stable_equilibria(ny, ylag, mu, thetas, ubar, ybar, L):  # pragma: no cover - compiled
+    """(P, M) mask: is the equilibrium (ū_j, ȳ_pj) of member p locally stable?
+
+    Builds the linearised recursion's coefficients a_l = Σ_t θ_t ∂φ_t/∂y(k-l) at (ȳ, ū) and
+    applies the Schur–Cohn step-down test to z^L − a_1 z^(L−1) − … − a_L (all reflection
+    coefficients strictly inside (−1, 1)). ``mu[t]`` is term t's input power; ``ny``/``ylag``
+    as in :class:`Code`. Non-finite ȳ counts as unstable.
+    """
+    P, T = thetas.shape
+    M = ubar.shape[0]
+    out = np.zeros((P, M), dtype=np.bool_)
+    c = np.empty(L + 1)
+    nxt = np.empty(L + 1)
+    for p in range(P):
+        for j in range(M):
+            yb = ybar[p, j]
+            if not np.isfinite(yb):
+                continue
+            for i in range(L + 1):
+                c[i] = 0.0
+            c[0] = 1.0
+            for t in range(T):
+                m = ny[t]
+                if m == 0:
+                    continue
+                g = thetas[p, t] * ubar[j] ** mu[t]
+                for _ in range(m - 1):
+                    g *= yb
+                for d in range(m):
+                    c[ylag[t, d]] -= g  # c_l = −a_l
+            ok = True
+            for i in range(L + 1):
+                if not np.isfinite(c[i]):
+                    ok = False
+            n = L
+            while ok and n > 0:
+                k = c[n]
+                if not (abs(k) < 1.0):
+                    ok = False
+                    break
+                den = 1.0 - k * k
+                for i in range(n):
+                    nxt[i] = (c[i] - k * c[n - i]) / den
+                for i in range(n):
+                    c[i] = nxt[i]
+                n -= 1
+            out[p, j] = ok
+    return out
+
+
+__all__ += ["stable_equilibria"]

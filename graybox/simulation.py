@@ -119,17 +119,9 @@ def simulate(
     return y
 
 
-_CODES: dict[Structure, tuple] = {}
-
-
-def _code(structure: Structure) -> tuple:
-    """Encoded structure, cached: encoding costs more than a short free run."""
-    c = _CODES.get(structure)
-    if c is None:
-        if len(_CODES) > 512:
-            _CODES.clear()
-        c = _CODES[structure] = encode(structure)
-    return c
+def _code(structure: Structure):
+    """Encoded structure (cached by :func:`graybox.kernels.encode`)."""
+    return encode(structure)
 
 
 def simulate_many(
