@@ -1,4 +1,9 @@
-"""Pictures: functions that take graybox values and return matplotlib Figures (no pyplot state)."""
+"""Pictures: functions that take graybox values and return matplotlib Figures (no pyplot state).
+
+The figures are built without pyplot, so nothing global changes and scripts need no backend.
+Save one with ``fig.savefig("name.png")``; in Jupyter, run ``%matplotlib inline`` once and end a
+cell with ``fig`` (or call ``IPython.display.display(fig)``) to see it.
+"""
 
 from .data import plot_record, plot_static_curve
 from .models import plot_free_run
