@@ -265,33 +265,23 @@ def _batch_block(thT, U, ny, ylag, Y, start):  # pragma: no cover - compiled
             Y[k, p] = acc[p]
 
 
-def _split_run(fn, thT: np.ndarray, threads: int, *args) -> list:
-    """Run ``fn(thT_block, *args)`` on contiguous population blocks in a thread pool.
+@nb.njit(cache=True, parallel=True)
+def _batch_block_parallel(blocks, U, ny, ylag, Y, start):  # pragma: no cover - compiled
+    # blocks: (n_blocks, T, step); Y: (n_blocks, N, step) with the initial rows filled. An
+    # OpenMP team (see _batch_sse_parallel) rather than a Python thread pool.
+    for b in nb.prange(blocks.shape[0]):
+        _batch_block(blocks[b], U, ny, ylag, Y[b], start)
 
-    The kernels are compiled with ``nogil=True``, so Python threads run them in parallel; this
-    avoids an OpenMP team whose spinning workers slowed everything down on a shared 2-core
-    machine.
-    """
+
+def _blocks(thT: np.ndarray, threads: int) -> np.ndarray:
+    """(threads, T, step) contiguous population blocks, zero-padded (a harmless null model)."""
     P = thT.shape[1]
     step = (P + threads - 1) // threads
-    blocks = [np.ascontiguousarray(thT[:, i : i + step]) for i in range(0, P, step)]
-    # the calling thread takes the first block itself: one hand-off fewer per call, which
-    # matters for millisecond calls on a virtual machine whose idle cores wake up slowly
-    futures = [_pool(threads).submit(fn, blk, *args) for blk in blocks[1:]]
-    first = fn(blocks[0], *args)
-    return [first] + [f.result() for f in futures]
-
-
-_POOLS: dict = {}
-
-
-def _pool(threads: int):
-    from concurrent.futures import ThreadPoolExecutor
-
-    ex = _POOLS.get(threads)
-    if ex is None:
-        ex = _POOLS[threads] = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="graybox")
-    return ex
+    blocks = np.zeros((threads, thT.shape[0], step))
+    for b in range(threads):
+        part = thT[:, b * step : (b + 1) * step]
+        blocks[b, :, : part.shape[1]] = part
+    return blocks
 
 
 def simulate_batch(
@@ -315,7 +305,7 @@ def simulate_batch(
     start : int
         Number of initial samples (>= the structure's max lag).
     threads : int
-        Population blocks run in parallel (Python threads over nogil kernels); 1 runs in the calling thread.
+        Population blocks run in parallel (an OpenMP team); 1 runs in the calling thread.
 
     Returns
     -------
@@ -334,14 +324,11 @@ def simulate_batch(
             _batch_block(thT, U, code.ny, code.ylag, Y, start)
             # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
             return Y.T
-
-        def run(th_b):
-            Yb = np.empty((n, th_b.shape[1]))
-            Yb[:start, :] = y0[:start, None]
-            _batch_block(th_b, U, code.ny, code.ylag, Yb, start)
-            return Yb.T
-
-        return np.vstack(_split_run(run, thT, int(threads)))
+        blocks = _blocks(thT, int(threads))
+        Y = np.empty((blocks.shape[0], n, blocks.shape[2]))
+        Y[:, :start, :] = y0[None, :start, None]
+        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start)
+        return np.concatenate([Yb.T for Yb in Y])[:P]
 
 
 @nb.njit(cache=True, nogil=True)
@@ -367,6 +354,18 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
             e_ = acc[p] - yk
             sse[p] += e_ * e_
     return sse
+
+
+@nb.njit(cache=True, parallel=True)
+def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
+    # blocks: (n_blocks, T, step) contiguous population blocks. An OpenMP team keeps its workers
+    # spinning for a moment between calls, so a GA's millisecond calls do not pay for waking an
+    # idle core each time (a Python thread pool measured no faster than one thread for them).
+    nb_ = blocks.shape[0]
+    out = np.empty((nb_, blocks.shape[2]))
+    for b in nb.prange(nb_):
+        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring)
+    return out
 
 
 def batch_sse(
@@ -404,10 +403,11 @@ def batch_sse(
         U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
     ring = 1 << int(np.ceil(np.log2(start + 1)))
     with np.errstate(all="ignore"):
-        if threads <= 1 or thT.shape[1] < 2 * threads:
+        P = thT.shape[1]
+        if threads <= 1 or P < 2 * threads:
             return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring)
-        parts = _split_run(_batch_sse, thT, int(threads), U, code.ny, code.ylag, y, start, ring)
-        return np.concatenate(parts)
+        blocks = _blocks(thT, int(threads))
+        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring).ravel()[:P]
 
 
 @nb.njit(cache=True, nogil=True)
@@ -449,8 +449,12 @@ def _sensitivity(fptr, fsig, flag, fpow, ny, ylag, theta, U, y0, start):  # prag
     return yh, S
 
 
-def free_run_sensitivity(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int) -> tuple[np.ndarray, np.ndarray]:
+def free_run_sensitivity(
+    code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int, U: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Free run and its Jacobian with respect to θ by forward sensitivity recursion.
+
+    ``U`` is :func:`input_products` of ``u`` when the caller keeps it across calls.
 
     Returns
     -------
@@ -458,7 +462,8 @@ def free_run_sensitivity(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.nd
     S : ndarray, shape (N, n_terms)
         ∂y(k)/∂θ_j (zero for the initial samples).
     """
-    U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
+    if U is None:
+        U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
     with np.errstate(all="ignore"):
         return _sensitivity(code.fptr, code.fsig, code.flag, code.fpow, code.ny, code.ylag,
                             np.asarray(theta, float), U, y0, start)

@@ -376,7 +376,7 @@ def _residuals_and_jac(problem: SEProblem, z: np.ndarray, lam1: float, want_jac:
     L = problem.L
     w1 = np.sqrt(lam1 / problem.n_dyn)
     if want_jac:
-        y, S = free_run_sensitivity(problem.code, th, rec.u, rec.y[:L], L)
+        y, S = free_run_sensitivity(problem.code, th, rec.u, rec.y[:L], L, problem.U)
     else:
         from .kernels import simulate_one
 

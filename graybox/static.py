@@ -406,6 +406,11 @@ def nearest_stable_equilibria(
         return best
 
 
+@lru_cache(maxsize=256)
+def _term_keys(structure: Structure) -> tuple[tuple[int, int], ...]:
+    return tuple(cluster_key(t) for t in structure)
+
+
 def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
     """∂ȳ_i/∂θ_t at equilibria (ū_i, ȳ_i), by implicit differentiation of eq. (5).
 
@@ -417,7 +422,7 @@ def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndar
     """
     ub = np.asarray(ubar, float)
     yb = np.asarray(ybar, float)
-    keys = [cluster_key(t) for t in structure]
+    keys = _term_keys(structure)
     basis = np.stack([yb**p * ub**m for p, m in keys], axis=1)  # (M, n)
     Fy = -np.ones_like(yb)
     for th, (p, m) in zip(theta, keys):

@@ -157,3 +157,22 @@ def test_se_pareto_returns_evaluated_set(problem):
         se_pareto(problem.structure, problem.record, problem.static, [1.0], method="simplex", progress=False)
     with pytest.raises(ValueError, match="static points"):
         se_pareto(problem.structure, problem.record, None, [1.0], progress=False)
+
+
+@pytest.mark.parametrize("P", [1, 7, 30])
+def test_parallel_sse_equals_serial(problem, P):
+    from graybox.kernels import batch_sse
+
+    ths = problem.ls_theta() * (1 + 0.001 * np.random.default_rng(P).standard_normal((P, 17)))
+    rec = problem.record
+    one = batch_sse(problem.code, ths, rec.u, rec.y, 6, threads=1)
+    two = batch_sse(problem.code, ths, rec.u, rec.y, 6, threads=2)
+    np.testing.assert_array_equal(one, two)
+    ref = np.sum((problem_free_runs(problem, ths)[:, 6:] - rec.y[6:]) ** 2, axis=1)
+    np.testing.assert_allclose(one, ref, rtol=1e-12)
+
+
+def problem_free_runs(problem, ths):
+    from graybox import simulate_many
+
+    return np.asarray(simulate_many(problem.structure, ths, problem.record))
