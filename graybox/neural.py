@@ -82,7 +82,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .records import Dataset, Record, as_1d_finite, frozen
-from .simulation import DivergenceError
+from .simulation import DivergenceError, free_run_inputs
 from .static import Equilibrium
 
 __all__ = ["NeuralModel", "NeuralTrainInfo", "neural_narx", "section_neural"]
@@ -471,23 +471,7 @@ class NeuralModel:
         if on_diverge not in ("raise", "nan"):
             raise ValueError(f"on_diverge must be 'raise' or 'nan', got {on_diverge!r}")
         L = self.max_lag
-        if isinstance(u, Record):
-            if y0 is None:
-                y0 = u.y[:L]
-            u = u.u
-        else:
-            u = as_1d_finite(u, "u")
-            if y0 is None:
-                raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
-        y0 = np.asarray(y0, dtype=float)
-        if y0.ndim != 1:
-            raise ValueError(f"y0 must be 1-D, got shape {y0.shape}")
-        if y0.size < L:
-            raise ValueError(f"y0 has {y0.size} samples, the network needs max lag = {L}")
-        y0 = as_1d_finite(y0[:L], "y0")
-        if u.size < L + 1:
-            raise ValueError(f"input has {u.size} samples, fewer than max lag + 1 = {L + 1}")
-        b = 1e6 * (1.0 + float(np.max(np.abs(y0), initial=0.0))) if bound is None else float(bound)
+        u, y0, b = free_run_inputs(u, y0, L, bound, what="network")
         yn = _free_run_kernel(self._W1c, self.b1, self.w2, self.b2, np.ascontiguousarray(self._un(u)),
                               np.ascontiguousarray(self._yn(y0)), self.ny, self.nu)
         y = self._y(yn)

@@ -17,7 +17,7 @@ from .records import Record, as_1d_finite
 from .regressors import regressor_matrix
 from .terms import Structure
 
-__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "check_theta"]
+__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "check_theta", "free_run_inputs"]
 
 
 class DivergenceError(ValueError):
@@ -64,6 +64,50 @@ def _default_bound(y0: np.ndarray) -> float:
     return 1e6 * (1.0 + float(np.max(np.abs(y0), initial=0.0)))
 
 
+def free_run_inputs(
+    u: np.ndarray | Record, y0: np.ndarray | None, L: int, bound: float | None, what: str = "structure"
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Validate a free run's input and initial conditions (shared by every model kind).
+
+    Parameters
+    ----------
+    u : ndarray, shape (N,), or Record
+        Input; with a Record, ``y0`` defaults to its first ``L`` outputs.
+    y0 : ndarray, shape (>= L,), optional
+        Initial outputs; only the first ``L`` are used.
+    L : int
+        Number of initial conditions (the model's max lag).
+    bound : float or None
+        Divergence bound on |y|; None gives 1e6 · (1 + max|y0|).
+    what : str
+        What needs the lags, for messages ("structure", "network").
+
+    Returns
+    -------
+    u : ndarray, shape (N,), contiguous
+    y0 : ndarray, shape (L,), contiguous
+    bound : float
+    """
+    if isinstance(u, Record):  # already validated
+        if y0 is None:
+            y0 = u.y[:L]
+        u = u.u
+    else:
+        u = as_1d_finite(u, "u")
+        if y0 is None:
+            raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
+    y0 = np.asarray(y0, dtype=float)
+    if y0.ndim != 1:
+        raise ValueError(f"y0 must be 1-D, got shape {y0.shape}")
+    if y0.size < L:
+        raise ValueError(f"y0 has {y0.size} samples, the {what} needs max lag = {L}")
+    y0 = as_1d_finite(y0[:L], "y0")
+    if u.size < L + 1:
+        raise ValueError(f"input has {u.size} samples, fewer than max lag + 1 = {L + 1}")
+    b = _default_bound(y0) if bound is None else float(bound)
+    return np.ascontiguousarray(u), np.ascontiguousarray(y0), b
+
+
 def simulate(
     structure: Structure,
     theta: np.ndarray,
@@ -95,24 +139,8 @@ def simulate(
     """
     th = check_theta(structure, theta)
     L = structure.max_lag
-    if isinstance(u, Record):  # already validated
-        if y0 is None:
-            y0 = u.y[:L]
-        u = u.u
-    else:
-        u = as_1d_finite(u, "u")
-        if y0 is None:
-            raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
-    y0 = np.asarray(y0, dtype=float)
-    if y0.ndim != 1:
-        raise ValueError(f"y0 must be 1-D, got shape {y0.shape}")
-    if y0.size < L:
-        raise ValueError(f"y0 has {y0.size} samples, the structure needs max lag = {L}")
-    y0 = as_1d_finite(y0[:L], "y0")
-    if u.size < L + 1:
-        raise ValueError(f"input has {u.size} samples, fewer than max lag + 1 = {L + 1}")
-    b = _default_bound(y0[:L]) if bound is None else float(bound)
-    y = simulate_one(_code(structure), th, np.ascontiguousarray(u), np.ascontiguousarray(y0[:L]), L, b)
+    u, y0, b = free_run_inputs(u, y0, L, bound)
+    y = simulate_one(_code(structure), th, u, y0, L, b)
     if on_diverge == "raise" and not np.isfinite(y[-1]):
         k = int(np.flatnonzero(~np.isfinite(y))[0])
         raise DivergenceError(f"free run diverged at sample {k} (|y| > {b:g}): the model is unstable along this input")
