@@ -383,7 +383,8 @@ class CurveEquality(StaticConstraint):
     ------
     ValueError
         The structure is not rational; the curve has a power of ū that no cluster carries;
-        Σ*_y = 1 (the static function would not exist).
+        Σ*_y = 1 (the static function would not exist); Σ*_y > 1 (no model meeting (22) has a
+        stable equilibrium).
     """
 
     curve: StaticCurve
@@ -422,6 +423,12 @@ class CurveEquality(StaticConstraint):
         if abs(1.0 - sy) < 1e-9:
             raise ValueError(f"Σ*_y = {sy:.12g}: the denominator 1 − Σ*_y of eq. (22) vanishes, "
                              "so no static function exists; use another reference model")
+        if sy > 1.0 and (1, 0) in cm.keys:
+            # with Σ_yu^m = 0 the linearised recursion's coefficients sum to Σ*_y at every ū, and
+            # a stable equilibrium needs that sum below 1: every model meeting (22) would be unstable
+            raise ValueError(f"Σ*_y = {sy:.6g} > 1: every model satisfying eq. (22) would have no stable "
+                             "equilibrium (its y coefficients sum to Σ*_y); use a reference model with Σy < 1 "
+                             "(e.g. reference='els') or give sigma_y < 1")
         c = self.curve.coefficients
         numer = {m for (p, m) in cm.keys if p == 0}
         missing = [m for m, cm_ in enumerate(c) if cm_ != 0.0 and m not in numer]

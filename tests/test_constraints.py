@@ -331,3 +331,8 @@ def test_band_does_not_go_vacuous_as_the_denominator_vanishes(rec):
     except InfeasibleError:
         return
     assert true_static_error(th).max() <= 0.33203125 * (1 + 1e-5)
+
+
+def test_curve_equality_refuses_a_reference_above_one(rec):
+    with pytest.raises(ValueError, match="no stable equilibrium"):
+        cls(S15, rec, EQ1, reference=1.02)
