@@ -560,7 +560,8 @@ def cls(
           structure whose static function is rational;
         - points → "the static function passes through these points"
           (:class:`~graybox.constraints.PassesThrough`), any structure;
-        - None → only ``constraints``.
+        - None → only ``constraints`` (those that need static points, e.g. a band, take a
+          Dataset's ``static`` when ``data`` is one).
     how : {"auto", "curve", "points"}
         ``"curve"`` with StaticPoints fits the polynomial the structure's numerator can carry
         (degree = highest ū power of the Σ_{u^m} clusters) and imposes eq. (22); it needs at
@@ -627,7 +628,8 @@ def cls(
     elif points is not None:
         static_cons.append(PassesThrough(points))
     cons = static_cons + as_constraint_list(constraints)
-    ctx = StaticContext(st, points, curve, _needed_sigma_y(cons, d, recs, reference), d.data_range, range_margin)
+    ctx_points = points if points is not None else (data.static if isinstance(data, Dataset) else None)
+    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference), d.data_range, range_margin)
     if curve is not None and curve.domain is not None:
         ctx.check_ubar(np.array(curve.domain), f"domain of {curve.name}")
     rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs

@@ -336,3 +336,13 @@ def test_band_does_not_go_vacuous_as_the_denominator_vanishes(rec):
 def test_curve_equality_refuses_a_reference_above_one(rec):
     with pytest.raises(ValueError, match="no stable equilibrium"):
         cls(S15, rec, EQ1, reference=1.02)
+
+
+def test_cls_with_only_a_band_takes_a_datasets_static_points(rec):
+    from graybox import Dataset
+
+    data = Dataset(rec, rec, PTS)
+    m = cls(S15, data, None, constraints=StaticBand(0.5))
+    assert true_static_error(m.theta).max() <= 0.5 * (1 + 1e-5)
+    with pytest.raises(ValueError, match="static points"):
+        cls(S15, rec, None, constraints=StaticBand(0.5))  # a bare record has none
