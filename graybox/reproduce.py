@@ -125,6 +125,16 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
                                  f"fig{6 if degree == 2 else 8}_se_free_run_l{degree}.png"))
         dom = _dominance(fronts)
         lines.append("   " + dom)
+    if out is not None:
+        # Fig. 4: the static points and the static curves of the two black-box models
+        fig = plot_static_curve(data.static, curve)
+        ax = fig.axes[0]
+        ub = np.linspace(data.static.ubar.min(), data.static.ubar.max(), 181)
+        for k in ("ELS (15)", "ELS (17)"):
+            ax.plot(ub, models[k].static_curve(ub, y0=np.interp(ub, data.static.ubar, data.static.ybar), strict=False),
+                    ":" if k == "ELS (15)" else "--", label=f"static curve of {k}")
+        ax.legend(fontsize=8)
+        lines.append("figures:" + _save(fig, out, "fig4_black_box_static_curves.png"))
     table = evaluate(models, data)
     with pd.option_context("display.width", 140, "display.float_format", "{:.4f}".format):
         lines.append(table.to_string())
