@@ -524,3 +524,81 @@ def stable_equilibria(ny, ylag, mu, thetas, ubar, ybar, L):  # pragma: no cover 
 
 
 __all__ += ["stable_equilibria"]
+
+
+@nb.njit(cache=True, nogil=True)
+def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
+    """Real roots of Σ_p coef[p] y^p (degree ≤ 3) for every (member, point), NaN-padded.
+
+    Parameters
+    ----------
+    coef : ndarray, shape (D + 1, P, M), D ≤ 3
+        Ascending coefficients.
+
+    Returns
+    -------
+    ndarray, shape (P, M, D)
+        Real roots (closed forms: Cardano / trigonometric for cubics, the stable quadratic
+        formula), each polished by one Newton step; NaN where a root is complex or missing.
+    """
+    D = coef.shape[0] - 1
+    P, M = coef.shape[1], coef.shape[2]
+    out = np.full((P, M, max(D, 1)), np.nan)
+    for i in range(P):
+        for j in range(M):
+            c = np.zeros(4)
+            for k in range(D + 1):
+                c[k] = coef[k, i, j]
+            scale = max(abs(c[0]), abs(c[1]), abs(c[2]), abs(c[3]))
+            if not np.isfinite(scale) or scale == 0.0:
+                continue
+            deg = 3
+            while deg > 0 and abs(c[deg]) <= 1e-14 * scale:
+                deg -= 1
+            n = 0
+            r = np.empty(3)
+            if deg == 1:
+                r[0] = -c[0] / c[1]
+                n = 1
+            elif deg == 2:
+                disc = c[1] * c[1] - 4.0 * c[2] * c[0]
+                if disc >= 0.0:
+                    q = -0.5 * (c[1] + np.sign(c[1] if c[1] != 0.0 else 1.0) * np.sqrt(disc))
+                    r[0] = q / c[2]
+                    n = 1
+                    if q != 0.0:
+                        r[1] = c[0] / q
+                        n = 2
+            elif deg == 3:
+                B = c[2] / c[3]
+                C = c[1] / c[3]
+                Dd = c[0] / c[3]
+                p = C - B * B / 3.0
+                q = 2.0 * B * B * B / 27.0 - B * C / 3.0 + Dd
+                disc = 0.25 * q * q + p * p * p / 27.0
+                if disc > 0.0:
+                    s = np.sqrt(disc)
+                    r[0] = np.cbrt(-0.5 * q + s) + np.cbrt(-0.5 * q - s) - B / 3.0
+                    n = 1
+                else:
+                    rr = np.sqrt(max(-p / 3.0, 0.0))
+                    if rr == 0.0:
+                        r[0] = -B / 3.0
+                        n = 1
+                    else:
+                        arg = min(1.0, max(-1.0, -q / (2.0 * rr * rr * rr)))
+                        phi = np.arccos(arg)
+                        for k in range(3):
+                            r[k] = 2.0 * rr * np.cos((phi - 2.0 * np.pi * k) / 3.0) - B / 3.0
+                        n = 3
+            for k in range(n):
+                y = r[k]
+                f = ((c[3] * y + c[2]) * y + c[1]) * y + c[0]
+                df = (3.0 * c[3] * y + 2.0 * c[2]) * y + c[1]
+                if df != 0.0 and np.isfinite(f / df):
+                    y = y - f / df
+                out[i, j, k] = y
+    return out
+
+
+__all__ += ["real_roots_upto_cubic"]

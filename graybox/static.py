@@ -352,7 +352,8 @@ def nearest_stable_equilibria(
     kept when it is stable. Otherwise every real root of eq. (5) is found at once (batched
     companion-matrix eigenvalues), the unstable ones are dropped (:func:`stable_mask`), and the
     one nearest the measured ȳ_i is kept — where :func:`static_curve` would run the model from
-    ȳ_i to see which stable equilibrium it reaches. The two agree whenever a single stable
+    ȳ_i to see which stable equilibrium it reaches (real roots of degree ≤ 3 by closed forms,
+    higher degrees by batched companion eigenvalues). The two agree whenever a single stable
     equilibrium exists (the usual case); the shared evaluator re-scores the final members.
 
     Parameters
@@ -384,19 +385,27 @@ def nearest_stable_equilibria(
         for c, (p, m) in enumerate(cm.keys):
             coef[p] += sig[:, c, None] * ub[None, :] ** m
         coef[1] -= 1.0
-        lead = coef[D]
-        ok = np.isfinite(coef).all(axis=0) & (np.abs(lead) > 1e-300)
-        comp = np.zeros((P, M, D, D))
-        comp[..., 0, :] = -np.moveaxis(coef[D - 1 :: -1], 0, -1) / np.where(ok, lead, 1.0)[..., None]
-        if D > 1:
-            idx = np.arange(D - 1)
-            comp[..., idx + 1, idx] = 1.0
-        comp[~ok] = 0.0
-        roots = np.linalg.eigvals(comp)  # (P, M, D)
-        real = ok[..., None] & (np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real)))
+        if D <= 3:
+            # closed forms, compiled: batched eigenvalues cost 5 ms per GA generation here
+            from .kernels import real_roots_upto_cubic
+
+            rr = real_roots_upto_cubic(coef)
+            roots = rr.astype(complex)
+            real = np.isfinite(rr)
+        else:
+            lead = coef[D]
+            ok = np.isfinite(coef).all(axis=0) & (np.abs(lead) > 1e-300)
+            comp = np.zeros((P, M, D, D))
+            comp[..., 0, :] = -np.moveaxis(coef[D - 1 :: -1], 0, -1) / np.where(ok, lead, 1.0)[..., None]
+            if D > 1:
+                idx = np.arange(D - 1)
+                comp[..., idx + 1, idx] = 1.0
+            comp[~ok] = 0.0
+            roots = np.linalg.eigvals(comp)  # (P, M, D)
+            real = ok[..., None] & (np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real)))
         best = np.full((P, M), np.nan)
         dist = np.full((P, M), np.inf)
-        for d in range(D):
+        for d in range(roots.shape[-1]):
             r = np.where(real[..., d], roots[..., d].real, np.nan)
             good = real[..., d] & stable_mask(structure, th, ub, r)
             dd = np.where(good, np.abs(r - yt[None, :]), np.inf)

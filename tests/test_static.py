@@ -93,3 +93,21 @@ def test_property_static_curve_equals_simulated_steady_state(m, ubar):
     ys = stable[0].ybar
     y = m.simulate(np.full(3000, ubar), np.full(m.max_lag, ys * 1.01 + 0.1), on_diverge="nan")
     assert y[-1] == pytest.approx(ys, rel=1e-6, abs=1e-6)
+
+
+@given(st.lists(st.floats(-10, 10), min_size=2, max_size=4).filter(lambda c: abs(c[-1]) > 1e-3),
+       st.floats(1e-3, 1e3))
+@settings(max_examples=80, deadline=None)
+def test_property_closed_form_roots_equal_numpy_roots(coef, scale):
+    from graybox.kernels import real_roots_upto_cubic
+
+    c = np.array(coef) * scale
+    got = real_roots_upto_cubic(c[:, None, None])[0, 0]
+    got = np.sort(got[np.isfinite(got)])
+    ref = np.roots(c[::-1])
+    # well-separated real roots only: near-double roots are ill-conditioned for any method
+    real = np.sort(ref[np.abs(ref.imag) < 1e-9].real)
+    if len(ref) > 1 and np.min(np.abs(np.subtract.outer(ref, ref))[~np.eye(len(ref), dtype=bool)]) < 1e-3:
+        return
+    assert got.size == real.size
+    np.testing.assert_allclose(got, real, rtol=1e-7, atol=1e-9)
