@@ -115,8 +115,8 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
             label = "SE" if method == "ga" else "SE-grad"
             fronts[label] = se
             models[f"{label} (D_SF) ℓ={degree}"] = decide_dsf(se, 0.031, fallback="min_jsf")
-        pts = {k: None for k in models if k.endswith(f"({eq})") or (degree == 2 and k == "CLS (22)")}
-        tab = evaluate({k: models[k] for k in pts}, data)
+        single = [k for k in models if k.endswith(f"({eq})") or (degree == 2 and k == "CLS (22)")]
+        tab = evaluate({k: models[k] for k in single}, data)
         if out is not None:
             fig = plot_pareto(fronts, tab, title=f"Pareto sets, ℓ = {degree} (identification data)")
             best = models[f"SE (D_SF) ℓ={degree}"]
@@ -148,8 +148,6 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
 
 def _dominance(fronts: dict) -> str:
     """Does the SE front dominate the PE front (in J_S, J_SF on the identification data)?"""
-    from .pareto import nondominated_mask
-
     out = []
     for se_name in ("SE", "SE-grad"):
         if se_name not in fronts or "PE" not in fronts:
