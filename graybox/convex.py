@@ -54,7 +54,7 @@ from .curves import StaticCurve
 from .ls import column_scales
 from .model import Model
 from .pareto import ParetoSet
-from .records import Dataset, Record, StaticPoints
+from .records import Dataset, Record, StaticPoints, as_records
 from .regressors import stacked_regressors
 from .static import cluster_map
 from .terms import Structure
@@ -159,17 +159,6 @@ def _process_structure(structure: Structure | Model | Sequence[str]) -> Structur
         raise ValueError(f"noise terms {noise} have no place in a gray-box estimate (the MA part is for ELS "
                          "bias only); pass structure.process")
     return st
-
-
-def _records(data: Record | Sequence[Record] | Dataset) -> list[Record]:
-    if isinstance(data, Dataset):
-        return [data.ident]
-    if isinstance(data, Record):
-        return [data]
-    recs = list(data)
-    if not recs or not all(isinstance(r, Record) for r in recs):
-        raise ValueError("data must be a Record, a sequence of Records or a Dataset (its ident record is used)")
-    return recs
 
 
 def _check_solver(solver: str) -> str:
@@ -599,7 +588,7 @@ def cls(
     """
     st = _process_structure(structure)
     solver = _check_solver(solver)
-    recs = _records(data)
+    recs = as_records(data)
     d = _dynamic(st, recs)
     cm = cluster_map(st)
     static_cons: list[StaticConstraint] = []
@@ -681,7 +670,7 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, range_margin,
     st = _process_structure(structure)
     if weights not in ("mse", "sum"):
         raise ValueError(f"weights must be 'mse' or 'sum', got {weights!r}")
-    recs = _records(data)
+    recs = as_records(data)
     d = _dynamic(st, recs)
     pts = _static_points(static, ubar)
     curve = static if isinstance(static, StaticCurve) else None

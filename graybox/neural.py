@@ -81,7 +81,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from .records import Dataset, Record, as_1d_finite, frozen
+from .records import Dataset, Record, as_1d_finite, as_records, frozen
 from .simulation import DivergenceError, free_run_inputs
 from .static import Equilibrium
 
@@ -682,22 +682,6 @@ def _unpack(theta: np.ndarray, H: int, n_in: int) -> tuple[np.ndarray, np.ndarra
     return np.ascontiguousarray(W1), b1.copy(), w2.copy(), float(theta[-1])
 
 
-def _as_training_records(data: Record | Dataset | Sequence[Record]) -> list[Record]:
-    if isinstance(data, Dataset):
-        return [data.ident]
-    if isinstance(data, Record):
-        return [data]
-    if isinstance(data, (str, bytes)) or not isinstance(data, Sequence):
-        raise ValueError(f"data must be a Record, a Dataset or a sequence of Records, got {type(data).__name__}")
-    recs = list(data)
-    if not recs:
-        raise ValueError("no records given")
-    for r in recs:
-        if not isinstance(r, Record):
-            raise ValueError(f"data must be a Record, a Dataset or a sequence of Records, got an element of type {type(r).__name__}")
-    return recs
-
-
 def neural_narx(
     data: Record | Dataset | Sequence[Record],
     ny: int = PAPER_NY,
@@ -748,7 +732,7 @@ def neural_narx(
         a constant input or output (no scale to normalise with), or training that produced
         non-finite weights.
     """
-    recs = _as_training_records(data)
+    recs = as_records(data)
     ny = _check_int(ny, "ny", 0)
     nu = _check_int(nu, "nu", 1)
     ne = _check_int(ne, "ne", 0)

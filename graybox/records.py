@@ -165,3 +165,34 @@ class Dataset:
 
 
 __all__.append("Dataset")
+
+
+def as_records(data: object, accept_dataset: bool = True) -> list[Record]:
+    """The records an estimator works on, as a non-empty list, or ``ValueError``.
+
+    Parameters
+    ----------
+    data : Record, Dataset or sequence of Record
+        A Dataset stands for its identification record.
+    accept_dataset : bool
+        When False a Dataset is refused (for functions where using ``ident`` silently could
+        surprise: the message says to pass ``data.ident``).
+    """
+    if isinstance(data, Dataset):
+        if not accept_dataset:
+            raise ValueError("pass the identification record (e.g. data.ident), not the whole Dataset")
+        return [data.ident]
+    if isinstance(data, Record):
+        return [data]
+    if isinstance(data, (str, bytes)) or not hasattr(data, "__iter__"):
+        raise ValueError(f"data must be a Record, a Dataset or a sequence of Records, got {type(data).__name__}")
+    recs = list(data)  # type: ignore[call-overload]
+    if not recs:
+        raise ValueError("no records given")
+    for r in recs:
+        if not isinstance(r, Record):
+            raise ValueError(f"data must be a Record, a Dataset or a sequence of Records, got an element of type {type(r).__name__}")
+    return recs
+
+
+__all__.append("as_records")

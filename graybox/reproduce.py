@@ -120,7 +120,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
         if out is not None:
             fig = plot_pareto(fronts, tab, title=f"Pareto sets, ℓ = {degree} (identification data)")
             best = models[f"SE (D_SF) ℓ={degree}"]
-            lines.append(f"   figures:" + _save(fig, out, f"fig{5 if degree == 2 else 7}_pareto_l{degree}.png")
+            lines.append("   figures:" + _save(fig, out, f"fig{5 if degree == 2 else 7}_pareto_l{degree}.png")
                          + _save(plot_free_run(data.valid, {best.name: best}), out,
                                  f"fig{6 if degree == 2 else 8}_se_free_run_l{degree}.png"))
         dom = _dominance(fronts)

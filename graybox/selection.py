@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 
 from .model import Model
-from .records import Dataset, Record
+from .records import Record, as_records
 from .terms import Structure, Term, parse_term
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
@@ -227,15 +227,7 @@ class Selection:
 
 
 def _as_records(data: Record | Sequence[Record]) -> list[Record]:
-    if isinstance(data, Dataset):
-        raise ValueError("pass the identification record (e.g. data.ident), not the whole Dataset")
-    recs = [data] if isinstance(data, Record) else list(data)
-    if not recs:
-        raise ValueError("no records given")
-    for r in recs:
-        if not isinstance(r, Record):
-            raise ValueError(f"data must be a Record or a sequence of Records, got {type(r).__name__}")
-    return recs
+    return as_records(data, accept_dataset=False)
 
 
 def _candidate_matrix(terms: Sequence[Term], records: list[Record], start: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from graybox import DivergenceError, Model, Record, reference, simulate_many
+from graybox import DivergenceError, Model, reference, simulate_many
 from graybox.kernels import encode, simulate_batch
 
 

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from graybox import Model, Structure, equilibria, reference
+from graybox import Model, Structure, reference
 from graybox.static import cluster_map, rational_static_curve
 
 
