@@ -41,8 +41,8 @@ from tqdm import tqdm
 from .kernels import batch_sse, encode, free_run_sensitivity, input_products
 from .ls import column_scales, scaled_lstsq
 from .pareto import ParetoSet
-from .records import Dataset, Record, StaticPoints
-from .regressors import regressor_matrix
+from .records import Dataset, Record, StaticPoints, as_records
+from .regressors import stacked_regressors
 from .static import nearest_stable_equilibria, static_theta_gradient
 from .terms import Structure
 
@@ -61,52 +61,49 @@ def check_lambdas(lambdas: Sequence[float]) -> np.ndarray:
 
 
 class SEProblem:
-    """The data of one SE problem: structure, identification record, static points.
+    """The data of one SE problem: structure, identification record(s), static points.
 
     Parameters
     ----------
     structure : Structure
         Process terms.
-    record : Record
-        Identification data (free run from its first max-lag samples).
+    records : Record or sequence of Record
+        Identification data. Each record is run freely from its own first max-lag samples (a
+        free run never straddles two experiments) and J_S is the mean over all their samples.
     static : StaticPoints
         Measured steady states.
     """
 
-    def __init__(self, structure: Structure, record: Record, static: StaticPoints):
-        if not isinstance(record, Record):
-            raise ValueError(f"record must be a Record, got {type(record).__name__}")
+    def __init__(self, structure: Structure, records: Record | Sequence[Record], static: StaticPoints):
+        self.records = as_records(records)
         if not isinstance(static, StaticPoints):
             raise ValueError(f"static must be StaticPoints, got {type(static).__name__}")
         structure = structure if isinstance(structure, Structure) else Structure(structure)
         if any(t.is_noise for t in structure):
             structure = structure.process
         self.structure = structure
-        self.record = record
+        self.record = self.records[0]
         self.static = static
         self.L = structure.max_lag
-        record.require_length(self.L)
-        lo, hi = float(record.u.min()), float(record.u.max())
-        self.code = encode(structure)
-        c = self.code
-        self.U = input_products(c.fptr, c.fsig, c.flag, c.fpow, record.u, self.L)  # fixed across the sweep
-        self.n_dyn = len(record) - self.L
-        self.psi = regressor_matrix(structure, record.u, record.y, start=self.L)
+        self.code = c = encode(structure)
+        # input products are fixed across the whole sweep: computed once per record
+        self.U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, r.u, self.L) for r in self.records]
+        self.psi, self.target = stacked_regressors(structure, self.records)
+        self.n_dyn = self.target.size
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
-        self.data_range = (lo, hi)
 
     def fingerprint(self) -> str:
         """A hash of everything that defines the problem (for checkpoints)."""
         h = hashlib.sha256()
         h.update(str(self.structure).encode())
-        for a in (self.record.u, self.record.y, self.static.ubar, self.static.ybar):
+        for a in [x for r in self.records for x in (r.u, r.y)] + [self.static.ubar, self.static.ybar]:
             h.update(np.ascontiguousarray(a).tobytes())
         return h.hexdigest()[:16]
 
     # -- objectives -------------------------------------------------------------------
     def js(self, thetas: np.ndarray, threads: int = 1) -> np.ndarray:
-        """J_S of each row of ``thetas`` (inf where the free run diverges), shape (P,)."""
-        sse = batch_sse(self.code, thetas, self.record.u, self.record.y, self.L, threads, self.U)
+        """J_S of each row of ``thetas`` (inf where a free run diverges), shape (P,)."""
+        sse = sum(batch_sse(self.code, thetas, r.u, r.y, self.L, threads, U) for r, U in zip(self.records, self.U))
         js = sse / self.n_dyn
         return np.where(np.isfinite(js), js, np.inf)
 
@@ -131,7 +128,7 @@ class SEProblem:
 
     def ls_theta(self) -> np.ndarray:
         """Least-squares (one-step) estimate on all samples."""
-        return scaled_lstsq(self.psi, self.record.y[self.L:])
+        return scaled_lstsq(self.psi, self.target)
 
     def random_ls(self, rng: np.random.Generator, count: int, samples: int = 30) -> np.ndarray:
         """``count`` θ's, each least squares on ``samples`` randomly chosen rows (the paper's seeds)."""
@@ -139,7 +136,7 @@ class SEProblem:
         if samples > n:
             raise ValueError(f"cannot draw {samples} samples from {n} rows")
         A = self.psi / self.scale
-        b = self.record.y[self.L:]
+        b = self.target
         out = np.empty((count, self.psi.shape[1]))
         for i in range(count):
             rows = rng.choice(n, size=samples, replace=False)
@@ -372,18 +369,18 @@ def ga_front(
 
 def _residuals_and_jac(problem: SEProblem, z: np.ndarray, lam1: float, want_jac: bool):
     th = z / problem.scale
-    rec = problem.record
     L = problem.L
     w1 = np.sqrt(lam1 / problem.n_dyn)
-    if want_jac:
-        y, S = free_run_sensitivity(problem.code, th, rec.u, rec.y[:L], L, problem.U)
-    else:
-        from .kernels import simulate_one
+    r, J = [], []
+    for rec, U in zip(problem.records, problem.U):
+        if want_jac:
+            y, S = free_run_sensitivity(problem.code, th, rec.u, rec.y[:L], L, U)
+            J.append(w1 * S[L:] / problem.scale)
+        else:
+            from .kernels import simulate_one
 
-        y = simulate_one(problem.code, th, rec.u, rec.y[:L], L, 1e300)
-        S = None
-    r = [w1 * (y[L:] - rec.y[L:])]
-    J = [w1 * S[L:] / problem.scale] if want_jac else []
+            y = simulate_one(problem.code, th, rec.u, rec.y[:L], L, 1e300)
+        r.append(w1 * (y[L:] - rec.y[L:]))
     lam2 = 1.0 - lam1
     if lam2 > 0:
         sp = problem.static
@@ -485,7 +482,7 @@ def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
 
     try:
         with threadpool_limits(limits=1, user_api="blas"):
-            return list(pe_thetas(problem.structure, problem.record, problem.static, [1e-1, 1e-2, 1e-3, 1e-4],
+            return list(pe_thetas(problem.structure, problem.records, problem.static, [1e-1, 1e-2, 1e-3, 1e-4],
                                   solver="closed", range_margin=None))
     except ValueError:  # e.g. not identifiable with the static rows: no fallback, theta0 only
         return []
@@ -493,7 +490,7 @@ def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
 
 def se_pareto(
     structure: Structure,
-    data: Record | Dataset,
+    data: Record | Dataset | Sequence[Record],
     static: StaticPoints | None = None,
     lambdas: Sequence[float] = tuple(np.logspace(-2, 0, 100)),
     method: Literal["ga", "gradient"] = "ga",
@@ -510,8 +507,9 @@ def se_pareto(
     ----------
     structure : Structure
         Process terms (noise terms are dropped: the SE problem has no MA part).
-    data : Record or Dataset
-        Identification record (a Dataset's ``ident``).
+    data : Record, Dataset or sequence of Record
+        Identification data (a Dataset's ``ident``); with several records each is run freely
+        on its own and J_S is the mean over all their samples.
     static : StaticPoints, optional
         Static points (default: the Dataset's).
     lambdas : sequence of float in (0, 1]
@@ -537,7 +535,7 @@ def se_pareto(
         All members (one per λ) with J_1, J_S and J_SF from the shared evaluator; the optimised
         cost is in ``extra["cost"]``. Use ``.nondominated()`` for the front proper.
     """
-    rec = data.ident if isinstance(data, Dataset) else data
+    rec = as_records(data)
     sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
     if sp is None:
         raise ValueError("the SE problem needs static points: pass static= or a Dataset with static points")

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from graybox import Record, reference
+from graybox import Model, Record, reference
 from graybox.kernels import encode, free_run_sensitivity
 from graybox.se import GAOptions, SEProblem, ga_front, gradient_front, se_pareto
 
@@ -176,3 +176,31 @@ def problem_free_runs(problem, ths):
     from graybox import simulate_many
 
     return np.asarray(simulate_many(problem.structure, ths, problem.record))
+
+
+def test_several_records_never_straddled(problem):
+    from graybox import js as js_single
+
+    rec = problem.record
+    a, b = rec.slice(0, 300, name="a"), rec.slice(300, None, name="b")
+    two = SEProblem(problem.structure, [a, b], problem.static)
+    th = problem.ls_theta() * (1 + 0.001 * np.random.default_rng(1).standard_normal((3, 17)))
+    # J_S over two experiments = sample-weighted mean of each one's own free-run MSE
+    for row, val in zip(th, two.js(th)):
+        m = Model(problem.structure, row)
+        na, nb = len(a) - 6, len(b) - 6
+        assert val == pytest.approx((na * js_single(m, a) + nb * js_single(m, b)) / (na + nb), rel=1e-10)
+    # the gradient method's residuals and Jacobian stay consistent across the record boundary
+    from graybox.se import _residuals_and_jac
+
+    z = two.ls_theta() * two.scale
+    r, J = _residuals_and_jac(two, z, 0.7, True)
+    for j in (0, 5, 16):
+        h = 1e-6 * max(abs(z[j]), 1e-9)
+        zp, zm = z.copy(), z.copy()
+        zp[j] += h
+        zm[j] -= h
+        fd = (_residuals_and_jac(two, zp, 0.7, False)[0] - _residuals_and_jac(two, zm, 0.7, False)[0]) / (2 * h)
+        assert np.max(np.abs(fd - J[:, j])) <= 1e-5 * np.max(np.abs(J[:, j])) + 1e-12
+    ps = se_pareto(problem.structure, [a, b], problem.static, [1.0, 0.3], method="gradient", progress=False)
+    assert ps.thetas.shape == (2, 17)
