@@ -167,6 +167,9 @@ def test_plot_pareto(pset):
     bad = ParetoSet(S15, pset.thetas, pset.lambdas, pset.J1, np.array([1.0, np.inf, 2.0]), pset.JSF, "x")
     fig2 = plot_pareto(bad, {"ELS": (2.0, 1.0)}, band=None, log=False)
     assert "1 not drawn" in fig2.axes[0].get_legend().get_texts()[0].get_text()
+    # a single model with an infinite J_SF: no marker, and the legend says why
+    fig3 = plot_pareto(pset, {"ELS (17)": (0.8, np.inf)})
+    assert any("ELS (17) (not drawn: J = inf)" == t.get_text() for t in fig3.axes[0].get_legend().get_texts())
     with pytest.raises(ValueError, match="ParetoSet"):
         plot_pareto({"x": [1, 2]})
     with pytest.raises(ValueError, match="J_S, J_SF"):

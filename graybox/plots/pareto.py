@@ -101,6 +101,10 @@ def plot_pareto(
             order = np.argsort(js[ok][nd])
             ax.plot(js[ok][nd][order], jsf[ok][nd][order], "-", color=line.get_color(), lw=1.2)
     for j, (name, (js, jsf)) in enumerate(pts.items()):
+        drawable = np.isfinite(js) and np.isfinite(jsf) and (not log or (js > 0 and jsf > 0))
+        if not drawable:  # say so in the legend rather than leave an entry without a marker
+            ax.plot([], [], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k", label=f"{name} (not drawn: J = inf)")
+            continue
         ax.plot([js], [jsf], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k", label=name, zorder=5)
         ax.annotate(name, (js, jsf), textcoords="offset points", xytext=(6, 6), fontsize=9)
     if log:
