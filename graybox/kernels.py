@@ -415,26 +415,30 @@ def _sensitivity(fptr, fsig, flag, fpow, ny, ylag, theta, U, y0, start):  # prag
     # Forward sensitivity of the free run: S(k, j) = ∂ŷ(k)/∂θ_j obeys
     #   S(k, :) = φ(k, :) + Σ_t θ_t Σ_{y(k-l) in t} ∂φ_t/∂y(k-l) · S(k-l, :),
     # where φ(k, t) is term t evaluated on the simulated output.
+    # The feedback is gathered first into a_l(k) = ∂ŷ(k)/∂ŷ(k-l) (a few lags), so the
+    # Jacobian update costs (number of lags) × n_terms per sample, not n_factors × n_terms.
     n = U.shape[0]
     nt = theta.shape[0]
+    Ly = 0
+    for t in range(nt):
+        for d in range(ny[t]):
+            Ly = max(Ly, ylag[t, d])
     yh = np.empty(n)
     S = np.zeros((n, nt))
     for k in range(start):
         yh[k] = y0[k]
-    phi = np.empty(nt)
+    a = np.zeros(Ly + 1)
     for k in range(start, n):
         acc = 0.0
-        for t in range(nt):
-            v = U[k, t]
-            for d in range(ny[t]):
-                v *= yh[k - ylag[t, d]]
-            phi[t] = v
-            acc += theta[t] * v
-        yh[k] = acc
-        for j in range(nt):
-            S[k, j] = phi[j]
+        for l in range(Ly + 1):
+            a[l] = 0.0
         for t in range(nt):
             m = ny[t]
+            v = U[k, t]
+            for d in range(m):
+                v *= yh[k - ylag[t, d]]
+            S[k, t] = v  # φ_t(k): the direct part of ∂ŷ(k)/∂θ_t
+            acc += theta[t] * v
             if m == 0 or theta[t] == 0.0:
                 continue
             for d in range(m):
@@ -443,9 +447,13 @@ def _sensitivity(fptr, fsig, flag, fpow, ny, ylag, theta, U, y0, start):  # prag
                 for e in range(m):
                     if e != d:
                         g *= yh[k - ylag[t, e]]
-                r = k - ylag[t, d]
+                a[ylag[t, d]] += g
+        yh[k] = acc
+        for l in range(1, Ly + 1):
+            if a[l] != 0.0:
+                r = k - l
                 for j in range(nt):
-                    S[k, j] += g * S[r, j]
+                    S[k, j] += a[l] * S[r, j]
     return yh, S
 
 
