@@ -120,25 +120,33 @@ def _check_positive(value: object, name: str) -> float:
 # Compiled kernels (normalised units, no validation: the Python layer validates)
 # ---------------------------------------------------------------------------
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _net_output(W1, b1, w2, b2, y, un, e, k, ny, nu, ne, e_from):  # pragma: no cover - compiled
+    """The network at sample k: past outputs y, inputs un, and residuals e(k-1-i) from e_from on."""
+    s = b2
+    for j in range(b1.size):
+        a = b1[j]
+        for i in range(ny):
+            a += W1[j, i] * y[k - 1 - i]
+        for i in range(nu):
+            a += W1[j, ny + i] * un[k - 1 - i]
+        for i in range(ne):
+            if k - 1 - i >= e_from:
+                a += W1[j, ny + nu + i] * e[k - 1 - i]
+        s += w2[j] * np.tanh(a)
+    return s
+
+
 @nb.njit(cache=True, nogil=True)
 def _free_run_kernel(W1, b1, w2, b2, un, y0n, ny, nu):  # pragma: no cover - compiled
     """Free run with e ≡ 0: the first L = max(ny, nu) outputs are y0n, shape (N,)."""
     N = un.size
-    H = b1.size
     L = max(ny, nu)
     y = np.empty(N)
     for k in range(L):
         y[k] = y0n[k]
     for k in range(L, N):
-        s = b2
-        for j in range(H):
-            a = b1[j]
-            for i in range(ny):
-                a += W1[j, i] * y[k - 1 - i]
-            for i in range(nu):
-                a += W1[j, ny + i] * un[k - 1 - i]
-            s += w2[j] * np.tanh(a)
-        y[k] = s
+        y[k] = _net_output(W1, b1, w2, b2, y, un, y, k, ny, nu, 0, 0)
     return y
 
 
@@ -149,24 +157,13 @@ def _pe_kernel(W1, b1, w2, b2, un, yn, seg, ny, nu, ne):  # pragma: no cover - c
     Returns ŷ (NaN on each record's first L samples) and e = y − ŷ (0 there), shape (N,).
     """
     N = un.size
-    H = b1.size
     L = max(ny, nu)
     yhat = np.full(N, np.nan)
     e = np.zeros(N)
     for r in range(seg.size - 1):
         a0 = seg[r] + L
         for k in range(a0, seg[r + 1]):
-            s = b2
-            for j in range(H):
-                a = b1[j]
-                for i in range(ny):
-                    a += W1[j, i] * yn[k - 1 - i]
-                for i in range(nu):
-                    a += W1[j, ny + i] * un[k - 1 - i]
-                for i in range(ne):
-                    if k - 1 - i >= a0:
-                        a += W1[j, ny + nu + i] * e[k - 1 - i]
-                s += w2[j] * np.tanh(a)
+            s = _net_output(W1, b1, w2, b2, yn, un, e, k, ny, nu, ne, a0)
             yhat[k] = s
             e[k] = yn[k] - s
     return yhat, e
