@@ -141,19 +141,12 @@ def static_curves(
     With ``check_stability`` an equilibrium that is not locally stable is NaN too (the model
     does not settle there), matching :meth:`Model.static_curve`.
     """
-    from .static import is_rational, rational_parts, stable_mask, static_curve
+    from .static import is_rational, rational_equilibria, static_curve
 
     th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float)
     if is_rational(structure):
-        num, den = rational_parts(structure, th, ub)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            yb = np.where(np.abs(den) > 1e-12, num / den, np.nan)
-        if check_stability:
-            good = np.isfinite(yb)
-            st = stable_mask(structure, th, ub, np.where(good, yb, 0.0))
-            yb = np.where(st & good, yb, np.nan)
-        return yb
+        return rational_equilibria(structure, th, ub, stable_only=check_stability)
     out = np.empty((th.shape[0], ub.size))
     for i, row in enumerate(th):
         out[i] = static_curve(structure, row, ub, y0=y0, strict=False) if np.all(np.isfinite(row)) else np.nan

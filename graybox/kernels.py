@@ -36,8 +36,9 @@ class Code(NamedTuple):
     (0 = y, 1 = u), lag and power. ``ny[t]`` is the total output power of term t and
     ``ylag[t, :ny[t]]`` its output lags with repetition (y(k-2)^2 → [2, 2]).
 
-    ``mu[t]``: the total input power of term t. ``uptr, ulag, upow``: the input factors only. ``grp[t]`` is the output monomial group of
-    term t (-1 for input-only terms); group g is the monomial with lags ``gylag[g, :gny[g]]``.
+    ``mu[t]``: the total input power of term t. ``uptr, ulag, upow``: the input factors only.
+    ``grp[t]`` is the output monomial group of term t (-1 for input-only terms); group g is the
+    monomial with lags ``gylag[g, :gny[g]]``.
     Grouping lets the single free run treat y(k) = X(k) + Σ_g C_g(k) · m_g(y) as a recursion
     over a few monomials with coefficients precomputed from the input.
     """
@@ -411,7 +412,7 @@ def batch_sse(
 
 
 @nb.njit(cache=True, nogil=True)
-def _sensitivity(fptr, fsig, flag, fpow, ny, ylag, theta, U, y0, start):  # pragma: no cover - compiled
+def _sensitivity(ny, ylag, theta, U, y0, start):  # pragma: no cover - compiled
     # Forward sensitivity of the free run: S(k, j) = ∂ŷ(k)/∂θ_j obeys
     #   S(k, :) = φ(k, :) + Σ_t θ_t Σ_{y(k-l) in t} ∂φ_t/∂y(k-l) · S(k-l, :),
     # where φ(k, t) is term t evaluated on the simulated output.
@@ -473,8 +474,7 @@ def free_run_sensitivity(
     if U is None:
         U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
     with np.errstate(all="ignore"):
-        return _sensitivity(code.fptr, code.fsig, code.flag, code.fpow, code.ny, code.ylag,
-                            np.asarray(theta, float), U, y0, start)
+        return _sensitivity(code.ny, code.ylag, np.asarray(theta, float), U, y0, start)
 
 
 __all__ += ["batch_sse", "free_run_sensitivity"]

@@ -140,16 +140,11 @@ def simulate(
     th = check_theta(structure, theta)
     L = structure.max_lag
     u, y0, b = free_run_inputs(u, y0, L, bound)
-    y = simulate_one(_code(structure), th, u, y0, L, b)
+    y = simulate_one(encode(structure), th, u, y0, L, b)
     if on_diverge == "raise" and not np.isfinite(y[-1]):
         k = int(np.flatnonzero(~np.isfinite(y))[0])
         raise DivergenceError(f"free run diverged at sample {k} (|y| > {b:g}): the model is unstable along this input")
     return y
-
-
-def _code(structure: Structure):
-    """Encoded structure (cached by :func:`graybox.kernels.encode`)."""
-    return encode(structure)
 
 
 def simulate_many(
@@ -179,4 +174,4 @@ def simulate_many(
         raise ValueError(f"thetas must have shape (P, {len(structure)}), got {th.shape}")
     L = structure.max_lag
     record.require_length(L)
-    return simulate_batch(_code(structure), th, record.u, record.y[:L], L, threads)
+    return simulate_batch(encode(structure), th, record.u, record.y[:L], L, threads)

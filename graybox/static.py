@@ -34,7 +34,7 @@ __all__ = [
     "rational_static_curve",
     "rational_parts",
     "stable_mask",
-    "linearisation",
+    "rational_equilibria",
 ]
 
 _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -223,6 +223,32 @@ def rational_parts(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -
     return num, den
 
 
+def rational_equilibria(
+    structure: Structure, thetas: np.ndarray, ubar: np.ndarray, stable_only: bool = True
+) -> np.ndarray:
+    """Eq. (6) for many parameter vectors, shape (P, M); NaN where the denominator vanishes.
+
+    With ``stable_only`` an equilibrium that is not locally stable is NaN too: the model does
+    not settle there (:func:`stable_mask`).
+
+    Parameters
+    ----------
+    structure : Structure
+        A rational structure.
+    thetas : ndarray, shape (P, n_terms)
+    ubar : ndarray, shape (M,)
+    stable_only : bool
+    """
+    th = np.atleast_2d(np.asarray(thetas, float))
+    ub = np.asarray(ubar, float)
+    num, den = rational_parts(structure, th, ub)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        yb = np.where(np.abs(den) > 1e-12, num / den, np.nan)
+    if stable_only:
+        yb = np.where(stable_mask(structure, th, ub, yb), yb, np.nan)
+    return yb
+
+
 def rational_static_curve(structure: Structure, theta: np.ndarray, ubar: np.ndarray) -> np.ndarray:
     """Eq. (6): ȳ = (Σ0 + Σu ū + Σu² ū² + …) / (1 − Σy − Σyu ū − …).
 
@@ -375,9 +401,7 @@ def nearest_stable_equilibria(
     P, M = th.shape[0], ub.size
     with np.errstate(all="ignore"):
         if is_rational(structure):
-            num, den = rational_parts(structure, th, ub)
-            yb = np.where(np.abs(den) > 1e-12, num / den, np.nan)
-            return np.where(stable_mask(structure, th, ub, yb), yb, np.nan)
+            return rational_equilibria(structure, th, ub)
         cm = cluster_map(structure)
         sig = th @ cm.R.T
         D = cm.max_y_power
@@ -442,20 +466,6 @@ def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndar
 
 
 __all__ += ["nearest_stable_equilibria", "static_theta_gradient"]
-
-
-def linearisation(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
-    """a_i = ∂f/∂y(k-i) at equilibria, batched: shape (P, M, L) for thetas (P, n) and ybar (P, M)."""
-    th = np.atleast_2d(thetas)
-    L = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
-    ub = np.asarray(ubar, float)
-    a = np.zeros(ybar.shape + (L,))
-    for t, term in enumerate(structure):
-        py, mu = term.power_of("y"), term.power_of("u")
-        for s, l, pw in term.factors:
-            if s == "y":
-                a[:, :, l - 1] += th[:, t, None] * pw * ybar ** (py - 1) * ub[None, :] ** mu
-    return a
 
 
 def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
