@@ -38,11 +38,12 @@ from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 from tqdm import tqdm
 
-from .kernels import batch_sse, encode, free_run_sensitivity, input_products
+from .kernels import batch_sse, encode, free_run_sensitivity, input_products, simulate_one
 from .ls import column_scales, scaled_lstsq
 from .pareto import ParetoSet
 from .records import Dataset, Record, StaticPoints, as_records
 from .regressors import stacked_regressors
+from .simulation import check_theta
 from .static import nearest_stable_equilibria, static_theta_gradient
 from .terms import Structure
 
@@ -349,9 +350,7 @@ def ga_front(
             raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
         first = problem.ls_theta()
     else:
-        first = None if theta0 is None else np.asarray(theta0, float)
-        if first is not None and first.shape != (len(problem.structure),):
-            raise ValueError(f"theta0 must have shape ({len(problem.structure)},), got {first.shape}")
+        first = None if theta0 is None else check_theta(problem.structure, theta0, "theta0")
 
     def step(i, lam1, prev, rng):
         carry = prev if prev is not None else first
@@ -377,8 +376,6 @@ def _residuals_and_jac(problem: SEProblem, z: np.ndarray, lam1: float, want_jac:
             y, S = free_run_sensitivity(problem.code, th, rec.u, rec.y[:L], L, U)
             J.append(w1 * S[L:] / problem.scale)
         else:
-            from .kernels import simulate_one
-
             y = simulate_one(problem.code, th, rec.u, rec.y[:L], L, 1e300)
         r.append(w1 * (y[L:] - rec.y[L:]))
     lam2 = 1.0 - lam1
@@ -435,9 +432,7 @@ def gradient_front(
     lambdas, thetas, costs : as :func:`ga_front`
     """
     lam = np.sort(check_lambdas(lambdas))[::-1]
-    start = problem.ls_theta() if theta0 is None else np.asarray(theta0, float)
-    if start.shape != (len(problem.structure),):
-        raise ValueError(f"theta0 must have shape ({len(problem.structure)},), got {start.shape}")
+    start = problem.ls_theta() if theta0 is None else check_theta(problem.structure, theta0, "theta0")
 
     def step(i, lam1, prev, rng):
         cache: dict = {}

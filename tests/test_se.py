@@ -204,3 +204,10 @@ def test_several_records_never_straddled(problem):
         assert np.max(np.abs(fd - J[:, j])) <= 1e-5 * np.max(np.abs(J[:, j])) + 1e-12
     ps = se_pareto(problem.structure, [a, b], problem.static, [1.0, 0.3], method="gradient", progress=False)
     assert ps.thetas.shape == (2, 17)
+
+
+def test_bad_theta0_is_named(problem):
+    with pytest.raises(ValueError, match="theta0 has 3 values but the structure has 17 terms"):
+        ga_front(problem, [1.0], SMALL, progress=False, theta0=np.zeros(3))
+    with pytest.raises(ValueError, match="theta0 has non-finite values"):
+        gradient_front(problem, [1.0], progress=False, theta0=np.full(17, np.nan))
