@@ -17,7 +17,7 @@ import pandas as pd
 
 from .evaluate import evaluate_thetas
 from .model import Model
-from .records import Dataset, Record, StaticPoints, frozen
+from .records import Dataset, Record, StaticPoints, as_records, frozen
 from .terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -128,9 +128,7 @@ class ParetoSet:
         """
         th = np.atleast_2d(np.asarray(thetas, float))
         K = th.shape[0]
-        recs = [data.ident] if isinstance(data, Dataset) else [data] if isinstance(data, Record) else list(data)
-        if not recs:
-            raise ValueError("no records to evaluate the members on")
+        recs = as_records(data)
         L = structure.max_lag
         j1 = np.zeros(K)
         js = np.zeros(K)

@@ -11,7 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .records import Record
+from .records import Record, as_records
 from .terms import Structure
 
 __all__ = ["regressor_matrix", "stacked_regressors"]
@@ -87,9 +87,7 @@ def stacked_regressors(
     target : ndarray, shape (sum(N_r - start),)
         The measured ``y(k)`` matching each row.
     """
-    recs = [records] if isinstance(records, Record) else list(records)
-    if not recs:
-        raise ValueError("no records given")
+    recs = as_records(records)
     s = structure.max_lag if start is None else int(start)
     blocks, targets = [], []
     for i, r in enumerate(recs):
