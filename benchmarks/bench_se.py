@@ -24,9 +24,9 @@ from _common import machine  # noqa: E402
 
 from graybox import Candidates, js  # noqa: E402
 from graybox.datasets import load_pumping  # noqa: E402
-from graybox.model import Model  # noqa: E402
-from graybox.se import GAOptions, SEProblem, ga_front, gradient_front  # noqa: E402
-from graybox.selection import frols  # noqa: E402
+from graybox._model import Model  # noqa: E402
+from graybox._se import GAOptions, SEProblem, ga_front, gradient_front  # noqa: E402
+from graybox._selection import frols  # noqa: E402
 
 
 def fastcan_ids(structure):
@@ -61,11 +61,11 @@ def main() -> None:
     print(f"# structure: {structure}")
 
     # warm-up compiles (not timed)
-    ga_front(prob, [1.0], GAOptions(population=20, generations=2), progress=False, threads=args.threads)
+    ga_front(prob, [1.0], options=GAOptions(population=20, generations=2), progress=False, threads=args.threads)
     gradient_front(prob, [1.0], progress=False, max_nfev=2)
 
     t0 = time.perf_counter()
-    _, th_ga, c_ga = ga_front(prob, lam, GAOptions(population=200, generations=50), seed=0, progress=False,
+    _, th_ga, c_ga = ga_front(prob, lam, options=GAOptions(population=200, generations=50), seed=0, progress=False,
                               threads=args.threads)
     t_ga = time.perf_counter() - t0
     t0 = time.perf_counter()

@@ -2,47 +2,58 @@
 
 Polynomial NARMAX models, structure selection, static analysis and gray-box estimation
 with static-curve information, after Barbosa, Aguirre, Martinez & Braga (IEEE TCST 2011).
+
+The implementation lives in private modules (``graybox._els`` …); every public name is
+exported here, and from the public subpackages :mod:`graybox.datasets`, :mod:`graybox.plots`
+and :mod:`graybox.reproduce`.
 """
 
-from .evaluate import evaluate, fit_percent, j1, js, jsf, mse, rrse
-from .model import Model
-from .records import Dataset, Record, StaticPoints
-from .regressors import regressor_matrix, stacked_regressors
-from .simulation import DivergenceError, predict, simulate, simulate_many
-from .static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
-from .terms import Candidates, Structure, Term, parse_structure, parse_term
-from .selection import CandidateWarning, Selection, frols, information_criterion
-from .els import ELSConvergenceWarning, ElsInfo, els, noise_terms
-from .curves import StaticCurve
-from .constraints import (
+from importlib.metadata import PackageNotFoundError, version as _version
+
+from ._terms import Candidates, Structure, Term, parse_structure, parse_term
+from ._records import Dataset, Record, StaticPoints, StaticRangeWarning
+from ._regressors import regressor_matrix, stacked_regressors
+from ._simulation import DivergenceError, predict, simulate, simulate_many
+from ._model import Model
+from ._static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
+from ._evaluate import evaluate, evaluate_thetas, fit_percent, j1, js, jsf, mse, rrse
+from ._selection import CandidateWarning, Selection, frols, information_criterion
+from ._els import ELSConvergenceWarning, ELSResult, els, noise_terms
+from ._curves import StaticCurve
+from ._constraints import (
     ClusterBounds, CurveEquality, GainBounds, InfeasibleError, PassesThrough, StaticBand, UserConstraint,
 )
-from .convex import cls, pe_pareto, pe_thetas, qr_static_error, static_matrices
-from .pareto import ParetoSet, nondominated_mask
-from .decide import decide_dsf
-from .se import GAOptions, se_pareto
-from .neural import NeuralModel, NeuralTrainInfo, neural_narx
-from . import datasets, reference
+from ._convex import PE_LAMBDAS, cls, pe_pareto, pe_thetas, qr_static_error, static_matrices
+from ._pareto import ParetoSet, nondominated_mask
+from ._se import SE_LAMBDAS, GAOptions, se_pareto
+from ._decide import Decision, decide_dsf, decide_min_correlation
+from ._neural import NeuralFit, NeuralModel, neural_narx
+from . import datasets, plots, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
 
-__version__ = "0.1.0"
+try:
+    __version__ = _version("graybox")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree that was never installed
+    __version__ = "0+unknown"
 
 __all__ = [
     "Candidates", "Structure", "Term", "parse_term", "parse_structure",
-    "Record", "StaticPoints", "Dataset",
+    "Record", "StaticPoints", "Dataset", "StaticRangeWarning",
     "regressor_matrix", "stacked_regressors",
     "Model", "predict", "simulate", "simulate_many", "DivergenceError",
     "cluster_map", "equilibria", "static_curve", "static_gain", "Equilibrium",
-    "evaluate", "j1", "js", "jsf", "mse", "rrse", "fit_percent",
+    "evaluate", "evaluate_thetas", "j1", "js", "jsf", "mse", "rrse", "fit_percent",
     "frols", "Selection", "CandidateWarning", "information_criterion",
-    "els", "ElsInfo", "ELSConvergenceWarning", "noise_terms",
+    "els", "ELSResult", "ELSConvergenceWarning", "noise_terms",
     "StaticCurve",
     "CurveEquality", "PassesThrough", "StaticBand", "GainBounds", "ClusterBounds", "UserConstraint",
     "InfeasibleError",
-    "cls", "pe_pareto", "pe_thetas", "static_matrices", "qr_static_error",
-    "ParetoSet", "nondominated_mask", "decide_dsf",
-    "se_pareto", "GAOptions",
-    "neural_narx", "NeuralModel", "NeuralTrainInfo",
-    "datasets", "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
-    "reference",
+    "cls", "pe_pareto", "pe_thetas", "static_matrices", "qr_static_error", "PE_LAMBDAS",
+    "ParetoSet", "nondominated_mask",
+    "decide_dsf", "decide_min_correlation", "Decision",
+    "se_pareto", "GAOptions", "SE_LAMBDAS",
+    "neural_narx", "NeuralModel", "NeuralFit",
+    "datasets", "plots", "reference",
+    "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
+    "__version__",
 ]

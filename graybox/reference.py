@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .model import Model
-from .records import StaticPoints
-from .terms import Structure
+from ._model import Model
+from ._records import StaticPoints
+from ._terms import Structure
 
 __all__ = [
     "STRUCTURE_15",

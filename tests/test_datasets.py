@@ -23,10 +23,10 @@ from graybox.datasets.pumping import (
     static_experiment,
     write_csvs,
 )
-from graybox.els import els
-from graybox.evaluate import evaluate
-from graybox.ls import scaled_lstsq
-from graybox.selection import frols
+from graybox._els import els
+from graybox._evaluate import evaluate
+from graybox._ls import scaled_lstsq
+from graybox._selection import frols
 
 REPO = Path(__file__).resolve().parents[1]
 PLANT = PumpingPlant()
@@ -301,7 +301,7 @@ def test_bundled_data_are_calibrated_to_table1():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # candidate and convergence notes are not under test
             sel = frols(Candidates(ny=6, nu=6, ne=2, degree=degree), ds.ident, n_terms=n_terms)
-            models[degree] = els(sel, ds.ident)
+            models[degree] = els(sel, ds.ident).model
     table = evaluate(models, ds)
     for degree in (2, 3):
         row = table.loc[degree]

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from graybox import Model, reference
-from graybox.decide import decide_dsf
-from graybox.pareto import ParetoSet
+from graybox._decide import decide_dsf
+from graybox._pareto import ParetoSet
 
 S15 = reference.STRUCTURE_15
 
@@ -19,31 +19,33 @@ def front(js, jsf, lambdas=None):
 
 def test_picks_min_js_inside_the_band():
     ps = front([1.0, 2.0, 3.0, 4.0], [0.5, 0.03, 0.01, 0.0])
-    m, i = decide_dsf(ps, return_index=True)
+    _d = decide_dsf(ps)
+    m, i = _d.model, _d.index
     assert i == 1 and isinstance(m, Model)
     np.testing.assert_array_equal(m.theta, ps.thetas[1])
     assert "D_SF" in m.name
-    assert isinstance(decide_dsf(ps), Model)  # without the index: a Model, ready for evaluate()
+    assert isinstance(decide_dsf(ps).model, Model)
     # the band's edge is inside: B is closed
-    assert decide_dsf(front([1.0, 2.0], [0.031, 0.0]), return_index=True)[1] == 0
+    assert decide_dsf(front([1.0, 2.0], [0.031, 0.0])).index == 0
 
 
 def test_ties_and_divergent_members():
     ps = front([2.0, 2.0, np.inf], [0.02, 0.01, 0.001])
     # the diverging member (J_S = inf) is never chosen; among equal J_S the smaller J_SF wins
-    assert decide_dsf(ps, return_index=True)[1] == 1
+    assert decide_dsf(ps).index == 1
 
 
 def test_band_as_interval():
     ps = front([1.0, 2.0, 3.0], [0.02, 0.01, 0.001])
-    assert decide_dsf(ps, band=(0.005, 0.015), return_index=True)[1] == 1
+    assert decide_dsf(ps, band=(0.005, 0.015)).index == 1
 
 
 def test_no_member_in_the_band_is_an_error_unless_a_fallback_is_named():
     ps = front([1.0, 2.0, 3.0], [0.5, 0.2, 0.1])
     with pytest.raises(ValueError, match=r"no member .* J_SF in B = \[0, 0.031\].*smallest J_SF is 0.1.*fallback"):
         decide_dsf(ps)
-    m, i = decide_dsf(ps, fallback="min_jsf", return_index=True)
+    _d = decide_dsf(ps, fallback="min_jsf")
+    m, i = _d.model, _d.index
     assert i == 2 and "no member in B" in m.name
     with pytest.raises(ValueError, match="fallback must be"):
         decide_dsf(ps, fallback="nearest")
@@ -68,7 +70,7 @@ def test_bad_input():
 def test_on_a_pe_front():
     """On a real PE sweep: the choice is in the band and no in-band member simulates better."""
     from graybox import Record
-    from graybox.convex import pe_pareto
+    from graybox._convex import pe_pareto
 
     rng = np.random.default_rng(2)
     m = reference.paper_model(15)
@@ -77,7 +79,7 @@ def test_on_a_pe_front():
     y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
     rec = Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(1600), Ts=0.05)
     ps = pe_pareto(S15, rec, reference.eq1_points(), np.logspace(-6, 0, 30), solver="closed")
-    chosen, i = decide_dsf(ps, return_index=True)
+    i = decide_dsf(ps).index
     inside = ps.JSF <= 0.031
     assert inside[i] and ps.JS[i] == ps.JS[inside].min()
     assert not inside.all()  # the band did select: λ1 near 1 keeps the data's static error
@@ -85,8 +87,8 @@ def test_on_a_pe_front():
 
 def test_min_correlation_picks_least_correlated_member():
     from graybox import Record, reference
-    from graybox.decide import decide_min_correlation
-    from graybox.pareto import ParetoSet
+    from graybox._decide import decide_min_correlation
+    from graybox._pareto import ParetoSet
 
     rng = np.random.default_rng(4)
     m = reference.paper_model(15, "PE")
@@ -95,7 +97,8 @@ def test_min_correlation_picks_least_correlated_member():
     rec = Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(u.size))
     thetas = np.vstack([m.theta, m.theta * (1 + 0.02 * rng.standard_normal(17)), m.theta * 1.001])
     ps = ParetoSet.from_thetas(m.structure, thetas, [1.0, 0.5, 0.1], rec, reference.eq1_points())
-    best, i = decide_min_correlation(ps, rec, return_index=True)
+    _d = decide_min_correlation(ps, rec)
+    best, i = _d.model, _d.index
     # recompute ρ by hand for every member
     L = 6
     rhos = []

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from graybox import Dataset, Record, evaluate, fit_percent, j1, js, jsf, reference, rrse
-from graybox.evaluate import evaluate_thetas
+from graybox._evaluate import evaluate_thetas
 
 
 def test_table_shape_and_values(paper_record):

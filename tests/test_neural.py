@@ -11,17 +11,17 @@ from hypothesis import strategies as st
 
 from graybox import Record
 from graybox.datasets import load_pumping
-from graybox.evaluate import evaluate, mse
-from graybox.neural import (
+from graybox._evaluate import evaluate, mse
+from graybox._neural import (
     NeuralModel,
     _pe_jacobian_kernel,
     _pe_kernel,
     _unpack,
     neural_narx,
-    section_neural,
 )
-from graybox.records import Dataset
-from graybox.simulation import DivergenceError
+from graybox.reproduce import section_neural
+from graybox._records import Dataset
+from graybox._simulation import DivergenceError
 
 # Few epochs keep the suite fast; 20 epochs from seed 0 already give a stable, accurate net.
 PLANT_EPOCHS = 20
@@ -67,12 +67,12 @@ def plant():
 
 @pytest.fixture(scope="module")
 def plant_net(plant):
-    return neural_narx(plant.ident, epochs=PLANT_EPOCHS, seed=0, name="Neural")
+    return neural_narx(plant.ident, epochs=PLANT_EPOCHS, seed=0, name="Neural").model
 
 
 @pytest.fixture(scope="module")
 def small_net():
-    return neural_narx(small_record(), ny=2, nu=2, ne=1, hidden=3, epochs=15, seed=1)
+    return neural_narx(small_record(), ny=2, nu=2, ne=1, hidden=3, epochs=15, seed=1).model
 
 
 # -- parameter count and immutability --------------------------------------------------------
@@ -82,7 +82,7 @@ def test_n_params_is_99_for_the_paper_sizes(plant_net):
     assert net.n_params == 99 == 12 * 7 + 7 + 7 + 1
     assert net.n_trained == 113
     assert plant_net.n_params == 99 and plant_net.max_lag == 6
-    assert neural_narx(small_record(), ny=6, nu=6, ne=0, hidden=7, epochs=1).n_params == 99
+    assert neural_narx(small_record(), ny=6, nu=6, ne=0, hidden=7, epochs=1).model.n_params == 99
 
 
 def test_model_is_immutable(small_net):
@@ -108,9 +108,9 @@ def test_str_and_repr(small_net, plant_net):
 
 def test_training_is_reproducible_with_a_seed():
     rec = small_record()
-    a = neural_narx(rec, ny=2, nu=2, ne=1, hidden=3, epochs=8, seed=3)
-    b = neural_narx(rec, ny=2, nu=2, ne=1, hidden=3, epochs=8, seed=3)
-    c = neural_narx(rec, ny=2, nu=2, ne=1, hidden=3, epochs=8, seed=4)
+    a = neural_narx(rec, ny=2, nu=2, ne=1, hidden=3, epochs=8, seed=3).model
+    b = neural_narx(rec, ny=2, nu=2, ne=1, hidden=3, epochs=8, seed=3).model
+    c = neural_narx(rec, ny=2, nu=2, ne=1, hidden=3, epochs=8, seed=4).model
     for f in ("W1", "b1", "w2"):
         assert np.array_equal(getattr(a, f), getattr(b, f))
     assert a.b2 == b.b2
@@ -119,7 +119,8 @@ def test_training_is_reproducible_with_a_seed():
 
 def test_training_cost_decreases_and_info_is_consistent():
     rec = small_record()
-    net, info = neural_narx(rec, ny=2, nu=2, ne=1, hidden=3, epochs=15, seed=0, full_output=True)
+    info = neural_narx(rec, ny=2, nu=2, ne=1, hidden=3, epochs=15, seed=0)
+    net = info.model
     assert info.epochs == len(info.cost) == len(info.lam) <= 15
     assert np.all(np.diff(info.cost) <= 0)  # only improving steps are kept
     assert 0 < info.accepted <= info.epochs
@@ -158,13 +159,13 @@ def test_jacobian_matches_finite_differences_across_two_records():
 
 def test_narx_variant_and_several_records():
     recs = [small_record(1, 200), small_record(2, 200)]
-    net = neural_narx(recs, ny=2, nu=2, ne=0, hidden=3, epochs=10, seed=0)
+    net = neural_narx(recs, ny=2, nu=2, ne=0, hidden=3, epochs=10, seed=0).model
     assert net.ne == 0 and net.n_params == net.n_trained == 3 * 6 + 1
     yh, e = net.predict_narmax(recs[0])
     np.testing.assert_allclose(yh, net.predict(recs[0]), rtol=1e-12)  # no residual inputs: same predictor
     ds = Dataset(recs[0], recs[1])
-    a = neural_narx(ds, ny=2, nu=2, ne=0, hidden=3, epochs=3)
-    b = neural_narx(recs[0], ny=2, nu=2, ne=0, hidden=3, epochs=3)
+    a = neural_narx(ds, ny=2, nu=2, ne=0, hidden=3, epochs=3).model
+    b = neural_narx(recs[0], ny=2, nu=2, ne=0, hidden=3, epochs=3).model
     assert np.array_equal(a.W1, b.W1)  # a Dataset trains on its identification record
 
 
@@ -317,7 +318,7 @@ def test_section_neural_reports_the_table_row(plant):
 )
 def test_bad_training_arguments(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        neural_narx(small_record(), **kwargs)
+        neural_narx(small_record(), **kwargs).model
 
 
 def test_bad_training_data():
@@ -325,16 +326,16 @@ def test_bad_training_data():
         Record([1.0, np.nan, 3.0], [1.0, 2.0, 3.0])  # NaN never reaches the trainer
     short = small_record(0, 6)
     with pytest.raises(ValueError, match="fewer than max lag"):
-        neural_narx(short, ny=6, nu=6)
+        neural_narx(short, ny=6, nu=6).model
     with pytest.raises(ValueError, match="fewer than the 113 weights"):
-        neural_narx(small_record(0, 100))
+        neural_narx(small_record(0, 100)).model
     flat = Record(np.full(300, 500.0), np.linspace(0, 1, 300))
     with pytest.raises(ValueError, match="input is constant"):
-        neural_narx(flat, ny=1, nu=1, hidden=1)
+        neural_narx(flat, ny=1, nu=1, hidden=1).model
     with pytest.raises(ValueError, match="Record"):
-        neural_narx(np.zeros((10, 2)))  # type: ignore[arg-type]
+        neural_narx(np.zeros((10, 2))).model  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="no records"):
-        neural_narx([])
+        neural_narx([]).model
 
 
 def test_bad_model_and_call_arguments(small_net):

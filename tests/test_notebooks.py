@@ -14,7 +14,7 @@ from pathlib import Path
 import matplotlib
 import pytest
 
-from graybox.datasets import loaders
+from graybox.datasets import _loaders as loaders
 
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
 NAMES = [

@@ -9,8 +9,8 @@ from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
 from graybox import Record, reference
-from graybox.evaluate import evaluate_thetas, j1, js, jsf
-from graybox.pareto import ParetoSet, nondominated_mask
+from graybox._evaluate import evaluate_thetas, j1, js, jsf
+from graybox._pareto import ParetoSet, nondominated_mask
 
 S15 = reference.STRUCTURE_15
 
@@ -100,9 +100,9 @@ def test_access_and_frame(pset, thetas):
     np.testing.assert_array_equal(m.theta, thetas[1])
     assert "λ1=0.5" in m.name and pset.model(-1).name.endswith("0.01")
     df = pset.to_frame()
-    assert list(df.columns) == ["lambda1", "J1", "JS", "JSF", "tag"] and len(df) == 3
+    assert list(df.columns) == ["lambda1", "J1", "JS", "JSF", "tag", "failure"] and len(df) == 3
     dfp = pset.to_frame(params=True)
-    assert dfp.shape == (3, 5 + 17) and dfp["u(k-4)u(k-6)"].iloc[0] == thetas[0, 2]
+    assert dfp.shape == (3, 6 + 17) and dfp["u(k-4)u(k-6)"].iloc[0] == thetas[0, 2]
     np.testing.assert_array_equal(pset.objective("tag"), [1.0, 2.0, 3.0])
     with pytest.raises(ValueError, match="unknown objective"):
         pset.objective("J2")
@@ -154,7 +154,7 @@ def test_validation():
 def test_plot_pareto(pset):
     from matplotlib.figure import Figure
 
-    from graybox.plots.pareto import plot_pareto
+    from graybox.plots import plot_pareto
 
     table = pd.DataFrame({"J_S ident": [2.6, 3.2], "J_SF": [1.6, 0.002]}, index=["ELS (15)", "CLS (22)"])
     fig = plot_pareto({"PE": pset}, table, band=0.031)

@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 from graybox import Model, Record, reference
-from graybox.kernels import encode, free_run_sensitivity
-from graybox.se import GAOptions, SEProblem, ga_front, gradient_front, se_pareto
+from graybox._kernels import encode, free_run_sensitivity
+from graybox._se import GAOptions, SEProblem, ga_front, gradient_front, se_pareto
 
 
 @pytest.fixture(scope="module")
@@ -55,7 +55,7 @@ def test_sensitivity_for_cubic_structure():
 
 
 def test_cost_definitions_match_shared_evaluator(problem):
-    from graybox.evaluate import evaluate_thetas
+    from graybox._evaluate import evaluate_thetas
 
     ths = problem.ls_theta() * (1 + 0.001 * np.random.default_rng(0).standard_normal((5, 17)))
     ev = evaluate_thetas(problem.structure, ths, problem.record, problem.static, check_stability=False)
@@ -73,9 +73,9 @@ def test_diverging_individual_gets_infinite_cost(problem):
 
 def test_ga_is_reproducible_and_improves(problem):
     lam = [1.0, 0.3]
-    a = ga_front(problem, lam, SMALL, seed=11, progress=False, theta0=None)  # the paper's seeding exactly
-    b = ga_front(problem, lam, SMALL, seed=11, progress=False, theta0=None)
-    c = ga_front(problem, lam, SMALL, seed=12, progress=False, theta0=None)
+    a = ga_front(problem, lam, options=SMALL, seed=11, progress=False, theta0=None)  # the paper's seeding exactly
+    b = ga_front(problem, lam, options=SMALL, seed=11, progress=False, theta0=None)
+    c = ga_front(problem, lam, options=SMALL, seed=12, progress=False, theta0=None)
     np.testing.assert_array_equal(a[1], b[1])
     assert not np.array_equal(a[1], c[1])
     # the best of a run is never worse than its seed individual (elitism)
@@ -83,7 +83,7 @@ def test_ga_is_reproducible_and_improves(problem):
     init = problem.random_ls(rng, SMALL.population, 30)
     assert a[2][0] <= np.min(problem.cost(init, 1.0))
     # seeded with least squares (the default), the first run is never worse than LS
-    d = ga_front(problem, lam, SMALL, seed=11, progress=False)
+    d = ga_front(problem, lam, options=SMALL, seed=11, progress=False)
     assert d[2][0] <= problem.cost(problem.ls_theta()[None], 1.0)[0]
 
 
@@ -109,10 +109,10 @@ def test_gradient_front_beats_ls_and_tracks_lambda(problem):
 
 
 def test_checkpoint_resume_equals_uninterrupted(problem, tmp_path, monkeypatch):
-    import graybox.se as se
+    import graybox._se as se
 
     lam = [1.0, 0.6, 0.3, 0.1]
-    full = ga_front(problem, lam, SMALL, seed=5, progress=False)
+    full = ga_front(problem, lam, options=SMALL, seed=5, progress=False)
     ck = tmp_path / "front.npz"
     calls = {"n": 0}
     real = se._ga_run
@@ -125,29 +125,29 @@ def test_checkpoint_resume_equals_uninterrupted(problem, tmp_path, monkeypatch):
 
     monkeypatch.setattr(se, "_ga_run", dying)
     with pytest.raises(KeyboardInterrupt):
-        ga_front(problem, lam, SMALL, seed=5, checkpoint=ck, progress=False)
+        ga_front(problem, lam, options=SMALL, seed=5, checkpoint=ck, progress=False)
     monkeypatch.setattr(se, "_ga_run", real)
     with np.load(ck) as z:
         assert int(z["done"]) == 2
-    resumed = ga_front(problem, lam, SMALL, seed=5, checkpoint=ck, progress=False)
+    resumed = ga_front(problem, lam, options=SMALL, seed=5, checkpoint=ck, progress=False)
     np.testing.assert_array_equal(resumed[1], full[1])
     np.testing.assert_array_equal(resumed[2], full[2])
 
 
 def test_checkpoint_of_another_problem_is_refused(problem, tmp_path):
     ck = tmp_path / "front.npz"
-    ga_front(problem, [1.0], SMALL, seed=5, checkpoint=ck, progress=False)
+    ga_front(problem, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
     other = SEProblem(problem.structure, problem.record.slice(0, 600), problem.static)
     with pytest.raises(ValueError, match="another problem.*problem"):
-        ga_front(other, [1.0], SMALL, seed=5, checkpoint=ck, progress=False)
+        ga_front(other, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
     with pytest.raises(ValueError, match="differs in: seed"):
-        ga_front(problem, [1.0], SMALL, seed=6, checkpoint=ck, progress=False)
+        ga_front(problem, [1.0], options=SMALL, seed=6, checkpoint=ck, progress=False)
 
 
 @pytest.mark.parametrize("lam", [[0.0], [1.5], [-0.1, 0.5], [np.nan], []])
 def test_lambda_outside_unit_interval(problem, lam):
     with pytest.raises(ValueError, match="λ1"):
-        ga_front(problem, lam, SMALL, progress=False)
+        ga_front(problem, lam, options=SMALL, progress=False)
 
 
 def test_se_pareto_returns_evaluated_set(problem):
@@ -161,7 +161,7 @@ def test_se_pareto_returns_evaluated_set(problem):
 
 @pytest.mark.parametrize("P", [1, 7, 30])
 def test_parallel_sse_equals_serial(problem, P):
-    from graybox.kernels import batch_sse
+    from graybox._kernels import batch_sse
 
     ths = problem.ls_theta() * (1 + 0.001 * np.random.default_rng(P).standard_normal((P, 17)))
     rec = problem.record
@@ -191,7 +191,7 @@ def test_several_records_never_straddled(problem):
         na, nb = len(a) - 6, len(b) - 6
         assert val == pytest.approx((na * js_single(m, a) + nb * js_single(m, b)) / (na + nb), rel=1e-10)
     # the gradient method's residuals and Jacobian stay consistent across the record boundary
-    from graybox.se import _residuals_and_jac
+    from graybox._se import _residuals_and_jac
 
     z = two.ls_theta() * two.scale
     r, J = _residuals_and_jac(two, z, 0.7, True)
@@ -208,6 +208,6 @@ def test_several_records_never_straddled(problem):
 
 def test_bad_theta0_is_named(problem):
     with pytest.raises(ValueError, match="theta0 has 3 values but the structure has 17 terms"):
-        ga_front(problem, [1.0], SMALL, progress=False, theta0=np.zeros(3))
+        ga_front(problem, [1.0], options=SMALL, progress=False, theta0=np.zeros(3))
     with pytest.raises(ValueError, match="theta0 has non-finite values"):
         gradient_front(problem, [1.0], progress=False, theta0=np.full(17, np.nan))

@@ -3,7 +3,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from graybox import Model, Structure, reference
-from graybox.static import cluster_map, rational_static_curve
+from graybox._static import cluster_map, rational_static_curve
 
 
 def test_eq16_clusters_from_table_ii():
@@ -99,7 +99,7 @@ def test_property_static_curve_equals_simulated_steady_state(m, ubar):
        st.floats(1e-3, 1e3))
 @settings(max_examples=80, deadline=None)
 def test_property_closed_form_roots_equal_numpy_roots(coef, scale):
-    from graybox.kernels import real_roots_upto_cubic
+    from graybox._kernels import real_roots_upto_cubic
 
     c = np.array(coef) * scale
     got = real_roots_upto_cubic(c[:, None, None])[0, 0]

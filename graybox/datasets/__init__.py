@@ -7,7 +7,7 @@
   (``python -m graybox.datasets.pumping`` rewrites them).
 """
 
-from .loaders import (
+from ._loaders import (
     BUCK_STATIC_CURVE,
     find_buck_dir,
     load_buck,

@@ -142,7 +142,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..records import Record, StaticPoints, as_1d_finite
+from .._records import Record, StaticPoints
+from .._validation import as_1d_finite
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -217,7 +218,7 @@ class PlantRun:
             object.__setattr__(self, name, a)
 
     def record(self, name: str = "pumping") -> Record:
-        """The measured input/output pair as a :class:`~graybox.records.Record` (rpm, mlc)."""
+        """The measured input/output pair as a :class:`~graybox.Record` (rpm, mlc)."""
         return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"))
 
 

@@ -5,8 +5,8 @@ Save one with ``fig.savefig("name.png")``; in Jupyter, run ``%matplotlib inline`
 cell with ``fig`` (or call ``IPython.display.display(fig)``) to see it.
 """
 
-from .data import plot_record, plot_static_curve
-from .models import plot_free_run
-from .pareto import plot_pareto
+from ._data import plot_record, plot_static_curve
+from ._models import plot_free_run
+from ._pareto import plot_pareto
 
 __all__ = ["plot_record", "plot_static_curve", "plot_free_run", "plot_pareto"]

@@ -41,7 +41,7 @@ changes. The measure is unit-free. After ``max_iter`` iterations without converg
 warns (:class:`ELSConvergenceWarning`) and returns the last iterate. Residuals of the first ``max_lag`` samples of each record, which have no
 regression row, are taken as zero.
 
-Every least-squares solve works on unit-RMS columns (:func:`graybox.ls.column_scales`; the
+Every least-squares solve works on unit-RMS columns (:func:`graybox._ls.column_scales`; the
 process block is QR-factored once and reused), so parameters come back in engineering units
 without loss of precision.
 """
@@ -50,21 +50,21 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
 from scipy.linalg import solve_triangular
 
-from .ls import column_scales, scaled_lstsq
-from .model import Model
-from .records import Dataset, Record
-from .regressors import regressor_matrix, stacked_regressors
-from .selection import Selection, _as_records, frols
-from .terms import Candidates, Structure, Term
+from ._ls import column_scales, scaled_lstsq
+from ._model import Model
+from ._records import Dataset, Record, as_records
+from ._regressors import regressor_matrix, stacked_regressors
+from ._selection import Selection
+from ._terms import Structure, Term
+from ._validation import check_int, check_real, frozen
 
-__all__ = ["els", "ElsInfo", "ELSConvergenceWarning", "noise_terms", "black_box_models", "section_black_box"]
+__all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 
 #: The paper's MA order (Section IV-A).
 DEFAULT_NE = 2
@@ -75,11 +75,14 @@ class ELSConvergenceWarning(RuntimeWarning):
 
 
 @dataclass(frozen=True, eq=False)
-class ElsInfo:
-    """How an ELS run went (returned with ``full_output=True``).
+class ELSResult:
+    """The result of :func:`els`: the model and how the iteration went.
 
     Attributes
     ----------
+    model : Model
+        Process parameters (engineering units) with the MA part in ``noise_structure`` /
+        ``noise_theta`` (used for estimation only, never in simulation).
     n_iter : int
         Iterations with noise regressors (0 when there is no MA part).
     converged : bool
@@ -92,18 +95,22 @@ class ElsInfo:
         The plain least-squares process parameters (iteration 0), for comparison.
     """
 
+    model: Model
     n_iter: int
     converged: bool
     history: tuple[float, ...]
     residuals: tuple[np.ndarray, ...]
     theta_ls: np.ndarray
 
+    def __repr__(self) -> str:
+        return (f"ELSResult(model={self.model.name!r}, n_params={self.model.n_params}, n_iter={self.n_iter}, "
+                f"converged={self.converged})")
+
 
 def noise_terms(ne: int) -> Structure:
     """The linear MA terms ``e(k-1) … e(k-ne)`` as a Structure."""
-    if isinstance(ne, bool) or int(ne) != ne or ne < 0:
-        raise ValueError(f"ne must be an integer >= 0, got {ne!r}")
-    return Structure(Term((("e", l, 1),)) for l in range(1, int(ne) + 1))
+    ne = check_int(ne, "ne", low=0)
+    return Structure(Term((("e", l, 1),)) for l in range(1, ne + 1))
 
 
 def _resolve(structure, noise) -> tuple[Structure, Structure]:
@@ -129,21 +136,21 @@ def _resolve(structure, noise) -> tuple[Structure, Structure]:
 
 def els(
     structure: Structure | Selection | Sequence[str],
-    data: Record | Sequence[Record],
+    data: Record | Sequence[Record] | Dataset,
+    *,
     noise: int | Structure | None = None,
     max_iter: int = 500,
     tol: float = 1e-6,
     relaxation: float = 0.5,
     name: str = "ELS",
-    full_output: bool = False,
-) -> Model | tuple[Model, ElsInfo]:
+) -> ELSResult:
     """Extended least squares: process parameters plus an MA noise model.
 
     Parameters
     ----------
     structure : Structure, Selection or sequence of str
-        Process terms (in parameter order). A :class:`~graybox.selection.Selection` from
-        :func:`~graybox.selection.frols` brings its selected terms and the noise terms of its
+        Process terms (in parameter order). A :class:`~graybox.Selection` from
+        :func:`~graybox.frols` brings its selected terms and the noise terms of its
         candidates; a Structure may hold noise terms too (they are split off).
     data : Record or sequence of Record
         Identification data, engineering units. Rows never straddle two records.
@@ -160,16 +167,13 @@ def els(
         iteration (1 is unrelaxed ELS; see the module docstring for why the default is 1/2).
     name : str
         Name of the returned model.
-    full_output : bool
-        Also return an :class:`ElsInfo`.
 
     Returns
     -------
-    Model
-        ``theta`` (process, engineering units), ``noise_structure`` and ``noise_theta`` set;
-        the MA part is ignored by ``simulate`` and ``predict``.
-    ElsInfo
-        Only with ``full_output=True``.
+    ELSResult
+        ``.model``: ``theta`` (process, engineering units), ``noise_structure`` and
+        ``noise_theta`` set (the MA part is ignored by ``simulate`` and ``predict``); the
+        iteration count, convergence flag, history, final residuals and the plain LS θ.
 
     Raises
     ------
@@ -183,13 +187,10 @@ def els(
         When ``max_iter`` iterations pass without meeting the stopping rule.
     """
     process, ns = _resolve(structure, noise)
-    if isinstance(max_iter, bool) or int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"max_iter must be a positive integer, got {max_iter!r}")
-    if not (np.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be a positive number, got {tol!r}")
-    if not (np.isfinite(relaxation) and 0 < relaxation <= 1):
-        raise ValueError(f"relaxation must lie in (0, 1], got {relaxation!r}")
-    recs = _as_records(data)
+    max_iter = check_int(max_iter, "max_iter", low=1)
+    tol = check_real(tol, "tol", low=0, low_open=True)
+    relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)
+    recs = as_records(data)
     L = max(process.max_lag, ns.max_lag)
     psi, y = stacked_regressors(process, recs, start=L)
     n_p = len(process)
@@ -207,17 +208,10 @@ def els(
             out.append(e)
         return out
 
-    def info(n_iter, conv, hist, x, th_ls=theta_ls) -> ElsInfo:
-        res = tuple(per_record(x))
-        for a in res:
-            a.setflags(write=False)
-        th = np.array(th_ls, copy=True)
-        th.setflags(write=False)
-        return ElsInfo(n_iter, conv, tuple(hist), res, th)
-
-    def done(theta, c, n_iter, conv, hist, x):
+    def done(theta, c, n_iter, conv, hist, x) -> ELSResult:
         m = Model(process, theta, noise_structure=ns, noise_theta=c, name=name)
-        return (m, info(n_iter, conv, hist, x)) if full_output else m
+        res = tuple(frozen(a) for a in per_record(x))
+        return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls))
 
     if len(ns) == 0:
         return done(theta_ls, np.zeros(0), 0, True, [], xi)
@@ -267,58 +261,3 @@ def els(
             stacklevel=2,
         )
     return done(theta, c, len(hist), converged, hist, xi)
-
-
-# --------------------------------------------------------------------------------------
-# the paper's black-box models on the bundled plant data (hook for `graybox reproduce`)
-
-#: (degree ℓ, number of terms) of the paper's models (15) and (17).
-PAPER_BLACK_BOX: tuple[tuple[int, int], ...] = ((2, 17), (3, 23))
-
-
-def black_box_models(
-    ident: Record | Sequence[Record],
-    ny: int = 6,
-    nu: int = 6,
-    ne: int = DEFAULT_NE,
-    sizes: Sequence[tuple[int, int]] = PAPER_BLACK_BOX,
-) -> dict[str, tuple[Selection, Model]]:
-    """FROLS + ELS as in Section IV-A, for each (degree, n_terms) in ``sizes``.
-
-    Returns
-    -------
-    dict
-        ``"ELS ℓ=2"`` → (Selection, Model), … in the order of ``sizes``.
-    """
-    out = {}
-    for degree, n_terms in sizes:
-        sel = frols(Candidates(ny=ny, nu=nu, ne=ne, degree=degree), ident, n_terms=n_terms)
-        out[f"ELS ℓ={degree}"] = (sel, els(sel, ident, name=f"ELS ℓ={degree}"))
-    return out
-
-
-def section_black_box(quick: bool = True, out: Path | None = None, data: Dataset | None = None) -> str:
-    """``graybox reproduce`` section: black-box ERR + ELS models on the bundled plant data.
-
-    Prints each model's Table I row (J_S ident, J_S valid, J_SF, N_p; MSE in mlc²) and its
-    equation. ``quick`` and ``out`` are accepted for the common section signature; this
-    section is fast and draws nothing.
-    """
-    from .evaluate import evaluate
-
-    if data is None:
-        from .datasets import load_pumping  # imported late: the data module is optional here
-
-        data = load_pumping()
-    models = black_box_models(data.ident)
-    table = evaluate({k: m for k, (_, m) in models.items()}, data)
-    lines = [
-        "== Black-box models: ERR (FROLS) structure selection + ELS with MA(2) (Section IV-A) ==",
-        f"ny = nu = 6, ne = {DEFAULT_NE}; 17 terms at ℓ = 2 (eq. 15), 23 terms at ℓ = 3 (eq. 17); "
-        "the MA part is used for estimation only.",
-        table[["J_S ident", "J_S valid", "J_SF", "N_p"]].to_string(float_format=lambda v: f"{v:.4f}"),
-    ]
-    for key, (sel, m) in models.items():
-        lines.append(f"-- {key}: 1 - ΣERR = {1.0 - sel.err_total:.3e}")
-        lines.append("   " + m.equation())
-    return "\n".join(lines)

@@ -12,28 +12,17 @@ from typing import Literal
 
 import numpy as np
 
-from .kernels import encode, simulate_batch, simulate_one
-from .records import Record, as_1d_finite
-from .regressors import regressor_matrix
-from .terms import Structure
+from ._kernels import encode, simulate_batch, simulate_one
+from ._records import Record
+from ._validation import as_1d_finite, check_choice, check_theta
+from ._regressors import regressor_matrix
+from ._terms import Structure
 
-__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "check_theta", "free_run_inputs"]
+__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "free_run_inputs"]
 
 
 class DivergenceError(ValueError):
     """A free run left every reasonable bound (the model is unstable along this input)."""
-
-
-def check_theta(structure: Structure, theta: np.ndarray, name: str = "theta") -> np.ndarray:
-    """Return θ as a finite float array of length ``len(structure)`` or raise ``ValueError``."""
-    th = np.asarray(theta, dtype=float)
-    if th.ndim != 1:
-        raise ValueError(f"{name} must be 1-D, got shape {th.shape}")
-    if th.size != len(structure):
-        raise ValueError(f"{name} has {th.size} values but the structure has {len(structure)} terms")
-    if not np.all(np.isfinite(th)):
-        raise ValueError(f"{name} has non-finite values at {np.flatnonzero(~np.isfinite(th)).tolist()}")
-    return th
 
 
 def predict(structure: Structure, theta: np.ndarray, record: Record) -> np.ndarray:
@@ -52,7 +41,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record) -> np.ndarr
     ndarray, shape (N,)
         ŷ; the first ``max_lag`` samples are the measured ones.
     """
-    th = check_theta(structure, theta)
+    th = check_theta(len(structure), theta)
     L = structure.max_lag
     record.require_length(L)
     yhat = record.y.copy()
@@ -137,7 +126,8 @@ def simulate(
     -------
     ndarray, shape (N,)
     """
-    th = check_theta(structure, theta)
+    th = check_theta(len(structure), theta)
+    check_choice(on_diverge, "on_diverge", ("raise", "nan"))
     L = structure.max_lag
     u, y0, b = free_run_inputs(u, y0, L, bound)
     y = simulate_one(encode(structure), th, u, y0, L, b)

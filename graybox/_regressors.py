@@ -11,8 +11,8 @@ from typing import Sequence
 
 import numpy as np
 
-from .records import Record, as_records
-from .terms import Structure
+from ._records import Record, as_records
+from ._terms import Structure
 
 __all__ = ["regressor_matrix", "stacked_regressors"]
 

@@ -1,52 +1,24 @@
-"""Reproduce the paper's results (Table I, the static analysis, the figures).
-
-Each section is a function returning text (and, where it makes pictures, writing them
-under ``out``); :func:`run` strings them together. The CLI's ``graybox reproduce``
-calls :func:`run`. ``quick`` mode shortens only the expensive searches, never the
-definitions of the numbers.
-"""
+"""Table I on the bundled plant data: ELS, CLS (22), PE (D_SF), SE (D_SF) for ℓ = 2 and 3, and Figs. 2–8."""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
-from typing import Callable, TextIO
 
 import numpy as np
+import pandas as pd
 
-from . import reference
-from .evaluate import mse
-from .static import equilibria
+from .._convex import cls as cls_fit, pe_pareto
+from .._curves import StaticCurve
+from .._decide import decide_dsf
+from .._els import els
+from .._evaluate import evaluate
+from .._se import GAOptions, se_pareto
+from .._selection import frols
+from .._terms import Candidates
+from ..datasets import load_pumping
+from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
 
-__all__ = ["run", "section_reference_models"]
-
-
-def section_reference_models(quick: bool = True, out: Path | None = None) -> str:
-    """The paper's printed models: clusters, static curves and J_SF against eq. (1)."""
-    pts = reference.eq1_points()
-    lines = ["== The paper's models as printed (Tables II and III) ==",
-             "J_SF is the MSE of the model's static curve against eq. (1) at ū = 750, 850, …, 1650 rpm."]
-    for eq, table in ((15, reference.TABLE_II), (17, reference.TABLE_III)):
-        for col in table:
-            if (("II" if eq == 15 else "III"), col) in reference.MISPRINTED:
-                lines.append(f"-- ({eq}) {col}: misprinted in the paper (static curve diverges); skipped")
-                continue
-            m = reference.paper_model(eq, col)
-            cl = ", ".join(f"{k} = {v:.4g}" for k, v in m.clusters().items())
-            try:
-                yb = m.static_curve(pts.ubar)
-                jsf = f"{mse(pts.ybar, yb):.4f}"
-                curve = " ".join(f"{v:.2f}" for v in yb)
-            except ValueError as exc:
-                jsf, curve = "inf", f"undefined ({exc})"
-            lines.append(f"-- ({eq}) {col}: N_p = {m.n_params}, J_SF = {jsf}")
-            lines.append(f"   clusters: {cl}")
-            lines.append(f"   static curve at 750…1650 rpm: {curve}")
-    m17 = reference.paper_model(17)
-    eqs = equilibria(m17.structure, m17.theta, 750.0)
-    lines.append("-- (17) ELS equilibria at ū = 750 rpm: " + "; ".join(
-        f"ȳ = {e.ybar:.3f} ({'stable' if e.stable else 'unstable'}, ρ = {e.spectral_radius:.3f})" for e in eqs))
-    return "\n".join(lines)
+__all__ = ["section_table1"]
 
 
 def _save(fig, out: Path | None, name: str) -> str:
@@ -67,21 +39,6 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
     come from the paper's GA and from the gradient method; quick mode runs 10 λ1 values instead
     of 100 (50 generations each, as in the full run). Long sweeps checkpoint under ``out`` and resume.
     """
-    import pandas as pd
-
-    from .convex import cls as cls_fit, pe_pareto
-    from .curves import StaticCurve
-    from .datasets import load_pumping
-    from .decide import decide_dsf
-    from .els import els
-    from .evaluate import evaluate
-    from .plots.data import plot_record, plot_static_curve
-    from .plots.models import plot_free_run
-    from .plots.pareto import plot_pareto
-    from .se import GAOptions, se_pareto
-    from .selection import frols
-    from .terms import Candidates
-
     data = load_pumping()
     curve = StaticCurve.fit(data.static, 2, name="eq. (1) form fitted to the static points")
     n_lam = 10 if quick else 100
@@ -99,7 +56,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
     for degree, n_terms, eq in ((2, 17, "15"), (3, 23, "17")):
         cand = Candidates(6, 6, 2, degree, max_y_power=1 if degree == 2 else None)
         sel = frols(cand, data.ident, n_terms=n_terms, include=["1"])
-        m_els = els(sel, data.ident, name=f"ELS ({eq})")
+        m_els = els(sel, data.ident, name=f"ELS ({eq})").model
         models[f"ELS ({eq})"] = m_els
         st = m_els.structure
         lines.append(f"-- ℓ = {degree}: {st}")
@@ -107,14 +64,14 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
             models["CLS (22)"] = cls_fit(st, data.ident, curve, reference=m_els, name="CLS (22)")
         pe = pe_pareto(st, data.ident, data.static, np.logspace(-6, 0, 100))
         fronts = {"PE": pe}
-        models[f"PE (D_SF) ℓ={degree}"] = decide_dsf(pe, 0.031, fallback="min_jsf")
+        models[f"PE (D_SF) ℓ={degree}"] = decide_dsf(pe, band=0.031, fallback="min_jsf").model
         for method in ("ga", "gradient"):
             ck = None if out is None else Path(out) / f"se_{method}_l{degree}{'_quick' if quick else ''}.npz"
             se = se_pareto(st, data, lambdas=np.logspace(-2, 0, n_lam), method=method, seed=0, checkpoint=ck,
-                           threads=threads, options=ga, progress=True)
+                           threads=threads, options=ga if method == "ga" else None)
             label = "SE" if method == "ga" else "SE-grad"
             fronts[label] = se
-            models[f"{label} (D_SF) ℓ={degree}"] = decide_dsf(se, 0.031, fallback="min_jsf")
+            models[f"{label} (D_SF) ℓ={degree}"] = decide_dsf(se, band=0.031, fallback="min_jsf").model
         single = [k for k in models if k.endswith(f"({eq})") or (degree == 2 and k == "CLS (22)")]
         tab = evaluate({k: models[k] for k in single}, data)
         if out is not None:
@@ -158,20 +115,3 @@ def _dominance(fronts: dict) -> str:
         dominated = np.array([np.any(np.all(S <= p, axis=1) & np.any(S < p, axis=1)) for p in P])
         out.append(f"{se_name} dominates {dominated.sum()}/{len(P)} PE members")
     return "; ".join(out)
-
-
-def _sections() -> list[Callable[..., str]]:
-    # imported here so that `import graybox.reproduce` stays light
-    from .els import section_black_box
-    from .neural import section_neural
-
-    return [section_reference_models, section_black_box, section_neural, section_table1]
-
-
-def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout) -> None:
-    """Run every section in order, printing each as it finishes."""
-    if out is not None:
-        Path(out).mkdir(parents=True, exist_ok=True)
-    for sec in _sections():
-        print(sec(quick=quick, out=out), file=stream, flush=True)
-        print(file=stream)

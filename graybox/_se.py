@@ -11,13 +11,13 @@ Two solvers share one problem definition (:class:`SEProblem`):
   residuals [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] with the Jacobian from the forward sensitivity
   recursion of the compiled kernel, warm-started along the λ sweep.
 
-:func:`se_pareto` runs either and returns a :class:`graybox.pareto.ParetoSet` whose J's come
+:func:`se_pareto` runs either and returns a :class:`graybox.ParetoSet` whose J's come
 from the shared evaluator. Long sweeps show a progress bar, write a checkpoint after each λ and
 resume from it; a checkpoint written for another problem is refused.
 
 Inside the optimisers J_S is computed by the fused batch kernel (same definition as
-:func:`graybox.evaluate.js`) and J_SF from the equilibrium near the measured ȳ_i
-(:func:`graybox.static.nearest_stable_equilibria`: exact for rational structures; for others the
+:func:`graybox.js`) and J_SF from the equilibrium near the measured ȳ_i
+(:func:`graybox.nearest_stable_equilibria`: exact for rational structures; for others the
 stable root nearest ȳ_i), counted as undefined (infinite cost) where no stable equilibrium exists —
 a model does not settle on an unstable equilibrium, so matching the static points there would be a
 false gain. The reported front is
@@ -29,6 +29,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Literal, Sequence
@@ -36,29 +37,23 @@ from typing import Literal, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
-from tqdm import tqdm
 
-from .kernels import batch_sse, encode, free_run_sensitivity, input_products, simulate_one
-from .ls import column_scales, scaled_lstsq
-from .pareto import ParetoSet
-from .records import Dataset, Record, StaticPoints, as_records
-from .regressors import stacked_regressors
-from .simulation import check_theta
-from .static import nearest_stable_equilibria, static_theta_gradient
-from .terms import Structure
+from ._convex import pe_thetas
+from ._kernels import batch_sse, encode, free_run_sensitivity, input_products, simulate_one
+from ._ls import column_scales, scaled_lstsq
+from ._pareto import ParetoSet
+from ._progress import progress_bar
+from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
+from ._regressors import stacked_regressors
+from ._static import nearest_stable_equilibria, static_theta_gradient
+from ._terms import Structure
+from ._validation import check_choice, check_lambdas, check_theta
 
-__all__ = ["SEProblem", "GAOptions", "ga_front", "gradient_front", "se_pareto", "check_lambdas"]
+__all__ = ["SEProblem", "GAOptions", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
 
-
-def check_lambdas(lambdas: Sequence[float]) -> np.ndarray:
-    """λ1 values as a 1-D array in (0, 1], or ``ValueError`` naming the offending values."""
-    lam = np.asarray(lambdas, dtype=float).ravel()
-    if lam.size == 0:
-        raise ValueError("no λ1 values given")
-    bad = ~np.isfinite(lam) | (lam <= 0) | (lam > 1)
-    if bad.any():
-        raise ValueError(f"λ1 must lie in (0, 1]; got {lam[bad].tolist()}")
-    return lam
+#: The paper's SE sweep (Section IV-C), the default ``lambdas``: 100 λ1 in logspace(−2, 0).
+SE_LAMBDAS = np.logspace(-2, 0, 100)
+SE_LAMBDAS.setflags(write=False)
 
 
 class SEProblem:
@@ -285,7 +280,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
         done = ck["done"]
         thetas[:done], costs[:done] = ck["thetas"][:done], ck["costs"][:done]
     prev = thetas[done - 1] if done else None
-    bar = tqdm(total=K, initial=done, desc=f"SE front ({method})", disable=not progress, leave=False)
+    bar = progress_bar(K, f"SE front ({method})", progress, initial=done)
     # The sweeps make thousands of small BLAS calls (a 3200 × n Jacobian's SVD, 30-row least
     # squares): a multi-threaded BLAS only adds synchronisation, and on a loaded 2-core machine
     # it measured 30x slower than one thread. Our own parallelism is the population threads.
@@ -308,11 +303,12 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
 
 def ga_front(
     problem: SEProblem,
-    lambdas: Sequence[float] = tuple(np.logspace(-2, 0, 100)),
+    lambdas: Sequence[float] | np.ndarray = SE_LAMBDAS,
+    *,
     options: GAOptions = GAOptions(),
     seed: int = 0,
     checkpoint: str | os.PathLike | None = None,
-    progress: bool = True,
+    progress: bool | None = None,
     threads: int = 1,
     theta0: np.ndarray | Literal["ls"] | None = "ls",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -350,7 +346,7 @@ def ga_front(
             raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
         first = problem.ls_theta()
     else:
-        first = None if theta0 is None else check_theta(problem.structure, theta0, "theta0")
+        first = None if theta0 is None else check_theta(len(problem.structure), theta0, "theta0")
 
     def step(i, lam1, prev, rng):
         carry = prev if prev is not None else first
@@ -396,11 +392,12 @@ def _residuals_and_jac(problem: SEProblem, z: np.ndarray, lam1: float, want_jac:
 
 def gradient_front(
     problem: SEProblem,
-    lambdas: Sequence[float] = tuple(np.logspace(-2, 0, 100)),
+    lambdas: Sequence[float] | np.ndarray = SE_LAMBDAS,
+    *,
     theta0: np.ndarray | None = None,
     seed: int = 0,
     checkpoint: str | os.PathLike | None = None,
-    progress: bool = True,
+    progress: bool | None = None,
     max_nfev: int = 50,
     tol: float = 1e-8,
     starts: Sequence[np.ndarray] = (),
@@ -432,7 +429,7 @@ def gradient_front(
     lambdas, thetas, costs : as :func:`ga_front`
     """
     lam = np.sort(check_lambdas(lambdas))[::-1]
-    start = problem.ls_theta() if theta0 is None else check_theta(problem.structure, theta0, "theta0")
+    start = problem.ls_theta() if theta0 is None else check_theta(len(problem.structure), theta0, "theta0")
 
     def step(i, lam1, prev, rng):
         cache: dict = {}
@@ -462,8 +459,7 @@ def gradient_front(
         th = res.x / problem.scale
         return th, float(2 * res.cost)
 
-    if solver not in ("dogbox", "trf", "lm"):
-        raise ValueError(f"solver must be 'dogbox', 'trf' or 'lm', got {solver!r}")
+    check_choice(solver, "solver", ("trf", "dogbox", "lm"))
     thetas, costs = _sweep(problem, lam, "gradient", {"max_nfev": max_nfev, "tol": tol, "solver": solver,
                                                      "theta0": None if theta0 is None else list(map(float, start)),
                                                      "starts": [list(map(float, s_)) for s_ in starts]},
@@ -473,28 +469,36 @@ def gradient_front(
 
 def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
     """PE solutions (closed form) leaning more and more on the static points: fallback starts."""
-    from .convex import pe_thetas
-
     try:
-        with threadpool_limits(limits=1, user_api="blas"):
+        with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
             return list(pe_thetas(problem.structure, problem.records, problem.static, [1e-1, 1e-2, 1e-3, 1e-4],
-                                  solver="closed", range_margin=None))
+                                  solver="closed"))
     except ValueError:  # e.g. not identifiable with the static rows: no fallback, theta0 only
         return []
+
+
+#: Options of :func:`se_pareto` that apply to one method only.
+_METHOD_ONLY = {"ga": ("options",), "gradient": ("max_nfev", "tol", "solver", "starts")}
 
 
 def se_pareto(
     structure: Structure,
     data: Record | Dataset | Sequence[Record],
     static: StaticPoints | None = None,
-    lambdas: Sequence[float] = tuple(np.logspace(-2, 0, 100)),
+    lambdas: Sequence[float] | np.ndarray | None = None,
+    *,
     method: Literal["ga", "gradient"] = "ga",
     seed: int = 0,
     checkpoint: str | os.PathLike | None = None,
-    progress: bool = True,
+    progress: bool | None = None,
     threads: int = 1,
+    theta0: np.ndarray | Literal["ls"] | None = "ls",
     options: GAOptions | None = None,
-    **kwargs,
+    max_nfev: int | None = None,
+    tol: float | None = None,
+    solver: Literal["trf", "dogbox", "lm"] | None = None,
+    starts: Sequence[np.ndarray] | None = None,
 ) -> ParetoSet:
     """SE Pareto set of eq. (13) by the paper's GA or the gradient method.
 
@@ -506,44 +510,68 @@ def se_pareto(
         Identification data (a Dataset's ``ident``); with several records each is run freely
         on its own and J_S is the mean over all their samples.
     static : StaticPoints, optional
-        Static points (default: the Dataset's).
-    lambdas : sequence of float in (0, 1]
-        λ1 values (paper: logspace(-2, 0, 100)); runs go from λ1 = 1 down.
+        Static points (default: the Dataset's). Points outside the records' input range are
+        welcome (a :class:`StaticRangeWarning` names them once).
+    lambdas : sequence of float in (0, 1], optional
+        λ1 values; default: the paper's logspace(-2, 0, 100). Runs go from λ1 = 1 down.
     method : {"ga", "gradient"}
+        The paper's genetic algorithm, or ``scipy.optimize.least_squares`` with the analytic
+        Jacobian of the free run.
     seed : int
         Makes the GA (and its random initial individuals) reproducible.
     checkpoint : path, optional
         Written after each λ; an existing one for the same problem resumes the sweep.
-    progress : bool
-        Show a progress bar.
+    progress : bool, optional
+        Show a progress bar; default: only on a terminal.
     threads : int
-        Threads for the GA's population runs.
+        Threads for the GA's population runs and the evaluation of the members.
+    theta0 : ndarray, "ls" or None
+        Start. GA: an individual added to the first run's population (``"ls"``, the default: the
+        least-squares estimate; ``None``: the paper's random individuals only). Gradient: the
+        first run's start (``"ls"`` or ``None``: least squares).
     options : GAOptions, optional
-        GA settings.
-    **kwargs
-        Passed to :func:`ga_front` (``theta0``) or :func:`gradient_front` (``theta0``, ``max_nfev``,
-        ``tol``).
+        GA settings (GA only).
+    max_nfev, tol, solver, starts : optional
+        Gradient only: evaluations per λ (default 50), ``least_squares`` tolerances (1e-8), its
+        method (``"trf"``), and further starting points (default: PE solutions).
 
     Returns
     -------
     ParetoSet
         All members (one per λ) with J_1, J_S and J_SF from the shared evaluator; the optimised
         cost is in ``extra["cost"]``. Use ``.nondominated()`` for the front proper.
+
+    Raises
+    ------
+    ValueError
+        An option of the other method is given, an unknown method, no static points.
     """
+    check_choice(method, "method", ("ga", "gradient"))
+    given = {"options": options, "max_nfev": max_nfev, "tol": tol, "solver": solver, "starts": starts}
+    other = "gradient" if method == "ga" else "ga"
+    wrong = [k for k in _METHOD_ONLY[other] if given[k] is not None]
+    if wrong:
+        raise ValueError(f"{', '.join(wrong)} appl{'y' if len(wrong) > 1 else 'ies'} to method={other!r} only, "
+                         f"not to method={method!r}")
     rec = as_records(data)
     sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
     if sp is None:
         raise ValueError("the SE problem needs static points: pass static= or a Dataset with static points")
+    warn_static_range(sp.ubar, rec)
     problem = SEProblem(structure, rec, sp)
+    lam_in = SE_LAMBDAS if lambdas is None else lambdas
     if method == "ga":
-        lam, th, cost = ga_front(problem, lambdas, options or GAOptions(), seed, checkpoint, progress, threads,
-                                 **kwargs)
-    elif method == "gradient":
-        if "starts" not in kwargs:
-            kwargs["starts"] = _pe_starts(problem)
-        lam, th, cost = gradient_front(problem, lambdas, seed=seed, checkpoint=checkpoint, progress=progress, **kwargs)
+        lam, th, cost = ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
+                                 progress=progress, threads=threads, theta0=theta0)
     else:
-        raise ValueError(f"method must be 'ga' or 'gradient', got {method!r}")
+        t0 = None if (isinstance(theta0, str) and theta0 == "ls") else theta0
+        if isinstance(theta0, str) and theta0 != "ls":
+            raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
+        lam, th, cost = gradient_front(
+            problem, lam_in, theta0=t0, seed=seed, checkpoint=checkpoint, progress=progress,
+            max_nfev=50 if max_nfev is None else max_nfev, tol=1e-8 if tol is None else tol,
+            solver="trf" if solver is None else solver,
+            starts=_pe_starts(problem) if starts is None else starts)
     finite = np.all(np.isfinite(th), axis=1) & np.isfinite(cost)
     if not finite.any():
         raise ValueError(

@@ -15,7 +15,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..pareto import ParetoSet, nondominated_mask
+from .._pareto import ParetoSet, nondominated_mask
 
 __all__ = ["plot_pareto"]
 
@@ -61,7 +61,7 @@ def plot_pareto(
         legend).
     points : mapping name -> (J_S, J_SF), or DataFrame, optional
         Single models such as ELS and CLS, drawn as large markers with their names; a table
-        from :func:`graybox.evaluate.evaluate` works too (its ``J_S ident`` and ``J_SF``).
+        from :func:`graybox.evaluate` works too (its ``J_S ident`` and ``J_SF``).
     band : float or None
         Shade J_SF in B = [0, band] (D_SF's band, 0.031 mlc²); None draws no band.
     ax : matplotlib Axes, optional

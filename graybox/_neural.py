@@ -74,24 +74,22 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Literal, Sequence
 
 import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from .records import Dataset, Record, as_1d_finite, as_records, frozen
-from .simulation import DivergenceError, free_run_inputs
-from .static import Equilibrium
+from ._records import Dataset, Record, as_records
+from ._validation import as_1d_finite, check_choice, check_int, check_real, frozen
+from ._simulation import DivergenceError, free_run_inputs
+from ._static import Equilibrium
 
-__all__ = ["NeuralModel", "NeuralTrainInfo", "neural_narx", "section_neural"]
+__all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
 
 #: The paper's sizes (Section IV-A) and training length.
 PAPER_NY, PAPER_NU, PAPER_NE, PAPER_HIDDEN, PAPER_EPOCHS = 6, 6, 2, 7, 60
 
-#: Table I, "Neural" column, as printed (MSE in mlc²).
-PAPER_ROW = {"J_S ident": 1.09, "J_S valid": 0.536, "J_SF": 0.0496, "N_p": 99}
 
 
 def _frozen(a: np.ndarray, name: str, shape: tuple[int, ...]) -> np.ndarray:
@@ -101,19 +99,6 @@ def _frozen(a: np.ndarray, name: str, shape: tuple[int, ...]) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} has non-finite values")
     return a
-
-
-def _check_int(value: object, name: str, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
-    return int(value)
-
-
-def _check_positive(value: object, name: str) -> float:
-    v = float(value)  # type: ignore[arg-type]
-    if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
 
 
 # ---------------------------------------------------------------------------
@@ -319,9 +304,9 @@ class NeuralModel:
     name: str = "Neural"
 
     def __post_init__(self) -> None:
-        ny = _check_int(self.ny, "ny", 0)
-        nu = _check_int(self.nu, "nu", 1)
-        ne = _check_int(self.ne, "ne", 0)
+        ny = check_int(self.ny, "ny", low=0)
+        nu = check_int(self.nu, "nu", low=1)
+        ne = check_int(self.ne, "ne", low=0)
         b1 = np.asarray(self.b1, dtype=float)
         if b1.ndim != 1 or b1.size == 0:
             raise ValueError(f"b1 must be 1-D with one bias per hidden node, got shape {b1.shape}")
@@ -341,8 +326,8 @@ class NeuralModel:
             if not np.isfinite(v):
                 raise ValueError(f"{off} must be finite, got {v!r}")
             object.__setattr__(self, off, v)
-        object.__setattr__(self, "u_scale", _check_positive(self.u_scale, "u_scale"))
-        object.__setattr__(self, "y_scale", _check_positive(self.y_scale, "y_scale"))
+        object.__setattr__(self, "u_scale", check_real(self.u_scale, "u_scale", low=0, low_open=True))
+        object.__setattr__(self, "y_scale", check_real(self.y_scale, "y_scale", low=0, low_open=True))
 
     # -- basic facts --------------------------------------------------------
     @property
@@ -443,7 +428,7 @@ class NeuralModel:
     ) -> np.ndarray:
         """Free run (e ≡ 0): the network feeds back its own past outputs.
 
-        Same conventions as :func:`graybox.simulation.simulate`. The output of a tanh network
+        Same conventions as :func:`graybox.simulate`. The output of a tanh network
         with a linear output node is bounded (|ŷ_n − b2| ≤ Σ|w2|), so it never runs off to
         infinity; the bound check is kept for the shared contract (and for a small ``bound``).
         An oscillating (limit-cycle) free run is not reported as divergence: J_S measures it.
@@ -455,7 +440,7 @@ class NeuralModel:
         y0 : ndarray, shape (>= max_lag,), optional
             Initial outputs y(0) … y(L-1) (output units); only the first L = max_lag are used.
         on_diverge : {"raise", "nan"}
-            When |y| exceeds ``bound``: raise :class:`~graybox.simulation.DivergenceError`
+            When |y| exceeds ``bound``: raise :class:`~graybox.DivergenceError`
             naming the sample, or return NaN from that sample on.
         bound : float, optional
             Divergence bound on |y| (default 1e6 · (1 + max|y0|), as for polynomial models).
@@ -465,8 +450,7 @@ class NeuralModel:
         ndarray, shape (N,)
             Output units; the first ``max_lag`` samples are ``y0``.
         """
-        if on_diverge not in ("raise", "nan"):
-            raise ValueError(f"on_diverge must be 'raise' or 'nan', got {on_diverge!r}")
+        check_choice(on_diverge, "on_diverge", ("raise", "nan"))
         L = self.max_lag
         u, y0, b = free_run_inputs(u, y0, L, bound, what="network")
         yn = _free_run_kernel(self._W1c, self.b1, self.w2, self.b2, np.ascontiguousarray(self._un(u)),
@@ -531,7 +515,7 @@ class NeuralModel:
     def static_curve(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, strict: bool = True) -> np.ndarray:
         """The steady state the network reaches at each constant input, shape (M,).
 
-        Conventions of :func:`graybox.static.static_curve`: the stable equilibrium at each ū;
+        Conventions of :func:`graybox.static_curve`: the stable equilibrium at each ū;
         when several are stable, the one a free run at constant ū from the constant initial
         output ``y0`` settles on.
 
@@ -642,11 +626,13 @@ class NeuralModel:
 # ---------------------------------------------------------------------------
 
 @dataclass(frozen=True, eq=False)
-class NeuralTrainInfo:
-    """How a Levenberg–Marquardt run went (``neural_narx(..., full_output=True)``).
+class NeuralFit:
+    """The result of :func:`neural_narx`: the trained network and how the training went.
 
     Attributes
     ----------
+    model : NeuralModel
+        The trained network.
     epochs : int
         Trial steps taken (each is one epoch, accepted or not).
     cost : tuple of float
@@ -663,6 +649,7 @@ class NeuralTrainInfo:
         Wall-clock training time.
     """
 
+    model: NeuralModel
     epochs: int
     cost: tuple[float, ...]
     lam: tuple[float, ...]
@@ -681,6 +668,7 @@ def _unpack(theta: np.ndarray, H: int, n_in: int) -> tuple[np.ndarray, np.ndarra
 
 def neural_narx(
     data: Record | Dataset | Sequence[Record],
+    *,
     ny: int = PAPER_NY,
     nu: int = PAPER_NU,
     ne: int = PAPER_NE,
@@ -690,8 +678,7 @@ def neural_narx(
     weight_decay: float = 0.0,
     lam0: float = 1.0,
     name: str = "Neural",
-    full_output: bool = False,
-) -> NeuralModel | tuple[NeuralModel, NeuralTrainInfo]:
+) -> NeuralFit:
     """Train the neural NARMAX baseline (Norgaard's ``nnnarmax2``) by Levenberg–Marquardt.
 
     Parameters
@@ -715,12 +702,11 @@ def neural_narx(
         Initial Levenberg–Marquardt λ (> 0; Norgaard's default 1).
     name : str
         Label of the returned model.
-    full_output : bool
-        Also return a :class:`NeuralTrainInfo`.
 
     Returns
     -------
-    NeuralModel, or (NeuralModel, NeuralTrainInfo)
+    NeuralFit
+        ``.model`` is the trained network; the other fields say how the training went.
 
     Raises
     ------
@@ -730,16 +716,16 @@ def neural_narx(
         non-finite weights.
     """
     recs = as_records(data)
-    ny = _check_int(ny, "ny", 0)
-    nu = _check_int(nu, "nu", 1)
-    ne = _check_int(ne, "ne", 0)
-    hidden = _check_int(hidden, "hidden", 1)
-    epochs = _check_int(epochs, "epochs", 1)
-    seed = _check_int(seed, "seed", 0)
+    ny = check_int(ny, "ny", low=0)
+    nu = check_int(nu, "nu", low=1)
+    ne = check_int(ne, "ne", low=0)
+    hidden = check_int(hidden, "hidden", low=1)
+    epochs = check_int(epochs, "epochs", low=1)
+    seed = check_int(seed, "seed", low=0)
     D = float(weight_decay)
     if not (np.isfinite(D) and D >= 0):
         raise ValueError(f"weight_decay must be a finite number >= 0, got {weight_decay!r}")
-    lam = _check_positive(lam0, "lam0")
+    lam = check_real(lam0, "lam0", low=0, low_open=True)
     L = max(ny, nu)
     for r in recs:
         r.require_length(L)
@@ -825,63 +811,5 @@ def neural_narx(
         raise ValueError("training produced non-finite weights")
     W1, b1, w2, b2 = _unpack(theta, hidden, n_in)
     model = NeuralModel(W1, b1, w2, b2, ny, nu, ne, u_off, u_sc, y_off, y_sc, name)
-    if not full_output:
-        return model
-    info = NeuralTrainInfo(len(costs), tuple(costs), tuple(lams), accepted, stopped,
+    return NeuralFit(model, len(costs), tuple(costs), tuple(lams), accepted, stopped,
                            float(np.sqrt(np.mean(e[mask] ** 2)) * y_sc), time.perf_counter() - t0)
-    return model, info
-
-
-# ---------------------------------------------------------------------------
-# The `graybox reproduce` section
-# ---------------------------------------------------------------------------
-
-def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | None = None) -> str:
-    """``graybox reproduce`` section: the neural NARMAX baseline's Table I row.
-
-    Trains ny = nu = 6, ne = 2, 7 tanh hidden nodes (N_p = 99) on the identification record
-    for the paper's 60 epochs from seed 0 and prints its row (J_S ident, J_S valid, J_SF, N_p;
-    MSE in output units²). Training takes under a second, so ``quick`` does not shorten it
-    (fewer epochs would change the model, not just the time); the full mode adds seeds 1–4
-    and reports the spread of the row over the five initialisations. With ``out`` the
-    seed-0 validation free run is drawn to ``out/neural_free_run.png``.
-    """
-    import pandas as pd
-
-    from .evaluate import evaluate
-
-    if data is None:
-        from .datasets import load_pumping
-
-        data = load_pumping()
-    seeds = (0,) if quick else (0, 1, 2, 3, 4)
-    nets, infos = {}, {}
-    for sd in seeds:
-        nets[sd], infos[sd] = neural_narx(data.ident, epochs=PAPER_EPOCHS, seed=sd, name="Neural", full_output=True)
-    net, info = nets[0], infos[0]
-    cols = ["J_S ident", "J_S valid", "J_SF", "N_p"]
-    table = evaluate({"Neural": net}, data)
-    paper = ", ".join(f"{k} = {v}" for k, v in PAPER_ROW.items())
-    fmt = {"float_format": lambda v: f"{v:.4f}"}
-    lines = [
-        "== Neural NARMAX baseline (Norgaard's nnnarmax2, Section IV-A) ==",
-        f"ny = nu = {net.ny}, ne = {net.ne}, {net.hidden} tanh hidden nodes, linear output; "
-        f"Levenberg–Marquardt, {PAPER_EPOCHS} epochs from seed 0 ({info.accepted} steps accepted, "
-        f"{info.seconds:.2f} s wall time incl. any first-call JIT compilation); training RMSE of the NARMAX predictor {info.rmse_train:.4f} {data.ident.units[1]}",
-        f"N_p = {net.n_params}: {net.hidden}·{net.ny + net.nu} input + {net.hidden} bias + {net.hidden} output "
-        f"weights + 1 output bias; the {net.hidden * net.ne} residual-input weights (training only) are not counted",
-        f"paper (measured plant, not these data): {paper}",
-        table[cols].to_string(**fmt),
-    ]
-    if len(seeds) > 1:
-        spread = evaluate({f"seed {sd}": nets[sd] for sd in seeds}, data)[cols[:3]]
-        summary = pd.DataFrame({"min": spread.min(), "median": spread.median(), "max": spread.max()}).T
-        lines.append(f"spread over seeds {list(seeds)}:")
-        lines.append(summary.to_string(**fmt))
-    if out is not None:
-        from .plots.models import plot_free_run
-
-        path = Path(out) / "neural_free_run.png"
-        plot_free_run(data.valid, {"Neural": net}).savefig(path, dpi=120)  # type: ignore[arg-type]
-        lines.append(f"figure: [{path}]")
-    return "\n".join(lines)

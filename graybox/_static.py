@@ -18,8 +18,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from .records import as_1d_finite
-from .terms import Structure, Term
+from ._validation import as_1d_finite
+from ._terms import Structure, Term
 
 __all__ = [
     "cluster_key",
@@ -320,7 +320,7 @@ def static_curve(
 
 def _settle(structure: Structure, theta: np.ndarray, ubar: float, y0: float, candidates: list[float]) -> float:
     """Run the model at constant input from y0 and return the candidate equilibrium it approaches."""
-    from .kernels import encode, simulate_one
+    from ._kernels import encode, simulate_one
 
     L = max(structure.max_lag, 1)
     n = L + 20000
@@ -411,7 +411,7 @@ def nearest_stable_equilibria(
         coef[1] -= 1.0
         if D <= 3:
             # closed forms, compiled: batched eigenvalues cost 5 ms per GA generation here
-            from .kernels import real_roots_upto_cubic
+            from ._kernels import real_roots_upto_cubic
 
             rr = real_roots_upto_cubic(coef)
             roots = rr.astype(complex)
@@ -473,7 +473,7 @@ def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar
 
     The characteristic polynomial z^L − a_1 z^(L−1) − … − a_L of the linearised recursion is
     tested by the Schur–Cohn step-down recursion (all reflection coefficients inside the unit
-    interval), compiled (:func:`graybox.kernels.stable_equilibria`): no eigenvalues are
+    interval), compiled (:func:`graybox._kernels.stable_equilibria`): no eigenvalues are
     computed, which makes the test cheap enough for every generation of a GA.
 
     Parameters
@@ -484,7 +484,7 @@ def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar
     ybar : ndarray, shape (P, M)
         Equilibrium outputs (non-finite entries count as unstable).
     """
-    from .kernels import encode, stable_equilibria
+    from ._kernels import encode, stable_equilibria
 
     code = encode(structure)
     L = int(code.ylag.max(initial=0))

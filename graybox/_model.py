@@ -7,9 +7,10 @@ from typing import Literal
 
 import numpy as np
 
-from . import simulation, static
-from .records import Record, frozen
-from .terms import Structure
+from . import _simulation, _static
+from ._records import Record
+from ._validation import check_theta, frozen
+from ._terms import Structure
 
 __all__ = ["Model"]
 
@@ -45,8 +46,8 @@ class Model:
         ns = self.noise_structure if isinstance(self.noise_structure, Structure) else Structure(self.noise_structure)
         object.__setattr__(self, "structure", st)
         object.__setattr__(self, "noise_structure", ns)
-        object.__setattr__(self, "theta", frozen(simulation.check_theta(st, self.theta)))
-        object.__setattr__(self, "noise_theta", frozen(simulation.check_theta(ns, self.noise_theta, "noise_theta")))
+        object.__setattr__(self, "theta", frozen(check_theta(len(st), self.theta)))
+        object.__setattr__(self, "noise_theta", frozen(check_theta(len(ns), self.noise_theta, "noise_theta")))
 
     # -- basic facts --------------------------------------------------------
     @property
@@ -65,8 +66,8 @@ class Model:
 
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record) -> np.ndarray:
-        """One-step-ahead prediction over ``record``, shape (N,); see :func:`graybox.simulation.predict`."""
-        return simulation.predict(self.structure, self.theta, record)
+        """One-step-ahead prediction over ``record``, shape (N,); see :func:`graybox._simulation.predict`."""
+        return _simulation.predict(self.structure, self.theta, record)
 
     def simulate(
         self,
@@ -74,35 +75,35 @@ class Model:
         y0: np.ndarray | None = None,
         on_diverge: Literal["raise", "nan"] = "raise",
     ) -> np.ndarray:
-        """Free run, shape (N,); see :func:`graybox.simulation.simulate`."""
-        return simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge)
+        """Free run, shape (N,); see :func:`graybox._simulation.simulate`."""
+        return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge)
 
     # -- statics ------------------------------------------------------------
     def clusters(self) -> dict[str, float]:
         """Cluster coefficients by name (``{"Σ0": …, "Σy": …, "Σu": …}``), Σ = R θ."""
-        cm = static.cluster_map(self.structure)
+        cm = _static.cluster_map(self.structure)
         return dict(zip(cm.names, (cm.R @ self.theta).tolist()))
 
-    def cluster_map(self) -> static.ClusterMap:
+    def cluster_map(self) -> _static.ClusterMap:
         """The clusters and the 0/1 map R of this structure."""
-        return static.cluster_map(self.structure)
+        return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, strict: bool = True) -> np.ndarray:
-        """Steady-state output at each ū, shape (M,); see :func:`graybox.static.static_curve`."""
-        return static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
+        """Steady-state output at each ū, shape (M,); see :func:`graybox._static.static_curve`."""
+        return _static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
 
-    def equilibria(self, ubar: float) -> list[static.Equilibrium]:
-        """Every real equilibrium at ū with its stability; see :func:`graybox.static.equilibria`."""
-        return static.equilibria(self.structure, self.theta, ubar)
+    def equilibria(self, ubar: float) -> list[_static.Equilibrium]:
+        """Every real equilibrium at ū with its stability; see :func:`graybox._static.equilibria`."""
+        return _static.equilibria(self.structure, self.theta, ubar)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None) -> np.ndarray:
         """dȳ/dū along the static curve, shape (M,)."""
-        return static.static_gain(self.structure, self.theta, ubar, y0=y0)
+        return _static.static_gain(self.structure, self.theta, ubar, y0=y0)
 
     @property
     def is_rational(self) -> bool:
         """True when the static function has the closed rational form of eq. (6)."""
-        return static.is_rational(self.structure)
+        return _static.is_rational(self.structure)
 
     # -- printing -----------------------------------------------------------
     def equation(self, digits: int = 4) -> str:

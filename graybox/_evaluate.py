@@ -22,9 +22,9 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from .model import Model
-from .records import Dataset, Record, StaticPoints
-from .simulation import DivergenceError
+from ._model import Model
+from ._records import Dataset, Record, StaticPoints
+from ._simulation import DivergenceError
 
 __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
 
@@ -141,7 +141,7 @@ def static_curves(
     With ``check_stability`` an equilibrium that is not locally stable is NaN too (the model
     does not settle there), matching :meth:`Model.static_curve`.
     """
-    from .static import is_rational, rational_equilibria, static_curve
+    from ._static import is_rational, rational_equilibria, static_curve
 
     th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float)
@@ -187,8 +187,8 @@ def evaluate_thetas(
     -------
     dict with keys among ``"J1"``, ``"JS"``, ``"JSF"``, each ndarray of shape (P,)
     """
-    from .regressors import regressor_matrix
-    from .simulation import simulate_many
+    from ._regressors import regressor_matrix
+    from ._simulation import simulate_many
 
     th = np.atleast_2d(np.asarray(thetas, float))
     out: dict[str, np.ndarray] = {}

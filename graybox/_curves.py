@@ -6,8 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .ls import scaled_lstsq
-from .records import StaticPoints, as_1d_finite
+from ._ls import scaled_lstsq
+from ._records import StaticPoints
+from ._validation import as_1d_finite
 
 __all__ = ["StaticCurve"]
 

@@ -12,39 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Record", "StaticPoints", "as_1d_finite", "frozen"]
+from ._validation import as_1d_finite, warn
 
-
-def frozen(a: object, dtype: type = float) -> np.ndarray:
-    """A read-only copy of ``a``: how every immutable value in graybox stores its arrays."""
-    x = np.array(a, dtype=dtype, copy=True)
-    x.setflags(write=False)
-    return x
-
-
-def as_1d_finite(x: object, name: str) -> np.ndarray:
-    """Return ``x`` as a read-only 1-D float64 array, or raise ``ValueError``.
-
-    Parameters
-    ----------
-    x : array_like
-        The values.
-    name : str
-        What ``x`` is, used in error messages (e.g. ``"u"``).
-    """
-    a = np.array(x, dtype=float, copy=True)
-    if a.ndim == 2 and 1 in a.shape:
-        raise ValueError(f"{name} must be 1-D, got shape {a.shape}; pass a flat array (e.g. x.ravel())")
-    if a.ndim != 1:
-        raise ValueError(f"{name} must be 1-D, got {a.ndim}-D with shape {a.shape}")
-    bad = ~np.isfinite(a)
-    if bad.any():
-        idx = np.flatnonzero(bad)
-        raise ValueError(
-            f"{name} has {idx.size} non-finite value(s) (NaN or inf), first at index {idx[0]}"
-        )
-    a.setflags(write=False)
-    return a
+__all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
 
 @dataclass(frozen=True)
@@ -83,6 +53,11 @@ class Record:
 
     def __len__(self) -> int:
         return int(self.u.size)
+
+    def __repr__(self) -> str:
+        uu, yu = (f" {x}" if x else "" for x in self.units)
+        return (f"Record({self.name!r}: {len(self)} samples, Ts = {self.Ts:g} s, "
+                f"u in [{self.u.min():.4g}, {self.u.max():.4g}]{uu}, y in [{self.y.min():.4g}, {self.y.max():.4g}]{yu})")
 
     @property
     def t(self) -> np.ndarray:
@@ -135,6 +110,10 @@ class StaticPoints:
     def __len__(self) -> int:
         return int(self.ubar.size)
 
+    def __repr__(self) -> str:
+        return (f"StaticPoints({self.name!r}: {len(self)} points, ū in [{self.ubar.min():.4g}, {self.ubar.max():.4g}], "
+                f"ȳ in [{self.ybar.min():.4g}, {self.ybar.max():.4g}])")
+
 
 @dataclass(frozen=True)
 class Dataset:
@@ -163,24 +142,23 @@ class Dataset:
         """Sampling period in seconds."""
         return self.ident.Ts
 
+    def __repr__(self) -> str:
+        st = "no static points" if self.static is None else f"static={self.static!r}"
+        return f"Dataset(ident={self.ident!r}, valid={self.valid!r}, {st})"
+
 
 __all__.append("Dataset")
 
 
-def as_records(data: object, accept_dataset: bool = True) -> list[Record]:
+def as_records(data: object) -> list[Record]:
     """The records an estimator works on, as a non-empty list, or ``ValueError``.
 
     Parameters
     ----------
     data : Record, Dataset or sequence of Record
         A Dataset stands for its identification record.
-    accept_dataset : bool
-        When False a Dataset is refused (for functions where using ``ident`` silently could
-        surprise: the message says to pass ``data.ident``).
     """
     if isinstance(data, Dataset):
-        if not accept_dataset:
-            raise ValueError("pass the identification record (e.g. data.ident), not the whole Dataset")
         return [data.ident]
     if isinstance(data, Record):
         return [data]
@@ -196,3 +174,25 @@ def as_records(data: object, accept_dataset: bool = True) -> list[Record]:
 
 
 __all__.append("as_records")
+
+
+class StaticRangeWarning(UserWarning):
+    """Static points lie outside the input range of the dynamic records (said once per call).
+
+    Not an error: static knowledge where the dynamic data do not reach is what gray-box
+    identification is for. The warning names the points so that a units mix-up is visible.
+    """
+
+
+def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "static points") -> None:
+    """Warn once, in words, which static ū lie outside the dynamic records' input range."""
+    ub = np.unique(np.atleast_1d(np.asarray(ubar, float)))
+    lo = min(float(r.u.min()) for r in records)
+    hi = max(float(r.u.max()) for r in records)
+    tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+    out = ub[(ub < lo - tol) | (ub > hi + tol)]
+    if out.size:
+        warn(
+            f"{what}: ū = {np.round(out, 6).tolist()} lie outside the input range [{lo:.6g}, {hi:.6g}] of the dynamic "
+            "records; the model is extrapolated there by the static information (if the points and the records "
+            "should overlap, check their units)", StaticRangeWarning)

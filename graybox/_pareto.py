@@ -2,7 +2,7 @@
 
 A :class:`ParetoSet` holds the members of a bi-objective estimate (PE, SE, …) of one
 structure: θ, the weight λ1 that produced each, and the errors J_1, J_S and J_SF computed by
-the shared evaluator (:func:`graybox.evaluate.evaluate_thetas`), so every front is judged by the
+the shared evaluator (:func:`graybox.evaluate_thetas`), so every front is judged by the
 same definitions as Table I.
 """
 
@@ -15,10 +15,11 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from .evaluate import evaluate_thetas
-from .model import Model
-from .records import Dataset, Record, StaticPoints, as_records, frozen
-from .terms import Structure
+from ._evaluate import evaluate_thetas
+from ._model import Model
+from ._records import Dataset, Record, StaticPoints, as_records
+from ._validation import frozen
+from ._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
 
@@ -76,6 +77,10 @@ class ParetoSet:
         How the set was produced (e.g. ``"PE (clarabel, mse)"``).
     extra : mapping str -> ndarray, shape (K,)
         Further per-member values (e.g. ``"JSF_QR"``, the affine static error PE trades).
+    failures : mapping int -> str
+        Members whose estimate failed (e.g. no start of an SE fit was feasible at that λ), with
+        the reason in words. Such a member stays in the set so that a sweep reports every λ: its
+        θ row is NaN and its J's are inf; :meth:`model` refuses it and naming the reason.
     """
 
     structure: Structure
@@ -86,19 +91,32 @@ class ParetoSet:
     JSF: np.ndarray
     method: str = ""
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
+    failures: Mapping[int, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         th = frozen(self.thetas)
         if th.ndim != 2 or th.shape[1] != len(self.structure):
             raise ValueError(f"thetas must have shape (K, {len(self.structure)}), got {th.shape}")
-        if not np.all(np.isfinite(th)):
-            raise ValueError("thetas must be finite")
         K = th.shape[0]
+        fails = {}
+        for k, why in dict(self.failures).items():
+            if not (isinstance(k, (int, np.integer)) and 0 <= k < K):
+                raise ValueError(f"failures: member index {k!r} out of range for a set of {K}")
+            fails[int(k)] = str(why)
+        ok = np.ones(K, bool)
+        ok[list(fails)] = False
+        if not np.all(np.isfinite(th[ok])):
+            raise ValueError("thetas must be finite (a failed member is listed in failures)")
+        object.__setattr__(self, "failures", MappingProxyType(fails))
         object.__setattr__(self, "thetas", th)
         for nm in ("lambdas", "J1", "JS", "JSF"):
             v = frozen(getattr(self, nm))
             if v.shape != (K,):
                 raise ValueError(f"{nm} must have shape ({K},), got {v.shape}")
+            if nm != "lambdas" and fails:
+                v = np.array(v)
+                v[~ok] = np.inf
+                v = frozen(v)
             object.__setattr__(self, nm, v)
         ex = {}
         for k, v in dict(self.extra).items():
@@ -120,14 +138,20 @@ class ParetoSet:
         method: str = "",
         extra: Mapping[str, np.ndarray] | None = None,
         threads: int = 1,
+        failures: Mapping[int, str] | None = None,
     ) -> "ParetoSet":
-        """Evaluate θs with :func:`graybox.evaluate.evaluate_thetas` and build the set.
+        """Evaluate θs with :func:`graybox.evaluate_thetas` and build the set.
 
         With several records J_1 and J_S are the sample-weighted means over the records (each
-        counted from its own max-lag on). ``static=None`` leaves J_SF as NaN.
+        counted from its own max-lag on). ``static=None`` leaves J_SF as NaN. Rows listed in
+        ``failures`` (index -> reason) are kept as failed members (θ NaN, J's inf).
         """
-        th = np.atleast_2d(np.asarray(thetas, float))
+        th = np.atleast_2d(np.asarray(thetas, float)).copy()
         K = th.shape[0]
+        fails = dict(failures or {})
+        bad = np.zeros(K, bool)
+        bad[list(fails)] = True
+        th[bad] = 0.0  # evaluated as a harmless null model, then reported as failed
         recs = as_records(data)
         L = structure.max_lag
         j1 = np.zeros(K)
@@ -142,7 +166,8 @@ class ParetoSet:
             total += w
         jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, th, None, static)["JSF"]
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
-        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {})
+        th[bad] = np.nan
+        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails)
 
     # -- access -------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -157,17 +182,19 @@ class ParetoSet:
         raise ValueError(f"unknown objective {name!r}; this set has {list(OBJECTIVES) + list(self.extra)}")
 
     def model(self, i: int, name: str | None = None) -> Model:
-        """Member ``i`` as a :class:`~graybox.model.Model`."""
+        """Member ``i`` as a :class:`~graybox.Model`."""
         K = len(self)
         if not -K <= int(i) < K:
             raise ValueError(f"member index {i} out of range for a set of {K}")
+        if int(i) % K in self.failures:
+            raise ValueError(f"member {int(i) % K} of this set failed: {self.failures[int(i) % K]}")
         lam = self.lambdas[i]
         label = name or (f"{self.method} λ1={lam:.3g}" if np.isfinite(lam) else f"{self.method} #{int(i) % K}")
         return Model(self.structure, self.thetas[i], name=label)
 
     def models(self) -> list[Model]:
-        """Every member as a Model, in order."""
-        return [self.model(i) for i in range(len(self))]
+        """Every member that did not fail, as a Model, in order."""
+        return [self.model(i) for i in range(len(self)) if i not in self.failures]
 
     def subset(self, index: np.ndarray | Sequence[int]) -> "ParetoSet":
         """The members at ``index`` (a boolean mask or integer indices), in that order."""
@@ -176,20 +203,25 @@ class ParetoSet:
             if idx.shape != (len(self),):
                 raise ValueError(f"mask must have shape ({len(self)},), got {idx.shape}")
             idx = np.flatnonzero(idx)
+        pos = {int(old): new for new, old in enumerate(idx)}
+        fails = {pos[k]: why for k, why in self.failures.items() if k in pos}
         return ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
-                         self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()})
+                         self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails)
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
         """The members that no other member dominates in ``objectives`` (order kept)."""
         if len(objectives) < 1:
             raise ValueError("give at least one objective")
         pts = np.column_stack([self.objective(o) for o in objectives])
-        return self.subset(nondominated_mask(pts))
+        keep = nondominated_mask(pts)
+        keep[list(self.failures)] = False
+        return self.subset(keep)
 
     def to_frame(self, params: bool = False) -> pd.DataFrame:
         """One row per member: ``lambda1``, ``J1``, ``JS``, ``JSF``, extras (and θ by term if ``params``)."""
         cols = {"lambda1": self.lambdas, "J1": self.J1, "JS": self.JS, "JSF": self.JSF}
         cols.update(self.extra)
+        cols["failure"] = [self.failures.get(i, "") for i in range(len(self))]
         df = pd.DataFrame(cols)
         if params:
             df = pd.concat([df, pd.DataFrame(self.thetas, columns=[str(t) for t in self.structure])], axis=1)
@@ -197,4 +229,5 @@ class ParetoSet:
         return df
 
     def __repr__(self) -> str:
-        return f"ParetoSet(method={self.method!r}, members={len(self)}, n_terms={len(self.structure)})"
+        failed = f", failed={len(self.failures)}" if self.failures else ""
+        return f"ParetoSet(method={self.method!r}, members={len(self)}{failed}, n_terms={len(self.structure)})"

@@ -37,10 +37,10 @@ from typing import Callable, Iterable, Iterator, Mapping
 import cvxpy as cp
 import numpy as np
 
-from .curves import StaticCurve
-from .records import StaticPoints
-from .static import ClusterMap, cluster_map, cluster_name, is_rational
-from .terms import Structure
+from ._curves import StaticCurve
+from ._records import StaticPoints
+from ._static import ClusterMap, cluster_map, cluster_name, is_rational
+from ._terms import Structure
 
 __all__ = [
     "InfeasibleError",
@@ -116,26 +116,12 @@ class StaticContext:
     sigma_y : float or None
         Σ*_y of the reference model (eq. (22)); used by :class:`CurveEquality` when it is not
         given its own value.
-    data_range : (float, float) or None
-        Smallest and largest input in the dynamic data (engineering units).
-    range_margin : float or None
-        Static ū levels further than ``range_margin × (high − low)`` outside ``data_range``
-        are refused: the dynamic data say nothing there, and a static point far outside them
-        usually means mixed units or the wrong data. The default 0.1 admits static points a
-        little beyond the dynamic data (as with the plant: steps over 770–1620 rpm, static
-        points over 750–1650 rpm). None switches the check off.
     """
 
     structure: Structure
     points: StaticPoints | None = None
     curve: StaticCurve | None = None
     sigma_y: float | None = None
-    data_range: tuple[float, float] | None = None
-    range_margin: float | None = 0.1
-
-    def __post_init__(self) -> None:
-        if self.range_margin is not None and not (np.isfinite(self.range_margin) and self.range_margin >= 0):
-            raise ValueError(f"range_margin must be a non-negative number or None, got {self.range_margin!r}")
 
     @cached_property
     def cluster_map(self) -> ClusterMap:
@@ -146,21 +132,6 @@ class StaticContext:
     def n_terms(self) -> int:
         """Number of parameters."""
         return len(self.structure)
-
-    def check_ubar(self, ubar: np.ndarray, what: str) -> None:
-        """Raise ``ValueError`` when a static ū lies outside the dynamic data's input range (+ margin)."""
-        if self.range_margin is None or self.data_range is None:
-            return
-        lo, hi = self.data_range
-        pad = self.range_margin * (hi - lo) + 1e-9 * max(abs(lo), abs(hi), 1.0)
-        ub = np.atleast_1d(np.asarray(ubar, float))
-        out = ub[(ub < lo - pad) | (ub > hi + pad)]
-        if out.size:
-            raise ValueError(
-                f"{what}: ū = {np.round(out, 6).tolist()} lies outside the input range [{lo:g}, {hi:g}] of the "
-                f"dynamic data (allowed margin {self.range_margin:g} of its width), where the model is not "
-                "identified; check the units, or pass range_margin=None to impose it anyway"
-            )
 
     def require_points(self, points: StaticPoints | None, what: str) -> StaticPoints:
         """The constraint's own points, or the problem's, or a clear error."""
@@ -503,7 +474,6 @@ class PassesThrough(StaticConstraint):
 
     def affine(self, ctx: StaticContext) -> AffineRows:
         pts = ctx.require_points(self.points, self.describe())
-        ctx.check_ubar(pts.ubar, self.describe())
         cm = ctx.cluster_map
         QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R
         return AffineRows.make(ctx.n_terms, QR, pts.ybar)
@@ -573,7 +543,6 @@ class StaticBand(StaticConstraint):
 
     def affine(self, ctx: StaticContext) -> AffineRows:
         pts = ctx.require_points(self.points, self.describe())
-        ctx.check_ubar(pts.ubar, self.describe())
         cm = ctx.cluster_map
         QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R
         if self.form == "exact":
@@ -673,7 +642,6 @@ class GainBounds(StaticConstraint):
             else:
                 raise ValueError(f"{self.describe()}: give ubar_range (no curve domain or static points to take it from)")
         ub = np.linspace(rng[0], rng[1], int(self.n))
-        ctx.check_ubar(ub, self.describe())
         if ref is None:
             if ctx.points is None:
                 raise ValueError(f"{self.describe()} needs a reference ȳ(ū): a static curve or static points")

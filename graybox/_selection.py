@@ -29,7 +29,7 @@ Noise terms
 -----------
 When the candidate structure contains noise terms ``e(k-l)`` (``Candidates(..., ne=2)``),
 FROLS selects among the process terms only (residuals do not exist before a model does) and
-carries the noise terms in :attr:`Selection.noise`. :func:`graybox.els.els` accepts the
+carries the noise terms in :attr:`Selection.noise`. :func:`graybox.els` accepts the
 :class:`Selection` itself and then uses those noise terms for its MA part.
 """
 
@@ -44,9 +44,9 @@ import numba as nb
 import numpy as np
 import pandas as pd
 
-from .model import Model
-from .records import Record, as_records
-from .terms import Structure, Term, parse_term
+from ._model import Model
+from ._records import Dataset, Record, as_records
+from ._terms import Structure, Term, parse_term
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -110,7 +110,7 @@ class Selection:
         Each selected term's error reduction ratio (fraction of yᵀy, in [0, 1]).
     theta : ndarray, shape (n_selected,)
         Least-squares parameters of the selected terms on the selection data (engineering
-        units; no MA part: use :func:`graybox.els.els` for the paper's estimator).
+        units; no MA part: use :func:`graybox.els` for the paper's estimator).
     noise : Structure
         Noise terms ``e(k-l)`` carried over from the candidates (not selected; see the module
         docstring).
@@ -224,10 +224,6 @@ class Selection:
 
 # --------------------------------------------------------------------------------------
 # candidate matrix
-
-
-def _as_records(data: Record | Sequence[Record]) -> list[Record]:
-    return as_records(data, accept_dataset=False)
 
 
 def _candidate_matrix(terms: Sequence[Term], records: list[Record], start: int) -> tuple[np.ndarray, np.ndarray]:
@@ -345,7 +341,8 @@ def _norms_and_dots(W, r, nrm, num):  # pragma: no cover - compiled
 
 def frols(
     candidates: Structure,
-    data: Record | Sequence[Record],
+    data: Record | Sequence[Record] | Dataset,
+    *,
     n_terms: int | None = None,
     tol: float | None = None,
     criterion: Literal["aic", "bic", "fpe"] | None = None,
@@ -373,8 +370,8 @@ def frols(
     candidates : Structure
         Candidate terms, e.g. ``Candidates(ny=6, nu=6, ne=2, degree=2)``. Noise terms are not
         selected; they are carried to :attr:`Selection.noise`.
-    data : Record or sequence of Record
-        Identification data (engineering units). Regression rows start at the candidates'
+    data : Record, sequence of Record, or Dataset
+        Identification data (engineering units; a Dataset contributes its ``ident`` record). Regression rows start at the candidates'
         largest process lag in each record and never straddle two records.
     n_terms : int, optional
         Number of terms to select, 1 ≤ n_terms ≤ number of process candidates.
@@ -458,7 +455,7 @@ def frols(
     if n_terms is not None and n_terms < len(forced):
         raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
 
-    records = _as_records(data)
+    records = as_records(data)
     start = process.max_lag
     W, y = _candidate_matrix(process.terms, records, start)
     N = W.shape[0]

@@ -7,8 +7,8 @@ from typing import Mapping
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..model import Model
-from ..records import Record
+from .._model import Model
+from .._records import Record
 
 __all__ = ["plot_free_run"]
 

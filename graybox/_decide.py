@@ -7,13 +7,61 @@ B = [0, band] of the pressure transmitter (0.031 mlc² = 0.175²).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .model import Model
-from .pareto import ParetoSet
-from .records import Record
+from ._model import Model
+from ._pareto import ParetoSet
+from ._records import Record
+from ._regressors import regressor_matrix
+from ._simulation import simulate_many
+from ._validation import check_choice
 
-__all__ = ["decide_dsf", "FALLBACKS"]
+__all__ = ["Decision", "decide_dsf", "decide_min_correlation", "FALLBACKS"]
+
+
+@dataclass(frozen=True, eq=False)
+class Decision:
+    """One member chosen from a Pareto set, and why.
+
+    Attributes
+    ----------
+    model : Model
+        The chosen member (named after the set's method and the rule).
+    index : int
+        Its position in the Pareto set.
+    lambda1 : float
+        Its weight λ1 (NaN when the member came from no weight).
+    JS, JSF : float
+        Its free-run and static errors as stored in the set (output units²).
+    rule : str
+        ``"D_SF"``, ``"min J_SF"`` (D_SF's explicit fallback: no member in the band) or
+        ``"min correlation"``.
+    in_band : bool
+        Whether J_SF lies in the band B (always False for the fallback; True for rules without a band).
+    score : float
+        The value the rule minimised at the chosen member (J_S for D_SF, J_SF for the fallback,
+        ρ for the minimal-correlation rule).
+    """
+
+    model: Model
+    index: int
+    lambda1: float
+    JS: float
+    JSF: float
+    rule: str
+    in_band: bool
+    score: float
+
+    def __repr__(self) -> str:
+        return (f"Decision(rule={self.rule!r}, index={self.index}, λ1={self.lambda1:.4g}, J_S={self.JS:.4g}, "
+                f"J_SF={self.JSF:.4g}, in_band={self.in_band})")
+
+
+def _decision(pareto: ParetoSet, i: int, rule: str, in_band: bool, score: float, label: str) -> Decision:
+    return Decision(pareto.model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
+                    float(pareto.JSF[i]), rule, in_band, float(score))
 
 #: What :func:`decide_dsf` may do when no member lies in the band, if the user says so.
 FALLBACKS = ("min_jsf",)
@@ -21,10 +69,10 @@ FALLBACKS = ("min_jsf",)
 
 def decide_dsf(
     pareto: ParetoSet,
+    *,
     band: float | tuple[float, float] = 0.031,
     fallback: str | None = None,
-    return_index: bool = False,
-) -> Model | tuple[Model, int]:
+) -> Decision:
     """Eq. (14): argmin J_S subject to J_SF ∈ B.
 
     Parameters
@@ -37,13 +85,12 @@ def decide_dsf(
         When no member has J_SF in B (with a finite J_S): None (default) raises ``ValueError``;
         ``"min_jsf"`` picks the member with the smallest J_SF (ties: smaller J_S) instead. The
         choice must be explicit because the result then is *not* a D_SF decision.
-    return_index : bool
-        Also return the member's index in ``pareto``.
 
     Returns
     -------
-    Model, or (Model, int) with ``return_index``
-        Ties in J_S are broken by the smaller J_SF, then the lower index.
+    Decision
+        ``.model`` is the chosen member; ties in J_S are broken by the smaller J_SF, then the
+        lower index.
     """
     if not isinstance(pareto, ParetoSet):
         raise ValueError(f"decide_dsf needs a ParetoSet, got {type(pareto).__name__}")
@@ -53,14 +100,14 @@ def decide_dsf(
     lo, hi = float(lo), float(hi)
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo <= hi):
         raise ValueError(f"band must be >= 0 (or (low, high) with 0 <= low <= high), got {band!r}")
-    if fallback is not None and fallback not in FALLBACKS:
-        raise ValueError(f"fallback must be None or one of {FALLBACKS}, got {fallback!r}")
+    if fallback is not None:
+        check_choice(fallback, "fallback", FALLBACKS)
     js, jsf = pareto.JS, pareto.JSF
     inside = (jsf >= lo) & (jsf <= hi) & np.isfinite(js)
     if inside.any():
         cand = np.flatnonzero(inside)
         i = int(cand[np.lexsort((cand, jsf[cand], js[cand]))[0]])
-        label = f"{pareto.method} D_SF"
+        return _decision(pareto, i, "D_SF", True, js[i], f"{pareto.method} D_SF")
     else:
         finite = jsf[np.isfinite(jsf)]
         best = f"{finite.min():.4g}" if finite.size else "inf for every member"
@@ -74,17 +121,15 @@ def decide_dsf(
         if ok.size == 0:
             raise ValueError("fallback 'min_jsf': every member has an undefined static curve (J_SF = inf)")
         i = int(ok[np.lexsort((ok, pareto.JS[ok], jsf[ok]))[0]])
-        label = f"{pareto.method} min J_SF (no member in B)"
-    model = pareto.model(i, name=label)
-    return (model, i) if return_index else model
+        return _decision(pareto, i, "min J_SF", False, jsf[i], f"{pareto.method} min J_SF (no member in B)")
 
 
 def decide_min_correlation(
     pareto: ParetoSet,
     record: Record,
+    *,
     output: str = "free-run",
-    return_index: bool = False,
-) -> Model | tuple[Model, int]:
+) -> Decision:
     """The minimal-correlation decision maker (Barroso, Takahashi & Aguirre, J. Process Control, 2007).
 
     As we read that paper: the chosen member is the one whose one-step residuals
@@ -100,20 +145,15 @@ def decide_min_correlation(
     record : Record
         Identification data, shape (N,) each; counted from sample max_lag on.
     output : {"free-run", "one-step"}
-    return_index : bool
-        Also return the member's index.
 
     Returns
     -------
-    Model, or (Model, int) with ``return_index``
+    Decision
+        ``.score`` is the chosen member's ρ.
     """
-    from .regressors import regressor_matrix
-    from .simulation import simulate_many
-
     if not isinstance(pareto, ParetoSet):
         raise ValueError(f"decide_min_correlation needs a ParetoSet, got {type(pareto).__name__}")
-    if output not in ("free-run", "one-step"):
-        raise ValueError(f"output must be 'free-run' or 'one-step', got {output!r}")
+    check_choice(output, "output", ("free-run", "one-step"))
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
     st = pareto.structure
@@ -131,8 +171,4 @@ def decide_min_correlation(
     if not np.isfinite(rho).any():
         raise ValueError("no member has a defined residual/output correlation (every free run diverged?)")
     i = int(np.argmin(rho))
-    model = pareto.model(i, name=f"{pareto.method} min-corr (ρ = {rho[i]:.3g})")
-    return (model, i) if return_index else model
-
-
-__all__.append("decide_min_correlation")
+    return _decision(pareto, i, "min correlation", True, rho[i], f"{pareto.method} min-corr (ρ = {rho[i]:.3g})")

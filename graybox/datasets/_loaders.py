@@ -20,8 +20,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..curves import StaticCurve
-from ..records import Dataset, Record, StaticPoints
+from .._curves import StaticCurve
+from .._records import Dataset, Record, StaticPoints
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -292,7 +292,7 @@ def load_pumping() -> Dataset:
         ``ident``: first 3200 samples, ``valid``: last 800 (Records, Ts = 0.05 s, units
         ("rpm", "mlc")); ``static``: 10 measured points at 750, 850, …, 1650 rpm;
         ``description``: where the data come from (a simulated stand-in, said plainly);
-        ``extra``: ``"static_curve"`` — eq. (1) as a :class:`~graybox.curves.StaticCurve` on
+        ``extra``: ``"static_curve"`` — eq. (1) as a :class:`~graybox.StaticCurve` on
         [750, 1650] rpm (the curve the plant is calibrated to), ``"plant"`` — the
         :class:`~graybox.datasets.pumping.PumpingPlant` that generated the data, ``"seed"``, and
         ``"files"`` — the two CSV paths.
@@ -387,7 +387,7 @@ def load_buck(path: str | os.PathLike | None = None) -> Dataset:
         9 points *sampled from the theoretical static function* ȳ = (4 − ū)·8 at ū = 1.5, 1.75,
         …, 3.5 (mostly outside the dynamic data's input range, which is what makes them useful
         to gray-box estimation), and ``extra["static_curve"]`` is that function as a
-        :class:`~graybox.curves.StaticCurve` (domain ū ∈ [1, 4]).
+        :class:`~graybox.StaticCurve` (domain ū ∈ [1, 4]).
     """
     d = find_buck_dir(path)
     kw = dict(u="input", y="y", time="sampling_time", units=("", "V"))

@@ -30,17 +30,15 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Iterable, Mapping, NamedTuple, Sequence
+from typing import Iterable, Mapping, Sequence
 
 import cvxpy as cp
 import numpy as np
-import pandas as pd
 import scipy.linalg
 import scipy.linalg.lapack
 import scipy.sparse
 
-from .constraints import (
+from ._constraints import (
     AffineRows,
     CurveEquality,
     InfeasibleError,
@@ -50,14 +48,16 @@ from .constraints import (
     as_constraint_list,
     static_rows,
 )
-from .curves import StaticCurve
-from .ls import column_scales
-from .model import Model
-from .pareto import ParetoSet
-from .records import Dataset, Record, StaticPoints, as_records
-from .regressors import stacked_regressors
-from .static import cluster_map
-from .terms import Structure
+from ._curves import StaticCurve
+from ._els import els
+from ._ls import column_scales
+from ._model import Model
+from ._pareto import ParetoSet
+from ._records import Dataset, Record, StaticPoints, as_records, warn_static_range
+from ._regressors import stacked_regressors
+from ._static import cluster_map
+from ._terms import Structure
+from ._validation import check_choice, check_lambdas
 
 __all__ = [
     "SOLVERS",
@@ -67,10 +67,12 @@ __all__ = [
     "cls",
     "pe_thetas",
     "pe_pareto",
-    "Table1Gray",
-    "table1_graybox",
-    "section_graybox",
+    "PE_LAMBDAS",
 ]
+
+#: The paper's PE sweep (Section IV-B), the default ``lambdas``: 100 λ1 in logspace(−6, 0).
+PE_LAMBDAS = np.logspace(-6, 0, 100)
+PE_LAMBDAS.setflags(write=False)
 
 #: Accepted ``solver`` values: cvxpy with Clarabel or OSQP, or the closed form.
 SOLVERS = ("clarabel", "osqp", "closed")
@@ -162,10 +164,7 @@ def _process_structure(structure: Structure | Model | Sequence[str]) -> Structur
 
 
 def _check_solver(solver: str) -> str:
-    s = str(solver).lower()
-    if s not in SOLVERS:
-        raise ValueError(f"solver must be one of {SOLVERS}, got {solver!r}")
-    return s
+    return check_choice(solver, "solver", SOLVERS)
 
 
 # --------------------------------------------------------------------------------------------
@@ -181,7 +180,6 @@ class _Data:
     c1: np.ndarray  # (n,)
     rss: float  # residual sum of squares of the unconstrained LS fit
     N: int  # regression rows
-    data_range: tuple[float, float]
 
 
 def _tri_inv(R: np.ndarray) -> np.ndarray:
@@ -226,9 +224,7 @@ def _dynamic(structure: Structure, records: list[Record]) -> _Data:
     # R-factor of [Ψ/s, y]: its top-left block is Ψ's triangular factor, its last column Q1ᵀy and
     # its corner the LS residual norm; Q itself is never formed.
     Raug = _r_factor(np.column_stack([psi / s, y]))
-    u_all = np.concatenate([r.u for r in records])
-    return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0],
-                 (float(u_all.min()), float(u_all.max())))
+    return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0])
 
 
 def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray, int]:
@@ -261,9 +257,7 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
     if reference is None or (isinstance(reference, str) and reference == "ls"):
         th = _ls_theta(d)
     elif isinstance(reference, str) and reference == "els":
-        from .els import els  # the paper's choice; imported here because ELS is another estimator
-
-        return float(els(d.structure, records).clusters().get("Σy", 0.0))
+        return float(els(d.structure, records).model.clusters().get("Σy", 0.0))
     elif isinstance(reference, str):
         raise ValueError(f"reference must be 'ls', 'els', a Model, a θ or a number, got {reference!r}")
     elif isinstance(reference, Model):
@@ -531,7 +525,6 @@ def cls(
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     solver: str = "clarabel",
     solver_options: Mapping | None = None,
-    range_margin: float | None = 0.1,
     name: str = "CLS",
 ) -> Model:
     """Constrained least squares: min J_1(θ) with the static information imposed exactly.
@@ -545,10 +538,10 @@ def cls(
     static : StaticCurve or StaticPoints, optional
         What the static function must match:
 
-        - a polynomial curve → eq. (22) (:class:`~graybox.constraints.CurveEquality`), for a
+        - a polynomial curve → eq. (22) (:class:`~graybox.CurveEquality`), for a
           structure whose static function is rational;
         - points → "the static function passes through these points"
-          (:class:`~graybox.constraints.PassesThrough`), any structure;
+          (:class:`~graybox.PassesThrough`), any structure;
         - None → only ``constraints`` (those that need static points, e.g. a band, take a
           Dataset's ``static`` when ``data`` is one).
     how : {"auto", "curve", "points"}
@@ -558,7 +551,7 @@ def cls(
     reference : {"ls", "els"}, Model, ndarray or float
         Where Σ*_y of eq. (22) comes from: ``"ls"`` (default) the unconstrained least-squares
         estimate on ``data``; ``"els"`` extended least squares on ``data`` (the paper's choice:
-        :func:`graybox.els.els` with its default MA(2)); a reference Model (its Σy); a θ of this
+        :func:`graybox.els` with its default MA(2)); a reference Model (its Σy); a θ of this
         structure; or the value itself.
     constraints : constraint or iterable of constraints, optional
         More constraints (band, gain, cluster bounds, user cvxpy constraints), combined with the
@@ -567,9 +560,6 @@ def cls(
         cvxpy with Clarabel (default) or OSQP, or the KKT closed form (equalities only).
     solver_options : mapping, optional
         Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults).
-    range_margin : float or None
-        Refuse static ū further than this fraction of the dynamic data's input span outside
-        that span (None: no check); see :class:`~graybox.constraints.StaticContext`.
     name : str
         The returned model's name.
 
@@ -594,8 +584,7 @@ def cls(
     static_cons: list[StaticConstraint] = []
     points: StaticPoints | None = None
     curve: StaticCurve | None = None
-    if how not in ("auto", "curve", "points"):
-        raise ValueError(f"how must be 'auto', 'curve' or 'points', got {how!r}")
+    check_choice(how, "how", ("auto", "curve", "points"))
     if isinstance(static, StaticCurve):
         if how == "points":
             raise ValueError("how='points' needs StaticPoints; sample the curve with curve.points(ubar)")
@@ -618,9 +607,8 @@ def cls(
         static_cons.append(PassesThrough(points))
     cons = static_cons + as_constraint_list(constraints)
     ctx_points = points if points is not None else (data.static if isinstance(data, Dataset) else None)
-    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference), d.data_range, range_margin)
-    if curve is not None and curve.domain is not None:
-        ctx.check_ubar(np.array(curve.domain), f"domain of {curve.name}")
+    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference))
+    _warn_static_range(cons, ctx, curve, recs)
     rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
@@ -635,7 +623,13 @@ def cls(
 # --------------------------------------------------------------------------------------------
 # PE bi-objective
 # --------------------------------------------------------------------------------------------
-def _static_points(static: StaticPoints | StaticCurve, ubar: np.ndarray | None) -> StaticPoints:
+def _static_points(static: StaticPoints | StaticCurve | None, ubar: np.ndarray | None, data: object) -> StaticPoints:
+    if static is None:
+        if isinstance(data, Dataset) and data.static is not None:
+            static = data.static
+        else:
+            raise ValueError("the PE problem needs static information: pass static= (StaticPoints or a StaticCurve) "
+                             "or a Dataset with static points")
     if isinstance(static, StaticPoints):
         if ubar is not None:
             raise ValueError("ubar is for sampling a StaticCurve; static points carry their own ū")
@@ -649,16 +643,6 @@ def _static_points(static: StaticPoints | StaticCurve, ubar: np.ndarray | None) 
     raise ValueError(f"static must be StaticPoints or a StaticCurve, got {type(static).__name__}")
 
 
-def _lambdas(lambdas: np.ndarray | Sequence[float] | float) -> np.ndarray:
-    lam = np.atleast_1d(np.asarray(lambdas, float))
-    if lam.ndim != 1 or lam.size == 0:
-        raise ValueError("lambdas must be a non-empty 1-D array of λ1 values")
-    if not np.all(np.isfinite(lam)) or lam.min() <= 0 or lam.max() > 1:
-        raise ValueError("every λ1 must lie in (0, 1] (λ2 = 1 − λ1; λ1 = 0 ignores the dynamic data, and "
-                         "θ is then not identifiable from the static points alone)")
-    return lam
-
-
 def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], reference) -> float | None:
     """Σ*_y only when some CurveEquality will ask for it (ELS is not free)."""
     if any(isinstance(c, CurveEquality) and c.sigma_y is None for c in cons):
@@ -666,17 +650,27 @@ def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], 
     return None
 
 
-def _pe_setup(structure, data, static, constraints, weights, ubar, range_margin, reference="ls"):
+def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: StaticCurve | None,
+                       recs: list[Record]) -> None:
+    """One warning per estimate naming every static ū (points, constraints' points) outside the records."""
+    ub = [ctx.points.ubar] if ctx.points is not None else []
+    ub += [c.points.ubar for c in cons if getattr(c, "points", None) is not None]
+    if curve is not None and curve.domain is not None:
+        ub.append(np.array(curve.domain))
+    if ub:
+        warn_static_range(np.concatenate(ub), recs)
+
+
+def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls"):
     st = _process_structure(structure)
-    if weights not in ("mse", "sum"):
-        raise ValueError(f"weights must be 'mse' or 'sum', got {weights!r}")
+    check_choice(weights, "weights", ("mse", "sum"))
     recs = as_records(data)
     d = _dynamic(st, recs)
-    pts = _static_points(static, ubar)
+    pts = _static_points(static, ubar, data)
     curve = static if isinstance(static, StaticCurve) else None
     cons = as_constraint_list(constraints)
-    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), d.data_range, range_margin)
-    ctx.check_ubar(pts.ubar, f"static points {pts.name!r}")
+    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference))
+    _warn_static_range(cons, ctx, curve, recs)
     rows = _rows(cons, ctx, d.s)
     R2, c2, M = _static_part(d, pts)
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
@@ -685,15 +679,14 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, range_margin,
 def pe_thetas(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | StaticCurve,
-    lambdas: np.ndarray | Sequence[float] = np.logspace(-6, 0, 100),
+    static: StaticPoints | StaticCurve | None = None,
+    lambdas: np.ndarray | Sequence[float] | None = None,
     *,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     solver: str = "clarabel",
     solver_options: Mapping | None = None,
     weights: str = "mse",
     ubar: np.ndarray | None = None,
-    range_margin: float | None = 0.1,
     warm_start: bool = True,
     reference: Model | np.ndarray | float | str = "ls",
 ) -> np.ndarray:
@@ -705,7 +698,7 @@ def pe_thetas(
 
     Parameters
     ----------
-    structure, data, static, lambdas, constraints, solver, solver_options, weights, ubar, range_margin, warm_start, reference
+    structure, data, static, lambdas, constraints, solver, solver_options, weights, ubar, warm_start, reference
         As for :func:`pe_pareto` (``reference``: where Σ*_y comes from when a constraint needs it,
         as for :func:`cls`).
 
@@ -714,9 +707,9 @@ def pe_thetas(
     ndarray, shape (K, n_terms), engineering units, in the order of ``lambdas``.
     """
     solver = _check_solver(solver)
-    lam = _lambdas(lambdas)
+    lam = check_lambdas(PE_LAMBDAS if lambdas is None else lambdas)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
-                                                            range_margin, reference)
+                                                            reference)
     w1 = lam / d.N if weights == "mse" else lam.copy()
     w2 = (1.0 - lam) / M if weights == "mse" else 1.0 - lam
     if solver == "closed":
@@ -738,8 +731,8 @@ def pe_thetas(
 def pe_pareto(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | StaticCurve,
-    lambdas: np.ndarray | Sequence[float] = np.logspace(-6, 0, 100),
+    static: StaticPoints | StaticCurve | None = None,
+    lambdas: np.ndarray | Sequence[float] | None = None,
     *,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     solver: str = "clarabel",
@@ -747,7 +740,6 @@ def pe_pareto(
     weights: str = "mse",
     ubar: np.ndarray | None = None,
     eval_static: StaticPoints | None = None,
-    range_margin: float | None = 0.1,
     warm_start: bool = True,
     threads: int = 1,
     reference: Model | np.ndarray | float | str = "ls",
@@ -760,10 +752,12 @@ def pe_pareto(
         Process terms ((15) without the MA part in the paper).
     data : Record, sequence of Record, or Dataset
         Dynamic identification data.
-    static : StaticPoints or StaticCurve
+    static : StaticPoints or StaticCurve, optional
         Static information; a curve is sampled at ``ubar`` (default: 10 points over its domain).
-    lambdas : array_like, shape (K,)
-        λ1 values in (0, 1]; λ2 = 1 − λ1. The paper: ``np.logspace(-6, 0, 100)``.
+        Default: the Dataset's static points. Points outside the records' input range are
+        welcome (a :class:`StaticRangeWarning` names them once).
+    lambdas : array_like, shape (K,), optional
+        λ1 values in (0, 1]; λ2 = 1 − λ1. Default: the paper's ``np.logspace(-6, 0, 100)``.
     constraints : optional
         Constraint objects imposed on every member (band, gain, clusters, user cvxpy).
     solver : {"clarabel", "osqp", "closed"}
@@ -777,14 +771,12 @@ def pe_pareto(
         Where to sample a StaticCurve given as ``static``.
     eval_static : StaticPoints, optional
         Points for the members' J_SF (default: the static points used in the objective).
-    range_margin : float or None
-        Refuse static ū further than this fraction of the dynamic data's input span outside it.
     warm_start : bool
         Warm-start OSQP from the neighbouring λ (the sweep runs from λ1 = 1 downwards).
     threads : int
         Threads for the batch free runs of the evaluator.
     reference : {"ls", "els"}, Model, ndarray or float
-        Σ*_y for a :class:`~graybox.constraints.CurveEquality` among ``constraints`` (see :func:`cls`).
+        Σ*_y for a :class:`~graybox.CurveEquality` among ``constraints`` (see :func:`cls`).
 
     Returns
     -------
@@ -793,130 +785,12 @@ def pe_pareto(
         in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²).
     """
     thetas = pe_thetas(structure, data, static, lambdas, constraints=constraints, solver=solver,
-                       solver_options=solver_options, weights=weights, ubar=ubar, range_margin=range_margin,
-                       warm_start=warm_start, reference=reference)
+                       solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
+                       reference=reference)
     st = _process_structure(structure)
-    pts = _static_points(static, ubar)
+    pts = _static_points(static, ubar, data)
     ev = pts if eval_static is None else eval_static
     return ParetoSet.from_thetas(
-        st, thetas, _lambdas(lambdas), data, ev, method=f"PE ({solver}, {weights})",
+        st, thetas, check_lambdas(PE_LAMBDAS if lambdas is None else lambdas), data, ev, method=f"PE ({solver}, {weights})",
         extra={"JSF_QR": qr_static_error(st, thetas, pts)}, threads=threads,
     )
-
-
-# --------------------------------------------------------------------------------------------
-# Table I rows for `graybox reproduce`
-# --------------------------------------------------------------------------------------------
-class Table1Gray(NamedTuple):
-    """The gray-box rows of Table I and what produced them."""
-
-    table: pd.DataFrame  # rows "CLS (22)", "PE (D_SF)"; the columns of graybox.evaluate.evaluate
-    cls: Model
-    pe: Model
-    pareto: ParetoSet
-    pe_index: int
-    reference: Model | None  # the model Σ*_y came from (ELS of the structure), if any
-
-
-def table1_graybox(
-    data: Dataset,
-    structure: Structure | None = None,
-    reference: Model | str = "els",
-    curve: StaticCurve | None = None,
-    lambdas: np.ndarray = np.logspace(-6, 0, 100),
-    band: float = 0.031,
-    solver: str = "clarabel",
-    fallback: str | None = "min_jsf",
-) -> Table1Gray:
-    """The CLS (22) and PE (D_SF) rows of Table I, for ``graybox reproduce``.
-
-    As in Section IV-B: the structure of model (15) without its MA part; CLS imposes eq. (1)
-    through eq. (22) with Σ*_y from the ELS estimate of that structure; PE sweeps 100 λ1 in
-    logspace(-6, 0) against the static points, and D_SF (eq. (14)) picks the member with the
-    smallest J_S among those with J_SF in [0, 0.031] mlc².
-
-    Parameters
-    ----------
-    data : Dataset
-        Identification and validation records and static points (e.g. ``load_pumping()``).
-    structure : Structure, optional
-        Default: the paper's (15) (``graybox.reference.STRUCTURE_15``; a structure selected by
-        FROLS on other data need not be rational, and eq. (22) needs a rational one).
-    reference : "els", "ls" or Model
-        Source of Σ*_y (see :func:`cls`); default: ELS (MA(2)) of ``structure`` on ``data.ident``,
-        as in the paper.
-    curve : StaticCurve, optional
-        The curve CLS imposes; default: eq. (1).
-    lambdas : ndarray
-        λ1 sweep of the PE set.
-    band : float
-        D_SF's band B = [0, band] on J_SF, mlc² (0.031 = 0.175²).
-    solver : {"clarabel", "osqp", "closed"}
-    fallback : str or None
-        Passed to :func:`graybox.decide.decide_dsf` when no member lies in the band (default
-        "min_jsf", so the reproduction always prints a row; the model's name says so).
-
-    Returns
-    -------
-    Table1Gray
-        ``table`` from :func:`graybox.evaluate.evaluate` (rows ``"CLS (22)"``, ``"PE (D_SF)"``),
-        the two models, the PE set, the index of the D_SF choice in it, and the reference model.
-    """
-    from . import reference as paper
-    from .decide import decide_dsf
-    from .evaluate import evaluate
-
-    if not isinstance(data, Dataset) or data.static is None:
-        raise ValueError("table1_graybox needs a Dataset with static points (e.g. graybox.datasets.load_pumping())")
-    st = _process_structure(structure if structure is not None else paper.STRUCTURE_15)
-    cv = curve if curve is not None else StaticCurve.polynomial(paper.EQ1_COEFFICIENTS, name="eq. (1)")
-    ref_model = reference if isinstance(reference, Model) else None
-    if isinstance(reference, str) and reference == "els":
-        from .els import els
-
-        ref_model = els(st, data.ident, name="ELS")
-    cls_model = cls(st, data.ident, cv, reference=ref_model if ref_model is not None else reference,
-                    solver=solver, name="CLS (22)")
-    front = pe_pareto(st, data.ident, data.static, lambdas, solver=solver)
-    pe_model, idx = decide_dsf(front, band=band, fallback=fallback, return_index=True)
-    table = evaluate({"CLS (22)": cls_model, "PE (D_SF)": pe_model.with_theta(pe_model.theta, "PE (D_SF)")}, data)
-    return Table1Gray(table, cls_model, pe_model, front, idx, ref_model)
-
-
-def section_graybox(quick: bool = True, out: Path | None = None, data: Dataset | None = None) -> str:
-    """``graybox reproduce`` section: the CLS (22) and PE (D_SF) rows of Table I and Fig. 5.
-
-    Prints the two rows (J_S ident, J_S valid, J_SF, N_p; MSE in mlc²), the reference ELS row
-    of structure (15) for comparison, the CLS clusters (eq. (22) check) and the D_SF choice;
-    with ``out`` writes ``fig5_pe_front.png`` (J_SF against J_S of the PE set with ELS, CLS and
-    the D_SF choice marked). ``quick`` is accepted for the common signature: this section is
-    fast (a few seconds) and runs in full either way.
-    """
-    from .evaluate import evaluate
-
-    if data is None:
-        from .datasets import load_pumping
-
-        data = load_pumping()
-    r = table1_graybox(data)
-    rows = r.table
-    if r.reference is not None:
-        rows = pd.concat([evaluate({"ELS (15 structure)": r.reference}, data), rows])
-    cl = ", ".join(f"{k} = {v:.5g}" for k, v in r.cls.clusters().items())
-    i = r.pe_index
-    lines = [
-        "== Gray-box models: CLS (eq. 22) and the PE bi-objective set with D_SF (Section IV-B) ==",
-        "Structure (15) without its MA part; CLS imposes eq. (1) with Σ*y from ELS; PE: 100 λ1 in "
-        "logspace(-6, 0), D_SF: min J_S with J_SF in [0, 0.031] mlc².",
-        rows[["J_S ident", "J_S valid", "J_SF", "N_p"]].to_string(float_format=lambda v: f"{v:.4f}"),
-        f"-- CLS clusters: {cl}",
-        f"-- D_SF picked member {i} of {len(r.pareto)} (λ1 = {r.pareto.lambdas[i]:.3g}): {r.pe.name}",
-    ]
-    if out is not None:
-        from .plots.pareto import plot_pareto
-
-        fig = plot_pareto({"PE set": r.pareto}, rows, title="PE Pareto set (cf. Fig. 5)")
-        path = Path(out) / "fig5_pe_front.png"
-        fig.savefig(path, dpi=120)
-        lines.append(f"-- wrote {path}")
-    return "\n".join(lines)

@@ -22,7 +22,7 @@ import numpy as np
 
 
 
-from .terms import Structure
+from ._terms import Structure
 
 __all__ = ["Code", "encode", "simulate_one", "simulate_batch", "input_products"]
 
