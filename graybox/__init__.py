@@ -18,6 +18,7 @@ from ._model import Model
 from ._static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
 from ._evaluate import evaluate, evaluate_thetas, fit_percent, j1, js, jsf, mse, rrse
 from ._selection import CandidateWarning, Selection, frols, information_criterion
+from ._semp import SEMPResult, semp
 from ._els import ELSConvergenceWarning, ELSResult, els, noise_terms
 from ._curves import StaticCurve
 from ._constraints import (
@@ -43,7 +44,7 @@ __all__ = [
     "Model", "predict", "simulate", "simulate_many", "DivergenceError",
     "cluster_map", "equilibria", "static_curve", "static_gain", "Equilibrium",
     "evaluate", "evaluate_thetas", "j1", "js", "jsf", "mse", "rrse", "fit_percent",
-    "frols", "Selection", "CandidateWarning", "information_criterion",
+    "frols", "Selection", "CandidateWarning", "information_criterion", "semp", "SEMPResult",
     "els", "ELSResult", "ELSConvergenceWarning", "noise_terms",
     "StaticCurve",
     "CurveEquality", "PassesThrough", "StaticBand", "GainBounds", "ClusterBounds", "UserConstraint",

@@ -1,0 +1,409 @@
+"""Structure selection by simulation error: SEMP (Piroddi & Spinelli, 2003).
+
+FROLS ranks terms by how much of the one-step-ahead output energy they explain. That criterion
+knows nothing of the free run, and under slowly varying inputs (staircases, where u(k-1) ≈ u(k-2)
+almost everywhere) it picks wrong terms even on noise-free data. SEMP scores a structure by what a
+model is for: its free-run (simulation) error.
+
+Algorithm (Piroddi & Spinelli, Int. J. Control 76(17), 2003, "simulation error minimization with
+pruning"): start from the included terms (default none); then repeat
+
+1. *forward*: for every remaining candidate, fit the structure with that term added by least
+   squares (one-step prediction error, cheap) and score it by the mean squared free-run error;
+   add the candidate with the smallest score;
+2. *pruning*: for every term of the structure, fit and score the structure without it; while the
+   best removal does not increase the score by more than ``prune_tol`` (relative), remove that term
+   (never the term just added, nor an included one);
+
+until the stopping rule holds. All candidates of one step are scored at once by the compiled
+population kernel: every candidate model is a member of a population of the full candidate
+structure, with zeros for the terms it does not hold, so one batched free run per record scores
+a whole step. The least-squares fits of all candidates of a step come from one Cholesky factor
+of the current structure's scaled Gram matrix (a rank-one border per candidate), so a step costs
+one batched free run plus O(n_candidates · n_terms²).
+
+Free runs start from each record's first L measured samples, L the largest lag among the
+candidates, and every score counts samples L … N−1 of every record, so all structures are judged
+on the same samples. A free run that diverges scores inf.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal, Sequence
+
+import numpy as np
+import pandas as pd
+import scipy.linalg
+
+from ._kernels import batch_sse, encode, input_products
+from ._model import Model
+from ._records import Dataset, Record, as_records
+from ._selection import CRITERIA
+from ._terms import Structure, Term, parse_term
+from ._validation import check_choice, check_int, check_real, frozen
+
+__all__ = ["semp", "SEMPResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class SEMPResult:
+    """The result of :func:`semp`: the chosen structure and the path that led to it.
+
+    Attributes
+    ----------
+    structure : Structure
+        The selected process terms, in the order they were added.
+    theta : ndarray, shape (n_terms,)
+        Least-squares (one-step) parameters of ``structure`` on the selection data, engineering units.
+    score : float
+        Mean squared free-run error of that model (output units²).
+    path : pandas.DataFrame
+        One row per accepted step: ``step``, ``action`` (``"add"``, ``"remove"``, ``"include"``),
+        ``term``, ``n_terms`` after the step, ``score`` (MSE of the free run, output units²),
+        ``criterion`` (the information criterion of the structure after the step) and
+        ``structure`` (the terms after the step, as text).
+    forward_scores : pandas.DataFrame
+        Every candidate's score at every forward step (rows: step, columns: candidate terms;
+        NaN for terms already in the structure, inf for a diverging or collinear candidate):
+        the terms tried and their scores.
+    criterion : str
+        The information criterion of the path (``"aic"``, ``"bic"`` or ``"fpe"``).
+    stop : str
+        Why selection stopped, in words.
+    n_rows : int
+        Samples scored (after the largest lag, summed over records).
+    """
+
+    structure: Structure
+    theta: np.ndarray
+    score: float
+    path: pd.DataFrame
+    forward_scores: pd.DataFrame
+    criterion: str
+    stop: str
+    n_rows: int
+
+    def model(self, name: str = "SEMP") -> Model:
+        """The selected structure with its least-squares parameters."""
+        return Model(self.structure, self.theta, name=name)
+
+    def __repr__(self) -> str:
+        return (f"SEMPResult(n_terms={len(self.structure)}, score={self.score:.4g}, steps={len(self.path)}, "
+                f"stop={self.stop!r})")
+
+
+class _Scorer:
+    """Least-squares fits and batched free-run scores of sub-structures of one candidate set."""
+
+    def __init__(self, process: Structure, records: list[Record], threads: int):
+        self.process = process
+        self.records = records
+        self.L = L = process.max_lag
+        self.code = code = encode(process)
+        self.threads = threads
+        blocks, targets = [], []
+        self.U = []
+        for r in records:
+            r.require_length(L)
+            U = input_products(code.fptr, code.fsig, code.flag, code.fpow, r.u, L)
+            self.U.append(U)
+            blocks.append(_psi(code, U, r.y, L))
+            targets.append(r.y[L:])
+        psi = np.vstack(blocks)
+        y = np.concatenate(targets)
+        if not (np.all(np.isfinite(psi)) and np.all(np.isfinite(y))):
+            raise ValueError("candidate regressors overflow to non-finite values (a high power of u or y?)")
+        self.n_rows = y.size
+        s = np.sqrt(np.mean(psi**2, axis=0))
+        self.zero = s == 0.0
+        self.s = np.where(self.zero, 1.0, s)
+        ps = psi / self.s
+        self.G = ps.T @ ps
+        self.b = ps.T @ y
+        self.yvar = float(np.var(y)) if np.var(y) > 0 else 1.0
+        # free-run errors below this are round-off, not signal: such structures tie (noise-free data)
+        self.floor = 1e-20 * max(float(np.mean(y**2)), np.finfo(float).tiny)
+
+    def fit(self, S: Sequence[int]) -> np.ndarray | None:
+        """θ (engineering units, full candidate length) of the LS fit of terms S, or None if singular."""
+        S = list(S)
+        th = np.zeros(len(self.process))
+        if not S:
+            return th
+        try:
+            c = scipy.linalg.cho_factor(self.G[np.ix_(S, S)], lower=False)
+        except np.linalg.LinAlgError:
+            return None
+        d = np.abs(np.diag(c[0]))
+        if d.min() <= 1e-7 * d.max():
+            return None
+        th[S] = scipy.linalg.cho_solve(c, self.b[S]) / self.s[S]
+        return th
+
+    def bordered(self, S: list[int], cands: np.ndarray, rank_tol: float) -> np.ndarray:
+        """θ rows (engineering units) of S ∪ {c} for every c in ``cands``; NaN rows where c is collinear."""
+        n = len(self.process)
+        out = np.zeros((cands.size, n))
+        Gcc = self.G[cands, cands]
+        if not S:
+            ok = (Gcc > 0) & ~self.zero[cands]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                out[np.arange(cands.size), cands] = np.where(ok, self.b[cands] / Gcc, np.nan) / self.s[cands]
+            out[~ok] = np.nan
+            return out
+        R = scipy.linalg.cholesky(self.G[np.ix_(S, S)], lower=False)
+        V = scipy.linalg.solve_triangular(R, self.G[np.ix_(S, cands)], trans="T")  # (k, C)
+        w = scipy.linalg.solve_triangular(R, self.b[S], trans="T")  # (k,)
+        d = Gcc - np.sum(V * V, axis=0)  # Schur complement: what c adds beyond S
+        ok = (d > rank_tol**2 * Gcc) & ~self.zero[cands]
+        dd = np.where(ok, d, 1.0)
+        zc = (self.b[cands] - V.T @ w) / dd
+        ZS = scipy.linalg.solve_triangular(R, w[:, None] - V * zc[None, :])  # (k, C)
+        out[:, S] = (ZS / self.s[S, None]).T
+        out[np.arange(cands.size), cands] = zc / self.s[cands]
+        out[~ok] = np.nan
+        return out
+
+    def scores(self, thetas: np.ndarray) -> np.ndarray:
+        """Mean squared free-run error of each row (inf where a run diverges or a row is NaN)."""
+        th = np.atleast_2d(thetas)
+        good = np.all(np.isfinite(th), axis=1)
+        out = np.full(th.shape[0], np.inf)
+        if good.any():
+            sse = sum(batch_sse(self.code, th[good], r.u, r.y, self.L, self.threads, U)
+                      for r, U in zip(self.records, self.U))
+            mse = np.maximum(sse / self.n_rows, self.floor)
+            out[good] = np.where(np.isfinite(mse), mse, np.inf)
+        return out
+
+
+def _psi(code, U: np.ndarray, y: np.ndarray, L: int) -> np.ndarray:
+    """Candidate regressors from measured y: input products × output monomials, rows L … N−1."""
+    psi = U[L:].copy()
+    for t in range(code.ny.size):
+        for d in range(code.ny[t]):
+            psi[:, t] *= y[L - code.ylag[t, d]: y.size - code.ylag[t, d]]
+    return psi
+
+
+def _criterion(name: str, mse: float, k: int, N: int) -> float:
+    if not np.isfinite(mse) or mse <= 0:
+        return math.inf if not np.isfinite(mse) else -math.inf
+    base = N * math.log(mse)
+    if name == "aic":
+        return base + 2.0 * k
+    if name == "bic":
+        return base + k * math.log(N)
+    return base + N * math.log((N + k) / (N - k)) if k < N else math.inf
+
+
+def semp(
+    candidates: Structure,
+    data: Record | Sequence[Record] | Dataset,
+    *,
+    n_terms: int | None = None,
+    tol: float | None = None,
+    criterion: Literal["aic", "bic", "fpe"] | None = None,
+    max_terms: int | None = None,
+    include: Sequence[Term | str] = (),
+    prune: bool = True,
+    prune_tol: float = 0.0,
+    rank_tol: float = 1e-7,
+    threads: int = 1,
+) -> SEMPResult:
+    """Select model terms by simulation error with pruning (SEMP, Piroddi & Spinelli 2003).
+
+    Exactly one stopping rule applies:
+
+    * ``n_terms``: stop when the structure (after pruning) holds ``n_terms`` terms;
+    * ``tol``: stop at the first structure whose free-run error is at most ``tol`` of the output's
+      variance (``MSE_free-run / var(y) <= tol``, a unit-free 1 − R² of the free run);
+    * ``criterion`` (the default, ``"bic"``): grow the structure to ``max_terms`` and return the
+      structure of the path with the smallest criterion ``N ln MSE_free-run + penalty(k)``.
+
+    Parameters
+    ----------
+    candidates : Structure
+        Candidate terms, e.g. ``Candidates(ny=6, nu=6, degree=2)``; noise terms are ignored.
+    data : Record, sequence of Record, or Dataset
+        Identification data, engineering units (a Dataset contributes its ``ident`` record).
+        Free runs never straddle two records.
+    n_terms : int, optional
+        Size of the structure to return.
+    tol : float, optional
+        Relative free-run error in (0, 1) that ends the search.
+    criterion : {"aic", "bic", "fpe"}, optional
+        Information criterion of the free-run error (see :func:`graybox.information_criterion`).
+    max_terms : int, optional
+        Largest structure looked at (``tol`` and ``criterion``; default min(30, candidates)).
+    include : sequence of Term or str
+        Terms in every structure, added first (e.g. ``["1"]``); never pruned.
+    prune : bool
+        Run the pruning steps (``False`` gives forward selection by simulation error only).
+    prune_tol : float
+        A term is removed when the score without it is at most ``(1 + prune_tol)`` times the
+        current score (0: removal must not hurt at all).
+    rank_tol : float
+        A candidate whose scaled column adds less than ``rank_tol`` of its norm to the current
+        structure is collinear with it and is not tried at that step.
+    threads : int
+        Threads of the batched free runs.
+
+    Returns
+    -------
+    SEMPResult
+        The structure, its LS parameters and score, the path (every accepted step) and the
+        score of every candidate at every forward step.
+
+    Raises
+    ------
+    ValueError
+        Conflicting or out-of-range arguments, no process candidates, records shorter than the
+        candidates' largest lag, or no candidate that can be added (all collinear or diverging).
+    """
+    if not isinstance(candidates, Structure):
+        raise ValueError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+    process = candidates.process
+    nc = len(process)
+    if nc == 0:
+        raise ValueError("the candidate structure has no process terms to select from")
+    if sum(x is not None for x in (n_terms, tol)) > 1:
+        raise ValueError("give either n_terms or tol, not both")
+    if n_terms is not None:
+        n_terms = check_int(n_terms, "n_terms", low=1, high=nc)
+        if max_terms is not None:
+            raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
+    if tol is not None:
+        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
+    if criterion is not None:
+        check_choice(criterion, "criterion", CRITERIA)
+    if max_terms is not None:
+        max_terms = check_int(max_terms, "max_terms", low=1, high=nc)
+    prune_tol = check_real(prune_tol, "prune_tol", low=0)
+    rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
+    threads = check_int(threads, "threads", low=1)
+    if not isinstance(prune, bool):
+        raise ValueError(f"prune must be True or False, got {prune!r}")
+    mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
+    crit = criterion or "bic"
+    forced: list[int] = []
+    for t in include:
+        term = t if isinstance(t, Term) else parse_term(t)
+        if term not in process:
+            raise ValueError(f"included term {term} is not among the process candidates")
+        if process.index(term) in forced:
+            raise ValueError(f"included term {term} is given twice")
+        forced.append(process.index(term))
+    # with n_terms the search still looks past that size (a term found later can make earlier ones
+    # redundant, and pruning then brings the structure back down); the answer is the best structure
+    # of that size met on the path
+    limit = min(nc, 2 * n_terms + 4) if mode == "n_terms" else (max_terms or min(30, nc))
+    if len(forced) > (n_terms if mode == "n_terms" else limit):
+        raise ValueError(f"{len(forced)} included terms exceed the {n_terms or limit} terms asked for")
+
+    sc = _Scorer(process, as_records(data), threads)
+    N = sc.n_rows
+    if N <= limit:
+        raise ValueError(f"{N} samples after the largest lag are too few for {limit} terms")
+    names = [str(t) for t in process]
+    current = list(forced)
+    th = sc.fit(current)
+    if th is None:
+        raise ValueError(f"the included terms {[names[j] for j in forced]} are collinear on these data")
+    score = float(sc.scores(th)[0]) if current else float(np.mean(np.concatenate([r.y[sc.L:] for r in sc.records]) ** 2))
+    rows: list[dict] = []
+    fwd: list[np.ndarray] = []
+
+    def log(action: str, term: str) -> None:
+        rows.append({"step": len(rows), "action": action, "term": term, "n_terms": len(current), "score": score,
+                     "criterion": _criterion(crit, score, len(current), N),
+                     "structure": " + ".join(names[j] for j in current) or "(empty)", "_set": tuple(current),
+                     "_theta": th.copy()})
+
+    if forced:
+        log("include", ", ".join(names[j] for j in forced))
+    visited = {frozenset(current)}
+    stop = ""
+    # Pruning on noisy data can keep the size from growing (a removal that does not hurt is taken):
+    # after this many additions the search stops pruning and only adds, so every size up to the
+    # limit is reached.
+    budget = 6 * limit + 10
+    n_add = 0
+    while True:
+        if mode == "tol" and current and score / sc.yvar <= tol:
+            stop = f"free-run MSE / var(y) = {score / sc.yvar:.3g} ≤ {tol:g}"
+            break
+        if len(current) >= limit:
+            stop = f"{limit} terms reached"
+            break
+        if mode == "n_terms" and score <= sc.floor and len(current) > n_terms:
+            stop = "exact free run (noise-free data) reached"
+            break
+        cands = np.array([j for j in range(nc) if j not in current and not sc.zero[j]], dtype=int)
+        if cands.size == 0:
+            stop = "no candidate left"
+            break
+        thetas = sc.bordered(current, cands, rank_tol)
+        s_c = sc.scores(thetas)
+        row = np.full(nc, np.nan)
+        row[cands] = s_c
+        fwd.append(row)
+        # a candidate whose structure was visited before would re-open a cycle: skip it
+        order = np.argsort(s_c, kind="stable")
+        pick = next((int(i) for i in order if np.isfinite(s_c[i]) and frozenset(current + [int(cands[i])]) not in visited),
+                    None)
+        if pick is None:
+            if not current or not rows:
+                raise ValueError("no candidate gives a bounded free run (every one-term extension diverges or is "
+                                 "collinear); check the data or the candidate set")
+            stop = "no candidate improves: every extension diverges, is collinear or was visited"
+            break
+        added = int(cands[pick])
+        current.append(added)
+        th, score = thetas[pick], float(s_c[pick])
+        visited.add(frozenset(current))
+        log("add", names[added])
+        n_add += 1
+        while prune and n_add <= budget and len(current) > len(forced) + 1:
+            removable = [j for j in current if j not in forced and j != added]
+            trial = []
+            for j in removable:
+                S = [i for i in current if i != j]
+                t_ = sc.fit(S)
+                trial.append(t_ if t_ is not None else np.full(nc, np.nan))
+            if not trial:
+                break
+            s_r = sc.scores(np.array(trial))
+            i = int(np.argmin(s_r))
+            if not (np.isfinite(s_r[i]) and s_r[i] <= score * (1.0 + prune_tol)):
+                break
+            nxt = [k for k in current if k != removable[i]]
+            if frozenset(nxt) in visited and not s_r[i] < score:
+                break  # back to an earlier structure without a gain: a cycle
+            current = nxt
+            th, score = trial[i], float(s_r[i])
+            visited.add(frozenset(current))
+            log("remove", names[removable[i]])
+    if prune and n_add > budget:
+        stop += f" (pruning stopped after {budget} additions)"
+    path = pd.DataFrame(rows)
+    if mode == "n_terms":
+        same = path[path["n_terms"] == n_terms]
+        if len(same) == 0:
+            raise ValueError(f"the search never reached {n_terms} terms ({stop})")
+        # the best of that size; among ties (exact fits on noise-free data) the last one met
+        best = same.iloc[::-1].loc[lambda d: d["score"] == d["score"].min()].iloc[0]
+        current, th, score = list(best["_set"]), best["_theta"], float(best["score"])
+        stop = f"n_terms = {n_terms}: best structure of that size on the path (step {int(best['step'])}); search: {stop}"
+    elif mode == "criterion":
+        finite = path[path["n_terms"] > 0]
+        best = finite.loc[finite["criterion"].idxmin()] if len(finite) else path.iloc[-1]
+        current, th, score = list(best["_set"]), best["_theta"], float(best["score"])
+        stop = f"{crit} minimum at {len(current)} terms (step {int(best['step'])}); search: {stop}"
+    structure = Structure([process[j] for j in current])
+    fwd_df = pd.DataFrame(np.array(fwd) if fwd else np.zeros((0, nc)), columns=names)
+    fwd_df.index.name = "forward step"
+    return SEMPResult(structure, frozen(th[current]), score, path.drop(columns=["_set", "_theta"]), fwd_df, crit, stop,
+                      N)

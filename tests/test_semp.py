@@ -1,0 +1,104 @@
+"""SEMP: structure selection by simulation error with pruning (graybox.semp)."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox import Candidates, Model, Record, Structure
+
+# A NARX system whose terms FROLS gets wrong under staircase inputs, even without noise: with
+# u(k-1) = u(k-2) = u(k-3) almost everywhere, one-step ERR cannot tell the input lags apart.
+TRUE = Structure(["y(k-1)", "y(k-2)", "u(k-2)", "u(k-1)y(k-1)", "u(k-2)^2", "1"])
+THETA = np.array([0.5, 0.3, 0.4, -0.2, 0.15, 0.1])
+SECOND = Structure(["y(k-1)", "u(k-1)", "u(k-2)", "u(k-2)y(k-1)", "1"])
+THETA2 = np.array([0.6, 0.3, 0.2, -0.1, 0.05])
+
+
+def staircase_record(structure, theta, seed, n=1000, hold=10, noise=0.0):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1.0, 1.0, n // hold + 1), hold)[:n]
+    y = Model(structure, theta).simulate(u, np.zeros(structure.max_lag))
+    if noise:
+        y = y + noise * np.std(y) * rng.standard_normal(n)
+    return Record(u, y, name=f"stair{seed}")
+
+
+@pytest.mark.parametrize("structure,theta,seed,hold", [
+    (TRUE, THETA, 0, 10), (TRUE, THETA, 1, 5), (TRUE, THETA, 2, 10), (SECOND, THETA2, 0, 20), (SECOND, THETA2, 1, 5),
+])
+def test_recovers_the_true_structure_where_frols_fails(structure, theta, seed, hold):
+    rec = staircase_record(structure, theta, seed, hold=hold)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        wrong = gb.frols(Candidates(3, 3, 0, 2), rec, n_terms=len(structure))
+    assert set(wrong.structure) != set(structure)  # the case is a real one: ERR picks wrong terms
+    for res in (gb.semp(Candidates(3, 3, 0, 2), rec, n_terms=len(structure)),
+                gb.semp(Candidates(3, 3, 0, 2), rec)):  # criterion (BIC) stopping
+        assert set(res.structure) == set(structure)
+        order = [res.structure.index(t) for t in structure]
+        np.testing.assert_allclose(res.theta[order], theta, atol=1e-8)
+        assert res.score < 1e-15 * np.mean(rec.y**2)
+
+
+def test_path_and_scores_are_consistent():
+    rec = staircase_record(TRUE, THETA, 3, noise=0.02)
+    res = gb.semp(Candidates(3, 3, 0, 2), rec, n_terms=4, include=["1"])
+    assert res.structure[0] == gb.parse_term("1") and len(res.structure) == 4
+    path = res.path
+    assert list(path.columns) == ["step", "action", "term", "n_terms", "score", "criterion", "structure"]
+    assert path["action"].iloc[0] == "include"
+    assert set(path["action"]) <= {"include", "add", "remove"}
+    # each size changes by one per step
+    assert np.all(np.abs(np.diff(path["n_terms"])) == 1)
+    # the returned score is the model's own free-run MSE (the shared evaluator's J_S on these samples)
+    m = res.model()
+    L = Candidates(3, 3, 0, 2).max_lag  # every structure is run from the candidates' largest lag
+    sim = np.r_[rec.y[:L], gb.simulate(m.structure, m.theta, rec.u[L - m.max_lag:], rec.y[L - m.max_lag:L])[m.max_lag:]]
+    assert res.score == pytest.approx(np.mean((sim[L:] - rec.y[L:]) ** 2), rel=1e-9)
+    # at every forward step the accepted term had the smallest finite score among the unvisited
+    fs = res.forward_scores
+    assert fs.shape[1] == len(Candidates(3, 3, 0, 2).process)
+    adds = path[path["action"] == "add"]
+    for k, (_, row) in enumerate(adds.iterrows()):
+        assert fs.iloc[k][row["term"]] == pytest.approx(row["score"])
+    # the rule that picked it: the minimum of that step (cycles aside, which this small case does not hit)
+    assert fs.iloc[0].min() == pytest.approx(adds["score"].iloc[0])
+
+
+def test_prune_false_is_forward_selection_and_tol_stops():
+    rec = staircase_record(TRUE, THETA, 4)
+    fwd = gb.semp(Candidates(3, 3, 0, 2), rec, n_terms=3, prune=False)
+    assert set(fwd.path["action"]) == {"add"} and len(fwd.structure) == 3
+    res = gb.semp(Candidates(3, 3, 0, 2), rec, tol=1e-6)
+    assert res.score / np.var(rec.y[3:]) <= 1e-6 and "≤" in res.stop
+
+
+def test_several_records_never_straddle():
+    recs = [staircase_record(TRUE, THETA, s, n=500) for s in (5, 6)]
+    res = gb.semp(Candidates(3, 3, 0, 2), recs, n_terms=len(TRUE))
+    assert set(res.structure) == set(TRUE)
+    joined = Record(np.concatenate([r.u for r in recs]), np.concatenate([r.y for r in recs]))
+    assert res.n_rows == sum(len(r) - 3 for r in recs) < len(joined)
+
+
+def test_bad_input():
+    rec = staircase_record(TRUE, THETA, 0, n=200)
+    cand = Candidates(3, 3, 0, 2)
+    with pytest.raises(ValueError, match="Structure"):
+        gb.semp(["y(k-1)"], rec)
+    with pytest.raises(ValueError, match="either n_terms or tol"):
+        gb.semp(cand, rec, n_terms=2, tol=0.1)
+    with pytest.raises(ValueError, match="n_terms"):
+        gb.semp(cand, rec, n_terms=0)
+    with pytest.raises(ValueError, match="criterion"):
+        gb.semp(cand, rec, criterion="hqc")
+    with pytest.raises(ValueError, match="tol"):
+        gb.semp(cand, rec, tol=1.5)
+    with pytest.raises(ValueError, match="not among"):
+        gb.semp(cand, rec, include=["u(k-9)"])
+    with pytest.raises(ValueError, match="max lag"):
+        gb.semp(cand, Record([1.0, 2.0], [1.0, 2.0]))
+    with pytest.raises(ValueError, match="no process terms"):
+        gb.semp(Structure(["e(k-1)"]), rec)
