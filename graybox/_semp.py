@@ -41,7 +41,7 @@ from ._kernels import batch_sse, encode, input_products
 from ._model import Model
 from ._records import Dataset, Record, as_records
 from ._selection import CRITERIA
-from ._terms import Structure, Term, parse_term
+from ._terms import Structure, Term
 from ._validation import check_choice, check_int, check_real, frozen
 
 __all__ = ["semp", "SEMPResult"]
@@ -288,14 +288,7 @@ def semp(
         raise ValueError(f"prune must be True or False, got {prune!r}")
     mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
     crit = criterion or "bic"
-    forced: list[int] = []
-    for t in include:
-        term = t if isinstance(t, Term) else parse_term(t)
-        if term not in process:
-            raise ValueError(f"included term {term} is not among the process candidates")
-        if process.index(term) in forced:
-            raise ValueError(f"included term {term} is given twice")
-        forced.append(process.index(term))
+    forced = process.positions(include, "included term")
     # with n_terms the search still looks past that size (a term found later can make earlier ones
     # redundant, and pruning then brings the structure back down); the answer is the best structure
     # of that size met on the path

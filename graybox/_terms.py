@@ -179,6 +179,23 @@ class Structure:
         t = term if isinstance(term, Term) else parse_term(term)
         return self.terms.index(t)
 
+    def positions(self, terms: Iterable[Term | str], what: str = "term") -> list[int]:
+        """Positions of ``terms`` (Terms or strings) in the structure, in the order given.
+
+        Raises ``ValueError`` naming a term that is not in the structure or is given twice
+        (``what`` names the role of the terms in the message, e.g. ``"included term"``).
+        """
+        out: list[int] = []
+        for t in terms:
+            term = t if isinstance(t, Term) else parse_term(t)
+            if term not in self.terms:
+                raise ValueError(f"{what} {term} is not among the process candidates")
+            i = self.terms.index(term)
+            if i in out:
+                raise ValueError(f"{what} {term} is given twice")
+            out.append(i)
+        return out
+
     def __contains__(self, term: object) -> bool:
         t = parse_term(term) if isinstance(term, str) else term
         return t in self.terms
