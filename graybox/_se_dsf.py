@@ -1,0 +1,298 @@
+"""The D_SF choice solved directly: min J_S(θ) subject to J_SF(θ) ≤ B.
+
+D_SF (eq. (14)) picks, from a swept Pareto set, the member with the smallest free-run error among
+those whose static error lies in the band B. That is the ε-constraint problem
+
+    min_θ J_S(θ)   subject to   J_SF(θ) ≤ B,
+
+and it can be solved without sweeping λ. Both J's are mean squares of residuals whose Jacobians
+graybox computes exactly (the forward sensitivity recursion of the free run; implicit
+differentiation of the equilibrium reached at each static point), so a Gauss–Newton model of
+both is at hand. Each iteration solves the linearised problem
+
+    min_d ‖r_S + J_S d‖²  s.t.  ‖r_SF + J_SF d‖² ≤ B
+
+through its Lagrangian: d(μ) = argmin ‖r_S + J_S d‖² + μ ‖r_SF + J_SF d‖² (+ a Levenberg–Marquardt
+damping ν), with the multiplier μ ≥ 0 found by bisection so that the linearised constraint holds;
+a step is kept when the true J_SF stays in the band and the true J_S falls, else ν grows. A start
+outside the band first restores feasibility (steps that decrease J_SF); when that stalls above B the
+band is infeasible for the structure, and the result says so with the smallest J_SF reached.
+
+The start is the PE member nearest the band (the closed form of eq. (11) over a λ sweep costs
+milliseconds): the member inside the band with the smallest J_S, or the smallest J_SF when no PE
+member is inside.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from ._convex import pe_thetas
+from ._kernels import free_run_sensitivity
+from ._model import Model
+from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
+from ._se import SEProblem
+from ._static import static_theta_gradient
+from ._terms import Structure
+from ._validation import check_int, check_real, check_theta, warn
+
+__all__ = ["se_dsf", "DSFResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class DSFResult:
+    """The result of :func:`se_dsf`.
+
+    Attributes
+    ----------
+    model : Model
+        The solution (engineering units).
+    JS, JSF : float
+        Its free-run MSE on the identification record(s) and its static MSE at the static points
+        (output units²), by the shared definitions.
+    band : float
+        B, the bound on J_SF (output units²).
+    feasible : bool
+        Whether J_SF ≤ B holds. When False, ``model`` is the member with the smallest J_SF reached.
+    start : str
+        Where the iteration started (e.g. ``"PE λ1=0.0123"`` or ``"theta0"``).
+    start_JS, start_JSF : float
+        J_S and J_SF of the start.
+    n_iter : int
+        Iterations (trial steps) taken.
+    message : str
+        Why the iteration stopped, in words.
+    """
+
+    model: Model
+    JS: float
+    JSF: float
+    band: float
+    feasible: bool
+    start: str
+    start_JS: float
+    start_JSF: float
+    n_iter: int
+    message: str
+
+    def __repr__(self) -> str:
+        return (f"DSFResult(J_S={self.JS:.4g}, J_SF={self.JSF:.4g}, band={self.band:g}, feasible={self.feasible}, "
+                f"start={self.start!r}, n_iter={self.n_iter})")
+
+
+class _GN:
+    """Residuals and Jacobians (in scaled coordinates z = s ⊙ θ) of J_S and J_SF."""
+
+    def __init__(self, problem: SEProblem):
+        self.p = problem
+        self.M = len(problem.static)
+
+    def parts(self, z: np.ndarray, jac: bool):
+        p = self.p
+        th = z / p.scale
+        L = p.L
+        w1 = 1.0 / np.sqrt(p.n_dyn)
+        r1, J1 = [], []
+        for rec, U in zip(p.records, p.U):
+            y, S = free_run_sensitivity(p.code, th, rec.u, rec.y[:L], L, U)
+            r1.append(w1 * (y[L:] - rec.y[L:]))
+            if jac:
+                J1.append(w1 * S[L:] / p.scale)
+        r1 = np.concatenate(r1)
+        yb = p.static_outputs(th)[0]
+        w2 = 1.0 / np.sqrt(self.M)
+        r2 = w2 * (yb - p.static.ybar)
+        f = float(r1 @ r1) if np.all(np.isfinite(r1)) else np.inf
+        g = float(r2 @ r2) if np.all(np.isfinite(r2)) else np.inf
+        if not jac or not (np.isfinite(f) and np.isfinite(g)):
+            return f, g, None
+        J1 = np.vstack(J1)
+        J2 = w2 * static_theta_gradient(p.structure, th, p.static.ubar, yb) / p.scale
+        if not (np.all(np.isfinite(J1)) and np.all(np.isfinite(J2))):
+            return f, g, None
+        return f, g, (J1.T @ J1, J1.T @ r1, J2.T @ J2, J2.T @ r2)
+
+
+def _step(A1, b1, A2, b2, mu, nu):
+    H = A1 + mu * A2
+    D = np.diag(np.maximum(np.diag(H), 1e-12 * max(1.0, float(np.max(np.diag(H))))))
+    try:
+        return np.linalg.solve(H + nu * D, -(b1 + mu * b2))
+    except np.linalg.LinAlgError:
+        return None
+
+
+def _lin(c: float, b: np.ndarray, A: np.ndarray, d: np.ndarray) -> float:
+    return c + 2.0 * float(b @ d) + float(d @ A @ d)
+
+
+def _constrained_step(f, g, G, band, nu):
+    """d minimising the linearised J_S with the linearised J_SF ≤ band (μ by bisection)."""
+    A1, b1, A2, b2 = G
+    d = _step(A1, b1, A2, b2, 0.0, nu)
+    if d is not None and _lin(g, b2, A2, d) <= band:
+        return d
+    scale = float(np.trace(A1)) / max(float(np.trace(A2)), 1e-300)
+    lo, hi = 0.0, 1e-6 * scale
+    for _ in range(80):  # grow μ until the linearised constraint holds
+        d = _step(A1, b1, A2, b2, hi, nu)
+        if d is not None and _lin(g, b2, A2, d) <= band:
+            break
+        lo, hi = hi, hi * 10.0
+    else:
+        return None
+    for _ in range(40):  # then the smallest such μ (the multiplier of the linearised problem)
+        mid = np.sqrt(lo * hi) if lo > 0 else hi / 10.0
+        dm = _step(A1, b1, A2, b2, mid, nu)
+        if dm is not None and _lin(g, b2, A2, dm) <= band:
+            hi, d = mid, dm
+        else:
+            lo = mid
+        if hi <= lo * (1 + 1e-3):
+            break
+    return d
+
+
+def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray, str]:
+    with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", StaticRangeWarning)
+        try:
+            th = pe_thetas(problem.structure, problem.records, problem.static, lambdas, solver="closed")
+        except ValueError:
+            th = np.zeros((0, len(problem.structure)))
+    th = np.vstack([th, problem.ls_theta()[None, :]])
+    lam = np.r_[lambdas, 1.0]
+    js, jsf = problem.js(th), problem.jsf(th)
+    inside = np.isfinite(js) & (jsf <= band)
+    if inside.any():
+        i = int(np.flatnonzero(inside)[np.argmin(js[inside])])
+    else:
+        ok = np.isfinite(js) & np.isfinite(jsf)
+        if not ok.any():
+            raise ValueError("no PE member nor the least-squares estimate has a bounded free run and a static curve "
+                             "at every static point: give theta0")
+        i = int(np.flatnonzero(ok)[np.argmin(jsf[ok])])
+    return th[i], f"PE λ1={lam[i]:.4g}"
+
+
+def se_dsf(
+    structure: Structure,
+    data: Record | Dataset | Sequence[Record],
+    static: StaticPoints | None = None,
+    *,
+    band: float = 0.031,
+    theta0: np.ndarray | None = None,
+    max_iter: int = 200,
+    tol: float = 1e-9,
+    pe_lambdas: np.ndarray | None = None,
+) -> DSFResult:
+    """The D_SF model solved directly: min J_S(θ) subject to J_SF(θ) ≤ ``band``.
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms (noise terms are dropped).
+    data : Record, Dataset or sequence of Record
+        Identification data (a Dataset's ``ident``); each record is run freely on its own.
+    static : StaticPoints, optional
+        Static points (default: the Dataset's).
+    band : float
+        B, the bound on J_SF in output units² (D_SF's band: 0.031 mlc² = 0.175² for the plant).
+    theta0 : ndarray, shape (n_terms,), optional
+        Start; default: the PE member nearest the band (see the module docstring).
+    max_iter : int
+        Largest number of trial steps.
+    tol : float
+        Relative decrease of J_S below which the iteration stops.
+    pe_lambdas : ndarray, optional
+        λ1 values of the PE sweep that picks the start (default: 60 in logspace(-6, 0)).
+
+    Returns
+    -------
+    DSFResult
+        The model, its J_S and J_SF, whether the band was met (with a warning naming the smallest
+        J_SF reached when it was not), the start and the iteration count.
+    """
+    recs = as_records(data)
+    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
+    if sp is None:
+        raise ValueError("se_dsf needs static points: pass static= or a Dataset with static points")
+    band = check_real(band, "band", low=0, low_open=True)
+    max_iter = check_int(max_iter, "max_iter", low=1)
+    tol = check_real(tol, "tol", low=0, low_open=True)
+    warn_static_range(sp.ubar, recs)
+    problem = SEProblem(structure, recs, sp)
+    if theta0 is not None:
+        th0, start = check_theta(len(problem.structure), theta0, "theta0"), "theta0"
+    else:
+        lams = np.logspace(-6, 0, 60) if pe_lambdas is None else np.asarray(pe_lambdas, float)
+        th0, start = _pe_start(problem, band, lams)
+    gn = _GN(problem)
+    z = th0 * problem.scale
+    f, g, G = gn.parts(z, True)
+    if not (np.isfinite(f) and np.isfinite(g)):
+        raise ValueError(f"the start ({start}) has an unbounded free run or no equilibrium reached at some static "
+                         "point; give another theta0")
+    f0, g0 = f, g
+    nu = 1e-3
+    # the linearised constraint aims a margin inside the band, so that the curvature of J_SF does not
+    # throw most steps just outside it (they would be refused and the iteration would zigzag)
+    margin = 0.05
+    it = 0
+    message = f"{max_iter} iterations reached"
+    stall = 0
+    with np.errstate(all="ignore"):
+        while it < max_iter:
+            it += 1
+            if G is None:
+                message = "the Jacobian is not finite at the current point"
+                break
+            A1, b1, A2, b2 = G
+            feasible = g <= band
+            if feasible:
+                d = _constrained_step(f, g, G, min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin))), nu)
+            else:
+                # restoration: decrease J_SF, with J_S as a small regulariser
+                d = _step(A2, b2, A1, b1, 1e-6, nu)
+            if d is None:
+                nu *= 10.0
+                if nu > 1e12:
+                    message = "no step improves (the linearised problem has no feasible step)"
+                    break
+                continue
+            f_new, g_new, G_new = gn.parts(z + d, True)
+            if feasible:
+                ok = np.isfinite(f_new) and g_new <= band * (1 + 1e-12) and f_new < f
+                gain = (f - f_new) / f if ok else 0.0
+            else:
+                ok = np.isfinite(f_new) and np.isfinite(g_new) and g_new < g
+                gain = (g - g_new) / g if ok else 0.0
+            if ok:
+                z, f, g, G = z + d, f_new, g_new, G_new
+                nu = max(nu / 3.0, 1e-12)
+                margin = max(margin / 1.5, 1e-4)
+                stall = stall + 1 if gain < tol else 0
+                if stall >= 3:
+                    message = (f"converged: relative decrease of {'J_S' if feasible else 'J_SF'} below {tol:g} "
+                               "for 3 steps")
+                    if feasible or g > band:
+                        break
+            elif feasible and np.isfinite(f_new) and f_new < f and np.isfinite(g_new):
+                margin = min(2.0 * margin, 0.5)  # the model was right about J_S: only the band was missed
+            else:
+                nu *= 4.0
+                if nu > 1e12:
+                    message = "converged: no step along which the model improves (step size vanished)"
+                    break
+    th = z / problem.scale
+    feasible = bool(g <= band * (1 + 1e-12))
+    if not feasible:
+        warn(f"se_dsf: the band B = {band:g} is infeasible for this structure from the start {start}: the smallest "
+             f"J_SF reached is {g:.4g} (J_S {f:.4g}); widen the band or change the structure", RuntimeWarning)
+    name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
+    return DSFResult(Model(problem.structure, th, name=name), f, g, band, feasible, start, f0, g0, it, message)
