@@ -99,7 +99,7 @@ def test_property_static_curve_equals_simulated_steady_state(m, ubar):
        st.floats(1e-3, 1e3))
 @settings(max_examples=80, deadline=None)
 def test_property_closed_form_roots_equal_numpy_roots(coef, scale):
-    from graybox._kernels import real_roots_upto_cubic
+    from graybox._static_kernels import real_roots_upto_cubic
 
     c = np.array(coef) * scale
     got = real_roots_upto_cubic(c[:, None, None])[0, 0]
