@@ -39,7 +39,7 @@ import numpy as np
 
 from ._curves import StaticCurve
 from ._records import StaticPoints
-from ._static import ClusterMap, cluster_map, cluster_name, is_rational
+from ._static import ClusterMap, cluster_map, cluster_name, is_rational, vanishing_denominator
 from ._terms import Structure
 
 __all__ = [
@@ -434,16 +434,8 @@ def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray
     """Refuse an estimate whose rational static function has a zero denominator at a static ū."""
     if not is_rational(ctx.structure):
         return
-    cm = ctx.cluster_map
-    sigma = cm.R @ theta
     ub = np.asarray(ubar, float)
-    den = np.ones_like(ub)
-    scale = np.ones_like(ub)
-    for (p, m), s in zip(cm.keys, sigma):
-        if p == 1:
-            den -= s * ub**m
-            scale += abs(s) * np.abs(ub) ** m
-    bad = np.abs(den) <= 1e-9 * scale
+    bad = vanishing_denominator(ctx.structure, theta, ub)
     if bad.any():
         raise ValueError(
             f"{what}: the estimated model's static function does not exist at ū = {ub[bad].tolist()} "

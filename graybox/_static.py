@@ -63,6 +63,7 @@ __all__ = [
     "rational_static_curve",
     "rational_parts",
     "denominator_vanishes",
+    "vanishing_denominator",
     "static_coefficients",
     "real_roots",
     "stable_mask",
@@ -193,60 +194,78 @@ def static_coefficients(structure: Structure, thetas: np.ndarray, ubar: np.ndarr
     return coef
 
 
+def _root_groups(c: np.ndarray) -> list[tuple[float, int, int]]:
+    """Groups of roots of Σ c_k x^k of similar magnitude: (scale, k1, k2) for each.
+
+    The upper convex hull of the points (k, log2|c_k|) (the Newton polygon) has one edge per
+    group: the edge from k1 to k2 carries k2 − k1 roots of magnitude near 2^(−slope), the roots of
+    Σ_{k1 ≤ k ≤ k2} c_k x^(k−k1) up to a relative error of the order of the ratio to the next
+    group's scale. Edges whose scales are less than 2^10 apart form one group.
+    """
+    pts = [(k, float(np.log2(abs(v)))) for k, v in enumerate(c) if v != 0]
+    hull: list[tuple[int, float]] = []
+    for p in pts:
+        while len(hull) >= 2 and ((hull[-1][1] - hull[-2][1]) * (p[0] - hull[-2][0])
+                                  <= (p[1] - hull[-2][1]) * (hull[-1][0] - hull[-2][0])):
+            hull.pop()
+        hull.append(p)
+    groups: list[list[float]] = []  # [log2 scale · count, k1, k2]
+    for (k1, v1), (k2, v2) in zip(hull, hull[1:]):
+        e = (v1 - v2) / (k2 - k1)
+        if groups and e - groups[-1][0] / (groups[-1][2] - groups[-1][1]) < 10:
+            groups[-1][0] += e * (k2 - k1)
+            groups[-1][2] = k2
+        else:
+            groups.append([e * (k2 - k1), k1, k2])
+    return [(2.0 ** np.round(w / (k2 - k1)), int(k1), int(k2)) for w, k1, k2 in groups]
+
+
+def _roots_one(c: np.ndarray) -> np.ndarray:
+    """Every root (complex) of Σ c_k x^k: group by group in each group's scale, then Newton on the whole."""
+    z0 = [0.0] * int(np.argmax(c != 0))  # x^lo divides the polynomial
+    z = []
+    for tau, k1, k2 in _root_groups(c):
+        cs = c[k1:k2 + 1] * tau ** np.arange(k2 - k1 + 1)  # exact: tau is a power of two
+        z.extend((tau * np.roots(cs[::-1] / np.max(np.abs(cs)))).tolist())
+    z = np.array(z, dtype=complex)
+    dc = c[1:] * np.arange(1, c.size)
+    for _ in range(30):  # Newton steps on the whole polynomial, each kept only if it reduces |F|
+        f = np.polynomial.polynomial.polyval(z, c)
+        df = np.polynomial.polynomial.polyval(z, dc)
+        zn = z - np.where(df != 0, f / np.where(df != 0, df, 1.0), 0.0)
+        better = np.abs(np.polynomial.polynomial.polyval(zn, c)) < np.abs(f)
+        z = np.where(better, zn, z)
+        if not better.any():
+            break
+    return np.concatenate([np.array(z0, dtype=complex), z])
+
+
 def _real_roots_companion(coef: np.ndarray) -> np.ndarray:
     """Real roots (sorted, NaN-padded) of ascending polynomials of degree D >= 4, shape (P, M, D).
 
-    The variable is balanced by a power of two as in :func:`real_roots_upto_cubic`; the roots are
-    the eigenvalues of the companion matrix (numpy.roots where the leading coefficient is exactly
-    zero), the real ones polished by Newton steps and kept only if their backward error is small.
+    Companion-matrix eigenvalues (numpy.roots), computed group by group in the scale of each group
+    of roots (the edges of the Newton polygon of the coefficients, scales rounded to powers of
+    two), so roots of very different magnitudes all start accurate and a change of units only
+    rescales them; Newton steps on the whole polynomial finish them, and a real root is kept
+    only if its backward error is small.
     """
     D = coef.shape[0] - 1
     P, M = coef.shape[1:]
-    c = np.moveaxis(coef, 0, -1).reshape(-1, D + 1).copy()
+    c = np.moveaxis(coef, 0, -1).reshape(-1, D + 1)
     K = c.shape[0]
     out = np.full((K, D), np.nan)
-    ok = np.all(np.isfinite(c), axis=1) & np.any(c != 0, axis=1)
-    nz = c != 0
-    lo = np.argmax(nz, axis=1)
-    hi = D - np.argmax(nz[:, ::-1], axis=1)
-    rows = np.arange(K)
-    with np.errstate(all="ignore"):
-        e = np.where(hi > lo, np.round((np.log2(np.abs(c[rows, lo])) - np.log2(np.abs(c[rows, hi])))
-                                       / np.maximum(hi - lo, 1)), 0.0)
-        s = np.where(ok, 2.0 ** e, 1.0)
-        c = c * s[:, None] ** np.arange(D + 1)  # exact: powers of two
-        big = np.max(np.abs(c), axis=1)
-        ok &= np.isfinite(big) & (big > 0)
-        c = c / np.where(ok, 2.0 ** np.round(np.log2(np.where(ok, big, 1.0))), 1.0)[:, None]
-    roots = np.full((K, D), np.nan, dtype=complex)
-    full = ok & (c[:, D] != 0)
-    if full.any():
-        cf = c[full]
-        comp = np.zeros((cf.shape[0], D, D))
-        comp[:, 0, :] = -cf[:, D - 1::-1] / cf[:, D, None]
-        idx = np.arange(D - 1)
-        comp[:, idx + 1, idx] = 1.0
-        roots[full] = np.linalg.eigvals(comp)
-    for k in np.flatnonzero(ok & ~full):
-        r = np.roots(c[k, ::-1])
-        roots[k, : r.size] = r
-    with np.errstate(all="ignore"):
-        real = np.abs(roots.imag) <= IMAG_RTOL * np.maximum(np.abs(roots), 1.0)
-        x = np.where(real, roots.real, np.nan)
-        powers = np.arange(D + 1)
-        for _ in range(3):
-            xp = x[..., None] ** powers  # (K, D, D+1)
-            f = np.einsum("kdp,kp->kd", xp, c)
-            df = np.einsum("kdp,kp->kd", xp[..., :-1], c[:, 1:] * powers[1:])
-            step = np.where(df != 0, f / df, 0.0)
-            xn = x - step
-            fn = np.einsum("kdp,kp->kd", xn[..., None] ** powers, c)
-            x = np.where(np.abs(fn) < np.abs(f), xn, x)
-        xp = x[..., None] ** powers
-        f = np.einsum("kdp,kp->kd", xp, c)
-        size = np.einsum("kdp,kp->kd", np.abs(xp), np.abs(c))
-        real &= np.isfinite(x) & (np.abs(f) <= 1e-8 * size)
-        out = np.sort(np.where(real, x * s[:, None], np.nan), axis=1)
+    powers = np.arange(D + 1)
+    for k in range(K):
+        ck = c[k]
+        if not (np.all(np.isfinite(ck)) and np.any(ck != 0)):
+            continue
+        with np.errstate(all="ignore"):
+            z = _roots_one(ck)
+            x = z.real[np.abs(z.imag) <= IMAG_RTOL * np.abs(z)]
+            f = np.polynomial.polynomial.polyval(x, ck)
+            size = np.abs(x[:, None]) ** powers @ np.abs(ck)
+            x = np.sort(x[np.isfinite(x) & (np.abs(f) <= 1e-8 * size)])
+        out[k, : x.size] = x[:D]
     return out.reshape(P, M, D)
 
 
@@ -459,6 +478,20 @@ def denominator_vanishes(den: np.ndarray, size: np.ndarray) -> np.ndarray:
         1 + Σ |Σ_{y u^m} ū^m|: the magnitude of the terms it is the sum of.
     """
     return ~(np.abs(den) > DENOMINATOR_RTOL * size)
+
+
+def vanishing_denominator(structure: Structure, theta: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+    """Where does the denominator of eq. (6) vanish (:func:`denominator_vanishes`)? Shape (M,).
+
+    Parameters
+    ----------
+    structure : Structure
+        A rational structure.
+    theta : ndarray, shape (n_terms,)
+    ubar : ndarray, shape (M,)
+    """
+    _, den, size = _rational_terms(structure, theta, np.asarray(ubar, float))
+    return denominator_vanishes(den, size)
 
 
 def _rational_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.ndarray:
