@@ -7,22 +7,25 @@ constant included), its SE problem with the 10 static points, and two population
 "seeds" is a first generation (the least-squares estimate plus 199 least-squares fits on 30 random
 samples, the paper's seeds); "late" is the best member of a short GA run at λ1 = 0.5 with the GA's
 own variation (heuristic crossover with it and 5 % Gaussian mutation), which is what most
-generations of a sweep evaluate. Reported: the median time of `SEProblem.jsf` (every member × every
-static point) and of `SEProblem.js` (the free runs, for scale), and how the members' static points
-end (reached / no stable equilibrium / diverged / did not settle).
+generations of a sweep evaluate. Reported: the median CPU time of the process (less sensitive than
+wall time to the steal time of a shared VM) of `SEProblem.jsf` (every member × every static point)
+and of `SEProblem.js` (the free runs, for scale), and how the members' static points end (reached /
+no stable equilibrium / diverged / did not settle).
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import statistics
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _common import machine, timeit  # noqa: E402
+from _common import machine  # noqa: E402
 
 from graybox import Candidates  # noqa: E402
 from graybox.datasets import load_pumping  # noqa: E402
@@ -44,6 +47,18 @@ def populations(prob: SEProblem) -> dict[str, np.ndarray]:
     return {"seeds": seeds, "late": np.vstack([best[None, :], kids])}
 
 
+def cpu_time(fn, repeat: int, number: int = 5) -> float:
+    """Median CPU seconds per call of ``fn`` (after a warm-up call)."""
+    fn()
+    times = []
+    for _ in range(repeat):
+        t0 = time.process_time()
+        for _ in range(number):
+            fn()
+        times.append((time.process_time() - t0) / number)
+    return statistics.median(times)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=7)
@@ -54,8 +69,8 @@ def main() -> None:
     print(f"# bench_static  {datetime.date.today()}  {machine()}")
     print(f"# structure: {prob.structure}")
     for name, pop in populations(prob).items():
-        t_sf = timeit(lambda: prob.jsf(pop), repeat=args.repeat)
-        t_s = timeit(lambda: prob.js(pop), repeat=args.repeat)
+        t_sf = cpu_time(lambda: prob.jsf(pop), args.repeat)
+        t_s = cpu_time(lambda: prob.js(pop), args.repeat)
         jsf = prob.jsf(pop)
         line = (f"{name:6s}: J_SF {1e3 * t_sf:8.2f} ms per generation (200 members × {len(data.static)} points), "
                 f"J_S {1e3 * t_s:7.2f} ms; finite J_SF for {int(np.isfinite(jsf).sum())}/200")

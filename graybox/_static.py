@@ -359,6 +359,12 @@ def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar
     return stable_equilibria(code.ny, code.ylag, code.mu, th, np.asarray(ubar, float), np.ascontiguousarray(yb), L)
 
 
+def _roots_stable(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, roots: np.ndarray) -> np.ndarray:
+    """:func:`stable_mask` of every root: roots (P, M, D) → (P, M, D), in one call."""
+    P, M, D = roots.shape
+    return stable_mask(structure, thetas, np.repeat(ubar, D), roots.reshape(P, M * D)).reshape(P, M, D)
+
+
 @dataclass(frozen=True)
 class Equilibrium:
     """A real steady state of a model at constant input.
@@ -687,7 +693,7 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
         yb = np.where(stable, yb, np.nan)
     else:
         roots = real_roots(structure, th_ok, ub)  # (P, M, D)
-        stab = np.stack([stable_mask(structure, th_ok, ub, roots[..., d]) for d in range(roots.shape[-1])], axis=-1)
+        stab = _roots_stable(structure, th_ok, ub, roots)
         has_root = np.any(np.isfinite(roots), axis=-1)
         status = np.where(has_root, NONE_STABLE, NO_EQUILIBRIUM).astype(np.int8)
         yb = np.full((P, M), np.nan)
@@ -696,7 +702,7 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
             ip, onehot, L = _fold_map(structure)
             mu = encode(structure).mu
             with np.errstate(all="ignore"):
-                W = th_ok[:, None, :] * ub[None, :, None] ** mu  # θ_t ū^m_t: the input folded in
+                W = th_ok[:, None, :] * (ub[:, None] ** mu)[None]  # θ_t ū^m_t: the input folded in
             fp = (W.reshape(P * M, -1)[run]) @ onehot
             D = roots.shape[-1]
             y_run, s_run = settle(POLY, ip, fp, np.broadcast_to(y0s, (P, M)).ravel()[run],
@@ -763,8 +769,7 @@ def static_curve(
             raise ValueError(_describe_failures(res))
         return res.ybar[0].copy()
     roots = real_roots(structure, th[None, :], ub)[0]  # (M, D)
-    stab = np.stack([stable_mask(structure, th[None, :], ub, roots[None, :, d])[0] for d in range(roots.shape[1])],
-                    axis=1)
+    stab = _roots_stable(structure, th[None, :], ub, roots[None])[0]
     out = np.full(ub.size, np.nan)
     for i, u_ in enumerate(ub):
         stable = roots[i][stab[i]]
