@@ -124,7 +124,7 @@ def evaluate(
     static : StaticPoints, optional
         Static points for J_SF (default ``data.static``).
     y0 : float or ndarray, optional
-        Initial output used to pick among several stable equilibria (default: the measured ȳ_i).
+        Initial output of the constant-input runs that define J_SF (default: the measured ȳ_i).
 
     Returns
     -------
