@@ -18,7 +18,8 @@ model's static output is **the equilibrium a free run at constant input ū_i, st
 initial condition equal to the measured ȳ_i, settles on** (:func:`reached_equilibria`). When the
 run settles on none — it diverges, oscillates, or creeps on beyond the step budget — the point is
 undefined: J_SF is infinite and the point is named (NaN in batched outputs). A locally stable
-equilibrium whose basin does not hold ȳ_i does not count.
+equilibrium whose basin does not hold ȳ_i does not count; nor does an unstable one, even for a run
+started exactly on it.
 
 - Rational structures (no y power above 1): at constant ū the dynamics are linear in y, so the
   unique equilibrium of eq. (6) is reached from every start exactly when the linearised recursion
@@ -30,8 +31,10 @@ equilibrium whose basin does not hold ȳ_i does not count.
   the point, and as not settled after ``SETTLE_STEPS`` steps.
 
 Units do not matter: the roots are computed with the variable ȳ scaled by a power of two that
-balances the polynomial's extreme coefficients, every tolerance is relative, and a rational
-denominator counts as vanishing below one relative threshold (``DENOMINATOR_RTOL``).
+balances the polynomial's extreme coefficients (degree >= 4: each group of roots of similar size in
+its own scale, read off the Newton polygon), so no degree is dropped and no root is judged by an
+absolute threshold; every tolerance is relative, and a rational denominator counts as vanishing
+below one relative threshold (``DENOMINATOR_RTOL``).
 """
 
 from __future__ import annotations
@@ -93,7 +96,7 @@ SETTLE_RTOL = 1e-6
 #: STALL_RTOL · max(|y|, |y0|), and Newton's method on eq. (5) from there lands on it (a slow approach).
 STALL_RTOL = 1e-7
 #: A root of a static polynomial of degree >= 4 (companion eigenvalues) counts as real when its
-#: imaginary part is at most this fraction of its modulus (in the balanced variable, at least 1).
+#: imaginary part is at most this fraction of its modulus.
 IMAG_RTOL = 1e-7
 
 _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -566,7 +569,7 @@ class Reached:
             u, y0 = float(self.ubar[j]), float(self.y0[j])
             s = int(self.status[member, j])
             if s == NO_EQUILIBRIUM:
-                why = "no equilibrium (the static equation has no real root there)"
+                why = "no equilibrium (the static equation has no real root, or its denominator vanishes)"
             elif s == NONE_STABLE:
                 why = "no stable equilibrium"
             elif s == DIVERGED:
