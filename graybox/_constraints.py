@@ -39,7 +39,7 @@ import numpy as np
 
 from ._curves import StaticCurve
 from ._records import StaticPoints
-from ._static import ClusterMap, cluster_map, cluster_name, is_rational
+from ._static import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._terms import Structure
 
 __all__ = [
@@ -391,7 +391,7 @@ class CurveEquality(StaticConstraint):
             )
         cm = ctx.cluster_map
         sy = self.resolved_sigma_y(ctx)
-        if abs(1.0 - sy) < 1e-9:
+        if denominator_vanishes(np.array(1.0 - sy), np.array(1.0 + abs(sy))):
             raise ValueError(f"Σ*_y = {sy:.12g}: the denominator 1 − Σ*_y of eq. (22) vanishes, "
                              "so no static function exists; use another reference model")
         if sy > 1.0 and (1, 0) in cm.keys:
@@ -434,16 +434,8 @@ def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray
     """Refuse an estimate whose rational static function has a zero denominator at a static ū."""
     if not is_rational(ctx.structure):
         return
-    cm = ctx.cluster_map
-    sigma = cm.R @ theta
     ub = np.asarray(ubar, float)
-    den = np.ones_like(ub)
-    scale = np.ones_like(ub)
-    for (p, m), s in zip(cm.keys, sigma):
-        if p == 1:
-            den -= s * ub**m
-            scale += abs(s) * np.abs(ub) ** m
-    bad = np.abs(den) <= 1e-9 * scale
+    bad = vanishing_denominator(ctx.structure, theta, ub)
     if bad.any():
         raise ValueError(
             f"{what}: the estimated model's static function does not exist at ū = {ub[bad].tolist()} "

@@ -10,8 +10,11 @@ Error measures (all mean squared errors in output units², as in the paper's Tab
 
 Dynamic errors are counted from sample ``max_lag`` on (the samples before are initial
 conditions copied from the data, so their error is zero by construction). A free run that
-diverges has J_S = inf; a static point where the model has no stable equilibrium makes
-J_SF = inf (with a warning naming ū). Neither is a made-up number: both errors are unbounded.
+diverges has J_S = inf. J_SF counts, at each static point (ū_i, ȳ_i), the equilibrium the model
+actually reaches: the one a free run at constant ū_i, started with every initial condition equal
+to the measured ȳ_i, settles on (:func:`graybox._static.reached_equilibria`). A point where it
+settles on none (no stable equilibrium, the run diverges or does not settle) makes J_SF = inf,
+with a warning naming ū and why. Neither is a made-up number: both errors are unbounded.
 """
 
 from __future__ import annotations
@@ -25,6 +28,8 @@ import pandas as pd
 from ._model import Model
 from ._records import Dataset, Record, StaticPoints
 from ._simulation import DivergenceError
+from ._static import reached_equilibria
+from ._terms import Structure
 
 __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
 
@@ -50,10 +55,27 @@ def js(model: Model, record: Record) -> float:
 
 
 def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None) -> float:
-    """J_SF: MSE of the model's static curve at the static points (inf with a warning if undefined).
+    """J_SF: MSE of the model's static outputs at the static points, output units².
 
-    Where the model has several stable equilibria at ū_i, the one it settles on when started at
-    ``y0`` (default: the measured ȳ_i) counts.
+    At each static point (ū_i, ȳ_i) the model's static output is the equilibrium a free run at
+    constant ū_i, started with every initial condition equal to ȳ_i, settles on. A locally stable
+    equilibrium whose basin does not hold ȳ_i does not count. For a rational structure (no power
+    of y above 1) that is the equilibrium of eq. (6) when it is stable, from any start.
+
+    Parameters
+    ----------
+    model : Model or NeuralModel
+        Anything with ``static_curve(ubar, y0=…, strict=True)``.
+    static : StaticPoints
+        The measured static points.
+    y0 : float or ndarray of shape (M,), optional
+        Initial output of the runs (default: the measured ȳ_i).
+
+    Returns
+    -------
+    float
+        inf, with a ``RuntimeWarning`` naming each ū where no equilibrium is reached and why,
+        when the model settles on none at some point.
     """
     try:
         yb = model.static_curve(static.ubar, y0=static.ybar if y0 is None else y0, strict=True)
@@ -102,7 +124,7 @@ def evaluate(
     static : StaticPoints, optional
         Static points for J_SF (default ``data.static``).
     y0 : float or ndarray, optional
-        Initial output used to pick among several stable equilibria (default: the measured ȳ_i).
+        Initial output of the constant-input runs that define J_SF (default: the measured ȳ_i).
 
     Returns
     -------
@@ -127,65 +149,43 @@ def evaluate(
     return df
 
 
-def static_curves(
-    structure,
-    thetas: np.ndarray,
-    ubar: np.ndarray,
-    check_stability: bool = True,
-    y0: np.ndarray | None = None,
-) -> np.ndarray:
-    """Static curves of many parameter vectors, shape (P, M); NaN where undefined.
-
-    Rational structures use eq. (6) vectorised; others solve the polynomial per member (with
-    ``y0``, shape (M,), choosing among several stable equilibria as in :func:`jsf`).
-    With ``check_stability`` an equilibrium that is not locally stable is NaN too (the model
-    does not settle there), matching :meth:`Model.static_curve`.
-    """
-    from ._static import is_rational, rational_equilibria, static_curve
-
-    th = np.atleast_2d(np.asarray(thetas, float))
-    ub = np.asarray(ubar, float)
-    if is_rational(structure):
-        return rational_equilibria(structure, th, ub, stable_only=check_stability)
-    out = np.empty((th.shape[0], ub.size))
-    for i, row in enumerate(th):
-        out[i] = static_curve(structure, row, ub, y0=y0, strict=False) if np.all(np.isfinite(row)) else np.nan
-    return out
-
-
 def evaluate_thetas(
-    structure,
+    structure: Structure,
     thetas: np.ndarray,
     record: Record | None = None,
     static: StaticPoints | None = None,
     one_step: bool = True,
     threads: int = 1,
-    check_stability: bool = True,
 ) -> dict[str, np.ndarray]:
     """J_1, J_S and J_SF of many parameter vectors of one structure, vectorised.
 
-    The same definitions as :func:`j1`, :func:`js` and :func:`jsf` (counted from sample
-    max_lag on; inf where a free run diverges or the static curve is undefined), computed for a
-    whole front or GA population at once.
+    The evaluator for whole fronts and GA populations: the same definitions as :func:`j1`,
+    :func:`js` and :func:`jsf`, computed for every row of ``thetas`` at once (compiled batch free
+    runs; J_SF from the equilibrium each member reaches from each measured ȳ_i). Errors are
+    counted from sample max_lag on; a diverging free run gives J_S = inf, a static point where a
+    member reaches no equilibrium gives its J_SF = inf. Nothing warns: use :func:`jsf` on a single
+    model to learn which point failed and why.
 
     Parameters
     ----------
     structure : Structure
-    thetas : ndarray, shape (P, n_terms)
+        Process terms shared by every member.
+    thetas : ndarray, shape (P, n_terms) or (n_terms,)
+        Parameter vectors, engineering units, one per row.
     record : Record, optional
-        Dynamic data for J_1 and J_S.
+        Dynamic data for J_1 and J_S (N samples); omitted: neither is computed.
     static : StaticPoints, optional
-        Static points for J_SF.
+        Static points (M of them) for J_SF; omitted: J_SF is not computed.
     one_step : bool
-        Compute J_1 too (needs the regressor matrix).
+        Compute J_1 too (builds the regressor matrix, N × n_terms).
     threads : int
         Threads for the batch free run.
-    check_stability : bool
-        Whether J_SF treats an unstable equilibrium as undefined (inf).
 
     Returns
     -------
-    dict with keys among ``"J1"``, ``"JS"``, ``"JSF"``, each ndarray of shape (P,)
+    dict
+        Keys among ``"J1"``, ``"JS"`` (with ``record``) and ``"JSF"`` (with ``static``), each an
+        ndarray of shape (P,) in output units².
     """
     from ._regressors import regressor_matrix
     from ._simulation import simulate_many
@@ -203,11 +203,11 @@ def evaluate_thetas(
             js_ = np.mean(e2, axis=1)
         out["JS"] = np.where(np.isfinite(js_), js_, np.inf)
     if static is not None:
-        yb = static_curves(structure, th, static.ubar, check_stability, y0=static.ybar)
+        yb = reached_equilibria(structure, th, static.ubar, static.ybar).ybar
         with np.errstate(over="ignore", invalid="ignore"):
             jsf_ = np.mean((yb - static.ybar[None, :]) ** 2, axis=1)
         out["JSF"] = np.where(np.isfinite(jsf_), jsf_, np.inf)
     return out
 
 
-__all__ += ["evaluate_thetas", "static_curves"]
+__all__ += ["evaluate_thetas"]

@@ -9,7 +9,8 @@ work buffer (shape (N, P)) so that every term update is a unit-stride loop that
 LLVM vectorises; the input-only part of each term is computed once per sample
 and shared by the whole population.
 
-Nothing here validates input: callers in :mod:`graybox.simulation` do.
+Nothing here validates input: callers in :mod:`graybox._simulation` do. The static-analysis kernels
+(roots, stability, settling runs) live in :mod:`graybox._static_kernels`.
 """
 
 from __future__ import annotations
@@ -19,8 +20,6 @@ from typing import NamedTuple
 
 import numba as nb
 import numpy as np
-
-
 
 from ._terms import Structure
 
@@ -478,135 +477,3 @@ def free_run_sensitivity(
 
 
 __all__ += ["batch_sse", "free_run_sensitivity"]
-
-
-@nb.njit(cache=True, nogil=True)
-def stable_equilibria(ny, ylag, mu, thetas, ubar, ybar, L):  # pragma: no cover - compiled
-    """(P, M) mask: is the equilibrium (ū_j, ȳ_pj) of member p locally stable?
-
-    Builds the linearised recursion's coefficients a_l = Σ_t θ_t ∂φ_t/∂y(k-l) at (ȳ, ū) and
-    applies the Schur–Cohn step-down test to z^L − a_1 z^(L−1) − … − a_L (all reflection
-    coefficients strictly inside (−1, 1)). ``mu[t]`` is term t's input power; ``ny``/``ylag``
-    as in :class:`Code`. Non-finite ȳ counts as unstable.
-    """
-    P, T = thetas.shape
-    M = ubar.shape[0]
-    out = np.zeros((P, M), dtype=np.bool_)
-    c = np.empty(L + 1)
-    nxt = np.empty(L + 1)
-    for p in range(P):
-        for j in range(M):
-            yb = ybar[p, j]
-            if not np.isfinite(yb):
-                continue
-            for i in range(L + 1):
-                c[i] = 0.0
-            c[0] = 1.0
-            for t in range(T):
-                m = ny[t]
-                if m == 0:
-                    continue
-                g = thetas[p, t] * ubar[j] ** mu[t]
-                for _ in range(m - 1):
-                    g *= yb
-                for d in range(m):
-                    c[ylag[t, d]] -= g  # c_l = −a_l
-            ok = True
-            for i in range(L + 1):
-                if not np.isfinite(c[i]):
-                    ok = False
-            n = L
-            while ok and n > 0:
-                k = c[n]
-                if not (abs(k) < 1.0):
-                    ok = False
-                    break
-                den = 1.0 - k * k
-                for i in range(n):
-                    nxt[i] = (c[i] - k * c[n - i]) / den
-                for i in range(n):
-                    c[i] = nxt[i]
-                n -= 1
-            out[p, j] = ok
-    return out
-
-
-__all__ += ["stable_equilibria"]
-
-
-@nb.njit(cache=True, nogil=True)
-def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
-    """Real roots of Σ_p coef[p] y^p (degree ≤ 3) for every (member, point), NaN-padded.
-
-    Parameters
-    ----------
-    coef : ndarray, shape (D + 1, P, M), D ≤ 3
-        Ascending coefficients.
-
-    Returns
-    -------
-    ndarray, shape (P, M, D)
-        Real roots (closed forms: Cardano / trigonometric for cubics, the stable quadratic
-        formula), each polished by one Newton step; NaN where a root is complex or missing.
-    """
-    D = coef.shape[0] - 1
-    P, M = coef.shape[1], coef.shape[2]
-    out = np.full((P, M, max(D, 1)), np.nan)
-    for i in range(P):
-        for j in range(M):
-            c = np.zeros(4)
-            for k in range(D + 1):
-                c[k] = coef[k, i, j]
-            scale = max(abs(c[0]), abs(c[1]), abs(c[2]), abs(c[3]))
-            if not np.isfinite(scale) or scale == 0.0:
-                continue
-            deg = 3
-            while deg > 0 and abs(c[deg]) <= 1e-14 * scale:
-                deg -= 1
-            n = 0
-            r = np.empty(3)
-            if deg == 1:
-                r[0] = -c[0] / c[1]
-                n = 1
-            elif deg == 2:
-                disc = c[1] * c[1] - 4.0 * c[2] * c[0]
-                if disc >= 0.0:
-                    q = -0.5 * (c[1] + np.sign(c[1] if c[1] != 0.0 else 1.0) * np.sqrt(disc))
-                    r[0] = q / c[2]
-                    n = 1
-                    if q != 0.0:
-                        r[1] = c[0] / q
-                        n = 2
-            elif deg == 3:
-                B = c[2] / c[3]
-                C = c[1] / c[3]
-                Dd = c[0] / c[3]
-                p = C - B * B / 3.0
-                q = 2.0 * B * B * B / 27.0 - B * C / 3.0 + Dd
-                disc = 0.25 * q * q + p * p * p / 27.0
-                if disc > 0.0:
-                    s = np.sqrt(disc)
-                    r[0] = np.cbrt(-0.5 * q + s) + np.cbrt(-0.5 * q - s) - B / 3.0
-                    n = 1
-                else:
-                    rr = np.sqrt(max(-p / 3.0, 0.0))
-                    if rr == 0.0:
-                        r[0] = -B / 3.0
-                        n = 1
-                    else:
-                        arg = min(1.0, max(-1.0, -q / (2.0 * rr * rr * rr)))
-                        phi = np.arccos(arg)
-                        for k in range(3):
-                            r[k] = 2.0 * rr * np.cos((phi - 2.0 * np.pi * k) / 3.0) - B / 3.0
-                        n = 3
-            for k in range(n):
-                y = r[k]
-                f = ((c[3] * y + c[2]) * y + c[1]) * y + c[0]
-                df = (3.0 * c[3] * y + 2.0 * c[2]) * y + c[1]
-                if df != 0.0 and np.isfinite(f / df):
-                    y = y - f / df
-                out[i, j, k] = y
-    return out
-
-
-__all__ += ["real_roots_upto_cubic"]

@@ -63,11 +63,14 @@ At constant input the deterministic model's steady state solves the scalar equat
 units, every real root lies in |ȳ − b2| ≤ Σ|w2| (normalised units): that interval is scanned on
 a fine grid and each sign change is refined with Brent's method, so no equilibrium outside a
 guessed bracket is missed. Local stability comes from the linearisation
-y(k) = Σ_i a_i y(k-i), a_i = ∂f/∂y(k-i) (companion matrix eigenvalues strictly inside the unit
-circle). A stable equilibrium always has ∂g/∂ȳ < 1, i.e. F = g − ȳ crosses zero downwards, so a
-tangent (double) root — which the grid can miss — is never a stable one. Two distinct roots
-closer together than the grid spacing (2·10⁻³ normalised output units, i.e. 2·10⁻³ standard
-deviations of the training output, or finer) can still be missed.
+y(k) = Σ_i a_i y(k-i), a_i = ∂f/∂y(k-i), decided by the package's one stability test (the
+Schur–Cohn recursion, :func:`graybox._static.schur_stable`). A stable equilibrium always has
+∂g/∂ȳ < 1, i.e. F = g − ȳ crosses zero downwards, so a tangent (double) root — which the grid can
+miss — is never a stable one. Two distinct roots closer together than the grid spacing (2·10⁻³
+normalised output units, i.e. 2·10⁻³ standard deviations of the training output, or finer) can
+still be missed. The static output at a static point is, as for every model of the package, the
+equilibrium a free run at constant ū from y0 settles on (:func:`graybox._static.settle`, the one
+checked settling routine; tolerances in normalised units).
 """
 
 from __future__ import annotations
@@ -83,7 +86,7 @@ from scipy.optimize import brentq
 from ._records import Dataset, Record, as_records
 from ._validation import as_1d_finite, check_choice, check_int, check_real, frozen
 from ._simulation import DivergenceError, free_run_inputs
-from ._static import Equilibrium
+from ._static import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
 
 __all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
 
@@ -472,12 +475,12 @@ class NeuralModel:
         c = self.b1 + un * self.W1[:, self.ny: self.ny + self.nu].sum(axis=1)
         return a, c
 
-    def _equilibria_n(self, un: float) -> list[tuple[float, float]]:
-        """All real equilibria (ȳ_n, spectral radius) at normalised input ``un``, sorted."""
+    def _equilibria_n(self, un: float) -> list[tuple[float, bool, float]]:
+        """All real equilibria (ȳ_n, stable, spectral radius) at normalised input ``un``, sorted."""
         a, c = self._static_parts(un)
         if self.ny == 0 or not np.any(a):
             yb = float(np.tanh(c) @ self.w2 + self.b2)
-            return [(yb, 0.0)]
+            return [(yb, True, 0.0)]
 
         def F(y: np.ndarray | float) -> np.ndarray | float:
             return np.tanh(np.multiply.outer(y, a) + c) @ self.w2 + self.b2 - y
@@ -493,42 +496,48 @@ class NeuralModel:
         idx = np.flatnonzero((f[:-1] * f[1:]) < 0)
         for i in idx:
             roots.append(float(brentq(F, grid[i], grid[i + 1], xtol=1e-13, rtol=1e-13, maxiter=200)))
-        out = []
-        for yb in sorted(roots):
-            out.append((yb, self._spectral_radius_n(yb, un)))
-        return out
+        roots.sort()
+        lin = np.array([self._linearisation_n(yb, un) for yb in roots]).reshape(len(roots), self.ny)
+        stable = schur_stable(lin)  # the package's one stability test
+        return [(yb, bool(s), spectral_radius(ai)) for yb, s, ai in zip(roots, stable, lin)]
 
-    def _spectral_radius_n(self, ybn: float, un: float) -> float:
+    def _linearisation_n(self, ybn: float, un: float) -> np.ndarray:
+        """a_i = ∂f/∂y(k-i) at the equilibrium ȳ_n, i = 1..ny (dimensionless)."""
         a, c = self._static_parts(un)
         d = self.w2 * (1.0 - np.tanh(a * ybn + c) ** 2)
-        coef = d @ self.W1[:, : self.ny]  # a_i = ∂f/∂y(k-i), i = 1..ny (dimensionless)
-        if coef.size == 0 or not np.any(coef):
-            return 0.0
-        # characteristic polynomial z^ny − a_1 z^(ny−1) − … − a_ny (companion-matrix eigenvalues)
-        return float(np.max(np.abs(np.roots(np.concatenate(([1.0], -coef))))))
+        return d @ self.W1[:, : self.ny]
 
     def equilibria(self, ubar: float) -> list[Equilibrium]:
-        """Every real equilibrium at constant input ``ubar`` (input units), sorted by ȳ, with stability."""
+        """Every real equilibrium at constant input ``ubar`` (input units), sorted by ȳ, with stability.
+
+        Stability is decided by :func:`graybox._static.schur_stable` on the linearisation (the test
+        every model of the package uses); the spectral radius is given for information.
+        """
         ub = float(as_1d_finite([ubar], "ubar")[0])
-        return [Equilibrium(ub, float(self._y(yb)), rho < 1.0, rho) for yb, rho in self._equilibria_n(self._un(ub))]
+        return [Equilibrium(ub, float(self._y(yb)), s, rho) for yb, s, rho in self._equilibria_n(self._un(ub))]
+
+    def _settle_params(self, un: float) -> np.ndarray:
+        """One row of coefficients of the free run at constant normalised input (see :func:`settle`)."""
+        c = self.b1 + un * self.W1[:, self.ny: self.ny + self.nu].sum(axis=1)
+        return np.concatenate([[self.b2], self.w2, c, self.W1[:, : self.ny].ravel()])
 
     def static_curve(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, strict: bool = True) -> np.ndarray:
         """The steady state the network reaches at each constant input, shape (M,).
 
-        Conventions of :func:`graybox.static_curve`: the stable equilibrium at each ū;
-        when several are stable, the one a free run at constant ū from the constant initial
-        output ``y0`` settles on.
+        Conventions of :func:`graybox.static_curve`. With ``y0``: the equilibrium a free run at
+        constant ū, with every initial output equal to ``y0``, settles on (the package's one
+        settling routine, :func:`graybox._static.settle`, checks that it does). Without it: the
+        stable equilibrium when there is exactly one.
 
         Parameters
         ----------
         ubar : array_like, shape (M,)
             Constant input levels (input units).
         y0 : float or array_like of shape (M,), optional
-            Initial output (output units), one for all ū or one per ū, used only to choose
-            among several stable equilibria.
+            Initial output (output units), one for all ū or one per ū.
         strict : bool
-            True: a ū with no stable equilibrium (or several and no ``y0``) raises
-            ``ValueError`` naming ū. False: NaN there.
+            True: a ū where no equilibrium is reached (none is stable, the run does not settle;
+            or several are stable and no ``y0``) raises ``ValueError`` naming ū. False: NaN there.
 
         Returns
         -------
@@ -544,49 +553,34 @@ class NeuralModel:
             y0s = np.broadcast_to(np.ravel(y0a) if y0a.ndim else y0a, ub.shape)
             if not np.all(np.isfinite(y0s)):
                 raise ValueError("y0 has non-finite values")
-        out = np.empty(ub.size)
+        out = np.full(ub.size, np.nan)
+        eqs = [self._equilibria_n(self._un(u_)) for u_ in ub]
+        if y0s is not None:
+            D = max(len(e) for e in eqs)
+            roots = np.full((ub.size, D), np.nan)
+            stable = np.zeros((ub.size, D), bool)
+            for i, e in enumerate(eqs):
+                roots[i, : len(e)] = [yb for yb, _, _ in e]
+                stable[i, : len(e)] = [s for _, s, _ in e]
+            fp = np.array([self._settle_params(self._un(u_)) for u_ in ub])
+            ip = np.array([self.hidden, self.ny], dtype=np.int64)
+            yn, status = settle(NET, ip, fp, self._yn(y0s), roots, stable, self.ny, floor=1.0)
+            out = np.where(status == 0, self._y(yn), np.nan)
+            if strict and np.any(status != 0):
+                res = Reached(ub, np.asarray(y0s, float), out[None, :], status[None, :])
+                raise ValueError("the network reaches no equilibrium at " + "; ".join(res.explain(0)))
+            return out
         for i, u_ in enumerate(ub):
-            stable = [yb for yb, rho in self._equilibria_n(self._un(u_)) if rho < 1.0]
-            if len(stable) == 1:
-                out[i] = self._y(stable[0])
-                continue
-            if not stable:
-                if strict:
-                    raise ValueError(f"the network has no stable equilibrium at ū = {u_:g}")
-                out[i] = np.nan
-                continue
-            if y0s is None:
-                if strict:
-                    raise ValueError(
-                        f"the network has {len(stable)} stable equilibria at ū = {u_:g} "
-                        f"({[round(float(self._y(s)), 6) for s in stable]}); pass y0 to choose the one reached from it")
-                out[i] = np.nan
-                continue
-            try:
-                out[i] = self._settle(float(u_), float(y0s[i]), stable)
-            except ValueError:
-                if strict:
-                    raise
-                out[i] = np.nan
+            stable_n = [yb for yb, s, _ in eqs[i] if s]
+            if len(stable_n) == 1:
+                out[i] = self._y(stable_n[0])
+            elif strict and not stable_n:
+                raise ValueError(f"the network has no stable equilibrium at ū = {u_:g}")
+            elif strict:
+                raise ValueError(
+                    f"the network has {len(stable_n)} stable equilibria at ū = {u_:g} "
+                    f"({[round(float(self._y(s)), 6) for s in stable_n]}); pass y0 to choose the one reached from it")
         return out
-
-    def _settle(self, ubar: float, y0: float, candidates_n: list[float], n: int = 20000) -> float:
-        """Free run at constant ū from y0; the candidate equilibrium (normalised) it settles on, output units."""
-        L = max(self.max_lag, 1)
-        yn = _free_run_kernel(self._W1c, self.b1, self.w2, self.b2, np.full(L + n, self._un(ubar)),
-                              np.full(L, self._yn(y0)), self.ny, self.nu)
-        tail = yn[-200:]
-        spread = float(tail.max() - tail.min())
-        end = float(yn[-1])
-        near = min(candidates_n, key=lambda c: abs(c - end))
-        # Settled in the basin of `near` when the run sits close to it and barely moves, on the
-        # scale of the gaps between the candidates (a slow but converging approach passes; a
-        # limit cycle or a run stuck between candidates does not).
-        gap = min((abs(a - b) for a in candidates_n for b in candidates_n if a != b), default=1.0)
-        if not (np.isfinite(spread) and spread <= 1e-2 * gap and abs(end - near) <= 0.1 * gap):
-            raise ValueError(f"free run at ū = {ubar:g} from y0 = {y0:g} did not settle on a stable equilibrium "
-                             f"(last 200 samples span {spread * self.y_scale:.3g} output units)")
-        return float(self._y(near))
 
     def static_gain(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, strict: bool = True) -> np.ndarray:
         """dȳ/dū along the static curve, shape (M,), output units per input unit.

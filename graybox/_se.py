@@ -16,12 +16,12 @@ from the shared evaluator. Long sweeps show a progress bar, write a checkpoint a
 resume from it; a checkpoint written for another problem is refused.
 
 Inside the optimisers J_S is computed by the fused batch kernel (same definition as
-:func:`graybox.js`) and J_SF from the equilibrium near the measured ȳ_i
-(:func:`graybox.nearest_stable_equilibria`: exact for rational structures; for others the
-stable root nearest ȳ_i), counted as undefined (infinite cost) where no stable equilibrium exists —
-a model does not settle on an unstable equilibrium, so matching the static points there would be a
-false gain. The reported front is
-re-evaluated by the shared evaluator, which takes the stable equilibrium the model reaches.
+:func:`graybox.js`) and J_SF by the package's one static definition
+(:func:`graybox._static.reached_equilibria`): at each static point the equilibrium a free run at
+constant ū_i from the measured ȳ_i settles on; where it settles on none the cost is infinite — a
+model does not settle on an unstable equilibrium, nor on a stable one whose basin does not hold
+ȳ_i, so matching the static points there would be a false gain. The reported front is
+re-evaluated by the shared evaluator, which uses the same definition.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from ._pareto import ParetoSet
 from ._progress import progress_bar
 from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
 from ._regressors import stacked_regressors
-from ._static import nearest_stable_equilibria, static_theta_gradient
+from ._static import reached_equilibria, static_theta_gradient
 from ._terms import Structure
 from ._validation import check_choice, check_lambdas, check_theta
 
@@ -104,11 +104,14 @@ class SEProblem:
         return np.where(np.isfinite(js), js, np.inf)
 
     def static_outputs(self, thetas: np.ndarray) -> np.ndarray:
-        """Stable equilibrium nearest each measured ȳ_i (NaN where none), shape (P, M)."""
-        return nearest_stable_equilibria(self.structure, np.atleast_2d(thetas), self.static.ubar, self.static.ybar)
+        """The equilibrium each row reaches from each measured ȳ_i (NaN where none), shape (P, M).
+
+        :func:`graybox._static.reached_equilibria` with y0 = ȳ_i: the definition of J_SF.
+        """
+        return reached_equilibria(self.structure, np.atleast_2d(thetas), self.static.ubar, self.static.ybar).ybar
 
     def jsf(self, thetas: np.ndarray) -> np.ndarray:
-        """J_SF of each row (stable equilibrium near the measured ȳ; inf where none), shape (P,)."""
+        """J_SF of each row (the equilibrium reached from the measured ȳ; inf where none), shape (P,)."""
         yb = self.static_outputs(thetas)
         with np.errstate(all="ignore"):
             v = np.mean((yb - self.static.ybar) ** 2, axis=1)

@@ -1,25 +1,57 @@
-"""Static analysis of polynomial NARX models: clusters, equilibria, static curve and gain.
+"""Static analysis of polynomial NARX models: clusters, equilibria, the equilibrium reached, curve and gain.
 
-At a constant input ū a term with output power p and input power m becomes
-ȳ^p ū^m, so the steady state solves the polynomial equation (eq. (5))
+At a constant input ū a term with output power p and input power m becomes ȳ^p ū^m, so the
+steady states solve the polynomial equation (eq. (5))
 
-    ȳ = Σ_{p,m} Σ_{y^p u^m} ȳ^p ū^m,
+    F(ȳ) = Σ_{p,m} Σ_{y^p u^m} ȳ^p ū^m − ȳ = 0,
 
-whose coefficients are the *cluster coefficients* Σ = R θ (R is a 0/1 matrix).
-When no term has y to a power above 1 the solution is the rational function of
-eq. (6). Every real root is an equilibrium; its local stability follows from the
-linearised recursion y(k) = Σ_i a_i y(k-i) with a_i = ∂f/∂y(k-i) at (ȳ, ū).
+whose coefficients are the *cluster coefficients* Σ = R θ (R is a 0/1 matrix). When no term has
+y to a power above 1 the solution is the rational function of eq. (6). Every real root is an
+equilibrium; its local stability follows from the linearised recursion y(k) = Σ_i a_i y(k-i),
+a_i = ∂f/∂y(k-i) at (ȳ, ū), decided by one test, the compiled Schur–Cohn recursion
+(:func:`stable_mask`, :func:`schur_stable`).
+
+The equilibrium a model reaches
+-------------------------------
+J_SF and every static path of the package use one definition. At a static point (ū_i, ȳ_i) the
+model's static output is **the equilibrium a free run at constant input ū_i, started with every
+initial condition equal to the measured ȳ_i, settles on** (:func:`reached_equilibria`). When the
+run settles on none — it diverges, oscillates, or creeps on beyond the step budget — the point is
+undefined: J_SF is infinite and the point is named (NaN in batched outputs). A locally stable
+equilibrium whose basin does not hold ȳ_i does not count; nor does an unstable one, even for a run
+started exactly on it.
+
+- Rational structures (no y power above 1): at constant ū the dynamics are linear in y, so the
+  unique equilibrium of eq. (6) is reached from every start exactly when the linearised recursion
+  is Schur-stable. This is decided in closed form; no simulation is needed.
+- Other structures: every real root of eq. (5) is found and tested; then the model is run from
+  ȳ_i (:func:`settle`, compiled, all (member, point) pairs at once) until its last L outputs lie
+  within ``SETTLE_RTOL`` (relative) of one stable root, or its increments vanish and Newton's
+  method on eq. (5) lands on one; it is stopped as diverged when |y| exceeds 10⁶ times the scale of
+  the point, and as not settled after ``SETTLE_STEPS`` steps.
+
+Units do not matter: the roots are computed with the variable ȳ scaled by a power of two that
+balances the polynomial's extreme coefficients (degree >= 4: each group of roots of similar size in
+its own scale, read off the Newton polygon), so no degree is dropped and no root is judged by an
+absolute threshold; every tolerance is relative, and a rational denominator counts as vanishing
+below one relative threshold (``DENOMINATOR_RTOL``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import ClassVar
 
 import numpy as np
 
-from ._validation import as_1d_finite
+from ._kernels import encode
+from ._static_kernels import (
+    DIVERGED, NET, POLY, REACHED, real_roots_upto_cubic, schur_stable_rows, settle_runs,
+    stable_equilibria,
+)
 from ._terms import Structure, Term
+from ._validation import as_1d_finite
 
 __all__ = [
     "cluster_key",
@@ -33,9 +65,39 @@ __all__ = [
     "is_rational",
     "rational_static_curve",
     "rational_parts",
+    "denominator_vanishes",
+    "vanishing_denominator",
+    "static_coefficients",
+    "real_roots",
     "stable_mask",
-    "rational_equilibria",
+    "schur_stable",
+    "spectral_radius",
+    "Reached",
+    "reached_equilibria",
+    "settle",
+    "static_theta_gradient",
+    "DENOMINATOR_RTOL",
+    "SETTLE_STEPS",
+    "SETTLE_RTOL",
+    "POLY",
+    "NET",
 ]
+
+#: A rational static function's denominator 1 − Σy − Σyu ū − … (dimensionless) counts as vanishing
+#: when its magnitude is at most this fraction of the sum of the magnitudes of its terms (the
+#: static gain would exceed 10⁹ times the numerator's): the static function does not exist there.
+DENOMINATOR_RTOL = 1e-9
+#: Step budget of a settling run (:func:`settle`).
+SETTLE_STEPS = 20000
+#: A settling run has reached a stable equilibrium ȳ_e once its last L outputs lie within
+#: SETTLE_RTOL · min(max(|ȳ_e|, |y0|), distance to the nearest other equilibrium) of it ...
+SETTLE_RTOL = 1e-6
+#: ... or once it lies within 1000 times that distance of it, its last L increments are below
+#: STALL_RTOL · max(|y|, |y0|), and Newton's method on eq. (5) from there lands on it (a slow approach).
+STALL_RTOL = 1e-7
+#: A root of a static polynomial of degree >= 4 (companion eigenvalues) counts as real when its
+#: imaginary part is at most this fraction of its modulus.
+IMAG_RTOL = 1e-7
 
 _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -107,14 +169,131 @@ def cluster_map(structure: Structure) -> ClusterMap:
     return ClusterMap(uniq, R)
 
 
-def _poly_in_y(cm: ClusterMap, sigma: np.ndarray, ubar: float) -> np.ndarray:
-    """Coefficients c_p (p = 0..P) of F(ȳ) = Σ_p c_p ȳ^p - ȳ, highest power first (np.roots order)."""
-    P = max(cm.max_y_power, 1)
-    c = np.zeros(P + 1)
-    for (p, m), s in zip(cm.keys, sigma):
-        c[p] += s * ubar**m
-    c[1] -= 1.0
-    return c[::-1]
+# -- the static polynomial and its real roots ----------------------------------------------------
+def static_coefficients(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+    """Ascending coefficients of F(ȳ) = Σ_p c_p ȳ^p of eq. (5) for many members and points.
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    ubar : ndarray, shape (M,)
+
+    Returns
+    -------
+    ndarray, shape (D + 1, P, M)
+        D = max(largest power of y, 1); c_1 includes the −ȳ of eq. (5).
+    """
+    cm = cluster_map(structure)
+    th = np.atleast_2d(np.asarray(thetas, float))
+    ub = np.asarray(ubar, float)
+    sig = th @ cm.R.T
+    D = max(cm.max_y_power, 1)
+    coef = np.zeros((D + 1, th.shape[0], ub.size))
+    with np.errstate(all="ignore"):
+        for c, (p, m) in enumerate(cm.keys):
+            coef[p] += sig[:, c, None] * ub[None, :] ** m
+    coef[1] -= 1.0
+    return coef
+
+
+def _root_groups(c: np.ndarray) -> list[tuple[float, int, int]]:
+    """Groups of roots of Σ c_k x^k of similar magnitude: (scale, k1, k2) for each.
+
+    The upper convex hull of the points (k, log2|c_k|) (the Newton polygon) has one edge per
+    group: the edge from k1 to k2 carries k2 − k1 roots of magnitude near 2^(−slope), the roots of
+    Σ_{k1 ≤ k ≤ k2} c_k x^(k−k1) up to a relative error of the order of the ratio to the next
+    group's scale. Edges whose scales are less than 2^10 apart form one group.
+    """
+    pts = [(k, float(np.log2(abs(v)))) for k, v in enumerate(c) if v != 0]
+    hull: list[tuple[int, float]] = []
+    for p in pts:
+        while len(hull) >= 2 and ((hull[-1][1] - hull[-2][1]) * (p[0] - hull[-2][0])
+                                  <= (p[1] - hull[-2][1]) * (hull[-1][0] - hull[-2][0])):
+            hull.pop()
+        hull.append(p)
+    groups: list[list[float]] = []  # [log2 scale · count, k1, k2]
+    for (k1, v1), (k2, v2) in zip(hull, hull[1:]):
+        e = (v1 - v2) / (k2 - k1)
+        if groups and e - groups[-1][0] / (groups[-1][2] - groups[-1][1]) < 10:
+            groups[-1][0] += e * (k2 - k1)
+            groups[-1][2] = k2
+        else:
+            groups.append([e * (k2 - k1), k1, k2])
+    return [(2.0 ** np.round(w / (k2 - k1)), int(k1), int(k2)) for w, k1, k2 in groups]
+
+
+def _roots_one(c: np.ndarray) -> np.ndarray:
+    """Every root (complex) of Σ c_k x^k: group by group in each group's scale, then Newton on the whole."""
+    z0 = [0.0] * int(np.argmax(c != 0))  # x^lo divides the polynomial
+    z = []
+    for tau, k1, k2 in _root_groups(c):
+        cs = c[k1:k2 + 1] * tau ** np.arange(k2 - k1 + 1)  # exact: tau is a power of two
+        z.extend((tau * np.roots(cs[::-1] / np.max(np.abs(cs)))).tolist())
+    z = np.array(z, dtype=complex)
+    dc = c[1:] * np.arange(1, c.size)
+    for _ in range(30):  # Newton steps on the whole polynomial, each kept only if it reduces |F|
+        f = np.polynomial.polynomial.polyval(z, c)
+        df = np.polynomial.polynomial.polyval(z, dc)
+        zn = z - np.where(df != 0, f / np.where(df != 0, df, 1.0), 0.0)
+        better = np.abs(np.polynomial.polynomial.polyval(zn, c)) < np.abs(f)
+        z = np.where(better, zn, z)
+        if not better.any():
+            break
+    return np.concatenate([np.array(z0, dtype=complex), z])
+
+
+def _real_roots_companion(coef: np.ndarray) -> np.ndarray:
+    """Real roots (sorted, NaN-padded) of ascending polynomials of degree D >= 4, shape (P, M, D).
+
+    Companion-matrix eigenvalues (numpy.roots), computed group by group in the scale of each group
+    of roots (the edges of the Newton polygon of the coefficients, scales rounded to powers of
+    two), so roots of very different magnitudes all start accurate and a change of units only
+    rescales them; Newton steps on the whole polynomial finish them, and a real root is kept
+    only if its backward error is small.
+    """
+    D = coef.shape[0] - 1
+    P, M = coef.shape[1:]
+    c = np.moveaxis(coef, 0, -1).reshape(-1, D + 1)
+    K = c.shape[0]
+    out = np.full((K, D), np.nan)
+    powers = np.arange(D + 1)
+    for k in range(K):
+        ck = c[k]
+        if not (np.all(np.isfinite(ck)) and np.any(ck != 0)):
+            continue
+        with np.errstate(all="ignore"):
+            z = _roots_one(ck)
+            x = z.real[np.abs(z.imag) <= IMAG_RTOL * np.abs(z)]
+            f = np.polynomial.polynomial.polyval(x, ck)
+            size = np.abs(x[:, None]) ** powers @ np.abs(ck)
+            x = np.sort(x[np.isfinite(x) & (np.abs(f) <= 1e-8 * size)])
+        out[k, : x.size] = x[:D]
+    return out.reshape(P, M, D)
+
+
+def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+    """Every real root of eq. (5) for many members and points: the candidate equilibria.
+
+    Degree ≤ 3 (every quadratic and cubic structure): closed forms, compiled
+    (:func:`graybox._static_kernels.real_roots_upto_cubic`). Degree >= 4: companion-matrix
+    eigenvalues. Both balance the variable first, so the result does not depend on units.
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    ubar : ndarray, shape (M,)
+
+    Returns
+    -------
+    ndarray, shape (P, M, D)
+        Real roots in ascending order, NaN-padded (D = max(largest power of y, 1)).
+    """
+    coef = static_coefficients(structure, thetas, ubar)
+    if coef.shape[0] <= 4:
+        return real_roots_upto_cubic(coef)
+    return _real_roots_companion(coef)
 
 
 def _linear_coefficients(structure: Structure, theta: np.ndarray, ybar: float, ubar: float) -> np.ndarray:
@@ -132,6 +311,63 @@ def _linear_coefficients(structure: Structure, theta: np.ndarray, ybar: float, u
     return a
 
 
+# -- stability: one test ---------------------------------------------------------------------------
+def schur_stable(a: np.ndarray) -> np.ndarray:
+    """Is the linear recursion y(k) = Σ_l a_l y(k-l) asymptotically stable? The one stability test.
+
+    The Schur–Cohn step-down recursion on z^L − a_1 z^(L−1) − … − a_L (every root strictly inside
+    the unit circle), compiled. :func:`stable_mask` applies the same test to the linearisation
+    of a polynomial model at its equilibria; the neural model uses this entry point.
+
+    Parameters
+    ----------
+    a : array_like, shape (L,) or (K, L)
+        Coefficients a_1 … a_L (dimensionless), one row per recursion.
+
+    Returns
+    -------
+    bool or ndarray of bool, shape (K,)
+    """
+    arr = np.asarray(a, float)
+    rows = np.ascontiguousarray(np.atleast_2d(arr))
+    out = schur_stable_rows(rows)
+    return bool(out[0]) if arr.ndim <= 1 else out
+
+
+def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+    """Is each equilibrium (ū_j, ȳ_pj) of member p locally stable? Shape (P, M), batched.
+
+    The linearised recursion at each equilibrium is tested by the compiled Schur–Cohn recursion
+    (the test of :func:`schur_stable`): no eigenvalues are computed, which makes it cheap enough
+    for every generation of a GA.
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    ubar : ndarray, shape (M,)
+    ybar : ndarray, shape (P, M)
+        Equilibrium outputs (non-finite entries count as unstable).
+
+    Returns
+    -------
+    ndarray of bool, shape (P, M)
+    """
+    code = encode(structure)
+    L = int(code.ylag.max(initial=0))
+    yb = np.atleast_2d(np.asarray(ybar, float))
+    if L == 0:
+        return np.isfinite(yb)
+    th = np.ascontiguousarray(np.atleast_2d(np.asarray(thetas, float)))
+    return stable_equilibria(code.ny, code.ylag, code.mu, th, np.asarray(ubar, float), np.ascontiguousarray(yb), L)
+
+
+def _roots_stable(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, roots: np.ndarray) -> np.ndarray:
+    """:func:`stable_mask` of every root: roots (P, M, D) → (P, M, D), in one call."""
+    P, M, D = roots.shape
+    return stable_mask(structure, thetas, np.repeat(ubar, D), roots.reshape(P, M * D)).reshape(P, M, D)
+
+
 @dataclass(frozen=True)
 class Equilibrium:
     """A real steady state of a model at constant input.
@@ -141,9 +377,10 @@ class Equilibrium:
     ubar, ybar : float
         Input and output levels.
     stable : bool
-        True when every root of the linearised recursion lies strictly inside the unit circle.
+        True when the linearised recursion is asymptotically stable (every root strictly inside
+        the unit circle, by the Schur–Cohn test of :func:`schur_stable`).
     spectral_radius : float
-        Largest modulus of those roots (0 for a static model).
+        Largest modulus of those roots (0 for a static model), for information.
     """
 
     ubar: float
@@ -152,14 +389,17 @@ class Equilibrium:
     spectral_radius: float
 
 
-def _spectral_radius(a: np.ndarray) -> float:
+def spectral_radius(a: np.ndarray) -> float:
+    """Largest modulus of the roots of z^L − a_1 z^(L−1) − … − a_L (information; stability is
+    decided by :func:`schur_stable`)."""
+    a = np.asarray(a, float)
     if a.size == 0 or not np.any(a):
         return 0.0
     # characteristic polynomial z^L - a1 z^(L-1) - ... - aL
     return float(np.max(np.abs(np.roots(np.concatenate(([1.0], -a))))))
 
 
-def equilibria(structure: Structure, theta: np.ndarray, ubar: float, imag_tol: float = 1e-9) -> list[Equilibrium]:
+def equilibria(structure: Structure, theta: np.ndarray, ubar: float) -> list[Equilibrium]:
     """Every real equilibrium at constant input ``ubar``, sorted by ȳ, with its local stability.
 
     Parameters
@@ -169,27 +409,51 @@ def equilibria(structure: Structure, theta: np.ndarray, ubar: float, imag_tol: f
     theta : ndarray, shape (n_terms,)
     ubar : float
         Constant input level (engineering units).
-    imag_tol : float
-        A root counts as real when |Im| <= imag_tol * max(1, |root|).
+
+    Returns
+    -------
+    list of Equilibrium
+        Empty when eq. (5) has no real root (or, for a rational structure, its denominator
+        vanishes: no equilibrium or infinitely many).
     """
-    cm = cluster_map(structure)
-    sigma = cm.R @ theta
-    c = np.trim_zeros(_poly_in_y(cm, sigma, float(ubar)), "f")
-    if c.size <= 1:
-        return []  # no dependence on ȳ left: no (or infinitely many) solutions
-    roots = np.roots(c)
-    real = sorted(float(r.real) for r in roots if abs(r.imag) <= imag_tol * max(1.0, abs(r)))
-    out = []
-    for yb in real:
-        rho = _spectral_radius(_linear_coefficients(structure, theta, yb, float(ubar)))
-        out.append(Equilibrium(float(ubar), yb, rho < 1.0, rho))
-    return out
+    ub = float(as_1d_finite([ubar], "ubar")[0])
+    th = np.asarray(theta, float)[None, :]
+    if is_rational(structure):
+        yb = _rational_roots(structure, th, np.array([ub]))[0]
+    else:
+        yb = real_roots(structure, th, np.array([ub]))[0, 0]
+    yb = yb[np.isfinite(yb)]
+    if yb.size == 0:
+        return []
+    stable = stable_mask(structure, th, np.full(yb.size, ub), yb[None, :])[0]
+    return [Equilibrium(ub, float(y), bool(s), spectral_radius(_linear_coefficients(structure, th[0], float(y), ub)))
+            for y, s in zip(yb, stable)]
 
 
+# -- rational structures: eq. (6) --------------------------------------------------------------------
 @lru_cache(maxsize=256)
 def is_rational(structure: Structure) -> bool:
     """True when no term has y to a power above 1 (static function of eq. (6))."""
     return all(t.power_of("y") <= 1 for t in structure if not t.is_noise)
+
+
+def _rational_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray):
+    cm = cluster_map(structure)
+    th = np.asarray(thetas, dtype=float)
+    sig = th @ cm.R.T  # (C,) or (P, C)
+    ub = np.asarray(ubar, dtype=float)
+    num = np.zeros(sig.shape[:-1] + ub.shape)
+    den = np.ones_like(num)
+    size = np.ones_like(num)
+    with np.errstate(all="ignore"):
+        for c, (p, m) in enumerate(cm.keys):
+            term = sig[..., c, None] * ub**m
+            if p == 0:
+                num += term
+            else:
+                den -= term
+                size += np.abs(term)
+    return num, den, size
 
 
 def rational_parts(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -208,61 +472,253 @@ def rational_parts(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -
     """
     if not is_rational(structure):
         raise ValueError("structure has a term with y to a power above 1: its static function is not rational")
-    cm = cluster_map(structure)
-    th = np.asarray(thetas, dtype=float)
-    sig = th @ cm.R.T  # (C,) or (P, C)
-    ub = np.asarray(ubar, dtype=float)
-    num = np.zeros(sig.shape[:-1] + ub.shape)
-    den = np.ones_like(num)
-    for c, (p, m) in enumerate(cm.keys):
-        term = sig[..., c, None] * ub**m
-        if p == 0:
-            num += term
-        else:
-            den -= term
+    num, den, _ = _rational_terms(structure, thetas, ubar)
     return num, den
 
 
-def rational_equilibria(
-    structure: Structure, thetas: np.ndarray, ubar: np.ndarray, stable_only: bool = True
-) -> np.ndarray:
-    """Eq. (6) for many parameter vectors, shape (P, M); NaN where the denominator vanishes.
+def denominator_vanishes(den: np.ndarray, size: np.ndarray) -> np.ndarray:
+    """Does a rational static denominator vanish? |den| <= ``DENOMINATOR_RTOL`` · size.
 
-    With ``stable_only`` an equilibrium that is not locally stable is NaN too: the model does
-    not settle there (:func:`stable_mask`).
+    Parameters
+    ----------
+    den : ndarray
+        1 − Σy − Σyu ū − … (dimensionless).
+    size : ndarray
+        1 + Σ |Σ_{y u^m} ū^m|: the magnitude of the terms it is the sum of.
+    """
+    return ~(np.abs(den) > DENOMINATOR_RTOL * size)
+
+
+def vanishing_denominator(structure: Structure, theta: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+    """Where does the denominator of eq. (6) vanish (:func:`denominator_vanishes`)? Shape (M,).
 
     Parameters
     ----------
     structure : Structure
         A rational structure.
-    thetas : ndarray, shape (P, n_terms)
+    theta : ndarray, shape (n_terms,)
     ubar : ndarray, shape (M,)
-    stable_only : bool
     """
-    th = np.atleast_2d(np.asarray(thetas, float))
-    ub = np.asarray(ubar, float)
-    num, den = rational_parts(structure, th, ub)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        yb = np.where(np.abs(den) > 1e-12, num / den, np.nan)
-    if stable_only:
-        yb = np.where(stable_mask(structure, th, ub, yb), yb, np.nan)
-    return yb
+    _, den, size = _rational_terms(structure, theta, np.asarray(ubar, float))
+    return denominator_vanishes(den, size)
+
+
+def _rational_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+    """Eq. (6) for many members, shape (P, M); NaN where the denominator vanishes."""
+    num, den, size = _rational_terms(structure, np.atleast_2d(thetas), ubar)
+    with np.errstate(all="ignore"):
+        return np.where(denominator_vanishes(den, size), np.nan, num / den)
 
 
 def rational_static_curve(structure: Structure, theta: np.ndarray, ubar: np.ndarray) -> np.ndarray:
-    """Eq. (6): ȳ = (Σ0 + Σu ū + Σu² ū² + …) / (1 − Σy − Σyu ū − …).
+    """Eq. (6): ȳ = (Σ0 + Σu ū + Σu² ū² + …) / (1 − Σy − Σyu ū − …), shape (M,).
 
-    Raises ``ValueError`` when the structure is not rational or the denominator vanishes.
+    Raises ``ValueError`` when the structure is not rational or the denominator vanishes
+    (:func:`denominator_vanishes`). Stability is not checked: this is the equilibrium, reached
+    or not.
     """
     ub = np.atleast_1d(np.asarray(ubar, dtype=float))
-    num, den = rational_parts(structure, theta, ub)
-    cm = cluster_map(structure)
-    sigma = cm.R @ theta
-    scale = 1.0 + sum(abs(s) * np.abs(ub) ** m for (p, m), s in zip(cm.keys, sigma) if p == 1)
-    bad = np.abs(den) <= 1e-12 * scale
+    if not is_rational(structure):
+        raise ValueError("structure has a term with y to a power above 1: its static function is not rational")
+    num, den, size = _rational_terms(structure, theta, ub)
+    bad = denominator_vanishes(den, size)
     if bad.any():
         raise ValueError(f"static function undefined: denominator 1 − Σy − … vanishes at ū = {ub[bad].tolist()}")
     return num / den
+
+
+# -- the equilibrium reached -----------------------------------------------------------------------
+NO_EQUILIBRIUM, NONE_STABLE = 1, 2
+
+
+@dataclass(frozen=True, eq=False)
+class Reached:
+    """Where free runs at constant input settle: the static outputs of many members at many points.
+
+    Attributes
+    ----------
+    ubar : ndarray, shape (M,)
+        Input levels.
+    y0 : ndarray, shape (M,)
+        The constant initial output of each point's run (usually the measured ȳ_i).
+    ybar : ndarray, shape (P, M)
+        The equilibrium each member's run settles on; NaN where it settles on none.
+    status : ndarray of int8, shape (P, M)
+        0 reached; 1 no equilibrium (eq. (5) has no real root, or a rational denominator
+        vanishes); 2 no locally stable equilibrium; 3 the run diverged; 4 the run did not settle
+        within the step budget (an oscillation, a limit cycle, a very slow approach).
+    """
+
+    ubar: np.ndarray
+    y0: np.ndarray
+    ybar: np.ndarray
+    status: np.ndarray
+
+    STATUS: ClassVar[tuple[str, ...]] = ("reached", "no equilibrium", "no stable equilibrium", "diverged",
+                                         "did not settle")
+
+    @property
+    def ok(self) -> np.ndarray:
+        """(P, M) mask of the points where an equilibrium is reached."""
+        return self.status == REACHED
+
+    def explain(self, member: int = 0) -> list[str]:
+        """One phrase per point member ``member`` does not reach, naming ū and the reason."""
+        out = []
+        for j in np.flatnonzero(self.status[member] != REACHED):
+            u, y0 = float(self.ubar[j]), float(self.y0[j])
+            s = int(self.status[member, j])
+            if s == NO_EQUILIBRIUM:
+                why = "no equilibrium (the static equation has no real root, or its denominator vanishes)"
+            elif s == NONE_STABLE:
+                why = "no stable equilibrium"
+            elif s == DIVERGED:
+                why = f"the free run from y0 = {y0:g} diverged"
+            else:
+                why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within "
+                       f"{SETTLE_STEPS} steps")
+            out.append(f"ū = {u:g}: {why}")
+        return out
+
+
+def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.ndarray, stable: np.ndarray,
+           L: int, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """The one "run until settled" routine: free runs at constant input, checked to have settled.
+
+    Each pair k is run from the constant initial output ``y0[k]`` until its last L outputs lie
+    within ``SETTLE_RTOL`` (relative; at most that fraction of the distance to the nearest other
+    equilibrium) of one of its stable equilibria, or it creeps towards one so slowly that its
+    increments vanish and Newton's method on the static equation lands on it; it is stopped as
+    diverged (|y| beyond 10⁶ times the pair's scale) or as not settled after ``SETTLE_STEPS``
+    steps (:func:`graybox._static_kernels.settle_runs`, whose docstring gives ``kind``, ``ip``
+    and ``fp``). Pairs with no stable equilibrium are not run: they settle on none.
+
+    Parameters
+    ----------
+    kind : {POLY, NET}
+        A polynomial model with its input folded in, or a tanh network.
+    ip : ndarray of int64
+        Integer description of the recursion.
+    fp : ndarray, shape (K, nf)
+        Each pair's coefficients.
+    y0 : ndarray, shape (K,)
+        Constant initial outputs.
+    roots : ndarray, shape (K, D)
+        Each pair's equilibria (every real root of its static equation), NaN-padded.
+    stable : ndarray of bool, shape (K, D)
+        Which of them are locally stable.
+    L : int
+        Largest output lag of the recursion.
+    floor : float
+        Smallest output scale of the tolerances (0 for engineering units; 1 in normalised units).
+
+    Returns
+    -------
+    ybar : ndarray, shape (K,)
+        The equilibrium reached (NaN where none).
+    status : ndarray of int8, shape (K,)
+        As in :class:`Reached`: 0, 2 (no stable equilibrium), 3 or 4.
+    """
+    r = np.asarray(roots, float)
+    y0a = np.asarray(y0, float)
+    st = np.asarray(stable, bool) & np.isfinite(r)
+    with np.errstate(all="ignore"):
+        gaps = np.abs(r[:, :, None] - r[:, None, :])
+        gaps[:, np.arange(r.shape[1]), np.arange(r.shape[1])] = np.inf
+        gap = np.min(np.where(np.isfinite(gaps), gaps, np.inf), axis=2)
+        scale = np.minimum(np.maximum(np.maximum(np.abs(r), np.abs(y0a)[:, None]), floor), gap)
+    order = np.argsort(~st, axis=1, kind="stable")  # stable candidates first
+    cand = np.ascontiguousarray(np.take_along_axis(np.where(st, r, np.nan), order, axis=1))
+    scale = np.take_along_axis(scale, order, axis=1)
+    ncand = st.sum(axis=1).astype(np.int64)
+    tol = np.ascontiguousarray(SETTLE_RTOL * scale)
+    ntol = np.ascontiguousarray(1000.0 * SETTLE_RTOL * scale)
+    run = ncand > 0
+    ybar = np.full(y0a.shape, np.nan)
+    status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
+    if run.any():
+        with np.errstate(all="ignore"):
+            ybar[run], status[run] = settle_runs(
+                int(kind), np.ascontiguousarray(ip, dtype=np.int64), np.ascontiguousarray(fp[run], dtype=float),
+                np.ascontiguousarray(y0a[run]), np.ascontiguousarray(cand[run]), ncand[run],
+                np.ascontiguousarray(tol[run]), np.ascontiguousarray(ntol[run]), max(int(L), 1), float(floor),
+                SETTLE_STEPS, STALL_RTOL)
+    return ybar, status
+
+
+@lru_cache(maxsize=256)
+def _fold_map(structure: Structure) -> tuple[np.ndarray, np.ndarray, int]:
+    """(ip, one-hot term → [X, group 0, …] matrix, L) of a structure for :func:`settle` (POLY)."""
+    code = encode(structure)
+    G = int(code.gny.size)
+    Dg = int(code.gylag.shape[1])
+    ip = np.concatenate([[G, Dg], code.gny, code.gylag[:G].ravel()]).astype(np.int64)
+    onehot = np.zeros((len(structure), G + 1))
+    onehot[np.arange(len(structure)), code.grp + 1] = 1.0  # group −1 (input only) → column 0: X
+    ip.setflags(write=False)
+    onehot.setflags(write=False)
+    return ip, onehot, int(code.ylag.max(initial=0))
+
+
+def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray) -> Reached:
+    """The equilibrium each member reaches at each point from the constant initial output ``y0``.
+
+    The definition behind J_SF (see the module docstring): at (ū_j, y0_j) the equilibrium a free
+    run at constant ū_j, started with every initial condition equal to y0_j, settles on. Rational
+    structures: the equilibrium of eq. (6) when it is Schur-stable (then it is reached from every
+    start). Others: the real roots of eq. (5), their stability, and a checked settling run from
+    y0_j (:func:`settle`) for every pair that has a stable root.
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    ubar : ndarray, shape (M,)
+        Input levels (input units).
+    y0 : float or ndarray, shape (M,)
+        Initial output of each point's run (output units), usually the measured ȳ_i.
+
+    Returns
+    -------
+    Reached
+        ``ybar`` (P, M), NaN where nothing is reached, and the reason in ``status``.
+    """
+    th = np.atleast_2d(np.asarray(thetas, float))
+    ub = np.asarray(ubar, float).ravel()
+    y0s = np.broadcast_to(np.asarray(y0, float), ub.shape).copy()
+    P, M = th.shape[0], ub.size
+    finite = np.all(np.isfinite(th), axis=1)
+    th_ok = np.where(finite[:, None], th, 0.0)
+    if is_rational(structure):
+        yb = _rational_roots(structure, th_ok, ub)
+        stable = stable_mask(structure, th_ok, ub, yb)
+        status = np.where(np.isfinite(yb), np.where(stable, REACHED, NONE_STABLE), NO_EQUILIBRIUM).astype(np.int8)
+        yb = np.where(stable, yb, np.nan)
+    else:
+        roots = real_roots(structure, th_ok, ub)  # (P, M, D)
+        stab = _roots_stable(structure, th_ok, ub, roots)
+        has_root = np.any(np.isfinite(roots), axis=-1)
+        status = np.where(has_root, NONE_STABLE, NO_EQUILIBRIUM).astype(np.int8)
+        yb = np.full((P, M), np.nan)
+        run = np.flatnonzero((np.any(stab, axis=-1) & finite[:, None]).ravel())
+        if run.size:
+            ip, onehot, L = _fold_map(structure)
+            mu = encode(structure).mu
+            with np.errstate(all="ignore"):
+                W = th_ok[:, None, :] * (ub[:, None] ** mu)[None]  # θ_t ū^m_t: the input folded in
+            fp = (W.reshape(P * M, -1)[run]) @ onehot
+            D = roots.shape[-1]
+            y_run, s_run = settle(POLY, ip, fp, np.broadcast_to(y0s, (P, M)).ravel()[run],
+                                  roots.reshape(P * M, D)[run], stab.reshape(P * M, D)[run], L)
+            yb.ravel()[run] = y_run
+            status.ravel()[run] = s_run
+    status[~finite] = NO_EQUILIBRIUM
+    yb[~finite] = np.nan
+    return Reached(ub, y0s, yb, status)
+
+
+def _describe_failures(res: Reached, what: str = "model") -> str:
+    return f"the {what} reaches no equilibrium at " + "; ".join(res.explain(0))
 
 
 def static_curve(
@@ -274,62 +730,60 @@ def static_curve(
 ) -> np.ndarray:
     """The steady state the model reaches at each constant input ``ubar``.
 
-    At each ū the stable equilibrium is returned. When several are stable the one reached
-    by a free run at constant ū from the constant initial output ``y0`` is returned (``y0``
-    is then required; the evaluator passes the measured ȳ_i, so J_SF asks "started at the
-    plant's measured steady state, where does the model settle?").
+    With ``y0`` (the evaluator passes the measured ȳ_i): the equilibrium a free run at constant
+    ū, started with every initial condition equal to ``y0``, settles on (:func:`reached_equilibria`).
+    Without it: the locally stable equilibrium when there is exactly one; several need ``y0`` to
+    choose. For a rational structure both are the equilibrium of eq. (6) when it is Schur-stable.
 
     Parameters
     ----------
     structure : Structure
     theta : ndarray, shape (n_terms,)
     ubar : array_like, shape (M,)
+        Input levels (input units).
     y0 : float or array_like of shape (M,), optional
-        Initial output (one for all ū, or one per ū) used to pick among several stable equilibria.
+        Initial output (one for all ū, or one per ū), output units.
     strict : bool
-        When True (default) a ū with no stable equilibrium raises ``ValueError``; when False
-        its value is NaN (used inside optimisers, which turn it into an infinite cost).
+        When True (default) a ū where no equilibrium is reached (none is stable, the run
+        diverges or does not settle; or several are stable and ``y0`` is not given) raises
+        ``ValueError`` naming every such ū and why; when False its value is NaN.
 
     Returns
     -------
     ndarray, shape (M,)
+        Output units.
     """
     ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
-    y0s = None if y0 is None else np.broadcast_to(np.asarray(y0, dtype=float), ub.shape)
-    out = np.empty(ub.size)
+    th = np.asarray(theta, float)
+    if y0 is not None:
+        y0a = np.asarray(y0, dtype=float)
+        if y0a.ndim > 1 or (y0a.ndim == 1 and y0a.size not in (1, ub.size)):
+            raise ValueError(f"y0 must be a scalar or have one value per ū ({ub.size}), got shape {y0a.shape}")
+        y0s = np.broadcast_to(np.ravel(y0a) if y0a.ndim else y0a, ub.shape)
+        if not np.all(np.isfinite(y0s)):
+            raise ValueError("y0 has non-finite values")
+        res = reached_equilibria(structure, th[None, :], ub, y0s)
+        if strict and not res.ok.all():
+            raise ValueError(_describe_failures(res))
+        return res.ybar[0].copy()
+    if is_rational(structure):
+        res = reached_equilibria(structure, th[None, :], ub, np.zeros(ub.size))
+        if strict and not res.ok.all():
+            raise ValueError(_describe_failures(res))
+        return res.ybar[0].copy()
+    roots = real_roots(structure, th[None, :], ub)[0]  # (M, D)
+    stab = _roots_stable(structure, th[None, :], ub, roots[None])[0]
+    out = np.full(ub.size, np.nan)
     for i, u_ in enumerate(ub):
-        stable = [e for e in equilibria(structure, theta, u_) if e.stable]
-        if len(stable) == 1:
-            out[i] = stable[0].ybar
-        elif not stable:
-            if strict:
-                raise ValueError(f"the model has no stable equilibrium at ū = {u_:g}")
-            out[i] = np.nan
-        else:
-            if y0s is None:
-                if strict:
-                    raise ValueError(
-                        f"the model has {len(stable)} stable equilibria at ū = {u_:g} "
-                        f"({[round(e.ybar, 6) for e in stable]}); pass y0 to choose the one reached from it"
-                    )
-                out[i] = np.nan
-                continue
-            out[i] = _settle(structure, theta, u_, float(y0s[i]), [e.ybar for e in stable])
+        stable = roots[i][stab[i]]
+        if stable.size == 1:
+            out[i] = stable[0]
+        elif strict and stable.size == 0:
+            raise ValueError(f"the model has no stable equilibrium at ū = {u_:g}")
+        elif strict:
+            raise ValueError(f"the model has {stable.size} stable equilibria at ū = {u_:g} "
+                             f"({[round(float(e), 6) for e in stable]}); pass y0 to choose the one reached from it")
     return out
-
-
-def _settle(structure: Structure, theta: np.ndarray, ubar: float, y0: float, candidates: list[float]) -> float:
-    """Run the model at constant input from y0 and return the candidate equilibrium it approaches."""
-    from ._kernels import encode, simulate_one
-
-    L = max(structure.max_lag, 1)
-    n = L + 20000
-    code = encode(structure)
-    y = simulate_one(code, np.asarray(theta, float), np.full(n, ubar), np.full(L, y0), L, 1e300)
-    end = y[-1]
-    if not np.isfinite(end):
-        raise ValueError(f"free run at ū = {ubar:g} from y0 = {y0:g} diverged")
-    return min(candidates, key=lambda c: abs(c - end))
 
 
 def static_gain(
@@ -369,76 +823,6 @@ def static_gain(
     return -Fu / Fy
 
 
-def nearest_stable_equilibria(
-    structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ytarget: np.ndarray
-) -> np.ndarray:
-    """For many parameter vectors at once: the stable equilibrium nearest ``ytarget`` at each ū.
-
-    The optimisers' fast path for J_SF. Rational structures have one equilibrium (eq. (6)),
-    kept when it is stable. Otherwise every real root of eq. (5) is found at once (batched
-    companion-matrix eigenvalues), the unstable ones are dropped (:func:`stable_mask`), and the
-    one nearest the measured ȳ_i is kept — where :func:`static_curve` would run the model from
-    ȳ_i to see which stable equilibrium it reaches (real roots of degree ≤ 3 by closed forms,
-    higher degrees by batched companion eigenvalues). The two agree whenever a single stable
-    equilibrium exists (the usual case); the shared evaluator re-scores the final members.
-
-    Parameters
-    ----------
-    structure : Structure
-    thetas : ndarray, shape (P, n_terms)
-    ubar : ndarray, shape (M,)
-    ytarget : ndarray, shape (M,)
-        Usually the measured ȳ_i.
-
-    Returns
-    -------
-    ndarray, shape (P, M)
-        NaN where there is no stable real equilibrium.
-    """
-    th = np.atleast_2d(np.asarray(thetas, float))
-    ub = np.asarray(ubar, float)
-    yt = np.broadcast_to(np.asarray(ytarget, float), ub.shape)
-    P, M = th.shape[0], ub.size
-    with np.errstate(all="ignore"):
-        if is_rational(structure):
-            return rational_equilibria(structure, th, ub)
-        cm = cluster_map(structure)
-        sig = th @ cm.R.T
-        D = cm.max_y_power
-        coef = np.zeros((D + 1, P, M))  # F(ȳ) = Σ_p coef[p] ȳ^p
-        for c, (p, m) in enumerate(cm.keys):
-            coef[p] += sig[:, c, None] * ub[None, :] ** m
-        coef[1] -= 1.0
-        if D <= 3:
-            # closed forms, compiled: batched eigenvalues cost 5 ms per GA generation here
-            from ._kernels import real_roots_upto_cubic
-
-            rr = real_roots_upto_cubic(coef)
-            roots = rr.astype(complex)
-            real = np.isfinite(rr)
-        else:
-            lead = coef[D]
-            ok = np.isfinite(coef).all(axis=0) & (np.abs(lead) > 1e-300)
-            comp = np.zeros((P, M, D, D))
-            comp[..., 0, :] = -np.moveaxis(coef[D - 1 :: -1], 0, -1) / np.where(ok, lead, 1.0)[..., None]
-            if D > 1:
-                idx = np.arange(D - 1)
-                comp[..., idx + 1, idx] = 1.0
-            comp[~ok] = 0.0
-            roots = np.linalg.eigvals(comp)  # (P, M, D)
-            real = ok[..., None] & (np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real)))
-        best = np.full((P, M), np.nan)
-        dist = np.full((P, M), np.inf)
-        for d in range(roots.shape[-1]):
-            r = np.where(real[..., d], roots[..., d].real, np.nan)
-            good = real[..., d] & stable_mask(structure, th, ub, r)
-            dd = np.where(good, np.abs(r - yt[None, :]), np.inf)
-            take = dd < dist
-            best = np.where(take, r, best)
-            dist = np.where(take, dd, dist)
-        return best
-
-
 @lru_cache(maxsize=256)
 def _term_keys(structure: Structure) -> tuple[tuple[int, int], ...]:
     return tuple(cluster_key(t) for t in structure)
@@ -447,7 +831,9 @@ def _term_keys(structure: Structure) -> tuple[tuple[int, int], ...]:
 def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
     """∂ȳ_i/∂θ_t at equilibria (ū_i, ȳ_i), by implicit differentiation of eq. (5).
 
-    F(ȳ, θ) = Σ_t θ_t ȳ^{p_t} ū^{m_t} − ȳ = 0 gives ∂ȳ/∂θ_t = −ȳ^{p_t} ū^{m_t} / F_ȳ.
+    F(ȳ, θ) = Σ_t θ_t ȳ^{p_t} ū^{m_t} − ȳ = 0 gives ∂ȳ/∂θ_t = −ȳ^{p_t} ū^{m_t} / F_ȳ. At a
+    reached equilibrium this is the gradient of the static output (the basin does not change
+    under a small step).
 
     Returns
     -------
@@ -463,33 +849,3 @@ def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndar
             Fy += th * p * yb ** (p - 1) * ub**m
     with np.errstate(all="ignore"):
         return -basis / Fy[:, None]
-
-
-__all__ += ["nearest_stable_equilibria", "static_theta_gradient"]
-
-
-def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
-    """Is each equilibrium (ū_j, ȳ_pj) of member p locally stable? Shape (P, M), batched.
-
-    The characteristic polynomial z^L − a_1 z^(L−1) − … − a_L of the linearised recursion is
-    tested by the Schur–Cohn step-down recursion (all reflection coefficients inside the unit
-    interval), compiled (:func:`graybox._kernels.stable_equilibria`): no eigenvalues are
-    computed, which makes the test cheap enough for every generation of a GA.
-
-    Parameters
-    ----------
-    structure : Structure
-    thetas : ndarray, shape (P, n_terms)
-    ubar : ndarray, shape (M,)
-    ybar : ndarray, shape (P, M)
-        Equilibrium outputs (non-finite entries count as unstable).
-    """
-    from ._kernels import encode, stable_equilibria
-
-    code = encode(structure)
-    L = int(code.ylag.max(initial=0))
-    yb = np.atleast_2d(np.asarray(ybar, float))
-    if L == 0:
-        return np.isfinite(yb)
-    return stable_equilibria(code.ny, code.ylag, code.mu, np.atleast_2d(np.asarray(thetas, float)),
-                             np.asarray(ubar, float), yb, L)

@@ -58,7 +58,7 @@ def test_cost_definitions_match_shared_evaluator(problem):
     from graybox._evaluate import evaluate_thetas
 
     ths = problem.ls_theta() * (1 + 0.001 * np.random.default_rng(0).standard_normal((5, 17)))
-    ev = evaluate_thetas(problem.structure, ths, problem.record, problem.static, check_stability=False)
+    ev = evaluate_thetas(problem.structure, ths, problem.record, problem.static)
     np.testing.assert_allclose(problem.js(ths), ev["JS"], rtol=1e-10)
     np.testing.assert_allclose(problem.jsf(ths), ev["JSF"], rtol=1e-10)
 

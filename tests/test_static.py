@@ -1,9 +1,15 @@
+from fractions import Fraction
+
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 
-from graybox import Model, Structure, reference
-from graybox._static import cluster_map, rational_static_curve
+from graybox import Model, Record, StaticPoints, Structure, evaluate_thetas, jsf, reference
+from graybox._static import (
+    DENOMINATOR_RTOL, _real_roots_companion, cluster_map, rational_static_curve, reached_equilibria, schur_stable,
+    spectral_radius, vanishing_denominator,
+)
+from graybox._static_kernels import real_roots_upto_cubic
 
 
 def test_eq16_clusters_from_table_ii():
@@ -88,26 +94,227 @@ def stable_models(draw):
 @settings(max_examples=40, deadline=None)
 def test_property_static_curve_equals_simulated_steady_state(m, ubar):
     stable = [e for e in m.equilibria(ubar) if e.stable]
-    if len(stable) != 1:
-        return
+    assume(len(stable) == 1)
     ys = stable[0].ybar
     y = m.simulate(np.full(3000, ubar), np.full(m.max_lag, ys * 1.01 + 0.1), on_diverge="nan")
     assert y[-1] == pytest.approx(ys, rel=1e-6, abs=1e-6)
 
 
-@given(st.lists(st.floats(-10, 10), min_size=2, max_size=4).filter(lambda c: abs(c[-1]) > 1e-3),
-       st.floats(1e-3, 1e3))
-@settings(max_examples=80, deadline=None)
-def test_property_closed_form_roots_equal_numpy_roots(coef, scale):
-    from graybox._kernels import real_roots_upto_cubic
+# ---------------------------------------------------------------------------------------------
+# real roots of the static polynomial: exact checks (rational arithmetic), any relative scales
+# ---------------------------------------------------------------------------------------------
+def _sturm_count(coef: list[Fraction]) -> int:
+    """Number of distinct real roots of Σ coef[k] x^k (exact, Sturm's theorem)."""
+    def trim(p):
+        while p and p[-1] == 0:
+            p = p[:-1]
+        return p
 
-    c = np.array(coef) * scale
+    def rem(a, b):  # remainder of a / b, ascending coefficients
+        a = list(a)
+        while len(a) >= len(b) and a:
+            f = a[-1] / b[-1]
+            shift = len(a) - len(b)
+            for i, bi in enumerate(b):
+                a[shift + i] -= f * bi
+            a = trim(a[:-1])
+        return a
+
+    p = trim(list(coef))
+    seq = [p, trim([k * c for k, c in enumerate(p)][1:])]
+    while len(seq[-1]) > 1 or (len(seq[-1]) == 1 and len(seq[-2]) > 1 and False):
+        r = rem(seq[-2], seq[-1])
+        if not r:
+            break
+        seq.append([-c for c in r])
+
+    def changes(signs):
+        s = [x for x in signs if x != 0]
+        return sum(1 for a, b in zip(s, s[1:]) if a != b)
+
+    at_minus = [(-1) ** (len(q) - 1) * (1 if q[-1] > 0 else -1) for q in seq if q]
+    at_plus = [1 if q[-1] > 0 else -1 for q in seq if q]
+    return changes(at_minus) - changes(at_plus)
+
+
+def _poly_exact(coef: list[Fraction], x: Fraction) -> Fraction:
+    v = Fraction(0)
+    for c in reversed(coef):
+        v = v * x + c
+    return v
+
+
+def _is_root_within(coef: list[Fraction], x: float, rel: float) -> bool:
+    """Does Σ coef[k] t^k change sign (or vanish) on [x − rel|x|, x + rel|x|]? Exact."""
+    fx = Fraction(x)
+    if x == 0.0:
+        return _poly_exact(coef, fx) == 0
+    h = Fraction(rel) * abs(fx)
+    lo, hi = _poly_exact(coef, fx - h), _poly_exact(coef, fx + h)
+    return lo == 0 or hi == 0 or (lo > 0) != (hi > 0)
+
+
+def _well_separated(c: np.ndarray, rel: float = 1e-3) -> bool:
+    """Every pair of roots (numpy.roots, complex too) is more than ``rel`` apart, relatively."""
+    r = np.roots(c[::-1])
+    if r.size < 2:
+        return True
+    d = np.abs(np.subtract.outer(r, r)) / np.maximum.outer(np.abs(r), np.abs(r))
+    return bool(np.min(d[~np.eye(r.size, dtype=bool)]) > rel)
+
+
+coefficient = st.tuples(st.sampled_from([-1.0, 1.0]), st.floats(1.0, 9.99), st.integers(-15, 15)).map(
+    lambda t: t[0] * t[1] * 10.0 ** t[2])
+
+
+@given(st.lists(coefficient, min_size=4, max_size=4), st.booleans())
+@settings(max_examples=200, deadline=None)
+def test_property_cubic_roots_exact_over_many_decades_of_relative_scale(coef, drop_lead):
+    """Each coefficient has its own scale (10^-15 … 10^15): the roots found are the real roots, all of them."""
+    c = np.array(coef)
+    if drop_lead:
+        c[3] = 0.0  # an exact zero lowers the degree, nothing else does
+    assume(_well_separated(c[: 3 if drop_lead else 4]))
     got = real_roots_upto_cubic(c[:, None, None])[0, 0]
-    got = np.sort(got[np.isfinite(got)])
-    ref = np.roots(c[::-1])
-    # well-separated real roots only: near-double roots are ill-conditioned for any method
-    real = np.sort(ref[np.abs(ref.imag) < 1e-9].real)
-    if len(ref) > 1 and np.min(np.abs(np.subtract.outer(ref, ref))[~np.eye(len(ref), dtype=bool)]) < 1e-3:
-        return
-    assert got.size == real.size
-    np.testing.assert_allclose(got, real, rtol=1e-7, atol=1e-9)
+    got = got[np.isfinite(got)]
+    exact = [Fraction(v) for v in c]
+    assert got.size == _sturm_count(exact)
+    assert np.all(np.diff(got) > 0)  # sorted, distinct
+    for x in got:
+        assert _is_root_within(exact, float(x), 1e-10), (x, c)
+
+
+@given(st.lists(coefficient, min_size=4, max_size=6), st.integers(-8, 8))
+@settings(max_examples=100, deadline=None)
+def test_property_roots_follow_a_change_of_units(coef, e):
+    """y → k y maps c_p to c_p k^(1−p) and every root r to k r, whatever k (cubic and companion branches)."""
+    c = np.array(coef)
+    assume(_well_separated(c))
+    k = 10.0 ** e * 1.7
+    roots = real_roots_upto_cubic if c.size == 4 else _real_roots_companion
+    a = roots(c[:, None, None])[0, 0]
+    b = roots((c * k ** (1.0 - np.arange(c.size)))[:, None, None])[0, 0]
+    np.testing.assert_array_equal(np.isfinite(a), np.isfinite(b))
+    np.testing.assert_allclose(b[np.isfinite(b)], k * a[np.isfinite(a)], rtol=1e-10)
+
+
+@given(st.lists(coefficient, min_size=5, max_size=6))
+@settings(max_examples=100, deadline=None)
+def test_property_companion_branch_roots_exact(coef):
+    """Degree 4 and 5 (companion matrix): the real roots, all of them, over many decades of scale."""
+    c = np.array(coef)
+    assume(_well_separated(c))
+    got = _real_roots_companion(c[:, None, None])[0, 0]
+    got = got[np.isfinite(got)]
+    exact = [Fraction(v) for v in c]
+    assert got.size == _sturm_count(exact)
+    for x in got:
+        assert _is_root_within(exact, float(x), 1e-10), (x, c)
+
+
+def test_quartic_model_equilibria_and_reached_state():
+    """A structure with y⁴ takes the companion branch: every equilibrium, and the one a run reaches."""
+    # y = 0.3 y1 + 0.2 y2 − 0.05 y1⁴ + 0.6 y1² u − …: a quartic static equation
+    s = Structure(["y(k-1)", "y(k-2)", "y(k-1)^4", "u(k-1)y(k-1)^2", "1"])
+    m = Model(s, [0.3, 0.2, -0.05, 0.001, 0.4])
+    for ub in (-300.0, 0.0, 300.0):
+        eqs = m.equilibria(ub)
+        c = np.array([0.4, 0.5 - 1.0, 0.001 * ub, 0.0, -0.05])  # ascending: F(ȳ)
+        ref = np.sort(np.roots(c[::-1]))
+        ref = ref[np.abs(ref.imag) < 1e-9].real
+        np.testing.assert_allclose([e.ybar for e in eqs], ref, rtol=1e-12)
+        assert [e.stable for e in eqs] == [e.spectral_radius < 1 for e in eqs]
+        for e in eqs:
+            if e.stable:  # started next to a stable equilibrium, a long run ends on it
+                y = m.simulate(np.full(5000, ub), np.full(2, e.ybar * (1 + 1e-3)), on_diverge="nan")
+                assert y[-1] == pytest.approx(e.ybar, rel=1e-9)
+                assert m.static_curve([ub], y0=e.ybar * (1 + 1e-3))[0] == pytest.approx(e.ybar, rel=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------
+# the one stability test
+# ---------------------------------------------------------------------------------------------
+@given(st.lists(st.floats(-2.0, 2.0), min_size=1, max_size=7))
+@settings(max_examples=200, deadline=None)
+def test_property_schur_cohn_agrees_with_eigenvalues(a):
+    rho = spectral_radius(np.array(a))
+    assume(abs(rho - 1.0) > 1e-9)
+    assert schur_stable(np.array(a)) == (rho < 1.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# units: every static path gives the same equilibria in any units of u and y
+# ---------------------------------------------------------------------------------------------
+def _in_units(model: Model, cu: float, cy: float) -> Model:
+    """The same model with u in units cu times smaller (u' = cu u) and y' = cy y."""
+    p = np.array([t.power_of("y") for t in model.structure])
+    m_ = np.array([t.power_of("u") for t in model.structure])
+    return model.with_theta(model.theta * cy ** (1.0 - p) * cu ** (-m_.astype(float)))
+
+
+def _population(model: Model, n: int = 12) -> np.ndarray:
+    rng = np.random.default_rng(1)
+    return model.theta * (1 + 0.01 * rng.standard_normal((n, len(model.theta))))
+
+
+@pytest.mark.parametrize("eq", [15, 17])
+@pytest.mark.parametrize("cu,cy", [(1.0, 9806.65), (1e-4, 1.0), (1e4, 1e-4), (1e-4, 1e4), (2 * np.pi / 60, 1e-2),
+                                   (1e4, 1e4)])
+def test_every_static_path_is_the_same_in_any_units(eq, cu, cy, paper_record):
+    from graybox._se import SEProblem
+
+    m = reference.paper_model(eq)
+    mu = _in_units(m, cu, cy)
+    pts = reference.eq1_points()
+    ptu = StaticPoints(pts.ubar * cu, pts.ybar * cy)
+    rtol = 1e-9
+    # single model: every equilibrium and its stability, the static curve with and without y0, the gain
+    for ub in (750.0, 1200.0, 1650.0):
+        a, b = m.equilibria(ub), mu.equilibria(ub * cu)
+        assert [e.stable for e in a] == [e.stable for e in b]
+        np.testing.assert_allclose([e.ybar * cy for e in a], [e.ybar for e in b], rtol=rtol)
+    np.testing.assert_allclose(mu.static_curve(ptu.ubar) / cy, m.static_curve(pts.ubar), rtol=rtol)
+    np.testing.assert_allclose(mu.static_curve(ptu.ubar, y0=ptu.ybar) / cy, m.static_curve(pts.ubar, y0=pts.ybar),
+                               rtol=rtol)
+    np.testing.assert_allclose(mu.static_gain(ptu.ubar) * cu / cy, m.static_gain(pts.ubar), rtol=1e-8)
+    # batch path, SE objective and evaluator, on a population around the model
+    th, thu = _population(m), _population(mu)
+    r, ru = reached_equilibria(m.structure, th, pts.ubar, pts.ybar), reached_equilibria(mu.structure, thu, ptu.ubar,
+                                                                                        ptu.ybar)
+    np.testing.assert_array_equal(r.status, ru.status)
+    np.testing.assert_allclose(ru.ybar / cy, r.ybar, rtol=rtol)
+    rec = Record(paper_record.u, paper_record.y)
+    recu = Record(paper_record.u * cu, paper_record.y * cy)
+    se, seu = SEProblem(m.structure, rec, pts), SEProblem(mu.structure, recu, ptu)
+    np.testing.assert_allclose(seu.static_outputs(thu) / cy, se.static_outputs(th), rtol=rtol)
+    np.testing.assert_allclose(seu.jsf(thu) / cy**2, se.jsf(th), rtol=rtol)
+    assert np.isfinite(se.jsf(th)).sum() >= 6  # most of the population reaches the points
+    np.testing.assert_allclose(evaluate_thetas(mu.structure, thu, static=ptu)["JSF"] / cy**2,
+                               evaluate_thetas(m.structure, th, static=pts)["JSF"], rtol=rtol)
+    assert jsf(mu, ptu) / cy**2 == pytest.approx(jsf(m, pts), rel=rtol)
+
+
+def test_model17_in_pascal_issue_numbers():
+    """Issue 10: in Pa the batched path gave 4.043 / 10.746 / NaN and the SE objective J_SF = inf."""
+    m = reference.paper_model(17)
+    mp = _in_units(m, 1.0, 9806.65)
+    ub = np.array([750.0, 1200.0, 1650.0])
+    np.testing.assert_allclose(m.static_curve(ub), [4.044, 10.470, 20.485], atol=1e-3)
+    y_pa = reached_equilibria(mp.structure, mp.theta[None], ub, reference.eq1(ub) * 9806.65).ybar[0]
+    np.testing.assert_allclose(y_pa / 9806.65, m.static_curve(ub), rtol=1e-12)
+    pts = reference.eq1_points()
+    assert jsf(mp, StaticPoints(pts.ubar, pts.ybar * 9806.65)) / 9806.65**2 == pytest.approx(0.1027, abs=1e-4)
+
+
+def test_one_relative_threshold_for_a_vanishing_denominator():
+    # D(ū) = 1 − Σy − Σyu ū vanishes at ū = 1000 (in any units of u): no static function there
+    s = Structure(["y(k-1)", "u(k-1)y(k-1)", "u(k-1)", "1"])
+    th = np.array([0.5, 5e-4, 1e-3, 0.1])
+    for cu in (1e-4, 1.0, 1e4):
+        mu = _in_units(Model(s, th), cu, 1.0)
+        assert vanishing_denominator(s, mu.theta, [1000.0 * cu]).all()
+        assert not vanishing_denominator(s, mu.theta, [1000.0 * cu * (1 + 1e-6)]).any()
+        with pytest.raises(ValueError, match="vanishes"):
+            rational_static_curve(s, mu.theta, [1000.0 * cu])
+        assert mu.equilibria(1000.0 * cu) == []
+    assert DENOMINATOR_RTOL == 1e-9

@@ -1,0 +1,502 @@
+"""Compiled kernels of the static analysis (numba): real roots, the stability test, settling runs.
+
+- :func:`schur_stable_rows` and :func:`stable_equilibria` — the one stability test: the
+  Schur–Cohn step-down recursion on the characteristic polynomial of a linearised recursion
+  (no eigenvalues are computed, which keeps it cheap enough for every generation of a GA).
+- :func:`real_roots_upto_cubic` — real roots of the static equation (degree ≤ 3) for every
+  (member, point) pair, with the variable scaled by a power of two so that the extreme
+  coefficients are balanced (the decisions do not depend on the units of y), then Kahan's cubic
+  solver (one real root by a monotone Newton iteration, deflation, a stable quadratic formula).
+- :func:`settle_runs` — the one "run until settled" routine: a free run at constant input from a
+  constant initial output, stopped and classified (reached a given stable equilibrium / diverged /
+  did not settle within the step budget). Two recursions share it: a polynomial model with its
+  input folded into the coefficients, and a one-hidden-layer tanh network.
+
+Nothing here validates input: :mod:`graybox._static` and :mod:`graybox._neural` do.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+__all__ = [
+    "schur_stable_rows", "stable_equilibria", "real_roots_upto_cubic", "settle_runs",
+    "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED",
+]
+
+#: Kinds of recursion understood by :func:`settle_runs`.
+POLY, NET = 0, 1
+#: Outcomes of :func:`settle_runs` (codes shared with :class:`graybox._static.Reached`).
+REACHED, DIVERGED, NOT_SETTLED = 0, 3, 4
+
+
+# -- the stability test ------------------------------------------------------------------------
+@nb.njit(cache=True, nogil=True)
+def _schur_cohn(c, n, nxt):  # pragma: no cover - compiled
+    """Are all roots of z^n + c[1] z^(n-1) + … + c[n] (c[0] = 1) strictly inside the unit circle?
+
+    The step-down recursion: every reflection coefficient must lie strictly inside (−1, 1).
+    ``c`` is overwritten; ``nxt`` is work space of the same length. Non-finite → False.
+    """
+    for i in range(n + 1):
+        if not np.isfinite(c[i]):
+            return False
+    while n > 0:
+        k = c[n]
+        if not (abs(k) < 1.0):
+            return False
+        den = 1.0 - k * k
+        for i in range(n):
+            nxt[i] = (c[i] - k * c[n - i]) / den
+        for i in range(n):
+            c[i] = nxt[i]
+        n -= 1
+    return True
+
+
+@nb.njit(cache=True, nogil=True)
+def schur_stable_rows(a):  # pragma: no cover - compiled
+    """(K,) mask: is y(k) = Σ_l a[r, l-1] y(k-l) asymptotically stable, row by row?
+
+    ``a`` has shape (K, L): the coefficients a_1 … a_L of a linearised recursion.
+    """
+    K, L = a.shape
+    out = np.zeros(K, dtype=np.bool_)
+    c = np.empty(L + 1)
+    nxt = np.empty(L + 1)
+    for r in range(K):
+        c[0] = 1.0
+        for i in range(L):
+            c[i + 1] = -a[r, i]
+        out[r] = _schur_cohn(c, L, nxt)
+    return out
+
+
+@nb.njit(cache=True, nogil=True)
+def stable_equilibria(ny, ylag, mu, thetas, ubar, ybar, L):  # pragma: no cover - compiled
+    """(P, M) mask: is the equilibrium (ū_j, ȳ_pj) of member p of a polynomial model locally stable?
+
+    Builds the linearised recursion's coefficients a_l = Σ_t θ_t ∂φ_t/∂y(k-l) at (ȳ, ū) and applies
+    :func:`_schur_cohn` to z^L − a_1 z^(L−1) − … − a_L. ``mu[t]`` is term t's input power,
+    ``ny``/``ylag`` as in :class:`graybox._kernels.Code`. Non-finite ȳ counts as unstable.
+    """
+    P, T = thetas.shape
+    M = ubar.shape[0]
+    out = np.zeros((P, M), dtype=np.bool_)
+    c = np.empty(L + 1)
+    nxt = np.empty(L + 1)
+    for p in range(P):
+        for j in range(M):
+            yb = ybar[p, j]
+            if not np.isfinite(yb):
+                continue
+            for i in range(L + 1):
+                c[i] = 0.0
+            c[0] = 1.0
+            for t in range(T):
+                m = ny[t]
+                if m == 0:
+                    continue
+                g = thetas[p, t] * ubar[j] ** mu[t]
+                for _ in range(m - 1):
+                    g *= yb
+                for d in range(m):
+                    c[ylag[t, d]] -= g  # c_l = −a_l
+            out[p, j] = _schur_cohn(c, L, nxt)
+    return out
+
+
+# -- real roots of the static equation -----------------------------------------------------------
+@nb.njit(cache=True, nogil=True)
+def _pow2_scale(c, deg):  # pragma: no cover - compiled
+    """Power of two s balancing |c_lo| s^lo and |c_hi| s^hi (lo, hi: first and last non-zero)."""
+    lo = -1
+    hi = -1
+    for k in range(deg + 1):
+        if c[k] != 0.0:
+            if lo < 0:
+                lo = k
+            hi = k
+    if lo < 0 or hi == lo:
+        return 1.0
+    e = (np.log2(abs(c[lo])) - np.log2(abs(c[hi]))) / (hi - lo)
+    return 2.0 ** np.round(e)
+
+
+@nb.njit(cache=True, nogil=True)
+def _eval3(X, A, B, C, D):  # pragma: no cover - compiled
+    # A X³ + B X² + C X + D by Horner, its derivative, and the quotient's coefficients b1, c2
+    q0 = A * X
+    b1 = q0 + B
+    c2 = b1 * X + C
+    dq = (q0 + b1) * X + c2
+    q = c2 * X + D
+    return q, dq, b1, c2
+
+
+@nb.njit(cache=True, nogil=True)
+def _real_roots3(A, B, C, D, r):  # pragma: no cover - compiled
+    """Real roots of A x³ + B x² + C x + D into r (unsorted); returns their number.
+
+    W. Kahan, "To solve a real cubic equation" (1986): one real root by Newton's iteration from
+    a start that makes it monotone, deflation (from the end that keeps it accurate), and the
+    stable quadratic formula. Exact zeros of A (or B) lower the degree; nothing else does.
+    """
+    n = 0
+    if A == 0.0:
+        a, b1, c2 = B, C, D
+    elif D == 0.0:
+        r[n] = 0.0
+        n += 1
+        a, b1, c2 = A, B, C
+    else:
+        X = -(B / A) / 3.0
+        q, dq, b1, c2 = _eval3(X, A, B, C, D)
+        t = q / A
+        rr = np.cbrt(abs(t))
+        s = 1.0 if t > 0.0 else (-1.0 if t < 0.0 else 0.0)
+        t = -dq / A
+        if t > 0.0:
+            rr = 1.324718 * max(rr, np.sqrt(t))
+        x0 = X - s * rr
+        if x0 != X:
+            for _ in range(200):
+                X = x0
+                q, dq, b1, c2 = _eval3(X, A, B, C, D)
+                x0 = X if dq == 0.0 else X - (q / dq) / 1.000000000000001
+                if not (s * x0 > s * X):
+                    break
+            if abs(A) * X * X > abs(D / X):
+                c2 = -D / X
+                b1 = (c2 - C) / X
+        if not np.isfinite(X):
+            return 0
+        r[n] = X
+        n += 1
+        a = A
+    # a x² + b1 x + c2
+    if a == 0.0:
+        if b1 != 0.0:
+            r[n] = -c2 / b1
+            n += 1
+        return n
+    disc = b1 * b1 - 4.0 * a * c2
+    if disc < 0.0:
+        return n
+    qq = -0.5 * (b1 + (np.sqrt(disc) if b1 >= 0.0 else -np.sqrt(disc)))
+    if qq == 0.0:  # b1 = 0 and a c2 = 0: a double root at 0
+        r[n] = 0.0
+        r[n + 1] = 0.0
+        return n + 2
+    r[n] = qq / a
+    r[n + 1] = c2 / qq
+    return n + 2
+
+
+@nb.njit(cache=True, nogil=True)
+def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
+    """Real roots of Σ_p coef[p] y^p (degree ≤ 3) for every (member, point), sorted, NaN-padded.
+
+    Parameters
+    ----------
+    coef : ndarray, shape (D + 1, P, M), D ≤ 3
+        Ascending coefficients.
+
+    Returns
+    -------
+    ndarray, shape (P, M, max(D, 1))
+        Real roots, ascending; NaN where fewer exist (or a coefficient is not finite). The
+        variable is scaled by a power of two (exact) that balances the extreme coefficients, so
+        a change of units of y changes nothing but the scale; every root is then polished by
+        Newton steps on the full polynomial that are kept only when they reduce |F|.
+    """
+    D = coef.shape[0] - 1
+    P, M = coef.shape[1], coef.shape[2]
+    W = max(D, 1)
+    out = np.full((P, M, W), np.nan)
+    c = np.zeros(4)
+    r = np.empty(4)
+    for i in range(P):
+        for j in range(M):
+            ok = True
+            for k in range(4):
+                c[k] = coef[k, i, j] if k <= D else 0.0
+                if not np.isfinite(c[k]):
+                    ok = False
+            if not ok:
+                continue
+            s = _pow2_scale(c, 3)
+            big = 0.0
+            sk = 1.0
+            for k in range(4):
+                c[k] *= sk  # exact: s is a power of two
+                sk *= s
+                big = max(big, abs(c[k]))
+            if big == 0.0 or not np.isfinite(big):
+                continue
+            e = 2.0 ** np.round(np.log2(big))
+            for k in range(4):
+                c[k] /= e
+            n = _real_roots3(c[3], c[2], c[1], c[0], r)
+            for k in range(n):
+                x = r[k]
+                f = ((c[3] * x + c[2]) * x + c[1]) * x + c[0]
+                for _ in range(2):
+                    df = (3.0 * c[3] * x + 2.0 * c[2]) * x + c[1]
+                    if df == 0.0:
+                        break
+                    xn = x - f / df
+                    fn = ((c[3] * xn + c[2]) * xn + c[1]) * xn + c[0]
+                    if not (abs(fn) < abs(f)):
+                        break
+                    x, f = xn, fn
+                r[k] = x * s
+            # sort the (at most three) roots
+            for a_ in range(n):
+                for b_ in range(a_ + 1, n):
+                    if r[b_] < r[a_]:
+                        r[a_], r[b_] = r[b_], r[a_]
+            for k in range(min(n, W)):
+                out[i, j, k] = r[k]
+    return out
+
+
+# -- running until settled ---------------------------------------------------------------------------
+#: Pairs run side by side (lanes): independent recursions interleaved hide each one's latency.
+LANES = 8
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _step_lanes(kind, ip, C, ring, t, mask, acc):  # pragma: no cover - compiled
+    """acc[b] = next output of lane b's recursion at constant input; outputs in ring[(k & mask)·B + b].
+
+    Every loop over lanes runs over the whole lane axis, contiguous in ``ring`` and ``C``, with a
+    compile-time length, so LLVM vectorises it.
+    """
+    B = LANES
+    if kind == POLY:
+        # ip = [G, Dg, gny(G), gylag(G·Dg)]; C rows = [X, C_0 … C_{G-1}]
+        G = ip[0]
+        Dg = ip[1]
+        for b in range(B):
+            acc[b] = C[0, b]
+        for g in range(G):
+            m = ip[2 + g]
+            lag = 2 + G + g * Dg
+            o0 = ((t - ip[lag]) & mask) * B
+            if m == 1:
+                for b in range(B):
+                    acc[b] += C[1 + g, b] * ring[o0 + b]
+            elif m == 2:
+                o1 = ((t - ip[lag + 1]) & mask) * B
+                for b in range(B):
+                    acc[b] += C[1 + g, b] * ring[o0 + b] * ring[o1 + b]
+            elif m == 3:
+                o1 = ((t - ip[lag + 1]) & mask) * B
+                o2 = ((t - ip[lag + 2]) & mask) * B
+                for b in range(B):
+                    acc[b] += C[1 + g, b] * ring[o0 + b] * ring[o1 + b] * ring[o2 + b]
+            else:
+                for b in range(B):
+                    v = C[1 + g, b]
+                    for d in range(m):
+                        v *= ring[((t - ip[lag + d]) & mask) * B + b]
+                    acc[b] += v
+        return
+    # NET: ip = [H, ny]; C rows = [b2, w2(H), c(H), A(H·ny)]
+    H = ip[0]
+    ny = ip[1]
+    for b in range(B):
+        acc[b] = C[0, b]
+    for j in range(H):
+        for b in range(B):
+            a = C[1 + H + j, b]
+            for i in range(ny):
+                a += C[1 + 2 * H + j * ny + i, b] * ring[((t - 1 - i) & mask) * B + b]
+            acc[b] += C[1 + j, b] * np.tanh(a)
+
+
+@nb.njit(cache=True, nogil=True)
+def _static_residual(kind, ip, fp, y):  # pragma: no cover - compiled
+    """F(y) = g(y, …, y) − y and F'(y) of the scalar static equation (fp: one pair's row)."""
+    if kind == POLY:
+        G = ip[0]
+        F = fp[0] - y
+        dF = -1.0
+        for g in range(G):
+            m = ip[2 + g]
+            v = fp[1 + g]
+            for _ in range(m - 1):
+                v *= y
+            F += v * y
+            dF += m * v
+        return F, dF
+    H = ip[0]
+    ny = ip[1]
+    F = fp[0] - y
+    dF = -1.0
+    for j in range(H):
+        a = 0.0
+        for i in range(ny):
+            a += fp[1 + 2 * H + j * ny + i]
+        th = np.tanh(fp[1 + H + j] + a * y)
+        F += fp[1 + j] * th
+        dF += fp[1 + j] * a * (1.0 - th * th)
+    return F, dF
+
+
+@nb.njit(cache=True, nogil=True)
+def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, stall_rtol):  # pragma: no cover - compiled
+    """Run each pair's recursion at constant input from y0 until it settles; classify the end.
+
+    Parameters
+    ----------
+    kind : int
+        :data:`POLY` or :data:`NET` (see :func:`_step_lanes` for the layouts of ``ip`` and ``fp``).
+    ip : ndarray of int64
+        Integer description of the recursion, shared by all pairs.
+    fp : ndarray, shape (K, nf)
+        Each pair's coefficients (its input folded in).
+    y0 : ndarray, shape (K,)
+        Initial output: all L initial conditions equal it.
+    cand : ndarray, shape (K, C)
+        The pair's locally stable equilibria; the first ``ncand[k]`` of them are valid.
+    tol, ntol : ndarray, shape (K, C)
+        A pair has reached candidate c once its last L outputs all lie within ``tol`` of c; or
+        once its last L increments are all below stall_rtol · max(|y|, |y0|, floor), it lies
+        within ``ntol`` of c, and Newton's method on the static equation, started at the current
+        output, lands within ``tol`` of c (a slow approach).
+    L : int
+        Number of past outputs the recursion reads (its largest output lag, >= 1).
+    floor : float
+        Smallest output scale (0 where only ratios of outputs are meaningful).
+    max_steps : int
+        Step budget.
+    stall_rtol : float
+        Relative size of a vanishing increment.
+
+    Returns
+    -------
+    ybar : ndarray, shape (K,)
+        The candidate reached (NaN when none is).
+    status : ndarray of int8, shape (K,)
+        :data:`REACHED`, :data:`DIVERGED` (the output left 10⁶ times the pair's scale or is not
+        finite) or :data:`NOT_SETTLED` (neither within the budget: an oscillation, a limit
+        cycle, a run too slow).
+    """
+    K = y0.shape[0]
+    nf = fp.shape[1]
+    B = LANES
+    ring_n = 1
+    while ring_n < L + 1:
+        ring_n *= 2
+    mask = ring_n - 1
+    ybar = np.full(K, np.nan)
+    status = np.full(K, NOT_SETTLED, dtype=np.int8)
+    ring = np.zeros(ring_n * B)
+    Cl = np.zeros((nf, B))
+    acc = np.empty(B)
+    pair = np.full(B, -1, dtype=np.int64)
+    start = np.zeros(B, dtype=np.int64)
+    target = np.zeros(B, dtype=np.int64)  # the candidate this lane's window is measured against
+    goal = np.zeros(B)
+    dev = np.zeros(B)  # largest |y − goal| since the last check
+    inc = np.zeros(B)  # largest |y(k) − y(k−1)| since the last check
+    bound = np.zeros(B)
+    sref = np.zeros(B)
+    nxt = 0
+    active = 0
+    t = L
+    while True:
+        # fill empty lanes with the next pairs (a pair that starts on a candidate needs no run)
+        for b in range(B):
+            while pair[b] < 0 and nxt < K:
+                k = nxt
+                nxt += 1
+                yk0 = y0[k]
+                ref = max(abs(yk0), floor)
+                best = 0
+                for c_ in range(ncand[k]):
+                    ref = max(ref, abs(cand[k, c_]))
+                    if abs(yk0 - cand[k, c_]) < abs(yk0 - cand[k, best]):
+                        best = c_
+                if abs(yk0 - cand[k, best]) <= tol[k, best]:
+                    ybar[k] = cand[k, best]
+                    status[k] = REACHED
+                    continue
+                pair[b] = k
+                active += 1
+                start[b] = t
+                target[b] = best
+                goal[b] = cand[k, best]
+                dev[b] = 0.0
+                inc[b] = 0.0
+                bound[b] = 1e6 * ref
+                sref[b] = max(abs(yk0), floor)
+                for i in range(ring_n):
+                    ring[i * B + b] = yk0
+                for f in range(nf):
+                    Cl[f, b] = fp[k, f]
+        if active == 0:
+            break
+        # L steps, all lanes at once; each lane tracks its largest deviation from its goal and
+        # its largest increment over these L outputs (vectorised, no branches)
+        for _ in range(L):
+            _step_lanes(kind, ip, Cl, ring, t, mask, acc)
+            last = ((t - 1) & mask) * B
+            now = (t & mask) * B
+            for b in range(B):
+                dev[b] = max(dev[b], abs(acc[b] - goal[b]))
+                inc[b] = max(inc[b], abs(acc[b] - ring[last + b]))
+            for b in range(B):
+                ring[now + b] = acc[b]
+            t += 1
+        # check each lane on the window of its last L outputs
+        for b in range(B):
+            k = pair[b]
+            if k < 0:
+                continue
+            y = ring[((t - 1) & mask) * B + b]
+            c0 = target[b]
+            end = -1
+            if not (abs(y) <= bound[b]) or not (dev[b] < np.inf):
+                end = DIVERGED
+            elif dev[b] <= tol[k, c0]:
+                end = REACHED
+            elif inc[b] <= stall_rtol * max(abs(y), sref[b]) and abs(y - goal[b]) <= ntol[k, c0]:
+                # a slow approach: Newton on the static equation says where it is heading
+                x = y
+                for _ in range(50):
+                    F, dF = _static_residual(kind, ip, fp[k], x)
+                    if dF == 0.0 or not np.isfinite(F / dF):
+                        break
+                    x -= F / dF
+                    if abs(F / dF) <= 1e-15 * max(abs(x), floor):
+                        break
+                if abs(x - goal[b]) <= tol[k, c0]:
+                    end = REACHED
+            if end < 0 and t - start[b] >= max_steps:
+                end = NOT_SETTLED
+            if end >= 0:
+                status[k] = end
+                if end == REACHED:
+                    ybar[k] = goal[b]
+                pair[b] = -1
+                active -= 1
+                for f in range(nf):
+                    Cl[f, b] = 0.0  # an idle lane computes zeros
+                for i in range(ring_n):
+                    ring[i * B + b] = 0.0
+                goal[b] = 0.0
+                continue
+            # measure the next window against the candidate nearest the current output
+            best = 0
+            for c_ in range(ncand[k]):
+                if abs(y - cand[k, c_]) < abs(y - cand[k, best]):
+                    best = c_
+            target[b] = best
+            goal[b] = cand[k, best]
+            dev[b] = 0.0
+            inc[b] = 0.0
+    return ybar, status
