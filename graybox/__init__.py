@@ -28,6 +28,7 @@ from ._pareto import ParetoSet, nondominated_mask
 from ._se import SE_LAMBDAS, GAOptions, se_pareto
 from ._decide import Decision, decide_dsf, decide_min_correlation
 from ._neural import NeuralFit, NeuralModel, neural_narx
+from ._residuals import CorrelationTest, ResidualTests, one_step_residuals, residual_tests
 from . import datasets, plots, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
 
@@ -53,6 +54,7 @@ __all__ = [
     "decide_dsf", "decide_min_correlation", "Decision",
     "se_pareto", "GAOptions", "SE_LAMBDAS",
     "neural_narx", "NeuralModel", "NeuralFit",
+    "residual_tests", "ResidualTests", "CorrelationTest", "one_step_residuals",
     "datasets", "plots", "reference",
     "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
     "__version__",
