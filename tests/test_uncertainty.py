@@ -235,3 +235,29 @@ def test_static_band_delta_gradients_and_monte_carlo():
         gb.static_curve_band(u, ub, method="bootstrap")
     with pytest.raises(ValueError, match="ParameterUncertainty"):
         gb.static_curve_band(m, ub)
+
+
+def test_static_band_figure(tmp_path):
+    from matplotlib.figure import Figure
+
+    from graybox.plots import plot_static_band
+
+    rec = narx_records(1, 300, seed=13)[0]
+    u = gb.ls_uncertainty(gb.els(STRUCT, rec, noise=0).model, rec)
+    ub = np.linspace(800, 1600, 30)
+    band = gb.static_curve_band(u, ub)
+    pts = gb.StaticPoints(ub[::6], TRUE.static_curve(ub[::6]))
+    fig = plot_static_band(band, pts)
+    assert isinstance(fig, Figure) and len(fig.axes) == 2
+    ax = fig.axes[0]
+    (poly,) = ax.collections
+    verts = poly.get_paths()[0].vertices
+    assert verts[:, 1].min() == pytest.approx(band.ybar_low.min()) and verts[:, 1].max() == pytest.approx(band.ybar_high.max())
+    line, star = ax.lines
+    np.testing.assert_array_equal(line.get_ydata(), band.ybar)
+    assert star.get_marker() == "*"
+    assert "95% band (delta)" in [t.get_text() for t in ax.get_legend().get_texts()]
+    fig.savefig(tmp_path / "band.png", dpi=50)
+    assert len(plot_static_band(band, gain=False).axes) == 1
+    with pytest.raises(ValueError, match="StaticCurveBand"):
+        plot_static_band(u)

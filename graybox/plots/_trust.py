@@ -11,9 +11,11 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from .._records import StaticPoints
 from .._residuals import ResidualTests
+from .._uncertainty import StaticCurveBand
 
-__all__ = ["plot_residual_tests"]
+__all__ = ["plot_residual_tests", "plot_static_band"]
 
 
 def plot_residual_tests(
@@ -73,4 +75,67 @@ def plot_residual_tests(
         verdict = "all tests passed" if tests.passed else f"{len(tests.failed)} test(s) failed"
         fig.suptitle(title or f"{tests.model_name or 'model'}: residual correlation tests, N = {tests.n} ({verdict})",
                      fontsize=10)
+    return fig
+
+
+def plot_static_band(
+    band: StaticCurveBand,
+    points: StaticPoints | None = None,
+    gain: bool = True,
+    axes: Sequence[Axes] | None = None,
+    xlabel: str = "Pump speed (rpm)",
+    ylabel: str = "Pressure (mlc)",
+    gain_label: str = "static gain (mlc/rpm)",
+) -> Figure:
+    """The static curve with its confidence band (shaded) and the static points; the gain beside it.
+
+    Parameters
+    ----------
+    band : StaticCurveBand
+        From :func:`graybox.static_curve_band`.
+    points : StaticPoints, optional
+        Measured steady states, drawn as ``*`` markers.
+    gain : bool
+        Add a second panel with the static gain and its band.
+    axes : sequence of Axes, optional
+        Draw here (one Axes, or two with ``gain``); by default a new figure is made.
+    xlabel, ylabel, gain_label : str
+        Axis labels (defaults: the pumping plant's).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The curve as a line over its shaded band (with the level and method in the legend), the
+        points as asterisks; the gain panel likewise.
+    """
+    if not isinstance(band, StaticCurveBand):
+        raise ValueError(f"plot_static_band needs a StaticCurveBand, got {type(band).__name__}")
+    need = 2 if gain else 1
+    if axes is None:
+        fig = Figure(figsize=(10.0 if gain else 6.4, 4.0), layout="constrained")
+        axs = list(np.atleast_1d(fig.subplots(1, need)))
+    else:
+        axs = list(axes)
+        if len(axs) != need:
+            raise ValueError(f"plot_static_band: axes must hold {need} Axes, got {len(axs)}")
+        fig = axs[0].figure
+    what = f"{band.level:.0%} band ({band.method})"
+    name = band.model_name or "model"
+    ax = axs[0]
+    ax.fill_between(band.ubar, band.ybar_low, band.ybar_high, color="C0", alpha=0.25, lw=0, label=what)
+    ax.plot(band.ubar, band.ybar, "-", color="C0", label=f"{name} static curve")
+    if points is not None:
+        ax.plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    if gain:
+        ax = axs[1]
+        ax.fill_between(band.ubar, band.gain_low, band.gain_high, color="C1", alpha=0.25, lw=0, label=what)
+        ax.plot(band.ubar, band.gain, "-", color="C1", label=f"{name} static gain")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(gain_label)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
     return fig
