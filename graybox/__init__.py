@@ -33,6 +33,7 @@ from ._uncertainty import (
     ParameterUncertainty, StaticCurveBand, UncertaintyWarning, cls_uncertainty, ls_uncertainty, pe_uncertainty,
     se_uncertainty, static_curve_band,
 )
+from ._bootstrap import BootstrapJob, DecisionBootstrap, block_resample, bootstrap_decision
 from . import datasets, plots, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
 
@@ -61,6 +62,7 @@ __all__ = [
     "residual_tests", "ResidualTests", "CorrelationTest", "one_step_residuals",
     "ls_uncertainty", "cls_uncertainty", "pe_uncertainty", "se_uncertainty", "ParameterUncertainty",
     "UncertaintyWarning", "static_curve_band", "StaticCurveBand",
+    "bootstrap_decision", "DecisionBootstrap", "BootstrapJob", "block_resample",
     "datasets", "plots", "reference",
     "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
     "__version__",

@@ -11,11 +11,12 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from .._bootstrap import DecisionBootstrap
 from .._records import StaticPoints
 from .._residuals import ResidualTests
 from .._uncertainty import StaticCurveBand
 
-__all__ = ["plot_residual_tests", "plot_static_band"]
+__all__ = ["plot_residual_tests", "plot_static_band", "plot_decision_bootstrap"]
 
 
 def plot_residual_tests(
@@ -138,4 +139,73 @@ def plot_static_band(
         ax.set_ylabel(gain_label)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="best")
+    return fig
+
+
+def plot_decision_bootstrap(
+    boot: DecisionBootstrap,
+    axes: Sequence[Axes] | None = None,
+    xlabel: str = "J_S (mlc²)",
+    ylabel: str = "J_SF (mlc²)",
+) -> Figure:
+    """How often each λ1 was chosen, and where the chosen members lie in (J_S, J_SF).
+
+    Parameters
+    ----------
+    boot : DecisionBootstrap
+        From :func:`graybox.bootstrap_decision`.
+    axes : pair of Axes, optional
+        Draw here; by default a new 10 × 4 in figure with two panels is made.
+    xlabel, ylabel : str
+        Labels of the right panel (defaults: the pumping plant's units).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: the fraction of replicates choosing each λ1 (log axis), the reference decision's
+        λ1 dashed. Right: each replicate's chosen member (J_S, J_SF) on log axes, D_SF's band
+        shaded, the reference decision as a star; failed replicates are counted in the title.
+    """
+    if not isinstance(boot, DecisionBootstrap):
+        raise ValueError(f"plot_decision_bootstrap needs a DecisionBootstrap, got {type(boot).__name__}")
+    if axes is None:
+        fig = Figure(figsize=(10.0, 4.0), layout="constrained")
+        ax_l, ax_r = fig.subplots(1, 2)
+    else:
+        if len(axes) != 2:
+            raise ValueError(f"plot_decision_bootstrap: axes must be a pair, got {len(axes)}")
+        ax_l, ax_r = axes
+        fig = ax_l.figure
+    freq = boot.frequencies()
+    lam = freq.index.to_numpy(float)
+    ax_l.vlines(lam, 0.0, freq["fraction"], color="C0", lw=3)
+    ax_l.plot(lam, freq["fraction"], "o", color="C0", ms=4)
+    ref = boot.reference.get("lambda1")
+    if ref is not None:
+        ax_l.axvline(ref, color="k", ls="--", lw=1, label=f"original data: λ1 = {ref:.3g}")
+        ax_l.legend(fontsize=8, loc="best")
+    ax_l.set_xscale("log")
+    lo, hi = float(np.min(boot.lambdas)), float(np.max(boot.lambdas))
+    ax_l.set_xlim(lo / 1.5, hi * 1.5)
+    ax_l.set_ylim(0, 1.05)
+    ax_l.set_xlabel("λ1 chosen by D_SF")
+    ax_l.set_ylabel("fraction of replicates")
+    ax_l.grid(True, which="both", alpha=0.3)
+    ok = boot.ok & np.isfinite(boot.JS) & np.isfinite(boot.JSF) & (boot.JS > 0) & (boot.JSF > 0)
+    ax_r.plot(boot.JS[ok], boot.JSF[ok], "o", ms=4, alpha=0.6, color="C0", label=f"replicates ({int(ok.sum())})")
+    if "JS" in boot.reference and boot.reference["JS"] > 0 and boot.reference["JSF"] > 0:
+        ax_r.plot([boot.reference["JS"]], [boot.reference["JSF"]], "*", ms=14, mec="k", color="C1",
+                  label="original data", zorder=5)
+    ax_r.set_xscale("log")
+    ax_r.set_yscale("log")
+    band_hi = boot.band if np.ndim(boot.band) == 0 else boot.band[1]
+    ylo, yhi = ax_r.get_ylim()
+    ax_r.axhspan(ylo, band_hi, color="0.85", zorder=0, label=f"B = [0, {band_hi:g}]")
+    ax_r.set_ylim(ylo, max(yhi, band_hi))
+    ax_r.set_xlabel(xlabel)
+    ax_r.set_ylabel(ylabel)
+    ax_r.grid(True, which="both", alpha=0.3)
+    ax_r.legend(fontsize=8, loc="best")
+    failed = f", {len(boot.failures)} failed" if boot.failures else ""
+    ax_r.set_title(f"{boot.method.upper()} + D_SF, {boot.n_replicates} replicates{failed}", fontsize=9)
     return fig
