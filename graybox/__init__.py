@@ -34,6 +34,7 @@ from ._uncertainty import (
     se_uncertainty, static_curve_band,
 )
 from ._bootstrap import BootstrapJob, DecisionBootstrap, block_resample, bootstrap_decision
+from ._io import FORMAT_VERSION, GrayboxFileError, from_json, load, read_header, save, to_json
 from . import datasets, plots, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
 
@@ -63,6 +64,7 @@ __all__ = [
     "ls_uncertainty", "cls_uncertainty", "pe_uncertainty", "se_uncertainty", "ParameterUncertainty",
     "UncertaintyWarning", "static_curve_band", "StaticCurveBand",
     "bootstrap_decision", "DecisionBootstrap", "BootstrapJob", "block_resample",
+    "save", "load", "to_json", "from_json", "read_header", "GrayboxFileError", "FORMAT_VERSION",
     "datasets", "plots", "reference",
     "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
     "__version__",
