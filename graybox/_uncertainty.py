@@ -42,8 +42,8 @@ from typing import Iterable, Sequence
 
 import numpy as np
 import pandas as pd
-import scipy.linalg
 from scipy import stats
+from threadpoolctl import ThreadpoolController
 
 from ._constraints import StaticConstraint, static_rows
 from ._convex import _cls_setup, _dynamic, _pe_setup, _process_structure
@@ -211,23 +211,38 @@ def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
     return Vt[r:].T, r
 
 
-def _sandwich(Z: np.ndarray, H: np.ndarray, M: np.ndarray, what: str) -> np.ndarray:
-    """Z (ZᵀHZ)⁻¹ ZᵀMZ (ZᵀHZ)⁻¹ Zᵀ, or ValueError when ZᵀHZ is singular (not identifiable)."""
-    n = H.shape[0]
+_CONTROLLER: list[ThreadpoolController] = []
+
+
+def _blas() -> ThreadpoolController:
+    """One controller for the process (building one scans the loaded libraries: 0.5 ms; limiting with it: 8 µs)."""
+    if not _CONTROLLER:
+        _CONTROLLER.append(ThreadpoolController())
+    return _CONTROLLER[0]
+
+
+def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> np.ndarray:
+    """Z (ZᵀHZ)⁻¹ ZᵀMZ (ZᵀHZ)⁻¹ Zᵀ with H = AᵀA and M = GᵀG, from the factors (never forming H).
+
+    With AZ = U S Vᵀ the result is WᵀW, W = (GZV S⁻²)(ZV)ᵀ: positive semidefinite by construction,
+    and accurate to about eps·cond(AZ) where forming H would lose eps·cond(AZ)² (an SE Jacobian of
+    a slow plant has cond ≈ 1e9). ValueError when AZ is rank deficient (not identifiable).
+    """
+    n = A.shape[1]
     if Z.shape[1] == 0:
         return np.zeros((n, n))
-    Hr = Z.T @ H @ Z
-    try:
-        c = scipy.linalg.cho_factor(Hr, lower=False, check_finite=True)
-        d = np.abs(np.diag(c[0]))
-        if d.min() <= 1e-7 * d.max():
-            raise np.linalg.LinAlgError
-    except (np.linalg.LinAlgError, ValueError):
-        raise ValueError(f"{what}: the parameters are not identifiable from these data and constraints "
-                         "(singular information matrix), so they have no finite covariance") from None
-    K = scipy.linalg.cho_solve(c, Z.T)  # (ZᵀHZ)⁻¹ Zᵀ
-    C = K.T @ (Z.T @ M @ Z) @ K
-    return (C + C.T) / 2
+    AZ = A @ Z
+    if not (np.all(np.isfinite(AZ)) and np.all(np.isfinite(G))):
+        raise ValueError(f"{what}: non-finite derivatives; the covariance is undefined here")
+    # one BLAS thread: the SVD of a thin 3200 × 19 matrix took 440 ms threaded on a loaded 2-core machine, 4 ms not
+    with _blas().limit(limits=1, user_api="blas"):
+        _, S, Vt = np.linalg.svd(AZ, full_matrices=False)
+        if S.size < Z.shape[1] or S[0] == 0 or S[-1] <= 1e-12 * S[0]:
+            raise ValueError(f"{what}: the parameters are not identifiable from these data and constraints "
+                             "(singular information matrix), so they have no finite covariance")
+        ZV = Z @ Vt.T
+        W = ((G @ ZV) / S**2) @ ZV.T
+        return W.T @ W
 
 
 def _to_theta(cov_z: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -354,12 +369,11 @@ def ls_uncertainty(
     s = np.where(s > 0, s, 1.0)
     A = phi / s
     res = y - phi @ theta_all
-    H = A.T @ A
     dof = N - n - ne
     sigma2 = float(res @ res) / dof
-    cov = _to_theta(_sandwich(np.eye(n + ne), H, sigma2 * H, what), s)
+    cov = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what), s)
     if ne == 0:
-        _check_stationary(np.eye(n), A.T @ res, _size(H @ (theta_all * s), A.T @ y), what,
+        _check_stationary(np.eye(n), A.T @ res, _size(A.T @ (A @ (theta_all * s)), A.T @ y), what,
                           "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty)")
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
                                 cov[n:, n:])
@@ -423,13 +437,12 @@ def cls_uncertainty(
     n = len(st)
     Z, r = _null_space(A / d.s, n)
     z = model.theta * d.s
-    H = d.R1.T @ d.R1
     dof = d.N - (n - r)
     rss = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss)
     sigma2 = rss / dof
-    cov = _to_theta(_sandwich(Z, H, sigma2 * H, "cls_uncertainty"), d.s)
+    cov = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty"), d.s)
     grad = d.R1.T @ (d.R1 @ z - d.c1)
-    _check_stationary(Z, grad, _size(H @ z, d.R1.T @ d.c1), "cls_uncertainty",
+    _check_stationary(Z, grad, _size(d.R1.T @ (d.R1 @ z), d.R1.T @ d.c1), "cls_uncertainty",
                       "pass the CLS estimate with the data, static information and constraints it was estimated with")
     return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)))
 
@@ -504,10 +517,8 @@ def pe_uncertainty(
     if np.any(np.abs(g) < 1e-12):
         raise ValueError("pe_uncertainty: the static equation does not depend on ȳ at some static point "
                          "(its denominator vanishes): the member's static function is undefined there")
-    H1 = d.R1.T @ d.R1
-    H = w1 * H1 + w2 * (QR.T @ QR)
     grad = w1 * (d.R1.T @ (d.R1 @ z - d.c1)) + w2 * (QR.T @ sres)
-    size = _size(w1 * (H1 @ z), w1 * (d.R1.T @ d.c1), w2 * (QR.T @ (QR @ z)), w2 * (QR.T @ pts.ybar))
+    size = _size(w1 * (d.R1.T @ (d.R1 @ z)), w1 * (d.R1.T @ d.c1), w2 * (QR.T @ (QR @ z)), w2 * (QR.T @ pts.ybar))
     _check_stationary(Z, grad, size, "pe_uncertainty", f"pass the member's own λ1 (got {lam:g}) and the data, static "
                       "points and constraints of its estimate")
     dof_ls = d.N - n
@@ -515,8 +526,9 @@ def pe_uncertainty(
     ss2 = (check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2 if static_sigma is not None
            else float(np.mean((sres / g) ** 2)))
     B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
-    Mt = w1**2 * sigma2 * H1 + w2**2 * ss2 * (B.T @ B)
-    cov = _to_theta(_sandwich(Z, H, Mt, "pe_uncertainty"), d.s)
+    A2 = np.vstack([np.sqrt(w1) * d.R1, np.sqrt(w2) * QR])  # H = A2ᵀA2
+    G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
+    cov = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty"), d.s)
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2)
 
 
@@ -594,16 +606,15 @@ def se_uncertainty(
                else float(np.mean((rs / w2) ** 2)))
     else:
         ss2 = float("nan")
-    H = J.T @ J
-    # J holds the weighted residuals' derivatives (w ∂e/∂z): the gradient Jᵀr = Σ_b w_b² Ĵ_bᵀe_b has covariance
-    # Σ_b w_b⁴ σ_b² Ĵ_bᵀĴ_b = Σ_b w_b² σ_b² J_bᵀJ_b
-    Mt = w1**2 * sigma2 * (Jd.T @ Jd) + (w2**2 * ss2 * (Js.T @ Js) if lam < 1 else 0.0)
+    # J holds the weighted residuals' derivatives (w ∂e/∂z): H = JᵀJ, and the gradient Jᵀr = Σ_b w_b² Ĵ_bᵀe_b
+    # has covariance Σ_b w_b⁴ σ_b² Ĵ_bᵀĴ_b = Σ_b w_b² σ_b² J_bᵀJ_b
+    G = w1 * np.sqrt(sigma2) * Jd if lam == 1 else np.vstack([w1 * np.sqrt(sigma2) * Jd, w2 * np.sqrt(ss2) * Js])
     g = np.linalg.norm(J.T @ r)
     rel = g / max(float(np.linalg.norm(J, 2) * np.linalg.norm(r)), 1e-300)
     if rel > 1e-3:
         warn(f"se_uncertainty: θ is not a stationary point of the SE objective at λ1 = {lam:g} (relative gradient "
              f"{rel:.1e}); the intervals describe the curvature at this θ, not at an optimum", UncertaintyWarning)
-    cov = _to_theta(_sandwich(np.eye(n), H, Mt, "se_uncertainty"), problem.scale)
+    cov = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty"), problem.scale)
     return ParameterUncertainty(m, cov, level, nd - n, sigma2, f"SE λ1={lam:.4g}", np.zeros((0, n)),
                                 np.zeros((0, 0)), ss2)
 
