@@ -347,7 +347,8 @@ def bootstrap_decision(
         depend on where replicates run.
     options : mapping, optional
         Keyword options of the sweep (e.g. ``{"solver": "closed"}`` for PE,
-        ``{"method": "gradient", "max_nfev": 20}`` for SE).
+        ``{"method": "gradient", "max_nfev": 20}`` for SE). The SE GA's own ``seed`` (default 0) is
+        the same in every replicate: replicates differ by their data only.
     map : callable, optional
         ``map(job, range(B))`` returning results in order: ``None`` runs in this process; pass an
         executor's ``.map`` or a Dask wrapper to run elsewhere (see the module docstring).

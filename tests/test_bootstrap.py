@@ -40,15 +40,15 @@ def test_blocks_are_slices_of_one_record(lengths, b, seed):
     if max(lengths) < b:
         with pytest.raises(ValueError, match="no record has"):
             gb.block_resample(recs, b, np.random.default_rng(seed))
-        return
-    blocks = gb.block_resample(recs, b, np.random.default_rng(seed))
-    assert len(blocks) == max(1, round(sum(lengths) / b))
-    for blk in blocks:
-        assert len(blk) == b
-        i, s = int(blk.u[0] // 1000), int(blk.u[0] % 1000)
-        np.testing.assert_array_equal(blk.u, np.arange(s, s + b) + 1000.0 * i)  # contiguous, one record
-        np.testing.assert_array_equal(blk.y, -blk.u)
-        assert blk.name == f"r{i}[{s}:{s + b}]"
+    else:
+        blocks = gb.block_resample(recs, b, np.random.default_rng(seed))
+        assert len(blocks) == max(1, round(sum(lengths) / b))
+        for blk in blocks:
+            assert len(blk) == b
+            i, s = int(blk.u[0] // 1000), int(blk.u[0] % 1000)
+            np.testing.assert_array_equal(blk.u, np.arange(s, s + b) + 1000.0 * i)  # contiguous, one record
+            np.testing.assert_array_equal(blk.y, -blk.u)
+            assert blk.name == f"r{i}[{s}:{s + b}]"
 
 
 def test_replicates_match_a_direct_rerun(data):
