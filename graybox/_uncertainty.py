@@ -215,7 +215,7 @@ _CONTROLLER: list[ThreadpoolController] = []
 
 
 def _blas() -> ThreadpoolController:
-    """One controller for the process (building one scans the loaded libraries: 0.5 ms; limiting with it: 8 µs)."""
+    """One controller for the process: building one scans the loaded libraries, limiting with it is cheap."""
     if not _CONTROLLER:
         _CONTROLLER.append(ThreadpoolController())
     return _CONTROLLER[0]
@@ -226,7 +226,7 @@ def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> np.ndar
 
     With AZ = U S Vᵀ the result is WᵀW, W = (GZV S⁻²)(ZV)ᵀ: positive semidefinite by construction,
     and accurate to about eps·cond(AZ) where forming H would lose eps·cond(AZ)² (an SE Jacobian of
-    a slow plant has cond ≈ 1e9). ValueError when AZ is rank deficient (not identifiable).
+    a slow plant can have cond ≈ 1e9). ValueError when AZ is rank deficient (not identifiable).
     """
     n = A.shape[1]
     if Z.shape[1] == 0:
@@ -234,7 +234,7 @@ def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> np.ndar
     AZ = A @ Z
     if not (np.all(np.isfinite(AZ)) and np.all(np.isfinite(G))):
         raise ValueError(f"{what}: non-finite derivatives; the covariance is undefined here")
-    # one BLAS thread: the SVD of a thin 3200 × 19 matrix took 440 ms threaded on a loaded 2-core machine, 4 ms not
+    # one BLAS thread: a threaded SVD of a thin matrix mostly waits for threads on a busy machine (BENCHMARKS.md)
     with _blas().limit(limits=1, user_api="blas"):
         _, S, Vt = np.linalg.svd(AZ, full_matrices=False)
         if S.size < Z.shape[1] or S[0] == 0 or S[-1] <= 1e-12 * S[0]:
