@@ -31,6 +31,11 @@ is checked by Monte Carlo in the tests); the SE intervals assume white output er
 coloured simulation errors (equation noise) they are optimistic. A PE or SE member is a biased
 estimate of the true θ by design (it trades dynamic fit for static fit): its interval says how
 much the *member* would move with another noise realisation, not where the true θ lies.
+Towards small λ1 a PE member of a rational structure leans on static points that nearly leave one
+direction free (numerator and denominator of eq. (6) scaled together; the measured ȳ sits on both
+sides of eq. (12)): θ̂ is then far from linear in the noise and the first-order covariance is off
+(in the tests' Monte Carlo it matches at λ1 = 0.5 and 0.1, and overstates the spread by ~20 % at
+λ1 = 0.01): use :func:`graybox.bootstrap_decision` or a Monte Carlo there.
 Intervals use Student's t with the residual degrees of freedom.
 """
 
@@ -490,6 +495,7 @@ def pe_uncertainty(
     -------
     ParameterUncertainty
         ``sigma2``: the dynamic noise variance (least squares on the data); ``static_sigma2``: σ_SF².
+        First order: unreliable towards small λ1 (see the module docstring).
 
     Raises
     ------
