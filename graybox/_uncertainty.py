@@ -34,7 +34,7 @@ much the *member* would move with another noise realisation, not where the true 
 Towards small λ1 a PE member of a rational structure leans on static points that nearly leave one
 direction free (numerator and denominator of eq. (6) scaled together; the measured ȳ sits on both
 sides of eq. (12)): θ̂ is then far from linear in the noise and the first-order covariance is off
-(in the tests' Monte Carlo it matches at λ1 = 0.5 and 0.1, and overstates the spread by ~20 % at
+(in a Monte Carlo like the tests' it matched at λ1 = 0.5 and 0.1 and overstated the spread by up to 20 % at
 λ1 = 0.01): use :func:`graybox.bootstrap_decision` or a Monte Carlo there.
 Intervals use Student's t with the residual degrees of freedom.
 """
