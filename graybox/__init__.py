@@ -29,6 +29,13 @@ from ._pareto import ParetoSet, nondominated_mask
 from ._se import SE_LAMBDAS, GAOptions, se_pareto
 from ._decide import Decision, decide_dsf, decide_min_correlation
 from ._neural import NeuralFit, NeuralModel, neural_narx
+from ._residuals import CorrelationTest, ResidualTests, one_step_residuals, residual_tests
+from ._uncertainty import (
+    ParameterUncertainty, StaticCurveBand, UncertaintyWarning, cls_uncertainty, ls_uncertainty, pe_uncertainty,
+    se_uncertainty, static_curve_band,
+)
+from ._bootstrap import BootstrapJob, DecisionBootstrap, block_resample, bootstrap_decision
+from ._io import FORMAT_VERSION, GrayboxFileError, from_json, load, read_header, save, to_json
 from . import datasets, plots, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
 
@@ -54,6 +61,11 @@ __all__ = [
     "decide_dsf", "decide_min_correlation", "Decision",
     "se_pareto", "GAOptions", "SE_LAMBDAS",
     "neural_narx", "NeuralModel", "NeuralFit",
+    "residual_tests", "ResidualTests", "CorrelationTest", "one_step_residuals",
+    "ls_uncertainty", "cls_uncertainty", "pe_uncertainty", "se_uncertainty", "ParameterUncertainty",
+    "UncertaintyWarning", "static_curve_band", "StaticCurveBand",
+    "bootstrap_decision", "DecisionBootstrap", "BootstrapJob", "block_resample",
+    "save", "load", "to_json", "from_json", "read_header", "GrayboxFileError", "FORMAT_VERSION",
     "datasets", "plots", "reference",
     "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
     "__version__",

@@ -580,6 +580,22 @@ def cls(
     solver = _check_solver(solver)
     recs = as_records(data)
     d = _dynamic(st, recs)
+    cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
+    _warn_static_range(cons, ctx, curve, recs)
+    rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
+    if solver == "closed":
+        z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
+    else:
+        z = _QP(d, None, cons, ctx, solver, solver_options).solve(1.0, 0.0)
+    theta = z / d.s
+    for c in cons:
+        c.after_solve(theta, ctx)
+    return Model(st, theta, name=name)
+
+
+def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: str, reference,
+               constraints) -> tuple[list[StaticConstraint], StaticContext, StaticCurve | None]:
+    """The constraints and context of a CLS problem (shared by :func:`cls` and the covariance of its estimate)."""
     cm = cluster_map(st)
     static_cons: list[StaticConstraint] = []
     points: StaticPoints | None = None
@@ -608,16 +624,7 @@ def cls(
     cons = static_cons + as_constraint_list(constraints)
     ctx_points = points if points is not None else (data.static if isinstance(data, Dataset) else None)
     ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference))
-    _warn_static_range(cons, ctx, curve, recs)
-    rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
-    if solver == "closed":
-        z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
-    else:
-        z = _QP(d, None, cons, ctx, solver, solver_options).solve(1.0, 0.0)
-    theta = z / d.s
-    for c in cons:
-        c.after_solve(theta, ctx)
-    return Model(st, theta, name=name)
+    return cons, ctx, curve
 
 
 # --------------------------------------------------------------------------------------------

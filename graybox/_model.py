@@ -8,6 +8,7 @@ from typing import Literal
 import numpy as np
 
 from . import _simulation, _static
+from ._latex import latex_equation
 from ._records import Record
 from ._validation import check_theta, frozen
 from ._terms import Structure
@@ -117,6 +118,14 @@ class Model:
         for th, t in zip(self.noise_theta, self.noise_structure):
             parts.append(f" {'-' if th < 0 else '+'} {abs(th):.{digits}g} {t}")
         return "y(k) = " + ("".join(parts) if parts else "0") + (" + e(k)" if len(self.noise_structure) else "")
+
+    def to_latex(self, digits: int = 4, terms_per_line: int | None = None) -> str:
+        """The equation in LaTeX math (no ``$`` delimiters), the MA part written with ξ as in the paper.
+
+        ``terms_per_line`` breaks a long model into an ``aligned`` block (put it inside
+        ``\\begin{equation}`` … ``\\end{equation}``).
+        """
+        return latex_equation(self.structure, self.theta, self.noise_structure, self.noise_theta, digits, terms_per_line)
 
     def __str__(self) -> str:
         head = f"{self.name}: " if self.name else ""

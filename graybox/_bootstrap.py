@@ -1,0 +1,426 @@
+"""Robustness of a decision: a block bootstrap of the identification records that reruns a sweep and D_SF.
+
+D_SF (eq. (14)) picks one member of a Pareto set. Would it pick the same member from another
+record of the same plant? :func:`bootstrap_decision` answers by resampling: each replicate draws
+blocks of the identification record(s) (a moving-block bootstrap, which keeps the dynamics inside
+each block), reruns the PE or SE sweep on them, applies D_SF, and records the chosen λ1 and that
+member's J_S and J_SF.
+
+Blocks as records
+-----------------
+The blocks of a replicate are *separate records*, not glued together: graybox's regressors and free
+runs never straddle two records, so a replicate has no artificial jumps at the seams, and each
+block's free run starts from its own first measured samples (as every record's does). Blocks are
+drawn from every record of the data (every start position equally likely) until the replicate has
+about as many samples as the original.
+
+The static points are kept as measured, or, with ``static_sigma``, perturbed by Gaussian noise of
+that standard deviation in each replicate (a parametric bootstrap of the transmitter's error).
+
+Running replicates elsewhere
+----------------------------
+Replicates are independent jobs: replicate ``i`` draws from ``numpy.random.default_rng([seed, i])``,
+so the result does not depend on where or in which order they run. ``map`` is any callable with
+the signature of the built-in ``map`` that returns the results in order:
+
+- ``map=None``: in this process, one after the other (with a progress bar on a terminal);
+- ``concurrent.futures.ProcessPoolExecutor().map``: local processes;
+- with Dask, ``lambda f, xs: client.gather(client.map(f, list(xs)))``.
+
+The job object (:class:`BootstrapJob`) is a frozen dataclass of plain values and records, so it
+pickles for processes and Dask workers alike (these are graybox's own objects in transit, never a
+user's file). A replicate that fails (no member in the band without a fallback, a sweep with no
+finite member, …) is kept with its reason and the bootstrap goes on.
+"""
+
+from __future__ import annotations
+
+import inspect
+import warnings
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Callable, Iterable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from ._convex import PE_LAMBDAS, pe_pareto
+from ._decide import FALLBACKS, decide_dsf
+from ._progress import progress_bar
+from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ._se import SE_LAMBDAS, se_pareto
+from ._terms import Structure
+from ._validation import check_choice, check_int, check_lambdas, check_real, check_seed, frozen
+
+__all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
+
+METHODS = ("pe", "se")
+
+
+def block_resample(
+    records: Sequence[Record],
+    block_length: int,
+    rng: np.random.Generator,
+) -> list[Record]:
+    """One moving-block bootstrap replicate: blocks of ``block_length`` samples, each a Record.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The original records; a block lies inside one record.
+    block_length : int
+        Samples per block.
+    rng : numpy.random.Generator
+        Source of the block starts.
+
+    Returns
+    -------
+    list of Record
+        round(Σ N_r / block_length) blocks (at least one), each named after its record and range.
+    """
+    starts = [(i, s) for i, r in enumerate(records) for s in range(len(r) - block_length + 1)]
+    if not starts:
+        raise ValueError(f"no record has {block_length} samples: use a shorter block_length")
+    total = sum(len(r) for r in records)
+    count = max(1, int(round(total / block_length)))
+    pick = rng.integers(0, len(starts), size=count)
+    out = []
+    for j in pick:
+        i, s = starts[int(j)]
+        r = records[i]
+        out.append(r.slice(s, s + block_length, name=f"{r.name}[{s}:{s + block_length}]"))
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class BootstrapJob:
+    """One bootstrap's settings; calling it with a replicate index runs that replicate.
+
+    ``job(-1)`` runs the sweep and D_SF on the original data (the reference decision);
+    ``job(i)`` for i >= 0 on replicate i. Returns a dict of plain values (picklable):
+    ``lambda1, index, JS, JSF, in_band, rule, theta`` or ``failure`` (the reason, in words).
+
+    Attributes
+    ----------
+    structure : Structure
+    records : tuple of Record
+    static : StaticPoints
+    method : str
+        ``"pe"`` or ``"se"``.
+    lambdas : ndarray
+        λ1 values of the sweep.
+    band : float or (float, float)
+        D_SF's band B.
+    fallback : str or None
+        As for :func:`graybox.decide_dsf`.
+    block_length : int
+    seed : int
+    static_sigma : float or None
+    options : mapping
+        Keyword options of :func:`graybox.pe_pareto` or :func:`graybox.se_pareto`.
+    """
+
+    structure: Structure
+    records: tuple[Record, ...]
+    static: StaticPoints
+    method: str
+    lambdas: np.ndarray
+    band: float | tuple[float, float]
+    fallback: str | None
+    block_length: int
+    seed: int
+    static_sigma: float | None
+    options: Mapping = field(default_factory=dict)
+
+    def data(self, i: int) -> tuple[list[Record], StaticPoints]:
+        """The records and static points of replicate ``i`` (the original ones for i = −1)."""
+        if i < 0:
+            return list(self.records), self.static
+        rng = np.random.default_rng([self.seed, i])
+        recs = block_resample(self.records, self.block_length, rng)
+        sp = self.static
+        if self.static_sigma is not None:
+            sp = StaticPoints(sp.ubar, sp.ybar + self.static_sigma * rng.standard_normal(len(sp)), name=sp.name)
+        return recs, sp
+
+    def __call__(self, i: int) -> dict:
+        try:
+            recs, sp = self.data(int(i))
+            with warnings.catch_warnings():
+                # said once by bootstrap_decision; block records cover a narrower input range than the whole
+                warnings.simplefilter("ignore", StaticRangeWarning)
+                if self.method == "pe":
+                    front = pe_pareto(self.structure, recs, sp, self.lambdas, **dict(self.options))
+                else:
+                    front = se_pareto(self.structure, recs, sp, self.lambdas, progress=False, **dict(self.options))
+            d = decide_dsf(front, band=self.band, fallback=self.fallback)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:  # InfeasibleError, DivergenceError are ValueErrors
+            return {"failure": f"{type(exc).__name__}: {exc}"}
+        return {"lambda1": d.lambda1, "index": d.index, "JS": d.JS, "JSF": d.JSF, "in_band": d.in_band,
+                "rule": d.rule, "theta": [float(v) for v in d.model.theta]}
+
+
+@dataclass(frozen=True, eq=False)
+class DecisionBootstrap:
+    """The result of :func:`bootstrap_decision`.
+
+    Attributes
+    ----------
+    structure : Structure
+    method : str
+        ``"pe"`` or ``"se"`` (with the estimator options in :attr:`options`).
+    lambdas : ndarray, shape (K,)
+        The sweep's λ1 values.
+    band : float or (float, float)
+        D_SF's band.
+    block_length, n_blocks : int
+        Samples per block and blocks per replicate.
+    seed : int
+    lambda1 : ndarray, shape (B,)
+        λ1 chosen in each replicate (NaN where it failed).
+    JS, JSF : ndarray, shape (B,)
+        The chosen member's J_S and J_SF on its replicate's data (NaN where it failed).
+    in_band : ndarray of bool, shape (B,)
+        Whether the chosen member's J_SF lies in B (False for a fallback choice or a failure).
+    thetas : ndarray, shape (B, n_terms)
+        The chosen members' θ (NaN rows where it failed).
+    rules : tuple of str
+        The decision rule of each replicate (``"D_SF"``, ``"min J_SF"``, or ``""`` where it failed).
+    reference : mapping
+        The decision on the original data (``lambda1``, ``JS``, ``JSF``, ``in_band``, ``rule``,
+        ``theta``), or ``{"failure": reason}``.
+    failures : mapping int -> str
+        Replicates that failed, with the reason.
+    options : mapping
+        The estimator options used.
+    static_sigma : float or None
+    """
+
+    structure: Structure
+    method: str
+    lambdas: np.ndarray
+    band: float | tuple[float, float]
+    block_length: int
+    n_blocks: int
+    seed: int
+    lambda1: np.ndarray
+    JS: np.ndarray
+    JSF: np.ndarray
+    in_band: np.ndarray
+    thetas: np.ndarray
+    rules: tuple[str, ...]
+    reference: Mapping
+    failures: Mapping[int, str]
+    options: Mapping = field(default_factory=dict)
+    static_sigma: float | None = None
+
+    def __post_init__(self) -> None:
+        B = np.shape(self.lambda1)[0]
+        for f in ("lambdas", "lambda1", "JS", "JSF"):
+            object.__setattr__(self, f, frozen(getattr(self, f)))
+        object.__setattr__(self, "in_band", frozen(self.in_band, bool))
+        th = frozen(np.reshape(self.thetas, (B, len(self.structure))))
+        object.__setattr__(self, "thetas", th)
+        for f in ("JS", "JSF", "in_band"):
+            if getattr(self, f).shape != (B,):
+                raise ValueError(f"{f} must have shape ({B},), got {getattr(self, f).shape}")
+        if len(self.rules) != B:
+            raise ValueError(f"rules must have {B} entries, got {len(self.rules)}")
+        object.__setattr__(self, "rules", tuple(self.rules))
+        object.__setattr__(self, "reference", MappingProxyType(dict(self.reference)))
+        object.__setattr__(self, "failures", MappingProxyType({int(k): str(v) for k, v in dict(self.failures).items()}))
+        object.__setattr__(self, "options", MappingProxyType(dict(self.options)))
+
+    @property
+    def n_replicates(self) -> int:
+        """B, replicates run (failed ones included)."""
+        return int(self.lambda1.size)
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Replicates that produced a decision, shape (B,) bool."""
+        return np.isfinite(self.lambda1)
+
+    @property
+    def agreement(self) -> float:
+        """Fraction of the successful replicates that chose the reference λ1 (NaN without one)."""
+        ref = self.reference.get("lambda1")
+        if ref is None or not self.ok.any():
+            return float("nan")
+        return float(np.mean(self.lambda1[self.ok] == ref))
+
+    def frequencies(self) -> pd.DataFrame:
+        """How often each λ1 was chosen: ``count`` and ``fraction`` of the successful replicates, by λ1.
+
+        The reference decision's λ1 is listed (``reference`` True) even when no replicate chose it.
+        """
+        lam = self.lambda1[self.ok]
+        vals, counts = np.unique(lam, return_counts=True)
+        ref = self.reference.get("lambda1")
+        if ref is not None and ref not in vals:  # the reference's λ1 is listed even if no replicate chose it
+            vals, counts = np.append(vals, ref), np.append(counts, 0)
+            order = np.argsort(vals)
+            vals, counts = vals[order], counts[order]
+        df = pd.DataFrame({"count": counts, "fraction": counts / max(lam.size, 1)}, index=pd.Index(vals, name="lambda1"))
+        df["reference"] = df.index == ref if ref is not None else False
+        return df
+
+    def summary(self) -> pd.DataFrame:
+        """The spread of the chosen member's J_S and J_SF: reference, median, 5 % and 95 % quantiles, std."""
+        rows = {}
+        for name in ("JS", "JSF"):
+            v = getattr(self, name)[self.ok]
+            v = v[np.isfinite(v)]
+            q = np.quantile(v, [0.05, 0.5, 0.95]) if v.size else [np.nan] * 3
+            rows[name] = {"reference": self.reference.get(name, np.nan), "median": q[1], "q05": q[0], "q95": q[2],
+                          "std": float(np.std(v)) if v.size else np.nan}
+        rows_df = pd.DataFrame.from_dict(rows, orient="index")
+        rows_df["in band"] = float(np.mean(self.in_band[self.ok])) if self.ok.any() else np.nan
+        return rows_df
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per replicate: λ1, J_S, J_SF, in band, rule, failure."""
+        return pd.DataFrame({"lambda1": self.lambda1, "JS": self.JS, "JSF": self.JSF, "in band": self.in_band,
+                             "rule": self.rules, "failure": [self.failures.get(i, "") for i in range(self.n_replicates)]},
+                            index=pd.RangeIndex(self.n_replicates, name="replicate"))
+
+    def __repr__(self) -> str:
+        return (f"DecisionBootstrap({self.method.upper()}, replicates={self.n_replicates}, failed={len(self.failures)}, "
+                f"blocks={self.n_blocks} × {self.block_length}, agreement={self.agreement:.2f})")
+
+
+def _estimator_options(method: str, options: Mapping | None) -> dict:
+    opts = dict(options or {})
+    fn = pe_pareto if method == "pe" else se_pareto
+    allowed = [p.name for p in inspect.signature(fn).parameters.values() if p.kind == p.KEYWORD_ONLY]
+    taken = {"progress", "checkpoint"} if method == "se" else set()
+    bad = [k for k in opts if k not in allowed or k in taken]
+    if bad:
+        raise ValueError(f"options {bad} are not keyword options of {fn.__name__} the bootstrap can pass "
+                         f"(allowed: {sorted(set(allowed) - taken)})")
+    return opts
+
+
+def bootstrap_decision(
+    structure: Structure,
+    data: Record | Sequence[Record] | Dataset,
+    static: StaticPoints | None = None,
+    *,
+    method: str = "pe",
+    lambdas: Sequence[float] | np.ndarray | None = None,
+    n_boot: int = 50,
+    block_length: int | None = None,
+    band: float | tuple[float, float] = 0.031,
+    fallback: str | None = None,
+    static_sigma: float | None = None,
+    seed: int = 0,
+    options: Mapping | None = None,
+    map: Callable[[Callable[[int], dict], Iterable[int]], Iterable[dict]] | None = None,
+    progress: bool | None = None,
+) -> DecisionBootstrap:
+    """Block bootstrap of the identification data: rerun the PE or SE sweep and D_SF per replicate.
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms.
+    data : Record, sequence of Record, or Dataset
+        Identification data (a Dataset's ``ident``, and its static points by default).
+    static : StaticPoints, optional
+        Static points (default: the Dataset's).
+    method : {"pe", "se"}
+        The sweep: :func:`graybox.pe_pareto` or :func:`graybox.se_pareto`.
+    lambdas : array_like, optional
+        λ1 values (default: the method's paper sweep; a short one keeps the bootstrap fast).
+    n_boot : int
+        Replicates B.
+    block_length : int, optional
+        Samples per block (default: the larger of 10·(max lag + 1) and a tenth of the data);
+        at least 2·(max lag + 1) so that a block has rows to fit.
+    band, fallback
+        As for :func:`graybox.decide_dsf`.
+    static_sigma : float, optional
+        Standard deviation of Gaussian noise added to the static ȳ_i in each replicate (output
+        units); default: the static points are kept as measured.
+    seed : int
+        Replicate i draws from ``default_rng([seed, i])``: the result is reproducible and does not
+        depend on where replicates run.
+    options : mapping, optional
+        Keyword options of the sweep (e.g. ``{"solver": "closed"}`` for PE,
+        ``{"method": "gradient", "max_nfev": 20}`` for SE). The SE GA's own ``seed`` (default 0) is
+        the same in every replicate: replicates differ by their data only.
+    map : callable, optional
+        ``map(job, range(B))`` returning results in order: ``None`` runs in this process; pass an
+        executor's ``.map`` or a Dask wrapper to run elsewhere (see the module docstring).
+    progress : bool, optional
+        Progress bar (default: on a terminal only; in-process runs).
+
+    Returns
+    -------
+    DecisionBootstrap
+        Chosen λ1, J_S, J_SF per replicate; ``frequencies()``, ``summary()``, ``agreement``; the
+        reference decision on the original data; failures with their reasons. Draw it with
+        :func:`graybox.plots.plot_decision_bootstrap`.
+
+    Raises
+    ------
+    ValueError
+        Bad options (an unknown estimator option, a block too short for the lags or longer than
+        every record, no static points).
+    """
+    if not isinstance(structure, Structure):
+        structure = Structure(structure)
+    check_choice(method, "method", METHODS)
+    recs = as_records(data)
+    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
+    if not isinstance(sp, StaticPoints):
+        raise ValueError("bootstrap_decision needs static points: pass static= or a Dataset with static points")
+    lam = check_lambdas((PE_LAMBDAS if method == "pe" else SE_LAMBDAS) if lambdas is None else lambdas)
+    n_boot = check_int(n_boot, "n_boot", low=1)
+    seed = check_seed(seed)
+    L = structure.process.max_lag
+    total = sum(len(r) for r in recs)
+    if block_length is None:
+        block_length = min(max(10 * (L + 1), total // 10), max(len(r) for r in recs))
+    block_length = check_int(block_length, "block_length", low=2 * (L + 1))
+    if static_sigma is not None:
+        static_sigma = check_real(static_sigma, "static_sigma", low=0, low_open=True)
+    if fallback is not None:
+        check_choice(fallback, "fallback", FALLBACKS)
+    opts = _estimator_options(method, options)
+    if not any(len(r) >= block_length for r in recs):
+        raise ValueError(f"block_length {block_length} is longer than every record ({[len(r) for r in recs]} samples)")
+    job = BootstrapJob(structure.process, tuple(recs), sp, method, lam, band, fallback, block_length, seed,
+                       static_sigma, opts)
+    ids = [-1] + list(range(n_boot))
+    results: list[dict] = []
+    if map is None:
+        bar = progress_bar(len(ids), f"bootstrap of D_SF ({method.upper()})", progress)
+        try:
+            for i in ids:
+                results.append(job(i))
+                bar.update(1)
+        finally:
+            bar.close()
+    else:
+        results = list(map(job, ids))
+        if len(results) != len(ids):
+            raise ValueError(f"map returned {len(results)} results for {len(ids)} jobs")
+    ref, reps = results[0], results[1:]
+    n = len(structure.process)
+    lam1 = np.full(n_boot, np.nan)
+    js, jsf = np.full(n_boot, np.nan), np.full(n_boot, np.nan)
+    inb = np.zeros(n_boot, bool)
+    th = np.full((n_boot, n), np.nan)
+    rules, fails = [], {}
+    for i, r in enumerate(reps):
+        if "failure" in r:
+            fails[i] = r["failure"]
+            rules.append("")
+            continue
+        lam1[i], js[i], jsf[i], inb[i] = r["lambda1"], r["JS"], r["JSF"], r["in_band"]
+        th[i] = r["theta"]
+        rules.append(r["rule"])
+    n_blocks = max(1, int(round(total / block_length)))
+    return DecisionBootstrap(structure.process, method, lam, band, block_length, n_blocks, seed, lam1, js, jsf, inb, th,
+                             tuple(rules), ref, fails, opts, static_sigma)

@@ -1,0 +1,510 @@
+"""Save and load graybox values as readable JSON (never pickle).
+
+One file holds one value::
+
+    {
+      "format": "graybox",
+      "format_version": 1,
+      "graybox_version": "0.1.0",
+      "type": "Model",
+      "units": {"u": "rpm", "y": "mlc"},
+      "object": {
+        "name": "ELS",
+        "structure": ["y(k-1)", "u(k-2)y(k-6)", …],      terms as the paper prints them
+        "theta": [0.6303, 0.00023011, …],
+        …
+        "equation": "y(k) = 0.6303 y(k-1) + …"          for the reader only; ignored on load
+      }
+    }
+
+Numbers are JSON numbers written with Python's shortest round-trip ``repr``, so every finite float
+comes back bit for bit (−0.0 and subnormals included); ±∞ and NaN, which JSON lacks, are the
+strings ``"inf"``, ``"-inf"`` and ``"nan"``. Vectors are written on one line, matrices one row per
+line.
+
+Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.ParetoSet`,
+:class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
+:class:`~graybox.Decision`, :class:`~graybox.ParameterUncertainty` and
+:class:`~graybox.StaticCurveBand`.
+
+Loading refuses, with a :class:`GrayboxFileError` naming the file and the problem: a file that is
+not JSON or not a graybox file, a newer or unknown ``format_version``, an unknown type, a type other
+than the one expected, a missing or unknown field, a value of the wrong kind; the value's own
+constructor then validates shapes and meaning (e.g. θ's length against the structure). The units
+(of u and y) are written when given and read back with :func:`read_header`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+from types import MappingProxyType
+from collections.abc import Mapping
+from typing import Any, Callable
+
+import numpy as np
+
+from ._decide import Decision
+from ._els import ELSResult
+from ._model import Model
+from ._neural import NeuralFit, NeuralModel
+from ._pareto import ParetoSet
+from ._selection import Selection
+from ._terms import Structure, parse_term
+from ._uncertainty import ParameterUncertainty, StaticCurveBand
+
+__all__ = ["FORMAT_VERSION", "GrayboxFileError", "save", "load", "to_json", "from_json", "read_header"]
+
+#: The version of the file layout this graybox writes and reads.
+FORMAT_VERSION = 1
+
+
+class GrayboxFileError(ValueError):
+    """A file (or JSON text) cannot be loaded: not graybox's, a newer format, corrupt, or of another type."""
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("graybox")
+    except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
+        return "0+unknown"
+
+
+# --------------------------------------------------------------------------------------------
+# scalars and arrays
+# --------------------------------------------------------------------------------------------
+def _num(x: float) -> float | str:
+    x = float(x)
+    if math.isfinite(x):
+        return x
+    return "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")
+
+
+def _arr(a: Any) -> Any:
+    a = np.asarray(a, float)
+    if a.ndim == 0:
+        return _num(a)
+    return [_arr(r) for r in a] if a.ndim > 1 else [_num(v) for v in a]
+
+
+class _Reader:
+    """Typed access to decoded JSON, with errors that say where."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, where: str, what: str) -> GrayboxFileError:
+        return GrayboxFileError(f"{self.source}: {where}: {what}")
+
+    def float(self, v: Any, where: str) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float, str)):
+            raise self.fail(where, f"expected a number, got {type(v).__name__}")
+        if isinstance(v, str):
+            if v not in ("nan", "inf", "-inf"):
+                raise self.fail(where, f"expected a number, got the string {v!r}")
+            return float(v)
+        return float(v)
+
+    def int(self, v: Any, where: str) -> int:
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.fail(where, f"expected an integer, got {v!r}")
+        return v
+
+    def str(self, v: Any, where: str) -> str:
+        if not isinstance(v, str):
+            raise self.fail(where, f"expected a string, got {type(v).__name__}")
+        return v
+
+    def bool(self, v: Any, where: str) -> bool:
+        if not isinstance(v, bool):
+            raise self.fail(where, f"expected true or false, got {v!r}")
+        return v
+
+    def list(self, v: Any, where: str) -> list:
+        if not isinstance(v, list):
+            raise self.fail(where, f"expected a list, got {type(v).__name__}")
+        return v
+
+    def dict(self, v: Any, where: str) -> dict:
+        if not isinstance(v, dict):
+            raise self.fail(where, f"expected an object, got {type(v).__name__}")
+        return v
+
+    def array(self, v: Any, where: str, ndim: int) -> np.ndarray:
+        if ndim == 0:
+            return np.array(self.float(v, where))
+        rows = self.list(v, where)
+        out = [self.array(r, f"{where}[{i}]", ndim - 1) for i, r in enumerate(rows)]
+        if ndim > 1 and len({o.shape for o in out}) > 1:
+            raise self.fail(where, "rows of different lengths")
+        a = np.zeros((0,) * ndim) if not out else np.array(out, dtype=float)
+        a.setflags(write=False)  # loaded values are as immutable as computed ones
+        return a
+
+    def floats(self, v: Any, where: str) -> tuple[float, ...]:
+        return tuple(self.float(x, f"{where}[{i}]") for i, x in enumerate(self.list(v, where)))
+
+    def structure(self, v: Any, where: str) -> Structure:
+        terms = [self.str(t, f"{where}[{i}]") for i, t in enumerate(self.list(v, where))]
+        try:
+            return Structure(parse_term(t) for t in terms)
+        except ValueError as exc:
+            raise self.fail(where, str(exc)) from None
+
+
+# --------------------------------------------------------------------------------------------
+# codecs: per type, its fields as (name, kind); kinds map to an encoder and a reader method
+# --------------------------------------------------------------------------------------------
+def _enc(kind: str, v: Any) -> Any:
+    if kind in ("float", "array1", "array2"):
+        return _arr(v)
+    if kind in ("int", "str", "bool"):
+        return v if kind != "int" else int(v)
+    if kind == "floats":
+        return [_num(x) for x in v]
+    if kind == "structure":
+        return [str(t) for t in v]
+    if kind == "arrays":
+        return [_arr(a) for a in v]
+    if kind == "dict_arrays":
+        return {str(k): _arr(a) for k, a in dict(v).items()}
+    if kind == "failures":
+        return {str(k): str(r) for k, r in dict(v).items()}
+    if kind == "skipped":
+        return [[str(t), str(why)] for t, why in v]
+    if kind in _CODECS:
+        return _encode_fields(v)
+    raise AssertionError(kind)  # pragma: no cover - a codec table error
+
+
+def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
+    if kind == "float":
+        return rd.float(v, where)
+    if kind == "array1":
+        return rd.array(v, where, 1)
+    if kind == "array2":
+        return rd.array(v, where, 2)
+    if kind == "int":
+        return rd.int(v, where)
+    if kind == "str":
+        return rd.str(v, where)
+    if kind == "bool":
+        return rd.bool(v, where)
+    if kind == "floats":
+        return rd.floats(v, where)
+    if kind == "structure":
+        return rd.structure(v, where)
+    if kind == "arrays":
+        return tuple(rd.array(a, f"{where}[{i}]", 1) for i, a in enumerate(rd.list(v, where)))
+    if kind == "dict_arrays":
+        return {k: rd.array(a, f"{where}.{k}", 1) for k, a in rd.dict(v, where).items()}
+    if kind == "failures":
+        out = {}
+        for k, r in rd.dict(v, where).items():
+            if not k.lstrip("-").isdigit():
+                raise rd.fail(f"{where}.{k}", "a member index must be an integer")
+            out[int(k)] = rd.str(r, f"{where}.{k}")
+        return out
+    if kind == "skipped":
+        out = []
+        for i, pair in enumerate(rd.list(v, where)):
+            p = rd.list(pair, f"{where}[{i}]")
+            if len(p) != 2:
+                raise rd.fail(f"{where}[{i}]", "expected [term, reason]")
+            try:
+                out.append((parse_term(rd.str(p[0], f"{where}[{i}][0]")), rd.str(p[1], f"{where}[{i}][1]")))
+            except ValueError as exc:
+                raise rd.fail(f"{where}[{i}][0]", str(exc)) from None
+        return tuple(out)
+    if kind in _CODECS:
+        return _decode_fields(kind, v, where, rd)
+    raise AssertionError(kind)  # pragma: no cover
+
+
+_CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
+    "Model": (Model, (("name", "str"), ("structure", "structure"), ("theta", "array1"),
+                      ("noise_structure", "structure"), ("noise_theta", "array1"))),
+    "NeuralModel": (NeuralModel, (("name", "str"), ("ny", "int"), ("nu", "int"), ("ne", "int"), ("W1", "array2"),
+                                  ("b1", "array1"), ("w2", "array1"), ("b2", "float"), ("u_offset", "float"),
+                                  ("u_scale", "float"), ("y_offset", "float"), ("y_scale", "float"))),
+    "ParetoSet": (ParetoSet, (("method", "str"), ("structure", "structure"), ("lambdas", "array1"),
+                              ("thetas", "array2"), ("J1", "array1"), ("JS", "array1"), ("JSF", "array1"),
+                              ("extra", "dict_arrays"), ("failures", "failures"))),
+    "Selection": (Selection, (("structure", "structure"), ("err", "array1"), ("theta", "array1"),
+                              ("noise", "structure"), ("evaluated", "structure"), ("err_evaluated", "array1"),
+                              ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
+                              ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"))),
+    "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
+                              ("theta_ls", "array1"), ("residuals", "arrays"))),
+    "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("epochs", "int"), ("cost", "floats"), ("lam", "floats"),
+                              ("accepted", "int"), ("stopped", "str"), ("rmse_train", "float"), ("seconds", "float"))),
+    "Decision": (Decision, (("rule", "str"), ("index", "int"), ("lambda1", "float"), ("JS", "float"), ("JSF", "float"),
+                            ("in_band", "bool"), ("score", "float"), ("model", "Model"))),
+    "ParameterUncertainty": (ParameterUncertainty, (("method", "str"), ("model", "Model"), ("cov", "array2"),
+                                                    ("level", "float"), ("dof", "int"), ("sigma2", "float"),
+                                                    ("constraints", "array2"), ("noise_cov", "array2"),
+                                                    ("static_sigma2", "float"))),
+    "StaticCurveBand": (StaticCurveBand, (("model_name", "str"), ("method", "str"), ("level", "float"),
+                                          ("n_samples", "int"), ("ubar", "array1"), ("ybar", "array1"),
+                                          ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
+                                          ("gain", "array1"), ("gain_low", "array1"), ("gain_high", "array1"),
+                                          ("gain_std", "array1"), ("undefined", "array1"))),
+}
+
+#: Fields written for the reader only (ignored on load), per type: their names and how to write them.
+_READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]] = {
+    "Model": (("equation", "clusters"),
+              lambda m: {"equation": m.equation(digits=6), "clusters": {k: _num(v) for k, v in m.clusters().items()}}),
+}
+
+_TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
+
+
+def _encode_fields(obj: Any) -> dict:
+    name = _TYPES[type(obj)]
+    out = {k: _enc(kind, getattr(obj, k)) for k, kind in _CODECS[name][1]}
+    if name in _READABLE:
+        out.update(_READABLE[name][1](obj))
+    return out
+
+
+def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
+    cls, spec = _CODECS[name]
+    d = rd.dict(v, where)
+    known = {k for k, _ in spec} | set(_READABLE[name][0] if name in _READABLE else ())
+    unknown = sorted(set(d) - known)
+    if unknown:
+        raise rd.fail(where, f"unknown field(s) {unknown} for a {name}")
+    missing = [k for k, _ in spec if k not in d]
+    if missing:
+        raise rd.fail(where, f"missing field(s) {missing} for a {name}")
+    kwargs = {k: _dec(kind, d[k], f"{where}.{k}", rd) for k, kind in spec}
+    try:
+        return cls(**kwargs)
+    except (ValueError, TypeError) as exc:
+        raise rd.fail(where, f"not a valid {name}: {exc}") from None
+
+
+# --------------------------------------------------------------------------------------------
+# the document
+# --------------------------------------------------------------------------------------------
+def _dump(v: Any, level: int = 0) -> str:
+    """JSON with objects indented and vectors on one line (matrices: a row per line)."""
+    pad, inner = "  " * level, "  " * (level + 1)
+    if isinstance(v, dict):
+        if not v:
+            return "{}"
+        items = [f"{inner}{json.dumps(k, ensure_ascii=False)}: {_dump(x, level + 1)}" for k, x in v.items()]
+        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
+    if isinstance(v, list):
+        if all(not isinstance(x, (dict, list)) for x in v):
+            return json.dumps(v, ensure_ascii=False, allow_nan=False)
+        return "[\n" + ",\n".join(inner + _dump(x, level + 1) for x in v) + "\n" + pad + "]"
+    return json.dumps(v, ensure_ascii=False, allow_nan=False)
+
+
+def _units_arg(units: tuple[str, str] | Mapping[str, str] | None) -> dict | None:
+    if units is None:
+        return None
+    if isinstance(units, Mapping):
+        u, y = units.get("u", ""), units.get("y", "")
+    else:
+        try:
+            u, y = units
+        except (TypeError, ValueError):
+            raise ValueError(f"units must be (u unit, y unit), got {units!r}") from None
+    if not (isinstance(u, str) and isinstance(y, str)):
+        raise ValueError(f"units must be strings, got {units!r}")
+    return {"u": u, "y": y}
+
+
+def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = None) -> str:
+    """The JSON text of a graybox value (see the module docstring for the layout).
+
+    Parameters
+    ----------
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, ParameterUncertainty or StaticCurveBand
+        The value to write.
+    units : (str, str) or mapping, optional
+        Units of the input and output (e.g. ``("rpm", "mlc")``, or a Record's ``units``), written
+        in the header.
+
+    Returns
+    -------
+    str
+    """
+    if type(obj) not in _TYPES:
+        raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}")
+    doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": _version(),
+                           "type": _TYPES[type(obj)]}
+    u = _units_arg(units)
+    if u is not None:
+        doc["units"] = u
+    doc["object"] = _encode_fields(obj)
+    return _dump(doc) + "\n"
+
+
+def _header(doc: Any, rd: _Reader) -> dict:
+    if not isinstance(doc, dict) or doc.get("format") != "graybox":
+        raise rd.fail("header", "not a graybox file (no \"format\": \"graybox\")")
+    ver = doc.get("format_version")
+    if isinstance(ver, bool) or not isinstance(ver, int) or ver < 1:
+        raise rd.fail("header", f"unknown format_version {ver!r}")
+    if ver > FORMAT_VERSION:
+        raise rd.fail("header", f"written by a newer graybox ({doc.get('graybox_version', '?')}, format version {ver}); "
+                      f"this graybox ({_version()}) reads format version {FORMAT_VERSION}: upgrade graybox to load it")
+    typ = doc.get("type")
+    if typ not in _CODECS:
+        raise rd.fail("header", f"unknown type {typ!r}; graybox loads {sorted(_CODECS)}")
+    units = doc.get("units")
+    if units is not None:
+        d = rd.dict(units, "units")
+        if set(d) - {"u", "y"} or not all(isinstance(x, str) for x in d.values()):
+            raise rd.fail("units", f"expected {{\"u\": str, \"y\": str}}, got {units!r}")
+    allowed = {"format", "format_version", "graybox_version", "type", "units", "object"}
+    extra = sorted(set(doc) - allowed)
+    if extra:
+        raise rd.fail("header", f"unknown field(s) {extra}")
+    return {"format": "graybox", "format_version": ver, "graybox_version": str(doc.get("graybox_version", "")),
+            "type": typ, "units": None if units is None else (units.get("u", ""), units.get("y", ""))}
+
+
+def _parse(text: str, source: str) -> tuple[dict, Any]:
+    rd = _Reader(source)
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise rd.fail("JSON", f"corrupt file ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    return _header(doc, rd), doc
+
+
+def _expect(expect: type | tuple[type, ...] | None, typ: str, source: str) -> None:
+    if expect is None:
+        return
+    want = expect if isinstance(expect, tuple) else (expect,)
+    for w in want:
+        if w not in _TYPES:
+            raise ValueError(f"expect must be one of graybox's saved types {sorted(_CODECS)}, got {w!r}")
+    if _CODECS[typ][0] not in want:
+        raise GrayboxFileError(f"{source}: holds a {typ}, expected {' or '.join(w.__name__ for w in want)}")
+
+
+def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, source: str = "<json>") -> Any:
+    """The value in a graybox JSON text.
+
+    Parameters
+    ----------
+    text : str
+        As written by :func:`to_json`.
+    expect : type or tuple of types, optional
+        Refuse a value of any other type (e.g. ``expect=gb.Model``).
+    source : str
+        Name used in error messages.
+
+    Returns
+    -------
+    The value (a Model, ParetoSet, …).
+
+    Raises
+    ------
+    GrayboxFileError
+        Corrupt JSON, not a graybox document, a newer or unknown format version, an unknown or
+        unexpected type, a missing, unknown or malformed field.
+    """
+    if not isinstance(text, str):
+        raise ValueError(f"text must be a str, got {type(text).__name__}")
+    head, doc = _parse(text, source)
+    _expect(expect, head["type"], source)
+    if "object" not in doc:
+        raise GrayboxFileError(f"{source}: no \"object\" in the document")
+    return _decode_fields(head["type"], doc["object"], "object", _Reader(source))
+
+
+def save(
+    obj: Any,
+    path: str | os.PathLike,
+    *,
+    units: tuple[str, str] | Mapping[str, str] | None = None,
+) -> Path:
+    """Write a graybox value to a JSON file (atomically: a crash never leaves a torn file).
+
+    Parameters
+    ----------
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, ParameterUncertainty or StaticCurveBand
+        The value.
+    path : str or PathLike
+        Where to write (conventionally ``*.json``).
+    units : (str, str) or mapping, optional
+        Units of u and y for the header (e.g. ``data.ident.units``).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
+    text = to_json(obj, units=units)
+    p = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=p.name + ".", suffix=".tmp", dir=p.parent if str(p.parent) else ".")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, p)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return p
+
+
+def _read(path: str | os.PathLike) -> str:
+    p = Path(path)
+    try:
+        return p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise GrayboxFileError(f"{p}: not a graybox file (not UTF-8 text)") from None
+
+
+def load(path: str | os.PathLike, *, expect: type | tuple[type, ...] | None = None) -> Any:
+    """Read a value written by :func:`save`. No pickle is involved, whatever the file holds.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The JSON file.
+    expect : type or tuple of types, optional
+        Refuse a value of any other type (e.g. ``expect=gb.Model``).
+
+    Returns
+    -------
+    The value (a Model, ParetoSet, …).
+
+    Raises
+    ------
+    GrayboxFileError
+        See :func:`from_json`.
+    FileNotFoundError
+        No such file.
+    """
+    return from_json(_read(path), expect=expect, source=str(path))
+
+
+def read_header(path: str | os.PathLike) -> Mapping[str, Any]:
+    """The header of a graybox file: ``format_version``, ``graybox_version``, ``type``, ``units``.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The JSON file.
+
+    Returns
+    -------
+    mapping
+        ``units`` is ``(u unit, y unit)`` or None when the file has none.
+    """
+    head, _ = _parse(_read(path), str(path))
+    return MappingProxyType(head)

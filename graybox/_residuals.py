@@ -1,0 +1,395 @@
+"""Residual validation: the higher-order correlation tests of Billings & Voon (1986).
+
+A model whose one-step residuals ξ are unpredictable from past data has captured everything the
+data can say. Billings & Voon ("Structure detection and model validity tests in the
+identification of nonlinear systems", IEE Proc. D 130(4), 1983; "Correlation based model
+validity tests for non-linear models", Int. J. Control 44(1), 1986) showed that for a NARMAX
+model the linear tests (residual autocorrelation, input/residual cross-correlation) are not
+enough: a missing term in u² leaves them clean. Their five tests, as Billings & Zhu (1994) and
+Billings's book (2013, Section 5.2) collect them, with ξ' = ξ − mean(ξ) etc.:
+
+====================  ========================================  ===================
+test                  correlation of                            lags (default)
+====================  ========================================  ===================
+φ_ξξ(τ)               ξ(k−τ) and ξ(k)                           τ = 1 … 20
+φ_uξ(τ)               u(k−τ) and ξ(k)                           τ = −20 … 20
+φ_ξ(ξu)(τ)            ξ(k−1−τ)u(k−1−τ) and ξ(k)                 τ = 0 … 20
+φ_(u²)'ξ(τ)           u²(k−τ) and ξ(k)                          τ = −20 … 20
+φ_(u²)'ξ²(τ)          u²(k−τ) and ξ²(k)                         τ = −20 … 20
+====================  ========================================  ===================
+
+Products with u use the input centred and scaled to unit spread (u' = (u − mean u)/std u): with
+an engineering offset (u ≈ 1000 ± 400 rpm) the raw u² would be almost a linear function of u and
+ξu almost a multiple of ξ, and the higher-order tests would repeat the linear ones. Each φ is a
+normalised sample correlation (means removed, divided by the product of the two
+sequences' norms over all samples, as Box & Jenkins' biased estimator), so it lies in [−1, 1] and
+does not depend on units. For a model that explains the data, each is zero at every lag up to
+sampling error, which for N residuals is approximately normal with standard deviation 1/√N:
+the 95 % band is ±1.96/√N.
+
+Pass or fail
+------------
+Twenty to forty-one lags are looked at per test. Read lag by lag, even a correct model has about
+5 % of them outside the 95 % band (with 41 lags it leaves the band somewhere in 88 % of records),
+so "no lag outside ±1.96/√N" (``rule="pointwise"``, the literature's reading taken literally)
+fails correct models most of the time. The default, ``rule="simultaneous"``, asks the question
+at the 95 % level for the test as a whole: a test fails when some lag lies outside
+±z/√N with z the Bonferroni quantile for its number of lags (z = 3.23 for 41 lags; valid whatever
+the correlation between lags, e.g. with a slow step input). Either way the result lists every lag
+outside the classic ±1.96/√N band, and the figure draws both lines.
+
+Residuals
+---------
+ξ(k) is the model's one-step prediction error on measured data, counted from sample L on (L the
+largest lag, process and noise terms). For a model with an MA part (ELS), ξ includes it:
+ξ(k) = y(k) − ψ(k)ᵀθ − Σ_j c_j ν_j(k), with the noise terms ν_j evaluated on the residuals
+themselves (zero before sample L), the recursion whose fixed point ELS converges to. That is the
+model the tests judge: its MA part is meant to whiten the equation error, and the tests ask whether
+it did. ``moving_average=False`` judges the process part alone (ξ = y − ψᵀθ, the equation error,
+coloured whenever the noise is). A neural model's residuals are those of its training predictor
+(:meth:`graybox.NeuralModel.predict_narmax`), or of its deterministic predictor without the MA part.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from scipy import signal, stats
+
+from ._model import Model
+from ._neural import NeuralModel
+from ._records import Dataset, Record, as_records
+from ._regressors import regressor_matrix
+from ._validation import check_choice, check_int, check_real
+
+__all__ = ["CorrelationTest", "ResidualTests", "residual_tests", "one_step_residuals", "TESTS"]
+
+#: The five tests: key -> (label, kind, lag side). Side "both": τ = −L … L; "positive": 1 … L
+#: (φ_ξξ is symmetric and 1 at τ = 0); "nonnegative": 0 … L.
+TESTS: Mapping[str, tuple[str, str, str]] = MappingProxyType({
+    "xi_xi": ("φ_ξξ(τ)", "linear", "positive"),
+    "u_xi": ("φ_uξ(τ)", "linear", "both"),
+    "xi_xiu": ("φ_ξ(ξu)(τ)", "nonlinear", "nonnegative"),
+    "u2_xi": ("φ_(u²)'ξ(τ)", "nonlinear", "both"),
+    "u2_xi2": ("φ_(u²)'ξ²(τ)", "nonlinear", "both"),
+})
+
+RULES = ("simultaneous", "pointwise")
+
+
+@dataclass(frozen=True, eq=False)
+class CorrelationTest:
+    """One correlation test over its lags.
+
+    Attributes
+    ----------
+    name : str
+        Key in :data:`TESTS` (``"xi_xi"``, ``"u_xi"``, ``"xi_xiu"``, ``"u2_xi"``, ``"u2_xi2"``).
+    label : str
+        As the literature prints it, e.g. ``"φ_(u²)'ξ(τ)"``.
+    kind : str
+        ``"linear"`` or ``"nonlinear"``.
+    lags : ndarray of int, shape (m,)
+        τ, in samples.
+    phi : ndarray, shape (m,)
+        The normalised correlation at each lag, in [−1, 1].
+    band : float
+        The pointwise confidence half-width z_{(1+level)/2}/√N (1.96/√N at 95 %).
+    limit : float
+        The half-width the pass/fail rule uses (``band`` for the pointwise rule, the Bonferroni
+        half-width for the simultaneous one).
+    outside : ndarray of int
+        Lags where |φ| > ``band``.
+    passed : bool
+        Every |φ| <= ``limit``.
+    """
+
+    name: str
+    label: str
+    kind: str
+    lags: np.ndarray
+    phi: np.ndarray
+    band: float
+    limit: float
+    outside: np.ndarray
+    passed: bool
+
+    @property
+    def worst_lag(self) -> int:
+        """The lag with the largest |φ|."""
+        return int(self.lags[int(np.argmax(np.abs(self.phi)))])
+
+    def __repr__(self) -> str:
+        verdict = "pass" if self.passed else f"FAIL (max |φ| = {np.max(np.abs(self.phi)):.3f} at τ = {self.worst_lag})"
+        return f"CorrelationTest({self.label}: {verdict}; {self.outside.size} of {self.lags.size} lags outside ±{self.band:.3g})"
+
+
+@dataclass(frozen=True, eq=False)
+class ResidualTests:
+    """The result of :func:`residual_tests`: five correlation tests of one model's residuals.
+
+    Attributes
+    ----------
+    tests : mapping str -> CorrelationTest
+        In the order of :data:`TESTS`.
+    n : int
+        Residuals used (samples from the max lag on, summed over records).
+    level : float
+        Confidence level of the bands (0.95).
+    rule : str
+        ``"simultaneous"`` or ``"pointwise"`` (see the module docstring).
+    model_name : str
+        Name of the model tested.
+    residuals : tuple of ndarray
+        ξ per record, shape (N_r − L,) (samples L … N_r − 1).
+    """
+
+    tests: Mapping[str, CorrelationTest]
+    n: int
+    level: float
+    rule: str
+    model_name: str
+    residuals: tuple[np.ndarray, ...]
+
+    @property
+    def passed(self) -> bool:
+        """Every test passed."""
+        return all(t.passed for t in self.tests.values())
+
+    @property
+    def linear_passed(self) -> bool:
+        """φ_ξξ and φ_uξ passed."""
+        return all(t.passed for t in self.tests.values() if t.kind == "linear")
+
+    @property
+    def nonlinear_passed(self) -> bool:
+        """The three higher-order tests passed."""
+        return all(t.passed for t in self.tests.values() if t.kind == "nonlinear")
+
+    @property
+    def failed(self) -> list[str]:
+        """Names of the tests that failed."""
+        return [k for k, t in self.tests.items() if not t.passed]
+
+    def __getitem__(self, name: str) -> CorrelationTest:
+        return self.tests[name]
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per test: label, kind, passed, max |φ|, worst lag, lags outside the band."""
+        rows = {
+            k: {"test": t.label, "kind": t.kind, "passed": t.passed, "max |phi|": float(np.max(np.abs(t.phi))),
+                "worst lag": t.worst_lag, "limit": t.limit, "band": t.band,
+                "lags outside band": t.outside.tolist()}
+            for k, t in self.tests.items()
+        }
+        return pd.DataFrame.from_dict(rows, orient="index")
+
+    def __repr__(self) -> str:
+        verdict = "all passed" if self.passed else f"failed: {', '.join(self.tests[k].label for k in self.failed)}"
+        return f"ResidualTests({self.model_name or 'model'}: N = {self.n}, {self.rule} {self.level:.0%}; {verdict})"
+
+
+# --------------------------------------------------------------------------------------------
+# residuals
+# --------------------------------------------------------------------------------------------
+def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bool) -> tuple[np.ndarray, int]:
+    """ξ(k) for k = L … N−1 of one record, and L."""
+    if isinstance(model, NeuralModel):
+        L = model.max_lag
+        if moving_average and model.ne:
+            _, e = model.predict_narmax(rec)
+            return e[L:].copy(), L
+        return (rec.y - model.predict(rec))[L:], L
+    ns = model.noise_structure if moving_average else model.noise_structure[:0]
+    L = max(model.max_lag, ns.max_lag)
+    rec.require_length(L)
+    v = rec.y[L:] - regressor_matrix(model.structure, rec.u, rec.y, start=L) @ model.theta
+    if len(ns) == 0:
+        return v, L
+    c = model.noise_theta
+    if all(len(t.factors) == 1 and t.factors[0][2] == 1 for t in ns):
+        # linear MA part: ξ(k) + Σ c_l ξ(k−l) = v(k) with ξ = 0 before sample L, a linear filter
+        a = np.zeros(ns.max_lag + 1)
+        a[0] = 1.0
+        for cj, t in zip(c, ns):
+            a[t.factors[0][1]] += cj
+        return signal.lfilter([1.0], a, v), L
+    # products of residuals with u, y or each other: the recursion sample by sample
+    N = len(rec)
+    e = np.zeros(N)
+    sig = {"u": rec.u, "y": rec.y, "e": e}
+    for k in range(L, N):
+        acc = 0.0
+        for cj, t in zip(c, ns):
+            val = cj
+            for s, lag, pw in t.factors:
+                val *= sig[s][k - lag] ** pw
+            acc += val
+        e[k] = v[k - L] - acc
+    return e[L:], L
+
+
+def one_step_residuals(
+    model: Model | NeuralModel,
+    data: Record | Sequence[Record] | Dataset,
+    *,
+    moving_average: bool = True,
+) -> list[np.ndarray]:
+    """The model's one-step prediction errors ξ on measured data, per record.
+
+    Parameters
+    ----------
+    model : Model or NeuralModel
+        A polynomial model (with or without an MA part) or a neural one.
+    data : Record, sequence of Record, or Dataset
+        Measured data (a Dataset stands for its identification record; pass ``data.valid`` for
+        the validation record).
+    moving_average : bool
+        Include the model's MA part (default; see the module docstring). False: the process
+        part's equation error y − ψᵀθ.
+
+    Returns
+    -------
+    list of ndarray
+        ξ(k) for k = L … N_r − 1 of each record, shape (N_r − L,), output units; L is the largest
+        lag of the terms used (process and, with ``moving_average``, noise terms).
+    """
+    if not isinstance(model, (Model, NeuralModel)):
+        raise ValueError(f"model must be a Model or a NeuralModel, got {type(model).__name__}")
+    return [_model_residuals(model, r, bool(moving_average))[0] for r in as_records(data)]
+
+
+# --------------------------------------------------------------------------------------------
+# correlations
+# --------------------------------------------------------------------------------------------
+def _lags(side: str, max_lag: int) -> np.ndarray:
+    if side == "both":
+        return np.arange(-max_lag, max_lag + 1)
+    if side == "positive":
+        return np.arange(1, max_lag + 1)
+    return np.arange(0, max_lag + 1)
+
+
+def _xcorr(a: list[np.ndarray], b: list[np.ndarray], lags: np.ndarray) -> np.ndarray:
+    """Σ_r Σ_k a_r(k−τ) b_r(k) / sqrt(Σ a² Σ b²) with a, b mean-removed over all records.
+
+    Products never pair samples of two records.
+    """
+    ma = np.mean(np.concatenate(a))
+    mb = np.mean(np.concatenate(b))
+    a = [x - ma for x in a]
+    b = [x - mb for x in b]
+    den = np.sqrt(sum(float(x @ x) for x in a) * sum(float(x @ x) for x in b))
+    num = np.zeros(lags.size)
+    for x, y in zip(a, b):
+        n = x.size
+        for i, t in enumerate(lags):
+            t = int(t)
+            if abs(t) >= n:
+                continue
+            num[i] += float(x[: n - t] @ y[t:]) if t >= 0 else float(x[-t:] @ y[: n + t])
+    if den == 0.0:
+        return np.full(lags.size, np.nan)
+    return num / den
+
+
+def residual_tests(
+    model: Model | NeuralModel,
+    data: Record | Sequence[Record] | Dataset,
+    *,
+    max_lag: int = 20,
+    level: float = 0.95,
+    rule: str = "simultaneous",
+    moving_average: bool = True,
+) -> ResidualTests:
+    """The five correlation tests of Billings & Voon on a model's one-step residuals.
+
+    Parameters
+    ----------
+    model : Model or NeuralModel
+        The model to validate.
+    data : Record, sequence of Record, or Dataset
+        Measured data: the identification record, or better a validation record the model has
+        not seen. With several records, lagged products never pair samples of two records.
+    max_lag : int
+        Largest |τ| in samples (default 20).
+    level : float
+        Confidence level in (0, 1) of the band (0.95: ±1.96/√N).
+    rule : {"simultaneous", "pointwise"}
+        How a test passes: every lag within the Bonferroni band at ``level`` for the test as a
+        whole (default), or every lag within the pointwise ±1.96/√N band (see the module
+        docstring for why the pointwise rule fails correct models).
+    moving_average : bool
+        Include the model's MA part in the residuals (default; see :func:`one_step_residuals`).
+
+    Returns
+    -------
+    ResidualTests
+        Per test: φ at each lag, the band, the lags outside it, pass or fail; ``.passed``,
+        ``.linear_passed``, ``.nonlinear_passed``; draw with :func:`graybox.plots.plot_residual_tests`.
+
+    Raises
+    ------
+    ValueError
+        A record shorter than the model's lags plus ``max_lag`` + 2, constant residuals (a model
+        that reproduces the data exactly has nothing to test), a constant input, bad options.
+    """
+    if not isinstance(model, (Model, NeuralModel)):
+        raise ValueError(f"model must be a Model or a NeuralModel, got {type(model).__name__}")
+    max_lag = check_int(max_lag, "max_lag", low=1)
+    level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
+    check_choice(rule, "rule", RULES)
+    recs = as_records(data)
+    xi, us = [], []
+    for r in recs:
+        e, L = _model_residuals(model, r, bool(moving_average))
+        if e.size < max_lag + 2:
+            raise ValueError(f"{r.name}: {e.size} residuals (after the model's max lag {L}) are too few for "
+                             f"max_lag = {max_lag}")
+        xi.append(e)
+        us.append(r.u[L:])
+    n = sum(e.size for e in xi)
+    allxi = np.concatenate(xi)
+    if np.ptp(allxi) <= 1e-14 * max(1.0, float(np.max(np.abs(allxi)))):
+        raise ValueError("the residuals are constant: the model reproduces the data exactly, there is nothing to test")
+    allu = np.concatenate(us)
+    if np.ptp(allu) == 0.0:
+        raise ValueError("the input is constant: the input correlation tests are undefined")
+    # u in units of its own spread: u² of 1e3 rpm would otherwise lose digits to the mean removal
+    uc = [(u - np.mean(allu)) / np.std(allu) for u in us]
+    u2 = [u**2 for u in uc]
+    xiu = [e * u for e, u in zip(xi, uc)]
+    z = stats.norm.ppf(0.5 + level / 2)
+    band = float(z / np.sqrt(n))
+    out = {}
+    for key, (label, kind, side) in TESTS.items():
+        lags = _lags(side, max_lag)
+        if key == "xi_xi":
+            phi = _xcorr(xi, xi, lags)
+        elif key == "u_xi":
+            phi = _xcorr(uc, xi, lags)
+        elif key == "xi_xiu":
+            phi = _xcorr(xiu, xi, lags + 1)
+        elif key == "u2_xi":
+            phi = _xcorr(u2, xi, lags)
+        else:
+            phi = _xcorr(u2, [e**2 for e in xi], lags)
+        if rule == "pointwise":
+            limit = band
+        else:
+            limit = float(stats.norm.ppf(1 - (1 - level) / (2 * lags.size)) / np.sqrt(n))
+        outside = lags[np.abs(phi) > band]
+        out[key] = CorrelationTest(key, label, kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
+                                   bool(np.all(np.abs(phi) <= limit)))
+    return ResidualTests(MappingProxyType(out), n, level, rule, getattr(model, "name", ""),
+                         tuple(_ro(e) for e in xi))
+
+
+def _ro(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, copy=True)
+    a.setflags(write=False)
+    return a

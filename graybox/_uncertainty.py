@@ -1,0 +1,812 @@
+"""Parameter uncertainty: covariance and confidence intervals of LS, ELS, CLS, PE and SE estimates,
+and the confidence band of the static curve and static gain they imply.
+
+Every estimator of graybox minimises a weighted sum of squared errors, possibly under affine
+equality constraints, so one formula covers them all. Near the estimate θ̂ (first order), with
+H the Hessian of the objective, M the covariance of its gradient (the "meat") and Z a basis of
+the null space of the equality constraints that hold at θ̂,
+
+    cov(θ̂) = Z (ZᵀHZ)⁻¹ ZᵀMZ (ZᵀHZ)⁻¹ Zᵀ           (sandwich form).
+
+- **LS**: J = ‖Ψθ − y‖², H = ΨᵀΨ, M = σ² ΨᵀΨ, so cov = σ² (ΨᵀΨ)⁻¹ with σ² = RSS / (N − n).
+- **ELS**: the same with the extended regressors [Ψ, Ψ_e(ξ)] evaluated on the model's final
+  residuals ξ (MA part included), σ² from those residuals; the process block is ``cov`` and the
+  MA block ``noise_cov``.
+- **CLS**: the LS formula restricted to the null space of the equality constraints (and of the
+  inequality rows active at θ̂, which hold as equalities there), so cov·Aᵀ = 0: every constrained
+  combination of θ — e.g. a cluster fixed by eq. (22) — has zero variance; σ² = RSS / (N − n + r)
+  with r independent constraints.
+- **PE member** (λ1): J = w1‖Ψθ − y‖² + w2‖QRθ − ȳ‖² (w1 = λ1/N, w2 = λ2/N_SF). H is its Hessian;
+  M collects the dynamic noise (σ² from least squares on the same data: the noise belongs to the
+  data, not to the member) and the static points' noise σ_SF² (``static_sigma``; default: the
+  member's own static misfit). The measured ȳ_i sits on both sides of the static equation
+  (eq. (12)), so its effect on θ̂ is differentiated through both.
+- **SE member** (gradient or GA solution): the Gauss–Newton Hessian JᵀJ of the stacked residuals
+  [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] at θ̂ (J from the free run's sensitivity recursion, the Jacobian
+  the gradient method uses), with M = σ_S² J_SᵀJ_S + σ_SF² J_SFᵀJ_SF, σ_S² = Σe_sim²/(N − n).
+
+Caveats, said once here and in each docstring: the intervals are first-order (delta method) and
+assume the structure is right. LS and CLS intervals assume white equation noise (their coverage
+is checked by Monte Carlo in the tests); the SE intervals assume white output errors, so with
+coloured simulation errors (equation noise) they are optimistic. A PE or SE member is a biased
+estimate of the true θ by design (it trades dynamic fit for static fit): its interval says how
+much the *member* would move with another noise realisation, not where the true θ lies.
+Towards small λ1 a PE member of a rational structure leans on static points that nearly leave one
+direction free (numerator and denominator of eq. (6) scaled together; the measured ȳ sits on both
+sides of eq. (12)): θ̂ is then far from linear in the noise and the first-order covariance is off
+(in a Monte Carlo like the tests' it matched at λ1 = 0.5 and 0.1 and overstated the spread by up to 20 % at
+λ1 = 0.01): use :func:`graybox.bootstrap_decision` or a Monte Carlo there.
+Intervals use Student's t with the residual degrees of freedom.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+from threadpoolctl import ThreadpoolController
+
+from ._constraints import StaticConstraint, static_rows
+from ._convex import _cls_setup, _dynamic, _pe_setup, _process_structure
+from ._curves import StaticCurve
+from ._decide import Decision
+from ._model import Model
+from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ._regressors import regressor_matrix, stacked_regressors
+from ._residuals import _model_residuals
+from ._se import SEProblem, _residuals_and_jac
+from ._static import cluster_key, cluster_map, nearest_stable_equilibria, static_theta_gradient
+from ._validation import check_choice, check_int, check_real, check_seed, frozen, warn
+
+__all__ = [
+    "ParameterUncertainty",
+    "UncertaintyWarning",
+    "ls_uncertainty",
+    "cls_uncertainty",
+    "pe_uncertainty",
+    "se_uncertainty",
+    "StaticCurveBand",
+    "static_curve_band",
+]
+
+
+class UncertaintyWarning(UserWarning):
+    """The uncertainty was computed, but at a point where its assumptions are doubtful."""
+
+
+@dataclass(frozen=True, eq=False)
+class ParameterUncertainty:
+    """Covariance and confidence intervals of a model's process parameters.
+
+    Attributes
+    ----------
+    model : Model
+        The estimate θ̂ (engineering units).
+    cov : ndarray, shape (n_terms, n_terms)
+        Covariance of θ̂, engineering units (θ_i θ_j); symmetric positive semidefinite, singular
+        along constrained directions.
+    level : float
+        Confidence level of :attr:`intervals` (0.95).
+    dof : int
+        Residual degrees of freedom (rows minus free parameters) used for Student's t.
+    sigma2 : float
+        Noise variance of the dynamic data, output units² (equation noise for LS/ELS/CLS/PE,
+        simulation error for SE).
+    method : str
+        ``"LS"``, ``"ELS"``, ``"CLS"``, ``"PE λ1=…"`` or ``"SE λ1=…"``.
+    constraints : ndarray, shape (r, n_terms)
+        Rows A (engineering units) of the equalities that hold exactly at θ̂ (with the active
+        inequalities); ``cov @ A.T`` is zero.
+    noise_cov : ndarray, shape (n_noise, n_noise)
+        Covariance of the MA parameters (ELS); empty otherwise.
+    static_sigma2 : float
+        Variance of the static points' ȳ used (PE and SE), output units²; NaN otherwise.
+    """
+
+    model: Model
+    cov: np.ndarray
+    level: float
+    dof: int
+    sigma2: float
+    method: str
+    constraints: np.ndarray
+    noise_cov: np.ndarray
+    static_sigma2: float = float("nan")
+
+    def __post_init__(self) -> None:
+        n = self.model.n_params
+        cov = frozen(self.cov)
+        if cov.shape != (n, n):
+            raise ValueError(f"cov must have shape ({n}, {n}), got {cov.shape}")
+        object.__setattr__(self, "cov", cov)
+        object.__setattr__(self, "constraints", frozen(np.reshape(self.constraints, (-1, n))))
+        ne = len(self.model.noise_structure)
+        nc = frozen(np.reshape(self.noise_cov, (ne, ne)) if ne else np.zeros((0, 0)))
+        object.__setattr__(self, "noise_cov", nc)
+
+    @property
+    def theta(self) -> np.ndarray:
+        """θ̂, shape (n_terms,)."""
+        return self.model.theta
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard deviations √diag(cov), shape (n_terms,) (0 for a constrained parameter)."""
+        return np.sqrt(np.clip(np.diag(self.cov), 0.0, None))
+
+    @property
+    def quantile(self) -> float:
+        """Student's t quantile of the two-sided interval at :attr:`level` with :attr:`dof`."""
+        return float(stats.t.ppf(0.5 + self.level / 2, self.dof))
+
+    @property
+    def intervals(self) -> np.ndarray:
+        """Confidence intervals θ̂ ± t·std, shape (n_terms, 2) (low, high)."""
+        h = self.quantile * self.std
+        return np.column_stack([self.theta - h, self.theta + h])
+
+    @property
+    def noise_std(self) -> np.ndarray:
+        """Standard deviations of the MA parameters, shape (n_noise,)."""
+        return np.sqrt(np.clip(np.diag(self.noise_cov), 0.0, None))
+
+    @property
+    def correlation(self) -> np.ndarray:
+        """Correlation matrix of θ̂, shape (n_terms, n_terms) (NaN rows for constrained parameters)."""
+        s = self.std
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return self.cov / np.outer(s, s)
+
+    def covers(self, theta: np.ndarray) -> np.ndarray:
+        """Which components of ``theta`` (shape (n_terms,)) lie in their interval, shape (n_terms,) bool."""
+        th = np.asarray(theta, float)
+        iv = self.intervals
+        return (th >= iv[:, 0]) & (th <= iv[:, 1])
+
+    def with_level(self, level: float) -> "ParameterUncertainty":
+        """The same covariance with intervals at another confidence level."""
+        level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
+        return ParameterUncertainty(self.model, self.cov, level, self.dof, self.sigma2, self.method,
+                                    self.constraints, self.noise_cov, self.static_sigma2)
+
+    def cluster_cov(self) -> np.ndarray:
+        """Covariance of the cluster coefficients Σ = Rθ, shape (n_clusters, n_clusters)."""
+        R = self.model.cluster_map().R
+        return R @ self.cov @ R.T
+
+    def cluster_frame(self) -> pd.DataFrame:
+        """One row per cluster: Σ, its standard deviation and interval (a constrained cluster has 0)."""
+        cm = self.model.cluster_map()
+        sig = cm.R @ self.theta
+        sd = np.sqrt(np.clip(np.diag(self.cluster_cov()), 0.0, None))
+        h = self.quantile * sd
+        return pd.DataFrame({"value": sig, "std": sd, "low": sig - h, "high": sig + h},
+                            index=pd.Index(cm.names, name="cluster"))
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per term: θ, std, interval, relative std (std / |θ|)."""
+        iv = self.intervals
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rel = self.std / np.abs(self.theta)
+        return pd.DataFrame({"theta": self.theta, "std": self.std, "low": iv[:, 0], "high": iv[:, 1],
+                             "rel std": rel}, index=pd.Index([str(t) for t in self.model.structure], name="term"))
+
+    def __repr__(self) -> str:
+        return (f"ParameterUncertainty({self.method}, model={self.model.name!r}, n_params={self.model.n_params}, "
+                f"constraints={self.constraints.shape[0]}, dof={self.dof}, level={self.level:g})")
+
+
+# --------------------------------------------------------------------------------------------
+# the one formula
+# --------------------------------------------------------------------------------------------
+def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
+    """Orthonormal basis of {z: A z = 0} (rows normalised first) and the rank of A."""
+    if A.shape[0] == 0:
+        return np.eye(n), 0
+    norms = np.linalg.norm(A, axis=1)
+    A = A[norms > 0] / norms[norms > 0, None]
+    if A.shape[0] == 0:
+        return np.eye(n), 0
+    _, S, Vt = np.linalg.svd(A, full_matrices=True)
+    r = int(np.sum(S > 1e-10 * S[0]))
+    return Vt[r:].T, r
+
+
+_CONTROLLER: list[ThreadpoolController] = []
+
+
+def _blas() -> ThreadpoolController:
+    """One controller for the process: building one scans the loaded libraries, limiting with it is cheap."""
+    if not _CONTROLLER:
+        _CONTROLLER.append(ThreadpoolController())
+    return _CONTROLLER[0]
+
+
+def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> np.ndarray:
+    """Z (ZᵀHZ)⁻¹ ZᵀMZ (ZᵀHZ)⁻¹ Zᵀ with H = AᵀA and M = GᵀG, from the factors (never forming H).
+
+    With AZ = U S Vᵀ the result is WᵀW, W = (GZV S⁻²)(ZV)ᵀ: positive semidefinite by construction,
+    and accurate to about eps·cond(AZ) where forming H would lose eps·cond(AZ)² (an SE Jacobian of
+    a slow plant can have cond ≈ 1e9). ValueError when AZ is rank deficient (not identifiable).
+    """
+    n = A.shape[1]
+    if Z.shape[1] == 0:
+        return np.zeros((n, n))
+    AZ = A @ Z
+    if not (np.all(np.isfinite(AZ)) and np.all(np.isfinite(G))):
+        raise ValueError(f"{what}: non-finite derivatives; the covariance is undefined here")
+    # one BLAS thread: a threaded SVD of a thin matrix mostly waits for threads on a busy machine (BENCHMARKS.md)
+    with _blas().limit(limits=1, user_api="blas"):
+        _, S, Vt = np.linalg.svd(AZ, full_matrices=False)
+        if S.size < Z.shape[1] or S[0] == 0 or S[-1] <= 1e-12 * S[0]:
+            raise ValueError(f"{what}: the parameters are not identifiable from these data and constraints "
+                             "(singular information matrix), so they have no finite covariance")
+        ZV = Z @ Vt.T
+        W = ((G @ ZV) / S**2) @ ZV.T
+        return W.T @ W
+
+
+def _to_theta(cov_z: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Covariance in z = s ⊙ θ → in θ."""
+    return cov_z / np.outer(s, s)
+
+
+def _check_stationary(Z: np.ndarray, grad: np.ndarray, size: float, what: str, hint: str) -> None:
+    """θ̂ must be the optimum of the problem whose covariance is asked for."""
+    g = np.linalg.norm(Z.T @ grad)
+    if not np.isfinite(g) or g > 1e-5 * max(size, 1e-300):
+        raise ValueError(f"{what}: the model's θ is not the optimum of this problem (relative gradient "
+                         f"{g / max(size, 1e-300):.1e}); {hint}")
+
+
+def _size(*parts: np.ndarray) -> float:
+    """The magnitude of a gradient's parts: what "zero" is measured against."""
+    return float(sum(np.linalg.norm(p) for p in parts))
+
+
+def _check_level(level: float) -> float:
+    return check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
+
+
+def _model_arg(model: object, what: str) -> Model:
+    if isinstance(model, Decision):
+        return model.model
+    if not isinstance(model, Model):
+        raise ValueError(f"{what} needs a Model, got {type(model).__name__}")
+    return model
+
+
+def _lambda_arg(model: object, lambda1: float | None, what: str) -> float:
+    if lambda1 is None:
+        if isinstance(model, Decision) and np.isfinite(model.lambda1):
+            lambda1 = model.lambda1
+        else:
+            raise ValueError(f"{what} needs lambda1, the weight the member was estimated with (a Decision carries it)")
+    return check_real(lambda1, "lambda1", low=0, high=1, low_open=True)
+
+
+def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, what: str) -> np.ndarray:
+    """Equality rows and the inequality rows active at θ (engineering units); user constraints refused."""
+    n = theta.size
+    rows = [np.zeros((0, n))]
+    for c in cons:
+        r = c.affine(ctx)
+        if r is None:
+            raise ValueError(f"{what}: {c.describe()} is not affine in θ; the covariance is defined for affine "
+                             "constraints (equalities, bands, gain and cluster bounds) only")
+        if r.n_eq:
+            res = r.A_eq @ theta - r.b_eq
+            scale = np.abs(r.b_eq) + np.abs(r.A_eq) @ np.abs(theta)
+            if np.any(np.abs(res) > 1e-6 * np.where(scale > 0, scale, 1.0)):
+                raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
+                                 "constraints and data?")
+            rows.append(np.asarray(r.A_eq))
+        if r.n_ub:
+            slack = r.b_ub - r.A_ub @ theta
+            scale = np.abs(r.b_ub) + np.abs(r.A_ub) @ np.abs(theta)
+            active = slack <= 1e-6 * np.where(scale > 0, scale, 1.0)
+            rows.append(np.asarray(r.A_ub)[active])
+    return np.vstack(rows)
+
+
+# --------------------------------------------------------------------------------------------
+# LS / ELS
+# --------------------------------------------------------------------------------------------
+def ls_uncertainty(
+    model: Model,
+    data: Record | Sequence[Record] | Dataset,
+    *,
+    level: float = 0.95,
+) -> ParameterUncertainty:
+    """Covariance of a least-squares (or ELS) estimate: σ²(ΨᵀΨ)⁻¹.
+
+    Parameters
+    ----------
+    model : Model
+        The estimate on ``data``: plain least squares (e.g. ``Selection.model()`` or
+        ``els(..., noise=0)``) or ELS (a model with an MA part: the covariance is that of the
+        extended problem in [θ; c], see the module docstring).
+    data : Record, sequence of Record, or Dataset
+        The identification data the model was estimated on.
+    level : float
+        Confidence level of the intervals, in (0, 1).
+
+    Returns
+    -------
+    ParameterUncertainty
+        ``cov`` of θ (engineering units), ``noise_cov`` of the MA part (ELS).
+
+    Raises
+    ------
+    ValueError
+        A plain LS model that is not the least-squares estimate on ``data`` (its gradient is not
+        zero), collinear regressors, too few rows.
+    """
+    model = _model_arg(model, "ls_uncertainty")
+    level = _check_level(level)
+    recs = as_records(data)
+    st, ns = model.structure, model.noise_structure
+    n, ne = len(st), len(ns)
+    if ne == 0:
+        psi, y = stacked_regressors(st, recs)
+        what = "ls_uncertainty"
+        phi, theta_all = psi, model.theta
+    else:
+        L = max(st.max_lag, ns.max_lag)
+        blocks, targets = [], []
+        for r in recs:
+            xi, _ = _model_residuals(model, r, True)
+            e = np.zeros(len(r))
+            e[L:] = xi
+            blocks.append(np.hstack([regressor_matrix(st, r.u, r.y, start=L), regressor_matrix(ns, r.u, r.y, e, start=L)]))
+            targets.append(r.y[L:])
+        phi, y = np.vstack(blocks), np.concatenate(targets)
+        what = "ls_uncertainty (ELS)"
+        theta_all = np.concatenate([model.theta, model.noise_theta])
+    N = phi.shape[0]
+    if N <= n + ne:
+        raise ValueError(f"{what}: {N} regression rows for {n + ne} parameters")
+    s = np.sqrt(np.mean(phi**2, axis=0))
+    s = np.where(s > 0, s, 1.0)
+    A = phi / s
+    res = y - phi @ theta_all
+    dof = N - n - ne
+    sigma2 = float(res @ res) / dof
+    cov = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what), s)
+    if ne == 0:
+        _check_stationary(np.eye(n), A.T @ res, _size(A.T @ (A @ (theta_all * s)), A.T @ y), what,
+                          "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty)")
+    return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
+                                cov[n:, n:])
+
+
+# --------------------------------------------------------------------------------------------
+# CLS
+# --------------------------------------------------------------------------------------------
+def cls_uncertainty(
+    model: Model,
+    data: Record | Sequence[Record] | Dataset,
+    static: StaticCurve | StaticPoints | None = None,
+    *,
+    how: str = "auto",
+    reference: Model | np.ndarray | float | str = "ls",
+    constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
+    level: float = 0.95,
+) -> ParameterUncertainty:
+    """Covariance of a CLS estimate, projected on the null space of its equality constraints.
+
+    Give the same ``data``, ``static``, ``how``, ``reference`` and ``constraints`` as to
+    :func:`graybox.cls`: the constraint rows are rebuilt from them. Inequality rows active at θ̂
+    count as equalities (the covariance is then conditional on the active set; near-active rows
+    make it unreliable).
+
+    Parameters
+    ----------
+    model : Model
+        The CLS estimate.
+    data : Record, sequence of Record, or Dataset
+        Its identification data.
+    static : StaticCurve or StaticPoints, optional
+        As for :func:`graybox.cls`.
+    how : {"auto", "curve", "points"}
+        As for :func:`graybox.cls`.
+    reference : {"ls", "els"}, Model, ndarray or float
+        As for :func:`graybox.cls` (Σ*_y of eq. (22)); its own randomness is not propagated.
+    constraints : constraint or iterable of constraints, optional
+        As for :func:`graybox.cls` (affine ones only).
+    level : float
+        Confidence level of the intervals, in (0, 1).
+
+    Returns
+    -------
+    ParameterUncertainty
+        ``cov @ constraints.T`` is zero: constrained clusters have zero variance.
+
+    Raises
+    ------
+    ValueError
+        The model does not satisfy the constraints or is not their least-squares solution (other
+        data or settings than its estimate's), a non-affine constraint, not identifiable.
+    """
+    model = _model_arg(model, "cls_uncertainty")
+    level = _check_level(level)
+    st = _process_structure(model)
+    recs = as_records(data)
+    d = _dynamic(st, recs)
+    cons, ctx, _ = _cls_setup(st, recs, d, data, static, how, reference, constraints)
+    A = _equalities(cons, ctx, model.theta, "cls_uncertainty")
+    n = len(st)
+    Z, r = _null_space(A / d.s, n)
+    z = model.theta * d.s
+    dof = d.N - (n - r)
+    rss = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss)
+    sigma2 = rss / dof
+    cov = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty"), d.s)
+    grad = d.R1.T @ (d.R1 @ z - d.c1)
+    _check_stationary(Z, grad, _size(d.R1.T @ (d.R1 @ z), d.R1.T @ d.c1), "cls_uncertainty",
+                      "pass the CLS estimate with the data, static information and constraints it was estimated with")
+    return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)))
+
+
+# --------------------------------------------------------------------------------------------
+# PE
+# --------------------------------------------------------------------------------------------
+def pe_uncertainty(
+    model: Model | Decision,
+    data: Record | Sequence[Record] | Dataset,
+    static: StaticPoints | StaticCurve | None = None,
+    *,
+    lambda1: float | None = None,
+    constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
+    weights: str = "mse",
+    ubar: np.ndarray | None = None,
+    reference: Model | np.ndarray | float | str = "ls",
+    static_sigma: float | None = None,
+    level: float = 0.95,
+) -> ParameterUncertainty:
+    """Sandwich covariance of a PE member (eq. (9)) at its weight λ1.
+
+    Parameters
+    ----------
+    model : Model or Decision
+        The member (``ParetoSet.model(i)``, or a Decision from :func:`graybox.decide_dsf`, which
+        brings its λ1).
+    data : Record, sequence of Record, or Dataset
+        Its identification data.
+    static : StaticPoints or StaticCurve, optional
+        As for :func:`graybox.pe_pareto` (default: the Dataset's points).
+    lambda1 : float, optional
+        The member's λ1 in (0, 1] (default: the Decision's).
+    constraints, weights, ubar, reference
+        As for :func:`graybox.pe_pareto` (affine constraints only; active inequalities count as
+        equalities).
+    static_sigma : float, optional
+        Standard deviation of the measured ȳ_i, output units (e.g. 0.175 mlc for the plant's
+        transmitter). Default: the member's own static misfit √mean(((QRθ − ȳ)/D)²), which
+        includes any systematic misfit and so errs on the safe side.
+    level : float
+        Confidence level of the intervals, in (0, 1).
+
+    Returns
+    -------
+    ParameterUncertainty
+        ``sigma2``: the dynamic noise variance (least squares on the data); ``static_sigma2``: σ_SF².
+        First order: unreliable towards small λ1 (see the module docstring).
+
+    Raises
+    ------
+    ValueError
+        θ is not the PE optimum at this λ1 with these data (e.g. a wrong λ1), not identifiable.
+    """
+    m = _model_arg(model, "pe_uncertainty")
+    lam = _lambda_arg(model, lambda1, "pe_uncertainty")
+    level = _check_level(level)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StaticRangeWarning)  # the estimator has said it
+        st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(m, data, static, constraints, weights, ubar, reference)
+    n = len(st)
+    theta = m.theta
+    A = _equalities(cons, ctx, theta, "pe_uncertainty")
+    Z, r = _null_space(A / d.s, n)
+    w1 = lam / d.N if weights == "mse" else lam
+    w2 = (1 - lam) / M if weights == "mse" else 1 - lam
+    cm = cluster_map(st)
+    QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R / d.s  # (M, n) in z
+    dQR = static_rows(cm, pts.ubar, pts.ybar, wrt="y") @ cm.R / d.s
+    z = theta * d.s
+    sres = QR @ z - pts.ybar  # affine static residual s_i
+    g = dQR @ z - 1.0  # ∂s_i/∂ȳ_i (−D(ū_i) for a rational structure)
+    if np.any(np.abs(g) < 1e-12):
+        raise ValueError("pe_uncertainty: the static equation does not depend on ȳ at some static point "
+                         "(its denominator vanishes): the member's static function is undefined there")
+    grad = w1 * (d.R1.T @ (d.R1 @ z - d.c1)) + w2 * (QR.T @ sres)
+    size = _size(w1 * (d.R1.T @ (d.R1 @ z)), w1 * (d.R1.T @ d.c1), w2 * (QR.T @ (QR @ z)), w2 * (QR.T @ pts.ybar))
+    _check_stationary(Z, grad, size, "pe_uncertainty", f"pass the member's own λ1 (got {lam:g}) and the data, static "
+                      "points and constraints of its estimate")
+    dof_ls = d.N - n
+    sigma2 = d.rss / dof_ls  # the data's noise, from least squares on the same data
+    ss2 = (check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2 if static_sigma is not None
+           else float(np.mean((sres / g) ** 2)))
+    B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
+    A2 = np.vstack([np.sqrt(w1) * d.R1, np.sqrt(w2) * QR])  # H = A2ᵀA2
+    G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
+    cov = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty"), d.s)
+    return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2)
+
+
+# --------------------------------------------------------------------------------------------
+# SE
+# --------------------------------------------------------------------------------------------
+def se_uncertainty(
+    model: Model | Decision,
+    data: Record | Sequence[Record] | Dataset,
+    static: StaticPoints | None = None,
+    *,
+    lambda1: float | None = None,
+    static_sigma: float | None = None,
+    level: float = 0.95,
+) -> ParameterUncertainty:
+    """Covariance of an SE member (eq. (13)) from the Jacobian of its residuals at θ̂.
+
+    Parameters
+    ----------
+    model : Model or Decision
+        The member (from :func:`graybox.se_pareto`, gradient or GA; a Decision brings its λ1).
+    data : Record, sequence of Record, or Dataset
+        Its identification data (each record run freely from its own first samples).
+    static : StaticPoints, optional
+        Its static points (default: the Dataset's).
+    lambda1 : float, optional
+        The member's λ1 in (0, 1] (default: the Decision's).
+    static_sigma : float, optional
+        Standard deviation of the measured ȳ_i, output units; default: the member's static
+        misfit √J_SF.
+    level : float
+        Confidence level of the intervals, in (0, 1).
+
+    Returns
+    -------
+    ParameterUncertainty
+        ``sigma2``: the free-run error variance Σe_sim²/(N − n).
+
+    Raises
+    ------
+    ValueError
+        The member's free run diverges or its static curve is undefined at a static point; not
+        identifiable.
+
+    Warns
+    -----
+    UncertaintyWarning
+        θ̂ is not a stationary point of the SE objective (e.g. a GA member, or a gradient run
+        stopped by its evaluation budget): the intervals then describe the curvature there.
+    """
+    m = _model_arg(model, "se_uncertainty")
+    lam = _lambda_arg(model, lambda1, "se_uncertainty")
+    level = _check_level(level)
+    recs = as_records(data)
+    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
+    if sp is None and lam < 1:
+        raise ValueError("se_uncertainty needs the static points (static= or a Dataset with static points)")
+    if sp is None:  # λ1 = 1 ignores the static points; SEProblem still wants some
+        sp = StaticPoints([0.0], [0.0])
+    problem = SEProblem(m.structure, recs, sp)
+    n = len(m.structure)
+    with np.errstate(all="ignore"):
+        r, J = _residuals_and_jac(problem, m.theta * problem.scale, lam, True)
+    if not np.all(np.isfinite(r)) or not np.all(np.isfinite(J)):
+        raise ValueError("se_uncertainty: the member's free run diverges or its static curve is undefined (no stable "
+                         "equilibrium) at a static point; it has no local covariance")
+    nd = problem.n_dyn
+    Jd, Js = J[:nd], J[nd:]
+    rd, rs = r[:nd], r[nd:]
+    w1 = np.sqrt(lam / nd)
+    sigma2 = float(np.sum((rd / w1) ** 2)) / (nd - n)
+    if lam < 1:
+        w2 = np.sqrt((1 - lam) / len(sp))
+        ss2 = (check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2 if static_sigma is not None
+               else float(np.mean((rs / w2) ** 2)))
+    else:
+        ss2 = float("nan")
+    # J holds the weighted residuals' derivatives (w ∂e/∂z): H = JᵀJ, and the gradient Jᵀr = Σ_b w_b² Ĵ_bᵀe_b
+    # has covariance Σ_b w_b⁴ σ_b² Ĵ_bᵀĴ_b = Σ_b w_b² σ_b² J_bᵀJ_b
+    G = w1 * np.sqrt(sigma2) * Jd if lam == 1 else np.vstack([w1 * np.sqrt(sigma2) * Jd, w2 * np.sqrt(ss2) * Js])
+    g = np.linalg.norm(J.T @ r)
+    rel = g / max(float(np.linalg.norm(J, 2) * np.linalg.norm(r)), 1e-300)
+    if rel > 1e-3:
+        warn(f"se_uncertainty: θ is not a stationary point of the SE objective at λ1 = {lam:g} (relative gradient "
+             f"{rel:.1e}); the intervals describe the curvature at this θ, not at an optimum", UncertaintyWarning)
+    cov = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty"), problem.scale)
+    return ParameterUncertainty(m, cov, level, nd - n, sigma2, f"SE λ1={lam:.4g}", np.zeros((0, n)),
+                                np.zeros((0, 0)), ss2)
+
+
+# --------------------------------------------------------------------------------------------
+# static curve and gain
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class StaticCurveBand:
+    """Confidence band of a model's static curve ȳ(ū) and static gain dȳ/dū.
+
+    Attributes
+    ----------
+    ubar : ndarray, shape (M,)
+        Input levels (engineering units).
+    ybar, gain : ndarray, shape (M,)
+        The estimate's static curve and gain (the stable equilibrium it reaches).
+    ybar_low, ybar_high, gain_low, gain_high : ndarray, shape (M,)
+        The band at :attr:`level`.
+    ybar_std, gain_std : ndarray, shape (M,)
+        Standard deviations (delta method, or of the Monte Carlo draws).
+    level : float
+    method : str
+        ``"delta"`` or ``"monte-carlo"``.
+    n_samples : int
+        Monte Carlo draws (0 for the delta method).
+    undefined : ndarray, shape (M,)
+        Fraction of draws without a stable equilibrium near the estimate's at each ū (Monte
+        Carlo; 0 for the delta method). Those draws are left out of the band.
+    model_name : str
+    """
+
+    ubar: np.ndarray
+    ybar: np.ndarray
+    ybar_low: np.ndarray
+    ybar_high: np.ndarray
+    ybar_std: np.ndarray
+    gain: np.ndarray
+    gain_low: np.ndarray
+    gain_high: np.ndarray
+    gain_std: np.ndarray
+    level: float
+    method: str
+    n_samples: int
+    undefined: np.ndarray
+    model_name: str = ""
+
+    def __post_init__(self) -> None:
+        M = np.shape(self.ubar)[0]
+        for f in ("ubar", "ybar", "ybar_low", "ybar_high", "ybar_std", "gain", "gain_low", "gain_high", "gain_std",
+                  "undefined"):
+            a = frozen(getattr(self, f))
+            if a.shape != (M,):
+                raise ValueError(f"{f} must have shape ({M},), got {a.shape}")
+            object.__setattr__(self, f, a)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per ū: ȳ, its band and std, the gain, its band and std (and the undefined fraction)."""
+        return pd.DataFrame({"ybar": self.ybar, "ybar low": self.ybar_low, "ybar high": self.ybar_high,
+                             "ybar std": self.ybar_std, "gain": self.gain, "gain low": self.gain_low,
+                             "gain high": self.gain_high, "gain std": self.gain_std, "undefined": self.undefined},
+                            index=pd.Index(self.ubar, name="ubar"))
+
+    def __repr__(self) -> str:
+        return (f"StaticCurveBand({self.model_name or 'model'}: {self.ubar.size} levels, {self.method}, "
+                f"level={self.level:g}, max ±{np.max((self.ybar_high - self.ybar_low) / 2):.4g} in ȳ)")
+
+
+def _gains(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+    """dȳ/dū = −F_u/F_ȳ at equilibria, for many θ at once: thetas (P, n), ybar (P, M) → (P, M)."""
+    keys = [cluster_key(t) for t in structure]
+    ub = ubar[None, :]
+    Fu = np.zeros_like(ybar)
+    Fy = -np.ones_like(ybar)
+    for j, (p, m) in enumerate(keys):
+        th = thetas[:, j, None]
+        if m:
+            Fu = Fu + th * m * ybar**p * ub ** (m - 1)
+        if p:
+            Fy = Fy + th * p * ybar ** (p - 1) * ub**m
+    with np.errstate(all="ignore"):
+        return -Fu / Fy
+
+
+def _gain_gradient(structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+    """∂(dȳ/dū)/∂θ along the static curve (through ȳ(θ) too), shape (M, n)."""
+    keys = [cluster_key(t) for t in structure]
+    Fu, Fy = np.zeros_like(ybar), -np.ones_like(ybar)
+    Fuy, Fyy = np.zeros_like(ybar), np.zeros_like(ybar)
+    dFu, dFy = np.zeros((ubar.size, len(keys))), np.zeros((ubar.size, len(keys)))
+
+    def pw(x, k):
+        return x**k if k >= 0 else np.zeros_like(x)
+
+    for j, (p, m) in enumerate(keys):
+        t = theta[j]
+        if m:
+            dFu[:, j] = m * pw(ybar, p) * pw(ubar, m - 1)
+            Fu += t * dFu[:, j]
+            if p:
+                Fuy += t * m * p * pw(ybar, p - 1) * pw(ubar, m - 1)
+        if p:
+            dFy[:, j] = p * pw(ybar, p - 1) * pw(ubar, m)
+            Fy += t * dFy[:, j]
+            if p > 1:
+                Fyy += t * p * (p - 1) * pw(ybar, p - 2) * pw(ubar, m)
+    dy = static_theta_gradient(structure, theta, ubar, ybar)  # (M, n)
+    dFu_tot = dFu + Fuy[:, None] * dy
+    dFy_tot = dFy + Fyy[:, None] * dy
+    return -(dFu_tot * Fy[:, None] - Fu[:, None] * dFy_tot) / (Fy**2)[:, None]
+
+
+def static_curve_band(
+    uncertainty: ParameterUncertainty,
+    ubar: np.ndarray | Sequence[float],
+    *,
+    method: str = "delta",
+    n_samples: int = 2000,
+    seed: int = 0,
+    y0: float | np.ndarray | None = None,
+) -> StaticCurveBand:
+    """Confidence band of the static curve and gain implied by a parameter covariance.
+
+    Parameters
+    ----------
+    uncertainty : ParameterUncertainty
+        From :func:`ls_uncertainty`, :func:`cls_uncertainty`, :func:`pe_uncertainty` or
+        :func:`se_uncertainty`.
+    ubar : array_like, shape (M,)
+        Input levels (engineering units).
+    method : {"delta", "monte-carlo"}
+        ``"delta"``: first order through the static map, ±z·std with std² = gᵀ cov g and g the
+        gradient of ȳ(ū) (implicit differentiation of eq. (5)) or of the gain. ``"monte-carlo"``:
+        θ drawn from N(θ̂, cov), the stable equilibrium nearest the estimate's taken for each
+        draw, the band from the draws' quantiles (honest where the map is curved, e.g. near a
+        vanishing denominator).
+    n_samples : int
+        Monte Carlo draws.
+    seed : int
+        Seed of the Monte Carlo draws.
+    y0 : float or array_like, optional
+        Initial output to pick the estimate's equilibrium where several are stable (as for
+        :meth:`graybox.Model.static_curve`).
+
+    Returns
+    -------
+    StaticCurveBand
+        Draw it with :func:`graybox.plots.plot_static_band`.
+
+    Raises
+    ------
+    ValueError
+        The estimate has no stable equilibrium at some ū.
+    """
+    if not isinstance(uncertainty, ParameterUncertainty):
+        raise ValueError(f"static_curve_band needs a ParameterUncertainty, got {type(uncertainty).__name__}")
+    check_choice(method, "method", ("delta", "monte-carlo"))
+    ub = np.atleast_1d(np.asarray(ubar, float)).ravel()
+    if ub.size == 0 or not np.all(np.isfinite(ub)):
+        raise ValueError("ubar must be a non-empty array of finite input levels")
+    m = uncertainty.model
+    st, th, cov = m.structure, m.theta, uncertainty.cov
+    yb = m.static_curve(ub, y0=y0)
+    gain = _gains(st, th[None], ub, yb[None])[0]
+    z = stats.norm.ppf(0.5 + uncertainty.level / 2)
+    if method == "delta":
+        Gy = static_theta_gradient(st, th, ub, yb)
+        Gg = _gain_gradient(st, th, ub, yb)
+        sy = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", Gy, cov, Gy), 0, None))
+        sg = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", Gg, cov, Gg), 0, None))
+        return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
+                               uncertainty.level, "delta", 0, np.zeros(ub.size), m.name)
+    n_samples = check_int(n_samples, "n_samples", low=10)
+    rng = np.random.default_rng(check_seed(seed))
+    w, V = np.linalg.eigh((cov + cov.T) / 2)
+    thetas = th[None, :] + (rng.standard_normal((n_samples, th.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T
+    Y = nearest_stable_equilibria(st, thetas, ub, yb)
+    G = _gains(st, thetas, ub, Y)
+    ok = np.isfinite(Y) & np.isfinite(G)
+    undefined = 1.0 - ok.mean(axis=0)
+    a = (1 - uncertainty.level) / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns give NaN bands
+        Yn, Gn = np.where(ok, Y, np.nan), np.where(ok, G, np.nan)
+        ylo, yhi = np.nanquantile(Yn, [a, 1 - a], axis=0)
+        glo, ghi = np.nanquantile(Gn, [a, 1 - a], axis=0)
+        sy, sg = np.nanstd(Yn, axis=0), np.nanstd(Gn, axis=0)
+    return StaticCurveBand(ub, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo", n_samples,
+                           undefined, m.name)

@@ -1,0 +1,211 @@
+"""Pictures for trusting a model: residual correlation tests, static-curve bands, decision bootstrap.
+
+Built with :class:`matplotlib.figure.Figure` directly (no pyplot state), like the other plots.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from .._bootstrap import DecisionBootstrap
+from .._records import StaticPoints
+from .._residuals import ResidualTests
+from .._uncertainty import StaticCurveBand
+
+__all__ = ["plot_residual_tests", "plot_static_band", "plot_decision_bootstrap"]
+
+
+def plot_residual_tests(
+    tests: ResidualTests,
+    axes: Sequence[Axes] | None = None,
+    title: str | None = None,
+) -> Figure:
+    """The five correlation tests as five stacked panels, with their bands.
+
+    Parameters
+    ----------
+    tests : ResidualTests
+        From :func:`graybox.residual_tests`.
+    axes : sequence of 5 Axes, optional
+        Draw here; by default a new 7 × 9 in figure with five rows is made.
+    title : str, optional
+        Figure title (default: the model's name and the verdict).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Per panel: φ(τ) as stems, the pointwise band ±z/√N (dashed, 1.96/√N at 95 %) and, with the
+        simultaneous rule, the limit the verdict uses (dotted); the panel title says pass or FAIL.
+    """
+    if not isinstance(tests, ResidualTests):
+        raise ValueError(f"plot_residual_tests needs a ResidualTests, got {type(tests).__name__}")
+    items = list(tests.tests.values())
+    if axes is None:
+        fig = Figure(figsize=(7.0, 9.0), layout="constrained")
+        axs = fig.subplots(len(items), 1)
+    else:
+        axs = list(axes)
+        if len(axs) != len(items):
+            raise ValueError(f"plot_residual_tests: axes must hold {len(items)} Axes, got {len(axs)}")
+        fig = axs[0].figure
+    for ax, t in zip(axs, items):
+        bad = np.abs(t.phi) > t.limit
+        ax.vlines(t.lags, 0.0, t.phi, color="C0", lw=1.2)
+        ax.plot(t.lags[~bad], t.phi[~bad], "o", ms=3, color="C0")
+        if bad.any():
+            ax.plot(t.lags[bad], t.phi[bad], "o", ms=4, color="C3", label="beyond the limit")
+        ax.axhline(0.0, color="k", lw=0.6)
+        for s in (-1, 1):
+            ax.axhline(s * t.band, color="0.4", ls="--", lw=0.9,
+                       label=f"±{t.band:.3g} ({tests.level:.0%} pointwise)" if s > 0 else None)
+            if t.limit != t.band:
+                ax.axhline(s * t.limit, color="0.4", ls=":", lw=0.9,
+                           label=f"±{t.limit:.3g} ({tests.level:.0%} for the test)" if s > 0 else None)
+        top = max(1.2 * float(np.max(np.abs(t.phi))), 1.5 * t.limit)
+        ax.set_ylim(-min(top, 1.05), min(top, 1.05))
+        ax.set_ylabel(t.label)
+        ax.set_title(f"{t.label}: {'pass' if t.passed else 'FAIL'}", fontsize=9, loc="left")
+        ax.grid(True, alpha=0.3)
+    axs[-1].set_xlabel("lag τ (samples)")
+    axs[0].legend(fontsize=7, loc="upper right")
+    if axes is None:
+        verdict = "all tests passed" if tests.passed else f"{len(tests.failed)} test(s) failed"
+        fig.suptitle(title or f"{tests.model_name or 'model'}: residual correlation tests, N = {tests.n} ({verdict})",
+                     fontsize=10)
+    return fig
+
+
+def plot_static_band(
+    band: StaticCurveBand,
+    points: StaticPoints | None = None,
+    gain: bool = True,
+    axes: Sequence[Axes] | None = None,
+    xlabel: str = "Pump speed (rpm)",
+    ylabel: str = "Pressure (mlc)",
+    gain_label: str = "static gain (mlc/rpm)",
+) -> Figure:
+    """The static curve with its confidence band (shaded) and the static points; the gain beside it.
+
+    Parameters
+    ----------
+    band : StaticCurveBand
+        From :func:`graybox.static_curve_band`.
+    points : StaticPoints, optional
+        Measured steady states, drawn as ``*`` markers.
+    gain : bool
+        Add a second panel with the static gain and its band.
+    axes : sequence of Axes, optional
+        Draw here (one Axes, or two with ``gain``); by default a new figure is made.
+    xlabel, ylabel, gain_label : str
+        Axis labels (defaults: the pumping plant's).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The curve as a line over its shaded band (with the level and method in the legend), the
+        points as asterisks; the gain panel likewise.
+    """
+    if not isinstance(band, StaticCurveBand):
+        raise ValueError(f"plot_static_band needs a StaticCurveBand, got {type(band).__name__}")
+    need = 2 if gain else 1
+    if axes is None:
+        fig = Figure(figsize=(10.0 if gain else 6.4, 4.0), layout="constrained")
+        axs = list(np.atleast_1d(fig.subplots(1, need)))
+    else:
+        axs = list(axes)
+        if len(axs) != need:
+            raise ValueError(f"plot_static_band: axes must hold {need} Axes, got {len(axs)}")
+        fig = axs[0].figure
+    what = f"{band.level:.0%} band ({band.method})"
+    name = band.model_name or "model"
+    ax = axs[0]
+    ax.fill_between(band.ubar, band.ybar_low, band.ybar_high, color="C0", alpha=0.25, lw=0, label=what)
+    ax.plot(band.ubar, band.ybar, "-", color="C0", label=f"{name} static curve")
+    if points is not None:
+        ax.plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    if gain:
+        ax = axs[1]
+        ax.fill_between(band.ubar, band.gain_low, band.gain_high, color="C1", alpha=0.25, lw=0, label=what)
+        ax.plot(band.ubar, band.gain, "-", color="C1", label=f"{name} static gain")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(gain_label)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    return fig
+
+
+def plot_decision_bootstrap(
+    boot: DecisionBootstrap,
+    axes: Sequence[Axes] | None = None,
+    xlabel: str = "J_S (mlc²)",
+    ylabel: str = "J_SF (mlc²)",
+) -> Figure:
+    """How often each λ1 was chosen, and where the chosen members lie in (J_S, J_SF).
+
+    Parameters
+    ----------
+    boot : DecisionBootstrap
+        From :func:`graybox.bootstrap_decision`.
+    axes : pair of Axes, optional
+        Draw here; by default a new 10 × 4 in figure with two panels is made.
+    xlabel, ylabel : str
+        Labels of the right panel (defaults: the pumping plant's units).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: the fraction of replicates choosing each λ1 (log axis), the reference decision's
+        λ1 dashed. Right: each replicate's chosen member (J_S, J_SF) on log axes, D_SF's band
+        shaded, the reference decision as a star; failed replicates are counted in the title.
+    """
+    if not isinstance(boot, DecisionBootstrap):
+        raise ValueError(f"plot_decision_bootstrap needs a DecisionBootstrap, got {type(boot).__name__}")
+    if axes is None:
+        fig = Figure(figsize=(10.0, 4.0), layout="constrained")
+        ax_l, ax_r = fig.subplots(1, 2)
+    else:
+        if len(axes) != 2:
+            raise ValueError(f"plot_decision_bootstrap: axes must be a pair, got {len(axes)}")
+        ax_l, ax_r = axes
+        fig = ax_l.figure
+    freq = boot.frequencies()
+    lam = freq.index.to_numpy(float)
+    ax_l.vlines(lam, 0.0, freq["fraction"], color="C0", lw=3)
+    ax_l.plot(lam, freq["fraction"], "o", color="C0", ms=4)
+    ref = boot.reference.get("lambda1")
+    if ref is not None:
+        ax_l.axvline(ref, color="k", ls="--", lw=1, label=f"original data: λ1 = {ref:.3g}")
+        ax_l.legend(fontsize=8, loc="best")
+    ax_l.set_xscale("log")
+    lo, hi = float(np.min(boot.lambdas)), float(np.max(boot.lambdas))
+    ax_l.set_xlim(lo / 1.5, hi * 1.5)
+    ax_l.set_ylim(0, 1.05)
+    ax_l.set_xlabel("λ1 chosen by D_SF")
+    ax_l.set_ylabel("fraction of replicates")
+    ax_l.grid(True, which="both", alpha=0.3)
+    ok = boot.ok & np.isfinite(boot.JS) & np.isfinite(boot.JSF) & (boot.JS > 0) & (boot.JSF > 0)
+    ax_r.plot(boot.JS[ok], boot.JSF[ok], "o", ms=4, alpha=0.6, color="C0", label=f"replicates ({int(ok.sum())})")
+    if "JS" in boot.reference and boot.reference["JS"] > 0 and boot.reference["JSF"] > 0:
+        ax_r.plot([boot.reference["JS"]], [boot.reference["JSF"]], "*", ms=14, mec="k", color="C1",
+                  label="original data", zorder=5)
+    ax_r.set_xscale("log")
+    ax_r.set_yscale("log")
+    band_hi = boot.band if np.ndim(boot.band) == 0 else boot.band[1]
+    ylo, yhi = ax_r.get_ylim()
+    ax_r.axhspan(ylo, band_hi, color="0.85", zorder=0, label=f"B = [0, {band_hi:g}]")
+    ax_r.set_ylim(ylo, max(yhi, band_hi))
+    ax_r.set_xlabel(xlabel)
+    ax_r.set_ylabel(ylabel)
+    ax_r.grid(True, which="both", alpha=0.3)
+    ax_r.legend(fontsize=8, loc="best")
+    failed = f", {len(boot.failures)} failed" if boot.failures else ""
+    ax_r.set_title(f"{boot.method.upper()} + D_SF, {boot.n_replicates} replicates{failed}", fontsize=9)
+    return fig

@@ -1,0 +1,259 @@
+"""Save and load as JSON: every saved type round-trips bit for bit; bad files are refused clearly; no pickle."""
+
+import ast
+import json
+import struct
+import warnings
+from dataclasses import fields
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+import graybox as gb
+from graybox import _io
+
+STRUCT = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-2)", "u(k-1)^2", "1"])
+
+
+def bits(x):
+    """The float64 bit patterns of an array (NaN payloads aside: graybox writes one NaN)."""
+    a = np.asarray(x, float)
+    return np.where(np.isnan(a), np.nan, a).view(np.int64) if a.size else a
+
+
+def same(a, b, path="value"):
+    """Deep equality of graybox values: floats bit for bit, arrays by shape and bits."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        assert a.shape == b.shape, path
+        np.testing.assert_array_equal(bits(a), bits(b), err_msg=path)
+    elif type(a) in _io._TYPES:
+        assert type(a) is type(b), path
+        for f in fields(a):
+            same(getattr(a, f.name), getattr(b, f.name), f"{path}.{f.name}")
+    elif isinstance(a, float) or isinstance(b, float):
+        assert struct.pack("<d", a) == struct.pack("<d", b) or (np.isnan(a) and np.isnan(b)), path
+    elif isinstance(a, (tuple, list)):
+        assert len(a) == len(b), path
+        for i, (x, y) in enumerate(zip(a, b)):
+            same(x, y, f"{path}[{i}]")
+    elif hasattr(a, "items"):
+        assert dict(a).keys() == dict(b).keys(), path
+        for k in dict(a):
+            same(a[k], b[k], f"{path}.{k}")
+    else:
+        assert a == b, path
+
+
+def record(seed=0, N=300):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(750, 1650, N // 10 + 1), 10)[:N]
+    m = gb.Model(STRUCT, [0.6, 0.2, 2e-3, 1e-5, -5e-7, 0.3])
+    y = m.simulate(u, np.full(2, 8.0)) + 0.05 * rng.standard_normal(N)
+    return gb.Record(u, y, name="ident", units=("rpm", "mlc"))
+
+
+@pytest.fixture(scope="module")
+def values():
+    rec = record()
+    static = gb.StaticPoints(np.linspace(800, 1600, 5), np.linspace(5, 19, 5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sel = gb.frols(gb.Candidates(ny=2, nu=1, ne=2, degree=2), rec, n_terms=6)
+        fit = gb.els(sel, rec)
+        pe = gb.pe_pareto(STRUCT, rec, static, [1.0, 0.1, 1e-3], solver="closed")
+        failed = gb.ParetoSet(STRUCT, np.vstack([pe.thetas[:2], np.full(6, np.nan)]), [1.0, 0.1, np.nan],
+                              pe.J1, [0.5, np.inf, np.inf], pe.JSF, "PE with a failure", {"cost": [1.0, -0.0, np.inf]},
+                              {2: "no start was feasible"})
+        dec = gb.decide_dsf(pe, band=100.0)
+        nfit = gb.neural_narx(rec, ny=1, nu=1, ne=1, hidden=2, epochs=3, seed=0)
+        unc = gb.pe_uncertainty(dec, rec, static)
+        band = gb.static_curve_band(gb.ls_uncertainty(pe.model(0), rec), [900.0, 1300.0], method="monte-carlo",
+                                    n_samples=200)
+    return {"model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
+            "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band}
+
+
+TYPES = ["model", "plain model", "neural", "pareto", "failed", "selection", "els", "neural fit", "decision",
+         "uncertainty", "band"]
+
+
+@pytest.mark.parametrize("name", TYPES)
+def test_round_trip(values, name, tmp_path):
+    v = values[name]
+    p = gb.save(v, tmp_path / f"{name}.json", units=("rpm", "mlc"))
+    back = gb.load(p)
+    same(v, back)
+    assert gb.load(p, expect=type(v)) is not None
+    head = gb.read_header(p)
+    assert head["type"] == type(v).__name__ and head["units"] == ("rpm", "mlc")
+    assert head["format_version"] == gb.FORMAT_VERSION and head["graybox_version"] == gb.__version__
+    # text round trip too, and writing the loaded value gives the same file
+    assert gb.to_json(back, units=("rpm", "mlc")) == p.read_text(encoding="utf-8")
+
+
+def test_every_constructor_field_is_saved():
+    for name, (cls, spec) in _io._CODECS.items():
+        assert {f.name for f in fields(cls)} == {k for k, _ in spec}, name
+
+
+def test_the_file_is_readable(values, tmp_path):
+    p = gb.save(values["model"], tmp_path / "m.json", units=("rpm", "mlc"))
+    doc = json.loads(p.read_text(encoding="utf-8"))
+    assert doc["format"] == "graybox" and doc["type"] == "Model" and doc["units"] == {"u": "rpm", "y": "mlc"}
+    m = values["model"]
+    assert doc["object"]["structure"] == [str(t) for t in m.structure]  # terms as the paper prints them
+    assert doc["object"]["noise_structure"] == ["e(k-1)", "e(k-2)"]
+    assert doc["object"]["equation"].startswith("y(k) = ")
+    assert set(doc["object"]["clusters"]) == set(m.clusters())
+    lines = p.read_text(encoding="utf-8").splitlines()
+    assert any(line.strip().startswith('"theta": [') and line.rstrip().endswith("],") for line in lines)  # one line
+    pareto = gb.to_json(values["failed"])
+    assert '"nan"' in pareto and '"inf"' in pareto and "NaN" not in pareto and "Infinity" not in pareto
+    json.loads(pareto)  # strict JSON
+
+
+finite_or_inf = st.floats(allow_nan=False, allow_infinity=False, allow_subnormal=True, width=64)
+
+
+@settings(max_examples=200, deadline=None)
+@given(theta=st.lists(finite_or_inf, min_size=6, max_size=6))
+def test_model_floats_round_trip_bit_for_bit(theta):
+    m = gb.Model(STRUCT, theta, name="θ")
+    back = gb.from_json(gb.to_json(m))
+    assert [struct.pack("<d", x) for x in back.theta] == [struct.pack("<d", float(x)) for x in theta]
+
+
+@settings(max_examples=100, deadline=None)
+@given(values=st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=1, max_size=8))
+def test_non_finite_values_round_trip(values):
+    K = len(values)
+    ps = gb.ParetoSet(gb.Structure(["y(k-1)"]), np.ones((K, 1)), values, np.zeros(K), np.array(values), np.zeros(K))
+    back = gb.from_json(gb.to_json(ps))
+    same(ps, back)
+
+
+def _doc(values, **change):
+    d = json.loads(gb.to_json(values["model"]))
+    for k, v in change.items():
+        if v is None:
+            d.pop(k)
+        else:
+            d[k] = v
+    return json.dumps(d)
+
+
+def test_bad_files_are_refused(values, tmp_path):
+    ok = gb.to_json(values["model"])
+    bad = {
+        "not JSON": (ok[:-20], "corrupt file"),
+        "a list": ("[1, 2]", "not a graybox file"),
+        "another format": (_doc(values, format="other"), "not a graybox file"),
+        "newer": (_doc(values, format_version=2), r"newer graybox .*format version 2.*upgrade"),
+        "version as text": (_doc(values, format_version="1"), "unknown format_version"),
+        "version 0": (_doc(values, format_version=0), "unknown format_version"),
+        "unknown type": (_doc(values, type="Pickle"), "unknown type 'Pickle'"),
+        "extra header": (_doc(values, comment="hi"), r"unknown field\(s\) \['comment'\]"),
+        "bad units": (_doc(values, units={"u": 1}), "units"),
+        "no object": (_doc(values, object=None), 'no "object"'),
+    }
+    for label, (text, msg) in bad.items():
+        with pytest.raises(gb.GrayboxFileError, match=msg):
+            gb.from_json(text, source=label)
+    obj = json.loads(ok)
+
+    def with_object(**change):
+        d = json.loads(ok)
+        d["object"].update(change)
+        return json.dumps(d)
+
+    cases = {
+        "object.theta": (with_object(theta="0.5"), "expected a list"),
+        "object.theta[1]": (with_object(theta=[0.1, "x"] + obj["object"]["theta"][2:]), "expected a number"),
+        "length": (with_object(theta=obj["object"]["theta"][:-1]), r"not a valid Model: theta has \d values"),
+        "term": (with_object(structure=["y(k-1)", "w(k-1)"] + obj["object"]["structure"][2:]), "unknown signal"),
+        "name": (with_object(name=3), "expected a string"),
+        "unknown": (with_object(colour="red"), r"unknown field\(s\) \['colour'\]"),
+        "true as number": (with_object(theta=[True] + obj["object"]["theta"][1:]), "expected a number"),
+    }
+    for label, (text, msg) in cases.items():
+        with pytest.raises(gb.GrayboxFileError, match=msg):
+            gb.from_json(text)
+    d = json.loads(ok)
+    del d["object"]["theta"]
+    with pytest.raises(gb.GrayboxFileError, match=r"missing field\(s\) \['theta'\]"):
+        gb.from_json(json.dumps(d))
+    # a file: names itself in the message; binary junk is refused without being interpreted
+    junk = tmp_path / "junk.json"
+    junk.write_bytes(b"\x80\x04\x95 pickle protocol 4")
+    with pytest.raises(gb.GrayboxFileError, match="junk.json: not a graybox file"):
+        gb.load(junk)
+    with pytest.raises(FileNotFoundError):
+        gb.load(tmp_path / "missing.json")
+
+
+def test_expect_and_unsupported_types(values, tmp_path):
+    p = gb.save(values["pareto"], tmp_path / "front.json")
+    with pytest.raises(gb.GrayboxFileError, match="holds a ParetoSet, expected Model"):
+        gb.load(p, expect=gb.Model)
+    assert isinstance(gb.load(p, expect=(gb.Model, gb.ParetoSet)), gb.ParetoSet)
+    with pytest.raises(ValueError, match="expect must be one of"):
+        gb.load(p, expect=dict)
+    with pytest.raises(ValueError, match="cannot save a dict"):
+        gb.save({"a": 1}, tmp_path / "x.json")
+    with pytest.raises(ValueError, match="units"):
+        gb.save(values["model"], tmp_path / "x.json", units="rpm")
+
+
+def test_loaded_values_are_immutable(values):
+    back = gb.from_json(gb.to_json(values["els"]))
+    with pytest.raises(ValueError):
+        back.residuals[0][0] = 1.0
+    with pytest.raises(ValueError):
+        back.model.theta[0] = 1.0
+
+
+def test_save_is_atomic(values, tmp_path, monkeypatch):
+    p = tmp_path / "m.json"
+    gb.save(values["model"], p)
+    before = p.read_text(encoding="utf-8")
+
+    def boom(*a, **k):
+        raise OSError("disk full (test)")
+
+    monkeypatch.setattr(_io.os, "replace", boom)
+    with pytest.raises(OSError, match="disk full"):
+        gb.save(values["plain model"], p)
+    assert p.read_text(encoding="utf-8") == before
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["m.json"]  # no temporary left behind
+
+
+def test_no_loader_uses_pickle():
+    """No module of graybox imports pickle (or its kin) or calls np.load without allow_pickle=False."""
+    root = Path(gb.__file__).parent
+    for path in root.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                names = [a.name for a in node.names] + ([node.module] if isinstance(node, ast.ImportFrom) else [])
+                assert not {"pickle", "cPickle", "dill", "joblib", "shelve", "marshal", "cloudpickle"} & set(names), path
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+                if node.func.attr == "read_pickle":
+                    raise AssertionError(f"{path}: read_pickle")
+                if node.func.attr == "load" and getattr(node.func.value, "id", "") in ("np", "numpy"):
+                    kw = {k.arg: k.value for k in node.keywords}
+                    assert "allow_pickle" in kw and getattr(kw["allow_pickle"], "value", True) is False, path
+
+
+def test_latex():
+    m = gb.Model(["y(k-1)", "u(k-2)y(k-6)", "u(k-6)^2", "1"], [0.6303, 2.3e-4, -4.134e-7, -0.477],
+                 noise_structure=["e(k-1)"], noise_theta=[-0.5])
+    tex = m.to_latex()
+    assert tex == (r"y(k) = 0.6303\,y(k-1) + 0.00023\,u(k-2)\,y(k-6) - 4.134 \times 10^{-7}\,u(k-6)^{2} - 0.477"
+                   r" - 0.5\,\xi(k-1) + \xi(k)")
+    block = m.to_latex(terms_per_line=2)
+    assert block.startswith("\\begin{aligned}\ny(k) ={}& 0.6303") and block.endswith("\\end{aligned}")
+    assert block.count("\\\\\n") == 2
+    assert gb.Model(["y(k-1)"], [-2.0]).to_latex(digits=2) == r"y(k) = -2\,y(k-1)"

@@ -1,0 +1,35 @@
+"""The README's "trust and keep a model" example runs as written and names only what exists."""
+
+import re
+import warnings
+from pathlib import Path
+
+import matplotlib
+
+import graybox as gb
+
+matplotlib.use("Agg")
+
+README = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+SECTION = README.split("## API: trust and keep a model", 1)[1]
+
+
+def test_example_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    block = re.findall(r"```python\n(.*?)```", SECTION, re.S)[0]
+    ns: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exec(compile(block, "README.md (API)", "exec"), ns)
+    assert isinstance(ns["tests"], gb.ResidualTests) and isinstance(ns["boot"], gb.DecisionBootstrap)
+    assert gb.load("els.json", expect=gb.ELSResult).model.n_params == 17
+
+
+def test_every_name_in_the_table_exists():
+    table = SECTION.split("```python")[0]
+    for name in re.findall(r"^\| `([A-Za-z_.]+)", table, re.M):
+        obj = gb
+        for part in name.split("."):
+            obj = getattr(obj, part)
+    for name in ("plot_residual_tests", "plot_static_band", "plot_decision_bootstrap"):
+        assert hasattr(gb.plots, name)

@@ -1,0 +1,207 @@
+"""Residual validation: the five correlation tests of Billings & Voon."""
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings, strategies as st
+
+import graybox as gb
+from graybox._residuals import _xcorr
+
+GOOD = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"])
+MISSING_U2 = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"])
+
+
+def simulate(seed, N=1000, ma=(0.0, 0.0), offset=1000.0, gain=300.0):
+    """y(k) = 0.5 y(k-1) + 0.8 u(k-1) + 0.4 u(k-1)² − 0.2 y(k-1)u(k-1) + e(k) + c1 e(k-1) + c2 e(k-2).
+
+    u is white and symmetric (E u³ = 0), so a model without u² leaves the linear tests clean and
+    only the higher-order ones can see what is missing. The record holds u in "engineering units"
+    (offset + gain · u).
+    """
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1, 1, N)
+    e = 0.05 * rng.standard_normal(N)
+    v = e.copy()
+    v[1:] += ma[0] * e[:-1]
+    v[2:] += ma[1] * e[:-2]
+    y = np.zeros(N)
+    for k in range(1, N):
+        y[k] = 0.5 * y[k - 1] + 0.8 * u[k - 1] + 0.4 * u[k - 1] ** 2 - 0.2 * y[k - 1] * u[k - 1] + v[k]
+    return gb.Record(offset + gain * u, y, name=f"sim{seed}")
+
+
+def ls(structure, rec):
+    return gb.els(structure, rec, noise=0).model
+
+
+def test_correct_model_passes_and_missing_nonlinear_term_fails():
+    seeds = range(20)
+    good = [gb.residual_tests(ls(GOOD, simulate(s)), simulate(s)) for s in seeds]
+    bad = [gb.residual_tests(ls(MISSING_U2, simulate(s)), simulate(s)) for s in seeds]
+    # each test is a 95 % test: a correct model passes all five in about 80 % of records
+    assert sum(t.passed for t in good) >= 14
+    for name in good[0].tests:
+        assert sum(t[name].passed for t in good) >= 17
+    # the missing u² shows in the higher-order tests every time, and only there (E u³ = 0)
+    assert all(not t.nonlinear_passed for t in bad)
+    assert all(not t["u2_xi"].passed for t in bad)
+    assert sum(t.linear_passed for t in bad) >= 17
+    worst = bad[0]["u2_xi"]
+    assert worst.worst_lag == 1 and abs(worst.phi[list(worst.lags).index(1)]) > 0.5
+
+
+def test_pointwise_rule_is_the_literal_reading_and_stricter():
+    rec = simulate(3)
+    m = ls(GOOD, rec)
+    sim_ = gb.residual_tests(m, rec)
+    pw = gb.residual_tests(m, rec, rule="pointwise")
+    for k in sim_.tests:
+        a, b = sim_[k], pw[k]
+        np.testing.assert_array_equal(a.phi, b.phi)
+        assert b.limit == b.band == pytest.approx(1.96 / np.sqrt(sim_.n), rel=1e-3)
+        assert a.limit > a.band
+        assert b.passed == (b.outside.size == 0)
+        np.testing.assert_array_equal(b.outside, b.lags[np.abs(b.phi) > b.band])
+    # over many records the pointwise rule fails a correct model far more often
+    fails_pw = sum(not gb.residual_tests(ls(GOOD, simulate(s)), simulate(s), rule="pointwise").passed
+                   for s in range(10))
+    fails_sim = sum(not gb.residual_tests(ls(GOOD, simulate(s)), simulate(s)).passed for s in range(10))
+    assert fails_pw > fails_sim
+
+
+def test_lags_follow_the_literature():
+    rec = simulate(0, N=400)
+    t = gb.residual_tests(ls(GOOD, rec), rec, max_lag=7)
+    assert t["xi_xi"].lags.tolist() == list(range(1, 8))
+    assert t["xi_xiu"].lags.tolist() == list(range(0, 8))
+    for k in ("u_xi", "u2_xi", "u2_xi2"):
+        assert t[k].lags.tolist() == list(range(-7, 8))
+    assert t.n == 399
+
+
+def test_correlation_against_a_direct_formula():
+    rng = np.random.default_rng(1)
+    a, b = rng.standard_normal(50), rng.standard_normal(50)
+    lags = np.arange(-5, 6)
+    phi = _xcorr([a], [b], lags)
+    ac, bc = a - a.mean(), b - b.mean()
+    for t, p in zip(lags, phi):
+        num = sum(ac[k - t] * bc[k] for k in range(50) if 0 <= k - t < 50)
+        assert p == pytest.approx(num / np.sqrt((ac @ ac) * (bc @ bc)), rel=1e-12)
+
+
+def test_records_are_not_straddled():
+    """Two records give the pooled sums of their own lagged products, not those of the concatenation."""
+    rng = np.random.default_rng(2)
+    a1, a2 = rng.standard_normal(30), rng.standard_normal(40)
+    lags = np.array([1, 2])
+    two = _xcorr([a1, a2], [a1, a2], lags)
+    joined = _xcorr([np.concatenate([a1, a2])], [np.concatenate([a1, a2])], lags)
+    assert not np.allclose(two, joined)
+    m = np.concatenate([a1, a2]).mean()
+    c1, c2 = a1 - m, a2 - m
+    den = c1 @ c1 + c2 @ c2
+    assert two[0] == pytest.approx((c1[:-1] @ c1[1:] + c2[:-1] @ c2[1:]) / den)
+
+
+def test_moving_average_part_whitens_the_residuals():
+    """With MA noise the LS model's residuals are coloured; the ELS model's (MA part included) are not."""
+    rec = simulate(5, N=2000, ma=(0.7, 0.3))
+    ls_model = ls(GOOD, rec)
+    fit = gb.els(GOOD, rec, noise=2)
+    assert not gb.residual_tests(ls_model, rec)["xi_xi"].passed
+    t = gb.residual_tests(fit.model, rec)
+    assert t["xi_xi"].passed
+    # without its MA part the ELS model's equation error is coloured again
+    assert not gb.residual_tests(fit.model, rec, moving_average=False)["xi_xi"].passed
+    # the residuals are ELS's own fixed point
+    L = 2
+    np.testing.assert_allclose(t.residuals[0], fit.residuals[0][L:], atol=1e-4 * np.std(fit.residuals[0]))  # ELS stops at tol 1e-6
+
+
+def test_general_noise_terms_match_the_filter():
+    rec = simulate(6, N=300)
+    base = gb.els(GOOD, rec, noise=0).model
+    lin = gb.Model(base.structure, base.theta, noise_structure=["e(k-1)", "e(k-2)"], noise_theta=[0.3, -0.2])
+    # the same MA part written with a product term of zero weight forces the sample-by-sample path
+    gen = gb.Model(base.structure, base.theta, noise_structure=["e(k-1)", "e(k-2)", "e(k-1)u(k-1)"],
+                   noise_theta=[0.3, -0.2, 0.0])
+    r1 = gb.one_step_residuals(lin, rec)[0]
+    r2 = gb.one_step_residuals(gen, rec)[0]
+    np.testing.assert_allclose(r1, r2, rtol=1e-12, atol=1e-14)
+
+
+@settings(max_examples=25, deadline=None)
+@given(scale_u=st.floats(1e-3, 1e3), scale_y=st.floats(1e-3, 1e3), shift_u=st.floats(-1e3, 1e3))
+def test_tests_do_not_depend_on_units(scale_u, scale_y, shift_u):
+    assume(abs(shift_u) < 1e3 * scale_u)
+    rec = simulate(7, N=300, offset=0.0, gain=1.0)
+    m = ls(GOOD, rec)
+    base = gb.residual_tests(m, rec)
+    rec2 = gb.Record(shift_u + scale_u * rec.u, scale_y * rec.y)
+    m2 = ls(GOOD, rec2)
+    other = gb.residual_tests(m2, rec2)
+    for k in base.tests:
+        np.testing.assert_allclose(other[k].phi, base[k].phi, atol=1e-7)
+
+
+def test_neural_model_residuals():
+    rec = simulate(8, N=400)
+    fit = gb.neural_narx(rec, ny=1, nu=1, ne=1, hidden=3, epochs=5, seed=0)
+    t = gb.residual_tests(fit.model, rec)
+    _, e = fit.model.predict_narmax(rec)
+    np.testing.assert_allclose(t.residuals[0], e[1:])
+    t0 = gb.residual_tests(fit.model, rec, moving_average=False)
+    np.testing.assert_allclose(t0.residuals[0], (rec.y - fit.model.predict(rec))[1:])
+
+
+def test_bad_input():
+    rec = simulate(0, N=100)
+    m = ls(GOOD, rec)
+    with pytest.raises(ValueError, match="max_lag"):
+        gb.residual_tests(m, rec, max_lag=0)
+    with pytest.raises(ValueError, match="too few"):
+        gb.residual_tests(m, rec, max_lag=99)
+    with pytest.raises(ValueError, match="level"):
+        gb.residual_tests(m, rec, level=1.0)
+    with pytest.raises(ValueError, match="rule"):
+        gb.residual_tests(m, rec, rule="any")
+    with pytest.raises(ValueError, match="Model or a NeuralModel"):
+        gb.residual_tests("model", rec)
+    exact = gb.Record(rec.u, m.simulate(rec))
+    with pytest.raises(ValueError, match="constant"):
+        gb.residual_tests(m, exact)
+    flat = gb.Record(np.full(100, 3.0), rec.y)
+    with pytest.raises(ValueError, match="input is constant"):
+        gb.residual_tests(m, flat)
+
+
+def test_result_reads_well():
+    rec = simulate(0, N=400)
+    t = gb.residual_tests(ls(MISSING_U2, rec), rec)
+    df = t.to_frame()
+    assert list(df.index) == ["xi_xi", "u_xi", "xi_xiu", "u2_xi", "u2_xi2"]
+    assert not df.loc["u2_xi", "passed"]
+    assert "FAIL" in repr(t["u2_xi"]) and "failed" in repr(t)
+
+
+def test_figure(tmp_path):
+    from matplotlib.figure import Figure
+
+    from graybox.plots import plot_residual_tests
+
+    rec = simulate(0, N=400)
+    t = gb.residual_tests(ls(MISSING_U2, rec), rec, max_lag=10)
+    fig = plot_residual_tests(t)
+    assert isinstance(fig, Figure) and len(fig.axes) == 5
+    titles = [ax.get_title(loc="left") for ax in fig.axes]
+    assert titles[3] == "φ_(u²)'ξ(τ): FAIL" and titles[0].endswith("pass")
+    # the band lines sit at ±1.96/√N and the limit lines at the Bonferroni half-width
+    levels = sorted({round(abs(line.get_ydata()[0]), 12) for line in fig.axes[1].lines if line.get_linestyle() in ("--", ":")})
+    assert levels == sorted({round(t["u_xi"].band, 12), round(t["u_xi"].limit, 12)})
+    fig.savefig(tmp_path / "r.png", dpi=50)
+    host = Figure()
+    axes = host.subplots(5, 1)
+    assert plot_residual_tests(t, axes=axes) is host
+    with pytest.raises(ValueError, match="5 Axes"):
+        plot_residual_tests(t, axes=axes[:2])
