@@ -59,7 +59,7 @@ from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_reco
 from ._regressors import regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
 from ._se import SEProblem, _residuals_and_jac
-from ._static import cluster_key, cluster_map, nearest_stable_equilibria, static_theta_gradient
+from ._static import cluster_key, cluster_map, reached_equilibria, static_theta_gradient
 from ._validation import check_choice, check_int, check_real, check_seed, frozen, warn
 
 __all__ = [
@@ -797,7 +797,7 @@ def static_curve_band(
     rng = np.random.default_rng(check_seed(seed))
     w, V = np.linalg.eigh((cov + cov.T) / 2)
     thetas = th[None, :] + (rng.standard_normal((n_samples, th.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T
-    Y = nearest_stable_equilibria(st, thetas, ub, yb)
+    Y = reached_equilibria(st, thetas, ub, yb).ybar
     G = _gains(st, thetas, ub, Y)
     ok = np.isfinite(Y) & np.isfinite(G)
     undefined = 1.0 - ok.mean(axis=0)
