@@ -84,7 +84,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ._records import Dataset, Record, as_records
-from ._validation import as_1d_finite, check_choice, check_int, check_real, frozen
+from ._validation import as_1d_finite, check_choice, check_int, check_per_point, check_real, frozen
 from ._simulation import DivergenceError, free_run_inputs
 from ._static import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
 
@@ -547,12 +547,7 @@ class NeuralModel:
         ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
         y0s = None
         if y0 is not None:
-            y0a = np.asarray(y0, dtype=float)
-            if y0a.ndim > 1 or (y0a.ndim == 1 and y0a.size not in (1, ub.size)):
-                raise ValueError(f"y0 must be a scalar or have one value per ū ({ub.size}), got shape {y0a.shape}")
-            y0s = np.broadcast_to(np.ravel(y0a) if y0a.ndim else y0a, ub.shape)
-            if not np.all(np.isfinite(y0s)):
-                raise ValueError("y0 has non-finite values")
+            y0s = check_per_point(y0, ub.size, "y0")
         out = np.full(ub.size, np.nan)
         eqs = [self._equilibria_n(self._un(u_)) for u_ in ub]
         if y0s is not None:

@@ -51,7 +51,7 @@ from ._static_kernels import (
     stable_equilibria,
 )
 from ._terms import Structure, Term
-from ._validation import as_1d_finite
+from ._validation import as_1d_finite, check_per_point
 
 __all__ = [
     "cluster_key",
@@ -756,12 +756,7 @@ def static_curve(
     ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
     th = np.asarray(theta, float)
     if y0 is not None:
-        y0a = np.asarray(y0, dtype=float)
-        if y0a.ndim > 1 or (y0a.ndim == 1 and y0a.size not in (1, ub.size)):
-            raise ValueError(f"y0 must be a scalar or have one value per ū ({ub.size}), got shape {y0a.shape}")
-        y0s = np.broadcast_to(np.ravel(y0a) if y0a.ndim else y0a, ub.shape)
-        if not np.all(np.isfinite(y0s)):
-            raise ValueError("y0 has non-finite values")
+        y0s = check_per_point(y0, ub.size, "y0")
         res = reached_equilibria(structure, th[None, :], ub, y0s)
         if strict and not res.ok.all():
             raise ValueError(_describe_failures(res))

@@ -25,6 +25,7 @@ __all__ = [
     "as_1d_finite",
     "frozen",
     "warn",
+    "check_per_point",
 ]
 
 _PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
@@ -126,6 +127,17 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
     if bad.any():
         raise ValueError(f"every λ1 in {name} must lie in (0, 1] (λ2 = 1 − λ1); got {lam[bad].tolist()}")
     return lam
+
+
+def check_per_point(value: object, n: int, name: str) -> np.ndarray:
+    """A scalar or one value per point, as a finite float array of shape (n,), or ``ValueError``."""
+    a = np.asarray(value, dtype=float)
+    if a.ndim > 1 or (a.ndim == 1 and a.size not in (1, n)):
+        raise ValueError(f"{name} must be a scalar or have one value per ū ({n}), got shape {a.shape}")
+    out = np.broadcast_to(np.ravel(a) if a.ndim else a, (n,))
+    if not np.all(np.isfinite(out)):
+        raise ValueError(f"{name} has non-finite values")
+    return out
 
 
 def as_1d_finite(x: object, name: str) -> np.ndarray:
