@@ -4,8 +4,8 @@ Polynomial NARMAX models, structure selection, static analysis and gray-box esti
 with static-curve information, after Barbosa, Aguirre, Martinez & Braga (IEEE TCST 2011).
 
 The implementation lives in private modules (``graybox._els`` …); every public name is
-exported here, and from the public subpackages :mod:`graybox.datasets`, :mod:`graybox.plots`
-and :mod:`graybox.reproduce`.
+exported here, and from the public subpackages :mod:`graybox.datasets`, :mod:`graybox.plots`,
+:mod:`graybox.experiments` and :mod:`graybox.reproduce`.
 """
 
 from importlib.metadata import PackageNotFoundError, version as _version
@@ -30,6 +30,8 @@ from ._decide import Decision, decide_dsf, decide_min_correlation
 from ._neural import NeuralFit, NeuralModel, neural_narx
 from . import datasets, plots, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
+from . import experiments
+from .experiments import load_results
 
 try:
     __version__ = _version("graybox")
@@ -53,7 +55,7 @@ __all__ = [
     "decide_dsf", "decide_min_correlation", "Decision",
     "se_pareto", "GAOptions", "SE_LAMBDAS",
     "neural_narx", "NeuralModel", "NeuralFit",
-    "datasets", "plots", "reference",
-    "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
+    "datasets", "plots", "reference", "experiments",
+    "load_pumping", "load_buck", "load_record_csv", "load_static_csv", "load_results",
     "__version__",
 ]
