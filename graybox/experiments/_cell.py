@@ -104,15 +104,31 @@ def make_structure(spec: Mapping[str, Any], data: gb.Dataset, data_hash: str) ->
     return gb.parse_structure(list(_STRUCTURES[k]))
 
 
+def _numerator_fit(st: gb.Structure, points: gb.StaticPoints) -> gb.StaticCurve:
+    """The polynomial in ū with exactly the powers the structure's numerator carries (its Σ_{u^m}
+    clusters), least squares through the static points: the curve eq. (22) can impose."""
+    powers = sorted(m for p, m in gb.cluster_map(st).keys if p == 0)
+    if not powers:
+        raise ValueError("eq. (22) needs numerator clusters (the constant or terms in u only); this structure has none")
+    if len(points) < len(powers):
+        raise ValueError(f"fitting the {len(powers)} numerator coefficients (ū powers {powers}) needs at least "
+                         f"{len(powers)} static points, got {len(points)}")
+    V = points.ubar[:, None] ** np.array(powers, float)[None, :]
+    scale = np.sqrt(np.mean(V**2, axis=0))  # columns in engineering units span decades (ū² ≈ 1e6)
+    z = np.linalg.lstsq(V / scale, points.ybar, rcond=None)[0]
+    coef = np.zeros(max(powers) + 1)
+    coef[powers] = z / scale
+    return gb.StaticCurve.polynomial(coef, domain=(float(points.ubar.min()), float(points.ubar.max())),
+                                     name=f"fit of ū^{powers} to {points.name}")
+
+
 def _constraints(specs, st: gb.Structure, data: gb.Dataset) -> list:
     out = []
     for c in specs:
         curve = None
         if c["type"] == "equality":
             if c["curve"] == "fit":
-                # the polynomial the structure's numerator can carry, as gb.cls(how="curve") fits it
-                degree = max((m for p, m in gb.cluster_map(st).keys if p == 0), default=0)
-                curve = gb.StaticCurve.fit(data.static, degree=degree)
+                curve = _numerator_fit(st, data.static)
             elif c["curve"] == "dataset":
                 curve = data.extra["static_curve"]
             else:
@@ -187,8 +203,12 @@ def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, list]:
     js_valid = np.full(K, np.inf)
     if ok.any():
         js_valid[ok] = gb.evaluate_thetas(pareto.structure, pareto.thetas[ok], data.valid, one_step=False)["JS"]
+    # fit % from J_S as gb.fit_percent defines it: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖) from sample L on
+    y = data.valid.y[pareto.structure.max_lag:]
+    with np.errstate(invalid="ignore"):
+        fit = 100.0 * (1.0 - np.sqrt(js_valid * y.size / np.sum((y - y.mean()) ** 2)))
     return {"lambda1": pareto.lambdas.tolist(), "J1": pareto.J1.tolist(), "JS": pareto.JS.tolist(),
-            "JSF": pareto.JSF.tolist(), "JS_valid": js_valid.tolist(),
+            "JSF": pareto.JSF.tolist(), "JS_valid": js_valid.tolist(), "fit_valid": fit.tolist(),
             "failure": [pareto.failures.get(i, "") for i in range(K)]}
 
 

@@ -15,7 +15,6 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
@@ -127,10 +126,25 @@ def _name(v: object, path: Sequence[str | int]) -> str:
     return v
 
 
+class FrozenDict(dict):
+    """A dict that refuses changes (and, unlike a mapping proxy, pickles: cells travel to workers)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("a grid's specification is immutable")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = __ior__ = _refuse  # type: ignore
+
+    def __reduce__(self):
+        return (FrozenDict, (dict(self),))
+
+    def __hash__(self) -> int:  # type: ignore[override]
+        return hash(canonical_json(self))
+
+
 def _freeze(obj: Any) -> Any:
-    """Read-only copies of nested canonical values (dicts become mapping proxies, lists tuples)."""
+    """Read-only copies of nested canonical values (dicts become FrozenDicts, lists tuples)."""
     if isinstance(obj, Mapping):
-        return MappingProxyType({k: _freeze(v) for k, v in obj.items()})
+        return FrozenDict({k: _freeze(v) for k, v in obj.items()})
     if isinstance(obj, (list, tuple)):
         return tuple(_freeze(v) for v in obj)
     return obj
@@ -676,7 +690,8 @@ class Variant:
         For cls and pe: graybox constraint objects (``gb.StaticBand(0.175) & gb.GainBounds(lower=0)``)
         or TOML-style tables ``{"type": "band", "b": 0.175}``; types: equality (eq. (22); its
         ``curve`` is "fit" — the polynomial the structure's numerator carries, fitted to the data
-        set's static points —, "dataset" or coefficients), points, band, gain, clusters.
+        set's static points, with exactly the ū powers of its numerator clusters —, "dataset" or
+        coefficients), points, band, gain, clusters.
     lambdas : sequence of float or mapping, optional
         λ1 values in (0, 1] of a Pareto estimator, or ``{"logspace": [a, b, n]}``; default: the
         estimator's own (the paper's 100).
@@ -755,7 +770,7 @@ class Variant:
         if "reference" in clean and "equality" not in kinds:
             raise SpecError("reference (where Σ*_y of eq. (22) comes from) needs an equality constraint",
                             ("options", "reference"))
-        object.__setattr__(self, "options", MappingProxyType(dict(sorted(clean.items()))))
+        object.__setattr__(self, "options", FrozenDict(sorted(clean.items())))
 
     @property
     def stochastic(self) -> bool:

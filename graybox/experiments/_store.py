@@ -225,7 +225,7 @@ def load_results(path: str | os.PathLike) -> pd.DataFrame:
         records ``J1_ident``, ``JS_ident``, ``fit_ident``, ``J1_valid``, ``JS_valid``,
         ``fit_valid`` (MSE in output units², fit in %), ``JSF`` and ``static_miss`` (largest
         |ȳ_model(ū_i) − ȳ_i|, output units); ``members`` (Pareto sets: dict of arrays
-        ``lambda1``, ``J1``, ``JS``, ``JSF``, ``JS_valid`` and the list ``failure``); ``wall_time``
+        ``lambda1``, ``J1``, ``JS``, ``JSF``, ``JS_valid``, ``fit_valid`` and the list ``failure``); ``wall_time``
         (s), ``version``, ``warnings`` (tuple of str), ``worker``, ``finished_at``, ``key``,
         ``cell_index``. ``df.attrs`` holds the grid's name, fingerprint and spec.
 
