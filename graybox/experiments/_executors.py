@@ -7,10 +7,12 @@ runs BLAS and numba on one thread (see :func:`graybox.experiments._cell.run_cell
 
 A worker process that dies while running a cell (killed, out of memory, a crash in compiled
 code) gets that cell retried once on a fresh worker; if it dies again the cell is a failed row
-naming what happened. With the local process pool the driver does this itself; with a
-``LocalCluster`` that graybox starts, the scheduler does (``allowed-failures = 1``, one task per
-worker at a time so that a death is charged to the cell that caused it). A cluster the user
-brings keeps its own ``distributed.scheduler.allowed-failures`` setting.
+naming what happened. The local process pool does this itself and knows exactly which cell a
+dead worker was running. On Dask the scheduler does it: the ``LocalCluster`` graybox starts
+allows one failure per task (``allowed-failures`` 1) and hands each worker one cell at a time, so
+a death is charged to the cell that was running — Dask charges every task it had placed on the
+dead worker, which can include a retried cell waiting there. A cluster the user brings keeps its
+own ``distributed.scheduler.allowed-failures``.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ import graybox as gb
 from ._cell import failed_row, run_cell
 from ._spec import Cell
 
-__all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "make_executor", "worker_threads"]
+__all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "local_cluster", "make_executor", "worker_threads"]
 
 #: Executor names accepted by :func:`graybox.experiments.run_grid`.
 EXECUTORS = ("inprocess", "processes", "dask")
@@ -197,6 +199,27 @@ class ProcessPool:
 # --------------------------------------------------------------------------------------------
 # Dask distributed
 # --------------------------------------------------------------------------------------------
+@contextmanager
+def local_cluster(workers: int):
+    """The Dask ``LocalCluster`` graybox starts for ``workers`` processes (closed on exit).
+
+    One thread per worker, ``NUMBA_NUM_THREADS`` = cores // workers; the scheduler hands a
+    worker one queued cell at a time (``worker-saturation`` 1.0) and retries a cell once after
+    its worker died (``allowed-failures`` 1): a second death makes it a failed row.
+    """
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set({"distributed.scheduler.worker-saturation": 1.0,
+                          "distributed.scheduler.allowed-failures": 1}):
+        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR, env=_thread_env(worker_threads(int(workers))))
+    try:
+        yield cluster
+    finally:
+        cluster.close()
+
+
 class DaskCluster:
     """Cells on a Dask distributed cluster: a Client given, a scheduler address, or a LocalCluster.
 
@@ -228,8 +251,7 @@ class DaskCluster:
 
     @contextmanager
     def _client(self):
-        import dask
-        from distributed import Client, LocalCluster
+        from distributed import Client
 
         if self.client is not None:
             if not isinstance(self.client, Client):
@@ -244,52 +266,64 @@ class DaskCluster:
             finally:
                 client.close()
             return
-        threads = worker_threads(self.workers)
-        # one task per worker at a time and one retry after a worker's death: a death is charged
-        # to the cell that was running, which is retried once and then reported as failed
-        with dask.config.set({"distributed.scheduler.worker-saturation": 1.0,
-                              "distributed.scheduler.allowed-failures": 1}):
-            cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR, env=_thread_env(threads))
-        try:
+        with local_cluster(self.workers) as cluster:
             client = Client(cluster)
             try:
                 yield client
             finally:
                 client.close()
-        finally:
-            cluster.close()
 
     def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
-        """Submit every cell, yield each row as it completes."""
+        """Submit the cells, yield each row as it completes."""
         from distributed import as_completed
 
         if not cells:
             return
         with self._client() as client:
-            used = {c.data_hash for c in cells}
-            data_futures = {h: client.scatter(datasets[h], hash=False) for h in used}
+            nthreads = max(1, sum(client.nthreads().values()))
+            # A grid larger than twice the cluster's threads is queued on the scheduler, which then
+            # hands a worker one cell at a time (worker-saturation 1.0 on a LocalCluster we start).
+            # A smaller one would be assigned to workers all at once, so a worker's death would be
+            # charged to the cells waiting behind the one it was running: such grids are fed one
+            # cell per thread from here. Each task carries its data set (tens of kB) rather than
+            # depending on a scattered copy, which a worker's death would lose.
+            window = len(cells) if len(cells) > 2 * nthreads else nthreads
             tag = uuid.uuid4().hex[:8]
-            futures = {}
-            for c in cells:
-                f = client.submit(self.fn, c, data_futures[c.data_hash], 1, key=f"graybox-cell-{c.key[:24]}-{tag}",
+            todo = iter(cells)
+            futures: dict = {}
+
+            def submit() -> bool:
+                c = next(todo, None)
+                if c is None:
+                    return False
+                f = client.submit(self.fn, c, datasets[c.data_hash], 1, key=f"graybox-cell-{c.key[:24]}-{tag}",
                                   pure=False)
                 futures[f] = c
+                return True
+
+            for _ in range(window):
+                if not submit():
+                    break
+            pending = as_completed(list(futures))
             try:
-                for f in as_completed(list(futures)):
+                for f in pending:
                     c = futures.pop(f)
+                    if submit():
+                        pending.add(next(reversed(futures)))
                     if f.status == "finished":
                         row = f.result()
                     else:
-                        exc = f.exception()
-                        row = failed_row(c, f"{type(exc).__name__}: {exc}")
+                        try:
+                            exc = f.exception(timeout=10)
+                        except Exception as err:  # e.g. a cancelled future has no exception to give
+                            exc = err
+                        why = f"{type(exc).__name__}: {exc}" if exc is not None else f"the task ended as {f.status!r}"
+                        row = failed_row(c, why)
                     f.release()
                     yield row
             finally:
                 for f in futures:
                     f.cancel()
-                for f in data_futures.values():
-                    f.release()
 
 
 def make_executor(executor: str | None = None, *, workers: int | None = None, client: Any = None,

@@ -917,7 +917,8 @@ class Grid:
         try:
             d = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
-            raise SpecError(f"invalid TOML: {exc}", source=source) from None
+            at = re.search(r"at line (\d+)", str(exc))
+            raise SpecError(f"invalid TOML: {exc}", source=source, line=int(at.group(1)) if at else None) from None
         lines = _TomlLines(text)
         try:
             return cls.from_dict(d, base_dir=base_dir)
