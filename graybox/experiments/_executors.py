@@ -279,14 +279,18 @@ class DaskCluster:
 
         if not cells:
             return
+        from ._dask import GridData, cell_task
+
         with self._client() as client:
+            plugin = f"graybox-grid-data-{uuid.uuid4().hex[:8]}"
+            client.register_plugin(GridData({h: datasets[h] for h in {c.data_hash for c in cells}}), name=plugin)
             nthreads = max(1, sum(client.nthreads().values()))
             # A grid larger than twice the cluster's threads is queued on the scheduler, which then
             # hands a worker one cell at a time (worker-saturation 1.0 on a LocalCluster we start).
             # A smaller one would be assigned to workers all at once, so a worker's death would be
             # charged to the cells waiting behind the one it was running: such grids are fed one
-            # cell per thread from here. Each task carries its data set (tens of kB) rather than
-            # depending on a scattered copy, which a worker's death would lose.
+            # cell per thread from here. The data sets reach every worker (restarted ones too)
+            # in a worker plugin; a scattered copy would be lost with a worker that dies.
             window = len(cells) if len(cells) > 2 * nthreads else nthreads
             tag = uuid.uuid4().hex[:8]
             todo = iter(cells)
@@ -296,8 +300,7 @@ class DaskCluster:
                 c = next(todo, None)
                 if c is None:
                     return False
-                f = client.submit(self.fn, c, datasets[c.data_hash], 1, key=f"graybox-cell-{c.key[:24]}-{tag}",
-                                  pure=False)
+                f = client.submit(cell_task, self.fn, plugin, c, key=f"graybox-cell-{c.key[:24]}-{tag}", pure=False)
                 futures[f] = c
                 return True
 
@@ -324,6 +327,10 @@ class DaskCluster:
             finally:
                 for f in futures:
                     f.cancel()
+                try:
+                    client.unregister_worker_plugin(plugin)
+                except Exception:  # the cluster may be going away; the plugin goes with it
+                    pass
 
 
 def make_executor(executor: str | None = None, *, workers: int | None = None, client: Any = None,
