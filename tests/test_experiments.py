@@ -413,3 +413,22 @@ def test_cli_init_run_report(tmp_path, capsys, monkeypatch):
     assert main(["grid", "run", str(spec), "--store", "x.sqlite"]) == 2
     assert re.search(r"line \d+: variants\[0\]\.estimator", capsys.readouterr().err)
     assert not (tmp_path / "x.sqlite").exists()
+
+
+def test_public_api_is_documented():
+    import inspect
+
+    for name in gx.__all__:
+        obj = getattr(gx, name)
+        if not (inspect.isfunction(obj) or inspect.isclass(obj)):
+            continue
+        assert obj.__doc__ and obj.__doc__.strip(), name
+        funcs = [obj] if inspect.isfunction(obj) else [
+            m for n, m in inspect.getmembers(obj, inspect.isfunction)
+            if not n.startswith("_") and m.__qualname__.startswith(obj.__name__ + ".")]
+        for f in funcs:
+            doc = f.__doc__ or ""
+            missing = [p.name for p in inspect.signature(f).parameters.values()
+                       if p.name not in ("self", "cls") and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+                       and p.name not in doc]
+            assert doc and not missing, f"{name}.{f.__name__}: undocumented {missing}"

@@ -18,7 +18,7 @@ import pytest
 
 from graybox import experiments as gx
 from graybox.experiments._cell import run_cell
-from graybox.experiments._executors import DaskCluster, ProcessPool, local_cluster
+from graybox.experiments._executors import DaskCluster, ProcessPool, local_cluster, worker_threads
 
 VALUES = ["data", "structure", "variant", "seed", "status", "message", "n_params", "lambda1", "rule", "in_band",
           "J1_ident", "JS_ident", "fit_ident", "J1_valid", "JS_valid", "fit_valid", "JSF", "static_miss"]
@@ -72,7 +72,9 @@ def _kill_myself(marker_dir: str, cell, data, threads):
     if cell.variant == "LS" or (cell.variant == "CLS" and not list(Path(marker_dir).glob(cell.key + "*"))):
         marker.touch()
         os.kill(os.getpid(), signal.SIGKILL)
-    return run_cell(cell, data, threads)
+    row = run_cell(cell, data, threads)
+    row["NUMBA_NUM_THREADS"] = os.environ.get("NUMBA_NUM_THREADS")  # what the executor gave this worker
+    return row
 
 
 def _death_cells(variants):
@@ -94,6 +96,8 @@ def _check_deaths(rows, cells, markers: Path, reference):
         else:
             assert starts == (1 if c.variant == "CLS" else 0)  # CLS: killed once, the retry finished
             assert r["status"] == "ok" and r["JS_valid"] == ref.loc[r["key"], "JS_valid"]
+            # 2 workers × NUMBA_NUM_THREADS <= cores
+            assert r["NUMBA_NUM_THREADS"] == str(worker_threads(2))
 
 
 def test_a_dying_worker_gets_its_cell_retried_once_processes(tmp_path, reference):
@@ -103,7 +107,7 @@ def test_a_dying_worker_gets_its_cell_retried_once_processes(tmp_path, reference
     _check_deaths(rows, cells, tmp_path, reference)
 
 
-def test_a_dying_worker_gets_its_cell_retried_once_dask(tmp_path, reference):
+def test_a_dying_worker_gets_its_cell_retried_once_dask_and_a_scheduler_address(tmp_path, reference):
     from distributed import Client
 
     with local_cluster(2) as cluster, Client(cluster) as client:
@@ -113,6 +117,10 @@ def test_a_dying_worker_gets_its_cell_retried_once_dask(tmp_path, reference):
             rows = {r["variant"]: r for r in ex.run(cells, data)}
             assert set(rows) == set(variants)
             _check_deaths(rows, cells, tmp_path, reference)
+        # the same cluster by its scheduler's address, as `graybox grid run --scheduler ADDRESS` reaches it
+        run = gx.run_grid(tiny_grid(), tmp_path / "by-address.sqlite", scheduler=cluster.scheduler_address)
+        assert run.executor.startswith("Dask scheduler at tcp://") and run.ran == 8
+        assert_same_rows(gx.load_results(tmp_path / "by-address.sqlite"), reference)
 
 
 SPEC = """\

@@ -105,6 +105,13 @@ def run_grid(
         The spec is invalid or its data cannot be loaded.
     StoreError
         The store cannot be used.
+
+    Notes
+    -----
+    Worker processes are started with the ``spawn`` method (the local pool and a Dask
+    ``LocalCluster``), which imports the calling script again: a script that runs a grid on
+    workers must do so under ``if __name__ == "__main__":``. Notebooks and the ``graybox``
+    command need nothing.
     """
     t0 = time.perf_counter()
     g = grid if isinstance(grid, Grid) else Grid.from_toml(grid)

@@ -268,6 +268,11 @@ class DataSpec:
 
         Only what cells use is kept: the records, the static points and, when the source has
         one, ``extra["static_curve"]`` (e.g. eq. (1) for the pumping plant).
+
+        Parameters
+        ----------
+        base_dir : path, optional
+            Folder that relative CSV paths are resolved against (default: the working folder).
         """
         if self.dataset is not None:
             ds = self.dataset
