@@ -2,8 +2,8 @@
 
 Imported only when a grid runs on Dask (importing :mod:`distributed` is not free). The data
 sets travel once to each worker inside a :class:`GridData` plugin — a worker that joins later
-(e.g. one the nanny restarted after a crash) receives it from the scheduler too — so a cell's
-task carries only the cell (about a kilobyte), not tens of kilobytes of records.
+(e.g. one the nanny restarted after a crash) receives it from the scheduler too — so a task
+carries only its cells (about a kilobyte each), not tens of kilobytes of records.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import graybox as gb
 
 from ._spec import Cell
 
-__all__ = ["GridData", "cell_task"]
+__all__ = ["GridData", "cells_task"]
 
 
 class GridData(WorkerPlugin):
@@ -31,7 +31,7 @@ class GridData(WorkerPlugin):
         pass
 
 
-def cell_task(fn: Callable[[Cell, gb.Dataset, int], dict], plugin: str, cell: Cell) -> dict:
-    """Run ``fn`` on a cell with the data set the worker's plugin ``plugin`` holds."""
-    data = get_worker().plugins[plugin].datasets[cell.data_hash]
-    return fn(cell, data, 1)
+def cells_task(fn: Callable[[Cell, gb.Dataset, int], dict], plugin: str, cells: list[Cell]) -> list[dict]:
+    """Run ``fn`` on a batch of cells, one after another; their rows in order."""
+    store = get_worker().plugins[plugin].datasets
+    return [fn(c, store[c.data_hash], 1) for c in cells]

@@ -7,19 +7,22 @@ runs BLAS and numba on one thread (see :func:`graybox.experiments._cell.run_cell
 
 A worker process that dies while running a cell (killed, out of memory, a crash in compiled
 code) gets that cell retried once on a fresh worker; if it dies again the cell is a failed row
-naming what happened. The local process pool does this itself and knows exactly which cell a
-dead worker was running. On Dask the scheduler does it: the ``LocalCluster`` graybox starts
-allows one failure per task (``allowed-failures`` 1) and hands each worker one cell at a time, so
-a death is charged to the cell that was running — Dask charges every task it had placed on the
-dead worker, which can include a retried cell waiting there. A cluster the user brings keeps its
-own ``distributed.scheduler.allowed-failures``.
+naming what happened. The driver does this itself for both pools, and knows which cells a dead
+worker held: the local pool gives a worker one cell at a time; on Dask the driver keeps one task
+per worker thread in flight, and a task is a small batch of cells (about ``BATCH_SECONDS`` of
+work, so that the scheduler's cost per task stays a few per cent). When a Dask worker dies, every
+cell of its batch is retried alone, so the one that kills its worker dies alone the second time.
+The ``LocalCluster`` graybox starts reports a worker's death at once (``allowed-failures`` 0); a
+cluster the user brings first retries as its own ``distributed.scheduler.allowed-failures`` says.
 """
 
 from __future__ import annotations
 
+import itertools
 import logging
 import multiprocessing as mp
 import os
+import statistics
 import uuid
 from collections import deque
 from contextlib import contextmanager
@@ -38,6 +41,13 @@ __all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "local_cluste
 EXECUTORS = ("inprocess", "processes", "dask")
 
 CellFn = Callable[[Cell, gb.Dataset, int], dict]
+
+#: A Dask task runs a batch of cells lasting about this long (seconds), once the first cells
+#: have shown how long a cell takes: the scheduler's cost per task (milliseconds on a busy
+#: machine) is then a few per cent of the work.
+BATCH_SECONDS = 0.25
+#: Most cells in one Dask task.
+MAX_BATCH = 64
 
 
 def worker_threads(workers: int, cores: int | None = None) -> int:
@@ -203,15 +213,13 @@ class ProcessPool:
 def local_cluster(workers: int):
     """The Dask ``LocalCluster`` graybox starts for ``workers`` processes (closed on exit).
 
-    One thread per worker, ``NUMBA_NUM_THREADS`` = cores // workers; the scheduler hands a
-    worker one queued cell at a time (``worker-saturation`` 1.0) and retries a cell once after
-    its worker died (``allowed-failures`` 1): a second death makes it a failed row.
+    One thread per worker, ``NUMBA_NUM_THREADS`` = cores // workers; the scheduler reports a
+    task whose worker died at once (``allowed-failures`` 0): the driver decides what to retry.
     """
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set({"distributed.scheduler.worker-saturation": 1.0,
-                          "distributed.scheduler.allowed-failures": 1}):
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, dashboard_address=None,
                                silence_logs=logging.ERROR, env=_thread_env(worker_threads(int(workers))))
     try:
@@ -274,56 +282,75 @@ class DaskCluster:
                 client.close()
 
     def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
-        """Submit the cells, yield each row as it completes."""
+        """Submit the cells in batches, yield each row as its batch completes."""
         from distributed import as_completed
+        from distributed.scheduler import KilledWorker
+
+        from ._dask import GridData, cells_task
 
         if not cells:
             return
-        from ._dask import GridData, cell_task
-
         with self._client() as client:
             plugin = f"graybox-grid-data-{uuid.uuid4().hex[:8]}"
             client.register_plugin(GridData({h: datasets[h] for h in {c.data_hash for c in cells}}), name=plugin)
-            nthreads = max(1, sum(client.nthreads().values()))
-            # A grid larger than twice the cluster's threads is queued on the scheduler, which then
-            # hands a worker one cell at a time (worker-saturation 1.0 on a LocalCluster we start).
-            # A smaller one would be assigned to workers all at once, so a worker's death would be
-            # charged to the cells waiting behind the one it was running: such grids are fed one
-            # cell per thread from here. The data sets reach every worker (restarted ones too)
-            # in a worker plugin; a scattered copy would be lost with a worker that dies.
-            window = len(cells) if len(cells) > 2 * nthreads else nthreads
             tag = uuid.uuid4().hex[:8]
-            todo = iter(cells)
+            queue: deque[tuple[Cell, int]] = deque((c, 0) for c in cells)  # (cell, deaths so far)
             futures: dict = {}
+            times: list[float] = []
+            counter = itertools.count()
+            window = max(1, sum(client.nthreads().values()))
 
-            def submit() -> bool:
-                c = next(todo, None)
-                if c is None:
-                    return False
-                f = client.submit(cell_task, self.fn, plugin, c, key=f"graybox-cell-{c.key[:24]}-{tag}", pure=False)
-                futures[f] = c
-                return True
+            def batch() -> list[tuple[Cell, int]]:
+                """The next task's cells: a retried cell alone, else as many as fill ~BATCH_SECONDS."""
+                if queue[0][1] > 0:
+                    return [queue.popleft()]
+                k = 1
+                if len(times) >= window:
+                    k = int(BATCH_SECONDS / max(statistics.median(times[-64:]), 1e-3))
+                    k = max(1, min(k, MAX_BATCH, len(queue) // (2 * window)))
+                out = []
+                while queue and len(out) < k and queue[0][1] == 0:
+                    out.append(queue.popleft())
+                return out
 
-            for _ in range(window):
-                if not submit():
-                    break
-            pending = as_completed(list(futures))
+            def submit() -> None:
+                while queue and len(futures) < window:
+                    items = batch()
+                    seq = next(counter)  # a retried cell gets a new key: the old one may still be known as erred
+                    f = client.submit(cells_task, self.fn, plugin, [c for c, _ in items],
+                                      key=f"graybox-cells-{items[0][0].key[:16]}-{seq}-{tag}", pure=False)
+                    futures[f] = items
+                    pending.add(f)
+
+            # results are gathered in the background as tasks finish (no round trip per task here)
+            pending = as_completed([], with_results=True, raise_errors=False)
+            submit()
             try:
-                for f in pending:
-                    c = futures.pop(f)
-                    if submit():
-                        pending.add(next(reversed(futures)))
+                for f, result in pending:
+                    items = futures.pop(f)
+                    rows: list[dict] = []
                     if f.status == "finished":
-                        row = f.result()
+                        rows = list(result)
+                        times.extend(r["wall_time"] for r in rows)
                     else:
-                        try:
-                            exc = f.exception(timeout=10)
-                        except Exception as err:  # e.g. a cancelled future has no exception to give
-                            exc = err
-                        why = f"{type(exc).__name__}: {exc}" if exc is not None else f"the task ended as {f.status!r}"
-                        row = failed_row(c, why)
+                        exc = result[1] if isinstance(result, tuple) and len(result) > 1 else result
+                        if not isinstance(exc, BaseException):
+                            exc = RuntimeError(f"the task ended as {f.status!r}")
+                        if isinstance(exc, KilledWorker):
+                            # every cell of the batch goes back alone (the one that kills its worker
+                            # is then found out); a second death makes a cell a failed row
+                            window = max(1, sum(client.nthreads().values()))
+                            for c, deaths in reversed(items):
+                                if deaths + 1 >= 2:
+                                    rows.append(failed_row(c, "the worker died twice while running this cell; "
+                                                              f"it was retried once ({type(exc).__name__}: {exc})"))
+                                else:
+                                    queue.appendleft((c, deaths + 1))
+                        else:
+                            rows = [failed_row(c, f"{type(exc).__name__}: {exc}") for c, _ in items]
                     f.release()
-                    yield row
+                    submit()
+                    yield from rows
             finally:
                 for f in futures:
                     f.cancel()
