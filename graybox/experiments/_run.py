@@ -108,7 +108,9 @@ def run_grid(
 
     Notes
     -----
-    Worker processes are started with the ``spawn`` method (the local pool and a Dask
+    A row is committed as soon as the driver receives it. On Dask, cells travel in small batches
+    (about a quarter of a second of work each, one batch per worker thread), so a killed driver
+    loses at most the batches in flight. Worker processes are started with the ``spawn`` method (the local pool and a Dask
     ``LocalCluster``), which imports the calling script again: a script that runs a grid on
     workers must do so under ``if __name__ == "__main__":``. Notebooks and the ``graybox``
     command need nothing.
