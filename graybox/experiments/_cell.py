@@ -18,7 +18,7 @@ from typing import Any, Mapping
 
 import numba
 import numpy as np
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 import graybox as gb
 
@@ -69,6 +69,18 @@ JSON_COLUMNS = ("terms", "theta", "members", "warnings")
 # the structures it has made.
 _STRUCTURES: dict[tuple[str, str], tuple[str, ...]] = {}
 _STRUCTURE_CACHE_SIZE = 256
+
+
+_CONTROLLER: ThreadpoolController | None = None
+
+
+def _thread_pools() -> ThreadpoolController:
+    """This process's BLAS/OpenMP pools, found once (``threadpool_limits`` searches for them on
+    every call, which costs as much as a short cell)."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER
 
 
 def _row(cell: Cell) -> dict[str, Any]:
@@ -246,7 +258,7 @@ def run_cell(cell: Cell, data: gb.Dataset, threads: int = 1) -> dict[str, Any]:
     caught: list[warnings.WarningMessage] = []
     try:
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
-        with threadpool_limits(limits=int(threads)), warnings.catch_warnings(record=True) as caught:
+        with _thread_pools().limit(limits=int(threads)), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             st = make_structure(cell.structure_spec, data, cell.data_hash)
             row["terms"] = [str(t) for t in st]
