@@ -4,8 +4,8 @@ Polynomial NARMAX models, structure selection, static analysis and gray-box esti
 with static-curve information, after Barbosa, Aguirre, Martinez & Braga (IEEE TCST 2011).
 
 The implementation lives in private modules (``graybox._els`` …); every public name is
-exported here, and from the public subpackages :mod:`graybox.datasets`, :mod:`graybox.plots`
-and :mod:`graybox.reproduce`.
+exported here, and from the public subpackages :mod:`graybox.datasets`, :mod:`graybox.plots`,
+:mod:`graybox.experiments` and :mod:`graybox.reproduce`.
 """
 
 from importlib.metadata import PackageNotFoundError, version as _version
@@ -38,6 +38,8 @@ from ._bootstrap import BootstrapJob, DecisionBootstrap, block_resample, bootstr
 from ._io import FORMAT_VERSION, GrayboxFileError, from_json, load, read_header, save, to_json
 from . import datasets, plots, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
+from . import experiments
+from .experiments import load_results
 
 try:
     __version__ = _version("graybox")
@@ -66,7 +68,7 @@ __all__ = [
     "UncertaintyWarning", "static_curve_band", "StaticCurveBand",
     "bootstrap_decision", "DecisionBootstrap", "BootstrapJob", "block_resample",
     "save", "load", "to_json", "from_json", "read_header", "GrayboxFileError", "FORMAT_VERSION",
-    "datasets", "plots", "reference",
-    "load_pumping", "load_buck", "load_record_csv", "load_static_csv",
+    "datasets", "plots", "reference", "experiments",
+    "load_pumping", "load_buck", "load_record_csv", "load_static_csv", "load_results",
     "__version__",
 ]

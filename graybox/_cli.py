@@ -3,9 +3,31 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 __all__ = ["main"]
+
+
+def _grid(args: argparse.Namespace) -> int:
+    from . import experiments as gx
+
+    if args.grid_command == "init":
+        sys.stdout.write(gx.EXAMPLE_SPEC)
+        return 0
+    try:
+        if args.grid_command == "run":
+            res = gx.run_grid(args.spec, args.store, executor="processes" if args.processes else None,
+                              workers=args.workers or args.processes, scheduler=args.scheduler,
+                              retry_failed=args.retry_failed)
+            print(res.summary())
+            return 0
+        written = gx.write_report(args.store, args.out, rule=args.rule, band=args.band)
+        print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
+        return 0
+    except (gx.SpecError, gx.StoreError) as exc:
+        print(f"graybox grid {args.grid_command}: {exc}", file=sys.stderr)
+        return 2
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -15,12 +37,30 @@ def main(argv: list[str] | None = None) -> int:
     rp = sub.add_parser("reproduce", help="reproduce the paper's Table I and figures on the bundled plant data")
     rp.add_argument("--quick", action="store_true", help="short searches (minutes, not hours)")
     rp.add_argument("--out", type=Path, default=Path("reproduce-out"), help="folder for figures and tables")
+    gp = sub.add_parser("grid", help="grids of structures × constraint variants × estimators, kept in SQLite")
+    gsub = gp.add_subparsers(dest="grid_command", required=True)
+    gsub.add_parser("init", help="print a commented example spec for the bundled plant (graybox grid init > spec.toml)")
+    run = gsub.add_parser("run", help="run the cells of a spec that are not in the store yet")
+    run.add_argument("spec", type=Path, help="the grid's TOML spec")
+    run.add_argument("--store", type=Path, required=True, help="SQLite file for the results (created if missing)")
+    where = run.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, help="start a Dask LocalCluster of N worker processes")
+    where.add_argument("--scheduler", help="run on the Dask scheduler at this address (e.g. tcp://host:8786)")
+    where.add_argument("--processes", type=int, help="run in N local worker processes (no Dask)")
+    run.add_argument("--retry-failed", action="store_true", help="run the failed cells again")
+    rep = gsub.add_parser("report", help="write a store's leaderboard, heat maps and figures")
+    rep.add_argument("store", type=Path, help="the SQLite store of a grid")
+    rep.add_argument("--out", type=Path, required=True, help="folder for the tables (CSV) and figures (PNG)")
+    rep.add_argument("--rule", default="dsf_valid", choices=("dsf_valid", "chosen"),
+                     help="ranking: D_SF on the validation record over all members (default), or each cell's choice")
+    rep.add_argument("--band", type=float, help="J_SF band for the ranking (default: each data set's, as stored)")
     args = parser.parse_args(argv)
     if args.command == "reproduce":
-        from .reproduce import run
+        from .reproduce import run as reproduce
 
-        run(quick=args.quick, out=args.out)
-    return 0
+        reproduce(quick=args.quick, out=args.out)
+        return 0
+    return _grid(args)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -22,6 +22,7 @@ NAMES = [
     "02_gray_box_convex.ipynb",
     "03_simulation_error.ipynb",
     "04_buck_converter.ipynb",
+    "05_constraint_variants.ipynb",
 ]
 
 
@@ -72,6 +73,16 @@ def test_buck_notebook_runs(sandbox):
         pytest.skip(f"the buck converter data (kept outside the repository) are not here: {err}")
     ns = run_notebook("04_buck_converter.ipynb")
     assert ns["QUICK"] is True
+
+
+def test_grid_notebook_runs(sandbox):
+    ns = run_notebook("05_constraint_variants.ipynb")
+    assert ns["QUICK"] is True
+    stores = sorted(p.name for p in (sandbox / "grid_results").iterdir())
+    assert any(n.startswith("pumping-quick") for n in stores)
+    assert (ns["pumping"]["status"] == "ok").sum() >= 4 * 6  # at least 4 structures × 6 variants that ran
+    assert "pumping" in ns["summary"].columns
+    assert ("buck" in ns["summary"].columns) == ns["have_buck"]
 
 
 def test_buck_notebook_stops_gracefully_without_data(sandbox, monkeypatch, capsys):

@@ -1,0 +1,115 @@
+"""A grid of about 200 cheap cells in-process and on a Dask LocalCluster: speed-up and scheduler overhead.
+
+    .venv/bin/python benchmarks/bench_grid.py [--workers 2] [--quick]
+
+Bundled pumping-plant data; 20 structures made by FROLS (ny = nu = 1…6, 4…17 terms, rational
+candidates) × 10 variants: CLS with eq. (22) and with static bands, PE by the closed form (11)
+with several λ sets and decision makers, SE by the gradient method with 10 λ: 200 cells.
+
+Both runs use warmed-up processes (a small grid first), so the times are the grid's own: the
+in-process run on the driver, the Dask run on a ``LocalCluster`` started beforehand the way
+``graybox grid run --workers N`` starts it (its start-up time is printed separately). Every
+cell's own wall time is stored in its row; the scheduler's overhead per cell is the worker
+time not spent in cells, (wall × workers − Σ cell times) / cells.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _common import git_rev, machine  # noqa: E402
+
+from graybox import experiments as gx  # noqa: E402
+from graybox.experiments._executors import local_cluster  # noqa: E402
+
+
+def grid(quick: bool) -> gx.Grid:
+    structures = []
+    for ny, sizes in ((1, (4, 5)), (2, (4, 6, 9, 12)), (3, (4, 6, 9, 12)), (4, (4, 6, 9, 12)), (5, (4, 6, 9, 12)),
+                      (6, (9, 17))):
+        for n in sizes:
+            structures.append(gx.StructureSpec(f"ny{ny}-{n}", candidates={"ny": ny, "nu": ny, "degree": 2,
+                                                                           "max_y_power": 1},
+                                               n_terms=n, include=["1"]))
+    variants = [
+        gx.Variant("CLS eq(22)", "cls", constraints=[{"type": "equality"}]),
+        gx.Variant("CLS eq(22) els", "cls", constraints=[{"type": "equality"}], options={"reference": "els"}),
+        gx.Variant("CLS band .175", "cls", constraints=[{"type": "band", "b": 0.175}]),
+        gx.Variant("CLS band .1", "cls", constraints=[{"type": "band", "b": 0.1}]),
+        gx.Variant("PE 30", "pe", lambdas={"logspace": [-6, 0, 30]}, options={"solver": "closed"}),
+        gx.Variant("PE 100", "pe", options={"solver": "closed"}),
+        gx.Variant("PE min-corr", "pe", lambdas={"logspace": [-6, 0, 30]}, decision={"rule": "min_correlation"},
+                   options={"solver": "closed"}),
+        gx.Variant("PE min-JSF", "pe", lambdas={"logspace": [-6, 0, 30]}, decision={"rule": "min_jsf"},
+                   options={"solver": "closed"}),
+        gx.Variant("SE grad 10", "se-gradient", lambdas={"logspace": [-2, 0, 10]}, options={"max_nfev": 20}),
+        gx.Variant("SE grad 10 fb", "se-gradient", lambdas={"logspace": [-2, 0, 10]},
+                   decision={"rule": "dsf", "fallback": "min_jsf"}, options={"max_nfev": 30}),
+    ]
+    if quick:
+        structures, variants = structures[:4], variants[:6]
+    return gx.Grid([gx.DataSpec("pumping", bundled="pumping")], structures, variants, name="bench")
+
+
+def warm_up() -> gx.Grid:
+    return gx.Grid([gx.DataSpec("pumping", bundled="pumping")],
+                   [gx.StructureSpec("w", candidates={"ny": 1, "nu": 1, "degree": 2, "max_y_power": 1}, n_terms=3)],
+                   [gx.Variant("c", "cls", constraints=[{"type": "equality"}]),
+                    gx.Variant("p", "pe", lambdas=[0.1, 1.0], options={"solver": "closed"}),
+                    gx.Variant("s", "se-gradient", lambdas=[0.1, 1.0], options={"max_nfev": 3})], name="warm")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--quick", action="store_true", help="24 cells instead of 200")
+    args = ap.parse_args()
+    g = grid(args.quick)
+    n = len(g.cells())
+    print(f"# bench_grid: {n} cells; {machine()}; git {git_rev()}; {datetime.datetime.now():%Y-%m-%d %H:%M}")
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        gx.run_grid(warm_up(), tmp / "warm-in.sqlite")
+        t = time.perf_counter()
+        r_in = gx.run_grid(g, tmp / "inprocess.sqlite")
+        wall_in = time.perf_counter() - t
+        df_in = gx.load_results(tmp / "inprocess.sqlite")
+        from distributed import Client
+
+        t = time.perf_counter()
+        with local_cluster(args.workers) as cluster, Client(cluster) as client:
+            start = time.perf_counter() - t
+            gx.run_grid(warm_up(), tmp / "warm-dask.sqlite", client=client)
+            t = time.perf_counter()
+            r_dk = gx.run_grid(g, tmp / "dask.sqlite", client=client)
+            wall_dk = time.perf_counter() - t
+        df_dk = gx.load_results(tmp / "dask.sqlite")
+    assert r_in.ran == r_dk.ran == n
+    same = all(np.array_equal(df_in[c].to_numpy(float), df_dk[c].to_numpy(float), equal_nan=True)
+               for c in ("JS_valid", "JSF", "J1_ident"))
+    cell_in, cell_dk = df_in["wall_time"].to_numpy(), df_dk["wall_time"].to_numpy()
+    overhead = (wall_dk * args.workers - cell_dk.sum()) / n
+    med = statistics.median(cell_in)
+    print(f"statuses: {dict(r_in.counts)}; identical figures in-process vs Dask: {same}")
+    print(f"cell wall time in-process: median {med * 1e3:.1f} ms, mean {cell_in.mean() * 1e3:.1f} ms, "
+          f"total {cell_in.sum():.2f} s; by estimator (median ms): "
+          + ", ".join(f"{k} {v * 1e3:.1f}" for k, v in df_in.groupby("estimator")["wall_time"].median().items()))
+    print(f"cell wall time on Dask workers: median {statistics.median(cell_dk) * 1e3:.1f} ms, total {cell_dk.sum():.2f} s")
+    print(f"in-process grid: {wall_in:.2f} s ({r_in.wall_time:.2f} s inside run_grid)")
+    print(f"Dask, {args.workers} workers: {wall_dk:.2f} s (cluster start-up {start:.1f} s, not included)")
+    print(f"speed-up: {wall_in / wall_dk:.2f}x (goal >= 1.6x)")
+    print(f"scheduler overhead per cell: {overhead * 1e3:.2f} ms = {overhead / med * 100:.1f} % of the median cell "
+          "(goal <= 5 %)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,34 @@
+"""Experiments: grids of data sets × structures × variants × seeds, run anywhere, kept in SQLite.
+
+A *grid* is declared in Python (:class:`Grid` of :class:`DataSpec`, :class:`StructureSpec`,
+:class:`Variant`) or in a TOML file with the same content (``graybox grid init`` prints a
+commented example). A *cell* is one (data, structure, variant, seed): the structure is made (or
+taken), the estimator runs with its constraints and λ set, the decision maker picks a member,
+and the shared evaluator scores the chosen model on the identification AND the validation
+records. :func:`run_grid` runs the cells not yet in the store — in the driver, in local
+processes or on a Dask cluster — and commits each row as it completes, so a killed run resumes
+where it stopped. :func:`load_results` reads a store as a DataFrame; the report functions turn
+it into a leaderboard, a heat map and figures.
+
+This package sits above the estimators and the decision makers; nothing in graybox below it
+imports it.
+"""
+
+from ._cell import COLUMNS, STATUSES, run_cell
+from ._example import EXAMPLE_SPEC
+from ._executors import EXECUTORS
+from ._report import RULES, heatmap_table, leaderboard, plot_fronts, plot_heatmap, plot_scatter, write_report
+from ._run import GridRun, run_grid
+from ._spec import (
+    BUNDLED, CONSTRAINT_TYPES, DECISION_RULES, ESTIMATORS, Cell, DataSpec, DecisionRule, Grid, SpecError, StructureSpec,
+    Variant,
+)
+from ._store import StoreError, load_results
+
+__all__ = [
+    "Grid", "DataSpec", "StructureSpec", "Variant", "DecisionRule", "Cell", "SpecError",
+    "run_grid", "GridRun", "run_cell", "load_results", "StoreError",
+    "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report", "RULES",
+    "EXAMPLE_SPEC",
+    "ESTIMATORS", "CONSTRAINT_TYPES", "DECISION_RULES", "BUNDLED", "EXECUTORS", "STATUSES", "COLUMNS",
+]

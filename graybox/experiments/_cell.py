@@ -1,0 +1,292 @@
+"""One cell of a grid: make the structure, estimate, decide, evaluate; a row of plain values.
+
+:func:`run_cell` is what every executor runs (in the driver, in a local worker process or on a
+Dask worker). It never raises for a problem of the cell itself: an infeasible constraint set, a
+diverging free run, any other error become a row with that status and the message. Its
+result depends only on the cell and the data — BLAS and numba run on one thread inside a cell
+(parallelism is across cells), so every executor gives the same numbers.
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import socket
+import time
+import warnings
+from typing import Any, Mapping
+
+import numba
+import numpy as np
+from threadpoolctl import ThreadpoolController
+
+import graybox as gb
+
+from ._spec import Cell, build_constraint, canonical_json
+
+__all__ = ["COLUMNS", "JSON_COLUMNS", "STATUSES", "run_cell", "failed_row"]
+
+#: Statuses of a finished cell.
+STATUSES = ("ok", "infeasible", "diverged", "failed")
+
+#: The columns of a cell's row and their SQLite types (figures are MSEs in output units², fit in %).
+COLUMNS: dict[str, str] = {
+    "key": "TEXT PRIMARY KEY",
+    "cell_index": "INTEGER NOT NULL",
+    "data": "TEXT NOT NULL",
+    "structure": "TEXT NOT NULL",
+    "variant": "TEXT NOT NULL",
+    "seed": "INTEGER",
+    "estimator": "TEXT NOT NULL",
+    "status": "TEXT NOT NULL",
+    "message": "TEXT",
+    "terms": "TEXT",
+    "theta": "TEXT",
+    "n_params": "INTEGER",
+    "lambda1": "REAL",
+    "rule": "TEXT",
+    "in_band": "INTEGER",
+    "band": "REAL",
+    "J1_ident": "REAL",
+    "JS_ident": "REAL",
+    "fit_ident": "REAL",
+    "J1_valid": "REAL",
+    "JS_valid": "REAL",
+    "fit_valid": "REAL",
+    "JSF": "REAL",
+    "static_miss": "REAL",
+    "members": "TEXT",
+    "wall_time": "REAL",
+    "version": "TEXT NOT NULL",
+    "warnings": "TEXT",
+    "worker": "TEXT",
+    "finished_at": "TEXT",
+}
+#: Columns stored as JSON text.
+JSON_COLUMNS = ("terms", "theta", "members", "warnings")
+
+# FROLS is deterministic and shared by every variant of a (data, structure): each process keeps
+# the structures it has made.
+_STRUCTURES: dict[tuple[str, str], tuple[str, ...]] = {}
+_STRUCTURE_CACHE_SIZE = 256
+
+
+_CONTROLLER: ThreadpoolController | None = None
+
+
+def _thread_pools() -> ThreadpoolController:
+    """This process's BLAS/OpenMP pools, found once (``threadpool_limits`` searches for them on
+    every call, which costs as much as a short cell)."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER
+
+
+def _row(cell: Cell) -> dict[str, Any]:
+    row: dict[str, Any] = {k: None for k in COLUMNS}
+    row.update(key=cell.key, cell_index=cell.index, data=cell.data, structure=cell.structure, variant=cell.variant,
+               seed=cell.seed, estimator=cell.variant_spec["estimator"], band=cell.band, version=gb.__version__,
+               worker=f"{socket.gethostname()}:{os.getpid()}")
+    return row
+
+
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def failed_row(cell: Cell, message: str) -> dict[str, Any]:
+    """The row of a cell that could not be run at all (e.g. its worker died twice)."""
+    row = _row(cell)
+    row.update(status="failed", message=message, worker=None, finished_at=_now(), warnings=[])
+    return row
+
+
+def make_structure(spec: Mapping[str, Any], data: gb.Dataset, data_hash: str) -> gb.Structure:
+    """The cell's structure: given terms, or FROLS on the identification record (cached per process)."""
+    if "terms" in spec:
+        return gb.parse_structure(list(spec["terms"]))
+    k = (data_hash, canonical_json(spec))
+    if k not in _STRUCTURES:
+        kw = {n: spec[n] for n in ("n_terms", "tol", "criterion", "max_terms") if spec[n] is not None}
+        sel = gb.frols(gb.Candidates(**spec["candidates"]), data.ident, include=list(spec["include"]), **kw)
+        if len(_STRUCTURES) >= _STRUCTURE_CACHE_SIZE:
+            _STRUCTURES.clear()
+        _STRUCTURES[k] = tuple(str(t) for t in sel.structure)
+    return gb.parse_structure(list(_STRUCTURES[k]))
+
+
+def _numerator_fit(st: gb.Structure, points: gb.StaticPoints) -> gb.StaticCurve:
+    """The polynomial in ū with exactly the powers the structure's numerator carries (its Σ_{u^m}
+    clusters), least squares through the static points: the curve eq. (22) can impose."""
+    powers = sorted(m for p, m in gb.cluster_map(st).keys if p == 0)
+    if not powers:
+        raise ValueError("eq. (22) needs numerator clusters (the constant or terms in u only); this structure has none")
+    if len(points) < len(powers):
+        raise ValueError(f"fitting the {len(powers)} numerator coefficients (ū powers {powers}) needs at least "
+                         f"{len(powers)} static points, got {len(points)}")
+    V = points.ubar[:, None] ** np.array(powers, float)[None, :]
+    scale = np.sqrt(np.mean(V**2, axis=0))  # columns in engineering units span decades (ū² ≈ 1e6)
+    z = np.linalg.lstsq(V / scale, points.ybar, rcond=None)[0]
+    coef = np.zeros(max(powers) + 1)
+    coef[powers] = z / scale
+    return gb.StaticCurve.polynomial(coef, domain=(float(points.ubar.min()), float(points.ubar.max())),
+                                     name=f"fit of ū^{powers} to {points.name}")
+
+
+def _constraints(specs, st: gb.Structure, data: gb.Dataset) -> list:
+    out = []
+    for c in specs:
+        curve = None
+        if c["type"] == "equality":
+            if c["curve"] == "fit":
+                curve = _numerator_fit(st, data.static)
+            elif c["curve"] == "dataset":
+                curve = data.extra["static_curve"]
+            else:
+                curve = gb.StaticCurve.polynomial(list(c["curve"]), name="given static curve")
+        out.append(build_constraint(c, curve=curve))
+    return out
+
+
+def _lags(st: gb.Structure) -> tuple[int, int]:
+    ny = max((lag for t in st for s, lag, _ in t.factors if s == "y"), default=0)
+    nu = max((lag for t in st for s, lag, _ in t.factors if s == "u"), default=1)
+    return ny, nu
+
+
+def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
+    """(model, Pareto set or None)."""
+    v = cell.variant_spec
+    est = v["estimator"]
+    opts = dict(v["options"])
+    name = f"{cell.variant} / {cell.structure}"
+    lam = None if v["lambdas"] is None else np.array(v["lambdas"])
+    if est == "ls":
+        return gb.els(st, data.ident, noise=0, name=name).model, None
+    if est == "els":
+        return gb.els(st, data.ident, name=name, **opts).model, None
+    if est == "neural":
+        ny, nu = _lags(st)
+        kw = {"ny": ny, "nu": nu, **opts}
+        return gb.neural_narx(data.ident, seed=cell.seed or 0, name=name, **kw).model, None
+    cons = _constraints(v["constraints"], st, data)
+    if est == "cls":
+        return gb.cls(st, data, constraints=cons, name=name, **opts), None
+    if est == "pe":
+        return None, gb.pe_pareto(st, data, lambdas=lam, constraints=cons, **opts)
+    if est == "se-ga":
+        theta0 = opts.pop("theta0", "ls")
+        ga = gb.GAOptions(**opts)
+        return None, gb.se_pareto(st, data, lambdas=lam, method="ga", seed=cell.seed or 0, progress=False,
+                                  options=ga, theta0=None if theta0 == "none" else "ls")
+    if est == "se-gradient":
+        return None, gb.se_pareto(st, data, lambdas=lam, method="gradient", progress=False, **opts)
+    raise ValueError(f"unknown estimator {est!r}")  # pragma: no cover - the spec refuses it
+
+
+def _decide(cell: Cell, pareto: gb.ParetoSet, data: gb.Dataset) -> tuple[int, str, bool]:
+    """(member index, rule, in band) or ``InfeasibleError`` when D_SF finds no member in its band."""
+    d = cell.variant_spec["decision"]
+    if d["rule"] == "dsf":
+        band = d["band"] if d["band"] is not None else cell.band
+        inside = (pareto.JSF <= band) & np.isfinite(pareto.JS)
+        if not inside.any() and d["fallback"] is None:
+            finite = pareto.JSF[np.isfinite(pareto.JSF)]
+            best = f"{finite.min():.4g}" if finite.size else "inf for every member"
+            raise gb.InfeasibleError(f"D_SF: no member of the {len(pareto)}-member set has J_SF in B = [0, {band:g}] "
+                                     f"(smallest J_SF {best}); the members are stored")
+        dec = gb.decide_dsf(pareto, band=band, fallback=d["fallback"])
+        return dec.index, dec.rule, bool(dec.in_band)
+    if d["rule"] == "min_correlation":
+        dec = gb.decide_min_correlation(pareto, data.ident, output=d["output"])
+        return dec.index, dec.rule, True
+    ok = np.flatnonzero(np.isfinite(pareto.JSF))
+    if ok.size == 0:
+        raise gb.InfeasibleError("min J_SF: every member has an undefined static curve (J_SF = inf)")
+    i = int(ok[np.lexsort((ok, pareto.JS[ok], pareto.JSF[ok]))[0]])
+    return i, "min J_SF", True
+
+
+def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, list]:
+    """Every member's figures (identification J's from the set, J_S on the validation record)."""
+    K = len(pareto)
+    ok = np.array([i not in pareto.failures for i in range(K)], bool)
+    js_valid = np.full(K, np.inf)
+    if ok.any():
+        js_valid[ok] = gb.evaluate_thetas(pareto.structure, pareto.thetas[ok], data.valid, one_step=False)["JS"]
+    # fit % from J_S as gb.fit_percent defines it: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖) from sample L on
+    y = data.valid.y[pareto.structure.max_lag:]
+    with np.errstate(invalid="ignore"):
+        fit = 100.0 * (1.0 - np.sqrt(js_valid * y.size / np.sum((y - y.mean()) ** 2)))
+    return {"lambda1": pareto.lambdas.tolist(), "J1": pareto.J1.tolist(), "JS": pareto.JS.tolist(),
+            "JSF": pareto.JSF.tolist(), "JS_valid": js_valid.tolist(), "fit_valid": fit.tolist(),
+            "failure": [pareto.failures.get(i, "") for i in range(K)]}
+
+
+def _figures(m, data: gb.Dataset) -> dict[str, float]:
+    """The shared evaluator's figures of one model on both records and the static points."""
+    L = m.max_lag
+    out: dict[str, float] = {}
+    for tag, rec in (("ident", data.ident), ("valid", data.valid)):
+        out[f"J1_{tag}"] = gb.j1(m, rec)
+        sim = m.simulate(rec, on_diverge="nan")
+        out[f"JS_{tag}"] = gb.mse(rec.y, sim, L)
+        out[f"fit_{tag}"] = gb.fit_percent(rec.y, sim, L)
+    out["JSF"] = gb.jsf(m, data.static)
+    yb = np.asarray(m.static_curve(data.static.ubar, y0=data.static.ybar, strict=False), float)
+    miss = np.abs(yb - data.static.ybar)
+    out["static_miss"] = float(miss.max()) if np.all(np.isfinite(miss)) else float("inf")
+    return out
+
+
+def run_cell(cell: Cell, data: gb.Dataset, threads: int = 1) -> dict[str, Any]:
+    """Run one cell and return its row (see :data:`COLUMNS`); never raises for the cell's own problems.
+
+    Parameters
+    ----------
+    cell : Cell
+        What to run.
+    data : Dataset
+        The cell's data set (identification, validation, static points).
+    threads : int
+        Threads for BLAS and numba inside the cell (1: the same numbers on every executor).
+    """
+    row = _row(cell)
+    t0 = time.perf_counter()
+    numba_before = numba.get_num_threads()
+    caught: list[warnings.WarningMessage] = []
+    try:
+        numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
+        with _thread_pools().limit(limits=int(threads)), warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            st = make_structure(cell.structure_spec, data, cell.data_hash)
+            row["terms"] = [str(t) for t in st]
+            model, pareto = _estimate(cell, st, data)
+            if pareto is not None:
+                row["members"] = _members(pareto, data)
+                i, rule, in_band = _decide(cell, pareto, data)
+                model = pareto.model(i, name=f"{cell.variant} / {cell.structure}")
+                row.update(lambda1=float(pareto.lambdas[i]), rule=rule, in_band=int(in_band))
+            row["n_params"] = int(model.n_params)
+            if isinstance(model, gb.Model):
+                row["theta"] = model.theta.tolist()
+            row.update(_figures(model, data))
+        bad = [tag for tag in ("ident", "valid") if not np.isfinite(row[f"JS_{tag}"])]
+        if bad:
+            row.update(status="diverged", message=f"the free run diverges on the {' and '.join(bad)} record(s) "
+                                                  "(J_S = inf)")
+        else:
+            row["status"] = "ok"
+    except gb.InfeasibleError as exc:
+        row.update(status="infeasible", message=str(exc))
+    except gb.DivergenceError as exc:
+        row.update(status="diverged", message=str(exc))
+    except Exception as exc:  # a cell's failure is data, not a crash of the grid
+        row.update(status="failed", message=f"{type(exc).__name__}: {exc}")
+    finally:
+        numba.set_num_threads(numba_before)
+    row["warnings"] = sorted({f"{w.category.__name__}: {w.message}" for w in caught})
+    row["wall_time"] = time.perf_counter() - t0
+    row["finished_at"] = _now()
+    return row

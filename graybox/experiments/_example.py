@@ -1,0 +1,103 @@
+"""The commented example spec that ``graybox grid init`` prints (the bundled pumping plant)."""
+
+__all__ = ["EXAMPLE_SPEC"]
+
+EXAMPLE_SPEC = '''\
+# A graybox grid: data sets x structures x variants x seeds.
+#   graybox grid run spec.toml --store results.sqlite [--workers N | --scheduler ADDRESS]
+#   graybox grid report results.sqlite --out report/
+# Every cell (data, structure, variant, seed) is scored by the shared evaluator on the
+# identification AND the validation record. Rerunning skips the cells already in the store.
+
+name = "pumping-variants"
+seeds = [0, 1]            # used by the stochastic estimators (se-ga, neural); the others run once
+
+# ---------------------------------------------------------------------------------- data sets
+[[data]]
+name = "pumping"
+bundled = "pumping"       # or "buck" (the real buck converter, data kept outside the package)
+band = 0.031              # D_SF band B = [0, band] on J_SF (mlc^2): the transmitter's +/-0.175 mlc
+
+# Your own plant: CSV files, columns chosen by name; paths relative to this file.
+# [[data]]
+# name = "my-plant"
+# ident = {path = "ident.csv", u = "speed", y = "pressure", time = "t"}    # or Ts = 0.05 (seconds)
+# valid = {path = "valid.csv", u = "speed", y = "pressure", time = "t"}
+# static = {path = "static.csv", u = "speed", y = "pressure"}             # measured steady states
+# band = 0.031
+
+# --------------------------------------------------------------------------------- structures
+# Made by FROLS: a candidate space (graybox.Candidates) and a rule (n_terms, tol or criterion).
+[[structures]]
+name = "frols-17"
+candidates = {ny = 6, nu = 6, degree = 2, max_y_power = 1}   # max_y_power = 1: rational statics, eq. (22) applies
+n_terms = 17
+include = ["1"]           # the constant first: eq. (22) needs it
+
+[[structures]]
+name = "frols-bic"
+candidates = {ny = 3, nu = 3, degree = 2, max_y_power = 1}
+criterion = "bic"
+include = ["1"]
+
+# Given: the terms themselves.
+[[structures]]
+name = "first-order"
+terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]
+
+# ----------------------------------------------------------------------------------- variants
+# estimator: ls, els, cls, pe, se-ga, se-gradient, neural
+# constraints (cls, pe): {type = "equality"} (eq. (22); curve = "fit" | "dataset" | [c0, c1, ...]),
+#   {type = "points"}, {type = "band", b = 0.175}, {type = "gain", lower = 0.0},
+#   {type = "clusters", bounds = {Sy = {upper = 0.999}}}; a list imposes them together.
+# lambdas (pe, se-*): a list of lambda1 in (0, 1], or {logspace = [a, b, n]}.
+# decision (pe, se-*): {rule = "dsf"} (band from the data set), {rule = "dsf", band = 0.05,
+#   fallback = "min_jsf"}, {rule = "min_correlation"}, {rule = "min_jsf"}.
+# options: the estimator's keyword options.
+
+[[variants]]
+name = "LS"
+estimator = "ls"
+
+[[variants]]
+name = "ELS"
+estimator = "els"
+options = {noise = 2}
+
+[[variants]]
+name = "CLS eq.(22)"
+estimator = "cls"
+constraints = [{type = "equality", curve = "fit"}]
+options = {reference = "els"}     # Sigma*_y from ELS, as in the paper
+
+[[variants]]
+name = "PE"
+estimator = "pe"
+lambdas = {logspace = [-6, 0, 30]}
+options = {solver = "closed"}     # eq. (11), no constraints
+
+[[variants]]
+name = "PE band"
+estimator = "pe"
+lambdas = {logspace = [-3, 0, 10]}
+constraints = [{type = "band", b = 0.175}]
+
+[[variants]]
+name = "PE band+gain"
+estimator = "pe"
+lambdas = {logspace = [-3, 0, 10]}
+constraints = [{type = "band", b = 0.175}, {type = "gain", lower = 0.0}]
+
+[[variants]]
+name = "SE gradient"
+estimator = "se-gradient"
+lambdas = {logspace = [-2, 0, 10]}
+options = {max_nfev = 30}
+
+[[variants]]
+name = "SE GA (short)"
+estimator = "se-ga"
+lambdas = {logspace = [-2, 0, 5]}
+decision = {rule = "dsf", fallback = "min_jsf"}
+options = {population = 40, generations = 10}
+'''

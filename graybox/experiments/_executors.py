@@ -1,0 +1,382 @@
+"""Where cells run: in the driver, in local worker processes, or on a Dask distributed cluster.
+
+Every executor takes the cells and the data and yields rows *as they complete*; only the driver
+writes them to the store. Parallel executors keep workers × threads ≤ cores: each worker process
+gets ``NUMBA_NUM_THREADS`` (and the BLAS thread variables) = cores // workers, and a cell itself
+runs BLAS and numba on one thread (see :func:`graybox.experiments._cell.run_cell`).
+
+A worker process that dies while running a cell (killed, out of memory, a crash in compiled
+code) gets that cell retried once on a fresh worker; if it dies again the cell is a failed row
+naming what happened. The driver does this itself for both pools, and knows which cells a dead
+worker held: the local pool gives a worker one cell at a time; on Dask the driver keeps one task
+per worker thread in flight, and a task is a small batch of cells (about ``BATCH_SECONDS`` of
+work, so that the scheduler's cost per task stays a few per cent). When a Dask worker dies, every
+cell of its batch is retried alone, so the one that kills its worker dies alone the second time.
+The ``LocalCluster`` graybox starts reports a worker's death at once (``allowed-failures`` 0); a
+cluster the user brings first retries as its own ``distributed.scheduler.allowed-failures`` says.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import multiprocessing as mp
+import os
+import statistics
+import uuid
+from collections import deque
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from multiprocessing.connection import wait as mp_wait
+from typing import Any, Callable, Iterator, Mapping, Sequence
+
+import graybox as gb
+
+from ._cell import failed_row, run_cell
+from ._spec import Cell
+
+__all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "local_cluster", "make_executor", "worker_threads"]
+
+#: Executor names accepted by :func:`graybox.experiments.run_grid`.
+EXECUTORS = ("inprocess", "processes", "dask")
+
+CellFn = Callable[[Cell, gb.Dataset, int], dict]
+
+#: A Dask task runs a batch of cells lasting about this long (seconds), once the first cells
+#: have shown how long a cell takes: the scheduler's cost per task (milliseconds on a busy
+#: machine) is then a few per cent of the work.
+BATCH_SECONDS = 0.25
+#: Most cells in one Dask task.
+MAX_BATCH = 64
+
+
+def worker_threads(workers: int, cores: int | None = None) -> int:
+    """Threads each of ``workers`` processes may use so that workers × threads ≤ cores (at least 1)."""
+    cores = cores or os.cpu_count() or 1
+    return max(1, cores // max(1, workers))
+
+
+def _thread_env(threads: int) -> dict[str, str]:
+    t = str(threads)
+    return {"NUMBA_NUM_THREADS": t, "OMP_NUM_THREADS": t, "OPENBLAS_NUM_THREADS": t, "MKL_NUM_THREADS": t}
+
+
+@contextmanager
+def _environ(values: Mapping[str, str]):
+    """Temporarily set environment variables (inherited by processes started inside)."""
+    old = {k: os.environ.get(k) for k in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+class InProcess:
+    """Cells one after another in the driver process (the default)."""
+
+    name = "in-process"
+
+    def __init__(self, fn: CellFn = run_cell):
+        self.fn = fn
+
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
+        """Yield each cell's row."""
+        for c in cells:
+            yield self.fn(c, datasets[c.data_hash], 1)
+
+
+# --------------------------------------------------------------------------------------------
+# local worker processes
+# --------------------------------------------------------------------------------------------
+def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the child process
+    """A worker process: receive (cell, data or None), run it, send the row; stop on None or EOF."""
+    cache: dict[str, gb.Dataset] = {}
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):  # the driver is gone
+            return
+        if msg is None:
+            return
+        cell, data = msg
+        if data is not None:
+            cache[cell.data_hash] = data
+        row = fn(cell, cache[cell.data_hash], 1)
+        try:
+            conn.send(row)
+        except (BrokenPipeError, OSError):
+            return
+
+
+@dataclass
+class _Slot:
+    proc: Any
+    conn: Any
+    sent: set = field(default_factory=set)
+    cell: Cell | None = None
+    attempt: int = 0
+
+
+class ProcessPool:
+    """Cells in ``workers`` local processes (spawned), results taken as they complete.
+
+    Parameters
+    ----------
+    workers : int
+        Number of worker processes.
+    fn : callable
+        What a worker runs for a cell (default: :func:`run_cell`).
+    """
+
+    def __init__(self, workers: int, fn: CellFn = run_cell):
+        self.workers = int(workers)
+        self.threads = worker_threads(self.workers)
+        self.fn = fn
+        self.name = f"{self.workers} local processes ({self.threads} thread(s) each)"
+        self._ctx = mp.get_context("spawn")
+
+    def _start(self) -> _Slot:
+        parent, child = self._ctx.Pipe()
+        proc = self._ctx.Process(target=_worker_main, args=(child, self.fn), daemon=True,
+                                 name="graybox-grid-worker")
+        with _environ(_thread_env(self.threads)):
+            proc.start()
+        child.close()
+        return _Slot(proc, parent)
+
+    @staticmethod
+    def _stop(slot: _Slot, graceful: bool) -> None:
+        try:
+            if graceful:
+                slot.conn.send(None)
+        except (BrokenPipeError, OSError):
+            pass
+        slot.proc.join(timeout=5 if graceful else 0.1)
+        if slot.proc.is_alive():
+            slot.proc.kill()
+            slot.proc.join(timeout=5)
+        slot.conn.close()
+
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
+        """Yield each cell's row as it completes."""
+        pending: deque[tuple[Cell, int]] = deque((c, 0) for c in cells)
+        slots: list[_Slot] = []
+        try:
+            slots = [self._start() for _ in range(min(self.workers, max(1, len(pending))))]
+            while pending or any(s.cell is not None for s in slots):
+                for s in slots:
+                    if s.cell is None and pending:
+                        s.cell, s.attempt = pending.popleft()
+                        h = s.cell.data_hash
+                        s.conn.send((s.cell, None if h in s.sent else datasets[h]))
+                        s.sent.add(h)
+                busy = [s for s in slots if s.cell is not None]
+                ready = set(mp_wait([s.conn for s in busy] + [s.proc.sentinel for s in busy]))
+                for i, s in enumerate(slots):
+                    if s.cell is None or not ({s.conn, s.proc.sentinel} & ready):
+                        continue
+                    row = None
+                    try:
+                        if s.conn.poll():
+                            row = s.conn.recv()
+                    except (EOFError, OSError):
+                        row = None
+                    if row is not None:
+                        s.cell = None
+                        yield row
+                        continue
+                    # the worker died while running s.cell
+                    s.proc.join(timeout=5)
+                    code = s.proc.exitcode
+                    cell, attempt = s.cell, s.attempt + 1
+                    self._stop(s, graceful=False)
+                    slots[i] = self._start()
+                    if attempt < 2:
+                        pending.appendleft((cell, attempt))
+                    else:
+                        yield failed_row(cell, f"the worker process died twice while running this cell "
+                                               f"(last exit code {code}); it was retried once")
+        finally:
+            for s in slots:
+                self._stop(s, graceful=s.proc.is_alive())
+
+
+# --------------------------------------------------------------------------------------------
+# Dask distributed
+# --------------------------------------------------------------------------------------------
+@contextmanager
+def local_cluster(workers: int):
+    """The Dask ``LocalCluster`` graybox starts for ``workers`` processes (closed on exit).
+
+    One thread per worker, ``NUMBA_NUM_THREADS`` = cores // workers; the scheduler reports a
+    task whose worker died at once (``allowed-failures`` 0): the driver decides what to retry.
+    """
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR, env=_thread_env(worker_threads(int(workers))))
+    try:
+        yield cluster
+    finally:
+        cluster.close()
+
+
+class DaskCluster:
+    """Cells on a Dask distributed cluster: a Client given, a scheduler address, or a LocalCluster.
+
+    Parameters
+    ----------
+    client : distributed.Client, optional
+        A client the caller owns (not closed here).
+    scheduler : str, optional
+        Address of a running scheduler, e.g. ``"tcp://10.0.0.5:8786"``.
+    workers : int, optional
+        Start a ``LocalCluster`` of this many worker processes (one thread each) for the run.
+    fn : callable
+        What a worker runs for a cell.
+    """
+
+    def __init__(self, client: Any = None, scheduler: str | None = None, workers: int | None = None,
+                 fn: CellFn = run_cell):
+        given = [k for k, v in (("client", client), ("scheduler", scheduler), ("workers", workers)) if v is not None]
+        if len(given) != 1:
+            raise ValueError(f"the Dask executor needs exactly one of client, scheduler or workers; got {given or 'none'}")
+        self.client, self.scheduler, self.workers, self.fn = client, scheduler, workers, fn
+        if workers is not None:
+            self.workers = int(workers)
+            self.name = f"Dask LocalCluster of {self.workers} worker processes"
+        elif scheduler is not None:
+            self.name = f"Dask scheduler at {scheduler}"
+        else:
+            self.name = "Dask client"
+
+    @contextmanager
+    def _client(self):
+        from distributed import Client
+
+        if self.client is not None:
+            if not isinstance(self.client, Client):
+                raise ValueError(f"client must be a distributed.Client, got {type(self.client).__name__}")
+            yield self.client
+            return
+        if self.scheduler is not None:
+            client = Client(self.scheduler, timeout="30s")
+            try:
+                client.wait_for_workers(1, timeout=60)
+                yield client
+            finally:
+                client.close()
+            return
+        with local_cluster(self.workers) as cluster:
+            client = Client(cluster)
+            try:
+                yield client
+            finally:
+                client.close()
+
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
+        """Submit the cells in batches, yield each row as its batch completes."""
+        from distributed import as_completed
+        from distributed.scheduler import KilledWorker
+
+        from ._dask import GridData, cells_task
+
+        if not cells:
+            return
+        with self._client() as client:
+            plugin = f"graybox-grid-data-{uuid.uuid4().hex[:8]}"
+            client.register_plugin(GridData({h: datasets[h] for h in {c.data_hash for c in cells}}), name=plugin)
+            tag = uuid.uuid4().hex[:8]
+            queue: deque[tuple[Cell, int]] = deque((c, 0) for c in cells)  # (cell, deaths so far)
+            futures: dict = {}
+            times: list[float] = []
+            counter = itertools.count()
+            window = max(1, sum(client.nthreads().values()))
+
+            def batch() -> list[tuple[Cell, int]]:
+                """The next task's cells: a retried cell alone, else as many as fill ~BATCH_SECONDS."""
+                if queue[0][1] > 0:
+                    return [queue.popleft()]
+                k = 1
+                if len(times) >= window:
+                    k = int(BATCH_SECONDS / max(statistics.median(times[-64:]), 1e-3))
+                    k = max(1, min(k, MAX_BATCH, len(queue) // (2 * window)))
+                out = []
+                while queue and len(out) < k and queue[0][1] == 0:
+                    out.append(queue.popleft())
+                return out
+
+            def submit() -> None:
+                while queue and len(futures) < window:
+                    items = batch()
+                    seq = next(counter)  # a retried cell gets a new key: the old one may still be known as erred
+                    f = client.submit(cells_task, self.fn, plugin, [c for c, _ in items],
+                                      key=f"graybox-cells-{items[0][0].key[:16]}-{seq}-{tag}", pure=False)
+                    futures[f] = items
+                    pending.add(f)
+
+            # results are gathered in the background as tasks finish (no round trip per task here)
+            pending = as_completed([], with_results=True, raise_errors=False)
+            submit()
+            try:
+                for f, result in pending:
+                    items = futures.pop(f)
+                    rows: list[dict] = []
+                    if f.status == "finished":
+                        rows = list(result)
+                        times.extend(r["wall_time"] for r in rows)
+                    else:
+                        exc = result[1] if isinstance(result, tuple) and len(result) > 1 else result
+                        if not isinstance(exc, BaseException):
+                            exc = RuntimeError(f"the task ended as {f.status!r}")
+                        if isinstance(exc, KilledWorker):
+                            # every cell of the batch goes back alone (the one that kills its worker
+                            # is then found out); a second death makes a cell a failed row
+                            window = max(1, sum(client.nthreads().values()))
+                            for c, deaths in reversed(items):
+                                if deaths + 1 >= 2:
+                                    rows.append(failed_row(c, "the worker died twice while running this cell; "
+                                                              f"it was retried once ({type(exc).__name__}: {exc})"))
+                                else:
+                                    queue.appendleft((c, deaths + 1))
+                        else:
+                            rows = [failed_row(c, f"{type(exc).__name__}: {exc}") for c, _ in items]
+                    f.release()
+                    submit()
+                    yield from rows
+            finally:
+                for f in futures:
+                    f.cancel()
+                try:
+                    client.unregister_worker_plugin(plugin)
+                except Exception:  # the cluster may be going away; the plugin goes with it
+                    pass
+
+
+def make_executor(executor: str | None = None, *, workers: int | None = None, client: Any = None,
+                  scheduler: str | None = None, fn: CellFn = run_cell):
+    """The executor for :func:`graybox.experiments.run_grid`'s arguments (see there)."""
+    if executor is None:
+        executor = "dask" if (client is not None or scheduler is not None or workers is not None) else "inprocess"
+    if executor not in EXECUTORS:
+        raise ValueError(f"executor must be one of {', '.join(map(repr, EXECUTORS))}; got {executor!r}")
+    if workers is not None:
+        if isinstance(workers, bool) or int(workers) != workers or workers < 1:
+            raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+        workers = int(workers)
+    if executor == "inprocess":
+        if any(v is not None for v in (workers, client, scheduler)):
+            raise ValueError("the in-process executor takes no workers, client or scheduler")
+        return InProcess(fn)
+    if executor == "processes":
+        if client is not None or scheduler is not None:
+            raise ValueError("the local process executor takes workers only (a client or scheduler means Dask)")
+        return ProcessPool(workers or os.cpu_count() or 1, fn)
+    return DaskCluster(client=client, scheduler=scheduler, workers=workers, fn=fn)

@@ -1,0 +1,1110 @@
+"""Grid specifications: data sets × structures × variants × seeds, in Python and in TOML.
+
+Every piece is a small frozen dataclass that validates itself and has a *canonical* form
+(:meth:`to_dict`: plain JSON values, defaults filled in). The canonical forms are what a cell's
+key hashes and what the store keeps, so a grid written in Python and the same grid written in
+TOML give the same cells. A TOML spec is parsed with :mod:`tomllib`; every problem in it is a
+:class:`SpecError` naming the key and the line it is on.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+
+import graybox as gb
+
+from .._validation import check_choice, check_int, check_lambdas, check_real
+
+__all__ = [
+    "SpecError",
+    "DataSpec",
+    "StructureSpec",
+    "Variant",
+    "DecisionRule",
+    "Grid",
+    "Cell",
+    "ESTIMATORS",
+    "CONSTRAINT_TYPES",
+    "DECISION_RULES",
+    "BUNDLED",
+]
+
+#: Estimators a variant may name.
+ESTIMATORS = ("ls", "els", "cls", "pe", "se-ga", "se-gradient", "neural")
+#: Estimators that give a Pareto set (and so need a decision maker).
+PARETO_ESTIMATORS = ("pe", "se-ga", "se-gradient")
+#: Estimators whose result depends on the seed; the others run once per (data, structure, variant).
+STOCHASTIC_ESTIMATORS = ("se-ga", "neural")
+#: Estimators that take static constraints.
+CONSTRAINED_ESTIMATORS = ("cls", "pe")
+#: Constraint types (TOML ``type = …``) and the graybox object each stands for.
+CONSTRAINT_TYPES = {
+    "equality": "CurveEquality (eq. (22))",
+    "points": "PassesThrough",
+    "band": "StaticBand",
+    "gain": "GainBounds",
+    "clusters": "ClusterBounds",
+}
+#: Decision makers for Pareto sets.
+DECISION_RULES = ("dsf", "min_correlation", "min_jsf")
+#: Bundled data sets and their default J_SF band B (output units²): the pumping plant's
+#: transmitter error ±0.175 mlc (0.031 mlc²), the buck converter's 0.2 V quantisation (0.1² V²).
+BUNDLED = {"pumping": 0.031, "buck": 0.01}
+
+
+# --------------------------------------------------------------------------------------------
+# errors that know where they are
+# --------------------------------------------------------------------------------------------
+class SpecError(ValueError):
+    """A grid specification is wrong; the message names the key (and, for a TOML file, its line).
+
+    Attributes
+    ----------
+    path : tuple
+        Where the problem is, e.g. ``("variants", 2, "options", "solver")``.
+    problem : str
+        What is wrong, in words.
+    """
+
+    def __init__(self, problem: str, path: Sequence[str | int] = (), source: str | None = None,
+                 line: int | None = None):
+        self.problem = problem
+        self.path = tuple(path)
+        self.source = source
+        self.line = line
+        super().__init__(self._text())
+
+    def _text(self) -> str:
+        where = _dotted(self.path)
+        head = ""
+        if self.source:
+            head = f"{self.source}" + (f", line {self.line}" if self.line else "") + ": "
+        return f"{head}{where + ': ' if where else ''}{self.problem}"
+
+    def within(self, *prefix: str | int) -> "SpecError":
+        """The same error with ``prefix`` put in front of its path."""
+        return SpecError(self.problem, tuple(prefix) + self.path, self.source, self.line)
+
+
+def _dotted(path: Sequence[str | int]) -> str:
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out
+
+
+def _wrap(fn, path: Sequence[str | int], *args, **kw):
+    """Call a graybox validator; turn its ValueError into a SpecError at ``path``."""
+    try:
+        return fn(*args, **kw)
+    except SpecError:
+        raise
+    except (ValueError, TypeError) as exc:
+        raise SpecError(str(exc), path) from None
+
+
+def _check_keys(d: Mapping, allowed: Iterable[str], what: str, path: Sequence[str | int] = ()) -> None:
+    if not isinstance(d, Mapping):
+        raise SpecError(f"{what} must be a table (key = value pairs), got {type(d).__name__}", path)
+    allowed = tuple(allowed)
+    for k in d:
+        if k not in allowed:
+            raise SpecError(f"unknown key {k!r} in {what}; known keys: {', '.join(allowed)}", tuple(path) + (k,))
+
+
+def _name(v: object, path: Sequence[str | int]) -> str:
+    if not isinstance(v, str) or not v.strip():
+        raise SpecError(f"name must be a non-empty string, got {v!r}", tuple(path) + ("name",))
+    return v
+
+
+class FrozenDict(dict):
+    """A dict that refuses changes (and, unlike a mapping proxy, pickles: cells travel to workers)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("a grid's specification is immutable")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = __ior__ = _refuse  # type: ignore
+
+    def __reduce__(self):
+        return (FrozenDict, (dict(self),))
+
+    def __hash__(self) -> int:  # type: ignore[override]
+        return hash(canonical_json(self))
+
+
+def _freeze(obj: Any) -> Any:
+    """Read-only copies of nested canonical values (dicts become FrozenDicts, lists tuples)."""
+    if isinstance(obj, Mapping):
+        return FrozenDict({k: _freeze(v) for k, v in obj.items()})
+    if isinstance(obj, (list, tuple)):
+        return tuple(_freeze(v) for v in obj)
+    return obj
+
+
+def _thaw(obj: Any) -> Any:
+    """Plain JSON values (dicts and lists) from frozen ones."""
+    if isinstance(obj, Mapping):
+        return {k: _thaw(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_thaw(v) for v in obj]
+    return obj
+
+
+def canonical_json(obj: Any) -> str:
+    """Deterministic JSON text of a canonical value (sorted keys, exact float repr)."""
+    return json.dumps(_thaw(obj), sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
+def _hash(obj: Any, n: int = 16) -> str:
+    return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:n]
+
+
+# --------------------------------------------------------------------------------------------
+# data sets
+# --------------------------------------------------------------------------------------------
+_RECORD_KEYS = ("path", "u", "y", "time", "Ts")
+_STATIC_KEYS = ("path", "u", "y")
+
+
+def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dict:
+    _check_keys(d, keys, what, path)
+    assert isinstance(d, Mapping)
+    out: dict[str, Any] = {}
+    for k in ("path", "u", "y"):
+        if k not in d:
+            raise SpecError(f"{what} needs {k!r}", path + (k,))
+        if not isinstance(d[k], str) or not d[k]:
+            raise SpecError(f"{k} must be a non-empty string, got {d[k]!r}", path + (k,))
+        out[k] = d[k]
+    if "time" in keys:
+        t = d.get("time")
+        if t is not None and not isinstance(t, str):
+            raise SpecError(f"time must be a column name, got {t!r}", path + ("time",))
+        Ts = d.get("Ts")
+        if Ts is not None:
+            Ts = _wrap(check_real, path + ("Ts",), Ts, "Ts", low=0, low_open=True)
+        if t is None and Ts is None:
+            raise SpecError(f"{what} needs a time column (time = …) or a sampling period (Ts = … seconds)", path)
+        out["time"], out["Ts"] = t, Ts
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class DataSpec:
+    """One data set of a grid: a bundled one by name, the user's CSV files, or a Dataset in memory.
+
+    Parameters
+    ----------
+    name : str
+        Label in the results.
+    bundled : {"pumping", "buck"}, optional
+        :func:`graybox.load_pumping` or :func:`graybox.load_buck`.
+    ident, valid : mapping, optional
+        CSV records ``{"path", "u", "y", "time" or "Ts"}`` (see :func:`graybox.load_record_csv`);
+        relative paths are resolved against the spec file's folder.
+    static : mapping, optional
+        CSV static points ``{"path", "u", "y"}`` (see :func:`graybox.load_static_csv`).
+    band : float, optional
+        The J_SF band B = [0, band] (output units²) for D_SF decisions and the reports; default
+        for the bundled sets 0.031 mlc² (pumping) and 0.01 V² (buck).
+    dataset : Dataset, optional
+        A Dataset built in Python (not expressible in TOML); its content is hashed.
+    """
+
+    name: str
+    bundled: str | None = None
+    ident: Mapping[str, Any] | None = None
+    valid: Mapping[str, Any] | None = None
+    static: Mapping[str, Any] | None = None
+    band: float | None = None
+    dataset: gb.Dataset | None = None
+
+    def __post_init__(self) -> None:
+        _name(self.name, ())
+        given = [k for k in ("bundled", "dataset") if getattr(self, k) is not None]
+        files = [k for k in ("ident", "valid", "static") if getattr(self, k) is not None]
+        if len(given) + bool(files) != 1:
+            raise SpecError("a data set is exactly one of: bundled = \"pumping\"/\"buck\", CSV files "
+                            "(ident, valid, static), or a Dataset in memory")
+        if self.bundled is not None:
+            _wrap(check_choice, ("bundled",), self.bundled, "bundled", tuple(BUNDLED))
+        if self.dataset is not None and not isinstance(self.dataset, gb.Dataset):
+            raise SpecError(f"dataset must be a graybox Dataset, got {type(self.dataset).__name__}", ("dataset",))
+        if files:
+            for k in ("ident", "valid", "static"):
+                if getattr(self, k) is None:
+                    raise SpecError(f"CSV data need ident, valid and static files; {k} is missing", (k,))
+            object.__setattr__(self, "ident", _freeze(_file_entry(self.ident, _RECORD_KEYS, "a record file", ("ident",))))
+            object.__setattr__(self, "valid", _freeze(_file_entry(self.valid, _RECORD_KEYS, "a record file", ("valid",))))
+            object.__setattr__(self, "static", _freeze(_file_entry(self.static, _STATIC_KEYS, "a static file", ("static",))))
+        band = self.band
+        if band is None and self.bundled is not None:
+            band = BUNDLED[self.bundled]
+        if band is not None:
+            band = _wrap(check_real, ("band",), band, "band", low=0, low_open=True)
+        object.__setattr__(self, "band", band)
+
+    def to_dict(self) -> dict:
+        """Canonical form (what the spec says, not the data's content)."""
+        if self.bundled is not None:
+            src: dict[str, Any] = {"bundled": self.bundled}
+        elif self.dataset is not None:
+            src = {"dataset": "in memory"}
+        else:
+            src = {k: _thaw(getattr(self, k)) for k in ("ident", "valid", "static")}
+        return {"name": self.name, **src, "band": self.band}
+
+    def load(self, base_dir: str | Path | None = None) -> gb.Dataset:
+        """The data as a :class:`~graybox.Dataset` (identification, validation, static points).
+
+        Only what cells use is kept: the records, the static points and, when the source has
+        one, ``extra["static_curve"]`` (e.g. eq. (1) for the pumping plant).
+
+        Parameters
+        ----------
+        base_dir : path, optional
+            Folder that relative CSV paths are resolved against (default: the working folder).
+        """
+        if self.dataset is not None:
+            ds = self.dataset
+        elif self.bundled == "pumping":
+            ds = gb.load_pumping()
+        elif self.bundled == "buck":
+            ds = gb.load_buck()
+        else:
+            base = Path(base_dir) if base_dir is not None else Path.cwd()
+
+            def p(entry: Mapping) -> Path:
+                q = Path(entry["path"]).expanduser()
+                return q if q.is_absolute() else base / q
+
+            assert self.ident is not None and self.valid is not None and self.static is not None
+            ident = gb.load_record_csv(p(self.ident), u=self.ident["u"], y=self.ident["y"], time=self.ident["time"],
+                                       Ts=self.ident["Ts"], name=f"{self.name} ident")
+            valid = gb.load_record_csv(p(self.valid), u=self.valid["u"], y=self.valid["y"], time=self.valid["time"],
+                                       Ts=self.valid["Ts"], name=f"{self.name} valid")
+            static = gb.load_static_csv(p(self.static), u=self.static["u"], y=self.static["y"],
+                                        name=f"{self.name} static points")
+            ds = gb.Dataset(ident, valid, static, description=f"CSV files of data set {self.name!r}")
+        if ds.static is None:
+            raise SpecError("the data set has no static points: gray-box cells and J_SF need them", ())
+        extra = {"static_curve": ds.extra["static_curve"]} if "static_curve" in ds.extra else {}
+        return gb.Dataset(ds.ident, ds.valid, ds.static, description=ds.description, extra=extra)
+
+
+def data_fingerprint(ds: gb.Dataset) -> str:
+    """A hash of a data set's content: records (u, y, Ts), static points, static curve."""
+    h = hashlib.sha256()
+    for r in (ds.ident, ds.valid):
+        h.update(np.ascontiguousarray(r.u, dtype="<f8").tobytes())
+        h.update(np.ascontiguousarray(r.y, dtype="<f8").tobytes())
+        h.update(repr(float(r.Ts)).encode())
+    if ds.static is not None:
+        h.update(np.ascontiguousarray(ds.static.ubar, dtype="<f8").tobytes())
+        h.update(np.ascontiguousarray(ds.static.ybar, dtype="<f8").tobytes())
+    curve = ds.extra.get("static_curve")
+    if curve is not None:
+        h.update(np.ascontiguousarray(curve.coefficients, dtype="<f8").tobytes())
+        h.update(repr(curve.domain).encode())
+    return h.hexdigest()[:16]
+
+
+# --------------------------------------------------------------------------------------------
+# structures
+# --------------------------------------------------------------------------------------------
+_CANDIDATE_KEYS = ("ny", "nu", "ne", "degree", "delay", "constant", "max_y_power")
+_STRUCTURE_RULE_KEYS = ("n_terms", "tol", "criterion", "max_terms", "include")
+
+
+@dataclass(frozen=True, eq=False)
+class StructureSpec:
+    """One structure of a grid: given terms, or made by FROLS from a candidate space and a rule.
+
+    Parameters
+    ----------
+    name : str
+        Label in the results.
+    terms : sequence of str, optional
+        The process terms, e.g. ``["y(k-1)", "u(k-1)", "1"]`` (given structure).
+    candidates : mapping, optional
+        Keyword arguments of :func:`graybox.Candidates` (``ny``, ``nu``, ``degree``,
+        ``max_y_power`` …): the space FROLS selects from (made structure).
+    n_terms, tol, criterion, max_terms, include : optional
+        The selection rule, as for :func:`graybox.frols` (count, ERR tolerance, or information
+        criterion; ``include``: terms selected first, e.g. ``["1"]``).
+    """
+
+    name: str
+    terms: Sequence[str] | None = None
+    candidates: Mapping[str, Any] | None = None
+    n_terms: int | None = None
+    tol: float | None = None
+    criterion: str | None = None
+    max_terms: int | None = None
+    include: Sequence[str] = ()
+
+    def __post_init__(self) -> None:
+        _name(self.name, ())
+        if (self.terms is None) == (self.candidates is None):
+            raise SpecError("a structure is either given (terms = [...]) or made (candidates = {...} and a rule)")
+        rule = {k: getattr(self, k) for k in _STRUCTURE_RULE_KEYS if getattr(self, k) not in (None, ())}
+        if self.terms is not None:
+            if rule:
+                raise SpecError(f"a given structure (terms) takes no selection rule; remove {', '.join(rule)}",
+                                (next(iter(rule)),))
+            if isinstance(self.terms, str) or not isinstance(self.terms, Sequence) or not self.terms:
+                raise SpecError("terms must be a non-empty list of term strings such as \"u(k-1)y(k-2)\"", ("terms",))
+            st = _wrap(gb.parse_structure, ("terms",), list(self.terms))
+            if len(st.noise):
+                raise SpecError(f"noise terms {[str(t) for t in st.noise]} have no place in a grid structure "
+                                "(ELS takes its MA order from the variant's options)", ("terms",))
+            object.__setattr__(self, "terms", tuple(str(t) for t in st))
+            object.__setattr__(self, "include", ())
+            return
+        _check_keys(self.candidates, _CANDIDATE_KEYS, "candidates", ("candidates",))
+        assert self.candidates is not None
+        c = dict(self.candidates)
+        for k in ("ny", "nu"):
+            if k not in c:
+                raise SpecError(f"candidates need {k!r}", ("candidates", k))
+        cand = {"ny": c["ny"], "nu": c["nu"], "ne": c.get("ne", 0), "degree": c.get("degree", 2),
+                "delay": c.get("delay", 1), "constant": c.get("constant", True),
+                "max_y_power": c.get("max_y_power")}
+        for k in ("ny", "nu", "ne", "degree", "delay", "max_y_power"):
+            if cand[k] is not None:
+                cand[k] = _wrap(check_int, ("candidates", k), cand[k], k, low=1 if k == "delay" else 0)
+        if cand["ne"]:
+            raise SpecError("noise candidates (ne > 0) are not selected by FROLS; give ELS its MA order in the "
+                            "variant's options (noise = 2)", ("candidates", "ne"))
+        if not isinstance(cand["constant"], bool):
+            raise SpecError(f"constant must be true or false, got {cand['constant']!r}", ("candidates", "constant"))
+        space = _wrap(lambda: gb.Candidates(**cand), ("candidates",))
+        object.__setattr__(self, "candidates", _freeze(cand))
+        if self.n_terms is not None:
+            object.__setattr__(self, "n_terms", _wrap(check_int, ("n_terms",), self.n_terms, "n_terms", low=1,
+                                                      high=len(space)))
+        if self.tol is not None:
+            object.__setattr__(self, "tol", _wrap(check_real, ("tol",), self.tol, "tol", low=0, high=1,
+                                                  low_open=True, high_open=True))
+        if self.criterion is not None:
+            _wrap(check_choice, ("criterion",), self.criterion, "criterion", ("aic", "bic", "fpe"))
+        if self.max_terms is not None:
+            object.__setattr__(self, "max_terms", _wrap(check_int, ("max_terms",), self.max_terms, "max_terms", low=1))
+        if self.n_terms is not None and self.tol is not None:
+            raise SpecError("give n_terms or tol, not both", ("tol",))
+        if isinstance(self.include, str) or not isinstance(self.include, Sequence):
+            raise SpecError("include must be a list of term strings", ("include",))
+        inc = _wrap(gb.parse_structure, ("include",), list(self.include)) if self.include else gb.Structure(())
+        missing = [str(t) for t in inc if t not in space]
+        if missing:
+            raise SpecError(f"included terms {missing} are not among the candidates", ("include",))
+        object.__setattr__(self, "include", tuple(str(t) for t in inc))
+
+    @property
+    def made(self) -> bool:
+        """True when FROLS makes the structure."""
+        return self.candidates is not None
+
+    def to_dict(self) -> dict:
+        """Canonical form (name excluded: see :meth:`content`)."""
+        return {"name": self.name, **self.content()}
+
+    def content(self) -> dict:
+        """What determines the structure (the part a cell's key hashes)."""
+        if self.terms is not None:
+            return {"terms": list(self.terms)}
+        return {"candidates": _thaw(self.candidates), "n_terms": self.n_terms, "tol": self.tol,
+                "criterion": self.criterion, "max_terms": self.max_terms, "include": list(self.include)}
+
+
+# --------------------------------------------------------------------------------------------
+# variants: estimator, constraints, λ set, decision maker, options
+# --------------------------------------------------------------------------------------------
+def _opt_int(low: int | None = None, high: int | None = None):
+    return lambda v, name: check_int(v, name, low=low, high=high)
+
+
+def _opt_real(low: float | None = None, high: float | None = None, low_open: bool = False, high_open: bool = False):
+    return lambda v, name: check_real(v, name, low=low, high=high, low_open=low_open, high_open=high_open)
+
+
+def _opt_choice(*choices: str):
+    return lambda v, name: check_choice(v, name, choices)
+
+
+def _opt_reference(v: object, name: str) -> str | float:
+    if isinstance(v, str):
+        return check_choice(v, name, ("ls", "els"))
+    return check_real(v, name)
+
+
+def _opt_stall(v: object, name: str) -> int | None:
+    return None if v in (None, 0) else check_int(v, name, low=1)
+
+
+_GA_FIELDS = {
+    "population": _opt_int(4), "generations": _opt_int(1), "stall": _opt_stall,
+    "crossover_prob": _opt_real(0, 1), "crossover_ratio": _opt_real(0, low_open=True),
+    "mutation_prob": _opt_real(0, 1), "mutation_scale": _opt_real(0), "elite": _opt_int(0),
+    "random_samples": _opt_int(1), "selective_pressure": _opt_real(1, 2),
+}
+#: Options each estimator takes (validators); they are passed to the graybox function.
+OPTIONS: dict[str, dict[str, Any]] = {
+    "ls": {},
+    "els": {"noise": _opt_int(0), "max_iter": _opt_int(1), "tol": _opt_real(0, low_open=True),
+            "relaxation": _opt_real(0, 1, low_open=True)},
+    "cls": {"solver": _opt_choice("clarabel", "osqp", "closed"), "reference": _opt_reference},
+    "pe": {"solver": _opt_choice("clarabel", "osqp", "closed"), "weights": _opt_choice("mse", "sum"),
+           "reference": _opt_reference},
+    "se-ga": {**_GA_FIELDS, "theta0": _opt_choice("ls", "none")},
+    "se-gradient": {"max_nfev": _opt_int(1), "tol": _opt_real(0, low_open=True),
+                    "solver": _opt_choice("trf", "dogbox", "lm")},
+    "neural": {"ny": _opt_int(0), "nu": _opt_int(1), "ne": _opt_int(0), "hidden": _opt_int(1), "epochs": _opt_int(1),
+               "weight_decay": _opt_real(0), "lam0": _opt_real(0, low_open=True)},
+}
+
+_CONSTRAINT_KEYS = {
+    "equality": ("type", "curve", "sigma_y"),
+    "points": ("type",),
+    "band": ("type", "b", "form", "min_denominator"),
+    "gain": ("type", "lower", "upper", "ubar_range", "n", "min_denominator"),
+    "clusters": ("type", "bounds"),
+}
+
+
+def _bound(v: object, path: tuple, name: str) -> float | None:
+    return None if v is None else _wrap(check_real, path, v, name)
+
+
+def canonical_constraint(c: object, path: tuple = ()) -> dict:
+    """The canonical dict of one constraint given as a TOML-style table ``{"type": …, …}``."""
+    if not isinstance(c, Mapping):
+        raise SpecError(f"a constraint is a table such as {{type = \"band\", b = 0.175}}, got {c!r}", path)
+    kind = c.get("type")
+    if kind not in _CONSTRAINT_TYPES_KEYS:
+        raise SpecError(f"unknown constraint type {kind!r}; known: {', '.join(CONSTRAINT_TYPES)}", path + ("type",))
+    _check_keys(c, _CONSTRAINT_KEYS[kind], f"a {kind!r} constraint", path)
+    if kind == "equality":
+        curve = c.get("curve", "fit")
+        if isinstance(curve, str):
+            _wrap(check_choice, path + ("curve",), curve, "curve", ("fit", "dataset"))
+        elif isinstance(curve, Sequence) and curve:
+            curve = [_wrap(check_real, path + ("curve",), v, "curve coefficient") for v in curve]
+        else:
+            raise SpecError("curve must be \"fit\" (fitted to the data set's static points), \"dataset\" (the data "
+                            "set's own static curve) or a list of ascending polynomial coefficients", path + ("curve",))
+        return {"type": kind, "curve": curve, "sigma_y": _bound(c.get("sigma_y"), path + ("sigma_y",), "sigma_y")}
+    if kind == "points":
+        return {"type": kind}
+    if kind == "band":
+        if "b" not in c:
+            raise SpecError("a band needs its half-width b (output units)", path + ("b",))
+        b = _wrap(check_real, path + ("b",), c["b"], "b", low=0, low_open=True)
+        form = _wrap(check_choice, path + ("form",), c.get("form", "exact"), "form", ("exact", "residual"))
+        md = _wrap(check_real, path + ("min_denominator",), c.get("min_denominator", 1e-3), "min_denominator",
+                   low=0, high=1, low_open=True, high_open=True)
+        return {"type": kind, "b": b, "form": form, "min_denominator": md}
+    if kind == "gain":
+        lo = _bound(c.get("lower"), path + ("lower",), "lower")
+        hi = _bound(c.get("upper"), path + ("upper",), "upper")
+        if lo is None and hi is None:
+            raise SpecError("gain bounds need lower or upper", path)
+        rng = c.get("ubar_range")
+        if rng is not None:
+            if not (isinstance(rng, Sequence) and len(rng) == 2):
+                raise SpecError(f"ubar_range must be [low, high], got {rng!r}", path + ("ubar_range",))
+            rng = [_wrap(check_real, path + ("ubar_range",), v, "ubar_range") for v in rng]
+        n = _wrap(check_int, path + ("n",), c.get("n", 25), "n", low=1)
+        md = _wrap(check_real, path + ("min_denominator",), c.get("min_denominator", 1e-6), "min_denominator",
+                   low=0, low_open=True)
+        out = {"type": kind, "lower": lo, "upper": hi, "ubar_range": rng, "n": n, "min_denominator": md}
+        _wrap(build_constraint, path, out)  # the object's own checks (e.g. lower <= upper)
+        return out
+    bounds = c.get("bounds")
+    if not isinstance(bounds, Mapping) or not bounds:
+        raise SpecError("cluster bounds need bounds = {Sy = {upper = 0.999}, …}", path + ("bounds",))
+    clean = {}
+    for name, b in bounds.items():
+        p = path + ("bounds", name)
+        if isinstance(b, Mapping):
+            _check_keys(b, ("lower", "upper"), f"the bounds of cluster {name!r}", p)
+            lo, hi = b.get("lower"), b.get("upper")
+        elif isinstance(b, Sequence) and not isinstance(b, str) and len(b) == 2:
+            lo, hi = b
+        else:
+            raise SpecError(f"bounds of cluster {name!r} must be {{lower = …, upper = …}}", p)
+        clean[str(name)] = [_bound(lo, p, "lower"), _bound(hi, p, "upper")]
+    out = {"type": kind, "bounds": clean}
+    _wrap(build_constraint, path, out)
+    return out
+
+
+_CONSTRAINT_TYPES_KEYS = tuple(CONSTRAINT_TYPES)
+
+
+def constraint_from_object(obj: object, path: tuple = ()) -> list[dict]:
+    """Canonical dicts of graybox constraint objects (``a & b`` flattened), for grids written in Python."""
+    if isinstance(obj, Mapping):
+        return [canonical_constraint(obj, path)]
+    if not isinstance(obj, (gb.StaticBand, gb.CurveEquality, gb.PassesThrough, gb.GainBounds, gb.ClusterBounds)):
+        members = list(obj) if hasattr(obj, "__iter__") and not isinstance(obj, (str, bytes)) else None
+        if members is None or (len(members) == 1 and members[0] is obj):
+            raise SpecError(f"{obj!r} cannot be part of a grid: a grid stores its constraints as data "
+                            "(equality, points, band, gain, clusters); a UserConstraint's function cannot be "
+                            "stored or hashed", path)
+        return [d for m in members for d in constraint_from_object(m, path)]
+    if isinstance(obj, gb.CurveEquality):
+        c = obj.curve
+        return [canonical_constraint({"type": "equality", "curve": [float(v) for v in c.coefficients],
+                                      "sigma_y": obj.sigma_y}, path)]
+    if getattr(obj, "points", None) is not None:
+        raise SpecError(f"{obj.describe()}: in a grid, constraints use the data set's static points; "
+                        "give the points as the data set's static file instead", path)
+    if isinstance(obj, gb.PassesThrough):
+        return [{"type": "points"}]
+    if isinstance(obj, gb.StaticBand):
+        return [canonical_constraint({"type": "band", "b": obj.b, "form": obj.form,
+                                      "min_denominator": obj.min_denominator}, path)]
+    if isinstance(obj, gb.GainBounds):
+        if obj.reference is not None:
+            raise SpecError(f"{obj.describe()}: a grid's gain bounds take the data set's reference (its static "
+                            "points); a reference function cannot be stored", path)
+        return [canonical_constraint({"type": "gain", "lower": obj.lower, "upper": obj.upper,
+                                      "ubar_range": list(obj.ubar_range) if obj.ubar_range else None,
+                                      "n": obj.n, "min_denominator": obj.min_denominator}, path)]
+    bounds = {}
+    for k, (lo, hi) in obj.bounds.items():
+        if not isinstance(k, str):
+            raise SpecError(f"cluster bounds in a grid name their clusters (\"Sy\", \"Su^2\", …), got key {k!r}", path)
+        bounds[k] = [lo, hi]
+    return [canonical_constraint({"type": "clusters", "bounds": bounds}, path)]
+
+
+def _is_constraint_object(obj: object) -> bool:
+    return callable(getattr(obj, "affine", None)) and callable(getattr(obj, "describe", None))
+
+
+def build_constraint(d: Mapping, *, curve: gb.StaticCurve | None = None) -> Any:
+    """The graybox constraint object of a canonical dict (``curve``: the resolved curve of an equality)."""
+    kind = d["type"]
+    if kind == "equality":
+        if curve is None:
+            if isinstance(d["curve"], str):
+                raise ValueError("an equality's curve is resolved against the data set when the cell runs")
+            curve = gb.StaticCurve.polynomial(d["curve"], name="given static curve")
+        return gb.CurveEquality(curve, sigma_y=d["sigma_y"])
+    if kind == "points":
+        return gb.PassesThrough()
+    if kind == "band":
+        return gb.StaticBand(d["b"], form=d["form"], min_denominator=d["min_denominator"])
+    if kind == "gain":
+        rng = tuple(d["ubar_range"]) if d["ubar_range"] is not None else None
+        return gb.GainBounds(d["lower"], d["upper"], ubar_range=rng, n=d["n"], min_denominator=d["min_denominator"])
+    return gb.ClusterBounds({k: tuple(v) for k, v in d["bounds"].items()})
+
+
+def _lambdas(v: object, path: tuple) -> list[float] | None:
+    if v is None:
+        return None
+    if isinstance(v, Mapping):
+        _check_keys(v, ("logspace", "linspace"), "lambdas", path)
+        if len(v) != 1:
+            raise SpecError("lambdas: give one of logspace = [a, b, n] or linspace = [a, b, n]", path)
+        (kind, args), = v.items()
+        if not (isinstance(args, Sequence) and len(args) == 3):
+            raise SpecError(f"{kind} needs [start, stop, count], got {args!r}", path + (kind,))
+        a = _wrap(check_real, path + (kind,), args[0], "start")
+        b = _wrap(check_real, path + (kind,), args[1], "stop")
+        n = _wrap(check_int, path + (kind,), args[2], "count", low=1)
+        lam = np.logspace(a, b, n) if kind == "logspace" else np.linspace(a, b, n)
+    else:
+        lam = v
+    arr = _wrap(check_lambdas, path, lam)
+    return [float(x) for x in arr]
+
+
+@dataclass(frozen=True, eq=False)
+class DecisionRule:
+    """How a cell picks one member of a Pareto set.
+
+    Parameters
+    ----------
+    rule : {"dsf", "min_correlation", "min_jsf"}
+        D_SF (eq. (14): smallest J_S with J_SF in B = [0, band]); the minimal-correlation rule
+        (:func:`graybox.decide_min_correlation`); or the smallest J_SF.
+    band : float, optional
+        D_SF's band (output units²); default: the data set's band.
+    fallback : {"min_jsf"}, optional
+        D_SF only: what to take when no member lies in the band (default: the cell is
+        ``infeasible``, and its members are still stored).
+    output : {"free-run", "one-step"}
+        Minimal correlation only: which output the residuals are correlated with.
+    """
+
+    rule: str = "dsf"
+    band: float | None = None
+    fallback: str | None = None
+    output: str = "free-run"
+
+    def __post_init__(self) -> None:
+        _wrap(check_choice, ("rule",), self.rule, "rule", DECISION_RULES)
+        if self.rule != "dsf":
+            for k in ("band", "fallback"):
+                if getattr(self, k) is not None:
+                    raise SpecError(f"{k} applies to rule = \"dsf\" only", (k,))
+        if self.rule != "min_correlation" and self.output != "free-run":
+            raise SpecError("output applies to rule = \"min_correlation\" only", ("output",))
+        if self.band is not None:
+            object.__setattr__(self, "band", _wrap(check_real, ("band",), self.band, "band", low=0, low_open=True))
+        if self.fallback is not None:
+            _wrap(check_choice, ("fallback",), self.fallback, "fallback", ("min_jsf",))
+        _wrap(check_choice, ("output",), self.output, "output", ("free-run", "one-step"))
+
+    def to_dict(self) -> dict:
+        """Canonical form."""
+        if self.rule == "dsf":
+            return {"rule": "dsf", "band": self.band, "fallback": self.fallback}
+        if self.rule == "min_correlation":
+            return {"rule": self.rule, "output": self.output}
+        return {"rule": self.rule}
+
+
+@dataclass(frozen=True, eq=False)
+class Variant:
+    """One way of estimating: estimator, constraints, λ set, decision maker and options.
+
+    Parameters
+    ----------
+    name : str
+        Label in the results.
+    estimator : {"ls", "els", "cls", "pe", "se-ga", "se-gradient", "neural"}
+        Least squares, extended least squares (:func:`graybox.els`), constrained least squares
+        (:func:`graybox.cls`), the PE Pareto set (:func:`graybox.pe_pareto`), the SE Pareto set
+        by GA or gradient (:func:`graybox.se_pareto`), the neural NARX baseline
+        (:func:`graybox.neural_narx`; its lags default to the structure's largest y and u lags).
+    constraints : constraint object(s) or sequence of tables, optional
+        For cls and pe: graybox constraint objects (``gb.StaticBand(0.175) & gb.GainBounds(lower=0)``)
+        or TOML-style tables ``{"type": "band", "b": 0.175}``; types: equality (eq. (22); its
+        ``curve`` is "fit" — the polynomial the structure's numerator carries, fitted to the data
+        set's static points, with exactly the ū powers of its numerator clusters —, "dataset" or
+        coefficients), points, band, gain, clusters.
+    lambdas : sequence of float or mapping, optional
+        λ1 values in (0, 1] of a Pareto estimator, or ``{"logspace": [a, b, n]}``; default: the
+        estimator's own (the paper's 100).
+    decision : DecisionRule or mapping, optional
+        Pareto estimators only; default D_SF with the data set's band.
+    options : mapping, optional
+        Keyword options of the estimator (e.g. ``{"solver": "closed"}`` for pe,
+        ``{"max_nfev": 20}`` for se-gradient, GAOptions fields for se-ga).
+    """
+
+    name: str
+    estimator: str
+    constraints: Any = ()
+    lambdas: Any = None
+    decision: Any = None
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        _name(self.name, ())
+        est = _wrap(check_choice, ("estimator",), self.estimator, "estimator", ESTIMATORS)
+        # constraints
+        raw = self.constraints
+        if raw is None:
+            raw = ()
+        if isinstance(raw, Mapping) or _is_constraint_object(raw):
+            raw = [raw]
+        if not isinstance(raw, Sequence) or isinstance(raw, str):
+            raise SpecError("constraints must be a list of tables or graybox constraint objects", ("constraints",))
+        cons: list[dict] = []
+        for i, c in enumerate(raw):
+            cons += constraint_from_object(c, ("constraints", i))
+        if cons and est not in CONSTRAINED_ESTIMATORS:
+            raise SpecError(f"estimator {est!r} takes no constraints (only {', '.join(CONSTRAINED_ESTIMATORS)} do)",
+                            ("constraints",))
+        if est == "cls" and not cons:
+            raise SpecError("cls needs at least one constraint (without any it is plain least squares: use ls)",
+                            ("constraints",))
+        kinds = [c["type"] for c in cons]
+        if kinds.count("equality") > 1:
+            raise SpecError("at most one equality (22) constraint per variant", ("constraints",))
+        object.__setattr__(self, "constraints", _freeze(cons))
+        # λ set
+        if self.lambdas is not None and est not in PARETO_ESTIMATORS:
+            raise SpecError(f"estimator {est!r} gives one model: lambdas apply to {', '.join(PARETO_ESTIMATORS)}",
+                            ("lambdas",))
+        lam = _lambdas(self.lambdas, ("lambdas",))
+        object.__setattr__(self, "lambdas", None if lam is None else tuple(lam))
+        # decision maker
+        dec = self.decision
+        if dec is not None and est not in PARETO_ESTIMATORS:
+            raise SpecError(f"estimator {est!r} gives one model: a decision maker applies to "
+                            f"{', '.join(PARETO_ESTIMATORS)}", ("decision",))
+        if est in PARETO_ESTIMATORS:
+            if dec is None:
+                dec = DecisionRule()
+            elif isinstance(dec, Mapping):
+                _check_keys(dec, ("rule", "band", "fallback", "output"), "decision", ("decision",))
+                try:
+                    dec = DecisionRule(**dec)
+                except SpecError as e:
+                    raise e.within("decision") from None
+            elif not isinstance(dec, DecisionRule):
+                raise SpecError(f"decision must be a DecisionRule or a table, got {type(dec).__name__}", ("decision",))
+        object.__setattr__(self, "decision", dec)
+        # options
+        opts = self.options if self.options is not None else {}
+        known = OPTIONS[est]
+        if not isinstance(opts, Mapping):
+            raise SpecError(f"options must be a table, got {type(opts).__name__}", ("options",))
+        clean = {}
+        for k, v in opts.items():
+            if k not in known:
+                raise SpecError(f"unknown option {k!r} for estimator {est!r}; known: {', '.join(known) or '(none)'}",
+                                ("options", k))
+            clean[k] = _wrap(known[k], ("options", k), v, k)
+        if "reference" in clean and "equality" not in kinds:
+            raise SpecError("reference (where Σ*_y of eq. (22) comes from) needs an equality constraint",
+                            ("options", "reference"))
+        object.__setattr__(self, "options", FrozenDict(sorted(clean.items())))
+
+    @property
+    def stochastic(self) -> bool:
+        """Whether the seed matters (se-ga, neural)."""
+        return self.estimator in STOCHASTIC_ESTIMATORS
+
+    def to_dict(self) -> dict:
+        """Canonical form (name included)."""
+        return {"name": self.name, **self.content()}
+
+    def content(self) -> dict:
+        """What determines the estimate (the part a cell's key hashes)."""
+        return {"estimator": self.estimator, "constraints": _thaw(self.constraints),
+                "lambdas": None if self.lambdas is None else list(self.lambdas),
+                "decision": None if self.decision is None else self.decision.to_dict(),
+                "options": dict(self.options)}
+
+
+# --------------------------------------------------------------------------------------------
+# cells and the grid
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Cell:
+    """One (data, structure, variant, seed) of a grid: everything a worker needs except the data.
+
+    Attributes
+    ----------
+    index : int
+        Position in the grid's cell order (data, then structure, then variant, then seed).
+    key : str
+        Hash of the data's content, the structure, the variant, the seed and graybox's version.
+    data, structure, variant : str
+        Names.
+    seed : int or None
+        The seed (None for deterministic estimators, which run once).
+    data_hash : str
+        Content hash of the data set (workers look the data up by it).
+    band : float or None
+        The resolved J_SF band of the data set (output units²).
+    structure_spec, variant_spec : mapping
+        Canonical contents (see :meth:`StructureSpec.content`, :meth:`Variant.content`).
+    version : str
+        graybox version the key was made for.
+    """
+
+    index: int
+    key: str
+    data: str
+    structure: str
+    variant: str
+    seed: int | None
+    data_hash: str
+    band: float | None
+    structure_spec: Mapping[str, Any]
+    variant_spec: Mapping[str, Any]
+    version: str
+
+
+@dataclass(frozen=True, eq=False)
+class Grid:
+    """Data sets × structures × variants × seeds.
+
+    Deterministic estimators (ls, els, cls, pe, se-gradient) run once per (data, structure,
+    variant); the stochastic ones (se-ga, neural) once per seed as well.
+
+    Parameters
+    ----------
+    data : sequence of DataSpec
+    structures : sequence of StructureSpec
+    variants : sequence of Variant
+    seeds : sequence of int
+        Seeds of the stochastic estimators (default ``(0,)``).
+    name : str
+        The grid's name (stored with its results).
+    base_dir : str, optional
+        Folder that relative CSV paths are resolved against (a TOML spec's own folder).
+    """
+
+    data: Sequence[DataSpec]
+    structures: Sequence[StructureSpec]
+    variants: Sequence[Variant]
+    seeds: Sequence[int] = (0,)
+    name: str = "grid"
+    base_dir: str | None = None
+
+    def __post_init__(self) -> None:
+        _name(self.name, ())
+        for what, cls_, items in (("data", DataSpec, self.data), ("structures", StructureSpec, self.structures),
+                                  ("variants", Variant, self.variants)):
+            if isinstance(items, (str, Mapping)) or not isinstance(items, Sequence | tuple) or not items:
+                raise SpecError(f"a grid needs a non-empty list of {what}", (what,))
+            for i, it in enumerate(items):
+                if not isinstance(it, cls_):
+                    raise SpecError(f"{what} must hold {cls_.__name__} objects, got {type(it).__name__}", (what, i))
+            names = [it.name for it in items]
+            dup = sorted({n for n in names if names.count(n) > 1})
+            if dup:
+                raise SpecError(f"duplicated {what} names {dup}: names identify rows in the results",
+                                (what, names.index(dup[0], names.index(dup[0]) + 1)))
+            object.__setattr__(self, what, tuple(items))
+        if isinstance(self.seeds, (int, np.integer)):
+            object.__setattr__(self, "seeds", (self.seeds,))
+        seeds = [_wrap(check_int, ("seeds", i), s, "seed", low=0) for i, s in enumerate(self.seeds)]
+        if not seeds or len(set(seeds)) != len(seeds):
+            raise SpecError("seeds must be a non-empty list of distinct integers >= 0", ("seeds",))
+        object.__setattr__(self, "seeds", tuple(seeds))
+        for kind, items in (("structures", self.structures), ("variants", self.variants)):
+            seen: dict[str, str] = {}
+            for i, it in enumerate(items):
+                c = canonical_json(it.content())
+                if c in seen:
+                    raise SpecError(f"{kind[:-1]} {it.name!r} is identical to {seen[c]!r} (same content, same cells)",
+                                    (kind, i))
+                seen[c] = it.name
+        for i, v in enumerate(self.variants):
+            if v.decision is not None and v.decision.rule == "dsf" and v.decision.band is None:
+                nob = [d.name for d in self.data if d.band is None]
+                if nob:
+                    raise SpecError(f"variant {v.name!r} decides by D_SF with the data set's band, but data set(s) "
+                                    f"{nob} have none: give band = … to the data set or the decision",
+                                    ("variants", i, "decision"))
+
+    # -- construction from TOML ------------------------------------------------------------
+    @classmethod
+    def from_toml(cls, path: str | Path) -> "Grid":
+        """Read a TOML spec (see ``graybox grid init`` for a commented example).
+
+        Raises
+        ------
+        SpecError
+            Invalid TOML, or an unknown or wrong key, estimator or constraint, naming the key and
+            its line.
+        """
+        p = Path(path)
+        try:
+            text = p.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise SpecError(f"cannot read the spec: {exc}", source=str(p)) from None
+        return cls.from_toml_text(text, source=str(p), base_dir=str(p.resolve().parent))
+
+    @classmethod
+    def from_toml_text(cls, text: str, source: str = "<spec>", base_dir: str | None = None) -> "Grid":
+        """Parse a TOML spec given as text (``source`` names it in messages)."""
+        try:
+            d = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            at = re.search(r"at line (\d+)", str(exc))
+            raise SpecError(f"invalid TOML: {exc}", source=source, line=int(at.group(1)) if at else None) from None
+        lines = _TomlLines(text)
+        try:
+            return cls.from_dict(d, base_dir=base_dir)
+        except SpecError as e:
+            raise SpecError(e.problem, e.path, source, lines.line_of(e.path)) from None
+
+    @classmethod
+    def from_dict(cls, d: Mapping, base_dir: str | None = None) -> "Grid":
+        """Build from nested dicts shaped like the TOML spec (keys: name, seeds, data, structures, variants)."""
+        _check_keys(d, ("name", "seeds", "data", "structures", "variants"), "the grid spec")
+        parts: dict[str, list] = {}
+        for key, cls_, allowed in (("data", DataSpec, ("name", "bundled", "ident", "valid", "static", "band")),
+                                   ("structures", StructureSpec, ("name", "terms", "candidates") + _STRUCTURE_RULE_KEYS),
+                                   ("variants", Variant, ("name", "estimator", "constraints", "lambdas", "decision",
+                                                          "options"))):
+            items = d.get(key)
+            if not isinstance(items, list) or not items:
+                raise SpecError(f"the spec needs at least one [[{key}]] table", (key,))
+            out = []
+            for i, it in enumerate(items):
+                _check_keys(it, allowed, f"a [[{key}]] table", (key, i))
+                if "name" not in it:
+                    raise SpecError(f"every [[{key}]] table needs a name", (key, i))
+                try:
+                    out.append(cls_(**it))
+                except SpecError as e:
+                    raise e.within(key, i) from None
+            parts[key] = out
+        seeds = d.get("seeds", [0])
+        if not isinstance(seeds, list):
+            seeds = [seeds]
+        return cls(parts["data"], parts["structures"], parts["variants"], seeds=seeds, name=d.get("name", "grid"),
+                   base_dir=base_dir)
+
+    # -- canonical form, data, cells --------------------------------------------------------
+    def to_dict(self) -> dict:
+        """Canonical form of the whole grid (names, contents, seeds)."""
+        return {"name": self.name, "seeds": list(self.seeds),
+                "data": [d.to_dict() for d in self.data],
+                "structures": [s.to_dict() for s in self.structures],
+                "variants": [v.to_dict() for v in self.variants]}
+
+    def load_data(self) -> dict[str, gb.Dataset]:
+        """Every data set, loaded, by name (CSV paths relative to ``base_dir``)."""
+        out = {}
+        for i, d in enumerate(self.data):
+            try:
+                ds = d.load(self.base_dir)
+            except SpecError as e:
+                raise e.within("data", i) from None
+            except (OSError, ValueError) as exc:
+                raise SpecError(f"data set {d.name!r} cannot be loaded: {exc}", ("data", i)) from None
+            for j, v in enumerate(self.variants):
+                for c in v.constraints:
+                    if c["type"] == "equality" and c["curve"] == "dataset" and "static_curve" not in ds.extra:
+                        raise SpecError(f"variant {v.name!r} imposes the data set's own static curve, but data set "
+                                        f"{d.name!r} has none; use curve = \"fit\" or coefficients",
+                                        ("variants", j, "constraints"))
+            out[d.name] = ds
+        return out
+
+    def cells(self, datasets: Mapping[str, gb.Dataset] | None = None) -> tuple[Cell, ...]:
+        """The grid's cells in order (data, structure, variant, seed), with their keys.
+
+        Parameters
+        ----------
+        datasets : mapping name -> Dataset, optional
+            The loaded data (default: :meth:`load_data`); keys hash their content.
+        """
+        ds = self.load_data() if datasets is None else datasets
+        version = gb.__version__
+        out: list[Cell] = []
+        for d in self.data:
+            dh = data_fingerprint(ds[d.name])
+            for s in self.structures:
+                sc = s.content()
+                for v in self.variants:
+                    vc = v.content()
+                    for seed in (self.seeds if v.stochastic else (None,)):
+                        band = d.band
+                        key = _hash({"data": dh, "band": band, "structure": sc, "variant": vc, "seed": seed,
+                                     "version": version}, 32)
+                        out.append(Cell(len(out), key, d.name, s.name, v.name, seed, dh, band, _freeze(sc),
+                                        _freeze(vc), version))
+        return tuple(out)
+
+    def fingerprint(self, cells: Sequence[Cell]) -> str:
+        """A hash of the grid: its names and its cells' keys (so: contents, data, version)."""
+        return _hash({"name": self.name, "cells": [[c.key, c.data, c.structure, c.variant, c.seed] for c in cells]})
+
+
+# --------------------------------------------------------------------------------------------
+# where a key is in a TOML text
+# --------------------------------------------------------------------------------------------
+class _TomlLines:
+    """Line numbers of the keys of a TOML text (tomllib keeps none).
+
+    Table headers (``[a.b]``, ``[[a]]``) and ``key = value`` lines at the top level of a table are
+    indexed exactly; a key inside an inline table or a multi-line array is found by searching
+    for ``key =`` after the line of the enclosing key.
+    """
+
+    _HEADER = re.compile(r"^\s*(\[\[?)\s*(.+?)\s*\]\]?\s*(?:#.*)?$")
+    _KEY = re.compile(r"^\s*((?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*')(?:\s*\.\s*(?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*'))*)\s*=")
+
+    def __init__(self, text: str):
+        self.lines = text.splitlines()
+        self.index: dict[tuple, int] = {}
+        self.headers: list[int] = []
+        arrays: dict[tuple, int] = {}
+        table: tuple = ()
+        depth = 0
+        for n, line in enumerate(self.lines, start=1):
+            if depth == 0:
+                m = self._HEADER.match(line)
+                if m and not self._KEY.match(line):
+                    names = tuple(self._split(m.group(2)))
+                    if m.group(1) == "[[":
+                        arrays[names] = arrays.get(names, 0) + 1
+                    table = self._resolve(names, arrays)
+                    self.index.setdefault(table, n)
+                    self.headers.append(n)
+                    continue
+                k = self._KEY.match(line)
+                if k:
+                    self.index.setdefault(table + tuple(self._split(k.group(1))), n)
+            depth = max(0, depth + self._depth_change(line))
+
+    @staticmethod
+    def _split(dotted: str) -> list[str]:
+        parts = re.findall(r"\"[^\"]*\"|'[^']*'|[^.\s]+", dotted)
+        return [p[1:-1] if p[:1] in "\"'" else p for p in parts]
+
+    @staticmethod
+    def _resolve(names: tuple, arrays: dict[tuple, int]) -> tuple:
+        out: list = []
+        for i, nm in enumerate(names):
+            out.append(nm)
+            if names[: i + 1] in arrays:
+                out.append(arrays[names[: i + 1]] - 1)
+        return tuple(out)
+
+    @staticmethod
+    def _depth_change(line: str) -> int:
+        d, quote = 0, ""
+        for ch in line:
+            if quote:
+                if ch == quote:
+                    quote = ""
+            elif ch in "\"'":
+                quote = ch
+            elif ch == "#":
+                break
+            elif ch in "[{":
+                d += 1
+            elif ch in "]}":
+                d -= 1
+        return d
+
+    def line_of(self, path: Sequence[str | int]) -> int | None:
+        """The line of ``path`` (or of its nearest enclosing key), 1-based; None if unknown."""
+        path = tuple(path)
+        for cut in range(len(path), 0, -1):
+            if path[:cut] in self.index:
+                start = self.index[path[:cut]]
+                rest = path[cut:]
+                break
+        else:
+            return None
+        keys = [p for p in rest if isinstance(p, str)]
+        if not keys:
+            return start
+        target = keys[-1]
+        ints = [p for p in rest if isinstance(p, int)]
+        skip = ints[-1] if ints else 0
+        stop = next((h for h in self.headers if h > start), len(self.lines) + 1)
+        pat = re.compile(r"(?:^|[\s{,])(?:" + re.escape(target) + r"|\"" + re.escape(target) + r"\")\s*=")
+        seen = 0
+        for n in range(start, stop):
+            for _ in pat.finditer(self.lines[n - 1]):
+                if seen == skip:
+                    return n
+                seen += 1
+        return start

@@ -1,0 +1,190 @@
+"""Grids on real worker processes: a Dask LocalCluster, the local process pool, workers killed
+with SIGKILL, and the driver itself killed with SIGKILL mid-grid and run again."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from graybox import experiments as gx
+from graybox.experiments._cell import run_cell
+from graybox.experiments._executors import DaskCluster, ProcessPool, local_cluster, worker_threads
+
+VALUES = ["data", "structure", "variant", "seed", "status", "message", "n_params", "lambda1", "rule", "in_band",
+          "J1_ident", "JS_ident", "fit_ident", "J1_valid", "JS_valid", "fit_valid", "JSF", "static_miss"]
+
+
+def tiny_grid() -> gx.Grid:
+    """ls / cls / PE closed form / a short SE gradient on two structures: 8 cells of milliseconds."""
+    return gx.Grid(
+        name="tiny",
+        data=[gx.DataSpec("pumping", bundled="pumping")],
+        structures=[gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"]),
+                    gx.StructureSpec("second-order", terms=["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "1"])],
+        variants=[gx.Variant("LS", "ls"),
+                  gx.Variant("CLS", "cls", constraints=[{"type": "equality"}]),
+                  gx.Variant("PE", "pe", lambdas={"logspace": [-4, 0, 8]}, options={"solver": "closed"}),
+                  gx.Variant("SE", "se-gradient", lambdas=[0.1, 1.0], options={"max_nfev": 5})],
+    )
+
+
+def assert_same_rows(a: pd.DataFrame, b: pd.DataFrame) -> None:
+    """Same cells, each once, with identical values (members and θ included)."""
+    assert a["key"].is_unique and b["key"].is_unique
+    a, b = a.set_index("key").sort_index(), b.set_index("key").sort_index()
+    assert list(a.index) == list(b.index)
+    pd.testing.assert_frame_equal(a[VALUES], b[VALUES])
+    for x, y in zip(a["theta"], b["theta"]):
+        assert (x is None and y is None) or np.array_equal(x, y)
+    for x, y in zip(a["members"], b["members"]):
+        assert (x is None and y is None) or all(np.array_equal(np.asarray(x[k]), np.asarray(y[k])) for k in x)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    path = tmp_path_factory.mktemp("ref") / "inprocess.sqlite"
+    gx.run_grid(tiny_grid(), path)
+    return gx.load_results(path)
+
+
+def test_dask_localcluster_gives_the_in_process_rows(reference, tmp_path):
+    run = gx.run_grid(tiny_grid(), tmp_path / "dask.sqlite", workers=2)
+    assert "LocalCluster of 2 worker processes" in run.executor and run.ran == 8
+    df = gx.load_results(tmp_path / "dask.sqlite")
+    assert_same_rows(df, reference)
+    # the cells ran in the workers, not in the driver
+    assert not (df["worker"].str.endswith(f":{os.getpid()}")).any()
+
+
+def _kill_myself(marker_dir: str, cell, data, threads):
+    """Run a cell, except: variant "LS" SIGKILLs its worker every time, "CLS" the first time only."""
+    marker = Path(marker_dir) / f"{cell.key}.{len(list(Path(marker_dir).glob(cell.key + '*')))}"
+    if cell.variant == "LS" or (cell.variant == "CLS" and not list(Path(marker_dir).glob(cell.key + "*"))):
+        marker.touch()
+        os.kill(os.getpid(), signal.SIGKILL)
+    row = run_cell(cell, data, threads)
+    row["NUMBA_NUM_THREADS"] = os.environ.get("NUMBA_NUM_THREADS")  # what the executor gave this worker
+    return row
+
+
+def _death_cells(variants):
+    g = gx.Grid(tiny_grid().data, tiny_grid().structures[:1], [v for v in tiny_grid().variants if v.name in variants],
+                name="deaths")
+    datasets = g.load_data()
+    cells = g.cells(datasets)
+    return cells, {c.data_hash: datasets[c.data] for c in cells}
+
+
+def _check_deaths(rows, cells, markers: Path, reference):
+    ref = reference.set_index("key")
+    for c in cells:
+        r = rows[c.variant]
+        starts = len(list(markers.glob(c.key + "*")))
+        if c.variant == "LS":  # killed, retried once, killed again: failed, with the error
+            assert starts == 2 and r["status"] == "failed"
+            assert "died" in r["message"] or "KilledWorker" in r["message"]
+        else:
+            assert starts == (1 if c.variant == "CLS" else 0)  # CLS: killed once, the retry finished
+            assert r["status"] == "ok" and r["JS_valid"] == ref.loc[r["key"], "JS_valid"]
+            # 2 workers × NUMBA_NUM_THREADS <= cores
+            assert r["NUMBA_NUM_THREADS"] == str(worker_threads(2))
+
+
+def test_a_dying_worker_gets_its_cell_retried_once_processes(tmp_path, reference):
+    cells, data = _death_cells(("LS", "CLS", "PE"))
+    rows = {r["variant"]: r for r in ProcessPool(2, partial(_kill_myself, str(tmp_path))).run(cells, data)}
+    assert set(rows) == {"LS", "CLS", "PE"}
+    _check_deaths(rows, cells, tmp_path, reference)
+
+
+def test_a_dying_worker_gets_its_cell_retried_once_dask_and_a_scheduler_address(tmp_path, reference):
+    from distributed import Client
+
+    with local_cluster(2) as cluster, Client(cluster) as client:
+        cells, data = _death_cells(("LS", "CLS", "PE"))
+        ex = DaskCluster(client=client, fn=partial(_kill_myself, str(tmp_path)))
+        rows = {r["variant"]: r for r in ex.run(cells, data)}
+        assert set(rows) == {"LS", "CLS", "PE"}
+        _check_deaths(rows, cells, tmp_path, reference)
+        # the same cluster by its scheduler's address, as `graybox grid run --scheduler ADDRESS` reaches it
+        run = gx.run_grid(tiny_grid(), tmp_path / "by-address.sqlite", scheduler=cluster.scheduler_address)
+        assert run.executor.startswith("Dask scheduler at tcp://") and run.ran == 8
+        assert_same_rows(gx.load_results(tmp_path / "by-address.sqlite"), reference)
+
+
+SPEC = """\
+name = "killed"
+seeds = [0, 1, 2, 3]
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "a"
+terms = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "1"]
+[[structures]]
+name = "b"
+terms = ["y(k-1)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"]
+[[variants]]
+name = "GA"
+estimator = "se-ga"
+lambdas = [0.1, 0.5, 1.0]
+decision = {rule = "dsf", fallback = "min_jsf"}
+options = {population = 150, generations = 25}
+[[variants]]
+name = "PE"
+estimator = "pe"
+lambdas = {logspace = [-4, 0, 5]}
+options = {solver = "closed"}
+"""
+
+
+def _count(store: Path) -> int:
+    try:
+        con = sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=0.1)
+        try:
+            return con.execute("SELECT COUNT(*) FROM cells").fetchone()[0]
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return 0
+
+
+def test_driver_killed_mid_grid_then_run_again(tmp_path):
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC)
+    store = tmp_path / "results.sqlite"
+    n = len(gx.Grid.from_toml(spec).cells())
+    assert n == 10
+    proc = subprocess.Popen([sys.executable, "-m", "graybox._cli", "grid", "run", str(spec), "--store", str(store)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 120
+        while _count(store) < 2:
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "the grid did not start"
+            time.sleep(0.01)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == -signal.SIGKILL
+    done = _count(store)
+    assert 2 <= done < n, f"{done} of {n} cells were finished when the driver was killed"
+    again = gx.run_grid(spec, store)
+    assert again.skipped == done and again.ran == n - done
+    resumed = gx.load_results(store)
+    assert len(resumed) == n and resumed["key"].is_unique
+    gx.run_grid(spec, tmp_path / "uninterrupted.sqlite")
+    assert_same_rows(resumed, gx.load_results(tmp_path / "uninterrupted.sqlite"))
+    assert (resumed["status"] == "ok").all()
