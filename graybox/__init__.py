@@ -39,7 +39,7 @@ from ._io import FORMAT_VERSION, GrayboxFileError, from_json, load, read_header,
 from . import datasets, plots, reference
 from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
 from . import experiments
-from .experiments import load_results
+from .experiments import GrayboxSelection, load_results, select_graybox
 
 try:
     __version__ = _version("graybox")
@@ -69,6 +69,6 @@ __all__ = [
     "bootstrap_decision", "DecisionBootstrap", "BootstrapJob", "block_resample",
     "save", "load", "to_json", "from_json", "read_header", "GrayboxFileError", "FORMAT_VERSION",
     "datasets", "plots", "reference", "experiments",
-    "load_pumping", "load_buck", "load_record_csv", "load_static_csv", "load_results",
+    "load_pumping", "load_buck", "load_record_csv", "load_static_csv", "load_results", "select_graybox", "GrayboxSelection",
     "__version__",
 ]

@@ -1,0 +1,76 @@
+"""select_graybox: gray-box structure selection through the experiment layer."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
+THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+
+
+def plant(seed, n=1200, noise=0.02):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 3.0, n // 25 + 1), 25)[:n]
+    m = gb.Model(TRUE, THETA)
+    y = m.simulate(u, np.zeros(2)) + noise * rng.standard_normal(n)
+    return gb.Record(u, y, name=f"r{seed}")
+
+
+@pytest.fixture(scope="module")
+def data():
+    m = gb.Model(TRUE, THETA)
+    ub = np.linspace(-0.5, 3.5, 7)  # beyond the records' range on both sides: that is the point
+    static = gb.StaticPoints(ub, m.static_curve(ub))
+    return gb.Dataset(plant(1), plant(2), static)
+
+
+def test_selects_a_structure_in_the_band_and_reports_everything(data, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, 0, 2), data, band=1e-3, sizes=[3, 5], store=tmp_path / "s.sqlite")
+    assert res.decision.in_band and res.decision.JSF <= 1e-3
+    assert res.degree == 2  # a quadratic static curve: the points ask for degree 2
+    # every structure tried is a row; the chosen one is rank 1 and carries Σ0, Σu, Σu², Σy
+    assert len(res.table) >= 2 and res.table.iloc[0]["rank"] == 1
+    keys = {gb.cluster_map(res.structure).keys[i] for i in range(len(gb.cluster_map(res.structure).keys))}
+    assert {(0, 0), (0, 1), (0, 2), (1, 0)} <= keys
+    # the decision was made on the validation record: the chosen member's validation J_S is the
+    # smallest among the in-band members of the refitted front
+    ev = gb.evaluate({"m": res.model}, data)
+    assert ev.loc["m", "J_S valid"] == pytest.approx(res.decision.JS, rel=1e-9)
+    assert ev.loc["m", "J_S valid"] < 10 * 0.02**2 * 10  # near the noise level
+    # the cells are in a real store, one per structure
+    df = gb.load_results(res.store)
+    assert len(df) == len(res.table) and set(df["status"]) == {"ok"}
+
+
+def test_folds_when_there_is_one_record(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, 0, 2), data.ident, data.static, band=1e-3, sizes=[5], folds=3)
+    df = gb.load_results(res.store)
+    assert set(df["data"]) == {"fold1", "fold2", "fold3"}
+    assert res.decision.JSF <= 1e-3
+
+
+def test_band_no_structure_reaches_is_an_error_or_an_explicit_fallback(data):
+    far = gb.StaticPoints(data.static.ubar, data.static.ybar + np.array([0.5, -0.5, 0.5, -0.5, 0.5, -0.5, 0.5]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ValueError, match="no structure meets the band.*smallest J_SF reached"):
+            gb.select_graybox(gb.Candidates(3, 3, 0, 2), data, far, band=1e-6, sizes=[5])
+        res = gb.select_graybox(gb.Candidates(3, 3, 0, 2), data, far, band=1e-6, sizes=[5], fallback="min_jsf")
+    assert res.fallback and not res.decision.in_band
+
+
+def test_bad_input(data):
+    with pytest.raises(ValueError, match="cannot represent a degree-2 static curve"):
+        gb.select_graybox(gb.Candidates(3, 3, 0, 1), data, band=1e-3, sizes=[3])
+    short = gb.Dataset(data.ident, data.valid.slice(0, 3), data.static)
+    with pytest.raises(ValueError, match="fewer than max lag|shorter"):
+        gb.select_graybox(gb.Candidates(3, 3, 0, 2), short, band=1e-3, sizes=[3])
+    with pytest.raises(ValueError, match="estimator"):
+        gb.select_graybox(gb.Candidates(3, 3, 0, 2), data, band=1e-3, estimator="ls")
