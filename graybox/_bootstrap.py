@@ -25,7 +25,7 @@ the signature of the built-in ``map`` that returns the results in order:
 
 - ``map=None``: in this process, one after the other (with a progress bar on a terminal);
 - ``concurrent.futures.ProcessPoolExecutor().map``: local processes;
-- with Dask, ``lambda f, xs: client.gather(client.map(f, list(xs)))``.
+- on the experiment layer's executors: ``with graybox.experiments.parallel_map(workers=2) as pmap: … map=pmap`` (Dask or local processes).
 
 The job object (:class:`BootstrapJob`) is a frozen dataclass of plain values and records, so it
 pickles for processes and Dask workers alike (these are graybox's own objects in transit, never a

@@ -2,7 +2,7 @@
 
 import pickle
 import warnings
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
@@ -97,21 +97,22 @@ def test_seeded_and_independent_of_where_replicates_run(data):
     assert again(2)["theta"] == list(a.thetas[2])
 
 
-def test_a_real_process_pool(data):
-    with ProcessPoolExecutor(2) as ex:
-        p = run(data, seed=3, n_boot=3, map=ex.map)
+def test_a_real_process_pool_through_the_experiment_layer(data):
+    with gb.experiments.parallel_map(workers=2, processes=True) as pmap:
+        p = run(data, seed=3, n_boot=3, map=pmap)
     a = run(data, seed=3, n_boot=3)
     np.testing.assert_array_equal(p.thetas, a.thetas)
     np.testing.assert_array_equal(p.JS, a.JS)
 
 
-def test_a_real_dask_cluster(data):
-    distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        d = run(data, seed=3, n_boot=3, map=lambda f, xs: client.gather(client.map(f, list(xs), pure=False)))
+def test_a_real_dask_cluster_through_the_experiment_layer(data):
+    with gb.experiments.parallel_map(workers=2) as pmap:
+        d = run(data, seed=3, n_boot=3, map=pmap)
     a = run(data, seed=3, n_boot=3)
     np.testing.assert_array_equal(d.thetas, a.thetas)
+    with pytest.raises(ValueError, match="exactly one"):
+        with gb.experiments.parallel_map():
+            pass
 
 
 def test_static_noise_and_se(data):

@@ -18,6 +18,7 @@ from ._cell import COLUMNS, STATUSES, run_cell
 from ._example import EXAMPLE_SPEC
 from ._executors import EXECUTORS
 from ._report import RULES, heatmap_table, leaderboard, plot_fronts, plot_heatmap, plot_scatter, write_report
+from ._map import parallel_map
 from ._run import GridRun, run_grid
 from ._select import GrayboxSelection, select_graybox
 from ._spec import (
@@ -28,7 +29,7 @@ from ._store import StoreError, load_results
 
 __all__ = [
     "Grid", "DataSpec", "StructureSpec", "Variant", "DecisionRule", "Cell", "SpecError",
-    "run_grid", "GridRun", "select_graybox", "GrayboxSelection", "run_cell", "load_results", "StoreError",
+    "run_grid", "GridRun", "select_graybox", "GrayboxSelection", "parallel_map", "run_cell", "load_results", "StoreError",
     "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report", "RULES",
     "EXAMPLE_SPEC",
     "ESTIMATORS", "CONSTRAINT_TYPES", "DECISION_RULES", "BUNDLED", "EXECUTORS", "STATUSES", "COLUMNS",
