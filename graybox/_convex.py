@@ -183,8 +183,8 @@ class _Data:
 
 
 def _tri_inv(R: np.ndarray) -> np.ndarray:
-    """Inverse of an upper-triangular matrix (LAPACK trtri: 3 µs for 18 × 18, where a BLAS trsm
-    against the identity was measured at 8 ms waiting for threads on a busy machine)."""
+    """Inverse of an upper-triangular matrix by LAPACK trtri (no BLAS threads to wait for; see
+    BENCHMARKS.md, "Implementation choices")."""
     inv, info = scipy.linalg.lapack.dtrtri(np.asarray(R, float), lower=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"singular triangular factor (trtri info {info})")
@@ -194,10 +194,10 @@ def _tri_inv(R: np.ndarray) -> np.ndarray:
 def _r_factor(A: np.ndarray) -> np.ndarray:
     """Upper-triangular R of A = Q R (Q not formed), shape (n, n), for tall A (m > n).
 
-    CholeskyQR2 (two passes of Gram matrix + Cholesky, Yamamoto et al. 2015): BLAS-3 only, so a
-    3200 × 18 factor takes about a millisecond where LAPACK's Householder QR was measured at
-    1–100 ms on a busy 2-core machine. It is as accurate as Householder QR while cond(A) stays
-    below ~1e8; beyond 1e6 (a tiny residual, nearly collinear columns) Householder QR is used.
+    CholeskyQR2 (two passes of Gram matrix + Cholesky, Yamamoto et al. 2015): BLAS-3 only, which
+    keeps thin factors fast and steady on a busy machine (BENCHMARKS.md, "Implementation choices").
+    It is as accurate as Householder QR while cond(A) stays below ~1e8; beyond 1e6 (a tiny
+    residual, nearly collinear columns) Householder QR is used.
     """
     try:
         R1 = scipy.linalg.cholesky(A.T @ A, lower=False, check_finite=False)
@@ -205,7 +205,7 @@ def _r_factor(A: np.ndarray) -> np.ndarray:
         if not (np.all(np.isfinite(R1)) and d.min() > 1e-6 * d.max()):
             raise np.linalg.LinAlgError("too ill-conditioned for CholeskyQR2")
         # A R1⁻¹ through the small explicit inverse. einsum, not `@`: a threaded BLAS GEMM of this
-        # thin shape was measured at 8 ms (thread hand-offs on a busy machine) against 0.9 ms.
+        # thin shape waits on thread hand-offs on a busy machine.
         Q1 = np.einsum("ij,jk->ik", A, _tri_inv(R1))
         R2 = scipy.linalg.cholesky(Q1.T @ Q1, lower=False, check_finite=False)
         return R2 @ R1
@@ -447,8 +447,8 @@ class _QP:
         tot = float(w1) + float(w2)
         self.w1.value, self.w2.value = float(w1) / tot, float(w2) / tot
         # Warm starts help OSQP (first order) only. Through cvxpy, a warm-started Clarabel re-uses
-        # its solver object and was measured to stop early, 3.7e-3 away from the optimum, on the
-        # PE sweep; an interior-point method gains nothing from a warm start anyway.
+        # its solver object and stops early on the PE sweep (BENCHMARKS.md); an interior-point
+        # method gains nothing from a warm start anyway.
         warm = warm_start and self.solver == "osqp"
         try:
             self.problem.solve(solver=self.solver.upper(), warm_start=warm, **self.options)

@@ -220,7 +220,7 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc):  # pragma: no cover - compiled
     # acc[p] = ŷ_p(k) for every member p, reading past outputs from rows (k - lag) & mask of Y.
     # The accumulator is a separate array, every access is 2-D indexed and every population
     # loop runs over the whole second axis (range(P) with P = Y.shape[1]): in this form LLVM
-    # vectorises each term update; a loop over a sub-range p0:p1 measured 5x slower.
+    # vectorises each term update, which a loop over a sub-range p0:p1 does not (BENCHMARKS.md).
     P = Y.shape[1]
     nt = thT.shape[0]
     for p in range(P):
@@ -360,7 +360,7 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
 def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step) contiguous population blocks. An OpenMP team keeps its workers
     # spinning for a moment between calls, so a GA's millisecond calls do not pay for waking an
-    # idle core each time (a Python thread pool measured no faster than one thread for them).
+    # idle core each time (a Python thread pool did not beat one thread for them: BENCHMARKS.md).
     nb_ = blocks.shape[0]
     out = np.empty((nb_, blocks.shape[2]))
     for b in nb.prange(nb_):

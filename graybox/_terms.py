@@ -153,7 +153,7 @@ class Structure:
         return len(self.terms)
 
     def __hash__(self) -> int:
-        # cached: structures key the compiled-code cache, and hashing 20 terms costs ~10 µs
+        # cached: structures key the compiled-code cache and are hashed on every kernel call
         h = self.__dict__.get("_hash")
         if h is None:
             h = hash(self.terms)
