@@ -165,6 +165,8 @@ def _enc(kind: str, v: Any) -> Any:
         return _arr(v)
     if kind in ("int", "str", "bool"):
         return v if kind != "int" else int(v)
+    if kind == "int_or_none":
+        return None if v is None else int(v)
     if kind == "floats":
         return [_num(x) for x in v]
     if kind == "structure":
@@ -191,6 +193,8 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return rd.array(v, where, 2)
     if kind == "int":
         return rd.int(v, where)
+    if kind == "int_or_none":
+        return None if v is None else rd.int(v, where)
     if kind == "str":
         return rd.str(v, where)
     if kind == "bool":
@@ -241,8 +245,9 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"))),
     "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
                               ("theta_ls", "array1"), ("residuals", "arrays"))),
-    "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("epochs", "int"), ("cost", "floats"), ("lam", "floats"),
-                              ("accepted", "int"), ("stopped", "str"), ("rmse_train", "float"), ("seconds", "float"))),
+    "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("prediction_cost", "floats"), ("simulation_cost", "floats"),
+                              ("holdout_cost", "floats"), ("best_step", "int_or_none"), ("epochs", "int"),
+                              ("stopped", "str"), ("rmse_train", "float"), ("rmse_sim", "float"), ("seconds", "float"))),
     "Decision": (Decision, (("rule", "str"), ("index", "int"), ("lambda1", "float"), ("JS", "float"), ("JSF", "float"),
                             ("in_band", "bool"), ("score", "float"), ("model", "Model"))),
     "ParameterUncertainty": (ParameterUncertainty, (("method", "str"), ("model", "Model"), ("cov", "array2"),
