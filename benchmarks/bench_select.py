@@ -1,0 +1,112 @@
+"""Structure selection for gray-box use: semp and select_graybox against FROLS (issue 12).
+
+    .venv/bin/python benchmarks/bench_select.py [--workers 2] [--part speed|tables|staircase|all]
+
+- speed: FROLS, ``semp`` (91 candidates: degree 2, lags 6; 3200 samples; to 17 terms) and
+  ``select_graybox`` over the same space (in-process and with N Dask workers);
+- tables: on the bundled plant and the buck converter, the D_SF model of the selected structure
+  against the FROLS + ELS model of the same size (J_S ident / valid, J_SF, N_p);
+- staircase: noise-free NARX systems under staircase inputs, FROLS against semp (true structure
+  recovered or not).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _common import git_rev, machine  # noqa: E402
+
+import graybox as gb  # noqa: E402
+
+BANDS = {"pumping": 0.031, "buck": 0.01}
+
+
+def wall(fn):
+    t0 = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t0
+
+
+def speed(workers: int) -> None:
+    data = gb.load_pumping()
+    cand = gb.Candidates(6, 6, degree=2)
+    gb.frols(cand, data, n_terms=17)
+    _, t_frols = wall(lambda: gb.frols(cand, data, n_terms=17))
+    gb.semp(gb.Candidates(2, 2, degree=2), data, n_terms=3)  # compile
+    _, t_semp = wall(lambda: gb.semp(cand, data, n_terms=17))
+    _, t_sel = wall(lambda: gb.select_graybox(cand, data, band=0.031))
+    _, t_sel_dask = wall(lambda: gb.select_graybox(cand, data, band=0.031, workers=workers))
+    print("| step | time |\n| --- | --- |")
+    print(f"| FROLS, 91 candidates -> 17 terms | {t_frols:.3f} s |")
+    print(f"| semp, 91 candidates -> 17 terms (1 thread) | {t_semp:.2f} s |")
+    print(f"| select_graybox (semp + FROLS, sizes 4..20, PE fronts), in-process | {t_sel:.1f} s |")
+    print(f"| select_graybox, {workers} Dask workers (LocalCluster start included) | {t_sel_dask:.1f} s |")
+
+
+def tables() -> None:
+    for name, load, cand_kw, sizes in (("pumping", gb.load_pumping, dict(ny=6, nu=6), None),
+                                       ("buck", gb.load_buck, dict(ny=2, nu=2), [2, 3, 4, 5, 6])):
+        data = load()
+        band = BANDS[name]
+        for est, lam in (("pe", None), ("se-gradient", list(np.logspace(-2, 0, 10)))):
+            res = gb.select_graybox(gb.Candidates(**cand_kw, degree=2), data, band=band, estimator=est,
+                                    sizes=sizes, lambdas=lam)
+            k = len(res.structure)
+            sel = gb.frols(gb.Candidates(**cand_kw, ne=2, degree=2), data, n_terms=k)
+            els = gb.els(sel, data).model
+            tab = gb.evaluate({f"select_graybox ({est}) D_SF": res.model, f"FROLS + ELS, {k} terms": els}, data)
+            print(f"\n{name}, band {band}, estimator {est}: {res.structure}")
+            print(tab[["J_S ident", "J_S valid", "J_SF", "N_p"]].to_string(float_format=lambda v: f"{v:.4f}"))
+
+
+def staircase() -> None:
+    systems = {
+        "A": (["y(k-1)", "y(k-2)", "u(k-2)", "u(k-1)y(k-1)", "u(k-2)^2", "1"], [0.5, 0.3, 0.4, -0.2, 0.15, 0.1]),
+        "C": (["y(k-1)", "u(k-1)", "u(k-2)", "u(k-2)y(k-1)", "1"], [0.6, 0.3, 0.2, -0.1, 0.05]),
+        "D": (["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2"], [1.2, -0.4, 0.2, 0.1]),
+    }
+    rows = []
+    for name, (terms, th) in systems.items():
+        st = gb.Structure(terms)
+        for hold in (5, 10, 20):
+            for seed in range(3):
+                rng = np.random.default_rng(seed)
+                u = np.repeat(rng.uniform(-1, 1, 1000 // hold + 1), hold)[:1000]
+                rec = gb.Record(u, gb.Model(st, th).simulate(u, np.zeros(st.max_lag)))
+                cand = gb.Candidates(3, 3, degree=2)
+                f = gb.frols(cand, rec, n_terms=len(st))
+                s = gb.semp(cand, rec, n_terms=len(st))
+                b = gb.semp(cand, rec)
+                rows.append({"system": name, "hold": hold, "seed": seed, "frols": set(f.structure) == set(st),
+                             "semp n_terms": set(s.structure) == set(st), "semp BIC": set(b.structure) == set(st)})
+    df = pd.DataFrame(rows)
+    print(df.groupby("system")[["frols", "semp n_terms", "semp BIC"]].sum().to_string())
+    print(f"(of {len(df) // len(systems)} records per system)")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--part", default="all", choices=("speed", "tables", "staircase", "all"))
+    args = ap.parse_args()
+    print(f"# bench_select ({datetime.date.today()}, git {git_rev()}): {machine()}")
+    warnings.simplefilter("ignore")
+    if args.part in ("staircase", "all"):
+        staircase()
+    if args.part in ("speed", "all"):
+        speed(args.workers)
+    if args.part in ("tables", "all"):
+        tables()
+
+
+if __name__ == "__main__":
+    main()
