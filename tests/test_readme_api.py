@@ -33,3 +33,19 @@ def test_every_name_in_the_table_exists():
             obj = getattr(obj, part)
     for name in ("plot_residual_tests", "plot_static_band", "plot_decision_bootstrap"):
         assert hasattr(gb.plots, name)
+
+
+def test_selection_example_runs():
+    section = README.split("## API: structure selection for gray-box use", 1)[1]
+    block = re.findall(r"```python\n(.*?)```", section, re.S)[0]
+    ns: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exec(compile(block, "README.md (selection)", "exec"), ns)
+    assert len(ns["path"].structure) == 17
+    assert ns["chosen"].decision.JSF <= 0.031 and len(ns["chosen"].table) > 5
+    table = section.split("```python")[0]
+    for name in re.findall(r"^\| `([A-Za-z_.]+)", table, re.M):
+        obj = gb
+        for part in name.split("."):
+            obj = getattr(obj, part)
