@@ -584,23 +584,28 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
     """Fit from every feasible start with every solver; keep the lowest cost (or raise _Failed)."""
     best = None
     nfev = 0
-    why = []
+    why: dict[str, list[str]] = {}  # reason -> the starts it applies to
+    tried: list[np.ndarray] = []
     for name, th0 in cands:
+        if any(np.allclose(th0, t, rtol=1e-9, atol=0) for t in tried):  # e.g. the PE member of λ1 = 1 is LS
+            continue
+        tried.append(th0)
         nfev += 1
         if not np.isfinite(_residuals(problem, th0 * problem.scale, lam1)[0]):
-            why.append(f"{name}: {_why_infeasible(problem, th0, lam1)}")
+            why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
             continue
         for solver in solvers:
             try:
                 th, c, k = _fit(problem, th0, lam1, solver, max_nfev, tol)
             except (ValueError, np.linalg.LinAlgError) as exc:  # a numerical breakdown ends this run only
-                why.append(f"{name} ({solver}): {exc}")
+                why.setdefault(str(exc), []).append(f"{name} ({solver})")
                 continue
             nfev += k
             if np.isfinite(c) and (best is None or c < best[1]):
                 best = (th, c)
     if best is None:
-        raise _Failed(f"no start of the gradient SE fit at λ1 = {lam1:g} is feasible: " + "; ".join(why))
+        raise _Failed(f"no start of the gradient SE fit at λ1 = {lam1:g} is feasible: "
+                      + "; ".join(f"{', '.join(names)}: {reason}" for reason, names in why.items()))
     return best[0], best[1], nfev
 
 
