@@ -9,11 +9,15 @@ Two solvers share one problem definition (:class:`SEProblem`):
   θ is least squares on 30 randomly chosen samples.
 - :func:`gradient_front` — beyond the paper: ``scipy.optimize.least_squares`` on the stacked
   residuals [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] with the Jacobian from the forward sensitivity
-  recursion of the compiled kernel, warm-started along the λ sweep.
+  recursion of the compiled kernel, streamed through a QR factorisation so that the solver sees
+  n + 1 residuals instead of N (cost linear in N); continued along the λ sweep, with a multi-start
+  ("trf" and "dogbox" from every feasible start) wherever the sweep has to restart.
 
 :func:`se_pareto` runs either and returns a :class:`graybox.ParetoSet` whose J's come
-from the shared evaluator. Long sweeps show a progress bar, write a checkpoint after each λ and
-resume from it; a checkpoint written for another problem is refused.
+from the shared evaluator. A λ whose fit fails (no feasible start; no individual with a finite
+cost) stays in the set as a failed member with the reason, and the sweep goes on. Long sweeps show
+a progress bar, write a checkpoint after each λ (failed members included) and resume from it; a
+checkpoint written for another problem is refused.
 
 Inside the optimisers J_S is computed by the fused batch kernel (same definition as
 :func:`graybox.js`) and J_SF from the equilibrium near the measured ȳ_i
@@ -549,6 +553,12 @@ class _Compressed:
         return A
 
 
+#: The second pass of :func:`gradient_front` fits a member again from its neighbour's solution
+#: only when that solution beats it by this relative margin: most neighbours differ by the
+#: solver's tolerance, and refitting those spent a quarter of the evaluations for nothing.
+_UP_MARGIN = 1e-4
+
+
 class _Stop(Exception):
     """The Jacobian overflowed at an accepted point: the fit ends there."""
 
@@ -643,9 +653,12 @@ def gradient_front(
     (continuation in λ). Where that start is not feasible — the first λ, or after the λ1 = 1
     member, whose static equilibria nothing constrains — the fit restarts from every feasible
     start: the nearest earlier members, the PE member of the same λ (closed form), ``theta0``
-    and ``starts``, and keeps the lowest cost. After the sweep a failed member (no feasible start)
-    is tried again from its nearest later members; if it still fails it stays failed, with the
-    reason, and the other members are kept.
+    and ``starts``, and keeps the lowest cost. A second pass goes back up: the smallest λ1
+    restarts from every start (and its own solution), and each member is fitted again from its
+    neighbour's solution (next smaller λ1) wherever that beats it, so a better basin found low
+    in the sweep carries upwards. A failed member (no feasible start) is tried again from its
+    nearest later members; if it still fails it stays failed, with the reason, and the other
+    members are kept.
 
     Parameters
     ----------
@@ -667,10 +680,9 @@ def gradient_front(
         (convex, with the static points weighted in).
     solver : {"auto", "trf", "dogbox", "lm"}
         ``least_squares`` method. ``"auto"`` (default) restarts with both "trf" and "dogbox" and
-        continues with "trf": on the plant's ℓ = 2 problem "dogbox" reached the lowest pure
-        simulation error from least squares (λ1 = 1: J_S 0.158, "trf" 0.549 in 50 evaluations),
-        while along the sweep, where unstable equilibria are walls, it stalled in poorer minima
-        (J_SF 0.08–0.27 where "trf" reached 0.001–0.003). BENCHMARKS.md has the fronts.
+        continues with "trf": on the plant's ℓ = 2 problem "dogbox" finds far lower minima of
+        the simulation error where it starts afresh, while along the sweep, where unstable static
+        equilibria are walls, it stalls in poorer minima than "trf" (BENCHMARKS.md, SE section).
 
     Returns
     -------
@@ -708,23 +720,44 @@ def gradient_front(
                 "theta0": None if theta0 is None else list(map(float, start)),
                 "starts": [list(map(float, s_)) for s_ in extra]}
     front = _sweep(problem, lam, "gradient", settings, seed, checkpoint, progress, step)
-    if not front.failures or len(front.failures) == lam.size:
+    if lam.size == 1 or len(front.failures) == lam.size:
         return front
-    # a failed member tries the later members' solutions too (deterministic: resume-safe)
+    # Second pass, from the smallest λ1 up (deterministic, so a resumed sweep gives the same set).
+    # Continuation follows one basin down the sweep, and the basin that was best where the sweep
+    # restarted (static points nearly ignored) need not be best where they weigh most: the
+    # smallest λ1 restarts from every start too, and going up each member starts again from its
+    # neighbour's solution (next smaller λ1) wherever that solution beats it. A failed member
+    # tries its nearest later members here.
     thetas, costs, nfev = front.thetas.copy(), front.costs.copy(), front.nfev.copy()
     failures = dict(front.failures)
+    K = lam.size
     with threadpool_limits(limits=1, user_api="blas"):
-        for i in sorted(failures):
+        for i in range(K - 1, -1, -1):
+            lam1 = float(lam[i])
             after = _nearest(thetas, i, "after", 2)
-            if not after:
+            if i == K - 1 or i in failures:
+                cands = ([] if i in failures else [("this member", thetas[i])]) + \
+                    [(f"member λ1 = {lam[j]:g}", thetas[j]) for j in after]
+                if i == K - 1:
+                    cands += candidates(i, thetas, [])
+                try:
+                    th, c, k = _multistart(problem, lam1, cands, restart_solvers, max_nfev, tol)
+                except _Failed as why:
+                    if i in failures and after:
+                        failures[i] += f"; then from the later members: {str(why).split(': ', 1)[1]}"
+                    continue
+            elif after:
+                th0 = thetas[after[0]]
+                c0 = problem.cost(th0[None], lam1)[0]
+                if not c0 < costs[i] * (1 - _UP_MARGIN):
+                    continue
+                th, c, k = _fit(problem, th0, lam1, follow, max_nfev, tol)
+            else:
                 continue
-            try:
-                thetas[i], costs[i], nfev[i] = _multistart(
-                    problem, float(lam[i]), [(f"member λ1 = {lam[j]:g}", thetas[j]) for j in after],
-                    restart_solvers, max_nfev, tol)
-                del failures[i]
-            except _Failed as why:
-                failures[i] += f"; then from the later members: {str(why).split(': ', 1)[1]}"
+            nfev[i] += k
+            if c < costs[i]:
+                thetas[i], costs[i] = th, c
+                failures.pop(i, None)
     return SEFront(lam, thetas, costs, failures, nfev)
 
 

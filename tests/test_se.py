@@ -423,3 +423,21 @@ def test_corrupt_checkpoint_is_named(problem, tmp_path):
 def test_gradient_options_are_validated(problem, kw, match):
     with pytest.raises(ValueError, match=match):
         se_pareto(problem.structure, problem.record, problem.static, [1.0], method="gradient", progress=False, **kw)
+
+
+def test_gradient_front_second_pass_leaves_no_better_neighbour():
+    import graybox as gb
+    from graybox._se import _UP_MARGIN, _pe_members
+
+    # the paper's eq. (15) structure on the bundled plant: going down alone, a member ends up
+    # beaten at its own λ by its smaller-λ neighbour's solution (seen without the second pass)
+    data = gb.load_pumping()
+    problem = SEProblem(reference.STRUCTURE_15, data.ident, data.static)
+    front = gradient_front(problem, np.logspace(-2, 0, 8), progress=False)
+    assert not front.failures
+    for i in range(len(front.lambdas) - 1):
+        c_neighbour = problem.cost(front.thetas[i + 1][None], front.lambdas[i])[0]
+        assert front.costs[i] * (1 - _UP_MARGIN) <= c_neighbour
+    # the smallest λ restarted from every start: no worse than any of them
+    starts = [problem.ls_theta(), *_pe_members(problem, front.lambdas[-1:])]
+    assert front.costs[-1] <= min(problem.cost(s[None], front.lambdas[-1])[0] for s in starts)
