@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.linalg
+from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _common import git_rev, machine  # noqa: E402
@@ -176,15 +177,16 @@ def scale(args, data, structure):
         z = th * prob.scale
         cp = _Compressed(prob, 1.0)
         rep = 3 if N < 1_000_000 else 2
-        t_fun = best_of(lambda: cp.fun(z), rep)
-        t_jac = best_of(lambda: cp.jac(z), rep)
         L = prob.L
 
         def former():
             _, S = free_run_sensitivity(prob.code, th, rec.u, rec.y[:L], L, prob.U[0])
             scipy.linalg.svd(S[L:] / prob.scale, full_matrices=False)
 
-        t_old = best_of(former, rep)
+        with threadpool_limits(limits=1, user_api="blas"):  # as inside the sweeps
+            t_fun = best_of(lambda: cp.fun(z), rep)
+            t_jac = best_of(lambda: cp.jac(z), rep)
+            t_old = best_of(former, rep)
 
         def one_lambda():
             se_pareto(structure, rec, data.static, [1.0], method="gradient", progress=False)

@@ -286,22 +286,34 @@ class SEFront:
         object.__setattr__(self, "failures", MappingProxyType({int(k): str(v) for k, v in dict(self.failures).items()}))
 
 
+_CHECKPOINT_ARRAYS = ("thetas", "costs", "done", "failures", "nfev")
+
+
 def _load_checkpoint(path: Path, meta: dict) -> dict:
+    def unreadable(exc: Exception) -> ValueError:
+        return ValueError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose another "
+                          "checkpoint path")
+
     try:
         with np.load(path, allow_pickle=False) as z:
             stored = json.loads(str(z["meta"]))
-            out = {"thetas": z["thetas"], "costs": z["costs"], "done": int(z["done"]),
-                   "failures": {int(k): str(v) for k, v in json.loads(str(z["failures"])).items()},
-                   "nfev": z["nfev"]}
+            raw = {k: z[k] for k in _CHECKPOINT_ARRAYS if k in z.files}
     except (ValueError, KeyError, OSError, EOFError, zipfile.BadZipFile) as exc:  # JSONDecodeError is a ValueError
-        raise ValueError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose another "
-                         "checkpoint path") from None
+        raise unreadable(exc) from None
     if stored != meta:
         diff = sorted(k for k in set(stored) | set(meta) if stored.get(k) != meta.get(k))
         raise ValueError(
             f"checkpoint {path} was written for another problem or settings (differs in: {', '.join(diff)}); "
             "delete it or choose another checkpoint path"
         )
+    if set(raw) != set(_CHECKPOINT_ARRAYS):
+        raise ValueError(f"checkpoint {path} was written by an older graybox (it does not record failed members); "
+                         "delete it or choose another checkpoint path")
+    try:
+        out = {"thetas": raw["thetas"], "costs": raw["costs"], "done": int(raw["done"]), "nfev": raw["nfev"],
+               "failures": {int(k): str(v) for k, v in json.loads(str(raw["failures"])).items()}}
+    except (ValueError, TypeError) as exc:
+        raise unreadable(exc) from None
     K = len(meta["lambdas"])
     if out["thetas"].shape[0] != K or not 0 <= out["done"] <= K or any(not 0 <= k < out["done"] for k in out["failures"]):
         raise ValueError(f"checkpoint {path} is corrupt (inconsistent sizes); delete it or choose another path")
@@ -445,18 +457,23 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     """Stacked residuals [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] at z = θ·scale; all inf once a run diverges."""
     th = z / problem.scale
     L = problem.L
-    w1 = np.sqrt(lam1 / problem.n_dyn)
-    r = []
-    for rec, U in zip(problem.records, problem.U):
+    M = len(problem.static) if lam1 < 1.0 else 0
+    r = np.empty(problem.n_dyn + M)
+    a = 0
+    for rec in problem.records:
         y = simulate_one(problem.code, th, rec.u, rec.y[:L], L, 1e300)
-        r.append(w1 * (y[L:] - rec.y[L:]))
-    if lam1 < 1.0:
+        b = a + y.size - L
+        np.subtract(y[L:], rec.y[L:], out=r[a:b])  # written in place: long records make no copies
+        a = b
+    r[:a] *= np.sqrt(lam1 / problem.n_dyn)
+    if M:
         # an unstable equilibrium gives NaN here, hence inf residuals: the solver treats the
         # region as infeasible and shrinks its step, so the front never trades J_SF for stability
         yb = problem.static_outputs(th)[0]
-        r.append(np.sqrt((1.0 - lam1) / len(problem.static)) * (yb - problem.static.ybar))
-    r = np.concatenate(r)
-    return r if np.all(np.isfinite(r)) else np.full_like(r, np.inf)
+        r[a:] = np.sqrt((1.0 - lam1) / M) * (yb - problem.static.ybar)
+    if not np.all(np.isfinite(r)):
+        r[:] = np.inf
+    return r
 
 
 def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:

@@ -441,3 +441,16 @@ def test_gradient_front_second_pass_leaves_no_better_neighbour():
     # the smallest λ restarted from every start: no worse than any of them
     starts = [problem.ls_theta(), *_pe_members(problem, front.lambdas[-1:])]
     assert front.costs[-1] <= min(problem.cost(s[None], front.lambdas[-1])[0] for s in starts)
+
+
+def test_checkpoint_of_an_older_graybox_is_named(problem, tmp_path):
+    ck = tmp_path / "front.npz"
+    ga_front(problem, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
+    with np.load(ck) as z:
+        kept = {k: z[k] for k in ("meta", "thetas", "costs", "done")}  # as written before failures were kept
+    np.savez(ck, **kept)
+    with pytest.raises(ValueError, match="older graybox"):
+        ga_front(problem, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
+    np.savez(ck, **kept, failures="{not json", nfev=np.zeros(1))
+    with pytest.raises(ValueError, match="not a readable SE checkpoint"):
+        ga_front(problem, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
