@@ -54,7 +54,7 @@ from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_reco
 from ._regressors import stacked_regressors
 from ._static import nearest_stable_equilibria, static_theta_gradient
 from ._terms import Structure
-from ._validation import check_choice, check_int, check_lambdas, check_real, check_theta, frozen
+from ._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
 
@@ -500,6 +500,8 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
             np.multiply(S, colw, out=work[m:m + b, :n])
             np.subtract(yh[k0:k1], rec.y[k0:k1], out=work[m:m + b, n])
             work[m:m + b, n] *= w1
+            if not np.all(np.isfinite(work[:m + b])):
+                return np.full((n + 1, n + 1), np.nan)
             T = _triangle(work[:m + b])
     if lam1 < 1.0:
         sp = problem.static
@@ -507,6 +509,8 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
         yb = problem.static_outputs(th)[0]
         rows = np.column_stack([w2 * static_theta_gradient(problem.structure, th, sp.ubar, yb) / problem.scale,
                                 w2 * (yb - sp.ybar)])
+        if not np.all(np.isfinite(rows)):
+            return np.full((n + 1, n + 1), np.nan)
         T = _triangle(np.vstack([T, rows]))
     if T.shape[0] < n + 1:
         T = np.vstack([T, np.zeros((n + 1 - T.shape[0], n + 1))])
@@ -514,9 +518,7 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
 
 
 def _triangle(A: np.ndarray) -> np.ndarray:
-    """R of A = QR (Householder, LAPACK), at most n rows; NaN when A is not finite."""
-    if not np.all(np.isfinite(A)):
-        return np.full((min(A.shape), A.shape[1]), np.nan)
+    """R of A = QR (Householder, LAPACK): its first min(A.shape) rows."""
     qr, _, _, _ = dgeqrf(A, overwrite_a=False)
     return np.triu(qr[: min(A.shape)])
 
@@ -858,6 +860,8 @@ def se_pareto(
         member failed (the reasons are listed).
     """
     check_choice(method, "method", ("ga", "gradient"))
+    seed = check_seed(seed)
+    threads = check_int(threads, "threads", low=1)
     given = {"options": options, "max_nfev": max_nfev, "tol": tol, "solver": solver, "starts": starts}
     other = "gradient" if method == "ga" else "ga"
     wrong = [k for k in _METHOD_ONLY[other] if given[k] is not None]

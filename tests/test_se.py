@@ -419,7 +419,8 @@ def test_corrupt_checkpoint_is_named(problem, tmp_path):
 
 @pytest.mark.parametrize("kw, match", [({"solver": "newton"}, "solver must be one of 'auto'"),
                                        ({"max_nfev": 0}, "max_nfev"), ({"tol": -1.0}, "tol"),
-                                       ({"starts": [np.zeros(3)]}, r"starts\[0\] has 3 values")])
+                                       ({"starts": [np.zeros(3)]}, r"starts\[0\] has 3 values"),
+                                       ({"seed": -1}, "seed"), ({"threads": 0}, "threads")])
 def test_gradient_options_are_validated(problem, kw, match):
     with pytest.raises(ValueError, match=match):
         se_pareto(problem.structure, problem.record, problem.static, [1.0], method="gradient", progress=False, **kw)
@@ -454,3 +455,22 @@ def test_checkpoint_of_an_older_graybox_is_named(problem, tmp_path):
     np.savez(ck, **kept, failures="{not json", nfev=np.zeros(1))
     with pytest.raises(ValueError, match="not a readable SE checkpoint"):
         ga_front(problem, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
+
+
+def test_fit_stops_at_the_last_accepted_point_when_the_jacobian_overflows(problem, monkeypatch):
+    import graybox._se as se
+
+    real = se._r_factor
+    calls = {"n": 0}
+
+    def overflowing(prob, z, lam1):
+        calls["n"] += 1
+        T = real(prob, z, lam1)
+        return T if calls["n"] < 3 else np.full_like(T, np.nan)  # sensitivities overflow from the third step
+
+    monkeypatch.setattr(se, "_r_factor", overflowing)
+    th0 = problem.ls_theta()
+    th, cost, nfev = se._fit(problem, th0, 1.0, "trf", 50, 1e-8)
+    assert calls["n"] == 3 and nfev < 50
+    assert cost == pytest.approx(problem.cost(th[None], 1.0)[0], rel=1e-12)
+    assert cost < problem.cost(th0[None], 1.0)[0]  # two accepted steps were kept
