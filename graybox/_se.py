@@ -282,7 +282,7 @@ class SEFront:
         object.__setattr__(self, "lambdas", frozen(self.lambdas))
         object.__setattr__(self, "thetas", frozen(self.thetas))
         object.__setattr__(self, "costs", frozen(self.costs))
-        object.__setattr__(self, "nfev", frozen(np.zeros(K, int) if self.nfev is None else self.nfev))
+        object.__setattr__(self, "nfev", frozen(np.zeros(K) if self.nfev is None else self.nfev, int))
         object.__setattr__(self, "failures", MappingProxyType({int(k): str(v) for k, v in dict(self.failures).items()}))
 
 

@@ -374,6 +374,7 @@ def test_failed_member_is_retried_from_later_members(problem, monkeypatch):
     monkeypatch.setattr(se, "_pe_members", lambda prob, lam: np.vstack([bad, ls]))
     front = gradient_front(problem, [0.5, 0.2], theta0=bad, progress=False)
     assert not front.failures and np.all(np.isfinite(front.costs))
+    assert front.nfev.dtype.kind == "i" and np.all(front.nfev > 0)
     assert front.costs[0] <= problem.cost(front.thetas[1][None], 0.5)[0]
     monkeypatch.setattr(se, "_pe_members", lambda prob, lam: np.vstack([bad, bad]))
     front = gradient_front(problem, [0.5, 0.2], theta0=bad, progress=False)
