@@ -36,7 +36,7 @@ from graybox._selection import frols  # noqa: E402
 def populations(prob: SEProblem) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(0)
     seeds = np.vstack([prob.ls_theta()[None, :], prob.random_ls(rng, 199)])
-    _, th, _ = ga_front(prob, [1.0, 0.5], options=GAOptions(population=60, generations=15), seed=0, progress=False)
+    th = ga_front(prob, [1.0, 0.5], options=GAOptions(population=60, generations=15), seed=0, progress=False).thetas
     best = th[-1]
     mates = seeds[rng.integers(0, 200, 199)]
     r = rng.random((199, 1))

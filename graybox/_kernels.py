@@ -411,24 +411,23 @@ def batch_sse(
 
 
 @nb.njit(cache=True, nogil=True)
-def _sensitivity(ny, ylag, theta, U, y0, start):  # pragma: no cover - compiled
+def _sensitivity_rows(ny, ylag, theta, U, yh, S, k0, k1, off):  # pragma: no cover - compiled
     # Forward sensitivity of the free run: S(k, j) = ∂ŷ(k)/∂θ_j obeys
     #   S(k, :) = φ(k, :) + Σ_t θ_t Σ_{y(k-l) in t} ∂φ_t/∂y(k-l) · S(k-l, :),
     # where φ(k, t) is term t evaluated on the simulated output.
     # The feedback is gathered first into a_l(k) = ∂ŷ(k)/∂ŷ(k-l) (a few lags), so the
     # Jacobian update costs (number of lags) × n_terms per sample, not n_factors × n_terms.
-    n = U.shape[0]
+    # Samples k0..k1-1 are computed: ŷ(k) into yh[k] (earlier samples must be there), S(k, :)
+    # into S[k - off] (the rows of the output lags before k0 must be there), so a caller can
+    # run a long record through a small buffer of rows.
     nt = theta.shape[0]
     Ly = 0
     for t in range(nt):
         for d in range(ny[t]):
             Ly = max(Ly, ylag[t, d])
-    yh = np.empty(n)
-    S = np.zeros((n, nt))
-    for k in range(start):
-        yh[k] = y0[k]
     a = np.zeros(Ly + 1)
-    for k in range(start, n):
+    for k in range(k0, k1):
+        row = k - off
         acc = 0.0
         for l in range(Ly + 1):
             a[l] = 0.0
@@ -437,7 +436,7 @@ def _sensitivity(ny, ylag, theta, U, y0, start):  # pragma: no cover - compiled
             v = U[k, t]
             for d in range(m):
                 v *= yh[k - ylag[t, d]]
-            S[k, t] = v  # φ_t(k): the direct part of ∂ŷ(k)/∂θ_t
+            S[row, t] = v  # φ_t(k): the direct part of ∂ŷ(k)/∂θ_t
             acc += theta[t] * v
             if m == 0 or theta[t] == 0.0:
                 continue
@@ -451,10 +450,66 @@ def _sensitivity(ny, ylag, theta, U, y0, start):  # pragma: no cover - compiled
         yh[k] = acc
         for l in range(1, Ly + 1):
             if a[l] != 0.0:
-                r = k - l
+                r = row - l
                 for j in range(nt):
-                    S[k, j] += a[l] * S[r, j]
+                    S[row, j] += a[l] * S[r, j]
+
+
+@nb.njit(cache=True, nogil=True)
+def _sensitivity(ny, ylag, theta, U, y0, start):  # pragma: no cover - compiled
+    n = U.shape[0]
+    yh = np.empty(n)
+    S = np.zeros((n, theta.shape[0]))
+    for k in range(start):
+        yh[k] = y0[k]
+    _sensitivity_rows(ny, ylag, theta, U, yh, S, start, n, 0)
     return yh, S
+
+
+def free_run_sensitivity_blocks(
+    code: Code, theta: np.ndarray, U: np.ndarray, y0: np.ndarray, start: int, block: int = 4096
+):
+    """Free run and its Jacobian with respect to θ, streamed in blocks of samples.
+
+    Memory stays at ``block`` rows of the Jacobian whatever the record's length (a long
+    record's full N × n_terms Jacobian would not stay in cache, nor, at 10⁶ samples and
+    beyond, comfortably in memory).
+
+    Parameters
+    ----------
+    code : Code
+    theta : ndarray, shape (n_terms,)
+    U : ndarray, shape (N, n_terms)
+        :func:`input_products` of the record's input.
+    y0 : ndarray, shape (start,)
+        Initial outputs.
+    start : int
+        First simulated sample (at least the structure's largest output lag).
+    block : int
+        Samples per block.
+
+    Yields
+    ------
+    k0, k1 : int
+        The block's samples.
+    yh : ndarray, shape (N,)
+        The free run, valid up to sample k1 (one array, filled as the blocks go).
+    S : ndarray, shape (k1 − k0, n_terms)
+        ∂ŷ(k)/∂θ_j for k in [k0, k1): a view into a buffer reused by the next block.
+    """
+    theta = np.asarray(theta, float)
+    n = U.shape[0]
+    H = max(int(start), 1)
+    block = max(int(block), H)
+    yh = np.empty(n)
+    yh[:start] = y0[:start]
+    buf = np.zeros((H + block, theta.size))
+    for k0 in range(start, n, block):
+        k1 = min(k0 + block, n)
+        with np.errstate(all="ignore"):
+            _sensitivity_rows(code.ny, code.ylag, theta, U, yh, buf, k0, k1, k0 - H)
+        yield k0, k1, yh, buf[H:H + k1 - k0]
+        buf[:H] = buf[k1 - k0:k1 - k0 + H]  # the rows the next block's feedback reads
 
 
 def free_run_sensitivity(
@@ -476,4 +531,4 @@ def free_run_sensitivity(
         return _sensitivity(code.ny, code.ylag, np.asarray(theta, float), U, y0, start)
 
 
-__all__ += ["batch_sse", "free_run_sensitivity"]
+__all__ += ["batch_sse", "free_run_sensitivity", "free_run_sensitivity_blocks"]

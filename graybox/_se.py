@@ -9,11 +9,15 @@ Two solvers share one problem definition (:class:`SEProblem`):
   θ is least squares on 30 randomly chosen samples.
 - :func:`gradient_front` — beyond the paper: ``scipy.optimize.least_squares`` on the stacked
   residuals [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] with the Jacobian from the forward sensitivity
-  recursion of the compiled kernel, warm-started along the λ sweep.
+  recursion of the compiled kernel, streamed through a QR factorisation so that the solver sees
+  n + 1 residuals instead of N (cost linear in N); continued along the λ sweep, with a multi-start
+  ("trf" and "dogbox" from every feasible start) wherever the sweep has to restart.
 
 :func:`se_pareto` runs either and returns a :class:`graybox.ParetoSet` whose J's come
-from the shared evaluator. Long sweeps show a progress bar, write a checkpoint after each λ and
-resume from it; a checkpoint written for another problem is refused.
+from the shared evaluator. A λ whose fit fails (no feasible start; no individual with a finite
+cost) stays in the set as a failed member with the reason, and the sweep goes on. Long sweeps show
+a progress bar, write a checkpoint after each λ (failed members included) and resume from it; a
+checkpoint written for another problem is refused.
 
 Inside the optimisers J_S is computed by the fused batch kernel (same definition as
 :func:`graybox.js`) and J_SF by the package's one static definition
@@ -30,16 +34,19 @@ import hashlib
 import json
 import os
 import warnings
-from dataclasses import asdict, dataclass
+import zipfile
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Literal, Sequence
+from types import MappingProxyType
+from typing import Literal, Mapping, Sequence
 
 import numpy as np
+from scipy.linalg.lapack import dgeqrf
 from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
 from ._convex import pe_thetas
-from ._kernels import batch_sse, encode, free_run_sensitivity, input_products, simulate_one
+from ._kernels import batch_sse, encode, free_run_sensitivity, free_run_sensitivity_blocks, input_products, simulate_one
 from ._ls import column_scales, scaled_lstsq
 from ._pareto import ParetoSet
 from ._progress import progress_bar
@@ -47,9 +54,9 @@ from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_reco
 from ._regressors import stacked_regressors
 from ._static import reached_equilibria, static_theta_gradient
 from ._terms import Structure
-from ._validation import check_choice, check_lambdas, check_theta
+from ._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
 
-__all__ = ["SEProblem", "GAOptions", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
+__all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
 
 #: The paper's SE sweep (Section IV-C), the default ``lambdas``: 100 λ1 in logspace(−2, 0).
 SE_LAMBDAS = np.logspace(-2, 0, 100)
@@ -124,6 +131,34 @@ class SEProblem:
         if lam1 < 1.0:
             c = c + (1.0 - lam1) * self.jsf(thetas)
         return np.where(np.isfinite(c), c, np.inf)
+
+    def residuals(self, theta: np.ndarray, *, jacobian: bool = True):
+        """Free-run and static residuals of one θ and their Jacobians with respect to θ.
+
+        Unweighted: ``e_dyn = ŷ − y`` over every record's samples L … (shape (N_dyn,)), and
+        ``e_static = ȳ_model − ȳ`` at the static points (shape (M,), the equilibrium reached from
+        each measured ȳ_i; NaN where none). With ``jacobian`` also ``J_dyn`` (N_dyn, n) by the
+        forward sensitivity recursion and ``J_static`` (M, n) by implicit differentiation.
+        For covariances and the direct D_SF solver, which need the whole Jacobian; the sweeps
+        stream it instead (:func:`_r_factor`).
+        """
+        th = np.asarray(theta, float)
+        L = self.L
+        e, J = [], []
+        for rec, U in zip(self.records, self.U):
+            if jacobian:
+                y, S = free_run_sensitivity(self.code, th, rec.u, rec.y[:L], L, U)
+                J.append(S[L:])
+            else:
+                y = simulate_one(self.code, th, rec.u, rec.y[:L], L, 1e300)
+            e.append(y[L:] - rec.y[L:])
+        yb = self.static_outputs(th)[0]
+        e_static = yb - self.static.ybar
+        if not jacobian:
+            return np.concatenate(e), e_static, None, None
+        with np.errstate(all="ignore"):
+            Js = static_theta_gradient(self.structure, th, self.static.ubar, yb)
+        return np.concatenate(e), e_static, np.vstack(J), Js
 
     def ls_theta(self) -> np.ndarray:
         """Least-squares (one-step) estimate on all samples."""
@@ -248,32 +283,100 @@ def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, 
     return pop[i].copy(), float(cost[i]), g
 
 
-# -- checkpoints ------------------------------------------------------------------------
+# -- results and checkpoints ----------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class SEFront:
+    """The members of one SE sweep, as the optimiser left them (before re-evaluation).
+
+    Attributes
+    ----------
+    lambdas : ndarray, shape (K,)
+        λ1 of each member, in the order the runs were made (descending).
+    thetas : ndarray, shape (K, n_terms)
+        Parameters, engineering units; a NaN row for a failed member.
+    costs : ndarray, shape (K,)
+        The optimised weighted cost λ1 J_S + λ2 J_SF (output units²); inf for a failed member.
+    failures : mapping int -> str
+        Members whose fit failed, with the reason in words.
+    nfev : ndarray of int, shape (K,)
+        Objective evaluations (free runs) spent on each member.
+    """
+
+    lambdas: np.ndarray
+    thetas: np.ndarray
+    costs: np.ndarray
+    failures: Mapping[int, str] = field(default_factory=dict)
+    nfev: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        K = np.shape(self.lambdas)[0]
+        object.__setattr__(self, "lambdas", frozen(self.lambdas))
+        object.__setattr__(self, "thetas", frozen(self.thetas))
+        object.__setattr__(self, "costs", frozen(self.costs))
+        object.__setattr__(self, "nfev", frozen(np.zeros(K) if self.nfev is None else self.nfev, int))
+        object.__setattr__(self, "failures", MappingProxyType({int(k): str(v) for k, v in dict(self.failures).items()}))
+
+
+_CHECKPOINT_ARRAYS = ("thetas", "costs", "done", "failures", "nfev")
+
+
 def _load_checkpoint(path: Path, meta: dict) -> dict:
-    with np.load(path, allow_pickle=False) as z:
-        stored = json.loads(str(z["meta"]))
-        if stored != meta:
-            diff = sorted(k for k in set(stored) | set(meta) if stored.get(k) != meta.get(k))
-            raise ValueError(
-                f"checkpoint {path} was written for another problem or settings (differs in: {', '.join(diff)}); "
-                "delete it or choose another checkpoint path"
-            )
-        return {"thetas": z["thetas"], "costs": z["costs"], "done": int(z["done"])}
+    def unreadable(exc: Exception) -> ValueError:
+        return ValueError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose another "
+                          "checkpoint path")
+
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            stored = json.loads(str(z["meta"]))
+            raw = {k: z[k] for k in _CHECKPOINT_ARRAYS if k in z.files}
+    except (ValueError, KeyError, OSError, EOFError, zipfile.BadZipFile) as exc:  # JSONDecodeError is a ValueError
+        raise unreadable(exc) from None
+    if stored != meta:
+        diff = sorted(k for k in set(stored) | set(meta) if stored.get(k) != meta.get(k))
+        raise ValueError(
+            f"checkpoint {path} was written for another problem or settings (differs in: {', '.join(diff)}); "
+            "delete it or choose another checkpoint path"
+        )
+    if set(raw) != set(_CHECKPOINT_ARRAYS):
+        raise ValueError(f"checkpoint {path} was written by an older graybox (it does not record failed members); "
+                         "delete it or choose another checkpoint path")
+    try:
+        out = {"thetas": raw["thetas"], "costs": raw["costs"], "done": int(raw["done"]), "nfev": raw["nfev"],
+               "failures": {int(k): str(v) for k, v in json.loads(str(raw["failures"])).items()}}
+    except (ValueError, TypeError) as exc:
+        raise unreadable(exc) from None
+    K = len(meta["lambdas"])
+    if out["thetas"].shape[0] != K or not 0 <= out["done"] <= K or any(not 0 <= k < out["done"] for k in out["failures"]):
+        raise ValueError(f"checkpoint {path} is corrupt (inconsistent sizes); delete it or choose another path")
+    return out
 
 
-def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarray, done: int) -> None:
+def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarray, done: int,
+                     failures: dict, nfev: np.ndarray) -> None:
     tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(tmp, meta=json.dumps(meta), thetas=thetas, costs=costs, done=done)
+    np.savez(tmp, meta=json.dumps(meta), thetas=thetas, costs=costs, done=done,
+             failures=json.dumps({str(k): v for k, v in failures.items()}), nfev=nfev)
     os.replace(tmp, path)  # atomic: a kill during the write never leaves a torn checkpoint
 
 
+class _Failed(Exception):
+    """A member's fit failed; the message is the reason kept in the result."""
+
+
 def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, seed: int | None,
-           checkpoint: str | os.PathLike | None, progress: bool, step) -> tuple[np.ndarray, np.ndarray]:
-    """Run ``step(i, lam1, previous θ, rng)`` over the λ's with checkpoints and a progress bar."""
+           checkpoint: str | os.PathLike | None, progress: bool, step) -> SEFront:
+    """Run ``step(i, lam1, thetas, rng) -> (θ, cost, nfev)`` over the λ's (descending).
+
+    ``thetas`` holds the members so far (NaN rows for failed ones). A step that raises
+    :class:`_Failed` leaves a failed member with its reason and the sweep goes on. Each λ is
+    checkpointed, failures included, so a resumed sweep gives the uninterrupted one's set.
+    """
     K = lam.size
     n = len(problem.structure)
     thetas = np.full((K, n), np.nan)
-    costs = np.full(K, np.nan)
+    costs = np.full(K, np.inf)
+    nfev = np.zeros(K, int)
+    failures: dict[int, str] = {}
     done = 0
     meta = {"problem": problem.fingerprint(), "method": method, "lambdas": lam.tolist(), "seed": seed,
             "settings": settings}
@@ -281,10 +384,10 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     if path is not None and path.exists():
         ck = _load_checkpoint(path, meta)
         done = ck["done"]
-        thetas[:done], costs[:done] = ck["thetas"][:done], ck["costs"][:done]
-    prev = thetas[done - 1] if done else None
+        thetas[:done], costs[:done], nfev[:done] = ck["thetas"][:done], ck["costs"][:done], ck["nfev"][:done]
+        failures.update(ck["failures"])
     bar = progress_bar(K, f"SE front ({method})", progress, initial=done)
-    # The sweeps make thousands of small BLAS calls (a 3200 × n Jacobian's SVD, 30-row least
+    # The sweeps make thousands of small BLAS calls (QR of a few thousand rows, 30-row least
     # squares): a multi-threaded BLAS only adds synchronisation, and on a loaded 2-core machine
     # it measured 30x slower than one thread. Our own parallelism is the population threads.
     limits = threadpool_limits(limits=1, user_api="blas")
@@ -292,16 +395,24 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
         for i in range(done, K):
             # one generator per λ index: a resumed sweep draws exactly what an uninterrupted one does
             rng = np.random.default_rng([0 if seed is None else seed, i])
-            th, c = step(i, float(lam[i]), prev, rng)
-            thetas[i], costs[i] = th, c
-            prev = th
+            try:
+                thetas[i], costs[i], nfev[i] = step(i, float(lam[i]), thetas, rng)
+            except _Failed as why:
+                failures[i] = str(why)
+                thetas[i], costs[i] = np.nan, np.inf
             if path is not None:
-                _save_checkpoint(path, meta, thetas, costs, i + 1)
+                _save_checkpoint(path, meta, thetas, costs, i + 1, failures, nfev)
             bar.update(1)
     finally:
         bar.close()
         limits.restore_original_limits()
-    return thetas, costs
+    return SEFront(lam, thetas, costs, failures, nfev)
+
+
+def _nearest(thetas: np.ndarray, i: int, side: str, count: int) -> list[int]:
+    """Indices of up to ``count`` successful members nearest member i, earlier ("before") or later ("after")."""
+    order = range(i - 1, -1, -1) if side == "before" else range(i + 1, thetas.shape[0])
+    return [j for j in order if np.all(np.isfinite(thetas[j]))][:count]
 
 
 def ga_front(
@@ -314,7 +425,7 @@ def ga_front(
     progress: bool | None = None,
     threads: int = 1,
     theta0: np.ndarray | Literal["ls"] | None = "ls",
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> SEFront:
     """The paper's GA over a λ1 sweep (run from λ1 = 1 down, whatever order is given).
 
     Parameters
@@ -337,11 +448,11 @@ def ga_front(
 
     Returns
     -------
-    lambdas : ndarray, shape (K,)
-        λ1 in the order the runs were made (descending).
-    thetas : ndarray, shape (K, n_terms)
-    costs : ndarray, shape (K,)
-        The optimised weighted cost of each run's best individual.
+    SEFront
+        One member per λ, each the best individual of its run (its cost optimised). A run whose
+        best individual has an infinite cost (every free run diverged, or an equilibrium at some
+        static point was unstable or undefined) is a failed member; the next run is seeded with
+        the nearest earlier member that did not fail.
     """
     lam = np.sort(check_lambdas(lambdas))[::-1]
     if isinstance(theta0, str):
@@ -351,46 +462,226 @@ def ga_front(
     else:
         first = None if theta0 is None else check_theta(len(problem.structure), theta0, "theta0")
 
-    def step(i, lam1, prev, rng):
-        carry = prev if prev is not None else first
+    def step(i, lam1, thetas, rng):
+        near = _nearest(thetas, i, "before", 1)
+        carry = thetas[near[0]] if near else first
         nrand = options.population - (carry is not None)
         init = problem.random_ls(rng, nrand, options.random_samples)
         if carry is not None:
             init = np.vstack([carry[None, :], init])
-        th, c, _ = _ga_run(problem, lam1, init, options, rng, threads)
-        return th, c
+        th, c, g = _ga_run(problem, lam1, init, options, rng, threads)
+        if not np.isfinite(c):
+            raise _Failed(f"no individual of the GA run at λ1 = {lam1:g} had a finite cost after {g} generation(s): "
+                          "every free run diverged" + ("" if lam1 == 1.0 else " or had an unstable or undefined "
+                                                       "equilibrium at some static point"))
+        return th, c, options.population * (g + 1)
 
     settings = dict(asdict(options), theta0=None if first is None else [float(v) for v in first])
-    thetas, costs = _sweep(problem, lam, "ga", settings, seed, checkpoint, progress, step)
-    return lam, thetas, costs
+    return _sweep(problem, lam, "ga", settings, seed, checkpoint, progress, step)
 
 
-def _residuals_and_jac(problem: SEProblem, z: np.ndarray, lam1: float, want_jac: bool):
+#: Samples per block of the streamed QR of the Jacobian (the block stays in cache).
+_BLOCK = 4096
+
+
+def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
+    """Stacked residuals [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] at z = θ·scale; all inf once a run diverges."""
     th = z / problem.scale
     L = problem.L
-    w1 = np.sqrt(lam1 / problem.n_dyn)
-    r, J = [], []
-    for rec, U in zip(problem.records, problem.U):
-        if want_jac:
-            y, S = free_run_sensitivity(problem.code, th, rec.u, rec.y[:L], L, U)
-            J.append(w1 * S[L:] / problem.scale)
-        else:
-            y = simulate_one(problem.code, th, rec.u, rec.y[:L], L, 1e300)
-        r.append(w1 * (y[L:] - rec.y[L:]))
-    lam2 = 1.0 - lam1
-    if lam2 > 0:
-        sp = problem.static
-        w2 = np.sqrt(lam2 / len(sp))
-        # an unstable equilibrium gives NaN here, hence inf residuals: least_squares treats the
+    M = len(problem.static) if lam1 < 1.0 else 0
+    r = np.empty(problem.n_dyn + M)
+    a = 0
+    for rec in problem.records:
+        y = simulate_one(problem.code, th, rec.u, rec.y[:L], L, 1e300)
+        b = a + y.size - L
+        np.subtract(y[L:], rec.y[L:], out=r[a:b])  # written in place: long records make no copies
+        a = b
+    r[:a] *= np.sqrt(lam1 / problem.n_dyn)
+    if M:
+        # an unstable equilibrium gives NaN here, hence inf residuals: the solver treats the
         # region as infeasible and shrinks its step, so the front never trades J_SF for stability
         yb = problem.static_outputs(th)[0]
-        r.append(w2 * (yb - sp.ybar))
-        if want_jac:
-            J.append(w2 * static_theta_gradient(problem.structure, th, sp.ubar, yb) / problem.scale)
-    r = np.concatenate(r)
+        r[a:] = np.sqrt((1.0 - lam1) / M) * (yb - problem.static.ybar)
     if not np.all(np.isfinite(r)):
-        r = np.full_like(r, np.inf)  # diverged: least_squares shrinks its trust region
-    return r, (np.vstack(J) if want_jac else None)
+        r[:] = np.inf
+    return r
+
+
+def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
+    """Triangular factor of the augmented Jacobian [J r] of :func:`_residuals` at z.
+
+    The upper-triangular T, shape (n + 1, n + 1), has Tᵀ T = [J r]ᵀ [J r]: its first n
+    columns hold R of J = QR, its last column Qᵀr and ±‖r − QQᵀr‖. The dynamic rows are
+    streamed through a QR of a few thousand rows at a time, so neither the N × n Jacobian
+    nor its SVD is ever formed: the cost is linear in N and the memory independent of it,
+    with the conditioning of QR (normal equations JᵀJ would square it).
+    """
+    th = z / problem.scale
+    n = th.size
+    L = problem.L
+    w1 = np.sqrt(lam1 / problem.n_dyn)
+    colw = w1 / problem.scale
+    T = np.zeros((0, n + 1))
+    work = np.empty((n + 1 + _BLOCK, n + 1))
+    for rec, U in zip(problem.records, problem.U):
+        for k0, k1, yh, S in free_run_sensitivity_blocks(problem.code, th, U, rec.y[:L], L, _BLOCK):
+            m = T.shape[0]
+            b = k1 - k0
+            work[:m] = T
+            np.multiply(S, colw, out=work[m:m + b, :n])
+            np.subtract(yh[k0:k1], rec.y[k0:k1], out=work[m:m + b, n])
+            work[m:m + b, n] *= w1
+            if not np.all(np.isfinite(work[:m + b])):
+                return np.full((n + 1, n + 1), np.nan)
+            T = _triangle(work[:m + b])
+    if lam1 < 1.0:
+        sp = problem.static
+        w2 = np.sqrt((1.0 - lam1) / len(sp))
+        yb = problem.static_outputs(th)[0]
+        rows = np.column_stack([w2 * static_theta_gradient(problem.structure, th, sp.ubar, yb) / problem.scale,
+                                w2 * (yb - sp.ybar)])
+        if not np.all(np.isfinite(rows)):
+            return np.full((n + 1, n + 1), np.nan)
+        T = _triangle(np.vstack([T, rows]))
+    if T.shape[0] < n + 1:
+        T = np.vstack([T, np.zeros((n + 1 - T.shape[0], n + 1))])
+    return T
+
+
+def _triangle(A: np.ndarray) -> np.ndarray:
+    """R of A = QR (Householder, LAPACK): its first min(A.shape) rows."""
+    qr, _, _, _ = dgeqrf(A, overwrite_a=False)
+    return np.triu(qr[: min(A.shape)])
+
+
+class _Compressed:
+    """The SE least-squares problem as ``least_squares`` sees it: n + 1 residuals, not N.
+
+    ``least_squares`` only uses the residual vector f and the Jacobian J through ‖f‖, Jᵀf and
+    JᵀJ (and the column norms of J). With the factor T of [J r] (:func:`_r_factor`) and a
+    Householder reflection H that maps its last column c = [Qᵀr; ±ρ] onto ‖r‖ e₁, the pair
+    f̃ = ‖r‖ e₁, J̃ = H [R; 0] has exactly those three quantities, so ``trf``, ``dogbox`` and ``lm``
+    take the same steps as on the full problem while decomposing an (n + 1) × n matrix. A trial
+    point costs one free run (its Jacobian is needed only where a step is accepted).
+    """
+
+    def __init__(self, problem: SEProblem, lam1: float):
+        self.problem = problem
+        self.lam1 = lam1
+        self.n = len(problem.structure)
+        self.nfun = 0
+        self.last = (None, np.inf)  # the last point with a finite cost, and that cost
+
+    def fun(self, z: np.ndarray) -> np.ndarray:
+        self.nfun += 1
+        r = _residuals(self.problem, z, self.lam1)
+        f = np.zeros(self.n + 1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            f[0] = np.sqrt(r @ r) if np.isfinite(r[0]) else np.inf
+        if not np.isfinite(f[0]):
+            return np.full(self.n + 1, np.inf)
+        self.last = (z.copy(), float(f[0] ** 2))
+        return f
+
+    def jac(self, z: np.ndarray, f: np.ndarray | None = None) -> np.ndarray:
+        T = _r_factor(self.problem, z, self.lam1)
+        if not np.all(np.isfinite(T)):
+            # bounded run, overflowing sensitivities (a run on the edge of instability): stop here
+            last, cost = self.last
+            if last is None or not np.array_equal(last, z):
+                last, cost = z.copy(), float(np.sum(_residuals(self.problem, z, self.lam1) ** 2))
+            raise _Stop(last, cost)
+        A = T[:, :-1].copy()
+        v = T[:, -1].copy()
+        nc = np.linalg.norm(v)
+        # v = c − ‖c‖e₁, its first entry without cancellation (as LAPACK's dlarfg)
+        tail = v[1:] @ v[1:]
+        v[0] = -tail / (v[0] + nc) if v[0] > 0 else v[0] - nc
+        vv = v @ v
+        if vv > 0 and np.isfinite(vv):
+            A -= np.outer(v, (2.0 / vv) * (v @ A))
+        return A
+
+
+#: The second pass of :func:`gradient_front` fits a member again from its neighbour's solution
+#: only when that solution beats it by this relative margin: most neighbours differ by the
+#: solver's tolerance, and refitting those spent a quarter of the evaluations for nothing.
+_UP_MARGIN = 1e-4
+
+
+class _Stop(Exception):
+    """The Jacobian overflowed at an accepted point: the fit ends there."""
+
+
+def _fit(problem: SEProblem, theta0: np.ndarray, lam1: float, solver: str, max_nfev: int,
+         tol: float) -> tuple[np.ndarray, float, int]:
+    """One ``least_squares`` fit at λ1 from a feasible θ0: (θ, weighted cost, evaluations)."""
+    cp = _Compressed(problem, lam1)
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
+            res = least_squares(cp.fun, theta0 * problem.scale, jac=cp.jac, method=solver, x_scale="jac",
+                                max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
+    except _Stop as stop:
+        z, cost = stop.args
+        return z / problem.scale, cost, cp.nfun
+    return res.x / problem.scale, float(2 * res.cost), cp.nfun
+
+
+def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
+    """Why a start cannot be used at λ1, in words."""
+    if not np.isfinite(problem.js(theta[None]))[0]:
+        return "free run diverges"
+    yb = problem.static_outputs(theta[None])[0]
+    bad = problem.static.ubar[~np.isfinite(yb)]
+    if bad.size:
+        return f"equilibrium unstable or undefined at ū = {', '.join(f'{u:g}' for u in bad[:3])}" + \
+            (f" (and {bad.size - 3} more)" if bad.size > 3 else "")
+    return "cost not finite"
+
+
+def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarray]], solvers: Sequence[str],
+                max_nfev: int, tol: float) -> tuple[np.ndarray, float, int]:
+    """Fit from every feasible start with every solver; keep the lowest cost (or raise _Failed)."""
+    best = None
+    nfev = 0
+    why: dict[str, list[str]] = {}  # reason -> the starts it applies to
+    tried: list[np.ndarray] = []
+    for name, th0 in cands:
+        if any(np.allclose(th0, t, rtol=1e-9, atol=0) for t in tried):  # e.g. the PE member of λ1 = 1 is LS
+            continue
+        tried.append(th0)
+        nfev += 1
+        if not np.isfinite(_residuals(problem, th0 * problem.scale, lam1)[0]):
+            why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
+            continue
+        for solver in solvers:
+            try:
+                th, c, k = _fit(problem, th0, lam1, solver, max_nfev, tol)
+            except (ValueError, np.linalg.LinAlgError) as exc:  # a numerical breakdown ends this run only
+                why.setdefault(str(exc), []).append(f"{name} ({solver})")
+                continue
+            nfev += k
+            if np.isfinite(c) and (best is None or c < best[1]):
+                best = (th, c)
+    if best is None:
+        raise _Failed(f"no start of the gradient SE fit at λ1 = {lam1:g} is feasible: "
+                      + "; ".join(f"{', '.join(names)}: {reason}" for reason, names in why.items()))
+    return best[0], best[1], nfev
+
+
+def _pe_members(problem: SEProblem, lambdas: np.ndarray) -> np.ndarray | None:
+    """The PE member (closed form) of each λ1, a start of the same λ; None if PE cannot solve it."""
+    try:
+        with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
+            th = pe_thetas(problem.structure, problem.records, problem.static, lambdas, solver="closed")
+    except ValueError:  # e.g. not identifiable with the static rows
+        return None
+    return th if np.all(np.isfinite(th)) else None
+
+
+#: The gradient method's solver choices; "auto" picks per phase (see :func:`gradient_front`).
+_SOLVERS = ("auto", "trf", "dogbox", "lm")
 
 
 def gradient_front(
@@ -404,9 +695,20 @@ def gradient_front(
     max_nfev: int = 50,
     tol: float = 1e-8,
     starts: Sequence[np.ndarray] = (),
-    solver: Literal["trf", "dogbox", "lm"] = "trf",
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Gradient SE front: ``scipy.optimize.least_squares`` per λ1, warm-started.
+    solver: Literal["auto", "trf", "dogbox", "lm"] = "auto",
+) -> SEFront:
+    """Gradient SE front: ``scipy.optimize.least_squares`` per λ1, continued along the sweep.
+
+    The runs go from the largest λ1 down. A member starts from the previous member's solution
+    (continuation in λ). Where that start is not feasible — the first λ, or after the λ1 = 1
+    member, whose static equilibria nothing constrains — the fit restarts from every feasible
+    start: the nearest earlier members, the PE member of the same λ (closed form), ``theta0``
+    and ``starts``, and keeps the lowest cost. A second pass goes back up: the smallest λ1
+    restarts from every start (and its own solution), and each member is fitted again from its
+    neighbour's solution (next smaller λ1) wherever that beats it, so a better basin found low
+    in the sweep carries upwards. A failed member (no feasible start) is tried again from its
+    nearest later members; if it still fails it stays failed, with the reason, and the other
+    members are kept.
 
     Parameters
     ----------
@@ -414,71 +716,105 @@ def gradient_front(
     lambdas : sequence of float in (0, 1]
         Run from λ1 = 1 down.
     theta0 : ndarray, optional
-        Start of the first run (default: least squares on all samples).
+        A start of the first run (default: least squares on all samples).
+    seed : int
+        Recorded in checkpoints (the method draws no random numbers).
+    checkpoint : path, optional
+        Written after each λ; an existing one for the same problem and settings resumes the sweep.
+    progress : bool, optional
+        Show a progress bar; default: only on a terminal.
     max_nfev, tol : int, float
-        Per-λ limits passed to ``least_squares`` (``ftol = xtol = gtol = tol``).
-    solver : {"trf", "dogbox", "lm"}
-        ``least_squares`` method. On the plant's ℓ = 2 problem "dogbox" reached the lowest pure
-        simulation error (λ1 = 1: J_S 0.158 in 65 evaluations; "trf" 0.442 and "lm" 0.464 in
-        300), but along the sweep, where unstable equilibria are walls, it stalled in poorer
-        minima (J_SF 0.08–0.27 where "trf" reached 0.001–0.003): "trf" is the default.
+        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = gtol = tol``).
     starts : sequence of ndarray
-        Further starting points tried, in order, when neither the previous λ's solution nor
-        ``theta0`` gives a finite cost (e.g. their static equilibria are unstable).
-        :func:`se_pareto` passes PE solutions (convex, with the static points weighted in).
+        Further starts tried wherever the fit restarts. :func:`se_pareto` passes PE solutions
+        (convex, with the static points weighted in).
+    solver : {"auto", "trf", "dogbox", "lm"}
+        ``least_squares`` method. ``"auto"`` (default) restarts with both "trf" and "dogbox" and
+        continues with "trf": on the plant's ℓ = 2 problem "dogbox" finds far lower minima of
+        the simulation error where it starts afresh, while along the sweep, where unstable static
+        equilibria are walls, it stalls in poorer minima than "trf" (BENCHMARKS.md, SE section).
 
     Returns
     -------
-    lambdas, thetas, costs : as :func:`ga_front`
+    SEFront
     """
     lam = np.sort(check_lambdas(lambdas))[::-1]
-    start = problem.ls_theta() if theta0 is None else check_theta(len(problem.structure), theta0, "theta0")
+    n = len(problem.structure)
+    start = problem.ls_theta() if theta0 is None else check_theta(n, theta0, "theta0")
+    check_choice(solver, "solver", _SOLVERS)
+    max_nfev = check_int(max_nfev, "max_nfev", low=1)
+    tol = check_real(tol, "tol", low=0.0, low_open=True)
+    extra = [check_theta(n, s_, f"starts[{k}]") for k, s_ in enumerate(starts)]
+    restart_solvers = ("trf", "dogbox") if solver == "auto" else (solver,)
+    follow = "trf" if solver == "auto" else solver
+    pe = _pe_members(problem, lam)
 
-    def step(i, lam1, prev, rng):
-        cache: dict = {}
+    def candidates(i, thetas, neighbours):
+        c = [(f"member λ1 = {lam[j]:g}", thetas[j]) for j in neighbours]
+        if pe is not None:
+            c.append(("PE member of this λ", pe[i]))
+        c.append(("theta0" if theta0 is not None else "least squares", start))
+        c += [(f"starts[{k}]", s_) for k, s_ in enumerate(extra)]
+        return c
 
-        def fun(z):
-            r, J = _residuals_and_jac(problem, z, lam1, True)
-            cache["J"] = J
-            return r
+    def step(i, lam1, thetas, rng):
+        before = _nearest(thetas, i, "before", 2)
+        if before:
+            th0 = thetas[before[0]]
+            if np.isfinite(_residuals(problem, th0 * problem.scale, lam1)[0]):
+                th, c, k = _fit(problem, th0, lam1, follow, max_nfev, tol)
+                return th, c, k + 1
+        return _multistart(problem, lam1, candidates(i, thetas, before), restart_solvers, max_nfev, tol)
 
-        def jac(z):
-            return cache["J"]
-
-        # warm start from the previous λ; if its static equilibria are unstable (the λ1 = 1 run
-        # ignores statics) start again from theta0
-        for th0 in ([prev] if prev is not None else []) + [start] + [np.asarray(s, float) for s in starts]:
-            z0 = th0 * problem.scale
-            if np.all(np.isfinite(fun(z0))):
-                break
-        else:
-            why = ("its free run diverges" if not np.isfinite(problem.js(start[None]))[0]
-                   else "its equilibrium at some static point is unstable or undefined")
-            raise ValueError(f"cannot start the gradient SE fit at λ1 = {lam1:g}: theta0 fails ({why}) and so "
-                             f"do the {len(starts)} further start(s); give another theta0")
-        with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
-            res = least_squares(fun, z0, jac=jac, method=solver, x_scale="jac", max_nfev=max_nfev,
-                                ftol=tol, xtol=tol, gtol=tol)
-        th = res.x / problem.scale
-        return th, float(2 * res.cost)
-
-    check_choice(solver, "solver", ("trf", "dogbox", "lm"))
-    thetas, costs = _sweep(problem, lam, "gradient", {"max_nfev": max_nfev, "tol": tol, "solver": solver,
-                                                     "theta0": None if theta0 is None else list(map(float, start)),
-                                                     "starts": [list(map(float, s_)) for s_ in starts]},
-                           seed, checkpoint, progress, step)
-    return lam, thetas, costs
+    settings = {"max_nfev": max_nfev, "tol": tol, "solver": solver,
+                "theta0": None if theta0 is None else list(map(float, start)),
+                "starts": [list(map(float, s_)) for s_ in extra]}
+    front = _sweep(problem, lam, "gradient", settings, seed, checkpoint, progress, step)
+    if lam.size == 1 or len(front.failures) == lam.size:
+        return front
+    # Second pass, from the smallest λ1 up (deterministic, so a resumed sweep gives the same set).
+    # Continuation follows one basin down the sweep, and the basin that was best where the sweep
+    # restarted (static points nearly ignored) need not be best where they weigh most: the
+    # smallest λ1 restarts from every start too, and going up each member starts again from its
+    # neighbour's solution (next smaller λ1) wherever that solution beats it. A failed member
+    # tries its nearest later members here.
+    thetas, costs, nfev = front.thetas.copy(), front.costs.copy(), front.nfev.copy()
+    failures = dict(front.failures)
+    K = lam.size
+    with threadpool_limits(limits=1, user_api="blas"):
+        for i in range(K - 1, -1, -1):
+            lam1 = float(lam[i])
+            after = _nearest(thetas, i, "after", 2)
+            if i == K - 1 or i in failures:
+                cands = ([] if i in failures else [("this member", thetas[i])]) + \
+                    [(f"member λ1 = {lam[j]:g}", thetas[j]) for j in after]
+                if i == K - 1:
+                    cands += candidates(i, thetas, [])
+                try:
+                    th, c, k = _multistart(problem, lam1, cands, restart_solvers, max_nfev, tol)
+                except _Failed as why:
+                    if i in failures and after:
+                        failures[i] += f"; then from the later members: {str(why).split(': ', 1)[1]}"
+                    continue
+            elif after:
+                th0 = thetas[after[0]]
+                c0 = problem.cost(th0[None], lam1)[0]
+                if not c0 < costs[i] * (1 - _UP_MARGIN):
+                    continue
+                th, c, k = _fit(problem, th0, lam1, follow, max_nfev, tol)
+            else:
+                continue
+            nfev[i] += k
+            if c < costs[i]:
+                thetas[i], costs[i] = th, c
+                failures.pop(i, None)
+    return SEFront(lam, thetas, costs, failures, nfev)
 
 
 def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
-    """PE solutions (closed form) leaning more and more on the static points: fallback starts."""
-    try:
-        with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
-            return list(pe_thetas(problem.structure, problem.records, problem.static, [1e-1, 1e-2, 1e-3, 1e-4],
-                                  solver="closed"))
-    except ValueError:  # e.g. not identifiable with the static rows: no fallback, theta0 only
-        return []
+    """PE solutions (closed form) leaning more and more on the static points: further starts."""
+    th = _pe_members(problem, np.array([1e-1, 1e-2, 1e-3, 1e-4]))
+    return [] if th is None else list(th)
 
 
 #: Options of :func:`se_pareto` that apply to one method only.
@@ -500,7 +836,7 @@ def se_pareto(
     options: GAOptions | None = None,
     max_nfev: int | None = None,
     tol: float | None = None,
-    solver: Literal["trf", "dogbox", "lm"] | None = None,
+    solver: Literal["auto", "trf", "dogbox", "lm"] | None = None,
     starts: Sequence[np.ndarray] | None = None,
 ) -> ParetoSet:
     """SE Pareto set of eq. (13) by the paper's GA or the gradient method.
@@ -535,21 +871,28 @@ def se_pareto(
     options : GAOptions, optional
         GA settings (GA only).
     max_nfev, tol, solver, starts : optional
-        Gradient only: evaluations per λ (default 50), ``least_squares`` tolerances (1e-8), its
-        method (``"trf"``), and further starting points (default: PE solutions).
+        Gradient only: evaluations per ``least_squares`` run (default 50), its tolerances
+        (1e-8), its method (``"auto"``: "trf" and "dogbox" wherever the fit restarts, "trf" along
+        the sweep; see :func:`graybox._se.gradient_front`), and further starting points (default:
+        PE solutions).
 
     Returns
     -------
     ParetoSet
         All members (one per λ) with J_1, J_S and J_SF from the shared evaluator; the optimised
-        cost is in ``extra["cost"]``. Use ``.nondominated()`` for the front proper.
+        cost is in ``extra["cost"]``. A λ whose fit failed (no feasible start, or no individual
+        with a finite cost) stays in the set as a failed member, with the reason in
+        ``failures``. Use ``.nondominated()`` for the front proper.
 
     Raises
     ------
     ValueError
-        An option of the other method is given, an unknown method, no static points.
+        An option of the other method is given, an unknown method, no static points, or every
+        member failed (the reasons are listed).
     """
     check_choice(method, "method", ("ga", "gradient"))
+    seed = check_seed(seed)
+    threads = check_int(threads, "threads", low=1)
     given = {"options": options, "max_nfev": max_nfev, "tol": tol, "solver": solver, "starts": starts}
     other = "gradient" if method == "ga" else "ga"
     wrong = [k for k in _METHOD_ONLY[other] if given[k] is not None]
@@ -564,22 +907,21 @@ def se_pareto(
     problem = SEProblem(structure, rec, sp)
     lam_in = SE_LAMBDAS if lambdas is None else lambdas
     if method == "ga":
-        lam, th, cost = ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
-                                 progress=progress, threads=threads, theta0=theta0)
+        front = ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
+                         progress=progress, threads=threads, theta0=theta0)
     else:
         t0 = None if (isinstance(theta0, str) and theta0 == "ls") else theta0
         if isinstance(theta0, str) and theta0 != "ls":
             raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
-        lam, th, cost = gradient_front(
+        front = gradient_front(
             problem, lam_in, theta0=t0, seed=seed, checkpoint=checkpoint, progress=progress,
             max_nfev=50 if max_nfev is None else max_nfev, tol=1e-8 if tol is None else tol,
-            solver="trf" if solver is None else solver,
+            solver="auto" if solver is None else solver,
             starts=_pe_starts(problem) if starts is None else starts)
-    finite = np.all(np.isfinite(th), axis=1) & np.isfinite(cost)
-    if not finite.any():
-        raise ValueError(
-            f"the SE sweep ({method}) produced no member with a finite cost: every candidate's free run "
-            "diverged or its static curve was undefined; try another structure, theta0 or more generations"
-        )
-    return ParetoSet.from_thetas(problem.structure, th[finite], lam[finite], rec, sp,
-                                 method=f"SE ({method})", extra={"cost": cost[finite]}, threads=threads)
+    K = front.lambdas.size
+    if len(front.failures) == K:
+        reasons = "; ".join(f"λ1 = {front.lambdas[i]:g}: {why}" for i, why in sorted(front.failures.items()))
+        raise ValueError(f"every member of the SE sweep ({method}) failed, so there is no Pareto set: {reasons}. "
+                         "Try another structure, theta0, starts or more generations")
+    return ParetoSet.from_thetas(problem.structure, front.thetas, front.lambdas, rec, sp, method=f"SE ({method})",
+                                 extra={"cost": front.costs}, threads=threads, failures=front.failures)

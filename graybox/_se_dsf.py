@@ -33,11 +33,9 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ._convex import pe_thetas
-from ._kernels import free_run_sensitivity
 from ._model import Model
 from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
 from ._se import SEProblem
-from ._static import static_theta_gradient
 from ._terms import Structure
 from ._validation import check_int, check_real, check_theta, warn
 
@@ -86,7 +84,7 @@ class DSFResult:
 
 
 class _GN:
-    """Residuals and Jacobians (in scaled coordinates z = s ⊙ θ) of J_S and J_SF."""
+    """J_S, J_SF and their Gauss–Newton Gram matrices in scaled coordinates z = s ⊙ θ."""
 
     def __init__(self, problem: SEProblem):
         self.p = problem
@@ -94,25 +92,15 @@ class _GN:
 
     def parts(self, z: np.ndarray, jac: bool):
         p = self.p
-        th = z / p.scale
-        L = p.L
-        w1 = 1.0 / np.sqrt(p.n_dyn)
-        r1, J1 = [], []
-        for rec, U in zip(p.records, p.U):
-            y, S = free_run_sensitivity(p.code, th, rec.u, rec.y[:L], L, U)
-            r1.append(w1 * (y[L:] - rec.y[L:]))
-            if jac:
-                J1.append(w1 * S[L:] / p.scale)
-        r1 = np.concatenate(r1)
-        yb = p.static_outputs(th)[0]
-        w2 = 1.0 / np.sqrt(self.M)
-        r2 = w2 * (yb - p.static.ybar)
+        ed, es, Jd, Js = p.residuals(z / p.scale, jacobian=jac)
+        r1 = ed / np.sqrt(p.n_dyn)
+        r2 = es / np.sqrt(self.M)
         f = float(r1 @ r1) if np.all(np.isfinite(r1)) else np.inf
         g = float(r2 @ r2) if np.all(np.isfinite(r2)) else np.inf
         if not jac or not (np.isfinite(f) and np.isfinite(g)):
             return f, g, None
-        J1 = np.vstack(J1)
-        J2 = w2 * static_theta_gradient(p.structure, th, p.static.ubar, yb) / p.scale
+        J1 = Jd / (np.sqrt(p.n_dyn) * p.scale)
+        J2 = Js / (np.sqrt(self.M) * p.scale)
         if not (np.all(np.isfinite(J1)) and np.all(np.isfinite(J2))):
             return f, g, None
         return f, g, (J1.T @ J1, J1.T @ r1, J2.T @ J2, J2.T @ r2)

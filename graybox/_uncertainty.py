@@ -58,7 +58,7 @@ from ._model import Model
 from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
 from ._regressors import regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
-from ._se import SEProblem, _residuals_and_jac
+from ._se import SEProblem
 from ._static import cluster_key, cluster_map, reached_equilibria, static_theta_gradient
 from ._validation import check_choice, check_int, check_real, check_seed, frozen, warn
 
@@ -597,7 +597,11 @@ def se_uncertainty(
     problem = SEProblem(m.structure, recs, sp)
     n = len(m.structure)
     with np.errstate(all="ignore"):
-        r, J = _residuals_and_jac(problem, m.theta * problem.scale, lam, True)
+        ed, es, Jd_, Js_ = problem.residuals(m.theta)
+        w1_, w2_ = np.sqrt(lam / problem.n_dyn), np.sqrt((1 - lam) / len(sp))
+        # the weighted problem of eq. (13) in the solver's scaled coordinates z = θ · scale
+        r = np.concatenate([w1_ * ed] + ([w2_ * es] if lam < 1 else []))
+        J = np.vstack([w1_ * Jd_ / problem.scale] + ([w2_ * Js_ / problem.scale] if lam < 1 else []))
     if not np.all(np.isfinite(r)) or not np.all(np.isfinite(J)):
         raise ValueError("se_uncertainty: the member's free run diverges or its static curve is undefined (no stable "
                          "equilibrium) at a static point; it has no local covariance")

@@ -76,15 +76,15 @@ def test_ga_is_reproducible_and_improves(problem):
     a = ga_front(problem, lam, options=SMALL, seed=11, progress=False, theta0=None)  # the paper's seeding exactly
     b = ga_front(problem, lam, options=SMALL, seed=11, progress=False, theta0=None)
     c = ga_front(problem, lam, options=SMALL, seed=12, progress=False, theta0=None)
-    np.testing.assert_array_equal(a[1], b[1])
-    assert not np.array_equal(a[1], c[1])
+    np.testing.assert_array_equal(a.thetas, b.thetas)
+    assert not np.array_equal(a.thetas, c.thetas)
     # the best of a run is never worse than its seed individual (elitism)
     rng = np.random.default_rng([11, 0])
     init = problem.random_ls(rng, SMALL.population, 30)
-    assert a[2][0] <= np.min(problem.cost(init, 1.0))
+    assert a.costs[0] <= np.min(problem.cost(init, 1.0))
     # seeded with least squares (the default), the first run is never worse than LS
     d = ga_front(problem, lam, options=SMALL, seed=11, progress=False)
-    assert d[2][0] <= problem.cost(problem.ls_theta()[None], 1.0)[0]
+    assert d.costs[0] <= problem.cost(problem.ls_theta()[None], 1.0)[0]
 
 
 def test_ga_with_no_bounded_individual_is_an_error(problem, monkeypatch):
@@ -95,16 +95,18 @@ def test_ga_with_no_bounded_individual_is_an_error(problem, monkeypatch):
         return np.tile(bad, (count, 1)) * (1 + 0.01 * rng.standard_normal((count, bad.size)))
 
     monkeypatch.setattr(SEProblem, "random_ls", exploding)
-    with pytest.raises(ValueError, match="no member with a finite cost"):
+    with pytest.raises(ValueError, match=r"every member of the SE sweep \(ga\) failed.*λ1 = 1: no individual"):
         se_pareto(problem.structure, problem.record, problem.static, [1.0], method="ga", progress=False,
                   options=SMALL, theta0=None)
 
 
 def test_gradient_front_beats_ls_and_tracks_lambda(problem):
-    lam, th, cost = gradient_front(problem, [1.0, 0.5, 0.05], progress=False)
+    front = gradient_front(problem, [1.0, 0.5, 0.05], progress=False)
     ls = problem.ls_theta()
-    assert cost[0] <= problem.cost(ls[None], 1.0)[0]
-    jsf = problem.jsf(th)
+    assert front.costs[0] <= problem.cost(ls[None], 1.0)[0]
+    np.testing.assert_allclose(front.costs, [problem.cost(t[None], lam)[0] for t, lam in zip(front.thetas, front.lambdas)],
+                               rtol=1e-9)
+    jsf = problem.jsf(front.thetas)
     assert jsf[2] <= jsf[0]  # more weight on the static objective: static error does not grow
 
 
@@ -130,8 +132,8 @@ def test_checkpoint_resume_equals_uninterrupted(problem, tmp_path, monkeypatch):
     with np.load(ck) as z:
         assert int(z["done"]) == 2
     resumed = ga_front(problem, lam, options=SMALL, seed=5, checkpoint=ck, progress=False)
-    np.testing.assert_array_equal(resumed[1], full[1])
-    np.testing.assert_array_equal(resumed[2], full[2])
+    np.testing.assert_array_equal(resumed.thetas, full.thetas)
+    np.testing.assert_array_equal(resumed.costs, full.costs)
 
 
 def test_checkpoint_of_another_problem_is_refused(problem, tmp_path):
@@ -191,17 +193,8 @@ def test_several_records_never_straddled(problem):
         na, nb = len(a) - 6, len(b) - 6
         assert val == pytest.approx((na * js_single(m, a) + nb * js_single(m, b)) / (na + nb), rel=1e-10)
     # the gradient method's residuals and Jacobian stay consistent across the record boundary
-    from graybox._se import _residuals_and_jac
-
     z = two.ls_theta() * two.scale
-    r, J = _residuals_and_jac(two, z, 0.7, True)
-    for j in (0, 5, 16):
-        h = 1e-6 * max(abs(z[j]), 1e-9)
-        zp, zm = z.copy(), z.copy()
-        zp[j] += h
-        zm[j] -= h
-        fd = (_residuals_and_jac(two, zp, 0.7, False)[0] - _residuals_and_jac(two, zm, 0.7, False)[0]) / (2 * h)
-        assert np.max(np.abs(fd - J[:, j])) <= 1e-5 * np.max(np.abs(J[:, j])) + 1e-12
+    assert_factor_matches_finite_differences(two, z, 0.7)
     ps = se_pareto(problem.structure, [a, b], problem.static, [1.0, 0.3], method="gradient", progress=False)
     assert ps.thetas.shape == (2, 17)
 
@@ -211,3 +204,274 @@ def test_bad_theta0_is_named(problem):
         ga_front(problem, [1.0], options=SMALL, progress=False, theta0=np.zeros(3))
     with pytest.raises(ValueError, match="theta0 has non-finite values"):
         gradient_front(problem, [1.0], progress=False, theta0=np.full(17, np.nan))
+
+
+# -- the solver-facing problem: streamed QR factor against finite differences ---------------
+def finite_difference_jacobian(problem, z, lam1):
+    from graybox._se import _residuals
+
+    J = np.empty((_residuals(problem, z, lam1).size, z.size))
+    for j in range(z.size):
+        h = 1e-6 * max(abs(z[j]), 1e-3 * np.max(np.abs(z)))
+        zp, zm = z.copy(), z.copy()
+        zp[j] += h
+        zm[j] -= h
+        J[:, j] = (_residuals(problem, zp, lam1) - _residuals(problem, zm, lam1)) / (2 * h)
+    return J
+
+
+def assert_factor_matches_finite_differences(problem, z, lam1, J=None):
+    """The factor T of [J r] and the compressed pair (f̃, J̃) that least_squares sees carry the
+    full problem's ‖r‖², Jᵀr and JᵀJ, J by central differences of the full residual vector."""
+    from graybox._se import _Compressed, _r_factor, _residuals
+
+    r = _residuals(problem, z, lam1)
+    J = finite_difference_jacobian(problem, z, lam1) if J is None else J
+    T = _r_factor(problem, z, lam1)
+    n = z.size
+    d = np.sqrt(np.diag(J.T @ J))
+    assert np.all(d > 0)
+    H = (J.T @ J) / np.outer(d, d)  # compared in correlation form: every entry matters
+    np.testing.assert_allclose(T[:, :n].T @ T[:, :n] / np.outer(d, d), H, atol=2e-6)
+    np.testing.assert_allclose(T[:, :n].T @ T[:, n] / d, J.T @ r / d, atol=2e-6 * np.linalg.norm(r))
+    assert np.linalg.norm(T[:, n]) == pytest.approx(np.linalg.norm(r), rel=1e-12)
+    cp = _Compressed(problem, lam1)
+    f = cp.fun(z)
+    Jt = cp.jac(z, f)
+    assert f @ f == pytest.approx(r @ r, rel=1e-12)
+    np.testing.assert_allclose(Jt.T @ f / d, J.T @ r / d, atol=2e-6 * np.linalg.norm(r))
+    np.testing.assert_allclose(Jt.T @ Jt / np.outer(d, d), H, atol=2e-6)
+
+
+def test_streamed_factor_matches_finite_differences(problem):
+    z = problem.ls_theta() * problem.scale
+    for lam1 in (1.0, 0.3):
+        assert_factor_matches_finite_differences(problem, z, lam1)
+
+
+def test_streamed_blocks_equal_one_pass(problem, monkeypatch):
+    import graybox._se as se
+    from graybox._kernels import free_run_sensitivity_blocks
+
+    th = problem.ls_theta()
+    rec = problem.record
+    y, S = free_run_sensitivity(problem.code, th, rec.u, rec.y[:6], 6)
+    rows, yb = [], None
+    for k0, k1, yh, Sb in free_run_sensitivity_blocks(problem.code, th, problem.U[0], rec.y[:6], 6, block=50):
+        rows.append(Sb.copy())
+        yb = yh
+    np.testing.assert_array_equal(np.vstack(rows), S[6:])
+    np.testing.assert_array_equal(yb, y)
+    z = th * problem.scale
+    whole = se._r_factor(problem, z, 0.4)
+    monkeypatch.setattr(se, "_BLOCK", 37)  # many blocks, none aligned with the record or the lags
+    blocks = se._r_factor(problem, z, 0.4)
+    np.testing.assert_allclose(blocks.T @ blocks, whole.T @ whole, rtol=1e-10, atol=1e-14 * np.abs(whole).max() ** 2)
+
+
+# -- a non-rational structure (ℓ = 3: y up to the third power) ------------------------------
+@pytest.fixture(scope="module")
+def cubic_problem():
+    m = reference.paper_model(17)
+    rng = np.random.default_rng(0)
+    n = 600
+    u = np.repeat(rng.uniform(900, 1650, n // 60 + 1), 60)[:n]
+    y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
+    y = m.simulate(u, y0) + 0.05 * rng.standard_normal(n)
+    return m, SEProblem(m.structure, Record(u, y, 0.05), reference.eq1_points())
+
+
+def test_cubic_problem_objective_matches_shared_evaluator(cubic_problem):
+    from graybox import evaluate_thetas
+    from graybox._static import cluster_map
+
+    m, problem = cubic_problem
+    assert cluster_map(m.structure).max_y_power == 3
+    ths = np.vstack([m.theta, problem.ls_theta()])
+    ev = evaluate_thetas(problem.structure, ths, problem.record, problem.static)
+    np.testing.assert_allclose(problem.js(ths), ev["JS"], rtol=1e-10)
+    np.testing.assert_allclose(problem.jsf(ths), ev["JSF"], rtol=1e-10)
+    assert np.all(np.isfinite(problem.cost(ths, 0.5)))
+
+
+def test_cubic_problem_jacobian_matches_finite_differences(cubic_problem):
+    from graybox._se import _residuals
+
+    m, problem = cubic_problem
+    z = m.theta * problem.scale
+    M = len(problem.static)
+    for lam1 in (0.6, 0.01):
+        J = finite_difference_jacobian(problem, z, lam1)
+        # the static rows alone: ∂ȳ_i/∂θ of the cubic equilibria, by implicit differentiation
+        from graybox._static import static_theta_gradient
+
+        yb = problem.static_outputs(m.theta[None])[0]
+        G = np.sqrt((1 - lam1) / M) * static_theta_gradient(m.structure, m.theta, problem.static.ubar, yb)
+        np.testing.assert_allclose(G / problem.scale, J[-M:], rtol=1e-5, atol=1e-7 * np.abs(J[-M:]).max())
+        assert np.all(np.isfinite(_residuals(problem, z, lam1)))
+        assert_factor_matches_finite_differences(problem, z, lam1, J)
+
+
+def test_cubic_problem_small_sweep(cubic_problem):
+    m, problem = cubic_problem
+    lam = [1.0, 0.3, 0.05]
+    front = gradient_front(problem, lam, theta0=m.theta, progress=False, max_nfev=30)
+    assert not front.failures
+    for th, l, c in zip(front.thetas, front.lambdas, front.costs):
+        assert c == pytest.approx(problem.cost(th[None], l)[0], rel=1e-9)
+        assert c <= problem.cost(m.theta[None], l)[0]  # never worse than the start the run was given
+    jsf = problem.jsf(front.thetas)
+    assert np.all(np.isfinite(jsf[1:])) and jsf[2] <= jsf[1]
+    ps = se_pareto(problem.structure, problem.record, problem.static, lam, method="gradient", progress=False,
+                   theta0=m.theta, max_nfev=30)
+    assert not ps.failures and np.all(np.isfinite(ps.JS)) and np.all(np.isfinite(ps.JSF[1:]))
+
+
+# -- a sweep survives a bad λ ------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def buck_structure():
+    """The real buck converter record with the structure a new user gets (degree 3, lags 4, BIC):
+    its static points reach ū = 1.5, far outside the record, where no start has a stable
+    equilibrium, so every λ1 < 1 of an SE sweep fails while λ1 = 1 (J_S only) fits."""
+    import graybox as gb
+
+    data = gb.load_buck()
+    sel = gb.frols(gb.Candidates(4, 4, 0, 3), data.ident, criterion="bic")
+    return sel.structure, data
+
+
+@pytest.mark.parametrize("method", ["gradient", "ga"])
+def test_sweep_keeps_failed_members_and_the_others(buck_structure, method):
+    st, data = buck_structure
+    kw = {"options": SMALL} if method == "ga" else {}
+    ps = se_pareto(st, data, None, [1.0, 0.5, 0.1], method=method, progress=False, **kw)
+    assert len(ps) == 3 and 0 not in ps.failures and set(ps.failures) == {1, 2}
+    assert np.isfinite(ps.JS[0]) and np.isfinite(ps.J1[0]) and np.all(np.isfinite(ps.thetas[0]))
+    assert np.all(np.isnan(ps.thetas[1:])) and np.all(ps.JS[1:] == np.inf) and np.all(ps.JSF[1:] == np.inf)
+    assert "λ1 = 0.5" in ps.failures[1] and ("equilibrium" in ps.failures[1])
+    ps.model(0).simulate(data.valid.u, data.valid.y[:4])
+    with pytest.raises(ValueError, match="member 1 of this set failed: .*λ1 = 0.5"):
+        ps.model(1)
+    assert list(ps.to_frame()["failure"] != "") == [False, True, True]
+    assert len(ps.nondominated()) == 1
+
+
+def test_every_member_failed_is_an_error_listing_the_reasons(buck_structure):
+    st, data = buck_structure
+    with pytest.raises(ValueError, match=r"every member of the SE sweep \(gradient\) failed.*λ1 = 0\.5: no start.*"
+                                         r"λ1 = 0\.2: no start.*ū = 1\.5"):
+        se_pareto(st, data, None, [0.5, 0.2], method="gradient", progress=False)
+
+
+def test_failed_member_is_retried_from_later_members(problem, monkeypatch):
+    import graybox._se as se
+
+    bad = problem.ls_theta().copy()
+    bad[0] = 5.0  # diverging free run
+    ls = problem.ls_theta()
+    # the PE member of λ1 = 0.5 is no use, that of 0.2 is: λ1 = 0.5 fails in the sweep, then
+    # starts again from the λ1 = 0.2 member's solution
+    monkeypatch.setattr(se, "_pe_members", lambda prob, lam: np.vstack([bad, ls]))
+    front = gradient_front(problem, [0.5, 0.2], theta0=bad, progress=False)
+    assert not front.failures and np.all(np.isfinite(front.costs))
+    assert front.nfev.dtype.kind == "i" and np.all(front.nfev > 0)
+    assert front.costs[0] <= problem.cost(front.thetas[1][None], 0.5)[0]
+    monkeypatch.setattr(se, "_pe_members", lambda prob, lam: np.vstack([bad, bad]))
+    front = gradient_front(problem, [0.5, 0.2], theta0=bad, progress=False)
+    assert set(front.failures) == {0, 1} and "free run diverges" in front.failures[0]
+
+
+def test_checkpoint_records_failed_members(buck_structure, tmp_path, monkeypatch):
+    import graybox._se as se
+
+    st, data = buck_structure
+    problem = SEProblem(st, data.ident, data.static)
+    lam = [1.0, 0.5, 0.2, 0.1]
+    full = gradient_front(problem, lam, progress=False)
+    assert set(full.failures) == {1, 2, 3}
+    ck = tmp_path / "front.npz"
+    real = se._multistart
+    calls = {"n": 0}
+
+    def dying(*args, **kw):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise KeyboardInterrupt  # killed during the fourth λ, after two failed members
+        return real(*args, **kw)
+
+    monkeypatch.setattr(se, "_multistart", dying)
+    with pytest.raises(KeyboardInterrupt):
+        gradient_front(problem, lam, progress=False, checkpoint=ck)
+    monkeypatch.setattr(se, "_multistart", real)
+    with np.load(ck) as z:
+        assert int(z["done"]) == 3
+    resumed = gradient_front(problem, lam, progress=False, checkpoint=ck)
+    np.testing.assert_array_equal(resumed.thetas, full.thetas)
+    np.testing.assert_array_equal(resumed.costs, full.costs)
+    assert dict(resumed.failures) == dict(full.failures)
+
+
+def test_corrupt_checkpoint_is_named(problem, tmp_path):
+    ck = tmp_path / "front.npz"
+    ck.write_bytes(b"not a checkpoint")
+    with pytest.raises(ValueError, match="not a readable SE checkpoint"):
+        gradient_front(problem, [1.0], progress=False, checkpoint=ck)
+
+
+@pytest.mark.parametrize("kw, match", [({"solver": "newton"}, "solver must be one of 'auto'"),
+                                       ({"max_nfev": 0}, "max_nfev"), ({"tol": -1.0}, "tol"),
+                                       ({"starts": [np.zeros(3)]}, r"starts\[0\] has 3 values"),
+                                       ({"seed": -1}, "seed"), ({"threads": 0}, "threads")])
+def test_gradient_options_are_validated(problem, kw, match):
+    with pytest.raises(ValueError, match=match):
+        se_pareto(problem.structure, problem.record, problem.static, [1.0], method="gradient", progress=False, **kw)
+
+
+def test_gradient_front_second_pass_leaves_no_better_neighbour():
+    import graybox as gb
+    from graybox._se import _UP_MARGIN, _pe_members
+
+    # the paper's eq. (15) structure on the bundled plant: going down alone, a member ends up
+    # beaten at its own λ by its smaller-λ neighbour's solution (seen without the second pass)
+    data = gb.load_pumping()
+    problem = SEProblem(reference.STRUCTURE_15, data.ident, data.static)
+    front = gradient_front(problem, np.logspace(-2, 0, 8), progress=False)
+    assert not front.failures
+    for i in range(len(front.lambdas) - 1):
+        c_neighbour = problem.cost(front.thetas[i + 1][None], front.lambdas[i])[0]
+        assert front.costs[i] * (1 - _UP_MARGIN) <= c_neighbour
+    # the smallest λ restarted from every start: no worse than any of them
+    starts = [problem.ls_theta(), *_pe_members(problem, front.lambdas[-1:])]
+    assert front.costs[-1] <= min(problem.cost(s[None], front.lambdas[-1])[0] for s in starts)
+
+
+def test_checkpoint_of_an_older_graybox_is_named(problem, tmp_path):
+    ck = tmp_path / "front.npz"
+    ga_front(problem, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
+    with np.load(ck) as z:
+        kept = {k: z[k] for k in ("meta", "thetas", "costs", "done")}  # as written before failures were kept
+    np.savez(ck, **kept)
+    with pytest.raises(ValueError, match="older graybox"):
+        ga_front(problem, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
+    np.savez(ck, **kept, failures="{not json", nfev=np.zeros(1))
+    with pytest.raises(ValueError, match="not a readable SE checkpoint"):
+        ga_front(problem, [1.0], options=SMALL, seed=5, checkpoint=ck, progress=False)
+
+
+def test_fit_stops_at_the_last_accepted_point_when_the_jacobian_overflows(problem, monkeypatch):
+    import graybox._se as se
+
+    real = se._r_factor
+    calls = {"n": 0}
+
+    def overflowing(prob, z, lam1):
+        calls["n"] += 1
+        T = real(prob, z, lam1)
+        return T if calls["n"] < 3 else np.full_like(T, np.nan)  # sensitivities overflow from the third step
+
+    monkeypatch.setattr(se, "_r_factor", overflowing)
+    th0 = problem.ls_theta()
+    th, cost, nfev = se._fit(problem, th0, 1.0, "trf", 50, 1e-8)
+    assert calls["n"] == 3 and nfev < 50
+    assert cost == pytest.approx(problem.cost(th[None], 1.0)[0], rel=1e-12)
+    assert cost < problem.cost(th0[None], 1.0)[0]  # two accepted steps were kept

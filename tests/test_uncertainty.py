@@ -154,7 +154,7 @@ def test_se_covariance_matches_monte_carlo():
         for _ in range(100):
             rec = gb.Record(u, ysim + 0.05 * rng.standard_normal(N))
             sp = gb.StaticPoints(ub, yb + 0.05 * rng.standard_normal(5))
-            _, T, _ = gradient_front(SEProblem(s, [rec], sp), [lam], theta0=true.theta, max_nfev=100, progress=False)
+            T = gradient_front(SEProblem(s, [rec], sp), [lam], theta0=true.theta, max_nfev=100, progress=False).thetas
             thetas.append(T[0])
             stds.append(gb.se_uncertainty(gb.Model(s, T[0]), rec, sp, lambda1=lam, static_sigma=0.05).std)
         ratio = np.std(thetas, axis=0) / np.mean(stds, axis=0)
