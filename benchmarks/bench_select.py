@@ -93,10 +93,28 @@ def staircase() -> None:
     print(f"(of {len(df) // len(systems)} records per system)")
 
 
+def dsf() -> None:
+    """se_dsf against sweep + D_SF (same gradient machinery) on the plant and the buck converter."""
+    cases = (("pumping", gb.load_pumping(), gb.Candidates(6, 6, ne=2, degree=2, max_y_power=1), 17),
+             ("buck", gb.load_buck(), gb.Candidates(2, 2, degree=2, max_y_power=1), 4))
+    print("| data | method | J_S ident | J_SF | time |\n| --- | --- | --- | --- | --- |")
+    for name, data, cand, k in cases:
+        band = BANDS[name]
+        st = gb.frols(cand, data, n_terms=k, include=["1"]).structure
+        if name == "buck" and gb.parse_term("u(k-1)") not in st:
+            st = st + gb.parse_structure(["u(k-1)"])
+        for K in (8, 30, 100):
+            se, t = wall(lambda: gb.se_pareto(st, data, lambdas=np.logspace(-2, 0, K), method="gradient"))
+            d = gb.decide_dsf(se, band=band, fallback="min_jsf")
+            print(f"| {name} | sweep of {K} λ + D_SF | {d.JS:.4f} | {d.JSF:.4f} | {t:.2f} s |")
+        r, t = wall(lambda: gb.se_dsf(st, data, band=band))
+        print(f"| {name} | se_dsf (coarse sweep of 8 λ + edge) | {r.JS:.4f} | {r.JSF:.4f} | {t:.2f} s |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--part", default="all", choices=("speed", "tables", "staircase", "all"))
+    ap.add_argument("--part", default="all", choices=("speed", "tables", "staircase", "dsf", "all"))
     args = ap.parse_args()
     print(f"# bench_select ({datetime.date.today()}, git {git_rev()}): {machine()}")
     warnings.simplefilter("ignore")
@@ -106,6 +124,8 @@ def main() -> None:
         speed(args.workers)
     if args.part in ("tables", "all"):
         tables()
+    if args.part in ("dsf", "all"):
+        dsf()
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ from ._constraints import (
 from ._convex import PE_LAMBDAS, cls, pe_pareto, pe_thetas, qr_static_error, static_matrices
 from ._pareto import ParetoSet, nondominated_mask
 from ._se import SE_LAMBDAS, GAOptions, se_pareto
+from ._se_dsf import DSFResult, se_dsf
 from ._decide import Decision, decide_dsf, decide_min_correlation
 from ._neural import NeuralFit, NeuralModel, neural_narx
 from ._residuals import CorrelationTest, ResidualTests, one_step_residuals, residual_tests
@@ -61,7 +62,7 @@ __all__ = [
     "cls", "pe_pareto", "pe_thetas", "static_matrices", "qr_static_error", "PE_LAMBDAS",
     "ParetoSet", "nondominated_mask",
     "decide_dsf", "decide_min_correlation", "Decision",
-    "se_pareto", "GAOptions", "SE_LAMBDAS",
+    "se_pareto", "GAOptions", "SE_LAMBDAS", "se_dsf", "DSFResult",
     "neural_narx", "NeuralModel", "NeuralFit",
     "residual_tests", "ResidualTests", "CorrelationTest", "one_step_residuals",
     "ls_uncertainty", "cls_uncertainty", "pe_uncertainty", "se_uncertainty", "ParameterUncertainty",

@@ -18,9 +18,11 @@ a step is kept when the true J_SF stays in the band and the true J_S falls, else
 outside the band first restores feasibility (steps that decrease J_SF); when that stalls above B the
 band is infeasible for the structure, and the result says so with the smallest J_SF reached.
 
-The start is the PE member nearest the band (the closed form of eq. (11) over a λ sweep costs
-milliseconds): the member inside the band with the smallest J_S, or the smallest J_SF when no PE
-member is inside.
+The start: the weighted-sum SE solution at the band's edge, found by continuation in λ1 (λ1 = 1
+fitted from several starts as in the SE sweep, then λ1 lowered with warm starts until J_SF ≤ B,
+then bisected back towards the edge); the iteration above then moves along the band's edge,
+where a weighted sum cannot go when the front is not convex. When the continuation finds nothing,
+the start is the PE member nearest the band (the closed form of eq. (11) costs milliseconds).
 """
 
 from __future__ import annotations
@@ -35,9 +37,9 @@ from threadpoolctl import threadpool_limits
 from ._convex import pe_thetas
 from ._model import Model
 from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
-from ._se import SEProblem
+from ._se import SEProblem, _Failed, _multistart, _pe_starts, gradient_front
 from ._terms import Structure
-from ._validation import check_int, check_real, check_theta, warn
+from ._validation import check_int, check_lambdas, check_real, check_theta, warn
 
 __all__ = ["se_dsf", "DSFResult"]
 
@@ -168,6 +170,46 @@ def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.
     return th[i], f"PE λ1={lam[i]:.4g}"
 
 
+def _continuation(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """The weighted-sum SE solution at the band's edge: a coarse sweep, then a bisection in λ1.
+
+    The coarse sweep is the SE gradient sweep itself (multi-start where it restarts); between the
+    in-band member with the smallest J_S and its neighbour with the larger λ1 (outside the band), a
+    bisection in log λ1 refits from both neighbours and keeps moving towards the band's edge.
+    Returns (θ, description) of the in-band solution with the smallest J_S, or (None, reason).
+    """
+    front = gradient_front(problem, lambdas, progress=False, starts=_pe_starts(problem))
+    ok = np.all(np.isfinite(front.thetas), axis=1)
+    if not ok.any():
+        return None, "no member of the coarse SE sweep is defined"
+    js = np.where(ok, problem.js(np.where(ok[:, None], front.thetas, 0.0)), np.inf)
+    jsf = np.where(ok, problem.jsf(np.where(ok[:, None], front.thetas, 0.0)), np.inf)
+    inside = np.isfinite(js) & (jsf <= band)
+    if not inside.any():
+        return None, f"no member of the coarse SE sweep meets the band (smallest J_SF {jsf.min():.4g})"
+    i = int(np.flatnonzero(inside)[np.argmin(js[inside])])
+    best = (float(js[i]), front.thetas[i], float(front.lambdas[i]))
+    lam_lo, th_lo = float(front.lambdas[i]), front.thetas[i]
+    higher = [k for k in range(len(front.lambdas)) if front.lambdas[k] > lam_lo and ok[k]]
+    if higher:
+        k = min(higher, key=lambda k: front.lambdas[k])
+        lam_hi, th_hi = float(front.lambdas[k]), front.thetas[k]
+        for _ in range(5):
+            lam = float(np.sqrt(lam_lo * lam_hi))
+            try:
+                th, _, _ = _multistart(problem, lam, [("lo", th_lo), ("hi", th_hi)], ("trf",), 50, 1e-8)
+            except _Failed:
+                break
+            j_s, j_sf = float(problem.js(th[None])[0]), float(problem.jsf(th[None])[0])
+            if np.isfinite(j_s) and j_sf <= band:
+                lam_lo, th_lo = lam, th
+                if j_s < best[0]:
+                    best = (j_s, th, lam)
+            else:
+                lam_hi, th_hi = lam, th
+    return best[1], f"SE λ1={best[2]:.4g}"
+
+
 def se_dsf(
     structure: Structure,
     data: Record | Dataset | Sequence[Record],
@@ -175,6 +217,7 @@ def se_dsf(
     *,
     band: float = 0.031,
     theta0: np.ndarray | None = None,
+    lambdas: Sequence[float] | np.ndarray | None = None,
     max_iter: int = 200,
     tol: float = 1e-9,
     pe_lambdas: np.ndarray | None = None,
@@ -192,13 +235,16 @@ def se_dsf(
     band : float
         B, the bound on J_SF in output units² (D_SF's band: 0.031 mlc² = 0.175² for the plant).
     theta0 : ndarray, shape (n_terms,), optional
-        Start; default: the PE member nearest the band (see the module docstring).
+        Start; default: the weighted-sum solution at the band's edge (see the module docstring).
+    lambdas : sequence of float, optional
+        λ1 of the coarse SE sweep that finds the start (default: 8 in logspace(-2, 0)).
     max_iter : int
         Largest number of trial steps.
     tol : float
         Relative decrease of J_S below which the iteration stops.
     pe_lambdas : ndarray, optional
-        λ1 values of the PE sweep that picks the start (default: 60 in logspace(-6, 0)).
+        λ1 values of the PE sweep that picks the start when the coarse SE sweep finds no member in
+        the band (default: 60 in logspace(-6, 0)).
 
     Returns
     -------
@@ -220,6 +266,11 @@ def se_dsf(
     else:
         lams = np.logspace(-6, 0, 60) if pe_lambdas is None else np.asarray(pe_lambdas, float)
         th0, start = _pe_start(problem, band, lams)
+    if theta0 is None:
+        coarse = np.logspace(-2, 0, 8) if lambdas is None else check_lambdas(lambdas)
+        th_c, start_c = _continuation(problem, band, coarse)
+        if th_c is not None:
+            th0, start = th_c, start_c
     gn = _GN(problem)
     z = th0 * problem.scale
     f, g, G = gn.parts(z, True)

@@ -1,0 +1,57 @@
+"""se_dsf: the D_SF choice solved directly as min J_S subject to J_SF <= B."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "u(k-1)y(k-1)", "1"])
+THETA = np.array([0.6, 0.2, 0.3, 0.05, -0.02, 0.4])
+
+
+@pytest.fixture(scope="module")
+def data():
+    rng = np.random.default_rng(4)
+    m = gb.Model(TRUE, THETA)
+    u = np.repeat(rng.uniform(0.0, 3.0, 60), 20)
+    y = m.simulate(u, np.zeros(2)) + 0.05 * rng.standard_normal(u.size)
+    ub = np.linspace(0.2, 2.8, 6)
+    # static points that disagree a little with the dynamics: the band costs free-run accuracy
+    static = gb.StaticPoints(ub, m.static_curve(ub) + 0.3 * np.sin(ub))
+    return gb.Dataset(gb.Record(u[:800], y[:800]), gb.Record(u[800:], y[800:]), static)
+
+
+def test_meets_the_band_and_beats_the_same_coarse_sweep(data):
+    band = 0.02
+    lam = np.logspace(-2, 0, 8)
+    res = gb.se_dsf(TRUE, data, band=band, lambdas=lam)
+    assert res.feasible and res.JSF <= band * (1 + 1e-9)
+    # the figures are the shared evaluator's
+    assert res.JS == pytest.approx(gb.js(res.model, data.ident), rel=1e-9)
+    assert res.JSF == pytest.approx(gb.jsf(res.model, data.static), rel=1e-9)
+    # never worse than D_SF on the sweep it starts from
+    front = gb.se_pareto(TRUE, data, lambdas=lam, method="gradient", progress=False)
+    assert res.JS <= gb.decide_dsf(front, band=band).JS * (1 + 1e-9)
+    # an active band: the solution sits on its edge (a larger band allows a smaller J_S)
+    wide = gb.se_dsf(TRUE, data, band=10 * band, lambdas=lam)
+    assert wide.JS <= res.JS * (1 + 1e-9)
+
+
+def test_from_theta0_and_an_infeasible_band(data):
+    res = gb.se_dsf(TRUE, data, band=0.05, theta0=THETA)
+    assert res.start == "theta0" and res.feasible and res.JS <= res.start_JS
+    with pytest.warns(RuntimeWarning, match="infeasible.*smallest J_SF reached"):
+        bad = gb.se_dsf(TRUE, data, band=1e-9, theta0=THETA)
+    assert not bad.feasible and bad.JSF > 1e-9 and bad.JSF < bad.start_JSF
+    assert "band infeasible" in bad.model.name
+
+
+def test_bad_input(data):
+    with pytest.raises(ValueError, match="band"):
+        gb.se_dsf(TRUE, data, band=0.0)
+    with pytest.raises(ValueError, match="static points"):
+        gb.se_dsf(TRUE, data.ident, band=0.1)
+    with pytest.raises(ValueError, match="theta0"):
+        gb.se_dsf(TRUE, data, band=0.1, theta0=np.zeros(2))
