@@ -1,6 +1,5 @@
 """se_dsf: the D_SF choice solved directly as min J_S subject to J_SF <= B."""
 
-import warnings
 
 import numpy as np
 import pytest
