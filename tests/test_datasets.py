@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from graybox import Candidates, Dataset, Record, StaticPoints, reference, regressor_matrix, simulate
 from graybox.datasets import load_pumping, pumping_data_dir
@@ -196,6 +197,96 @@ def test_simulation_is_seeded():
     c = PLANT.simulate(u, rng=6).y
     np.testing.assert_array_equal(a, b)
     assert not np.array_equal(a, c)
+
+
+# -- long records and low flow (issue 14) -------------------------------------
+
+def _check_run_physics(plant: PumpingPlant, run) -> None:
+    """Laws every run obeys, whatever the staircase and the disturbances."""
+    for name in ("y", "pressure", "speed", "flow", "surge", "air_loss"):
+        assert np.all(np.isfinite(getattr(run, name))), name
+    assert run.flow.min() >= 0.0  # the non-return valves: the flow stops, it never reverses
+    assert run.pressure.min() >= 0.0
+    assert np.all((run.air_loss >= 0) & (run.air_loss <= 1))
+    # the measured pressure is the turbine characteristic at the flow, in every branch
+    idx = np.unique(np.r_[np.argsort(run.flow)[:50], np.linspace(0, len(run.flow) - 1, 50).astype(int)])
+    np.testing.assert_allclose(run.pressure[idx], [plant.turbine_head(q) for q in run.flow[idx]], rtol=0, atol=1e-12)
+
+
+def test_issue_14_long_records_simulate():
+    # The calls of the issue that raised "math domain error" (seeds 2 and 4 of 0-5): a large step
+    # down sets off a surge of -6 to -15 mlc of head while air costs 14-17 % of the pump head, and
+    # the pumps cannot push water against it. Seed 4 stops the flow for a while.
+    runs = {}
+    for seed in (2, 4):
+        u = speed_reference(n_samples=100_000, n_ident=50_000, seed=seed)
+        runs[seed] = run = PLANT.simulate(u, rng=seed)
+        _check_run_physics(PLANT, run)
+        assert run.flow.min() < PLANT._low_flow[0]  # the state that used to fail was reached
+    stopped = runs[4].flow == 0
+    assert 10 < stopped.sum() < 1000
+    k = int(np.flatnonzero(stopped)[0])
+    assert runs[4].surge[k - 1] < -5  # against a large negative head the flow stopped
+    # and it came back: the run ends on a normal flow
+    assert runs[4].flow[-1000:].min() > 20
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    levels=st.lists(st.integers(50, 180), min_size=3, max_size=40),
+    holds=st.lists(st.integers(10, 400), min_size=40, max_size=40),
+    seed=st.integers(0, 2**32 - 1),
+    surge=st.sampled_from([1.0, 3.0]),
+    air=st.sampled_from([1.0, 3.0]),
+)
+def test_any_staircase_in_range_simulates(levels, holds, seed, surge, air):
+    # Random staircases over the whole accepted range (500-1800 rpm, steps of any size) and
+    # seeds, on the default plant and on one with a three times stronger surge and air loss, so
+    # that records of a few thousand samples reach the collapsed flow that long ones reach.
+    plant = PumpingPlant(surge_intensity=surge * PLANT.surge_intensity, air_loss_per_rpm=air * PLANT.air_loss_per_rpm)
+    u = np.repeat(10.0 * np.array(levels), holds[: len(levels)])
+    run = plant.simulate(u, rng=seed)
+    _check_run_physics(plant, run)
+    # against a head the pumps cannot overcome (w is not reported; with |w| < 1 mlc it cannot
+    # help by more than 1 mlc) the flow falls, down to zero and no further
+    head = (1 - run.air_loss[:-1]) * plant.shutoff_head * np.maximum(run.speed[:-1], run.speed[1:]) ** 2
+    cannot = head + run.surge[:-1] < -1.0
+    assert np.all(run.flow[1:][cannot] <= run.flow[:-1][cannot])
+
+
+@settings(max_examples=6, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_long_speed_reference_simulates(seed):
+    u = speed_reference(n_samples=60_000, n_ident=30_000, seed=seed)
+    _check_run_physics(PLANT, PLANT.simulate(u, rng=seed))
+
+
+def test_low_flow_characteristic():
+    qj, hj, m = PLANT._low_flow
+    assert qj == pytest.approx(float(PLANT.steady_flow(PLANT.speed_range[0])))
+    assert PLANT.turbine_head(0.0) == 0.0
+    q = np.linspace(0.0, 40.0, 4001)
+    h = np.array([PLANT.turbine_head(x) for x in q])
+    assert np.all(np.diff(h) > 0)  # more flow needs more head, in both branches
+    # continuous, with a continuous slope, where the branches meet
+    eps = 1e-6
+    left, mid, right = (PLANT.turbine_head(x) for x in (qj - eps, qj, qj + eps))
+    assert abs(right - left) < 2e-6 * (hj / qj) * m
+    assert (mid - left) / eps == pytest.approx((right - mid) / eps, rel=1e-4)
+    with pytest.raises(ValueError, match="flow must be >= 0"):
+        PLANT.turbine_head(-1.0)
+    with pytest.raises(ValueError, match="speed_range"):
+        PumpingPlant(speed_range=(300.0, 1800.0))
+
+
+def test_stopped_flow_restarts_and_settles_on_eq1():
+    # From a stopped column (Q = 0) at 1000 rpm the pumps push the flow back to the equilibrium.
+    run = PLANT.simulate(np.full(400, 1000.0), noise=False, process_noise=False, x0=(1000.0, 1000.0, 0.0))
+    assert run.flow[0] == 0.0 and run.pressure[0] == 0.0
+    assert np.all(np.diff(run.flow) >= 0)
+    assert run.y[-1] == pytest.approx(reference.eq1(1000.0), abs=1e-6)
+    with pytest.raises(ValueError, match="x0"):
+        PLANT.simulate(np.full(10, 1000.0), noise=False, process_noise=False, x0=(1000.0, 1000.0, -1.0))
 
 
 # -- the experiment ----------------------------------------------------------

@@ -31,7 +31,8 @@ one pump curve with Q/2 per pump describe both. State x = (n_c, n, Q):
    (affinity law). With J' = J π/30 (N·m·s per rpm):
    ``J' dn/dt = k_s (n_c − n) + c (n_c² − n²)``, i.e. a mechanical time constant
    J' / (k_s + 2 c n) that *falls* as the speed rises.
-3. **Two centrifugal pumps in parallel** (affinity laws): each delivers Q/2 against the head
+3. **Two centrifugal pumps in parallel** (affinity laws; a non-return valve on each, item 6):
+   each delivers Q/2 against the head
    ``H_p(n, Q) = h_0 n² − h_2 (Q/2)²``.
 4. **Water column inertia** (rigid column of length L and area A, inertance I = L / (g A)):
    ``I dQ/dt = H_p(n, Q) − R_f Q² − H_t(Q) + w(t)``, with R_f the pipe friction and w a head
@@ -46,8 +47,22 @@ one pump curve with Q/2 per pump describe both. State x = (n_c, n, Q):
    more steeply than Q², and is smooth over the operating range. The hydraulic time constant
    I / (H_t'(Q) + 2 R Q) falls as the flow rises.
 
+6. **Low flow.** The calibrated characteristic exists only above 21.4 L/s (below, n*(Q) is
+   imaginary) and turns negative below 22.0 L/s, both far below the operating range (30 L/s at
+   750 rpm). Under the flow Q_j of the lowest accepted reference (``speed_range[0]``, 500 rpm:
+   24.2 L/s, H_j = 1.23 mlc) it continues as ``H_t(Q) = H_j (Q/Q_j)^m`` (m = 9.6 makes the slope
+   continuous) down to H_t(0) = 0: a turbine passing little water holds little head. Each pump's
+   discharge has a non-return valve (standard for pumps in parallel), so the flow never reverses:
+   when the pumps cannot push water against the head, ``(1 − a) h_0 n² + w ≤ 0``, the flow falls
+   to zero, stays there (p = 0) while the disturbance lasts, and restarts when it subsides.
+   This happens on long records: a large step down (e.g. 1630 → 780 rpm) now and then sets off a
+   surge of −6 to −15 mlc of head while the air costs 14–17 % of the pump head, against a shut-off
+   head (1 − a) h_0 n² of about 6–8 mlc at 800–900 rpm. The air loss is capped at 1 (a pump full
+   of air delivers no head). None of this touches the bundled records, whose flow stays above
+   28 L/s.
+
 Integration: classical RK4 with ``substeps`` steps per sample (default 10, i.e. 5 ms, against a
-fastest time constant of 80 ms). Sampling: y(k) is read at t = k Ts, then u(k) is applied over
+fastest time constant of 80 ms), compiled with numba (about 1 s per 10⁶ samples). Sampling: y(k) is read at t = k Ts, then u(k) is applied over
 [k Ts, (k+1) Ts), so y(k) depends on u(k−1), u(k−2), …
 
 Measured dynamics of the default plant (noise-free 63.2 % rise after a ±20 rpm step, measured from
@@ -138,8 +153,10 @@ import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Sequence
+from functools import cached_property
+from typing import Sequence
 
+import numba as nb
 import numpy as np
 
 from .._records import Record, StaticPoints
@@ -269,7 +286,8 @@ class PumpingPlant:
         Time τ_a in which the air vents, i.e. the decay time of the head loss (s).
     speed_range : tuple of float
         References accepted by :meth:`simulate` (rpm); the turbine characteristic is calibrated
-        for the rig's 750–1650 rpm and extrapolates smoothly a little beyond.
+        for the rig's 750–1650 rpm and extrapolates smoothly a little beyond, down to the flow at
+        ``speed_range[0]``, under which the low-flow branch takes over (module docs, item 6).
     """
 
     Ts: float = TS
@@ -327,6 +345,8 @@ class PumpingPlant:
         g = self.shutoff_head - b
         if not (0 < lo < hi and 2 * g * lo - a > 0 and g * lo * lo - a * lo - k > 0):
             raise ValueError(f"PumpingPlant: the static curve cannot be calibrated over speed_range {self.speed_range}")
+        if not b * lo * lo + a * lo + k > 0:  # the low-flow branch H_j (Q/Q_j)^m needs H_j > 0
+            raise ValueError(f"PumpingPlant: the static pressure at speed_range[0] = {lo:g} rpm must be positive")
 
     # -- derived constants --------------------------------------------------
     @property
@@ -353,16 +373,44 @@ class PumpingPlant:
         n = np.asarray(speed, dtype=float)
         return np.sqrt(((self.shutoff_head - b) * n**2 - a * n - k) / self.loss)
 
-    def turbine_head(self, flow: float) -> float:
-        """H_t(Q) (mlc), the turbine characteristic calibrated so that the steady state is eq. (1)."""
+    @cached_property
+    def _low_flow(self) -> tuple[float, float, float]:
+        """(Q_j, H_j, m) of the low-flow branch of H_t: H_t(Q) = H_j (Q / Q_j)^m below Q_j.
+
+        Q_j is the steady flow at the lowest reference of ``speed_range``, H_j = H_t(Q_j) from the
+        calibrated characteristic, and m = Q_j H_t'(Q_j) / H_j makes the slope continuous there.
+        """
+        k, a, b = (float(c) for c in self.static_coefficients)
+        lo = float(self.speed_range[0])
+        g = self.shutoff_head - b
+        R = self.loss
+        qj = float(self.steady_flow(lo))
+        hj = self._calibrated_head(qj)
+        # dH_t/dQ = H'(n*) / (dQ/dn*) along the calibrated characteristic, at n* = lo
+        slope = (2 * b * lo + a) * 2 * R * qj / (2 * g * lo - a)
+        return qj, hj, qj * slope / hj
+
+    def _calibrated_head(self, flow: float) -> float:
         k, a, b = self.static_coefficients
         g = self.shutoff_head - b
         R = self.loss
         disc = a * a + 4 * g * (k + R * flow * flow)
-        if disc < 0:  # outside the calibrated characteristic: the flow collapsed (never in range)
-            raise ValueError(f"flow {flow:g} L/s is below the turbine characteristic's range")
         n_star = (a + math.sqrt(disc)) / (2 * g)
         return self.shutoff_head * n_star * n_star - R * flow * flow
+
+    def turbine_head(self, flow: float) -> float:
+        """H_t(Q) (mlc), the turbine characteristic calibrated so that the steady state is eq. (1).
+
+        Below the flow Q_j of the lowest reference of ``speed_range`` (24.2 L/s for the default
+        plant) it continues as H_j (Q/Q_j)^m down to H_t(0) = 0 (module docs, "Low flow").
+        """
+        q = float(flow)
+        if not q >= 0.0:
+            raise ValueError(f"flow must be >= 0 L/s (the non-return valves stop a reverse flow), got {flow!r}")
+        qj, hj, m = self._low_flow
+        if q < qj:
+            return hj * (q / qj) ** m
+        return self._calibrated_head(q)
 
     def steady_state(self, speed: float) -> tuple[float, float, float]:
         """Equilibrium state (n_c, n, Q) at constant reference ``speed`` (rpm)."""
@@ -370,28 +418,6 @@ class PumpingPlant:
         return (s, s, float(self.steady_flow(s)))
 
     # -- dynamics -----------------------------------------------------------
-    def _make_rhs(self) -> Callable[[float, float, float, float, float, float], tuple[float, float, float]]:
-        """The ODE right-hand side as a closure over plain floats (the integrator's hot loop)."""
-        k0, a0, b0 = (float(c) for c in self.static_coefficients)
-        g = self.shutoff_head - b0
-        tv = self.drive_lag
-        jp = self.inertia * math.pi / 30.0  # J' in N·m·s/rpm (ω = n π/30)
-        ks, cp, h0, R, inert = self.speed_stiffness, self.pump_torque, self.shutoff_head, self.loss, self.inertance
-        sqrt = math.sqrt
-
-        def rhs(nc: float, n: float, q: float, r: float, w: float, air: float) -> tuple[float, float, float]:
-            rq2 = R * q * q
-            n_star = (a0 + sqrt(a0 * a0 + 4 * g * (k0 + rq2))) / (2 * g)
-            ht = h0 * n_star * n_star - rq2  # turbine_head(q), inlined
-            return (
-                (r - nc) / tv,
-                (ks * (nc - n) + cp * (nc * nc - n * n)) / jp,
-                # R Q² lumps pump drop and pipe friction; air costs the fraction `air` of h_0 n²
-                (h0 * (1.0 - air) * n * n - rq2 - ht + w) / inert,
-            )
-
-        return rhs
-
     def _check_reference(self, u: np.ndarray, what: str = "speed reference") -> None:
         lo, hi = self.speed_range
         bad = np.flatnonzero((u < lo) | (u > hi))
@@ -439,13 +465,10 @@ class PumpingPlant:
         # Draw all four noise sequences up front, always in this order, so a seed fixes the run
         # whichever disturbances are switched on.
         eps_w, eps_v, eps_s, eps_a = (gen.standard_normal((4, N)) if need_rng else np.zeros((4, N)))
-        w = np.zeros(N)
-        if process_noise and self.process_noise_std > 0:
-            phi, sw = self.process_noise_pole, self.process_noise_std
-            w[0] = sw * eps_w[0]  # start stationary
-            gain = sw * math.sqrt(1 - phi * phi)
-            for k in range(1, N):
-                w[k] = phi * w[k - 1] + gain * eps_w[k]
+        phi = self.process_noise_pole
+        w_on = process_noise and self.process_noise_std > 0
+        w_gain = self.process_noise_std * math.sqrt(1 - phi * phi) if w_on else 0.0
+        w0 = self.process_noise_std * eps_w[0] if w_on else 0.0  # w starts stationary
         v = self.noise_std * eps_v if noise else np.zeros(N)
         # Transient-excited slow disturbances (module docs, "Disturbances"): both start at rest
         # (the rig has been settled at u[0]) and are driven by the shaft-speed change of each sample.
@@ -455,44 +478,19 @@ class PumpingPlant:
         a_gain = self.air_loss_per_rpm if process_noise else 0.0
 
         nc, n, q = self.steady_state(u[0]) if x0 is None else (float(x) for x in x0)
+        if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
+            raise ValueError(f"x0 must be finite with a flow >= 0 L/s, got {x0!r}")
         S = int(self.substeps)
         dt = self.Ts / S
         delay = int(round(self.dead_time / dt))  # substeps during which the previous reference still acts
-        rhs = self._make_rhs()
-        p = np.empty(N)
-        speed = np.empty(N)
-        flow = np.empty(N)
-        surge_out = np.empty(N)
-        air_out = np.empty(N)
-        uu = u.tolist()
-        ww = w.tolist()
-        es = eps_s.tolist()
-        ea = eps_a.tolist()
-        prev = uu[0]
-        surge = air = 0.0
-        for k in range(N):
-            p[k] = self.turbine_head(q)
-            speed[k] = n
-            flow[k] = q
-            surge_out[k] = surge
-            air_out[k] = air
-            wk = ww[k] + surge
-            n_old = n
-            for j in range(S):
-                r = uu[k] if j >= delay else prev
-                a1, b1, c1 = rhs(nc, n, q, r, wk, air)
-                h = 0.5 * dt
-                a2, b2, c2 = rhs(nc + h * a1, n + h * b1, q + h * c1, r, wk, air)
-                a3, b3, c3 = rhs(nc + h * a2, n + h * b2, q + h * c2, r, wk, air)
-                a4, b4, c4 = rhs(nc + dt * a3, n + dt * b3, q + dt * c3, r, wk, air)
-                s6 = dt / 6.0
-                nc += s6 * (a1 + 2 * a2 + 2 * a3 + a4)
-                n += s6 * (b1 + 2 * b2 + 2 * b3 + b4)
-                q += s6 * (c1 + 2 * c2 + 2 * c3 + c4)
-            prev = uu[k]
-            dn = abs(n - n_old)
-            surge = s_phi * surge + s_gain * dn * es[k]
-            air = a_phi * air + a_gain * dn * ea[k] * ea[k]
+        k0, a0, b0 = (float(c) for c in self.static_coefficients)
+        qj, hj, m = self._low_flow
+        consts = np.array([k0, a0, self.shutoff_head - b0, self.drive_lag, self.inertia * math.pi / 30.0,
+                           self.speed_stiffness, self.pump_torque, self.shutoff_head, self.loss, self.inertance,
+                           qj, hj, m])
+        out = _integrate(u, eps_w, eps_s, eps_a, float(phi), float(w_gain), float(w0), float(s_phi), float(s_gain),
+                         float(a_phi), float(a_gain), nc, n, q, S, delay, dt, consts)
+        p, speed, flow, surge_out, air_out = out
         t = np.arange(N) * self.Ts
         return PlantRun(t=t, u=np.array(u), y=p + v, pressure=p, speed=speed, flow=flow, Ts=self.Ts,
                         surge=surge_out, air_loss=air_out)
@@ -536,6 +534,78 @@ class PumpingPlant:
         phi = self.process_noise_pole
         var = self.noise_std**2 + (G * self.process_noise_std) ** 2 * (1 + phi) / (1 - phi)
         return math.sqrt(var / n_samples)
+
+
+@nb.njit(cache=True, nogil=True)
+def _rhs(nc, n, q, r, w, air, c):  # pragma: no cover - compiled
+    """The ODE right-hand side (module docs, "Physical model" and "Low flow"); c: the constants."""
+    k0, a0, g, tv, jp, ks, cp, h0, R, inert, qj, hj, m = (c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8],
+                                                          c[9], c[10], c[11], c[12])
+    if q >= qj:
+        rq2 = R * q * q
+        n_star = (a0 + math.sqrt(a0 * a0 + 4 * g * (k0 + rq2))) / (2 * g)
+        ht = h0 * n_star * n_star - rq2  # turbine_head(q), inlined
+    elif q > 0.0:
+        rq2 = R * q * q
+        ht = hj * (q / qj) ** m
+    else:
+        rq2 = 0.0
+        ht = 0.0
+    # R Q² lumps pump drop and pipe friction; air costs the fraction `air` of h_0 n²
+    dq = (h0 * (1.0 - air) * n * n - rq2 - ht + w) / inert
+    if q <= 0.0 and dq < 0.0:
+        dq = 0.0  # the non-return valves hold the column: the flow stops, it does not reverse
+    return (r - nc) / tv, (ks * (nc - n) + cp * (nc * nc - n * n)) / jp, dq
+
+
+@nb.njit(cache=True, nogil=True)
+def _integrate(u, eps_w, eps_s, eps_a, phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain, nc, n, q, S, delay, dt,
+               c):  # pragma: no cover - compiled
+    """RK4 over the whole record; returns (pressure, speed, flow, surge, air loss), each shape (N,)."""
+    N = u.shape[0]
+    p = np.empty(N)
+    speed = np.empty(N)
+    flow = np.empty(N)
+    surge_out = np.empty(N)
+    air_out = np.empty(N)
+    k0, a0, g, h0, R, qj, hj, m = c[0], c[1], c[2], c[7], c[8], c[10], c[11], c[12]
+    prev = u[0]
+    surge = 0.0
+    air = 0.0
+    w = w0
+    for k in range(N):
+        if k > 0:
+            w = phi * w + w_gain * eps_w[k]
+        if q >= qj:  # turbine_head(q)
+            n_star = (a0 + math.sqrt(a0 * a0 + 4 * g * (k0 + R * q * q))) / (2 * g)
+            p[k] = h0 * n_star * n_star - R * q * q
+        else:
+            p[k] = hj * (q / qj) ** m
+        speed[k] = n
+        flow[k] = q
+        surge_out[k] = surge
+        air_out[k] = air
+        wk = w + surge
+        n_old = n
+        for j in range(S):
+            r = u[k] if j >= delay else prev
+            a1, b1, c1 = _rhs(nc, n, q, r, wk, air, c)
+            h = 0.5 * dt
+            a2, b2, c2 = _rhs(nc + h * a1, n + h * b1, q + h * c1, r, wk, air, c)
+            a3, b3, c3 = _rhs(nc + h * a2, n + h * b2, q + h * c2, r, wk, air, c)
+            a4, b4, c4 = _rhs(nc + dt * a3, n + dt * b3, q + dt * c3, r, wk, air, c)
+            s6 = dt / 6.0
+            nc += s6 * (a1 + 2 * a2 + 2 * a3 + a4)
+            n += s6 * (b1 + 2 * b2 + 2 * b3 + b4)
+            q += s6 * (c1 + 2 * c2 + 2 * c3 + c4)
+            if q < 0.0:
+                q = 0.0  # the valves close within the substep (RK4 overshoots the stop)
+        prev = u[k]
+        dn = abs(n - n_old)
+        surge = s_phi * surge + s_gain * dn * eps_s[k]
+        # a pump full of air delivers no head: the loss cannot exceed the whole head
+        air = min(1.0, a_phi * air + a_gain * dn * eps_a[k] * eps_a[k])
+    return p, speed, flow, surge_out, air_out
 
 
 # ---------------------------------------------------------------------------
