@@ -71,16 +71,16 @@ def main(argv: list[str] | None = None) -> None:
     print(f"# structure (15), {len(st)} terms; {len(rec)} samples; {len(pts)} static points; "
           f"{LAMBDAS.size} λ1 in logspace(-6, 0); median of {args.repeat}")
 
-    ref = pe_thetas(st, rec, pts, LAMBDAS, solver="closed")
-    ref_sum = pe_thetas(st, rec, pts, LAMBDAS, solver="closed", weights="sum")
+    ref = pe_thetas(st, rec, pts, lambdas=LAMBDAS, solver="closed")
+    ref_sum = pe_thetas(st, rec, pts, lambdas=LAMBDAS, solver="closed", weights="sum")
     rows = []
-    t = timeit(lambda: pe_thetas(st, rec, pts, LAMBDAS, solver="closed"), repeat=max(args.repeat, 5))
+    t = timeit(lambda: pe_thetas(st, rec, pts, lambdas=LAMBDAS, solver="closed"), repeat=max(args.repeat, 5))
     rows.append(("graybox closed form (11), batched QR", t, 0.0))
     for solver in ("clarabel", "osqp"):
-        th = pe_thetas(st, rec, pts, LAMBDAS, solver=solver)
-        t = timeit(lambda: pe_thetas(st, rec, pts, LAMBDAS, solver=solver), repeat=args.repeat)
+        th = pe_thetas(st, rec, pts, lambdas=LAMBDAS, solver=solver)
+        t = timeit(lambda: pe_thetas(st, rec, pts, lambdas=LAMBDAS, solver=solver), repeat=args.repeat)
         rows.append((f"graybox cvxpy + {solver.capitalize()} (one DPP problem)", t, rel_err(th, ref, s)))
-    t = timeit(lambda: pe_pareto(st, rec, pts, LAMBDAS, solver="closed"), repeat=args.repeat)
+    t = timeit(lambda: pe_pareto(st, rec, pts, lambdas=LAMBDAS, solver="closed"), repeat=args.repeat)
     rows.append(("graybox pe_pareto (closed form + J1/JS/JSF of 100 members)", t, 0.0))
     try:
         import sysidentpy

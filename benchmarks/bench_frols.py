@@ -73,7 +73,7 @@ def main() -> None:
     X, Y = rec.u.reshape(-1, 1), rec.y.reshape(-1, 1)
     rows = []
     for degree, k in TASKS:
-        cand = Candidates(NY, NU, 0, degree)
+        cand = Candidates(NY, NU, ne=0, degree=degree)
         sel = frols(cand, rec, n_terms=k)
         t_g = timeit(lambda: frols(cand, rec, n_terms=k), repeat=args.repeat)
         t_s, same = float("nan"), "-"

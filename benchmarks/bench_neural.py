@@ -113,7 +113,7 @@ def part_cv(data, seeds, decays=(0.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0), fo
                 train = [r for r in ((rec.slice(0, lo) if lo else None), (rec.slice(hi, N) if hi < N else None)) if r]
                 m = neural_narx(train, seed=sd, weight_decay=D).model
                 held = rec.slice(lo, hi)
-                per[a, f] = mse(held.y, m.simulate(held, on_diverge="nan"), m.max_lag)
+                per[a, f] = mse(held.y, m.simulate(held, on_diverge="nan"), start=m.max_lag)
         fold = per.mean(0)
         cv.append(fold.mean())
         se.append(fold.std(ddof=1) / np.sqrt(folds))

@@ -189,7 +189,7 @@ def scale(args, data, structure):
             t_old = best_of(former, rep)
 
         def one_lambda():
-            se_pareto(structure, rec, data.static, [1.0], method="gradient", progress=False)
+            se_pareto(structure, rec, data.static, lambdas=[1.0], method="gradient", progress=False)
 
         evals = {}
 
@@ -219,7 +219,7 @@ def main() -> None:
     warnings.simplefilter("ignore", StaticRangeWarning)
     data = load_pumping()
     # the ℓ = 2 structure of `graybox reproduce` (rational, constant included)
-    sel = frols(Candidates(6, 6, 0, 2, max_y_power=1), data.ident, n_terms=17, include=["1"])
+    sel = frols(Candidates(6, 6, ne=0, degree=2, max_y_power=1), data.ident, n_terms=17, include=["1"])
     structure = sel.structure
     prob = SEProblem(structure, data.ident, data.static)
     print(f"# bench_se  {datetime.datetime.now():%Y-%m-%d %H:%M}  git {git_rev()}  {machine()}  threads={args.threads}")

@@ -64,7 +64,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
     data = load_pumping()
-    sel = frols(Candidates(6, 6, 2, 3), data.ident, n_terms=23, include=["1"])
+    sel = frols(Candidates(6, 6, ne=2, degree=3), data.ident, n_terms=23, include=["1"])
     prob = SEProblem(sel.structure, data.ident, data.static)
     print(f"# bench_static  {datetime.date.today()}  {machine()}")
     print(f"# structure: {prob.structure}")

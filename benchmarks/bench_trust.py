@@ -41,14 +41,14 @@ def main() -> None:
     curve = gb.StaticCurve.fit(data.static, degree=2)
     cls = gb.cls(st, data.ident, curve, reference=els)
     pe_l = np.logspace(-6, 0, 30)
-    pe = gb.pe_pareto(st, data.ident, data.static, pe_l, solver="closed")
+    pe = gb.pe_pareto(st, data.ident, data.static, lambdas=pe_l, solver="closed")
     pe_d = gb.decide_dsf(pe, band=0.031, fallback="min_jsf")
     se_l = np.logspace(-2, 0, 6)
     se = gb.se_pareto(st, data, lambdas=se_l, method="gradient", progress=False)
     se_d = gb.decide_dsf(se, band=0.031, fallback="min_jsf")
     unc = gb.ls_uncertainty(els, data.ident)
     ub = np.linspace(750, 1650, 50)
-    big = gb.pe_pareto(st, data.ident, data.static, np.logspace(-6, 0, 100), solver="closed")
+    big = gb.pe_pareto(st, data.ident, data.static, lambdas=np.logspace(-6, 0, 100), solver="closed")
     text = gb.to_json(big)
     rows = [
         ("residual_tests (ELS, validation, 5 tests × ≤ 41 lags)", lambda: gb.residual_tests(els, data.valid)),

@@ -150,9 +150,9 @@ class BootstrapJob:
                 # said once by bootstrap_decision; block records cover a narrower input range than the whole
                 warnings.simplefilter("ignore", StaticRangeWarning)
                 if self.method == "pe":
-                    front = pe_pareto(self.structure, recs, sp, self.lambdas, **dict(self.options))
+                    front = pe_pareto(self.structure, recs, sp, lambdas=self.lambdas, **dict(self.options))
                 else:
-                    front = se_pareto(self.structure, recs, sp, self.lambdas, progress=False, **dict(self.options))
+                    front = se_pareto(self.structure, recs, sp, lambdas=self.lambdas, progress=False, **dict(self.options))
             d = decide_dsf(front, band=self.band, fallback=self.fallback)
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:  # InfeasibleError, DivergenceError are ValueErrors
             return {"failure": f"{type(exc).__name__}: {exc}"}

@@ -687,8 +687,8 @@ def pe_thetas(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
     static: StaticPoints | StaticCurve | None = None,
-    lambdas: np.ndarray | Sequence[float] | None = None,
     *,
+    lambdas: np.ndarray | Sequence[float] | None = None,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     solver: str = "clarabel",
     solver_options: Mapping | None = None,
@@ -739,8 +739,8 @@ def pe_pareto(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
     static: StaticPoints | StaticCurve | None = None,
-    lambdas: np.ndarray | Sequence[float] | None = None,
     *,
+    lambdas: np.ndarray | Sequence[float] | None = None,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     solver: str = "clarabel",
     solver_options: Mapping | None = None,
@@ -791,7 +791,7 @@ def pe_pareto(
         θ, λ1, J_1 and J_S on ``data``, J_SF (true static-curve MSE, stable equilibria only) and,
         in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²).
     """
-    thetas = pe_thetas(structure, data, static, lambdas, constraints=constraints, solver=solver,
+    thetas = pe_thetas(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
                        solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
                        reference=reference)
     st = _process_structure(structure)

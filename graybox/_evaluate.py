@@ -34,7 +34,7 @@ from ._terms import Structure
 __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
 
 
-def mse(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
+def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """Mean squared error of ``yhat`` against ``y`` over samples ``start …``; inf if ŷ is not finite."""
     e = np.asarray(y)[start:] - np.asarray(yhat)[start:]
     if e.size == 0:
@@ -46,12 +46,12 @@ def mse(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
 
 def j1(model: Model, record: Record) -> float:
     """J_1: one-step-ahead prediction MSE of ``model`` over ``record`` (samples max_lag … N-1)."""
-    return mse(record.y, model.predict(record), model.max_lag)
+    return mse(record.y, model.predict(record), start=model.max_lag)
 
 
 def js(model: Model, record: Record) -> float:
     """J_S: free-run simulation MSE of ``model`` over ``record`` (inf when the run diverges)."""
-    return mse(record.y, model.simulate(record, on_diverge="nan"), model.max_lag)
+    return mse(record.y, model.simulate(record, on_diverge="nan"), start=model.max_lag)
 
 
 def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None) -> float:
@@ -85,7 +85,7 @@ def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None
     return mse(static.ybar, yb)
 
 
-def rrse(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
+def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """Root relative squared error ‖y − ŷ‖ / ‖y − mean(y)‖ over samples ``start …``.
 
     ``y`` is measured, ``yhat`` the model's output (inf when ``yhat`` is not finite).
@@ -100,12 +100,12 @@ def rrse(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
     return float(np.linalg.norm(y - yhat) / den)
 
 
-def fit_percent(y: np.ndarray, yhat: np.ndarray, start: int = 0) -> float:
+def fit_percent(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """MATLAB ``compare`` fit: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖), in percent.
 
     ``y`` is measured, ``yhat`` the model's output, counted from sample ``start`` on.
     """
-    return 100.0 * (1.0 - rrse(y, yhat, start))
+    return 100.0 * (1.0 - rrse(y, yhat, start=start))
 
 
 def evaluate(
@@ -138,11 +138,11 @@ def evaluate(
         sim_v = m.simulate(data.valid, on_diverge="nan")
         rows[name] = {
             "J_S ident": js(m, data.ident),
-            "J_S valid": mse(data.valid.y, sim_v, m.max_lag),
+            "J_S valid": mse(data.valid.y, sim_v, start=m.max_lag),
             "J_SF": jsf(m, sp, y0) if sp is not None else float("nan"),
             "N_p": m.n_params,
             "J_1 ident": j1(m, data.ident),
-            "fit % valid": fit_percent(data.valid.y, sim_v, m.max_lag),
+            "fit % valid": fit_percent(data.valid.y, sim_v, start=m.max_lag),
         }
     df = pd.DataFrame.from_dict(rows, orient="index")
     df["N_p"] = df["N_p"].astype(int)
@@ -154,6 +154,7 @@ def evaluate_thetas(
     thetas: np.ndarray,
     record: Record | None = None,
     static: StaticPoints | None = None,
+    *,
     one_step: bool = True,
     threads: int = 1,
 ) -> dict[str, np.ndarray]:

@@ -61,7 +61,7 @@ class Model:
         """Largest lag of the process terms (number of initial conditions of a free run)."""
         return self.structure.max_lag
 
-    def with_theta(self, theta: np.ndarray, name: str | None = None) -> "Model":
+    def with_theta(self, theta: np.ndarray, *, name: str | None = None) -> "Model":
         """The same structure with other parameters (the noise part is dropped)."""
         return Model(self.structure, theta, name=self.name if name is None else name)
 
@@ -74,6 +74,7 @@ class Model:
         self,
         u: np.ndarray | Record,
         y0: np.ndarray | None = None,
+        *,
         on_diverge: Literal["raise", "nan"] = "raise",
     ) -> np.ndarray:
         """Free run, shape (N,); see :func:`graybox._simulation.simulate`."""
@@ -89,7 +90,7 @@ class Model:
         """The clusters and the 0/1 map R of this structure."""
         return _static.cluster_map(self.structure)
 
-    def static_curve(self, ubar: np.ndarray, y0: float | None = None, strict: bool = True) -> np.ndarray:
+    def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
         """Steady-state output at each ū, shape (M,); see :func:`graybox._static.static_curve`."""
         return _static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
 
@@ -107,7 +108,7 @@ class Model:
         return _static.is_rational(self.structure)
 
     # -- printing -----------------------------------------------------------
-    def equation(self, digits: int = 4) -> str:
+    def equation(self, *, digits: int = 4) -> str:
         """Paper-style equation, e.g. ``y(k) = 0.6303 y(k-1) - 0.0264 y(k-4) + …``."""
         parts = []
         for i, (th, t) in enumerate(zip(self.theta, self.structure)):

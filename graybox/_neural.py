@@ -530,6 +530,7 @@ class NeuralModel:
         self,
         u: np.ndarray | Record,
         y0: np.ndarray | None = None,
+        *,
         on_diverge: Literal["raise", "nan"] = "raise",
         bound: float | None = None,
     ) -> np.ndarray:
@@ -625,7 +626,7 @@ class NeuralModel:
         c = self.b1 + un * self.W1[:, self.ny: self.ny + self.nu].sum(axis=1)
         return np.concatenate([[self.b2], self.w2, c, self.W1[:, : self.ny].ravel()])
 
-    def static_curve(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, strict: bool = True) -> np.ndarray:
+    def static_curve(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, *, strict: bool = True) -> np.ndarray:
         """The steady state the network reaches at each constant input, shape (M,).
 
         Conventions of :func:`graybox.static_curve`. With ``y0``: the equilibrium a free run at
@@ -681,7 +682,7 @@ class NeuralModel:
                     f"({[round(float(self._y(s)), 6) for s in stable_n]}); pass y0 to choose the one reached from it")
         return out
 
-    def static_gain(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, strict: bool = True) -> np.ndarray:
+    def static_gain(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, *, strict: bool = True) -> np.ndarray:
         """dȳ/dū along the static curve, shape (M,), output units per input unit.
 
         Implicit differentiation of ȳ = g(ȳ, ū): dȳ/dū = g_ū / (1 − g_ȳ).

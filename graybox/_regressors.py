@@ -21,6 +21,7 @@ def regressor_matrix(
     structure: Structure,
     u: np.ndarray,
     y: np.ndarray,
+    *,
     e: np.ndarray | None = None,
     start: int | None = None,
 ) -> np.ndarray:
@@ -67,6 +68,7 @@ def regressor_matrix(
 def stacked_regressors(
     structure: Structure,
     records: Record | Sequence[Record],
+    *,
     start: int | None = None,
     residuals: Sequence[np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -93,6 +95,6 @@ def stacked_regressors(
     for i, r in enumerate(recs):
         r.require_length(s)
         e = None if residuals is None else residuals[i]
-        blocks.append(regressor_matrix(structure, r.u, r.y, e, s))
+        blocks.append(regressor_matrix(structure, r.u, r.y, e=e, start=s))
         targets.append(r.y[s:])
     return np.vstack(blocks), np.concatenate(targets)

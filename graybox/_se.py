@@ -674,7 +674,7 @@ def _pe_members(problem: SEProblem, lambdas: np.ndarray) -> np.ndarray | None:
     try:
         with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
             warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
-            th = pe_thetas(problem.structure, problem.records, problem.static, lambdas, solver="closed")
+            th = pe_thetas(problem.structure, problem.records, problem.static, lambdas=lambdas, solver="closed")
     except ValueError:  # e.g. not identifiable with the static rows
         return None
     return th if np.all(np.isfinite(th)) else None
@@ -825,8 +825,8 @@ def se_pareto(
     structure: Structure,
     data: Record | Dataset | Sequence[Record],
     static: StaticPoints | None = None,
-    lambdas: Sequence[float] | np.ndarray | None = None,
     *,
+    lambdas: Sequence[float] | np.ndarray | None = None,
     method: Literal["ga", "gradient"] = "ga",
     seed: int = 0,
     checkpoint: str | os.PathLike | None = None,

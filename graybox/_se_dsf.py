@@ -152,7 +152,7 @@ def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.
     with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
         warnings.simplefilter("ignore", StaticRangeWarning)
         try:
-            th = pe_thetas(problem.structure, problem.records, problem.static, lambdas, solver="closed")
+            th = pe_thetas(problem.structure, problem.records, problem.static, lambdas=lambdas, solver="closed")
         except ValueError:
             th = np.zeros((0, len(problem.structure)))
     th = np.vstack([th, problem.ls_theta()[None, :]])

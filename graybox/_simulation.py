@@ -102,6 +102,7 @@ def simulate(
     theta: np.ndarray,
     u: np.ndarray | Record,
     y0: np.ndarray | None = None,
+    *,
     on_diverge: Literal["raise", "nan"] = "raise",
     bound: float | None = None,
 ) -> np.ndarray:
@@ -141,6 +142,7 @@ def simulate_many(
     structure: Structure,
     thetas: np.ndarray,
     record: Record,
+    *,
     threads: int = 1,
 ) -> np.ndarray:
     """Free runs of many parameter vectors of one structure over one record.

@@ -726,6 +726,7 @@ def static_curve(
     theta: np.ndarray,
     ubar: np.ndarray,
     y0: float | np.ndarray | None = None,
+    *,
     strict: bool = True,
 ) -> np.ndarray:
     """The steady state the model reaches at each constant input ``ubar``.
@@ -786,6 +787,7 @@ def static_gain(
     theta: np.ndarray,
     ubar: np.ndarray,
     y0: float | np.ndarray | None = None,
+    *,
     strict: bool = True,
 ) -> np.ndarray:
     """dȳ/dū along the static curve, by implicit differentiation of eq. (5).

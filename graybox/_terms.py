@@ -242,6 +242,7 @@ def parse_structure(text: str | Sequence[str]) -> Structure:
 def Candidates(
     ny: int,
     nu: int,
+    *,
     ne: int = 0,
     degree: int = 2,
     delay: int = 1,

@@ -32,3 +32,25 @@ def test_every_argument_documented(name, obj):
 def test_all_names_exist():
     for name in gb.__all__:
         assert hasattr(gb, name), name
+
+
+# Data may be positional (the structure, the records, the static information); every option is
+# keyword-only, so a call never depends on the order of options.
+_DATA_ARGS = {"curve", "static", "data", "record", "records", "u", "y0", "ubar", "structure", "thetas", "theta", "model",
+              "candidates", "points", "pareto", "path", "obj", "text", "terms"}
+
+
+def _all_public_functions():
+    mods = [gb, gb.experiments, gb.plots, gb.datasets]
+    for mod in mods:
+        for name in getattr(mod, "__all__", []):
+            obj = getattr(mod, name)
+            if inspect.isfunction(obj):
+                yield f"{mod.__name__}.{name}", obj
+
+
+@pytest.mark.parametrize("name,fn", list(_all_public_functions()))
+def test_options_are_keyword_only(name, fn):
+    bad = [p.name for p in inspect.signature(fn).parameters.values()
+           if p.kind == p.POSITIONAL_OR_KEYWORD and p.default is not p.empty and p.name not in _DATA_ARGS]
+    assert not bad, f"{name}: options {bad} can be given by position; make them keyword-only"

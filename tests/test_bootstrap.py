@@ -62,12 +62,12 @@ def test_replicates_match_a_direct_rerun(data):
         assert len(recs) == 10 and all(len(r) == 60 for r in recs)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", gb.StaticRangeWarning)
-            d = gb.decide_dsf(gb.pe_pareto(STRUCT, recs, sp, LAMBDAS, solver="closed"), band=0.05, fallback="min_jsf")
+            d = gb.decide_dsf(gb.pe_pareto(STRUCT, recs, sp, lambdas=LAMBDAS, solver="closed"), band=0.05, fallback="min_jsf")
         assert boot.lambda1[i] == d.lambda1 and boot.JS[i] == d.JS and boot.JSF[i] == d.JSF
         np.testing.assert_array_equal(boot.thetas[i], d.model.theta)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
-        ref = gb.decide_dsf(gb.pe_pareto(STRUCT, data.ident, data.static, LAMBDAS, solver="closed"), band=0.05,
+        ref = gb.decide_dsf(gb.pe_pareto(STRUCT, data.ident, data.static, lambdas=LAMBDAS, solver="closed"), band=0.05,
                             fallback="min_jsf")
     assert boot.reference["lambda1"] == ref.lambda1 and boot.reference["JS"] == ref.JS
     freq = boot.frequencies()

@@ -68,21 +68,21 @@ def test_band_bounds_the_true_static_error_with_cls_and_pe(rec, ls, solver):
     assert true_static_error(ls).max() > 3 * b  # the data alone miss eq. (1) by far more
     band = StaticBand(b)
     for th in (
-        pe_thetas(S15, rec, PTS, [1.0], constraints=band, solver=solver)[0],  # λ1 = 1: LS + band
-        pe_thetas(S15, rec, PTS, [0.5], constraints=band, solver=solver)[0],
+        pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=band, solver=solver)[0],  # λ1 = 1: LS + band
+        pe_thetas(S15, rec, PTS, lambdas=[0.5], constraints=band, solver=solver)[0],
         cls(S15, rec, None, constraints=StaticBand(b, PTS), solver=solver).theta,
     ):
         err = true_static_error(th)
         assert err.max() <= b * (1 + 1e-6)
         assert band.violation(th, ctx_for(rec)) < 1e-7
     # at λ1 = 1 the band is active: the LS-optimal model sits on its edge somewhere
-    th = pe_thetas(S15, rec, PTS, [1.0], constraints=band, solver=solver)[0]
+    th = pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=band, solver=solver)[0]
     assert true_static_error(th).max() == pytest.approx(b, rel=1e-5)
 
 
 def test_band_residual_form_is_looser(rec):
     b = 0.175
-    th = pe_thetas(S15, rec, PTS, [1.0], constraints=StaticBand(b, form="residual"))[0]
+    th = pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=StaticBand(b, form="residual"))[0]
     resid = np.abs(PTS.ybar - static_prediction(S15, th, PTS))
     assert resid.max() <= b * (1 + 1e-6)
     # bounding the residual D (ȳ − ȳ_model) with D ≈ 0.07 lets the true error reach ≈ b / D
@@ -116,7 +116,7 @@ def test_gain_bounds_with_the_curve_imposed_are_exact(rec):
 
 def test_gain_bounds_affine_rows_hold_with_pe(rec):
     g = GainBounds(lower=0.0)  # monotone; reference: the problem's static points, interpolated
-    th = pe_thetas(S15, rec, PTS, [1.0, 0.01], constraints=g)
+    th = pe_thetas(S15, rec, PTS, lambdas=[1.0, 0.01], constraints=g)
     for t in th:
         assert g.violation(t, ctx_for(rec)) < 1e-7
 
@@ -139,7 +139,7 @@ def test_cluster_bounds_by_name_and_key(rec, ls):
     sy_ls = float((cm.R @ ls)[cm.index("Σy")])
     cap = sy_ls - 0.02  # binding
     for key in ("Σy", "Sy", (1, 0)):
-        th = pe_thetas(S15, rec, PTS, [1.0], constraints=ClusterBounds({key: (None, cap)}))[0]
+        th = pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=ClusterBounds({key: (None, cap)}))[0]
         sy = float((cm.R @ th)[cm.index("Σy")])
         assert cap - 1e-6 <= sy <= cap + 1e-10  # active, met to the interior-point tolerance
     m = cls(S15, rec, None, constraints=ClusterBounds({"Σyu": (0.0, 0.0), "Σu²": (1e-7, None)}))
@@ -151,7 +151,7 @@ def test_cluster_bounds_conflict_is_infeasible(rec):
     both = ClusterBounds({"Σy": (0.95, None)}) & ClusterBounds({"Σy": (None, 0.9)})
     for solver in ("clarabel", "osqp"):
         with pytest.raises(InfeasibleError) as exc:
-            pe_thetas(S15, rec, PTS, [0.5], constraints=both, solver=solver)
+            pe_thetas(S15, rec, PTS, lambdas=[0.5], constraints=both, solver=solver)
         msg = str(exc.value)
         assert "0.95 <= Σy" in msg and "Σy <= 0.9" in msg and "status 'infeasible'" in msg and solver in msg
     # two equalities that disagree are caught before any solver runs, closed form included
@@ -167,7 +167,7 @@ def test_cluster_bounds_conflict_is_infeasible(rec):
 def test_user_constraint_one_and_two_arguments(rec, ls):
     assert ls[0] < 0.9
     first = UserConstraint(lambda th: th[0] >= 0.9, name="θ1 >= 0.9")
-    th = pe_thetas(S15, rec, PTS, [1.0], constraints=first)[0]
+    th = pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=first)[0]
     assert th[0] == pytest.approx(0.9, abs=1e-8)
 
     def sum_y(th, ctx):  # Σy through the context's R, as a list of constraints
@@ -203,7 +203,7 @@ def test_composition_flattens_and_all_hold(rec):
     assert isinstance(both, AllOf) and len(both) == 3 and list(both) == [a, b, c]
     assert as_constraint_list([a, b & c]) == [a, b, c] and as_constraint_list(None) == []
     assert "static band" in both.describe() and "Σy <= 0.93" in both.describe()
-    th = pe_thetas(S15, rec, PTS, [1.0, 0.1], constraints=both)
+    th = pe_thetas(S15, rec, PTS, lambdas=[1.0, 0.1], constraints=both)
     ctx = ctx_for(rec)
     for t in th:
         assert both.violation(t, ctx) < 1e-7
@@ -320,7 +320,7 @@ def test_property_every_variant_is_satisfied(rec, theta_star, cons, lam, use_cls
     if use_cls:
         th = cls(S15, rec, None, constraints=cons).theta
     else:
-        th = pe_thetas(S15, rec, PTS, [lam], constraints=cons)[0]
+        th = pe_thetas(S15, rec, PTS, lambdas=[lam], constraints=cons)[0]
     for c in cons:
         assert c.violation(th, ctx) < 1e-6, c.describe()
         if isinstance(c, StaticBand):  # exact for this rational structure
@@ -337,10 +337,10 @@ def test_band_does_not_go_vacuous_as_the_denominator_vanishes(rec):
     through = PassesThrough(StaticPoints(PTS.ubar[0:2], PTS.ybar[0:2]))
     steep = GainBounds(lower=0.015, ubar_range=(750.0, 1650.0), reference=EQ1)
     with pytest.raises(InfeasibleError, match="admit no θ"):
-        pe_thetas(S15, rec, PTS, [1.0], constraints=[band, steep, through])
+        pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=[band, steep, through])
     # a gain bound eq. (1) meets: feasible, and the band holds on the true static error
     gentle = GainBounds(lower=0.012, ubar_range=(750.0, 1650.0), reference=EQ1)
-    th = pe_thetas(S15, rec, PTS, [1.0], constraints=[band, gentle, through])[0]
+    th = pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=[band, gentle, through])[0]
     assert true_static_error(th).max() <= 0.33203125 * (1 + 1e-5)
 
 

@@ -186,12 +186,12 @@ def test_cls_on_the_plant_data():
 # ---------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def pe_closed(rec):
-    return pe_thetas(S15, rec, reference.eq1_points(), LAMBDAS, solver="closed")
+    return pe_thetas(S15, rec, reference.eq1_points(), lambdas=LAMBDAS, solver="closed")
 
 
 @pytest.mark.parametrize("solver", ["clarabel", "osqp"])
 def test_pe_qp_equals_closed_form_for_all_100_lambdas(rec, scales, pe_closed, solver):
-    th = pe_thetas(S15, rec, reference.eq1_points(), LAMBDAS, solver=solver)
+    th = pe_thetas(S15, rec, reference.eq1_points(), lambdas=LAMBDAS, solver=solver)
     err = rel_scaled(th, pe_closed, scales)
     assert err.max() < 1e-6, (err.max(), LAMBDAS[err.argmax()])
 
@@ -199,7 +199,7 @@ def test_pe_qp_equals_closed_form_for_all_100_lambdas(rec, scales, pe_closed, so
 def test_pe_lambda1_one_is_least_squares(rec, scales):
     ls = scaled_lstsq(*stacked_regressors(S15, rec))
     for solver in ("closed", "clarabel"):
-        th = pe_thetas(S15, rec, reference.eq1_points(), [1.0], solver=solver)[0]
+        th = pe_thetas(S15, rec, reference.eq1_points(), lambdas=[1.0], solver=solver)[0]
         assert rel_scaled(th, ls, scales)[0] < 1e-7, solver
 
 
@@ -211,7 +211,7 @@ def test_pe_closed_form_is_eq11(rec):
     Q, R = static_matrices(S15, pts)
     A, B = psi / s, (Q @ R) / s
     lam = np.array([0.02, 0.3, 0.9])
-    th = pe_thetas(S15, rec, pts, lam, solver="closed", weights="sum")
+    th = pe_thetas(S15, rec, pts, lambdas=lam, solver="closed", weights="sum")
     for l1, t in zip(lam, th):
         l2 = 1 - l1
         z = np.linalg.solve(l1 * A.T @ A + l2 * B.T @ B, l1 * A.T @ y + l2 * B.T @ pts.ybar)
@@ -226,8 +226,8 @@ def test_pe_sum_and_mse_weights_trace_the_same_front(rec, scales):
     # λ1/(1−λ1) (sum) = (λ1'/N)/((1−λ1')/M) (mse)  ⇒  λ1' = r N / (M + r N) with r = λ1/(1−λ1) · M … solve:
     r = lam_sum / (1 - lam_sum)
     lam_mse = r * N / (M + r * N)
-    a = pe_thetas(S15, rec, pts, lam_sum, solver="closed", weights="sum")
-    b = pe_thetas(S15, rec, pts, lam_mse, solver="closed", weights="mse")
+    a = pe_thetas(S15, rec, pts, lambdas=lam_sum, solver="closed", weights="sum")
+    b = pe_thetas(S15, rec, pts, lambdas=lam_mse, solver="closed", weights="mse")
     assert rel_scaled(a, b, scales).max() < 1e-8
 
 
@@ -241,7 +241,7 @@ def test_pe_sweep_builds_one_dpp_problem(rec, monkeypatch):
             built.append(self)
 
     monkeypatch.setattr(convex, "_QP", Counting)
-    pe_thetas(S15, rec, reference.eq1_points(), np.logspace(-4, 0, 15))
+    pe_thetas(S15, rec, reference.eq1_points(), lambdas=np.logspace(-4, 0, 15))
     assert len(built) == 1
     prob = built[0].problem
     assert prob.is_dpp() and {p.name() for p in prob.parameters()} == {"w1", "w2"}
@@ -253,7 +253,7 @@ def test_pe_pareto_evaluates_with_the_shared_evaluator(rec, pe_closed):
     from graybox._evaluate import evaluate_thetas
 
     pts = reference.eq1_points()
-    ps = pe_pareto(S15, rec, pts, LAMBDAS[::10], solver="closed")
+    ps = pe_pareto(S15, rec, pts, lambdas=LAMBDAS[::10], solver="closed")
     ev = evaluate_thetas(S15, pe_closed[::10], rec, pts)
     for k in ("J1", "JS", "JSF"):
         np.testing.assert_allclose(getattr(ps, k), ev[k], rtol=1e-12)
@@ -312,12 +312,12 @@ def test_property_pe_closed_form_equals_qp(seed, n_terms, n_points, unit, lam):
     structure, r, pts = _random_problem(seed, n_terms, n_points, unit)
     s = column_scales(stacked_regressors(structure, r)[0])
     try:
-        a = pe_thetas(structure, r, pts, lam, solver="closed")
+        a = pe_thetas(structure, r, pts, lambdas=lam, solver="closed")
     except ValueError as exc:  # a random structure on a few-level input can be unidentifiable:
         assert "not identifiable" in str(exc)  # then θ is not unique and there is nothing to compare
         a = None
     assume(a is not None)
-    b = pe_thetas(structure, r, pts, lam, solver="clarabel")
+    b = pe_thetas(structure, r, pts, lambdas=lam, solver="clarabel")
     assert rel_scaled(b, a, s).max() < 1e-6
 
 
@@ -346,7 +346,7 @@ def test_property_weighted_sum_sweep_is_monotone(seed, n_terms, n_points, unit):
     """J_SF^QR (mean (ȳ − QRθ)², the static error PE optimises) never increases as λ2 grows."""
     structure, r, pts = _random_problem(seed, n_terms, n_points, unit)
     lam = np.logspace(-5, 0, 25)[::-1]  # λ2 grows along this array
-    th = pe_thetas(structure, r, pts, lam, solver="closed")
+    th = pe_thetas(structure, r, pts, lambdas=lam, solver="closed")
     q = qr_static_error(structure, th, pts)
     assert np.all(np.diff(q) <= 1e-9 * q[:-1] + 1e-20)
     psi, y = stacked_regressors(structure, r)
@@ -394,16 +394,16 @@ def test_static_points_outside_the_data_range_are_used_and_named_once(rec):
     from graybox import StaticRangeWarning
 
     for fit in (lambda: cls(S15, rec, far, how="points"),
-                lambda: pe_thetas(S15, rec, far, [0.5], solver="closed"),
+                lambda: pe_thetas(S15, rec, far, lambdas=[0.5], solver="closed"),
                 lambda: cls(S15, rec, StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, domain=(100.0, 1650.0)))):
         with w.catch_warnings(record=True) as caught:
             w.simplefilter("always")
             fit()
         said = [c for c in caught if issubclass(c.category, StaticRangeWarning)]
         assert len(said) == 1 and "outside the input range" in str(said[0].message)
-    th = pe_thetas(S15, rec, far, [1e-3], solver="closed")[0]
+    th = pe_thetas(S15, rec, far, lambdas=[1e-3], solver="closed")[0]
     # the far point pulls the static equation towards it, beyond the records' range
-    ls = pe_thetas(S15, rec, far, [1.0], solver="closed")[0]
+    ls = pe_thetas(S15, rec, far, lambdas=[1.0], solver="closed")[0]
     assert qr_static_error(S15, th, far) < 0.01 * qr_static_error(S15, ls, far)
 
 
@@ -447,24 +447,24 @@ def test_bad_pe_arguments(rec):
     pts = reference.eq1_points()
     for lam in ([0.0, 0.5], [1.5], [], [np.nan]):
         with pytest.raises(ValueError, match="λ1|lambdas"):
-            pe_thetas(S15, rec, pts, lam)
+            pe_thetas(S15, rec, pts, lambdas=lam)
     with pytest.raises(ValueError, match="weights"):
-        pe_thetas(S15, rec, pts, [0.5], weights="mean")
+        pe_thetas(S15, rec, pts, lambdas=[0.5], weights="mean")
     with pytest.raises(ValueError, match="equality constraints only"):
-        pe_thetas(S15, rec, pts, [0.5], solver="closed", constraints=StaticBand(0.2))
+        pe_thetas(S15, rec, pts, lambdas=[0.5], solver="closed", constraints=StaticBand(0.2))
     with pytest.raises(ValueError, match="noise terms"):
-        pe_thetas(Structure(["y(k-1)", "e(k-1)"]), rec, pts, [0.5])
+        pe_thetas(Structure(["y(k-1)", "e(k-1)"]), rec, pts, lambdas=[0.5])
     with pytest.raises(ValueError, match="domain"):
-        pe_thetas(S15, rec, EQ1, [0.5])
+        pe_thetas(S15, rec, EQ1, lambdas=[0.5])
     with pytest.raises(ValueError, match="StaticPoints or a StaticCurve"):
-        pe_thetas(S15, rec, [1, 2, 3], [0.5])
+        pe_thetas(S15, rec, [1, 2, 3], lambdas=[0.5])
 
 
 def test_results_are_immutable(rec):
     m = cls(S15, rec, EQ1, solver="closed")
     with pytest.raises(ValueError):
         m.theta[0] = 1.0
-    ps = pe_pareto(S15, rec, reference.eq1_points(), [0.1, 0.9], solver="closed")
+    ps = pe_pareto(S15, rec, reference.eq1_points(), lambdas=[0.1, 0.9], solver="closed")
     with pytest.raises(ValueError):
         ps.thetas[0, 0] = 1.0
     with pytest.raises(Exception):

@@ -78,7 +78,7 @@ def test_on_a_pe_front():
     u[:40], u[40:80] = 750.0, 1650.0
     y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
     rec = Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(1600), Ts=0.05)
-    ps = pe_pareto(S15, rec, reference.eq1_points(), np.logspace(-6, 0, 30), solver="closed")
+    ps = pe_pareto(S15, rec, reference.eq1_points(), lambdas=np.logspace(-6, 0, 30), solver="closed")
     i = decide_dsf(ps).index
     inside = ps.JSF <= 0.031
     assert inside[i] and ps.JS[i] == ps.JS[inside].min()

@@ -116,7 +116,7 @@ def test_no_noise_terms_is_plain_least_squares():
 
 def test_noise_terms_flow_from_the_candidates():
     rec = narmax_record(4)
-    sel = frols(Candidates(2, 2, 3, 2), rec, n_terms=4)
+    sel = frols(Candidates(2, 2, ne=3, degree=2), rec, n_terms=4)
     assert len(sel.noise) == 3
     from_sel = els(sel, rec).model
     assert [str(t) for t in from_sel.noise_structure] == ["e(k-1)", "e(k-2)", "e(k-3)"]
@@ -128,7 +128,7 @@ def test_noise_terms_flow_from_the_candidates():
     m = els(mixed, rec).model
     assert m.structure == sel.structure and [str(t) for t in m.noise_structure] == ["e(k-2)"]
     # a Selection without noise candidates also gets MA(2)
-    assert len(els(frols(Candidates(2, 2, 0, 2), rec, n_terms=4), rec).model.noise_structure) == 2
+    assert len(els(frols(Candidates(2, 2, ne=0, degree=2), rec, n_terms=4), rec).model.noise_structure) == 2
 
 
 def test_engineering_units_and_several_records():

@@ -72,7 +72,7 @@ def _kill_myself(marker_dir: str, cell, data, threads):
     if cell.variant == "LS" or (cell.variant == "CLS" and not list(Path(marker_dir).glob(cell.key + "*"))):
         marker.touch()
         os.kill(os.getpid(), signal.SIGKILL)
-    row = run_cell(cell, data, threads)
+    row = run_cell(cell, data, threads=threads)
     row["NUMBA_NUM_THREADS"] = os.environ.get("NUMBA_NUM_THREADS")  # what the executor gave this worker
     return row
 

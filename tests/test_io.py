@@ -63,7 +63,7 @@ def values():
         warnings.simplefilter("ignore")
         sel = gb.frols(gb.Candidates(ny=2, nu=1, ne=2, degree=2), rec, n_terms=6)
         fit = gb.els(sel, rec)
-        pe = gb.pe_pareto(STRUCT, rec, static, [1.0, 0.1, 1e-3], solver="closed")
+        pe = gb.pe_pareto(STRUCT, rec, static, lambdas=[1.0, 0.1, 1e-3], solver="closed")
         failed = gb.ParetoSet(STRUCT, np.vstack([pe.thetas[:2], np.full(6, np.nan)]), [1.0, 0.1, np.nan],
                               pe.J1, [0.5, np.inf, np.inf], pe.JSF, "PE with a failure", {"cost": [1.0, -0.0, np.inf]},
                               {2: "no start was feasible"})

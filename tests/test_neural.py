@@ -80,7 +80,7 @@ def plant_net(plant):
 @pytest.fixture(scope="module")
 def els15(plant):
     """ELS (15) as `graybox reproduce` builds it: the reference row of the neural claim."""
-    sel = frols(Candidates(6, 6, 2, 2, max_y_power=1), plant.ident, n_terms=17, include=["1"])
+    sel = frols(Candidates(6, 6, ne=2, degree=2, max_y_power=1), plant.ident, n_terms=17, include=["1"])
     return els(sel, plant.ident, name="ELS (15)").model
 
 
@@ -158,7 +158,7 @@ def test_training_costs_decrease_and_info_is_consistent():
     # the simulation cost is the free run's, from the record's first L outputs, plus the decay
     # of the weights the free run uses
     sim = net.simulate(rec)
-    assert info.rmse_sim == pytest.approx(np.sqrt(mse(rec.y, sim, L)), rel=1e-9)
+    assert info.rmse_sim == pytest.approx(np.sqrt(mse(rec.y, sim, start=L)), rel=1e-9)
     theta = np.concatenate([net.W1.ravel(), net.b1, net.w2, [net.b2]])
     det = _deterministic(net.hidden, net.ny, net.nu, net.ne)
     expect = 0.5 * np.sum(((sim - rec.y) / net.y_scale)[L:] ** 2) + 0.5 * D * np.sum(theta[det] ** 2)
@@ -249,7 +249,7 @@ def test_early_stopping_stops_on_the_held_out_cost(plant):
     net = info.model
     n = len(plant.ident)
     held = plant.ident.slice(n - int(round(0.2 * n)), n)
-    assert mse(held.y, net.simulate(held), net.max_lag) == pytest.approx(h[info.best_step], rel=1e-9)
+    assert mse(held.y, net.simulate(held), start=net.max_lag) == pytest.approx(h[info.best_step], rel=1e-9)
     # the held-out part was not trained on: the normalisation comes from the first 80 % alone
     assert net.y_offset == pytest.approx(float(np.mean(plant.ident.y[: n - len(held)])), rel=1e-12)
 
@@ -396,10 +396,10 @@ def test_default_training_matches_els15_on_the_validation_record(plant, els15):
     """The claim of the module docstring: over five seeds, the default training's free run on the
     validation record is at least as good as ELS (15)'s (the validation record is never trained on)."""
     v = plant.valid
-    ref = mse(v.y, els15.simulate(v), els15.max_lag)
+    ref = mse(v.y, els15.simulate(v), start=els15.max_lag)
     for sd in range(5):
         net = neural_narx(plant.ident, seed=sd).model
-        assert mse(v.y, net.simulate(v), net.max_lag) <= ref, f"seed {sd}"
+        assert mse(v.y, net.simulate(v), start=net.max_lag) <= ref, f"seed {sd}"
 
 
 def test_trained_net_on_plant_data(plant_net, plant):
@@ -407,9 +407,9 @@ def test_trained_net_on_plant_data(plant_net, plant):
     L = plant_net.max_lag
     sim = plant_net.simulate(v)  # raises on divergence
     assert np.all(np.isfinite(sim))
-    assert mse(v.y, sim, L) < 0.1 * np.var(v.y)
+    assert mse(v.y, sim, start=L) < 0.1 * np.var(v.y)
     # the re-fitted residual inputs make the NARMAX predictor better than the e ≡ 0 one
-    assert mse(v.y, plant_net.predict_narmax(v)[0], L) < mse(v.y, plant_net.predict(v), L)
+    assert mse(v.y, plant_net.predict_narmax(v)[0], start=L) < mse(v.y, plant_net.predict(v), start=L)
 
 
 def test_works_with_the_shared_evaluator(plant_net, plant):

@@ -20,13 +20,13 @@ def naive(structure, u, y, start):
 def test_matches_naive_loop(rng):
     u = rng.uniform(700, 1700, 80)
     y = rng.normal(10, 3, 80)
-    s = Candidates(3, 3, 0, 3)
+    s = Candidates(3, 3, ne=0, degree=3)
     np.testing.assert_allclose(regressor_matrix(s, u, y), naive(s, u, y, 3), rtol=1e-14)
     np.testing.assert_allclose(regressor_matrix(s, u, y, start=5), naive(s, u, y, 5), rtol=1e-14)
 
 
 def test_records_are_not_straddled(rng):
-    s = Candidates(2, 2, 0, 1)
+    s = Candidates(2, 2, ne=0, degree=1)
     r1 = Record(rng.normal(size=20), rng.normal(size=20))
     r2 = Record(rng.normal(size=15), rng.normal(size=15))
     psi, target = stacked_regressors(s, [r1, r2])
@@ -36,7 +36,7 @@ def test_records_are_not_straddled(rng):
 
 
 def test_start_below_max_lag_and_short_record():
-    s = Candidates(3, 3, 0, 1)
+    s = Candidates(3, 3, ne=0, degree=1)
     with pytest.raises(ValueError, match="max lag"):
         regressor_matrix(s, np.ones(10), np.ones(10), start=2)
     with pytest.raises(ValueError, match="fewer than max lag"):

@@ -96,7 +96,7 @@ def test_ga_with_no_bounded_individual_is_an_error(problem, monkeypatch):
 
     monkeypatch.setattr(SEProblem, "random_ls", exploding)
     with pytest.raises(ValueError, match=r"every member of the SE sweep \(ga\) failed.*λ1 = 1: no individual"):
-        se_pareto(problem.structure, problem.record, problem.static, [1.0], method="ga", progress=False,
+        se_pareto(problem.structure, problem.record, problem.static, lambdas=[1.0], method="ga", progress=False,
                   options=SMALL, theta0=None)
 
 
@@ -153,12 +153,12 @@ def test_lambda_outside_unit_interval(problem, lam):
 
 
 def test_se_pareto_returns_evaluated_set(problem):
-    ps = se_pareto(problem.structure, problem.record, problem.static, [1.0, 0.2], method="gradient", progress=False)
+    ps = se_pareto(problem.structure, problem.record, problem.static, lambdas=[1.0, 0.2], method="gradient", progress=False)
     assert ps.thetas.shape == (2, 17) and np.all(np.isfinite(ps.JS))
     with pytest.raises(ValueError, match="method"):
-        se_pareto(problem.structure, problem.record, problem.static, [1.0], method="simplex", progress=False)
+        se_pareto(problem.structure, problem.record, problem.static, lambdas=[1.0], method="simplex", progress=False)
     with pytest.raises(ValueError, match="static points"):
-        se_pareto(problem.structure, problem.record, None, [1.0], progress=False)
+        se_pareto(problem.structure, problem.record, None, lambdas=[1.0], progress=False)
 
 
 @pytest.mark.parametrize("P", [1, 7, 30])
@@ -195,7 +195,7 @@ def test_several_records_never_straddled(problem):
     # the gradient method's residuals and Jacobian stay consistent across the record boundary
     z = two.ls_theta() * two.scale
     assert_factor_matches_finite_differences(two, z, 0.7)
-    ps = se_pareto(problem.structure, [a, b], problem.static, [1.0, 0.3], method="gradient", progress=False)
+    ps = se_pareto(problem.structure, [a, b], problem.static, lambdas=[1.0, 0.3], method="gradient", progress=False)
     assert ps.thetas.shape == (2, 17)
 
 
@@ -322,7 +322,7 @@ def test_cubic_problem_small_sweep(cubic_problem):
         assert c <= problem.cost(m.theta[None], l)[0]  # never worse than the start the run was given
     jsf = problem.jsf(front.thetas)
     assert np.all(np.isfinite(jsf[1:])) and jsf[2] <= jsf[1]
-    ps = se_pareto(problem.structure, problem.record, problem.static, lam, method="gradient", progress=False,
+    ps = se_pareto(problem.structure, problem.record, problem.static, lambdas=lam, method="gradient", progress=False,
                    theta0=m.theta, max_nfev=30)
     assert not ps.failures and np.all(np.isfinite(ps.JS)) and np.all(np.isfinite(ps.JSF[1:]))
 
@@ -336,7 +336,7 @@ def buck_structure():
     import graybox as gb
 
     data = gb.load_buck()
-    sel = gb.frols(gb.Candidates(4, 4, 0, 3), data.ident, criterion="bic")
+    sel = gb.frols(gb.Candidates(4, 4, ne=0, degree=3), data.ident, criterion="bic")
     return sel.structure, data
 
 
@@ -344,7 +344,7 @@ def buck_structure():
 def test_sweep_keeps_failed_members_and_the_others(buck_structure, method):
     st, data = buck_structure
     kw = {"options": SMALL} if method == "ga" else {}
-    ps = se_pareto(st, data, None, [1.0, 0.5, 0.1], method=method, progress=False, **kw)
+    ps = se_pareto(st, data, None, lambdas=[1.0, 0.5, 0.1], method=method, progress=False, **kw)
     assert len(ps) == 3 and 0 not in ps.failures and set(ps.failures) == {1, 2}
     assert np.isfinite(ps.JS[0]) and np.isfinite(ps.J1[0]) and np.all(np.isfinite(ps.thetas[0]))
     assert np.all(np.isnan(ps.thetas[1:])) and np.all(ps.JS[1:] == np.inf) and np.all(ps.JSF[1:] == np.inf)
@@ -360,7 +360,7 @@ def test_every_member_failed_is_an_error_listing_the_reasons(buck_structure):
     st, data = buck_structure
     with pytest.raises(ValueError, match=r"every member of the SE sweep \(gradient\) failed.*λ1 = 0\.5: no start.*"
                                          r"λ1 = 0\.2: no start.*ū = 1\.5"):
-        se_pareto(st, data, None, [0.5, 0.2], method="gradient", progress=False)
+        se_pareto(st, data, None, lambdas=[0.5, 0.2], method="gradient", progress=False)
 
 
 def test_failed_member_is_retried_from_later_members(problem, monkeypatch):
@@ -424,7 +424,7 @@ def test_corrupt_checkpoint_is_named(problem, tmp_path):
                                        ({"seed": -1}, "seed"), ({"threads": 0}, "threads")])
 def test_gradient_options_are_validated(problem, kw, match):
     with pytest.raises(ValueError, match=match):
-        se_pareto(problem.structure, problem.record, problem.static, [1.0], method="gradient", progress=False, **kw)
+        se_pareto(problem.structure, problem.record, problem.static, lambdas=[1.0], method="gradient", progress=False, **kw)
 
 
 def test_gradient_front_second_pass_leaves_no_better_neighbour():

@@ -30,7 +30,7 @@ def data():
 def test_selects_a_structure_in_the_band_and_reports_everything(data, tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = gb.select_graybox(gb.Candidates(3, 3, 0, 2), data, band=1e-3, sizes=[3, 5], store=tmp_path / "s.sqlite")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5], store=tmp_path / "s.sqlite")
     assert res.decision.in_band and res.decision.JSF <= 1e-3
     assert res.degree == 2  # a quadratic static curve: the points ask for degree 2
     # every structure tried is a row; the chosen one is rank 1 and carries Σ0, Σu, Σu², Σy
@@ -50,7 +50,7 @@ def test_selects_a_structure_in_the_band_and_reports_everything(data, tmp_path):
 def test_folds_when_there_is_one_record(data):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = gb.select_graybox(gb.Candidates(3, 3, 0, 2), data.ident, data.static, band=1e-3, sizes=[5], folds=3)
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data.ident, data.static, band=1e-3, sizes=[5], folds=3)
     df = gb.load_results(res.store)
     assert set(df["data"]) == {"fold1", "fold2", "fold3"}
     assert res.decision.JSF <= 1e-3
@@ -61,16 +61,16 @@ def test_band_no_structure_reaches_is_an_error_or_an_explicit_fallback(data):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(ValueError, match="no structure meets the band.*smallest J_SF reached"):
-            gb.select_graybox(gb.Candidates(3, 3, 0, 2), data, far, band=1e-6, sizes=[5])
-        res = gb.select_graybox(gb.Candidates(3, 3, 0, 2), data, far, band=1e-6, sizes=[5], fallback="min_jsf")
+            gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, far, band=1e-6, sizes=[5])
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, far, band=1e-6, sizes=[5], fallback="min_jsf")
     assert res.fallback and not res.decision.in_band
 
 
 def test_bad_input(data):
     with pytest.raises(ValueError, match="cannot represent a degree-2 static curve"):
-        gb.select_graybox(gb.Candidates(3, 3, 0, 1), data, band=1e-3, sizes=[3])
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=1), data, band=1e-3, sizes=[3])
     short = gb.Dataset(data.ident, data.valid.slice(0, 3), data.static)
     with pytest.raises(ValueError, match="fewer than max lag|shorter"):
-        gb.select_graybox(gb.Candidates(3, 3, 0, 2), short, band=1e-3, sizes=[3])
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), short, band=1e-3, sizes=[3])
     with pytest.raises(ValueError, match="estimator"):
-        gb.select_graybox(gb.Candidates(3, 3, 0, 2), data, band=1e-3, estimator="ls")
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, estimator="ls")

@@ -33,7 +33,7 @@ def narx_record(seed: int, n: int = 1500, noise: float = 0.0) -> Record:
 
 @pytest.mark.parametrize("seed", range(5))
 def test_recovers_exact_structure_noise_free(seed):
-    sel = frols(Candidates(3, 3, 0, 2), narx_record(seed), n_terms=len(TRUE))
+    sel = frols(Candidates(3, 3, ne=0, degree=2), narx_record(seed), n_terms=len(TRUE))
     assert set(sel.structure) == set(TRUE)
     order = [sel.structure.index(t) for t in TRUE]
     np.testing.assert_allclose(sel.theta[order], TRUE_THETA, atol=1e-9)
@@ -41,7 +41,7 @@ def test_recovers_exact_structure_noise_free(seed):
 
 @pytest.mark.parametrize("seed", range(5))
 def test_recovers_structure_with_output_noise_given_n_terms(seed):
-    sel = frols(Candidates(3, 3, 0, 2), narx_record(seed, noise=0.05), n_terms=len(TRUE))
+    sel = frols(Candidates(3, 3, ne=0, degree=2), narx_record(seed, noise=0.05), n_terms=len(TRUE))
     assert set(sel.structure) == set(TRUE)
 
 
@@ -51,7 +51,7 @@ def test_criterion_minimum_is_the_true_size_noise_free(criterion):
         # noise-free data: after the true terms, lagged copies of the model are exact
         # combinations of candidates and are (rightly) dropped with a warning
         warnings.simplefilter("ignore", CandidateWarning)
-        sel = frols(Candidates(3, 3, 0, 2), narx_record(1), criterion=criterion)
+        sel = frols(Candidates(3, 3, ne=0, degree=2), narx_record(1), criterion=criterion)
     assert set(sel.structure) == set(TRUE)
     assert sel.criterion == criterion
     assert int(np.argmin(sel.criterion_curve)) + 1 == len(TRUE)
@@ -61,7 +61,7 @@ def test_criterion_minimum_is_the_true_size_noise_free(criterion):
 def test_default_rule_is_bic():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CandidateWarning)
-        sel = frols(Candidates(3, 3, 0, 2), narx_record(2))
+        sel = frols(Candidates(3, 3, ne=0, degree=2), narx_record(2))
     assert sel.criterion == "bic" and "bic minimum" in sel.stop
     assert set(sel.structure) == set(TRUE)
 
@@ -69,7 +69,7 @@ def test_default_rule_is_bic():
 def test_tol_stops_at_first_size_below_tolerance():
     rec = narx_record(3, noise=0.01)
     tol = 1e-3
-    sel = frols(Candidates(3, 3, 0, 2), rec, tol=tol)
+    sel = frols(Candidates(3, 3, ne=0, degree=2), rec, tol=tol)
     unexplained = 1.0 - np.cumsum(sel.err)
     assert unexplained[-1] <= tol
     assert np.all(unexplained[:-1] > tol)
@@ -77,7 +77,7 @@ def test_tol_stops_at_first_size_below_tolerance():
 
 def test_err_matches_least_squares_residual_and_theta(rng):
     rec = narx_record(4, noise=0.05)
-    cand = Candidates(3, 3, 0, 2)
+    cand = Candidates(3, 3, ne=0, degree=2)
     sel = frols(cand, rec, n_terms=9)
     psi, y = stacked_regressors(sel.structure, rec, start=cand.max_lag)
     theta, *_ = np.linalg.lstsq(psi, y, rcond=None)
@@ -93,7 +93,7 @@ def test_err_matches_least_squares_residual_and_theta(rng):
 
 def test_several_records_never_straddle(rng):
     r1, r2 = narx_record(5, n=700, noise=0.02), narx_record(6, n=500, noise=0.02)
-    cand = Candidates(3, 3, 0, 2)
+    cand = Candidates(3, 3, ne=0, degree=2)
     sel = frols(cand, [r1, r2], n_terms=8)
     assert sel.n_rows == (700 - 3) + (500 - 3)
     psi, y = stacked_regressors(sel.structure, [r1, r2], start=3)
@@ -132,7 +132,7 @@ def rpm_record(seed: int, n: int = 1500) -> Record:
 def test_degree3_engineering_units_same_selection_as_unit_variance(seed):
     rec = rpm_record(seed)
     su, sy = rec.u.std(), rec.y.std()
-    cand = Candidates(4, 4, 0, 3)
+    cand = Candidates(4, 4, ne=0, degree=3)
     eng = frols(cand, rec, n_terms=12)
     unit = frols(cand, Record(rec.u / su, rec.y / sy), n_terms=12)
     assert eng.structure == unit.structure
@@ -162,7 +162,7 @@ def test_err_in_unit_interval_and_sum_at_most_one(seed, n, log_su, log_sy, offse
     rng = np.random.default_rng(seed)
     u = 10**log_su * (offset + rng.standard_normal(n))
     y = 10**log_sy * (offset + rng.standard_normal(n))
-    cand = Candidates(2, 2, 0, degree)
+    cand = Candidates(2, 2, ne=0, degree=degree)
     sel = frols(cand, Record(u, y), n_terms=min(n_terms, len(cand)))
     assert np.all(sel.err >= 0.0) and np.all(sel.err <= 1.0)
     assert sel.err.sum() <= 1.0 + 1e-12
@@ -187,12 +187,12 @@ def test_information_criteria_definitions():
 
 def test_noise_terms_are_carried_not_selected():
     rec = narx_record(7, noise=0.05)
-    with_noise = frols(Candidates(3, 3, 2, 2), rec, n_terms=6)
-    without = frols(Candidates(3, 3, 0, 2), rec, n_terms=6)
+    with_noise = frols(Candidates(3, 3, ne=2, degree=2), rec, n_terms=6)
+    without = frols(Candidates(3, 3, ne=0, degree=2), rec, n_terms=6)
     assert with_noise.structure == without.structure
     assert not any(t.is_noise for t in with_noise.structure)
     assert [str(t) for t in with_noise.noise] == ["e(k-1)", "e(k-2)"]
-    assert with_noise.n_candidates == len(Candidates(3, 3, 0, 2))
+    assert with_noise.n_candidates == len(Candidates(3, 3, ne=0, degree=2))
     assert len(without.noise) == 0
 
 
@@ -200,7 +200,7 @@ def test_noise_terms_are_carried_not_selected():
 
 
 def test_selection_is_an_immutable_value_that_prints_as_a_table():
-    sel = frols(Candidates(3, 3, 2, 2), narx_record(8, noise=0.02), n_terms=6)
+    sel = frols(Candidates(3, 3, ne=2, degree=2), narx_record(8, noise=0.02), n_terms=6)
     with pytest.raises(dataclasses.FrozenInstanceError):
         sel.err = np.zeros(6)
     with pytest.raises(ValueError):
@@ -222,7 +222,7 @@ def test_selection_is_an_immutable_value_that_prints_as_a_table():
 def test_frame_marks_terms_evaluated_for_the_curve_only():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CandidateWarning)
-        sel = frols(Candidates(3, 3, 0, 2), narx_record(1), criterion="bic", max_terms=10)
+        sel = frols(Candidates(3, 3, ne=0, degree=2), narx_record(1), criterion="bic", max_terms=10)
     df = sel.to_frame()
     assert len(df) == 10 and df["selected"].sum() == len(sel.structure) == 6
     assert df["theta"].isna().sum() == 4
@@ -233,7 +233,7 @@ def test_frame_marks_terms_evaluated_for_the_curve_only():
 
 
 def test_more_terms_than_candidates():
-    cand = Candidates(2, 2, 0, 1)  # 5 terms
+    cand = Candidates(2, 2, ne=0, degree=1)  # 5 terms
     with pytest.raises(ValueError, match="more than the 5 process candidates"):
         frols(cand, narx_record(0, n=100), n_terms=6)
 
@@ -241,7 +241,7 @@ def test_more_terms_than_candidates():
 @pytest.mark.parametrize("tol", [0.0, 1.0, -0.1, 1.5, float("nan")])
 def test_tol_outside_open_unit_interval(tol):
     with pytest.raises(ValueError, match="tol"):
-        frols(Candidates(2, 2, 0, 1), narx_record(0, n=100), tol=tol)
+        frols(Candidates(2, 2, ne=0, degree=1), narx_record(0, n=100), tol=tol)
 
 
 def test_constant_input_duplicates_are_skipped_with_a_warning():
@@ -252,7 +252,7 @@ def test_constant_input_duplicates_are_skipped_with_a_warning():
     e = rng.standard_normal(n)
     for k in range(1, n):
         y[k] = 0.5 * y[k - 1] + 2.0 + e[k]
-    cand = Candidates(2, 2, 0, 2)
+    cand = Candidates(2, 2, ne=0, degree=2)
     with pytest.warns(CandidateWarning, match="proportional to 1"):
         sel = frols(cand, Record(u, y), n_terms=3)
     skipped = {str(t) for t, _ in sel.skipped}
@@ -272,7 +272,7 @@ def test_all_zero_candidate_columns_are_skipped_with_a_warning():
     n = 300
     y = np.cumsum(rng.standard_normal(n)) * 0.1 + 1.0
     with pytest.warns(CandidateWarning, match="all-zero"):
-        sel = frols(Candidates(2, 2, 0, 2), Record(np.zeros(n), y), n_terms=2)
+        sel = frols(Candidates(2, 2, ne=0, degree=2), Record(np.zeros(n), y), n_terms=2)
     assert all(t.power_of("u") == 0 for t in sel.structure)
     assert sum(why == "all-zero column" for _, why in sel.skipped) == 2 + 3 + 4  # u, u², u·y terms
 
@@ -288,21 +288,21 @@ def test_binary_input_square_duplicates_constant():
         u, np.zeros(2)
     )
     with pytest.warns(CandidateWarning, match=r"u\(k-1\)\^2 \(proportional to 1\)"):
-        sel = frols(Candidates(2, 2, 0, 2), Record(u, y), n_terms=5)
+        sel = frols(Candidates(2, 2, ne=0, degree=2), Record(u, y), n_terms=5)
     assert set(map(str, sel.structure)) == set(BIN_TERMS)
 
 
 def test_dependent_candidates_end_selection_with_a_clear_error():
     # noise-free data of a lag-2 model: with lag-3 candidates, y(k-1) is an exact combination
     # of other candidates, so the candidate matrix is rank deficient
-    cand = Candidates(3, 3, 0, 2)
+    cand = Candidates(3, 3, ne=0, degree=2)
     with pytest.raises(ValueError, match="independent terms.*linear combinations"):
         frols(cand, narx_record(0), n_terms=len(cand))
 
 
 def test_argument_checks():
     rec = narx_record(0, n=100)
-    cand = Candidates(2, 2, 0, 1)
+    cand = Candidates(2, 2, ne=0, degree=1)
     with pytest.raises(ValueError, match="either n_terms or tol"):
         frols(cand, rec, n_terms=2, tol=0.1)
     with pytest.raises(ValueError, match="positive integer"):
@@ -326,10 +326,10 @@ def test_argument_checks():
 def test_edge_warnings():
     rec = narx_record(1, noise=0.01)
     with pytest.warns(RuntimeWarning, match="not reached"):
-        sel = frols(Candidates(3, 3, 0, 2), rec, tol=1e-9, max_terms=3)
+        sel = frols(Candidates(3, 3, ne=0, degree=2), rec, tol=1e-9, max_terms=3)
     assert len(sel.structure) == 3 and "not reached" in sel.stop
     with pytest.warns(RuntimeWarning, match="still be"):
-        frols(Candidates(3, 3, 0, 2), rec, criterion="aic", max_terms=3)
+        frols(Candidates(3, 3, ne=0, degree=2), rec, criterion="aic", max_terms=3)
 
 
 def test_included_terms_come_first():
@@ -341,10 +341,10 @@ def test_included_terms_come_first():
     for k in range(2, 400):
         y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.3 * u[k - 2] * u[k - 1]
     rec = Record(u, y)
-    sel = frols(Candidates(2, 2, 0, 2), rec, n_terms=4, include=["1", "y(k-2)"])
+    sel = frols(Candidates(2, 2, ne=0, degree=2), rec, n_terms=4, include=["1", "y(k-2)"])
     assert [str(t) for t in sel.structure][:2] == ["1", "y(k-2)"]
     assert len(sel.structure) == 4 and len(sel.err) == 4
     with pytest.raises(ValueError, match="not among the process candidates"):
-        frols(Candidates(2, 2, 0, 2), rec, n_terms=3, include=["y(k-5)"])
+        frols(Candidates(2, 2, ne=0, degree=2), rec, n_terms=3, include=["y(k-5)"])
     with pytest.raises(ValueError, match="fewer than the 2 included"):
-        frols(Candidates(2, 2, 0, 2), rec, n_terms=1, include=["1", "y(k-1)"])
+        frols(Candidates(2, 2, ne=0, degree=2), rec, n_terms=1, include=["1", "y(k-1)"])

@@ -32,10 +32,10 @@ def test_recovers_the_true_structure_where_frols_fails(structure, theta, seed, h
     rec = staircase_record(structure, theta, seed, hold=hold)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.CandidateWarning)
-        wrong = gb.frols(Candidates(3, 3, 0, 2), rec, n_terms=len(structure))
+        wrong = gb.frols(Candidates(3, 3, ne=0, degree=2), rec, n_terms=len(structure))
     assert set(wrong.structure) != set(structure)  # the case is a real one: ERR picks wrong terms
-    for res in (gb.semp(Candidates(3, 3, 0, 2), rec, n_terms=len(structure)),
-                gb.semp(Candidates(3, 3, 0, 2), rec)):  # criterion (BIC) stopping
+    for res in (gb.semp(Candidates(3, 3, ne=0, degree=2), rec, n_terms=len(structure)),
+                gb.semp(Candidates(3, 3, ne=0, degree=2), rec)):  # criterion (BIC) stopping
         assert set(res.structure) == set(structure)
         order = [res.structure.index(t) for t in structure]
         np.testing.assert_allclose(res.theta[order], theta, atol=1e-8)
@@ -44,7 +44,7 @@ def test_recovers_the_true_structure_where_frols_fails(structure, theta, seed, h
 
 def test_path_and_scores_are_consistent():
     rec = staircase_record(TRUE, THETA, 3, noise=0.02)
-    res = gb.semp(Candidates(3, 3, 0, 2), rec, n_terms=4, include=["1"])
+    res = gb.semp(Candidates(3, 3, ne=0, degree=2), rec, n_terms=4, include=["1"])
     assert res.structure[0] == gb.parse_term("1") and len(res.structure) == 4
     path = res.path
     assert list(path.columns) == ["step", "action", "term", "n_terms", "score", "criterion", "structure"]
@@ -54,12 +54,12 @@ def test_path_and_scores_are_consistent():
     assert np.all(np.abs(np.diff(path["n_terms"])) == 1)
     # the returned score is the model's own free-run MSE (the shared evaluator's J_S on these samples)
     m = res.model()
-    L = Candidates(3, 3, 0, 2).max_lag  # every structure is run from the candidates' largest lag
+    L = Candidates(3, 3, ne=0, degree=2).max_lag  # every structure is run from the candidates' largest lag
     sim = np.r_[rec.y[:L], gb.simulate(m.structure, m.theta, rec.u[L - m.max_lag:], rec.y[L - m.max_lag:L])[m.max_lag:]]
     assert res.score == pytest.approx(np.mean((sim[L:] - rec.y[L:]) ** 2), rel=1e-9)
     # at every forward step the accepted term had the smallest finite score among the unvisited
     fs = res.forward_scores
-    assert fs.shape[1] == len(Candidates(3, 3, 0, 2).process)
+    assert fs.shape[1] == len(Candidates(3, 3, ne=0, degree=2).process)
     adds = path[path["action"] == "add"]
     for k, (_, row) in enumerate(adds.iterrows()):
         assert fs.iloc[k][row["term"]] == pytest.approx(row["score"])
@@ -69,15 +69,15 @@ def test_path_and_scores_are_consistent():
 
 def test_prune_false_is_forward_selection_and_tol_stops():
     rec = staircase_record(TRUE, THETA, 4)
-    fwd = gb.semp(Candidates(3, 3, 0, 2), rec, n_terms=3, prune=False)
+    fwd = gb.semp(Candidates(3, 3, ne=0, degree=2), rec, n_terms=3, prune=False)
     assert set(fwd.path["action"]) == {"add"} and len(fwd.structure) == 3
-    res = gb.semp(Candidates(3, 3, 0, 2), rec, tol=1e-6)
+    res = gb.semp(Candidates(3, 3, ne=0, degree=2), rec, tol=1e-6)
     assert res.score / np.var(rec.y[3:]) <= 1e-6 and "≤" in res.stop
 
 
 def test_several_records_never_straddle():
     recs = [staircase_record(TRUE, THETA, s, n=500) for s in (5, 6)]
-    res = gb.semp(Candidates(3, 3, 0, 2), recs, n_terms=len(TRUE))
+    res = gb.semp(Candidates(3, 3, ne=0, degree=2), recs, n_terms=len(TRUE))
     assert set(res.structure) == set(TRUE)
     joined = Record(np.concatenate([r.u for r in recs]), np.concatenate([r.y for r in recs]))
     assert res.n_rows == sum(len(r) - 3 for r in recs) < len(joined)
@@ -85,7 +85,7 @@ def test_several_records_never_straddle():
 
 def test_bad_input():
     rec = staircase_record(TRUE, THETA, 0, n=200)
-    cand = Candidates(3, 3, 0, 2)
+    cand = Candidates(3, 3, ne=0, degree=2)
     with pytest.raises(ValueError, match="Structure"):
         gb.semp(["y(k-1)"], rec)
     with pytest.raises(ValueError, match="either n_terms or tol"):

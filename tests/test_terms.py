@@ -28,7 +28,7 @@ def test_round_trip_property(factors):
 
 @pytest.mark.parametrize("ny,nu,degree,count", [(6, 6, 2, 91), (6, 6, 3, 455), (2, 2, 1, 5), (1, 0, 2, 3)])
 def test_candidate_counts(ny, nu, degree, count):
-    c = Candidates(ny, nu, 0, degree)
+    c = Candidates(ny, nu, ne=0, degree=degree)
     assert len(c) == count
     assert len(set(c)) == count
     assert all(t.degree <= degree for t in c)
@@ -54,8 +54,8 @@ def test_unparsable_terms_raise(bad):
 
 
 def test_rational_candidates():
-    c = Candidates(6, 6, 0, 2, max_y_power=1)
+    c = Candidates(6, 6, ne=0, degree=2, max_y_power=1)
     assert len(c) == 91 - 21  # the 21 products y(k-i)y(k-j) are gone
     assert all(t.power_of("y") <= 1 for t in c)
     with pytest.raises(ValueError, match="max_y_power"):
-        Candidates(2, 2, 0, 2, max_y_power=-1)
+        Candidates(2, 2, ne=0, degree=2, max_y_power=-1)

@@ -114,7 +114,7 @@ def test_pe_sandwich_matches_monte_carlo():
         thetas, stds = [], []
         for rec in narx_records(200, 200, seed=5, same_input=True):
             sp = gb.StaticPoints(ub, yb + 0.05 * rng.standard_normal(6))
-            th = gb.pe_thetas(STRUCT, rec, sp, [lam], solver="closed")[0]
+            th = gb.pe_thetas(STRUCT, rec, sp, lambdas=[lam], solver="closed")[0]
             thetas.append(th)
             stds.append(gb.pe_uncertainty(gb.Model(STRUCT, th), rec, sp, lambda1=lam, static_sigma=0.05).std)
         ratio = np.std(thetas, axis=0) / np.mean(stds, axis=0)

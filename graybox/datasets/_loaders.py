@@ -115,6 +115,7 @@ def load_record_csv(
     path: str | os.PathLike,
     u: str,
     y: str,
+    *,
     time: str | None = None,
     Ts: float | None = None,
     name: str | None = None,
@@ -203,6 +204,7 @@ def load_static_csv(
     path: str | os.PathLike,
     u: str,
     y: str,
+    *,
     name: str | None = None,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.

@@ -612,7 +612,7 @@ def _integrate(u, eps_w, eps_s, eps_a, phi, w_gain, w0, s_phi, s_gain, a_phi, a_
 # The experiment: input design, static test, files
 # ---------------------------------------------------------------------------
 
-def speed_reference(n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed: int = DEFAULT_SEED,
+def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed: int = DEFAULT_SEED,
                     low: float = 750.0, high: float = 1650.0) -> np.ndarray:
     """A staircase speed reference (rpm) like the paper's Fig. 3, shape (n_samples,).
 
@@ -662,6 +662,7 @@ def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.
 
 def static_experiment(
     plant: PumpingPlant,
+    *,
     speeds: Sequence[float] = STATIC_SPEEDS,
     rng: np.random.Generator | int | None = None,
     settle: float = 180.0,

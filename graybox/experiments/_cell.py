@@ -231,8 +231,8 @@ def _figures(m, data: gb.Dataset) -> dict[str, float]:
     for tag, rec in (("ident", data.ident), ("valid", data.valid)):
         out[f"J1_{tag}"] = gb.j1(m, rec)
         sim = m.simulate(rec, on_diverge="nan")
-        out[f"JS_{tag}"] = gb.mse(rec.y, sim, L)
-        out[f"fit_{tag}"] = gb.fit_percent(rec.y, sim, L)
+        out[f"JS_{tag}"] = gb.mse(rec.y, sim, start=L)
+        out[f"fit_{tag}"] = gb.fit_percent(rec.y, sim, start=L)
     out["JSF"] = gb.jsf(m, data.static)
     yb = np.asarray(m.static_curve(data.static.ubar, y0=data.static.ybar, strict=False), float)
     miss = np.abs(yb - data.static.ybar)
@@ -240,7 +240,7 @@ def _figures(m, data: gb.Dataset) -> dict[str, float]:
     return out
 
 
-def run_cell(cell: Cell, data: gb.Dataset, threads: int = 1) -> dict[str, Any]:
+def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any]:
     """Run one cell and return its row (see :data:`COLUMNS`); never raises for the cell's own problems.
 
     Parameters

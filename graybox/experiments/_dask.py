@@ -34,4 +34,4 @@ class GridData(WorkerPlugin):
 def cells_task(fn: Callable[[Cell, gb.Dataset, int], dict], plugin: str, cells: list[Cell]) -> list[dict]:
     """Run ``fn`` on a batch of cells, one after another; their rows in order."""
     store = get_worker().plugins[plugin].datasets
-    return [fn(c, store[c.data_hash], 1) for c in cells]
+    return [fn(c, store[c.data_hash], threads=1) for c in cells]

@@ -87,7 +87,7 @@ class InProcess:
     def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
         """Yield each cell's row."""
         for c in cells:
-            yield self.fn(c, datasets[c.data_hash], 1)
+            yield self.fn(c, datasets[c.data_hash], threads=1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -106,7 +106,7 @@ def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the ch
         cell, data = msg
         if data is not None:
             cache[cell.data_hash] = data
-        row = fn(cell, cache[cell.data_hash], 1)
+        row = fn(cell, cache[cell.data_hash], threads=1)
         try:
             conn.send(row)
         except (BrokenPipeError, OSError):

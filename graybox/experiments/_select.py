@@ -307,10 +307,10 @@ def _refit(structure, ident, valid, sp, band, estimator, constraints, lambdas, f
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         if estimator == "pe":
-            front = gb.pe_pareto(structure, ident, sp, lambdas, constraints=cons or None,
+            front = gb.pe_pareto(structure, ident, sp, lambdas=lambdas, constraints=cons or None,
                                  solver="clarabel" if cons else "closed")
         else:
-            front = gb.se_pareto(structure, ident, sp, lambdas, method="gradient" if estimator == "se-gradient" else "ga")
+            front = gb.se_pareto(structure, ident, sp, lambdas=lambdas, method="gradient" if estimator == "se-gradient" else "ga")
     if valid is None or fallback:
         return gb.decide_dsf(front, band=band, fallback="min_jsf")
     # D_SF on the validation record: the members' validation J_S

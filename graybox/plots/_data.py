@@ -26,6 +26,7 @@ def _label(text: str, unit: str) -> str:
 def plot_static_curve(
     points: StaticPoints | None = None,
     curve: StaticCurve | Sequence[StaticCurve] | None = None,
+    *,
     ax: Axes | None = None,
     xlabel: str = "Pump speed (rpm)",
     ylabel: str = "Pressure (mlc)",
@@ -89,6 +90,7 @@ def plot_static_curve(
 
 def plot_record(
     record: Record,
+    *,
     input_label: str = "Pump speed reference",
     output_label: str = "Pressure",
     start: int = 0,

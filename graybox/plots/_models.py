@@ -16,6 +16,7 @@ __all__ = ["plot_free_run"]
 def plot_free_run(
     record: Record,
     models: Model | Mapping[str, Model],
+    *,
     ax: Axes | None = None,
     ylabel: str = "Pressure",
 ) -> Figure:

@@ -44,6 +44,7 @@ def _points_of(points) -> dict[str, tuple[float, float]]:
 def plot_pareto(
     fronts: ParetoSet | Mapping[str, ParetoSet],
     points: Mapping[str, tuple[float, float]] | pd.DataFrame | None = None,
+    *,
     band: float | None = 0.031,
     ax: Axes | None = None,
     log: bool = True,

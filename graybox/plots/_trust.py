@@ -21,6 +21,7 @@ __all__ = ["plot_residual_tests", "plot_static_band", "plot_decision_bootstrap"]
 
 def plot_residual_tests(
     tests: ResidualTests,
+    *,
     axes: Sequence[Axes] | None = None,
     title: str | None = None,
 ) -> Figure:
@@ -82,6 +83,7 @@ def plot_residual_tests(
 def plot_static_band(
     band: StaticCurveBand,
     points: StaticPoints | None = None,
+    *,
     gain: bool = True,
     axes: Sequence[Axes] | None = None,
     xlabel: str = "Pump speed (rpm)",
@@ -144,6 +146,7 @@ def plot_static_band(
 
 def plot_decision_bootstrap(
     boot: DecisionBootstrap,
+    *,
     axes: Sequence[Axes] | None = None,
     xlabel: str = "J_S (mlc²)",
     ylabel: str = "J_SF (mlc²)",

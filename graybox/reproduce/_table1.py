@@ -54,7 +54,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
                      + _save(plot_record(data.ident), out, "fig3_ident_record.png"))
     models: dict = {}
     for degree, n_terms, eq in ((2, 17, "15"), (3, 23, "17")):
-        cand = Candidates(6, 6, 2, degree, max_y_power=1 if degree == 2 else None)
+        cand = Candidates(6, 6, ne=2, degree=degree, max_y_power=1 if degree == 2 else None)
         sel = frols(cand, data.ident, n_terms=n_terms, include=["1"])
         m_els = els(sel, data.ident, name=f"ELS ({eq})").model
         models[f"ELS ({eq})"] = m_els
@@ -62,7 +62,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
         lines.append(f"-- ℓ = {degree}: {st}")
         if degree == 2:
             models["CLS (22)"] = cls_fit(st, data.ident, curve, reference=m_els, name="CLS (22)")
-        pe = pe_pareto(st, data.ident, data.static, np.logspace(-6, 0, 100))
+        pe = pe_pareto(st, data.ident, data.static, lambdas=np.logspace(-6, 0, 100))
         fronts = {"PE": pe}
         models[f"PE (D_SF) ℓ={degree}"] = decide_dsf(pe, band=0.031, fallback="min_jsf").model
         for method in ("ga", "gradient"):
