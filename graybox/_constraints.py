@@ -7,7 +7,7 @@ range of the dynamic data), yields
 
 - :meth:`StaticConstraint.affine`: rows ``A_eq θ = b_eq`` and ``A_ub θ <= b_ub`` in
   engineering units (all built-in variants are affine in θ), which the estimators in
-  :mod:`graybox.convex` scale and normalise before handing them to a solver, and which the
+  the convex estimators (`graybox._convex`) scale and normalise before handing them to a solver, and which the
   closed forms use directly (equalities);
 - :meth:`StaticConstraint.constraints`: cvxpy constraints on a θ expression;
 - :meth:`StaticConstraint.violation`: how far a given θ is from satisfying it.
@@ -273,7 +273,7 @@ def as_constraint_list(constraints: StaticConstraint | Iterable[StaticConstraint
     for c in constraints:
         if not isinstance(c, StaticConstraint):
             raise ValueError(
-                f"constraints must be graybox.constraints objects, got {type(c).__name__}; "
+                f"constraints must be graybox constraint objects (gb.StaticBand, gb.CurveEquality, …), got {type(c).__name__}; "
                 "wrap a cvxpy function of θ in UserConstraint(fn)"
             )
         out.extend(c)

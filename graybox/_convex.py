@@ -5,7 +5,7 @@ Both problems are least squares in θ with static information that is affine in 
 
 - **CLS**: min J_1(θ) subject to static equalities (the rational static function equals a
   polynomial curve, eq. (22); or it passes through given points) and any of the constraint
-  objects of :mod:`graybox.constraints`.
+  constraint objects (:class:`graybox.StaticBand` …, module `graybox._constraints`).
 - **PE**: min λ1 J_1(θ) + λ2 J_SF^QR(θ), λ2 = 1 − λ1, over a sweep of λ1, with
   ``J_1 = ‖Ψθ − y‖²/N`` and ``J_SF^QR = ‖QRθ − ȳ‖²/N_SF`` (the static-equation error that is
   affine in θ; for a rational model it is the true static error times the denominator D(ū)).
