@@ -14,7 +14,16 @@ import numpy as np
 from ._records import Record, as_records
 from ._terms import Structure
 
-__all__ = ["regressor_matrix", "stacked_regressors"]
+__all__ = ["record_signals", "regressor_matrix", "stacked_regressors"]
+
+
+def record_signals(record: Record) -> dict[str, np.ndarray]:
+    """The measured signals of a record by the names terms use for them, each shape (N,).
+
+    The one place that maps a record onto term signal names; every builder of regressor
+    columns takes its signals from here.
+    """
+    return {"u": record.u, "y": record.y}
 
 
 def regressor_matrix(

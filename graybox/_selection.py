@@ -47,6 +47,7 @@ import pandas as pd
 from ._model import Model
 from ._records import Dataset, Record, as_records
 from ._terms import Structure, Term, parse_term
+from ._regressors import record_signals
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -240,7 +241,7 @@ def _candidate_matrix(terms: Sequence[Term], records: list[Record], start: int) 
         rec.require_length(start)
         n = len(rec)
         r1 = r0 + n - start
-        sig = {"u": rec.u, "y": rec.y}
+        sig = record_signals(rec)
         memo: dict[tuple, np.ndarray] = {(): np.ones(n - start)}
 
         def column(vars_: tuple) -> np.ndarray:
