@@ -20,9 +20,13 @@ band is infeasible for the structure, and the result says so with the smallest J
 
 The start: the weighted-sum SE solution at the band's edge, found by continuation in λ1 (λ1 = 1
 fitted from several starts as in the SE sweep, then λ1 lowered with warm starts until J_SF ≤ B,
-then bisected back towards the edge); the iteration above then moves along the band's edge,
-where a weighted sum cannot go when the front is not convex. When the continuation finds nothing,
-the start is the PE member nearest the band (the closed form of eq. (11) costs milliseconds).
+then bisected back towards the edge, each bisection step refitted from its neighbours, the
+least-squares estimate and the PE member of its λ1); the iteration above then moves along the
+band's edge, where a weighted sum cannot go when the front is not convex. The problem is not
+convex and the weighted sums of nearby λ1 can sit in different basins, so the iteration runs
+from several starts: the in-band solution with the smallest J_S and the out-of-band solutions
+(J_SF ≤ 4 B) with a smaller J_S, which restoration brings into the band; the best feasible end wins. When the continuation finds nothing, the start is the PE member
+nearest the band (the closed form of eq. (11) costs milliseconds).
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ from threadpoolctl import threadpool_limits
 from ._convex import pe_thetas
 from ._model import Model
 from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
-from ._se import SEProblem, _Failed, _multistart, _pe_starts, gradient_front
+from ._se import SEProblem, _Failed, _multistart, _pe_members, _pe_starts, gradient_front
 from ._terms import Structure
 from ._validation import check_int, check_lambdas, check_real, check_theta, warn
 
@@ -64,7 +68,7 @@ class DSFResult:
     start_JS, start_JSF : float
         J_S and J_SF of the start.
     n_iter : int
-        Iterations (trial steps) taken.
+        Iterations (trial steps) taken, summed over the starts.
     message : str
         Why the iteration stopped, in words.
     """
@@ -170,25 +174,30 @@ def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.
     return th[i], f"PE λ1={lam[i]:.4g}"
 
 
-def _continuation(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray | None, str]:
-    """The weighted-sum SE solution at the band's edge: a coarse sweep, then a bisection in λ1.
+def _continuation(problem: SEProblem, band: float, lambdas: np.ndarray,
+                  n_out: int = 2) -> tuple[list[tuple[np.ndarray, str]], str]:
+    """Starts at the band's edge: a coarse weighted-sum sweep, then a bisection in λ1.
 
     The coarse sweep is the SE gradient sweep itself (multi-start where it restarts); between the
     in-band member with the smallest J_S and its neighbour with the larger λ1 (outside the band), a
-    bisection in log λ1 refits from both neighbours and keeps moving towards the band's edge.
-    Returns (θ, description) of the in-band solution with the smallest J_S, or (None, reason).
+    bisection in log λ1 refits from both neighbours, the least-squares estimate and the PE member
+    of that λ1, and keeps moving towards the band's edge. Returns the in-band solution with the
+    smallest J_S and the (at most ``n_out``) out-of-band solutions with J_SF ≤ 4 B and a smaller J_S
+    (better basins that restoration can bring into the band), each as (θ, description); or ([], reason).
     """
     front = gradient_front(problem, lambdas, progress=False, starts=_pe_starts(problem))
     ok = np.all(np.isfinite(front.thetas), axis=1)
     if not ok.any():
-        return None, "no member of the coarse SE sweep is defined"
+        return [], "no member of the coarse SE sweep is defined"
     js = np.where(ok, problem.js(np.where(ok[:, None], front.thetas, 0.0)), np.inf)
     jsf = np.where(ok, problem.jsf(np.where(ok[:, None], front.thetas, 0.0)), np.inf)
     inside = np.isfinite(js) & (jsf <= band)
     if not inside.any():
-        return None, f"no member of the coarse SE sweep meets the band (smallest J_SF {jsf.min():.4g})"
+        return [], f"no member of the coarse SE sweep meets the band (smallest J_SF {jsf.min():.4g})"
     i = int(np.flatnonzero(inside)[np.argmin(js[inside])])
     best = (float(js[i]), front.thetas[i], float(front.lambdas[i]))
+    near = [(float(js[k]), front.thetas[k], float(front.lambdas[k])) for k in np.flatnonzero(
+        np.isfinite(js) & (jsf > band) & (jsf <= 4 * band))]
     lam_lo, th_lo = float(front.lambdas[i]), front.thetas[i]
     higher = [k for k in range(len(front.lambdas)) if front.lambdas[k] > lam_lo and ok[k]]
     if higher:
@@ -197,7 +206,11 @@ def _continuation(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple
         for _ in range(5):
             lam = float(np.sqrt(lam_lo * lam_hi))
             try:
-                th, _, _ = _multistart(problem, lam, [("lo", th_lo), ("hi", th_hi)], ("trf",), 50, 1e-8)
+                cands = [("lo", th_lo), ("hi", th_hi), ("least squares", problem.ls_theta())]
+                pe = _pe_members(problem, np.array([lam]))
+                if pe is not None:  # a fresh convex start can land in a better basin than either neighbour
+                    cands.append(("PE", pe[0]))
+                th, _, _ = _multistart(problem, lam, cands, ("trf", "dogbox"), 50, 1e-8)
             except _Failed:
                 break
             j_s, j_sf = float(problem.js(th[None])[0]), float(problem.jsf(th[None])[0])
@@ -207,7 +220,77 @@ def _continuation(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple
                     best = (j_s, th, lam)
             else:
                 lam_hi, th_hi = lam, th
-    return best[1], f"SE λ1={best[2]:.4g}"
+                if np.isfinite(j_s) and j_sf <= 4 * band:
+                    near.append((j_s, th, lam))
+    out = [(best[1], f"SE λ1={best[2]:.4g}")]
+    # the out-of-band solutions with a smaller J_S, best first: each edge iteration costs a few
+    # Jacobians, far less than one weighted-sum fit, so several are affordable
+    for j_s, th, lam in sorted(near, key=lambda t: t[0])[:n_out]:
+        if j_s < best[0]:
+            out.append((th, f"SE λ1={lam:.4g} (outside the band, restored)"))
+    return out, ""
+
+
+def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
+    """The constrained Gauss–Newton iteration from θ0: (θ, J_S, J_SF, J_S0, J_SF0, steps, message), or None
+    when θ0 has an unbounded free run or reaches no equilibrium at some static point."""
+    problem = gn.p
+    z = th0 * problem.scale
+    f, g, G = gn.parts(z, True)
+    if not (np.isfinite(f) and np.isfinite(g)):
+        return None
+    f0, g0 = f, g
+    nu = 1e-3
+    # the linearised constraint aims a margin inside the band, so that the curvature of J_SF does not
+    # throw most steps just outside it (they would be refused and the iteration would zigzag)
+    margin = 0.05
+    it = 0
+    message = f"{max_iter} iterations reached"
+    stall = 0
+    with np.errstate(all="ignore"):
+        while it < max_iter:
+            it += 1
+            if G is None:
+                message = "the Jacobian is not finite at the current point"
+                break
+            A1, b1, A2, b2 = G
+            feasible = g <= band
+            if feasible:
+                d = _constrained_step(f, g, G, min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin))), nu)
+            else:
+                # restoration: decrease J_SF, with J_S as a small regulariser
+                d = _step(A2, b2, A1, b1, 1e-6, nu)
+            if d is None:
+                nu *= 10.0
+                if nu > 1e12:
+                    message = "no step improves (the linearised problem has no feasible step)"
+                    break
+                continue
+            f_new, g_new, G_new = gn.parts(z + d, True)
+            if feasible:
+                ok = np.isfinite(f_new) and g_new <= band * (1 + 1e-12) and f_new < f
+                gain = (f - f_new) / f if ok else 0.0
+            else:
+                ok = np.isfinite(f_new) and np.isfinite(g_new) and g_new < g
+                gain = (g - g_new) / g if ok else 0.0
+            if ok:
+                z, f, g, G = z + d, f_new, g_new, G_new
+                nu = max(nu / 3.0, 1e-12)
+                margin = max(margin / 1.5, 1e-4)
+                stall = stall + 1 if gain < tol else 0
+                if stall >= 3:
+                    message = (f"converged: relative decrease of {'J_S' if feasible else 'J_SF'} below {tol:g} "
+                               "for 3 steps")
+                    if feasible or g > band:
+                        break
+            elif feasible and np.isfinite(f_new) and f_new < f and np.isfinite(g_new):
+                margin = min(2.0 * margin, 0.5)  # the model was right about J_S: only the band was missed
+            else:
+                nu *= 4.0
+                if nu > 1e12:
+                    message = "converged: no step along which the model improves (step size vanished)"
+                    break
+    return z / problem.scale, f, g, f0, g0, it, message
 
 
 def se_dsf(
@@ -266,69 +349,25 @@ def se_dsf(
     else:
         lams = np.logspace(-6, 0, 60) if pe_lambdas is None else np.asarray(pe_lambdas, float)
         th0, start = _pe_start(problem, band, lams)
+    starts = [(th0, start)]
     if theta0 is None:
         coarse = np.logspace(-2, 0, 8) if lambdas is None else check_lambdas(lambdas)
-        th_c, start_c = _continuation(problem, band, coarse)
-        if th_c is not None:
-            th0, start = th_c, start_c
+        found, _ = _continuation(problem, band, coarse)
+        if found:
+            starts = found
     gn = _GN(problem)
-    z = th0 * problem.scale
-    f, g, G = gn.parts(z, True)
-    if not (np.isfinite(f) and np.isfinite(g)):
-        raise ValueError(f"the start ({start}) has an unbounded free run or no equilibrium reached at some static "
-                         "point; give another theta0")
-    f0, g0 = f, g
-    nu = 1e-3
-    # the linearised constraint aims a margin inside the band, so that the curvature of J_SF does not
-    # throw most steps just outside it (they would be refused and the iteration would zigzag)
-    margin = 0.05
-    it = 0
-    message = f"{max_iter} iterations reached"
-    stall = 0
-    with np.errstate(all="ignore"):
-        while it < max_iter:
-            it += 1
-            if G is None:
-                message = "the Jacobian is not finite at the current point"
-                break
-            A1, b1, A2, b2 = G
-            feasible = g <= band
-            if feasible:
-                d = _constrained_step(f, g, G, min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin))), nu)
-            else:
-                # restoration: decrease J_SF, with J_S as a small regulariser
-                d = _step(A2, b2, A1, b1, 1e-6, nu)
-            if d is None:
-                nu *= 10.0
-                if nu > 1e12:
-                    message = "no step improves (the linearised problem has no feasible step)"
-                    break
-                continue
-            f_new, g_new, G_new = gn.parts(z + d, True)
-            if feasible:
-                ok = np.isfinite(f_new) and g_new <= band * (1 + 1e-12) and f_new < f
-                gain = (f - f_new) / f if ok else 0.0
-            else:
-                ok = np.isfinite(f_new) and np.isfinite(g_new) and g_new < g
-                gain = (g - g_new) / g if ok else 0.0
-            if ok:
-                z, f, g, G = z + d, f_new, g_new, G_new
-                nu = max(nu / 3.0, 1e-12)
-                margin = max(margin / 1.5, 1e-4)
-                stall = stall + 1 if gain < tol else 0
-                if stall >= 3:
-                    message = (f"converged: relative decrease of {'J_S' if feasible else 'J_SF'} below {tol:g} "
-                               "for 3 steps")
-                    if feasible or g > band:
-                        break
-            elif feasible and np.isfinite(f_new) and f_new < f and np.isfinite(g_new):
-                margin = min(2.0 * margin, 0.5)  # the model was right about J_S: only the band was missed
-            else:
-                nu *= 4.0
-                if nu > 1e12:
-                    message = "converged: no step along which the model improves (step size vanished)"
-                    break
-    th = z / problem.scale
+    runs = []
+    for th_s, start_s in starts:
+        r = _edge(gn, th_s, band, max_iter, tol)
+        if r is not None:
+            runs.append((start_s, r))
+    if not runs:
+        raise ValueError(f"the start ({starts[0][1]}) has an unbounded free run or no equilibrium reached at some "
+                         "static point; give another theta0")
+    # the feasible run with the smallest J_S, else the run with the smallest J_SF
+    start, (th, f, g, f0, g0, it, message) = min(
+        runs, key=lambda t: (t[1][2] > band * (1 + 1e-12), t[1][1] if t[1][2] <= band * (1 + 1e-12) else t[1][2]))
+    it = sum(r[5] for _, r in runs)
     feasible = bool(g <= band * (1 + 1e-12))
     if not feasible:
         warn(f"se_dsf: the band B = {band:g} is infeasible for this structure from the start {start}: the smallest "
