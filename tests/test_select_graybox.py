@@ -74,3 +74,21 @@ def test_bad_input(data):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), short, band=1e-3, sizes=[3])
     with pytest.raises(ValueError, match="estimator"):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, estimator="ls")
+
+
+def test_several_estimators_score_every_structure_and_the_best_pair_wins(data, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5],
+                                estimator=("pe", "se-gradient"), store=tmp_path / "s.sqlite")
+        single = {e: gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5],
+                                       estimator=e, store=tmp_path / f"{e}.sqlite") for e in ("pe", "se-gradient")}
+    # one row per structure and estimator, each structure scored by both
+    assert set(res.table["estimator"]) == {"pe", "se-gradient"}
+    assert res.table.groupby(level=0).size().eq(2).all()
+    # the winner is the better of the two single-estimator selections, by validation J_S in the band
+    best = min(single.values(), key=lambda r: r.table["JS_valid"].iloc[0])
+    assert res.table["JS_valid"].iloc[0] == pytest.approx(best.table["JS_valid"].iloc[0], rel=1e-9)
+    assert res.decision.in_band
+    with pytest.raises(ValueError, match="distinct"):
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, estimator=("pe", "pe"))

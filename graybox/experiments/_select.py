@@ -9,7 +9,7 @@ driver, in local processes or on a Dask cluster) and picks by D_SF on validation
 2. **static form** — the degree d the static information asks for (:func:`static_degree`: the
    smallest polynomial fitting the static points within the band), and for each structure the
    simplest candidates of the clusters Σ_{u^0} … Σ_{u^d}, Σ_y it lacks (:func:`static_terms`);
-3. **scoring** — every structure × the gray-box variant (PE closed form by default, or SE), one
+3. **scoring** — every structure × each gray-box estimator (PE closed form by default, or SE), one
    grid cell per structure and validation fold; each cell's Pareto members are scored on the
    validation record, and a structure's score is D_SF on validation: the smallest validation J_S
    among its members with J_SF ≤ B (averaged over folds);
@@ -59,9 +59,9 @@ class GrayboxSelection:
     decision : Decision
         How that member was chosen from its Pareto set.
     table : pandas.DataFrame
-        Everything tried, one row per structure: ``structure`` (name), ``source`` (semp / frols),
-        ``size`` (terms before the static terms), ``n_terms``, ``added`` (static-form terms added),
-        ``JS_valid`` (D_SF on validation, mean over folds), ``JSF`` (its static error, worst fold),
+        Everything tried, one row per structure and estimator: ``structure`` (name), ``source``
+        (semp / frols), ``size`` (terms before the static terms), ``n_terms``, ``added`` (static-form
+        terms added), ``estimator``, ``JS_valid`` (D_SF on validation, mean over folds), ``JSF`` (its static error, worst fold),
         ``in_band`` (the band met in every fold), ``rank``.
     degree : int
         Degree of the static curve the static information asks for.
@@ -111,7 +111,7 @@ def select_graybox(
     band: float,
     sizes: Sequence[int] | None = None,
     sources: Sequence[str] = ("semp", "frols"),
-    estimator: str = "pe",
+    estimator: str | Sequence[str] = ("pe", "se-gradient"),
     constraints: Any = (),
     lambdas: Sequence[float] | None = None,
     validation: gb.Record | None = None,
@@ -143,12 +143,17 @@ def select_graybox(
         Structure sizes (before the static terms); default 4, 6, …, up to min(20, candidates).
     sources : sequence of {"semp", "frols"}
         Where the structures of each size come from.
-    estimator : {"pe", "se-gradient", "se-ga"}
+    estimator : {"pe", "se-gradient", "se-ga"} or a sequence of them
         The gray-box front of each structure (PE uses the closed form unless constraints need a QP).
+        With several, every structure is scored with each, and the best (structure, estimator) pair
+        wins (the default scores with PE and with the SE gradient method: where the static and the
+        dynamic data disagree they choose differently, and either can be the better one —
+        BENCHMARKS.md, structure selection).
     constraints : optional
         Constraint objects or tables imposed in every cell (PE only), as in :class:`Variant`.
     lambdas : sequence of float, optional
-        λ1 of each front (default: the estimator's; PE: 100 in logspace(-6, 0)).
+        λ1 of each front (default: PE 100 in logspace(-6, 0), the closed form; SE 10 in
+        logspace(-2, 0), a coarse front is enough to rank structures).
     validation : Record, optional
         Validation record (default: the Dataset's).
     folds : int
@@ -178,7 +183,11 @@ def select_graybox(
         raise ValueError(f"candidates must be a Structure, got {type(candidates).__name__}")
     process = candidates.process
     band = check_real(band, "band", low=0, low_open=True)
-    check_choice(estimator, "estimator", ("pe", "se-gradient", "se-ga"))
+    estimators = [estimator] if isinstance(estimator, str) else list(estimator)
+    if not estimators or len(set(estimators)) != len(estimators):
+        raise ValueError(f"estimator must name one or more distinct estimators, got {estimator!r}")
+    for e in estimators:
+        check_choice(e, "estimator", ("pe", "se-gradient", "se-ga"))
     for s in sources:
         check_choice(s, "sources", ("semp", "frols"))
     if not sources:
@@ -253,12 +262,11 @@ def select_graybox(
     data_specs = [DataSpec(f"fold{i + 1}" if len(splits) > 1 else "data",
                            dataset=gb.Dataset(a, b, sp, description="select_graybox"), band=band)
                   for i, (a, b) in enumerate(splits)]
-    opts: dict = {}
-    if estimator == "pe" and not constraints:
-        opts["solver"] = "closed"
-    variant = Variant("graybox", estimator, constraints=constraints, lambdas=lambdas,
-                      decision=DecisionRule("dsf", band=band, fallback="min_jsf"), options=opts)
-    grid = Grid(data_specs, structs, [variant], name="select_graybox")
+    variants = [Variant(e, e, constraints=constraints, lambdas=_lambdas(e, lambdas),
+                        decision=DecisionRule("dsf", band=band, fallback="min_jsf"),
+                        options={"solver": "closed"} if e == "pe" and not constraints else {})
+                for e in estimators]
+    grid = Grid(data_specs, structs, variants, name="select_graybox")
     if store is None:
         store = Path(tempfile.mkdtemp(prefix="graybox-select-")) / "cells.sqlite"
     with warnings.catch_warnings():
@@ -267,14 +275,18 @@ def select_graybox(
                  progress=progress)
     results = load_results(store)
     board = leaderboard(results, rule="dsf_valid", band=band).reset_index()
-    per = board.groupby("structure").agg(JS_valid=("JS_valid", "mean"), JSF=("JSF", "max"),
-                                         in_band=("in_band", "all"))
-    table = pd.DataFrame(rows).set_index("structure").join(per)
+    per = board.groupby(["structure", "variant"]).agg(JS_valid=("JS_valid", "mean"), JSF=("JSF", "max"),
+                                                      in_band=("in_band", "all")).reset_index()
+    per = per.rename(columns={"variant": "estimator"})
+    table = pd.DataFrame(rows).merge(per, on="structure", how="left")
+    table["estimator"] = table["estimator"].fillna(estimators[0])
+    table = table.set_index("structure")
     table["in_band"] = table["in_band"].fillna(False).astype(bool) & np.isfinite(table["JS_valid"])
     ok = table[table["in_band"]]
     used_fallback = False
     if len(ok):
-        chosen = ok["JS_valid"].idxmin()
+        chosen = ok["JS_valid"].astype(float).to_numpy().argmin()
+        chosen_row = ok.iloc[chosen]
     else:
         # the smallest static error reached by any member of any structure, from the stored fronts
         best_jsf = _smallest_jsf(results)
@@ -282,15 +294,23 @@ def select_graybox(
             raise ValueError(f"no structure meets the band B = {band:g}: the smallest J_SF reached is {best_jsf:.4g} "
                              f"(over {len(table)} structures); widen the band, change the candidates, or pass "
                              "fallback='min_jsf'")
-        chosen = table["JSF"].astype(float).idxmin() if table["JSF"].notna().any() else table.index[0]
+        jsf = table["JSF"].astype(float).to_numpy()
+        chosen_row = table.iloc[int(np.nanargmin(jsf)) if np.isfinite(jsf).any() else 0]
         used_fallback = True
     table = table.sort_values(["in_band", "JS_valid"], ascending=[False, True])
     table["rank"] = np.arange(1, len(table) + 1)
-    structure = gb.Structure(table.loc[chosen, "terms"].split(" + "))
+    structure = gb.Structure(chosen_row["terms"].split(" + "))
     # -- the chosen structure refitted on all the identification data ------------------------
-    decision = _refit(structure, ident, valid, sp, band, estimator, constraints, lambdas, used_fallback)
+    est = chosen_row["estimator"]
+    decision = _refit(structure, ident, valid, sp, band, est, constraints, _lambdas(est, lambdas), used_fallback)
     return GrayboxSelection(structure, decision.model, decision, table.drop(columns=["terms"]), degree, band,
                             used_fallback, str(store))
+
+
+def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> list[float] | None:
+    if lambdas is None and estimator.startswith("se"):
+        return list(np.logspace(-2, 0, 10))
+    return None if lambdas is None else list(lambdas)
 
 
 def _smallest_jsf(results: pd.DataFrame) -> float:
