@@ -206,11 +206,21 @@ def _continuation(problem: SEProblem, band: float, lambdas: np.ndarray,
         for _ in range(5):
             lam = float(np.sqrt(lam_lo * lam_hi))
             try:
-                cands = [("lo", th_lo), ("hi", th_hi), ("least squares", problem.ls_theta())]
+                # warm starts continue with "trf"; fresh starts (least squares, the PE member of this
+                # λ1) with "dogbox", which finds the deeper basins from afar (the SE section)
+                fresh = [("least squares", problem.ls_theta())]
                 pe = _pe_members(problem, np.array([lam]))
-                if pe is not None:  # a fresh convex start can land in a better basin than either neighbour
-                    cands.append(("PE", pe[0]))
-                th, _, _ = _multistart(problem, lam, cands, ("trf", "dogbox"), 50, 1e-8)
+                if pe is not None:
+                    fresh.append(("PE", pe[0]))
+                fits = []
+                for cands, solver in (([("lo", th_lo), ("hi", th_hi)], "trf"), (fresh, "dogbox")):
+                    try:
+                        fits.append(_multistart(problem, lam, cands, (solver,), 50, 1e-8))
+                    except _Failed:
+                        pass
+                if not fits:
+                    raise _Failed(f"no start of the bisection at λ1 = {lam:g} is feasible")
+                th = min(fits, key=lambda f: f[1])[0]
             except _Failed:
                 break
             j_s, j_sf = float(problem.js(th[None])[0]), float(problem.jsf(th[None])[0])
