@@ -145,17 +145,42 @@ def term_factors(terms: Sequence[Term]) -> list[tuple[tuple[str, int], ...]]:
 def fill_columns(out: np.ndarray, factors: Sequence[tuple], sig: dict[str, np.ndarray], k0: int, k1: int) -> None:
     """Write the candidate columns at samples ``k0 … k1−1`` of one record into ``out`` (k1−k0, n).
 
-    Each monomial is one multiply of a lower-degree monomial by a lagged signal; the prefixes live
-    in a dict local to this call (no closure refers to it), so they are freed on return.
+    Each monomial is one multiply of a lower-degree monomial by a lagged signal, written straight
+    into its column; only the proper prefixes other monomials need are kept, in a dict local to
+    this call (no closure refers to it), so they are freed on return.
     """
-    memo: dict[tuple, np.ndarray] = {(): np.ones(k1 - k0)}
+    needed = {vars_[:m] for vars_ in factors for m in range(1, len(vars_))}
+    memo: dict[tuple, np.ndarray] = {}
+
+    def prefix(key: tuple) -> np.ndarray | None:
+        # iterative: build the shortest missing prefix first
+        if not key:
+            return None
+        m = len(key)
+        while m > 1 and key[: m - 1] not in memo:
+            m -= 1
+        for i in range(m, len(key) + 1):
+            s, lag = key[i - 1]
+            x = sig[s][k0 - lag : k1 - lag]
+            base = memo.get(key[: i - 1])
+            memo[key[:i]] = x.copy() if base is None else base * x
+        return memo[key]
+
     for j, vars_ in enumerate(factors):
-        for m in range(1, len(vars_) + 1):
-            key = vars_[:m]
-            if key not in memo:
-                s, lag = vars_[m - 1]
-                memo[key] = memo[vars_[: m - 1]] * sig[s][k0 - lag : k1 - lag]
-        out[:, j] = memo[vars_]
+        col = out[:, j]
+        if not vars_:
+            col[...] = 1.0
+            continue
+        s, lag = vars_[-1]
+        x = sig[s][k0 - lag : k1 - lag]
+        head = vars_[:-1]
+        if not head:
+            col[...] = x
+            continue
+        base = memo[head] if head in memo else prefix(head)
+        np.multiply(base, x, out=col)
+        if vars_ in needed and vars_ not in memo:
+            memo[vars_] = col.copy()
 
 
 def chunk_rows(n_columns: int) -> int:
