@@ -8,7 +8,8 @@ whole record used for identification), ny = nu = 6, degree 2 (91 candidates -> 1
 degree 3 (455 candidates -> 23 terms), a fixed number of terms, ``method`` as given (default: the
 library's default). Each size runs in a fresh subprocess (one process per size, so the peak is
 that size's own): the time is the minimum of ``--repeat`` calls below 5 s (one call above) after
-a warm-up; the peak is ``tracemalloc``'s over one extra call (Python and numpy allocations, over
+a warm-up (and the CPU time of the same calls: with one BLAS thread, the default, it is the
+figure least disturbed by other work on the machine); the peak is ``tracemalloc``'s over one extra call (Python and numpy allocations, over
 what the record itself holds) and the subprocess's ``ru_maxrss``.
 
 The records are simulated once and cached in ``--cache`` (``.npz``), so a run against another
@@ -65,11 +66,12 @@ def one_size(path: str, degree: int, k: int, repeat: int, method: str) -> dict:
             return frols(cand, rec, **kw)
 
     sel = call()  # warm-up
-    times = []
+    times, cpus = [], []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         call()
         times.append(time.perf_counter() - t0)
+        cpus.append(time.process_time() - c0)
         if times[-1] > 5.0:
             break
     tracemalloc.start()
@@ -77,7 +79,7 @@ def one_size(path: str, degree: int, k: int, repeat: int, method: str) -> dict:
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     return {
-        "N": len(rec), "degree": degree, "candidates": len(cand), "terms": k, "time_s": min(times),
+        "N": len(rec), "degree": degree, "candidates": len(cand), "terms": k, "time_s": min(times), "cpu_s": min(cpus),
         "peak_MiB": peak / 2**20, "maxrss_MiB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "matrix_MiB": 8 * sel.n_rows * len(cand) / 2**20, "selected": [str(t) for t in sel.structure],
         "graybox": str(Path(graybox.__file__).parent),
@@ -91,6 +93,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--method", default="auto", help='frols method; "" to omit the keyword (old checkouts)')
     ap.add_argument("--cache", type=Path, default=Path("/tmp/graybox_bench_records"))
+    ap.add_argument("--blas-threads", type=int, default=1,
+                    help="BLAS/OpenMP threads of each run (1: steady figures on a shared machine)")
     ap.add_argument("--json", type=Path, help="append the rows to this JSON-lines file")
     ap.add_argument("--child", nargs=3, metavar=("PATH", "DEGREE", "K"), help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -102,8 +106,9 @@ def main() -> None:
     from _common import git_rev, machine
 
     print(f"# bench_frols_long  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  git {git_rev()}  {machine()}")
-    print(f"# method={args.method!r}, PYTHONPATH={os.environ.get('PYTHONPATH', '')!r}")
-    print(f"{'N':>9} {'deg':>3} {'cand':>5} {'terms':>5} {'time':>9} {'peak':>11} {'maxrss':>11} {'Ψ size':>11}")
+    print(f"# method={args.method!r}, BLAS threads {args.blas_threads}, PYTHONPATH={os.environ.get('PYTHONPATH', '')!r}")
+    print(f"{'N':>9} {'deg':>3} {'cand':>5} {'terms':>5} {'time':>9} {'CPU':>9} {'peak':>11} {'maxrss':>11} "
+          f"{'Ψ size':>11}")
     prev: dict[int, dict] = {}
     for n in [int(s) for s in args.sizes]:
         path = make_record(args.cache, n)
@@ -112,7 +117,9 @@ def main() -> None:
                 continue
             cmd = [sys.executable, __file__, "--child", str(path), str(degree), str(k), "--repeat", str(args.repeat),
                    "--method", args.method]
-            out = subprocess.run(cmd, capture_output=True, text=True)
+            env = os.environ | {v: str(args.blas_threads) for v in
+                                ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
+            out = subprocess.run(cmd, capture_output=True, text=True, env=env)
             if out.returncode:
                 print(f"{n:>9} {degree:>3} failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode}")
                 continue
@@ -122,7 +129,7 @@ def main() -> None:
                 a = prev[degree]
                 growth = f"  growth N^{np.log(row['time_s'] / a['time_s']) / np.log(row['N'] / a['N']):.2f}"
             prev[degree] = row
-            print(f"{row['N']:>9} {degree:>3} {row['candidates']:>5} {k:>5} {row['time_s']:8.3f}s "
+            print(f"{row['N']:>9} {degree:>3} {row['candidates']:>5} {k:>5} {row['time_s']:8.3f}s {row['cpu_s']:8.3f}s "
                   f"{row['peak_MiB']:8.1f}MiB {row['maxrss_MiB']:8.1f}MiB {row['matrix_MiB']:8.1f}MiB{growth}")
             if args.json:
                 with open(args.json, "a") as fh:

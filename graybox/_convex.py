@@ -54,7 +54,7 @@ from ._ls import column_scales
 from ._model import Model
 from ._pareto import ParetoSet
 from ._records import Dataset, Record, StaticPoints, warn_static_range
-from ._gram import as_gram_records, is_dask_data, r_factor
+from ._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ._regressors import stacked_regressors
 from ._static import cluster_map
 from ._terms import Structure
@@ -217,6 +217,10 @@ def _r_factor(A: np.ndarray) -> np.ndarray:
 def _dynamic(structure: Structure, records: list) -> _Data:
     if is_dask_data(records):
         return _dynamic_chunked(structure, records)
+    rows = sum(max(len(r) - structure.max_lag, 0) for r in records)
+    if 8 * 4 * rows * (len(structure) + 1) > available_memory():
+        # Ψ, its scaled copy, [Ψ/s, y] and the CholeskyQR2 Q would not fit: reduce chunk by chunk
+        return _dynamic_chunked(structure, records)
     psi, y = stacked_regressors(structure, records)
     n = len(structure)
     if psi.shape[0] <= n:
@@ -231,8 +235,9 @@ def _dynamic(structure: Structure, records: list) -> _Data:
 
 
 def _dynamic_chunked(structure: Structure, records: list) -> _Data:
-    """As :func:`_dynamic` for Dask records: the R factor of [Ψ, y] by TSQR over the blocks, on the
-    active Dask scheduler; the record is never held whole."""
+    """As :func:`_dynamic` by TSQR over chunks of rows: for Dask records (the blocks reduced on the
+    active Dask scheduler; the record is never held whole) and for records whose dense Ψ would not
+    fit in memory."""
     n = len(structure)
     R, N = r_factor(structure.terms, records, structure.max_lag)
     if N <= n:

@@ -14,7 +14,17 @@ How it is computed, and why
   after a term is chosen, every remaining column loses its component along the new
   orthonormal vector (a rank-1 update of the N × n candidate matrix, fused with the norms
   and inner products the next ERR needs into one compiled pass). The cost is O(N·n·k) for
-  k chosen terms out of n candidates on N rows.
+  k chosen terms out of n candidates on N rows, and the N × n matrix must fit in memory.
+* For long records (``method="gram"``, what ``"auto"`` picks once the candidate matrix would
+  exceed 32 MiB, and for Dask records) the same selection runs in the covariance form
+  (Korenberg's fast orthogonal search): ΨᵀΨ, Ψᵀy and yᵀy are accumulated over chunks of rows
+  in one pass (:mod:`graybox._gram`), scaled to unit-RMS columns, and the orthogonalisation is
+  a pivoted Cholesky factorisation of that n × n matrix, O(n·k) a step whatever N. Memory does
+  not grow with N. The Gram matrix squares the conditioning, so it only *ranks* the
+  candidates (an orthogonalised energy below 1e-11 N is treated as a linear combination); the
+  chosen terms' ERR, RSS and θ are then taken from a TSQR factor of just those k columns and
+  y (a second, narrow pass), which carries QR accuracy: on the bundled plant the two methods
+  choose the same terms with ERR and θ equal to ~1e-12.
 * A candidate whose orthogonalised norm falls below ``rank_tol`` of its original norm is
   (numerically) a linear combination of the chosen terms. Its ERR would be round-off divided
   by round-off, so it is dropped and reported, never chosen.

@@ -305,3 +305,19 @@ def test_frols_and_pe_on_dask_records_reduced_on_a_local_cluster(dask_client):
     np.testing.assert_allclose(th_lazy, th_mem, rtol=1e-8)
     with pytest.raises(ValueError, match="pe_thetas"):
         gb.pe_pareto(st, lazy[0], ds.static, solver="closed")
+
+
+def test_pe_reduces_a_record_chunk_by_chunk_when_its_regressors_would_not_fit(monkeypatch):
+    import graybox._convex as cx
+
+    ds = gb.load_pumping()
+    st = Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-2)y(k-1)", "1"])
+    dense = cx._dynamic(st, [ds.ident])
+    monkeypatch.setattr(cx, "available_memory", lambda: 100_000)  # under 4 copies of the 3200 × 7 Ψ
+    used = []
+    monkeypatch.setattr(cx, "_dynamic_chunked", lambda *a, f=cx._dynamic_chunked: used.append(1) or f(*a))
+    chunked = cx._dynamic(st, [ds.ident])
+    assert used
+    np.testing.assert_allclose(chunked.R1, dense.R1, rtol=1e-10, atol=1e-10 * np.abs(dense.R1).max())
+    np.testing.assert_allclose(chunked.c1, dense.c1, rtol=1e-10, atol=1e-10 * np.abs(dense.c1).max())
+    np.testing.assert_allclose(chunked.rss, dense.rss, rtol=1e-10)
