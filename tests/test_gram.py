@@ -10,6 +10,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 import graybox as gb
 import graybox._gram as gram
@@ -321,3 +323,34 @@ def test_pe_reduces_a_record_chunk_by_chunk_when_its_regressors_would_not_fit(mo
     np.testing.assert_allclose(chunked.R1, dense.R1, rtol=1e-10, atol=1e-10 * np.abs(dense.R1).max())
     np.testing.assert_allclose(chunked.c1, dense.c1, rtol=1e-10, atol=1e-10 * np.abs(dense.c1).max())
     np.testing.assert_allclose(chunked.rss, dense.rss, rtol=1e-10)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    n=st.integers(60, 400),
+    log_su=st.floats(-3, 4),
+    offset=st.floats(-2, 2),
+    n_terms=st.integers(1, 10),
+)
+def test_gram_err_is_the_least_squares_fit_of_what_it_selects(seed, n, log_su, offset, n_terms):
+    rng = np.random.default_rng(seed)
+    u = 10**log_su * (offset + rng.standard_normal(n))
+    y = np.zeros(n)
+    e = rng.standard_normal(n)
+    for k in range(2, n):
+        y[k] = 0.5 * y[k - 1] + 0.1 * (u[k - 1] / 10**log_su) ** 2 + e[k]
+    cand = Candidates(2, 2, ne=0, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        try:
+            sel = frols(cand, Record(u, y), n_terms=n_terms, method="gram")
+        except ValueError as exc:
+            assume("usable" not in str(exc) and "independent" not in str(exc))
+            raise
+    assert np.all(sel.err >= 0.0) and sel.err.sum() <= 1.0 + 1e-12
+    psi, target = stacked_regressors(sel.structure, Record(u, y), start=2)
+    theta, *_ = np.linalg.lstsq(psi, target, rcond=None)
+    resid = target - psi @ theta
+    np.testing.assert_allclose(sel.rss[-1], max(resid @ resid, 1e-20 * (target @ target)), rtol=1e-8)
+    np.testing.assert_allclose(sel.theta, theta, rtol=1e-6, atol=1e-9 * np.abs(theta).max())
