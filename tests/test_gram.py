@@ -354,3 +354,21 @@ def test_gram_err_is_the_least_squares_fit_of_what_it_selects(seed, n, log_su, o
     resid = target - psi @ theta
     np.testing.assert_allclose(sel.rss[-1], max(resid @ resid, 1e-20 * (target @ target)), rtol=1e-8)
     np.testing.assert_allclose(sel.theta, theta, rtol=1e-6, atol=1e-9 * np.abs(theta).max())
+
+
+def test_dask_blocks_shorter_than_the_lags_see_their_lags():
+    da = pytest.importorskip("dask.array")
+    import dask
+
+    r1, r2 = narx_record(5, n=300, noise=0.02), narx_record(6, n=200, noise=0.02)
+    cand = Candidates(6, 6, ne=0, degree=2)
+    lazy = [gb.DaskRecord(da.from_array(r.u, chunks=c), da.from_array(r.y, chunks=7)) for r, c in ((r1, 4), (r2, 13))]
+    with dask.config.set(scheduler="synchronous"):
+        got = gram.gram_sums(cand.terms, lazy, 6)
+        R, N = gram.r_factor(cand.terms, lazy, 6)
+    ref = gram.gram_sums(cand.terms, [r1, r2], 6)
+    assert got.N == ref.N == N == (300 - 6) + (200 - 6)
+    np.testing.assert_allclose(got.G, ref.G, rtol=1e-12, atol=1e-12 * np.abs(ref.G).max())
+    np.testing.assert_allclose(got.b, ref.b, rtol=1e-12, atol=1e-12 * np.abs(ref.b).max())
+    A = np.column_stack(stacked_regressors(cand, [r1, r2], start=6))
+    np.testing.assert_allclose(R.T @ R, A.T @ A, rtol=1e-10, atol=1e-10 * np.abs(A.T @ A).max())
