@@ -50,7 +50,7 @@ def make_record(cache: Path, n: int) -> Path:
     return p
 
 
-def one_size(path: str, degree: int, k: int, repeat: int, method: str) -> dict:
+def one_size(path: str, degree: int, k: int, repeat: int, method: str, dask_blocks: int = 0) -> dict:
     import graybox
     from graybox import Candidates, Record
     from graybox._selection import frols
@@ -58,6 +58,15 @@ def one_size(path: str, degree: int, k: int, repeat: int, method: str) -> dict:
     d = np.load(path)
     rec = Record(d["u"], d["y"], Ts=0.05)
     cand = Candidates(6, 6, ne=0, degree=degree)
+    if dask_blocks:
+        # the record as Dask arrays, reduced on a 2-worker LocalCluster: the driver never holds Ψ
+        import dask.array as da
+        from distributed import Client, LocalCluster
+
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+        Client(cluster)
+        step = -(-len(rec) // dask_blocks)
+        rec = graybox.DaskRecord(da.from_array(rec.u, chunks=step), da.from_array(rec.y, chunks=step), Ts=0.05)
     kw = {"n_terms": k} | ({"method": method} if method else {})
 
     def call():
@@ -79,7 +88,7 @@ def one_size(path: str, degree: int, k: int, repeat: int, method: str) -> dict:
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     return {
-        "N": len(rec), "degree": degree, "candidates": len(cand), "terms": k, "time_s": min(times), "cpu_s": min(cpus),
+        "N": len(rec), "degree": degree, "dask_blocks": dask_blocks, "candidates": len(cand), "terms": k, "time_s": min(times), "cpu_s": min(cpus),
         "peak_MiB": peak / 2**20, "maxrss_MiB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "matrix_MiB": 8 * sel.n_rows * len(cand) / 2**20, "selected": [str(t) for t in sel.structure],
         "graybox": str(Path(graybox.__file__).parent),
@@ -96,17 +105,20 @@ def main() -> None:
     ap.add_argument("--blas-threads", type=int, default=1,
                     help="BLAS/OpenMP threads of each run (1: steady figures on a shared machine)")
     ap.add_argument("--json", type=Path, help="append the rows to this JSON-lines file")
+    ap.add_argument("--dask", type=int, default=0, metavar="BLOCKS",
+                    help="run on the record as a DaskRecord of BLOCKS blocks on a 2-worker LocalCluster "
+                         "(time and driver memory; needs dask[distributed])")
     ap.add_argument("--child", nargs=3, metavar=("PATH", "DEGREE", "K"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         p, deg, k = args.child
-        print(json.dumps(one_size(p, int(deg), int(k), args.repeat, args.method)))
+        print(json.dumps(one_size(p, int(deg), int(k), args.repeat, args.method, args.dask)))
         return
     sys.path.insert(0, str(Path(__file__).parent))
     from _common import git_rev, machine
 
     print(f"# bench_frols_long  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  git {git_rev()}  {machine()}")
-    print(f"# method={args.method!r}, BLAS threads {args.blas_threads}, PYTHONPATH={os.environ.get('PYTHONPATH', '')!r}")
+    print(f"# method={args.method!r}, dask blocks {args.dask or '-'}, BLAS threads {args.blas_threads}, PYTHONPATH={os.environ.get('PYTHONPATH', '')!r}")
     print(f"{'N':>9} {'deg':>3} {'cand':>5} {'terms':>5} {'time':>9} {'CPU':>9} {'peak':>11} {'maxrss':>11} "
           f"{'Ψ size':>11}")
     prev: dict[int, dict] = {}
@@ -116,7 +128,7 @@ def main() -> None:
             if degree not in args.degrees:
                 continue
             cmd = [sys.executable, __file__, "--child", str(path), str(degree), str(k), "--repeat", str(args.repeat),
-                   "--method", args.method]
+                   "--method", args.method, "--dask", str(args.dask)]
             env = os.environ | {v: str(args.blas_threads) for v in
                                 ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
             out = subprocess.run(cmd, capture_output=True, text=True, env=env)
