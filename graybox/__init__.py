@@ -13,6 +13,7 @@ from importlib.metadata import PackageNotFoundError, version as _version
 from ._terms import Candidates, Structure, Term, parse_structure, parse_term
 from ._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ._regressors import regressor_matrix, stacked_regressors
+from ._gram import DaskRecord
 from ._simulation import DivergenceError, predict, simulate, simulate_many
 from ._model import Model
 from ._static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
@@ -50,7 +51,7 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree th
 __all__ = [
     "Candidates", "Structure", "Term", "parse_term", "parse_structure",
     "Record", "StaticPoints", "Dataset", "StaticRangeWarning",
-    "regressor_matrix", "stacked_regressors",
+    "regressor_matrix", "stacked_regressors", "DaskRecord",
     "Model", "predict", "simulate", "simulate_many", "DivergenceError",
     "cluster_map", "equilibria", "static_curve", "static_gain", "Equilibrium",
     "evaluate", "evaluate_thetas", "j1", "js", "jsf", "mse", "rrse", "fit_percent",

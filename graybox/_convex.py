@@ -53,7 +53,8 @@ from ._els import els
 from ._ls import column_scales
 from ._model import Model
 from ._pareto import ParetoSet
-from ._records import Dataset, Record, StaticPoints, as_records, warn_static_range
+from ._records import Dataset, Record, StaticPoints, warn_static_range
+from ._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ._regressors import stacked_regressors
 from ._static import cluster_map
 from ._terms import Structure
@@ -213,7 +214,13 @@ def _r_factor(A: np.ndarray) -> np.ndarray:
         return scipy.linalg.qr(A, mode="r", check_finite=False)[0][: A.shape[1]]
 
 
-def _dynamic(structure: Structure, records: list[Record]) -> _Data:
+def _dynamic(structure: Structure, records: list) -> _Data:
+    if is_dask_data(records):
+        return _dynamic_chunked(structure, records)
+    rows = sum(max(len(r) - structure.max_lag, 0) for r in records)
+    if 8 * 4 * rows * (len(structure) + 1) > available_memory():
+        # Ψ, its scaled copy, [Ψ/s, y] and the CholeskyQR2 Q would not fit: reduce chunk by chunk
+        return _dynamic_chunked(structure, records)
     psi, y = stacked_regressors(structure, records)
     n = len(structure)
     if psi.shape[0] <= n:
@@ -225,6 +232,24 @@ def _dynamic(structure: Structure, records: list[Record]) -> _Data:
     # its corner the LS residual norm; Q itself is never formed.
     Raug = _r_factor(np.column_stack([psi / s, y]))
     return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0])
+
+
+def _dynamic_chunked(structure: Structure, records: list) -> _Data:
+    """As :func:`_dynamic` by TSQR over chunks of rows: for Dask records (the blocks reduced on the
+    active Dask scheduler; the record is never held whole) and for records whose dense Ψ would not
+    fit in memory."""
+    n = len(structure)
+    R, N = r_factor(structure.terms, records, structure.max_lag)
+    if N <= n:
+        raise ValueError(f"{N} regression rows for {n} parameters: the data are too short")
+    # column RMS from the factor (‖A e_j‖ = ‖R e_j‖); R D⁻¹ is the factor of the scaled matrix
+    s = np.sqrt(np.einsum("ij,ij->j", R[:, :n], R[:, :n]) / N)
+    s = np.where(s > 0, s, 1.0)
+    Rs = R[:, :n] / s
+    # QR sign convention: make the diagonal positive, as the Cholesky-based factor has it
+    sign = np.where(np.diag(R) < 0, -1.0, 1.0)[:, None]
+    Rs, c = sign * Rs, sign[:, 0] * R[:, n]
+    return _Data(structure, s, Rs[:n, :n], c[:n], float(c[n] ** 2), N)
 
 
 def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray, int]:
@@ -533,8 +558,10 @@ def cls(
     ----------
     structure : Structure or Model
         Process terms (a Model's structure is used; noise terms are refused).
-    data : Record, sequence of Record, or Dataset
-        Dynamic identification data (a Dataset's ``ident`` record).
+    data : Record, sequence of Record, Dataset, DaskRecord or sequence of DaskRecord
+        Dynamic identification data (a Dataset's ``ident`` record). A
+        :class:`~graybox.DaskRecord` is reduced to the triangular factor of [Ψ, y] block by
+        block on the active Dask scheduler (never held whole).
     static : StaticCurve or StaticPoints, optional
         What the static function must match:
 
@@ -578,7 +605,7 @@ def cls(
     """
     st = _process_structure(structure)
     solver = _check_solver(solver)
-    recs = as_records(data)
+    recs = as_gram_records(data)
     d = _dynamic(st, recs)
     cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
     _warn_static_range(cons, ctx, curve, recs)
@@ -671,7 +698,7 @@ def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: 
 def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls"):
     st = _process_structure(structure)
     check_choice(weights, "weights", ("mse", "sum"))
-    recs = as_records(data)
+    recs = as_gram_records(data)
     d = _dynamic(st, recs)
     pts = _static_points(static, ubar, data)
     curve = static if isinstance(static, StaticCurve) else None
@@ -707,7 +734,9 @@ def pe_thetas(
     ----------
     structure, data, static, lambdas, constraints, solver, solver_options, weights, ubar, warm_start, reference
         As for :func:`pe_pareto` (``reference``: where Σ*_y comes from when a constraint needs it,
-        as for :func:`cls`).
+        as for :func:`cls`), except that ``data`` may also be a :class:`~graybox.DaskRecord` (or a
+        sequence of them): it is reduced to the triangular factor of [Ψ, y] block by block on the
+        active Dask scheduler, so a record larger than memory can be used.
 
     Returns
     -------
@@ -758,7 +787,8 @@ def pe_pareto(
     structure : Structure or Model
         Process terms ((15) without the MA part in the paper).
     data : Record, sequence of Record, or Dataset
-        Dynamic identification data.
+        Dynamic identification data. (For a :class:`~graybox.DaskRecord` use
+        :func:`pe_thetas`: the members' free-run J_S needs the record in memory.)
     static : StaticPoints or StaticCurve, optional
         Static information; a curve is sampled at ``ubar`` (default: 10 points over its domain).
         Default: the Dataset's static points. Points outside the records' input range are
@@ -791,6 +821,10 @@ def pe_pareto(
         θ, λ1, J_1 and J_S on ``data``, J_SF (true static-curve MSE, stable equilibria only) and,
         in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²).
     """
+    if is_dask_data(data):
+        raise ValueError("pe_pareto evaluates every member by a free run on the record, which needs it in memory; "
+                         "for a DaskRecord call pe_thetas (it reduces the record on the Dask scheduler) and evaluate "
+                         "the θs on a record that fits")
     thetas = pe_thetas(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
                        solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
                        reference=reference)

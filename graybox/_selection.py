@@ -14,7 +14,17 @@ How it is computed, and why
   after a term is chosen, every remaining column loses its component along the new
   orthonormal vector (a rank-1 update of the N × n candidate matrix, fused with the norms
   and inner products the next ERR needs into one compiled pass). The cost is O(N·n·k) for
-  k chosen terms out of n candidates on N rows.
+  k chosen terms out of n candidates on N rows, and the N × n matrix must fit in memory.
+* For long records (``method="gram"``, what ``"auto"`` picks once the candidate matrix would
+  exceed 32 MiB, and for Dask records) the same selection runs in the covariance form
+  (Korenberg's fast orthogonal search): ΨᵀΨ, Ψᵀy and yᵀy are accumulated over chunks of rows
+  in one pass (:mod:`graybox._gram`), scaled to unit-RMS columns, and the orthogonalisation is
+  a pivoted Cholesky factorisation of that n × n matrix, O(n·k) a step whatever N. Memory does
+  not grow with N. The Gram matrix squares the conditioning, so it only *ranks* the
+  candidates (an orthogonalised energy below 1e-11 N is treated as a linear combination); the
+  chosen terms' ERR, RSS and θ are then taken from a TSQR factor of just those k columns and
+  y (a second, narrow pass), which carries QR accuracy: on the bundled plant the two methods
+  choose the same terms with ERR and θ equal to ~1e-12.
 * A candidate whose orthogonalised norm falls below ``rank_tol`` of its original norm is
   (numerically) a linear combination of the chosen terms. Its ERR would be round-off divided
   by round-off, so it is dropped and reported, never chosen.
@@ -47,7 +57,20 @@ import pandas as pd
 from ._model import Model
 from ._records import Dataset, Record, as_records
 from ._terms import Structure, Term, parse_term
+from ._gram import (
+    DaskRecord,
+    as_gram_records,
+    chunk_bytes,
+    chunk_rows,
+    fill_columns,
+    gram_sums,
+    is_dask_data,
+    r_factor,
+    require_memory,
+    term_factors,
+)
 from ._regressors import record_signals
+from ._validation import check_choice
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -61,6 +84,21 @@ _DEFAULT_MAX_TERMS = 50
 # criterion curve of noise-free data keeps "improving" at the 1e-30 level and the penalty
 # loses to ln(round-off).
 _RSS_FLOOR = 1e-20
+
+# Columns whose |cos| with an earlier one exceeds 1 − this are the same column up to scale.
+_DUPLICATE_TOL = 1e-10
+
+# The Gram form sees a candidate's orthogonalised energy as G_jj − Σ C_ij², a difference of
+# O(N) numbers: below about this fraction of N it is round-off, so a candidate under it is
+# treated as a linear combination of the chosen terms whatever ``rank_tol`` asks.
+_GRAM_DEPENDENT = 1e-11
+
+# method="auto" orthogonalises on the data (MGS) while the candidate matrix is at most this
+# many bytes, and on the Gram matrix (one chunked pass, memory independent of N) beyond.
+_AUTO_GRAM_BYTES = 32 * 2**20
+
+#: Orthogonalisation methods understood by :func:`frols`.
+METHODS: tuple[str, ...] = ("auto", "mgs", "gram")
 
 
 class CandidateWarning(UserWarning):
@@ -230,33 +268,25 @@ class Selection:
 def _candidate_matrix(terms: Sequence[Term], records: list[Record], start: int) -> tuple[np.ndarray, np.ndarray]:
     """Candidate columns over all records, Fortran-ordered (rows, n), and the target.
 
-    Each monomial is one multiply of a lower-degree monomial (memoised) by a lagged signal,
-    so the whole matrix costs about one multiply per entry instead of one per factor.
+    Built chunk by chunk of rows (see :func:`graybox._gram.fill_columns`): each monomial is one
+    multiply of a lower-degree monomial by a lagged signal, and the prefixes kept for that live
+    only as long as one chunk, so the peak is the matrix plus one chunk's worth.
     """
     rows = sum(len(r) - start for r in records)
+    factors = term_factors(terms)
     W = np.empty((rows, len(terms)), order="F")
     target = np.empty(rows)
+    step = chunk_rows(len(terms))
     r0 = 0
     for rec in records:
         rec.require_length(start)
         n = len(rec)
-        r1 = r0 + n - start
         sig = record_signals(rec)
-        memo: dict[tuple, np.ndarray] = {(): np.ones(n - start)}
-
-        def column(vars_: tuple) -> np.ndarray:
-            c = memo.get(vars_)
-            if c is None:
-                s, lag = vars_[-1]
-                c = column(vars_[:-1]) * sig[s][start - lag : n - lag]
-                memo[vars_] = c
-            return c
-
-        for j, t in enumerate(terms):
-            vars_ = tuple((s, l) for s, l, p in t.factors for _ in range(p))
-            W[r0:r1, j] = column(vars_)
-        target[r0:r1] = rec.y[start:]
-        r0 = r1
+        for k0 in range(start, n, step):
+            k1 = min(k0 + step, n)
+            fill_columns(W[r0 : r0 + k1 - k0], factors, sig, k0, k1)
+            r0 += k1 - k0
+        target[r0 - (n - start) : r0] = rec.y[start:]
     return W, target
 
 
@@ -273,14 +303,16 @@ def _duplicates(W: np.ndarray, active: np.ndarray) -> list[tuple[int, int]]:
         return []
     N = W.shape[0]
     z = np.random.default_rng(0).standard_normal(N) / math.sqrt(N)
-    key = np.abs(z @ W[:, idx])
+    # project every column (a GEMV over W in place) and pick the active ones afterwards:
+    # W[:, idx] would copy the whole candidate matrix for one projection
+    key = np.abs(z @ W)[idx]
     order = np.argsort(key, kind="stable")
     groups: list[list[int]] = [[int(idx[order[0]])]]
     for a in order[1:]:
         head = groups[-1][0]
         ia = int(idx[a])
         same_key = abs(key[a] - key[np.searchsorted(idx, head)]) <= 1e-8 * max(1.0, key[a])
-        if same_key and abs(float(W[:, ia] @ W[:, head])) / N > 1.0 - 1e-10:
+        if same_key and abs(float(W[:, ia] @ W[:, head])) / N > 1.0 - _DUPLICATE_TOL:
             groups[-1].append(ia)
         else:
             groups.append([ia])
@@ -288,6 +320,28 @@ def _duplicates(W: np.ndarray, active: np.ndarray) -> list[tuple[int, int]]:
     for g in groups:
         kept = min(g)
         pairs += [(kept, j) for j in sorted(g) if j != kept]
+    return pairs
+
+
+def _gram_duplicates(G: np.ndarray, active: np.ndarray) -> list[tuple[int, int]]:
+    """As :func:`_duplicates`, from the Gram matrix: |cos θ_ij| = |G_ij| / √(G_ii G_jj) ≈ 1.
+
+    Each dropped candidate is paired with the first earlier candidate it is proportional to
+    that is itself kept (proportionality is transitive, so that is its group's first member).
+    """
+    idx = np.flatnonzero(active)
+    if idx.size < 2:
+        return []
+    d = np.sqrt(np.diag(G)[idx])
+    close = np.abs(G[np.ix_(idx, idx)]) / np.outer(d, d) > 1.0 - _DUPLICATE_TOL
+    pairs: list[tuple[int, int]] = []
+    dropped = np.zeros(idx.size, bool)
+    for b in np.flatnonzero(np.triu(close, 1).any(axis=0)):
+        for a in np.flatnonzero(close[:b, b]):
+            if not dropped[a]:
+                pairs.append((int(idx[a]), int(idx[b])))
+                dropped[b] = True
+                break
     return pairs
 
 
@@ -336,13 +390,99 @@ def _norms_and_dots(W, r, nrm, num):  # pragma: no cover - compiled
         num[j] = s2
 
 
+class _MGS:
+    """Forward OLS state on the data: unit-RMS candidate matrix W (N × n, Fortran), residual r."""
+
+    def __init__(self, W: np.ndarray, y: np.ndarray, K: int) -> None:
+        N, n = W.shape
+        self.W, self.r = W, y.copy()
+        self.nrm, self.num, self.coef = np.empty(n), np.empty(n), np.zeros(n)
+        _norms_and_dots(W, self.r, self.nrm, self.num)
+        self.C = np.zeros((K, n))  # C[i, j] = q_iᵀ s_j: the upper triangle of the QR factor
+        self.Q = np.empty((N, K))
+        self.g = np.empty(K)
+
+    def choose(self, k: int, j: int, active: np.ndarray, last: bool) -> None:
+        Q, C = self.Q, self.C
+        # The chosen column is re-orthogonalised once against the previous q's: cheap (one
+        # column) and it keeps Q orthonormal to working precision, so ERR sums stay ≤ 1.
+        w = self.W[:, j].copy()
+        if k:
+            corr = Q[:, :k].T @ w
+            w -= Q[:, :k] @ corr
+            C[:k, j] += corr
+        norm_w = math.sqrt(float(w @ w))
+        q = w / norm_w
+        C[k, j] = norm_w
+        Q[:, k] = q
+        self.g[k] = float(q @ self.r)
+        self.r -= self.g[k] * q
+        if not last:
+            _mgs_update(self.W, q, self.r, active, self.coef, self.nrm, self.num)
+            C[k, active] = self.coef[active]
+
+    def rss(self, k: int) -> float:
+        return float(self.r @ self.r)
+
+
+class _GramOLS:
+    """Forward OLS on the Gram matrix (covariance form; Korenberg's fast orthogonal search).
+
+    With G = SᵀS (unit-RMS columns s_j) and b = Sᵀy, the QR factor of the chosen columns is a
+    pivoted, left-looking Cholesky factor of G: C[k, :] = (G[j, :] − C[:k, j]ᵀ C[:k, :]) / C[k, j]
+    with C[k, j] = √(G_jj − Σ_i C[i, j]²), and q_kᵀy = (b_j − C[:k, j]ᵀ g[:k]) / C[k, j]. Every
+    candidate's orthogonalised energy and its inner product with y follow by rank-1 updates, so
+    a step costs O(n k) whatever N.
+    """
+
+    def __init__(self, G: np.ndarray, b: np.ndarray, yy: float, K: int) -> None:
+        n = G.shape[0]
+        self.G, self.b, self.yy = G, b, yy
+        self.nrm = np.diag(G).copy()
+        self.num = b.copy()
+        self.C = np.zeros((K, n))
+        self.g = np.empty(K)
+
+    def choose(self, k: int, j: int, active: np.ndarray, last: bool) -> None:
+        C = self.C
+        # energy of the chosen column recomputed from its own C column (not the running update)
+        d = float(self.G[j, j] - C[:k, j] @ C[:k, j])
+        cjj = math.sqrt(d)
+        row = (self.G[j] - C[:k, j] @ C[:k]) / cjj
+        row[j] = cjj
+        C[k] = row
+        self.g[k] = float(self.b[j] - C[:k, j] @ self.g[:k]) / cjj
+        self.nrm -= row * row
+        self.num -= row * self.g[k]
+
+    def rss(self, k: int) -> float:
+        return self.yy - float(self.g[: k + 1] @ self.g[: k + 1])
+
+
+def _choose_method(method: str, N: int, n: int, K: int, lazy: bool) -> str:
+    """The orthogonalisation for ``method``, after checking that it fits in memory."""
+    check_choice(method, "method", METHODS)
+    if lazy:
+        if method == "mgs":
+            raise ValueError("method='mgs' needs the candidate matrix in memory; a DaskRecord is reduced by "
+                             "method='gram' (or 'auto')")
+        return "gram"
+    mgs_bytes = 8 * N * (n + K + 6) + chunk_bytes(n)
+    if method == "auto":
+        return "mgs" if 8 * N * n <= _AUTO_GRAM_BYTES else "gram"
+    if method == "mgs":
+        require_memory(mgs_bytes, f"FROLS by MGS on {N} rows × {n} candidates",
+                       hint="method='gram' needs memory independent of the record length")
+    return method
+
+
 # --------------------------------------------------------------------------------------
 # FROLS
 
 
 def frols(
     candidates: Structure,
-    data: Record | Sequence[Record] | Dataset,
+    data: Record | Sequence[Record] | Dataset | DaskRecord | Sequence[DaskRecord],
     *,
     n_terms: int | None = None,
     tol: float | None = None,
@@ -350,6 +490,7 @@ def frols(
     max_terms: int | None = None,
     rank_tol: float = 1e-7,
     include: Sequence[Term | str] = (),
+    method: Literal["auto", "mgs", "gram"] = "auto",
 ) -> Selection:
     """Select model terms by forward regression with orthogonal least squares (ERR).
 
@@ -371,9 +512,11 @@ def frols(
     candidates : Structure
         Candidate terms, e.g. ``Candidates(ny=6, nu=6, ne=2, degree=2)``. Noise terms are not
         selected; they are carried to :attr:`Selection.noise`.
-    data : Record, sequence of Record, or Dataset
-        Identification data (engineering units; a Dataset contributes its ``ident`` record). Regression rows start at the candidates'
-        largest process lag in each record and never straddle two records.
+    data : Record, sequence of Record, Dataset, DaskRecord or sequence of DaskRecord
+        Identification data (engineering units; a Dataset contributes its ``ident`` record).
+        Regression rows start at the candidates' largest process lag in each record and never
+        straddle two records. A :class:`~graybox.DaskRecord` (u, y as Dask arrays) is reduced to
+        its Gram matrix block by block on the active Dask scheduler (``method="gram"``).
     n_terms : int, optional
         Number of terms to select, 1 ≤ n_terms ≤ number of process candidates.
     tol : float, optional
@@ -391,6 +534,14 @@ def frols(
         Terms selected first, in this order, whatever their ERR (e.g. ``["1"]``: gray-box
         estimation with eq. (22) needs the constant, which ERR may rank late when slow
         disturbances dominate). They count towards ``n_terms`` and their ERR is reported.
+    method : {"auto", "mgs", "gram"}, optional
+        How candidates are orthogonalised. ``"mgs"``: modified Gram–Schmidt on the N × n
+        candidate matrix (most accurate; memory ~8·N·(n + n_terms) bytes, checked before
+        allocation). ``"gram"``: the covariance form (Korenberg's fast orthogonal search) on
+        ΨᵀΨ, Ψᵀy, yᵀy accumulated over chunks of rows: one pass over the data, memory
+        independent of N; it resolves orthogonalised norms down to about √1e-11 ≈ 3e-6 of a
+        column's norm (a looser ``rank_tol`` floor). ``"auto"`` (default): MGS while the
+        candidate matrix takes at most 32 MiB, the Gram form beyond, and for Dask records.
 
     Returns
     -------
@@ -401,6 +552,9 @@ def frols(
     ValueError
         Conflicting or out-of-range arguments; no process candidates; an output that is
         identically zero; more terms asked than independent candidates on these data.
+    MemoryError
+        Before allocating, when the work of the chosen method would not fit in the memory
+        available (the message names both, in bytes).
 
     Warns
     -----
@@ -456,24 +610,44 @@ def frols(
     if n_terms is not None and n_terms < len(forced):
         raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
 
-    records = as_records(data)
+    lazy = is_dask_data(data)
+    records = as_gram_records(data)
     start = process.max_lag
-    W, y = _candidate_matrix(process.terms, records, start)
-    N = W.shape[0]
-    if not np.all(np.isfinite(W)):
-        bad = [str(process[j]) for j in np.flatnonzero(~np.all(np.isfinite(W), axis=0))[:5]]
-        raise ValueError(f"candidate columns overflow to non-finite values (e.g. {', '.join(bad)})")
-    yy = float(y @ y)
+    for rec in records:
+        rec.require_length(start)
+    N = sum(len(r) - start for r in records)
+    K_max = n_cand if mode == "tol" and max_terms is None else min(n_cand, n_terms or max_terms or _DEFAULT_MAX_TERMS)
+    method = _choose_method(method, N, n_cand, K_max, lazy)
+
+    if method == "mgs":
+        W, y = _candidate_matrix(process.terms, records, start)
+        if not np.all(np.isfinite(W)):
+            bad = [str(process[j]) for j in np.flatnonzero(~np.all(np.isfinite(W), axis=0))[:5]]
+            raise ValueError(f"candidate columns overflow to non-finite values (e.g. {', '.join(bad)})")
+        yy = float(y @ y)
+        scales = np.sqrt(np.einsum("ij,ij->j", W, W) / N)
+    else:
+        require_memory(chunk_bytes(n_cand) + 8 * 6 * (n_cand + 1) ** 2, f"FROLS (Gram form, {n_cand} candidates)")
+        gs = gram_sums(process.terms, data if lazy else records, start)
+        yy = gs.yy
+        scales = np.sqrt(np.maximum(np.diag(gs.G), 0.0) / N)
     if yy == 0.0:
         raise ValueError("the output is identically zero on the regression rows: ERR is undefined")
 
     # ---- scale to unit RMS; skip columns that carry no information of their own ----
-    scales = np.sqrt(np.einsum("ij,ij->j", W, W) / N)
     active = scales > 0.0
     skipped: list[tuple[Term, str]] = [(process[j], "all-zero column") for j in np.flatnonzero(~active)]
     scales = np.where(active, scales, 1.0)
-    W /= scales
-    for kept, dropped in _duplicates(W, active):
+    if method == "mgs":
+        W /= scales
+        dups = _duplicates(W, active)
+    else:
+        # D⁻¹ G D⁻¹ is the Gram matrix of the unit-RMS columns to the rounding of one division per
+        # entry: scaling before or after accumulating the products gives the same relative accuracy.
+        G = gs.G / scales / scales[:, None]
+        np.fill_diagonal(G, np.where(active, float(N), 0.0))
+        dups = _gram_duplicates(G, active)
+    for kept, dropped in dups:
         if active[dropped]:
             active[dropped] = False
             skipped.append((process[dropped], f"proportional to {process[kept]}"))
@@ -500,20 +674,14 @@ def frols(
     if mode == "criterion" and K >= N:
         raise ValueError(f"criterion needs more rows ({N}) than model terms ({K}); lower max_terms")
 
-    # ---- forward selection by modified Gram-Schmidt ----
-    nrm0 = np.full(W.shape[1], float(N))  # unit-RMS columns: ‖s_j‖² = N
-    nrm = np.empty(W.shape[1])
-    num = np.empty(W.shape[1])
-    coef = np.zeros(W.shape[1])
-    r = y.copy()
-    _norms_and_dots(W, r, nrm, num)
-    C = np.zeros((K, W.shape[1]))  # C[i, j] = q_iᵀ s_j: the upper triangle of the QR factor
-    Q = np.empty((N, K))
-    g = np.empty(K)
+    # ---- forward selection: orthogonalise on the data (MGS) or on the Gram matrix ----
+    engine: _MGS | _GramOLS = _MGS(W, y, K) if method == "mgs" else _GramOLS(G, gs.b / scales, yy, K)
+    nrm0 = float(N)  # unit-RMS columns: ‖s_j‖² = N
+    dependent_thr = rank_tol**2 if method == "mgs" else max(rank_tol**2, _GRAM_DEPENDENT)
     chosen: list[int] = []
-    dependent_thr = rank_tol**2
     n_dependent = 0
     for k in range(K):
+        nrm, num = engine.nrm, engine.num
         dep = active & (nrm <= dependent_thr * nrm0)
         if dep.any():
             for j in np.flatnonzero(dep):
@@ -538,26 +706,23 @@ def frols(
             with np.errstate(divide="ignore", invalid="ignore"):
                 score = np.where(active, num * num / nrm, -1.0)
             j = int(np.argmax(score))
-        # The chosen column is re-orthogonalised once against the previous q's: cheap (one
-        # column) and it keeps Q orthonormal to working precision, so ERR sums stay ≤ 1.
-        w = W[:, j].copy()
-        if k:
-            corr = Q[:, :k].T @ w
-            w -= Q[:, :k] @ corr
-            C[:k, j] += corr
-        norm_w = math.sqrt(float(w @ w))
-        q = w / norm_w
-        C[k, j] = norm_w
-        Q[:, k] = q
-        g[k] = float(q @ r)
-        r -= g[k] * q
-        chosen.append(j)
         active[j] = False
-        if k + 1 < K:
-            _mgs_update(W, q, r, active, coef, nrm, num)
-            C[k, active] = coef[active]
-        if mode == "tol" and float(r @ r) / yy <= tol:
+        engine.choose(k, j, active, last=k + 1 == K)
+        chosen.append(j)
+        if mode == "tol" and engine.rss(k) / yy <= tol:
             break
+    C, g = engine.C, engine.g
+    if method == "gram" and chosen:
+        # The Gram form ranks the candidates; the chosen ones' ERR, RSS and θ are then taken from
+        # the triangular factor of [S_chosen, y] by TSQR over the same chunks (a second, narrow
+        # pass: k+1 columns), so they carry QR accuracy instead of the Gram form's squared
+        # conditioning, and agree with MGS and across chunkings (Dask blocks) to ~1e-12.
+        R, _ = r_factor([process[j] for j in chosen], data if lazy else records, start)
+        k_ = len(chosen)
+        sign = np.where(np.diag(R)[:k_] < 0, -1.0, 1.0)
+        C = np.zeros((k_, n_cand))
+        C[:, chosen] = sign[:, None] * np.triu(R[:k_, :k_]) / scales[chosen]
+        g = sign * R[:k_, k_]
     if n_dependent:
         dep_terms = [t for t, why in skipped if why.startswith("linear")]
         warnings.warn(

@@ -1,0 +1,385 @@
+"""The Gram (covariance) form of a regression: ΨᵀΨ, Ψᵀy and yᵀy accumulated over chunks.
+
+Everything an orthogonal-least-squares selection (:func:`graybox.frols`, method ``"gram"``) or a
+least-squares / PE closed form needs from the dynamic data is the augmented Gram matrix
+``[Ψ, y]ᵀ[Ψ, y]`` and the row count. It is a sum over regression rows, so it is built one chunk
+of rows at a time: the cost is one pass over the data and the memory does not grow with the
+record length N (one chunk of the candidate matrix plus a few (n+1)² matrices).
+
+* Rows never straddle records: each record contributes its own rows ``k = start … N_r − 1``.
+* Chunk sums are combined pairwise (a binary counter of partial sums), so the rounding error of
+  the accumulation grows with log(number of chunks), not with it.
+* No centring: the constant term is a candidate like any other, and ERR is defined on the
+  uncentred energy yᵀy.
+* Records held as Dask arrays (:class:`DaskRecord`) are reduced block by block on whatever
+  scheduler is active (e.g. a ``distributed`` cluster): each block carries the ``start`` samples
+  before it so its rows see their lags, and the per-block Gram matrices are summed in a tree.
+  Dask is imported only when such a record is given.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from ._records import Dataset, Record, as_records
+from ._terms import Term
+
+__all__ = ["DaskRecord", "GramSums", "gram_sums", "r_factor", "available_memory", "require_memory", "is_dask_data"]
+
+# Entries of one chunk of the candidate matrix (16 MiB of float64): large enough that the
+# chunk's AᵀA runs at BLAS-3 speed, small enough to stay in a few MiB of cache-friendly memory.
+_CHUNK_ENTRIES = 1 << 21
+
+
+def available_memory() -> int:
+    """Bytes the system can give this process now: MemAvailable, else the physical memory."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - exotic platforms
+        return 1 << 62
+
+
+def _gib(nbytes: float) -> str:
+    return f"{nbytes / 2**30:.2f} GiB" if nbytes >= 2**28 else f"{nbytes / 2**20:.1f} MiB"
+
+
+def require_memory(nbytes: int, what: str, *, hint: str = "") -> None:
+    """Raise ``MemoryError`` naming the bytes needed and available if ``nbytes`` will not fit."""
+    avail = available_memory()
+    if nbytes > avail:
+        raise MemoryError(
+            f"{what} needs {_gib(nbytes)} ({nbytes} bytes) but only {_gib(avail)} ({avail} bytes) are available"
+            + (f"; {hint}" if hint else "")
+        )
+
+
+# --------------------------------------------------------------------------------------------
+# records held as Dask arrays
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class DaskRecord:
+    """A dynamic experiment whose ``u`` and ``y`` are Dask arrays (possibly larger than memory).
+
+    Accepted by :func:`graybox.frols` and by the PE/CLS estimators' dynamic data
+    (:func:`graybox.pe_thetas`); they reduce it to its Gram matrix block by block on the active
+    Dask scheduler (e.g. a ``distributed`` cluster) and never hold the whole record. Nothing is
+    computed at construction.
+
+    Parameters
+    ----------
+    u, y : dask.array.Array, shape (N,)
+        Input and output samples (engineering units). ``y`` is rechunked to ``u``'s blocks.
+    Ts : float
+        Sampling period, seconds (> 0).
+    name : str
+        Label.
+    """
+
+    u: Any
+    y: Any
+    Ts: float = 1.0
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        try:
+            import dask.array as da
+        except ImportError as exc:  # pragma: no cover - dask is optional
+            raise ImportError("DaskRecord needs dask: pip install 'dask[array]'") from exc
+        for nm in ("u", "y"):
+            a = getattr(self, nm)
+            if not isinstance(a, da.Array):
+                raise ValueError(f"DaskRecord.{nm} must be a dask array, got {type(a).__name__}")
+            if a.ndim != 1:
+                raise ValueError(f"DaskRecord.{nm} must be 1-D, got shape {a.shape}")
+            if not np.issubdtype(a.dtype, np.number) or np.issubdtype(a.dtype, np.complexfloating):
+                raise ValueError(f"DaskRecord.{nm} must hold real numbers, got dtype {a.dtype}")
+        if self.u.shape[0] != self.y.shape[0] or np.isnan(self.u.shape[0]):
+            raise ValueError(f"DaskRecord: u and y must have the same known length, got {self.u.shape[0]} and "
+                             f"{self.y.shape[0]}")
+        if not (np.isfinite(self.Ts) and self.Ts > 0):
+            raise ValueError(f"Ts must be a positive number of seconds, got {self.Ts!r}")
+        u = self.u.astype(float)
+        object.__setattr__(self, "u", u)
+        object.__setattr__(self, "y", self.y.astype(float).rechunk(u.chunks))
+
+    def __len__(self) -> int:
+        return int(self.u.shape[0])
+
+    def require_length(self, max_lag: int) -> None:
+        """Raise ``ValueError`` unless the record has more than ``max_lag`` samples."""
+        if len(self) < max_lag + 1:
+            raise ValueError(f"record {self.name!r} has {len(self)} samples, fewer than max lag + 1 = {max_lag + 1}")
+
+    def __repr__(self) -> str:
+        return f"DaskRecord({self.name!r}: {len(self)} samples in {len(self.u.chunks[0])} blocks, Ts = {self.Ts:g} s)"
+
+
+def is_dask_data(data: object) -> bool:
+    """True for a DaskRecord or a non-empty sequence of them."""
+    if isinstance(data, DaskRecord):
+        return True
+    if isinstance(data, (list, tuple)) and data and all(isinstance(r, DaskRecord) for r in data):
+        return True
+    return False
+
+
+# --------------------------------------------------------------------------------------------
+# the chunked candidate builder
+# --------------------------------------------------------------------------------------------
+def term_factors(terms: Sequence[Term]) -> list[tuple[tuple[str, int], ...]]:
+    """Each term as its multiset of lagged signals, e.g. u(k-1)²y(k-2) -> (("u",1),("u",1),("y",2))."""
+    return [tuple((s, lag) for s, lag, p in t.factors for _ in range(p)) for t in terms]
+
+
+def fill_columns(out: np.ndarray, factors: Sequence[tuple], sig: dict[str, np.ndarray], k0: int, k1: int) -> None:
+    """Write the candidate columns at samples ``k0 … k1−1`` of one record into ``out`` (k1−k0, n).
+
+    Each monomial is one multiply of a lower-degree monomial by a lagged signal, written straight
+    into its column; only the proper prefixes other monomials need are kept, in a dict local to
+    this call (no closure refers to it), so they are freed on return.
+    """
+    needed = {vars_[:m] for vars_ in factors for m in range(1, len(vars_))}
+    memo: dict[tuple, np.ndarray] = {}
+
+    def prefix(key: tuple) -> np.ndarray | None:
+        # iterative: build the shortest missing prefix first
+        if not key:
+            return None
+        m = len(key)
+        while m > 1 and key[: m - 1] not in memo:
+            m -= 1
+        for i in range(m, len(key) + 1):
+            s, lag = key[i - 1]
+            x = sig[s][k0 - lag : k1 - lag]
+            base = memo.get(key[: i - 1])
+            memo[key[:i]] = x.copy() if base is None else base * x
+        return memo[key]
+
+    for j, vars_ in enumerate(factors):
+        col = out[:, j]
+        if not vars_:
+            col[...] = 1.0
+            continue
+        s, lag = vars_[-1]
+        x = sig[s][k0 - lag : k1 - lag]
+        head = vars_[:-1]
+        if not head:
+            col[...] = x
+            continue
+        base = memo[head] if head in memo else prefix(head)
+        np.multiply(base, x, out=col)
+        if vars_ in needed and vars_ not in memo:
+            memo[vars_] = col.copy()
+
+
+def chunk_rows(n_columns: int) -> int:
+    """Rows of one chunk for ``n_columns`` columns."""
+    return max(256, _CHUNK_ENTRIES // max(1, n_columns))
+
+
+def chunk_bytes(n_columns: int) -> int:
+    """Peak working memory of the chunked builder for ``n_columns`` columns (chunk, prefixes, sums)."""
+    rows = chunk_rows(n_columns)
+    return 8 * (3 * rows * (n_columns + 1) + 64 * (n_columns + 1) ** 2)
+
+
+def _r_combine(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """R factor of [a; b] for two triangular factors (the TSQR reduction step)."""
+    return np.linalg.qr(np.vstack([a, b]), mode="r")
+
+
+class _Pairwise:
+    """Reduce many equally shaped arrays with ``combine``, pairwise (error ~ log of their count)."""
+
+    def __init__(self, combine=np.add) -> None:
+        self._combine = combine
+        self._stack: list[tuple[int, np.ndarray]] = []
+
+    def add(self, a: np.ndarray) -> None:
+        level = 0
+        while self._stack and self._stack[-1][0] == level:
+            _, b = self._stack.pop()
+            a = self._combine(b, a)
+            level += 1
+        self._stack.append((level, a))
+
+    def total(self) -> np.ndarray | None:
+        if not self._stack:
+            return None
+        out = self._stack[0][1]
+        for _, b in self._stack[1:]:
+            out = self._combine(out, b)
+        return out
+
+
+def _block_reduce(factors: Sequence[tuple], u: np.ndarray, y: np.ndarray, start: int, form: str) -> np.ndarray:
+    """[Ψ, y]ᵀ[Ψ, y] (form "gram") or the R factor of [Ψ, y] (form "qr") of the rows
+    ``k = start … len(u)−1`` of one stretch of samples, shape (n+1, n+1)."""
+    n = len(factors)
+    sig = {"u": np.asarray(u, float), "y": np.asarray(y, float)}
+    N = sig["u"].shape[0]
+    acc = _Pairwise(np.add if form == "gram" else _r_combine)
+    step = chunk_rows(n + 1)
+    A = np.empty((min(step, max(N - start, 0)), n + 1), order="F")
+    for k0 in range(start, N, step):
+        k1 = min(k0 + step, N)
+        Ak = A[: k1 - k0]
+        fill_columns(Ak, factors, sig, k0, k1)
+        Ak[:, n] = sig["y"][k0:k1]
+        acc.add(Ak.T @ Ak if form == "gram" else np.linalg.qr(Ak, mode="r"))
+    tot = acc.total()
+    if tot is None:
+        return np.zeros((n + 1, n + 1))
+    if form == "qr" and tot.shape[0] < n + 1:  # fewer rows than columns: pad the factor
+        tot = np.vstack([tot, np.zeros((n + 1 - tot.shape[0], n + 1))])
+    return tot
+
+
+@dataclass(frozen=True, eq=False)
+class GramSums:
+    """The Gram form of a regression over some records.
+
+    Attributes
+    ----------
+    G : ndarray, shape (n, n)
+        ΨᵀΨ (engineering units; symmetric).
+    b : ndarray, shape (n,)
+        Ψᵀy.
+    yy : float
+        yᵀy.
+    N : int
+        Regression rows (summed over records).
+    """
+
+    G: np.ndarray
+    b: np.ndarray
+    yy: float
+    N: int
+
+
+def gram_sums(terms: Sequence[Term], data: object, start: int) -> GramSums:
+    """ΨᵀΨ, Ψᵀy, yᵀy over the rows ``k ≥ start`` of every record, in one chunked pass.
+
+    Parameters
+    ----------
+    terms : sequence of Term
+        Process terms (columns of Ψ), signals ``u`` and ``y`` only.
+    data : Record, sequence of Record, Dataset, DaskRecord or sequence of DaskRecord
+    start : int
+        First regression sample of each record (≥ the terms' largest lag).
+
+    Returns
+    -------
+    GramSums
+
+    Raises
+    ------
+    ValueError
+        A record shorter than ``start + 1``; non-finite sums (overflow of a high power), naming
+        the columns.
+    """
+    factors = term_factors(terms)
+    n = len(factors)
+    if is_dask_data(data):
+        recs = [data] if isinstance(data, DaskRecord) else list(data)
+        for r in recs:
+            r.require_length(start)
+        Ga = _dask_reduce(factors, recs, start, "gram")
+        N = sum(len(r) - start for r in recs)
+    else:
+        recs = as_records(data)
+        acc = _Pairwise(np.add)
+        N = 0
+        for r in recs:
+            r.require_length(start)
+            acc.add(_block_reduce(factors, r.u, r.y, start, "gram"))
+            N += len(r) - start
+        Ga = acc.total()
+    if not np.all(np.isfinite(Ga)):
+        bad = np.flatnonzero(~np.isfinite(np.diag(Ga)[:n]))
+        names = ", ".join(str(terms[j]) for j in bad[:5]) or "products of columns"
+        raise ValueError(f"candidate columns overflow to non-finite values (e.g. {names})")
+    Ga = 0.5 * (Ga + Ga.T)
+    return GramSums(Ga[:n, :n], Ga[:n, n].copy(), float(Ga[n, n]), int(N))
+
+
+def r_factor(terms: Sequence[Term], data: object, start: int) -> tuple[np.ndarray, int]:
+    """Upper-triangular R of [Ψ, y] = Q R (Q never formed) by TSQR over chunks, and the row count.
+
+    As accurate as one Householder QR of the stacked matrix (no squaring of the conditioning as
+    in the Gram form); used where a few dozen columns make the n² per row affordable.
+
+    Returns
+    -------
+    R : ndarray, shape (n+1, n+1)
+    N : int
+    """
+    factors = term_factors(terms)
+    if is_dask_data(data):
+        recs = [data] if isinstance(data, DaskRecord) else list(data)
+        for r in recs:
+            r.require_length(start)
+        R = _dask_reduce(factors, recs, start, "qr")
+    else:
+        recs = as_records(data)
+        acc = _Pairwise(_r_combine)
+        for r in recs:
+            r.require_length(start)
+            acc.add(_block_reduce(factors, r.u, r.y, start, "qr"))
+        R = acc.total()
+    N = sum(len(r) - start for r in recs)
+    if not np.all(np.isfinite(R)):
+        raise ValueError("non-finite regressors (overflow of a high power of u or y?)")
+    return R, int(N)
+
+
+def _dask_reduce(factors: Sequence[tuple], recs: list[DaskRecord], start: int, form: str) -> np.ndarray:
+    """Per-block Gram matrices (summed) or R factors (TSQR) of Dask records, reduced in a tree on
+    the active scheduler."""
+    import dask
+
+    parts = []
+    for r in recs:
+        bounds = np.cumsum((0,) + tuple(r.u.chunks[0]))
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            k0 = max(int(a), start)  # rows k0 … b−1 belong to this block; they need samples from k0 − start
+            if k0 >= b:
+                continue
+            lo = k0 - start
+            parts.append(dask.delayed(_block_reduce)(factors, r.u[lo:b], r.y[lo:b], start, form))
+    combine = np.add if form == "gram" else _r_combine
+    while len(parts) > 1:
+        parts = [dask.delayed(combine)(parts[i], parts[i + 1]) if i + 1 < len(parts) else parts[i]
+                 for i in range(0, len(parts), 2)]
+    (total,) = dask.compute(parts[0])
+    return np.asarray(total, float)
+
+
+def dask_input_range(data: object) -> np.ndarray:
+    """(min, max) of u over Dask records, computed on the scheduler (for static-range warnings)."""
+    import dask
+    import dask.array as da
+
+    recs = [data] if isinstance(data, DaskRecord) else list(data)
+    lo, hi = dask.compute(da.stack([r.u.min() for r in recs]).min(), da.stack([r.u.max() for r in recs]).max())
+    return np.array([float(lo), float(hi)])
+
+
+def as_gram_records(data: object) -> list:
+    """Records as a list (in-memory or Dask), for code that only needs lengths."""
+    if is_dask_data(data):
+        return [data] if isinstance(data, DaskRecord) else list(data)
+    if isinstance(data, Dataset):
+        return [data.ident]
+    return as_records(data)
