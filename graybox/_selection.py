@@ -55,7 +55,7 @@ import numpy as np
 import pandas as pd
 
 from ._model import Model
-from ._records import Dataset, Record, as_records
+from ._records import Dataset, Record
 from ._terms import Structure, Term, parse_term
 from ._gram import (
     DaskRecord,

@@ -372,3 +372,18 @@ def test_dask_blocks_shorter_than_the_lags_see_their_lags():
     np.testing.assert_allclose(got.b, ref.b, rtol=1e-12, atol=1e-12 * np.abs(ref.b).max())
     A = np.column_stack(stacked_regressors(cand, [r1, r2], start=6))
     np.testing.assert_allclose(R.T @ R, A.T @ A, rtol=1e-10, atol=1e-10 * np.abs(A.T @ A).max())
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_gram_form_does_not_depend_on_units(seed):
+    rec = rpm_record(seed)
+    su, sy = rec.u.std(), rec.y.std()
+    cand = Candidates(4, 4, ne=0, degree=3)
+    eng = frols(cand, rec, n_terms=12, method="gram")
+    unit = frols(cand, Record(rec.u / su, rec.y / sy), n_terms=12, method="gram")
+    assert eng.structure == unit.structure
+    np.testing.assert_allclose(eng.err, unit.err, rtol=1e-9, atol=1e-15)
+    back = np.array(
+        [th * sy / (su ** t.power_of("u") * sy ** t.power_of("y")) for th, t in zip(unit.theta, unit.structure)]
+    )
+    np.testing.assert_allclose(eng.theta, back, rtol=1e-6)
