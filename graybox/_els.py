@@ -80,8 +80,8 @@ import numpy as np
 
 from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
-from scipy.signal import lfilter
 
+from ._kernels import inverse_ma_filter
 from ._ls import column_scales, scaled_lstsq
 from ._model import Model
 from ._records import Dataset, Record, as_records
@@ -225,47 +225,28 @@ class _NewtonMA:
     """
 
     def __init__(self, psis: np.ndarray, y: np.ndarray, lags: list, bounds: np.ndarray) -> None:
-        self.psis, self.y, self.lags = psis, y, [int(l) for l in lags]
-        self.segs = [slice(int(bounds[i]), int(bounds[i + 1])) for i in range(len(bounds) - 1)]
+        self.n = psis.shape[1]
+        self.X = np.column_stack([psis, y])  # [Ψ y], C-contiguous
+        self.lags = [int(l) for l in lags]
+        self.bounds = np.asarray(bounds, dtype=np.int64)
         self.nfev = 0
-        self.scale = np.ones(psis.shape[1] + len(lags))
 
-    def _filter(self, X: np.ndarray, C: np.ndarray) -> np.ndarray:
-        out = np.empty_like(X)
-        for s in self.segs:
-            out[s] = lfilter([1.0], C, X[s], axis=0)
-        return out
-
-    def _shift(self, x: np.ndarray, l: int, ahead: bool = False) -> np.ndarray:
+    def _shift(self, x: np.ndarray, l: int) -> np.ndarray:
         out = np.zeros_like(x)
-        for s in self.segs:
-            seg, o = x[s], out[s]
-            m = len(seg) - l
-            if m > 0:
-                if ahead:
-                    o[:m] = seg[l:]
-                else:
-                    o[l:] = seg[:m]
+        for k0, k1 in zip(self.bounds[:-1], self.bounds[1:]):
+            if k1 - k0 > l:
+                out[k0 + l : k1] = x[k0 : k1 - l]
         return out
-
-    def residuals(self, p: np.ndarray):
-        """(C, ξ, E(ξ)) at p, or None when 1/C(q) is unstable (the prediction errors grow without bound)."""
-        n = self.psis.shape[1]
-        C = _ma_coefficients(p[n:], self.lags)
-        if len(C) > 1 and np.max(np.abs(np.roots(C))) >= 1.0:
-            return None
-        xi = self._filter(self.y - self.psis @ p[:n], C)
-        return C, xi, np.column_stack([self._shift(xi, l) for l in self.lags])
 
     def _xi(self, c: np.ndarray):
         """(ξ, E(ξ)) with θ eliminated (Ψᵀξ = 0 solved for θ), or None when 1/C(q) is unstable."""
         C = _ma_coefficients(c, self.lags)
         if len(C) > 1 and np.max(np.abs(np.roots(C))) >= 1.0:
             return None
-        Fp = self._filter(self.psis, C)
-        Fy = self._filter(self.y, C)
-        th = np.linalg.solve(self.psis.T @ Fp, self.psis.T @ Fy)
-        xi = Fy - Fp @ th
+        F = inverse_ma_filter(self.X, C, self.bounds)  # [Ψ_C y_C]
+        G = self.X[:, : self.n].T @ F  # [Ψᵀ Ψ_C, Ψᵀ y_C]
+        th = np.linalg.solve(G[:, : self.n], G[:, self.n])
+        xi = F[:, self.n] - F[:, : self.n] @ th
         return xi, np.column_stack([self._shift(xi, l) for l in self.lags])
 
     def _h(self, c: np.ndarray) -> np.ndarray:
