@@ -228,12 +228,19 @@ def main(argv: list[str] | None = None) -> int:
     for it, n, e in errors:
         print(f"\n{it} at N = {n} failed: {e}")
     if a.els_table and "els" in items:
-        print("\n| N | iterations | of which Newton | converged | c1 | c2 |")
-        print("| --- | --- | --- | --- | --- | --- |")
-        for n in sizes:
+        ok = [n for n in sizes if "n_iter" in res["els"][n]]
+        ref_theta = np.array(res["els"][ok[-1]]["theta"]) if ok else None
+        print(f"\n| N | ELS iterations | direct-solve evaluations | converged | c1 | c2 | "
+              f"max relative θ difference to N = {ok[-1] if ok else 0:.0e} |")
+        print("| --- | --- | --- | --- | --- | --- | --- |")
+        for n in ok:
             r = res["els"][n]
-            if "n_iter" in r:
-                print(f"| {n:.0e} | {r['n_iter']} | {r['n_newton']} | {r['converged']} | {r['c'][0]:.4f} | {r['c'][1]:.4f} |")
+            d = np.max(np.abs(np.array(r["theta"]) - ref_theta) / np.abs(ref_theta))
+            print(f"| {n:.0e} | {r['n_iter']} | {r['n_newton']} | {r['converged']} | {r['c'][0]:.4f} | {r['c'][1]:.4f} "
+                  f"| {d:.3g} |")
+            if ref is not None and "n_iter" in before["els"][n]:
+                b = before["els"][n]
+                print(f"| {n:.0e} (before) | {b['n_iter']} | – | {b['converged']} | {b['c'][0]:.4f} | {b['c'][1]:.4f} | |")
     return 0
 
 
