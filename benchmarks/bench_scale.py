@@ -103,7 +103,7 @@ def _child(item: str, data_file: str, warm_file: str, repeat: int) -> None:
         if item == "els":
             r = gb.els(st17, rec)
             info.update(n_iter=int(r.n_iter), converged=bool(r.converged),
-                        n_newton=int(getattr(r, "n_newton", 0)),
+                        n_direct=int(getattr(r, "n_direct", 0)),
                         c=[float(x) for x in r.model.noise_theta], theta=[float(x) for x in r.model.theta])
             return r
         if item == "se":
@@ -236,7 +236,7 @@ def main(argv: list[str] | None = None) -> int:
         for n in ok:
             r = res["els"][n]
             d = np.max(np.abs(np.array(r["theta"]) - ref_theta) / np.abs(ref_theta))
-            print(f"| {n:.0e} | {r['n_iter']} | {r['n_newton']} | {r['converged']} | {r['c'][0]:.4f} | {r['c'][1]:.4f} "
+            print(f"| {n:.0e} | {r['n_iter']} | {r['n_direct']} | {r['converged']} | {r['c'][0]:.4f} | {r['c'][1]:.4f} "
                   f"| {d:.3g} |")
             if ref is not None and "n_iter" in before["els"][n]:
                 b = before["els"][n]

@@ -119,7 +119,7 @@ class ELSResult:
         Final residuals ξ per record, shape (N_r,), zero on the first ``max_lag`` samples.
     theta_ls : ndarray
         The plain least-squares process parameters (iteration 0), for comparison.
-    n_newton : int
+    n_direct : int
         Evaluations of the fixed-point equations by the direct solve (module docstring, "Long
         records"); 0 when the relaxed iteration converged by itself.
     """
@@ -130,7 +130,7 @@ class ELSResult:
     history: tuple[float, ...]
     residuals: tuple[np.ndarray, ...]
     theta_ls: np.ndarray
-    n_newton: int = 0
+    n_direct: int = 0
 
     def __repr__(self) -> str:
         return (f"ELSResult(model={self.model.name!r}, n_params={self.model.n_params}, n_iter={self.n_iter}, "
@@ -189,14 +189,14 @@ def _ma_text(C: np.ndarray) -> str:
 
 
 def _no_convergence_message(max_iter: int, last: float, tol: float, beta: float, C: np.ndarray,
-                            newton_failure: str = "") -> str:
+                            direct_failure: str = "") -> str:
     F = _frequency_response(C)
     rate = float(np.max(np.abs(1.0 - beta * F)))
     b = _contraction_limit(C)
     msg = (f"ELS did not converge in {max_iter} iterations: the residuals still changed by {last:.2e} "
            f"(relative) in the last one, above tol {tol:g}; returning the last iterate. ")
-    if newton_failure:
-        msg += f"solving the fixed-point equations directly failed: {newton_failure}. "
+    if direct_failure:
+        msg += f"solving the fixed-point equations directly failed: {direct_failure}. "
     if len(C) == 1:
         return msg + "Its noise terms are not plain lags e(k-l), so no cause is diagnosed."
     why = f"The MA part C(q) = {_ma_text(C)} "
@@ -212,7 +212,7 @@ def _no_convergence_message(max_iter: int, last: float, tol: float, beta: float,
     return msg + why
 
 
-class _NewtonMA:
+class _DirectMA:
     """The ELS fixed-point equations solved directly, for an MA part made of plain lags.
 
     The residuals are the model's one-step prediction errors ξ = (y − Ψθ) / C(q), computed
@@ -302,7 +302,7 @@ def els(
     max_iter: int = 500,
     tol: float = 1e-6,
     relaxation: float = 0.5,
-    newton: bool = True,
+    direct: bool = True,
     name: str = "ELS",
 ) -> ELSResult:
     """Extended least squares: process parameters plus an MA noise model.
@@ -326,7 +326,7 @@ def els(
     relaxation : float
         β in (0, 1]: the fraction of the new residuals mixed into the regressors each
         iteration (1 is unrelaxed ELS; see the module docstring for why the default is 1/2).
-    newton : bool
+    direct : bool
         When the relaxed iteration stalls (no new smallest residual change in
         10 iterations), solve the fixed-point equations directly from the last iterate
         (Levenberg–Marquardt; MA parts made of plain lags ``e(k-l)`` only; module
@@ -356,8 +356,8 @@ def els(
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)
-    if not isinstance(newton, (bool, np.bool_)):
-        raise ValueError(f"newton must be True or False, got {newton!r}")
+    if not isinstance(direct, (bool, np.bool_)):
+        raise ValueError(f"direct must be True or False, got {direct!r}")
     recs = as_records(data)
     L = max(process.max_lag, ns.max_lag)
     psi, y = stacked_regressors(process, recs, start=L)
@@ -376,10 +376,10 @@ def els(
             out.append(e)
         return out
 
-    def done(theta, c, n_iter, conv, hist, x, n_newton=0) -> ELSResult:
+    def done(theta, c, n_iter, conv, hist, x, n_direct=0) -> ELSResult:
         m = Model(process, theta, noise_structure=ns, noise_theta=c, name=name)
         res = tuple(frozen(a) for a in per_record(x))
-        return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_newton)
+        return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
 
     if len(ns) == 0:
         return done(theta_ls, np.zeros(0), 0, True, [], xi)
@@ -398,7 +398,7 @@ def els(
     y_perp = y - Q @ Qty
     m_e = len(ns)
     lags = _pure_lags(ns)
-    can_newton = newton and all(l is not None for l in lags)
+    can_direct = direct and all(l is not None for l in lags)
 
     def fit(x: np.ndarray):
         """One ELS least-squares step with ``x`` in the noise regressors: (θ, c, ξ̃, change)."""
@@ -426,8 +426,8 @@ def els(
     theta, c = theta_ls, np.zeros(m_e)
     converged = False
     solver = None  # the direct solver once the relaxed iteration has stalled
-    n_newton = 0
-    newton_failure = ""
+    n_direct = 0
+    direct_failure = ""
     for it in range(1, int(max_iter) + 1):
         theta, c, xi_fit, delta = fit(xi)
         hist.append(delta)
@@ -435,22 +435,22 @@ def els(
             xi = xi_fit
             converged = True
             break
-        if can_newton and (solver is not None or len(hist) - 1 - int(np.argmin(hist)) >= _STALL):
+        if can_direct and (solver is not None or len(hist) - 1 - int(np.argmin(hist)) >= _STALL):
             # the relaxed iteration has stalled: solve the fixed-point equations directly
             # (again from each new fit while it has not met the stopping rule)
             if solver is None:
-                solver = _NewtonMA(psi / sp, y, lags, bounds)
-            if solver.nfev < _LM_NFEV and not newton_failure:
+                solver = _DirectMA(psi / sp, y, lags, bounds)
+            if solver.nfev < _LM_NFEV and not direct_failure:
                 nxt = solver.solve(c, max_nfev=_LM_NFEV - solver.nfev)
-                n_newton = solver.nfev
+                n_direct = solver.nfev
                 if nxt is not None:
                     xi = nxt
                     continue
-                newton_failure = f"no root found in {n_newton} evaluations"
+                direct_failure = f"no root found in {n_direct} evaluations"
         xi = xi + relaxation * (xi_fit - xi)
     if not converged:
-        why = newton_failure if newton_failure else ("it did not reach the fixed point in "
-                                                     f"{n_newton} evaluations" if solver is not None else "")
+        why = direct_failure if direct_failure else ("it did not reach the fixed point in "
+                                                     f"{n_direct} evaluations" if solver is not None else "")
         warnings.warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
                       ELSConvergenceWarning, stacklevel=2)
-    return done(theta, c, len(hist), converged, hist, xi, n_newton)
+    return done(theta, c, len(hist), converged, hist, xi, n_direct)

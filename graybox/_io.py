@@ -244,7 +244,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
                               ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"))),
     "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
-                              ("theta_ls", "array1"), ("residuals", "arrays"), ("n_newton", "int"))),
+                              ("theta_ls", "array1"), ("residuals", "arrays"), ("n_direct", "int"))),
     "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("prediction_cost", "floats"), ("simulation_cost", "floats"),
                               ("holdout_cost", "floats"), ("best_step", "int_or_none"), ("epochs", "int"),
                               ("stopped", "str"), ("rmse_train", "float"), ("rmse_sim", "float"), ("seconds", "float"))),
@@ -270,7 +270,7 @@ _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]]
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 
 #: Fields added after files of this format version were written, with the value a file without them means.
-_ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_newton": 0}}
+_ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}}
 
 
 def _encode_fields(obj: Any) -> dict:

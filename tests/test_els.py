@@ -74,7 +74,7 @@ def test_unrelaxed_els_oscillates_where_relaxed_converges():
     # why relaxation is the default: plain batch ELS does not contract for MA (0.8, 0.5)
     rec = narmax_record(0)
     with pytest.warns(ELSConvergenceWarning):
-        plain = els(PROCESS, rec, relaxation=1.0, max_iter=100, newton=False)
+        plain = els(PROCESS, rec, relaxation=1.0, max_iter=100, direct=False)
     assert min(plain.history[-20:]) > 0.1
     relaxed = els(PROCESS, rec)
     assert relaxed.converged and relaxed.n_iter < 200
@@ -168,6 +168,8 @@ def test_bad_arguments():
         els(PROCESS, rec, max_iter=0)
     with pytest.raises(ValueError, match="tol"):
         els(PROCESS, rec, tol=0.0)
+    with pytest.raises(ValueError, match="direct must be True or False"):
+        els(PROCESS, rec, direct="yes")
     with pytest.raises(ValueError, match="no process terms"):
         els(Structure(["e(k-1)"]), rec)
     # a Dataset stands for its identification record, as for every estimator
@@ -237,7 +239,7 @@ def test_long_plant_record_converges_where_the_relaxed_iteration_stalls():
     with warnings.catch_warnings():
         warnings.simplefilter("error", ELSConvergenceWarning)
         info = els(st, rec)
-    assert info.converged and info.n_newton > 0 and info.history[-1] <= 1e-6
+    assert info.converged and info.n_direct > 0 and info.history[-1] <= 1e-6
     c = info.model.noise_theta
     assert _contraction_limit(_ma_coefficients(c, [1, 2])) < 0.5
     # the fixed point: residuals are the recursive one-step prediction errors, orthogonal to every regressor
@@ -262,7 +264,7 @@ def test_an_iteration_that_cannot_converge_warns_once_in_words():
         warnings.simplefilter("always")
         info = els(PROCESS, rec, noise=ns, relaxation=1.0, max_iter=80)
     mine = [w for w in caught if issubclass(w.category, ELSConvergenceWarning)]
-    assert len(mine) == 1 and not info.converged and info.n_iter == 80 and info.n_newton == 0
+    assert len(mine) == 1 and not info.converged and info.n_iter == 80 and info.n_direct == 0
     text = str(mine[0].message)
     assert "did not converge in 80 iterations" in text and "returning the last iterate" in text
     assert min(info.history[-20:]) > 0.05

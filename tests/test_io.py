@@ -259,12 +259,12 @@ def test_latex():
     assert gb.Model(["y(k-1)"], [-2.0]).to_latex(digits=2) == r"y(k) = -2\,y(k-1)"
 
 
-def test_an_els_file_written_before_n_newton_existed_still_loads(values):
+def test_an_els_file_written_before_n_direct_existed_still_loads(values):
     import json
 
     text = gb.to_json(values["els"])
     doc = json.loads(text)
     body = doc["object"]
-    assert body.pop("n_newton") == values["els"].n_newton
+    assert body.pop("n_direct") == values["els"].n_direct
     back = gb.from_json(json.dumps(doc))
-    assert back.n_newton == 0 and back.n_iter == values["els"].n_iter
+    assert back.n_direct == 0 and back.n_iter == values["els"].n_iter
