@@ -37,9 +37,33 @@ ELS stops at the first iteration ``i`` with
 
 that is, when the residuals a fit produces equal (to that relative precision) the residuals
 it was given as regressors: the fixed point, after which no regressor or parameter
-changes. The measure is unit-free. After ``max_iter`` iterations without convergence ELS
-warns (:class:`ELSConvergenceWarning`) and returns the last iterate. Residuals of the first ``max_lag`` samples of each record, which have no
-regression row, are taken as zero.
+changes. The measure is unit-free and does not depend on N. After ``max_iter`` iterations
+without convergence ELS warns once (:class:`ELSConvergenceWarning`, saying why in words)
+and returns the last iterate. Residuals of the first ``max_lag`` samples of each record,
+which have no regression row, are taken as zero.
+
+Long records
+------------
+On long plant records (N ≥ 10⁴) the relaxed iteration used to run to its cap with a
+residual change stuck at 4–6 % per iteration. The stopping rule is not the cause: the
+map itself stops contracting. Linearised, one relaxed step acts on the residuals as
+I − β C(q) (C(q) = 1 + Σ c_l q^-l), which contracts at every frequency iff
+
+    β < β* = 2 · min_ω Re 1/C(e^{jω})
+
+(|1 − βC|² < 1 ⇔ β < 2 Re C / |C|²). The MA estimates of long plant records approach
+C ≈ 1 − 1.6 q⁻¹ + 0.75 q⁻² (roots of modulus ≈ 0.87: output noise on a slow plant), for
+which β* falls below 1/2 and then to 0 (C is barely positive real): no fixed relaxation
+contracts there, and lowering β only freezes the iteration. The fixed point exists all
+the same. So, when the relaxed iteration has stalled (no new smallest change for 10
+iterations) and the MA part is made of plain lags ``e(k-l)``, ELS solves the fixed-point
+equations directly: with ξ(c) = (y − Ψθ)/C(q) (the recursive one-step prediction errors)
+and θ(c) eliminated by Ψᵀξ = 0, the ne equations E(ξ)ᵀξ / ξᵀξ = 0 (ξ uncorrelated with its
+own lags 1 … ne) are solved for c by Levenberg–Marquardt, which copes with their nearly
+singular direction (a near common factor of C and the output-lag polynomial makes them
+flat along a curve of c). The result then passes the same stopping rule, so the estimate
+is the same fixed point that the relaxed iteration reaches whenever it converges; results
+on short records, where it converges by itself, are unchanged.
 
 Every least-squares solve works on unit-RMS columns (:func:`graybox._ls.column_scales`; the
 process block is QR-factored once and reused), so parameters come back in engineering units
@@ -55,7 +79,9 @@ from typing import Sequence
 import numpy as np
 
 from scipy.linalg import solve_triangular
+from scipy.optimize import least_squares
 
+from ._kernels import inverse_ma_filter
 from ._ls import column_scales, scaled_lstsq
 from ._model import Model
 from ._records import Dataset, Record, as_records
@@ -93,6 +119,9 @@ class ELSResult:
         Final residuals ξ per record, shape (N_r,), zero on the first ``max_lag`` samples.
     theta_ls : ndarray
         The plain least-squares process parameters (iteration 0), for comparison.
+    n_direct : int
+        Evaluations of the fixed-point equations by the direct solve (module docstring, "Long
+        records"); 0 when the relaxed iteration converged by itself.
     """
 
     model: Model
@@ -101,10 +130,141 @@ class ELSResult:
     history: tuple[float, ...]
     residuals: tuple[np.ndarray, ...]
     theta_ls: np.ndarray
+    n_direct: int = 0
 
     def __repr__(self) -> str:
         return (f"ELSResult(model={self.model.name!r}, n_params={self.model.n_params}, n_iter={self.n_iter}, "
                 f"converged={self.converged})")
+
+
+
+#: Iterations without a new smallest residual change after which the relaxed iteration has stalled.
+_STALL = 10
+#: Evaluations of the fixed-point equations allowed to the direct solve.
+_LM_NFEV = 200
+
+
+def _pure_lags(ns: Structure) -> list[int | None]:
+    """For each noise term: its lag l when it is exactly e(k-l), else None."""
+    out: list[int | None] = []
+    for t in ns:
+        f = t.factors
+        out.append(f[0][1] if len(f) == 1 and f[0][0] == "e" and f[0][2] == 1 else None)
+    return out
+
+
+def _ma_coefficients(c: np.ndarray, lags: list[int | None]) -> np.ndarray:
+    """[1, c_1, …, c_L] of the linear MA part C(q) = 1 + Σ c_l q^-l (terms e(k-l) only)."""
+    L = max([l for l in lags if l is not None], default=0)
+    out = np.zeros(L + 1)
+    out[0] = 1.0
+    for ci, l in zip(c, lags):
+        if l is not None:
+            out[l] += ci
+    return out
+
+
+def _frequency_response(C: np.ndarray) -> np.ndarray:
+    """C(e^{jω}) on a grid of [0, π] fine enough for its degree."""
+    w = np.linspace(0.0, np.pi, max(513, 64 * len(C)))
+    return np.exp(-1j * np.outer(w, np.arange(len(C)))) @ C
+
+
+def _contraction_limit(C: np.ndarray) -> float:
+    """β* = 2·min_ω Re 1/C(e^{jω}): the relaxed step contracts every frequency iff β < β*.
+
+    |1 − β C|² = 1 − 2β Re C + β² |C|² < 1  ⇔  β < 2 Re C / |C|² = 2 Re 1/C. ``0`` when C is
+    not positive real (then no β contracts every frequency).
+    """
+    F = _frequency_response(C)
+    m2 = np.abs(F) ** 2
+    if np.any(m2 <= 1e-300):
+        return 0.0
+    return max(0.0, float(2.0 * np.min(F.real / m2)))
+
+
+def _ma_text(C: np.ndarray) -> str:
+    parts = ["1"] + [f"{'-' if c < 0 else '+'} {abs(c):.3g} q^-{l}" for l, c in enumerate(C) if l and c != 0]
+    return " ".join(parts)
+
+
+def _no_convergence_message(max_iter: int, last: float, tol: float, beta: float, C: np.ndarray,
+                            direct_failure: str = "") -> str:
+    F = _frequency_response(C)
+    rate = float(np.max(np.abs(1.0 - beta * F)))
+    b = _contraction_limit(C)
+    msg = (f"ELS did not converge in {max_iter} iterations: the residuals still changed by {last:.2e} "
+           f"(relative) in the last one, above tol {tol:g}; returning the last iterate. ")
+    if direct_failure:
+        msg += f"solving the fixed-point equations directly failed: {direct_failure}. "
+    if len(C) == 1:
+        return msg + "Its noise terms are not plain lags e(k-l), so no cause is diagnosed."
+    why = f"The MA part C(q) = {_ma_text(C)} "
+    if b <= 0:
+        why += ("is not positive real (Re 1/C(e^jw) <= 0 at some frequency): no relaxation makes the "
+                "iteration contract there; the MA estimate is not reliable.")
+    elif rate >= 1.0:
+        why += (f"needs a relaxation below {b:.3g} for the relaxed iteration to contract; {beta:.3g} "
+                "was used.")
+    else:
+        why += (f"lets the iteration contract only by a factor {rate:.3g} per iteration with relaxation "
+                f"{beta:.3g}: raise max_iter or tol.")
+    return msg + why
+
+
+class _DirectMA:
+    """The ELS fixed-point equations solved directly, for an MA part made of plain lags.
+
+    The residuals are the model's one-step prediction errors ξ = (y − Ψθ) / C(q), computed
+    from rest on each record. The fixed point has them orthogonal to every regressor:
+    Ψᵀξ = 0, linear in θ for a given c (θ(c) = (Ψᵀ Ψ_C)⁻¹ Ψᵀ y_C with Ψ_C, y_C filtered by
+    1/C), and E(ξ)ᵀξ = 0, the ne equations h(c) left for the MA coefficients. They are
+    solved by Levenberg–Marquardt (MINPACK, forward differences), which copes with the
+    nearly singular direction that a near common factor of C and the output-lag polynomial
+    gives on long records.
+    """
+
+    def __init__(self, psis: np.ndarray, y: np.ndarray, lags: list, bounds: np.ndarray) -> None:
+        self.n = psis.shape[1]
+        self.X = np.column_stack([psis, y])  # [Ψ y], C-contiguous
+        self.lags = [int(l) for l in lags]
+        self.bounds = np.asarray(bounds, dtype=np.int64)
+        self.nfev = 0
+
+    def _shift(self, x: np.ndarray, l: int) -> np.ndarray:
+        out = np.zeros_like(x)
+        for k0, k1 in zip(self.bounds[:-1], self.bounds[1:]):
+            if k1 - k0 > l:
+                out[k0 + l : k1] = x[k0 : k1 - l]
+        return out
+
+    def _xi(self, c: np.ndarray):
+        """(ξ, E(ξ)) with θ eliminated (Ψᵀξ = 0 solved for θ), or None when 1/C(q) is unstable."""
+        C = _ma_coefficients(c, self.lags)
+        if len(C) > 1 and np.max(np.abs(np.roots(C))) >= 1.0:
+            return None
+        F = inverse_ma_filter(self.X, C, self.bounds)  # [Ψ_C y_C]
+        G = self.X[:, : self.n].T @ F  # [Ψᵀ Ψ_C, Ψᵀ y_C]
+        th = np.linalg.solve(G[:, : self.n], G[:, self.n])
+        xi = F[:, self.n] - F[:, : self.n] @ th
+        return xi, np.column_stack([self._shift(xi, l) for l in self.lags])
+
+    def _h(self, c: np.ndarray) -> np.ndarray:
+        self.nfev += 1
+        st = self._xi(c)
+        if st is None:
+            return np.ones(c.size)  # far from a root: the solver shortens its step
+        xi, E = st
+        return (E.T @ xi) / (xi @ xi)
+
+    def solve(self, c: np.ndarray, max_nfev: int) -> np.ndarray | None:
+        """Residuals ξ at the root found from c, or None when none is found."""
+        with np.errstate(all="ignore"):
+            # forward differences with a step well above the round-off of h (filters of N samples)
+            sol = least_squares(self._h, np.asarray(c, float), method="lm", xtol=1e-14, ftol=1e-15, gtol=1e-15,
+                                diff_step=1e-6, max_nfev=int(max_nfev))
+        st = self._xi(sol.x)
+        return None if st is None else st[0]
 
 
 def noise_terms(ne: int) -> Structure:
@@ -142,6 +302,7 @@ def els(
     max_iter: int = 500,
     tol: float = 1e-6,
     relaxation: float = 0.5,
+    direct: bool = True,
     name: str = "ELS",
 ) -> ELSResult:
     """Extended least squares: process parameters plus an MA noise model.
@@ -165,6 +326,11 @@ def els(
     relaxation : float
         β in (0, 1]: the fraction of the new residuals mixed into the regressors each
         iteration (1 is unrelaxed ELS; see the module docstring for why the default is 1/2).
+    direct : bool
+        When the relaxed iteration stalls (no new smallest residual change in
+        10 iterations), solve the fixed-point equations directly from the last iterate
+        (Levenberg–Marquardt; MA parts made of plain lags ``e(k-l)`` only; module
+        docstring, "Long records"). False keeps the relaxed iteration throughout.
     name : str
         Name of the returned model.
 
@@ -190,6 +356,8 @@ def els(
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)
+    if not isinstance(direct, (bool, np.bool_)):
+        raise ValueError(f"direct must be True or False, got {direct!r}")
     recs = as_records(data)
     L = max(process.max_lag, ns.max_lag)
     psi, y = stacked_regressors(process, recs, start=L)
@@ -208,10 +376,10 @@ def els(
             out.append(e)
         return out
 
-    def done(theta, c, n_iter, conv, hist, x) -> ELSResult:
+    def done(theta, c, n_iter, conv, hist, x, n_direct=0) -> ELSResult:
         m = Model(process, theta, noise_structure=ns, noise_theta=c, name=name)
         res = tuple(frozen(a) for a in per_record(x))
-        return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls))
+        return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
 
     if len(ns) == 0:
         return done(theta_ls, np.zeros(0), 0, True, [], xi)
@@ -222,42 +390,67 @@ def els(
 
     # Ψ is the same in every iteration: factor it once (scaled columns, Householder QR) and
     # solve each extended problem by block elimination. The noise columns are made
-    # orthogonal to range(Ψ), c comes from that small problem and θ by back-substitution;
-    # each iteration then costs O(N·n·ne) instead of a fresh O(N·(n+ne)²) factorisation.
+    # orthogonal to range(Ψ), c comes from that small problem and θ by back-substitution
+    # from Qᵀy − (QᵀE)c; an iteration reads Q twice (QᵀE and Q(QᵀE)): O(N·n·ne).
     sp = column_scales(psi)
     Q, R = np.linalg.qr(psi / sp)
-    y_perp = y - Q @ (Q.T @ y)
+    Qty = Q.T @ y
+    y_perp = y - Q @ Qty
     m_e = len(ns)
-    hist: list[float] = []
-    theta, c = theta_ls, np.zeros(m_e)
-    converged = False
-    for it in range(1, int(max_iter) + 1):
-        E = np.vstack([regressor_matrix(ns, r.u, r.y, e=e, start=L) for r, e in zip(recs, per_record(xi))])
+    lags = _pure_lags(ns)
+    can_direct = direct and all(l is not None for l in lags)
+
+    def fit(x: np.ndarray):
+        """One ELS least-squares step with ``x`` in the noise regressors: (θ, c, ξ̃, change)."""
+        if len(recs) == 1:
+            E = regressor_matrix(ns, recs[0].u, recs[0].y, e=per_record(x)[0], start=L)
+        else:
+            E = np.vstack([regressor_matrix(ns, r.u, r.y, e=e, start=L) for r, e in zip(recs, per_record(x))])
         se = column_scales(E)
         Es = E / se
-        E_perp = Es - Q @ (Q.T @ Es)
+        B = Q.T @ Es
+        E_perp = Es - Q @ B
         cs, _, rank, _ = np.linalg.lstsq(E_perp, y_perp, rcond=None)
         if rank < m_e:
             raise ValueError(
                 f"ELS: the noise regressors {ns} are collinear with the process terms or each other "
                 f"(rank {rank} < {m_e}); the MA part is not identifiable from these data"
             )
-        theta = solve_triangular(R, Q.T @ (y - Es @ cs), lower=False) / sp
-        c = cs / se
-        xi_fit = y_perp - E_perp @ cs  # = y − Ψθ − E c
-        den = float(np.linalg.norm(xi_fit))
-        delta = float(np.linalg.norm(xi_fit - xi)) / den if den > 0 else 0.0
+        th = solve_triangular(R, Qty - B @ cs, lower=False) / sp
+        x_fit = y_perp - E_perp @ cs  # = y − Ψθ − E c
+        den = float(np.linalg.norm(x_fit))
+        change = float(np.linalg.norm(x_fit - x)) / den if den > 0 else 0.0
+        return th, cs / se, x_fit, change
+
+    hist: list[float] = []
+    theta, c = theta_ls, np.zeros(m_e)
+    converged = False
+    solver = None  # the direct solver once the relaxed iteration has stalled
+    n_direct = 0
+    direct_failure = ""
+    for it in range(1, int(max_iter) + 1):
+        theta, c, xi_fit, delta = fit(xi)
         hist.append(delta)
         if delta <= tol:
             xi = xi_fit
             converged = True
             break
+        if can_direct and (solver is not None or len(hist) - 1 - int(np.argmin(hist)) >= _STALL):
+            # the relaxed iteration has stalled: solve the fixed-point equations directly
+            # (again from each new fit while it has not met the stopping rule)
+            if solver is None:
+                solver = _DirectMA(psi / sp, y, lags, bounds)
+            if solver.nfev < _LM_NFEV and not direct_failure:
+                nxt = solver.solve(c, max_nfev=_LM_NFEV - solver.nfev)
+                n_direct = solver.nfev
+                if nxt is not None:
+                    xi = nxt
+                    continue
+                direct_failure = f"no root found in {n_direct} evaluations"
         xi = xi + relaxation * (xi_fit - xi)
     if not converged:
-        warnings.warn(
-            f"ELS did not converge in {max_iter} iterations (last relative residual change {hist[-1]:.2e} > "
-            f"tol {tol:g}); returning the last iterate",
-            ELSConvergenceWarning,
-            stacklevel=2,
-        )
-    return done(theta, c, len(hist), converged, hist, xi)
+        why = direct_failure if direct_failure else ("it did not reach the fixed point in "
+                                                     f"{n_direct} evaluations" if solver is not None else "")
+        warnings.warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
+                      ELSConvergenceWarning, stacklevel=2)
+    return done(theta, c, len(hist), converged, hist, xi, n_direct)

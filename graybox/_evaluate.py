@@ -188,20 +188,27 @@ def evaluate_thetas(
         Keys among ``"J1"``, ``"JS"`` (with ``record``) and ``"JSF"`` (with ``static``), each an
         ndarray of shape (P,) in output units².
     """
+    from ._kernels import batch_sse, encode
     from ._regressors import regressor_matrix
-    from ._simulation import simulate_many
 
     th = np.atleast_2d(np.asarray(thetas, float))
     out: dict[str, np.ndarray] = {}
     if record is not None:
         L = structure.max_lag
+        record.require_length(L)
+        n_rows = len(record) - L
         if one_step:
             psi = regressor_matrix(structure, record.u, record.y, start=L)
-            out["J1"] = np.mean((record.y[L:, None] - psi @ th.T) ** 2, axis=0)
-        Y = simulate_many(structure, th, record, threads=threads)
+            # row blocks of at most ~2^20 residuals: no N × P temporary on long records
+            step = max(1, (1 << 20) // max(1, th.shape[0]))
+            sse1 = np.zeros(th.shape[0])
+            for k in range(0, n_rows, step):
+                r = record.y[L + k : L + k + step, None] - psi[k : k + step] @ th.T
+                sse1 += np.einsum("ij,ij->j", r, r)
+            out["J1"] = sse1 / n_rows
+        # the compiled kernel sums squared free-run errors as it simulates: no P × N output
         with np.errstate(over="ignore", invalid="ignore"):
-            e2 = (Y[:, L:] - record.y[None, L:]) ** 2
-            js_ = np.mean(e2, axis=1)
+            js_ = batch_sse(encode(structure), th, record.u, record.y, L, threads) / n_rows
         out["JS"] = np.where(np.isfinite(js_), js_, np.inf)
     if static is not None:
         yb = reached_equilibria(structure, th, static.ubar, static.ybar).ybar

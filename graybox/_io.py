@@ -244,7 +244,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
                               ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"))),
     "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
-                              ("theta_ls", "array1"), ("residuals", "arrays"))),
+                              ("theta_ls", "array1"), ("residuals", "arrays"), ("n_direct", "int"))),
     "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("prediction_cost", "floats"), ("simulation_cost", "floats"),
                               ("holdout_cost", "floats"), ("best_step", "int_or_none"), ("epochs", "int"),
                               ("stopped", "str"), ("rmse_train", "float"), ("rmse_sim", "float"), ("seconds", "float"))),
@@ -269,6 +269,9 @@ _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]]
 
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 
+#: Fields added after files of this format version were written, with the value a file without them means.
+_ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}}
+
 
 def _encode_fields(obj: Any) -> dict:
     name = _TYPES[type(obj)]
@@ -285,10 +288,11 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
     unknown = sorted(set(d) - known)
     if unknown:
         raise rd.fail(where, f"unknown field(s) {unknown} for a {name}")
-    missing = [k for k, _ in spec if k not in d]
+    added = _ADDED.get(name, {})
+    missing = [k for k, _ in spec if k not in d and k not in added]
     if missing:
         raise rd.fail(where, f"missing field(s) {missing} for a {name}")
-    kwargs = {k: _dec(kind, d[k], f"{where}.{k}", rd) for k, kind in spec}
+    kwargs = {k: _dec(kind, d[k], f"{where}.{k}", rd) if k in d else added[k] for k, kind in spec}
     try:
         return cls(**kwargs)
     except (ValueError, TypeError) as exc:

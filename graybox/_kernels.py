@@ -532,3 +532,45 @@ def free_run_sensitivity(
 
 
 __all__ += ["batch_sse", "free_run_sensitivity", "free_run_sensitivity_blocks"]
+
+
+@nb.njit(cache=True, nogil=True)
+def _inverse_ma_cols(X, a, bounds, out):  # pragma: no cover - compiled
+    # samples outermost, signals innermost (contiguous): the recursions of the m signals
+    # run side by side instead of one latency-bound chain at a time
+    L = a.shape[0] - 1
+    m = X.shape[1]
+    for s in range(bounds.shape[0] - 1):
+        k0, k1 = bounds[s], bounds[s + 1]
+        for k in range(k0, k1):
+            for r in range(m):
+                out[k, r] = X[k, r]
+            for l in range(1, min(L, k - k0) + 1):
+                al = a[l]
+                for r in range(m):
+                    out[k, r] -= al * out[k - l, r]
+
+
+def inverse_ma_filter(X: np.ndarray, C: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """Columns of ``X`` filtered by 1/C(q) from rest on each segment: what ``lfilter([1], C, ·, axis=0)`` gives.
+
+    Parameters
+    ----------
+    X : ndarray, shape (N, m)
+        Signals, one per column (C-contiguous is fastest).
+    C : ndarray, shape (L + 1,)
+        Monic polynomial 1 + c_1 q^-1 + … + c_L q^-L.
+    bounds : ndarray of int, shape (S + 1,)
+        Segment boundaries along the rows (records): the recursion restarts at each.
+
+    Returns
+    -------
+    ndarray, shape (N, m)
+    """
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    out = np.empty_like(X)
+    _inverse_ma_cols(X, np.ascontiguousarray(C, dtype=np.float64), np.asarray(bounds, dtype=np.int64), out)
+    return out
+
+
+__all__ += ["inverse_ma_filter"]

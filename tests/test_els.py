@@ -74,7 +74,7 @@ def test_unrelaxed_els_oscillates_where_relaxed_converges():
     # why relaxation is the default: plain batch ELS does not contract for MA (0.8, 0.5)
     rec = narmax_record(0)
     with pytest.warns(ELSConvergenceWarning):
-        plain = els(PROCESS, rec, relaxation=1.0, max_iter=100)
+        plain = els(PROCESS, rec, relaxation=1.0, max_iter=100, direct=False)
     assert min(plain.history[-20:]) > 0.1
     relaxed = els(PROCESS, rec)
     assert relaxed.converged and relaxed.n_iter < 200
@@ -168,6 +168,8 @@ def test_bad_arguments():
         els(PROCESS, rec, max_iter=0)
     with pytest.raises(ValueError, match="tol"):
         els(PROCESS, rec, tol=0.0)
+    with pytest.raises(ValueError, match="direct must be True or False"):
+        els(PROCESS, rec, direct="yes")
     with pytest.raises(ValueError, match="no process terms"):
         els(Structure(["e(k-1)"]), rec)
     # a Dataset stands for its identification record, as for every estimator
@@ -217,3 +219,52 @@ def test_black_box_section_prints_table_rows_and_equations(paper_record):
         assert col in text
     assert "ELS ℓ=2" in text and "ELS ℓ=3" in text
     assert text.count("y(k) = ") == 2
+
+
+# ---------------------------------------------------------------- long records (issue 14)
+
+
+def test_long_plant_record_converges_where_the_relaxed_iteration_stalls():
+    # 3·10⁴ plant samples: the MA estimate (≈ 1 − 1.57 q⁻¹ + 0.72 q⁻²) is one for which the
+    # relaxed map does not contract (2·min Re 1/C < 1/2); the stalled iteration hands over
+    # to the direct solve of the fixed-point equations, which meets the same stopping rule
+    from graybox.datasets.pumping import PumpingPlant, speed_reference
+    from graybox._els import _contraction_limit, _ma_coefficients
+
+    data = _load_pumping()
+    st = frols(Candidates(ny=6, nu=6, ne=2, degree=2), data.ident, n_terms=17).structure
+    n = 30_000
+    run = PumpingPlant().simulate(speed_reference(n_samples=n + 1000, n_ident=n, seed=1), rng=1)
+    rec = Record(run.u[:n], run.y[:n], Ts=0.05)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ELSConvergenceWarning)
+        info = els(st, rec)
+    assert info.converged and info.n_direct > 0 and info.history[-1] <= 1e-6
+    c = info.model.noise_theta
+    assert _contraction_limit(_ma_coefficients(c, [1, 2])) < 0.5
+    # the fixed point: residuals are the recursive one-step prediction errors, orthogonal to every regressor
+    psi, y = stacked_regressors(st, rec, start=6)
+    xi = info.residuals[0][6:]
+    v = y - psi @ info.model.theta
+    rec_xi = np.zeros_like(v)
+    for k in range(len(v)):
+        rec_xi[k] = v[k] - c[0] * (rec_xi[k - 1] if k >= 1 else 0.0) - c[1] * (rec_xi[k - 2] if k >= 2 else 0.0)
+    np.testing.assert_allclose(xi, rec_xi, atol=1e-6 * np.abs(xi).max())
+    E = np.column_stack([np.r_[0.0, xi[:-1]], np.r_[0.0, 0.0, xi[:-2]]])
+    A = np.column_stack([psi / np.sqrt(np.mean(psi**2, axis=0)), E / np.sqrt(np.mean(E**2, axis=0))])
+    assert np.max(np.abs(A.T @ xi)) / (np.sqrt(len(xi)) * np.linalg.norm(xi)) < 1e-6
+
+
+def test_an_iteration_that_cannot_converge_warns_once_in_words():
+    # unrelaxed ELS oscillates for MA (0.8, 0.5), and a noise term with an input factor leaves no
+    # direct solve to fall back on: the cap is reached, with one warning that says why
+    rec = narmax_record(0)
+    ns = Structure(["e(k-1)", "e(k-2)", "e(k-1)u(k-1)"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        info = els(PROCESS, rec, noise=ns, relaxation=1.0, max_iter=80)
+    mine = [w for w in caught if issubclass(w.category, ELSConvergenceWarning)]
+    assert len(mine) == 1 and not info.converged and info.n_iter == 80 and info.n_direct == 0
+    text = str(mine[0].message)
+    assert "did not converge in 80 iterations" in text and "returning the last iterate" in text
+    assert min(info.history[-20:]) > 0.05

@@ -53,3 +53,28 @@ def test_jsf_infinite_when_no_stable_equilibrium():
         assert jsf(m, reference.eq1_points()) == float("inf")
     out = evaluate_thetas(m.structure, m.theta[None, :], static=reference.eq1_points())
     assert out["JSF"][0] == float("inf")
+
+
+def test_population_errors_equal_the_dense_definition_without_its_temporaries(paper_record):
+    # J1 in row blocks and J_S from the compiled SSE kernel: the same numbers as the dense
+    # N × P residual matrices (P = 400 members: the rows come in several blocks), one member diverging
+    from graybox._regressors import regressor_matrix
+    from graybox._simulation import simulate_many
+
+    m15 = reference.paper_model(15)
+    st = m15.structure
+    rng = np.random.default_rng(7)
+    rec = Record(np.tile(paper_record.u, 3), np.tile(paper_record.y, 3) + 0.05 * rng.standard_normal(3 * len(paper_record)))
+    thetas = m15.theta * (1.0 + 0.01 * rng.standard_normal((400, len(st))))
+    thetas[3] = m15.theta * 3.0
+    out = evaluate_thetas(st, thetas, rec)
+    L = st.max_lag
+    psi = regressor_matrix(st, rec.u, rec.y, start=L)
+    dense_j1 = np.mean((rec.y[L:, None] - psi @ thetas.T) ** 2, axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        dense_js = np.mean((simulate_many(st, thetas, rec)[:, L:] - rec.y[None, L:]) ** 2, axis=1)
+    dense_js = np.where(np.isfinite(dense_js), dense_js, np.inf)
+    assert np.isinf(out["JS"][3]) and np.isinf(dense_js[3])
+    np.testing.assert_allclose(out["J1"], dense_j1, rtol=1e-12)
+    np.testing.assert_allclose(out["JS"], dense_js, rtol=1e-12)
+    assert np.sum(np.isfinite(out["JS"])) > 300

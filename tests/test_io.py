@@ -257,3 +257,14 @@ def test_latex():
     assert block.startswith("\\begin{aligned}\ny(k) ={}& 0.6303") and block.endswith("\\end{aligned}")
     assert block.count("\\\\\n") == 2
     assert gb.Model(["y(k-1)"], [-2.0]).to_latex(digits=2) == r"y(k) = -2\,y(k-1)"
+
+
+def test_an_els_file_written_before_n_direct_existed_still_loads(values):
+    import json
+
+    text = gb.to_json(values["els"])
+    doc = json.loads(text)
+    body = doc["object"]
+    assert body.pop("n_direct") == values["els"].n_direct
+    back = gb.from_json(json.dumps(doc))
+    assert back.n_direct == 0 and back.n_iter == values["els"].n_iter
