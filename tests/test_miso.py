@@ -200,3 +200,27 @@ def test_miso_mismatched_inputs_are_clear_errors():
         gb.simulate(Structure(["u1(k-9)", "u2(k-1)"]), [1.0, 1.0], Record(np.ones((5, 2)), np.ones(5)))
     with pytest.raises(ValueError, match="fewer than max lag"):
         gb.Model(Structure(["u1(k-9)", "u2(k-1)"]), [1.0, 1.0]).predict(Record(np.ones((5, 2)), np.ones(5)))
+
+
+# -- FROLS ---------------------------------------------------------------------
+_TRUE2 = Structure(["y(k-1)", "u1(k-1)", "u2(k-2)", "u1(k-1)u2(k-1)", "u2(k-1)y(k-1)", "1"])
+_TRUE2_THETA = np.array([0.5, 0.8, -0.4, 0.3, -0.1, 0.2])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_frols_recovers_a_two_input_structure(seed):
+    rng = np.random.default_rng(seed)
+    n = 1500
+    u = rng.uniform(-1, 1, (n, 2))
+    e = 0.02 * rng.standard_normal(n)  # equation noise: a NARX model, as FROLS assumes
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = (0.5 * y[k - 1] + 0.8 * u[k - 1, 0] - 0.4 * u[k - 2, 1] + 0.3 * u[k - 1, 0] * u[k - 1, 1]
+                - 0.1 * u[k - 1, 1] * y[k - 1] + 0.2 + e[k])
+    rec = Record(u, y)
+    cand = Candidates(2, 2, inputs=["u1", "u2"], degree=2)
+    assert all(t in cand for t in _TRUE2)
+    by_size = gb.frols(cand, rec, n_terms=len(_TRUE2))
+    assert set(by_size.structure) == set(_TRUE2)
+    by_bic = gb.frols(cand, rec)  # the default stopping rule (BIC) finds the size too
+    assert set(by_bic.structure) == set(_TRUE2)
