@@ -117,7 +117,7 @@ class Model:
     def cluster_map(self) -> _static.ClusterMap | _surface.SurfaceClusterMap:
         """The clusters and the 0/1 map R of this structure (per input power with several inputs)."""
         if self.n_inputs > 1:
-            return _surface.surface_cluster_map(self.structure, self.input_names)
+            return _surface.surface_cluster_map(self.structure, inputs=self.input_names)
         return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:

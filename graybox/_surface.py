@@ -125,7 +125,7 @@ def _surface_cluster_map(structure: Structure, inputs: tuple[str, ...]) -> Surfa
     return SurfaceClusterMap(inputs, uniq, R)
 
 
-def surface_cluster_map(structure: Structure, inputs: tuple[str, ...] | None = None) -> SurfaceClusterMap:
+def surface_cluster_map(structure: Structure, *, inputs: tuple[str, ...] | None = None) -> SurfaceClusterMap:
     """The clusters per output power and input powers of ``structure`` (cached).
 
     Parameters
@@ -134,6 +134,10 @@ def surface_cluster_map(structure: Structure, inputs: tuple[str, ...] | None = N
         Process terms.
     inputs : tuple of str, optional
         The inputs in the order of the key powers (default: the structure's inputs).
+
+    Returns
+    -------
+    SurfaceClusterMap
     """
     return _surface_cluster_map(structure, surface_inputs(structure, inputs))
 
@@ -184,7 +188,7 @@ def _folded(structure: Structure, thetas: np.ndarray, ub: np.ndarray, inputs: tu
     return sk, np.atleast_2d(np.asarray(thetas, float))[:, None, :] * g[None, :, :]
 
 
-def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray,
+def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray, *,
                        inputs: tuple[str, ...] | None = None) -> list[Equilibrium]:
     """Every real equilibrium at the constant input vector ``ubar``, sorted by ȳ, with its local stability.
 
@@ -211,7 +215,7 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
     return [Equilibrium(point, e.ybar, e.stable, e.spectral_radius) for e in _static.equilibria(sk, th[0, 0], 1.0)]
 
 
-def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray,
+def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray, *,
                     inputs: tuple[str, ...] | None = None) -> Reached:
     """The equilibrium each member reaches at each point ū_j from the constant initial output y0_j.
 
@@ -286,7 +290,7 @@ def static_surface(
     th = np.asarray(theta, float)
     sk, thf = _folded(structure, th, ub, names)
     if y0 is not None or _static.is_rational(sk):
-        res = reached_surface(structure, th[None, :], ub, 0.0 if y0 is None else y0, names)
+        res = reached_surface(structure, th[None, :], ub, 0.0 if y0 is None else y0, inputs=names)
         if strict and not res.ok.all():
             raise ValueError("the model reaches no equilibrium at " + "; ".join(res.explain(0)))
         return res.ybar[0].copy()
@@ -357,9 +361,12 @@ def static_surface_gain(
         return -Fu / Fy[:, None]
 
 
-def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray,
+def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray, *,
                            inputs: tuple[str, ...] | None = None) -> np.ndarray:
-    """∂ȳ_j/∂θ_t at equilibria (ū_j, ȳ_j) of the surface: −ȳ^p_t g_t(ū_j) / F_ȳ, shape (M, n_terms)."""
+    """∂ȳ_j/∂θ_t at equilibria (ū_j, ȳ_j) of the surface: −ȳ^p_t g_t(ū_j) / F_ȳ, shape (M, n_terms).
+
+    ``ubar`` (M, m) in ``inputs`` order (default: the structure's inputs), ``ybar`` (M,).
+    """
     names = surface_inputs(structure, inputs)
     ub = _as_points(ubar, len(names))
     yb = np.asarray(ybar, float)

@@ -315,3 +315,18 @@ def test_surface_bad_input():
     with pytest.raises(ValueError, match="2 stable equilibria"):
         static_surface(st, th, np.zeros((1, 2)))
     assert static_surface(st, th, np.zeros((1, 2)), y0=0.3)[0] == pytest.approx(1.0)
+
+
+def test_evaluate_a_two_input_model():
+    rec, m = _miso_record()
+    ub = np.array([[0.5, 0.2], [1.0, -1.0], [-0.3, 0.7]])
+    yb = m.static_curve(ub)
+    sp = StaticPoints(ub[:, ::-1], yb, input_names=("u2", "u1"))  # columns by name, in any order
+    assert gb.jsf(m, sp) == pytest.approx(0.0, abs=1e-20)
+    ds = Dataset(rec, rec, StaticPoints(ub, yb))
+    tab = gb.evaluate({"m": m}, ds)
+    assert tab.loc["m", "J_SF"] == pytest.approx(0.0, abs=1e-20) and tab.loc["m", "J_S valid"] < 1e-20
+    with pytest.raises(ValueError, match="has the inputs \\('u1', 'u2'\\) but the static points have \\('a', 'b'\\)"):
+        gb.jsf(m, StaticPoints(ub, yb, input_names=("a", "b")))
+    with pytest.raises(ValueError, match="2 input columns .* one input"):
+        gb.jsf(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]), sp)
