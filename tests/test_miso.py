@@ -330,3 +330,18 @@ def test_evaluate_a_two_input_model():
         gb.jsf(m, StaticPoints(ub, yb, input_names=("a", "b")))
     with pytest.raises(ValueError, match="2 input columns .* one input"):
         gb.jsf(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]), sp)
+
+
+def test_frols_bad_input_is_a_clear_error():
+    rec = _rec2(n=40)
+    with pytest.raises(ValueError, match="terms use input 'u3', but the record's inputs are \\('u1', 'u2'\\)"):
+        gb.frols(Candidates(1, 2, inputs=["u1", "u3"], degree=1), rec, n_terms=2)
+    with pytest.raises(ValueError, match="fewer than max lag"):  # a delay larger than the record
+        gb.frols(Candidates(1, {"u1": 45, "u2": 1}, delay={"u1": 45}, degree=1), rec, n_terms=2)
+
+
+def test_miso_model_round_trips_through_json():
+    rec, m = _miso_record()
+    back = gb.from_json(gb.to_json(m))
+    assert back.structure == m.structure and np.array_equal(back.theta, m.theta)
+    assert back.input_names == ("u1", "u2") and np.array_equal(back.simulate(rec), m.simulate(rec))
