@@ -98,7 +98,7 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
                              f"largest lag {min_len - 1}; use fewer folds or a validation record")
         valid = record.slice(a, b, name=f"{record.name} fold {i + 1} valid")
         ident = gb.Record(np.r_[record.u[:a], record.u[b:]], np.r_[record.y[:a], record.y[b:]], record.Ts,
-                          f"{record.name} fold {i + 1} ident", record.units)
+                          f"{record.name} fold {i + 1} ident", record.units, record.input_names)
         out.append((ident, valid))
     return out
 
