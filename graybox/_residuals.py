@@ -345,6 +345,9 @@ def residual_tests(
     level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
     check_choice(rule, "rule", RULES)
     recs = as_records(data)
+    if recs[0].n_inputs > 1:
+        raise ValueError(f"{recs[0].name}: the input correlation tests are defined for one input; the record has "
+                         f"{recs[0].n_inputs} inputs {recs[0].input_names}")
     xi, us = [], []
     for r in recs:
         e, L = _model_residuals(model, r, bool(moving_average))

@@ -345,3 +345,24 @@ def test_miso_model_round_trips_through_json():
     back = gb.from_json(gb.to_json(m))
     assert back.structure == m.structure and np.array_equal(back.theta, m.theta)
     assert back.input_names == ("u1", "u2") and np.array_equal(back.simulate(rec), m.simulate(rec))
+
+
+def test_two_input_pipeline_frols_els_evaluate():
+    rng = np.random.default_rng(0)
+    n = 1500
+    u = rng.uniform(-1, 1, (n, 2))
+    e = 0.02 * rng.standard_normal(n)
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = (0.5 * y[k - 1] + 0.8 * u[k - 1, 0] - 0.4 * u[k - 2, 1] + 0.3 * u[k - 1, 0] * u[k - 1, 1]
+                - 0.1 * u[k - 1, 1] * y[k - 1] + 0.2 + e[k] + 0.3 * e[k - 1])
+    rec = Record(u, y, input_names=("n1", "n2"))
+    sel = gb.frols(Candidates(2, 2, inputs=["n1", "n2"], degree=2, ne=1), rec)
+    m = gb.els(sel, rec).model
+    assert m.input_names == ("n1", "n2") and set(m.structure.inputs) == {"n1", "n2"}
+    assert m.noise_theta[0] == pytest.approx(0.3, abs=0.1)
+    ds = Dataset(rec, rec, StaticPoints([[0, 0], [0.5, 0.5]], [0.4, 0.5], input_names=("n1", "n2")))
+    tab = gb.evaluate({"els": m}, ds)
+    assert np.isfinite(tab.loc["els", "J_SF"]) and tab.loc["els", "J_S valid"] < 0.01
+    with pytest.raises(ValueError, match="defined for one input"):
+        gb.residual_tests(m, rec)
