@@ -241,15 +241,11 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
     M = ub.shape[0]
     y0s = np.broadcast_to(np.asarray(y0, float), (M,)).copy()
     sk, th = _folded(structure, thetas, ub, names)
-    P = th.shape[0]
-    yb = np.full((P, M), np.nan)
-    status = np.zeros((P, M), dtype=np.int8)
-    one = np.ones(1)
-    for j in range(M):  # each point has its own folded parameters
-        r = _static.reached_equilibria(sk, th[:, j, :], one, y0s[j:j + 1])
-        yb[:, j] = r.ybar[:, 0]
-        status[:, j] = r.status[:, 0]
-    return Reached(ub, y0s, yb, status)
+    P, T = th.shape[0], th.shape[2]
+    # every (member, point) pair is one member of the folded model at ū' = 1, in one call
+    y0p = np.broadcast_to(y0s[None, :], (P, M)).reshape(P * M, 1)
+    r = _static.reached_equilibria(sk, th.reshape(P * M, T), np.ones(1), y0p)
+    return Reached(ub, y0s, r.ybar.reshape(P, M), r.status.reshape(P, M))
 
 
 def static_surface(

@@ -366,3 +366,19 @@ def test_two_input_pipeline_frols_els_evaluate():
     assert np.isfinite(tab.loc["els", "J_SF"]) and tab.loc["els", "J_S valid"] < 0.01
     with pytest.raises(ValueError, match="defined for one input"):
         gb.residual_tests(m, rec)
+
+
+def test_reached_surface_batches_members_and_points():
+    from graybox._surface import reached_surface
+
+    rng = np.random.default_rng(5)
+    th0 = np.array([0.3, 0.1, 0.5, -0.4, 0.2, 0.1, -0.2, 0.1])
+    thetas = th0 * (1 + 0.2 * rng.standard_normal((6, 8)))
+    ub = rng.uniform(-1, 1, (7, 2))
+    y0 = rng.uniform(-0.5, 0.5, 7)
+    res = reached_surface(_POLY2, thetas, ub, y0)
+    assert res.ybar.shape == (6, 7) and res.ok.any()
+    for p in range(6):
+        one = static_surface(_POLY2, thetas[p], ub, y0=y0, strict=False)
+        assert np.array_equal(np.isnan(one), ~res.ok[p])
+        assert np.allclose(one[res.ok[p]], res.ybar[p, res.ok[p]], rtol=0, atol=0)
