@@ -382,3 +382,21 @@ def test_reached_surface_batches_members_and_points():
         one = static_surface(_POLY2, thetas[p], ub, y0=y0, strict=False)
         assert np.array_equal(np.isnan(one), ~res.ok[p])
         assert np.allclose(one[res.ok[p]], res.ybar[p, res.ok[p]], rtol=0, atol=0)
+
+
+def test_surface_static_rows():
+    from graybox._surface import surface_static_rows
+
+    rec, m = _miso_record()
+    cm = surface_cluster_map(_ST2)
+    ub = np.array([[0.5, 0.2], [1.0, -1.0], [0.0, 0.7]])
+    yb = m.static_curve(ub)
+    Q = surface_static_rows(cm, ub, yb)
+    assert np.allclose(Q @ cm.R @ _TH2, yb, rtol=1e-12, atol=1e-14)  # on the surface, QRθ = ȳ
+    # F = QRθ − ȳ: its derivatives give the gradient of the surface
+    Fy = surface_static_rows(cm, ub, yb, "y") @ cm.R @ _TH2 - 1
+    for i, n in enumerate(("u1", "u2")):
+        Fu = surface_static_rows(cm, ub, yb, n) @ cm.R @ _TH2
+        assert np.allclose(-Fu / Fy, m.static_gain(ub)[:, i], rtol=1e-10, atol=1e-12)
+    with pytest.raises(ValueError, match="wrt must be"):
+        surface_static_rows(cm, ub, yb, "u3")
