@@ -400,3 +400,28 @@ def test_surface_static_rows():
         assert np.allclose(-Fu / Fy, m.static_gain(ub)[:, i], rtol=1e-10, atol=1e-12)
     with pytest.raises(ValueError, match="wrt must be"):
         surface_static_rows(cm, ub, yb, "u3")
+
+
+def test_readme_several_inputs_example_runs():
+    import re
+    import warnings
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    section = text.split("## API: several inputs", 1)[1]
+    block = re.findall(r"```python\n(.*?)```", section, re.S)[0]
+    ns: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exec(compile(block, "README.md (several inputs)", "exec"), ns)
+    assert set(ns["model"].structure) == {parse_term(t) for t in
+                                          ("y(k-1)", "n1(k-1)", "n2(k-2)", "n1(k-1)n2(k-1)", "1")}
+    # the true surface: ȳ = (0.2 + 0.8 n1 − 0.4 n2 + 0.3 n1 n2) / (1 − 0.5)
+    n1, n2 = np.array([0.0, 0.5]), np.array([0.0, -0.5])
+    assert np.allclose(ns["surface"], (0.2 + 0.8 * n1 - 0.4 * n2 + 0.3 * n1 * n2) / 0.5, atol=0.05)
+    assert ns["gradient"].shape == (2, 2)
+    table = section.split("```python")[0]
+    for name in re.findall(r"^\| `([A-Za-z_.]+)", table, re.M):
+        obj = gb
+        for part in name.split("."):
+            obj = getattr(obj, part)

@@ -206,7 +206,7 @@ def select_graybox(
         if float(np.mean((fit(sp.ubar) - sp.ybar) ** 2)) > band:
             # no polynomial fits the points within the band: their form is not known, so ask only
             # what the candidates can carry (the band is then out of reach, which step 4 reports)
-            degree = min(degree, max((t.power_of("u") for t in process if t.power_of("y") == 0), default=0))
+            degree = min(degree, max((t.input_power for t in process if t.power_of("y") == 0), default=0))
     L = process.max_lag
     if valid is not None:
         valid.require_length(L)
