@@ -403,9 +403,11 @@ def els(
     def fit(x: np.ndarray):
         """One ELS least-squares step with ``x`` in the noise regressors: (θ, c, ξ̃, change)."""
         if len(recs) == 1:
-            E = regressor_matrix(ns, recs[0].u, recs[0].y, e=per_record(x)[0], start=L)
+            E = regressor_matrix(ns, recs[0].u, recs[0].y, e=per_record(x)[0], start=L,
+                                  input_names=recs[0].input_names)
         else:
-            E = np.vstack([regressor_matrix(ns, r.u, r.y, e=e, start=L) for r, e in zip(recs, per_record(x))])
+            E = np.vstack([regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)
+                           for r, e in zip(recs, per_record(x))])
         se = column_scales(E)
         Es = E / se
         B = Q.T @ Es

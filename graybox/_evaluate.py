@@ -25,8 +25,10 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
+from ._kernels import batch_sse, encode, record_inputs
 from ._model import Model
-from ._records import Dataset, Record, StaticPoints
+from ._regressors import regressor_matrix
+from ._records import Dataset, Record, StaticPoints, static_point_inputs
 from ._simulation import DivergenceError
 from ._static import reached_equilibria
 from ._terms import Structure
@@ -77,8 +79,10 @@ def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None
         inf, with a ``RuntimeWarning`` naming each ū where no equilibrium is reached and why,
         when the model settles on none at some point.
     """
+    names = getattr(model, "input_names", ("u",))
+    ub = static_point_inputs(static, names)  # several inputs: ū's columns by the model's input names
     try:
-        yb = model.static_curve(static.ubar, y0=static.ybar if y0 is None else y0, strict=True)
+        yb = model.static_curve(ub, y0=static.ybar if y0 is None else y0, strict=True)
     except (ValueError, DivergenceError) as exc:
         warnings.warn(f"J_SF of {model.name or 'model'} is infinite: {exc}", RuntimeWarning, stacklevel=2)
         return float("inf")
@@ -188,8 +192,6 @@ def evaluate_thetas(
         Keys among ``"J1"``, ``"JS"`` (with ``record``) and ``"JSF"`` (with ``static``), each an
         ndarray of shape (P,) in output units².
     """
-    from ._kernels import batch_sse, encode
-    from ._regressors import regressor_matrix
 
     th = np.atleast_2d(np.asarray(thetas, float))
     out: dict[str, np.ndarray] = {}
@@ -198,7 +200,7 @@ def evaluate_thetas(
         record.require_length(L)
         n_rows = len(record) - L
         if one_step:
-            psi = regressor_matrix(structure, record.u, record.y, start=L)
+            psi = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names)
             # row blocks of at most ~2^20 residuals: no N × P temporary on long records
             step = max(1, (1 << 20) // max(1, th.shape[0]))
             sse1 = np.zeros(th.shape[0])
@@ -208,7 +210,8 @@ def evaluate_thetas(
             out["J1"] = sse1 / n_rows
         # the compiled kernel sums squared free-run errors as it simulates: no P × N output
         with np.errstate(over="ignore", invalid="ignore"):
-            js_ = batch_sse(encode(structure), th, record.u, record.y, L, threads) / n_rows
+            code = encode(structure)
+            js_ = batch_sse(code, th, record_inputs(record, code.inputs), record.y, L, threads) / n_rows
         out["JS"] = np.where(np.isfinite(js_), js_, np.inf)
     if static is not None:
         yb = reached_equilibria(structure, th, static.ubar, static.ybar).ybar

@@ -26,6 +26,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ._records import Dataset, as_records
+from ._regressors import input_signals
 from ._terms import Term
 
 __all__ = ["DaskRecord", "GramSums", "gram_sums", "r_factor", "available_memory", "require_memory", "is_dask_data"]
@@ -115,6 +116,11 @@ class DaskRecord:
 
     def __len__(self) -> int:
         return int(self.u.shape[0])
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """The input's name as terms use it (one input: ``"u"``)."""
+        return ("u",)
 
     def require_length(self, max_lag: int) -> None:
         """Raise ``ValueError`` unless the record has more than ``max_lag`` samples."""
@@ -223,12 +229,15 @@ class _Pairwise:
         return out
 
 
-def _block_reduce(factors: Sequence[tuple], u: np.ndarray, y: np.ndarray, start: int, form: str) -> np.ndarray:
+def _block_reduce(factors: Sequence[tuple], u: np.ndarray, y: np.ndarray, start: int, form: str,
+                  input_names: tuple[str, ...] = ("u",)) -> np.ndarray:
     """[Ψ, y]ᵀ[Ψ, y] (form "gram") or the R factor of [Ψ, y] (form "qr") of the rows
-    ``k = start … len(u)−1`` of one stretch of samples, shape (n+1, n+1)."""
+    ``k = start … len(u)−1`` of one stretch of samples (u of shape (N,) or (N, m), its inputs
+    named ``input_names``), shape (n+1, n+1)."""
     n = len(factors)
-    sig = {"u": np.asarray(u, float), "y": np.asarray(y, float)}
-    N = sig["u"].shape[0]
+    sig = input_signals(np.asarray(u, float), input_names)
+    sig["y"] = np.asarray(y, float)
+    N = sig["y"].shape[0]
     acc = _Pairwise(np.add if form == "gram" else _r_combine)
     step = chunk_rows(n + 1)
     A = np.empty((min(step, max(N - start, 0)), n + 1), order="F")
@@ -274,7 +283,7 @@ def gram_sums(terms: Sequence[Term], data: object, start: int) -> GramSums:
     Parameters
     ----------
     terms : sequence of Term
-        Process terms (columns of Ψ), signals ``u`` and ``y`` only.
+        Process terms (columns of Ψ): inputs (by the records' input names) and ``y``.
     data : Record, sequence of Record, Dataset, DaskRecord or sequence of DaskRecord
     start : int
         First regression sample of each record (≥ the terms' largest lag).
@@ -303,7 +312,7 @@ def gram_sums(terms: Sequence[Term], data: object, start: int) -> GramSums:
         N = 0
         for r in recs:
             r.require_length(start)
-            acc.add(_block_reduce(factors, r.u, r.y, start, "gram"))
+            acc.add(_block_reduce(factors, r.u, r.y, start, "gram", r.input_names))
             N += len(r) - start
         Ga = acc.total()
     if not np.all(np.isfinite(Ga)):
@@ -336,7 +345,7 @@ def r_factor(terms: Sequence[Term], data: object, start: int) -> tuple[np.ndarra
         acc = _Pairwise(_r_combine)
         for r in recs:
             r.require_length(start)
-            acc.add(_block_reduce(factors, r.u, r.y, start, "qr"))
+            acc.add(_block_reduce(factors, r.u, r.y, start, "qr", r.input_names))
         R = acc.total()
     N = sum(len(r) - start for r in recs)
     if not np.all(np.isfinite(R)):

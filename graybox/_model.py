@@ -7,11 +7,11 @@ from typing import Literal
 
 import numpy as np
 
-from . import _simulation, _static
+from . import _simulation, _static, _surface
 from ._latex import latex_equation
 from ._records import Record
 from ._validation import check_theta, frozen
-from ._terms import Structure
+from ._terms import Structure, check_input_names
 
 __all__ = ["Model"]
 
@@ -32,6 +32,10 @@ class Model:
         Their parameters.
     name : str, optional
         Label for tables and plots.
+    input_names : sequence of str, optional
+        The model's inputs, in the column order of an input array (default: the inputs the
+        structure uses, in natural name order, or ``("u",)`` when it uses none). Must contain
+        every input the structure uses.
     """
 
     structure: Structure
@@ -39,6 +43,7 @@ class Model:
     noise_structure: Structure = field(default_factory=lambda: Structure(()))
     noise_theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
     name: str = ""
+    input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         st = self.structure if isinstance(self.structure, Structure) else Structure(self.structure)
@@ -49,6 +54,11 @@ class Model:
         object.__setattr__(self, "noise_structure", ns)
         object.__setattr__(self, "theta", frozen(check_theta(len(st), self.theta)))
         object.__setattr__(self, "noise_theta", frozen(check_theta(len(ns), self.noise_theta, "noise_theta")))
+        names = (st.inputs or ("u",)) if self.input_names is None else check_input_names(self.input_names)
+        missing = [n for n in st.inputs if n not in names]
+        if missing:
+            raise ValueError(f"the structure uses input {missing[0]!r}, which is not among input_names {names}")
+        object.__setattr__(self, "input_names", names)
 
     # -- basic facts --------------------------------------------------------
     @property
@@ -63,12 +73,17 @@ class Model:
 
     def with_theta(self, theta: np.ndarray, *, name: str | None = None) -> "Model":
         """The same structure with other parameters (the noise part is dropped)."""
-        return Model(self.structure, theta, name=self.name if name is None else name)
+        return Model(self.structure, theta, name=self.name if name is None else name, input_names=self.input_names)
 
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record) -> np.ndarray:
         """One-step-ahead prediction over ``record``, shape (N,); see :func:`graybox._simulation.predict`."""
         return _simulation.predict(self.structure, self.theta, record)
+
+    @property
+    def n_inputs(self) -> int:
+        """m, the number of inputs (columns of an input array)."""
+        return len(self.input_names)
 
     def simulate(
         self,
@@ -77,29 +92,55 @@ class Model:
         *,
         on_diverge: Literal["raise", "nan"] = "raise",
     ) -> np.ndarray:
-        """Free run, shape (N,); see :func:`graybox._simulation.simulate`."""
+        """Free run, shape (N,); see :func:`graybox._simulation.simulate`.
+
+        ``u`` is a Record (inputs taken by name) or an array of shape (N,) or (N, m) with the
+        columns in ``input_names`` order.
+        """
+        if not isinstance(u, Record) and self.n_inputs > 1:
+            return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge,
+                                        input_names=self.input_names)
         return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge)
 
     # -- statics ------------------------------------------------------------
+    # With several inputs the static function is a surface ȳ(ū_1, …, ū_m): ū is then of shape
+    # (M, m) (columns in input_names order; a single point may be given as shape (m,)).
     def clusters(self) -> dict[str, float]:
-        """Cluster coefficients by name (``{"Σ0": …, "Σy": …, "Σu": …}``), Σ = R θ."""
-        cm = _static.cluster_map(self.structure)
+        """Cluster coefficients by name, Σ = R θ.
+
+        ``{"Σ0": …, "Σy": …, "Σu": …}``; with several inputs one cluster per output power and
+        input powers (``"Σyu1"``, ``"Σu1u2²"``, …).
+        """
+        cm = self.cluster_map()
         return dict(zip(cm.names, (cm.R @ self.theta).tolist()))
 
-    def cluster_map(self) -> _static.ClusterMap:
-        """The clusters and the 0/1 map R of this structure."""
+    def cluster_map(self) -> _static.ClusterMap | _surface.SurfaceClusterMap:
+        """The clusters and the 0/1 map R of this structure (per input power with several inputs)."""
+        if self.n_inputs > 1:
+            return _surface.surface_cluster_map(self.structure, inputs=self.input_names)
         return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
-        """Steady-state output at each ū, shape (M,); see :func:`graybox._static.static_curve`."""
+        """Steady-state output at each ū, shape (M,); see :func:`graybox._static.static_curve`.
+
+        With several inputs, the static surface at the points ``ubar`` of shape (M, m)
+        (:func:`graybox._surface.static_surface`).
+        """
+        if self.n_inputs > 1:
+            return _surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,
+                                           inputs=self.input_names)
         return _static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
 
-    def equilibria(self, ubar: float) -> list[_static.Equilibrium]:
-        """Every real equilibrium at ū with its stability; see :func:`graybox._static.equilibria`."""
+    def equilibria(self, ubar: float | np.ndarray) -> list[_static.Equilibrium]:
+        """Every real equilibrium at ū (a float, or a point of shape (m,) with several inputs) with its stability."""
+        if self.n_inputs > 1:
+            return _surface.surface_equilibria(self.structure, self.theta, ubar, inputs=self.input_names)
         return _static.equilibria(self.structure, self.theta, ubar)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None) -> np.ndarray:
-        """dȳ/dū along the static curve, shape (M,)."""
+        """dȳ/dū along the static curve, shape (M,); with several inputs the gradient, shape (M, m)."""
+        if self.n_inputs > 1:
+            return _surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, inputs=self.input_names)
         return _static.static_gain(self.structure, self.theta, ubar, y0=y0)
 
     @property

@@ -69,7 +69,7 @@ from ._gram import (
     require_memory,
     term_factors,
 )
-from ._regressors import record_signals
+from ._regressors import check_structure_inputs, record_signals
 from ._validation import check_choice
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
@@ -612,6 +612,7 @@ def frols(
 
     lazy = is_dask_data(data)
     records = as_gram_records(data)
+    check_structure_inputs(process, records)
     start = process.max_lag
     for rec in records:
         rec.require_length(start)
