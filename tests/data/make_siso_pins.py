@@ -1,9 +1,15 @@
 """Generator of ``siso_pins.json``: the single-input results pinned bit for bit.
 
-Run ONCE, from the code as it was before several inputs were added (commit 2ebc567,
-2026-11-23), with ``python tests/data/make_siso_pins.py``; the JSON file it writes is the
-reference that ``tests/test_siso_pins.py`` compares today's code against. Do not re-run it to
-make a failing pin pass: a changed pin means a single-input result changed.
+Run ONCE, from the code as it was before several inputs were added, with
+``python tests/data/make_siso_pins.py``; the JSON file it writes is the reference that
+``tests/test_siso_pins.py`` compares today's code against. Do not re-run it to make a failing
+pin pass: a changed pin means a single-input result changed.
+
+The file was first written from commit 2ebc567. Issue 14's ELS (a rearranged iteration and a
+direct solve when the relaxed one stalls) landed on main before the several-inputs branch, and it
+changes ELS's θ in the last bits (Table I's figures by about 1e-12 relative), and with it CLS (22), whose reference Σ*_y comes from ELS. The
+file was therefore written again from 3a0f02a, main with issue 14's changes and without several
+inputs; the several-inputs merge reproduces it bit for bit (both files were compared).
 
 What is pinned (each float array as the sha256 of its float64 bytes, scalars as float hex):
 Table I's rows built as ``graybox reproduce`` builds them (FROLS structures, ELS, CLS (22),
