@@ -4,7 +4,9 @@
 - :func:`load_buck` — real buck-converter measurements kept outside the project;
 - :func:`load_record_csv`, :func:`load_static_csv` — users' own files, columns chosen by name;
 - :mod:`graybox.datasets.pumping` — the plant simulator and the generator of the bundled files
-  (``python -m graybox.datasets.pumping`` rewrites them).
+  (``python -m graybox.datasets.pumping`` rewrites them);
+- :class:`TwoSpeedPumpingPlant` — the same rig with its two pump sets at independent speeds, a
+  two-input benchmark (``python -m graybox.datasets._pumping_miso`` rewrites its bundled files).
 """
 
 from ._loaders import (
@@ -18,6 +20,7 @@ from ._loaders import (
 )
 
 _PUMPING_NAMES = ("PlantRun", "PumpingPlant", "speed_reference", "static_experiment")
+_PUMPING_MISO_NAMES = ("TwoSpeedPumpingPlant", "TwoSpeedRun", "two_speed_reference", "static_grid_experiment")
 
 
 def __getattr__(name: str):
@@ -27,6 +30,10 @@ def __getattr__(name: str):
         from . import pumping
 
         return getattr(pumping, name)
+    if name in _PUMPING_MISO_NAMES:
+        from . import _pumping_miso
+
+        return getattr(_pumping_miso, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
@@ -41,4 +48,5 @@ __all__ = [
     "PlantRun",
     "speed_reference",
     "static_experiment",
+    *_PUMPING_MISO_NAMES,
 ]
