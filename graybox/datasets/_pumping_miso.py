@@ -48,7 +48,7 @@ combination, and never fails there (flows go to zero, never negative; tests/test
 checks random staircases with hypothesis). The benchmark data keep each reference within
 ``OPERATING_RANGE`` = 1150–1650 rpm, where both valves are open at every steady state (the corner
 (1150, 1650) keeps 5.4 L/s through the slower pump): the static surface is smooth there, and a
-quadratic in (n̄_1, n̄_2) fits it to within 0.08 mlc (0.014 mlc rms), against a static-point
+quadratic in (n̄_1, n̄_2) fits it to within 0.1 mlc (about 0.013 mlc rms), against a static-point
 noise of about 0.03 mlc. (Over 750–1650 rpm the shut-valve regions make the surface kinked, and no
 low-degree polynomial fits it to better than 2 mlc.)
 
