@@ -64,6 +64,15 @@ def test_static_surface_is_the_long_simulated_steady_state(n1, n2, m1, m2):
     np.testing.assert_allclose(run.pump_flow[-1], [q1, q2], rtol=0, atol=1e-6)
 
 
+def test_surface_callable():
+    surf = PLANT.surface()
+    U = static_grid()
+    np.testing.assert_array_equal(surf(U), PLANT.static_pressure(U[:, 0], U[:, 1]))
+    assert surf.domain == (OPERATING_RANGE, OPERATING_RANGE) and surf(np.array([1200.0, 1300.0])).shape == (1,)
+    with pytest.raises(ValueError, match=r"shape \(K, 2\)"):
+        surf(np.ones((2, 3)))
+
+
 def test_static_surface_rises_with_each_speed_in_the_operating_range():
     g = np.linspace(*OPERATING_RANGE, 41)
     P = PLANT.static_pressure(g[:, None], g[None, :])

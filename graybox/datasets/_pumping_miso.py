@@ -74,6 +74,7 @@ from .pumping import DEFAULT_SEED, PumpingPlant, _staircase
 __all__ = [
     "TwoSpeedPumpingPlant",
     "TwoSpeedRun",
+    "PlantSurface",
     "two_speed_reference",
     "static_grid",
     "static_grid_experiment",
@@ -215,6 +216,17 @@ class TwoSpeedPumpingPlant:
         c = self._consts()
         return np.vectorize(lambda x: _turbine_head(float(x), c), otypes=[float])(q)
 
+    def surface(self, *, domain: tuple[tuple[float, float], tuple[float, float]] | None = None) -> "PlantSurface":
+        """The theoretical static surface as a callable on ū of shape (K, 2) (for plots and errors).
+
+        Parameters
+        ----------
+        domain : ((float, float), (float, float)), optional
+            Box of (n̄₁, n̄₂) the surface is drawn over; default ``OPERATING_RANGE`` for both.
+        """
+        box = (OPERATING_RANGE, OPERATING_RANGE) if domain is None else domain
+        return PlantSurface(self, tuple((float(lo), float(hi)) for lo, hi in box))
+
     def steady_state(self, speed1: float, speed2: float) -> tuple[float, float, float, float, float]:
         """Equilibrium state (n_c1, n_1, n_c2, n_2, Q) at constant references (rpm)."""
         q = float(self.steady_flow(float(speed1), float(speed2)))
@@ -291,6 +303,32 @@ class TwoSpeedPumpingPlant:
         return TwoSpeedRun(t=np.arange(N) * rig.Ts, u=np.column_stack([r1, r2]), y=p + v, pressure=p,
                            speed=np.column_stack([n1, n2]), flow=q, pump_flow=np.column_stack([q1, q - q1]),
                            Ts=rig.Ts, surge=surge, air_loss=air)
+
+
+@dataclass(frozen=True)
+class PlantSurface:
+    """p̄(n̄₁, n̄₂) of a :class:`TwoSpeedPumpingPlant` as a function of ū of shape (K, 2) (mlc).
+
+    Attributes
+    ----------
+    plant : TwoSpeedPumpingPlant
+    domain : ((float, float), (float, float))
+        Box of speeds (rpm) it is meant for (plots use it as their default range).
+    name : str
+    """
+
+    plant: TwoSpeedPumpingPlant
+    domain: tuple[tuple[float, float], tuple[float, float]]
+    name: str = "theoretical static surface"
+
+    def __call__(self, ubar: np.ndarray) -> np.ndarray:
+        """p̄ at ``ubar`` of shape (K, 2) (rpm); returns shape (K,)."""
+        u = np.asarray(ubar, dtype=float)
+        if u.ndim == 1 and u.size == 2:
+            u = u[None, :]
+        if u.ndim != 2 or u.shape[1] != 2:
+            raise ValueError(f"ū must have shape (K, 2), got {np.shape(ubar)}")
+        return self.plant.static_pressure(u[:, 0], u[:, 1])
 
 
 # ---------------------------------------------------------------------------
