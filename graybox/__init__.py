@@ -21,6 +21,7 @@ from ._selection import CandidateWarning, Selection, frols, information_criterio
 from ._semp import SEMPResult, semp
 from ._els import ELSConvergenceWarning, ELSResult, els, noise_terms
 from ._curves import StaticCurve
+from ._surfaces import StaticSurface
 from ._constraints import (
     ClusterBounds, CurveEquality, GainBounds, InfeasibleError, PassesThrough, StaticBand, UserConstraint,
 )
@@ -56,7 +57,7 @@ __all__ = [
     "evaluate", "evaluate_thetas", "j1", "js", "jsf", "mse", "rrse", "fit_percent",
     "frols", "Selection", "CandidateWarning", "information_criterion", "semp", "SEMPResult",
     "els", "ELSResult", "ELSConvergenceWarning", "noise_terms",
-    "StaticCurve",
+    "StaticCurve", "StaticSurface",
     "CurveEquality", "PassesThrough", "StaticBand", "GainBounds", "ClusterBounds", "UserConstraint",
     "InfeasibleError",
     "cls", "pe_pareto", "pe_thetas", "static_matrices", "qr_static_error", "PE_LAMBDAS",

@@ -46,10 +46,15 @@ from ._constraints import (
     StaticConstraint,
     StaticContext,
     as_constraint_list,
+    cluster_powers,
+    n_static_inputs,
+    sigma_y_index,
+    static_inputs,
     static_rows,
 )
 from ._curves import StaticCurve
 from ._els import els
+from ._surfaces import StaticSurface
 from ._ls import column_scales
 from ._model import Model
 from ._pareto import ParetoSet
@@ -252,7 +257,8 @@ def _ls_theta(d: _Data) -> np.ndarray:
 def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str | None) -> float | None:
     """Σ*_y of eq. (22) from ``reference``: "ls" (default), "els", a Model, a θ of this structure, a number."""
     cm = cluster_map(d.structure)
-    if (1, 0) not in cm.keys:
+    iy = sigma_y_index(cm)
+    if iy is None:
         return None
     if reference is None or (isinstance(reference, str) and reference == "ls"):
         th = _ls_theta(d)
@@ -271,7 +277,7 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
         th = np.asarray(reference, float)
         if th.shape != (len(d.structure),):
             raise ValueError(f"reference θ must have shape ({len(d.structure)},), got {th.shape}")
-    return float((cm.R @ th)[cm.index((1, 0))])
+    return float((cm.R @ th)[iy])
 
 
 # --------------------------------------------------------------------------------------------
@@ -518,7 +524,7 @@ def _closed_form(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, rows: _
 def cls(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticCurve | StaticPoints | None = None,
+    static: StaticCurve | StaticSurface | StaticPoints | None = None,
     *,
     how: str = "auto",
     reference: Model | np.ndarray | float | str = "ls",
@@ -535,11 +541,12 @@ def cls(
         Process terms (a Model's structure is used; noise terms are refused).
     data : Record, sequence of Record, or Dataset
         Dynamic identification data (a Dataset's ``ident`` record).
-    static : StaticCurve or StaticPoints, optional
+    static : StaticCurve, StaticSurface or StaticPoints, optional
         What the static function must match:
 
         - a polynomial curve → eq. (22) (:class:`~graybox.CurveEquality`), for a
-          structure whose static function is rational;
+          structure whose static function is rational; with several inputs a polynomial
+          surface (:class:`~graybox.StaticSurface`) → eq. (22) on the surface;
         - points → "the static function passes through these points"
           (:class:`~graybox.PassesThrough`), any structure;
         - None → only ``constraints`` (those that need static points, e.g. a band, take a
@@ -547,7 +554,9 @@ def cls(
     how : {"auto", "curve", "points"}
         ``"curve"`` with StaticPoints fits the polynomial the structure's numerator can carry
         (degree = highest ū power of the Σ_{u^m} clusters) and imposes eq. (22); it needs at
-        least degree + 1 points.
+        least degree + 1 points. With several inputs it fits a surface on exactly the monomials
+        of the structure's Σ_{u^e} clusters (:meth:`StaticSurface.fit`), so it needs at least as
+        many points as there are such clusters.
     reference : {"ls", "els"}, Model, ndarray or float
         Where Σ*_y of eq. (22) comes from: ``"ls"`` (default) the unconstrained least-squares
         estimate on ``data``; ``"els"`` extended least squares on ``data`` (the paper's choice:
@@ -594,17 +603,20 @@ def cls(
 
 
 def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: str, reference,
-               constraints) -> tuple[list[StaticConstraint], StaticContext, StaticCurve | None]:
+               constraints) -> tuple[list[StaticConstraint], StaticContext, StaticCurve | StaticSurface | None]:
     """The constraints and context of a CLS problem (shared by :func:`cls` and the covariance of its estimate)."""
     cm = cluster_map(st)
     static_cons: list[StaticConstraint] = []
     points: StaticPoints | None = None
-    curve: StaticCurve | None = None
+    curve: StaticCurve | StaticSurface | None = None
     check_choice(how, "how", ("auto", "curve", "points"))
-    if isinstance(static, StaticCurve):
+    if isinstance(static, (StaticCurve, StaticSurface)):
         if how == "points":
             raise ValueError("how='points' needs StaticPoints; sample the curve with curve.points(ubar)")
         curve = static
+    elif isinstance(static, StaticPoints) and how == "curve" and n_static_inputs(cm) > 1:
+        points = static
+        curve = _fit_surface(cm, points)
     elif isinstance(static, StaticPoints):
         points = static
         if how == "curve":
@@ -616,7 +628,7 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
                 )
             curve = StaticCurve.fit(points, degree=degree)
     elif static is not None:
-        raise ValueError(f"static must be a StaticCurve, StaticPoints or None, got {type(static).__name__}")
+        raise ValueError(f"static must be a StaticCurve, StaticSurface, StaticPoints or None, got {type(static).__name__}")
     if curve is not None:
         static_cons.append(CurveEquality(curve))
     elif points is not None:
@@ -627,10 +639,26 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
     return cons, ctx, curve
 
 
+def _fit_surface(cm, points: StaticPoints) -> StaticSurface:
+    """The surface on the monomials of the Σ_{u^e} clusters (what the numerator can carry), fitted to ``points``."""
+    m = n_static_inputs(cm)
+    static_inputs(points.ubar, m, points.name)
+    exps = sorted({e for p, e in map(cluster_powers, cm.keys) if p == 0}, key=lambda e: (sum(e), tuple(-v for v in e)))
+    if not exps:
+        raise ValueError("how='curve': the structure has no cluster without y (no Σ_u… or constant term), so its "
+                         "static function is 0 wherever it exists; give points (how='points') or more terms")
+    if len(points) < len(exps):
+        raise ValueError(
+            f"fewer static points than the constraints need: eq. (22) for this structure matches a surface with "
+            f"{len(exps)} monomials, which needs at least {len(exps)} points; got {len(points)}"
+        )
+    return StaticSurface.fit(points, exponents=exps, inputs=getattr(points, "inputs", None))
+
+
 # --------------------------------------------------------------------------------------------
 # PE bi-objective
 # --------------------------------------------------------------------------------------------
-def _static_points(static: StaticPoints | StaticCurve | None, ubar: np.ndarray | None, data: object) -> StaticPoints:
+def _static_points(static: StaticPoints | StaticCurve | StaticSurface | None, ubar: np.ndarray | None, data: object) -> StaticPoints:
     if static is None:
         if isinstance(data, Dataset) and data.static is not None:
             static = data.static
@@ -647,7 +675,15 @@ def _static_points(static: StaticPoints | StaticCurve | None, ubar: np.ndarray |
                 raise ValueError("a StaticCurve without a domain needs ubar: where to sample it")
             ubar = np.linspace(static.domain[0], static.domain[1], 10)
         return static.points(np.asarray(ubar, float))
-    raise ValueError(f"static must be StaticPoints or a StaticCurve, got {type(static).__name__}")
+    if isinstance(static, StaticSurface):
+        if ubar is None:
+            if static.domain is None:
+                raise ValueError("a StaticSurface without a domain needs ubar of shape (K, m): where to sample it")
+            axes = [np.linspace(lo, hi, 5) for lo, hi in static.domain]  # 5 levels per input
+            ubar = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+        return static.points(np.asarray(ubar, float))
+    raise ValueError(f"static must be StaticPoints or a StaticCurve (or a StaticSurface for several inputs), "
+                     f"got {type(static).__name__}")
 
 
 def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], reference) -> float | None:
@@ -657,13 +693,14 @@ def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], 
     return None
 
 
-def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: StaticCurve | None,
+def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: StaticCurve | StaticSurface | None,
                        recs: list[Record]) -> None:
     """One warning per estimate naming every static ū (points, constraints' points) outside the records."""
     ub = [ctx.points.ubar] if ctx.points is not None else []
     ub += [c.points.ubar for c in cons if getattr(c, "points", None) is not None]
     if curve is not None and curve.domain is not None:
-        ub.append(np.array(curve.domain))
+        # a surface's domain is one (low, high) per input: its two corners are the rows of the transpose
+        ub.append(np.array(curve.domain).T if isinstance(curve, StaticSurface) else np.array(curve.domain))
     if ub:
         warn_static_range(np.concatenate(ub), recs)
 
@@ -674,7 +711,7 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     recs = as_records(data)
     d = _dynamic(st, recs)
     pts = _static_points(static, ubar, data)
-    curve = static if isinstance(static, StaticCurve) else None
+    curve = static if isinstance(static, (StaticCurve, StaticSurface)) else None
     cons = as_constraint_list(constraints)
     ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference))
     _warn_static_range(cons, ctx, curve, recs)
@@ -686,7 +723,7 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
 def pe_thetas(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | StaticCurve | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     lambdas: np.ndarray | Sequence[float] | None = None,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
@@ -738,7 +775,7 @@ def pe_thetas(
 def pe_pareto(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | StaticCurve | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     lambdas: np.ndarray | Sequence[float] | None = None,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
@@ -759,8 +796,9 @@ def pe_pareto(
         Process terms ((15) without the MA part in the paper).
     data : Record, sequence of Record, or Dataset
         Dynamic identification data.
-    static : StaticPoints or StaticCurve, optional
-        Static information; a curve is sampled at ``ubar`` (default: 10 points over its domain).
+    static : StaticPoints, StaticCurve or StaticSurface, optional
+        Static information; a curve is sampled at ``ubar`` (default: 10 points over its domain),
+        a surface at ``ubar`` of shape (K, m) (default: 5 levels per input over its domain box).
         Default: the Dataset's static points. Points outside the records' input range are
         welcome (a :class:`StaticRangeWarning` names them once).
     lambdas : array_like, shape (K,), optional

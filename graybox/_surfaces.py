@@ -15,6 +15,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ._ls import scaled_lstsq
+from ._records import StaticPoints
 from ._validation import check_int
 
 __all__ = ["StaticSurface", "monomial_exponents"]
@@ -239,6 +240,11 @@ class StaticSurface:
                 lower = tuple(v - (i == j) for i, v in enumerate(e))
                 out[:, j] += c * e[j] * _monomials(u, (lower,))[:, 0]
         return out
+
+    def points(self, ubar: np.ndarray) -> StaticPoints:
+        """The surface sampled at ``ubar`` (shape (K, m)) as static points."""
+        u = _as_inputs(ubar, self.n_inputs, self.name)
+        return StaticPoints(u if self.n_inputs > 1 else u[:, 0], self(u), name=self.name)
 
     def describe(self) -> str:
         """The polynomial as text, e.g. ``"-1.3 + 0.0015 u1 + 7.3e-06 u1*u2"``."""
