@@ -652,7 +652,7 @@ def _fit_surface(cm, points: StaticPoints) -> StaticSurface:
             f"fewer static points than the constraints need: eq. (22) for this structure matches a surface with "
             f"{len(exps)} monomials, which needs at least {len(exps)} points; got {len(points)}"
         )
-    return StaticSurface.fit(points, exponents=exps, inputs=getattr(points, "inputs", None))
+    return StaticSurface.fit(points, exponents=exps)
 
 
 # --------------------------------------------------------------------------------------------

@@ -62,15 +62,16 @@ class StaticSurface:
         A box (low, high) per input over which the surface is known (e.g. the span of the static
         points); None when unknown. Evaluations outside it are refused.
     name : str
-    inputs : tuple of str, optional
-        Names of the inputs (for display; default u1 … um).
+    input_names : tuple of str, optional
+        Names of the inputs, in the order of the exponents' entries (default ``u1 … um``, or
+        ``("u",)`` for one input).
     """
 
     exponents: tuple[tuple[int, ...], ...]
     coefficients: np.ndarray
     domain: tuple[tuple[float, float], ...] | None = None
     name: str = "static surface"
-    inputs: tuple[str, ...] | None = None
+    input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         ex = tuple(tuple(int(v) for v in e) for e in self.exponents)
@@ -103,10 +104,13 @@ class StaticSurface:
                                      f"got {(lo, hi)}")
                 box.append((lo, hi))
             object.__setattr__(self, "domain", tuple(box))
-        names = tuple(f"u{i + 1}" for i in range(m)) if self.inputs is None else tuple(str(s) for s in self.inputs)
+        if self.input_names is None:
+            names = ("u",) if m == 1 else tuple(f"u{i + 1}" for i in range(m))
+        else:
+            names = tuple(str(s) for s in self.input_names)
         if len(names) != m or len(set(names)) != m:
-            raise ValueError(f"{self.name}: inputs must be {m} distinct names, got {names}")
-        object.__setattr__(self, "inputs", names)
+            raise ValueError(f"{self.name}: input_names must be {m} distinct names, got {names}")
+        object.__setattr__(self, "input_names", names)
 
     # -- construction -------------------------------------------------------
     @classmethod
@@ -116,7 +120,7 @@ class StaticSurface:
         *,
         domain: Sequence[tuple[float, float]] | None = None,
         name: str = "static surface",
-        inputs: Sequence[str] | None = None,
+        input_names: Sequence[str] | None = None,
     ) -> "StaticSurface":
         """A surface from ``{exponent vector: coefficient}``, e.g. ``{(0, 0): κ, (1, 0): a, (1, 1): b}``.
 
@@ -128,14 +132,15 @@ class StaticSurface:
             Box per input where the surface is known.
         name : str
             Label.
-        inputs : sequence of str, optional
+        input_names : sequence of str, optional
             Input names (default u1 … um).
         """
         if not coefficients:
             raise ValueError(f"{name}: give at least one monomial")
         ex = tuple(tuple(int(v) for v in e) for e in coefficients)
         return cls(ex, np.array([float(v) for v in coefficients.values()]),
-                   None if domain is None else tuple(domain), name, None if inputs is None else tuple(inputs))
+                   None if domain is None else tuple(domain), name,
+                   None if input_names is None else tuple(input_names))
 
     @classmethod
     def fit(
@@ -145,7 +150,7 @@ class StaticSurface:
         *,
         name: str | None = None,
         exponents: Sequence[Sequence[int]] | None = None,
-        inputs: Sequence[str] | None = None,
+        input_names: Sequence[str] | None = None,
     ) -> "StaticSurface":
         """Least-squares polynomial surface through static points (columns scaled internally).
 
@@ -160,7 +165,7 @@ class StaticSurface:
             Label (default "fit to <points' name>").
         exponents : sequence of exponent vectors, optional
             The monomials to fit instead of the full set of ``degree``.
-        inputs : sequence of str, optional
+        input_names : sequence of str, optional
             Input names (default: the points', else u1 … um).
 
         The domain is the box spanned by the points. Needs at least as many points as monomials,
@@ -181,7 +186,7 @@ class StaticSurface:
         if any(lo == hi for lo, hi in box):
             raise ValueError("StaticSurface.fit: the points do not vary every input (a flat direction has no domain)")
         pname = getattr(points, "name", "static points")
-        names = inputs if inputs is not None else getattr(points, "inputs", None)
+        names = input_names if input_names is not None else getattr(points, "input_names", None)
         return cls(ex, c, box, name or f"fit to {pname}", None if names is None else tuple(names))
 
     # -- properties ---------------------------------------------------------
@@ -220,7 +225,7 @@ class StaticSurface:
             col = u[:, i]
             out = col[(col < lo - tol) | (col > hi + tol)]
             if out.size:
-                raise ValueError(f"{self.inputs[i]} = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")
+                raise ValueError(f"{self.input_names[i]} = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
         """H(ū) at points ``ubar`` of shape (K, m) (or (m,) for one point); returns shape (K,)."""
@@ -244,13 +249,13 @@ class StaticSurface:
     def points(self, ubar: np.ndarray) -> StaticPoints:
         """The surface sampled at ``ubar`` (shape (K, m)) as static points."""
         u = _as_inputs(ubar, self.n_inputs, self.name)
-        return StaticPoints(u if self.n_inputs > 1 else u[:, 0], self(u), name=self.name)
+        return StaticPoints(u if self.n_inputs > 1 else u[:, 0], self(u), name=self.name, input_names=self.input_names)
 
     def describe(self) -> str:
         """The polynomial as text, e.g. ``"-1.3 + 0.0015 u1 + 7.3e-06 u1*u2"``."""
         parts = []
         for e, c in zip(self.exponents, self.coefficients):
-            mono = "*".join(n if v == 1 else f"{n}^{v}" for n, v in zip(self.inputs, e) if v)
+            mono = "*".join(n if v == 1 else f"{n}^{v}" for n, v in zip(self.input_names, e) if v)
             parts.append(f"{c:.6g}" + (f" {mono}" if mono else ""))
         return " + ".join(parts).replace("+ -", "- ")
 

@@ -69,7 +69,7 @@ def test_evaluation_shapes_domain_and_text():
     with pytest.raises(ValueError, match=r"shape \(K, 2\)"):
         s(np.ones((3, 3)))
     assert s.describe().startswith("-1.3 + 0.0015 u1 + 0.0014 u2")
-    assert StaticSurface.polynomial({(1, 1): 2.0}, inputs=("n1", "n2")).describe() == "2 n1*n2"
+    assert StaticSurface.polynomial({(1, 1): 2.0}, input_names=("n1", "n2")).describe() == "2 n1*n2"
 
 
 def test_bad_surfaces():
@@ -82,7 +82,7 @@ def test_bad_surfaces():
     with pytest.raises(ValueError, match="low < high"):
         StaticSurface.polynomial(TRUE, domain=[(1, 0), (0, 1)])
     with pytest.raises(ValueError, match="distinct names"):
-        StaticSurface.polynomial(TRUE, inputs=("a", "a"))
+        StaticSurface.polynomial(TRUE, input_names=("a", "a"))
     with pytest.raises(ValueError, match="needs at least 6 static points"):
         StaticSurface.fit(_points(np.ones((4, 2)), np.ones(4)), 2)
     with pytest.raises(ValueError, match="rank"):  # all points on a line: u1*u2, u1², u2² collinear
