@@ -196,7 +196,7 @@ def evaluate_thetas(
     if record is not None:
         L = structure.max_lag
         if one_step:
-            psi = regressor_matrix(structure, record.u, record.y, start=L)
+            psi = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names)
             out["J1"] = np.mean((record.y[L:, None] - psi @ th.T) ** 2, axis=0)
         Y = simulate_many(structure, th, record, threads=threads)
         with np.errstate(over="ignore", invalid="ignore"):

@@ -2,8 +2,11 @@
 
 A :class:`Record` is one experiment (input and output sampled at ``Ts``). A
 :class:`StaticPoints` holds measured steady states (ū_i, ȳ_i). Both validate at
-construction, so everything downstream may assume finite, 1-D, equally long
-arrays.
+construction, so everything downstream may assume finite, equally long arrays.
+
+Several inputs: ``u`` of shape (N, m) with ``input_names`` (default ``u1 … um``). A single
+input stays 1-D, shape (N,), named ``"u"`` unless named otherwise, so that every
+single-input path is exactly what it was.
 """
 
 from __future__ import annotations
@@ -12,9 +15,32 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._terms import check_input_names, default_input_names
 from ._validation import as_1d_finite, warn
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
+
+
+def as_input_array(x: object, name: str) -> np.ndarray:
+    """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several."""
+    try:
+        a = np.array(x, dtype=float, copy=True)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an array of numbers, got {type(x).__name__}") from None
+    if a.ndim == 2 and a.shape[1] == 1:
+        a = a[:, 0].copy()
+    if a.ndim == 1:
+        return as_1d_finite(a, name)
+    if a.ndim != 2:
+        raise ValueError(f"{name} must be 1-D (one input) or 2-D of shape (N, m) (m inputs), got {a.ndim}-D "
+                         f"with shape {a.shape}")
+    bad = ~np.isfinite(a)
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise ValueError(f"{name} has {int(bad.sum())} non-finite value(s) (NaN or inf), first at sample {r}, input {c}")
+    a = np.ascontiguousarray(a)
+    a.setflags(write=False)
+    return a
 
 
 @dataclass(frozen=True)
@@ -23,8 +49,9 @@ class Record:
 
     Parameters
     ----------
-    u : array_like, shape (N,)
-        Input samples (engineering units, e.g. rpm).
+    u : array_like, shape (N,) or (N, m)
+        Input samples (engineering units, e.g. rpm); one column per input. One input is
+        stored 1-D (an (N, 1) array is flattened), several as a C-contiguous (N, m) array.
     y : array_like, shape (N,)
         Output samples (engineering units, e.g. mlc).
     Ts : float, optional
@@ -33,6 +60,9 @@ class Record:
         A label used in messages and tables.
     units : tuple of str, optional
         Units of ``(u, y)``, for display only.
+    input_names : sequence of str, optional
+        The inputs' names as terms use them (default ``("u",)`` for one input, ``u1 … um``
+        for several); identifiers other than y, e, k, none given twice.
     """
 
     u: np.ndarray
@@ -40,24 +70,49 @@ class Record:
     Ts: float = 1.0
     name: str = "record"
     units: tuple[str, str] = ("", "")
+    input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
-        u = as_1d_finite(self.u, f"{self.name}: u")
+        u = as_input_array(self.u, f"{self.name}: u")
         y = as_1d_finite(self.y, f"{self.name}: y")
-        if u.shape != y.shape:
-            raise ValueError(f"{self.name}: u and y must have the same length, got {u.size} and {y.size}")
+        if u.shape[0] != y.shape[0]:
+            raise ValueError(f"{self.name}: u and y must have the same length, got {u.shape[0]} and {y.size}")
         if not (np.isfinite(self.Ts) and self.Ts > 0):
             raise ValueError(f"{self.name}: Ts must be a positive number of seconds, got {self.Ts}")
+        m = 1 if u.ndim == 1 else u.shape[1]
+        names = default_input_names(m) if self.input_names is None else check_input_names(
+            self.input_names, m, f"{self.name}: input_names")
         object.__setattr__(self, "u", u)
         object.__setattr__(self, "y", y)
+        object.__setattr__(self, "input_names", names)
 
     def __len__(self) -> int:
-        return int(self.u.size)
+        return int(self.y.size)
+
+    @property
+    def n_inputs(self) -> int:
+        """m, the number of inputs."""
+        return 1 if self.u.ndim == 1 else int(self.u.shape[1])
+
+    def input(self, name: str) -> np.ndarray:
+        """The samples of input ``name``, shape (N,) (a read-only view)."""
+        if name not in self.input_names:
+            raise ValueError(f"{self.name}: no input named {name!r}; its inputs are {self.input_names}")
+        return self.u if self.u.ndim == 1 else self.u[:, self.input_names.index(name)]
+
+    @property
+    def inputs(self) -> np.ndarray:
+        """All inputs as shape (N, m) (a view; m = 1 for a single input)."""
+        return self.u.reshape(len(self), self.n_inputs)
 
     def __repr__(self) -> str:
         uu, yu = (f" {x}" if x else "" for x in self.units)
-        return (f"Record({self.name!r}: {len(self)} samples, Ts = {self.Ts:g} s, "
-                f"u in [{self.u.min():.4g}, {self.u.max():.4g}]{uu}, y in [{self.y.min():.4g}, {self.y.max():.4g}]{yu})")
+        if self.u.ndim == 1 and self.input_names == ("u",):
+            ins = f"u in [{self.u.min():.4g}, {self.u.max():.4g}]{uu}"
+        else:
+            ins = ", ".join(f"{n} in [{c.min():.4g}, {c.max():.4g}]" for n, c in zip(self.input_names, self.inputs.T))
+            ins += uu
+        return f"Record({self.name!r}: {len(self)} samples, Ts = {self.Ts:g} s, {ins}, y in [{self.y.min():.4g}, {self.y.max():.4g}]{yu})"
 
     @property
     def t(self) -> np.ndarray:
@@ -66,7 +121,7 @@ class Record:
 
     def slice(self, start: int | None = None, stop: int | None = None, name: str | None = None) -> "Record":
         """Return the samples ``start:stop`` as a new record."""
-        return Record(self.u[start:stop], self.y[start:stop], self.Ts, name or self.name, self.units)
+        return Record(self.u[start:stop], self.y[start:stop], self.Ts, name or self.name, self.units, self.input_names)
 
     def require_length(self, max_lag: int) -> None:
         """Raise ``ValueError`` unless the record has more than ``max_lag`` samples."""
@@ -82,37 +137,60 @@ class StaticPoints:
 
     Parameters
     ----------
-    ubar : array_like, shape (M,)
-        Constant input levels (engineering units), all distinct.
+    ubar : array_like, shape (M,) or (M, m)
+        Constant input levels (engineering units), all distinct; one column per input (a
+        point ū in input space per row) for several inputs.
     ybar : array_like, shape (M,)
         Settled output at each level.
     name : str, optional
         A label used in messages.
+    input_names : sequence of str, optional
+        The inputs' names (default ``("u",)`` for one input, ``u1 … um`` for several).
     """
 
     ubar: np.ndarray
     ybar: np.ndarray
     name: str = "static points"
+    input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
-        u = as_1d_finite(self.ubar, f"{self.name}: ubar")
+        u = as_input_array(self.ubar, f"{self.name}: ubar")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
-        if u.shape != y.shape:
-            raise ValueError(f"{self.name}: ubar and ybar must have the same length, got {u.size} and {y.size}")
-        if u.size == 0:
+        if u.shape[0] != y.shape[0]:
+            raise ValueError(f"{self.name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
+        if u.shape[0] == 0:
             raise ValueError(f"{self.name}: no static points")
-        uniq, counts = np.unique(u, return_counts=True)
+        uniq, counts = np.unique(u, return_counts=True, axis=0)
         if (counts > 1).any():
             raise ValueError(f"{self.name}: duplicated ubar value(s) {uniq[counts > 1].tolist()}")
+        m = 1 if u.ndim == 1 else u.shape[1]
+        names = default_input_names(m) if self.input_names is None else check_input_names(
+            self.input_names, m, f"{self.name}: input_names")
         object.__setattr__(self, "ubar", u)
         object.__setattr__(self, "ybar", y)
+        object.__setattr__(self, "input_names", names)
 
     def __len__(self) -> int:
-        return int(self.ubar.size)
+        return int(self.ybar.size)
+
+    @property
+    def n_inputs(self) -> int:
+        """m, the number of inputs."""
+        return 1 if self.ubar.ndim == 1 else int(self.ubar.shape[1])
 
     def __repr__(self) -> str:
-        return (f"StaticPoints({self.name!r}: {len(self)} points, ū in [{self.ubar.min():.4g}, {self.ubar.max():.4g}], "
-                f"ȳ in [{self.ybar.min():.4g}, {self.ybar.max():.4g}])")
+        if self.ubar.ndim == 1:
+            ins = f"ū in [{self.ubar.min():.4g}, {self.ubar.max():.4g}]"
+        else:
+            ins = ", ".join(f"{n} in [{c.min():.4g}, {c.max():.4g}]" for n, c in zip(self.input_names, self.ubar.T))
+        return f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in [{self.ybar.min():.4g}, {self.ybar.max():.4g}])"
+
+
+def check_same_inputs(a: object, b: object) -> None:
+    """``ValueError`` naming both unless ``a`` and ``b`` (records, static points) have the same inputs."""
+    if a.input_names != b.input_names:  # type: ignore[attr-defined]
+        raise ValueError(f"{a.name!r} has inputs {a.input_names} but {b.name!r} has inputs {b.input_names}: "  # type: ignore[attr-defined]
+                         "all data of one identification must have the same inputs, in the same order")
 
 
 @dataclass(frozen=True)
@@ -136,6 +214,16 @@ class Dataset:
     static: StaticPoints | None = None
     description: str = ""
     extra: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        check_same_inputs(self.ident, self.valid)
+        if self.static is not None:
+            check_same_inputs(self.ident, self.static)
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """The inputs' names, shared by every record and the static points."""
+        return self.ident.input_names
 
     @property
     def Ts(self) -> float:
@@ -170,10 +258,12 @@ def as_records(data: object) -> list[Record]:
     for r in recs:
         if not isinstance(r, Record):
             raise ValueError(f"data must be a Record, a Dataset or a sequence of Records, got an element of type {type(r).__name__}")
+    for r in recs[1:]:
+        check_same_inputs(recs[0], r)
     return recs
 
 
-__all__.append("as_records")
+__all__ += ["as_records", "as_input_array", "check_same_inputs"]
 
 
 class StaticRangeWarning(UserWarning):
@@ -185,7 +275,20 @@ class StaticRangeWarning(UserWarning):
 
 
 def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "static points") -> None:
-    """Warn once, in words, which static ū lie outside the dynamic records' input range."""
+    """Warn once, in words, which static ū lie outside the dynamic records' input range (box, per input)."""
+    ubar = np.asarray(ubar, float)
+    if ubar.ndim == 2 and ubar.shape[1] > 1:
+        lo_ = np.min([r.inputs.min(axis=0) for r in records], axis=0)
+        hi_ = np.max([r.inputs.max(axis=0) for r in records], axis=0)
+        tol_ = 1e-9 * np.maximum(np.maximum(abs(lo_), abs(hi_)), 1.0)
+        rows = np.unique(ubar, axis=0)
+        out_ = rows[((rows < lo_ - tol_) | (rows > hi_ + tol_)).any(axis=1)]
+        if out_.size:
+            box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo_, hi_))
+            warn(f"{what}: ū = {np.round(out_, 6).tolist()} lie outside the input box {box} of the dynamic records; "
+                 "the model is extrapolated there by the static information (if the points and the records should "
+                 "overlap, check their units)", StaticRangeWarning)
+        return
     ub = np.unique(np.atleast_1d(np.asarray(ubar, float)))
     lo = min(float(r.u.min()) for r in records)
     hi = max(float(r.u.max()) for r in records)

@@ -14,16 +14,32 @@ import numpy as np
 from ._records import Record, as_records
 from ._terms import Structure
 
-__all__ = ["record_signals", "regressor_matrix", "stacked_regressors"]
+__all__ = ["record_signals", "input_signals", "regressor_matrix", "stacked_regressors"]
 
 
 def record_signals(record: Record) -> dict[str, np.ndarray]:
     """The measured signals of a record by the names terms use for them, each shape (N,).
 
     The one place that maps a record onto term signal names; every builder of regressor
-    columns takes its signals from here.
+    columns takes its signals from here. Each input appears under its name (``"u"`` for a
+    single unnamed input, ``"u1"``, ``"u2"``, … or the record's ``input_names``).
     """
-    return {"u": record.u, "y": record.y}
+    if record.u.ndim == 1:
+        out = {record.input_names[0]: record.u}
+    else:
+        out = {n: record.u[:, i] for i, n in enumerate(record.input_names)}
+    out["y"] = record.y
+    return out
+
+
+def input_signals(u: np.ndarray, input_names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+    """Input columns by name: ``u`` of shape (N,) (one input, default name ``"u"``) or (N, m)."""
+    if u.ndim == 1:
+        return {"u" if input_names is None else input_names[0]: u}
+    names = tuple(f"u{i}" for i in range(1, u.shape[1] + 1)) if input_names is None else tuple(input_names)
+    if len(names) != u.shape[1]:
+        raise ValueError(f"u has {u.shape[1]} input columns but {len(names)} input names {names} were given")
+    return {n: u[:, i] for i, n in enumerate(names)}
 
 
 def regressor_matrix(
@@ -33,6 +49,7 @@ def regressor_matrix(
     *,
     e: np.ndarray | None = None,
     start: int | None = None,
+    input_names: tuple[str, ...] | None = None,
 ) -> np.ndarray:
     """Evaluate every term of ``structure`` at samples ``k = start … N-1``.
 
@@ -40,25 +57,30 @@ def regressor_matrix(
     ----------
     structure : Structure
         The terms, in column order.
-    u, y : ndarray, shape (N,)
-        Input and output samples (assumed validated, e.g. from a :class:`Record`).
+    u : ndarray, shape (N,) or (N, m)
+        Input samples, one column per input (assumed validated, e.g. from a :class:`Record`).
+    y : ndarray, shape (N,)
+        Output samples.
     e : ndarray, shape (N,), optional
         Residuals for noise terms ``e(k-l)``; required when the structure has any.
     start : int, optional
         First sample to evaluate; defaults to ``structure.max_lag`` and must not be smaller.
+    input_names : tuple of str, optional
+        Names of the columns of ``u`` (default ``"u"`` for 1-D ``u``, else ``u1 … um``).
 
     Returns
     -------
     ndarray, shape (N - start, len(structure))
         Ψ, float64, C-contiguous.
     """
-    n = u.shape[0]
+    n = y.shape[0]
     s = structure.max_lag if start is None else int(start)
     if s < structure.max_lag:
         raise ValueError(f"start ({s}) is smaller than the structure's max lag ({structure.max_lag})")
     if n < s + 1:
         raise ValueError(f"record has {n} samples, fewer than max lag + 1 = {s + 1}")
-    signals = {"u": u, "y": y}
+    signals = input_signals(u, input_names)
+    signals["y"] = y
     if e is not None:
         signals["e"] = e
     rows = n - s
@@ -67,7 +89,9 @@ def regressor_matrix(
         col = np.ones(rows)
         for sig, lag, power in term.factors:
             if sig not in signals:
-                raise ValueError(f"term {term} needs signal {sig!r}, which was not given")
+                what = "input" if sig not in ("y", "e") else "signal"
+                raise ValueError(f"term {term} needs {what} {sig!r}, which the data do not have "
+                                 f"(inputs: {tuple(k for k in signals if k not in ('y', 'e'))})")
             x = signals[sig][s - lag : n - lag]
             col *= x if power == 1 else x**power
         psi[:, j] = col
@@ -104,6 +128,6 @@ def stacked_regressors(
     for i, r in enumerate(recs):
         r.require_length(s)
         e = None if residuals is None else residuals[i]
-        blocks.append(regressor_matrix(structure, r.u, r.y, e=e, start=s))
+        blocks.append(regressor_matrix(structure, r.u, r.y, e=e, start=s, input_names=r.input_names))
         targets.append(r.y[s:])
     return np.vstack(blocks), np.concatenate(targets)

@@ -207,7 +207,7 @@ def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bo
     ns = model.noise_structure if moving_average else model.noise_structure[:0]
     L = max(model.max_lag, ns.max_lag)
     rec.require_length(L)
-    v = rec.y[L:] - regressor_matrix(model.structure, rec.u, rec.y, start=L) @ model.theta
+    v = rec.y[L:] - regressor_matrix(model.structure, rec.u, rec.y, start=L, input_names=rec.input_names) @ model.theta
     if len(ns) == 0:
         return v, L
     c = model.noise_theta

@@ -45,7 +45,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record) -> np.ndarr
     L = structure.max_lag
     record.require_length(L)
     yhat = record.y.copy()
-    yhat[L:] = regressor_matrix(structure, record.u, record.y, start=L) @ th
+    yhat[L:] = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
     return yhat
 
 

@@ -1,13 +1,15 @@
 """Polynomial NARMAX terms, structures and candidate sets.
 
 A :class:`Term` is a product of lagged signals with powers, e.g. ``u(k-2)y(k-6)``
-or ``u(k-6)^2``; the empty product is the constant term ``1``. Signals are named
-(``"y"`` output, ``"u"`` input, ``"e"`` noise/residual) so that further inputs can
-be added later without a rewrite. A :class:`Structure` is an ordered tuple of
-distinct terms. :func:`Candidates` enumerates every monomial up to a degree.
+or ``u(k-6)^2``; the empty product is the constant term ``1``. Signals are named:
+``"y"`` is the output, ``"e"`` the noise/residual, and every other valid identifier
+(``"u"`` for a single input, ``"u1"``, ``"u2"``, … or a CSV column's name such as
+``"n1"``) is an input. A :class:`Structure` is an ordered tuple of distinct terms.
+:func:`Candidates` enumerates every monomial up to a degree, with lags per input.
 
-Printing follows the paper (``"u(k-2)y(k-6)"``) and :func:`parse_term` reads it
-back; ``parse_term(str(t)) == t`` for every term.
+Printing follows the paper (``"u(k-2)y(k-6)"``, ``"u1(k-1)u2(k-2)"``): inputs first
+in natural name order (u2 before u10), then y, then e; :func:`parse_term` reads any
+factor order back, and ``parse_term(str(t)) == t`` for every term.
 """
 
 from __future__ import annotations
@@ -16,13 +18,56 @@ import itertools
 import re
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Iterable, Iterator, Sequence
+from typing import Iterable, Iterator, Mapping, Sequence
 
-__all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS"]
+__all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
+           "default_input_names"]
 
-#: Signals a term may reference, in printing order (the paper writes u before y).
+#: The signals of a single-input model, in printing order (the paper writes u before y). Any
+#: other identifier except ``y``, ``e`` and ``k`` is accepted as the name of a further input.
 SIGNALS: tuple[str, ...] = ("u", "y", "e")
-_SIGNAL_RANK = {s: i for i, s in enumerate(SIGNALS)}
+_RESERVED = ("y", "e", "k")
+_NAME_RE = re.compile(r"[A-Za-z][A-Za-z0-9_]*\Z")
+_NUM_RE = re.compile(r"(\d+)")
+
+
+def _rank(signal: str) -> tuple:
+    """Printing/sorting rank of a signal: inputs (natural name order), then y, then e."""
+    if signal == "y":
+        return (1,)
+    if signal == "e":
+        return (2,)
+    return (0, tuple((0, int(p), "") if p.isdigit() else (1, 0, p) for p in _NUM_RE.split(signal) if p))
+
+
+def _check_signal(sig: object) -> str:
+    if not isinstance(sig, str) or not _NAME_RE.match(sig) or sig == "k":
+        raise ValueError(f"unknown signal {sig!r}: a signal is y (output), e (noise) or an input named by an "
+                         "identifier other than y, e, k (e.g. u, u1, n1)")
+    return sig
+
+
+def default_input_names(m: int) -> tuple[str, ...]:
+    """The input names used when none are given: ``("u",)`` for one input, ``u1 … um`` otherwise."""
+    return ("u",) if m == 1 else tuple(f"u{i}" for i in range(1, m + 1))
+
+
+def check_input_names(names: object, m: int | None = None, what: str = "input_names") -> tuple[str, ...]:
+    """Validated input names: identifiers, not y/e/k, none given twice (and ``m`` of them when given)."""
+    if isinstance(names, str) or not hasattr(names, "__iter__"):
+        raise ValueError(f"{what} must be a sequence of names, got {names!r}")
+    out = tuple(names)  # type: ignore[arg-type]
+    if not out:
+        raise ValueError(f"{what}: at least one input name is needed")
+    for n in out:
+        if not isinstance(n, str) or not _NAME_RE.match(n) or n in _RESERVED:
+            raise ValueError(f"{what}: input name {n!r} is not a valid identifier other than y, e, k")
+    dup = sorted({n for n in out if out.count(n) > 1})
+    if dup:
+        raise ValueError(f"{what}: input {dup[0]!r} is named twice in {out}")
+    if m is not None and len(out) != m:
+        raise ValueError(f"{what}: {len(out)} names {out} for {m} input column(s)")
+    return out
 
 _FACTOR_RE = re.compile(r"\s*([a-zA-Z]\w*)\s*\(\s*k\s*-\s*(\d+)\s*\)\s*(?:\^\s*(\d+))?\s*\*?")
 
@@ -34,7 +79,7 @@ class Term:
     Parameters
     ----------
     factors : tuple of (signal, lag, power)
-        ``signal`` in :data:`SIGNALS`, ``lag >= 1`` samples (``lag >= 0`` for ``e``,
+        ``signal`` is ``"y"``, ``"e"`` or an input name, ``lag >= 1`` samples (``lag >= 0`` for ``e``,
         not used here), ``power >= 1``. Stored in canonical order with repeated
         (signal, lag) pairs merged. The empty tuple is the constant term.
     """
@@ -47,8 +92,7 @@ class Term:
             if len(f) != 3:
                 raise ValueError(f"a factor must be (signal, lag, power), got {f!r}")
             sig, lag, power = f
-            if sig not in _SIGNAL_RANK:
-                raise ValueError(f"unknown signal {sig!r}; expected one of {SIGNALS}")
+            _check_signal(sig)
             if int(lag) != lag or lag < 1:
                 raise ValueError(f"lag must be an integer >= 1, got {lag!r} in {sig}(k-{lag})")
             if int(power) != power or power < 1:
@@ -56,7 +100,7 @@ class Term:
             key = (sig, int(lag))
             merged[key] = merged.get(key, 0) + int(power)
         canon = tuple(
-            (s, l, p) for (s, l), p in sorted(merged.items(), key=lambda kv: (_SIGNAL_RANK[kv[0][0]], kv[0][1]))
+            (s, l, p) for (s, l), p in sorted(merged.items(), key=lambda kv: (_rank(kv[0][0]), kv[0][1]))
         )
         object.__setattr__(self, "factors", canon)
 
@@ -74,6 +118,20 @@ class Term:
     def power_of(self, signal: str) -> int:
         """Total power of ``signal`` in the term (e.g. 2 for ``y`` in ``u(k-1)y(k-2)^2``)."""
         return sum(p for s, _, p in self.factors if s == signal)
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """The input signals of the term, in printing order (empty for y-only terms)."""
+        out: list[str] = []
+        for s, _, _ in self.factors:
+            if s not in ("y", "e") and s not in out:
+                out.append(s)
+        return tuple(out)
+
+    @property
+    def input_power(self) -> int:
+        """Total power of all inputs together (e.g. 3 for ``u1(k-1)u2(k-2)^2y(k-1)``)."""
+        return sum(p for s, _, p in self.factors if s not in ("y", "e"))
 
     @property
     def max_lag(self) -> int:
@@ -95,11 +153,11 @@ class Term:
 
     def sort_key(self) -> tuple:
         """Key ordering terms by degree, then signals and lags (used for candidates)."""
-        return (self.degree, [(_SIGNAL_RANK[s], l, -p) for s, l, p in self.factors])
+        return (self.degree, [(_rank(s), l, -p) for s, l, p in self.factors])
 
 
 def parse_term(text: str) -> Term:
-    """Parse a paper-style term such as ``"u(k-2)y(k-6)"``, ``"u(k-6)^2"`` or ``"1"``.
+    """Parse a paper-style term such as ``"u(k-2)y(k-6)"``, ``"u1(k-1)u2(k-2)"``, ``"u(k-6)^2"`` or ``"1"``.
 
     Factors may be separated by nothing, spaces or ``*``. Raises ``ValueError`` with the
     offending text when it cannot be read.
@@ -118,8 +176,10 @@ def parse_term(text: str) -> Term:
         if m is None or m.end() == pos:
             raise ValueError(f"cannot parse term {text!r} at position {pos}: {s[pos:]!r}")
         sig, lag, power = m.group(1), int(m.group(2)), int(m.group(3) or 1)
-        if sig not in _SIGNAL_RANK:
-            raise ValueError(f"cannot parse term {text!r}: unknown signal {sig!r} (expected one of {SIGNALS})")
+        try:
+            _check_signal(sig)
+        except ValueError as exc:
+            raise ValueError(f"cannot parse term {text!r}: {exc}") from None
         factors.append((sig, lag, power))
         pos = m.end()
     try:
@@ -205,6 +265,16 @@ class Structure:
         """Largest lag over all terms (0 for a static structure)."""
         return max((t.max_lag for t in self.terms), default=0)
 
+    @cached_property
+    def inputs(self) -> tuple[str, ...]:
+        """Every input signal the terms use, in natural name order (``()`` when none does)."""
+        names = {n for t in self.terms for n in t.inputs}
+        return tuple(sorted(names, key=_rank))
+
+    def input_lag(self, name: str) -> int:
+        """Largest lag of input ``name`` over the terms (0 when no term uses it)."""
+        return max((l for t in self.terms for s, l, _ in t.factors if s == name), default=0)
+
     @property
     def process(self) -> "Structure":
         """The terms without the noise signal (the NARX part)."""
@@ -241,48 +311,75 @@ def parse_structure(text: str | Sequence[str]) -> Structure:
 
 def Candidates(
     ny: int,
-    nu: int,
+    nu: int | Mapping[str, int],
     *,
     ne: int = 0,
     degree: int = 2,
-    delay: int = 1,
+    delay: int | Mapping[str, int] = 1,
     constant: bool = True,
     max_y_power: int | None = None,
+    inputs: Sequence[str] | None = None,
 ) -> Structure:
-    """Every monomial of degree <= ``degree`` in y(k-1..ny), u(k-delay..nu) (and e(k-1..ne)).
+    """Every monomial of degree <= ``degree`` in y(k-1..ny), each input's lags (and e(k-1..ne)).
 
     Parameters
     ----------
-    ny, nu : int
-        Largest output and input lags (samples). ``nu`` is the largest input lag, so input
-        lags run from ``delay`` to ``nu``.
+    ny : int
+        Largest output lag (samples).
+    nu : int or mapping name -> int
+        Largest input lag (samples). An int applies to every input; a mapping gives each input
+        its own (``{"u1": 4, "u2": 6}``) and, unless ``inputs`` is given, names the inputs.
+        Input ``i``'s lags run from its delay to its ``nu``; ``nu = 0`` leaves that input out.
     ne : int, optional
         Largest noise lag. Noise terms are the linear ``e(k-1) … e(k-ne)`` only (the MA part
         of the paper's models); they are appended after the process candidates.
     degree : int, optional
         Largest total degree (the paper's ℓ).
-    delay : int, optional
-        Smallest input lag (pure delay, samples), >= 1.
+    delay : int or mapping name -> int, optional
+        Smallest input lag (pure delay, MATLAB's ``nk``, samples), >= 1; an int for every
+        input or one per input (``{"u1": 1, "u2": 3}``; inputs not named get 1).
     constant : bool, optional
         Include the constant term.
     max_y_power : int, optional
         Drop terms whose total output power exceeds this. ``max_y_power=1`` keeps only
         structures with the rational static function of eq. (6) (what CLS with eq. (22) needs).
+    inputs : sequence of str, optional
+        Input names (default: the keys of ``nu`` when it is a mapping, else ``("u",)``, the
+        single input). Names are identifiers other than y, e, k; a name given twice is an error.
 
     Returns
     -------
     Structure
         Process candidates ordered by degree, then noise terms. For ny = nu = 6, ne = 0 there
         are 91 at degree 2 and 455 at degree 3 (constant included).
+
+    Examples
+    --------
+    >>> Candidates(1, {"u1": 1, "u2": 2}, delay={"u2": 2}, degree=1)
+    Structure(['1', 'u1(k-1)', 'u2(k-2)', 'y(k-1)'])
     """
-    for name, v, lo in (("ny", ny, 0), ("nu", nu, 0), ("ne", ne, 0), ("degree", degree, 0), ("delay", delay, 1)):
+    if inputs is None:
+        names = tuple(nu) if isinstance(nu, Mapping) else ("u",)
+    else:
+        names = tuple(inputs)
+    names = check_input_names(names, what="inputs")
+    nus = _per_input(nu, names, "nu", None)
+    delays = _per_input(delay, names, "delay", 1)
+    for name, v, lo in (("ny", ny, 0), ("ne", ne, 0), ("degree", degree, 0)):
         if int(v) != v or v < lo:
             raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
-    if nu and delay > nu:
-        raise ValueError(f"delay ({delay}) must not exceed nu ({nu})")
-    variables = [("y", i) for i in range(1, ny + 1)] + [("u", j) for j in range(delay, nu + 1)] if nu else [
-        ("y", i) for i in range(1, ny + 1)
-    ]
+    for n in names:
+        for what, v, lo in (("nu", nus[n], 0), ("delay", delays[n], 1)):
+            if isinstance(v, bool) or int(v) != v or v < lo:
+                label = what if names == ("u",) else f"{what} of input {n!r}"
+                raise ValueError(f"{label} must be an integer >= {lo}, got {v!r}")
+        if nus[n] and delays[n] > nus[n]:
+            label = "" if names == ("u",) else f" of input {n!r}"
+            raise ValueError(f"delay{label} ({delays[n]}) must not exceed nu{label} ({nus[n]})")
+    variables = [("y", i) for i in range(1, ny + 1)]
+    for n in names:
+        if nus[n]:
+            variables += [(n, j) for j in range(delays[n], nus[n] + 1)]
     terms: list[Term] = [Term(())] if constant else []
     for d in range(1, degree + 1):
         for combo in itertools.combinations_with_replacement(variables, d):
@@ -294,3 +391,16 @@ def Candidates(
     terms.sort(key=Term.sort_key)
     terms += [Term((("e", l, 1),)) for l in range(1, ne + 1)]
     return Structure(terms)
+
+
+def _per_input(value, names: tuple[str, ...], what: str, default: int | None) -> dict[str, int]:
+    """``value`` (an int, or a mapping name -> int) spread over ``names``."""
+    if not isinstance(value, Mapping):
+        return {n: value for n in names}
+    unknown = [k for k in value if k not in names]
+    if unknown:
+        raise ValueError(f"{what} names input {unknown[0]!r}, which is not among the inputs {names}")
+    missing = [n for n in names if n not in value]
+    if missing and default is None:
+        raise ValueError(f"{what} gives no value for input {missing[0]!r} (inputs {names})")
+    return {n: value.get(n, default) for n in names}

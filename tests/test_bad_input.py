@@ -17,10 +17,13 @@ def test_mismatched_lengths():
 
 
 def test_two_d_where_one_d_expected():
+    # u of shape (N, m) is m inputs (issue 15); y stays 1-D and u cannot be 3-D
     with pytest.raises(ValueError, match="must be 1-D"):
-        Record(np.ones((5, 1)), np.ones(5))
-    with pytest.raises(ValueError, match="must be 1-D"):
-        Record(np.ones((5, 2)), np.ones(5))
+        Record(np.ones(5), np.ones((5, 2)))
+    with pytest.raises(ValueError, match="must be 1-D .* or 2-D"):
+        Record(np.ones((5, 2, 1)), np.ones(5))
+    assert Record(np.ones((5, 1)), np.ones(5)).u.shape == (5,)
+    assert Record(np.ones((5, 2)), np.ones(5)).input_names == ("u1", "u2")
 
 
 def test_record_shorter_than_max_lag():
@@ -35,8 +38,8 @@ def test_record_shorter_than_max_lag():
 
 
 def test_unparsable_term():
-    with pytest.raises(ValueError, match="cannot parse term 'u\\(k-2\\)z\\(k-1\\)'"):
-        parse_term("u(k-2)z(k-1)")
+    with pytest.raises(ValueError, match="cannot parse term 'u\\(k-2\\)k\\(k-1\\)'"):
+        parse_term("u(k-2)k(k-1)")
 
 
 def test_theta_length():

@@ -22,6 +22,7 @@ import numpy as np
 
 from .._curves import StaticCurve
 from .._records import Dataset, Record, StaticPoints
+from .._terms import check_input_names
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -113,7 +114,7 @@ def _missing_column_message(path: Path, role: str, col: str, header: Sequence[st
 
 def load_record_csv(
     path: str | os.PathLike,
-    u: str,
+    u: str | Sequence[str],
     y: str,
     *,
     time: str | None = None,
@@ -121,6 +122,7 @@ def load_record_csv(
     name: str | None = None,
     units: tuple[str, str] = ("", ""),
     time_rtol: float = 1e-3,
+    input_names: Sequence[str] | None = None,
 ) -> Record:
     """A dynamic record (input, output, sampling period) from a CSV file.
 
@@ -128,8 +130,10 @@ def load_record_csv(
     ----------
     path : str or path-like
         The CSV file (header line with column names, one sample per line).
-    u, y : str
-        Names of the input and output columns.
+    u : str or sequence of str
+        Name of the input column, or of several input columns (``["n1", "n2"]``).
+    y : str
+        Name of the output column.
     time : str, optional
         Name of a time-stamp column (seconds). Stamps must increase strictly and evenly: every
         step within ``time_rtol`` × (median step) of the median step. The sampling period is the mean
@@ -144,11 +148,15 @@ def load_record_csv(
     time_rtol : float
         Relative tolerance on the time steps (default 1e-3: stamps printed with few digits pass,
         a logger's jitter or a missing sample does not).
+    input_names : sequence of str, optional
+        Names the terms use for the inputs. Default: ``"u"`` for a single column given as a
+        string, the column names themselves for a list of columns (they must then be
+        identifiers other than y, e, k).
 
     Returns
     -------
     Record
-        Arrays of shape (N,).
+        ``u`` of shape (N,) for one input, (N, m) for several; ``y`` of shape (N,).
 
     Raises
     ------
@@ -166,12 +174,36 @@ def load_record_csv(
         raise ValueError(f"units must be a pair of strings (input unit, output unit), got {units!r}")
     if not (0 < time_rtol < 1):
         raise ValueError(f"time_rtol must be in (0, 1), got {time_rtol!r}")
-    wanted = {"u": u, "y": y} | ({"time": time} if time is not None else {})
+    ucols, names = _input_columns(p, u, input_names)
+    wanted = {f"input {c!r}" if len(ucols) > 1 else "u": c for c in ucols} | {"y": y} | (
+        {"time": time} if time is not None else {})
     cols = _read_columns(p, wanted)
     lines = cols["_lines"]
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
-    return Record(cols["u"], cols["y"], Ts=float(Ts), name=name or p.stem, units=tuple(units))
+    uarr = cols["u"] if len(ucols) == 1 else np.column_stack([cols[f"input {c!r}"] for c in ucols])
+    return Record(uarr, cols["y"], Ts=float(Ts), name=name or p.stem, units=tuple(units), input_names=names)
+
+
+def _input_columns(p: Path, u: object, input_names: object) -> tuple[list[str], tuple[str, ...] | None]:
+    """The input column names and the input names of a loader's ``u`` argument."""
+    if isinstance(u, str):
+        ucols = [u]
+    elif hasattr(u, "__iter__") and all(isinstance(c, str) for c in u) and len(list(u)) > 0:  # type: ignore[arg-type]
+        ucols = list(u)  # type: ignore[arg-type]
+    else:
+        raise ValueError(f"{p}: u must name an input column or a non-empty list of input columns, got {u!r}")
+    dup = sorted({c for c in ucols if ucols.count(c) > 1})
+    if dup:
+        raise ValueError(f"{p}: input column {dup[0]!r} is named twice in u = {ucols}")
+    if input_names is not None:
+        return ucols, check_input_names(input_names, len(ucols), f"{p}: input_names")
+    if isinstance(u, str):
+        return ucols, None
+    try:
+        return ucols, check_input_names(ucols, len(ucols), f"{p}: input columns")
+    except ValueError as exc:
+        raise ValueError(f"{exc}; name the inputs with input_names=[...]") from None
 
 
 def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float | None, rtol: float) -> float:
@@ -202,10 +234,11 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
 
 def load_static_csv(
     path: str | os.PathLike,
-    u: str,
+    u: str | Sequence[str],
     y: str,
     *,
     name: str | None = None,
+    input_names: Sequence[str] | None = None,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
@@ -213,15 +246,19 @@ def load_static_csv(
     ----------
     path : str or path-like
         The CSV file (header line with column names, one point per line).
-    u, y : str
-        Names of the columns holding the constant input level ū and the settled output ȳ.
+    u : str or sequence of str
+        Name of the column holding the constant input level ū, or of one column per input.
+    y : str
+        Name of the column holding the settled output ȳ.
     name : str, optional
         Name of the points (default: the file name without extension).
+    input_names : sequence of str, optional
+        Names of the inputs (as in :func:`load_record_csv`).
 
     Returns
     -------
     StaticPoints
-        Arrays of shape (M,), in file order.
+        ``ubar`` of shape (M,) or (M, m), ``ybar`` of shape (M,), in file order.
 
     Raises
     ------
@@ -230,15 +267,26 @@ def load_static_csv(
         or two lines with the same ū (a steady state is one number per input level).
     """
     p = Path(path)
-    cols = _read_columns(p, {"u": u, "y": y})
+    ucols, names = _input_columns(p, u, input_names)
+    if len(ucols) > 1:
+        cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y})
+        ub = np.column_stack([cols[f"input {c!r}"] for c in ucols])
+        seen2: dict[tuple, int] = {}
+        for v, line in zip(map(tuple, ub.tolist()), cols["_lines"].tolist()):
+            if v in seen2:
+                raise ValueError(f"{p}: columns {ucols}: lines {seen2[v]} and {line} have the same input point {v}; "
+                                 "average repeated measurements into one point per input point")
+            seen2[v] = line
+        return StaticPoints(ub, cols["y"], name=name or p.stem, input_names=names)
+    cols = _read_columns(p, {"u": ucols[0], "y": y})
     ub, lines = cols["u"], cols["_lines"]
     seen: dict[float, int] = {}
     for v, line in zip(ub.tolist(), lines.tolist()):
         if v in seen:
-            raise ValueError(f"{p}: column {u!r}: lines {seen[v]} and {line} have the same input level {v:g}; "
+            raise ValueError(f"{p}: column {ucols[0]!r}: lines {seen[v]} and {line} have the same input level {v:g}; "
                              "average repeated measurements into one point per level")
         seen[v] = line
-    return StaticPoints(ub, cols["y"], name=name or p.stem)
+    return StaticPoints(ub, cols["y"], name=name or p.stem, input_names=names)
 
 
 # ---------------------------------------------------------------------------
