@@ -39,7 +39,7 @@ from ._uncertainty import (
 from ._bootstrap import BootstrapJob, DecisionBootstrap, block_resample, bootstrap_decision
 from ._io import FORMAT_VERSION, GrayboxFileError, from_json, load, read_header, save, to_json
 from . import datasets, plots, reference
-from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
+from .datasets import load_buck, load_pumping, load_pumping_miso, load_record_csv, load_static_csv
 from . import experiments
 from .experiments import GrayboxSelection, load_results, select_graybox
 
@@ -71,6 +71,6 @@ __all__ = [
     "bootstrap_decision", "DecisionBootstrap", "BootstrapJob", "block_resample",
     "save", "load", "to_json", "from_json", "read_header", "GrayboxFileError", "FORMAT_VERSION",
     "datasets", "plots", "reference", "experiments",
-    "load_pumping", "load_buck", "load_record_csv", "load_static_csv", "load_results", "select_graybox", "GrayboxSelection",
+    "load_pumping", "load_pumping_miso", "load_buck", "load_record_csv", "load_static_csv", "load_results", "select_graybox", "GrayboxSelection",
     "__version__",
 ]

@@ -95,8 +95,9 @@ def test_static_surface_is_flat_in_the_slower_speed_while_its_valve_is_shut():
 
 
 def test_static_grid_experiment_scatters_around_the_surface():
-    ubar, ybar = static_grid_experiment(PLANT, rng=3)
-    assert ubar.shape == (36, 2) and ybar.shape == (36,)
+    pts = static_grid_experiment(PLANT, rng=3)
+    ubar, ybar = pts.ubar, pts.ybar
+    assert ubar.shape == (36, 2) and ybar.shape == (36,) and pts.input_names == ("u1", "u2")
     assert {tuple(p) for p in ubar} == {(a, b) for a in STATIC_SPEEDS_MISO for b in STATIC_SPEEDS_MISO}
     assert np.all(np.abs(np.diff(ubar, axis=0)).sum(axis=1) == 100.0)  # one grid step per move
     err = ybar - PLANT.static_pressure(ubar[:, 0], ubar[:, 1])
@@ -214,3 +215,23 @@ def test_bad_calls():
         TwoSpeedPumpingPlant(rig="rig")
     with pytest.raises(ValueError, match=r"shape \(K, 2\)"):
         static_grid_experiment(PLANT, speeds=[1200.0, 1300.0], rng=1)
+
+
+# -- the bundled data set ---------------------------------------------------------
+
+def test_load_pumping_miso():
+    import graybox as gb
+
+    ds = gb.load_pumping_miso()
+    assert ds.input_names == ("u1", "u2") and ds.Ts == 0.05
+    assert ds.ident.u.shape == (N_IDENT_MISO, 2) and ds.valid.u.shape == (N_SAMPLES_MISO - N_IDENT_MISO, 2)
+    assert ds.static.ubar.shape == (36, 2) and ds.ident.units == ("rpm", "mlc")
+    run = PLANT.simulate(two_speed_reference(), rng=np.random.default_rng([2011, 13]))
+    np.testing.assert_array_equal(ds.ident.u, run.u[:N_IDENT_MISO])
+    np.testing.assert_allclose(ds.valid.y, run.y[N_IDENT_MISO:], rtol=0, atol=5.01e-5)  # 4 decimals in the file
+    rec = run.record()
+    assert rec.input_names == ("u1", "u2") and rec.u.shape == (N_SAMPLES_MISO, 2)
+    surf = ds.extra["static_surface"]
+    err = ds.static.ybar - surf(ds.static.ubar)
+    assert np.abs(err).max() < 0.15 and ds.extra["plant"] == PLANT
+    assert "not a measured plant" in ds.description

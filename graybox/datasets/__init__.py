@@ -1,6 +1,7 @@
 """Data sets: the bundled pumping-plant benchmark, the buck converter, and CSV loaders.
 
 - :func:`load_pumping` — simulated stand-in for the paper's rig (bundled, works after install);
+- :func:`load_pumping_miso` — the same rig with its two pump sets at independent speeds (two inputs, bundled);
 - :func:`load_buck` — real buck-converter measurements kept outside the project;
 - :func:`load_record_csv`, :func:`load_static_csv` — users' own files, columns chosen by name;
 - :mod:`graybox.datasets.pumping` — the plant simulator and the generator of the bundled files
@@ -18,6 +19,7 @@ from ._loaders import (
     load_static_csv,
     pumping_data_dir,
 )
+from ._miso_loader import load_pumping_miso, pumping_miso_data_dir
 
 _PUMPING_NAMES = ("PlantRun", "PumpingPlant", "speed_reference", "static_experiment")
 _PUMPING_MISO_NAMES = ("TwoSpeedPumpingPlant", "TwoSpeedRun", "two_speed_reference", "static_grid_experiment")
@@ -38,6 +40,8 @@ def __getattr__(name: str):
 
 __all__ = [
     "load_pumping",
+    "load_pumping_miso",
+    "pumping_miso_data_dir",
     "load_buck",
     "load_record_csv",
     "load_static_csv",

@@ -68,6 +68,7 @@ from typing import Sequence
 import numba as nb
 import numpy as np
 
+from .._records import Record, StaticPoints
 from .._validation import as_1d_finite
 from .pumping import DEFAULT_SEED, PumpingPlant, _staircase
 
@@ -144,6 +145,16 @@ class TwoSpeedRun:
             a = np.array(getattr(self, name), dtype=float, copy=True)
             a.setflags(write=False)  # a run is a value
             object.__setattr__(self, name, a)
+
+    def record(self, name: str = "pumping_miso") -> Record:
+        """The measured inputs/output as a two-input :class:`~graybox.Record` (inputs ``u1``, ``u2`` in rpm; mlc).
+
+        Parameters
+        ----------
+        name : str
+            The record's name.
+        """
+        return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"), input_names=("u1", "u2"))
 
 
 @dataclass(frozen=True)
@@ -508,7 +519,7 @@ def static_grid_experiment(
     rng: np.random.Generator | int | None = None,
     settle: float = 180.0,
     average: float = 6.0,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> StaticPoints:
     """The static test over (n₁, n₂): hold each pair, wait out the transients, average the pressure.
 
     As :func:`graybox.datasets.pumping.static_experiment`, one continuous run visiting ``speeds``
@@ -517,10 +528,9 @@ def static_grid_experiment(
 
     Returns
     -------
-    ubar : ndarray, shape (K, 2)
-        The speed pairs (rpm).
-    ybar : ndarray, shape (K,)
-        Mean measured pressure (mlc).
+    StaticPoints
+        ū = the speed pairs (rpm), shape (K, 2), inputs named ``u1``, ``u2``; ȳ = mean measured
+        pressure (mlc), shape (K,).
     """
     sp = static_grid() if speeds is None else np.asarray(speeds, dtype=float)
     if sp.ndim != 2 or sp.shape[1] != 2 or sp.shape[0] == 0:
@@ -532,11 +542,11 @@ def static_grid_experiment(
     u = np.repeat(sp, n_settle + n_avg, axis=0)
     run = plant.simulate(u, rng=rng)
     y = run.y.reshape(sp.shape[0], n_settle + n_avg)[:, n_settle:]
-    return sp.copy(), y.mean(axis=1)
+    return StaticPoints(sp, y.mean(axis=1), name="pumping_miso static points", input_names=("u1", "u2"))
 
 
 def generate_miso(*, seed: int = DEFAULT_SEED, plant: TwoSpeedPumpingPlant | None = None
-                  ) -> tuple[TwoSpeedRun, np.ndarray, np.ndarray]:
+                  ) -> tuple[TwoSpeedRun, StaticPoints]:
     """The bundled MISO experiment: the dynamic run and the 36-point static grid.
 
     ``plant`` defaults to :class:`TwoSpeedPumpingPlant` (the bundled rig). Deterministic for a given
@@ -545,13 +555,13 @@ def generate_miso(*, seed: int = DEFAULT_SEED, plant: TwoSpeedPumpingPlant | Non
 
     Returns
     -------
-    (TwoSpeedRun, ndarray (36, 2), ndarray (36,))
-        The run, the static speed pairs (rpm) and pressures (mlc).
+    (TwoSpeedRun, StaticPoints)
+        The run and the 36 static points (ū in rpm, shape (36, 2); ȳ in mlc).
     """
     plant = TwoSpeedPumpingPlant() if plant is None else plant
     run = plant.simulate(two_speed_reference(seed=seed), rng=np.random.default_rng([seed, 13]))
-    ubar, ybar = static_grid_experiment(plant, rng=np.random.default_rng([seed, 14]))
-    return run, ubar, ybar
+    static = static_grid_experiment(plant, rng=np.random.default_rng([seed, 14]))
+    return run, static
 
 
 def write_miso_csvs(out_dir: str | Path, *, seed: int = DEFAULT_SEED) -> tuple[Path, Path]:
@@ -566,14 +576,14 @@ def write_miso_csvs(out_dir: str | Path, *, seed: int = DEFAULT_SEED) -> tuple[P
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    run, ubar, ybar = generate_miso(seed=seed)
+    run, static = generate_miso(seed=seed)
     dyn = out / "dynamic.csv"
     sta = out / "static.csv"
     lines = [",".join(DYNAMIC_COLUMNS_MISO)]
     lines += [f"{t:.2f},{u[0]:.1f},{u[1]:.1f},{y:.4f}" for t, u, y in zip(run.t, run.u, run.y)]
     dyn.write_text("\n".join(lines) + "\n", encoding="utf-8", newline="\n")
     lines = [",".join(STATIC_COLUMNS_MISO)]
-    lines += [f"{u[0]:.1f},{u[1]:.1f},{y:.4f}" for u, y in zip(ubar, ybar)]
+    lines += [f"{u[0]:.1f},{u[1]:.1f},{y:.4f}" for u, y in zip(static.ubar, static.ybar)]
     sta.write_text("\n".join(lines) + "\n", encoding="utf-8", newline="\n")
     return dyn, sta
 
