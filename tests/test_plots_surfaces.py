@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
+from graybox import StaticPoints
 from graybox._surfaces import StaticSurface
 from graybox.datasets import TwoSpeedPumpingPlant
 from graybox.datasets._pumping_miso import static_grid
@@ -26,7 +27,7 @@ theory.name = "theoretical surface"
 
 def _grid_points():
     U = static_grid()
-    return SimpleNamespace(ubar=U, ybar=theory(U) + 0.01, name="grid")
+    return StaticPoints(U, theory(U) + 0.01, name="grid")
 
 
 def test_slices_draw_one_line_per_level_and_surface_with_the_points(tmp_path):

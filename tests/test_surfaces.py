@@ -7,6 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from graybox import StaticPoints
 from graybox._surfaces import StaticSurface, monomial_exponents
 from graybox.datasets import TwoSpeedPumpingPlant
 from graybox.datasets._pumping_miso import static_grid
@@ -15,7 +16,7 @@ TRUE = {(0, 0): -1.3, (1, 0): 1.5e-3, (0, 1): 1.4e-3, (2, 0): 2e-6, (1, 1): 3.2e
 
 
 def _points(ubar, ybar, name="pts"):
-    return SimpleNamespace(ubar=np.asarray(ubar, float), ybar=np.asarray(ybar, float), name=name)
+    return StaticPoints(ubar, ybar, name=name)
 
 
 def test_monomial_exponents():
@@ -60,6 +61,16 @@ def test_gradient_matches_finite_differences():
         np.testing.assert_allclose(G[:, j], (s(U + d) - s(U - d)) / (2 * h), rtol=1e-7)
 
 
+def test_fit_takes_the_points_input_names_and_samples_back():
+    U = static_grid()
+    true = StaticSurface.polynomial(TRUE)
+    fit = StaticSurface.fit(StaticPoints(U, true(U), input_names=("n1", "n2")), 2)
+    assert fit.input_names == ("n1", "n2")
+    pts = fit.points(U[:5])
+    assert pts.input_names == ("n1", "n2") and pts.ubar.shape == (5, 2)
+    np.testing.assert_allclose(pts.ybar, true(U[:5]), rtol=1e-9)
+
+
 def test_evaluation_shapes_domain_and_text():
     s = StaticSurface.polynomial(TRUE, domain=[(1000, 1700), (1000, 1700)], name="H")
     assert s(np.array([1200.0, 1300.0])).shape == (1,)
@@ -84,7 +95,7 @@ def test_bad_surfaces():
     with pytest.raises(ValueError, match="distinct names"):
         StaticSurface.polynomial(TRUE, input_names=("a", "a"))
     with pytest.raises(ValueError, match="needs at least 6 static points"):
-        StaticSurface.fit(_points(np.ones((4, 2)), np.ones(4)), 2)
+        StaticSurface.fit(SimpleNamespace(ubar=np.ones((4, 2)), ybar=np.ones(4)), 2)
     with pytest.raises(ValueError, match="rank"):  # all points on a line: u1*u2, u1², u2² collinear
         t = np.linspace(0, 1, 10)
         StaticSurface.fit(_points(np.c_[t, t], t), 2)
