@@ -616,7 +616,7 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
         curve = static
     elif isinstance(static, StaticPoints) and how == "curve" and n_static_inputs(cm) > 1:
         points = static
-        curve = _fit_surface(cm, points)
+        curve = numerator_surface(cm, points)
     elif isinstance(static, StaticPoints):
         points = static
         if how == "curve":
@@ -639,8 +639,12 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
     return cons, ctx, curve
 
 
-def _fit_surface(cm, points: StaticPoints) -> StaticSurface:
-    """The surface on the monomials of the Σ_{u^e} clusters (what the numerator can carry), fitted to ``points``."""
+def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
+    """The surface on the monomials of the Σ_{u^e} clusters (what the numerator can carry), fitted to ``points``.
+
+    The surface eq. (22) can impose on a several-input structure (:class:`~graybox.CurveEquality`);
+    ``cm`` is the structure's :class:`ClusterMap`.
+    """
     m = n_static_inputs(cm)
     static_inputs(points.ubar, m, points.name)
     exps = sorted({e for p, e in map(cluster_powers, cm.keys) if p == 0}, key=lambda e: (sum(e), tuple(-v for v in e)))

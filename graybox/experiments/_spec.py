@@ -57,7 +57,7 @@ CONSTRAINT_TYPES = {
 DECISION_RULES = ("dsf", "min_correlation", "min_jsf")
 #: Bundled data sets and their default J_SF band B (output units²): the pumping plant's
 #: transmitter error ±0.175 mlc (0.031 mlc²), the buck converter's 0.2 V quantisation (0.1² V²).
-BUNDLED = {"pumping": 0.031, "buck": 0.01}
+BUNDLED = {"pumping": 0.031, "buck": 0.01, "pumping_miso": 0.031}
 
 
 # --------------------------------------------------------------------------------------------
@@ -206,8 +206,9 @@ class DataSpec:
     ----------
     name : str
         Label in the results.
-    bundled : {"pumping", "buck"}, optional
-        :func:`graybox.load_pumping` or :func:`graybox.load_buck`.
+    bundled : {"pumping", "buck", "pumping_miso"}, optional
+        :func:`graybox.load_pumping`, :func:`graybox.load_buck` or :func:`graybox.load_pumping_miso`
+        (the rig with two independent pump speeds: two inputs).
     ident, valid : mapping, optional
         CSV records ``{"path", "u", "y", "time" or "Ts"}`` (see :func:`graybox.load_record_csv`);
         relative paths are resolved against the spec file's folder.
@@ -215,7 +216,8 @@ class DataSpec:
         CSV static points ``{"path", "u", "y"}`` (see :func:`graybox.load_static_csv`).
     band : float, optional
         The J_SF band B = [0, band] (output units²) for D_SF decisions and the reports; default
-        for the bundled sets 0.031 mlc² (pumping) and 0.01 V² (buck).
+        for the bundled sets 0.031 mlc² (pumping and pumping_miso: the same transmitter) and
+        0.01 V² (buck).
     dataset : Dataset, optional
         A Dataset built in Python (not expressible in TOML); its content is hashed.
     """
@@ -280,6 +282,8 @@ class DataSpec:
             ds = gb.load_pumping()
         elif self.bundled == "buck":
             ds = gb.load_buck()
+        elif self.bundled == "pumping_miso":
+            ds = gb.load_pumping_miso()
         else:
             base = Path(base_dir) if base_dir is not None else Path.cwd()
 
