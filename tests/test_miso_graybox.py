@@ -1,0 +1,222 @@
+"""Gray-box estimation with static surfaces: several inputs in CLS, PE and SE (issue 15)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox._constraints import (
+    StaticContext, cluster_powers, n_static_inputs, static_rows,
+)
+from graybox._surfaces import StaticSurface
+
+# A rational two-input structure (no y power above 1) for the bundled two-input rig: its
+# numerator carries 1, u1, u2, u1², u1·u2, u2²; its denominator 1 − Σy − Σyu1 ū1 − Σyu2 ū2.
+TERMS = ["1", "y(k-1)", "y(k-2)", "u1(k-2)", "u2(k-2)", "u1(k-3)^2", "u1(k-2)u2(k-3)", "u2(k-3)^2",
+         "u1(k-2)y(k-1)", "u2(k-2)y(k-2)"]
+ST = gb.parse_structure(TERMS)
+
+
+@pytest.fixture(scope="module")
+def ds():
+    return gb.load_pumping_miso()
+
+
+def rational_surface(structure, theta, U):
+    """ȳ = N(ū)/D(ū) from the cluster coefficients (eq. (6) in several inputs), shape (K,)."""
+    cm = gb.cluster_map(structure)
+    sig = cm.R @ np.asarray(theta, float)
+    U = np.atleast_2d(np.asarray(U, float))
+    num = np.zeros(U.shape[0])
+    den = np.ones(U.shape[0])
+    for s, key in zip(sig, cm.keys):
+        p, e = cluster_powers(key)
+        mono = np.prod(U ** np.array(e, float)[None, :], axis=1)
+        if p == 0:
+            num += s * mono
+        else:
+            assert p == 1
+            den -= s * mono
+    return num / den
+
+
+def rational_gradient(structure, theta, U, h=1e-4):
+    U = np.atleast_2d(np.asarray(U, float))
+    out = np.empty(U.shape)
+    for j in range(U.shape[1]):
+        d = np.zeros(U.shape[1])
+        d[j] = h * np.abs(U[:, j]).max()
+        out[:, j] = (rational_surface(structure, theta, U + d) - rational_surface(structure, theta, U - d)) / (2 * d[j])
+    return out
+
+
+def grid(n=7, lo=1150.0, hi=1650.0):
+    g = np.linspace(lo, hi, n)
+    return np.array([(a, b) for a in g for b in g])
+
+
+# -- static rows -------------------------------------------------------------------
+
+def test_clusters_speak_of_both_inputs():
+    cm = gb.cluster_map(ST)
+    assert n_static_inputs(cm) == 2
+    powers = {cluster_powers(k) for k in cm.keys}
+    assert powers == {(0, (0, 0)), (1, (0, 0)), (0, (1, 0)), (0, (0, 1)), (0, (2, 0)), (0, (1, 1)), (0, (0, 2)),
+                      (1, (1, 0)), (1, (0, 1))}
+
+
+def test_static_rows_are_the_monomials_and_their_derivatives():
+    cm = gb.cluster_map(ST)
+    rng = np.random.default_rng(0)
+    U = rng.uniform(1000, 1700, (5, 2))
+    yb = rng.uniform(8, 20, 5)
+    Q = static_rows(cm, U, yb)
+    for c, key in enumerate(cm.keys):
+        p, e = cluster_powers(key)
+        np.testing.assert_allclose(Q[:, c], yb**p * U[:, 0] ** e[0] * U[:, 1] ** e[1], rtol=1e-14)
+    theta = rng.standard_normal(len(ST))
+    for j in (0, 1):
+        h = np.zeros(2)
+        h[j] = 1e-3
+        fd = (static_rows(cm, U + h, yb) - static_rows(cm, U - h, yb)) / 2e-3
+        np.testing.assert_allclose(static_rows(cm, U, yb, wrt="u", input=j) @ cm.R @ theta, fd @ cm.R @ theta,
+                                   rtol=1e-6)
+    fd = (static_rows(cm, U, yb + 1e-4) - static_rows(cm, U, yb - 1e-4)) / 2e-4
+    np.testing.assert_allclose(static_rows(cm, U, yb, wrt="y"), fd, rtol=1e-6, atol=1e-9)
+    with pytest.raises(ValueError, match="needs input = 0 … 1"):
+        static_rows(cm, U, yb, wrt="u")
+    with pytest.raises(ValueError, match="the structure has 2 inputs but ū has shape"):
+        static_rows(cm, U[:, 0], yb)
+
+
+# -- CLS ----------------------------------------------------------------------------
+
+def test_cls_imposes_a_fitted_surface_to_1e_8(ds):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        model = gb.cls(ST, ds, ds.static, how="curve")
+    cm = gb.cluster_map(ST)
+    exps = {cluster_powers(k)[1] for k in cm.keys if cluster_powers(k)[0] == 0}
+    surf = StaticSurface.fit(ds.static, exponents=sorted(exps))
+    U = grid(11)
+    H = surf(U)
+    ym = rational_surface(ST, model.theta, U)
+    assert np.max(np.abs(ym - H) / np.abs(H)) < 1e-8
+    # the model's own static analysis (the equilibrium a free run reaches) agrees
+    ys = np.asarray(gb.static_curve(model, U), float).reshape(-1)
+    np.testing.assert_allclose(ys, H, rtol=1e-8)
+    # and the rows are met as equalities: Σ_{y u^e} = 0 for e ≠ 0
+    sig = dict(zip(cm.keys, cm.R @ model.theta))
+    for key, v in sig.items():
+        p, e = cluster_powers(key)
+        if p == 1 and any(e):
+            assert abs(v) < 1e-12
+
+
+def test_cls_surface_equality_in_rad_per_s_gives_the_same_model(ds):
+    k = np.pi / 30
+    scaled = gb.Dataset(
+        gb.Record(ds.ident.u * k, ds.ident.y, Ts=ds.Ts, input_names=ds.input_names),
+        gb.Record(ds.valid.u * k, ds.valid.y, Ts=ds.Ts, input_names=ds.input_names),
+        gb.StaticPoints(ds.static.ubar * k, ds.static.ybar, input_names=ds.input_names),
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        a = gb.cls(ST, ds, ds.static, how="curve")
+        b = gb.cls(ST, scaled, scaled.static, how="curve")
+    U = grid(5)
+    np.testing.assert_allclose(rational_surface(ST, b.theta, U * k), rational_surface(ST, a.theta, U), rtol=1e-7)
+
+
+def test_cls_through_a_few_static_points_meets_them_to_1e_8(ds):
+    pts = gb.StaticPoints(ds.static.ubar[[0, 14, 21, 35]], ds.static.ybar[[0, 14, 21, 35]],
+                          input_names=ds.input_names)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        for solver in ("clarabel", "closed"):
+            model = gb.cls(ST, ds, pts, solver=solver)
+            ym = rational_surface(ST, model.theta, pts.ubar)
+            np.testing.assert_allclose(ym, pts.ybar, rtol=1e-8)
+
+
+def test_cls_with_a_given_surface_and_per_input_gain_bounds(ds):
+    surf = StaticSurface.fit(ds.static, 2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        model = gb.cls(ST, ds, surf, constraints=gb.GainBounds(lower=[0.0, 0.0], n=6))
+    U = grid(9)
+    np.testing.assert_allclose(rational_surface(ST, model.theta, U), surf(U), rtol=1e-8)
+    assert np.all(rational_gradient(ST, model.theta, U) > -1e-8)
+
+
+# -- PE -----------------------------------------------------------------------------
+
+def test_pe_closed_form_and_cvxpy_agree_with_two_inputs(ds):
+    lam = np.array([1e-3, 0.1, 0.9])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        closed = gb.pe_thetas(ST, ds, lambdas=lam, solver="closed")
+        qp = gb.pe_thetas(ST, ds, lambdas=lam, solver="clarabel")
+    U = ds.static.ubar
+    for a, b in zip(closed, qp):
+        np.testing.assert_allclose(rational_surface(ST, b, U), rational_surface(ST, a, U), rtol=1e-6)
+    jsf_qr = gb.qr_static_error(ST, closed, ds.static)
+    assert jsf_qr[0] < jsf_qr[-1]  # the static points weigh more at small λ1
+
+
+def test_pe_band_and_gain_bounds_hold_per_input(ds):
+    band = gb.StaticBand(0.2)
+    gain = gb.GainBounds(lower=[0.0, 0.0])  # at the static points (no reference surface)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        thetas = gb.pe_thetas(ST, ds, lambdas=[0.5, 1.0], constraints=band & gain)
+    for th in thetas:
+        err = rational_surface(ST, th, ds.static.ubar) - ds.static.ybar
+        assert np.abs(err).max() <= 0.2 + 1e-6
+        assert np.all(rational_gradient(ST, th, ds.static.ubar) > -1e-6)
+
+
+def test_pe_samples_a_surface(ds):
+    surf = StaticSurface.fit(ds.static, 2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        th = gb.pe_thetas(ST, ds, surf, lambdas=[1e-4], solver="closed")[0]
+    U = grid(5)  # the default sample: 5 levels per input over the surface's domain
+    assert np.sqrt(np.mean((rational_surface(ST, th, U) - surf(U)) ** 2)) < 0.05
+
+
+# -- SE -----------------------------------------------------------------------------
+
+def test_se_gradient_on_two_inputs(ds):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        par = gb.se_pareto(ST, ds, lambdas=[0.3, 1.0], method="gradient", progress=False, max_nfev=5)
+    assert len(par) == 2 and np.all(np.isfinite(par.JSF))
+    # J_SF is the static error at the 36 points of the equilibrium each member reaches
+    th = par.thetas[0]
+    ym = rational_surface(ST, th, ds.static.ubar)
+    assert par.JSF[0] == pytest.approx(np.mean((ym - ds.static.ybar) ** 2), rel=1e-6)
+
+
+# -- bad input ------------------------------------------------------------------------
+
+def test_input_count_mismatches_are_named(ds):
+    three = gb.StaticPoints(np.c_[ds.static.ubar, ds.static.ubar[:, :1]], ds.static.ybar)
+    with pytest.raises(ValueError, match="inputs"):
+        gb.cls(ST, ds, three)
+    with pytest.raises(ValueError, match="curve in one input but the structure has 2 inputs"):
+        gb.cls(ST, ds, gb.StaticCurve.polynomial([1.0, 2.0]))
+    surf3 = StaticSurface.polynomial({(0, 0, 0): 1.0, (1, 0, 0): 1.0})
+    with pytest.raises(ValueError, match="surface in 3 input"):
+        gb.cls(ST, ds, surf3)
+    surf_y = StaticSurface.polynomial({(0, 0): 1.0, (3, 0): 1.0})
+    with pytest.raises(ValueError, match="no cluster of the structure carries"):
+        gb.cls(ST, ds, surf_y)
+    with pytest.raises(ValueError, match="lower has 3 entries but the structure has 2 input"):
+        gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(lower=[0, 0, 0]))
+    ctx = StaticContext(ST, ds.static)
+    with pytest.raises(ValueError, match="one \\(low, high\\) per input"):
+        gb.GainBounds(lower=0.0, ubar_range=(1200, 1500), reference=StaticSurface.fit(ds.static, 2)).affine(ctx)
