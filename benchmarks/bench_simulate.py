@@ -7,6 +7,10 @@ Run with the benchmark environment (SysIdentPy is not a project dependency):
 
 Model (15) of the paper (Table II, ELS column), 3200 samples of a step input in rpm.
 Throughput counts term-evaluations: one term of one model at one sample.
+
+``--kernels`` prints only graybox's kernel rows (single run, batch, batch SSE, sensitivities),
+for one input and for two inputs: the two-input model is (15) with the input factors of odd
+lag read from a second input (the same terms, lags and powers, so the same work per term).
 """
 
 from __future__ import annotations
@@ -20,13 +24,62 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from _common import machine, sysidentpy_code, timeit  # noqa: E402
 
-from graybox import Record, reference, simulate_many  # noqa: E402
+from graybox import Record, reference, simulate as gb_simulate, simulate_many  # noqa: E402
 
 N = 3200
 P = 200
 
 
+def _miso_variant(structure):
+    """Model (15)'s structure with u(k-l) read from input u2 for odd l, from u1 otherwise."""
+    from graybox import Structure, Term
+
+    return Structure(Term(tuple(((f"u{1 + l % 2}" if s == "u" else s), l, p) for s, l, p in t.factors))
+                     for t in structure)
+
+
+def kernel_rows() -> list[tuple[str, float, float]]:
+    """graybox's kernels, one input and two inputs: (case, seconds per call, term-evals/s)."""
+    from graybox._kernels import batch_sse, encode, free_run_sensitivity
+
+    rng = np.random.default_rng(0)
+    m = reference.paper_model(15)
+    u = np.repeat(rng.uniform(750, 1650, N // 80 + 1), 80)[:N]
+    y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
+    rec = Record(u, m.simulate(u, y0), Ts=0.05)
+    thetas = m.theta * (1 + 0.002 * rng.standard_normal((P, m.n_params)))
+    L, T = m.max_lag, m.n_params
+    evals = (N - L) * T
+    cases = [("SISO", m.structure, rec, rec.u)]
+    try:
+        st2 = _miso_variant(m.structure)
+        u2 = np.column_stack([u, np.roll(u, 3)])
+        rec2 = Record(u2, rec.y, Ts=0.05)
+        simulate_many(st2, thetas[:2], rec2)
+        cases.append(("MISO (2 inputs)", st2, rec2, rec2.u))
+    except (ValueError, TypeError, KeyError) as exc:  # the code before several inputs
+        print(f"# no MISO rows: {exc}")
+    rows = []
+    for label, st, r, uu in cases:
+        code = encode(st)
+        t_one = timeit(lambda: gb_simulate(st, m.theta, r), repeat=15, number=20)
+        t_b1 = timeit(lambda: simulate_many(st, thetas, r, threads=1), repeat=9, number=3)
+        t_sse = timeit(lambda: batch_sse(code, thetas, uu, r.y, L), repeat=9, number=3)
+        t_sen = timeit(lambda: free_run_sensitivity(code, m.theta, uu, r.y[:L], L), repeat=9, number=5)
+        rows += [(f"{label} single free run", t_one, evals / t_one),
+                 (f"{label} batch of {P}, 1 thread", t_b1, P * evals / t_b1),
+                 (f"{label} batch SSE of {P}, 1 thread", t_sse, P * evals / t_sse),
+                 (f"{label} free-run sensitivities", t_sen, evals / t_sen)]
+    return rows
+
+
 def main() -> None:
+    if "--kernels" in sys.argv:
+        print(f"# bench_simulate --kernels  {datetime.date.today()}  {machine()}")
+        print(f"{'case':60s} {'time':>12s} {'term-evals/s':>14s}")
+        for name, t, r in kernel_rows():
+            print(f"{name:60s} {t * 1e3:9.3f} ms {r:14.3e}")
+        return
     rng = np.random.default_rng(0)
     m = reference.paper_model(15)
     u = np.repeat(rng.uniform(750, 1650, N // 80 + 1), 80)[:N]

@@ -1,8 +1,15 @@
 """Compiled free-run kernels (numba).
 
 A structure is encoded once as flat integer arrays (see :func:`encode`): for term
-``t`` its factors are ``fsig[fptr[t]:fptr[t+1]]`` (0 = y, 1 = u), with lags and
-powers alongside. Noise terms are never encoded: free runs ignore the MA part.
+``t`` its factors are ``fsig[fptr[t]:fptr[t+1]]`` (0 = y, 1 + i = input i of the
+code's ``inputs``), with lags and powers alongside. Noise terms are never encoded:
+free runs ignore the MA part.
+
+Several inputs: the kernels read the inputs as one (m, N) array, one contiguous row per
+input (a single input is the (1, N) view of its (N,) samples, so the single-input
+arithmetic is exactly what it was). The wrappers take ``u`` of shape (N,) or (N, m) with
+the columns in the code's ``inputs`` order; :func:`record_inputs` picks them from a record
+by name.
 
 The batch kernel keeps the population on the innermost, contiguous axis of its
 work buffer (shape (N, P)) so that every term update is a unit-stride loop that
@@ -23,19 +30,19 @@ import numpy as np
 
 from ._terms import Structure
 
-__all__ = ["Code", "encode", "simulate_one", "simulate_batch", "input_products"]
-
-_SIG = {"y": 0, "u": 1}
+__all__ = ["Code", "encode", "simulate_one", "simulate_batch", "input_products", "record_inputs", "kernel_inputs"]
 
 
 class Code(NamedTuple):
     """A structure encoded for the kernels.
 
     ``fptr, fsig, flag, fpow``: the factors of term t are ``fptr[t]:fptr[t+1]`` with signal
-    (0 = y, 1 = u), lag and power. ``ny[t]`` is the total output power of term t and
+    (0 = y, 1 + i = input ``inputs[i]``), lag and power. ``ny[t]`` is the total output power of term t and
     ``ylag[t, :ny[t]]`` its output lags with repetition (y(k-2)^2 → [2, 2]).
 
-    ``mu[t]``: the total input power of term t. ``uptr, ulag, upow``: the input factors only.
+    ``mu[t]``: the total input power of term t. ``uptr, ulag, upow, usig``: the input factors
+    only (``usig``: the input's index in ``inputs``). ``inputs``: the input names, in the order
+    of the columns the kernels expect.
     ``grp[t]`` is the output monomial group of term t (-1 for input-only terms); group g is the
     monomial with lags ``gylag[g, :gny[g]]``.
     Grouping lets the single free run treat y(k) = X(k) + Σ_g C_g(k) · m_g(y) as a recursion
@@ -55,11 +62,32 @@ class Code(NamedTuple):
     gny: np.ndarray
     gylag: np.ndarray
     mu: np.ndarray
+    usig: np.ndarray
+    inputs: tuple[str, ...]
+
+
+def encode(structure: Structure, inputs: tuple[str, ...] | None = None) -> Code:
+    """Encode the process terms of ``structure`` for the kernels (cached; arrays read-only).
+
+    Parameters
+    ----------
+    structure : Structure
+    inputs : tuple of str, optional
+        The input names in the column order the caller will pass (default: the inputs the
+        structure uses, in natural name order; ``("u",)`` when it uses none). Must contain
+        every input the structure uses.
+    """
+    if inputs is None:
+        inputs = structure.inputs or ("u",)
+    return _encode(structure, tuple(inputs))
 
 
 @lru_cache(maxsize=512)
-def encode(structure: Structure) -> Code:
-    """Encode the process terms of ``structure`` for the kernels (cached; arrays read-only)."""
+def _encode(structure: Structure, inputs: tuple[str, ...]) -> Code:
+    sig = {"y": 0} | {n: 1 + i for i, n in enumerate(inputs)}
+    missing = [n for n in structure.inputs if n not in sig]
+    if missing:
+        raise ValueError(f"the structure uses input {missing[0]!r}, which is not among the inputs {inputs}")
     fptr = [0]
     fsig: list[int] = []
     flag: list[int] = []
@@ -70,7 +98,7 @@ def encode(structure: Structure) -> Code:
             raise ValueError(f"noise term {term} cannot be simulated; pass the process structure")
         lags: list[int] = []
         for s, l, p in term.factors:
-            fsig.append(_SIG[s])
+            fsig.append(sig[s])
             flag.append(l)
             fpow.append(p)
             if s == "y":
@@ -81,14 +109,15 @@ def encode(structure: Structure) -> Code:
     ylag = np.zeros((len(ylags), max(D, 1)), dtype=np.int64)
     for t, lags in enumerate(ylags):
         ylag[t, : len(lags)] = lags
-    uptr, ulag, upow = [0], [], []
+    uptr, ulag, upow, usig = [0], [], [], []
     groups: dict[tuple[int, ...], int] = {}
     grp = []
     for term, lags in zip(structure, ylags):
         for s_, l, p in term.factors:
-            if s_ == "u":
+            if s_ != "y":
                 ulag.append(l)
                 upow.append(p)
+                usig.append(sig[s_] - 1)
         uptr.append(len(ulag))
         key = tuple(sorted(lags))
         if key:
@@ -111,21 +140,65 @@ def encode(structure: Structure) -> Code:
     return Code(
         as_i(fptr), as_i(fsig), as_i(flag), as_i(fpow), as_i([len(l) for l in ylags]), as_i(ylag),
         as_i(uptr), as_i(ulag), as_i(upow), as_i(grp), as_i([len(k) for k in sorted(groups, key=groups.get)]),
-        as_i(gylag), as_i([t.power_of("u") for t in structure]),
+        as_i(gylag), as_i([t.input_power for t in structure]), as_i(usig), tuple(inputs),
     )
 
 
+def kernel_inputs(code: Code, u: np.ndarray) -> np.ndarray:
+    """The inputs as the kernels read them: shape (m, N), one contiguous row per input.
+
+    ``u`` is (N,) for a single input (a view, no copy) or (N, m) with the columns in
+    ``code.inputs`` order; ``ValueError`` when the column count differs.
+    """
+    if u.ndim == 1:
+        if len(code.inputs) > 1:
+            raise ValueError(f"u has one input column but the structure's inputs are {code.inputs}")
+        return u.reshape(1, u.shape[0])
+    if u.ndim != 2 or u.shape[1] != len(code.inputs):
+        raise ValueError(f"u has shape {u.shape}, expected (N, {len(code.inputs)}) for the inputs {code.inputs}")
+    return np.ascontiguousarray(u.T, dtype=np.float64)
+
+
+def record_inputs(record, inputs: tuple[str, ...]) -> np.ndarray:
+    """The columns ``inputs`` of a record's input, by name: shape (N,) for one, (N, k) for several.
+
+    Raises ``ValueError`` naming an input the record does not have.
+    """
+    names = record.input_names
+    if tuple(inputs) == tuple(names):
+        return record.u
+    missing = [n for n in inputs if n not in names]
+    if missing:
+        raise ValueError(f"{record.name}: the structure uses input {missing[0]!r}, but the record's inputs are "
+                         f"{names}")
+    if len(inputs) == 1:
+        return np.ascontiguousarray(record.input(inputs[0]))
+    if len(inputs) == 0:
+        return record.inputs[:, 0]
+    return np.ascontiguousarray(record.inputs[:, [names.index(n) for n in inputs]])
+
+
+def input_products(fptr, fsig, flag, fpow, u, start):
+    """U[k, t] = product of the input factors of term t at sample k (1 for none), shape (N, T).
+
+    ``u`` is (N,) for a single input or (N, m) with the columns in the code's input order
+    (signal 1 + i reads column i).
+    """
+    uc = u.reshape(1, u.shape[0]) if u.ndim == 1 else np.ascontiguousarray(u.T, dtype=np.float64)
+    return _input_products(fptr, fsig, flag, fpow, uc, start)
+
+
 @nb.njit(cache=True, nogil=True)
-def input_products(fptr, fsig, flag, fpow, u, start):  # pragma: no cover - compiled
-    """U[k, t] = product of the input factors of term t at sample k (1 for none), shape (N, T)."""
-    n = u.shape[0]
+def _input_products(fptr, fsig, flag, fpow, uc, start):  # pragma: no cover - compiled
+    n = uc.shape[1]
     nt = fptr.shape[0] - 1
     U = np.ones((n, nt))
     # term by term with the sample loop innermost: branch-free, vectorisable inner loops
     for t in range(nt):
         for f in range(fptr[t], fptr[t + 1]):
-            if fsig[f] != 1:
+            if fsig[f] == 0:
                 continue
+            u = uc[fsig[f] - 1]
             lag = flag[f]
             pw = fpow[f]
             if pw == 1:
@@ -149,8 +222,8 @@ _CHUNK = 512
 
 
 @nb.njit(cache=True, nogil=True)
-def _one(uptr, ulag, upow, grp, gny, gylag, theta, u, y0, start, bound):  # pragma: no cover - compiled
-    n = u.shape[0]
+def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uc, y0, start, bound):  # pragma: no cover - compiled
+    n = uc.shape[1]
     nt = theta.shape[0]
     G = gny.shape[0]
     y = np.empty(n)
@@ -175,7 +248,7 @@ def _one(uptr, ulag, upow, grp, gny, gylag, theta, u, y0, start, bound):  # prag
             for i in range(mm):
                 tmp[i] = th
             for f in range(uptr[t], uptr[t + 1]):
-                us = u[k0 - ulag[f]:]
+                us = uc[usig[f], k0 - ulag[f]:]
                 for _ in range(upow[f]):
                     for i in range(mm):
                         tmp[i] *= us[i]
@@ -209,10 +282,12 @@ def _one(uptr, ulag, upow, grp, gny, gylag, theta, u, y0, start, bound):  # prag
 def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int, bound: float) -> np.ndarray:
     """Free run of one model; ``y0`` gives samples ``0 … start-1``; returns y, shape (N,).
 
-    The run stops at the first sample whose magnitude exceeds ``bound`` (or is not finite);
-    that sample and all later ones are NaN.
+    ``u`` is (N,) or (N, m) in ``code.inputs`` order. The run stops at the first sample whose
+    magnitude exceeds ``bound`` (or is not finite); that sample and all later ones are NaN.
     """
-    return _one(code.uptr, code.ulag, code.upow, code.grp, code.gny, code.gylag, theta, u, y0, start, bound)
+    uc = kernel_inputs(code, u)
+    return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc, y0, start,
+                bound)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -299,7 +374,8 @@ def simulate_batch(
     code : Code
         :func:`encode` of the structure.
     thetas : ndarray, shape (P, n_terms)
-    u : ndarray, shape (N,)
+    u : ndarray, shape (N,) or (N, m)
+        Input(s), columns in ``code.inputs`` order.
     y0 : ndarray, shape (start,)
         Initial outputs shared by the population.
     start : int
@@ -316,7 +392,7 @@ def simulate_batch(
     P = thetas.shape[0]
     n = u.shape[0]
     thT = np.ascontiguousarray(thetas.T, dtype=np.float64)
-    U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
+    U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     with np.errstate(all="ignore"):
         if threads <= 1 or P < 2 * threads:
             Y = np.empty((n, P))
@@ -385,8 +461,10 @@ def batch_sse(
     ----------
     code : Code
     thetas : ndarray, shape (P, n_terms)
-    u, y : ndarray, shape (N,)
-        Input and measured output.
+    u : ndarray, shape (N,) or (N, m)
+        Input(s), columns in ``code.inputs`` order.
+    y : ndarray, shape (N,)
+        Measured output.
     start : int
         Number of initial conditions (>= the structure's max lag).
     threads : int
@@ -400,7 +478,7 @@ def batch_sse(
     """
     thT = np.ascontiguousarray(np.asarray(thetas, dtype=np.float64).T)
     if U is None:
-        U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
+        U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     ring = 1 << int(np.ceil(np.log2(start + 1)))
     with np.errstate(all="ignore"):
         P = thT.shape[1]
@@ -526,7 +604,7 @@ def free_run_sensitivity(
         ∂y(k)/∂θ_j (zero for the initial samples).
     """
     if U is None:
-        U = input_products(code.fptr, code.fsig, code.flag, code.fpow, u, start)
+        U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
     with np.errstate(all="ignore"):
         return _sensitivity(code.ny, code.ylag, np.asarray(theta, float), U, y0, start)
 

@@ -11,7 +11,7 @@ from . import _simulation, _static
 from ._latex import latex_equation
 from ._records import Record
 from ._validation import check_theta, frozen
-from ._terms import Structure
+from ._terms import Structure, check_input_names
 
 __all__ = ["Model"]
 
@@ -32,6 +32,10 @@ class Model:
         Their parameters.
     name : str, optional
         Label for tables and plots.
+    input_names : sequence of str, optional
+        The model's inputs, in the column order of an input array (default: the inputs the
+        structure uses, in natural name order, or ``("u",)`` when it uses none). Must contain
+        every input the structure uses.
     """
 
     structure: Structure
@@ -39,6 +43,7 @@ class Model:
     noise_structure: Structure = field(default_factory=lambda: Structure(()))
     noise_theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
     name: str = ""
+    input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         st = self.structure if isinstance(self.structure, Structure) else Structure(self.structure)
@@ -49,6 +54,11 @@ class Model:
         object.__setattr__(self, "noise_structure", ns)
         object.__setattr__(self, "theta", frozen(check_theta(len(st), self.theta)))
         object.__setattr__(self, "noise_theta", frozen(check_theta(len(ns), self.noise_theta, "noise_theta")))
+        names = (st.inputs or ("u",)) if self.input_names is None else check_input_names(self.input_names)
+        missing = [n for n in st.inputs if n not in names]
+        if missing:
+            raise ValueError(f"the structure uses input {missing[0]!r}, which is not among input_names {names}")
+        object.__setattr__(self, "input_names", names)
 
     # -- basic facts --------------------------------------------------------
     @property
@@ -63,12 +73,17 @@ class Model:
 
     def with_theta(self, theta: np.ndarray, *, name: str | None = None) -> "Model":
         """The same structure with other parameters (the noise part is dropped)."""
-        return Model(self.structure, theta, name=self.name if name is None else name)
+        return Model(self.structure, theta, name=self.name if name is None else name, input_names=self.input_names)
 
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record) -> np.ndarray:
         """One-step-ahead prediction over ``record``, shape (N,); see :func:`graybox._simulation.predict`."""
         return _simulation.predict(self.structure, self.theta, record)
+
+    @property
+    def n_inputs(self) -> int:
+        """m, the number of inputs (columns of an input array)."""
+        return len(self.input_names)
 
     def simulate(
         self,
@@ -77,7 +92,14 @@ class Model:
         *,
         on_diverge: Literal["raise", "nan"] = "raise",
     ) -> np.ndarray:
-        """Free run, shape (N,); see :func:`graybox._simulation.simulate`."""
+        """Free run, shape (N,); see :func:`graybox._simulation.simulate`.
+
+        ``u`` is a Record (inputs taken by name) or an array of shape (N,) or (N, m) with the
+        columns in ``input_names`` order.
+        """
+        if not isinstance(u, Record) and self.n_inputs > 1:
+            return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge,
+                                        input_names=self.input_names)
         return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge)
 
     # -- statics ------------------------------------------------------------

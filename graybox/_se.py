@@ -46,7 +46,8 @@ from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
 from ._convex import pe_thetas
-from ._kernels import batch_sse, encode, free_run_sensitivity, free_run_sensitivity_blocks, input_products, simulate_one
+from ._kernels import (batch_sse, encode, free_run_sensitivity, free_run_sensitivity_blocks, input_products,
+                       record_inputs, simulate_one)
 from ._ls import column_scales, scaled_lstsq
 from ._pareto import ParetoSet
 from ._progress import progress_bar
@@ -90,7 +91,8 @@ class SEProblem:
         self.L = structure.max_lag
         self.code = c = encode(structure)
         # input products are fixed across the whole sweep: computed once per record
-        self.U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, r.u, self.L) for r in self.records]
+        self.U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L)
+                  for r in self.records]
         self.psi, self.target = stacked_regressors(structure, self.records)
         self.n_dyn = self.target.size
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
@@ -106,7 +108,8 @@ class SEProblem:
     # -- objectives -------------------------------------------------------------------
     def js(self, thetas: np.ndarray, threads: int = 1) -> np.ndarray:
         """J_S of each row of ``thetas`` (inf where a free run diverges), shape (P,)."""
-        sse = sum(batch_sse(self.code, thetas, r.u, r.y, self.L, threads, U) for r, U in zip(self.records, self.U))
+        sse = sum(batch_sse(self.code, thetas, record_inputs(r, self.code.inputs), r.y, self.L, threads, U)
+                  for r, U in zip(self.records, self.U))
         js = sse / self.n_dyn
         return np.where(np.isfinite(js), js, np.inf)
 
@@ -147,10 +150,10 @@ class SEProblem:
         e, J = [], []
         for rec, U in zip(self.records, self.U):
             if jacobian:
-                y, S = free_run_sensitivity(self.code, th, rec.u, rec.y[:L], L, U)
+                y, S = free_run_sensitivity(self.code, th, record_inputs(rec, self.code.inputs), rec.y[:L], L, U)
                 J.append(S[L:])
             else:
-                y = simulate_one(self.code, th, rec.u, rec.y[:L], L, 1e300)
+                y = simulate_one(self.code, th, record_inputs(rec, self.code.inputs), rec.y[:L], L, 1e300)
             e.append(y[L:] - rec.y[L:])
         yb = self.static_outputs(th)[0]
         e_static = yb - self.static.ybar
@@ -492,7 +495,7 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     r = np.empty(problem.n_dyn + M)
     a = 0
     for rec in problem.records:
-        y = simulate_one(problem.code, th, rec.u, rec.y[:L], L, 1e300)
+        y = simulate_one(problem.code, th, record_inputs(rec, problem.code.inputs), rec.y[:L], L, 1e300)
         b = a + y.size - L
         np.subtract(y[L:], rec.y[L:], out=r[a:b])  # written in place: long records make no copies
         a = b

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg
 
-from ._kernels import batch_sse, encode, input_products
+from ._kernels import batch_sse, encode, input_products, record_inputs
 from ._model import Model
 from ._records import Dataset, Record, as_records
 from ._selection import CRITERIA
@@ -107,7 +107,7 @@ class _Scorer:
         self.U = []
         for r in records:
             r.require_length(L)
-            U = input_products(code.fptr, code.fsig, code.flag, code.fpow, r.u, L)
+            U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(r, code.inputs), L)
             self.U.append(U)
             blocks.append(_psi(code, U, r.y, L))
             targets.append(r.y[L:])
@@ -172,7 +172,8 @@ class _Scorer:
         good = np.all(np.isfinite(th), axis=1)
         out = np.full(th.shape[0], np.inf)
         if good.any():
-            sse = sum(batch_sse(self.code, th[good], r.u, r.y, self.L, self.threads, U)
+            sse = sum(batch_sse(self.code, th[good], record_inputs(r, self.code.inputs), r.y, self.L, self.threads,
+                                U)
                       for r, U in zip(self.records, self.U))
             mse = np.maximum(sse / self.n_rows, self.floor)
             out[good] = np.where(np.isfinite(mse), mse, np.inf)

@@ -12,8 +12,9 @@ from typing import Literal
 
 import numpy as np
 
-from ._kernels import encode, simulate_batch, simulate_one
-from ._records import Record
+from ._kernels import encode, record_inputs, simulate_batch, simulate_one
+from ._records import Record, as_input_array
+from ._terms import check_input_names, default_input_names
 from ._validation import as_1d_finite, check_choice, check_theta
 from ._regressors import regressor_matrix
 from ._terms import Structure
@@ -34,7 +35,8 @@ def predict(structure: Structure, theta: np.ndarray, record: Record) -> np.ndarr
         Process terms.
     theta : ndarray, shape (n_terms,)
     record : Record
-        Measured input and output, shape (N,) each.
+        Measured input(s) and output; every input the structure uses must be among the
+        record's ``input_names``.
 
     Returns
     -------
@@ -60,8 +62,8 @@ def free_run_inputs(
 
     Parameters
     ----------
-    u : ndarray, shape (N,), or Record
-        Input; with a Record, ``y0`` defaults to its first ``L`` outputs.
+    u : ndarray, shape (N,) or (N, m), or Record
+        Input(s); with a Record, ``y0`` defaults to its first ``L`` outputs.
     y0 : ndarray, shape (>= L,), optional
         Initial outputs; only the first ``L`` are used.
     L : int
@@ -73,7 +75,7 @@ def free_run_inputs(
 
     Returns
     -------
-    u : ndarray, shape (N,), contiguous
+    u : ndarray, shape (N,) or (N, m), contiguous
     y0 : ndarray, shape (L,), contiguous
     bound : float
     """
@@ -82,7 +84,7 @@ def free_run_inputs(
             y0 = u.y[:L]
         u = u.u
     else:
-        u = as_1d_finite(u, "u")
+        u = as_input_array(u, "u")
         if y0 is None:
             raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
     y0 = np.asarray(y0, dtype=float)
@@ -91,8 +93,8 @@ def free_run_inputs(
     if y0.size < L:
         raise ValueError(f"y0 has {y0.size} samples, the {what} needs max lag = {L}")
     y0 = as_1d_finite(y0[:L], "y0")
-    if u.size < L + 1:
-        raise ValueError(f"input has {u.size} samples, fewer than max lag + 1 = {L + 1}")
+    if u.shape[0] < L + 1:
+        raise ValueError(f"input has {u.shape[0]} samples, fewer than max lag + 1 = {L + 1}")
     b = _default_bound(y0) if bound is None else float(bound)
     return np.ascontiguousarray(u), np.ascontiguousarray(y0), b
 
@@ -105,6 +107,7 @@ def simulate(
     *,
     on_diverge: Literal["raise", "nan"] = "raise",
     bound: float | None = None,
+    input_names: tuple[str, ...] | None = None,
 ) -> np.ndarray:
     """Free-run simulation: the model feeds back its own past outputs.
 
@@ -113,8 +116,9 @@ def simulate(
     structure : Structure
         Process terms (noise terms are not simulated).
     theta : ndarray, shape (n_terms,)
-    u : ndarray, shape (N,), or Record
-        Input. With a Record, ``y0`` defaults to its first ``max_lag`` outputs.
+    u : ndarray, shape (N,) or (N, m), or Record
+        Input(s). With a Record, ``y0`` defaults to its first ``max_lag`` outputs and the
+        inputs are taken by name.
     y0 : ndarray, shape (>= max_lag,), optional
         Initial outputs y(0) … y(L-1); only the first L = max_lag are used.
     on_diverge : {"raise", "nan"}
@@ -122,6 +126,9 @@ def simulate(
         or return NaN from that sample on.
     bound : float, optional
         Divergence bound on |y| (default 1e6 · (1 + max|y0|)).
+    input_names : tuple of str, optional
+        Names of the columns of an array ``u`` (default ``"u"`` for 1-D, ``u1 … um`` for
+        (N, m)); ignored for a Record, which names its inputs.
 
     Returns
     -------
@@ -130,8 +137,14 @@ def simulate(
     th = check_theta(len(structure), theta)
     check_choice(on_diverge, "on_diverge", ("raise", "nan"))
     L = structure.max_lag
-    u, y0, b = free_run_inputs(u, y0, L, bound)
-    y = simulate_one(encode(structure), th, u, y0, L, b)
+    if isinstance(u, Record):  # validated already: no copy
+        code = encode(structure)
+        _, y0, b = free_run_inputs(u, y0, L, bound)
+        uu = record_inputs(u, code.inputs)
+    else:
+        uu, y0, b = free_run_inputs(u, y0, L, bound)
+        code, uu = _inputs_for(structure, uu, input_names)
+    y = simulate_one(code, th, uu, y0, L, b)
     if on_diverge == "raise" and not np.isfinite(y[-1]):
         k = int(np.flatnonzero(~np.isfinite(y))[0])
         raise DivergenceError(f"free run diverged at sample {k} (|y| > {b:g}): the model is unstable along this input")
@@ -166,4 +179,23 @@ def simulate_many(
         raise ValueError(f"thetas must have shape (P, {len(structure)}), got {th.shape}")
     L = structure.max_lag
     record.require_length(L)
-    return simulate_batch(encode(structure), th, record.u, record.y[:L], L, threads)
+    code = encode(structure)
+    return simulate_batch(code, th, record_inputs(record, code.inputs), record.y[:L], L, threads)
+
+
+def _inputs_for(structure: Structure, u: np.ndarray, input_names: object):
+    """The kernel code of ``structure`` and the validated input array ``u`` (N,) or (N, m) it reads."""
+    a = u
+    m = 1 if a.ndim == 1 else a.shape[1]
+    names = default_input_names(m) if input_names is None else check_input_names(input_names, m, "input_names")
+    if m == 1:
+        # one column feeds the structure's one input whatever its name, unless named otherwise
+        if len(structure.inputs) > 1 or (input_names is not None and structure.inputs
+                                         and structure.inputs[0] != names[0]):
+            raise ValueError(f"u has one input column ({names[0]!r}) but the structure uses the inputs "
+                             f"{structure.inputs}; pass u of shape (N, m) and its input_names")
+        return encode(structure), a
+    missing = [n for n in structure.inputs if n not in names]
+    if missing:
+        raise ValueError(f"the structure uses input {missing[0]!r}, but u's {m} columns are the inputs {names}")
+    return encode(structure, names), a

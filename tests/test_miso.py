@@ -116,3 +116,111 @@ def test_regressor_columns_by_input_name():
     assert np.allclose(psi[:, 1], b[1:-1] ** 2 * y[1:-1])
     with pytest.raises(ValueError, match="needs input 'c'"):
         regressor_matrix(Structure(["c(k-1)"]), r.u, r.y, input_names=r.input_names)
+
+
+# -- kernels and simulation ------------------------------------------------------
+_ST2 = Structure(["y(k-1)", "u1(k-1)", "u2(k-2)", "u1(k-1)u2(k-1)", "u2(k-1)^2y(k-2)", "u1(k-2)y(k-1)", "1"])
+_TH2 = np.array([0.5, 0.3, -0.2, 0.1, -0.05, 0.05, 0.1])
+
+
+def _reference_free_run(st, th, u_by_name, y0, n):
+    y = np.empty(n)
+    L = st.max_lag
+    y[:L] = y0[:L]
+    for k in range(L, n):
+        acc = 0.0
+        for c, t in zip(th, st):
+            v = c
+            for s, lag, p in t.factors:
+                v *= (y[k - lag] if s == "y" else u_by_name[s][k - lag]) ** p
+            acc += v
+        y[k] = acc
+    return y
+
+
+def _miso_record(n=300, seed=3, names=("u1", "u2")):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, (n // 20 + 1, 2)), 20, axis=0)[:n]
+    m = gb.Model(_ST2, _TH2, input_names=names) if names == ("u1", "u2") else None
+    y = _reference_free_run(_ST2, _TH2, {"u1": u[:, 0], "u2": u[:, 1]}, np.zeros(2), n)
+    return Record(u, y, input_names=names), m
+
+
+def test_miso_kernels_match_a_plain_loop():
+    from graybox._kernels import batch_sse, encode, free_run_sensitivity, record_inputs
+
+    rec, m = _miso_record()
+    ref = rec.y
+    assert np.allclose(m.simulate(rec), ref, rtol=1e-12, atol=1e-12)
+    assert np.allclose(m.simulate(rec.u, rec.y[:2]), ref, rtol=1e-12, atol=1e-12)
+    # columns taken by name: a record with the inputs swapped gives the same run
+    swapped = Record(rec.u[:, ::-1], rec.y, input_names=("u2", "u1"))
+    assert np.allclose(m.simulate(swapped), ref, rtol=1e-12, atol=1e-12)
+    thetas = _TH2 * np.array([[1.0], [0.99], [1.01]])
+    many = gb.simulate_many(_ST2, thetas, swapped)
+    for i in range(3):
+        assert np.allclose(many[i], gb.simulate(_ST2, thetas[i], rec), rtol=1e-12, atol=1e-12)
+    code = encode(_ST2)
+    assert code.inputs == ("u1", "u2")
+    sse = batch_sse(code, thetas, record_inputs(swapped, code.inputs), rec.y, 2)
+    assert np.allclose(sse, ((many[:, 2:] - rec.y[2:]) ** 2).sum(axis=1), rtol=1e-10)
+    y, S = free_run_sensitivity(code, _TH2, rec.u, rec.y[:2], 2)
+    h = 1e-6
+    for j in (0, 3, 4):
+        tp, tm = _TH2.copy(), _TH2.copy()
+        tp[j] += h
+        tm[j] -= h
+        fd = (gb.simulate(_ST2, tp, rec) - gb.simulate(_ST2, tm, rec)) / (2 * h)
+        assert np.allclose(S[:, j], fd, rtol=1e-5, atol=1e-7)
+    assert np.allclose(m.predict(rec)[2:], ref[2:], rtol=1e-12, atol=1e-12)
+
+
+def test_miso_model_knows_its_inputs():
+    rec, m = _miso_record()
+    assert m.input_names == ("u1", "u2") and m.n_inputs == 2
+    assert gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]).input_names == ("u",)
+    with pytest.raises(ValueError, match="uses input 'u2', which is not among input_names"):
+        gb.Model(_ST2, _TH2, input_names=("u1",))
+    with pytest.raises(ValueError, match="named twice"):
+        gb.Model(_ST2, _TH2, input_names=("u1", "u2", "u2"))
+
+
+def test_miso_mismatched_inputs_are_clear_errors():
+    rec, m = _miso_record()
+    other = Record(rec.u, rec.y, input_names=("a", "b"))
+    with pytest.raises(ValueError, match="uses input 'u1', but the record's inputs are \\('a', 'b'\\)"):
+        m.simulate(other)
+    with pytest.raises(ValueError, match="needs input 'u1'"):
+        m.predict(other)
+    with pytest.raises(ValueError, match="2 names .* for 3 input"):
+        m.simulate(np.ones((50, 3)), np.zeros(2))
+    with pytest.raises(ValueError, match="one input column"):
+        gb.simulate(_ST2, _TH2, np.ones(50), np.zeros(2))
+    with pytest.raises(ValueError, match="needs max lag = 9"):
+        gb.simulate(Structure(["u1(k-9)", "u2(k-1)"]), [1.0, 1.0], Record(np.ones((5, 2)), np.ones(5)))
+    with pytest.raises(ValueError, match="fewer than max lag"):
+        gb.Model(Structure(["u1(k-9)", "u2(k-1)"]), [1.0, 1.0]).predict(Record(np.ones((5, 2)), np.ones(5)))
+
+
+# -- FROLS ---------------------------------------------------------------------
+_TRUE2 = Structure(["y(k-1)", "u1(k-1)", "u2(k-2)", "u1(k-1)u2(k-1)", "u2(k-1)y(k-1)", "1"])
+_TRUE2_THETA = np.array([0.5, 0.8, -0.4, 0.3, -0.1, 0.2])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_frols_recovers_a_two_input_structure(seed):
+    rng = np.random.default_rng(seed)
+    n = 1500
+    u = rng.uniform(-1, 1, (n, 2))
+    e = 0.02 * rng.standard_normal(n)  # equation noise: a NARX model, as FROLS assumes
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = (0.5 * y[k - 1] + 0.8 * u[k - 1, 0] - 0.4 * u[k - 2, 1] + 0.3 * u[k - 1, 0] * u[k - 1, 1]
+                - 0.1 * u[k - 1, 1] * y[k - 1] + 0.2 + e[k])
+    rec = Record(u, y)
+    cand = Candidates(2, 2, inputs=["u1", "u2"], degree=2)
+    assert all(t in cand for t in _TRUE2)
+    by_size = gb.frols(cand, rec, n_terms=len(_TRUE2))
+    assert set(by_size.structure) == set(_TRUE2)
+    by_bic = gb.frols(cand, rec)  # the default stopping rule (BIC) finds the size too
+    assert set(by_bic.structure) == set(_TRUE2)
