@@ -16,6 +16,7 @@ from ._regressors import regressor_matrix, stacked_regressors
 from ._simulation import DivergenceError, predict, simulate, simulate_many
 from ._model import Model
 from ._static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
+from ._surface import SurfaceClusterMap, static_surface, static_surface_gain, surface_cluster_map, surface_equilibria
 from ._evaluate import evaluate, evaluate_thetas, fit_percent, j1, js, jsf, mse, rrse
 from ._selection import CandidateWarning, Selection, frols, information_criterion
 from ._semp import SEMPResult, semp
@@ -74,3 +75,5 @@ __all__ = [
     "load_pumping", "load_pumping_miso", "load_buck", "load_record_csv", "load_static_csv", "load_results", "select_graybox", "GrayboxSelection",
     "__version__",
 ]
+# several inputs (issue 15): the static surface
+__all__ += ["static_surface", "static_surface_gain", "surface_equilibria", "surface_cluster_map", "SurfaceClusterMap"]

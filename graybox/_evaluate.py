@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from ._model import Model
-from ._records import Dataset, Record, StaticPoints
+from ._records import Dataset, Record, StaticPoints, static_point_inputs
 from ._simulation import DivergenceError
 from ._static import reached_equilibria
 from ._terms import Structure
@@ -77,8 +77,10 @@ def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None
         inf, with a ``RuntimeWarning`` naming each ū where no equilibrium is reached and why,
         when the model settles on none at some point.
     """
+    names = getattr(model, "input_names", ("u",))
+    ub = static_point_inputs(static, names)  # several inputs: ū's columns by the model's input names
     try:
-        yb = model.static_curve(static.ubar, y0=static.ybar if y0 is None else y0, strict=True)
+        yb = model.static_curve(ub, y0=static.ybar if y0 is None else y0, strict=True)
     except (ValueError, DivergenceError) as exc:
         warnings.warn(f"J_SF of {model.name or 'model'} is infinite: {exc}", RuntimeWarning, stacklevel=2)
         return float("inf")

@@ -171,6 +171,8 @@ def _enc(kind: str, v: Any) -> Any:
         return [_num(x) for x in v]
     if kind == "structure":
         return [str(t) for t in v]
+    if kind == "names":
+        return [str(n) for n in v]
     if kind == "arrays":
         return [_arr(a) for a in v]
     if kind == "dict_arrays":
@@ -203,6 +205,8 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return rd.floats(v, where)
     if kind == "structure":
         return rd.structure(v, where)
+    if kind == "names":
+        return tuple(rd.str(n, f"{where}[{i}]") for i, n in enumerate(rd.list(v, where)))
     if kind == "arrays":
         return tuple(rd.array(a, f"{where}[{i}]", 1) for i, a in enumerate(rd.list(v, where)))
     if kind == "dict_arrays":
@@ -232,7 +236,7 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "Model": (Model, (("name", "str"), ("structure", "structure"), ("theta", "array1"),
-                      ("noise_structure", "structure"), ("noise_theta", "array1"))),
+                      ("noise_structure", "structure"), ("noise_theta", "array1"), ("input_names", "names"))),
     "NeuralModel": (NeuralModel, (("name", "str"), ("ny", "int"), ("nu", "int"), ("ne", "int"), ("W1", "array2"),
                                   ("b1", "array1"), ("w2", "array1"), ("b2", "float"), ("u_offset", "float"),
                                   ("u_scale", "float"), ("y_offset", "float"), ("y_scale", "float"))),
@@ -267,6 +271,9 @@ _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]]
               lambda m: {"equation": m.equation(digits=6), "clusters": {k: _num(v) for k, v in m.clusters().items()}}),
 }
 
+#: Fields added after a format was published: a file without them gets the constructor's default.
+_OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"})}
+
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 
 
@@ -285,10 +292,11 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
     unknown = sorted(set(d) - known)
     if unknown:
         raise rd.fail(where, f"unknown field(s) {unknown} for a {name}")
-    missing = [k for k, _ in spec if k not in d]
+    optional = _OPTIONAL.get(name, frozenset())
+    missing = [k for k, _ in spec if k not in d and k not in optional]
     if missing:
         raise rd.fail(where, f"missing field(s) {missing} for a {name}")
-    kwargs = {k: _dec(kind, d[k], f"{where}.{k}", rd) for k, kind in spec}
+    kwargs = {k: _dec(kind, d[k], f"{where}.{k}", rd) for k, kind in spec if k in d}
     try:
         return cls(**kwargs)
     except (ValueError, TypeError) as exc:

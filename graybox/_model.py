@@ -7,7 +7,7 @@ from typing import Literal
 
 import numpy as np
 
-from . import _simulation, _static
+from . import _simulation, _static, _surface
 from ._latex import latex_equation
 from ._records import Record
 from ._validation import check_theta, frozen
@@ -103,25 +103,44 @@ class Model:
         return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge)
 
     # -- statics ------------------------------------------------------------
+    # With several inputs the static function is a surface ȳ(ū_1, …, ū_m): ū is then of shape
+    # (M, m) (columns in input_names order; a single point may be given as shape (m,)).
     def clusters(self) -> dict[str, float]:
-        """Cluster coefficients by name (``{"Σ0": …, "Σy": …, "Σu": …}``), Σ = R θ."""
-        cm = _static.cluster_map(self.structure)
+        """Cluster coefficients by name, Σ = R θ.
+
+        ``{"Σ0": …, "Σy": …, "Σu": …}``; with several inputs one cluster per output power and
+        input powers (``"Σyu1"``, ``"Σu1u2²"``, …).
+        """
+        cm = self.cluster_map()
         return dict(zip(cm.names, (cm.R @ self.theta).tolist()))
 
-    def cluster_map(self) -> _static.ClusterMap:
-        """The clusters and the 0/1 map R of this structure."""
+    def cluster_map(self) -> _static.ClusterMap | _surface.SurfaceClusterMap:
+        """The clusters and the 0/1 map R of this structure (per input power with several inputs)."""
+        if self.n_inputs > 1:
+            return _surface.surface_cluster_map(self.structure, inputs=self.input_names)
         return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
-        """Steady-state output at each ū, shape (M,); see :func:`graybox._static.static_curve`."""
+        """Steady-state output at each ū, shape (M,); see :func:`graybox._static.static_curve`.
+
+        With several inputs, the static surface at the points ``ubar`` of shape (M, m)
+        (:func:`graybox._surface.static_surface`).
+        """
+        if self.n_inputs > 1:
+            return _surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,
+                                           inputs=self.input_names)
         return _static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
 
-    def equilibria(self, ubar: float) -> list[_static.Equilibrium]:
-        """Every real equilibrium at ū with its stability; see :func:`graybox._static.equilibria`."""
+    def equilibria(self, ubar: float | np.ndarray) -> list[_static.Equilibrium]:
+        """Every real equilibrium at ū (a float, or a point of shape (m,) with several inputs) with its stability."""
+        if self.n_inputs > 1:
+            return _surface.surface_equilibria(self.structure, self.theta, ubar, inputs=self.input_names)
         return _static.equilibria(self.structure, self.theta, ubar)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None) -> np.ndarray:
-        """dȳ/dū along the static curve, shape (M,)."""
+        """dȳ/dū along the static curve, shape (M,); with several inputs the gradient, shape (M, m)."""
+        if self.n_inputs > 1:
+            return _surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, inputs=self.input_names)
         return _static.static_gain(self.structure, self.theta, ubar, y0=y0)
 
     @property

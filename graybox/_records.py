@@ -186,6 +186,26 @@ class StaticPoints:
         return f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in [{self.ybar.min():.4g}, {self.ybar.max():.4g}])"
 
 
+def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.ndarray:
+    """The static points' ū in the column order ``inputs``: shape (M,) for one input, (M, k) for several.
+
+    One input: any single-input points (whatever their input's name, as before several inputs).
+    Several: the columns are taken by name; ``ValueError`` naming a missing input or a count mismatch.
+    """
+    if len(inputs) <= 1:
+        if static.n_inputs != 1:
+            raise ValueError(f"{static.name}: {static.n_inputs} input columns {static.input_names}, but the model has "
+                             f"one input {tuple(inputs)}")
+        return static.ubar
+    if tuple(inputs) == static.input_names:
+        return static.ubar
+    missing = [n for n in inputs if n not in static.input_names]
+    if missing:
+        raise ValueError(f"{static.name}: the model has the inputs {tuple(inputs)} but the static points have "
+                         f"{static.input_names} (no {missing[0]!r})")
+    return static.ubar[:, [static.input_names.index(n) for n in inputs]]
+
+
 def check_same_inputs(a: object, b: object) -> None:
     """``ValueError`` naming both unless ``a`` and ``b`` (records, static points) have the same inputs."""
     if a.input_names != b.input_names:  # type: ignore[attr-defined]
@@ -263,7 +283,7 @@ def as_records(data: object) -> list[Record]:
     return recs
 
 
-__all__ += ["as_records", "as_input_array", "check_same_inputs"]
+__all__ += ["as_records", "as_input_array", "check_same_inputs", "static_point_inputs"]
 
 
 class StaticRangeWarning(UserWarning):

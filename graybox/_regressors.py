@@ -14,7 +14,7 @@ import numpy as np
 from ._records import Record, as_records
 from ._terms import Structure
 
-__all__ = ["record_signals", "input_signals", "regressor_matrix", "stacked_regressors"]
+__all__ = ["record_signals", "check_structure_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
 
 
 def record_signals(record: Record) -> dict[str, np.ndarray]:
@@ -30,6 +30,19 @@ def record_signals(record: Record) -> dict[str, np.ndarray]:
         out = {n: record.u[:, i] for i, n in enumerate(record.input_names)}
     out["y"] = record.y
     return out
+
+
+def check_structure_inputs(structure: Structure, records: Sequence[Record]) -> None:
+    """``ValueError`` naming an input a term of ``structure`` uses that a record lacks, or a record too short.
+
+    Too short: not more samples than the structure's largest lag (e.g. an input delay beyond the record).
+    """
+    for r in records:
+        r.require_length(structure.max_lag)
+        missing = [n for n in structure.inputs if n not in r.input_names]
+        if missing:
+            raise ValueError(f"{r.name}: the terms use input {missing[0]!r}, but the record's inputs are "
+                             f"{r.input_names}")
 
 
 def input_signals(u: np.ndarray, input_names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:

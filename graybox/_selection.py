@@ -47,7 +47,7 @@ import pandas as pd
 from ._model import Model
 from ._records import Dataset, Record, as_records
 from ._terms import Structure, Term, parse_term
-from ._regressors import record_signals
+from ._regressors import check_structure_inputs, record_signals
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -457,6 +457,7 @@ def frols(
         raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
 
     records = as_records(data)
+    check_structure_inputs(process, records)
     start = process.max_lag
     W, y = _candidate_matrix(process.terms, records, start)
     N = W.shape[0]

@@ -103,10 +103,13 @@ _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 
 def cluster_key(term: Term) -> tuple[int, int]:
-    """(power of y, power of u) of a process term: its cluster Ω_{y^p u^m}."""
+    """(power of y, power of the input) of a process term of a single-input model: its cluster Ω_{y^p u^m}.
+
+    The input may have any name; for several inputs see :func:`graybox._surface.surface_cluster_map`.
+    """
     if term.is_noise:
         raise ValueError(f"noise term {term} has no cluster")
-    return term.power_of("y"), term.power_of("u")
+    return term.power_of("y"), term.input_power
 
 
 def cluster_name(p: int, m: int) -> str:
@@ -159,7 +162,14 @@ class ClusterMap:
 
 @lru_cache(maxsize=256)
 def cluster_map(structure: Structure) -> ClusterMap:
-    """Build the :class:`ClusterMap` of the process terms of ``structure`` (cached: it is immutable)."""
+    """Build the :class:`ClusterMap` of the process terms of ``structure`` (cached: it is immutable).
+
+    Single-input structures only (a structure with several inputs has a static *surface*:
+    :func:`graybox._surface.surface_cluster_map`); ``ValueError`` otherwise.
+    """
+    if len(structure.inputs) > 1:
+        raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its static function "
+                         "is a surface (use the surface functions, e.g. Model.static_curve with ū of shape (M, m))")
     keys = [cluster_key(t) for t in structure]
     uniq = tuple(sorted(set(keys)))
     R = np.zeros((len(uniq), len(structure)))
@@ -566,7 +576,9 @@ class Reached:
         """One phrase per point member ``member`` does not reach, naming ū and the reason."""
         out = []
         for j in np.flatnonzero(self.status[member] != REACHED):
-            u, y0 = float(self.ubar[j]), float(self.y0[j])
+            y0 = float(self.y0[j])
+            # a point of a static surface is a row ū = (ū_1, …, ū_m)
+            u = float(self.ubar[j]) if self.ubar.ndim == 1 else "(" + ", ".join(f"{v:g}" for v in self.ubar[j]) + ")"
             s = int(self.status[member, j])
             if s == NO_EQUILIBRIUM:
                 why = "no equilibrium (the static equation has no real root, or its denominator vanishes)"
@@ -577,7 +589,7 @@ class Reached:
             else:
                 why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within "
                        f"{SETTLE_STEPS} steps")
-            out.append(f"ū = {u:g}: {why}")
+            out.append(f"ū = {u:g}: {why}" if isinstance(u, float) else f"ū = {u}: {why}")
         return out
 
 

@@ -173,7 +173,7 @@ def test_bad_files_are_refused(values, tmp_path):
         "object.theta": (with_object(theta="0.5"), "expected a list"),
         "object.theta[1]": (with_object(theta=[0.1, "x"] + obj["object"]["theta"][2:]), "expected a number"),
         "length": (with_object(theta=obj["object"]["theta"][:-1]), r"not a valid Model: theta has \d values"),
-        "term": (with_object(structure=["y(k-1)", "w(k-1)"] + obj["object"]["structure"][2:]), "unknown signal"),
+        "term": (with_object(structure=["y(k-1)", "k(k-1)"] + obj["object"]["structure"][2:]), "unknown signal"),
         "name": (with_object(name=3), "expected a string"),
         "unknown": (with_object(colour="red"), r"unknown field\(s\) \['colour'\]"),
         "true as number": (with_object(theta=[True] + obj["object"]["theta"][1:]), "expected a number"),

@@ -224,3 +224,124 @@ def test_frols_recovers_a_two_input_structure(seed):
     assert set(by_size.structure) == set(_TRUE2)
     by_bic = gb.frols(cand, rec)  # the default stopping rule (BIC) finds the size too
     assert set(by_bic.structure) == set(_TRUE2)
+
+
+# -- static surface --------------------------------------------------------------
+from hypothesis import assume, given, settings, strategies as hst  # noqa: E402
+
+from graybox._surface import (  # noqa: E402
+    static_surface, static_surface_gain, surface_cluster_map, surface_equilibria,
+)
+
+_RATIONAL2 = Structure(["y(k-1)", "y(k-2)", "u1(k-1)", "u2(k-2)", "u1(k-1)u2(k-1)", "u2(k-1)y(k-1)",
+                        "u1(k-2)^2", "1"])
+_POLY2 = Structure(["y(k-1)", "y(k-2)", "u1(k-1)", "u2(k-2)", "u1(k-1)u2(k-1)", "u2(k-1)y(k-1)",
+                    "y(k-1)^2", "1"])
+
+
+def _long_run(st, th, ub, y0, n=4000):
+    return gb.simulate(st, th, np.tile(ub, (n, 1)), np.full(st.max_lag, y0), on_diverge="nan")
+
+
+@given(th=hst.lists(hst.floats(-1, 1), min_size=8, max_size=8), ub=hst.tuples(hst.floats(-2, 2), hst.floats(-2, 2)),
+       scale=hst.sampled_from([1e-3, 1.0, 1e3]), poly=hst.booleans(), y0=hst.floats(-1, 1))
+@settings(max_examples=60, deadline=None)
+def test_static_surface_is_the_simulated_steady_state(th, ub, scale, poly, y0):
+    # θ of the y-terms kept small enough for a stable model over most of the input box; the
+    # input scale (1e-3, 1, 1e3: mrpm, rpm, krpm) must not matter
+    th = np.array(th) * np.array([0.5, 0.3, 1, 1, 0.5, 0.2, 0.3 if not poly else 0.2, 1])
+    st = _POLY2 if poly else _RATIONAL2
+    ubs = np.array(ub) * scale
+    th = th / np.array([1, 1, scale, scale, scale**2, scale, 1 if poly else scale**2, 1])
+    eqs = surface_equilibria(st, th, ubs)
+    assume(any(e.stable and e.spectral_radius < 0.9 for e in eqs))
+    y_start = 0.0 if not poly else y0
+    y = _long_run(st, th, ubs, y_start)
+    assume(np.isfinite(y[-1]))
+    settled = y[-1]
+    assert abs(y[-1] - y[-2]) <= 1e-9 * max(1.0, abs(settled))
+    got = static_surface(st, th, ubs[None, :], y0=y_start, strict=False)[0]
+    assert np.isclose(got, settled, rtol=1e-7, atol=1e-9)
+    if not poly:  # rational: the closed form needs no initial output
+        assert np.isclose(static_surface(st, th, ubs[None, :])[0], settled, rtol=1e-7, atol=1e-9)
+    stable = [e.ybar for e in eqs if e.stable]
+    assert np.isclose(stable, settled, rtol=1e-7, atol=1e-9).any()
+
+
+def test_static_surface_gain_is_the_gradient():
+    rec, m = _miso_record()
+    ub = np.array([[0.5, 0.2], [1.0, -1.0], [-0.3, 0.7]])
+    g = m.static_gain(ub)
+    assert g.shape == (3, 2)
+    h = 1e-6
+    for i in range(2):
+        d = np.zeros(2)
+        d[i] = h
+        fd = (m.static_curve(ub + d) - m.static_curve(ub - d)) / (2 * h)
+        assert np.allclose(g[:, i], fd, rtol=1e-6, atol=1e-9)
+
+
+def test_surface_clusters_per_input_power():
+    rec, m = _miso_record()
+    cl = m.clusters()
+    # terms: y(k-1), u1(k-1), u2(k-2), u1(k-1)u2(k-1), u2(k-1)^2y(k-2), u1(k-2)y(k-1), 1
+    assert cl == {"Σ0": 0.1, "Σu1": 0.3, "Σu2": -0.2, "Σu1u2": 0.1, "Σy": 0.5, "Σyu1": 0.05, "Σyu2²": -0.05}
+    cm = surface_cluster_map(_ST2)
+    assert cm.keys[cm.index("Σyu2²")] == (1, 0, 2) and cm.inputs == ("u1", "u2")
+    # the static equation at a point, written from the clusters, holds at every equilibrium
+    for u1, u2 in ((0.5, 0.2), (-1.0, 1.5)):
+        for e in m.equilibria([u1, u2]):
+            F = (cl["Σ0"] + cl["Σu1"] * u1 + cl["Σu2"] * u2 + cl["Σu1u2"] * u1 * u2
+                 + (cl["Σy"] + cl["Σyu1"] * u1 + cl["Σyu2²"] * u2**2) * e.ybar - e.ybar)
+            assert abs(F) < 1e-12 and e.ubar == (u1, u2)
+    with pytest.raises(ValueError, match="2 inputs .*surface"):
+        gb.cluster_map(_ST2)
+
+
+def test_surface_bad_input():
+    rec, m = _miso_record()
+    with pytest.raises(ValueError, match="shape \\(M, 2\\)"):
+        m.static_curve(np.ones((4, 3)))
+    with pytest.raises(ValueError, match="shape \\(M, 2\\)"):
+        m.static_curve(np.ones(3))
+    with pytest.raises(ValueError, match="one point"):
+        m.equilibria(np.ones((2, 2)))
+    with pytest.raises(ValueError, match="not among the inputs"):
+        static_surface(_ST2, _TH2, np.ones((1, 2)), inputs=("u1", "u3"))
+    # a model that has several stable equilibria needs y0
+    # y(k) = 1.5 y(k-1) − 0.5 y(k-1)³ at ū = 0: equilibria 0 (unstable) and ±1 (stable)
+    st = Structure(["y(k-1)", "y(k-1)^3", "u1(k-1)", "u2(k-1)"])
+    th = np.array([1.5, -0.5, 0.0, 0.0])
+    with pytest.raises(ValueError, match="2 stable equilibria"):
+        static_surface(st, th, np.zeros((1, 2)))
+    assert static_surface(st, th, np.zeros((1, 2)), y0=0.3)[0] == pytest.approx(1.0)
+
+
+def test_evaluate_a_two_input_model():
+    rec, m = _miso_record()
+    ub = np.array([[0.5, 0.2], [1.0, -1.0], [-0.3, 0.7]])
+    yb = m.static_curve(ub)
+    sp = StaticPoints(ub[:, ::-1], yb, input_names=("u2", "u1"))  # columns by name, in any order
+    assert gb.jsf(m, sp) == pytest.approx(0.0, abs=1e-20)
+    ds = Dataset(rec, rec, StaticPoints(ub, yb))
+    tab = gb.evaluate({"m": m}, ds)
+    assert tab.loc["m", "J_SF"] == pytest.approx(0.0, abs=1e-20) and tab.loc["m", "J_S valid"] < 1e-20
+    with pytest.raises(ValueError, match="has the inputs \\('u1', 'u2'\\) but the static points have \\('a', 'b'\\)"):
+        gb.jsf(m, StaticPoints(ub, yb, input_names=("a", "b")))
+    with pytest.raises(ValueError, match="2 input columns .* one input"):
+        gb.jsf(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]), sp)
+
+
+def test_frols_bad_input_is_a_clear_error():
+    rec = _rec2(n=40)
+    with pytest.raises(ValueError, match="terms use input 'u3', but the record's inputs are \\('u1', 'u2'\\)"):
+        gb.frols(Candidates(1, 2, inputs=["u1", "u3"], degree=1), rec, n_terms=2)
+    with pytest.raises(ValueError, match="fewer than max lag"):  # a delay larger than the record
+        gb.frols(Candidates(1, {"u1": 45, "u2": 1}, delay={"u1": 45}, degree=1), rec, n_terms=2)
+
+
+def test_miso_model_round_trips_through_json():
+    rec, m = _miso_record()
+    back = gb.from_json(gb.to_json(m))
+    assert back.structure == m.structure and np.array_equal(back.theta, m.theta)
+    assert back.input_names == ("u1", "u2") and np.array_equal(back.simulate(rec), m.simulate(rec))

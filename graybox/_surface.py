@@ -1,0 +1,378 @@
+"""Static analysis of models with several inputs: the static surface ȳ(ū_1, …, ū_m).
+
+At a constant input vector ū a term with output power p and input powers a_1 … a_m becomes
+ȳ^p ū_1^a_1 ⋯ ū_m^a_m, so the steady states solve (eq. (5) in several variables)
+
+    F(ȳ, ū) = Σ_{p, a} Σ_{y^p u1^a1 ⋯ um^am} ȳ^p ū_1^a_1 ⋯ ū_m^a_m − ȳ = 0,
+
+whose coefficients are the cluster coefficients Σ = R θ of the clusters Ω_{y^p u1^a1 ⋯ um^am}
+(:func:`surface_cluster_map`).
+
+One definition, shared with the single-input case: at a fixed ū the input part of every term is
+a number, so the model is, for its statics, a single-input model at ū' = 1 whose parameters are
+θ_t · ū_1^a_t1 ⋯ ū_m^a_tm (the inputs folded into θ, as :func:`graybox._static.reached_equilibria`
+already does for one input). Every static question at a point of the surface — the real roots,
+their stability (the Schur–Cohn test), the equilibrium a free run from y0 settles on — is
+answered by the single-input code on that folded model: one implementation, one definition of
+"the equilibrium reached", whatever the number of inputs.
+
+The static gain is the gradient ∂ȳ/∂ū_i = −F_{ū_i} / F_ȳ (implicit differentiation), one
+entry per input.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from . import _static
+from ._static import Equilibrium, Reached
+from ._terms import Structure, Term, check_input_names
+
+__all__ = [
+    "SurfaceClusterMap",
+    "surface_cluster_map",
+    "surface_cluster_name",
+    "surface_inputs",
+    "input_monomials",
+    "surface_equilibria",
+    "reached_surface",
+    "static_surface",
+    "static_surface_gain",
+    "surface_theta_gradient",
+]
+
+_SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def surface_inputs(structure: Structure, inputs: tuple[str, ...] | None = None) -> tuple[str, ...]:
+    """The input order of ū's columns: ``inputs`` (validated against the structure) or the structure's own."""
+    if inputs is None:
+        return structure.inputs or ("u",)
+    names = check_input_names(inputs)
+    missing = [n for n in structure.inputs if n not in names]
+    if missing:
+        raise ValueError(f"the structure uses input {missing[0]!r}, which is not among the inputs {names}")
+    return names
+
+
+def _powers(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
+    return tuple(term.power_of(n) for n in inputs)
+
+
+def surface_cluster_name(p: int, powers: tuple[int, ...], inputs: tuple[str, ...]) -> str:
+    """Cluster name, e.g. ``Σ0``, ``Σyu1``, ``Σu1²u2``, ``Σy²u2``."""
+    s = "Σ"
+    if p:
+        s += "y" + (str(p).translate(_SUP) if p > 1 else "")
+    for n, a in zip(inputs, powers):
+        if a:
+            s += n + (str(a).translate(_SUP) if a > 1 else "")
+    return "Σ0" if s == "Σ" else s
+
+
+@dataclass(frozen=True)
+class SurfaceClusterMap:
+    """The clusters Ω_{y^p u1^a1 ⋯ um^am} of a structure with several inputs and the 0/1 map R (Σ = R θ).
+
+    Attributes
+    ----------
+    inputs : tuple of str
+        The inputs, in the order of the powers in each key.
+    keys : tuple of (p, a_1, …, a_m)
+        Output power and input powers of each cluster, sorted.
+    R : ndarray, shape (n_clusters, n_terms)
+    """
+
+    inputs: tuple[str, ...]
+    keys: tuple[tuple[int, ...], ...]
+    R: np.ndarray
+
+    @property
+    def names(self) -> list[str]:
+        """Cluster names in the order of ``keys``."""
+        return [surface_cluster_name(k[0], k[1:], self.inputs) for k in self.keys]
+
+    def index(self, name_or_key: str | tuple[int, ...]) -> int:
+        """Row of R for a cluster given by name (``"Σyu1"``) or key (p, a_1, …, a_m)."""
+        if isinstance(name_or_key, tuple):
+            return self.keys.index(name_or_key)
+        names = self.names
+        if name_or_key not in names:
+            raise ValueError(f"no cluster {name_or_key!r} in this structure; it has {names}")
+        return names.index(name_or_key)
+
+    @property
+    def max_y_power(self) -> int:
+        """Largest output power over the clusters."""
+        return max((k[0] for k in self.keys), default=0)
+
+
+@lru_cache(maxsize=256)
+def _surface_cluster_map(structure: Structure, inputs: tuple[str, ...]) -> SurfaceClusterMap:
+    keys = []
+    for t in structure:
+        if t.is_noise:
+            raise ValueError(f"noise term {t} has no cluster")
+        keys.append((t.power_of("y"),) + _powers(t, inputs))
+    uniq = tuple(sorted(set(keys)))
+    R = np.zeros((len(uniq), len(structure)))
+    for j, k in enumerate(keys):
+        R[uniq.index(k), j] = 1.0
+    R.setflags(write=False)
+    return SurfaceClusterMap(inputs, uniq, R)
+
+
+def surface_cluster_map(structure: Structure, *, inputs: tuple[str, ...] | None = None) -> SurfaceClusterMap:
+    """The clusters per output power and input powers of ``structure`` (cached).
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms.
+    inputs : tuple of str, optional
+        The inputs in the order of the key powers (default: the structure's inputs).
+
+    Returns
+    -------
+    SurfaceClusterMap
+    """
+    return _surface_cluster_map(structure, surface_inputs(structure, inputs))
+
+
+@lru_cache(maxsize=256)
+def _skeleton(structure: Structure) -> Structure:
+    """The single-input structure of the folded model.
+
+    Term t keeps its output factors; its input factors become one factor ``u(k-j)`` with j
+    numbering the terms that share the same output part, so the terms stay distinct. At ū' = 1
+    the input factor is 1 whatever j is: only the output lags matter for the statics.
+    """
+    seen: dict[tuple, int] = {}
+    terms = []
+    for t in structure:
+        ypart = tuple(f for f in t.factors if f[0] == "y")
+        j = seen.get(ypart, 0) + 1
+        seen[ypart] = j
+        terms.append(Term(ypart + (("u", j, 1),)))
+    return Structure(terms)
+
+
+def input_monomials(structure: Structure, ubar: np.ndarray, inputs: tuple[str, ...] | None = None) -> np.ndarray:
+    """g_t(ū) = ū_1^a_t1 ⋯ ū_m^a_tm for every term t at every point, shape (M, n_terms)."""
+    names = surface_inputs(structure, inputs)
+    ub = _as_points(ubar, len(names))
+    A = np.array([_powers(t, names) for t in structure], dtype=float).reshape(len(structure), len(names))
+    with np.errstate(all="ignore"):
+        return np.prod(ub[:, None, :] ** A[None, :, :], axis=2)
+
+
+def _as_points(ubar: object, m: int) -> np.ndarray:
+    """ū as finite points, shape (M, m); a 1-D ū of length m is one point."""
+    ub = np.asarray(ubar, dtype=float)
+    if ub.ndim == 1 and ub.size == m:
+        ub = ub[None, :]
+    if ub.ndim != 2 or ub.shape[1] != m:
+        raise ValueError(f"ubar must have shape (M, {m}) (one column per input), got shape {ub.shape}")
+    if not np.all(np.isfinite(ub)):
+        raise ValueError("ubar has non-finite values")
+    return ub
+
+
+def _folded(structure: Structure, thetas: np.ndarray, ub: np.ndarray, inputs: tuple[str, ...]):
+    """The skeleton structure and θ'[p, j, t] = θ_pt g_t(ū_j), shape (P, M, n_terms)."""
+    sk = _skeleton(structure)
+    g = input_monomials(structure, ub, inputs)
+    return sk, np.atleast_2d(np.asarray(thetas, float))[:, None, :] * g[None, :, :]
+
+
+def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray, *,
+                       inputs: tuple[str, ...] | None = None) -> list[Equilibrium]:
+    """Every real equilibrium at the constant input vector ``ubar``, sorted by ȳ, with its local stability.
+
+    Parameters
+    ----------
+    structure : Structure
+    theta : ndarray, shape (n_terms,)
+    ubar : array_like, shape (m,)
+        One point of input space (engineering units), columns in ``inputs`` order.
+    inputs : tuple of str, optional
+        Input order (default: the structure's inputs).
+
+    Returns
+    -------
+    list of Equilibrium
+        ``ubar`` of each is the tuple (ū_1, …, ū_m).
+    """
+    names = surface_inputs(structure, inputs)
+    ub = _as_points(ubar, len(names))
+    if ub.shape[0] != 1:
+        raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
+    sk, th = _folded(structure, theta, ub, names)
+    point = tuple(float(v) for v in ub[0])
+    return [Equilibrium(point, e.ybar, e.stable, e.spectral_radius) for e in _static.equilibria(sk, th[0, 0], 1.0)]
+
+
+def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray, *,
+                    inputs: tuple[str, ...] | None = None) -> Reached:
+    """The equilibrium each member reaches at each point ū_j from the constant initial output y0_j.
+
+    The definition of :func:`graybox._static.reached_equilibria`, at points of input space.
+
+    Parameters
+    ----------
+    structure : Structure
+    thetas : ndarray, shape (P, n_terms)
+    ubar : ndarray, shape (M, m)
+        Points of input space (input units), columns in ``inputs`` order.
+    y0 : float or ndarray, shape (M,)
+        Initial output of each point's run (output units).
+    inputs : tuple of str, optional
+
+    Returns
+    -------
+    Reached
+        ``ubar`` (M, m), ``ybar`` and ``status`` (P, M).
+    """
+    names = surface_inputs(structure, inputs)
+    ub = _as_points(ubar, len(names))
+    M = ub.shape[0]
+    y0s = np.broadcast_to(np.asarray(y0, float), (M,)).copy()
+    sk, th = _folded(structure, thetas, ub, names)
+    P = th.shape[0]
+    yb = np.full((P, M), np.nan)
+    status = np.zeros((P, M), dtype=np.int8)
+    one = np.ones(1)
+    for j in range(M):  # each point has its own folded parameters
+        r = _static.reached_equilibria(sk, th[:, j, :], one, y0s[j:j + 1])
+        yb[:, j] = r.ybar[:, 0]
+        status[:, j] = r.status[:, 0]
+    return Reached(ub, y0s, yb, status)
+
+
+def static_surface(
+    structure: Structure,
+    theta: np.ndarray,
+    ubar: np.ndarray,
+    y0: float | np.ndarray | None = None,
+    *,
+    strict: bool = True,
+    inputs: tuple[str, ...] | None = None,
+) -> np.ndarray:
+    """The steady state the model reaches at each constant input vector: the static surface ȳ(ū).
+
+    As :func:`graybox._static.static_curve` at points of input space: with ``y0``, the equilibrium
+    a free run at constant ū started from y0 settles on; without it, the unique stable
+    equilibrium (rational structures: the equilibrium of eq. (6) when it is stable).
+
+    Parameters
+    ----------
+    structure : Structure
+    theta : ndarray, shape (n_terms,)
+    ubar : array_like, shape (M, m)
+        Points of input space (input units), columns in ``inputs`` order.
+    y0 : float or array_like of shape (M,), optional
+        Initial output (output units).
+    strict : bool
+        Raise ``ValueError`` naming every ū where no equilibrium is reached (else NaN there).
+    inputs : tuple of str, optional
+        Input order (default: the structure's inputs).
+
+    Returns
+    -------
+    ndarray, shape (M,)
+        Output units.
+    """
+    names = surface_inputs(structure, inputs)
+    ub = _as_points(ubar, len(names))
+    th = np.asarray(theta, float)
+    sk, thf = _folded(structure, th, ub, names)
+    if y0 is not None or _static.is_rational(sk):
+        res = reached_surface(structure, th[None, :], ub, 0.0 if y0 is None else y0, inputs=names)
+        if strict and not res.ok.all():
+            raise ValueError("the model reaches no equilibrium at " + "; ".join(res.explain(0)))
+        return res.ybar[0].copy()
+    out = np.full(ub.shape[0], np.nan)
+    problems = []
+    for j in range(ub.shape[0]):
+        stable = [e.ybar for e in _static.equilibria(sk, thf[0, j], 1.0) if e.stable]
+        if len(stable) == 1:
+            out[j] = stable[0]
+        else:
+            pt = "(" + ", ".join(f"{v:g}" for v in ub[j]) + ")"
+            problems.append(f"ū = {pt}: " + ("no stable equilibrium" if not stable else
+                                            f"{len(stable)} stable equilibria {np.round(stable, 6).tolist()}; "
+                                            "pass y0 to choose the one reached from it"))
+    if strict and problems:
+        raise ValueError("the static surface is undefined at " + "; ".join(problems))
+    return out
+
+
+def _fderivs(structure: Structure, theta: np.ndarray, ub: np.ndarray, yb: np.ndarray, names: tuple[str, ...]):
+    """F_ȳ (M,) and F_ū (M, m) of F(ȳ, ū) = Σ_t θ_t ȳ^p_t Π ū_i^a_ti − ȳ at (ū_j, ȳ_j)."""
+    M, m = ub.shape
+    Fy = -np.ones(M)
+    Fu = np.zeros((M, m))
+    with np.errstate(all="ignore"):
+        for th, t in zip(theta, structure):
+            if th == 0.0:
+                continue
+            p = t.power_of("y")
+            a = np.array(_powers(t, names))
+            g = np.prod(ub ** a[None, :], axis=1)
+            if p:
+                Fy += th * p * yb ** (p - 1) * g
+            for i in np.flatnonzero(a):
+                ai = a.copy()
+                ai[i] -= 1
+                Fu[:, i] += th * a[i] * yb**p * np.prod(ub ** ai[None, :], axis=1)
+    return Fy, Fu
+
+
+def static_surface_gain(
+    structure: Structure,
+    theta: np.ndarray,
+    ubar: np.ndarray,
+    y0: float | np.ndarray | None = None,
+    *,
+    strict: bool = True,
+    inputs: tuple[str, ...] | None = None,
+) -> np.ndarray:
+    """The static gain as a gradient: ∂ȳ/∂ū_i along the static surface, by implicit differentiation.
+
+    Parameters
+    ----------
+    structure, theta, ubar, y0, strict, inputs
+        As for :func:`static_surface`.
+
+    Returns
+    -------
+    ndarray, shape (M, m)
+        Entry (j, i) in output units per unit of input i.
+    """
+    names = surface_inputs(structure, inputs)
+    ub = _as_points(ubar, len(names))
+    th = np.asarray(theta, float)
+    yb = static_surface(structure, th, ub, y0, strict=strict, inputs=names)
+    Fy, Fu = _fderivs(structure, th, ub, yb, names)
+    with np.errstate(all="ignore"):
+        return -Fu / Fy[:, None]
+
+
+def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray, *,
+                           inputs: tuple[str, ...] | None = None) -> np.ndarray:
+    """∂ȳ_j/∂θ_t at equilibria (ū_j, ȳ_j) of the surface: −ȳ^p_t g_t(ū_j) / F_ȳ, shape (M, n_terms).
+
+    ``ubar`` (M, m) in ``inputs`` order (default: the structure's inputs), ``ybar`` (M,).
+    """
+    names = surface_inputs(structure, inputs)
+    ub = _as_points(ubar, len(names))
+    yb = np.asarray(ybar, float)
+    th = np.asarray(theta, float)
+    g = input_monomials(structure, ub, names)
+    P = np.array([t.power_of("y") for t in structure])
+    Fy, _ = _fderivs(structure, th, ub, yb, names)
+    with np.errstate(all="ignore"):
+        return -(yb[:, None] ** P[None, :]) * g / Fy[:, None]
