@@ -41,6 +41,7 @@ from ._curves import StaticCurve
 from ._records import StaticPoints
 from ._surfaces import StaticSurface
 from ._static import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
+from ._surface import SurfaceClusterMap, surface_cluster_map
 from ._terms import Structure
 
 __all__ = [
@@ -61,6 +62,7 @@ __all__ = [
     "n_static_inputs",
     "static_inputs",
     "sigma_y_index",
+    "static_cluster_map",
 ]
 
 
@@ -82,9 +84,22 @@ def cluster_powers(key: tuple) -> tuple[int, tuple[int, ...]]:
     return p, tuple(int(v) for v in rest)
 
 
-def n_static_inputs(cm: ClusterMap) -> int:
+def n_static_inputs(cm: ClusterMap | SurfaceClusterMap) -> int:
     """Number of inputs the clusters of ``cm`` speak of (1 for a SISO structure)."""
+    if isinstance(cm, SurfaceClusterMap):
+        return len(cm.inputs)
     return max((len(cluster_powers(k)[1]) for k in cm.keys), default=1)
+
+
+def static_cluster_map(structure: Structure, inputs: tuple[str, ...] | None = None) -> ClusterMap | SurfaceClusterMap:
+    """The clusters of ``structure``: per input power for one input, per input powers for several.
+
+    ``inputs`` are the data's input names (the order of ū's columns); a structure that uses fewer
+    inputs than the data still gets one power per data input.
+    """
+    if len(structure.inputs) > 1 or (inputs is not None and len(inputs) > 1):
+        return surface_cluster_map(structure, inputs=None if inputs is None else tuple(inputs))
+    return cluster_map(structure)
 
 
 def sigma_y_index(cm: ClusterMap) -> int | None:
@@ -197,17 +212,20 @@ class StaticContext:
     sigma_y : float or None
         Σ*_y of the reference model (eq. (22)); used by :class:`CurveEquality` when it is not
         given its own value.
+    inputs : tuple of str or None
+        The data's input names, the order of ū's columns (None: the structure's own inputs).
     """
 
     structure: Structure
     points: StaticPoints | None = None
     curve: StaticCurve | StaticSurface | None = None
     sigma_y: float | None = None
+    inputs: tuple[str, ...] | None = None
 
     @cached_property
-    def cluster_map(self) -> ClusterMap:
-        """Clusters and the 0/1 map R of the structure."""
-        return cluster_map(self.structure)
+    def cluster_map(self) -> ClusterMap | SurfaceClusterMap:
+        """Clusters and the 0/1 map R of the structure (per input powers for several inputs)."""
+        return static_cluster_map(self.structure, self.inputs)
 
     @property
     def n_terms(self) -> int:
@@ -545,12 +563,22 @@ def _denominator_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray) -> tup
     return np.ones(len(ubar)), d
 
 
+def _vanishing_denominator(ctx: StaticContext, theta: np.ndarray, ub: np.ndarray) -> np.ndarray:
+    """Where the rational static function's denominator vanishes, shape (M,) (several inputs too)."""
+    cm = ctx.cluster_map
+    if n_static_inputs(cm) == 1 and not isinstance(cm, SurfaceClusterMap):
+        return vanishing_denominator(ctx.structure, theta, ub)
+    # D(ū) = 1 − Σ_c Σ_c p ū^e (p ∈ {0, 1}): the y-derivative rows at any ȳ
+    terms = static_rows(cm, ub, np.ones(ub.shape[0]), wrt="y") * (cm.R @ np.asarray(theta, float))[None, :]
+    return denominator_vanishes(1.0 - terms.sum(axis=1), 1.0 + np.abs(terms).sum(axis=1))
+
+
 def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray, what: str, hint: str = "") -> None:
     """Refuse an estimate whose rational static function has a zero denominator at a static ū."""
     if not is_rational(ctx.structure):
         return
     ub = np.asarray(ubar, float)
-    bad = vanishing_denominator(ctx.structure, theta, ub)
+    bad = _vanishing_denominator(ctx, theta, ub)
     if bad.any():
         raise ValueError(
             f"{what}: the estimated model's static function does not exist at ū = {ub[bad].tolist()} "
@@ -937,7 +965,7 @@ class ClusterBounds(StaticConstraint):
     def describe(self) -> str:
         parts = []
         for k, (lo, hi) in self.bounds.items():
-            name = cluster_name(*k) if isinstance(k, tuple) else k
+            name = (cluster_name(*k) if len(k) == 2 else f"cluster {k}") if isinstance(k, tuple) else k
             parts.append(f"{'' if lo is None else f'{lo:g} <= '}{name}{'' if hi is None else f' <= {hi:g}'}")
         return "cluster bounds " + ", ".join(parts)
 

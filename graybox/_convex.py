@@ -49,6 +49,7 @@ from ._constraints import (
     cluster_powers,
     n_static_inputs,
     sigma_y_index,
+    static_cluster_map,
     static_inputs,
     static_rows,
 )
@@ -58,7 +59,7 @@ from ._surfaces import StaticSurface
 from ._ls import column_scales
 from ._model import Model
 from ._pareto import ParetoSet
-from ._records import Dataset, Record, StaticPoints, as_records, warn_static_range
+from ._records import Dataset, Record, StaticPoints, as_records, check_same_inputs, warn_static_range
 from ._regressors import stacked_regressors
 from ._static import cluster_map
 from ._terms import Structure
@@ -114,7 +115,7 @@ def static_matrices(structure: Structure, points: StaticPoints) -> tuple[np.ndar
         The 0/1 map from θ to the cluster coefficients, Σ = R θ.
     """
     st = _process_structure(structure)
-    cm = cluster_map(st)
+    cm = static_cluster_map(st, points.input_names)
     return static_rows(cm, points.ubar, points.ybar), np.array(cm.R)
 
 
@@ -256,7 +257,7 @@ def _ls_theta(d: _Data) -> np.ndarray:
 
 def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str | None) -> float | None:
     """Σ*_y of eq. (22) from ``reference``: "ls" (default), "els", a Model, a θ of this structure, a number."""
-    cm = cluster_map(d.structure)
+    cm = static_cluster_map(d.structure, records[0].input_names if records else None)
     iy = sigma_y_index(cm)
     if iy is None:
         return None
@@ -315,7 +316,7 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, T: np
     names = tuple(c.describe() for c in cons)
     E, f, G, h = np.vstack(E), np.concatenate(f), np.vstack(G), np.concatenate(h)
     G, h = _normalise_ub(G, h, names)
-    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(cluster_map(ctx.structure).keys))
+    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys))
     return _Rows(V, g, G, h, tuple(user), names)
 
 
@@ -605,7 +606,8 @@ def cls(
 def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: str, reference,
                constraints) -> tuple[list[StaticConstraint], StaticContext, StaticCurve | StaticSurface | None]:
     """The constraints and context of a CLS problem (shared by :func:`cls` and the covariance of its estimate)."""
-    cm = cluster_map(st)
+    inputs = recs[0].input_names
+    cm = static_cluster_map(st, inputs)
     static_cons: list[StaticConstraint] = []
     points: StaticPoints | None = None
     curve: StaticCurve | StaticSurface | None = None
@@ -635,8 +637,20 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
         static_cons.append(PassesThrough(points))
     cons = static_cons + as_constraint_list(constraints)
     ctx_points = points if points is not None else (data.static if isinstance(data, Dataset) else None)
-    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference))
+    for c in cons:  # every set of static points speaks of the records' inputs
+        _check_point_inputs(recs, getattr(c, "points", None))
+    _check_point_inputs(recs, ctx_points)
+    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference), inputs)
     return cons, ctx, curve
+
+
+def _check_point_inputs(recs: list[Record], points: StaticPoints | None) -> None:
+    """Static points must speak of the records' inputs: same count; same names when there are several."""
+    if points is None or not recs:
+        return
+    r = recs[0]
+    if points.n_inputs != r.n_inputs or (r.n_inputs > 1 and points.input_names != r.input_names):
+        check_same_inputs(r, points)
 
 
 def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
@@ -717,7 +731,9 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     pts = _static_points(static, ubar, data)
     curve = static if isinstance(static, (StaticCurve, StaticSurface)) else None
     cons = as_constraint_list(constraints)
-    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference))
+    for p in [pts] + [getattr(c, "points", None) for c in cons]:
+        _check_point_inputs(recs, p)
+    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), recs[0].input_names)
     _warn_static_range(cons, ctx, curve, recs)
     rows = _rows(cons, ctx, d.s)
     R2, c2, M = _static_part(d, pts)

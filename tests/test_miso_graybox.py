@@ -27,7 +27,7 @@ def ds():
 
 def rational_surface(structure, theta, U):
     """ȳ = N(ū)/D(ū) from the cluster coefficients (eq. (6) in several inputs), shape (K,)."""
-    cm = gb.cluster_map(structure)
+    cm = gb.surface_cluster_map(structure)
     sig = cm.R @ np.asarray(theta, float)
     U = np.atleast_2d(np.asarray(U, float))
     num = np.zeros(U.shape[0])
@@ -61,7 +61,7 @@ def grid(n=7, lo=1150.0, hi=1650.0):
 # -- static rows -------------------------------------------------------------------
 
 def test_clusters_speak_of_both_inputs():
-    cm = gb.cluster_map(ST)
+    cm = gb.surface_cluster_map(ST)
     assert n_static_inputs(cm) == 2
     powers = {cluster_powers(k) for k in cm.keys}
     assert powers == {(0, (0, 0)), (1, (0, 0)), (0, (1, 0)), (0, (0, 1)), (0, (2, 0)), (0, (1, 1)), (0, (0, 2)),
@@ -69,7 +69,7 @@ def test_clusters_speak_of_both_inputs():
 
 
 def test_static_rows_are_the_monomials_and_their_derivatives():
-    cm = gb.cluster_map(ST)
+    cm = gb.surface_cluster_map(ST)
     rng = np.random.default_rng(0)
     U = rng.uniform(1000, 1700, (5, 2))
     yb = rng.uniform(8, 20, 5)
@@ -98,7 +98,7 @@ def test_cls_imposes_a_fitted_surface_to_1e_8(ds):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         model = gb.cls(ST, ds, ds.static, how="curve")
-    cm = gb.cluster_map(ST)
+    cm = gb.surface_cluster_map(ST)
     exps = {cluster_powers(k)[1] for k in cm.keys if cluster_powers(k)[0] == 0}
     surf = StaticSurface.fit(ds.static, exponents=sorted(exps))
     U = grid(11)
@@ -106,7 +106,7 @@ def test_cls_imposes_a_fitted_surface_to_1e_8(ds):
     ym = rational_surface(ST, model.theta, U)
     assert np.max(np.abs(ym - H) / np.abs(H)) < 1e-8
     # the model's own static analysis (the equilibrium a free run reaches) agrees
-    ys = np.asarray(gb.static_curve(model, U), float).reshape(-1)
+    ys = model.static_curve(U)
     np.testing.assert_allclose(ys, H, rtol=1e-8)
     # and the rows are met as equalities: Σ_{y u^e} = 0 for e ≠ 0
     sig = dict(zip(cm.keys, cm.R @ model.theta))
@@ -205,8 +205,12 @@ def test_se_gradient_on_two_inputs(ds):
 
 def test_input_count_mismatches_are_named(ds):
     three = gb.StaticPoints(np.c_[ds.static.ubar, ds.static.ubar[:, :1]], ds.static.ybar)
-    with pytest.raises(ValueError, match="inputs"):
+    with pytest.raises(ValueError, match=r"has inputs \('u1', 'u2'\) but .* has inputs \('u1', 'u2', 'u3'\)"):
         gb.cls(ST, ds, three)
+    with pytest.raises(ValueError, match="has inputs"):
+        gb.pe_thetas(ST, ds, three, lambdas=[0.5])
+    with pytest.raises(ValueError, match="has inputs"):
+        gb.cls(ST, ds, constraints=gb.StaticBand(0.2, points=three))
     with pytest.raises(ValueError, match="curve in one input but the structure has 2 inputs"):
         gb.cls(ST, ds, gb.StaticCurve.polynomial([1.0, 2.0]))
     surf3 = StaticSurface.polynomial({(0, 0, 0): 1.0, (1, 0, 0): 1.0})
