@@ -786,14 +786,14 @@ class GainBounds(StaticConstraint):
 
     def describe(self) -> str:
         def one(v):
-            return "None" if v is None else f"{v:g}"
+            return "none" if v is None else f"{v:g}"
         lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
         if len(lows) == 1 and len(highs) == 1:
             lo = "-inf" if lows[0] is None else f"{lows[0]:g}"
             hi = "inf" if highs[0] is None else f"{highs[0]:g}"
             bounds = f"[{lo}, {hi}]"
         else:
-            bounds = f"lower {[one(v) for v in lows]}, upper {[one(v) for v in highs]} per input"
+            bounds = f"lower ({', '.join(map(one, lows))}), upper ({', '.join(map(one, highs))}) per input"
         rng = self.ubar_range
         if rng is None:
             where = ""

@@ -22,6 +22,7 @@ from threadpoolctl import ThreadpoolController
 
 import graybox as gb
 
+from .._constraints import static_cluster_map
 from .._convex import numerator_surface
 from ._spec import Cell, build_constraint, canonical_json
 
@@ -122,7 +123,7 @@ def _numerator_fit(st: gb.Structure, points: gb.StaticPoints) -> gb.StaticCurve 
     clusters), least squares through the static points: the curve eq. (22) can impose. With
     several inputs: the surface on the monomials of the Σ_{u^e} clusters."""
     if getattr(points, "n_inputs", 1) > 1:
-        return numerator_surface(gb.cluster_map(st), points)
+        return numerator_surface(static_cluster_map(st, points.input_names), points)
     powers = sorted(m for p, m in gb.cluster_map(st).keys if p == 0)
     if not powers:
         raise ValueError("eq. (22) needs numerator clusters (the constant or terms in u only); this structure has none")
