@@ -222,8 +222,9 @@ _CHUNK = 512
 
 
 @nb.njit(cache=True, nogil=True)
-def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uc, y0, start, bound):  # pragma: no cover - compiled
-    n = uc.shape[1]
+def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound):  # pragma: no cover - compiled
+    # uflat: the (m, n) inputs flattened, input i at uflat[i*n:(i+1)*n]; 1-D slices of a 1-D
+    # array keep the pass-1 loops as the single-input kernel had them (unit stride, vectorised)
     nt = theta.shape[0]
     G = gny.shape[0]
     y = np.empty(n)
@@ -248,7 +249,7 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uc, y0, start, bound): 
             for i in range(mm):
                 tmp[i] = th
             for f in range(uptr[t], uptr[t + 1]):
-                us = uc[usig[f], k0 - ulag[f]:]
+                us = uflat[usig[f] * n + k0 - ulag[f]:]
                 for _ in range(upow[f]):
                     for i in range(mm):
                         tmp[i] *= us[i]
@@ -286,8 +287,8 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
     magnitude exceeds ``bound`` (or is not finite); that sample and all later ones are NaN.
     """
     uc = kernel_inputs(code, u)
-    return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc, y0, start,
-                bound)
+    return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc.reshape(-1),
+                uc.shape[1], y0, start, bound)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
