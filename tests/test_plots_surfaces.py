@@ -89,3 +89,15 @@ def test_surface_plot_errors():
         plot_surface_contours([theory, theory], _grid_points())
     with pytest.raises(ValueError, match="returned shape"):
         plot_surface_contours(lambda U: np.ones(3), _grid_points())
+
+
+def test_record_with_two_inputs_has_a_line_and_a_legend_entry_per_input():
+    from graybox.datasets import load_pumping_miso
+    from graybox.plots import plot_record
+
+    rec = load_pumping_miso().valid
+    fig = plot_record(rec, stop=300)
+    ax_u = fig.axes[0]
+    assert len(ax_u.lines) == 2
+    assert [t.get_text() for t in ax_u.get_legend().get_texts()] == ["u1", "u2"]
+    np.testing.assert_array_equal(ax_u.lines[1].get_ydata()[:300], rec.u[:300, 1])
