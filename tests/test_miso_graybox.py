@@ -261,3 +261,18 @@ def test_grid_spec_with_per_input_lags_and_gain_bounds(tmp_path):
     res = gb.load_results(tmp_path / "r.sqlite")
     assert list(res.status) == ["ok", "ok"], res.message.tolist()
     assert res.JSF.iloc[0] < 0.2  # eq. (22) on the fitted surface: the static points are met closely
+
+
+def test_readme_miso_example_runs():
+    import re
+    from pathlib import Path
+
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## Several inputs: static surfaces and the two-speed rig", 1)[1]
+    block = re.findall(r"```python\n(.*?)```", section, re.S)[0]
+    ns: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exec(compile(block, "README.md (several inputs)", "exec"), ns)
+    U = ns["data"].static.ubar
+    np.testing.assert_allclose(ns["cls"].static_curve(U), ns["surface"](U), rtol=1e-8)
