@@ -6,6 +6,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import graybox as gb
 from graybox._constraints import (
@@ -276,3 +278,41 @@ def test_readme_miso_example_runs():
         exec(compile(block, "README.md (several inputs)", "exec"), ns)
     U = ns["data"].static.ubar
     np.testing.assert_allclose(ns["cls"].static_curve(U), ns["surface"](U), rtol=1e-8)
+
+
+def test_cluster_bounds_by_name_on_two_inputs(ds):
+    cm = gb.surface_cluster_map(ST)
+    assert "Σu1²" in cm.names and "Σyu2" in cm.names
+    cons = gb.ClusterBounds({"Sy": (None, 0.95), "Su1^2": (0.0, None), "Σyu2": (0.0, 0.0)})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        model = gb.cls(ST, ds, constraints=cons)
+    sig = dict(zip(cm.names, cm.R @ model.theta))
+    assert sig["Σy"] <= 0.95 + 1e-9 and sig["Σu1²"] >= -1e-12 and abs(sig["Σyu2"]) < 1e-12
+    with pytest.raises(ValueError, match="no cluster 'Σu3'"):
+        gb.cls(ST, ds, constraints=gb.ClusterBounds({"Su3": (0.0, None)}))
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.floats(1150, 1650), st.floats(1150, 1650))
+def test_a_models_static_surface_is_its_long_free_run_steady_state(u1, u2):
+    # the PE member nearest the static points on the bundled rig: a stable, realistic two-input model
+    model = _pe_model()
+    U = np.array([[u1, u2]])
+    yb = float(model.static_curve(U)[0])
+    rec = gb.Record(np.tile(U, (4000, 1)), np.full(4000, yb + 1.0), Ts=0.05, input_names=("u1", "u2"))
+    y = model.simulate(rec)
+    assert y[-1] == pytest.approx(yb, rel=1e-9, abs=1e-9)
+
+
+_PE = {}
+
+
+def _pe_model():
+    if "m" not in _PE:
+        ds = gb.load_pumping_miso()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.StaticRangeWarning)
+            par = gb.pe_pareto(ST, ds.ident, ds.static, lambdas=[0.01], solver="closed")
+        _PE["m"] = par.model(0)
+    return _PE["m"]
