@@ -160,7 +160,7 @@ def decide_min_correlation(
     L = st.max_lag
     record.require_length(L)
     y = record.y[L:]
-    Y1 = regressor_matrix(st, record.u, record.y, start=L) @ pareto.thetas.T  # (N-L, K)
+    Y1 = regressor_matrix(st, record.u, record.y, start=L, input_names=record.input_names) @ pareto.thetas.T  # (N-L, K)
     xi = y[:, None] - Y1
     Yo = Y1 if output == "one-step" else np.asarray(simulate_many(st, pareto.thetas, record)).T[L:]
     with np.errstate(all="ignore"):

@@ -232,7 +232,8 @@ def els(
     theta, c = theta_ls, np.zeros(m_e)
     converged = False
     for it in range(1, int(max_iter) + 1):
-        E = np.vstack([regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names) for r, e in zip(recs, per_record(xi))])
+        E = np.vstack([regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)
+                       for r, e in zip(recs, per_record(xi))])
         se = column_scales(E)
         Es = E / se
         E_perp = Es - Q @ (Q.T @ Es)

@@ -63,7 +63,7 @@ from scipy import signal, stats
 from ._model import Model
 from ._neural import NeuralModel
 from ._records import Dataset, Record, as_records
-from ._regressors import regressor_matrix
+from ._regressors import record_signals, regressor_matrix
 from ._validation import check_choice, check_int, check_real
 
 __all__ = ["CorrelationTest", "ResidualTests", "residual_tests", "one_step_residuals", "TESTS"]
@@ -207,7 +207,8 @@ def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bo
     ns = model.noise_structure if moving_average else model.noise_structure[:0]
     L = max(model.max_lag, ns.max_lag)
     rec.require_length(L)
-    v = rec.y[L:] - regressor_matrix(model.structure, rec.u, rec.y, start=L, input_names=rec.input_names) @ model.theta
+    psi = regressor_matrix(model.structure, rec.u, rec.y, start=L, input_names=rec.input_names)
+    v = rec.y[L:] - psi @ model.theta
     if len(ns) == 0:
         return v, L
     c = model.noise_theta
@@ -221,7 +222,7 @@ def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bo
     # products of residuals with u, y or each other: the recursion sample by sample
     N = len(rec)
     e = np.zeros(N)
-    sig = {"u": rec.u, "y": rec.y, "e": e}
+    sig = record_signals(rec) | {"e": e}
     for k in range(L, N):
         acc = 0.0
         for cj, t in zip(c, ns):
@@ -344,6 +345,9 @@ def residual_tests(
     level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
     check_choice(rule, "rule", RULES)
     recs = as_records(data)
+    if recs[0].n_inputs > 1:
+        raise ValueError(f"{recs[0].name}: the input correlation tests are defined for one input; the record has "
+                         f"{recs[0].n_inputs} inputs {recs[0].input_names}")
     xi, us = [], []
     for r in recs:
         e, L = _model_residuals(model, r, bool(moving_average))

@@ -687,8 +687,9 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
     thetas : ndarray, shape (P, n_terms)
     ubar : ndarray, shape (M,)
         Input levels (input units).
-    y0 : float or ndarray, shape (M,)
-        Initial output of each point's run (output units), usually the measured ȳ_i.
+    y0 : float or ndarray, shape (M,) or (P, M)
+        Initial output of each point's run (output units), usually the measured ȳ_i; or one
+        per member and point.
 
     Returns
     -------
@@ -697,8 +698,10 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
     """
     th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float).ravel()
-    y0s = np.broadcast_to(np.asarray(y0, float), ub.shape).copy()
     P, M = th.shape[0], ub.size
+    y0a = np.asarray(y0, float)
+    # one initial output per point, or per member and point (the static surface's folded members)
+    y0s = np.broadcast_to(y0a, (P, M) if y0a.ndim == 2 else ub.shape).copy()
     finite = np.all(np.isfinite(th), axis=1)
     th_ok = np.where(finite[:, None], th, 0.0)
     if is_rational(structure):

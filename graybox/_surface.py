@@ -42,6 +42,7 @@ __all__ = [
     "static_surface",
     "static_surface_gain",
     "surface_theta_gradient",
+    "surface_static_rows",
 ]
 
 _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -241,15 +242,11 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
     M = ub.shape[0]
     y0s = np.broadcast_to(np.asarray(y0, float), (M,)).copy()
     sk, th = _folded(structure, thetas, ub, names)
-    P = th.shape[0]
-    yb = np.full((P, M), np.nan)
-    status = np.zeros((P, M), dtype=np.int8)
-    one = np.ones(1)
-    for j in range(M):  # each point has its own folded parameters
-        r = _static.reached_equilibria(sk, th[:, j, :], one, y0s[j:j + 1])
-        yb[:, j] = r.ybar[:, 0]
-        status[:, j] = r.status[:, 0]
-    return Reached(ub, y0s, yb, status)
+    P, T = th.shape[0], th.shape[2]
+    # every (member, point) pair is one member of the folded model at ū' = 1, in one call
+    y0p = np.broadcast_to(y0s[None, :], (P, M)).reshape(P * M, 1)
+    r = _static.reached_equilibria(sk, th.reshape(P * M, T), np.ones(1), y0p)
+    return Reached(ub, y0s, r.ybar.reshape(P, M), r.status.reshape(P, M))
 
 
 def static_surface(
@@ -376,3 +373,41 @@ def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.nda
     Fy, _ = _fderivs(structure, th, ub, yb, names)
     with np.errstate(all="ignore"):
         return -(yb[:, None] ** P[None, :]) * g / Fy[:, None]
+
+
+def surface_static_rows(cm: SurfaceClusterMap, ubar: np.ndarray, ybar: np.ndarray, wrt: str | None = None) -> np.ndarray:
+    """Rows of Q in eq. (12) at points of input space (or their derivatives), per cluster of ``cm``.
+
+    Parameters
+    ----------
+    cm : SurfaceClusterMap
+        Cluster keys (p, a_1, …, a_m) and their inputs.
+    ubar : ndarray, shape (M, m)
+        Points of input space, columns in ``cm.inputs`` order.
+    ybar : ndarray, shape (M,)
+        Output levels (the measured or reference ȳ).
+    wrt : None, "y" or an input name
+        None: ``Q[j, c] = ȳ_j^p Π_i ū_ji^a_i`` (the static prediction is ``Q R θ``); ``"y"``:
+        ``∂/∂ȳ``; an input name ``u_i``: ``∂/∂ū_i``.
+
+    Returns
+    -------
+    ndarray, shape (M, n_clusters)
+    """
+    ub = _as_points(ubar, len(cm.inputs))
+    yb = np.asarray(ybar, float)[:, None]
+    K = np.array(cm.keys, float).reshape(len(cm.keys), 1 + len(cm.inputs))
+    p, A = K[None, :, 0], K[:, 1:]
+    with np.errstate(all="ignore"):
+        g = np.prod(ub[:, None, :] ** A[None, :, :], axis=2)  # (M, C); 0**0 == 1: a missing factor
+        if wrt is None:
+            return yb**p * g
+        if wrt == "y":
+            return np.where(p > 0, p * yb ** np.maximum(p - 1, 0) * g, 0.0)
+        if wrt not in cm.inputs:
+            raise ValueError(f"wrt must be None, 'y' or one of the inputs {cm.inputs}, got {wrt!r}")
+        i = cm.inputs.index(wrt)
+        Ad = A.copy()
+        Ad[:, i] = np.maximum(Ad[:, i] - 1, 0)
+        gd = np.prod(ub[:, None, :] ** Ad[None, :, :], axis=2)
+        return np.where(A[None, :, i] > 0, A[None, :, i] * yb**p * gd, 0.0)

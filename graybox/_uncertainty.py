@@ -362,7 +362,8 @@ def ls_uncertainty(
             xi, _ = _model_residuals(model, r, True)
             e = np.zeros(len(r))
             e[L:] = xi
-            blocks.append(np.hstack([regressor_matrix(st, r.u, r.y, start=L, input_names=r.input_names), regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)]))
+            blocks.append(np.hstack([regressor_matrix(st, r.u, r.y, start=L, input_names=r.input_names),
+                                     regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)]))
             targets.append(r.y[L:])
         phi, y = np.vstack(blocks), np.concatenate(targets)
         what = "ls_uncertainty (ELS)"

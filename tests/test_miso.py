@@ -345,3 +345,83 @@ def test_miso_model_round_trips_through_json():
     back = gb.from_json(gb.to_json(m))
     assert back.structure == m.structure and np.array_equal(back.theta, m.theta)
     assert back.input_names == ("u1", "u2") and np.array_equal(back.simulate(rec), m.simulate(rec))
+
+
+def test_two_input_pipeline_frols_els_evaluate():
+    rng = np.random.default_rng(0)
+    n = 1500
+    u = rng.uniform(-1, 1, (n, 2))
+    e = 0.02 * rng.standard_normal(n)
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = (0.5 * y[k - 1] + 0.8 * u[k - 1, 0] - 0.4 * u[k - 2, 1] + 0.3 * u[k - 1, 0] * u[k - 1, 1]
+                - 0.1 * u[k - 1, 1] * y[k - 1] + 0.2 + e[k] + 0.3 * e[k - 1])
+    rec = Record(u, y, input_names=("n1", "n2"))
+    sel = gb.frols(Candidates(2, 2, inputs=["n1", "n2"], degree=2, ne=1), rec)
+    m = gb.els(sel, rec).model
+    assert m.input_names == ("n1", "n2") and set(m.structure.inputs) == {"n1", "n2"}
+    assert m.noise_theta[0] == pytest.approx(0.3, abs=0.1)
+    ds = Dataset(rec, rec, StaticPoints([[0, 0], [0.5, 0.5]], [0.4, 0.5], input_names=("n1", "n2")))
+    tab = gb.evaluate({"els": m}, ds)
+    assert np.isfinite(tab.loc["els", "J_SF"]) and tab.loc["els", "J_S valid"] < 0.01
+    with pytest.raises(ValueError, match="defined for one input"):
+        gb.residual_tests(m, rec)
+
+
+def test_reached_surface_batches_members_and_points():
+    from graybox._surface import reached_surface
+
+    rng = np.random.default_rng(5)
+    th0 = np.array([0.3, 0.1, 0.5, -0.4, 0.2, 0.1, -0.2, 0.1])
+    thetas = th0 * (1 + 0.2 * rng.standard_normal((6, 8)))
+    ub = rng.uniform(-1, 1, (7, 2))
+    y0 = rng.uniform(-0.5, 0.5, 7)
+    res = reached_surface(_POLY2, thetas, ub, y0)
+    assert res.ybar.shape == (6, 7) and res.ok.any()
+    for p in range(6):
+        one = static_surface(_POLY2, thetas[p], ub, y0=y0, strict=False)
+        assert np.array_equal(np.isnan(one), ~res.ok[p])
+        assert np.allclose(one[res.ok[p]], res.ybar[p, res.ok[p]], rtol=0, atol=0)
+
+
+def test_surface_static_rows():
+    from graybox._surface import surface_static_rows
+
+    rec, m = _miso_record()
+    cm = surface_cluster_map(_ST2)
+    ub = np.array([[0.5, 0.2], [1.0, -1.0], [0.0, 0.7]])
+    yb = m.static_curve(ub)
+    Q = surface_static_rows(cm, ub, yb)
+    assert np.allclose(Q @ cm.R @ _TH2, yb, rtol=1e-12, atol=1e-14)  # on the surface, QRθ = ȳ
+    # F = QRθ − ȳ: its derivatives give the gradient of the surface
+    Fy = surface_static_rows(cm, ub, yb, "y") @ cm.R @ _TH2 - 1
+    for i, n in enumerate(("u1", "u2")):
+        Fu = surface_static_rows(cm, ub, yb, n) @ cm.R @ _TH2
+        assert np.allclose(-Fu / Fy, m.static_gain(ub)[:, i], rtol=1e-10, atol=1e-12)
+    with pytest.raises(ValueError, match="wrt must be"):
+        surface_static_rows(cm, ub, yb, "u3")
+
+
+def test_readme_several_inputs_example_runs():
+    import re
+    import warnings
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    section = text.split("## API: several inputs", 1)[1]
+    block = re.findall(r"```python\n(.*?)```", section, re.S)[0]
+    ns: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exec(compile(block, "README.md (several inputs)", "exec"), ns)
+    assert set(ns["model"].structure) == {parse_term(t) for t in
+                                          ("y(k-1)", "n1(k-1)", "n2(k-2)", "n1(k-1)n2(k-1)", "1")}
+    # the true surface: ȳ = (0.2 + 0.8 n1 − 0.4 n2 + 0.3 n1 n2) / (1 − 0.5)
+    n1, n2 = np.array([0.0, 0.5]), np.array([0.0, -0.5])
+    assert np.allclose(ns["surface"], (0.2 + 0.8 * n1 - 0.4 * n2 + 0.3 * n1 * n2) / 0.5, atol=0.05)
+    assert ns["gradient"].shape == (2, 2)
+    table = section.split("```python")[0]
+    for name in re.findall(r"^\| `([A-Za-z_.]+)", table, re.M):
+        obj = gb
+        for part in name.split("."):
+            obj = getattr(obj, part)

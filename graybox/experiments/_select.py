@@ -98,7 +98,7 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
                              f"largest lag {min_len - 1}; use fewer folds or a validation record")
         valid = record.slice(a, b, name=f"{record.name} fold {i + 1} valid")
         ident = gb.Record(np.r_[record.u[:a], record.u[b:]], np.r_[record.y[:a], record.y[b:]], record.Ts,
-                          f"{record.name} fold {i + 1} ident", record.units)
+                          f"{record.name} fold {i + 1} ident", record.units, record.input_names)
         out.append((ident, valid))
     return out
 
@@ -206,7 +206,7 @@ def select_graybox(
         if float(np.mean((fit(sp.ubar) - sp.ybar) ** 2)) > band:
             # no polynomial fits the points within the band: their form is not known, so ask only
             # what the candidates can carry (the band is then out of reach, which step 4 reports)
-            degree = min(degree, max((t.power_of("u") for t in process if t.power_of("y") == 0), default=0))
+            degree = min(degree, max((t.input_power for t in process if t.power_of("y") == 0), default=0))
     L = process.max_lag
     if valid is not None:
         valid.require_length(L)
