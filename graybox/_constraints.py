@@ -42,7 +42,7 @@ from ._curves import StaticCurve
 from ._records import StaticPoints
 from ._surfaces import StaticSurface
 from ._static import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
-from ._surface import SurfaceClusterMap, surface_cluster_map
+from ._surface import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ._terms import Structure
 
 __all__ = [
@@ -173,26 +173,12 @@ def static_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray, wrt: str | N
             return np.where(p > 0, p * yb ** np.maximum(p - 1, 0) * ub**m, 0.0)
         return np.where(m > 0, m * yb**p * ub ** np.maximum(m - 1, 0), 0.0)
     U = static_inputs(ubar, m_in)
-    yb = np.asarray(ybar, float)[:, None]
-    pw = [cluster_powers(k) for k in cm.keys]
-    p = np.array([q for q, _ in pw], float)[None, :]
-    E = np.array([e for _, e in pw], float)  # (n_clusters, m)
-
-    def mono(E_: np.ndarray) -> np.ndarray:  # Π_j ū_j^(E_cj), shape (M, n_clusters)
-        return np.prod(U[:, None, :] ** E_[None, :, :], axis=2)
-
-    if wrt is None:
-        return yb**p * mono(E)
-    if wrt == "y":
-        return np.where(p > 0, p * yb ** np.maximum(p - 1, 0) * mono(E), 0.0)
-    if input is None or not (0 <= int(input) < m_in):
+    if wrt == "u" and (input is None or not (0 <= int(input) < m_in)):
         raise ValueError(f"wrt='u' needs input = 0 … {m_in - 1} (which input) for a structure with {m_in} inputs, "
                          f"got {input!r}")
-    j = int(input)
-    ej = E[:, j][None, :]
-    lowered = E.copy()
-    lowered[:, j] = np.maximum(lowered[:, j] - 1, 0)
-    return np.where(ej > 0, ej * yb**p * mono(lowered), 0.0)
+    if not isinstance(cm, SurfaceClusterMap):
+        raise ValueError("several inputs need the structure's surface cluster map (static_cluster_map)")
+    return surface_static_rows(cm, U, ybar, cm.inputs[int(input)] if wrt == "u" else wrt)
 
 
 # --------------------------------------------------------------------------------------------
