@@ -316,3 +316,12 @@ def _pe_model():
             par = gb.pe_pareto(ST, ds.ident, ds.static, lambdas=[0.01], solver="closed")
         _PE["m"] = par.model(0)
     return _PE["m"]
+
+
+def test_se_dsf_on_two_inputs_lands_on_the_band(ds):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        res = gb.se_dsf(ST, ds, band=0.031)
+    assert res.feasible and res.JSF <= 0.031 * (1 + 1e-6)
+    ym = res.model.static_curve(ds.static.ubar)
+    assert np.mean((ym - ds.static.ybar) ** 2) == pytest.approx(res.JSF, rel=1e-6)
