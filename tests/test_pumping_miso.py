@@ -135,6 +135,20 @@ def test_simulator_never_fails_within_its_speed_range(levels1, levels2, hold, se
     assert run.air_loss.max() <= 1.0
 
 
+def test_valves_shut_and_the_column_stops_under_harsh_disturbances():
+    # a surge ten times stronger and 5x the air: the slower pump's valve shuts, now and then the
+    # whole column stops (p = 0), and it restarts; nothing is NaN and no flow is negative
+    rig = PumpingPlant(surge_intensity=0.055, air_loss_per_rpm=4e-4)
+    rng = np.random.default_rng(0)
+    u = np.column_stack([np.repeat(rng.uniform(LO, HI, 12), 60), np.repeat(rng.uniform(LO, HI, 12), 60)])
+    run = TwoSpeedPumpingPlant(rig=rig).simulate(u, rng=0)
+    assert np.all(np.isfinite(run.y)) and run.pump_flow.min() >= 0.0
+    shut = (run.pump_flow == 0.0).any(axis=1)
+    assert shut.any() and not shut.all()
+    stopped = np.flatnonzero(run.flow == 0.0)
+    assert stopped.size and np.all(run.pressure[stopped] == 0.0) and run.flow[stopped[-1]:].max() > 10.0
+
+
 def test_a_stopped_column_restarts():
     # from rest (no flow) at full speed the column accelerates to the steady state
     u = np.full((600, 2), 1400.0)
