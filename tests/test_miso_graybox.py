@@ -325,3 +325,25 @@ def test_se_dsf_on_two_inputs_lands_on_the_band(ds):
     assert res.feasible and res.JSF <= 0.031 * (1 + 1e-6)
     ym = res.model.static_curve(ds.static.ubar)
     assert np.mean((ym - ds.static.ybar) ** 2) == pytest.approx(res.JSF, rel=1e-6)
+
+
+def test_pe_on_two_inputs_does_not_depend_on_units(ds):
+    # ū in rad/s and ȳ in kPa: the same models (static surfaces scaled by the output's unit)
+    ku, ky = np.pi / 30, 9.80665
+    scaled = gb.Dataset(
+        gb.Record(ds.ident.u * ku, ds.ident.y * ky, Ts=ds.Ts, input_names=ds.input_names),
+        gb.Record(ds.valid.u * ku, ds.valid.y * ky, Ts=ds.Ts, input_names=ds.input_names),
+        gb.StaticPoints(ds.static.ubar * ku, ds.static.ybar * ky, input_names=ds.input_names),
+    )
+    lam = [1e-3, 0.5]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        for solver in ("closed", "clarabel"):
+            a = gb.pe_thetas(ST, ds, lambdas=lam, solver=solver, constraints=None if solver == "closed" else
+                             gb.StaticBand(0.3) & gb.GainBounds(lower=[0.0, 0.0]))
+            b = gb.pe_thetas(ST, scaled, lambdas=lam, solver=solver, constraints=None if solver == "closed" else
+                             gb.StaticBand(0.3 * ky) & gb.GainBounds(lower=[0.0, 0.0]))
+            U = grid(4)
+            for ta, tb in zip(a, b):
+                np.testing.assert_allclose(rational_surface(ST, tb, U * ku), ky * rational_surface(ST, ta, U),
+                                           rtol=1e-6)
