@@ -14,6 +14,13 @@ range of the dynamic data), yields
 
 Constraints combine with ``&`` (``band & gain & ClusterBounds(...)``) into :class:`AllOf`.
 
+Several inputs: the static function is a surface ȳ(ū_1, …, ū_m), the clusters are
+Ω_{y^p u1^a1 ⋯ um^am} (:func:`static_cluster_map`, the core's surface cluster map, in the order of
+the data's inputs), static points have ū of shape (M, m), and every row below is built the same
+way with ū^m read as the monomial Π_i ū_i^a_i: eq. (22) matches a :class:`~graybox.StaticSurface`
+coefficient by coefficient, the band and the points are unchanged, and the gain bounds hold per
+input (the gain is a gradient).
+
 Why the static error is affine in θ (eq. (12)): at a steady state every term
 ``y^p(k-i) u^m(k-j)`` becomes ``ȳ^p ū^m``, so with the *measured* ȳ_i placed on the regressor
 side the right-hand side of the static equation is ``q_iᵀ R θ`` with
@@ -417,7 +424,7 @@ class AllOf(StaticConstraint):
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False, repr=False)
 class CurveEquality(StaticConstraint):
-    """Eq. (22): the model's rational static function equals the polynomial curve H(ū).
+    """Eq. (22): the model's rational static function equals the polynomial curve H(ū) (or surface).
 
     With ȳ = N(ū)/D(ū) (eq. (6)) and H(ū) = Σ_m c_m ū^m, the identity N ≡ D·H is met by
     making the denominator constant and matching the numerator:
@@ -429,10 +436,16 @@ class CurveEquality(StaticConstraint):
     Σ*_y comes from a reference model (the paper: the ELS estimate; graybox's estimators pass
     the LS estimate unless told otherwise) or is given here.
 
+    Several inputs: with a :class:`~graybox.StaticSurface` H(ū) = Σ_e c_e ū_1^e_1 ⋯ ū_m^e_m the same
+    identity gives ``Σ_{y u^e} = 0`` for every e ≠ 0, ``Σ_y = Σ*_y`` and
+    ``Σ_{u^e} = (1 − Σ*_y) c_e`` for every numerator cluster (c_e = 0 for monomials the surface
+    does not have); every monomial of the surface needs its cluster.
+
     Parameters
     ----------
-    curve : StaticCurve
-        Polynomial static curve (ascending coefficients), e.g. eq. (1).
+    curve : StaticCurve or StaticSurface
+        Polynomial static curve (ascending coefficients), e.g. eq. (1); or, for a structure with
+        several inputs, a polynomial static surface whose inputs are the data's, in their order.
     sigma_y : float, optional
         Σ*_y; default: the problem's (``StaticContext.sigma_y``).
 
