@@ -17,7 +17,7 @@ from __future__ import annotations
 import itertools
 import re
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
@@ -31,6 +31,7 @@ _NAME_RE = re.compile(r"[A-Za-z][A-Za-z0-9_]*\Z")
 _NUM_RE = re.compile(r"(\d+)")
 
 
+@lru_cache(maxsize=1024)
 def _rank(signal: str) -> tuple:
     """Printing/sorting rank of a signal: inputs (natural name order), then y, then e."""
     if signal == "y":
@@ -41,10 +42,15 @@ def _rank(signal: str) -> tuple:
 
 
 def _check_signal(sig: object) -> str:
-    if not isinstance(sig, str) or not _NAME_RE.match(sig) or sig == "k":
+    if not isinstance(sig, str) or not _valid_signal(sig):
         raise ValueError(f"unknown signal {sig!r}: a signal is y (output), e (noise) or an input named by an "
                          "identifier other than y, e, k (e.g. u, u1, n1)")
     return sig
+
+
+@lru_cache(maxsize=1024)
+def _valid_signal(sig: str) -> bool:
+    return bool(_NAME_RE.match(sig)) and sig != "k"
 
 
 def default_input_names(m: int) -> tuple[str, ...]:
