@@ -23,6 +23,7 @@ from ._selection import CandidateWarning, Selection, frols, information_criterio
 from ._semp import SEMPResult, semp
 from ._els import ELSConvergenceWarning, ELSResult, els, noise_terms
 from ._curves import StaticCurve
+from ._surfaces import StaticSurface
 from ._constraints import (
     ClusterBounds, CurveEquality, GainBounds, InfeasibleError, PassesThrough, StaticBand, UserConstraint,
 )
@@ -40,7 +41,7 @@ from ._uncertainty import (
 from ._bootstrap import BootstrapJob, DecisionBootstrap, block_resample, bootstrap_decision
 from ._io import FORMAT_VERSION, GrayboxFileError, from_json, load, read_header, save, to_json
 from . import datasets, plots, reference
-from .datasets import load_buck, load_pumping, load_record_csv, load_static_csv
+from .datasets import load_buck, load_pumping, load_pumping_miso, load_record_csv, load_static_csv
 from . import experiments
 from .experiments import GrayboxSelection, load_results, select_graybox
 
@@ -58,7 +59,7 @@ __all__ = [
     "evaluate", "evaluate_thetas", "j1", "js", "jsf", "mse", "rrse", "fit_percent",
     "frols", "Selection", "CandidateWarning", "information_criterion", "semp", "SEMPResult",
     "els", "ELSResult", "ELSConvergenceWarning", "noise_terms",
-    "StaticCurve",
+    "StaticCurve", "StaticSurface",
     "CurveEquality", "PassesThrough", "StaticBand", "GainBounds", "ClusterBounds", "UserConstraint",
     "InfeasibleError",
     "cls", "pe_pareto", "pe_thetas", "static_matrices", "qr_static_error", "PE_LAMBDAS",
@@ -72,7 +73,7 @@ __all__ = [
     "bootstrap_decision", "DecisionBootstrap", "BootstrapJob", "block_resample",
     "save", "load", "to_json", "from_json", "read_header", "GrayboxFileError", "FORMAT_VERSION",
     "datasets", "plots", "reference", "experiments",
-    "load_pumping", "load_buck", "load_record_csv", "load_static_csv", "load_results", "select_graybox", "GrayboxSelection",
+    "load_pumping", "load_pumping_miso", "load_buck", "load_record_csv", "load_static_csv", "load_results", "select_graybox", "GrayboxSelection",
     "__version__",
 ]
 # several inputs (issue 15): the static surface

@@ -14,6 +14,13 @@ range of the dynamic data), yields
 
 Constraints combine with ``&`` (``band & gain & ClusterBounds(...)``) into :class:`AllOf`.
 
+Several inputs: the static function is a surface ȳ(ū_1, …, ū_m), the clusters are
+Ω_{y^p u1^a1 ⋯ um^am} (:func:`static_cluster_map`, the core's surface cluster map, in the order of
+the data's inputs), static points have ū of shape (M, m), and every row below is built the same
+way with ū^m read as the monomial Π_i ū_i^a_i: eq. (22) matches a :class:`~graybox.StaticSurface`
+coefficient by coefficient, the band and the points are unchanged, and the gain bounds hold per
+input (the gain is a gradient).
+
 Why the static error is affine in θ (eq. (12)): at a steady state every term
 ``y^p(k-i) u^m(k-j)`` becomes ``ȳ^p ū^m``, so with the *measured* ȳ_i placed on the regressor
 side the right-hand side of the static equation is ``q_iᵀ R θ`` with
@@ -28,18 +35,21 @@ a reference curve (see :class:`GainBounds` for the approximation).
 from __future__ import annotations
 
 import inspect
+import re
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
-from typing import Callable, Iterable, Iterator, Mapping
+from typing import Callable, Iterable, Iterator, Mapping, Sequence
 
 import cvxpy as cp
 import numpy as np
 
 from ._curves import StaticCurve
 from ._records import StaticPoints
+from ._surfaces import StaticSurface
 from ._static import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
+from ._surface import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ._terms import Structure
 
 __all__ = [
@@ -56,6 +66,11 @@ __all__ = [
     "AllOf",
     "as_constraint_list",
     "static_rows",
+    "cluster_powers",
+    "n_static_inputs",
+    "static_inputs",
+    "sigma_y_index",
+    "static_cluster_map",
 ]
 
 
@@ -66,36 +81,111 @@ class InfeasibleError(ValueError):
 # --------------------------------------------------------------------------------------------
 # static rows (eq. (12)) and their derivatives
 # --------------------------------------------------------------------------------------------
-def static_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray, wrt: str | None = None) -> np.ndarray:
+def cluster_powers(key: tuple) -> tuple[int, tuple[int, ...]]:
+    """(p, (m_1, …, m_m)) of a cluster key: the output power and one input power per input.
+
+    SISO keys are (p, m); several-input keys are (p, m_1, …, m_m) or (p, (m_1, …, m_m)).
+    """
+    p, rest = int(key[0]), tuple(key[1:])
+    if len(rest) == 1 and isinstance(rest[0], tuple):
+        rest = rest[0]
+    return p, tuple(int(v) for v in rest)
+
+
+def n_static_inputs(cm: ClusterMap | SurfaceClusterMap) -> int:
+    """Number of inputs the clusters of ``cm`` speak of (1 for a SISO structure)."""
+    if isinstance(cm, SurfaceClusterMap):
+        return len(cm.inputs)
+    return max((len(cluster_powers(k)[1]) for k in cm.keys), default=1)
+
+
+def static_cluster_map(structure: Structure, inputs: tuple[str, ...] | None = None) -> ClusterMap | SurfaceClusterMap:
+    """The clusters of ``structure``: per input power for one input, per input powers for several.
+
+    ``inputs`` are the data's input names (the order of ū's columns); a structure that uses fewer
+    inputs than the data still gets one power per data input.
+    """
+    if len(structure.inputs) > 1 or (inputs is not None and len(inputs) > 1):
+        return surface_cluster_map(structure, inputs=None if inputs is None else tuple(inputs))
+    return cluster_map(structure)
+
+
+def sigma_y_index(cm: ClusterMap) -> int | None:
+    """Row of R of the cluster Σ_y (output power 1, no input), or None when the structure has none."""
+    for k, key in enumerate(cm.keys):
+        p, e = cluster_powers(key)
+        if p == 1 and not any(e):
+            return k
+    return None
+
+
+def _has_sigma_y(cm: ClusterMap) -> bool:
+    return sigma_y_index(cm) is not None
+
+
+def static_inputs(ubar: object, m: int, what: str = "static points") -> np.ndarray:
+    """ū as shape (M,) for one input, (M, m) for several; a clear error when the count differs."""
+    ub = np.asarray(ubar, float)
+    if m == 1:
+        if ub.ndim == 2 and ub.shape[1] == 1:
+            ub = ub[:, 0]
+        if ub.ndim != 1:
+            raise ValueError(f"{what}: the structure has one input but ū has shape {ub.shape} "
+                             f"({ub.shape[-1]} inputs per point)")
+        return ub
+    if ub.ndim != 2 or ub.shape[1] != m:
+        got = 1 if ub.ndim == 1 else ub.shape[-1]
+        raise ValueError(f"{what}: the structure has {m} inputs but ū has shape {ub.shape} ({got} input(s) per "
+                         f"point); give ū of shape (M, {m}), one column per input in the structure's order")
+    return ub
+
+
+def static_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray, wrt: str | None = None, *,
+                input: int | None = None) -> np.ndarray:
     """Rows of Q in eq. (12) (or their derivatives) for the clusters of ``cm``.
 
     Parameters
     ----------
     cm : ClusterMap
-        Cluster keys (p, m): output power p, input power m.
-    ubar, ybar : ndarray, shape (M,)
-        Input and output levels (engineering units); ȳ is the *measured* (or reference) level.
+        Cluster keys: output power p and input power(s) (m, or m_1 … m_m for several inputs).
+    ubar : ndarray, shape (M,) or (M, m)
+        Input levels (engineering units), one column per input for several inputs.
+    ybar : ndarray, shape (M,)
+        Output levels; ȳ is the *measured* (or reference) level.
     wrt : {None, "y", "u"}
-        None: ``Q[i, c] = ȳ_i^p ū_i^m`` (so the static prediction is ``Q R θ``);
-        ``"y"``: ``∂/∂ȳ = p ȳ^(p-1) ū^m``; ``"u"``: ``∂/∂ū = m ȳ^p ū^(m-1)``.
+        None: ``Q[i, c] = ȳ_i^p Π_j ū_ij^(m_j)`` (so the static prediction is ``Q R θ``);
+        ``"y"``: ``∂/∂ȳ = p ȳ^(p-1) Π_j ū_j^(m_j)``; ``"u"``: ``∂/∂ū_input``.
+    input : int, optional
+        With ``wrt="u"``: which input (0-based); required when there are several.
 
     Returns
     -------
     ndarray, shape (M, n_clusters)
     """
-    ub = np.asarray(ubar, float)[:, None]
-    yb = np.asarray(ybar, float)[:, None]
-    p = np.array([k[0] for k in cm.keys], float)[None, :]
-    m = np.array([k[1] for k in cm.keys], float)[None, :]
-    # np.power(0., 0.) == 1, which is what a missing factor means; negative exponents only
-    # appear multiplied by a zero power, so mask them instead of evaluating 0**-1.
-    if wrt is None:
-        return yb**p * ub**m
-    if wrt == "y":
-        return np.where(p > 0, p * yb ** np.maximum(p - 1, 0) * ub**m, 0.0)
-    if wrt == "u":
+    m_in = n_static_inputs(cm)
+    if wrt not in (None, "y", "u"):
+        raise ValueError(f"wrt must be None, 'y' or 'u', got {wrt!r}")
+    if m_in == 1:
+        if input not in (None, 0):
+            raise ValueError(f"input must be 0 for a structure with one input, got {input!r}")
+        ub = static_inputs(ubar, 1)[:, None]
+        yb = np.asarray(ybar, float)[:, None]
+        p = np.array([cluster_powers(k)[0] for k in cm.keys], float)[None, :]
+        m = np.array([cluster_powers(k)[1][0] for k in cm.keys], float)[None, :]
+        # np.power(0., 0.) == 1, which is what a missing factor means; negative exponents only
+        # appear multiplied by a zero power, so mask them instead of evaluating 0**-1.
+        if wrt is None:
+            return yb**p * ub**m
+        if wrt == "y":
+            return np.where(p > 0, p * yb ** np.maximum(p - 1, 0) * ub**m, 0.0)
         return np.where(m > 0, m * yb**p * ub ** np.maximum(m - 1, 0), 0.0)
-    raise ValueError(f"wrt must be None, 'y' or 'u', got {wrt!r}")
+    U = static_inputs(ubar, m_in)
+    if wrt == "u" and (input is None or not (0 <= int(input) < m_in)):
+        raise ValueError(f"wrt='u' needs input = 0 … {m_in - 1} (which input) for a structure with {m_in} inputs, "
+                         f"got {input!r}")
+    if not isinstance(cm, SurfaceClusterMap):
+        raise ValueError("several inputs need the structure's surface cluster map (static_cluster_map)")
+    return surface_static_rows(cm, U, ybar, cm.inputs[int(input)] if wrt == "u" else wrt)
 
 
 # --------------------------------------------------------------------------------------------
@@ -111,22 +201,25 @@ class StaticContext:
         Process terms, in parameter order.
     points : StaticPoints or None
         The problem's static points (measured steady states), if any.
-    curve : StaticCurve or None
-        The problem's static curve, if any.
+    curve : StaticCurve, StaticSurface or None
+        The problem's static curve (or surface, for several inputs), if any.
     sigma_y : float or None
         Σ*_y of the reference model (eq. (22)); used by :class:`CurveEquality` when it is not
         given its own value.
+    inputs : tuple of str or None
+        The data's input names, the order of ū's columns (None: the structure's own inputs).
     """
 
     structure: Structure
     points: StaticPoints | None = None
-    curve: StaticCurve | None = None
+    curve: StaticCurve | StaticSurface | None = None
     sigma_y: float | None = None
+    inputs: tuple[str, ...] | None = None
 
     @cached_property
-    def cluster_map(self) -> ClusterMap:
-        """Clusters and the 0/1 map R of the structure."""
-        return cluster_map(self.structure)
+    def cluster_map(self) -> ClusterMap | SurfaceClusterMap:
+        """Clusters and the 0/1 map R of the structure (per input powers for several inputs)."""
+        return static_cluster_map(self.structure, self.inputs)
 
     @property
     def n_terms(self) -> int:
@@ -331,7 +424,7 @@ class AllOf(StaticConstraint):
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False, repr=False)
 class CurveEquality(StaticConstraint):
-    """Eq. (22): the model's rational static function equals the polynomial curve H(ū).
+    """Eq. (22): the model's rational static function equals the polynomial curve H(ū) (or surface).
 
     With ȳ = N(ū)/D(ū) (eq. (6)) and H(ū) = Σ_m c_m ū^m, the identity N ≡ D·H is met by
     making the denominator constant and matching the numerator:
@@ -343,10 +436,16 @@ class CurveEquality(StaticConstraint):
     Σ*_y comes from a reference model (the paper: the ELS estimate; graybox's estimators pass
     the LS estimate unless told otherwise) or is given here.
 
+    Several inputs: with a :class:`~graybox.StaticSurface` H(ū) = Σ_e c_e ū_1^e_1 ⋯ ū_m^e_m the same
+    identity gives ``Σ_{y u^e} = 0`` for every e ≠ 0, ``Σ_y = Σ*_y`` and
+    ``Σ_{u^e} = (1 − Σ*_y) c_e`` for every numerator cluster (c_e = 0 for monomials the surface
+    does not have); every monomial of the surface needs its cluster.
+
     Parameters
     ----------
-    curve : StaticCurve
-        Polynomial static curve (ascending coefficients), e.g. eq. (1).
+    curve : StaticCurve or StaticSurface
+        Polynomial static curve (ascending coefficients), e.g. eq. (1); or, for a structure with
+        several inputs, a polynomial static surface whose inputs are the data's, in their order.
     sigma_y : float, optional
         Σ*_y; default: the problem's (``StaticContext.sigma_y``).
 
@@ -358,12 +457,12 @@ class CurveEquality(StaticConstraint):
         stable equilibrium).
     """
 
-    curve: StaticCurve
+    curve: StaticCurve | StaticSurface
     sigma_y: float | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.curve, StaticCurve):
-            raise ValueError(f"CurveEquality needs a StaticCurve, got {type(self.curve).__name__}")
+        if not isinstance(self.curve, (StaticCurve, StaticSurface)):
+            raise ValueError(f"CurveEquality needs a StaticCurve or a StaticSurface, got {type(self.curve).__name__}")
         if self.sigma_y is not None and not np.isfinite(self.sigma_y):
             raise ValueError(f"sigma_y must be finite, got {self.sigma_y!r}")
 
@@ -374,7 +473,7 @@ class CurveEquality(StaticConstraint):
     def resolved_sigma_y(self, ctx: StaticContext) -> float:
         """Σ*_y used: this constraint's, else the context's; 0 when the structure has no Σy."""
         cm = ctx.cluster_map
-        if (1, 0) not in cm.keys:
+        if not _has_sigma_y(cm):
             return 0.0  # no linear-in-y cluster: the denominator is 1 − Σ_{yu^m} ū^m → 1
         s = self.sigma_y if self.sigma_y is not None else ctx.sigma_y
         if s is None:
@@ -394,12 +493,17 @@ class CurveEquality(StaticConstraint):
         if denominator_vanishes(np.array(1.0 - sy), np.array(1.0 + abs(sy))):
             raise ValueError(f"Σ*_y = {sy:.12g}: the denominator 1 − Σ*_y of eq. (22) vanishes, "
                              "so no static function exists; use another reference model")
-        if sy > 1.0 and (1, 0) in cm.keys:
+        if sy > 1.0 and _has_sigma_y(cm):
             # with Σ_yu^m = 0 the linearised recursion's coefficients sum to Σ*_y at every ū, and
             # a stable equilibrium needs that sum below 1: every model meeting (22) would be unstable
             raise ValueError(f"Σ*_y = {sy:.6g} > 1: every model satisfying eq. (22) would have no stable "
                              "equilibrium (its y coefficients sum to Σ*_y); use a reference model with Σy < 1 "
                              "(e.g. reference='els') or give sigma_y < 1")
+        if isinstance(self.curve, StaticSurface):
+            return self._surface_rows(ctx, sy)
+        if n_static_inputs(cm) != 1:
+            raise ValueError(f"{self.curve.name} is a curve in one input but the structure has "
+                             f"{n_static_inputs(cm)} inputs: give a StaticSurface (e.g. StaticSurface.fit(points))")
         c = self.curve.coefficients
         numer = {m for (p, m) in cm.keys if p == 0}
         missing = [m for m, cm_ in enumerate(c) if cm_ != 0.0 and m not in numer]
@@ -420,6 +524,35 @@ class CurveEquality(StaticConstraint):
             b.append(target)
         return AffineRows.make(ctx.n_terms, A, b)
 
+    def _surface_rows(self, ctx: StaticContext, sy: float) -> AffineRows:
+        """Eq. (22) on a surface: Σ_{y u^e} = 0 (e ≠ 0), Σ_y = Σ*_y, Σ_{u^e} = (1 − Σ*_y) c_e."""
+        cm = ctx.cluster_map
+        surf = self.curve
+        m = n_static_inputs(cm)
+        if surf.n_inputs != m:
+            raise ValueError(f"{surf.name} is a surface in {surf.n_inputs} input(s) but the structure has {m}: "
+                             "they must speak of the same inputs, in the same order")
+        powers = [cluster_powers(k) for k in cm.keys]
+        numer = {e for p, e in powers if p == 0}
+        missing = [e for e, c in zip(surf.exponents, surf.coefficients) if c != 0.0 and e not in numer]
+        if missing:
+            raise ValueError(
+                f"{surf.name} has monomials with exponents {missing} (one power per input) that no cluster of the "
+                "structure carries (no process term with that input powers and no y): its static function cannot "
+                "equal the surface. Fit the surface on the structure's numerator monomials (CLS with how='curve')"
+            )
+        A, b = [], []
+        for k, (p, e) in enumerate(powers):
+            if p == 1 and any(e):
+                target = 0.0
+            elif p == 1:
+                target = sy
+            else:
+                target = (1.0 - sy) * surf.coefficient(e)
+            A.append(cm.R[k])
+            b.append(target)
+        return AffineRows.make(ctx.n_terms, A, b)
+
 
 # --------------------------------------------------------------------------------------------
 # the static function passes through given points
@@ -430,12 +563,22 @@ def _denominator_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray) -> tup
     return np.ones(len(ubar)), d
 
 
+def _vanishing_denominator(ctx: StaticContext, theta: np.ndarray, ub: np.ndarray) -> np.ndarray:
+    """Where the rational static function's denominator vanishes, shape (M,) (several inputs too)."""
+    cm = ctx.cluster_map
+    if n_static_inputs(cm) == 1 and not isinstance(cm, SurfaceClusterMap):
+        return vanishing_denominator(ctx.structure, theta, ub)
+    # D(ū) = 1 − Σ_c Σ_c p ū^e (p ∈ {0, 1}): the y-derivative rows at any ȳ
+    terms = static_rows(cm, ub, np.ones(ub.shape[0]), wrt="y") * (cm.R @ np.asarray(theta, float))[None, :]
+    return denominator_vanishes(1.0 - terms.sum(axis=1), 1.0 + np.abs(terms).sum(axis=1))
+
+
 def _check_static_exists(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray, what: str, hint: str = "") -> None:
     """Refuse an estimate whose rational static function has a zero denominator at a static ū."""
     if not is_rational(ctx.structure):
         return
     ub = np.asarray(ubar, float)
-    bad = vanishing_denominator(ctx.structure, theta, ub)
+    bad = _vanishing_denominator(ctx, theta, ub)
     if bad.any():
         raise ValueError(
             f"{what}: the estimated model's static function does not exist at ū = {ub[bad].tolist()} "
@@ -569,6 +712,14 @@ class GainBounds(StaticConstraint):
     are affine in θ, and with ``D >= min_denominator > 0`` the bounds become the affine rows
     ``G − lower·D >= 0`` and ``G − upper·D <= 0``.
 
+    Several inputs: the gain is the gradient, ``∂ȳ/∂ū_j = G_j/D`` with
+    ``G_j = Σ_c Σ_c m_j ȳ^p Π_k ū_k^(m_k − δ_jk)``, and the bounds hold per input (``lower`` and
+    ``upper`` may be one number for every input or one entry per input, None for no bound). The
+    bounds are imposed on the grid of ``n`` levels per input over the box ``ubar_range`` (one
+    (low, high) per input) with ȳ from a reference surface (a :class:`~graybox.StaticSurface` or
+    any function of ū of shape (K, m)); without a reference surface they are imposed at the
+    static points themselves, with their measured ȳ.
+
     Approximation: the gain is that of the model's static equation *along the reference curve*;
     it equals the model's own gain wherever the model's static curve passes through the
     reference (e.g. with :class:`CurveEquality` or :class:`PassesThrough`), and exactly
@@ -577,55 +728,100 @@ class GainBounds(StaticConstraint):
 
     Parameters
     ----------
-    lower, upper : float, optional
-        Gain bounds, output units per input unit (at least one).
-    ubar_range : (float, float), optional
-        ū interval; default: the reference curve's domain, else the static points' range.
+    lower, upper : float or sequence of (float or None), optional
+        Gain bounds, output units per input unit (at least one); per input for several inputs.
+    ubar_range : (float, float), or one (low, high) per input, optional
+        ū interval (box); default: the reference's domain, else the static points' range.
     n : int
-        Number of equally spaced ū in the interval where the bounds are imposed.
-    reference : StaticCurve or callable ū ↦ ȳ, optional
-        Default: the problem's static curve, else the problem's static points interpolated
-        linearly.
+        Number of equally spaced ū in the interval (per input) where the bounds are imposed.
+    reference : StaticCurve, StaticSurface or callable ū ↦ ȳ, optional
+        Default: the problem's static curve (or surface), else the problem's static points
+        (interpolated linearly for one input, used as they are for several).
     min_denominator : float
         D >= this (also a necessary condition for a stable equilibrium).
     """
 
-    lower: float | None = None
-    upper: float | None = None
-    ubar_range: tuple[float, float] | None = None
+    lower: float | Sequence[float | None] | None = None
+    upper: float | Sequence[float | None] | None = None
+    ubar_range: tuple | None = None
     n: int = 25
-    reference: StaticCurve | Callable[[np.ndarray], np.ndarray] | None = None
+    reference: StaticCurve | StaticSurface | Callable[[np.ndarray], np.ndarray] | None = None
     min_denominator: float = 1e-6
 
     def __post_init__(self) -> None:
-        if self.lower is None and self.upper is None:
+        lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
+        if all(v is None for v in lows) and all(v is None for v in highs):
             raise ValueError("GainBounds needs a lower or an upper bound")
-        for nm in ("lower", "upper"):
-            v = getattr(self, nm)
-            if v is not None and not np.isfinite(v):
-                raise ValueError(f"{nm} gain bound must be finite, got {v!r}")
-        if self.lower is not None and self.upper is not None and self.lower > self.upper:
-            raise ValueError(f"lower gain bound {self.lower} exceeds upper bound {self.upper}")
+        if len(lows) > 1 and len(highs) > 1 and len(lows) != len(highs):
+            raise ValueError(f"lower and upper give bounds for {len(lows)} and {len(highs)} inputs; give as many")
+        k = max(len(lows), len(highs))
+        for j in range(k):
+            lo = lows[j if len(lows) > 1 else 0]
+            hi = highs[j if len(highs) > 1 else 0]
+            if lo is not None and hi is not None and lo > hi:
+                which = "" if k == 1 else f" of input {j + 1}"
+                raise ValueError(f"lower gain bound {lo} exceeds upper bound {hi}{which}")
         if int(self.n) != self.n or self.n < 1:
             raise ValueError(f"n must be a positive integer, got {self.n!r}")
         if self.ubar_range is not None:
-            lo, hi = (float(v) for v in self.ubar_range)
-            if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
-                raise ValueError(f"ubar_range must be (low, high) with low <= high, got {self.ubar_range}")
-            object.__setattr__(self, "ubar_range", (lo, hi))
+            rng = self.ubar_range
+            if len(rng) == 2 and all(np.ndim(v) == 0 for v in rng):
+                lo, hi = (float(v) for v in rng)
+                if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+                    raise ValueError(f"ubar_range must be (low, high) with low <= high, got {self.ubar_range}")
+                object.__setattr__(self, "ubar_range", (lo, hi))
+            else:
+                box = []
+                for j, pair in enumerate(rng):
+                    try:
+                        lo, hi = (float(v) for v in pair)
+                    except (TypeError, ValueError):
+                        raise ValueError(f"ubar_range must be (low, high) or one (low, high) per input, got {rng!r}") from None
+                    if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+                        raise ValueError(f"ubar_range of input {j + 1} must be (low, high) with low <= high, got {pair}")
+                    box.append((lo, hi))
+                object.__setattr__(self, "ubar_range", tuple(box))
         if not (self.min_denominator > 0):
             raise ValueError("min_denominator must be positive")
 
     def describe(self) -> str:
-        lo = "-inf" if self.lower is None else f"{self.lower:g}"
-        hi = "inf" if self.upper is None else f"{self.upper:g}"
-        rng = "" if self.ubar_range is None else f" over ū in [{self.ubar_range[0]:g}, {self.ubar_range[1]:g}]"
-        return f"static gain in [{lo}, {hi}]{rng}"
+        def one(v):
+            return "none" if v is None else f"{v:g}"
+        lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
+        if len(lows) == 1 and len(highs) == 1:
+            lo = "-inf" if lows[0] is None else f"{lows[0]:g}"
+            hi = "inf" if highs[0] is None else f"{highs[0]:g}"
+            bounds = f"[{lo}, {hi}]"
+        else:
+            bounds = f"lower ({', '.join(map(one, lows))}), upper ({', '.join(map(one, highs))}) per input"
+        rng = self.ubar_range
+        if rng is None:
+            where = ""
+        elif np.ndim(rng[0]) == 0:
+            where = f" over ū in [{rng[0]:g}, {rng[1]:g}]"
+        else:
+            where = " over ū in " + " × ".join(f"[{lo:g}, {hi:g}]" for lo, hi in rng)
+        return f"static gain in {bounds}{where}"
+
+    def _bounds(self, m: int) -> list[tuple[float | None, float | None]]:
+        """(lower, upper) per input, checked against the structure's input count ``m``."""
+        lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
+        for nm, v in (("lower", lows), ("upper", highs)):
+            if len(v) > 1 and len(v) != m:
+                raise ValueError(f"{self.describe()}: {nm} has {len(v)} entries but the structure has {m} input(s)")
+        return [(lows[j if len(lows) > 1 else 0], highs[j if len(highs) > 1 else 0]) for j in range(m)]
 
     def grid(self, ctx: StaticContext) -> tuple[np.ndarray, np.ndarray]:
-        """The ū grid and the reference ȳ on it, shapes (n,), (n,)."""
+        """The ū grid and the reference ȳ on it, shapes (K,) or (K, m), and (K,)."""
+        m = n_static_inputs(ctx.cluster_map)
+        if m > 1:
+            return self._grid_several(ctx, m)
         ref = self.reference if self.reference is not None else ctx.curve
         rng = self.ubar_range
+        if rng is not None and np.ndim(rng[0]) != 0:
+            if len(rng) != 1:
+                raise ValueError(f"{self.describe()}: ubar_range has {len(rng)} ranges but the structure has one input")
+            rng = rng[0]
         if rng is None:
             if isinstance(ref, StaticCurve) and ref.domain is not None:
                 rng = ref.domain
@@ -649,22 +845,86 @@ class GainBounds(StaticConstraint):
                 raise ValueError(f"{self.describe()}: the reference must map ū of shape {ub.shape} to finite ȳ")
         return ub, yb
 
+    def _grid_several(self, ctx: StaticContext, m: int) -> tuple[np.ndarray, np.ndarray]:
+        ref = self.reference if self.reference is not None else ctx.curve
+        if isinstance(ref, StaticCurve):
+            raise ValueError(f"{self.describe()}: the reference {ref.name} is a curve in one input but the structure "
+                             f"has {m}; give a StaticSurface or a function of ū of shape (K, {m})")
+        rng = self.ubar_range
+        if rng is not None and (np.ndim(rng[0]) == 0 or len(rng) != m):
+            raise ValueError(f"{self.describe()}: ubar_range must give one (low, high) per input ({m})")
+        if ref is None:
+            if ctx.points is None:
+                raise ValueError(f"{self.describe()} needs a reference ȳ(ū): a static surface or static points")
+            U = static_inputs(ctx.points.ubar, m, self.describe())
+            yb = np.asarray(ctx.points.ybar, float)
+            if rng is not None:
+                inside = np.all([(U[:, j] >= lo) & (U[:, j] <= hi) for j, (lo, hi) in enumerate(rng)], axis=0)
+                if not inside.any():
+                    raise ValueError(f"{self.describe()}: no static point lies in ubar_range")
+                U, yb = U[inside], yb[inside]
+            return U, yb
+        if rng is None:
+            dom = getattr(ref, "domain", None)
+            if dom is not None:
+                rng = dom
+            elif ctx.points is not None:
+                U = static_inputs(ctx.points.ubar, m, self.describe())
+                rng = tuple((float(U[:, j].min()), float(U[:, j].max())) for j in range(m))
+            else:
+                raise ValueError(f"{self.describe()}: give ubar_range (no surface domain or static points to take it from)")
+        axes = [np.linspace(lo, hi, int(self.n)) for lo, hi in rng]
+        U = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+        yb = np.asarray(ref(U), float).reshape(-1)
+        if yb.shape != (U.shape[0],) or not np.all(np.isfinite(yb)):
+            raise ValueError(f"{self.describe()}: the reference must map ū of shape {U.shape} to finite ȳ of shape "
+                             f"({U.shape[0]},)")
+        return U, yb
+
     def affine(self, ctx: StaticContext) -> AffineRows:
         cm = ctx.cluster_map
+        m = n_static_inputs(cm)
+        bounds = self._bounds(m)
         ub, yb = self.grid(ctx)
-        G = static_rows(cm, ub, yb, wrt="u") @ cm.R
         one, dR = _denominator_rows(cm, ub, yb)
         rows, rhs = [], []
         # D = 1 − dR θ >= min_denominator   ⇔   dR θ <= 1 − δ
         rows.append(dR)
         rhs.append(one - self.min_denominator)
-        if self.lower is not None:  # G − l D >= 0  ⇔  −G − l dR θ <= −l
-            rows.append(-G - self.lower * dR)
-            rhs.append(-self.lower * one)
-        if self.upper is not None:  # G − u D <= 0  ⇔  G + u dR θ <= u
-            rows.append(G + self.upper * dR)
-            rhs.append(self.upper * one)
+        for j, (lower, upper) in enumerate(bounds):
+            if lower is None and upper is None:
+                continue
+            G = static_rows(cm, ub, yb, wrt="u", input=j if m > 1 else None) @ cm.R
+            if lower is not None:  # G − l D >= 0  ⇔  −G − l dR θ <= −l
+                rows.append(-G - lower * dR)
+                rhs.append(-lower * one)
+            if upper is not None:  # G − u D <= 0  ⇔  G + u dR θ <= u
+                rows.append(G + upper * dR)
+                rhs.append(upper * one)
         return AffineRows.make(ctx.n_terms, A_ub=np.vstack(rows), b_ub=np.concatenate(rhs))
+
+
+def _per_input(v: object, name: str) -> list[float | None]:
+    """A gain bound as a list: [v] for one number (or None), one entry per input for a sequence."""
+    if v is None or np.ndim(v) == 0:
+        vals = [v]
+    else:
+        vals = list(v)
+        if not vals:
+            raise ValueError(f"{name} gain bounds: give a number or one entry per input, got an empty sequence")
+    out: list[float | None] = []
+    for x in vals:
+        if x is None:
+            out.append(None)
+            continue
+        try:
+            f = float(x)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} gain bound must be a number or None, got {x!r}") from None
+        if not np.isfinite(f):
+            raise ValueError(f"{name} gain bound must be finite, got {x!r}")
+        out.append(f)
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -705,7 +965,7 @@ class ClusterBounds(StaticConstraint):
     def describe(self) -> str:
         parts = []
         for k, (lo, hi) in self.bounds.items():
-            name = cluster_name(*k) if isinstance(k, tuple) else k
+            name = (cluster_name(*k) if len(k) == 2 else f"cluster {k}") if isinstance(k, tuple) else k
             parts.append(f"{'' if lo is None else f'{lo:g} <= '}{name}{'' if hi is None else f' <= {hi:g}'}")
         return "cluster bounds " + ", ".join(parts)
 
@@ -713,7 +973,7 @@ class ClusterBounds(StaticConstraint):
         cm = ctx.cluster_map
         Ae, be, Au, bu = [], [], [], []
         for k, (lo, hi) in self.bounds.items():
-            row = cm.R[cm.index(k)]
+            row = cm.R[cm.index(_surface_name(k) if isinstance(cm, SurfaceClusterMap) else k)]
             if lo is not None and hi is not None and lo == hi:
                 Ae.append(row)
                 be.append(lo)
@@ -726,6 +986,20 @@ class ClusterBounds(StaticConstraint):
                 bu.append(-lo)
         n = ctx.n_terms
         return AffineRows.make(n, Ae or None, be or None, Au or None, bu or None)
+
+
+_SUPERSCRIPT = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _surface_name(key: object) -> object:
+    """An ASCII cluster name of several inputs (``"Syu1"``, ``"Su1^2u2"``) in the paper's form (``"Σyu1²u2"``).
+
+    Input names may end in digits (u1), so only ``^k`` becomes a superscript; keys and names
+    already in Σ form are returned as they are.
+    """
+    if not isinstance(key, str) or not key.startswith("S"):
+        return key
+    return "Σ" + re.sub(r"\^(\d+)", lambda m: m.group(1).translate(_SUPERSCRIPT), key[1:])
 
 
 # --------------------------------------------------------------------------------------------

@@ -46,17 +46,22 @@ from ._constraints import (
     StaticConstraint,
     StaticContext,
     as_constraint_list,
+    cluster_powers,
+    n_static_inputs,
+    sigma_y_index,
+    static_cluster_map,
+    static_inputs,
     static_rows,
 )
 from ._curves import StaticCurve
 from ._els import els
+from ._surfaces import StaticSurface
 from ._ls import column_scales
 from ._model import Model
 from ._pareto import ParetoSet
-from ._records import Dataset, Record, StaticPoints, warn_static_range
+from ._records import Dataset, Record, StaticPoints, check_same_inputs, warn_static_range
 from ._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ._regressors import stacked_regressors
-from ._static import cluster_map
 from ._terms import Structure
 from ._validation import check_choice, check_lambdas
 
@@ -110,7 +115,7 @@ def static_matrices(structure: Structure, points: StaticPoints) -> tuple[np.ndar
         The 0/1 map from θ to the cluster coefficients, Σ = R θ.
     """
     st = _process_structure(structure)
-    cm = cluster_map(st)
+    cm = static_cluster_map(st, points.input_names)
     return static_rows(cm, points.ubar, points.ybar), np.array(cm.R)
 
 
@@ -276,8 +281,9 @@ def _ls_theta(d: _Data) -> np.ndarray:
 
 def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str | None) -> float | None:
     """Σ*_y of eq. (22) from ``reference``: "ls" (default), "els", a Model, a θ of this structure, a number."""
-    cm = cluster_map(d.structure)
-    if (1, 0) not in cm.keys:
+    cm = static_cluster_map(d.structure, records[0].input_names if records else None)
+    iy = sigma_y_index(cm)
+    if iy is None:
         return None
     if reference is None or (isinstance(reference, str) and reference == "ls"):
         th = _ls_theta(d)
@@ -296,7 +302,7 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
         th = np.asarray(reference, float)
         if th.shape != (len(d.structure),):
             raise ValueError(f"reference θ must have shape ({len(d.structure)},), got {th.shape}")
-    return float((cm.R @ th)[cm.index((1, 0))])
+    return float((cm.R @ th)[iy])
 
 
 # --------------------------------------------------------------------------------------------
@@ -334,7 +340,7 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, T: np
     names = tuple(c.describe() for c in cons)
     E, f, G, h = np.vstack(E), np.concatenate(f), np.vstack(G), np.concatenate(h)
     G, h = _normalise_ub(G, h, names)
-    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(cluster_map(ctx.structure).keys))
+    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys))
     return _Rows(V, g, G, h, tuple(user), names)
 
 
@@ -543,7 +549,7 @@ def _closed_form(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, rows: _
 def cls(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticCurve | StaticPoints | None = None,
+    static: StaticCurve | StaticSurface | StaticPoints | None = None,
     *,
     how: str = "auto",
     reference: Model | np.ndarray | float | str = "ls",
@@ -562,11 +568,12 @@ def cls(
         Dynamic identification data (a Dataset's ``ident`` record). A
         :class:`~graybox.DaskRecord` is reduced to the triangular factor of [Ψ, y] block by
         block on the active Dask scheduler (never held whole).
-    static : StaticCurve or StaticPoints, optional
+    static : StaticCurve, StaticSurface or StaticPoints, optional
         What the static function must match:
 
         - a polynomial curve → eq. (22) (:class:`~graybox.CurveEquality`), for a
-          structure whose static function is rational;
+          structure whose static function is rational; with several inputs a polynomial
+          surface (:class:`~graybox.StaticSurface`) → eq. (22) on the surface;
         - points → "the static function passes through these points"
           (:class:`~graybox.PassesThrough`), any structure;
         - None → only ``constraints`` (those that need static points, e.g. a band, take a
@@ -574,7 +581,9 @@ def cls(
     how : {"auto", "curve", "points"}
         ``"curve"`` with StaticPoints fits the polynomial the structure's numerator can carry
         (degree = highest ū power of the Σ_{u^m} clusters) and imposes eq. (22); it needs at
-        least degree + 1 points.
+        least degree + 1 points. With several inputs it fits a surface on exactly the monomials
+        of the structure's Σ_{u^e} clusters (:meth:`StaticSurface.fit`), so it needs at least as
+        many points as there are such clusters.
     reference : {"ls", "els"}, Model, ndarray or float
         Where Σ*_y of eq. (22) comes from: ``"ls"`` (default) the unconstrained least-squares
         estimate on ``data``; ``"els"`` extended least squares on ``data`` (the paper's choice:
@@ -621,17 +630,21 @@ def cls(
 
 
 def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: str, reference,
-               constraints) -> tuple[list[StaticConstraint], StaticContext, StaticCurve | None]:
+               constraints) -> tuple[list[StaticConstraint], StaticContext, StaticCurve | StaticSurface | None]:
     """The constraints and context of a CLS problem (shared by :func:`cls` and the covariance of its estimate)."""
-    cm = cluster_map(st)
+    inputs = recs[0].input_names
+    cm = static_cluster_map(st, inputs)
     static_cons: list[StaticConstraint] = []
     points: StaticPoints | None = None
-    curve: StaticCurve | None = None
+    curve: StaticCurve | StaticSurface | None = None
     check_choice(how, "how", ("auto", "curve", "points"))
-    if isinstance(static, StaticCurve):
+    if isinstance(static, (StaticCurve, StaticSurface)):
         if how == "points":
             raise ValueError("how='points' needs StaticPoints; sample the curve with curve.points(ubar)")
         curve = static
+    elif isinstance(static, StaticPoints) and how == "curve" and n_static_inputs(cm) > 1:
+        points = static
+        curve = numerator_surface(cm, points)
     elif isinstance(static, StaticPoints):
         points = static
         if how == "curve":
@@ -643,21 +656,53 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
                 )
             curve = StaticCurve.fit(points, degree=degree)
     elif static is not None:
-        raise ValueError(f"static must be a StaticCurve, StaticPoints or None, got {type(static).__name__}")
+        raise ValueError(f"static must be a StaticCurve, StaticSurface, StaticPoints or None, got {type(static).__name__}")
     if curve is not None:
         static_cons.append(CurveEquality(curve))
     elif points is not None:
         static_cons.append(PassesThrough(points))
     cons = static_cons + as_constraint_list(constraints)
     ctx_points = points if points is not None else (data.static if isinstance(data, Dataset) else None)
-    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference))
+    for c in cons:  # every set of static points speaks of the records' inputs
+        _check_point_inputs(recs, getattr(c, "points", None))
+    _check_point_inputs(recs, ctx_points)
+    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference), inputs)
     return cons, ctx, curve
+
+
+def _check_point_inputs(recs: list[Record], points: StaticPoints | None) -> None:
+    """Static points must speak of the records' inputs: same count; same names when there are several."""
+    if points is None or not recs:
+        return
+    r = recs[0]
+    if points.n_inputs != r.n_inputs or (r.n_inputs > 1 and points.input_names != r.input_names):
+        check_same_inputs(r, points)
+
+
+def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
+    """The surface on the monomials of the Σ_{u^e} clusters (what the numerator can carry), fitted to ``points``.
+
+    The surface eq. (22) can impose on a several-input structure (:class:`~graybox.CurveEquality`);
+    ``cm`` is the structure's :class:`ClusterMap`.
+    """
+    m = n_static_inputs(cm)
+    static_inputs(points.ubar, m, points.name)
+    exps = sorted({e for p, e in map(cluster_powers, cm.keys) if p == 0}, key=lambda e: (sum(e), tuple(-v for v in e)))
+    if not exps:
+        raise ValueError("how='curve': the structure has no cluster without y (no Σ_u… or constant term), so its "
+                         "static function is 0 wherever it exists; give points (how='points') or more terms")
+    if len(points) < len(exps):
+        raise ValueError(
+            f"fewer static points than the constraints need: eq. (22) for this structure matches a surface with "
+            f"{len(exps)} monomials, which needs at least {len(exps)} points; got {len(points)}"
+        )
+    return StaticSurface.fit(points, exponents=exps)
 
 
 # --------------------------------------------------------------------------------------------
 # PE bi-objective
 # --------------------------------------------------------------------------------------------
-def _static_points(static: StaticPoints | StaticCurve | None, ubar: np.ndarray | None, data: object) -> StaticPoints:
+def _static_points(static: StaticPoints | StaticCurve | StaticSurface | None, ubar: np.ndarray | None, data: object) -> StaticPoints:
     if static is None:
         if isinstance(data, Dataset) and data.static is not None:
             static = data.static
@@ -674,7 +719,15 @@ def _static_points(static: StaticPoints | StaticCurve | None, ubar: np.ndarray |
                 raise ValueError("a StaticCurve without a domain needs ubar: where to sample it")
             ubar = np.linspace(static.domain[0], static.domain[1], 10)
         return static.points(np.asarray(ubar, float))
-    raise ValueError(f"static must be StaticPoints or a StaticCurve, got {type(static).__name__}")
+    if isinstance(static, StaticSurface):
+        if ubar is None:
+            if static.domain is None:
+                raise ValueError("a StaticSurface without a domain needs ubar of shape (K, m): where to sample it")
+            axes = [np.linspace(lo, hi, 5) for lo, hi in static.domain]  # 5 levels per input
+            ubar = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+        return static.points(np.asarray(ubar, float))
+    raise ValueError(f"static must be StaticPoints or a StaticCurve (or a StaticSurface for several inputs), "
+                     f"got {type(static).__name__}")
 
 
 def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], reference) -> float | None:
@@ -684,13 +737,14 @@ def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], 
     return None
 
 
-def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: StaticCurve | None,
+def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: StaticCurve | StaticSurface | None,
                        recs: list[Record]) -> None:
     """One warning per estimate naming every static ū (points, constraints' points) outside the records."""
     ub = [ctx.points.ubar] if ctx.points is not None else []
     ub += [c.points.ubar for c in cons if getattr(c, "points", None) is not None]
     if curve is not None and curve.domain is not None:
-        ub.append(np.array(curve.domain))
+        # a surface's domain is one (low, high) per input: its two corners are the rows of the transpose
+        ub.append(np.array(curve.domain).T if isinstance(curve, StaticSurface) else np.array(curve.domain))
     if ub:
         warn_static_range(np.concatenate(ub), recs)
 
@@ -701,9 +755,11 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     recs = as_gram_records(data)
     d = _dynamic(st, recs)
     pts = _static_points(static, ubar, data)
-    curve = static if isinstance(static, StaticCurve) else None
+    curve = static if isinstance(static, (StaticCurve, StaticSurface)) else None
     cons = as_constraint_list(constraints)
-    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference))
+    for p in [pts] + [getattr(c, "points", None) for c in cons]:
+        _check_point_inputs(recs, p)
+    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), recs[0].input_names)
     _warn_static_range(cons, ctx, curve, recs)
     rows = _rows(cons, ctx, d.s)
     R2, c2, M = _static_part(d, pts)
@@ -713,7 +769,7 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
 def pe_thetas(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | StaticCurve | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     lambdas: np.ndarray | Sequence[float] | None = None,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
@@ -767,7 +823,7 @@ def pe_thetas(
 def pe_pareto(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | StaticCurve | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     lambdas: np.ndarray | Sequence[float] | None = None,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
@@ -789,8 +845,9 @@ def pe_pareto(
     data : Record, sequence of Record, or Dataset
         Dynamic identification data. (For a :class:`~graybox.DaskRecord` use
         :func:`pe_thetas`: the members' free-run J_S needs the record in memory.)
-    static : StaticPoints or StaticCurve, optional
-        Static information; a curve is sampled at ``ubar`` (default: 10 points over its domain).
+    static : StaticPoints, StaticCurve or StaticSurface, optional
+        Static information; a curve is sampled at ``ubar`` (default: 10 points over its domain),
+        a surface at ``ubar`` of shape (K, m) (default: 5 levels per input over its domain box).
         Default: the Dataset's static points. Points outside the records' input range are
         welcome (a :class:`StaticRangeWarning` names them once).
     lambdas : array_like, shape (K,), optional

@@ -31,6 +31,7 @@ from ._regressors import regressor_matrix
 from ._records import Dataset, Record, StaticPoints, static_point_inputs
 from ._simulation import DivergenceError
 from ._static import reached_equilibria
+from ._surface import reached_surface
 from ._terms import Structure
 
 __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
@@ -214,7 +215,12 @@ def evaluate_thetas(
             js_ = batch_sse(code, th, record_inputs(record, code.inputs), record.y, L, threads) / n_rows
         out["JS"] = np.where(np.isfinite(js_), js_, np.inf)
     if static is not None:
-        yb = reached_equilibria(structure, th, static.ubar, static.ybar).ybar
+        if static.n_inputs > 1 or len(structure.inputs) > 1:  # a static surface: ū's columns by name
+            names = record.input_names if record is not None else static.input_names
+            ub = static_point_inputs(static, names)
+            yb = reached_surface(structure, th, ub, static.ybar, inputs=names).ybar
+        else:
+            yb = reached_equilibria(structure, th, static.ubar, static.ybar).ybar
         with np.errstate(over="ignore", invalid="ignore"):
             jsf_ = np.mean((yb - static.ybar[None, :]) ** 2, axis=1)
         out["JSF"] = np.where(np.isfinite(jsf_), jsf_, np.inf)

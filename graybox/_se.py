@@ -51,9 +51,10 @@ from ._kernels import (batch_sse, encode, free_run_sensitivity, free_run_sensiti
 from ._ls import column_scales, scaled_lstsq
 from ._pareto import ParetoSet
 from ._progress import progress_bar
-from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
+from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_inputs, warn_static_range
 from ._regressors import stacked_regressors
 from ._static import reached_equilibria, static_theta_gradient
+from ._surface import reached_surface, surface_theta_gradient
 from ._terms import Structure
 from ._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
 
@@ -87,6 +88,11 @@ class SEProblem:
             structure = structure.process
         self.structure = structure
         self.record = self.records[0]
+        r0 = self.record
+        if static.n_inputs != r0.n_inputs or (r0.n_inputs > 1 and static.input_names != r0.input_names):
+            check_same_inputs(r0, static)
+        # several inputs: the static part lives on the surface ȳ(ū_1, …, ū_m), columns in the records' order
+        self.surface_inputs = r0.input_names if (r0.n_inputs > 1 or len(structure.inputs) > 1) else None
         self.static = static
         self.L = structure.max_lag
         self.code = c = encode(structure)
@@ -118,7 +124,16 @@ class SEProblem:
 
         :func:`graybox._static.reached_equilibria` with y0 = ȳ_i: the definition of J_SF.
         """
+        if self.surface_inputs is not None:
+            return reached_surface(self.structure, np.atleast_2d(thetas), self.static.ubar, self.static.ybar,
+                                   inputs=self.surface_inputs).ybar
         return reached_equilibria(self.structure, np.atleast_2d(thetas), self.static.ubar, self.static.ybar).ybar
+
+    def static_theta_gradient(self, theta: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+        """∂ȳ_i/∂θ at the static points' equilibria ``ybar`` (implicit differentiation), shape (M, n)."""
+        if self.surface_inputs is not None:
+            return surface_theta_gradient(self.structure, theta, self.static.ubar, ybar, inputs=self.surface_inputs)
+        return static_theta_gradient(self.structure, theta, self.static.ubar, ybar)
 
     def jsf(self, thetas: np.ndarray) -> np.ndarray:
         """J_SF of each row (the equilibrium reached from the measured ȳ; inf where none), shape (P,)."""
@@ -160,7 +175,7 @@ class SEProblem:
         if not jacobian:
             return np.concatenate(e), e_static, None, None
         with np.errstate(all="ignore"):
-            Js = static_theta_gradient(self.structure, th, self.static.ubar, yb)
+            Js = self.static_theta_gradient(th, yb)
         return np.concatenate(e), e_static, np.vstack(J), Js
 
     def ls_theta(self) -> np.ndarray:
@@ -541,7 +556,7 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
         sp = problem.static
         w2 = np.sqrt((1.0 - lam1) / len(sp))
         yb = problem.static_outputs(th)[0]
-        rows = np.column_stack([w2 * static_theta_gradient(problem.structure, th, sp.ubar, yb) / problem.scale,
+        rows = np.column_stack([w2 * problem.static_theta_gradient(th, yb) / problem.scale,
                                 w2 * (yb - sp.ybar)])
         if not np.all(np.isfinite(rows)):
             return np.full((n + 1, n + 1), np.nan)
@@ -636,9 +651,11 @@ def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
         return "free run diverges"
     yb = problem.static_outputs(theta[None])[0]
     bad = problem.static.ubar[~np.isfinite(yb)]
-    if bad.size:
-        return f"equilibrium unstable or undefined at ū = {', '.join(f'{u:g}' for u in bad[:3])}" + \
-            (f" (and {bad.size - 3} more)" if bad.size > 3 else "")
+    if bad.shape[0]:
+        def point(u):  # a point of a surface is a row (ū_1, …, ū_m)
+            return f"{u:g}" if np.ndim(u) == 0 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
+        return f"equilibrium unstable or undefined at ū = {', '.join(point(u) for u in bad[:3])}" + \
+            (f" (and {bad.shape[0] - 3} more)" if bad.shape[0] > 3 else "")
     return "cost not finite"
 
 

@@ -37,7 +37,7 @@ def test_all_names_exist():
 # Data may be positional (the structure, the records, the static information); every option is
 # keyword-only, so a call never depends on the order of options.
 _DATA_ARGS = {"curve", "static", "data", "record", "records", "u", "y0", "ubar", "structure", "thetas", "theta", "model",
-              "candidates", "points", "pareto", "path", "obj", "text", "terms"}
+              "candidates", "points", "pareto", "path", "obj", "text", "terms", "surface"}
 
 
 def _all_public_functions():

@@ -23,6 +23,7 @@ NAMES = [
     "03_simulation_error.ipynb",
     "04_buck_converter.ipynb",
     "05_constraint_variants.ipynb",
+    "06_miso.ipynb",
 ]
 
 
@@ -94,3 +95,12 @@ def test_buck_notebook_stops_gracefully_without_data(sandbox, monkeypatch, capsy
         run_notebook("04_buck_converter.ipynb")
     out = capsys.readouterr().out
     assert "not available" in out and "buck converter data not found (test)" in out
+
+
+def test_miso_notebook_runs(sandbox):
+    ns = run_notebook("06_miso.ipynb")
+    assert ns["QUICK"] is True
+    # the CLS model meets the fitted surface (eq. (22) on two inputs)
+    ub = ns["data"].static.ubar
+    assert abs(ns["cls"].static_curve(ub) - ns["surface"](ub)).max() < 1e-8
+    assert (ns["results"].status == "ok").sum() >= 6

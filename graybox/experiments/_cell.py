@@ -22,6 +22,8 @@ from threadpoolctl import ThreadpoolController
 
 import graybox as gb
 
+from .._constraints import static_cluster_map
+from .._convex import numerator_surface
 from ._spec import Cell, build_constraint, canonical_json
 
 __all__ = ["COLUMNS", "JSON_COLUMNS", "STATUSES", "run_cell", "failed_row"]
@@ -116,9 +118,12 @@ def make_structure(spec: Mapping[str, Any], data: gb.Dataset, data_hash: str) ->
     return gb.parse_structure(list(_STRUCTURES[k]))
 
 
-def _numerator_fit(st: gb.Structure, points: gb.StaticPoints) -> gb.StaticCurve:
+def _numerator_fit(st: gb.Structure, points: gb.StaticPoints) -> gb.StaticCurve | gb.StaticSurface:
     """The polynomial in ū with exactly the powers the structure's numerator carries (its Σ_{u^m}
-    clusters), least squares through the static points: the curve eq. (22) can impose."""
+    clusters), least squares through the static points: the curve eq. (22) can impose. With
+    several inputs: the surface on the monomials of the Σ_{u^e} clusters."""
+    if getattr(points, "n_inputs", 1) > 1:
+        return numerator_surface(static_cluster_map(st, points.input_names), points)
     powers = sorted(m for p, m in gb.cluster_map(st).keys if p == 0)
     if not powers:
         raise ValueError("eq. (22) needs numerator clusters (the constant or terms in u only); this structure has none")
@@ -151,7 +156,7 @@ def _constraints(specs, st: gb.Structure, data: gb.Dataset) -> list:
 
 def _lags(st: gb.Structure) -> tuple[int, int]:
     ny = max((lag for t in st for s, lag, _ in t.factors if s == "y"), default=0)
-    nu = max((lag for t in st for s, lag, _ in t.factors if s == "u"), default=1)
+    nu = max((lag for t in st for s, lag, _ in t.factors if s not in ("y", "e")), default=1)  # any input
     return ny, nu
 
 

@@ -57,7 +57,7 @@ CONSTRAINT_TYPES = {
 DECISION_RULES = ("dsf", "min_correlation", "min_jsf")
 #: Bundled data sets and their default J_SF band B (output units²): the pumping plant's
 #: transmitter error ±0.175 mlc (0.031 mlc²), the buck converter's 0.2 V quantisation (0.1² V²).
-BUNDLED = {"pumping": 0.031, "buck": 0.01}
+BUNDLED = {"pumping": 0.031, "buck": 0.01, "pumping_miso": 0.031}
 
 
 # --------------------------------------------------------------------------------------------
@@ -206,8 +206,9 @@ class DataSpec:
     ----------
     name : str
         Label in the results.
-    bundled : {"pumping", "buck"}, optional
-        :func:`graybox.load_pumping` or :func:`graybox.load_buck`.
+    bundled : {"pumping", "buck", "pumping_miso"}, optional
+        :func:`graybox.load_pumping`, :func:`graybox.load_buck` or :func:`graybox.load_pumping_miso`
+        (the rig with two independent pump speeds: two inputs).
     ident, valid : mapping, optional
         CSV records ``{"path", "u", "y", "time" or "Ts"}`` (see :func:`graybox.load_record_csv`);
         relative paths are resolved against the spec file's folder.
@@ -215,7 +216,8 @@ class DataSpec:
         CSV static points ``{"path", "u", "y"}`` (see :func:`graybox.load_static_csv`).
     band : float, optional
         The J_SF band B = [0, band] (output units²) for D_SF decisions and the reports; default
-        for the bundled sets 0.031 mlc² (pumping) and 0.01 V² (buck).
+        for the bundled sets 0.031 mlc² (pumping and pumping_miso: the same transmitter) and
+        0.01 V² (buck).
     dataset : Dataset, optional
         A Dataset built in Python (not expressible in TOML); its content is hashed.
     """
@@ -280,6 +282,8 @@ class DataSpec:
             ds = gb.load_pumping()
         elif self.bundled == "buck":
             ds = gb.load_buck()
+        elif self.bundled == "pumping_miso":
+            ds = gb.load_pumping_miso()
         else:
             base = Path(base_dir) if base_dir is not None else Path.cwd()
 
@@ -337,7 +341,8 @@ class StructureSpec:
         The process terms, e.g. ``["y(k-1)", "u(k-1)", "1"]`` (given structure).
     candidates : mapping, optional
         Keyword arguments of :func:`graybox.Candidates` (``ny``, ``nu``, ``degree``,
-        ``max_y_power`` …): the space FROLS selects from (made structure).
+        ``max_y_power`` …): the space FROLS selects from (made structure). With several inputs
+        ``nu`` and ``delay`` may be tables of one value per input name (``{"u1": 2, "u2": 3}``).
     n_terms, tol, criterion, max_terms, include : optional
         The selection rule, as for :func:`graybox.frols` (count, ERR tolerance, or information
         criterion; ``include``: terms selected first, e.g. ``["1"]``).
@@ -380,7 +385,10 @@ class StructureSpec:
                 "delay": c.get("delay", 1), "constant": c.get("constant", True),
                 "max_y_power": c.get("max_y_power")}
         for k in ("ny", "nu", "ne", "degree", "delay", "max_y_power"):
-            if cand[k] is not None:
+            if k in ("nu", "delay") and isinstance(cand[k], Mapping):  # several inputs: one value per input name
+                cand[k] = {str(n): _wrap(check_int, ("candidates", k, n), v, f"{k} of input {n!r}",
+                                         low=1 if k == "delay" else 0) for n, v in cand[k].items()}
+            elif cand[k] is not None:
                 cand[k] = _wrap(check_int, ("candidates", k), cand[k], k, low=1 if k == "delay" else 0)
         if cand["ne"]:
             raise SpecError("noise candidates (ne > 0) are not selected by FROLS; give ELS its MA order in the "
@@ -485,6 +493,15 @@ def _bound(v: object, path: tuple, name: str) -> float | None:
     return None if v is None else _wrap(check_real, path, v, name)
 
 
+def _gain_bound(v: object, path: tuple, name: str) -> float | list[float | None] | None:
+    """A gain bound: a number (every input), or one number or None per input (several inputs)."""
+    if isinstance(v, Sequence) and not isinstance(v, str):
+        if not v:
+            raise SpecError(f"{name} must be a number or one entry per input, got an empty list", path)
+        return [_bound(x, path + (i,), name) for i, x in enumerate(v)]
+    return _bound(v, path, name)
+
+
 def canonical_constraint(c: object, path: tuple = ()) -> dict:
     """The canonical dict of one constraint given as a TOML-style table ``{"type": …, …}``."""
     if not isinstance(c, Mapping):
@@ -514,15 +531,23 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
                    low=0, high=1, low_open=True, high_open=True)
         return {"type": kind, "b": b, "form": form, "min_denominator": md}
     if kind == "gain":
-        lo = _bound(c.get("lower"), path + ("lower",), "lower")
-        hi = _bound(c.get("upper"), path + ("upper",), "upper")
+        lo = _gain_bound(c.get("lower"), path + ("lower",), "lower")
+        hi = _gain_bound(c.get("upper"), path + ("upper",), "upper")
         if lo is None and hi is None:
             raise SpecError("gain bounds need lower or upper", path)
         rng = c.get("ubar_range")
         if rng is not None:
-            if not (isinstance(rng, Sequence) and len(rng) == 2):
-                raise SpecError(f"ubar_range must be [low, high], got {rng!r}", path + ("ubar_range",))
-            rng = [_wrap(check_real, path + ("ubar_range",), v, "ubar_range") for v in rng]
+            box = isinstance(rng, Sequence) and rng and all(isinstance(r, Sequence) and not isinstance(r, str)
+                                                            for r in rng)
+            if box:  # several inputs: one [low, high] per input
+                if not all(len(r) == 2 for r in rng):
+                    raise SpecError(f"ubar_range must be [low, high] or one [low, high] per input, got {rng!r}",
+                                    path + ("ubar_range",))
+                rng = [[_wrap(check_real, path + ("ubar_range",), v, "ubar_range") for v in r] for r in rng]
+            else:
+                if not (isinstance(rng, Sequence) and len(rng) == 2):
+                    raise SpecError(f"ubar_range must be [low, high], got {rng!r}", path + ("ubar_range",))
+                rng = [_wrap(check_real, path + ("ubar_range",), v, "ubar_range") for v in rng]
         n = _wrap(check_int, path + ("n",), c.get("n", 25), "n", low=1)
         md = _wrap(check_real, path + ("min_denominator",), c.get("min_denominator", 1e-6), "min_denominator",
                    low=0, low_open=True)
@@ -578,8 +603,10 @@ def constraint_from_object(obj: object, path: tuple = ()) -> list[dict]:
         if obj.reference is not None:
             raise SpecError(f"{obj.describe()}: a grid's gain bounds take the data set's reference (its static "
                             "points); a reference function cannot be stored", path)
-        return [canonical_constraint({"type": "gain", "lower": obj.lower, "upper": obj.upper,
-                                      "ubar_range": list(obj.ubar_range) if obj.ubar_range else None,
+        def plain(v):  # tuples (per input, a box) as lists
+            return [plain(x) for x in v] if isinstance(v, (list, tuple)) else v
+        return [canonical_constraint({"type": "gain", "lower": plain(obj.lower), "upper": plain(obj.upper),
+                                      "ubar_range": plain(obj.ubar_range) if obj.ubar_range else None,
                                       "n": obj.n, "min_denominator": obj.min_denominator}, path)]
     bounds = {}
     for k, (lo, hi) in obj.bounds.items():
@@ -607,8 +634,11 @@ def build_constraint(d: Mapping, *, curve: gb.StaticCurve | None = None) -> Any:
     if kind == "band":
         return gb.StaticBand(d["b"], form=d["form"], min_denominator=d["min_denominator"])
     if kind == "gain":
-        rng = tuple(d["ubar_range"]) if d["ubar_range"] is not None else None
-        return gb.GainBounds(d["lower"], d["upper"], ubar_range=rng, n=d["n"], min_denominator=d["min_denominator"])
+        rng = d["ubar_range"]
+        if rng is not None:
+            rng = tuple(tuple(r) for r in rng) if np.ndim(rng) == 2 else tuple(rng)
+        lo, hi = (tuple(v) if isinstance(v, Sequence) else v for v in (d["lower"], d["upper"]))
+        return gb.GainBounds(lo, hi, ubar_range=rng, n=d["n"], min_denominator=d["min_denominator"])
     return gb.ClusterBounds({k: tuple(v) for k, v in d["bounds"].items()})
 
 

@@ -102,8 +102,9 @@ def plot_record(
     Parameters
     ----------
     record : Record
-        Input and output of shape (N,), sampled every ``record.Ts`` seconds; the units in
-        ``record.units`` are appended to the labels.
+        Input and output of shape (N,), sampled every ``record.Ts`` seconds (several inputs,
+        shape (N, m): one line per input, named in a legend); the units in ``record.units`` are
+        appended to the labels.
     input_label, output_label : str
         Axis labels without units (defaults: the pumping plant's).
     start, stop : int, optional
@@ -131,7 +132,12 @@ def plot_record(
         fig = ax_u.figure
     t = record.t[start:stop]
     # the input is held over [t_k, t_k + Ts): draw it as steps, as the plant sees it
-    ax_u.step(t, record.u[start:stop], where="post", label=input_label)
+    if record.u.ndim == 1:
+        ax_u.step(t, record.u[start:stop], where="post", label=input_label)
+    else:  # several inputs: one line each, named in a legend
+        for j, nm in enumerate(record.input_names):
+            ax_u.step(t, record.u[start:stop, j], where="post", label=nm)
+        ax_u.legend(loc="best", fontsize="small")
     ax_y.plot(t, record.y[start:stop], "-", linewidth=0.8, label=output_label)
     u_unit, y_unit = record.units
     ax_u.set_ylabel(_label(input_label, u_unit))

@@ -1,0 +1,266 @@
+"""Static surfaces ȳ = H(ū₁, …, ū_m) as immutable values: polynomial, given or fitted to points.
+
+The several-input twin of :class:`~graybox.StaticCurve`: a polynomial in the m constant inputs,
+stored as monomials ``c_e ū₁^e₁ … ū_m^e_m`` in engineering units, so that its coefficients can be
+matched one by one with a model's cluster coefficients (the eq. (22) idea on a surface).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ._ls import scaled_lstsq
+from ._records import StaticPoints
+from ._validation import check_int
+
+__all__ = ["StaticSurface", "monomial_exponents"]
+
+
+def monomial_exponents(n_inputs: int, degree: int) -> tuple[tuple[int, ...], ...]:
+    """All exponent vectors of total degree <= ``degree`` in ``n_inputs`` variables.
+
+    Ordered by total degree, then lexicographically from the first input down
+    (``(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2), …``).
+    """
+    m = check_int(n_inputs, "n_inputs", low=1)
+    d = check_int(degree, "degree", low=0)
+    out: list[tuple[int, ...]] = []
+    for total in range(d + 1):
+        level = [e for e in itertools.product(range(total + 1), repeat=m) if sum(e) == total]
+        out.extend(sorted(level, reverse=True))
+    return tuple(out)
+
+
+def _as_inputs(ubar: object, m: int, what: str) -> np.ndarray:
+    """ū as a finite array of shape (K, m); a 1-D array is K points when m = 1, one point otherwise."""
+    u = np.asarray(ubar, dtype=float)
+    if u.ndim == 1:
+        u = u[:, None] if m == 1 else u[None, :]
+    if u.ndim != 2 or u.shape[1] != m:
+        raise ValueError(f"{what}: ū must have shape (K, {m}) (one column per input), got shape {np.shape(ubar)}")
+    if not np.all(np.isfinite(u)):
+        raise ValueError(f"{what}: ū has non-finite values")
+    return u
+
+
+@dataclass(frozen=True)
+class StaticSurface:
+    """A polynomial static surface H(ū) = Σ_e c_e ū₁^e₁ … ū_m^e_m (engineering units).
+
+    Attributes
+    ----------
+    exponents : tuple of tuple of int
+        One exponent vector (e₁, …, e_m) per monomial, all distinct; shape (n_monomials, m).
+    coefficients : ndarray, shape (n_monomials,)
+        c_e for each exponent vector, output units per input unit^|e|.
+    domain : tuple of (float, float), optional
+        A box (low, high) per input over which the surface is known (e.g. the span of the static
+        points); None when unknown. Evaluations outside it are refused.
+    name : str
+    input_names : tuple of str, optional
+        Names of the inputs, in the order of the exponents' entries (default ``u1 … um``, or
+        ``("u",)`` for one input).
+    """
+
+    exponents: tuple[tuple[int, ...], ...]
+    coefficients: np.ndarray
+    domain: tuple[tuple[float, float], ...] | None = None
+    name: str = "static surface"
+    input_names: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        ex = tuple(tuple(int(v) for v in e) for e in self.exponents)
+        if not ex:
+            raise ValueError(f"{self.name}: a polynomial needs at least one monomial")
+        m = len(ex[0])
+        if m < 1 or any(len(e) != m for e in ex):
+            raise ValueError(f"{self.name}: every exponent vector must have the same length >= 1 (one entry per input)")
+        if any(v < 0 for e in ex for v in e):
+            raise ValueError(f"{self.name}: exponents must be >= 0")
+        if len(set(ex)) != len(ex):
+            dup = sorted({e for e in ex if ex.count(e) > 1})
+            raise ValueError(f"{self.name}: monomial(s) {dup} given twice")
+        c = np.array(self.coefficients, dtype=float).reshape(-1)
+        if c.size != len(ex):
+            raise ValueError(f"{self.name}: {c.size} coefficients for {len(ex)} monomials")
+        if not np.all(np.isfinite(c)):
+            raise ValueError(f"{self.name}: non-finite coefficients")
+        c.setflags(write=False)
+        object.__setattr__(self, "exponents", ex)
+        object.__setattr__(self, "coefficients", c)
+        if self.domain is not None:
+            if len(self.domain) != m:
+                raise ValueError(f"{self.name}: domain needs one (low, high) per input ({m}), got {len(self.domain)}")
+            box = []
+            for i, (lo, hi) in enumerate(self.domain):
+                lo, hi = float(lo), float(hi)
+                if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                    raise ValueError(f"{self.name}: domain of input {i + 1} must be (low, high) with low < high, "
+                                     f"got {(lo, hi)}")
+                box.append((lo, hi))
+            object.__setattr__(self, "domain", tuple(box))
+        if self.input_names is None:
+            names = ("u",) if m == 1 else tuple(f"u{i + 1}" for i in range(m))
+        else:
+            names = tuple(str(s) for s in self.input_names)
+        if len(names) != m or len(set(names)) != m:
+            raise ValueError(f"{self.name}: input_names must be {m} distinct names, got {names}")
+        object.__setattr__(self, "input_names", names)
+
+    # -- construction -------------------------------------------------------
+    @classmethod
+    def polynomial(
+        cls,
+        coefficients: Mapping[Sequence[int], float],
+        *,
+        domain: Sequence[tuple[float, float]] | None = None,
+        name: str = "static surface",
+        input_names: Sequence[str] | None = None,
+    ) -> "StaticSurface":
+        """A surface from ``{exponent vector: coefficient}``, e.g. ``{(0, 0): κ, (1, 0): a, (1, 1): b}``.
+
+        Parameters
+        ----------
+        coefficients : mapping
+            Exponent vector (one entry per input) to coefficient.
+        domain : sequence of (low, high), optional
+            Box per input where the surface is known.
+        name : str
+            Label.
+        input_names : sequence of str, optional
+            Input names (default u1 … um).
+        """
+        if not coefficients:
+            raise ValueError(f"{name}: give at least one monomial")
+        ex = tuple(tuple(int(v) for v in e) for e in coefficients)
+        return cls(ex, np.array([float(v) for v in coefficients.values()]),
+                   None if domain is None else tuple(domain), name,
+                   None if input_names is None else tuple(input_names))
+
+    @classmethod
+    def fit(
+        cls,
+        points: object,
+        degree: int = 2,
+        *,
+        name: str | None = None,
+        exponents: Sequence[Sequence[int]] | None = None,
+        input_names: Sequence[str] | None = None,
+    ) -> "StaticSurface":
+        """Least-squares polynomial surface through static points (columns scaled internally).
+
+        Parameters
+        ----------
+        points : StaticPoints
+            Static points with ``ubar`` of shape (K, m) and ``ybar`` of shape (K,).
+        degree : int
+            Total degree: every monomial with e₁ + … + e_m <= degree (ignored when ``exponents``
+            is given).
+        name : str, optional
+            Label (default "fit to <points' name>").
+        exponents : sequence of exponent vectors, optional
+            The monomials to fit instead of the full set of ``degree``.
+        input_names : sequence of str, optional
+            Input names (default: the points', else u1 … um).
+
+        The domain is the box spanned by the points. Needs at least as many points as monomials,
+        spread so that the monomials are identifiable (else ``ValueError``).
+        """
+        yb = np.asarray(getattr(points, "ybar", None), dtype=float)
+        ub_raw = np.asarray(getattr(points, "ubar", None), dtype=float)
+        if yb.ndim != 1 or ub_raw.ndim not in (1, 2) or ub_raw.shape[0] != yb.size:
+            raise ValueError("StaticSurface.fit needs static points with ubar of shape (K, m) and ybar of shape (K,)")
+        m = 1 if ub_raw.ndim == 1 else ub_raw.shape[1]
+        ub = _as_inputs(ub_raw, m, "StaticSurface.fit")
+        ex = monomial_exponents(m, degree) if exponents is None else tuple(tuple(int(v) for v in e) for e in exponents)
+        if len(yb) < len(ex):
+            raise ValueError(f"fitting {len(ex)} monomials needs at least {len(ex)} static points, got {len(yb)}")
+        V = _monomials(ub, ex)
+        c = scaled_lstsq(V, yb)
+        box = tuple((float(ub[:, i].min()), float(ub[:, i].max())) for i in range(m))
+        if any(lo == hi for lo, hi in box):
+            raise ValueError("StaticSurface.fit: the points do not vary every input (a flat direction has no domain)")
+        pname = getattr(points, "name", "static points")
+        names = input_names if input_names is not None else getattr(points, "input_names", None)
+        return cls(ex, c, box, name or f"fit to {pname}", None if names is None else tuple(names))
+
+    # -- properties ---------------------------------------------------------
+    @property
+    def n_inputs(self) -> int:
+        """Number of inputs m."""
+        return len(self.exponents[0])
+
+    @property
+    def degree(self) -> int:
+        """Total degree of the highest monomial with a nonzero coefficient (0 for a zero surface)."""
+        return max((sum(e) for e, c in zip(self.exponents, self.coefficients) if c != 0.0), default=0)
+
+    def coefficient(self, exponent: Sequence[int]) -> float:
+        """c_e of the monomial with exponent vector ``exponent`` (0 when the surface has none)."""
+        e = tuple(int(v) for v in exponent)
+        if len(e) != self.n_inputs:
+            raise ValueError(f"{self.name}: exponent {e} needs {self.n_inputs} entries")
+        try:
+            return float(self.coefficients[self.exponents.index(e)])
+        except ValueError:
+            return 0.0
+
+    def as_dict(self) -> dict[tuple[int, ...], float]:
+        """``{exponent vector: coefficient}``."""
+        return {e: float(c) for e, c in zip(self.exponents, self.coefficients)}
+
+    # -- evaluation ---------------------------------------------------------
+    def check_domain(self, ubar: np.ndarray) -> None:
+        """Raise ``ValueError`` if any point lies outside the domain box (when there is one)."""
+        if self.domain is None:
+            return
+        u = _as_inputs(ubar, self.n_inputs, self.name)
+        for i, (lo, hi) in enumerate(self.domain):
+            tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+            col = u[:, i]
+            out = col[(col < lo - tol) | (col > hi + tol)]
+            if out.size:
+                raise ValueError(f"{self.input_names[i]} = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")
+
+    def __call__(self, ubar: np.ndarray) -> np.ndarray:
+        """H(ū) at points ``ubar`` of shape (K, m) (or (m,) for one point); returns shape (K,)."""
+        u = _as_inputs(ubar, self.n_inputs, self.name)
+        self.check_domain(u)
+        return _monomials(u, self.exponents) @ self.coefficients
+
+    def gradient(self, ubar: np.ndarray) -> np.ndarray:
+        """∂H/∂ū_j at points ``ubar`` of shape (K, m); returns shape (K, m), one column per input."""
+        u = _as_inputs(ubar, self.n_inputs, self.name)
+        self.check_domain(u)
+        out = np.zeros(u.shape)
+        for j in range(self.n_inputs):
+            for e, c in zip(self.exponents, self.coefficients):
+                if e[j] == 0 or c == 0.0:
+                    continue
+                lower = tuple(v - (i == j) for i, v in enumerate(e))
+                out[:, j] += c * e[j] * _monomials(u, (lower,))[:, 0]
+        return out
+
+    def points(self, ubar: np.ndarray) -> StaticPoints:
+        """The surface sampled at ``ubar`` (shape (K, m)) as static points."""
+        u = _as_inputs(ubar, self.n_inputs, self.name)
+        return StaticPoints(u if self.n_inputs > 1 else u[:, 0], self(u), name=self.name, input_names=self.input_names)
+
+    def describe(self) -> str:
+        """The polynomial as text, e.g. ``"-1.3 + 0.0015 u1 + 7.3e-06 u1*u2"``."""
+        parts = []
+        for e, c in zip(self.exponents, self.coefficients):
+            mono = "*".join(n if v == 1 else f"{n}^{v}" for n, v in zip(self.input_names, e) if v)
+            parts.append(f"{c:.6g}" + (f" {mono}" if mono else ""))
+        return " + ".join(parts).replace("+ -", "- ")
+
+
+def _monomials(u: np.ndarray, exponents: Sequence[tuple[int, ...]]) -> np.ndarray:
+    """Columns ū₁^e₁ … ū_m^e_m, shape (K, len(exponents)); 0**0 is 1 (a missing factor)."""
+    E = np.array(exponents, dtype=float)  # (n, m)
+    return np.prod(u[:, None, :] ** E[None, :, :], axis=2)

@@ -1,0 +1,259 @@
+"""Pictures of static surfaces ȳ(ū₁, ū₂): slices against one input, and contour maps, with static points.
+
+A *surface* here is anything that maps constant inputs of shape (K, 2) to outputs of shape (K,):
+a :class:`~graybox.StaticSurface`, a model's static surface wrapped in a function, or a plant's
+theoretical one (``lambda U: plant.static_pressure(U[:, 0], U[:, 1])``). Its ``name`` attribute,
+when it has one, labels it; a ``domain`` attribute (one (low, high) per input) sets the default
+ranges.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Sequence
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+__all__ = ["plot_surface_slices", "plot_surface_contours"]
+
+Surface = Callable[[np.ndarray], np.ndarray]
+
+
+def _surfaces(surface: Surface | Sequence[Surface] | None) -> list[Surface]:
+    if surface is None:
+        return []
+    if callable(surface):
+        return [surface]
+    out = list(surface)
+    for s in out:
+        if not callable(s):
+            raise ValueError(f"a surface must be callable on ū of shape (K, 2), got {type(s).__name__}")
+    return out
+
+
+def _name(s: Surface, i: int) -> str:
+    return str(getattr(s, "name", None) or f"surface {i + 1}")
+
+
+def _points(points: object) -> tuple[np.ndarray, np.ndarray, str] | None:
+    if points is None:
+        return None
+    ub = np.asarray(getattr(points, "ubar", None), dtype=float)
+    yb = np.asarray(getattr(points, "ybar", None), dtype=float)
+    if ub.ndim != 2 or ub.shape[1] != 2 or yb.shape != (ub.shape[0],):
+        raise ValueError(f"static points must have ubar of shape (K, 2) and ybar of shape (K,), got {ub.shape} "
+                         f"and {yb.shape}")
+    return ub, yb, str(getattr(points, "name", "static points"))
+
+
+def _range(i: int, surfaces: list[Surface], pts, given: tuple[float, float] | None, margin: float) -> tuple[float, float]:
+    if given is not None:
+        lo, hi = (float(v) for v in given)
+    elif pts is not None:
+        lo, hi = float(pts[0][:, i].min()), float(pts[0][:, i].max())
+        pad = margin * (hi - lo)
+        lo, hi = lo - pad, hi + pad
+        for s in surfaces:  # never draw a surface beyond its own domain
+            dom = getattr(s, "domain", None)
+            if dom is not None:
+                lo, hi = max(lo, float(dom[i][0])), min(hi, float(dom[i][1]))
+    else:
+        doms = [getattr(s, "domain", None) for s in surfaces]
+        doms = [d for d in doms if d is not None]
+        if not doms:
+            raise ValueError(f"no range for input {i + 1}: give static points, a surface with a domain, or the range")
+        lo, hi = max(float(d[i][0]) for d in doms), min(float(d[i][1]) for d in doms)
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+        raise ValueError(f"empty range for input {i + 1}: ({lo:g}, {hi:g})")
+    return lo, hi
+
+
+def _evaluate(s: Surface, U: np.ndarray, i: int) -> np.ndarray:
+    y = np.asarray(s(U), dtype=float).reshape(-1)
+    if y.shape != (U.shape[0],):
+        raise ValueError(f"{_name(s, i)} returned shape {y.shape} for {U.shape[0]} points; expected ({U.shape[0]},)")
+    return y
+
+
+def plot_surface_slices(
+    surface: Surface | Sequence[Surface] | None = None,
+    points: object | None = None,
+    *,
+    against: int = 0,
+    at: Sequence[float] | None = None,
+    urange: tuple[float, float] | None = None,
+    ax: Axes | None = None,
+    xlabel: str | None = None,
+    ylabel: str = "Pressure (mlc)",
+    input_labels: tuple[str, str] = ("Speed 1 (rpm)", "Speed 2 (rpm)"),
+    n_grid: int = 100,
+    margin: float = 0.0,
+) -> Figure:
+    """Slices of static surfaces: ȳ against one input with the other held at several levels.
+
+    One colour per level of the held input; each surface has its own line style (solid, dashed,
+    dotted, …), and the static points lying on a slice are drawn as ``*`` in its colour.
+
+    Parameters
+    ----------
+    surface : callable or sequence of callables, optional
+        Surfaces mapping ū of shape (K, 2) to ȳ of shape (K,) (module docs).
+    points : StaticPoints, optional
+        Static points with ``ubar`` of shape (K, 2); a point is drawn on the slice whose level its
+        held input equals (to 1e-9 relative).
+    against : {0, 1}
+        The input on the horizontal axis (0: ū₁); the other one is held.
+    at : sequence of float, optional
+        Levels of the held input; default: the distinct levels of the points' held input, else 5
+        levels across the surfaces' domain.
+    urange : (float, float), optional
+        Range of the horizontal axis; default the points' range (widened by ``margin``), else the
+        surfaces' domain.
+    ax : matplotlib Axes, optional
+        Draw here; by default a new 6.4 × 4.2 in figure is made.
+    xlabel, ylabel : str
+        Axis labels (default x: the label of input ``against``).
+    input_labels : (str, str)
+        Labels of the two inputs (used for the axis and the legend's levels).
+    n_grid : int
+        Points per slice.
+    margin : float
+        Relative widening of the points' range.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One line per (surface, level), then one marker-only line per level that has points.
+    """
+    surfaces = _surfaces(surface)
+    pts = _points(points)
+    if not surfaces and pts is None:
+        raise ValueError("plot_surface_slices: give a surface, static points, or both")
+    if against not in (0, 1):
+        raise ValueError(f"against must be 0 or 1 (the input on the horizontal axis), got {against!r}")
+    if n_grid < 2:
+        raise ValueError(f"n_grid must be at least 2, got {n_grid}")
+    held = 1 - against
+    if at is None:
+        if pts is not None:
+            levels = np.unique(pts[0][:, held])
+        else:
+            levels = np.linspace(*_range(held, surfaces, None, None, 0.0), 5)
+    else:
+        levels = np.asarray(at, dtype=float).reshape(-1)
+        if levels.size == 0 or not np.all(np.isfinite(levels)):
+            raise ValueError("at must hold at least one finite level")
+    lo, hi = _range(against, surfaces, pts, urange, margin)
+    if ax is None:
+        fig = Figure(figsize=(6.4, 4.2), layout="constrained")
+        ax = fig.add_subplot()
+    else:
+        fig = ax.figure
+    colors = [f"C{k % 10}" for k in range(levels.size)]
+    styles = ["-", "--", ":", "-."]
+    x = np.linspace(lo, hi, n_grid)
+    for i, s in enumerate(surfaces):
+        for lev, col in zip(levels, colors):
+            U = np.empty((n_grid, 2))
+            U[:, against] = x
+            U[:, held] = lev
+            label = f"{_name(s, i)}, {input_labels[held]} = {lev:g}" if len(surfaces) > 1 else \
+                f"{input_labels[held]} = {lev:g}"
+            ax.plot(x, _evaluate(s, U, i), styles[i % len(styles)], color=col, label=label)
+    if pts is not None:
+        ub, yb, pname = pts
+        labelled = False
+        for lev, col in zip(levels, colors):
+            on = np.abs(ub[:, held] - lev) <= 1e-9 * max(abs(lev), 1.0)
+            if on.any():
+                # one legend entry for the points (their colour already names the level)
+                ax.plot(ub[on, against], yb[on], "*", linestyle="none", markersize=9, color=col,
+                        label=None if labelled else pname)
+                labelled = True
+    ax.set_xlabel(xlabel if xlabel is not None else input_labels[against])
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="best", fontsize="small")
+    return fig
+
+
+def plot_surface_contours(
+    surface: Surface,
+    points: object | None = None,
+    *,
+    levels: int | Sequence[float] = 12,
+    ranges: tuple[tuple[float, float], tuple[float, float]] | None = None,
+    ax: Axes | None = None,
+    input_labels: tuple[str, str] = ("Speed 1 (rpm)", "Speed 2 (rpm)"),
+    output_label: str = "Pressure (mlc)",
+    n_grid: int = 60,
+    margin: float = 0.0,
+    cmap: str = "viridis",
+) -> Figure:
+    """Contour map of one static surface over (ū₁, ū₂), with the static points coloured by ȳ.
+
+    The points use the contours' colour scale, so a point whose colour differs from the map
+    around it is one the surface misses; a colour bar gives the scale.
+
+    Parameters
+    ----------
+    surface : callable
+        Maps ū of shape (K, 2) to ȳ of shape (K,) (module docs).
+    points : StaticPoints, optional
+        Static points with ``ubar`` of shape (K, 2), drawn as filled circles.
+    levels : int or sequence of float
+        Number of contour levels, or the levels (output units).
+    ranges : ((float, float), (float, float)), optional
+        Ranges of ū₁ and ū₂; default the points' ranges (widened by ``margin``), else the
+        surface's domain.
+    ax : matplotlib Axes, optional
+        Draw here; by default a new 6.0 × 4.8 in figure is made.
+    input_labels : (str, str)
+        Axis labels.
+    output_label : str
+        Colour bar label.
+    n_grid : int
+        Grid points per input.
+    margin : float
+        Relative widening of the points' ranges.
+    cmap : str
+        Matplotlib colour map.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Filled contours, contour lines, the points (one scatter collection) and a colour bar.
+    """
+    surfaces = _surfaces(surface)
+    if len(surfaces) != 1:
+        raise ValueError("plot_surface_contours draws one surface; call it once per surface")
+    s = surfaces[0]
+    pts = _points(points)
+    if n_grid < 2:
+        raise ValueError(f"n_grid must be at least 2, got {n_grid}")
+    if ranges is not None and len(ranges) != 2:
+        raise ValueError(f"ranges must be two (low, high) pairs, got {ranges!r}")
+    r1 = _range(0, surfaces, pts, None if ranges is None else ranges[0], margin)
+    r2 = _range(1, surfaces, pts, None if ranges is None else ranges[1], margin)
+    g1, g2 = np.linspace(*r1, n_grid), np.linspace(*r2, n_grid)
+    G1, G2 = np.meshgrid(g1, g2)
+    Z = _evaluate(s, np.column_stack([G1.ravel(), G2.ravel()]), 0).reshape(G1.shape)
+    if ax is None:
+        fig = Figure(figsize=(6.0, 4.8), layout="constrained")
+        ax = fig.add_subplot()
+    else:
+        fig = ax.figure
+    filled = ax.contourf(G1, G2, Z, levels=levels, cmap=cmap)
+    ax.contour(G1, G2, Z, levels=filled.levels, colors="k", linewidths=0.5, alpha=0.5)
+    if pts is not None:
+        ub, yb, pname = pts
+        ax.scatter(ub[:, 0], ub[:, 1], c=yb, cmap=cmap, norm=filled.norm, edgecolors="k", s=40, zorder=3,
+                   label=pname)
+        ax.legend(loc="upper left", fontsize="small")
+    fig.colorbar(filled, ax=ax, label=output_label)
+    ax.set_xlabel(input_labels[0])
+    ax.set_ylabel(input_labels[1])
+    ax.set_title(_name(s, 0))
+    return fig

@@ -1,0 +1,103 @@
+"""Pictures of static surfaces: slices and contours with static points (issue 15)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from graybox import StaticPoints
+from graybox._surfaces import StaticSurface
+from graybox.datasets import TwoSpeedPumpingPlant
+from graybox.datasets._pumping_miso import static_grid
+from graybox.plots import plot_surface_contours, plot_surface_slices
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+PLANT = TwoSpeedPumpingPlant()
+
+
+def theory(U):
+    return PLANT.static_pressure(U[:, 0], U[:, 1])
+
+
+theory.name = "theoretical surface"
+
+
+def _grid_points():
+    U = static_grid()
+    return StaticPoints(U, theory(U) + 0.01, name="grid")
+
+
+def test_slices_draw_one_line_per_level_and_surface_with_the_points(tmp_path):
+    pts = _grid_points()
+    fit = StaticSurface.fit(pts, 2)
+    fig = plot_surface_slices([theory, fit], pts)
+    ax = fig.axes[0]
+    lines, markers = ax.lines[:12], ax.lines[12:]
+    assert len(ax.lines) == 12 + 6  # 2 surfaces x 6 levels of u2, then the points of each level
+    x = lines[0].get_xdata()
+    assert x[0] == 1150 and x[-1] == 1650 and len(x) == 100
+    np.testing.assert_allclose(lines[0].get_ydata(), PLANT.static_pressure(x, 1150.0))
+    np.testing.assert_allclose(lines[6 + 5].get_ydata(), fit(np.c_[x, np.full(100, 1650.0)]))
+    assert lines[0].get_linestyle() == "-" and lines[6].get_linestyle() == "--"
+    assert lines[0].get_color() == lines[6].get_color() == markers[0].get_color()
+    np.testing.assert_array_equal(np.sort(markers[2].get_xdata()), static_grid()[:6, 1])
+    np.testing.assert_allclose(markers[2].get_ydata(), PLANT.static_pressure(markers[2].get_xdata(), 1350.0) + 0.01)
+    assert ax.get_xlabel() == "Speed 1 (rpm)"
+    fig.savefig(tmp_path / "s.png", dpi=50)
+    assert (tmp_path / "s.png").read_bytes().startswith(PNG_MAGIC)
+
+
+def test_slices_against_the_second_input_at_chosen_levels():
+    fit = StaticSurface.fit(_grid_points(), 2)
+    fig = plot_surface_slices(fit, against=1, at=[1200.0, 1600.0], n_grid=11)
+    ax = fig.axes[0]
+    assert len(ax.lines) == 2 and ax.get_xlabel() == "Speed 2 (rpm)"
+    x = ax.lines[1].get_xdata()
+    np.testing.assert_allclose(ax.lines[1].get_ydata(), fit(np.c_[np.full(11, 1600.0), x]))
+    assert x[0] == 1150 and x[-1] == 1650  # the fit's domain
+
+
+def test_contours_with_points(tmp_path):
+    pts = _grid_points()
+    fig = plot_surface_contours(theory, pts, levels=8, n_grid=30)
+    assert isinstance(fig, Figure) and len(fig.axes) == 2  # the map and its colour bar
+    ax = fig.axes[0]
+    (scatter,) = ax.collections[-1:]
+    np.testing.assert_array_equal(scatter.get_offsets(), pts.ubar)
+    np.testing.assert_allclose(scatter.get_array(), pts.ybar)
+    assert ax.get_title() == "theoretical surface"
+    fig.savefig(tmp_path / "c.png", dpi=50)
+    assert (tmp_path / "c.png").read_bytes().startswith(PNG_MAGIC)
+    host = Figure()
+    a = host.add_subplot()
+    assert plot_surface_contours(StaticSurface.fit(pts, 2), ax=a) is host
+
+
+def test_surface_plot_errors():
+    with pytest.raises(ValueError, match="give a surface, static points, or both"):
+        plot_surface_slices()
+    with pytest.raises(ValueError, match="no range for input 2"):
+        plot_surface_slices(theory)
+    with pytest.raises(ValueError, match="against must be 0 or 1"):
+        plot_surface_slices(theory, _grid_points(), against=2)
+    with pytest.raises(ValueError, match=r"ubar of shape \(K, 2\)"):
+        plot_surface_slices(theory, SimpleNamespace(ubar=np.ones(3), ybar=np.ones(3)))
+    with pytest.raises(ValueError, match="one surface"):
+        plot_surface_contours([theory, theory], _grid_points())
+    with pytest.raises(ValueError, match="returned shape"):
+        plot_surface_contours(lambda U: np.ones(3), _grid_points())
+
+
+def test_record_with_two_inputs_has_a_line_and_a_legend_entry_per_input():
+    from graybox.datasets import load_pumping_miso
+    from graybox.plots import plot_record
+
+    rec = load_pumping_miso().valid
+    fig = plot_record(rec, stop=300)
+    ax_u = fig.axes[0]
+    assert len(ax_u.lines) == 2
+    assert [t.get_text() for t in ax_u.get_legend().get_texts()] == ["u1", "u2"]
+    np.testing.assert_array_equal(ax_u.lines[1].get_ydata()[:300], rec.u[:300, 1])
