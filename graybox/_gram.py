@@ -122,6 +122,11 @@ class DaskRecord:
         """The input's name as terms use it (one input: ``"u"``)."""
         return ("u",)
 
+    @property
+    def n_inputs(self) -> int:
+        """m, the number of inputs (a DaskRecord holds one)."""
+        return 1
+
     def require_length(self, max_lag: int) -> None:
         """Raise ``ValueError`` unless the record has more than ``max_lag`` samples."""
         if len(self) < max_lag + 1:
