@@ -88,7 +88,8 @@ class CorrelationTest:
     Attributes
     ----------
     name : str
-        Key in :data:`TESTS` (``"xi_xi"``, ``"u_xi"``, ``"xi_xiu"``, ``"u2_xi"``, ``"u2_xi2"``).
+        Key in :data:`TESTS` (``"xi_xi"``, ``"u_xi"``, ``"xi_xiu"``, ``"u2_xi"``, ``"u2_xi2"``); with
+        several inputs each input test once per input, keyed ``"u_xi:u1"`` and so on.
     label : str
         As the literature prints it, e.g. ``"φ_(u²)'ξ(τ)"``.
     kind : str
@@ -338,6 +339,11 @@ def residual_tests(
     ValueError
         A record shorter than the model's lags plus ``max_lag`` + 2, constant residuals (a model
         that reproduces the data exactly has nothing to test), a constant input, bad options.
+
+    Notes
+    -----
+    With several inputs the four input tests are made for each input (keys ``"u_xi:u1"`` …, labels
+    with the input's name); the model is adequate when every one of them passes.
     """
     if not isinstance(model, (Model, NeuralModel)):
         raise ValueError(f"model must be a Model or a NeuralModel, got {type(model).__name__}")
@@ -345,9 +351,7 @@ def residual_tests(
     level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
     check_choice(rule, "rule", RULES)
     recs = as_records(data)
-    if recs[0].n_inputs > 1:
-        raise ValueError(f"{recs[0].name}: the input correlation tests are defined for one input; the record has "
-                         f"{recs[0].n_inputs} inputs {recs[0].input_names}")
+    names = recs[0].input_names
     xi, us = [], []
     for r in recs:
         e, L = _model_residuals(model, r, bool(moving_average))
@@ -355,40 +359,46 @@ def residual_tests(
             raise ValueError(f"{r.name}: {e.size} residuals (after the model's max lag {L}) are too few for "
                              f"max_lag = {max_lag}")
         xi.append(e)
-        us.append(r.u[L:])
+        us.append(r.inputs[L:])
     n = sum(e.size for e in xi)
     allxi = np.concatenate(xi)
     if np.ptp(allxi) <= 1e-14 * max(1.0, float(np.max(np.abs(allxi)))):
         raise ValueError("the residuals are constant: the model reproduces the data exactly, there is nothing to test")
     allu = np.concatenate(us)
-    if np.ptp(allu) == 0.0:
-        raise ValueError("the input is constant: the input correlation tests are undefined")
-    # u in units of its own spread: u² of 1e3 rpm would otherwise lose digits to the mean removal
-    uc = [(u - np.mean(allu)) / np.std(allu) for u in us]
-    u2 = [u**2 for u in uc]
-    xiu = [e * u for e, u in zip(xi, uc)]
+    for j, nm in enumerate(names):
+        if np.ptp(allu[:, j]) == 0.0:
+            what = "the input is" if len(names) == 1 else f"input {nm!r} is"
+            raise ValueError(f"{what} constant: the input correlation tests are undefined")
     z = stats.norm.ppf(0.5 + level / 2)
     band = float(z / np.sqrt(n))
     out = {}
+    # with several inputs every input test is made for each input (keys "u_xi:u1", …)
+    per_input = [(None, 0)] if len(names) == 1 else [(nm, j) for j, nm in enumerate(names)]
     for key, (label, kind, side) in TESTS.items():
         lags = _lags(side, max_lag)
-        if key == "xi_xi":
-            phi = _xcorr(xi, xi, lags)
-        elif key == "u_xi":
-            phi = _xcorr(uc, xi, lags)
-        elif key == "xi_xiu":
-            phi = _xcorr(xiu, xi, lags + 1)
-        elif key == "u2_xi":
-            phi = _xcorr(u2, xi, lags)
-        else:
-            phi = _xcorr(u2, [e**2 for e in xi], lags)
         if rule == "pointwise":
             limit = band
         else:
             limit = float(stats.norm.ppf(1 - (1 - level) / (2 * lags.size)) / np.sqrt(n))
-        outside = lags[np.abs(phi) > band]
-        out[key] = CorrelationTest(key, label, kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
-                                   bool(np.all(np.abs(phi) <= limit)))
+        for nm, j in ([(None, 0)] if key == "xi_xi" else per_input):
+            # u in units of its own spread: u² of 1e3 rpm would otherwise lose digits to the mean removal
+            col = allu[:, j]
+            uc = [(u[:, j] - np.mean(col)) / np.std(col) for u in us]
+            if key == "xi_xi":
+                phi = _xcorr(xi, xi, lags)
+            elif key == "u_xi":
+                phi = _xcorr(uc, xi, lags)
+            elif key == "xi_xiu":
+                phi = _xcorr([e * u for e, u in zip(xi, uc)], xi, lags + 1)
+            elif key == "u2_xi":
+                phi = _xcorr([u**2 for u in uc], xi, lags)
+            else:
+                phi = _xcorr([u**2 for u in uc], [e**2 for e in xi], lags)
+            k = key if nm is None else f"{key}:{nm}"
+            lab = label if nm is None else label.replace("u", nm)
+            outside = lags[np.abs(phi) > band]
+            out[k] = CorrelationTest(k, lab, kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
+                                     bool(np.all(np.abs(phi) <= limit)))
     return ResidualTests(MappingProxyType(out), n, level, rule, getattr(model, "name", ""),
                          tuple(_ro(e) for e in xi))
 

@@ -368,8 +368,15 @@ def test_two_input_pipeline_frols_els_evaluate():
     ds = Dataset(rec, rec, StaticPoints([[0, 0], [0.5, 0.5]], [0.4, 0.5], input_names=("n1", "n2")))
     tab = gb.evaluate({"els": m}, ds)
     assert np.isfinite(tab.loc["els", "J_SF"]) and tab.loc["els", "J_S valid"] < 0.01
-    with pytest.raises(ValueError, match="defined for one input"):
-        gb.residual_tests(m, rec)
+    # residual tests: every input test once per input; the true structure passes them, a model
+    # without the input product n1·n2 fails a nonlinear one
+    tests = gb.residual_tests(m, rec)
+    assert {"u_xi:n1", "u_xi:n2", "u2_xi2:n1", "u2_xi2:n2", "xi_xi"} <= set(tests.tests)
+    assert len(tests.tests) == 1 + 4 * 2 and tests.passed
+    st = Structure([t for t in m.structure if str(t) != "n1(k-1)n2(k-1)"])
+    assert len(st) == len(m.structure) - 1
+    bad = gb.residual_tests(gb.els(st, rec, noise=1).model, rec)
+    assert bad.linear_passed and not bad.nonlinear_passed
 
 
 def test_reached_surface_batches_members_and_points():
