@@ -32,7 +32,7 @@ def plot_residual_tests(
     tests : ResidualTests
         From :func:`graybox.residual_tests`.
     axes : sequence of 5 Axes, optional
-        Draw here; by default a new 7 × 9 in figure with five rows is made.
+        Draw here; by default a new figure with one row per test (7 × 9 in for one input's five) is made.
     title : str, optional
         Figure title (default: the model's name and the verdict).
 
@@ -46,7 +46,7 @@ def plot_residual_tests(
         raise ValueError(f"plot_residual_tests needs a ResidualTests, got {type(tests).__name__}")
     items = list(tests.tests.values())
     if axes is None:
-        fig = Figure(figsize=(7.0, 9.0), layout="constrained")
+        fig = Figure(figsize=(7.0, 1.8 * len(items)), layout="constrained")  # 9 in for the five tests of one input
         axs = fig.subplots(len(items), 1)
     else:
         axs = list(axes)
