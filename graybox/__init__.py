@@ -17,7 +17,7 @@ from ._gram import DaskRecord
 from ._simulation import DivergenceError, predict, simulate, simulate_many
 from ._model import Model
 from ._static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
-from ._surface import SurfaceClusterMap, static_surface, static_surface_gain, surface_cluster_map, surface_equilibria
+from ._static_surface import SurfaceClusterMap, static_surface, static_surface_gain, surface_cluster_map, surface_equilibria
 from ._evaluate import evaluate, evaluate_thetas, fit_percent, j1, js, jsf, mse, rrse
 from ._selection import CandidateWarning, Selection, frols, information_criterion
 from ._semp import SEMPResult, semp

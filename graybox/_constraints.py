@@ -49,7 +49,7 @@ from ._curves import StaticCurve
 from ._records import StaticPoints
 from ._surfaces import StaticSurface
 from ._static import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
-from ._surface import SurfaceClusterMap, surface_cluster_map, surface_static_rows
+from ._static_surface import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ._terms import Structure
 
 __all__ = [

@@ -31,7 +31,7 @@ from ._regressors import regressor_matrix
 from ._records import Dataset, Record, StaticPoints, static_point_inputs
 from ._simulation import DivergenceError
 from ._static import reached_equilibria
-from ._surface import reached_surface
+from ._static_surface import reached_surface
 from ._terms import Structure
 
 __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]

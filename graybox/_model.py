@@ -7,7 +7,7 @@ from typing import Literal
 
 import numpy as np
 
-from . import _simulation, _static, _surface
+from . import _simulation, _static, _static_surface
 from ._latex import latex_equation
 from ._records import Record
 from ._validation import check_theta, frozen
@@ -114,33 +114,33 @@ class Model:
         cm = self.cluster_map()
         return dict(zip(cm.names, (cm.R @ self.theta).tolist()))
 
-    def cluster_map(self) -> _static.ClusterMap | _surface.SurfaceClusterMap:
+    def cluster_map(self) -> _static.ClusterMap | _static_surface.SurfaceClusterMap:
         """The clusters and the 0/1 map R of this structure (per input power with several inputs)."""
         if self.n_inputs > 1:
-            return _surface.surface_cluster_map(self.structure, inputs=self.input_names)
+            return _static_surface.surface_cluster_map(self.structure, inputs=self.input_names)
         return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
         """Steady-state output at each ū, shape (M,); see :func:`graybox._static.static_curve`.
 
         With several inputs, the static surface at the points ``ubar`` of shape (M, m)
-        (:func:`graybox._surface.static_surface`).
+        (:func:`graybox._static_surface.static_surface`).
         """
         if self.n_inputs > 1:
-            return _surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,
+            return _static_surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,
                                            inputs=self.input_names)
         return _static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
 
     def equilibria(self, ubar: float | np.ndarray) -> list[_static.Equilibrium]:
         """Every real equilibrium at ū (a float, or a point of shape (m,) with several inputs) with its stability."""
         if self.n_inputs > 1:
-            return _surface.surface_equilibria(self.structure, self.theta, ubar, inputs=self.input_names)
+            return _static_surface.surface_equilibria(self.structure, self.theta, ubar, inputs=self.input_names)
         return _static.equilibria(self.structure, self.theta, ubar)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None) -> np.ndarray:
         """dȳ/dū along the static curve, shape (M,); with several inputs the gradient, shape (M, m)."""
         if self.n_inputs > 1:
-            return _surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, inputs=self.input_names)
+            return _static_surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, inputs=self.input_names)
         return _static.static_gain(self.structure, self.theta, ubar, y0=y0)
 
     @property

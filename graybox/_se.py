@@ -54,7 +54,7 @@ from ._progress import progress_bar
 from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_inputs, warn_static_range
 from ._regressors import stacked_regressors
 from ._static import reached_equilibria, static_theta_gradient
-from ._surface import reached_surface, surface_theta_gradient
+from ._static_surface import reached_surface, surface_theta_gradient
 from ._terms import Structure
 from ._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
 

@@ -105,7 +105,7 @@ _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 def cluster_key(term: Term) -> tuple[int, int]:
     """(power of y, power of the input) of a process term of a single-input model: its cluster Ω_{y^p u^m}.
 
-    The input may have any name; for several inputs see :func:`graybox._surface.surface_cluster_map`.
+    The input may have any name; for several inputs see :func:`graybox._static_surface.surface_cluster_map`.
     """
     if term.is_noise:
         raise ValueError(f"noise term {term} has no cluster")
@@ -165,7 +165,7 @@ def cluster_map(structure: Structure) -> ClusterMap:
     """Build the :class:`ClusterMap` of the process terms of ``structure`` (cached: it is immutable).
 
     Single-input structures only (a structure with several inputs has a static *surface*:
-    :func:`graybox._surface.surface_cluster_map`); ``ValueError`` otherwise.
+    :func:`graybox._static_surface.surface_cluster_map`); ``ValueError`` otherwise.
     """
     if len(structure.inputs) > 1:
         raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its static function "
