@@ -20,7 +20,7 @@ import numba
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-import graybox as gb
+from .. import _api as gb
 
 from .._constraints import static_cluster_map
 from .._convex import numerator_surface

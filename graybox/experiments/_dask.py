@@ -12,7 +12,7 @@ from typing import Callable, Mapping
 
 from distributed import WorkerPlugin, get_worker
 
-import graybox as gb
+from .. import _api as gb
 
 from ._spec import Cell
 

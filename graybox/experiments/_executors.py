@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
-import graybox as gb
+from .. import _api as gb
 
 from ._cell import failed_row, run_cell
 from ._spec import Cell

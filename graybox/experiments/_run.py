@@ -9,7 +9,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
 
-import graybox as gb
+from .. import _api as gb
 
 from .._progress import progress_bar
 from ._cell import STATUSES, failed_row, run_cell

@@ -34,7 +34,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-import graybox as gb
+from .. import _api as gb
 
 from .._static_form import static_degree, static_terms
 from .._validation import check_choice, check_int, check_real

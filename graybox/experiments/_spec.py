@@ -19,7 +19,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
-import graybox as gb
+from .. import _api as gb
 
 from .._validation import check_choice, check_int, check_lambdas, check_real
 
