@@ -58,7 +58,6 @@ Run ``python -m graybox.datasets._pumping_miso`` to regenerate the bundled CSVs 
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from dataclasses import dataclass, field
@@ -70,7 +69,7 @@ import numpy as np
 
 from .._records import Record, StaticPoints
 from .._validation import as_1d_finite
-from .pumping import DEFAULT_SEED, PumpingPlant, _staircase
+from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, write_csv_pair
 
 __all__ = [
     "TwoSpeedPumpingPlant",
@@ -574,41 +573,16 @@ def write_miso_csvs(out_dir: str | Path, *, seed: int = DEFAULT_SEED) -> tuple[P
     (Path, Path)
         The dynamic and static files.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     run, static = generate_miso(seed=seed)
-    dyn = out / "dynamic.csv"
-    sta = out / "static.csv"
-    lines = [",".join(DYNAMIC_COLUMNS_MISO)]
-    lines += [f"{t:.2f},{u[0]:.1f},{u[1]:.1f},{y:.4f}" for t, u, y in zip(run.t, run.u, run.y)]
-    dyn.write_text("\n".join(lines) + "\n", encoding="utf-8", newline="\n")
-    lines = [",".join(STATIC_COLUMNS_MISO)]
-    lines += [f"{u[0]:.1f},{u[1]:.1f},{y:.4f}" for u, y in zip(static.ubar, static.ybar)]
-    sta.write_text("\n".join(lines) + "\n", encoding="utf-8", newline="\n")
-    return dyn, sta
-
-
-def _source_data_dir() -> Path | None:
-    """``<repo>/data/pumping_miso`` when running from a source checkout (else None)."""
-    root = Path(__file__).resolve().parents[2]
-    return root / "data" / "pumping_miso" if (root / "pyproject.toml").is_file() else None
+    return write_csv_pair(out_dir, DYNAMIC_COLUMNS_MISO,
+                          [f"{t:.2f},{u[0]:.1f},{u[1]:.1f},{y:.4f}" for t, u, y in zip(run.t, run.u, run.y)],
+                          STATIC_COLUMNS_MISO, [f"{u[0]:.1f},{u[1]:.1f},{y:.4f}" for u, y in zip(static.ubar, static.ybar)])
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m graybox.datasets._pumping_miso [--out DIR] [--seed N]``: regenerate the bundled MISO CSVs.
-
-    Without ``--out`` it writes into the source checkout's ``data/pumping_miso``.
-    """
-    ap = argparse.ArgumentParser(prog="python -m graybox.datasets._pumping_miso", description=main.__doc__)
-    ap.add_argument("--out", type=Path, default=None, help="output folder (default: <repo>/data/pumping_miso)")
-    ap.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"seed (default {DEFAULT_SEED})")
-    args = ap.parse_args(argv)
-    out = args.out if args.out is not None else _source_data_dir()
-    if out is None:
-        ap.error("not running from a source checkout: give --out DIR")
-    dyn, sta = write_miso_csvs(out, seed=args.seed)
-    print(f"wrote {dyn} and {sta}")
-    return 0
+    """``python -m graybox.datasets._pumping_miso [--out DIR] [--seed N]``: regenerate the bundled MISO CSVs."""
+    return regenerate_main(argv, module="graybox.datasets._pumping_miso", folder="pumping_miso",
+                           write=lambda out, seed: write_miso_csvs(out, seed=seed))
 
 
 if __name__ == "__main__":

@@ -731,41 +731,44 @@ def write_csvs(out_dir: str | Path, seed: int = DEFAULT_SEED) -> tuple[Path, Pat
     (Path, Path)
         The dynamic and static files.
     """
+    run, static = generate(seed)
+    return write_csv_pair(out_dir, DYNAMIC_COLUMNS, [f"{t:.2f},{u:.1f},{y:.4f}" for t, u, y in zip(run.t, run.u, run.y)],
+                          STATIC_COLUMNS, [f"{u:.1f},{y:.4f}" for u, y in zip(static.ubar, static.ybar)])
+
+
+def write_csv_pair(out_dir: str | Path, dynamic_columns: Sequence[str], dynamic_lines: Sequence[str],
+                   static_columns: Sequence[str], static_lines: Sequence[str]) -> tuple[Path, Path]:
+    """Write a bundled data set's ``dynamic.csv`` and ``static.csv`` (header + lines, Unix newlines)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    run, static = generate(seed)
-    dyn = out / "dynamic.csv"
-    sta = out / "static.csv"
-    lines = [",".join(DYNAMIC_COLUMNS)]
-    lines += [f"{t:.2f},{u:.1f},{y:.4f}" for t, u, y in zip(run.t, run.u, run.y)]
-    dyn.write_text("\n".join(lines) + "\n", encoding="utf-8", newline="\n")
-    lines = [",".join(STATIC_COLUMNS)]
-    lines += [f"{u:.1f},{y:.4f}" for u, y in zip(static.ubar, static.ybar)]
-    sta.write_text("\n".join(lines) + "\n", encoding="utf-8", newline="\n")
-    return dyn, sta
+    paths = (out / "dynamic.csv", out / "static.csv")
+    for path, cols, lines in zip(paths, (dynamic_columns, static_columns), (dynamic_lines, static_lines)):
+        path.write_text("\n".join([",".join(cols), *lines]) + "\n", encoding="utf-8", newline="\n")
+    return paths
 
 
-def _source_data_dir() -> Path | None:
-    """``<repo>/data/pumping`` when running from a source checkout (else None)."""
+def regenerate_main(argv: list[str] | None, *, module: str, folder: str, write) -> int:
+    """The command line that regenerates a bundled data set: ``python -m MODULE [--out DIR] [--seed N]``.
+
+    Without ``--out`` it writes into the source checkout's ``data/FOLDER`` (the bundled files);
+    ``write(out_dir, seed)`` writes them.
+    """
+    ap = argparse.ArgumentParser(prog=f"python -m {module}", description=f"Regenerate the bundled data/{folder} CSVs.")
+    ap.add_argument("--out", type=Path, default=None, help=f"output folder (default: <repo>/data/{folder})")
+    ap.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"seed (default {DEFAULT_SEED})")
+    args = ap.parse_args(argv)
     root = Path(__file__).resolve().parents[2]
-    return root / "data" / "pumping" if (root / "pyproject.toml").is_file() else None
+    out = args.out if args.out is not None else (root / "data" / folder if (root / "pyproject.toml").is_file() else None)
+    if out is None:
+        ap.error("not running from a source checkout: give --out DIR")
+    dyn, sta = write(out, args.seed)
+    print(f"wrote {dyn} and {sta}")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m graybox.datasets.pumping [--out DIR] [--seed N]``: regenerate the bundled CSVs.
-
-    Without ``--out`` it writes into the source checkout's ``data/pumping`` (the bundled files).
-    """
-    ap = argparse.ArgumentParser(prog="python -m graybox.datasets.pumping", description=main.__doc__)
-    ap.add_argument("--out", type=Path, default=None, help="output folder (default: <repo>/data/pumping)")
-    ap.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"seed (default {DEFAULT_SEED})")
-    args = ap.parse_args(argv)
-    out = args.out if args.out is not None else _source_data_dir()
-    if out is None:
-        ap.error("not running from a source checkout: give --out DIR")
-    dyn, sta = write_csvs(out, args.seed)
-    print(f"wrote {dyn} and {sta}")
-    return 0
+    """``python -m graybox.datasets.pumping [--out DIR] [--seed N]``: regenerate the bundled CSVs."""
+    return regenerate_main(argv, module="graybox.datasets.pumping", folder="pumping", write=write_csvs)
 
 
 if __name__ == "__main__":
