@@ -61,7 +61,10 @@ equations directly: with ξ(c) = (y − Ψθ)/C(q) (the recursive one-step predi
 and θ(c) eliminated by Ψᵀξ = 0, the ne equations E(ξ)ᵀξ / ξᵀξ = 0 (ξ uncorrelated with its
 own lags 1 … ne) are solved for c by Levenberg–Marquardt, which copes with their nearly
 singular direction (a near common factor of C and the output-lag polynomial makes them
-flat along a curve of c). The result then passes the same stopping rule, so the estimate
+flat along a curve of c). They also have spurious minima of |h| off the root, so the solve
+starts from the stalled c and then, for lags 1 … ne, from C = (1 − ρq⁻¹)^ne with ρ in
+(0.85, 0.7, 0.95, 0.5), until |h| ≤ 1e-9 (at most 600 evaluations of h in all). The
+result then passes the same stopping rule, so the estimate
 is the same fixed point that the relaxed iteration reaches whenever it converges; results
 on short records, where it converges by itself, are unchanged.
 
@@ -137,7 +140,6 @@ class ELSResult:
                 f"converged={self.converged})")
 
 
-
 #: Iterations without a new smallest residual change after which the relaxed iteration has stalled.
 _STALL = 10
 #: Evaluations of the fixed-point equations allowed to the direct solve.
@@ -199,7 +201,7 @@ def _no_convergence_message(max_iter: int, last: float, tol: float, beta: float,
     msg = (f"ELS did not converge in {max_iter} iterations: the residuals still changed by {last:.2e} "
            f"(relative) in the last one, above tol {tol:g}; returning the last iterate. ")
     if direct_failure:
-        msg += f"solving the fixed-point equations directly failed: {direct_failure}. "
+        msg += f"Solving the fixed-point equations directly failed: {direct_failure}. "
     if len(C) == 1:
         return msg + "Its noise terms are not plain lags e(k-l), so no cause is diagnosed."
     why = f"The MA part C(q) = {_ma_text(C)} "
