@@ -61,7 +61,10 @@ equations directly: with ξ(c) = (y − Ψθ)/C(q) (the recursive one-step predi
 and θ(c) eliminated by Ψᵀξ = 0, the ne equations E(ξ)ᵀξ / ξᵀξ = 0 (ξ uncorrelated with its
 own lags 1 … ne) are solved for c by Levenberg–Marquardt, which copes with their nearly
 singular direction (a near common factor of C and the output-lag polynomial makes them
-flat along a curve of c). The result then passes the same stopping rule, so the estimate
+flat along a curve of c). They also have spurious minima of |h| off the root, so the solve
+starts from the stalled c and then, for lags 1 … ne, from C = (1 − ρq⁻¹)^ne with ρ in
+(0.85, 0.7, 0.95, 0.5), until |h| ≤ 1e-9 (at most 600 evaluations of h in all). The
+result then passes the same stopping rule, so the estimate
 is the same fixed point that the relaxed iteration reaches whenever it converges; results
 on short records, where it converges by itself, are unchanged.
 
@@ -137,11 +140,13 @@ class ELSResult:
                 f"converged={self.converged})")
 
 
-
 #: Iterations without a new smallest residual change after which the relaxed iteration has stalled.
 _STALL = 10
 #: Evaluations of the fixed-point equations allowed to the direct solve.
-_LM_NFEV = 200
+_LM_NFEV = 600
+#: Double roots ρ of the extra starts of the direct solve, and |h| that counts as a root.
+_RHO_STARTS = (0.85, 0.7, 0.95, 0.5)
+_ROOT_TOL = 1e-9
 
 
 def _pure_lags(ns: Structure) -> list[int | None]:
@@ -196,7 +201,7 @@ def _no_convergence_message(max_iter: int, last: float, tol: float, beta: float,
     msg = (f"ELS did not converge in {max_iter} iterations: the residuals still changed by {last:.2e} "
            f"(relative) in the last one, above tol {tol:g}; returning the last iterate. ")
     if direct_failure:
-        msg += f"solving the fixed-point equations directly failed: {direct_failure}. "
+        msg += f"Solving the fixed-point equations directly failed: {direct_failure}. "
     if len(C) == 1:
         return msg + "Its noise terms are not plain lags e(k-l), so no cause is diagnosed."
     why = f"The MA part C(q) = {_ma_text(C)} "
@@ -257,14 +262,35 @@ class _DirectMA:
         xi, E = st
         return (E.T @ xi) / (xi @ xi)
 
+    def starts(self, c: np.ndarray) -> list[np.ndarray]:
+        """Where to start: the stalled iterate's c, then C(q) = (1 − ρq⁻¹)^ne for a few ρ (lags 1 … ne).
+
+        The equations are flat along a curve of c and have spurious minima of ‖h‖ off it, so one
+        start may end at a point that is no root; a double-root family spans that curve.
+        """
+        out = [np.asarray(c, float)]
+        ne = len(self.lags)
+        if sorted(self.lags) == list(range(1, ne + 1)):
+            for rho in _RHO_STARTS:
+                poly = np.poly(np.full(ne, rho))  # [1, c_1, …, c_ne]
+                out.append(np.array([poly[l] for l in self.lags]))
+        return out
+
     def solve(self, c: np.ndarray, max_nfev: int) -> np.ndarray | None:
-        """Residuals ξ at the root found from c, or None when none is found."""
-        with np.errstate(all="ignore"):
-            # forward differences with a step well above the round-off of h (filters of N samples)
-            sol = least_squares(self._h, np.asarray(c, float), method="lm", xtol=1e-14, ftol=1e-15, gtol=1e-15,
-                                diff_step=1e-6, max_nfev=int(max_nfev))
-        st = self._xi(sol.x)
-        return None if st is None else st[0]
+        """Residuals ξ at a root of h found from the starts, or None when none is found."""
+        for c0 in self.starts(c):
+            left = int(max_nfev) - self.nfev
+            if left < 10:
+                break
+            with np.errstate(all="ignore"):
+                # forward differences with a step well above the round-off of h (filters of N samples)
+                sol = least_squares(self._h, c0, method="lm", xtol=1e-14, ftol=1e-15, gtol=1e-15,
+                                    diff_step=1e-6, max_nfev=left)
+            if np.all(np.isfinite(sol.fun)) and np.max(np.abs(sol.fun)) <= _ROOT_TOL:
+                st = self._xi(sol.x)
+                if st is not None:
+                    return st[0]
+        return None
 
 
 def noise_terms(ne: int) -> Structure:
@@ -443,7 +469,7 @@ def els(
             if solver is None:
                 solver = _DirectMA(psi / sp, y, lags, bounds)
             if solver.nfev < _LM_NFEV and not direct_failure:
-                nxt = solver.solve(c, max_nfev=_LM_NFEV - solver.nfev)
+                nxt = solver.solve(c, max_nfev=_LM_NFEV)
                 n_direct = solver.nfev
                 if nxt is not None:
                     xi = nxt
