@@ -49,3 +49,16 @@ def test_selection_example_runs():
         obj = gb
         for part in name.split("."):
             obj = getattr(obj, part)
+
+
+def test_long_records_example_runs():
+    section = README.split("## API: long records", 1)[1]
+    block = re.findall(r"```python\n(.*?)```", section, re.S)[0]
+    ns: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        exec(compile(block, "README.md (long records)", "exec"), ns)
+    assert isinstance(ns["big"], gb.DaskRecord) and len(ns["sel"].structure) == 17
+    table = section.split("```python")[0]
+    for name in re.findall(r"^\| `([A-Za-z_.]+)", table, re.M):
+        assert hasattr(gb, name), name
