@@ -120,6 +120,14 @@ def test_a_dying_worker_gets_its_cell_retried_once_dask_and_a_scheduler_address(
         run = gx.run_grid(tiny_grid(), tmp_path / "by-address.sqlite", scheduler=cluster.scheduler_address)
         assert run.executor.startswith("Dask scheduler at tcp://") and run.ran == 8
         assert_same_rows(gx.load_results(tmp_path / "by-address.sqlite"), reference)
+        # the workers run without Dask's MALLOC_TRIM_THRESHOLD_ (it slows numpy's allocations) and
+        # with one BLAS thread and cores // workers numba threads
+        env = client.run(lambda: {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "OMP_NUM_THREADS",
+                                                                 "NUMBA_NUM_THREADS")})
+        assert len(env) == 2
+        for e in env.values():
+            assert e["MALLOC_TRIM_THRESHOLD_"] is None and e["OMP_NUM_THREADS"] == "1"
+            assert e["NUMBA_NUM_THREADS"] == str(worker_threads(2))
 
 
 SPEC = """\

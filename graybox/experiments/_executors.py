@@ -215,11 +215,17 @@ def local_cluster(workers: int):
 
     One thread per worker, ``NUMBA_NUM_THREADS`` = cores // workers; the scheduler reports a
     task whose worker died at once (``allowed-failures`` 0): the driver decides what to retry.
+    The workers start without the ``MALLOC_TRIM_THRESHOLD_`` that Dask's nanny sets by default:
+    setting it switches off glibc's adaptive mmap threshold, so every array of more than 64 KiB
+    is mapped and unmapped afresh, which made graybox's cells about 1.5–2 times slower on a
+    worker than in the driver (BENCHMARKS.md, grids).
     """
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+    environ = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ", {}).items()
+               if k != "MALLOC_TRIM_THRESHOLD_"}
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0, "distributed.nanny.pre-spawn-environ": environ}):
         cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, dashboard_address=None,
                                silence_logs=logging.ERROR, env=_thread_env(worker_threads(int(workers))))
     try:
