@@ -282,22 +282,8 @@ class TwoSpeedPumpingPlant:
         rig._check_reference(r1, "speed reference 1")
         rig._check_reference(r2, "speed reference 2")
         N = r1.size
-        slow = rig.surge_intensity > 0 or rig.air_loss_per_rpm > 0
-        need_rng = (noise and rig.noise_std > 0) or (process_noise and (rig.process_noise_std > 0 or slow))
-        if need_rng and rng is None:
-            raise ValueError("simulate: pass rng (a numpy Generator or a seed) or switch the noise off; "
-                             "the plant never draws unseeded noise")
-        gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
-        eps_w, eps_v, eps_s, eps_a = (gen.standard_normal((4, N)) if need_rng else np.zeros((4, N)))
-        phi = rig.process_noise_pole
-        w_on = process_noise and rig.process_noise_std > 0
-        w_gain = rig.process_noise_std * math.sqrt(1 - phi * phi) if w_on else 0.0
-        w0 = rig.process_noise_std * eps_w[0] if w_on else 0.0
-        v = rig.noise_std * eps_v if noise else np.zeros(N)
-        s_phi = math.exp(-rig.Ts / rig.surge_time)
-        s_gain = rig.surge_intensity / math.sqrt(rig.Ts) if process_noise else 0.0
-        a_phi = math.exp(-rig.Ts / rig.air_vent_time)
-        a_gain = rig.air_loss_per_rpm if process_noise else 0.0
+        eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = rig._disturbances(
+            N, rng, noise=noise, process_noise=process_noise)
         if x0 is None:
             state = self.steady_state(r1[0], r2[0])
         else:

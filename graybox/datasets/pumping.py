@@ -425,6 +425,34 @@ class PumpingPlant:
             raise ValueError(f"{what} must stay within {lo:g}–{hi:g} rpm (the calibrated range); "
                              f"sample {bad[0]} is {u[bad[0]]:g} rpm")
 
+    def _disturbances(self, N: int, rng, *, noise: bool, process_noise: bool):
+        """The noise sequences and disturbance constants of a run of N samples (one- and two-speed rigs).
+
+        Returns ``eps_w, eps_s, eps_a`` (unit normals for the process noise, surge and air),
+        ``v`` (the transmitter noise, mlc) and ``(phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain)``.
+        """
+        slow = self.surge_intensity > 0 or self.air_loss_per_rpm > 0
+        need_rng = (noise and self.noise_std > 0) or (process_noise and (self.process_noise_std > 0 or slow))
+        if need_rng and rng is None:
+            raise ValueError("simulate: pass rng (a numpy Generator or a seed) or switch the noise off; "
+                             "the plant never draws unseeded noise")
+        gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
+        # Draw all four noise sequences up front, always in this order, so a seed fixes the run
+        # whichever disturbances are switched on.
+        eps_w, eps_v, eps_s, eps_a = (gen.standard_normal((4, N)) if need_rng else np.zeros((4, N)))
+        phi = self.process_noise_pole
+        w_on = process_noise and self.process_noise_std > 0
+        w_gain = self.process_noise_std * math.sqrt(1 - phi * phi) if w_on else 0.0
+        w0 = self.process_noise_std * eps_w[0] if w_on else 0.0  # w starts stationary
+        v = self.noise_std * eps_v if noise else np.zeros(N)
+        # Transient-excited slow disturbances (module docs, "Disturbances"): both start at rest
+        # (the rig has been settled at u[0]) and are driven by the shaft-speed change of each sample.
+        s_phi = math.exp(-self.Ts / self.surge_time)
+        s_gain = self.surge_intensity / math.sqrt(self.Ts) if process_noise else 0.0
+        a_phi = math.exp(-self.Ts / self.air_vent_time)
+        a_gain = self.air_loss_per_rpm if process_noise else 0.0
+        return eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain)
+
     def simulate(
         self,
         u: np.ndarray | Sequence[float],
@@ -456,26 +484,8 @@ class PumpingPlant:
         u = as_1d_finite(u, "speed reference")
         self._check_reference(u)
         N = u.size
-        slow = self.surge_intensity > 0 or self.air_loss_per_rpm > 0
-        need_rng = (noise and self.noise_std > 0) or (process_noise and (self.process_noise_std > 0 or slow))
-        if need_rng and rng is None:
-            raise ValueError("simulate: pass rng (a numpy Generator or a seed) or switch the noise off; "
-                             "the plant never draws unseeded noise")
-        gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
-        # Draw all four noise sequences up front, always in this order, so a seed fixes the run
-        # whichever disturbances are switched on.
-        eps_w, eps_v, eps_s, eps_a = (gen.standard_normal((4, N)) if need_rng else np.zeros((4, N)))
-        phi = self.process_noise_pole
-        w_on = process_noise and self.process_noise_std > 0
-        w_gain = self.process_noise_std * math.sqrt(1 - phi * phi) if w_on else 0.0
-        w0 = self.process_noise_std * eps_w[0] if w_on else 0.0  # w starts stationary
-        v = self.noise_std * eps_v if noise else np.zeros(N)
-        # Transient-excited slow disturbances (module docs, "Disturbances"): both start at rest
-        # (the rig has been settled at u[0]) and are driven by the shaft-speed change of each sample.
-        s_phi = math.exp(-self.Ts / self.surge_time)
-        s_gain = self.surge_intensity / math.sqrt(self.Ts) if process_noise else 0.0
-        a_phi = math.exp(-self.Ts / self.air_vent_time)
-        a_gain = self.air_loss_per_rpm if process_noise else 0.0
+        eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
+            N, rng, noise=noise, process_noise=process_noise)
 
         nc, n, q = self.steady_state(u[0]) if x0 is None else (float(x) for x in x0)
         if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
