@@ -225,13 +225,22 @@ def local_cluster(workers: int):
 
     environ = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ", {}).items()
                if k != "MALLOC_TRIM_THRESHOLD_"}
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0, "distributed.nanny.pre-spawn-environ": environ}):
-        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR, env=_thread_env(worker_threads(int(workers))))
+    # a nanny started earlier in this process (another cluster) leaves the variable in os.environ,
+    # whence every worker spawned later (a restarted one too) would inherit it: off while we run
+    inherited = os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
     try:
-        yield cluster
+        with dask.config.set({"distributed.scheduler.allowed-failures": 0,
+                              "distributed.nanny.pre-spawn-environ": environ}):
+            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   env=_thread_env(worker_threads(int(workers))))
+        try:
+            yield cluster
+        finally:
+            cluster.close()
     finally:
-        cluster.close()
+        if inherited is not None:
+            os.environ["MALLOC_TRIM_THRESHOLD_"] = inherited
 
 
 class DaskCluster:
