@@ -160,14 +160,21 @@ def decide_min_correlation(
     L = st.max_lag
     record.require_length(L)
     y = record.y[L:]
-    Y1 = regressor_matrix(st, record.u, record.y, start=L, input_names=record.input_names) @ pareto.thetas.T  # (N-L, K)
-    xi = y[:, None] - Y1
-    Yo = Y1 if output == "one-step" else np.asarray(simulate_many(st, pareto.thetas, record)).T[L:]
-    with np.errstate(all="ignore"):
-        xc = xi - xi.mean(axis=0)
-        oc = Yo - Yo.mean(axis=0)
-        rho = np.abs(np.sum(xc * oc, axis=0)) / np.sqrt(np.sum(xc**2, axis=0) * np.sum(oc**2, axis=0))
-    rho = np.where(np.isfinite(rho) & np.all(np.isfinite(Yo), axis=0), rho, np.inf)
+    psi = regressor_matrix(st, record.u, record.y, start=L, input_names=record.input_names)
+    K = len(pareto)
+    rho = np.empty(K)
+    # members in blocks of at most ~2^22 samples of output: bounded memory on long records
+    step = max(1, (1 << 22) // max(1, y.size))
+    for k0 in range(0, K, step):
+        th = pareto.thetas[k0 : k0 + step]
+        Y1 = psi @ th.T  # (N-L, block)
+        xi = y[:, None] - Y1
+        Yo = Y1 if output == "one-step" else np.asarray(simulate_many(st, th, record)).T[L:]
+        with np.errstate(all="ignore"):
+            xc = xi - xi.mean(axis=0)
+            oc = Yo - Yo.mean(axis=0)
+            r = np.abs(np.sum(xc * oc, axis=0)) / np.sqrt(np.sum(xc**2, axis=0) * np.sum(oc**2, axis=0))
+        rho[k0 : k0 + step] = np.where(np.isfinite(r) & np.all(np.isfinite(Yo), axis=0), r, np.inf)
     if not np.isfinite(rho).any():
         raise ValueError("no member has a defined residual/output correlation (every free run diverged?)")
     i = int(np.argmin(rho))

@@ -111,3 +111,28 @@ def test_min_correlation_picks_least_correlated_member():
     assert "min-corr" in best.name
     with pytest.raises(ValueError, match="output must be"):
         decide_min_correlation(ps, rec, output="sideways")
+
+
+def test_min_correlation_on_a_long_record_works_in_member_blocks():
+    """1.5e6 samples: the members are scored in blocks (bounded memory); ρ as computed by hand."""
+    from graybox import Model, Record, Structure
+    from graybox._decide import decide_min_correlation
+    from graybox._pareto import ParetoSet
+
+    rng = np.random.default_rng(7)
+    n = 1_500_000
+    st = Structure(["y(k-1)", "u(k-1)", "1"])
+    u = np.repeat(rng.uniform(0.0, 1.0, n // 500), 500)
+    truth = Model(st, np.array([0.8, 0.5, 0.1]))
+    rec = Record(u, truth.simulate(u, np.zeros(1)) + 0.05 * rng.standard_normal(n))
+    thetas = truth.theta * (1 + 0.05 * rng.standard_normal((5, 3)))
+    thetas[2] = truth.theta
+    ps = ParetoSet(st, thetas, np.linspace(1, 0.2, 5), np.zeros(5), np.zeros(5), np.zeros(5), "test")
+    d = decide_min_correlation(ps, rec)
+    rhos = []
+    for th in thetas:
+        m = truth.with_theta(th)
+        xi = rec.y[1:] - m.predict(rec)[1:]
+        rhos.append(abs(np.corrcoef(xi, m.simulate(rec)[1:])[0, 1]))
+    assert d.index == int(np.argmin(rhos))
+    assert d.score == pytest.approx(min(rhos), rel=1e-9)
