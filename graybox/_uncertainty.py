@@ -778,11 +778,14 @@ def static_curve_band(
     Raises
     ------
     ValueError
-        The estimate has no stable equilibrium at some ū.
+        The estimate has no stable equilibrium at some ū; a model with several inputs.
     """
     if not isinstance(uncertainty, ParameterUncertainty):
         raise ValueError(f"static_curve_band needs a ParameterUncertainty, got {type(uncertainty).__name__}")
     check_choice(method, "method", ("delta", "monte-carlo"))
+    if uncertainty.model.n_inputs > 1:
+        raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
+                         f"inputs {uncertainty.model.input_names} (a band around a static surface is not built yet)")
     ub = np.atleast_1d(np.asarray(ubar, float)).ravel()
     if ub.size == 0 or not np.all(np.isfinite(ub)):
         raise ValueError("ubar must be a non-empty array of finite input levels")

@@ -436,3 +436,12 @@ def test_readme_several_inputs_example_runs():
         obj = gb
         for part in name.split("."):
             obj = getattr(obj, part)
+
+
+def test_static_curve_band_refuses_several_inputs_clearly():
+    rec, m = _miso_record()
+    fit = gb.els(m.structure, rec, noise=0).model
+    unc = gb.ls_uncertainty(fit, rec)
+    assert unc.cov.shape == (len(fit.structure),) * 2  # the parameter covariance itself works
+    with pytest.raises(ValueError, match="defined for one input"):
+        gb.static_curve_band(unc, [[0.0, 0.0], [0.5, 0.5]])
