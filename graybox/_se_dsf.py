@@ -25,8 +25,9 @@ least-squares estimate and the PE member of its λ1); the iteration above then m
 band's edge, where a weighted sum cannot go when the front is not convex. The problem is not
 convex and the weighted sums of nearby λ1 can sit in different basins, so the iteration runs
 from several starts: the in-band solution with the smallest J_S and the out-of-band solutions
-(J_SF ≤ 4 B) with a smaller J_S, which restoration brings into the band; the best feasible end wins. When the continuation finds nothing, the start is the PE member
-nearest the band (the closed form of eq. (11) costs milliseconds).
+(J_SF ≤ 4 B) with a smaller J_S, which restoration brings into the band; the best feasible end
+wins. When the continuation finds nothing, the start is the PE member nearest the band (the
+closed form of eq. (11) costs milliseconds).
 """
 
 from __future__ import annotations
