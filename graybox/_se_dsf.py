@@ -186,7 +186,9 @@ def _continuation(problem: SEProblem, band: float, lambdas: np.ndarray,
     smallest J_S and the (at most ``n_out``) out-of-band solutions with J_SF ≤ 4 B and a smaller J_S
     (better basins that restoration can bring into the band), each as (θ, description); or ([], reason).
     """
-    front = gradient_front(problem, lambdas, progress=False, starts=_pe_starts(problem))
+    # the coarse sweep only brackets the band's edge: "trf" throughout (the bisection makes the fresh
+    # "dogbox" restarts that find the deeper basins)
+    front = gradient_front(problem, lambdas, progress=False, starts=_pe_starts(problem), solver="trf")
     ok = np.all(np.isfinite(front.thetas), axis=1)
     if not ok.any():
         return [], "no member of the coarse SE sweep is defined"
