@@ -300,20 +300,27 @@ def pumping_data_dir() -> Path:
     repository's ``data/pumping`` by pyproject.toml); a source checkout (or an editable install)
     reads ``<repo>/data/pumping`` directly.
     """
+    return bundled_data_dir("pumping", "the bundled pumping data", "graybox.datasets.pumping")
+
+
+def bundled_data_dir(folder: str, what: str, module: str) -> Path:
+    """The folder of a bundled data set: package data ``graybox/data/FOLDER`` of an installed
+    package, else ``<repo>/data/FOLDER`` of a source checkout; ``FileNotFoundError`` naming both
+    places tried, ``what`` is missing, and ``python -m MODULE`` to regenerate it."""
     tried = []
     try:
-        cand = Path(str(resources.files("graybox.data") / "pumping"))
+        cand = Path(str(resources.files("graybox.data") / folder))
         tried.append(cand)
         if (cand / "dynamic.csv").is_file():
             return cand
     except ModuleNotFoundError:
         pass
-    cand = Path(__file__).resolve().parents[2] / "data" / "pumping"
+    cand = Path(__file__).resolve().parents[2] / "data" / folder
     tried.append(cand)
     if (cand / "dynamic.csv").is_file():
         return cand
-    raise FileNotFoundError(f"the bundled pumping data are missing; looked in {[str(t) for t in tried]}. "
-                            "Reinstall graybox, or regenerate them with `python -m graybox.datasets.pumping`")
+    raise FileNotFoundError(f"{what} are missing; looked in {[str(t) for t in tried]}. "
+                            f"Reinstall graybox, or regenerate them with `python -m {module}`")
 
 
 PUMPING_DESCRIPTION = (

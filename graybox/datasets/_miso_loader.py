@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-from importlib import resources
 from pathlib import Path
 
 from .._records import Dataset
-from ._loaders import load_record_csv, load_static_csv
+from ._loaders import bundled_data_dir, load_record_csv, load_static_csv
 
 __all__ = ["load_pumping_miso", "pumping_miso_data_dir", "PUMPING_MISO_INPUTS"]
 
@@ -32,20 +31,7 @@ def pumping_miso_data_dir() -> Path:
     An installed package carries them as package data ``graybox/data/pumping_miso``; a source
     checkout (or an editable install) reads ``<repo>/data/pumping_miso``.
     """
-    tried = []
-    try:
-        cand = Path(str(resources.files("graybox.data") / "pumping_miso"))
-        tried.append(cand)
-        if (cand / "dynamic.csv").is_file():
-            return cand
-    except ModuleNotFoundError:
-        pass
-    cand = Path(__file__).resolve().parents[2] / "data" / "pumping_miso"
-    tried.append(cand)
-    if (cand / "dynamic.csv").is_file():
-        return cand
-    raise FileNotFoundError(f"the bundled two-input pumping data are missing; looked in {[str(t) for t in tried]}. "
-                            "Reinstall graybox, or regenerate them with `python -m graybox.datasets._pumping_miso`")
+    return bundled_data_dir("pumping_miso", "the bundled two-input pumping data", "graybox.datasets._pumping_miso")
 
 
 def load_pumping_miso() -> Dataset:
