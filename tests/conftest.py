@@ -32,3 +32,19 @@ def paper_record(rng):
     y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
     y = m.simulate(u, y0)
     return Record(u, y, Ts=0.05, name="sim15")
+
+
+def assert_csv_pair_matches(dyn, sta, committed, ncols: tuple[int, int]) -> None:
+    """Regenerated bundled CSVs equal the committed ones: same header and rows, every column but the
+    last (pressure) exactly, the pressure to one unit of its 4th decimal (a last-ulp difference on
+    another platform can flip the printed rounding by that unit, never more)."""
+    for new, old, n in ((dyn, committed / "dynamic.csv", ncols[0]), (sta, committed / "static.csv", ncols[1])):
+        new_lines = new.read_text().splitlines()
+        old_lines = old.read_text().splitlines()
+        assert new_lines[0] == old_lines[0]
+        assert len(new_lines) == len(old_lines)
+        a = np.loadtxt(new_lines[1:], delimiter=",")
+        b = np.loadtxt(old_lines[1:], delimiter=",")
+        assert a.shape == b.shape and a.shape[1] == n
+        np.testing.assert_array_equal(a[:, :-1], b[:, :-1])
+        np.testing.assert_allclose(a[:, -1], b[:, -1], rtol=0, atol=1.01e-4)

@@ -316,18 +316,10 @@ def test_regenerated_files_match_the_committed_ones(tmp_path):
     # decimals: the simulation is plain IEEE float arithmetic and numpy's seeded normals, so on
     # another platform a last-ulp difference could flip the rounding of a printed value by one
     # unit of the last digit, never more: the tolerance is that unit, 1e-4 mlc.
+    from conftest import assert_csv_pair_matches
+
     dyn, sta = write_csvs(tmp_path)
-    committed = pumping_data_dir()
-    for new, old, ncols in ((dyn, committed / "dynamic.csv", 3), (sta, committed / "static.csv", 2)):
-        new_lines = new.read_text().splitlines()
-        old_lines = old.read_text().splitlines()
-        assert new_lines[0] == old_lines[0]
-        assert len(new_lines) == len(old_lines)
-        a = np.loadtxt(new_lines[1:], delimiter=",")
-        b = np.loadtxt(old_lines[1:], delimiter=",")
-        assert a.shape == b.shape and a.shape[1] == ncols
-        np.testing.assert_array_equal(a[:, :-1], b[:, :-1])
-        np.testing.assert_allclose(a[:, -1], b[:, -1], rtol=0, atol=1.01e-4)
+    assert_csv_pair_matches(dyn, sta, pumping_data_dir(), (3, 2))
 
 
 def test_main_writes_to_out(tmp_path, capsys):

@@ -184,18 +184,10 @@ def test_static_grid_is_a_serpentine():
 
 def test_regenerated_files_match_the_committed_ones(tmp_path):
     # as for the SISO files: exact speeds and times, pressures to one unit of the 4th decimal
+    from conftest import assert_csv_pair_matches
+
     dyn, sta = write_miso_csvs(tmp_path)
-    committed = REPO / "data" / "pumping_miso"
-    for new, old, ncols in ((dyn, committed / "dynamic.csv", 4), (sta, committed / "static.csv", 3)):
-        new_lines = new.read_text().splitlines()
-        old_lines = old.read_text().splitlines()
-        assert new_lines[0] == old_lines[0]
-        assert len(new_lines) == len(old_lines)
-        a = np.loadtxt(new_lines[1:], delimiter=",")
-        b = np.loadtxt(old_lines[1:], delimiter=",")
-        assert a.shape == b.shape and a.shape[1] == ncols
-        np.testing.assert_array_equal(a[:, :-1], b[:, :-1])
-        np.testing.assert_allclose(a[:, -1], b[:, -1], rtol=0, atol=1.01e-4)
+    assert_csv_pair_matches(dyn, sta, REPO / "data" / "pumping_miso", (4, 3))
 
 
 def test_main_writes_to_out(tmp_path, capsys):
