@@ -10,7 +10,13 @@ Both runs use warmed-up processes (a small grid first), so the times are the gri
 in-process run on the driver, the Dask run on a ``LocalCluster`` started beforehand the way
 ``graybox grid run --workers N`` starts it (its start-up time is printed separately). Every
 cell's own wall time is stored in its row; the scheduler's overhead per cell is the worker
-time not spent in cells, (wall × workers − Σ cell times) / cells.
+time not spent in cells, (wall × workers − Σ cell times) / cells. That figure includes the run's
+fixed costs (loading the data, opening the store, the first task's trip to a worker, the last
+result's trip back) and the last cells' imbalance, so it is split from the rows' timestamps (each
+row's ``finished_at`` less its ``wall_time`` is when the cell started on its worker): the time
+each worker spent between its first cell's start and its last cell's end outside cells (the
+per-cell hand-over: task dispatch, results, the driver's CPU on the shared cores), the fixed
+start and end, and the imbalance.
 """
 
 from __future__ import annotations
@@ -116,8 +122,10 @@ def main() -> None:
             gx.run_grid(warm_up(), tmp / "warm-dask.sqlite", client=client)
             t = time.perf_counter()
             cpu0 = time.process_time()
+            called = time.time()
             r_dk = gx.run_grid(g, tmp / "dask.sqlite", client=client)
             wall_dk = time.perf_counter() - t
+            returned = time.time()
             driver_cpu = time.process_time() - cpu0
         df_dk = gx.load_results(tmp / "dask.sqlite")
     assert r_in.ran == r_dk.ran == n
@@ -137,8 +145,25 @@ def main() -> None:
           f"= {driver_cpu / wall_dk:.0%} of one core")
     print(f"speed-up: {wall_in / wall_dk:.2f}x (goal >= 1.6x); this machine's own parallel throughput of "
           f"{args.workers} busy processes right after: {machine_ceiling(args.workers):.2f}x")
-    print(f"scheduler overhead per cell: {overhead * 1e3:.2f} ms = {overhead / med * 100:.1f} % of the median cell "
-          "(goal <= 5 %)")
+    print(f"scheduler overhead per cell, all in: {overhead * 1e3:.2f} ms = {overhead / med * 100:.1f} % of the median "
+          "cell (goal <= 5 %), made of:")
+    end = df_dk["finished_at"].map(lambda s: datetime.datetime.fromisoformat(s).timestamp()).to_numpy()
+    start = end - cell_dk
+    gaps = fixed = 0.0
+    spans = []
+    for w in df_dk["worker"].unique():
+        on = (df_dk["worker"] == w).to_numpy()
+        spans.append((start[on].min(), end[on].max()))
+        gaps += end[on].max() - start[on].min() - cell_dk[on].sum()
+    first, last = min(s for s, _ in spans), max(e for _, e in spans)
+    fixed = args.workers * ((first - called) + (returned - last))
+    imbalance = sum((s - first) + (last - e) for s, e in spans)
+    print(f"  hand-over between cells on the workers: {gaps / n * 1e3:.2f} ms per cell = {gaps / n / med * 100:.1f} % "
+          f"of the median cell ({len(spans)} workers, {gaps:.3f} s in all)")
+    print(f"  the run's fixed start and end (run_grid called -> first cell starts: {(first - called) * 1e3:.0f} ms; "
+          f"last cell ends -> run_grid returns: {(returned - last) * 1e3:.0f} ms), x {args.workers} workers: "
+          f"{fixed / n * 1e3:.2f} ms per cell")
+    print(f"  the workers' start and end imbalance: {imbalance * 1e3:.0f} ms in all, {imbalance / n * 1e3:.2f} ms per cell")
 
 
 if __name__ == "__main__":

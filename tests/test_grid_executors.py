@@ -15,10 +15,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from graybox import experiments as gx
 from graybox.experiments._cell import run_cell
-from graybox.experiments._executors import DaskCluster, ProcessPool, local_cluster, worker_threads
+from graybox.experiments._executors import (BATCH_SECONDS, MAX_BATCH, DaskCluster, ProcessPool, _Batches,
+                                            local_cluster, worker_threads)
 
 VALUES = ["data", "structure", "variant", "seed", "status", "message", "n_params", "lambda1", "rule", "in_band",
           "J1_ident", "JS_ident", "fit_ident", "J1_valid", "JS_valid", "fit_valid", "JSF", "static_miss"]
@@ -121,7 +124,8 @@ def test_a_dying_worker_gets_its_cell_retried_once_dask_and_a_scheduler_address(
         assert run.executor.startswith("Dask scheduler at tcp://") and run.ran == 8
         assert_same_rows(gx.load_results(tmp_path / "by-address.sqlite"), reference)
         # the workers run without Dask's MALLOC_TRIM_THRESHOLD_ (it slows numpy's allocations) and
-        # with one BLAS thread and cores // workers numba threads
+        # with one BLAS thread and cores // workers numba threads (a killed worker's nanny restarts it)
+        client.wait_for_workers(2, timeout=60)
         env = client.run(lambda: {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "OMP_NUM_THREADS",
                                                                  "NUMBA_NUM_THREADS")})
         assert len(env) == 2
@@ -196,3 +200,44 @@ def test_driver_killed_mid_grid_then_run_again(tmp_path):
     gx.run_grid(spec, tmp_path / "uninterrupted.sqlite")
     assert_same_rows(resumed, gx.load_results(tmp_path / "uninterrupted.sqlite"))
     assert (resumed["status"] == "ok").all()
+
+
+@settings(max_examples=60, deadline=None)
+@given(groups=st.lists(st.tuples(st.integers(1, 40), st.floats(1e-4, 2.0)), min_size=1, max_size=8),
+       slots=st.integers(1, 8), deaths=st.lists(st.integers(0, 200), max_size=3))
+def test_dask_batches_hold_every_cell_once_probes_first_then_longest_first(groups, slots, deaths):
+    """The Dask executor's batching: every cell exactly once (retried cells again, alone), one cell of
+    each (data, variant) group before any group's second, then the groups by measured time, longest
+    first, in batches of at most ~BATCH_SECONDS of work (or one cell) and at most MAX_BATCH cells."""
+    cells = [_FakeCell(f"{g}-{i}", "d", f"v{g}") for g, (n, _) in enumerate(groups) for i in range(n)]
+    seconds = {f"v{g}": t for g, (_, t) in enumerate(groups)}
+    b = _Batches(cells, slots)
+    out, retried, n_batches, requeued = [], [], 0, 0
+    deaths = set(deaths)
+    while b:
+        batch = b.next()
+        n_batches += 1
+        assert 1 <= len(batch) <= MAX_BATCH
+        if any(d for _, d in batch):
+            assert len(batch) == 1
+            retried.append(batch[0][0])
+            continue
+        if len(out) >= len(groups):  # past the probes: at most ~BATCH_SECONDS of work unless one cell
+            assert len(batch) == 1 or sum(seconds[c.variant] for c, _ in batch) <= BATCH_SECONDS * (1 + 1e-9)
+        for c, _ in batch:
+            out.append(c)
+            b.observe(c, seconds[c.variant])
+        if n_batches in deaths:
+            b.requeue(batch[0][0], 1)
+            requeued += 1
+    assert sorted(c.key for c in out) == sorted(c.key for c in cells)
+    assert len(retried) == requeued  # each requeued cell came back, alone
+    first = [c.variant for c in out[:len(groups)]]
+    assert sorted(first) == sorted(seconds)  # one probe per group first
+    rest = [seconds[c.variant] for c in out[len(groups):]]
+    assert all(a >= b * (1 - 1e-9) for a, b in zip(rest, rest[1:]))  # then longest group first
+
+
+class _FakeCell:
+    def __init__(self, key, data, variant):
+        self.key, self.data, self.variant = key, data, variant

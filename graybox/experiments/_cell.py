@@ -94,7 +94,7 @@ def _row(cell: Cell) -> dict[str, Any]:
 
 
 def _now() -> str:
-    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds")
 
 
 def failed_row(cell: Cell, message: str) -> dict[str, Any]:

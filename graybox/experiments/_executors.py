@@ -8,10 +8,10 @@ runs BLAS and numba on one thread (see :func:`graybox.experiments._cell.run_cell
 A worker process that dies while running a cell (killed, out of memory, a crash in compiled
 code) gets that cell retried once on a fresh worker; if it dies again the cell is a failed row
 naming what happened. The driver does this itself for both pools, and knows which cells a dead
-worker held: the local pool gives a worker one cell at a time; on Dask the driver keeps one task
-per worker thread in flight, and a task is a small batch of cells (about ``BATCH_SECONDS`` of
-work, so that the scheduler's cost per task stays a few per cent). When a Dask worker dies, every
-cell of its batch is retried alone, so the one that kills its worker dies alone the second time.
+worker held: the local pool gives a worker one cell at a time; on Dask the driver keeps
+``IN_FLIGHT`` tasks per worker thread in flight, and a task is a batch of cells (see
+:class:`_Batches`). When a Dask worker dies, every cell of its tasks is retried alone, so the one
+that kills its worker dies alone the second time.
 The ``LocalCluster`` graybox starts reports a worker's death at once (``allowed-failures`` 0); a
 cluster the user brings first retries as its own ``distributed.scheduler.allowed-failures`` says.
 """
@@ -22,13 +22,14 @@ import itertools
 import logging
 import multiprocessing as mp
 import os
-import statistics
 import uuid
 from collections import deque
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable, Iterator, Mapping, Sequence
+
+import numpy as np
 
 from .. import _api as gb
 
@@ -42,12 +43,19 @@ EXECUTORS = ("inprocess", "processes", "dask")
 
 CellFn = Callable[[Cell, gb.Dataset, int], dict]
 
-#: A Dask task runs a batch of cells lasting about this long (seconds), once the first cells
-#: have shown how long a cell takes: the scheduler's cost per task (milliseconds on a busy
-#: machine) is then a few per cent of the work.
-BATCH_SECONDS = 0.25
+#: A Dask task runs a batch of cells lasting at most about this long (seconds, by the times of the
+#: cells already run): the scheduler's cost per task (milliseconds) is then well under a per cent,
+#: and a killed driver loses at most IN_FLIGHT × threads of them.
+BATCH_SECONDS = 2.0
+#: Towards the end a batch holds at most 1/(GUIDE × in-flight tasks) of the work left ...
+GUIDE = 1
+#: ... but not less than this (seconds), so that the last tasks do not become many tiny ones.
+MIN_BATCH_SECONDS = 0.1
 #: Most cells in one Dask task.
 MAX_BATCH = 64
+#: Dask tasks in flight per worker thread: the next one waits on the worker, so no round trip
+#: through the driver sits between two tasks.
+IN_FLIGHT = 2
 
 
 def worker_threads(workers: int, cores: int | None = None) -> int:
@@ -206,9 +214,87 @@ class ProcessPool:
                 self._stop(s, graceful=s.proc.is_alive())
 
 
+class _Batches:
+    """The cells of the Dask tasks: which go together, and in which order.
+
+    Cells are grouped by (data, variant), whose estimator sets most of a cell's time. One cell of
+    each group runs first, alone, so that every group's time is known early; the rest go longest
+    group first (largest mean time so far), cheap cells last, in batches of about
+    ``BATCH_SECONDS`` of work that shrink towards the end to one in-flight task's share of the
+    work left, but not below ``MIN_BATCH_SECONDS`` (guided self-scheduling), so the workers
+    finish nearly together. A cell retried after its worker died goes alone, before the others.
+    """
+
+    def __init__(self, cells: Sequence[Cell], slots: int):
+        self.slots = max(1, int(slots))
+        self.retry: deque[tuple[Cell, int]] = deque()
+        self.probes: deque[Cell] = deque()
+        self.groups: dict[tuple[str, str], deque[Cell]] = {}
+        for c in cells:
+            g = (c.data, c.variant)
+            if g in self.groups:
+                self.groups[g].append(c)
+            else:
+                self.groups[g] = deque()
+                self.probes.append(c)
+        self._time: dict[tuple[str, str], list[float]] = {}  # group -> [sum of seconds, count]
+        self._probe_k = -(-len(self.probes) // self.slots)
+
+    def __len__(self) -> int:
+        return len(self.retry) + len(self.probes) + sum(len(q) for q in self.groups.values())
+
+    def observe(self, cell: Cell, seconds: float) -> None:
+        """Record a finished cell's wall time (seconds)."""
+        if np.isfinite(seconds) and seconds >= 0:
+            t = self._time.setdefault((cell.data, cell.variant), [0.0, 0])
+            t[0] += float(seconds)
+            t[1] += 1
+
+    def _mean(self, g: tuple[str, str], default: float) -> float:
+        t = self._time.get(g)
+        return t[0] / t[1] if t else default
+
+    def requeue(self, cell: Cell, deaths: int) -> None:
+        """Put back a cell whose worker died (it runs alone, next)."""
+        self.retry.appendleft((cell, deaths))
+
+    def next(self) -> list[tuple[Cell, int]]:
+        """The next task's cells, each with the number of worker deaths it has seen."""
+        if self.retry:
+            return [self.retry.popleft()]
+        if self.probes:  # spread over the first tasks, one for each in-flight slot
+            return [(self.probes.popleft(), 0) for _ in range(min(self._probe_k, len(self.probes)))]
+        seen = [t[0] / t[1] for t in self._time.values() if t[1]]
+        default = float(np.mean(seen)) if seen else BATCH_SECONDS
+        order = sorted((g for g, q in self.groups.items() if q), key=lambda g: -self._mean(g, default))
+        left = sum(len(self.groups[g]) * self._mean(g, default) for g in order)
+        target = min(BATCH_SECONDS, max(left / (GUIDE * self.slots), MIN_BATCH_SECONDS))
+        out: list[tuple[Cell, int]] = []
+        work = 0.0
+        for g in order:
+            q, t = self.groups[g], self._mean(g, default)
+            while q and len(out) < MAX_BATCH and (not out or work + t <= target):
+                out.append((q.popleft(), 0))
+                work += t
+            if len(out) >= MAX_BATCH or q:  # full; or the target reached inside this group
+                break
+        return out
+
+
 # --------------------------------------------------------------------------------------------
 # Dask distributed
 # --------------------------------------------------------------------------------------------
+#: The LocalCluster's housekeeping, made rarer: on a machine with as many cores as workers, the
+#: scheduler and the nannies (in the driver process) and each worker's own threads take their CPU
+#: from the cells. The workers' statistical profiler (a stack sample every 10 ms) is off.
+_QUIET = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.tick.interval": "200ms",
+}
+
+
 @contextmanager
 def local_cluster(workers: int):
     """The Dask ``LocalCluster`` graybox starts for ``workers`` processes (closed on exit).
@@ -230,7 +316,7 @@ def local_cluster(workers: int):
     inherited = os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
     try:
         with dask.config.set({"distributed.scheduler.allowed-failures": 0,
-                              "distributed.nanny.pre-spawn-environ": environ}):
+                              "distributed.nanny.pre-spawn-environ": environ, **_QUIET}):
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
                                    dashboard_address=None, silence_logs=logging.ERROR,
                                    env=_thread_env(worker_threads(int(workers))))
@@ -309,28 +395,20 @@ class DaskCluster:
             plugin = f"graybox-grid-data-{uuid.uuid4().hex[:8]}"
             client.register_plugin(GridData({h: datasets[h] for h in {c.data_hash for c in cells}}), name=plugin)
             tag = uuid.uuid4().hex[:8]
-            queue: deque[tuple[Cell, int]] = deque((c, 0) for c in cells)  # (cell, deaths so far)
             futures: dict = {}
-            times: list[float] = []
             counter = itertools.count()
-            window = max(1, sum(client.nthreads().values()))
-
-            def batch() -> list[tuple[Cell, int]]:
-                """The next task's cells: a retried cell alone, else as many as fill ~BATCH_SECONDS."""
-                if queue[0][1] > 0:
-                    return [queue.popleft()]
-                k = 1
-                if len(times) >= window:
-                    k = int(BATCH_SECONDS / max(statistics.median(times[-64:]), 1e-3))
-                    k = max(1, min(k, MAX_BATCH, len(queue) // (2 * window)))
-                out = []
-                while queue and len(out) < k and queue[0][1] == 0:
-                    out.append(queue.popleft())
-                return out
+            threads = max(1, sum(client.nthreads().values()))
+            batches = _Batches(cells, IN_FLIGHT * threads)
 
             def submit() -> None:
-                while queue and len(futures) < window:
-                    items = batch()
+                limit = IN_FLIGHT * threads
+                if batches.retry or any(d for items in futures.values() for _, d in items):
+                    # while cells whose worker died are retried, at most one task per live worker
+                    # thread: a task waiting behind the one that kills its worker would be charged
+                    # with that death too
+                    limit = max(1, sum(client.nthreads().values()))
+                while batches and len(futures) < limit:
+                    items = batches.next()
                     seq = next(counter)  # a retried cell gets a new key: the old one may still be known as erred
                     f = client.submit(cells_task, self.fn, plugin, [c for c, _ in items],
                                       key=f"graybox-cells-{items[0][0].key[:16]}-{seq}-{tag}", pure=False)
@@ -346,7 +424,8 @@ class DaskCluster:
                     rows: list[dict] = []
                     if f.status == "finished":
                         rows = list(result)
-                        times.extend(r["wall_time"] for r in rows)
+                        for (c, _), r in zip(items, rows):
+                            batches.observe(c, r.get("wall_time", np.nan))
                     else:
                         exc = result[1] if isinstance(result, tuple) and len(result) > 1 else result
                         if not isinstance(exc, BaseException):
@@ -354,13 +433,12 @@ class DaskCluster:
                         if isinstance(exc, KilledWorker):
                             # every cell of the batch goes back alone (the one that kills its worker
                             # is then found out); a second death makes a cell a failed row
-                            window = max(1, sum(client.nthreads().values()))
                             for c, deaths in reversed(items):
                                 if deaths + 1 >= 2:
                                     rows.append(failed_row(c, "the worker died twice while running this cell; "
                                                               f"it was retried once ({type(exc).__name__}: {exc})"))
                                 else:
-                                    queue.appendleft((c, deaths + 1))
+                                    batches.requeue(c, deaths + 1)
                         else:
                             rows = [failed_row(c, f"{type(exc).__name__}: {exc}") for c, _ in items]
                     f.release()
