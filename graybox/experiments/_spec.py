@@ -1026,18 +1026,20 @@ class Grid:
         ds = self.load_data() if datasets is None else datasets
         version = gb.__version__
         out: list[Cell] = []
+        structures = [(s, s.content()) for s in self.structures]
+        structures = [(s, sc, _freeze(sc)) for s, sc in structures]
+        variants = [(v, v.content()) for v in self.variants]
+        variants = [(v, vc, _freeze(vc)) for v, vc in variants]
         for d in self.data:
             dh = data_fingerprint(ds[d.name])
-            for s in self.structures:
-                sc = s.content()
-                for v in self.variants:
-                    vc = v.content()
+            for s, sc, frozen_s in structures:
+                for v, vc, frozen_v in variants:
                     for seed in (self.seeds if v.stochastic else (None,)):
                         band = d.band
                         key = _hash({"data": dh, "band": band, "structure": sc, "variant": vc, "seed": seed,
                                      "version": version}, 32)
-                        out.append(Cell(len(out), key, d.name, s.name, v.name, seed, dh, band, _freeze(sc),
-                                        _freeze(vc), version))
+                        out.append(Cell(len(out), key, d.name, s.name, v.name, seed, dh, band, frozen_s, frozen_v,
+                                        version))
         return tuple(out)
 
     def fingerprint(self, cells: Sequence[Cell]) -> str:
