@@ -102,6 +102,7 @@ class SEProblem:
         self.psi, self.target = stacked_regressors(structure, self.records)
         self.n_dyn = self.target.size
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
+        self._ls: np.ndarray | None = None
 
     def fingerprint(self) -> str:
         """A hash of everything that defines the problem (for checkpoints)."""
@@ -179,8 +180,10 @@ class SEProblem:
         return np.concatenate(e), e_static, np.vstack(J), Js
 
     def ls_theta(self) -> np.ndarray:
-        """Least-squares (one-step) estimate on all samples."""
-        return scaled_lstsq(self.psi, self.target)
+        """Least-squares (one-step) estimate on all samples (computed once; a copy)."""
+        if self._ls is None:
+            self._ls = scaled_lstsq(self.psi, self.target)
+        return self._ls.copy()
 
     def random_ls(self, rng: np.random.Generator, count: int, samples: int = 30) -> np.ndarray:
         """``count`` θ's, each least squares on ``samples`` randomly chosen rows (the paper's seeds)."""

@@ -15,19 +15,19 @@ both is at hand. Each iteration solves the linearised problem
 through its Lagrangian: d(μ) = argmin ‖r_S + J_S d‖² + μ ‖r_SF + J_SF d‖² (+ a Levenberg–Marquardt
 damping ν), with the multiplier μ ≥ 0 found by bisection so that the linearised constraint holds;
 a step is kept when the true J_SF stays in the band and the true J_S falls, else ν grows. A start
-outside the band first restores feasibility (steps that decrease J_SF); when that stalls above B the
-band is infeasible for the structure, and the result says so with the smallest J_SF reached.
+outside the band first restores feasibility: steps of the same linearised problem with the bound
+at half the current J_SF (or B), so that J_S is not given away on the way in, and plain descent of
+J_SF where the linearisation cannot get there; when that stalls above B the band is infeasible for
+the structure, and the result says so with the smallest J_SF reached.
 
-The start: the weighted-sum SE solution at the band's edge, found by continuation in λ1 (λ1 = 1
-fitted from several starts as in the SE sweep, then λ1 lowered with warm starts until J_SF ≤ B,
-then bisected back towards the edge, each bisection step refitted from its neighbours, the
-least-squares estimate and the PE member of its λ1); the iteration above then moves along the
-band's edge, where a weighted sum cannot go when the front is not convex. The problem is not
-convex and the weighted sums of nearby λ1 can sit in different basins, so the iteration runs
-from several starts: the in-band solution with the smallest J_S and the out-of-band solutions
-(J_SF ≤ 4 B) with a smaller J_S, which restoration brings into the band; the best feasible end
-wins. When the continuation finds nothing, the start is the PE member nearest the band (the
-closed form of eq. (11) costs milliseconds).
+The problem is not convex (the weighted sums of nearby λ1 sit in different basins), so the
+iteration runs from several starts and the best feasible end wins: the PE member nearest the band
+(the closed form of eq. (11), milliseconds); the member of a coarse SE gradient sweep (15 λ1, the
+sweep :func:`graybox.se_pareto` makes) with the smallest J_S in the band, so that the result is
+never worse than sweep + D_SF on the same λ1; and the members outside the band (J_SF ≤ 4 B) with a
+smaller J_S, from the sweep and from a few fresh weighted-sum fits at high λ1, which restoration
+brings into the band. Along the band's edge the iteration goes where no weighted sum can when the
+front is not convex.
 """
 
 from __future__ import annotations
@@ -175,73 +175,48 @@ def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.
     return th[i], f"PE λ1={lam[i]:.4g}"
 
 
-def _continuation(problem: SEProblem, band: float, lambdas: np.ndarray,
-                  n_out: int = 2) -> tuple[list[tuple[np.ndarray, str]], str]:
-    """Starts at the band's edge: a coarse weighted-sum sweep, then a bisection in λ1.
+#: λ1 of the fresh weighted-sum fits (least squares and the PE member of the same λ1 as starts,
+#: "dogbox") that add starts to the coarse sweep's: fits from afar land in basins that the sweep's
+#: continuation does not reach (BENCHMARKS.md, structure selection).
+_FRESH = (0.95, 0.85)
 
-    The coarse sweep is the SE gradient sweep itself (multi-start where it restarts); between the
-    in-band member with the smallest J_S and its neighbour with the larger λ1 (outside the band), a
-    bisection in log λ1 refits from both neighbours, the least-squares estimate and the PE member
-    of that λ1, and keeps moving towards the band's edge. Returns the in-band solution with the
-    smallest J_S and the (at most ``n_out``) out-of-band solutions with J_SF ≤ 4 B and a smaller J_S
-    (better basins that restoration can bring into the band), each as (θ, description); or ([], reason).
+
+def _sweep_starts(problem: SEProblem, band: float, lambdas: np.ndarray,
+                  n_out: int = 3) -> list[tuple[np.ndarray, str]]:
+    """Starts near the band's edge: members of a coarse SE sweep and of a few fresh fits.
+
+    The coarse sweep is :func:`graybox.se_pareto`'s gradient sweep itself (same starts and
+    solvers), so the edge iteration from its best in-band member ends no worse than sweep + D_SF
+    on the same λ1. Returned: that member, then the (at most ``n_out``) solutions outside the band
+    with J_SF ≤ 4 B and a smaller J_S, best first, which restoration brings into the band
+    (better basins); each as (θ, description).
     """
-    # the coarse sweep only brackets the band's edge: "trf" throughout (the bisection makes the fresh
-    # "dogbox" restarts that find the deeper basins)
-    front = gradient_front(problem, lambdas, progress=False, starts=_pe_starts(problem), solver="trf")
-    ok = np.all(np.isfinite(front.thetas), axis=1)
-    if not ok.any():
-        return [], "no member of the coarse SE sweep is defined"
-    js = np.where(ok, problem.js(np.where(ok[:, None], front.thetas, 0.0)), np.inf)
-    jsf = np.where(ok, problem.jsf(np.where(ok[:, None], front.thetas, 0.0)), np.inf)
-    inside = np.isfinite(js) & (jsf <= band)
-    if not inside.any():
-        return [], f"no member of the coarse SE sweep meets the band (smallest J_SF {jsf.min():.4g})"
-    i = int(np.flatnonzero(inside)[np.argmin(js[inside])])
-    best = (float(js[i]), front.thetas[i], float(front.lambdas[i]))
-    near = [(float(js[k]), front.thetas[k], float(front.lambdas[k])) for k in np.flatnonzero(
-        np.isfinite(js) & (jsf > band) & (jsf <= 4 * band))]
-    lam_lo, th_lo = float(front.lambdas[i]), front.thetas[i]
-    higher = [k for k in range(len(front.lambdas)) if front.lambdas[k] > lam_lo and ok[k]]
-    if higher:
-        k = min(higher, key=lambda k: front.lambdas[k])
-        lam_hi, th_hi = float(front.lambdas[k]), front.thetas[k]
-        for _ in range(5):
-            lam = float(np.sqrt(lam_lo * lam_hi))
-            try:
-                # warm starts continue with "trf"; fresh starts (least squares, the PE member of this
-                # λ1) with "dogbox", which finds the deeper basins from afar (the SE section)
-                fresh = [("least squares", problem.ls_theta())]
-                pe = _pe_members(problem, np.array([lam]))
-                if pe is not None:
-                    fresh.append(("PE", pe[0]))
-                fits = []
-                for cands, solver in (([("lo", th_lo), ("hi", th_hi)], "trf"), (fresh, "dogbox")):
-                    try:
-                        fits.append(_multistart(problem, lam, cands, (solver,), 50, 1e-8))
-                    except _Failed:
-                        pass
-                if not fits:
-                    raise _Failed(f"no start of the bisection at λ1 = {lam:g} is feasible")
-                th = min(fits, key=lambda f: f[1])[0]
-            except _Failed:
-                break
-            j_s, j_sf = float(problem.js(th[None])[0]), float(problem.jsf(th[None])[0])
-            if np.isfinite(j_s) and j_sf <= band:
-                lam_lo, th_lo = lam, th
-                if j_s < best[0]:
-                    best = (j_s, th, lam)
-            else:
-                lam_hi, th_hi = lam, th
-                if np.isfinite(j_s) and j_sf <= 4 * band:
-                    near.append((j_s, th, lam))
-    out = [(best[1], f"SE λ1={best[2]:.4g}")]
-    # the out-of-band solutions with a smaller J_S, best first: each edge iteration costs a few
-    # Jacobians, far less than one weighted-sum fit, so several are affordable
-    for j_s, th, lam in sorted(near, key=lambda t: t[0])[:n_out]:
-        if j_s < best[0]:
-            out.append((th, f"SE λ1={lam:.4g} (outside the band, restored)"))
-    return out, ""
+    front = gradient_front(problem, lambdas, progress=False, starts=_pe_starts(problem))
+    cands = [(th, f"SE λ1={lam:.4g}") for th, lam in zip(front.thetas, front.lambdas)]
+    ls = problem.ls_theta()
+    fresh = np.array(_FRESH)
+    pe = _pe_members(problem, fresh)
+    for k, lam in enumerate(fresh):
+        starts = [("least squares", ls)] + ([("PE", pe[k])] if pe is not None else [])
+        try:
+            cands.append((_multistart(problem, float(lam), starts, ("dogbox",), 50, 1e-8)[0],
+                          f"SE λ1={lam:.4g} (fresh fit)"))
+        except _Failed:
+            pass
+    cands = [(th, name) for th, name in cands if np.all(np.isfinite(th))]
+    if not cands:
+        return []
+    th = np.array([c[0] for c in cands])
+    js, jsf = problem.js(th), problem.jsf(th)
+    inside = np.flatnonzero(np.isfinite(js) & (jsf <= band))
+    out, best = [], np.inf
+    if inside.size:
+        i = int(inside[np.argmin(js[inside])])
+        out.append(cands[i])
+        best = js[i]
+    near = [k for k in np.argsort(js) if np.isfinite(js[k]) and band < jsf[k] <= 4 * band and js[k] < best]
+    out += [(cands[k][0], cands[k][1] + " (outside the band, restored)") for k in near[:n_out]]
+    return out
 
 
 def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
@@ -271,8 +246,12 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
             if feasible:
                 d = _constrained_step(f, g, G, min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin))), nu)
             else:
-                # restoration: decrease J_SF, with J_S as a small regulariser
-                d = _step(A2, b2, A1, b1, 1e-6, nu)
+                # restoration: the smallest linearised J_S with J_SF at most half of now (or the band),
+                # so that J_S is not given away on the way into the band; where the linearised J_SF
+                # cannot get there, plain descent of J_SF with J_S as a small regulariser
+                d = _constrained_step(f, g, G, max(band * (1.0 - margin), 0.5 * g), nu)
+                if d is None:
+                    d = _step(A2, b2, A1, b1, 1e-6, nu)
             if d is None:
                 nu *= 10.0
                 if nu > 1e12:
@@ -331,16 +310,16 @@ def se_dsf(
     band : float
         B, the bound on J_SF in output units² (D_SF's band: 0.031 mlc² = 0.175² for the plant).
     theta0 : ndarray, shape (n_terms,), optional
-        Start; default: the weighted-sum solution at the band's edge (see the module docstring).
+        The only start; default: several (see the module docstring).
     lambdas : sequence of float, optional
-        λ1 of the coarse SE sweep that finds the start (default: 8 in logspace(-2, 0)).
+        λ1 of the coarse SE sweep that finds starts (default: 15 in logspace(-2, 0)).
     max_iter : int
         Largest number of trial steps.
     tol : float
         Relative decrease of J_S below which the iteration stops.
     pe_lambdas : ndarray, optional
-        λ1 values of the PE sweep that picks the start when the coarse SE sweep finds no member in
-        the band (default: 60 in logspace(-6, 0)).
+        λ1 values of the PE sweep (closed form) whose member nearest the band is one start
+        (default: 60 in logspace(-6, 0)).
 
     Returns
     -------
@@ -364,10 +343,8 @@ def se_dsf(
         th0, start = _pe_start(problem, band, lams)
     starts = [(th0, start)]
     if theta0 is None:
-        coarse = np.logspace(-2, 0, 8) if lambdas is None else check_lambdas(lambdas)
-        found, _ = _continuation(problem, band, coarse)
-        if found:
-            starts = found
+        coarse = np.logspace(-2, 0, 15) if lambdas is None else check_lambdas(lambdas)
+        starts += _sweep_starts(problem, band, coarse)
     gn = _GN(problem)
     runs = []
     for th_s, start_s in starts:
