@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from graybox import experiments as gx
 from graybox.experiments._cell import run_cell
-from graybox.experiments._executors import (BATCH_SECONDS, MAX_BATCH, DaskCluster, ProcessPool, _Batches,
+from graybox.experiments._executors import (BATCH_SECONDS, MAX_BATCH, DaskCluster, ProcessPool, _Batches, _size,
                                             local_cluster, worker_threads)
 
 VALUES = ["data", "structure", "variant", "seed", "status", "message", "n_params", "lambda1", "rule", "in_band",
@@ -209,7 +209,8 @@ def test_dask_batches_hold_every_cell_once_probes_first_then_longest_first(group
     """The Dask executor's batching: every cell exactly once (retried cells again, alone), one cell of
     each (data, variant) group before any group's second, then the groups by measured time, longest
     first, in batches of at most ~BATCH_SECONDS of work (or one cell) and at most MAX_BATCH cells."""
-    cells = [_FakeCell(f"{g}-{i}", "d", f"v{g}") for g, (n, _) in enumerate(groups) for i in range(n)]
+    cells = [_FakeCell(f"{g}-{i}", "d", f"v{g}", {"terms": ["1"] * ((7 * i) % 5)} if i % 2 else {"n_terms": i % 4})
+             for g, (n, _) in enumerate(groups) for i in range(n)]
     seconds = {f"v{g}": t for g, (_, t) in enumerate(groups)}
     b = _Batches(cells, slots)
     out, retried, n_batches, requeued = [], [], 0, 0
@@ -236,8 +237,11 @@ def test_dask_batches_hold_every_cell_once_probes_first_then_longest_first(group
     assert sorted(first) == sorted(seconds)  # one probe per group first
     rest = [seconds[c.variant] for c in out[len(groups):]]
     assert all(a >= b * (1 - 1e-9) for a, b in zip(rest, rest[1:]))  # then longest group first
+    for v in seconds:  # within a group, larger structures first
+        sizes = [_size(c) for c in out[len(groups):] if c.variant == v]
+        assert sizes == sorted(sizes, reverse=True)
 
 
 class _FakeCell:
-    def __init__(self, key, data, variant):
-        self.key, self.data, self.variant = key, data, variant
+    def __init__(self, key, data, variant, structure_spec):
+        self.key, self.data, self.variant, self.structure_spec = key, data, variant, structure_spec

@@ -214,12 +214,21 @@ class ProcessPool:
                 self._stop(s, graceful=s.proc.is_alive())
 
 
+def _size(cell: Cell) -> int:
+    """Terms of a cell's structure as its spec gives them (0 when a rule other than a count decides)."""
+    spec = cell.structure_spec
+    if spec.get("terms") is not None:
+        return len(spec["terms"])
+    return int(spec.get("n_terms") or 0)
+
+
 class _Batches:
     """The cells of the Dask tasks: which go together, and in which order.
 
     Cells are grouped by (data, variant), whose estimator sets most of a cell's time. One cell of
-    each group runs first, alone, so that every group's time is known early; the rest go longest
-    group first (largest mean time so far), cheap cells last, in batches of about
+    each group runs first (these probes are spread over the first tasks), so that every group's
+    time is known early; the rest go longest group first (largest mean time so far), within a
+    group the larger structures first, so that the cheapest cells come last, in batches of about
     ``BATCH_SECONDS`` of work that shrink towards the end to one in-flight task's share of the
     work left, but not below ``MIN_BATCH_SECONDS`` (guided self-scheduling), so the workers
     finish nearly together. A cell retried after its worker died goes alone, before the others.
@@ -237,6 +246,8 @@ class _Batches:
             else:
                 self.groups[g] = deque()
                 self.probes.append(c)
+        for g, q in self.groups.items():  # larger structures first within a group: the last cells are the cheapest
+            self.groups[g] = deque(sorted(q, key=lambda c: -_size(c)))
         self._time: dict[tuple[str, str], list[float]] = {}  # group -> [sum of seconds, count]
         self._probe_k = -(-len(self.probes) // self.slots)
 
