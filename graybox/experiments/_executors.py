@@ -46,11 +46,11 @@ CellFn = Callable[[Cell, gb.Dataset, int], dict]
 #: A Dask task runs a batch of cells lasting at most about this long (seconds, by the times of the
 #: cells already run): the scheduler's cost per task (milliseconds) is then well under a per cent,
 #: and a killed driver loses at most IN_FLIGHT × threads of them.
-BATCH_SECONDS = 2.0
+BATCH_SECONDS = 3.0
 #: Towards the end a batch holds at most 1/(GUIDE × in-flight tasks) of the work left ...
 GUIDE = 1
 #: ... but not less than this (seconds), so that the last tasks do not become many tiny ones.
-MIN_BATCH_SECONDS = 0.1
+MIN_BATCH_SECONDS = 0.15
 #: Most cells in one Dask task.
 MAX_BATCH = 64
 #: Dask tasks in flight per worker thread: the next one waits on the worker, so no round trip
