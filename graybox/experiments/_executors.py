@@ -50,7 +50,7 @@ BATCH_SECONDS = 3.0
 #: Towards the end a batch holds at most 1/(GUIDE × in-flight tasks) of the work left ...
 GUIDE = 1
 #: ... but not less than this (seconds), so that the last tasks do not become many tiny ones.
-MIN_BATCH_SECONDS = 0.15
+MIN_BATCH_SECONDS = 0.04
 #: Most cells in one Dask task.
 MAX_BATCH = 64
 #: Dask tasks in flight per worker thread: the next one waits on the worker, so no round trip
@@ -215,23 +215,24 @@ class ProcessPool:
 
 
 def _size(cell: Cell) -> int:
-    """Terms of a cell's structure as its spec gives them (0 when a rule other than a count decides)."""
+    """Terms of a cell's structure as its spec gives them (1 when a rule other than a count decides)."""
     spec = cell.structure_spec
     if spec.get("terms") is not None:
-        return len(spec["terms"])
-    return int(spec.get("n_terms") or 0)
+        return max(1, len(spec["terms"]))
+    return max(1, int(spec.get("n_terms") or 1))
 
 
 class _Batches:
     """The cells of the Dask tasks: which go together, and in which order.
 
-    Cells are grouped by (data, variant), whose estimator sets most of a cell's time. One cell of
-    each group runs first (these probes are spread over the first tasks), so that every group's
-    time is known early; the rest go longest group first (largest mean time so far), within a
-    group the larger structures first, so that the cheapest cells come last, in batches of about
-    ``BATCH_SECONDS`` of work that shrink towards the end to one in-flight task's share of the
-    work left, but not below ``MIN_BATCH_SECONDS`` (guided self-scheduling), so the workers
-    finish nearly together. A cell retried after its worker died goes alone, before the others.
+    A cell's time is estimated as its (data, variant) group's measured seconds per structure term
+    times its structure's terms (a variant's estimator sets most of a cell's time, the structure's
+    size most of the rest). One cell of each group runs first (these probes are spread over the
+    first tasks), so that every group's rate is known early; then the cells go longest first by
+    that estimate, so the cheapest come last, in batches of about ``BATCH_SECONDS`` of estimated
+    work that shrink towards the end to one in-flight task's share of the work left, but not
+    below ``MIN_BATCH_SECONDS`` (guided self-scheduling), so the workers finish nearly together.
+    A cell retried after its worker died goes alone, before the others.
     """
 
     def __init__(self, cells: Sequence[Cell], slots: int):
@@ -246,9 +247,10 @@ class _Batches:
             else:
                 self.groups[g] = deque()
                 self.probes.append(c)
-        for g, q in self.groups.items():  # larger structures first within a group: the last cells are the cheapest
+        for g, q in self.groups.items():  # larger structures first: each group's head is its longest cell
             self.groups[g] = deque(sorted(q, key=lambda c: -_size(c)))
-        self._time: dict[tuple[str, str], list[float]] = {}  # group -> [sum of seconds, count]
+        self._terms = {g: sum(_size(c) for c in q) for g, q in self.groups.items()}  # terms still queued
+        self._time: dict[tuple[str, str], list[float]] = {}  # group -> [seconds, terms] of finished cells
         self._probe_k = -(-len(self.probes) // self.slots)
 
     def __len__(self) -> int:
@@ -259,11 +261,7 @@ class _Batches:
         if np.isfinite(seconds) and seconds >= 0:
             t = self._time.setdefault((cell.data, cell.variant), [0.0, 0])
             t[0] += float(seconds)
-            t[1] += 1
-
-    def _mean(self, g: tuple[str, str], default: float) -> float:
-        t = self._time.get(g)
-        return t[0] / t[1] if t else default
+            t[1] += _size(cell)
 
     def requeue(self, cell: Cell, deaths: int) -> None:
         """Put back a cell whose worker died (it runs alone, next)."""
@@ -275,20 +273,25 @@ class _Batches:
             return [self.retry.popleft()]
         if self.probes:  # spread over the first tasks, one for each in-flight slot
             return [(self.probes.popleft(), 0) for _ in range(min(self._probe_k, len(self.probes)))]
-        seen = [t[0] / t[1] for t in self._time.values() if t[1]]
-        default = float(np.mean(seen)) if seen else BATCH_SECONDS
-        order = sorted((g for g, q in self.groups.items() if q), key=lambda g: -self._mean(g, default))
-        left = sum(len(self.groups[g]) * self._mean(g, default) for g in order)
+        seen = [t for t in self._time.values() if t[1]]
+        default = sum(t[0] for t in seen) / sum(t[1] for t in seen) if seen else BATCH_SECONDS
+        rate = {g: (self._time[g][0] / self._time[g][1] if self._time.get(g, (0, 0))[1] else default)
+                for g, q in self.groups.items() if q}
+        left = sum(rate[g] * self._terms[g] for g in rate)
         target = min(BATCH_SECONDS, max(left / (GUIDE * self.slots), MIN_BATCH_SECONDS))
         out: list[tuple[Cell, int]] = []
         work = 0.0
-        for g in order:
-            q, t = self.groups[g], self._mean(g, default)
-            while q and len(out) < MAX_BATCH and (not out or work + t <= target):
-                out.append((q.popleft(), 0))
-                work += t
-            if len(out) >= MAX_BATCH or q:  # full; or the target reached inside this group
+        while rate and len(out) < MAX_BATCH:
+            g = max(rate, key=lambda g: rate[g] * _size(self.groups[g][0]))  # the longest cell left
+            t = rate[g] * _size(self.groups[g][0])
+            if out and work + t > target:
                 break
+            c = self.groups[g].popleft()
+            self._terms[g] -= _size(c)
+            out.append((c, 0))
+            work += t
+            if not self.groups[g]:
+                del rate[g]
         return out
 
 
