@@ -23,7 +23,7 @@ the structure, and the result says so with the smallest J_SF reached.
 The problem is not convex (the weighted sums of nearby λ1 sit in different basins), so the
 iteration runs from several starts and the best feasible end wins: the PE member nearest the band
 (the closed form of eq. (11), milliseconds); the member of a coarse SE gradient sweep (15 λ1, the
-sweep :func:`graybox.se_pareto` makes) with the smallest J_S in the band, so that the result is
+sweep ``se_pareto(method="gradient")`` makes) with the smallest J_S in the band, so that the result is
 never worse than sweep + D_SF on the same λ1; and the members outside the band (J_SF ≤ 4 B) with a
 smaller J_S, from the sweep and from a few fresh weighted-sum fits at high λ1, which restoration
 brings into the band. Along the band's edge the iteration goes where no weighted sum can when the
@@ -65,13 +65,13 @@ class DSFResult:
     feasible : bool
         Whether J_SF ≤ B holds. When False, ``model`` is the member with the smallest J_SF reached.
     start : str
-        Where the iteration started (e.g. ``"PE λ1=0.0123"`` or ``"theta0"``).
+        Where the winning run started (e.g. ``"PE λ1=0.0123"``, ``"SE λ1=0.7197"`` or ``"theta0"``).
     start_JS, start_JSF : float
-        J_S and J_SF of the start.
+        J_S and J_SF of that start.
     n_iter : int
         Iterations (trial steps) taken, summed over the starts.
     message : str
-        Why the iteration stopped, in words.
+        Why the winning run stopped, in words.
     """
 
     model: Model
@@ -172,7 +172,7 @@ def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.
             raise ValueError("no PE member nor the least-squares estimate has a bounded free run and a static curve "
                              "at every static point: give theta0")
         i = int(np.flatnonzero(ok)[np.argmin(jsf[ok])])
-    return th[i], f"PE λ1={lam[i]:.4g}"
+    return th[i], ("least squares" if i == len(lam) - 1 else f"PE λ1={lam[i]:.4g}")
 
 
 #: λ1 of the fresh weighted-sum fits (least squares and the PE member of the same λ1 as starts,
@@ -316,7 +316,7 @@ def se_dsf(
     max_iter : int
         Largest number of trial steps.
     tol : float
-        Relative decrease of J_S below which the iteration stops.
+        Relative decrease of J_S (of J_SF while a run restores feasibility) below which a run stops.
     pe_lambdas : ndarray, optional
         λ1 values of the PE sweep (closed form) whose member nearest the band is one start
         (default: 60 in logspace(-6, 0)).
@@ -336,15 +336,21 @@ def se_dsf(
     tol = check_real(tol, "tol", low=0, low_open=True)
     warn_static_range(sp.ubar, recs)
     problem = SEProblem(structure, recs, sp)
+    why: list[str] = []
     if theta0 is not None:
-        th0, start = check_theta(len(problem.structure), theta0, "theta0"), "theta0"
+        starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]
     else:
         lams = np.logspace(-6, 0, 60) if pe_lambdas is None else np.asarray(pe_lambdas, float)
-        th0, start = _pe_start(problem, band, lams)
-    starts = [(th0, start)]
-    if theta0 is None:
         coarse = np.logspace(-2, 0, 15) if lambdas is None else check_lambdas(lambdas)
-        starts += _sweep_starts(problem, band, coarse)
+        starts = []
+        try:
+            starts.append(_pe_start(problem, band, lams))
+        except ValueError as exc:  # the SE sweep may still find starts
+            why.append(str(exc))
+        try:
+            starts += _sweep_starts(problem, band, coarse)
+        except (ValueError, np.linalg.LinAlgError) as exc:
+            why.append(f"the coarse SE sweep: {exc}")
     gn = _GN(problem)
     runs = []
     for th_s, start_s in starts:
@@ -352,8 +358,9 @@ def se_dsf(
         if r is not None:
             runs.append((start_s, r))
     if not runs:
-        raise ValueError(f"the start ({starts[0][1]}) has an unbounded free run or no equilibrium reached at some "
-                         "static point; give another theta0")
+        named = ", ".join(name for _, name in starts) or "none found"
+        raise ValueError(f"no start ({named}) has a bounded free run and an equilibrium reached at every static "
+                         "point" + (f" ({'; '.join(why)})" if why else "") + "; give another theta0")
     # the feasible run with the smallest J_S, else the run with the smallest J_SF
     start, (th, f, g, f0, g0, it, message) = min(
         runs, key=lambda t: (t[1][2] > band * (1 + 1e-12), t[1][1] if t[1][2] <= band * (1 + 1e-12) else t[1][2]))

@@ -3,6 +3,7 @@ with SIGKILL, and the driver itself killed with SIGKILL mid-grid and run again."
 
 from __future__ import annotations
 
+import logging
 import os
 import signal
 import sqlite3
@@ -134,6 +135,27 @@ def test_a_dying_worker_gets_its_cell_retried_once_dask_and_a_scheduler_address(
             assert e["NUMBA_NUM_THREADS"] == str(worker_threads(2))
 
 
+def test_a_dying_worker_with_two_threads_takes_only_its_own_cell_down(tmp_path, reference):
+    """A user's cluster whose worker runs two threads: while cells are retried only one task runs
+    per worker process, so the cell that kills its worker is the only one failed."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR)
+    with cluster, Client(cluster) as client:
+        cells, data = _death_cells(("LS", "PE", "SE"))
+        rows = {r["variant"]: r for r in DaskCluster(client=client, fn=partial(_kill_myself, str(tmp_path))).run(
+            cells, data)}
+    assert set(rows) == {"LS", "PE", "SE"}
+    assert rows["LS"]["status"] == "failed" and "died" in rows["LS"]["message"]
+    ref = reference.set_index("key")
+    for v in ("PE", "SE"):
+        assert rows[v]["status"] == "ok", rows[v]["message"]
+        assert rows[v]["JS_valid"] == ref.loc[rows[v]["key"], "JS_valid"]
+
+
 SPEC = """\
 name = "killed"
 seeds = [0, 1, 2, 3]
@@ -246,3 +268,13 @@ def test_dask_batches_hold_every_cell_once_probes_first_then_longest_first(group
 class _FakeCell:
     def __init__(self, key, data, variant, structure_spec):
         self.key, self.data, self.variant, self.structure_spec = key, data, variant, structure_spec
+
+
+def test_dask_batches_learn_only_from_finite_times():
+    cells = [_FakeCell(f"c{i}", "d", "v", {"n_terms": 4}) for i in range(3)]
+    b = _Batches(cells, 2)
+    for bad in (None, "x", float("nan"), float("inf"), -1.0):
+        b.observe(cells[0], bad)
+    assert b._time == {}
+    b.observe(cells[0], 0.2)
+    assert b._time[("d", "v")] == [0.2, 4]

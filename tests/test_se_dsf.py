@@ -54,3 +54,17 @@ def test_bad_input(data):
         gb.se_dsf(TRUE, data.ident, band=0.1)
     with pytest.raises(ValueError, match="theta0"):
         gb.se_dsf(TRUE, data, band=0.1, theta0=np.zeros(2))
+
+
+def test_a_failed_pe_start_leaves_the_sweep_starts(data, monkeypatch):
+    import graybox._se_dsf as impl
+
+    def no_pe(*args, **kwargs):
+        raise ValueError("no PE member has a bounded free run")
+
+    monkeypatch.setattr(impl, "_pe_start", no_pe)
+    res = gb.se_dsf(TRUE, data, band=0.02, lambdas=np.logspace(-2, 0, 5))
+    assert res.feasible and res.start.startswith("SE")
+    monkeypatch.setattr(impl, "_sweep_starts", lambda *a, **k: [])
+    with pytest.raises(ValueError, match="no start .*no PE member has a bounded free run"):
+        gb.se_dsf(TRUE, data, band=0.02)

@@ -22,6 +22,7 @@ import itertools
 import logging
 import multiprocessing as mp
 import os
+import time
 import uuid
 from collections import deque
 from contextlib import contextmanager
@@ -256,8 +257,12 @@ class _Batches:
     def __len__(self) -> int:
         return len(self.retry) + len(self.probes) + sum(len(q) for q in self.groups.values())
 
-    def observe(self, cell: Cell, seconds: float) -> None:
-        """Record a finished cell's wall time (seconds)."""
+    def observe(self, cell: Cell, seconds: Any) -> None:
+        """Record a finished cell's wall time (seconds; anything but a finite number ≥ 0 is ignored)."""
+        try:
+            seconds = float(seconds)
+        except (TypeError, ValueError):
+            return
         if np.isfinite(seconds) and seconds >= 0:
             t = self._time.setdefault((cell.data, cell.variant), [0.0, 0])
             t[0] += float(seconds)
@@ -411,16 +416,20 @@ class DaskCluster:
             tag = uuid.uuid4().hex[:8]
             futures: dict = {}
             counter = itertools.count()
-            threads = max(1, sum(client.nthreads().values()))
-            batches = _Batches(cells, IN_FLIGHT * threads)
+            batches = _Batches(cells, IN_FLIGHT * max(1, sum(client.nthreads().values())))
+            asked = [time.monotonic()]
 
             def submit() -> None:
-                limit = IN_FLIGHT * threads
                 if batches.retry or any(d for items in futures.values() for _, d in items):
                     # while cells whose worker died are retried, at most one task per live worker
-                    # thread: a task waiting behind the one that kills its worker would be charged
-                    # with that death too
-                    limit = max(1, sum(client.nthreads().values()))
+                    # process: a task beside or behind the one that kills its worker would be
+                    # charged with that death too
+                    limit = max(1, len(client.nthreads()))
+                else:
+                    if time.monotonic() - asked[0] > 1.0:  # workers may come and go (at most one question a second)
+                        batches.slots = IN_FLIGHT * max(1, sum(client.nthreads().values()))
+                        asked[0] = time.monotonic()
+                    limit = batches.slots
                 while batches and len(futures) < limit:
                     items = batches.next()
                     seq = next(counter)  # a retried cell gets a new key: the old one may still be known as erred
@@ -439,7 +448,8 @@ class DaskCluster:
                     if f.status == "finished":
                         rows = list(result)
                         for (c, _), r in zip(items, rows):
-                            batches.observe(c, r.get("wall_time", np.nan))
+                            if r.get("status") in ("ok", "diverged"):  # a cell that fails at once says little
+                                batches.observe(c, r.get("wall_time"))
                     else:
                         exc = result[1] if isinstance(result, tuple) and len(result) > 1 else result
                         if not isinstance(exc, BaseException):

@@ -109,7 +109,7 @@ def run_grid(
     Notes
     -----
     A row is committed as soon as the driver receives it. On Dask, cells travel in batches (at
-    most about two seconds of work each, smaller towards the end, two per worker thread in
+    most about three seconds of work each, smaller towards the end, two per worker thread in
     flight), so a killed driver loses at most the batches in flight. Worker processes are
     started with the ``spawn`` method (the local pool and a Dask ``LocalCluster``), which imports
     the calling script again: a script that runs a grid on workers must do so under
