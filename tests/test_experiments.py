@@ -432,3 +432,34 @@ def test_public_api_is_documented():
                        if p.name not in ("self", "cls") and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
                        and p.name not in doc]
             assert doc and not missing, f"{name}.{f.__name__}: undocumented {missing}"
+
+
+def test_se_dsf_variant_gives_the_direct_dsf_model(tmp_path):
+    terms = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]
+    lam = [0.05, 0.3, 1.0]
+    g = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], [gx.StructureSpec("s", terms=terms)],
+                [gx.Variant("direct", "se-dsf", lambdas=lam),
+                 gx.Variant("direct, wide band", "se-dsf", lambdas=lam, options={"band": 0.5})], name="dsf")
+    gx.run_grid(g, tmp_path / "dsf.sqlite")
+    df = gx.load_results(tmp_path / "dsf.sqlite").set_index("variant")
+    data = gb.load_pumping()
+    for v, band in (("direct", df.loc["direct", "band"]), ("direct, wide band", 0.5)):
+        r = df.loc[v]
+        assert r["status"] == "ok" and r["estimator"] == "se-dsf"
+        res = gb.se_dsf(gb.parse_structure(terms), data, band=band, lambdas=lam)
+        np.testing.assert_array_equal(r["theta"], res.model.theta)  # the same model as the function gives
+        assert r["rule"] == ("D_SF (direct)" if res.feasible else "min J_SF (band infeasible)")
+        assert bool(r["in_band"]) == res.feasible
+        if res.feasible:
+            assert r["JSF"] <= band * (1 + 1e-9)
+    # a wider band allows a smaller free-run error
+    assert df.loc["direct, wide band", "JS_ident"] <= df.loc["direct", "JS_ident"] * (1 + 1e-9)
+
+
+def test_se_dsf_variant_refuses_a_decision_maker_and_unknown_options():
+    with pytest.raises(gx.SpecError, match="gives one model.*band = "):
+        gx.Variant("v", "se-dsf", decision={"rule": "dsf"})
+    with pytest.raises(gx.SpecError, match="unknown option 'max_nfev' for estimator 'se-dsf'"):
+        gx.Variant("v", "se-dsf", options={"max_nfev": 3})
+    with pytest.raises(gx.SpecError, match="band"):
+        gx.Variant("v", "se-dsf", options={"band": -1.0})

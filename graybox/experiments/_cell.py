@@ -161,32 +161,41 @@ def _lags(st: gb.Structure) -> tuple[int, int]:
 
 
 def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
-    """(model, Pareto set or None)."""
+    """(model, Pareto set or None, row fields the estimator sets itself)."""
     v = cell.variant_spec
     est = v["estimator"]
     opts = dict(v["options"])
     name = f"{cell.variant} / {cell.structure}"
     lam = None if v["lambdas"] is None else np.array(v["lambdas"])
     if est == "ls":
-        return gb.els(st, data.ident, noise=0, name=name).model, None
+        return gb.els(st, data.ident, noise=0, name=name).model, None, {}
     if est == "els":
-        return gb.els(st, data.ident, name=name, **opts).model, None
+        return gb.els(st, data.ident, name=name, **opts).model, None, {}
     if est == "neural":
         ny, nu = _lags(st)
         kw = {"ny": ny, "nu": nu, **opts}
-        return gb.neural_narx(data.ident, seed=cell.seed or 0, name=name, **kw).model, None
+        return gb.neural_narx(data.ident, seed=cell.seed or 0, name=name, **kw).model, None, {}
     cons = _constraints(v["constraints"], st, data)
     if est == "cls":
-        return gb.cls(st, data, constraints=cons, name=name, **opts), None
+        return gb.cls(st, data, constraints=cons, name=name, **opts), None, {}
     if est == "pe":
-        return None, gb.pe_pareto(st, data, lambdas=lam, constraints=cons, **opts)
+        return None, gb.pe_pareto(st, data, lambdas=lam, constraints=cons, **opts), {}
     if est == "se-ga":
         theta0 = opts.pop("theta0", "ls")
         ga = gb.GAOptions(**opts)
         return None, gb.se_pareto(st, data, lambdas=lam, method="ga", seed=cell.seed or 0, progress=False,
-                                  options=ga, theta0=None if theta0 == "none" else "ls")
+                                  options=ga, theta0=None if theta0 == "none" else "ls"), {}
     if est == "se-gradient":
-        return None, gb.se_pareto(st, data, lambdas=lam, method="gradient", progress=False, **opts)
+        return None, gb.se_pareto(st, data, lambdas=lam, method="gradient", progress=False, **opts), {}
+    if est == "se-dsf":
+        band = opts.pop("band", None) or cell.band
+        if band is None:
+            raise ValueError("se-dsf needs a band: give the data set a band or the variant options = {band = ...}")
+        res = gb.se_dsf(st, data, band=band, lambdas=lam, **opts)
+        # a band the structure cannot reach gives the model with the smallest J_SF (and a warning), as
+        # D_SF with fallback "min_jsf" does
+        return gb.Model(res.model.structure, res.model.theta, name=name), None, \
+            {"rule": "D_SF (direct)" if res.feasible else "min J_SF (band infeasible)", "in_band": int(res.feasible)}
     raise ValueError(f"unknown estimator {est!r}")  # pragma: no cover - the spec refuses it
 
 
@@ -267,7 +276,8 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
             warnings.simplefilter("always")
             st = make_structure(cell.structure_spec, data, cell.data_hash)
             row["terms"] = [str(t) for t in st]
-            model, pareto = _estimate(cell, st, data)
+            model, pareto, fields = _estimate(cell, st, data)
+            row.update(fields)
             if pareto is not None:
                 row["members"] = _members(pareto, data)
                 i, rule, in_band = _decide(cell, pareto, data)

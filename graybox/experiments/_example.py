@@ -46,14 +46,14 @@ name = "first-order"
 terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]
 
 # ----------------------------------------------------------------------------------- variants
-# estimator: ls, els, cls, pe, se-ga, se-gradient, neural
+# estimator: ls, els, cls, pe, se-ga, se-gradient, se-dsf (the D_SF model solved directly), neural
 # constraints (cls, pe): {type = "equality"} (eq. (22); curve = "fit" | "dataset" | [c0, c1, ...]),
 #   {type = "points"}, {type = "band", b = 0.175}, {type = "gain", lower = 0.0},
 #   {type = "clusters", bounds = {Sy = {upper = 0.999}}}; a list imposes them together.
-# lambdas (pe, se-*): a list of lambda1 in (0, 1], or {logspace = [a, b, n]}.
-# decision (pe, se-*): {rule = "dsf"} (band from the data set), {rule = "dsf", band = 0.05,
+# lambdas (pe, se-*): a list of lambda1 in (0, 1], or {logspace = [a, b, n]} (se-dsf: its coarse sweep).
+# decision (pe, se-ga, se-gradient): {rule = "dsf"} (band from the data set), {rule = "dsf", band = 0.05,
 #   fallback = "min_jsf"}, {rule = "min_correlation"}, {rule = "min_jsf"}.
-# options: the estimator's keyword options.
+# options: the estimator's keyword options (se-dsf: band, default the data set's; max_iter; tol).
 
 [[variants]]
 name = "LS"

@@ -38,9 +38,11 @@ __all__ = [
 ]
 
 #: Estimators a variant may name.
-ESTIMATORS = ("ls", "els", "cls", "pe", "se-ga", "se-gradient", "neural")
+ESTIMATORS = ("ls", "els", "cls", "pe", "se-ga", "se-gradient", "se-dsf", "neural")
 #: Estimators that give a Pareto set (and so need a decision maker).
 PARETO_ESTIMATORS = ("pe", "se-ga", "se-gradient")
+#: Estimators that take a λ set (se-dsf: the λ1 of the coarse sweep that finds its starts).
+LAMBDA_ESTIMATORS = PARETO_ESTIMATORS + ("se-dsf",)
 #: Estimators whose result depends on the seed; the others run once per (data, structure, variant).
 STOCHASTIC_ESTIMATORS = ("se-ga", "neural")
 #: Estimators that take static constraints.
@@ -476,6 +478,7 @@ OPTIONS: dict[str, dict[str, Any]] = {
     "se-ga": {**_GA_FIELDS, "theta0": _opt_choice("ls", "none")},
     "se-gradient": {"max_nfev": _opt_int(1), "tol": _opt_real(0, low_open=True),
                     "solver": _opt_choice("trf", "dogbox", "lm")},
+    "se-dsf": {"band": _opt_real(0, low_open=True), "max_iter": _opt_int(1), "tol": _opt_real(0, low_open=True)},
     "neural": {"ny": _opt_int(0), "nu": _opt_int(1), "ne": _opt_int(0), "hidden": _opt_int(1), "epochs": _opt_int(1),
                "weight_decay": _opt_real(0), "lam0": _opt_real(0, low_open=True)},
 }
@@ -716,11 +719,14 @@ class Variant:
     ----------
     name : str
         Label in the results.
-    estimator : {"ls", "els", "cls", "pe", "se-ga", "se-gradient", "neural"}
+    estimator : {"ls", "els", "cls", "pe", "se-ga", "se-gradient", "se-dsf", "neural"}
         Least squares, extended least squares (:func:`graybox.els`), constrained least squares
         (:func:`graybox.cls`), the PE Pareto set (:func:`graybox.pe_pareto`), the SE Pareto set
-        by GA or gradient (:func:`graybox.se_pareto`), the neural NARX baseline
-        (:func:`graybox.neural_narx`; its lags default to the structure's largest y and u lags).
+        by GA or gradient (:func:`graybox.se_pareto`), the D_SF model solved directly
+        (:func:`graybox.se_dsf`: one model; its band is ``options["band"]``, default the data
+        set's; a band it cannot reach gives the smallest J_SF reached, ``in_band`` False), the
+        neural NARX baseline (:func:`graybox.neural_narx`; its lags default to the structure's
+        largest y and u lags).
     constraints : constraint object(s) or sequence of tables, optional
         For cls and pe: graybox constraint objects (``gb.StaticBand(0.175) & gb.GainBounds(lower=0)``)
         or TOML-style tables ``{"type": "band", "b": 0.175}``; types: equality (eq. (22); its
@@ -728,13 +734,14 @@ class Variant:
         set's static points, with exactly the ū powers of its numerator clusters —, "dataset" or
         coefficients), points, band, gain, clusters.
     lambdas : sequence of float or mapping, optional
-        λ1 values in (0, 1] of a Pareto estimator, or ``{"logspace": [a, b, n]}``; default: the
-        estimator's own (the paper's 100).
+        λ1 values in (0, 1] of a Pareto estimator (se-dsf: of the coarse sweep that finds its
+        starts), or ``{"logspace": [a, b, n]}``; default: the estimator's own (the paper's 100).
     decision : DecisionRule or mapping, optional
         Pareto estimators only; default D_SF with the data set's band.
     options : mapping, optional
         Keyword options of the estimator (e.g. ``{"solver": "closed"}`` for pe,
-        ``{"max_nfev": 20}`` for se-gradient, GAOptions fields for se-ga).
+        ``{"max_nfev": 20}`` for se-gradient, GAOptions fields for se-ga, ``band``, ``max_iter``
+        and ``tol`` for se-dsf).
     """
 
     name: str
@@ -769,16 +776,17 @@ class Variant:
             raise SpecError("at most one equality (22) constraint per variant", ("constraints",))
         object.__setattr__(self, "constraints", _freeze(cons))
         # λ set
-        if self.lambdas is not None and est not in PARETO_ESTIMATORS:
-            raise SpecError(f"estimator {est!r} gives one model: lambdas apply to {', '.join(PARETO_ESTIMATORS)}",
+        if self.lambdas is not None and est not in LAMBDA_ESTIMATORS:
+            raise SpecError(f"estimator {est!r} gives one model: lambdas apply to {', '.join(LAMBDA_ESTIMATORS)}",
                             ("lambdas",))
         lam = _lambdas(self.lambdas, ("lambdas",))
         object.__setattr__(self, "lambdas", None if lam is None else tuple(lam))
         # decision maker
         dec = self.decision
         if dec is not None and est not in PARETO_ESTIMATORS:
+            hint = " (se-dsf solves D_SF itself: give its band as options = {band = ...})" if est == "se-dsf" else ""
             raise SpecError(f"estimator {est!r} gives one model: a decision maker applies to "
-                            f"{', '.join(PARETO_ESTIMATORS)}", ("decision",))
+                            f"{', '.join(PARETO_ESTIMATORS)}{hint}", ("decision",))
         if est in PARETO_ESTIMATORS:
             if dec is None:
                 dec = DecisionRule()
