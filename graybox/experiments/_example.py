@@ -95,6 +95,11 @@ lambdas = {logspace = [-2, 0, 10]}
 options = {max_nfev = 30}
 
 [[variants]]
+name = "SE D_SF direct"
+estimator = "se-dsf"               # min J_S subject to J_SF <= the data set's band, no sweep to decide on
+lambdas = {logspace = [-2, 0, 8]}  # the coarse sweep that finds its starts
+
+[[variants]]
 name = "SE GA (short)"
 estimator = "se-ga"
 lambdas = {logspace = [-2, 0, 5]}
