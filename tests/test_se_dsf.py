@@ -68,3 +68,16 @@ def test_a_failed_pe_start_leaves_the_sweep_starts(data, monkeypatch):
     monkeypatch.setattr(impl, "_sweep_starts", lambda *a, **k: [])
     with pytest.raises(ValueError, match="no start .*no PE member has a bounded free run"):
         gb.se_dsf(TRUE, data, band=0.02)
+
+
+def test_static_points_outside_the_records_range_and_in_conflict(data):
+    """Static points beyond the dynamic records' input range (what gray-box identification is for),
+    disagreeing with the dynamics: a warning names the range, and the band is met."""
+    m = gb.Model(TRUE, THETA)
+    ub = np.linspace(0.5, 4.0, 7)  # the records' input stays in [0, 3]
+    static = gb.StaticPoints(ub, m.static_curve(ub) + 0.2 * np.cos(ub))
+    with pytest.warns(gb.StaticRangeWarning):
+        res = gb.se_dsf(TRUE, data.ident, static, band=0.02, lambdas=np.logspace(-2, 0, 5))
+    assert res.feasible and res.JSF <= 0.02 * (1 + 1e-9)
+    assert res.JSF == pytest.approx(gb.jsf(res.model, static), rel=1e-9)
+    assert res.JS == pytest.approx(gb.js(res.model, data.ident), rel=1e-9)
