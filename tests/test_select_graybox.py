@@ -92,3 +92,20 @@ def test_several_estimators_score_every_structure_and_the_best_pair_wins(data, t
     assert res.decision.in_band
     with pytest.raises(ValueError, match="distinct"):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, estimator=("pe", "pe"))
+
+
+def test_constraints_are_imposed_by_pe_and_refused_for_se(data, tmp_path):
+    """With constraints the default scores with PE alone (the estimator that imposes them); naming an
+    SE estimator with them is an error, not a silent unconstrained model."""
+    gain = gb.GainBounds(lower=0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5],
+                                constraints=[gain], store=tmp_path / "c.sqlite")
+    assert set(res.table["estimator"]) == {"pe"} and res.decision.in_band
+    df = gb.load_results(res.store)
+    assert set(df["estimator"]) == {"pe"} and set(df["status"]) == {"ok"}
+    assert [c["type"] for c in df.attrs["spec"]["variants"][0]["constraints"]] == ["gain"]  # the cells imposed it
+    with pytest.raises(ValueError, match="constraints are imposed by PE only; se-gradient"):
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5], constraints=[gain],
+                          estimator=("pe", "se-gradient"))

@@ -111,7 +111,7 @@ def select_graybox(
     band: float,
     sizes: Sequence[int] | None = None,
     sources: Sequence[str] = ("semp", "frols"),
-    estimator: str | Sequence[str] = ("pe", "se-gradient"),
+    estimator: str | Sequence[str] | None = None,
     constraints: Any = (),
     lambdas: Sequence[float] | None = None,
     validation: gb.Record | None = None,
@@ -143,14 +143,15 @@ def select_graybox(
         Structure sizes (before the static terms); default 4, 6, …, up to min(20, candidates).
     sources : sequence of {"semp", "frols"}
         Where the structures of each size come from.
-    estimator : {"pe", "se-gradient", "se-ga"} or a sequence of them
+    estimator : {"pe", "se-gradient", "se-ga"} or a sequence of them, optional
         The gray-box front of each structure (PE uses the closed form unless constraints need a QP).
         With several, every structure is scored with each, and the best (structure, estimator) pair
-        wins (the default scores with PE and with the SE gradient method: where the static and the
-        dynamic data disagree they choose differently, and either can be the better one —
-        BENCHMARKS.md, structure selection).
+        wins. Default: PE and the SE gradient method (where the static and the dynamic data
+        disagree they choose differently, and either can be the better one — BENCHMARKS.md,
+        structure selection); with ``constraints``, PE alone, the one that imposes them.
     constraints : optional
-        Constraint objects or tables imposed in every cell (PE only), as in :class:`Variant`.
+        Constraint objects or tables imposed in every cell, as in :class:`Variant`. Only PE
+        imposes them: naming an SE estimator with constraints is an error.
     lambdas : sequence of float, optional
         λ1 of each front (default: PE 100 in logspace(-6, 0), the closed form; SE 10 in
         logspace(-2, 0), a coarse front is enough to rank structures).
@@ -183,11 +184,17 @@ def select_graybox(
         raise ValueError(f"candidates must be a Structure, got {type(candidates).__name__}")
     process = candidates.process
     band = check_real(band, "band", low=0, low_open=True)
+    if estimator is None:
+        estimator = ("pe",) if constraints else ("pe", "se-gradient")
     estimators = [estimator] if isinstance(estimator, str) else list(estimator)
     if not estimators or len(set(estimators)) != len(estimators):
         raise ValueError(f"estimator must name one or more distinct estimators, got {estimator!r}")
     for e in estimators:
         check_choice(e, "estimator", ("pe", "se-gradient", "se-ga"))
+    if constraints and any(e != "pe" for e in estimators):
+        raise ValueError(f"constraints are imposed by PE only; {', '.join(e for e in estimators if e != 'pe')} "
+                         "cannot impose them: use estimator='pe' (the default with constraints) or drop the "
+                         "constraints")
     for s in sources:
         check_choice(s, "sources", ("semp", "frols"))
     if not sources:
