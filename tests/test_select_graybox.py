@@ -109,3 +109,21 @@ def test_constraints_are_imposed_by_pe_and_refused_for_se(data, tmp_path):
     with pytest.raises(ValueError, match="constraints are imposed by PE only; se-gradient"):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5], constraints=[gain],
                           estimator=("pe", "se-gradient"))
+
+
+@pytest.mark.parametrize("constraints", [
+    [{"type": "equality"}], [{"type": "points"}], [{"type": "band", "b": 0.05}], [{"type": "gain", "lower": 0.0}],
+    [{"type": "clusters", "bounds": {"Sy": {"upper": 0.999}}}], gb.StaticBand(0.05) & gb.GainBounds(lower=0.0),
+], ids=["equality", "points", "band", "gain", "clusters", "object"])
+def test_every_constraint_variant(data, constraints):
+    """Every constraint variant runs in the cells and in the refit of the chosen structure (an
+    equality's curve is fitted to the static points there too; one object needs no list)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5],
+                                constraints=constraints)
+    assert res.decision.in_band and res.decision.JSF <= 1e-3
+    assert set(gb.load_results(res.store)["status"]) == {"ok"}
+    if isinstance(constraints, list) and constraints[0]["type"] in ("equality", "points"):
+        # the static curve passes through the points' curve: J_SF far inside the band
+        assert res.decision.JSF < 1e-6

@@ -139,7 +139,9 @@ def _numerator_fit(st: gb.Structure, points: gb.StaticPoints) -> gb.StaticCurve 
                                      name=f"fit of ū^{powers} to {points.name}")
 
 
-def _constraints(specs, st: gb.Structure, data: gb.Dataset) -> list:
+def cell_constraints(specs, st: gb.Structure, data: gb.Dataset) -> list:
+    """The graybox constraint objects of canonical constraint tables, an equality's curve resolved
+    against the structure and the data set ("fit", "dataset" or given coefficients)."""
     out = []
     for c in specs:
         curve = None
@@ -175,7 +177,7 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
         ny, nu = _lags(st)
         kw = {"ny": ny, "nu": nu, **opts}
         return gb.neural_narx(data.ident, seed=cell.seed or 0, name=name, **kw).model, None, {}
-    cons = _constraints(v["constraints"], st, data)
+    cons = cell_constraints(v["constraints"], st, data)
     if est == "cls":
         return gb.cls(st, data, constraints=cons, name=name, **opts), None, {}
     if est == "pe":

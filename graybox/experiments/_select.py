@@ -29,7 +29,7 @@ import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -40,7 +40,8 @@ from .._static_form import static_degree, static_terms
 from .._validation import check_choice, check_int, check_real
 from ._report import leaderboard
 from ._run import run_grid
-from ._spec import DataSpec, DecisionRule, Grid, StructureSpec, Variant, build_constraint, constraint_from_object
+from ._cell import cell_constraints
+from ._spec import DataSpec, DecisionRule, Grid, StructureSpec, Variant, constraint_from_object
 from ._store import load_results
 
 __all__ = ["select_graybox", "GrayboxSelection"]
@@ -184,6 +185,10 @@ def select_graybox(
         raise ValueError(f"candidates must be a Structure, got {type(candidates).__name__}")
     process = candidates.process
     band = check_real(band, "band", low=0, low_open=True)
+    if constraints is None:
+        constraints = ()
+    elif isinstance(constraints, Mapping) or not isinstance(constraints, Sequence):  # one table or object
+        constraints = (constraints,)
     if estimator is None:
         estimator = ("pe",) if constraints else ("pe", "se-gradient")
     estimators = [estimator] if isinstance(estimator, str) else list(estimator)
@@ -201,10 +206,12 @@ def select_graybox(
         raise ValueError("sources must name at least one of 'semp', 'frols'")
     if fallback is not None:
         check_choice(fallback, "fallback", ("min_jsf",))
+    extra: dict = {}
     if isinstance(data, gb.Dataset):
         ident = data.ident
         valid = validation if validation is not None else data.valid
         sp = static if static is not None else data.static
+        extra = dict(data.extra)  # e.g. the curve of an equality with curve="dataset"
     elif isinstance(data, gb.Record):
         ident, valid, sp = data, validation, static
     else:
@@ -267,7 +274,7 @@ def select_graybox(
                      "added": ", ".join(map(str, added)), "terms": str(st)})
     # -- one grid cell per structure × fold ------------------------------------------------------
     data_specs = [DataSpec(f"fold{i + 1}" if len(splits) > 1 else "data",
-                           dataset=gb.Dataset(a, b, sp, description="select_graybox"), band=band)
+                           dataset=gb.Dataset(a, b, sp, description="select_graybox", extra=extra), band=band)
                   for i, (a, b) in enumerate(splits)]
     variants = [Variant(e, e, constraints=constraints, lambdas=_lambdas(e, lambdas),
                         decision=DecisionRule("dsf", band=band, fallback="min_jsf"),
@@ -309,7 +316,8 @@ def select_graybox(
     structure = gb.Structure(chosen_row["terms"].split(" + "))
     # -- the chosen structure refitted on all the identification data ------------------------
     est = chosen_row["estimator"]
-    decision = _refit(structure, ident, valid, sp, band, est, constraints, _lambdas(est, lambdas), used_fallback)
+    decision = _refit(structure, ident, valid, sp, band, est, constraints, _lambdas(est, lambdas), used_fallback,
+                      extra)
     return GrayboxSelection(structure, decision.model, decision, table.drop(columns=["terms"]), degree, band,
                             used_fallback, str(store))
 
@@ -329,8 +337,10 @@ def _smallest_jsf(results: pd.DataFrame) -> float:
     return best
 
 
-def _refit(structure, ident, valid, sp, band, estimator, constraints, lambdas, fallback) -> gb.Decision:
-    cons = [build_constraint(c) for c in sum((constraint_from_object(c) for c in (constraints or ())), [])]
+def _refit(structure, ident, valid, sp, band, estimator, constraints, lambdas, fallback, extra) -> gb.Decision:
+    specs = sum((constraint_from_object(c) for c in constraints), [])
+    # only the static points and the data set's extra matter to the constraints
+    cons = cell_constraints(specs, structure, gb.Dataset(ident, ident if valid is None else valid, sp, extra=extra))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         if estimator == "pe":
