@@ -11,6 +11,10 @@ Notebooks 02 and 04 added "the simplest term per missing cluster" by hand; this 
   whose least-squares fit lies within the band B (mean squared error ≤ B, the band of D_SF);
 - :func:`static_terms` — for each cluster that degree needs and the structure lacks, the simplest
   candidate of that cluster (smallest largest lag, then fewest factors, then candidate order).
+
+With several inputs the static information is a surface: the degree is the total degree of the
+polynomial surface (every monomial ū₁^a₁ ⋯ ū_m^a_m with a₁ + … + a_m ≤ d), and the clusters
+needed are every Σ_{u₁^a₁ ⋯ u_m^a_m} of those monomials and Σ_y.
 """
 
 from __future__ import annotations
@@ -20,6 +24,8 @@ import numpy as np
 from ._curves import StaticCurve
 from ._records import StaticPoints
 from ._static import cluster_key, cluster_name
+from ._static_surface import surface_cluster_name
+from ._surfaces import StaticSurface, monomial_exponents
 from ._terms import Structure, Term
 from ._validation import check_int, check_real
 
@@ -45,17 +51,22 @@ def static_degree(static: StaticPoints | StaticCurve, *, band: float, max_degree
         The degree d; when no degree up to the limit fits within B, the limit (the best that
         can be asked of the points).
     """
-    if isinstance(static, StaticCurve):
+    if isinstance(static, (StaticCurve, StaticSurface)):
         return static.degree
     if not isinstance(static, StaticPoints):
-        raise ValueError(f"static must be StaticPoints or a StaticCurve, got {type(static).__name__}")
+        raise ValueError(f"static must be StaticPoints, a StaticCurve or a StaticSurface, got {type(static).__name__}")
     band = check_real(band, "band", low=0, low_open=True)
-    top = min(check_int(max_degree, "max_degree", low=0), len(static) - 1)
+    top = check_int(max_degree, "max_degree", low=0)
+    m = 1 if np.ndim(static.ubar) == 1 else int(np.shape(static.ubar)[1])
+    best = 0
     for d in range(top + 1):
-        c = StaticCurve.fit(static, d)
-        if float(np.mean((c(static.ubar) - static.ybar) ** 2)) <= band:
+        if len(static) < len(monomial_exponents(m, d)):  # too few points for this degree's monomials
+            break
+        fit = StaticCurve.fit(static, d) if m == 1 else StaticSurface.fit(static, d)
+        best = d
+        if float(np.mean((fit(static.ubar) - static.ybar) ** 2)) <= band:
             return d
-    return top
+    return best
 
 
 def _simplicity(term: Term) -> tuple[int, int, int]:
@@ -86,19 +97,36 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
         curve's form: e.g. a degree-2 curve and candidates of degree 1), naming the clusters.
     """
     degree = check_int(degree, "degree", low=0)
-    have = {cluster_key(t) for t in structure if not t.is_noise}
-    need = [(0, m) for m in range(degree + 1)] + [(1, 0)]
+    inputs = tuple(dict.fromkeys(candidates.inputs + structure.inputs)) or ("u",)
+    if len(inputs) == 1:
+        def key_of(t: Term) -> tuple[int, ...]:
+            return cluster_key(t)
+
+        need = [(0, m) for m in range(degree + 1)] + [(1, 0)]
+
+        def name(k: tuple[int, ...]) -> str:
+            return cluster_name(*k)
+    else:
+        def key_of(t: Term) -> tuple[int, ...]:
+            return (t.power_of("y"),) + tuple(t.power_of(n) for n in inputs)
+
+        need = [(0,) + e for e in monomial_exponents(len(inputs), degree)] + [(1,) + (0,) * len(inputs)]
+
+        def name(k: tuple[int, ...]) -> str:
+            return surface_cluster_name(k[0], k[1:], inputs)
+    have = {key_of(t) for t in structure if not t.is_noise}
     out, missing = [], []
     for key in need:
         if key in have:
             continue
-        pool = [t for t in candidates if not t.is_noise and cluster_key(t) == key]
+        pool = [t for t in candidates if not t.is_noise and key_of(t) == key]
         if not pool:
             missing.append(key)
             continue
         out.append(min(pool, key=_simplicity))
     if missing:
         raise ValueError(
-            f"the candidates cannot represent a degree-{degree} static curve: they hold no term of the cluster(s) "
-            f"{[cluster_name(*k) for k in missing]} (raise the candidates' degree, or include a constant)")
+            f"the candidates cannot represent a degree-{degree} static {'curve' if len(inputs) == 1 else 'surface'}: "
+            f"they hold no term of the cluster(s) {[name(k) for k in missing]} (raise the candidates' degree, or "
+            "include a constant)")
     return out

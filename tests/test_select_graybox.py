@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from graybox._static_form import static_degree
 
 TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
 THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
@@ -127,3 +128,42 @@ def test_every_constraint_variant(data, constraints):
     if isinstance(constraints, list) and constraints[0]["type"] in ("equality", "points"):
         # the static curve passes through the points' curve: J_SF far inside the band
         assert res.decision.JSF < 1e-6
+
+
+TWO = gb.Structure(["y(k-1)", "u1(k-1)", "u2(k-1)", "u1(k-1)u2(k-1)", "1"])
+THETA2 = np.array([0.5, 0.3, 0.2, 0.05, 0.1])
+
+
+def _two_input_record(seed, n=1500):
+    rng = np.random.default_rng(seed)
+    u = np.column_stack([np.repeat(rng.uniform(0.0, 2.0, n // 30 + 1), 30)[:n],
+                         np.repeat(rng.uniform(0.0, 2.0, n // 45 + 1), 45)[:n]])  # (N, m)
+    y = gb.Model(TWO, THETA2).simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(n)
+    return gb.Record(u, y, name=f"two{seed}", input_names=("u1", "u2"))
+
+
+def test_two_inputs_the_static_surface_asks_for_its_clusters():
+    """Several inputs: the static points make a surface; its degree (2: the ū1ū2 monomial) asks for
+    every cluster Σ0, Σu1, Σu2, Σu1², Σu1u2, Σu2² and Σy, and the selected model meets the band."""
+    g = np.linspace(-0.5, 2.5, 4)  # beyond the records' range [0, 2] in both inputs
+    ub = np.array([(a, b) for a in g for b in g])
+    yb = (0.3 * ub[:, 0] + 0.2 * ub[:, 1] + 0.05 * ub[:, 0] * ub[:, 1] + 0.1) / 0.5
+    static = gb.StaticPoints(ub, yb, input_names=("u1", "u2"))
+    assert static_degree(static, band=1e-6) == 2
+    data = gb.Dataset(_two_input_record(1), _two_input_record(2), static)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(1, 1, degree=2, inputs=("u1", "u2")), data, band=1e-3, sizes=[4])
+    assert res.degree == 2 and res.decision.in_band and res.decision.JSF <= 1e-3
+    keys = set(gb.surface_cluster_map(res.structure, inputs=("u1", "u2")).keys)
+    assert {(0, 0, 0), (0, 1, 0), (0, 0, 1), (0, 2, 0), (0, 1, 1), (0, 0, 2), (1, 0, 0)} <= keys
+
+
+def test_two_inputs_candidates_that_cannot_carry_the_surface_are_named():
+    from graybox._static_form import static_terms
+
+    st = gb.Structure(["y(k-1)", "u1(k-1)"])
+    added = static_terms(st, gb.Candidates(1, 1, degree=2, inputs=("u1", "u2")), 1)
+    assert sorted(map(str, added)) == ["1", "u2(k-1)"]  # Σ0 and Σu2 were missing; Σu1 and Σy are there
+    with pytest.raises(ValueError, match=r"static surface.*Σu1².*Σu1u2.*Σu2²"):
+        static_terms(st, gb.Candidates(1, 1, degree=1, inputs=("u1", "u2")), 2)

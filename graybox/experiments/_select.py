@@ -218,14 +218,18 @@ def select_graybox(
         raise ValueError(f"data must be a Dataset or a Record, got {type(data).__name__}")
     if sp is None:
         raise ValueError("select_graybox needs static information: pass static= or a Dataset with static points")
-    if isinstance(sp, gb.StaticCurve):
+    if isinstance(sp, (gb.StaticCurve, gb.StaticSurface)):
         if sp.domain is None:
-            raise ValueError("a StaticCurve without a domain cannot be sampled: give static points")
+            raise ValueError(f"a {type(sp).__name__} without a domain cannot be sampled: give static points")
         degree = sp.degree
-        sp = sp.points(np.linspace(*sp.domain, 10))
+        if isinstance(sp, gb.StaticCurve):
+            sp = sp.points(np.linspace(*sp.domain, 10))
+        else:  # a grid over the surface's box, 6 points per input
+            axes = [np.linspace(lo, hi, 6) for lo, hi in sp.domain]
+            sp = sp.points(np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1))
     else:
         degree = static_degree(sp, band=band)
-        fit = gb.StaticCurve.fit(sp, degree)
+        fit = gb.StaticCurve.fit(sp, degree) if np.ndim(sp.ubar) == 1 else gb.StaticSurface.fit(sp, degree)
         if float(np.mean((fit(sp.ubar) - sp.ybar) ** 2)) > band:
             # no polynomial fits the points within the band: their form is not known, so ask only
             # what the candidates can carry (the band is then out of reach, which step 4 reports)
