@@ -989,6 +989,10 @@ def neural_narx(
     BENCHMARKS.md, "Neural NARMAX training" (``benchmarks/bench_neural.py``).
     """
     recs = as_records(data)
+    several = [r for r in recs if r.n_inputs > 1]
+    if several:
+        raise ValueError(f"neural_narx takes one input; the record {several[0].name!r} has the inputs "
+                         f"{several[0].input_names} (the neural baseline is single-input)")
     ny = check_int(ny, "ny", low=0)
     nu = check_int(nu, "nu", low=1)
     ne = check_int(ne, "ne", low=0)

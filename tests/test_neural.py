@@ -463,6 +463,9 @@ def test_bad_training_data():
         neural_narx(small_record(0, 100)).model
     with pytest.raises(ValueError, match="held-out parts.* fewer than the 113 weights"):
         neural_narx(small_record(0, 200), holdout=0.45).model
+    two = Record(np.column_stack([small_record().u, small_record().u[::-1]]), small_record().y, input_names=("u1", "u2"))
+    with pytest.raises(ValueError, match=r"neural_narx takes one input.*\('u1', 'u2'\)"):
+        neural_narx(two)
     with pytest.raises(ValueError, match="holdout = 0.1 of record 'small0' .* leaves 36 training and 4 held-out"):
         neural_narx(small_record(0, 40), hidden=1, holdout=0.1).model
     flat = Record(np.full(300, 500.0), np.linspace(0, 1, 300))
