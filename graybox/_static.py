@@ -426,6 +426,9 @@ def equilibria(structure: Structure, theta: np.ndarray, ubar: float) -> list[Equ
         Empty when eq. (5) has no real root (or, for a rational structure, its denominator
         vanishes: no equilibrium or infinitely many).
     """
+    if len(structure.inputs) > 1:
+        raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its equilibria lie on "
+                         "a surface; use graybox.surface_equilibria(structure, theta, ū) with ū of shape (m,)")
     ub = float(as_1d_finite([ubar], "ubar")[0])
     th = np.asarray(theta, float)[None, :]
     if is_rational(structure):

@@ -445,3 +445,11 @@ def test_static_curve_band_refuses_several_inputs_clearly():
     assert unc.cov.shape == (len(fit.structure),) * 2  # the parameter covariance itself works
     with pytest.raises(ValueError, match="defined for one input"):
         gb.static_curve_band(unc, [[0.0, 0.0], [0.5, 0.5]])
+
+
+def test_single_input_equilibria_point_to_the_surface_function():
+    st = gb.Structure(["y(k-1)", "u1(k-1)", "u2(k-1)", "1"])
+    with pytest.raises(ValueError, match=r"2 inputs.*surface_equilibria"):
+        gb.equilibria(st, np.array([0.5, 0.1, 0.2, 0.0]), np.array([1.0, 2.0]))
+    eqs = surface_equilibria(st, np.array([0.5, 0.1, 0.2, 0.0]), np.array([1.0, 2.0]))
+    assert len(eqs) == 1 and eqs[0].ybar == pytest.approx((0.1 + 0.4) / 0.5)
