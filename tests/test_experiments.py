@@ -463,3 +463,20 @@ def test_se_dsf_variant_refuses_a_decision_maker_and_unknown_options():
         gx.Variant("v", "se-dsf", options={"max_nfev": 3})
     with pytest.raises(gx.SpecError, match="band"):
         gx.Variant("v", "se-dsf", options={"band": -1.0})
+
+
+def test_a_made_structure_takes_every_input_of_the_data_set(tmp_path):
+    """nu = 2 on a two-input data set: the candidates hold both inputs' lags (as nu = {u1 = 2, u2 = 2}),
+    and n_terms is not bounded by a single input's candidate count."""
+    n_siso = len(gb.Candidates(2, 2, degree=2))
+    g = gx.Grid([gx.DataSpec("miso", bundled="pumping_miso")],
+                [gx.StructureSpec("one nu", candidates={"ny": 2, "nu": 2, "degree": 2}, n_terms=n_siso + 2,
+                                  include=["1"]),
+                 gx.StructureSpec("per input", candidates={"ny": 2, "nu": {"u1": 2, "u2": 2}, "degree": 2},
+                                  n_terms=n_siso + 2, include=["1"])],
+                [gx.Variant("ls", "ls")], name="miso-made")
+    gx.run_grid(g, tmp_path / "m.sqlite")
+    df = gx.load_results(tmp_path / "m.sqlite").set_index("structure")
+    assert set(df["status"]) == {"ok"}
+    assert df.loc["one nu", "terms"] == df.loc["per input", "terms"]
+    assert {"u1", "u2"} <= {gb.parse_term(t).factors[0][0] for t in df.loc["one nu", "terms"] if t != "1"}

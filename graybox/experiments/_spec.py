@@ -344,7 +344,8 @@ class StructureSpec:
     candidates : mapping, optional
         Keyword arguments of :func:`graybox.Candidates` (``ny``, ``nu``, ``degree``,
         ``max_y_power`` …): the space FROLS selects from (made structure). With several inputs
-        ``nu`` and ``delay`` may be tables of one value per input name (``{"u1": 2, "u2": 3}``).
+        ``nu`` and ``delay`` may be tables of one value per input name (``{"u1": 2, "u2": 3}``);
+        a single ``nu`` applies to every input of the data set.
     n_terms, tol, criterion, max_terms, include : optional
         The selection rule, as for :func:`graybox.frols` (count, ERR tolerance, or information
         criterion; ``include``: terms selected first, e.g. ``["1"]``).
@@ -400,8 +401,11 @@ class StructureSpec:
         space = _wrap(lambda: gb.Candidates(**cand), ("candidates",))
         object.__setattr__(self, "candidates", _freeze(cand))
         if self.n_terms is not None:
+            # with one lag count for all inputs the data set decides how many inputs, so how many
+            # candidates there are: FROLS checks the count in the cell then
+            high = len(space) if isinstance(cand["nu"], Mapping) else None
             object.__setattr__(self, "n_terms", _wrap(check_int, ("n_terms",), self.n_terms, "n_terms", low=1,
-                                                      high=len(space)))
+                                                      high=high))
         if self.tol is not None:
             object.__setattr__(self, "tol", _wrap(check_real, ("tol",), self.tol, "tol", low=0, high=1,
                                                   low_open=True, high_open=True))
