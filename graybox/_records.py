@@ -12,6 +12,7 @@ single-input path is exactly what it was.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Sequence
 
 import numpy as np
 
@@ -162,7 +163,8 @@ class StaticPoints:
             raise ValueError(f"{self.name}: no static points")
         uniq, counts = np.unique(u, return_counts=True, axis=0)
         if (counts > 1).any():
-            raise ValueError(f"{self.name}: duplicated ubar value(s) {uniq[counts > 1].tolist()}")
+            raise ValueError(f"{self.name}: duplicated ubar value(s) {uniq[counts > 1].tolist()}; for repeated "
+                             "measurements at one level use StaticPoints.from_repeats, which averages them")
         m = 1 if u.ndim == 1 else u.shape[1]
         names = default_input_names(m) if self.input_names is None else check_input_names(
             self.input_names, m, f"{self.name}: input_names")
@@ -172,6 +174,37 @@ class StaticPoints:
 
     def __len__(self) -> int:
         return int(self.ybar.size)
+
+    @classmethod
+    def from_repeats(cls, ubar: object, ybar: object, *, name: str = "static points",
+                     input_names: Sequence[str] | None = None) -> "StaticPoints":
+        """Static points from repeated measurements: the mean ȳ at each distinct ū.
+
+        Parameters
+        ----------
+        ubar : array_like, shape (N,) or (N, m)
+            Input level of each measurement (engineering units); levels may repeat.
+        ybar : array_like, shape (N,)
+            Settled output of each measurement.
+        name, input_names
+            As for :class:`StaticPoints`.
+
+        Returns
+        -------
+        StaticPoints
+            One point per distinct level, sorted by ū; its ȳ is the mean of the measurements
+            there. (Their spread is the static uncertainty that D_SF's band B stands for.)
+        """
+        u = as_input_array(ubar, f"{name}: ubar")
+        y = as_1d_finite(ybar, f"{name}: ybar")
+        if u.shape[0] != y.shape[0]:
+            raise ValueError(f"{name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
+        if u.shape[0] == 0:
+            raise ValueError(f"{name}: no static points")
+        uniq, inverse = np.unique(u, return_inverse=True, axis=0)
+        inverse = np.asarray(inverse).reshape(-1)
+        mean = np.bincount(inverse, weights=y) / np.bincount(inverse)
+        return cls(uniq, mean, name, None if input_names is None else tuple(input_names))
 
     @property
     def n_inputs(self) -> int:

@@ -25,11 +25,12 @@ from ._curves import StaticCurve
 from ._records import StaticPoints
 from ._static import cluster_key, cluster_name
 from ._static_surface import surface_cluster_name
-from ._surfaces import StaticSurface, monomial_exponents
+from ._ls import scaled_lstsq
+from ._surfaces import StaticSurface, _monomials, monomial_exponents
 from ._terms import Structure, Term
 from ._validation import check_int, check_real
 
-__all__ = ["static_degree", "static_terms"]
+__all__ = ["static_degree", "static_fit_mse", "static_terms"]
 
 
 def static_degree(static: StaticPoints | StaticCurve, *, band: float, max_degree: int = 3) -> int:
@@ -57,16 +58,30 @@ def static_degree(static: StaticPoints | StaticCurve, *, band: float, max_degree
         raise ValueError(f"static must be StaticPoints, a StaticCurve or a StaticSurface, got {type(static).__name__}")
     band = check_real(band, "band", low=0, low_open=True)
     top = check_int(max_degree, "max_degree", low=0)
-    m = 1 if np.ndim(static.ubar) == 1 else int(np.shape(static.ubar)[1])
     best = 0
     for d in range(top + 1):
-        if len(static) < len(monomial_exponents(m, d)):  # too few points for this degree's monomials
+        mse = static_fit_mse(static, d)
+        if mse is None:  # too few points for this degree's monomials
             break
-        fit = StaticCurve.fit(static, d) if m == 1 else StaticSurface.fit(static, d)
         best = d
-        if float(np.mean((fit(static.ubar) - static.ybar) ** 2)) <= band:
+        if mse <= band:
             return d
     return best
+
+
+def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
+    """Mean squared error (output units²) of the least-squares polynomial of ``degree`` through the
+    points (a surface of that total degree with several inputs); None when there are fewer points
+    than the polynomial has coefficients. One point is fitted exactly by a constant."""
+    m = static.n_inputs
+    ex = monomial_exponents(m, degree)
+    if len(static) < len(ex):
+        return None
+    # plain least squares on the monomials (no curve object: its domain would refuse one point,
+    # or points that do not vary every input)
+    V = _monomials(np.asarray(static.ubar, float).reshape(len(static), m), ex)
+    r = V @ scaled_lstsq(V, static.ybar) - static.ybar
+    return float(np.mean(r**2))
 
 
 def _simplicity(term: Term) -> tuple[int, int, int]:

@@ -50,8 +50,17 @@ def test_theta_length():
 
 
 def test_static_points_validation():
-    with pytest.raises(ValueError, match="duplicated ubar"):
+    with pytest.raises(ValueError, match="duplicated ubar.*StaticPoints.from_repeats"):
         StaticPoints([1.0, 1.0], [2.0, 3.0])
+    # repeated measurements at one level: their mean, one point per level, sorted by ū
+    sp = StaticPoints.from_repeats([2.0, 1.0, 2.0, 1.0, 3.0], [5.0, 2.0, 7.0, 4.0, 1.0])
+    np.testing.assert_array_equal(sp.ubar, [1.0, 2.0, 3.0])
+    np.testing.assert_allclose(sp.ybar, [3.0, 6.0, 1.0])
+    two = StaticPoints.from_repeats([[1.0, 2.0], [1.0, 2.0], [2.0, 1.0]], [1.0, 3.0, 5.0], input_names=("a", "b"))
+    assert two.ubar.shape == (2, 2) and two.input_names == ("a", "b")
+    np.testing.assert_allclose(two.ybar, [2.0, 5.0])
+    with pytest.raises(ValueError, match="non-finite"):
+        StaticPoints.from_repeats([1.0, 1.0], [2.0, np.nan])
     with pytest.raises(ValueError, match="non-finite"):
         StaticPoints([1.0, np.nan], [2.0, 3.0])
 

@@ -167,3 +167,21 @@ def test_two_inputs_candidates_that_cannot_carry_the_surface_are_named():
     assert sorted(map(str, added)) == ["1", "u2(k-1)"]  # Σ0 and Σu2 were missing; Σu1 and Σy are there
     with pytest.raises(ValueError, match=r"static surface.*Σu1².*Σu1u2.*Σu2²"):
         static_terms(st, gb.Candidates(1, 1, degree=1, inputs=("u1", "u2")), 2)
+
+
+def test_one_static_point_and_repeated_measurements(data):
+    """One static point asks for a constant (degree 0) and is met; repeated measurements at the same
+    levels, averaged by StaticPoints.from_repeats, work like any points."""
+    m = gb.Model(TRUE, THETA)
+    one = gb.StaticPoints([1.5], m.static_curve(np.array([1.5])))
+    assert static_degree(one, band=1e-3) == 0
+    rng = np.random.default_rng(3)
+    ub = np.tile(np.linspace(-0.5, 3.5, 7), 3)
+    rep = gb.StaticPoints.from_repeats(ub, m.static_curve(ub) + 0.01 * rng.standard_normal(ub.size))
+    assert len(rep) == 7
+    for sp in (one, rep):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), gb.Dataset(data.ident, data.valid, sp),
+                                    band=1e-3, sizes=[5])
+        assert res.decision.in_band and res.decision.JSF <= 1e-3

@@ -36,7 +36,7 @@ import pandas as pd
 
 from .. import _api as gb
 
-from .._static_form import static_degree, static_terms
+from .._static_form import static_degree, static_fit_mse, static_terms
 from .._validation import check_choice, check_int, check_real
 from ._report import leaderboard
 from ._run import run_grid
@@ -229,8 +229,7 @@ def select_graybox(
             sp = sp.points(np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1))
     else:
         degree = static_degree(sp, band=band)
-        fit = gb.StaticCurve.fit(sp, degree) if np.ndim(sp.ubar) == 1 else gb.StaticSurface.fit(sp, degree)
-        if float(np.mean((fit(sp.ubar) - sp.ybar) ** 2)) > band:
+        if static_fit_mse(sp, degree) > band:
             # no polynomial fits the points within the band: their form is not known, so ask only
             # what the candidates can carry (the band is then out of reach, which step 4 reports)
             degree = min(degree, max((t.input_power for t in process if t.power_of("y") == 0), default=0))
