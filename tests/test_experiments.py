@@ -480,3 +480,44 @@ def test_a_made_structure_takes_every_input_of_the_data_set(tmp_path):
     assert set(df["status"]) == {"ok"}
     assert df.loc["one nu", "terms"] == df.loc["per input", "terms"]
     assert {"u1", "u2"} <= {gb.parse_term(t).factors[0][0] for t in df.loc["one nu", "terms"] if t != "1"}
+
+
+def test_two_input_csv_data_with_repeated_static_measurements(tmp_path):
+    """A user's two-input rig in CSV files, described in TOML: u is a list of columns, and the static
+    file repeats each operating point (repeats = "mean" averages them, else the spec names the lines)."""
+    d = gb.load_pumping_miso()
+    for name, rec in (("ident", d.ident), ("valid", d.valid)):
+        pd.DataFrame({"t": rec.t, "n1": rec.u[:, 0], "n2": rec.u[:, 1], "p": rec.y}).to_csv(
+            tmp_path / f"{name}.csv", index=False, float_format="%.17g")
+    ub, yb = d.static.ubar, d.static.ybar
+    pd.DataFrame({"n1": np.r_[ub[:, 0], ub[:, 0]], "n2": np.r_[ub[:, 1], ub[:, 1]],
+                  "p": np.r_[yb - 0.01, yb + 0.01]}).to_csv(tmp_path / "static.csv", index=False, float_format="%.17g")
+    text = """name = "rig"
+[[data]]
+name = "rig"
+band = 0.031
+ident = {path = "ident.csv", u = ["n1", "n2"], y = "p", time = "t"}
+valid = {path = "valid.csv", u = ["n1", "n2"], y = "p", time = "t"}
+static = {path = "static.csv", u = ["n1", "n2"], y = "p", repeats = "mean"}
+[[structures]]
+name = "made"
+candidates = {ny = 1, nu = 1, degree = 2}
+n_terms = 8
+include = ["1"]
+[[variants]]
+name = "PE"
+estimator = "pe"
+options = {solver = "closed"}
+"""
+    (tmp_path / "spec.toml").write_text(text)
+    g = gx.Grid.from_toml(tmp_path / "spec.toml")
+    loaded = g.load_data()["rig"]
+    assert loaded.input_names == ("n1", "n2") and len(loaded.static) == len(d.static)
+    order = np.lexsort((ub[:, 1], ub[:, 0]))  # from_repeats sorts the points
+    np.testing.assert_allclose(loaded.static.ybar, yb[order], atol=1e-12)
+    gx.run_grid(g, tmp_path / "rig.sqlite")
+    df = gx.load_results(tmp_path / "rig.sqlite")
+    assert list(df["status"]) == ["ok"] and np.isfinite(df["JSF"].iloc[0])
+    (tmp_path / "spec.toml").write_text(text.replace(', repeats = "mean"', ""))
+    with pytest.raises(gx.SpecError, match="same input level.*repeats"):
+        gx.Grid.from_toml(tmp_path / "spec.toml").load_data()

@@ -152,8 +152,15 @@ def test_static_points(tmp_path):
 
 def test_static_duplicated_ubar_names_both_lines(tmp_path):
     p = write(tmp_path, "rpm,mlc\n750,3.9\n850,5.2\n750.0,4.0\n")
-    with pytest.raises(ValueError, match=re.escape(f"{p}: column 'rpm': lines 2 and 4 have the same input level 750")):
+    with pytest.raises(ValueError, match=re.escape(f"{p}: column 'rpm': lines 2 and 4 have the same input level 750")
+                       + ".*repeats=\"mean\""):
         load_static_csv(p, u="rpm", y="mlc")
+    # repeated measurements averaged: one point per level
+    s = load_static_csv(p, u="rpm", y="mlc", repeats="mean")
+    np.testing.assert_array_equal(s.ubar, [750, 850])
+    np.testing.assert_allclose(s.ybar, [3.95, 5.2])
+    with pytest.raises(ValueError, match="repeats"):
+        load_static_csv(p, u="rpm", y="mlc", repeats="median")
 
 
 def test_static_nan_and_missing_column(tmp_path):

@@ -23,6 +23,7 @@ import numpy as np
 from .._curves import StaticCurve
 from .._records import Dataset, Record, StaticPoints
 from .._terms import check_input_names
+from .._validation import check_choice
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -239,6 +240,7 @@ def load_static_csv(
     *,
     name: str | None = None,
     input_names: Sequence[str] | None = None,
+    repeats: str = "error",
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
@@ -254,39 +256,44 @@ def load_static_csv(
         Name of the points (default: the file name without extension).
     input_names : sequence of str, optional
         Names of the inputs (as in :func:`load_record_csv`).
+    repeats : {"error", "mean"}
+        Lines with the same ū: an error naming them (default: a steady state is one number per
+        input level), or their mean, one point per level (:meth:`StaticPoints.from_repeats`).
 
     Returns
     -------
     StaticPoints
-        ``ubar`` of shape (M,) or (M, m), ``ybar`` of shape (M,), in file order.
+        ``ubar`` of shape (M,) or (M, m), ``ybar`` of shape (M,), in file order (sorted by ū
+        with ``repeats="mean"``).
 
     Raises
     ------
     ValueError
         Naming the file and line or column: a missing column, an empty, NaN or non-numeric cell,
-        or two lines with the same ū (a steady state is one number per input level).
+        or two lines with the same ū (unless ``repeats="mean"``).
     """
     p = Path(path)
+    check_choice(repeats, "repeats", ("error", "mean"))
     ucols, names = _input_columns(p, u, input_names)
+    label = name or p.stem
     if len(ucols) > 1:
         cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y})
         ub = np.column_stack([cols[f"input {c!r}"] for c in ucols])
-        seen2: dict[tuple, int] = {}
-        for v, line in zip(map(tuple, ub.tolist()), cols["_lines"].tolist()):
-            if v in seen2:
-                raise ValueError(f"{p}: columns {ucols}: lines {seen2[v]} and {line} have the same input point {v}; "
-                                 "average repeated measurements into one point per input point")
-            seen2[v] = line
-        return StaticPoints(ub, cols["y"], name=name or p.stem, input_names=names)
-    cols = _read_columns(p, {"u": ucols[0], "y": y})
-    ub, lines = cols["u"], cols["_lines"]
-    seen: dict[float, int] = {}
-    for v, line in zip(ub.tolist(), lines.tolist()):
+        where = f"columns {ucols}"
+    else:
+        cols = _read_columns(p, {"u": ucols[0], "y": y})
+        ub = cols["u"]
+        where = f"column {ucols[0]!r}"
+    if repeats == "mean":
+        return StaticPoints.from_repeats(ub, cols["y"], name=label, input_names=names)
+    seen: dict[object, int] = {}
+    for v, line in zip(ub.tolist() if ub.ndim == 1 else map(tuple, ub.tolist()), cols["_lines"].tolist()):
         if v in seen:
-            raise ValueError(f"{p}: column {ucols[0]!r}: lines {seen[v]} and {line} have the same input level {v:g}; "
-                             "average repeated measurements into one point per level")
+            level = f"{v:g}" if ub.ndim == 1 else str(v)
+            raise ValueError(f"{p}: {where}: lines {seen[v]} and {line} have the same input level {level}; average "
+                             "repeated measurements into one point per level (repeats=\"mean\" does it)")
         seen[v] = line
-    return StaticPoints(ub, cols["y"], name=name or p.stem, input_names=names)
+    return StaticPoints(ub, cols["y"], name=label, input_names=names)
 
 
 # ---------------------------------------------------------------------------

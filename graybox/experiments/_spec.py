@@ -174,7 +174,7 @@ def _hash(obj: Any, n: int = 16) -> str:
 # data sets
 # --------------------------------------------------------------------------------------------
 _RECORD_KEYS = ("path", "u", "y", "time", "Ts")
-_STATIC_KEYS = ("path", "u", "y")
+_STATIC_KEYS = ("path", "u", "y", "repeats")
 
 
 def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dict:
@@ -184,9 +184,18 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
     for k in ("path", "u", "y"):
         if k not in d:
             raise SpecError(f"{what} needs {k!r}", path + (k,))
-        if not isinstance(d[k], str) or not d[k]:
-            raise SpecError(f"{k} must be a non-empty string, got {d[k]!r}", path + (k,))
-        out[k] = d[k]
+        v = d[k]
+        if k == "u" and isinstance(v, Sequence) and not isinstance(v, str):  # several input columns
+            if not v or not all(isinstance(c, str) and c for c in v):
+                raise SpecError(f"u must be a column name or a non-empty list of column names, got {v!r}", path + (k,))
+            out[k] = list(v)
+            continue
+        if not isinstance(v, str) or not v:
+            raise SpecError(f"{k} must be a non-empty string{' or a list of them' if k == 'u' else ''}, got {v!r}",
+                            path + (k,))
+        out[k] = v
+    if "repeats" in keys:
+        out["repeats"] = _wrap(check_choice, path + ("repeats",), d.get("repeats", "error"), "repeats", ("error", "mean"))
     if "time" in keys:
         t = d.get("time")
         if t is not None and not isinstance(t, str):
@@ -212,10 +221,12 @@ class DataSpec:
         :func:`graybox.load_pumping`, :func:`graybox.load_buck` or :func:`graybox.load_pumping_miso`
         (the rig with two independent pump speeds: two inputs).
     ident, valid : mapping, optional
-        CSV records ``{"path", "u", "y", "time" or "Ts"}`` (see :func:`graybox.load_record_csv`);
-        relative paths are resolved against the spec file's folder.
+        CSV records ``{"path", "u", "y", "time" or "Ts"}`` (see :func:`graybox.load_record_csv`;
+        ``u`` a column name, or a list of them for several inputs); relative paths are resolved
+        against the spec file's folder.
     static : mapping, optional
-        CSV static points ``{"path", "u", "y"}`` (see :func:`graybox.load_static_csv`).
+        CSV static points ``{"path", "u", "y", "repeats"}`` (see :func:`graybox.load_static_csv`;
+        ``repeats = "mean"`` averages repeated measurements at one level).
     band : float, optional
         The J_SF band B = [0, band] (output units²) for D_SF decisions and the reports; default
         for the bundled sets 0.031 mlc² (pumping and pumping_miso: the same transmitter) and
@@ -299,7 +310,7 @@ class DataSpec:
             valid = gb.load_record_csv(p(self.valid), u=self.valid["u"], y=self.valid["y"], time=self.valid["time"],
                                        Ts=self.valid["Ts"], name=f"{self.name} valid")
             static = gb.load_static_csv(p(self.static), u=self.static["u"], y=self.static["y"],
-                                        name=f"{self.name} static points")
+                                        name=f"{self.name} static points", repeats=self.static["repeats"])
             ds = gb.Dataset(ident, valid, static, description=f"CSV files of data set {self.name!r}")
         if ds.static is None:
             raise SpecError("the data set has no static points: gray-box cells and J_SF need them", ())
