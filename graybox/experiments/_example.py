@@ -25,6 +25,8 @@ band = 0.031              # D_SF band B = [0, band] on J_SF (mlc^2): the transmi
 # valid = {path = "valid.csv", u = "speed", y = "pressure", time = "t"}
 # static = {path = "static.csv", u = "speed", y = "pressure"}             # measured steady states
 # band = 0.031
+# Several inputs: u = ["speed1", "speed2"] in all three files. Static files that repeat an
+# operating point: repeats = "mean" averages the repeats into one point.
 
 # --------------------------------------------------------------------------------- structures
 # Made by FROLS: a candidate space (graybox.Candidates) and a rule (n_terms, tol or criterion).
