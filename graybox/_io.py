@@ -24,7 +24,7 @@ line.
 
 Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.ParetoSet`,
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
-:class:`~graybox.Decision`, :class:`~graybox.ParameterUncertainty` and
+:class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.ParameterUncertainty` and
 :class:`~graybox.StaticCurveBand`.
 
 Loading refuses, with a :class:`GrayboxFileError` naming the file and the problem: a file that is
@@ -52,6 +52,7 @@ from ._els import ELSResult
 from ._model import Model
 from ._neural import NeuralFit, NeuralModel
 from ._pareto import ParetoSet
+from ._se_dsf import DSFResult
 from ._selection import Selection
 from ._terms import Structure, parse_term
 from ._uncertainty import ParameterUncertainty, StaticCurveBand
@@ -254,6 +255,9 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("stopped", "str"), ("rmse_train", "float"), ("rmse_sim", "float"), ("seconds", "float"))),
     "Decision": (Decision, (("rule", "str"), ("index", "int"), ("lambda1", "float"), ("JS", "float"), ("JSF", "float"),
                             ("in_band", "bool"), ("score", "float"), ("model", "Model"))),
+    "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
+                              ("feasible", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
+                              ("n_iter", "int"), ("message", "str"))),
     "ParameterUncertainty": (ParameterUncertainty, (("method", "str"), ("model", "Model"), ("cov", "array2"),
                                                     ("level", "float"), ("dof", "int"), ("sigma2", "float"),
                                                     ("constraints", "array2"), ("noise_cov", "array2"),
@@ -346,7 +350,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, ParameterUncertainty or StaticCurveBand
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, ParameterUncertainty or StaticCurveBand
         The value to write.
     units : (str, str) or mapping, optional
         Units of the input and output (e.g. ``("rpm", "mlc")``, or a Record's ``units``), written
@@ -453,7 +457,7 @@ def save(
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, ParameterUncertainty or StaticCurveBand
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, ParameterUncertainty or StaticCurveBand
         The value.
     path : str or PathLike
         Where to write (conventionally ``*.json``).

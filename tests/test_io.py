@@ -72,12 +72,14 @@ def values():
         unc = gb.pe_uncertainty(dec, rec, static)
         band = gb.static_curve_band(gb.ls_uncertainty(pe.model(0), rec), [900.0, 1300.0], method="monte-carlo",
                                     n_samples=200)
+        dsf = gb.se_dsf(STRUCT, rec, static, band=1.0, theta0=pe.thetas[1], max_iter=5)
     return {"model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
-            "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band}
+            "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band,
+            "dsf": dsf}
 
 
 TYPES = ["model", "plain model", "neural", "pareto", "failed", "selection", "els", "neural fit", "decision",
-         "uncertainty", "band"]
+         "uncertainty", "band", "dsf"]
 
 
 @pytest.mark.parametrize("name", TYPES)
