@@ -17,16 +17,22 @@ def _grid(args: argparse.Namespace) -> int:
         return 0
     try:
         if args.grid_command == "run":
-            res = gx.run_grid(args.spec, args.store, executor="processes" if args.processes else None,
-                              workers=args.workers or args.processes, scheduler=args.scheduler,
+            processes = args.processes is not None
+            res = gx.run_grid(args.spec, args.store, executor="processes" if processes else None,
+                              workers=args.processes if processes else args.workers, scheduler=args.scheduler,
                               retry_failed=args.retry_failed)
             print(res.summary())
             return 0
         written = gx.write_report(args.store, args.out, rule=args.rule, band=args.band)
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
         return 0
-    except (gx.SpecError, gx.StoreError) as exc:
+    except (gx.SpecError, gx.StoreError, ConnectionError) as exc:
         print(f"graybox grid {args.grid_command}: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:  # an argument run_grid refuses (e.g. --workers 0)
+        if args.grid_command != "run":
+            raise
+        print(f"graybox grid run: {exc}", file=sys.stderr)
         return 2
 
 

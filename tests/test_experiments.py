@@ -415,6 +415,21 @@ def test_cli_init_run_report(tmp_path, capsys, monkeypatch):
     assert not (tmp_path / "x.sqlite").exists()
 
 
+def test_cli_refuses_zero_workers_and_names_an_unreachable_scheduler(tmp_path, capsys, monkeypatch):
+    from graybox.experiments import _executors
+
+    monkeypatch.chdir(tmp_path)
+    spec = tmp_path / "spec.toml"
+    spec.write_text(TOML)
+    for flag in ("--workers", "--processes"):  # 0 used to mean "in-process" without a word
+        assert main(["grid", "run", str(spec), "--store", "z.sqlite", flag, "0"]) == 2
+        assert "workers must be an integer >= 1, got 0" in capsys.readouterr().err
+    assert not (tmp_path / "z.sqlite").exists()
+    monkeypatch.setattr(_executors, "CONNECT_TIMEOUT", "1s")
+    assert main(["grid", "run", str(spec), "--store", "s.sqlite", "--scheduler", "tcp://127.0.0.1:1"]) == 2
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:1" in capsys.readouterr().err
+
+
 def test_public_api_is_documented():
     import inspect
 

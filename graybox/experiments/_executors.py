@@ -57,6 +57,8 @@ MAX_BATCH = 64
 #: Dask tasks in flight per worker thread: the next one waits on the worker, so no round trip
 #: through the driver sits between two tasks.
 IN_FLIGHT = 2
+#: How long the driver tries to reach a Dask scheduler given by its address.
+CONNECT_TIMEOUT = "30s"
 
 
 def worker_threads(workers: int, cores: int | None = None) -> int:
@@ -387,7 +389,11 @@ class DaskCluster:
             yield self.client
             return
         if self.scheduler is not None:
-            client = Client(self.scheduler, timeout="30s")
+            try:
+                client = Client(self.scheduler, timeout=CONNECT_TIMEOUT)
+            except OSError as exc:
+                raise ConnectionError(f"cannot reach the Dask scheduler at {self.scheduler} ({exc}); is it running, "
+                                      "and is the address right?") from None
             try:
                 client.wait_for_workers(1, timeout=60)
                 yield client
