@@ -17,6 +17,9 @@ def _grid(args: argparse.Namespace) -> int:
         return 0
     try:
         if args.grid_command == "run":
+            for flag, n in (("--workers", args.workers), ("--processes", args.processes)):
+                if n is not None and n < 1:
+                    raise ValueError(f"{flag} must be an integer >= 1, got {n}")
             processes = args.processes is not None
             res = gx.run_grid(args.spec, args.store, executor="processes" if processes else None,
                               workers=args.processes if processes else args.workers, scheduler=args.scheduler,

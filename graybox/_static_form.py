@@ -33,18 +33,20 @@ from ._validation import check_int, check_real
 __all__ = ["static_degree", "static_fit_mse", "static_terms"]
 
 
-def static_degree(static: StaticPoints | StaticCurve, *, band: float, max_degree: int = 3) -> int:
-    """Degree of the polynomial static curve the static information asks for.
+def static_degree(static: StaticPoints | StaticCurve | StaticSurface, *, band: float, max_degree: int = 3) -> int:
+    """Degree of the polynomial static curve (total degree of the surface, several inputs) the
+    static information asks for.
 
     Parameters
     ----------
-    static : StaticPoints or StaticCurve
-        The static information. A curve gives its own degree.
+    static : StaticPoints, StaticCurve or StaticSurface
+        The static information. A curve or a surface gives its own degree.
     band : float
         B (output units²): points ask for the smallest degree whose least-squares polynomial fit
         has a mean squared error at most B (a fit closer than the points' uncertainty is noise).
     max_degree : int
-        Largest degree considered (also limited by the number of points minus one).
+        Largest degree considered (also limited to the degrees the points can determine: see
+        :func:`static_fit_mse`).
 
     Returns
     -------
@@ -71,8 +73,9 @@ def static_degree(static: StaticPoints | StaticCurve, *, band: float, max_degree
 
 def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
     """Mean squared error (output units²) of the least-squares polynomial of ``degree`` through the
-    points (a surface of that total degree with several inputs); None when there are fewer points
-    than the polynomial has coefficients. One point is fitted exactly by a constant."""
+    points (a surface of that total degree with several inputs); None when the points cannot
+    determine it (fewer points than coefficients, or points that leave a direction unvaried, as
+    when two inputs always move together). One point is fitted exactly by a constant."""
     m = static.n_inputs
     ex = monomial_exponents(m, degree)
     if len(static) < len(ex):
@@ -80,8 +83,11 @@ def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
     # plain least squares on the monomials (no curve object: its domain would refuse one point,
     # or points that do not vary every input)
     V = _monomials(np.asarray(static.ubar, float).reshape(len(static), m), ex)
-    r = V @ scaled_lstsq(V, static.ybar) - static.ybar
-    return float(np.mean(r**2))
+    try:
+        c = scaled_lstsq(V, static.ybar)
+    except ValueError:  # rank deficient: the points do not pin the polynomial down (e.g. one input held)
+        return None
+    return float(np.mean((V @ c - static.ybar) ** 2))
 
 
 def _simplicity(term: Term) -> tuple[int, int, int]:
@@ -98,7 +104,8 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
     candidates : Structure
         Where the missing terms are taken from.
     degree : int
-        Degree d of the static curve: clusters Σ_{u^0} … Σ_{u^d} and Σ_y are needed.
+        Degree d of the static curve: clusters Σ_{u^0} … Σ_{u^d} and Σ_y are needed (several
+        inputs: every Σ_{u1^a1 ⋯ um^am} with a1 + … + am ≤ d, and Σ_y).
 
     Returns
     -------

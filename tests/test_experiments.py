@@ -423,7 +423,7 @@ def test_cli_refuses_zero_workers_and_names_an_unreachable_scheduler(tmp_path, c
     spec.write_text(TOML)
     for flag in ("--workers", "--processes"):  # 0 used to mean "in-process" without a word
         assert main(["grid", "run", str(spec), "--store", "z.sqlite", flag, "0"]) == 2
-        assert "workers must be an integer >= 1, got 0" in capsys.readouterr().err
+        assert f"{flag} must be an integer >= 1, got 0" in capsys.readouterr().err
     assert not (tmp_path / "z.sqlite").exists()
     monkeypatch.setattr(_executors, "CONNECT_TIMEOUT", "1s")
     assert main(["grid", "run", str(spec), "--store", "s.sqlite", "--scheduler", "tcp://127.0.0.1:1"]) == 2
@@ -536,3 +536,22 @@ options = {solver = "closed"}
     (tmp_path / "spec.toml").write_text(text.replace(', repeats = "mean"', ""))
     with pytest.raises(gx.SpecError, match="same input level.*repeats"):
         gx.Grid.from_toml(tmp_path / "spec.toml").load_data()
+
+
+def test_input_names_are_part_of_the_data_and_of_made_structures():
+    """Same numbers, other input names: other cell keys (a made structure's terms carry the names),
+    and the structure cache does not mix them up; default names hash as before."""
+    from graybox.experiments._cell import make_structure
+
+    d = gb.load_pumping_miso()
+    renamed = gb.Dataset(*(gb.Record(r.u, r.y, Ts=r.Ts, input_names=("a", "b")) for r in (d.ident, d.valid)),
+                         gb.StaticPoints(d.static.ubar, d.static.ybar, input_names=("a", "b")))
+    plain = gb.Dataset(d.ident, d.valid, d.static)
+    assert data_fingerprint(renamed) != data_fingerprint(plain)
+    spec = gx.StructureSpec("m", candidates={"ny": 1, "nu": 1, "degree": 2}, n_terms=5, include=["1"])
+    st_plain = make_structure(spec.content(), plain, data_fingerprint(plain))
+    st_named = make_structure(spec.content(), renamed, data_fingerprint(renamed))
+    assert set(st_plain.inputs) == {"u1", "u2"} and set(st_named.inputs) == {"a", "b"}
+    # the spec checks included terms and per-input delays against the inputs they name
+    gx.StructureSpec("n", candidates={"ny": 1, "nu": 2, "delay": {"n1": 1, "n2": 2}}, n_terms=4, include=["n1(k-1)"])
+    gx.StructureSpec("n", candidates={"ny": 1, "nu": 2}, n_terms=4, include=["n1(k-1)"])

@@ -185,3 +185,23 @@ def test_one_static_point_and_repeated_measurements(data):
             res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), gb.Dataset(data.ident, data.valid, sp),
                                     band=1e-3, sizes=[5])
         assert res.decision.in_band and res.decision.JSF <= 1e-3
+
+
+def test_static_points_that_leave_a_direction_unvaried_ask_only_what_they_determine():
+    """Two inputs that always move together (or one held) cannot determine a full surface: the
+    degree stops where the fit is still determined, instead of a rank error."""
+    from graybox._static_form import static_fit_mse
+
+    s = np.linspace(1.0, 3.0, 6)
+    together = gb.StaticPoints(np.column_stack([s, s]), 1.0 + 0.5 * s + 0.1 * s**2, input_names=("u1", "u2"))
+    assert static_fit_mse(together, 1) is None  # ū1 and ū2 are collinear: a plane is not determined
+    assert static_fit_mse(together, 0) is not None
+    assert static_degree(together, band=1e-9) == 0
+
+
+def test_constraints_given_as_a_generator_reach_the_refit(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5],
+                                constraints=(c for c in [{"type": "points"}]))
+    assert res.decision.JSF < 1e-6  # the refit passes through the points: the constraint was imposed

@@ -41,7 +41,7 @@ from .._validation import check_choice, check_int, check_real
 from ._report import leaderboard
 from ._run import run_grid
 from ._cell import cell_constraints
-from ._spec import DataSpec, DecisionRule, Grid, StructureSpec, Variant, constraint_from_object
+from ._spec import DataSpec, DecisionRule, Grid, StructureSpec, Variant, _is_constraint_object, constraint_from_object
 from ._store import load_results
 
 __all__ = ["select_graybox", "GrayboxSelection"]
@@ -107,7 +107,7 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
 def select_graybox(
     candidates: gb.Structure,
     data: gb.Dataset | gb.Record,
-    static: gb.StaticPoints | gb.StaticCurve | None = None,
+    static: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None = None,
     *,
     band: float,
     sizes: Sequence[int] | None = None,
@@ -135,9 +135,10 @@ def select_graybox(
     data : Dataset or Record
         A Dataset brings the identification and validation records and the static points; a
         Record is identification data only (validation by ``folds``).
-    static : StaticPoints or StaticCurve, optional
+    static : StaticPoints, StaticCurve or StaticSurface, optional
         Static information (default: the Dataset's points). A curve is sampled at 10 points of
-        its domain for the cells.
+        its domain for the cells, a surface (several inputs) on a grid of 6 points per input over
+        its domain.
     band : float
         B: the bound on J_SF (output units²), the static measurements' uncertainty.
     sizes : sequence of int, optional
@@ -187,8 +188,10 @@ def select_graybox(
     band = check_real(band, "band", low=0, low_open=True)
     if constraints is None:
         constraints = ()
-    elif isinstance(constraints, Mapping) or not isinstance(constraints, Sequence):  # one table or object
+    elif isinstance(constraints, Mapping) or _is_constraint_object(constraints):  # one table or object
         constraints = (constraints,)
+    else:  # any iterable of them, read once (a generator too)
+        constraints = tuple(constraints)
     if estimator is None:
         estimator = ("pe",) if constraints else ("pe", "se-gradient")
     estimators = [estimator] if isinstance(estimator, str) else list(estimator)

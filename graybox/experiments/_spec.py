@@ -21,6 +21,7 @@ import numpy as np
 
 from .. import _api as gb
 
+from .._terms import default_input_names
 from .._validation import check_choice, check_int, check_lambdas, check_real
 
 __all__ = [
@@ -319,8 +320,12 @@ class DataSpec:
 
 
 def data_fingerprint(ds: gb.Dataset) -> str:
-    """A hash of a data set's content: records (u, y, Ts), static points, static curve."""
+    """A hash of a data set's content: records (u, y, Ts), static points, static curve, and the
+    inputs' names when they are not the default ones (made structures' terms carry them)."""
     h = hashlib.sha256()
+    names = ds.input_names
+    if tuple(names) != tuple(default_input_names(len(names))):  # default names hash as before
+        h.update(repr(tuple(names)).encode())
     for r in (ds.ident, ds.valid):
         h.update(np.ascontiguousarray(r.u, dtype="<f8").tobytes())
         h.update(np.ascontiguousarray(r.y, dtype="<f8").tobytes())
@@ -409,7 +414,17 @@ class StructureSpec:
                             "variant's options (noise = 2)", ("candidates", "ne"))
         if not isinstance(cand["constant"], bool):
             raise SpecError(f"constant must be true or false, got {cand['constant']!r}", ("candidates", "constant"))
-        space = _wrap(lambda: gb.Candidates(**cand), ("candidates",))
+        if isinstance(self.include, str) or not isinstance(self.include, Sequence):
+            raise SpecError("include must be a list of term strings", ("include",))
+        inc = _wrap(gb.parse_structure, ("include",), list(self.include)) if self.include else gb.Structure(())
+        kw: dict[str, Any] = {}
+        if not isinstance(cand["nu"], Mapping):
+            # one lag count for every input of the data set, whose names the spec does not know: check
+            # against the inputs the delays or the included terms name (the cell uses the data set's)
+            named = list(cand["delay"]) if isinstance(cand["delay"], Mapping) else list(inc.inputs)
+            if named:
+                kw["inputs"] = tuple(named)
+        space = _wrap(lambda: gb.Candidates(**cand, **kw), ("candidates",))
         object.__setattr__(self, "candidates", _freeze(cand))
         if self.n_terms is not None:
             # with one lag count for all inputs the data set decides how many inputs, so how many
@@ -426,9 +441,6 @@ class StructureSpec:
             object.__setattr__(self, "max_terms", _wrap(check_int, ("max_terms",), self.max_terms, "max_terms", low=1))
         if self.n_terms is not None and self.tol is not None:
             raise SpecError("give n_terms or tol, not both", ("tol",))
-        if isinstance(self.include, str) or not isinstance(self.include, Sequence):
-            raise SpecError("include must be a list of term strings", ("include",))
-        inc = _wrap(gb.parse_structure, ("include",), list(self.include)) if self.include else gb.Structure(())
         missing = [str(t) for t in inc if t not in space]
         if missing:
             raise SpecError(f"included terms {missing} are not among the candidates", ("include",))
