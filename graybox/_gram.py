@@ -305,21 +305,7 @@ def gram_sums(terms: Sequence[Term], data: object, start: int) -> GramSums:
     """
     factors = term_factors(terms)
     n = len(factors)
-    if is_dask_data(data):
-        recs = [data] if isinstance(data, DaskRecord) else list(data)
-        for r in recs:
-            r.require_length(start)
-        Ga = _dask_reduce(factors, recs, start, "gram")
-        N = sum(len(r) - start for r in recs)
-    else:
-        recs = as_records(data)
-        acc = _Pairwise(np.add)
-        N = 0
-        for r in recs:
-            r.require_length(start)
-            acc.add(_block_reduce(factors, r.u, r.y, start, "gram", r.input_names))
-            N += len(r) - start
-        Ga = acc.total()
+    Ga, N = _reduce(factors, data, start, "gram")
     if not np.all(np.isfinite(Ga)):
         bad = np.flatnonzero(~np.isfinite(np.diag(Ga)[:n]))
         names = ", ".join(str(terms[j]) for j in bad[:5]) or "products of columns"
@@ -339,23 +325,28 @@ def r_factor(terms: Sequence[Term], data: object, start: int) -> tuple[np.ndarra
     R : ndarray, shape (n+1, n+1)
     N : int
     """
-    factors = term_factors(terms)
+    R, N = _reduce(term_factors(terms), data, start, "qr")
+    if not np.all(np.isfinite(R)):
+        raise ValueError("non-finite regressors (overflow of a high power of u or y?)")
+    return R, N
+
+
+def _reduce(factors: Sequence[tuple], data: object, start: int, form: str) -> tuple[np.ndarray, int]:
+    """[Ψ, y]'s Gram matrix summed (``form="gram"``) or its R factor by TSQR (``"qr"``) over the
+    records, in memory or on Dask, pairwise; and the number of rows."""
     if is_dask_data(data):
         recs = [data] if isinstance(data, DaskRecord) else list(data)
         for r in recs:
             r.require_length(start)
-        R = _dask_reduce(factors, recs, start, "qr")
+        M = _dask_reduce(factors, recs, start, form)
     else:
         recs = as_records(data)
-        acc = _Pairwise(_r_combine)
+        acc = _Pairwise(np.add if form == "gram" else _r_combine)
         for r in recs:
             r.require_length(start)
-            acc.add(_block_reduce(factors, r.u, r.y, start, "qr", r.input_names))
-        R = acc.total()
-    N = sum(len(r) - start for r in recs)
-    if not np.all(np.isfinite(R)):
-        raise ValueError("non-finite regressors (overflow of a high power of u or y?)")
-    return R, int(N)
+            acc.add(_block_reduce(factors, r.u, r.y, start, form, r.input_names))
+        M = acc.total()
+    return M, int(sum(len(r) - start for r in recs))
 
 
 def _dask_reduce(factors: Sequence[tuple], recs: list[DaskRecord], start: int, form: str) -> np.ndarray:
