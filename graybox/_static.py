@@ -170,13 +170,18 @@ def cluster_map(structure: Structure) -> ClusterMap:
     if len(structure.inputs) > 1:
         raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its static function "
                          "is a surface (use the surface functions, e.g. Model.static_curve with ū of shape (M, m))")
-    keys = [cluster_key(t) for t in structure]
+    return ClusterMap(*cluster_membership([cluster_key(t) for t in structure]))
+
+
+def cluster_membership(keys: list[tuple[int, ...]]) -> tuple[tuple[tuple[int, ...], ...], np.ndarray]:
+    """The distinct cluster keys, sorted, and the read-only 0/1 map R (clusters × terms) with
+    R[i, j] = 1 when term j (of key ``keys[j]``) belongs to cluster i."""
     uniq = tuple(sorted(set(keys)))
-    R = np.zeros((len(uniq), len(structure)))
+    R = np.zeros((len(uniq), len(keys)))
     for j, k in enumerate(keys):
         R[uniq.index(k), j] = 1.0
     R.setflags(write=False)
-    return ClusterMap(uniq, R)
+    return uniq, R
 
 
 # -- the static polynomial and its real roots ----------------------------------------------------

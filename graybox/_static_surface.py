@@ -118,12 +118,7 @@ def _surface_cluster_map(structure: Structure, inputs: tuple[str, ...]) -> Surfa
         if t.is_noise:
             raise ValueError(f"noise term {t} has no cluster")
         keys.append((t.power_of("y"),) + _powers(t, inputs))
-    uniq = tuple(sorted(set(keys)))
-    R = np.zeros((len(uniq), len(structure)))
-    for j, k in enumerate(keys):
-        R[uniq.index(k), j] = 1.0
-    R.setflags(write=False)
-    return SurfaceClusterMap(inputs, uniq, R)
+    return SurfaceClusterMap(inputs, *_static.cluster_membership(keys))
 
 
 def surface_cluster_map(structure: Structure, *, inputs: tuple[str, ...] | None = None) -> SurfaceClusterMap:
