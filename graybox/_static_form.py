@@ -23,7 +23,7 @@ import numpy as np
 
 from ._curves import StaticCurve
 from ._records import StaticPoints
-from ._static import cluster_key, cluster_name
+from ._static import cluster_name
 from ._static_surface import surface_cluster_name
 from ._ls import scaled_lstsq
 from ._surfaces import StaticSurface, _monomials, monomial_exponents
@@ -120,22 +120,12 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
     """
     degree = check_int(degree, "degree", low=0)
     inputs = tuple(dict.fromkeys(candidates.inputs + structure.inputs)) or ("u",)
-    if len(inputs) == 1:
-        def key_of(t: Term) -> tuple[int, ...]:
-            return cluster_key(t)
+    m = len(inputs)
 
-        need = [(0, m) for m in range(degree + 1)] + [(1, 0)]
+    def key_of(t: Term) -> tuple[int, ...]:  # (power of y, power of each input): one input gives cluster_key
+        return (t.power_of("y"),) + tuple(t.power_of(n) for n in inputs)
 
-        def name(k: tuple[int, ...]) -> str:
-            return cluster_name(*k)
-    else:
-        def key_of(t: Term) -> tuple[int, ...]:
-            return (t.power_of("y"),) + tuple(t.power_of(n) for n in inputs)
-
-        need = [(0,) + e for e in monomial_exponents(len(inputs), degree)] + [(1,) + (0,) * len(inputs)]
-
-        def name(k: tuple[int, ...]) -> str:
-            return surface_cluster_name(k[0], k[1:], inputs)
+    need = [(0,) + e for e in monomial_exponents(m, degree)] + [(1,) + (0,) * m]
     have = {key_of(t) for t in structure if not t.is_noise}
     out, missing = [], []
     for key in need:
@@ -147,8 +137,8 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
             continue
         out.append(min(pool, key=_simplicity))
     if missing:
+        names = [cluster_name(*k) if m == 1 else surface_cluster_name(k[0], k[1:], inputs) for k in missing]
         raise ValueError(
-            f"the candidates cannot represent a degree-{degree} static {'curve' if len(inputs) == 1 else 'surface'}: "
-            f"they hold no term of the cluster(s) {[name(k) for k in missing]} (raise the candidates' degree, or "
-            "include a constant)")
+            f"the candidates cannot represent a degree-{degree} static {'curve' if m == 1 else 'surface'}: they hold "
+            f"no term of the cluster(s) {names} (raise the candidates' degree, or include a constant)")
     return out
