@@ -22,8 +22,8 @@ the structure, and the result says so with the smallest J_SF reached.
 
 The problem is not convex (the weighted sums of nearby λ1 sit in different basins), so the
 iteration runs from several starts and the best feasible end wins: the PE member nearest the band
-(the closed form of eq. (11), milliseconds); the member of a coarse SE gradient sweep (15 λ1, the
-sweep ``se_pareto(method="gradient")`` makes) with the smallest J_S in the band, so that the result is
+(the closed form of eq. (11), milliseconds); the member of a coarse SE gradient sweep (14 λ1 below 1,
+the sweep ``se_pareto(method="gradient")`` makes) with the smallest J_S in the band, so that the result is
 never worse than sweep + D_SF on the same λ1; and the members outside the band (J_SF ≤ 4 B) with a
 smaller J_S, from the sweep and from a few fresh weighted-sum fits at high λ1, which restoration
 brings into the band. Along the band's edge the iteration goes where no weighted sum can when the
@@ -175,6 +175,10 @@ def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.
     return th[i], ("least squares" if i == len(lam) - 1 else f"PE λ1={lam[i]:.4g}")
 
 
+#: λ1 of the default coarse sweep. Without λ1 = 1: that member ignores the static points, and the
+#: sweep restarts from every start right after it (the multi-start fits dominate the sweep's time).
+_COARSE = np.logspace(-2, 0, 15)[:-1]
+
 #: λ1 of the fresh weighted-sum fits (least squares and the PE member of the same λ1 as starts,
 #: "dogbox") that add starts to the coarse sweep's: fits from afar land in basins that the sweep's
 #: continuation does not reach (BENCHMARKS.md, structure selection).
@@ -312,7 +316,8 @@ def se_dsf(
     theta0 : ndarray, shape (n_terms,), optional
         The only start; default: several (see the module docstring).
     lambdas : sequence of float, optional
-        λ1 of the coarse SE sweep that finds starts (default: 15 in logspace(-2, 0)).
+        λ1 of the coarse SE sweep that finds starts (default: the 14 values of logspace(-2, 0, 15)
+        below 1; λ1 = 1 weighs no static point, and the least-squares estimate is a start anyway).
     max_iter : int
         Largest number of trial steps.
     tol : float
@@ -341,7 +346,7 @@ def se_dsf(
         starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]
     else:
         lams = np.logspace(-6, 0, 60) if pe_lambdas is None else np.asarray(pe_lambdas, float)
-        coarse = np.logspace(-2, 0, 15) if lambdas is None else check_lambdas(lambdas)
+        coarse = _COARSE if lambdas is None else check_lambdas(lambdas)
         starts = []
         try:
             starts.append(_pe_start(problem, band, lams))
