@@ -126,31 +126,53 @@ def _lin(c: float, b: np.ndarray, A: np.ndarray, d: np.ndarray) -> float:
     return c + 2.0 * float(b @ d) + float(d @ A @ d)
 
 
-def _constrained_step(f, g, G, band, nu):
-    """d minimising the linearised J_S with the linearised J_SF ≤ band (μ by bisection)."""
+def _constrained_step(g, G, band, nu, mu0=0.0):
+    """d minimising the linearised J_S with the linearised J_SF ≤ band, and its multiplier μ.
+
+    μ is bracketed and bisected (in log) to 0.1 %; the previous step's μ (``mu0``) starts the bracket,
+    since μ changes little from one iteration to the next. (None, mu0) when no μ gets there.
+    """
     A1, b1, A2, b2 = G
-    d = _step(A1, b1, A2, b2, 0.0, nu)
-    if d is not None and _lin(g, b2, A2, d) <= band:
-        return d
-    scale = float(np.trace(A1)) / max(float(np.trace(A2)), 1e-300)
-    lo, hi = 0.0, 1e-6 * scale
-    for _ in range(80):  # grow μ until the linearised constraint holds
-        d = _step(A1, b1, A2, b2, hi, nu)
-        if d is not None and _lin(g, b2, A2, d) <= band:
-            break
-        lo, hi = hi, hi * 10.0
-    else:
-        return None
-    for _ in range(40):  # then the smallest such μ (the multiplier of the linearised problem)
-        mid = np.sqrt(lo * hi) if lo > 0 else hi / 10.0
-        dm = _step(A1, b1, A2, b2, mid, nu)
-        if dm is not None and _lin(g, b2, A2, dm) <= band:
+
+    def inside(mu):
+        d = _step(A1, b1, A2, b2, mu, nu)
+        return d if d is not None and _lin(g, b2, A2, d) <= band else None
+
+    d = inside(0.0)
+    if d is not None:
+        return d, 0.0
+    warm = mu0 > 0
+    factor = 4.0 if warm else 10.0
+    hi = mu0 if warm else 1e-6 * float(np.trace(A1)) / max(float(np.trace(A2)), 1e-300)
+    d = inside(hi)
+    lo = 0.0
+    if d is not None:  # the warm μ is enough: look down for one that is not
+        for _ in range(80):
+            dm = inside(hi / factor)
+            if dm is None:
+                lo = hi / factor
+                break
+            hi, d = hi / factor, dm
+    else:  # grow μ until the linearised constraint holds
+        for _ in range(80):
+            lo, hi = hi, hi * factor
+            d = inside(hi)
+            if d is not None:
+                break
+        else:
+            return None, mu0
+    while lo > 0 and hi > lo * (1 + _MU_RTOL):  # then the smallest such μ (the multiplier)
+        mid = np.sqrt(lo * hi)
+        dm = inside(mid)
+        if dm is not None:
             hi, d = mid, dm
         else:
             lo = mid
-        if hi <= lo * (1 + 1e-3):
-            break
-    return d
+    return d, hi
+
+
+#: Relative precision of the multiplier μ of the linearised band.
+_MU_RTOL = 1e-3
 
 
 def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray, str]:
@@ -233,6 +255,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
         return None
     f0, g0 = f, g
     nu = 1e-3
+    mu = 0.0
     # the linearised constraint aims a margin inside the band, so that the curvature of J_SF does not
     # throw most steps just outside it (they would be refused and the iteration would zigzag)
     margin = 0.05
@@ -248,12 +271,12 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
             A1, b1, A2, b2 = G
             feasible = g <= band
             if feasible:
-                d = _constrained_step(f, g, G, min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin))), nu)
+                d, mu = _constrained_step(g, G, min(band * (1.0 - margin), max(g, band * (1.0 - 2 * margin))), nu, mu)
             else:
                 # restoration: the smallest linearised J_S with J_SF at most half of now (or the band),
                 # so that J_S is not given away on the way into the band; where the linearised J_SF
                 # cannot get there, plain descent of J_SF with J_S as a small regulariser
-                d = _constrained_step(f, g, G, max(band * (1.0 - margin), 0.5 * g), nu)
+                d, mu = _constrained_step(g, G, max(band * (1.0 - margin), 0.5 * g), nu, mu)
                 if d is None:
                     d = _step(A2, b2, A1, b1, 1e-6, nu)
             if d is None:
@@ -262,7 +285,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                     message = "no step improves (the linearised problem has no feasible step)"
                     break
                 continue
-            f_new, g_new, G_new = gn.parts(z + d, True)
+            f_new, g_new, _ = gn.parts(z + d, False)  # the Jacobian only where the step is kept
             if feasible:
                 ok = np.isfinite(f_new) and g_new <= band * (1 + 1e-12) and f_new < f
                 gain = (f - f_new) / f if ok else 0.0
@@ -270,7 +293,8 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                 ok = np.isfinite(f_new) and np.isfinite(g_new) and g_new < g
                 gain = (g - g_new) / g if ok else 0.0
             if ok:
-                z, f, g, G = z + d, f_new, g_new, G_new
+                z, f, g = z + d, f_new, g_new
+                G = gn.parts(z, True)[2]
                 nu = max(nu / 3.0, 1e-12)
                 margin = max(margin / 1.5, 1e-4)
                 stall = stall + 1 if gain < tol else 0
