@@ -3,6 +3,7 @@
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings, strategies as st
 
 import graybox as gb
 
@@ -81,3 +82,28 @@ def test_static_points_outside_the_records_range_and_in_conflict(data):
     assert res.feasible and res.JSF <= 0.02 * (1 + 1e-9)
     assert res.JSF == pytest.approx(gb.jsf(res.model, static), rel=1e-9)
     assert res.JS == pytest.approx(gb.js(res.model, data.ident), rel=1e-9)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.floats(1e-4, 1e4), st.floats(0.05, 0.95))
+def test_the_band_multiplier_does_not_depend_on_its_warm_start(seed, mu0, shrink):
+    """The linearised step meets the linearised band with the smallest multiplier μ (to its
+    tolerance), whatever μ the bracket starts from."""
+    from graybox._se_dsf import _MU_RTOL, _constrained_step, _lin
+
+    rng = np.random.default_rng(seed)
+    n = 5
+    J1, J2 = rng.standard_normal((30, n)), rng.standard_normal((4, n))
+    r1, r2 = rng.standard_normal(30), rng.standard_normal(4)
+    G = (J1.T @ J1, J1.T @ r1, J2.T @ J2, J2.T @ r2)
+    g = float(r2 @ r2)
+    d_free, _ = _constrained_step(g, G, np.inf, 1e-3)
+    lin_free = _lin(g, G[3], G[2], d_free)
+    floor = g - float(G[3] @ np.linalg.lstsq(G[2], G[3], rcond=None)[0])  # the smallest linearised J_SF
+    assume(lin_free - floor > 1e-6 * g)
+    band = floor + shrink * (lin_free - floor)  # between the two: the constraint is active and reachable
+    cold, mu_cold = _constrained_step(g, G, band, 1e-3)
+    warm, mu_warm = _constrained_step(g, G, band, 1e-3, mu0)
+    for d in (cold, warm):
+        assert d is not None and _lin(g, G[3], G[2], d) <= band
+    assert mu_cold > 0 and mu_warm == pytest.approx(mu_cold, rel=3 * _MU_RTOL)
