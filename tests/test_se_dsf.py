@@ -107,3 +107,23 @@ def test_the_band_multiplier_does_not_depend_on_its_warm_start(seed, mu0, shrink
     for d in (cold, warm):
         assert d is not None and _lin(g, G[3], G[2], d) <= band
     assert mu_cold > 0 and mu_warm == pytest.approx(mu_cold, rel=3 * _MU_RTOL)
+
+
+def test_does_not_depend_on_units(data):
+    """u in other units (×60) and y in other units (×1000, so J's and the band ×10⁶): the same model."""
+    lam = np.logspace(-2, 0, 5)[:-1]
+    ku, ky = 60.0, 1000.0
+
+    def scaled(r):
+        return gb.Record(r.u * ku, r.y * ky)
+
+    other = gb.Dataset(scaled(data.ident), scaled(data.valid),
+                       gb.StaticPoints(data.static.ubar * ku, data.static.ybar * ky))
+    a = gb.se_dsf(TRUE, data, band=0.02, lambdas=lam)
+    b = gb.se_dsf(TRUE, other, band=0.02 * ky**2, lambdas=lam)
+    assert a.feasible and b.feasible and a.start == b.start
+    assert b.JS / ky**2 == pytest.approx(a.JS, rel=1e-6)
+    assert b.JSF / ky**2 == pytest.approx(a.JSF, rel=1e-6)
+    u = data.valid.u[:200]
+    assert b.model.simulate(u * ku, data.valid.y[:2] * ky) / ky == pytest.approx(
+        a.model.simulate(u, data.valid.y[:2]), rel=1e-5, abs=1e-8)
