@@ -161,7 +161,9 @@ def _constrained_step(g, G, band, nu, mu0=0.0):
                 break
         else:
             return None, mu0
-    while lo > 0 and hi > lo * (1 + _MU_RTOL):  # then the smallest such μ (the multiplier)
+    for _ in range(60):  # then the smallest such μ (the multiplier), to _MU_RTOL
+        if not (lo > 0 and hi > lo * (1 + _MU_RTOL)):
+            break
         mid = np.sqrt(lo * hi)
         dm = inside(mid)
         if dm is not None:
