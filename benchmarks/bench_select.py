@@ -104,6 +104,9 @@ def dsf_cases():
         for k in sizes:
             yield f"plant, lags {label}, {k} terms", plant, gb.frols(cand, plant, n_terms=k, include=["1"]).structure, \
                 BANDS["pumping"]
+    # the structure select_graybox chooses on the plant (the tables above): a case a user meets
+    chosen = gb.select_graybox(gb.Candidates(6, 6, degree=2), plant, band=BANDS["pumping"]).structure
+    yield f"plant, chosen by select_graybox, {len(chosen)} terms", plant, chosen, BANDS["pumping"]
     buck = gb.load_buck()
     for k in (4, 6, 8):
         st = gb.frols(gb.Candidates(2, 2, degree=2, max_y_power=1), buck, n_terms=k, include=["1"]).structure

@@ -129,7 +129,7 @@ def _lin(c: float, b: np.ndarray, A: np.ndarray, d: np.ndarray) -> float:
 def _constrained_step(g, G, band, nu, mu0=0.0):
     """d minimising the linearised J_S with the linearised J_SF ≤ band, and its multiplier μ.
 
-    μ is bracketed and bisected (in log) to 0.1 %; the previous step's μ (``mu0``) starts the bracket,
+    μ is bracketed and bisected (in log) to 0.01 %; the previous step's μ (``mu0``) starts the bracket,
     since μ changes little from one iteration to the next. (None, mu0) when no μ gets there.
     """
     A1, b1, A2, b2 = G
@@ -173,8 +173,11 @@ def _constrained_step(g, G, band, nu, mu0=0.0):
     return d, hi
 
 
+#: Smallest relative margin inside the band that the linearised constraint aims at.
+_MARGIN_FLOOR = 1e-4
+
 #: Relative precision of the multiplier μ of the linearised band.
-_MU_RTOL = 1e-3
+_MU_RTOL = 1e-4
 
 
 def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray, str]:
@@ -298,8 +301,11 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                 z, f, g = z + d, f_new, g_new
                 G = gn.parts(z, True)[2]
                 nu = max(nu / 3.0, 1e-12)
-                margin = max(margin / 1.5, 1e-4)
+                margin = max(margin / 1.5, _MARGIN_FLOOR)
                 stall = stall + 1 if gain < tol else 0
+                if stall >= 3 and feasible and margin > _MARGIN_FLOOR:
+                    # small steps while the aim is still well inside the band: aim at its edge first
+                    margin, stall = _MARGIN_FLOOR, 0
                 if stall >= 3:
                     message = (f"converged: relative decrease of {'J_S' if feasible else 'J_SF'} below {tol:g} "
                                "for 3 steps")
