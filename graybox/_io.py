@@ -24,8 +24,10 @@ line.
 
 Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.ParetoSet`,
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
-:class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.ParameterUncertainty` and
-:class:`~graybox.StaticCurveBand`.
+:class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.SEMPResult`,
+:class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand` and (registered by the experiment
+layer) :class:`~graybox.GrayboxSelection`. Their tables (pandas DataFrames of int, float, bool or text
+columns) are written one column per line, with the index and each column's kind.
 
 Loading refuses, with a :class:`GrayboxFileError` naming the file and the problem: a file that is
 not JSON or not a graybox file, a newer or unknown ``format_version``, an unknown type, a type other
@@ -46,6 +48,7 @@ from collections.abc import Mapping
 from typing import Any, Callable
 
 import numpy as np
+import pandas as pd
 
 from ._decide import Decision
 from ._els import ELSResult
@@ -54,6 +57,7 @@ from ._neural import NeuralFit, NeuralModel
 from ._pareto import ParetoSet
 from ._se_dsf import DSFResult
 from ._selection import Selection
+from ._semp import SEMPResult
 from ._terms import Structure, parse_term
 from ._uncertainty import ParameterUncertainty, StaticCurveBand
 
@@ -182,6 +186,8 @@ def _enc(kind: str, v: Any) -> Any:
         return {str(k): str(r) for k, r in dict(v).items()}
     if kind == "skipped":
         return [[str(t), str(why)] for t, why in v]
+    if kind == "frame":
+        return _enc_frame(v)
     if kind in _CODECS:
         return _encode_fields(v)
     raise AssertionError(kind)  # pragma: no cover - a codec table error
@@ -230,9 +236,95 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
             except ValueError as exc:
                 raise rd.fail(f"{where}[{i}][0]", str(exc)) from None
         return tuple(out)
+    if kind == "frame":
+        return _dec_frame(v, where, rd)
     if kind in _CODECS:
         return _decode_fields(kind, v, where, rd)
     raise AssertionError(kind)  # pragma: no cover
+
+
+# --------------------------------------------------------------------------------------------
+# tables (pandas DataFrames of result objects): columns of int, float, bool or str
+# --------------------------------------------------------------------------------------------
+def _column_kind(values: Any, name: str) -> str:
+    k = np.asarray(values).dtype.kind
+    if k in "iu":
+        return "int"
+    if k == "f":
+        return "float"
+    if k == "b":
+        return "bool"
+    if all(isinstance(x, str) for x in values):
+        return "str"
+    raise ValueError(f"cannot save the table column {name!r}: its values are neither numbers, booleans nor text")
+
+
+def _column(kind: str, values: Any) -> list:
+    if kind == "float":
+        return [_num(x) for x in values]
+    if kind == "int":
+        return [int(x) for x in values]
+    if kind == "bool":
+        return [bool(x) for x in values]
+    return [str(x) for x in values]
+
+
+def _enc_frame(df: pd.DataFrame) -> dict:
+    """A table as {index, columns, kinds, data}: one list per column (a row of the file each)."""
+    idx = df.index
+    index_kind = "range" if isinstance(idx, pd.RangeIndex) and idx.start == 0 and idx.step == 1 else \
+        _column_kind(idx, "index")
+    cols = [str(c) for c in df.columns]
+    kinds = [_column_kind(df[c].to_numpy(), str(c)) for c in df.columns]
+    return {"index_name": None if idx.name is None else str(idx.name), "index_kind": index_kind,
+            "index": len(idx) if index_kind == "range" else _column(index_kind, idx),
+            "columns": cols, "kinds": kinds,
+            "data": [_column(k, df[c].to_numpy()) for c, k in zip(df.columns, kinds)]}
+
+
+_FRAME_KINDS = {"int": ("int", np.int64), "float": ("float", np.float64), "bool": ("bool", np.bool_), "str": ("str", None)}
+
+
+def _dec_column(kind: str, values: Any, where: str, rd: _Reader) -> Any:
+    if kind not in _FRAME_KINDS:
+        raise rd.fail(where, f"unknown column kind {kind!r} (one of {sorted(_FRAME_KINDS)})")
+    read = getattr(rd, _FRAME_KINDS[kind][0])
+    out = [read(x, f"{where}[{i}]") for i, x in enumerate(rd.list(values, where))]
+    dtype = _FRAME_KINDS[kind][1]
+    return out if dtype is None else np.array(out, dtype=dtype)
+
+
+def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
+    d = rd.dict(v, where)
+    need = ["index_name", "index_kind", "index", "columns", "kinds", "data"]
+    missing = [k for k in need if k not in d]
+    unknown = sorted(set(d) - set(need))
+    if missing or unknown:
+        raise rd.fail(where, f"a table needs {need}" + (f"; missing {missing}" if missing else "")
+                      + (f"; unknown {unknown}" if unknown else ""))
+    cols = [rd.str(c, f"{where}.columns[{i}]") for i, c in enumerate(rd.list(d["columns"], f"{where}.columns"))]
+    kinds = [rd.str(k, f"{where}.kinds[{i}]") for i, k in enumerate(rd.list(d["kinds"], f"{where}.kinds"))]
+    data = rd.list(d["data"], f"{where}.data")
+    if not (len(cols) == len(kinds) == len(data)):
+        raise rd.fail(where, f"{len(cols)} columns, {len(kinds)} kinds and {len(data)} data lists")
+    if len(set(cols)) < len(cols):
+        raise rd.fail(f"{where}.columns", "repeated column names")
+    values = {c: _dec_column(k, x, f"{where}.data[{i}]", rd) for i, (c, k, x) in enumerate(zip(cols, kinds, data))}
+    name = d["index_name"]
+    if name is not None:
+        name = rd.str(name, f"{where}.index_name")
+    ik = rd.str(d["index_kind"], f"{where}.index_kind")
+    if ik == "range":
+        n = rd.int(d["index"], f"{where}.index")
+        if n < 0:
+            raise rd.fail(f"{where}.index", "a negative length")
+        index = pd.RangeIndex(n, name=name)
+    else:
+        index = pd.Index(_dec_column(ik, d["index"], f"{where}.index", rd), name=name)
+    lengths = {len(x) for x in values.values()} | {len(index)}
+    if len(lengths) > 1:
+        raise rd.fail(where, f"columns and index of different lengths {sorted(lengths)}")
+    return pd.DataFrame(values, index=index, columns=cols)
 
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
@@ -255,6 +347,8 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("stopped", "str"), ("rmse_train", "float"), ("rmse_sim", "float"), ("seconds", "float"))),
     "Decision": (Decision, (("rule", "str"), ("index", "int"), ("lambda1", "float"), ("JS", "float"), ("JSF", "float"),
                             ("in_band", "bool"), ("score", "float"), ("model", "Model"))),
+    "SEMPResult": (SEMPResult, (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
+                                ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
                               ("feasible", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
                               ("n_iter", "int"), ("message", "str"))),
@@ -268,6 +362,17 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                           ("gain", "array1"), ("gain_low", "array1"), ("gain_high", "array1"),
                                           ("gain_std", "array1"), ("undefined", "array1"))),
 }
+
+def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> None:
+    """Add a saved type defined above this module (the experiment layer's results).
+
+    ``spec`` lists every constructor field as (name, kind), with the kinds of ``_CODECS``.
+    """
+    if name in _CODECS and _CODECS[name][0] is not cls:
+        raise ValueError(f"a saved type named {name!r} exists already")
+    _CODECS[name] = (cls, tuple(spec))
+    _TYPES[cls] = name
+
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
 _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]] = {
@@ -350,7 +455,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, ParameterUncertainty or StaticCurveBand
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, SEMPResult, ParameterUncertainty, StaticCurveBand or GrayboxSelection
         The value to write.
     units : (str, str) or mapping, optional
         Units of the input and output (e.g. ``("rpm", "mlc")``, or a Record's ``units``), written
@@ -457,7 +562,7 @@ def save(
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, ParameterUncertainty or StaticCurveBand
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, SEMPResult, ParameterUncertainty, StaticCurveBand or GrayboxSelection
         The value.
     path : str or PathLike
         Where to write (conventionally ``*.json``).

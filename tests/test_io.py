@@ -8,6 +8,7 @@ from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import given, settings, strategies as st
 
@@ -25,7 +26,9 @@ def bits(x):
 
 def same(a, b, path="value"):
     """Deep equality of graybox values: floats bit for bit, arrays by shape and bits."""
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+    if isinstance(a, pd.DataFrame) or isinstance(b, pd.DataFrame):
+        pd.testing.assert_frame_equal(a, b, check_exact=True, obj=path)  # dtypes, index and values exactly
+    elif isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
         a, b = np.asarray(a, float), np.asarray(b, float)
         assert a.shape == b.shape, path
         np.testing.assert_array_equal(bits(a), bits(b), err_msg=path)
@@ -73,13 +76,14 @@ def values():
         band = gb.static_curve_band(gb.ls_uncertainty(pe.model(0), rec), [900.0, 1300.0], method="monte-carlo",
                                     n_samples=200)
         dsf = gb.se_dsf(STRUCT, rec, static, band=1.0, theta0=pe.thetas[1], max_iter=5)
+        path = gb.semp(gb.Candidates(ny=2, nu=1, degree=2), rec, n_terms=3)
     return {"model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
             "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band,
-            "dsf": dsf}
+            "dsf": dsf, "semp": path}
 
 
 TYPES = ["model", "plain model", "neural", "pareto", "failed", "selection", "els", "neural fit", "decision",
-         "uncertainty", "band", "dsf"]
+         "uncertainty", "band", "dsf", "semp"]
 
 
 @pytest.mark.parametrize("name", TYPES)
@@ -270,3 +274,46 @@ def test_an_els_file_written_before_n_direct_existed_still_loads(values):
     assert body.pop("n_direct") == values["els"].n_direct
     back = gb.from_json(json.dumps(doc))
     assert back.n_direct == 0 and back.n_iter == values["els"].n_iter
+
+
+def test_a_graybox_selection_round_trips_with_its_table(tmp_path):
+    """select_graybox's result (defined in the experiment layer, registered with the file format):
+    its table comes back with the same columns, kinds, index and values."""
+    rec = record(3, N=600)
+    static = gb.StaticPoints(np.linspace(800, 1600, 5), gb.Model(STRUCT, [0.6, 0.2, 2e-3, 1e-5, -5e-7, 0.3])
+                             .static_curve(np.linspace(800, 1600, 5)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sel = gb.select_graybox(gb.Candidates(ny=2, nu=1, degree=2), rec, static, band=1.0, sizes=[3, 4],
+                                estimator="pe", folds=2, store=tmp_path / "s.sqlite")
+    assert len(sel.table) >= 2 and {"JS_valid", "in_band", "rank"} <= set(sel.table.columns)
+    p = gb.save(sel, tmp_path / "sel.json", units=("rpm", "mlc"))
+    back = gb.load(p, expect=gb.GrayboxSelection)
+    same(sel, back)
+    assert gb.to_json(back, units=("rpm", "mlc")) == p.read_text(encoding="utf-8")
+
+
+def test_bad_tables_are_refused(values):
+    ok = json.loads(gb.to_json(values["semp"]))
+
+    def with_path(**change):
+        d = json.loads(json.dumps(ok))
+        d["object"]["path"].update(change)
+        return json.dumps(d)
+
+    cols = ok["object"]["path"]["columns"]
+    data = ok["object"]["path"]["data"]
+    cases = {
+        "short column": (with_path(data=[data[0][:-1]] + data[1:]), "different lengths"),
+        "unknown kind": (with_path(kinds=["complex"] + ok["object"]["path"]["kinds"][1:]), "unknown column kind"),
+        "text in a float column": (with_path(data=[c if k != "float" else ["x"] * len(c) for c, k in
+                                                   zip(data, ok["object"]["path"]["kinds"])]), "expected a number"),
+        "repeated name": (with_path(columns=[cols[0]] * len(cols)), "repeated column names"),
+        "too few kinds": (with_path(kinds=ok["object"]["path"]["kinds"][:-1]), "columns, .* kinds"),
+        "unknown key": (with_path(colour="red"), "unknown"),
+    }
+    for label, (text, msg) in cases.items():
+        with pytest.raises(gb.GrayboxFileError, match=msg):
+            gb.from_json(text, source=label)
+    with pytest.raises(ValueError, match="cannot save the table column 'x'"):
+        _io._enc_frame(pd.DataFrame({"x": [None, 1.0, "a"]}, dtype=object))

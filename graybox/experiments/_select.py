@@ -36,6 +36,7 @@ import pandas as pd
 
 from .. import _api as gb
 
+from .._io import register_type
 from .._static_form import static_degree, static_fit_mse, static_terms
 from .._validation import check_choice, check_int, check_real
 from ._report import leaderboard
@@ -86,6 +87,11 @@ class GrayboxSelection:
     def __repr__(self) -> str:
         return (f"GrayboxSelection(n_terms={len(self.structure)}, structures tried={len(self.table)}, "
                 f"J_S valid={self.table['JS_valid'].min():.4g}, fallback={self.fallback})")
+
+
+register_type("GrayboxSelection", GrayboxSelection,
+              (("structure", "structure"), ("model", "Model"), ("decision", "Decision"), ("table", "frame"),
+               ("degree", "int"), ("band", "float"), ("fallback", "bool"), ("store", "str")))
 
 
 def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.Record]]:
