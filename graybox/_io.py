@@ -246,6 +246,11 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
 # --------------------------------------------------------------------------------------------
 # tables (pandas DataFrames of result objects): columns of int, float, bool or str
 # --------------------------------------------------------------------------------------------
+#: Column kinds of a saved table: the reader's method, the numpy dtype (None: a list of str), the writer.
+_FRAME_KINDS = {"int": ("int", np.int64, int), "float": ("float", np.float64, _num), "bool": ("bool", np.bool_, bool),
+                "str": ("str", None, str)}
+
+
 def _column_kind(values: Any, name: str) -> str:
     k = np.asarray(values).dtype.kind
     if k in "iu":
@@ -260,13 +265,8 @@ def _column_kind(values: Any, name: str) -> str:
 
 
 def _column(kind: str, values: Any) -> list:
-    if kind == "float":
-        return [_num(x) for x in values]
-    if kind == "int":
-        return [int(x) for x in values]
-    if kind == "bool":
-        return [bool(x) for x in values]
-    return [str(x) for x in values]
+    write = _FRAME_KINDS[kind][2]
+    return [write(x) for x in values]
 
 
 def _enc_frame(df: pd.DataFrame) -> dict:
@@ -282,7 +282,6 @@ def _enc_frame(df: pd.DataFrame) -> dict:
             "data": [_column(k, df[c].to_numpy()) for c, k in zip(df.columns, kinds)]}
 
 
-_FRAME_KINDS = {"int": ("int", np.int64), "float": ("float", np.float64), "bool": ("bool", np.bool_), "str": ("str", None)}
 
 
 def _dec_column(kind: str, values: Any, where: str, rd: _Reader) -> Any:
