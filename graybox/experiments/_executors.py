@@ -452,7 +452,7 @@ class DaskCluster:
                     items = futures.pop(f)
                     rows: list[dict] = []
                     if f.status == "finished":
-                        rows = list(result)
+                        rows = list(result.rows)
                         for (c, _), r in zip(items, rows):
                             if r.get("status") in ("ok", "diverged"):  # a cell that fails at once says little
                                 batches.observe(c, r.get("wall_time"))
