@@ -131,6 +131,23 @@ def test_cell_keys_follow_content_not_names(pumping):
     assert {c.key for c in g.cells({"pumping": shifted})}.isdisjoint(keys)
 
 
+def test_cell_keys_are_the_hash_of_their_canonical_content(pumping):
+    """A key is the SHA-256 of the canonical JSON of (band, data, seed, structure, variant, version),
+    so that stores written before keep their keys; the grid builds that text in pieces."""
+    from graybox.experiments._spec import _hash
+
+    g = python_grid()
+    for band in (None, 0.02):  # the bundled set's own band, and another
+        data = [gx.DataSpec(d.name, bundled="pumping", band=band) for d in g.data]
+        grid = gx.Grid(data, g.structures, g.variants, g.seeds, name=g.name)
+        for c in grid.cells(pumping):
+            s = next(s for s in grid.structures if s.name == c.structure)
+            v = next(v for v in grid.variants if v.name == c.variant)
+            assert c.band == (0.031 if band is None else band)
+            assert c.key == _hash({"data": c.data_hash, "band": c.band, "structure": s.content(),
+                                   "variant": v.content(), "seed": c.seed, "version": gb.__version__}, 32)
+
+
 def test_data_from_csv_files_hash_like_the_same_data_in_memory(tmp_path, pumping):
     d = pumping["pumping"]
     for name, rec in (("ident", d.ident), ("valid", d.valid)):

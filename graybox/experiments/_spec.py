@@ -1061,18 +1061,22 @@ class Grid:
         ds = self.load_data() if datasets is None else datasets
         version = gb.__version__
         out: list[Cell] = []
+        # a key hashes the canonical JSON of {band, data, seed, structure, variant, version}; the
+        # structure's and the variant's texts are made once, not once per cell (the same bytes)
         structures = [(s, s.content()) for s in self.structures]
-        structures = [(s, sc, _freeze(sc)) for s, sc in structures]
+        structures = [(s, canonical_json(sc), _freeze(sc)) for s, sc in structures]
         variants = [(v, v.content()) for v in self.variants]
-        variants = [(v, vc, _freeze(vc)) for v, vc in variants]
+        variants = [(v, canonical_json(vc), _freeze(vc)) for v, vc in variants]
+        tail = ',"version":' + canonical_json(version) + "}"
         for d in self.data:
             dh = data_fingerprint(ds[d.name])
+            band = d.band
+            head = '{"band":' + canonical_json(band) + ',"data":' + canonical_json(dh) + ',"seed":'
             for s, sc, frozen_s in structures:
                 for v, vc, frozen_v in variants:
                     for seed in (self.seeds if v.stochastic else (None,)):
-                        band = d.band
-                        key = _hash({"data": dh, "band": band, "structure": sc, "variant": vc, "seed": seed,
-                                     "version": version}, 32)
+                        text = head + canonical_json(seed) + ',"structure":' + sc + ',"variant":' + vc + tail
+                        key = hashlib.sha256(text.encode()).hexdigest()[:32]
                         out.append(Cell(len(out), key, d.name, s.name, v.name, seed, dh, band, frozen_s, frozen_v,
                                         version))
         return tuple(out)
