@@ -26,8 +26,10 @@ Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
 :class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.SEMPResult`,
 :class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand` and (registered by the experiment
-layer) :class:`~graybox.GrayboxSelection`. Their tables (pandas DataFrames of int, float, bool or text
-columns) are written one column per line, with the index and each column's kind.
+layer) :class:`~graybox.GrayboxSelection`. Their tables (pandas DataFrames of int64, float64, bool or
+text columns with distinct text labels) are written one column per line, with the index and each
+column's kind; text loads as pandas' default text dtype. A table the format cannot carry is
+refused when saving, not converted.
 
 Loading refuses, with a :class:`GrayboxFileError` naming the file and the problem: a file that is
 not JSON or not a graybox file, a newer or unknown ``format_version``, an unknown type, a type other
@@ -113,11 +115,16 @@ class _Reader:
             if v not in ("nan", "inf", "-inf"):
                 raise self.fail(where, f"expected a number, got the string {v!r}")
             return float(v)
-        return float(v)
+        try:
+            return float(v)
+        except OverflowError:  # an integer beyond the float range
+            raise self.fail(where, "a number beyond the float range") from None
 
     def int(self, v: Any, where: str) -> int:
         if isinstance(v, bool) or not isinstance(v, int):
             raise self.fail(where, f"expected an integer, got {v!r}")
+        if not -2**63 <= v < 2**63:
+            raise self.fail(where, "an integer beyond the 64-bit range")
         return v
 
     def str(self, v: Any, where: str) -> str:
@@ -246,22 +253,24 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
 # --------------------------------------------------------------------------------------------
 # tables (pandas DataFrames of result objects): columns of int, float, bool or str
 # --------------------------------------------------------------------------------------------
-#: Column kinds of a saved table: the reader's method, the numpy dtype (None: a list of str), the writer.
+#: Column kinds of a saved table: the reader's method, the dtype it loads as, the writer.
+#: Text loads as pandas' default text dtype ("str").
 _FRAME_KINDS = {"int": ("int", np.int64, int), "float": ("float", np.float64, _num), "bool": ("bool", np.bool_, bool),
-                "str": ("str", None, str)}
+                "str": ("str", "str", str)}
+
+#: Largest table the loader builds (rows), so that a crafted length cannot ask for terabytes.
+_MAX_ROWS = 10**8
 
 
-def _column_kind(values: Any, name: str) -> str:
-    k = np.asarray(values).dtype.kind
-    if k in "iu":
-        return "int"
-    if k == "f":
-        return "float"
-    if k == "b":
-        return "bool"
-    if all(isinstance(x, str) for x in values):
+def _column_kind(values: pd.Series | pd.Index, name: str) -> str:
+    dtype = values.dtype
+    if isinstance(dtype, np.dtype) and dtype in (np.int64, np.float64, np.bool_):
+        return {"i": "int", "f": "float", "b": "bool"}[dtype.kind]
+    text = isinstance(dtype, pd.StringDtype) or (isinstance(dtype, np.dtype) and dtype.kind == "O")
+    if text and all(isinstance(x, str) for x in values):
         return "str"
-    raise ValueError(f"cannot save the table column {name!r}: its values are neither numbers, booleans nor text")
+    raise ValueError(f"cannot save the table column {name!r} of dtype {dtype}: a saved table holds int64, float64, "
+                     "bool or text columns (text without missing values)")
 
 
 def _column(kind: str, values: Any) -> list:
@@ -272,10 +281,17 @@ def _column(kind: str, values: Any) -> list:
 def _enc_frame(df: pd.DataFrame) -> dict:
     """A table as {index, columns, kinds, data}: one list per column (a row of the file each)."""
     idx = df.index
+    labels = list(df.columns)
+    bad = [c for c in labels if not isinstance(c, str)]
+    if bad or len(set(labels)) < len(labels) or df.columns.name is not None or isinstance(idx, pd.MultiIndex) \
+            or not (idx.name is None or isinstance(idx.name, str)):
+        raise ValueError("cannot save this table: a saved table has distinct text column labels, no name on its "
+                         f"column axis and one index named by text or not at all (columns {labels[:5]}, "
+                         f"column axis name {df.columns.name!r}, index name {idx.name!r})")
     index_kind = "range" if isinstance(idx, pd.RangeIndex) and idx.start == 0 and idx.step == 1 else \
         _column_kind(idx, "index")
     cols = [str(c) for c in df.columns]
-    kinds = [_column_kind(df[c].to_numpy(), str(c)) for c in df.columns]
+    kinds = [_column_kind(df[c], c) for c in df.columns]
     return {"index_name": None if idx.name is None else str(idx.name), "index_kind": index_kind,
             "index": len(idx) if index_kind == "range" else _column(index_kind, idx),
             "columns": cols, "kinds": kinds,
@@ -289,8 +305,7 @@ def _dec_column(kind: str, values: Any, where: str, rd: _Reader) -> Any:
         raise rd.fail(where, f"unknown column kind {kind!r} (one of {sorted(_FRAME_KINDS)})")
     read = getattr(rd, _FRAME_KINDS[kind][0])
     out = [read(x, f"{where}[{i}]") for i, x in enumerate(rd.list(values, where))]
-    dtype = _FRAME_KINDS[kind][1]
-    return out if dtype is None else np.array(out, dtype=dtype)
+    return pd.array(out, dtype="str") if kind == "str" else np.array(out, dtype=_FRAME_KINDS[kind][1])
 
 
 def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
@@ -315,15 +330,19 @@ def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
     ik = rd.str(d["index_kind"], f"{where}.index_kind")
     if ik == "range":
         n = rd.int(d["index"], f"{where}.index")
-        if n < 0:
-            raise rd.fail(f"{where}.index", "a negative length")
+        if not 0 <= n <= _MAX_ROWS:
+            raise rd.fail(f"{where}.index", f"a table length must be in [0, {_MAX_ROWS}], got {n}")
         index = pd.RangeIndex(n, name=name)
     else:
         index = pd.Index(_dec_column(ik, d["index"], f"{where}.index", rd), name=name)
     lengths = {len(x) for x in values.values()} | {len(index)}
     if len(lengths) > 1:
         raise rd.fail(where, f"columns and index of different lengths {sorted(lengths)}")
-    return pd.DataFrame(values, index=index, columns=cols)
+    df = pd.DataFrame({c: pd.Series(x, copy=False) for c, x in values.items()}, columns=cols)
+    if not cols:
+        df = pd.DataFrame(index=range(len(index)))
+    df.index = index
+    return df
 
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
@@ -367,11 +386,25 @@ def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> No
 
     ``spec`` lists every constructor field as (name, kind), with the kinds of ``_CODECS``.
     """
-    if name in _CODECS and _CODECS[name][0] is not cls:
+    spec = tuple((str(k), str(kind)) for k, kind in spec)
+    unknown = sorted({kind for _, kind in spec} - _KINDS - set(_CODECS))
+    if unknown:
+        raise ValueError(f"unknown field kind(s) {unknown} for {name!r}; kinds: {sorted(_KINDS | set(_CODECS))}")
+    old = _CODECS.get(name)
+    same_class = old is not None and (old[0].__module__, old[0].__qualname__) == (cls.__module__, cls.__qualname__)
+    if old is not None and not (same_class and old[1] == spec):  # a module reloaded may register its class again
         raise ValueError(f"a saved type named {name!r} exists already")
-    _CODECS[name] = (cls, tuple(spec))
+    if cls in _TYPES and _TYPES[cls] != name:
+        raise ValueError(f"{cls.__qualname__} is saved as {_TYPES[cls]!r} already")
+    if old is not None:
+        _TYPES.pop(old[0], None)
+    _CODECS[name] = (cls, spec)
     _TYPES[cls] = name
 
+
+#: Field kinds other than the saved types themselves.
+_KINDS = frozenset({"float", "array1", "array2", "int", "int_or_none", "str", "bool", "floats", "structure", "names",
+                    "arrays", "dict_arrays", "failures", "skipped", "frame"})
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
 _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]] = {
@@ -506,6 +539,8 @@ def _parse(text: str, source: str) -> tuple[dict, Any]:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise rd.fail("JSON", f"corrupt file ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    except (ValueError, RecursionError) as exc:  # e.g. an integer of more digits than Python converts
+        raise rd.fail("JSON", f"corrupt file ({exc})") from None
     return _header(doc, rd), doc
 
 

@@ -2,6 +2,7 @@
 
 import ast
 import json
+import re
 import struct
 import warnings
 from dataclasses import fields
@@ -315,5 +316,43 @@ def test_bad_tables_are_refused(values):
     for label, (text, msg) in cases.items():
         with pytest.raises(gb.GrayboxFileError, match=msg):
             gb.from_json(text, source=label)
-    with pytest.raises(ValueError, match="cannot save the table column 'x'"):
-        _io._enc_frame(pd.DataFrame({"x": [None, 1.0, "a"]}, dtype=object))
+    huge = {
+        "an int beyond 64 bits": (with_path(data=[[2**64] * len(data[0])] + data[1:]), "beyond the 64-bit range"),
+        "a length of a trillion rows": (with_path(index=10**12), r"a table length must be in \[0, "),
+        "a float beyond the float range": (with_path(data=data[:4] + [[10**400] * len(data[4])] + data[5:]),
+                                           "beyond the float range"),
+        "a 5000-digit integer": (re.sub(r'"n_rows": \d+', '"n_rows": ' + "9" * 5000, gb.to_json(values["semp"])),
+                                 "corrupt file"),
+    }
+    for label, (text, msg) in huge.items():
+        with pytest.raises(gb.GrayboxFileError, match=msg):
+            gb.from_json(text, source=label)
+    # a file whose parts do not fit together is refused by the value's own checks
+    d = json.loads(gb.to_json(values["semp"]))
+    d["object"]["theta"] = d["object"]["theta"][:-1]
+    with pytest.raises(gb.GrayboxFileError, match="not a valid SEMPResult: theta has"):
+        gb.from_json(json.dumps(d))
+    d = json.loads(gb.to_json(values["semp"]))
+    d["object"]["criterion"] = "nonsense"
+    with pytest.raises(gb.GrayboxFileError, match="not a valid SEMPResult: criterion"):
+        gb.from_json(json.dumps(d))
+    # what the format cannot carry is refused when saving, not converted
+    for frame, what in ((pd.DataFrame({"x": [None, 1.0, "a"]}, dtype=object), "cannot save the table column 'x'"),
+                        (pd.DataFrame({"x": pd.array([1, 2], dtype="Int64")}), "dtype Int64"),
+                        (pd.DataFrame({"x": np.array([1, 2], dtype=np.int32)}), "dtype int32"),
+                        (pd.DataFrame({0: [1.0]}), "text column labels"),
+                        (pd.DataFrame([[1.0, 2.0]], columns=["a", "a"]), "distinct")):
+        with pytest.raises(ValueError, match=what):
+            _io._enc_frame(frame)
+
+
+def test_registering_a_saved_type_cannot_replace_or_duplicate_one():
+    spec = _io._CODECS["GrayboxSelection"][1]
+    _io.register_type("GrayboxSelection", gb.GrayboxSelection, spec)  # the same again (a module reloaded): fine
+    with pytest.raises(ValueError, match="exists already"):
+        _io.register_type("Model", gb.Model, (("name", "str"),))
+    with pytest.raises(ValueError, match="saved as 'Model' already"):
+        _io.register_type("Model2", gb.Model, _io._CODECS["Model"][1])
+    with pytest.raises(ValueError, match="unknown field kind"):
+        _io.register_type("Thing", type("Thing", (), {}), (("x", "integer"),))
+    assert "Model2" not in _io._CODECS and "Thing" not in _io._CODECS

@@ -84,6 +84,19 @@ class GrayboxSelection:
     fallback: bool
     store: str
 
+    #: Columns every table holds (a loaded file is checked against them).
+    TABLE_COLUMNS = ("source", "size", "n_terms", "added", "estimator", "JS_valid", "JSF", "in_band", "rank")
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.table, pd.DataFrame):
+            raise ValueError(f"table must be a DataFrame, got {type(self.table).__name__}")
+        missing = [c for c in self.TABLE_COLUMNS if c not in self.table.columns]
+        if missing:
+            raise ValueError(f"the table lacks the column(s) {missing}")
+        if list(self.model.structure) != list(self.structure):
+            raise ValueError("the model's structure is not the chosen structure")
+        check_real(self.band, "band", low=0, low_open=True)
+
     def __repr__(self) -> str:
         return (f"GrayboxSelection(n_terms={len(self.structure)}, structures tried={len(self.table)}, "
                 f"J_S valid={self.table['JS_valid'].min():.4g}, fallback={self.fallback})")
