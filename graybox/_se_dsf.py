@@ -173,8 +173,10 @@ def _constrained_step(g, G, band, nu, mu0=0.0):
     return d, hi
 
 
-#: Smallest relative margin inside the band that the linearised constraint aims at.
+#: Smallest and largest relative margin inside the band that the linearised constraint aims at; at the
+#: largest, a step that still leaves the band is shortened instead (the same step would come again).
 _MARGIN_FLOOR = 1e-4
+_MARGIN_CAP = 0.5
 
 #: Relative precision of the multiplier μ of the linearised band.
 _MU_RTOL = 1e-4
@@ -311,8 +313,8 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                                "for 3 steps")
                     if feasible or g > band:
                         break
-            elif feasible and np.isfinite(f_new) and f_new < f and np.isfinite(g_new):
-                margin = min(2.0 * margin, 0.5)  # the model was right about J_S: only the band was missed
+            elif feasible and np.isfinite(f_new) and f_new < f and np.isfinite(g_new) and margin < _MARGIN_CAP:
+                margin = min(2.0 * margin, _MARGIN_CAP)  # the model was right about J_S: only the band was missed
             else:
                 nu *= 4.0
                 if nu > 1e12:

@@ -127,3 +127,14 @@ def test_does_not_depend_on_units(data):
     u = data.valid.u[:200]
     assert b.model.simulate(u * ku, data.valid.y[:2] * ky) / ky == pytest.approx(
         a.model.simulate(u, data.valid.y[:2]), rel=1e-5, abs=1e-8)
+
+
+def test_static_points_far_from_the_dynamics_do_not_stall_the_edge_iteration(data):
+    """Static points 5 units off the dynamics: a step that improves J_S but leaves the band, with the
+    aim already at its widest margin, is shortened, not proposed again until max_iter."""
+    m = gb.Model(TRUE, THETA)
+    ub = np.linspace(0.2, 2.8, 6)
+    far = gb.StaticPoints(ub, m.static_curve(ub) + 5.0)
+    res = gb.se_dsf(TRUE, data.ident, far, band=0.02, lambdas=np.logspace(-2, 0, 15)[:-1], max_iter=300)
+    assert res.feasible and res.JS < res.start_JS
+    assert "iterations reached" not in res.message
