@@ -24,7 +24,7 @@ import numpy as np
 from ._curves import StaticCurve
 from ._records import StaticPoints
 from ._static import cluster_name
-from ._static_surface import surface_cluster_name
+from ._static_surface import surface_cluster_key, surface_cluster_name
 from ._ls import scaled_lstsq
 from ._surfaces import StaticSurface, _monomials, monomial_exponents
 from ._terms import Structure, Term
@@ -121,17 +121,13 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
     degree = check_int(degree, "degree", low=0)
     inputs = tuple(dict.fromkeys(candidates.inputs + structure.inputs)) or ("u",)
     m = len(inputs)
-
-    def key_of(t: Term) -> tuple[int, ...]:  # (power of y, power of each input): one input gives cluster_key
-        return (t.power_of("y"),) + tuple(t.power_of(n) for n in inputs)
-
     need = [(0,) + e for e in monomial_exponents(m, degree)] + [(1,) + (0,) * m]
-    have = {key_of(t) for t in structure if not t.is_noise}
+    have = {surface_cluster_key(t, inputs) for t in structure if not t.is_noise}
     out, missing = [], []
     for key in need:
         if key in have:
             continue
-        pool = [t for t in candidates if not t.is_noise and key_of(t) == key]
+        pool = [t for t in candidates if not t.is_noise and surface_cluster_key(t, inputs) == key]
         if not pool:
             missing.append(key)
             continue

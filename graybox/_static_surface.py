@@ -63,6 +63,14 @@ def _powers(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
     return tuple(term.power_of(n) for n in inputs)
 
 
+def surface_cluster_key(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
+    """(power of y, power of each of ``inputs``) of a process term: its cluster Σ_{y^p u1^a1 ⋯ um^am}
+    (with one input, :func:`graybox._static.cluster_key`)."""
+    if term.is_noise:
+        raise ValueError(f"noise term {term} has no cluster")
+    return (term.power_of("y"),) + _powers(term, inputs)
+
+
 def surface_cluster_name(p: int, powers: tuple[int, ...], inputs: tuple[str, ...]) -> str:
     """Cluster name, e.g. ``Σ0``, ``Σyu1``, ``Σu1²u2``, ``Σy²u2``."""
     s = "Σ"
@@ -113,11 +121,7 @@ class SurfaceClusterMap:
 
 @lru_cache(maxsize=256)
 def _surface_cluster_map(structure: Structure, inputs: tuple[str, ...]) -> SurfaceClusterMap:
-    keys = []
-    for t in structure:
-        if t.is_noise:
-            raise ValueError(f"noise term {t} has no cluster")
-        keys.append((t.power_of("y"),) + _powers(t, inputs))
+    keys = [surface_cluster_key(t, inputs) for t in structure]
     return SurfaceClusterMap(inputs, *_static.cluster_membership(keys))
 
 
