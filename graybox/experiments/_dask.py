@@ -40,8 +40,6 @@ class CellRows:
     estimate, used by Dask only to account for memory and transfers.
     """
 
-    __slots__ = ("rows",)
-
     #: Estimated bytes per row (a PE row with 100 members pickles to about 6 kB, a CLS row to 0.7 kB).
     ROW_BYTES = 4096
 
@@ -50,12 +48,6 @@ class CellRows:
 
     def __sizeof__(self) -> int:
         return 64 + self.ROW_BYTES * len(self.rows)
-
-    def __getstate__(self):
-        return self.rows
-
-    def __setstate__(self, rows):
-        self.rows = rows
 
 
 def cells_task(fn: Callable[[Cell, gb.Dataset, int], dict], plugin: str, cells: list[Cell]) -> CellRows:
