@@ -29,7 +29,7 @@ import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
@@ -42,7 +42,7 @@ from .._validation import check_choice, check_int, check_real
 from ._report import leaderboard
 from ._run import run_grid
 from ._cell import cell_constraints
-from ._spec import DataSpec, DecisionRule, Grid, StructureSpec, Variant, _is_constraint_object, constraint_from_object
+from ._spec import DataSpec, DecisionRule, Grid, StructureSpec, Variant, constraint_entries, constraint_from_object
 from ._store import load_results
 
 __all__ = ["select_graybox", "GrayboxSelection"]
@@ -205,12 +205,7 @@ def select_graybox(
         raise ValueError(f"candidates must be a Structure, got {type(candidates).__name__}")
     process = candidates.process
     band = check_real(band, "band", low=0, low_open=True)
-    if constraints is None:
-        constraints = ()
-    elif isinstance(constraints, Mapping) or _is_constraint_object(constraints):  # one table or object
-        constraints = (constraints,)
-    else:  # any iterable of them, read once (a generator too)
-        constraints = tuple(constraints)
+    constraints = tuple(constraint_entries(constraints))  # read once: a generator is used up
     if estimator is None:
         estimator = ("pe",) if constraints else ("pe", "se-gradient")
     estimators = [estimator] if isinstance(estimator, str) else list(estimator)

@@ -650,6 +650,16 @@ def _is_constraint_object(obj: object) -> bool:
     return callable(getattr(obj, "affine", None)) and callable(getattr(obj, "describe", None))
 
 
+def constraint_entries(raw: Any) -> Any:
+    """The constraints as given, one entry per table or object: () for None, a one-item list for a
+    single table or graybox constraint object, anything else as it is (a list, a generator, …)."""
+    if raw is None:
+        return ()
+    if isinstance(raw, Mapping) or _is_constraint_object(raw):
+        return [raw]
+    return raw
+
+
 def build_constraint(d: Mapping, *, curve: gb.StaticCurve | None = None) -> Any:
     """The graybox constraint object of a canonical dict (``curve``: the resolved curve of an equality)."""
     kind = d["type"]
@@ -782,11 +792,7 @@ class Variant:
         _name(self.name, ())
         est = _wrap(check_choice, ("estimator",), self.estimator, "estimator", ESTIMATORS)
         # constraints
-        raw = self.constraints
-        if raw is None:
-            raw = ()
-        if isinstance(raw, Mapping) or _is_constraint_object(raw):
-            raw = [raw]
+        raw = constraint_entries(self.constraints)
         if not isinstance(raw, Sequence) or isinstance(raw, str):
             raise SpecError("constraints must be a list of tables or graybox constraint objects", ("constraints",))
         cons: list[dict] = []
