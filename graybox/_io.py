@@ -290,14 +290,11 @@ def _enc_frame(df: pd.DataFrame) -> dict:
                          f"column axis name {df.columns.name!r}, index name {idx.name!r})")
     index_kind = "range" if isinstance(idx, pd.RangeIndex) and idx.start == 0 and idx.step == 1 else \
         _column_kind(idx, "index")
-    cols = [str(c) for c in df.columns]
-    kinds = [_column_kind(df[c], c) for c in df.columns]
-    return {"index_name": None if idx.name is None else str(idx.name), "index_kind": index_kind,
+    kinds = [_column_kind(df[c], c) for c in labels]
+    return {"index_name": idx.name, "index_kind": index_kind,
             "index": len(idx) if index_kind == "range" else _column(index_kind, idx),
-            "columns": cols, "kinds": kinds,
-            "data": [_column(k, df[c].to_numpy()) for c, k in zip(df.columns, kinds)]}
-
-
+            "columns": labels, "kinds": kinds,
+            "data": [_column(k, df[c].to_numpy()) for c, k in zip(labels, kinds)]}
 
 
 def _dec_column(kind: str, values: Any, where: str, rd: _Reader) -> Any:
@@ -338,11 +335,7 @@ def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
     lengths = {len(x) for x in values.values()} | {len(index)}
     if len(lengths) > 1:
         raise rd.fail(where, f"columns and index of different lengths {sorted(lengths)}")
-    df = pd.DataFrame({c: pd.Series(x, copy=False) for c, x in values.items()}, columns=cols)
-    if not cols:
-        df = pd.DataFrame(index=range(len(index)))
-    df.index = index
-    return df
+    return pd.DataFrame(values, index=index, columns=cols or None)  # no columns: an empty RangeIndex, as pandas makes
 
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
@@ -380,6 +373,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                           ("gain", "array1"), ("gain_low", "array1"), ("gain_high", "array1"),
                                           ("gain_std", "array1"), ("undefined", "array1"))),
 }
+
 
 def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> None:
     """Add a saved type defined above this module (the experiment layer's results).

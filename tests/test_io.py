@@ -356,3 +356,15 @@ def test_registering_a_saved_type_cannot_replace_or_duplicate_one():
     with pytest.raises(ValueError, match="unknown field kind"):
         _io.register_type("Thing", type("Thing", (), {}), (("x", "integer"),))
     assert "Model2" not in _io._CODECS and "Thing" not in _io._CODECS
+
+
+@pytest.mark.parametrize("frame", [
+    pd.DataFrame(index=pd.RangeIndex(3)),                                   # rows, no columns
+    pd.DataFrame({"a": pd.array([], dtype="str"), "b": np.array([], float)}),  # columns, no rows
+    pd.DataFrame({"s": ["x", ""], "f": [1.5, np.inf], "i": [1, -2], "b": [True, False]},
+                 index=pd.Index(["p", "q"], name="k")),
+    pd.DataFrame({"f": [np.nan, -0.0]}, index=pd.Index([2.5, 2.5])),          # a repeated float index
+])
+def test_tables_round_trip_exactly(frame):
+    back = _io._dec_frame(_io._enc_frame(frame), "table", _io._Reader("test"))
+    pd.testing.assert_frame_equal(frame, back, check_exact=True)
