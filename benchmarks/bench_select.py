@@ -1,19 +1,21 @@
 """Structure selection for gray-box use: semp and select_graybox against FROLS (issue 12).
 
-    .venv/bin/python benchmarks/bench_select.py [--workers 2] [--part speed|tables|staircase|all]
+    .venv/bin/python benchmarks/bench_select.py [--workers 2] [--part speed|tables|staircase|dsf|all]
 
 - speed: FROLS, ``semp`` (91 candidates: degree 2, lags 6; 3200 samples; to 17 terms) and
   ``select_graybox`` over the same space (in-process and with N Dask workers);
 - tables: on the bundled plant and the buck converter, the D_SF model of the selected structure
   against the FROLS + ELS model of the same size (J_S ident / valid, J_SF, N_p);
 - staircase: noise-free NARX systems under staircase inputs, FROLS against semp (true structure
-  recovered or not).
+  recovered or not);
+- dsf: ``se_dsf`` against sweep + D_SF (the GA and the gradient method) on ten structures.
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import functools
 import sys
 import time
 import warnings
@@ -54,14 +56,25 @@ def speed(workers: int) -> None:
     print(f"| select_graybox (default), {workers} Dask workers (LocalCluster start included) | {t_sel_dask:.1f} s |")
 
 
+#: Per data set: loader, candidate lags, structure sizes of the selection tables.
+SELECTION_CASES = {"pumping": (gb.load_pumping, dict(ny=6, nu=6), None),
+                   "buck": (gb.load_buck, dict(ny=2, nu=2), (2, 3, 4, 5, 6))}
+
+
+@functools.lru_cache(maxsize=None)
+def selection(name: str, est: str | tuple[str, ...]) -> gb.GrayboxSelection:
+    """select_graybox on a bundled data set (once per run: the tables and the dsf part share it)."""
+    load, cand_kw, sizes = SELECTION_CASES[name]
+    return gb.select_graybox(gb.Candidates(**cand_kw, degree=2), load(), band=BANDS[name], estimator=est,
+                             sizes=None if sizes is None else list(sizes))
+
+
 def tables() -> None:
-    for name, load, cand_kw, sizes in (("pumping", gb.load_pumping, dict(ny=6, nu=6), None),
-                                       ("buck", gb.load_buck, dict(ny=2, nu=2), [2, 3, 4, 5, 6])):
+    for name, (load, cand_kw, _) in SELECTION_CASES.items():
         data = load()
         band = BANDS[name]
         for est in ("pe", "se-gradient", ("pe", "se-gradient")):
-            res = gb.select_graybox(gb.Candidates(**cand_kw, degree=2), data, band=band, estimator=est,
-                                    sizes=sizes)
+            res = selection(name, est)
             est = "+".join(est) if isinstance(est, tuple) else est
             k = len(res.structure)
             sel = gb.frols(gb.Candidates(**cand_kw, ne=2, degree=2), data, n_terms=k)
@@ -97,7 +110,8 @@ def staircase() -> None:
 
 
 def dsf_cases():
-    """(name, data, structure, band): FROLS structures of several sizes on both data sets."""
+    """(name, data, structure, band): FROLS structures of several sizes on both data sets, and the
+    structure select_graybox chooses on the plant."""
     plant = gb.load_pumping()
     for label, cand, sizes in (("6", gb.Candidates(6, 6, ne=2, degree=2, max_y_power=1), (10, 13, 17, 20)),
                                ("3", gb.Candidates(3, 3, degree=2, max_y_power=1), (6, 9))):
@@ -105,7 +119,7 @@ def dsf_cases():
             yield f"plant, lags {label}, {k} terms", plant, gb.frols(cand, plant, n_terms=k, include=["1"]).structure, \
                 BANDS["pumping"]
     # the structure select_graybox chooses on the plant (the tables above): a case a user meets
-    chosen = gb.select_graybox(gb.Candidates(6, 6, degree=2), plant, band=BANDS["pumping"]).structure
+    chosen = selection("pumping", ("pe", "se-gradient")).structure
     yield f"plant, chosen by select_graybox, {len(chosen)} terms", plant, chosen, BANDS["pumping"]
     buck = gb.load_buck()
     for k in (4, 6, 8):
@@ -116,7 +130,7 @@ def dsf_cases():
 
 
 def dsf() -> None:
-    """se_dsf against sweep + D_SF on FROLS structures of both data sets.
+    """se_dsf against sweep + D_SF on the structures of :func:`dsf_cases`.
 
     The sweeps: the gradient method on 30 and on 100 λ1 (the fast one, same machinery as se_dsf) and
     the paper's GA (``se_pareto``'s default method, 100 λ1, one thread like the others).
