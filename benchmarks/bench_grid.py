@@ -154,7 +154,7 @@ def main() -> None:
 
     end = ends(df_dk)
     start = end - cell_dk
-    gaps = fixed = 0.0
+    gaps = 0.0
     spans = []
     for w in df_dk["worker"].unique():
         on = (df_dk["worker"] == w).to_numpy()
