@@ -340,6 +340,25 @@ def test_foreign_or_corrupt_files_are_refused_untouched(kind, small_store, tmp_p
     assert not Path(str(p) + "-wal").exists() or kind == "corrupt"
 
 
+def test_store_log_stays_short_so_closing_is_quick(tmp_path, pumping):
+    """The write-ahead log is folded into the database as the rows come, not all at close."""
+    from graybox.experiments._cell import failed_row
+    from graybox.experiments._store import WAL_PAGES
+
+    g = python_grid()
+    cells = g.cells()
+    path = tmp_path / "s.sqlite"
+    with ResultStore.open(path, fingerprint=g.fingerprint(cells), grid_name=g.name, spec=g.to_dict(),
+                          n_cells=len(cells), version=gb.__version__) as st:
+        page = st._conn.execute("PRAGMA page_size").fetchone()[0]
+        for i in range(400):  # rows of two pages or more: 800 pages of log in all
+            row = failed_row(cells[i % len(cells)], "x" * (2 * page) + str(i))
+            st.write(dict(row, key=f"{row['key']}-{i}"))
+        wal = Path(str(path) + "-wal").stat().st_size
+    assert wal <= 32 + (WAL_PAGES + 8) * (page + 24)
+    assert len(gx.load_results(path)) == 400
+
+
 def test_retry_failed_reruns_only_failed_cells(tmp_path, pumping):
     g = gx.Grid(python_grid().data, python_grid().structures[:1], python_grid().variants[:2], name="tiny")
     path = tmp_path / "s.sqlite"

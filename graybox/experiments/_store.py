@@ -27,6 +27,8 @@ __all__ = ["StoreError", "ResultStore", "load_results", "FORMAT", "FORMAT_VERSIO
 FORMAT = "graybox-grid-store"
 FORMAT_VERSION = "1"
 _SQLITE_MAGIC = b"SQLite format 3\x00"
+#: Pages of write-ahead log after which a commit folds the log into the database.
+WAL_PAGES = 128
 
 
 class StoreError(ValueError):
@@ -110,6 +112,12 @@ class ResultStore:
             raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
         conn = _connect(p)
         try:
+            # connection settings, nothing written: durable against a killed process (WAL), where an
+            # fsync per cell would only guard against power loss; the log folded into the database
+            # every WAL_PAGES pages, not SQLite's 1000, so that closing the store, which folds what
+            # is left while every worker waits, stays short
+            conn.execute("PRAGMA synchronous=NORMAL")
+            conn.execute(f"PRAGMA wal_autocheckpoint={WAL_PAGES}")
             if exists:
                 meta = _read_meta(conn, p)
                 if meta.get("grid_fingerprint") != fingerprint:
@@ -134,8 +142,6 @@ class ResultStore:
                 conn.execute(f"CREATE TABLE cells ({cols})")
                 conn.executemany("INSERT INTO meta VALUES (?, ?)", list(meta.items()))
                 conn.execute("COMMIT")
-            # durable against a killed process (WAL); an fsync per cell would only guard against power loss
-            conn.execute("PRAGMA synchronous=NORMAL")
         except BaseException:
             conn.close()
             raise
