@@ -38,7 +38,10 @@ from graybox import experiments as gx  # noqa: E402
 from graybox.experiments._executors import local_cluster  # noqa: E402
 
 
-def grid(quick: bool) -> gx.Grid:
+def grid(quick: bool, copies: int = 0) -> gx.Grid:
+    """The benchmark grid on the bundled plant; with ``copies`` = k > 0, on k copies of its data
+    held in memory (static points shifted by k × 1e-12 relative, so each copy has its own cells,
+    whose work is the same): k × 200 cells of one distribution of cell times."""
     structures = []
     for ny, sizes in ((1, (4, 5)), (2, (4, 6, 9, 12)), (3, (4, 6, 9, 12)), (4, (4, 6, 9, 12)), (5, (4, 6, 9, 12)),
                       (6, (9, 17))):
@@ -63,7 +66,17 @@ def grid(quick: bool) -> gx.Grid:
     ]
     if quick:
         structures, variants = structures[:4], variants[:6]
-    return gx.Grid([gx.DataSpec("pumping", bundled="pumping")], structures, variants, name="bench")
+    data = [gx.DataSpec("pumping", bundled="pumping")]
+    if copies:
+        import graybox as gb
+
+        ds = gb.load_pumping()
+        st = ds.static
+        data = [gx.DataSpec(f"pumping-{i}", band=0.031, dataset=gb.Dataset(
+            ds.ident, ds.valid, gb.StaticPoints(st.ubar, st.ybar * (1 + i * 1e-12), name=st.name,
+                                                input_names=st.input_names)))
+                for i in range(copies)]
+    return gx.Grid(data, structures, variants, name="bench")
 
 
 def warm_up() -> gx.Grid:
@@ -103,6 +116,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--quick", action="store_true", help="24 cells instead of 200")
+    ap.add_argument("--scale", type=int, default=0, metavar="K",
+                    help="also run grids of 1..K copies of the data (200 K cells) and fit the time lost "
+                         "outside cells against the number of cells: per-cell slope and per-run intercept")
     args = ap.parse_args()
     g = grid(args.quick)
     n = len(g.cells())
@@ -129,6 +145,7 @@ def main() -> None:
             wall_dk = time.perf_counter() - t
             returned = time.time()
             driver_cpu = time.process_time() - cpu0
+            scaled = [scale_point(k, tmp, client, args.workers) for k in range(1, args.scale + 1)]
         df_dk = gx.load_results(tmp / "dask.sqlite")
     assert r_in.ran == r_dk.ran == n
     same = all(np.array_equal(df_in[c].to_numpy(float), df_dk[c].to_numpy(float), equal_nan=True)
@@ -176,6 +193,35 @@ def main() -> None:
     print(f"the in-process run's own time outside cells (the same loading, keying, store writes): {own_in * 1e3:.2f} ms "
           f"per cell; what Dask adds beyond it: {(overhead - own_in) * 1e3:.2f} ms per cell = "
           f"{(overhead - own_in) / med * 100:.1f} % of the median cell")
+    if scaled:
+        report_scale(scaled, med)
+
+
+def scale_point(k: int, tmp: Path, client, workers: int) -> dict:
+    """One grid of k data copies, in-process and on the cluster: cells and time lost outside cells."""
+    g = grid(False, copies=k)
+    out = {"cells": len(g.cells())}
+    for name, kw in (("in", {}), ("dask", {"client": client})):
+        path = tmp / f"scale-{k}-{name}.sqlite"
+        t = time.perf_counter()
+        gx.run_grid(g, path, **kw)
+        wall = time.perf_counter() - t
+        cells = gx.load_results(path)["wall_time"].to_numpy()
+        out[name] = (wall * (workers if name == "dask" else 1) - cells.sum(), wall)
+    print(f"  scale {k}: {out['cells']} cells; in-process {out['in'][1]:.2f} s, {out['in'][0] * 1e3:.0f} ms outside "
+          f"cells; Dask {out['dask'][1]:.2f} s, {out['dask'][0] * 1e3:.0f} ms of worker time outside cells", flush=True)
+    return out
+
+
+def report_scale(points: list[dict], med: float) -> None:
+    """Least-squares line of the time lost outside cells against the number of cells."""
+    n = np.array([p["cells"] for p in points], float)
+    for name, label in (("dask", f"Dask (worker time: wall x workers - cells)"), ("in", "in-process (wall - cells)")):
+        lost = np.array([p[name][0] for p in points])
+        slope, icpt = np.polyfit(n, lost, 1)
+        print(f"{label}: per cell {slope * 1e3:.3f} ms = {slope / med * 100:.1f} % of the median cell; per run "
+              f"{icpt * 1e3:.0f} ms (fit over {', '.join(str(int(c)) for c in n)} cells; lost "
+              f"{', '.join(f'{x * 1e3:.0f}' for x in lost)} ms)")
 
 
 if __name__ == "__main__":
