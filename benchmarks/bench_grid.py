@@ -119,6 +119,7 @@ def main() -> None:
     ap.add_argument("--scale", type=int, default=0, metavar="K",
                     help="also run grids of 1..K copies of the data (200 K cells) and fit the time lost "
                          "outside cells against the number of cells: per-cell slope and per-run intercept")
+    ap.add_argument("--repeat", type=int, default=1, metavar="R", help="run each --scale size R times (pooled fit)")
     args = ap.parse_args()
     g = grid(args.quick)
     n = len(g.cells())
@@ -145,7 +146,8 @@ def main() -> None:
             wall_dk = time.perf_counter() - t
             returned = time.time()
             driver_cpu = time.process_time() - cpu0
-            scaled = [scale_point(k, tmp, client, args.workers) for k in range(1, args.scale + 1)]
+            scaled = [scale_point(k, tmp / f"r{r}", client, args.workers)
+                      for r in range(args.repeat) for k in range(1, args.scale + 1)]
         df_dk = gx.load_results(tmp / "dask.sqlite")
     assert r_in.ran == r_dk.ran == n
     same = all(np.array_equal(df_in[c].to_numpy(float), df_dk[c].to_numpy(float), equal_nan=True)
@@ -200,6 +202,7 @@ def main() -> None:
 def scale_point(k: int, tmp: Path, client, workers: int) -> dict:
     """One grid of k data copies, in-process and on the cluster: cells and time lost outside cells."""
     g = grid(False, copies=k)
+    tmp.mkdir(exist_ok=True)
     out = {"cells": len(g.cells())}
     for name, kw in (("in", {}), ("dask", {"client": client})):
         path = tmp / f"scale-{k}-{name}.sqlite"
@@ -216,12 +219,15 @@ def scale_point(k: int, tmp: Path, client, workers: int) -> dict:
 def report_scale(points: list[dict], med: float) -> None:
     """Least-squares line of the time lost outside cells against the number of cells."""
     n = np.array([p["cells"] for p in points], float)
-    for name, label in (("dask", f"Dask (worker time: wall x workers - cells)"), ("in", "in-process (wall - cells)")):
+    for name, label in (("dask", "Dask (worker time: wall x workers - cells)"), ("in", "in-process (wall - cells)")):
         lost = np.array([p[name][0] for p in points])
-        slope, icpt = np.polyfit(n, lost, 1)
-        print(f"{label}: per cell {slope * 1e3:.3f} ms = {slope / med * 100:.1f} % of the median cell; per run "
+        (slope, icpt), cov = np.polyfit(n, lost, 1, cov=True) if n.size > 3 else (np.polyfit(n, lost, 1), None)
+        se = "" if cov is None else f" (standard error {np.sqrt(cov[0, 0]) * 1e3:.3f} ms)"
+        print(f"{label}: per cell {slope * 1e3:.3f} ms{se} = {slope / med * 100:.1f} % of the median cell; per run "
               f"{icpt * 1e3:.0f} ms (fit over {', '.join(str(int(c)) for c in n)} cells; lost "
               f"{', '.join(f'{x * 1e3:.0f}' for x in lost)} ms)")
+        print(f"  {label.split(' (')[0]}, all in, per cell at each size: "
+              + ", ".join(f"{int(c)}: {x / c / med * 100:.1f} %" for c, x in zip(n, lost)) + " of the median cell")
 
 
 if __name__ == "__main__":
