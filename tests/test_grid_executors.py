@@ -10,13 +10,14 @@ import sqlite3
 import subprocess
 import sys
 import time
+from collections import deque
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from graybox import experiments as gx
@@ -275,6 +276,44 @@ def test_dask_batches_learn_only_from_finite_times():
     b = _Batches(cells, 2)
     for bad in (None, "x", float("nan"), float("inf"), -1.0):
         b.observe(cells[0], bad)
-    assert b._time == {}
+    assert b.model(("d", "v")) is None
     b.observe(cells[0], 0.2)
-    assert b._time[("d", "v")] == [0.2, 4]
+    assert b.model(("d", "v")) == (0.0, 0.05)  # one size seen: proportional to the terms
+
+
+@settings(max_examples=60, deadline=None)
+@given(groups=st.lists(st.tuples(st.integers(1, 40), st.floats(0, 0.05), st.floats(0, 0.05)), min_size=1,
+                       max_size=12),
+       slots=st.integers(1, 8))
+def test_dask_batches_with_results_late_never_fill_a_batch_from_an_unmeasured_group(groups, slots):
+    """With ``slots`` tasks in flight (a task's cells are measured only when it comes back), a batch of
+    more than one cell holds only groups already measured, and once a group's time a + b × terms has
+    been seen at two sizes its estimate is exact, so such a batch holds at most ~BATCH_SECONDS."""
+    assume(any(a + b > 0 for _, a, b in groups))
+    cells = [_FakeCell(f"{g}-{i}", "d", f"v{g}", {"n_terms": 1 + (5 * i) % 13})
+             for g, (n, _, _) in enumerate(groups) for i in range(n)]
+    ab = {f"v{g}": (a, b) for g, (_, a, b) in enumerate(groups)}
+
+    def seconds(c):
+        a, b = ab[c.variant]
+        return a + b * _size(c)
+
+    bt = _Batches(cells, slots)
+    flight: deque = deque()
+    sizes: dict[str, set] = {}
+    out = []
+    while bt or flight:
+        if bt and len(flight) < slots:
+            batch = [c for c, _ in bt.next()]
+            assert batch
+            if len(batch) > 1 and len(out) + sum(len(f) for f in flight) >= len(groups):  # past the probes
+                assert all(c.variant in sizes for c in batch)
+                if all(len(sizes[c.variant]) > 1 for c in batch):
+                    assert sum(seconds(c) for c in batch) <= BATCH_SECONDS * (1 + 1e-6) + 1e-12
+            flight.append(batch)
+            continue
+        for c in flight.popleft():
+            bt.observe(c, seconds(c))
+            sizes.setdefault(c.variant, set()).add(_size(c))
+            out.append(c)
+    assert sorted(c.key for c in out) == sorted(c.key for c in cells)

@@ -228,14 +228,16 @@ def _size(cell: Cell) -> int:
 class _Batches:
     """The cells of the Dask tasks: which go together, and in which order.
 
-    A cell's time is estimated as its (data, variant) group's measured seconds per structure term
-    times its structure's terms (a variant's estimator sets most of a cell's time, the structure's
-    size most of the rest). One cell of each group runs first (these probes are spread over the
-    first tasks), so that every group's rate is known early; then the cells go longest first by
-    that estimate, so the cheapest come last, in batches of about ``BATCH_SECONDS`` of estimated
-    work that shrink towards the end to one in-flight task's share of the work left, but not
-    below ``MIN_BATCH_SECONDS`` (guided self-scheduling), so the workers finish nearly together.
-    A cell retried after its worker died goes alone, before the others.
+    A cell's time is estimated from its (data, variant) group's finished cells as a + b × its
+    structure's terms (least squares, a, b ≥ 0; proportional to the terms while one size has
+    been seen): a variant's estimator sets most of a cell's time, the structure's size most of
+    the rest, and the evaluation every cell ends with costs the same at any size. One cell of each
+    group runs first (these probes are spread over the first tasks), so that every group's time
+    is known early; a group whose probe has not come back yet sends its cells one per task. Then
+    the cells go longest first, so the cheapest come last, in batches of about ``BATCH_SECONDS``
+    of estimated work that shrink towards the end to one in-flight task's share of the work left,
+    but not below ``MIN_BATCH_SECONDS`` (guided self-scheduling), so the workers finish nearly
+    together. A cell retried after its worker died goes alone, before the others.
     """
 
     def __init__(self, cells: Sequence[Cell], slots: int):
@@ -252,8 +254,8 @@ class _Batches:
                 self.probes.append(c)
         for g, q in self.groups.items():  # larger structures first: each group's head is its longest cell
             self.groups[g] = deque(sorted(q, key=lambda c: -_size(c)))
-        self._terms = {g: sum(_size(c) for c in q) for g, q in self.groups.items()}  # terms still queued
-        self._time: dict[tuple[str, str], list[float]] = {}  # group -> [seconds, terms] of finished cells
+        self._left = {g: [len(q), sum(_size(c) for c in q)] for g, q in self.groups.items()}  # cells, terms queued
+        self._fit: dict[tuple[str, str], list[float]] = {}  # group -> [n, Σ terms, Σ s, Σ terms², Σ terms × s]
         self._probe_k = -(-len(self.probes) // self.slots)
 
     def __len__(self) -> int:
@@ -266,13 +268,39 @@ class _Batches:
         except (TypeError, ValueError):
             return
         if np.isfinite(seconds) and seconds >= 0:
-            t = self._time.setdefault((cell.data, cell.variant), [0.0, 0])
-            t[0] += float(seconds)
-            t[1] += _size(cell)
+            k = _size(cell)
+            f = self._fit.setdefault((cell.data, cell.variant), [0, 0.0, 0.0, 0.0, 0.0])
+            f[0] += 1
+            f[1] += k
+            f[2] += seconds
+            f[3] += k * k
+            f[4] += k * seconds
+
+    def model(self, group: tuple[str, str]) -> tuple[float, float] | None:
+        """(a, b) of the group's time a + b × terms (seconds), or None before its first finished cell."""
+        f = self._fit.get(group)
+        if not f:
+            return None
+        n, sk, st, skk, sks = f
+        var = skk - sk * sk / n
+        if n > 1 and var > 1e-9 * skk:
+            b = (sks - sk * st / n) / var
+            a = (st - b * sk) / n
+            if b < 0:
+                return st / n, 0.0
+            if a >= 0:
+                return a, b
+        return 0.0, st / sk
 
     def requeue(self, cell: Cell, deaths: int) -> None:
         """Put back a cell whose worker died (it runs alone, next)."""
         self.retry.appendleft((cell, deaths))
+
+    def _take(self, g: tuple[str, str]) -> Cell:
+        c = self.groups[g].popleft()
+        self._left[g][0] -= 1
+        self._left[g][1] -= _size(c)
+        return c
 
     def next(self) -> list[tuple[Cell, int]]:
         """The next task's cells, each with the number of worker deaths it has seen."""
@@ -280,25 +308,29 @@ class _Batches:
             return [self.retry.popleft()]
         if self.probes:  # spread over the first tasks, one for each in-flight slot
             return [(self.probes.popleft(), 0) for _ in range(min(self._probe_k, len(self.probes)))]
-        seen = [t for t in self._time.values() if t[1]]
-        default = sum(t[0] for t in seen) / sum(t[1] for t in seen) if seen else BATCH_SECONDS
-        rate = {g: (self._time[g][0] / self._time[g][1] if self._time.get(g, (0, 0))[1] else default)
-                for g, q in self.groups.items() if q}
-        left = sum(rate[g] * self._terms[g] for g in rate)
+        models = {g: self.model(g) for g, q in self.groups.items() if q}
+        known = {g: m for g, m in models.items() if m is not None}
+        if not known:  # only groups whose probe is still out: one cell, lest a long group fill a batch
+            return [(self._take(next(iter(models))), 0)]
+        default = sum(f[2] for f in self._fit.values()) / sum(f[1] for f in self._fit.values())  # s per term, all
+        left = sum(a * self._left[g][0] + b * self._left[g][1] for g, (a, b) in known.items())
+        left += default * sum(self._left[g][1] for g in models if g not in known)
         target = min(BATCH_SECONDS, max(left / (GUIDE * self.slots), MIN_BATCH_SECONDS))
         out: list[tuple[Cell, int]] = []
         work = 0.0
-        while rate and len(out) < MAX_BATCH:
-            g = max(rate, key=lambda g: rate[g] * _size(self.groups[g][0]))  # the longest cell left
-            t = rate[g] * _size(self.groups[g][0])
+        def head(g: tuple[str, str]) -> float:  # the estimated time of a group's longest cell left
+            a, b = known[g]
+            return a + b * _size(self.groups[g][0])
+
+        while known and len(out) < MAX_BATCH:
+            g = max(known, key=head)
+            t = head(g)
             if out and work + t > target:
                 break
-            c = self.groups[g].popleft()
-            self._terms[g] -= _size(c)
-            out.append((c, 0))
+            out.append((self._take(g), 0))
             work += t
             if not self.groups[g]:
-                del rate[g]
+                del known[g]
         return out
 
 
