@@ -1,6 +1,6 @@
 """A grid of about 200 cheap cells in-process and on a Dask LocalCluster: speed-up and scheduler overhead.
 
-    .venv/bin/python benchmarks/bench_grid.py [--workers 2] [--quick]
+    .venv/bin/python benchmarks/bench_grid.py [--workers 2] [--quick] [--scale K [--repeat R]]
 
 Bundled pumping-plant data; 20 structures made by FROLS (ny = nu = 1…6, 4…17 terms, rational
 candidates) × 10 variants: CLS with eq. (22) and with static bands, PE by the closed form (11)
@@ -9,14 +9,22 @@ with several λ sets and decision makers, SE by the gradient method with 10 λ: 
 Both runs use warmed-up processes (a small grid first), so the times are the grid's own: the
 in-process run on the driver, the Dask run on a ``LocalCluster`` started beforehand the way
 ``graybox grid run --workers N`` starts it (its start-up time is printed separately). Every
-cell's own wall time is stored in its row; the scheduler's overhead per cell is the worker
-time not spent in cells, (wall × workers − Σ cell times) / cells. That figure includes the run's
+cell's own wall time is stored in its row; the worker time not spent in cells, averaged over
+the run's cells, is (wall × workers − Σ cell times) / cells. That figure includes the run's
 fixed costs (loading the data, opening the store, the first task's trip to a worker, the last
 result's trip back) and the last cells' imbalance, so it is split from the rows' timestamps (each
 row's ``finished_at`` less its ``wall_time`` is when the cell started on its worker): the time
 each worker spent between its first cell's start and its last cell's end outside cells (the
 per-cell hand-over: task dispatch, results, the driver's CPU on the shared cores), the fixed
 start and end, and the imbalance.
+
+Part of that time is paid once per run, whatever the number of cells. ``--scale K`` separates
+the two: it runs grids of 1, 2, …, K copies of the data (200, 400, … cells whose work is the
+same), in-process and on the cluster, and fits the time lost outside cells against the number
+of cells. The slope is the scheduler's overhead per cell (the issue's goal: at most 5 % of the
+median cell); the intercept is the run's own cost (loading,
+keying, the store, the first dispatch and the last result, the end imbalance). ``--repeat R``
+runs each size R times and pools the fit.
 """
 
 from __future__ import annotations
@@ -166,26 +174,14 @@ def main() -> None:
           f"= {driver_cpu / wall_dk:.0%} of one core")
     print(f"speed-up: {wall_in / wall_dk:.2f}x (goal >= 1.6x); this machine's own parallel throughput of "
           f"{args.workers} busy processes right after: {machine_ceiling(args.workers):.2f}x")
-    print(f"scheduler overhead per cell, all in: {overhead * 1e3:.2f} ms = {overhead / med * 100:.1f} % of the median "
-          "cell (goal <= 5 %), made of:")
-    def ends(df):
-        return df["finished_at"].map(lambda s: datetime.datetime.fromisoformat(s).timestamp()).to_numpy()
-
-    end = ends(df_dk)
-    start = end - cell_dk
-    gaps = 0.0
-    spans = []
-    for w in df_dk["worker"].unique():
-        on = (df_dk["worker"] == w).to_numpy()
-        spans.append((start[on].min(), end[on].max()))
-        gaps += end[on].max() - start[on].min() - cell_dk[on].sum()
-    first, last = min(s for s, _ in spans), max(e for _, e in spans)
-    fixed = args.workers * ((first - called) + (returned - last))
-    imbalance = sum((s - first) + (last - e) for s, e in spans)
+    print(f"worker time outside cells, all in, averaged over this run's {n} cells (its fixed costs included): "
+          f"{overhead * 1e3:.2f} ms = {overhead / med * 100:.1f} % of the median cell, made of:")
+    sp = split(df_dk, called, returned, args.workers)
+    gaps, fixed, imbalance = sp["hand-over"], sp["fixed"], sp["imbalance"]
     print(f"  hand-over between cells on the workers: {gaps / n * 1e3:.2f} ms per cell = {gaps / n / med * 100:.1f} % "
-          f"of the median cell ({len(spans)} workers, {gaps:.3f} s in all)")
-    print(f"  the run's fixed start and end (run_grid called -> first cell starts: {(first - called) * 1e3:.0f} ms; "
-          f"last cell ends -> run_grid returns: {(returned - last) * 1e3:.0f} ms), x {args.workers} workers: "
+          f"of the median cell ({args.workers} workers, {gaps:.3f} s in all)")
+    print(f"  the run's fixed start and end (run_grid called -> first cell starts: {sp['start'] * 1e3:.0f} ms; "
+          f"last cell ends -> run_grid returns: {sp['end'] * 1e3:.0f} ms), x {args.workers} workers: "
           f"{fixed / n * 1e3:.2f} ms per cell")
     end_in = ends(df_in)
     print(f"  (the in-process run's own start and end, for comparison: {((end_in - cell_in).min() - called_in) * 1e3:.0f} "
@@ -199,6 +195,34 @@ def main() -> None:
         report_scale(scaled, med)
 
 
+def ends(df) -> np.ndarray:
+    """When each row's cell ended (epoch seconds, from its ``finished_at``)."""
+    return df["finished_at"].map(lambda s: datetime.datetime.fromisoformat(s).timestamp()).to_numpy()
+
+
+def split(df, called: float, returned: float, workers: int) -> dict:
+    """The worker time outside cells of a run on the cluster, by where it went (seconds).
+
+    hand-over: on each worker, from its first cell's start to its last cell's end, the time
+    outside cells; start, end: ``run_grid`` called -> first cell starts, last cell ends ->
+    ``run_grid`` returns (fixed = their sum x workers); imbalance: the workers' idle time
+    between the first start and the last end before their own first start and after their own
+    last end.
+    """
+    cell = df["wall_time"].to_numpy()
+    end = ends(df)
+    start = end - cell
+    gaps, spans = 0.0, []
+    for w in df["worker"].unique():
+        on = (df["worker"] == w).to_numpy()
+        spans.append((start[on].min(), end[on].max()))
+        gaps += end[on].max() - start[on].min() - cell[on].sum()
+    first, last = min(s for s, _ in spans), max(e for _, e in spans)
+    return {"hand-over": gaps, "start": first - called, "end": returned - last,
+            "fixed": workers * ((first - called) + (returned - last)),
+            "imbalance": sum((s - first) + (last - e) for s, e in spans)}
+
+
 def scale_point(k: int, tmp: Path, client, workers: int) -> dict:
     """One grid of k data copies, in-process and on the cluster: cells and time lost outside cells."""
     g = grid(False, copies=k)
@@ -207,18 +231,26 @@ def scale_point(k: int, tmp: Path, client, workers: int) -> dict:
     for name, kw in (("in", {}), ("dask", {"client": client})):
         path = tmp / f"scale-{k}-{name}.sqlite"
         t = time.perf_counter()
+        called = time.time()
         gx.run_grid(g, path, **kw)
         wall = time.perf_counter() - t
-        cells = gx.load_results(path)["wall_time"].to_numpy()
-        out[name] = (wall * (workers if name == "dask" else 1) - cells.sum(), wall)
+        returned = time.time()
+        df = gx.load_results(path)
+        out[name] = (wall * (workers if name == "dask" else 1) - df["wall_time"].sum(), wall)
+        if name == "dask":
+            out["split"] = split(df, called, returned, workers)
     print(f"  scale {k}: {out['cells']} cells; in-process {out['in'][1]:.2f} s, {out['in'][0] * 1e3:.0f} ms outside "
-          f"cells; Dask {out['dask'][1]:.2f} s, {out['dask'][0] * 1e3:.0f} ms of worker time outside cells", flush=True)
+          f"cells; Dask {out['dask'][1]:.2f} s, {out['dask'][0] * 1e3:.0f} ms of worker time outside cells (hand-over "
+          f"{out['split']['hand-over'] * 1e3:.0f}, fixed {out['split']['fixed'] * 1e3:.0f}, imbalance "
+          f"{out['split']['imbalance'] * 1e3:.0f} ms)", flush=True)
     return out
 
 
 def report_scale(points: list[dict], med: float) -> None:
     """Least-squares line of the time lost outside cells against the number of cells."""
     n = np.array([p["cells"] for p in points], float)
+    print("time outside cells against the number of cells (the slope is the overhead per cell; goal for Dask <= 5 % of "
+          "the median cell):")
     for name, label in (("dask", "Dask (worker time: wall x workers - cells)"), ("in", "in-process (wall - cells)")):
         lost = np.array([p[name][0] for p in points])
         (slope, icpt), cov = np.polyfit(n, lost, 1, cov=True) if n.size > 3 else (np.polyfit(n, lost, 1), None)
@@ -228,6 +260,10 @@ def report_scale(points: list[dict], med: float) -> None:
               f"{', '.join(f'{x * 1e3:.0f}' for x in lost)} ms)")
         print(f"  {label.split(' (')[0]}, all in, per cell at each size: "
               + ", ".join(f"{int(c)}: {x / c / med * 100:.1f} %" for c, x in zip(n, lost)) + " of the median cell")
+    for part in ("hand-over", "fixed", "imbalance"):
+        x = np.array([p["split"][part] for p in points])
+        print(f"  Dask {part} per cell at each size: "
+              + ", ".join(f"{int(c)}: {v / c / med * 100:.1f} %" for c, v in zip(n, x)) + " of the median cell")
 
 
 if __name__ == "__main__":
