@@ -312,8 +312,36 @@ def test_dask_batches_with_results_late_never_fill_a_batch_from_an_unmeasured_gr
                     assert sum(seconds(c) for c in batch) <= BATCH_SECONDS * (1 + 1e-6) + 1e-12
             flight.append(batch)
             continue
-        for c in flight.popleft():
+        done = flight.popleft()
+        bt.returned([(c, 0) for c in done])
+        for c in done:
             bt.observe(c, seconds(c))
             sizes.setdefault(c.variant, set()).add(_size(c))
             out.append(c)
     assert sorted(c.key for c in out) == sorted(c.key for c in cells)
+
+
+def test_dask_batches_leave_out_the_work_done_while_a_new_task_waits():
+    """A new batch is sized on the work left less what the workers do while it waits behind the
+    tasks in flight (QUEUE_SHARE of an in-flight task's estimate per worker thread)."""
+    from graybox.experiments._executors import GUIDE, IN_FLIGHT, MIN_BATCH_SECONDS, QUEUE_SHARE
+
+    cells = [_FakeCell(f"c{i}", "d", "v", {"n_terms": 2 + i % 2}) for i in range(400)]
+    slots = 2 * IN_FLIGHT
+    bt = _Batches(cells, slots)
+    (probe,), = [bt.next()]
+    bt.returned([probe])
+    for k in (2, 3):  # a + b × terms with a = 0.01 s, b = 5 ms, seen at two sizes: estimates exact
+        bt.observe(_FakeCell(f"seen{k}", "d", "v", {"n_terms": k}), 0.01 + 0.005 * k)
+    est = lambda batch: sum(0.01 + 0.005 * _size(c) for c, _ in batch)  # noqa: E731
+    first = bt.next()  # nothing in flight: a share of the work left as it is
+    flight = [est(first)]
+    for _ in range(3):
+        left = sum(0.01 + 0.005 * _size(c) for q in bt.groups.values() for c in q)
+        batch = bt.next()
+        target = max((left - QUEUE_SHARE * (slots // IN_FLIGHT) * sum(flight) / len(flight)) / (GUIDE * slots),
+                     MIN_BATCH_SECONDS)
+        head = 0.01 + 0.005 * max(_size(c) for c, _ in batch)
+        assert target - head < est(batch) <= target + 1e-12
+        assert est(batch) < left / (GUIDE * slots) - head  # smaller than without the tasks in flight
+        flight.append(est(batch))
