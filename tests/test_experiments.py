@@ -312,7 +312,7 @@ def test_store_of_another_grid_is_refused_untouched(small_store, tmp_path):
     assert _bytes(path) == before
 
 
-@pytest.mark.parametrize("kind", ["text", "empty", "foreign", "corrupt"])
+@pytest.mark.parametrize("kind", ["text", "empty", "foreign", "corrupt", "header"])
 def test_foreign_or_corrupt_files_are_refused_untouched(kind, small_store, tmp_path):
     p = tmp_path / "store.sqlite"
     if kind == "text":
@@ -325,6 +325,8 @@ def test_foreign_or_corrupt_files_are_refused_untouched(kind, small_store, tmp_p
         con.execute("INSERT INTO cells VALUES ('a', 1.0)")
         con.commit()
         con.close()
+    elif kind == "header":  # an SQLite header and nothing readable after it
+        p.write_bytes(b"SQLite format 3\x00" + bytes(range(256)) * 40)
     else:
         src = _bytes(small_store[0])
         page = 4096
@@ -337,7 +339,7 @@ def test_foreign_or_corrupt_files_are_refused_untouched(kind, small_store, tmp_p
     with pytest.raises(gx.StoreError):
         gx.load_results(p)
     assert _bytes(p) == before
-    assert not Path(str(p) + "-wal").exists() or kind == "corrupt"
+    assert not Path(str(p) + "-wal").exists() or kind in ("corrupt", "header")
 
 
 def test_store_log_stays_short_so_closing_is_quick(tmp_path, pumping):

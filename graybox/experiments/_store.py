@@ -75,6 +75,15 @@ def _read_meta(conn: sqlite3.Connection, path: Path) -> dict[str, str]:
     return meta
 
 
+def _settings(conn: sqlite3.Connection) -> None:
+    """Durable against a killed process (WAL), where an fsync per cell would only guard against
+    power loss; the log folded into the database every WAL_PAGES pages, not SQLite's 1000, so that
+    closing the store, which folds what is left while every worker waits, stays short. (Read the
+    schema: only on a file already checked.)"""
+    conn.execute("PRAGMA synchronous=NORMAL")
+    conn.execute(f"PRAGMA wal_autocheckpoint={WAL_PAGES}")
+
+
 def _connect(path: Path) -> sqlite3.Connection:
     conn = sqlite3.connect(str(path), timeout=30.0, isolation_level=None)  # explicit transactions
     return conn
@@ -112,12 +121,6 @@ class ResultStore:
             raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
         conn = _connect(p)
         try:
-            # connection settings, nothing written: durable against a killed process (WAL), where an
-            # fsync per cell would only guard against power loss; the log folded into the database
-            # every WAL_PAGES pages, not SQLite's 1000, so that closing the store, which folds what
-            # is left while every worker waits, stays short
-            conn.execute("PRAGMA synchronous=NORMAL")
-            conn.execute(f"PRAGMA wal_autocheckpoint={WAL_PAGES}")
             if exists:
                 meta = _read_meta(conn, p)
                 if meta.get("grid_fingerprint") != fingerprint:
@@ -130,8 +133,10 @@ class ResultStore:
                         f"{p} holds {n} cell(s) of another grid ({meta.get('grid_name')!r}, fingerprint "
                         f"{meta.get('grid_fingerprint')}){why}; this grid ({grid_name!r}) has fingerprint "
                         f"{fingerprint}. Results of two grids are not mixed: choose another --store path")
+                _settings(conn)
             else:
                 conn.execute("PRAGMA journal_mode=WAL")
+                _settings(conn)
                 cols = ", ".join(f"{k} {t}" for k, t in COLUMNS.items())
                 meta = {"format": FORMAT, "format_version": FORMAT_VERSION, "grid_fingerprint": fingerprint,
                         "grid_name": grid_name, "grid_spec": json.dumps(spec, sort_keys=True),
