@@ -321,6 +321,25 @@ def test_dask_batches_with_results_late_never_fill_a_batch_from_an_unmeasured_gr
     assert sorted(c.key for c in out) == sorted(c.key for c in cells)
 
 
+def test_dask_batches_cost_a_group_whose_probe_came_back_untimed_at_the_mean_rate():
+    """A probe that came back failed or infeasible (no time learnt) does not leave its group sent
+    one cell per task: the group is costed at the other groups' mean rate."""
+    cells = [_FakeCell(f"{g}{i}", "d", g, {"n_terms": 4}) for g in ("A", "B") for i in range(20)]
+    bt = _Batches(cells, 2)
+    probes = bt.next() + bt.next()  # one per in-flight task
+    assert sorted(c.variant for c, _ in probes) == ["A", "B"]
+    bt.returned(probes[:1])
+    bt.returned(probes[1:])
+    bt.observe(next(c for c, _ in probes if c.variant == "A"), 0.01)  # B's probe: no time
+    batches = []
+    while bt:
+        batches.append([c for c, _ in bt.next()])
+        bt.returned([(c, 0) for c in batches[-1]])
+    assert sorted(c.key for b in batches for c in b) == sorted(c.key for c in cells if c not in {p for p, _ in probes})
+    assert any(len(b) > 1 and any(c.variant == "B" for c in b) for b in batches)
+    assert len(batches) < 12
+
+
 def test_dask_batches_leave_out_the_work_done_while_a_new_task_waits():
     """A new batch is sized on the work left less what the workers do while it waits behind the
     tasks in flight (QUEUE_SHARE of an in-flight task's estimate per worker thread)."""

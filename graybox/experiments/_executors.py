@@ -240,7 +240,8 @@ class _Batches:
     been seen): a variant's estimator sets most of a cell's time, the structure's size most of
     the rest, and the evaluation every cell ends with costs the same at any size. One cell of each
     group runs first (these probes are spread over the first tasks), so that every group's time
-    is known early; a group whose probe has not come back yet sends its cells one per task. Then
+    is known early; a group whose probe has not come back yet sends its cells one per task (one
+    whose probe came back without a time, e.g. infeasible, is costed at the mean rate). Then
     the cells go longest first, so the cheapest come last, in batches of about ``BATCH_SECONDS``
     of estimated work that shrink towards the end to one in-flight task's share of the work left
     (less what the workers will do while the new task waits behind the one in flight, see
@@ -266,6 +267,7 @@ class _Batches:
         self._left = {g: [len(q), sum(_size(c) for c in q)] for g, q in self.groups.items()}  # cells, terms queued
         self._fit: dict[tuple[str, str], list[float]] = {}  # group -> [n, Σ terms, Σ s, Σ terms², Σ terms × s]
         self._flight: dict[str, float] = {}  # first cell's key -> estimated seconds of a task in flight
+        self._back: set[tuple[str, str]] = set()  # groups with a cell come back, timed or not
         self._probe_k = -(-len(self.probes) // self.slots)
 
     def __len__(self) -> int:
@@ -306,6 +308,7 @@ class _Batches:
         """A task given by :meth:`next` came back (finished or not): it is no longer in flight."""
         if items:
             self._flight.pop(items[0][0].key, None)
+        self._back.update((c.data, c.variant) for c, _ in items)
 
     def requeue(self, cell: Cell, deaths: int) -> None:
         """Put back a cell whose worker died (it runs alone, next)."""
@@ -323,11 +326,15 @@ class _Batches:
             return [self.retry.popleft()]
         if self.probes:  # spread over the first tasks, one for each in-flight slot
             return [(self.probes.popleft(), 0) for _ in range(min(self._probe_k, len(self.probes)))]
+        fits = list(self._fit.values())
+        default = sum(f[2] for f in fits) / sum(f[1] for f in fits) if fits else BATCH_SECONDS  # s per term
         models = {g: self.model(g) for g, q in self.groups.items() if q}
+        for g, m in models.items():  # its probe came back untimed (failed, infeasible): the default
+            if m is None and g in self._back:
+                models[g] = (0.0, default)
         known = {g: m for g, m in models.items() if m is not None}
         if not known:  # only groups whose probe is still out: one cell, lest a long group fill a batch
             return [(self._take(next(iter(models))), 0)]
-        default = sum(f[2] for f in self._fit.values()) / sum(f[1] for f in self._fit.values())  # s per term, all
         left = sum(a * self._left[g][0] + b * self._left[g][1] for g, (a, b) in known.items())
         left += default * sum(self._left[g][1] for g in models if g not in known)
         if self._flight:
