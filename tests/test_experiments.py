@@ -312,6 +312,27 @@ def test_store_of_another_grid_is_refused_untouched(small_store, tmp_path):
     assert _bytes(path) == before
 
 
+def test_store_left_by_a_killed_writer_is_refused_without_folding_its_log(tmp_path):
+    """Another grid's store whose writer was killed still has its rows in the write-ahead log;
+    refusing it must not fold that log into the file (nothing is written to a refused store)."""
+    import signal
+    import subprocess
+    import sys
+
+    path = tmp_path / "killed.sqlite"
+    code = (f"import os, signal\nfrom graybox.experiments._store import ResultStore\n"
+            f"ResultStore.open({str(path)!r}, fingerprint='other', grid_name='other', spec={{}}, n_cells=1, "
+            f"version='0')\nos.kill(os.getpid(), signal.SIGKILL)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True)
+    assert proc.returncode == -signal.SIGKILL
+    wal = Path(str(path) + "-wal")
+    assert wal.exists() and wal.stat().st_size > 0  # the store's tables are still in the log
+    before, wal_before = _bytes(path), _bytes(wal)
+    with pytest.raises(gx.StoreError, match="another grid"):
+        gx.run_grid(python_grid(), path)
+    assert _bytes(path) == before and _bytes(wal) == wal_before
+
+
 @pytest.mark.parametrize("kind", ["text", "empty", "foreign", "corrupt", "header"])
 def test_foreign_or_corrupt_files_are_refused_untouched(kind, small_store, tmp_path):
     p = tmp_path / "store.sqlite"

@@ -84,9 +84,10 @@ def _settings(conn: sqlite3.Connection) -> None:
     conn.execute(f"PRAGMA wal_autocheckpoint={WAL_PAGES}")
 
 
-def _connect(path: Path) -> sqlite3.Connection:
-    conn = sqlite3.connect(str(path), timeout=30.0, isolation_level=None)  # explicit transactions
-    return conn
+def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:
+    if readonly:
+        return sqlite3.connect(path.resolve().as_uri() + "?mode=ro", uri=True, timeout=30.0, isolation_level=None)
+    return sqlite3.connect(str(path), timeout=30.0, isolation_level=None)  # explicit transactions
 
 
 class ResultStore:
@@ -119,12 +120,12 @@ class ResultStore:
             _check_file(p)
         elif not p.parent.exists():
             raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
-        conn = _connect(p)
-        try:
-            if exists:
-                meta = _read_meta(conn, p)
+        if exists:  # checked through a read-only connection: closing it folds no log left by a killed writer
+            ro = _connect(p, readonly=True)
+            try:
+                meta = _read_meta(ro, p)
                 if meta.get("grid_fingerprint") != fingerprint:
-                    n = conn.execute("SELECT COUNT(*) FROM cells").fetchone()[0]
+                    n = ro.execute("SELECT COUNT(*) FROM cells").fetchone()[0]
                     why = ""
                     if meta.get("graybox_version") != version:
                         why = (f" (it was written by graybox {meta.get('graybox_version')}, this is {version}: "
@@ -133,6 +134,11 @@ class ResultStore:
                         f"{p} holds {n} cell(s) of another grid ({meta.get('grid_name')!r}, fingerprint "
                         f"{meta.get('grid_fingerprint')}){why}; this grid ({grid_name!r}) has fingerprint "
                         f"{fingerprint}. Results of two grids are not mixed: choose another --store path")
+            finally:
+                ro.close()
+        conn = _connect(p)
+        try:
+            if exists:
                 _settings(conn)
             else:
                 conn.execute("PRAGMA journal_mode=WAL")
