@@ -363,6 +363,21 @@ def test_foreign_or_corrupt_files_are_refused_untouched(kind, small_store, tmp_p
     assert not Path(str(p) + "-wal").exists() or kind in ("corrupt", "header")
 
 
+def test_store_writes_arrays_as_the_same_json_as_lists():
+    """Rows carry the Pareto members as numpy arrays (cheaper for a Dask task to return); the store
+    writes exactly the text the lists would give."""
+    import json
+
+    from graybox.experiments._store import _encode
+
+    lists = {"JS": [0.1, float("inf"), 1e-300], "failure": ["", "no equilibrium", ""]}
+    arrays = {"JS": np.array(lists["JS"]), "failure": lists["failure"]}
+    assert _encode("members", arrays) == _encode("members", lists) == json.dumps(lists)
+    assert _encode("theta", np.array([1.0, -2.5])) == "[1.0, -2.5]"
+    with pytest.raises(TypeError, match="object"):
+        _encode("members", {"x": object()})
+
+
 def test_store_log_stays_short_so_closing_is_quick(tmp_path, pumping):
     """The write-ahead log is folded into the database as the rows come, not all at close."""
     from graybox.experiments._cell import failed_row

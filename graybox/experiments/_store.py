@@ -190,9 +190,16 @@ class ResultStore:
         self.close()
 
 
+def _plain(v: Any) -> Any:
+    """numpy arrays and scalars as the lists and numbers JSON writes."""
+    if isinstance(v, (np.ndarray, np.generic)):
+        return v.tolist()
+    raise TypeError(f"{type(v).__name__} cannot be written to the store")
+
+
 def _encode(k: str, v: Any) -> Any:
     if k in JSON_COLUMNS:
-        return None if v is None else json.dumps(v)
+        return None if v is None else json.dumps(v, default=_plain)
     if isinstance(v, (np.floating, np.integer)):
         return v.item()
     return v
