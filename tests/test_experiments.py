@@ -331,6 +331,8 @@ def test_store_left_by_a_killed_writer_is_refused_without_folding_its_log(tmp_pa
     with pytest.raises(gx.StoreError, match="another grid"):
         gx.run_grid(python_grid(), path)
     assert _bytes(path) == before and _bytes(wal) == wal_before
+    assert len(gx.load_results(path)) == 0  # readable, and reading it writes nothing either
+    assert _bytes(path) == before and _bytes(wal) == wal_before
 
 
 @pytest.mark.parametrize("kind", ["text", "empty", "foreign", "corrupt", "header"])

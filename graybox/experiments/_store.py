@@ -218,7 +218,7 @@ def read_store(path: str | os.PathLike) -> tuple[dict[str, str], list[dict[str, 
     if not p.is_file():
         raise StoreError(f"{p}: no such store")
     _check_file(p)
-    conn = _connect(p)
+    conn = _connect(p, readonly=True)  # closing it folds no log left by a killed writer into the file
     try:
         meta = _read_meta(conn, p)
         cur = conn.execute(f"SELECT {', '.join(COLUMNS)} FROM cells ORDER BY cell_index")
