@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from graybox import Dataset, Record, StaticPoints
 from graybox.datasets import BUCK_STATIC_CURVE, find_buck_dir, load_buck, load_record_csv, load_static_csv
@@ -215,3 +217,50 @@ def test_buck_files_are_not_in_the_project():
     hits = [p for d in ("data", "tests", "graybox", "notebooks") if (REPO / d).is_dir()
             for p in (REPO / d).rglob("buck_*.csv")]
     assert not hits, hits
+
+
+# -- the fast reader gives what the careful reader gives -------------------------------------
+
+_FORMATS = (repr, "{:.3f}".format, "{:.6e}".format, lambda v: f"  {v!r} ", lambda v: f"{v:+.17g}")
+
+
+@settings(max_examples=80, deadline=None)
+@given(values=st.lists(st.tuples(st.floats(-1e300, 1e300, allow_nan=False), st.floats(-1e6, 1e6, allow_nan=False)),
+                       min_size=1, max_size=30),
+       fmt=st.integers(0, len(_FORMATS) - 1), crlf=st.booleans(), bom=st.booleans(),
+       blank=st.integers(-1, 30), quote=st.booleans(), text_col=st.booleans(), trailing_newline=st.booleans())
+def test_fast_and_careful_csv_readers_agree(values, fmt, crlf, bom, blank, quote, text_col, trailing_newline):
+    """numpy's reader, used where it can be, gives the careful reader's floats bit for bit and its line
+    numbers; files it cannot read exactly (quotes, blank lines) go to the careful reader."""
+    import tempfile
+
+    from graybox.datasets import _loaders
+
+    f = _FORMATS[fmt]
+    lines = ["a,b" + (",note" if text_col else "")]
+    for i, (a, b) in enumerate(values):
+        row = f"{f(a)},{f(b)}" + (f",row {i}" if text_col else "")
+        lines.append(row.replace(f(a), f'"{f(a)}"', 1) if quote and i == 0 else row)
+    if 0 <= blank < len(values):
+        lines.insert(blank + 1, "")
+    nl = "\r\n" if crlf else "\n"
+    text = nl.join(lines) + (nl if trailing_newline else "")
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "x.csv"
+        p.write_bytes((b"\xef\xbb\xbf" if bom else b"") + text.encode())
+        index = {"u": 0, "y": 1}
+        fast = _loaders._fast_columns(p, index)
+        careful_reader = _loaders._fast_columns
+        try:
+            _loaders._fast_columns = lambda p, index: None
+            careful = _loaders._read_columns(p, {"u": "a", "y": "b"})
+        finally:
+            _loaders._fast_columns = careful_reader
+        got = _loaders._read_columns(p, {"u": "a", "y": "b"})
+    simple = not quote and not (0 <= blank < len(values))
+    assert (fast is not None) == simple
+    for k in ("u", "y", "_lines"):
+        assert np.array_equal(got[k], careful[k])
+        assert np.array_equal(np.signbit(got[k]), np.signbit(careful[k]))
+    assume(simple)
+    assert np.array_equal(fast["u"], careful["u"]) and np.array_equal(fast["_lines"], careful["_lines"])

@@ -76,6 +76,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str]) -> dict[str, 
             if header.count(col) > 1:
                 raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
             index[role] = header.index(col)
+        fast = _fast_columns(p, index)
+        if fast is not None:
+            return fast
         need = max(index.values()) + 1
         values: dict[str, list[float]] = {role: [] for role in wanted}
         lines: list[int] = []
@@ -103,6 +106,31 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str]) -> dict[str, 
         raise ValueError(f"{p}: no data rows after the header")
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
+    return out
+
+
+def _fast_columns(p: Path, index: dict[str, int]) -> dict[str, np.ndarray] | None:
+    """The columns by numpy's reader (faster on long records), or None when the file needs the
+    careful reader: quotes, blank lines, bare carriage returns, a field that is not a finite number
+    or that only Python reads (``1_000``). Where numpy reads a field it gives the same float as
+    Python's ``float``, so a record's content, and the cells' keys, do not depend on the reader."""
+    raw = p.read_bytes()
+    if b'"' in raw or raw.count(b"\r") != raw.count(b"\r\n"):
+        return None
+    rows = raw.count(b"\n") + (0 if raw.endswith(b"\n") else 1) - 1  # physical lines after the header
+    del raw
+    if rows < 1:
+        return None
+    roles = list(index)
+    try:
+        arr = np.loadtxt(p, delimiter=",", skiprows=1, usecols=[index[r] for r in roles], comments=None,
+                         dtype=np.float64, ndmin=2, encoding="utf-8-sig")
+    except ValueError:
+        return None
+    if arr.shape[0] != rows or not np.isfinite(arr).all():
+        return None
+    out = {role: np.ascontiguousarray(arr[:, j]) for j, role in enumerate(roles)}
+    out["_lines"] = np.arange(2, rows + 2)
     return out
 
 
