@@ -370,14 +370,14 @@ def test_store_writes_arrays_as_the_same_json_as_lists():
     writes exactly the text the lists would give."""
     import json
 
-    from graybox.experiments._store import _encode
+    from graybox.experiments._store import encode_value
 
     lists = {"JS": [0.1, float("inf"), 1e-300], "failure": ["", "no equilibrium", ""]}
     arrays = {"JS": np.array(lists["JS"]), "failure": lists["failure"]}
-    assert _encode("members", arrays) == _encode("members", lists) == json.dumps(lists)
-    assert _encode("theta", np.array([1.0, -2.5])) == "[1.0, -2.5]"
+    assert encode_value("members", arrays) == encode_value("members", lists) == json.dumps(lists)
+    assert encode_value("theta", np.array([1.0, -2.5])) == "[1.0, -2.5]"
     with pytest.raises(TypeError, match="object"):
-        _encode("members", {"x": object()})
+        encode_value("members", {"x": object()})
 
 
 def test_store_log_stays_short_so_closing_is_quick(tmp_path, pumping):

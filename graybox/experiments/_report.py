@@ -16,7 +16,6 @@ Ranking rules (``rule``):
 
 from __future__ import annotations
 
-import json
 import os
 import re
 from pathlib import Path
@@ -28,7 +27,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.figure import Figure
 
 from ._cell import STATUSES
-from ._store import load_results
+from ._store import encode_value, load_results
 
 __all__ = ["RULES", "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report"]
 
@@ -429,9 +428,8 @@ def write_report(
 
     flat = df.copy()
     flat["terms"] = [None if t is None else " + ".join(t) for t in flat["terms"]]
-    flat["theta"] = [None if t is None else json.dumps(np.asarray(t).tolist()) for t in flat["theta"]]
-    flat["members"] = [None if m is None else json.dumps({k: np.asarray(v).tolist() if k != "failure" else v
-                                                          for k, v in m.items()}) for m in flat["members"]]
+    for col in ("theta", "members"):  # as JSON text, as the store holds them
+        flat[col] = [encode_value(col, v) for v in flat[col]]
     flat["warnings"] = ["; ".join(w) for w in flat["warnings"]]
     save(o / "cells.csv", flat.set_index("key"))
     lb = leaderboard(df, rule=rule, band=band)

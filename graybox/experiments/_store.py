@@ -164,7 +164,7 @@ class ResultStore:
 
     def write(self, row: Mapping[str, Any], replace: bool = False) -> None:
         """Commit one finished cell (``replace``: overwrite a failed row of the same key)."""
-        values = [_encode(k, row.get(k)) for k in COLUMNS]
+        values = [encode_value(k, row.get(k)) for k in COLUMNS]
         verb = "INSERT OR REPLACE" if replace else "INSERT"
         self._conn.execute("BEGIN IMMEDIATE")
         try:
@@ -197,7 +197,8 @@ def _plain(v: Any) -> Any:
     raise TypeError(f"{type(v).__name__} cannot be written to the store")
 
 
-def _encode(k: str, v: Any) -> Any:
+def encode_value(k: str, v: Any) -> Any:
+    """A row's value of column ``k`` as the store holds it (JSON text for the list columns)."""
     if k in JSON_COLUMNS:
         return None if v is None else json.dumps(v, default=_plain)
     if isinstance(v, (np.floating, np.integer)):
