@@ -48,7 +48,7 @@ from graybox.experiments._executors import local_cluster  # noqa: E402
 
 def grid(quick: bool, copies: int = 0) -> gx.Grid:
     """The benchmark grid on the bundled plant; with ``copies`` = k > 0, on k copies of its data
-    held in memory (static points shifted by k × 1e-12 relative, so each copy has its own cells,
+    held in memory (copy i's static points scaled by 1 + i × 1e-12, so each copy has its own cells,
     whose work is the same): k × 200 cells of one distribution of cell times."""
     structures = []
     for ny, sizes in ((1, (4, 5)), (2, (4, 6, 9, 12)), (3, (4, 6, 9, 12)), (4, (4, 6, 9, 12)), (5, (4, 6, 9, 12)),

@@ -231,7 +231,7 @@ def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
     """Every member's figures (identification J's from the set, J_S on the validation record).
 
     Arrays, not lists: a Dask task returns them, and a worker pickles and frees arrays of floats
-    far faster than lists of Python floats (about 0.5 ms less between two tasks, BENCHMARKS.md).
+    faster than lists of Python floats (BENCHMARKS.md, grids).
     """
     K = len(pareto)
     ok = np.array([i not in pareto.failures for i in range(K)], bool)

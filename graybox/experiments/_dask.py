@@ -35,9 +35,9 @@ class CellRows:
     """A task's rows, with a size Dask reads instead of walking them.
 
     A worker measures every task result (``dask.sizeof``) before it starts its next task; on a
-    batch of rows, with their nested lists of Pareto members, that walk took about a millisecond,
-    as long as Dask's own hand-over between two tasks (BENCHMARKS.md, grids). The size given is an
-    estimate, used by Dask only to account for memory and transfers.
+    batch of rows, with their nested Pareto members, that walk took as long as Dask's own
+    hand-over between two tasks (BENCHMARKS.md, grids). The size given is an estimate, used by
+    Dask only to account for memory and transfers.
     """
 
     #: Estimated bytes per row (a PE row with 100 members pickles to about 6 kB, a CLS row to 0.7 kB).

@@ -55,9 +55,8 @@ MIN_BATCH_SECONDS = 0.04
 #: A new task waits behind the worker's task in flight: of the work left, the share the workers
 #: will do meanwhile (this fraction of an in-flight task's estimated time, per worker thread) is
 #: not counted when the task is sized, lest a task sized for the work left at its submission start
-#: when little is left and end long after the other workers (a simulation of the 200–800-cell
-#: benchmark grids with estimates off by 15 % per group and 20 % per cell: mean worker time lost
-#: 95–126 ms against 153–171 ms without it, worst 163 ms against 1.1 s).
+#: when little is left and end long after the other workers (chosen by a simulation of the
+#: batcher: BENCHMARKS.md, grids).
 QUEUE_SHARE = 0.75
 #: Most cells in one Dask task.
 MAX_BATCH = 64

@@ -114,13 +114,13 @@ class ResultStore:
         """
         p = Path(path)
         exists = p.exists()
+        if not exists and not p.parent.exists():
+            raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
         if exists:
             if p.is_dir():
                 raise StoreError(f"{p} is a folder; give a file path for the store")
             _check_file(p)
-        elif not p.parent.exists():
-            raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
-        if exists:  # checked through a read-only connection: closing it folds no log left by a killed writer
+            # checked through a read-only connection: closing it folds no log left by a killed writer
             ro = _connect(p, readonly=True)
             try:
                 meta = _read_meta(ro, p)
