@@ -17,7 +17,7 @@ import numpy as np
 sys.path.insert(0, sys.argv[1])
 import graybox as new  # noqa: E402
 import graybox_base as old  # noqa: E402
-from graybox._kernels import batch_sse as sse_new, encode as enc_new, free_run_sensitivity as sen_new  # noqa: E402
+from graybox.core._simulation_kernels import batch_sse as sse_new, encode as enc_new, free_run_sensitivity as sen_new  # noqa: E402
 from graybox_base._kernels import batch_sse as sse_old, encode as enc_old, free_run_sensitivity as sen_old  # noqa: E402
 
 N, P = 3200, 200

@@ -31,11 +31,11 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _common import git_rev, machine, sysidentpy_code, timeit  # noqa: E402
 
 from graybox import reference  # noqa: E402
-from graybox._convex import cls, pe_pareto, pe_thetas, qr_static_error  # noqa: E402
-from graybox._curves import StaticCurve  # noqa: E402
+from graybox.estimation._prediction_error import cls, pe_pareto, pe_thetas, qr_static_error  # noqa: E402
+from graybox.static._curves import StaticCurve  # noqa: E402
 from graybox.datasets import load_pumping  # noqa: E402
-from graybox._ls import column_scales  # noqa: E402
-from graybox._regressors import stacked_regressors  # noqa: E402
+from graybox.core._least_squares import column_scales  # noqa: E402
+from graybox.core._regressors import stacked_regressors  # noqa: E402
 
 LAMBDAS = np.logspace(-6, 0, 100)
 

@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _common import git_rev, machine, timeit  # noqa: E402
 
 from graybox import Candidates, Record, Structure, Term  # noqa: E402
-from graybox._selection import frols  # noqa: E402
+from graybox.selection._forward_regression import frols  # noqa: E402
 
 TASKS = ((2, 17), (3, 23))
 NY = NU = 6

@@ -53,7 +53,7 @@ def make_record(cache: Path, n: int) -> Path:
 def one_size(path: str, degree: int, k: int, repeat: int, method: str, dask_blocks: int = 0) -> dict:
     import graybox
     from graybox import Candidates, Record
-    from graybox._selection import frols
+    from graybox.selection._forward_regression import frols
 
     d = np.load(path)
     rec = Record(d["u"], d["y"], Ts=0.05)

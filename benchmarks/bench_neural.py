@@ -36,9 +36,9 @@ from threadpoolctl import threadpool_limits
 sys.path.insert(0, str(Path(__file__).parent))
 from _common import git_rev, machine  # noqa: E402
 
-import graybox._neural as gn  # noqa: E402
+import graybox.estimation._neural as gn  # noqa: E402
 from graybox import neural_narx  # noqa: E402
-from graybox._evaluate import evaluate, mse  # noqa: E402
+from graybox.models._evaluate import evaluate, mse  # noqa: E402
 from graybox.datasets import load_pumping  # noqa: E402
 
 

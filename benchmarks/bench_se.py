@@ -38,10 +38,10 @@ from _common import git_rev, machine  # noqa: E402
 from graybox import Candidates, Record, StaticRangeWarning, evaluate_thetas, js, se_pareto  # noqa: E402
 from graybox.datasets import load_pumping  # noqa: E402
 from graybox.datasets.pumping import PumpingPlant, speed_reference  # noqa: E402
-from graybox._kernels import free_run_sensitivity  # noqa: E402
-from graybox._model import Model  # noqa: E402
-from graybox._se import GAOptions, SEProblem, _Compressed, _pe_starts, ga_front, gradient_front  # noqa: E402
-from graybox._selection import frols  # noqa: E402
+from graybox.core._simulation_kernels import free_run_sensitivity  # noqa: E402
+from graybox.models._model import Model  # noqa: E402
+from graybox.estimation._simulation_error import GAOptions, SEProblem, _Compressed, _pe_starts, ga_front, gradient_front  # noqa: E402
+from graybox.selection._forward_regression import frols  # noqa: E402
 
 
 def fastcan_ids(structure):

@@ -41,7 +41,7 @@ def _miso_variant(structure):
 
 def kernel_rows() -> list[tuple[str, float, float]]:
     """graybox's kernels, one input and two inputs: (case, seconds per call, term-evals/s)."""
-    from graybox._kernels import batch_sse, encode, free_run_sensitivity
+    from graybox.core._simulation_kernels import batch_sse, encode, free_run_sensitivity
 
     rng = np.random.default_rng(0)
     m = reference.paper_model(15)

@@ -29,8 +29,8 @@ from _common import machine  # noqa: E402
 
 from graybox import Candidates  # noqa: E402
 from graybox.datasets import load_pumping  # noqa: E402
-from graybox._se import GAOptions, SEProblem, ga_front  # noqa: E402
-from graybox._selection import frols  # noqa: E402
+from graybox.estimation._simulation_error import GAOptions, SEProblem, ga_front  # noqa: E402
+from graybox.selection._forward_regression import frols  # noqa: E402
 
 
 def populations(prob: SEProblem) -> dict[str, np.ndarray]:
@@ -75,7 +75,7 @@ def main() -> None:
         line = (f"{name:6s}: J_SF {1e3 * t_sf:8.2f} ms per generation (200 members × {len(data.static)} points), "
                 f"J_S {1e3 * t_s:7.2f} ms; finite J_SF for {int(np.isfinite(jsf).sum())}/200")
         try:
-            from graybox._static import reached_equilibria
+            from graybox.static._analysis import reached_equilibria
 
             res = reached_equilibria(prob.structure, pop, data.static.ubar, data.static.ybar)
             codes, counts = np.unique(res.status, return_counts=True)

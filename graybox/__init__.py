@@ -3,42 +3,41 @@
 Polynomial NARMAX models, structure selection, static analysis and gray-box estimation
 with static-curve information, after Barbosa, Aguirre, Martinez & Braga (IEEE TCST 2011).
 
-The implementation lives in private modules (``graybox._els`` …); every public name is
-exported here, and from the public subpackages :mod:`graybox.datasets`, :mod:`graybox.plots`,
-:mod:`graybox.experiments` and :mod:`graybox.reproduce`.
+The implementation lives in subpackages by concern (:mod:`graybox.core`, :mod:`graybox.static`,
+:mod:`graybox.models`, :mod:`graybox.selection`, :mod:`graybox.estimation`,
+:mod:`graybox.diagnostics`, :mod:`graybox.io`, :mod:`graybox.datasets`), each of private modules;
+every public name is exported here. :mod:`graybox.plots`, :mod:`graybox.experiments` and
+:mod:`graybox.reproduce` sit above them. Names load on first use, so ``import graybox`` is quick.
 """
 
-from ._api import *  # noqa: F401,F403  (the core's public names)
-from ._api import __version__
-from . import plots
-from . import experiments
-from .experiments import GrayboxSelection, load_results, select_graybox
+from __future__ import annotations
 
-__all__ = [
-    "Candidates", "Structure", "Term", "parse_term", "parse_structure",
-    "Record", "StaticPoints", "Dataset", "StaticRangeWarning",
-    "regressor_matrix", "stacked_regressors", "DaskRecord",
-    "Model", "predict", "simulate", "simulate_many", "DivergenceError",
-    "cluster_map", "equilibria", "static_curve", "static_gain", "Equilibrium",
-    "evaluate", "evaluate_thetas", "j1", "js", "jsf", "mse", "rrse", "fit_percent",
-    "frols", "Selection", "CandidateWarning", "information_criterion", "semp", "SEMPResult",
-    "els", "ELSResult", "ELSConvergenceWarning", "noise_terms",
-    "StaticCurve", "StaticSurface",
-    "CurveEquality", "PassesThrough", "StaticBand", "GainBounds", "ClusterBounds", "UserConstraint",
-    "InfeasibleError",
-    "cls", "pe_pareto", "pe_thetas", "static_matrices", "qr_static_error", "PE_LAMBDAS",
-    "ParetoSet", "nondominated_mask",
-    "decide_dsf", "decide_min_correlation", "Decision",
-    "se_pareto", "GAOptions", "SE_LAMBDAS", "se_dsf", "DSFResult",
-    "neural_narx", "NeuralModel", "NeuralFit",
-    "residual_tests", "ResidualTests", "CorrelationTest", "one_step_residuals",
-    "ls_uncertainty", "cls_uncertainty", "pe_uncertainty", "se_uncertainty", "ParameterUncertainty",
-    "UncertaintyWarning", "static_curve_band", "StaticCurveBand",
-    "bootstrap_decision", "DecisionBootstrap", "BootstrapJob", "block_resample",
-    "save", "load", "to_json", "from_json", "read_header", "GrayboxFileError", "FORMAT_VERSION",
-    "datasets", "plots", "reference", "experiments",
-    "load_pumping", "load_pumping_miso", "load_buck", "load_record_csv", "load_static_csv", "load_results", "select_graybox", "GrayboxSelection",
-    "__version__",
-]
-# several inputs (issue 15): the static surface
-__all__ += ["static_surface", "static_surface_gain", "surface_equilibria", "surface_cluster_map", "SurfaceClusterMap"]
+import importlib
+from typing import Any
+
+from . import _api
+from ._api import __version__
+
+#: Subpackages reachable as attributes, loaded on first use.
+_SUBMODULES = ("plots", "experiments", "reproduce")
+#: Names of the experiment layer re-exported at the top.
+_EXPERIMENT_NAMES = ("GrayboxSelection", "load_results", "select_graybox")
+
+__all__ = sorted([*_api.__all__, *_SUBMODULES, *_EXPERIMENT_NAMES, "__version__"])
+
+
+def __getattr__(name: str) -> Any:
+    if name in _SUBMODULES:
+        value = importlib.import_module(f"graybox.{name}")
+    elif name in _EXPERIMENT_NAMES:
+        value = getattr(importlib.import_module("graybox.experiments"), name)
+    elif name in _api.__all__:
+        value = getattr(_api, name)
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return __all__

@@ -1,50 +1,53 @@
-"""Every public name of the core (everything below the experiment layer), in one namespace.
+"""Every public name of the layers below the figures and the experiments, in one namespace.
 
-:mod:`graybox` re-exports it; the experiment layer reads the core through it
+:mod:`graybox` re-exports it; the experiment layer reads those layers through it
 (``from .. import _api as gb``), so that nothing in :mod:`graybox.experiments` imports the
-package that imports it.
+package that imports it. Names are loaded on first use (see :mod:`graybox._lazy`).
 """
 
-from importlib.metadata import PackageNotFoundError, version as _version
+from __future__ import annotations
 
-from ._terms import Candidates, Structure, Term, parse_structure, parse_term
-from ._records import Dataset, Record, StaticPoints, StaticRangeWarning
-from ._regressors import regressor_matrix, stacked_regressors
-from ._gram import DaskRecord
-from ._simulation import DivergenceError, predict, simulate, simulate_many
-from ._model import Model
-from ._static import Equilibrium, cluster_map, equilibria, static_curve, static_gain
-from ._static_surface import SurfaceClusterMap, static_surface, static_surface_gain, surface_cluster_map, surface_equilibria
-from ._evaluate import evaluate, evaluate_thetas, fit_percent, j1, js, jsf, mse, rrse
-from ._selection import CandidateWarning, Selection, frols, information_criterion
-from ._semp import SEMPResult, semp
-from ._els import ELSConvergenceWarning, ELSResult, els, noise_terms
-from ._curves import StaticCurve
-from ._surfaces import StaticSurface
-from ._constraints import (
-    ClusterBounds, CurveEquality, GainBounds, InfeasibleError, PassesThrough, StaticBand, UserConstraint,
-)
-from ._convex import PE_LAMBDAS, cls, pe_pareto, pe_thetas, qr_static_error, static_matrices
-from ._pareto import ParetoSet, nondominated_mask
-from ._se import SE_LAMBDAS, GAOptions, se_pareto
-from ._se_dsf import DSFResult, se_dsf
-from ._decide import Decision, decide_dsf, decide_min_correlation
-from ._neural import NeuralFit, NeuralModel, neural_narx
-from ._residuals import CorrelationTest, ResidualTests, one_step_residuals, residual_tests
-from ._uncertainty import (
-    ParameterUncertainty, StaticCurveBand, UncertaintyWarning, cls_uncertainty, ls_uncertainty, pe_uncertainty,
-    se_uncertainty, static_curve_band,
-)
-from ._bootstrap import BootstrapJob, DecisionBootstrap, block_resample, bootstrap_decision
-from ._io import FORMAT_VERSION, GrayboxFileError, from_json, load, read_header, save, to_json
-from . import datasets, reference
-from .datasets import load_buck, load_pumping, load_pumping_miso, load_record_csv, load_static_csv
+import importlib
+from importlib.metadata import PackageNotFoundError, version as _version
+from typing import Any
+
+from ._layers import PUBLIC_SUBPACKAGES
 
 try:
     __version__ = _version("graybox")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree that was never installed
     __version__ = "0+unknown"
 
+_HOME: dict[str, str] = {}
+for _pkg in PUBLIC_SUBPACKAGES:
+    for _name in importlib.import_module(f"graybox.{_pkg}").__all__:
+        if _pkg == "datasets" and not _name.startswith("load_"):
+            continue  # the simulators' names stay in graybox.datasets; only its loaders come up
+        if _name in _HOME:
+            raise RuntimeError(f"{_name} is exported by both graybox.{_HOME[_name]} and graybox.{_pkg}")
+        _HOME[_name] = _pkg
 
-__all__ = sorted(n for n in dir() if not n.startswith("_") and n not in ("PackageNotFoundError", "annotations"))
-__all__ += ["__version__"]
+#: Public modules reachable as attributes (``gb.datasets``, ``gb.reference``).
+MODULES: tuple[str, ...] = ("datasets", "reference")
+
+__all__ = sorted([*_HOME, *MODULES])
+
+
+def __getattr__(name: str) -> Any:
+    if name in MODULES:
+        value = importlib.import_module(f"graybox.{name}")
+    elif name in _HOME:
+        value = getattr(importlib.import_module(f"graybox.{_HOME[name]}"), name)
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return __all__
+
+
+def home(name: str) -> str:
+    """The subpackage that holds a public name of this namespace (``"estimation"`` for ``"els"``)."""
+    return _HOME[name]

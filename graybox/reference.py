@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._model import Model
-from ._records import StaticPoints
-from ._terms import Structure
+from .models._model import Model
+from .core._records import StaticPoints
+from .core._terms import Structure
 
 __all__ = [
     "STRUCTURE_15",

@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import graybox as gb
+from graybox.diagnostics._bootstrap import BootstrapJob, block_resample
 
 STRUCT = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"])
 TRUE = gb.Model(STRUCT, [0.6, 0.2, 2e-3, 1e-3, -5e-7, 0.3])
@@ -39,9 +40,9 @@ def test_blocks_are_slices_of_one_record(lengths, b, seed):
     recs = [gb.Record(np.arange(n) + 1000.0 * i, -np.arange(n) - 1000.0 * i, name=f"r{i}") for i, n in enumerate(lengths)]
     if max(lengths) < b:
         with pytest.raises(ValueError, match="no record has"):
-            gb.block_resample(recs, b, np.random.default_rng(seed))
+            block_resample(recs, b, np.random.default_rng(seed))
     else:
-        blocks = gb.block_resample(recs, b, np.random.default_rng(seed))
+        blocks = block_resample(recs, b, np.random.default_rng(seed))
         assert len(blocks) == max(1, round(sum(lengths) / b))
         for blk in blocks:
             assert len(blk) == b
@@ -55,7 +56,7 @@ def test_replicates_match_a_direct_rerun(data):
     boot = run(data)
     assert boot.n_replicates == 8 and not boot.failures
     assert boot.block_length == 60 and boot.n_blocks == 10  # max(10·(L+1), N/10) = 60
-    job = gb.BootstrapJob(STRUCT, (data.ident,), data.static, "pe", LAMBDAS, 0.05, "min_jsf", 60, 0, None,
+    job = BootstrapJob(STRUCT, (data.ident,), data.static, "pe", LAMBDAS, 0.05, "min_jsf", 60, 0, None,
                           {"solver": "closed"})
     for i in (0, 5):
         recs, sp = job.data(i)
@@ -90,7 +91,7 @@ def test_seeded_and_independent_of_where_replicates_run(data):
         t = run(data, seed=3, map=ex.map)
     np.testing.assert_array_equal(t.thetas, a.thetas)
     # the job and its results travel by pickle (processes, Dask workers)
-    job = gb.BootstrapJob(STRUCT, (data.ident,), data.static, "pe", LAMBDAS, 0.05, "min_jsf", 60, 3, None,
+    job = BootstrapJob(STRUCT, (data.ident,), data.static, "pe", LAMBDAS, 0.05, "min_jsf", 60, 3, None,
                           {"solver": "closed"})
     again = pickle.loads(pickle.dumps(job))
     assert again(2) == job(2) == pickle.loads(pickle.dumps(job(2)))
@@ -117,7 +118,7 @@ def test_a_real_dask_cluster_through_the_experiment_layer(data):
 
 def test_static_noise_and_se(data):
     boot = run(data, static_sigma=0.05, n_boot=3)
-    job = gb.BootstrapJob(STRUCT, (data.ident,), data.static, "pe", LAMBDAS, 0.05, None, 60, 0, 0.05, {})
+    job = BootstrapJob(STRUCT, (data.ident,), data.static, "pe", LAMBDAS, 0.05, None, 60, 0, 0.05, {})
     _, sp = job.data(1)
     assert np.all(sp.ybar != data.static.ybar) and np.array_equal(sp.ubar, data.static.ubar)
     assert boot.static_sigma == 0.05

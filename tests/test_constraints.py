@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from graybox import Model, Record, StaticPoints, Structure, reference
-from graybox._constraints import (
+from graybox.static._constraints import (
     AllOf,
     ClusterBounds,
     CurveEquality,
@@ -21,11 +21,11 @@ from graybox._constraints import (
     as_constraint_list,
     static_rows,
 )
-from graybox._convex import cls, pe_thetas, static_prediction
-from graybox._curves import StaticCurve
-from graybox._ls import scaled_lstsq
-from graybox._regressors import stacked_regressors
-from graybox._static import cluster_map, rational_static_curve, static_gain
+from graybox.estimation._prediction_error import cls, pe_thetas, static_prediction
+from graybox.static._curves import StaticCurve
+from graybox.core._least_squares import scaled_lstsq
+from graybox.core._regressors import stacked_regressors
+from graybox.static._analysis import cluster_map, rational_static_curve, static_gain
 
 EQ1 = StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, name="eq. (1)")
 S15 = reference.STRUCTURE_15

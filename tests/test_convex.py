@@ -7,13 +7,13 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from graybox import Candidates, Model, Record, StaticPoints, Structure, reference
-from graybox import _convex as convex
-from graybox._constraints import InfeasibleError, StaticBand
-from graybox._convex import cls, pe_pareto, pe_thetas, qr_static_error, static_matrices, static_prediction
-from graybox._curves import StaticCurve
-from graybox._ls import column_scales, scaled_lstsq
-from graybox._regressors import stacked_regressors
-from graybox._static import cluster_map, rational_static_curve
+from graybox.estimation import _prediction_error as convex
+from graybox.static._constraints import InfeasibleError, StaticBand
+from graybox.estimation._prediction_error import cls, pe_pareto, pe_thetas, qr_static_error, static_matrices, static_prediction
+from graybox.static._curves import StaticCurve
+from graybox.core._least_squares import column_scales, scaled_lstsq
+from graybox.core._regressors import stacked_regressors
+from graybox.static._analysis import cluster_map, rational_static_curve
 
 EQ1 = StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, name="eq. (1)")
 S15 = reference.STRUCTURE_15
@@ -250,7 +250,7 @@ def test_pe_sweep_builds_one_dpp_problem(rec, monkeypatch):
 
 
 def test_pe_pareto_evaluates_with_the_shared_evaluator(rec, pe_closed):
-    from graybox._evaluate import evaluate_thetas
+    from graybox.models._evaluate import evaluate_thetas
 
     pts = reference.eq1_points()
     ps = pe_pareto(S15, rec, pts, lambdas=LAMBDAS[::10], solver="closed")
@@ -408,7 +408,7 @@ def test_static_points_outside_the_data_range_are_used_and_named_once(rec):
 
 
 def test_zero_denominator_at_a_static_point(rec):
-    from graybox._constraints import ClusterBounds
+    from graybox.static._constraints import ClusterBounds
 
     # fix the y clusters so that D(ū) = 1 − Σy − Σyu ū vanishes at ū = 1000: "passing" through
     # a point there would read 0 = 0, and the static function does not exist

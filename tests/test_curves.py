@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from graybox import StaticPoints, reference
-from graybox._curves import StaticCurve
+from graybox.static._curves import StaticCurve
 from graybox.datasets import load_pumping
 from graybox.datasets.pumping import PumpingPlant
 

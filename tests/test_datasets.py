@@ -24,10 +24,10 @@ from graybox.datasets.pumping import (
     static_experiment,
     write_csvs,
 )
-from graybox._els import els
-from graybox._evaluate import evaluate
-from graybox._ls import scaled_lstsq
-from graybox._selection import frols
+from graybox.estimation._extended_least_squares import els
+from graybox.models._evaluate import evaluate
+from graybox.core._least_squares import scaled_lstsq
+from graybox.selection._forward_regression import frols
 
 REPO = Path(__file__).resolve().parents[1]
 PLANT = PumpingPlant()

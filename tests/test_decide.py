@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from graybox import Model, reference
-from graybox._decide import decide_dsf
-from graybox._pareto import ParetoSet
+from graybox.estimation._decisions import decide_dsf
+from graybox.estimation._pareto import ParetoSet
 
 S15 = reference.STRUCTURE_15
 
@@ -70,7 +70,7 @@ def test_bad_input():
 def test_on_a_pe_front():
     """On a real PE sweep: the choice is in the band and no in-band member simulates better."""
     from graybox import Record
-    from graybox._convex import pe_pareto
+    from graybox.estimation._prediction_error import pe_pareto
 
     rng = np.random.default_rng(2)
     m = reference.paper_model(15)
@@ -87,8 +87,8 @@ def test_on_a_pe_front():
 
 def test_min_correlation_picks_least_correlated_member():
     from graybox import Record, reference
-    from graybox._decide import decide_min_correlation
-    from graybox._pareto import ParetoSet
+    from graybox.estimation._decisions import decide_min_correlation
+    from graybox.estimation._pareto import ParetoSet
 
     rng = np.random.default_rng(4)
     m = reference.paper_model(15, "PE")
@@ -116,8 +116,8 @@ def test_min_correlation_picks_least_correlated_member():
 def test_min_correlation_on_a_long_record_works_in_member_blocks():
     """1.5e6 samples: the members are scored in blocks (bounded memory); ρ as computed by hand."""
     from graybox import Model, Record, Structure
-    from graybox._decide import decide_min_correlation
-    from graybox._pareto import ParetoSet
+    from graybox.estimation._decisions import decide_min_correlation
+    from graybox.estimation._pareto import ParetoSet
 
     rng = np.random.default_rng(7)
     n = 1_500_000

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from graybox import Candidates, Model, Record, Structure, stacked_regressors
-from graybox._els import ELSConvergenceWarning, ELSResult, els, noise_terms
+from graybox.estimation._extended_least_squares import ELSConvergenceWarning, ELSResult, els, noise_terms
 from graybox.reproduce import section_black_box
-from graybox._ls import scaled_lstsq
-from graybox._records import Dataset
-from graybox._selection import frols
+from graybox.core._least_squares import scaled_lstsq
+from graybox.core._records import Dataset
+from graybox.selection._forward_regression import frols
 
 PROCESS = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
 THETA = np.array([0.7, 0.5, -0.2, 0.3])
@@ -229,7 +229,7 @@ def test_long_plant_record_converges_where_the_relaxed_iteration_stalls():
     # relaxed map does not contract (2·min Re 1/C < 1/2); the stalled iteration hands over
     # to the direct solve of the fixed-point equations, which meets the same stopping rule
     from graybox.datasets.pumping import PumpingPlant, speed_reference
-    from graybox._els import _contraction_limit, _ma_coefficients
+    from graybox.estimation._extended_least_squares import _contraction_limit, _ma_coefficients
 
     data = _load_pumping()
     st = frols(Candidates(ny=6, nu=6, ne=2, degree=2), data.ident, n_terms=17).structure

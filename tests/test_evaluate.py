@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from graybox import Dataset, Record, evaluate, fit_percent, j1, js, jsf, reference, rrse
-from graybox._evaluate import evaluate_thetas
+from graybox.models._evaluate import evaluate_thetas
 
 
 def test_table_shape_and_values(paper_record):
@@ -58,8 +58,8 @@ def test_jsf_infinite_when_no_stable_equilibrium():
 def test_population_errors_equal_the_dense_definition_without_its_temporaries(paper_record):
     # J1 in row blocks and J_S from the compiled SSE kernel: the same numbers as the dense
     # N × P residual matrices (P = 400 members: the rows come in several blocks), one member diverging
-    from graybox._regressors import regressor_matrix
-    from graybox._simulation import simulate_many
+    from graybox.core._regressors import regressor_matrix
+    from graybox.core._simulation import simulate_many
 
     m15 = reference.paper_model(15)
     st = m15.structure

@@ -14,9 +14,9 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import graybox as gb
-import graybox._gram as gram
+import graybox.core._gram as gram
 from graybox import Candidates, Model, Record, Structure, stacked_regressors
-from graybox._selection import CandidateWarning, frols
+from graybox.selection._forward_regression import CandidateWarning, frols
 
 from test_selection import BIN_TERMS, narx_record, rpm_record
 
@@ -143,7 +143,7 @@ def test_gram_duplicates_and_dependent_candidates_as_mgs():
 
 
 def test_auto_picks_mgs_for_short_and_gram_for_long_records():
-    from graybox._selection import _choose_method
+    from graybox.selection._forward_regression import _choose_method
 
     assert _choose_method("auto", 3000, 455, 23, False) == "mgs"
     assert _choose_method("auto", 10**6, 91, 17, False) == "gram"
@@ -290,7 +290,7 @@ def test_frols_and_pe_on_dask_records_reduced_on_a_local_cluster(dask_client):
     np.testing.assert_allclose(got.rss, ref.rss, rtol=1e-10)
 
     # the PE closed form reduces the lazy records to the triangular factor of [Ψ, y]
-    import graybox._convex as cx
+    import graybox.estimation._prediction_error as cx
 
     st = ref.structure
     d_mem, d_lazy = cx._dynamic(st, mem), cx._dynamic(st, lazy)
@@ -310,7 +310,7 @@ def test_frols_and_pe_on_dask_records_reduced_on_a_local_cluster(dask_client):
 
 
 def test_pe_reduces_a_record_chunk_by_chunk_when_its_regressors_would_not_fit(monkeypatch):
-    import graybox._convex as cx
+    import graybox.estimation._prediction_error as cx
 
     ds = gb.load_pumping()
     st = Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-2)y(k-1)", "1"])

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 import graybox as gb
-from graybox import _io
+from graybox.io import _json as _io
 
 STRUCT = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-2)", "u(k-1)^2", "1"])
 

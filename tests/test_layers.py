@@ -1,69 +1,122 @@
 """Arrows point down: no module imports one above it, not even inside a function.
 
-The order is the README's layout table, bottom first: a module imports only modules listed
-before it (a subpackage counts as one unit).
+The order is :data:`graybox._layers.LAYERS`, bottom first, the one place it is written; the
+README's layout table is checked against it here too.
 """
 
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
 
+from graybox._layers import LAYERS
+
 PKG = Path(__file__).parents[1] / "graybox"
-
-#: Bottom first; a module may import only modules that come earlier in this list.
-ORDER = [
-    "_validation", "_progress", "_terms", "_latex", "_records",
-    "_regressors", "_kernels", "_static_kernels", "_simulation", "_static", "_static_surface", "_gram",
-    "_model", "_evaluate", "_ls", "_curves", "_surfaces", "_pareto", "_constraints", "_static_form",
-    "_selection", "_semp", "_els", "_neural", "_convex", "_se", "_se_dsf", "_decide",
-    "_residuals", "_uncertainty", "_bootstrap", "_io",
-    "reference", "datasets", "_api",
-    "plots", "experiments", "reproduce", "_cli", "__init__",
-]
+README = Path(__file__).parents[1] / "README.md"
+UNITS = [u for u, _, _ in LAYERS]
+MODULES = {u: list(mods) for u, mods, _ in LAYERS}
 
 
-def _unit(path: Path) -> str:
-    """The ORDER entry a file belongs to (a subpackage counts as one unit)."""
-    rel = path.relative_to(PKG).with_suffix("").parts
-    return rel[0]
+def _place(parts: list[str]) -> tuple[int, int] | None:
+    """(unit rank, module rank inside the unit) of a dotted path below graybox, or None if outside."""
+    if not parts or parts[0] not in UNITS:
+        return None
+    unit = parts[0]
+    mods = MODULES[unit]
+    if len(parts) == 1 or parts[1] == "__init__":
+        return UNITS.index(unit), len(mods)  # a subpackage's __init__ sits on top of its modules
+    return UNITS.index(unit), mods.index(parts[1]) if parts[1] in mods else -1
 
 
-def _imports(path: Path) -> set[str]:
-    """ORDER units that a file imports, anywhere in it (module level or inside functions)."""
-    rel = path.relative_to(PKG).with_suffix("").parts
-    pkg = ["graybox", *rel[:-1]]  # the package the file is in
-    out = set()
+def _rel(path: Path) -> list[str]:
+    return list(path.relative_to(PKG).with_suffix("").parts)
+
+
+def _imports(path: Path) -> set[tuple[str, ...]]:
+    """Dotted targets below graybox that a file imports, anywhere in it."""
+    rel = _rel(path)
+    pkg = ["graybox", *rel[:-1]]
+    out: set[tuple[str, ...]] = set()
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        names: list[list[str]] = []
+        targets: list[list[str]] = []
         if isinstance(node, ast.ImportFrom):
             base = pkg[: len(pkg) - (node.level - 1)] if node.level else []
             target = base + (node.module.split(".") if node.module else [])
-            if target == ["graybox"] and node.level:
-                names = [["graybox", a.name] for a in node.names]
-            else:
-                names = [target]
+            targets = [target + [a.name] for a in node.names]  # a name may be a module of that package
         elif isinstance(node, ast.Import):
-            names = [a.name.split(".") for a in node.names]
-        for t in names:
+            targets = [a.name.split(".") for a in node.names]
+        for t in targets:
             if t and t[0] == "graybox":
-                out.add(t[1] if len(t) > 1 else "__init__")
+                out.add(tuple(t[1:]) if len(t) > 1 else ("__init__",))
     return out
 
 
-FILES = sorted(p for p in PKG.rglob("*.py"))
+def _resolve(target: tuple[str, ...]) -> list[str]:
+    """The unit (and module) an import reaches: `from graybox.core._terms import X` → [core, _terms];
+    `from graybox import frols` reaches the package's __init__."""
+    t = list(target)
+    if t[0] not in UNITS:
+        return ["__init__"]
+    if len(t) >= 2 and t[1] in MODULES[t[0]]:
+        return t[:2]
+    return t[:1]
+
+
+FILES = sorted(PKG.rglob("*.py"))
 
 
 def test_every_module_has_a_layer():
-    units = {_unit(p) for p in FILES}
-    assert units <= set(ORDER), f"modules without a layer: {sorted(units - set(ORDER))}"
+    missing = []
+    for p in FILES:
+        rel = _rel(p)
+        if rel[0] not in UNITS:
+            missing.append("/".join(rel))
+        elif len(rel) > 1 and rel[-1] != "__init__" and rel[1] not in MODULES[rel[0]]:
+            missing.append("/".join(rel))
+    assert not missing, f"modules without a layer in graybox/_layers.py: {missing}"
+
+
+def test_every_layer_exists():
+    for unit, mods, _ in LAYERS:
+        assert (PKG / f"{unit}.py").exists() or (PKG / unit / "__init__.py").exists(), unit
+        for m in mods:
+            assert (PKG / unit / f"{m}.py").exists(), f"{unit}.{m}"
 
 
 @pytest.mark.parametrize("path", FILES, ids=lambda p: str(p.relative_to(PKG)))
 def test_imports_point_down(path):
-    me = _unit(path)
-    rank = ORDER.index(me)
-    up = [u for u in _imports(path) if u != me and u in ORDER and ORDER.index(u) > rank]
-    assert not up, f"{path.relative_to(PKG)} ({me}) imports {sorted(up)}, which sit above it"
+    me = _place(_rel(path))
+    assert me is not None
+    up = []
+    for target in _imports(path):
+        there = _place(_resolve(target))
+        if there is None:
+            continue
+        if there[0] > me[0] or (there[0] == me[0] and there[1] >= me[1] and _resolve(target) != _rel(path)):
+            # the same unit: only modules listed before this one (its __init__ is on top)
+            if there[0] == me[0] and _rel(path)[-1] == "__init__":
+                continue
+            up.append(".".join(_resolve(target)))
+    assert not up, f"{path.relative_to(PKG)} imports {sorted(up)}, which sit above it in graybox/_layers.py"
+
+
+def test_readme_layout_table_is_the_layer_order():
+    """The README's layout table lists the units in the layer order, each with what it owns."""
+    text = README.read_text(encoding="utf-8")
+    rows = re.findall(r"^\| `graybox\.?([\w.]*)` \| (.*) \|$", text, re.M)
+    documented = [(name or "__init__", owns) for name, owns in rows]
+    expected = [(u, owns) for u, _, owns in LAYERS if not u.startswith("_") or u == "__init__"]
+    assert [d[0] for d in documented] == [e[0] for e in reversed(expected)], \
+        "README's layout table differs from graybox/_layers.py (write it with tests/test_layers.py's layout_table())"
+    assert documented == list(reversed(expected))
+
+
+def layout_table() -> str:
+    """The README's layout table, top first, as written from graybox/_layers.py."""
+    rows = [(u, owns) for u, _, owns in reversed(LAYERS) if not u.startswith("_") or u == "__init__"]
+    lines = ["| package | owns |", "| --- | --- |"]
+    lines += [f"| `graybox{'' if u == '__init__' else '.' + u}` | {owns} |" for u, owns in rows]
+    return "\n".join(lines)

@@ -7,8 +7,8 @@ import pytest
 
 import graybox as gb
 from graybox import Candidates, Record, StaticPoints, Structure, Term, parse_term
-from graybox._records import Dataset, as_records
-from graybox._regressors import record_signals, regressor_matrix
+from graybox.core._records import Dataset, as_records
+from graybox.core._regressors import record_signals, regressor_matrix
 from graybox.datasets import load_record_csv, load_static_csv
 
 
@@ -147,7 +147,7 @@ def _miso_record(n=300, seed=3, names=("u1", "u2")):
 
 
 def test_miso_kernels_match_a_plain_loop():
-    from graybox._kernels import batch_sse, encode, free_run_sensitivity, record_inputs
+    from graybox.core._simulation_kernels import batch_sse, encode, free_run_sensitivity, record_inputs
 
     rec, m = _miso_record()
     ref = rec.y
@@ -233,7 +233,7 @@ def test_frols_recovers_a_two_input_structure(seed):
 # -- static surface --------------------------------------------------------------
 from hypothesis import assume, given, settings, strategies as hst  # noqa: E402
 
-from graybox._static_surface import (  # noqa: E402
+from graybox.static._surface_analysis import (  # noqa: E402
     static_surface, static_surface_gain, surface_cluster_map, surface_equilibria,
 )
 
@@ -380,7 +380,7 @@ def test_two_input_pipeline_frols_els_evaluate():
 
 
 def test_reached_surface_batches_members_and_points():
-    from graybox._static_surface import reached_surface
+    from graybox.static._surface_analysis import reached_surface
 
     rng = np.random.default_rng(5)
     th0 = np.array([0.3, 0.1, 0.5, -0.4, 0.2, 0.1, -0.2, 0.1])
@@ -396,7 +396,7 @@ def test_reached_surface_batches_members_and_points():
 
 
 def test_surface_static_rows():
-    from graybox._static_surface import surface_static_rows
+    from graybox.static._surface_analysis import surface_static_rows
 
     rec, m = _miso_record()
     cm = surface_cluster_map(_ST2)

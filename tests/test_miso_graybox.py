@@ -10,10 +10,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import graybox as gb
-from graybox._constraints import (
+from graybox.estimation._prediction_error import qr_static_error
+from graybox.static._constraints import (
     StaticContext, cluster_powers, n_static_inputs, static_rows,
 )
-from graybox._surfaces import StaticSurface
+from graybox.static._surfaces import StaticSurface
 
 # A rational two-input structure (no y power above 1) for the bundled two-input rig: its
 # numerator carries 1, u1, u2, u1², u1·u2, u2²; its denominator 1 − Σy − Σyu1 ū1 − Σyu2 ū2.
@@ -165,7 +166,7 @@ def test_pe_closed_form_and_cvxpy_agree_with_two_inputs(ds):
     U = ds.static.ubar
     for a, b in zip(closed, qp):
         np.testing.assert_allclose(rational_surface(ST, b, U), rational_surface(ST, a, U), rtol=1e-6)
-    jsf_qr = gb.qr_static_error(ST, closed, ds.static)
+    jsf_qr = qr_static_error(ST, closed, ds.static)
     assert jsf_qr[0] < jsf_qr[-1]  # the static points weigh more at small λ1
 
 

@@ -13,9 +13,9 @@ from threadpoolctl import threadpool_limits
 
 from graybox import Candidates, Record
 from graybox.datasets import load_pumping
-from graybox._els import els
-from graybox._evaluate import evaluate, mse
-from graybox._neural import (
+from graybox.estimation._extended_least_squares import els
+from graybox.models._evaluate import evaluate, mse
+from graybox.estimation._neural import (
     NeuralModel,
     _deterministic,
     _pe_jacobian_kernel,
@@ -24,10 +24,10 @@ from graybox._neural import (
     _unpack,
     neural_narx,
 )
-from graybox._selection import frols
+from graybox.selection._forward_regression import frols
 from graybox.reproduce import section_neural
-from graybox._records import Dataset
-from graybox._simulation import DivergenceError
+from graybox.core._records import Dataset
+from graybox.core._simulation import DivergenceError
 
 # The small network of the fast tests: ny = nu = 2, ne = 1, 3 hidden nodes.
 SMALL = dict(ny=2, nu=2, ne=1, hidden=3)

@@ -9,8 +9,8 @@ from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
 from graybox import Record, reference
-from graybox._evaluate import evaluate_thetas, j1, js, jsf
-from graybox._pareto import ParetoSet, nondominated_mask
+from graybox.models._evaluate import evaluate_thetas, j1, js, jsf
+from graybox.estimation._pareto import ParetoSet, nondominated_mask
 
 S15 = reference.STRUCTURE_15
 

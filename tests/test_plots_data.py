@@ -7,7 +7,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from graybox import Record, reference
-from graybox._curves import StaticCurve
+from graybox.static._curves import StaticCurve
 from graybox.datasets import load_pumping
 from graybox.plots import plot_record, plot_static_curve
 

@@ -9,7 +9,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from graybox import StaticPoints
-from graybox._surfaces import StaticSurface
+from graybox.static._surfaces import StaticSurface
 from graybox.datasets import TwoSpeedPumpingPlant
 from graybox.datasets._pumping_miso import static_grid
 from graybox.plots import plot_surface_contours, plot_surface_slices

@@ -11,11 +11,11 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from graybox import Model, Record, StaticPoints, Structure, evaluate_thetas, jsf, reference
-from graybox._se import SEProblem
-from graybox._static import (
+from graybox.estimation._simulation_error import SEProblem
+from graybox.static._analysis import (
     NO_EQUILIBRIUM, NONE_STABLE, SETTLE_STEPS, reached_equilibria, static_theta_gradient,
 )
-from graybox._static_kernels import DIVERGED, NOT_SETTLED, REACHED
+from graybox.static._equilibrium_kernels import DIVERGED, NOT_SETTLED, REACHED
 
 CUBIC = Structure(["y(k-1)", "y(k-2)", "y(k-1)^3", "u(k-1)"])
 #: y = 0.3 y1 + 0.2 y2 + 0.5 y1³ + 1e-3 u: three equilibria at ū = 100 (−1.088, 0.209, 0.879),

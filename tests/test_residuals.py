@@ -5,7 +5,7 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 import graybox as gb
-from graybox._residuals import _xcorr
+from graybox.diagnostics._residuals import _xcorr
 
 GOOD = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"])
 MISSING_U2 = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"])

@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 from graybox import Model, Record, reference
-from graybox._kernels import encode, free_run_sensitivity
-from graybox._se import GAOptions, SEProblem, ga_front, gradient_front, se_pareto
+from graybox.core._simulation_kernels import encode, free_run_sensitivity
+from graybox.estimation._simulation_error import GAOptions, SEProblem, ga_front, gradient_front, se_pareto
 
 
 @pytest.fixture(scope="module")
@@ -55,7 +55,7 @@ def test_sensitivity_for_cubic_structure():
 
 
 def test_cost_definitions_match_shared_evaluator(problem):
-    from graybox._evaluate import evaluate_thetas
+    from graybox.models._evaluate import evaluate_thetas
 
     ths = problem.ls_theta() * (1 + 0.001 * np.random.default_rng(0).standard_normal((5, 17)))
     ev = evaluate_thetas(problem.structure, ths, problem.record, problem.static)
@@ -111,7 +111,7 @@ def test_gradient_front_beats_ls_and_tracks_lambda(problem):
 
 
 def test_checkpoint_resume_equals_uninterrupted(problem, tmp_path, monkeypatch):
-    import graybox._se as se
+    import graybox.estimation._simulation_error as se
 
     lam = [1.0, 0.6, 0.3, 0.1]
     full = ga_front(problem, lam, options=SMALL, seed=5, progress=False)
@@ -163,7 +163,7 @@ def test_se_pareto_returns_evaluated_set(problem):
 
 @pytest.mark.parametrize("P", [1, 7, 30])
 def test_parallel_sse_equals_serial(problem, P):
-    from graybox._kernels import batch_sse
+    from graybox.core._simulation_kernels import batch_sse
 
     ths = problem.ls_theta() * (1 + 0.001 * np.random.default_rng(P).standard_normal((P, 17)))
     rec = problem.record
@@ -208,7 +208,7 @@ def test_bad_theta0_is_named(problem):
 
 # -- the solver-facing problem: streamed QR factor against finite differences ---------------
 def finite_difference_jacobian(problem, z, lam1):
-    from graybox._se import _residuals
+    from graybox.estimation._simulation_error import _residuals
 
     J = np.empty((_residuals(problem, z, lam1).size, z.size))
     for j in range(z.size):
@@ -223,7 +223,7 @@ def finite_difference_jacobian(problem, z, lam1):
 def assert_factor_matches_finite_differences(problem, z, lam1, J=None):
     """The factor T of [J r] and the compressed pair (f̃, J̃) that least_squares sees carry the
     full problem's ‖r‖², Jᵀr and JᵀJ, J by central differences of the full residual vector."""
-    from graybox._se import _Compressed, _r_factor, _residuals
+    from graybox.estimation._simulation_error import _Compressed, _r_factor, _residuals
 
     r = _residuals(problem, z, lam1)
     J = finite_difference_jacobian(problem, z, lam1) if J is None else J
@@ -250,8 +250,8 @@ def test_streamed_factor_matches_finite_differences(problem):
 
 
 def test_streamed_blocks_equal_one_pass(problem, monkeypatch):
-    import graybox._se as se
-    from graybox._kernels import free_run_sensitivity_blocks
+    import graybox.estimation._simulation_error as se
+    from graybox.core._simulation_kernels import free_run_sensitivity_blocks
 
     th = problem.ls_theta()
     rec = problem.record
@@ -283,7 +283,7 @@ def cubic_problem():
 
 def test_cubic_problem_objective_matches_shared_evaluator(cubic_problem):
     from graybox import evaluate_thetas
-    from graybox._static import cluster_map
+    from graybox.static._analysis import cluster_map
 
     m, problem = cubic_problem
     assert cluster_map(m.structure).max_y_power == 3
@@ -295,7 +295,7 @@ def test_cubic_problem_objective_matches_shared_evaluator(cubic_problem):
 
 
 def test_cubic_problem_jacobian_matches_finite_differences(cubic_problem):
-    from graybox._se import _residuals
+    from graybox.estimation._simulation_error import _residuals
 
     m, problem = cubic_problem
     z = m.theta * problem.scale
@@ -303,7 +303,7 @@ def test_cubic_problem_jacobian_matches_finite_differences(cubic_problem):
     for lam1 in (0.6, 0.01):
         J = finite_difference_jacobian(problem, z, lam1)
         # the static rows alone: ∂ȳ_i/∂θ of the cubic equilibria, by implicit differentiation
-        from graybox._static import static_theta_gradient
+        from graybox.static._analysis import static_theta_gradient
 
         yb = problem.static_outputs(m.theta[None])[0]
         G = np.sqrt((1 - lam1) / M) * static_theta_gradient(m.structure, m.theta, problem.static.ubar, yb)
@@ -367,7 +367,7 @@ def test_every_member_failed_is_an_error_listing_the_reasons(buck_structure):
 
 
 def test_failed_member_is_retried_from_later_members(problem, monkeypatch):
-    import graybox._se as se
+    import graybox.estimation._simulation_error as se
 
     bad = problem.ls_theta().copy()
     bad[0] = 5.0  # diverging free run
@@ -385,7 +385,7 @@ def test_failed_member_is_retried_from_later_members(problem, monkeypatch):
 
 
 def test_checkpoint_records_failed_members(buck_structure, tmp_path, monkeypatch):
-    import graybox._se as se
+    import graybox.estimation._simulation_error as se
 
     st, data = buck_structure
     problem = SEProblem(st, data.ident, data.static)
@@ -432,7 +432,7 @@ def test_gradient_options_are_validated(problem, kw, match):
 
 def test_gradient_front_second_pass_leaves_no_better_neighbour():
     import graybox as gb
-    from graybox._se import _UP_MARGIN, _pe_members
+    from graybox.estimation._simulation_error import _UP_MARGIN, _pe_members
 
     # the paper's eq. (15) structure on the bundled plant: going down alone, a member ends up
     # beaten at its own λ by its smaller-λ neighbour's solution (seen without the second pass)
@@ -462,7 +462,7 @@ def test_checkpoint_of_an_older_graybox_is_named(problem, tmp_path):
 
 
 def test_fit_stops_at_the_last_accepted_point_when_the_jacobian_overflows(problem, monkeypatch):
-    import graybox._se as se
+    import graybox.estimation._simulation_error as se
 
     real = se._r_factor
     calls = {"n": 0}

@@ -58,7 +58,7 @@ def test_bad_input(data):
 
 
 def test_a_failed_pe_start_leaves_the_sweep_starts(data, monkeypatch):
-    import graybox._se_dsf as impl
+    import graybox.estimation._epsilon_constraint as impl
 
     def no_pe(*args, **kwargs):
         raise ValueError("no PE member has a bounded free run")
@@ -89,7 +89,7 @@ def test_static_points_outside_the_records_range_and_in_conflict(data):
 def test_the_band_multiplier_does_not_depend_on_its_warm_start(seed, mu0, shrink):
     """The linearised step meets the linearised band with the smallest multiplier μ (to its
     tolerance), whatever μ the bracket starts from."""
-    from graybox._se_dsf import _MU_RTOL, _constrained_step, _lin, _step
+    from graybox.estimation._epsilon_constraint import _MU_RTOL, _constrained_step, _lin, _step
 
     rng = np.random.default_rng(seed)
     n = 5

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
-from graybox._static_form import static_degree
+from graybox.static._form_check import static_degree
 
 TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
 THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
@@ -160,7 +160,7 @@ def test_two_inputs_the_static_surface_asks_for_its_clusters():
 
 
 def test_two_inputs_candidates_that_cannot_carry_the_surface_are_named():
-    from graybox._static_form import static_terms
+    from graybox.static._form_check import static_terms
 
     st = gb.Structure(["y(k-1)", "u1(k-1)"])
     added = static_terms(st, gb.Candidates(1, 1, degree=2, inputs=("u1", "u2")), 1)
@@ -190,7 +190,7 @@ def test_one_static_point_and_repeated_measurements(data):
 def test_static_points_that_leave_a_direction_unvaried_ask_only_what_they_determine():
     """Two inputs that always move together (or one held) cannot determine a full surface: the
     degree stops where the fit is still determined, instead of a rank error."""
-    from graybox._static_form import static_fit_mse
+    from graybox.static._form_check import static_fit_mse
 
     s = np.linspace(1.0, 3.0, 6)
     together = gb.StaticPoints(np.column_stack([s, s]), 1.0 + 0.5 * s + 0.1 * s**2, input_names=("u1", "u2"))

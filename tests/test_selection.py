@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from graybox import Candidates, Model, Record, Structure, stacked_regressors
-from graybox._records import Dataset
-from graybox._selection import CandidateWarning, frols, information_criterion
+from graybox.core._records import Dataset
+from graybox.selection._forward_regression import CandidateWarning, frols, information_criterion
 
 # A polynomial NARX with a constant, output and input lags, a cross term and a square.
 TRUE_TERMS = ["1", "y(k-1)", "y(k-2)", "u(k-2)", "u(k-1)y(k-1)", "u(k-1)^2"]

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from graybox import DivergenceError, Model, reference, simulate_many
-from graybox._kernels import encode, simulate_batch
+from graybox.core._simulation_kernels import encode, simulate_batch
 
 
 def python_free_run(model: Model, u, y0):

@@ -5,11 +5,11 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from graybox import Model, Record, StaticPoints, Structure, evaluate_thetas, jsf, reference
-from graybox._static import (
+from graybox.static._analysis import (
     DENOMINATOR_RTOL, _real_roots_companion, cluster_map, rational_static_curve, reached_equilibria, schur_stable,
     spectral_radius, vanishing_denominator,
 )
-from graybox._static_kernels import real_roots_upto_cubic
+from graybox.static._equilibrium_kernels import real_roots_upto_cubic
 
 
 def test_eq16_clusters_from_table_ii():
@@ -261,7 +261,7 @@ def _population(model: Model, n: int = 12) -> np.ndarray:
 @pytest.mark.parametrize("cu,cy", [(1.0, 9806.65), (1e-4, 1.0), (1e4, 1e-4), (1e-4, 1e4), (2 * np.pi / 60, 1e-2),
                                    (1e4, 1e4)])
 def test_every_static_path_is_the_same_in_any_units(eq, cu, cy, paper_record):
-    from graybox._se import SEProblem
+    from graybox.estimation._simulation_error import SEProblem
 
     m = reference.paper_model(eq)
     mu = _in_units(m, cu, cy)

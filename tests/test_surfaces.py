@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from graybox import StaticPoints
-from graybox._surfaces import StaticSurface, monomial_exponents
+from graybox.static._surfaces import StaticSurface, monomial_exponents
 from graybox.datasets import TwoSpeedPumpingPlant
 from graybox.datasets._pumping_miso import static_grid
 

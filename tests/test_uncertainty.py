@@ -139,7 +139,7 @@ def test_pe_at_lambda_one_is_least_squares_and_takes_a_decision():
 
 def test_se_covariance_matches_monte_carlo():
     """Output-error data (white noise on the free run), as the SE covariance assumes."""
-    from graybox._se import SEProblem, gradient_front
+    from graybox.estimation._simulation_error import SEProblem, gradient_front
 
     s = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
     true = gb.Model(s, [0.7, 3e-3, -6e-7, 0.5])

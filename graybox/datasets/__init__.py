@@ -10,47 +10,17 @@
   two-input benchmark (``python -m graybox.datasets._pumping_miso`` rewrites its bundled files).
 """
 
-from ._loaders import (
-    BUCK_STATIC_CURVE,
-    find_buck_dir,
-    load_buck,
-    load_pumping,
-    load_record_csv,
-    load_static_csv,
-    pumping_data_dir,
-)
-from ._miso_loader import load_pumping_miso, pumping_miso_data_dir
+from .._lazy import attach
 
 _PUMPING_NAMES = ("PlantRun", "PumpingPlant", "speed_reference", "static_experiment")
 _PUMPING_MISO_NAMES = ("TwoSpeedPumpingPlant", "TwoSpeedRun", "two_speed_reference", "static_grid_experiment")
 
-
-def __getattr__(name: str):
-    # The simulator's names are loaded on first use, not at import: `python -m
-    # graybox.datasets.pumping` would otherwise import that module twice (runpy warns).
-    if name in _PUMPING_NAMES:
-        from . import pumping
-
-        return getattr(pumping, name)
-    if name in _PUMPING_MISO_NAMES:
-        from . import _pumping_miso
-
-        return getattr(_pumping_miso, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-__all__ = [
-    "load_pumping",
-    "load_pumping_miso",
-    "pumping_miso_data_dir",
-    "load_buck",
-    "load_record_csv",
-    "load_static_csv",
-    "find_buck_dir",
-    "pumping_data_dir",
-    "BUCK_STATIC_CURVE",
-    "PumpingPlant",
-    "PlantRun",
-    "speed_reference",
-    "static_experiment",
-    *_PUMPING_MISO_NAMES,
-]
+# Loaded on first use, not at import: `python -m graybox.datasets.pumping` would otherwise import that
+# module twice (runpy warns), and `import graybox` stays light.
+__getattr__, __dir__, __all__ = attach(__name__, {
+    "_loaders": ("BUCK_STATIC_CURVE", "find_buck_dir", "load_buck", "load_pumping", "load_record_csv",
+                 "load_static_csv", "pumping_data_dir"),
+    "_miso_loader": ("load_pumping_miso", "pumping_miso_data_dir"),
+    "pumping": _PUMPING_NAMES,
+    "_pumping_miso": _PUMPING_MISO_NAMES,
+})

@@ -20,10 +20,10 @@ from typing import Sequence
 
 import numpy as np
 
-from .._curves import StaticCurve
-from .._records import Dataset, Record, StaticPoints
-from .._terms import check_input_names
-from .._validation import check_choice
+from ..static._curves import StaticCurve
+from ..core._records import Dataset, Record, StaticPoints
+from ..core._terms import check_input_names
+from ..core._validation import check_choice
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._records import Dataset
+from ..core._records import Dataset
 from ._loaders import bundled_data_dir, load_record_csv, load_static_csv
 
 __all__ = ["load_pumping_miso", "pumping_miso_data_dir", "PUMPING_MISO_INPUTS"]
@@ -51,7 +51,11 @@ def load_pumping_miso() -> Dataset:
     """
     # imported here so that `python -m graybox.datasets._pumping_miso` does not import that module twice
     from ._pumping_miso import (
-        DEFAULT_SEED, DYNAMIC_COLUMNS_MISO, N_IDENT_MISO, STATIC_COLUMNS_MISO, TwoSpeedPumpingPlant,
+        DEFAULT_SEED,
+        DYNAMIC_COLUMNS_MISO,
+        N_IDENT_MISO,
+        STATIC_COLUMNS_MISO,
+        TwoSpeedPumpingPlant,
     )
 
     d = pumping_miso_data_dir()

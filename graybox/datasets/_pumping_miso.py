@@ -67,8 +67,8 @@ from typing import Sequence
 import numba as nb
 import numpy as np
 
-from .._records import Record, StaticPoints
-from .._validation import as_1d_finite
+from ..core._records import Record, StaticPoints
+from ..core._validation import as_1d_finite
 from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, write_csv_pair
 
 __all__ = [

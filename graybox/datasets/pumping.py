@@ -159,8 +159,8 @@ from typing import Sequence
 import numba as nb
 import numpy as np
 
-from .._records import Record, StaticPoints
-from .._validation import as_1d_finite
+from ..core._records import Record, StaticPoints
+from ..core._validation import as_1d_finite
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [

@@ -14,23 +14,17 @@ This package sits above the estimators and the decision makers; nothing in grayb
 imports it.
 """
 
-from ._cell import COLUMNS, STATUSES, run_cell
-from ._example import EXAMPLE_SPEC
-from ._executors import EXECUTORS
-from ._report import RULES, heatmap_table, leaderboard, plot_fronts, plot_heatmap, plot_scatter, write_report
-from ._map import parallel_map
-from ._run import GridRun, run_grid
-from ._select import GrayboxSelection, select_graybox
-from ._spec import (
-    BUNDLED, CONSTRAINT_TYPES, DECISION_RULES, ESTIMATORS, Cell, DataSpec, DecisionRule, Grid, SpecError, StructureSpec,
-    Variant,
-)
-from ._store import StoreError, load_results
+from .._lazy import attach
 
-__all__ = [
-    "Grid", "DataSpec", "StructureSpec", "Variant", "DecisionRule", "Cell", "SpecError",
-    "run_grid", "GridRun", "select_graybox", "GrayboxSelection", "parallel_map", "run_cell", "load_results", "StoreError",
-    "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report", "RULES",
-    "EXAMPLE_SPEC",
-    "ESTIMATORS", "CONSTRAINT_TYPES", "DECISION_RULES", "BUNDLED", "EXECUTORS", "STATUSES", "COLUMNS",
-]
+__getattr__, __dir__, __all__ = attach(__name__, {
+    "_cell": ("COLUMNS", "STATUSES", "run_cell"),
+    "_example": ("EXAMPLE_SPEC",),
+    "_executors": ("EXECUTORS",),
+    "_report": ("RULES", "heatmap_table", "leaderboard", "plot_fronts", "plot_heatmap", "plot_scatter", "write_report"),
+    "_map": ("parallel_map",),
+    "_run": ("GridRun", "run_grid"),
+    "_select": ("GrayboxSelection", "select_graybox"),
+    "_spec": ("BUNDLED", "CONSTRAINT_TYPES", "DECISION_RULES", "ESTIMATORS", "Cell", "DataSpec", "DecisionRule", "Grid",
+              "SpecError", "StructureSpec", "Variant"),
+    "_store": ("StoreError", "load_results"),
+})

@@ -22,8 +22,8 @@ from threadpoolctl import ThreadpoolController
 
 from .. import _api as gb
 
-from .._constraints import static_cluster_map
-from .._convex import numerator_surface
+from ..static._constraints import static_cluster_map
+from ..estimation._prediction_error import numerator_surface
 from ._spec import Cell, build_constraint, canonical_json
 
 __all__ = ["COLUMNS", "JSON_COLUMNS", "STATUSES", "run_cell", "failed_row"]

@@ -15,7 +15,7 @@ from concurrent.futures import ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
 
-from .._validation import check_int
+from ..core._validation import check_int
 from ._executors import _environ, _thread_env, local_cluster, worker_threads
 
 __all__ = ["parallel_map"]

@@ -11,7 +11,7 @@ from typing import Any, Mapping
 
 from .. import _api as gb
 
-from .._progress import progress_bar
+from ..core._progress import progress_bar
 from ._cell import STATUSES, failed_row, run_cell
 from ._executors import make_executor
 from ._spec import Grid

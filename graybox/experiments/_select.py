@@ -36,9 +36,9 @@ import pandas as pd
 
 from .. import _api as gb
 
-from .._io import register_type
-from .._static_form import static_degree, static_fit_mse, static_terms
-from .._validation import check_choice, check_int, check_real
+from ..io._json import register_type
+from ..static._form_check import static_degree, static_fit_mse, static_terms
+from ..core._validation import check_choice, check_int, check_real
 from ._report import leaderboard
 from ._run import run_grid
 from ._cell import cell_constraints

@@ -21,8 +21,8 @@ import numpy as np
 
 from .. import _api as gb
 
-from .._terms import default_input_names
-from .._validation import check_choice, check_int, check_lambdas, check_real
+from ..core._terms import default_input_names
+from ..core._validation import check_choice, check_int, check_lambdas, check_real
 
 __all__ = [
     "SpecError",

@@ -5,11 +5,12 @@ Save one with ``fig.savefig("name.png")``; in Jupyter, run ``%matplotlib inline`
 cell with ``fig`` (or call ``IPython.display.display(fig)``) to see it.
 """
 
-from ._data import plot_record, plot_static_curve
-from ._models import plot_free_run
-from ._pareto import plot_pareto
-from ._surfaces import plot_surface_contours, plot_surface_slices
-from ._trust import plot_decision_bootstrap, plot_residual_tests, plot_static_band
+from .._lazy import attach
 
-__all__ = ["plot_record", "plot_static_curve", "plot_free_run", "plot_pareto", "plot_residual_tests", "plot_static_band",
-           "plot_decision_bootstrap", "plot_surface_slices", "plot_surface_contours"]
+__getattr__, __dir__, __all__ = attach(__name__, {
+    "_data": ("plot_record", "plot_static_curve"),
+    "_models": ("plot_free_run",),
+    "_pareto": ("plot_pareto",),
+    "_surfaces": ("plot_surface_contours", "plot_surface_slices"),
+    "_trust": ("plot_decision_bootstrap", "plot_residual_tests", "plot_static_band"),
+})

@@ -13,8 +13,8 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .._curves import StaticCurve
-from .._records import Record, StaticPoints
+from ..static._curves import StaticCurve
+from ..core._records import Record, StaticPoints
 
 __all__ = ["plot_static_curve", "plot_record"]
 

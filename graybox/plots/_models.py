@@ -7,8 +7,8 @@ from typing import Mapping
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .._model import Model
-from .._records import Record
+from ..models._model import Model
+from ..core._records import Record
 
 __all__ = ["plot_free_run"]
 

@@ -15,7 +15,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .._pareto import ParetoSet, nondominated_mask
+from ..estimation._pareto import ParetoSet, nondominated_mask
 
 __all__ = ["plot_pareto"]
 

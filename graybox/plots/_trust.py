@@ -11,10 +11,10 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .._bootstrap import DecisionBootstrap
-from .._records import StaticPoints
-from .._residuals import ResidualTests
-from .._uncertainty import StaticCurveBand
+from ..diagnostics._bootstrap import DecisionBootstrap
+from ..core._records import StaticPoints
+from ..diagnostics._residuals import ResidualTests
+from ..diagnostics._uncertainty import StaticCurveBand
 
 __all__ = ["plot_residual_tests", "plot_static_band", "plot_decision_bootstrap"]
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
-from .._els import DEFAULT_NE, els
-from .._evaluate import evaluate
-from .._model import Model
-from .._records import Dataset, Record
-from .._selection import Selection, frols
-from .._terms import Candidates
+from ..estimation._extended_least_squares import DEFAULT_NE, els
+from ..models._evaluate import evaluate
+from ..models._model import Model
+from ..core._records import Dataset, Record
+from ..selection._forward_regression import Selection, frols
+from ..core._terms import Candidates
 from ..datasets import load_pumping
 
 __all__ = ["PAPER_BLACK_BOX", "black_box_models", "section_black_box"]

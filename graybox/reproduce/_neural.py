@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from .._evaluate import evaluate
-from .._neural import DEFAULT_EPOCHS, DEFAULT_SIM_EPOCHS, DEFAULT_WEIGHT_DECAY, PAPER_EPOCHS, neural_narx
-from .._records import Dataset
+from ..models._evaluate import evaluate
+from ..estimation._neural import DEFAULT_EPOCHS, DEFAULT_SIM_EPOCHS, DEFAULT_WEIGHT_DECAY, PAPER_EPOCHS, neural_narx
+from ..core._records import Dataset
 from ..datasets import load_pumping
 from ..plots import plot_free_run
 
@@ -56,7 +56,7 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
         f"seed 0: {fit.epochs} epochs, {fit.seconds:.2f} s incl. any first-call JIT compilation; "
         f"free-run RMSE on the training data {fit.rmse_sim:.4f} {yu}",
         f"paper's training: {PAPER_EPOCHS} epochs of nnnarmax2 (one-step prediction error) alone, D = 0: on "
-        "these data its free run degrades as the one-step fit improves (see graybox._neural's docstring)",
+        "these data its free run degrades as the one-step fit improves (see graybox.estimation._neural's docstring)",
         "paper (measured plant, not these data): " + ", ".join(f"{k} = {v}" for k, v in PAPER_NEURAL_ROW.items()),
         "seed 0:",
         table[cols].to_string(**fmt),

@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from .. import reference
-from .._evaluate import mse
-from .._static import equilibria
+from ..models._evaluate import mse
+from ..static._analysis import equilibria
 
 __all__ = ["section_reference_models"]
 

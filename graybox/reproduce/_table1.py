@@ -7,14 +7,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .._convex import cls as cls_fit, pe_pareto
-from .._curves import StaticCurve
-from .._decide import decide_dsf
-from .._els import els
-from .._evaluate import evaluate
-from .._se import GAOptions, se_pareto
-from .._selection import frols
-from .._terms import Candidates
+from ..estimation._prediction_error import cls as cls_fit, pe_pareto
+from ..static._curves import StaticCurve
+from ..estimation._decisions import decide_dsf
+from ..estimation._extended_least_squares import els
+from ..models._evaluate import evaluate
+from ..estimation._simulation_error import GAOptions, se_pareto
+from ..selection._forward_regression import frols
+from ..core._terms import Candidates
 from ..datasets import load_pumping
 from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
 

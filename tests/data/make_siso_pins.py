@@ -41,17 +41,17 @@ def _f(x) -> str:
 def compute_pins() -> dict:
     """Every pinned single-input result, as a JSON-able dict of strings."""
     from graybox import reference
-    from graybox._convex import cls as cls_fit, pe_pareto
-    from graybox._curves import StaticCurve
-    from graybox._decide import decide_dsf
-    from graybox._els import els
-    from graybox._evaluate import evaluate
-    from graybox._se import GAOptions, se_pareto
-    from graybox._selection import frols
-    from graybox._kernels import batch_sse, encode, free_run_sensitivity
-    from graybox._simulation import simulate_many
-    from graybox._static import equilibria
-    from graybox._terms import Candidates
+    from graybox.estimation._prediction_error import cls as cls_fit, pe_pareto
+    from graybox.static._curves import StaticCurve
+    from graybox.estimation._decisions import decide_dsf
+    from graybox.estimation._extended_least_squares import els
+    from graybox.models._evaluate import evaluate
+    from graybox.estimation._simulation_error import GAOptions, se_pareto
+    from graybox.selection._forward_regression import frols
+    from graybox.core._simulation_kernels import batch_sse, encode, free_run_sensitivity
+    from graybox.core._simulation import simulate_many
+    from graybox.static._analysis import equilibria
+    from graybox.core._terms import Candidates
     from graybox.datasets import load_pumping
 
     out: dict = {}

@@ -52,16 +52,16 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from ._decide import Decision
-from ._els import ELSResult
-from ._model import Model
-from ._neural import NeuralFit, NeuralModel
-from ._pareto import ParetoSet
-from ._se_dsf import DSFResult
-from ._selection import Selection
-from ._semp import SEMPResult
-from ._terms import Structure, parse_term
-from ._uncertainty import ParameterUncertainty, StaticCurveBand
+from ..estimation._decisions import Decision
+from ..estimation._extended_least_squares import ELSResult
+from ..models._model import Model
+from ..estimation._neural import NeuralFit, NeuralModel
+from ..estimation._pareto import ParetoSet
+from ..estimation._epsilon_constraint import DSFResult
+from ..selection._forward_regression import Selection
+from ..selection._simulation_error_pruning import SEMPResult
+from ..core._terms import Structure, parse_term
+from ..diagnostics._uncertainty import ParameterUncertainty, StaticCurveBand
 
 __all__ = ["FORMAT_VERSION", "GrayboxFileError", "save", "load", "to_json", "from_json", "read_header"]
 

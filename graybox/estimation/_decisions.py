@@ -11,12 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._model import Model
+from ..models._model import Model
 from ._pareto import ParetoSet
-from ._records import Record
-from ._regressors import regressor_matrix
-from ._simulation import simulate_many
-from ._validation import check_choice
+from ..core._records import Record
+from ..core._regressors import regressor_matrix
+from ..core._simulation import simulate_many
+from ..core._validation import check_choice
 
 __all__ = ["Decision", "decide_dsf", "decide_min_correlation", "FALLBACKS"]
 

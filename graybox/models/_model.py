@@ -7,11 +7,13 @@ from typing import Literal
 
 import numpy as np
 
-from . import _simulation, _static, _static_surface
-from ._latex import latex_equation
-from ._records import Record
-from ._validation import check_theta, frozen
-from ._terms import Structure, check_input_names
+from ..core import _simulation
+from ..static import _analysis as _static
+from ..static import _surface_analysis as _static_surface
+from ..core._equation_text import latex_equation
+from ..core._records import Record
+from ..core._validation import check_theta, frozen
+from ..core._terms import Structure, check_input_names
 
 __all__ = ["Model"]
 
@@ -77,7 +79,7 @@ class Model:
 
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record) -> np.ndarray:
-        """One-step-ahead prediction over ``record``, shape (N,); see :func:`graybox._simulation.predict`."""
+        """One-step-ahead prediction over ``record``, shape (N,); see :func:`graybox.core._simulation.predict`."""
         return _simulation.predict(self.structure, self.theta, record)
 
     @property
@@ -92,7 +94,7 @@ class Model:
         *,
         on_diverge: Literal["raise", "nan"] = "raise",
     ) -> np.ndarray:
-        """Free run, shape (N,); see :func:`graybox._simulation.simulate`.
+        """Free run, shape (N,); see :func:`graybox.core._simulation.simulate`.
 
         ``u`` is a Record (inputs taken by name) or an array of shape (N,) or (N, m) with the
         columns in ``input_names`` order.
@@ -121,10 +123,10 @@ class Model:
         return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
-        """Steady-state output at each ū, shape (M,); see :func:`graybox._static.static_curve`.
+        """Steady-state output at each ū, shape (M,); see :func:`graybox.static._analysis.static_curve`.
 
         With several inputs, the static surface at the points ``ubar`` of shape (M, m)
-        (:func:`graybox._static_surface.static_surface`).
+        (:func:`graybox.static._surface_analysis.static_surface`).
         """
         if self.n_inputs > 1:
             return _static_surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,

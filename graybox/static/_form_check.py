@@ -22,13 +22,13 @@ from __future__ import annotations
 import numpy as np
 
 from ._curves import StaticCurve
-from ._records import StaticPoints
-from ._static import cluster_name
-from ._static_surface import surface_cluster_key, surface_cluster_name
-from ._ls import scaled_lstsq
+from ..core._records import StaticPoints
+from ._analysis import cluster_name
+from ._surface_analysis import surface_cluster_key, surface_cluster_name
+from ..core._least_squares import scaled_lstsq
 from ._surfaces import StaticSurface, _monomials, monomial_exponents
-from ._terms import Structure, Term
-from ._validation import check_int, check_real
+from ..core._terms import Structure, Term
+from ..core._validation import check_int, check_real
 
 __all__ = ["static_degree", "static_fit_mse", "static_terms"]
 

@@ -5,7 +5,7 @@ Both problems are least squares in θ with static information that is affine in 
 
 - **CLS**: min J_1(θ) subject to static equalities (the rational static function equals a
   polynomial curve, eq. (22); or it passes through given points) and any of the constraint
-  constraint objects (:class:`graybox.StaticBand` …, module `graybox._constraints`).
+  constraint objects (:class:`graybox.StaticBand` …, module `graybox.static._constraints`).
 - **PE**: min λ1 J_1(θ) + λ2 J_SF^QR(θ), λ2 = 1 − λ1, over a sweep of λ1, with
   ``J_1 = ‖Ψθ − y‖²/N`` and ``J_SF^QR = ‖QRθ − ȳ‖²/N_SF`` (the static-equation error that is
   affine in θ; for a rational model it is the true static error times the denominator D(ū)).
@@ -38,7 +38,7 @@ import scipy.linalg
 import scipy.linalg.lapack
 import scipy.sparse
 
-from ._constraints import (
+from ..static._constraints import (
     AffineRows,
     CurveEquality,
     InfeasibleError,
@@ -53,17 +53,17 @@ from ._constraints import (
     static_inputs,
     static_rows,
 )
-from ._curves import StaticCurve
-from ._els import els
-from ._surfaces import StaticSurface
-from ._ls import column_scales
-from ._model import Model
+from ..static._curves import StaticCurve
+from ._extended_least_squares import els
+from ..static._surfaces import StaticSurface
+from ..core._least_squares import column_scales
+from ..models._model import Model
 from ._pareto import ParetoSet
-from ._records import Dataset, Record, StaticPoints, check_same_inputs, warn_static_range
-from ._gram import as_gram_records, available_memory, is_dask_data, r_factor
-from ._regressors import stacked_regressors
-from ._terms import Structure
-from ._validation import check_choice, check_lambdas
+from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, warn_static_range
+from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
+from ..core._regressors import stacked_regressors
+from ..core._terms import Structure
+from ..core._validation import check_choice, check_lambdas
 
 __all__ = [
     "SOLVERS",

@@ -14,9 +14,9 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ._ls import scaled_lstsq
-from ._records import StaticPoints
-from ._validation import check_int
+from ..core._least_squares import scaled_lstsq
+from ..core._records import StaticPoints
+from ..core._validation import check_int
 
 __all__ = ["StaticSurface", "monomial_exponents"]
 

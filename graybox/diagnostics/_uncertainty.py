@@ -50,17 +50,17 @@ import pandas as pd
 from scipy import stats
 from threadpoolctl import ThreadpoolController
 
-from ._constraints import StaticConstraint, static_rows
-from ._convex import _cls_setup, _dynamic, _pe_setup, _process_structure
-from ._curves import StaticCurve
-from ._decide import Decision
-from ._model import Model
-from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
-from ._regressors import regressor_matrix, stacked_regressors
+from ..static._constraints import StaticConstraint, static_rows
+from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure
+from ..static._curves import StaticCurve
+from ..estimation._decisions import Decision
+from ..models._model import Model
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ..core._regressors import regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
-from ._se import SEProblem
-from ._static import cluster_key, cluster_map, reached_equilibria, static_theta_gradient
-from ._validation import check_choice, check_int, check_real, check_seed, frozen, warn
+from ..estimation._simulation_error import SEProblem
+from ..static._analysis import cluster_key, cluster_map, reached_equilibria, static_theta_gradient
+from ..core._validation import check_choice, check_int, check_real, check_seed, frozen, warn
 
 __all__ = [
     "ParameterUncertainty",

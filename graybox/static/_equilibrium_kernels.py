@@ -12,7 +12,7 @@
   did not settle within the step budget). Two recursions share it: a polynomial model with its
   input folded into the coefficients, and a one-hidden-layer tanh network.
 
-Nothing here validates input: :mod:`graybox._static` and :mod:`graybox._neural` do.
+Nothing here validates input: :mod:`graybox.static._analysis` and :mod:`graybox.estimation._neural` do.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ __all__ = [
 
 #: Kinds of recursion understood by :func:`settle_runs`.
 POLY, NET = 0, 1
-#: Outcomes of :func:`settle_runs` (codes shared with :class:`graybox._static.Reached`).
+#: Outcomes of :func:`settle_runs` (codes shared with :class:`graybox.static._analysis.Reached`).
 REACHED, DIVERGED, NOT_SETTLED = 0, 3, 4
 
 
@@ -79,7 +79,7 @@ def stable_equilibria(ny, ylag, mu, thetas, ubar, ybar, L):  # pragma: no cover 
 
     Builds the linearised recursion's coefficients a_l = Σ_t θ_t ∂φ_t/∂y(k-l) at (ȳ, ū) and applies
     :func:`_schur_cohn` to z^L − a_1 z^(L−1) − … − a_L. ``mu[t]`` is term t's input power,
-    ``ny``/``ylag`` as in :class:`graybox._kernels.Code`. Non-finite ȳ counts as unstable.
+    ``ny``/``ylag`` as in :class:`graybox.core._simulation_kernels.Code`. Non-finite ȳ counts as unstable.
     """
     P, T = thetas.shape
     M = ubar.shape[0]

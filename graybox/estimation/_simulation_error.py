@@ -21,7 +21,7 @@ checkpoint written for another problem is refused.
 
 Inside the optimisers J_S is computed by the fused batch kernel (same definition as
 :func:`graybox.js`) and J_SF by the package's one static definition
-(:func:`graybox._static.reached_equilibria`): at each static point the equilibrium a free run at
+(:func:`graybox.static._analysis.reached_equilibria`): at each static point the equilibrium a free run at
 constant ū_i from the measured ȳ_i settles on; where it settles on none the cost is infinite — a
 model does not settle on an unstable equilibrium, nor on a stable one whose basin does not hold
 ȳ_i, so matching the static points there would be a false gain. The reported front is
@@ -45,18 +45,33 @@ from scipy.linalg.lapack import dgeqrf
 from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
-from ._convex import pe_thetas
-from ._kernels import (batch_sse, encode, free_run_sensitivity, free_run_sensitivity_blocks, input_products,
-                       record_inputs, simulate_one)
-from ._ls import column_scales, scaled_lstsq
+from ._prediction_error import pe_thetas
+from ..core._simulation_kernels import (
+    batch_sse,
+    encode,
+    free_run_sensitivity,
+    free_run_sensitivity_blocks,
+    input_products,
+    record_inputs,
+    simulate_one,
+)
+from ..core._least_squares import column_scales, scaled_lstsq
 from ._pareto import ParetoSet
-from ._progress import progress_bar
-from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_inputs, warn_static_range
-from ._regressors import stacked_regressors
-from ._static import reached_equilibria, static_theta_gradient
-from ._static_surface import reached_surface, surface_theta_gradient
-from ._terms import Structure
-from ._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
+from ..core._progress import progress_bar
+from ..core._records import (
+    Dataset,
+    Record,
+    StaticPoints,
+    StaticRangeWarning,
+    as_records,
+    check_same_inputs,
+    warn_static_range,
+)
+from ..core._regressors import stacked_regressors
+from ..static._analysis import reached_equilibria, static_theta_gradient
+from ..static._surface_analysis import reached_surface, surface_theta_gradient
+from ..core._terms import Structure
+from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
 
@@ -123,7 +138,7 @@ class SEProblem:
     def static_outputs(self, thetas: np.ndarray) -> np.ndarray:
         """The equilibrium each row reaches from each measured ȳ_i (NaN where none), shape (P, M).
 
-        :func:`graybox._static.reached_equilibria` with y0 = ȳ_i: the definition of J_SF.
+        :func:`graybox.static._analysis.reached_equilibria` with y0 = ȳ_i: the definition of J_SF.
         """
         if self.surface_inputs is not None:
             return reached_surface(self.structure, np.atleast_2d(thetas), self.static.ubar, self.static.ybar,
@@ -896,7 +911,7 @@ def se_pareto(
     max_nfev, tol, solver, starts : optional
         Gradient only: evaluations per ``least_squares`` run (default 50), its tolerances
         (1e-8), its method (``"auto"``: "trf" and "dogbox" wherever the fit restarts, "trf" along
-        the sweep; see :func:`graybox._se.gradient_front`), and further starting points (default:
+        the sweep; see :func:`graybox.estimation._simulation_error.gradient_front`), and further starting points (default:
         PE solutions).
 
     Returns

@@ -44,13 +44,13 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ._convex import PE_LAMBDAS, pe_pareto
-from ._decide import FALLBACKS, decide_dsf
-from ._progress import progress_bar
-from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
-from ._se import SE_LAMBDAS, se_pareto
-from ._terms import Structure
-from ._validation import check_choice, check_int, check_lambdas, check_real, check_seed, frozen
+from ..estimation._prediction_error import PE_LAMBDAS, pe_pareto
+from ..estimation._decisions import FALLBACKS, decide_dsf
+from ..core._progress import progress_bar
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
+from ..core._terms import Structure
+from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, frozen
 
 __all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
 

@@ -7,7 +7,7 @@ range of the dynamic data), yields
 
 - :meth:`StaticConstraint.affine`: rows ``A_eq θ = b_eq`` and ``A_ub θ <= b_ub`` in
   engineering units (all built-in variants are affine in θ), which the estimators in
-  the convex estimators (`graybox._convex`) scale and normalise before handing them to a solver, and which the
+  the convex estimators (`graybox.estimation._prediction_error`) scale and normalise before handing them to a solver, and which the
   closed forms use directly (equalities);
 - :meth:`StaticConstraint.constraints`: cvxpy constraints on a θ expression;
 - :meth:`StaticConstraint.violation`: how far a given θ is from satisfying it.
@@ -46,11 +46,11 @@ import cvxpy as cp
 import numpy as np
 
 from ._curves import StaticCurve
-from ._records import StaticPoints
+from ..core._records import StaticPoints
 from ._surfaces import StaticSurface
-from ._static import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
-from ._static_surface import SurfaceClusterMap, surface_cluster_map, surface_static_rows
-from ._terms import Structure
+from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
+from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
+from ..core._terms import Structure
 
 __all__ = [
     "InfeasibleError",

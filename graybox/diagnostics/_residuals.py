@@ -60,11 +60,11 @@ import numpy as np
 import pandas as pd
 from scipy import signal, stats
 
-from ._model import Model
-from ._neural import NeuralModel
-from ._records import Dataset, Record, as_records
-from ._regressors import record_signals, regressor_matrix
-from ._validation import check_choice, check_int, check_real
+from ..models._model import Model
+from ..estimation._neural import NeuralModel
+from ..core._records import Dataset, Record, as_records
+from ..core._regressors import record_signals, regressor_matrix
+from ..core._validation import check_choice, check_int, check_real
 
 __all__ = ["CorrelationTest", "ResidualTests", "residual_tests", "one_step_residuals", "TESTS"]
 

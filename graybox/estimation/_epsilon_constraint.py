@@ -39,12 +39,12 @@ from typing import Sequence
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from ._convex import pe_thetas
-from ._model import Model
-from ._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
-from ._se import SEProblem, _Failed, _multistart, _pe_members, _pe_starts, gradient_front
-from ._terms import Structure
-from ._validation import check_int, check_lambdas, check_real, check_theta, warn
+from ._prediction_error import pe_thetas
+from ..models._model import Model
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
+from ._simulation_error import SEProblem, _Failed, _multistart, _pe_members, _pe_starts, gradient_front
+from ..core._terms import Structure
+from ..core._validation import check_int, check_lambdas, check_real, check_theta, warn
 
 __all__ = ["se_dsf", "DSFResult"]
 

@@ -12,7 +12,7 @@ from typing import Literal
 
 import numpy as np
 
-from ._kernels import encode, record_inputs, simulate_batch, simulate_one
+from ._simulation_kernels import encode, record_inputs, simulate_batch, simulate_one
 from ._records import Record, as_input_array
 from ._terms import check_input_names, default_input_names
 from ._validation import as_1d_finite, check_choice, check_theta

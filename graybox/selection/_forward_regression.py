@@ -18,7 +18,7 @@ How it is computed, and why
 * For long records (``method="gram"``, what ``"auto"`` picks once the candidate matrix would
   exceed 32 MiB, and for Dask records) the same selection runs in the covariance form
   (Korenberg's fast orthogonal search): ΨᵀΨ, Ψᵀy and yᵀy are accumulated over chunks of rows
-  in one pass (:mod:`graybox._gram`), scaled to unit-RMS columns, and the orthogonalisation is
+  in one pass (:mod:`graybox.core._gram`), scaled to unit-RMS columns, and the orthogonalisation is
   a pivoted Cholesky factorisation of that n × n matrix, O(n·k) a step whatever N. Memory does
   not grow with N. The Gram matrix squares the conditioning, so it only *ranks* the
   candidates (an orthogonalised energy below 1e-11 N is treated as a linear combination); the
@@ -54,10 +54,10 @@ import numba as nb
 import numpy as np
 import pandas as pd
 
-from ._model import Model
-from ._records import Dataset, Record
-from ._terms import Structure, Term, parse_term
-from ._gram import (
+from ..models._model import Model
+from ..core._records import Dataset, Record
+from ..core._terms import Structure, Term, parse_term
+from ..core._gram import (
     DaskRecord,
     as_gram_records,
     chunk_bytes,
@@ -69,8 +69,8 @@ from ._gram import (
     require_memory,
     term_factors,
 )
-from ._regressors import check_structure_inputs, record_signals
-from ._validation import check_choice
+from ..core._regressors import check_structure_inputs, record_signals
+from ..core._validation import check_choice
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -268,7 +268,7 @@ class Selection:
 def _candidate_matrix(terms: Sequence[Term], records: list[Record], start: int) -> tuple[np.ndarray, np.ndarray]:
     """Candidate columns over all records, Fortran-ordered (rows, n), and the target.
 
-    Built chunk by chunk of rows (see :func:`graybox._gram.fill_columns`): each monomial is one
+    Built chunk by chunk of rows (see :func:`graybox.core._gram.fill_columns`): each monomial is one
     multiply of a lower-degree monomial by a lagged signal, and the prefixes kept for that live
     only as long as one chunk, so the peak is the matrix plus one chunk's worth.
     """

@@ -37,12 +37,12 @@ import numpy as np
 import pandas as pd
 import scipy.linalg
 
-from ._kernels import batch_sse, encode, input_products, record_inputs
-from ._model import Model
-from ._records import Dataset, Record, as_records
-from ._selection import CRITERIA
-from ._terms import Structure, Term
-from ._validation import check_choice, check_int, check_real, frozen
+from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
+from ..models._model import Model
+from ..core._records import Dataset, Record, as_records
+from ._forward_regression import CRITERIA
+from ..core._terms import Structure, Term
+from ..core._validation import check_choice, check_int, check_real, frozen
 
 __all__ = ["semp", "SEMPResult"]
 

@@ -10,7 +10,7 @@ whose coefficients are the cluster coefficients Σ = R θ of the clusters Ω_{y^
 
 One definition, shared with the single-input case: at a fixed ū the input part of every term is
 a number, so the model is, for its statics, a single-input model at ū' = 1 whose parameters are
-θ_t · ū_1^a_t1 ⋯ ū_m^a_tm (the inputs folded into θ, as :func:`graybox._static.reached_equilibria`
+θ_t · ū_1^a_t1 ⋯ ū_m^a_tm (the inputs folded into θ, as :func:`graybox.static._analysis.reached_equilibria`
 already does for one input). Every static question at a point of the surface — the real roots,
 their stability (the Schur–Cohn test), the equilibrium a free run from y0 settles on — is
 answered by the single-input code on that folded model: one implementation, one definition of
@@ -27,9 +27,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import _static
-from ._static import Equilibrium, Reached
-from ._terms import Structure, Term, check_input_names
+from . import _analysis as _static
+from ._analysis import Equilibrium, Reached
+from ..core._terms import Structure, Term, check_input_names
 
 __all__ = [
     "SurfaceClusterMap",
@@ -65,7 +65,7 @@ def _powers(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
 
 def surface_cluster_key(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
     """(power of y, power of each of ``inputs``) of a process term: its cluster Σ_{y^p u1^a1 ⋯ um^am}
-    (with one input, :func:`graybox._static.cluster_key`)."""
+    (with one input, :func:`graybox.static._analysis.cluster_key`)."""
     if term.is_noise:
         raise ValueError(f"noise term {term} has no cluster")
     return (term.power_of("y"),) + _powers(term, inputs)
@@ -219,7 +219,7 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
                     inputs: tuple[str, ...] | None = None) -> Reached:
     """The equilibrium each member reaches at each point ū_j from the constant initial output y0_j.
 
-    The definition of :func:`graybox._static.reached_equilibria`, at points of input space.
+    The definition of :func:`graybox.static._analysis.reached_equilibria`, at points of input space.
 
     Parameters
     ----------
@@ -259,7 +259,7 @@ def static_surface(
 ) -> np.ndarray:
     """The steady state the model reaches at each constant input vector: the static surface ȳ(ū).
 
-    As :func:`graybox._static.static_curve` at points of input space: with ``y0``, the equilibrium
+    As :func:`graybox.static._analysis.static_curve` at points of input space: with ``y0``, the equilibrium
     a free run at constant ū started from y0 settles on; without it, the unique stable
     equilibrium (rational structures: the equilibrium of eq. (6) when it is stable).
 

@@ -68,7 +68,7 @@ result then passes the same stopping rule, so the estimate
 is the same fixed point that the relaxed iteration reaches whenever it converges; results
 on short records, where it converges by itself, are unchanged.
 
-Every least-squares solve works on unit-RMS columns (:func:`graybox._ls.column_scales`; the
+Every least-squares solve works on unit-RMS columns (:func:`graybox.core._least_squares.column_scales`; the
 process block is QR-factored once and reused), so parameters come back in engineering units
 without loss of precision.
 """
@@ -84,14 +84,14 @@ import numpy as np
 from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
-from ._kernels import inverse_ma_filter
-from ._ls import column_scales, scaled_lstsq
-from ._model import Model
-from ._records import Dataset, Record, as_records
-from ._regressors import regressor_matrix, stacked_regressors
-from ._selection import Selection
-from ._terms import Structure, Term
-from ._validation import check_int, check_real, frozen
+from ..core._simulation_kernels import inverse_ma_filter
+from ..core._least_squares import column_scales, scaled_lstsq
+from ..models._model import Model
+from ..core._records import Dataset, Record, as_records
+from ..core._regressors import regressor_matrix, stacked_regressors
+from ..selection._forward_regression import Selection
+from ..core._terms import Structure, Term
+from ..core._validation import check_int, check_real, frozen
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 

@@ -108,12 +108,12 @@ units, every real root lies in |ȳ − b2| ≤ Σ|w2| (normalised units): that i
 a fine grid and each sign change is refined with Brent's method, so no equilibrium outside a
 guessed bracket is missed. Local stability comes from the linearisation
 y(k) = Σ_i a_i y(k-i), a_i = ∂f/∂y(k-i), decided by the package's one stability test (the
-Schur–Cohn recursion, :func:`graybox._static.schur_stable`). A stable equilibrium always has
+Schur–Cohn recursion, :func:`graybox.static._analysis.schur_stable`). A stable equilibrium always has
 ∂g/∂ȳ < 1, i.e. F = g − ȳ crosses zero downwards, so a tangent (double) root — which the grid can
 miss — is never a stable one. Two distinct roots closer together than the grid spacing (2·10⁻³
 normalised output units, i.e. 2·10⁻³ standard deviations of the training output, or finer) can
 still be missed. The static output at a static point is, as for every model of the package, the
-equilibrium a free run at constant ū from y0 settles on (:func:`graybox._static.settle`, the one
+equilibrium a free run at constant ū from y0 settles on (:func:`graybox.static._analysis.settle`, the one
 checked settling routine; tolerances in normalised units).
 """
 
@@ -127,10 +127,10 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from ._records import Dataset, Record, as_records
-from ._validation import as_1d_finite, check_choice, check_int, check_per_point, check_real, check_seed, frozen
-from ._simulation import DivergenceError, free_run_inputs
-from ._static import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
+from ..core._records import Dataset, Record, as_records
+from ..core._validation import as_1d_finite, check_choice, check_int, check_per_point, check_real, check_seed, frozen
+from ..core._simulation import DivergenceError, free_run_inputs
+from ..static._analysis import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
 
 __all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
 
@@ -615,7 +615,7 @@ class NeuralModel:
     def equilibria(self, ubar: float) -> list[Equilibrium]:
         """Every real equilibrium at constant input ``ubar`` (input units), sorted by ȳ, with stability.
 
-        Stability is decided by :func:`graybox._static.schur_stable` on the linearisation (the test
+        Stability is decided by :func:`graybox.static._analysis.schur_stable` on the linearisation (the test
         every model of the package uses); the spectral radius is given for information.
         """
         ub = float(as_1d_finite([ubar], "ubar")[0])
@@ -631,7 +631,7 @@ class NeuralModel:
 
         Conventions of :func:`graybox.static_curve`. With ``y0``: the equilibrium a free run at
         constant ū, with every initial output equal to ``y0``, settles on (the package's one
-        settling routine, :func:`graybox._static.settle`, checks that it does). Without it: the
+        settling routine, :func:`graybox.static._analysis.settle`, checks that it does). Without it: the
         stable equilibrium when there is exactly one.
 
         Parameters

@@ -45,13 +45,19 @@ from typing import ClassVar
 
 import numpy as np
 
-from ._kernels import encode
-from ._static_kernels import (
-    DIVERGED, NET, POLY, REACHED, real_roots_upto_cubic, schur_stable_rows, settle_runs,
+from ..core._simulation_kernels import encode
+from ._equilibrium_kernels import (
+    DIVERGED,
+    NET,
+    POLY,
+    REACHED,
+    real_roots_upto_cubic,
+    schur_stable_rows,
+    settle_runs,
     stable_equilibria,
 )
-from ._terms import Structure, Term
-from ._validation import as_1d_finite, check_per_point
+from ..core._terms import Structure, Term
+from ..core._validation import as_1d_finite, check_per_point
 
 __all__ = [
     "cluster_key",
@@ -105,7 +111,7 @@ _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 def cluster_key(term: Term) -> tuple[int, int]:
     """(power of y, power of the input) of a process term of a single-input model: its cluster Ω_{y^p u^m}.
 
-    The input may have any name; for several inputs see :func:`graybox._static_surface.surface_cluster_map`.
+    The input may have any name; for several inputs see :func:`graybox.static._surface_analysis.surface_cluster_map`.
     """
     if term.is_noise:
         raise ValueError(f"noise term {term} has no cluster")
@@ -165,7 +171,7 @@ def cluster_map(structure: Structure) -> ClusterMap:
     """Build the :class:`ClusterMap` of the process terms of ``structure`` (cached: it is immutable).
 
     Single-input structures only (a structure with several inputs has a static *surface*:
-    :func:`graybox._static_surface.surface_cluster_map`); ``ValueError`` otherwise.
+    :func:`graybox.static._surface_analysis.surface_cluster_map`); ``ValueError`` otherwise.
     """
     if len(structure.inputs) > 1:
         raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its static function "
@@ -291,7 +297,7 @@ def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np
     """Every real root of eq. (5) for many members and points: the candidate equilibria.
 
     Degree ≤ 3 (every quadratic and cubic structure): closed forms, compiled
-    (:func:`graybox._static_kernels.real_roots_upto_cubic`). Degree >= 4: companion-matrix
+    (:func:`graybox.static._equilibrium_kernels.real_roots_upto_cubic`). Degree >= 4: companion-matrix
     eigenvalues. Both balance the variable first, so the result does not depend on units.
 
     Parameters
@@ -610,7 +616,7 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     equilibrium) of one of its stable equilibria, or it creeps towards one so slowly that its
     increments vanish and Newton's method on the static equation lands on it; it is stopped as
     diverged (|y| beyond 10⁶ times the pair's scale) or as not settled after ``SETTLE_STEPS``
-    steps (:func:`graybox._static_kernels.settle_runs`, whose docstring gives ``kind``, ``ip``
+    steps (:func:`graybox.static._equilibrium_kernels.settle_runs`, whose docstring gives ``kind``, ``ip``
     and ``fp``). Pairs with no stable equilibrium are not run: they settle on none.
 
     Parameters

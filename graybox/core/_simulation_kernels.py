@@ -16,8 +16,8 @@ work buffer (shape (N, P)) so that every term update is a unit-stride loop that
 LLVM vectorises; the input-only part of each term is computed once per sample
 and shared by the whole population.
 
-Nothing here validates input: callers in :mod:`graybox._simulation` do. The static-analysis kernels
-(roots, stability, settling runs) live in :mod:`graybox._static_kernels`.
+Nothing here validates input: callers in :mod:`graybox.core._simulation` do. The static-analysis kernels
+(roots, stability, settling runs) live in :mod:`graybox.static._equilibrium_kernels`.
 """
 
 from __future__ import annotations

@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._ls import scaled_lstsq
-from ._records import StaticPoints
-from ._validation import as_1d_finite
+from ..core._least_squares import scaled_lstsq
+from ..core._records import StaticPoints
+from ..core._validation import as_1d_finite
 
 __all__ = ["StaticCurve"]
 

@@ -12,7 +12,7 @@ Dynamic errors are counted from sample ``max_lag`` on (the samples before are in
 conditions copied from the data, so their error is zero by construction). A free run that
 diverges has J_S = inf. J_SF counts, at each static point (ū_i, ȳ_i), the equilibrium the model
 actually reaches: the one a free run at constant ū_i, started with every initial condition equal
-to the measured ȳ_i, settles on (:func:`graybox._static.reached_equilibria`). A point where it
+to the measured ȳ_i, settles on (:func:`graybox.static._analysis.reached_equilibria`). A point where it
 settles on none (no stable equilibrium, the run diverges or does not settle) makes J_SF = inf,
 with a warning naming ū and why. Neither is a made-up number: both errors are unbounded.
 """
@@ -25,14 +25,14 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from ._kernels import batch_sse, encode, record_inputs
+from ..core._simulation_kernels import batch_sse, encode, record_inputs
 from ._model import Model
-from ._regressors import regressor_matrix
-from ._records import Dataset, Record, StaticPoints, static_point_inputs
-from ._simulation import DivergenceError
-from ._static import reached_equilibria
-from ._static_surface import reached_surface
-from ._terms import Structure
+from ..core._regressors import regressor_matrix
+from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
+from ..core._simulation import DivergenceError
+from ..static._analysis import reached_equilibria
+from ..static._surface_analysis import reached_surface
+from ..core._terms import Structure
 
 __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
 

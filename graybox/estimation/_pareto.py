@@ -15,11 +15,11 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ._evaluate import evaluate_thetas
-from ._model import Model
-from ._records import Dataset, Record, StaticPoints, as_records
-from ._validation import frozen
-from ._terms import Structure
+from ..models._evaluate import evaluate_thetas
+from ..models._model import Model
+from ..core._records import Dataset, Record, StaticPoints, as_records
+from ..core._validation import frozen
+from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
 

@@ -1,0 +1,10 @@
+"""Diagnostics: residual correlation tests, parameter and static-curve uncertainty, bootstrap of a decision."""
+
+from .._lazy import attach
+
+__getattr__, __dir__, __all__ = attach(__name__, {
+    "_residuals": ("CorrelationTest", "ResidualTests", "one_step_residuals", "residual_tests"),
+    "_uncertainty": ("ParameterUncertainty", "StaticCurveBand", "UncertaintyWarning", "cls_uncertainty",
+                     "ls_uncertainty", "pe_uncertainty", "se_uncertainty", "static_curve_band"),
+    "_bootstrap": ("DecisionBootstrap", "bootstrap_decision"),
+})
