@@ -120,3 +120,23 @@ def layout_table() -> str:
     lines = ["| package | owns |", "| --- | --- |"]
     lines += [f"| `graybox{'' if u == '__init__' else '.' + u}` | {owns} |" for u, owns in rows]
     return "\n".join(lines)
+
+
+def test_import_graybox_loads_no_heavy_dependency():
+    """`import graybox` is lazy: numba, cvxpy, pandas, matplotlib and scipy load on first use of a name."""
+    import subprocess
+    import sys
+
+    code = ("import sys, graybox; heavy = [m for m in ('numba', 'cvxpy', 'pandas', 'matplotlib', 'scipy', 'dask')"
+            " if m in sys.modules]; print(','.join(heavy))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "", f"import graybox loaded {out}"
+
+
+def test_every_public_name_resolves():
+    import graybox as gb
+
+    for name in gb.__all__:
+        assert getattr(gb, name) is not None, name
+    with pytest.raises(AttributeError, match="module 'graybox' has no attribute 'nope'"):
+        gb.nope  # noqa: B018
