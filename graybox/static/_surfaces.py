@@ -168,6 +168,8 @@ class StaticSurface:
         input_names : sequence of str, optional
             Input names (default: the points', else u1 … um).
 
+        Notes
+        -----
         The domain is the box spanned by the points. Needs at least as many points as monomials,
         spread so that the monomials are identifiable (else ``ValueError``).
         """

@@ -1,0 +1,139 @@
+"""Sphinx configuration of graybox's documentation site.
+
+Build: ``python -m sphinx -W --keep-going -b html docs docs/_build/html`` (tests/test_docs.py runs
+the same build, warnings as errors). The API reference is generated at build time from the public
+names each subpackage exports (its ``__all__``), grouped by concern in the layer order of
+``graybox/_layers.py``; the notebooks are copied with ``QUICK = True`` and executed by myst-nb.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import shutil
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(ROOT))
+
+import graybox  # noqa: E402
+from graybox._layers import LAYERS  # noqa: E402
+
+project = "graybox"
+author = "the graybox developers"
+copyright = "2026, the graybox developers"
+release = graybox.__version__
+
+extensions = ["sphinx.ext.autodoc", "sphinx.ext.autosummary", "sphinx.ext.napoleon", "sphinx.ext.mathjax",
+              "myst_nb"]
+exclude_patterns = ["_build", "**.ipynb_checkpoints"]
+html_theme = "alabaster"
+html_title = "graybox"
+html_static_path: list[str] = []
+
+autodoc_default_options = {"members": True, "undoc-members": False, "show-inheritance": False}
+autodoc_typehints = "description"
+autodoc_member_order = "bysource"
+autosummary_generate = False
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+napoleon_use_rtype = False
+# Dataclass fields are documented in their class's Parameters/Attributes sections; numpy-style
+# "Attributes" sections would list them a second time as directives.
+napoleon_use_ivar = True
+# Attribute names repeat across classes (``n_terms`` of a Selection and of a StructureSpec); a field
+# type naming one is ambiguous to Sphinx but harmless to a reader.
+suppress_warnings = ["myst.header", "ref.python"]
+
+myst_enable_extensions = ["dollarmath"]
+nb_execution_mode = "force"
+nb_execution_raise_on_error = True
+nb_execution_timeout = 600
+nb_execution_show_tb = True
+nb_merge_streams = True
+
+# --- the API reference, written from the public names --------------------------------------------
+#: Public subpackages in the reference, in layer order (top-level names are re-exports of these).
+API_PACKAGES = [unit for unit, _, _ in LAYERS if not unit.startswith("_") and unit not in ("reference",
+                                                                                           "reproduce")]
+OWNS = {unit: owns for unit, _, owns in LAYERS}
+
+
+def _write_api() -> None:
+    out = HERE / "api"
+    shutil.rmtree(out, ignore_errors=True)
+    out.mkdir()
+    index = ["API reference", "=============", "",
+             "Every name below is also exported from :mod:`graybox` itself (``import graybox as gb``), except",
+             "those of :mod:`graybox.plots` and :mod:`graybox.experiments` (and the simulators of",
+             ":mod:`graybox.datasets`), which are used through their subpackage. The subpackages are listed",
+             "bottom layer first: each uses only those before it.", "", ".. toctree::", "   :maxdepth: 1", ""]
+    for unit in API_PACKAGES:
+        mod = importlib.import_module(f"graybox.{unit}")
+        names = sorted(mod.__all__, key=lambda n: (not n[0].isupper(), n.lower()))
+        title = f"graybox.{unit}"
+        lines = [title, "=" * len(title), "", f".. module:: graybox.{unit}", "", OWNS[unit][0].upper() + OWNS[unit][1:]
+                 + ".", ""]
+        for name in names:
+            obj = getattr(mod, name)
+            if isinstance(obj, type):
+                directive = "autoexception" if issubclass(obj, BaseException) else "autoclass"
+            elif callable(obj):
+                directive = "autofunction"
+            else:
+                lines += [f".. py:data:: graybox.{unit}.{name}", "", *_data_doc(unit, name, obj), ""]
+                continue
+            lines += [f".. {directive}:: graybox.{unit}.{name}", ""]
+        (out / f"{unit}.rst").write_text("\n".join(lines), encoding="utf-8")
+        index.append(f"   {unit}")
+    (out / "index.rst").write_text("\n".join(index) + "\n", encoding="utf-8")
+
+
+def _data_doc(unit: str, name: str, obj: object) -> list[str]:
+    """The ``#:`` comment of a public constant, read from the private module that defines it."""
+    from sphinx.pycode import ModuleAnalyzer
+
+    for module in dict((u, m) for u, m, _ in LAYERS)[unit]:
+        full = f"graybox.{unit}.{module}"
+        if getattr(importlib.import_module(full), name, None) is obj:
+            doc = ModuleAnalyzer.for_module(full).find_attr_docs().get(("", name))
+            if doc:
+                return ["   " + line for line in doc]
+    return ["   " + f"``{name}``"]
+
+
+def _literal_bars(app, what, name, obj, options, lines) -> None:  # noqa: ANN001
+    """Docstrings write absolute values and norms as |x|, which reStructuredText reads as a substitution."""
+    for i, line in enumerate(lines):
+        bare = line.strip()
+        if "|" in line and not bare.startswith("+") and not (bare.startswith("|") and bare.endswith("|")):
+            lines[i] = line.replace("|", "\\|")
+
+
+def setup(app):  # noqa: ANN001, ANN201
+    app.connect("autodoc-process-docstring", _literal_bars)
+
+
+# --- the notebooks, executed in quick mode -------------------------------------------------------
+def _copy_notebooks() -> None:
+    out = HERE / "notebooks"
+    shutil.rmtree(out, ignore_errors=True)
+    out.mkdir()
+    for src in sorted((ROOT / "notebooks").glob("*.ipynb")):
+        nb = json.loads(src.read_text(encoding="utf-8"))
+        first = next(c for c in nb["cells"] if c["cell_type"] == "code")
+        first["source"] = ["QUICK = True  # the documentation runs every notebook in its quick mode"]
+        nb["nbformat_minor"] = max(nb.get("nbformat_minor", 0), 5)
+        for i, cell in enumerate(nb["cells"]):  # cell ids, which nbformat 4.5 requires
+            cell.setdefault("id", f"cell-{i}")
+        (out / src.name).write_text(json.dumps(nb, indent=1), encoding="utf-8")
+
+
+_write_api()
+_copy_notebooks()
+# Figures inline, whatever the machine's default backend; the notebooks' checkpoints land in a scratch folder.
+os.environ.setdefault("MPLBACKEND", "Agg")
+nb_execution_in_temp = True
