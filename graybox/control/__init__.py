@@ -9,5 +9,5 @@ from .._lazy import attach
 
 __getattr__, __dir__, __all__ = attach(__name__, {
     "_local": ("LocalModel", "OperatingCurve", "local_model", "operating_curve"),
-    "_systems": ("narx_initial_state", "narx_iosystem", "narx_state_names"),
+    "_systems": ("narx_initial_state", "narx_iosystem", "narx_state_names", "narx_steady_state"),
 })

@@ -549,7 +549,7 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
     model = check_polynomial(model, "local_model")
     ub = _as_points(model, ubar)
     if ub.shape[0] != 1:
-        raise ValueError(f"local_model takes one operating point; got {ub.shape[0]} (use operating_curve)")
+        raise ValueError(f"ubar: local_model takes one operating point, got {ub.shape[0]} (use operating_curve)")
     Ts_ = _check_Ts(Ts, data)
     _range_warning(model, ub, data)
     return _linearise(model, ub[0], _y0s(y0, 1)[0], Ts_)

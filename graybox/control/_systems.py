@@ -32,7 +32,7 @@ from ..core._validation import check_real
 from ..models._model import Model
 from ._local import system_name, check_polynomial, require_control
 
-__all__ = ["narx_iosystem", "narx_initial_state", "narx_state_names"]
+__all__ = ["narx_iosystem", "narx_initial_state", "narx_state_names", "narx_steady_state"]
 
 # -- the whole model ------------------------------------------------------------------------------
 @dataclass(frozen=True)
@@ -114,6 +114,32 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     return np.concatenate(parts).astype(float)
 
 
+def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float) -> np.ndarray:
+    """The state of :func:`narx_iosystem`'s system settled at (ū, ȳ): every output lag ȳ, every input lag ū.
+
+    Parameters
+    ----------
+    model : Model
+        A polynomial NARX model.
+    ubar : float or array_like, shape (m,)
+        The constant input (input units), one value per input in ``model.input_names`` order.
+    ybar : float
+        The output level (output units), e.g. :attr:`graybox.LocalModel.ybar` at ū.
+
+    Returns
+    -------
+    ndarray, shape (n_states,)
+        In the order of :func:`narx_state_names`.
+    """
+    model = check_polynomial(model, "narx_steady_state")
+    ub = np.atleast_1d(np.asarray(ubar, float)).ravel()
+    if ub.size != model.n_inputs or not np.all(np.isfinite(ub)):
+        raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
+    yb = check_real(ybar, "ybar")
+    lay = _layout(model.structure, model.input_names)
+    return np.concatenate([np.full(lay.Ly, yb)] + [np.full(L, u) for u, L in zip(ub, lay.Lu)])
+
+
 def narx_iosystem(model: Model, Ts: float, *, name: str | None = None) -> Any:
     """The whole NARX model as a discrete ``control.NonlinearIOSystem`` (dt = Ts).
 
@@ -122,7 +148,7 @@ def narx_iosystem(model: Model, Ts: float, *, name: str | None = None) -> Any:
     the update shifts y(k) and u(k) in. Every model input is a system input (named after
     ``model.input_names``); the output is ``"y"``. Connect it with a controller by
     ``control.interconnect`` and simulate with ``control.input_output_response`` (times
-    ``Ts * arange(N)``, initial state from :func:`narx_initial_state` or a settled state). The MA
+    ``Ts * arange(N)``, initial state from :func:`narx_initial_state` or :func:`narx_steady_state`). The MA
     part of a NARMAX model is left out, as in :meth:`graybox.Model.simulate`.
 
     Parameters
