@@ -125,6 +125,7 @@ def plot_operating_curve(
     if reference is not None:
         ru, rt = (np.asarray(v, float) for v in reference)
         axes[1].plot(ru, rt, "s", ms=5, color="black", label=reference_label)
+    axes[2].set_ylim(0.0, 1.05)  # ζ of a stable pole lies in [0, 1]
     bad = [f"{v:g}" for v, s in zip(u, curve.status) if s != "reached"]
     if bad:
         axes[0].set_title("not reached at ū = " + ", ".join(bad), fontsize=9)
