@@ -352,3 +352,23 @@ def test_plots_of_local_models():
     assert len(fig.axes) == 3 and len(fig.axes[0].lines) == 3
     fig2 = plots.plot_operating_curve(oc, reference=([800.0, 1600.0], [0.5, 0.3]))
     assert len(fig2.axes) == 3 and len(fig2.axes[1].lines) == 2
+
+
+def test_nonlinear_system_with_its_noise_input_reproduces_the_record():
+    data = gb.load_pumping()
+    sel = gb.frols(gb.Candidates(ny=6, nu=6, ne=2, degree=2, max_y_power=1), data, n_terms=17, include=["1"])
+    model = gb.els(sel, data).model
+    assert len(model.noise_structure) == 2
+    rec = data.valid
+    L = model.max_lag
+    xi = gb.one_step_residuals(model, rec)[0]  # ξ(k), k = L … N−1 (0 before L)
+    sysm = gb.narx_iosystem(model, rec.Ts, noise=True)
+    assert sysm.input_labels == ["u", "e"] and sysm.state_labels[-2:] == ["e[k-1]", "e[k-2]"]
+    x0 = gb.narx_initial_state(model, rec, noise=True)
+    r = ct.input_output_response(sysm, rec.Ts * np.arange(len(rec) - L), np.vstack([rec.u[L:], xi]), x0)
+    np.testing.assert_allclose(r.outputs[0], rec.y[L:], rtol=0, atol=1e-9)
+    # without the noise input it is the free run
+    assert gb.narx_iosystem(model, rec.Ts).ninputs == 1
+    bad = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], noise_structure=["e(k-1)y(k-1)"], noise_theta=[0.1])
+    with pytest.raises(ValueError, match="linear MA part"):
+        gb.narx_iosystem(bad, 1.0, noise=True)

@@ -64,23 +64,38 @@ def _layout(structure: Structure, inputs: tuple[str, ...]) -> _Layout:
     return _Layout(Ly, Lu, E, np.arange(Ly), u_rows)
 
 
-def narx_state_names(model: Model) -> list[str]:
+def _noise_coefficients(model: Model) -> np.ndarray:
+    """c_l of the linear MA part Σ c_l e(k−l), shape (n_e,); ``ValueError`` for any other noise term."""
+    ne = model.noise_structure.max_lag
+    c = np.zeros(ne)
+    for cj, t in zip(model.noise_theta, model.noise_structure):
+        if not (len(t.factors) == 1 and t.factors[0][2] == 1):
+            raise ValueError(f"noise=True takes a linear MA part (terms e(k-l)); the model has the noise term {t}")
+        c[t.factors[0][1] - 1] += cj
+    return c
+
+
+def narx_state_names(model: Model, *, noise: bool = False) -> list[str]:
     """The state names of :func:`narx_iosystem`'s system: ``y[k-1]`` … then each input's ``u[k-1]`` …
 
     Parameters
     ----------
     model : Model
         A polynomial NARX model.
+    noise : bool
+        As for :func:`narx_iosystem`: the noise lags ``e[k-1]`` … come last.
     """
     model = check_polynomial(model, "narx_state_names")
     lay = _layout(model.structure, model.input_names)
     names = [f"y[k-{l}]" for l in range(1, lay.Ly + 1)]
     for n, L in zip(model.input_names, lay.Lu):
         names += [f"{n}[k-{l}]" for l in range(1, L + 1)]
+    if noise:
+        names += [f"e[k-{l}]" for l in range(1, _noise_coefficients(model).size + 1)]
     return names
 
 
-def narx_initial_state(model: Model, record: Record, *, start: int | None = None) -> np.ndarray:
+def narx_initial_state(model: Model, record: Record, *, start: int | None = None, noise: bool = False) -> np.ndarray:
     """The state of :func:`narx_iosystem`'s system at sample ``start`` of a record: its lagged outputs and inputs.
 
     Parameters
@@ -93,6 +108,9 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
         The sample the system starts at (default, and at least, the model's max lag L: the state
         holds y(start−1) … and u(start−1) …). From ``start = L`` and inputs ``u[L:]`` the
         system's free run is ``model.simulate(record)[L:]``.
+    noise : bool
+        As for :func:`narx_iosystem`: the noise lags are then appended, as zeros (the residuals
+        before the start are taken as 0, as one-step residuals are before sample L).
 
     Returns
     -------
@@ -111,10 +129,12 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     for n, Lu in zip(model.input_names, lay.Lu):
         if Lu:
             parts.append(record.input(n)[k - Lu: k][::-1])
+    if noise:
+        parts.append(np.zeros(_noise_coefficients(model).size))
     return np.concatenate(parts).astype(float)
 
 
-def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float) -> np.ndarray:
+def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, noise: bool = False) -> np.ndarray:
     """The state of :func:`narx_iosystem`'s system settled at (ū, ȳ): every output lag ȳ, every input lag ū.
 
     Parameters
@@ -125,6 +145,8 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float) -> np
         The constant input (input units), one value per input in ``model.input_names`` order.
     ybar : float
         The output level (output units), e.g. :attr:`graybox.LocalModel.ybar` at ū.
+    noise : bool
+        As for :func:`narx_iosystem`: the noise lags are appended, as zeros.
 
     Returns
     -------
@@ -137,10 +159,11 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float) -> np
         raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
     yb = check_real(ybar, "ybar")
     lay = _layout(model.structure, model.input_names)
-    return np.concatenate([np.full(lay.Ly, yb)] + [np.full(L, u) for u, L in zip(ub, lay.Lu)])
+    ne = _noise_coefficients(model).size if noise else 0
+    return np.concatenate([np.full(lay.Ly, yb)] + [np.full(L, u) for u, L in zip(ub, lay.Lu)] + [np.zeros(ne)])
 
 
-def narx_iosystem(model: Model, Ts: float, *, name: str | None = None) -> Any:
+def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | None = None) -> Any:
     """The whole NARX model as a discrete ``control.NonlinearIOSystem`` (dt = Ts).
 
     State, update and output as in the module docstring: the state holds the lagged outputs and
@@ -148,8 +171,8 @@ def narx_iosystem(model: Model, Ts: float, *, name: str | None = None) -> Any:
     the update shifts y(k) and u(k) in. Every model input is a system input (named after
     ``model.input_names``); the output is ``"y"``. Connect it with a controller by
     ``control.interconnect`` and simulate with ``control.input_output_response`` (times
-    ``Ts * arange(N)``, initial state from :func:`narx_initial_state` or :func:`narx_steady_state`). The MA
-    part of a NARMAX model is left out, as in :meth:`graybox.Model.simulate`.
+    ``Ts * arange(N)``, initial state from :func:`narx_initial_state` or :func:`narx_steady_state`).
+    By default the MA part of a NARMAX model is left out, as in :meth:`graybox.Model.simulate`.
 
     Parameters
     ----------
@@ -157,6 +180,13 @@ def narx_iosystem(model: Model, Ts: float, *, name: str | None = None) -> Any:
         A polynomial NARX model.
     Ts : float
         Sampling period (s).
+    noise : bool
+        Add the noise e(k) as a last system input ``"e"`` (output units) and the model's linear MA
+        part: y(k) = F(x(k)) + Σ_l c_l e(k−l) + e(k), with e(k−1) … e(k−n_e) appended to the
+        state (for a NARX model, y(k) = F(x(k)) + e(k)). Fed the model's one-step residuals on a
+        record, the system reproduces the record's output; fed white noise of the residuals'
+        variance, it simulates the loop with the identified disturbance. e(k) reaches y(k)
+        directly (the only feedthrough).
     name : str, optional
         The system's name (default from the model's name).
 
@@ -167,26 +197,37 @@ def narx_iosystem(model: Model, Ts: float, *, name: str | None = None) -> Any:
     """
     model = check_polynomial(model, "narx_iosystem")
     Ts = check_real(Ts, "Ts", low=0, low_open=True)
+    c = _noise_coefficients(model) if noise else np.zeros(0)
     ct = require_control()
     lay = _layout(model.structure, model.input_names)
     theta = np.array(model.theta)
     E = lay.E
+    n_proc = E.shape[1]  # the process states; the noise lags follow
+    m = model.n_inputs
 
     def output(t, x, u, params):
-        return np.array([theta @ np.prod(np.asarray(x, float)[None, :] ** E, axis=1)])
+        x = np.asarray(x, float)
+        y = theta @ np.prod(x[None, :n_proc] ** E, axis=1)
+        if noise:
+            y += c @ x[n_proc:] + np.atleast_1d(np.asarray(u, float))[m]
+        return np.array([y])
 
     def update(t, x, u, params):
         x = np.asarray(x, float)
         u = np.atleast_1d(np.asarray(u, float))
         new = np.empty_like(x)
         if lay.Ly:
-            new[0] = theta @ np.prod(x[None, :] ** E, axis=1)
+            new[0] = output(t, x, u, params)[0]
             new[1: lay.Ly] = x[: lay.Ly - 1]
         for i, rows in enumerate(lay.u_rows):
             if rows.size:
                 new[rows[0]] = u[i]
                 new[rows[1:]] = x[rows[:-1]]
+        if c.size:
+            new[n_proc] = u[m]
+            new[n_proc + 1:] = x[n_proc:-1]
         return new
 
-    return ct.nlsys(update, output, inputs=list(model.input_names), outputs=["y"], states=narx_state_names(model),
+    inputs = list(model.input_names) + (["e"] if noise else [])
+    return ct.nlsys(update, output, inputs=inputs, outputs=["y"], states=narx_state_names(model, noise=noise),
                     dt=Ts, name=name if name is not None else system_name(model.name, "narx"))
