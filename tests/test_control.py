@@ -282,8 +282,11 @@ def test_operating_curve_band_from_the_parameter_covariance():
 # -- bad input -----------------------------------------------------------------------------------------
 def test_operating_point_outside_the_data_warns():
     data = gb.load_pumping()
-    with pytest.warns(gb.StaticRangeWarning, match="2000"):
+    with pytest.warns(gb.StaticRangeWarning, match="2000") as record:
         gb.local_model(reference.paper_model(15), 2000.0, data=data)
+    assert record[0].filename == __file__  # attributed to the caller, not to graybox's internals
+    with pytest.warns(gb.StaticRangeWarning, match=r"\[700.0, 2000.0\]"):
+        gb.operating_curve(reference.paper_model(15), [700.0, 1000.0, 2000.0], data=data)
 
 
 def test_no_stable_equilibrium_is_said_not_nan():

@@ -21,6 +21,7 @@ Then
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any, ClassVar, Sequence
@@ -729,8 +730,6 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
     tau = np.where(ok, tau, np.nan)
     gain = np.where(ok[:, :, None], gain, np.nan)
     q = (1 - uncertainty.level) / 2
-    import warnings
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a point no draw reaches has an all-NaN column
         glo, ghi = np.nanquantile(gain, [q, 1 - q], axis=0)
