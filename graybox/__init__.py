@@ -5,7 +5,7 @@ with static-curve information, after Barbosa, Aguirre, Martinez & Braga (IEEE TC
 
 The implementation lives in subpackages by concern (:mod:`graybox.core`, :mod:`graybox.static`,
 :mod:`graybox.models`, :mod:`graybox.selection`, :mod:`graybox.estimation`,
-:mod:`graybox.diagnostics`, :mod:`graybox.io`, :mod:`graybox.datasets`), each of private modules;
+:mod:`graybox.diagnostics`, :mod:`graybox.control`, :mod:`graybox.io`, :mod:`graybox.datasets`), each of private modules;
 every public name is exported here. :mod:`graybox.plots`, :mod:`graybox.experiments` and
 :mod:`graybox.reproduce` sit above them. Names load on first use, so ``import graybox`` is quick.
 """

@@ -33,12 +33,15 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
      "Pareto sets and decision makers, the neural baseline"),
     ("diagnostics", ("_residuals", "_uncertainty", "_bootstrap"),
      "residual correlation tests, parameter and static-curve uncertainty, bootstrap of a decision"),
+    ("control", ("_local", "_systems"),
+     "local linear models at operating points and along the static curve; the bridge to python-control "
+     "(LTI local models, the whole model as a discrete nonlinear system)"),
     ("io", ("_json",), "save and load graybox values as JSON (never pickle)"),
     ("reference", (), "the paper's identified models (Tables II and III) as data"),
     ("datasets", ("pumping", "_pumping_miso", "_loaders", "_miso_loader"),
      "the bundled plant simulators and their data, the buck converter, CSV loaders"),
     ("_api", (), "every public name below this line, as one namespace"),
-    ("plots", ("_data", "_models", "_pareto", "_surfaces", "_trust"), "figures (matplotlib, no pyplot)"),
+    ("plots", ("_data", "_models", "_pareto", "_surfaces", "_trust", "_control"), "figures (matplotlib, no pyplot)"),
     ("experiments", ("_example", "_spec", "_cell", "_store", "_dask", "_executors", "_map", "_run", "_report",
                      "_select"),
      "grids of data × structures × variants × seeds on Dask or in-process, the SQLite store, reports, "
@@ -49,5 +52,5 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
 )
 
 #: Subpackages whose public names ``graybox`` re-exports, in layer order.
-PUBLIC_SUBPACKAGES: tuple[str, ...] = ("core", "static", "models", "selection", "estimation", "diagnostics", "io",
-                                       "datasets")
+PUBLIC_SUBPACKAGES: tuple[str, ...] = ("core", "static", "models", "selection", "estimation", "diagnostics", "control",
+                                       "io", "datasets")

@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 import pytest
 
 from graybox.datasets import _loaders as loaders
@@ -24,6 +25,7 @@ NAMES = [
     "04_buck_converter.ipynb",
     "05_constraint_variants.ipynb",
     "06_miso.ipynb",
+    "07_control.ipynb",
 ]
 
 
@@ -104,3 +106,20 @@ def test_miso_notebook_runs(sandbox):
     ub = ns["data"].static.ubar
     assert abs(ns["cls"].static_curve(ub) - ns["surface"](ub)).max() < 1e-8
     assert (ns["results"].status == "ok").sum() >= 6
+
+
+def test_control_notebook_runs(sandbox):
+    pytest.importorskip("control")
+    ns = run_notebook("07_control.ipynb")
+    assert ns["QUICK"] is True
+    # the gray-box model's local gain is the plant's static slope (the static curve is imposed) ...
+    np.testing.assert_allclose(ns["table"]["gain CLS"], ns["table"]["gain plant"], rtol=0.02)
+    # ... its time constant falls with the speed, as the plant's does
+    assert np.all(np.diff(ns["oc"].time_constant) < 0) and np.all(np.diff(ns["tau_plant"]) < 0)
+    # the loops designed on the model behave alike on the model and on the plant, at every operating point
+    s = ns["summary"]
+    assert np.all(s["max |model − plant| (mlc)"] < 0.2 * ns["STEP"])
+    assert np.all(np.abs(s["rise model (s)"] - s["rise plant (s)"]) <= 0.2)
+    # local PIs rise alike across the range; the one PI of 1200 rpm does not
+    spread = s["rise plant (s)"].groupby(level="controller").agg(lambda r: r.max() - r.min())
+    assert spread["local PI"] < 0.5 * spread["PI of 1200 rpm"]

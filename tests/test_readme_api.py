@@ -60,3 +60,15 @@ def test_long_records_example_runs():
     ns = _run_example("API: long records")
     assert isinstance(ns["big"], gb.DaskRecord) and len(ns["sel"].structure) == 17
     _check_table_names("API: long records")
+
+
+def test_control_example_runs():
+    import pytest
+
+    pytest.importorskip("control")
+    ns = _run_example("API: from model to controller")
+    lm = ns["lm"]
+    assert lm.reached and abs(lm.dc_gain[0] - ns["gray"].static_gain([1200.0])[0]) < 1e-12
+    assert ns["oc"].has_band
+    assert abs(ns["step"].outputs[0][-1] - (lm.ybar + 1.0)) < 1e-3  # the PI brings the model to the setpoint
+    _check_table_names("API: from model to controller")

@@ -28,7 +28,8 @@ __all__ = [
     "check_per_point",
 ]
 
-_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+#: The graybox package folder (this module sits in graybox/core): warnings skip every frame inside it.
+_PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def check_int(value: object, name: str, *, low: int | None = None, high: int | None = None) -> int:
@@ -171,7 +172,7 @@ def warn(message: str, category: type[Warning]) -> None:
     The warning points at the first frame outside the graybox package, so that Python's default
     filter says it once per place in the user's code (and the user sees which line caused it).
     """
-    level = 1
+    level = 2  # stacklevel 1 is this function; 2 its caller, the frame below
     frame = sys._getframe(1)
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR):
         frame = frame.f_back

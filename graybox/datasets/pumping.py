@@ -154,7 +154,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 from functools import cached_property
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numba as nb
 import numpy as np
@@ -490,6 +490,17 @@ class PumpingPlant:
         nc, n, q = self.steady_state(u[0]) if x0 is None else (float(x) for x in x0)
         if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
             raise ValueError(f"x0 must be finite with a flow >= 0 L/s, got {x0!r}")
+        S, delay, dt, consts = self._kernel_constants
+        out = _integrate(u, eps_w, eps_s, eps_a, float(phi), float(w_gain), float(w0), float(s_phi), float(s_gain),
+                         float(a_phi), float(a_gain), nc, n, q, S, delay, dt, consts)
+        p, speed, flow, surge_out, air_out = out
+        t = np.arange(N) * self.Ts
+        return PlantRun(t=t, u=np.array(u), y=p + v, pressure=p, speed=speed, flow=flow, Ts=self.Ts,
+                        surge=surge_out, air_loss=air_out)
+
+    @cached_property
+    def _kernel_constants(self) -> tuple[int, int, float, np.ndarray]:
+        """(substeps S, dead-time substeps, substep length dt (s), the constants of ``_rhs``)."""
         S = int(self.substeps)
         dt = self.Ts / S
         delay = int(round(self.dead_time / dt))  # substeps during which the previous reference still acts
@@ -498,12 +509,138 @@ class PumpingPlant:
         consts = np.array([k0, a0, self.shutoff_head - b0, self.drive_lag, self.inertia * math.pi / 30.0,
                            self.speed_stiffness, self.pump_torque, self.shutoff_head, self.loss, self.inertance,
                            qj, hj, m])
-        out = _integrate(u, eps_w, eps_s, eps_a, float(phi), float(w_gain), float(w0), float(s_phi), float(s_gain),
-                         float(a_phi), float(a_gain), nc, n, q, S, delay, dt, consts)
-        p, speed, flow, surge_out, air_out = out
-        t = np.arange(N) * self.Ts
-        return PlantRun(t=t, u=np.array(u), y=p + v, pressure=p, speed=speed, flow=flow, Ts=self.Ts,
-                        surge=surge_out, air_loss=air_out)
+        consts.setflags(write=False)
+        return S, delay, dt, consts
+
+    # -- closed loop --------------------------------------------------------
+    def closed_loop(
+        self,
+        controller: Callable[[int, float], float],
+        n_samples: int,
+        *,
+        u0: float,
+        rng: np.random.Generator | int | None = None,
+        noise: bool = True,
+        process_noise: bool = True,
+        x0: tuple[float, float, float] | None = None,
+    ) -> PlantRun:
+        """Run the rig under feedback: at each sample a controller reads the measured pressure and sets the reference.
+
+        At t_k = k Ts the pressure y(k) is measured (with transmitter noise when ``noise``), the
+        controller returns the speed reference u(k), which is held over [t_k, t_k + Ts) (and, for
+        the dead time, the previous reference still acts at the start of the sample: ``u0`` before
+        the first). The physics, the noise and the disturbances are those of :meth:`simulate`,
+        sample for sample: a controller that returns a fixed sequence u with u(0) = ``u0`` gives
+        exactly ``simulate(u)`` with the same ``rng``.
+
+        Parameters
+        ----------
+        controller : callable (k, y) -> float
+            Called once per sample, in order, with the sample index k and the measured pressure
+            y(k) (mlc); returns the speed reference u(k) (rpm), which must lie in ``speed_range``.
+            It may keep its own state (an integrator).
+        n_samples : int
+            Number of samples N.
+        u0 : float
+            The reference the rig has been settled at before the loop starts (rpm).
+        rng : numpy Generator or int, optional
+            Source of noise, as for :meth:`simulate`; required when any noise is on.
+        noise : bool
+            Add transmitter noise to the pressure the controller reads.
+        process_noise : bool
+            Add the process disturbances (module docs, "Disturbances").
+        x0 : (n_c, n, Q), optional
+            Initial state; default the equilibrium at ``u0``.
+
+        Returns
+        -------
+        PlantRun
+            ``u`` the references the controller set, ``y`` the pressures it read.
+        """
+        N = int(n_samples)
+        if N != n_samples or N < 1:
+            raise ValueError(f"n_samples must be a positive integer, got {n_samples!r}")
+        if not callable(controller):
+            raise TypeError(f"controller must be callable as controller(k, y) -> u, got {type(controller).__name__}")
+        prev = float(as_1d_finite([u0], "u0")[0])
+        self._check_reference(np.array([prev]), "u0")
+        eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
+            N, rng, noise=noise, process_noise=process_noise)
+        nc, n, q = self.steady_state(prev) if x0 is None else (float(x) for x in x0)
+        if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
+            raise ValueError(f"x0 must be finite with a flow >= 0 L/s, got {x0!r}")
+        S, delay, dt, consts = self._kernel_constants
+        out = np.empty((7, N))  # u, y, pressure, speed, flow, surge, air
+        w, surge, air = float(w0), 0.0, 0.0
+        for k in range(N):
+            p_k = _pressure(q, consts)
+            y_k = p_k + v[k]
+            u_k = float(controller(k, float(y_k)))
+            if not math.isfinite(u_k):
+                raise ValueError(f"the controller returned {u_k!r} at sample {k}")
+            self._check_reference(np.array([u_k]), f"the controller's reference at sample {k}")
+            out[:, k] = (u_k, y_k, p_k, n, q, surge, air)
+            _, w, nc, n, q, surge, air = _sample(u_k, prev, k, w, surge, air, nc, n, q, eps_w[k], eps_s[k], eps_a[k],
+                                                 float(phi), float(w_gain), float(s_phi), float(s_gain), float(a_phi),
+                                                 float(a_gain), S, delay, dt, consts)
+            prev = u_k
+        return PlantRun(t=np.arange(N) * self.Ts, u=out[0], y=out[1], pressure=out[2], speed=out[3], flow=out[4],
+                        Ts=self.Ts, surge=out[5], air_loss=out[6])
+
+    def linearize(self, speed: float, rel_step: float = 1e-5) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The noise-free sampled rig linearised at the steady state of ``speed``, numerically.
+
+        State x(k) = (n_c, n, Q, r(k−1)) at t_k (the previous reference acts during the dead time),
+        input the reference r(k), output the pressure y(k) = H_t(Q(k)):
+        Δx(k+1) = A Δx(k) + B Δr(k), Δy(k) = C Δx(k). A and B are central differences of the
+        compiled one-sample map (the RK4 of :meth:`simulate`), C of H_t, each with a step of
+        ``rel_step`` times the variable's level.
+
+        Parameters
+        ----------
+        speed : float
+            Operating reference (rpm), within ``speed_range``.
+        rel_step : float
+            Relative finite-difference step (dimensionless).
+
+        Returns
+        -------
+        A : ndarray, shape (4, 4)
+        B : ndarray, shape (4, 1)
+            Per rpm.
+        C : ndarray, shape (1, 4)
+            mlc per unit of each state.
+        """
+        s = float(as_1d_finite([speed], "speed")[0])
+        self._check_reference(np.array([s]), "speed")
+        S, delay, dt, consts = self._kernel_constants
+        x_bar = np.array([*self.steady_state(s), s])
+
+        def step(x: np.ndarray, r: float) -> np.ndarray:
+            nc, n, q = _advance(r, x[3], 0.0, 0.0, x[0], x[1], x[2], S, delay, dt, consts)
+            return np.array([nc, n, q, r])
+
+        J = np.zeros((4, 5))
+        for j in range(5):
+            h = rel_step * (abs(x_bar[j]) if j < 4 else abs(s))
+            e = np.zeros(5)
+            e[j] = h
+            J[:, j] = (step(x_bar + e[:4], s + e[4]) - step(x_bar - e[:4], s - e[4])) / (2 * h)
+        hq = rel_step * x_bar[2]
+        C = np.zeros((1, 4))
+        C[0, 2] = (_pressure(x_bar[2] + hq, consts) - _pressure(x_bar[2] - hq, consts)) / (2 * hq)
+        return J[:, :4], J[:, 4:], C
+
+    def local_time_constant(self, speed: float) -> float:
+        """−Ts / ln|p| of the dominant pole of :meth:`linearize` at ``speed`` (s): the rig's own local time constant.
+
+        Parameters
+        ----------
+        speed : float
+            Operating reference (rpm).
+        """
+        A, _, _ = self.linearize(speed)
+        return float(-self.Ts / np.log(np.max(np.abs(np.linalg.eigvals(A)))))
 
     # -- measured facts -----------------------------------------------------
     def step_time_constant(self, speed: float, step: float = 20.0, horizon: float = 15.0) -> float:
@@ -569,6 +706,55 @@ def _rhs(nc, n, q, r, w, air, c):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
+def _pressure(q, c):  # pragma: no cover - compiled
+    """H_t(Q) (mlc): the measured pressure at flow q (``turbine_head``, inlined); c: the constants."""
+    k0, a0, g, h0, R, qj, hj, m = c[0], c[1], c[2], c[7], c[8], c[10], c[11], c[12]
+    if q >= qj:
+        n_star = (a0 + math.sqrt(a0 * a0 + 4 * g * (k0 + R * q * q))) / (2 * g)
+        return h0 * n_star * n_star - R * q * q
+    return hj * (q / qj) ** m
+
+
+@nb.njit(cache=True, nogil=True)
+def _advance(uk, prev, wk, air, nc, n, q, S, delay, dt, c):  # pragma: no cover - compiled
+    """One sample of RK4: the state (n_c, n, Q) at t_k + Ts under the reference uk (prev for the dead time)."""
+    for j in range(S):
+        r = uk if j >= delay else prev
+        a1, b1, c1 = _rhs(nc, n, q, r, wk, air, c)
+        h = 0.5 * dt
+        a2, b2, c2 = _rhs(nc + h * a1, n + h * b1, q + h * c1, r, wk, air, c)
+        a3, b3, c3 = _rhs(nc + h * a2, n + h * b2, q + h * c2, r, wk, air, c)
+        a4, b4, c4 = _rhs(nc + dt * a3, n + dt * b3, q + dt * c3, r, wk, air, c)
+        s6 = dt / 6.0
+        nc += s6 * (a1 + 2 * a2 + 2 * a3 + a4)
+        n += s6 * (b1 + 2 * b2 + 2 * b3 + b4)
+        q += s6 * (c1 + 2 * c2 + 2 * c3 + c4)
+        if q < 0.0:
+            q = 0.0  # the valves close within the substep (RK4 overshoots the stop)
+    return nc, n, q
+
+
+@nb.njit(cache=True, nogil=True)
+def _sample(uk, prev, k, w, surge, air, nc, n, q, eps_w_k, eps_s_k, eps_a_k, phi, w_gain, s_phi, s_gain, a_phi,
+            a_gain, S, delay, dt, c):  # pragma: no cover - compiled
+    """Sample k of a run: the pressure read at t_k, then the state and disturbances carried to t_k + Ts.
+
+    Returns (p_k, w_k, nc, n, q, surge, air): the pressure at t_k, the fast disturbance over the
+    sample, and the state and slow disturbances at t_k + Ts.
+    """
+    if k > 0:
+        w = phi * w + w_gain * eps_w_k
+    p = _pressure(q, c)
+    n_old = n
+    nc, n, q = _advance(uk, prev, w + surge, air, nc, n, q, S, delay, dt, c)
+    dn = abs(n - n_old)
+    surge_next = s_phi * surge + s_gain * dn * eps_s_k
+    # a pump full of air delivers no head: the loss cannot exceed the whole head
+    air_next = min(1.0, a_phi * air + a_gain * dn * eps_a_k * eps_a_k)
+    return p, w, nc, n, q, surge_next, air_next
+
+
+@nb.njit(cache=True, nogil=True)
 def _integrate(u, eps_w, eps_s, eps_a, phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain, nc, n, q, S, delay, dt,
                c):  # pragma: no cover - compiled
     """RK4 over the whole record; returns (pressure, speed, flow, surge, air loss), each shape (N,)."""
@@ -578,43 +764,18 @@ def _integrate(u, eps_w, eps_s, eps_a, phi, w_gain, w0, s_phi, s_gain, a_phi, a_
     flow = np.empty(N)
     surge_out = np.empty(N)
     air_out = np.empty(N)
-    k0, a0, g, h0, R, qj, hj, m = c[0], c[1], c[2], c[7], c[8], c[10], c[11], c[12]
     prev = u[0]
     surge = 0.0
     air = 0.0
     w = w0
     for k in range(N):
-        if k > 0:
-            w = phi * w + w_gain * eps_w[k]
-        if q >= qj:  # turbine_head(q)
-            n_star = (a0 + math.sqrt(a0 * a0 + 4 * g * (k0 + R * q * q))) / (2 * g)
-            p[k] = h0 * n_star * n_star - R * q * q
-        else:
-            p[k] = hj * (q / qj) ** m
         speed[k] = n
         flow[k] = q
         surge_out[k] = surge
         air_out[k] = air
-        wk = w + surge
-        n_old = n
-        for j in range(S):
-            r = u[k] if j >= delay else prev
-            a1, b1, c1 = _rhs(nc, n, q, r, wk, air, c)
-            h = 0.5 * dt
-            a2, b2, c2 = _rhs(nc + h * a1, n + h * b1, q + h * c1, r, wk, air, c)
-            a3, b3, c3 = _rhs(nc + h * a2, n + h * b2, q + h * c2, r, wk, air, c)
-            a4, b4, c4 = _rhs(nc + dt * a3, n + dt * b3, q + dt * c3, r, wk, air, c)
-            s6 = dt / 6.0
-            nc += s6 * (a1 + 2 * a2 + 2 * a3 + a4)
-            n += s6 * (b1 + 2 * b2 + 2 * b3 + b4)
-            q += s6 * (c1 + 2 * c2 + 2 * c3 + c4)
-            if q < 0.0:
-                q = 0.0  # the valves close within the substep (RK4 overshoots the stop)
+        p[k], w, nc, n, q, surge, air = _sample(u[k], prev, k, w, surge, air, nc, n, q, eps_w[k], eps_s[k],
+                                                eps_a[k], phi, w_gain, s_phi, s_gain, a_phi, a_gain, S, delay, dt, c)
         prev = u[k]
-        dn = abs(n - n_old)
-        surge = s_phi * surge + s_gain * dn * eps_s[k]
-        # a pump full of air delivers no head: the loss cannot exceed the whole head
-        air = min(1.0, a_phi * air + a_gain * dn * eps_a[k] * eps_a[k])
     return p, speed, flow, surge_out, air_out
 
 

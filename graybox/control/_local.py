@@ -1,0 +1,740 @@
+"""Local linear models of a polynomial NARX model at its operating points, and along the static curve.
+
+At a constant input ū the model reaches an equilibrium ȳ (the definition J_SF uses:
+:func:`graybox.static._analysis.reached_equilibria`). Around it, in deviation variables
+Δy = y − ȳ, Δu_i = u_i − ū_i, the model is to first order
+
+    A(q⁻¹) Δy(k) = Σ_i B_i(q⁻¹) Δu_i(k),   A = 1 − Σ_l a_l q⁻ˡ,   B_i = Σ_l b_il q⁻ˡ,
+
+with a_l = ∂F/∂y(k−l) and b_il = ∂F/∂u_i(k−l) of the one-step map F at the equilibrium. They are
+exact, read from the term structure: a factor s(k−l)^p of a term θ ∏ s^P contributes
+θ p x̄_s^(P_s − 1) ∏_(s' ≠ s) x̄_s'^P_s' (at steady state every lag of a signal has the same value).
+Then
+
+- the poles are the roots of z^L − a_1 z^(L−1) − … − a_L (L the largest output lag), the
+  polynomial the Schur–Cohn stability test works on;
+- the DC gain Σ_l b_il / (1 − Σ_l a_l) is the static gain ∂ȳ/∂ū_i (implicit differentiation of the
+  static equation gives the same quotient);
+- the dominant time constant is −Ts / ln|p| of the pole p of largest modulus, its damping that of
+  the continuous pole s = ln(p)/Ts, ζ = −Re s / |s|.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any, ClassVar, Sequence
+
+import numpy as np
+from scipy.signal import lfilter
+
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ..core._terms import Structure
+from ..core._validation import check_int, check_real, check_seed, frozen, warn
+from ..models._model import Model
+from ..static._analysis import REACHED, reached_equilibria, schur_stable
+from ..static._surface_analysis import reached_surface
+
+__all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "jacobian_rows", "check_polynomial",
+           "require_control", "local_statespace", "local_transfer_function", "system_name", "CONTROL_EXTRA"]
+
+#: Settling band of :attr:`LocalModel.settling_time`: the step response stays within this fraction
+#: of its final value (dimensionless).
+SETTLING_BAND = 0.02
+#: Longest step response used for a settling time (samples); a slower equilibrium gets inf.
+MAX_SETTLING_SAMPLES = 10_000_000
+
+
+def check_polynomial(model: object, what: str) -> Model:
+    """``model`` if it is a polynomial :class:`Model`; a clear ``TypeError`` otherwise (a neural model included)."""
+    if isinstance(model, Model):
+        return model
+    kind = type(model).__name__
+    hint = (" A NeuralModel's equilibria and their stability are given by its equilibria() method; its local "
+            "linear model is not built here." if kind == "NeuralModel" else "")
+    raise TypeError(f"{what} needs a polynomial NARX Model, got {kind}.{hint}")
+
+
+# -- exact partial derivatives from the term structure ------------------------------------------
+@lru_cache(maxsize=256)
+def _derivative_map(structure: Structure, inputs: tuple[str, ...]):
+    """(L_y, L_u, entries) of the Jacobian at steady state.
+
+    One entry per factor s(k−l)^p of each term t: (t, column, p, exponents of [ȳ, ū_1 … ū_m]).
+    Columns: y(k−1) … y(k−L_y), then for each input u_i(k−1) … u_i(k−L_u) (L_u the largest input
+    lag over the inputs: unused lags get zero columns).
+    """
+    signals = ("y",) + inputs
+    Ly = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
+    Lu = max((structure.input_lag(n) for n in inputs), default=0)
+    T, col, pw, E = [], [], [], []
+    for j, term in enumerate(structure):
+        P = np.array([term.power_of(s) for s in signals], dtype=float)
+        for s, l, p in term.factors:
+            i = signals.index(s)
+            e = P.copy()
+            e[i] -= 1.0
+            T.append(j)
+            col.append(l - 1 if i == 0 else Ly + (i - 1) * Lu + l - 1)
+            pw.append(float(p))
+            E.append(e)
+    E_arr = np.array(E, dtype=float).reshape(len(E), len(signals))
+    return Ly, Lu, np.array(T, dtype=np.int64), np.array(col, dtype=np.int64), np.array(pw), E_arr
+
+
+def jacobian_rows(structure: Structure, inputs: tuple[str, ...], thetas: np.ndarray, ybar: np.ndarray,
+                  ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """a_l and b_il at many steady states, from the term structure (no finite differences).
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms.
+    inputs : tuple of str
+        The inputs, in the column order of ``ubar``.
+    thetas : ndarray, shape (K, n_terms)
+        One parameter vector per steady state.
+    ybar : ndarray, shape (K,)
+        Output levels.
+    ubar : ndarray, shape (K, m)
+        Input levels.
+
+    Returns
+    -------
+    a : ndarray, shape (K, L_y)
+        ∂F/∂y(k−l), l = 1 … L_y (dimensionless).
+    b : ndarray, shape (K, m, L_u)
+        ∂F/∂u_i(k−l) (output units per unit of input i).
+    """
+    Ly, Lu, T, col, pw, E = _derivative_map(structure, tuple(inputs))
+    th = np.atleast_2d(np.asarray(thetas, float))
+    xbar = np.column_stack([np.asarray(ybar, float), np.asarray(ubar, float).reshape(th.shape[0], -1)])
+    m = xbar.shape[1] - 1
+    J = np.zeros((th.shape[0], Ly + m * Lu))
+    if T.size:
+        with np.errstate(all="ignore"):
+            vals = th[:, T] * pw * np.prod(xbar[:, None, :] ** E[None, :, :], axis=2)  # (K, entries); 0**0 = 1
+        np.add.at(J.T, col, vals.T)
+    return J[:, :Ly], J[:, Ly:].reshape(th.shape[0], m, Lu)
+
+
+def _characteristic_roots(a: np.ndarray) -> np.ndarray:
+    """Roots of z^L − a_1 z^(L−1) − … − a_L for many rows: a (K, L) → (K, L) complex (companion eigenvalues)."""
+    K, L = a.shape
+    if L == 0:
+        return np.zeros((K, 0), complex)
+    C = np.zeros((K, L, L))
+    C[:, 0, :] = a
+    C[:, np.arange(1, L), np.arange(L - 1)] = 1.0
+    return np.linalg.eigvals(C)
+
+
+def _dominant(poles: np.ndarray, Ts: float) -> tuple[complex, float, float]:
+    """(dominant pole, its time constant (s), its damping) of one set of poles."""
+    if poles.size == 0 or not np.any(poles):
+        return 0j, 0.0, 1.0  # a finite impulse response: no recursion, nothing to wait for
+    mods = np.abs(poles)
+    cand = poles[mods >= mods.max() * (1 - 1e-12)]
+    p = complex(cand[np.argmax(cand.imag)])  # of a conjugate pair, the one with arg >= 0
+    r = abs(p)
+    if r >= 1.0:
+        return p, float("inf"), float("nan") if r > 1.0 else 0.0
+    s = complex(np.log(r), np.angle(p))
+    return p, float(-Ts / np.log(r)), float(-s.real / abs(s))
+
+
+@dataclass(frozen=True, eq=False)
+class LocalModel:
+    """The linearisation of a NARX model around the equilibrium it reaches at a constant input.
+
+    Attributes
+    ----------
+    ubar : ndarray, shape (m,)
+        The operating input (input units), in ``input_names`` order.
+    ybar : float or None
+        The equilibrium output (output units); None when the model has no equilibrium at ū.
+    status : str
+        ``"reached"`` (a stable equilibrium, reached from y0 as J_SF defines it), or why not:
+        ``"no equilibrium"``, ``"no stable equilibrium"`` (the linearisation is then at the
+        unstable equilibrium nearest y0, or with the smallest spectral radius), ``"diverged"`` or
+        ``"did not settle"`` (the free run from y0 settles on none; the linearisation is at the
+        real equilibrium nearest y0).
+    reason : str
+        The status in words, naming ū (empty when reached).
+    a : ndarray, shape (L_y,)
+        a_l = ∂F/∂y(k−l) (dimensionless): A(q⁻¹) = 1 − Σ a_l q⁻ˡ.
+    b : ndarray, shape (m, L_u)
+        b_il = ∂F/∂u_i(k−l) (output units per unit of input i): B_i(q⁻¹) = Σ b_il q⁻ˡ.
+    Ts : float
+        Sampling period (s).
+    input_names : tuple of str
+    name : str
+        Label (the model's name).
+    """
+
+    ubar: np.ndarray
+    ybar: float | None
+    status: str
+    reason: str
+    a: np.ndarray
+    b: np.ndarray
+    Ts: float
+    input_names: tuple[str, ...]
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "ubar", frozen(np.ravel(self.ubar)))
+        object.__setattr__(self, "a", frozen(self.a))
+        object.__setattr__(self, "b", frozen(np.reshape(self.b, (len(self.input_names), -1))))
+
+    # -- facts --------------------------------------------------------------------------------
+    @property
+    def exists(self) -> bool:
+        """True when there is an equilibrium to linearise around (stable or not)."""
+        return self.ybar is not None
+
+    @property
+    def reached(self) -> bool:
+        """True when the equilibrium is stable and reached (the J_SF definition)."""
+        return self.status == "reached"
+
+    def _need(self) -> None:
+        if self.ybar is None:
+            raise ValueError(f"no local model: {self.reason}")
+
+    @property
+    def poles(self) -> np.ndarray:
+        """Roots of z^L − a_1 z^(L−1) − … − a_L, shape (L_y,) complex: the stability test's eigenvalues."""
+        self._need()
+        return _characteristic_roots(self.a[None, :])[0]
+
+    @property
+    def stable(self) -> bool:
+        """Every pole strictly inside the unit circle (the package's Schur–Cohn test)."""
+        self._need()
+        return bool(schur_stable(self.a)) if self.a.size else True
+
+    @property
+    def spectral_radius(self) -> float:
+        """Largest pole modulus (0 without output lags)."""
+        p = self.poles
+        return float(np.abs(p).max()) if p.size else 0.0
+
+    def zeros(self, input: int | str = 0) -> np.ndarray:
+        """Finite zeros of B_i: roots of Σ_l b_il z^(L_u − l), complex (input ``input``, by position or name).
+
+        Parameters
+        ----------
+        input : int or str
+            The input, by position in ``input_names`` or by name.
+        """
+        self._need()
+        row = self.b[self._input_index(input)]
+        nz = np.flatnonzero(row)
+        if nz.size == 0:
+            return np.zeros(0, complex)
+        return np.roots(row[nz[0]: nz[-1] + 1]).astype(complex)
+
+    def _input_index(self, input: int | str) -> int:
+        if isinstance(input, str):
+            if input not in self.input_names:
+                raise ValueError(f"no input named {input!r}; the inputs are {self.input_names}")
+            return self.input_names.index(input)
+        i = check_int(input, "input", low=0, high=len(self.input_names) - 1)
+        return i
+
+    @property
+    def dc_gain(self) -> np.ndarray:
+        """Σ_l b_il / (1 − Σ_l a_l), shape (m,): output units per unit of each input (= the static gain)."""
+        self._need()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.b.sum(axis=1) / (1.0 - self.a.sum())
+
+    @property
+    def dominant_pole(self) -> complex:
+        """The pole of largest modulus (of a complex pair, the one with positive angle)."""
+        return _dominant(self.poles, self.Ts)[0]
+
+    @property
+    def time_constant(self) -> float:
+        """−Ts / ln|p| of the dominant pole (s); 0 without recursion; inf when |p| >= 1 (nothing settles)."""
+        return _dominant(self.poles, self.Ts)[1]
+
+    @property
+    def damping(self) -> float:
+        """ζ of the dominant pole's continuous equivalent s = ln(p)/Ts (1 for a positive real pole,
+        below 1 for a complex or negative one; 0 on the unit circle, NaN outside it)."""
+        return _dominant(self.poles, self.Ts)[2]
+
+    def step(self, n_samples: int, input: int | str = 0) -> np.ndarray:
+        """Response Δy(k), k = 0 … n−1, to a unit step of input ``input`` applied from k = 0, shape (n,).
+
+        Parameters
+        ----------
+        n_samples : int
+            Length of the response.
+        input : int or str
+            The input stepped, by position or name.
+        """
+        self._need()
+        n = check_int(n_samples, "n_samples", low=1)
+        b = np.concatenate([[0.0], self.b[self._input_index(input)]])
+        return lfilter(b, np.concatenate([[1.0], -self.a]), np.ones(n))
+
+    def frequency_response(self, omega: np.ndarray, input: int | str = 0) -> np.ndarray:
+        """G_i(e^{jωTs}) = B_i / A on the unit circle at the angular frequencies ``omega`` (rad/s), complex, shape (K,).
+
+        Parameters
+        ----------
+        omega : array_like, shape (K,)
+            Angular frequencies (rad/s), up to the Nyquist frequency π/Ts.
+        input : int or str
+            The input, by position or name.
+        """
+        self._need()
+        zi = np.exp(-1j * np.atleast_1d(np.asarray(omega, float)) * self.Ts)  # z⁻¹ on the unit circle
+        b = self.b[self._input_index(input)]
+        num = np.polynomial.polynomial.polyval(zi, np.concatenate([[0.0], b]))
+        den = np.polynomial.polynomial.polyval(zi, np.concatenate([[1.0], -self.a]))
+        return num / den
+
+    def settling_time(self, input: int | str = 0, band: float = SETTLING_BAND) -> float:
+        """Time (s) after which the step response stays within ``band`` of its final value.
+
+        Counted from the step instant. inf when the equilibrium is not stable (or settles beyond
+        10⁷ samples); NaN when the DC gain is zero (no final value to settle on).
+
+        Parameters
+        ----------
+        input : int or str
+            The input stepped.
+        band : float
+            Fraction of the final value (dimensionless, default 0.02).
+        """
+        band = check_real(band, "band", low=0, low_open=True, high=1, high_open=True)
+        i = self._input_index(input)
+        g = float(self.dc_gain[i])
+        rho = self.spectral_radius
+        if rho >= 1.0 or not np.isfinite(g):
+            return float("inf")
+        if g == 0.0:
+            return float("nan")
+        lags = self.a.size + self.b.shape[1] + 2
+        n = lags if rho == 0.0 else lags + int(np.ceil(np.log(band * 1e-3) / np.log(rho)))
+        if n > MAX_SETTLING_SAMPLES:
+            return float("inf")
+        s = self.step(n, i)
+        out = np.flatnonzero(np.abs(s - g) > band * abs(g))
+        return float((out[-1] + 1) * self.Ts) if out.size else 0.0
+
+    # -- python-control ------------------------------------------------------------------------
+    def to_statespace(self) -> Any:
+        """The local model as a discrete ``control.StateSpace`` (dt = Ts) in deviation variables.
+
+        Observer canonical form of order n = max(L_y, L_u): x_1 = Δy, A's first column holds the
+        a_l, B's rows the b_il, C = [1, 0, …], D = 0. Its eigenvalues are :attr:`poles` and
+        n − L_y poles at z = 0 (input lags beyond the output lags). Inputs are named after
+        ``input_names``, the output ``"y"``. Needs python-control (``pip install graybox[control]``).
+        """
+        self._need()
+        return local_statespace(self)
+
+    def to_transfer_function(self) -> Any:
+        """The local model as a discrete ``control.TransferFunction`` (dt = Ts), one column per input.
+
+        G_i(z) = Σ_l b_il z^(n−l) / (z^n − Σ_l a_l z^(n−l)), n = max(L_y, L_u), in deviation
+        variables. Needs python-control (``pip install graybox[control]``).
+        """
+        self._need()
+        return local_transfer_function(self)
+
+    def __repr__(self) -> str:
+        u = ", ".join(f"{v:g}" for v in self.ubar)
+        if self.ybar is None:
+            return f"LocalModel(ū = ({u}): {self.reason})"
+        g = ", ".join(f"{v:.4g}" for v in self.dc_gain)
+        return (f"LocalModel(ū = ({u}), ȳ = {self.ybar:.6g}, {self.status}, gain = ({g}), "
+                f"ρ = {self.spectral_radius:.4g}, τ = {self.time_constant:.4g} s)")
+
+
+# -- python-control ------------------------------------------------------------------------------
+#: How to install the optional dependency.
+CONTROL_EXTRA = "pip install graybox[control]"
+
+
+def require_control() -> Any:
+    """python-control, or an ``ImportError`` naming the extra to install."""
+    try:
+        import control
+    except ImportError as exc:
+        raise ImportError(f"this needs python-control (the 'control' extra): {CONTROL_EXTRA}") from exc
+    return control
+
+
+def _padded(lm: LocalModel) -> tuple[np.ndarray, np.ndarray, int]:
+    """(a, b) padded to the common order n = max(L_y, L_u): a (n,), b (m, n)."""
+    n = max(lm.a.size, lm.b.shape[1], 1)
+    a = np.zeros(n)
+    a[: lm.a.size] = lm.a
+    b = np.zeros((lm.b.shape[0], n))
+    b[:, : lm.b.shape[1]] = lm.b
+    return a, b, n
+
+
+def local_statespace(lm: LocalModel) -> Any:
+    """See :meth:`graybox.control._local.LocalModel.to_statespace`."""
+    ct = require_control()
+    a, b, n = _padded(lm)
+    A = np.zeros((n, n))
+    A[:, 0] = a
+    A[np.arange(n - 1), np.arange(1, n)] = 1.0
+    C = np.zeros((1, n))
+    C[0, 0] = 1.0
+    return ct.ss(A, b.T, C, np.zeros((1, b.shape[0])), dt=lm.Ts, inputs=list(lm.input_names), outputs=["y"],
+                 states=[f"x{i + 1}" for i in range(n)], name=system_name(lm.name, "local"))
+
+
+def local_transfer_function(lm: LocalModel) -> Any:
+    """See :meth:`graybox.control._local.LocalModel.to_transfer_function`."""
+    ct = require_control()
+    a, b, n = _padded(lm)
+    den = np.concatenate([[1.0], -a])
+    nums = [[np.trim_zeros(np.concatenate([[0.0], row]), "f") if np.any(row) else np.array([0.0]) for row in b]]
+    return ct.tf(nums, [[den] * b.shape[0]], dt=lm.Ts, inputs=list(lm.input_names), outputs=["y"],
+                 name=system_name(lm.name, "local"))
+
+
+def system_name(name: str, what: str) -> str | None:
+    """A python-control system name from a model name (None lets python-control number it)."""
+    clean = "".join(ch if ch.isalnum() or ch == "_" else "_" for ch in name).strip("_")
+    return f"{clean}_{what}" if clean else None
+
+
+# -- the equilibrium and the linearisation --------------------------------------------------------
+def _as_points(model: Model, ubar: object) -> np.ndarray:
+    """ū as points of shape (M, m) in the model's input order."""
+    m = model.n_inputs
+    ub = np.asarray(ubar, dtype=float)
+    if m == 1:
+        ub = np.atleast_1d(ub).reshape(-1, 1) if ub.ndim <= 1 else ub
+    elif ub.ndim == 1 and ub.size == m:
+        ub = ub[None, :]
+    if ub.ndim != 2 or ub.shape[1] != m or ub.shape[0] == 0:
+        raise ValueError(f"ubar must have shape (M,) for one input or (M, {m}) for {m} inputs "
+                         f"{model.input_names}, got shape {np.shape(ubar)}")
+    if not np.all(np.isfinite(ub)):
+        raise ValueError("ubar has non-finite values")
+    return ub
+
+
+def _reached(model: Model, thetas: np.ndarray, ub: np.ndarray, y0: np.ndarray):
+    """:class:`~graybox.static._analysis.Reached` of many members at the points ``ub`` (M, m)."""
+    if model.n_inputs > 1:
+        return reached_surface(model.structure, thetas, ub, y0, inputs=model.input_names)
+    return reached_equilibria(model.structure, thetas, ub[:, 0], y0)
+
+
+def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float | None, str, str]:
+    """(ȳ, status, reason) at one point u (m,): the reached equilibrium, else the one to linearise around."""
+    eqs = model.equilibria(u if model.n_inputs > 1 else float(u[0]))
+    label = f"{float(u[0]):g}" if u.size == 1 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
+    if y0 is None:
+        stable = [e for e in eqs if e.stable]
+        if len(stable) == 1:
+            return stable[0].ybar, "reached", ""
+        if len(stable) > 1:
+            raise ValueError(f"the model has {len(stable)} stable equilibria at ū = {label} "
+                             f"({[round(e.ybar, 6) for e in stable]}); pass y0 to choose the one reached from it")
+        if not eqs:
+            return None, "no equilibrium", f"ū = {label}: no equilibrium (the static equation has no real root)"
+        e = min(eqs, key=lambda e: e.spectral_radius)
+        return e.ybar, "no stable equilibrium", (f"ū = {label}: no stable equilibrium; linearised at the unstable "
+                                                 f"ȳ = {e.ybar:.6g} (spectral radius {e.spectral_radius:.4g})")
+    r = _reached(model, model.theta[None, :], u[None, :], np.array([y0]))
+    if r.ok[0, 0]:
+        return float(r.ybar[0, 0]), "reached", ""
+    status = r.STATUS[int(r.status[0, 0])]
+    reason = r.explain(0)[0]
+    if not eqs:
+        return None, status, reason
+    e = min(eqs, key=lambda e: abs(e.ybar - y0))
+    return e.ybar, status, reason + f"; linearised at the equilibrium ȳ = {e.ybar:.6g} nearest y0"
+
+
+def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
+    """StaticRangeWarning naming the ū outside the input range of ``data``'s records and static points."""
+    if data is None:
+        return
+    if isinstance(data, Dataset):
+        recs = [data.ident, data.valid]
+        static = data.static
+    elif isinstance(data, StaticPoints):
+        recs, static = [], data
+    else:
+        recs, static = as_records(data), None
+    cols = [r.inputs for r in recs] + ([static.ubar.reshape(len(static), -1)] if static is not None else [])
+    lo = np.min([c.min(axis=0) for c in cols], axis=0)
+    hi = np.max([c.max(axis=0) for c in cols], axis=0)
+    if lo.size != ub.shape[1]:
+        raise ValueError(f"data has {lo.size} input(s) but the model has {ub.shape[1]} {model.input_names}")
+    tol = 1e-9 * np.maximum(np.maximum(np.abs(lo), np.abs(hi)), 1.0)
+    out = ub[((ub < lo - tol) | (ub > hi + tol)).any(axis=1)]
+    if out.size:
+        box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo, hi))
+        pts = np.round(out[:, 0] if out.shape[1] == 1 else out, 6).tolist()
+        warn(f"operating points ū = {pts} lie outside the input range {box} of the records and static points: "
+             "the local models there are extrapolations of the model", StaticRangeWarning)
+
+
+def _check_Ts(Ts: float | None, data: object) -> float:
+    if Ts is None:
+        if isinstance(data, Dataset):
+            return float(data.Ts)
+        if isinstance(data, Record):
+            return float(data.Ts)
+        raise ValueError("Ts (the sampling period, s) is needed: pass Ts= or data= (a Record or Dataset)")
+    return check_real(Ts, "Ts", low=0, low_open=True)
+
+
+def _y0s(y0: object, M: int) -> list[float | None]:
+    if y0 is None:
+        return [None] * M
+    a = np.atleast_1d(np.asarray(y0, float)).ravel()
+    if a.size not in (1, M) or not np.all(np.isfinite(a)):
+        raise ValueError(f"y0 must be a finite scalar or one value per operating point ({M}), got {y0!r}")
+    return [float(v) for v in np.broadcast_to(a, (M,))]
+
+
+def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float) -> LocalModel:
+    ybar, status, reason = _equilibrium(model, u, y0)
+    Ly, Lu, *_ = _derivative_map(model.structure, model.input_names)
+    if ybar is None:
+        a, b = np.zeros(0), np.zeros((model.n_inputs, 0))
+    else:
+        a2, b3 = jacobian_rows(model.structure, model.input_names, model.theta[None, :], np.array([ybar]), u[None, :])
+        a, b = a2[0], b3[0]
+    return LocalModel(u, ybar, status, reason, a, b, Ts, model.input_names, model.name)
+
+
+def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts: float | None = None,
+                y0: float | None = None, data: Record | Dataset | Sequence[Record] | StaticPoints | None = None
+                ) -> LocalModel:
+    """The local linear model of a polynomial NARX model at the constant input ``ubar``.
+
+    The equilibrium is the one the model reaches there (:func:`graybox.static._analysis.reached_equilibria`,
+    the definition J_SF uses): from ``y0`` when given, else the only stable one. The linearisation
+    around it is exact (partial derivatives read from the term structure).
+
+    Parameters
+    ----------
+    model : Model
+        A polynomial NARX model (a ``NeuralModel`` gets a ``TypeError``).
+    ubar : float or array_like, shape (m,)
+        The operating input (input units); one value per input, in ``model.input_names`` order.
+    Ts : float, optional
+        Sampling period (s); default ``data``'s.
+    y0 : float, optional
+        Initial output of the settling run that picks the equilibrium (output units), e.g. the
+        measured ȳ; needed when several equilibria are stable.
+    data : Record, Dataset, sequence of Record or StaticPoints, optional
+        The data the model was identified on: a ū outside their input range (records and static
+        points) gets a :class:`~graybox.StaticRangeWarning`.
+
+    Returns
+    -------
+    LocalModel
+        ``status`` says whether the equilibrium is reached; without any equilibrium its
+        properties raise ``ValueError`` saying so.
+    """
+    model = check_polynomial(model, "local_model")
+    ub = _as_points(model, ubar)
+    if ub.shape[0] != 1:
+        raise ValueError(f"ubar: local_model takes one operating point, got {ub.shape[0]} (use operating_curve)")
+    Ts_ = _check_Ts(Ts, data)
+    _range_warning(model, ub, data)
+    return _linearise(model, ub[0], _y0s(y0, 1)[0], Ts_)
+
+
+@dataclass(frozen=True, eq=False)
+class OperatingCurve:
+    """Local models along the static curve: gain, time constant and damping against ū.
+
+    Attributes
+    ----------
+    local_models : tuple of LocalModel
+        One per operating point.
+    ubar : ndarray, shape (M,) or (M, m)
+        Operating points (input units).
+    ybar, time_constant, damping, spectral_radius, settling_time : ndarray, shape (M,)
+        Equilibrium (output units), dominant time constant (s), its damping, largest pole
+        modulus, 2 % settling time of a step of the first input (s); NaN where there is no
+        equilibrium (``status`` says why).
+    gain : ndarray, shape (M,) or (M, m)
+        DC gain = static gain (output units per input unit).
+    status : tuple of str
+        Each point's :attr:`LocalModel.status`.
+    level : float
+        Confidence level of the bands (NaN without bands).
+    gain_low, gain_high, time_constant_low, time_constant_high : ndarray or None
+        Monte Carlo band from the parameter covariance (None when none was given).
+    undefined : ndarray, shape (M,) or None
+        Fraction of draws that reach no stable equilibrium at each ū (left out of the band).
+    """
+
+    local_models: tuple[LocalModel, ...]
+    ubar: np.ndarray
+    ybar: np.ndarray
+    gain: np.ndarray
+    time_constant: np.ndarray
+    damping: np.ndarray
+    spectral_radius: np.ndarray
+    settling_time: np.ndarray
+    status: tuple[str, ...]
+    level: float = float("nan")
+    gain_low: np.ndarray | None = None
+    gain_high: np.ndarray | None = None
+    time_constant_low: np.ndarray | None = None
+    time_constant_high: np.ndarray | None = None
+    undefined: np.ndarray | None = None
+    model_name: str = ""
+
+    BANDS: ClassVar[tuple[str, ...]] = ("gain_low", "gain_high", "time_constant_low", "time_constant_high", "undefined")
+
+    def __post_init__(self) -> None:
+        for f in ("ubar", "ybar", "gain", "time_constant", "damping", "spectral_radius", "settling_time", *self.BANDS):
+            v = getattr(self, f)
+            if v is not None:
+                object.__setattr__(self, f, frozen(v))
+
+    @property
+    def has_band(self) -> bool:
+        """True when the parameter uncertainty gave bands."""
+        return self.gain_low is not None
+
+    def to_frame(self) -> Any:
+        """One row per operating point (pandas DataFrame): ȳ, gain, τ, ζ, ρ, settling time, status, bands."""
+        import pandas as pd
+
+        single = self.ubar.ndim == 1
+        cols: dict[str, Any] = {"ybar": self.ybar}
+        if single:
+            cols["gain"] = self.gain
+        else:
+            for i in range(self.gain.shape[1]):
+                cols[f"gain {self.local_models[0].input_names[i]}"] = self.gain[:, i]
+        cols.update({"time constant": self.time_constant, "damping": self.damping,
+                     "spectral radius": self.spectral_radius, "settling time": self.settling_time,
+                     "status": list(self.status)})
+        if self.has_band:
+            for f in self.BANDS:
+                v = getattr(self, f)
+                if v.ndim == 1:
+                    cols[f.replace("_", " ")] = v
+        index = pd.Index(self.ubar, name="ubar") if single else pd.MultiIndex.from_arrays(
+            self.ubar.T, names=list(self.local_models[0].input_names))
+        return pd.DataFrame(cols, index=index)
+
+    def __repr__(self) -> str:
+        ok = sum(s == "reached" for s in self.status)
+        tau = self.time_constant[np.isfinite(self.time_constant)]
+        span = f", τ in [{tau.min():.4g}, {tau.max():.4g}] s" if tau.size else ""
+        return (f"OperatingCurve({self.model_name or 'model'}: {len(self.local_models)} points, {ok} reached{span}"
+                + (f", band at {self.level:g}" if self.has_band else "") + ")")
+
+
+def _summary(lm: LocalModel) -> tuple[float, np.ndarray, float, float, float, float]:
+    """(ȳ, gain, τ, ζ, ρ, settling time) of one local model; NaN where it has no equilibrium."""
+    m = len(lm.input_names)
+    if not lm.exists:
+        return np.nan, np.full(m, np.nan), np.nan, np.nan, np.nan, np.nan
+    _, tau, zeta = _dominant(lm.poles, lm.Ts)
+    return float(lm.ybar), lm.dc_gain, tau, zeta, lm.spectral_radius, lm.settling_time(0)
+
+
+def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: float | None = None,
+                    y0: float | Sequence[float] | np.ndarray | None = None,
+                    data: Record | Dataset | Sequence[Record] | StaticPoints | None = None,
+                    uncertainty: Any = None, n_samples: int = 500, seed: int = 0) -> OperatingCurve:
+    """Local models over a grid of operating inputs: the model's gain, time constant and damping against ū.
+
+    Parameters
+    ----------
+    model : Model
+        A polynomial NARX model.
+    ubar : array_like, shape (M,) or (M, m)
+        Operating inputs (input units).
+    Ts : float, optional
+        Sampling period (s); default ``data``'s.
+    y0 : float or array_like of shape (M,), optional
+        Initial output of each point's settling run (see :func:`local_model`).
+    data : Record, Dataset, sequence of Record or StaticPoints, optional
+        The identification data: ū outside their range gets a :class:`~graybox.StaticRangeWarning`.
+    uncertainty : ParameterUncertainty, optional
+        The model's parameter covariance (:func:`graybox.ls_uncertainty` and the others): the
+        gain and time-constant bands at its level are the quantiles of ``n_samples`` draws
+        θ ~ N(θ̂, cov), each at the equilibrium it reaches from the estimate's ȳ.
+    n_samples : int
+        Monte Carlo draws for the bands.
+    seed : int
+        Seed of the draws.
+
+    Returns
+    -------
+    OperatingCurve
+        Draw it with :func:`graybox.plots.plot_operating_curve`.
+    """
+    model = check_polynomial(model, "operating_curve")
+    ub = _as_points(model, ubar)
+    Ts_ = _check_Ts(Ts, data)
+    _range_warning(model, ub, data)
+    lms = tuple(_linearise(model, u, y, Ts_) for u, y in zip(ub, _y0s(y0, ub.shape[0])))
+    rows = [_summary(lm) for lm in lms]
+    single = model.n_inputs == 1
+    gain = np.array([r[1] for r in rows])
+    fields: dict[str, Any] = {}
+    if uncertainty is not None:
+        fields = _band(model, uncertainty, ub, np.array([r[0] for r in rows]), Ts_, check_int(n_samples, "n_samples",
+                       low=10), check_seed(seed), single)
+    return OperatingCurve(lms, ub[:, 0] if single else ub, np.array([r[0] for r in rows]),
+                          gain[:, 0] if single else gain, np.array([r[2] for r in rows]),
+                          np.array([r[3] for r in rows]), np.array([r[4] for r in rows]),
+                          np.array([r[5] for r in rows]), tuple(lm.status for lm in lms), model_name=model.name,
+                          **fields)
+
+
+def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: float, n: int, seed: int,
+          single: bool) -> dict[str, Any]:
+    """Monte Carlo quantiles of the gain and the time constant under θ ~ N(θ̂, cov)."""
+    cov = getattr(uncertainty, "cov", None)
+    um = getattr(uncertainty, "model", None)
+    if cov is None or not isinstance(um, Model) or um.structure != model.structure:
+        raise ValueError("uncertainty must be the ParameterUncertainty of this model (same structure), e.g. "
+                         "graybox.ls_uncertainty(model, data)")
+    if not np.all(np.isfinite(ybar)):
+        raise ValueError("the gain and time-constant bands need an equilibrium at every operating point")
+    th = model.theta
+    rng = np.random.default_rng(seed)
+    w, V = np.linalg.eigh((cov + cov.T) / 2)
+    thetas = th[None, :] + (rng.standard_normal((n, th.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T
+    M = ub.shape[0]
+    r = _reached(model, thetas, ub, ybar)
+    ok = r.status == REACHED  # (n, M)
+    Y = np.where(ok, r.ybar, 0.0)
+    a, b = jacobian_rows(model.structure, model.input_names, np.repeat(thetas, M, axis=0), Y.ravel(),
+                         np.tile(ub, (n, 1)))
+    rho = np.abs(_characteristic_roots(a)).max(axis=1, initial=0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = np.where(rho > 0, -Ts / np.log(rho), 0.0).reshape(n, M)
+        gain = (b.sum(axis=2) / (1.0 - a.sum(axis=1))[:, None]).reshape(n, M, -1)
+    tau = np.where(ok, tau, np.nan)
+    gain = np.where(ok[:, :, None], gain, np.nan)
+    q = (1 - uncertainty.level) / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a point no draw reaches has an all-NaN column
+        glo, ghi = np.nanquantile(gain, [q, 1 - q], axis=0)
+        tlo, thi = np.nanquantile(tau, [q, 1 - q], axis=0)
+    if single:
+        glo, ghi = glo[:, 0], ghi[:, 0]
+    return {"level": float(uncertainty.level), "gain_low": glo, "gain_high": ghi, "time_constant_low": tlo,
+            "time_constant_high": thi, "undefined": 1.0 - ok.mean(axis=0)}

@@ -1,0 +1,233 @@
+"""The bridge to python-control: local models as LTI systems, the whole model as a discrete nonlinear system.
+
+python-control is an optional extra (``pip install graybox[control]``), imported only here and only
+when a function needs it. (``import control`` inside :mod:`graybox.control` is an absolute import:
+it reaches python-control, not this package.)
+
+The nonlinear system
+--------------------
+A NARX model y(k) = F(y(k−1) … y(k−L_y), u_i(k−1) … u_i(k−L_ui)) becomes a discrete
+``NonlinearIOSystem`` whose state at sample k holds the lagged outputs and inputs
+
+    x(k) = [y(k−1) … y(k−L_y), u_1(k−1) … u_1(k−L_u1), …, u_m(k−1) … u_m(k−L_um)],
+
+whose output is y(k) = F(x(k)) (no direct feedthrough: every input lag is at least 1, so it can be
+closed with any controller without an algebraic loop) and whose update shifts the lags in, y(k)
+and u(k) at the front. Started from the state the record's first L = max lag samples give
+(:func:`narx_initial_state`) and fed the inputs u(L), u(L+1), …, its outputs are the free run
+y(L), y(L+1), … of :meth:`graybox.Model.simulate`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from ..core._records import Record
+from ..core._terms import Structure
+from ..core._validation import check_real
+from ..models._model import Model
+from ._local import system_name, check_polynomial, require_control
+
+__all__ = ["narx_iosystem", "narx_initial_state", "narx_state_names", "narx_steady_state"]
+
+# -- the whole model ------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Layout:
+    """Where each lag sits in the state, and the exponents of every term in the state variables."""
+
+    Ly: int
+    Lu: tuple[int, ...]
+    E: np.ndarray        # (n_terms, n_states): term t = ∏_j x_j^E[t, j]
+    y_rows: np.ndarray   # state indices of y(k-1) … y(k-Ly)
+    u_rows: tuple[np.ndarray, ...]
+
+
+@lru_cache(maxsize=256)
+def _layout(structure: Structure, inputs: tuple[str, ...]) -> _Layout:
+    Ly = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
+    Lu = tuple(structure.input_lag(n) for n in inputs)
+    start = {"y": 0}
+    pos = Ly
+    for name, L in zip(inputs, Lu):
+        start[name] = pos
+        pos += L
+    E = np.zeros((len(structure), pos))
+    for j, term in enumerate(structure):
+        for s, l, p in term.factors:
+            E[j, start[s] + l - 1] += p
+    E.setflags(write=False)
+    u_rows = tuple(np.arange(start[n], start[n] + L) for n, L in zip(inputs, Lu))
+    return _Layout(Ly, Lu, E, np.arange(Ly), u_rows)
+
+
+def _noise_coefficients(model: Model) -> np.ndarray:
+    """c_l of the linear MA part Σ c_l e(k−l), shape (n_e,); ``ValueError`` for any other noise term."""
+    ne = model.noise_structure.max_lag
+    c = np.zeros(ne)
+    for cj, t in zip(model.noise_theta, model.noise_structure):
+        if not (len(t.factors) == 1 and t.factors[0][2] == 1):
+            raise ValueError(f"noise=True takes a linear MA part (terms e(k-l)); the model has the noise term {t}")
+        c[t.factors[0][1] - 1] += cj
+    return c
+
+
+def narx_state_names(model: Model, *, noise: bool = False) -> list[str]:
+    """The state names of :func:`narx_iosystem`'s system: ``y[k-1]`` … then each input's ``u[k-1]`` …
+
+    Parameters
+    ----------
+    model : Model
+        A polynomial NARX model.
+    noise : bool
+        As for :func:`narx_iosystem`: the noise lags ``e[k-1]`` … come last.
+    """
+    model = check_polynomial(model, "narx_state_names")
+    lay = _layout(model.structure, model.input_names)
+    names = [f"y[k-{l}]" for l in range(1, lay.Ly + 1)]
+    for n, L in zip(model.input_names, lay.Lu):
+        names += [f"{n}[k-{l}]" for l in range(1, L + 1)]
+    if noise:
+        names += [f"e[k-{l}]" for l in range(1, _noise_coefficients(model).size + 1)]
+    return names
+
+
+def narx_initial_state(model: Model, record: Record, *, start: int | None = None, noise: bool = False) -> np.ndarray:
+    """The state of :func:`narx_iosystem`'s system at sample ``start`` of a record: its lagged outputs and inputs.
+
+    Parameters
+    ----------
+    model : Model
+        A polynomial NARX model.
+    record : Record
+        Measured data with the model's inputs (taken by name).
+    start : int, optional
+        The sample the system starts at (default, and at least, the model's max lag L: the state
+        holds y(start−1) … and u(start−1) …). From ``start = L`` and inputs ``u[L:]`` the
+        system's free run is ``model.simulate(record)[L:]``.
+    noise : bool
+        As for :func:`narx_iosystem`: the noise lags are then appended, as zeros (the residuals
+        before the start are taken as 0, as one-step residuals are before sample L).
+
+    Returns
+    -------
+    ndarray, shape (n_states,)
+        In the order of :func:`narx_state_names`.
+    """
+    model = check_polynomial(model, "narx_initial_state")
+    if not isinstance(record, Record):
+        raise TypeError(f"record must be a Record, got {type(record).__name__}")
+    lay = _layout(model.structure, model.input_names)
+    L = model.max_lag
+    k = L if start is None else int(start)
+    if k < L or k > len(record):
+        raise ValueError(f"start must lie in [{L}, {len(record)}] (the model's max lag to the record's length), got {start!r}")
+    parts = [record.y[k - lay.Ly: k][::-1] if lay.Ly else np.zeros(0)]
+    for n, Lu in zip(model.input_names, lay.Lu):
+        if Lu:
+            parts.append(record.input(n)[k - Lu: k][::-1])
+    if noise:
+        parts.append(np.zeros(_noise_coefficients(model).size))
+    return np.concatenate(parts).astype(float)
+
+
+def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, noise: bool = False) -> np.ndarray:
+    """The state of :func:`narx_iosystem`'s system settled at (ū, ȳ): every output lag ȳ, every input lag ū.
+
+    Parameters
+    ----------
+    model : Model
+        A polynomial NARX model.
+    ubar : float or array_like, shape (m,)
+        The constant input (input units), one value per input in ``model.input_names`` order.
+    ybar : float
+        The output level (output units), e.g. :attr:`graybox.LocalModel.ybar` at ū.
+    noise : bool
+        As for :func:`narx_iosystem`: the noise lags are appended, as zeros.
+
+    Returns
+    -------
+    ndarray, shape (n_states,)
+        In the order of :func:`narx_state_names`.
+    """
+    model = check_polynomial(model, "narx_steady_state")
+    ub = np.atleast_1d(np.asarray(ubar, float)).ravel()
+    if ub.size != model.n_inputs or not np.all(np.isfinite(ub)):
+        raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
+    yb = check_real(ybar, "ybar")
+    lay = _layout(model.structure, model.input_names)
+    ne = _noise_coefficients(model).size if noise else 0
+    return np.concatenate([np.full(lay.Ly, yb)] + [np.full(L, u) for u, L in zip(ub, lay.Lu)] + [np.zeros(ne)])
+
+
+def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | None = None) -> Any:
+    """The whole NARX model as a discrete ``control.NonlinearIOSystem`` (dt = Ts).
+
+    State, update and output as in the module docstring: the state holds the lagged outputs and
+    inputs (:func:`narx_state_names`), the output is the model's one-step map y(k) = F(x(k)) and
+    the update shifts y(k) and u(k) in. Every model input is a system input (named after
+    ``model.input_names``); the output is ``"y"``. Connect it with a controller by
+    ``control.interconnect`` and simulate with ``control.input_output_response`` (times
+    ``Ts * arange(N)``, initial state from :func:`narx_initial_state` or :func:`narx_steady_state`).
+    By default the MA part of a NARMAX model is left out, as in :meth:`graybox.Model.simulate`.
+
+    Parameters
+    ----------
+    model : Model
+        A polynomial NARX model.
+    Ts : float
+        Sampling period (s).
+    noise : bool
+        Add the noise e(k) as a last system input ``"e"`` (output units) and the model's linear MA
+        part: y(k) = F(x(k)) + Σ_l c_l e(k−l) + e(k), with e(k−1) … e(k−n_e) appended to the
+        state (for a NARX model, y(k) = F(x(k)) + e(k)). Fed the model's one-step residuals on a
+        record, the system reproduces the record's output; fed white noise of the residuals'
+        variance, it simulates the loop with the identified disturbance. e(k) reaches y(k)
+        directly (the only feedthrough).
+    name : str, optional
+        The system's name (default from the model's name).
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        Needs python-control (``pip install graybox[control]``).
+    """
+    model = check_polynomial(model, "narx_iosystem")
+    Ts = check_real(Ts, "Ts", low=0, low_open=True)
+    c = _noise_coefficients(model) if noise else np.zeros(0)
+    ct = require_control()
+    lay = _layout(model.structure, model.input_names)
+    theta = np.array(model.theta)
+    E = lay.E
+    n_proc = E.shape[1]  # the process states; the noise lags follow
+    m = model.n_inputs
+
+    def output(t, x, u, params):
+        x = np.asarray(x, float)
+        y = theta @ np.prod(x[None, :n_proc] ** E, axis=1)
+        if noise:
+            y += c @ x[n_proc:] + np.atleast_1d(np.asarray(u, float))[m]
+        return np.array([y])
+
+    def update(t, x, u, params):
+        x = np.asarray(x, float)
+        u = np.atleast_1d(np.asarray(u, float))
+        new = np.empty_like(x)
+        if lay.Ly:
+            new[0] = output(t, x, u, params)[0]
+            new[1: lay.Ly] = x[: lay.Ly - 1]
+        for i, rows in enumerate(lay.u_rows):
+            if rows.size:
+                new[rows[0]] = u[i]
+                new[rows[1:]] = x[rows[:-1]]
+        if c.size:
+            new[n_proc] = u[m]
+            new[n_proc + 1:] = x[n_proc:-1]
+        return new
+
+    inputs = list(model.input_names) + (["e"] if noise else [])
+    return ct.nlsys(update, output, inputs=inputs, outputs=["y"], states=narx_state_names(model, noise=noise),
+                    dt=Ts, name=name if name is not None else system_name(model.name, "narx"))

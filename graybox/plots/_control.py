@@ -1,0 +1,135 @@
+"""Pictures of local linear models: step and Bode responses over the operating range, gain and time constant against ū."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..control._local import LocalModel, OperatingCurve
+
+__all__ = ["plot_local_models", "plot_operating_curve"]
+
+
+def _models(models: OperatingCurve | Sequence[LocalModel]) -> list[LocalModel]:
+    lms = list(models.local_models if isinstance(models, OperatingCurve) else models)
+    if not lms or not all(isinstance(m, LocalModel) for m in lms):
+        raise ValueError("models must be an OperatingCurve or a non-empty sequence of LocalModel")
+    return lms
+
+
+def _label(lm: LocalModel) -> str:
+    return "ū = " + (f"{lm.ubar[0]:g}" if lm.ubar.size == 1 else "(" + ", ".join(f"{v:g}" for v in lm.ubar) + ")")
+
+
+def plot_local_models(
+    models: OperatingCurve | Sequence[LocalModel],
+    *,
+    input: int | str = 0,
+    duration: float | None = None,
+    n_frequencies: int = 400,
+) -> Figure:
+    """Step responses and Bode diagrams of local models at several operating points (one colour each).
+
+    Parameters
+    ----------
+    models : OperatingCurve or sequence of LocalModel
+        Local models with an equilibrium (those without one are listed in the title and skipped).
+    input : int or str
+        The input stepped (by position or name).
+    duration : float, optional
+        Length of the step responses (s); default six times the largest finite time constant.
+    n_frequencies : int
+        Frequencies of the Bode diagram, log-spaced up to the Nyquist frequency π/Ts.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: Δy per unit step of the input against time; right: magnitude (output units per
+        input unit) and phase (degrees) against frequency (rad/s).
+    """
+    lms = _models(models)
+    shown = [m for m in lms if m.exists]
+    missing = [m for m in lms if not m.exists]
+    if not shown:
+        raise ValueError("none of the local models has an equilibrium: " + "; ".join(m.reason for m in missing))
+    Ts = shown[0].Ts
+    taus = [m.time_constant for m in shown if np.isfinite(m.time_constant) and m.time_constant > 0]
+    T = duration if duration is not None else 6 * max(taus, default=20 * Ts)
+    n = max(int(np.ceil(T / Ts)) + 1, 2)
+    fig = Figure(figsize=(10, 5))
+    ax_s = fig.add_subplot(1, 2, 1)
+    ax_m = fig.add_subplot(2, 2, 2)
+    ax_p = fig.add_subplot(2, 2, 4, sharex=ax_m)
+    w = np.logspace(np.log10(np.pi / Ts) - 3, np.log10(np.pi / Ts), int(n_frequencies))
+    for m in shown:
+        tag = _label(m) + ("" if m.reached else f" ({m.status})")
+        line, = ax_s.plot(np.arange(n) * Ts, m.step(n, input), lw=1.2, label=tag)
+        G = m.frequency_response(w, input)
+        ax_m.loglog(w, np.abs(G), color=line.get_color(), lw=1.0)
+        ax_p.semilogx(w, np.degrees(np.unwrap(np.angle(G))), color=line.get_color(), lw=1.0)
+    ax_s.set_xlabel("time (s)")
+    ax_s.set_ylabel("Δy per unit step")
+    ax_s.legend(fontsize=8, loc="best")
+    ax_m.set_ylabel("|G|")
+    ax_p.set_ylabel("phase (°)")
+    ax_p.set_xlabel("ω (rad/s)")
+    if missing:
+        fig.suptitle("no equilibrium at " + ", ".join(_label(m)[4:] for m in missing), fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def plot_operating_curve(
+    curve: OperatingCurve,
+    *,
+    reference: tuple[np.ndarray, np.ndarray] | None = None,
+    reference_label: str = "plant",
+    xlabel: str = "ū",
+) -> Figure:
+    """The local gain, dominant time constant and damping against the operating input (one input).
+
+    Parameters
+    ----------
+    curve : OperatingCurve
+        From :func:`graybox.operating_curve`; its bands (when computed) are shaded.
+    reference : (ubar, time_constant), optional
+        Another time constant against ū (e.g. the plant's own, linearised), drawn as points.
+    reference_label : str
+        Its legend label.
+    xlabel : str
+        The input's label (with units).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three stacked panels sharing ū: gain, time constant (s), damping.
+    """
+    if not isinstance(curve, OperatingCurve):
+        raise ValueError(f"curve must be an OperatingCurve, got {type(curve).__name__}")
+    if curve.ubar.ndim != 1:
+        raise ValueError("plot_operating_curve draws one input; for several, plot slices of the curve's to_frame()")
+    u = curve.ubar
+    fig = Figure(figsize=(7, 7))
+    axes = [fig.add_subplot(3, 1, i + 1) for i in range(3)]
+    name = curve.model_name or "model"
+    for ax, y, lo, hi, lab in ((axes[0], curve.gain, curve.gain_low, curve.gain_high, "gain"),
+                               (axes[1], curve.time_constant, curve.time_constant_low, curve.time_constant_high,
+                                "time constant (s)"),
+                               (axes[2], curve.damping, None, None, "damping ζ")):
+        ax.plot(u, y, "-o", ms=3, lw=1.2, label=name)
+        if lo is not None:
+            ax.fill_between(u, lo, hi, alpha=0.25, label=f"{curve.level:.0%} band")
+        ax.set_ylabel(lab)
+    if reference is not None:
+        ru, rt = (np.asarray(v, float) for v in reference)
+        axes[1].plot(ru, rt, "s", ms=5, color="black", label=reference_label)
+    axes[2].set_ylim(0.0, 1.05)  # ζ of a stable pole lies in [0, 1]
+    bad = [f"{v:g}" for v, s in zip(u, curve.status) if s != "reached"]
+    if bad:
+        axes[0].set_title("not reached at ū = " + ", ".join(bad), fontsize=9)
+    axes[1].legend(fontsize=8, loc="best")
+    axes[2].set_xlabel(xlabel)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,377 @@
+"""From model to controller (issue 23): local linear models, python-control systems, closed loop."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings, strategies as st
+
+import graybox as gb
+from graybox import Model, reference
+from graybox.control._local import jacobian_rows
+from graybox.datasets.pumping import PumpingPlant
+from graybox.static._analysis import _linear_coefficients
+
+ct = pytest.importorskip("control")
+
+#: A non-rational single-input model (y² terms), stable near ū = 1 … 3.
+NONRATIONAL = Model(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)y(k-1)", "y(k-1)^2", "u(k-3)^2"],
+                    [0.1, 0.5, 0.2, 0.3, 0.05, -0.04, 0.01], name="nonrational")
+#: Two inputs, products across inputs and with y.
+TWO_INPUTS = Model(["1", "y(k-1)", "y(k-2)", "u1(k-1)", "u2(k-2)", "u1(k-1)u2(k-1)", "y(k-1)u1(k-2)", "y(k-2)^2"],
+                   [0.2, 0.4, 0.1, 0.3, -0.2, 0.05, 0.04, -0.02], name="two", input_names=("u1", "u2"))
+
+
+def one_step(model: Model, ylags: np.ndarray, ulags: np.ndarray) -> float:
+    """y(L) of the model's own compiled free run from y(L-1) … y(0) = ylags and u(L-1) … u(0) = ulags (L, m)."""
+    L = ylags.size
+    u = np.vstack([ulags[::-1], ulags[:1]])  # u(0) … u(L-1), then u(L) (unused by y(L))
+    y0 = ylags[::-1]
+    if model.n_inputs == 1:
+        return float(model.simulate(u[:, 0], y0)[L])
+    return float(model.simulate(u, y0)[L])
+
+
+def fd_jacobian(model: Model, ybar: float, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Central differences of the one-step map at the steady state, in every lagged output and input."""
+    L = model.max_lag
+    m = model.n_inputs
+    y = np.full(L, ybar)
+    U = np.tile(np.asarray(ubar, float), (L, 1))
+    a = np.zeros(L)
+    b = np.zeros((m, L))
+    for l in range(L):
+        h = 1e-6 * max(abs(ybar), 1.0)
+        e = np.zeros(L)
+        e[l] = h
+        a[l] = (one_step(model, y + e, U) - one_step(model, y - e, U)) / (2 * h)
+        for i in range(m):
+            hu = 1e-6 * max(abs(ubar[i]), 1.0)
+            E = np.zeros((L, m))
+            E[l, i] = hu
+            b[i, l] = (one_step(model, y, U + E) - one_step(model, y, U - E)) / (2 * hu)
+    return a, b
+
+
+def padded(x: np.ndarray, n: int, axis: int = -1) -> np.ndarray:
+    pad = [(0, 0)] * x.ndim
+    pad[axis] = (0, n - x.shape[axis])
+    return np.pad(x, pad)
+
+
+@pytest.mark.parametrize("model,ubar", [
+    (reference.paper_model(15), [1200.0]),
+    (reference.paper_model(17), [1000.0]),
+    (NONRATIONAL, [2.0]),
+    (TWO_INPUTS, [1.0, 0.5]),
+])
+def test_linearisation_equals_finite_differences_of_the_one_step_map(model, ubar):
+    lm = gb.local_model(model, ubar if model.n_inputs > 1 else ubar[0], Ts=0.05)
+    assert lm.reached
+    a_fd, b_fd = fd_jacobian(model, lm.ybar, np.array(ubar))
+    L = model.max_lag
+    np.testing.assert_allclose(padded(lm.a, L), a_fd, rtol=1e-5, atol=1e-7 * np.abs(a_fd).max())
+    np.testing.assert_allclose(padded(lm.b, L), b_fd, rtol=1e-5, atol=1e-7 * np.abs(b_fd).max())
+
+
+@settings(deadline=None, max_examples=60)  # the first example compiles the static kernels
+@given(theta=st.lists(st.floats(-0.6, 0.6), min_size=7, max_size=7), u=st.floats(0.2, 3.0))
+def test_dc_gain_is_the_static_gain_and_poles_are_the_stability_tests(theta, u):
+    m = NONRATIONAL.with_theta(np.array(theta))
+    eqs = m.equilibria(u)
+    stable = [e for e in eqs if e.stable]
+    assume(len(stable) == 1)
+    lm = gb.local_model(m, u, Ts=1.0)
+    assert lm.reached and lm.ybar == pytest.approx(stable[0].ybar, rel=1e-9, abs=1e-12)
+    np.testing.assert_allclose(lm.dc_gain, m.static_gain([u]), rtol=1e-8, atol=1e-12)
+    # the stability test's own linearisation, its verdict and spectral radius
+    np.testing.assert_allclose(lm.a, _linear_coefficients(m.structure, m.theta, lm.ybar, u), rtol=1e-12, atol=1e-15)
+    assert lm.stable == stable[0].stable
+    assert lm.spectral_radius == pytest.approx(stable[0].spectral_radius, rel=1e-9, abs=1e-12)
+
+
+def test_two_input_dc_gain_is_the_static_surface_gradient():
+    pts = np.array([[1.0, 0.5], [0.6, 1.2], [1.5, 1.5]])
+    oc = gb.operating_curve(TWO_INPUTS, pts, Ts=0.1)
+    np.testing.assert_allclose(oc.gain, TWO_INPUTS.static_gain(pts), rtol=1e-10)
+    np.testing.assert_allclose(oc.ybar, TWO_INPUTS.static_curve(pts), rtol=1e-12)
+    for lm, e in zip(oc.local_models, pts):
+        eq = [q for q in TWO_INPUTS.equilibria(e) if q.stable][0]
+        assert lm.spectral_radius == pytest.approx(eq.spectral_radius, rel=1e-9)
+
+
+def test_jacobian_rows_of_many_draws_equal_one_at_a_time():
+    rng = np.random.default_rng(0)
+    th = NONRATIONAL.theta[None, :] * (1 + 0.05 * rng.standard_normal((5, 7)))
+    yb, ub = rng.uniform(1, 2, 5), rng.uniform(1, 3, (5, 1))
+    a, b = jacobian_rows(NONRATIONAL.structure, ("u",), th, yb, ub)
+    for k in range(5):
+        np.testing.assert_allclose(a[k], _linear_coefficients(NONRATIONAL.structure, th[k], yb[k], ub[k, 0]))
+
+
+def test_time_constant_damping_and_settling_of_a_first_order_model():
+    p, g, Ts = 0.9, 2.0, 0.05
+    m = Model(["y(k-1)", "u(k-1)"], [p, g * (1 - p)])
+    lm = gb.local_model(m, 3.0, Ts=Ts)
+    assert lm.time_constant == pytest.approx(-Ts / np.log(p))
+    assert lm.damping == pytest.approx(1.0)
+    # the step response 1 - p^k stays within 2 % from the first k with p^k <= 0.02
+    k = int(np.ceil(np.log(0.02) / np.log(p)))
+    assert lm.settling_time() == pytest.approx(k * Ts)
+    np.testing.assert_allclose(lm.step(20), g * (1 - p ** np.arange(20)))
+    # an oscillating pair: the damping of its continuous equivalent
+    r, phi = 0.8, 0.5
+    m2 = Model(["y(k-1)", "y(k-2)", "u(k-1)"], [2 * r * np.cos(phi), -r * r, 1.0])
+    lm2 = gb.local_model(m2, 1.0, Ts=Ts)
+    s = np.log(r) + 1j * phi
+    assert lm2.damping == pytest.approx(-s.real / abs(s))
+    assert np.angle(lm2.dominant_pole) == pytest.approx(phi)
+
+
+@pytest.mark.parametrize("model,u", [(reference.paper_model(15), 1200.0), (NONRATIONAL, 2.0)])
+def test_small_step_of_the_nonlinear_model_matches_the_local_model_to_first_order(model, u):
+    lm = gb.local_model(model, u, Ts=0.05)
+    L, n = model.max_lag, 200
+    errors = []
+    for delta in (0.02 * u, 0.005 * u):
+        uu = np.r_[np.full(L, u), np.full(n, u + delta)]
+        y = model.simulate(uu, np.full(L, lm.ybar))[L:]
+        dy = (y - lm.ybar) / delta
+        errors.append(np.max(np.abs(dy - lm.step(n))))
+    # first order: the error per unit step shrinks with the step, here 4-fold
+    assert errors[1] < 0.3 * errors[0]
+    assert errors[1] < 0.05 * np.max(np.abs(lm.step(n)))
+
+
+def test_local_model_as_python_control_systems():
+    lm = gb.local_model(reference.paper_model(15), 1200.0, Ts=0.05)
+    ss, tf = lm.to_statespace(), lm.to_transfer_function()
+    assert ss.dt == 0.05 and tf.dt == 0.05
+    assert ss.input_labels == ["u"] and ss.output_labels == ["y"]
+    np.testing.assert_allclose(ct.dcgain(ss), lm.dc_gain[0], rtol=1e-9)
+    np.testing.assert_allclose(ct.dcgain(tf), lm.dc_gain[0], rtol=1e-9)
+    # the state-space poles: the local model's, plus poles at 0 for input lags beyond the output lags
+    pss = ss.poles()
+    for p in lm.poles:
+        assert np.min(np.abs(pss - p)) < 1e-8
+    n = 60
+    t = 0.05 * np.arange(n)
+    np.testing.assert_allclose(ct.step_response(ss, t).outputs, lm.step(n), atol=1e-12)
+    np.testing.assert_allclose(ct.step_response(tf, t).outputs, lm.step(n), atol=1e-10)
+    w = np.array([0.1, 1.0, 10.0])
+    np.testing.assert_allclose(ct.frequency_response(tf, w).complex, lm.frequency_response(w), rtol=1e-9)
+
+
+def test_two_input_local_model_has_two_system_inputs():
+    lm = gb.local_model(TWO_INPUTS, [1.0, 0.5], Ts=0.1)
+    ss = lm.to_statespace()
+    assert ss.ninputs == 2 and ss.input_labels == ["u1", "u2"]
+    np.testing.assert_allclose(np.ravel(ct.dcgain(ss)), lm.dc_gain, rtol=1e-9)
+    tf = lm.to_transfer_function()
+    np.testing.assert_allclose(np.ravel(ct.dcgain(tf)), lm.dc_gain, rtol=1e-9)
+
+
+def test_nonlinear_system_free_run_equals_simulate_one_input():
+    data = gb.load_pumping()
+    for model in (reference.paper_model(15), reference.paper_model(17)):
+        rec = data.valid
+        L = model.max_lag
+        sysm = gb.narx_iosystem(model, rec.Ts)
+        x0 = gb.narx_initial_state(model, rec)
+        assert sysm.nstates == x0.size and sysm.state_labels == gb.narx_state_names(model)
+        r = ct.input_output_response(sysm, rec.Ts * np.arange(len(rec) - L), rec.u[L:], x0)
+        y = model.simulate(rec)
+        np.testing.assert_allclose(r.outputs, y[L:], rtol=0, atol=1e-12)
+
+
+def test_nonlinear_system_free_run_equals_simulate_two_inputs():
+    data = gb.load_pumping_miso()
+    names = data.input_names
+    sel = gb.frols(gb.Candidates(3, 3, inputs=names, degree=2, max_y_power=1), data, n_terms=10, include=["1"])
+    model = gb.els(sel, data).model
+    assert set(model.structure.inputs) == set(names)
+    rec = data.valid
+    L = model.max_lag
+    sysm = gb.narx_iosystem(model, rec.Ts)
+    assert sysm.ninputs == 2 and sysm.input_labels == list(names)
+    r = ct.input_output_response(sysm, rec.Ts * np.arange(len(rec) - L), rec.inputs[L:].T,
+                                 gb.narx_initial_state(model, rec))
+    np.testing.assert_allclose(r.outputs[0], model.simulate(rec)[L:], rtol=0, atol=1e-12)
+
+
+def test_closed_loop_with_the_model_reaches_the_reference():
+    model = reference.paper_model(15)
+    Ts, u0 = 0.05, 1000.0
+    y0 = float(model.static_curve([u0])[0])
+    lm = gb.local_model(model, u0, Ts=Ts)
+    g, tau = lm.dc_gain[0], lm.time_constant
+    kp, ki = 0.5 / g, 0.5 / (g * tau)  # a slow PI: integral action brings the error to zero
+    pi = ct.ss([[1.0]], [[ki * Ts]], [[1.0]], [[kp + ki * Ts]], dt=Ts, inputs="e", outputs="u", name="pi")
+    plant = gb.narx_iosystem(model, Ts, name="plant")
+    loop = ct.interconnect([plant, pi, ct.summing_junction(["r", "-y"], "e", dt=Ts)], inputs="r", outputs=["y", "u"])
+    x0 = np.r_[gb.narx_steady_state(model, u0, y0), u0]  # the PI's integrator holds u0
+    n = 600
+    r = ct.input_output_response(loop, Ts * np.arange(n), np.full(n, y0 + 1.0), x0)
+    assert abs(r.outputs[0, -1] - (y0 + 1.0)) < 1e-3
+    # the model's static curve there: the controller settles on the input that reaches it
+    assert float(model.static_curve([r.outputs[1, -1]])[0]) == pytest.approx(y0 + 1.0, abs=1e-3)
+
+
+# -- the bundled plant's closed-loop interface -----------------------------------------------------
+def test_plant_closed_loop_with_an_open_loop_controller_is_simulate():
+    plant = PumpingPlant()
+    u = np.repeat([900.0, 1100.0, 1000.0], 50)
+    a = plant.simulate(u, rng=3)
+    b = plant.closed_loop(lambda k, y: u[k], u.size, u0=u[0], rng=3)
+    for f in ("u", "y", "pressure", "speed", "flow", "surge", "air_loss"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+
+
+def test_plant_closed_loop_pi_tracks_and_bad_references_are_named():
+    plant = PumpingPlant()
+    y_ref = float(plant.static_pressure(1200.0))
+    state = {"i": 1000.0}
+
+    def pi(k, y):
+        e = y_ref - y
+        u = state["i"] + 20.0 * e
+        state["i"] += 2.0 * e
+        return u
+
+    run = plant.closed_loop(pi, 800, u0=1000.0, noise=False, process_noise=False)
+    assert run.pressure[-1] == pytest.approx(y_ref, abs=1e-3)
+    assert run.u[-1] == pytest.approx(1200.0, abs=0.5)
+    with pytest.raises(ValueError, match="sample 3"):
+        plant.closed_loop(lambda k, y: 1000.0 if k < 3 else 5000.0, 10, u0=1000.0, noise=False, process_noise=False)
+    with pytest.raises(ValueError, match="rng"):
+        plant.closed_loop(lambda k, y: 1000.0, 10, u0=1000.0)
+
+
+def test_plant_linearisation_gain_is_the_static_slope_and_its_time_constant_falls():
+    plant = PumpingPlant()
+    taus = []
+    for s in (800.0, 1200.0, 1600.0):
+        A, B, C = plant.linearize(s)
+        gain = (C @ np.linalg.solve(np.eye(4) - A, B))[0, 0]
+        k, a, b = plant.static_coefficients
+        assert gain == pytest.approx(2 * b * s + a, rel=1e-6)
+        taus.append(plant.local_time_constant(s))
+    assert taus[0] > taus[1] > taus[2] > 0  # the paper's "variable time-constant"
+
+
+# -- along the static curve -------------------------------------------------------------------------
+def test_operating_curve_band_from_the_parameter_covariance():
+    data = gb.load_pumping()
+    model = reference.paper_model(15)
+    fit = gb.els(model.structure, data, noise=2).model
+    unc = gb.ls_uncertainty(fit, data)
+    u = np.linspace(800, 1600, 5)
+    oc = gb.operating_curve(fit, u, data=data, uncertainty=unc, n_samples=200, seed=1)
+    assert oc.has_band and oc.level == unc.level
+    assert np.all(oc.gain_low <= oc.gain) and np.all(oc.gain <= oc.gain_high)
+    assert np.all(oc.time_constant_low <= oc.time_constant) and np.all(oc.time_constant <= oc.time_constant_high)
+    assert np.all(oc.gain_high > oc.gain_low)
+    frame = oc.to_frame()
+    assert list(frame.index) == list(u) and "time constant" in frame
+    again = gb.operating_curve(fit, u, data=data, uncertainty=unc, n_samples=200, seed=1)
+    np.testing.assert_array_equal(again.time_constant_high, oc.time_constant_high)
+
+
+# -- bad input -----------------------------------------------------------------------------------------
+def test_operating_point_outside_the_data_warns():
+    data = gb.load_pumping()
+    with pytest.warns(gb.StaticRangeWarning, match="2000") as record:
+        gb.local_model(reference.paper_model(15), 2000.0, data=data)
+    assert record[0].filename == __file__  # attributed to the caller, not to graybox's internals
+    with pytest.warns(gb.StaticRangeWarning, match=r"\[700.0, 2000.0\]"):
+        gb.operating_curve(reference.paper_model(15), [700.0, 1000.0, 2000.0], data=data)
+
+
+def test_no_stable_equilibrium_is_said_not_nan():
+    unstable = Model(["y(k-1)", "u(k-1)"], [1.2, 1.0])
+    lm = gb.local_model(unstable, 1.0, Ts=1.0)
+    assert lm.status == "no stable equilibrium" and not lm.reached and "no stable" in lm.reason
+    assert lm.exists and np.all(np.isfinite(lm.poles)) and lm.poles[0] == pytest.approx(1.2)
+    assert not lm.stable and lm.time_constant == np.inf and lm.settling_time() == np.inf
+    none = Model(["y(k-1)", "1"], [1.0, 0.5])  # ȳ = ȳ + 0.5: no equilibrium
+    lm2 = gb.local_model(none, 1.0, Ts=1.0)
+    assert lm2.status == "no equilibrium" and not lm2.exists
+    with pytest.raises(ValueError, match="no equilibrium"):
+        lm2.poles
+    with pytest.raises(ValueError, match="no equilibrium"):
+        lm2.to_statespace()
+    oc = gb.operating_curve(none, [1.0, 2.0], Ts=1.0)
+    assert oc.status == ("no equilibrium", "no equilibrium") and np.all(np.isnan(oc.gain))
+
+
+def test_equilibrium_not_reached_from_y0_is_said():
+    # y(k) = 1.5 y(k-1) - 0.5 y(k-1)^2 + 0.1 u: stable root near 1 (+ u), unstable root near 0
+    m = Model(["y(k-1)", "y(k-1)^2", "u(k-1)"], [1.5, -0.5, 0.1])
+    eqs = m.equilibria(0.0)
+    assert [e.stable for e in eqs] == [False, True]
+    lm = gb.local_model(m, 0.0, Ts=1.0, y0=-0.5)  # below the unstable root: the run diverges
+    assert lm.status == "diverged" and not lm.reached
+    assert lm.ybar == pytest.approx(eqs[0].ybar)  # linearised at the equilibrium nearest y0
+    assert gb.local_model(m, 0.0, Ts=1.0, y0=0.5).ybar == pytest.approx(eqs[1].ybar)
+
+
+def test_python_control_missing_names_the_extra(monkeypatch):
+    lm = gb.local_model(reference.paper_model(15), 1200.0, Ts=0.05)
+    monkeypatch.setitem(sys.modules, "control", None)
+    for call in (lm.to_statespace, lm.to_transfer_function, lambda: gb.narx_iosystem(reference.paper_model(15), 0.05)):
+        with pytest.raises(ImportError, match=r"pip install graybox\[control\]"):
+            call()
+
+
+def test_neural_model_gets_a_clear_error():
+    net = gb.NeuralModel(np.zeros((2, 2)), np.zeros(2), np.zeros(2), 0.0, ny=1, nu=1)
+    for fn in (lambda: gb.local_model(net, 1.0, Ts=1.0), lambda: gb.operating_curve(net, [1.0], Ts=1.0),
+               lambda: gb.narx_iosystem(net, 1.0)):
+        with pytest.raises(TypeError, match="polynomial NARX Model, got NeuralModel"):
+            fn()
+
+
+def test_arguments_are_checked():
+    m = reference.paper_model(15)
+    with pytest.raises(ValueError, match="Ts"):
+        gb.local_model(m, 1000.0)
+    with pytest.raises(ValueError, match="ubar"):
+        gb.local_model(m, [1000.0, 1100.0], Ts=0.05)
+    with pytest.raises(ValueError, match="Ts"):
+        gb.narx_iosystem(m, -1.0)
+    with pytest.raises(ValueError, match="start"):
+        gb.narx_initial_state(m, gb.load_pumping().valid, start=2)
+    with pytest.raises(ValueError, match="uncertainty"):
+        gb.operating_curve(m, [1000.0], Ts=0.05, uncertainty=object())
+
+
+def test_plots_of_local_models():
+    from graybox import plots
+
+    oc = gb.operating_curve(reference.paper_model(15), np.linspace(800, 1600, 3), Ts=0.05)
+    fig = plots.plot_local_models(oc)
+    assert len(fig.axes) == 3 and len(fig.axes[0].lines) == 3
+    fig2 = plots.plot_operating_curve(oc, reference=([800.0, 1600.0], [0.5, 0.3]))
+    assert len(fig2.axes) == 3 and len(fig2.axes[1].lines) == 2
+
+
+def test_nonlinear_system_with_its_noise_input_reproduces_the_record():
+    data = gb.load_pumping()
+    sel = gb.frols(gb.Candidates(ny=6, nu=6, ne=2, degree=2, max_y_power=1), data, n_terms=17, include=["1"])
+    model = gb.els(sel, data).model
+    assert len(model.noise_structure) == 2
+    rec = data.valid
+    L = model.max_lag
+    xi = gb.one_step_residuals(model, rec)[0]  # ξ(k), k = L … N−1 (0 before L)
+    sysm = gb.narx_iosystem(model, rec.Ts, noise=True)
+    assert sysm.input_labels == ["u", "e"] and sysm.state_labels[-2:] == ["e[k-1]", "e[k-2]"]
+    x0 = gb.narx_initial_state(model, rec, noise=True)
+    r = ct.input_output_response(sysm, rec.Ts * np.arange(len(rec) - L), np.vstack([rec.u[L:], xi]), x0)
+    np.testing.assert_allclose(r.outputs[0], rec.y[L:], rtol=0, atol=1e-9)
+    # without the noise input it is the free run
+    assert gb.narx_iosystem(model, rec.Ts).ninputs == 1
+    bad = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], noise_structure=["e(k-1)y(k-1)"], noise_theta=[0.1])
+    with pytest.raises(ValueError, match="linear MA part"):
+        gb.narx_iosystem(bad, 1.0, noise=True)
