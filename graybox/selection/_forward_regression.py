@@ -919,9 +919,9 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
     sizes = list(range(lo, K + 1))
     budget = SearchBudget(EXACT_NODES)
     plan = search_sizes(problem, sizes, forced, exact=search == "exact", rule=rule,
-                        criterion=lambda k, r: _criterion_of_sizes(rule.criterion, k, r, N), n_rows=N, budget=budget)
+                        criterion=lambda k, r: criterion_of_sizes(rule.criterion, k, r, N), n_rows=N, budget=budget)
     ks = np.array([len(S) for S in plan.subsets])
-    crit = _criterion_of_sizes(rule.criterion, ks, plan.rss, N)
+    crit = criterion_of_sizes(rule.criterion, ks, plan.rss, N)
     i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy, can_grow=ks.max() < n_free + len(forced),
                            fraction="1 - ΣERR")
     how = ("exact (branch and bound, proven)" if plan.proven else
@@ -936,9 +936,9 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
     return _Plan(plan.subsets, plan.rss, i, tuple(order), f"{stop}; search: {how}")
 
 
-def _criterion_of_sizes(name: str, sizes: np.ndarray, rss: np.ndarray, N: int) -> np.ndarray:
+def criterion_of_sizes(name: str, sizes: np.ndarray, rss: np.ndarray, N: int) -> np.ndarray:
     """The criterion of models of the given sizes (≥ 1) and RSS, not necessarily 1, 2, … in turn."""
-    sizes = np.asarray(sizes, dtype=int)
+    sizes = np.atleast_1d(np.asarray(sizes, dtype=int))
     penalty = information_criterion(name, np.full(int(sizes.max()), float(N)), N)  # at RSS = N the log term is 0
     return N * np.log(np.asarray(rss, dtype=float) / N) + penalty[sizes - 1]
 

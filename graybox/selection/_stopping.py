@@ -67,6 +67,12 @@ def choose_model(
 ) -> tuple[int, str]:
     """Index of the model the rule picks among those looked at, and why, in words.
 
+    ``n_terms``: the model of that size with the smallest criterion (the last one met among
+    ties); ``tol``: the fewest terms whose unexplained fraction is at most the tolerance (then
+    the smallest criterion, the last met), else the last model, with a warning; ``criterion``:
+    the smallest criterion (the first met among ties), with a warning when it is at the largest
+    size looked at and ``can_grow``.
+
     Parameters
     ----------
     rule : StopRule
@@ -106,7 +112,9 @@ def choose_model(
     if rule.mode == "tol":
         reached = np.flatnonzero(unexplained <= rule.tol)
         if reached.size:
-            return int(reached[0]), f"{fraction} ≤ {rule.tol:g}"
+            # the fewest terms within the tolerance (SEMP's pruning may reach it with fewer after more)
+            few = reached[sizes[reached] == sizes[reached].min()]
+            return int(few[crit[few] == crit[few].min()][-1]), f"{fraction} ≤ {rule.tol:g}"
         last = sizes.size - 1
         warn(f"tolerance {rule.tol:g} not reached: {fraction} = {unexplained[last]:.3e} after {sizes[last]} terms "
              "(raise max_terms or tol)", RuntimeWarning)
