@@ -189,8 +189,9 @@ class Selection:
         ``"swap"`` or ``"exact"`` (see :func:`frols`).
     subsets : tuple of Structure
         With ``search="swap"`` or ``"exact"``: the best subset found of each size the stopping
-        rule looked at, smallest first (empty for greedy search, whose size-k model is
-        ``evaluated[:k]``). :attr:`structure` is one of them, in ERR order within itself.
+        rule looked at, smallest first, each in ERR order within itself (included terms first);
+        empty for greedy search, whose size-k model is ``evaluated[:k]``. :attr:`structure` is one
+        of them.
     subset_rss : ndarray, shape (len(subsets),)
         Their residual sums of squares on the selection rows (output units²).
     """
@@ -931,9 +932,9 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
         warnings.warn(f"exact subset search stopped after {EXACT_NODES} branch-and-bound nodes: the result is the best "
                       "subset found (at least as good as search='swap'), not proven optimal", RuntimeWarning,
                       stacklevel=3)
-    S = list(plan.subsets[i])
-    order = problem.ordered(S, fixed=len([j for j in S if j in forced]))
-    return _Plan(plan.subsets, plan.rss, i, tuple(order), f"{stop}; search: {how}")
+    # each subset in ERR order within itself, the included terms first
+    subsets = tuple(tuple(problem.ordered(list(S), fixed=min(len(S), len(forced)))) for S in plan.subsets)
+    return _Plan(subsets, plan.rss, i, subsets[i], f"{stop}; search: {how}")
 
 
 def criterion_of_sizes(name: str, sizes: np.ndarray, rss: np.ndarray, N: int) -> np.ndarray:

@@ -225,9 +225,9 @@ def exact_search(problem: SubsetProblem, k: int, forced: list[int], incumbent: l
                  budget: SearchBudget) -> tuple[list[int], float, bool]:
     """Best subset of size k holding ``forced`` with RSS below ``cutoff``, by branch and bound.
 
-    Returns (subset, rss, proven). The subset is ``incumbent`` (with ``cutoff`` as its RSS) when
-    no subset below the cutoff exists; ``proven`` is False when the node budget ran out first,
-    and then the best subset met so far is returned.
+    Returns (subset, rss, proven). The subset is ``incumbent`` (with its own RSS) when no subset
+    below the cutoff exists; ``proven`` is False when the node budget ran out first, and then the
+    best subset met so far is returned.
     """
     f = len(forced)
     need0 = k - f
@@ -237,7 +237,7 @@ def exact_search(problem: SubsetProblem, k: int, forced: list[int], incumbent: l
     # the strong terms, their bounds are high, and they are cut
     free = problem.ordered(list(forced) + [int(j) for j in problem.outside(list(forced))], fixed=f)[f:]
     m = len(free)
-    best = [list(incumbent), float(cutoff)]
+    best: list = [None, float(cutoff)]
 
     def visit(F: list[int], i: int, need: int) -> None:
         budget.used += 1
@@ -265,6 +265,8 @@ def exact_search(problem: SubsetProblem, k: int, forced: list[int], incumbent: l
     except _OutOfNodes:
         budget.exhausted = True
         proven = False
+    if best[0] is None:
+        return list(incumbent), problem.rss(list(incumbent)), proven
     return best[0], best[1], proven
 
 
