@@ -24,8 +24,8 @@ RSS values come from the Gram matrix, so they carry its squared conditioning: RS
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Callable
+from dataclasses import dataclass
+from typing import Callable, Sequence
 
 import numba as nb
 import numpy as np
@@ -180,7 +180,7 @@ def _swap(problem: SubsetProblem, S: list[int], n_fixed: int) -> tuple[list[int]
 SWAP_STARTS = 4
 
 
-def swap_search(problem: SubsetProblem, k: int, forced: list[int], extra_starts: list[list[int]] = ()
+def swap_search(problem: SubsetProblem, k: int, forced: list[int], extra_starts: Sequence[list[int]] = ()
                 ) -> tuple[list[int], float]:
     """The best subset of size k (holding ``forced``) found by swaps from several starts.
 
@@ -214,7 +214,6 @@ class SearchBudget:
 
     nodes: int
     used: int = 0
-    exhausted: bool = field(default=False)
 
 
 class _OutOfNodes(Exception):
@@ -263,7 +262,6 @@ def exact_search(problem: SubsetProblem, k: int, forced: list[int], incumbent: l
             visit(list(forced), 0, need0)
         proven = True
     except _OutOfNodes:
-        budget.exhausted = True
         proven = False
     if best[0] is None:
         return list(incumbent), problem.rss(list(incumbent)), proven
