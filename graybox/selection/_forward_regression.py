@@ -71,7 +71,7 @@ from ..core._gram import (
 )
 from ..core._regressors import check_structure_inputs, record_signals
 from ..core._validation import check_choice
-from ._stopping import StopRule, choose_model
+from ._stopping import StopRule, choose_model, stop_rule
 from ._subset_search import SearchBudget, SubsetProblem, search_sizes
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
@@ -654,7 +654,7 @@ def frols(
     if n_terms is not None and n_terms < len(forced):
         raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
 
-    rule = StopRule(mode, n_terms, tol, curve_name)
+    rule = stop_rule(n_terms, tol, criterion, curve_default="aic")
     check_choice(search, "search", SEARCHES)
     cols = _scaled_columns(process, data, rule, max_terms, method)
     N, yy, active, skipped = cols.n_rows, cols.yy, cols.active, cols.skipped
