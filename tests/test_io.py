@@ -78,13 +78,14 @@ def values():
                                     n_samples=200)
         dsf = gb.se_dsf(STRUCT, rec, static, band=1.0, theta0=pe.thetas[1], max_iter=5)
         path = gb.semp(gb.Candidates(ny=2, nu=1, degree=2), rec, n_terms=3)
-    return {"model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
+        exact = gb.frols(gb.Candidates(ny=2, nu=1, degree=2), rec, max_terms=4, search="exact")
+    return {"exact selection": exact, "model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
             "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band,
             "dsf": dsf, "semp": path}
 
 
-TYPES = ["model", "plain model", "neural", "pareto", "failed", "selection", "els", "neural fit", "decision",
-         "uncertainty", "band", "dsf", "semp"]
+TYPES = ["model", "plain model", "neural", "pareto", "failed", "selection", "exact selection", "els", "neural fit",
+         "decision", "uncertainty", "band", "dsf", "semp"]
 
 
 @pytest.mark.parametrize("name", TYPES)
@@ -99,6 +100,18 @@ def test_round_trip(values, name, tmp_path):
     assert head["format_version"] == gb.FORMAT_VERSION and head["graybox_version"] == gb.__version__
     # text round trip too, and writing the loaded value gives the same file
     assert gb.to_json(back, units=("rpm", "mlc")) == p.read_text(encoding="utf-8")
+
+
+def test_a_selection_saved_before_subset_search_loads_as_greedy(values):
+    import json
+
+    d = json.loads(gb.to_json(values["selection"]))
+    body = d["object"]
+    for k in ("search", "subsets", "subset_rss"):
+        del body[k]
+    back = gb.from_json(json.dumps(d))
+    assert back.search == "greedy" and back.subsets == () and back.subset_rss.size == 0
+    assert back.structure == values["selection"].structure
 
 
 def test_every_constructor_field_is_saved():

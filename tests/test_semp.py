@@ -102,3 +102,21 @@ def test_bad_input():
         gb.semp(cand, Record([1.0, 2.0], [1.0, 2.0]))
     with pytest.raises(ValueError, match="no process terms"):
         gb.semp(Structure(["e(k-1)"]), rec)
+
+
+def test_stopping_at_the_size_cap_warns_as_frols_does():
+    rec = staircase_record(TRUE, THETA, 3, noise=0.05)
+    cand = Candidates(3, 3, ne=0, degree=2)
+    with pytest.warns(RuntimeWarning, match="smallest at the largest size looked at"):
+        res = gb.semp(cand, rec, criterion="bic", max_terms=3)
+    assert len(res.structure) == 3 and "bic minimum at 3 of 3 sizes" in res.stop
+    with pytest.warns(RuntimeWarning, match="smallest at the largest size looked at"):
+        gb.frols(cand, rec, criterion="bic", max_terms=3)
+    with pytest.warns(RuntimeWarning, match="tolerance 1e-09 not reached"):
+        res = gb.semp(cand, rec, tol=1e-9, max_terms=3)
+    assert "not reached" in res.stop and len(res.structure) == 3
+    # no warning when the minimum lies inside the range
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        res = gb.semp(cand, staircase_record(TRUE, THETA, 3), criterion="bic", max_terms=10)
+    assert set(res.structure) == set(TRUE)

@@ -183,6 +183,8 @@ def _enc(kind: str, v: Any) -> Any:
         return [_num(x) for x in v]
     if kind == "structure":
         return [str(t) for t in v]
+    if kind == "structures":
+        return [[str(t) for t in x] for x in v]
     if kind == "names":
         return [str(n) for n in v]
     if kind == "arrays":
@@ -219,6 +221,8 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return rd.floats(v, where)
     if kind == "structure":
         return rd.structure(v, where)
+    if kind == "structures":
+        return tuple(rd.structure(x, f"{where}[{i}]") for i, x in enumerate(rd.list(v, where)))
     if kind == "names":
         return tuple(rd.str(n, f"{where}[{i}]") for i, n in enumerate(rd.list(v, where)))
     if kind == "arrays":
@@ -350,7 +354,8 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "Selection": (Selection, (("structure", "structure"), ("err", "array1"), ("theta", "array1"),
                               ("noise", "structure"), ("evaluated", "structure"), ("err_evaluated", "array1"),
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
-                              ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"))),
+                              ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"), ("search", "str"),
+                              ("subsets", "structures"), ("subset_rss", "array1"))),
     "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
                               ("theta_ls", "array1"), ("residuals", "arrays"), ("n_direct", "int"))),
     "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("prediction_cost", "floats"), ("simulation_cost", "floats"),
@@ -397,8 +402,8 @@ def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> No
 
 
 #: Field kinds other than the saved types themselves.
-_KINDS = frozenset({"float", "array1", "array2", "int", "int_or_none", "str", "bool", "floats", "structure", "names",
-                    "arrays", "dict_arrays", "failures", "skipped", "frame"})
+_KINDS = frozenset({"float", "array1", "array2", "int", "int_or_none", "str", "bool", "floats", "structure",
+                    "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame"})
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
 _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]] = {
@@ -407,7 +412,8 @@ _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]]
 }
 
 #: Fields added after a format was published: a file without them gets the constructor's default.
-_OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"})}
+_OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"}),
+                                         "Selection": frozenset({"search", "subsets", "subset_rss"})}
 
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 

@@ -71,6 +71,8 @@ from ..core._gram import (
 )
 from ..core._regressors import check_structure_inputs, record_signals
 from ..core._validation import check_choice
+from ._stopping import StopRule, choose_model, stop_rule
+from ._subset_search import SearchBudget, SubsetProblem, search_sizes
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -99,6 +101,15 @@ _AUTO_GRAM_BYTES = 32 * 2**20
 
 #: Orthogonalisation methods understood by :func:`frols`.
 METHODS: tuple[str, ...] = ("auto", "mgs", "gram")
+
+#: Subset searches understood by :func:`frols`.
+SEARCHES: tuple[str, ...] = ("greedy", "swap", "exact")
+
+#: ``search="exact"`` is refused beyond this many usable candidates (not counting included terms).
+EXACT_MAX_CANDIDATES = 100
+
+#: Branch-and-bound nodes one exact search may visit (over all the sizes it looks at).
+EXACT_NODES = 200_000
 
 
 class CandidateWarning(UserWarning):
@@ -173,6 +184,16 @@ class Selection:
     skipped : tuple of (Term, str)
         Candidates left out and why (zero column, duplicate of another candidate, linear
         combination of selected terms).
+    search : str
+        The subset search that chose :attr:`structure`: ``"greedy"`` (FROLS proper),
+        ``"swap"`` or ``"exact"`` (see :func:`frols`).
+    subsets : tuple of Structure
+        With ``search="swap"`` or ``"exact"``: the best subset found of each size the stopping
+        rule looked at, smallest first, each in ERR order within itself (included terms first);
+        empty for greedy search, whose size-k model is ``evaluated[:k]``. :attr:`structure` is one
+        of them.
+    subset_rss : ndarray, shape (len(subsets),)
+        Their residual sums of squares on the selection rows (output units²).
     """
 
     structure: Structure
@@ -188,9 +209,12 @@ class Selection:
     n_rows: int
     n_candidates: int
     skipped: tuple[tuple[Term, str], ...] = field(default=())
+    search: str = "greedy"
+    subsets: tuple[Structure, ...] = field(default=())
+    subset_rss: np.ndarray = field(default=())
 
     def __post_init__(self) -> None:
-        for name in ("err", "theta", "err_evaluated", "rss", "criterion_curve"):
+        for name in ("err", "theta", "err_evaluated", "rss", "criterion_curve", "subset_rss"):
             a = np.array(getattr(self, name), dtype=float, copy=True)
             a.setflags(write=False)
             object.__setattr__(self, name, a)
@@ -237,7 +261,8 @@ class Selection:
     def __str__(self) -> str:
         width = max([len("term")] + [len(str(t)) for t in self.evaluated])
         head = (
-            f"FROLS: {self.n_terms} of {self.n_candidates} candidate terms, {self.n_rows} rows; "
+            f"FROLS{'' if self.search == 'greedy' else f' ({self.search} search)'}: "
+            f"{self.n_terms} of {self.n_candidates} candidate terms, {self.n_rows} rows; "
             f"stop: {self.stop}; 1 - ΣERR = {1.0 - self.err_total:.3e}"
         )
         lines = [head]
@@ -491,6 +516,7 @@ def frols(
     rank_tol: float = 1e-7,
     include: Sequence[Term | str] = (),
     method: Literal["auto", "mgs", "gram"] = "auto",
+    search: Literal["greedy", "swap", "exact"] = "greedy",
 ) -> Selection:
     """Select model terms by forward regression with orthogonal least squares (ERR).
 
@@ -542,6 +568,24 @@ def frols(
         independent of N; it resolves orthogonalised norms down to about √1e-11 ≈ 3e-6 of a
         column's norm (a looser ``rank_tol`` floor). ``"auto"`` (default): MGS while the
         candidate matrix takes at most 32 MiB, the Gram form beyond, and for Dask records.
+    search : {"greedy", "swap", "exact"}, optional
+        How the subset of each size is found. ``"greedy"`` (default): FROLS proper, one term at a
+        time by ERR, never undone. ``"swap"``: from the greedy path and from greedy paths started
+        at the next-best first picks, exchange one term for another while the residual sum of
+        squares falls (deterministic; a local optimum). ``"exact"``: the subset of least RSS of
+        each size, by branch and bound on the Gram matrix of the unit-RMS candidates, started
+        from the swap result. Under slowly varying inputs (staircases, where ``u(k-1) ≈ u(k-2)``)
+        greedy and swap can both settle on lag-shifted look-alikes of the true terms; exact cannot.
+        All three work on the same scaled columns (results do not depend on units) and the same
+        rows (never straddling two records), and respect ``include``. The stopping rule then
+        compares the best subsets of each size: ``n_terms`` searches that size only, ``tol`` the
+        sizes up to the first whose best subset reaches it, ``criterion`` every size up to
+        ``max_terms``, the exact search cutting each size at the RSS that would beat the other
+        sizes' criterion. :attr:`Selection.subsets` keeps the best subset of each size looked at;
+        :attr:`Selection.evaluated` is the chosen subset followed by the greedy terms after it.
+        Exact search is refused (``ValueError``, naming ``"swap"``) beyond 100 usable candidates;
+        when it visits 200 000 nodes without finishing it returns the best subset found (at least
+        as good as swap's), says so in :attr:`Selection.stop` and warns.
 
     Returns
     -------
@@ -563,7 +607,7 @@ def frols(
         combination of selected terms). The result lists them in :attr:`Selection.skipped`.
     RuntimeWarning
         When ``tol`` is not reached within ``max_terms`` terms, or the criterion's minimum is
-        at the edge of the range.
+        at the edge of the range; when an exact search ran out of nodes.
     """
     # ---- validate arguments at the boundary ----
     if not isinstance(candidates, Structure):
@@ -610,56 +654,10 @@ def frols(
     if n_terms is not None and n_terms < len(forced):
         raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
 
-    lazy = is_dask_data(data)
-    records = as_gram_records(data)
-    check_structure_inputs(process, records)
-    start = process.max_lag
-    for rec in records:
-        rec.require_length(start)
-    N = sum(len(r) - start for r in records)
-    K_max = n_cand if mode == "tol" and max_terms is None else min(n_cand, n_terms or max_terms or _DEFAULT_MAX_TERMS)
-    method = _choose_method(method, N, n_cand, K_max, lazy)
-
-    if method == "mgs":
-        W, y = _candidate_matrix(process.terms, records, start)
-        if not np.all(np.isfinite(W)):
-            bad = [str(process[j]) for j in np.flatnonzero(~np.all(np.isfinite(W), axis=0))[:5]]
-            raise ValueError(f"candidate columns overflow to non-finite values (e.g. {', '.join(bad)})")
-        yy = float(y @ y)
-        scales = np.sqrt(np.einsum("ij,ij->j", W, W) / N)
-    else:
-        require_memory(chunk_bytes(n_cand) + 8 * 6 * (n_cand + 1) ** 2, f"FROLS (Gram form, {n_cand} candidates)")
-        gs = gram_sums(process.terms, data if lazy else records, start)
-        yy = gs.yy
-        scales = np.sqrt(np.maximum(np.diag(gs.G), 0.0) / N)
-    if yy == 0.0:
-        raise ValueError("the output is identically zero on the regression rows: ERR is undefined")
-
-    # ---- scale to unit RMS; skip columns that carry no information of their own ----
-    active = scales > 0.0
-    skipped: list[tuple[Term, str]] = [(process[j], "all-zero column") for j in np.flatnonzero(~active)]
-    scales = np.where(active, scales, 1.0)
-    if method == "mgs":
-        W /= scales
-        dups = _duplicates(W, active)
-    else:
-        # D⁻¹ G D⁻¹ is the Gram matrix of the unit-RMS columns to the rounding of one division per
-        # entry: scaling before or after accumulating the products gives the same relative accuracy.
-        G = gs.G / scales / scales[:, None]
-        np.fill_diagonal(G, np.where(active, float(N), 0.0))
-        dups = _gram_duplicates(G, active)
-    for kept, dropped in dups:
-        if active[dropped]:
-            active[dropped] = False
-            skipped.append((process[dropped], f"proportional to {process[kept]}"))
-    if skipped:
-        warnings.warn(
-            f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
-            + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
-            + ("; …" if len(skipped) > 10 else ""),
-            CandidateWarning,
-            stacklevel=2,
-        )
+    rule = stop_rule(n_terms, tol, criterion, curve_default="aic")
+    check_choice(search, "search", SEARCHES)
+    cols = _scaled_columns(process, data, rule, max_terms, method)
+    N, yy, active, skipped = cols.n_rows, cols.yy, cols.active, cols.skipped
     n_usable = int(active.sum())
     if n_terms is not None and n_terms > n_usable:
         raise ValueError(
@@ -675,55 +673,14 @@ def frols(
     if mode == "criterion" and K >= N:
         raise ValueError(f"criterion needs more rows ({N}) than model terms ({K}); lower max_terms")
 
-    # ---- forward selection: orthogonalise on the data (MGS) or on the Gram matrix ----
-    engine: _MGS | _GramOLS = _MGS(W, y, K) if method == "mgs" else _GramOLS(G, gs.b / scales, yy, K)
-    nrm0 = float(N)  # unit-RMS columns: ‖s_j‖² = N
-    dependent_thr = rank_tol**2 if method == "mgs" else max(rank_tol**2, _GRAM_DEPENDENT)
-    chosen: list[int] = []
-    n_dependent = 0
-    for k in range(K):
-        nrm, num = engine.nrm, engine.num
-        dep = active & (nrm <= dependent_thr * nrm0)
-        if dep.any():
-            for j in np.flatnonzero(dep):
-                skipped.append((process[j], "linear combination of the selected terms"))
-            active &= ~dep
-            n_dependent += int(dep.sum())
-        if not active.any():
-            if mode == "n_terms":
-                dep_terms = [str(t) for t, why in skipped if why.startswith("linear")]
-                raise ValueError(
-                    f"only {k} independent terms could be selected on these data, n_terms = {n_terms} asked: "
-                    f"the remaining candidates are linear combinations of the selected ones "
-                    f"({', '.join(dep_terms[:8])}{', …' if len(dep_terms) > 8 else ''})"
-                )
-            break
-        if k < len(forced):
-            j = forced[k]
-            if not active[j]:
-                why = next((w for t, w in skipped if t == process[j]), "skipped")
-                raise ValueError(f"included term {process[j]} cannot be used on these data: {why}")
-        else:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                score = np.where(active, num * num / nrm, -1.0)
-            j = int(np.argmax(score))
-        active[j] = False
-        engine.choose(k, j, active, last=k + 1 == K)
-        chosen.append(j)
-        if mode == "tol" and engine.rss(k) / yy <= tol:
-            break
-    C, g = engine.C, engine.g
-    if method == "gram" and chosen:
-        # The Gram form ranks the candidates; the chosen ones' ERR, RSS and θ are then taken from
-        # the triangular factor of [S_chosen, y] by TSQR over the same chunks (a second, narrow
-        # pass: k+1 columns), so they carry QR accuracy instead of the Gram form's squared
-        # conditioning, and agree with MGS and across chunkings (Dask blocks) to ~1e-12.
-        R, _ = r_factor([process[j] for j in chosen], data if lazy else records, start)
-        k_ = len(chosen)
-        sign = np.where(np.diag(R)[:k_] < 0, -1.0, 1.0)
-        C = np.zeros((k_, n_cand))
-        C[:, chosen] = sign[:, None] * np.triu(R[:k_, :k_]) / scales[chosen]
-        g = sign * R[:k_, k_]
+    plan = None
+    if search != "greedy":
+        plan = _search_subsets(cols, forced, K, rule, search, rank_tol, process)
+        n_plan = len(plan.subsets[plan.chosen])
+        # the chosen subset first (ERR order within it), then, for the stored curve, greedy terms after it
+        forced, K = list(plan.order), (K if mode == "criterion" else n_plan)
+    chosen, n_dependent = _forward(cols, process, forced, K, rule if plan is None else None, rank_tol)
+    C, g = _chosen_factors(cols, process, chosen)
     if n_dependent:
         dep_terms = [t for t, why in skipped if why.startswith("linear")]
         warnings.warn(
@@ -740,36 +697,18 @@ def frols(
     if k_eval >= N:
         raise ValueError(f"more terms ({k_eval}) than regression rows ({N})")
     curve = information_criterion(curve_name, rss, N)
-
-    if mode == "n_terms":
-        n_sel, stop = k_eval, f"n_terms = {n_terms}"
-    elif mode == "tol":
-        n_sel = k_eval
-        reached = 1.0 - err_eval.sum() <= tol
-        stop = f"1 - ΣERR ≤ {tol:g}" if reached else f"tol {tol:g} not reached in {k_eval} terms"
-        if not reached:
-            warnings.warn(
-                f"ERR tolerance {tol:g} not reached: 1 - ΣERR = {1.0 - err_eval.sum():.3e} after {k_eval} terms "
-                "(raise max_terms or tol)",
-                RuntimeWarning,
-                stacklevel=2,
-            )
+    if plan is None:
+        i, stop = choose_model(rule, np.arange(1, k_eval + 1), curve, rss / yy, can_grow=k_eval < n_usable,
+                               fraction="1 - ΣERR")
+        n_sel = i + 1
     else:
-        n_sel = int(np.argmin(curve)) + 1
-        stop = f"{curve_name} minimum at {n_sel} of {k_eval} sizes"
-        if n_sel == k_eval and k_eval < n_usable:
-            warnings.warn(
-                f"{curve_name} is smallest at the largest size looked at ({k_eval} terms): the curve may still be "
-                "falling; raise max_terms",
-                RuntimeWarning,
-                stacklevel=2,
-            )
+        n_sel, stop = n_plan, plan.stop
 
     # θ of the selected terms: back-substitution in the triangular factor, then undo scaling
     idx = np.array(chosen[:n_sel], dtype=int)
     R = C[:n_sel][:, idx]
     theta_scaled = _back_substitute(np.triu(R), g[:n_sel])
-    theta = theta_scaled / scales[idx]
+    theta = theta_scaled / cols.scales[idx]
     evaluated = Structure([process[j] for j in chosen])
     return Selection(
         structure=evaluated[:n_sel],
@@ -785,7 +724,224 @@ def frols(
         n_rows=N,
         n_candidates=n_cand,
         skipped=tuple(skipped),
+        search=search,
+        subsets=() if plan is None else tuple(Structure([process[j] for j in S]) for S in plan.subsets),
+        subset_rss=() if plan is None else plan.rss,
     )
+
+
+# --------------------------------------------------------------------------------------
+# FROLS's phases: scaled columns, subset search, forward orthogonalisation, accurate factors
+
+
+@dataclass
+class _Columns:
+    """The candidates on the regression rows, scaled to unit RMS, with what cannot be used marked.
+
+    ``W`` (N × n, Fortran) and ``y`` for MGS, or ``G`` = SᵀS and ``b`` = Sᵀy for the Gram form;
+    ``active`` marks usable columns (the forward phase clears it as it goes), ``skipped`` lists
+    the others and why.
+    """
+
+    method: str
+    data: object
+    start: int
+    n_rows: int
+    yy: float
+    scales: np.ndarray
+    active: np.ndarray
+    skipped: list[tuple[Term, str]]
+    W: np.ndarray | None = None
+    y: np.ndarray | None = None
+    G: np.ndarray | None = None
+    b: np.ndarray | None = None
+    engine: object = None
+
+    def gram(self) -> tuple[np.ndarray, np.ndarray]:
+        """(SᵀS, Sᵀy) of the unit-RMS columns (computed from W for MGS, before it is orthogonalised)."""
+        if self.method == "gram":
+            return self.G, self.b
+        return self.W.T @ self.W, self.W.T @ self.y
+
+
+def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms: int | None,
+                    method: str) -> _Columns:
+    """Build the candidate columns (or their Gram matrix), scale them and skip the unusable ones."""
+    n_cand = len(process)
+    lazy = is_dask_data(data)
+    records = as_gram_records(data)
+    check_structure_inputs(process, records)
+    start = process.max_lag
+    for rec in records:
+        rec.require_length(start)
+    N = sum(len(r) - start for r in records)
+    K_max = (n_cand if rule.mode == "tol" and max_terms is None
+             else min(n_cand, rule.n_terms or max_terms or _DEFAULT_MAX_TERMS))
+    method = _choose_method(method, N, n_cand, K_max, lazy)
+    source = data if lazy else records
+
+    if method == "mgs":
+        W, y = _candidate_matrix(process.terms, records, start)
+        if not np.all(np.isfinite(W)):
+            bad = [str(process[j]) for j in np.flatnonzero(~np.all(np.isfinite(W), axis=0))[:5]]
+            raise ValueError(f"candidate columns overflow to non-finite values (e.g. {', '.join(bad)})")
+        yy = float(y @ y)
+        scales = np.sqrt(np.einsum("ij,ij->j", W, W) / N)
+    else:
+        require_memory(chunk_bytes(n_cand) + 8 * 6 * (n_cand + 1) ** 2, f"FROLS (Gram form, {n_cand} candidates)")
+        gs = gram_sums(process.terms, source, start)
+        yy = gs.yy
+        scales = np.sqrt(np.maximum(np.diag(gs.G), 0.0) / N)
+    if yy == 0.0:
+        raise ValueError("the output is identically zero on the regression rows: ERR is undefined")
+
+    # ---- scale to unit RMS; skip columns that carry no information of their own ----
+    active = scales > 0.0
+    skipped: list[tuple[Term, str]] = [(process[j], "all-zero column") for j in np.flatnonzero(~active)]
+    scales = np.where(active, scales, 1.0)
+    cols = _Columns(method, source, start, N, yy, scales, active, skipped)
+    if method == "mgs":
+        W /= scales
+        cols.W, cols.y = W, y
+        dups = _duplicates(W, active)
+    else:
+        # D⁻¹ G D⁻¹ is the Gram matrix of the unit-RMS columns to the rounding of one division per
+        # entry: scaling before or after accumulating the products gives the same relative accuracy.
+        G = gs.G / scales / scales[:, None]
+        np.fill_diagonal(G, np.where(active, float(N), 0.0))
+        cols.G, cols.b = G, gs.b / scales
+        dups = _gram_duplicates(G, active)
+    for kept, dropped in dups:
+        if active[dropped]:
+            active[dropped] = False
+            skipped.append((process[dropped], f"proportional to {process[kept]}"))
+    if skipped:
+        warnings.warn(
+            f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
+            + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
+            + ("; …" if len(skipped) > 10 else ""),
+            CandidateWarning,
+            stacklevel=3,
+        )
+    return cols
+
+
+def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule: StopRule | None,
+             rank_tol: float) -> tuple[list[int], int]:
+    """Forward selection of up to K terms (``forced`` first, in order), orthogonalising as it goes.
+
+    Returns the chosen candidates' indices and how many candidates turned out to be linear
+    combinations of them (added to ``cols.skipped``). A tolerance ``rule`` ends it early.
+    """
+    active, skipped, yy = cols.active, cols.skipped, cols.yy
+    engine: _MGS | _GramOLS = (_MGS(cols.W, cols.y, K) if cols.method == "mgs"
+                               else _GramOLS(cols.G, cols.b, yy, K))
+    nrm0 = float(cols.n_rows)  # unit-RMS columns: ‖s_j‖² = N
+    dependent_thr = rank_tol**2 if cols.method == "mgs" else max(rank_tol**2, _GRAM_DEPENDENT)
+    chosen: list[int] = []
+    n_dependent = 0
+    for k in range(K):
+        nrm, num = engine.nrm, engine.num
+        dep = active & (nrm <= dependent_thr * nrm0)
+        if dep.any():
+            for j in np.flatnonzero(dep):
+                skipped.append((process[j], "linear combination of the selected terms"))
+            active &= ~dep
+            n_dependent += int(dep.sum())
+        if not active.any():
+            if rule is not None and rule.mode == "n_terms":
+                dep_terms = [str(t) for t, why in skipped if why.startswith("linear")]
+                raise ValueError(
+                    f"only {k} independent terms could be selected on these data, n_terms = {rule.n_terms} asked: "
+                    f"the remaining candidates are linear combinations of the selected ones "
+                    f"({', '.join(dep_terms[:8])}{', …' if len(dep_terms) > 8 else ''})"
+                )
+            break
+        if k < len(forced):
+            j = forced[k]
+            if not active[j]:
+                why = next((w for t, w in skipped if t == process[j]), "skipped")
+                raise ValueError(f"included term {process[j]} cannot be used on these data: {why}")
+        else:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                score = np.where(active, num * num / nrm, -1.0)
+            j = int(np.argmax(score))
+        active[j] = False
+        engine.choose(k, j, active, last=k + 1 == K)
+        chosen.append(j)
+        if rule is not None and rule.mode == "tol" and engine.rss(k) / yy <= rule.tol:
+            break
+    cols.engine = engine
+    return chosen, n_dependent
+
+
+def _chosen_factors(cols: _Columns, process: Structure, chosen: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """The triangular factor C (k × n) of the chosen columns and the output's coordinates g (k,)."""
+    engine = cols.engine
+    C, g = engine.C, engine.g
+    if cols.method == "gram" and chosen:
+        # The Gram form ranks the candidates; the chosen ones' ERR, RSS and θ are then taken from
+        # the triangular factor of [S_chosen, y] by TSQR over the same chunks (a second, narrow
+        # pass: k+1 columns), so they carry QR accuracy instead of the Gram form's squared
+        # conditioning, and agree with MGS and across chunkings (Dask blocks) to ~1e-12.
+        R, _ = r_factor([process[j] for j in chosen], cols.data, cols.start)
+        k_ = len(chosen)
+        sign = np.where(np.diag(R)[:k_] < 0, -1.0, 1.0)
+        C = np.zeros((k_, len(process)))
+        C[:, chosen] = sign[:, None] * np.triu(R[:k_, :k_]) / cols.scales[chosen]
+        g = sign * R[:k_, k_]
+    return C, g
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What the subset search found: the best subset of each size, the chosen one and its order."""
+
+    subsets: tuple[tuple[int, ...], ...]
+    rss: np.ndarray
+    chosen: int
+    order: tuple[int, ...]
+    stop: str
+
+
+def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, search: str, rank_tol: float,
+                    process: Structure) -> _Plan:
+    """Swap or exact best-subset search over the sizes the stopping rule needs (see :func:`frols`)."""
+    n_free = int(cols.active.sum()) - len(forced)
+    if search == "exact" and n_free > EXACT_MAX_CANDIDATES:
+        raise ValueError(
+            f"exact search is refused for {n_free} usable candidates (at most {EXACT_MAX_CANDIDATES}: the branch "
+            "and bound may grow as their number of subsets); use search='swap', or fewer candidates"
+        )
+    G, b = cols.gram()
+    problem = SubsetProblem(G, b, cols.yy, cols.active, max(rank_tol**2, _GRAM_DEPENDENT))
+    N = cols.n_rows
+    lo = max(1, len(forced)) if rule.mode != "n_terms" else rule.n_terms
+    sizes = list(range(lo, K + 1))
+    budget = SearchBudget(EXACT_NODES)
+    plan = search_sizes(problem, sizes, forced, exact=search == "exact", rule=rule,
+                        criterion=lambda k, r: criterion_of_sizes(rule.criterion, k, r, N), n_rows=N, budget=budget)
+    ks = np.array([len(S) for S in plan.subsets])
+    crit = criterion_of_sizes(rule.criterion, ks, plan.rss, N)
+    i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy, can_grow=ks.max() < n_free + len(forced),
+                           fraction="1 - ΣERR")
+    how = ("exact (branch and bound, proven)" if plan.proven else
+           f"exact search ran out of its {EXACT_NODES} nodes: best found, not proven") if search == "exact" else \
+        "swap (local optimum under single exchanges)"
+    if search == "exact" and not plan.proven:
+        warnings.warn(f"exact subset search stopped after {EXACT_NODES} branch-and-bound nodes: the result is the best "
+                      "subset found (at least as good as search='swap'), not proven optimal", RuntimeWarning,
+                      stacklevel=3)
+    # each subset in ERR order within itself, the included terms first
+    subsets = tuple(tuple(problem.ordered(list(S), fixed=min(len(S), len(forced)))) for S in plan.subsets)
+    return _Plan(subsets, plan.rss, i, subsets[i], f"{stop}; search: {how}")
+
+
+def criterion_of_sizes(name: str, sizes: np.ndarray, rss: np.ndarray, N: int) -> np.ndarray:
+    """The criterion of models of the given sizes (≥ 1) and RSS, not necessarily 1, 2, … in turn."""
+    sizes = np.atleast_1d(np.asarray(sizes, dtype=int))
+    penalty = information_criterion(name, np.full(int(sizes.max()), float(N)), N)  # at RSS = N the log term is 0
+    return N * np.log(np.asarray(rss, dtype=float) / N) + penalty[sizes - 1]
 
 
 def _back_substitute(R: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -40,7 +40,8 @@ import scipy.linalg
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model
 from ..core._records import Dataset, Record, as_records
-from ._forward_regression import CRITERIA
+from ._forward_regression import CRITERIA, criterion_of_sizes
+from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
 from ..core._validation import check_choice, check_int, check_real, frozen
 
@@ -203,17 +204,6 @@ def _psi(code, U: np.ndarray, y: np.ndarray, L: int) -> np.ndarray:
     return psi
 
 
-def _criterion(name: str, mse: float, k: int, N: int) -> float:
-    if not np.isfinite(mse) or mse <= 0:
-        return math.inf if not np.isfinite(mse) else -math.inf
-    base = N * math.log(mse)
-    if name == "aic":
-        return base + 2.0 * k
-    if name == "bic":
-        return base + k * math.log(N)
-    return base + N * math.log((N + k) / (N - k)) if k < N else math.inf
-
-
 def semp(
     candidates: Structure,
     data: Record | Sequence[Record] | Dataset,
@@ -277,6 +267,13 @@ def semp(
     ValueError
         Conflicting or out-of-range arguments, no process candidates, records shorter than the
         candidates' largest lag, or no candidate that can be added (all collinear or diverging).
+
+    Warns
+    -----
+    RuntimeWarning
+        As :func:`graybox.frols` (the same stopping rule): when ``tol`` is not reached within
+        ``max_terms`` terms, or the criterion is smallest at ``max_terms`` terms while candidates
+        were left (the curve may still be falling).
     """
     if not isinstance(candidates, Structure):
         raise ValueError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
@@ -326,7 +323,7 @@ def semp(
 
     def log(action: str, term: str) -> None:
         rows.append({"step": len(rows), "action": action, "term": term, "n_terms": len(current), "score": score,
-                     "criterion": _criterion(crit, score, len(current), N),
+                     "criterion": float(criterion_of_sizes(crit, len(current), score * N, N)[0]) if current else math.inf,
                      "structure": " + ".join(names[j] for j in current) or "(empty)", "_set": tuple(current),
                      "_theta": th.copy()})
 
@@ -339,12 +336,14 @@ def semp(
     # limit is reached.
     budget = 6 * limit + 10
     n_add = 0
+    capped = False  # stopped by the size limit while candidates were left
     while True:
         if mode == "tol" and current and score / sc.yvar <= tol:
             stop = f"free-run MSE / var(y) = {score / sc.yvar:.3g} ≤ {tol:g}"
             break
         if len(current) >= limit:
             stop = f"{limit} terms reached"
+            capped = limit < int(np.sum(~sc.zero))
             break
         if mode == "n_terms" and score <= sc.floor and len(current) > n_terms:
             stop = "exact free run (noise-free data) reached"
@@ -397,19 +396,17 @@ def semp(
     if prune and n_add > budget:
         stop += f" (pruning stopped after {budget} additions)"
     path = pd.DataFrame(rows)
-    if mode == "n_terms":
-        same = path[path["n_terms"] == n_terms]
-        if len(same) == 0:
-            raise ValueError(f"the search never reached {n_terms} terms ({stop})")
-        # the best of that size; among ties (exact fits on noise-free data) the last one met
-        best = same.iloc[::-1].loc[lambda d: d["score"] == d["score"].min()].iloc[0]
-        current, th, score = list(best["_set"]), best["_theta"], float(best["score"])
-        stop = f"n_terms = {n_terms}: best structure of that size on the path (step {int(best['step'])}); search: {stop}"
-    elif mode == "criterion":
-        finite = path[path["n_terms"] > 0]
-        best = finite.loc[finite["criterion"].idxmin()] if len(finite) else path.iloc[-1]
-        current, th, score = list(best["_set"]), best["_theta"], float(best["score"])
-        stop = f"{crit} minimum at {len(current)} terms (step {int(best['step'])}); search: {stop}"
+    if mode == "n_terms" and not (path["n_terms"] == n_terms).any():
+        raise ValueError(f"the search never reached {n_terms} terms ({stop})")
+    # the same rule as frols: the size asked for, the smallest model within the tolerance, or the
+    # criterion's minimum (warning when the size limit cut the curve or the search short)
+    scored = path[path["n_terms"] > 0] if (path["n_terms"] > 0).any() else path
+    i, why = choose_model(stop_rule(n_terms, tol, criterion, curve_default="bic"), scored["n_terms"].to_numpy(),
+                          scored["criterion"].to_numpy(), scored["score"].to_numpy() / sc.yvar, can_grow=capped,
+                          fraction="free-run MSE / var(y)")
+    best = scored.iloc[i]
+    current, th, score = list(best["_set"]), best["_theta"], float(best["score"])
+    stop = f"{why}: step {int(best['step'])} of the path; search: {stop}"
     structure = Structure([process[j] for j in current])
     fwd_df = pd.DataFrame(np.array(fwd) if fwd else np.zeros((0, nc)), columns=names)
     fwd_df.index.name = "forward step"

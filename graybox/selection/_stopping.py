@@ -1,0 +1,127 @@
+"""The stopping rule shared by FROLS and SEMP: a term count, a tolerance or an information criterion.
+
+A selector walks through models of growing size (FROLS: the nested models of its path; SEMP:
+every structure its forward and pruning steps accept). Each model is described by its size, the
+value of the information criterion and the unexplained fraction the tolerance is read on
+(FROLS: 1 − ΣERR = RSS / yᵀy; SEMP: free-run MSE / var(y)). :func:`choose_model` picks one of
+them by the same rule for both selectors, and warns in the same words when the rule was cut
+short by the largest size looked at.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..core._validation import warn
+
+__all__ = ["StopRule", "stop_rule", "choose_model"]
+
+Mode = Literal["n_terms", "tol", "criterion"]
+
+
+@dataclass(frozen=True)
+class StopRule:
+    """Which rule ends a selection: exactly one of a count, a tolerance, a criterion minimum.
+
+    Attributes
+    ----------
+    mode : {"n_terms", "tol", "criterion"}
+    n_terms : int or None
+        The count (mode ``"n_terms"``).
+    tol : float or None
+        The tolerance on the unexplained fraction (mode ``"tol"``).
+    criterion : str
+        The information criterion: the rule's own in mode ``"criterion"``, otherwise only the
+        name of the curve a result stores.
+    """
+
+    mode: Mode
+    n_terms: int | None
+    tol: float | None
+    criterion: str
+
+
+def stop_rule(n_terms: int | None, tol: float | None, criterion: str | None, *, curve_default: str) -> StopRule:
+    """The rule given by already checked arguments: a count, else a tolerance, else a criterion (BIC by default).
+
+    ``curve_default`` names the stored curve when a count or a tolerance stops the selection.
+    """
+    if n_terms is not None:
+        return StopRule("n_terms", n_terms, None, criterion or curve_default)
+    if tol is not None:
+        return StopRule("tol", None, tol, criterion or curve_default)
+    return StopRule("criterion", None, None, criterion or "bic")
+
+
+def choose_model(
+    rule: StopRule,
+    sizes: np.ndarray,
+    crit: np.ndarray,
+    unexplained: np.ndarray,
+    *,
+    can_grow: bool,
+    fraction: str,
+) -> tuple[int, str]:
+    """Index of the model the rule picks among those looked at, and why, in words.
+
+    ``n_terms``: the model of that size with the smallest criterion (the last one met among
+    ties); ``tol``: the fewest terms whose unexplained fraction is at most the tolerance (then
+    the smallest criterion, the last met), else the last model, with a warning; ``criterion``:
+    the smallest criterion (the first met among ties), with a warning when it is at the largest
+    size looked at and ``can_grow``.
+
+    Parameters
+    ----------
+    rule : StopRule
+    sizes : ndarray of int, shape (M,)
+        Number of terms of each model, in the order the selector met them.
+    crit : ndarray, shape (M,)
+        The criterion of each model (smaller is better).
+    unexplained : ndarray, shape (M,)
+        The fraction the tolerance is read on (dimensionless).
+    can_grow : bool
+        Whether a larger model could have been looked at (candidates were left): only then is a
+        rule cut short by the largest size worth a warning.
+    fraction : str
+        How the unexplained fraction is written in messages (e.g. ``"1 - ΣERR"``).
+
+    Returns
+    -------
+    (int, str)
+        The index into the arrays and the reason (e.g. ``"bic minimum at 6 of 12 sizes"``).
+
+    Warns
+    -----
+    RuntimeWarning
+        When the tolerance is not reached by any model (the last one is returned), or the
+        criterion is smallest at the largest size looked at while candidates were left.
+    """
+    sizes = np.asarray(sizes, dtype=int)
+    crit = np.asarray(crit, dtype=float)
+    unexplained = np.asarray(unexplained, dtype=float)
+    if rule.mode == "n_terms":
+        same = np.flatnonzero(sizes == rule.n_terms)
+        if same.size == 0:
+            raise ValueError(f"no model of {rule.n_terms} terms was reached")
+        # the best of that size; among ties (exact fits on noise-free data) the last one met
+        best = same[crit[same] == crit[same].min()]
+        return int(best[-1]), f"n_terms = {rule.n_terms}"
+    if rule.mode == "tol":
+        reached = np.flatnonzero(unexplained <= rule.tol)
+        if reached.size:
+            # the fewest terms within the tolerance (SEMP's pruning may reach it with fewer after more)
+            few = reached[sizes[reached] == sizes[reached].min()]
+            return int(few[crit[few] == crit[few].min()][-1]), f"{fraction} ≤ {rule.tol:g}"
+        last = sizes.size - 1
+        warn(f"tolerance {rule.tol:g} not reached: {fraction} = {unexplained[last]:.3e} after {sizes[last]} terms "
+             "(raise max_terms or tol)", RuntimeWarning)
+        return last, f"tol {rule.tol:g} not reached in {sizes[last]} terms"
+    i = int(np.argmin(crit))
+    largest = int(sizes.max())
+    if sizes[i] == largest and can_grow:
+        warn(f"{rule.criterion} is smallest at the largest size looked at ({largest} terms): the curve may still be "
+             "falling; raise max_terms", RuntimeWarning)
+    return i, f"{rule.criterion} minimum at {sizes[i]} of {largest} sizes"

@@ -1,0 +1,357 @@
+"""Subset search beyond greedy forward selection: swap (local) and exact (branch and bound).
+
+Forward selection never undoes a pick. Under slowly varying inputs (staircases) ``u(k-1)`` and
+``u(k-2)`` agree on most samples, ERR ranks a lag-shifted look-alike first, and the true
+structure, whose one-step error may be hundreds of times smaller, is never reached. Two searches
+look further, both on the Gram matrix G = SᵀS, b = Sᵀy, yᵀy of the unit-RMS candidate columns S
+(so nothing depends on units, and multi-record data arrive already summed over records):
+
+* **swap**: from several starts (the greedy path, and greedy paths whose first free pick is each
+  of the next-best first picks), repeatedly make the best exchange of one term of the subset for
+  one outside it while that lowers the residual sum of squares (RSS); a local optimum under
+  single exchanges (as in iterative OFR). Deterministic: no random starts, so no seed.
+* **exact**: branch and bound over k-subsets (Furnival & Wilson's leaps and bounds in its
+  simplest form). A node fixes some terms and leaves a pool of later candidates; the RSS of the
+  fixed terms and the whole pool together is a lower bound on every subset below the node (adding
+  columns never raises RSS), and a node whose bound is not below the best subset found so far is
+  cut. One factorisation of the node's Gram matrix, with the pool in reverse order, gives the
+  bounds of all its children at once (the RSS after each prefix). The search starts from the swap
+  result, so it only ever improves on it, and it proves the answer optimal when it finishes.
+
+RSS values come from the Gram matrix, so they carry its squared conditioning: RSS below
+``floor · yᵀy`` are treated as equal (see :data:`RSS_FLOOR`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numba as nb
+import numpy as np
+
+from ._stopping import StopRule
+
+__all__ = ["SubsetProblem", "SearchBudget", "SizePlan", "swap_search", "exact_search", "search_sizes", "RSS_FLOOR"]
+
+#: RSS below this fraction of yᵀy is round-off of the Gram form: such subsets tie.
+RSS_FLOOR = 1e-13
+
+
+@nb.njit(cache=True, nogil=True)
+def _eliminate(G, b, yy, idx, p, dep_tol, nested, border):  # pragma: no cover - compiled
+    """Symmetric elimination on the Gram matrix of the columns ``idx`` bordered by y.
+
+    The first ``p`` columns of ``idx`` are eliminated in order; ``nested[t]`` is the RSS of the
+    first t + 1 of them. For every later column c, ``border[c - p]`` is the RSS of the p columns
+    together with c. A column whose remaining energy is at most ``dep_tol`` of its own is a linear
+    combination of those before it and adds nothing.
+    """
+    m = idx.size
+    A = np.empty((m + 1, m + 1))
+    for r in range(m):
+        for c in range(m):
+            A[r, c] = G[idx[r], idx[c]]
+        A[r, m] = b[idx[r]]
+        A[m, r] = b[idx[r]]
+    A[m, m] = yy
+    for t in range(p):
+        d = A[t, t]
+        if d <= dep_tol * G[idx[t], idx[t]]:
+            nested[t] = A[m, m]
+            continue
+        for r in range(t + 1, m + 1):
+            f = A[t, r] / d
+            if f == 0.0:
+                continue
+            for c in range(r, m + 1):
+                A[r, c] -= f * A[t, c]
+        for r in range(t + 1, m + 1):
+            for c in range(t + 1, r):
+                A[r, c] = A[c, r]
+        nested[t] = A[m, m]
+    for c in range(p, m):
+        d = A[c, c]
+        if d <= dep_tol * G[idx[c], idx[c]]:
+            border[c - p] = A[m, m]
+        else:
+            border[c - p] = A[m, m] - A[c, m] * A[c, m] / d
+
+
+class SubsetProblem:
+    """RSS of subsets of unit-RMS candidate columns, from their Gram matrix.
+
+    Parameters
+    ----------
+    G : ndarray, shape (n, n)
+        Gram matrix of the scaled candidate columns (diagonal N for usable ones).
+    b : ndarray, shape (n,)
+        Their inner products with the output.
+    yy : float
+        yᵀy.
+    usable : ndarray of bool, shape (n,)
+        Candidates the search may use (zero and duplicate columns left out).
+    dep_tol : float
+        Relative remaining energy below which a column counts as a combination of others.
+    """
+
+    def __init__(self, G: np.ndarray, b: np.ndarray, yy: float, usable: np.ndarray, dep_tol: float) -> None:
+        self.G = np.ascontiguousarray(G, dtype=float)
+        self.b = np.ascontiguousarray(b, dtype=float)
+        self.yy = float(yy)
+        self.usable = np.flatnonzero(usable)
+        self.dep_tol = float(dep_tol)
+        self.floor = RSS_FLOOR * self.yy
+        self.evaluations = 0
+
+    def _run(self, idx: list[int] | np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
+        idx = np.asarray(idx, dtype=np.int64)
+        nested = np.empty(p)
+        border = np.empty(idx.size - p)
+        _eliminate(self.G, self.b, self.yy, idx, p, self.dep_tol, nested, border)
+        self.evaluations += 1
+        return np.maximum(nested, self.floor), np.maximum(border, self.floor)
+
+    def rss(self, S: list[int]) -> float:
+        """RSS of the least-squares fit on the columns S (yᵀy for the empty set)."""
+        return float(self._run(S, len(S))[0][-1]) if S else self.yy
+
+    def nested(self, order: list[int]) -> np.ndarray:
+        """RSS of each prefix of ``order``."""
+        return self._run(order, len(order))[0]
+
+    def added(self, S: list[int], cands: np.ndarray) -> np.ndarray:
+        """RSS of S ∪ {c} for every c in ``cands``."""
+        return self._run(list(S) + list(cands), len(S))[1]
+
+    def outside(self, S: list[int]) -> np.ndarray:
+        """Usable candidates not in S."""
+        return np.setdiff1d(self.usable, S, assume_unique=True)
+
+    def forward(self, S: list[int], k: int) -> list[int]:
+        """Greedy forward selection (smallest RSS, i.e. largest ERR, first) from S up to k terms."""
+        S = list(S)
+        while len(S) < k:
+            cands = self.outside(S)
+            if cands.size == 0:
+                break
+            S.append(int(cands[int(np.argmin(self.added(S, cands)))]))
+        return S
+
+    def ordered(self, S: list[int], fixed: int = 0) -> list[int]:
+        """S with its first ``fixed`` terms kept in place and the rest in forward (ERR) order among themselves."""
+        out = list(S[:fixed])
+        rest = list(S[fixed:])
+        while rest:
+            r = self.added(out, np.array(rest))
+            out.append(rest.pop(int(np.argmin(r))))
+        return out
+
+
+def _swap(problem: SubsetProblem, S: list[int], n_fixed: int) -> tuple[list[int], float]:
+    """Best single exchanges from S (its first ``n_fixed`` terms stay) until none lowers the RSS."""
+    S = list(S)
+    rss = problem.rss(S)
+    seen = {frozenset(S)}
+    while len(S) > n_fixed:
+        cands = problem.outside(S)
+        if cands.size == 0:
+            break
+        best = (rss, -1, -1)
+        for i in range(n_fixed, len(S)):
+            rest = S[:i] + S[i + 1:]
+            r = problem.added(rest, cands)
+            j = int(np.argmin(r))
+            if r[j] < best[0]:
+                best = (float(r[j]), i, int(cands[j]))
+        # an exchange must gain more than round-off, else two equal subsets would swap forever
+        if best[1] < 0 or not best[0] < rss * (1.0 - 1e-12) or rss <= problem.floor:
+            break
+        S = S[: best[1]] + S[best[1] + 1:] + [best[2]]
+        if frozenset(S) in seen:
+            break
+        seen.add(frozenset(S))
+        rss = best[0]
+    return S, rss
+
+
+#: Starts of the swap search besides the greedy path: greedy paths whose first free pick is the
+#: 2nd, 3rd, … best by ERR.
+SWAP_STARTS = 4
+
+
+def swap_search(problem: SubsetProblem, k: int, forced: list[int], extra_starts: Sequence[list[int]] = ()
+                ) -> tuple[list[int], float]:
+    """The best subset of size k (holding ``forced``) found by swaps from several starts.
+
+    Starts: the greedy path, greedy paths whose first free pick is the next-best ERR candidates
+    (:data:`SWAP_STARTS` in all), and ``extra_starts`` (completed greedily to size k).
+    """
+    f = len(forced)
+    if k <= f:
+        return list(forced[:k]), problem.rss(list(forced[:k]))
+    cands = problem.outside(list(forced))
+    firsts = cands[np.argsort(problem.added(list(forced), cands), kind="stable")[:SWAP_STARTS]]
+    starts = [problem.forward(list(forced) + [int(j)], k) for j in firsts]
+    starts += [problem.forward(list(s), k) for s in extra_starts if len(s) <= k]
+    best: tuple[list[int], float] | None = None
+    tried: set[frozenset[int]] = set()
+    for s in starts:
+        if len(s) < k or frozenset(s) in tried:
+            continue
+        tried.add(frozenset(s))
+        S, r = _swap(problem, s, f)
+        if best is None or r < best[1]:
+            best = (S, r)
+    if best is None:
+        raise ValueError(f"no subset of {k} independent terms on these data")
+    return best
+
+
+@dataclass
+class SearchBudget:
+    """Nodes the branch and bound may visit before giving up (shared by the sizes of one search)."""
+
+    nodes: int
+    used: int = 0
+
+
+class _OutOfNodes(Exception):
+    pass
+
+
+def exact_search(problem: SubsetProblem, k: int, forced: list[int], incumbent: list[int], cutoff: float,
+                 budget: SearchBudget) -> tuple[list[int], float, bool]:
+    """Best subset of size k holding ``forced`` with RSS below ``cutoff``, by branch and bound.
+
+    Returns (subset, rss, proven). The subset is ``incumbent`` (with its own RSS) when no subset
+    below the cutoff exists; ``proven`` is False when the node budget ran out first, and then the
+    best subset met so far is returned.
+    """
+    f = len(forced)
+    need0 = k - f
+    if need0 <= 0:
+        return list(forced[:k]), problem.rss(list(forced[:k])), True
+    # candidates in forward (ERR) order from the forced terms: the pools of late nodes then lack
+    # the strong terms, their bounds are high, and they are cut
+    free = problem.ordered(list(forced) + [int(j) for j in problem.outside(list(forced))], fixed=f)[f:]
+    m = len(free)
+    best: list = [None, float(cutoff)]
+
+    def visit(F: list[int], i: int, need: int) -> None:
+        budget.used += 1
+        if budget.used > budget.nodes:
+            raise _OutOfNodes
+        pool = free[i:]
+        if need == 1:
+            r = problem.added(F, np.array(pool))
+            j = int(np.argmin(r))
+            if r[j] < best[1]:
+                best[0], best[1] = F + [pool[j]], float(r[j])
+            return
+        # RSS of F with the pool's tails free[j:], j = m-1 … i (one elimination, pool reversed)
+        nested = problem.nested(F + pool[::-1])[len(F):]
+        bound = nested[::-1]  # bound[j - i] = RSS(F ∪ free[j:])
+        for j in range(i, m - need + 1):
+            if bound[j - i] >= best[1]:
+                break  # the pools only shrink from here on: no later child can do better
+            visit(F + [free[j]], j + 1, need - 1)
+
+    try:
+        if m >= need0:
+            visit(list(forced), 0, need0)
+        proven = True
+    except _OutOfNodes:
+        proven = False
+    if best[0] is None:
+        return list(incumbent), problem.rss(list(incumbent)), proven
+    return best[0], best[1], proven
+
+
+@dataclass(frozen=True)
+class SizePlan:
+    """The outcome of a subset search over sizes.
+
+    Attributes
+    ----------
+    subsets : tuple of tuple of int
+        The best subset found of each size looked at, smallest size first.
+    rss : ndarray
+        Their residual sums of squares (unit-RMS columns: output units²).
+    proven : bool
+        Whether the rule's answer is proven (exact search finished within its node budget).
+    nodes : int
+        Branch-and-bound nodes visited.
+    """
+
+    subsets: tuple[tuple[int, ...], ...]
+    rss: np.ndarray
+    proven: bool
+    nodes: int
+
+
+def _just_above(x: float) -> float:
+    """The cutoff that lets RSS = x through (the search keeps what is strictly below its cutoff)."""
+    return float(np.nextafter(x, np.inf))
+
+
+def search_sizes(problem: SubsetProblem, sizes: list[int], forced: list[int], *, exact: bool, rule: StopRule,
+                 criterion: Callable[[np.ndarray, np.ndarray], np.ndarray], n_rows: int,
+                 budget: SearchBudget) -> SizePlan:
+    """Best subsets of the sizes the stopping rule needs: swap, then branch and bound if ``exact``.
+
+    * ``n_terms``: the one size.
+    * ``tol`` (on RSS / yᵀy): sizes in turn up to the first whose best subset reaches the tolerance.
+    * ``criterion``: every size; the exact search of a size only looks for subsets that would beat
+      the best criterion of the other sizes (``criterion(sizes, rss)`` of the form N ln(RSS/N) +
+      penalty(k)), and skips a size when not even all candidates together would.
+    """
+    subsets: list[tuple[int, ...]] = []
+    rss: list[float] = []
+    prev: list[int] = list(forced)
+    target = rule.tol * problem.yy if rule.mode == "tol" else None
+    for k in sizes:
+        S, r = swap_search(problem, k, forced, extra_starts=[prev])
+        subsets.append(tuple(S))
+        rss.append(r)
+        prev = S
+        if target is not None and r <= target:
+            break
+    proven = True
+    if not exact:
+        return SizePlan(tuple(subsets), np.array(rss), False, 0)
+
+    def improve(i: int, cut: float) -> None:
+        nonlocal proven
+        S, r, ok = exact_search(problem, len(subsets[i]), forced, list(subsets[i]), cut, budget)
+        proven &= ok
+        if r < rss[i]:
+            subsets[i], rss[i] = tuple(S), r
+
+    if rule.mode == "n_terms":
+        improve(0, rss[0])
+    elif rule.mode == "tol":
+        # the smallest size that reaches the tolerance; then the best subset of that size
+        for i in range(len(subsets)):
+            last = i == len(subsets) - 1
+            # below the tolerance (the search then keeps tightening to the best of the size) or, at the
+            # last size when nothing reaches it, the best of that size
+            improve(i, rss[i] if rss[i] <= target else _just_above(target))
+            if rss[i] > target and last:
+                improve(i, rss[i])
+            if rss[i] <= target or last:
+                del subsets[i + 1:], rss[i + 1:]
+                break
+    else:
+        r_all = problem.rss(list(problem.usable))
+        ks = np.array([len(s) for s in subsets])
+        pen = criterion(ks, np.full(ks.size, float(n_rows)))  # the penalty: N ln(N/N) = 0
+        order = np.argsort(criterion(ks, np.array(rss)), kind="stable")
+        for i in order:
+            crit = criterion(ks, np.array(rss))
+            others = np.delete(crit, i)
+            level = n_rows * np.exp((others.min() - pen[i]) / n_rows) if others.size else np.inf
+            if r_all >= level:
+                continue  # no subset of this size can beat the best of the other sizes
+            improve(int(i), min(rss[i], level))
+    return SizePlan(tuple(subsets), np.array(rss), proven, budget.used)

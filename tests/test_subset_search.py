@@ -1,0 +1,195 @@
+"""Subset search beyond greedy FROLS: frols(search="swap" | "exact")."""
+
+import itertools
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+import graybox as gb
+from graybox import Candidates, Model, Record, Structure, stacked_regressors
+from graybox.selection import _forward_regression as fr
+from graybox.selection._forward_regression import CandidateWarning, frols
+
+# A 2-input NARX driven by independent staircases held 5 samples: u(k-1) and u(k-2) agree on 4
+# samples in 5, and ERR's first picks are lag-shifted look-alikes of the true terms.
+TWO = Structure(["y(k-1)", "y(k-2)", "u1(k-2)", "u2(k-1)", "u1(k-1)y(k-1)", "u2(k-2)^2"])
+TWO_THETA = np.array([0.6, 0.2, 0.5, -0.4, -0.15, 0.2])
+TWO_CAND = Candidates(3, 3, degree=2, inputs=("u1", "u2"))
+
+
+def staircases(seed: int, n: int, hold: int, m: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    u = np.column_stack([np.repeat(rng.uniform(-1.0, 1.0, n // hold + 1), hold)[:n] for _ in range(m)])
+    return u[:, 0] if m == 1 else u
+
+
+def two_input_record(seed: int, n: int = 1000, noise: float = 0.0) -> Record:
+    u = staircases(seed, n, 5, 2)
+    y = Model(TWO, TWO_THETA).simulate(u, np.zeros(2))
+    if noise:
+        y = y + noise * np.std(y) * np.random.default_rng(seed + 100).standard_normal(n)
+    return Record(u, y, name=f"stairs{seed}")
+
+
+def one_step_rss(structure, records, start) -> float:
+    psi, y = stacked_regressors(structure, records, start=start)
+    theta, *_ = np.linalg.lstsq(psi, y, rcond=None)
+    return float(np.sum((y - psi @ theta) ** 2))
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.01])
+def test_staircase_two_inputs_exact_finds_what_greedy_and_semp_miss(noise):
+    rec = two_input_record(0, noise=noise)
+    L = TWO_CAND.max_lag
+    greedy = frols(TWO_CAND, rec, n_terms=6)
+    sem = gb.semp(TWO_CAND, rec, n_terms=6)
+    # the case is a real one: both greedy selectors settle on look-alikes, whose one-step error is
+    # far above the true structure's
+    assert set(greedy.structure) != set(TWO) and set(sem.structure) != set(TWO)
+    shifted = {str(t) for t in greedy.structure} - {str(t) for t in TWO}
+    assert any(t.replace("(k-1)", "(k-2)") in {str(x) for x in TWO} or t.replace("(k-2)", "(k-1)") in
+               {str(x) for x in TWO} for t in shifted)
+    rss_true = one_step_rss(TWO, rec, L)
+    gap = 3 if noise else 100  # 1 % output noise bounds the true structure's error from below
+    assert one_step_rss(greedy.structure, rec, L) > gap * rss_true
+    assert one_step_rss(sem.structure, rec, L) > gap * rss_true
+    for search in ("swap", "exact"):
+        sel = frols(TWO_CAND, rec, n_terms=6, search=search)
+        assert set(sel.structure) == set(TWO) and sel.search == search
+        order = [sel.structure.index(t) for t in TWO]
+        np.testing.assert_allclose(sel.theta[order], TWO_THETA, atol=0.05 if noise else 1e-8)
+        assert sel.subsets == (sel.structure,) or set(sel.subsets[0]) == set(sel.structure)
+        assert sel.subset_rss[0] == pytest.approx(rss_true, rel=1e-6, abs=1e-12 * float(rec.y @ rec.y))
+    assert "proven" in frols(TWO_CAND, rec, n_terms=6, search="exact").stop
+
+
+def test_staircase_criterion_and_tol_stopping_find_the_true_size():
+    rec = two_input_record(2)
+    greedy = frols(TWO_CAND, rec, max_terms=10)
+    exact = frols(TWO_CAND, rec, search="exact", max_terms=10)
+    assert set(greedy.structure) != set(TWO)
+    assert set(exact.structure) == set(TWO) and "bic minimum at 6" in exact.stop
+    # one best subset per size; the stored curve is that of the chosen subset and the greedy terms
+    # after it, so its minimum is where the rule stopped
+    assert [len(s) for s in exact.subsets] == list(range(1, 11))
+    assert exact.subsets[5] == exact.structure
+    assert int(np.argmin(exact.criterion_curve)) + 1 == exact.n_terms
+    assert exact.evaluated[:6] == exact.structure and len(exact.evaluated) == 10
+    # the best subsets of growing size explain more
+    assert np.all(np.diff(exact.subset_rss) <= 1e-9 * float(rec.y @ rec.y))
+    # tolerance: the fewest terms whose best subset reaches it
+    noisy = two_input_record(2, noise=0.01)
+    best = frols(TWO_CAND, noisy, search="exact", n_terms=6)
+    yy = float(noisy.y[3:] @ noisy.y[3:])
+    tol = 1.5 * best.subset_rss[0] / yy
+    sel = frols(TWO_CAND, noisy, tol=tol, search="exact")
+    assert set(sel.structure) == set(TWO) and 1.0 - sel.err_total <= tol
+    assert frols(TWO_CAND, noisy, search="exact", n_terms=5).subset_rss[0] / yy > tol
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(
+    seed=st.integers(0, 10_000),
+    hold=st.integers(1, 6),
+    k=st.integers(2, 4),
+    log_noise=st.one_of(st.just(None), st.floats(-3.5, -1.3)),
+    scale_u=st.floats(-2, 3),
+)
+def test_exact_returns_a_structure_far_below_every_other_subset(seed, hold, k, log_noise, scale_u):
+    """Whenever the true structure's one-step error is ≥ 10× below every other subset of its size, exact finds it."""
+    cand = Candidates(2, 2, degree=2)
+    rng = np.random.default_rng(seed)
+    terms = [cand.process[int(j)] for j in rng.choice(len(cand.process), k, replace=False)]
+    theta = rng.uniform(0.1, 0.5, k) * rng.choice([-1.0, 1.0], k)
+    n = 300
+    u = staircases(seed, n, hold, 1)
+    y = Model(Structure(terms), theta).simulate(u, np.zeros(max(1, Structure(terms).max_lag)), on_diverge="nan")
+    assume(np.all(np.isfinite(y)) and np.max(np.abs(y)) < 1e3 and np.std(y[2:]) > 1e-6)
+    if log_noise is not None:
+        y = y + 10.0**log_noise * np.std(y) * rng.standard_normal(n)
+    u = u * 10.0**scale_u  # engineering units: the answer must not depend on them
+    y_true = y
+    rec = Record(u, y_true)
+    psi, target = stacked_regressors(cand.process, rec, start=cand.max_lag)
+    yy = float(target @ target)
+    s = np.sqrt(np.mean(psi**2, axis=0))
+    assume(np.all(s > 0))
+    psi = psi / s
+    idx_true = frozenset(cand.process.index(t) for t in terms)
+    rss = {}
+    for S in itertools.combinations(range(len(cand.process)), k):
+        P = psi[:, S]
+        th, *_ = np.linalg.lstsq(P, target, rcond=None)
+        rss[frozenset(S)] = float(np.sum((target - P @ th) ** 2))
+    others = min(v for S, v in rss.items() if S != idx_true)
+    assume(others >= 10 * rss[idx_true] and others > 1e-9 * yy)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        sel = frols(cand, rec, n_terms=k, search="exact")
+        swap = frols(cand, rec, n_terms=k, search="swap")
+        greedy = frols(cand, rec, n_terms=k)
+    assert set(sel.structure) == set(terms)
+    # and the laws between the searches: exact ≤ swap ≤ greedy (swap starts from the greedy path)
+    r = [one_step_rss(x.structure, rec, cand.max_lag) for x in (sel, swap, greedy)]
+    assert r[0] <= r[1] * (1 + 1e-9) + 1e-12 * yy and r[1] <= r[2] * (1 + 1e-9) + 1e-12 * yy
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), hold=st.integers(1, 5), k=st.integers(1, 4))
+def test_exact_is_the_least_rss_of_its_size(seed, hold, k):
+    """The exact search's subset has the least one-step RSS of all subsets of its size (brute force)."""
+    cand = Candidates(2, 2, degree=2)
+    rng = np.random.default_rng(seed)
+    u = staircases(seed, 250, hold, 1)
+    y = np.convolve(u, [0.0, 0.5, 0.3], mode="full")[:250] + 0.2 * rng.standard_normal(250)
+    rec = Record(u, y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CandidateWarning)
+        sel = frols(cand, rec, n_terms=k, search="exact")
+    psi, target = stacked_regressors(cand.process, rec, start=cand.max_lag)
+    best = min(float(np.sum((target - psi[:, S] @ np.linalg.lstsq(psi[:, S], target, rcond=None)[0]) ** 2))
+               for S in itertools.combinations(range(psi.shape[1]), k))
+    assert one_step_rss(sel.structure, rec, cand.max_lag) <= best * (1 + 1e-9)
+
+
+def test_units_records_methods_and_include():
+    recs = [two_input_record(s, n=500, noise=0.01) for s in (3, 4)]
+    ref = frols(TWO_CAND, recs, n_terms=6, search="exact")
+    assert set(ref.structure) == set(TWO)
+    assert ref.n_rows == sum(len(r) - 3 for r in recs)  # rows never straddle the two records
+    psi, y = stacked_regressors(ref.structure, recs, start=3)
+    np.testing.assert_allclose(ref.theta, np.linalg.lstsq(psi, y, rcond=None)[0], rtol=1e-7, atol=1e-12)
+    scaled = [Record(r.u * np.array([1e3, 1e-2]), r.y * 50.0) for r in recs]
+    assert frols(TWO_CAND, scaled, n_terms=6, search="exact").structure == ref.structure
+    assert frols(TWO_CAND, recs, n_terms=6, search="exact", method="gram").structure == ref.structure
+    sel = frols(TWO_CAND, recs, n_terms=6, search="exact", include=["1"])
+    assert sel.structure[0] == gb.parse_term("1") and len(sel.structure) == 6
+    # the constant displaces the least useful true term: what remains is the best 5 of the rest
+    assert len(set(sel.structure) & set(TWO)) == 5
+
+
+def test_exact_refused_beyond_its_candidate_limit_and_budget_reported(monkeypatch):
+    rec = two_input_record(0, n=600, noise=0.01)
+    with pytest.raises(ValueError, match="search='swap'"):
+        frols(Candidates(5, 5, degree=2, inputs=("u1", "u2")), rec, n_terms=3, search="exact")
+    with pytest.raises(ValueError, match="search"):
+        frols(TWO_CAND, rec, n_terms=3, search="best")
+    swap = frols(TWO_CAND, rec, n_terms=6, search="swap")
+    monkeypatch.setattr(fr, "EXACT_NODES", 2)
+    with pytest.warns(RuntimeWarning, match="not proven"):
+        sel = frols(TWO_CAND, rec, n_terms=6, search="exact")
+    assert "not proven" in sel.stop
+    assert sel.subset_rss[0] <= swap.subset_rss[0] * (1 + 1e-12)
+
+
+def test_result_prints_and_frames_with_its_search():
+    rec = two_input_record(1, n=400, noise=0.01)
+    sel = frols(TWO_CAND, rec, n_terms=4, search="swap")
+    assert str(sel).startswith("FROLS (swap search)")
+    frame = sel.to_frame()
+    assert list(frame["term"]) == [str(t) for t in sel.structure]
+    assert sel.subset_rss.flags.writeable is False
+    assert frols(TWO_CAND, rec, n_terms=4).subsets == ()
