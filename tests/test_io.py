@@ -78,13 +78,15 @@ def values():
                                     n_samples=200)
         dsf = gb.se_dsf(STRUCT, rec, static, band=1.0, theta0=pe.thetas[1], max_iter=5)
         path = gb.semp(gb.Candidates(ny=2, nu=1, degree=2), rec, n_terms=3)
-    return {"model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
+        oe = gb.output_error(STRUCT, rec, n_starts=1, max_nfev=5, margin=0.05, choose_on=record(seed=1))
+        chosen = gb.decide_dsf(pe, band=100.0, choose_on=record(seed=1))
+    return {"oe": oe, "chosen decision": chosen, "model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
             "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band,
             "dsf": dsf, "semp": path}
 
 
 TYPES = ["model", "plain model", "neural", "pareto", "failed", "selection", "els", "neural fit", "decision",
-         "uncertainty", "band", "dsf", "semp"]
+         "uncertainty", "band", "dsf", "semp", "oe", "chosen decision"]
 
 
 @pytest.mark.parametrize("name", TYPES)
