@@ -31,10 +31,10 @@ from ..core._terms import Structure
 from ..core._validation import check_real
 from ..static._equilibrium_kernels import schur_stable_rows
 
-__all__ = ["LocalModels", "record_points", "check_margin", "RECORD_POINTS"]
+__all__ = ["LocalModels", "record_points", "within_at", "check_margin", "RECORD_POINTS"]
 
 #: Samples of the record(s) at which the margin is checked, at most (evenly spaced).
-RECORD_POINTS = 256
+RECORD_POINTS = 64
 
 
 def check_margin(margin: object) -> float | None:
@@ -88,6 +88,8 @@ class LocalModels:
             for d in range(code.ny[t]):
                 self.G[t, code.ylag[t, d] - 1] += 1.0
         self.W = self.weights(code, np.asarray(ubar, float), np.asarray(ybar, float))
+        # a(θ) for every point at once is one matrix product: θ (T,) @ WG (T, P·L)
+        self.WG = (self.W.T[:, :, None] * self.G[:, None, :]).reshape(T, -1)
 
     @staticmethod
     def weights(code, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
@@ -132,12 +134,38 @@ class LocalModels:
         K, P = th.shape[0], self.W.shape[0]
         if self.L == 0 or P == 0:
             return np.ones(K, bool)
-        r = 1.0 - margin
-        if r <= 0.0:
-            return np.zeros(K, bool)
-        a = np.einsum("pt,kt,tl->kpl", self.W, th, self.G)
-        a = a / r ** np.arange(1, self.L + 1)
-        return schur_stable_rows(np.ascontiguousarray(a.reshape(K * P, self.L))).reshape(K, P).all(axis=1)
+        a = th @ self.WG  # (K, P·L): row k holds a_1 … a_L of each point in turn
+        return _within(a.reshape(K * P, self.L), margin).reshape(K, P).all(axis=1)
+
+
+def within_at(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray, margin: float
+              ) -> np.ndarray:
+    """Does row k keep ρ ≤ 1 − margin at its own points (ū_j, ȳ_kj), every finite ȳ_kj? Shape (K,).
+
+    For equilibria that depend on θ (the static points'): ``thetas`` (K, T), ``ubar`` (M,) or
+    (M, m), ``ybar`` (K, M); a non-finite ȳ_kj is skipped.
+    """
+    th = np.atleast_2d(np.asarray(thetas, float))
+    yb = np.atleast_2d(np.asarray(ybar, float))
+    K, M = yb.shape
+    local = LocalModels(structure, ubar[:0], yb[0, :0])
+    if local.L == 0 or M == 0:
+        return np.ones(K, bool)
+    ub = np.asarray(ubar, float)
+    fin = np.isfinite(yb)
+    W = LocalModels.weights(encode(structure), np.tile(ub, (K,) + (1,) * (ub.ndim - 1)) if ub.ndim > 1
+                            else np.tile(ub, K), np.where(fin, yb, 0.0).ravel())
+    a = ((np.repeat(th, M, axis=0) * W) @ local.G)
+    ok = _within(a, margin) | ~fin.ravel()
+    return ok.reshape(K, M).all(axis=1)
+
+
+def _within(a: np.ndarray, margin: float) -> np.ndarray:
+    """Row-wise: is every root of z^L − a_1 z^(L−1) − … − a_L of modulus < 1 − margin? (Schur–Cohn, scaled)."""
+    r = 1.0 - margin
+    if r <= 0.0:
+        return np.zeros(a.shape[0], bool)
+    return schur_stable_rows(np.ascontiguousarray(a / r ** np.arange(1, a.shape[1] + 1)))
 
 
 def _radius(a: np.ndarray) -> np.ndarray:

@@ -40,12 +40,9 @@ from ..core._terms import Structure
 from ..core._validation import check_choice, check_int, check_real, check_seed, check_theta
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
-from ._simulation_error import _SOLVERS, SEProblem, _fit, _why_infeasible
+from ._simulation_error import _SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible
 
 __all__ = ["OEResult", "output_error"]
-
-#: Factors tried, in order, on a start's output-feedback parameters to bring it inside the margin.
-_PULL = (0.99, 0.97, 0.94, 0.9, 0.8, 0.65, 0.5, 0.3, 0.1, 0.0)
 
 #: Columns of :attr:`OEResult.starts`.
 START_COLUMNS = ("start", "solver", "status", "message", "JS_start", "JS", "JS_choose", "nfev")
@@ -103,16 +100,6 @@ class OEResult:
                 f"failed starts={len(self.failures)})")
 
 
-def _pull_inside(problem: SEProblem, theta: np.ndarray) -> tuple[np.ndarray, float] | None:
-    """θ with its output-feedback terms scaled by the largest factor of _PULL that keeps the margin."""
-    fb = np.array([any(s == "y" for s, _, _ in t.factors) for t in problem.structure])
-    for c in _PULL:
-        th = np.where(fb, c * theta, theta)
-        if problem.within_margin(th)[0] and np.isfinite(problem.js(th[None])[0]):
-            return th, c
-    return None
-
-
 def output_error(
     structure: Structure,
     data: Record | Dataset | Sequence[Record],
@@ -148,7 +135,7 @@ def output_error(
     theta0 : ndarray, shape (n_terms,), optional
         A further start (engineering units).
     margin : float in [0, 1), optional
-        Stability margin: every local linear model at up to 256 samples (u(k), y(k)) of the
+        Stability margin: every local linear model at up to 64 samples (u(k), y(k)) of the
         fitting records keeps its spectral radius ≤ 1 − margin (see
         :class:`~graybox.estimation._simulation_error.SEProblem`); a start outside it is pulled in
         by scaling its output-feedback parameters down, and no step leaves it. ρ = 1 − margin is
@@ -240,7 +227,7 @@ def output_error(
                 bar.update(1)
                 js0 = float(problem.js(th0[None])[0])
                 if np.isfinite(js0) and not problem.within_margin(th0)[0]:
-                    pulled = _pull_inside(problem, th0)
+                    pulled = _pull_inside(problem, th0, 1.0)
                     if pulled is None:
                         row(label, "", "infeasible", _why_infeasible(problem, th0, 1.0) + "; no scaling of its "
                             "output feedback brings it inside")

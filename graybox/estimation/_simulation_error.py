@@ -72,7 +72,7 @@ from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
-from ._local_models import LocalModels, check_margin, record_points
+from ._local_models import LocalModels, check_margin, record_points, within_at
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
 
@@ -155,12 +155,8 @@ class SEProblem:
         if self.margin is None:
             return np.ones(th.shape[0], bool)
         ok = self.local.within(th, self.margin)
-        if static_outputs is not None and self.surface_inputs is None:
-            yb = np.atleast_2d(static_outputs)
-            for p in np.flatnonzero(ok):
-                fin = np.isfinite(yb[p])
-                if fin.any():
-                    ok[p] = LocalModels(self.structure, self.static.ubar[fin], yb[p, fin]).within(th[p], self.margin)[0]
+        if static_outputs is not None and self.surface_inputs is None and ok.any():
+            ok[ok] = within_at(self.structure, th[ok], self.static.ubar, np.atleast_2d(static_outputs)[ok], self.margin)
         return ok
 
     def radius(self, theta: np.ndarray) -> float:
@@ -557,6 +553,9 @@ def ga_front(
     def step(i, lam1, thetas, rng):
         near = _nearest(thetas, i, "before", 1)
         carry = thetas[near[0]] if near else first
+        if carry is not None and problem.margin is not None and not np.isfinite(problem.cost(carry[None], lam1)[0]):
+            pulled = _pull_inside(problem, carry, lam1)  # a carried individual outside the margin: shrink its feedback
+            carry = carry if pulled is None else pulled[0]
         nrand = options.population - (carry is not None)
         init = problem.random_ls(rng, nrand, options.random_samples)
         if carry is not None:
@@ -748,6 +747,22 @@ def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
     return "cost not finite"
 
 
+#: Factors tried, in order, on a start's output-feedback parameters to bring it inside the margin.
+_PULL = (0.99, 0.97, 0.94, 0.9, 0.8, 0.65, 0.5, 0.3, 0.1, 0.0)
+
+
+def _pull_inside(problem: SEProblem, theta: np.ndarray, lam1: float) -> tuple[np.ndarray, float] | None:
+    """θ with its output-feedback parameters scaled by the largest factor of _PULL that makes it
+    feasible at λ1 (inside the margin, a bounded free run, stable static equilibria), with that
+    factor; None if none does. Shrinking the feedback shrinks every local model's roots."""
+    fb = np.array([any(s == "y" for s, _, _ in t.factors) for t in problem.structure])
+    for c in _PULL:
+        th = np.where(fb, c * theta, theta)
+        if np.isfinite(_residuals(problem, th * problem.scale, lam1)[0]):
+            return th, c
+    return None
+
+
 def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarray]], solvers: Sequence[str],
                 max_nfev: int, tol: float) -> tuple[np.ndarray, float, int]:
     """Fit from every feasible start with every solver; keep the lowest cost (or raise _Failed)."""
@@ -761,8 +776,14 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
         tried.append(th0)
         nfev += 1
         if not np.isfinite(_residuals(problem, th0 * problem.scale, lam1)[0]):
-            why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
-            continue
+            pulled = None
+            if problem.margin is not None and np.isfinite(problem.js(th0[None])[0]) \
+                    and not problem.within_margin(th0)[0]:
+                pulled = _pull_inside(problem, th0, lam1)  # outside the margin: shrink its feedback
+            if pulled is None:
+                why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
+                continue
+            th0 = pulled[0]
         for solver in solvers:
             try:
                 th, c, k = _fit(problem, th0, lam1, solver, max_nfev, tol)
