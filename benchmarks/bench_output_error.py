@@ -9,7 +9,8 @@ SE fronts) and **test** (nothing sees it; the figure to judge by).
 - Bundled plant (simulated stand-in): fit = ``ident`` (3200 samples), choose = ``valid`` (800),
   test = three new 4000-sample runs of the same plant (``PumpingPlant().simulate`` on
   ``speed_reference(seed=s)``, s = 7, 8, 9), mean (and worst) J_S over the three. Structures: the
-  ℓ = 2 (17 terms) and ℓ = 3 (23 terms) FROLS selections of ``graybox reproduce``.
+  ℓ = 2 (17 terms) and ℓ = 3 (23 terms) FROLS selections of ``graybox reproduce``, and the paper's
+  structure (15).
 - Buck converter (real, ``GRAYBOX_BUCK_DIR`` or /work/shared/data/buck): fit = ``ident`` (1001),
   choose = first half of ``valid``, test = its second half. Structures: FROLS on the fit record,
   ny = nu = 2, degree 2, 6 terms; ny = nu = 3, degree 3, 8 terms.
@@ -18,7 +19,8 @@ SE fronts) and **test** (nothing sees it; the figure to judge by).
   choose 600, test 1500 noise-free; also ‖θ − θ_true‖.
 
 Estimators on the same structure: LS, ELS (process part), and :func:`graybox.output_error`
-without and with a margin (0.01 and 0.05), without and with ``choose_on``. ``--se`` adds the SE
+without and with a margin (0.01 and 0.05) or a ridge towards least squares (0.01 and 1), without
+and with ``choose_on``. ``--se`` adds the SE
 fronts of Table I (10 λ1, gradient; ``--ga`` the paper's GA too) with margins None, 0.01, 0.02,
 0.05, D_SF on the identification record and on the choosing record, and (margin 0.01) a front fitted
 on fit + choose together: what members inside the band reach on the choosing record when they have
@@ -47,6 +49,11 @@ OE_STRUCT = gb.Structure(["y(k-1)", "u(k-1)", "u(k-2)^2", "u(k-1)y(k-1)"])
 OE_THETA = np.array([0.7, 0.25, 0.1, -0.05])
 
 
+#: Output-error variants: (margin, ridge, choose on the choosing record).
+VARIANTS = ((None, 0.0, False), (None, 0.0, True), (0.01, 0.0, False), (0.01, 0.0, True), (0.05, 0.0, False),
+            (0.05, 0.0, True), (None, 0.01, False), (None, 1.0, False), (None, 0.01, True))
+
+
 def synthetic():
     def rec(seed, N, noise, name):
         rng = np.random.default_rng(seed)
@@ -68,6 +75,8 @@ def pumping_sets(quick):
         cand = gb.Candidates(6, 6, ne=2, degree=degree, max_y_power=1 if degree == 2 else None)
         st = gb.frols(cand, data.ident, n_terms=n_terms, include=["1"]).structure
         out.append((f"plant ℓ={degree} ({n_terms} terms)", st, data.ident, data.valid, tests, data))
+    if not quick:
+        out.append(("plant, the paper's (15)", gb.reference.STRUCTURE_15, data.ident, data.valid, tests, data))
     return out
 
 
@@ -95,7 +104,7 @@ def fmt(v):
     return "inf" if not np.isfinite(v) else (f"{v:.3g}" if v < 1e4 else f"{v:.2e}")
 
 
-def black_boxes(sets, margins, true_theta=None):
+def black_boxes(sets, true_theta=None):
     print("| data, structure | estimator | J_S fit | J_S choose | J_S test (mean, worst) | ρ max | s |"
           + (" ‖θ − θ_true‖ |" if true_theta is not None else ""))
     print("| --- | --- | --- | --- | --- | --- | --- |" + (" --- |" if true_theta is not None else ""))
@@ -105,12 +114,12 @@ def black_boxes(sets, margins, true_theta=None):
             e = gb.els(st, fit)
         st = e.model.structure
         fits = {"LS": (e.theta_ls, 0.0, np.nan), "ELS": (e.model.theta, 0.0, np.nan)}
-        for m in margins:
-            for on in (None, choose):
-                t0 = time.perf_counter()
-                r = gb.output_error(st, fit, margin=m, choose_on=on, seed=0)
-                name = "OE" + (f" margin={m:g}" if m is not None else "") + (" choose" if on is not None else "")
-                fits[name] = (r.model.theta, time.perf_counter() - t0, r.radius)
+        for m, g, on in VARIANTS:
+            t0 = time.perf_counter()
+            r = gb.output_error(st, fit, margin=m, ridge=g, choose_on=choose if on else None, seed=0)
+            name = "OE" + (f" margin={m:g}" if m is not None else "") + (f" ridge={g:g}" if g else "") \
+                + (" choose" if on else "")
+            fits[name] = (r.model.theta, time.perf_counter() - t0, r.radius)
         for name, (th, sec, rho) in fits.items():
             tj = [js(st, th, t) for t in tests]
             test = f"{fmt(np.mean(tj))}" + (f", {fmt(max(tj))}" if len(tj) > 1 else "")
@@ -176,13 +185,12 @@ def main(argv=None):
     print(f"# bench_output_error.py{' --quick' if args.quick else ''}{' --se' if args.se else ''}"
           f"{' --ga' if args.ga else ''}: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
           f"git {git_rev()}, {machine()}")
-    margins = (None, 0.01, 0.05)
     plant = pumping_sets(args.quick)
     print("\n## synthetic output-error system\n")
     fit, choose, tests = synthetic()
-    black_boxes([("synthetic OE", OE_STRUCT, fit, choose, tests, None)], margins, OE_THETA)
+    black_boxes([("synthetic OE", OE_STRUCT, fit, choose, tests, None)], OE_THETA)
     print("\n## bundled plant and buck converter\n")
-    black_boxes(plant + buck_sets(args.quick), margins)
+    black_boxes(plant + buck_sets(args.quick))
     if args.se:
         print("\n## SE fronts (10 λ1) and D_SF, bundled plant\n")
         se_fronts(plant, ("gradient", "ga") if args.ga else ("gradient",))

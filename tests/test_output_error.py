@@ -167,3 +167,34 @@ def test_dsf_chooses_on_the_choosing_record(oe_data):
     assert decide_dsf(ps, band=0.5).chosen_on == ""
     with pytest.raises(ValueError, match="choose_on"):
         decide_dsf(ps, band=0.5, choose_on=[])
+
+
+# -- regularisation towards least squares -------------------------------------------------------------------
+def test_ridge_factor_matches_finite_differences(oe_data):
+    from test_se import assert_factor_matches_finite_differences
+
+    fit, _ = oe_data
+    x_static = np.array([-0.8, 0.0, 0.8])
+    static = gb.StaticPoints(x_static, gb.Model(OE_STRUCT, OE_THETA).static_curve(x_static))
+    problem = SEProblem(OE_STRUCT, fit, static, ridge=0.3)
+    z = OE_THETA * problem.scale  # away from least squares: the ridge rows are not zero
+    for lam1 in (1.0, 0.4):
+        assert_factor_matches_finite_differences(problem, z, lam1)
+        # the GA's cost is the same regularised objective
+        from graybox.estimation._simulation_error import _residuals
+
+        r = _residuals(problem, z, lam1)
+        assert problem.cost(OE_THETA[None], lam1)[0] == pytest.approx(r @ r, rel=1e-10)
+
+
+def test_ridge_pulls_towards_least_squares(oe_data):
+    fit, _ = oe_data
+    ls = SEProblem(OE_STRUCT, fit, None).ls_theta()
+    free = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40).model.theta
+    held = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40, ridge=1e4).model.theta
+    mild = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40, ridge=1e-3).model.theta
+    assert np.linalg.norm(held - ls) < 0.05 * np.linalg.norm(free - ls)
+    d_mild = np.linalg.norm(mild - ls)
+    assert np.linalg.norm(held - ls) < d_mild <= np.linalg.norm(free - ls) * (1 + 1e-9)
+    with pytest.raises(ValueError, match="ridge"):
+        output_error(OE_STRUCT, fit, ridge=-1.0)

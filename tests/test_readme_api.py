@@ -60,3 +60,14 @@ def test_long_records_example_runs():
     ns = _run_example("API: long records")
     assert isinstance(ns["big"], gb.DaskRecord) and len(ns["sel"].structure) == 17
     _check_table_names("API: long records")
+
+
+def test_output_error_example_runs():
+    ns = _run_example("API: output error, and fits that hold on new data")
+    assert isinstance(ns["oe"], gb.OEResult) and ns["oe"].radius <= 0.95 + 1e-9
+    assert ns["early"].chosen_on == data_valid_name() and ns["pick"].chosen_on == data_valid_name()
+    _check_table_names("API: output error, and fits that hold on new data")
+
+
+def data_valid_name() -> str:
+    return gb.load_pumping().valid.name

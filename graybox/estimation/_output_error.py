@@ -108,6 +108,7 @@ def output_error(
     subsample: float = 0.5,
     theta0: np.ndarray | None = None,
     margin: float | None = None,
+    ridge: float = 0.0,
     choose_on: Record | Sequence[Record] | None = None,
     seed: int = 0,
     max_nfev: int = 100,
@@ -141,6 +142,9 @@ def output_error(
         by scaling its output-feedback parameters down, and no step leaves it. ρ = 1 − margin is
         a time constant of about Ts / margin: choose it from the slowest dynamics the system may
         have, not from this record. None (default): no margin.
+    ridge : float >= 0
+        Regularisation towards least squares (dimensionless γ): γ · mean_j (s_j (θ_j − θ_LS,j))²
+        is added to J_S, s_j the RMS of regressor j. 0 (default): none.
     choose_on : Record or sequence of Record, optional
         A choosing record, not used for fitting: the iterate (over every start, solver and step)
         with the smallest J_S on it is returned (early stopping). None: the fit with the smallest
@@ -174,7 +178,7 @@ def output_error(
     max_nfev = check_int(max_nfev, "max_nfev", low=1)
     tol = check_real(tol, "tol", low=0.0, low_open=True)
     check_choice(solver, "solver", _SOLVERS)
-    problem = SEProblem(structure, rec, None, margin=margin)
+    problem = SEProblem(structure, rec, None, margin=margin, ridge=ridge)
     st = problem.structure
     n = len(st)
     chooser = None
@@ -258,7 +262,7 @@ def output_error(
                         row(label, sv, "failed", "the fit ended where the free run diverges", js0, nfev=k)
                         continue
                     if chooser is None:
-                        offer(th, js, f"{label} ({sv})")
+                        offer(th, cost, f"{label} ({sv})")  # the optimised cost: J_S (+ the ridge term)
                         row(label, sv, "fitted", "", js0, js, nfev=k)
                     else:
                         jc = float(chooser.js(th[None])[0])

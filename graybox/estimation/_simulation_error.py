@@ -100,10 +100,14 @@ class SEProblem:
         samples (u(k), y(k)) along the records and, where the weight on the static points is
         positive, at the equilibria reached at the static points (:mod:`._local_models`).
         None: no margin (stability at the static points is still required where J_SF counts).
+    ridge : float >= 0
+        Regularisation towards least squares: γ · mean_j (s_j (θ_j − θ_LS,j))² is added to the
+        cost, with s_j the RMS of regressor j (so each term is a change of that term's contribution
+        to ŷ, in output units, and the cost stays independent of units). 0: none.
     """
 
     def __init__(self, structure: Structure, records: Record | Sequence[Record], static: StaticPoints | None,
-                 *, margin: float | None = None):
+                 *, margin: float | None = None, ridge: float = 0.0):
         self.records = as_records(records)
         if static is not None and not isinstance(static, StaticPoints):
             raise ValueError(f"static must be StaticPoints or None, got {type(static).__name__}")
@@ -131,6 +135,8 @@ class SEProblem:
         self.n_dyn = self.target.size
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
         self._ls: np.ndarray | None = None
+        self.ridge = check_real(ridge, "ridge", low=0.0)
+        self.ridge_ref = self.ls_theta() * self.scale if self.ridge > 0 else None
 
     def fingerprint(self) -> str:
         """A hash of everything that defines the problem (for checkpoints)."""
@@ -141,6 +147,8 @@ class SEProblem:
             h.update(np.ascontiguousarray(a).tobytes())
         if self.margin is not None:  # a checkpoint without a margin stays valid
             h.update(f"margin={self.margin!r}".encode())
+        if self.ridge > 0:
+            h.update(f"ridge={self.ridge!r}".encode())
         return h.hexdigest()[:16]
 
     # -- the stability margin ----------------------------------------------------------
@@ -209,6 +217,8 @@ class SEProblem:
             with np.errstate(all="ignore"):
                 jsf = np.mean((yb - self.static.ybar) ** 2, axis=1)
             c = c + (1.0 - lam1) * np.where(np.isfinite(jsf), jsf, np.inf)
+        if self.ridge > 0:
+            c = c + self.ridge * np.mean((np.atleast_2d(thetas) * self.scale - self.ridge_ref) ** 2, axis=1)
         c = np.where(np.isfinite(c), c, np.inf)
         if self.margin is not None:
             fin = np.isfinite(c)
@@ -580,7 +590,8 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     th = z / problem.scale
     L = problem.L
     M = len(problem.static) if lam1 < 1.0 else 0
-    r = np.empty(problem.n_dyn + M)
+    n_ridge = th.size if problem.ridge > 0 else 0
+    r = np.empty(problem.n_dyn + M + n_ridge)
     a = 0
     for rec in problem.records:
         y = simulate_one(problem.code, th, record_inputs(rec, problem.code.inputs), rec.y[:L], L, 1e300)
@@ -593,7 +604,9 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
         # an unstable equilibrium gives NaN here, hence inf residuals: the solver treats the
         # region as infeasible and shrinks its step, so the front never trades J_SF for stability
         yb = problem.static_outputs(th)[0]
-        r[a:] = np.sqrt((1.0 - lam1) / M) * (yb - problem.static.ybar)
+        r[a:a + M] = np.sqrt((1.0 - lam1) / M) * (yb - problem.static.ybar)
+    if n_ridge:
+        r[a + M:] = np.sqrt(problem.ridge / n_ridge) * (z - problem.ridge_ref)
     if not np.all(np.isfinite(r)):
         r[:] = np.inf
     elif problem.margin is not None and not problem.within_margin(th, None if yb is None else yb[None])[0]:
@@ -637,6 +650,9 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
         if not np.all(np.isfinite(rows)):
             return np.full((n + 1, n + 1), np.nan)
         T = _triangle(np.vstack([T, rows]))
+    if problem.ridge > 0:
+        w3 = np.sqrt(problem.ridge / n)
+        T = _triangle(np.vstack([T, np.column_stack([w3 * np.eye(n), w3 * (z - problem.ridge_ref)])]))
     if T.shape[0] < n + 1:
         T = np.vstack([T, np.zeros((n + 1 - T.shape[0], n + 1))])
     return T
@@ -969,6 +985,7 @@ def se_pareto(
     solver: Literal["auto", "trf", "dogbox", "lm"] | None = None,
     starts: Sequence[np.ndarray] | None = None,
     margin: float | None = None,
+    ridge: float = 0.0,
 ) -> ParetoSet:
     """SE Pareto set of eq. (13) by the paper's GA or the gradient method.
 
@@ -1015,6 +1032,10 @@ def se_pareto(
         but tied to the sampling period: ρ = 1 − margin is a time constant of about Ts / margin.
         Starts (and the GA's individuals) outside the margin are infeasible. None (default): no
         margin, the paper's problem.
+    ridge : float >= 0
+        Regularisation towards least squares (both methods): γ · mean_j (s_j (θ_j − θ_LS,j))² is
+        added to every member's cost, s_j the RMS of regressor j (see :class:`SEProblem`). 0
+        (default): none, the paper's problem; ``extra["cost"]`` then holds the regularised cost.
 
     Returns
     -------
@@ -1044,7 +1065,7 @@ def se_pareto(
     if sp is None:
         raise ValueError("the SE problem needs static points: pass static= or a Dataset with static points")
     warn_static_range(sp.ubar, rec)
-    problem = SEProblem(structure, rec, sp, margin=margin)
+    problem = SEProblem(structure, rec, sp, margin=margin, ridge=ridge)
     lam_in = SE_LAMBDAS if lambdas is None else lambdas
     if method == "ga":
         front = ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
