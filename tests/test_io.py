@@ -279,6 +279,21 @@ def test_an_els_file_written_before_n_direct_existed_still_loads(values):
     assert back.n_direct == 0 and back.n_iter == values["els"].n_iter
 
 
+def test_a_decision_file_written_before_chosen_on_existed_still_loads(values):
+    import json
+
+    doc = json.loads(gb.to_json(values["chosen decision"]))
+    assert doc["object"].pop("chosen_on") == "ident"
+    back = gb.from_json(json.dumps(doc))
+    assert back.chosen_on == "" and back.index == values["chosen decision"].index
+
+
+def test_an_output_error_result_keeps_its_starts(values):
+    back = gb.from_json(gb.to_json(values["oe"]))
+    assert back.starts.equals(values["oe"].starts) and dict(back.failures) == dict(values["oe"].failures)
+    assert back.chosen_on == "ident" and back.JS_choose == values["oe"].JS_choose
+
+
 def test_a_graybox_selection_round_trips_with_its_table(tmp_path):
     """select_graybox's result (defined in the experiment layer, registered with the file format):
     its table comes back with the same columns, kinds, index and values."""

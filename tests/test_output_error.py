@@ -32,7 +32,7 @@ def oe_data():
 
 def test_recovers_an_output_error_system_better_than_least_squares(oe_data):
     fit, test = oe_data
-    r = output_error(OE_STRUCT, fit, n_starts=3, seed=0)
+    r = output_error(OE_STRUCT, fit, n_starts=3, seed=0, ridge=0.0)  # pure output error
     assert isinstance(r, OEResult)
     ls = SEProblem(OE_STRUCT, fit, None).ls_theta()
     err_oe = np.linalg.norm(r.model.theta - OE_THETA)
@@ -44,6 +44,11 @@ def test_recovers_an_output_error_system_better_than_least_squares(oe_data):
     assert gb.js(r.model, test) < gb.js(gb.Model(OE_STRUCT, ls), test)
     assert r.JS == pytest.approx(gb.js(r.model, fit), rel=1e-9)
     assert np.isnan(r.JS_choose) and r.chosen_on == "" and np.isnan(r.margin)
+    # the default (a ridge towards least squares) pays some bias for robustness, and still beats least squares
+    d = output_error(OE_STRUCT, fit, n_starts=3, seed=0)
+    err_d = np.linalg.norm(d.model.theta - OE_THETA)
+    assert err_oe < err_d < err_ls
+    assert gb.js(d.model, test) < gb.js(gb.Model(OE_STRUCT, ls), test)
 
 
 def test_reproducible_with_a_seed(oe_data):
@@ -104,7 +109,7 @@ def test_the_margin_holds_on_the_fitted_model(oe_data, margin):
             assert eq.spectral_radius <= 1 - margin + 1e-9
     # the margin binds here: the unconstrained fit's feedback 0.7 - 0.05 u reaches 0.75 > 1 - 0.4
     if margin == 0.4:
-        assert output_error(OE_STRUCT, fit, n_starts=0, max_nfev=30).radius > 1 - margin
+        assert output_error(OE_STRUCT, fit, n_starts=0, max_nfev=30, ridge=0.0).radius > 1 - margin
 
 
 def test_a_start_outside_the_margin_is_pulled_inside(oe_data):
@@ -190,7 +195,7 @@ def test_ridge_factor_matches_finite_differences(oe_data):
 def test_ridge_pulls_towards_least_squares(oe_data):
     fit, _ = oe_data
     ls = SEProblem(OE_STRUCT, fit, None).ls_theta()
-    free = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40).model.theta
+    free = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40, ridge=0.0).model.theta
     held = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40, ridge=1e4).model.theta
     mild = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40, ridge=1e-3).model.theta
     assert np.linalg.norm(held - ls) < 0.05 * np.linalg.norm(free - ls)
