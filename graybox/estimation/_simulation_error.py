@@ -13,6 +13,13 @@ Two solvers share one problem definition (:class:`SEProblem`):
   n + 1 residuals instead of N (cost linear in N); continued along the λ sweep, with a multi-start
   ("trf" and "dogbox" from every feasible start) wherever the sweep has to restart.
 
+Beyond the paper, both solvers take a stability margin (every local linear model along the records
+and at the static points keeps its spectral radius ≤ 1 − margin: :mod:`._local_models`; a θ outside
+it is a wall, and a start outside it is pulled in by shrinking its output feedback) and a ridge
+towards least squares, through :class:`SEProblem`. Without a margin the gradient members on the
+bundled plant buy identification error with near-unit roots that follow the record's drift.
+:func:`graybox.estimation._output_error.output_error` is the problem at λ1 = 1 without static points.
+
 :func:`se_pareto` runs either and returns a :class:`graybox.ParetoSet` whose J's come
 from the shared evaluator. A λ whose fit fails (no feasible start; no individual with a finite
 cost) stays in the set as a failed member with the reason, and the sweep goes on. Long sweeps show
