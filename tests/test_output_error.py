@@ -203,3 +203,42 @@ def test_ridge_pulls_towards_least_squares(oe_data):
     assert np.linalg.norm(held - ls) < d_mild <= np.linalg.norm(free - ls) * (1 + 1e-9)
     with pytest.raises(ValueError, match="ridge"):
         output_error(OE_STRUCT, fit, ridge=-1.0)
+
+
+# -- the margin test itself ---------------------------------------------------------------------------------
+from hypothesis import assume, given, settings  # noqa: E402
+from hypothesis import strategies as hst  # noqa: E402
+
+
+@settings(max_examples=200, deadline=None)
+@given(a=hst.lists(hst.floats(-1.5, 1.5), min_size=1, max_size=6), margin=hst.floats(0.0, 0.9))
+def test_scaled_schur_cohn_agrees_with_the_roots(a, margin):
+    """ρ(a) < 1 − margin exactly when the compiled test on the scaled polynomial says so."""
+    from graybox.estimation._local_models import _radius, _within
+
+    row = np.array([a])
+    rho = _radius(row)[0]
+    assume(abs(rho - (1 - margin)) > 1e-9)  # the boundary itself is measure zero and rounding-sensitive
+    assert bool(_within(row, margin)[0]) == (rho < 1 - margin)
+
+
+def test_local_models_are_the_linearisation_of_the_model(oe_data):
+    """a_l at a point equals the derivative of the one-step map with respect to y(k-l), by differences."""
+    fit, _ = oe_data
+    theta = np.array([0.6, 0.3, 0.1, -0.2])
+    ub, yb = np.array([0.3, -0.7]), np.array([0.5, 1.2])
+    a = LocalModels(OE_STRUCT, ub, yb).coefficients(theta)
+    for p in range(2):
+        def step(y1):  # y(k) from y(k-1) = y1, every input lag at ū
+            return theta[0] * y1 + theta[1] * ub[p] + theta[2] * ub[p] ** 2 + theta[3] * ub[p] * y1
+        h = 1e-6
+        assert a[p, 0] == pytest.approx((step(yb[p] + h) - step(yb[p] - h)) / (2 * h), rel=1e-8)
+
+
+def test_checkpoints_tell_margins_and_ridges_apart(oe_data):
+    fit, _ = oe_data
+    static = gb.StaticPoints(np.array([-0.5, 0.5]), np.array([0.0, 0.5]))
+    plain = SEProblem(OE_STRUCT, fit, static).fingerprint()
+    assert SEProblem(OE_STRUCT, fit, static, margin=0.1).fingerprint() != plain
+    assert SEProblem(OE_STRUCT, fit, static, ridge=0.1).fingerprint() != plain
+    assert SEProblem(OE_STRUCT, fit, static, margin=None, ridge=0.0).fingerprint() == plain
