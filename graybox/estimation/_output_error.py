@@ -195,6 +195,8 @@ def output_error(
     n = len(st)
     chooser = None
     if choose_on is not None:
+        if isinstance(choose_on, Dataset):  # as_records would take its ident: the fitting data
+            raise ValueError("choose_on must be a Record or a sequence of Records (e.g. data.valid), not a Dataset")
         crec = as_records(choose_on)
         chooser = SEProblem(st, crec, None)
         chosen_on = ", ".join(r.name for r in crec)
