@@ -28,9 +28,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
     ("selection", ("_stopping", "_subset_search", "_forward_regression", "_simulation_error_pruning"),
      "structure selection: FROLS (ERR) and SEMP (simulation error with pruning)"),
     ("estimation", ("_pareto", "_decisions", "_extended_least_squares", "_neural", "_prediction_error",
-                    "_simulation_error", "_epsilon_constraint"),
-     "ELS, CLS and PE (cvxpy QPs and the closed form), SE (GA and gradient), D_SF solved directly, "
-     "Pareto sets and decision makers, the neural baseline"),
+                    "_local_models", "_simulation_error", "_output_error", "_epsilon_constraint"),
+     "ELS, CLS and PE (cvxpy QPs and the closed form), SE (GA and gradient) with a stability margin, "
+     "output error, D_SF solved directly, Pareto sets and decision makers, the neural baseline"),
     ("diagnostics", ("_residuals", "_uncertainty", "_bootstrap"),
      "residual correlation tests, parameter and static-curve uncertainty, bootstrap of a decision"),
     ("control", ("_local", "_systems"),

@@ -79,13 +79,15 @@ def values():
         dsf = gb.se_dsf(STRUCT, rec, static, band=1.0, theta0=pe.thetas[1], max_iter=5)
         path = gb.semp(gb.Candidates(ny=2, nu=1, degree=2), rec, n_terms=3)
         exact = gb.frols(gb.Candidates(ny=2, nu=1, degree=2), rec, max_terms=4, search="exact")
-    return {"exact selection": exact, "model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
+        oe = gb.output_error(STRUCT, rec, n_starts=1, max_nfev=5, margin=0.05, choose_on=record(seed=1))
+        chosen = gb.decide_dsf(pe, band=100.0, choose_on=record(seed=1))
+    return {"exact selection": exact, "oe": oe, "chosen decision": chosen, "model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
             "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band,
             "dsf": dsf, "semp": path}
 
 
 TYPES = ["model", "plain model", "neural", "pareto", "failed", "selection", "exact selection", "els", "neural fit",
-         "decision", "uncertainty", "band", "dsf", "semp"]
+         "decision", "uncertainty", "band", "dsf", "semp", "oe", "chosen decision"]
 
 
 @pytest.mark.parametrize("name", TYPES)
@@ -288,6 +290,21 @@ def test_an_els_file_written_before_n_direct_existed_still_loads(values):
     assert body.pop("n_direct") == values["els"].n_direct
     back = gb.from_json(json.dumps(doc))
     assert back.n_direct == 0 and back.n_iter == values["els"].n_iter
+
+
+def test_a_decision_file_written_before_chosen_on_existed_still_loads(values):
+    import json
+
+    doc = json.loads(gb.to_json(values["chosen decision"]))
+    assert doc["object"].pop("chosen_on") == "ident"
+    back = gb.from_json(json.dumps(doc))
+    assert back.chosen_on == "" and back.index == values["chosen decision"].index
+
+
+def test_an_output_error_result_keeps_its_starts(values):
+    back = gb.from_json(gb.to_json(values["oe"]))
+    assert back.starts.equals(values["oe"].starts) and dict(back.failures) == dict(values["oe"].failures)
+    assert back.chosen_on == "ident" and back.JS_choose == values["oe"].JS_choose
 
 
 def test_a_graybox_selection_round_trips_with_its_table(tmp_path):

@@ -72,3 +72,13 @@ def test_control_example_runs():
     assert ns["oc"].has_band
     assert abs(ns["step"].outputs[0][-1] - (lm.ybar + 1.0)) < 1e-3  # the PI brings the model to the setpoint
     _check_table_names("API: from model to controller")
+
+def test_output_error_example_runs():
+    ns = _run_example("API: output error, and fits that hold on new data")
+    assert isinstance(ns["oe"], gb.OEResult) and ns["oe"].radius <= 0.95 + 1e-9
+    assert ns["early"].chosen_on == data_valid_name() and ns["pick"].chosen_on == data_valid_name()
+    _check_table_names("API: output error, and fits that hold on new data")
+
+
+def data_valid_name() -> str:
+    return gb.load_pumping().valid.name

@@ -1,4 +1,4 @@
-"""Estimation: ELS, CLS and PE, SE (GA and gradient), D_SF, Pareto sets and decisions, the neural baseline."""
+"""Estimation: ELS, CLS and PE, SE (GA and gradient), output error, D_SF, Pareto sets and decisions, the neural baseline."""
 
 from .._lazy import attach
 
@@ -9,5 +9,6 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "_neural": ("NeuralFit", "NeuralModel", "neural_narx"),
     "_prediction_error": ("PE_LAMBDAS", "cls", "pe_pareto", "pe_thetas"),
     "_simulation_error": ("SE_LAMBDAS", "GAOptions", "se_pareto"),
+    "_output_error": ("OEResult", "output_error"),
     "_epsilon_constraint": ("DSFResult", "se_dsf"),
 })

@@ -13,6 +13,13 @@ Two solvers share one problem definition (:class:`SEProblem`):
   n + 1 residuals instead of N (cost linear in N); continued along the λ sweep, with a multi-start
   ("trf" and "dogbox" from every feasible start) wherever the sweep has to restart.
 
+Beyond the paper, both solvers take a stability margin (every local linear model along the records
+and at the static points keeps its spectral radius ≤ 1 − margin: :mod:`._local_models`; a θ outside
+it is a wall, and a start outside it is pulled in by shrinking its output feedback) and a ridge
+towards least squares, through :class:`SEProblem`. Without a margin the gradient members on the
+bundled plant buy identification error with near-unit roots that follow the record's drift.
+:func:`graybox.estimation._output_error.output_error` is the problem at λ1 = 1 without static points.
+
 :func:`se_pareto` runs either and returns a :class:`graybox.ParetoSet` whose J's come
 from the shared evaluator. A λ whose fit fails (no feasible start; no individual with a finite
 cost) stays in the set as a failed member with the reason, and the sweep goes on. Long sweeps show
@@ -72,6 +79,7 @@ from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
+from ._local_models import LocalModels, check_margin, record_points, within_at
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
 
@@ -81,7 +89,7 @@ SE_LAMBDAS.setflags(write=False)
 
 
 class SEProblem:
-    """The data of one SE problem: structure, identification record(s), static points.
+    """The data of one SE problem: structure, identification record(s), static points, margin.
 
     Parameters
     ----------
@@ -90,21 +98,37 @@ class SEProblem:
     records : Record or sequence of Record
         Identification data. Each record is run freely from its own first max-lag samples (a
         free run never straddles two experiments) and J_S is the mean over all their samples.
-    static : StaticPoints
-        Measured steady states.
+    static : StaticPoints or None
+        Measured steady states. None: a pure simulation-error (output-error) problem, whose only
+        weight is λ1 = 1.
+    margin : float in [0, 1) or None
+        Stability margin: a θ is feasible only where every local linear model keeps its spectral
+        radius ≤ 1 − margin, at up to :data:`~graybox.estimation._local_models.RECORD_POINTS`
+        samples (u(k), y(k)) along the records and, where the weight on the static points is
+        positive, at the equilibria reached at the static points (:mod:`._local_models`).
+        None: no margin (stability at the static points is still required where J_SF counts).
+    ridge : float >= 0
+        Regularisation towards least squares: γ · mean_j (s_j (θ_j − θ_LS,j))² is added to the
+        cost, with s_j the RMS of regressor j (so each term is a change of that term's contribution
+        to ŷ, in output units, and the cost stays independent of units). 0: none.
     """
 
-    def __init__(self, structure: Structure, records: Record | Sequence[Record], static: StaticPoints):
+    def __init__(self, structure: Structure, records: Record | Sequence[Record], static: StaticPoints | None,
+                 *, margin: float | None = None, ridge: float = 0.0):
         self.records = as_records(records)
-        if not isinstance(static, StaticPoints):
-            raise ValueError(f"static must be StaticPoints, got {type(static).__name__}")
+        if static is not None and not isinstance(static, StaticPoints):
+            raise ValueError(f"static must be StaticPoints or None, got {type(static).__name__}")
         structure = structure if isinstance(structure, Structure) else Structure(structure)
         if any(t.is_noise for t in structure):
             structure = structure.process
         self.structure = structure
         self.record = self.records[0]
         r0 = self.record
-        if static.n_inputs != r0.n_inputs or (r0.n_inputs > 1 and static.input_names != r0.input_names):
+        self.margin = check_margin(margin)
+        self.local = LocalModels(structure, *record_points(structure, self.records)) if self.margin is not None \
+            else None
+        if static is not None and (static.n_inputs != r0.n_inputs or (r0.n_inputs > 1
+                                                                       and static.input_names != r0.input_names)):
             check_same_inputs(r0, static)
         # several inputs: the static part lives on the surface ȳ(ū_1, …, ū_m), columns in the records' order
         self.surface_inputs = r0.input_names if (r0.n_inputs > 1 or len(structure.inputs) > 1) else None
@@ -118,14 +142,44 @@ class SEProblem:
         self.n_dyn = self.target.size
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
         self._ls: np.ndarray | None = None
+        self.ridge = check_real(ridge, "ridge", low=0.0)
+        self.ridge_ref = self.ls_theta() * self.scale if self.ridge > 0 else None
 
     def fingerprint(self) -> str:
         """A hash of everything that defines the problem (for checkpoints)."""
         h = hashlib.sha256()
         h.update(str(self.structure).encode())
-        for a in [x for r in self.records for x in (r.u, r.y)] + [self.static.ubar, self.static.ybar]:
+        static = [] if self.static is None else [self.static.ubar, self.static.ybar]
+        for a in [x for r in self.records for x in (r.u, r.y)] + static:
             h.update(np.ascontiguousarray(a).tobytes())
+        if self.margin is not None:  # a checkpoint without a margin stays valid
+            h.update(f"margin={self.margin!r}".encode())
+        if self.ridge > 0:
+            h.update(f"ridge={self.ridge!r}".encode())
         return h.hexdigest()[:16]
+
+    # -- the stability margin ----------------------------------------------------------
+    def within_margin(self, thetas: np.ndarray, static_outputs: np.ndarray | None = None) -> np.ndarray:
+        """Does each row keep every local model's spectral radius ≤ 1 − margin? Shape (P,).
+
+        Checked at the record points and, when ``static_outputs`` (P, M) is given, at the
+        equilibria (ū_i, ȳ_i) of each row (a non-finite ȳ_i is skipped: J_SF handles it).
+        Always True without a margin.
+        """
+        th = np.atleast_2d(np.asarray(thetas, float))
+        if self.margin is None:
+            return np.ones(th.shape[0], bool)
+        ok = self.local.within(th, self.margin)
+        if static_outputs is not None and self.surface_inputs is None and ok.any():
+            ok[ok] = within_at(self.structure, th[ok], self.static.ubar, np.atleast_2d(static_outputs)[ok], self.margin)
+        return ok
+
+    def radius(self, theta: np.ndarray) -> float:
+        """The largest spectral radius of θ's local models at the record points (dimensionless)."""
+        local = self.local if self.local is not None else LocalModels(self.structure,
+                                                                      *record_points(self.structure, self.records))
+        r = local.radius(theta)
+        return float(r.max()) if r.size else 0.0
 
     # -- objectives -------------------------------------------------------------------
     def js(self, thetas: np.ndarray, threads: int = 1) -> np.ndarray:
@@ -140,6 +194,8 @@ class SEProblem:
 
         :func:`graybox.static._analysis.reached_equilibria` with y0 = ȳ_i: the definition of J_SF.
         """
+        if self.static is None:
+            raise ValueError("this problem has no static points")
         if self.surface_inputs is not None:
             return reached_surface(self.structure, np.atleast_2d(thetas), self.static.ubar, self.static.ybar,
                                    inputs=self.surface_inputs).ybar
@@ -162,9 +218,22 @@ class SEProblem:
         """λ1 J_S + λ2 J_SF with λ2 = 1 − λ1, shape (P,); inf for a diverging member."""
         js = self.js(thetas, threads)
         c = lam1 * js
+        yb = None
         if lam1 < 1.0:
-            c = c + (1.0 - lam1) * self.jsf(thetas)
-        return np.where(np.isfinite(c), c, np.inf)
+            yb = self.static_outputs(thetas)
+            with np.errstate(all="ignore"):
+                jsf = np.mean((yb - self.static.ybar) ** 2, axis=1)
+            c = c + (1.0 - lam1) * np.where(np.isfinite(jsf), jsf, np.inf)
+        if self.ridge > 0:
+            c = c + self.ridge * np.mean((np.atleast_2d(thetas) * self.scale - self.ridge_ref) ** 2, axis=1)
+        c = np.where(np.isfinite(c), c, np.inf)
+        if self.margin is not None:
+            fin = np.isfinite(c)
+            if fin.any():
+                th = np.atleast_2d(thetas)
+                ok = self.within_margin(th[fin], None if yb is None else yb[fin])
+                c[np.flatnonzero(fin)[~ok]] = np.inf
+        return c
 
     def residuals(self, theta: np.ndarray, *, jacobian: bool = True):
         """Free-run and static residuals of one θ and their Jacobians with respect to θ.
@@ -501,6 +570,9 @@ def ga_front(
     def step(i, lam1, thetas, rng):
         near = _nearest(thetas, i, "before", 1)
         carry = thetas[near[0]] if near else first
+        if carry is not None and problem.margin is not None and not np.isfinite(problem.cost(carry[None], lam1)[0]):
+            pulled = _pull_inside(problem, carry, lam1)  # a carried individual outside the margin: shrink its feedback
+            carry = carry if pulled is None else pulled[0]
         nrand = options.population - (carry is not None)
         init = problem.random_ls(rng, nrand, options.random_samples)
         if carry is not None:
@@ -525,7 +597,8 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     th = z / problem.scale
     L = problem.L
     M = len(problem.static) if lam1 < 1.0 else 0
-    r = np.empty(problem.n_dyn + M)
+    n_ridge = th.size if problem.ridge > 0 else 0
+    r = np.empty(problem.n_dyn + M + n_ridge)
     a = 0
     for rec in problem.records:
         y = simulate_one(problem.code, th, record_inputs(rec, problem.code.inputs), rec.y[:L], L, 1e300)
@@ -533,13 +606,18 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
         np.subtract(y[L:], rec.y[L:], out=r[a:b])  # written in place: long records make no copies
         a = b
     r[:a] *= np.sqrt(lam1 / problem.n_dyn)
+    yb = None
     if M:
         # an unstable equilibrium gives NaN here, hence inf residuals: the solver treats the
         # region as infeasible and shrinks its step, so the front never trades J_SF for stability
         yb = problem.static_outputs(th)[0]
-        r[a:] = np.sqrt((1.0 - lam1) / M) * (yb - problem.static.ybar)
+        r[a:a + M] = np.sqrt((1.0 - lam1) / M) * (yb - problem.static.ybar)
+    if n_ridge:
+        r[a + M:] = np.sqrt(problem.ridge / n_ridge) * (z - problem.ridge_ref)
     if not np.all(np.isfinite(r)):
         r[:] = np.inf
+    elif problem.margin is not None and not problem.within_margin(th, None if yb is None else yb[None])[0]:
+        r[:] = np.inf  # outside the margin: a wall, as instability is (every accepted point keeps the margin)
     return r
 
 
@@ -579,6 +657,9 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
         if not np.all(np.isfinite(rows)):
             return np.full((n + 1, n + 1), np.nan)
         T = _triangle(np.vstack([T, rows]))
+    if problem.ridge > 0:
+        w3 = np.sqrt(problem.ridge / n)
+        T = _triangle(np.vstack([T, np.column_stack([w3 * np.eye(n), w3 * (z - problem.ridge_ref)])]))
     if T.shape[0] < n + 1:
         T = np.vstack([T, np.zeros((n + 1 - T.shape[0], n + 1))])
     return T
@@ -601,12 +682,13 @@ class _Compressed:
     point costs one free run (its Jacobian is needed only where a step is accepted).
     """
 
-    def __init__(self, problem: SEProblem, lam1: float):
+    def __init__(self, problem: SEProblem, lam1: float, watch=None):
         self.problem = problem
         self.lam1 = lam1
         self.n = len(problem.structure)
         self.nfun = 0
         self.last = (None, np.inf)  # the last point with a finite cost, and that cost
+        self.watch = watch  # called with θ at every point where a Jacobian is taken (the iterates)
 
     def fun(self, z: np.ndarray) -> np.ndarray:
         self.nfun += 1
@@ -620,6 +702,8 @@ class _Compressed:
         return f
 
     def jac(self, z: np.ndarray, f: np.ndarray | None = None) -> np.ndarray:
+        if self.watch is not None:
+            self.watch(z / self.problem.scale)
         T = _r_factor(self.problem, z, self.lam1)
         if not np.all(np.isfinite(T)):
             # bounded run, overflowing sensitivities (a run on the edge of instability): stop here
@@ -650,9 +734,12 @@ class _Stop(Exception):
 
 
 def _fit(problem: SEProblem, theta0: np.ndarray, lam1: float, solver: str, max_nfev: int,
-         tol: float) -> tuple[np.ndarray, float, int]:
-    """One ``least_squares`` fit at λ1 from a feasible θ0: (θ, weighted cost, evaluations)."""
-    cp = _Compressed(problem, lam1)
+         tol: float, watch=None) -> tuple[np.ndarray, float, int]:
+    """One ``least_squares`` fit at λ1 from a feasible θ0: (θ, weighted cost, evaluations).
+
+    ``watch(θ)``, if given, sees every iterate (each point where a Jacobian is taken).
+    """
+    cp = _Compressed(problem, lam1, watch)
     try:
         with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
             res = least_squares(cp.fun, theta0 * problem.scale, jac=cp.jac, method=solver, x_scale="jac",
@@ -667,6 +754,10 @@ def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
     """Why a start cannot be used at λ1, in words."""
     if not np.isfinite(problem.js(theta[None]))[0]:
         return "free run diverges"
+    if problem.static is None or lam1 == 1.0:
+        if problem.margin is not None and not problem.within_margin(theta)[0]:
+            return f"a local model's spectral radius {problem.radius(theta):.6g} exceeds 1 − margin = {1 - problem.margin:g}"
+        return "cost not finite"
     yb = problem.static_outputs(theta[None])[0]
     bad = problem.static.ubar[~np.isfinite(yb)]
     if bad.shape[0]:
@@ -674,7 +765,25 @@ def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
             return f"{u:g}" if np.ndim(u) == 0 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
         return f"equilibrium unstable or undefined at ū = {', '.join(point(u) for u in bad[:3])}" + \
             (f" (and {bad.shape[0] - 3} more)" if bad.shape[0] > 3 else "")
+    if problem.margin is not None and not problem.within_margin(theta, yb[None])[0]:
+        return f"outside the stability margin (a local model's spectral radius exceeds 1 − margin = {1 - problem.margin:g})"
     return "cost not finite"
+
+
+#: Factors tried, in order, on a start's output-feedback parameters to bring it inside the margin.
+_PULL = (0.99, 0.97, 0.94, 0.9, 0.8, 0.65, 0.5, 0.3, 0.1, 0.0)
+
+
+def _pull_inside(problem: SEProblem, theta: np.ndarray, lam1: float) -> tuple[np.ndarray, float] | None:
+    """θ with its output-feedback parameters scaled by the largest factor of _PULL that makes it
+    feasible at λ1 (inside the margin, a bounded free run, stable static equilibria), with that
+    factor; None if none does. Shrinking the feedback shrinks every local model's roots."""
+    fb = np.array([any(s == "y" for s, _, _ in t.factors) for t in problem.structure])
+    for c in _PULL:
+        th = np.where(fb, c * theta, theta)
+        if np.isfinite(_residuals(problem, th * problem.scale, lam1)[0]):
+            return th, c
+    return None
 
 
 def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarray]], solvers: Sequence[str],
@@ -690,8 +799,14 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
         tried.append(th0)
         nfev += 1
         if not np.isfinite(_residuals(problem, th0 * problem.scale, lam1)[0]):
-            why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
-            continue
+            pulled = None
+            if problem.margin is not None and np.isfinite(problem.js(th0[None])[0]) \
+                    and not problem.within_margin(th0)[0]:
+                pulled = _pull_inside(problem, th0, lam1)  # outside the margin: shrink its feedback
+            if pulled is None:
+                why.setdefault(_why_infeasible(problem, th0, lam1), []).append(name)
+                continue
+            th0 = pulled[0]
         for solver in solvers:
             try:
                 th, c, k = _fit(problem, th0, lam1, solver, max_nfev, tol)
@@ -876,6 +991,8 @@ def se_pareto(
     tol: float | None = None,
     solver: Literal["auto", "trf", "dogbox", "lm"] | None = None,
     starts: Sequence[np.ndarray] | None = None,
+    margin: float | None = None,
+    ridge: float = 0.0,
 ) -> ParetoSet:
     """SE Pareto set of eq. (13) by the paper's GA or the gradient method.
 
@@ -913,6 +1030,19 @@ def se_pareto(
         (1e-8), its method (``"auto"``: "trf" and "dogbox" wherever the fit restarts, "trf" along
         the sweep; see :func:`graybox.estimation._simulation_error.gradient_front`), and further starting points (default:
         PE solutions).
+    margin : float in [0, 1), optional
+        Stability margin (both methods): every member keeps the spectral radius of its local
+        linear models ≤ 1 − margin, along the identification records and at the static points'
+        equilibria (see :class:`SEProblem`); a θ outside it is infeasible, as an unstable
+        equilibrium is. Without it a free-run fit may buy identification error with near-unit
+        roots that follow the record's slow drift (BENCHMARKS.md, "Output error"). Dimensionless
+        but tied to the sampling period: ρ = 1 − margin is a time constant of about Ts / margin.
+        Starts (and the GA's individuals) outside the margin are infeasible. None (default): no
+        margin, the paper's problem.
+    ridge : float >= 0
+        Regularisation towards least squares (both methods): γ · mean_j (s_j (θ_j − θ_LS,j))² is
+        added to every member's cost, s_j the RMS of regressor j (see :class:`SEProblem`). 0
+        (default): none, the paper's problem; ``extra["cost"]`` then holds the regularised cost.
 
     Returns
     -------
@@ -942,7 +1072,7 @@ def se_pareto(
     if sp is None:
         raise ValueError("the SE problem needs static points: pass static= or a Dataset with static points")
     warn_static_range(sp.ubar, rec)
-    problem = SEProblem(structure, rec, sp)
+    problem = SEProblem(structure, rec, sp, margin=margin, ridge=ridge)
     lam_in = SE_LAMBDAS if lambdas is None else lambdas
     if method == "ga":
         front = ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,

@@ -24,7 +24,7 @@ line.
 
 Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.ParetoSet`,
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
-:class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.SEMPResult`,
+:class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.OEResult`, :class:`~graybox.SEMPResult`,
 :class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand` and (registered by the experiment
 layer) :class:`~graybox.GrayboxSelection`. Their tables (pandas DataFrames of int64, float64, bool or
 text columns with distinct text labels) are written one column per line, with the index and each
@@ -58,6 +58,7 @@ from ..models._model import Model
 from ..estimation._neural import NeuralFit, NeuralModel
 from ..estimation._pareto import ParetoSet
 from ..estimation._epsilon_constraint import DSFResult
+from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
 from ..core._terms import Structure, parse_term
@@ -362,12 +363,15 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("holdout_cost", "floats"), ("best_step", "int_or_none"), ("epochs", "int"),
                               ("stopped", "str"), ("rmse_train", "float"), ("rmse_sim", "float"), ("seconds", "float"))),
     "Decision": (Decision, (("rule", "str"), ("index", "int"), ("lambda1", "float"), ("JS", "float"), ("JSF", "float"),
-                            ("in_band", "bool"), ("score", "float"), ("model", "Model"))),
+                            ("in_band", "bool"), ("score", "float"), ("model", "Model"), ("chosen_on", "str"))),
     "SEMPResult": (SEMPResult, (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
                                 ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
                               ("feasible", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
                               ("n_iter", "int"), ("message", "str"))),
+    "OEResult": (OEResult, (("model", "Model"), ("JS", "float"), ("JS_choose", "float"), ("chosen_on", "str"),
+                            ("start", "str"), ("starts", "frame"), ("margin", "float"), ("radius", "float"),
+                            ("seed", "int"))),
     "ParameterUncertainty": (ParameterUncertainty, (("method", "str"), ("model", "Model"), ("cov", "array2"),
                                                     ("level", "float"), ("dof", "int"), ("sigma2", "float"),
                                                     ("constraints", "array2"), ("noise_cov", "array2"),
@@ -418,7 +422,7 @@ _OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"}),
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 
 #: Fields added after files of this format version were written, with the value a file without them means.
-_ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}}
+_ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {"chosen_on": ""}}
 
 
 def _encode_fields(obj: Any) -> dict:
@@ -487,7 +491,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, SEMPResult, ParameterUncertainty, StaticCurveBand or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand or GrayboxSelection
         The value to write.
     units : (str, str) or mapping, optional
         Units of the input and output (e.g. ``("rpm", "mlc")``, or a Record's ``units``), written
@@ -596,7 +600,7 @@ def save(
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, SEMPResult, ParameterUncertainty, StaticCurveBand or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand or GrayboxSelection
         The value.
     path : str or PathLike
         Where to write (conventionally ``*.json``).

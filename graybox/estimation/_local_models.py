@@ -1,0 +1,178 @@
+"""The local linear models of a polynomial NARX model, and a stability margin on them.
+
+At an operating point (ū, ȳ) — every input lag at ū, every output lag at ȳ — the model's
+linearisation is the recursion δy(k) = Σ_l a_l δy(k−l) with a_l = Σ_t θ_t ∂φ_t/∂y(k−l). For a term
+θ_t ū^μ_t ȳ^(m_t) (input power μ_t, output power m_t) that is θ_t ū^μ_t ȳ^(m_t − 1) times the
+number of its output factors at lag l, so a = (W ⊙ θ) G with W the points' weights (one row per
+point, one column per term) and G the terms' lag counts: linear in θ, computed once per set of
+points. At an equilibrium this is the local model whose stability
+:func:`graybox.static._analysis.stable_mask` decides; away from one it is the frozen-time model of
+a sample the record visits.
+
+Why a margin. A free-run (simulation-error) fit can buy identification error with near-unit
+roots that follow the record's slow drift: on the bundled plant the gradient SE members reach a
+spectral radius of 0.99975 at every static point and wander off on new data. Asking every local
+model to keep its spectral radius ρ ≤ 1 − margin (at the static points' equilibria and at samples
+along the record) rules those out. The test is the Schur–Cohn recursion of the package's one
+stability test applied to the polynomial with its variable scaled by 1 − margin
+(ρ(a) ≤ r ⇔ z^L − (a_1/r) z^(L−1) − … − a_L/r^L has no root outside the unit circle), compiled and
+cheap enough for every trial point of a fit and every individual of a GA generation.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from ..core._records import Record
+from ..core._simulation_kernels import encode, record_inputs
+from ..core._terms import Structure
+from ..core._validation import check_real
+from ..static._equilibrium_kernels import schur_stable_rows
+
+__all__ = ["LocalModels", "record_points", "within_at", "check_margin", "RECORD_POINTS"]
+
+#: Samples of the record(s) at which the margin is checked, at most (evenly spaced).
+RECORD_POINTS = 64
+
+
+def check_margin(margin: object) -> float | None:
+    """``margin`` as a float in [0, 1), or None (no margin)."""
+    if margin is None:
+        return None
+    return check_real(margin, "margin", low=0.0, high=1.0, high_open=True)
+
+
+def record_points(structure: Structure, records: Sequence[Record], count: int = RECORD_POINTS
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Up to ``count`` operating points (u(k), y(k)) measured along the records, evenly spaced.
+
+    Returns
+    -------
+    ubar : ndarray, shape (P,) or (P, m)
+        The input(s) at those samples, columns in the order of ``encode(structure).inputs``.
+    ybar : ndarray, shape (P,)
+    """
+    code = encode(structure)
+    L = structure.max_lag
+    total = sum(max(len(r) - L, 0) for r in records)
+    stride = max(1, -(-total // count))
+    us, ys = [], []
+    for r in records:
+        u = record_inputs(r, code.inputs)
+        us.append(u[L::stride])
+        ys.append(r.y[L::stride])
+    return np.concatenate(us), np.concatenate(ys)
+
+
+class LocalModels:
+    """The local linear models of one structure at fixed operating points, for many θ at once.
+
+    Parameters
+    ----------
+    structure : Structure
+        Process terms.
+    ubar : ndarray, shape (P,) or (P, m)
+        Input level(s) of each point (columns in the order of ``encode(structure).inputs``).
+    ybar : ndarray, shape (P,)
+        Output level of each point.
+    """
+
+    def __init__(self, structure: Structure, ubar: np.ndarray, ybar: np.ndarray):
+        code = encode(structure)
+        self.L = int(code.ylag.max(initial=0))
+        T = len(structure)
+        self.G = np.zeros((T, max(self.L, 1)))
+        for t in range(T):
+            for d in range(code.ny[t]):
+                self.G[t, code.ylag[t, d] - 1] += 1.0
+        self.W = self.weights(code, np.asarray(ubar, float), np.asarray(ybar, float))
+        # a(θ) for every point at once is one matrix product: θ (T,) @ WG (T, P·L)
+        self.WG = (self.W.T[:, :, None] * self.G[:, None, :]).reshape(T, -1)
+
+    @staticmethod
+    def weights(code, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+        """ū^μ_t ȳ^(m_t − 1) of each term t with an output factor (0 for the others), shape (P, T)."""
+        T = code.ny.shape[0]
+        W = np.zeros((ybar.size, T))
+        with np.errstate(all="ignore"):
+            for t in range(T):
+                m = int(code.ny[t])
+                if m == 0:
+                    continue
+                w = ybar ** (m - 1) if m > 1 else np.ones(ybar.size)
+                for f in range(code.uptr[t], code.uptr[t + 1]):
+                    col = ubar if ubar.ndim == 1 else ubar[:, code.usig[f]]
+                    w = w * col ** code.upow[f]
+                W[:, t] = w
+        return W
+
+    def coefficients(self, theta: np.ndarray) -> np.ndarray:
+        """a_1 … a_L of each point's local model, shape (P, L)."""
+        return (self.W * np.asarray(theta, float)) @ self.G
+
+    def radius(self, theta: np.ndarray) -> np.ndarray:
+        """Spectral radius of each point's local model (dimensionless), shape (P,)."""
+        a = self.coefficients(theta)
+        P = a.shape[0]
+        if self.L == 0 or P == 0:
+            return np.zeros(P)
+        if not np.all(np.isfinite(a)):
+            out = np.full(P, np.inf)
+            ok = np.all(np.isfinite(a), axis=1)
+            out[ok] = _radius(a[ok])
+            return out
+        return _radius(a)
+
+    def within(self, thetas: np.ndarray, margin: float) -> np.ndarray:
+        """Does every point's local model of each row keep ρ ≤ 1 − margin? Shape (K,).
+
+        ρ < 1 − margin strictly (the Schur–Cohn test is strict); equality has measure zero.
+        """
+        th = np.atleast_2d(np.asarray(thetas, float))
+        K, P = th.shape[0], self.W.shape[0]
+        if self.L == 0 or P == 0:
+            return np.ones(K, bool)
+        a = th @ self.WG  # (K, P·L): row k holds a_1 … a_L of each point in turn
+        return _within(a.reshape(K * P, self.L), margin).reshape(K, P).all(axis=1)
+
+
+def within_at(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray, margin: float
+              ) -> np.ndarray:
+    """Does row k keep ρ ≤ 1 − margin at its own points (ū_j, ȳ_kj), every finite ȳ_kj? Shape (K,).
+
+    For equilibria that depend on θ (the static points'): ``thetas`` (K, T), ``ubar`` (M,) or
+    (M, m), ``ybar`` (K, M); a non-finite ȳ_kj is skipped.
+    """
+    th = np.atleast_2d(np.asarray(thetas, float))
+    yb = np.atleast_2d(np.asarray(ybar, float))
+    K, M = yb.shape
+    local = LocalModels(structure, ubar[:0], yb[0, :0])
+    if local.L == 0 or M == 0:
+        return np.ones(K, bool)
+    ub = np.asarray(ubar, float)
+    fin = np.isfinite(yb)
+    W = LocalModels.weights(encode(structure), np.tile(ub, (K,) + (1,) * (ub.ndim - 1)) if ub.ndim > 1
+                            else np.tile(ub, K), np.where(fin, yb, 0.0).ravel())
+    a = ((np.repeat(th, M, axis=0) * W) @ local.G)
+    ok = _within(a, margin) | ~fin.ravel()
+    return ok.reshape(K, M).all(axis=1)
+
+
+def _within(a: np.ndarray, margin: float) -> np.ndarray:
+    """Row-wise: is every root of z^L − a_1 z^(L−1) − … − a_L of modulus < 1 − margin? (Schur–Cohn, scaled)."""
+    r = 1.0 - margin
+    if r <= 0.0:
+        return np.zeros(a.shape[0], bool)
+    return schur_stable_rows(np.ascontiguousarray(a / r ** np.arange(1, a.shape[1] + 1)))
+
+
+def _radius(a: np.ndarray) -> np.ndarray:
+    """Largest root modulus of z^L − a_1 z^(L−1) − … − a_L, row by row (companion eigenvalues)."""
+    P, L = a.shape
+    C = np.zeros((P, L, L))
+    C[:, 0, :] = a
+    if L > 1:
+        C[:, np.arange(1, L), np.arange(L - 1)] = 1.0
+    return np.abs(np.linalg.eigvals(C)).max(axis=1)

@@ -1,0 +1,245 @@
+"""Output error (pure simulation-error fit), the stability margin, and D_SF on a choosing record."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.estimation._decisions import decide_dsf
+from graybox.estimation._local_models import LocalModels, record_points
+from graybox.estimation._output_error import OEResult, output_error
+from graybox.estimation._pareto import ParetoSet
+from graybox.estimation._simulation_error import SEProblem, se_pareto
+
+#: A nonlinear output-error system: x(k) = 0.7 x(k-1) + 0.25 u(k-1) + 0.1 u(k-2)^2 - 0.05 x(k-1) u(k-1),
+#: measured as y = x + v with white v (noise on the output only).
+OE_STRUCT = gb.Structure(["y(k-1)", "u(k-1)", "u(k-2)^2", "u(k-1)y(k-1)"])
+OE_THETA = np.array([0.7, 0.25, 0.1, -0.05])
+
+
+def oe_record(seed, N=1500, noise=0.15, name="oe"):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1.0, 1.0, N // 8 + 1), 8)[:N]
+    x = gb.Model(OE_STRUCT, OE_THETA).simulate(u, np.zeros(2))
+    return gb.Record(u, x + noise * rng.standard_normal(N), name=name), x
+
+
+@pytest.fixture(scope="module")
+def oe_data():
+    fit, _ = oe_record(1)
+    test, clean = oe_record(2, noise=0.0, name="test")
+    return fit, test
+
+
+def test_recovers_an_output_error_system_better_than_least_squares(oe_data):
+    fit, test = oe_data
+    r = output_error(OE_STRUCT, fit, n_starts=3, seed=0, ridge=0.0)  # pure output error
+    assert isinstance(r, OEResult)
+    ls = SEProblem(OE_STRUCT, fit, None).ls_theta()
+    err_oe = np.linalg.norm(r.model.theta - OE_THETA)
+    err_ls = np.linalg.norm(ls - OE_THETA)
+    # noise on the output biases least squares (its regressors hold the noisy past output)
+    assert err_oe < 0.5 * err_ls
+    assert abs(r.model.theta[0] - OE_THETA[0]) < abs(ls[0] - OE_THETA[0])
+    # and the free run on noise-free data follows the system more closely
+    assert gb.js(r.model, test) < gb.js(gb.Model(OE_STRUCT, ls), test)
+    assert r.JS == pytest.approx(gb.js(r.model, fit), rel=1e-9)
+    assert np.isnan(r.JS_choose) and r.chosen_on == "" and np.isnan(r.margin)
+    # the default (a ridge towards least squares) pays some bias for robustness, and still beats least squares
+    d = output_error(OE_STRUCT, fit, n_starts=3, seed=0)
+    err_d = np.linalg.norm(d.model.theta - OE_THETA)
+    assert err_oe < err_d < err_ls
+    assert gb.js(d.model, test) < gb.js(gb.Model(OE_STRUCT, ls), test)
+
+
+def test_reproducible_with_a_seed(oe_data):
+    fit, _ = oe_data
+    a = output_error(OE_STRUCT, fit, n_starts=2, seed=5, max_nfev=20)
+    b = output_error(OE_STRUCT, fit, n_starts=2, seed=5, max_nfev=20)
+    np.testing.assert_array_equal(a.model.theta, b.model.theta)
+    assert a.starts.equals(b.starts)
+    c = output_error(OE_STRUCT, fit, n_starts=2, seed=6, max_nfev=20)
+    # another seed draws other subsample starts
+    assert not np.array_equal(a.starts["JS_start"].to_numpy()[-2:], c.starts["JS_start"].to_numpy()[-2:])
+
+
+def test_reports_failed_starts(oe_data):
+    fit, _ = oe_data
+    r = output_error(OE_STRUCT, fit, n_starts=1, theta0=np.array([3.0, 0.0, 0.0, 0.0]), max_nfev=20)
+    row = r.starts[r.starts["start"] == "theta0"]
+    assert list(row["status"]) == ["infeasible"] and "diverges" in row["message"].iloc[0]
+    assert "theta0" in r.failures and "diverges" in r.failures["theta0"]
+    assert set(r.starts["status"]) <= {"fitted", "infeasible", "failed"}
+    assert (r.starts["status"] == "fitted").sum() >= 2  # least squares and ELS at least, with both solvers
+    assert "theta0" not in r.start
+
+
+def test_needs_no_static_points(oe_data):
+    fit, _ = oe_data
+    ds = gb.Dataset(ident=fit, valid=oe_data[1], static=None)
+    r = output_error(OE_STRUCT, ds, n_starts=0, max_nfev=10)
+    assert np.all(np.isfinite(r.model.theta))
+    # the SE front still needs them: its λ < 1 members weigh the static points
+    with pytest.raises(ValueError, match="static points"):
+        se_pareto(OE_STRUCT, fit, lambdas=[1.0, 0.5], method="gradient")
+
+
+def test_choosing_record_picks_the_iterate_with_the_smallest_js_there(oe_data):
+    fit, test = oe_data
+    choose, _ = oe_record(3, N=600, name="choose")
+    r = output_error(OE_STRUCT, fit, n_starts=2, choose_on=choose, max_nfev=30)
+    assert r.chosen_on == "choose"
+    assert r.JS_choose == pytest.approx(gb.js(r.model, choose), rel=1e-9)
+    fitted = r.starts[r.starts["status"] == "fitted"]
+    assert r.JS_choose <= fitted["JS_choose"].min() * (1 + 1e-12)
+    # no fitted end point nor start has a lower J_S on the choosing record than the returned iterate
+    assert r.JS_choose <= gb.js(gb.Model(OE_STRUCT, SEProblem(OE_STRUCT, fit, None).ls_theta()), choose)
+
+
+@pytest.mark.parametrize("margin", [0.2, 0.4])
+def test_the_margin_holds_on_the_fitted_model(oe_data, margin):
+    fit, _ = oe_data
+    r = output_error(OE_STRUCT, fit, n_starts=2, margin=margin, max_nfev=30)
+    assert r.margin == margin
+    assert r.radius <= 1 - margin + 1e-9
+    pts = LocalModels(OE_STRUCT, *record_points(OE_STRUCT, [fit]))
+    assert pts.radius(r.model.theta).max() <= 1 - margin + 1e-9
+    # the local models at the model's own equilibria inside the record's input range keep it too
+    for ub in np.quantile(fit.u, [0.05, 0.5, 0.95]):
+        for eq in r.model.equilibria(float(ub)):
+            assert eq.spectral_radius <= 1 - margin + 1e-9
+    # the margin binds here: the unconstrained fit's feedback 0.7 - 0.05 u reaches 0.75 > 1 - 0.4
+    if margin == 0.4:
+        assert output_error(OE_STRUCT, fit, n_starts=0, max_nfev=30, ridge=0.0).radius > 1 - margin
+
+
+def test_a_start_outside_the_margin_is_pulled_inside(oe_data):
+    fit, _ = oe_data
+    r = output_error(OE_STRUCT, fit, n_starts=0, margin=0.4, theta0=np.array([0.95, 0.25, 0.1, 0.0]), max_nfev=10)
+    pulled = [s for s in r.starts["start"] if s.startswith("theta0")]
+    assert pulled and all("feedback ×" in s for s in pulled)
+    assert r.radius <= 0.6 + 1e-9
+
+
+@pytest.mark.parametrize("method", ["gradient", "ga"])
+@pytest.mark.parametrize("margin", [0.35, 0.45])
+def test_se_front_members_keep_the_margin(method, margin):
+    fit, _ = oe_record(4, N=800)
+    x_static = np.array([-0.8, 0.0, 0.8])
+    m = gb.Model(OE_STRUCT, OE_THETA)
+    static = gb.StaticPoints(x_static, m.static_curve(x_static))
+    kw = {"options": gb.GAOptions(population=30, generations=5)} if method == "ga" else {"max_nfev": 20}
+    ps = se_pareto(OE_STRUCT, fit, static, lambdas=[1.0, 0.3], method=method, margin=margin, seed=0, **kw)
+    pts = LocalModels(OE_STRUCT, *record_points(OE_STRUCT, [fit]))
+    problem = SEProblem(OE_STRUCT, fit, static, margin=margin)
+    if margin == 0.45:  # least squares (and the PE starts) lie outside: the sweep pulls them in, nothing fails
+        assert not problem.within_margin(problem.ls_theta())[0]
+        assert not ps.failures
+    for i in range(len(ps)):
+        if i in ps.failures:
+            continue
+        assert pts.radius(ps.thetas[i]).max() <= 1 - margin + 1e-9
+        for ub in x_static:
+            for eq in gb.Model(OE_STRUCT, ps.thetas[i]).equilibria(float(ub)):
+                if eq.stable:
+                    assert eq.spectral_radius <= 1 - margin + 1e-9
+
+
+def test_bad_options(oe_data):
+    fit, _ = oe_data
+    for kw, match in [({"margin": 1.0}, "margin"), ({"margin": -0.1}, "margin"), ({"n_starts": -1}, "n_starts"),
+                      ({"subsample": 0.0}, "subsample"), ({"solver": "bfgs"}, "solver"),
+                      ({"theta0": np.ones(3)}, "theta0"),
+                      ({"choose_on": gb.Dataset(ident=fit, valid=fit, static=None)}, "choose_on")]:
+        with pytest.raises(ValueError, match=match):
+            output_error(OE_STRUCT, fit, **kw)
+
+
+# -- D_SF on a choosing record ------------------------------------------------------------------------------
+def test_dsf_chooses_on_the_choosing_record(oe_data):
+    fit, _ = oe_data
+    choose, _ = oe_record(3, N=600, name="choose")
+    thetas = np.array([OE_THETA, OE_THETA * [1.3, 1, 1, 1], OE_THETA * [1, 0.5, 1, 1], OE_THETA * [0.9, 1, 1, 1]])
+    k = len(thetas)
+    # the identification J_S stored in the set says member 1 is best; the choosing record is asked instead
+    ps = ParetoSet(OE_STRUCT, thetas, np.linspace(1, 0.1, k), np.zeros(k), np.array([0.5, 0.1, 0.2, 0.3]),
+                   np.array([0.0, 0.0, 0.0, 1.0]), "test")
+    assert decide_dsf(ps, band=0.5).index == 1
+    d = decide_dsf(ps, band=0.5, choose_on=choose)
+    on_choose = np.array([gb.js(gb.Model(OE_STRUCT, t), choose) for t in thetas])
+    in_band = np.flatnonzero(ps.JSF <= 0.5)
+    assert d.index == in_band[np.argmin(on_choose[in_band])]
+    assert d.score == pytest.approx(on_choose[d.index], rel=1e-9)
+    assert d.JS == ps.JS[d.index] and d.chosen_on == "choose" and "on choose" in d.model.name
+    assert decide_dsf(ps, band=0.5).chosen_on == ""
+    with pytest.raises(ValueError, match="choose_on"):
+        decide_dsf(ps, band=0.5, choose_on=[])
+
+
+# -- regularisation towards least squares -------------------------------------------------------------------
+def test_ridge_factor_matches_finite_differences(oe_data):
+    from test_se import assert_factor_matches_finite_differences
+
+    fit, _ = oe_data
+    x_static = np.array([-0.8, 0.0, 0.8])
+    static = gb.StaticPoints(x_static, gb.Model(OE_STRUCT, OE_THETA).static_curve(x_static))
+    problem = SEProblem(OE_STRUCT, fit, static, ridge=0.3)
+    z = OE_THETA * problem.scale  # away from least squares: the ridge rows are not zero
+    for lam1 in (1.0, 0.4):
+        assert_factor_matches_finite_differences(problem, z, lam1)
+        # the GA's cost is the same regularised objective
+        from graybox.estimation._simulation_error import _residuals
+
+        r = _residuals(problem, z, lam1)
+        assert problem.cost(OE_THETA[None], lam1)[0] == pytest.approx(r @ r, rel=1e-10)
+
+
+def test_ridge_pulls_towards_least_squares(oe_data):
+    fit, _ = oe_data
+    ls = SEProblem(OE_STRUCT, fit, None).ls_theta()
+    free = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40, ridge=0.0).model.theta
+    held = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40, ridge=1e4).model.theta
+    mild = output_error(OE_STRUCT, fit, n_starts=0, max_nfev=40, ridge=1e-3).model.theta
+    assert np.linalg.norm(held - ls) < 0.05 * np.linalg.norm(free - ls)
+    d_mild = np.linalg.norm(mild - ls)
+    assert np.linalg.norm(held - ls) < d_mild <= np.linalg.norm(free - ls) * (1 + 1e-9)
+    with pytest.raises(ValueError, match="ridge"):
+        output_error(OE_STRUCT, fit, ridge=-1.0)
+
+
+# -- the margin test itself ---------------------------------------------------------------------------------
+from hypothesis import assume, given, settings  # noqa: E402
+from hypothesis import strategies as hst  # noqa: E402
+
+
+@settings(max_examples=200, deadline=None)
+@given(a=hst.lists(hst.floats(-1.5, 1.5), min_size=1, max_size=6), margin=hst.floats(0.0, 0.9))
+def test_scaled_schur_cohn_agrees_with_the_roots(a, margin):
+    """ρ(a) < 1 − margin exactly when the compiled test on the scaled polynomial says so."""
+    from graybox.estimation._local_models import _radius, _within
+
+    row = np.array([a])
+    rho = _radius(row)[0]
+    assume(abs(rho - (1 - margin)) > 1e-9)  # the boundary itself is measure zero and rounding-sensitive
+    assert bool(_within(row, margin)[0]) == (rho < 1 - margin)
+
+
+def test_local_models_are_the_linearisation_of_the_model(oe_data):
+    """a_l at a point equals the derivative of the one-step map with respect to y(k-l), by differences."""
+    fit, _ = oe_data
+    theta = np.array([0.6, 0.3, 0.1, -0.2])
+    ub, yb = np.array([0.3, -0.7]), np.array([0.5, 1.2])
+    a = LocalModels(OE_STRUCT, ub, yb).coefficients(theta)
+    for p in range(2):
+        def step(y1):  # y(k) from y(k-1) = y1, every input lag at ū
+            return theta[0] * y1 + theta[1] * ub[p] + theta[2] * ub[p] ** 2 + theta[3] * ub[p] * y1
+        h = 1e-6
+        assert a[p, 0] == pytest.approx((step(yb[p] + h) - step(yb[p] - h)) / (2 * h), rel=1e-8)
+
+
+def test_checkpoints_tell_margins_and_ridges_apart(oe_data):
+    fit, _ = oe_data
+    static = gb.StaticPoints(np.array([-0.5, 0.5]), np.array([0.0, 0.5]))
+    plain = SEProblem(OE_STRUCT, fit, static).fingerprint()
+    assert SEProblem(OE_STRUCT, fit, static, margin=0.1).fingerprint() != plain
+    assert SEProblem(OE_STRUCT, fit, static, ridge=0.1).fingerprint() != plain
+    assert SEProblem(OE_STRUCT, fit, static, margin=None, ridge=0.0).fingerprint() == plain
