@@ -112,7 +112,7 @@ def trials(seeds: int, n: int, dump: str | None) -> pd.DataFrame:
                             rows.append(dict(system=system, inputs=kind, noise=noise, seed=seed, selector=sel,
                                              mode=mode, recovered=set(got) == true, seconds=dt, size=len(got),
                                              rss_ratio=one_step_rss(got, rec, cand.max_lag) / rss_true))
-                print(f"  {system} {kind} done", file=sys.stderr, flush=True)
+                print(f"  {system} {kind} {noise:.0%} done", file=sys.stderr, flush=True)
     if dump:
         np.savez_compressed(dump, **store)
     return pd.DataFrame(rows)

@@ -193,7 +193,8 @@ class Selection:
         empty for greedy search, whose size-k model is ``evaluated[:k]``. :attr:`structure` is one
         of them.
     subset_rss : ndarray, shape (len(subsets),)
-        Their residual sums of squares on the selection rows (output units²).
+        Their residual sums of squares on the selection rows (output units²), from the Gram matrix
+        of the scaled candidates: values below 1e-13 yᵀy are that floor (round-off, not signal).
     """
 
     structure: Structure
