@@ -39,7 +39,7 @@ def main() -> None:
     fit = gb.els(sel, data.ident)
     els = fit.model
     curve = gb.StaticCurve.fit(data.static, degree=2)
-    cls = gb.cls(st, data.ident, curve, reference=els)
+    cls = gb.cls(st, data.ident, curve, reference=els).model
     pe_l = np.logspace(-6, 0, 30)
     pe = gb.pe_pareto(st, data.ident, data.static, lambdas=pe_l, solver="closed")
     pe_d = gb.decide_dsf(pe, band=0.031, fallback="min_jsf")

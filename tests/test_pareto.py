@@ -96,9 +96,9 @@ def test_from_thetas_several_records(record, thetas):
 
 def test_access_and_frame(pset, thetas):
     assert len(pset) == 3
-    m = pset.model(1)
+    m = pset.member_model(1)
     np.testing.assert_array_equal(m.theta, thetas[1])
-    assert "λ1=0.5" in m.name and pset.model(-1).name.endswith("0.01")
+    assert "λ1=0.5" in m.name and pset.member_model(-1).name.endswith("0.01")
     df = pset.to_frame()
     assert list(df.columns) == ["lambda1", "J1", "JS", "JSF", "tag", "failure"] and len(df) == 3
     dfp = pset.to_frame(params=True)
@@ -107,7 +107,7 @@ def test_access_and_frame(pset, thetas):
     with pytest.raises(ValueError, match="unknown objective"):
         pset.objective("J2")
     with pytest.raises(ValueError, match="out of range"):
-        pset.model(3)
+        pset.member_model(3)
 
 
 def test_nondominated_and_subset(pset):

@@ -327,7 +327,7 @@ def ls_uncertainty(
     Parameters
     ----------
     model : Model
-        The estimate on ``data``: plain least squares (e.g. ``Selection.model()`` or
+        The estimate on ``data``: plain least squares (e.g. ``Selection.model`` or
         ``els(..., noise=0)``) or ELS (a model with an MA part: the covariance is that of the
         extended problem in [θ; c], see the module docstring).
     data : Record, sequence of Record, or Dataset
@@ -474,7 +474,7 @@ def pe_uncertainty(
     Parameters
     ----------
     model : Model or Decision
-        The member (``ParetoSet.model(i)``, or a Decision from :func:`graybox.decide_dsf`, which
+        The member (``ParetoSet.member_model(i)``, or a Decision from :func:`graybox.decide_dsf`, which
         brings its λ1).
     data : Record, sequence of Record, or Dataset
         Its identification data.

@@ -60,7 +60,7 @@ class Decision:
 
 
 def _decision(pareto: ParetoSet, i: int, rule: str, in_band: bool, score: float, label: str) -> Decision:
-    return Decision(pareto.model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
+    return Decision(pareto.member_model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
                     float(pareto.JSF[i]), rule, in_band, float(score))
 
 #: What :func:`decide_dsf` may do when no member lies in the band, if the user says so.

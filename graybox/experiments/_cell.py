@@ -182,7 +182,8 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
         return gb.neural_narx(data.ident, seed=cell.seed or 0, name=name, **kw).model, None, {}
     cons = cell_constraints(v["constraints"], st, data)
     if est == "cls":
-        return gb.cls(st, data, constraints=cons, name=name, **opts), None, {}
+        # the variant's constraints are what it imposes; the data set's points are their context
+        return gb.cls(st, data, constraints=cons, name=name, **{"how": "context", **opts}).model, None, {}
     if est == "pe":
         return None, gb.pe_pareto(st, data, lambdas=lam, constraints=cons, **opts), {}
     if est == "se-ga":
@@ -292,7 +293,7 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
             if pareto is not None:
                 row["members"] = _members(pareto, data)
                 i, rule, in_band = _decide(cell, pareto, data)
-                model = pareto.model(i, name=f"{cell.variant} / {cell.structure}")
+                model = pareto.member_model(i, name=f"{cell.variant} / {cell.structure}")
                 row.update(lambda1=float(pareto.lambdas[i]), rule=rule, in_band=int(in_band))
             row["n_params"] = int(model.n_params)
             if isinstance(model, gb.Model):

@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from . import _analysis as _static
-from ._analysis import Equilibrium, Reached
+from ._analysis import Equilibrium, Reached, ascii_cluster_name
 from ..core._terms import Structure, Term, check_input_names
 
 __all__ = [
@@ -109,9 +109,11 @@ class SurfaceClusterMap:
         if isinstance(name_or_key, tuple):
             return self.keys.index(name_or_key)
         names = self.names
-        if name_or_key not in names:
-            raise ValueError(f"no cluster {name_or_key!r} in this structure; it has {names}")
-        return names.index(name_or_key)
+        # every printed name is accepted as it is; ASCII ("Syu1", "Su1^2u2") is read as the paper's form
+        name = name_or_key if name_or_key in names else ascii_cluster_name(name_or_key, single_input=False)
+        if name not in names:
+            raise ValueError(f"no cluster {name!r} in this structure; it has {names}")
+        return names.index(name)
 
     @property
     def max_y_power(self) -> int:
