@@ -388,10 +388,10 @@ def test_bundled_data_are_calibrated_to_table1():
     table = evaluate(models, ds)
     for degree in (2, 3):
         row = table.loc[degree]
-        assert 0.3 < row["J_S ident"] < 3.0, row
-        assert 0.3 < row["J_S valid"] < 3.0, row
-    assert 0.2 < table.loc[2, "J_SF"] < 2.0  # D_SF's band is 0.031: black box alone is not enough
-    assert np.isfinite(table.loc[3, "J_SF"])
+        assert 0.3 < row["JS_ident"] < 3.0, row
+        assert 0.3 < row["JS_valid"] < 3.0, row
+    assert 0.2 < table.loc[2, "JSF"] < 2.0  # D_SF's band is 0.031: black box alone is not enough
+    assert np.isfinite(table.loc[3, "JSF"])
 
 
 # -- packaging ---------------------------------------------------------------

@@ -215,7 +215,7 @@ def test_black_box_section_prints_table_rows_and_equations(paper_record):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         text = section_black_box(data=data)
-    for col in ("J_S ident", "J_S valid", "J_SF", "N_p"):
+    for col in ("JS_ident", "JS_valid", "JSF", "n_params"):
         assert col in text
     assert "ELS ℓ=2" in text and "ELS ℓ=3" in text
     assert text.count("y(k) = ") == 2

@@ -329,7 +329,7 @@ def test_evaluate_a_two_input_model():
     assert gb.jsf(m, sp) == pytest.approx(0.0, abs=1e-20)
     ds = Dataset(rec, rec, StaticPoints(ub, yb))
     tab = gb.evaluate({"m": m}, ds)
-    assert tab.loc["m", "J_SF"] == pytest.approx(0.0, abs=1e-20) and tab.loc["m", "J_S valid"] < 1e-20
+    assert tab.loc["m", "JSF"] == pytest.approx(0.0, abs=1e-20) and tab.loc["m", "JS_valid"] < 1e-20
     with pytest.raises(ValueError, match="has the inputs \\('u1', 'u2'\\) but the static points have \\('a', 'b'\\)"):
         gb.jsf(m, StaticPoints(ub, yb, input_names=("a", "b")))
     with pytest.raises(ValueError, match="2 input columns .* one input"):
@@ -367,7 +367,7 @@ def test_two_input_pipeline_frols_els_evaluate():
     assert m.noise_theta[0] == pytest.approx(0.3, abs=0.1)
     ds = Dataset(rec, rec, StaticPoints([[0, 0], [0.5, 0.5]], [0.4, 0.5], input_names=("n1", "n2")))
     tab = gb.evaluate({"els": m}, ds)
-    assert np.isfinite(tab.loc["els", "J_SF"]) and tab.loc["els", "J_S valid"] < 0.01
+    assert np.isfinite(tab.loc["els", "JSF"]) and tab.loc["els", "JS_valid"] < 0.01
     # residual tests: every input test once per input; the true structure passes them, a model
     # without the input product n1·n2 fails a nonlinear one
     tests = gb.residual_tests(m, rec)

@@ -323,7 +323,7 @@ def test_se_dsf_on_two_inputs_lands_on_the_band(ds):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         res = gb.se_dsf(ST, ds, band=0.031)
-    assert res.feasible and res.JSF <= 0.031 * (1 + 1e-6)
+    assert res.in_band and res.JSF <= 0.031 * (1 + 1e-6)
     ym = res.model.static_curve(ds.static.ubar)
     assert np.mean((ym - ds.static.ybar) ** 2) == pytest.approx(res.JSF, rel=1e-6)
 

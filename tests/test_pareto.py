@@ -156,7 +156,7 @@ def test_plot_pareto(pset):
 
     from graybox.plots import plot_pareto
 
-    table = pd.DataFrame({"J_S ident": [2.6, 3.2], "J_SF": [1.6, 0.002]}, index=["ELS (15)", "CLS (22)"])
+    table = pd.DataFrame({"JS_ident": [2.6, 3.2], "JSF": [1.6, 0.002]}, index=["ELS (15)", "CLS (22)"])
     fig = plot_pareto({"PE": pset}, table, band=0.031)
     assert isinstance(fig, Figure)
     ax = fig.axes[0]
@@ -174,5 +174,5 @@ def test_plot_pareto(pset):
         plot_pareto({"x": [1, 2]})
     with pytest.raises(ValueError, match="J_S, J_SF"):
         plot_pareto(pset, {"ELS": 3.0})
-    with pytest.raises(ValueError, match="J_S ident"):
+    with pytest.raises(ValueError, match="JS_ident"):
         plot_pareto(pset, pd.DataFrame({"a": [1]}))

@@ -181,7 +181,7 @@ def test_wrong_inputs_are_refused():
     user = gb.UserConstraint(lambda th: th[0] <= 0.9, name="cap")
     with pytest.raises(ValueError, match="not affine"):
         gb.cls_uncertainty(gb.cls(STRUCT, rec, constraints=user).model, rec, constraints=user)
-    with pytest.raises(ValueError, match="needs a Model"):
+    with pytest.raises(TypeError, match="model must be a Model"):
         gb.ls_uncertainty("m", rec)
     with pytest.raises(ValueError, match="level"):
         gb.ls_uncertainty(m, rec, level=1.5)

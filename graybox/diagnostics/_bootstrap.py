@@ -47,7 +47,8 @@ import pandas as pd
 from ..estimation._prediction_error import PE_LAMBDAS, pe_pareto
 from ..estimation._decisions import FALLBACKS, decide_dsf
 from ..core._progress import progress_bar
-from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ..models._coerce import as_structure, records_of, static_info
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, frozen
@@ -322,8 +323,8 @@ def bootstrap_decision(
 
     Parameters
     ----------
-    structure : Structure
-        Process terms.
+    structure : Structure, sequence of str, Model, or a result that carries one
+        Process terms (a Selection, ELSResult, Decision … gives its own).
     data : Record, sequence of Record, or Dataset
         Identification data (a Dataset's ``ident``, and its static points by default).
     static : StaticPoints, optional
@@ -368,13 +369,10 @@ def bootstrap_decision(
         Bad options (an unknown estimator option, a block too short for the lags or longer than
         every record, no static points).
     """
-    if not isinstance(structure, Structure):
-        structure = Structure(structure)
+    structure = as_structure(structure)
     check_choice(method, "method", METHODS)
-    recs = as_records(data)
-    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
-    if not isinstance(sp, StaticPoints):
-        raise ValueError("bootstrap_decision needs static points: pass static= or a Dataset with static points")
+    recs = records_of(data)
+    sp = static_info(static, data, needed_by="bootstrap_decision")
     lam = check_lambdas((PE_LAMBDAS if method == "pe" else SE_LAMBDAS) if lambdas is None else lambdas)
     n_boot = check_int(n_boot, "n_boot", low=1)
     seed = check_seed(seed)

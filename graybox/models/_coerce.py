@@ -76,17 +76,17 @@ def as_structure(obj: object, name: str = "structure", *, with_noise: bool = Fal
     """
     if isinstance(obj, Structure):
         return obj
+    carried = None if isinstance(obj, Model) else getattr(obj, "structure", None)
+    if isinstance(carried, Structure):  # a result's own structure first: a Selection's carries its noise terms
+        noise = getattr(obj, "noise", None)
+        if with_noise and isinstance(noise, Structure) and len(noise):
+            return Structure(tuple(carried) + tuple(noise))
+        return carried
     model = obj if isinstance(obj, Model) else _carried_model(obj, (Model,))
     if model is not None:
         if with_noise and len(model.noise_structure):
             return Structure(tuple(model.structure) + tuple(model.noise_structure))
         return model.structure
-    carried = getattr(obj, "structure", None)
-    if isinstance(carried, Structure):
-        noise = getattr(obj, "noise", None)
-        if with_noise and isinstance(noise, Structure) and len(noise):
-            return Structure(tuple(carried) + tuple(noise))
-        return carried
     if isinstance(obj, (list, tuple)) and all(isinstance(t, (str, Term)) for t in obj):
         return Structure(obj)
     raise TypeError(f"{name} must be {STRUCTURE_ACCEPTED}; got {type(obj).__name__}")

@@ -162,8 +162,8 @@ def evaluate(
     Returns
     -------
     pandas.DataFrame
-        Index: model names. Columns: ``J_S ident``, ``J_S valid``, ``J_SF``, ``N_p``,
-        ``J_1 ident``, ``fit % valid`` (MSE in output units²).
+        Index: model names. Columns: ``JS_ident``, ``JS_valid``, ``JSF``, ``n_params``,
+        ``J1_ident``, ``fit_valid`` (MSE in output units²).
     """
     if not isinstance(data, Dataset):
         raise TypeError(f"data must be a Dataset (the table scores its ident and valid records); got "
@@ -176,15 +176,15 @@ def evaluate(
         m = as_model(m, f"models[{name!r}]", duck="simulate")
         sim_v = m.simulate(data.valid, on_diverge="nan")
         rows[name] = {
-            "J_S ident": js(m, data.ident),
-            "J_S valid": mse(data.valid.y, sim_v, start=m.max_lag),
-            "J_SF": jsf(m, sp, y0) if sp is not None else float("nan"),
-            "N_p": m.n_params,
-            "J_1 ident": j1(m, data.ident),
-            "fit % valid": fit_percent(data.valid.y, sim_v, start=m.max_lag),
+            "JS_ident": js(m, data.ident),
+            "JS_valid": mse(data.valid.y, sim_v, start=m.max_lag),
+            "JSF": jsf(m, sp, y0) if sp is not None else float("nan"),
+            "n_params": m.n_params,
+            "J1_ident": j1(m, data.ident),
+            "fit_valid": fit_percent(data.valid.y, sim_v, start=m.max_lag),
         }
     df = pd.DataFrame.from_dict(rows, orient="index")
-    df["N_p"] = df["N_p"].astype(int)
+    df["n_params"] = df["n_params"].astype(int)
     return df
 
 

@@ -15,7 +15,7 @@ from ..plots import plot_free_run
 __all__ = ["PAPER_NEURAL_ROW", "section_neural"]
 
 #: Table I, "Neural" column, as printed (MSE in mlc²).
-PAPER_NEURAL_ROW = {"J_S ident": 1.09, "J_S valid": 0.536, "J_SF": 0.0496, "N_p": 99}
+PAPER_NEURAL_ROW = {"JS_ident": 1.09, "JS_valid": 0.536, "JSF": 0.0496, "n_params": 99}
 
 #: The paper's training: Norgaard's nnnarmax2 alone (one-step prediction error, no weight decay).
 PAPER_TRAINING = {"epochs": PAPER_EPOCHS, "sim_epochs": 0, "weight_decay": 0.0}
@@ -41,7 +41,7 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
              for sd in seeds}
     fit = fits[0]
     net = fit.model
-    cols = ["J_S ident", "J_S valid", "J_SF", "N_p"]
+    cols = ["JS_ident", "JS_valid", "JSF", "n_params"]
     table = evaluate({"Neural": net, "Neural, paper's training": paper[0]}, data)
     fmt = {"float_format": lambda v: f"{v:.4f}"}
     yu = data.ident.units[1]
