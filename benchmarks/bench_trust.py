@@ -69,7 +69,7 @@ def main() -> None:
         print(f"| {name} | {1e3 * timeit(fn, repeat=args.repeat):.2f} ms |")
 
     def boot(method, lambdas, options, mp=None):
-        return gb.bootstrap_decision(st, data, method=method, lambdas=lambdas, n_boot=args.boot, fallback="min_jsf",
+        return gb.bootstrap_decision(st, data, estimator=method, lambdas=lambdas, n_boot=args.boot, fallback="min_jsf",
                                      options=options, map=mp, progress=False)
 
     for label, method, lam, opts in (("PE, 30 λ, closed form", "pe", pe_l, {"solver": "closed"}),

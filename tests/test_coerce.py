@@ -305,7 +305,7 @@ def test_an_old_graybox_selection_file_loads_with_in_band(results):
     (gb.Structure(["1", "y(k-1)", "u1(k-1)", "u2(k-1)^2", "u1(k-1)u2(k-1)", "u2(k-1)y(k-1)"]), ("u1", "u2")),
 ])
 def test_every_printed_cluster_name_names_its_cluster(structure, inputs):
-    cm = gb.surface_cluster_map(structure, inputs=inputs) if inputs else gb.cluster_map(structure)
+    cm = gb.surface_cluster_map(structure, input_names=inputs) if inputs else gb.cluster_map(structure)
     assert "Σ0" in cm.names
     for i, name in enumerate(cm.names):
         assert cm.index(name) == i, name
@@ -320,3 +320,43 @@ def test_cluster_bounds_by_every_printed_name(data):
             warnings.simplefilter("ignore")
             fit = gb.cls(TRUE, data.ident, constraints=gb.ClusterBounds({name: (value, value)})).model
         assert fit.clusters()[name] == pytest.approx(value, abs=1e-9 * max(1.0, abs(value))), name
+
+
+# -- one keyword per concept: input_names=, seed= (the former names warn for one release) ----------
+
+def test_input_names_is_the_one_input_names_keyword():
+    st = gb.Structure(["1", "y(k-1)", "u1(k-1)", "u2(k-1)^2"])
+    new = gb.Candidates(1, 1, degree=1, input_names=("u1", "u2"))
+    assert {n for t in new for n in t.inputs} == {"u1", "u2"}
+    with pytest.warns(DeprecationWarning, match="input_names="):
+        old = gb.Candidates(1, 1, degree=1, inputs=("u1", "u2"))
+    assert list(old) == list(new)
+    with pytest.raises(TypeError, match="former name"):
+        gb.Candidates(1, 1, input_names=("u1", "u2"), inputs=("u1", "u2"))
+    th = np.array([0.2, 0.5, 0.3, 0.1])
+    pts = np.array([[1.0, 2.0]])
+    with pytest.warns(DeprecationWarning, match="input_names="):
+        a = gb.static_surface(st, th, pts, inputs=("u1", "u2"))
+    np.testing.assert_array_equal(a, gb.static_surface(st, th, pts, input_names=("u1", "u2")))
+    assert gb.surface_cluster_map(st, input_names=("u2", "u1")).inputs == ("u2", "u1")
+
+
+def test_seed_is_the_one_random_source_keyword():
+    from graybox.datasets.pumping import PumpingPlant, speed_reference
+
+    plant = PumpingPlant()
+    u = speed_reference(n_samples=1600, n_ident=800, seed=0)[:300]
+    with pytest.warns(DeprecationWarning, match="seed="):
+        old = plant.simulate(u, rng=3)
+    np.testing.assert_array_equal(old.y, plant.simulate(u, seed=3).y)
+
+
+def test_method_names_an_algorithm_and_estimator_an_estimator(data):
+    kw = dict(lambdas=[0.1, 1.0], n_boot=1, band=BAND, fallback="min_jsf", options={"solver": "closed"})
+    new = gb.bootstrap_decision(TRUE, data, estimator="pe", **kw)
+    with pytest.warns(DeprecationWarning, match="estimator="):
+        old = gb.bootstrap_decision(TRUE, data, method="pe", **kw)
+    assert new.estimator == old.estimator == "pe"
+    np.testing.assert_array_equal(new.thetas, old.thetas)
+    with pytest.warns(DeprecationWarning, match="estimator"):
+        assert new.method == "pe"

@@ -234,7 +234,7 @@ def test_long_plant_record_converges_where_the_relaxed_iteration_stalls():
     data = _load_pumping()
     st = frols(Candidates(ny=6, nu=6, ne=2, degree=2), data.ident, n_terms=17).structure
     n = 30_000
-    run = PumpingPlant().simulate(speed_reference(n_samples=n + 1000, n_ident=n, seed=1), rng=1)
+    run = PumpingPlant().simulate(speed_reference(n_samples=n + 1000, n_ident=n, seed=1), seed=1)
     rec = Record(run.u[:n], run.y[:n], Ts=0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("error", ELSConvergenceWarning)

@@ -113,7 +113,7 @@ def make_structure(spec: Mapping[str, Any], data: gb.Dataset, data_hash: str) ->
         kw = {n: spec[n] for n in ("n_terms", "tol", "criterion", "max_terms") if spec[n] is not None}
         cand = dict(spec["candidates"])
         if not isinstance(cand["nu"], Mapping):  # one lag count for every input of the data set
-            cand["inputs"] = data.ident.input_names
+            cand["input_names"] = data.ident.input_names
         sel = gb.frols(gb.Candidates(**cand), data.ident, include=list(spec["include"]), **kw)
         if len(_STRUCTURES) >= _STRUCTURE_CACHE_SIZE:
             _STRUCTURES.clear()

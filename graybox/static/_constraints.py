@@ -105,7 +105,7 @@ def static_cluster_map(structure: Structure, inputs: tuple[str, ...] | None = No
     inputs than the data still gets one power per data input.
     """
     if len(structure.inputs) > 1 or (inputs is not None and len(inputs) > 1):
-        return surface_cluster_map(structure, inputs=None if inputs is None else tuple(inputs))
+        return surface_cluster_map(structure, input_names=None if inputs is None else tuple(inputs))
     return cluster_map(structure)
 
 
