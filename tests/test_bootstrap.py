@@ -99,7 +99,7 @@ def test_seeded_and_independent_of_where_replicates_run(data):
 
 
 def test_a_real_process_pool_through_the_experiment_layer(data):
-    with gb.experiments.parallel_map(workers=2, processes=True) as pmap:
+    with gb.experiments.parallel_map(executor="processes", workers=2) as pmap:
         p = run(data, seed=3, n_boot=3, map=pmap)
     a = run(data, seed=3, n_boot=3)
     np.testing.assert_array_equal(p.thetas, a.thetas)

@@ -360,3 +360,18 @@ def test_method_names_an_algorithm_and_estimator_an_estimator(data):
     np.testing.assert_array_equal(new.thetas, old.thetas)
     with pytest.warns(DeprecationWarning, match="estimator"):
         assert new.method == "pe"
+
+
+def test_parallel_map_speaks_run_grids_words(data):
+    double = abs  # picklable, deterministic
+    with gb.experiments.parallel_map(executor="inprocess") as pmap:
+        assert pmap(double, [-1, 2, -3]) == [1, 2, 3]
+    with pytest.warns(DeprecationWarning, match="executor='processes'"):
+        with gb.experiments.parallel_map(workers=1, processes=True) as pmap:
+            assert pmap(double, [-4, 5]) == [4, 5]
+    with pytest.raises(ValueError, match="executor"):
+        with gb.experiments.parallel_map(executor="threads"):
+            pass
+    with pytest.raises(ValueError, match="client and scheduler are for executor='dask'"):
+        with gb.experiments.parallel_map(executor="processes", scheduler="tcp://x:1"):
+            pass

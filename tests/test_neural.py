@@ -471,7 +471,7 @@ def test_bad_training_data():
     flat = Record(np.full(300, 500.0), np.linspace(0, 1, 300))
     with pytest.raises(ValueError, match="input is constant"):
         neural_narx(flat, ny=1, nu=1, hidden=1).model
-    with pytest.raises(ValueError, match="Record"):
+    with pytest.raises(TypeError, match="Record"):
         neural_narx(np.zeros((10, 2))).model  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="no records"):
         neural_narx([]).model

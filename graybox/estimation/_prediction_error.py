@@ -709,7 +709,7 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
     elif points is not None and how != "context":
         static_cons.append(PassesThrough(points))
     cons = static_cons + as_constraint_list(constraints)
-    ctx_points = points if points is not None else (data.static if isinstance(data, Dataset) else None)
+    ctx_points = points if points is not None else static_info(None, data)  # a curve: the Dataset's points are the context
     for c in cons:  # every set of static points speaks of the records' inputs
         _check_point_inputs(recs, getattr(c, "points", None))
     _check_point_inputs(recs, ctx_points)

@@ -6,7 +6,8 @@
 - a **model** from a Model or a result that carries one in ``.model``;
 - the **static information** from an explicit argument, else the Dataset's static points;
 - a **record** from a Record, or the part of a Dataset the entry means (``ident`` for an
-  estimate, ``valid`` for a judgement).
+  estimate, ``valid`` for a judgement): :func:`as_record` for one, ``records_of`` (core's
+  ``as_records``, which core's own regressors use too) for a Record, a sequence or a Dataset.
 
 Anything else is a ``TypeError`` that lists what is accepted. The results live in higher layers,
 so they are recognised by what they carry (a ``.structure`` or a ``.model`` attribute), not by
@@ -15,9 +16,8 @@ their class.
 
 from __future__ import annotations
 
-from typing import Sequence
-
-from ..core._records import Dataset, Record, StaticPoints, as_records
+from ..core._records import Dataset, Record, StaticPoints
+from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
 from ..core._terms import Structure, Term
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
@@ -33,9 +33,6 @@ STRUCTURE_ACCEPTED = ("a Structure, a sequence of terms (str or Term), a Model, 
 #: What a model argument may be, in words.
 MODEL_ACCEPTED = ("a Model or a result that carries one in .model (ELSResult, CLSResult, Decision, DSFResult, "
                   "Selection, SEMPResult, GrayboxSelection)")
-#: What a data argument of an estimator may be, in words.
-DATA_ACCEPTED = "a Record, a sequence of Records or a Dataset"
-
 
 def _carried_model(obj: object, kinds: tuple[type, ...]) -> object | None:
     """``obj.model`` when it is an attribute of one of ``kinds`` (a method is not a model)."""
@@ -181,25 +178,3 @@ def as_record(data: object, part: str, name: str = "data") -> Record:
     if isinstance(data, Dataset):
         return getattr(data, part)
     raise TypeError(f"{name} must be a Record or a Dataset (whose {part} record is used); got {type(data).__name__}")
-
-
-def records_of(data: object, part: str = "ident", name: str = "data") -> list[Record]:
-    """The records of ``data`` as a non-empty list: a Record, a sequence of Records, or a Dataset's ``part``.
-
-    Raises
-    ------
-    TypeError
-        ``data`` (or one of its elements) is none of these; the message lists what is accepted.
-    ValueError
-        An empty sequence, or records whose inputs differ.
-    """
-    if isinstance(data, Dataset):
-        return [getattr(data, part)]
-    if isinstance(data, Record):
-        return [data]
-    if isinstance(data, (str, bytes)) or not isinstance(data, Sequence):
-        raise TypeError(f"{name} must be {DATA_ACCEPTED} (whose {part} record is used); got {type(data).__name__}")
-    bad = [type(r).__name__ for r in data if not isinstance(r, Record)]
-    if bad:
-        raise TypeError(f"{name} must be {DATA_ACCEPTED}; got a sequence holding a {bad[0]}")
-    return as_records(list(data))
