@@ -375,3 +375,22 @@ def test_parallel_map_speaks_run_grids_words(data):
     with pytest.raises(ValueError, match="client and scheduler are for executor='dask'"):
         with gb.experiments.parallel_map(executor="processes", scheduler="tcp://x:1"):
             pass
+
+
+def test_decision_makers_take_a_pareto_set_only(results, data):
+    for wrong in (results["ELSResult"], results["Decision"]):
+        with pytest.raises(TypeError, match="pareto must be a ParetoSet"):
+            gb.decide_dsf(wrong, band=BAND)
+        with pytest.raises(TypeError, match="pareto must be a ParetoSet"):
+            gb.decide_min_correlation(wrong, data)
+    front = results["ParetoSet"]
+    a = gb.decide_min_correlation(front, data)  # a Dataset: its identification record
+    assert a.index == gb.decide_min_correlation(front, data.ident).index
+
+
+def test_a_cls_result_is_saved_through_its_model(results, tmp_path):
+    res = results["CLSResult"]
+    with pytest.raises(ValueError, match="save its .model"):
+        gb.to_json(res)
+    back = gb.load(gb.save(res.model, tmp_path / "cls.json"), expect=gb.Model)
+    np.testing.assert_array_equal(back.theta, res.model.theta)

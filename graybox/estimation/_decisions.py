@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
 from ..core._records import Record
@@ -93,7 +94,7 @@ def decide_dsf(
         lower index.
     """
     if not isinstance(pareto, ParetoSet):
-        raise ValueError(f"decide_dsf needs a ParetoSet, got {type(pareto).__name__}")
+        raise TypeError(f"pareto must be a ParetoSet (from pe_pareto or se_pareto); got {type(pareto).__name__}")
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
     lo, hi = (0.0, band) if np.ndim(band) == 0 else band
@@ -142,8 +143,8 @@ def decide_min_correlation(
     Parameters
     ----------
     pareto : ParetoSet
-    record : Record
-        Identification data, shape (N,) each; counted from sample max_lag on.
+    record : Record or Dataset
+        Identification data (a Dataset's ``ident``), shape (N,) each; counted from sample max_lag on.
     output : {"free-run", "one-step"}
 
     Returns
@@ -152,8 +153,9 @@ def decide_min_correlation(
         ``.score`` is the chosen member's ρ.
     """
     if not isinstance(pareto, ParetoSet):
-        raise ValueError(f"decide_min_correlation needs a ParetoSet, got {type(pareto).__name__}")
+        raise TypeError(f"pareto must be a ParetoSet (from pe_pareto or se_pareto); got {type(pareto).__name__}")
     check_choice(output, "output", ("free-run", "one-step"))
+    record = as_record(record, "ident", "record")
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
     st = pareto.structure

@@ -502,7 +502,8 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     str
     """
     if type(obj) not in _TYPES:
-        raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}")
+        hint = "; save its .model" if type(getattr(obj, "model", None)) in _TYPES else ""
+        raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}{hint}")
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": _version(),
                            "type": _TYPES[type(obj)]}
     u = _units_arg(units)

@@ -43,7 +43,7 @@ def black_box_models(
 def section_black_box(quick: bool = True, out: Path | None = None, data: Dataset | None = None) -> str:
     """``graybox reproduce`` section: black-box ERR + ELS models on the bundled plant data.
 
-    Prints each model's Table I row (J_S ident, J_S valid, J_SF, N_p; MSE in mlc²) and its
+    Prints each model's Table I row (columns JS_ident, JS_valid, JSF, n_params; MSE in mlc²) and its
     equation. ``quick`` and ``out`` are accepted for the common section signature; this
     section is fast and draws nothing.
     """

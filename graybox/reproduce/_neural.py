@@ -27,8 +27,8 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
     The paper's network (ny = nu = 6, ne = 2, 7 tanh hidden nodes, N_p = 99) trained on the
     identification record twice from seed 0: by the default of :func:`graybox.neural_narx`
     (prediction error, then simulation error with weight decay) and by the paper's training
-    (``nnnarmax2``: 60 epochs of one-step prediction error), each with its Table I row (J_S
-    ident, J_S valid, J_SF, N_p; MSE in output units²). Each training takes well under a second;
+    (``nnnarmax2``: 60 epochs of one-step prediction error), each with its Table I row (columns
+    JS_ident, JS_valid, JSF, n_params; MSE in output units²). Each training takes well under a second;
     the full mode adds seeds 1–4 and reports the spread (min / median / max) of both rows over
     the five initialisations. With ``out`` the default network's validation free run is drawn
     to ``out/neural_free_run.png``.
