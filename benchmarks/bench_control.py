@@ -50,7 +50,7 @@ def main() -> None:
     sel = gb.frols(gb.Candidates(ny=6, nu=6, ne=2, degree=2, max_y_power=1), data, n_terms=17, include=["1"])
     els = gb.els(sel, data).model
     curve = gb.StaticCurve.fit(data.static, degree=2)
-    cls = gb.cls(els.structure, data, curve, reference=els)
+    cls = gb.cls(els.structure, data, curve, reference=els).model
     unc = gb.cls_uncertainty(cls, data, curve, reference=els)
     plant = PumpingPlant()
     k, a, b = plant.static_coefficients

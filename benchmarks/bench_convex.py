@@ -105,11 +105,11 @@ def main(argv: list[str] | None = None) -> None:
               f"{LAMBDAS.size} λ; at λ1 = 1 (plain LS) J_1 = {j1(th_ails)[-1]:.5f} vs {j1(ref_sum)[-1]:.5f} mlc²")
 
     curve = StaticCurve.polynomial(reference.EQ1_COEFFICIENTS)
-    closed = cls(st, rec, curve, solver="closed")
+    closed = cls(st, rec, curve, solver="closed").model
     print(f"\n{'CLS (22), one estimate':64s} {'time':>11s} {'max rel Δθ':>11s}")
     for solver in ("closed", "clarabel", "osqp"):
-        m = cls(st, rec, curve, solver=solver)
-        t = timeit(lambda: cls(st, rec, curve, solver=solver), repeat=args.repeat)
+        m = cls(st, rec, curve, solver=solver).model
+        t = timeit(lambda: cls(st, rec, curve, solver=solver).model, repeat=args.repeat)
         print(f"{'graybox cls, ' + solver:64s} {t * 1e3:8.1f} ms {rel_err(m.theta[None], closed.theta[None], s):11.1e}")
 
 

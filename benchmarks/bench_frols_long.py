@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/bench_frols_long.py [--sizes 1e4 1e5 1e6] [--repeat 3]
 
 Task: records of N samples from the bundled plant simulator
-(``PumpingPlant().simulate(speed_reference(n_samples=N, n_ident=N // 2, seed=0), rng=0)``, the
+(``PumpingPlant().simulate(speed_reference(n_samples=N, n_ident=N // 2, seed=0), seed=0)``, the
 whole record used for identification), ny = nu = 6, degree 2 (91 candidates -> 17 terms) and
 degree 3 (455 candidates -> 23 terms), a fixed number of terms, ``method`` as given (default: the
 library's default). Each size runs in a fresh subprocess (one process per size, so the peak is
@@ -44,7 +44,7 @@ def make_record(cache: Path, n: int) -> Path:
     if not p.exists():
         from graybox.datasets.pumping import PumpingPlant, speed_reference
 
-        run = PumpingPlant().simulate(speed_reference(n_samples=n, n_ident=n // 2, seed=0), rng=0)
+        run = PumpingPlant().simulate(speed_reference(n_samples=n, n_ident=n // 2, seed=0), seed=0)
         cache.mkdir(parents=True, exist_ok=True)
         np.savez(p, u=np.asarray(run.u, float), y=np.asarray(run.y, float))
     return p

@@ -46,7 +46,7 @@ def row(model, data) -> tuple[float, float, float, float]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         r = evaluate({"n": model}, data).loc["n"]
-    return r["J_S ident"], r["J_S valid"], r["J_SF"], r["J_1 ident"]
+    return r["JS_ident"], r["JS_valid"], r["JSF"], r["J1_ident"]
 
 
 def spread(rows) -> str:
@@ -70,7 +70,7 @@ VARIANTS = {
 
 def part_evidence(data, seeds) -> None:
     print("## training variants: median [min–max] over seeds", list(seeds))
-    print(f"{'variant':52s} {'J_S ident':>22s}  {'J_S valid':>22s}  {'J_SF':>22s}")
+    print(f"{'variant':52s} {'JS_ident':>22s}  {'JS_valid':>22s}  {'JSF':>22s}")
     for label, kw in VARIANTS.items():
         rows = [row(neural_narx(data.ident, seed=sd, **kw).model, data) for sd in seeds]
         print(f"{label:52s} {spread(rows)}", flush=True)
@@ -165,7 +165,7 @@ def run_with(data, seed, lsq):
 def part_optimiser(data, seeds, repeat) -> None:
     print(f"## optimisers in the default training (wall time: median of {repeat} runs per seed; "
           "final SE cost in normalised units, lower is better)")
-    print(f"{'optimiser':40s} {'time s':>16s}  {'final SE cost':>26s}  {'J_S ident':>22s}  {'J_S valid':>22s}  {'J_SF':>22s}")
+    print(f"{'optimiser':40s} {'time s':>16s}  {'final SE cost':>26s}  {'JS_ident':>22s}  {'JS_valid':>22s}  {'JSF':>22s}")
     for label, lsq in OPTIMISERS.items():
         run_with(data, 0, lsq)  # JIT warm-up
         times, costs, rows = [], [], []

@@ -22,8 +22,8 @@ def main() -> None:
     print(machine())
     u2 = two_speed_reference()
     siso, miso = PumpingPlant(), TwoSpeedPumpingPlant()
-    t_siso = timeit(lambda: siso.simulate(u2[:, 0], rng=1), repeat=args.repeat)
-    t_miso = timeit(lambda: miso.simulate(u2, rng=1), repeat=args.repeat)
+    t_siso = timeit(lambda: siso.simulate(u2[:, 0], seed=1), repeat=args.repeat)
+    t_miso = timeit(lambda: miso.simulate(u2, seed=1), repeat=args.repeat)
     n = u2.shape[0]
     print(f"{'plant':<28}{'ms / 6000 samples':>20}{'samples/s':>14}")
     for name, t in (("PumpingPlant (one speed)", t_siso), ("TwoSpeedPumpingPlant", t_miso)):

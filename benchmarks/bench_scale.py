@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/bench_scale.py [--sizes 1e3,1e4,1e5,1e6] [--items frols3,els,...]
                                                [--ref GITREF] [--repeat 3] [--els-table]
 
-Records: ``PumpingPlant().simulate(speed_reference(n_samples=N + 1000, n_ident=N, seed=s), rng=s)``
+Records: ``PumpingPlant().simulate(speed_reference(n_samples=N + 1000, n_ident=N, seed=s), seed=s)``
 (the first N samples, seed 1), generated once by *this* checkout and cached in
 ``$TMPDIR/graybox-bench-scale`` so that a ``--ref`` run times the same data. Structures come from the
 bundled record (FROLS degree 2 → the 17-term ℓ = 2 structure), so every N fits the same model.
@@ -64,7 +64,7 @@ def record_file(n: int) -> Path:
         from graybox.datasets.pumping import PumpingPlant, speed_reference
 
         u = speed_reference(n_samples=n + 1000, n_ident=n, seed=SEED)
-        run = PumpingPlant().simulate(u, rng=SEED)
+        run = PumpingPlant().simulate(u, seed=SEED)
         tmp = path.with_suffix(".tmp.npz")
         np.savez(tmp, u=run.u[:n], y=run.y[:n])
         tmp.replace(path)

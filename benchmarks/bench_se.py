@@ -158,7 +158,7 @@ def scale(args, data, structure):
     while sum(r.u.size for r in runs) < sizes[-1]:
         try:
             runs.append(PumpingPlant().simulate(speed_reference(n_samples=100_000, n_ident=50_000, seed=seed),
-                                                rng=seed))
+                                                seed=seed))
         except ValueError as exc:  # the simulator's known failure on some long records
             failed.append((seed, str(exc)))
         seed += 1

@@ -81,7 +81,7 @@ def tables() -> None:
             els = gb.els(sel, data).model
             tab = gb.evaluate({f"select_graybox ({est}) D_SF": res.model, f"FROLS + ELS, {k} terms": els}, data)
             print(f"\n{name}, band {band}, estimator {est}: {res.structure}")
-            print(tab[["J_S ident", "J_S valid", "J_SF", "N_p"]].to_string(float_format=lambda v: f"{v:.4f}"))
+            print(tab[["JS_ident", "JS_valid", "JSF", "n_params"]].to_string(float_format=lambda v: f"{v:.4f}"))
 
 
 def staircase() -> None:

@@ -39,7 +39,7 @@ def main() -> None:
     fit = gb.els(sel, data.ident)
     els = fit.model
     curve = gb.StaticCurve.fit(data.static, degree=2)
-    cls = gb.cls(st, data.ident, curve, reference=els)
+    cls = gb.cls(st, data.ident, curve, reference=els).model
     pe_l = np.logspace(-6, 0, 30)
     pe = gb.pe_pareto(st, data.ident, data.static, lambdas=pe_l, solver="closed")
     pe_d = gb.decide_dsf(pe, band=0.031, fallback="min_jsf")
@@ -69,7 +69,7 @@ def main() -> None:
         print(f"| {name} | {1e3 * timeit(fn, repeat=args.repeat):.2f} ms |")
 
     def boot(method, lambdas, options, mp=None):
-        return gb.bootstrap_decision(st, data, method=method, lambdas=lambdas, n_boot=args.boot, fallback="min_jsf",
+        return gb.bootstrap_decision(st, data, estimator=method, lambdas=lambdas, n_boot=args.boot, fallback="min_jsf",
                                      options=options, map=mp, progress=False)
 
     for label, method, lam, opts in (("PE, 30 λ, closed form", "pe", pe_l, {"solver": "closed"}),

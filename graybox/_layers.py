@@ -23,7 +23,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
                 "_form_check"),
      "clusters, equilibria and their stability, static curves, surfaces and gains; static curves and "
      "surfaces fitted to points; static constraints as affine rows"),
-    ("models", ("_model", "_evaluate"),
+    ("models", ("_model", "_coerce", "_evaluate"),
      "the polynomial NARMAX model as a value; J_1, J_S, J_SF and the other figures of merit"),
     ("selection", ("_stopping", "_subset_search", "_forward_regression", "_simulation_error_pruning"),
      "structure selection: FROLS (ERR) and SEMP (simulation error with pruning)"),

@@ -27,7 +27,7 @@ def data():
 
 
 def run(data, **kw):
-    args = dict(method="pe", lambdas=LAMBDAS, n_boot=8, band=0.05, options={"solver": "closed"}, fallback="min_jsf")
+    args = dict(estimator="pe", lambdas=LAMBDAS, n_boot=8, band=0.05, options={"solver": "closed"}, fallback="min_jsf")
     args.update(kw)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
@@ -99,7 +99,7 @@ def test_seeded_and_independent_of_where_replicates_run(data):
 
 
 def test_a_real_process_pool_through_the_experiment_layer(data):
-    with gb.experiments.parallel_map(workers=2, processes=True) as pmap:
+    with gb.experiments.parallel_map(executor="processes", workers=2) as pmap:
         p = run(data, seed=3, n_boot=3, map=pmap)
     a = run(data, seed=3, n_boot=3)
     np.testing.assert_array_equal(p.thetas, a.thetas)
@@ -122,8 +122,8 @@ def test_static_noise_and_se(data):
     _, sp = job.data(1)
     assert np.all(sp.ybar != data.static.ybar) and np.array_equal(sp.ubar, data.static.ubar)
     assert boot.static_sigma == 0.05
-    se = run(data, method="se", lambdas=[1.0, 0.3, 0.1], n_boot=2, options={"method": "gradient", "max_nfev": 10})
-    assert se.method == "se" and se.n_replicates == 2
+    se = run(data, estimator="se", lambdas=[1.0, 0.3, 0.1], n_boot=2, options={"method": "gradient", "max_nfev": 10})
+    assert se.estimator == "se" and se.n_replicates == 2
     assert set(se.lambda1[se.ok]) <= {1.0, 0.3, 0.1}
 
 
@@ -143,13 +143,13 @@ def test_bad_options(data):
     with pytest.raises(ValueError, match="not keyword options of pe_pareto"):
         run(data, options={"solver": "closed", "max_nfev": 3})
     with pytest.raises(ValueError, match="not keyword options of se_pareto"):
-        run(data, method="se", options={"checkpoint": "x.npz"})
+        run(data, estimator="se", options={"checkpoint": "x.npz"})
     with pytest.raises(ValueError, match="block_length"):
         run(data, block_length=3)
     with pytest.raises(ValueError, match="longer than every record"):
         run(data, block_length=601)
-    with pytest.raises(ValueError, match="method"):
-        run(data, method="ga")
+    with pytest.raises(ValueError, match="estimator"):
+        run(data, estimator="ga")
     with pytest.raises(ValueError, match="static points"):
         gb.bootstrap_decision(STRUCT, data.ident)
     with pytest.raises(ValueError, match="map returned"):

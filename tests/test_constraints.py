@@ -70,7 +70,7 @@ def test_band_bounds_the_true_static_error_with_cls_and_pe(rec, ls, solver):
     for th in (
         pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=band, solver=solver)[0],  # λ1 = 1: LS + band
         pe_thetas(S15, rec, PTS, lambdas=[0.5], constraints=band, solver=solver)[0],
-        cls(S15, rec, None, constraints=StaticBand(b, PTS), solver=solver).theta,
+        cls(S15, rec, None, constraints=StaticBand(b, PTS), solver=solver).model.theta,
     ):
         err = true_static_error(th)
         assert err.max() <= b * (1 + 1e-6)
@@ -97,7 +97,7 @@ def test_gain_bounds_exact_without_mixed_clusters(rec):
     # is exact and the model's own static gain obeys the bounds everywhere on the grid
     s = Structure(["y(k-1)", "y(k-2)", "1", "u(k-1)", "u(k-2)^2", "u(k-1)u(k-3)"])
     g = GainBounds(lower=0.02, upper=0.024, ubar_range=(800.0, 1600.0), n=17, reference=EQ1)
-    m = cls(s, rec, None, constraints=g)
+    m = cls(s, rec, None, constraints=g).model
     ub = np.linspace(800.0, 1600.0, 17)
     gain = static_gain(s, m.theta, ub)
     assert gain.min() >= 0.02 - 1e-8 and gain.max() <= 0.024 + 1e-8
@@ -108,7 +108,7 @@ def test_gain_bounds_exact_without_mixed_clusters(rec):
 def test_gain_bounds_with_the_curve_imposed_are_exact(rec):
     # with eq. (22) the model's static curve is eq. (1), so the gain along it is the model's own
     g = GainBounds(lower=0.012, ubar_range=(750.0, 1650.0), reference=EQ1)
-    m = cls(S15, rec, EQ1, constraints=g)
+    m = cls(S15, rec, EQ1, constraints=g).model
     ub = np.linspace(750.0, 1650.0, 25)
     np.testing.assert_allclose(m.static_gain(ub), EQ1.gain(ub), rtol=1e-6)
     assert g.violation(m.theta, ctx_for(rec, curve=EQ1)) < 1e-9
@@ -126,7 +126,7 @@ def test_gain_bounds_incompatible_with_the_curve_are_infeasible(rec):
     g = GainBounds(upper=0.01, ubar_range=(750.0, 1650.0), reference=EQ1)
     for solver in ("clarabel", "osqp"):
         with pytest.raises(InfeasibleError) as exc:
-            cls(S15, rec, EQ1, constraints=g, solver=solver)
+            cls(S15, rec, EQ1, constraints=g, solver=solver).model
         msg = str(exc.value)
         assert "static gain in [-inf, 0.01]" in msg and "equality (22)" in msg and "status" in msg
 
@@ -142,7 +142,7 @@ def test_cluster_bounds_by_name_and_key(rec, ls):
         th = pe_thetas(S15, rec, PTS, lambdas=[1.0], constraints=ClusterBounds({key: (None, cap)}))[0]
         sy = float((cm.R @ th)[cm.index("Σy")])
         assert cap - 1e-6 <= sy <= cap + 1e-10  # active, met to the interior-point tolerance
-    m = cls(S15, rec, None, constraints=ClusterBounds({"Σyu": (0.0, 0.0), "Σu²": (1e-7, None)}))
+    m = cls(S15, rec, None, constraints=ClusterBounds({"Σyu": (0.0, 0.0), "Σu²": (1e-7, None)})).model
     c = m.clusters()
     assert abs(c["Σyu"]) < 1e-12 and c["Σu²"] >= 1e-7 * (1 - 1e-8)
 
@@ -158,7 +158,7 @@ def test_cluster_bounds_conflict_is_infeasible(rec):
     eq = ClusterBounds({"Σyu": (1e-5, 1e-5)}) & CurveEquality(EQ1)
     for solver in ("closed", "clarabel"):
         with pytest.raises(InfeasibleError, match="inconsistent"):
-            cls(S15, rec, None, constraints=eq, solver=solver)
+            cls(S15, rec, None, constraints=eq, solver=solver).model
 
 
 # ---------------------------------------------------------------------------------------------
@@ -174,7 +174,7 @@ def test_user_constraint_one_and_two_arguments(rec, ls):
         r = ctx.cluster_map.R[ctx.cluster_map.index("Σy")]
         return [r @ th <= 0.85, r @ th >= 0.5]
 
-    m = cls(S15, rec, None, constraints=UserConstraint(sum_y, name="Σy in [0.5, 0.85]"))
+    m = cls(S15, rec, None, constraints=UserConstraint(sum_y, name="Σy in [0.5, 0.85]")).model
     assert 0.5 - 1e-8 <= m.clusters()["Σy"] <= 0.85 + 1e-8
     ctx = ctx_for(rec)
     assert UserConstraint(sum_y).violation(m.theta, ctx) < 1e-8
@@ -185,13 +185,13 @@ def test_user_constraint_errors(rec):
     with pytest.raises(ValueError, match="callable"):
         UserConstraint(3)
     with pytest.raises(ValueError, match="must return cvxpy constraints"):
-        cls(S15, rec, None, constraints=UserConstraint(lambda th: [th[0]]))
+        cls(S15, rec, None, constraints=UserConstraint(lambda th: [th[0]])).model
     with pytest.raises(ValueError, match="not convex"):
-        cls(S15, rec, None, constraints=UserConstraint(lambda th: cp.square(th[0]) >= 1))
+        cls(S15, rec, None, constraints=UserConstraint(lambda th: cp.square(th[0]) >= 1)).model
     with pytest.raises(ValueError, match="equality constraints only"):
-        cls(S15, rec, None, constraints=UserConstraint(lambda th: th[0] >= 0), solver="closed")
+        cls(S15, rec, None, constraints=UserConstraint(lambda th: th[0] >= 0), solver="closed").model
     with pytest.raises(ValueError, match="UserConstraint"):
-        cls(S15, rec, None, constraints=[lambda th: th[0] >= 0])
+        cls(S15, rec, None, constraints=[lambda th: th[0] >= 0]).model
 
 
 # ---------------------------------------------------------------------------------------------
@@ -308,7 +308,7 @@ variant = st.one_of(
 
 @pytest.fixture(scope="module")
 def theta_star(rec):
-    return cls(S15, rec, EQ1).theta
+    return cls(S15, rec, EQ1).model.theta
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
@@ -318,7 +318,7 @@ def test_property_every_variant_is_satisfied(rec, theta_star, cons, lam, use_cls
     for c in cons:  # θ* is a feasible point of the combination
         assert c.violation(theta_star, ctx) <= 1e-9, c.describe()
     if use_cls:
-        th = cls(S15, rec, None, constraints=cons).theta
+        th = cls(S15, rec, None, constraints=cons).model.theta
     else:
         th = pe_thetas(S15, rec, PTS, lambdas=[lam], constraints=cons)[0]
     for c in cons:
@@ -346,14 +346,18 @@ def test_band_does_not_go_vacuous_as_the_denominator_vanishes(rec):
 
 def test_curve_equality_refuses_a_reference_above_one(rec):
     with pytest.raises(ValueError, match="no stable equilibrium"):
-        cls(S15, rec, EQ1, reference=1.02)
+        cls(S15, rec, EQ1, reference=1.02).model
 
 
 def test_cls_with_only_a_band_takes_a_datasets_static_points(rec):
     from graybox import Dataset
 
     data = Dataset(rec, rec, PTS)
-    m = cls(S15, data, None, constraints=StaticBand(0.5))
+    m = cls(S15, data, None, constraints=StaticBand(0.5), how="context").model
     assert true_static_error(m.theta).max() <= 0.5 * (1 + 1e-5)
+    # without how="context" the Dataset's points are the static information itself, as for PE and SE
+    both = cls(S15, data, constraints=StaticBand(0.5))
+    assert both.static is PTS and len(both.constraints) == 2
+    np.testing.assert_allclose(both.model.theta, cls(S15, rec, PTS, constraints=StaticBand(0.5)).model.theta)
     with pytest.raises(ValueError, match="static points"):
-        cls(S15, rec, None, constraints=StaticBand(0.5))  # a bare record has none
+        cls(S15, rec, None, constraints=StaticBand(0.5)).model  # a bare record has none

@@ -189,7 +189,7 @@ def test_nonlinear_system_free_run_equals_simulate_one_input():
 def test_nonlinear_system_free_run_equals_simulate_two_inputs():
     data = gb.load_pumping_miso()
     names = data.input_names
-    sel = gb.frols(gb.Candidates(3, 3, inputs=names, degree=2, max_y_power=1), data, n_terms=10, include=["1"])
+    sel = gb.frols(gb.Candidates(3, 3, input_names=names, degree=2, max_y_power=1), data, n_terms=10, include=["1"])
     model = gb.els(sel, data).model
     assert set(model.structure.inputs) == set(names)
     rec = data.valid
@@ -223,8 +223,8 @@ def test_closed_loop_with_the_model_reaches_the_reference():
 def test_plant_closed_loop_with_an_open_loop_controller_is_simulate():
     plant = PumpingPlant()
     u = np.repeat([900.0, 1100.0, 1000.0], 50)
-    a = plant.simulate(u, rng=3)
-    b = plant.closed_loop(lambda k, y: u[k], u.size, u0=u[0], rng=3)
+    a = plant.simulate(u, seed=3)
+    b = plant.closed_loop(lambda k, y: u[k], u.size, u0=u[0], seed=3)
     for f in ("u", "y", "pressure", "speed", "flow", "surge", "air_loss"):
         np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
 

@@ -86,16 +86,16 @@ def test_static_matrices_any_powers():
 # CLS
 # ---------------------------------------------------------------------------------------------
 def test_cls_qp_equals_kkt_closed_form(rec, scales):
-    closed = cls(S15, rec, EQ1, solver="closed")
+    closed = cls(S15, rec, EQ1, solver="closed").model
     for solver in ("clarabel", "osqp"):
-        qp = cls(S15, rec, EQ1, solver=solver)
+        qp = cls(S15, rec, EQ1, solver=solver).model
         assert rel_scaled(qp.theta, closed.theta, scales)[0] < 1e-6, solver
         # and in engineering units, term by term
         np.testing.assert_allclose(qp.theta, closed.theta, rtol=1e-5, atol=1e-6 * np.abs(closed.theta).max())
 
 
 def test_cls_static_curve_is_eq1(rec):
-    m = cls(S15, rec, EQ1)
+    m = cls(S15, rec, EQ1).model
     ub = np.linspace(750.0, 1650.0, 91)
     assert np.max(np.abs(rational_static_curve(S15, m.theta, ub) - EQ1(ub))) < 1e-6
     assert np.max(np.abs(m.static_curve(ub) - EQ1(ub))) < 1e-6  # and it is the stable equilibrium
@@ -107,50 +107,50 @@ def test_cls_static_curve_is_eq1(rec):
 def test_cls_clusters_follow_eq22(rec):
     ls = scaled_lstsq(*stacked_regressors(S15, rec))
     sy_ls = float((cluster_map(S15).R @ ls)[cluster_map(S15).index("Σy")])
-    c = cls(S15, rec, EQ1).clusters()
+    c = cls(S15, rec, EQ1).model.clusters()
     k, a, b = reference.EQ1_COEFFICIENTS
     assert abs(c["Σyu"]) < 1e-12
     assert c["Σy"] == pytest.approx(sy_ls, rel=1e-9)
     for name, coef in (("Σ0", k), ("Σu", a), ("Σu²", b)):
         assert c[name] / coef == pytest.approx(1 - sy_ls, rel=1e-8)
     # Σ*_y from a given reference: a Model, a number
-    c2 = cls(S15, rec, EQ1, reference=reference.paper_model(15)).clusters()
+    c2 = cls(S15, rec, EQ1, reference=reference.paper_model(15)).model.clusters()
     assert c2["Σy"] == pytest.approx(reference.paper_model(15).clusters()["Σy"], rel=1e-9)
-    c3 = cls(S15, rec, EQ1, reference=0.95, solver="closed").clusters()
+    c3 = cls(S15, rec, EQ1, reference=0.95, solver="closed").model.clusters()
     assert c3["Σy"] == pytest.approx(0.95) and c3["Σ0"] == pytest.approx(0.05 * k)
 
 
 def test_cls_costs_one_step_error(rec):
     psi, y = stacked_regressors(S15, rec)
     ls = scaled_lstsq(psi, y)
-    m = cls(S15, rec, EQ1)
+    m = cls(S15, rec, EQ1).model
     j = lambda th: np.mean((y - psi @ th) ** 2)  # noqa: E731
     assert j(m.theta) > j(ls)  # constrained: never better than LS on J_1
 
 
 def test_cls_through_points_and_curve_from_points(rec, scales):
     pts = EQ1.points(np.array([800.0, 1200.0, 1600.0]))
-    m = cls(S15, rec, pts)
+    m = cls(S15, rec, pts).model
     np.testing.assert_allclose(rational_static_curve(S15, m.theta, pts.ubar), pts.ybar, atol=1e-8)
-    mc = cls(S15, rec, pts, solver="closed")
+    mc = cls(S15, rec, pts, solver="closed").model
     assert rel_scaled(m.theta, mc.theta, scales)[0] < 1e-6
     # how="curve": fit the degree the numerator carries (2) and impose (22)
     many = EQ1.points(np.linspace(750, 1650, 10))
-    fitted = cls(S15, rec, many, how="curve")
-    direct = cls(S15, rec, EQ1)
+    fitted = cls(S15, rec, many, how="curve").model
+    direct = cls(S15, rec, EQ1).model
     assert rel_scaled(fitted.theta, direct.theta, scales)[0] < 1e-6
 
 
 def test_cls_points_on_a_representable_curve_are_consistent(rec):
     # ten points, five clusters: dependent rows, but consistent (they lie on a quadratic)
-    m = cls(S15, rec, EQ1.points(np.linspace(750, 1650, 10)))
+    m = cls(S15, rec, EQ1.points(np.linspace(750, 1650, 10))).model
     ub = np.linspace(750, 1650, 10)
     np.testing.assert_allclose(rational_static_curve(S15, m.theta, ub), EQ1(ub), atol=1e-7)
 
 
 def test_cls_multi_record_equals_its_parts(rec):
     a, b = rec.slice(0, 1200, "a"), rec.slice(1200, None, "b")
-    m = cls(S15, [a, b], EQ1, solver="closed")
+    m = cls(S15, [a, b], EQ1, solver="closed").model
     # by hand: stacked regressors of the two records, KKT with the (22) rows
     psi, y = stacked_regressors(S15, [a, b])
     s = column_scales(psi)
@@ -173,10 +173,10 @@ def test_cls_on_the_plant_data():
     data = load_pumping()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # ELS's own convergence warning is not under test here
-        m = cls(S15, data.ident, EQ1, reference="els")
+        m = cls(S15, data.ident, EQ1, reference="els").model
     ub = np.linspace(750.0, 1650.0, 91)
     assert np.max(np.abs(m.static_curve(ub) - EQ1(ub))) < 1e-6
-    closed = cls(S15, data.ident, EQ1, reference=m.clusters()["Σy"], solver="closed")
+    closed = cls(S15, data.ident, EQ1, reference=m.clusters()["Σy"], solver="closed").model
     s = column_scales(stacked_regressors(S15, data.ident)[0])
     assert rel_scaled(m.theta, closed.theta, s)[0] < 1e-6
 
@@ -330,12 +330,12 @@ def test_property_cls_points_closed_form_equals_qp(seed, n_terms, n_points, unit
     sub = StaticPoints(pts.ubar[:k], pts.ybar[:k])
     s = column_scales(stacked_regressors(structure, r)[0])
     try:
-        a = cls(structure, r, sub, solver="closed")
+        a = cls(structure, r, sub, solver="closed").model
     except ValueError as exc:  # a random structure may not be able to pass through the points
         assert "does not exist" in str(exc) or "inconsistent" in str(exc)
         a = None
     assume(a is not None)
-    b = cls(structure, r, sub, solver="clarabel")
+    b = cls(structure, r, sub, solver="clarabel").model
     assert rel_scaled(b.theta, a.theta, s)[0] < 1e-6
     np.testing.assert_allclose(static_prediction(structure, a.theta, sub), sub.ybar, atol=1e-7 * (1 + np.abs(sub.ybar).max()))
 
@@ -360,16 +360,16 @@ def test_property_weighted_sum_sweep_is_monotone(seed, n_terms, n_points, unit):
 def test_non_rational_structure_refused_by_rational_cls(rec):
     s = Structure(["y(k-1)", "y(k-1)^2", "u(k-1)", "1", "u(k-1)^2"])
     with pytest.raises(ValueError, match="rational"):
-        cls(s, rec, EQ1)
+        cls(s, rec, EQ1).model
     # the general variant works for it
-    m = cls(s, rec, EQ1.points([900.0, 1400.0]))
+    m = cls(s, rec, EQ1.points([900.0, 1400.0])).model
     np.testing.assert_allclose(static_prediction(s, m.theta, EQ1.points([900.0, 1400.0])), EQ1([900.0, 1400.0]),
                                atol=1e-7)
 
 
 def test_fewer_points_than_needed(rec):
     with pytest.raises(ValueError, match="fewer static points"):
-        cls(S15, rec, EQ1.points([800.0, 1500.0]), how="curve")
+        cls(S15, rec, EQ1.points([800.0, 1500.0]), how="curve").model
 
 
 def test_too_many_inconsistent_points(rec):
@@ -379,11 +379,15 @@ def test_too_many_inconsistent_points(rec):
     # ȳ_i is itself a column of Q (Σy), so the only way through ten generic points is the
     # degenerate Σy = 1 (no static function): refused, with the reason
     with pytest.raises(ValueError, match="only 5 cluster coefficients"):
-        cls(S15, rec, noisy)
+        cls(S15, rec, noisy, how="points")
     # without a Σy cluster the equalities are simply inconsistent
     s = Structure(["u(k-1)", "1", "u(k-2)^2", "u(k-1)y(k-1)"])
     with pytest.raises(InfeasibleError, match="inconsistent"):
-        cls(s, rec, noisy)
+        cls(s, rec, noisy, how="points")
+    # so how="auto" takes, from as many points as clusters or more, the curve the numerator carries
+    auto = cls(S15, rec, noisy)
+    assert auto.constraints[0].startswith("static curve equality (22)")
+    np.testing.assert_allclose(auto.model.theta, cls(S15, rec, noisy, how="curve").model.theta)
 
 
 def test_static_points_outside_the_data_range_are_used_and_named_once(rec):
@@ -393,9 +397,9 @@ def test_static_points_outside_the_data_range_are_used_and_named_once(rec):
 
     from graybox import StaticRangeWarning
 
-    for fit in (lambda: cls(S15, rec, far, how="points"),
+    for fit in (lambda: cls(S15, rec, far, how="points").model,
                 lambda: pe_thetas(S15, rec, far, lambdas=[0.5], solver="closed"),
-                lambda: cls(S15, rec, StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, domain=(100.0, 1650.0)))):
+                lambda: cls(S15, rec, StaticCurve.polynomial(reference.EQ1_COEFFICIENTS, domain=(100.0, 1650.0))).model):
         with w.catch_warnings(record=True) as caught:
             w.simplefilter("always")
             fit()
@@ -414,20 +418,20 @@ def test_zero_denominator_at_a_static_point(rec):
     # a point there would read 0 = 0, and the static function does not exist
     fix = ClusterBounds({"Σy": (0.5, 0.5), "Σyu": (5e-4, 5e-4)})
     with pytest.raises(ValueError, match="does not exist at ū"):
-        cls(S15, rec, EQ1.points([1000.0]), constraints=fix)
+        cls(S15, rec, EQ1.points([1000.0]), constraints=fix).model
     with pytest.raises(ValueError, match="does not exist at ū"):
-        cls(S15, rec, EQ1.points([1000.0]), constraints=fix, solver="closed")
+        cls(S15, rec, EQ1.points([1000.0]), constraints=fix, solver="closed").model
 
 
 def test_curve_the_structure_cannot_carry(rec):
     cubic = StaticCurve.polynomial([0.0, 1e-3, 0.0, 1e-9])
     with pytest.raises(ValueError, match="Σu³"):
-        cls(S15, rec, cubic)
+        cls(S15, rec, cubic).model
 
 
 def test_reference_with_unit_sigma_y(rec):
     with pytest.raises(ValueError, match="vanishes"):
-        cls(S15, rec, EQ1, reference=1.0)
+        cls(S15, rec, EQ1, reference=1.0).model
 
 
 @pytest.mark.parametrize(
@@ -440,7 +444,7 @@ def test_reference_with_unit_sigma_y(rec):
 )
 def test_bad_arguments(rec, kwargs, match):
     with pytest.raises(ValueError, match=match):
-        cls(S15, rec, EQ1, **kwargs)
+        cls(S15, rec, EQ1, **kwargs).model
 
 
 def test_bad_pe_arguments(rec):
@@ -456,12 +460,12 @@ def test_bad_pe_arguments(rec):
         pe_thetas(Structure(["y(k-1)", "e(k-1)"]), rec, pts, lambdas=[0.5])
     with pytest.raises(ValueError, match="domain"):
         pe_thetas(S15, rec, EQ1, lambdas=[0.5])
-    with pytest.raises(ValueError, match="StaticPoints or a StaticCurve"):
+    with pytest.raises(TypeError, match="StaticPoints, a StaticCurve"):
         pe_thetas(S15, rec, [1, 2, 3], lambdas=[0.5])
 
 
 def test_results_are_immutable(rec):
-    m = cls(S15, rec, EQ1, solver="closed")
+    m = cls(S15, rec, EQ1, solver="closed").model
     with pytest.raises(ValueError):
         m.theta[0] = 1.0
     ps = pe_pareto(S15, rec, reference.eq1_points(), lambdas=[0.1, 0.9], solver="closed")

@@ -91,7 +91,7 @@ def test_fastest_effect_after_two_samples(speed):
 
 def test_measurement_noise_band():
     u = np.full(8000, 1200.0)
-    run = PLANT.simulate(u, rng=1, process_noise=False)
+    run = PLANT.simulate(u, seed=1, process_noise=False)
     v = run.y - run.pressure
     assert NOISE_STD == pytest.approx(0.175 / 1.96)
     assert np.std(v) == pytest.approx(NOISE_STD, rel=0.03)
@@ -102,18 +102,18 @@ def test_measurement_noise_band():
 def test_process_noise_is_coloured_and_optional():
     u = np.full(3000, 1200.0)
     clean = PLANT.simulate(u, noise=False, process_noise=False).y
-    pn = PLANT.simulate(u, rng=2, noise=False).y - clean
+    pn = PLANT.simulate(u, seed=2, noise=False).y - clean
     assert 0.02 < np.std(pn) < 0.15
     r1 = np.corrcoef(pn[:-1], pn[1:])[0, 1]
     assert r1 > 0.8  # strongly coloured: passes through the water column
-    quiet = PumpingPlant(process_noise_std=0.0).simulate(u, rng=2, noise=False).y
+    quiet = PumpingPlant(process_noise_std=0.0).simulate(u, seed=2, noise=False).y
     np.testing.assert_array_equal(quiet, clean)
 
 
 def test_slow_disturbances_are_set_off_by_speed_changes():
     u = np.r_[np.full(10, 1000.0), np.full(1200, 1500.0)]  # one 500 rpm step, then 60 s at rest
     clean = PLANT.simulate(u, noise=False, process_noise=False)
-    runs = [PLANT.simulate(u, rng=np.random.default_rng([4, i]), noise=False) for i in range(12)]
+    runs = [PLANT.simulate(u, seed=np.random.default_rng([4, i]), noise=False) for i in range(12)]
     for r in runs:
         assert np.all(r.surge[:11] == 0) and np.all(r.air_loss[:11] == 0)  # at rest until the step
         assert np.all(r.air_loss >= 0)  # air only ever costs head
@@ -129,7 +129,7 @@ def test_slow_disturbances_are_set_off_by_speed_changes():
     for r in runs:
         assert r.air_loss[-1] < 0.2 * r.air_loss[after] and abs(r.surge[-1]) < 0.05 * np.max(np.abs(r.surge))
     # process_noise=False switches them off with the rest of the process noise
-    off = PLANT.simulate(u, rng=1, noise=False, process_noise=False)
+    off = PLANT.simulate(u, seed=1, noise=False, process_noise=False)
     np.testing.assert_array_equal(off.pressure, clean.pressure)
     assert not off.surge.any() and not off.air_loss.any()
 
@@ -140,8 +140,8 @@ def test_static_experiment_waits_out_the_slow_disturbances():
     n_set, n_avg = 3600, 120  # the defaults of static_experiment: 180 s and 6 s
     u = np.repeat(np.array(STATIC_SPEEDS), n_set + n_avg)
     slow_off = PumpingPlant(surge_intensity=0.0, air_loss_per_rpm=0.0)
-    a = PLANT.simulate(u, rng=np.random.default_rng([2011, 3]))  # stream [seed, 3] of generate()
-    b = slow_off.simulate(u, rng=np.random.default_rng([2011, 3]))
+    a = PLANT.simulate(u, seed=np.random.default_rng([2011, 3]))  # stream [seed, 3] of generate()
+    b = slow_off.simulate(u, seed=np.random.default_rng([2011, 3]))
     assert a.air_loss.max() > 1e-3 and np.abs(a.surge).max() > 0.1  # the steps did excite them
     effect = (a.pressure - b.pressure).reshape(len(STATIC_SPEEDS), -1)[:, n_set:]
     assert np.abs(effect).max() < 1e-3
@@ -155,7 +155,7 @@ def test_static_point_std_agrees_with_monte_carlo():
     # repetitions of one static point. The sample std of 40 values has a relative std of ~11 %.
     # One speed and no step: nothing excites the slow disturbances, so 8 s of settling (6 time
     # constants at 750 rpm) suffice and keep the test fast; the averaging is the bundled one.
-    reps = [static_experiment(PLANT, speeds=[1150.0], rng=np.random.default_rng([9, i]), settle=8.0).ybar[0]
+    reps = [static_experiment(PLANT, speeds=[1150.0], seed=np.random.default_rng([9, i]), settle=8.0).ybar[0]
             for i in range(40)]
     expected = PLANT.static_point_std(1150.0, n_samples=120)
     assert np.std(reps, ddof=1) == pytest.approx(expected, rel=0.35)
@@ -165,7 +165,7 @@ def test_static_point_std_agrees_with_monte_carlo():
 def test_simulate_validates_its_input():
     with pytest.raises(ValueError, match="sample 3 is 2000 rpm"):
         PLANT.simulate([1000, 1000, 1000, 2000], noise=False, process_noise=False)
-    with pytest.raises(ValueError, match="rng"):
+    with pytest.raises(ValueError, match="pass seed"):
         PLANT.simulate([1000.0] * 5)
     with pytest.raises(ValueError, match="non-finite"):
         PLANT.simulate([1000.0, np.nan], noise=False, process_noise=False)
@@ -192,9 +192,9 @@ def test_run_is_an_immutable_value():
 
 def test_simulation_is_seeded():
     u = speed_reference()[:200]
-    a = PLANT.simulate(u, rng=5).y
-    b = PLANT.simulate(u, rng=np.random.default_rng(5)).y
-    c = PLANT.simulate(u, rng=6).y
+    a = PLANT.simulate(u, seed=5).y
+    b = PLANT.simulate(u, seed=np.random.default_rng(5)).y
+    c = PLANT.simulate(u, seed=6).y
     np.testing.assert_array_equal(a, b)
     assert not np.array_equal(a, c)
 
@@ -220,7 +220,7 @@ def test_issue_14_long_records_simulate():
     runs = {}
     for seed in (2, 4):
         u = speed_reference(n_samples=100_000, n_ident=50_000, seed=seed)
-        runs[seed] = run = PLANT.simulate(u, rng=seed)
+        runs[seed] = run = PLANT.simulate(u, seed=seed)
         _check_run_physics(PLANT, run)
         assert run.flow.min() < PLANT._low_flow[0]  # the state that used to fail was reached
     stopped = runs[4].flow == 0
@@ -245,7 +245,7 @@ def test_any_staircase_in_range_simulates(levels, holds, seed, surge, air):
     # that records of a few thousand samples reach the collapsed flow that long ones reach.
     plant = PumpingPlant(surge_intensity=surge * PLANT.surge_intensity, air_loss_per_rpm=air * PLANT.air_loss_per_rpm)
     u = np.repeat(10.0 * np.array(levels), holds[: len(levels)])
-    run = plant.simulate(u, rng=seed)
+    run = plant.simulate(u, seed=seed)
     _check_run_physics(plant, run)
     # against a head the pumps cannot overcome (w is not reported; with |w| < 1 mlc it cannot
     # help by more than 1 mlc) the flow falls, down to zero and no further
@@ -258,7 +258,7 @@ def test_any_staircase_in_range_simulates(levels, holds, seed, surge, air):
 @given(seed=st.integers(0, 2**32 - 1))
 def test_long_speed_reference_simulates(seed):
     u = speed_reference(n_samples=60_000, n_ident=30_000, seed=seed)
-    _check_run_physics(PLANT, PLANT.simulate(u, rng=seed))
+    _check_run_physics(PLANT, PLANT.simulate(u, seed=seed))
 
 
 def test_low_flow_characteristic():
@@ -388,10 +388,10 @@ def test_bundled_data_are_calibrated_to_table1():
     table = evaluate(models, ds)
     for degree in (2, 3):
         row = table.loc[degree]
-        assert 0.3 < row["J_S ident"] < 3.0, row
-        assert 0.3 < row["J_S valid"] < 3.0, row
-    assert 0.2 < table.loc[2, "J_SF"] < 2.0  # D_SF's band is 0.031: black box alone is not enough
-    assert np.isfinite(table.loc[3, "J_SF"])
+        assert 0.3 < row["JS_ident"] < 3.0, row
+        assert 0.3 < row["JS_valid"] < 3.0, row
+    assert 0.2 < table.loc[2, "JSF"] < 2.0  # D_SF's band is 0.031: black box alone is not enough
+    assert np.isfinite(table.loc[3, "JSF"])
 
 
 # -- packaging ---------------------------------------------------------------

@@ -58,7 +58,7 @@ def test_bad_band(band):
 
 
 def test_bad_input():
-    with pytest.raises(ValueError, match="ParetoSet"):
+    with pytest.raises(TypeError, match="ParetoSet"):
         decide_dsf([1, 2, 3])
     empty = ParetoSet(S15, np.zeros((0, 17)), [], [], [], [], "x")
     with pytest.raises(ValueError, match="empty"):

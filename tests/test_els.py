@@ -215,7 +215,7 @@ def test_black_box_section_prints_table_rows_and_equations(paper_record):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         text = section_black_box(data=data)
-    for col in ("J_S ident", "J_S valid", "J_SF", "N_p"):
+    for col in ("JS_ident", "JS_valid", "JSF", "n_params"):
         assert col in text
     assert "ELS ℓ=2" in text and "ELS ℓ=3" in text
     assert text.count("y(k) = ") == 2
@@ -234,7 +234,7 @@ def test_long_plant_record_converges_where_the_relaxed_iteration_stalls():
     data = _load_pumping()
     st = frols(Candidates(ny=6, nu=6, ne=2, degree=2), data.ident, n_terms=17).structure
     n = 30_000
-    run = PumpingPlant().simulate(speed_reference(n_samples=n + 1000, n_ident=n, seed=1), rng=1)
+    run = PumpingPlant().simulate(speed_reference(n_samples=n + 1000, n_ident=n, seed=1), seed=1)
     rec = Record(run.u[:n], run.y[:n], Ts=0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("error", ELSConvergenceWarning)

@@ -12,11 +12,11 @@ def test_table_shape_and_values(paper_record):
     noisy = Record(paper_record.u, paper_record.y + noise, Ts=0.05)
     data = Dataset(noisy, noisy.slice(600), reference.eq1_points())
     df = evaluate({"ELS (15)": m, "PE (15)": reference.paper_model(15, "PE")}, data)
-    assert list(df.columns[:4]) == ["J_S ident", "J_S valid", "J_SF", "N_p"]
-    assert df.loc["ELS (15)", "N_p"] == 17
-    assert df.loc["ELS (15)", "J_SF"] == pytest.approx(1.618, abs=1e-3)
+    assert list(df.columns[:4]) == ["JS_ident", "JS_valid", "JSF", "n_params"]
+    assert df.loc["ELS (15)", "n_params"] == 17
+    assert df.loc["ELS (15)", "JSF"] == pytest.approx(1.618, abs=1e-3)
     # the noise is 0.1 sin(k): the model's own free run has MSE ≈ 0.005
-    assert df.loc["ELS (15)", "J_S ident"] == pytest.approx(np.mean(noise[6:] ** 2), rel=1e-9)
+    assert df.loc["ELS (15)", "JS_ident"] == pytest.approx(np.mean(noise[6:] ** 2), rel=1e-9)
 
 
 def test_errors_count_from_max_lag(paper_record):

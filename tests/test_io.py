@@ -74,14 +74,14 @@ def values():
         dec = gb.decide_dsf(pe, band=100.0)
         nfit = gb.neural_narx(rec, ny=1, nu=1, ne=1, hidden=2, epochs=3, seed=0)
         unc = gb.pe_uncertainty(dec, rec, static)
-        band = gb.static_curve_band(gb.ls_uncertainty(pe.model(0), rec), [900.0, 1300.0], method="monte-carlo",
+        band = gb.static_curve_band(gb.ls_uncertainty(pe.member_model(0), rec), [900.0, 1300.0], method="monte-carlo",
                                     n_samples=200)
         dsf = gb.se_dsf(STRUCT, rec, static, band=1.0, theta0=pe.thetas[1], max_iter=5)
         path = gb.semp(gb.Candidates(ny=2, nu=1, degree=2), rec, n_terms=3)
         exact = gb.frols(gb.Candidates(ny=2, nu=1, degree=2), rec, max_terms=4, search="exact")
         oe = gb.output_error(STRUCT, rec, n_starts=1, max_nfev=5, margin=0.05, choose_on=record(seed=1))
         chosen = gb.decide_dsf(pe, band=100.0, choose_on=record(seed=1))
-    return {"exact selection": exact, "oe": oe, "chosen decision": chosen, "model": fit.model, "plain model": sel.model(), "neural": nfit.model, "pareto": pe, "failed": failed,
+    return {"exact selection": exact, "oe": oe, "chosen decision": chosen, "model": fit.model, "plain model": sel.model, "neural": nfit.model, "pareto": pe, "failed": failed,
             "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band,
             "dsf": dsf, "semp": path}
 

@@ -31,18 +31,18 @@ def test_miso_term_order_and_powers():
 def test_candidates_per_input_lags_and_delays():
     c = Candidates(1, {"u1": 2, "u2": 4}, delay={"u2": 3}, degree=1)
     assert [str(t) for t in c] == ["1", "u1(k-1)", "u1(k-2)", "u2(k-3)", "u2(k-4)", "y(k-1)"]
-    c2 = Candidates(2, 2, inputs=["u1", "u2"], degree=2)
+    c2 = Candidates(2, 2, input_names=["u1", "u2"], degree=2)
     # 1 + 6 linear + 21 quadratic in 6 variables
     assert len(c2) == 28 and set(c2.inputs) == {"u1", "u2"}
     assert Candidates(6, 6, ne=2, degree=2) == Candidates(6, {"u": 6}, ne=2, degree=2)
 
 
 @pytest.mark.parametrize("kw,msg", [
-    (dict(nu=2, inputs=["u1", "u1"]), "named twice"),
-    (dict(nu=2, inputs=["y"]), "not a valid identifier other than y"),
+    (dict(nu=2, input_names=["u1", "u1"]), "named twice"),
+    (dict(nu=2, input_names=["y"]), "not a valid identifier other than y"),
     (dict(nu={"u1": 2}, delay={"u2": 1}), "not among the inputs"),
     (dict(nu={"u1": 2, "u2": 1}, delay={"u2": 3}), "delay of input 'u2' \\(3\\) must not exceed"),
-    (dict(nu=2, inputs=["u1", "u2"], delay={"u1": 0}), "delay of input 'u1' must be an integer >= 1"),
+    (dict(nu=2, input_names=["u1", "u2"], delay={"u1": 0}), "delay of input 'u1' must be an integer >= 1"),
 ])
 def test_candidates_bad_input(kw, msg):
     with pytest.raises(ValueError, match=msg):
@@ -218,7 +218,7 @@ def test_frols_recovers_a_two_input_structure(seed):
         y[k] = (0.5 * y[k - 1] + 0.8 * u[k - 1, 0] - 0.4 * u[k - 2, 1] + 0.3 * u[k - 1, 0] * u[k - 1, 1]
                 - 0.1 * u[k - 1, 1] * y[k - 1] + 0.2 + e[k])
     rec = Record(u, y)
-    cand = Candidates(2, 2, inputs=["u1", "u2"], degree=2)
+    cand = Candidates(2, 2, input_names=["u1", "u2"], degree=2)
     assert all(t in cand for t in _TRUE2)
     by_size = gb.frols(cand, rec, n_terms=len(_TRUE2))
     assert set(by_size.structure) == set(_TRUE2)
@@ -311,7 +311,7 @@ def test_surface_bad_input():
     with pytest.raises(ValueError, match="one point"):
         m.equilibria(np.ones((2, 2)))
     with pytest.raises(ValueError, match="not among the inputs"):
-        static_surface(_ST2, _TH2, np.ones((1, 2)), inputs=("u1", "u3"))
+        static_surface(_ST2, _TH2, np.ones((1, 2)), input_names=("u1", "u3"))
     # a model that has several stable equilibria needs y0
     # y(k) = 1.5 y(k-1) − 0.5 y(k-1)³ at ū = 0: equilibria 0 (unstable) and ±1 (stable)
     st = Structure(["y(k-1)", "y(k-1)^3", "u1(k-1)", "u2(k-1)"])
@@ -329,7 +329,7 @@ def test_evaluate_a_two_input_model():
     assert gb.jsf(m, sp) == pytest.approx(0.0, abs=1e-20)
     ds = Dataset(rec, rec, StaticPoints(ub, yb))
     tab = gb.evaluate({"m": m}, ds)
-    assert tab.loc["m", "J_SF"] == pytest.approx(0.0, abs=1e-20) and tab.loc["m", "J_S valid"] < 1e-20
+    assert tab.loc["m", "JSF"] == pytest.approx(0.0, abs=1e-20) and tab.loc["m", "JS_valid"] < 1e-20
     with pytest.raises(ValueError, match="has the inputs \\('u1', 'u2'\\) but the static points have \\('a', 'b'\\)"):
         gb.jsf(m, StaticPoints(ub, yb, input_names=("a", "b")))
     with pytest.raises(ValueError, match="2 input columns .* one input"):
@@ -339,7 +339,7 @@ def test_evaluate_a_two_input_model():
 def test_frols_bad_input_is_a_clear_error():
     rec = _rec2(n=40)
     with pytest.raises(ValueError, match="terms use input 'u3', but the record's inputs are \\('u1', 'u2'\\)"):
-        gb.frols(Candidates(1, 2, inputs=["u1", "u3"], degree=1), rec, n_terms=2)
+        gb.frols(Candidates(1, 2, input_names=["u1", "u3"], degree=1), rec, n_terms=2)
     with pytest.raises(ValueError, match="fewer than max lag"):  # a delay larger than the record
         gb.frols(Candidates(1, {"u1": 45, "u2": 1}, delay={"u1": 45}, degree=1), rec, n_terms=2)
 
@@ -361,13 +361,13 @@ def test_two_input_pipeline_frols_els_evaluate():
         y[k] = (0.5 * y[k - 1] + 0.8 * u[k - 1, 0] - 0.4 * u[k - 2, 1] + 0.3 * u[k - 1, 0] * u[k - 1, 1]
                 - 0.1 * u[k - 1, 1] * y[k - 1] + 0.2 + e[k] + 0.3 * e[k - 1])
     rec = Record(u, y, input_names=("n1", "n2"))
-    sel = gb.frols(Candidates(2, 2, inputs=["n1", "n2"], degree=2, ne=1), rec)
+    sel = gb.frols(Candidates(2, 2, input_names=["n1", "n2"], degree=2, ne=1), rec)
     m = gb.els(sel, rec).model
     assert m.input_names == ("n1", "n2") and set(m.structure.inputs) == {"n1", "n2"}
     assert m.noise_theta[0] == pytest.approx(0.3, abs=0.1)
     ds = Dataset(rec, rec, StaticPoints([[0, 0], [0.5, 0.5]], [0.4, 0.5], input_names=("n1", "n2")))
     tab = gb.evaluate({"els": m}, ds)
-    assert np.isfinite(tab.loc["els", "J_SF"]) and tab.loc["els", "J_S valid"] < 0.01
+    assert np.isfinite(tab.loc["els", "JSF"]) and tab.loc["els", "JS_valid"] < 0.01
     # residual tests: every input test once per input; the true structure passes them, a model
     # without the input product n1·n2 fails a nonlinear one
     tests = gb.residual_tests(m, rec)

@@ -415,16 +415,16 @@ def test_trained_net_on_plant_data(plant_net, plant):
 def test_works_with_the_shared_evaluator(plant_net, plant):
     table = evaluate({"Neural": plant_net}, plant)
     row = table.loc["Neural"]
-    assert row["N_p"] == 99
-    for col in ("J_S ident", "J_S valid", "J_SF", "J_1 ident"):
+    assert row["n_params"] == 99
+    for col in ("JS_ident", "JS_valid", "JSF", "J1_ident"):
         assert np.isfinite(row[col]) and row[col] >= 0
     # relative to the data, not an absolute figure: the bundled plant's disturbances set the level
-    assert row["J_S valid"] < 0.1 * np.var(plant.valid.y) and row["fit % valid"] > 70.0
+    assert row["JS_valid"] < 0.1 * np.var(plant.valid.y) and row["fit_valid"] > 70.0
 
 
 def test_section_neural_reports_the_table_row(plant):
     text = section_neural(quick=True, data=plant)
-    assert "Neural" in text and "J_S valid" in text and "99" in text
+    assert "Neural" in text and "JS_valid" in text and "99" in text
     assert "paper's training" in text and "seed 0" in text
 
 
@@ -471,7 +471,7 @@ def test_bad_training_data():
     flat = Record(np.full(300, 500.0), np.linspace(0, 1, 300))
     with pytest.raises(ValueError, match="input is constant"):
         neural_narx(flat, ny=1, nu=1, hidden=1).model
-    with pytest.raises(ValueError, match="Record"):
+    with pytest.raises(TypeError, match="Record"):
         neural_narx(np.zeros((10, 2))).model  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="no records"):
         neural_narx([]).model

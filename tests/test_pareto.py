@@ -96,9 +96,9 @@ def test_from_thetas_several_records(record, thetas):
 
 def test_access_and_frame(pset, thetas):
     assert len(pset) == 3
-    m = pset.model(1)
+    m = pset.member_model(1)
     np.testing.assert_array_equal(m.theta, thetas[1])
-    assert "λ1=0.5" in m.name and pset.model(-1).name.endswith("0.01")
+    assert "λ1=0.5" in m.name and pset.member_model(-1).name.endswith("0.01")
     df = pset.to_frame()
     assert list(df.columns) == ["lambda1", "J1", "JS", "JSF", "tag", "failure"] and len(df) == 3
     dfp = pset.to_frame(params=True)
@@ -107,7 +107,7 @@ def test_access_and_frame(pset, thetas):
     with pytest.raises(ValueError, match="unknown objective"):
         pset.objective("J2")
     with pytest.raises(ValueError, match="out of range"):
-        pset.model(3)
+        pset.member_model(3)
 
 
 def test_nondominated_and_subset(pset):
@@ -156,7 +156,7 @@ def test_plot_pareto(pset):
 
     from graybox.plots import plot_pareto
 
-    table = pd.DataFrame({"J_S ident": [2.6, 3.2], "J_SF": [1.6, 0.002]}, index=["ELS (15)", "CLS (22)"])
+    table = pd.DataFrame({"JS_ident": [2.6, 3.2], "JSF": [1.6, 0.002]}, index=["ELS (15)", "CLS (22)"])
     fig = plot_pareto({"PE": pset}, table, band=0.031)
     assert isinstance(fig, Figure)
     ax = fig.axes[0]
@@ -174,5 +174,5 @@ def test_plot_pareto(pset):
         plot_pareto({"x": [1, 2]})
     with pytest.raises(ValueError, match="J_S, J_SF"):
         plot_pareto(pset, {"ELS": 3.0})
-    with pytest.raises(ValueError, match="J_S ident"):
+    with pytest.raises(ValueError, match="JS_ident"):
         plot_pareto(pset, pd.DataFrame({"a": [1]}))

@@ -40,8 +40,8 @@ def test_equal_speeds_give_the_siso_static_curve():
 
 def test_equal_speeds_give_the_siso_run_with_the_same_noise():
     u = speed_reference()[:1500]
-    siso = PLANT.rig.simulate(u, rng=7)
-    miso = PLANT.simulate(np.column_stack([u, u]), rng=7)
+    siso = PLANT.rig.simulate(u, seed=7)
+    miso = PLANT.simulate(np.column_stack([u, u]), seed=7)
     np.testing.assert_allclose(miso.y, siso.y, rtol=0, atol=1e-9)
     np.testing.assert_allclose(miso.flow, siso.flow, rtol=0, atol=1e-9)
     np.testing.assert_allclose(miso.speed[:, 0], siso.speed, rtol=0, atol=1e-9)
@@ -95,7 +95,7 @@ def test_static_surface_is_flat_in_the_slower_speed_while_its_valve_is_shut():
 
 
 def test_static_grid_experiment_scatters_around_the_surface():
-    pts = static_grid_experiment(PLANT, rng=3)
+    pts = static_grid_experiment(PLANT, seed=3)
     ubar, ybar = pts.ubar, pts.ybar
     assert ubar.shape == (36, 2) and ybar.shape == (36,) and pts.input_names == ("u1", "u2")
     assert {tuple(p) for p in ubar} == {(a, b) for a in STATIC_SPEEDS_MISO for b in STATIC_SPEEDS_MISO}
@@ -127,7 +127,7 @@ def test_simulator_never_fails_within_its_speed_range(levels1, levels2, hold, se
     assume(n >= 10)
     # harsh: a surge ten times stronger and 5x the air, so valves shut and the column stops
     rig = PumpingPlant(surge_intensity=0.055, air_loss_per_rpm=4e-4) if harsh else PumpingPlant()
-    run = TwoSpeedPumpingPlant(rig=rig).simulate(np.column_stack([u1[:n], u2[:n]]), rng=seed)
+    run = TwoSpeedPumpingPlant(rig=rig).simulate(np.column_stack([u1[:n], u2[:n]]), seed=seed)
     for a in (run.y, run.pressure, run.flow, run.pump_flow, run.speed, run.air_loss, run.surge):
         assert np.all(np.isfinite(a))
     assert run.flow.min() >= 0.0 and run.pump_flow.min() >= 0.0 and run.pressure.min() >= 0.0
@@ -141,7 +141,7 @@ def test_valves_shut_and_the_column_stops_under_harsh_disturbances():
     rig = PumpingPlant(surge_intensity=0.055, air_loss_per_rpm=4e-4)
     rng = np.random.default_rng(0)
     u = np.column_stack([np.repeat(rng.uniform(LO, HI, 12), 60), np.repeat(rng.uniform(LO, HI, 12), 60)])
-    run = TwoSpeedPumpingPlant(rig=rig).simulate(u, rng=0)
+    run = TwoSpeedPumpingPlant(rig=rig).simulate(u, seed=0)
     assert np.all(np.isfinite(run.y)) and run.pump_flow.min() >= 0.0
     shut = (run.pump_flow == 0.0).any(axis=1)
     assert shut.any() and not shut.all()
@@ -211,7 +211,7 @@ def test_bad_references(u, match):
 
 def test_bad_calls():
     u = np.full((10, 2), 1200.0)
-    with pytest.raises(ValueError, match="pass rng"):
+    with pytest.raises(ValueError, match="pass seed"):
         PLANT.simulate(u)
     with pytest.raises(ValueError, match="x0 must be 5 finite numbers"):
         PLANT.simulate(u, noise=False, process_noise=False, x0=(1200.0, 1200.0, 40.0))
@@ -220,7 +220,7 @@ def test_bad_calls():
     with pytest.raises(TypeError, match="rig must be a PumpingPlant"):
         TwoSpeedPumpingPlant(rig="rig")
     with pytest.raises(ValueError, match=r"shape \(K, 2\)"):
-        static_grid_experiment(PLANT, speeds=[1200.0, 1300.0], rng=1)
+        static_grid_experiment(PLANT, speeds=[1200.0, 1300.0], seed=1)
 
 
 # -- the bundled data set ---------------------------------------------------------
@@ -232,7 +232,7 @@ def test_load_pumping_miso():
     assert ds.input_names == ("u1", "u2") and ds.Ts == 0.05
     assert ds.ident.u.shape == (N_IDENT_MISO, 2) and ds.valid.u.shape == (N_SAMPLES_MISO - N_IDENT_MISO, 2)
     assert ds.static.ubar.shape == (36, 2) and ds.ident.units == ("rpm", "mlc")
-    run = PLANT.simulate(two_speed_reference(), rng=np.random.default_rng([2011, 13]))
+    run = PLANT.simulate(two_speed_reference(), seed=np.random.default_rng([2011, 13]))
     np.testing.assert_array_equal(ds.ident.u, run.u[:N_IDENT_MISO])
     np.testing.assert_allclose(ds.valid.y, run.y[N_IDENT_MISO:], rtol=0, atol=5.01e-5)  # 4 decimals in the file
     rec = run.record()

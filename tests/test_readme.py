@@ -16,4 +16,4 @@ def test_readme_example_runs():
     exec(compile(blocks[0], "README.md", "exec"), ns)
     table = ns["table"]
     assert list(table.index) == ["ELS", "CLS", "PE", "SE"]
-    assert table.loc["SE", "J_SF"] <= 0.031 + 1e-12
+    assert table.loc["SE", "JSF"] <= 0.031 + 1e-12

@@ -166,7 +166,7 @@ def test_bad_input():
         gb.residual_tests(m, rec, level=1.0)
     with pytest.raises(ValueError, match="rule"):
         gb.residual_tests(m, rec, rule="any")
-    with pytest.raises(ValueError, match="Model or a NeuralModel"):
+    with pytest.raises(TypeError, match="model must be a Model, a NeuralModel or a result"):
         gb.residual_tests("model", rec)
     exact = gb.Record(rec.u, m.simulate(rec))
     with pytest.raises(ValueError, match="constant"):

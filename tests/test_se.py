@@ -352,9 +352,9 @@ def test_sweep_keeps_failed_members_and_the_others(buck_structure, method):
     assert np.isfinite(ps.JS[0]) and np.isfinite(ps.J1[0]) and np.all(np.isfinite(ps.thetas[0]))
     assert np.all(np.isnan(ps.thetas[1:])) and np.all(ps.JS[1:] == np.inf) and np.all(ps.JSF[1:] == np.inf)
     assert "λ1 = 0.5" in ps.failures[1] and ("equilibrium" in ps.failures[1])
-    ps.model(0).simulate(data.valid.u, data.valid.y[:4])
+    ps.member_model(0).simulate(data.valid.u, data.valid.y[:4])
     with pytest.raises(ValueError, match="member 1 of this set failed: .*λ1 = 0.5"):
-        ps.model(1)
+        ps.member_model(1)
     assert list(ps.to_frame()["failure"] != "") == [False, True, True]
     assert len(ps.nondominated()) == 1
 

@@ -27,7 +27,7 @@ def test_meets_the_band_and_beats_the_same_coarse_sweep(data):
     band = 0.02
     lam = np.logspace(-2, 0, 8)
     res = gb.se_dsf(TRUE, data, band=band, lambdas=lam)
-    assert res.feasible and res.JSF <= band * (1 + 1e-9)
+    assert res.in_band and res.JSF <= band * (1 + 1e-9)
     # the figures are the shared evaluator's
     assert res.JS == pytest.approx(gb.js(res.model, data.ident), rel=1e-9)
     assert res.JSF == pytest.approx(gb.jsf(res.model, data.static), rel=1e-9)
@@ -41,10 +41,10 @@ def test_meets_the_band_and_beats_the_same_coarse_sweep(data):
 
 def test_from_theta0_and_an_infeasible_band(data):
     res = gb.se_dsf(TRUE, data, band=0.05, theta0=THETA)
-    assert res.start == "theta0" and res.feasible and res.JS <= res.start_JS
+    assert res.start == "theta0" and res.in_band and res.JS <= res.start_JS
     with pytest.warns(RuntimeWarning, match="infeasible.*smallest J_SF reached"):
         bad = gb.se_dsf(TRUE, data, band=1e-9, theta0=THETA)
-    assert not bad.feasible and bad.JSF > 1e-9 and bad.JSF < bad.start_JSF
+    assert not bad.in_band and bad.JSF > 1e-9 and bad.JSF < bad.start_JSF
     assert "band infeasible" in bad.model.name
 
 
@@ -65,7 +65,7 @@ def test_a_failed_pe_start_leaves_the_sweep_starts(data, monkeypatch):
 
     monkeypatch.setattr(impl, "_pe_start", no_pe)
     res = gb.se_dsf(TRUE, data, band=0.02, lambdas=np.logspace(-2, 0, 5))
-    assert res.feasible and res.start.startswith("SE")
+    assert res.in_band and res.start.startswith("SE")
     monkeypatch.setattr(impl, "_sweep_starts", lambda *a, **k: [])
     with pytest.raises(ValueError, match="no start .*no PE member has a bounded free run"):
         gb.se_dsf(TRUE, data, band=0.02)
@@ -79,7 +79,7 @@ def test_static_points_outside_the_records_range_and_in_conflict(data):
     static = gb.StaticPoints(ub, m.static_curve(ub) + 0.2 * np.cos(ub))
     with pytest.warns(gb.StaticRangeWarning):
         res = gb.se_dsf(TRUE, data.ident, static, band=0.02, lambdas=np.logspace(-2, 0, 5))
-    assert res.feasible and res.JSF <= 0.02 * (1 + 1e-9)
+    assert res.in_band and res.JSF <= 0.02 * (1 + 1e-9)
     assert res.JSF == pytest.approx(gb.jsf(res.model, static), rel=1e-9)
     assert res.JS == pytest.approx(gb.js(res.model, data.ident), rel=1e-9)
 
@@ -121,7 +121,7 @@ def test_does_not_depend_on_units(data):
                        gb.StaticPoints(data.static.ubar * ku, data.static.ybar * ky))
     a = gb.se_dsf(TRUE, data, band=0.02, lambdas=lam)
     b = gb.se_dsf(TRUE, other, band=0.02 * ky**2, lambdas=lam)
-    assert a.feasible and b.feasible and a.start == b.start
+    assert a.in_band and b.in_band and a.start == b.start
     assert b.JS / ky**2 == pytest.approx(a.JS, rel=1e-6)
     assert b.JSF / ky**2 == pytest.approx(a.JSF, rel=1e-6)
     u = data.valid.u[:200]
@@ -136,5 +136,5 @@ def test_static_points_far_from_the_dynamics_do_not_stall_the_edge_iteration(dat
     ub = np.linspace(0.2, 2.8, 6)
     far = gb.StaticPoints(ub, m.static_curve(ub) + 5.0)
     res = gb.se_dsf(TRUE, data.ident, far, band=0.02, lambdas=np.logspace(-2, 0, 15)[:-1], max_iter=300)
-    assert res.feasible and res.JS < res.start_JS
+    assert res.in_band and res.JS < res.start_JS
     assert "iterations reached" not in res.message

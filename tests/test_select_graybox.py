@@ -41,8 +41,8 @@ def test_selects_a_structure_in_the_band_and_reports_everything(data, tmp_path):
     # the decision was made on the validation record: the chosen member's validation J_S is the
     # smallest among the in-band members of the refitted front
     ev = gb.evaluate({"m": res.model}, data)
-    assert ev.loc["m", "J_S valid"] == pytest.approx(res.decision.JS, rel=1e-9)
-    assert ev.loc["m", "J_S valid"] < 10 * 0.02**2 * 10  # near the noise level
+    assert ev.loc["m", "JS_valid"] == pytest.approx(res.decision.JS, rel=1e-9)
+    assert ev.loc["m", "JS_valid"] < 10 * 0.02**2 * 10  # near the noise level
     # the cells are in a real store, one per structure
     df = gb.load_results(res.store)
     assert len(df) == len(res.table) and set(df["status"]) == {"ok"}
@@ -64,7 +64,7 @@ def test_band_no_structure_reaches_is_an_error_or_an_explicit_fallback(data):
         with pytest.raises(ValueError, match="no structure meets the band.*smallest J_SF reached"):
             gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, far, band=1e-6, sizes=[5])
         res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, far, band=1e-6, sizes=[5], fallback="min_jsf")
-    assert res.fallback and not res.decision.in_band
+    assert not res.in_band and not res.decision.in_band
 
 
 def test_bad_input(data):
@@ -153,9 +153,9 @@ def test_two_inputs_the_static_surface_asks_for_its_clusters():
     data = gb.Dataset(_two_input_record(1), _two_input_record(2), static)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = gb.select_graybox(gb.Candidates(1, 1, degree=2, inputs=("u1", "u2")), data, band=1e-3, sizes=[4])
+        res = gb.select_graybox(gb.Candidates(1, 1, degree=2, input_names=("u1", "u2")), data, band=1e-3, sizes=[4])
     assert res.degree == 2 and res.decision.in_band and res.decision.JSF <= 1e-3
-    keys = set(gb.surface_cluster_map(res.structure, inputs=("u1", "u2")).keys)
+    keys = set(gb.surface_cluster_map(res.structure, input_names=("u1", "u2")).keys)
     assert {(0, 0, 0), (0, 1, 0), (0, 0, 1), (0, 2, 0), (0, 1, 1), (0, 0, 2), (1, 0, 0)} <= keys
 
 
@@ -163,10 +163,10 @@ def test_two_inputs_candidates_that_cannot_carry_the_surface_are_named():
     from graybox.static._form_check import static_terms
 
     st = gb.Structure(["y(k-1)", "u1(k-1)"])
-    added = static_terms(st, gb.Candidates(1, 1, degree=2, inputs=("u1", "u2")), 1)
+    added = static_terms(st, gb.Candidates(1, 1, degree=2, input_names=("u1", "u2")), 1)
     assert sorted(map(str, added)) == ["1", "u2(k-1)"]  # Σ0 and Σu2 were missing; Σu1 and Σy are there
     with pytest.raises(ValueError, match=r"static surface.*Σu1².*Σu1u2.*Σu2²"):
-        static_terms(st, gb.Candidates(1, 1, degree=1, inputs=("u1", "u2")), 2)
+        static_terms(st, gb.Candidates(1, 1, degree=1, input_names=("u1", "u2")), 2)
 
 
 def test_one_static_point_and_repeated_measurements(data):

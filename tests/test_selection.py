@@ -214,7 +214,7 @@ def test_selection_is_an_immutable_value_that_prints_as_a_table():
     assert list(df.columns) == ["term", "ERR", "cumulative ERR", "aic", "selected", "theta"]
     assert list(df["term"]) == [str(t) for t in sel.structure]
     np.testing.assert_allclose(df["cumulative ERR"].iloc[-1], sel.err_total)
-    m = sel.model()
+    m = sel.model
     assert m.structure == sel.structure and len(m.noise_structure) == 0
     assert "Selection(" in repr(sel)
 

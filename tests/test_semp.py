@@ -53,7 +53,7 @@ def test_path_and_scores_are_consistent():
     # each size changes by one per step
     assert np.all(np.abs(np.diff(path["n_terms"])) == 1)
     # the returned score is the model's own free-run MSE (the shared evaluator's J_S on these samples)
-    m = res.model()
+    m = res.model
     L = Candidates(3, 3, ne=0, degree=2).max_lag  # every structure is run from the candidates' largest lag
     sim = np.r_[rec.y[:L], gb.simulate(m.structure, m.theta, rec.u[L - m.max_lag:], rec.y[L - m.max_lag:L])[m.max_lag:]]
     assert res.score == pytest.approx(np.mean((sim[L:] - rec.y[L:]) ** 2), rel=1e-9)

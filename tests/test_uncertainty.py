@@ -40,7 +40,7 @@ def test_monte_carlo_coverage_ls_and_cls():
         band_cov.append((b.ybar_low <= TRUE.static_curve(ub)) & (TRUE.static_curve(ub) <= b.ybar_high))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", gb.StaticRangeWarning)
-            c = gb.cls(STRUCT, rec, points, solver="closed")
+            c = gb.cls(STRUCT, rec, points, solver="closed").model
         uc = gb.cls_uncertainty(c, rec, points)
         assert uc.constraints.shape == (2, 6)
         cls_cov.append(uc.covers(THETA))
@@ -54,7 +54,7 @@ def test_cls_constrained_clusters_have_zero_variance():
     curve = gb.StaticCurve.fit(gb.StaticPoints(np.linspace(800, 1600, 6), TRUE.static_curve(np.linspace(800, 1600, 6))))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
-        c = gb.cls(STRUCT, rec, curve, reference=0.8)
+        c = gb.cls(STRUCT, rec, curve, reference=0.8).model
     u = gb.cls_uncertainty(c, rec, curve, reference=0.8)
     # the terms of the two-term clusters (y and u) still move, within their cluster …
     assert np.all(u.std[:4] > 0)
@@ -76,12 +76,12 @@ def test_cls_constrained_clusters_have_zero_variance():
 def test_cls_active_inequalities_count_as_equalities():
     rec = narx_records(1, 300, seed=2)[0]
     tight = gb.ClusterBounds({"Σy": (None, 0.7)})  # the truth has Σy = 0.8: the bound is active
-    c = gb.cls(STRUCT, rec, constraints=tight)
+    c = gb.cls(STRUCT, rec, constraints=tight).model
     u = gb.cls_uncertainty(c, rec, constraints=tight)
     assert u.constraints.shape[0] == 1
     assert u.cluster_frame().loc["Σy", "std"] < 1e-6 * u.cluster_frame().loc["Σu", "std"] / 1e-3
     loose = gb.ClusterBounds({"Σy": (None, 0.99)})
-    c2 = gb.cls(STRUCT, rec, constraints=loose)
+    c2 = gb.cls(STRUCT, rec, constraints=loose).model
     assert gb.cls_uncertainty(c2, rec, constraints=loose).constraints.shape[0] == 0
 
 
@@ -125,16 +125,16 @@ def test_pe_at_lambda_one_is_least_squares_and_takes_a_decision():
     data = gb.Dataset(narx_records(1, 300, seed=6)[0], narx_records(1, 100, seed=7)[0],
                       gb.StaticPoints(np.linspace(800, 1600, 5), TRUE.static_curve(np.linspace(800, 1600, 5))))
     front = gb.pe_pareto(STRUCT, data, lambdas=[1.0, 0.3, 0.01], solver="closed")
-    u1 = gb.pe_uncertainty(front.model(0), data, lambda1=1.0)
-    ls = gb.ls_uncertainty(front.model(0), data)
+    u1 = gb.pe_uncertainty(front.member_model(0), data, lambda1=1.0)
+    ls = gb.ls_uncertainty(front.member_model(0), data)
     np.testing.assert_allclose(u1.cov, ls.cov, rtol=1e-6)
     d = gb.decide_dsf(front, band=10.0)
     ud = gb.pe_uncertainty(d, data)
     assert ud.method == f"PE λ1={d.lambda1:.4g}"
     with pytest.raises(ValueError, match="not the optimum"):
-        gb.pe_uncertainty(front.model(1), data, lambda1=0.9)
+        gb.pe_uncertainty(front.member_model(1), data, lambda1=0.9)
     with pytest.raises(ValueError, match="needs lambda1"):
-        gb.pe_uncertainty(front.model(1), data)
+        gb.pe_uncertainty(front.member_model(1), data)
 
 
 def test_se_covariance_matches_monte_carlo():
@@ -180,8 +180,8 @@ def test_wrong_inputs_are_refused():
         gb.cls_uncertainty(m, rec, pts)
     user = gb.UserConstraint(lambda th: th[0] <= 0.9, name="cap")
     with pytest.raises(ValueError, match="not affine"):
-        gb.cls_uncertainty(gb.cls(STRUCT, rec, constraints=user), rec, constraints=user)
-    with pytest.raises(ValueError, match="needs a Model"):
+        gb.cls_uncertainty(gb.cls(STRUCT, rec, constraints=user).model, rec, constraints=user)
+    with pytest.raises(TypeError, match="model must be a Model"):
         gb.ls_uncertainty("m", rec)
     with pytest.raises(ValueError, match="level"):
         gb.ls_uncertainty(m, rec, level=1.5)

@@ -12,7 +12,7 @@ single-input path is exactly what it was.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -291,26 +291,39 @@ class Dataset:
 __all__.append("Dataset")
 
 
-def as_records(data: object) -> list[Record]:
-    """The records an estimator works on, as a non-empty list, or ``ValueError``.
+def as_records(data: object, part: str = "ident", name: str = "data") -> list[Record]:
+    """The records an entry works on, as a non-empty list.
 
     Parameters
     ----------
     data : Record, Dataset or sequence of Record
-        A Dataset stands for its identification record.
+        A Dataset stands for its record ``part``.
+    part : {"ident", "valid"}
+        Which record of a Dataset: ``"ident"`` for an estimate, ``"valid"`` for a judgement.
+    name : str
+        The argument's name, for the error message.
+
+    Raises
+    ------
+    TypeError
+        ``data`` (or an element) is of another type; the message lists what is accepted.
+    ValueError
+        No records, or records whose inputs differ.
     """
     if isinstance(data, Dataset):
-        return [data.ident]
+        return [getattr(data, part)]
     if isinstance(data, Record):
         return [data]
-    if isinstance(data, (str, bytes)) or not hasattr(data, "__iter__"):
-        raise ValueError(f"data must be a Record, a Dataset or a sequence of Records, got {type(data).__name__}")
+    if isinstance(data, (str, bytes, Mapping)) or not hasattr(data, "__iter__"):
+        raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset (whose {part} record is used); "
+                        f"got {type(data).__name__}")
     recs = list(data)  # type: ignore[call-overload]
     if not recs:
         raise ValueError("no records given")
     for r in recs:
         if not isinstance(r, Record):
-            raise ValueError(f"data must be a Record, a Dataset or a sequence of Records, got an element of type {type(r).__name__}")
+            raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset; got a sequence holding a "
+                            f"{type(r).__name__}")
     for r in recs[1:]:
         check_same_inputs(recs[0], r)
     return recs

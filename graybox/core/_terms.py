@@ -20,6 +20,8 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
+from ._validation import renamed
+
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
            "default_input_names"]
 
@@ -324,6 +326,7 @@ def Candidates(
     delay: int | Mapping[str, int] = 1,
     constant: bool = True,
     max_y_power: int | None = None,
+    input_names: Sequence[str] | None = None,
     inputs: Sequence[str] | None = None,
 ) -> Structure:
     """Every monomial of degree <= ``degree`` in y(k-1..ny), each input's lags (and e(k-1..ne)).
@@ -334,7 +337,7 @@ def Candidates(
         Largest output lag (samples).
     nu : int or mapping name -> int
         Largest input lag (samples). An int applies to every input; a mapping gives each input
-        its own (``{"u1": 4, "u2": 6}``) and, unless ``inputs`` is given, names the inputs.
+        its own (``{"u1": 4, "u2": 6}``) and, unless ``input_names`` is given, names the inputs.
         Input ``i``'s lags run from its delay to its ``nu``; ``nu = 0`` leaves that input out.
     ne : int, optional
         Largest noise lag. Noise terms are the linear ``e(k-1) … e(k-ne)`` only (the MA part
@@ -349,9 +352,12 @@ def Candidates(
     max_y_power : int, optional
         Drop terms whose total output power exceeds this. ``max_y_power=1`` keeps only
         structures with the rational static function of eq. (6) (what CLS with eq. (22) needs).
-    inputs : sequence of str, optional
+    input_names : sequence of str, optional
         Input names (default: the keys of ``nu`` when it is a mapping, else ``("u",)``, the
         single input). Names are identifiers other than y, e, k; a name given twice is an error.
+        (The keyword of :class:`Record`, :class:`Model` and the loaders.)
+    inputs : sequence of str, optional
+        Former name of ``input_names`` (deprecated; kept for one release).
 
     Returns
     -------
@@ -364,10 +370,11 @@ def Candidates(
     >>> Candidates(1, {"u1": 1, "u2": 2}, delay={"u2": 2}, degree=1)
     Structure(['1', 'u1(k-1)', 'u2(k-2)', 'y(k-1)'])
     """
-    if inputs is None:
+    input_names = renamed(input_names, inputs, "input_names", "inputs")
+    if input_names is None:
         names = tuple(nu) if isinstance(nu, Mapping) else ("u",)
     else:
-        names = tuple(inputs)
+        names = tuple(input_names)
     names = check_input_names(names, what="inputs")
     nus = _per_input(nu, names, "nu", None)
     delays = _per_input(delay, names, "delay", 1)

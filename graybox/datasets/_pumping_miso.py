@@ -68,7 +68,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints
-from ..core._validation import as_1d_finite
+from ..core._validation import as_1d_finite, renamed
 from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, write_csv_pair
 
 __all__ = [
@@ -247,10 +247,11 @@ class TwoSpeedPumpingPlant:
         self,
         u: np.ndarray | Sequence[Sequence[float]],
         *,
-        rng: np.random.Generator | int | None = None,
+        seed: int | np.random.Generator | None = None,
         noise: bool = True,
         process_noise: bool = True,
         x0: tuple[float, float, float, float, float] | None = None,
+        rng: np.random.Generator | int | None = None,
     ) -> TwoSpeedRun:
         """Simulate the rig for two sampled speed references.
 
@@ -259,7 +260,7 @@ class TwoSpeedPumpingPlant:
         u : array_like, shape (N, 2)
             Speed references r₁, r₂ (rpm), held over each sample, each within the rig's
             ``speed_range``.
-        rng : numpy Generator or int, optional
+        seed : int or numpy Generator, optional
             Source of noise (an int seeds ``np.random.default_rng``); required when any noise is on.
             The draws are the bundled rig's, in its order.
         noise : bool
@@ -268,6 +269,8 @@ class TwoSpeedPumpingPlant:
             Add the process disturbances w, s and a; False gives the noise-free physics.
         x0 : (n_c1, n_1, n_c2, n_2, Q), optional
             Initial state; default the equilibrium at ``u[0]``.
+        rng : numpy Generator or int, optional
+            Former name of ``seed`` (deprecated; kept for one release).
 
         Returns
         -------
@@ -283,7 +286,7 @@ class TwoSpeedPumpingPlant:
         rig._check_reference(r2, "speed reference 2")
         N = r1.size
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = rig._disturbances(
-            N, rng, noise=noise, process_noise=process_noise)
+            N, renamed(seed, rng, "seed", "rng"), noise=noise, process_noise=process_noise)
         if x0 is None:
             state = self.steady_state(r1[0], r2[0])
         else:
@@ -501,15 +504,17 @@ def static_grid_experiment(
     plant: TwoSpeedPumpingPlant,
     *,
     speeds: np.ndarray | None = None,
-    rng: np.random.Generator | int | None = None,
+    seed: int | np.random.Generator | None = None,
     settle: float = 180.0,
     average: float = 6.0,
+    rng: np.random.Generator | int | None = None,
 ) -> StaticPoints:
     """The static test over (n₁, n₂): hold each pair, wait out the transients, average the pressure.
 
     As :func:`graybox.datasets.pumping.static_experiment`, one continuous run visiting ``speeds``
     in order (default :func:`static_grid`), discarding ``settle`` seconds and averaging the next
-    ``average`` seconds of noisy measurements at each pair.
+    ``average`` seconds of noisy measurements at each pair; ``seed`` (an int or a numpy
+    Generator) is the source of noise, ``rng`` its former name (deprecated; kept for one release).
 
     Returns
     -------
@@ -525,7 +530,7 @@ def static_grid_experiment(
     if n_avg < 1 or n_settle < 0:
         raise ValueError(f"average must cover at least one sample and settle must be >= 0, got {average}, {settle} s")
     u = np.repeat(sp, n_settle + n_avg, axis=0)
-    run = plant.simulate(u, rng=rng)
+    run = plant.simulate(u, seed=renamed(seed, rng, "seed", "rng"))
     y = run.y.reshape(sp.shape[0], n_settle + n_avg)[:, n_settle:]
     return StaticPoints(sp, y.mean(axis=1), name="pumping_miso static points", input_names=("u1", "u2"))
 
@@ -544,8 +549,8 @@ def generate_miso(*, seed: int = DEFAULT_SEED, plant: TwoSpeedPumpingPlant | Non
         The run and the 36 static points (ū in rpm, shape (36, 2); ȳ in mlc).
     """
     plant = TwoSpeedPumpingPlant() if plant is None else plant
-    run = plant.simulate(two_speed_reference(seed=seed), rng=np.random.default_rng([seed, 13]))
-    static = static_grid_experiment(plant, rng=np.random.default_rng([seed, 14]))
+    run = plant.simulate(two_speed_reference(seed=seed), seed=np.random.default_rng([seed, 13]))
+    static = static_grid_experiment(plant, seed=np.random.default_rng([seed, 14]))
     return run, static
 
 

@@ -160,7 +160,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints
-from ..core._validation import as_1d_finite
+from ..core._validation import as_1d_finite, renamed
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -434,7 +434,7 @@ class PumpingPlant:
         slow = self.surge_intensity > 0 or self.air_loss_per_rpm > 0
         need_rng = (noise and self.noise_std > 0) or (process_noise and (self.process_noise_std > 0 or slow))
         if need_rng and rng is None:
-            raise ValueError("simulate: pass rng (a numpy Generator or a seed) or switch the noise off; "
+            raise ValueError("simulate: pass seed (an int or a numpy Generator) or switch the noise off; "
                              "the plant never draws unseeded noise")
         gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
         # Draw all four noise sequences up front, always in this order, so a seed fixes the run
@@ -456,10 +456,12 @@ class PumpingPlant:
     def simulate(
         self,
         u: np.ndarray | Sequence[float],
-        rng: np.random.Generator | int | None = None,
+        seed: int | np.random.Generator | None = None,
         noise: bool = True,
         process_noise: bool = True,
         x0: tuple[float, float, float] | None = None,
+        *,
+        rng: np.random.Generator | int | None = None,
     ) -> PlantRun:
         """Simulate the rig for a sampled speed reference.
 
@@ -467,8 +469,10 @@ class PumpingPlant:
         ----------
         u : array_like, shape (N,)
             Speed reference (rpm), held constant over each sample.
-        rng : numpy Generator or int, optional
+        seed : int or numpy Generator, optional
             Source of noise (an int seeds ``np.random.default_rng``). Required when any noise is on.
+        rng : numpy Generator or int, optional
+            Former name of ``seed`` (deprecated; kept for one release).
         noise : bool
             Add transmitter noise (std ``noise_std``) to the measured pressure.
         process_noise : bool
@@ -481,11 +485,12 @@ class PumpingPlant:
         -------
         PlantRun
         """
+        seed = renamed(seed, rng, "seed", "rng")
         u = as_1d_finite(u, "speed reference")
         self._check_reference(u)
         N = u.size
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
-            N, rng, noise=noise, process_noise=process_noise)
+            N, seed, noise=noise, process_noise=process_noise)
 
         nc, n, q = self.steady_state(u[0]) if x0 is None else (float(x) for x in x0)
         if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
@@ -519,7 +524,7 @@ class PumpingPlant:
         n_samples: int,
         *,
         u0: float,
-        rng: np.random.Generator | int | None = None,
+        seed: np.random.Generator | int | None = None,
         noise: bool = True,
         process_noise: bool = True,
         x0: tuple[float, float, float] | None = None,
@@ -531,7 +536,7 @@ class PumpingPlant:
         the dead time, the previous reference still acts at the start of the sample: ``u0`` before
         the first). The physics, the noise and the disturbances are those of :meth:`simulate`,
         sample for sample: a controller that returns a fixed sequence u with u(0) = ``u0`` gives
-        exactly ``simulate(u)`` with the same ``rng``.
+        exactly ``simulate(u)`` with the same ``seed``.
 
         Parameters
         ----------
@@ -543,7 +548,7 @@ class PumpingPlant:
             Number of samples N.
         u0 : float
             The reference the rig has been settled at before the loop starts (rpm).
-        rng : numpy Generator or int, optional
+        seed : numpy Generator or int, optional
             Source of noise, as for :meth:`simulate`; required when any noise is on.
         noise : bool
             Add transmitter noise to the pressure the controller reads.
@@ -565,7 +570,7 @@ class PumpingPlant:
         prev = float(as_1d_finite([u0], "u0")[0])
         self._check_reference(np.array([prev]), "u0")
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
-            N, rng, noise=noise, process_noise=process_noise)
+            N, seed, noise=noise, process_noise=process_noise)
         nc, n, q = self.steady_state(prev) if x0 is None else (float(x) for x in x0)
         if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
             raise ValueError(f"x0 must be finite with a flow >= 0 L/s, got {x0!r}")
@@ -835,9 +840,10 @@ def static_experiment(
     plant: PumpingPlant,
     *,
     speeds: Sequence[float] = STATIC_SPEEDS,
-    rng: np.random.Generator | int | None = None,
+    seed: int | np.random.Generator | None = None,
     settle: float = 180.0,
     average: float = 6.0,
+    rng: np.random.Generator | int | None = None,
 ) -> StaticPoints:
     """The paper's static test: hold each speed, wait for transients to die out, average the pressure.
 
@@ -854,7 +860,9 @@ def static_experiment(
     a separate experiment of this kind ("after transients died out, the output pressure was
     recorded"); the dynamic record, whose levels last 4–9 s, never lets the slow disturbances
     die out, which is why its black-box models miss the static curve. A shorter ``settle`` is
-    fine when the speed does not change (nothing excites them).
+    fine when the speed does not change (nothing excites them). ``seed`` (an int or a numpy
+    Generator) is the source of noise, as for :meth:`PumpingPlant.simulate`; ``rng`` is its
+    former name (deprecated; kept for one release).
 
     Returns
     -------
@@ -867,7 +875,7 @@ def static_experiment(
     if n_avg < 1:
         raise ValueError(f"average must cover at least one sample, got {average} s")
     u = np.repeat(sp, n_settle + n_avg)
-    run = plant.simulate(u, rng=rng)
+    run = plant.simulate(u, seed=renamed(seed, rng, "seed", "rng"))
     y = run.y.reshape(sp.size, n_settle + n_avg)[:, n_settle:]
     return StaticPoints(sp, y.mean(axis=1), name="pumping static points")
 
@@ -880,8 +888,8 @@ def generate(seed: int = DEFAULT_SEED, plant: PumpingPlant | None = None) -> tup
     """
     plant = PumpingPlant() if plant is None else plant
     u = speed_reference(seed=seed)
-    run = plant.simulate(u, rng=np.random.default_rng([seed, 2]))
-    static = static_experiment(plant, rng=np.random.default_rng([seed, 3]))
+    run = plant.simulate(u, seed=np.random.default_rng([seed, 2]))
+    static = static_experiment(plant, seed=np.random.default_rng([seed, 3]))
     return run, static
 
 

@@ -47,14 +47,15 @@ import pandas as pd
 from ..estimation._prediction_error import PE_LAMBDAS, pe_pareto
 from ..estimation._decisions import FALLBACKS, decide_dsf
 from ..core._progress import progress_bar
-from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ..models._coerce import as_structure, records_of, static_info
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, frozen
+from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
 
 __all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
 
-METHODS = ("pe", "se")
+ESTIMATORS = ("pe", "se")
 
 
 def block_resample(
@@ -105,7 +106,7 @@ class BootstrapJob:
     structure : Structure
     records : tuple of Record
     static : StaticPoints
-    method : str
+    estimator : str
         ``"pe"`` or ``"se"``.
     lambdas : ndarray
         λ1 values of the sweep.
@@ -123,7 +124,7 @@ class BootstrapJob:
     structure: Structure
     records: tuple[Record, ...]
     static: StaticPoints
-    method: str
+    estimator: str
     lambdas: np.ndarray
     band: float | tuple[float, float]
     fallback: str | None
@@ -149,7 +150,7 @@ class BootstrapJob:
             with warnings.catch_warnings():
                 # said once by bootstrap_decision; block records cover a narrower input range than the whole
                 warnings.simplefilter("ignore", StaticRangeWarning)
-                if self.method == "pe":
+                if self.estimator == "pe":
                     front = pe_pareto(self.structure, recs, sp, lambdas=self.lambdas, **dict(self.options))
                 else:
                     front = se_pareto(self.structure, recs, sp, lambdas=self.lambdas, progress=False, **dict(self.options))
@@ -167,7 +168,7 @@ class DecisionBootstrap:
     Attributes
     ----------
     structure : Structure
-    method : str
+    estimator : str
         ``"pe"`` or ``"se"`` (with the estimator options in :attr:`options`).
     lambdas : ndarray, shape (K,)
         The sweep's λ1 values.
@@ -197,7 +198,7 @@ class DecisionBootstrap:
     """
 
     structure: Structure
-    method: str
+    estimator: str
     lambdas: np.ndarray
     band: float | tuple[float, float]
     block_length: int
@@ -284,16 +285,23 @@ class DecisionBootstrap:
                              "rule": self.rules, "failure": [self.failures.get(i, "") for i in range(self.n_replicates)]},
                             index=pd.RangeIndex(self.n_replicates, name="replicate"))
 
+    @property
+    def method(self) -> str:
+        """Deprecated name of :attr:`estimator` (kept for one release)."""
+        warn("DecisionBootstrap.method is deprecated: use .estimator (method= names an algorithm elsewhere)",
+             DeprecationWarning)
+        return self.estimator
+
     def __repr__(self) -> str:
-        return (f"DecisionBootstrap({self.method.upper()}, replicates={self.n_replicates}, failed={len(self.failures)}, "
+        return (f"DecisionBootstrap({self.estimator.upper()}, replicates={self.n_replicates}, failed={len(self.failures)}, "
                 f"blocks={self.n_blocks} × {self.block_length}, agreement={self.agreement:.2f})")
 
 
-def _estimator_options(method: str, options: Mapping | None) -> dict:
+def _estimator_options(estimator: str, options: Mapping | None) -> dict:
     opts = dict(options or {})
-    fn = pe_pareto if method == "pe" else se_pareto
+    fn = pe_pareto if estimator == "pe" else se_pareto
     allowed = [p.name for p in inspect.signature(fn).parameters.values() if p.kind == p.KEYWORD_ONLY]
-    taken = {"progress", "checkpoint"} if method == "se" else set()
+    taken = {"progress", "checkpoint"} if estimator == "se" else set()
     bad = [k for k in opts if k not in allowed or k in taken]
     if bad:
         raise ValueError(f"options {bad} are not keyword options of {fn.__name__} the bootstrap can pass "
@@ -306,7 +314,7 @@ def bootstrap_decision(
     data: Record | Sequence[Record] | Dataset,
     static: StaticPoints | None = None,
     *,
-    method: str = "pe",
+    estimator: str = "pe",
     lambdas: Sequence[float] | np.ndarray | None = None,
     n_boot: int = 50,
     block_length: int | None = None,
@@ -317,21 +325,22 @@ def bootstrap_decision(
     options: Mapping | None = None,
     map: Callable[[Callable[[int], dict], Iterable[int]], Iterable[dict]] | None = None,
     progress: bool | None = None,
+    method: str | None = None,
 ) -> DecisionBootstrap:
     """Block bootstrap of the identification data: rerun the PE or SE sweep and D_SF per replicate.
 
     Parameters
     ----------
-    structure : Structure
-        Process terms.
+    structure : Structure, sequence of str, Model, or a result that carries one
+        Process terms (a Selection, ELSResult, Decision … gives its own).
     data : Record, sequence of Record, or Dataset
         Identification data (a Dataset's ``ident``, and its static points by default).
     static : StaticPoints, optional
         Static points (default: the Dataset's).
-    method : {"pe", "se"}
+    estimator : {"pe", "se"}
         The sweep: :func:`graybox.pe_pareto` or :func:`graybox.se_pareto`.
     lambdas : array_like, optional
-        λ1 values (default: the method's paper sweep; a short one keeps the bootstrap fast).
+        λ1 values (default: the estimator's paper sweep; a short one keeps the bootstrap fast).
     n_boot : int
         Replicates B.
     block_length : int, optional
@@ -354,6 +363,9 @@ def bootstrap_decision(
         executor's ``.map`` or a Dask wrapper to run elsewhere (see the module docstring).
     progress : bool, optional
         Progress bar (default: on a terminal only; in-process runs).
+    method : {"pe", "se"}, optional
+        Former name of ``estimator`` (deprecated; kept for one release: ``method=`` names an
+        algorithm everywhere else, e.g. SE's ``"ga"`` or ``"gradient"``).
 
     Returns
     -------
@@ -368,14 +380,12 @@ def bootstrap_decision(
         Bad options (an unknown estimator option, a block too short for the lags or longer than
         every record, no static points).
     """
-    if not isinstance(structure, Structure):
-        structure = Structure(structure)
-    check_choice(method, "method", METHODS)
-    recs = as_records(data)
-    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
-    if not isinstance(sp, StaticPoints):
-        raise ValueError("bootstrap_decision needs static points: pass static= or a Dataset with static points")
-    lam = check_lambdas((PE_LAMBDAS if method == "pe" else SE_LAMBDAS) if lambdas is None else lambdas)
+    structure = as_structure(structure)
+    estimator = check_choice(renamed(estimator if method is None else None, method, "estimator", "method"),
+                             "estimator", ESTIMATORS)
+    recs = records_of(data)
+    sp = static_info(static, data, needed_by="bootstrap_decision")
+    lam = check_lambdas((PE_LAMBDAS if estimator == "pe" else SE_LAMBDAS) if lambdas is None else lambdas)
     n_boot = check_int(n_boot, "n_boot", low=1)
     seed = check_seed(seed)
     L = structure.process.max_lag
@@ -387,15 +397,15 @@ def bootstrap_decision(
         static_sigma = check_real(static_sigma, "static_sigma", low=0, low_open=True)
     if fallback is not None:
         check_choice(fallback, "fallback", FALLBACKS)
-    opts = _estimator_options(method, options)
+    opts = _estimator_options(estimator, options)
     if not any(len(r) >= block_length for r in recs):
         raise ValueError(f"block_length {block_length} is longer than every record ({[len(r) for r in recs]} samples)")
-    job = BootstrapJob(structure.process, tuple(recs), sp, method, lam, band, fallback, block_length, seed,
+    job = BootstrapJob(structure.process, tuple(recs), sp, estimator, lam, band, fallback, block_length, seed,
                        static_sigma, opts)
     ids = [-1] + list(range(n_boot))
     results: list[dict] = []
     if map is None:
-        bar = progress_bar(len(ids), f"bootstrap of D_SF ({method.upper()})", progress)
+        bar = progress_bar(len(ids), f"bootstrap of D_SF ({estimator.upper()})", progress)
         try:
             for i in ids:
                 results.append(job(i))
@@ -422,5 +432,5 @@ def bootstrap_decision(
         th[i] = r["theta"]
         rules.append(r["rule"])
     n_blocks = max(1, int(round(total / block_length)))
-    return DecisionBootstrap(structure.process, method, lam, band, block_length, n_blocks, seed, lam1, js, jsf, inb, th,
+    return DecisionBootstrap(structure.process, estimator, lam, band, block_length, n_blocks, seed, lam1, js, jsf, inb, th,
                              tuple(rules), ref, fails, opts, static_sigma)

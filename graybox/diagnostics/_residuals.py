@@ -60,11 +60,15 @@ import numpy as np
 import pandas as pd
 from scipy import signal, stats
 
+from ..models._coerce import MODEL_ACCEPTED, as_model, records_of
 from ..models._model import Model
 from ..estimation._neural import NeuralModel
-from ..core._records import Dataset, Record, as_records
+from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
 from ..core._validation import check_choice, check_int, check_real
+
+#: What a model argument of the residual tests may be, in words.
+_ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
 
 __all__ = ["CorrelationTest", "ResidualTests", "residual_tests", "one_step_residuals", "TESTS"]
 
@@ -245,11 +249,12 @@ def one_step_residuals(
 
     Parameters
     ----------
-    model : Model or NeuralModel
-        A polynomial model (with or without an MA part) or a neural one.
+    model : Model, NeuralModel, or a result that carries one in ``.model``
+        A polynomial model (with or without an MA part) or a neural one (an ELSResult,
+        NeuralFit, Decision … stands for its model).
     data : Record, sequence of Record, or Dataset
-        Measured data (a Dataset stands for its identification record; pass ``data.valid`` for
-        the validation record).
+        Measured data (a Dataset stands for its validation record, as in :func:`residual_tests`;
+        pass ``data.ident`` for the identification record).
     moving_average : bool
         Include the model's MA part (default; see the module docstring). False: the process
         part's equation error y − ψᵀθ.
@@ -260,9 +265,8 @@ def one_step_residuals(
         ξ(k) for k = L … N_r − 1 of each record, shape (N_r − L,), output units; L is the largest
         lag of the terms used (process and, with ``moving_average``, noise terms).
     """
-    if not isinstance(model, (Model, NeuralModel)):
-        raise ValueError(f"model must be a Model or a NeuralModel, got {type(model).__name__}")
-    return [_model_residuals(model, r, bool(moving_average))[0] for r in as_records(data)]
+    model = as_model(model, kinds=(Model, NeuralModel), accepted=_ACCEPTED)
+    return [_model_residuals(model, r, bool(moving_average))[0] for r in records_of(data, "valid")]
 
 
 # --------------------------------------------------------------------------------------------
@@ -312,11 +316,11 @@ def residual_tests(
 
     Parameters
     ----------
-    model : Model or NeuralModel
-        The model to validate.
+    model : Model, NeuralModel, or a result that carries one in ``.model``
+        The model to validate (an ELSResult, NeuralFit, Decision … stands for its model).
     data : Record, sequence of Record, or Dataset
-        Measured data: the identification record, or better a validation record the model has
-        not seen. With several records, lagged products never pair samples of two records.
+        Measured data: a validation record the model has not seen (a Dataset stands for its
+        ``valid`` record), or the identification record (``data.ident``). With several records, lagged products never pair samples of two records.
     max_lag : int
         Largest |τ| in samples (default 20).
     level : float
@@ -345,12 +349,11 @@ def residual_tests(
     With several inputs the four input tests are made for each input (keys ``"u_xi:u1"`` …, labels
     with the input's name); the model is adequate when every one of them passes.
     """
-    if not isinstance(model, (Model, NeuralModel)):
-        raise ValueError(f"model must be a Model or a NeuralModel, got {type(model).__name__}")
+    model = as_model(model, kinds=(Model, NeuralModel), accepted=_ACCEPTED)
     max_lag = check_int(max_lag, "max_lag", low=1)
     level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
     check_choice(rule, "rule", RULES)
-    recs = as_records(data)
+    recs = records_of(data, "valid")
     names = recs[0].input_names
     xi, us = [], []
     for r in recs:

@@ -54,8 +54,9 @@ from ..static._constraints import StaticConstraint, static_rows
 from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure
 from ..static._curves import StaticCurve
 from ..estimation._decisions import Decision
+from ..models._coerce import as_model, records_of, static_info
 from ..models._model import Model
-from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
@@ -272,14 +273,6 @@ def _check_level(level: float) -> float:
     return check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
 
 
-def _model_arg(model: object, what: str) -> Model:
-    if isinstance(model, Decision):
-        return model.model
-    if not isinstance(model, Model):
-        raise ValueError(f"{what} needs a Model, got {type(model).__name__}")
-    return model
-
-
 def _lambda_arg(model: object, lambda1: float | None, what: str) -> float:
     if lambda1 is None:
         if isinstance(model, Decision) and np.isfinite(model.lambda1):
@@ -326,12 +319,12 @@ def ls_uncertainty(
 
     Parameters
     ----------
-    model : Model
-        The estimate on ``data``: plain least squares (e.g. ``Selection.model()`` or
+    model : Model, or a result that carries one in ``.model`` (ELSResult, Selection …)
+        The estimate on ``data``: plain least squares (e.g. ``Selection.model`` or
         ``els(..., noise=0)``) or ELS (a model with an MA part: the covariance is that of the
         extended problem in [θ; c], see the module docstring).
     data : Record, sequence of Record, or Dataset
-        The identification data the model was estimated on.
+        The identification data the model was estimated on (a Dataset's ``ident``).
     level : float
         Confidence level of the intervals, in (0, 1).
 
@@ -346,9 +339,9 @@ def ls_uncertainty(
         A plain LS model that is not the least-squares estimate on ``data`` (its gradient is not
         zero), collinear regressors, too few rows.
     """
-    model = _model_arg(model, "ls_uncertainty")
+    model = as_model(model)
     level = _check_level(level)
-    recs = as_records(data)
+    recs = records_of(data)
     st, ns = model.structure, model.noise_structure
     n, ne = len(st), len(ns)
     if ne == 0:
@@ -407,7 +400,7 @@ def cls_uncertainty(
 
     Parameters
     ----------
-    model : Model
+    model : Model, or a result that carries one in ``.model`` (CLSResult …)
         The CLS estimate.
     data : Record, sequence of Record, or Dataset
         Its identification data.
@@ -433,10 +426,10 @@ def cls_uncertainty(
         The model does not satisfy the constraints or is not their least-squares solution (other
         data or settings than its estimate's), a non-affine constraint, not identifiable.
     """
-    model = _model_arg(model, "cls_uncertainty")
+    model = as_model(model)
     level = _check_level(level)
     st = _process_structure(model)
-    recs = as_records(data)
+    recs = records_of(data)
     d = _dynamic(st, recs)
     cons, ctx, _ = _cls_setup(st, recs, d, data, static, how, reference, constraints)
     A = _equalities(cons, ctx, model.theta, "cls_uncertainty")
@@ -473,8 +466,8 @@ def pe_uncertainty(
 
     Parameters
     ----------
-    model : Model or Decision
-        The member (``ParetoSet.model(i)``, or a Decision from :func:`graybox.decide_dsf`, which
+    model : Model, Decision, or a result that carries one in ``.model``
+        The member (``ParetoSet.member_model(i)``, or a Decision from :func:`graybox.decide_dsf`, which
         brings its λ1).
     data : Record, sequence of Record, or Dataset
         Its identification data.
@@ -503,7 +496,7 @@ def pe_uncertainty(
     ValueError
         θ is not the PE optimum at this λ1 with these data (e.g. a wrong λ1), not identifiable.
     """
-    m = _model_arg(model, "pe_uncertainty")
+    m = as_model(model)
     lam = _lambda_arg(model, lambda1, "pe_uncertainty")
     level = _check_level(level)
     with warnings.catch_warnings():
@@ -555,7 +548,7 @@ def se_uncertainty(
 
     Parameters
     ----------
-    model : Model or Decision
+    model : Model, Decision, or a result that carries one in ``.model``
         The member (from :func:`graybox.se_pareto`, gradient or GA; a Decision brings its λ1).
     data : Record, sequence of Record, or Dataset
         Its identification data (each record run freely from its own first samples).
@@ -586,13 +579,11 @@ def se_uncertainty(
         θ̂ is not a stationary point of the SE objective (e.g. a GA member, or a gradient run
         stopped by its evaluation budget): the intervals then describe the curvature there.
     """
-    m = _model_arg(model, "se_uncertainty")
+    m = as_model(model)
     lam = _lambda_arg(model, lambda1, "se_uncertainty")
     level = _check_level(level)
-    recs = as_records(data)
-    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
-    if sp is None and lam < 1:
-        raise ValueError("se_uncertainty needs the static points (static= or a Dataset with static points)")
+    recs = records_of(data)
+    sp = static_info(static, data, needed_by=None if lam == 1 else "se_uncertainty")
     if sp is None:  # λ1 = 1 ignores the static points; SEProblem still wants some
         sp = StaticPoints([0.0], [0.0])
     problem = SEProblem(m.structure, recs, sp)

@@ -17,6 +17,7 @@ from typing import Sequence
 import numpy as np
 
 from ..models._evaluate import evaluate_thetas
+from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
 from ..core._records import Record
@@ -72,7 +73,7 @@ class Decision:
 
 def _decision(pareto: ParetoSet, i: int, rule: str, in_band: bool, score: float, label: str,
               chosen_on: str = "") -> Decision:
-    return Decision(pareto.model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
+    return Decision(pareto.member_model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
                     float(pareto.JSF[i]), rule, in_band, float(score), chosen_on)
 
 #: What :func:`decide_dsf` may do when no member lies in the band, if the user says so.
@@ -131,7 +132,7 @@ def decide_dsf(
         lower index.
     """
     if not isinstance(pareto, ParetoSet):
-        raise ValueError(f"decide_dsf needs a ParetoSet, got {type(pareto).__name__}")
+        raise TypeError(f"pareto must be a ParetoSet (from pe_pareto or se_pareto); got {type(pareto).__name__}")
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
     lo, hi = (0.0, band) if np.ndim(band) == 0 else band
@@ -185,8 +186,8 @@ def decide_min_correlation(
     Parameters
     ----------
     pareto : ParetoSet
-    record : Record
-        Identification data, shape (N,) each; counted from sample max_lag on.
+    record : Record or Dataset
+        Identification data (a Dataset's ``ident``), shape (N,) each; counted from sample max_lag on.
     output : {"free-run", "one-step"}
 
     Returns
@@ -195,8 +196,9 @@ def decide_min_correlation(
         ``.score`` is the chosen member's ρ.
     """
     if not isinstance(pareto, ParetoSet):
-        raise ValueError(f"decide_min_correlation needs a ParetoSet, got {type(pareto).__name__}")
+        raise TypeError(f"pareto must be a ParetoSet (from pe_pareto or se_pareto); got {type(pareto).__name__}")
     check_choice(output, "output", ("free-run", "one-step"))
+    record = as_record(record, "ident", "record")
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
     st = pareto.structure

@@ -40,8 +40,9 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ._prediction_error import pe_thetas
+from ..models._coerce import as_structure, records_of, static_info
 from ..models._model import Model
-from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, warn_static_range
 from ._simulation_error import SEProblem, _Failed, _multistart, _pe_members, _pe_starts, gradient_front
 from ..core._terms import Structure
 from ..core._validation import check_int, check_lambdas, check_real, check_theta, warn
@@ -62,8 +63,9 @@ class DSFResult:
         (output units²), by the shared definitions.
     band : float
         B, the bound on J_SF (output units²).
-    feasible : bool
-        Whether J_SF ≤ B holds. When False, ``model`` is the member with the smallest J_SF reached.
+    in_band : bool
+        Whether J_SF ≤ B holds (the name :class:`Decision` uses too). When False, ``model`` is the
+        member with the smallest J_SF reached.
     start : str
         Where the winning run started (e.g. ``"PE λ1=0.0123"``, ``"SE λ1=0.7197"`` or ``"theta0"``).
     start_JS, start_JSF : float
@@ -78,15 +80,21 @@ class DSFResult:
     JS: float
     JSF: float
     band: float
-    feasible: bool
+    in_band: bool
     start: str
     start_JS: float
     start_JSF: float
     n_iter: int
     message: str
 
+    @property
+    def feasible(self) -> bool:
+        """Deprecated name of :attr:`in_band` (kept for one release)."""
+        warn("DSFResult.feasible is deprecated: use DSFResult.in_band (the name Decision uses)", DeprecationWarning)
+        return self.in_band
+
     def __repr__(self) -> str:
-        return (f"DSFResult(J_S={self.JS:.4g}, J_SF={self.JSF:.4g}, band={self.band:g}, feasible={self.feasible}, "
+        return (f"DSFResult(J_S={self.JS:.4g}, J_SF={self.JSF:.4g}, band={self.band:g}, in_band={self.in_band}, "
                 f"start={self.start!r}, n_iter={self.n_iter})")
 
 
@@ -324,7 +332,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
 
 
 def se_dsf(
-    structure: Structure,
+    structure: Structure | object,
     data: Record | Dataset | Sequence[Record],
     static: StaticPoints | None = None,
     *,
@@ -339,8 +347,8 @@ def se_dsf(
 
     Parameters
     ----------
-    structure : Structure
-        Process terms (noise terms are dropped).
+    structure : Structure, sequence of str, Model, or a result that carries one
+        Process terms (noise terms are dropped); a Selection, ELSResult, Decision … gives its own.
     data : Record, Dataset or sequence of Record
         Identification data (a Dataset's ``ident``); each record is run freely on its own.
     static : StaticPoints, optional
@@ -366,15 +374,13 @@ def se_dsf(
         The model, its J_S and J_SF, whether the band was met (with a warning naming the smallest
         J_SF reached when it was not), the start and the iteration count.
     """
-    recs = as_records(data)
-    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
-    if sp is None:
-        raise ValueError("se_dsf needs static points: pass static= or a Dataset with static points")
+    recs = records_of(data)
+    sp = static_info(static, data, needed_by="se_dsf")
     band = check_real(band, "band", low=0, low_open=True)
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     warn_static_range(sp.ubar, recs)
-    problem = SEProblem(structure, recs, sp)
+    problem = SEProblem(as_structure(structure), recs, sp)
     why: list[str] = []
     if theta0 is not None:
         starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]

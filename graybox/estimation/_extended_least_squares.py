@@ -86,10 +86,10 @@ from scipy.optimize import least_squares
 
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._least_squares import column_scales, scaled_lstsq
+from ..models._coerce import as_structure, records_of
 from ..models._model import Model
-from ..core._records import Dataset, Record, as_records
+from ..core._records import Dataset, Record
 from ..core._regressors import regressor_matrix, stacked_regressors
-from ..selection._forward_regression import Selection
 from ..core._terms import Structure, Term
 from ..core._validation import check_int, check_real, frozen
 
@@ -301,11 +301,8 @@ def noise_terms(ne: int) -> Structure:
 
 def _resolve(structure, noise) -> tuple[Structure, Structure]:
     """Split the arguments of :func:`els` into (process, noise) structures."""
-    if isinstance(structure, Selection):
-        process, carried = structure.structure, structure.noise
-    else:
-        st = structure if isinstance(structure, Structure) else Structure(structure)
-        process, carried = st.process, st.noise
+    st = as_structure(structure, with_noise=True)  # a Selection's or a Model's noise terms come along
+    process, carried = st.process, st.noise
     if len(process) == 0:
         raise ValueError("the structure has no process terms to estimate")
     if noise is None:
@@ -321,7 +318,7 @@ def _resolve(structure, noise) -> tuple[Structure, Structure]:
 
 
 def els(
-    structure: Structure | Selection | Sequence[str],
+    structure: object,
     data: Record | Sequence[Record] | Dataset,
     *,
     noise: int | Structure | None = None,
@@ -335,12 +332,14 @@ def els(
 
     Parameters
     ----------
-    structure : Structure, Selection or sequence of str
+    structure : Structure, sequence of str, Selection, Model, or a result that carries one
         Process terms (in parameter order). A :class:`~graybox.Selection` from
         :func:`~graybox.frols` brings its selected terms and the noise terms of its
-        candidates; a Structure may hold noise terms too (they are split off).
-    data : Record or sequence of Record
-        Identification data, engineering units. Rows never straddle two records.
+        candidates, a Model (or ELSResult) its MA part; a Structure may hold noise terms too
+        (they are split off).
+    data : Record, sequence of Record, or Dataset
+        Identification data (a Dataset's ``ident``), engineering units. Rows never straddle two
+        records.
     noise : int, Structure or None
         The MA part: ``ne`` for ``e(k-1) … e(k-ne)``, or explicit noise terms. ``None``: the
         noise terms carried by ``structure``, else the paper's ``ne = 2``. ``0`` gives plain
@@ -384,7 +383,7 @@ def els(
     relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)
     if not isinstance(direct, (bool, np.bool_)):
         raise ValueError(f"direct must be True or False, got {direct!r}")
-    recs = as_records(data)
+    recs = records_of(data)
     L = max(process.max_lag, ns.max_lag)
     psi, y = stacked_regressors(process, recs, start=L)
     n_p = len(process)

@@ -18,7 +18,7 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, as_records
-from ..core._validation import frozen
+from ..core._validation import frozen, warn
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -80,7 +80,7 @@ class ParetoSet:
     failures : mapping int -> str
         Members whose estimate failed (e.g. no start of an SE fit was feasible at that λ), with
         the reason in words. Such a member stays in the set so that a sweep reports every λ: its
-        θ row is NaN and its J's are inf; :meth:`model` refuses it and naming the reason.
+        θ row is NaN and its J's are inf; :meth:`member_model` refuses it, naming the reason.
     """
 
     structure: Structure
@@ -181,8 +181,13 @@ class ParetoSet:
             return self.extra[name]
         raise ValueError(f"unknown objective {name!r}; this set has {list(OBJECTIVES) + list(self.extra)}")
 
-    def model(self, i: int, name: str | None = None) -> Model:
-        """Member ``i`` as a :class:`~graybox.Model`."""
+    def member_model(self, i: int, name: str | None = None) -> Model:
+        """Member ``i`` as a :class:`~graybox.Model` (``name``: its label; default: the method and λ1).
+
+        A set holds many models, so it has no ``.model`` of its own (that name is, on every other
+        result, the one model it carries): pick a member here, or one by a rule with
+        :func:`graybox.decide_dsf`.
+        """
         K = len(self)
         if not -K <= int(i) < K:
             raise ValueError(f"member index {i} out of range for a set of {K}")
@@ -194,7 +199,13 @@ class ParetoSet:
 
     def models(self) -> list[Model]:
         """Every member that did not fail, as a Model, in order."""
-        return [self.model(i) for i in range(len(self)) if i not in self.failures]
+        return [self.member_model(i) for i in range(len(self)) if i not in self.failures]
+
+    def model(self, i: int, name: str | None = None) -> Model:
+        """Deprecated name of :meth:`member_model` (kept for one release)."""
+        warn("ParetoSet.model(i) is deprecated: use ParetoSet.member_model(i) (a set has no one model)",
+             DeprecationWarning)
+        return self.member_model(i, name)
 
     def subset(self, index: np.ndarray | Sequence[int]) -> "ParetoSet":
         """The members at ``index`` (a boolean mask or integer indices), in that order."""

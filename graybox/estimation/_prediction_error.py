@@ -57,6 +57,7 @@ from ..static._curves import StaticCurve
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..core._least_squares import column_scales
+from ..models._coerce import as_model, as_structure, static_info
 from ..models._model import Model
 from ._pareto import ParetoSet
 from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, warn_static_range
@@ -71,6 +72,7 @@ __all__ = [
     "static_prediction",
     "qr_static_error",
     "cls",
+    "CLSResult",
     "pe_thetas",
     "pe_pareto",
     "PE_LAMBDAS",
@@ -79,6 +81,9 @@ __all__ = [
 #: The paper's PE sweep (Section IV-B), the default ``lambdas``: 100 λ1 in logspace(−6, 0).
 PE_LAMBDAS = np.logspace(-6, 0, 100)
 PE_LAMBDAS.setflags(write=False)
+
+#: Accepted ``how`` values of :func:`cls`: what static points impose.
+HOW = ("auto", "curve", "points", "context")
 
 #: Accepted ``solver`` values: cvxpy with Clarabel or OSQP, or the closed form.
 SOLVERS = ("clarabel", "osqp", "closed")
@@ -153,13 +158,38 @@ def qr_static_error(structure: Structure, thetas: np.ndarray, points: StaticPoin
     return np.mean((pred - points.ybar) ** 2, axis=-1)
 
 
+@dataclass(frozen=True, eq=False)
+class CLSResult:
+    """The result of :func:`cls`: the model and what was imposed on it.
+
+    Attributes
+    ----------
+    model : Model
+        θ in engineering units.
+    static : StaticPoints, StaticCurve, StaticSurface or None
+        The static information the estimate used (the ``static`` argument, else the Dataset's
+        static points; None when there was none).
+    constraints : tuple of str
+        Every constraint imposed, in words (the static one first).
+    solver : str
+        ``"clarabel"``, ``"osqp"`` or ``"closed"``.
+    """
+
+    model: Model
+    static: StaticPoints | StaticCurve | StaticSurface | None
+    constraints: tuple[str, ...]
+    solver: str
+
+    def __repr__(self) -> str:
+        return (f"CLSResult(model={self.model.name!r}, n_params={self.model.n_params}, "
+                f"constraints={list(self.constraints)}, solver={self.solver!r})")
+
+
 # --------------------------------------------------------------------------------------------
 # input validation
 # --------------------------------------------------------------------------------------------
-def _process_structure(structure: Structure | Model | Sequence[str]) -> Structure:
-    if isinstance(structure, Model):
-        structure = structure.structure
-    st = structure if isinstance(structure, Structure) else Structure(structure)
+def _process_structure(structure: object) -> Structure:
+    st = as_structure(structure)
     if len(st) == 0:
         raise ValueError("the structure has no terms")
     noise = [str(t) for t in st if t.is_noise]
@@ -291,8 +321,8 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
         return float(els(d.structure, records).model.clusters().get("Σy", 0.0))
     elif isinstance(reference, str):
         raise ValueError(f"reference must be 'ls', 'els', a Model, a θ or a number, got {reference!r}")
-    elif isinstance(reference, Model):
-        return float(reference.clusters().get("Σy", 0.0))
+    elif isinstance(reference, Model) or isinstance(getattr(reference, "model", None), Model):
+        return float(as_model(reference, "reference").clusters().get("Σy", 0.0))
     elif np.ndim(reference) == 0:
         v = float(reference)
         if not np.isfinite(v):
@@ -557,13 +587,14 @@ def cls(
     solver: str = "clarabel",
     solver_options: Mapping | None = None,
     name: str = "CLS",
-) -> Model:
+) -> CLSResult:
     """Constrained least squares: min J_1(θ) with the static information imposed exactly.
 
     Parameters
     ----------
-    structure : Structure or Model
-        Process terms (a Model's structure is used; noise terms are refused).
+    structure : Structure, sequence of str, Model, or a result that carries one
+        Process terms (a Model's or a result's structure is used, e.g. a Selection or an
+        ELSResult; noise terms are refused).
     data : Record, sequence of Record, Dataset, DaskRecord or sequence of DaskRecord
         Dynamic identification data (a Dataset's ``ident`` record). A
         :class:`~graybox.DaskRecord` is reduced to the triangular factor of [Ψ, y] block by
@@ -576,9 +607,14 @@ def cls(
           surface (:class:`~graybox.StaticSurface`) → eq. (22) on the surface;
         - points → "the static function passes through these points"
           (:class:`~graybox.PassesThrough`), any structure;
-        - None → only ``constraints`` (those that need static points, e.g. a band, take a
-          Dataset's ``static`` when ``data`` is one).
-    how : {"auto", "curve", "points"}
+        - None → the Dataset's static points when ``data`` is a Dataset that has them (as for
+          :func:`pe_pareto` and :func:`se_pareto`); otherwise only ``constraints``.
+    how : {"auto", "curve", "points", "context"}
+        What StaticPoints impose. ``"context"``: nothing by themselves; they are only the points
+        that ``constraints`` without points of their own speak of (a band, gain bounds over
+        their range). ``"points"``: pass through each. ``"auto"``: pass through each
+        when there are fewer points than the structure has clusters, else (the points cannot all
+        be passed through, save degenerately) as ``"curve"`` for a rational structure.
         ``"curve"`` with StaticPoints fits the polynomial the structure's numerator can carry
         (degree = highest ū power of the Σ_{u^m} clusters) and imposes eq. (22); it needs at
         least degree + 1 points. With several inputs it fits a surface on exactly the monomials
@@ -601,8 +637,9 @@ def cls(
 
     Returns
     -------
-    Model
-        θ in engineering units.
+    CLSResult
+        ``.model`` (θ in engineering units), the static information used and the constraints
+        imposed, in words.
 
     Raises
     ------
@@ -626,7 +663,8 @@ def cls(
     theta = z / d.s
     for c in cons:
         c.after_solve(theta, ctx)
-    return Model(st, theta, name=name)
+    return CLSResult(Model(st, theta, name=name), static_info(static, data, curves=True),
+                     tuple(c.describe() for c in cons), solver)
 
 
 def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: str, reference,
@@ -637,7 +675,18 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
     static_cons: list[StaticConstraint] = []
     points: StaticPoints | None = None
     curve: StaticCurve | StaticSurface | None = None
-    check_choice(how, "how", ("auto", "curve", "points"))
+    check_choice(how, "how", HOW)
+    static = static_info(static, data, curves=True)  # the Dataset's points unless static is given, as PE and SE
+    _check_point_inputs(recs, static if isinstance(static, StaticPoints) else None)
+    if how == "context":
+        if isinstance(static, (StaticCurve, StaticSurface)):
+            raise ValueError("how='context' makes static points the context of the constraints; a curve or surface is "
+                             "imposed by eq. (22): leave how='auto'")
+        points, static = static, None
+    if isinstance(static, StaticPoints) and how == "auto":
+        # as many points as clusters or more: the static function cannot pass through them all (at best
+        # degenerately, Σy = 1), so a rational structure takes the curve its numerator carries (eq. (22))
+        how = "curve" if len(static) >= len(cm.keys) and cm.max_y_power <= 1 else "points"
     if isinstance(static, (StaticCurve, StaticSurface)):
         if how == "points":
             raise ValueError("how='points' needs StaticPoints; sample the curve with curve.points(ubar)")
@@ -655,14 +704,12 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
                     f"degree-{degree} curve, which needs at least {degree + 1} points; got {len(points)}"
                 )
             curve = StaticCurve.fit(points, degree=degree)
-    elif static is not None:
-        raise ValueError(f"static must be a StaticCurve, StaticSurface, StaticPoints or None, got {type(static).__name__}")
     if curve is not None:
         static_cons.append(CurveEquality(curve))
-    elif points is not None:
+    elif points is not None and how != "context":
         static_cons.append(PassesThrough(points))
     cons = static_cons + as_constraint_list(constraints)
-    ctx_points = points if points is not None else (data.static if isinstance(data, Dataset) else None)
+    ctx_points = points if points is not None else static_info(None, data)  # a curve: the Dataset's points are the context
     for c in cons:  # every set of static points speaks of the records' inputs
         _check_point_inputs(recs, getattr(c, "points", None))
     _check_point_inputs(recs, ctx_points)
@@ -703,12 +750,7 @@ def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
 # PE bi-objective
 # --------------------------------------------------------------------------------------------
 def _static_points(static: StaticPoints | StaticCurve | StaticSurface | None, ubar: np.ndarray | None, data: object) -> StaticPoints:
-    if static is None:
-        if isinstance(data, Dataset) and data.static is not None:
-            static = data.static
-        else:
-            raise ValueError("the PE problem needs static information: pass static= (StaticPoints or a StaticCurve) "
-                             "or a Dataset with static points")
+    static = static_info(static, data, needed_by="the PE problem", curves=True)
     if isinstance(static, StaticPoints):
         if ubar is not None:
             raise ValueError("ubar is for sampling a StaticCurve; static points carry their own ū")
@@ -719,15 +761,13 @@ def _static_points(static: StaticPoints | StaticCurve | StaticSurface | None, ub
                 raise ValueError("a StaticCurve without a domain needs ubar: where to sample it")
             ubar = np.linspace(static.domain[0], static.domain[1], 10)
         return static.points(np.asarray(ubar, float))
-    if isinstance(static, StaticSurface):
-        if ubar is None:
-            if static.domain is None:
-                raise ValueError("a StaticSurface without a domain needs ubar of shape (K, m): where to sample it")
-            axes = [np.linspace(lo, hi, 5) for lo, hi in static.domain]  # 5 levels per input
-            ubar = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
-        return static.points(np.asarray(ubar, float))
-    raise ValueError(f"static must be StaticPoints or a StaticCurve (or a StaticSurface for several inputs), "
-                     f"got {type(static).__name__}")
+    # a StaticSurface: static_info admits nothing else
+    if ubar is None:
+        if static.domain is None:
+            raise ValueError("a StaticSurface without a domain needs ubar of shape (K, m): where to sample it")
+        axes = [np.linspace(lo, hi, 5) for lo, hi in static.domain]  # 5 levels per input
+        ubar = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+    return static.points(np.asarray(ubar, float))
 
 
 def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], reference) -> float | None:

@@ -63,6 +63,7 @@ from ..core._simulation_kernels import (
     simulate_one,
 )
 from ..core._least_squares import column_scales, scaled_lstsq
+from ..models._coerce import as_structure, records_of, static_info
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
 from ..core._records import (
@@ -975,7 +976,7 @@ _METHOD_ONLY = {"ga": ("options",), "gradient": ("max_nfev", "tol", "solver", "s
 
 
 def se_pareto(
-    structure: Structure,
+    structure: Structure | object,
     data: Record | Dataset | Sequence[Record],
     static: StaticPoints | None = None,
     *,
@@ -998,8 +999,9 @@ def se_pareto(
 
     Parameters
     ----------
-    structure : Structure
-        Process terms (noise terms are dropped: the SE problem has no MA part).
+    structure : Structure, sequence of str, Model, or a result that carries one
+        Process terms (noise terms are dropped: the SE problem has no MA part); a Selection,
+        ELSResult, Decision … gives its own.
     data : Record, Dataset or sequence of Record
         Identification data (a Dataset's ``ident``); with several records each is run freely
         on its own and J_S is the mean over all their samples.
@@ -1067,12 +1069,10 @@ def se_pareto(
     if wrong:
         raise ValueError(f"{', '.join(wrong)} appl{'y' if len(wrong) > 1 else 'ies'} to method={other!r} only, "
                          f"not to method={method!r}")
-    rec = as_records(data)
-    sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
-    if sp is None:
-        raise ValueError("the SE problem needs static points: pass static= or a Dataset with static points")
+    rec = records_of(data)
+    sp = static_info(static, data, needed_by="the SE problem")
     warn_static_range(sp.ubar, rec)
-    problem = SEProblem(structure, rec, sp, margin=margin, ridge=ridge)
+    problem = SEProblem(as_structure(structure), rec, sp, margin=margin, ridge=ridge)
     lam_in = SE_LAMBDAS if lambdas is None else lambdas
     if method == "ga":
         front = ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,

@@ -113,7 +113,7 @@ def make_structure(spec: Mapping[str, Any], data: gb.Dataset, data_hash: str) ->
         kw = {n: spec[n] for n in ("n_terms", "tol", "criterion", "max_terms") if spec[n] is not None}
         cand = dict(spec["candidates"])
         if not isinstance(cand["nu"], Mapping):  # one lag count for every input of the data set
-            cand["inputs"] = data.ident.input_names
+            cand["input_names"] = data.ident.input_names
         sel = gb.frols(gb.Candidates(**cand), data.ident, include=list(spec["include"]), **kw)
         if len(_STRUCTURES) >= _STRUCTURE_CACHE_SIZE:
             _STRUCTURES.clear()
@@ -182,7 +182,8 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
         return gb.neural_narx(data.ident, seed=cell.seed or 0, name=name, **kw).model, None, {}
     cons = cell_constraints(v["constraints"], st, data)
     if est == "cls":
-        return gb.cls(st, data, constraints=cons, name=name, **opts), None, {}
+        # the variant's constraints are what it imposes; the data set's points are their context
+        return gb.cls(st, data, constraints=cons, name=name, **{"how": "context", **opts}).model, None, {}
     if est == "pe":
         return None, gb.pe_pareto(st, data, lambdas=lam, constraints=cons, **opts), {}
     if est == "se-ga":
@@ -200,7 +201,7 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
         # a band the structure cannot reach gives the model with the smallest J_SF (and a warning), as
         # D_SF with fallback "min_jsf" does
         return gb.Model(res.model.structure, res.model.theta, name=name), None, \
-            {"rule": "D_SF (direct)" if res.feasible else "min J_SF (band infeasible)", "in_band": int(res.feasible)}
+            {"rule": "D_SF (direct)" if res.in_band else "min J_SF (band infeasible)", "in_band": int(res.in_band)}
     raise ValueError(f"unknown estimator {est!r}")  # pragma: no cover - the spec refuses it
 
 
@@ -292,7 +293,7 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
             if pareto is not None:
                 row["members"] = _members(pareto, data)
                 i, rule, in_band = _decide(cell, pareto, data)
-                model = pareto.model(i, name=f"{cell.variant} / {cell.structure}")
+                model = pareto.member_model(i, name=f"{cell.variant} / {cell.structure}")
                 row.update(lambda1=float(pareto.lambdas[i]), rule=rule, in_band=int(in_band))
             row["n_params"] = int(model.n_params)
             if isinstance(model, gb.Model):

@@ -11,12 +11,13 @@ it started on exit::
 
 from __future__ import annotations
 
+import os
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
 
-from ..core._validation import check_int
-from ._executors import _environ, _thread_env, local_cluster, worker_threads
+from ..core._validation import check_choice, check_int, warn
+from ._executors import EXECUTORS, _environ, _thread_env, local_cluster, worker_threads
 
 __all__ = ["parallel_map"]
 
@@ -24,24 +25,33 @@ __all__ = ["parallel_map"]
 @contextmanager
 def parallel_map(
     *,
+    executor: str | None = None,
     workers: int | None = None,
     client: Any = None,
     scheduler: str | None = None,
-    processes: bool = False,
+    processes: bool | None = None,
 ) -> Iterator[Callable[[Callable, Iterable], list]]:
     """A ``map(fn, items)`` that runs the jobs in parallel and returns their results in order.
 
+    The words are :func:`run_grid`'s and :func:`select_graybox`'s (one parallelism vocabulary:
+    ``threads=`` for the threads of one process everywhere, ``executor``/``workers``/``client``/
+    ``scheduler`` for processes and clusters, and ``map=`` for the layers below the experiment
+    layer, which take the map this function builds).
+
     Parameters
     ----------
+    executor : {"processes", "dask", "inprocess"}, optional
+        Default: "dask". "processes" runs a local ``ProcessPoolExecutor``; "inprocess" runs the
+        jobs in turn here (the same results, no parallelism).
     workers : int, optional
-        Start a Dask ``LocalCluster`` of this many worker processes (or, with ``processes``, a
-        local process pool of this many workers).
+        "dask": start a ``LocalCluster`` of this many worker processes; "processes": the pool's
+        size (default: the number of cores).
     client : distributed.Client, optional
-        Run on this client's cluster (left open).
+        "dask": run on this client's cluster (left open).
     scheduler : str, optional
-        Run on the Dask scheduler at this address.
-    processes : bool
-        Use a ``concurrent.futures.ProcessPoolExecutor`` instead of Dask (``workers`` processes).
+        "dask": run on the Dask scheduler at this address.
+    processes : bool, optional
+        Former spelling of ``executor="processes"`` (deprecated; kept for one release).
 
     Yields
     ------
@@ -49,14 +59,24 @@ def parallel_map(
         ``map(fn, items) -> list`` of results in the order of ``items``; ``fn`` and the items must
         be picklable.
     """
-    given = sum(x is not None for x in (workers, client, scheduler))
-    if given != 1:
-        raise ValueError("give exactly one of workers, client or scheduler")
-    if processes and workers is None:
-        raise ValueError("processes=True needs workers=N")
-    with ExitStack() as stack:
+    if processes is not None:
+        warn("parallel_map(processes=...) is deprecated: use executor='processes', as run_grid does",
+             DeprecationWarning)
         if processes:
-            n = check_int(workers, "workers", low=1)
+            if executor not in (None, "processes"):
+                raise ValueError(f"processes=True contradicts executor={executor!r}")
+            executor = "processes"
+    executor = check_choice("dask" if executor is None else executor, "executor", EXECUTORS)
+    if executor != "dask" and (client is not None or scheduler is not None):
+        raise ValueError(f"client and scheduler are for executor='dask', not {executor!r}")
+    if executor == "dask" and sum(x is not None for x in (workers, client, scheduler)) != 1:
+        raise ValueError("executor='dask' needs exactly one of workers, client or scheduler")
+    with ExitStack() as stack:
+        if executor == "inprocess":
+            yield lambda fn, items: [fn(x) for x in items]
+            return
+        if executor == "processes":
+            n = check_int((os.cpu_count() or 1) if workers is None else workers, "workers", low=1)
             stack.enter_context(_environ(_thread_env(worker_threads(n))))
             pool = stack.enter_context(ProcessPoolExecutor(n))
             yield lambda fn, items: list(pool.map(fn, items))

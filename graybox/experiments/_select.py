@@ -69,8 +69,10 @@ class GrayboxSelection:
         Degree of the static curve the static information asks for.
     band : float
         B (output units²).
-    fallback : bool
-        True when no structure met the band and ``fallback="min_jsf"`` chose the smallest J_SF.
+    in_band : bool
+        Whether the chosen structure met the band (the name :class:`Decision` and
+        :class:`DSFResult` use); False when none did and ``fallback="min_jsf"`` chose the
+        smallest J_SF.
     store : str
         The SQLite store holding every cell (kept: the fronts can be drawn from it later).
     """
@@ -81,7 +83,7 @@ class GrayboxSelection:
     table: pd.DataFrame
     degree: int
     band: float
-    fallback: bool
+    in_band: bool
     store: str
 
     #: Columns every table holds (a loaded file is checked against them).
@@ -99,12 +101,12 @@ class GrayboxSelection:
 
     def __repr__(self) -> str:
         return (f"GrayboxSelection(n_terms={len(self.structure)}, structures tried={len(self.table)}, "
-                f"J_S valid={self.table['JS_valid'].min():.4g}, fallback={self.fallback})")
+                f"JS_valid={self.table['JS_valid'].min():.4g}, in_band={self.in_band})")
 
 
 register_type("GrayboxSelection", GrayboxSelection,
               (("structure", "structure"), ("model", "Model"), ("decision", "Decision"), ("table", "frame"),
-               ("degree", "int"), ("band", "float"), ("fallback", "bool"), ("store", "str")))
+               ("degree", "int"), ("band", "float"), ("in_band", "bool"), ("store", "str")))
 
 
 def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.Record]]:
@@ -339,7 +341,7 @@ def select_graybox(
     decision = _refit(structure, ident, valid, sp, band, est, constraints, _lambdas(est, lambdas), used_fallback,
                       extra)
     return GrayboxSelection(structure, decision.model, decision, table.drop(columns=["terms"]), degree, band,
-                            used_fallback, str(store))
+                            not used_fallback, str(store))
 
 
 def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> list[float] | None:

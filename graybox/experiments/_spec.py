@@ -423,7 +423,7 @@ class StructureSpec:
             # against the inputs the delays or the included terms name (the cell uses the data set's)
             named = list(cand["delay"]) if isinstance(cand["delay"], Mapping) else list(inc.inputs)
             if named:
-                kw["inputs"] = tuple(named)
+                kw["input_names"] = tuple(named)
         space = _wrap(lambda: gb.Candidates(**cand, **kw), ("candidates",))
         object.__setattr__(self, "candidates", _freeze(cand))
         if self.n_terms is not None:

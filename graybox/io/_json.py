@@ -367,7 +367,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "SEMPResult": (SEMPResult, (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
                                 ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
-                              ("feasible", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
+                              ("in_band", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
                               ("n_iter", "int"), ("message", "str"))),
     "OEResult": (OEResult, (("model", "Model"), ("JS", "float"), ("JS_choose", "float"), ("chosen_on", "str"),
                             ("start", "str"), ("starts", "frame"), ("margin", "float"), ("radius", "float"),
@@ -424,6 +424,13 @@ _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 #: Fields added after files of this format version were written, with the value a file without them means.
 _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {"chosen_on": ""}}
 
+#: Fields renamed after files were written (one name per concept): old name -> (new name, how the old value
+#: reads as the new one). "Met the band" was DSFResult.feasible and, inverted, GrayboxSelection.fallback.
+_RENAMED: dict[str, dict[str, tuple[str, Callable[[Any], Any]]]] = {
+    "DSFResult": {"feasible": ("in_band", lambda v: v)},
+    "GrayboxSelection": {"fallback": ("in_band", lambda v: (not v) if isinstance(v, bool) else v)},
+}
+
 
 def _encode_fields(obj: Any) -> dict:
     name = _TYPES[type(obj)]
@@ -436,6 +443,9 @@ def _encode_fields(obj: Any) -> dict:
 def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
     cls, spec = _CODECS[name]
     d = rd.dict(v, where)
+    for old, (new, read) in _RENAMED.get(name, {}).items():
+        if old in d and new not in d:
+            d = {**{k: x for k, x in d.items() if k != old}, new: read(d[old])}
     known = {k for k, _ in spec} | set(_READABLE[name][0] if name in _READABLE else ())
     unknown = sorted(set(d) - known)
     if unknown:
@@ -502,7 +512,8 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     str
     """
     if type(obj) not in _TYPES:
-        raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}")
+        hint = "; save its .model" if type(getattr(obj, "model", None)) in _TYPES else ""
+        raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}{hint}")
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": _version(),
                            "type": _TYPES[type(obj)]}
     u = _units_arg(units)

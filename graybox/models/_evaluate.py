@@ -27,6 +27,7 @@ import pandas as pd
 
 from ..core._simulation_kernels import batch_sse, encode, record_inputs
 from ._model import Model
+from ._coerce import as_model, as_record, as_structure, static_info
 from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
@@ -47,17 +48,38 @@ def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     return float(np.mean(e**2))
 
 
-def j1(model: Model, record: Record) -> float:
-    """J_1: one-step-ahead prediction MSE of ``model`` over ``record`` (samples max_lag … N-1)."""
+def j1(model: Model, record: Record | Dataset) -> float:
+    """J_1: one-step-ahead prediction MSE of ``model`` over ``record`` (samples max_lag … N-1).
+
+    Parameters
+    ----------
+    model : Model, NeuralModel, or a result that carries one in ``.model``
+        The model to score (an ELSResult, CLSResult, Decision, DSFResult … stands for its model).
+    record : Record or Dataset
+        Measured data; a Dataset stands for its validation record (a model is judged on data it
+        was not fitted on).
+    """
+    model = as_model(model, duck="predict")
+    record = as_record(record, "valid", "record")
     return mse(record.y, model.predict(record), start=model.max_lag)
 
 
-def js(model: Model, record: Record) -> float:
-    """J_S: free-run simulation MSE of ``model`` over ``record`` (inf when the run diverges)."""
+def js(model: Model, record: Record | Dataset) -> float:
+    """J_S: free-run simulation MSE of ``model`` over ``record`` (inf when the run diverges).
+
+    Parameters
+    ----------
+    model : Model, NeuralModel, or a result that carries one in ``.model``
+        The model to score.
+    record : Record or Dataset
+        Measured data; a Dataset stands for its validation record.
+    """
+    model = as_model(model, duck="simulate")
+    record = as_record(record, "valid", "record")
     return mse(record.y, model.simulate(record, on_diverge="nan"), start=model.max_lag)
 
 
-def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None) -> float:
+def jsf(model: Model, static: StaticPoints | Dataset, y0: float | np.ndarray | None = None) -> float:
     """J_SF: MSE of the model's static outputs at the static points, output units².
 
     At each static point (ū_i, ȳ_i) the model's static output is the equilibrium a free run at
@@ -67,10 +89,10 @@ def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None
 
     Parameters
     ----------
-    model : Model or NeuralModel
+    model : Model, NeuralModel, or a result that carries one in ``.model``
         Anything with ``static_curve(ubar, y0=…, strict=True)``.
-    static : StaticPoints
-        The measured static points.
+    static : StaticPoints or Dataset
+        The measured static points (a Dataset's ``static``).
     y0 : float or ndarray of shape (M,), optional
         Initial output of the runs (default: the measured ȳ_i).
 
@@ -80,6 +102,8 @@ def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None
         inf, with a ``RuntimeWarning`` naming each ū where no equilibrium is reached and why,
         when the model settles on none at some point.
     """
+    model = as_model(model, duck="static_curve")
+    static = static_info(None if isinstance(static, Dataset) else static, static, needed_by="jsf")
     names = getattr(model, "input_names", ("u",))
     ub = static_point_inputs(static, names)  # several inputs: ū's columns by the model's input names
     try:
@@ -114,7 +138,7 @@ def fit_percent(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
 
 
 def evaluate(
-    models: Mapping[str, Model],
+    models: Mapping[str, object],
     data: Dataset,
     static: StaticPoints | None = None,
     y0: float | None = None,
@@ -124,8 +148,12 @@ def evaluate(
     Parameters
     ----------
     models : mapping name -> Model
+        Each value a Model, a NeuralModel, or a result that carries one in ``.model`` (an
+        ELSResult, CLSResult, Decision, DSFResult …).
     data : Dataset
         Identification and validation records (and static points, unless ``static`` is given).
+        A single Record is refused (the table has a column per record): score it with
+        :func:`j1` and :func:`js`.
     static : StaticPoints, optional
         Static points for J_SF (default ``data.static``).
     y0 : float or ndarray, optional
@@ -134,30 +162,36 @@ def evaluate(
     Returns
     -------
     pandas.DataFrame
-        Index: model names. Columns: ``J_S ident``, ``J_S valid``, ``J_SF``, ``N_p``,
-        ``J_1 ident``, ``fit % valid`` (MSE in output units²).
+        Index: model names. Columns: ``JS_ident``, ``JS_valid``, ``JSF``, ``n_params``,
+        ``J1_ident``, ``fit_valid`` (MSE in output units²).
     """
-    sp = data.static if static is None else static
+    if not isinstance(data, Dataset):
+        raise TypeError(f"data must be a Dataset (the table scores its ident and valid records); got "
+                        f"{type(data).__name__}; score a single record with graybox.j1 and graybox.js")
+    if not isinstance(models, Mapping):
+        raise TypeError(f"models must be a mapping name -> model; got {type(models).__name__}")
+    sp = static_info(static, data)
     rows = {}
     for name, m in models.items():
+        m = as_model(m, f"models[{name!r}]", duck="simulate")
         sim_v = m.simulate(data.valid, on_diverge="nan")
         rows[name] = {
-            "J_S ident": js(m, data.ident),
-            "J_S valid": mse(data.valid.y, sim_v, start=m.max_lag),
-            "J_SF": jsf(m, sp, y0) if sp is not None else float("nan"),
-            "N_p": m.n_params,
-            "J_1 ident": j1(m, data.ident),
-            "fit % valid": fit_percent(data.valid.y, sim_v, start=m.max_lag),
+            "JS_ident": js(m, data.ident),
+            "JS_valid": mse(data.valid.y, sim_v, start=m.max_lag),
+            "JSF": jsf(m, sp, y0) if sp is not None else float("nan"),
+            "n_params": m.n_params,
+            "J1_ident": j1(m, data.ident),
+            "fit_valid": fit_percent(data.valid.y, sim_v, start=m.max_lag),
         }
     df = pd.DataFrame.from_dict(rows, orient="index")
-    df["N_p"] = df["N_p"].astype(int)
+    df["n_params"] = df["n_params"].astype(int)
     return df
 
 
 def evaluate_thetas(
     structure: Structure,
     thetas: np.ndarray,
-    record: Record | None = None,
+    record: Record | Dataset | None = None,
     static: StaticPoints | None = None,
     *,
     one_step: bool = True,
@@ -174,14 +208,15 @@ def evaluate_thetas(
 
     Parameters
     ----------
-    structure : Structure
-        Process terms shared by every member.
+    structure : Structure, sequence of str, Model, or a result that carries one
+        Process terms shared by every member (a ParetoSet, Selection, ELSResult … gives its own).
     thetas : ndarray, shape (P, n_terms) or (n_terms,)
         Parameter vectors, engineering units, one per row.
-    record : Record, optional
-        Dynamic data for J_1 and J_S (N samples); omitted: neither is computed.
+    record : Record or Dataset, optional
+        Dynamic data for J_1 and J_S (N samples); omitted: neither is computed. A Dataset
+        stands for its validation record and lends its static points when ``static`` is omitted.
     static : StaticPoints, optional
-        Static points (M of them) for J_SF; omitted: J_SF is not computed.
+        Static points (M of them) for J_SF; omitted (and no Dataset): J_SF is not computed.
     one_step : bool
         Compute J_1 too (builds the regressor matrix, N × n_terms).
     threads : int
@@ -194,6 +229,9 @@ def evaluate_thetas(
         ndarray of shape (P,) in output units².
     """
 
+    structure = as_structure(structure)
+    static = static_info(static, record)
+    record = None if record is None else as_record(record, "valid", "record")
     th = np.atleast_2d(np.asarray(thetas, float))
     out: dict[str, np.ndarray] = {}
     if record is not None:

@@ -119,7 +119,7 @@ class Model:
     def cluster_map(self) -> _static.ClusterMap | _static_surface.SurfaceClusterMap:
         """The clusters and the 0/1 map R of this structure (per input power with several inputs)."""
         if self.n_inputs > 1:
-            return _static_surface.surface_cluster_map(self.structure, inputs=self.input_names)
+            return _static_surface.surface_cluster_map(self.structure, input_names=self.input_names)
         return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
@@ -130,19 +130,19 @@ class Model:
         """
         if self.n_inputs > 1:
             return _static_surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,
-                                           inputs=self.input_names)
+                                           input_names=self.input_names)
         return _static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
 
     def equilibria(self, ubar: float | np.ndarray) -> list[_static.Equilibrium]:
         """Every real equilibrium at ū (a float, or a point of shape (m,) with several inputs) with its stability."""
         if self.n_inputs > 1:
-            return _static_surface.surface_equilibria(self.structure, self.theta, ubar, inputs=self.input_names)
+            return _static_surface.surface_equilibria(self.structure, self.theta, ubar, input_names=self.input_names)
         return _static.equilibria(self.structure, self.theta, ubar)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None) -> np.ndarray:
         """dȳ/dū along the static curve, shape (M,); with several inputs the gradient, shape (M, m)."""
         if self.n_inputs > 1:
-            return _static_surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, inputs=self.input_names)
+            return _static_surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, input_names=self.input_names)
         return _static.static_gain(self.structure, self.theta, ubar, y0=y0)
 
     @property

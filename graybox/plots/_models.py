@@ -7,15 +7,16 @@ from typing import Mapping
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..models._coerce import as_model, as_record
 from ..models._model import Model
-from ..core._records import Record
+from ..core._records import Dataset, Record
 
 __all__ = ["plot_free_run"]
 
 
 def plot_free_run(
-    record: Record,
-    models: Model | Mapping[str, Model],
+    record: Record | Dataset,
+    models: Model | Mapping[str, Model] | object,
     *,
     ax: Axes | None = None,
     ylabel: str = "Pressure",
@@ -24,9 +25,12 @@ def plot_free_run(
 
     Parameters
     ----------
-    record : Record
-        Input and output, shape (N,); each free run starts from its first max-lag samples.
-    models : Model or mapping name -> Model
+    record : Record or Dataset
+        Input and output, shape (N,); each free run starts from its first max-lag samples. A
+        Dataset stands for its validation record.
+    models : Model, a result that carries one in ``.model``, or a mapping name -> either
+        One model (an ELSResult, CLSResult, Decision, DSFResult, NeuralFit … stands for its
+        model) or several by name.
     ax : matplotlib Axes, optional
         Draw here; by default a new 8 × 3.6 in figure is made.
     ylabel : str
@@ -38,7 +42,12 @@ def plot_free_run(
         One line for the data and one per model; a diverging model is drawn up to where it
         left its bound (the rest is NaN) and its legend entry says so.
     """
-    ms = {models.name or "model": models} if isinstance(models, Model) else dict(models)
+    record = as_record(record, "valid", "record")
+    if isinstance(models, Mapping):
+        ms = {name: as_model(m, f"models[{name!r}]", duck="simulate") for name, m in models.items()}
+    else:
+        m = as_model(models, "models", duck="simulate")
+        ms = {m.name or "model": m}
     if ax is None:
         fig = Figure(figsize=(8, 3.6))
         ax = fig.add_subplot(1, 1, 1)

@@ -23,14 +23,14 @@ _MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*")
 
 
 def _points_of(points) -> dict[str, tuple[float, float]]:
-    """Accept {name: (J_S, J_SF)} or a Table-I DataFrame (columns "J_S ident", "J_SF")."""
+    """Accept {name: (J_S, J_SF)} or a Table-I DataFrame (columns "JS_ident", "JSF")."""
     if points is None:
         return {}
     if isinstance(points, pd.DataFrame):
-        missing = {"J_S ident", "J_SF"} - set(points.columns)
+        missing = {"JS_ident", "JSF"} - set(points.columns)
         if missing:
-            raise ValueError(f"a table of models needs columns 'J_S ident' and 'J_SF'; missing {sorted(missing)}")
-        return {str(k): (float(r["J_S ident"]), float(r["J_SF"])) for k, r in points.iterrows()}
+            raise ValueError(f"a table of models needs columns 'JS_ident' and 'JSF'; missing {sorted(missing)}")
+        return {str(k): (float(r["JS_ident"]), float(r["JSF"])) for k, r in points.iterrows()}
     out = {}
     for k, v in dict(points).items():
         try:
@@ -62,7 +62,7 @@ def plot_pareto(
         legend).
     points : mapping name -> (J_S, J_SF), or DataFrame, optional
         Single models such as ELS and CLS, drawn as large markers with their names; a table
-        from :func:`graybox.evaluate` works too (its ``J_S ident`` and ``J_SF``).
+        from :func:`graybox.evaluate` works too (its ``JS_ident`` and ``JSF``).
     band : float or None
         Shade J_SF in B = [0, band] (D_SF's band, 0.031 mlc²); None draws no band.
     ax : matplotlib Axes, optional

@@ -210,5 +210,5 @@ def plot_decision_bootstrap(
     ax_r.grid(True, which="both", alpha=0.3)
     ax_r.legend(fontsize=8, loc="best")
     failed = f", {len(boot.failures)} failed" if boot.failures else ""
-    ax_r.set_title(f"{boot.method.upper()} + D_SF, {boot.n_replicates} replicates{failed}", fontsize=9)
+    ax_r.set_title(f"{boot.estimator.upper()} + D_SF, {boot.n_replicates} replicates{failed}", fontsize=9)
     return fig

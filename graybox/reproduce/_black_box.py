@@ -43,7 +43,7 @@ def black_box_models(
 def section_black_box(quick: bool = True, out: Path | None = None, data: Dataset | None = None) -> str:
     """``graybox reproduce`` section: black-box ERR + ELS models on the bundled plant data.
 
-    Prints each model's Table I row (J_S ident, J_S valid, J_SF, N_p; MSE in mlc²) and its
+    Prints each model's Table I row (columns JS_ident, JS_valid, JSF, n_params; MSE in mlc²) and its
     equation. ``quick`` and ``out`` are accepted for the common section signature; this
     section is fast and draws nothing.
     """
@@ -55,7 +55,7 @@ def section_black_box(quick: bool = True, out: Path | None = None, data: Dataset
         "== Black-box models: ERR (FROLS) structure selection + ELS with MA(2) (Section IV-A) ==",
         f"ny = nu = 6, ne = {DEFAULT_NE}; 17 terms at ℓ = 2 (eq. 15), 23 terms at ℓ = 3 (eq. 17); "
         "the MA part is used for estimation only.",
-        table[["J_S ident", "J_S valid", "J_SF", "N_p"]].to_string(float_format=lambda v: f"{v:.4f}"),
+        table[["JS_ident", "JS_valid", "JSF", "n_params"]].to_string(float_format=lambda v: f"{v:.4f}"),
     ]
     for key, (sel, m) in models.items():
         lines.append(f"-- {key}: 1 - ΣERR = {1.0 - sel.err_total:.3e}")

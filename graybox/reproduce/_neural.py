@@ -15,7 +15,7 @@ from ..plots import plot_free_run
 __all__ = ["PAPER_NEURAL_ROW", "section_neural"]
 
 #: Table I, "Neural" column, as printed (MSE in mlc²).
-PAPER_NEURAL_ROW = {"J_S ident": 1.09, "J_S valid": 0.536, "J_SF": 0.0496, "N_p": 99}
+PAPER_NEURAL_ROW = {"JS_ident": 1.09, "JS_valid": 0.536, "JSF": 0.0496, "n_params": 99}
 
 #: The paper's training: Norgaard's nnnarmax2 alone (one-step prediction error, no weight decay).
 PAPER_TRAINING = {"epochs": PAPER_EPOCHS, "sim_epochs": 0, "weight_decay": 0.0}
@@ -27,8 +27,8 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
     The paper's network (ny = nu = 6, ne = 2, 7 tanh hidden nodes, N_p = 99) trained on the
     identification record twice from seed 0: by the default of :func:`graybox.neural_narx`
     (prediction error, then simulation error with weight decay) and by the paper's training
-    (``nnnarmax2``: 60 epochs of one-step prediction error), each with its Table I row (J_S
-    ident, J_S valid, J_SF, N_p; MSE in output units²). Each training takes well under a second;
+    (``nnnarmax2``: 60 epochs of one-step prediction error), each with its Table I row (columns
+    JS_ident, JS_valid, JSF, n_params; MSE in output units²). Each training takes well under a second;
     the full mode adds seeds 1–4 and reports the spread (min / median / max) of both rows over
     the five initialisations. With ``out`` the default network's validation free run is drawn
     to ``out/neural_free_run.png``.
@@ -41,7 +41,7 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
              for sd in seeds}
     fit = fits[0]
     net = fit.model
-    cols = ["J_S ident", "J_S valid", "J_SF", "N_p"]
+    cols = ["JS_ident", "JS_valid", "JSF", "n_params"]
     table = evaluate({"Neural": net, "Neural, paper's training": paper[0]}, data)
     fmt = {"float_format": lambda v: f"{v:.4f}"}
     yu = data.ident.units[1]

@@ -72,7 +72,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
         st = m_els.structure
         lines.append(f"-- ℓ = {degree}: {st}")
         if degree == 2:
-            models["CLS (22)"] = cls_fit(st, data.ident, curve, reference=m_els, name="CLS (22)")
+            models["CLS (22)"] = cls_fit(st, data.ident, curve, reference=m_els, name="CLS (22)").model
         pe = pe_pareto(st, data.ident, data.static, lambdas=np.logspace(-6, 0, 100))
         fronts = {"PE": pe}
         models[f"PE (D_SF) ℓ={degree}"] = decide_dsf(pe, band=0.031, fallback="min_jsf").model

@@ -233,9 +233,10 @@ class Selection:
         """Σ ERR of the selected terms: the fraction of yᵀy the selected model explains."""
         return float(np.sum(self.err))
 
-    def model(self, name: str = "LS") -> Model:
-        """The selected structure with its least-squares parameters (no MA part)."""
-        return Model(self.structure, self.theta, name=name)
+    @property
+    def model(self) -> Model:
+        """The selected structure with its least-squares parameters (no MA part), named ``"LS"``."""
+        return Model(self.structure, self.theta, name="LS")
 
     def to_frame(self) -> pd.DataFrame:
         """One row per evaluated term, in order.

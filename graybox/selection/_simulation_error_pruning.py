@@ -100,9 +100,10 @@ class SEMPResult:
         if missing:
             raise ValueError(f"the path lacks the column(s) {missing}")
 
-    def model(self, name: str = "SEMP") -> Model:
-        """The selected structure with its least-squares parameters."""
-        return Model(self.structure, self.theta, name=name)
+    @property
+    def model(self) -> Model:
+        """The selected structure with its least-squares parameters, named ``"SEMP"``."""
+        return Model(self.structure, self.theta, name="SEMP")
 
     def __repr__(self) -> str:
         return (f"SEMPResult(n_terms={len(self.structure)}, score={self.score:.4g}, steps={len(self.path)}, "

@@ -39,6 +39,7 @@ below one relative threshold (``DENOMINATOR_RTOL``).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import ClassVar
@@ -130,6 +131,23 @@ def cluster_name(p: int, m: int) -> str:
     return s
 
 
+def ascii_cluster_name(name: object, *, single_input: bool) -> object:
+    """A cluster name written in ASCII (``"Syu^2"``, ``"S0"``) in the paper's form (``"Σyu²"``, ``"Σ0"``).
+
+    With one input a digit after ``y`` or ``u`` is a power (``"Su2"`` is Σu²); with several the
+    inputs' names may end in digits (u1), so only ``^k`` is a power. The constant cluster ``Σ0``
+    keeps its digit. Anything that is not such a string is returned as it is.
+    """
+    if not isinstance(name, str) or not name.startswith(("S", "Σ")):
+        return name
+    body = name[1:]
+    if body == "0":
+        return "Σ0"
+    sup = (lambda m: m.group(1) + m.group(2).translate(_SUP))
+    body = re.sub(r"([yu])\^?(\d+)", sup, body) if single_input else re.sub(r"()\^(\d+)", sup, body)
+    return "Σ" + body
+
+
 @dataclass(frozen=True)
 class ClusterMap:
     """The clusters of a structure and the 0/1 map R with Σ = R θ.
@@ -153,9 +171,9 @@ class ClusterMap:
         """Row of R for a cluster given by name (``"Σyu"``, or ASCII ``"Syu"``) or (p, m)."""
         if isinstance(name_or_key, tuple):
             return self.keys.index(name_or_key)
-        name = name_or_key.replace("S", "Σ", 1) if name_or_key.startswith("S") else name_or_key
-        name = name.replace("^", "").translate(_SUP) if "Σ" in name else name
         names = self.names
+        # every printed name is accepted as it is; ASCII ("Syu^2", "Su2") is read as the paper's form
+        name = name_or_key if name_or_key in names else ascii_cluster_name(name_or_key, single_input=True)
         if name not in names:
             raise ValueError(f"no cluster {name_or_key!r} in this structure; it has {names}")
         return names.index(name)

@@ -35,7 +35,6 @@ a reference curve (see :class:`GainBounds` for the approximation).
 from __future__ import annotations
 
 import inspect
-import re
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -106,7 +105,7 @@ def static_cluster_map(structure: Structure, inputs: tuple[str, ...] | None = No
     inputs than the data still gets one power per data input.
     """
     if len(structure.inputs) > 1 or (inputs is not None and len(inputs) > 1):
-        return surface_cluster_map(structure, inputs=None if inputs is None else tuple(inputs))
+        return surface_cluster_map(structure, input_names=None if inputs is None else tuple(inputs))
     return cluster_map(structure)
 
 
@@ -973,7 +972,7 @@ class ClusterBounds(StaticConstraint):
         cm = ctx.cluster_map
         Ae, be, Au, bu = [], [], [], []
         for k, (lo, hi) in self.bounds.items():
-            row = cm.R[cm.index(_surface_name(k) if isinstance(cm, SurfaceClusterMap) else k)]
+            row = cm.R[cm.index(k)]
             if lo is not None and hi is not None and lo == hi:
                 Ae.append(row)
                 be.append(lo)
@@ -986,20 +985,6 @@ class ClusterBounds(StaticConstraint):
                 bu.append(-lo)
         n = ctx.n_terms
         return AffineRows.make(n, Ae or None, be or None, Au or None, bu or None)
-
-
-_SUPERSCRIPT = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
-
-
-def _surface_name(key: object) -> object:
-    """An ASCII cluster name of several inputs (``"Syu1"``, ``"Su1^2u2"``) in the paper's form (``"Σyu1²u2"``).
-
-    Input names may end in digits (u1), so only ``^k`` becomes a superscript; keys and names
-    already in Σ form are returned as they are.
-    """
-    if not isinstance(key, str) or not key.startswith("S"):
-        return key
-    return "Σ" + re.sub(r"\^(\d+)", lambda m: m.group(1).translate(_SUPERSCRIPT), key[1:])
 
 
 # --------------------------------------------------------------------------------------------

@@ -28,8 +28,9 @@ from functools import lru_cache
 import numpy as np
 
 from . import _analysis as _static
-from ._analysis import Equilibrium, Reached
+from ._analysis import Equilibrium, Reached, ascii_cluster_name
 from ..core._terms import Structure, Term, check_input_names
+from ..core._validation import renamed
 
 __all__ = [
     "SurfaceClusterMap",
@@ -109,9 +110,11 @@ class SurfaceClusterMap:
         if isinstance(name_or_key, tuple):
             return self.keys.index(name_or_key)
         names = self.names
-        if name_or_key not in names:
-            raise ValueError(f"no cluster {name_or_key!r} in this structure; it has {names}")
-        return names.index(name_or_key)
+        # every printed name is accepted as it is; ASCII ("Syu1", "Su1^2u2") is read as the paper's form
+        name = name_or_key if name_or_key in names else ascii_cluster_name(name_or_key, single_input=False)
+        if name not in names:
+            raise ValueError(f"no cluster {name!r} in this structure; it has {names}")
+        return names.index(name)
 
     @property
     def max_y_power(self) -> int:
@@ -125,21 +128,25 @@ def _surface_cluster_map(structure: Structure, inputs: tuple[str, ...]) -> Surfa
     return SurfaceClusterMap(inputs, *_static.cluster_membership(keys))
 
 
-def surface_cluster_map(structure: Structure, *, inputs: tuple[str, ...] | None = None) -> SurfaceClusterMap:
+def surface_cluster_map(structure: Structure, *, input_names: tuple[str, ...] | None = None,
+                        inputs: tuple[str, ...] | None = None) -> SurfaceClusterMap:
     """The clusters per output power and input powers of ``structure`` (cached).
 
     Parameters
     ----------
     structure : Structure
         Process terms.
-    inputs : tuple of str, optional
+    input_names : tuple of str, optional
         The inputs in the order of the key powers (default: the structure's inputs).
+    inputs : tuple of str, optional
+        Former name of ``input_names`` (deprecated; kept for one release).
 
     Returns
     -------
     SurfaceClusterMap
     """
-    return _surface_cluster_map(structure, surface_inputs(structure, inputs))
+    names = renamed(input_names, inputs, "input_names", "inputs")
+    return _surface_cluster_map(structure, surface_inputs(structure, names))
 
 
 @lru_cache(maxsize=256)
@@ -189,6 +196,7 @@ def _folded(structure: Structure, thetas: np.ndarray, ub: np.ndarray, inputs: tu
 
 
 def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray, *,
+                       input_names: tuple[str, ...] | None = None,
                        inputs: tuple[str, ...] | None = None) -> list[Equilibrium]:
     """Every real equilibrium at the constant input vector ``ubar``, sorted by ȳ, with its local stability.
 
@@ -197,16 +205,18 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
     structure : Structure
     theta : ndarray, shape (n_terms,)
     ubar : array_like, shape (m,)
-        One point of input space (engineering units), columns in ``inputs`` order.
-    inputs : tuple of str, optional
+        One point of input space (engineering units), columns in ``input_names`` order.
+    input_names : tuple of str, optional
         Input order (default: the structure's inputs).
+    inputs : tuple of str, optional
+        Former name of ``input_names`` (deprecated; kept for one release).
 
     Returns
     -------
     list of Equilibrium
         ``ubar`` of each is the tuple (ū_1, …, ū_m).
     """
-    names = surface_inputs(structure, inputs)
+    names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
     ub = _as_points(ubar, len(names))
     if ub.shape[0] != 1:
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
@@ -226,7 +236,7 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
     structure : Structure
     thetas : ndarray, shape (P, n_terms)
     ubar : ndarray, shape (M, m)
-        Points of input space (input units), columns in ``inputs`` order.
+        Points of input space (input units), columns in ``input_names`` order.
     y0 : float or ndarray, shape (M,)
         Initial output of each point's run (output units).
     inputs : tuple of str, optional
@@ -255,6 +265,7 @@ def static_surface(
     y0: float | np.ndarray | None = None,
     *,
     strict: bool = True,
+    input_names: tuple[str, ...] | None = None,
     inputs: tuple[str, ...] | None = None,
 ) -> np.ndarray:
     """The steady state the model reaches at each constant input vector: the static surface ȳ(ū).
@@ -268,20 +279,22 @@ def static_surface(
     structure : Structure
     theta : ndarray, shape (n_terms,)
     ubar : array_like, shape (M, m)
-        Points of input space (input units), columns in ``inputs`` order.
+        Points of input space (input units), columns in ``input_names`` order.
     y0 : float or array_like of shape (M,), optional
         Initial output (output units).
     strict : bool
         Raise ``ValueError`` naming every ū where no equilibrium is reached (else NaN there).
-    inputs : tuple of str, optional
+    input_names : tuple of str, optional
         Input order (default: the structure's inputs).
+    inputs : tuple of str, optional
+        Former name of ``input_names`` (deprecated; kept for one release).
 
     Returns
     -------
     ndarray, shape (M,)
         Output units.
     """
-    names = surface_inputs(structure, inputs)
+    names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
     ub = _as_points(ubar, len(names))
     th = np.asarray(theta, float)
     sk, thf = _folded(structure, th, ub, names)
@@ -334,13 +347,14 @@ def static_surface_gain(
     y0: float | np.ndarray | None = None,
     *,
     strict: bool = True,
+    input_names: tuple[str, ...] | None = None,
     inputs: tuple[str, ...] | None = None,
 ) -> np.ndarray:
     """The static gain as a gradient: ∂ȳ/∂ū_i along the static surface, by implicit differentiation.
 
     Parameters
     ----------
-    structure, theta, ubar, y0, strict, inputs
+    structure, theta, ubar, y0, strict, input_names, inputs
         As for :func:`static_surface`.
 
     Returns
@@ -348,10 +362,10 @@ def static_surface_gain(
     ndarray, shape (M, m)
         Entry (j, i) in output units per unit of input i.
     """
-    names = surface_inputs(structure, inputs)
+    names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
     ub = _as_points(ubar, len(names))
     th = np.asarray(theta, float)
-    yb = static_surface(structure, th, ub, y0, strict=strict, inputs=names)
+    yb = static_surface(structure, th, ub, y0, strict=strict, input_names=names)
     Fy, Fu = _fderivs(structure, th, ub, yb, names)
     with np.errstate(all="ignore"):
         return -Fu / Fy[:, None]

@@ -70,7 +70,7 @@ def compute_pins() -> dict:
         models[f"ELS ({eq})"] = m_els
         st = m_els.structure
         if degree == 2:
-            models["CLS (22)"] = cls_fit(st, data.ident, curve, reference=m_els, name="CLS (22)")
+            models["CLS (22)"] = cls_fit(st, data.ident, curve, reference=m_els, name="CLS (22)").model
         pe = pe_pareto(st, data.ident, data.static, lambdas=np.logspace(-6, 0, 20))
         models[f"PE (D_SF) l={degree}"] = decide_dsf(pe, band=0.031, fallback="min_jsf").model
         for method in ("ga", "gradient"):

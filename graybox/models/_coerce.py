@@ -1,0 +1,180 @@
+"""One coercion per concept, called at every public entry.
+
+- a **structure** from a Structure, a sequence of terms, a Model, or a result that carries one
+  (``.structure`` of a Selection, SEMPResult, ParetoSet or GrayboxSelection; ``.model`` of an
+  ELSResult, CLSResult, Decision, DSFResult …);
+- a **model** from a Model or a result that carries one in ``.model``;
+- the **static information** from an explicit argument, else the Dataset's static points;
+- a **record** from a Record, or the part of a Dataset the entry means (``ident`` for an
+  estimate, ``valid`` for a judgement): :func:`as_record` for one, ``records_of`` (core's
+  ``as_records``, which core's own regressors use too) for a Record, a sequence or a Dataset.
+
+Anything else is a ``TypeError`` that lists what is accepted. The results live in higher layers,
+so they are recognised by what they carry (a ``.structure`` or a ``.model`` attribute), not by
+their class.
+"""
+
+from __future__ import annotations
+
+from ..core._records import Dataset, Record, StaticPoints
+from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
+from ..core._terms import Structure, Term
+from ..static._curves import StaticCurve
+from ..static._surfaces import StaticSurface
+from ._model import Model
+
+__all__ = ["STRUCTURE_ACCEPTED", "MODEL_ACCEPTED", "as_structure", "as_model", "static_info", "as_record",
+           "records_of"]
+
+#: What a structure argument may be, in words (the TypeError lists it).
+STRUCTURE_ACCEPTED = ("a Structure, a sequence of terms (str or Term), a Model, or a result that carries one "
+                      "(Selection, SEMPResult, ParetoSet, GrayboxSelection, ELSResult, CLSResult, Decision, "
+                      "DSFResult)")
+#: What a model argument may be, in words.
+MODEL_ACCEPTED = ("a Model or a result that carries one in .model (ELSResult, CLSResult, Decision, DSFResult, "
+                  "Selection, SEMPResult, GrayboxSelection)")
+
+def _carried_model(obj: object, kinds: tuple[type, ...]) -> object | None:
+    """``obj.model`` when it is an attribute of one of ``kinds`` (a method is not a model)."""
+    m = getattr(obj, "model", None)
+    return m if isinstance(m, kinds) else None
+
+
+def _set_hint(obj: object) -> str:
+    if hasattr(obj, "member_model") and hasattr(obj, "thetas"):
+        return (f"; a {type(obj).__name__} holds many models: choose one (graybox.decide_dsf(front).model, or "
+                "front.member_model(i))")
+    return ""
+
+
+def as_structure(obj: object, name: str = "structure", *, with_noise: bool = False) -> Structure:
+    """The structure ``obj`` means.
+
+    Parameters
+    ----------
+    obj : Structure, sequence of str or Term, Model, or a result
+        A result is read through its ``.structure`` (Selection, SEMPResult, ParetoSet,
+        GrayboxSelection) or its ``.model`` (ELSResult, CLSResult, Decision, DSFResult).
+    name : str
+        The argument's name, for the error message.
+    with_noise : bool
+        Append the noise terms ``obj`` carries (a Selection's ``noise``, a Model's
+        ``noise_structure``), for an estimator that fits an MA part (ELS). Otherwise a Model or a
+        result gives its process terms only; an explicit Structure is returned as given.
+
+    Returns
+    -------
+    Structure
+
+    Raises
+    ------
+    TypeError
+        ``obj`` is none of these; the message lists what is accepted.
+    """
+    if isinstance(obj, Structure):
+        return obj
+    carried = None if isinstance(obj, Model) else getattr(obj, "structure", None)
+    if isinstance(carried, Structure):  # a result's own structure first: a Selection's carries its noise terms
+        noise = getattr(obj, "noise", None)
+        if with_noise and isinstance(noise, Structure) and len(noise):
+            return Structure(tuple(carried) + tuple(noise))
+        return carried
+    model = obj if isinstance(obj, Model) else _carried_model(obj, (Model,))
+    if model is not None:
+        if with_noise and len(model.noise_structure):
+            return Structure(tuple(model.structure) + tuple(model.noise_structure))
+        return model.structure
+    if isinstance(obj, (list, tuple)) and all(isinstance(t, (str, Term)) for t in obj):
+        return Structure(obj)
+    raise TypeError(f"{name} must be {STRUCTURE_ACCEPTED}; got {type(obj).__name__}")
+
+
+def as_model(obj: object, name: str = "model", *, kinds: tuple[type, ...] = (Model,),
+             duck: str | None = None, accepted: str = MODEL_ACCEPTED) -> object:
+    """The model ``obj`` means: ``obj`` itself when it is one of ``kinds``, else its ``.model``.
+
+    Parameters
+    ----------
+    obj : Model or a result with a ``.model`` attribute
+        ELSResult, CLSResult, Decision, DSFResult, Selection, SEMPResult, GrayboxSelection
+        (a NeuralFit where ``kinds`` holds NeuralModel).
+    name : str
+        The argument's name, for the error message.
+    kinds : tuple of type
+        The model classes the entry works with (default: the polynomial Model).
+    duck : str, optional
+        A method name: any object with it counts as a model too (e.g. ``"static_curve"`` lets a
+        NeuralModel, which lives above this layer, through where only that method is used).
+    accepted : str
+        What is accepted, in words, for the error message.
+
+    Returns
+    -------
+    Model (or one of ``kinds``)
+
+    Raises
+    ------
+    TypeError
+        ``obj`` neither is nor carries such a model; the message lists what is accepted (and
+        how to pick one model of a Pareto set).
+    """
+    if isinstance(obj, kinds) or (duck is not None and callable(getattr(obj, duck, None))):
+        return obj
+    m = getattr(obj, "model", None)
+    if isinstance(m, kinds) or (duck is not None and callable(getattr(m, duck, None))):
+        return m
+    raise TypeError(f"{name} must be {accepted}; got {type(obj).__name__}{_set_hint(obj)}")
+
+
+def static_info(static: object, data: object, *, needed_by: str | None = None, name: str = "static",
+                curves: bool = False) -> StaticPoints | StaticCurve | StaticSurface | None:
+    """The static information an entry uses: ``static`` when given, else the Dataset's static points.
+
+    Parameters
+    ----------
+    static : StaticPoints, StaticCurve, StaticSurface or None
+        The explicit argument (curves and surfaces only where ``curves`` is True).
+    data : object
+        The entry's data argument; a :class:`~graybox.Dataset` lends its ``static``.
+    needed_by : str, optional
+        The entry's name when it cannot work without static information: ``None`` found then
+        raises ``ValueError`` saying so.
+    name : str
+        The argument's name, for the error message.
+    curves : bool
+        Accept a StaticCurve or StaticSurface as well as StaticPoints.
+
+    Returns
+    -------
+    StaticPoints, StaticCurve, StaticSurface or None
+
+    Raises
+    ------
+    TypeError
+        ``static`` is of another type; the message lists what is accepted.
+    ValueError
+        No static information and ``needed_by`` is given.
+    """
+    kinds: tuple[type, ...] = (StaticPoints, StaticCurve, StaticSurface) if curves else (StaticPoints,)
+    if static is not None and not isinstance(static, kinds):
+        what = "StaticPoints, a StaticCurve, a StaticSurface or None" if curves else "StaticPoints or None"
+        raise TypeError(f"{name} must be {what}; got {type(static).__name__}")
+    out = static if static is not None else (data.static if isinstance(data, Dataset) else None)
+    if out is None and needed_by is not None:
+        raise ValueError(f"{needed_by} needs static points: pass {name}= or a Dataset with static points")
+    return out
+
+
+def as_record(data: object, part: str, name: str = "data") -> Record:
+    """One record: ``data`` itself, or the part ``part`` (``"ident"`` or ``"valid"``) of a Dataset.
+
+    Raises
+    ------
+    TypeError
+        ``data`` is neither; the message lists what is accepted and which part a Dataset gives.
+    """
+    if isinstance(data, Record):
+        return data
+    if isinstance(data, Dataset):
+        return getattr(data, part)
+    raise TypeError(f"{name} must be a Record or a Dataset (whose {part} record is used); got {type(data).__name__}")

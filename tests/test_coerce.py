@@ -1,0 +1,396 @@
+"""One coercion per concept: every public entry takes each result where it means a model or a structure.
+
+The system is synthetic (a rational NARX model with a known static curve and static points that
+disagree a little with the dynamics), not the bundled plant.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+
+import graybox as gb
+from graybox import plots
+
+matplotlib.use("Agg")
+
+TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "u(k-1)y(k-1)", "1"])
+THETA = np.array([0.6, 0.2, 0.3, 0.05, -0.02, 0.4])
+BAND = 0.05  # output units² of this system
+
+
+@pytest.fixture(scope="module")
+def data():
+    rng = np.random.default_rng(11)
+    m = gb.Model(TRUE, THETA)
+    u = np.repeat(rng.uniform(0.0, 3.0, 60), 20)
+    y = m.simulate(u, np.zeros(2)) + 0.05 * rng.standard_normal(u.size)
+    ub = np.linspace(0.2, 2.8, 8)
+    static = gb.StaticPoints(ub, m.static_curve(ub) + 0.2 * np.sin(ub))
+    return gb.Dataset(gb.Record(u[:800], y[:800], name="ident"), gb.Record(u[800:], y[800:], name="valid"), static)
+
+
+@pytest.fixture(scope="module")
+def results(data):
+    """Every kind of value that carries a model or a structure, each fitted on ``data``."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # convergence and candidate notes are not under test here
+        fit = gb.els(TRUE, data)
+        front = gb.pe_pareto(TRUE, data, lambdas=np.logspace(-4, 0, 12))
+        out = {
+            "Model": gb.Model(TRUE, THETA, name="true"),
+            "ELSResult": fit,
+            "CLSResult": gb.cls(TRUE, data),
+            "Decision": gb.decide_dsf(front, band=BAND, fallback="min_jsf"),
+            "DSFResult": gb.se_dsf(TRUE, data, band=BAND, theta0=fit.model.theta, max_iter=5),
+            "Selection": gb.frols(gb.Candidates(2, 2, degree=2, max_y_power=1), data, n_terms=5),
+            "SEMPResult": gb.semp(gb.Candidates(2, 2, degree=1), data, n_terms=3),
+            "ParetoSet": front,
+        }
+    return out
+
+
+MODEL_CARRIERS = ["Model", "ELSResult", "CLSResult", "Decision", "DSFResult", "Selection", "SEMPResult"]
+STRUCTURE_CARRIERS = MODEL_CARRIERS + ["ParetoSet", "Structure", "list of str"]
+
+
+def _model_of(obj):
+    return obj if isinstance(obj, gb.Model) else obj.model
+
+
+def _carrier(results, kind):
+    if kind == "Structure":
+        return TRUE, TRUE
+    if kind == "list of str":
+        return [str(t) for t in TRUE], TRUE
+    obj = results[kind]
+    return obj, getattr(obj, "structure", None) or obj.model.structure
+
+
+# -- a model where a model is meant -----------------------------------------------------------
+
+@pytest.mark.parametrize("kind", MODEL_CARRIERS)
+def test_scores_take_every_result_where_a_model_is_meant(results, data, kind):
+    obj = results[kind]
+    m = _model_of(obj)
+    assert isinstance(m, gb.Model)
+    # a Dataset stands for its validation record when a model is scored
+    assert gb.j1(obj, data) == gb.j1(m, data.valid)
+    assert gb.js(obj, data.valid) == gb.js(m, data.valid)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a model that reaches no equilibrium somewhere: J_SF = inf
+        assert gb.jsf(obj, data) == gb.jsf(m, data.static)
+        table = gb.evaluate({"r": obj}, data)
+        pd.testing.assert_frame_equal(table, gb.evaluate({"r": m}, data))
+    assert list(table.columns[:4]) == ["JS_ident", "JS_valid", "JSF", "n_params"]
+
+
+@pytest.mark.parametrize("kind", MODEL_CARRIERS)
+def test_diagnostics_and_plots_take_every_result_where_a_model_is_meant(results, data, kind):
+    obj = results[kind]
+    m = _model_of(obj)
+    a = gb.one_step_residuals(obj, data)
+    b = gb.one_step_residuals(m, data.valid)  # a Dataset means its validation record here too
+    np.testing.assert_array_equal(a[0], b[0])
+    t1, t2 = gb.residual_tests(obj, data, max_lag=5), gb.residual_tests(m, data.valid, max_lag=5)
+    assert t1.passed == t2.passed and t1.failed == t2.failed
+    fig = plots.plot_free_run(data, obj)
+    line = fig.axes[0].lines[1].get_ydata()
+    np.testing.assert_array_equal(line, m.simulate(data.valid, on_diverge="nan"))
+
+
+@pytest.mark.parametrize("kind", ["ELSResult", "Selection"])
+def test_ls_uncertainty_takes_the_least_squares_results(results, data, kind):
+    obj = results[kind]
+    a = gb.ls_uncertainty(obj, data)  # a Dataset means its identification record for an estimate
+    b = gb.ls_uncertainty(obj.model, data.ident)
+    np.testing.assert_array_equal(a.cov, b.cov)
+
+
+def test_cls_uncertainty_and_reference_take_a_cls_result(results, data):
+    # (no Σyu cluster here: eq. (22) pins it at 0, and the covariance's check of that row is relative to
+    # its own tiny |θ|, so it refuses a round-off residual)
+    st = gb.Structure([t for t in TRUE if str(t) != "u(k-1)y(k-1)"])
+    res = gb.cls(st, data)
+    a = gb.cls_uncertainty(res, data)
+    np.testing.assert_array_equal(a.cov, gb.cls_uncertainty(res.model, data).cov)
+    curve = gb.StaticCurve.fit(data.static, degree=2)
+    fit = results["ELSResult"]
+    np.testing.assert_array_equal(gb.cls(TRUE, data, curve, reference=fit).model.theta,
+                                  gb.cls(TRUE, data, curve, reference=fit.model).model.theta)
+
+
+def test_neural_fit_is_taken_where_a_neural_model_is(data):
+    fit = gb.neural_narx(data.ident, ny=2, nu=2, ne=0, hidden=3, epochs=5, sim_epochs=2, seed=0)
+    assert gb.js(fit, data) == gb.js(fit.model, data.valid)
+    t = gb.residual_tests(fit, data, max_lag=5)
+    assert t.passed == gb.residual_tests(fit.model, data.valid, max_lag=5).passed
+
+
+# -- a structure where a structure is meant ---------------------------------------------------
+
+@pytest.mark.parametrize("kind", STRUCTURE_CARRIERS)
+def test_estimators_take_every_result_where_a_structure_is_meant(results, data, kind):
+    obj, st = _carrier(results, kind)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        np.testing.assert_array_equal(gb.cls(obj, data).model.theta, gb.cls(st, data).model.theta)
+        np.testing.assert_array_equal(gb.pe_thetas(obj, data, lambdas=[0.3, 1.0]),
+                                      gb.pe_thetas(st, data, lambdas=[0.3, 1.0]))
+        a = gb.els(obj, data, noise=1)
+        assert list(a.model.structure) == list(st)
+        np.testing.assert_array_equal(a.model.theta, gb.els(st, data, noise=1).model.theta)
+    th = np.atleast_2d(results["Model"].theta) if len(st) == len(TRUE) and list(st) == list(TRUE) else None
+    if th is not None:
+        ev = gb.evaluate_thetas(obj, th, data)  # a Dataset: its validation record and its static points
+        ref = gb.evaluate_thetas(TRUE, th, data.valid, data.static)
+        assert ev.keys() == ref.keys() == {"J1", "JS", "JSF"}
+        for k in ev:
+            np.testing.assert_array_equal(ev[k], ref[k])
+
+
+@pytest.mark.parametrize("kind", ["ELSResult", "Decision", "Selection", "Model"])
+def test_simulation_error_estimators_take_results(results, data, kind):
+    obj, st = _carrier(results, kind)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = gb.se_pareto(obj, data, lambdas=[0.5, 1.0], method="gradient", max_nfev=3, progress=False)
+        b = gb.se_pareto(st, data, lambdas=[0.5, 1.0], method="gradient", max_nfev=3, progress=False)
+        np.testing.assert_array_equal(a.thetas, b.thetas)
+        theta0 = results["ELSResult"].model.theta if list(st) == list(TRUE) else None
+        if theta0 is not None:
+            c = gb.se_dsf(obj, data, band=BAND, theta0=theta0, max_iter=3)
+            np.testing.assert_array_equal(c.model.theta, gb.se_dsf(st, data, band=BAND, theta0=theta0,
+                                                                   max_iter=3).model.theta)
+
+
+def test_els_keeps_the_noise_part_a_model_or_selection_carries(results, data):
+    fit = results["ELSResult"]
+    again = gb.els(fit, data)
+    assert list(again.model.noise_structure) == list(fit.model.noise_structure)
+    sel = gb.frols(gb.Candidates(2, 2, ne=3, degree=1), data, n_terms=3)
+    assert len(gb.els(sel, data).model.noise_structure) == 3
+
+
+# -- anything else: a TypeError that lists what is accepted -------------------------------------
+
+@pytest.mark.parametrize("call", [
+    lambda d, r: gb.j1({"not": "a model"}, d),
+    lambda d, r: gb.js(3.0, d),
+    lambda d, r: gb.jsf(r["ParetoSet"], d),
+    lambda d, r: gb.evaluate({"set": r["ParetoSet"]}, d),
+    lambda d, r: gb.residual_tests("model", d),
+    lambda d, r: gb.one_step_residuals(r["ParetoSet"], d),
+    lambda d, r: gb.ls_uncertainty(r["ParetoSet"], d),
+    lambda d, r: gb.pe_uncertainty(None, d, lambda1=0.5),
+    lambda d, r: plots.plot_free_run(d, r["ParetoSet"]),
+], ids=["j1", "js", "jsf", "evaluate", "residual_tests", "one_step_residuals", "ls_uncertainty", "pe_uncertainty",
+        "plot_free_run"])
+def test_a_model_argument_of_another_type_lists_what_is_accepted(results, data, call):
+    with pytest.raises(TypeError, match=r"must be a Model.*result that carries one in \.model.*ELSResult") as exc:
+        call(data, results)
+    if "ParetoSet" in str(exc.value):  # a set: how to choose one of its models
+        assert "member_model(i)" in str(exc.value) and "decide_dsf" in str(exc.value)
+
+
+@pytest.mark.parametrize("call", [
+    lambda d: gb.cls(3, d),
+    lambda d: gb.pe_pareto({"y(k-1)": 1.0}, d),
+    lambda d: gb.pe_thetas(None, d),
+    lambda d: gb.els(1.5, d),
+    lambda d: gb.se_pareto(object(), d, progress=False),
+    lambda d: gb.se_dsf("y(k-1)", d, band=BAND),
+    lambda d: gb.evaluate_thetas(2, np.zeros((1, 1)), d),
+    lambda d: gb.bootstrap_decision(7, d),
+], ids=["cls", "pe_pareto", "pe_thetas", "els", "se_pareto", "se_dsf", "evaluate_thetas", "bootstrap_decision"])
+def test_a_structure_argument_of_another_type_lists_what_is_accepted(data, call):
+    with pytest.raises(TypeError, match=r"structure must be a Structure, a sequence of terms.*Selection.*ELSResult"):
+        call(data)
+
+
+@pytest.mark.parametrize("call", [
+    lambda d, m: gb.j1(m, [d.valid]),
+    lambda d, m: gb.evaluate({"m": m}, d.valid),
+    lambda d, m: gb.evaluate_thetas(TRUE, np.atleast_2d(m.theta), "valid"),
+    lambda d, m: gb.els(TRUE, "ident"),
+    lambda d, m: gb.se_pareto(TRUE, {"u": 1}, progress=False),
+    lambda d, m: gb.residual_tests(m, 3),
+    lambda d, m: plots.plot_free_run(np.zeros(3), m),
+], ids=["j1", "evaluate", "evaluate_thetas", "els", "se_pareto", "residual_tests", "plot_free_run"])
+def test_a_data_argument_of_another_type_lists_what_is_accepted(results, data, call):
+    with pytest.raises(TypeError, match=r"must be a (Record|Dataset)"):
+        call(data, results["Model"])
+
+
+def test_a_static_argument_of_another_type_lists_what_is_accepted(data):
+    with pytest.raises(TypeError, match="static must be StaticPoints, a StaticCurve, a StaticSurface or None"):
+        gb.cls(TRUE, data, [1.0, 2.0])
+    with pytest.raises(TypeError, match="static must be StaticPoints or None"):
+        gb.se_pareto(TRUE, data, data.static.ubar, progress=False)
+
+
+# -- the static points: one resolution, cls included --------------------------------------------
+
+def test_every_estimator_takes_the_datasets_static_points(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        # cls: the Dataset's points are the static information as if given; 8 points for 5 clusters
+        # cannot all be passed through, so the curve the numerator carries is imposed (eq. (22))
+        res = gb.cls(TRUE, data)
+        assert res.static is data.static and res.constraints[0].startswith("static curve equality (22)")
+        np.testing.assert_array_equal(res.model.theta, gb.cls(TRUE, data.ident, data.static).model.theta)
+        np.testing.assert_array_equal(res.model.theta, gb.cls(TRUE, data.ident, data.static, how="curve").model.theta)
+        plain = gb.cls(TRUE, data.ident)
+        assert plain.static is None and plain.constraints == ()
+        assert not np.allclose(plain.model.theta, res.model.theta)  # the points changed the estimate
+        # PE and SE the same way
+        np.testing.assert_array_equal(gb.pe_thetas(TRUE, data, lambdas=[0.5]),
+                                      gb.pe_thetas(TRUE, data.ident, data.static, lambdas=[0.5]))
+        a = gb.se_pareto(TRUE, data, lambdas=[0.5], method="gradient", max_nfev=2, progress=False)
+        b = gb.se_pareto(TRUE, data.ident, data.static, lambdas=[0.5], method="gradient", max_nfev=2, progress=False)
+        np.testing.assert_array_equal(a.thetas, b.thetas)
+    # without any, each says it needs them, in the same words
+    for call in (lambda: gb.pe_thetas(TRUE, data.ident, lambdas=[0.5]),
+                 lambda: gb.se_pareto(TRUE, data.ident, progress=False),
+                 lambda: gb.se_dsf(TRUE, data.ident, band=BAND),
+                 lambda: gb.bootstrap_decision(TRUE, data.ident),
+                 lambda: gb.jsf(gb.Model(TRUE, THETA), gb.Dataset(data.ident, data.valid))):
+        with pytest.raises(ValueError, match="needs static points: pass static= or a Dataset with static points"):
+            call()
+
+
+# -- names: one per concept ---------------------------------------------------------------------
+
+def test_results_carry_their_model_as_an_attribute(results):
+    for kind in MODEL_CARRIERS[1:]:
+        assert isinstance(results[kind].model, gb.Model), kind
+    front = results["ParetoSet"]
+    assert isinstance(front.member_model(0), gb.Model) and not isinstance(getattr(front, "model"), gb.Model)
+    with pytest.warns(DeprecationWarning, match="member_model"):
+        old = front.model(1)
+    np.testing.assert_array_equal(old.theta, front.member_model(1).theta)
+
+
+def test_met_the_band_is_in_band_everywhere_and_old_files_load(results):
+    dsf = results["DSFResult"]
+    assert isinstance(dsf.in_band, bool)
+    with pytest.warns(DeprecationWarning, match="in_band"):
+        assert dsf.feasible == dsf.in_band
+    doc = json.loads(gb.to_json(dsf))
+    doc["object"]["feasible"] = doc["object"].pop("in_band")  # a file written before the rename
+    back = gb.from_json(json.dumps(doc))
+    assert back.in_band == dsf.in_band and back.JS == dsf.JS
+
+
+def test_an_old_graybox_selection_file_loads_with_in_band(results):
+    dec = results["Decision"]
+    table = pd.DataFrame({"source": ["semp"], "size": [6], "n_terms": [6], "added": [""], "estimator": ["pe"],
+                          "JS_valid": [dec.JS], "JSF": [dec.JSF], "in_band": [dec.in_band], "rank": [1]})
+    sel = gb.experiments.GrayboxSelection(dec.model.structure, dec.model, dec, table, 2, BAND, dec.in_band, "store.sqlite")
+    doc = json.loads(gb.to_json(sel))
+    doc["object"]["fallback"] = not doc["object"].pop("in_band")  # the old, inverted field
+    assert gb.from_json(json.dumps(doc)).in_band == dec.in_band
+
+
+# -- cluster names round-trip ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("structure, inputs", [
+    (TRUE, None),
+    (gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "y(k-1)^2"]), None),
+    (gb.Structure(["1", "y(k-1)", "u1(k-1)", "u2(k-1)^2", "u1(k-1)u2(k-1)", "u2(k-1)y(k-1)"]), ("u1", "u2")),
+])
+def test_every_printed_cluster_name_names_its_cluster(structure, inputs):
+    cm = gb.surface_cluster_map(structure, input_names=inputs) if inputs else gb.cluster_map(structure)
+    assert "Σ0" in cm.names
+    for i, name in enumerate(cm.names):
+        assert cm.index(name) == i, name
+    with pytest.raises(ValueError, match="no cluster"):
+        cm.index("Σy³")
+
+
+def test_cluster_bounds_by_every_printed_name(data):
+    m = gb.Model(TRUE, THETA)
+    for name, value in m.clusters().items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fit = gb.cls(TRUE, data.ident, constraints=gb.ClusterBounds({name: (value, value)})).model
+        assert fit.clusters()[name] == pytest.approx(value, abs=1e-9 * max(1.0, abs(value))), name
+
+
+# -- one keyword per concept: input_names=, seed= (the former names warn for one release) ----------
+
+def test_input_names_is_the_one_input_names_keyword():
+    st = gb.Structure(["1", "y(k-1)", "u1(k-1)", "u2(k-1)^2"])
+    new = gb.Candidates(1, 1, degree=1, input_names=("u1", "u2"))
+    assert {n for t in new for n in t.inputs} == {"u1", "u2"}
+    with pytest.warns(DeprecationWarning, match="input_names="):
+        old = gb.Candidates(1, 1, degree=1, inputs=("u1", "u2"))
+    assert list(old) == list(new)
+    with pytest.raises(TypeError, match="former name"):
+        gb.Candidates(1, 1, input_names=("u1", "u2"), inputs=("u1", "u2"))
+    th = np.array([0.2, 0.5, 0.3, 0.1])
+    pts = np.array([[1.0, 2.0]])
+    with pytest.warns(DeprecationWarning, match="input_names="):
+        a = gb.static_surface(st, th, pts, inputs=("u1", "u2"))
+    np.testing.assert_array_equal(a, gb.static_surface(st, th, pts, input_names=("u1", "u2")))
+    assert gb.surface_cluster_map(st, input_names=("u2", "u1")).inputs == ("u2", "u1")
+
+
+def test_seed_is_the_one_random_source_keyword():
+    from graybox.datasets.pumping import PumpingPlant, speed_reference
+
+    plant = PumpingPlant()
+    u = speed_reference(n_samples=1600, n_ident=800, seed=0)[:300]
+    with pytest.warns(DeprecationWarning, match="seed="):
+        old = plant.simulate(u, rng=3)
+    np.testing.assert_array_equal(old.y, plant.simulate(u, seed=3).y)
+
+
+def test_method_names_an_algorithm_and_estimator_an_estimator(data):
+    kw = dict(lambdas=[0.1, 1.0], n_boot=1, band=BAND, fallback="min_jsf", options={"solver": "closed"})
+    new = gb.bootstrap_decision(TRUE, data, estimator="pe", **kw)
+    with pytest.warns(DeprecationWarning, match="estimator="):
+        old = gb.bootstrap_decision(TRUE, data, method="pe", **kw)
+    assert new.estimator == old.estimator == "pe"
+    np.testing.assert_array_equal(new.thetas, old.thetas)
+    with pytest.warns(DeprecationWarning, match="estimator"):
+        assert new.method == "pe"
+
+
+def test_parallel_map_speaks_run_grids_words(data):
+    double = abs  # picklable, deterministic
+    with gb.experiments.parallel_map(executor="inprocess") as pmap:
+        assert pmap(double, [-1, 2, -3]) == [1, 2, 3]
+    with pytest.warns(DeprecationWarning, match="executor='processes'"):
+        with gb.experiments.parallel_map(workers=1, processes=True) as pmap:
+            assert pmap(double, [-4, 5]) == [4, 5]
+    with pytest.raises(ValueError, match="executor"):
+        with gb.experiments.parallel_map(executor="threads"):
+            pass
+    with pytest.raises(ValueError, match="client and scheduler are for executor='dask'"):
+        with gb.experiments.parallel_map(executor="processes", scheduler="tcp://x:1"):
+            pass
+
+
+def test_decision_makers_take_a_pareto_set_only(results, data):
+    for wrong in (results["ELSResult"], results["Decision"]):
+        with pytest.raises(TypeError, match="pareto must be a ParetoSet"):
+            gb.decide_dsf(wrong, band=BAND)
+        with pytest.raises(TypeError, match="pareto must be a ParetoSet"):
+            gb.decide_min_correlation(wrong, data)
+    front = results["ParetoSet"]
+    a = gb.decide_min_correlation(front, data)  # a Dataset: its identification record
+    assert a.index == gb.decide_min_correlation(front, data.ident).index
+
+
+def test_a_cls_result_is_saved_through_its_model(results, tmp_path):
+    res = results["CLSResult"]
+    with pytest.raises(ValueError, match="save its .model"):
+        gb.to_json(res)
+    back = gb.load(gb.save(res.model, tmp_path / "cls.json"), expect=gb.Model)
+    np.testing.assert_array_equal(back.theta, res.model.theta)
