@@ -245,7 +245,7 @@ def test_plant_closed_loop_pi_tracks_and_bad_references_are_named():
     assert run.u[-1] == pytest.approx(1200.0, abs=0.5)
     with pytest.raises(ValueError, match="sample 3"):
         plant.closed_loop(lambda k, y: 1000.0 if k < 3 else 5000.0, 10, u0=1000.0, noise=False, process_noise=False)
-    with pytest.raises(ValueError, match="rng"):
+    with pytest.raises(ValueError, match="pass seed"):
         plant.closed_loop(lambda k, y: 1000.0, 10, u0=1000.0)
 
 
