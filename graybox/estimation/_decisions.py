@@ -17,6 +17,7 @@ from ..core._records import Record
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
 from ..core._validation import check_choice
+from ..static._constraints import InfeasibleError
 
 __all__ = ["Decision", "decide_dsf", "decide_min_correlation", "FALLBACKS"]
 
@@ -82,7 +83,8 @@ def decide_dsf(
     band : float or (float, float)
         B = [0, band] (default 0.031 mlc² = 0.175², the transmitter's error), or (low, high).
     fallback : {None, "min_jsf"}
-        When no member has J_SF in B (with a finite J_S): None (default) raises ``ValueError``;
+        When no member has J_SF in B (with a finite J_S): None (default) raises
+        ``InfeasibleError`` (a ``ValueError``) naming the smallest J_SF reached;
         ``"min_jsf"`` picks the member with the smallest J_SF (ties: smaller J_S) instead. The
         choice must be explicit because the result then is *not* a D_SF decision.
 
@@ -112,14 +114,14 @@ def decide_dsf(
         finite = jsf[np.isfinite(jsf)]
         best = f"{finite.min():.4g}" if finite.size else "inf for every member"
         if fallback is None:
-            raise ValueError(
+            raise InfeasibleError(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
                 f"B = [{lo:g}, {hi:g}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
                 "the λ sweep, or pass fallback='min_jsf' to take the member with the smallest J_SF"
             )
         ok = np.flatnonzero(np.isfinite(jsf))
         if ok.size == 0:
-            raise ValueError("fallback 'min_jsf': every member has an undefined static curve (J_SF = inf)")
+            raise InfeasibleError("fallback 'min_jsf': every member has an undefined static curve (J_SF = inf)")
         i = int(ok[np.lexsort((ok, pareto.JS[ok], jsf[ok]))[0]])
         return _decision(pareto, i, "min J_SF", False, jsf[i], f"{pareto.method} min J_SF (no member in B)")
 

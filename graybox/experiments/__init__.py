@@ -20,11 +20,11 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "_cell": ("COLUMNS", "STATUSES", "run_cell"),
     "_example": ("EXAMPLE_SPEC",),
     "_executors": ("EXECUTORS",),
-    "_report": ("RULES", "heatmap_table", "leaderboard", "plot_fronts", "plot_heatmap", "plot_scatter", "write_report"),
+    "_report": ("RULES", "GridStatus", "grid_status", "heatmap_table", "leaderboard", "plot_fronts", "plot_heatmap", "plot_scatter", "write_report"),
     "_map": ("parallel_map",),
     "_run": ("GridRun", "run_grid"),
     "_select": ("GrayboxSelection", "select_graybox"),
     "_spec": ("BUNDLED", "CONSTRAINT_TYPES", "DECISION_RULES", "ESTIMATORS", "Cell", "DataSpec", "DecisionRule", "Grid",
               "SpecError", "StructureSpec", "Variant"),
-    "_store": ("StoreError", "load_results"),
+    "_store": ("StoreError", "compare_results", "load_results", "store_specs"),
 })
