@@ -215,7 +215,8 @@ def heatmap_table(
 
     Parameters
     ----------
-    results : DataFrame or path
+    results : DataFrame, path or sequence of paths
+        As for :func:`leaderboard`.
     data : str, optional
         The data set (default: the only one; required when the grid has several).
     value : str
@@ -297,12 +298,14 @@ def plot_scatter(
 ) -> Figure:
     """J_S on the validation record against J_SF of every cell's chosen model, band drawn.
 
-    One panel per data set (or only ``data``); colour = variant, marker = structure; log axes.
+    One panel per data set (or only ``data``); colour = variant, marker = structure; an axis is
+    logarithmic where its values span a decade or more (tick labels never overlap).
     Cells without a finite chosen model (infeasible, diverged, failed) are counted in the title.
 
     Parameters
     ----------
-    results : DataFrame or path
+    results : DataFrame, path or sequence of paths
+        As for :func:`leaderboard`.
     data : str, optional
         Only this data set.
     band : float or mapping data -> float, optional
@@ -356,7 +359,8 @@ def plot_fronts(
 
     Parameters
     ----------
-    results : DataFrame or path
+    results : DataFrame, path or sequence of paths
+        As for :func:`leaderboard`.
     data : str, optional
         The data set (required when the grid has several).
     structures : sequence of str, optional
@@ -439,7 +443,8 @@ def plot_heatmap(
 
     Parameters
     ----------
-    results : DataFrame or path
+    results : DataFrame, path or sequence of paths
+        As for :func:`leaderboard`.
     data : str, optional
         The data set (required when the grid has several).
     value, rule, band
