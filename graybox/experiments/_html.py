@@ -61,28 +61,30 @@ def _img(name: str, png: bytes) -> str:
     return f'<figure><img alt="{_e(name)}" src="data:image/png;base64,{data}"><figcaption>{_e(name)}</figcaption></figure>'
 
 
-def _environment(df: pd.DataFrame) -> dict[str, str]:
+def _environment(attrs: Mapping) -> dict[str, str]:
     import matplotlib
     import numpy
 
     from .. import _api as gb
 
-    return {"graybox (this report)": gb.__version__, "graybox (the cells)": str(df.attrs.get("version")),
+    return {"graybox (this report)": gb.__version__, "graybox (the cells)": str(attrs.get("version")),
             "python": sys.version.split()[0], "numpy": numpy.__version__, "pandas": pd.__version__,
             "matplotlib": matplotlib.__version__, "platform": platform.platform(),
-            "store": str(df.attrs.get("store")), "cells shown": str(df.attrs.get("selection", "latest")),
+            "store": str(attrs.get("store")), "cells shown": str(attrs.get("selection", "latest")),
             "written": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
 
 
 def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Sequence[str],
-                figures: Mapping[str, bytes]) -> str:
+                figures: Mapping[str, bytes], attrs: Mapping | None = None) -> str:
     """The page's text: ``df`` from :func:`graybox.load_results`, ``lb`` its leaderboard,
-    ``summary`` the lines of summary.txt, ``figures`` PNG bytes by file name."""
-    title = f"graybox grid report: {df.attrs.get('grid')}"
+    ``summary`` the lines of summary.txt, ``figures`` PNG bytes by file name, ``attrs`` the
+    store's facts (default ``df.attrs``)."""
+    attrs = df.attrs if attrs is None else attrs
+    title = f"graybox grid report: {attrs.get('grid')}"
     counts = df["status"].value_counts()
     parts = [f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{_e(title)}</title>"
              f"<style>{_CSS}</style></head><body><h1>{_e(title)}</h1>"]
-    parts.append("<p>" + _e(f"{len(df)} of {df.attrs.get('n_cells', len(df))} cells in the store: ") + ", ".join(
+    parts.append("<p>" + _e(f"{len(df)} of {attrs.get('n_cells', len(df))} cells in the store: ") + ", ".join(
         f'<span class="{"st-ok" if s == "ok" else "st-bad"}">{int(counts.get(s, 0))} {_e(s)}</span>'
         for s in STATUSES) + _e(f". Ranking rule: {rule}.") + "</p>")
     # the reasons first: what did not work, and why
@@ -107,7 +109,7 @@ def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Seque
     for name, png in figures.items():
         parts.append(_img(name, png))
     parts.append("<h2 id=\"summary\">Summary (summary.txt)</h2><pre>" + _e("\n".join(summary)) + "</pre>")
-    specs = df.attrs.get("specs") or []
+    specs = attrs.get("specs") or []
     if specs:
         parts.append("<h2 id=\"specs\">Specs of the store</h2>")
         rows = pd.DataFrame([{k: s.get(k) for k in ("store", "id", "name", "created", "last_run", "version", "n_cells")
@@ -118,7 +120,7 @@ def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Seque
             parts.append(f"<details><summary>{_e(label)}</summary><pre>"
                          f"{_e(json.dumps(s.get('spec'), indent=2, sort_keys=True))}</pre></details>")
     parts.append("<h2 id=\"environment\">Environment</h2>")
-    env = pd.DataFrame(list(_environment(df).items()), columns=["", "value"])
+    env = pd.DataFrame(list(_environment(attrs).items()), columns=["", "value"])
     parts.append(_table(env, index=False, text_cols=("", "value")))
     parts.append("</body></html>\n")
     return "\n".join(parts)

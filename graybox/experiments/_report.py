@@ -41,15 +41,24 @@ _KEYS = ["data", "structure", "variant"]
 _MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">", "h", "p")
 
 
-def _frame(results: pd.DataFrame | str | os.PathLike | Sequence, spec: str | int = "latest") -> pd.DataFrame:
+def _frame(results: pd.DataFrame | str | os.PathLike | Sequence, spec: str | int = "latest",
+           attrs: bool = False) -> pd.DataFrame:
+    """The results as a frame; without its ``attrs`` unless asked (pandas deep-copies them on every
+    operation, and a store's specs made that the larger part of a leaderboard's time)."""
     if isinstance(results, pd.DataFrame):
         missing = {"data", "structure", "variant", "status", "JS_valid", "JSF", "members"} - set(results.columns)
         if missing:
             raise ValueError(f"results must come from graybox.load_results; missing columns {sorted(missing)}")
-        return results
-    if isinstance(results, (list, tuple)):
-        return compare_results(results, spec=spec)
-    return load_results(results, spec=spec)
+        df = results
+    elif isinstance(results, (list, tuple)):
+        df = compare_results(results, spec=spec)
+    else:
+        df = load_results(results, spec=spec)
+    if attrs or not df.attrs:
+        return df
+    bare = df.copy(deep=False)
+    bare.attrs = {}
+    return bare
 
 
 def _n_params(df: pd.DataFrame) -> pd.Series:
@@ -522,7 +531,9 @@ def write_report(
     list of Path
         The files written.
     """
-    df = _frame(list(store) if isinstance(store, (list, tuple)) else store, spec=spec)
+    df = _frame(list(store) if isinstance(store, (list, tuple)) else store, spec=spec, attrs=True)
+    attrs = dict(df.attrs)
+    df = _frame(df)
     o = Path(out)
     o.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
@@ -548,7 +559,7 @@ def write_report(
     save(o / "cells.csv", flat.set_index("key"))
     lb = leaderboard(df, rule=rule, band=band)
     save(o / "leaderboard.csv", lb)
-    lines = _summary_lines(df, lb, rule)
+    lines = _summary_lines(df, lb, rule, attrs)
     for d in dict.fromkeys(df["data"]):
         slug = _slug(d)
         save(o / f"heatmap_{slug}.csv", heatmap_table(df, data=d, rule=rule, band=band))
@@ -559,16 +570,18 @@ def write_report(
     if html:
         from ._html import report_page
 
-        save(o / "report.html", report_page(df, lb, rule=rule, summary=lines, figures=pngs))
+        save(o / "report.html", report_page(df, lb, rule=rule, summary=lines, figures=pngs, attrs=attrs))
     return written
 
 
-def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str) -> list[str]:
-    """summary.txt: counts, the best five per data set, and every reason."""
+def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping | None = None) -> list[str]:
+    """summary.txt: counts, the best five per data set, and every reason (``attrs``: the store's,
+    default ``df.attrs``)."""
+    attrs = df.attrs if attrs is None else attrs
     counts = df["status"].value_counts()
-    fp = df.attrs.get("fingerprint")
-    lines = [f"grid {df.attrs.get('grid')!r} ({f'fingerprint {fp}, ' if fp else ''}graybox "
-             f"{df.attrs.get('version')}): {len(df)} of {df.attrs.get('n_cells', len(df))} cells in the store; "
+    fp = attrs.get("fingerprint")
+    lines = [f"grid {attrs.get('grid')!r} ({f'fingerprint {fp}, ' if fp else ''}graybox "
+             f"{attrs.get('version')}): {len(df)} of {attrs.get('n_cells', len(df))} cells in the store; "
              + ", ".join(f"{int(counts.get(s, 0))} {s}" for s in STATUSES),
              f"ranking rule: {rule}"]
     for d in dict.fromkeys(df["data"]):
@@ -665,8 +678,10 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
     GridStatus
     """
     df = load_results(store, spec=spec)
+    attrs = dict(df.attrs)
+    df = _frame(df)
     counts = {s: int((df["status"] == s).sum()) for s in STATUSES}
-    n = int(df.attrs.get("n_cells", len(df)))
+    n = int(attrs.get("n_cells", len(df)))
     wall = df["wall_time"].astype(float)
     best = pd.DataFrame()
     if len(df):
@@ -677,8 +692,8 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
         top = lb.dropna(subset=["JS_valid"]).reset_index().groupby("data", sort=False).head(1)
         best = top.set_index("data")[["structure", "variant", "JS_valid", "JSF", "n_params"]]
     last = df["finished_at"].dropna()
-    sel = df.attrs.get("selection")
-    return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(df.attrs.get("grid")),
+    sel = attrs.get("selection")
+    return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(attrs.get("grid")),
                       n, len(df), max(0, n - len(df)), MappingProxyType(counts),
                       float(wall.mean()) if wall.notna().any() else float("nan"), max(last) if len(last) else None,
-                      best, len(df.attrs.get("specs", [])))
+                      best, len(attrs.get("specs", [])))
