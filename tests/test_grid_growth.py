@@ -393,3 +393,27 @@ def test_fronts_shade_only_the_band_inside_the_panel(base_store):
     for ax in above.axes:
         if ax.get_visible():
             assert not ax.patches and any("above every point" in t.get_text() for t in ax.texts)
+
+
+def test_select_graybox_table_says_why_a_structure_has_no_figures():
+    """The band no structure reaches: each structure's row in select_graybox's table carries the
+    leaderboard's reason (the smallest J_SF reached), not a bare NaN."""
+    import warnings
+
+    true = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
+    m = gb.Model(true, np.array([0.6, 0.2, 0.3, 0.05, 0.4]))
+    rng = np.random.default_rng(1)
+    recs = []
+    for _ in range(2):
+        u = np.repeat(rng.uniform(0.0, 3.0, 49), 25)[:1200]
+        recs.append(gb.Record(u, m.simulate(u, np.zeros(2)) + 0.02 * rng.standard_normal(1200)))
+    ub = np.linspace(-0.5, 3.5, 7)
+    far = gb.StaticPoints(ub, m.static_curve(ub) + 0.5 * (-1.0) ** np.arange(7))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), gb.Dataset(recs[0], recs[1], far), band=1e-6,
+                                sizes=[5], fallback="min_jsf")
+    t = res.table
+    assert t["JS_valid"].isna().all() and (~t["in_band"]).all()
+    for reason in t["reason"]:
+        assert re.search(r"no model has J_SF ≤ B = 1e-06: the smallest J_SF reached is [0-9.e+-]+", reason)
