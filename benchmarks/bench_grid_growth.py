@@ -66,19 +66,15 @@ def main() -> None:
         for r in range(args.repeat):
             d = tmp / f"r{r}"
             d.mkdir()
-            t, run = timed(lambda: gx.run_grid(base, d / "base.sqlite"))
-            results.setdefault("first run (base spec, new store)", []).append(t)
-            counts["first run (base spec, new store)"] = run.ran
-            t, run = timed(lambda: gx.run_grid(base, d / "base.sqlite"))
-            results.setdefault("same spec again (nothing runs)", []).append(t)
-            counts["same spec again (nothing runs)"] = run.ran
-            shutil.copy(d / "base.sqlite", d / "grown.sqlite")
-            t, run = timed(lambda: gx.run_grid(grown, d / "grown.sqlite"))
-            results.setdefault("grown spec on the finished store", []).append(t)
-            counts["grown spec on the finished store"] = run.ran
-            t, run = timed(lambda: gx.run_grid(grown, d / "fresh.sqlite"))
-            results.setdefault("grown spec into a new store", []).append(t)
-            counts["grown spec into a new store"] = run.ran
+            for label, g, store, start in (("first run (base spec, new store)", base, "base", None),
+                                           ("same spec again (nothing runs)", base, "base", None),
+                                           ("grown spec on the finished store", grown, "grown", "base"),
+                                           ("grown spec into a new store", grown, "fresh", None)):
+                if start is not None:
+                    shutil.copy(d / f"{start}.sqlite", d / f"{store}.sqlite")
+                t, run = timed(lambda: gx.run_grid(g, d / f"{store}.sqlite"))
+                results.setdefault(label, []).append(t)
+                counts[label] = run.ran
             for label, fn in (("load_results (latest spec)", lambda: gx.load_results(d / "grown.sqlite")),
                               ("load_results (spec='all')", lambda: gx.load_results(d / "grown.sqlite", spec="all")),
                               ("grid_status", lambda: gx.grid_status(d / "grown.sqlite")),

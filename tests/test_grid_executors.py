@@ -199,6 +199,28 @@ def _count(store: Path) -> int:
         return 0
 
 
+def _kill_when(proc: subprocess.Popen, store: Path, cells: int, watch=None) -> int:
+    """SIGKILL ``proc`` once the store holds ``cells`` cells (``watch(count)`` called while it
+    waits); the cells the store then holds."""
+    try:
+        deadline = time.monotonic() + 120
+        while _count(store) < cells:
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "the grid did not get that far"
+            if watch is not None:
+                watch(_count(store))
+            time.sleep(0.01)
+        if watch is not None:
+            watch(_count(store))
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == -signal.SIGKILL
+    return _count(store)
+
+
 def test_driver_killed_mid_grid_then_run_again(tmp_path):
     spec = tmp_path / "spec.toml"
     spec.write_text(SPEC)
@@ -207,19 +229,7 @@ def test_driver_killed_mid_grid_then_run_again(tmp_path):
     assert n == 10
     proc = subprocess.Popen([sys.executable, "-m", "graybox._cli", "grid", "run", str(spec), "--store", str(store)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    try:
-        deadline = time.monotonic() + 120
-        while _count(store) < 2:
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline, "the grid did not start"
-            time.sleep(0.01)
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == -signal.SIGKILL
-    done = _count(store)
+    done = _kill_when(proc, store, 2)
     assert 2 <= done < n, f"{done} of {n} cells were finished when the driver was killed"
     again = gx.run_grid(spec, store)
     assert again.skipped == done and again.ran == n - done
@@ -386,26 +396,16 @@ def test_a_growing_run_watched_then_killed_then_resumed(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "graybox._cli", "grid", "run", str(spec), "--store", str(store)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     seen = []
-    try:
-        deadline = time.monotonic() + 120
-        while _count(store) < 2 + 2:
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline, "the grid did not grow"
-            if _count(store) > 2:  # the new spec is registered and cells are coming in
-                seen.append(gx.grid_status(store))
-            time.sleep(0.01)
-        seen.append(gx.grid_status(store))
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == -signal.SIGKILL
+
+    def watch(count: int) -> None:
+        if count > 2:  # the new spec is registered and its cells are coming in
+            seen.append(gx.grid_status(store))
+
+    done = _kill_when(proc, store, 2 + 2, watch)
     # read while the other process wrote: the growing spec, done + left = its cells
     assert seen and all(s.spec == 2 and s.cells == n and s.done + s.left == n for s in seen)
     assert seen[-1].done >= 4 and seen[-1].counts["ok"] >= 2 and np.isfinite(seen[-1].time_per_cell)
     assert "best so far" in seen[-1].summary()
-    done = _count(store)
     assert 4 <= done < n, f"{done} of {n} cells were in the store when the run was killed"
     again = gx.run_grid(spec, store)
     assert (again.skipped, again.ran, again.spec) == (done, n - done, 2)

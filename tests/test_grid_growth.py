@@ -147,23 +147,24 @@ def test_same_name_other_data_is_refused_untouched(base_store, tmp_path):
     assert path.read_bytes() == before
 
 
-def test_a_store_of_a_newer_graybox_is_refused(base_store, tmp_path):
-    newer_format = copy_of(base_store, tmp_path, "format.sqlite")
-    con = sqlite3.connect(newer_format)
-    con.execute("UPDATE meta SET value = '99' WHERE key = 'format_version'")
+def _edited(store: Path, tmp_path: Path, name: str, sql: str) -> tuple[Path, bytes]:
+    """A copy of ``store`` changed by one SQL statement, and its bytes."""
+    p = copy_of(store, tmp_path, name)
+    con = sqlite3.connect(p)
+    con.execute(sql)
     con.commit()
     con.close()
-    before = newer_format.read_bytes()
+    return p, p.read_bytes()
+
+
+def test_a_store_of_a_newer_graybox_is_refused(base_store, tmp_path):
+    newer_format, before = _edited(base_store, tmp_path, "format.sqlite",
+                                   "UPDATE meta SET value = '99' WHERE key = 'format_version'")
     for call in (lambda: gx.run_grid(grid(), newer_format), lambda: gx.load_results(newer_format)):
         with pytest.raises(gx.StoreError, match=re.escape(str(newer_format)) + ".*newer graybox.*Upgrade graybox"):
             call()
     assert newer_format.read_bytes() == before
-    newer_cells = copy_of(base_store, tmp_path, "cells.sqlite")
-    con = sqlite3.connect(newer_cells)
-    con.execute("UPDATE specs SET graybox_version = '99.0'")
-    con.commit()
-    con.close()
-    before = newer_cells.read_bytes()
+    newer_cells, before = _edited(base_store, tmp_path, "cells.sqlite", "UPDATE specs SET graybox_version = '99.0'")
     with pytest.raises(gx.StoreError, match="graybox 99.0.*newer than this graybox.*upgrade graybox"):
         gx.run_grid(grid(), newer_cells)
     assert newer_cells.read_bytes() == before
