@@ -100,28 +100,36 @@ def _band_of(rows: pd.DataFrame, band: float | Mapping[str, float] | None, data:
     return float(b.iloc[0])
 
 
+_CANDIDATE_COLUMNS = ("seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params", "chosen", "status")
+
+
 def _candidates(g: pd.DataFrame) -> pd.DataFrame:
-    """Every model of a (data, structure, variant): Pareto members and single models."""
-    out = []
-    g = g.assign(n_params=_n_params(g))
-    for _, r in g.iterrows():
-        m = r["members"]
+    """Every model of a (data, structure, variant): Pareto members and single models (one frame
+    built from columns: a frame per row made the leaderboard's time)."""
+    cols: dict[str, list] = {k: [] for k in _CANDIDATE_COLUMNS}
+    sizes = _n_params(g).tolist()
+    for r, n_p in zip(g[["members", "lambda1", "seed", "status", "JS_ident", "JS_valid", "JSF",
+                         "fit_valid"]].itertuples(index=False), sizes):
+        m = r.members
         if isinstance(m, Mapping) and len(m.get("JSF", ())):
             K = len(m["JSF"])
-            chosen = r["lambda1"]
-            out.append(pd.DataFrame({
-                "seed": [r["seed"]] * K, "lambda1": m["lambda1"], "JS_ident": m["JS"], "JS_valid": m["JS_valid"],
-                "JSF": m["JSF"], "fit_valid": m.get("fit_valid", np.full(K, np.nan)),
-                "n_params": [r["n_params"]] * K, "chosen": np.isclose(m["lambda1"], chosen) if pd.notna(chosen)
-                else np.zeros(K, bool), "status": [r["status"]] * K}))
-        elif r["status"] == "ok":
-            out.append(pd.DataFrame({"seed": [r["seed"]], "lambda1": [np.nan], "JS_ident": [r["JS_ident"]],
-                                     "JS_valid": [r["JS_valid"]], "JSF": [r["JSF"]], "fit_valid": [r["fit_valid"]],
-                                     "n_params": [r["n_params"]], "chosen": [True], "status": [r["status"]]}))
-    if not out:
-        return pd.DataFrame(columns=["seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params",
-                                     "chosen", "status"])
-    return pd.concat(out, ignore_index=True)
+            lam = np.asarray(m["lambda1"], float)
+            parts = {"seed": [r.seed] * K, "lambda1": lam, "JS_ident": m["JS"], "JS_valid": m["JS_valid"],
+                     "JSF": m["JSF"], "fit_valid": m.get("fit_valid", np.full(K, np.nan)), "n_params": [n_p] * K,
+                     "chosen": np.isclose(lam, r.lambda1) if pd.notna(r.lambda1) else np.zeros(K, bool),
+                     "status": [r.status] * K}
+        elif r.status == "ok":
+            parts = {"seed": [r.seed], "lambda1": [np.nan], "JS_ident": [r.JS_ident], "JS_valid": [r.JS_valid],
+                     "JSF": [r.JSF], "fit_valid": [r.fit_valid], "n_params": [n_p], "chosen": [True],
+                     "status": [r.status]}
+        else:
+            continue
+        for k, v in parts.items():
+            cols[k].extend(np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
+    out = pd.DataFrame(cols, columns=list(_CANDIDATE_COLUMNS))
+    for k in ("lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid"):
+        out[k] = out[k].astype(float)
+    return out
 
 
 def leaderboard(
