@@ -374,6 +374,12 @@ def test_figures_have_tick_labels_that_never_overlap(base_store, lo, hi):
     assert not _labels_overlap(fig, ax)
     assert ax.get_xscale() == ("log" if hi >= 10 * lo else "linear")
     assert len([t for t in ax.get_xticklabels() if t.get_text()]) >= 1
+    heat = gx.plot_heatmap(df, band=1e9)  # every model in the band: the colours are the J_S above
+    assert not _labels_overlap(heat, heat.axes[1])  # the colour bar
+    fronts = gx.plot_fronts(df, band=1e9)
+    for a in fronts.axes:
+        if a.get_visible():
+            assert not _labels_overlap(fronts, a)
 
 
 def test_fronts_shade_only_the_band_inside_the_panel(base_store):

@@ -272,23 +272,31 @@ def _finite_pos(x: np.ndarray) -> np.ndarray:
     return np.isfinite(x) & (x > 0)
 
 
-def _scale(ax, which: str, values) -> None:
-    """A log axis where the values span a decade or more, else a linear one; few major ticks and
-    no minor labels, so that tick labels never run into each other at any data range."""
+def _spans_decades(values) -> bool:
+    """Whether the finite positive values span a decade or more (then a log scale reads best)."""
     v = np.asarray(values, float)
     v = v[_finite_pos(v)]
-    axis = ax.xaxis if which == "x" else ax.yaxis
-    if v.size and v.max() >= 10 * v.min():
-        (ax.set_xscale if which == "x" else ax.set_yscale)("log")
+    return bool(v.size) and v.max() >= 10 * v.min()
+
+
+def _ticks(axis, log: bool, nbins: int) -> None:
+    """Few major ticks and no minor labels, so that tick labels never run into each other."""
+    if log:
         axis.set_major_locator(LogLocator(base=10, numticks=5))
         axis.set_minor_locator(LogLocator(base=10, subs=np.arange(2, 10) * 0.1, numticks=12))
         axis.set_minor_formatter(NullFormatter())
     else:
-        (ax.set_xscale if which == "x" else ax.set_yscale)("linear")
-        axis.set_major_locator(MaxNLocator(nbins=4 if which == "x" else 6, min_n_ticks=2))
+        axis.set_major_locator(MaxNLocator(nbins=nbins, min_n_ticks=2))
         fmt = ScalarFormatter(useMathText=True)
         fmt.set_powerlimits((-2, 3))  # 0.0123 reads 1.23 with ×10⁻² once at the axis end
         axis.set_major_formatter(fmt)
+
+
+def _scale(ax, which: str, values) -> None:
+    """A log axis where the values span a decade or more, else a linear one (see :func:`_ticks`)."""
+    log = _spans_decades(values)
+    (ax.set_xscale if which == "x" else ax.set_yscale)("log" if log else "linear")
+    _ticks(ax.xaxis if which == "x" else ax.yaxis, log, 4 if which == "x" else 6)
 
 
 def _band_on(ax, b: float | None, label: bool = False) -> None:
@@ -456,7 +464,7 @@ def plot_heatmap(
     rule: str = "dsf_valid",
     band: float | Mapping[str, float] | None = None,
 ) -> Figure:
-    """Structure × variant heat map of a leaderboard figure (log colour scale for errors).
+    """Structure × variant heat map of a leaderboard figure (log colour scale for errors that span a decade).
 
     Parameters
     ----------
@@ -477,7 +485,7 @@ def plot_heatmap(
     fig = Figure(figsize=(1.2 + 1.1 * t.shape[1], 1.4 + 0.5 * t.shape[0]), layout="constrained")
     ax = fig.add_subplot()
     pos = np.isfinite(vals) & (vals > 0)
-    log = value.startswith("J") and pos.any()
+    log = value.startswith("J") and _spans_decades(vals)
     norm = LogNorm(vmin=vals[pos].min(), vmax=vals[pos].max()) if log else None
     shown = np.where(pos if log else np.isfinite(vals), vals, np.nan)
     im = ax.imshow(np.ma.masked_invalid(shown), cmap="viridis_r" if value.startswith("J") else "viridis",
@@ -493,7 +501,8 @@ def plot_heatmap(
             r, g, b_ = np.asarray(im.to_rgba(np.array([v])), float).reshape(-1)[:3]  # one value: vmin = vmax
             light = 0.299 * r + 0.587 * g + 0.114 * b_ > 0.5  # dark text on light colours
             ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7, color="k" if light else "w")
-    fig.colorbar(im, ax=ax, label=value)
+    cbar = fig.colorbar(im, ax=ax, label=value)
+    _ticks(cbar.ax.yaxis, log, 5)
     d = _one_data(_frame(results), data)
     ax.set_title(f"{d}: {value} ({rule})", fontsize=9)
     return fig
