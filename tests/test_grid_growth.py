@@ -320,6 +320,14 @@ def test_cli_status_report_html_and_growth(tmp_path, capsys, monkeypatch, base_s
     assert "no spec 7" in capsys.readouterr().err
     assert main(["grid", "status", str(tmp_path / "missing.sqlite")]) == 2
     assert "no such store" in capsys.readouterr().err
+    garbled = bytearray(path.read_bytes())
+    garbled[4096: 4096 + 512] = bytes(range(256)) * 2  # a page of the store overwritten
+    bad = tmp_path / "bad.sqlite"
+    bad.write_bytes(bytes(garbled))
+    for cmd in (["grid", "status", str(bad)], ["grid", "report", str(bad), "--out", "x"]):
+        assert main(cmd) == 2
+        err = capsys.readouterr().err
+        assert str(bad) in err and "damaged" in err and "restore it from a copy" in err
 
 
 # --------------------------------------------------------------------------------------------

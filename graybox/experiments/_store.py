@@ -39,6 +39,8 @@ FORMAT = "graybox-grid-store"
 FORMAT_VERSION = "2"
 READS = ("1", "2")
 _SQLITE_MAGIC = b"SQLite format 3\x00"
+#: What to do with a damaged store.
+_DAMAGED = "restore it from a copy, or run the spec into a new --store path"
 #: Pages of write-ahead log after which a commit folds the log into the database.
 WAL_PAGES = 128
 
@@ -109,7 +111,7 @@ def _read_meta(conn: sqlite3.Connection, path: Path) -> dict[str, str]:
         ok = conn.execute("PRAGMA quick_check").fetchone()
         if ok is None or ok[0] != "ok":
             raise StoreError(f"{path} is damaged (SQLite integrity check: {ok[0] if ok else 'no answer'}); "
-                             "nothing was written to it. Run the spec into a new --store path")
+                             f"nothing was written to it; {_DAMAGED}")
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
         if not {"meta", "cells"} <= tables:
             raise StoreError(f"{path} is an SQLite database but not a graybox grid store (tables: "
@@ -117,10 +119,11 @@ def _read_meta(conn: sqlite3.Connection, path: Path) -> dict[str, str]:
         meta = dict(conn.execute("SELECT key, value FROM meta").fetchall())
         cols = [r[1] for r in conn.execute("PRAGMA table_info(cells)")]
     except sqlite3.DatabaseError as exc:
-        raise StoreError(f"{path} is damaged or not a graybox grid store ({exc}); nothing was written to it") from None
+        raise StoreError(f"{path} is damaged or not a graybox grid store ({exc}); nothing was written to it; "
+                         f"{_DAMAGED}") from None
     if meta.get("format") != FORMAT:
         raise StoreError(f"{path} is an SQLite database but not a graybox grid store (no format mark); nothing "
-                         "was written to it")
+                         "was written to it. Choose another --store path")
     fv = meta.get("format_version")
     if fv not in READS:
         if _newer(fv, FORMAT_VERSION):
@@ -131,9 +134,9 @@ def _read_meta(conn: sqlite3.Connection, path: Path) -> dict[str, str]:
                          f"{', '.join(READS)}; nothing was written to it")
     if cols != list(COLUMNS):
         raise StoreError(f"{path}: the cells table has columns {cols}, expected {list(COLUMNS)}: damaged or "
-                         "written by another graybox")
+                         f"written by another graybox; {_DAMAGED}")
     if fv != "1" and not {"specs", "spec_cells"} <= tables:
-        raise StoreError(f"{path} is damaged: a store of format {fv} without its specs tables")
+        raise StoreError(f"{path} is damaged: a store of format {fv} without its specs tables; {_DAMAGED}")
     return meta
 
 
@@ -265,7 +268,7 @@ class ResultStore:
                         for name, h in json.loads(s["data"]).items():
                             known.setdefault(name, h)
             except sqlite3.DatabaseError as exc:
-                raise StoreError(f"{p} is damaged ({exc}); nothing was written to it") from None
+                raise StoreError(f"{p} is damaged ({exc}); nothing was written to it; {_DAMAGED}") from None
             finally:
                 ro.close()
         conn = _connect(p)
@@ -465,7 +468,7 @@ def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dic
         else:
             rows = _all_rows(conn, cols)
     except sqlite3.DatabaseError as exc:
-        raise StoreError(f"{p} is damaged ({exc})") from None
+        raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
     finally:
         conn.close()
     return meta, specs, rows, chosen
@@ -534,7 +537,7 @@ def store_specs(path: str | os.PathLike) -> pd.DataFrame:
             held = dict(conn.execute("SELECT s.spec, COUNT(*) FROM spec_cells s JOIN cells c ON c.key = s.key "
                                      "GROUP BY s.spec").fetchall())
     except sqlite3.DatabaseError as exc:
-        raise StoreError(f"{p} is damaged ({exc})") from None
+        raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
     finally:
         conn.close()
     rows = [dict(_spec_info(s), held=int(held.get(s["id"], 0))) for s in specs]
