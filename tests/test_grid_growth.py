@@ -432,3 +432,25 @@ def test_select_graybox_table_says_why_a_structure_has_no_figures():
     assert t["JS_valid"].isna().all() and (~t["in_band"]).all()
     for reason in t["reason"]:
         assert re.search(r"no model has J_SF ≤ B = 1e-06: the smallest J_SF reached is [0-9.e+-]+", reason)
+
+
+def test_the_cell_and_decide_dsf_share_one_no_member_in_band_rule():
+    """D_SF with no member in the band raises InfeasibleError (still a ValueError) naming the smallest
+    J_SF; a grid cell records exactly that message as its infeasible status."""
+    from graybox.estimation._decisions import min_jsf_index
+
+    data = gb.load_pumping()
+    st = gb.parse_structure(FIRST.terms)
+    front = gb.pe_pareto(st, data, lambdas=[1e-3, 1e-2, 1e-1, 1.0], solver="closed")
+    with pytest.raises(gb.InfeasibleError, match=f"the smallest J_SF is {np.min(front.JSF):.4g}") as err:
+        gb.decide_dsf(front, band=1e-12)
+    assert isinstance(err.value, ValueError)
+    i = min_jsf_index(front)
+    assert front.JSF[i] == np.min(front.JSF)
+    assert gb.decide_dsf(front, band=1e-12, fallback="min_jsf").index == i
+    g = gx.Grid([gx.DataSpec("pumping", bundled="pumping", band=1e-12)], [FIRST],
+                [gx.Variant("PE", "pe", lambdas=[1e-3, 1e-2, 1e-1, 1.0], options={"solver": "closed"})])
+    from graybox.experiments._cell import run_cell
+
+    row = run_cell(g.cells()[0], data)
+    assert row["status"] == "infeasible" and row["message"] == str(err.value)

@@ -64,6 +64,16 @@ def _decision(pareto: ParetoSet, i: int, rule: str, in_band: bool, score: float,
     return Decision(pareto.model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
                     float(pareto.JSF[i]), rule, in_band, float(score))
 
+def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF") -> int:
+    """The member with the smallest J_SF (ties: the smaller J_S, then the lower index);
+    ``InfeasibleError`` naming ``what`` when every member's static curve is undefined."""
+    jsf = pareto.JSF
+    ok = np.flatnonzero(np.isfinite(jsf))
+    if ok.size == 0:
+        raise InfeasibleError(f"{what}: every member has an undefined static curve (J_SF = inf)")
+    return int(ok[np.lexsort((ok, pareto.JS[ok], jsf[ok]))[0]])
+
+
 #: What :func:`decide_dsf` may do when no member lies in the band, if the user says so.
 FALLBACKS = ("min_jsf",)
 
@@ -119,10 +129,7 @@ def decide_dsf(
                 f"B = [{lo:g}, {hi:g}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
                 "the λ sweep, or pass fallback='min_jsf' to take the member with the smallest J_SF"
             )
-        ok = np.flatnonzero(np.isfinite(jsf))
-        if ok.size == 0:
-            raise InfeasibleError("fallback 'min_jsf': every member has an undefined static curve (J_SF = inf)")
-        i = int(ok[np.lexsort((ok, pareto.JS[ok], jsf[ok]))[0]])
+        i = min_jsf_index(pareto, "fallback 'min_jsf'")
         return _decision(pareto, i, "min J_SF", False, jsf[i], f"{pareto.method} min J_SF (no member in B)")
 
 

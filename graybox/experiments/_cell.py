@@ -23,6 +23,7 @@ from threadpoolctl import ThreadpoolController
 from .. import _api as gb
 
 from ..static._constraints import static_cluster_map
+from ..estimation._decisions import min_jsf_index
 from ..estimation._prediction_error import numerator_surface
 from ._spec import Cell, build_constraint, canonical_json
 
@@ -208,11 +209,7 @@ def _decide(cell: Cell, pareto: gb.ParetoSet, data: gb.Dataset) -> tuple[int, st
     if d["rule"] == "min_correlation":
         dec = gb.decide_min_correlation(pareto, data.ident, output=d["output"])
         return dec.index, dec.rule, True
-    ok = np.flatnonzero(np.isfinite(pareto.JSF))
-    if ok.size == 0:
-        raise gb.InfeasibleError("min J_SF: every member has an undefined static curve (J_SF = inf)")
-    i = int(ok[np.lexsort((ok, pareto.JS[ok], pareto.JSF[ok]))[0]])
-    return i, "min J_SF", True
+    return min_jsf_index(pareto), "min J_SF", True
 
 
 def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
