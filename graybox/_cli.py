@@ -37,7 +37,7 @@ def _grid(args: argparse.Namespace) -> int:
             res = gx.run_grid(args.spec, args.store, executor="processes" if processes else None,
                               workers=args.processes if processes else args.workers, scheduler=args.scheduler,
                               retry_failed=args.retry_failed, log=lambda line: print(line, flush=True))
-            print(res.summary())
+            print(res.summary().splitlines()[0])  # its notes were printed at the start
             return 0
         if args.grid_command == "status":
             print(gx.grid_status(args.store, spec=args.spec).summary())

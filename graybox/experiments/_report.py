@@ -76,12 +76,15 @@ def _short(text: object, n: int = 160) -> str:
     return t if len(t) <= n else t[: n - 1] + "…"
 
 
-def _cell_reasons(g: pd.DataFrame) -> list[str]:
-    """Why cells of a group are not ok: their count and first message per status."""
+def _cell_reasons(g: pd.DataFrame, brief: Sequence[str] = ()) -> list[str]:
+    """Why cells of a group are not ok: their count and first messages per status (only the count
+    for the statuses in ``brief``, whose reason is already said)."""
     out = []
     for st in STATUSES[1:]:
         bad = g[g["status"] == st]
-        if len(bad):
+        if len(bad) and st in brief:
+            out.append(f"{len(bad)} {st}")
+        elif len(bad):
             msgs = list(dict.fromkeys(_short(m) for m in bad["message"] if isinstance(m, str) and m))
             out.append(f"{len(bad)} {st}: " + ("; ".join(msgs[:2]) if msgs else "no message stored"))
     return out
@@ -203,7 +206,8 @@ def leaderboard(
             sizes = _n_params(g).dropna().unique()
             base.update(JS_valid=np.nan, JS_ident=np.nan, JSF=np.nan, fit_valid=np.nan,
                         n_params=sizes[0] if len(sizes) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan, in_band=False)
-            why += _cell_reasons(g)
+            # an infeasible cell whose members were judged above: its own D_SF said the same
+            why += _cell_reasons(g, brief=("infeasible",) if why and n else ())
             base["reason"] = "; ".join(why) or ("no cell is ok" if rule == "chosen" else "no model qualified")
         base["candidates"] = n
         rows.append(base)
@@ -672,6 +676,8 @@ class GridStatus:
         if len(self.best):
             lines.append("best so far:")
             lines += ["  " + ln for ln in self.best.to_string().splitlines()]
+        elif self.done:
+            lines.append("best so far: no model qualifies yet (graybox grid report says why)")
         else:
             lines.append("best so far: none yet")
         return "\n".join(lines)
