@@ -45,7 +45,8 @@ def _num(v: object) -> str:
 def _table(df: pd.DataFrame, *, index: bool = True, text_cols: Sequence[str] = (), why: str | None = None) -> str:
     """An HTML table (every value escaped); ``why``: a column whose non-empty rows are highlighted."""
     d = df.reset_index() if index else df
-    text = [c in text_cols or d[c].dtype == object for c in d.columns]
+    # text: left-aligned and escaped as is; numbers: formatted, a missing one as a dash
+    text = [c in text_cols or not pd.api.types.is_numeric_dtype(d[c]) for c in d.columns]
     head = "".join(f'<th class="t">{_e(c)}</th>' if t else f"<th>{_e(c)}</th>" for c, t in zip(d.columns, text))
     body = []
     for _, r in d.iterrows():
@@ -99,8 +100,7 @@ def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Seque
     if len(bad):
         parts.append(f"<p>{len(bad)} cell(s) not ok, with their messages:</p>")
         cols = ["data", "structure", "variant", "seed", "status", "message"]
-        parts.append(_table(bad[cols].assign(message=bad["message"].fillna("no message stored")), index=False,
-                            text_cols=cols))
+        parts.append(_table(bad[cols].assign(message=bad["message"].fillna("no message stored")), index=False))
     parts.append("<h2 id=\"leaderboard\">Leaderboard</h2><p>The best model of every (data, structure, variant), "
                  "ranked within each data set by J_S on the validation record; a row without figures says why in "
                  "<em>reason</em>.</p>")
