@@ -447,7 +447,10 @@ def plot_fronts(
         if drawn:
             _band_on(ax, b)
         else:
-            ax.text(0.5, 0.5, "no finite model", transform=ax.transAxes, ha="center", va="center", color="0.4")
+            ax.text(0.5, 0.5, "no model with finite J_S and J_SF\n(the leaderboard's reason says why)",
+                    transform=ax.transAxes, ha="center", va="center", color="0.4", fontsize=8)
+            ax.set_xticks([])
+            ax.set_yticks([])
         ax.set_title(s)
         ax.set_xlabel("J_S on the validation record")
         ax.set_ylabel("J_SF")
