@@ -7,8 +7,12 @@ taken), the estimator runs with its constraints and λ set, the decision maker p
 and the shared evaluator scores the chosen model on the identification AND the validation
 records. :func:`run_grid` runs the cells not yet in the store — in the driver, in local
 processes or on a Dask cluster — and commits each row as it completes, so a killed run resumes
-where it stopped. :func:`load_results` reads a store as a DataFrame; the report functions turn
-it into a leaderboard, a heat map and figures.
+where it stopped, and a grid grown by a data set, structure, variant, seed or option runs only
+its new cells. The store keeps every spec run on it (:func:`store_specs`). :func:`load_results`
+reads a store as a DataFrame (the latest spec's cells, one spec's, or all); the report functions
+turn it into a leaderboard whose empty rows say why, a heat map, figures and one HTML page;
+:func:`grid_status` shows a run's progress from another process; :func:`compare_results` puts
+stores side by side.
 
 This package sits above the estimators and the decision makers; nothing in graybox below it
 imports it.
