@@ -455,3 +455,15 @@ def test_the_cell_and_decide_dsf_share_one_no_member_in_band_rule():
 
     row = run_cell(g.cells()[0], data)
     assert row["status"] == "infeasible" and row["message"] == str(err.value)
+
+
+def test_cells_of_another_graybox_version_are_not_reused_and_the_run_says_why(base_store, tmp_path):
+    path, _ = _edited(base_store, tmp_path, "old.sqlite", "UPDATE cells SET version = '0.0.1'")
+    con = sqlite3.connect(path)  # the cells of an older graybox have other keys: theirs, not this version's
+    con.execute("UPDATE cells SET key = 'old-' || key")
+    con.commit()
+    con.close()
+    run = gx.run_grid(grid(), path)
+    assert (run.ran, run.skipped) == (4, 0)
+    assert any("none of the store's 4 cells is reused: they were made by graybox 0.0.1" in n for n in run.notes)
+    assert len(gx.load_results(path, spec="all")) == 8 and len(gx.load_results(path)) == 4

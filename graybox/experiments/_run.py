@@ -191,8 +191,7 @@ def _notes(st: ResultStore, cells, done: Mapping[str, str], version: str) -> lis
             out.append(f"data set {name!r} is new to the store" + (f" (the same data as {same[0]!r}: its cells are "
                                                                    "reused)" if same else ""))
     if done and not any(c.key in done for c in cells):
-        old = st._conn.execute("SELECT DISTINCT version FROM cells").fetchall()
-        others = sorted({v for (v,) in old} - {version})
+        others = sorted(st.versions() - {version})
         if others:
             out.append(f"none of the store's {len(done)} cells is reused: they were made by graybox "
                        f"{', '.join(others)}, and cells are keyed by version")

@@ -312,6 +312,10 @@ class ResultStore:
             raise
         self._conn.execute("COMMIT")
 
+    def versions(self) -> set[str]:
+        """The graybox versions that made the store's cells."""
+        return {v for (v,) in self._conn.execute("SELECT DISTINCT version FROM cells")}
+
     def counts(self) -> dict[str, int]:
         """The registered spec's cells by status."""
         return dict(self._conn.execute(
