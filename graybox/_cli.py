@@ -9,6 +9,19 @@ from pathlib import Path
 __all__ = ["main"]
 
 
+def _spec_arg(text: str) -> str | int:
+    """``--spec``: latest, all, or a spec number."""
+    if text in ("latest", "all"):
+        return text
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'latest', 'all' or a spec number, got {text!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"a spec number is >= 1, got {n}")
+    return n
+
+
 def _grid(args: argparse.Namespace) -> int:
     from . import experiments as gx
 
@@ -23,19 +36,23 @@ def _grid(args: argparse.Namespace) -> int:
             processes = args.processes is not None
             res = gx.run_grid(args.spec, args.store, executor="processes" if processes else None,
                               workers=args.processes if processes else args.workers, scheduler=args.scheduler,
-                              retry_failed=args.retry_failed)
-            print(res.summary())
+                              retry_failed=args.retry_failed, log=lambda line: print(line, flush=True))
+            print(res.summary().splitlines()[0])  # its notes were printed at the start
             return 0
-        written = gx.write_report(args.store, args.out, rule=args.rule, band=args.band)
+        if args.grid_command == "status":
+            print(gx.grid_status(args.store, spec=args.spec).summary())
+            return 0
+        store = args.store[0] if len(args.store) == 1 else args.store
+        written = gx.write_report(store, args.out, rule=args.rule, band=args.band, spec=args.spec, html=args.html)
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
         return 0
     except (gx.SpecError, gx.StoreError, ConnectionError) as exc:
         print(f"graybox grid {args.grid_command}: {exc}", file=sys.stderr)
         return 2
-    except ValueError as exc:  # an argument run_grid refuses (e.g. --workers 0)
-        if args.grid_command != "run":
+    except ValueError as exc:  # an argument refused (e.g. --workers 0, a spec number the store lacks)
+        if args.grid_command == "init":
             raise
-        print(f"graybox grid run: {exc}", file=sys.stderr)
+        print(f"graybox grid {args.grid_command}: {exc}", file=sys.stderr)
         return 2
 
 
@@ -57,12 +74,22 @@ def main(argv: list[str] | None = None) -> int:
     where.add_argument("--scheduler", help="run on the Dask scheduler at this address (e.g. tcp://host:8786)")
     where.add_argument("--processes", type=int, help="run in N local worker processes (no Dask)")
     run.add_argument("--retry-failed", action="store_true", help="run the failed cells again")
-    rep = gsub.add_parser("report", help="write a store's leaderboard, heat maps and figures")
-    rep.add_argument("store", type=Path, help="the SQLite store of a grid")
+    which = {"type": _spec_arg, "default": "latest",
+             "help": "which cells: of the spec run last (latest, default), all the store holds, or spec number N"}
+    stat = gsub.add_parser("status", help="a store's progress, also while a run writes it: cells done, failed, left, "
+                                          "time per cell, the best so far")
+    stat.add_argument("store", type=Path, help="the SQLite store of a grid")
+    stat.add_argument("--spec", **which)
+    rep = gsub.add_parser("report", help="write a store's leaderboard, heat maps and figures (several stores: side "
+                                         "by side)")
+    rep.add_argument("store", type=Path, nargs="+", help="the SQLite store of a grid; two or more are compared")
     rep.add_argument("--out", type=Path, required=True, help="folder for the tables (CSV) and figures (PNG)")
     rep.add_argument("--rule", default="dsf_valid", choices=("dsf_valid", "chosen"),
                      help="ranking: D_SF on the validation record over all members (default), or each cell's choice")
     rep.add_argument("--band", type=float, help="J_SF band for the ranking (default: each data set's, as stored)")
+    rep.add_argument("--spec", **which)
+    rep.add_argument("--html", action="store_true",
+                     help="also write report.html: one self-contained page (figures, tables, spec, reasons)")
     args = parser.parse_args(argv)
     if args.command == "reproduce":
         from .reproduce import run as reproduce

@@ -303,32 +303,54 @@ def _bytes(p: Path) -> bytes:
     return p.read_bytes()
 
 
-def test_store_of_another_grid_is_refused_untouched(small_store, tmp_path):
+def _shifted_pumping() -> gb.Dataset:
+    d = gb.load_pumping()
+    return gb.Dataset(d.ident, d.valid, gb.StaticPoints(d.static.ubar, d.static.ybar + 1e-9))
+
+
+def test_a_data_set_name_that_now_reads_other_data_is_refused_untouched(small_store, tmp_path):
     path, _ = small_store
     before = _bytes(path)
-    other = gx.Grid(python_grid().data, python_grid().structures[:1], python_grid().variants, name="other")
-    with pytest.raises(gx.StoreError, match="another grid"):
+    g = python_grid()
+    other = gx.Grid([gx.DataSpec("pumping", dataset=_shifted_pumping(), band=0.031)], g.structures[:1], g.variants[:1],
+                    name="other")
+    with pytest.raises(gx.StoreError, match=r"data set 'pumping' of this spec reads other data.*new name"):
         gx.run_grid(other, path)
     assert _bytes(path) == before
+    # the same data under a new name is a new data set: its cells are the store's (keys hash content)
+    renamed = gx.Grid([gx.DataSpec("plant", bundled="pumping")], g.structures, g.variants, g.seeds, name="renamed")
+    copy = tmp_path / "copy.sqlite"
+    copy.write_bytes(before)
+    run = gx.run_grid(renamed, copy)
+    assert run.ran == 0 and run.skipped == 12 and run.spec == 2
+    assert any("'plant' is new to the store (the same data as 'pumping'" in n for n in run.notes)
+    assert set(gx.load_results(copy)["data"]) == {"plant"}
+    assert set(gx.load_results(copy, spec=1)["data"]) == {"pumping"}
 
 
 def test_store_left_by_a_killed_writer_is_refused_without_folding_its_log(tmp_path):
-    """Another grid's store whose writer was killed still has its rows in the write-ahead log;
-    refusing it must not fold that log into the file (nothing is written to a refused store)."""
+    """A store whose writer was killed still has its rows in the write-ahead log; refusing it
+    (here: its data set 'pumping' held other data) must not fold that log into the file
+    (nothing is written to a refused store)."""
     import signal
     import subprocess
     import sys
 
     path = tmp_path / "killed.sqlite"
-    code = (f"import os, signal\nfrom graybox.experiments._store import ResultStore\n"
-            f"ResultStore.open({str(path)!r}, fingerprint='other', grid_name='other', spec={{}}, n_cells=1, "
-            f"version='0')\nos.kill(os.getpid(), signal.SIGKILL)\n")
+    code = (f"import os, signal\nimport graybox as gb\nfrom graybox import experiments as gx\n"
+            f"from graybox.experiments._store import ResultStore\nd = gb.load_pumping()\n"
+            f"d = gb.Dataset(d.ident, d.valid, gb.StaticPoints(d.static.ubar, d.static.ybar + 1e-9))\n"
+            f"g = gx.Grid([gx.DataSpec('pumping', dataset=d, band=0.031)], "
+            f"[gx.StructureSpec('s', terms=['y(k-1)', 'u(k-1)', '1'])], [gx.Variant('LS', 'ls')], name='other')\n"
+            f"c = g.cells()\n"
+            f"ResultStore.open({str(path)!r}, grid_name='other', fingerprint=g.fingerprint(c), spec=g.to_dict(), "
+            f"cells=c, version=gb.__version__)\nos.kill(os.getpid(), signal.SIGKILL)\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True)
-    assert proc.returncode == -signal.SIGKILL
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
     wal = Path(str(path) + "-wal")
     assert wal.exists() and wal.stat().st_size > 0  # the store's tables are still in the log
     before, wal_before = _bytes(path), _bytes(wal)
-    with pytest.raises(gx.StoreError, match="another grid"):
+    with pytest.raises(gx.StoreError, match="reads other data"):
         gx.run_grid(python_grid(), path)
     assert _bytes(path) == before and _bytes(wal) == wal_before
     assert len(gx.load_results(path)) == 0  # readable, and reading it writes nothing either
@@ -388,23 +410,23 @@ def test_store_log_stays_short_so_closing_is_quick(tmp_path, pumping):
     g = python_grid()
     cells = g.cells()
     path = tmp_path / "s.sqlite"
-    with ResultStore.open(path, fingerprint=g.fingerprint(cells), grid_name=g.name, spec=g.to_dict(),
-                          n_cells=len(cells), version=gb.__version__) as st:
+    with ResultStore.open(path, fingerprint=g.fingerprint(cells), grid_name=g.name, spec=g.to_dict(), cells=cells,
+                          version=gb.__version__) as st:
         page = st._conn.execute("PRAGMA page_size").fetchone()[0]
         for i in range(400):  # rows of two pages or more: 800 pages of log in all
             row = failed_row(cells[i % len(cells)], "x" * (2 * page) + str(i))
             st.write(dict(row, key=f"{row['key']}-{i}"))
         wal = Path(str(path) + "-wal").stat().st_size
     assert wal <= 32 + (WAL_PAGES + 8) * (page + 24)
-    assert len(gx.load_results(path)) == 400
+    assert len(gx.load_results(path, spec="all")) == 400  # rows of no spec: only "all" shows them
 
 
 def test_retry_failed_reruns_only_failed_cells(tmp_path, pumping):
     g = gx.Grid(python_grid().data, python_grid().structures[:1], python_grid().variants[:2], name="tiny")
     path = tmp_path / "s.sqlite"
     cells = g.cells(pumping)
-    with ResultStore.open(path, fingerprint=g.fingerprint(cells), grid_name=g.name, spec=g.to_dict(),
-                          n_cells=len(cells), version=gb.__version__) as st:
+    with ResultStore.open(path, fingerprint=g.fingerprint(cells), grid_name=g.name, spec=g.to_dict(), cells=cells,
+                          version=gb.__version__) as st:
         st.write(gx._cell.failed_row(cells[0], "the worker process died twice (simulated)"))
     run = gx.run_grid(g, path)
     assert run.ran == 1 and dict(run.counts)["failed"] == 1
@@ -477,9 +499,16 @@ def test_cli_init_run_report(tmp_path, capsys, monkeypatch):
     spec.write_text(TOML)
     assert main(["grid", "run", str(spec), "--store", "r.sqlite"]) == 0
     out = capsys.readouterr().out
-    assert "12 cells, 12 run now" in out and " ok" in out and "failed" in out
+    assert "12 cells, 0 reused, 12 run now" in out and " ok" in out and "failed" in out
     assert main(["grid", "run", str(spec), "--store", "r.sqlite"]) == 0
-    assert "0 run now" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "12 cells, 12 reused from r.sqlite, 0 to run" in out and "12 reused, 0 run now" in out
+    # one variant more in the spec: only its cells run (a structure each), the store grows
+    spec.write_text(TOML + '\n[[variants]]\nname = "ELS"\nestimator = "els"\n')
+    assert main(["grid", "run", str(spec), "--store", "r.sqlite"]) == 0
+    out = capsys.readouterr().out
+    assert "14 cells, 12 reused, 2 run now" in out and "a new spec for this store (spec 2)" in out
+    spec.write_text(TOML)
     assert main(["grid", "report", "r.sqlite", "--out", "rep"]) == 0
     assert (tmp_path / "rep" / "leaderboard.csv").is_file()
     (tmp_path / "notes.txt").write_text("not a store")
@@ -537,7 +566,8 @@ def test_se_dsf_variant_gives_the_direct_dsf_model(tmp_path):
     for v, band in (("direct", df.loc["direct", "band"]), ("direct, wide band", 0.5)):
         r = df.loc[v]
         assert r["status"] == "ok" and r["estimator"] == "se-dsf"
-        res = gb.se_dsf(gb.parse_structure(terms), data, band=band, lambdas=lam)
+        with pytest.warns(gb.StaticRangeWarning, match="outside the input range"):  # the bundled plant's points
+            res = gb.se_dsf(gb.parse_structure(terms), data, band=band, lambdas=lam)
         np.testing.assert_array_equal(r["theta"], res.model.theta)  # the same model as the function gives
         assert r["rule"] == ("D_SF (direct)" if res.in_band else "min J_SF (band infeasible)")
         assert bool(r["in_band"]) == res.in_band

@@ -56,10 +56,15 @@ def assert_same_rows(a: pd.DataFrame, b: pd.DataFrame) -> None:
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory):
+def reference_store(tmp_path_factory):
     path = tmp_path_factory.mktemp("ref") / "inprocess.sqlite"
     gx.run_grid(tiny_grid(), path)
-    return gx.load_results(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def reference(reference_store):
+    return gx.load_results(reference_store)
 
 
 def test_dask_localcluster_gives_the_in_process_rows(reference, tmp_path):
@@ -194,6 +199,28 @@ def _count(store: Path) -> int:
         return 0
 
 
+def _kill_when(proc: subprocess.Popen, store: Path, cells: int, watch=None) -> int:
+    """SIGKILL ``proc`` once the store holds ``cells`` cells (``watch(count)`` called while it
+    waits); the cells the store then holds."""
+    try:
+        deadline = time.monotonic() + 120
+        while _count(store) < cells:
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "the grid did not get that far"
+            if watch is not None:
+                watch(_count(store))
+            time.sleep(0.01)
+        if watch is not None:
+            watch(_count(store))
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == -signal.SIGKILL
+    return _count(store)
+
+
 def test_driver_killed_mid_grid_then_run_again(tmp_path):
     spec = tmp_path / "spec.toml"
     spec.write_text(SPEC)
@@ -202,19 +229,7 @@ def test_driver_killed_mid_grid_then_run_again(tmp_path):
     assert n == 10
     proc = subprocess.Popen([sys.executable, "-m", "graybox._cli", "grid", "run", str(spec), "--store", str(store)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    try:
-        deadline = time.monotonic() + 120
-        while _count(store) < 2:
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline, "the grid did not start"
-            time.sleep(0.01)
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == -signal.SIGKILL
-    done = _count(store)
+    done = _kill_when(proc, store, 2)
     assert 2 <= done < n, f"{done} of {n} cells were finished when the driver was killed"
     again = gx.run_grid(spec, store)
     assert again.skipped == done and again.ran == n - done
@@ -364,3 +379,53 @@ def test_dask_batches_leave_out_the_work_done_while_a_new_task_waits():
         assert target - head < est(batch) <= target + 1e-12
         assert est(batch) < left / (GUIDE * slots) - head  # smaller than without the tasks in flight
         flight.append(est(batch))
+
+
+def test_a_growing_run_watched_then_killed_then_resumed(tmp_path):
+    """A store made in-process (PE only) grows by the GA variant in another process; `grid status`
+    reads it while that process writes; SIGKILL, then the run again: no cell lost or run twice."""
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC)
+    base = tmp_path / "base.toml"
+    base.write_text(SPEC[: SPEC.index('[[variants]]\nname = "GA"')] + SPEC[SPEC.index('[[variants]]\nname = "PE"'):])
+    store = tmp_path / "results.sqlite"
+    first = gx.run_grid(base, store)
+    assert first.ran == 2
+    n = len(gx.Grid.from_toml(spec).cells())
+    assert n == 2 + 8
+    proc = subprocess.Popen([sys.executable, "-m", "graybox._cli", "grid", "run", str(spec), "--store", str(store)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    seen = []
+
+    def watch(count: int) -> None:
+        if count > 2:  # the new spec is registered and its cells are coming in
+            seen.append(gx.grid_status(store))
+
+    done = _kill_when(proc, store, 2 + 2, watch)
+    # read while the other process wrote: the growing spec, done + left = its cells
+    assert seen and all(s.spec == 2 and s.cells == n and s.done + s.left == n for s in seen)
+    assert seen[-1].done >= 4 and seen[-1].counts["ok"] >= 2 and np.isfinite(seen[-1].time_per_cell)
+    assert "best so far" in seen[-1].summary()
+    assert 4 <= done < n, f"{done} of {n} cells were in the store when the run was killed"
+    again = gx.run_grid(spec, store)
+    assert (again.skipped, again.ran, again.spec) == (done, n - done, 2)
+    resumed = gx.load_results(store)
+    assert len(resumed) == n and resumed["key"].is_unique and (resumed["status"] == "ok").all()
+    assert len(gx.load_results(store, spec="all")) == n  # nothing else in the store
+    gx.run_grid(spec, tmp_path / "uninterrupted.sqlite")
+    assert_same_rows(resumed, gx.load_results(tmp_path / "uninterrupted.sqlite"))
+
+
+def test_a_dask_localcluster_grows_a_store_made_in_process(reference_store, reference, tmp_path):
+    store = tmp_path / "grown.sqlite"
+    store.write_bytes(reference_store.read_bytes())
+    g = tiny_grid()
+    more = gx.Grid(g.data, g.structures, list(g.variants) + [gx.Variant("ELS", "els")], name="tiny")
+    lines: list[str] = []
+    run = gx.run_grid(more, store, workers=2, log=lines.append)
+    assert (run.ran, run.skipped, run.spec) == (2, 8, 2) and "LocalCluster" in run.executor
+    assert any("8 reused" in ln and "2 to run" in ln for ln in lines)
+    assert any(ln.startswith("Dask dashboard: ") for ln in lines)  # an address, or why there is none
+    df = gx.load_results(store)
+    assert len(df) == 10 and (df[df["variant"] == "ELS"]["worker"] != df["worker"].iloc[0]).all()
+    assert_same_rows(df[df["variant"] != "ELS"], reference)

@@ -24,6 +24,7 @@ from ..core._records import Record
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
 from ..core._validation import check_choice
+from ..static._constraints import InfeasibleError
 
 __all__ = ["Decision", "decide_dsf", "decide_min_correlation", "FALLBACKS"]
 
@@ -76,6 +77,16 @@ def _decision(pareto: ParetoSet, i: int, rule: str, in_band: bool, score: float,
     return Decision(pareto.member_model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
                     float(pareto.JSF[i]), rule, in_band, float(score), chosen_on)
 
+def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF") -> int:
+    """The member with the smallest J_SF (ties: the smaller J_S, then the lower index);
+    ``InfeasibleError`` naming ``what`` when every member's static curve is undefined."""
+    jsf = pareto.JSF
+    ok = np.flatnonzero(np.isfinite(jsf))
+    if ok.size == 0:
+        raise InfeasibleError(f"{what}: every member has an undefined static curve (J_SF = inf)")
+    return int(ok[np.lexsort((ok, pareto.JS[ok], jsf[ok]))[0]])
+
+
 #: What :func:`decide_dsf` may do when no member lies in the band, if the user says so.
 FALLBACKS = ("min_jsf",)
 
@@ -116,7 +127,8 @@ def decide_dsf(
     band : float or (float, float)
         B = [0, band] (default 0.031 mlc² = 0.175², the transmitter's error), or (low, high).
     fallback : {None, "min_jsf"}
-        When no member has J_SF in B (with a finite J_S): None (default) raises ``ValueError``;
+        When no member has J_SF in B (with a finite J_S): None (default) raises
+        ``InfeasibleError`` (a ``ValueError``) naming the smallest J_SF reached;
         ``"min_jsf"`` picks the member with the smallest J_SF (ties: smaller J_S) instead. The
         choice must be explicit because the result then is *not* a D_SF decision.
     choose_on : Record or sequence of Record, optional
@@ -156,15 +168,12 @@ def decide_dsf(
         finite = jsf[np.isfinite(jsf)]
         best = f"{finite.min():.4g}" if finite.size else "inf for every member"
         if fallback is None:
-            raise ValueError(
+            raise InfeasibleError(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
                 f"B = [{lo:g}, {hi:g}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
                 "the λ sweep, or pass fallback='min_jsf' to take the member with the smallest J_SF"
             )
-        ok = np.flatnonzero(np.isfinite(jsf))
-        if ok.size == 0:
-            raise ValueError("fallback 'min_jsf': every member has an undefined static curve (J_SF = inf)")
-        i = int(ok[np.lexsort((ok, pareto.JS[ok], jsf[ok]))[0]])
+        i = min_jsf_index(pareto, "fallback 'min_jsf'")
         return _decision(pareto, i, "min J_SF", False, jsf[i], f"{pareto.method} min J_SF (no member in B)")
 
 

@@ -23,6 +23,7 @@ from threadpoolctl import ThreadpoolController
 from .. import _api as gb
 
 from ..static._constraints import static_cluster_map
+from ..estimation._decisions import min_jsf_index
 from ..estimation._prediction_error import numerator_surface
 from ._spec import Cell, build_constraint, canonical_json
 
@@ -159,12 +160,6 @@ def cell_constraints(specs, st: gb.Structure, data: gb.Dataset) -> list:
     return out
 
 
-def _lags(st: gb.Structure) -> tuple[int, int]:
-    ny = max((lag for t in st for s, lag, _ in t.factors if s == "y"), default=0)
-    nu = max((lag for t in st for s, lag, _ in t.factors if s not in ("y", "e")), default=1)  # any input
-    return ny, nu
-
-
 def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
     """(model, Pareto set or None, row fields the estimator sets itself)."""
     v = cell.variant_spec
@@ -177,8 +172,8 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
     if est == "els":
         return gb.els(st, data.ident, name=name, **opts).model, None, {}
     if est == "neural":
-        ny, nu = _lags(st)
-        kw = {"ny": ny, "nu": nu, **opts}
+        # the network sees the structure's lags: of y, and the largest of any input (1 with none)
+        kw = {"ny": st.input_lag("y"), "nu": max((st.input_lag(n) for n in st.inputs), default=1), **opts}
         return gb.neural_narx(data.ident, seed=cell.seed or 0, name=name, **kw).model, None, {}
     cons = cell_constraints(v["constraints"], st, data)
     if est == "cls":
@@ -209,23 +204,13 @@ def _decide(cell: Cell, pareto: gb.ParetoSet, data: gb.Dataset) -> tuple[int, st
     """(member index, rule, in band) or ``InfeasibleError`` when D_SF finds no member in its band."""
     d = cell.variant_spec["decision"]
     if d["rule"] == "dsf":
-        band = d["band"] if d["band"] is not None else cell.band
-        inside = (pareto.JSF <= band) & np.isfinite(pareto.JS)
-        if not inside.any() and d["fallback"] is None:
-            finite = pareto.JSF[np.isfinite(pareto.JSF)]
-            best = f"{finite.min():.4g}" if finite.size else "inf for every member"
-            raise gb.InfeasibleError(f"D_SF: no member of the {len(pareto)}-member set has J_SF in B = [0, {band:g}] "
-                                     f"(smallest J_SF {best}); the members are stored")
-        dec = gb.decide_dsf(pareto, band=band, fallback=d["fallback"])
+        # no member in the band and no fallback: InfeasibleError naming the smallest J_SF reached
+        dec = gb.decide_dsf(pareto, band=d["band"] if d["band"] is not None else cell.band, fallback=d["fallback"])
         return dec.index, dec.rule, bool(dec.in_band)
     if d["rule"] == "min_correlation":
         dec = gb.decide_min_correlation(pareto, data.ident, output=d["output"])
         return dec.index, dec.rule, True
-    ok = np.flatnonzero(np.isfinite(pareto.JSF))
-    if ok.size == 0:
-        raise gb.InfeasibleError("min J_SF: every member has an undefined static curve (J_SF = inf)")
-    i = int(ok[np.lexsort((ok, pareto.JS[ok], pareto.JSF[ok]))[0]])
-    return i, "min J_SF", True
+    return min_jsf_index(pareto), "min J_SF", True
 
 
 def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
@@ -250,20 +235,25 @@ def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
     return out
 
 
-def _figures(m, data: gb.Dataset) -> dict[str, float]:
-    """The shared evaluator's figures of one model on both records and the static points."""
+def _figures(m, data: gb.Dataset) -> tuple[dict[str, float], dict[str, tuple[int, int]]]:
+    """The shared evaluator's figures of one model on both records and the static points, and
+    where a free run diverged: record -> (first sample that is not finite, samples)."""
     L = m.max_lag
     out: dict[str, float] = {}
+    diverged: dict[str, tuple[int, int]] = {}
     for tag, rec in (("ident", data.ident), ("valid", data.valid)):
         out[f"J1_{tag}"] = gb.j1(m, rec)
         sim = m.simulate(rec, on_diverge="nan")
         out[f"JS_{tag}"] = gb.mse(rec.y, sim, start=L)
         out[f"fit_{tag}"] = gb.fit_percent(rec.y, sim, start=L)
+        bad = np.flatnonzero(~np.isfinite(np.asarray(sim, float)[L:]))
+        if bad.size:
+            diverged[tag] = (int(bad[0]) + L, len(rec))
     out["JSF"] = gb.jsf(m, data.static)
     yb = np.asarray(m.static_curve(data.static.ubar, y0=data.static.ybar, strict=False), float)
     miss = np.abs(yb - data.static.ybar)
     out["static_miss"] = float(miss.max()) if np.all(np.isfinite(miss)) else float("inf")
-    return out
+    return out, diverged
 
 
 def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any]:
@@ -292,17 +282,21 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
             row.update(fields)
             if pareto is not None:
                 row["members"] = _members(pareto, data)
+                row["n_params"] = len(pareto.structure)  # every member's, kept when no member qualifies
                 i, rule, in_band = _decide(cell, pareto, data)
                 model = pareto.member_model(i, name=f"{cell.variant} / {cell.structure}")
                 row.update(lambda1=float(pareto.lambdas[i]), rule=rule, in_band=int(in_band))
             row["n_params"] = int(model.n_params)
             if isinstance(model, gb.Model):
                 row["theta"] = model.theta.tolist()
-            row.update(_figures(model, data))
+            figures, diverged = _figures(model, data)
+            row.update(figures)
         bad = [tag for tag in ("ident", "valid") if not np.isfinite(row[f"JS_{tag}"])]
         if bad:
-            row.update(status="diverged", message=f"the free run diverges on the {' and '.join(bad)} record(s) "
-                                                  "(J_S = inf)")
+            where = [f"the {'identification' if t == 'ident' else 'validation'} record at sample {diverged[t][0]} of "
+                     f"{diverged[t][1]}" if t in diverged else f"the {t} record" for t in bad]
+            row.update(status="diverged", message=f"the free run of the chosen model diverges on "
+                                                  f"{' and on '.join(where)} (J_S = inf)")
         else:
             row["status"] = "ok"
     except gb.InfeasibleError as exc:

@@ -5,9 +5,11 @@ __all__ = ["EXAMPLE_SPEC"]
 EXAMPLE_SPEC = '''\
 # A graybox grid: data sets x structures x variants x seeds.
 #   graybox grid run spec.toml --store results.sqlite [--workers N | --scheduler ADDRESS]
-#   graybox grid report results.sqlite --out report/
+#   graybox grid status results.sqlite          (from another terminal, while it runs)
+#   graybox grid report results.sqlite --out report/ --html
 # Every cell (data, structure, variant, seed) is scored by the shared evaluator on the
-# identification AND the validation record. Rerunning skips the cells already in the store.
+# identification AND the validation record. Running again skips the cells already in the store;
+# add data sets, structures, variants or seeds here and only the new cells run.
 
 name = "pumping-variants"
 seeds = [0, 1]            # used by the stochastic estimators (se-ga, neural); the others run once

@@ -43,6 +43,22 @@ __all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "local_cluste
 EXECUTORS = ("inprocess", "processes", "dask")
 
 CellFn = Callable[[Cell, gb.Dataset, int], dict]
+#: Where an executor tells what is worth telling at the start (e.g. the dashboard's address).
+Log = Callable[[str], None]
+
+
+def _bokeh() -> bool:
+    """Whether Dask's dashboard can be served here (it needs bokeh, an optional package)."""
+    import importlib.util
+
+    return importlib.util.find_spec("bokeh") is not None
+
+
+def _has_dashboard(client: Any) -> bool:
+    try:
+        return "dashboard" in client.scheduler_info().get("services", {})
+    except Exception:  # an old or odd scheduler: say nothing rather than a wrong address
+        return False
 
 #: A Dask task runs a batch of cells lasting at most about this long (seconds, by the times of the
 #: cells already run): the scheduler's cost per task (milliseconds) is then well under a per cent,
@@ -101,7 +117,7 @@ class InProcess:
     def __init__(self, fn: CellFn = run_cell):
         self.fn = fn
 
-    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None) -> Iterator[dict]:
         """Yield each cell's row."""
         for c in cells:
             yield self.fn(c, datasets[c.data_hash], threads=1)
@@ -179,7 +195,7 @@ class ProcessPool:
             slot.proc.join(timeout=5)
         slot.conn.close()
 
-    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None) -> Iterator[dict]:
         """Yield each cell's row as it completes."""
         pending: deque[tuple[Cell, int]] = deque((c, 0) for c in cells)
         slots: list[_Slot] = []
@@ -374,7 +390,7 @@ _QUIET = {
 
 
 @contextmanager
-def local_cluster(workers: int):
+def local_cluster(workers: int, dashboard: bool = False):
     """The Dask ``LocalCluster`` graybox starts for ``workers`` processes (closed on exit).
 
     One thread per worker, ``NUMBA_NUM_THREADS`` = cores // workers; the scheduler reports a
@@ -383,6 +399,9 @@ def local_cluster(workers: int):
     setting it switches off glibc's adaptive mmap threshold, so every array of more than 64 KiB
     is mapped and unmapped afresh, which made graybox's cells about 1.5–2 times slower on a
     worker than in the driver (BENCHMARKS.md, grids).
+
+    ``dashboard``: serve Dask's dashboard on a free port when bokeh is installed (off by default:
+    it costs start-up time and a port).
     """
     import dask
     from distributed import LocalCluster
@@ -396,7 +415,8 @@ def local_cluster(workers: int):
         with dask.config.set({"distributed.scheduler.allowed-failures": 0,
                               "distributed.nanny.pre-spawn-environ": environ, **_QUIET}):
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   dashboard_address=":0" if dashboard and _bokeh() else None,
+                                   silence_logs=logging.ERROR,
                                    env=_thread_env(worker_threads(int(workers))))
         try:
             yield cluster
@@ -437,7 +457,7 @@ class DaskCluster:
             self.name = "Dask client"
 
     @contextmanager
-    def _client(self):
+    def _client(self, dashboard: bool = False):
         from distributed import Client
 
         if self.client is not None:
@@ -457,14 +477,14 @@ class DaskCluster:
             finally:
                 client.close()
             return
-        with local_cluster(self.workers) as cluster:
+        with local_cluster(self.workers, dashboard) as cluster:
             client = Client(cluster)
             try:
                 yield client
             finally:
                 client.close()
 
-    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> Iterator[dict]:
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None) -> Iterator[dict]:
         """Submit the cells in batches, yield each row as its batch completes."""
         from distributed import as_completed
         from distributed.scheduler import KilledWorker
@@ -473,7 +493,12 @@ class DaskCluster:
 
         if not cells:
             return
-        with self._client() as client:
+        with self._client(dashboard=log is not None) as client:
+            if log is not None:
+                link = getattr(client, "dashboard_link", None) if _has_dashboard(client) else None
+                log(f"Dask dashboard: {link}" if link else
+                    "Dask dashboard: none (it needs the bokeh package: pip install bokeh); "
+                    "graybox grid status STORE shows the progress")
             plugin = f"graybox-grid-data-{uuid.uuid4().hex[:8]}"
             client.register_plugin(GridData({h: datasets[h] for h in {c.data_hash for c in cells}}), name=plugin)
             tag = uuid.uuid4().hex[:8]

@@ -16,20 +16,24 @@ Ranking rules (``rule``):
 
 from __future__ import annotations
 
+import io
 import os
 import re
+from dataclasses import dataclass
+from types import MappingProxyType
 from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 from matplotlib.colors import LogNorm
+from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
 from ._cell import STATUSES
-from ._store import encode_value, load_results
+from ._store import compare_results, encode_value, load_results
 
-__all__ = ["RULES", "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report"]
+__all__ = ["RULES", "GridStatus", "grid_status", "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report"]
 
 #: Ranking rules of :func:`leaderboard`.
 RULES = ("dsf_valid", "chosen")
@@ -37,13 +41,53 @@ _KEYS = ["data", "structure", "variant"]
 _MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">", "h", "p")
 
 
-def _frame(results: pd.DataFrame | str | os.PathLike) -> pd.DataFrame:
+def _frame(results: pd.DataFrame | str | os.PathLike | Sequence, spec: str | int = "latest",
+           attrs: bool = False) -> pd.DataFrame:
+    """The results as a frame; without its ``attrs`` unless asked (pandas deep-copies them on every
+    operation, and a store's specs made that the larger part of a leaderboard's time)."""
     if isinstance(results, pd.DataFrame):
         missing = {"data", "structure", "variant", "status", "JS_valid", "JSF", "members"} - set(results.columns)
         if missing:
             raise ValueError(f"results must come from graybox.load_results; missing columns {sorted(missing)}")
-        return results
-    return load_results(results)
+        df = results
+    elif isinstance(results, (list, tuple)):
+        df = compare_results(results, spec=spec)
+    else:
+        df = load_results(results, spec=spec)
+    if attrs or not df.attrs:
+        return df
+    bare = df.copy(deep=False)
+    bare.attrs = {}
+    return bare
+
+
+def _n_params(df: pd.DataFrame) -> pd.Series:
+    """N_p of every cell, also of a Pareto cell that a store of the first format kept without it
+    (its members share the structure: N_p = the number of its terms)."""
+    n = df["n_params"].copy()
+    gap = n.isna() & df["members"].map(lambda m: isinstance(m, Mapping)) & df["terms"].map(lambda t: t is not None)
+    if gap.any():
+        n[gap] = [len(t) for t in df.loc[gap, "terms"]]
+    return n
+
+
+def _short(text: object, n: int = 160) -> str:
+    t = " ".join(str(text).split())
+    return t if len(t) <= n else t[: n - 1] + "…"
+
+
+def _cell_reasons(g: pd.DataFrame, brief: Sequence[str] = ()) -> list[str]:
+    """Why cells of a group are not ok: their count and first messages per status (only the count
+    for the statuses in ``brief``, whose reason is already said)."""
+    out = []
+    for st in STATUSES[1:]:
+        bad = g[g["status"] == st]
+        if len(bad) and st in brief:
+            out.append(f"{len(bad)} {st}")
+        elif len(bad):
+            msgs = list(dict.fromkeys(_short(m) for m in bad["message"] if isinstance(m, str) and m))
+            out.append(f"{len(bad)} {st}: " + ("; ".join(msgs[:2]) if msgs else "no message stored"))
+    return out
 
 
 def _band_of(rows: pd.DataFrame, band: float | Mapping[str, float] | None, data: str) -> float:
@@ -59,27 +103,36 @@ def _band_of(rows: pd.DataFrame, band: float | Mapping[str, float] | None, data:
     return float(b.iloc[0])
 
 
+_CANDIDATE_COLUMNS = ("seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params", "chosen", "status")
+
+
 def _candidates(g: pd.DataFrame) -> pd.DataFrame:
-    """Every model of a (data, structure, variant): Pareto members and single models."""
-    out = []
-    for _, r in g.iterrows():
-        m = r["members"]
+    """Every model of a (data, structure, variant): Pareto members and single models (one frame
+    built from columns: a frame per row made the leaderboard's time)."""
+    cols: dict[str, list] = {k: [] for k in _CANDIDATE_COLUMNS}
+    sizes = _n_params(g).tolist()
+    for r, n_p in zip(g[["members", "lambda1", "seed", "status", "JS_ident", "JS_valid", "JSF",
+                         "fit_valid"]].itertuples(index=False), sizes):
+        m = r.members
         if isinstance(m, Mapping) and len(m.get("JSF", ())):
             K = len(m["JSF"])
-            chosen = r["lambda1"]
-            out.append(pd.DataFrame({
-                "seed": [r["seed"]] * K, "lambda1": m["lambda1"], "JS_ident": m["JS"], "JS_valid": m["JS_valid"],
-                "JSF": m["JSF"], "fit_valid": m.get("fit_valid", np.full(K, np.nan)),
-                "n_params": [r["n_params"]] * K, "chosen": np.isclose(m["lambda1"], chosen) if pd.notna(chosen)
-                else np.zeros(K, bool), "status": [r["status"]] * K}))
-        elif r["status"] == "ok":
-            out.append(pd.DataFrame({"seed": [r["seed"]], "lambda1": [np.nan], "JS_ident": [r["JS_ident"]],
-                                     "JS_valid": [r["JS_valid"]], "JSF": [r["JSF"]], "fit_valid": [r["fit_valid"]],
-                                     "n_params": [r["n_params"]], "chosen": [True], "status": [r["status"]]}))
-    if not out:
-        return pd.DataFrame(columns=["seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params",
-                                     "chosen", "status"])
-    return pd.concat(out, ignore_index=True)
+            lam = np.asarray(m["lambda1"], float)
+            parts = {"seed": [r.seed] * K, "lambda1": lam, "JS_ident": m["JS"], "JS_valid": m["JS_valid"],
+                     "JSF": m["JSF"], "fit_valid": m.get("fit_valid", np.full(K, np.nan)), "n_params": [n_p] * K,
+                     "chosen": np.isclose(lam, r.lambda1) if pd.notna(r.lambda1) else np.zeros(K, bool),
+                     "status": [r.status] * K}
+        elif r.status == "ok":
+            parts = {"seed": [r.seed], "lambda1": [np.nan], "JS_ident": [r.JS_ident], "JS_valid": [r.JS_valid],
+                     "JSF": [r.JSF], "fit_valid": [r.fit_valid], "n_params": [n_p], "chosen": [True],
+                     "status": [r.status]}
+        else:
+            continue
+        for k, v in parts.items():
+            cols[k].extend(np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
+    out = pd.DataFrame(cols, columns=list(_CANDIDATE_COLUMNS))
+    for k in ("lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid"):
+        out[k] = out[k].astype(float)
+    return out
 
 
 def leaderboard(
@@ -92,8 +145,9 @@ def leaderboard(
 
     Parameters
     ----------
-    results : DataFrame or path
-        From :func:`graybox.load_results`, or a store's path.
+    results : DataFrame, path or sequence of paths
+        From :func:`graybox.load_results` (or :func:`compare_results`), or a store's path (its
+        latest spec's cells), or several stores' paths (compared side by side).
     rule : {"dsf_valid", "chosen"}
         See the module docstring: D_SF on the validation record over all members, or each
         cell's own choice.
@@ -107,8 +161,10 @@ def leaderboard(
         Index (data, structure, variant); columns ``rank`` (1 = best within the data set, by
         J_S valid), ``JS_valid``, ``JS_ident``, ``JSF``, ``fit_valid``, ``n_params``, ``seed``,
         ``lambda1`` (of the member, NaN for single models), ``in_band``, ``candidates`` (how many
-        models were compared), ``cells`` and ``ok`` (cells of the group, cells with status ok).
-        A group with no qualifying model keeps a row with NaN figures (rank NaN).
+        models were compared), ``cells`` and ``ok`` (cells of the group, cells with status ok),
+        ``reason`` (empty for a ranked row). A group with no qualifying model keeps a row with NaN
+        figures (rank NaN) and says why in ``reason``: the smallest J_SF reached when no model
+        is in the band, and the messages of its infeasible, diverged or failed cells.
     """
     if rule not in RULES:
         raise ValueError(f"rule must be one of {', '.join(map(repr, RULES))}; got {rule!r}")
@@ -116,22 +172,43 @@ def leaderboard(
     rows = []
     for (d, s, v), g in df.groupby(_KEYS, sort=False):
         base = {"data": d, "structure": s, "variant": v, "cells": len(g), "ok": int((g["status"] == "ok").sum())}
+        why: list[str] = []
         if rule == "chosen":
             ok = g[g["status"] == "ok"]
-            cand = ok.assign(in_band=ok["in_band"])
+            cand = ok.assign(in_band=ok["in_band"], n_params=_n_params(ok))
             n = len(cand)
         else:
             b = _band_of(g, band, d)
             allc = _candidates(g)
             n = len(allc)
-            cand = allc[(allc["JSF"] <= b) & np.isfinite(allc["JS_valid"].astype(float))].assign(in_band=True)
+            jsf = allc["JSF"].astype(float)
+            inside = jsf <= b
+            cand = allc[inside & np.isfinite(allc["JS_valid"].astype(float))].assign(in_band=True)
+            if n and not len(cand):
+                finite = jsf[np.isfinite(jsf)]
+                if inside.any():
+                    why.append(f"every one of the {int(inside.sum())} model(s) with J_SF ≤ B = {b:g} diverges on the "
+                               "validation record")
+                elif len(finite):
+                    at = allc.loc[finite.idxmin()]
+                    lam = f", λ1 = {at['lambda1']:.3g}" if pd.notna(at["lambda1"]) else ""
+                    seed = f", seed {int(at['seed'])}" if pd.notna(at["seed"]) else ""
+                    why.append(f"no model has J_SF ≤ B = {b:g}: the smallest J_SF reached is {finite.min():.4g}"
+                               f"{lam}{seed} ({n} model(s) compared)")
+                else:
+                    why.append(f"every one of the {n} model(s) has an undefined static curve (J_SF = inf)")
         if len(cand):
             best = cand.sort_values(["JS_valid", "JSF"], kind="stable").iloc[0]
             base.update({k: best.get(k, np.nan) for k in ("JS_valid", "JS_ident", "JSF", "fit_valid", "n_params",
                                                          "seed", "lambda1", "in_band")})
+            base["reason"] = ""
         else:
-            base.update(JS_valid=np.nan, JS_ident=np.nan, JSF=np.nan, fit_valid=np.nan, n_params=pd.NA, seed=pd.NA,
-                        lambda1=np.nan, in_band=False)
+            sizes = _n_params(g).dropna().unique()
+            base.update(JS_valid=np.nan, JS_ident=np.nan, JSF=np.nan, fit_valid=np.nan,
+                        n_params=sizes[0] if len(sizes) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan, in_band=False)
+            # an infeasible cell whose members were judged above: its own D_SF said the same
+            why += _cell_reasons(g, brief=("infeasible",) if why and n else ())
+            base["reason"] = "; ".join(why) or ("no cell is ok" if rule == "chosen" else "no model qualified")
         base["candidates"] = n
         rows.append(base)
     out = pd.DataFrame(rows)
@@ -143,7 +220,7 @@ def leaderboard(
     out["seed"] = pd.array(out["seed"], dtype="Int64")
     out["rank"] = out.groupby("data")["JS_valid"].rank(method="min")
     cols = ["rank", "JS_valid", "JS_ident", "JSF", "fit_valid", "n_params", "seed", "lambda1", "in_band",
-            "candidates", "cells", "ok"]
+            "candidates", "cells", "ok", "reason"]
     return out.set_index(_KEYS)[cols].sort_values(["data", "rank"], kind="stable", na_position="last")
 
 
@@ -159,7 +236,8 @@ def heatmap_table(
 
     Parameters
     ----------
-    results : DataFrame or path
+    results : DataFrame, path or sequence of paths
+        As for :func:`leaderboard`.
     data : str, optional
         The data set (default: the only one; required when the grid has several).
     value : str
@@ -198,6 +276,49 @@ def _finite_pos(x: np.ndarray) -> np.ndarray:
     return np.isfinite(x) & (x > 0)
 
 
+def _spans_decades(values) -> bool:
+    """Whether the finite positive values span a decade or more (then a log scale reads best)."""
+    v = np.asarray(values, float)
+    v = v[_finite_pos(v)]
+    return bool(v.size) and v.max() >= 10 * v.min()
+
+
+def _ticks(axis, log: bool, nbins: int) -> None:
+    """Few major ticks and no minor labels, so that tick labels never run into each other."""
+    if log:
+        axis.set_major_locator(LogLocator(base=10, numticks=5))
+        axis.set_minor_locator(LogLocator(base=10, subs=np.arange(2, 10) * 0.1, numticks=12))
+        axis.set_minor_formatter(NullFormatter())
+    else:
+        axis.set_major_locator(MaxNLocator(nbins=nbins, min_n_ticks=2))
+        fmt = ScalarFormatter(useMathText=True)
+        fmt.set_powerlimits((-2, 3))  # 0.0123 reads 1.23 with ×10⁻² once at the axis end
+        axis.set_major_formatter(fmt)
+
+
+def _scale(ax, which: str, values) -> None:
+    """A log axis where the values span a decade or more, else a linear one (see :func:`_ticks`)."""
+    log = _spans_decades(values)
+    (ax.set_xscale if which == "x" else ax.set_yscale)("log" if log else "linear")
+    _ticks(ax.xaxis if which == "x" else ax.yaxis, log, 4 if which == "x" else 6)
+
+
+def _band_on(ax, b: float | None, label: bool = False) -> None:
+    """Shade J_SF ≤ B where B is inside the panel; say where B is when it is not (a panel that
+    is all band, or none of it, tells nothing by its colour)."""
+    if b is None:
+        return
+    lo, hi = ax.get_ylim()
+    if lo < b < hi:
+        ax.axhspan(lo, b, color="0.9", zorder=0, label=f"J_SF ≤ B = {b:g}" if label else None)
+        ax.axhline(b, color="0.45", lw=0.8, ls="--", zorder=1)
+        ax.set_ylim(lo, hi)
+    else:
+        where = "above" if b >= hi else "below"
+        ax.text(0.99, 0.99 if where == "above" else 0.01, f"B = {b:g}: {where} every point", transform=ax.transAxes,
+                ha="right", va="top" if where == "above" else "bottom", fontsize=7, color="0.3")
+
+
 def plot_scatter(
     results: pd.DataFrame | str | os.PathLike,
     *,
@@ -206,12 +327,14 @@ def plot_scatter(
 ) -> Figure:
     """J_S on the validation record against J_SF of every cell's chosen model, band drawn.
 
-    One panel per data set (or only ``data``); colour = variant, marker = structure; log axes.
+    One panel per data set (or only ``data``); colour = variant, marker = structure; an axis is
+    logarithmic where its values span a decade or more (tick labels never overlap).
     Cells without a finite chosen model (infeasible, diverged, failed) are counted in the title.
 
     Parameters
     ----------
-    results : DataFrame or path
+    results : DataFrame, path or sequence of paths
+        As for :func:`leaderboard`.
     data : str, optional
         Only this data set.
     band : float or mapping data -> float, optional
@@ -239,16 +362,14 @@ def plot_scatter(
         for s in structures:
             ax.plot([], [], marks[s], color="0.3", label=s, ls="none")
         b = _band_of(sub, band, d) if (band is not None or sub["band"].notna().any()) else None
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        if b is not None and ok.any():
-            lo, hi = ax.get_ylim()
-            ax.axhspan(min(lo, b / 10), b, color="0.88", zorder=0, label=f"B = [0, {b:g}]")
-            ax.set_ylim(min(lo, b / 10), max(hi, b))
+        _scale(ax, "x", sub.loc[ok, "JS_valid"])
+        _scale(ax, "y", sub.loc[ok, "JSF"])
+        if ok.any():
+            _band_on(ax, b, label=True)
         ax.set_xlabel("J_S on the validation record")
         ax.set_ylabel("J_SF")
         ax.set_title(f"{d}: {int(ok.sum())} of {len(sub)} cells drawn")
-        ax.grid(True, which="both", alpha=0.3)
+        ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7, ncol=2, loc="best")
     return fig
 
@@ -267,7 +388,8 @@ def plot_fronts(
 
     Parameters
     ----------
-    results : DataFrame or path
+    results : DataFrame, path or sequence of paths
+        As for :func:`leaderboard`.
     data : str, optional
         The data set (required when the grid has several).
     structures : sequence of str, optional
@@ -295,6 +417,8 @@ def plot_fronts(
     b = _band_of(sub, band, d) if (band is not None or sub["band"].notna().any()) else None
     for ax, s in zip(axes, names):
         drawn = False
+        xs: list[np.ndarray] = []
+        ys: list[np.ndarray] = []
         for v in variants:
             g = sub[(sub["structure"] == s) & (sub["variant"] == v)]
             for _, r in g.iterrows():
@@ -308,26 +432,34 @@ def plot_fronts(
                         best = np.minimum.accumulate(y[ok][o])
                         keep = np.r_[True, best[1:] < best[:-1]]
                         ax.plot(x[ok][o][keep], y[ok][o][keep], "-", lw=1.2, color=colors[v])
+                        xs.append(x[ok])
+                        ys.append(y[ok])
                         drawn = True
                 if r["status"] == "ok" and _finite_pos([r["JS_valid"]])[0] and _finite_pos([r["JSF"]])[0]:
                     ax.plot([r["JS_valid"]], [r["JSF"]], "*" if isinstance(m, Mapping) else "D", ms=11,
                             mec="k", color=colors[v], zorder=5)
+                    xs.append(np.array([r["JS_valid"]]))
+                    ys.append(np.array([r["JSF"]]))
                     drawn = True
             ax.plot([], [], "o-", color=colors[v], label=v)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        if b is not None and drawn:
-            lo, hi = ax.get_ylim()
-            ax.axhspan(min(lo, b / 10), b, color="0.88", zorder=0)
-            ax.set_ylim(min(lo, b / 10), max(hi, b))
+        _scale(ax, "x", np.concatenate(xs) if xs else [])
+        _scale(ax, "y", np.concatenate(ys) if ys else [])
+        if drawn:
+            _band_on(ax, b)
+        else:
+            ax.text(0.5, 0.5, "no model with finite J_S and J_SF\n(the leaderboard's reason says why)",
+                    transform=ax.transAxes, ha="center", va="center", color="0.4", fontsize=8)
+            ax.set_xticks([])
+            ax.set_yticks([])
         ax.set_title(s)
         ax.set_xlabel("J_S on the validation record")
         ax.set_ylabel("J_SF")
-        ax.grid(True, which="both", alpha=0.3)
+        ax.grid(True, which="major", alpha=0.3)
     for ax in axes[len(names):]:
         ax.set_visible(False)
     axes[0].legend(fontsize=7, loc="best", title="★ chosen, ◆ single model", title_fontsize=7)
-    fig.suptitle(f"{d}: fronts per structure" + (f" (shaded: J_SF ≤ {b:g})" if b is not None else ""))
+    fig.suptitle(f"{d}: fronts per structure" + (f" (shaded below the dashed line: J_SF ≤ B = {b:g})"
+                                                   if b is not None else ""))
     return fig
 
 
@@ -339,11 +471,12 @@ def plot_heatmap(
     rule: str = "dsf_valid",
     band: float | Mapping[str, float] | None = None,
 ) -> Figure:
-    """Structure × variant heat map of a leaderboard figure (log colour scale for errors).
+    """Structure × variant heat map of a leaderboard figure (log colour scale for errors that span a decade).
 
     Parameters
     ----------
-    results : DataFrame or path
+    results : DataFrame, path or sequence of paths
+        As for :func:`leaderboard`.
     data : str, optional
         The data set (required when the grid has several).
     value, rule, band
@@ -359,7 +492,7 @@ def plot_heatmap(
     fig = Figure(figsize=(1.2 + 1.1 * t.shape[1], 1.4 + 0.5 * t.shape[0]), layout="constrained")
     ax = fig.add_subplot()
     pos = np.isfinite(vals) & (vals > 0)
-    log = value.startswith("J") and pos.any()
+    log = value.startswith("J") and _spans_decades(vals)
     norm = LogNorm(vmin=vals[pos].min(), vmax=vals[pos].max()) if log else None
     shown = np.where(pos if log else np.isfinite(vals), vals, np.nan)
     im = ax.imshow(np.ma.masked_invalid(shown), cmap="viridis_r" if value.startswith("J") else "viridis",
@@ -372,10 +505,11 @@ def plot_heatmap(
             if not np.isfinite(v):
                 ax.text(j, i, "—", ha="center", va="center", fontsize=7, color="k")
                 continue
-            r, g, b_, _ = im.cmap(im.norm(v))
+            r, g, b_ = np.asarray(im.to_rgba(np.array([v])), float).reshape(-1)[:3]  # one value: vmin = vmax
             light = 0.299 * r + 0.587 * g + 0.114 * b_ > 0.5  # dark text on light colours
             ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7, color="k" if light else "w")
-    fig.colorbar(im, ax=ax, label=value)
+    cbar = fig.colorbar(im, ax=ax, label=value)
+    _ticks(cbar.ax.yaxis, log, 5)
     d = _one_data(_frame(results), data)
     ax.set_title(f"{d}: {value} ({rule})", fontsize=9)
     return fig
@@ -386,40 +520,55 @@ def _slug(name: str) -> str:
 
 
 def write_report(
-    store: str | os.PathLike,
+    store: str | os.PathLike | Sequence[str | os.PathLike],
     out: str | os.PathLike,
     *,
     rule: str = "dsf_valid",
     band: float | Mapping[str, float] | None = None,
+    spec: str | int = "latest",
+    html: bool = False,
 ) -> list[Path]:
-    """Write a store's tables (CSV) and figures (PNG) into a folder.
+    """Write a store's tables (CSV) and figures (PNG) into a folder, and optionally one HTML page.
 
     Files: ``cells.csv`` (every cell, θ and members as JSON text), ``leaderboard.csv``,
-    ``summary.txt`` (cells by status, the top five per data set), and per data set
-    ``heatmap_<data>.csv``, ``heatmap_<data>.png``, ``fronts_<data>.png``; ``scatter.png``.
+    ``summary.txt`` (cells by status, the top five per data set, and why a group has no
+    qualifying model or a cell is not ok), and per data set ``heatmap_<data>.csv``,
+    ``heatmap_<data>.png``, ``fronts_<data>.png``; ``scatter.png``; with ``html``,
+    ``report.html``: one self-contained page (the figures embedded, the tables, the reasons,
+    the spec and the environment) to open offline in any browser or send to a colleague.
 
     Parameters
     ----------
-    store : path
-        A grid store.
+    store : path or sequence of paths
+        A grid store; two or more are compared side by side (:func:`compare_results`).
     out : path
         Folder (created if missing).
     rule, band
         As for :func:`leaderboard`.
+    spec : "latest", "all" or int
+        Which cells of the store (see :func:`graybox.load_results`).
+    html : bool
+        Also write ``report.html``.
 
     Returns
     -------
     list of Path
         The files written.
     """
-    df = load_results(store)
+    df = _frame(list(store) if isinstance(store, (list, tuple)) else store, spec=spec, attrs=True)
+    attrs = dict(df.attrs)
+    df = _frame(df)
     o = Path(out)
     o.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
+    pngs: dict[str, bytes] = {}
 
     def save(path: Path, obj) -> None:
         if isinstance(obj, Figure):
-            obj.savefig(path, dpi=110)
+            buf = io.BytesIO()
+            obj.savefig(buf, format="png", dpi=110)
+            pngs[path.name] = buf.getvalue()
+            path.write_bytes(pngs[path.name])
         elif isinstance(obj, pd.DataFrame):
             obj.to_csv(path)
         else:
@@ -434,19 +583,143 @@ def write_report(
     save(o / "cells.csv", flat.set_index("key"))
     lb = leaderboard(df, rule=rule, band=band)
     save(o / "leaderboard.csv", lb)
-    counts = df["status"].value_counts()
-    lines = [f"grid {df.attrs.get('grid')!r} (fingerprint {df.attrs.get('fingerprint')}, graybox "
-             f"{df.attrs.get('version')}): {len(df)} of {df.attrs.get('n_cells', len(df))} cells in the store; "
-             + ", ".join(f"{int(counts.get(s, 0))} {s}" for s in STATUSES),
-             f"ranking rule: {rule}"]
+    lines = _summary_lines(df, lb, rule, attrs)
     for d in dict.fromkeys(df["data"]):
-        sub = lb.loc[d].dropna(subset=["JS_valid"]).head(5)
-        lines.append(f"\n{d}: best by J_S on the validation record")
-        lines.append(sub[["JS_valid", "JSF", "fit_valid", "n_params"]].to_string() if len(sub) else "  (no model qualified)")
         slug = _slug(d)
         save(o / f"heatmap_{slug}.csv", heatmap_table(df, data=d, rule=rule, band=band))
         save(o / f"heatmap_{slug}.png", plot_heatmap(df, data=d, rule=rule, band=band))
         save(o / f"fronts_{slug}.png", plot_fronts(df, data=d, band=band))
     save(o / "scatter.png", plot_scatter(df, band=band))
     save(o / "summary.txt", "\n".join(lines) + "\n")
+    if html:
+        from ._html import report_page
+
+        save(o / "report.html", report_page(df, lb, rule=rule, summary=lines, figures=pngs, attrs=attrs))
     return written
+
+
+def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping | None = None) -> list[str]:
+    """summary.txt: counts, the best five per data set, and every reason (``attrs``: the store's,
+    default ``df.attrs``)."""
+    attrs = df.attrs if attrs is None else attrs
+    counts = df["status"].value_counts()
+    fp = attrs.get("fingerprint")
+    lines = [f"grid {attrs.get('grid')!r} ({f'fingerprint {fp}, ' if fp else ''}graybox "
+             f"{attrs.get('version')}): {len(df)} of {attrs.get('n_cells', len(df))} cells in the store; "
+             + ", ".join(f"{int(counts.get(s, 0))} {s}" for s in STATUSES),
+             f"ranking rule: {rule}"]
+    for d in dict.fromkeys(df["data"]):
+        part = lb.loc[d]
+        sub = part.dropna(subset=["JS_valid"]).head(5)
+        lines.append(f"\n{d}: best by J_S on the validation record")
+        lines.append(sub[["JS_valid", "JSF", "fit_valid", "n_params"]].to_string() if len(sub) else
+                     "  (no model qualified: the reasons follow)")
+        empty = part[part["reason"] != ""]
+        if len(empty):
+            lines.append(f"{d}: {len(empty)} of {len(part)} (structure, variant) with no qualifying model, and why")
+            lines += [f"  {s} / {v}: {r}" for (s, v), r in empty["reason"].items()]
+    bad = df[df["status"] != "ok"]
+    if len(bad):
+        lines.append(f"\ncells not ok ({len(bad)}), with their messages")
+        for _, r in bad.iterrows():
+            seed = f" seed {int(r['seed'])}" if pd.notna(r["seed"]) else ""
+            lines.append(f"  [{r['status']}] {r['data']} / {r['structure']} / {r['variant']}{seed}: "
+                         f"{r['message'] if isinstance(r['message'], str) and r['message'] else 'no message stored'}")
+    return lines
+
+
+@dataclass(frozen=True)
+class GridStatus:
+    """Where a grid stands (:func:`grid_status`): readable while another process writes the store.
+
+    Attributes
+    ----------
+    store : str
+    spec : int
+        The spec shown (by default the one run last).
+    grid : str
+        Its name.
+    cells : int
+        Cells of the spec.
+    done : int
+        Cells the store holds (any status).
+    left : int
+        Cells not finished yet.
+    counts : mapping str -> int
+        Cells by status.
+    time_per_cell : float
+        Mean seconds per finished cell (NaN before the first).
+    last_finished : str or None
+        When the last cell finished (UTC, ISO 8601).
+    best : pandas.DataFrame
+        The best model so far per data set (the leaderboard's first row).
+    specs : int
+        Specs the store has seen.
+    """
+
+    store: str
+    spec: int
+    grid: str
+    cells: int
+    done: int
+    left: int
+    counts: Mapping[str, int]
+    time_per_cell: float
+    last_finished: str | None
+    best: pd.DataFrame
+    specs: int
+
+    def summary(self) -> str:
+        """A few lines for a terminal."""
+        st = ", ".join(f"{self.counts.get(s, 0)} {s}" for s in STATUSES)
+        tpc = f"{self.time_per_cell:.3g} s per cell" if np.isfinite(self.time_per_cell) else "no cell finished yet"
+        lines = [f"{self.store}: spec {self.spec} of {self.specs} ({self.grid!r}): {self.done} of {self.cells} cells "
+                 f"done ({st}), {self.left} left; {tpc}"
+                 + (f"; last finished {self.last_finished}" if self.last_finished else "")]
+        if len(self.best):
+            lines.append("best so far:")
+            lines += ["  " + ln for ln in self.best.to_string().splitlines()]
+        elif self.done:
+            lines.append("best so far: no model qualifies yet (graybox grid report says why)")
+        else:
+            lines.append("best so far: none yet")
+        return "\n".join(lines)
+
+
+def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> GridStatus:
+    """How far a grid has run: cells done, failed and left, time per cell, the best so far.
+
+    Reads the store read-only, so it can be called (``graybox grid status``) while another
+    process runs the grid into it.
+
+    Parameters
+    ----------
+    store : path
+        A grid store.
+    spec : "latest", "all" or int
+        Which spec's cells (see :func:`graybox.load_results`); default the one run last.
+
+    Returns
+    -------
+    GridStatus
+    """
+    df = load_results(store, spec=spec)
+    attrs = dict(df.attrs)
+    df = _frame(df)
+    counts = {s: int((df["status"] == s).sum()) for s in STATUSES}
+    n = int(attrs.get("n_cells", len(df)))
+    wall = df["wall_time"].astype(float)
+    best = pd.DataFrame()
+    if len(df):
+        try:
+            lb = leaderboard(df)
+        except ValueError:  # a data set without a band: each cell's own choice
+            lb = leaderboard(df, rule="chosen")
+        top = lb.dropna(subset=["JS_valid"]).reset_index().groupby("data", sort=False).head(1)
+        best = top.set_index("data")[["structure", "variant", "JS_valid", "JSF", "n_params"]]
+    last = df["finished_at"].dropna()
+    sel = attrs.get("selection")
+    return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(attrs.get("grid")),
+                      n, len(df), max(0, n - len(df)), MappingProxyType(counts),
+                      float(wall.mean()) if wall.notna().any() else float("nan"), max(last) if len(last) else None,
+                      best, len(attrs.get("specs", [])))

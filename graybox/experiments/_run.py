@@ -7,7 +7,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from .. import _api as gb
 
@@ -35,13 +35,18 @@ class GridRun:
     ran : int
         Cells run now.
     skipped : int
-        Cells already finished in the store (not run again).
+        Cells the store already held (reused, not run again).
     counts : mapping str -> int
-        Cells of the whole store by status (ok, infeasible, diverged, failed).
+        The grid's cells in the store by status (ok, infeasible, diverged, failed).
     executor : str
         Where the cells ran.
     wall_time : float
         Seconds for the whole run.
+    spec : int
+        The grid's number among the specs the store has seen (1 = the first).
+    notes : tuple of str
+        What the store made of the grid: a spec new to the store, new data sets, cells of an
+        older graybox that could not be reused.
     """
 
     store: str
@@ -52,12 +57,20 @@ class GridRun:
     counts: Mapping[str, int]
     executor: str
     wall_time: float
+    spec: int = 1
+    notes: tuple[str, ...] = ()
+
+    @property
+    def reused(self) -> int:
+        """Cells the store already held (the same as ``skipped``)."""
+        return self.skipped
 
     def summary(self) -> str:
-        """One line: how many cells, how many run now, and their statuses."""
+        """How many cells, how many reused and run now, their statuses, and any notes."""
         st = ", ".join(f"{self.counts.get(s, 0)} {s}" for s in STATUSES)
-        return (f"grid {self.grid!r}: {self.cells} cells, {self.ran} run now ({self.executor}, {self.wall_time:.1f} s), "
-                f"{self.skipped} already in {self.store}; {st}")
+        head = (f"grid {self.grid!r} (spec {self.spec} of {self.store}): {self.cells} cells, {self.skipped} reused, "
+                f"{self.ran} run now ({self.executor}, {self.wall_time:.1f} s); {st}")
+        return "\n".join([head, *(f"  {n}" for n in self.notes)])
 
 
 def run_grid(
@@ -70,16 +83,22 @@ def run_grid(
     scheduler: str | None = None,
     retry_failed: bool = False,
     progress: bool | None = None,
+    log: Callable[[str], None] | None = None,
 ) -> GridRun:
-    """Run a grid's cells that are not in the store yet; each finished cell is committed at once.
+    """Run a grid's cells that the store does not hold yet; each finished cell is committed at once.
+
+    A store grows: run a grid with one more data set, structure, variant, seed or option on a
+    finished store and only the new cells run (a cell is its content: a variant whose options
+    changed is a new cell, and the old one is kept). The store keeps every spec run on it.
 
     Parameters
     ----------
     grid : Grid or path
         The grid, or a TOML spec file.
     store : path
-        The SQLite store (created if missing). A store written by another grid, a damaged file
-        or a file that is not a graybox store is refused and left untouched.
+        The SQLite store (created if missing, grown if not). A store whose data set of the same
+        name holds other data, a store of a newer graybox, a damaged file or a file that is not
+        a graybox store is refused and left untouched.
     executor : {"inprocess", "processes", "dask"}, optional
         Default: "dask" when ``client``, ``scheduler`` or ``workers`` is given, else "inprocess".
     workers : int, optional
@@ -93,6 +112,9 @@ def run_grid(
         Run the cells whose stored status is "failed" again (their rows are replaced).
     progress : bool, optional
         Progress bar (cells done, ETA); default: on a terminal only.
+    log : callable, optional
+        Called with lines worth telling at the start of a run (cells reused and to run, the
+        Dask dashboard's address); the ``graybox`` command prints them.
 
     Returns
     -------
@@ -104,7 +126,7 @@ def run_grid(
     SpecError
         The spec is invalid or its data cannot be loaded.
     StoreError
-        The store cannot be used.
+        The store cannot be used, or gives one of the spec's data set names other data.
 
     Notes
     -----
@@ -123,14 +145,24 @@ def run_grid(
     by_hash = {c.data_hash: datasets[c.data] for c in cells}
     ex = make_executor(executor, workers=workers, client=client, scheduler=scheduler, fn=run_cell)
     version = gb.__version__
-    with ResultStore.open(store, fingerprint=g.fingerprint(cells), grid_name=g.name, spec=g.to_dict(),
-                          n_cells=len(cells), version=version) as st:
+    say = log or (lambda line: None)
+    with ResultStore.open(store, grid_name=g.name, fingerprint=g.fingerprint(cells), spec=g.to_dict(), cells=cells,
+                          version=version) as st:
         done = st.statuses()
-        todo = [c for c in cells if c.key not in done or (retry_failed and done[c.key] == "failed")]
+        todo, seen = [], set()
+        for c in cells:
+            # two data set names of one grid may hold the same data: their cells share keys, run once
+            if c.key not in seen and (c.key not in done or (retry_failed and done[c.key] == "failed")):
+                todo.append(c)
+            seen.add(c.key)
+        notes = _notes(st, cells, done, version)
+        say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - len(todo)} reused from {store}, {len(todo)} to run")
+        for n in notes:
+            say(f"  {n}")
         bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo))
         ran = 0
         try:
-            for row in ex.run(todo, by_hash):
+            for row in ex.run(todo, by_hash, log=say):
                 if row.get("version") != version:
                     row = failed_row(next(c for c in todo if c.key == row["key"]),
                                      f"the worker runs graybox {row.get('version')}, the driver {version}: "
@@ -141,5 +173,26 @@ def run_grid(
         finally:
             bar.close()
         counts = st.counts()
+        spec_id = st.spec_id
     return GridRun(str(Path(store)), g.name, len(cells), ran, len(cells) - len(todo),
-                   MappingProxyType({s: counts.get(s, 0) for s in STATUSES}), ex.name, time.perf_counter() - t0)
+                   MappingProxyType({s: counts.get(s, 0) for s in STATUSES}), ex.name, time.perf_counter() - t0,
+                   spec_id, tuple(notes))
+
+
+def _notes(st: ResultStore, cells, done: Mapping[str, str], version: str) -> list[str]:
+    """What the store made of the grid, in words."""
+    out = []
+    if st.new_spec and st.spec_id > 1:
+        out.append(f"a new spec for this store (spec {st.spec_id}): only the cells it does not hold run")
+    hashes = {c.data: c.data_hash for c in cells}
+    for name, h in hashes.items():
+        if st.known_data and name not in st.known_data:
+            same = [k for k, v in st.known_data.items() if v == h]
+            out.append(f"data set {name!r} is new to the store" + (f" (the same data as {same[0]!r}: its cells are "
+                                                                   "reused)" if same else ""))
+    if done and not any(c.key in done for c in cells):
+        others = sorted(st.versions() - {version})
+        if others:
+            out.append(f"none of the store's {len(done)} cells is reused: they were made by graybox "
+                       f"{', '.join(others)}, and cells are keyed by version")
+    return out

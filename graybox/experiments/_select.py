@@ -64,7 +64,9 @@ class GrayboxSelection:
         Everything tried, one row per structure and estimator: ``structure`` (name), ``source``
         (semp / frols), ``size`` (terms before the static terms), ``n_terms``, ``added`` (static-form
         terms added), ``estimator``, ``JS_valid`` (D_SF on validation, mean over folds), ``JSF`` (its static error, worst fold),
-        ``in_band`` (the band met in every fold), ``rank``.
+        ``in_band`` (the band met in every fold), ``rank``, ``reason`` (why a structure has no
+        qualifying model: the smallest J_SF reached, the sample where a free run diverged, the
+        error of a failed cell; empty when it qualified).
     degree : int
         Degree of the static curve the static information asks for.
     band : float
@@ -312,12 +314,14 @@ def select_graybox(
     results = load_results(store)
     board = leaderboard(results, rule="dsf_valid", band=band).reset_index()
     per = board.groupby(["structure", "variant"]).agg(JS_valid=("JS_valid", "mean"), JSF=("JSF", "max"),
-                                                      in_band=("in_band", "all")).reset_index()
+                                                      in_band=("in_band", "all"),
+                                                      reason=("reason", _reasons)).reset_index()
     per = per.rename(columns={"variant": "estimator"})
     table = pd.DataFrame(rows).merge(per, on="structure", how="left")
     table["estimator"] = table["estimator"].fillna(estimators[0])
     table = table.set_index("structure")
     table["in_band"] = table["in_band"].fillna(False).astype(bool) & np.isfinite(table["JS_valid"])
+    table["reason"] = table["reason"].fillna("no cell of this structure is in the store")
     ok = table[table["in_band"]]
     used_fallback = False
     if len(ok):
@@ -342,6 +346,11 @@ def select_graybox(
                       extra)
     return GrayboxSelection(structure, decision.model, decision, table.drop(columns=["terms"]), degree, band,
                             not used_fallback, str(store))
+
+
+def _reasons(r: pd.Series) -> str:
+    """The leaderboard's reasons of a structure's folds, each once (empty: every fold qualified)."""
+    return "; ".join(dict.fromkeys(x for x in r if isinstance(x, str) and x))
 
 
 def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> list[float] | None:

@@ -1,10 +1,17 @@
-"""The result store: one SQLite file per grid (standard library :mod:`sqlite3`).
+"""The result store: one SQLite file that grows with its grid (standard library :mod:`sqlite3`).
 
-Each finished cell is one row, committed in its own transaction as soon as the driver receives
-it, so a run that is killed loses only the cells in flight. A store knows the grid that wrote it
-(a fingerprint of its cells' keys and names, and the whole spec): running another grid against
-it is refused, and so is any file that is not a graybox store or is damaged. A refused file is
-never written to.
+Each finished cell is one row of the ``cells`` table, keyed by the hash of its content (data,
+structure, variant, seed, band, graybox version), committed in its own transaction as soon as
+the driver receives it, so a run that is killed loses only the cells in flight. Every spec run
+against the store is kept (table ``specs``: its canonical form, its data sets' content hashes,
+the graybox version, when it was first and last run) with the keys and names of its cells
+(table ``spec_cells``). A spec run on an existing store runs only the cells the store does not
+hold: new data sets, structures, variants, seeds or options add cells; the rest are reused.
+
+A store gives a data set name one meaning: a spec whose data set of that name reads other data
+is refused. So is a store written by a newer graybox, any file that is not a graybox store,
+and a damaged one; a refused file is never written to. Stores of the first format (one grid per
+store) are read as they are, and upgraded in place when their own spec runs on them again.
 """
 
 from __future__ import annotations
@@ -12,27 +19,77 @@ from __future__ import annotations
 import datetime
 import json
 import os
+import re
 import sqlite3
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
 from ._cell import COLUMNS, JSON_COLUMNS
+from ._spec import Cell, _hash
 
-__all__ = ["StoreError", "ResultStore", "load_results", "FORMAT", "FORMAT_VERSION"]
+__all__ = ["StoreError", "ResultStore", "load_results", "compare_results", "store_specs", "FORMAT",
+           "FORMAT_VERSION"]
 
 #: What a graybox store says it is (table ``meta``, key ``format``).
 FORMAT = "graybox-grid-store"
-FORMAT_VERSION = "1"
+#: The format this graybox writes; it reads every format in ``READS``.
+FORMAT_VERSION = "2"
+READS = ("1", "2")
 _SQLITE_MAGIC = b"SQLite format 3\x00"
+#: What to do with a damaged store.
+_DAMAGED = "restore it from a copy, or run the spec into a new --store path"
 #: Pages of write-ahead log after which a commit folds the log into the database.
 WAL_PAGES = 128
 
+#: Every spec run against the store.
+SPECS: dict[str, str] = {
+    "id": "INTEGER PRIMARY KEY",
+    "name": "TEXT NOT NULL",
+    "fingerprint": "TEXT NOT NULL UNIQUE",
+    "spec": "TEXT NOT NULL",
+    "data": "TEXT NOT NULL",  # JSON: data set name -> content hash
+    "graybox_version": "TEXT NOT NULL",
+    "created": "TEXT NOT NULL",
+    "last_run": "TEXT NOT NULL",
+    "n_cells": "INTEGER NOT NULL",
+}
+#: The cells of every spec, in its grid order, under the names that spec gives them.
+SPEC_CELLS: dict[str, str] = {
+    "spec": "INTEGER NOT NULL",
+    "position": "INTEGER NOT NULL",
+    "key": "TEXT NOT NULL",
+    "data": "TEXT NOT NULL",
+    "structure": "TEXT NOT NULL",
+    "variant": "TEXT NOT NULL",
+    "seed": "INTEGER",
+    "data_hash": "TEXT NOT NULL",
+    "structure_hash": "TEXT NOT NULL",
+    "variant_hash": "TEXT NOT NULL",
+}
+
 
 class StoreError(ValueError):
-    """A store cannot be used: not a graybox store, damaged, or written by another grid."""
+    """A store cannot be used: not a graybox store, damaged, written by a newer graybox, or
+    asked to give a data set name a second meaning."""
+
+
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds")
+
+
+def _release(v: str | None) -> tuple[int, ...] | None:
+    """A release version as numbers (``"0.3.1"`` -> (0, 3, 1)); None for a local or unknown one."""
+    m = re.fullmatch(r"(\d+(?:\.\d+)*)", v or "")
+    return tuple(int(x) for x in m.group(1).split(".")) if m else None
+
+
+def _newer(a: str | None, b: str | None) -> bool:
+    """Whether release ``a`` is newer than release ``b`` (False when either is not a plain release)."""
+    ra, rb = _release(a), _release(b)
+    return ra is not None and rb is not None and ra > rb
 
 
 def _check_file(path: Path) -> None:
@@ -49,12 +106,12 @@ def _check_file(path: Path) -> None:
 
 
 def _read_meta(conn: sqlite3.Connection, path: Path) -> dict[str, str]:
-    """Check integrity and ownership (read-only statements only) and return the meta table."""
+    """Check integrity, format and tables (read-only statements only) and return the meta table."""
     try:
         ok = conn.execute("PRAGMA quick_check").fetchone()
         if ok is None or ok[0] != "ok":
             raise StoreError(f"{path} is damaged (SQLite integrity check: {ok[0] if ok else 'no answer'}); "
-                             "nothing was written to it")
+                             f"nothing was written to it; {_DAMAGED}")
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
         if not {"meta", "cells"} <= tables:
             raise StoreError(f"{path} is an SQLite database but not a graybox grid store (tables: "
@@ -62,17 +119,36 @@ def _read_meta(conn: sqlite3.Connection, path: Path) -> dict[str, str]:
         meta = dict(conn.execute("SELECT key, value FROM meta").fetchall())
         cols = [r[1] for r in conn.execute("PRAGMA table_info(cells)")]
     except sqlite3.DatabaseError as exc:
-        raise StoreError(f"{path} is damaged or not a graybox grid store ({exc}); nothing was written to it") from None
+        raise StoreError(f"{path} is damaged or not a graybox grid store ({exc}); nothing was written to it; "
+                         f"{_DAMAGED}") from None
     if meta.get("format") != FORMAT:
         raise StoreError(f"{path} is an SQLite database but not a graybox grid store (no format mark); nothing "
-                         "was written to it")
-    if meta.get("format_version") != FORMAT_VERSION:
-        raise StoreError(f"{path} is a graybox store of format {meta.get('format_version')!r}; this graybox reads "
-                         f"format {FORMAT_VERSION!r}")
+                         "was written to it. Choose another --store path")
+    fv = meta.get("format_version")
+    if fv not in READS:
+        if _newer(fv, FORMAT_VERSION):
+            raise StoreError(f"{path} was written by a newer graybox (store format {fv}, graybox "
+                             f"{meta.get('graybox_version')}); this graybox reads formats {', '.join(READS)}. "
+                             "Upgrade graybox to read or grow it; nothing was written to it")
+        raise StoreError(f"{path} is a graybox store of unknown format {fv!r}; this graybox reads formats "
+                         f"{', '.join(READS)}; nothing was written to it")
     if cols != list(COLUMNS):
         raise StoreError(f"{path}: the cells table has columns {cols}, expected {list(COLUMNS)}: damaged or "
-                         "written by another graybox")
+                         f"written by another graybox; {_DAMAGED}")
+    if fv != "1" and not {"specs", "spec_cells"} <= tables:
+        raise StoreError(f"{path} is damaged: a store of format {fv} without its specs tables; {_DAMAGED}")
     return meta
+
+
+def _specs(conn: sqlite3.Connection, meta: Mapping[str, str]) -> list[dict[str, Any]]:
+    """The store's specs, oldest first (a first-format store: the one grid its meta names)."""
+    if meta.get("format_version") == "1":
+        created = meta.get("created", "")
+        return [{"id": 1, "name": meta.get("grid_name", "grid"), "fingerprint": meta.get("grid_fingerprint", ""),
+                 "spec": meta.get("grid_spec", "{}"), "data": "{}", "graybox_version": meta.get("graybox_version", ""),
+                 "created": created, "last_run": created, "n_cells": int(meta.get("n_cells", 0))}]
+    cur = conn.execute(f"SELECT {', '.join(SPECS)} FROM specs ORDER BY id")
+    return [dict(zip(SPECS, r)) for r in cur.fetchall()]
 
 
 def _settings(conn: sqlite3.Connection) -> None:
@@ -90,32 +166,79 @@ def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:
     return sqlite3.connect(str(path), timeout=30.0, isolation_level=None)  # explicit transactions
 
 
+def _table(name: str, cols: Mapping[str, str], extra: str = "") -> str:
+    return f"CREATE TABLE {name} ({', '.join(f'{k} {t}' for k, t in cols.items())}{extra})"
+
+
+def _data_hashes(cells: Sequence[Cell]) -> dict[str, str]:
+    return {c.data: c.data_hash for c in cells}
+
+
+def _check_growth(p: Path, specs: list[dict[str, Any]], cells: Sequence[Cell], version: str) -> None:
+    """Refuse (before anything is written) a spec that a store cannot take."""
+    for s in specs:
+        if _newer(s["graybox_version"], version):
+            raise StoreError(f"{p} holds cells of graybox {s['graybox_version']} (spec {s['id']} {s['name']!r}), "
+                             f"newer than this graybox {version}: upgrade graybox to grow it, or choose another "
+                             "--store path; nothing was written to it")
+    known: dict[str, tuple[str, dict]] = {}
+    for s in specs:
+        for name, h in json.loads(s["data"]).items():
+            known.setdefault(name, (h, s))
+    for name, h in _data_hashes(cells).items():
+        if name in known and known[name][0] != h:
+            old, s = known[name]
+            raise StoreError(
+                f"{p}: data set {name!r} of this spec reads other data than the data set {name!r} in the store "
+                f"(content hash {h} now, {old} in spec {s['id']} {s['name']!r} of {s['created']}). A store gives "
+                f"a data set name one meaning: if the files changed on purpose, give the data set a new name (it "
+                f"then runs as a new data set beside the old one) or choose another --store path; if not, point "
+                f"{name!r} back at the files it was run on. Nothing was written to the store")
+
+
 class ResultStore:
-    """An open store for one grid: which cells are finished; write a finished cell.
+    """An open store with one spec registered: which cells it holds; write a finished cell.
 
     Use :meth:`open`; close with :meth:`close` (or ``with``).
+
+    Attributes
+    ----------
+    path : Path
+    spec_id : int
+        The spec's number in the store (1 = the first spec run on it).
+    new_spec : bool
+        Whether the spec was new to the store (False: the same grid run again, e.g. to resume).
+    known_data : dict
+        Data set names the store held before, by content hash.
     """
 
-    def __init__(self, path: Path, conn: sqlite3.Connection, meta: Mapping[str, str]):
+    def __init__(self, path: Path, conn: sqlite3.Connection, meta: Mapping[str, str], spec_id: int, new_spec: bool,
+                 known_data: Mapping[str, str]):
         self.path = path
         self._conn = conn
         self.meta = dict(meta)
+        self.spec_id = spec_id
+        self.new_spec = new_spec
+        self.known_data = dict(known_data)
 
     @classmethod
-    def open(cls, path: str | os.PathLike, *, fingerprint: str, grid_name: str, spec: Mapping[str, Any],
-             n_cells: int, version: str) -> "ResultStore":
-        """Create the store, or reopen one written by the same grid.
+    def open(cls, path: str | os.PathLike, *, grid_name: str, fingerprint: str, spec: Mapping[str, Any],
+             cells: Sequence[Cell], version: str) -> "ResultStore":
+        """Create the store, or open an existing one and register the spec (its cells and names).
 
         Raises
         ------
         StoreError
-            The file is not a graybox store, is damaged, or was written by another grid (or
-            another graybox version, whose cells have other keys).
+            The file is not a graybox store, is damaged, was written by a newer graybox, a data
+            set name of the spec reads other data than the store's data set of that name, or a
+            first-format store is asked to take a grid other than its own.
         """
         p = Path(path)
         exists = p.exists()
         if not exists and not p.parent.exists():
             raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
+        migrate = False
+        known: dict[str, str] = {}
         if exists:
             if p.is_dir():
                 raise StoreError(f"{p} is a folder; give a file path for the store")
@@ -124,16 +247,28 @@ class ResultStore:
             ro = _connect(p, readonly=True)
             try:
                 meta = _read_meta(ro, p)
-                if meta.get("grid_fingerprint") != fingerprint:
-                    n = ro.execute("SELECT COUNT(*) FROM cells").fetchone()[0]
-                    why = ""
-                    if meta.get("graybox_version") != version:
-                        why = (f" (it was written by graybox {meta.get('graybox_version')}, this is {version}: "
-                               "cells are keyed by version)")
-                    raise StoreError(
-                        f"{p} holds {n} cell(s) of another grid ({meta.get('grid_name')!r}, fingerprint "
-                        f"{meta.get('grid_fingerprint')}){why}; this grid ({grid_name!r}) has fingerprint "
-                        f"{fingerprint}. Results of two grids are not mixed: choose another --store path")
+                if meta["format_version"] == "1":
+                    if meta.get("grid_fingerprint") != fingerprint:
+                        n = ro.execute("SELECT COUNT(*) FROM cells").fetchone()[0]
+                        why = ""
+                        if meta.get("graybox_version") != version:
+                            why = (f"; it was written by graybox {meta.get('graybox_version')}, this is {version}, "
+                                   "and cells are keyed by version, so none of them would be reused anyway")
+                        raise StoreError(
+                            f"{p} is a store of the first format (graybox {meta.get('graybox_version')}), which holds "
+                            f"one grid ({meta.get('grid_name')!r}, {n} cell(s)){why}. It can be read (load_results, "
+                            "graybox grid report) and resumed by its own spec, which upgrades it so that it can "
+                            "grow; this is another grid. Run the store's own spec on it first, or choose another "
+                            "--store path; nothing was written to it")
+                    migrate = True
+                else:
+                    specs = _specs(ro, meta)
+                    _check_growth(p, specs, cells, version)
+                    for s in specs:
+                        for name, h in json.loads(s["data"]).items():
+                            known.setdefault(name, h)
+            except sqlite3.DatabaseError as exc:
+                raise StoreError(f"{p} is damaged ({exc}); nothing was written to it; {_DAMAGED}") from None
             finally:
                 ro.close()
         conn = _connect(p)
@@ -143,23 +278,25 @@ class ResultStore:
             else:
                 conn.execute("PRAGMA journal_mode=WAL")
                 _settings(conn)
-                cols = ", ".join(f"{k} {t}" for k, t in COLUMNS.items())
-                meta = {"format": FORMAT, "format_version": FORMAT_VERSION, "grid_fingerprint": fingerprint,
-                        "grid_name": grid_name, "grid_spec": json.dumps(spec, sort_keys=True),
-                        "graybox_version": version, "n_cells": str(n_cells),
-                        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
+                meta = {"format": FORMAT, "format_version": FORMAT_VERSION, "graybox_version": version,
+                        "created": _now()}
                 conn.execute("BEGIN")
                 conn.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
-                conn.execute(f"CREATE TABLE cells ({cols})")
+                conn.execute(_table("cells", COLUMNS))
                 conn.executemany("INSERT INTO meta VALUES (?, ?)", list(meta.items()))
+                _create_spec_tables(conn)
                 conn.execute("COMMIT")
+            if migrate:
+                _upgrade(conn, meta, cells)
+                meta["format_version"] = FORMAT_VERSION
+            spec_id, new = _register(conn, grid_name, fingerprint, spec, cells, version)
         except BaseException:
             conn.close()
             raise
-        return cls(p, conn, meta)
+        return cls(p, conn, meta, spec_id, new, known)
 
     def statuses(self) -> dict[str, str]:
-        """Status of every finished cell, by key."""
+        """Status of every cell the store holds, by key."""
         return dict(self._conn.execute("SELECT key, status FROM cells").fetchall())
 
     def write(self, row: Mapping[str, Any], replace: bool = False) -> None:
@@ -175,9 +312,15 @@ class ResultStore:
             raise
         self._conn.execute("COMMIT")
 
+    def versions(self) -> set[str]:
+        """The graybox versions that made the store's cells."""
+        return {v for (v,) in self._conn.execute("SELECT DISTINCT version FROM cells")}
+
     def counts(self) -> dict[str, int]:
-        """Cells by status."""
-        return dict(self._conn.execute("SELECT status, COUNT(*) FROM cells GROUP BY status").fetchall())
+        """The registered spec's cells by status."""
+        return dict(self._conn.execute(
+            "SELECT status, COUNT(*) FROM cells WHERE key IN (SELECT key FROM spec_cells WHERE spec = ?) "
+            "GROUP BY status", (self.spec_id,)).fetchall())
 
     def close(self) -> None:
         """Close the connection."""
@@ -188,6 +331,64 @@ class ResultStore:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _create_spec_tables(conn: sqlite3.Connection) -> None:
+    conn.execute(_table("specs", SPECS))
+    conn.execute(_table("spec_cells", SPEC_CELLS, ", PRIMARY KEY (spec, position)"))
+    conn.execute("CREATE INDEX spec_cells_key ON spec_cells (key)")
+
+
+def _spec_cell_rows(spec_id: int, cells: Sequence[Cell]) -> list[tuple]:
+    return [(spec_id, i, c.key, c.data, c.structure, c.variant, c.seed, c.data_hash, _hash(c.structure_spec),
+             _hash(c.variant_spec)) for i, c in enumerate(cells)]
+
+
+def _upgrade(conn: sqlite3.Connection, meta: Mapping[str, str], cells: Sequence[Cell]) -> None:
+    """A first-format store run again by its own grid (same fingerprint, so the same cells and
+    data): its grid becomes spec 1, in one transaction."""
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        _create_spec_tables(conn)
+        created = meta.get("created", _now())
+        conn.execute(f"INSERT INTO specs ({', '.join(SPECS)}) VALUES ({', '.join('?' * len(SPECS))})",
+                     (1, meta.get("grid_name", "grid"), meta["grid_fingerprint"], meta.get("grid_spec", "{}"),
+                      json.dumps(_data_hashes(cells), sort_keys=True), meta.get("graybox_version", ""), created,
+                      created, len(cells)))
+        conn.executemany(f"INSERT INTO spec_cells VALUES ({', '.join('?' * len(SPEC_CELLS))})",
+                         _spec_cell_rows(1, cells))
+        conn.execute("UPDATE meta SET value = ? WHERE key = 'format_version'", (FORMAT_VERSION,))
+        conn.execute("INSERT OR REPLACE INTO meta VALUES ('upgraded', ?)", (_now(),))
+    except BaseException:
+        conn.execute("ROLLBACK")
+        raise
+    conn.execute("COMMIT")
+
+
+def _register(conn: sqlite3.Connection, grid_name: str, fingerprint: str, spec: Mapping[str, Any],
+              cells: Sequence[Cell], version: str) -> tuple[int, bool]:
+    """(spec id, new): the spec's row and its cells, written before any of them runs."""
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        row = conn.execute("SELECT id FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
+        now = _now()
+        if row is not None:
+            spec_id, new = int(row[0]), False
+            conn.execute("UPDATE specs SET last_run = ? WHERE id = ?", (now, spec_id))
+        else:
+            cur = conn.execute(
+                "INSERT INTO specs (name, fingerprint, spec, data, graybox_version, created, last_run, n_cells) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                (grid_name, fingerprint, json.dumps(spec, sort_keys=True),
+                 json.dumps(_data_hashes(cells), sort_keys=True), version, now, now, len(cells)))
+            spec_id, new = int(cur.lastrowid), True
+            conn.executemany(f"INSERT INTO spec_cells VALUES ({', '.join('?' * len(SPEC_CELLS))})",
+                             _spec_cell_rows(spec_id, cells))
+    except BaseException:
+        conn.execute("ROLLBACK")
+        raise
+    conn.execute("COMMIT")
+    return spec_id, new
 
 
 def _plain(v: Any) -> Any:
@@ -213,37 +414,160 @@ def _decode_members(text: str | None) -> dict[str, np.ndarray] | None:
     return {k: (np.array(v, dtype=float) if k != "failure" else list(v)) for k, v in d.items()}
 
 
-def read_store(path: str | os.PathLike) -> tuple[dict[str, str], list[dict[str, Any]]]:
-    """(meta, rows) of a store, read-only."""
+def _open_readonly(path: str | os.PathLike) -> tuple[Path, sqlite3.Connection, dict[str, str]]:
     p = Path(path)
     if not p.is_file():
-        raise StoreError(f"{p}: no such store")
+        raise StoreError(f"{p}: no such store" + (" (a folder)" if p.is_dir() else ""))
     _check_file(p)
     conn = _connect(p, readonly=True)  # closing it folds no log left by a killed writer into the file
     try:
-        meta = _read_meta(conn, p)
-        cur = conn.execute(f"SELECT {', '.join(COLUMNS)} FROM cells ORDER BY cell_index")
-        rows = [dict(zip(COLUMNS, r)) for r in cur.fetchall()]
+        return p, conn, _read_meta(conn, p)
+    except BaseException:
+        conn.close()
+        raise
+
+
+def _pick(specs: list[dict[str, Any]], spec: str | int, p: Path) -> dict[str, Any] | None:
+    """The spec record ``spec`` names ("latest": the one run last; "all": None)."""
+    if isinstance(spec, str):
+        if spec == "all":
+            return None
+        if spec == "latest":
+            return max(specs, key=lambda s: (s["last_run"], s["id"]))
+        raise ValueError(f"spec must be 'latest', 'all' or a spec number, got {spec!r}")
+    if isinstance(spec, bool) or not isinstance(spec, (int, np.integer)):
+        raise TypeError(f"spec must be 'latest', 'all' or a spec number (int), got {type(spec).__name__}")
+    for s in specs:
+        if s["id"] == int(spec):
+            return s
+    raise ValueError(f"{p} has no spec {spec}; its specs are "
+                     + ", ".join(f"{s['id']} ({s['name']!r})" for s in specs))
+
+
+def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dict[str, str], list[dict[str, Any]],
+                                                                                list[dict[str, Any]], dict | None]:
+    """(meta, specs, rows, the chosen spec record or None for "all") of a store, read-only.
+
+    Rows of one spec carry that spec's names and grid positions (``cell_index``); rows of all
+    specs carry the names of the first spec that ran each cell, a name that means different
+    structures or variants in different specs followed by the spec that defined it, e.g. ``"PE
+    (spec 2)"``.
+    """
+    p, conn, meta = _open_readonly(path)
+    cols = ", ".join(f"c.{k}" for k in COLUMNS)
+    try:
+        specs = _specs(conn, meta)
+        chosen = _pick(specs, spec, p)
+        if meta["format_version"] == "1":
+            cur = conn.execute(f"SELECT {cols} FROM cells c ORDER BY c.cell_index")
+            rows = [dict(zip(COLUMNS, r)) for r in cur.fetchall()]
+        elif chosen is not None:
+            cur = conn.execute(f"SELECT {cols}, s.position, s.data, s.structure, s.variant FROM spec_cells s "
+                               "JOIN cells c ON c.key = s.key WHERE s.spec = ? ORDER BY s.position", (chosen["id"],))
+            rows = []
+            for r in cur.fetchall():
+                row = dict(zip(COLUMNS, r))
+                row.update(zip(("cell_index", "data", "structure", "variant"), r[len(COLUMNS):]))
+                rows.append(row)
+        else:
+            rows = _all_rows(conn, cols)
     except sqlite3.DatabaseError as exc:
-        raise StoreError(f"{p} is damaged ({exc})") from None
+        raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
     finally:
         conn.close()
-    return meta, rows
+    return meta, specs, rows, chosen
 
 
-def load_results(path: str | os.PathLike) -> pd.DataFrame:
+def _all_rows(conn: sqlite3.Connection, cols: str) -> list[dict[str, Any]]:
+    """Every cell once, named by the first spec that holds it; names with two meanings told apart."""
+    entries = conn.execute("SELECT spec, position, key, structure, variant, structure_hash, variant_hash "
+                           "FROM spec_cells ORDER BY spec, position").fetchall()
+    first: dict[str, tuple] = {}
+    meanings: dict[tuple[str, str], dict[str, int]] = {}  # (kind, name) -> content hash -> first spec
+    for spec, pos, key, s, v, sh, vh in entries:
+        first.setdefault(key, (spec, pos, s, v, sh, vh))
+        meanings.setdefault(("structure", s), {}).setdefault(sh, spec)
+        meanings.setdefault(("variant", v), {}).setdefault(vh, spec)
+
+    def label(kind: str, name: str, h: str) -> str:
+        m = meanings[(kind, name)]
+        return name if len(m) == 1 else f"{name} (spec {m[h]})"
+
+    rows = []
+    for r in conn.execute(f"SELECT {cols} FROM cells c").fetchall():
+        row = dict(zip(COLUMNS, r))
+        f = first.get(row["key"])
+        if f is not None:
+            spec, pos, s, v, sh, vh = f
+            row.update(structure=label("structure", s, sh), variant=label("variant", v, vh))
+            row["_order"] = (spec, pos)
+        else:  # not reachable through the API: every cell is registered before it runs
+            row["_order"] = (10**9, row["cell_index"])
+        rows.append(row)
+    rows.sort(key=lambda r: r.pop("_order"))
+    for i, row in enumerate(rows):
+        row["cell_index"] = i
+    return rows
+
+
+def _spec_info(s: Mapping[str, Any]) -> dict[str, Any]:
+    return {"id": s["id"], "name": s["name"], "created": s["created"], "last_run": s["last_run"],
+            "version": s["graybox_version"], "n_cells": s["n_cells"], "fingerprint": s["fingerprint"],
+            "data": json.loads(s["data"]), "spec": json.loads(s["spec"])}
+
+
+def store_specs(path: str | os.PathLike) -> pd.DataFrame:
+    """The specs a store has seen, one row each (oldest first).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A grid store.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``id`` (the spec's number, what ``spec=`` of :func:`load_results` takes); columns
+        ``name``, ``created`` and ``last_run`` (UTC, ISO 8601), ``version`` (graybox), ``n_cells``,
+        ``held`` (how many of its cells the store holds), ``fingerprint``, ``data`` (data set name
+        -> content hash; empty for a first-format store) and ``spec`` (its canonical form).
+    """
+    p, conn, meta = _open_readonly(path)
+    try:
+        specs = _specs(conn, meta)
+        if meta["format_version"] == "1":
+            held = {1: conn.execute("SELECT COUNT(*) FROM cells").fetchone()[0]}
+        else:
+            held = dict(conn.execute("SELECT s.spec, COUNT(*) FROM spec_cells s JOIN cells c ON c.key = s.key "
+                                     "GROUP BY s.spec").fetchall())
+    except sqlite3.DatabaseError as exc:
+        raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
+    finally:
+        conn.close()
+    rows = [dict(_spec_info(s), held=int(held.get(s["id"], 0))) for s in specs]
+    cols = ["name", "created", "last_run", "version", "n_cells", "held", "fingerprint", "data", "spec"]
+    return pd.DataFrame(rows, columns=["id"] + cols).set_index("id")
+
+
+def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.DataFrame:
     """The cells of a grid store as a DataFrame, one row per cell, in grid order.
 
     Parameters
     ----------
     path : str or path-like
         A store written by :func:`graybox.experiments.run_grid` (``graybox grid run``).
+    spec : "latest", "all" or int
+        Which cells: those of the spec run last (default), every cell the store holds, or those
+        of spec number ``spec`` (:func:`store_specs` lists them). With "all", a structure or
+        variant name that stood for different contents in different specs is followed by the
+        spec that defined it, e.g. ``"PE (spec 2)"``.
 
     Returns
     -------
     pandas.DataFrame
         Columns: ``data``, ``structure``, ``variant``, ``seed`` (nullable integer; missing for deterministic
-        estimators), ``estimator``, ``status`` (ok, infeasible, diverged, failed), ``message``;
+        estimators), ``estimator``, ``status`` (ok, infeasible, diverged, failed), ``message`` (why a
+        cell is not ok);
         the chosen model's ``terms`` (tuple of str), ``theta`` (ndarray, engineering units; None
         for neural models), ``n_params`` (N_p), ``lambda1``, ``rule`` and ``in_band`` of the
         decision, ``band`` (the data set's J_SF band); the shared evaluator's figures on both
@@ -252,14 +576,18 @@ def load_results(path: str | os.PathLike) -> pd.DataFrame:
         |ȳ_model(ū_i) − ȳ_i|, output units); ``members`` (Pareto sets: dict of arrays
         ``lambda1``, ``J1``, ``JS``, ``JSF``, ``JS_valid``, ``fit_valid`` and the list ``failure``); ``wall_time``
         (s), ``version``, ``warnings`` (tuple of str), ``worker``, ``finished_at``, ``key``,
-        ``cell_index``. ``df.attrs`` holds the grid's name, fingerprint and spec.
+        ``cell_index``. ``df.attrs`` holds the spec's name (``grid``), ``fingerprint``, ``spec``
+        (its canonical form), ``version``, ``n_cells``, ``data_hashes`` (data set name -> content
+        hash), ``specs`` (every spec of the store) and ``store`` (the path).
 
     Raises
     ------
     StoreError
         Not a graybox store, or damaged.
+    ValueError
+        No such spec in the store.
     """
-    meta, rows = read_store(path)
+    meta, specs, rows, chosen = read_store(path, spec)
     for r in rows:
         r["terms"] = None if r["terms"] is None else tuple(json.loads(r["terms"]))
         r["theta"] = None if r["theta"] is None else np.array(json.loads(r["theta"]), dtype=float)
@@ -275,7 +603,92 @@ def load_results(path: str | os.PathLike) -> pd.DataFrame:
         df[c] = df[c].astype(float)
     for c, dtype in (("seed", "Int64"), ("n_params", "Int64"), ("in_band", "boolean")):
         df[c] = pd.array([r[c] for r in rows], dtype=dtype)
-    df.attrs.update(grid=meta.get("grid_name"), fingerprint=meta.get("grid_fingerprint"),
-                    spec=json.loads(meta.get("grid_spec", "{}")), version=meta.get("graybox_version"),
-                    n_cells=int(meta.get("n_cells", len(df))))
+    infos = [_spec_info(s) for s in specs]
+    if chosen is not None:
+        info = _spec_info(chosen)
+        df.attrs.update(grid=info["name"], fingerprint=info["fingerprint"], spec=info["spec"],
+                        version=info["version"], n_cells=int(info["n_cells"]), data_hashes=info["data"])
+    else:
+        hashes: dict[str, str] = {}
+        for i in infos:
+            for k, h in i["data"].items():
+                hashes.setdefault(k, h)
+        df.attrs.update(grid=" + ".join(dict.fromkeys(i["name"] for i in infos)), fingerprint=None,
+                        spec={str(i["id"]): i["spec"] for i in infos},
+                        version=", ".join(dict.fromkeys(i["version"] for i in infos)), n_cells=len(df),
+                        data_hashes=hashes)
+    df.attrs.update(specs=infos, store=str(path), selection=spec if chosen is None else int(chosen["id"]))
     return df
+
+
+def compare_results(
+    stores: Sequence[str | os.PathLike],
+    *,
+    labels: Sequence[str] | None = None,
+    spec: str | int = "latest",
+) -> pd.DataFrame:
+    """Several stores' cells in one frame, side by side: each variant name prefixed by its store's label.
+
+    The report functions take the result as they take :func:`load_results`' frame: a heat map
+    shows the stores' variants next to each other, a leaderboard ranks them together.
+
+    Parameters
+    ----------
+    stores : sequence of path
+        Two or more grid stores run on the same data.
+    labels : sequence of str, optional
+        One label per store (default: the file names without their suffix).
+    spec : "latest", "all" or int
+        Which cells of each store (see :func:`load_results`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        :func:`load_results`' columns and ``store`` (the label); variants read ``"label: name"``.
+
+    Raises
+    ------
+    StoreError
+        A store cannot be read, or two stores hold different data under one data set name, or
+        share no data set.
+    """
+    paths = [Path(s) for s in stores]
+    if len(paths) < 2:
+        raise ValueError(f"compare_results needs two or more stores, got {len(paths)}")
+    if labels is None:
+        labels = [p.stem for p in paths]
+        if len(set(labels)) < len(labels):
+            labels = [f"{i + 1}:{p.stem}" for i, p in enumerate(paths)]
+    labels = [str(x) for x in labels]
+    if len(labels) != len(paths) or len(set(labels)) != len(labels):
+        raise ValueError(f"labels must be {len(paths)} distinct names, one per store; got {labels}")
+    frames = [load_results(p, spec=spec) for p in paths]
+    seen: dict[str, tuple[str, Path]] = {}
+    for p, df in zip(paths, frames):
+        for name, h in df.attrs.get("data_hashes", {}).items():
+            if name in seen and seen[name][0] != h:
+                raise StoreError(f"{p} and {seen[name][1]} hold different data under the data set name {name!r} "
+                                 f"(content hashes {h} and {seen[name][0]}): their results are not comparable. "
+                                 "Compare stores run on the same data, or rename the data set in one spec")
+            seen.setdefault(name, (h, p))
+    names = [set(df["data"]) for df in frames]
+    if all(n for n in names) and not set.intersection(*names):
+        raise StoreError("the stores share no data set ("
+                         + "; ".join(f"{p}: {sorted(n)}" for p, n in zip(paths, names))
+                         + "): there is nothing to compare side by side")
+    out = []
+    for lab, df in zip(labels, frames):
+        d = df.copy()
+        d["variant"] = [f"{lab}: {v}" for v in d["variant"]]
+        d.insert(0, "store", lab)
+        out.append(d)
+    res = pd.concat(out, ignore_index=True)
+    res["cell_index"] = np.arange(len(res))
+    res.attrs = {"grid": " vs ".join(labels), "fingerprint": None,
+                 "spec": {lab: df.attrs.get("spec") for lab, df in zip(labels, frames)},
+                 "version": ", ".join(dict.fromkeys(df.attrs.get("version") or "" for df in frames)),
+                 "n_cells": sum(int(df.attrs.get("n_cells", len(df))) for df in frames),
+                 "data_hashes": {k: h for k, (h, _) in seen.items()},
+                 "specs": [dict(s, store=lab) for lab, df in zip(labels, frames) for s in df.attrs.get("specs", [])],
+                 "store": ", ".join(str(p) for p in paths), "selection": spec}
+    return res
