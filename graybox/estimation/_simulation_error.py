@@ -72,6 +72,7 @@ from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
+from ..core._reprs import short_repr
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
 
@@ -351,6 +352,8 @@ class SEFront:
         object.__setattr__(self, "costs", frozen(self.costs))
         object.__setattr__(self, "nfev", frozen(np.zeros(K) if self.nfev is None else self.nfev, int))
         object.__setattr__(self, "failures", MappingProxyType({int(k): str(v) for k, v in dict(self.failures).items()}))
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 _CHECKPOINT_ARRAYS = ("thetas", "costs", "done", "failures", "nfev")

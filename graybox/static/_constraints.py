@@ -51,6 +51,7 @@ from ._surfaces import StaticSurface
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
+from ..core._reprs import short_repr
 
 __all__ = [
     "InfeasibleError",
@@ -233,6 +234,8 @@ class StaticContext:
             raise ValueError(f"{what} needs static points: give them to the constraint or to the estimator")
         return pts
 
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
+
 
 # --------------------------------------------------------------------------------------------
 # affine rows
@@ -299,6 +302,8 @@ class AffineRows:
             scale = np.abs(b) + np.abs(A) @ np.abs(th)
             worst = max(worst, float(np.max(r / np.where(scale > 0, scale, 1.0))))
         return worst
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 # --------------------------------------------------------------------------------------------
