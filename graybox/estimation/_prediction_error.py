@@ -617,8 +617,8 @@ def cls(
     recs = as_gram_records(data)
     d = _dynamic(st, recs)
     cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
-    _warn_static_range(cons, ctx, curve, recs)
     rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
+    _warn_static_range(cons, ctx, curve, recs)  # after: bad input is an error, not a warning and an error
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
     else:
@@ -760,8 +760,8 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     for p in [pts] + [getattr(c, "points", None) for c in cons]:
         _check_point_inputs(recs, p)
     ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), recs[0].input_names)
-    _warn_static_range(cons, ctx, curve, recs)
     rows = _rows(cons, ctx, d.s)
+    _warn_static_range(cons, ctx, curve, recs)
     R2, c2, M = _static_part(d, pts)
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
 
