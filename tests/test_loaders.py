@@ -268,7 +268,7 @@ def test_fast_and_careful_csv_readers_agree(values, fmt, crlf, bom, blank, quote
         p.write_bytes((b"\xef\xbb\xbf" if bom else b"") + text.encode())
         index = {"u": 0, "y": 1}
         raw = p.read_bytes()
-        fast = _loaders._fast_columns(p, index, raw=raw, text=raw.decode("utf-8-sig"), delimiter=",", decimal=".",
+        fast = _loaders._fast_columns(p, index, raw=raw, text=lambda: raw.decode("utf-8-sig"), delimiter=",", decimal=".",
                                       n_fields=len(lines[0].split(",")))
         careful_reader = _loaders._fast_columns
         try:
@@ -342,7 +342,7 @@ def test_the_fast_reader_serves_semicolon_and_decimal_comma_files(tmp_path):
 
     p = write(tmp_path, "a;b\n1,5;2\n3,25;4\n")
     raw = p.read_bytes()
-    fast = _loaders._fast_columns(p, {"u": 0, "y": 1}, raw=raw, text=raw.decode(), delimiter=";", decimal=",",
+    fast = _loaders._fast_columns(p, {"u": 0, "y": 1}, raw=raw, text=lambda: raw.decode(), delimiter=";", decimal=",",
                                   n_fields=2)
     assert fast is not None and fast["u"].tolist() == [1.5, 3.25]
 
@@ -420,7 +420,7 @@ def test_a_line_with_more_fields_than_the_header_is_refused(tmp_path):
                                          "columns: a decimal comma with a comma delimiter"):
         load_static_csv(p, u="a", y="b")
     raw = p.read_bytes()
-    assert _loaders._fast_columns(p, {"u": 0, "y": 1}, raw=raw, text=raw.decode(), delimiter=",", decimal=".",
+    assert _loaders._fast_columns(p, {"u": 0, "y": 1}, raw=raw, text=lambda: raw.decode(), delimiter=",", decimal=".",
                                   n_fields=3) is None
     q = write(tmp_path, "a,b,c\n1,2,3\n4,5,6,7\n", "early.csv")  # within them: the detection says it
     with pytest.raises(ValueError, match=r"early.csv: line 3 has 4 comma-separated fields but the header \(line 1\) "

@@ -16,6 +16,7 @@ from __future__ import annotations
 import codecs
 import csv
 import difflib
+import functools
 import io
 import itertools
 import math
@@ -23,7 +24,7 @@ import os
 import re
 from importlib import resources
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -72,20 +73,21 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         roles = [r for r, n in wanted.items() if n in dup]
         raise ValueError(f"{p}: {', '.join(roles)} all name the column {sorted(dup)[0]!r}; each must be a different column")
     raw = p.read_bytes()
-    bom = raw.startswith(codecs.BOM_UTF8)  # spreadsheet exports often start with one
-    try:
-        text = raw[3 if bom else 0:].decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = raw[:exc.start].count(b"\n") + 1
-        raise ValueError(f"{p}: line {line} is not UTF-8 text (byte {raw[exc.start]:#04x}); save the file "
-                         "as UTF-8 CSV") from None
-    delim, dec = _dialect(p, text, delimiter, decimal)
-    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delim)
-    try:
-        header = next(reader)
-    except StopIteration:
+    start = 3 if raw.startswith(codecs.BOM_UTF8) else 0  # spreadsheet exports often start with one
+    # The dialect and the header come from the first lines alone: a long file is decoded whole
+    # only when the careful reader (or a decimal comma) needs its text.
+    end = start
+    for _ in range(_SNIFF_LINES):
+        end = raw.find(b"\n", end) + 1
+        if end == 0:
+            end = len(raw)
+            break
+    head = _decode(p, raw, start, end)
+    delim, dec = _dialect(p, head, delimiter, decimal)
+    header = next(csv.reader(io.StringIO(head, newline=""), delimiter=delim), None)
+    if header is None:
         raise ValueError(f"{p}: line 1: the file is empty; expected a header line naming the columns, then "
-                         "one sample per line") from None
+                         "one sample per line")
     header = [h.strip() for h in header]
     if not any(header):
         raise ValueError(f"{p}: line 1 is blank; expected a header line naming the columns, then one sample per line")
@@ -96,9 +98,12 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         if header.count(col) > 1:
             raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
         index[role] = header.index(col)
+    text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
     fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header))
     if fast is not None:
         return fast
+    reader = csv.reader(io.StringIO(text(), newline=""), delimiter=delim)
+    next(reader)  # the header, read above
     need = max(index.values()) + 1
     values: dict[str, list[float]] = {role: [] for role in wanted}
     lines: list[int] = []
@@ -123,9 +128,19 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     return out
 
 
+def _decode(p: Path, raw: bytes, start: int, end: int) -> str:
+    """``raw[start:end]`` as UTF-8 text, or a ``ValueError`` naming the line of the first bad byte."""
+    try:
+        return raw[start:end].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        at = start + exc.start
+        line = raw.count(b"\n", 0, at) + 1
+        raise ValueError(f"{p}: line {line} is not UTF-8 text (byte {raw[at]:#04x}); save the file as UTF-8 CSV") from None
+
+
 #: Delimiters tried when none is given, and how many lines the detection reads.
 _DELIMITERS = (",", ";", "\t")
-_SNIFF_LINES = 200
+_SNIFF_LINES = 50
 # A number written with a decimal comma: digits, one comma, digits (an exponent allowed).
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
 _DECIMAL_POINT = re.compile(r"^[+-]?\d*\.\d+(?:[eE][+-]?\d+)?$")
@@ -269,8 +284,8 @@ def _decimal_comma_hint(row: Sequence[str], delimiter: str) -> str:
     return ""
 
 
-def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: str, delimiter: str, decimal: str,
-                  n_fields: int) -> dict[str, np.ndarray] | None:
+def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: Callable[[], str], delimiter: str,
+                  decimal: str, n_fields: int) -> dict[str, np.ndarray] | None:
     """The columns by numpy's reader (faster on long records), or None when the file needs the
     careful reader: quotes, blank lines, bare carriage returns, a line with another number of fields
     than the header, a field that is not a finite number or that only Python reads (``1_000``), a
@@ -282,22 +297,26 @@ def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: str, deli
     if rows < 1:
         return None
     # Every line must hold exactly n_fields - 1 delimiters: numpy's reader with usecols would take
-    # a line with extra fields silently. Counted per line, vectorised.
-    buf = np.frombuffer(raw, np.uint8)
-    ends = np.flatnonzero(buf == 10)
-    if not raw.endswith(b"\n"):
-        ends = np.append(ends, buf.size)
-    per_line = np.bincount(np.searchsorted(ends, np.flatnonzero(buf == ord(delimiter))), minlength=ends.size)
-    if per_line.size != rows + 1 or (per_line != n_fields - 1).any():
+    # a line with extra fields silently. The delimiters and line ends, in file order, must then
+    # read m delimiters and an end, line after line.
+    m, lines = n_fields - 1, rows + 1
+    if raw.count(delimiter.encode()) != m * lines:
         return None
-    del buf, ends, per_line
+    if m:
+        buf = np.frombuffer(raw, np.uint8)
+        marks = buf[np.flatnonzero((buf == 10) | (buf == ord(delimiter)))]
+        if not raw.endswith(b"\n"):
+            marks = np.append(marks, np.uint8(10))
+        if marks.size != lines * (m + 1) or (marks.reshape(lines, m + 1)[:, m] != 10).any():
+            return None
+        del buf, marks
     roles = list(index)
     source: object = p  # numpy reads the file again itself: faster than parsing the text held here
     if decimal == ",":
-        body = text.split("\n", 1)[1] if "\n" in text else ""
-        if "." in body:
+        whole = text()
+        if "." in whole[whole.find("\n") + 1:]:
             return None  # a point in a decimal-comma file: the careful reader names it
-        source = io.StringIO(text.replace(",", "."))
+        source = io.StringIO(whole.replace(",", "."))
     try:
         arr = np.loadtxt(source, delimiter=delimiter, skiprows=1, usecols=[index[r] for r in roles], comments=None,
                          dtype=np.float64, ndmin=2, encoding="utf-8-sig")
