@@ -8,11 +8,14 @@ plain Python apart from one guarded ``get_ipython()`` call.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from pathlib import Path
 
 import matplotlib
 import pytest
+
+from graybox import CandidateWarning, StaticRangeWarning
 
 
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
@@ -40,9 +43,25 @@ def notebook_code(name: str) -> str:
     return "\n\n".join(sources)
 
 
+#: The notes each notebook's quick run gives a reader, asserted: a missing one or a new one fails.
+EXPECTED_WARNINGS: dict[str, list[tuple[type[Warning], str]]] = {
+    "01_black_box.ipynb": [(CandidateWarning, r"u\(k-4\)u\(k-5\)\^2")],
+    "02_gray_box_convex.ipynb": [(StaticRangeWarning, r"ū = \[750\.0, 1650\.0\]")],
+    "03_simulation_error.ipynb": [(StaticRangeWarning, r"ū = \[750\.0, 1650\.0\]"),
+                                  (RuntimeWarning, r"J_SF of SE \(gradient\) min-corr .* is infinite")],
+    "04_buck_converter.ipynb": [(StaticRangeWarning, r"ū = \[1\.0, 4\.0\]"),
+                                (StaticRangeWarning, r"ū = \[1\.5, 1\.75, 2\.0, 2\.75")],
+    "05_constraint_variants.ipynb": [],
+    "06_miso.ipynb": [],
+}
+
+
 def run_notebook(name: str) -> dict:
     namespace = {"__name__": "__notebook__"}
-    exec(compile(notebook_code(name), str(NOTEBOOKS / name), "exec"), namespace)
+    with contextlib.ExitStack() as notes:
+        for category, match in EXPECTED_WARNINGS[name]:
+            notes.enter_context(pytest.warns(category, match=match))
+        exec(compile(notebook_code(name), str(NOTEBOOKS / name), "exec"), namespace)
     return namespace
 
 
@@ -55,7 +74,7 @@ def sandbox(tmp_path, monkeypatch):
 
 
 def test_every_notebook_is_tested():
-    assert sorted(p.name for p in NOTEBOOKS.glob("*.ipynb")) == NAMES
+    assert sorted(p.name for p in NOTEBOOKS.glob("*.ipynb")) == NAMES == sorted(EXPECTED_WARNINGS)
 
 
 @pytest.mark.parametrize("name", NAMES[:3])

@@ -30,9 +30,8 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
-import cvxpy as cp
 import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
@@ -64,6 +63,9 @@ from ..core._gram import as_gram_records, available_memory, is_dask_data, r_fact
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_lambdas
+
+if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
+    import cvxpy as cp
 
 __all__ = [
     "SOLVERS",
@@ -421,6 +423,8 @@ def _basis(d: _Data, static: tuple[np.ndarray, np.ndarray] | None) -> _Basis:
 
 
 def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
+    import cvxpy as cp
+
     if H.ndim == 1:
         if np.all(H == 1.0):
             return cp.sum_squares(y)
@@ -443,6 +447,8 @@ class _QP:
 
     def __init__(self, d: _Data, static: tuple[np.ndarray, np.ndarray] | None, cons: list[StaticConstraint],
                  ctx: StaticContext, solver: str, options: Mapping | None):
+        import cvxpy as cp
+
         n = d.s.size
         self.basis = b = _basis(d, static)
         rows = _rows(cons, ctx, d.s, b.T)
@@ -475,6 +481,8 @@ class _QP:
 
     def solve(self, w1: float, w2: float, warm_start: bool = True) -> np.ndarray:
         """z for one weight pair (the weights are normalised to sum 1: the argmin is unchanged)."""
+        import cvxpy as cp
+
         tot = float(w1) + float(w2)
         self.w1.value, self.w2.value = float(w1) / tot, float(w2) / tot
         # Warm starts help OSQP (first order) only. Through cvxpy, a warm-started Clarabel re-uses

@@ -40,9 +40,8 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
-from typing import Callable, Iterable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Callable, Iterable, Iterator, Mapping, Sequence
 
-import cvxpy as cp
 import numpy as np
 
 from ._curves import StaticCurve
@@ -52,6 +51,9 @@ from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanish
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
 from ..core._reprs import short_repr
+
+if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it
+    import cvxpy as cp
 
 __all__ = [
     "InfeasibleError",
@@ -1039,6 +1041,8 @@ class UserConstraint(StaticConstraint):
         return self.name
 
     def _call(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
+        import cvxpy as cp
+
         try:
             n_args = len(inspect.signature(self.fn).parameters)
         except (TypeError, ValueError):
@@ -1057,10 +1061,14 @@ class UserConstraint(StaticConstraint):
 
     def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
         """Largest cvxpy-reported violation at ``theta`` (in the constraint's own units)."""
+        import cvxpy as cp
+
         v = cp.Variable(ctx.n_terms)
         v.value = np.asarray(theta, float)
         return max((float(np.max(c.violation())) for c in self._call(v, ctx)), default=0.0)
 
     def check(self, ctx: StaticContext) -> None:
+        import cvxpy as cp
+
         self._call(cp.Variable(ctx.n_terms), ctx)
 
