@@ -498,12 +498,9 @@ def load_static_csv(
         Lines with the same ū: an error naming them (default: a steady state is one number per
         input level), or their mean, one point per level (:meth:`StaticPoints.from_repeats`).
     delimiter : str, optional
-        The column delimiter, e.g. ``","``, ``";"`` or ``"\\t"``. Default: detected (``,``, ``;`` or
-        tab: the one that splits the header and the first lines into the same number of columns).
+        The column delimiter (as in :func:`load_record_csv`; detected by default).
     decimal : {".", ","}, optional
-        The decimal mark. Default: detected (``,`` where numbers such as ``2,5`` appear with a
-        ``;`` or tab delimiter, or quoted). With ``","`` a point in a number is an error, never a
-        thousands separator.
+        The decimal mark (as in :func:`load_record_csv`; detected by default).
 
     Returns
     -------
