@@ -143,7 +143,7 @@ def test_a_dying_worker_with_two_threads_takes_only_its_own_cell_down(tmp_path, 
     from distributed import Client, LocalCluster
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
-        cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None,
+        cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=":0",
                                silence_logs=logging.ERROR)
     with cluster, Client(cluster) as client:
         cells, data = _death_cells(("LS", "PE", "SE"))
@@ -213,6 +213,7 @@ def test_driver_killed_mid_grid_then_run_again(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+        proc.communicate()  # reaps the process and closes its pipes (left open they warn at collection)
     assert proc.returncode == -signal.SIGKILL
     done = _count(store)
     assert 2 <= done < n, f"{done} of {n} cells were finished when the driver was killed"

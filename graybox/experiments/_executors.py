@@ -395,8 +395,9 @@ def local_cluster(workers: int):
     try:
         with dask.config.set({"distributed.scheduler.allowed-failures": 0,
                               "distributed.nanny.pre-spawn-environ": environ, **_QUIET}):
+            # ":0": any free port; None still binds 8787 and warns when another cluster holds it
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   dashboard_address=":0", silence_logs=logging.ERROR,
                                    env=_thread_env(worker_threads(int(workers))))
         try:
             yield cluster
