@@ -1,4 +1,4 @@
-"""The ``graybox`` command."""
+"""The graybox command: reproduce the paper on the bundled data, run grids of experiments."""
 
 from __future__ import annotations
 
@@ -56,14 +56,48 @@ def _grid(args: argparse.Namespace) -> int:
         return 2
 
 
+_DESCRIPTION = """\
+Black- and gray-box identification of nonlinear dynamic systems with polynomial
+NARMAX models (Barbosa, Aguirre, Martinez & Braga, IEEE TCST 2011, and beyond).
+The library is used from Python (import graybox as gb); this command reproduces
+the paper on the bundled data and runs grids of experiments."""
+
+_EPILOG = """\
+examples:
+  graybox reproduce --quick                    Table I and figures in reproduce-out/
+  graybox grid init > spec.toml                a commented example spec
+  graybox grid run spec.toml --store r.sqlite --workers 2
+  graybox grid report r.sqlite --out report/   leaderboard, heat maps, fronts
+
+'graybox COMMAND --help' describes each command."""
+
+_REPRODUCE = """\
+Reproduce the paper on the bundled plant data: the paper's own models as printed,
+the black-box models, the neural baseline and Table I re-estimated, with figures
+written to --out.
+
+Checkpoints: the simulation-error sweeps of Table I save a checkpoint after each
+lambda in --out (se_ga_l2.npz, se_gradient_l3_quick.npz, ...) and a later run in
+the same folder resumes from them, so an interrupted run loses little; the run
+says which checkpoints it resumes. Quick and full runs keep separate files. To
+start over, pass --fresh (or delete those .npz files, or choose another --out)."""
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``graybox`` command; returns the exit status."""
-    parser = argparse.ArgumentParser(prog="graybox", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
-    rp = sub.add_parser("reproduce", help="reproduce the paper's Table I and figures on the bundled plant data")
+    parser = argparse.ArgumentParser(prog="graybox", description=_DESCRIPTION, epilog=_EPILOG,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(title="commands", dest="command", required=True, metavar="COMMAND")
+    rp = sub.add_parser("reproduce", help="reproduce the paper's Table I and figures on the bundled plant data",
+                        description=_REPRODUCE, formatter_class=argparse.RawDescriptionHelpFormatter)
     rp.add_argument("--quick", action="store_true", help="short searches (minutes, not hours)")
-    rp.add_argument("--out", type=Path, default=Path("reproduce-out"), help="folder for figures and tables")
-    gp = sub.add_parser("grid", help="grids of structures × constraint variants × estimators, kept in SQLite")
+    rp.add_argument("--out", type=Path, default=Path("reproduce-out"),
+                    help="folder for figures, tables and checkpoints (default: reproduce-out)")
+    rp.add_argument("--fresh", action="store_true",
+                    help="delete this mode's checkpoints in --out first and start every sweep over")
+    gp = sub.add_parser("grid", help="grids of structures × constraint variants × estimators, kept in SQLite",
+                        description="Grids of data sets × structures × constraint variants × estimators, scored "
+                                    "on the validation record and kept in a SQLite store (a killed run resumes).")
     gsub = gp.add_subparsers(dest="grid_command", required=True)
     gsub.add_parser("init", help="print a commented example spec for the bundled plant (graybox grid init > spec.toml)")
     run = gsub.add_parser("run", help="run the cells of a spec that are not in the store yet")
@@ -94,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "reproduce":
         from .reproduce import run as reproduce
 
-        reproduce(quick=args.quick, out=args.out)
+        reproduce(quick=args.quick, out=args.out, fresh=args.fresh)
         return 0
     return _grid(args)
 

@@ -148,7 +148,7 @@ def test_a_dying_worker_with_two_threads_takes_only_its_own_cell_down(tmp_path, 
     from distributed import Client, LocalCluster
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
-        cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None,
+        cluster = LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=":0",
                                silence_logs=logging.ERROR)
     with cluster, Client(cluster) as client:
         cells, data = _death_cells(("LS", "PE", "SE"))
@@ -217,6 +217,7 @@ def _kill_when(proc: subprocess.Popen, store: Path, cells: int, watch=None) -> i
     finally:
         if proc.poll() is None:
             proc.kill()
+        proc.communicate()  # reaps the process and closes its pipes (left open they warn at collection)
     assert proc.returncode == -signal.SIGKILL
     return _count(store)
 

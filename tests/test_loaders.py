@@ -175,16 +175,11 @@ def test_static_nan_and_missing_column(tmp_path):
 
 # -- buck converter -------------------------------------------------------------
 
-def _buck_dir() -> Path:
-    try:
-        return find_buck_dir()
-    except FileNotFoundError as exc:
-        pytest.skip(f"buck converter data (../shared/data/buck) not available here: {exc}")
+BUCK = REPO / "data" / "buck"
 
 
 def test_load_buck():
-    d = _buck_dir()
-    ds = load_buck(d)
+    ds = load_buck()
     assert isinstance(ds, Dataset)
     assert (len(ds.ident), len(ds.valid)) == (1001, 999)
     assert ds.Ts == pytest.approx(1e-5, rel=1e-9) and ds.valid.Ts == ds.Ts
@@ -197,26 +192,49 @@ def test_load_buck():
     np.testing.assert_allclose(curve.gain(np.array([2.5])), [-8.0])
     np.testing.assert_allclose(ds.static.ybar, (4 - ds.static.ubar) * 8)
     assert "theoretical" in ds.description and "no static points were measured" in ds.description.lower()
-    assert load_buck().extra["folder"] == str(d)  # the default search finds the same folder
+    assert Path(ds.extra["folder"]).resolve() == BUCK.resolve()  # the bundled copy
+
+
+def test_bundled_buck_files_are_the_published_ones_with_their_licence():
+    import hashlib
+
+    sha = {"buck_id.csv": "d244920026305463079732a91f62968bc30121f651a5699279b42b7ee637c3e7",
+           "buck_valid.csv": "adaaa29d0b677eaf7a3b36267f7fd8dc0afd6e9c1d7d054547a0e3f945e0c685"}
+    for name, digest in sha.items():
+        assert hashlib.sha256((BUCK / name).read_bytes()).hexdigest() == digest, name
+    licence = (BUCK / "LICENSE").read_text()
+    assert "MIT License" in licence and "Copyright (c) 2024 Wilson Rocha" in licence
+    assert "LICENSE" in (BUCK / "README.md").read_text()
+
+
+def test_buck_ships_as_package_data():
+    import tomllib
+
+    conf = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert "graybox.data.buck" in conf["packages"]
+    assert {"*.csv", "LICENSE"} <= set(conf["package-data"]["graybox.data.buck"])
 
 
 def test_buck_env_var(monkeypatch, tmp_path):
-    d = _buck_dir()
-    monkeypatch.setenv("GRAYBOX_BUCK_DIR", str(d))
-    monkeypatch.chdir(tmp_path)
-    assert find_buck_dir() == d
+    other = tmp_path / "copy"
+    other.mkdir()
+    for f in ("buck_id.csv", "buck_valid.csv"):
+        (other / f).write_bytes((BUCK / f).read_bytes())
+    monkeypatch.setenv("GRAYBOX_BUCK_DIR", str(other))
+    assert find_buck_dir() == other
+    assert load_buck().extra["folder"] == str(other)
+
+
+def test_buck_env_var_naming_a_wrong_folder_is_an_error(monkeypatch, tmp_path):
+    # never a silent fall-back to the bundled copy when the user pointed elsewhere
+    monkeypatch.setenv("GRAYBOX_BUCK_DIR", str(tmp_path))
+    with pytest.raises(FileNotFoundError, match=re.escape(str(tmp_path)) + ".*GRAYBOX_BUCK_DIR.*buck_id.csv"):
+        load_buck()
 
 
 def test_buck_wrong_folder(tmp_path):
     with pytest.raises(FileNotFoundError, match=re.escape(str(tmp_path)) + ".*buck_id.csv"):
         load_buck(tmp_path)
-
-
-def test_buck_files_are_not_in_the_project():
-    # The licence and the shared folder's README ask that the project never carries copies.
-    hits = [p for d in ("data", "tests", "graybox", "notebooks") if (REPO / d).is_dir()
-            for p in (REPO / d).rglob("buck_*.csv")]
-    assert not hits, hits
 
 
 # -- the fast reader gives what the careful reader gives -------------------------------------
@@ -249,10 +267,12 @@ def test_fast_and_careful_csv_readers_agree(values, fmt, crlf, bom, blank, quote
         p = Path(d) / "x.csv"
         p.write_bytes((b"\xef\xbb\xbf" if bom else b"") + text.encode())
         index = {"u": 0, "y": 1}
-        fast = _loaders._fast_columns(p, index)
+        raw = p.read_bytes()
+        fast = _loaders._fast_columns(p, index, raw=raw, text=lambda: raw.decode("utf-8-sig"), delimiter=",", decimal=".",
+                                      n_fields=len(lines[0].split(",")))
         careful_reader = _loaders._fast_columns
         try:
-            _loaders._fast_columns = lambda p, index: None
+            _loaders._fast_columns = lambda *a, **k: None
             careful = _loaders._read_columns(p, {"u": "a", "y": "b"})
         finally:
             _loaders._fast_columns = careful_reader
@@ -264,3 +284,154 @@ def test_fast_and_careful_csv_readers_agree(values, fmt, crlf, bom, blank, quote
         assert np.array_equal(np.signbit(got[k]), np.signbit(careful[k]))
     assume(simple)
     assert np.array_equal(fast["u"], careful["u"]) and np.array_equal(fast["_lines"], careful["_lines"])
+
+
+# -- CSV dialects as spreadsheets export them ------------------------------------------------
+
+# (delimiter, decimal mark, quote every field): the dialects spreadsheets write in common locales
+_DIALECTS = ((",", ".", False), (";", ".", False), (";", ",", False), ("\t", ".", False), ("\t", ",", False),
+             (",", ",", True), (",", ".", True))
+
+
+def _write_dialect(path: Path, header, rows, delimiter, decimal, quote, bom=False, crlf=False) -> Path:
+    def cell(v):
+        text = repr(v) if isinstance(v, float) else str(v)
+        text = text.replace(".", decimal)
+        return f'"{text}"' if quote else text
+
+    nl = "\r\n" if crlf else "\n"
+    lines = [delimiter.join(f'"{h}"' if quote else h for h in header)]
+    lines += [delimiter.join(cell(v) for v in row) for row in rows]
+    path.write_bytes((b"\xef\xbb\xbf" if bom else b"") + (nl.join(lines) + nl).encode())
+    return path
+
+
+@settings(max_examples=60, deadline=None)
+@given(rows=st.lists(st.tuples(st.floats(-1e12, 1e12, allow_nan=False), st.floats(-1e6, 1e6, allow_nan=False),
+                               st.integers(-5, 5)), min_size=1, max_size=20),
+       dialect=st.integers(0, len(_DIALECTS) - 1), bom=st.booleans(), crlf=st.booleans())
+def test_every_dialect_loads_the_same_floats(rows, dialect, bom, crlf):
+    """The same table written with each delimiter and decimal mark (BOM, CRLF or not) loads bit for
+    bit as the plain comma-and-point file, detected and with the dialect passed explicitly."""
+    import tempfile
+
+    delimiter, decimal, quote = _DIALECTS[dialect]
+    header = ("speed", "pressure", "count")
+    with tempfile.TemporaryDirectory() as d:
+        plain = _write_dialect(Path(d) / "plain.csv", header, rows, ",", ".", False)
+        other = _write_dialect(Path(d) / "other.csv", header, rows, delimiter, decimal, quote, bom, crlf)
+        want = load_record_csv(plain, u=["speed", "count"], y="pressure", Ts=1.0)
+        for kw in ({}, {"delimiter": delimiter, "decimal": decimal}):
+            got = load_record_csv(other, u=["speed", "count"], y="pressure", Ts=1.0, **kw)
+            assert got.u.tobytes() == want.u.tobytes() and got.y.tobytes() == want.y.tobytes()
+        pts = load_static_csv(other, u="speed", y="pressure", repeats="mean")
+        assert pts.ubar.tobytes() == load_static_csv(plain, u="speed", y="pressure", repeats="mean").ubar.tobytes()
+
+
+def test_semicolon_file_with_decimal_commas(tmp_path):
+    # the file of the issue: 't;valve;flow' was read as one column
+    p = write(tmp_path, "t;valve;flow\n0,0;10;1,5\n0,5;20;2,25\n1,0;30;3,125\n")
+    r = load_record_csv(p, u="valve", y="flow", time="t")
+    np.testing.assert_array_equal(r.u, [10, 20, 30])
+    np.testing.assert_array_equal(r.y, [1.5, 2.25, 3.125])
+    assert r.Ts == 0.5
+
+
+def test_the_fast_reader_serves_semicolon_and_decimal_comma_files(tmp_path):
+    from graybox.datasets import _loaders
+
+    p = write(tmp_path, "a;b\n1,5;2\n3,25;4\n")
+    raw = p.read_bytes()
+    fast = _loaders._fast_columns(p, {"u": 0, "y": 1}, raw=raw, text=lambda: raw.decode(), delimiter=";", decimal=",",
+                                  n_fields=2)
+    assert fast is not None and fast["u"].tolist() == [1.5, 3.25]
+
+
+def test_delimiter_and_decimal_can_be_given(tmp_path):
+    # a one-column-looking header: detection cannot tell, the caller can
+    p = write(tmp_path, "a|b\n1,5|2\n2,5|3\n")
+    with pytest.raises(ValueError, match="no column 'a'.*one column.*pass delimiter="):
+        load_static_csv(p, u="a", y="b")
+    pts = load_static_csv(p, u="a", y="b", delimiter="|", decimal=",")
+    np.testing.assert_array_equal(pts.ubar, [1.5, 2.5])
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"delimiter": ";;"}, "delimiter must be one character"),
+    ({"delimiter": "1"}, "delimiter must be one character"),
+    ({"decimal": ";"}, "decimal must be '.' or ','"),
+    ({"delimiter": ",", "decimal": ","}, "the delimiter is ',' and so is the decimal mark, but no field is quoted"),
+])
+def test_bad_dialect_arguments(tmp_path, kw, match):
+    p = write(tmp_path, "a,b\n1,2\n")
+    with pytest.raises(ValueError, match=match):
+        load_static_csv(p, u="a", y="b", **kw)
+
+
+@pytest.mark.parametrize("text, match", [
+    # mixed delimiters: the header and line 2 by ';', line 3 by ','
+    ("t;valve;flow\n0;1;2\n1,2,3\n", r"data.csv: mixed delimiters: the header \(line 1\) is separated by ';' but "
+                                    r"line 3 by ','.*pass delimiter=';'"),
+    # a decimal comma with a comma delimiter and no quotes
+    ("t,valve,flow\n0,1,2,5,3\n", r"data.csv: line 2 has 5 comma-separated fields but the header \(line 1\) has 3.*"
+                                  r"decimal comma.*';' as the delimiter"),
+    # every line splits evenly on two delimiters
+    ("a,b;c\n1,2;3\n", r"data.csv: the delimiter is ambiguous: on the first 2 lines ',' gives 2 columns and ';' gives 2 "
+                       r"columns; pass delimiter= \(',' or ';'\)"),
+    # both decimal marks among the numbers
+    ("a;b\n1,5;2\n2.5;3\n", r"data.csv: the decimal mark is ambiguous: line 3 has '2.5' and line 2 has '1,5'; "
+                            r"pass decimal="),
+    ("", r"data.csv: line 1: the file is empty; expected a header line"),
+    ("\n", r"data.csv: line 1 is blank; expected a header line"),
+    ("a,b\n", r"data.csv: line 2: no data rows after the header"),
+    ("a,b\n\n\n", r"data.csv: line 2: no data rows after the header"),
+])
+def test_unreadable_files_name_the_file_the_line_and_what_to_do(tmp_path, text, match):
+    p = write(tmp_path, text)
+    with pytest.raises(ValueError, match=match):
+        load_static_csv(p, u="a" if text.startswith(("a", "\n")) or not text else "valve",
+                        y="b" if text.startswith(("a", "\n")) or not text else "flow")
+
+
+def test_a_point_in_a_decimal_comma_file_is_never_a_thousands_separator(tmp_path):
+    p = write(tmp_path, "a;b\n1,5;2\n3;4\n1.500;5\n")
+    with pytest.raises(ValueError, match=r"line 4, column 'a': '1.500' is not a number; the decimal mark of this "
+                                         r"file is ','"):
+        load_static_csv(p, u="a", y="b", decimal=",")
+
+
+def test_a_decimal_comma_past_the_sniffed_lines_says_what_to_pass(tmp_path):
+    from graybox.datasets import _loaders
+
+    rows = "".join(f"{i};{i}\n" for i in range(_loaders._SNIFF_LINES + 5)) + "7,5;1\n"
+    p = write(tmp_path, "a;b\n" + rows)
+    with pytest.raises(ValueError, match=r"'7,5' is not a number; it has a decimal comma: pass decimal=','"):
+        load_static_csv(p, u="a", y="b")
+
+
+def test_a_line_with_more_fields_than_the_header_is_refused(tmp_path):
+    # numpy's reader with usecols would take it, shifted: the fast reader declines, the careful one
+    # refuses it (past the lines the detection reads)
+    from graybox.datasets import _loaders
+
+    rows = "".join(f"{i},{i},{i}\n" for i in range(_loaders._SNIFF_LINES + 5))
+    p = write(tmp_path, "a,b,c\n" + rows + "4,5,6,7\n")
+    with pytest.raises(ValueError, match=rf"line {_loaders._SNIFF_LINES + 7} has 4 fields but the header names 3 "
+                                         "columns: a decimal comma with a comma delimiter"):
+        load_static_csv(p, u="a", y="b")
+    raw = p.read_bytes()
+    assert _loaders._fast_columns(p, {"u": 0, "y": 1}, raw=raw, text=lambda: raw.decode(), delimiter=",", decimal=".",
+                                  n_fields=3) is None
+    q = write(tmp_path, "a,b,c\n1,2,3\n4,5,6,7\n", "early.csv")  # within them: the detection says it
+    with pytest.raises(ValueError, match=r"early.csv: line 3 has 4 comma-separated fields but the header \(line 1\) "
+                                         r"has 3.*otherwise correct line 3"):
+        load_static_csv(q, u="a", y="b")
+    r = write(tmp_path, "a,b,c\n1,2,3\n4,5,6,\n", "trailing.csv")  # an empty trailing field is harmless
+    np.testing.assert_array_equal(load_static_csv(r, u="a", y="b").ubar, [1, 4])
+
+
+def test_a_file_that_is_not_utf8_names_the_line(tmp_path):
+    p = tmp_path / "latin.csv"
+    p.write_bytes("a,b\n1,2\n3,4 \xb0C\n".encode("latin-1"))
+    with pytest.raises(ValueError, match=r"latin.csv: line 3 is not UTF-8 text.*save the file as UTF-8"):
+        load_static_csv(p, u="a", y="b")

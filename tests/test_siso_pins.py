@@ -25,8 +25,17 @@ def _generator():
 
 @pytest.fixture(scope="module")
 def pins():
+    from graybox import CandidateWarning, StaticRangeWarning
+
     expected = json.loads((_DATA / "siso_pins.json").read_text())
-    got = json.loads(json.dumps(_generator().compute_pins(), sort_keys=True, ensure_ascii=False))
+    # the notes the bundled plant's Table I gives, as `graybox reproduce` prints them: static points
+    # at 750 and 1650 rpm beyond the identification record, a cubic candidate FROLS drops, and the
+    # ℓ = 3 ELS model without a stable equilibrium at 1650 rpm
+    with pytest.warns(StaticRangeWarning, match=r"ū = \[750\.0, 1650\.0\]"), \
+            pytest.warns(CandidateWarning, match=r"u\(k-4\)u\(k-6\)\^2"), \
+            pytest.warns(RuntimeWarning, match=r"J_SF of ELS \(17\) is infinite"):
+        pins = _generator().compute_pins()
+    got = json.loads(json.dumps(pins, sort_keys=True, ensure_ascii=False))
     return expected, got
 
 

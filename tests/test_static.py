@@ -159,7 +159,8 @@ def _well_separated(c: np.ndarray, rel: float = 1e-3) -> bool:
     r = np.roots(c[::-1])
     if r.size < 2:
         return True
-    d = np.abs(np.subtract.outer(r, r)) / np.maximum.outer(np.abs(r), np.abs(r))
+    with np.errstate(invalid="ignore"):  # two zero roots: 0/0 is NaN, and NaN > rel is False (not separated)
+        d = np.abs(np.subtract.outer(r, r)) / np.maximum.outer(np.abs(r), np.abs(r))
     return bool(np.min(d[~np.eye(r.size, dtype=bool)]) > rel)
 
 

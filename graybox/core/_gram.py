@@ -28,6 +28,7 @@ import numpy as np
 from ._records import Dataset, as_records
 from ._regressors import input_signals
 from ._terms import Term
+from ._reprs import short_repr
 
 __all__ = ["DaskRecord", "GramSums", "gram_sums", "r_factor", "available_memory", "require_memory", "is_dask_data"]
 
@@ -280,6 +281,8 @@ class GramSums:
     b: np.ndarray
     yy: float
     N: int
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 def gram_sums(terms: Sequence[Term], data: object, start: int) -> GramSums:

@@ -284,8 +284,8 @@ class Dataset:
         return self.ident.Ts
 
     def __repr__(self) -> str:
-        st = "no static points" if self.static is None else f"static={self.static!r}"
-        return f"Dataset(ident={self.ident!r}, valid={self.valid!r}, {st})"
+        st = "static=None" if self.static is None else f"static={self.static!r}"
+        return f"Dataset(ident={self.ident!r},\n        valid={self.valid!r},\n        {st})"
 
 
 __all__.append("Dataset")

@@ -196,6 +196,10 @@ def parse_term(text: str) -> Term:
         raise ValueError(f"cannot parse term {text!r}: {exc}") from None
 
 
+#: Structures with more terms print as a summary (a candidate set would fill the screen).
+_REPR_TERMS = 12
+
+
 @dataclass(frozen=True)
 class Structure:
     """An ordered tuple of distinct terms: the model's regressors in parameter order.
@@ -302,7 +306,15 @@ class Structure:
         return " + ".join(str(t) for t in self.terms) if self.terms else "(empty)"
 
     def __repr__(self) -> str:
-        return f"Structure([{', '.join(repr(str(t)) for t in self.terms)}])"
+        names = [repr(str(t)) for t in self.terms]
+        if len(names) <= _REPR_TERMS:
+            return f"Structure([{', '.join(names)}])"
+        # a candidate set holds hundreds of terms: its size, lags, degree and inputs, and its ends
+        signals = sorted({s for t in self.terms for s, _, _ in t.factors}, key=lambda s: ({"y": 0, "e": 2}.get(s, 1), s))
+        lags = ", ".join(f"{s} {min(l for t in self.terms for x, l, _ in t.factors if x == s)}.."
+                         f"{max(l for t in self.terms for x, l, _ in t.factors if x == s)}" for s in signals)
+        return (f"Structure({len(names)} terms, degree {self.degree}, lags {lags}: "
+                f"[{', '.join(names[:3])}, …, {', '.join(names[-2:])}])")
 
 
 def parse_structure(text: str | Sequence[str]) -> Structure:

@@ -2,7 +2,7 @@
 
 - :func:`load_pumping` — simulated stand-in for the paper's rig (bundled, works after install);
 - :func:`load_pumping_miso` — the same rig with its two pump sets at independent speeds (two inputs, bundled);
-- :func:`load_buck` — real buck-converter measurements kept outside the project;
+- :func:`load_buck` — real buck-converter measurements (bundled, MIT licence notice beside them);
 - :func:`load_record_csv`, :func:`load_static_csv` — users' own files, columns chosen by name;
 - :mod:`graybox.datasets.pumping` — the plant simulator and the generator of the bundled files
   (``python -m graybox.datasets.pumping`` rewrites them);

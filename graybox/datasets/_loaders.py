@@ -1,7 +1,10 @@
 """Load data sets: the bundled pumping plant, the buck converter, and users' CSV files.
 
-CSV conventions (all loaders): comma separated, one header line naming the columns, one sample
-per line, numbers in any form Python's ``float`` reads. Columns are picked by name, so a file may
+CSV conventions (all loaders): one header line naming the columns, one sample per line, numbers
+in any form Python's ``float`` reads. Files as spreadsheets export them are read: the delimiter
+(``,`` ``;`` or tab) and the decimal mark (``.`` or ``,``) are detected from the header and the
+first lines (``delimiter=`` and ``decimal=`` override), a UTF-8 byte-order mark is skipped. A file
+that allows two readings is refused with what was seen. Columns are picked by name, so a file may
 hold other columns too. Every problem found is a ``ValueError`` naming the file and the line
 (1-based, the header is line 1) or the column: empty cells, NaN or inf, text where a number
 belongs, rows with too few fields, a missing column (with the closest existing names), time stamps
@@ -10,13 +13,18 @@ that do not increase or are unevenly spaced, repeated static input levels.
 
 from __future__ import annotations
 
+import codecs
 import csv
 import difflib
+import functools
+import io
+import itertools
 import math
 import os
+import re
 from importlib import resources
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -51,10 +59,12 @@ BUCK_STATIC_CURVE = StaticCurve.polynomial([32.0, -8.0], domain=(1.0, 4.0),
 # Generic CSV reading with row/column diagnostics
 # ---------------------------------------------------------------------------
 
-def _read_columns(path: str | os.PathLike, wanted: dict[str, str]) -> dict[str, np.ndarray]:
+def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter: str | None = None,
+                  decimal: str | None = None) -> dict[str, np.ndarray]:
     """Read the columns ``wanted`` (role -> column name) of a CSV file as finite float arrays.
 
-    Raises ``ValueError`` naming the file and the line or column of the first problem.
+    The delimiter and the decimal mark are detected (:func:`_dialect`) unless given. Raises
+    ``ValueError`` naming the file and the line or column of the first problem.
     """
     p = Path(path)
     names = list(wanted.values())
@@ -62,68 +72,253 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str]) -> dict[str, 
     if dup:
         roles = [r for r, n in wanted.items() if n in dup]
         raise ValueError(f"{p}: {', '.join(roles)} all name the column {sorted(dup)[0]!r}; each must be a different column")
-    with p.open(newline="", encoding="utf-8-sig") as fh:  # -sig: tolerate a BOM from spreadsheet exports
-        reader = csv.reader(fh)
-        try:
-            header = next(reader)
-        except StopIteration:
-            raise ValueError(f"{p}: the file is empty (expected a header line naming the columns)") from None
-        header = [h.strip() for h in header]
-        index: dict[str, int] = {}
-        for role, col in wanted.items():
-            if col not in header:
-                raise ValueError(_missing_column_message(p, role, col, header))
-            if header.count(col) > 1:
-                raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
-            index[role] = header.index(col)
-        fast = _fast_columns(p, index)
-        if fast is not None:
-            return fast
-        need = max(index.values()) + 1
-        values: dict[str, list[float]] = {role: [] for role in wanted}
-        lines: list[int] = []
-        for row in reader:
-            line = reader.line_num
-            if not row or all(not c.strip() for c in row):
-                continue  # blank line (e.g. a trailing newline): not a sample
-            if len(row) < need:
-                raise ValueError(f"{p}: line {line} has {len(row)} field(s), but column "
-                                 f"{header[need - 1]!r} is field {need}")
-            for role, i in index.items():
-                cell = row[i].strip()
-                col = wanted[role]
-                if cell == "":
-                    raise ValueError(f"{p}: line {line}, column {col!r}: empty cell")
-                try:
-                    v = float(cell)
-                except ValueError:
-                    raise ValueError(f"{p}: line {line}, column {col!r}: {cell!r} is not a number") from None
-                if not math.isfinite(v):
-                    raise ValueError(f"{p}: line {line}, column {col!r}: {cell!r} is not a finite number")
-                values[role].append(v)
-            lines.append(line)
+    raw = p.read_bytes()
+    start = 3 if raw.startswith(codecs.BOM_UTF8) else 0  # spreadsheet exports often start with one
+    # The dialect and the header come from the first lines alone: a long file is decoded whole
+    # only when the careful reader (or a decimal comma) needs its text.
+    end = start
+    for _ in range(_SNIFF_LINES):
+        end = raw.find(b"\n", end) + 1
+        if end == 0:
+            end = len(raw)
+            break
+    head = _decode(p, raw, start, end)
+    delim, dec = _dialect(p, head, delimiter, decimal)
+    header = next(csv.reader(io.StringIO(head, newline=""), delimiter=delim), None)
+    if header is None:
+        raise ValueError(f"{p}: line 1: the file is empty; expected a header line naming the columns, then "
+                         "one sample per line")
+    header = [h.strip() for h in header]
+    if not any(header):
+        raise ValueError(f"{p}: line 1 is blank; expected a header line naming the columns, then one sample per line")
+    index: dict[str, int] = {}
+    for role, col in wanted.items():
+        if col not in header:
+            raise ValueError(_missing_column_message(p, role, col, header, delim))
+        if header.count(col) > 1:
+            raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
+        index[role] = header.index(col)
+    text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
+    fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header))
+    if fast is not None:
+        return fast
+    reader = csv.reader(io.StringIO(text(), newline=""), delimiter=delim)
+    next(reader)  # the header, read above
+    need = max(index.values()) + 1
+    values: dict[str, list[float]] = {role: [] for role in wanted}
+    lines: list[int] = []
+    for row in reader:
+        line = reader.line_num
+        if not row or all(not c.strip() for c in row):
+            continue  # blank line (e.g. a trailing newline): not a sample
+        if len(row) < need:
+            raise ValueError(f"{p}: line {line} has {len(row)} field(s), but column "
+                             f"{header[need - 1]!r} is field {need}{_other_delimiter_hint(row, delim)}")
+        if any(c.strip() for c in row[len(header):]):
+            # a field past the header's last column shifts nothing we could trust: refuse
+            raise ValueError(f"{p}: line {line} has {len(row)} fields but the header names {len(header)} "
+                             f"columns{_decimal_comma_hint(row, delim)}")
+        for role, i in index.items():
+            values[role].append(_number(p, line, wanted[role], row[i], dec))
+        lines.append(line)
     if not lines:
-        raise ValueError(f"{p}: no data rows after the header")
+        raise ValueError(f"{p}: line 2: no data rows after the header; expected one sample per line")
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
     return out
 
 
-def _fast_columns(p: Path, index: dict[str, int]) -> dict[str, np.ndarray] | None:
+def _decode(p: Path, raw: bytes, start: int, end: int) -> str:
+    """``raw[start:end]`` as UTF-8 text, or a ``ValueError`` naming the line of the first bad byte."""
+    try:
+        return raw[start:end].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        at = start + exc.start
+        line = raw.count(b"\n", 0, at) + 1
+        raise ValueError(f"{p}: line {line} is not UTF-8 text (byte {raw[at]:#04x}); save the file as UTF-8 CSV") from None
+
+
+#: Delimiters tried when none is given, and how many lines the detection reads.
+_DELIMITERS = (",", ";", "\t")
+_SNIFF_LINES = 50
+# A number written with a decimal comma: digits, one comma, digits (an exponent allowed).
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
+_DECIMAL_POINT = re.compile(r"^[+-]?\d*\.\d+(?:[eE][+-]?\d+)?$")
+_INTEGER = re.compile(r"^[+-]?\d+(?:[eE][+-]?\d+)?$")
+
+
+def _name(d: str) -> str:
+    return {"\t": "tab", ",": "','", ";": "';'"}.get(d, repr(d))
+
+
+def _dialect(p: Path, text: str, delimiter: str | None, decimal: str | None) -> tuple[str, str]:
+    """The delimiter and the decimal mark of a CSV text, from its header and first data lines.
+
+    The delimiter is the one of ``, ; tab`` that splits the header into several columns and every
+    sampled data line into as many; the decimal mark is ``,`` when numbers such as ``2,5`` appear
+    (with ``;`` or tab as delimiter, or in quoted fields), else ``.``. A file that allows two
+    readings, mixes delimiters, or uses a decimal comma with an unquoted comma delimiter is refused
+    with what was seen and what to pass.
+    """
+    if delimiter is not None and (not isinstance(delimiter, str) or len(delimiter) != 1
+                                  or delimiter in "\"\r\n" or delimiter.isalnum()):
+        raise ValueError(f"{p}: delimiter must be one character such as ',', ';' or '\\t', got {delimiter!r}")
+    if decimal is not None and decimal not in (".", ","):
+        raise ValueError(f"{p}: decimal must be '.' or ',', got {decimal!r}")
+    head = [(i + 1, ln) for i, ln in enumerate(itertools.islice(io.StringIO(text, newline=""), _SNIFF_LINES))]
+    head = [(i, ln.rstrip("\r\n")) for i, ln in head]
+    if not head:
+        raise ValueError(f"{p}: line 1: the file is empty; expected a header line naming the columns, then "
+                         "one sample per line")
+    data = [(i, ln) for i, ln in head[1:] if ln.strip()]
+    if delimiter is None:
+        delimiter = _detect_delimiter(p, head[0][1], data)
+    if decimal is None:
+        decimal = _detect_decimal(p, data, delimiter)
+    if delimiter == decimal and '"' not in text:
+        # only quotes keep a decimal comma from splitting a number in two
+        raise ValueError(f"{p}: the delimiter is {_name(delimiter)} and so is the decimal mark, but no field is "
+                         "quoted, so a number such as 2,5 would read as two columns; pass another delimiter= or "
+                         "decimal=, or export the file with quoted fields")
+    return delimiter, decimal
+
+
+def _split(line: str, d: str) -> list[str]:
+    return next(csv.reader([line], delimiter=d), [])
+
+
+def _width(line: str, d: str, header_width: int) -> int:
+    """The fields of a line split at ``d``, not counting empty ones past the header's width (some
+    exports end every line with a delimiter)."""
+    cells = _split(line, d)
+    while len(cells) > header_width and not cells[-1].strip():
+        cells.pop()
+    return len(cells)
+
+
+def _detect_delimiter(p: Path, header: str, data: list[tuple[int, str]]) -> str:
+    widths = {d: len(_split(header, d)) for d in _DELIMITERS}
+    fits = [d for d in _DELIMITERS if widths[d] > 1 and all(_width(ln, d, widths[d]) == widths[d] for _, ln in data)]
+    if len(fits) == 1:
+        return fits[0]
+    if len(fits) > 1:
+        seen = " and ".join(f"{_name(d)} gives {widths[d]} columns" for d in fits)
+        raise ValueError(f"{p}: the delimiter is ambiguous: on the first {len(data) + 1} lines "
+                         f"{seen}; pass delimiter= ({' or '.join(repr(d) for d in fits)})")
+    split = [d for d in _DELIMITERS if widths[d] > 1]
+    if not split:
+        return ","  # one column: the missing-column message shows the header as read
+    best = max(split, key=lambda d: widths[d])
+    for line, ln in data:
+        n = _width(ln, best, widths[best])
+        if n == widths[best]:
+            continue
+        other = [d for d in _DELIMITERS if d != best and _width(ln, d, widths[best]) == widths[best]]
+        if best == "," and n > widths[best] and _decimal_comma_cells(ln.split(",")):
+            raise ValueError(f"{p}: line {line} has {n} comma-separated fields but the header (line 1) has "
+                             f"{widths[best]} ({ln!r}). If its numbers use a decimal comma, commas also separate "
+                             "the columns, which cannot be read unambiguously: export the file again with ';' as "
+                             "the delimiter (the decimal comma is then detected), with '.' as the decimal mark, "
+                             f"or with quoted fields; otherwise correct line {line}")
+        if other and n == 1:
+            raise ValueError(f"{p}: mixed delimiters: the header (line 1) is separated by {_name(best)} but line "
+                             f"{line} by {_name(other[0])} ({ln!r}); use one delimiter throughout, or pass "
+                             f"delimiter={best!r} and correct line {line}")
+        break  # another fault (a short row, say): the reader reports it with its line
+    return best
+
+
+def _decimal_comma_cells(cells: Sequence[str]) -> bool:
+    """Whether cells split at commas look like numbers cut at their decimal comma (``2``, ``5``)."""
+    cells = [c.strip() for c in cells]
+    return len(cells) > 1 and all(_INTEGER.match(c) for c in cells if c)
+
+
+def _detect_decimal(p: Path, data: list[tuple[int, str]], delimiter: str) -> str:
+    comma = point = None
+    for line, ln in data:
+        for cell in _split(ln, delimiter):
+            c = cell.strip()
+            if comma is None and _DECIMAL_COMMA.match(c):
+                comma = (line, c)
+            elif point is None and _DECIMAL_POINT.match(c):
+                point = (line, c)
+    if comma and point:
+        raise ValueError(f"{p}: the decimal mark is ambiguous: line {point[0]} has {point[1]!r} and line "
+                         f"{comma[0]} has {comma[1]!r}; pass decimal='.' or decimal=','")
+    return "," if comma else "."
+
+
+def _number(p: Path, line: int, col: str, cell: str, decimal: str) -> float:
+    """One cell as a finite float, or a ``ValueError`` naming the file, line and column."""
+    c = cell.strip()
+    if c == "":
+        raise ValueError(f"{p}: line {line}, column {col!r}: empty cell")
+    hint = ""
+    if decimal == ",":
+        if "." in c:  # in decimal-comma locales a point groups thousands: never guess
+            hint = "; the decimal mark of this file is ',' (pass decimal='.' if it is not)"
+            c = "?"
+        c = c.replace(",", ".")
+    elif _DECIMAL_COMMA.match(c):
+        hint = "; it has a decimal comma: pass decimal=','"
+    try:
+        v = float(c)
+    except ValueError:
+        raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a number{hint}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a finite number")
+    return v
+
+
+def _other_delimiter_hint(row: Sequence[str], delimiter: str) -> str:
+    joined = delimiter.join(row)
+    other = [d for d in _DELIMITERS if d != delimiter and d in joined]
+    return f" (it holds {_name(other[0])}: mixed delimiters? pass delimiter= to choose)" if other else ""
+
+
+def _decimal_comma_hint(row: Sequence[str], delimiter: str) -> str:
+    if delimiter == "," and _decimal_comma_cells(row):
+        return (": a decimal comma with a comma delimiter cannot be read unambiguously; export the file "
+                "again with ';' as the delimiter or '.' as the decimal mark")
+    return ""
+
+
+def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: Callable[[], str], delimiter: str,
+                  decimal: str, n_fields: int) -> dict[str, np.ndarray] | None:
     """The columns by numpy's reader (faster on long records), or None when the file needs the
-    careful reader: quotes, blank lines, bare carriage returns, a field that is not a finite number
-    or that only Python reads (``1_000``). Where numpy reads a field it gives the same float as
-    Python's ``float``, so a record's content, and the cells' keys, do not depend on the reader."""
-    raw = p.read_bytes()
+    careful reader: quotes, blank lines, bare carriage returns, a line with another number of fields
+    than the header, a field that is not a finite number or that only Python reads (``1_000``), a
+    point in a decimal-comma file. Where numpy reads a field it gives the same float as Python's
+    ``float``, so a record's content, and the cells' keys, do not depend on the reader."""
     if b'"' in raw or raw.count(b"\r") != raw.count(b"\r\n"):
         return None
     rows = raw.count(b"\n") + (0 if raw.endswith(b"\n") else 1) - 1  # physical lines after the header
-    del raw
     if rows < 1:
         return None
+    # Every line must hold exactly n_fields - 1 delimiters: numpy's reader with usecols would take
+    # a line with extra fields silently. The delimiters and line ends, in file order, must then
+    # read m delimiters and an end, line after line.
+    m, lines = n_fields - 1, rows + 1
+    if raw.count(delimiter.encode()) != m * lines:
+        return None
+    if m:
+        buf = np.frombuffer(raw, np.uint8)
+        marks = buf[np.flatnonzero((buf == 10) | (buf == ord(delimiter)))]
+        if not raw.endswith(b"\n"):
+            marks = np.append(marks, np.uint8(10))
+        if marks.size != lines * (m + 1) or (marks.reshape(lines, m + 1)[:, m] != 10).any():
+            return None
+        del buf, marks
     roles = list(index)
-    try:  # numpy reads the file again itself: faster than parsing the bytes held here
-        arr = np.loadtxt(p, delimiter=",", skiprows=1, usecols=[index[r] for r in roles], comments=None,
+    source: object = p  # numpy reads the file again itself: faster than parsing the text held here
+    if decimal == ",":
+        whole = text()
+        if "." in whole[whole.find("\n") + 1:]:
+            return None  # a point in a decimal-comma file: the careful reader names it
+        source = io.StringIO(whole.replace(",", "."))
+    try:
+        arr = np.loadtxt(source, delimiter=delimiter, skiprows=1, usecols=[index[r] for r in roles], comments=None,
                          dtype=np.float64, ndmin=2, encoding="utf-8-sig")
     except ValueError:
         return None
@@ -134,10 +329,12 @@ def _fast_columns(p: Path, index: dict[str, int]) -> dict[str, np.ndarray] | Non
     return out
 
 
-def _missing_column_message(path: Path, role: str, col: str, header: Sequence[str]) -> str:
+def _missing_column_message(path: Path, role: str, col: str, header: Sequence[str], delimiter: str = ",") -> str:
     close = difflib.get_close_matches(col, header, n=3, cutoff=0.5)
     close += [h for h in header if h.lower() == col.lower() and h not in close]
     hint = f" Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+    if len(header) == 1:
+        hint += f" The header was read as one column, split at {_name(delimiter)}: pass delimiter= if the file uses another."
     return f"{path}: no column {col!r} (asked for as {role}).{hint} The columns are {list(header)}."
 
 
@@ -152,6 +349,8 @@ def load_record_csv(
     units: tuple[str, str] = ("", ""),
     time_rtol: float = 1e-3,
     input_names: Sequence[str] | None = None,
+    delimiter: str | None = None,
+    decimal: str | None = None,
 ) -> Record:
     """A dynamic record (input, output, sampling period) from a CSV file.
 
@@ -181,6 +380,13 @@ def load_record_csv(
         Names the terms use for the inputs. Default: ``"u"`` for a single column given as a
         string, the column names themselves for a list of columns (they must then be
         identifiers other than y, e, k).
+    delimiter : str, optional
+        The column delimiter, e.g. ``","``, ``";"`` or ``"\\t"``. Default: detected (``,``, ``;`` or
+        tab: the one that splits the header and the first lines into the same number of columns).
+    decimal : {".", ","}, optional
+        The decimal mark. Default: detected (``,`` where numbers such as ``2,5`` appear with a
+        ``;`` or tab delimiter, or quoted). With ``","`` a point in a number is an error, never a
+        thousands separator.
 
     Returns
     -------
@@ -192,7 +398,9 @@ def load_record_csv(
     ValueError
         Naming the file and the line or column: a missing column (with close names), an empty
         cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
-        with the stamps, or neither ``time`` nor ``Ts`` given.
+        with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
+        rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, or a delimiter or
+        decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``).
     """
     p = Path(path)
     if time is None and Ts is None:
@@ -206,7 +414,7 @@ def load_record_csv(
     ucols, names = _input_columns(p, u, input_names)
     wanted = {f"input {c!r}" if len(ucols) > 1 else "u": c for c in ucols} | {"y": y} | (
         {"time": time} if time is not None else {})
-    cols = _read_columns(p, wanted)
+    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal)
     lines = cols["_lines"]
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
@@ -269,6 +477,8 @@ def load_static_csv(
     name: str | None = None,
     input_names: Sequence[str] | None = None,
     repeats: str = "error",
+    delimiter: str | None = None,
+    decimal: str | None = None,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
@@ -287,6 +497,10 @@ def load_static_csv(
     repeats : {"error", "mean"}
         Lines with the same ū: an error naming them (default: a steady state is one number per
         input level), or their mean, one point per level (:meth:`StaticPoints.from_repeats`).
+    delimiter : str, optional
+        The column delimiter (as in :func:`load_record_csv`; detected by default).
+    decimal : {".", ","}, optional
+        The decimal mark (as in :func:`load_record_csv`; detected by default).
 
     Returns
     -------
@@ -298,18 +512,19 @@ def load_static_csv(
     ------
     ValueError
         Naming the file and line or column: a missing column, an empty, NaN or non-numeric cell,
-        or two lines with the same ū (unless ``repeats="mean"``).
+        or two lines with the same ū (unless ``repeats="mean"``); the file's faults listed in
+        :func:`load_record_csv`.
     """
     p = Path(path)
     check_choice(repeats, "repeats", ("error", "mean"))
     ucols, names = _input_columns(p, u, input_names)
     label = name or p.stem
     if len(ucols) > 1:
-        cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y})
+        cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y}, delimiter=delimiter, decimal=decimal)
         ub = np.column_stack([cols[f"input {c!r}"] for c in ucols])
         where = f"columns {ucols}"
     else:
-        cols = _read_columns(p, {"u": ucols[0], "y": y})
+        cols = _read_columns(p, {"u": ucols[0], "y": y}, delimiter=delimiter, decimal=decimal)
         ub = cols["u"]
         where = f"column {ucols[0]!r}"
     if repeats == "mean":
@@ -338,24 +553,25 @@ def pumping_data_dir() -> Path:
     return bundled_data_dir("pumping", "the bundled pumping data", "graybox.datasets.pumping")
 
 
-def bundled_data_dir(folder: str, what: str, module: str) -> Path:
+def bundled_data_dir(folder: str, what: str, module: str | None, probe: str = "dynamic.csv") -> Path:
     """The folder of a bundled data set: package data ``graybox/data/FOLDER`` of an installed
-    package, else ``<repo>/data/FOLDER`` of a source checkout; ``FileNotFoundError`` naming both
-    places tried, ``what`` is missing, and ``python -m MODULE`` to regenerate it."""
+    package, else ``<repo>/data/FOLDER`` of a source checkout (the one holding the file ``probe``);
+    ``FileNotFoundError`` naming both places tried, ``what`` is missing, and ``python -m MODULE``
+    to regenerate it (when a module can)."""
     tried = []
     try:
         cand = Path(str(resources.files("graybox.data") / folder))
         tried.append(cand)
-        if (cand / "dynamic.csv").is_file():
+        if (cand / probe).is_file():
             return cand
     except ModuleNotFoundError:
         pass
     cand = Path(__file__).resolve().parents[2] / "data" / folder
     tried.append(cand)
-    if (cand / "dynamic.csv").is_file():
+    if (cand / probe).is_file():
         return cand
-    raise FileNotFoundError(f"{what} are missing; looked in {[str(t) for t in tried]}. "
-                            f"Reinstall graybox, or regenerate them with `python -m {module}`")
+    again = f", or regenerate them with `python -m {module}`" if module else ""
+    raise FileNotFoundError(f"{what} are missing; looked in {[str(t) for t in tried]}. Reinstall graybox{again}")
 
 
 PUMPING_DESCRIPTION = (
@@ -413,7 +629,7 @@ def load_pumping() -> Dataset:
 
 
 # ---------------------------------------------------------------------------
-# Buck converter (real measurements, kept outside the project)
+# Buck converter (real measurements, bundled with their MIT licence notice)
 # ---------------------------------------------------------------------------
 
 _BUCK_FILES = ("buck_id.csv", "buck_valid.csv")
@@ -422,53 +638,48 @@ _BUCK_FILES = ("buck_id.csv", "buck_valid.csv")
 def find_buck_dir(path: str | os.PathLike | None = None) -> Path:
     """The folder with ``buck_id.csv`` and ``buck_valid.csv``.
 
-    Search order: ``path`` if given (nothing else is tried); the folder named by the environment
-    variable ``GRAYBOX_BUCK_DIR``; then ``shared/data/buck`` under the current directory and each
-    of its parents, and under each parent of the graybox package (so a checkout at
-    ``<work>/main`` finds ``<work>/shared/data/buck``, i.e. ``../shared/data/buck``).
-
-    Raises
-    ------
-    FileNotFoundError
-        Listing every folder tried.
-    """
-    def ok(d: Path) -> bool:
-        return all((d / f).is_file() for f in _BUCK_FILES)
-
-    if path is not None:
-        d = Path(path)
-        if not ok(d):
-            raise FileNotFoundError(f"{d}: expected {' and '.join(_BUCK_FILES)} in this folder")
-        return d
-    tried: list[Path] = []
-    env = os.environ.get(BUCK_ENV)
-    if env:
-        d = Path(env)
-        if ok(d):
-            return d
-        tried.append(d)
-    here = Path.cwd().resolve()
-    pkg = Path(__file__).resolve().parent
-    for base in [here, *here.parents, *pkg.parents]:
-        d = base / "shared" / "data" / "buck"
-        if d in tried:
-            continue
-        if ok(d):
-            return d
-        tried.append(d)
-    raise FileNotFoundError(
-        f"buck converter data not found (need {' and '.join(_BUCK_FILES)}); set {BUCK_ENV} or pass "
-        f"path=. Tried: {', '.join(str(t) for t in tried)}"
-    )
-
-
-def load_buck(path: str | os.PathLike | None = None) -> Dataset:
-    """The real DC-DC buck converter data (Aguirre et al. 2000; ../shared/data/buck).
+    Search order: ``path`` if given; else the folder named by the environment variable
+    ``GRAYBOX_BUCK_DIR`` if it is set; else the bundled copy (package data ``graybox/data/buck``,
+    or ``<repo>/data/buck`` in a source checkout), which carries the data's MIT licence notice.
+    Only one place is tried: a ``path`` or a variable naming a folder without the files is an
+    error, never a silent fall-back to another copy.
 
     Parameters
     ----------
     path : str or path-like, optional
-        Folder holding ``buck_id.csv`` and ``buck_valid.csv``; default: see :func:`find_buck_dir`.
+        The folder to use.
+
+    Raises
+    ------
+    FileNotFoundError
+        Naming the folder tried and the files it lacks.
+    """
+    def check(d: Path, how: str) -> Path:
+        missing = [f for f in _BUCK_FILES if not (d / f).is_file()]
+        if missing:
+            raise FileNotFoundError(f"{d}: expected {' and '.join(_BUCK_FILES)} in this folder ({how}); "
+                                    f"missing {', '.join(missing)}")
+        return d
+
+    if path is not None:
+        return check(Path(path), "given as path=")
+    env = os.environ.get(BUCK_ENV)
+    if env:
+        return check(Path(env), f"named by {BUCK_ENV}")
+    return bundled_data_dir("buck", "the bundled buck converter data", None, probe=_BUCK_FILES[0])
+
+
+def load_buck(path: str | os.PathLike | None = None) -> Dataset:
+    """The real DC-DC buck converter data (Aguirre et al. 2000), bundled with graybox.
+
+    The files are those of wilsonrljr/sysidentpy-data (MIT licence, Copyright (c) 2024 Wilson
+    Rocha); the licence notice ships beside them in ``graybox/data/buck``.
+
+    Parameters
+    ----------
+    path : str or path-like, optional
+        Folder holding ``buck_id.csv`` and ``buck_valid.csv``; default: see :func:`find_buck_dir`
+        (the ``GRAYBOX_BUCK_DIR`` variable, else the bundled copy).
 
     Returns
     -------

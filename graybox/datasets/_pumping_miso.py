@@ -70,6 +70,7 @@ import numpy as np
 from ..core._records import Record, StaticPoints
 from ..core._validation import as_1d_finite, renamed
 from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, write_csv_pair
+from ..core._reprs import short_repr
 
 __all__ = [
     "TwoSpeedPumpingPlant",
@@ -154,6 +155,8 @@ class TwoSpeedRun:
             The record's name.
         """
         return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"), input_names=("u1", "u2"))
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 @dataclass(frozen=True)

@@ -162,6 +162,7 @@ import numpy as np
 from ..core._records import Record, StaticPoints
 from ..core._validation import as_1d_finite, renamed
 from ..reference import EQ1_COEFFICIENTS
+from ..core._reprs import short_repr
 
 __all__ = [
     "PumpingPlant",
@@ -237,6 +238,8 @@ class PlantRun:
     def record(self, name: str = "pumping") -> Record:
         """The measured input/output pair as a :class:`~graybox.Record` (rpm, mlc)."""
         return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"))
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 @dataclass(frozen=True)

@@ -52,6 +52,7 @@ from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
+from ..core._reprs import short_repr
 
 __all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
 
@@ -159,6 +160,8 @@ class BootstrapJob:
             return {"failure": f"{type(exc).__name__}: {exc}"}
         return {"lambda1": d.lambda1, "index": d.index, "JS": d.JS, "JSF": d.JSF, "in_band": d.in_band,
                 "rule": d.rule, "theta": [float(v) for v in d.model.theta]}
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 @dataclass(frozen=True, eq=False)

@@ -131,6 +131,7 @@ from ..core._records import Dataset, Record, as_records
 from ..core._validation import as_1d_finite, check_choice, check_int, check_per_point, check_real, check_seed, frozen
 from ..core._simulation import DivergenceError, free_run_inputs
 from ..static._analysis import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
+from ..core._reprs import short_repr
 
 __all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
 
@@ -768,6 +769,8 @@ class NeuralFit:
     rmse_train: float
     rmse_sim: float
     seconds: float
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 def _unpack(theta: np.ndarray, H: int, n_in: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:

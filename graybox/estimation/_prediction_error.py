@@ -30,9 +30,8 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
-import cvxpy as cp
 import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
@@ -65,6 +64,9 @@ from ..core._gram import as_gram_records, available_memory, is_dask_data, r_fact
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_lambdas
+
+if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
+    import cvxpy as cp
 
 __all__ = [
     "SOLVERS",
@@ -451,6 +453,8 @@ def _basis(d: _Data, static: tuple[np.ndarray, np.ndarray] | None) -> _Basis:
 
 
 def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
+    import cvxpy as cp
+
     if H.ndim == 1:
         if np.all(H == 1.0):
             return cp.sum_squares(y)
@@ -473,6 +477,8 @@ class _QP:
 
     def __init__(self, d: _Data, static: tuple[np.ndarray, np.ndarray] | None, cons: list[StaticConstraint],
                  ctx: StaticContext, solver: str, options: Mapping | None):
+        import cvxpy as cp
+
         n = d.s.size
         self.basis = b = _basis(d, static)
         rows = _rows(cons, ctx, d.s, b.T)
@@ -505,6 +511,8 @@ class _QP:
 
     def solve(self, w1: float, w2: float, warm_start: bool = True) -> np.ndarray:
         """z for one weight pair (the weights are normalised to sum 1: the argmin is unchanged)."""
+        import cvxpy as cp
+
         tot = float(w1) + float(w2)
         self.w1.value, self.w2.value = float(w1) / tot, float(w2) / tot
         # Warm starts help OSQP (first order) only. Through cvxpy, a warm-started Clarabel re-uses
@@ -654,8 +662,8 @@ def cls(
     recs = as_gram_records(data)
     d = _dynamic(st, recs)
     cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
-    _warn_static_range(cons, ctx, curve, recs)
     rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
+    _warn_static_range(cons, ctx, curve, recs)  # after: bad input is an error, not a warning and an error
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
     else:
@@ -800,8 +808,8 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     for p in [pts] + [getattr(c, "points", None) for c in cons]:
         _check_point_inputs(recs, p)
     ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), recs[0].input_names)
-    _warn_static_range(cons, ctx, curve, recs)
     rows = _rows(cons, ctx, d.s)
+    _warn_static_range(cons, ctx, curve, recs)
     R2, c2, M = _static_part(d, pts)
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
 

@@ -81,6 +81,7 @@ from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
 from ._local_models import LocalModels, check_margin, record_points, within_at
+from ..core._reprs import short_repr
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
 
@@ -421,6 +422,8 @@ class SEFront:
         object.__setattr__(self, "costs", frozen(self.costs))
         object.__setattr__(self, "nfev", frozen(np.zeros(K) if self.nfev is None else self.nfev, int))
         object.__setattr__(self, "failures", MappingProxyType({int(k): str(v) for k, v in dict(self.failures).items()}))
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 _CHECKPOINT_ARRAYS = ("thetas", "costs", "done", "failures", "nfev")

@@ -414,8 +414,10 @@ def local_cluster(workers: int, dashboard: bool = False):
     try:
         with dask.config.set({"distributed.scheduler.allowed-failures": 0,
                               "distributed.nanny.pre-spawn-environ": environ, **_QUIET}):
+            # ":0": any free port; None still binds 8787 and warns when another cluster holds it
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   dashboard_address=":0" if dashboard and _bokeh() else None,
+                                   # ":0": a free port; None would still bind 8787, taken by any other cluster
+                                   dashboard_address=":0",
                                    silence_logs=logging.ERROR,
                                    env=_thread_env(worker_threads(int(workers))))
         try:

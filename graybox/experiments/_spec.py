@@ -23,6 +23,7 @@ from .. import _api as gb
 
 from ..core._terms import default_input_names
 from ..core._validation import check_choice, check_int, check_lambdas, check_real
+from ..core._reprs import short_repr
 
 __all__ = [
     "SpecError",
@@ -318,6 +319,8 @@ class DataSpec:
         extra = {"static_curve": ds.extra["static_curve"]} if "static_curve" in ds.extra else {}
         return gb.Dataset(ds.ident, ds.valid, ds.static, description=ds.description, extra=extra)
 
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
+
 
 def data_fingerprint(ds: gb.Dataset) -> str:
     """A hash of a data set's content: records (u, y, Ts), static points, static curve, and the
@@ -461,6 +464,8 @@ class StructureSpec:
             return {"terms": list(self.terms)}
         return {"candidates": _thaw(self.candidates), "n_terms": self.n_terms, "tol": self.tol,
                 "criterion": self.criterion, "max_terms": self.max_terms, "include": list(self.include)}
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 # --------------------------------------------------------------------------------------------
@@ -864,6 +869,8 @@ class Variant:
                 "decision": None if self.decision is None else self.decision.to_dict(),
                 "options": dict(self.options)}
 
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
+
 
 # --------------------------------------------------------------------------------------------
 # cells and the grid
@@ -903,6 +910,8 @@ class Cell:
     structure_spec: Mapping[str, Any]
     variant_spec: Mapping[str, Any]
     version: str
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 @dataclass(frozen=True, eq=False)
@@ -1090,6 +1099,8 @@ class Grid:
     def fingerprint(self, cells: Sequence[Cell]) -> str:
         """A hash of the grid: its names and its cells' keys (so: contents, data, version)."""
         return _hash({"name": self.name, "cells": [[c.key, c.data, c.structure, c.variant, c.seed] for c in cells]})
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 # --------------------------------------------------------------------------------------------

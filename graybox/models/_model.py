@@ -114,7 +114,8 @@ class Model:
         input powers (``"Σyu1"``, ``"Σu1u2²"``, …).
         """
         cm = self.cluster_map()
-        return dict(zip(cm.names, (cm.R @ self.theta).tolist()))
+        with np.errstate(over="ignore"):  # a sum beyond the float range is ±inf, and says so
+            return dict(zip(cm.names, (cm.R @ self.theta).tolist()))
 
     def cluster_map(self) -> _static.ClusterMap | _static_surface.SurfaceClusterMap:
         """The clusters and the 0/1 map R of this structure (per input power with several inputs)."""

@@ -27,8 +27,12 @@ SECTIONS: tuple[Callable[..., str], ...] = (section_reference_models, section_bl
                                             section_table1)
 
 
-def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout) -> None:
+def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout, fresh: bool = False) -> None:
     """Run every section in order, printing each as it finishes.
+
+    The SE sweeps of Table I keep checkpoints under ``out`` (``se_<method>_l<degree>[_quick].npz``)
+    and resume from them: a second run in the same folder, or a run after a kill, skips the λ1
+    values already done. Each checkpoint resumed is named in the output.
 
     Parameters
     ----------
@@ -38,9 +42,23 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout
         Folder for the figures and the SE checkpoints (created if missing).
     stream : text file
         Where the text goes (default: standard output).
+    fresh : bool
+        Delete this mode's checkpoints under ``out`` first, so every sweep starts over.
     """
+    from ._table1 import checkpoint_paths
+
     if out is not None:
         Path(out).mkdir(parents=True, exist_ok=True)
+        found = [c for c in checkpoint_paths(out, quick) if c.exists()]
+        if fresh:
+            for c in found:
+                c.unlink()
+            if found:
+                print(f"--fresh: deleted {len(found)} checkpoint(s): {', '.join(c.name for c in found)}",
+                      file=stream, flush=True)
+        elif found:
+            print(f"resuming from {len(found)} checkpoint(s) in {out}: {', '.join(c.name for c in found)} "
+                  "(--fresh starts over)", file=stream, flush=True)
     said: set[str] = set()
     for sec in SECTIONS:
         # warnings raised inside a section are facts about the bundled data (e.g. static points

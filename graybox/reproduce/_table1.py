@@ -77,8 +77,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
         fronts = {"PE": pe}
         models[f"PE (D_SF) ℓ={degree}"] = decide_dsf(pe, band=0.031, fallback="min_jsf").model
         for method in ("ga", "gradient"):
-            tag = f"_margin{SE_MARGIN:g}{'_quick' if quick else ''}"
-            ck = None if out is None else Path(out) / f"se_{method}_l{degree}{tag}.npz"
+            ck = None if out is None else checkpoint_path(out, method, degree, quick)
             se = se_pareto(st, data, lambdas=np.logspace(-2, 0, n_lam), method=method, seed=0, checkpoint=ck,
                            threads=threads, options=ga if method == "ga" else None, margin=SE_MARGIN)
             label = "SE" if method == "ga" else "SE-grad"
@@ -113,6 +112,16 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
         if "no member in B" in m.name:
             lines.append(f"   {k}: {m.name}")
     return "\n".join(lines)
+
+
+def checkpoint_path(out: Path, method: str, degree: int, quick: bool) -> Path:
+    """Where Table I's SE sweep for ``method`` and ``degree`` keeps its checkpoint under ``out``."""
+    return Path(out) / f"se_{method}_l{degree}_margin{SE_MARGIN:g}{'_quick' if quick else ''}.npz"
+
+
+def checkpoint_paths(out: Path, quick: bool) -> list[Path]:
+    """Every checkpoint Table I's SE sweeps may leave under ``out`` in this mode."""
+    return [checkpoint_path(out, m, d, quick) for d in (2, 3) for m in ("ga", "gradient")]
 
 
 def _dominance(fronts: dict) -> str:

@@ -59,6 +59,7 @@ from ._equilibrium_kernels import (
 )
 from ..core._terms import Structure, Term
 from ..core._validation import as_1d_finite, check_per_point
+from ..core._reprs import short_repr
 
 __all__ = [
     "cluster_key",
@@ -182,6 +183,8 @@ class ClusterMap:
     def max_y_power(self) -> int:
         """Largest output power over the clusters."""
         return max((p for p, _ in self.keys), default=0)
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 @lru_cache(maxsize=256)
@@ -623,6 +626,8 @@ class Reached:
                        f"{SETTLE_STEPS} steps")
             out.append(f"ū = {u:g}: {why}" if isinstance(u, float) else f"ū = {u}: {why}")
         return out
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.ndarray, stable: np.ndarray,

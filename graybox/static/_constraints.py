@@ -39,9 +39,8 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
-from typing import Callable, Iterable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Callable, Iterable, Iterator, Mapping, Sequence
 
-import cvxpy as cp
 import numpy as np
 
 from ._curves import StaticCurve
@@ -50,6 +49,10 @@ from ._surfaces import StaticSurface
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
+from ..core._reprs import short_repr
+
+if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it
+    import cvxpy as cp
 
 __all__ = [
     "InfeasibleError",
@@ -232,6 +235,8 @@ class StaticContext:
             raise ValueError(f"{what} needs static points: give them to the constraint or to the estimator")
         return pts
 
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
+
 
 # --------------------------------------------------------------------------------------------
 # affine rows
@@ -298,6 +303,8 @@ class AffineRows:
             scale = np.abs(b) + np.abs(A) @ np.abs(th)
             worst = max(worst, float(np.max(r / np.where(scale > 0, scale, 1.0))))
         return worst
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 # --------------------------------------------------------------------------------------------
@@ -1019,6 +1026,8 @@ class UserConstraint(StaticConstraint):
         return self.name
 
     def _call(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
+        import cvxpy as cp
+
         try:
             n_args = len(inspect.signature(self.fn).parameters)
         except (TypeError, ValueError):
@@ -1037,10 +1046,14 @@ class UserConstraint(StaticConstraint):
 
     def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
         """Largest cvxpy-reported violation at ``theta`` (in the constraint's own units)."""
+        import cvxpy as cp
+
         v = cp.Variable(ctx.n_terms)
         v.value = np.asarray(theta, float)
         return max((float(np.max(c.violation())) for c in self._call(v, ctx)), default=0.0)
 
     def check(self, ctx: StaticContext) -> None:
+        import cvxpy as cp
+
         self._call(cp.Variable(ctx.n_terms), ctx)
 

@@ -9,6 +9,7 @@ import numpy as np
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints
 from ..core._validation import as_1d_finite
+from ..core._reprs import short_repr
 
 __all__ = ["StaticCurve"]
 
@@ -94,3 +95,5 @@ class StaticCurve:
         """The curve sampled at ``ubar`` as static points."""
         ub = np.asarray(ubar, dtype=float)
         return StaticPoints(ub, self(ub), name=self.name)
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape

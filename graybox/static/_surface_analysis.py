@@ -31,6 +31,7 @@ from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name
 from ..core._terms import Structure, Term, check_input_names
 from ..core._validation import renamed
+from ..core._reprs import short_repr
 
 __all__ = [
     "SurfaceClusterMap",
@@ -120,6 +121,8 @@ class SurfaceClusterMap:
     def max_y_power(self) -> int:
         """Largest output power over the clusters."""
         return max((k[0] for k in self.keys), default=0)
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 @lru_cache(maxsize=256)

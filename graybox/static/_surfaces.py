@@ -17,6 +17,7 @@ import numpy as np
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints
 from ..core._validation import check_int
+from ..core._reprs import short_repr
 
 __all__ = ["StaticSurface", "monomial_exponents"]
 
@@ -260,6 +261,8 @@ class StaticSurface:
             mono = "*".join(n if v == 1 else f"{n}^{v}" for n, v in zip(self.input_names, e) if v)
             parts.append(f"{c:.6g}" + (f" {mono}" if mono else ""))
         return " + ".join(parts).replace("+ -", "- ")
+
+    __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
 def _monomials(u: np.ndarray, exponents: Sequence[tuple[int, ...]]) -> np.ndarray:

@@ -1,0 +1,54 @@
+"""Reading records from CSV: a long file in each dialect spreadsheets write, and the bundled plant.
+
+A 10⁶-row file of three columns (time, input, output; ``%.17g``) written as ``,`` with ``.``,
+``;`` with ``,`` (decimal comma) and tab with ``.``; each read by ``load_record_csv`` with the
+dialect detected (median of 3 reads after one warm-up); then ``load_pumping()`` (two files, 4010
+rows). The readers must give the same floats in every dialect (checked here too).
+
+    python benchmarks/bench_csv.py [--rows 1000000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _common import git_rev, machine, timeit  # noqa: E402
+
+import graybox as gb  # noqa: E402
+from graybox.datasets import load_record_csv  # noqa: E402
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rows", type=int, default=1_000_000)
+    args = ap.parse_args()
+    print(f"# {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, {machine()}, git {git_rev()}")
+    rng = np.random.default_rng(0)
+    table = np.column_stack([np.arange(args.rows) * 0.001, rng.standard_normal((args.rows, 2))])
+    got = {}
+    with tempfile.TemporaryDirectory() as d:
+        for name, delim, dec in (("comma, point", ",", "."), ("semicolon, decimal comma", ";", ","),
+                                 ("tab, point", "\t", ".")):
+            p = Path(d) / "x.csv"
+            lines = [delim.join(("t", "u", "y"))]
+            lines += [delim.join(f"{v:.17g}".replace(".", dec) for v in row) for row in table]
+            p.write_text("\n".join(lines) + "\n")
+            size = p.stat().st_size / 1e6
+            t = timeit(lambda: load_record_csv(p, u="u", y="y", time="t"), repeat=3)
+            got[name] = load_record_csv(p, u="u", y="y", time="t")
+            print(f"{name:26s} {args.rows} rows ({size:.1f} MB): {t:.2f} s")
+    first = next(iter(got.values()))
+    assert all(r.u.tobytes() == first.u.tobytes() and r.y.tobytes() == first.y.tobytes() for r in got.values())
+    t = timeit(gb.load_pumping, repeat=20)
+    print(f"load_pumping (bundled, 2 files): {t * 1e3:.1f} ms")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,56 @@
+"""Short reprs for value types: one line that fits a log line, whatever the value holds.
+
+A dataclass's default repr prints every field in full: the arrays of a run, the history of a
+fit, every cell of a grid. :func:`short_repr` prints scalars and short strings as they are and
+summarises the rest (an array by its shape, a long sequence by its length), so ``print(x)``,
+``repr(x)`` in an f-string or a debugger's variable view stay readable.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+
+__all__ = ["short_repr", "summary"]
+
+#: A field's text longer than this is summarised.
+WIDTH = 48
+
+
+def summary(value: object, width: int = WIDTH) -> str:
+    """A short text for one value: itself when short, else its kind and size.
+
+    Parameters
+    ----------
+    value : object
+        Any value.
+    width : int
+        Longest text kept as is (characters).
+    """
+    if isinstance(value, np.ndarray):
+        if value.size <= 4 and value.ndim <= 1:
+            return np.array2string(value, precision=4, separator=", ")
+        return f"<array {'×'.join(map(str, value.shape)) or 'scalar'} {value.dtype}>"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    text = repr(value)
+    if len(text) <= width:
+        return text
+    if isinstance(value, str):
+        return repr(value[: width - 5] + "…")
+    if isinstance(value, Mapping):
+        return f"<{type(value).__name__} of {len(value)} keys>"
+    if isinstance(value, (list, tuple)):
+        return f"<{type(value).__name__} of {len(value)}>"
+    if hasattr(value, "shape") and hasattr(value, "columns"):  # a DataFrame, without importing pandas
+        return f"<{type(value).__name__} {value.shape[0]}×{value.shape[1]}>"
+    first = text.split("(", 1)[0]
+    return f"<{first if first.isidentifier() else type(value).__name__}>"
+
+
+def short_repr(self: object) -> str:
+    """``ClassName(field=summary, …)`` over a dataclass's repr fields: use as ``__repr__ = short_repr``."""
+    parts = [f"{f.name}={summary(getattr(self, f.name))}" for f in dataclasses.fields(self) if f.repr]  # type: ignore[arg-type]
+    return f"{type(self).__name__}({', '.join(parts)})"
