@@ -55,6 +55,7 @@ EXPECTED_WARNINGS: dict[str, list[tuple[type[Warning], str]]] = {
                                 (StaticRangeWarning, r"ū = \[1\.5, 1\.75, 2\.0, 2\.75")],
     "05_constraint_variants.ipynb": [],
     "06_miso.ipynb": [],
+    "07_control.ipynb": [],
 }
 
 
