@@ -70,7 +70,7 @@ def record(system: str, kind: str, noise: float, seed: int, n: int) -> Record:
 
 
 def candidates(system: str) -> Structure:
-    return Candidates(3, 3, degree=2, inputs=SYSTEMS[system][2])
+    return Candidates(3, 3, degree=2, input_names=SYSTEMS[system][2])
 
 
 def select(name: str, cand: Structure, rec: Record, **kw):

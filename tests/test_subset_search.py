@@ -17,7 +17,7 @@ from graybox.selection._forward_regression import CandidateWarning, frols
 # samples in 5, and ERR's first picks are lag-shifted look-alikes of the true terms.
 TWO = Structure(["y(k-1)", "y(k-2)", "u1(k-2)", "u2(k-1)", "u1(k-1)y(k-1)", "u2(k-2)^2"])
 TWO_THETA = np.array([0.6, 0.2, 0.5, -0.4, -0.15, 0.2])
-TWO_CAND = Candidates(3, 3, degree=2, inputs=("u1", "u2"))
+TWO_CAND = Candidates(3, 3, degree=2, input_names=("u1", "u2"))
 
 
 def staircases(seed: int, n: int, hold: int, m: int) -> np.ndarray:
@@ -174,7 +174,7 @@ def test_units_records_methods_and_include():
 def test_exact_refused_beyond_its_candidate_limit_and_budget_reported(monkeypatch):
     rec = two_input_record(0, n=600, noise=0.01)
     with pytest.raises(ValueError, match="search='swap'"):
-        frols(Candidates(5, 5, degree=2, inputs=("u1", "u2")), rec, n_terms=3, search="exact")
+        frols(Candidates(5, 5, degree=2, input_names=("u1", "u2")), rec, n_terms=3, search="exact")
     with pytest.raises(ValueError, match="search"):
         frols(TWO_CAND, rec, n_terms=3, search="best")
     swap = frols(TWO_CAND, rec, n_terms=6, search="swap")
