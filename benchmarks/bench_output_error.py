@@ -68,7 +68,7 @@ def pumping_sets(quick):
     data = gb.load_pumping()
     tests = []
     for s in (7, 8, 9):
-        run = PumpingPlant().simulate(speed_reference(seed=s), rng=np.random.default_rng([s, 2]))
+        run = PumpingPlant().simulate(speed_reference(seed=s), seed=np.random.default_rng([s, 2]))
         tests.append(gb.Record(run.u, run.y, Ts=data.ident.Ts, name=f"plant run {s}"))
     out = []
     for degree, n_terms in ((2, 17),) if quick else ((2, 17), (3, 23)):

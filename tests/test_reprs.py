@@ -61,7 +61,7 @@ def test_runs_specs_and_grids_are_short():
     from graybox.experiments import EXAMPLE_SPEC, Grid
 
     plant = PumpingPlant()
-    run = plant.simulate(np.full(400, 1000.0), rng=0)
+    run = plant.simulate(np.full(400, 1000.0), seed=0)
     _short(run)
     grid = Grid.from_toml_text(EXAMPLE_SPEC)
     _short(grid)
