@@ -134,7 +134,7 @@ def test_failures_are_kept_with_their_reason(data):
     assert "failure" in boot.reference
     assert np.all(np.isnan(boot.lambda1)) and not boot.in_band.any() and boot.rules == ("", "", "")
     assert np.isnan(boot.agreement)
-    assert list(boot.to_frame()["failure"].str.startswith("ValueError")) == [True] * 3
+    assert list(boot.to_frame()["failure"].str.startswith("InfeasibleError")) == [True] * 3  # a ValueError
     fb = run(data, band=1e-9, fallback="min_jsf", n_boot=3)
     assert not fb.failures and fb.rules == ("min J_SF",) * 3 and not fb.in_band.any()
 

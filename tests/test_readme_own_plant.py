@@ -47,8 +47,8 @@ def test_your_own_plant_runs_end_to_end(tmp_path, monkeypatch):
     # what the text says: the black box misses the steady states, the gray box meets them at a
     # dynamic cost of the same order
     black, gray = table.loc["black box"], table.loc["gray box"]
-    assert black["J_SF"] > 100 * gray["J_SF"] and gray["J_SF"] <= 0.05
-    assert gray["J_S valid"] < 2 * black["J_S valid"]
+    assert black["JSF"] > 100 * gray["JSF"] and gray["JSF"] <= 0.05
+    assert gray["JS_valid"] < 2 * black["JS_valid"]
     assert (tmp_path / "free_run.png").stat().st_size > 0 and (tmp_path / "static.png").stat().st_size > 0
     again = ns["model"]
     assert np.array_equal(again.theta, ns["gray"].theta) and again.structure == ns["gray"].structure
