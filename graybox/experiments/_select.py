@@ -481,8 +481,15 @@ def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progres
         kw = dict(workers=workers or 2, processes=True)
     elif not any(v is not None for v in kw.values()):
         kw["workers"] = 2
+    # the slow fronts first, largest structures first: the workers finish together
+    order = sorted(range(len(jobs)), key=lambda i: (jobs[i].estimator not in SLOW_ESTIMATORS,
+                                                     -jobs[i].terms.count(" + ")))
     with parallel_map(**kw) as pmap:
-        return pmap(_score_job, jobs)
+        done = pmap(_score_job, [jobs[i] for i in order])
+    out: list = [None] * len(jobs)
+    for i, r in zip(order, done):
+        out[i] = r
+    return out
 
 
 # -- 4. choice ---------------------------------------------------------------------------------
@@ -578,7 +585,7 @@ def select_graybox(
     rule: str = "one-se",
     blocks: int = 5,
     folds: int = 3,
-    shortlist: int | None = 6,
+    shortlist: int | None = None,
     include: Sequence[str] = ("1",),
     fallback: str | None = None,
     executor: str | None = None,
@@ -633,10 +640,11 @@ def select_graybox(
         fewer, with a :class:`SelectionWarning`, when the record is too short for them).
     folds : int
         Contiguous folds when there is no validation record (>= 2); each fold is one block.
-    shortlist : int or None
-        With PE (or a black-box estimator) among the estimators, the SE estimators (seconds per
-        structure) fit only the ``shortlist`` structures those rank best (in band first, then by
-        J_S on the choosing data); None: every structure.
+    shortlist : int, optional
+        Faster, less thorough: with PE (or a black-box estimator) among the estimators, the SE
+        estimators (seconds per structure) fit only the ``shortlist`` structures those rank best
+        (in band first, then by J_S on the choosing data). Default: every structure (PE's ranking
+        does not predict SE's: BENCHMARKS.md, honest selection).
     include : sequence of str
         Terms in every structure (default the constant, which eq. (22)-style static fits need).
     fallback : {None, "min_jsf"}
