@@ -382,3 +382,14 @@ def test_worker_processes_give_the_same_choice(data):
                                   executor="processes", workers=2)
     pd.testing.assert_frame_equal(here.table, there.table)
     np.testing.assert_array_equal(here.model.theta, there.model.theta)
+
+
+def test_a_shortlist_fits_se_on_the_structures_pe_ranks_best(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[2, 3, 5], shortlist=1)
+    t = res.table
+    se = t[t["estimator"] == "se-gradient"]
+    pe = t[(t["estimator"] == "pe") & t["in_band"]]
+    assert len(se) == 1 and len(t[t["estimator"] == "pe"]) >= 2
+    assert se.index[0] == pe["JS_valid"].idxmin()  # the structure PE ranks first
