@@ -393,3 +393,16 @@ def test_a_shortlist_fits_se_on_the_structures_pe_ranks_best(data):
     pe = t[(t["estimator"] == "pe") & t["in_band"]]
     assert len(se) == 1 and len(t[t["estimator"] == "pe"]) >= 2
     assert se.index[0] == pe["JS_valid"].idxmin()  # the structure PE ranks first
+
+
+def test_a_black_box_selection_without_static_points_round_trips(data, tmp_path):
+    """A Dataset without static points: the black box search runs, J_SF is NaN, and the result
+    (degree None, band inf) saves and loads."""
+    bare = gb.Dataset(data.ident, data.valid, None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), bare, sizes=[3, 4])
+    assert res.table["JSF"].isna().all() and res.degree is None and res.band == np.inf
+    back = gb.load(gb.save(res, tmp_path / "sel.json"), expect=gb.GrayboxSelection)
+    assert back.degree is None and back.band == np.inf and list(back.structure) == list(res.structure)
+    pd.testing.assert_frame_equal(back.table, res.table, check_dtype=False)
