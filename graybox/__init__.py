@@ -21,7 +21,7 @@ from ._api import __version__
 #: Subpackages reachable as attributes, loaded on first use.
 _SUBMODULES = ("plots", "experiments", "reproduce")
 #: Names of the experiment layer re-exported at the top.
-_EXPERIMENT_NAMES = ("GrayboxSelection", "load_results", "select_graybox")
+_EXPERIMENT_NAMES = ("GrayboxSelection", "SelectionWarning", "load_results", "select_graybox")
 
 __all__ = sorted([*_api.__all__, *_SUBMODULES, *_EXPERIMENT_NAMES, "__version__"])
 

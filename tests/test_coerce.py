@@ -291,10 +291,13 @@ def test_an_old_graybox_selection_file_loads_with_in_band(results):
     dec = results["Decision"]
     table = pd.DataFrame({"source": ["semp"], "size": [6], "n_terms": [6], "added": [""], "estimator": ["pe"],
                           "JS_valid": [dec.JS], "JSF": [dec.JSF], "in_band": [dec.in_band], "rank": [1]})
-    sel = gb.experiments.GrayboxSelection(dec.model.structure, dec.model, dec, table, 2, BAND, dec.in_band, "store.sqlite")
+    sel = gb.experiments.GrayboxSelection(dec.model.structure, dec.model, dec, table, 2, BAND, dec.in_band, "min")
     doc = json.loads(gb.to_json(sel))
     doc["object"]["fallback"] = not doc["object"].pop("in_band")  # the old, inverted field
-    assert gb.from_json(json.dumps(doc)).in_band == dec.in_band
+    del doc["object"]["rule"]  # written before the fit / choose / test protocol: it chose by the smallest J_S
+    doc["object"]["store"] = "store.sqlite"  # it named the store its cells ran in
+    back = gb.from_json(json.dumps(doc))
+    assert back.in_band == dec.in_band and back.rule == "min" and not hasattr(back, "store")
 
 
 # -- cluster names round-trip ---------------------------------------------------------------------

@@ -316,7 +316,7 @@ def test_a_graybox_selection_round_trips_with_its_table(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         sel = gb.select_graybox(gb.Candidates(ny=2, nu=1, degree=2), rec, static, band=1.0, sizes=[3, 4],
-                                estimator="pe", folds=2, store=tmp_path / "s.sqlite")
+                                estimator="pe", folds=2)
     assert len(sel.table) >= 2 and {"JS_valid", "in_band", "rank"} <= set(sel.table.columns)
     p = gb.save(sel, tmp_path / "sel.json", units=("rpm", "mlc"))
     back = gb.load(p, expect=gb.GrayboxSelection)

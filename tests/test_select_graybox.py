@@ -1,8 +1,9 @@
-"""select_graybox: gray-box structure selection through the experiment layer."""
+"""select_graybox: structure selection chosen on data it was not fitted on, reported on a test record."""
 
 import warnings
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import graybox as gb
@@ -31,7 +32,7 @@ def data():
 def test_selects_a_structure_in_the_band_and_reports_everything(data, tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5], store=tmp_path / "s.sqlite")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5])
     assert res.decision.in_band and res.decision.JSF <= 1e-3
     assert res.degree == 2  # a quadratic static curve: the points ask for degree 2
     # every structure tried is a row; the chosen one is rank 1 and carries Σ0, Σu, Σu², Σy
@@ -40,21 +41,41 @@ def test_selects_a_structure_in_the_band_and_reports_everything(data, tmp_path):
     assert {(0, 0), (0, 1), (0, 2), (1, 0)} <= keys
     # the decision was made on the validation record: the chosen member's validation J_S is the
     # smallest among the in-band members of the refitted front
-    ev = gb.evaluate({"m": res.model}, data)
-    assert ev.loc["m", "JS_valid"] == pytest.approx(res.decision.JS, rel=1e-9)
-    assert ev.loc["m", "JS_valid"] < 10 * 0.02**2 * 10  # near the noise level
-    # the cells are in a real store, one per structure
-    df = gb.load_results(res.store)
-    assert len(df) == len(res.table) and set(df["status"]) == {"ok"}
+    # (every row is scored on the same samples: from the candidates' largest lag on)
+    js_valid = gb.mse(data.valid.y, res.model.simulate(data.valid), start=3)
+    assert js_valid == pytest.approx(res.decision.JS, rel=1e-9)
+    assert js_valid < 10 * 0.02**2 * 10  # near the noise level
+    # the rule chose the fewest terms among the rows within one standard error of the best
+    ok = res.table[res.table["eligible"]]
+    assert res.rule == "one-se" and len(res.structure) == ok["n_terms"].min()
+    assert res.table["JS_valid"][res.table["in_band"]].min() == pytest.approx(
+        res.table.loc[res.table["vs_best"] == 0, "JS_valid"].min())
 
 
 def test_folds_when_there_is_one_record(data):
+    """One record: each fold refits and scores its held-out segment; the model is refitted on it all."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data.ident, data.static, band=1e-3, sizes=[5], folds=3)
-    df = gb.load_results(res.store)
-    assert set(df["data"]) == {"fold1", "fold2", "fold3"}
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data.ident, data.static, band=1e-3, sizes=[5],
+                                folds=3, estimator="pe")
     assert res.decision.JSF <= 1e-3
+    # the choosing score is the mean of the folds' held-out J_S of that λ's members, fitted without the fold
+    lam = res.decision.lambda1
+    st = res.structure
+    n = len(data.ident)
+    edges = np.linspace(0, n, 4).astype(int)
+    sse = count = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        for a, b in zip(edges[:-1], edges[1:]):
+            fit = gb.Record(np.r_[data.ident.u[:a], data.ident.u[b:]], np.r_[data.ident.y[:a], data.ident.y[b:]])
+            th = gb.pe_thetas(st, fit, data.static, lambdas=[lam], solver="closed")[0]
+            held = data.ident.slice(a, b)
+            e = held.y[3:] - gb.Model(st, th).simulate(held)[3:]  # from the candidates' largest lag on
+            sse, count = sse + e @ e, count + e.size
+        full = gb.pe_thetas(st, data.ident, data.static, lambdas=[lam], solver="closed")[0]
+    assert res.chosen["JS_valid"] == pytest.approx(sse / count, rel=1e-6)
+    np.testing.assert_allclose(res.model.theta, full, rtol=1e-9)
 
 
 def test_band_no_structure_reaches_is_an_error_or_an_explicit_fallback(data):
@@ -64,26 +85,36 @@ def test_band_no_structure_reaches_is_an_error_or_an_explicit_fallback(data):
         with pytest.raises(ValueError, match="no structure meets the band.*smallest J_SF reached"):
             gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, far, band=1e-6, sizes=[5])
         res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, far, band=1e-6, sizes=[5], fallback="min_jsf")
-    assert not res.in_band and not res.decision.in_band
+    assert res.fallback and not res.decision.in_band
 
 
 def test_bad_input(data):
-    with pytest.raises(ValueError, match="cannot represent a degree-2 static curve"):
-        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=1), data, band=1e-3, sizes=[3])
+    with pytest.warns(gb.SelectionWarning, match="asks for a degree-2 curve, the candidates carry degree 1"):
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=1), data, band=1e-3, sizes=[3], fallback="min_jsf")
+    assert res.degree == 1
     short = gb.Dataset(data.ident, data.valid.slice(0, 3), data.static)
     with pytest.raises(ValueError, match="fewer than max lag|shorter"):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), short, band=1e-3, sizes=[3])
     with pytest.raises(ValueError, match="estimator"):
-        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, estimator="ls")
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, estimator="oe-magic")
+    with pytest.raises(ValueError, match="give band="):
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, estimator="pe")
+    with pytest.raises(ValueError, match="a band needs static information"):
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data.ident, band=1e-3)
+    with pytest.raises(ValueError, match=r"sizes \[40\] exceed the 28 candidate"):
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5, 40])
+    with pytest.raises(ValueError, match="the validation record is the identification record"):
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), gb.Dataset(data.ident, data.ident, data.static),
+                          band=1e-3)
 
 
-def test_several_estimators_score_every_structure_and_the_best_pair_wins(data, tmp_path):
+def test_several_estimators_score_every_structure_and_the_best_pair_wins(data):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5],
-                                estimator=("pe", "se-gradient"), store=tmp_path / "s.sqlite")
+                                estimator=("pe", "se-gradient"), rule="min")
         single = {e: gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5],
-                                       estimator=e, store=tmp_path / f"{e}.sqlite") for e in ("pe", "se-gradient")}
+                                       estimator=e, rule="min") for e in ("pe", "se-gradient")}
     # one row per structure and estimator, each structure scored by both
     assert set(res.table["estimator"]) == {"pe", "se-gradient"}
     assert res.table.groupby(level=0).size().eq(2).all()
@@ -95,18 +126,17 @@ def test_several_estimators_score_every_structure_and_the_best_pair_wins(data, t
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, estimator=("pe", "pe"))
 
 
-def test_constraints_are_imposed_by_pe_and_refused_for_se(data, tmp_path):
+def test_constraints_are_imposed_by_pe_and_refused_for_se(data):
     """With constraints the default scores with PE alone (the estimator that imposes them); naming an
     SE estimator with them is an error, not a silent unconstrained model."""
     gain = gb.GainBounds(lower=0.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5],
-                                constraints=[gain], store=tmp_path / "c.sqlite")
+                                constraints=[gain])
     assert set(res.table["estimator"]) == {"pe"} and res.decision.in_band
-    df = gb.load_results(res.store)
-    assert set(df["estimator"]) == {"pe"} and set(df["status"]) == {"ok"}
-    assert [c["type"] for c in df.attrs["spec"]["variants"][0]["constraints"]] == ["gain"]  # the cells imposed it
+    ub = np.linspace(data.static.ubar.min(), data.static.ubar.max(), 9)
+    assert np.all(res.model.static_gain(ub) >= -1e-7)  # the fits imposed it
     with pytest.raises(ValueError, match="constraints are imposed by PE only; se-gradient"):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5], constraints=[gain],
                           estimator=("pe", "se-gradient"))
@@ -117,14 +147,13 @@ def test_constraints_are_imposed_by_pe_and_refused_for_se(data, tmp_path):
     [{"type": "clusters", "bounds": {"Sy": {"upper": 0.999}}}], gb.StaticBand(0.05) & gb.GainBounds(lower=0.0),
 ], ids=["equality", "points", "band", "gain", "clusters", "object"])
 def test_every_constraint_variant(data, constraints):
-    """Every constraint variant runs in the cells and in the refit of the chosen structure (an
+    """Every constraint variant runs in the fits and in the refit of the chosen structure (an
     equality's curve is fitted to the static points there too; one object needs no list)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5],
                                 constraints=constraints)
     assert res.decision.in_band and res.decision.JSF <= 1e-3
-    assert set(gb.load_results(res.store)["status"]) == {"ok"}
     if isinstance(constraints, list) and constraints[0]["type"] in ("equality", "points"):
         # the static curve passes through the points' curve: J_SF far inside the band
         assert res.decision.JSF < 1e-6
@@ -205,3 +234,175 @@ def test_constraints_given_as_a_generator_reach_the_refit(data):
         res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[5],
                                 constraints=(c for c in [{"type": "points"}]))
     assert res.decision.JSF < 1e-6  # the refit passes through the points: the constraint was imposed
+
+
+# -- the honest protocol: a test record, black boxes, defaults on small problems ----------------------
+
+def test_a_test_record_is_reported_and_never_chooses(data):
+    """The table gets test columns; the choice (structure, estimator, member, every choosing figure)
+    is the same with and without the test record."""
+    test = plant(3, n=2000)
+    cand = gb.Candidates(3, 3, ne=0, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with_test = gb.select_graybox(cand, data, band=1e-3, sizes=[2, 3, 5], test=test)
+        without = gb.select_graybox(cand, data, band=1e-3, sizes=[2, 3, 5])
+    assert {"JS_test", "JSF_test"} <= set(with_test.table.columns)
+    assert not {"JS_test", "JSF_test"} & set(without.table.columns)
+    assert list(with_test.structure) == list(without.structure)
+    np.testing.assert_array_equal(with_test.model.theta, without.model.theta)
+    pd.testing.assert_frame_equal(with_test.table.drop(columns=["JS_test", "JSF_test"]), without.table)
+    # the test figures are the refitted models' own: the chosen row's J_S on the test record
+    L = 3  # the candidates' largest lag: every row is scored on the same samples
+    sim = with_test.model.simulate(test)
+    assert with_test.chosen["JS_test"] == pytest.approx(gb.mse(test.y, sim, start=L), rel=1e-9)
+    assert with_test.chosen["JSF_test"] == pytest.approx(gb.jsf(with_test.model, data.static), rel=1e-6)
+
+
+def test_a_test_record_must_be_new_data(data):
+    cand = gb.Candidates(3, 3, ne=0, degree=2)
+    copy = gb.Record(data.valid.u.copy(), data.valid.y.copy(), name="a copy")
+    for rec, which in ((data.ident, "identification"), (data.valid, "validation"), (copy, "validation")):
+        with pytest.raises(ValueError, match=f"the test record is the {which} record"):
+            gb.select_graybox(cand, data, band=1e-3, sizes=[3], test=rec)
+    with pytest.raises(ValueError, match=r"test record \(4 samples\) is shorter than the candidates' lags \+ 2"):
+        gb.select_graybox(cand, data, band=1e-3, sizes=[3], test=data.valid.slice(0, 4))
+    with pytest.raises(ValueError, match="test must be a Record"):
+        gb.select_graybox(cand, data, band=1e-3, sizes=[3], test=data)
+
+
+def test_without_a_band_the_search_picks_a_black_box(data):
+    """No band: LS and ELS fits chosen by J_S alone; J_SF only reported; the model is the LS/ELS fit."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, sizes=[3, 5], test=plant(4))
+    assert set(res.table["estimator"]) == {"ls", "els"} and res.degree is None and res.band == np.inf
+    assert res.table["added"].eq("").all() and res.table["in_band"].all()
+    assert res.table["lambda1"].isna().all()
+    row = res.chosen
+    if row["estimator"] == "ls":
+        np.testing.assert_allclose(res.model.theta, gb.els(res.structure, data.ident, noise=0).model.theta,
+                                   rtol=1e-9)
+    assert gb.mse(data.valid.y, res.model.simulate(data.valid), start=3) == pytest.approx(row["JS_valid"], rel=1e-6)
+    assert row["JS_test"] < 10 * 0.02**2 * 10
+    # the true structure's five terms are within the compared rows, and the black box is close to the noise
+    assert res.decision.in_band and np.isnan(res.decision.lambda1)
+
+
+@pytest.mark.parametrize("rule", ["one-se", "min"])
+def test_the_rule_chooses_among_the_in_band_rows(data, rule):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[2, 3, 5, 8], rule=rule,
+                                estimator="pe")
+    t = res.table
+    inb = t[t["in_band"]]
+    if rule == "min":
+        assert res.chosen["JS_valid"] == inb["JS_valid"].min()
+    else:
+        # eligible: within one standard error (per-block log ratio) of the best row; the choice has the fewest terms
+        assert (inb["eligible"] == (inb["vs_best"] <= inb["vs_best_se"].fillna(0))).all()
+        assert res.chosen["n_terms"] == inb[inb["eligible"]]["n_terms"].min()
+        assert res.chosen["JS_valid"] >= inb["JS_valid"].min()
+    assert list(t["rank"]) == list(range(1, len(t) + 1))
+
+
+def test_a_short_validation_record_makes_fewer_blocks_and_says_so(data):
+    with pytest.warns(gb.SelectionWarning, match="make 2 block"):
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), gb.Dataset(data.ident, data.valid.slice(0, 30),
+                                                                                 data.static),
+                                band=1e-3, sizes=[3], estimator="pe")
+    assert res.rule == "one-se"
+    with pytest.warns(gb.SelectionWarning, match="with one block the rule is 'min'"):
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), gb.Dataset(data.ident, data.valid.slice(0, 15),
+                                                                                 data.static),
+                                band=1e-3, sizes=[3], estimator="pe")
+    assert res.rule == "min"
+
+
+def _first_order(seed, n=600):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.5, 2.0, n // 20 + 1), 20)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):  # y = 0.7 y + 0.2 u + 0.05 u²: a rational-free first-order plant
+        y[k] = 0.7 * y[k - 1] + 0.2 * u[k - 1] + 0.05 * u[k - 1] ** 2
+    return gb.Record(u, y + 0.002 * rng.standard_normal(n), name=f"first order {seed}")
+
+
+def test_defaults_on_a_small_problem():
+    """Candidates(ny=2, nu=2, degree=2) with the default sizes, and static points that a cubic fits
+    better than the band while a quadratic does not: a warning (the candidates carry degree 2), no
+    refusal, and a model in the band."""
+    ub = np.linspace(0.5, 2.0, 8)
+    yb = (0.2 * ub + 0.05 * ub**2) / 0.3 + 0.01 * ub**3  # a small cubic part the quadratic fit misses
+    static = gb.StaticPoints(ub, yb)
+    from graybox.static._form_check import static_fit_mse
+    band = static_fit_mse(static, 2) / 10
+    assert static_fit_mse(static, 3) < band  # the band asks for degree 3; the candidates have degree 2
+    data = gb.Dataset(_first_order(1), _first_order(2), static)
+    with pytest.warns(gb.SelectionWarning, match="asks for a degree-3 curve, the candidates carry degree 2"):
+        res = gb.select_graybox(gb.Candidates(ny=2, nu=2, degree=2), data, band=band, fallback="min_jsf")
+    assert res.degree == 2 and len(res.table) >= 2
+    assert res.table["size"].max() <= len(gb.Candidates(ny=2, nu=2, degree=2).process)
+
+
+def test_sizes_a_search_does_not_reach_are_left_out_with_a_warning(data):
+    """An identification record at one input level: u, u² and the constant are one column, so FROLS
+    stops before the candidates run out; the size it did not reach is named, the others are scored."""
+    cand = gb.Candidates(1, 1, ne=0, degree=2)  # y, u, y², yu, u² and the constant
+    rng = np.random.default_rng(5)
+    y = np.zeros(600)
+    for k in range(1, 600):
+        y[k] = 0.5 * y[k - 1] + 0.3 + 0.05 * rng.standard_normal()
+    flat = gb.Dataset(gb.Record(np.ones(600), y), data.valid, data.static)
+    with pytest.warns(gb.SelectionWarning, match=r"sizes no search reached are left out: frols: \[6\]"):
+        res = gb.select_graybox(cand, flat, band=1e3, sizes=[2, 6], sources=("frols",), estimator="pe")
+    assert list(res.table["size"]) == [2]
+
+
+def test_nothing_is_written_to_disk(data, tmp_path, monkeypatch):
+    """No store, no temporary file: the temporary folder is left as it was."""
+    import tempfile
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.chdir(tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5])
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, sizes=[3])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_worker_processes_give_the_same_choice(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        here = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5], estimator="pe")
+        there = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5], estimator="pe",
+                                  executor="processes", workers=2)
+    pd.testing.assert_frame_equal(here.table, there.table)
+    np.testing.assert_array_equal(here.model.theta, there.model.theta)
+
+
+def test_a_shortlist_fits_se_on_the_structures_pe_ranks_best(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[2, 3, 5], shortlist=1)
+    t = res.table
+    se = t[t["estimator"] == "se-gradient"]
+    pe = t[(t["estimator"] == "pe") & t["in_band"]]
+    assert len(se) == 1 and len(t[t["estimator"] == "pe"]) >= 2
+    assert se.index[0] == pe["JS_valid"].idxmin()  # the structure PE ranks first
+
+
+def test_a_black_box_selection_without_static_points_round_trips(data, tmp_path):
+    """A Dataset without static points: the black box search runs, J_SF is NaN, and the result
+    (degree None, band inf) saves and loads."""
+    bare = gb.Dataset(data.ident, data.valid, None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), bare, sizes=[3, 4])
+    assert res.table["JSF"].isna().all() and res.degree is None and res.band == np.inf
+    back = gb.load(gb.save(res, tmp_path / "sel.json"), expect=gb.GrayboxSelection)
+    assert back.degree is None and back.band == np.inf and list(back.structure) == list(res.structure)
+    pd.testing.assert_frame_equal(back.table, res.table, check_dtype=False)

@@ -27,7 +27,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "_report": ("RULES", "GridStatus", "grid_status", "heatmap_table", "leaderboard", "plot_fronts", "plot_heatmap", "plot_scatter", "write_report"),
     "_map": ("parallel_map",),
     "_run": ("GridRun", "run_grid"),
-    "_select": ("GrayboxSelection", "select_graybox"),
+    "_select": ("BLACK_BOX_ESTIMATORS", "GRAY_BOX_ESTIMATORS", "GrayboxSelection", "SelectionWarning", "select_graybox"),
     "_spec": ("BUNDLED", "CONSTRAINT_TYPES", "DECISION_RULES", "ESTIMATORS", "Cell", "DataSpec", "DecisionRule", "Grid",
               "SpecError", "StructureSpec", "Variant"),
     "_store": ("StoreError", "compare_results", "load_results", "store_specs"),

@@ -1,35 +1,41 @@
-"""Gray-box structure selection: choose the terms with the static information and the free run.
+"""Structure selection that says how its choice will do on data nothing was chosen on.
 
-:func:`select_graybox` makes a family of candidate structures, gives each one what the static
-information needs, fits every structure's gray-box front through the experiment layer (in the
-driver, in local processes or on a Dask cluster) and picks by D_SF on validation data:
+:func:`select_graybox` makes a family of candidate structures, fits each with one or more
+estimators, scores every member on data the fit never saw, and chooses by a rule that accounts
+for the spread of that score. Its phases (one function each below):
 
-1. **structures** — for each size in ``sizes``, the best structure of that size on the SEMP path
-   (:func:`graybox.semp`: simulation error with pruning) and the FROLS structure of that size;
-2. **static form** — the degree d the static information asks for (:func:`static_degree`: the
-   smallest polynomial fitting the static points within the band), and for each structure the
-   simplest candidates of the clusters Σ_{u^0} … Σ_{u^d}, Σ_y it lacks (:func:`static_terms`);
-3. **scoring** — every structure × each gray-box estimator (PE closed form by default, or SE), one
-   grid cell per structure and validation fold; each cell's Pareto members are scored on the
-   validation record, and a structure's score is D_SF on validation: the smallest validation J_S
-   among its members with J_SF ≤ B (averaged over folds);
-4. **choice** — the structure with the smallest score among those that meet the band, refitted on
-   all the identification data, its member chosen by D_SF on the validation record (with folds: on
-   the identification record).
+1. **inputs** (:func:`_inputs`) — the records and their jobs: *fit* on the identification record,
+   *choose* on the validation record (cut into contiguous blocks) or, with one record only, on k
+   contiguous folds of it (refitting per fold), and *report* on an optional test record that no
+   step of the choice reads;
+2. **structures** (:func:`_structures`) — for each size, the best structure of that size on the
+   SEMP path (:func:`graybox.semp`) and the FROLS structure of that size, completed (gray box)
+   with the simplest terms the static curve's form needs (:func:`static_terms`);
+3. **scoring** (:func:`_score_job`, one job per structure × estimator, in the driver or on the
+   experiment layer's executors) — every member's free-run J_S on each block, its J_SF, and its
+   J_S on the test record;
+4. **choice** (:func:`_choose`) — per row the member chosen by D_SF on the choosing data (the
+   smallest J_S among the members with J_SF ≤ B; a black box has one member), then the row: with
+   ``rule="one-se"`` the fewest parameters among the rows whose per-block log ratio of J_S to the
+   best row's is, on average, within one standard error of zero; with ``rule="min"`` the smallest
+   J_S;
+5. **refit** — the chosen row's member fitted on all the identification data.
 
-Validation data: the Dataset's validation record, or — when there is only one record — k folds of
-contiguous segments of it (each fold validates on one segment and identifies on the others, which
-are joined: the max-lag samples after a joint are a short transient of the identification data).
+The winner of many candidates scored on one short record is optimistic on that record (the
+winner's curse); the blocks measure how much of its lead is noise, and the rule gives the lead
+to the simpler structure when it is. The test columns measure what the choice is worth.
+
+Without static information (no ``band``) the same search picks a black box: LS and ELS fits,
+chosen by J_S alone.
 """
 
 from __future__ import annotations
 
-import os
-import tempfile
+import functools
+import re
 import warnings
-from dataclasses import dataclass
-from pathlib import Path
-from typing import Any, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -37,15 +43,44 @@ import pandas as pd
 from .. import _api as gb
 
 from ..io._json import register_type
-from ..static._form_check import static_degree, static_fit_mse, static_terms
-from ..core._validation import check_choice, check_int, check_real
-from ._report import leaderboard
-from ._run import run_grid
+from ..static._form_check import carried_degree, static_degree, static_fit_mse, static_terms
+from ..core._simulation_kernels import encode, record_inputs, simulate_batch
+from ..core._progress import progress_bar
+from ..core._validation import check_choice, check_int, check_real, warn
 from ._cell import cell_constraints
-from ._spec import DataSpec, DecisionRule, Grid, StructureSpec, Variant, constraint_entries, constraint_from_object
-from ._store import load_results
+from ._map import parallel_map
+from ._spec import constraint_entries, constraint_from_object
 
-__all__ = ["select_graybox", "GrayboxSelection"]
+__all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_ESTIMATORS", "BLACK_BOX_ESTIMATORS"]
+
+
+class SelectionWarning(UserWarning):
+    """select_graybox took an explicit fallback (fewer blocks, sizes a search did not reach, a
+    lower static degree than the points ask for); the message says which."""
+
+
+#: Estimators that trade J_S against J_SF along λ1 (a front per structure).
+GRAY_BOX_ESTIMATORS = ("pe", "se-gradient", "se-ga")
+#: Estimators of one model per structure, chosen by J_S alone. An output-error (simulation-error,
+#: no static points) estimator joins here: one entry in ``_BLACK_BOX_FITS``.
+BLACK_BOX_ESTIMATORS = ("ls", "els")
+RULES = ("one-se", "min")
+#: Estimators whose fronts cost seconds per structure: run on the shortlist the others rank best.
+SLOW_ESTIMATORS = ("se-gradient", "se-ga")
+
+
+def _fit_ls(st: gb.Structure, rec: gb.Record) -> np.ndarray:
+    return np.asarray(gb.els(st, rec, noise=0).model.theta, float)
+
+
+def _fit_els(st: gb.Structure, rec: gb.Record) -> np.ndarray:
+    m = gb.els(st, rec).model
+    # the process part only: a free run sets the noise terms to zero
+    return np.array([th for t, th in zip(m.structure, m.theta) if not t.is_noise], float)
+
+
+#: name -> fit(process structure, identification record) -> θ of the process terms.
+_BLACK_BOX_FITS: dict[str, Callable[[gb.Structure, gb.Record], np.ndarray]] = {"ls": _fit_ls, "els": _fit_els}
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,36 +92,44 @@ class GrayboxSelection:
     structure : Structure
         The chosen structure (static-form terms included).
     model : Model
-        Its gray-box model, refitted on all the identification data and chosen by D_SF.
+        Its model, refitted on all the identification data (gray box: the member chosen by D_SF
+        on the choosing data).
     decision : Decision
-        How that member was chosen from its Pareto set.
+        How that member was chosen (``JS`` is its J_S on the choosing data).
     table : pandas.DataFrame
-        Everything tried, one row per structure and estimator: ``structure`` (name), ``source``
-        (semp / frols), ``size`` (terms before the static terms), ``n_terms``, ``added`` (static-form
-        terms added), ``estimator``, ``JS_valid`` (D_SF on validation, mean over folds), ``JSF`` (its static error, worst fold),
-        ``in_band`` (the band met in every fold), ``rank``, ``reason`` (why a structure has no
-        qualifying model: the smallest J_SF reached, the sample where a free run diverged, the
-        error of a failed cell; empty when it qualified).
-    degree : int
-        Degree of the static curve the static information asks for.
+        Everything compared, one row per structure and estimator: ``source`` (semp / frols),
+        ``size`` (terms before the static terms), ``n_terms``, ``added`` (static-form terms),
+        ``estimator``, ``lambda1`` (of the member chosen, NaN for a black box), ``JS_valid``
+        (its J_S on the choosing data: the validation record, or all the folds' held-out samples;
+        every row's errors counted from the candidates' largest lag on, the same samples for all), ``JSF``
+        (its static error, worst fold; NaN without static points), ``in_band``, ``vs_best`` and
+        ``vs_best_se`` (mean per-block log ratio of its J_S to the best row's, and its standard
+        error), ``eligible`` (the rule could choose it), ``rank`` (1: the choice); with a test
+        record also ``JS_test`` (its refitted model's J_S there) and ``JSF_test`` (that model's
+        J_SF). Nothing in the test columns took part in the choice. ``reason``: why a row has no
+        qualifying model (every member failed or diverged; the smallest J_SF reached when the band is
+        missed); empty when it has one.
+    degree : int or None
+        Degree of the static curve the static information asks for (None for a black box).
     band : float
-        B (output units²).
+        B (output units²); inf for a black box (no static constraint).
     in_band : bool
         Whether the chosen structure met the band (the name :class:`Decision` and
         :class:`DSFResult` use); False when none did and ``fallback="min_jsf"`` chose the
         smallest J_SF.
-    store : str
-        The SQLite store holding every cell (kept: the fronts can be drawn from it later).
+    rule : str
+        The rule that chose (``"one-se"`` or ``"min"``; ``"min"`` also when one block only could
+        be cut).
     """
 
     structure: gb.Structure
     model: gb.Model
     decision: gb.Decision
     table: pd.DataFrame
-    degree: int
+    degree: int | None
     band: float
     in_band: bool
-    store: str
+    rule: str
 
     #: Columns every table holds (a loaded file is checked against them).
     TABLE_COLUMNS = ("source", "size", "n_terms", "added", "estimator", "JS_valid", "JSF", "in_band", "rank")
@@ -99,16 +142,59 @@ class GrayboxSelection:
             raise ValueError(f"the table lacks the column(s) {missing}")
         if list(self.model.structure) != list(self.structure):
             raise ValueError("the model's structure is not the chosen structure")
-        check_real(self.band, "band", low=0, low_open=True)
+        if not (isinstance(self.band, (int, float)) and self.band > 0):
+            raise ValueError(f"band must be > 0 (inf for a black box), got {self.band!r}")
+        check_choice(self.rule, "rule", RULES)
+
+    @property
+    def chosen(self) -> pd.Series:
+        """The table's row of the choice."""
+        return self.table[self.table["rank"] == 1].iloc[0]
 
     def __repr__(self) -> str:
-        return (f"GrayboxSelection(n_terms={len(self.structure)}, structures tried={len(self.table)}, "
-                f"JS_valid={self.table['JS_valid'].min():.4g}, in_band={self.in_band})")
+        row = self.chosen
+        test = f", J_S test={row['JS_test']:.4g}" if "JS_test" in self.table else ""
+        return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, rule={self.rule!r}, "
+                f"J_S valid={row['JS_valid']:.4g}{test}, in_band={self.in_band})")
 
 
 register_type("GrayboxSelection", GrayboxSelection,
               (("structure", "structure"), ("model", "Model"), ("decision", "Decision"), ("table", "frame"),
-               ("degree", "int"), ("band", "float"), ("in_band", "bool"), ("store", "str")))
+               ("degree", "int_or_none"), ("band", "float"), ("in_band", "bool"), ("rule", "str")))
+
+
+# -- 1. inputs ---------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Plan:
+    """What every job needs: where to fit, where to choose (blocks), where to report."""
+
+    ident: gb.Record
+    splits: tuple  # ((fit record, choosing record, block edges), ...): one with a validation record, k folds
+    test: gb.Record | None
+    static: gb.StaticPoints | None
+    band: float
+    lag: int  # the candidates' largest lag: every row's errors are counted from this sample on
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def folds(self) -> bool:
+        return len(self.splits) > 1
+
+
+def _same_record(a: gb.Record, b: gb.Record) -> bool:
+    return a is b or (a.u.shape == b.u.shape and np.array_equal(a.u, b.u) and np.array_equal(a.y, b.y))
+
+
+def _block_edges(n: int, L: int, blocks: int) -> np.ndarray:
+    """Edges of ``blocks`` contiguous blocks of the error samples L … n − 1 of a free run, fewer
+    (with a warning) when the record is too short for blocks of at least max(2L + 2, 10) samples."""
+    min_len = max(2 * L + 2, 10)
+    b = min(blocks, max(1, (n - L) // min_len))
+    if b < blocks:
+        warn(f"the validation record's {n - L} error samples make {b} block(s) of at least {min_len} samples, not "
+             f"{blocks}" + ("; with one block the rule is 'min'" if b < 2 else ""), SelectionWarning)
+    return np.linspace(L, n, b + 1).astype(int)
 
 
 def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.Record]]:
@@ -121,112 +207,51 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
             raise ValueError(f"fold {i + 1} of {k}: segments of {b - a} samples are too short for the candidates' "
                              f"largest lag {min_len - 1}; use fewer folds or a validation record")
         valid = record.slice(a, b, name=f"{record.name} fold {i + 1} valid")
+        # the joined identification segments: the max-lag samples after the joint are a short transient
         ident = gb.Record(np.r_[record.u[:a], record.u[b:]], np.r_[record.y[:a], record.y[b:]], record.Ts,
                           f"{record.name} fold {i + 1} ident", record.units, record.input_names)
         out.append((ident, valid))
     return out
 
 
-def select_graybox(
-    candidates: gb.Structure,
-    data: gb.Dataset | gb.Record,
-    static: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None = None,
-    *,
-    band: float,
-    sizes: Sequence[int] | None = None,
-    sources: Sequence[str] = ("semp", "frols"),
-    estimator: str | Sequence[str] | None = None,
-    constraints: Any = (),
-    lambdas: Sequence[float] | None = None,
-    validation: gb.Record | None = None,
-    folds: int = 3,
-    include: Sequence[str] = ("1",),
-    fallback: str | None = None,
-    store: str | os.PathLike | None = None,
-    executor: str | None = None,
-    workers: int | None = None,
-    client: Any = None,
-    scheduler: str | None = None,
-    progress: bool | None = None,
-) -> GrayboxSelection:
-    """Choose a structure for gray-box use by its D_SF model on validation data.
+def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.StaticPoints | None, int | None]:
+    """Static points for the jobs and the static degree the structures must carry (None: black box)."""
+    if sp is None:
+        return None, None
+    if isinstance(sp, (gb.StaticCurve, gb.StaticSurface)):
+        if sp.domain is None:
+            raise ValueError(f"a {type(sp).__name__} without a domain cannot be sampled: give static points")
+        degree = sp.degree
+        if isinstance(sp, gb.StaticCurve):
+            sp = sp.points(np.linspace(*sp.domain, 10))
+        else:  # a grid over the surface's box, 6 points per input
+            axes = [np.linspace(lo, hi, 6) for lo, hi in sp.domain]
+            sp = sp.points(np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1))
+    elif band is None:
+        return sp, None  # J_SF reported, no form asked
+    else:
+        degree = static_degree(sp, band=band)
+    if band is None:
+        return sp, None
+    top = carried_degree(process, degree)
+    if top is None:
+        static_terms(gb.Structure([]), process, degree)  # raises, naming the clusters the candidates lack
+    if top < degree:
+        # a rational structure (Σ_y) bends its static curve beyond its numerator's degree: ask what the
+        # candidates carry, say so, and let the band judge (the table reports every J_SF)
+        fit = static_fit_mse(sp, top) if isinstance(sp, gb.StaticPoints) else None
+        warn(f"the static information asks for a degree-{degree} curve, the candidates carry degree {top} at most: "
+             f"the structures get the clusters of degree {top}" +
+             (f" (a degree-{top} polynomial fits the points with MSE {fit:.4g}, band B = {band:g})"
+              if fit is not None else ""), SelectionWarning)
+        degree = top
+    return sp, degree
 
-    Parameters
-    ----------
-    candidates : Structure
-        Candidate terms (noise terms are ignored), e.g. ``Candidates(6, 6, degree=2, max_y_power=1)``.
-    data : Dataset or Record
-        A Dataset brings the identification and validation records and the static points; a
-        Record is identification data only (validation by ``folds``).
-    static : StaticPoints, StaticCurve or StaticSurface, optional
-        Static information (default: the Dataset's points). A curve is sampled at 10 points of
-        its domain for the cells, a surface (several inputs) on a grid of 6 points per input over
-        its domain.
-    band : float
-        B: the bound on J_SF (output units²), the static measurements' uncertainty.
-    sizes : sequence of int, optional
-        Structure sizes (before the static terms); default 4, 6, …, up to min(20, candidates).
-    sources : sequence of {"semp", "frols"}
-        Where the structures of each size come from.
-    estimator : {"pe", "se-gradient", "se-ga"} or a sequence of them, optional
-        The gray-box front of each structure (PE uses the closed form unless constraints need a QP).
-        With several, every structure is scored with each, and the best (structure, estimator) pair
-        wins. Default: PE and the SE gradient method (where the static and the dynamic data
-        disagree they choose differently, and either can be the better one — BENCHMARKS.md,
-        structure selection); with ``constraints``, PE alone, the one that imposes them.
-    constraints : optional
-        Constraint objects or tables imposed in every cell, as in :class:`Variant`. Only PE
-        imposes them: naming an SE estimator with constraints is an error.
-    lambdas : sequence of float, optional
-        λ1 of each front (default: PE 100 in logspace(-6, 0), the closed form; SE 10 in
-        logspace(-2, 0), a coarse front is enough to rank structures).
-    validation : Record, optional
-        Validation record (default: the Dataset's).
-    folds : int
-        Contiguous folds when there is no validation record (>= 2).
-    include : sequence of str
-        Terms in every structure (default the constant, which eq. (22)-style static fits need).
-    fallback : {None, "min_jsf"}
-        When no structure meets the band: None raises ``ValueError`` naming the smallest J_SF
-        reached; ``"min_jsf"`` takes the structure with the smallest J_SF and says so.
-    store : path, optional
-        SQLite store of the cells (default: a new file in a temporary folder, kept).
-    executor, workers, client, scheduler, progress
-        Where the cells run, as for :func:`run_grid` (default: in the driver).
 
-    Returns
-    -------
-    GrayboxSelection
-        The chosen structure and model, and the table of everything tried.
-
-    Raises
-    ------
-    ValueError
-        Candidates that cannot represent the static curve's form; validation data shorter than
-        the lags; no structure meeting the band (without ``fallback``); bad arguments.
-    """
+def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> tuple[_Plan, int | None]:
     if not isinstance(candidates, gb.Structure):
         raise ValueError(f"candidates must be a Structure, got {type(candidates).__name__}")
     process = candidates.process
-    band = check_real(band, "band", low=0, low_open=True)
-    constraints = tuple(constraint_entries(constraints))  # read once: a generator is used up
-    if estimator is None:
-        estimator = ("pe",) if constraints else ("pe", "se-gradient")
-    estimators = [estimator] if isinstance(estimator, str) else list(estimator)
-    if not estimators or len(set(estimators)) != len(estimators):
-        raise ValueError(f"estimator must name one or more distinct estimators, got {estimator!r}")
-    for e in estimators:
-        check_choice(e, "estimator", ("pe", "se-gradient", "se-ga"))
-    if constraints and any(e != "pe" for e in estimators):
-        raise ValueError(f"constraints are imposed by PE only; {', '.join(e for e in estimators if e != 'pe')} "
-                         "cannot impose them: use estimator='pe' (the default with constraints) or drop the "
-                         "constraints")
-    for s in sources:
-        check_choice(s, "sources", ("semp", "frols"))
-    if not sources:
-        raise ValueError("sources must name at least one of 'semp', 'frols'")
-    if fallback is not None:
-        check_choice(fallback, "fallback", ("min_jsf",))
     extra: dict = {}
     if isinstance(data, gb.Dataset):
         ident = data.ident
@@ -237,152 +262,540 @@ def select_graybox(
         ident, valid, sp = data, validation, static
     else:
         raise ValueError(f"data must be a Dataset or a Record, got {type(data).__name__}")
-    if sp is None:
-        raise ValueError("select_graybox needs static information: pass static= or a Dataset with static points")
-    if isinstance(sp, (gb.StaticCurve, gb.StaticSurface)):
-        if sp.domain is None:
-            raise ValueError(f"a {type(sp).__name__} without a domain cannot be sampled: give static points")
-        degree = sp.degree
-        if isinstance(sp, gb.StaticCurve):
-            sp = sp.points(np.linspace(*sp.domain, 10))
-        else:  # a grid over the surface's box, 6 points per input
-            axes = [np.linspace(lo, hi, 6) for lo, hi in sp.domain]
-            sp = sp.points(np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1))
-    else:
-        degree = static_degree(sp, band=band)
-        if static_fit_mse(sp, degree) > band:
-            # no polynomial fits the points within the band: their form is not known, so ask only
-            # what the candidates can carry (the band is then out of reach, which step 4 reports)
-            degree = min(degree, max((t.input_power for t in process if t.power_of("y") == 0), default=0))
+    if band is not None and sp is None:
+        raise ValueError("a band needs static information: pass static= or a Dataset with static points "
+                         "(without a band the search picks a black box)")
+    sp, degree = _static_points(sp, process, band)
     L = process.max_lag
+    if test is not None:
+        if not isinstance(test, gb.Record):
+            raise ValueError(f"test must be a Record, got {type(test).__name__}")
+        if len(test) <= L + 1:
+            raise ValueError(f"the test record ({len(test)} samples) is shorter than the candidates' lags + 2 "
+                             f"({L + 2})")
+        for name, rec in (("identification", ident), ("validation", valid)):
+            if rec is not None and _same_record(test, rec):
+                raise ValueError(f"the test record is the {name} record: a test must be data nothing was fitted "
+                                 "or chosen on")
+    blocks = check_int(blocks, "blocks", low=2)
     if valid is not None:
+        if not isinstance(valid, gb.Record):
+            raise ValueError(f"validation must be a Record, got {type(valid).__name__}")
         valid.require_length(L)
         if len(valid) <= L + 1:
             raise ValueError(f"the validation record ({len(valid)} samples) is shorter than the candidates' lags + 2")
-        splits = [(ident, valid)]
+        if _same_record(valid, ident):
+            raise ValueError("the validation record is the identification record: choose on other data, or pass "
+                             "the record alone (folds)")
+        splits = ((ident, valid, _block_edges(len(valid), L, blocks)),)
     else:
-        splits = _folds(ident, check_int(folds, "folds", low=2), L + 2)
-    k_max = min(20, len(process))
-    sizes = list(range(4, k_max + 1, 2)) if sizes is None else [check_int(s, "sizes", low=1, high=len(process))
-                                                                 for s in sizes]
+        splits = tuple((a, b, np.array([L, len(b)])) for a, b in
+                       _folds(ident, check_int(folds, "folds", low=2), L + 2))
+    return _Plan(ident, splits, test, sp, np.inf if band is None else band, L, extra), degree
+
+
+# -- 2. structures -----------------------------------------------------------------------------
+
+def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, include, degree) -> list[dict]:
+    """One dict per distinct structure: name, source(s), size, terms, added static-form terms."""
+    process = candidates.process
+    n_max = len(process)
+    asked = sizes is not None
+    if asked:
+        sizes = sorted({check_int(s, "sizes", low=1) for s in sizes})
+        if sizes and sizes[-1] > n_max:
+            raise ValueError(f"sizes {[s for s in sizes if s > n_max]} exceed the {n_max} candidate process terms")
+        if not sizes:
+            raise ValueError("sizes must name at least one size")
+    else:
+        # derived from the candidate space: even sizes from 4 (or fewer, for small spaces) to min(16, n)
+        # (larger structures were never the honest choice in BENCHMARKS.md, honest selection, and
+        # the SEMP path's cost grows quickly past them)
+        top = min(16, n_max)
+        sizes = sorted(set(range(min(4, top), top + 1, 2)) | {top})
     forced = list(include)
-    # -- the candidate structures -------------------------------------------------------------
-    found: dict[tuple, dict] = {}
+    found: dict[tuple, list[str]] = {}
+    reached: dict[str, set] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.CandidateWarning)
         if "semp" in sources:
-            res = gb.semp(candidates, ident, n_terms=max(sizes), include=forced)
-            path = res.path
+            # grown by criterion up to the largest size: a path that stops early gives the sizes it reached
+            path = gb.semp(candidates, ident, criterion="bic", max_terms=max(sizes), include=forced).path
+            reached["semp"] = set(path["n_terms"])
             for k in sizes:
                 same = path[path["n_terms"] == k]
                 if len(same):
-                    best = same.loc[same["score"].idxmin()]
-                    found.setdefault(("semp", k), {"terms": best["structure"].split(" + ")})
+                    found[("semp", k)] = same.loc[same["score"].idxmin()]["structure"].split(" + ")
         if "frols" in sources:
-            sel = gb.frols(candidates, ident, n_terms=max(sizes), include=forced)
+            try:
+                sel = gb.frols(candidates, ident, n_terms=max(sizes), include=forced)
+            except ValueError as e:  # fewer usable candidates on these data: the sizes they reach
+                usable = re.search(r"only (\d+) of the \d+ candidates are usable", str(e))
+                if usable is None:
+                    raise
+                sel = gb.frols(candidates, ident, n_terms=int(usable.group(1)), include=forced)
+            reached["frols"] = set(range(1, len(sel.structure) + 1))
             for k in sizes:
-                found.setdefault(("frols", k), {"terms": [str(t) for t in sel.structure[:k]]})
-    structs, rows, seen = [], [], {}
-    for (src, k), v in found.items():
-        st = gb.Structure(v["terms"])
-        added = static_terms(st, process, degree)
+                if k <= len(sel.structure):
+                    found[("frols", k)] = [str(t) for t in sel.structure[:k]]
+    if not found:
+        raise ValueError(f"no search reached any of the sizes {sizes} (reached: "
+                         f"{ {s: sorted(r) for s, r in reached.items()} })")
+    if asked:
+        missed = {s: [k for k in sizes if k not in r] for s, r in reached.items()}
+        missed = {s: m for s, m in missed.items() if m}
+        if missed:
+            warn("sizes no search reached are left out: " + "; ".join(f"{s}: {m}" for s, m in missed.items()),
+                 SelectionWarning)
+    rows, seen = [], {}
+    for (src, k), terms in found.items():
+        st = gb.Structure(terms)
+        added = static_terms(st, process, degree) if degree is not None else []
         st = st + gb.Structure(added)
         key = frozenset(st)
         if key in seen:
-            rows[seen[key]]["source"] += f", {src}"
+            seen[key]["source"] += f", {src}"
             continue
-        name = f"{src}-{k}"
-        seen[key] = len(rows)
-        structs.append(StructureSpec(name, terms=[str(t) for t in st]))
-        rows.append({"structure": name, "source": src, "size": k, "n_terms": len(st),
-                     "added": ", ".join(map(str, added)), "terms": str(st)})
-    # -- one grid cell per structure × fold ------------------------------------------------------
-    data_specs = [DataSpec(f"fold{i + 1}" if len(splits) > 1 else "data",
-                           dataset=gb.Dataset(a, b, sp, description="select_graybox", extra=extra), band=band)
-                  for i, (a, b) in enumerate(splits)]
-    variants = [Variant(e, e, constraints=constraints, lambdas=_lambdas(e, lambdas),
-                        decision=DecisionRule("dsf", band=band, fallback="min_jsf"),
-                        options={"solver": "closed"} if e == "pe" and not constraints else {})
-                for e in estimators]
-    grid = Grid(data_specs, structs, variants, name="select_graybox")
-    if store is None:
-        store = Path(tempfile.mkdtemp(prefix="graybox-select-")) / "cells.sqlite"
+        seen[key] = {"structure": f"{src}-{k}", "source": src, "size": k, "n_terms": len(st),
+                     "added": ", ".join(map(str, added)), "terms": str(st)}
+        rows.append(seen[key])
+    return rows
+
+
+# -- 3. scoring --------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Job:
+    name: str
+    terms: str
+    estimator: str
+    plan: _Plan
+    lambdas: tuple | None
+    constraints: tuple
+
+
+def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> np.ndarray | None:
+    if lambdas is not None:
+        return np.asarray(lambdas, float)
+    if estimator == "pe":
+        return np.logspace(-6, 0, 40)  # closed form: a front dense enough for D_SF at a third of the default's cost
+    if estimator.startswith("se"):
+        return np.logspace(-2, 0, 8)  # a coarse front ranks structures; the chosen one is refitted on it
+    return None
+
+
+def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.ndarray]:
+    """(θ rows (P, n), λ1 (P,)); a failed member's row is NaN."""
+    est, plan = job.estimator, job.plan
+    if est in _BLACK_BOX_FITS:
+        return _BLACK_BOX_FITS[est](st, rec)[None, :], np.array([np.nan])
+    lam = _lambdas(est, job.lambdas)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
-        run_grid(grid, store, executor=executor, workers=workers, client=client, scheduler=scheduler,
-                 progress=progress)
-    results = load_results(store)
-    board = leaderboard(results, rule="dsf_valid", band=band).reset_index()
-    per = board.groupby(["structure", "variant"]).agg(JS_valid=("JS_valid", "mean"), JSF=("JSF", "max"),
-                                                      in_band=("in_band", "all"),
-                                                      reason=("reason", _reasons)).reset_index()
-    per = per.rename(columns={"variant": "estimator"})
-    table = pd.DataFrame(rows).merge(per, on="structure", how="left")
-    table["estimator"] = table["estimator"].fillna(estimators[0])
-    table = table.set_index("structure")
-    table["in_band"] = table["in_band"].fillna(False).astype(bool) & np.isfinite(table["JS_valid"])
-    table["reason"] = table["reason"].fillna("no cell of this structure is in the store")
-    ok = table[table["in_band"]]
-    used_fallback = False
-    if len(ok):
-        chosen = ok["JS_valid"].astype(float).to_numpy().argmin()
-        chosen_row = ok.iloc[chosen]
+        if est == "pe":
+            specs = sum((constraint_from_object(c) for c in job.constraints), [])
+            # only the static points and the data set's extra matter to the constraints
+            cons = cell_constraints(specs, st, gb.Dataset(rec, rec, plan.static, extra=plan.extra))
+            th = gb.pe_thetas(st, rec, plan.static, lambdas=lam, constraints=cons or None,
+                              solver="clarabel" if cons else "closed")
+            return th, lam
+        front = gb.se_pareto(st, rec, plan.static, lambdas=lam, progress=False,
+                             method="gradient" if est == "se-gradient" else "ga")
+        th = np.array(front.thetas, float)
+        th[list(front.failures)] = np.nan
+        return th, np.asarray(front.lambdas, float)
+
+
+def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray) -> np.ndarray:
+    """(P, B) free-run MSE of each member on each block of ``rec`` (one free run from its first L samples)."""
+    P, B = thetas.shape[0], len(edges) - 1
+    out = np.full((P, B), np.inf)
+    ok = np.all(np.isfinite(thetas), axis=1)
+    if not ok.any():
+        return out
+    code = encode(st)
+    L = st.max_lag
+    y = simulate_batch(code, thetas[ok], record_inputs(rec, code.inputs), rec.y, max(L, 1))
+    with np.errstate(over="ignore", invalid="ignore"):
+        e2 = (y - rec.y[None, :]) ** 2
+        mse = np.stack([e2[:, a:b].mean(axis=1) for a, b in zip(edges[:-1], edges[1:])], axis=1)
+    out[ok] = np.where(np.isfinite(mse), mse, np.inf)
+    return out
+
+
+def _jsf(st: gb.Structure, thetas: np.ndarray, sp: gb.StaticPoints | None) -> np.ndarray:
+    out = np.full(thetas.shape[0], np.nan if sp is None else np.inf)
+    ok = np.all(np.isfinite(thetas), axis=1)
+    if sp is not None and ok.any():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.StaticRangeWarning)
+            out[ok] = gb.evaluate_thetas(st, thetas[ok], None, sp)["JSF"]
+    return out
+
+
+def _score_job(job: _Job) -> dict[str, np.ndarray]:
+    """Fit, per split and on all the identification data, and score every member.
+
+    Returns ``blocks`` (P, B): J_S per block of the choosing data (with folds: one block per fold,
+    members matched by λ) and ``weights`` (B,): the blocks' shares of its samples (``blocks @
+    weights`` is J_S on all the choosing samples); ``jsf`` (P,): the worst J_SF over the fits; ``thetas`` (P, n) and
+    ``lambdas`` of the fit on all the identification data; ``test`` (P,): their J_S on the test record.
+    """
+    st = gb.Structure(job.terms.split(" + "))
+    plan = job.plan
+    blocks, jsf, weights = [], [], []
+    full = None
+    for rec, choose, edges in plan.splits:
+        th, lam = _fit(job, st, rec)
+        if not plan.folds:
+            full = (th, lam)
+        blocks.append(_block_mse(st, th, choose, edges))
+        weights.append(np.diff(edges))
+        jsf.append(_jsf(st, th, plan.static))
+    if full is None:
+        full = _fit(job, st, plan.ident)
+        jsf.append(_jsf(st, full[0], plan.static))
+    w = np.concatenate(weights).astype(float)
+    out = {"blocks": np.concatenate(blocks, axis=1), "weights": w / w.sum(), "jsf": np.max(np.stack(jsf), axis=0),
+           "jsf_full": jsf[-1], "thetas": full[0], "lambdas": full[1]}
+    if plan.test is not None:
+        edges = np.array([plan.lag, len(plan.test)])
+        out["test"] = _block_mse(st, full[0], plan.test, edges)[:, 0]
+    return out
+
+
+def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progress) -> list[dict]:
+    if not jobs:
+        return []
+    if executor is None:
+        executor = "inprocess" if workers is None and client is None and scheduler is None else "dask"
+    check_choice(executor, "executor", ("inprocess", "processes", "dask"))
+    if executor == "inprocess":
+        if workers is not None or client is not None or scheduler is not None:
+            raise ValueError("workers, client and scheduler need executor='processes' or 'dask'")
+        bar = progress_bar(len(jobs), "select_graybox", progress)
+        out = []
+        for j in jobs:
+            out.append(_score_job(j))
+            bar.update()
+        bar.close()
+        return out
+    kw = dict(workers=workers, client=client, scheduler=scheduler)
+    if executor == "processes":
+        kw = dict(workers=workers or 2, processes=True)
+    elif not any(v is not None for v in kw.values()):
+        kw["workers"] = 2
+    # the slow fronts first, largest structures first: the workers finish together
+    order = sorted(range(len(jobs)), key=lambda i: (jobs[i].estimator not in SLOW_ESTIMATORS,
+                                                     -jobs[i].terms.count(" + ")))
+    with parallel_map(**kw) as pmap:
+        done = pmap(_score_job, [jobs[i] for i in order])
+    out: list = [None] * len(jobs)
+    for i, r in zip(order, done):
+        out[i] = r
+    return out
+
+
+# -- 4. choice ---------------------------------------------------------------------------------
+
+def _member(res: dict, band: float) -> tuple[int, bool]:
+    """D_SF on the choosing data: the smallest mean block J_S among the members in the band
+    (``None``-like -1 when no member has a finite J_S)."""
+    js = res["blocks"] @ res["weights"]
+    finite = np.isfinite(js)
+    inside = finite & (res["jsf"] <= band) if np.isfinite(band) else finite
+    if inside.any():
+        c = np.flatnonzero(inside)
+        return int(c[np.lexsort((c, res["jsf"][c], js[c]))[0]]), True
+    ok = np.flatnonzero(finite & np.isfinite(res["jsf"])) if np.isfinite(band) else np.array([], int)
+    if ok.size == 0:
+        return -1, False
+    return int(ok[np.lexsort((ok, js[ok], res["jsf"][ok]))[0]]), False
+
+
+def _log_ratio(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """Mean and standard error of log(a_i / b_i) over the blocks (NaN SE with one block)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.log(a / b)
+    if not np.all(np.isfinite(r)):
+        return np.inf, np.nan
+    se = r.std(ddof=1) / np.sqrt(r.size) if r.size > 1 else np.nan
+    return float(r.mean()), float(se)
+
+
+def _choose(table: pd.DataFrame, scores: list[np.ndarray], rule: str) -> tuple[int, str]:
+    """Position of the chosen row among the in-band rows (``table`` gains vs_best, vs_best_se,
+    eligible); the rule used."""
+    ok = np.flatnonzero(table["in_band"].to_numpy())
+    js = table["JS_valid"].to_numpy(float)
+    best = int(ok[np.argmin(js[ok])])
+    vs, se = np.full(len(table), np.nan), np.full(len(table), np.nan)
+    for i in ok:
+        vs[i], se[i] = _log_ratio(scores[i], scores[best])
+    table["vs_best"], table["vs_best_se"] = vs, se
+    if rule == "one-se" and scores[best].size < 2:
+        rule = "min"
+    if rule == "min":
+        eligible = np.zeros(len(table), bool)
+        eligible[best] = True
     else:
-        # the smallest static error reached by any member of any structure, from the stored fronts
-        best_jsf = _smallest_jsf(results)
-        if fallback is None:
-            raise ValueError(f"no structure meets the band B = {band:g}: the smallest J_SF reached is {best_jsf:.4g} "
-                             f"(over {len(table)} structures); widen the band, change the candidates, or pass "
-                             "fallback='min_jsf'")
-        jsf = table["JSF"].astype(float).to_numpy()
-        chosen_row = table.iloc[int(np.nanargmin(jsf)) if np.isfinite(jsf).any() else 0]
+        # within one standard error of the best: the lead is not distinguishable from block noise
+        eligible = np.zeros(len(table), bool)
+        eligible[ok] = vs[ok] <= np.nan_to_num(se[ok], nan=0.0)
+        eligible[best] = True
+    table["eligible"] = eligible
+    c = np.flatnonzero(eligible)
+    n = table["n_terms"].to_numpy()
+    return int(c[np.lexsort((js[c], n[c]))[0]]), rule
+
+
+def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, estimator: str, in_band: bool):
+    """The chosen member as a Decision: J_S on the choosing data, J_SF of the refitted member."""
+    js_choose = res["blocks"] @ res["weights"]
+    if estimator in _BLACK_BOX_FITS:
+        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})")
+        return gb.Decision(model, 0, float("nan"), float(js_choose[0]), float(res["jsf_full"][0]), "min J_S", True,
+                           float(js_choose[0]))
+    thetas = res["thetas"]
+    keep = np.all(np.isfinite(thetas), axis=1)
+    failures = {int(k): "the fit failed at this λ" for k in np.flatnonzero(~keep)}
+    th = np.where(keep[:, None], thetas, 0.0)
+    scored = gb.ParetoSet(st, th, res["lambdas"], np.full(len(th), np.nan), js_choose, res["jsf_full"],
+                          f"{estimator}, J_S on the choosing data", {}, failures)
+    if in_band:
+        d = gb.decide_dsf(scored, band=plan.band, fallback="min_jsf")
+        if d.index == i:
+            return d
+    return gb.Decision(scored.member_model(i, name=f"{estimator} ({row.name})"), int(i), float(res["lambdas"][i]),
+                       float(js_choose[i]), float(res["jsf_full"][i]), "D_SF" if in_band else "min J_SF", in_band,
+                       float(js_choose[i] if in_band else res["jsf_full"][i]))
+
+
+# -- the whole -----------------------------------------------------------------------------------
+
+def select_graybox(
+    candidates: gb.Structure,
+    data: gb.Dataset | gb.Record,
+    static: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None = None,
+    *,
+    band: float | None = None,
+    sizes: Sequence[int] | None = None,
+    sources: Sequence[str] = ("semp", "frols"),
+    estimator: str | Sequence[str] | None = None,
+    constraints: Any = (),
+    lambdas: Sequence[float] | None = None,
+    validation: gb.Record | None = None,
+    test: gb.Record | None = None,
+    rule: str = "one-se",
+    blocks: int = 5,
+    folds: int = 3,
+    shortlist: int | None = None,
+    include: Sequence[str] = ("1",),
+    fallback: str | None = None,
+    executor: str | None = None,
+    workers: int | None = None,
+    client: Any = None,
+    scheduler: str | None = None,
+    progress: bool | None = None,
+) -> GrayboxSelection:
+    """Choose a structure (and estimator, and λ member) on data it was not fitted on.
+
+    Parameters
+    ----------
+    candidates : Structure
+        Candidate terms (noise terms are ignored), e.g. ``Candidates(6, 6, degree=2, max_y_power=1)``.
+    data : Dataset or Record
+        A Dataset brings the identification and validation records and the static points; a
+        Record is identification data only (the choice on ``folds`` contiguous folds of it).
+    static : StaticPoints, StaticCurve or StaticSurface, optional
+        Static information (default: the Dataset's). A curve is sampled at 10 points of its
+        domain, a surface (several inputs) on a grid of 6 points per input over its domain.
+        Without ``band`` it is only reported (the table's J_SF).
+    band : float, optional
+        B: the bound on J_SF (output units²), the static measurements' uncertainty. Given: a gray
+        box (fronts of J_S against J_SF, D_SF). Omitted: a black box, chosen by J_S alone.
+    sizes : sequence of int, optional
+        Structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
+        (fewer for a small candidate set). Sizes a search does not reach are left out with a
+        :class:`SelectionWarning`.
+    sources : sequence of {"semp", "frols"}
+        Where the structures of each size come from.
+    estimator : str or sequence of str, optional
+        Gray box: ``"pe"`` (closed form unless constraints need a QP), ``"se-gradient"``,
+        ``"se-ga"`` (default PE and SE gradient; PE alone with constraints). Black box: ``"ls"``,
+        ``"els"`` (default both). Every structure is scored with each; the rule chooses among all
+        (structure, estimator) rows.
+    constraints : optional
+        Constraint objects or tables imposed by PE, as in :class:`Variant`. Naming another
+        estimator with them is an error.
+    lambdas : sequence of float, optional
+        λ1 of each front (default: PE 40 in logspace(-6, 0); SE 8 in logspace(-2, 0)).
+    validation : Record, optional
+        The choosing record (default: the Dataset's validation record).
+    test : Record, optional
+        A record nothing is fitted or chosen on: the table gets ``JS_test`` and ``JSF_test``
+        columns. The choice is the same with and without it.
+    rule : {"one-se", "min"}
+        How the row is chosen from the scores on the choosing data: ``"one-se"`` (default) the
+        fewest parameters among the rows within one standard error of the best (per-block log
+        ratio of J_S), ``"min"`` the smallest J_S.
+    blocks : int
+        Contiguous blocks the validation record is cut into for the standard errors (>= 2;
+        fewer, with a :class:`SelectionWarning`, when the record is too short for them).
+    folds : int
+        Contiguous folds when there is no validation record (>= 2); each fold is one block.
+    shortlist : int, optional
+        Faster, less thorough: with PE (or a black-box estimator) among the estimators, the SE
+        estimators (seconds per structure) fit only the ``shortlist`` structures those rank best
+        (in band first, then by J_S on the choosing data). Default: every structure (PE's ranking
+        does not predict SE's: BENCHMARKS.md, honest selection).
+    include : sequence of str
+        Terms in every structure (default the constant, which eq. (22)-style static fits need).
+    fallback : {None, "min_jsf"}
+        When no structure meets the band: None raises ``ValueError`` naming the smallest J_SF
+        reached; ``"min_jsf"`` takes the structure with the smallest J_SF and says so.
+    executor : {"inprocess", "processes", "dask"}, optional
+        Where the jobs (one per structure × estimator) run: default in the driver, or on Dask
+        when ``workers``, ``client`` or ``scheduler`` is given.
+    workers : int, optional
+        Local worker processes (Dask ``LocalCluster``, or a process pool with ``"processes"``).
+    client : distributed.Client, optional
+        Run on this Dask client's cluster.
+    scheduler : str, optional
+        Run on the Dask scheduler at this address.
+    progress : bool, optional
+        A progress bar over the jobs (default: on a terminal, in the driver only).
+
+    Returns
+    -------
+    GrayboxSelection
+        The chosen structure and model, and the table of everything compared. Nothing is
+        written to disk.
+
+    Raises
+    ------
+    ValueError
+        Candidates without a term of a cluster the static form needs; records shorter than the
+        lags; a test record that is a fitting or choosing record; a band without static points;
+        sizes beyond the candidates; no structure meeting the band (without ``fallback``); bad
+        arguments.
+    """
+    if band is not None:
+        band = check_real(band, "band", low=0, low_open=True)
+    constraints = tuple(constraint_entries(constraints))  # read once: a generator is used up
+    estimators = _estimators(estimator, band, constraints)
+    for s in sources:
+        check_choice(s, "sources", ("semp", "frols"))
+    if not sources:
+        raise ValueError("sources must name at least one of 'semp', 'frols'")
+    if fallback is not None:
+        check_choice(fallback, "fallback", ("min_jsf",))
+    check_choice(rule, "rule", RULES)
+    plan, degree = _inputs(candidates, data, static, validation, test, band, folds, blocks)
+    rows = _structures(candidates, plan.ident, sizes, sources, include, degree)
+    lam = None if lambdas is None else tuple(float(x) for x in lambdas)
+    run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
+                            progress=progress)
+    fast = [e for e in estimators if e not in SLOW_ESTIMATORS]
+    jobs = [_Job(r["structure"], r["terms"], e, plan, lam, constraints) for r in rows for e in fast]
+    results = run(jobs)
+    slow_rows = rows
+    if fast and shortlist is not None and len(rows) > check_int(shortlist, "shortlist", low=1):
+        # the slow fronts only for the structures the fast ones rank best (in band first)
+        first, _, _ = _table(rows, jobs, results, plan)
+        order = first.assign(_js=np.where(first["in_band"], first["JS_valid"], np.inf)).groupby(level=0)["_js"].min()
+        keep = set(order.sort_values(kind="stable").index[:shortlist])
+        slow_rows = [r for r in rows if r["structure"] in keep]
+    more = [_Job(r["structure"], r["terms"], e, plan, lam, constraints) for r in slow_rows for e in estimators
+            if e in SLOW_ESTIMATORS]
+    jobs, results = jobs + more, results + run(more)
+    table, members, scores = _table(rows, jobs, results, plan)
+    if table["in_band"].any():
+        pos, used = _choose(table, scores, rule)
+        used_fallback = False
+    else:
+        pos, used = _fallback(table, results, band, fallback), "min"
         used_fallback = True
-    table = table.sort_values(["in_band", "JS_valid"], ascending=[False, True])
-    table["rank"] = np.arange(1, len(table) + 1)
-    structure = gb.Structure(chosen_row["terms"].split(" + "))
-    # -- the chosen structure refitted on all the identification data ------------------------
-    est = chosen_row["estimator"]
-    decision = _refit(structure, ident, valid, sp, band, est, constraints, _lambdas(est, lambdas), used_fallback,
-                      extra)
-    return GrayboxSelection(structure, decision.model, decision, table.drop(columns=["terms"]), degree, band,
-                            not used_fallback, str(store))
+    order = [pos] + [i for i in np.lexsort((table["JS_valid"].to_numpy(float), ~table["in_band"].to_numpy()))
+                     if i != pos]
+    table["rank"] = 0
+    table.iloc[order, table.columns.get_loc("rank")] = np.arange(1, len(table) + 1)
+    job, res, i = jobs[pos], results[pos], members[pos]
+    structure = gb.Structure(job.terms.split(" + "))
+    decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
+    table = table.sort_values("rank").drop(columns=["terms"])
+    return GrayboxSelection(structure, decision.model, decision, table, degree, plan.band, not used_fallback, used)
 
 
-def _reasons(r: pd.Series) -> str:
-    """The leaderboard's reasons of a structure's folds, each once (empty: every fold qualified)."""
-    return "; ".join(dict.fromkeys(x for x in r if isinstance(x, str) and x))
+def _estimators(estimator, band, constraints) -> list[str]:
+    if estimator is None:
+        estimator = BLACK_BOX_ESTIMATORS if band is None else (("pe",) if constraints else ("pe", "se-gradient"))
+    estimators = [estimator] if isinstance(estimator, str) else list(estimator)
+    if not estimators or len(set(estimators)) != len(estimators):
+        raise ValueError(f"estimator must name one or more distinct estimators, got {estimator!r}")
+    for e in estimators:
+        check_choice(e, "estimator", GRAY_BOX_ESTIMATORS + BLACK_BOX_ESTIMATORS)
+    if band is None and any(e in GRAY_BOX_ESTIMATORS for e in estimators):
+        raise ValueError(f"{', '.join(e for e in estimators if e in GRAY_BOX_ESTIMATORS)} trade(s) J_S against "
+                         "J_SF within a band: give band= (and static points), or a black-box estimator "
+                         f"{BLACK_BOX_ESTIMATORS}")
+    if constraints and any(e != "pe" for e in estimators):
+        raise ValueError(f"constraints are imposed by PE only; {', '.join(e for e in estimators if e != 'pe')} "
+                         "cannot impose them: use estimator='pe' (the default with constraints) or drop the "
+                         "constraints")
+    return estimators
 
 
-def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> list[float] | None:
-    if lambdas is None and estimator.startswith("se"):
-        return list(np.logspace(-2, 0, 10))
-    return None if lambdas is None else list(lambdas)
+def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.ndarray]]:
+    """One row per job: its member chosen on the choosing data and that member's figures."""
+    by_name = {r["structure"]: r for r in rows}
+    out, members, scores = [], [], []
+    for job, res in zip(jobs, results):
+        i, in_band = _member(res, plan.band)
+        members.append(i)
+        blk = res["blocks"][i] if i >= 0 else np.full(res["blocks"].shape[1], np.inf)
+        scores.append(blk)
+        js = float(blk @ res["weights"])
+        row = dict(by_name[job.name], estimator=job.estimator,
+                   lambda1=float(res["lambdas"][i]) if i >= 0 else np.nan,
+                   JS_valid=js, JSF=float(res["jsf"][i]) if i >= 0 else np.inf, in_band=bool(in_band and np.isfinite(js)))
+        row["reason"] = _reason(res, i, in_band, js, plan.band)
+        if plan.test is not None:
+            row["JS_test"] = float(res["test"][i]) if i >= 0 else np.inf
+            row["JSF_test"] = float(res["jsf_full"][i]) if i >= 0 else np.inf
+        out.append(row)
+    table = pd.DataFrame(out).set_index("structure")
+    return table, members, scores
 
 
-def _smallest_jsf(results: pd.DataFrame) -> float:
-    best = float(results["JSF"].astype(float).min()) if len(results) else np.inf
-    for m in results["members"]:
-        v = np.asarray((m or {}).get("JSF", []), float)
-        if np.isfinite(v).any():
-            best = min(best, float(np.nanmin(np.where(np.isfinite(v), v, np.nan))))
-    return best
+def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> str:
+    """Why a row has no qualifying model (empty when it has one): every member failed or diverged,
+    or the band was missed, with the smallest J_SF its members reached."""
+    finite = np.isfinite(res["blocks"]).all(axis=1)
+    if not finite.any():
+        bad = int(np.sum(~np.all(np.isfinite(res["thetas"]), axis=1)))
+        return (f"every member failed or diverged on the choosing data ({bad} of {len(finite)} fits failed, "
+                f"the others' free runs diverged)")
+    if i < 0 or not np.isfinite(js):
+        return "no member has a finite free-run J_S on every block of the choosing data"
+    if band is not None and not in_band:
+        jsf = res["jsf"][finite]
+        best = float(jsf[np.isfinite(jsf)].min()) if np.isfinite(jsf).any() else np.inf
+        return f"no member meets the band B = {band:g}: the smallest J_SF reached is {best:.4g}"
+    return ""
 
 
-def _refit(structure, ident, valid, sp, band, estimator, constraints, lambdas, fallback, extra) -> gb.Decision:
-    specs = sum((constraint_from_object(c) for c in constraints), [])
-    # only the static points and the data set's extra matter to the constraints
-    cons = cell_constraints(specs, structure, gb.Dataset(ident, ident if valid is None else valid, sp, extra=extra))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", gb.StaticRangeWarning)
-        if estimator == "pe":
-            front = gb.pe_pareto(structure, ident, sp, lambdas=lambdas, constraints=cons or None,
-                                 solver="clarabel" if cons else "closed")
-        else:
-            front = gb.se_pareto(structure, ident, sp, lambdas=lambdas, method="gradient" if estimator == "se-gradient" else "ga")
-    if valid is None or fallback:
-        return gb.decide_dsf(front, band=band, fallback="min_jsf")
-    # D_SF on the validation record: the members' validation J_S
-    js_valid = gb.evaluate_thetas(structure, front.thetas, valid, one_step=False)["JS"]
-    scored = gb.ParetoSet(front.structure, front.thetas, front.lambdas, front.J1, js_valid, front.JSF,
-                          f"{front.method}, J_S on validation", dict(front.extra), dict(front.failures))
-    return gb.decide_dsf(scored, band=band, fallback="min_jsf")
+def _fallback(table: pd.DataFrame, results: list[dict], band: float | None, fallback: str | None) -> int:
+    if band is None:
+        raise ValueError("no structure has a finite free-run J_S on the choosing data (every fit diverged)")
+    # the smallest static error reached by any member of any structure
+    finite = [r["jsf"][np.isfinite(r["jsf"])] for r in results]
+    best = min((float(f.min()) for f in finite if f.size), default=np.inf)
+    if fallback is None:
+        raise ValueError(f"no structure meets the band B = {band:g}: the smallest J_SF reached is {best:.4g} "
+                         f"(over {len(table)} structure × estimator rows); widen the band, change the candidates, "
+                         "or pass fallback='min_jsf'")
+    jsf = table["JSF"].to_numpy(float)
+    if not np.isfinite(jsf).any():
+        raise ValueError("fallback 'min_jsf': no structure has a defined static curve (J_SF = inf everywhere)")
+    return int(np.nanargmin(np.where(np.isfinite(jsf), jsf, np.nan)))

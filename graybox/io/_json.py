@@ -422,7 +422,14 @@ _OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"}),
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 
 #: Fields added after files of this format version were written, with the value a file without them means.
-_ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {"chosen_on": ""}}
+_ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {"chosen_on": ""},
+                                     # selections saved before the fit / choose / test protocol chose by the
+                                     # smallest validation J_S
+                                     "GrayboxSelection": {"rule": "min"}}
+
+#: Fields that files written by an older graybox carry and this one no longer has: read and dropped.
+#: A GrayboxSelection named the SQLite store its cells ran in; it no longer runs through a store.
+_DROPPED: dict[str, frozenset[str]] = {"GrayboxSelection": frozenset({"store"})}
 
 #: Fields renamed after files were written (one name per concept): old name -> (new name, how the old value
 #: reads as the new one). "Met the band" was DSFResult.feasible and, inverted, GrayboxSelection.fallback.
@@ -446,6 +453,7 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
     for old, (new, read) in _RENAMED.get(name, {}).items():
         if old in d and new not in d:
             d = {**{k: x for k, x in d.items() if k != old}, new: read(d[old])}
+    d = {k: x for k, x in d.items() if k not in _DROPPED.get(name, frozenset())}
     known = {k for k, _ in spec} | set(_READABLE[name][0] if name in _READABLE else ())
     unknown = sorted(set(d) - known)
     if unknown:

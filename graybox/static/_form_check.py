@@ -30,7 +30,7 @@ from ._surfaces import StaticSurface, _monomials, monomial_exponents
 from ..core._terms import Structure, Term
 from ..core._validation import check_int, check_real
 
-__all__ = ["static_degree", "static_fit_mse", "static_terms"]
+__all__ = ["carried_degree", "static_degree", "static_fit_mse", "static_terms"]
 
 
 def static_degree(static: StaticPoints | StaticCurve | StaticSurface, *, band: float, max_degree: int = 3) -> int:
@@ -119,6 +119,22 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
         curve's form: e.g. a degree-2 curve and candidates of degree 1), naming the clusters.
     """
     degree = check_int(degree, "degree", low=0)
+    out, missing, inputs = _complete(structure, candidates, degree)
+    if missing:
+        m = len(inputs)
+        names = [cluster_name(*k) if m == 1 else surface_cluster_name(k[0], k[1:], inputs) for k in missing]
+        # name the remedy for what is missing: a constant for Σ0, a higher degree for the input powers
+        fixes = ([f"candidates of degree >= {max(sum(k[1:]) for k in missing)}"] if any(sum(k[1:]) for k in missing)
+                 else []) + (["a constant term"] if (0,) * (m + 1) in missing else []) + \
+            (["output terms (Σy)"] if (1,) + (0,) * m in missing else [])
+        raise ValueError(
+            f"the candidates cannot represent a degree-{degree} static {'curve' if m == 1 else 'surface'}: they hold "
+            f"no term of the cluster(s) {names}; they need {' and '.join(fixes)}")
+    return out
+
+
+def _complete(structure: Structure, candidates: Structure, degree: int) -> tuple[list[Term], list[tuple], tuple]:
+    """(terms to add, cluster keys no candidate holds, input names) for a degree-``degree`` form."""
     inputs = tuple(dict.fromkeys(candidates.inputs + structure.inputs)) or ("u",)
     m = len(inputs)
     need = [(0,) + e for e in monomial_exponents(m, degree)] + [(1,) + (0,) * m]
@@ -132,9 +148,27 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
             missing.append(key)
             continue
         out.append(min(pool, key=_simplicity))
-    if missing:
-        names = [cluster_name(*k) if m == 1 else surface_cluster_name(k[0], k[1:], inputs) for k in missing]
-        raise ValueError(
-            f"the candidates cannot represent a degree-{degree} static {'curve' if m == 1 else 'surface'}: they hold "
-            f"no term of the cluster(s) {names} (raise the candidates' degree, or include a constant)")
-    return out
+    return out, missing, inputs
+
+
+def carried_degree(candidates: Structure, degree: int) -> int | None:
+    """The largest degree d <= ``degree`` whose static form (clusters Σ_{u^0} … Σ_{u^d}, Σ_y; every
+    monomial of total degree <= d with several inputs) the candidates can complete; None when they
+    cannot complete even degree 0 (no constant, or no output term).
+
+    Parameters
+    ----------
+    candidates : Structure
+        Candidate terms (noise terms are ignored).
+    degree : int
+        The degree the static information asks for.
+
+    Returns
+    -------
+    int or None
+    """
+    degree = check_int(degree, "degree", low=0)
+    for d in range(degree, -1, -1):
+        if not _complete(Structure([]), candidates, d)[1]:
+            return d
+    return None

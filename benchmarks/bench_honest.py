@@ -1,0 +1,178 @@
+"""Honest selection: fit / choose / untouched test (issue 26).
+
+    .venv/bin/python benchmarks/bench_honest.py [--part speed|protocol|all] [--cases plant,buck,...] [--no-old]
+
+- protocol: on each case, ``select_graybox`` fits on the identification record, chooses on the
+  validation record and reports on a test record nothing was fitted or chosen on. Per case: the
+  chosen gray box (rule "one-se", the default; and rule "min", the smallest validation J_S) and the
+  black box chosen the same way (no band: LS / ELS), with the old select_graybox (main before
+  issue 26: smallest validation J_S over sizes 4…20) beside them. Figures: test J_S and its ratio
+  to the black box's, J_SF of the test-scored model against the band, optimism (choosing J_S /
+  test J_S) and regret (test J_S of the choice / the best test J_S among the rows it compared).
+- speed: the README's call ``select_graybox(Candidates(ny=6, nu=6, degree=2), data, band=0.031)``
+  on the bundled plant, in the driver and on 2 worker processes, with the load average.
+
+Cases: the bundled plant (test: a fresh simulator run, another seed), the two-speed rig (same),
+the buck converter (choose on the first half of its validation file, test on the second), and
+synthetic systems with a known answer that expose the old failure: short records with many
+candidates, a slow output disturbance, and static points that conflict with the records.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import subprocess
+import sys
+import time
+import types
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _common import git_rev, machine  # noqa: E402
+
+import graybox as gb  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
+THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+
+
+def old_select():
+    """select_graybox as it was on main before issue 26 (its source from git, loaded beside ours)."""
+    src = subprocess.run(["git", "-C", str(ROOT), "show", "main:graybox/experiments/_select.py"], check=True,
+                         capture_output=True, text=True).stdout
+    src = src.replace('register_type("GrayboxSelection"', '(lambda *a: None)("GrayboxSelection"')
+    mod = types.ModuleType("graybox.experiments._select_old")
+    mod.__package__ = "graybox.experiments"
+    sys.modules[mod.__name__] = mod  # dataclasses look their module up
+    exec(compile(src, "main:_select.py", "exec"), mod.__dict__)
+    return mod.select_graybox
+
+
+def _synthetic(seed, n, noise=0.02, drift=0.0):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 3.0, n // 25 + 1), 25)[:n]
+    y = gb.Model(TRUE, THETA).simulate(u, np.zeros(2)) + noise * rng.standard_normal(n)
+    if drift:  # a slow disturbance: a random walk smoothed over ~200 samples, the size of `drift`
+        w = np.cumsum(rng.standard_normal(n + 400))
+        w = np.convolve(w, np.ones(200) / 200, mode="same")[200:200 + n]
+        y = y + drift * (w - w.mean()) / (w.std() + 1e-12)
+    return gb.Record(u, y, name=f"synthetic {seed}")
+
+
+def _true_points(bias=0.0):
+    ub = np.linspace(-0.5, 3.5, 7)
+    return gb.StaticPoints(ub, gb.Model(TRUE, THETA).static_curve(ub) + bias)
+
+
+def cases():
+    """name -> (Dataset (ident, valid, static), test Record, candidates, band)."""
+    from graybox.datasets import pumping
+    from graybox.datasets._pumping_miso import generate_miso
+
+    out = {}
+    plant = gb.load_pumping()
+    test = pumping.generate(seed=plant.extra["seed"] + 1)[0].record("pumping, seed + 1")
+    out["plant"] = (plant, test, gb.Candidates(6, 6, degree=2), 0.031)
+    miso = gb.load_pumping_miso()
+    test = generate_miso(seed=miso.extra["seed"] + 1)[0].record("two-speed, seed + 1")
+    out["two-speed rig"] = (miso, test, gb.Candidates(2, 2, degree=2, input_names=("u1", "u2")), 0.031)
+    if not os.environ.get("GRAYBOX_BUCK_DIR") and Path("/work/shared/data/buck").is_dir():
+        os.environ["GRAYBOX_BUCK_DIR"] = "/work/shared/data/buck"
+    buck = gb.load_buck()
+    half = len(buck.valid) // 2
+    out["buck"] = (gb.Dataset(buck.ident, buck.valid.slice(0, half, "buck valid, first half"), buck.static),
+                   buck.valid.slice(half, None, "buck valid, second half"), gb.Candidates(2, 2, degree=2), 0.01)
+    out["short records (45 candidates)"] = (gb.Dataset(_synthetic(1, 300), _synthetic(2, 150), _true_points()),
+                                           _synthetic(3, 4000), gb.Candidates(4, 4, degree=2), 1e-3)
+    out["slow disturbance"] = (gb.Dataset(_synthetic(4, 1200, drift=0.3), _synthetic(5, 600, drift=0.3),
+                                          _true_points()), _synthetic(6, 4000, drift=0.3),
+                               gb.Candidates(3, 3, degree=2), 1e-3)
+    out["static points off the records"] = (gb.Dataset(_synthetic(7, 1200), _synthetic(8, 600), _true_points(0.15)),
+                                            _synthetic(9, 4000), gb.Candidates(3, 3, degree=2), 0.03)
+    return out
+
+
+def _test_js(model, rec):
+    sim = model.simulate(rec, on_diverge="nan")
+    return gb.mse(rec.y, sim, start=model.max_lag)
+
+
+def protocol(names, with_old: bool) -> None:
+    old = old_select() if with_old else None
+    rows = []
+    for name, (data, test, cand, band) in cases().items():
+        if names and name not in names:
+            continue
+        t0 = time.perf_counter()
+        res = {"gray one-se": gb.select_graybox(cand, data, band=band, test=test),
+               "gray min": gb.select_graybox(cand, data, band=band, test=test, rule="min"),
+               "black one-se": gb.select_graybox(cand, data, test=test)}
+        t_new = time.perf_counter() - t0
+        black = res["black one-se"].chosen["JS_test"]
+        for label, r in res.items():
+            c = r.chosen
+            rows.append({"case": name, "choice": label, "n_terms": len(r.structure), "estimator": c["estimator"],
+                         "JS_valid": c["JS_valid"], "JS_test": c["JS_test"], "vs black": c["JS_test"] / black,
+                         "JSF": c["JSF_test"], "in band": bool(c["JSF_test"] <= band) if np.isfinite(r.band) else None,
+                         "optimism": c["JS_valid"] / c["JS_test"],
+                         "regret": c["JS_test"] / r.table["JS_test"].min(), "rows": len(r.table)})
+        t_old = np.nan
+        if old is not None:
+            t0 = time.perf_counter()
+            try:
+                o = old(cand, data, band=band)
+                js_t = _test_js(o.model, test)
+                v = o.table["JS_valid"].min()
+                rows.append({"case": name, "choice": "gray, old (main)", "n_terms": len(o.structure),
+                             "estimator": o.table.iloc[0]["estimator"], "JS_valid": v, "JS_test": js_t,
+                             "vs black": js_t / black, "JSF": o.decision.JSF, "in band": bool(o.decision.JSF <= band),
+                             "optimism": v / js_t, "regret": np.nan, "rows": len(o.table)})
+            except ValueError as e:  # the old defaults' refusals are part of the comparison
+                rows.append({"case": name, "choice": "gray, old (main)", "estimator": f"error: {str(e)[:60]}"})
+            t_old = time.perf_counter() - t0
+        print(f"{name}: new (3 selections) {t_new:.0f} s, old {t_old:.0f} s (load {os.getloadavg()[0]:.1f})",
+              flush=True)
+        df = pd.DataFrame([r for r in rows if r["case"] == name]).drop(columns="case")
+        print(df.to_markdown(index=False, floatfmt=".4g"), flush=True)
+    df = pd.DataFrame(rows)
+    print("\n" + df.to_markdown(index=False, floatfmt=".4g"))
+
+
+def speed() -> None:
+    data = gb.load_pumping()
+    cand = gb.Candidates(6, 6, degree=2)
+    gb.semp(gb.Candidates(2, 2, degree=2), data, n_terms=3)  # compile
+    for label, kw in (("in the driver", {}), ("2 worker processes", dict(executor="processes", workers=2))):
+        la = os.getloadavg()[0]
+        t0, c0 = time.perf_counter(), time.process_time()
+        r = gb.select_graybox(cand, data, band=0.031, **kw)
+        t, c = time.perf_counter() - t0, time.process_time() - c0
+        # on a loaded machine the driver's CPU time is the closer figure for a quiet one (one thread)
+        print(f"| select_graybox(Candidates(6, 6, degree=2), plant, band=0.031), {label} | wall {t:.1f} s | "
+              f"driver CPU {c:.1f} s | {len(r.table)} rows | load average {la:.1f} → {os.getloadavg()[0]:.1f} |",
+              flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--part", default="all", choices=("speed", "protocol", "all"))
+    ap.add_argument("--cases", default="", help="comma-separated case names (default all)")
+    ap.add_argument("--no-old", action="store_true", help="skip main's select_graybox")
+    args = ap.parse_args()
+    print(f"# bench_honest ({datetime.date.today()}, git {git_rev()}): {machine()}")
+    warnings.simplefilter("ignore")
+    if args.part in ("speed", "all"):
+        speed()
+    if args.part in ("protocol", "all"):
+        protocol([c for c in args.cases.split(",") if c], not args.no_old)
+
+
+if __name__ == "__main__":
+    main()
