@@ -317,6 +317,161 @@ def _resolve(structure, noise) -> tuple[Structure, Structure]:
     return process, ns
 
 
+@dataclass(frozen=True, eq=False)
+class _Regression:
+    """The stacked process regression of one :func:`els` call: Ψ (rows of all records), y, row bounds."""
+
+    process: Structure
+    ns: Structure
+    recs: list[Record]
+    L: int
+    psi: np.ndarray
+    y: np.ndarray
+    bounds: np.ndarray
+
+    def per_record(self, x: np.ndarray) -> list[np.ndarray]:
+        """Stacked residuals ``x`` split per record, zero on the first ``L`` samples of each."""
+        out = []
+        for i, r in enumerate(self.recs):
+            e = np.zeros(len(r))
+            e[self.L :] = x[self.bounds[i] : self.bounds[i + 1]]
+            out.append(e)
+        return out
+
+    def noise_regressors(self, x: np.ndarray) -> np.ndarray:
+        """E: the noise terms' regressor matrix with ``x`` as the residuals e."""
+        recs, ns, L = self.recs, self.ns, self.L
+        if len(recs) == 1:
+            return regressor_matrix(ns, recs[0].u, recs[0].y, e=self.per_record(x)[0], start=L,
+                                    input_names=recs[0].input_names)
+        return np.vstack([regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)
+                          for r, e in zip(recs, self.per_record(x))])
+
+
+def _regression(process: Structure, ns: Structure, recs: list[Record]) -> _Regression:
+    """Build Ψ and y over all records (rows from the largest lag on), checking there are enough rows."""
+    L = max(process.max_lag, ns.max_lag)
+    psi, y = stacked_regressors(process, recs, start=L)
+    n_p = len(process)
+    if psi.shape[0] <= n_p + len(ns):
+        raise ValueError(f"{psi.shape[0]} regression rows are too few for {n_p + len(ns)} parameters")
+    bounds = np.cumsum([0] + [len(r) - L for r in recs])
+    return _Regression(process, ns, recs, L, psi, y, bounds)
+
+
+class _ExtendedFit:
+    """The least-squares step of ELS, with Ψ factored once.
+
+    Ψ is the same in every iteration: factor it once (scaled columns, Householder QR) and
+    solve each extended problem by block elimination. The noise columns are made
+    orthogonal to range(Ψ), c comes from that small problem and θ by back-substitution
+    from Qᵀy − (QᵀE)c; an iteration reads Q twice (QᵀE and Q(QᵀE)): O(N·n·ne).
+    """
+
+    def __init__(self, reg: _Regression) -> None:
+        self.reg = reg
+        self.sp = column_scales(reg.psi)
+        self.Q, self.R = np.linalg.qr(reg.psi / self.sp)
+        self.Qty = self.Q.T @ reg.y
+        self.y_perp = reg.y - self.Q @ self.Qty
+
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """One ELS least-squares step with ``x`` in the noise regressors: (θ, c, ξ̃, change)."""
+        Q, m_e = self.Q, len(self.reg.ns)
+        E = self.reg.noise_regressors(x)
+        se = column_scales(E)
+        Es = E / se
+        B = Q.T @ Es
+        E_perp = Es - Q @ B
+        cs, _, rank, _ = np.linalg.lstsq(E_perp, self.y_perp, rcond=None)
+        if rank < m_e:
+            raise ValueError(
+                f"ELS: the noise regressors {self.reg.ns} are collinear with the process terms or each other "
+                f"(rank {rank} < {m_e}); the MA part is not identifiable from these data"
+            )
+        th = solve_triangular(self.R, self.Qty - B @ cs, lower=False) / self.sp
+        x_fit = self.y_perp - E_perp @ cs  # = y − Ψθ − E c
+        den = float(np.linalg.norm(x_fit))
+        change = float(np.linalg.norm(x_fit - x)) / den if den > 0 else 0.0
+        return th, cs / se, x_fit, change
+
+
+class _DirectSolve:
+    """The direct solve of the fixed-point equations, taken over once the relaxed iteration stalls."""
+
+    def __init__(self, reg: _Regression, sp: np.ndarray, lags: list) -> None:
+        self.reg, self.sp, self.lags = reg, sp, lags
+        self.solver: _DirectMA | None = None
+        self.n_direct = 0
+        self.failure = ""
+
+    def wanted(self, hist: list[float]) -> bool:
+        """Whether to solve directly: once the iteration stalls (no new smallest change in ``_STALL``) and after."""
+        return self.solver is not None or len(hist) - 1 - int(np.argmin(hist)) >= _STALL
+
+    def step(self, c: np.ndarray) -> np.ndarray | None:
+        """Residuals at a root of the fixed-point equations from ``c``, or None (budget spent or no root)."""
+        if self.solver is None:
+            self.solver = _DirectMA(self.reg.psi / self.sp, self.reg.y, self.lags, self.reg.bounds)
+        if self.solver.nfev < _LM_NFEV and not self.failure:
+            nxt = self.solver.solve(c, max_nfev=_LM_NFEV)
+            self.n_direct = self.solver.nfev
+            if nxt is not None:
+                return nxt
+            self.failure = f"no root found in {self.n_direct} evaluations"
+        return None
+
+    def why(self) -> str:
+        """Why the direct solve did not end the iteration, for the warning ("" when it never started)."""
+        if self.failure:
+            return self.failure
+        return f"it did not reach the fixed point in {self.n_direct} evaluations" if self.solver is not None else ""
+
+
+def _iterate(fit: _ExtendedFit, xi: np.ndarray, theta: np.ndarray, max_iter: int, tol: float,
+             relaxation: float, fallback: _DirectSolve | None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float], bool]:
+    """The relaxed iteration (module docstring), handing over to ``fallback`` when it stalls.
+
+    Returns (θ, c, ξ, history, converged) of the last iterate.
+    """
+    hist: list[float] = []
+    c = np.zeros(len(fit.reg.ns))
+    converged = False
+    for _ in range(int(max_iter)):
+        theta, c, xi_fit, delta = fit(xi)
+        hist.append(delta)
+        if delta <= tol:
+            xi = xi_fit
+            converged = True
+            break
+        if fallback is not None and fallback.wanted(hist):
+            # the relaxed iteration has stalled: solve the fixed-point equations directly
+            # (again from each new fit while it has not met the stopping rule)
+            nxt = fallback.step(c)
+            if nxt is not None:
+                xi = nxt
+                continue
+        xi = xi + relaxation * (xi_fit - xi)
+    return theta, c, xi, hist, converged
+
+
+def _result(reg: _Regression, theta: np.ndarray, c: np.ndarray, n_iter: int, conv: bool, hist: list[float],
+            x: np.ndarray, theta_ls: np.ndarray, name: str, n_direct: int = 0) -> ELSResult:
+    """The ELSResult: the model with its MA part and the residuals per record."""
+    m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name)
+    res = tuple(frozen(a) for a in reg.per_record(x))
+    return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
+
+
+def _warn_not_converged(max_iter: int, hist: list[float], tol: float, relaxation: float, c: np.ndarray,
+                        lags: list, fallback: _DirectSolve | None) -> None:
+    """The ELSConvergenceWarning saying why, attributed to the caller of :func:`els`."""
+    why = fallback.why() if fallback is not None else ""
+    warnings.warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
+                  ELSConvergenceWarning, stacklevel=3)  # this function, els, its caller
+
+
 def els(
     structure: object,
     data: Record | Sequence[Record] | Dataset,
@@ -384,100 +539,19 @@ def els(
     if not isinstance(direct, (bool, np.bool_)):
         raise ValueError(f"direct must be True or False, got {direct!r}")
     recs = records_of(data)
-    L = max(process.max_lag, ns.max_lag)
-    psi, y = stacked_regressors(process, recs, start=L)
-    n_p = len(process)
-    if psi.shape[0] <= n_p + len(ns):
-        raise ValueError(f"{psi.shape[0]} regression rows are too few for {n_p + len(ns)} parameters")
-    theta_ls = scaled_lstsq(psi, y)
-    xi = y - psi @ theta_ls
-    bounds = np.cumsum([0] + [len(r) - L for r in recs])
+    reg = _regression(process, ns, recs)
+    theta_ls = scaled_lstsq(reg.psi, reg.y)
+    xi = reg.y - reg.psi @ theta_ls
+    # No MA part, or a model that explains the data to round-off: then the MA regressors
+    # would be round-off columns, so the MA part is zero by definition.
+    if len(ns) == 0 or np.sqrt(np.mean(xi**2)) <= 1e-12 * np.sqrt(np.mean(reg.y**2)):
+        return _result(reg, theta_ls, np.zeros(len(ns)), 0, True, [], xi, theta_ls, name)
 
-    def per_record(x: np.ndarray) -> list[np.ndarray]:
-        out = []
-        for i, r in enumerate(recs):
-            e = np.zeros(len(r))
-            e[L:] = x[bounds[i] : bounds[i + 1]]
-            out.append(e)
-        return out
-
-    def done(theta, c, n_iter, conv, hist, x, n_direct=0) -> ELSResult:
-        m = Model(process, theta, noise_structure=ns, noise_theta=c, name=name)
-        res = tuple(frozen(a) for a in per_record(x))
-        return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
-
-    if len(ns) == 0:
-        return done(theta_ls, np.zeros(0), 0, True, [], xi)
-    # A model that explains the data to round-off leaves no noise to model: the MA
-    # regressors would be round-off columns, so the MA part is zero by definition.
-    if np.sqrt(np.mean(xi**2)) <= 1e-12 * np.sqrt(np.mean(y**2)):
-        return done(theta_ls, np.zeros(len(ns)), 0, True, [], xi)
-
-    # Ψ is the same in every iteration: factor it once (scaled columns, Householder QR) and
-    # solve each extended problem by block elimination. The noise columns are made
-    # orthogonal to range(Ψ), c comes from that small problem and θ by back-substitution
-    # from Qᵀy − (QᵀE)c; an iteration reads Q twice (QᵀE and Q(QᵀE)): O(N·n·ne).
-    sp = column_scales(psi)
-    Q, R = np.linalg.qr(psi / sp)
-    Qty = Q.T @ y
-    y_perp = y - Q @ Qty
-    m_e = len(ns)
+    fit = _ExtendedFit(reg)
     lags = _pure_lags(ns)
-    can_direct = direct and all(l is not None for l in lags)
-
-    def fit(x: np.ndarray):
-        """One ELS least-squares step with ``x`` in the noise regressors: (θ, c, ξ̃, change)."""
-        if len(recs) == 1:
-            E = regressor_matrix(ns, recs[0].u, recs[0].y, e=per_record(x)[0], start=L,
-                                  input_names=recs[0].input_names)
-        else:
-            E = np.vstack([regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)
-                           for r, e in zip(recs, per_record(x))])
-        se = column_scales(E)
-        Es = E / se
-        B = Q.T @ Es
-        E_perp = Es - Q @ B
-        cs, _, rank, _ = np.linalg.lstsq(E_perp, y_perp, rcond=None)
-        if rank < m_e:
-            raise ValueError(
-                f"ELS: the noise regressors {ns} are collinear with the process terms or each other "
-                f"(rank {rank} < {m_e}); the MA part is not identifiable from these data"
-            )
-        th = solve_triangular(R, Qty - B @ cs, lower=False) / sp
-        x_fit = y_perp - E_perp @ cs  # = y − Ψθ − E c
-        den = float(np.linalg.norm(x_fit))
-        change = float(np.linalg.norm(x_fit - x)) / den if den > 0 else 0.0
-        return th, cs / se, x_fit, change
-
-    hist: list[float] = []
-    theta, c = theta_ls, np.zeros(m_e)
-    converged = False
-    solver = None  # the direct solver once the relaxed iteration has stalled
-    n_direct = 0
-    direct_failure = ""
-    for it in range(1, int(max_iter) + 1):
-        theta, c, xi_fit, delta = fit(xi)
-        hist.append(delta)
-        if delta <= tol:
-            xi = xi_fit
-            converged = True
-            break
-        if can_direct and (solver is not None or len(hist) - 1 - int(np.argmin(hist)) >= _STALL):
-            # the relaxed iteration has stalled: solve the fixed-point equations directly
-            # (again from each new fit while it has not met the stopping rule)
-            if solver is None:
-                solver = _DirectMA(psi / sp, y, lags, bounds)
-            if solver.nfev < _LM_NFEV and not direct_failure:
-                nxt = solver.solve(c, max_nfev=_LM_NFEV)
-                n_direct = solver.nfev
-                if nxt is not None:
-                    xi = nxt
-                    continue
-                direct_failure = f"no root found in {n_direct} evaluations"
-        xi = xi + relaxation * (xi_fit - xi)
+    fallback = _DirectSolve(reg, fit.sp, lags) if direct and all(l is not None for l in lags) else None
+    theta, c, xi, hist, converged = _iterate(fit, xi, theta_ls, max_iter, tol, relaxation, fallback)
     if not converged:
-        why = direct_failure if direct_failure else ("it did not reach the fixed point in "
-                                                     f"{n_direct} evaluations" if solver is not None else "")
-        warnings.warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
-                      ELSConvergenceWarning, stacklevel=2)
-    return done(theta, c, len(hist), converged, hist, xi, n_direct)
+        _warn_not_converged(max_iter, hist, tol, relaxation, c, lags, fallback)
+    n_direct = fallback.n_direct if fallback is not None else 0
+    return _result(reg, theta, c, len(hist), converged, hist, xi, theta_ls, name, n_direct)
