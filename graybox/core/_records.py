@@ -11,6 +11,7 @@ single-input path is exactly what it was.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -327,8 +328,27 @@ class StaticRangeWarning(UserWarning):
     """
 
 
+#: Range warnings already said, by (message, the records' sample arrays); an entry goes with its records.
+_RANGE_SAID: dict[tuple, None] = {}
+
+
+def _first_time(message: str, records: list[Record]) -> bool:
+    """True the first time ``message`` is said about these very records (one README session: one warning)."""
+    key = (message, *(id(r.u) for r in records))
+    if key in _RANGE_SAID:
+        return False
+    _RANGE_SAID[key] = None
+    for r in records:
+        weakref.finalize(r.u, _RANGE_SAID.pop, key, None)
+    return True
+
+
 def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "static points") -> None:
-    """Warn once, in words, which static ū lie outside the dynamic records' input range (box, per input)."""
+    """Warn, in words, which static ū lie outside the dynamic records' input range (box, per input).
+
+    The same fact about the same records (the same Record objects) is said once: a session that
+    fits several estimators to one data set hears it from the first, not from each.
+    """
     ubar = np.asarray(ubar, float)
     if ubar.ndim == 2 and ubar.shape[1] > 1:
         lo_ = np.min([r.inputs.min(axis=0) for r in records], axis=0)
@@ -338,9 +358,11 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
         out_ = rows[((rows < lo_ - tol_) | (rows > hi_ + tol_)).any(axis=1)]
         if out_.size:
             box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo_, hi_))
-            warn(f"{what}: ū = {np.round(out_, 6).tolist()} lie outside the input box {box} of the dynamic records; "
-                 "the model is extrapolated there by the static information (if the points and the records should "
-                 "overlap, check their units)", StaticRangeWarning)
+            msg = (f"{what}: ū = {np.round(out_, 6).tolist()} lie outside the input box {box} of the dynamic "
+                   "records; the model is extrapolated there by the static information (if the points and the "
+                   "records should overlap, check their units)")
+            if _first_time(msg, records):
+                warn(msg, StaticRangeWarning)
         return
     ub = np.unique(np.atleast_1d(np.asarray(ubar, float)))
     lo = min(float(r.u.min()) for r in records)
@@ -348,7 +370,8 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
     tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
     out = ub[(ub < lo - tol) | (ub > hi + tol)]
     if out.size:
-        warn(
-            f"{what}: ū = {np.round(out, 6).tolist()} lie outside the input range [{lo:.6g}, {hi:.6g}] of the dynamic "
-            "records; the model is extrapolated there by the static information (if the points and the records "
-            "should overlap, check their units)", StaticRangeWarning)
+        msg = (f"{what}: ū = {np.round(out, 6).tolist()} lie outside the input range [{lo:.6g}, {hi:.6g}] of the "
+               "dynamic records; the model is extrapolated there by the static information (if the points and the "
+               "records should overlap, check their units)")
+        if _first_time(msg, records):
+            warn(msg, StaticRangeWarning)

@@ -75,7 +75,6 @@ without loss of precision.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -91,7 +90,7 @@ from ..core._records import Dataset, Record, as_records
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..selection._forward_regression import Selection
 from ..core._terms import Structure, Term
-from ..core._validation import check_int, check_real, frozen
+from ..core._validation import check_int, check_real, frozen, warn
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 
@@ -479,6 +478,6 @@ def els(
     if not converged:
         why = direct_failure if direct_failure else ("it did not reach the fixed point in "
                                                      f"{n_direct} evaluations" if solver is not None else "")
-        warnings.warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
-                      ELSConvergenceWarning, stacklevel=2)
+        warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
+             ELSConvergenceWarning)
     return done(theta, c, len(hist), converged, hist, xi, n_direct)

@@ -28,7 +28,6 @@ sweep compiles once and re-solves (OSQP warm-started from the neighbouring λ).
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
@@ -63,7 +62,7 @@ from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, wa
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_lambdas
+from ..core._validation import check_choice, check_lambdas, warn
 
 __all__ = [
     "SOLVERS",
@@ -494,8 +493,7 @@ class _QP:
         if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.dy.value is None:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
-            warnings.warn(f"solver {self.solver} reports an inaccurate optimum (w1={w1:g}, w2={w2:g})",
-                          RuntimeWarning, stacklevel=3)
+            warn(f"solver {self.solver} reports an inaccurate optimum (w1={w1:g}, w2={w2:g})", RuntimeWarning)
         return self.basis.T @ (self.y0 + np.array(self.dy.value, float))
 
 

@@ -19,7 +19,6 @@ with a warning naming ū and why. Neither is a made-up number: both errors are u
 
 from __future__ import annotations
 
-import warnings
 from typing import Mapping
 
 import numpy as np
@@ -30,6 +29,7 @@ from ._model import Model
 from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
+from ..core._validation import warn
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -85,7 +85,7 @@ def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None
     try:
         yb = model.static_curve(ub, y0=static.ybar if y0 is None else y0, strict=True)
     except (ValueError, DivergenceError) as exc:
-        warnings.warn(f"J_SF of {model.name or 'model'} is infinite: {exc}", RuntimeWarning, stacklevel=2)
+        warn(f"J_SF of {model.name or 'model'} is infinite: {exc}", RuntimeWarning)
         return float("inf")
     return mse(static.ybar, yb)
 

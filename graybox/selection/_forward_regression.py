@@ -46,7 +46,6 @@ carries the noise terms in :attr:`Selection.noise`. :func:`graybox.els` accepts 
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from typing import Literal, Sequence
 
@@ -70,7 +69,7 @@ from ..core._gram import (
     term_factors,
 )
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import check_choice
+from ..core._validation import check_choice, warn
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -652,14 +651,10 @@ def frols(
         if active[dropped]:
             active[dropped] = False
             skipped.append((process[dropped], f"proportional to {process[kept]}"))
-    if skipped:
-        warnings.warn(
-            f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
-            + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
-            + ("; …" if len(skipped) > 10 else ""),
-            CandidateWarning,
-            stacklevel=2,
-        )
+    # said together with the candidates dropped during the selection: one CandidateWarning per call
+    said_skipped = (f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
+                    + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
+                    + ("; …" if len(skipped) > 10 else "")) if skipped else ""
     n_usable = int(active.sum())
     if n_terms is not None and n_terms > n_usable:
         raise ValueError(
@@ -724,14 +719,13 @@ def frols(
         C = np.zeros((k_, n_cand))
         C[:, chosen] = sign[:, None] * np.triu(R[:k_, :k_]) / scales[chosen]
         g = sign * R[:k_, k_]
+    said = [said_skipped] if said_skipped else []
     if n_dependent:
         dep_terms = [t for t, why in skipped if why.startswith("linear")]
-        warnings.warn(
-            f"{n_dependent} candidate(s) dropped as linear combinations of selected terms on these data: "
-            + ", ".join(str(t) for t in dep_terms[:10]) + (", …" if len(dep_terms) > 10 else ""),
-            CandidateWarning,
-            stacklevel=2,
-        )
+        said.append(f"{n_dependent} candidate(s) dropped as linear combinations of selected terms on these data: "
+                    + ", ".join(str(t) for t in dep_terms[:10]) + (", …" if len(dep_terms) > 10 else ""))
+    if said:
+        warn("; ".join(said), CandidateWarning)
     k_eval = len(chosen)
     g = g[:k_eval]
     err_eval = g**2 / yy
@@ -748,22 +742,14 @@ def frols(
         reached = 1.0 - err_eval.sum() <= tol
         stop = f"1 - ΣERR ≤ {tol:g}" if reached else f"tol {tol:g} not reached in {k_eval} terms"
         if not reached:
-            warnings.warn(
-                f"ERR tolerance {tol:g} not reached: 1 - ΣERR = {1.0 - err_eval.sum():.3e} after {k_eval} terms "
-                "(raise max_terms or tol)",
-                RuntimeWarning,
-                stacklevel=2,
-            )
+            warn(f"ERR tolerance {tol:g} not reached: 1 - ΣERR = {1.0 - err_eval.sum():.3e} after {k_eval} terms "
+                 "(raise max_terms or tol)", RuntimeWarning)
     else:
         n_sel = int(np.argmin(curve)) + 1
         stop = f"{curve_name} minimum at {n_sel} of {k_eval} sizes"
         if n_sel == k_eval and k_eval < n_usable:
-            warnings.warn(
-                f"{curve_name} is smallest at the largest size looked at ({k_eval} terms): the curve may still be "
-                "falling; raise max_terms",
-                RuntimeWarning,
-                stacklevel=2,
-            )
+            warn(f"{curve_name} is smallest at the largest size looked at ({k_eval} terms): the curve may still be "
+                 "falling; raise max_terms", RuntimeWarning)
 
     # θ of the selected terms: back-substitution in the triangular factor, then undo scaling
     idx = np.array(chosen[:n_sel], dtype=int)
