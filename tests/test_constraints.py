@@ -227,7 +227,7 @@ def test_objects_are_immutable_values():
 @pytest.mark.parametrize(
     "make, match",
     [
-        (lambda: StaticBand(0.0), "positive"),
+        (lambda: StaticBand(0.0), r"b \(the half-width\) must lie in \(0, inf\)"),
         (lambda: StaticBand(0.1, form="relative"), "form"),
         (lambda: GainBounds(), "lower or an upper"),
         (lambda: GainBounds(lower=1.0, upper=0.0), "exceeds"),

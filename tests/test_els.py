@@ -10,7 +10,7 @@ from graybox.estimation._extended_least_squares import ELSConvergenceWarning, EL
 from graybox.reproduce import section_black_box
 from graybox.core._least_squares import scaled_lstsq
 from graybox.core._records import Dataset
-from graybox.selection._forward_regression import frols
+from graybox.selection._forward_regression import CandidateWarning, frols
 
 PROCESS = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
 THETA = np.array([0.7, 0.5, -0.2, 0.3])
@@ -192,8 +192,13 @@ def _load_pumping():
 
 @pytest.mark.parametrize("degree, n_terms", [(2, 17), (3, 23)])
 def test_plant_models_free_run_is_stable_on_validation(degree, n_terms):
+    import warnings
+
     data = _load_pumping()
-    sel = frols(Candidates(ny=6, nu=6, ne=2, degree=degree), data.ident, n_terms=n_terms)
+    with warnings.catch_warnings():
+        # at ℓ = 3 a cubic candidate is a combination of the selected ones on these data: said, not tested here
+        warnings.simplefilter("ignore", CandidateWarning)
+        sel = frols(Candidates(ny=6, nu=6, ne=2, degree=degree), data.ident, n_terms=n_terms)
     info = els(sel, data.ident)
     m = info.model
     assert info.converged

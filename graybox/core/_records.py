@@ -11,14 +11,13 @@ single-input path is exactly what it was.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
 
 from ._terms import check_input_names, default_input_names
-from ._validation import as_1d_finite, warn
+from ._validation import as_1d_finite, check_per_point, warn
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -148,12 +147,18 @@ class StaticPoints:
         A label used in messages.
     input_names : sequence of str, optional
         The inputs' names (default ``("u",)`` for one input, ``u1 … um`` for several).
+    uncertainty : float or array_like of shape (M,), optional
+        δ_i, how far the measured ȳ_i may lie from the true steady state, output units (e.g. a
+        transmitter's ±0.175 mlc); one number for every point or one per point, each > 0. When
+        given, it supplies the bands that otherwise must be passed: D_SF's B (:attr:`band`) and
+        :class:`~graybox.StaticBand`'s half-widths. None (default): every band must be given.
     """
 
     ubar: np.ndarray
     ybar: np.ndarray
     name: str = "static points"
     input_names: tuple[str, ...] | None = None
+    uncertainty: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         u = as_input_array(self.ubar, f"{self.name}: ubar")
@@ -172,13 +177,39 @@ class StaticPoints:
         object.__setattr__(self, "ubar", u)
         object.__setattr__(self, "ybar", y)
         object.__setattr__(self, "input_names", names)
+        if self.uncertainty is not None:
+            d = np.array(check_per_point(self.uncertainty, y.size, f"{self.name}: uncertainty"), dtype=float)
+            if (d <= 0).any():
+                raise ValueError(f"{self.name}: uncertainty must be > 0 at every point (output units), got "
+                                 f"{d[d <= 0][:3].tolist()}")
+            d.setflags(write=False)
+            object.__setattr__(self, "uncertainty", d)
 
     def __len__(self) -> int:
         return int(self.ybar.size)
 
+    @property
+    def band(self) -> float:
+        """D_SF's B from the points' own uncertainty: the mean of δ_i², output units².
+
+        J_SF is the mean of (ȳ_i − ŷ_i)², so a static curve through the true steady states has
+        J_SF ≤ mean δ_i² when each measured ȳ_i is within δ_i of the truth: the rule reads the
+        same in any units (the paper's B = 0.175² = 0.031 mlc² is this rule for its transmitter).
+        ``ValueError`` when the points carry no uncertainty: then pass the band yourself.
+        """
+        if self.uncertainty is None:
+            raise ValueError(f"{self.name}: these static points carry no uncertainty, so no band follows from them; "
+                             "pass band=B (J_SF's bound, output units², e.g. the square of the static measurements' "
+                             "error) or build the points with uncertainty=δ (output units)")
+        return float(np.mean(self.uncertainty**2))
+
+    def with_uncertainty(self, uncertainty: object) -> "StaticPoints":
+        """The same points carrying ``uncertainty`` (δ, output units; one number or one per point)."""
+        return StaticPoints(self.ubar, self.ybar, self.name, self.input_names, uncertainty)
+
     @classmethod
     def from_repeats(cls, ubar: object, ybar: object, *, name: str = "static points",
-                     input_names: Sequence[str] | None = None) -> "StaticPoints":
+                     input_names: Sequence[str] | None = None, uncertainty: object = None) -> "StaticPoints":
         """Static points from repeated measurements: the mean ȳ at each distinct ū.
 
         Parameters
@@ -187,8 +218,9 @@ class StaticPoints:
             Input level of each measurement (engineering units); levels may repeat.
         ybar : array_like, shape (N,)
             Settled output of each measurement.
-        name, input_names
-            As for :class:`StaticPoints`.
+        name, input_names, uncertainty
+            As for :class:`StaticPoints` (``uncertainty``: of the averaged points, one number or
+            one per distinct level).
 
         Returns
         -------
@@ -205,7 +237,7 @@ class StaticPoints:
         uniq, inverse = np.unique(u, return_inverse=True, axis=0)
         inverse = np.asarray(inverse).reshape(-1)
         mean = np.bincount(inverse, weights=y) / np.bincount(inverse)
-        return cls(uniq, mean, name, None if input_names is None else tuple(input_names))
+        return cls(uniq, mean, name, None if input_names is None else tuple(input_names), uncertainty)
 
     @property
     def n_inputs(self) -> int:
@@ -217,7 +249,9 @@ class StaticPoints:
             ins = f"ū in [{self.ubar.min():.4g}, {self.ubar.max():.4g}]"
         else:
             ins = ", ".join(f"{n} in [{c.min():.4g}, {c.max():.4g}]" for n, c in zip(self.input_names, self.ubar.T))
-        return f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in [{self.ybar.min():.4g}, {self.ybar.max():.4g}])"
+        unc = "" if self.uncertainty is None else f", ±{np.max(self.uncertainty):.4g}"
+        return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in [{self.ybar.min():.4g}, "
+                f"{self.ybar.max():.4g}]{unc})")
 
 
 def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.ndarray:
@@ -321,39 +355,29 @@ __all__ += ["as_records", "as_input_array", "check_same_inputs", "static_point_i
 
 
 class StaticRangeWarning(UserWarning):
-    """Static points lie outside the input range of the dynamic records (said once per call).
+    """Static points lie well outside the input range of the dynamic records (said once per call).
 
     Not an error: static knowledge where the dynamic data do not reach is what gray-box
     identification is for. The warning names the points so that a units mix-up is visible.
     """
 
 
-#: Range warnings already said, by (message, the records' sample arrays); an entry goes with its records.
-_RANGE_SAID: dict[tuple, None] = {}
-
-
-def _first_time(message: str, records: list[Record]) -> bool:
-    """True the first time ``message`` is said about these very records (one README session: one warning)."""
-    key = (message, *(id(r.u) for r in records))
-    if key in _RANGE_SAID:
-        return False
-    _RANGE_SAID[key] = None
-    for r in records:
-        weakref.finalize(r.u, _RANGE_SAID.pop, key, None)
-    return True
+#: How far beyond the records' input span (a fraction of it) a static ū must lie to be named: a
+#: level just past the records' extremes (the bundled plant's 750 rpm against records from 770) is
+#: ordinary; one well beyond them is what a units mix-up looks like. A fraction: the same in any units.
+RANGE_MARGIN = 0.05
 
 
 def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "static points") -> None:
-    """Warn, in words, which static ū lie outside the dynamic records' input range (box, per input).
+    """Warn once, in words, which static ū lie well outside the dynamic records' input range (box, per input).
 
-    The same fact about the same records (the same Record objects) is said once: a session that
-    fits several estimators to one data set hears it from the first, not from each.
+    "Well outside": by more than :data:`RANGE_MARGIN` of the records' span of that input.
     """
     ubar = np.asarray(ubar, float)
     if ubar.ndim == 2 and ubar.shape[1] > 1:
         lo_ = np.min([r.inputs.min(axis=0) for r in records], axis=0)
         hi_ = np.max([r.inputs.max(axis=0) for r in records], axis=0)
-        tol_ = 1e-9 * np.maximum(np.maximum(abs(lo_), abs(hi_)), 1.0)
+        tol_ = np.maximum(1e-9 * np.maximum(np.maximum(abs(lo_), abs(hi_)), 1.0), RANGE_MARGIN * (hi_ - lo_))
         rows = np.unique(ubar, axis=0)
         out_ = rows[((rows < lo_ - tol_) | (rows > hi_ + tol_)).any(axis=1)]
         if out_.size:
@@ -361,17 +385,15 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
             msg = (f"{what}: ū = {np.round(out_, 6).tolist()} lie outside the input box {box} of the dynamic "
                    "records; the model is extrapolated there by the static information (if the points and the "
                    "records should overlap, check their units)")
-            if _first_time(msg, records):
-                warn(msg, StaticRangeWarning)
+            warn(msg, StaticRangeWarning)
         return
     ub = np.unique(np.atleast_1d(np.asarray(ubar, float)))
     lo = min(float(r.u.min()) for r in records)
     hi = max(float(r.u.max()) for r in records)
-    tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+    tol = max(1e-9 * max(abs(lo), abs(hi), 1.0), RANGE_MARGIN * (hi - lo))
     out = ub[(ub < lo - tol) | (ub > hi + tol)]
     if out.size:
         msg = (f"{what}: ū = {np.round(out, 6).tolist()} lie outside the input range [{lo:.6g}, {hi:.6g}] of the "
                "dynamic records; the model is extrapolated there by the static information (if the points and the "
                "records should overlap, check their units)")
-        if _first_time(msg, records):
-            warn(msg, StaticRangeWarning)
+        warn(msg, StaticRangeWarning)

@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 
 from ..estimation._prediction_error import PE_LAMBDAS, pe_pareto
-from ..estimation._decisions import FALLBACKS, decide_dsf
+from ..estimation._decisions import FALLBACKS, decide_dsf, resolve_band
 from ..core._progress import progress_bar
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
@@ -140,7 +140,8 @@ class BootstrapJob:
         recs = block_resample(self.records, self.block_length, rng)
         sp = self.static
         if self.static_sigma is not None:
-            sp = StaticPoints(sp.ubar, sp.ybar + self.static_sigma * rng.standard_normal(len(sp)), name=sp.name)
+            sp = StaticPoints(sp.ubar, sp.ybar + self.static_sigma * rng.standard_normal(len(sp)), sp.name,
+                              sp.input_names, sp.uncertainty)
         return recs, sp
 
     def __call__(self, i: int) -> dict:
@@ -310,7 +311,7 @@ def bootstrap_decision(
     lambdas: Sequence[float] | np.ndarray | None = None,
     n_boot: int = 50,
     block_length: int | None = None,
-    band: float | tuple[float, float] = 0.031,
+    band: float | tuple[float, float] | None = None,
     fallback: str | None = None,
     static_sigma: float | None = None,
     seed: int = 0,
@@ -337,7 +338,10 @@ def bootstrap_decision(
     block_length : int, optional
         Samples per block (default: the larger of 10·(max lag + 1) and a tenth of the data);
         at least 2·(max lag + 1) so that a block has rows to fit.
-    band, fallback
+    band : float or (float, float), optional
+        As for :func:`graybox.decide_dsf`; default: the static points' own band
+        (:attr:`~graybox.StaticPoints.band`), required when they carry no uncertainty.
+    fallback : {None, "min_jsf"}
         As for :func:`graybox.decide_dsf`.
     static_sigma : float, optional
         Standard deviation of Gaussian noise added to the static ȳ_i in each replicate (output
@@ -385,6 +389,8 @@ def bootstrap_decision(
     block_length = check_int(block_length, "block_length", low=2 * (L + 1))
     if static_sigma is not None:
         static_sigma = check_real(static_sigma, "static_sigma", low=0, low_open=True)
+    lo, hi = resolve_band(band, sp, "bootstrap_decision")
+    band = hi if lo == 0 and (band is None or np.ndim(band) == 0) else (lo, hi)
     if fallback is not None:
         check_choice(fallback, "fallback", FALLBACKS)
     opts = _estimator_options(method, options)

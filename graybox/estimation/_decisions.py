@@ -2,7 +2,9 @@
 
 :func:`decide_dsf` is the paper's D_SF (eq. (14)): the member with the smallest free-run
 error J_S among those whose static error J_SF lies in the uncertainty interval
-B = [0, band] of the pressure transmitter (0.031 mlc² = 0.175²).
+B = [0, band]. B is in the output's units² and belongs to the data: it is given, or read from
+the static points' uncertainty δ (:attr:`graybox.StaticPoints.band`, the mean of δ_i²; the
+paper's 0.031 mlc² = 0.175² for its transmitter); never a default.
 """
 
 from __future__ import annotations
@@ -16,9 +18,23 @@ from ._pareto import ParetoSet
 from ..core._records import Record
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
-from ..core._validation import check_choice
+from ..core._records import StaticPoints
+from ..core._validation import check_band, check_choice
 
-__all__ = ["Decision", "decide_dsf", "decide_min_correlation", "FALLBACKS"]
+__all__ = ["Decision", "decide_dsf", "decide_min_correlation", "FALLBACKS", "resolve_band"]
+
+
+def resolve_band(band: object, static: StaticPoints | None, who: str) -> tuple[float, float]:
+    """D_SF's band as ``(low, high)``: ``band`` checked, or, when it is None, the static points' own.
+
+    ``ValueError`` saying what to pass when neither is there: a band has no unit-free default.
+    """
+    if band is not None:
+        return check_band(band, "band")
+    if static is None:
+        raise ValueError(f"{who} needs band=B, J_SF's bound in output units² (e.g. the square of the static "
+                         "measurements' error, or data.static.band when the static points carry their uncertainty)")
+    return 0.0, static.band
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,7 +86,7 @@ FALLBACKS = ("min_jsf",)
 def decide_dsf(
     pareto: ParetoSet,
     *,
-    band: float | tuple[float, float] = 0.031,
+    band: float | tuple[float, float] | None = None,
     fallback: str | None = None,
 ) -> Decision:
     """Eq. (14): argmin J_S subject to J_SF ∈ B.
@@ -80,7 +96,9 @@ def decide_dsf(
     pareto : ParetoSet
         Members with J_S and J_SF (output units²).
     band : float or (float, float)
-        B = [0, band] (default 0.031 mlc² = 0.175², the transmitter's error), or (low, high).
+        B = [0, band] with band > 0, or (low, high) with 0 <= low < high, in the output's units²
+        (J_SF's units). Required: a Pareto set does not know its data's uncertainty; with static
+        points that carry one, pass ``band=data.static.band`` (the mean of δ_i²).
     fallback : {None, "min_jsf"}
         When no member has J_SF in B (with a finite J_S): None (default) raises ``ValueError``;
         ``"min_jsf"`` picks the member with the smallest J_SF (ties: smaller J_S) instead. The
@@ -93,13 +111,10 @@ def decide_dsf(
         lower index.
     """
     if not isinstance(pareto, ParetoSet):
-        raise ValueError(f"decide_dsf needs a ParetoSet, got {type(pareto).__name__}")
+        raise TypeError(f"decide_dsf: pareto must be a ParetoSet, got {type(pareto).__name__}")
+    lo, hi = resolve_band(band, None, "decide_dsf")
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
-    lo, hi = (0.0, band) if np.ndim(band) == 0 else band
-    lo, hi = float(lo), float(hi)
-    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo <= hi):
-        raise ValueError(f"band must be >= 0 (or (low, high) with 0 <= low <= high), got {band!r}")
     if fallback is not None:
         check_choice(fallback, "fallback", FALLBACKS)
     js, jsf = pareto.JS, pareto.JSF
@@ -152,7 +167,7 @@ def decide_min_correlation(
         ``.score`` is the chosen member's ρ.
     """
     if not isinstance(pareto, ParetoSet):
-        raise ValueError(f"decide_min_correlation needs a ParetoSet, got {type(pareto).__name__}")
+        raise TypeError(f"decide_min_correlation: pareto must be a ParetoSet, got {type(pareto).__name__}")
     check_choice(output, "output", ("free-run", "one-step"))
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")

@@ -39,6 +39,7 @@ from typing import Sequence
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from ._decisions import resolve_band
 from ._prediction_error import pe_thetas
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, warn_static_range
@@ -328,7 +329,7 @@ def se_dsf(
     data: Record | Dataset | Sequence[Record],
     static: StaticPoints | None = None,
     *,
-    band: float = 0.031,
+    band: float | None = None,
     theta0: np.ndarray | None = None,
     lambdas: Sequence[float] | np.ndarray | None = None,
     max_iter: int = 200,
@@ -346,7 +347,9 @@ def se_dsf(
     static : StaticPoints, optional
         Static points (default: the Dataset's).
     band : float
-        B, the bound on J_SF in output units² (D_SF's band: 0.031 mlc² = 0.175² for the plant).
+        B > 0, the bound on J_SF in output units² (D_SF's band). Default: the static points' own,
+        :attr:`~graybox.StaticPoints.band` (the mean of their uncertainty δ_i²); static points
+        without an uncertainty need it given (``ValueError`` otherwise).
     theta0 : ndarray, shape (n_terms,), optional
         The only start; default: several (see the module docstring).
     lambdas : sequence of float, optional
@@ -370,7 +373,9 @@ def se_dsf(
     sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
     if sp is None:
         raise ValueError("se_dsf needs static points: pass static= or a Dataset with static points")
-    band = check_real(band, "band", low=0, low_open=True)
+    if band is not None and np.ndim(band) != 0:
+        raise TypeError(f"se_dsf: band must be a number B > 0 (the bound on J_SF, output units²), got {band!r}")
+    band = resolve_band(band, sp, "se_dsf")[1]
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     warn_static_range(sp.ubar, recs)

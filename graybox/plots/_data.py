@@ -28,8 +28,8 @@ def plot_static_curve(
     curve: StaticCurve | Sequence[StaticCurve] | None = None,
     *,
     ax: Axes | None = None,
-    xlabel: str = "Pump speed (rpm)",
-    ylabel: str = "Pressure (mlc)",
+    xlabel: str = "input ū",
+    ylabel: str = "output ȳ",
     n_grid: int = 200,
     margin: float = 0.05,
 ) -> Figure:
@@ -45,7 +45,7 @@ def plot_static_curve(
     ax : matplotlib Axes, optional
         Draw here; by default a new 6.4 × 4.2 in figure is made.
     xlabel, ylabel : str
-        Axis labels (defaults: the pumping plant's).
+        Axis labels, with your data's units (e.g. ``"Pump speed (rpm)"``; the defaults name no unit).
     n_grid : int
         Points per curve.
     margin : float
@@ -91,8 +91,8 @@ def plot_static_curve(
 def plot_record(
     record: Record,
     *,
-    input_label: str = "Pump speed reference",
-    output_label: str = "Pressure",
+    input_label: str = "input",
+    output_label: str = "output",
     start: int = 0,
     stop: int | None = None,
     axes: Sequence[Axes] | None = None,
@@ -106,7 +106,7 @@ def plot_record(
         shape (N, m): one line per input, named in a legend); the units in ``record.units`` are
         appended to the labels.
     input_label, output_label : str
-        Axis labels without units (defaults: the pumping plant's).
+        Axis labels without units (the record's units are appended).
     start, stop : int, optional
         Sample range to draw (default: all); the time axis keeps the record's time.
     axes : pair of Axes, optional

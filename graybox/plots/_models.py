@@ -18,7 +18,7 @@ def plot_free_run(
     models: Model | Mapping[str, Model],
     *,
     ax: Axes | None = None,
-    ylabel: str = "Pressure",
+    ylabel: str = "output",
 ) -> Figure:
     """The measured output (solid) and each model's free run (dashed) against time.
 

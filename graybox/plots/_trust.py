@@ -86,9 +86,9 @@ def plot_static_band(
     *,
     gain: bool = True,
     axes: Sequence[Axes] | None = None,
-    xlabel: str = "Pump speed (rpm)",
-    ylabel: str = "Pressure (mlc)",
-    gain_label: str = "static gain (mlc/rpm)",
+    xlabel: str = "input ū",
+    ylabel: str = "output ȳ",
+    gain_label: str = "static gain dȳ/dū",
 ) -> Figure:
     """The static curve with its confidence band (shaded) and the static points; the gain beside it.
 
@@ -103,7 +103,7 @@ def plot_static_band(
     axes : sequence of Axes, optional
         Draw here (one Axes, or two with ``gain``); by default a new figure is made.
     xlabel, ylabel, gain_label : str
-        Axis labels (defaults: the pumping plant's).
+        Axis labels, with your data's units (the defaults name no unit).
 
     Returns
     -------
@@ -148,8 +148,8 @@ def plot_decision_bootstrap(
     boot: DecisionBootstrap,
     *,
     axes: Sequence[Axes] | None = None,
-    xlabel: str = "J_S (mlc²)",
-    ylabel: str = "J_SF (mlc²)",
+    xlabel: str = "J_S (output units²)",
+    ylabel: str = "J_SF (output units²)",
 ) -> Figure:
     """How often each λ1 was chosen, and where the chosen members lie in (J_S, J_SF).
 
@@ -160,7 +160,7 @@ def plot_decision_bootstrap(
     axes : pair of Axes, optional
         Draw here; by default a new 10 × 4 in figure with two panels is made.
     xlabel, ylabel : str
-        Labels of the right panel (defaults: the pumping plant's units).
+        Labels of the right panel (e.g. ``"J_S (mlc²)"``; the defaults name no unit).
 
     Returns
     -------

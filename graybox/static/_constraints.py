@@ -51,6 +51,7 @@ from ._surfaces import StaticSurface
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
+from ..core._validation import check_choice, check_real
 
 __all__ = [
     "InfeasibleError",
@@ -650,8 +651,10 @@ class StaticBand(StaticConstraint):
 
     Parameters
     ----------
-    b : float
-        Half-width of the band, output units (default 0.175 mlc: the transmitter's error).
+    b : float, optional
+        Half-width of the band, output units (> 0). Default: each point's own uncertainty δ_i
+        (:attr:`StaticPoints.uncertainty <graybox.StaticPoints>`, e.g. a transmitter's error);
+        points without one need ``b`` given (``ValueError`` when the band is built into a problem).
     points : StaticPoints, optional
         Default: the problem's static points.
     form : {"exact", "residual"}
@@ -659,22 +662,32 @@ class StaticBand(StaticConstraint):
         Smallest D_i allowed by the exact form (a stability margin: 1 − Σ a_i >= it).
     """
 
-    b: float = 0.175
+    b: float | None = None
     points: StaticPoints | None = None
     form: str = "exact"
     min_denominator: float = 1e-3
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.b) and self.b > 0):
-            raise ValueError(f"band half-width b must be a positive number, got {self.b!r}")
-        if self.form not in ("exact", "residual"):
-            raise ValueError(f"form must be 'exact' or 'residual', got {self.form!r}")
-        if not (np.isfinite(self.min_denominator) and 0 < self.min_denominator < 1):
-            raise ValueError(f"min_denominator must lie in (0, 1), got {self.min_denominator!r}")
+        if self.b is not None:
+            object.__setattr__(self, "b", check_real(self.b, "StaticBand: b (the half-width)", low=0, low_open=True))
+        if self.points is not None and not isinstance(self.points, StaticPoints):
+            raise TypeError(f"StaticBand: points must be StaticPoints, got {type(self.points).__name__}")
+        check_choice(self.form, "StaticBand: form", ("exact", "residual"))
+        check_real(self.min_denominator, "StaticBand: min_denominator", low=0, high=1, low_open=True, high_open=True)
+
+    def half_widths(self, pts: StaticPoints) -> np.ndarray:
+        """b at each of ``pts``, shape (M,): ``b``, or the points' own uncertainty when ``b`` is None."""
+        if self.b is not None:
+            return np.full(len(pts), self.b)
+        if pts.uncertainty is None:
+            raise ValueError(f"StaticBand needs its half-width: {pts.name} carry no uncertainty; pass b= (output "
+                             "units, e.g. the static measurements' error) or give the points an uncertainty")
+        return np.asarray(pts.uncertainty, float)
 
     def describe(self) -> str:
         n = "the problem's" if self.points is None else f"{len(self.points)}"
-        return f"static band ±{self.b:g} ({self.form}) at {n} static points"
+        w = "the points' uncertainty" if self.b is None else f"{self.b:g}"
+        return f"static band ±{w} ({self.form}) at {n} static points"
 
     def affine(self, ctx: StaticContext) -> AffineRows:
         pts = ctx.require_points(self.points, self.describe())
@@ -684,9 +697,9 @@ class StaticBand(StaticConstraint):
             one, dR = _denominator_rows(cm, pts.ubar, pts.ybar)
         else:
             one, dR = np.ones(len(pts)), np.zeros_like(QR)
-        b = self.b
+        b = self.half_widths(pts)
         # q θ − ȳ <= b (1 − dθ)   and   ȳ − q θ <= b (1 − dθ)
-        A = [QR + b * dR, -QR + b * dR]
+        A = [QR + b[:, None] * dR, -QR + b[:, None] * dR]
         rhs = [pts.ybar + b * one, b * one - pts.ybar]
         if self.form == "exact":
             A.append(dR)  # 1 − dθ >= min_denominator
