@@ -20,6 +20,8 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
+from ._validation import check_bool, check_int
+
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
            "default_input_names"]
 
@@ -371,14 +373,12 @@ def Candidates(
     names = check_input_names(names, what="inputs")
     nus = _per_input(nu, names, "nu", None)
     delays = _per_input(delay, names, "delay", 1)
-    for name, v, lo in (("ny", ny, 0), ("ne", ne, 0), ("degree", degree, 0)):
-        if int(v) != v or v < lo:
-            raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
+    ny, ne, degree = (check_int(v, name, low=0) for name, v in (("ny", ny), ("ne", ne), ("degree", degree)))
+    constant = check_bool(constant, "constant")
     for n in names:
         for what, v, lo in (("nu", nus[n], 0), ("delay", delays[n], 1)):
-            if isinstance(v, bool) or int(v) != v or v < lo:
-                label = what if names == ("u",) else f"{what} of input {n!r}"
-                raise ValueError(f"{label} must be an integer >= {lo}, got {v!r}")
+            label = what if names == ("u",) else f"{what} of input {n!r}"
+            (nus if what == "nu" else delays)[n] = check_int(v, label, low=lo)
         if nus[n] and delays[n] > nus[n]:
             label = "" if names == ("u",) else f" of input {n!r}"
             raise ValueError(f"delay{label} ({delays[n]}) must not exceed nu{label} ({nus[n]})")
@@ -391,8 +391,7 @@ def Candidates(
         for combo in itertools.combinations_with_replacement(variables, d):
             terms.append(Term(tuple((s, l, 1) for s, l in combo)))
     if max_y_power is not None:
-        if int(max_y_power) != max_y_power or max_y_power < 0:
-            raise ValueError(f"max_y_power must be an integer >= 0, got {max_y_power!r}")
+        max_y_power = check_int(max_y_power, "max_y_power", low=0)
         terms = [t for t in terms if t.power_of("y") <= max_y_power]
     terms.sort(key=Term.sort_key)
     terms += [Term((("e", l, 1),)) for l in range(1, ne + 1)]

@@ -69,7 +69,7 @@ from ..core._gram import (
     term_factors,
 )
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import check_choice, warn
+from ..core._validation import check_choice, check_int, check_real, warn
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -121,8 +121,7 @@ def information_criterion(name: str, rss: np.ndarray, n_rows: int) -> np.ndarray
         With σ²_k = rss_k / N: ``N ln σ² + 2k`` (AIC), ``N ln σ² + k ln N`` (BIC),
         ``N ln σ² + N ln((N + k)/(N − k))`` (FPE, in its logarithmic form as in SysIdentPy).
     """
-    if name not in CRITERIA:
-        raise ValueError(f"unknown criterion {name!r}; expected one of {CRITERIA}")
+    check_choice(name, "name (the criterion)", CRITERIA)
     rss = np.asarray(rss, dtype=float)
     k = np.arange(1, rss.size + 1, dtype=float)
     N = float(n_rows)
@@ -566,7 +565,7 @@ def frols(
     """
     # ---- validate arguments at the boundary ----
     if not isinstance(candidates, Structure):
-        raise ValueError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+        raise TypeError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
     process, noise = candidates.process, candidates.noise
     n_cand = len(process)
     if n_cand == 0:
@@ -574,25 +573,18 @@ def frols(
     if n_terms is not None and tol is not None:
         raise ValueError("give either n_terms or tol, not both")
     if n_terms is not None:
-        if isinstance(n_terms, bool) or int(n_terms) != n_terms or n_terms < 1:
-            raise ValueError(f"n_terms must be a positive integer, got {n_terms!r}")
-        n_terms = int(n_terms)
+        n_terms = check_int(n_terms, "n_terms", low=1)
         if n_terms > n_cand:
             raise ValueError(f"n_terms = {n_terms} is more than the {n_cand} process candidates")
         if max_terms is not None:
             raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
-    if tol is not None and not (np.isfinite(tol) and 0.0 < tol < 1.0):
-        raise ValueError(f"tol must lie in the open interval (0, 1), got {tol!r}")
+    if tol is not None:
+        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
     if criterion is not None:
-        if not isinstance(criterion, str) or criterion.lower() not in CRITERIA:
-            raise ValueError(f"criterion must be one of {CRITERIA}, got {criterion!r}")
-        criterion = criterion.lower()  # type: ignore[assignment]
+        check_choice(criterion, "criterion", CRITERIA)
     if max_terms is not None:
-        if isinstance(max_terms, bool) or int(max_terms) != max_terms or max_terms < 1:
-            raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
-        max_terms = int(max_terms)
-    if not (np.isfinite(rank_tol) and 0.0 < rank_tol < 1.0):
-        raise ValueError(f"rank_tol must lie in (0, 1), got {rank_tol!r}")
+        max_terms = check_int(max_terms, "max_terms", low=1)
+    rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
     mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
     if mode == "criterion" and criterion is None:
         criterion = "bic"

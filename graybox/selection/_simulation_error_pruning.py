@@ -42,7 +42,7 @@ from ..models._model import Model
 from ..core._records import Dataset, Record, as_records
 from ._forward_regression import CRITERIA
 from ..core._terms import Structure, Term
-from ..core._validation import check_choice, check_int, check_real, frozen
+from ..core._validation import check_bool, check_choice, check_int, check_real, frozen
 
 __all__ = ["semp", "SEMPResult"]
 
@@ -279,7 +279,7 @@ def semp(
         candidates' largest lag, or no candidate that can be added (all collinear or diverging).
     """
     if not isinstance(candidates, Structure):
-        raise ValueError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+        raise TypeError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
     process = candidates.process
     nc = len(process)
     if nc == 0:
@@ -299,8 +299,7 @@ def semp(
     prune_tol = check_real(prune_tol, "prune_tol", low=0)
     rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
     threads = check_int(threads, "threads", low=1)
-    if not isinstance(prune, bool):
-        raise ValueError(f"prune must be True or False, got {prune!r}")
+    prune = check_bool(prune, "prune")
     mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
     crit = criterion or "bic"
     forced = process.positions(include, "included term")
