@@ -17,7 +17,7 @@ from typing import Sequence
 import numpy as np
 
 from ._terms import check_input_names, default_input_names
-from ._validation import as_1d_finite, check_per_point, warn
+from ._validation import as_1d_finite, check_per_point, check_real, warn
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -78,8 +78,11 @@ class Record:
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: u and y must have the same length, got {u.shape[0]} and {y.size}")
-        if not (np.isfinite(self.Ts) and self.Ts > 0):
-            raise ValueError(f"{self.name}: Ts must be a positive number of seconds, got {self.Ts}")
+        object.__setattr__(self, "Ts", check_real(self.Ts, f"{self.name}: Ts (seconds)", low=0, low_open=True))
+        units = self.units
+        if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
+            raise TypeError(f"{self.name}: units must be a pair of strings (input unit, output unit), got {units!r}")
+        object.__setattr__(self, "units", tuple(units))
         m = 1 if u.ndim == 1 else u.shape[1]
         names = default_input_names(m) if self.input_names is None else check_input_names(
             self.input_names, m, f"{self.name}: input_names")
@@ -237,7 +240,8 @@ class StaticPoints:
         uniq, inverse = np.unique(u, return_inverse=True, axis=0)
         inverse = np.asarray(inverse).reshape(-1)
         mean = np.bincount(inverse, weights=y) / np.bincount(inverse)
-        return cls(uniq, mean, name, None if input_names is None else tuple(input_names), uncertainty)
+        names = None if input_names is None else check_input_names(input_names, what=f"{name}: input_names")
+        return cls(uniq, mean, name, names, uncertainty)
 
     @property
     def n_inputs(self) -> int:
@@ -304,6 +308,13 @@ class Dataset:
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        for nm in ("ident", "valid"):
+            if not isinstance(getattr(self, nm), Record):
+                raise TypeError(f"Dataset: {nm} must be a Record, got {type(getattr(self, nm)).__name__}")
+        if self.static is not None and not isinstance(self.static, StaticPoints):
+            raise TypeError(f"Dataset: static must be StaticPoints or None, got {type(self.static).__name__}")
+        if not isinstance(self.extra, dict):
+            raise TypeError(f"Dataset: extra must be a dict, got {type(self.extra).__name__}")
         check_same_inputs(self.ident, self.valid)
         if self.static is not None:
             check_same_inputs(self.ident, self.static)

@@ -13,6 +13,7 @@ import numpy as np
 
 from ._records import Record, as_records
 from ._terms import Structure
+from ._validation import check_int
 
 __all__ = ["record_signals", "check_structure_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
 
@@ -87,7 +88,7 @@ def regressor_matrix(
         Ψ, float64, C-contiguous.
     """
     n = y.shape[0]
-    s = structure.max_lag if start is None else int(start)
+    s = structure.max_lag if start is None else check_int(start, "start", low=0)
     if s < structure.max_lag:
         raise ValueError(f"start ({s}) is smaller than the structure's max lag ({structure.max_lag})")
     if n < s + 1:
@@ -136,7 +137,7 @@ def stacked_regressors(
         The measured ``y(k)`` matching each row.
     """
     recs = as_records(records)
-    s = structure.max_lag if start is None else int(start)
+    s = structure.max_lag if start is None else check_int(start, "start", low=0)
     blocks, targets = [], []
     for i, r in enumerate(recs):
         r.require_length(s)

@@ -63,12 +63,14 @@ def default_input_names(m: int) -> tuple[str, ...]:
 def check_input_names(names: object, m: int | None = None, what: str = "input_names") -> tuple[str, ...]:
     """Validated input names: identifiers, not y/e/k, none given twice (and ``m`` of them when given)."""
     if isinstance(names, str) or not hasattr(names, "__iter__"):
-        raise ValueError(f"{what} must be a sequence of names, got {names!r}")
+        raise TypeError(f"{what} must be a sequence of names (strings), got {names!r}")
     out = tuple(names)  # type: ignore[arg-type]
     if not out:
         raise ValueError(f"{what}: at least one input name is needed")
     for n in out:
-        if not isinstance(n, str) or not _NAME_RE.match(n) or n in _RESERVED:
+        if not isinstance(n, str):
+            raise TypeError(f"{what}: an input name must be a string, got {n!r}")
+        if not _NAME_RE.match(n) or n in _RESERVED:
             raise ValueError(f"{what}: input name {n!r} is not a valid identifier other than y, e, k")
     dup = sorted({n for n in out if out.count(n) > 1})
     if dup:
@@ -254,8 +256,15 @@ class Structure:
         (``what`` names the role of the terms in the message, e.g. ``"included term"``).
         """
         out: list[int] = []
+        if isinstance(terms, (str, Term)) or not hasattr(terms, "__iter__"):
+            raise TypeError(f"{what}s must be a sequence of terms (Terms or strings), got {terms!r}")
         for t in terms:
-            term = t if isinstance(t, Term) else parse_term(t)
+            if not isinstance(t, (Term, str)):
+                raise TypeError(f"{what}: a term must be a Term or a string, got {t!r}")
+            try:
+                term = t if isinstance(t, Term) else parse_term(t)
+            except ValueError as exc:
+                raise ValueError(f"{what}: {exc}") from None
             if term not in self.terms:
                 raise ValueError(f"{what} {term} is not among the process candidates")
             i = self.terms.index(term)
@@ -369,7 +378,7 @@ def Candidates(
     if inputs is None:
         names = tuple(nu) if isinstance(nu, Mapping) else ("u",)
     else:
-        names = tuple(inputs)
+        names = inputs
     names = check_input_names(names, what="inputs")
     nus = _per_input(nu, names, "nu", None)
     delays = _per_input(delay, names, "delay", 1)

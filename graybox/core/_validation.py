@@ -167,10 +167,14 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
     λ2 = 1 − λ1. λ1 = 0 would ignore the dynamic data entirely (θ is then not identifiable from
     the static points alone), so it is refused.
     """
+    if _is_bool(lambdas) or isinstance(lambdas, str):
+        raise TypeError(f"{name} must be numbers in (0, 1], got {lambdas!r}")
     try:
         lam = np.atleast_1d(np.asarray(lambdas, dtype=float))
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers in (0, 1], got {lambdas!r}") from None
+        raise TypeError(f"{name} must be numbers in (0, 1], got {lambdas!r}") from None
+    if np.asarray(lambdas).dtype == bool:
+        raise TypeError(f"{name} must be numbers in (0, 1], got booleans")
     if lam.ndim != 1 or lam.size == 0:
         raise ValueError(f"{name} must be a non-empty 1-D array of λ1 values, got shape {lam.shape}")
     bad = ~np.isfinite(lam) | (lam <= 0) | (lam > 1)

@@ -291,6 +291,8 @@ class DecisionBootstrap:
 
 
 def _estimator_options(method: str, options: Mapping | None) -> dict:
+    if options is not None and not isinstance(options, Mapping):
+        raise TypeError(f"options must be a mapping of the sweep's keyword options, got {options!r}")
     opts = dict(options or {})
     fn = pe_pareto if method == "pe" else se_pareto
     allowed = [p.name for p in inspect.signature(fn).parameters.values() if p.kind == p.KEYWORD_ONLY]
@@ -394,6 +396,8 @@ def bootstrap_decision(
     if fallback is not None:
         check_choice(fallback, "fallback", FALLBACKS)
     opts = _estimator_options(method, options)
+    if map is not None and not callable(map):
+        raise TypeError(f"map must be a callable map(job, ids) (e.g. an executor's .map), got {map!r}")
     if not any(len(r) >= block_length for r in recs):
         raise ValueError(f"block_length {block_length} is longer than every record ({[len(r) for r in recs]} samples)")
     job = BootstrapJob(structure.process, tuple(recs), sp, method, lam, band, fallback, block_length, seed,

@@ -64,7 +64,7 @@ from ..models._model import Model
 from ..estimation._neural import NeuralModel
 from ..core._records import Dataset, Record, as_records
 from ..core._regressors import record_signals, regressor_matrix
-from ..core._validation import check_choice, check_int, check_real
+from ..core._validation import check_bool, check_choice, check_int, check_real
 
 __all__ = ["CorrelationTest", "ResidualTests", "residual_tests", "one_step_residuals", "TESTS"]
 
@@ -262,7 +262,7 @@ def one_step_residuals(
     """
     if not isinstance(model, (Model, NeuralModel)):
         raise ValueError(f"model must be a Model or a NeuralModel, got {type(model).__name__}")
-    return [_model_residuals(model, r, bool(moving_average))[0] for r in as_records(data)]
+    return [_model_residuals(model, r, check_bool(moving_average, "moving_average"))[0] for r in as_records(data)]
 
 
 # --------------------------------------------------------------------------------------------
@@ -348,6 +348,7 @@ def residual_tests(
     if not isinstance(model, (Model, NeuralModel)):
         raise ValueError(f"model must be a Model or a NeuralModel, got {type(model).__name__}")
     max_lag = check_int(max_lag, "max_lag", low=1)
+    moving_average = check_bool(moving_average, "moving_average")
     level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
     check_choice(rule, "rule", RULES)
     recs = as_records(data)

@@ -591,6 +591,8 @@ def se_uncertainty(
     level = _check_level(level)
     recs = as_records(data)
     sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
+    if sp is not None and not isinstance(sp, StaticPoints):
+        raise TypeError(f"static must be StaticPoints, got {type(sp).__name__}")
     if sp is None and lam < 1:
         raise ValueError("se_uncertainty needs the static points (static= or a Dataset with static points)")
     if sp is None:  # λ1 = 1 ignores the static points; SEProblem still wants some
@@ -783,6 +785,8 @@ def static_curve_band(
     if not isinstance(uncertainty, ParameterUncertainty):
         raise ValueError(f"static_curve_band needs a ParameterUncertainty, got {type(uncertainty).__name__}")
     check_choice(method, "method", ("delta", "monte-carlo"))
+    n_samples = check_int(n_samples, "n_samples", low=2)  # checked for either method: a bad value is never ignored
+    seed = check_seed(seed)
     if uncertainty.model.n_inputs > 1:
         raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
                          f"inputs {uncertainty.model.input_names} (a band around a static surface is not built yet)")

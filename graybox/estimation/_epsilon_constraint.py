@@ -371,6 +371,8 @@ def se_dsf(
     """
     recs = as_records(data)
     sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
+    if sp is not None and not isinstance(sp, StaticPoints):
+        raise TypeError(f"static must be StaticPoints, got {type(sp).__name__}")
     if sp is None:
         raise ValueError("se_dsf needs static points: pass static= or a Dataset with static points")
     if band is not None and np.ndim(band) != 0:
@@ -384,7 +386,7 @@ def se_dsf(
     if theta0 is not None:
         starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]
     else:
-        lams = np.logspace(-6, 0, 60) if pe_lambdas is None else np.asarray(pe_lambdas, float)
+        lams = np.logspace(-6, 0, 60) if pe_lambdas is None else check_lambdas(pe_lambdas, "pe_lambdas")
         coarse = _COARSE if lambdas is None else check_lambdas(lambdas)
         starts = []
         try:

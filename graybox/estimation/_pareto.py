@@ -18,7 +18,7 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, as_records
-from ..core._validation import frozen
+from ..core._validation import check_bool, frozen
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -219,6 +219,7 @@ class ParetoSet:
 
     def to_frame(self, params: bool = False) -> pd.DataFrame:
         """One row per member: ``lambda1``, ``J1``, ``JS``, ``JSF``, extras (and θ by term if ``params``)."""
+        params = check_bool(params, "params")
         cols = {"lambda1": self.lambdas, "J1": self.J1, "JS": self.JS, "JSF": self.JSF}
         cols.update(self.extra)
         cols["failure"] = [self.failures.get(i, "") for i in range(len(self))]

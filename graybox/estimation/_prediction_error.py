@@ -62,7 +62,7 @@ from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, wa
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_lambdas, warn
+from ..core._validation import check_bool, check_choice, check_int, check_lambdas, check_real, warn
 
 __all__ = [
     "SOLVERS",
@@ -293,10 +293,7 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
     elif isinstance(reference, Model):
         return float(reference.clusters().get("Σy", 0.0))
     elif np.ndim(reference) == 0:
-        v = float(reference)
-        if not np.isfinite(v):
-            raise ValueError(f"reference Σ*_y must be finite, got {reference!r}")
-        return v
+        return check_real(reference, "reference (Σ*_y)")
     else:
         th = np.asarray(reference, float)
         if th.shape != (len(d.structure),):
@@ -620,6 +617,7 @@ def cls(
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
     else:
+        _check_solver_options(solver_options)
         z = _QP(d, None, cons, ctx, solver, solver_options).solve(1.0, 0.0)
     theta = z / d.s
     for c in cons:
@@ -764,6 +762,11 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
 
 
+def _check_solver_options(options: object) -> None:
+    if options is not None and not isinstance(options, Mapping):
+        raise TypeError(f"solver_options must be a mapping of the solver's keyword options, got {options!r}")
+
+
 def pe_thetas(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
@@ -798,6 +801,8 @@ def pe_thetas(
     """
     solver = _check_solver(solver)
     lam = check_lambdas(PE_LAMBDAS if lambdas is None else lambdas)
+    warm_start = check_bool(warm_start, "warm_start")
+    _check_solver_options(solver_options)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
                                                             reference)
     w1 = lam / d.N if weights == "mse" else lam.copy()
@@ -876,6 +881,9 @@ def pe_pareto(
         θ, λ1, J_1 and J_S on ``data``, J_SF (true static-curve MSE, stable equilibria only) and,
         in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²).
     """
+    threads = check_int(threads, "threads", low=1)
+    if eval_static is not None and not isinstance(eval_static, StaticPoints):
+        raise TypeError(f"eval_static must be StaticPoints, got {type(eval_static).__name__}")
     if is_dask_data(data):
         raise ValueError("pe_pareto evaluates every member by a free run on the record, which needs it in memory; "
                          "for a DaskRecord call pe_thetas (it reduces the record on the Dask scheduler) and evaluate "

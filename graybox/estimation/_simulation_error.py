@@ -420,6 +420,8 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     done = 0
     meta = {"problem": problem.fingerprint(), "method": method, "lambdas": lam.tolist(), "seed": seed,
             "settings": settings}
+    if checkpoint is not None and not isinstance(checkpoint, (str, os.PathLike)):
+        raise TypeError(f"checkpoint must be a file path, got {checkpoint!r}")
     path = Path(checkpoint) if checkpoint is not None else None
     if path is not None and path.exists():
         ck = _load_checkpoint(path, meta)
@@ -943,6 +945,8 @@ def se_pareto(
                          f"not to method={method!r}")
     rec = as_records(data)
     sp = static if static is not None else (data.static if isinstance(data, Dataset) else None)
+    if sp is not None and not isinstance(sp, StaticPoints):
+        raise TypeError(f"static must be StaticPoints, got {type(sp).__name__}")
     if sp is None:
         raise ValueError("the SE problem needs static points: pass static= or a Dataset with static points")
     warn_static_range(sp.ubar, rec)

@@ -260,7 +260,7 @@ class DataSpec:
         files = [k for k in ("ident", "valid", "static") if getattr(self, k) is not None]
         if len(given) + bool(files) != 1:
             raise SpecError("a data set is exactly one of: bundled = \"pumping\"/\"buck\", CSV files "
-                            "(ident, valid, static), or a Dataset in memory")
+                            "(ident, valid, static), or dataset = a Dataset in memory")
         if self.bundled is not None:
             _wrap(check_choice, ("bundled",), self.bundled, "bundled", tuple(BUNDLED))
         if self.dataset is not None and not isinstance(self.dataset, gb.Dataset):

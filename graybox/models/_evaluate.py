@@ -29,7 +29,7 @@ from ._model import Model
 from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
-from ..core._validation import warn
+from ..core._validation import check_bool, check_int, check_per_point, warn
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -39,6 +39,7 @@ __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
 
 def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """Mean squared error of ``yhat`` against ``y`` over samples ``start …``; inf if ŷ is not finite."""
+    start = check_int(start, "start")
     e = np.asarray(y)[start:] - np.asarray(yhat)[start:]
     if e.size == 0:
         raise ValueError("no samples left to evaluate")
@@ -81,7 +82,9 @@ def jsf(model: Model, static: StaticPoints, y0: float | np.ndarray | None = None
         when the model settles on none at some point.
     """
     names = getattr(model, "input_names", ("u",))
-    ub = static_point_inputs(static, names)  # several inputs: ū's columns by the model's input names
+    ub = static_point_inputs(static, names)
+    if y0 is not None:  # checked here: a bad y0 must not pass for a model without an equilibrium
+        y0 = check_per_point(y0, len(static), "y0")  # several inputs: ū's columns by the model's input names
     try:
         yb = model.static_curve(ub, y0=static.ybar if y0 is None else y0, strict=True)
     except (ValueError, DivergenceError) as exc:
@@ -95,6 +98,7 @@ def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
 
     ``y`` is measured, ``yhat`` the model's output (inf when ``yhat`` is not finite).
     """
+    start = check_int(start, "start", low=0)
     y = np.asarray(y)[start:]
     yhat = np.asarray(yhat)[start:]
     if not np.all(np.isfinite(yhat)):
@@ -138,6 +142,8 @@ def evaluate(
         ``J_1 ident``, ``fit % valid`` (MSE in output units²).
     """
     sp = data.static if static is None else static
+    if sp is not None and not isinstance(sp, StaticPoints):
+        raise TypeError(f"static must be StaticPoints, got {type(sp).__name__}")
     rows = {}
     for name, m in models.items():
         sim_v = m.simulate(data.valid, on_diverge="nan")
@@ -194,6 +200,8 @@ def evaluate_thetas(
         ndarray of shape (P,) in output units².
     """
 
+    one_step = check_bool(one_step, "one_step")
+    threads = check_int(threads, "threads", low=1)
     th = np.atleast_2d(np.asarray(thetas, float))
     out: dict[str, np.ndarray] = {}
     if record is not None:

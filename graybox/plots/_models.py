@@ -43,6 +43,8 @@ def plot_free_run(
         fig = Figure(figsize=(8, 3.6))
         ax = fig.add_subplot(1, 1, 1)
     else:
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
         fig = ax.figure
     t = record.t
     ax.plot(t, record.y, "-", color="black", lw=1.0, label="measured")

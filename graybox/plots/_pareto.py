@@ -95,6 +95,8 @@ def plot_pareto(
         fig = Figure(figsize=(6.4, 4.6))
         ax = fig.add_subplot()
     else:
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
         fig = ax.figure
     for i, (name, ps) in enumerate(sets.items()):
         js, jsf = ps.JS, ps.JSF

@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints
+from ..core._validation import check_bool
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._uncertainty import StaticCurveBand
 
@@ -113,6 +114,9 @@ def plot_static_band(
     """
     if not isinstance(band, StaticCurveBand):
         raise ValueError(f"plot_static_band needs a StaticCurveBand, got {type(band).__name__}")
+    gain = check_bool(gain, "gain")
+    if points is not None and not isinstance(points, StaticPoints):
+        raise TypeError(f"points must be StaticPoints, got {type(points).__name__}")
     need = 2 if gain else 1
     if axes is None:
         fig = Figure(figsize=(10.0 if gain else 6.4, 4.0), layout="constrained")

@@ -570,6 +570,11 @@ def frols(
     n_cand = len(process)
     if n_cand == 0:
         raise ValueError("the candidate structure has no process terms to select from")
+    # each value first (a wrong type is named as such), then how they combine
+    if tol is not None:
+        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
+    if max_terms is not None:
+        max_terms = check_int(max_terms, "max_terms", low=1)
     if n_terms is not None and tol is not None:
         raise ValueError("give either n_terms or tol, not both")
     if n_terms is not None:
@@ -578,26 +583,15 @@ def frols(
             raise ValueError(f"n_terms = {n_terms} is more than the {n_cand} process candidates")
         if max_terms is not None:
             raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
-    if tol is not None:
-        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
     if criterion is not None:
         check_choice(criterion, "criterion", CRITERIA)
-    if max_terms is not None:
-        max_terms = check_int(max_terms, "max_terms", low=1)
     rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
     mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
     if mode == "criterion" and criterion is None:
         criterion = "bic"
     curve_name = criterion or "aic"
 
-    forced: list[int] = []
-    for t in include:
-        term = t if isinstance(t, Term) else parse_term(t)
-        if term not in process:
-            raise ValueError(f"included term {term} is not among the process candidates")
-        if process.index(term) in forced:
-            raise ValueError(f"included term {term} is given twice")
-        forced.append(process.index(term))
+    forced = process.positions(include, "included term")
     if n_terms is not None and n_terms < len(forced):
         raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
 

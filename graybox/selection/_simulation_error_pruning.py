@@ -284,18 +284,19 @@ def semp(
     nc = len(process)
     if nc == 0:
         raise ValueError("the candidate structure has no process terms to select from")
+    # each value first (a wrong type is named as such), then how they combine
+    if tol is not None:
+        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
+    if max_terms is not None:
+        max_terms = check_int(max_terms, "max_terms", low=1, high=nc)
     if sum(x is not None for x in (n_terms, tol)) > 1:
         raise ValueError("give either n_terms or tol, not both")
     if n_terms is not None:
         n_terms = check_int(n_terms, "n_terms", low=1, high=nc)
         if max_terms is not None:
             raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
-    if tol is not None:
-        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
     if criterion is not None:
         check_choice(criterion, "criterion", CRITERIA)
-    if max_terms is not None:
-        max_terms = check_int(max_terms, "max_terms", low=1, high=nc)
     prune_tol = check_real(prune_tol, "prune_tol", low=0)
     rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
     threads = check_int(threads, "threads", low=1)

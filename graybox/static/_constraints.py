@@ -51,7 +51,7 @@ from ._surfaces import StaticSurface
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_real
+from ..core._validation import check_choice, check_int, check_real
 
 __all__ = [
     "InfeasibleError",
@@ -363,10 +363,12 @@ def as_constraint_list(constraints: StaticConstraint | Iterable[StaticConstraint
         return []
     if isinstance(constraints, StaticConstraint):
         return list(constraints)
+    if isinstance(constraints, str) or not hasattr(constraints, "__iter__"):
+        raise TypeError(f"constraints must be a constraint, a sequence of them or None, got {constraints!r}")
     out: list[StaticConstraint] = []
     for c in constraints:
         if not isinstance(c, StaticConstraint):
-            raise ValueError(
+            raise TypeError(
                 f"constraints must be graybox constraint objects (gb.StaticBand, gb.CurveEquality, …), got {type(c).__name__}; "
                 "wrap a cvxpy function of θ in UserConstraint(fn)"
             )
@@ -464,8 +466,8 @@ class CurveEquality(StaticConstraint):
     def __post_init__(self) -> None:
         if not isinstance(self.curve, (StaticCurve, StaticSurface)):
             raise ValueError(f"CurveEquality needs a StaticCurve or a StaticSurface, got {type(self.curve).__name__}")
-        if self.sigma_y is not None and not np.isfinite(self.sigma_y):
-            raise ValueError(f"sigma_y must be finite, got {self.sigma_y!r}")
+        if self.sigma_y is not None:
+            object.__setattr__(self, "sigma_y", check_real(self.sigma_y, "CurveEquality: sigma_y"))
 
     def describe(self) -> str:
         s = "" if self.sigma_y is None else f", Σ*y = {self.sigma_y:.6g}"
@@ -603,6 +605,10 @@ class PassesThrough(StaticConstraint):
     """
 
     points: StaticPoints | None = None
+
+    def __post_init__(self) -> None:
+        if self.points is not None and not isinstance(self.points, StaticPoints):
+            raise TypeError(f"PassesThrough: points must be StaticPoints, got {type(self.points).__name__}")
 
     def describe(self) -> str:
         n = "the problem's" if self.points is None else f"{len(self.points)}"
@@ -774,8 +780,7 @@ class GainBounds(StaticConstraint):
             if lo is not None and hi is not None and lo > hi:
                 which = "" if k == 1 else f" of input {j + 1}"
                 raise ValueError(f"lower gain bound {lo} exceeds upper bound {hi}{which}")
-        if int(self.n) != self.n or self.n < 1:
-            raise ValueError(f"n must be a positive integer, got {self.n!r}")
+        object.__setattr__(self, "n", check_int(self.n, "GainBounds: n", low=1))
         if self.ubar_range is not None:
             rng = self.ubar_range
             if len(rng) == 2 and all(np.ndim(v) == 0 for v in rng):
@@ -794,8 +799,8 @@ class GainBounds(StaticConstraint):
                         raise ValueError(f"ubar_range of input {j + 1} must be (low, high) with low <= high, got {pair}")
                     box.append((lo, hi))
                 object.__setattr__(self, "ubar_range", tuple(box))
-        if not (self.min_denominator > 0):
-            raise ValueError("min_denominator must be positive")
+        object.__setattr__(self, "min_denominator",
+                           check_real(self.min_denominator, "GainBounds: min_denominator", low=0, low_open=True))
 
     def describe(self) -> str:
         def one(v):
@@ -930,13 +935,7 @@ def _per_input(v: object, name: str) -> list[float | None]:
         if x is None:
             out.append(None)
             continue
-        try:
-            f = float(x)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} gain bound must be a number or None, got {x!r}") from None
-        if not np.isfinite(f):
-            raise ValueError(f"{name} gain bound must be finite, got {x!r}")
-        out.append(f)
+        out.append(check_real(x, f"{name} (a gain bound, or None)"))
     return out
 
 

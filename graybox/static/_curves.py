@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints
-from ..core._validation import as_1d_finite
+from ..core._validation import as_1d_finite, check_int
 
 __all__ = ["StaticCurve"]
 
@@ -54,8 +54,7 @@ class StaticCurve:
 
         The domain is the points' ū range. Needs at least ``degree + 1`` points.
         """
-        if int(degree) != degree or degree < 0:
-            raise ValueError(f"degree must be a non-negative integer, got {degree!r}")
+        degree = check_int(degree, "degree", low=0)
         if len(points) < degree + 1:
             raise ValueError(f"fitting degree {degree} needs at least {degree + 1} static points, got {len(points)}")
         V = np.vander(points.ubar, degree + 1, increasing=True)
