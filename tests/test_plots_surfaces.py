@@ -81,7 +81,7 @@ def test_surface_plot_errors():
         plot_surface_slices()
     with pytest.raises(ValueError, match="no range for input 2"):
         plot_surface_slices(theory)
-    with pytest.raises(ValueError, match="against must be 0 or 1"):
+    with pytest.raises(ValueError, match=r"against \(the input on the horizontal axis\) must be an integer <= 1"):
         plot_surface_slices(theory, _grid_points(), against=2)
     with pytest.raises(ValueError, match=r"ubar of shape \(K, 2\)"):
         plot_surface_slices(theory, SimpleNamespace(ubar=np.ones(3), ybar=np.ones(3)))
