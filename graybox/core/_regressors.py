@@ -13,7 +13,7 @@ import numpy as np
 
 from ._records import Record, as_records
 from ._terms import Structure
-from ._validation import check_int
+from ._validation import as_1d_finite, check_int
 
 __all__ = ["record_signals", "check_structure_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
 
@@ -96,7 +96,9 @@ def regressor_matrix(
     signals = input_signals(u, input_names)
     signals["y"] = y
     if e is not None:
-        signals["e"] = e
+        signals["e"] = as_1d_finite(e, "e")
+        if signals["e"].size != n:
+            raise ValueError(f"e has {signals['e'].size} samples, y has {n}")
     rows = n - s
     psi = np.empty((rows, len(structure)))
     for j, term in enumerate(structure):

@@ -210,9 +210,14 @@ class ParetoSet:
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
         """The members that no other member dominates in ``objectives`` (order kept)."""
+        if isinstance(objectives, str) or not hasattr(objectives, "__len__"):
+            raise TypeError(f"objectives must be a sequence of objective names, got {objectives!r}")
         if len(objectives) < 1:
-            raise ValueError("give at least one objective")
-        pts = np.column_stack([self.objective(o) for o in objectives])
+            raise ValueError("objectives: give at least one objective")
+        try:
+            pts = np.column_stack([self.objective(o) for o in objectives])
+        except ValueError as exc:
+            raise ValueError(f"objectives: {exc}") from None
         keep = nondominated_mask(pts)
         keep[list(self.failures)] = False
         return self.subset(keep)

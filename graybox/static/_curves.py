@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints
-from ..core._validation import as_1d_finite, check_int
+from ..core._validation import as_1d_finite, check_int, check_real
 
 __all__ = ["StaticCurve"]
 
@@ -38,9 +38,11 @@ class StaticCurve:
         c.setflags(write=False)
         object.__setattr__(self, "coefficients", c)
         if self.domain is not None:
-            lo, hi = (float(v) for v in self.domain)
-            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-                raise ValueError(f"{self.name}: domain must be (low, high) with low < high, got {self.domain}")
+            d = self.domain
+            if isinstance(d, str) or not hasattr(d, "__len__") or len(d) != 2:
+                raise TypeError(f"{self.name}: domain must be a pair (low, high), got {d!r}")
+            lo = check_real(d[0], f"{self.name}: domain low")
+            hi = check_real(d[1], f"{self.name}: domain high", low=lo, low_open=True)
             object.__setattr__(self, "domain", (lo, hi))
 
     @classmethod
