@@ -48,8 +48,10 @@ def test_bad_curves():
         StaticCurve.polynomial([])
     with pytest.raises(ValueError, match="non-finite"):
         StaticCurve.polynomial([1.0, np.nan])
-    with pytest.raises(ValueError, match="low < high"):
+    with pytest.raises(ValueError, match=r"domain high must lie in \(2, inf\)"):
         StaticCurve.polynomial([1.0], domain=(2, 1))
+    with pytest.raises(TypeError, match="domain must be a pair"):
+        StaticCurve.polynomial([1.0], domain=2.0)
 
 
 def test_fit_recovers_a_noise_free_polynomial():
