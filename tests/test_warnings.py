@@ -111,3 +111,18 @@ def test_the_helper_skips_every_graybox_frame():
     with pytest.warns(UserWarning) as rec:
         gb.core._validation.warn("y", UserWarning)
     assert rec[0].filename == THIS
+
+
+def test_pe_inaccurate_optimum_is_one_warning_for_the_sweep(monkeypatch):
+    # make every solve report "optimal_inaccurate" (the solver's status is the only input of this warning)
+    import cvxpy as cp
+
+    import graybox.estimation._prediction_error as pe
+
+    monkeypatch.setattr(pe.cp, "OPTIMAL_INACCURATE", cp.OPTIMAL)
+    st = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    rec = _record(5)
+    sp = gb.StaticPoints(np.linspace(-0.8, 0.8, 4), 2 * np.linspace(-0.8, 0.8, 4) + 0.4 * np.linspace(-0.8, 0.8, 4) ** 2)
+    ws = caught(RuntimeWarning, lambda: gb.pe_thetas(st, rec, sp, lambdas=[1.0, 0.5, 0.1], solver="clarabel",
+                                                     constraints=gb.GainBounds(lower=0.0)))
+    said_once_here(ws, "inaccurate optimum at 3 weight(s)")

@@ -468,6 +468,8 @@ class _QP:
         self.names = rows.names
         self.options = dict(_SOLVER_DEFAULTS[solver])
         self.options.update(options or {})
+        #: (w1, w2) of the solves the solver called inaccurate: said once per estimate (warn_inaccurate)
+        self.inaccurate: list[tuple[float, float]] = []
 
     def solve(self, w1: float, w2: float, warm_start: bool = True) -> np.ndarray:
         """z for one weight pair (the weights are normalised to sum 1: the argmin is unchanged)."""
@@ -490,8 +492,16 @@ class _QP:
         if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.dy.value is None:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
-            warn(f"solver {self.solver} reports an inaccurate optimum (w1={w1:g}, w2={w2:g})", RuntimeWarning)
+            self.inaccurate.append((float(w1), float(w2)))
         return self.basis.T @ (self.y0 + np.array(self.dy.value, float))
+
+    def warn_inaccurate(self) -> None:
+        """One warning for the whole sweep, naming the weights whose optimum the solver called inaccurate."""
+        if self.inaccurate:
+            said = ", ".join(f"(w1={a:g}, w2={b:g})" for a, b in self.inaccurate[:5])
+            more = f" and {len(self.inaccurate) - 5} more" if len(self.inaccurate) > 5 else ""
+            warn(f"solver {self.solver} reports an inaccurate optimum at {len(self.inaccurate)} weight(s): "
+                 f"{said}{more}", RuntimeWarning)
 
 
 # --------------------------------------------------------------------------------------------
@@ -618,7 +628,9 @@ def cls(
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
     else:
         _check_solver_options(solver_options)
-        z = _QP(d, None, cons, ctx, solver, solver_options).solve(1.0, 0.0)
+        qp = _QP(d, None, cons, ctx, solver, solver_options)
+        z = qp.solve(1.0, 0.0)
+        qp.warn_inaccurate()
     theta = z / d.s
     for c in cons:
         c.after_solve(theta, ctx)
@@ -816,6 +828,7 @@ def pe_thetas(
         Z = np.empty((lam.size, d.s.size))
         for i in np.argsort(-lam, kind="stable"):
             Z[i] = qp.solve(w1[i], w2[i], warm_start)
+        qp.warn_inaccurate()
     thetas = Z / d.s
     for th in thetas:
         for c in cons:
