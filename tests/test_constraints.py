@@ -189,9 +189,9 @@ def test_user_constraint_errors(rec):
     with pytest.raises(ValueError, match="not convex"):
         cls(S15, rec, None, constraints=UserConstraint(lambda th: cp.square(th[0]) >= 1)).model
     with pytest.raises(ValueError, match="equality constraints only"):
-        cls(S15, rec, None, constraints=UserConstraint(lambda th: th[0] >= 0), solver="closed").model
-    with pytest.raises(ValueError, match="UserConstraint"):
-        cls(S15, rec, None, constraints=[lambda th: th[0] >= 0]).model
+        cls(S15, rec, None, constraints=UserConstraint(lambda th: th[0] >= 0), solver="closed")
+    with pytest.raises(TypeError, match="UserConstraint"):
+        cls(S15, rec, None, constraints=[lambda th: th[0] >= 0])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -227,11 +227,11 @@ def test_objects_are_immutable_values():
 @pytest.mark.parametrize(
     "make, match",
     [
-        (lambda: StaticBand(0.0), "positive"),
+        (lambda: StaticBand(0.0), r"b \(the half-width\) must lie in \(0, inf\)"),
         (lambda: StaticBand(0.1, form="relative"), "form"),
         (lambda: GainBounds(), "lower or an upper"),
         (lambda: GainBounds(lower=1.0, upper=0.0), "exceeds"),
-        (lambda: GainBounds(lower=0.0, n=0), "positive integer"),
+        (lambda: GainBounds(lower=0.0, n=0), "n must be an integer >= 1"),
         (lambda: GainBounds(lower=0.0, ubar_range=(2.0, 1.0)), "low <= high"),
         (lambda: ClusterBounds({}), "at least one"),
         (lambda: ClusterBounds({"Σy": 0.9}), r"\(lower, upper\)"),

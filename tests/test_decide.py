@@ -8,6 +8,7 @@ from graybox.estimation._decisions import decide_dsf
 from graybox.estimation._pareto import ParetoSet
 
 S15 = reference.STRUCTURE_15
+B = 0.031  # a band for these tests (output units²); decide_dsf has no default
 
 
 def front(js, jsf, lambdas=None):
@@ -19,20 +20,20 @@ def front(js, jsf, lambdas=None):
 
 def test_picks_min_js_inside_the_band():
     ps = front([1.0, 2.0, 3.0, 4.0], [0.5, 0.03, 0.01, 0.0])
-    _d = decide_dsf(ps)
+    _d = decide_dsf(ps, band=B)
     m, i = _d.model, _d.index
     assert i == 1 and isinstance(m, Model)
     np.testing.assert_array_equal(m.theta, ps.thetas[1])
     assert "D_SF" in m.name
-    assert isinstance(decide_dsf(ps).model, Model)
+    assert isinstance(decide_dsf(ps, band=B).model, Model)
     # the band's edge is inside: B is closed
-    assert decide_dsf(front([1.0, 2.0], [0.031, 0.0])).index == 0
+    assert decide_dsf(front([1.0, 2.0], [0.031, 0.0]), band=B).index == 0
 
 
 def test_ties_and_divergent_members():
     ps = front([2.0, 2.0, np.inf], [0.02, 0.01, 0.001])
     # the diverging member (J_S = inf) is never chosen; among equal J_S the smaller J_SF wins
-    assert decide_dsf(ps).index == 1
+    assert decide_dsf(ps, band=B).index == 1
 
 
 def test_band_as_interval():
@@ -43,28 +44,36 @@ def test_band_as_interval():
 def test_no_member_in_the_band_is_an_error_unless_a_fallback_is_named():
     ps = front([1.0, 2.0, 3.0], [0.5, 0.2, 0.1])
     with pytest.raises(ValueError, match=r"no member .* J_SF in B = \[0, 0.031\].*smallest J_SF is 0.1.*fallback"):
-        decide_dsf(ps)
-    _d = decide_dsf(ps, fallback="min_jsf")
+        decide_dsf(ps, band=B)
+    _d = decide_dsf(ps, band=B, fallback="min_jsf")
     m, i = _d.model, _d.index
     assert i == 2 and "no member in B" in m.name
     with pytest.raises(ValueError, match="fallback must be"):
-        decide_dsf(ps, fallback="nearest")
+        decide_dsf(ps, band=B, fallback="nearest")
 
 
-@pytest.mark.parametrize("band", [-0.1, np.nan, (0.02, 0.01), (-1.0, 0.1)])
+@pytest.mark.parametrize("band", [-0.1, 0.0, np.nan, np.inf, (0.02, 0.01), (-1.0, 0.1), (0.1, 0.1), (0.0, 0.1, 0.2)])
 def test_bad_band(band):
     with pytest.raises(ValueError, match="band"):
         decide_dsf(front([1.0], [0.0]), band=band)
 
 
+@pytest.mark.parametrize("band", ["0.031", True, None])
+def test_band_of_the_wrong_type_or_missing(band):
+    # a band has no unit-free default: leaving it out says what to pass
+    err = ValueError if band is None else TypeError
+    with pytest.raises(err, match="band"):
+        decide_dsf(front([1.0], [0.0]), band=band)
+
+
 def test_bad_input():
     with pytest.raises(TypeError, match="ParetoSet"):
-        decide_dsf([1, 2, 3])
+        decide_dsf([1, 2, 3], band=B)
     empty = ParetoSet(S15, np.zeros((0, 17)), [], [], [], [], "x")
     with pytest.raises(ValueError, match="empty"):
-        decide_dsf(empty)
+        decide_dsf(empty, band=B)
     with pytest.raises(ValueError, match="every member"):
-        decide_dsf(front([1.0, 2.0], [np.inf, np.inf]), fallback="min_jsf")
+        decide_dsf(front([1.0, 2.0], [np.inf, np.inf]), band=B, fallback="min_jsf")
 
 
 def test_on_a_pe_front():
@@ -79,8 +88,8 @@ def test_on_a_pe_front():
     y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
     rec = Record(u, m.simulate(u, y0) + 0.05 * rng.standard_normal(1600), Ts=0.05)
     ps = pe_pareto(S15, rec, reference.eq1_points(), lambdas=np.logspace(-6, 0, 30), solver="closed")
-    i = decide_dsf(ps).index
-    inside = ps.JSF <= 0.031
+    i = decide_dsf(ps, band=B).index
+    inside = ps.JSF <= B
     assert inside[i] and ps.JS[i] == ps.JS[inside].min()
     assert not inside.all()  # the band did select: λ1 near 1 keeps the data's static error
 

@@ -193,6 +193,8 @@ def _load_pumping():
 
 @pytest.mark.parametrize("degree, n_terms", [(2, 17), (3, 23)])
 def test_plant_models_free_run_is_stable_on_validation(degree, n_terms):
+    import warnings
+
     data = _load_pumping()
     # at degree 3 one cubic candidate is a combination of selected terms on this record, and FROLS says so
     with pytest.warns(CandidateWarning, match=r"u\(k-4\)u\(k-5\)\^2") if degree == 3 else contextlib.nullcontext():

@@ -435,9 +435,7 @@ def test_section_neural_reports_the_table_row(plant):
     [
         ({"ny": -1}, "ny must be an integer >= 0"),
         ({"nu": 0}, "nu must be an integer >= 1"),
-        ({"ne": 1.5}, "ne must be an integer"),
         ({"hidden": 0}, "hidden must be an integer >= 1"),
-        ({"hidden": True}, "hidden must be an integer"),
         ({"epochs": 0}, "epochs must be an integer >= 1"),
         ({"seed": -1}, "seed must be"),
         ({"weight_decay": -1.0}, "weight_decay"),
@@ -450,6 +448,13 @@ def test_section_neural_reports_the_table_row(plant):
 )
 def test_bad_training_arguments(kwargs, match):
     with pytest.raises(ValueError, match=match):
+        neural_narx(small_record(), **kwargs).model
+
+
+@pytest.mark.parametrize("kwargs, match", [({"ne": 1.5}, "ne must be an integer"),
+                                           ({"hidden": True}, "hidden must be an integer")])
+def test_training_arguments_of_the_wrong_type(kwargs, match):
+    with pytest.raises(TypeError, match=match):
         neural_narx(small_record(), **kwargs).model
 
 

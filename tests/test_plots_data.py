@@ -21,7 +21,7 @@ def _saved(fig: Figure, path) -> bytes:
 
 def test_fig2_static_curve_with_points(tmp_path):
     ds = load_pumping()
-    fig = plot_static_curve(ds.static, ds.extra["static_curve"])
+    fig = plot_static_curve(ds.static, ds.extra["static_curve"], xlabel="Pump speed (rpm)", ylabel="Pressure (mlc)")
     assert isinstance(fig, Figure) and len(fig.axes) == 1
     ax = fig.axes[0]
     curve_line, point_line = ax.lines
@@ -57,7 +57,7 @@ def test_fig2_errors():
 
 def test_fig3_record(tmp_path):
     ds = load_pumping()
-    fig = plot_record(ds.ident)
+    fig = plot_record(ds.ident, input_label="Pump speed reference", output_label="Pressure")
     assert isinstance(fig, Figure) and len(fig.axes) == 2
     ax_u, ax_y = fig.axes
     assert len(ax_u.lines) == 1 and len(ax_y.lines) == 1
@@ -66,6 +66,9 @@ def test_fig3_record(tmp_path):
     np.testing.assert_allclose(ax_y.lines[0].get_xdata()[[0, -1]], [0.0, 3199 * 0.05])
     assert ax_u.get_ylabel() == "Pump speed reference (rpm)" and ax_y.get_ylabel() == "Pressure (mlc)"
     assert ax_y.get_xlabel() == "Time (s)"
+    # the defaults name no plant: the units come from the record
+    ax_u, ax_y = plot_record(ds.ident).axes
+    assert ax_u.get_ylabel() == "input (rpm)" and ax_y.get_ylabel() == "output (mlc)"
     assert ax_u.get_shared_x_axes().joined(ax_u, ax_y)
     assert _saved(fig, tmp_path / "fig3.png").startswith(PNG_MAGIC)
 

@@ -45,7 +45,7 @@ def test_slices_draw_one_line_per_level_and_surface_with_the_points(tmp_path):
     assert lines[0].get_color() == lines[6].get_color() == markers[0].get_color()
     np.testing.assert_array_equal(np.sort(markers[2].get_xdata()), static_grid()[:6, 1])
     np.testing.assert_allclose(markers[2].get_ydata(), PLANT.static_pressure(markers[2].get_xdata(), 1350.0) + 0.01)
-    assert ax.get_xlabel() == "Speed 1 (rpm)"
+    assert ax.get_xlabel() == "input ū₁"  # the defaults name no unit
     fig.savefig(tmp_path / "s.png", dpi=50)
     assert (tmp_path / "s.png").read_bytes().startswith(PNG_MAGIC)
 
@@ -54,7 +54,7 @@ def test_slices_against_the_second_input_at_chosen_levels():
     fit = StaticSurface.fit(_grid_points(), 2)
     fig = plot_surface_slices(fit, against=1, at=[1200.0, 1600.0], n_grid=11)
     ax = fig.axes[0]
-    assert len(ax.lines) == 2 and ax.get_xlabel() == "Speed 2 (rpm)"
+    assert len(ax.lines) == 2 and ax.get_xlabel() == "input ū₂"
     x = ax.lines[1].get_xdata()
     np.testing.assert_allclose(ax.lines[1].get_ydata(), fit(np.c_[np.full(11, 1600.0), x]))
     assert x[0] == 1150 and x[-1] == 1650  # the fit's domain
@@ -81,7 +81,7 @@ def test_surface_plot_errors():
         plot_surface_slices()
     with pytest.raises(ValueError, match="no range for input 2"):
         plot_surface_slices(theory)
-    with pytest.raises(ValueError, match="against must be 0 or 1"):
+    with pytest.raises(ValueError, match=r"against \(the input on the horizontal axis\) must be an integer <= 1"):
         plot_surface_slices(theory, _grid_points(), against=2)
     with pytest.raises(ValueError, match=r"ubar of shape \(K, 2\)"):
         plot_surface_slices(theory, SimpleNamespace(ubar=np.ones(3), ybar=np.ones(3)))

@@ -305,13 +305,18 @@ def test_argument_checks():
     cand = Candidates(2, 2, ne=0, degree=1)
     with pytest.raises(ValueError, match="either n_terms or tol"):
         frols(cand, rec, n_terms=2, tol=0.1)
-    with pytest.raises(ValueError, match="positive integer"):
+    with pytest.raises(ValueError, match="n_terms must be an integer >= 1"):
         frols(cand, rec, n_terms=0)
     with pytest.raises(ValueError, match="criterion"):
         frols(cand, rec, criterion="hqc")
+    # one spelling, as semp has it: the criteria are lower case
+    with pytest.raises(ValueError, match="criterion must be one of 'aic', 'bic', 'fpe'"):
+        frols(cand, rec, criterion="BIC")
+    with pytest.raises(TypeError, match="tol must be a real number"):
+        frols(cand, rec, tol="0.1")
     with pytest.raises(ValueError, match="max_terms"):
         frols(cand, rec, n_terms=2, max_terms=3)
-    with pytest.raises(ValueError, match="Structure"):
+    with pytest.raises(TypeError, match="Structure"):
         frols(["y(k-1)"], rec, n_terms=1)
     with pytest.raises(ValueError, match="no process terms"):
         frols(Structure(["e(k-1)"]), rec, n_terms=1)

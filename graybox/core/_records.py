@@ -17,7 +17,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ._terms import check_input_names, default_input_names
-from ._validation import as_1d_finite, warn
+from ._validation import as_1d_finite, check_per_point, check_real, warn
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -78,8 +78,11 @@ class Record:
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: u and y must have the same length, got {u.shape[0]} and {y.size}")
-        if not (np.isfinite(self.Ts) and self.Ts > 0):
-            raise ValueError(f"{self.name}: Ts must be a positive number of seconds, got {self.Ts}")
+        object.__setattr__(self, "Ts", check_real(self.Ts, f"{self.name}: Ts (seconds)", low=0, low_open=True))
+        units = self.units
+        if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
+            raise TypeError(f"{self.name}: units must be a pair of strings (input unit, output unit), got {units!r}")
+        object.__setattr__(self, "units", tuple(units))
         m = 1 if u.ndim == 1 else u.shape[1]
         names = default_input_names(m) if self.input_names is None else check_input_names(
             self.input_names, m, f"{self.name}: input_names")
@@ -147,12 +150,18 @@ class StaticPoints:
         A label used in messages.
     input_names : sequence of str, optional
         The inputs' names (default ``("u",)`` for one input, ``u1 … um`` for several).
+    uncertainty : float or array_like of shape (M,), optional
+        δ_i, how far the measured ȳ_i may lie from the true steady state, output units (e.g. a
+        transmitter's ±0.175 mlc); one number for every point or one per point, each > 0. When
+        given, it supplies the bands that otherwise must be passed: D_SF's B (:attr:`band`) and
+        :class:`~graybox.StaticBand`'s half-widths. None (default): every band must be given.
     """
 
     ubar: np.ndarray
     ybar: np.ndarray
     name: str = "static points"
     input_names: tuple[str, ...] | None = None
+    uncertainty: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         u = as_input_array(self.ubar, f"{self.name}: ubar")
@@ -171,13 +180,39 @@ class StaticPoints:
         object.__setattr__(self, "ubar", u)
         object.__setattr__(self, "ybar", y)
         object.__setattr__(self, "input_names", names)
+        if self.uncertainty is not None:
+            d = np.array(check_per_point(self.uncertainty, y.size, f"{self.name}: uncertainty"), dtype=float)
+            if (d <= 0).any():
+                raise ValueError(f"{self.name}: uncertainty must be > 0 at every point (output units), got "
+                                 f"{d[d <= 0][:3].tolist()}")
+            d.setflags(write=False)
+            object.__setattr__(self, "uncertainty", d)
 
     def __len__(self) -> int:
         return int(self.ybar.size)
 
+    @property
+    def band(self) -> float:
+        """D_SF's B from the points' own uncertainty: the mean of δ_i², output units².
+
+        J_SF is the mean of (ȳ_i − ŷ_i)², so a static curve through the true steady states has
+        J_SF ≤ mean δ_i² when each measured ȳ_i is within δ_i of the truth: the rule reads the
+        same in any units (the paper's B = 0.175² = 0.031 mlc² is this rule for its transmitter).
+        ``ValueError`` when the points carry no uncertainty: then pass the band yourself.
+        """
+        if self.uncertainty is None:
+            raise ValueError(f"{self.name}: these static points carry no uncertainty, so no band follows from them; "
+                             "pass band=B (J_SF's bound, output units², e.g. the square of the static measurements' "
+                             "error) or build the points with uncertainty=δ (output units)")
+        return float(np.mean(self.uncertainty**2))
+
+    def with_uncertainty(self, uncertainty: object) -> "StaticPoints":
+        """The same points carrying ``uncertainty`` (δ, output units; one number or one per point)."""
+        return StaticPoints(self.ubar, self.ybar, self.name, self.input_names, uncertainty)
+
     @classmethod
     def from_repeats(cls, ubar: object, ybar: object, *, name: str = "static points",
-                     input_names: Sequence[str] | None = None) -> "StaticPoints":
+                     input_names: Sequence[str] | None = None, uncertainty: object = None) -> "StaticPoints":
         """Static points from repeated measurements: the mean ȳ at each distinct ū.
 
         Parameters
@@ -186,8 +221,9 @@ class StaticPoints:
             Input level of each measurement (engineering units); levels may repeat.
         ybar : array_like, shape (N,)
             Settled output of each measurement.
-        name, input_names
-            As for :class:`StaticPoints`.
+        name, input_names, uncertainty
+            As for :class:`StaticPoints` (``uncertainty``: of the averaged points, one number or
+            one per distinct level).
 
         Returns
         -------
@@ -204,7 +240,8 @@ class StaticPoints:
         uniq, inverse = np.unique(u, return_inverse=True, axis=0)
         inverse = np.asarray(inverse).reshape(-1)
         mean = np.bincount(inverse, weights=y) / np.bincount(inverse)
-        return cls(uniq, mean, name, None if input_names is None else tuple(input_names))
+        names = None if input_names is None else check_input_names(input_names, what=f"{name}: input_names")
+        return cls(uniq, mean, name, names, uncertainty)
 
     @property
     def n_inputs(self) -> int:
@@ -216,7 +253,9 @@ class StaticPoints:
             ins = f"ū in [{self.ubar.min():.4g}, {self.ubar.max():.4g}]"
         else:
             ins = ", ".join(f"{n} in [{c.min():.4g}, {c.max():.4g}]" for n, c in zip(self.input_names, self.ubar.T))
-        return f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in [{self.ybar.min():.4g}, {self.ybar.max():.4g}])"
+        unc = "" if self.uncertainty is None else f", ±{np.max(self.uncertainty):.4g}"
+        return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in [{self.ybar.min():.4g}, "
+                f"{self.ybar.max():.4g}]{unc})")
 
 
 def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.ndarray:
@@ -269,6 +308,13 @@ class Dataset:
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        for nm in ("ident", "valid"):
+            if not isinstance(getattr(self, nm), Record):
+                raise TypeError(f"Dataset: {nm} must be a Record, got {type(getattr(self, nm)).__name__}")
+        if self.static is not None and not isinstance(self.static, StaticPoints):
+            raise TypeError(f"Dataset: static must be StaticPoints or None, got {type(self.static).__name__}")
+        if not isinstance(self.extra, dict):
+            raise TypeError(f"Dataset: extra must be a dict, got {type(self.extra).__name__}")
         check_same_inputs(self.ident, self.valid)
         if self.static is not None:
             check_same_inputs(self.ident, self.static)
@@ -333,35 +379,45 @@ __all__ += ["as_records", "as_input_array", "check_same_inputs", "static_point_i
 
 
 class StaticRangeWarning(UserWarning):
-    """Static points lie outside the input range of the dynamic records (said once per call).
+    """Static points lie well outside the input range of the dynamic records (said once per call).
 
     Not an error: static knowledge where the dynamic data do not reach is what gray-box
     identification is for. The warning names the points so that a units mix-up is visible.
     """
 
 
+#: How far beyond the records' input span (a fraction of it) a static ū must lie to be named: a
+#: level just past the records' extremes (the bundled plant's 750 rpm against records from 770) is
+#: ordinary; one well beyond them is what a units mix-up looks like. A fraction: the same in any units.
+RANGE_MARGIN = 0.05
+
+
 def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "static points") -> None:
-    """Warn once, in words, which static ū lie outside the dynamic records' input range (box, per input)."""
+    """Warn once, in words, which static ū lie well outside the dynamic records' input range (box, per input).
+
+    "Well outside": by more than :data:`RANGE_MARGIN` of the records' span of that input.
+    """
     ubar = np.asarray(ubar, float)
     if ubar.ndim == 2 and ubar.shape[1] > 1:
         lo_ = np.min([r.inputs.min(axis=0) for r in records], axis=0)
         hi_ = np.max([r.inputs.max(axis=0) for r in records], axis=0)
-        tol_ = 1e-9 * np.maximum(np.maximum(abs(lo_), abs(hi_)), 1.0)
+        tol_ = np.maximum(1e-9 * np.maximum(np.maximum(abs(lo_), abs(hi_)), 1.0), RANGE_MARGIN * (hi_ - lo_))
         rows = np.unique(ubar, axis=0)
         out_ = rows[((rows < lo_ - tol_) | (rows > hi_ + tol_)).any(axis=1)]
         if out_.size:
             box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo_, hi_))
-            warn(f"{what}: ū = {np.round(out_, 6).tolist()} lie outside the input box {box} of the dynamic records; "
-                 "the model is extrapolated there by the static information (if the points and the records should "
-                 "overlap, check their units)", StaticRangeWarning)
+            msg = (f"{what}: ū = {np.round(out_, 6).tolist()} lie outside the input box {box} of the dynamic "
+                   "records; the model is extrapolated there by the static information (if the points and the "
+                   "records should overlap, check their units)")
+            warn(msg, StaticRangeWarning)
         return
     ub = np.unique(np.atleast_1d(np.asarray(ubar, float)))
     lo = min(float(r.u.min()) for r in records)
     hi = max(float(r.u.max()) for r in records)
-    tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+    tol = max(1e-9 * max(abs(lo), abs(hi), 1.0), RANGE_MARGIN * (hi - lo))
     out = ub[(ub < lo - tol) | (ub > hi + tol)]
     if out.size:
-        warn(
-            f"{what}: ū = {np.round(out, 6).tolist()} lie outside the input range [{lo:.6g}, {hi:.6g}] of the dynamic "
-            "records; the model is extrapolated there by the static information (if the points and the records "
-            "should overlap, check their units)", StaticRangeWarning)
+        msg = (f"{what}: ū = {np.round(out, 6).tolist()} lie outside the input range [{lo:.6g}, {hi:.6g}] of the "
+               "dynamic records; the model is extrapolated there by the static information (if the points and the "
+               "records should overlap, check their units)")
+        warn(msg, StaticRangeWarning)

@@ -13,6 +13,7 @@ import numpy as np
 
 from ._records import Record, as_records
 from ._terms import Structure
+from ._validation import as_1d_finite, check_int
 
 __all__ = ["record_signals", "check_structure_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
 
@@ -87,7 +88,7 @@ def regressor_matrix(
         Ψ, float64, C-contiguous.
     """
     n = y.shape[0]
-    s = structure.max_lag if start is None else int(start)
+    s = structure.max_lag if start is None else check_int(start, "start", low=0)
     if s < structure.max_lag:
         raise ValueError(f"start ({s}) is smaller than the structure's max lag ({structure.max_lag})")
     if n < s + 1:
@@ -95,7 +96,9 @@ def regressor_matrix(
     signals = input_signals(u, input_names)
     signals["y"] = y
     if e is not None:
-        signals["e"] = e
+        signals["e"] = as_1d_finite(e, "e")
+        if signals["e"].size != n:
+            raise ValueError(f"e has {signals['e'].size} samples, y has {n}")
     rows = n - s
     psi = np.empty((rows, len(structure)))
     for j, term in enumerate(structure):
@@ -136,7 +139,7 @@ def stacked_regressors(
         The measured ``y(k)`` matching each row.
     """
     recs = as_records(records)
-    s = structure.max_lag if start is None else int(start)
+    s = structure.max_lag if start is None else check_int(start, "start", low=0)
     blocks, targets = [], []
     for i, r in enumerate(recs):
         r.require_length(s)

@@ -15,7 +15,7 @@ import numpy as np
 from ._simulation_kernels import encode, record_inputs, simulate_batch, simulate_one
 from ._records import Record, as_input_array
 from ._terms import check_input_names, default_input_names
-from ._validation import as_1d_finite, check_choice, check_theta
+from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta
 from ._regressors import regressor_matrix
 from ._terms import Structure
 
@@ -87,15 +87,18 @@ def free_run_inputs(
         u = as_input_array(u, "u")
         if y0 is None:
             raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
-    y0 = np.asarray(y0, dtype=float)
+    try:
+        y0 = np.asarray(y0, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"y0 must be an array of the first max-lag outputs, got {y0!r}") from None
     if y0.ndim != 1:
-        raise ValueError(f"y0 must be 1-D, got shape {y0.shape}")
+        raise ValueError(f"y0 must be 1-D (the first max-lag outputs), got shape {y0.shape}")
     if y0.size < L:
         raise ValueError(f"y0 has {y0.size} samples, the {what} needs max lag = {L}")
     y0 = as_1d_finite(y0[:L], "y0")
     if u.shape[0] < L + 1:
         raise ValueError(f"input has {u.shape[0]} samples, fewer than max lag + 1 = {L + 1}")
-    b = _default_bound(y0) if bound is None else float(bound)
+    b = _default_bound(y0) if bound is None else check_real(bound, "bound", low=0, low_open=True)
     return np.ascontiguousarray(u), np.ascontiguousarray(y0), b
 
 
@@ -174,6 +177,7 @@ def simulate_many(
     ndarray, shape (P, N)
         A diverging member has non-finite samples; this never raises for divergence.
     """
+    threads = check_int(threads, "threads", low=1)
     th = np.asarray(thetas, dtype=float)
     if th.ndim != 2 or th.shape[1] != len(structure):
         raise ValueError(f"thetas must have shape (P, {len(structure)}), got {th.shape}")

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
-from ._validation import renamed
+from ._validation import check_bool, check_int, renamed
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
            "default_input_names"]
@@ -63,12 +63,14 @@ def default_input_names(m: int) -> tuple[str, ...]:
 def check_input_names(names: object, m: int | None = None, what: str = "input_names") -> tuple[str, ...]:
     """Validated input names: identifiers, not y/e/k, none given twice (and ``m`` of them when given)."""
     if isinstance(names, str) or not hasattr(names, "__iter__"):
-        raise ValueError(f"{what} must be a sequence of names, got {names!r}")
+        raise TypeError(f"{what} must be a sequence of names (strings), got {names!r}")
     out = tuple(names)  # type: ignore[arg-type]
     if not out:
         raise ValueError(f"{what}: at least one input name is needed")
     for n in out:
-        if not isinstance(n, str) or not _NAME_RE.match(n) or n in _RESERVED:
+        if not isinstance(n, str):
+            raise TypeError(f"{what}: an input name must be a string, got {n!r}")
+        if not _NAME_RE.match(n) or n in _RESERVED:
             raise ValueError(f"{what}: input name {n!r} is not a valid identifier other than y, e, k")
     dup = sorted({n for n in out if out.count(n) > 1})
     if dup:
@@ -258,8 +260,15 @@ class Structure:
         (``what`` names the role of the terms in the message, e.g. ``"included term"``).
         """
         out: list[int] = []
+        if isinstance(terms, (str, Term)) or not hasattr(terms, "__iter__"):
+            raise TypeError(f"{what}s must be a sequence of terms (Terms or strings), got {terms!r}")
         for t in terms:
-            term = t if isinstance(t, Term) else parse_term(t)
+            if not isinstance(t, (Term, str)):
+                raise TypeError(f"{what}: a term must be a Term or a string, got {t!r}")
+            try:
+                term = t if isinstance(t, Term) else parse_term(t)
+            except ValueError as exc:
+                raise ValueError(f"{what}: {exc}") from None
             if term not in self.terms:
                 raise ValueError(f"{what} {term} is not among the process candidates")
             i = self.terms.index(term)
@@ -386,18 +395,16 @@ def Candidates(
     if input_names is None:
         names = tuple(nu) if isinstance(nu, Mapping) else ("u",)
     else:
-        names = tuple(input_names)
+        names = input_names
     names = check_input_names(names, what="inputs")
     nus = _per_input(nu, names, "nu", None)
     delays = _per_input(delay, names, "delay", 1)
-    for name, v, lo in (("ny", ny, 0), ("ne", ne, 0), ("degree", degree, 0)):
-        if int(v) != v or v < lo:
-            raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
+    ny, ne, degree = (check_int(v, name, low=0) for name, v in (("ny", ny), ("ne", ne), ("degree", degree)))
+    constant = check_bool(constant, "constant")
     for n in names:
         for what, v, lo in (("nu", nus[n], 0), ("delay", delays[n], 1)):
-            if isinstance(v, bool) or int(v) != v or v < lo:
-                label = what if names == ("u",) else f"{what} of input {n!r}"
-                raise ValueError(f"{label} must be an integer >= {lo}, got {v!r}")
+            label = what if names == ("u",) else f"{what} of input {n!r}"
+            (nus if what == "nu" else delays)[n] = check_int(v, label, low=lo)
         if nus[n] and delays[n] > nus[n]:
             label = "" if names == ("u",) else f" of input {n!r}"
             raise ValueError(f"delay{label} ({delays[n]}) must not exceed nu{label} ({nus[n]})")
@@ -410,8 +417,7 @@ def Candidates(
         for combo in itertools.combinations_with_replacement(variables, d):
             terms.append(Term(tuple((s, l, 1) for s, l in combo)))
     if max_y_power is not None:
-        if int(max_y_power) != max_y_power or max_y_power < 0:
-            raise ValueError(f"max_y_power must be an integer >= 0, got {max_y_power!r}")
+        max_y_power = check_int(max_y_power, "max_y_power", low=0)
         terms = [t for t in terms if t.power_of("y") <= max_y_power]
     terms.sort(key=Term.sort_key)
     terms += [Term((("e", l, 1),)) for l in range(1, ne + 1)]

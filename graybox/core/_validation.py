@@ -2,12 +2,15 @@
 
 Every public function of graybox validates its arguments with these helpers, so the same
 mistake gets the same message everywhere. Each returns the value in its canonical form
-(a Python ``int``, a ``float``, a read-only float array …) or raises ``ValueError`` naming the
-argument and what was wrong with it.
+(a Python ``int``, a ``float``, a read-only float array …) or raises, naming the argument and
+what was wrong with it, as NumPy and scikit-learn do: ``TypeError`` for a value of the wrong type
+(``"x"`` or ``True`` where a number is meant, ``2.5`` where a count is meant), ``ValueError`` for
+a value of the right type outside its allowed range (``-1``, ``nan``, ``inf``, an unknown choice).
 """
 
 from __future__ import annotations
 
+import numbers
 import os
 import sys
 import warnings
@@ -16,8 +19,10 @@ from typing import Iterable, Sequence
 import numpy as np
 
 __all__ = [
+    "check_bool",
     "check_int",
     "check_real",
+    "check_band",
     "check_choice",
     "check_seed",
     "check_theta",
@@ -29,25 +34,48 @@ __all__ = [
     "check_per_point",
 ]
 
-#: The graybox package folder (this module sits in graybox/core): warnings skip every frame inside it.
-_PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# graybox/, not graybox/core/: a frame in any subpackage is graybox's own
+_PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
+
+
+def _is_bool(value: object) -> bool:
+    return isinstance(value, (bool, np.bool_))
+
+
+def _is_number(value: object) -> bool:
+    """A real number: Python's, NumPy's, or a 0-d numeric array (never a bool or a string)."""
+    if _is_bool(value):
+        return False
+    if isinstance(value, np.ndarray):
+        return value.ndim == 0 and value.dtype.kind in "iuf"
+    return isinstance(value, numbers.Real)
+
+
+def check_bool(value: object, name: str) -> bool:
+    """``value`` as a Python ``bool``, or ``TypeError`` (``1``, ``"yes"`` and ``None`` are not flags)."""
+    if not _is_bool(value):
+        raise TypeError(f"{name} must be True or False, got {value!r} ({type(value).__name__})")
+    return bool(value)
 
 
 def check_int(value: object, name: str, *, low: int | None = None, high: int | None = None) -> int:
-    """``value`` as an ``int`` in [low, high], or ``ValueError``.
+    """``value`` as an ``int`` in [low, high].
 
-    Booleans and non-integral numbers are refused (``True`` is not a count, nor is ``2.5``);
-    an integral float such as ``3.0`` is accepted.
+    ``TypeError`` for anything but an integer: booleans (``True`` is not a count), strings and
+    non-integral numbers (``2.5``); an integral float such as ``3.0`` is accepted.
+    ``ValueError`` for an integer outside [low, high] (and for ``nan`` or ``inf``).
     """
-    if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be an integer, got {value!r}")
-    try:
-        ok = int(value) == value  # type: ignore[call-overload]
-    except (TypeError, ValueError, OverflowError):
-        ok = False
-    if not ok:
-        raise ValueError(f"{name} must be an integer, got {value!r}")
-    v = int(value)  # type: ignore[call-overload]
+    if not _is_number(value):
+        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
+    f = float(value)  # type: ignore[arg-type]
+    if not np.isfinite(f):
+        raise ValueError(f"{name} must be a finite integer, got {value!r}")
+    if isinstance(value, (numbers.Integral, np.integer)) or (isinstance(value, np.ndarray) and value.dtype.kind in "iu"):
+        v = int(value)  # type: ignore[arg-type]
+    elif f == int(f):
+        v = int(f)
+    else:
+        raise TypeError(f"{name} must be an integer, got {value!r}")
     if low is not None and v < low:
         raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
     if high is not None and v > high:
@@ -64,16 +92,16 @@ def check_real(
     low_open: bool = False,
     high_open: bool = False,
 ) -> float:
-    """``value`` as a finite ``float`` in the interval given by ``low``/``high``, or ``ValueError``.
+    """``value`` as a finite ``float`` in the interval given by ``low``/``high``.
 
     ``low_open`` / ``high_open`` exclude the end points (``low=0, low_open=True``: positive).
+    ``TypeError`` for a bool, a string or anything else that is not a real number (``"0.1"`` is
+    refused: a number read from a file is converted where it is read); ``ValueError`` for
+    ``nan``, ``inf`` or a number outside the interval.
     """
-    if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    try:
-        v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not _is_number(value):
+        raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
+    v = float(value)  # type: ignore[arg-type]
     if not np.isfinite(v):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
     lo_bad = low is not None and (v <= low if low_open else v < low)
@@ -85,10 +113,31 @@ def check_real(
     return v
 
 
+def check_band(band: object, name: str = "band") -> tuple[float, float]:
+    """A band on a mean square error (output units²) as ``(low, high)``, or ``TypeError``/``ValueError``.
+
+    ``band`` is the upper end ``B > 0`` of [0, B], or a pair ``(low, high)`` with
+    ``0 <= low < high``. A band of width 0 asks for an exact fit of noisy data, so it is refused.
+    """
+    if isinstance(band, (tuple, list)) or (isinstance(band, np.ndarray) and band.ndim == 1):
+        if len(band) != 2:
+            raise ValueError(f"{name} must be a number B > 0 or a pair (low, high), got {len(band)} values")
+        lo = check_real(band[0], f"{name}[0] (low)", low=0)
+        hi = check_real(band[1], f"{name}[1] (high)", low=lo, low_open=True)
+        return lo, hi
+    if not _is_number(band):
+        raise TypeError(f"{name} must be a number B > 0 (output units²) or a pair (low, high), got {band!r} "
+                        f"({type(band).__name__})")
+    return 0.0, check_real(band, name, low=0, low_open=True)
+
+
 def check_choice(value: object, name: str, choices: Iterable[str]) -> str:
-    """``value`` if it is one of ``choices`` (strings), or ``ValueError`` listing them."""
+    """``value`` if it is one of ``choices`` (strings): ``TypeError`` for a non-string, else ``ValueError`` listing them."""
     opts = tuple(choices)
-    if not isinstance(value, str) or value not in opts:
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a string, one of {', '.join(repr(c) for c in opts)}; got {value!r} "
+                        f"({type(value).__name__})")
+    if value not in opts:
         raise ValueError(f"{name} must be one of {', '.join(repr(c) for c in opts)}; got {value!r}")
     return value
 
@@ -119,10 +168,14 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
     λ2 = 1 − λ1. λ1 = 0 would ignore the dynamic data entirely (θ is then not identifiable from
     the static points alone), so it is refused.
     """
+    if _is_bool(lambdas) or isinstance(lambdas, str):
+        raise TypeError(f"{name} must be numbers in (0, 1], got {lambdas!r}")
     try:
         lam = np.atleast_1d(np.asarray(lambdas, dtype=float))
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers in (0, 1], got {lambdas!r}") from None
+        raise TypeError(f"{name} must be numbers in (0, 1], got {lambdas!r}") from None
+    if np.asarray(lambdas).dtype == bool:
+        raise TypeError(f"{name} must be numbers in (0, 1], got booleans")
     if lam.ndim != 1 or lam.size == 0:
         raise ValueError(f"{name} must be a non-empty 1-D array of λ1 values, got shape {lam.shape}")
     bad = ~np.isfinite(lam) | (lam <= 0) | (lam > 1)
@@ -133,7 +186,12 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
 
 def check_per_point(value: object, n: int, name: str) -> np.ndarray:
     """A scalar or one value per point, as a finite float array of shape (n,), or ``ValueError``."""
-    a = np.asarray(value, dtype=float)
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number or an array of numbers, got {type(value).__name__}") from None
+    if _is_bool(value) or a.dtype == object:
+        raise TypeError(f"{name} must be a number or an array of numbers, got {value!r}")
     if a.ndim > 1 or (a.ndim == 1 and a.size not in (1, n)):
         raise ValueError(f"{name} must be a scalar or have one value per ū ({n}), got shape {a.shape}")
     out = np.broadcast_to(np.ravel(a) if a.ndim else a, (n,))

@@ -479,6 +479,7 @@ def load_static_csv(
     repeats: str = "error",
     delimiter: str | None = None,
     decimal: str | None = None,
+    uncertainty: float | Sequence[float] | None = None,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
@@ -501,6 +502,11 @@ def load_static_csv(
         The column delimiter (as in :func:`load_record_csv`; detected by default).
     decimal : {".", ","}, optional
         The decimal mark (as in :func:`load_record_csv`; detected by default).
+    uncertainty : float or sequence of float, optional
+        δ, how far each ȳ may lie from the true steady state (output units; one number, or one
+        per point in the returned order), carried on the points: D_SF's band and
+        :class:`~graybox.StaticBand`'s half-widths then follow from it. Default: none (bands
+        must be given).
 
     Returns
     -------
@@ -528,7 +534,7 @@ def load_static_csv(
         ub = cols["u"]
         where = f"column {ucols[0]!r}"
     if repeats == "mean":
-        return StaticPoints.from_repeats(ub, cols["y"], name=label, input_names=names)
+        return StaticPoints.from_repeats(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty)
     seen: dict[object, int] = {}
     for v, line in zip(ub.tolist() if ub.ndim == 1 else map(tuple, ub.tolist()), cols["_lines"].tolist()):
         if v in seen:
@@ -536,7 +542,7 @@ def load_static_csv(
             raise ValueError(f"{p}: {where}: lines {seen[v]} and {line} have the same input level {level}; average "
                              "repeated measurements into one point per level (repeats=\"mean\" does it)")
         seen[v] = line
-    return StaticPoints(ub, cols["y"], name=label, input_names=names)
+    return StaticPoints(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty)
 
 
 # ---------------------------------------------------------------------------
@@ -598,7 +604,9 @@ def load_pumping() -> Dataset:
     -------
     Dataset
         ``ident``: first 3200 samples, ``valid``: last 800 (Records, Ts = 0.05 s, units
-        ("rpm", "mlc")); ``static``: 10 measured points at 750, 850, …, 1650 rpm;
+        ("rpm", "mlc")); ``static``: 10 measured points at 750, 850, …, 1650 rpm, carrying
+        the transmitter's error ±0.175 mlc as their ``uncertainty`` (so ``static.band`` is
+        0.175² mlc², D_SF's band by its rule);
         ``description``: where the data come from (a simulated stand-in, said plainly);
         ``extra``: ``"static_curve"`` — eq. (1) as a :class:`~graybox.StaticCurve` on
         [750, 1650] rpm (the curve the plant is calibrated to), ``"plant"`` — the
@@ -616,7 +624,8 @@ def load_pumping() -> Dataset:
     if len(rec) <= N_IDENT:
         raise ValueError(f"{d / 'dynamic.csv'}: {len(rec)} samples, need more than {N_IDENT} to split ident/valid")
     su, sy = STATIC_COLUMNS
-    static = load_static_csv(d / "static.csv", u=su, y=sy, name="pumping static points")
+    static = load_static_csv(d / "static.csv", u=su, y=sy, name="pumping static points",
+                             uncertainty=PUMPING_STATIC_UNCERTAINTY)
     eq1 = StaticCurve.polynomial(EQ1_COEFFICIENTS, domain=(750.0, 1650.0), name="eq. (1)")
     return Dataset(
         ident=rec.slice(0, N_IDENT, name="pumping ident"),
@@ -633,6 +642,11 @@ def load_pumping() -> Dataset:
 # ---------------------------------------------------------------------------
 
 _BUCK_FILES = ("buck_id.csv", "buck_valid.csv")
+#: The bundled static points' uncertainty δ (output units), carried on the loaded StaticPoints so
+#: that D_SF's band and StaticBand's half-widths follow from the data: the pumping rig's pressure
+#: transmitter error ±0.175 mlc (both rigs), the buck converter's half resolution 0.1 V.
+PUMPING_STATIC_UNCERTAINTY = 0.175
+BUCK_STATIC_UNCERTAINTY = 0.1
 
 
 def find_buck_dir(path: str | os.PathLike | None = None) -> Path:
@@ -689,7 +703,8 @@ def load_buck(path: str | os.PathLike | None = None) -> Dataset:
         2.2–2.5), y = ``y`` (output voltage, V). No static points were measured: ``static`` holds
         9 points *sampled from the theoretical static function* ȳ = (4 − ū)·8 at ū = 1.5, 1.75,
         …, 3.5 (mostly outside the dynamic data's input range, which is what makes them useful
-        to gray-box estimation), and ``extra["static_curve"]`` is that function as a
+        to gray-box estimation), carrying an ``uncertainty`` of 0.1 V (half the output's 0.2 V
+        resolution), and ``extra["static_curve"]`` is that function as a
         :class:`~graybox.StaticCurve` (domain ū ∈ [1, 4]).
     """
     d = find_buck_dir(path)
@@ -700,7 +715,8 @@ def load_buck(path: str | os.PathLike | None = None) -> Dataset:
         raise ValueError(f"{d}: identification and validation files have different sampling periods "
                          f"({ident.Ts:g} s and {valid.Ts:g} s)")
     ubar = np.linspace(1.5, 3.5, 9)
-    static = StaticPoints(ubar, BUCK_STATIC_CURVE(ubar), name="buck theoretical static points")
+    static = StaticPoints(ubar, BUCK_STATIC_CURVE(ubar), name="buck theoretical static points",
+                          uncertainty=BUCK_STATIC_UNCERTAINTY)
     return Dataset(
         ident=ident,
         valid=valid,

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..core._records import Dataset
-from ._loaders import bundled_data_dir, load_record_csv, load_static_csv
+from ._loaders import PUMPING_STATIC_UNCERTAINTY, bundled_data_dir, load_record_csv, load_static_csv
 
 __all__ = ["load_pumping_miso", "pumping_miso_data_dir", "PUMPING_MISO_INPUTS"]
 
@@ -43,7 +43,7 @@ def load_pumping_miso() -> Dataset:
         ``ident``: first 4800 samples, ``valid``: last 1200 (Records with ``u`` of shape (N, 2),
         inputs named ``u1``, ``u2`` (speed references, rpm), output the pressure (mlc),
         Ts = 0.05 s); ``static``: 36 measured points on the 6 × 6 grid (1150, 1250, …, 1650 rpm)²,
-        ``ubar`` of shape (36, 2); ``description``: where the data come from; ``extra``:
+        ``ubar`` of shape (36, 2), carrying the transmitter's ±0.175 mlc as ``uncertainty``; ``description``: where the data come from; ``extra``:
         ``"static_surface"`` — the plant's theoretical static surface p̄(ū₁, ū₂), a function of ū
         of shape (K, 2) with a ``domain``; ``"plant"`` — the
         :class:`~graybox.datasets.TwoSpeedPumpingPlant` that generated the data; ``"seed"``; and
@@ -66,7 +66,7 @@ def load_pumping_miso() -> Dataset:
         raise ValueError(f"{d / 'dynamic.csv'}: {len(rec)} samples, need more than {N_IDENT_MISO} to split ident/valid")
     s1, s2, sy = STATIC_COLUMNS_MISO
     static = load_static_csv(d / "static.csv", u=[s1, s2], y=sy, name="pumping_miso static points",
-                             input_names=PUMPING_MISO_INPUTS)
+                             input_names=PUMPING_MISO_INPUTS, uncertainty=PUMPING_STATIC_UNCERTAINTY)
     plant = TwoSpeedPumpingPlant()
     return Dataset(
         ident=rec.slice(0, N_IDENT_MISO, name="pumping_miso ident"),

@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 
 from ..estimation._prediction_error import PE_LAMBDAS, pe_pareto
-from ..estimation._decisions import FALLBACKS, decide_dsf
+from ..estimation._decisions import FALLBACKS, decide_dsf, resolve_band
 from ..core._progress import progress_bar
 from ..models._coerce import as_structure, records_of, static_info
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
@@ -142,7 +142,8 @@ class BootstrapJob:
         recs = block_resample(self.records, self.block_length, rng)
         sp = self.static
         if self.static_sigma is not None:
-            sp = StaticPoints(sp.ubar, sp.ybar + self.static_sigma * rng.standard_normal(len(sp)), name=sp.name)
+            sp = StaticPoints(sp.ubar, sp.ybar + self.static_sigma * rng.standard_normal(len(sp)), sp.name,
+                              sp.input_names, sp.uncertainty)
         return recs, sp
 
     def __call__(self, i: int) -> dict:
@@ -301,6 +302,8 @@ class DecisionBootstrap:
 
 
 def _estimator_options(estimator: str, options: Mapping | None) -> dict:
+    if options is not None and not isinstance(options, Mapping):
+        raise TypeError(f"options must be a mapping of the sweep's keyword options, got {options!r}")
     opts = dict(options or {})
     fn = pe_pareto if estimator == "pe" else se_pareto
     allowed = [p.name for p in inspect.signature(fn).parameters.values() if p.kind == p.KEYWORD_ONLY]
@@ -321,7 +324,7 @@ def bootstrap_decision(
     lambdas: Sequence[float] | np.ndarray | None = None,
     n_boot: int = 50,
     block_length: int | None = None,
-    band: float | tuple[float, float] = 0.031,
+    band: float | tuple[float, float] | None = None,
     fallback: str | None = None,
     static_sigma: float | None = None,
     seed: int = 0,
@@ -349,7 +352,10 @@ def bootstrap_decision(
     block_length : int, optional
         Samples per block (default: the larger of 10·(max lag + 1) and a tenth of the data);
         at least 2·(max lag + 1) so that a block has rows to fit.
-    band, fallback
+    band : float or (float, float), optional
+        As for :func:`graybox.decide_dsf`; default: the static points' own band
+        (:attr:`~graybox.StaticPoints.band`), required when they carry no uncertainty.
+    fallback : {None, "min_jsf"}
         As for :func:`graybox.decide_dsf`.
     static_sigma : float, optional
         Standard deviation of Gaussian noise added to the static ȳ_i in each replicate (output
@@ -398,9 +404,13 @@ def bootstrap_decision(
     block_length = check_int(block_length, "block_length", low=2 * (L + 1))
     if static_sigma is not None:
         static_sigma = check_real(static_sigma, "static_sigma", low=0, low_open=True)
+    lo, hi = resolve_band(band, sp, "bootstrap_decision")
+    band = hi if lo == 0 and (band is None or np.ndim(band) == 0) else (lo, hi)
     if fallback is not None:
         check_choice(fallback, "fallback", FALLBACKS)
     opts = _estimator_options(estimator, options)
+    if map is not None and not callable(map):
+        raise TypeError(f"map must be a callable map(job, ids) (e.g. an executor's .map), got {map!r}")
     if not any(len(r) >= block_length for r in recs):
         raise ValueError(f"block_length {block_length} is longer than every record ({[len(r) for r in recs]} samples)")
     job = BootstrapJob(structure.process, tuple(recs), sp, estimator, lam, band, fallback, block_length, seed,

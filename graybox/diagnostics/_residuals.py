@@ -65,7 +65,7 @@ from ..models._model import Model
 from ..estimation._neural import NeuralModel
 from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
-from ..core._validation import check_choice, check_int, check_real
+from ..core._validation import check_bool, check_choice, check_int, check_real
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
@@ -266,7 +266,8 @@ def one_step_residuals(
         lag of the terms used (process and, with ``moving_average``, noise terms).
     """
     model = as_model(model, kinds=(Model, NeuralModel), accepted=_ACCEPTED)
-    return [_model_residuals(model, r, bool(moving_average))[0] for r in records_of(data, "valid")]
+    moving_average = check_bool(moving_average, "moving_average")
+    return [_model_residuals(model, r, moving_average)[0] for r in records_of(data, "valid")]
 
 
 # --------------------------------------------------------------------------------------------
@@ -351,6 +352,7 @@ def residual_tests(
     """
     model = as_model(model, kinds=(Model, NeuralModel), accepted=_ACCEPTED)
     max_lag = check_int(max_lag, "max_lag", low=1)
+    moving_average = check_bool(moving_average, "moving_average")
     level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
     check_choice(rule, "rule", RULES)
     recs = records_of(data, "valid")

@@ -774,6 +774,8 @@ def static_curve_band(
     if not isinstance(uncertainty, ParameterUncertainty):
         raise ValueError(f"static_curve_band needs a ParameterUncertainty, got {type(uncertainty).__name__}")
     check_choice(method, "method", ("delta", "monte-carlo"))
+    n_samples = check_int(n_samples, "n_samples", low=2)  # checked for either method: a bad value is never ignored
+    seed = check_seed(seed)
     if uncertainty.model.n_inputs > 1:
         raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
                          f"inputs {uncertainty.model.input_names} (a band around a static surface is not built yet)")

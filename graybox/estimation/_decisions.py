@@ -2,7 +2,10 @@
 
 :func:`decide_dsf` is the paper's D_SF (eq. (14)): the member with the smallest free-run
 error J_S among those whose static error J_SF lies in the uncertainty interval
-B = [0, band] of the pressure transmitter (0.031 mlc² = 0.175²). With ``choose_on`` it scores
+B = [0, band]. B is in the output's units² and belongs to the data: it is given, or read from
+the static points' uncertainty δ (:attr:`graybox.StaticPoints.band`, the mean of δ_i²; the
+paper's 0.031 mlc² = 0.175² for its transmitter); never a default.
+With ``choose_on`` it scores
 the members on a choosing record instead of the identification data they were fitted on: on the
 bundled plant the gradient SE members of structure (15) have identification J_S 0.54 and
 validation J_S near 2000 (near-integrators that follow the record's drift), which the paper's
@@ -23,10 +26,24 @@ from ._pareto import ParetoSet
 from ..core._records import Record
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
-from ..core._validation import check_choice
+from ..core._validation import check_band, check_choice
 from ..static._constraints import InfeasibleError
+from ..core._records import StaticPoints
 
-__all__ = ["Decision", "decide_dsf", "decide_min_correlation", "FALLBACKS"]
+__all__ = ["Decision", "decide_dsf", "decide_min_correlation", "FALLBACKS", "resolve_band"]
+
+
+def resolve_band(band: object, static: StaticPoints | None, who: str) -> tuple[float, float]:
+    """D_SF's band as ``(low, high)``: ``band`` checked, or, when it is None, the static points' own.
+
+    ``ValueError`` saying what to pass when neither is there: a band has no unit-free default.
+    """
+    if band is not None:
+        return check_band(band, "band")
+    if static is None:
+        raise ValueError(f"{who} needs band=B, J_SF's bound in output units² (e.g. the square of the static "
+                         "measurements' error, or data.static.band when the static points carry their uncertainty)")
+    return 0.0, static.band
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,7 +131,7 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
 def decide_dsf(
     pareto: ParetoSet,
     *,
-    band: float | tuple[float, float] = 0.031,
+    band: float | tuple[float, float] | None = None,
     fallback: str | None = None,
     choose_on: Record | Sequence[Record] | None = None,
 ) -> Decision:
@@ -125,7 +142,9 @@ def decide_dsf(
     pareto : ParetoSet
         Members with J_S and J_SF (output units²).
     band : float or (float, float)
-        B = [0, band] (default 0.031 mlc² = 0.175², the transmitter's error), or (low, high).
+        B = [0, band] with band > 0, or (low, high) with 0 <= low < high, in the output's units²
+        (J_SF's units). Required: a Pareto set does not know its data's uncertainty; with static
+        points that carry one, pass ``band=data.static.band`` (the mean of δ_i²).
     fallback : {None, "min_jsf"}
         When no member has J_SF in B (with a finite J_S): None (default) raises
         ``InfeasibleError`` (a ``ValueError``) naming the smallest J_SF reached;
@@ -145,12 +164,9 @@ def decide_dsf(
     """
     if not isinstance(pareto, ParetoSet):
         raise TypeError(f"pareto must be a ParetoSet (from pe_pareto or se_pareto); got {type(pareto).__name__}")
+    lo, hi = resolve_band(band, None, "decide_dsf")
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
-    lo, hi = (0.0, band) if np.ndim(band) == 0 else band
-    lo, hi = float(lo), float(hi)
-    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo <= hi):
-        raise ValueError(f"band must be >= 0 (or (low, high) with 0 <= low <= high), got {band!r}")
     if fallback is not None:
         check_choice(fallback, "fallback", FALLBACKS)
     js, jsf = pareto.JS, pareto.JSF

@@ -39,6 +39,7 @@ from typing import Sequence
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from ._decisions import resolve_band
 from ._prediction_error import pe_thetas
 from ..models._coerce import as_structure, records_of, static_info
 from ..models._model import Model
@@ -336,7 +337,7 @@ def se_dsf(
     data: Record | Dataset | Sequence[Record],
     static: StaticPoints | None = None,
     *,
-    band: float = 0.031,
+    band: float | None = None,
     theta0: np.ndarray | None = None,
     lambdas: Sequence[float] | np.ndarray | None = None,
     max_iter: int = 200,
@@ -354,7 +355,9 @@ def se_dsf(
     static : StaticPoints, optional
         Static points (default: the Dataset's).
     band : float
-        B, the bound on J_SF in output units² (D_SF's band: 0.031 mlc² = 0.175² for the plant).
+        B > 0, the bound on J_SF in output units² (D_SF's band). Default: the static points' own,
+        :attr:`~graybox.StaticPoints.band` (the mean of their uncertainty δ_i²); static points
+        without an uncertainty need it given (``ValueError`` otherwise).
     theta0 : ndarray, shape (n_terms,), optional
         The only start; default: several (see the module docstring).
     lambdas : sequence of float, optional
@@ -376,7 +379,9 @@ def se_dsf(
     """
     recs = records_of(data)
     sp = static_info(static, data, needed_by="se_dsf")
-    band = check_real(band, "band", low=0, low_open=True)
+    if band is not None and np.ndim(band) != 0:
+        raise TypeError(f"se_dsf: band must be a number B > 0 (the bound on J_SF, output units²), got {band!r}")
+    band = resolve_band(band, sp, "se_dsf")[1]
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     warn_static_range(sp.ubar, recs)
@@ -385,7 +390,7 @@ def se_dsf(
     if theta0 is not None:
         starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]
     else:
-        lams = np.logspace(-6, 0, 60) if pe_lambdas is None else np.asarray(pe_lambdas, float)
+        lams = np.logspace(-6, 0, 60) if pe_lambdas is None else check_lambdas(pe_lambdas, "pe_lambdas")
         coarse = _COARSE if lambdas is None else check_lambdas(lambdas)
         starts = []
         try:

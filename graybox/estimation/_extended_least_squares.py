@@ -75,7 +75,6 @@ without loss of precision.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -91,7 +90,7 @@ from ..models._model import Model
 from ..core._records import Dataset, Record
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
-from ..core._validation import check_int, check_real, frozen
+from ..core._validation import check_int, check_real, frozen, warn
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 
@@ -468,8 +467,8 @@ def _warn_not_converged(max_iter: int, hist: list[float], tol: float, relaxation
                         lags: list, fallback: _DirectSolve | None) -> None:
     """The ELSConvergenceWarning saying why, attributed to the caller of :func:`els`."""
     why = fallback.why() if fallback is not None else ""
-    warnings.warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
-                  ELSConvergenceWarning, stacklevel=3)  # this function, els, its caller
+    warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
+         ELSConvergenceWarning)
 
 
 def els(

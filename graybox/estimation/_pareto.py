@@ -18,7 +18,7 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, as_records
-from ..core._validation import frozen, warn
+from ..core._validation import check_bool, frozen, warn
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -221,15 +221,21 @@ class ParetoSet:
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
         """The members that no other member dominates in ``objectives`` (order kept)."""
+        if isinstance(objectives, str) or not hasattr(objectives, "__len__"):
+            raise TypeError(f"objectives must be a sequence of objective names, got {objectives!r}")
         if len(objectives) < 1:
-            raise ValueError("give at least one objective")
-        pts = np.column_stack([self.objective(o) for o in objectives])
+            raise ValueError("objectives: give at least one objective")
+        try:
+            pts = np.column_stack([self.objective(o) for o in objectives])
+        except ValueError as exc:
+            raise ValueError(f"objectives: {exc}") from None
         keep = nondominated_mask(pts)
         keep[list(self.failures)] = False
         return self.subset(keep)
 
     def to_frame(self, params: bool = False) -> pd.DataFrame:
         """One row per member: ``lambda1``, ``J1``, ``JS``, ``JSF``, extras (and θ by term if ``params``)."""
+        params = check_bool(params, "params")
         cols = {"lambda1": self.lambdas, "J1": self.J1, "JS": self.JS, "JSF": self.JSF}
         cols.update(self.extra)
         cols["failure"] = [self.failures.get(i, "") for i in range(len(self))]

@@ -28,7 +28,6 @@ sweep compiles once and re-solves (OSQP warm-started from the neighbouring λ).
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
@@ -63,7 +62,7 @@ from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, wa
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_lambdas
+from ..core._validation import check_bool, check_choice, check_int, check_lambdas, check_real, warn
 
 if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
     import cvxpy as cp
@@ -326,10 +325,7 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
     elif isinstance(reference, Model) or isinstance(getattr(reference, "model", None), Model):
         return float(as_model(reference, "reference").clusters().get("Σy", 0.0))
     elif np.ndim(reference) == 0:
-        v = float(reference)
-        if not np.isfinite(v):
-            raise ValueError(f"reference Σ*_y must be finite, got {reference!r}")
-        return v
+        return check_real(reference, "reference (Σ*_y)")
     else:
         th = np.asarray(reference, float)
         if th.shape != (len(d.structure),):
@@ -508,6 +504,8 @@ class _QP:
         self.names = rows.names
         self.options = dict(_SOLVER_DEFAULTS[solver])
         self.options.update(options or {})
+        #: (w1, w2) of the solves the solver called inaccurate: said once per estimate (warn_inaccurate)
+        self.inaccurate: list[tuple[float, float]] = []
 
     def solve(self, w1: float, w2: float, warm_start: bool = True) -> np.ndarray:
         """z for one weight pair (the weights are normalised to sum 1: the argmin is unchanged)."""
@@ -532,9 +530,16 @@ class _QP:
         if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.dy.value is None:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
-            warnings.warn(f"solver {self.solver} reports an inaccurate optimum (w1={w1:g}, w2={w2:g})",
-                          RuntimeWarning, stacklevel=3)
+            self.inaccurate.append((float(w1), float(w2)))
         return self.basis.T @ (self.y0 + np.array(self.dy.value, float))
+
+    def warn_inaccurate(self) -> None:
+        """One warning for the whole sweep, naming the weights whose optimum the solver called inaccurate."""
+        if self.inaccurate:
+            said = ", ".join(f"(w1={a:g}, w2={b:g})" for a, b in self.inaccurate[:5])
+            more = f" and {len(self.inaccurate) - 5} more" if len(self.inaccurate) > 5 else ""
+            warn(f"solver {self.solver} reports an inaccurate optimum at {len(self.inaccurate)} weight(s): "
+                 f"{said}{more}", RuntimeWarning)
 
 
 # --------------------------------------------------------------------------------------------
@@ -667,7 +672,10 @@ def cls(
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
     else:
-        z = _QP(d, None, cons, ctx, solver, solver_options).solve(1.0, 0.0)
+        _check_solver_options(solver_options)
+        qp = _QP(d, None, cons, ctx, solver, solver_options)
+        z = qp.solve(1.0, 0.0)
+        qp.warn_inaccurate()
     theta = z / d.s
     for c in cons:
         c.after_solve(theta, ctx)
@@ -814,6 +822,11 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
 
 
+def _check_solver_options(options: object) -> None:
+    if options is not None and not isinstance(options, Mapping):
+        raise TypeError(f"solver_options must be a mapping of the solver's keyword options, got {options!r}")
+
+
 def pe_thetas(
     structure: Structure | Model,
     data: Record | Sequence[Record] | Dataset,
@@ -848,6 +861,8 @@ def pe_thetas(
     """
     solver = _check_solver(solver)
     lam = check_lambdas(PE_LAMBDAS if lambdas is None else lambdas)
+    warm_start = check_bool(warm_start, "warm_start")
+    _check_solver_options(solver_options)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
                                                             reference)
     w1 = lam / d.N if weights == "mse" else lam.copy()
@@ -861,6 +876,7 @@ def pe_thetas(
         Z = np.empty((lam.size, d.s.size))
         for i in np.argsort(-lam, kind="stable"):
             Z[i] = qp.solve(w1[i], w2[i], warm_start)
+        qp.warn_inaccurate()
     thetas = Z / d.s
     for th in thetas:
         for c in cons:
@@ -926,6 +942,9 @@ def pe_pareto(
         θ, λ1, J_1 and J_S on ``data``, J_SF (true static-curve MSE, stable equilibria only) and,
         in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²).
     """
+    threads = check_int(threads, "threads", low=1)
+    if eval_static is not None and not isinstance(eval_static, StaticPoints):
+        raise TypeError(f"eval_static must be StaticPoints, got {type(eval_static).__name__}")
     if is_dask_data(data):
         raise ValueError("pe_pareto evaluates every member by a free run on the record, which needs it in memory; "
                          "for a DaskRecord call pe_thetas (it reduces the record on the Dask scheduler) and evaluate "

@@ -323,16 +323,20 @@ class GAOptions:
     selective_pressure: float = 2.0
 
     def __post_init__(self) -> None:
-        if self.population < 4 or self.generations < 1:
-            raise ValueError("population must be >= 4 and generations >= 1")
+        def put(name: str, v: object) -> None:
+            object.__setattr__(self, name, v)
+
+        put("population", check_int(self.population, "GAOptions: population", low=4))
+        put("generations", check_int(self.generations, "GAOptions: generations", low=1))
+        if self.stall is not None:
+            put("stall", check_int(self.stall, "GAOptions: stall", low=1))
         for name in ("crossover_prob", "mutation_prob"):
-            v = getattr(self, name)
-            if not 0 <= v <= 1:
-                raise ValueError(f"{name} must lie in [0, 1], got {v}")
-        if not 0 <= self.elite < self.population:
-            raise ValueError("elite must lie in [0, population)")
-        if not 1 <= self.selective_pressure <= 2:
-            raise ValueError("selective_pressure must lie in [1, 2]")
+            put(name, check_real(getattr(self, name), f"GAOptions: {name}", low=0, high=1))
+        put("crossover_ratio", check_real(self.crossover_ratio, "GAOptions: crossover_ratio", low=0))
+        put("mutation_scale", check_real(self.mutation_scale, "GAOptions: mutation_scale", low=0))
+        put("elite", check_int(self.elite, "GAOptions: elite", low=0, high=self.population - 1))
+        put("random_samples", check_int(self.random_samples, "GAOptions: random_samples", low=0))
+        put("selective_pressure", check_real(self.selective_pressure, "GAOptions: selective_pressure", low=1, high=2))
 
 
 def _sus(fitness: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -489,6 +493,8 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     done = 0
     meta = {"problem": problem.fingerprint(), "method": method, "lambdas": lam.tolist(), "seed": seed,
             "settings": settings}
+    if checkpoint is not None and not isinstance(checkpoint, (str, os.PathLike)):
+        raise TypeError(f"checkpoint must be a file path, got {checkpoint!r}")
     path = Path(checkpoint) if checkpoint is not None else None
     if path is not None and path.exists():
         ck = _load_checkpoint(path, meta)

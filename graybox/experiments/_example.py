@@ -18,15 +18,16 @@ seeds = [0, 1]            # used by the stochastic estimators (se-ga, neural); t
 [[data]]
 name = "pumping"
 bundled = "pumping"       # or "buck" (the real buck converter, data kept outside the package)
-band = 0.031              # D_SF band B = [0, band] on J_SF (mlc^2): the transmitter's +/-0.175 mlc
+# D_SF's band B = [0, band] on J_SF (output units^2) comes from the static points' uncertainty:
+# the bundled plant's transmitter error +/-0.175 mlc gives 0.175^2 mlc^2. To choose another: band = 0.05
 
 # Your own plant: CSV files, columns chosen by name; paths relative to this file.
 # [[data]]
 # name = "my-plant"
 # ident = {path = "ident.csv", u = "speed", y = "pressure", time = "t"}    # or Ts = 0.05 (seconds)
 # valid = {path = "valid.csv", u = "speed", y = "pressure", time = "t"}
-# static = {path = "static.csv", u = "speed", y = "pressure"}             # measured steady states
-# band = 0.031
+# static = {path = "static.csv", u = "speed", y = "pressure", uncertainty = 0.175}  # steady states, +/- error
+# (without uncertainty give band = B, J_SF's bound in output units^2, and b to every band constraint)
 # Several inputs: u = ["speed1", "speed2"] in all three files. Static files that repeat an
 # operating point: repeats = "mean" averages the repeats into one point.
 
@@ -52,7 +53,8 @@ terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]
 # ----------------------------------------------------------------------------------- variants
 # estimator: ls, els, cls, pe, se-ga, se-gradient, se-dsf (the D_SF model solved directly), neural
 # constraints (cls, pe): {type = "equality"} (eq. (22); curve = "fit" | "dataset" | [c0, c1, ...]),
-#   {type = "points"}, {type = "band", b = 0.175}, {type = "gain", lower = 0.0},
+#   {type = "points"}, {type = "band"} (half-width: the static points' uncertainty; or b = 0.2 in
+#   output units), {type = "gain", lower = 0.0},
 #   {type = "clusters", bounds = {Sy = {upper = 0.999}}}; a list imposes them together.
 # lambdas (pe, se-*): a list of lambda1 in (0, 1], or {logspace = [a, b, n]} (se-dsf: its coarse sweep).
 # decision (pe, se-ga, se-gradient): {rule = "dsf"} (band from the data set), {rule = "dsf", band = 0.05,
@@ -84,13 +86,13 @@ options = {solver = "closed"}     # eq. (11), no constraints
 name = "PE band"
 estimator = "pe"
 lambdas = {logspace = [-3, 0, 10]}
-constraints = [{type = "band", b = 0.175}]
+constraints = [{type = "band"}]
 
 [[variants]]
 name = "PE band+gain"
 estimator = "pe"
 lambdas = {logspace = [-3, 0, 10]}
-constraints = [{type = "band", b = 0.175}, {type = "gain", lower = 0.0}]
+constraints = [{type = "band"}, {type = "gain", lower = 0.0}]
 
 [[variants]]
 name = "SE gradient"

@@ -22,6 +22,7 @@ import numpy as np
 from .. import _api as gb
 
 from ..core._terms import default_input_names
+from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
 from ..core._validation import check_choice, check_int, check_lambdas, check_real
 from ..core._reprs import short_repr
 
@@ -59,9 +60,11 @@ CONSTRAINT_TYPES = {
 }
 #: Decision makers for Pareto sets.
 DECISION_RULES = ("dsf", "min_correlation", "min_jsf")
-#: Bundled data sets and their default J_SF band B (output units²): the pumping plant's
-#: transmitter error ±0.175 mlc (0.031 mlc²), the buck converter's 0.2 V quantisation (0.1² V²).
-BUNDLED = {"pumping": 0.031, "buck": 0.01, "pumping_miso": 0.031}
+#: Bundled data sets and their J_SF band B (output units²), the band their static points carry
+#: (``load_*().static.band``, the mean of δ²): the pumping plant's transmitter error ±0.175 mlc
+#: (0.175² mlc²), the buck converter's half resolution 0.1 V (0.1² V²).
+BUNDLED = {"pumping": PUMPING_STATIC_UNCERTAINTY**2, "buck": BUCK_STATIC_UNCERTAINTY**2,
+           "pumping_miso": PUMPING_STATIC_UNCERTAINTY**2}
 
 
 # --------------------------------------------------------------------------------------------
@@ -176,7 +179,7 @@ def _hash(obj: Any, n: int = 16) -> str:
 # data sets
 # --------------------------------------------------------------------------------------------
 _RECORD_KEYS = ("path", "u", "y", "time", "Ts")
-_STATIC_KEYS = ("path", "u", "y", "repeats")
+_STATIC_KEYS = ("path", "u", "y", "repeats", "uncertainty")
 
 
 def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dict:
@@ -198,6 +201,9 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
         out[k] = v
     if "repeats" in keys:
         out["repeats"] = _wrap(check_choice, path + ("repeats",), d.get("repeats", "error"), "repeats", ("error", "mean"))
+    if "uncertainty" in keys and d.get("uncertainty") is not None:  # absent: the canonical form is as before
+        out["uncertainty"] = _wrap(check_real, path + ("uncertainty",), d["uncertainty"], "uncertainty", low=0,
+                                   low_open=True)
     if "time" in keys:
         t = d.get("time")
         if t is not None and not isinstance(t, str):
@@ -227,12 +233,16 @@ class DataSpec:
         ``u`` a column name, or a list of them for several inputs); relative paths are resolved
         against the spec file's folder.
     static : mapping, optional
-        CSV static points ``{"path", "u", "y", "repeats"}`` (see :func:`graybox.load_static_csv`;
-        ``repeats = "mean"`` averages repeated measurements at one level).
+        CSV static points ``{"path", "u", "y", "repeats", "uncertainty"}`` (see
+        :func:`graybox.load_static_csv`; ``repeats = "mean"`` averages repeated measurements at one
+        level; ``uncertainty`` is δ, the static measurements' error in output units, which gives
+        the band and the half-width of a ``{type = "band"}`` without ``b``).
     band : float, optional
-        The J_SF band B = [0, band] (output units²) for D_SF decisions and the reports; default
-        for the bundled sets 0.031 mlc² (pumping and pumping_miso: the same transmitter) and
-        0.01 V² (buck).
+        The J_SF band B = [0, band] (output units²) for D_SF decisions and the reports. Default:
+        the static points' own band, δ² (:attr:`graybox.StaticPoints.band`): for the bundled sets
+        0.175² mlc² (pumping and pumping_miso: the same transmitter) and 0.1² V² (buck); for CSV
+        data the static file's ``uncertainty``; for a Dataset its static points' uncertainty.
+        None when there is none (then D_SF decisions need a band given).
     dataset : Dataset, optional
         A Dataset built in Python (not expressible in TOML); its content is hashed.
     """
@@ -251,7 +261,7 @@ class DataSpec:
         files = [k for k in ("ident", "valid", "static") if getattr(self, k) is not None]
         if len(given) + bool(files) != 1:
             raise SpecError("a data set is exactly one of: bundled = \"pumping\"/\"buck\", CSV files "
-                            "(ident, valid, static), or a Dataset in memory")
+                            "(ident, valid, static), or dataset = a Dataset in memory")
         if self.bundled is not None:
             _wrap(check_choice, ("bundled",), self.bundled, "bundled", tuple(BUNDLED))
         if self.dataset is not None and not isinstance(self.dataset, gb.Dataset):
@@ -266,6 +276,11 @@ class DataSpec:
         band = self.band
         if band is None and self.bundled is not None:
             band = BUNDLED[self.bundled]
+        elif band is None and self.static is not None and self.static.get("uncertainty") is not None:
+            band = float(self.static["uncertainty"]) ** 2
+        elif band is None and self.dataset is not None and self.dataset.static is not None \
+                and self.dataset.static.uncertainty is not None:
+            band = self.dataset.static.band
         if band is not None:
             band = _wrap(check_real, ("band",), band, "band", low=0, low_open=True)
         object.__setattr__(self, "band", band)
@@ -312,7 +327,8 @@ class DataSpec:
             valid = gb.load_record_csv(p(self.valid), u=self.valid["u"], y=self.valid["y"], time=self.valid["time"],
                                        Ts=self.valid["Ts"], name=f"{self.name} valid")
             static = gb.load_static_csv(p(self.static), u=self.static["u"], y=self.static["y"],
-                                        name=f"{self.name} static points", repeats=self.static["repeats"])
+                                        name=f"{self.name} static points", repeats=self.static["repeats"],
+                                        uncertainty=self.static.get("uncertainty"))
             ds = gb.Dataset(ident, valid, static, description=f"CSV files of data set {self.name!r}")
         if ds.static is None:
             raise SpecError("the data set has no static points: gray-box cells and J_SF need them", ())
@@ -558,9 +574,8 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
     if kind == "points":
         return {"type": kind}
     if kind == "band":
-        if "b" not in c:
-            raise SpecError("a band needs its half-width b (output units)", path + ("b",))
-        b = _wrap(check_real, path + ("b",), c["b"], "b", low=0, low_open=True)
+        # no b: each static point's own uncertainty (carried by the data set's static points)
+        b = None if c.get("b") is None else _wrap(check_real, path + ("b",), c["b"], "b", low=0, low_open=True)
         form = _wrap(check_choice, path + ("form",), c.get("form", "exact"), "form", ("exact", "residual"))
         md = _wrap(check_real, path + ("min_denominator",), c.get("min_denominator", 1e-3), "min_denominator",
                    low=0, high=1, low_open=True, high_open=True)

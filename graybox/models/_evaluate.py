@@ -19,7 +19,6 @@ with a warning naming ū and why. Neither is a made-up number: both errors are u
 
 from __future__ import annotations
 
-import warnings
 from typing import Mapping
 
 import numpy as np
@@ -31,6 +30,7 @@ from ._coerce import as_model, as_record, as_structure, static_info
 from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
+from ..core._validation import check_bool, check_int, check_per_point, warn
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -40,6 +40,7 @@ __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
 
 def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """Mean squared error of ``yhat`` against ``y`` over samples ``start …``; inf if ŷ is not finite."""
+    start = check_int(start, "start")
     e = np.asarray(y)[start:] - np.asarray(yhat)[start:]
     if e.size == 0:
         raise ValueError("no samples left to evaluate")
@@ -105,11 +106,13 @@ def jsf(model: Model, static: StaticPoints | Dataset, y0: float | np.ndarray | N
     model = as_model(model, duck="static_curve")
     static = static_info(None if isinstance(static, Dataset) else static, static, needed_by="jsf")
     names = getattr(model, "input_names", ("u",))
-    ub = static_point_inputs(static, names)  # several inputs: ū's columns by the model's input names
+    ub = static_point_inputs(static, names)
+    if y0 is not None:  # checked here: a bad y0 must not pass for a model without an equilibrium
+        y0 = check_per_point(y0, len(static), "y0")  # several inputs: ū's columns by the model's input names
     try:
         yb = model.static_curve(ub, y0=static.ybar if y0 is None else y0, strict=True)
     except (ValueError, DivergenceError) as exc:
-        warnings.warn(f"J_SF of {model.name or 'model'} is infinite: {exc}", RuntimeWarning, stacklevel=2)
+        warn(f"J_SF of {model.name or 'model'} is infinite: {exc}", RuntimeWarning)
         return float("inf")
     return mse(static.ybar, yb)
 
@@ -119,6 +122,7 @@ def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
 
     ``y`` is measured, ``yhat`` the model's output (inf when ``yhat`` is not finite).
     """
+    start = check_int(start, "start", low=0)
     y = np.asarray(y)[start:]
     yhat = np.asarray(yhat)[start:]
     if not np.all(np.isfinite(yhat)):
@@ -232,6 +236,8 @@ def evaluate_thetas(
     structure = as_structure(structure)
     static = static_info(static, record)
     record = None if record is None else as_record(record, "valid", "record")
+    one_step = check_bool(one_step, "one_step")
+    threads = check_int(threads, "threads", low=1)
     th = np.atleast_2d(np.asarray(thetas, float))
     out: dict[str, np.ndarray] = {}
     if record is not None:

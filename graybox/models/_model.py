@@ -12,7 +12,7 @@ from ..static import _analysis as _static
 from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
 from ..core._records import Record
-from ..core._validation import check_theta, frozen
+from ..core._validation import check_int, check_theta, frozen
 from ..core._terms import Structure, check_input_names
 
 __all__ = ["Model"]
@@ -153,7 +153,8 @@ class Model:
 
     # -- printing -----------------------------------------------------------
     def equation(self, *, digits: int = 4) -> str:
-        """Paper-style equation, e.g. ``y(k) = 0.6303 y(k-1) - 0.0264 y(k-4) + …``."""
+        """Paper-style equation, e.g. ``y(k) = 0.6303 y(k-1) - 0.0264 y(k-4) + …`` (``digits`` significant)."""
+        digits = check_int(digits, "digits", low=1)
         parts = []
         for i, (th, t) in enumerate(zip(self.theta, self.structure)):
             mag = f"{abs(th):.{digits}g}"
@@ -170,6 +171,9 @@ class Model:
         ``terms_per_line`` breaks a long model into an ``aligned`` block (put it inside
         ``\\begin{equation}`` … ``\\end{equation}``).
         """
+        digits = check_int(digits, "digits", low=1)
+        if terms_per_line is not None:
+            terms_per_line = check_int(terms_per_line, "terms_per_line", low=1)
         return latex_equation(self.structure, self.theta, self.noise_structure, self.noise_theta, digits, terms_per_line)
 
     def __str__(self) -> str:

@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from ..static._curves import StaticCurve
 from ..core._records import Record, StaticPoints
+from ..core._validation import check_int, check_real
 
 __all__ = ["plot_static_curve", "plot_record"]
 
@@ -28,8 +29,8 @@ def plot_static_curve(
     curve: StaticCurve | Sequence[StaticCurve] | None = None,
     *,
     ax: Axes | None = None,
-    xlabel: str = "Pump speed (rpm)",
-    ylabel: str = "Pressure (mlc)",
+    xlabel: str = "input ū",
+    ylabel: str = "output ȳ",
     n_grid: int = 200,
     margin: float = 0.05,
 ) -> Figure:
@@ -45,7 +46,7 @@ def plot_static_curve(
     ax : matplotlib Axes, optional
         Draw here; by default a new 6.4 × 4.2 in figure is made.
     xlabel, ylabel : str
-        Axis labels (defaults: the pumping plant's).
+        Axis labels, with your data's units (e.g. ``"Pump speed (rpm)"``; the defaults name no unit).
     n_grid : int
         Points per curve.
     margin : float
@@ -65,8 +66,8 @@ def plot_static_curve(
     curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else list(curve))
     if points is None and not curves:
         raise ValueError("plot_static_curve: give static points, a curve, or both")
-    if n_grid < 2:
-        raise ValueError(f"n_grid must be at least 2, got {n_grid}")
+    n_grid = check_int(n_grid, "n_grid", low=2)
+    margin = check_real(margin, "margin", low=0)
     fig, ax = _figure(ax, (6.4, 4.2))
     for c in curves:
         if c.domain is not None:
@@ -91,8 +92,8 @@ def plot_static_curve(
 def plot_record(
     record: Record,
     *,
-    input_label: str = "Pump speed reference",
-    output_label: str = "Pressure",
+    input_label: str = "input",
+    output_label: str = "output",
     start: int = 0,
     stop: int | None = None,
     axes: Sequence[Axes] | None = None,
@@ -106,7 +107,7 @@ def plot_record(
         shape (N, m): one line per input, named in a legend); the units in ``record.units`` are
         appended to the labels.
     input_label, output_label : str
-        Axis labels without units (defaults: the pumping plant's).
+        Axis labels without units (the record's units are appended).
     start, stop : int, optional
         Sample range to draw (default: all); the time axis keeps the record's time.
     axes : pair of Axes, optional
@@ -119,7 +120,8 @@ def plot_record(
         a line through the samples.
     """
     n = len(record)
-    stop = n if stop is None else stop
+    start = check_int(start, "start", low=0)
+    stop = n if stop is None else check_int(stop, "stop", low=1)
     if not (0 <= start < stop <= n):
         raise ValueError(f"plot_record: need 0 <= start < stop <= {n}, got start={start}, stop={stop}")
     if axes is None:
@@ -151,6 +153,8 @@ def plot_record(
 
 def _figure(ax: Axes | None, size: tuple[float, float]) -> tuple[Figure, Axes]:
     if ax is not None:
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
         return ax.figure, ax
     fig = Figure(figsize=size, layout="constrained")
     return fig, fig.add_subplot()

@@ -19,7 +19,7 @@ def plot_free_run(
     models: Model | Mapping[str, Model] | object,
     *,
     ax: Axes | None = None,
-    ylabel: str = "Pressure",
+    ylabel: str = "output",
 ) -> Figure:
     """The measured output (solid) and each model's free run (dashed) against time.
 
@@ -52,6 +52,8 @@ def plot_free_run(
         fig = Figure(figsize=(8, 3.6))
         ax = fig.add_subplot(1, 1, 1)
     else:
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
         fig = ax.figure
     t = record.t
     ax.plot(t, record.y, "-", color="black", lw=1.0, label="measured")

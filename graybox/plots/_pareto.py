@@ -15,6 +15,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..core._validation import check_bool, check_real
 from ..estimation._pareto import ParetoSet, nondominated_mask
 
 __all__ = ["plot_pareto"]
@@ -45,11 +46,11 @@ def plot_pareto(
     fronts: ParetoSet | Mapping[str, ParetoSet],
     points: Mapping[str, tuple[float, float]] | pd.DataFrame | None = None,
     *,
-    band: float | None = 0.031,
+    band: float | None = None,
     ax: Axes | None = None,
     log: bool = True,
-    xlabel: str = "J_S (mlc²)",
-    ylabel: str = "J_SF (mlc²)",
+    xlabel: str = "J_S (output units²)",
+    ylabel: str = "J_SF (output units²)",
     title: str | None = None,
 ) -> Figure:
     """J_SF against J_S of Pareto sets and single models (Figs. 5 and 7).
@@ -64,21 +65,29 @@ def plot_pareto(
         Single models such as ELS and CLS, drawn as large markers with their names; a table
         from :func:`graybox.evaluate` works too (its ``JS_ident`` and ``JSF``).
     band : float or None
-        Shade J_SF in B = [0, band] (D_SF's band, 0.031 mlc²); None draws no band.
+        Shade J_SF in B = [0, band] (D_SF's band, output units², e.g. ``data.static.band``);
+        None (default) draws no band.
     ax : matplotlib Axes, optional
         Draw here; by default a new 6.4 × 4.6 in figure is made.
     log : bool
         Logarithmic axes (the errors span decades).
-    xlabel, ylabel, title : str
+    xlabel, ylabel : str
+        Axis labels, with your data's units (e.g. ``"J_S (mlc²)"``; the defaults name no unit).
+    title : str, optional
 
     Returns
     -------
     matplotlib.figure.Figure
     """
+    if not isinstance(fronts, (ParetoSet, Mapping)):
+        raise TypeError(f"fronts must be a ParetoSet or a mapping name -> ParetoSet, got {type(fronts).__name__}")
     sets = {"": fronts} if isinstance(fronts, ParetoSet) else dict(fronts)
     for k, v in sets.items():
         if not isinstance(v, ParetoSet):
-            raise ValueError(f"front {k!r} must be a ParetoSet, got {type(v).__name__}")
+            raise TypeError(f"front {k!r} must be a ParetoSet, got {type(v).__name__}")
+    log = check_bool(log, "log")
+    if band is not None:
+        band = check_real(band, "band", low=0, low_open=True)
     pts = _points_of(points)
     if not sets and not pts:
         raise ValueError("nothing to plot: give at least one front or one point")
@@ -86,6 +95,8 @@ def plot_pareto(
         fig = Figure(figsize=(6.4, 4.6))
         ax = fig.add_subplot()
     else:
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
         fig = ax.figure
     for i, (name, ps) in enumerate(sets.items()):
         js, jsf = ps.JS, ps.JSF
@@ -112,8 +123,7 @@ def plot_pareto(
         ax.set_xscale("log")
         ax.set_yscale("log")
     if band is not None:
-        if not (np.isfinite(band) and band > 0):
-            raise ValueError(f"band must be a positive number or None, got {band!r}")
+        band = check_real(band, "band", low=0, low_open=True)
         lo, hi = ax.get_ylim()
         ax.axhspan(lo if log else 0.0, band, color="0.85", zorder=0, label=f"B = [0, {band:g}]")
         ax.set_ylim(lo, max(hi, band))

@@ -15,6 +15,8 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..core._validation import check_int, check_real
+
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
 Surface = Callable[[np.ndarray], np.ndarray]
@@ -85,8 +87,8 @@ def plot_surface_slices(
     urange: tuple[float, float] | None = None,
     ax: Axes | None = None,
     xlabel: str | None = None,
-    ylabel: str = "Pressure (mlc)",
-    input_labels: tuple[str, str] = ("Speed 1 (rpm)", "Speed 2 (rpm)"),
+    ylabel: str = "output ȳ",
+    input_labels: tuple[str, str] = ("input ū₁", "input ū₂"),
     n_grid: int = 100,
     margin: float = 0.0,
 ) -> Figure:
@@ -130,10 +132,9 @@ def plot_surface_slices(
     pts = _points(points)
     if not surfaces and pts is None:
         raise ValueError("plot_surface_slices: give a surface, static points, or both")
-    if against not in (0, 1):
-        raise ValueError(f"against must be 0 or 1 (the input on the horizontal axis), got {against!r}")
-    if n_grid < 2:
-        raise ValueError(f"n_grid must be at least 2, got {n_grid}")
+    against = check_int(against, "against (the input on the horizontal axis)", low=0, high=1)
+    n_grid = check_int(n_grid, "n_grid", low=2)
+    margin = check_real(margin, "margin", low=0)
     held = 1 - against
     if at is None:
         if pts is not None:
@@ -149,6 +150,8 @@ def plot_surface_slices(
         fig = Figure(figsize=(6.4, 4.2), layout="constrained")
         ax = fig.add_subplot()
     else:
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
         fig = ax.figure
     colors = [f"C{k % 10}" for k in range(levels.size)]
     styles = ["-", "--", ":", "-."]
@@ -186,8 +189,8 @@ def plot_surface_contours(
     levels: int | Sequence[float] = 12,
     ranges: tuple[tuple[float, float], tuple[float, float]] | None = None,
     ax: Axes | None = None,
-    input_labels: tuple[str, str] = ("Speed 1 (rpm)", "Speed 2 (rpm)"),
-    output_label: str = "Pressure (mlc)",
+    input_labels: tuple[str, str] = ("input ū₁", "input ū₂"),
+    output_label: str = "output ȳ",
     n_grid: int = 60,
     margin: float = 0.0,
     cmap: str = "viridis",
@@ -231,8 +234,8 @@ def plot_surface_contours(
         raise ValueError("plot_surface_contours draws one surface; call it once per surface")
     s = surfaces[0]
     pts = _points(points)
-    if n_grid < 2:
-        raise ValueError(f"n_grid must be at least 2, got {n_grid}")
+    n_grid = check_int(n_grid, "n_grid", low=2)
+    margin = check_real(margin, "margin", low=0)
     if ranges is not None and len(ranges) != 2:
         raise ValueError(f"ranges must be two (low, high) pairs, got {ranges!r}")
     r1 = _range(0, surfaces, pts, None if ranges is None else ranges[0], margin)
@@ -244,6 +247,8 @@ def plot_surface_contours(
         fig = Figure(figsize=(6.0, 4.8), layout="constrained")
         ax = fig.add_subplot()
     else:
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
         fig = ax.figure
     filled = ax.contourf(G1, G2, Z, levels=levels, cmap=cmap)
     ax.contour(G1, G2, Z, levels=filled.levels, colors="k", linewidths=0.5, alpha=0.5)

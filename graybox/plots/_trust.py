@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints
+from ..core._validation import check_bool
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._uncertainty import StaticCurveBand
 
@@ -86,9 +87,9 @@ def plot_static_band(
     *,
     gain: bool = True,
     axes: Sequence[Axes] | None = None,
-    xlabel: str = "Pump speed (rpm)",
-    ylabel: str = "Pressure (mlc)",
-    gain_label: str = "static gain (mlc/rpm)",
+    xlabel: str = "input ū",
+    ylabel: str = "output ȳ",
+    gain_label: str = "static gain dȳ/dū",
 ) -> Figure:
     """The static curve with its confidence band (shaded) and the static points; the gain beside it.
 
@@ -103,7 +104,7 @@ def plot_static_band(
     axes : sequence of Axes, optional
         Draw here (one Axes, or two with ``gain``); by default a new figure is made.
     xlabel, ylabel, gain_label : str
-        Axis labels (defaults: the pumping plant's).
+        Axis labels, with your data's units (the defaults name no unit).
 
     Returns
     -------
@@ -113,6 +114,9 @@ def plot_static_band(
     """
     if not isinstance(band, StaticCurveBand):
         raise ValueError(f"plot_static_band needs a StaticCurveBand, got {type(band).__name__}")
+    gain = check_bool(gain, "gain")
+    if points is not None and not isinstance(points, StaticPoints):
+        raise TypeError(f"points must be StaticPoints, got {type(points).__name__}")
     need = 2 if gain else 1
     if axes is None:
         fig = Figure(figsize=(10.0 if gain else 6.4, 4.0), layout="constrained")
@@ -148,8 +152,8 @@ def plot_decision_bootstrap(
     boot: DecisionBootstrap,
     *,
     axes: Sequence[Axes] | None = None,
-    xlabel: str = "J_S (mlc²)",
-    ylabel: str = "J_SF (mlc²)",
+    xlabel: str = "J_S (output units²)",
+    ylabel: str = "J_SF (output units²)",
 ) -> Figure:
     """How often each λ1 was chosen, and where the chosen members lie in (J_S, J_SF).
 
@@ -160,7 +164,7 @@ def plot_decision_bootstrap(
     axes : pair of Axes, optional
         Draw here; by default a new 10 × 4 in figure with two panels is made.
     xlabel, ylabel : str
-        Labels of the right panel (defaults: the pumping plant's units).
+        Labels of the right panel (e.g. ``"J_S (mlc²)"``; the defaults name no unit).
 
     Returns
     -------

@@ -69,6 +69,6 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
             lines.append(summary.to_string(**fmt))
     if out is not None:
         path = Path(out) / "neural_free_run.png"
-        plot_free_run(data.valid, {"Neural": net}).savefig(path, dpi=120)  # type: ignore[arg-type]
+        plot_free_run(data.valid, {"Neural": net}, ylabel="Pressure").savefig(path, dpi=120)  # type: ignore[arg-type]
         lines.append(f"figure: [{path}]")
     return "\n".join(lines)

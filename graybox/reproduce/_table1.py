@@ -18,7 +18,13 @@ from ..core._terms import Candidates
 from ..datasets import load_pumping
 from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
 
-__all__ = ["section_table1"]
+__all__ = ["section_table1", "PAPER_BAND"]
+
+#: The paper's D_SF band B = [0, 0.031] mlc²: (±0.175 mlc)² of its transmitter, rounded as the paper
+#: prints it. The paper's own choice, passed explicitly here; graybox itself has no default band.
+PAPER_BAND = 0.031
+#: The bundled plant's axis labels (the plots' defaults name no unit).
+_SPEED, _PRESSURE = "Pump speed (rpm)", "Pressure (mlc)"
 
 #: The SE fronts' stability margin: local models' spectral radius ≤ 0.99 (time constants up to Ts/0.01 = 5 s).
 SE_MARGIN = 0.01
@@ -57,12 +63,14 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
              f"mode: {'quick' if quick else 'full'}; SE: {n_lam} λ1 in logspace(-2, 0), GA population "
              f"{ga.population}, {ga.generations} generations per λ, stability margin {SE_MARGIN:g}; "
              "PE: 100 λ1 in logspace(-6, 0); "
-             "D_SF band B = [0, 0.031] mlc²",
+             f"D_SF band B = [0, {PAPER_BAND}] mlc² (the paper's)",
              f"static curve fitted to the 10 static points (eq. (1) form): κ = {curve.coefficients[0]:.4f}, "
              f"α = {curve.coefficients[1]:.4e}, β = {curve.coefficients[2]:.4e}"]
     if out is not None:
-        lines.append("figures:" + _save(plot_static_curve(data.static, curve), out, "fig2_static_curve.png")
-                     + _save(plot_record(data.ident), out, "fig3_ident_record.png"))
+        lines.append("figures:" + _save(plot_static_curve(data.static, curve, xlabel=_SPEED, ylabel=_PRESSURE), out,
+                                        "fig2_static_curve.png")
+                     + _save(plot_record(data.ident, input_label="Pump speed reference", output_label="Pressure"), out,
+                             "fig3_ident_record.png"))
     models: dict = {}
     for degree, n_terms, eq in ((2, 17, "15"), (3, 23, "17")):
         cand = Candidates(6, 6, ne=2, degree=degree, max_y_power=1 if degree == 2 else None)
@@ -75,27 +83,28 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
             models["CLS (22)"] = cls_fit(st, data.ident, curve, reference=m_els, name="CLS (22)").model
         pe = pe_pareto(st, data.ident, data.static, lambdas=np.logspace(-6, 0, 100))
         fronts = {"PE": pe}
-        models[f"PE (D_SF) ℓ={degree}"] = decide_dsf(pe, band=0.031, fallback="min_jsf").model
+        models[f"PE (D_SF) ℓ={degree}"] = decide_dsf(pe, band=PAPER_BAND, fallback="min_jsf").model
         for method in ("ga", "gradient"):
             ck = None if out is None else checkpoint_path(out, method, degree, quick)
             se = se_pareto(st, data, lambdas=np.logspace(-2, 0, n_lam), method=method, seed=0, checkpoint=ck,
                            threads=threads, options=ga if method == "ga" else None, margin=SE_MARGIN)
             label = "SE" if method == "ga" else "SE-grad"
             fronts[label] = se
-            models[f"{label} (D_SF) ℓ={degree}"] = decide_dsf(se, band=0.031, fallback="min_jsf").model
+            models[f"{label} (D_SF) ℓ={degree}"] = decide_dsf(se, band=PAPER_BAND, fallback="min_jsf").model
         single = [k for k in models if k.endswith(f"({eq})") or (degree == 2 and k == "CLS (22)")]
         tab = evaluate({k: models[k] for k in single}, data)
         if out is not None:
-            fig = plot_pareto(fronts, tab, title=f"Pareto sets, ℓ = {degree} (identification data)")
+            fig = plot_pareto(fronts, tab, band=PAPER_BAND, xlabel="J_S (mlc²)", ylabel="J_SF (mlc²)",
+                              title=f"Pareto sets, ℓ = {degree} (identification data)")
             best = models[f"SE (D_SF) ℓ={degree}"]
             lines.append("   figures:" + _save(fig, out, f"fig{5 if degree == 2 else 7}_pareto_l{degree}.png")
-                         + _save(plot_free_run(data.valid, {best.name: best}), out,
+                         + _save(plot_free_run(data.valid, {best.name: best}, ylabel="Pressure"), out,
                                  f"fig{6 if degree == 2 else 8}_se_free_run_l{degree}.png"))
         dom = _dominance(fronts)
         lines.append("   " + dom)
     if out is not None:
         # Fig. 4: the static points and the static curves of the two black-box models
-        fig = plot_static_curve(data.static, curve)
+        fig = plot_static_curve(data.static, curve, xlabel=_SPEED, ylabel=_PRESSURE)
         ax = fig.axes[0]
         ub = np.linspace(data.static.ubar.min(), data.static.ubar.max(), 181)
         for k in ("ELS (15)", "ELS (17)"):

@@ -46,7 +46,6 @@ carries the noise terms in :attr:`Selection.noise`. :func:`graybox.els` accepts 
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from typing import Literal, Sequence
 
@@ -70,9 +69,9 @@ from ..core._gram import (
     term_factors,
 )
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import check_choice
-from ._stopping import StopRule, choose_model, stop_rule
-from ._subset_search import SearchBudget, SubsetProblem, search_sizes
+from ..core._validation import check_choice, check_int, check_real, warn
+from ._stopping import choose_model, stop_rule, StopRule
+from ._subset_search import search_sizes, SearchBudget, SubsetProblem
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
 
@@ -133,8 +132,7 @@ def information_criterion(name: str, rss: np.ndarray, n_rows: int) -> np.ndarray
         With σ²_k = rss_k / N: ``N ln σ² + 2k`` (AIC), ``N ln σ² + k ln N`` (BIC),
         ``N ln σ² + N ln((N + k)/(N − k))`` (FPE, in its logarithmic form as in SysIdentPy).
     """
-    if name not in CRITERIA:
-        raise ValueError(f"unknown criterion {name!r}; expected one of {CRITERIA}")
+    check_choice(name, "name (the criterion)", CRITERIA)
     rss = np.asarray(rss, dtype=float)
     k = np.arange(1, rss.size + 1, dtype=float)
     N = float(n_rows)
@@ -613,46 +611,33 @@ def frols(
     """
     # ---- validate arguments at the boundary ----
     if not isinstance(candidates, Structure):
-        raise ValueError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+        raise TypeError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
     process, noise = candidates.process, candidates.noise
     n_cand = len(process)
     if n_cand == 0:
         raise ValueError("the candidate structure has no process terms to select from")
+    # each value first (a wrong type is named as such), then how they combine
+    if tol is not None:
+        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
+    if max_terms is not None:
+        max_terms = check_int(max_terms, "max_terms", low=1)
     if n_terms is not None and tol is not None:
         raise ValueError("give either n_terms or tol, not both")
     if n_terms is not None:
-        if isinstance(n_terms, bool) or int(n_terms) != n_terms or n_terms < 1:
-            raise ValueError(f"n_terms must be a positive integer, got {n_terms!r}")
-        n_terms = int(n_terms)
+        n_terms = check_int(n_terms, "n_terms", low=1)
         if n_terms > n_cand:
             raise ValueError(f"n_terms = {n_terms} is more than the {n_cand} process candidates")
         if max_terms is not None:
             raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
-    if tol is not None and not (np.isfinite(tol) and 0.0 < tol < 1.0):
-        raise ValueError(f"tol must lie in the open interval (0, 1), got {tol!r}")
     if criterion is not None:
-        if not isinstance(criterion, str) or criterion.lower() not in CRITERIA:
-            raise ValueError(f"criterion must be one of {CRITERIA}, got {criterion!r}")
-        criterion = criterion.lower()  # type: ignore[assignment]
-    if max_terms is not None:
-        if isinstance(max_terms, bool) or int(max_terms) != max_terms or max_terms < 1:
-            raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
-        max_terms = int(max_terms)
-    if not (np.isfinite(rank_tol) and 0.0 < rank_tol < 1.0):
-        raise ValueError(f"rank_tol must lie in (0, 1), got {rank_tol!r}")
+        check_choice(criterion, "criterion", CRITERIA)
+    rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
     mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
     if mode == "criterion" and criterion is None:
         criterion = "bic"
     curve_name = criterion or "aic"
 
-    forced: list[int] = []
-    for t in include:
-        term = t if isinstance(t, Term) else parse_term(t)
-        if term not in process:
-            raise ValueError(f"included term {term} is not among the process candidates")
-        if process.index(term) in forced:
-            raise ValueError(f"included term {term} is given twice")
-        forced.append(process.index(term))
+    forced = process.positions(include, "included term")
     if n_terms is not None and n_terms < len(forced):
         raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
 
@@ -660,6 +645,10 @@ def frols(
     check_choice(search, "search", SEARCHES)
     cols = _scaled_columns(process, data, rule, max_terms, method)
     N, yy, active, skipped = cols.n_rows, cols.yy, cols.active, cols.skipped
+    # said together with the candidates dropped during the selection: one CandidateWarning per call
+    said = [f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
+            + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
+            + ("; …" if len(skipped) > 10 else "")] if skipped else []
     n_usable = int(active.sum())
     if n_terms is not None and n_terms > n_usable:
         raise ValueError(
@@ -685,12 +674,10 @@ def frols(
     C, g = _chosen_factors(cols, process, chosen)
     if n_dependent:
         dep_terms = [t for t, why in skipped if why.startswith("linear")]
-        warnings.warn(
-            f"{n_dependent} candidate(s) dropped as linear combinations of selected terms on these data: "
-            + ", ".join(str(t) for t in dep_terms[:10]) + (", …" if len(dep_terms) > 10 else ""),
-            CandidateWarning,
-            stacklevel=2,
-        )
+        said.append(f"{n_dependent} candidate(s) dropped as linear combinations of selected terms on these data: "
+                    + ", ".join(str(t) for t in dep_terms[:10]) + (", …" if len(dep_terms) > 10 else ""))
+    if said:
+        warn("; ".join(said), CandidateWarning)
     k_eval = len(chosen)
     g = g[:k_eval]
     err_eval = g**2 / yy
@@ -817,14 +804,6 @@ def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms:
         if active[dropped]:
             active[dropped] = False
             skipped.append((process[dropped], f"proportional to {process[kept]}"))
-    if skipped:
-        warnings.warn(
-            f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
-            + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
-            + ("; …" if len(skipped) > 10 else ""),
-            CandidateWarning,
-            stacklevel=3,
-        )
     return cols
 
 
@@ -931,9 +910,8 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
            f"exact search ran out of its {EXACT_NODES} nodes: best found, not proven") if search == "exact" else \
         "swap (local optimum under single exchanges)"
     if search == "exact" and not plan.proven:
-        warnings.warn(f"exact subset search stopped after {EXACT_NODES} branch-and-bound nodes: the result is the best "
-                      "subset found (at least as good as search='swap'), not proven optimal", RuntimeWarning,
-                      stacklevel=3)
+        warn(f"exact subset search stopped after {EXACT_NODES} branch-and-bound nodes: the result is the best "
+             "subset found (at least as good as search='swap'), not proven optimal", RuntimeWarning)
     # each subset in ERR order within itself, the included terms first
     subsets = tuple(tuple(problem.ordered(list(S), fixed=min(len(S), len(forced)))) for S in plan.subsets)
     return _Plan(subsets, plan.rss, i, subsets[i], f"{stop}; search: {how}")

@@ -43,7 +43,7 @@ from ..core._records import Dataset, Record, as_records
 from ._forward_regression import CRITERIA, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
-from ..core._validation import check_choice, check_int, check_real, frozen
+from ..core._validation import check_bool, check_choice, check_int, check_real, frozen
 
 __all__ = ["semp", "SEMPResult"]
 
@@ -277,28 +277,28 @@ def semp(
         were left (the curve may still be falling).
     """
     if not isinstance(candidates, Structure):
-        raise ValueError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+        raise TypeError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
     process = candidates.process
     nc = len(process)
     if nc == 0:
         raise ValueError("the candidate structure has no process terms to select from")
+    # each value first (a wrong type is named as such), then how they combine
+    if tol is not None:
+        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
+    if max_terms is not None:
+        max_terms = check_int(max_terms, "max_terms", low=1, high=nc)
     if sum(x is not None for x in (n_terms, tol)) > 1:
         raise ValueError("give either n_terms or tol, not both")
     if n_terms is not None:
         n_terms = check_int(n_terms, "n_terms", low=1, high=nc)
         if max_terms is not None:
             raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
-    if tol is not None:
-        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
     if criterion is not None:
         check_choice(criterion, "criterion", CRITERIA)
-    if max_terms is not None:
-        max_terms = check_int(max_terms, "max_terms", low=1, high=nc)
     prune_tol = check_real(prune_tol, "prune_tol", low=0)
     rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
     threads = check_int(threads, "threads", low=1)
-    if not isinstance(prune, bool):
-        raise ValueError(f"prune must be True or False, got {prune!r}")
+    prune = check_bool(prune, "prune")
     mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
     crit = criterion or "bic"
     forced = process.positions(include, "included term")

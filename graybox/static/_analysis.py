@@ -58,7 +58,7 @@ from ._equilibrium_kernels import (
     stable_equilibria,
 )
 from ..core._terms import Structure, Term
-from ..core._validation import as_1d_finite, check_per_point
+from ..core._validation import as_1d_finite, check_bool, check_per_point
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -806,6 +806,7 @@ def static_curve(
     ndarray, shape (M,)
         Output units.
     """
+    strict = check_bool(strict, "strict")
     ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
     th = np.asarray(theta, float)
     if y0 is not None:

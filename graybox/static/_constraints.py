@@ -49,6 +49,7 @@ from ._surfaces import StaticSurface
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
+from ..core._validation import check_choice, check_int, check_real
 from ..core._reprs import short_repr
 
 if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it
@@ -368,10 +369,12 @@ def as_constraint_list(constraints: StaticConstraint | Iterable[StaticConstraint
         return []
     if isinstance(constraints, StaticConstraint):
         return list(constraints)
+    if isinstance(constraints, str) or not hasattr(constraints, "__iter__"):
+        raise TypeError(f"constraints must be a constraint, a sequence of them or None, got {constraints!r}")
     out: list[StaticConstraint] = []
     for c in constraints:
         if not isinstance(c, StaticConstraint):
-            raise ValueError(
+            raise TypeError(
                 f"constraints must be graybox constraint objects (gb.StaticBand, gb.CurveEquality, …), got {type(c).__name__}; "
                 "wrap a cvxpy function of θ in UserConstraint(fn)"
             )
@@ -469,8 +472,8 @@ class CurveEquality(StaticConstraint):
     def __post_init__(self) -> None:
         if not isinstance(self.curve, (StaticCurve, StaticSurface)):
             raise ValueError(f"CurveEquality needs a StaticCurve or a StaticSurface, got {type(self.curve).__name__}")
-        if self.sigma_y is not None and not np.isfinite(self.sigma_y):
-            raise ValueError(f"sigma_y must be finite, got {self.sigma_y!r}")
+        if self.sigma_y is not None:
+            object.__setattr__(self, "sigma_y", check_real(self.sigma_y, "CurveEquality: sigma_y"))
 
     def describe(self) -> str:
         s = "" if self.sigma_y is None else f", Σ*y = {self.sigma_y:.6g}"
@@ -609,6 +612,10 @@ class PassesThrough(StaticConstraint):
 
     points: StaticPoints | None = None
 
+    def __post_init__(self) -> None:
+        if self.points is not None and not isinstance(self.points, StaticPoints):
+            raise TypeError(f"PassesThrough: points must be StaticPoints, got {type(self.points).__name__}")
+
     def describe(self) -> str:
         n = "the problem's" if self.points is None else f"{len(self.points)}"
         return f"static function passes through {n} static points"
@@ -656,8 +663,10 @@ class StaticBand(StaticConstraint):
 
     Parameters
     ----------
-    b : float
-        Half-width of the band, output units (default 0.175 mlc: the transmitter's error).
+    b : float, optional
+        Half-width of the band, output units (> 0). Default: each point's own uncertainty δ_i
+        (:attr:`StaticPoints.uncertainty <graybox.StaticPoints>`, e.g. a transmitter's error);
+        points without one need ``b`` given (``ValueError`` when the band is built into a problem).
     points : StaticPoints, optional
         Default: the problem's static points.
     form : {"exact", "residual"}
@@ -665,22 +674,32 @@ class StaticBand(StaticConstraint):
         Smallest D_i allowed by the exact form (a stability margin: 1 − Σ a_i >= it).
     """
 
-    b: float = 0.175
+    b: float | None = None
     points: StaticPoints | None = None
     form: str = "exact"
     min_denominator: float = 1e-3
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.b) and self.b > 0):
-            raise ValueError(f"band half-width b must be a positive number, got {self.b!r}")
-        if self.form not in ("exact", "residual"):
-            raise ValueError(f"form must be 'exact' or 'residual', got {self.form!r}")
-        if not (np.isfinite(self.min_denominator) and 0 < self.min_denominator < 1):
-            raise ValueError(f"min_denominator must lie in (0, 1), got {self.min_denominator!r}")
+        if self.b is not None:
+            object.__setattr__(self, "b", check_real(self.b, "StaticBand: b (the half-width)", low=0, low_open=True))
+        if self.points is not None and not isinstance(self.points, StaticPoints):
+            raise TypeError(f"StaticBand: points must be StaticPoints, got {type(self.points).__name__}")
+        check_choice(self.form, "StaticBand: form", ("exact", "residual"))
+        check_real(self.min_denominator, "StaticBand: min_denominator", low=0, high=1, low_open=True, high_open=True)
+
+    def half_widths(self, pts: StaticPoints) -> np.ndarray:
+        """b at each of ``pts``, shape (M,): ``b``, or the points' own uncertainty when ``b`` is None."""
+        if self.b is not None:
+            return np.full(len(pts), self.b)
+        if pts.uncertainty is None:
+            raise ValueError(f"StaticBand needs its half-width: {pts.name} carry no uncertainty; pass b= (output "
+                             "units, e.g. the static measurements' error) or give the points an uncertainty")
+        return np.asarray(pts.uncertainty, float)
 
     def describe(self) -> str:
         n = "the problem's" if self.points is None else f"{len(self.points)}"
-        return f"static band ±{self.b:g} ({self.form}) at {n} static points"
+        w = "the points' uncertainty" if self.b is None else f"{self.b:g}"
+        return f"static band ±{w} ({self.form}) at {n} static points"
 
     def affine(self, ctx: StaticContext) -> AffineRows:
         pts = ctx.require_points(self.points, self.describe())
@@ -690,9 +709,9 @@ class StaticBand(StaticConstraint):
             one, dR = _denominator_rows(cm, pts.ubar, pts.ybar)
         else:
             one, dR = np.ones(len(pts)), np.zeros_like(QR)
-        b = self.b
+        b = self.half_widths(pts)
         # q θ − ȳ <= b (1 − dθ)   and   ȳ − q θ <= b (1 − dθ)
-        A = [QR + b * dR, -QR + b * dR]
+        A = [QR + b[:, None] * dR, -QR + b[:, None] * dR]
         rhs = [pts.ybar + b * one, b * one - pts.ybar]
         if self.form == "exact":
             A.append(dR)  # 1 − dθ >= min_denominator
@@ -767,8 +786,7 @@ class GainBounds(StaticConstraint):
             if lo is not None and hi is not None and lo > hi:
                 which = "" if k == 1 else f" of input {j + 1}"
                 raise ValueError(f"lower gain bound {lo} exceeds upper bound {hi}{which}")
-        if int(self.n) != self.n or self.n < 1:
-            raise ValueError(f"n must be a positive integer, got {self.n!r}")
+        object.__setattr__(self, "n", check_int(self.n, "GainBounds: n", low=1))
         if self.ubar_range is not None:
             rng = self.ubar_range
             if len(rng) == 2 and all(np.ndim(v) == 0 for v in rng):
@@ -787,8 +805,8 @@ class GainBounds(StaticConstraint):
                         raise ValueError(f"ubar_range of input {j + 1} must be (low, high) with low <= high, got {pair}")
                     box.append((lo, hi))
                 object.__setattr__(self, "ubar_range", tuple(box))
-        if not (self.min_denominator > 0):
-            raise ValueError("min_denominator must be positive")
+        object.__setattr__(self, "min_denominator",
+                           check_real(self.min_denominator, "GainBounds: min_denominator", low=0, low_open=True))
 
     def describe(self) -> str:
         def one(v):
@@ -923,13 +941,7 @@ def _per_input(v: object, name: str) -> list[float | None]:
         if x is None:
             out.append(None)
             continue
-        try:
-            f = float(x)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} gain bound must be a number or None, got {x!r}") from None
-        if not np.isfinite(f):
-            raise ValueError(f"{name} gain bound must be finite, got {x!r}")
-        out.append(f)
+        out.append(check_real(x, f"{name} (a gain bound, or None)"))
     return out
 
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints
-from ..core._validation import as_1d_finite
+from ..core._validation import as_1d_finite, check_int, check_real
 from ..core._reprs import short_repr
 
 __all__ = ["StaticCurve"]
@@ -39,9 +39,11 @@ class StaticCurve:
         c.setflags(write=False)
         object.__setattr__(self, "coefficients", c)
         if self.domain is not None:
-            lo, hi = (float(v) for v in self.domain)
-            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-                raise ValueError(f"{self.name}: domain must be (low, high) with low < high, got {self.domain}")
+            d = self.domain
+            if isinstance(d, str) or not hasattr(d, "__len__") or len(d) != 2:
+                raise TypeError(f"{self.name}: domain must be a pair (low, high), got {d!r}")
+            lo = check_real(d[0], f"{self.name}: domain low")
+            hi = check_real(d[1], f"{self.name}: domain high", low=lo, low_open=True)
             object.__setattr__(self, "domain", (lo, hi))
 
     @classmethod
@@ -55,8 +57,7 @@ class StaticCurve:
 
         The domain is the points' ū range. Needs at least ``degree + 1`` points.
         """
-        if int(degree) != degree or degree < 0:
-            raise ValueError(f"degree must be a non-negative integer, got {degree!r}")
+        degree = check_int(degree, "degree", low=0)
         if len(points) < degree + 1:
             raise ValueError(f"fitting degree {degree} needs at least {degree + 1} static points, got {len(points)}")
         V = np.vander(points.ubar, degree + 1, increasing=True)

@@ -30,7 +30,7 @@ import numpy as np
 from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name
 from ..core._terms import Structure, Term, check_input_names
-from ..core._validation import renamed
+from ..core._validation import check_bool, check_per_point, renamed
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -54,7 +54,7 @@ def surface_inputs(structure: Structure, inputs: tuple[str, ...] | None = None) 
     """The input order of ū's columns: ``inputs`` (validated against the structure) or the structure's own."""
     if inputs is None:
         return structure.inputs or ("u",)
-    names = check_input_names(inputs)
+    names = check_input_names(inputs, what="inputs")
     missing = [n for n in structure.inputs if n not in names]
     if missing:
         raise ValueError(f"the structure uses input {missing[0]!r}, which is not among the inputs {names}")
@@ -297,9 +297,12 @@ def static_surface(
     ndarray, shape (M,)
         Output units.
     """
+    strict = check_bool(strict, "strict")
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
     ub = _as_points(ubar, len(names))
     th = np.asarray(theta, float)
+    if y0 is not None:
+        y0 = check_per_point(y0, ub.shape[0], "y0")
     sk, thf = _folded(structure, th, ub, names)
     if y0 is not None or _static.is_rational(sk):
         res = reached_surface(structure, th[None, :], ub, 0.0 if y0 is None else y0, inputs=names)
