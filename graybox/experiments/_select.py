@@ -318,6 +318,9 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
     reached: dict[str, set] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.CandidateWarning)
+        # the path is grown to the largest size asked for on purpose; that its criterion may still fall
+        # there is no news to the caller, who chooses among the sizes on other data
+        warnings.filterwarnings("ignore", r".* is smallest at the largest size looked at", RuntimeWarning)
         if "semp" in sources:
             # grown by criterion up to the largest size: a path that stops early gives the sizes it reached
             path = gb.semp(candidates, ident, criterion="bic", max_terms=max(sizes), include=forced).path
