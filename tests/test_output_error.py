@@ -148,10 +148,11 @@ def test_bad_options(oe_data):
     fit, _ = oe_data
     for kw, match in [({"margin": 1.0}, "margin"), ({"margin": -0.1}, "margin"), ({"n_starts": -1}, "n_starts"),
                       ({"subsample": 0.0}, "subsample"), ({"solver": "bfgs"}, "solver"),
-                      ({"theta0": np.ones(3)}, "theta0"),
-                      ({"choose_on": gb.Dataset(ident=fit, valid=fit, static=None)}, "choose_on")]:
+                      ({"theta0": np.ones(3)}, "theta0")]:
         with pytest.raises(ValueError, match=match):
             output_error(OE_STRUCT, fit, **kw)
+    with pytest.raises(TypeError, match="choose_on"):  # a Dataset would stand for its ident, the fitting data
+        output_error(OE_STRUCT, fit, choose_on=gb.Dataset(ident=fit, valid=fit, static=None))
 
 
 # -- D_SF on a choosing record ------------------------------------------------------------------------------

@@ -16,9 +16,9 @@ def test_readme_example_runs():
     blocks = re.findall(r"```python\n(.*?)```", text, re.S)
     assert blocks, "README has no python example"
     ns: dict = {}
-    # the bundled plant's static points (750 and 1650 rpm) lie just beyond its identification record
-    with pytest.warns(gb.StaticRangeWarning, match=r"ū = \[750\.0, 1650\.0\]"):
-        exec(compile(blocks[0], "README.md", "exec"), ns)
+    # the bundled plant's static points (750 and 1650 rpm) lie just beyond its identification record,
+    # within 5 % of its span: no StaticRangeWarning (warnings are errors in the tests)
+    exec(compile(blocks[0], "README.md", "exec"), ns)
     table = ns["table"]
     assert list(table.index) == ["ELS", "CLS", "PE", "SE"]
     assert table.loc["SE", "JSF"] <= 0.031 + 1e-12

@@ -11,7 +11,7 @@ import pytest
 import graybox as gb
 from graybox.core._reprs import short_repr, summary
 
-MAX_CHARS = 330  # a Dataset's three lines; everything else is one line well under it
+MAX_CHARS = 360  # a Dataset's three lines (its points with their ±δ); everything else is one line well under it
 
 
 def _short(obj: object, lines: int = 1) -> str:
@@ -50,7 +50,7 @@ def test_results_and_their_parts_are_short():
         pe = gb.pe_pareto(fit.model.structure, data, lambdas=np.logspace(-6, 0, 5))
     curve = gb.StaticCurve.fit(data.static, degree=2)
     surface = gb.StaticSurface.fit(gb.load_pumping_miso().static, 2)
-    for obj in (sel, fit, fit.model, pe, gb.decide_dsf(pe, fallback="min_jsf"), curve, surface,
+    for obj in (sel, fit, fit.model, pe, gb.decide_dsf(pe, band=1.0, fallback="min_jsf"), curve, surface,
                 gb.StaticBand(0.1), gb.GainBounds(lower=0.0), gb.GAOptions(), fit.model.equilibria(1000.0)[0],
                 gb.ls_uncertainty(fit.model, data), gb.residual_tests(fit.model, data.valid)):
         _short(obj)

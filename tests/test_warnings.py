@@ -117,9 +117,8 @@ def test_pe_inaccurate_optimum_is_one_warning_for_the_sweep(monkeypatch):
     # make every solve report "optimal_inaccurate" (the solver's status is the only input of this warning)
     import cvxpy as cp
 
-    import graybox.estimation._prediction_error as pe
 
-    monkeypatch.setattr(pe.cp, "OPTIMAL_INACCURATE", cp.OPTIMAL)
+    monkeypatch.setattr(cp, "OPTIMAL_INACCURATE", cp.OPTIMAL)  # the module pe imports when it solves
     st = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
     rec = _record(5)
     sp = gb.StaticPoints(np.linspace(-0.8, 0.8, 4), 2 * np.linspace(-0.8, 0.8, 4) + 0.4 * np.linspace(-0.8, 0.8, 4) ** 2)

@@ -396,7 +396,7 @@ def Candidates(
         names = tuple(nu) if isinstance(nu, Mapping) else ("u",)
     else:
         names = input_names
-    names = check_input_names(names, what="inputs")
+    names = check_input_names(names, what="input_names")
     nus = _per_input(nu, names, "nu", None)
     delays = _per_input(delay, names, "delay", 1)
     ny, ne, degree = (check_int(v, name, low=0) for name, v in (("ny", ny), ("ne", ne), ("degree", degree)))

@@ -110,9 +110,11 @@ FALLBACKS = ("min_jsf",)
 
 def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.ndarray:
     """J_S of every member on choosing record(s) (sample-weighted mean; inf where a run diverges), shape (K,)."""
-    recs = [records] if isinstance(records, Record) else list(records)
-    if not recs or not all(isinstance(r, Record) for r in recs):
-        raise ValueError("choose_on must be a Record or a non-empty sequence of Records")
+    recs = [records] if isinstance(records, Record) else list(records) if isinstance(records, (list, tuple)) else None
+    if recs is None or not all(isinstance(r, Record) for r in recs):
+        raise TypeError(f"choose_on must be a Record or a sequence of Records, got {records!r}")
+    if not recs:
+        raise ValueError("choose_on: at least one choosing record is needed")
     th = np.where(np.isfinite(pareto.thetas), pareto.thetas, 0.0)
     L = pareto.structure.max_lag
     total = np.zeros(len(pareto))

@@ -47,7 +47,7 @@ from threadpoolctl import threadpool_limits
 from ..core._progress import progress_bar
 from ..core._records import Dataset, Record, as_records
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_int, check_real, check_seed, check_theta
+from ..core._validation import check_bool, check_choice, check_int, check_real, check_seed, check_theta
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
 from ._simulation_error import _SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible
@@ -190,14 +190,17 @@ def output_error(
     max_nfev = check_int(max_nfev, "max_nfev", low=1)
     tol = check_real(tol, "tol", low=0.0, low_open=True)
     check_choice(solver, "solver", _SOLVERS)
+    progress = None if progress is None else check_bool(progress, "progress")
     problem = SEProblem(structure, rec, None, margin=margin, ridge=ridge)
     st = problem.structure
     n = len(st)
     chooser = None
     if choose_on is not None:
-        if isinstance(choose_on, Dataset):  # as_records would take its ident: the fitting data
-            raise ValueError("choose_on must be a Record or a sequence of Records (e.g. data.valid), not a Dataset")
-        crec = as_records(choose_on)
+        # a Dataset is refused: as a record it would stand for its ident, the fitting data
+        crec = [choose_on] if isinstance(choose_on, Record) else list(choose_on) if isinstance(choose_on, (list, tuple)) \
+            else None
+        if not crec or not all(isinstance(r, Record) for r in crec):
+            raise TypeError(f"choose_on must be a Record or a sequence of Records (e.g. data.valid), got {choose_on!r}")
         chooser = SEProblem(st, crec, None)
         chosen_on = ", ".join(r.name for r in crec)
     solvers = ("trf", "dogbox") if solver == "auto" else (solver,)

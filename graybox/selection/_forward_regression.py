@@ -651,6 +651,8 @@ def frols(
             + ("; …" if len(skipped) > 10 else "")] if skipped else []
     n_usable = int(active.sum())
     if n_terms is not None and n_terms > n_usable:
+        if said:
+            warn("; ".join(said), CandidateWarning)
         raise ValueError(
             f"n_terms = {n_terms} but only {n_usable} of the {n_cand} candidates are usable on these data "
             f"({len(skipped)} skipped: {', '.join(str(t) for t, _ in skipped[:5])}{', …' if len(skipped) > 5 else ''})"

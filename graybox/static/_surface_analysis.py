@@ -54,7 +54,7 @@ def surface_inputs(structure: Structure, inputs: tuple[str, ...] | None = None) 
     """The input order of ū's columns: ``inputs`` (validated against the structure) or the structure's own."""
     if inputs is None:
         return structure.inputs or ("u",)
-    names = check_input_names(inputs, what="inputs")
+    names = check_input_names(inputs, what="input_names")
     missing = [n for n in structure.inputs if n not in names]
     if missing:
         raise ValueError(f"the structure uses input {missing[0]!r}, which is not among the inputs {names}")
