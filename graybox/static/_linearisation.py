@@ -54,41 +54,87 @@ class DerivativeMap:
     H: np.ndarray
     powers: np.ndarray
 
-    def output_weights(self, ybar: np.ndarray, ubar: np.ndarray) -> np.ndarray:
-        """ȳ^(P_y − 1) ∏_i ū_i^P_i of each term with an output factor (0 for the others), shape (K, n_terms).
+    def input_part(self, ubar: np.ndarray) -> np.ndarray:
+        """∏_i ū_i^P_i of each term, shape (K, n_terms).
 
-        ``ybar`` (K,) output levels; ``ubar`` (K,) or (K, m) input levels (columns in ``code.inputs`` order).
+        ``ubar`` (K, m): columns in ``code.inputs`` order; (K,): every input at ū (ū^μ, μ the
+        term's total input power).
         """
-        code = self.code
-        T = code.ny.shape[0]
-        W = np.zeros((ybar.size, T))
+        ub = np.asarray(ubar, float)
         with np.errstate(all="ignore"):
-            for t in range(T):
-                p = int(code.ny[t])
-                if p == 0:
-                    continue
-                w = ybar ** (p - 1) if p > 1 else np.ones(ybar.size)
-                for f in range(code.uptr[t], code.uptr[t + 1]):
-                    col = ubar if ubar.ndim == 1 else ubar[:, code.usig[f]]
-                    w = w * col ** code.upow[f]
-                W[:, t] = w
-        return W
+            U = np.ones((ub.shape[0], self.powers.shape[0]))
+            if ub.ndim == 1:
+                mu = self.powers[:, 1:].sum(axis=1)
+                for t in np.flatnonzero(mu):
+                    U[:, t] = ub ** mu[t]
+                return U
+            for t in range(U.shape[1]):
+                for i in np.flatnonzero(self.powers[t, 1:]):
+                    U[:, t] = U[:, t] * ub[:, i] ** self.powers[t, 1 + i]
+        return U
 
-    def input_weights(self, ybar: np.ndarray, ubar: np.ndarray) -> np.ndarray:
-        """ȳ^P_y ū_i^(P_i − 1) ∏_(i' ≠ i) ū_i'^P_i' of each term and input i, shape (K, m, n_terms).
+    def output_part(self, ybar: np.ndarray) -> np.ndarray:
+        """ȳ^(P_y − 1) of each term with an output factor (1 for the others), shape (K, n_terms)."""
+        with np.errstate(all="ignore"):
+            return np.asarray(ybar, float)[:, None] ** np.maximum(self.powers[:, 0] - 1.0, 0.0)[None, :]
 
-        ``ybar`` (K,); ``ubar`` (K, m). A term without input i has weight 0 for it.
+    def output_weights(self, ybar: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+        """W = ȳ^(P_y − 1) ∏_i ū_i^P_i of each term with an output factor (0 for the others), shape (K, n_terms).
+
+        a = (θ ⊙ W) G: the form for many θ at the same points. ``ybar`` (K,); ``ubar`` as for
+        :meth:`input_part`.
         """
-        x = np.column_stack([ybar, ubar.reshape(ybar.size, -1)])  # (K, 1 + m)
+        with np.errstate(all="ignore"):
+            return np.where(self.powers[:, 0] > 0, self.output_part(ybar) * self.input_part(ubar), 0.0)
+
+    def coefficients(self, thetas: np.ndarray, ybar: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+        """a_l = Σ_t θ_t G_tl ȳ^(P_y − 1) ∏ ū^P, one row per steady state, shape (K, Ly).
+
+        ``thetas`` (K, n_terms), ``ybar`` (K,), ``ubar`` as for :meth:`input_part`. Summed term by
+        term in structure order, θ_t = 0 skipped (so an overflowing weight of a zero term is no NaN).
+        """
+        t, _ = np.nonzero(self.G)
+        return self._sum_entries(np.asarray(thetas, float), self._entry_parts(ybar, t),
+                                 self.input_part(ubar)[:, t])
+
+    def _entry_parts(self, ybar: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """ȳ^(P_y − 1) of the terms ``t`` of the entries of G, shape (K, entries); 1 where P_y <= 1."""
+        yb = np.asarray(ybar, float)
+        Y = np.ones((yb.size, t.size))
+        with np.errstate(all="ignore"):
+            for e in np.flatnonzero(self.powers[t, 0] > 1):
+                Y[:, e] = yb ** (self.powers[t[e], 0] - 1.0)
+        return Y
+
+    def _sum_entries(self, th: np.ndarray, Y: np.ndarray, U: np.ndarray) -> np.ndarray:
+        """a from the entries' output and input parts: ((θ_t G_tl) ȳ^(P_y − 1)) ∏ ū^P, summed per lag in order."""
+        t, l = np.nonzero(self.G)  # entries in structure order
+        a = np.zeros((th.shape[0], self.Ly))
+        with np.errstate(all="ignore"):
+            v = th[:, t] * self.G[t, l] * Y * U
+            v[th[:, t] == 0.0] = 0.0
+        for e in range(t.size):  # one sum per lag, term by term in order (no pairwise reordering)
+            a[:, l[e]] += v[:, e]
+        return a
+
+    def input_coefficients(self, thetas: np.ndarray, ybar: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+        """b_il = Σ_t θ_t H_itl ȳ^P_y ū_i^(P_i − 1) ∏_(i' ≠ i) ū_i'^P_i', shape (K, m, Lu).
+
+        ``thetas`` (K, n_terms), ``ybar`` (K,), ``ubar`` (K, m).
+        """
+        th = np.asarray(thetas, float)
+        x = np.column_stack([np.asarray(ybar, float), np.asarray(ubar, float).reshape(th.shape[0], -1)])
         m = x.shape[1] - 1
-        V = np.zeros((ybar.size, m, self.powers.shape[0]))
+        b = np.zeros((th.shape[0], m, self.Lu))
         with np.errstate(all="ignore"):
             for i in range(m):
-                has = self.powers[:, 1 + i] > 0
-                E = self.powers[has].copy()
-                E[:, 1 + i] -= 1.0
-                V[:, i, has] = np.prod(x[:, None, :] ** E[None, :, :], axis=2)  # 0**0 = 1
-        return V
+                for t in np.flatnonzero(self.powers[:, 1 + i]):
+                    e = self.powers[t].copy()
+                    e[1 + i] -= 1.0
+                    v = th[:, t] * np.prod(x ** e, axis=1)  # 0**0 = 1
+                    for l in np.flatnonzero(self.H[i, t]):
+                        b[:, i, l] += np.where(th[:, t] == 0.0, 0.0, v * self.H[i, t, l])
+        return b
 
 
 @lru_cache(maxsize=256)
@@ -149,19 +195,16 @@ def local_coefficients(structure: Structure, inputs: tuple[str, ...] | None, the
     th = np.atleast_2d(np.asarray(thetas, float))
     yb = np.asarray(ybar, float).reshape(th.shape[0])
     ub = np.asarray(ubar, float).reshape(th.shape[0], -1)
-    # einsum, not a BLAS product: these are many short rows, and BLAS threads only contend for them
-    a = np.einsum("kt,tl->kl", th * dm.output_weights(yb, ub), dm.G)
-    if not with_b:
-        return a, None
-    b = np.einsum("kit,itl->kil", th[:, None, :] * dm.input_weights(yb, ub), dm.H)
-    return a, b
+    a = dm.coefficients(th, yb, ub)
+    return a, (dm.input_coefficients(th, yb, ub) if with_b else None)
 
 
 def grid_coefficients(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
     """a_l of member p at its steady state (ū_j, ȳ_pj), every pair at once, shape (P, M, Ly).
 
-    The members × points form (equilibria depend on θ; the input part of the weights does not):
-    a[p, j] = Σ_q ȳ_pj^q Σ_(t: P_y,t = q + 1) θ_pt g_jt G_t, with g_jt = ∏ ū_j^P the input part.
+    The members × points form, for equilibria that depend on θ (the stability test of every root
+    of every member, the margin at the static points): :meth:`DerivativeMap.coefficients` of
+    every (member, point) pair.
 
     Parameters
     ----------
@@ -174,18 +217,13 @@ def grid_coefficients(structure: Structure, thetas: np.ndarray, ubar: np.ndarray
         Output levels (a non-finite one gives non-finite or meaningless coefficients: mask it).
     """
     dm = derivative_map(structure)
-    th = np.atleast_2d(np.asarray(thetas, float))
     yb = np.atleast_2d(np.asarray(ybar, float))
-    ub = np.asarray(ubar, float)
-    g = dm.output_weights(np.ones(ub.shape[0]), ub)  # (M, T): ȳ = 1 leaves the input part
-    py = dm.powers[:, 0]
-    a = np.zeros(yb.shape + (dm.Ly,))
-    with np.errstate(all="ignore"):
-        for p in np.unique(py[py > 0]):
-            sel = py == p
-            part = np.einsum("pt,jtl->pjl", th[:, sel], g[:, sel, None] * dm.G[sel])
-            a += part if p == 1 else yb[:, :, None] ** (p - 1) * part
-    return a
+    P, M = yb.shape
+    th = np.broadcast_to(np.atleast_2d(np.asarray(thetas, float)), (P, len(structure)))
+    t, _ = np.nonzero(dm.G)
+    U = dm.input_part(np.asarray(ubar, float))[:, t]  # the input part depends on the points only
+    a = dm._sum_entries(np.repeat(th, M, axis=0), dm._entry_parts(yb.ravel(), t), np.tile(U, (P, 1)))
+    return a.reshape(P, M, dm.Ly)
 
 
 def characteristic_roots(a: np.ndarray) -> np.ndarray:
