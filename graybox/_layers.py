@@ -19,7 +19,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
               "_simulation_kernels", "_simulation", "_gram", "_least_squares"),
      "terms and structures, records and data sets, argument checks, regressors, compiled free runs, "
      "Gram matrices and long records, scaled least squares"),
-    ("static", ("_equilibrium_kernels", "_analysis", "_surface_analysis", "_curves", "_surfaces", "_constraints",
+    ("static", ("_equilibrium_kernels", "_linearisation", "_analysis", "_surface_analysis", "_curves", "_surfaces", "_constraints",
                 "_form_check"),
      "clusters, equilibria and their stability, static curves, surfaces and gains; static curves and "
      "surfaces fitted to points; static constraints as affine rows"),

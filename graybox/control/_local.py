@@ -7,7 +7,8 @@ At a constant input ū the model reaches an equilibrium ȳ (the definition J_SF 
     A(q⁻¹) Δy(k) = Σ_i B_i(q⁻¹) Δu_i(k),   A = 1 − Σ_l a_l q⁻ˡ,   B_i = Σ_l b_il q⁻ˡ,
 
 with a_l = ∂F/∂y(k−l) and b_il = ∂F/∂u_i(k−l) of the one-step map F at the equilibrium. They are
-exact, read from the term structure: a factor s(k−l)^p of a term θ ∏ s^P contributes
+exact, read from the term structure (:mod:`graybox.static._linearisation`, the package's one
+derivative map): a factor s(k−l)^p of a term θ ∏ s^P contributes
 θ p x̄_s^(P_s − 1) ∏_(s' ≠ s) x̄_s'^P_s' (at steady state every lag of a signal has the same value).
 Then
 
@@ -23,7 +24,6 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any, ClassVar, Sequence
 
 import numpy as np
@@ -34,6 +34,7 @@ from ..core._terms import Structure
 from ..core._validation import check_int, check_real, check_seed, frozen, warn
 from ..models._model import Model
 from ..static._analysis import REACHED, reached_equilibria, schur_stable
+from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import reached_surface
 
 __all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "jacobian_rows", "check_polynomial",
@@ -56,33 +57,7 @@ def check_polynomial(model: object, what: str) -> Model:
     raise TypeError(f"{what} needs a polynomial NARX Model, got {kind}.{hint}")
 
 
-# -- exact partial derivatives from the term structure ------------------------------------------
-@lru_cache(maxsize=256)
-def _derivative_map(structure: Structure, inputs: tuple[str, ...]):
-    """(L_y, L_u, entries) of the Jacobian at steady state.
-
-    One entry per factor s(k−l)^p of each term t: (t, column, p, exponents of [ȳ, ū_1 … ū_m]).
-    Columns: y(k−1) … y(k−L_y), then for each input u_i(k−1) … u_i(k−L_u) (L_u the largest input
-    lag over the inputs: unused lags get zero columns).
-    """
-    signals = ("y",) + inputs
-    Ly = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
-    Lu = max((structure.input_lag(n) for n in inputs), default=0)
-    T, col, pw, E = [], [], [], []
-    for j, term in enumerate(structure):
-        P = np.array([term.power_of(s) for s in signals], dtype=float)
-        for s, l, p in term.factors:
-            i = signals.index(s)
-            e = P.copy()
-            e[i] -= 1.0
-            T.append(j)
-            col.append(l - 1 if i == 0 else Ly + (i - 1) * Lu + l - 1)
-            pw.append(float(p))
-            E.append(e)
-    E_arr = np.array(E, dtype=float).reshape(len(E), len(signals))
-    return Ly, Lu, np.array(T, dtype=np.int64), np.array(col, dtype=np.int64), np.array(pw), E_arr
-
-
+# -- exact partial derivatives from the term structure (graybox.static._linearisation) -----------
 def jacobian_rows(structure: Structure, inputs: tuple[str, ...], thetas: np.ndarray, ybar: np.ndarray,
                   ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """a_l and b_il at many steady states, from the term structure (no finite differences).
@@ -105,29 +80,9 @@ def jacobian_rows(structure: Structure, inputs: tuple[str, ...], thetas: np.ndar
     a : ndarray, shape (K, L_y)
         ∂F/∂y(k−l), l = 1 … L_y (dimensionless).
     b : ndarray, shape (K, m, L_u)
-        ∂F/∂u_i(k−l) (output units per unit of input i).
+        ∂F/∂u_i(k−l) (output units per unit of input i; L_u the largest input lag over the inputs).
     """
-    Ly, Lu, T, col, pw, E = _derivative_map(structure, tuple(inputs))
-    th = np.atleast_2d(np.asarray(thetas, float))
-    xbar = np.column_stack([np.asarray(ybar, float), np.asarray(ubar, float).reshape(th.shape[0], -1)])
-    m = xbar.shape[1] - 1
-    J = np.zeros((th.shape[0], Ly + m * Lu))
-    if T.size:
-        with np.errstate(all="ignore"):
-            vals = th[:, T] * pw * np.prod(xbar[:, None, :] ** E[None, :, :], axis=2)  # (K, entries); 0**0 = 1
-        np.add.at(J.T, col, vals.T)
-    return J[:, :Ly], J[:, Ly:].reshape(th.shape[0], m, Lu)
-
-
-def _characteristic_roots(a: np.ndarray) -> np.ndarray:
-    """Roots of z^L − a_1 z^(L−1) − … − a_L for many rows: a (K, L) → (K, L) complex (companion eigenvalues)."""
-    K, L = a.shape
-    if L == 0:
-        return np.zeros((K, 0), complex)
-    C = np.zeros((K, L, L))
-    C[:, 0, :] = a
-    C[:, np.arange(1, L), np.arange(L - 1)] = 1.0
-    return np.linalg.eigvals(C)
+    return local_coefficients(structure, tuple(inputs), thetas, ybar, ubar)  # type: ignore[return-value]
 
 
 def _dominant(poles: np.ndarray, Ts: float) -> tuple[complex, float, float]:
@@ -207,7 +162,7 @@ class LocalModel:
     def poles(self) -> np.ndarray:
         """Roots of z^L − a_1 z^(L−1) − … − a_L, shape (L_y,) complex: the stability test's eigenvalues."""
         self._need()
-        return _characteristic_roots(self.a[None, :])[0]
+        return characteristic_roots(self.a[None, :])[0]
 
     @property
     def stable(self) -> bool:
@@ -508,7 +463,6 @@ def _y0s(y0: object, M: int) -> list[float | None]:
 
 def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float) -> LocalModel:
     ybar, status, reason = _equilibrium(model, u, y0)
-    Ly, Lu, *_ = _derivative_map(model.structure, model.input_names)
     if ybar is None:
         a, b = np.zeros(0), np.zeros((model.n_inputs, 0))
     else:
@@ -723,7 +677,7 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
     Y = np.where(ok, r.ybar, 0.0)
     a, b = jacobian_rows(model.structure, model.input_names, np.repeat(thetas, M, axis=0), Y.ravel(),
                          np.tile(ub, (n, 1)))
-    rho = np.abs(_characteristic_roots(a)).max(axis=1, initial=0.0)
+    rho = np.abs(characteristic_roots(a)).max(axis=1, initial=0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         tau = np.where(rho > 0, -Ts / np.log(rho), 0.0).reshape(n, M)
         gain = (b.sum(axis=2) / (1.0 - a.sum(axis=1))[:, None]).reshape(n, M, -1)

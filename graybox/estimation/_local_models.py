@@ -5,7 +5,8 @@ linearisation is the recursion δy(k) = Σ_l a_l δy(k−l) with a_l = Σ_t θ_t
 θ_t ū^μ_t ȳ^(m_t) (input power μ_t, output power m_t) that is θ_t ū^μ_t ȳ^(m_t − 1) times the
 number of its output factors at lag l, so a = (W ⊙ θ) G with W the points' weights (one row per
 point, one column per term) and G the terms' lag counts: linear in θ, computed once per set of
-points. At an equilibrium this is the local model whose stability
+points. W and G are the package's one derivative map (:mod:`graybox.static._linearisation`); this
+module keeps only the many-θ form of it. At an equilibrium this is the local model whose stability
 :func:`graybox.static._analysis.stable_mask` decides; away from one it is the frozen-time model of
 a sample the record visits.
 
@@ -30,6 +31,7 @@ from ..core._simulation_kernels import encode, record_inputs
 from ..core._terms import Structure
 from ..core._validation import check_real
 from ..static._equilibrium_kernels import schur_stable_rows
+from ..static._linearisation import characteristic_roots, derivative_map, grid_coefficients
 
 __all__ = ["LocalModels", "record_points", "within_at", "check_margin", "RECORD_POINTS"]
 
@@ -80,33 +82,13 @@ class LocalModels:
     """
 
     def __init__(self, structure: Structure, ubar: np.ndarray, ybar: np.ndarray):
-        code = encode(structure)
-        self.L = int(code.ylag.max(initial=0))
+        dm = derivative_map(structure)
+        self.L = dm.Ly
         T = len(structure)
-        self.G = np.zeros((T, max(self.L, 1)))
-        for t in range(T):
-            for d in range(code.ny[t]):
-                self.G[t, code.ylag[t, d] - 1] += 1.0
-        self.W = self.weights(code, np.asarray(ubar, float), np.asarray(ybar, float))
+        self.G = dm.G if self.L else np.zeros((T, 1))
+        self.W = dm.output_weights(np.asarray(ybar, float), np.asarray(ubar, float))
         # a(θ) for every point at once is one matrix product: θ (T,) @ WG (T, P·L)
         self.WG = (self.W.T[:, :, None] * self.G[:, None, :]).reshape(T, -1)
-
-    @staticmethod
-    def weights(code, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
-        """ū^μ_t ȳ^(m_t − 1) of each term t with an output factor (0 for the others), shape (P, T)."""
-        T = code.ny.shape[0]
-        W = np.zeros((ybar.size, T))
-        with np.errstate(all="ignore"):
-            for t in range(T):
-                m = int(code.ny[t])
-                if m == 0:
-                    continue
-                w = ybar ** (m - 1) if m > 1 else np.ones(ybar.size)
-                for f in range(code.uptr[t], code.uptr[t + 1]):
-                    col = ubar if ubar.ndim == 1 else ubar[:, code.usig[f]]
-                    w = w * col ** code.upow[f]
-                W[:, t] = w
-        return W
 
     def coefficients(self, theta: np.ndarray) -> np.ndarray:
         """a_1 … a_L of each point's local model, shape (P, L)."""
@@ -145,18 +127,14 @@ def within_at(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar: 
     For equilibria that depend on θ (the static points'): ``thetas`` (K, T), ``ubar`` (M,) or
     (M, m), ``ybar`` (K, M); a non-finite ȳ_kj is skipped.
     """
-    th = np.atleast_2d(np.asarray(thetas, float))
     yb = np.atleast_2d(np.asarray(ybar, float))
     K, M = yb.shape
-    local = LocalModels(structure, ubar[:0], yb[0, :0])
-    if local.L == 0 or M == 0:
+    L = derivative_map(structure).Ly
+    if L == 0 or M == 0:
         return np.ones(K, bool)
-    ub = np.asarray(ubar, float)
     fin = np.isfinite(yb)
-    W = LocalModels.weights(encode(structure), np.tile(ub, (K,) + (1,) * (ub.ndim - 1)) if ub.ndim > 1
-                            else np.tile(ub, K), np.where(fin, yb, 0.0).ravel())
-    a = ((np.repeat(th, M, axis=0) * W) @ local.G)
-    ok = _within(a, margin) | ~fin.ravel()
+    a = grid_coefficients(structure, thetas, np.asarray(ubar, float), np.where(fin, yb, 0.0))
+    ok = _within(a.reshape(K * M, L), margin) | ~fin.ravel()
     return ok.reshape(K, M).all(axis=1)
 
 
@@ -170,9 +148,4 @@ def _within(a: np.ndarray, margin: float) -> np.ndarray:
 
 def _radius(a: np.ndarray) -> np.ndarray:
     """Largest root modulus of z^L − a_1 z^(L−1) − … − a_L, row by row (companion eigenvalues)."""
-    P, L = a.shape
-    C = np.zeros((P, L, L))
-    C[:, 0, :] = a
-    if L > 1:
-        C[:, np.arange(1, L), np.arange(L - 1)] = 1.0
-    return np.abs(np.linalg.eigvals(C)).max(axis=1)
+    return np.abs(characteristic_roots(a)).max(axis=1)

@@ -55,11 +55,11 @@ from ._equilibrium_kernels import (
     real_roots_upto_cubic,
     schur_stable_rows,
     settle_runs,
-    stable_equilibria,
 )
 from ..core._terms import Structure, Term
 from ..core._validation import as_1d_finite, check_bool, check_per_point
 from ..core._reprs import short_repr
+from ._linearisation import derivative_map, grid_coefficients
 
 __all__ = [
     "cluster_key",
@@ -339,18 +339,9 @@ def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np
 
 
 def _linear_coefficients(structure: Structure, theta: np.ndarray, ybar: float, ubar: float) -> np.ndarray:
-    """a_i = ∂f/∂y(k-i) at the equilibrium, i = 1..L (L = largest output lag)."""
-    L = max((l for t in structure for s, l, _ in t.factors if s == "y"), default=0)
-    a = np.zeros(L)
-    for th, term in zip(theta, structure):
-        if th == 0.0:
-            continue
-        p, m = cluster_key(term)
-        for s, l, pw in term.factors:
-            if s == "y":
-                # d/dy(k-l) of y(k-l)^pw * (rest) at steady state = pw * ybar^(p-1) * ubar^m
-                a[l - 1] += th * pw * ybar ** (p - 1) * ubar**m
-    return a
+    """a_i = ∂f/∂y(k-i) at the equilibrium, i = 1..L (L = largest output lag): one row of the derivative map."""
+    return grid_coefficients(structure, np.asarray(theta, float)[None, :], np.array([float(ubar)]),
+                             np.array([[float(ybar)]]))[0, 0]
 
 
 # -- stability: one test ---------------------------------------------------------------------------
@@ -395,13 +386,12 @@ def stable_mask(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ybar
     -------
     ndarray of bool, shape (P, M)
     """
-    code = encode(structure)
-    L = int(code.ylag.max(initial=0))
     yb = np.atleast_2d(np.asarray(ybar, float))
-    if L == 0:
+    if derivative_map(structure).Ly == 0:
         return np.isfinite(yb)
-    th = np.ascontiguousarray(np.atleast_2d(np.asarray(thetas, float)))
-    return stable_equilibria(code.ny, code.ylag, code.mu, th, np.asarray(ubar, float), np.ascontiguousarray(yb), L)
+    fin = np.isfinite(yb)
+    a = grid_coefficients(structure, thetas, np.asarray(ubar, float), np.where(fin, yb, 0.0))
+    return schur_stable_rows(np.ascontiguousarray(a.reshape(-1, a.shape[2]))).reshape(yb.shape) & fin
 
 
 def _roots_stable(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, roots: np.ndarray) -> np.ndarray:

@@ -1,8 +1,9 @@
 """Compiled kernels of the static analysis (numba): real roots, the stability test, settling runs.
 
-- :func:`schur_stable_rows` and :func:`stable_equilibria` — the one stability test: the
-  Schur–Cohn step-down recursion on the characteristic polynomial of a linearised recursion
-  (no eigenvalues are computed, which keeps it cheap enough for every generation of a GA).
+- :func:`schur_stable_rows` — the one stability test: the Schur–Cohn step-down recursion on the
+  characteristic polynomial of a linearised recursion (no eigenvalues are computed, which keeps it
+  cheap enough for every generation of a GA); the coefficients come from
+  :mod:`graybox.static._linearisation`.
 - :func:`real_roots_upto_cubic` — real roots of the static equation (degree ≤ 3) for every
   (member, point) pair, with the variable scaled by a power of two so that the extreme
   coefficients are balanced (the decisions do not depend on the units of y), then Kahan's cubic
@@ -21,7 +22,7 @@ import numba as nb
 import numpy as np
 
 __all__ = [
-    "schur_stable_rows", "stable_equilibria", "real_roots_upto_cubic", "settle_runs",
+    "schur_stable_rows", "real_roots_upto_cubic", "settle_runs",
     "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED",
 ]
 
@@ -70,40 +71,6 @@ def schur_stable_rows(a):  # pragma: no cover - compiled
         for i in range(L):
             c[i + 1] = -a[r, i]
         out[r] = _schur_cohn(c, L, nxt)
-    return out
-
-
-@nb.njit(cache=True, nogil=True)
-def stable_equilibria(ny, ylag, mu, thetas, ubar, ybar, L):  # pragma: no cover - compiled
-    """(P, M) mask: is the equilibrium (ū_j, ȳ_pj) of member p of a polynomial model locally stable?
-
-    Builds the linearised recursion's coefficients a_l = Σ_t θ_t ∂φ_t/∂y(k-l) at (ȳ, ū) and applies
-    :func:`_schur_cohn` to z^L − a_1 z^(L−1) − … − a_L. ``mu[t]`` is term t's input power,
-    ``ny``/``ylag`` as in :class:`graybox.core._simulation_kernels.Code`. Non-finite ȳ counts as unstable.
-    """
-    P, T = thetas.shape
-    M = ubar.shape[0]
-    out = np.zeros((P, M), dtype=np.bool_)
-    c = np.empty(L + 1)
-    nxt = np.empty(L + 1)
-    for p in range(P):
-        for j in range(M):
-            yb = ybar[p, j]
-            if not np.isfinite(yb):
-                continue
-            for i in range(L + 1):
-                c[i] = 0.0
-            c[0] = 1.0
-            for t in range(T):
-                m = ny[t]
-                if m == 0:
-                    continue
-                g = thetas[p, t] * ubar[j] ** mu[t]
-                for _ in range(m - 1):
-                    g *= yb
-                for d in range(m):
-                    c[ylag[t, d]] -= g  # c_l = −a_l
-            out[p, j] = _schur_cohn(c, L, nxt)
     return out
 
 

@@ -1,0 +1,59 @@
+"""One derivative map (graybox.static._linearisation): its three users read the same local linear model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings, strategies as st
+
+from graybox import Structure
+from graybox.control._local import jacobian_rows
+from graybox.estimation._local_models import LocalModels, within_at
+from graybox.static._analysis import _linear_coefficients, schur_stable, stable_mask
+from graybox.static._surface_analysis import _fderivs, _folded
+
+#: A rational structure (no y power above 1), one with y² terms, and one with two inputs.
+STRUCTURES = {
+    "rational": Structure(["1", "y(k-1)", "y(k-3)", "u(k-1)", "u(k-2)y(k-1)", "u(k-1)^2", "u(k-2)u(k-3)y(k-2)"]),
+    "y squared": Structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)y(k-1)", "y(k-1)^2", "y(k-1)y(k-2)u(k-1)",
+                                  "y(k-2)^3"]),
+    "two inputs": Structure(["1", "y(k-1)", "y(k-2)", "u1(k-1)", "u2(k-2)", "u1(k-1)u2(k-1)", "y(k-1)u1(k-2)",
+                                   "y(k-2)^2u2(k-1)", "u1(k-2)^2"]),
+}
+
+
+@pytest.mark.parametrize("name", list(STRUCTURES))
+@settings(deadline=None, max_examples=40)
+@given(data=st.data())
+def test_static_estimation_and_control_read_the_same_local_model(name, data):
+    structure = STRUCTURES[name]
+    names = structure.inputs
+    theta = np.array(data.draw(st.lists(st.floats(-0.8, 0.8), min_size=len(structure), max_size=len(structure))))
+    ubar = np.array(data.draw(st.lists(st.floats(-3.0, 3.0), min_size=len(names), max_size=len(names))))
+    ybar = data.draw(st.floats(-4.0, 4.0))
+    assume(np.any(theta != 0.0))
+
+    a_ctrl, b_ctrl = jacobian_rows(structure, names, theta[None, :], np.array([ybar]), ubar[None, :])
+    a_est = LocalModels(structure, ubar[None, :], np.array([ybar])).coefficients(theta)
+    if len(names) == 1:
+        a_static = _linear_coefficients(structure, theta, ybar, float(ubar[0]))
+        mask = stable_mask(structure, theta[None, :], ubar, np.array([[ybar]]))
+    else:  # the static analysis of several inputs folds ū into θ (the skeleton at ū' = 1)
+        sk, th = _folded(structure, theta, ubar[None, :], names)
+        a_static = _linear_coefficients(sk, th[0, 0], ybar, 1.0)
+        mask = stable_mask(sk, th[0], np.ones(1), np.array([[ybar]]))
+    scale = np.abs(a_ctrl).max(initial=0.0) + 1e-300
+    np.testing.assert_allclose(a_est[0], a_ctrl[0], rtol=1e-12, atol=1e-13 * scale)
+    np.testing.assert_allclose(a_static, a_ctrl[0], rtol=1e-12, atol=1e-13 * scale)
+
+    # the stability test, the margin at margin 0 and the Schur–Cohn test of these coefficients agree
+    stable = schur_stable(a_ctrl[0])
+    assert bool(mask[0, 0]) == stable
+    assert bool(within_at(structure, theta[None, :], ubar[None, :] if len(names) > 1 else ubar,
+                          np.array([[ybar]]), 0.0)[0]) == stable
+
+    # summed over the lags, a and b are the derivatives of the static equation (computed term by term)
+    Fy, Fu = _fderivs(structure, theta, ubar[None, :], np.array([ybar]), names)
+    bscale = np.abs(b_ctrl).max(initial=0.0) + 1e-300
+    np.testing.assert_allclose(a_ctrl[0].sum() - 1.0, Fy[0], rtol=1e-12, atol=1e-12 * (scale + 1.0))
+    np.testing.assert_allclose(b_ctrl[0].sum(axis=1), Fu[0], rtol=1e-12, atol=1e-12 * bscale)
