@@ -41,11 +41,14 @@ import graybox as gb  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
 THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+OLD = "64f2d27"  # main before issue 26's selection protocol
 
 
 def old_select():
-    """select_graybox as it was on main before issue 26 (its source from git, loaded beside ours)."""
-    src = subprocess.run(["git", "-C", str(ROOT), "show", "main:graybox/experiments/_select.py"], check=True,
+    """select_graybox as it was before issue 26 (its source at 64f2d27, loaded beside ours; it reads the
+    package's names of that commit, so later renames may stop it: the figures in BENCHMARKS.md were taken
+    at 30dda9f, where it ran)."""
+    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{OLD}:graybox/experiments/_select.py"], check=True,
                          capture_output=True, text=True).stdout
     src = src.replace('register_type("GrayboxSelection"', '(lambda *a: None)("GrayboxSelection"')
     mod = types.ModuleType("graybox.experiments._select_old")
@@ -152,10 +155,10 @@ def speed() -> None:
     for label, kw in (("in the driver", {}), ("2 worker processes", dict(executor="processes", workers=2))):
         la = os.getloadavg()[0]
         t0, c0 = time.perf_counter(), time.process_time()
-        r = gb.select_graybox(cand, data, band=0.031, **kw)
+        r = gb.select_graybox(cand, data, band=data.static.band, **kw)
         t, c = time.perf_counter() - t0, time.process_time() - c0
         # on a loaded machine the driver's CPU time is the closer figure for a quiet one (one thread)
-        print(f"| select_graybox(Candidates(6, 6, degree=2), plant, band=0.031), {label} | wall {t:.1f} s | "
+        print(f"| select_graybox(Candidates(6, 6, degree=2), plant, band=data.static.band), {label} | wall {t:.1f} s | "
               f"driver CPU {c:.1f} s | {len(r.table)} rows | load average {la:.1f} → {os.getloadavg()[0]:.1f} |",
               flush=True)
 
