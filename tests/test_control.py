@@ -375,3 +375,18 @@ def test_nonlinear_system_with_its_noise_input_reproduces_the_record():
     bad = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], noise_structure=["e(k-1)y(k-1)"], noise_theta=[0.1])
     with pytest.raises(ValueError, match="linear MA part"):
         gb.narx_iosystem(bad, 1.0, noise=True)
+
+
+def test_results_that_carry_a_model_are_accepted_as_it():
+    """local_model and the systems take a result with a .model (ELSResult, Decision, …) as that model."""
+    p, g, Ts = 0.9, 2.0, 0.05
+    m = Model(["y(k-1)", "u(k-1)"], [p, g * (1 - p)])
+
+    class Carrier:  # what every graybox result is to these functions: something with a .model
+        model = m
+
+    a, b = gb.local_model(Carrier(), 3.0, Ts=Ts), gb.local_model(m, 3.0, Ts=Ts)
+    np.testing.assert_array_equal(a.a, b.a)
+    assert a.dc_gain == b.dc_gain
+    with pytest.raises(TypeError, match="needs a polynomial NARX Model, got str"):
+        gb.local_model("model", 3.0, Ts=Ts)

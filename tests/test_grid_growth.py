@@ -466,3 +466,8 @@ def test_cells_of_another_graybox_version_are_not_reused_and_the_run_says_why(ba
     assert (run.ran, run.skipped) == (4, 0)
     assert any("none of the store's 4 cells is reused: they were made by graybox 0.0.1" in n for n in run.notes)
     assert len(gx.load_results(path, spec="all")) == 8 and len(gx.load_results(path)) == 4
+
+
+def test_compare_results_wants_a_sequence_of_paths():
+    with pytest.raises(TypeError, match="stores must be a sequence of two or more store paths"):
+        gx.compare_results("results.sqlite")

@@ -244,3 +244,13 @@ def test_checkpoints_tell_margins_and_ridges_apart(oe_data):
     assert SEProblem(OE_STRUCT, fit, static, margin=0.1).fingerprint() != plain
     assert SEProblem(OE_STRUCT, fit, static, ridge=0.1).fingerprint() != plain
     assert SEProblem(OE_STRUCT, fit, static, margin=None, ridge=0.0).fingerprint() == plain
+
+
+def test_structure_carriers_and_a_choosing_record_that_is_the_fitting_one(oe_data):
+    fit, _ = oe_data
+    sel = gb.frols(gb.Candidates(1, 2, ne=0, degree=2), fit, n_terms=4)
+    a = output_error(sel, fit, n_starts=1, max_nfev=5, seed=0)  # a Selection stands for its structure
+    b = output_error(sel.structure, fit, n_starts=1, max_nfev=5, seed=0)
+    np.testing.assert_array_equal(a.model.theta, b.model.theta)
+    with pytest.raises(ValueError, match="choose_on: a choosing record is a fitting record"):
+        output_error(OE_STRUCT, fit, choose_on=fit)

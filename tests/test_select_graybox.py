@@ -267,7 +267,7 @@ def test_a_test_record_must_be_new_data(data):
             gb.select_graybox(cand, data, band=1e-3, sizes=[3], test=rec)
     with pytest.raises(ValueError, match=r"test record \(4 samples\) is shorter than the candidates' lags \+ 2"):
         gb.select_graybox(cand, data, band=1e-3, sizes=[3], test=data.valid.slice(0, 4))
-    with pytest.raises(ValueError, match="test must be a Record"):
+    with pytest.raises(TypeError, match="test must be a Record"):
         gb.select_graybox(cand, data, band=1e-3, sizes=[3], test=data)
 
 
@@ -406,3 +406,21 @@ def test_a_black_box_selection_without_static_points_round_trips(data, tmp_path)
     back = gb.load(gb.save(res, tmp_path / "sel.json"), expect=gb.GrayboxSelection)
     assert back.degree is None and back.band == np.inf and list(back.structure) == list(res.structure)
     pd.testing.assert_frame_equal(back.table, res.table, check_dtype=False)
+
+
+def test_wrong_types_are_type_errors_and_one_source_may_be_a_string(data):
+    with pytest.raises(TypeError, match="candidates must be a candidate set"):
+        gb.select_graybox(["y(k-1)", "u(k-1)"], data, band=1e-3)
+    with pytest.raises(TypeError, match="data must be a Dataset or a Record"):
+        gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), 3.0, band=1e-3)
+    res = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, sizes=[3], sources="frols", estimator="ls")
+    assert set(res.table["source"]) == {"frols"}
+    with pytest.warns(DeprecationWarning, match="in_band"):
+        assert res.fallback is (not res.in_band)
+
+
+def test_worker_processes_run_without_deprecated_options(data):
+    """select_graybox on worker processes (the executors' own words, no deprecated keyword)."""
+    res = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, sizes=[3], sources=("frols",),
+                            estimator="ls", executor="processes", workers=1)
+    assert len(res.structure) == 3

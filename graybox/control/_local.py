@@ -51,7 +51,10 @@ def check_polynomial(model: object, what: str) -> Model:
     """``model`` if it is a polynomial :class:`Model`; a clear ``TypeError`` otherwise (a neural model included)."""
     if isinstance(model, Model):
         return model
-    kind = type(model).__name__
+    carried = getattr(model, "model", None)  # a result that carries a model (ELSResult, CLSResult, Decision, …)
+    if isinstance(carried, Model):
+        return carried
+    kind = type(carried if carried is not None and not callable(carried) else model).__name__
     hint = (" A NeuralModel's equilibria and their stability are given by its equilibria() method; its local "
             "linear model is not built here." if kind == "NeuralModel" else "")
     raise TypeError(f"{what} needs a polynomial NARX Model, got {kind}.{hint}")

@@ -48,6 +48,7 @@ from ..core._progress import progress_bar
 from ..core._records import Dataset, Record, as_records
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_choice, check_int, check_real, check_seed, check_theta
+from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
 from ._simulation_error import _SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible
@@ -191,7 +192,7 @@ def output_error(
     tol = check_real(tol, "tol", low=0.0, low_open=True)
     check_choice(solver, "solver", _SOLVERS)
     progress = None if progress is None else check_bool(progress, "progress")
-    problem = SEProblem(structure, rec, None, margin=margin, ridge=ridge)
+    problem = SEProblem(as_structure(structure), rec, None, margin=margin, ridge=ridge)
     st = problem.structure
     n = len(st)
     chooser = None
@@ -201,6 +202,11 @@ def output_error(
             else None
         if not crec or not all(isinstance(r, Record) for r in crec):
             raise TypeError(f"choose_on must be a Record or a sequence of Records (e.g. data.valid), got {choose_on!r}")
+        fitting = [(r.u, r.y) for r in rec]
+        if any(any(c.u.shape == u.shape and np.array_equal(c.u, u) and np.array_equal(c.y, y) for u, y in fitting)
+               for c in crec):
+            raise ValueError("choose_on: a choosing record is a fitting record; choose on data the fit did not see "
+                             "(e.g. data.valid)")
         chooser = SEProblem(st, crec, None)
         chosen_on = ", ".join(r.name for r in crec)
     solvers = ("trf", "dogbox") if solver == "auto" else (solver,)

@@ -136,7 +136,7 @@ class GrayboxSelection:
 
     def __post_init__(self) -> None:
         if not isinstance(self.table, pd.DataFrame):
-            raise ValueError(f"table must be a DataFrame, got {type(self.table).__name__}")
+            raise TypeError(f"table must be a DataFrame, got {type(self.table).__name__}")
         missing = [c for c in self.TABLE_COLUMNS if c not in self.table.columns]
         if missing:
             raise ValueError(f"the table lacks the column(s) {missing}")
@@ -150,6 +150,12 @@ class GrayboxSelection:
     def chosen(self) -> pd.Series:
         """The table's row of the choice."""
         return self.table[self.table["rank"] == 1].iloc[0]
+
+    @property
+    def fallback(self) -> bool:
+        """Deprecated (one name per concept): ``not in_band``, the name :class:`Decision` uses."""
+        warn("GrayboxSelection.fallback is deprecated: use GrayboxSelection.in_band (its negation)", DeprecationWarning)
+        return not self.in_band
 
     def __repr__(self) -> str:
         row = self.chosen
@@ -250,7 +256,8 @@ def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.St
 
 def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> tuple[_Plan, int | None]:
     if not isinstance(candidates, gb.Structure):
-        raise ValueError(f"candidates must be a Structure, got {type(candidates).__name__}")
+        raise TypeError(f"candidates must be a candidate set (a Structure, e.g. graybox.Candidates(...)), got "
+                        f"{type(candidates).__name__}")
     process = candidates.process
     extra: dict = {}
     if isinstance(data, gb.Dataset):
@@ -261,7 +268,7 @@ def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> 
     elif isinstance(data, gb.Record):
         ident, valid, sp = data, validation, static
     else:
-        raise ValueError(f"data must be a Dataset or a Record, got {type(data).__name__}")
+        raise TypeError(f"data must be a Dataset or a Record, got {type(data).__name__}")
     if band is not None and sp is None:
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
@@ -269,7 +276,7 @@ def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> 
     L = process.max_lag
     if test is not None:
         if not isinstance(test, gb.Record):
-            raise ValueError(f"test must be a Record, got {type(test).__name__}")
+            raise TypeError(f"test must be a Record, got {type(test).__name__}")
         if len(test) <= L + 1:
             raise ValueError(f"the test record ({len(test)} samples) is shorter than the candidates' lags + 2 "
                              f"({L + 2})")
@@ -280,7 +287,7 @@ def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> 
     blocks = check_int(blocks, "blocks", low=2)
     if valid is not None:
         if not isinstance(valid, gb.Record):
-            raise ValueError(f"validation must be a Record, got {type(valid).__name__}")
+            raise TypeError(f"validation must be a Record, got {type(valid).__name__}")
         valid.require_length(L)
         if len(valid) <= L + 1:
             raise ValueError(f"the validation record ({len(valid)} samples) is shorter than the candidates' lags + 2")
@@ -485,7 +492,7 @@ def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progres
         return out
     kw = dict(workers=workers, client=client, scheduler=scheduler)
     if executor == "processes":
-        kw = dict(workers=workers or 2, processes=True)
+        kw = dict(executor="processes", workers=workers or 2)
     elif not any(v is not None for v in kw.values()):
         kw["workers"] = 2
     # the slow fronts first, largest structures first: the workers finish together
@@ -687,6 +694,8 @@ def select_graybox(
         band = check_real(band, "band", low=0, low_open=True)
     constraints = tuple(constraint_entries(constraints))  # read once: a generator is used up
     estimators = _estimators(estimator, band, constraints)
+    if isinstance(sources, str):
+        sources = (sources,)
     for s in sources:
         check_choice(s, "sources", ("semp", "frols"))
     if not sources:

@@ -652,6 +652,8 @@ def compare_results(
         A store cannot be read, or two stores hold different data under one data set name, or
         share no data set.
     """
+    if isinstance(stores, (str, os.PathLike)) or not isinstance(stores, (list, tuple)):
+        raise TypeError(f"stores must be a sequence of two or more store paths, got {stores!r}")
     paths = [Path(s) for s in stores]
     if len(paths) < 2:
         raise ValueError(f"compare_results needs two or more stores, got {len(paths)}")

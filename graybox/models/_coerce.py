@@ -42,7 +42,7 @@ def _carried_model(obj: object, kinds: tuple[type, ...]) -> object | None:
 
 def _set_hint(obj: object) -> str:
     if hasattr(obj, "member_model") and hasattr(obj, "thetas"):
-        return (f"; a {type(obj).__name__} holds many models: choose one (graybox.decide_dsf(front).model, or "
+        return (f"; a {type(obj).__name__} holds many models: choose one (graybox.decide_dsf(front, band=B).model, or "
                 "front.member_model(i))")
     return ""
 
