@@ -12,8 +12,8 @@ from typing import Sequence
 import numpy as np
 
 from ._records import Record, as_records
-from ._terms import Structure
-from ._validation import as_1d_finite, check_int
+from ._terms import Structure, check_input_names
+from ._validation import as_1d_finite, check_int, check_sequence
 
 __all__ = ["record_signals", "check_structure_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
 
@@ -93,7 +93,7 @@ def regressor_matrix(
         raise ValueError(f"start ({s}) is smaller than the structure's max lag ({structure.max_lag})")
     if n < s + 1:
         raise ValueError(f"record has {n} samples, fewer than max lag + 1 = {s + 1}")
-    signals = input_signals(u, input_names)
+    signals = input_signals(u, None if input_names is None else check_input_names(input_names))
     signals["y"] = y
     if e is not None:
         signals["e"] = as_1d_finite(e, "e")
@@ -140,6 +140,10 @@ def stacked_regressors(
     """
     recs = as_records(records)
     s = structure.max_lag if start is None else check_int(start, "start", low=0)
+    if residuals is not None:
+        residuals = check_sequence(residuals, "residuals", "a sequence of residual series, one per record")
+        if len(residuals) != len(recs):
+            raise ValueError(f"residuals has {len(residuals)} series for {len(recs)} record(s): give one per record")
     blocks, targets = [], []
     for i, r in enumerate(recs):
         r.require_length(s)

@@ -32,6 +32,7 @@ __all__ = [
     "warn",
     "renamed",
     "check_per_point",
+    "check_sequence",
 ]
 
 # graybox/, not graybox/core/: a frame in any subpackage is graybox's own
@@ -198,6 +199,18 @@ def check_per_point(value: object, n: int, name: str) -> np.ndarray:
     if not np.all(np.isfinite(out)):
         raise ValueError(f"{name} has non-finite values")
     return out
+
+
+def check_sequence(value: object, name: str, what: str = "a sequence") -> list:
+    """``value`` as a list of its items, or ``TypeError`` for a number, a bool, a string or a mapping.
+
+    For options that take several things (terms, start vectors, labels): a lone scalar or a
+    string would otherwise be iterated, or fail inside NumPy, without naming the option.
+    """
+    if (_is_bool(value) or _is_number(value) or isinstance(value, (str, bytes, dict))
+            or not isinstance(value, Iterable)):
+        raise TypeError(f"{name} must be {what}, got {value!r} ({type(value).__name__})")
+    return list(value)  # type: ignore[call-overload]
 
 
 def as_1d_finite(x: object, name: str) -> np.ndarray:

@@ -90,7 +90,7 @@ from ..models._model import Model
 from ..core._records import Dataset, Record
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
-from ..core._validation import check_int, check_real, frozen, warn
+from ..core._validation import check_int, check_real, check_sequence, frozen, warn
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 
@@ -298,6 +298,15 @@ def noise_terms(ne: int) -> Structure:
     return Structure(Term((("e", l, 1),)) for l in range(1, ne + 1))
 
 
+def _noise_structure(noise: object) -> Structure:
+    """Explicit noise terms given as a sequence, parsed with errors that name ``noise``."""
+    items = check_sequence(noise, "noise", "an integer ne >= 0, a Structure or a sequence of noise terms")
+    try:
+        return Structure(items)
+    except ValueError as exc:
+        raise ValueError(f"noise: {exc}") from None
+
+
 def _resolve(structure, noise) -> tuple[Structure, Structure]:
     """Split the arguments of :func:`els` into (process, noise) structures."""
     st = as_structure(structure, with_noise=True)  # a Selection's or a Model's noise terms come along
@@ -307,9 +316,9 @@ def _resolve(structure, noise) -> tuple[Structure, Structure]:
     if noise is None:
         ns = carried if len(carried) else noise_terms(DEFAULT_NE)
     elif isinstance(noise, (int, np.integer)) and not isinstance(noise, bool):
-        ns = noise_terms(int(noise))
+        ns = noise_terms(check_int(noise, "noise: ne", low=0))
     else:
-        ns = noise if isinstance(noise, Structure) else Structure(noise)
+        ns = noise if isinstance(noise, Structure) else _noise_structure(noise)
         not_noise = [str(t) for t in ns if not t.is_noise]
         if not_noise:
             raise ValueError(f"noise must hold noise terms e(k-l) only; got {', '.join(not_noise)}")

@@ -79,7 +79,8 @@ from ..core._regressors import stacked_regressors
 from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, check_theta, frozen
+from ..core._validation import (check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
+                                check_theta, frozen)
 from ._local_models import LocalModels, check_margin, record_points, within_at
 from ..core._reprs import short_repr
 
@@ -1078,6 +1079,8 @@ def se_pareto(
     if wrong:
         raise ValueError(f"{', '.join(wrong)} appl{'y' if len(wrong) > 1 else 'ies'} to method={other!r} only, "
                          f"not to method={method!r}")
+    if starts is not None:
+        starts = check_sequence(starts, "starts", "a sequence of θ arrays")
     rec = records_of(data)
     sp = static_info(static, data, needed_by="the SE problem")
     warn_static_range(sp.ubar, rec)

@@ -12,7 +12,7 @@ from ..static import _analysis as _static
 from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
 from ..core._records import Record
-from ..core._validation import check_int, check_theta, frozen
+from ..core._validation import check_int, check_sequence, check_theta, frozen
 from ..core._terms import Structure, check_input_names
 
 __all__ = ["Model"]
@@ -51,7 +51,11 @@ class Model:
         st = self.structure if isinstance(self.structure, Structure) else Structure(self.structure)
         if any(t.is_noise for t in st):
             raise ValueError("noise terms belong in noise_structure, not in the process structure")
-        ns = self.noise_structure if isinstance(self.noise_structure, Structure) else Structure(self.noise_structure)
+        ns = self.noise_structure
+        if not isinstance(ns, Structure):
+            ns = Structure(check_sequence(ns, "noise_structure", "a Structure or a sequence of noise terms"))
+        if not all(t.is_noise for t in ns):
+            raise ValueError(f"noise_structure must hold noise terms e(k-l) only; got {ns}")
         object.__setattr__(self, "structure", st)
         object.__setattr__(self, "noise_structure", ns)
         object.__setattr__(self, "theta", frozen(check_theta(len(st), self.theta)))
