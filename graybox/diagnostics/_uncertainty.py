@@ -296,7 +296,7 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, what: str)
             scale = np.abs(r.b_eq) + np.abs(r.A_eq) @ np.abs(theta)
             if np.any(np.abs(res) > 1e-6 * np.where(scale > 0, scale, 1.0)):
                 raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
-                                 "constraints and data?")
+                                 "constraints, data and reference (Σ*_y)?")
             rows.append(np.asarray(r.A_eq))
         if r.n_ub:
             slack = r.b_ub - r.A_ub @ theta

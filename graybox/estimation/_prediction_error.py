@@ -62,7 +62,7 @@ from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, wa
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
-from ..core._validation import check_bool, check_choice, check_int, check_lambdas, check_real, warn
+from ..core._validation import check_bool, check_choice, check_int, check_lambdas, check_real, check_theta, warn
 
 if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
     import cvxpy as cp
@@ -786,8 +786,22 @@ def _static_points(static: StaticPoints | StaticCurve | StaticSurface | None, ub
     return static.points(np.asarray(ubar, float))
 
 
+def _check_reference(reference: object, n_terms: int) -> None:
+    """``reference`` is one of the forms :func:`_sigma_y` reads, checked even where no constraint needs it."""
+    if reference is None or isinstance(reference, Model) or isinstance(getattr(reference, "model", None), Model):
+        return
+    if isinstance(reference, str):
+        if reference not in ("ls", "els"):
+            raise ValueError(f"reference must be 'ls', 'els', a Model, a θ or a number, got {reference!r}")
+    elif np.ndim(reference) == 0:
+        check_real(reference, "reference (Σ*_y)")
+    else:
+        check_theta(n_terms, reference, "reference θ")
+
+
 def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], reference) -> float | None:
     """Σ*_y only when some CurveEquality will ask for it (ELS is not free)."""
+    _check_reference(reference, len(d.structure))
     if any(isinstance(c, CurveEquality) and c.sigma_y is None for c in cons):
         return _sigma_y(d, recs, reference)
     return None

@@ -49,7 +49,7 @@ from ._surfaces import StaticSurface
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_int, check_real
+from ..core._validation import check_choice, check_int, check_real, check_sequence
 from ..core._reprs import short_repr
 
 if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it
@@ -787,10 +787,14 @@ class GainBounds(StaticConstraint):
                 which = "" if k == 1 else f" of input {j + 1}"
                 raise ValueError(f"lower gain bound {lo} exceeds upper bound {hi}{which}")
         object.__setattr__(self, "n", check_int(self.n, "GainBounds: n", low=1))
+        ref = self.reference
+        if ref is not None and not (isinstance(ref, (StaticCurve, StaticSurface)) or callable(ref)):
+            raise TypeError(f"GainBounds: reference must be a StaticCurve, a StaticSurface or a callable ū ↦ ȳ, "
+                            f"got {ref!r} ({type(ref).__name__})")
         if self.ubar_range is not None:
-            rng = self.ubar_range
+            rng = check_sequence(self.ubar_range, "GainBounds: ubar_range", "(low, high) or one (low, high) per input")
             if len(rng) == 2 and all(np.ndim(v) == 0 for v in rng):
-                lo, hi = (float(v) for v in rng)
+                lo, hi = (check_real(v, f"GainBounds: ubar_range[{i}]") for i, v in enumerate(rng))
                 if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
                     raise ValueError(f"ubar_range must be (low, high) with low <= high, got {self.ubar_range}")
                 object.__setattr__(self, "ubar_range", (lo, hi))
