@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 
 from ..static._curves import StaticCurve
 from ..core._records import Record, StaticPoints
-from ..core._validation import check_int, check_real
+from ..core._validation import check_int, check_real, check_sequence
 
 __all__ = ["plot_static_curve", "plot_record"]
 
@@ -23,6 +23,17 @@ __all__ = ["plot_static_curve", "plot_record"]
 def _label(text: str, unit: str) -> str:
     return f"{text} ({unit})" if unit else text
 
+
+
+def check_axes(axes: object, n: int, who: str, what: str = "") -> list[Axes]:
+    """``axes`` as a list of ``n`` matplotlib Axes, or ``TypeError``/``ValueError`` naming ``axes``."""
+    axs = check_sequence(axes, f"{who}: axes", f"a sequence of {n} matplotlib Axes{what}")
+    if len(axs) != n:
+        raise ValueError(f"{who}: axes must hold {n} Axes{what}, got {len(axs)}")
+    bad = [type(a).__name__ for a in axs if not isinstance(a, Axes)]
+    if bad:
+        raise TypeError(f"{who}: axes must hold matplotlib Axes, got {', '.join(bad)}")
+    return axs
 
 def plot_static_curve(
     points: StaticPoints | None = None,
@@ -128,9 +139,7 @@ def plot_record(
         fig = Figure(figsize=(8.0, 5.0), layout="constrained")
         ax_u, ax_y = fig.subplots(2, 1, sharex=True)
     else:
-        if len(axes) != 2:
-            raise ValueError(f"plot_record: axes must be a pair (input, output), got {len(axes)}")
-        ax_u, ax_y = axes
+        ax_u, ax_y = check_axes(axes, 2, "plot_record", ", a pair (input, output)")
         fig = ax_u.figure
     t = record.t[start:stop]
     # the input is held over [t_k, t_k + Ts): draw it as steps, as the plant sees it

@@ -15,7 +15,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..core._validation import check_bool, check_real
+from ..core._validation import check_bool, check_real, check_sequence
 from ..estimation._pareto import ParetoSet, nondominated_mask
 
 __all__ = ["plot_pareto"]
@@ -30,14 +30,20 @@ def _points_of(points) -> dict[str, tuple[float, float]]:
     if isinstance(points, pd.DataFrame):
         missing = {"JS_ident", "JSF"} - set(points.columns)
         if missing:
-            raise ValueError(f"a table of models needs columns 'JS_ident' and 'JSF'; missing {sorted(missing)}")
+            raise ValueError(f"points: a table of models needs columns 'JS_ident' and 'JSF'; missing {sorted(missing)}")
         return {str(k): (float(r["JS_ident"]), float(r["JSF"])) for k, r in points.iterrows()}
+    what = "a mapping name -> (J_S, J_SF) or a DataFrame with columns 'JS_ident' and 'JSF'"
+    seq = points if isinstance(points, Mapping) else check_sequence(points, "points", what)
+    try:
+        given = dict(seq)
+    except (TypeError, ValueError):  # items that are not (name, value) pairs
+        raise TypeError(f"points must be {what}, got {points!r}") from None
     out = {}
-    for k, v in dict(points).items():
+    for k, v in given.items():
         try:
             js, jsf = (float(x) for x in v)
         except (TypeError, ValueError):
-            raise ValueError(f"point {k!r} must be (J_S, J_SF), got {v!r}") from None
+            raise ValueError(f"points: point {k!r} must be (J_S, J_SF), got {v!r}") from None
         out[str(k)] = (js, jsf)
     return out
 

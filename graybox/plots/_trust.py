@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints
 from ..core._validation import check_bool
+from ._data import check_axes
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._uncertainty import StaticCurveBand
 
@@ -50,9 +51,7 @@ def plot_residual_tests(
         fig = Figure(figsize=(7.0, 1.8 * len(items)), layout="constrained")  # 9 in for the five tests of one input
         axs = fig.subplots(len(items), 1)
     else:
-        axs = list(axes)
-        if len(axs) != len(items):
-            raise ValueError(f"plot_residual_tests: axes must hold {len(items)} Axes, got {len(axs)}")
+        axs = check_axes(axes, len(items), "plot_residual_tests")
         fig = axs[0].figure
     for ax, t in zip(axs, items):
         bad = np.abs(t.phi) > t.limit
@@ -122,9 +121,7 @@ def plot_static_band(
         fig = Figure(figsize=(10.0 if gain else 6.4, 4.0), layout="constrained")
         axs = list(np.atleast_1d(fig.subplots(1, need)))
     else:
-        axs = list(axes)
-        if len(axs) != need:
-            raise ValueError(f"plot_static_band: axes must hold {need} Axes, got {len(axs)}")
+        axs = check_axes(axes, need, "plot_static_band")
         fig = axs[0].figure
     what = f"{band.level:.0%} band ({band.method})"
     name = band.model_name or "model"
@@ -179,9 +176,7 @@ def plot_decision_bootstrap(
         fig = Figure(figsize=(10.0, 4.0), layout="constrained")
         ax_l, ax_r = fig.subplots(1, 2)
     else:
-        if len(axes) != 2:
-            raise ValueError(f"plot_decision_bootstrap: axes must be a pair, got {len(axes)}")
-        ax_l, ax_r = axes
+        ax_l, ax_r = check_axes(axes, 2, "plot_decision_bootstrap")
         fig = ax_l.figure
     freq = boot.frequencies()
     lam = freq.index.to_numpy(float)
