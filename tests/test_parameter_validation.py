@@ -234,11 +234,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
 # Options not yet checked at the boundary (array-, mapping- or callable-valued, where a wrong value
 # still fails inside numpy or matplotlib without naming the option, or is ignored). Each entry is a
 # known gap, listed so that the test fails when one is fixed and the entry is left behind.
-PENDING: set[tuple[str, str]] = {
-    ("plot_surface_contours", "input_labels"),
-    ("plot_surface_contours", "levels"), ("plot_surface_contours", "ranges"), ("plot_surface_slices", "at"),
-    ("plot_surface_slices", "input_labels"), ("plot_surface_slices", "surface"), ("plot_surface_slices", "urange"),
-}
+PENDING: set[tuple[str, str]] = set()
 
 
 def _callables():

@@ -9,13 +9,14 @@ ranges.
 
 from __future__ import annotations
 
+import numbers
 from typing import Callable, Sequence
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..core._validation import check_int, check_real
+from ..core._validation import check_int, check_real, check_sequence
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
@@ -27,11 +28,28 @@ def _surfaces(surface: Surface | Sequence[Surface] | None) -> list[Surface]:
         return []
     if callable(surface):
         return [surface]
-    out = list(surface)
+    out = check_sequence(surface, "surface", "a callable on ū of shape (K, 2) or a sequence of them")
     for s in out:
         if not callable(s):
-            raise ValueError(f"a surface must be callable on ū of shape (K, 2), got {type(s).__name__}")
+            raise TypeError(f"surface: each surface must be callable on ū of shape (K, 2), got {type(s).__name__}")
     return out
+
+
+def _input_labels(labels: object) -> tuple:
+    """The two inputs' labels (any values, shown with str()), or an error naming ``input_labels``."""
+    out = tuple(check_sequence(labels, "input_labels", "a pair of labels (ū₁, ū₂)"))
+    if len(out) != 2:
+        raise ValueError(f"input_labels must be a pair of labels (ū₁, ū₂), got {len(out)}")
+    return out
+
+
+def _pair(given: object, name: str) -> tuple[float, float]:
+    """A (low, high) range given by the caller, as floats, or an error naming it."""
+    pair = check_sequence(given, name, "a pair (low, high)")
+    if len(pair) != 2:
+        raise ValueError(f"{name} must be a pair (low, high), got {len(pair)} values")
+    lo = check_real(pair[0], f"{name}[0] (low)")
+    return lo, check_real(pair[1], f"{name}[1] (high)", low=lo, low_open=True)
 
 
 def _name(s: Surface, i: int) -> str:
@@ -49,9 +67,10 @@ def _points(points: object) -> tuple[np.ndarray, np.ndarray, str] | None:
     return ub, yb, str(getattr(points, "name", "static points"))
 
 
-def _range(i: int, surfaces: list[Surface], pts, given: tuple[float, float] | None, margin: float) -> tuple[float, float]:
+def _range(i: int, surfaces: list[Surface], pts, given: tuple[float, float] | None, margin: float,
+           name: str = "urange") -> tuple[float, float]:
     if given is not None:
-        lo, hi = (float(v) for v in given)
+        lo, hi = _pair(given, name)
     elif pts is not None:
         lo, hi = float(pts[0][:, i].min()), float(pts[0][:, i].max())
         pad = margin * (hi - lo)
@@ -69,6 +88,17 @@ def _range(i: int, surfaces: list[Surface], pts, given: tuple[float, float] | No
     if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
         raise ValueError(f"empty range for input {i + 1}: ({lo:g}, {hi:g})")
     return lo, hi
+
+
+def _levels(levels: object) -> int | np.ndarray:
+    """Contour levels: a count >= 1, or increasing finite output levels; errors name ``levels``."""
+    if isinstance(levels, numbers.Real) or (isinstance(levels, np.ndarray) and levels.ndim == 0):
+        return check_int(levels, "levels (a count)", low=1)
+    items = check_sequence(levels, "levels", "a count or a sequence of output levels")
+    out = np.array([check_real(v, f"levels[{k}]") for k, v in enumerate(items)])
+    if out.size == 0 or np.any(np.diff(out) <= 0):
+        raise ValueError(f"levels must be increasing output levels, got {out.tolist()}")
+    return out
 
 
 def _evaluate(s: Surface, U: np.ndarray, i: int) -> np.ndarray:
@@ -135,6 +165,7 @@ def plot_surface_slices(
     against = check_int(against, "against (the input on the horizontal axis)", low=0, high=1)
     n_grid = check_int(n_grid, "n_grid", low=2)
     margin = check_real(margin, "margin", low=0)
+    input_labels = _input_labels(input_labels)
     held = 1 - against
     if at is None:
         if pts is not None:
@@ -142,7 +173,12 @@ def plot_surface_slices(
         else:
             levels = np.linspace(*_range(held, surfaces, None, None, 0.0), 5)
     else:
-        levels = np.asarray(at, dtype=float).reshape(-1)
+        if isinstance(at, (bool, np.bool_, str)):
+            raise TypeError(f"at must be levels of the held input (numbers), got {at!r}")
+        try:
+            levels = np.asarray(at, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise TypeError(f"at must be levels of the held input (numbers), got {at!r}") from None
         if levels.size == 0 or not np.all(np.isfinite(levels)):
             raise ValueError("at must hold at least one finite level")
     lo, hi = _range(against, surfaces, pts, urange, margin)
@@ -236,10 +272,14 @@ def plot_surface_contours(
     pts = _points(points)
     n_grid = check_int(n_grid, "n_grid", low=2)
     margin = check_real(margin, "margin", low=0)
-    if ranges is not None and len(ranges) != 2:
-        raise ValueError(f"ranges must be two (low, high) pairs, got {ranges!r}")
-    r1 = _range(0, surfaces, pts, None if ranges is None else ranges[0], margin)
-    r2 = _range(1, surfaces, pts, None if ranges is None else ranges[1], margin)
+    input_labels = _input_labels(input_labels)
+    levels = _levels(levels)
+    if ranges is not None:
+        ranges = check_sequence(ranges, "ranges", "two (low, high) pairs")
+        if len(ranges) != 2:
+            raise ValueError(f"ranges must be two (low, high) pairs, got {ranges!r}")
+    r1 = _range(0, surfaces, pts, None if ranges is None else ranges[0], margin, "ranges[0]")
+    r2 = _range(1, surfaces, pts, None if ranges is None else ranges[1], margin, "ranges[1]")
     g1, g2 = np.linspace(*r1, n_grid), np.linspace(*r2, n_grid)
     G1, G2 = np.meshgrid(g1, g2)
     Z = _evaluate(s, np.column_stack([G1.ravel(), G2.ravel()]), 0).reshape(G1.shape)
