@@ -346,3 +346,36 @@ def test_bad_values_are_refused_naming_the_option(label, option, value, tmp_path
     allowed = ACCEPTED.get((label, option), ())
     assert any(value is a or (isinstance(a, float) and isinstance(value, float) and a == value) for a in allowed), (
         f"{label}({option}={value!r}) was accepted silently")
+
+
+def test_structured_options_refuse_bad_shapes_naming_them():
+    """Beyond the scalar values above: wrong counts and contents of the options checked for issue 22."""
+    with pytest.raises(ValueError, match="noise_structure must hold noise terms"):
+        gb.Model(ST, THETA, noise_structure=["y(k-2)"])
+    with pytest.raises(ValueError, match="residuals has 2 series for 1 record"):
+        gb.stacked_regressors(ST, REC, residuals=[np.zeros(80), np.zeros(80)])
+    with pytest.raises(ValueError, match="noise: "):
+        gb.els(ST, REC, noise=["e(k-1)", "e(k-1)"])
+    with pytest.raises(TypeError, match=r"GainBounds: ubar_range\[1\]"):
+        gb.GainBounds(lower=0.0, ubar_range=(1.0, "2"))
+    with pytest.raises(ValueError, match="reference θ"):
+        gb.pe_pareto(ST, DATA, lambdas=[1.0], solver="closed", reference=[0.5, 0.3])
+    with pytest.raises(ValueError, match="input_labels must be a pair"):
+        gp.plot_surface_contours(SURFACE, input_labels=("a", "b", "c"))
+    with pytest.raises(ValueError, match="levels must be increasing"):
+        gp.plot_surface_contours(SURFACE, levels=[2.0, 1.0])
+    with pytest.raises(ValueError, match=r"urange\[1\]"):
+        gp.plot_surface_slices(SURFACE, urange=(1.0, 0.5))
+    with pytest.raises(TypeError, match="axes must hold matplotlib Axes"):
+        gp.plot_record(REC, axes=[1, 2])
+
+
+def test_structured_options_keep_their_valid_forms():
+    """The forms the options took before issue 22's checks still work."""
+    fig = gp.plot_pareto(FRONT, points=[("ls", (1e-3, 1e-2))])  # a sequence of (name, point) pairs
+    assert any(t.get_text() == "ls" for t in fig.axes[0].texts)
+    fig = gp.plot_surface_contours(SURFACE, levels=np.array([0.5, 1.0, 2.0]), ranges=[(0.0, 1.0), (0.0, 1.0)])
+    assert fig.axes
+    assert gb.Model(ST, THETA, noise_structure=["e(k-1)"], noise_theta=[0.2]).noise_structure[0].is_noise
+    psi, _ = gb.stacked_regressors(gb.Structure(["y(k-1)", "e(k-1)"]), REC, residuals=[np.zeros(80)])
+    assert psi.shape == (79, 2)
