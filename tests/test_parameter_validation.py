@@ -124,6 +124,13 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "Variant": (("v", "ls"), {}),
     "StructureSpec": (("s",), {"terms": ["y(k-1)", "u(k-1)"]}),
     "DataSpec": (("d",), {"bundled": "pumping"}),
+    # graybox.control (python-control is needed only by narx_iosystem)
+    "local_model": ((MODEL, 0.5), {"Ts": 0.1}),
+    "operating_curve": ((MODEL, [0.3, 0.6]), {"Ts": 0.1}),
+    "narx_state_names": ((MODEL,), {}),
+    "narx_initial_state": ((MODEL, REC), {}),
+    "narx_steady_state": ((MODEL, 0.5, float(MODEL.static_curve([0.5])[0])), {}),
+    "narx_iosystem": ((MODEL, 0.1), {}),
 }
 
 # Public callables with options that this test does not call, and why (each has its own tests).
@@ -154,11 +161,9 @@ NOT_EXERCISED = {
     "compare_results": "needs results stores; tests/test_grid_growth.py", "grid_status": "idem", "load_results": "idem",
     "plot_local_models": "needs local models; tests/test_control.py", "plot_operating_curve": "idem",
     "run_cell": "idem", "run_grid": "idem", "parallel_map": "starts worker processes; tests/test_grid_executors.py",
-    # graybox.control (issue 23) reached main after this table was written: give them valid calls here
-    **{k: "graybox.control: not yet in this table" for k in (
-        "LocalModel", "LocalModel.zeros", "LocalModel.step", "LocalModel.frequency_response",
-        "LocalModel.settling_time", "local_model", "OperatingCurve", "OperatingCurve.to_frame", "operating_curve",
-        "narx_state_names", "narx_initial_state", "narx_steady_state", "narx_iosystem")},
+    "LocalModel": "a result object (built by local_model)", "OperatingCurve": "a result object (built by operating_curve)",
+    "LocalModel.zeros": "a result's method; tests/test_control.py", "LocalModel.step": "idem",
+    "LocalModel.frequency_response": "idem", "LocalModel.settling_time": "idem", "OperatingCurve.to_frame": "idem",
 }
 
 # free-text labels: any value is shown with str(), so every value is accepted
@@ -182,6 +187,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     ("pe_thetas", "warm_start"): (True,),
     ("se_pareto", "progress"): (True,),
     ("bootstrap_decision", "progress"): (True,),
+    **{(k, "noise"): (True,) for k in ("narx_state_names", "narx_initial_state", "narx_steady_state", "narx_iosystem")},
     ("output_error", "progress"): (True,),
     # an initial output level or a start value in output units: any finite number, either sign
     **{(k, "y0"): (2.5, -1) for k in ("Model.simulate", "Model.static_curve", "Model.static_gain", "static_curve",
@@ -205,7 +211,11 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     ("bootstrap_decision", "band"): (2.5,),
     ("bootstrap_decision", "static_sigma"): (2.5,),  # output units
     ("pe_uncertainty", "static_sigma"): (2.5,),
-    ("simulate", "bound"): (2.5,),  # |y| beyond which a free run has diverged
+    ("simulate", "bound"): (2.5,),
+    ("local_model", "Ts"): (2.5,),  # seconds
+    ("operating_curve", "Ts"): (2.5,),
+    ("local_model", "y0"): (2.5, -1),  # where a run starts, output units
+    ("operating_curve", "y0"): (2.5, -1),  # |y| beyond which a free run has diverged
     ("Model.simulate", "bound"): (2.5,),
     ("els", "tol"): (2.5,),
     ("se_dsf", "tol"): (2.5,),

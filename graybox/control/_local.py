@@ -458,7 +458,12 @@ def _check_Ts(Ts: float | None, data: object) -> float:
 def _y0s(y0: object, M: int) -> list[float | None]:
     if y0 is None:
         return [None] * M
-    a = np.atleast_1d(np.asarray(y0, float)).ravel()
+    if isinstance(y0, (bool, np.bool_, str)):
+        raise TypeError(f"y0 must be a number or one number per operating point, got {y0!r}")
+    try:
+        a = np.atleast_1d(np.asarray(y0, float)).ravel()
+    except (TypeError, ValueError):
+        raise TypeError(f"y0 must be a number or one number per operating point, got {y0!r}") from None
     if a.size not in (1, M) or not np.all(np.isfinite(a)):
         raise ValueError(f"y0 must be a finite scalar or one value per operating point ({M}), got {y0!r}")
     return [float(v) for v in np.broadcast_to(a, (M,))]
@@ -642,6 +647,7 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         Draw it with :func:`graybox.plots.plot_operating_curve`.
     """
     model = check_polynomial(model, "operating_curve")
+    n_samples, seed = check_int(n_samples, "n_samples", low=10), check_seed(seed)
     ub = _as_points(model, ubar)
     Ts_ = _check_Ts(Ts, data)
     _range_warning(model, ub, data)
@@ -651,8 +657,7 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     gain = np.array([r[1] for r in rows])
     fields: dict[str, Any] = {}
     if uncertainty is not None:
-        fields = _band(model, uncertainty, ub, np.array([r[0] for r in rows]), Ts_, check_int(n_samples, "n_samples",
-                       low=10), check_seed(seed), single)
+        fields = _band(model, uncertainty, ub, np.array([r[0] for r in rows]), Ts_, n_samples, seed, single)
     return OperatingCurve(lms, ub[:, 0] if single else ub, np.array([r[0] for r in rows]),
                           gain[:, 0] if single else gain, np.array([r[2] for r in rows]),
                           np.array([r[3] for r in rows]), np.array([r[4] for r in rows]),

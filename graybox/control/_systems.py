@@ -28,7 +28,7 @@ import numpy as np
 
 from ..core._records import Record
 from ..core._terms import Structure
-from ..core._validation import check_real
+from ..core._validation import check_bool, check_int, check_real
 from ..models._model import Model
 from ._local import system_name, check_polynomial, require_control
 
@@ -86,6 +86,7 @@ def narx_state_names(model: Model, *, noise: bool = False) -> list[str]:
         As for :func:`narx_iosystem`: the noise lags ``e[k-1]`` … come last.
     """
     model = check_polynomial(model, "narx_state_names")
+    noise = check_bool(noise, "noise")
     lay = _layout(model.structure, model.input_names)
     names = [f"y[k-{l}]" for l in range(1, lay.Ly + 1)]
     for n, L in zip(model.input_names, lay.Lu):
@@ -118,11 +119,12 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
         In the order of :func:`narx_state_names`.
     """
     model = check_polynomial(model, "narx_initial_state")
+    noise = check_bool(noise, "noise")
     if not isinstance(record, Record):
         raise TypeError(f"record must be a Record, got {type(record).__name__}")
     lay = _layout(model.structure, model.input_names)
     L = model.max_lag
-    k = L if start is None else int(start)
+    k = L if start is None else check_int(start, "start", low=0)
     if k < L or k > len(record):
         raise ValueError(f"start must lie in [{L}, {len(record)}] (the model's max lag to the record's length), got {start!r}")
     parts = [record.y[k - lay.Ly: k][::-1] if lay.Ly else np.zeros(0)]
@@ -154,6 +156,7 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
         In the order of :func:`narx_state_names`.
     """
     model = check_polynomial(model, "narx_steady_state")
+    noise = check_bool(noise, "noise")
     ub = np.atleast_1d(np.asarray(ubar, float)).ravel()
     if ub.size != model.n_inputs or not np.all(np.isfinite(ub)):
         raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
@@ -196,6 +199,9 @@ def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | N
         Needs python-control (``pip install graybox[control]``).
     """
     model = check_polynomial(model, "narx_iosystem")
+    noise = check_bool(noise, "noise")
+    if name is not None and not isinstance(name, str):
+        raise TypeError(f"name must be a string, got {name!r}")
     Ts = check_real(Ts, "Ts", low=0, low_open=True)
     c = _noise_coefficients(model) if noise else np.zeros(0)
     ct = require_control()
