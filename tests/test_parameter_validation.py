@@ -131,6 +131,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "narx_initial_state": ((MODEL, REC), {}),
     "narx_steady_state": ((MODEL, 0.5, float(MODEL.static_curve([0.5])[0])), {}),
     "narx_iosystem": ((MODEL, 0.1), {}),
+    "select_graybox": ((gb.Candidates(1, 1, degree=2), DATA), {"sizes": [2], "sources": ("frols",), "estimator": "ls"}),
 }
 
 # Public callables with options that this test does not call, and why (each has its own tests).
@@ -152,7 +153,6 @@ NOT_EXERCISED = {
     "load_buck": "data kept outside the project", "load_record_csv": "files: tests/test_loaders.py",
     "load_static_csv": "idem",
     "se_uncertainty": "an SE fit per call; tests/test_uncertainty.py",
-    "select_graybox": "a grid per call; tests/test_select_graybox.py",
     "plot_decision_bootstrap": "needs a bootstrap; tests/test_bootstrap.py",
     "heatmap_table": "needs a results store; tests/test_experiments.py", "leaderboard": "idem",
     "plot_fronts": "idem", "plot_heatmap": "idem", "plot_scatter": "idem", "write_report": "idem",
@@ -187,6 +187,8 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     ("pe_thetas", "warm_start"): (True,),
     ("se_pareto", "progress"): (True,),
     ("bootstrap_decision", "progress"): (True,),
+    ("select_graybox", "progress"): (True,),
+    ("select_graybox", "band"): (2.5,),  # output units²
     **{(k, "noise"): (True,) for k in ("narx_state_names", "narx_initial_state", "narx_steady_state", "narx_iosystem")},
     ("output_error", "progress"): (True,),
     # an initial output level or a start value in output units: any finite number, either sign

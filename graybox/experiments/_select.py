@@ -46,7 +46,7 @@ from ..io._json import register_type
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
-from ..core._validation import check_choice, check_int, check_real, warn
+from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints
 from ._map import parallel_map
 from ._spec import constraint_entries, constraint_from_object
@@ -692,10 +692,25 @@ def select_graybox(
     """
     if band is not None:
         band = check_real(band, "band", low=0, low_open=True)
+    if _is_scalar(constraints):
+        raise TypeError(f"constraints must be a constraint, a table of them or a sequence, got {constraints!r}")
     constraints = tuple(constraint_entries(constraints))  # read once: a generator is used up
     estimators = _estimators(estimator, band, constraints)
-    if isinstance(sources, str):
-        sources = (sources,)
+    sources = (sources,) if isinstance(sources, str) else check_sequence(sources, "sources")
+    if sizes is not None:
+        sizes = [check_int(s, "sizes", low=1) for s in check_sequence(sizes, "sizes")]
+    include = check_sequence(include, "include")
+    lam = None if lambdas is None else tuple(float(x) for x in check_lambdas(lambdas))
+    folds, blocks = check_int(folds, "folds", low=2), check_int(blocks, "blocks", low=1)
+    if shortlist is not None:
+        shortlist = check_int(shortlist, "shortlist", low=1)
+    if client is not None and (_is_scalar(client) or isinstance(client, str)):
+        raise TypeError(f"client must be a distributed.Client, got {client!r}")
+    if scheduler is not None:
+        if not isinstance(scheduler, str):
+            raise TypeError(f"scheduler must be an address string such as 'tcp://host:8786', got {scheduler!r}")
+        if ":" not in scheduler:
+            raise ValueError(f"scheduler must be an address such as 'tcp://host:8786', got {scheduler!r}")
     for s in sources:
         check_choice(s, "sources", ("semp", "frols"))
     if not sources:
@@ -705,14 +720,13 @@ def select_graybox(
     check_choice(rule, "rule", RULES)
     plan, degree = _inputs(candidates, data, static, validation, test, band, folds, blocks)
     rows = _structures(candidates, plan.ident, sizes, sources, include, degree)
-    lam = None if lambdas is None else tuple(float(x) for x in lambdas)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
                             progress=progress)
     fast = [e for e in estimators if e not in SLOW_ESTIMATORS]
     jobs = [_Job(r["structure"], r["terms"], e, plan, lam, constraints) for r in rows for e in fast]
     results = run(jobs)
     slow_rows = rows
-    if fast and shortlist is not None and len(rows) > check_int(shortlist, "shortlist", low=1):
+    if fast and shortlist is not None and len(rows) > shortlist:
         # the slow fronts only for the structures the fast ones rank best (in band first)
         first, _, _ = _table(rows, jobs, results, plan)
         order = first.assign(_js=np.where(first["in_band"], first["JS_valid"], np.inf)).groupby(level=0)["_js"].min()
@@ -739,10 +753,15 @@ def select_graybox(
     return GrayboxSelection(structure, decision.model, decision, table, degree, plan.band, not used_fallback, used)
 
 
+def _is_scalar(value: object) -> bool:
+    """A bool or a number (where a collection or an object is meant)."""
+    return isinstance(value, (bool, int, float, np.bool_, np.integer, np.floating))
+
+
 def _estimators(estimator, band, constraints) -> list[str]:
     if estimator is None:
         estimator = BLACK_BOX_ESTIMATORS if band is None else (("pe",) if constraints else ("pe", "se-gradient"))
-    estimators = [estimator] if isinstance(estimator, str) else list(estimator)
+    estimators = [estimator] if isinstance(estimator, str) else check_sequence(estimator, "estimator")
     if not estimators or len(set(estimators)) != len(estimators):
         raise ValueError(f"estimator must name one or more distinct estimators, got {estimator!r}")
     for e in estimators:
