@@ -12,32 +12,14 @@ every public name is exported here. :mod:`graybox.plots`, :mod:`graybox.experime
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
 from . import _api
 from ._api import __version__
+from ._lazy import attach
 
-#: Subpackages reachable as attributes, loaded on first use.
-_SUBMODULES = ("plots", "experiments", "reproduce")
-#: Names of the experiment layer re-exported at the top.
-_EXPERIMENT_NAMES = ("GrayboxSelection", "SelectionWarning", "load_results", "select_graybox")
-
-__all__ = sorted([*_api.__all__, *_SUBMODULES, *_EXPERIMENT_NAMES, "__version__"])
-
-
-def __getattr__(name: str) -> Any:
-    if name in _SUBMODULES:
-        value = importlib.import_module(f"graybox.{name}")
-    elif name in _EXPERIMENT_NAMES:
-        value = getattr(importlib.import_module("graybox.experiments"), name)
-    elif name in _api.__all__:
-        value = getattr(_api, name)
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return __all__
+# The experiment layer's names re-exported at the top, the rest through graybox._api; plots,
+# experiments and reproduce are reachable as attributes. All load on first use.
+__getattr__, __dir__, _names = attach(
+    __name__, {"experiments": ("GrayboxSelection", "SelectionWarning", "load_results", "select_graybox"),
+               "_api": _api.__all__},
+    base="graybox", modules=("plots", "experiments", "reproduce"))
+__all__ = sorted([*_names, "__version__"])

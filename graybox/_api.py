@@ -9,45 +9,17 @@ from __future__ import annotations
 
 import importlib
 from importlib.metadata import PackageNotFoundError, version as _version
-from typing import Any
 
 from ._layers import PUBLIC_SUBPACKAGES
+from ._lazy import attach
 
 try:
     __version__ = _version("graybox")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree that was never installed
     __version__ = "0+unknown"
 
-_HOME: dict[str, str] = {}
-for _pkg in PUBLIC_SUBPACKAGES:
-    for _name in importlib.import_module(f"graybox.{_pkg}").__all__:
-        if _pkg == "datasets" and not _name.startswith("load_"):
-            continue  # the simulators' names stay in graybox.datasets; only its loaders come up
-        if _name in _HOME:
-            raise RuntimeError(f"{_name} is exported by both graybox.{_HOME[_name]} and graybox.{_pkg}")
-        _HOME[_name] = _pkg
-
-#: Public modules reachable as attributes (``gb.datasets``, ``gb.reference``).
-MODULES: tuple[str, ...] = ("datasets", "reference")
-
-__all__ = sorted([*_HOME, *MODULES])
-
-
-def __getattr__(name: str) -> Any:
-    if name in MODULES:
-        value = importlib.import_module(f"graybox.{name}")
-    elif name in _HOME:
-        value = getattr(importlib.import_module(f"graybox.{_HOME[name]}"), name)
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return __all__
-
-
-def home(name: str) -> str:
-    """The subpackage that holds a public name of this namespace (``"estimation"`` for ``"els"``)."""
-    return _HOME[name]
+# the simulators' names stay in graybox.datasets; only its loaders come up
+__getattr__, __dir__, __all__ = attach(
+    __name__, {pkg: [n for n in importlib.import_module(f"graybox.{pkg}").__all__
+                     if pkg != "datasets" or n.startswith("load_")] for pkg in PUBLIC_SUBPACKAGES},
+    base="graybox", modules=("datasets", "reference"))  # gb.datasets, gb.reference: modules themselves

@@ -12,8 +12,8 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 
-def attach(package: str, exports: Mapping[str, Sequence[str]]) -> tuple[Callable[[str], Any], Callable[[], list[str]],
-                                                                          list[str]]:
+def attach(package: str, exports: Mapping[str, Sequence[str]], *, base: str | None = None,
+           modules: Sequence[str] = ()) -> tuple[Callable[[str], Any], Callable[[], list[str]], list[str]]:
     """``__getattr__``, ``__dir__`` and ``__all__`` for a package that re-exports lazily.
 
     Parameters
@@ -21,22 +21,33 @@ def attach(package: str, exports: Mapping[str, Sequence[str]]) -> tuple[Callable
     package : str
         The package's ``__name__``.
     exports : mapping of str to sequence of str
-        Each private module (relative to the package, e.g. ``"_terms"``, or a subpackage) and
-        the public names it holds.
+        Each module (relative to ``base``, e.g. ``"_terms"``, or a subpackage) and the public
+        names it holds.
+    base : str, optional
+        The package the modules are relative to (default: ``package`` itself).
+    modules : sequence of str
+        Modules of ``base`` that are themselves public names (``graybox.plots``), loaded on first use.
     """
-    where = {name: module for module, names in exports.items() for name in names}
-    if len(where) != sum(len(v) for v in exports.values()):
-        raise RuntimeError(f"{package}: a public name is exported twice")
+    base = package if base is None else base
+    where: dict[str, str] = {}
+    for module, names_there in exports.items():
+        for name in names_there:
+            if name in where or name in modules:
+                raise RuntimeError(f"{package}: {name} is exported twice ({where.get(name, name)} and {module})")
+            where[name] = module
+    names = sorted([*where, *modules])
 
     def __getattr__(name: str) -> Any:
-        module = where.get(name)
-        if module is None:
+        if name in modules:
+            value = importlib.import_module(f"{base}.{name}")
+        elif name in where:
+            value = getattr(importlib.import_module(f"{base}.{where[name]}"), name)
+        else:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        value = getattr(importlib.import_module(f"{package}.{module}"), name)
         setattr(importlib.import_module(package), name, value)  # later accesses skip this function
         return value
 
     def __dir__() -> list[str]:
-        return sorted(where)
+        return names
 
-    return __getattr__, __dir__, sorted(where)
+    return __getattr__, __dir__, names
