@@ -421,3 +421,12 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
                "dynamic records; the model is extrapolated there by the static information (if the points and the "
                "records should overlap, check their units)")
         warn(msg, StaticRangeWarning)
+
+
+def same_record(a: Record, b: Record) -> bool:
+    """Whether two records hold the same data (the same object, or equal inputs and outputs): a
+    choosing or test record must not be one the fit saw."""
+    return a is b or (a.u.shape == b.u.shape and np.array_equal(a.u, b.u) and np.array_equal(a.y, b.y))
+
+
+__all__.append("same_record")

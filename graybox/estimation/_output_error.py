@@ -45,7 +45,7 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from ..core._progress import progress_bar
-from ..core._records import Dataset, Record, as_records
+from ..core._records import Dataset, Record, as_records, same_record
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_choice, check_int, check_real, check_seed, check_theta
 from ..models._coerce import as_structure
@@ -202,9 +202,7 @@ def output_error(
             else None
         if not crec or not all(isinstance(r, Record) for r in crec):
             raise TypeError(f"choose_on must be a Record or a sequence of Records (e.g. data.valid), got {choose_on!r}")
-        fitting = [(r.u, r.y) for r in rec]
-        if any(any(c.u.shape == u.shape and np.array_equal(c.u, u) and np.array_equal(c.y, y) for u, y in fitting)
-               for c in crec):
+        if any(same_record(c, r) for c in crec for r in rec):
             raise ValueError("choose_on: a choosing record is a fitting record; choose on data the fit did not see "
                              "(e.g. data.valid)")
         chooser = SEProblem(st, crec, None)

@@ -46,6 +46,7 @@ from ..io._json import register_type
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
+from ..core._records import same_record
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints
 from ._map import parallel_map
@@ -188,10 +189,6 @@ class _Plan:
         return len(self.splits) > 1
 
 
-def _same_record(a: gb.Record, b: gb.Record) -> bool:
-    return a is b or (a.u.shape == b.u.shape and np.array_equal(a.u, b.u) and np.array_equal(a.y, b.y))
-
-
 def _block_edges(n: int, L: int, blocks: int) -> np.ndarray:
     """Edges of ``blocks`` contiguous blocks of the error samples L … n − 1 of a free run, fewer
     (with a warning) when the record is too short for blocks of at least max(2L + 2, 10) samples."""
@@ -281,7 +278,7 @@ def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> 
             raise ValueError(f"the test record ({len(test)} samples) is shorter than the candidates' lags + 2 "
                              f"({L + 2})")
         for name, rec in (("identification", ident), ("validation", valid)):
-            if rec is not None and _same_record(test, rec):
+            if rec is not None and same_record(test, rec):
                 raise ValueError(f"the test record is the {name} record: a test must be data nothing was fitted "
                                  "or chosen on")
     blocks = check_int(blocks, "blocks", low=2)
@@ -291,7 +288,7 @@ def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> 
         valid.require_length(L)
         if len(valid) <= L + 1:
             raise ValueError(f"the validation record ({len(valid)} samples) is shorter than the candidates' lags + 2")
-        if _same_record(valid, ident):
+        if same_record(valid, ident):
             raise ValueError("the validation record is the identification record: choose on other data, or pass "
                              "the record alone (folds)")
         splits = ((ident, valid, _block_edges(len(valid), L, blocks)),)
