@@ -429,4 +429,15 @@ def same_record(a: Record, b: Record) -> bool:
     return a is b or (a.u.shape == b.u.shape and np.array_equal(a.u, b.u) and np.array_equal(a.y, b.y))
 
 
-__all__.append("same_record")
+def choosing_records(value: object, name: str = "choose_on") -> list[Record]:
+    """Records to choose on: a Record or a non-empty list or tuple of them (a Dataset is refused: as one
+    record it would stand for its ident, the fitting data). ``TypeError`` for anything else."""
+    recs = [value] if isinstance(value, Record) else list(value) if isinstance(value, (list, tuple)) else None
+    if recs is None or not all(isinstance(r, Record) for r in recs):
+        raise TypeError(f"{name} must be a Record or a sequence of Records (e.g. data.valid), got {value!r}")
+    if not recs:
+        raise ValueError(f"{name}: at least one choosing record is needed")
+    return recs
+
+
+__all__ += ["same_record", "choosing_records"]

@@ -23,7 +23,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import Record
+from ..core._records import Record, choosing_records
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
 from ..core._validation import check_band, check_choice
@@ -110,11 +110,7 @@ FALLBACKS = ("min_jsf",)
 
 def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.ndarray:
     """J_S of every member on choosing record(s) (sample-weighted mean; inf where a run diverges), shape (K,)."""
-    recs = [records] if isinstance(records, Record) else list(records) if isinstance(records, (list, tuple)) else None
-    if recs is None or not all(isinstance(r, Record) for r in recs):
-        raise TypeError(f"choose_on must be a Record or a sequence of Records, got {records!r}")
-    if not recs:
-        raise ValueError("choose_on: at least one choosing record is needed")
+    recs = choosing_records(records)
     th = np.where(np.isfinite(pareto.thetas), pareto.thetas, 0.0)
     L = pareto.structure.max_lag
     total = np.zeros(len(pareto))

@@ -45,7 +45,7 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from ..core._progress import progress_bar
-from ..core._records import Dataset, Record, as_records, same_record
+from ..core._records import Dataset, Record, as_records, choosing_records, same_record
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_choice, check_int, check_real, check_seed, check_theta
 from ..models._coerce import as_structure
@@ -197,11 +197,7 @@ def output_error(
     n = len(st)
     chooser = None
     if choose_on is not None:
-        # a Dataset is refused: as a record it would stand for its ident, the fitting data
-        crec = [choose_on] if isinstance(choose_on, Record) else list(choose_on) if isinstance(choose_on, (list, tuple)) \
-            else None
-        if not crec or not all(isinstance(r, Record) for r in crec):
-            raise TypeError(f"choose_on must be a Record or a sequence of Records (e.g. data.valid), got {choose_on!r}")
+        crec = choosing_records(choose_on)
         if any(same_record(c, r) for c in crec for r in rec):
             raise ValueError("choose_on: a choosing record is a fitting record; choose on data the fit did not see "
                              "(e.g. data.valid)")
