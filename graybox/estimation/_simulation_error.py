@@ -120,7 +120,7 @@ class SEProblem:
                  *, margin: float | None = None, ridge: float = 0.0):
         self.records = as_records(records)
         if static is not None and not isinstance(static, StaticPoints):
-            raise ValueError(f"static must be StaticPoints or None, got {type(static).__name__}")
+            raise TypeError(f"static must be StaticPoints or None, got {type(static).__name__}")
         structure = structure if isinstance(structure, Structure) else Structure(structure)
         if any(t.is_noise for t in structure):
             structure = structure.process

@@ -57,7 +57,7 @@ def static_degree(static: StaticPoints | StaticCurve | StaticSurface, *, band: f
     if isinstance(static, (StaticCurve, StaticSurface)):
         return static.degree
     if not isinstance(static, StaticPoints):
-        raise ValueError(f"static must be StaticPoints, a StaticCurve or a StaticSurface, got {type(static).__name__}")
+        raise TypeError(f"static must be StaticPoints, a StaticCurve or a StaticSurface, got {type(static).__name__}")
     band = check_real(band, "band", low=0, low_open=True)
     top = check_int(max_degree, "max_degree", low=0)
     best = 0
