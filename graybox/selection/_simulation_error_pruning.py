@@ -276,38 +276,11 @@ def semp(
         ``max_terms`` terms, or the criterion is smallest at ``max_terms`` terms while candidates
         were left (the curve may still be falling).
     """
-    if not isinstance(candidates, Structure):
-        raise TypeError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
-    process = candidates.process
+    opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
+    process, n_terms, tol, criterion = opt.process, opt.n_terms, opt.tol, opt.criterion
+    mode, crit, forced, limit = opt.mode, opt.crit, opt.forced, opt.limit
+    prune, prune_tol, rank_tol, threads = opt.prune, opt.prune_tol, opt.rank_tol, opt.threads
     nc = len(process)
-    if nc == 0:
-        raise ValueError("the candidate structure has no process terms to select from")
-    # each value first (a wrong type is named as such), then how they combine
-    if tol is not None:
-        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
-    if max_terms is not None:
-        max_terms = check_int(max_terms, "max_terms", low=1, high=nc)
-    if sum(x is not None for x in (n_terms, tol)) > 1:
-        raise ValueError("give either n_terms or tol, not both")
-    if n_terms is not None:
-        n_terms = check_int(n_terms, "n_terms", low=1, high=nc)
-        if max_terms is not None:
-            raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
-    if criterion is not None:
-        check_choice(criterion, "criterion", CRITERIA)
-    prune_tol = check_real(prune_tol, "prune_tol", low=0)
-    rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
-    threads = check_int(threads, "threads", low=1)
-    prune = check_bool(prune, "prune")
-    mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
-    crit = criterion or "bic"
-    forced = process.positions(include, "included term")
-    # with n_terms the search still looks past that size (a term found later can make earlier ones
-    # redundant, and pruning then brings the structure back down); the answer is the best structure
-    # of that size met on the path
-    limit = min(nc, 2 * n_terms + 4) if mode == "n_terms" else (max_terms or min(30, nc))
-    if len(forced) > (n_terms if mode == "n_terms" else limit):
-        raise ValueError(f"{len(forced)} included terms exceed the {n_terms or limit} terms asked for")
 
     sc = _Scorer(process, as_records(data), threads)
     N = sc.n_rows
@@ -413,3 +386,64 @@ def semp(
     fwd_df.index.name = "forward step"
     return SEMPResult(structure, frozen(th[current]), score, path.drop(columns=["_set", "_theta"]), fwd_df, crit, stop,
                       N)
+
+
+# --------------------------------------------------------------------------------------
+# SEMP's phases: options, the search state, forward steps with pruning, the chosen structure
+
+
+@dataclass(frozen=True)
+class _Options:
+    """The checked arguments of :func:`semp`, its stopping mode and the size limit of the search."""
+
+    process: Structure
+    n_terms: int | None
+    tol: float | None
+    criterion: str | None
+    mode: str
+    crit: str
+    forced: list[int]
+    limit: int
+    prune: bool
+    prune_tol: float
+    rank_tol: float
+    threads: int
+
+
+def _options(candidates: Structure, n_terms: int | None, tol: float | None, criterion: str | None,
+             max_terms: int | None, include: Sequence[Term | str], prune: bool, prune_tol: float, rank_tol: float,
+             threads: int) -> _Options:
+    """The arguments of :func:`semp` checked (TypeError / ValueError naming the argument), and its plan."""
+    if not isinstance(candidates, Structure):
+        raise TypeError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+    process = candidates.process
+    nc = len(process)
+    if nc == 0:
+        raise ValueError("the candidate structure has no process terms to select from")
+    # each value first (a wrong type is named as such), then how they combine
+    if tol is not None:
+        tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
+    if max_terms is not None:
+        max_terms = check_int(max_terms, "max_terms", low=1, high=nc)
+    if sum(x is not None for x in (n_terms, tol)) > 1:
+        raise ValueError("give either n_terms or tol, not both")
+    if n_terms is not None:
+        n_terms = check_int(n_terms, "n_terms", low=1, high=nc)
+        if max_terms is not None:
+            raise ValueError("max_terms applies to tol and criterion stopping; with n_terms leave it out")
+    if criterion is not None:
+        check_choice(criterion, "criterion", CRITERIA)
+    prune_tol = check_real(prune_tol, "prune_tol", low=0)
+    rank_tol = check_real(rank_tol, "rank_tol", low=0, high=1, low_open=True, high_open=True)
+    threads = check_int(threads, "threads", low=1)
+    prune = check_bool(prune, "prune")
+    mode = "n_terms" if n_terms is not None else "tol" if tol is not None else "criterion"
+    crit = criterion or "bic"
+    forced = process.positions(include, "included term")
+    # with n_terms the search still looks past that size (a term found later can make earlier ones
+    # redundant, and pruning then brings the structure back down); the answer is the best structure
+    # of that size met on the path
+    limit = min(nc, 2 * n_terms + 4) if mode == "n_terms" else (max_terms or min(30, nc))
+    if len(forced) > (n_terms if mode == "n_terms" else limit):
+        raise ValueError(f"{len(forced)} included terms exceed the {n_terms or limit} terms asked for")
+    return _Options(process, n_terms, tol, criterion, mode, crit, forced, limit, prune, prune_tol, rank_tol, threads)
