@@ -277,98 +277,13 @@ def semp(
         were left (the curve may still be falling).
     """
     opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
-    process, n_terms, tol, criterion = opt.process, opt.n_terms, opt.tol, opt.criterion
-    mode, crit, forced, limit = opt.mode, opt.crit, opt.forced, opt.limit
-    prune, prune_tol, rank_tol, threads = opt.prune, opt.prune_tol, opt.rank_tol, opt.threads
-    nc = len(process)
-
-    sc = _Scorer(process, as_records(data), threads)
-    N = sc.n_rows
-    if N <= limit:
-        raise ValueError(f"{N} samples after the largest lag are too few for {limit} terms")
-    names = [str(t) for t in process]
-    current = list(forced)
-    th = sc.fit(current)
-    if th is None:
-        raise ValueError(f"the included terms {[names[j] for j in forced]} are collinear on these data")
-    score = float(sc.scores(th)[0]) if current else float(np.mean(np.concatenate([r.y[sc.L:] for r in sc.records]) ** 2))
-    rows: list[dict] = []
-    fwd: list[np.ndarray] = []
-
-    def log(action: str, term: str) -> None:
-        rows.append({"step": len(rows), "action": action, "term": term, "n_terms": len(current), "score": score,
-                     "criterion": float(criterion_of_sizes(crit, len(current), score * N, N)[0]) if current else math.inf,
-                     "structure": " + ".join(names[j] for j in current) or "(empty)", "_set": tuple(current),
-                     "_theta": th.copy()})
-
-    if forced:
-        log("include", ", ".join(names[j] for j in forced))
-    visited = {frozenset(current)}
-    stop = ""
-    # Pruning on noisy data can keep the size from growing (a removal that does not hurt is taken):
-    # after this many additions the search stops pruning and only adds, so every size up to the
-    # limit is reached.
-    budget = 6 * limit + 10
-    n_add = 0
-    capped = False  # stopped by the size limit while candidates were left
-    while True:
-        if mode == "tol" and current and score / sc.yvar <= tol:
-            stop = f"free-run MSE / var(y) = {score / sc.yvar:.3g} ≤ {tol:g}"
-            break
-        if len(current) >= limit:
-            stop = f"{limit} terms reached"
-            capped = limit < int(np.sum(~sc.zero))
-            break
-        if mode == "n_terms" and score <= sc.floor and len(current) > n_terms:
-            stop = "exact free run (noise-free data) reached"
-            break
-        cands = np.array([j for j in range(nc) if j not in current and not sc.zero[j]], dtype=int)
-        if cands.size == 0:
-            stop = "no candidate left"
-            break
-        thetas = sc.bordered(current, cands, rank_tol)
-        s_c = sc.scores(thetas)
-        row = np.full(nc, np.nan)
-        row[cands] = s_c
-        fwd.append(row)
-        # a candidate whose structure was visited before would re-open a cycle: skip it
-        order = np.argsort(s_c, kind="stable")
-        pick = next((int(i) for i in order if np.isfinite(s_c[i]) and frozenset(current + [int(cands[i])]) not in visited),
-                    None)
-        if pick is None:
-            if not current or not rows:
-                raise ValueError("no candidate gives a bounded free run (every one-term extension diverges or is "
-                                 "collinear); check the data or the candidate set")
-            stop = "no candidate improves: every extension diverges, is collinear or was visited"
-            break
-        added = int(cands[pick])
-        current.append(added)
-        th, score = thetas[pick], float(s_c[pick])
-        visited.add(frozenset(current))
-        log("add", names[added])
-        n_add += 1
-        while prune and n_add <= budget and len(current) > len(forced) + 1:
-            removable = [j for j in current if j not in forced and j != added]
-            trial = []
-            for j in removable:
-                S = [i for i in current if i != j]
-                t_ = sc.fit(S)
-                trial.append(t_ if t_ is not None else np.full(nc, np.nan))
-            if not trial:
-                break
-            s_r = sc.scores(np.array(trial))
-            i = int(np.argmin(s_r))
-            if not (np.isfinite(s_r[i]) and s_r[i] <= score * (1.0 + prune_tol)):
-                break
-            nxt = [k for k in current if k != removable[i]]
-            if frozenset(nxt) in visited and not s_r[i] < score:
-                break  # back to an earlier structure without a gain: a cycle
-            current = nxt
-            th, score = trial[i], float(s_r[i])
-            visited.add(frozenset(current))
-            log("remove", names[removable[i]])
-    if prune and n_add > budget:
-        stop += f" (pruning stopped after {budget} additions)"
+    sc = _Scorer(opt.process, as_records(data), opt.threads)
+    if sc.n_rows <= opt.limit:
+        raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for {opt.limit} terms")
+    run = _Search(sc, opt)
+    stop, capped = _grow(run)
+    process, n_terms, tol, criterion, mode, crit = opt.process, opt.n_terms, opt.tol, opt.criterion, opt.mode, opt.crit
+    rows, fwd, names, N, nc = run.rows, run.fwd, run.names, sc.n_rows, len(opt.process)
     path = pd.DataFrame(rows)
     if mode == "n_terms" and not (path["n_terms"] == n_terms).any():
         raise ValueError(f"the search never reached {n_terms} terms ({stop})")
@@ -447,3 +362,127 @@ def _options(candidates: Structure, n_terms: int | None, tol: float | None, crit
     if len(forced) > (n_terms if mode == "n_terms" else limit):
         raise ValueError(f"{len(forced)} included terms exceed the {n_terms or limit} terms asked for")
     return _Options(process, n_terms, tol, criterion, mode, crit, forced, limit, prune, prune_tol, rank_tol, threads)
+
+
+class _Search:
+    """The state of a SEMP search: the current structure, its θ and score, the structures visited, the path."""
+
+    def __init__(self, sc: _Scorer, opt: _Options) -> None:
+        self.sc, self.opt = sc, opt
+        self.names = [str(t) for t in opt.process]
+        self.current = list(opt.forced)
+        th = sc.fit(self.current)
+        if th is None:
+            raise ValueError(f"the included terms {[self.names[j] for j in opt.forced]} are collinear on these data")
+        self.th = th
+        # the empty structure predicts 0: its free-run error is the output's mean square
+        self.score = (float(sc.scores(th)[0]) if self.current
+                      else float(np.mean(np.concatenate([r.y[sc.L:] for r in sc.records]) ** 2)))
+        self.rows: list[dict] = []  # the path: one row per accepted step
+        self.fwd: list[np.ndarray] = []  # every candidate's score at each forward step
+        if opt.forced:
+            self.log("include", ", ".join(self.names[j] for j in opt.forced))
+        self.visited = {frozenset(self.current)}
+
+    def log(self, action: str, term: str) -> None:
+        """Append the current structure to the path."""
+        current, score, N = self.current, self.score, self.sc.n_rows
+        self.rows.append({
+            "step": len(self.rows), "action": action, "term": term, "n_terms": len(current), "score": score,
+            "criterion": float(criterion_of_sizes(self.opt.crit, len(current), score * N, N)[0]) if current else math.inf,
+            "structure": " + ".join(self.names[j] for j in current) or "(empty)", "_set": tuple(current),
+            "_theta": self.th.copy()})
+
+    def move(self, action: str, term: int, structure: list[int], th: np.ndarray, score: float) -> None:
+        """Take a step: ``structure`` (parameters ``th``, free-run MSE ``score``) becomes the current one."""
+        self.current, self.th, self.score = structure, th, score
+        self.visited.add(frozenset(structure))
+        self.log(action, self.names[term])
+
+
+def _grow(run: _Search) -> tuple[str, bool]:
+    """Forward steps, each followed by pruning, until a stopping condition holds.
+
+    Returns why the search stopped, and whether the size limit cut it short while candidates were left.
+    """
+    opt, sc = run.opt, run.sc
+    # Pruning on noisy data can keep the size from growing (a removal that does not hurt is taken):
+    # after this many additions the search stops pruning and only adds, so every size up to the
+    # limit is reached.
+    budget = 6 * opt.limit + 10
+    n_add = 0
+    while True:
+        cands = np.array([j for j in range(len(opt.process)) if j not in run.current and not sc.zero[j]], dtype=int)
+        stop, capped = _stop_reason(run, cands)
+        if stop:
+            break
+        added = _add(run, cands)
+        if added is None:
+            stop = "no candidate improves: every extension diverges, is collinear or was visited"
+            break
+        n_add += 1
+        if opt.prune and n_add <= budget:
+            _prune(run, added)
+    if opt.prune and n_add > budget:
+        stop += f" (pruning stopped after {budget} additions)"
+    return stop, capped
+
+
+def _stop_reason(run: _Search, cands: np.ndarray) -> tuple[str, bool]:
+    """Why the search ends before the next forward step ("" to go on), and whether the size limit cut it short."""
+    opt, sc, current, score = run.opt, run.sc, run.current, run.score
+    if opt.mode == "tol" and current and score / sc.yvar <= opt.tol:
+        return f"free-run MSE / var(y) = {score / sc.yvar:.3g} ≤ {opt.tol:g}", False
+    if len(current) >= opt.limit:
+        return f"{opt.limit} terms reached", opt.limit < int(np.sum(~sc.zero))
+    if opt.mode == "n_terms" and score <= sc.floor and len(current) > opt.n_terms:
+        return "exact free run (noise-free data) reached", False
+    if cands.size == 0:
+        return "no candidate left", False
+    return "", False
+
+
+def _add(run: _Search, cands: np.ndarray) -> int | None:
+    """The forward step: score the current structure plus each of ``cands``, take the best unvisited one.
+
+    Returns the term added, or None when every extension diverges, is collinear or was visited.
+    """
+    sc = run.sc
+    thetas = sc.bordered(run.current, cands, run.opt.rank_tol)
+    s_c = sc.scores(thetas)
+    row = np.full(len(run.opt.process), np.nan)
+    row[cands] = s_c
+    run.fwd.append(row)
+    # a candidate whose structure was visited before would re-open a cycle: skip it
+    order = np.argsort(s_c, kind="stable")
+    pick = next((int(i) for i in order
+                 if np.isfinite(s_c[i]) and frozenset(run.current + [int(cands[i])]) not in run.visited), None)
+    if pick is None:
+        if not run.current or not run.rows:
+            raise ValueError("no candidate gives a bounded free run (every one-term extension diverges or is "
+                             "collinear); check the data or the candidate set")
+        return None
+    added = int(cands[pick])
+    run.move("add", added, run.current + [added], thetas[pick], float(s_c[pick]))
+    return added
+
+
+def _prune(run: _Search, added: int) -> None:
+    """The pruning steps after ``added`` came in: remove the term whose removal hurts least, while it does not hurt."""
+    opt, sc = run.opt, run.sc
+    while len(run.current) > len(opt.forced) + 1:
+        removable = [j for j in run.current if j not in opt.forced and j != added]
+        trial = []
+        for j in removable:
+            t_ = sc.fit([i for i in run.current if i != j])
+            trial.append(t_ if t_ is not None else np.full(len(opt.process), np.nan))
+        if not trial:
+            break
+        s_r = sc.scores(np.array(trial))
+        i = int(np.argmin(s_r))
+        if not (np.isfinite(s_r[i]) and s_r[i] <= run.score * (1.0 + opt.prune_tol)):
+            break
+        nxt = [k for k in run.current if k != removable[i]]
+        if frozenset(nxt) in run.visited and not s_r[i] < run.score:
+            break  # back to an earlier structure without a gain: a cycle
+        run.move("remove", removable[i], nxt, trial[i], float(s_r[i]))
