@@ -282,25 +282,7 @@ def semp(
         raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for {opt.limit} terms")
     run = _Search(sc, opt)
     stop, capped = _grow(run)
-    process, n_terms, tol, criterion, mode, crit = opt.process, opt.n_terms, opt.tol, opt.criterion, opt.mode, opt.crit
-    rows, fwd, names, N, nc = run.rows, run.fwd, run.names, sc.n_rows, len(opt.process)
-    path = pd.DataFrame(rows)
-    if mode == "n_terms" and not (path["n_terms"] == n_terms).any():
-        raise ValueError(f"the search never reached {n_terms} terms ({stop})")
-    # the same rule as frols: the size asked for, the smallest model within the tolerance, or the
-    # criterion's minimum (warning when the size limit cut the curve or the search short)
-    scored = path[path["n_terms"] > 0] if (path["n_terms"] > 0).any() else path
-    i, why = choose_model(stop_rule(n_terms, tol, criterion, curve_default="bic"), scored["n_terms"].to_numpy(),
-                          scored["criterion"].to_numpy(), scored["score"].to_numpy() / sc.yvar, can_grow=capped,
-                          fraction="free-run MSE / var(y)")
-    best = scored.iloc[i]
-    current, th, score = list(best["_set"]), best["_theta"], float(best["score"])
-    stop = f"{why}: step {int(best['step'])} of the path; search: {stop}"
-    structure = Structure([process[j] for j in current])
-    fwd_df = pd.DataFrame(np.array(fwd) if fwd else np.zeros((0, nc)), columns=names)
-    fwd_df.index.name = "forward step"
-    return SEMPResult(structure, frozen(th[current]), score, path.drop(columns=["_set", "_theta"]), fwd_df, crit, stop,
-                      N)
+    return _result(run, stop, capped)
 
 
 # --------------------------------------------------------------------------------------
@@ -486,3 +468,24 @@ def _prune(run: _Search, added: int) -> None:
         if frozenset(nxt) in run.visited and not s_r[i] < run.score:
             break  # back to an earlier structure without a gain: a cycle
         run.move("remove", removable[i], nxt, trial[i], float(s_r[i]))
+
+
+def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
+    """The structure of the path that the stopping rule chooses (warning as frols does), as a SEMPResult."""
+    opt, sc = run.opt, run.sc
+    path = pd.DataFrame(run.rows)
+    if opt.mode == "n_terms" and not (path["n_terms"] == opt.n_terms).any():
+        raise ValueError(f"the search never reached {opt.n_terms} terms ({stop})")
+    # the same rule as frols: the size asked for, the smallest model within the tolerance, or the
+    # criterion's minimum (warning when the size limit cut the curve or the search short)
+    scored = path[path["n_terms"] > 0] if (path["n_terms"] > 0).any() else path
+    i, why = choose_model(stop_rule(opt.n_terms, opt.tol, opt.criterion, curve_default="bic"),
+                          scored["n_terms"].to_numpy(), scored["criterion"].to_numpy(),
+                          scored["score"].to_numpy() / sc.yvar, can_grow=capped, fraction="free-run MSE / var(y)")
+    best = scored.iloc[i]
+    current = list(best["_set"])
+    fwd = pd.DataFrame(np.array(run.fwd) if run.fwd else np.zeros((0, len(run.names))), columns=run.names)
+    fwd.index.name = "forward step"
+    return SEMPResult(Structure([opt.process[j] for j in current]), frozen(best["_theta"][current]),
+                      float(best["score"]), path.drop(columns=["_set", "_theta"]), fwd, opt.crit,
+                      f"{why}: step {int(best['step'])} of the path; search: {stop}", sc.n_rows)
