@@ -116,7 +116,7 @@ def protocol(names, with_old: bool) -> None:
         t0 = time.perf_counter()
         res = {"gray one-se": gb.select_graybox(cand, data, band=band, test=test),
                "gray min": gb.select_graybox(cand, data, band=band, test=test, rule="min"),
-               "black one-se": gb.select_graybox(cand, data, test=test)}
+               "black one-se": gb.select_graybox(cand, data, band=np.inf, test=test)}
         t_new = time.perf_counter() - t0
         black = res["black one-se"].chosen["JS_test"]
         for label, r in res.items():

@@ -188,7 +188,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     ("se_pareto", "progress"): (True,),
     ("bootstrap_decision", "progress"): (True,),
     ("select_graybox", "progress"): (True,),
-    ("select_graybox", "band"): (2.5,),  # output units²
+    ("select_graybox", "band"): (2.5, float("inf")),  # output units²; inf: no static requirement (a black box)
     **{(k, "noise"): (True,) for k in ("narx_state_names", "narx_initial_state", "narx_steady_state", "narx_iosystem")},
     ("output_error", "progress"): (True,),
     # an initial output level or a start value in output units: any finite number, either sign

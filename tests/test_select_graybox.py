@@ -289,6 +289,26 @@ def test_without_a_band_the_search_picks_a_black_box(data):
     assert res.decision.in_band and np.isnan(res.decision.lambda1)
 
 
+def test_the_band_the_static_points_carry_is_the_default_and_inf_asks_for_a_black_box(data):
+    """Without band=, points with their uncertainty δ bring B = mean δ² (as se_dsf takes it); band=inf
+    is no static requirement: the black box, as without a band on points that carry none."""
+    carried = gb.Dataset(data.ident, data.valid, data.static.with_uncertainty(np.sqrt(1e-3)))
+    cand = gb.Candidates(3, 3, ne=0, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        own = gb.select_graybox(cand, carried, sizes=[5], estimator="pe")
+        given = gb.select_graybox(cand, carried, sizes=[5], estimator="pe", band=carried.static.band)
+        black = gb.select_graybox(cand, carried, sizes=[3, 5], band=np.inf)
+        plain = gb.select_graybox(cand, data, sizes=[3, 5])
+    assert own.band == pytest.approx(1e-3) and own.band == given.band and own.degree == given.degree == 2
+    np.testing.assert_array_equal(own.model.theta, given.model.theta)
+    pd.testing.assert_frame_equal(own.table, given.table)
+    assert black.band == np.inf and black.degree is None and set(black.table["estimator"]) == {"ls", "els"}
+    np.testing.assert_array_equal(black.model.theta, plain.model.theta)
+    with pytest.raises(ValueError, match="give band="):
+        gb.select_graybox(cand, carried, estimator="pe", band=np.inf)
+
+
 @pytest.mark.parametrize("rule", ["one-se", "min"])
 def test_the_rule_chooses_among_the_in_band_rows(data, rule):
     with warnings.catch_warnings():

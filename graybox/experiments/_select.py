@@ -25,8 +25,8 @@ The winner of many candidates scored on one short record is optimistic on that r
 winner's curse); the blocks measure how much of its lead is noise, and the rule gives the lead
 to the simpler structure when it is. The test columns measure what the choice is worth.
 
-Without static information (no ``band``) the same search picks a black box: LS and ELS fits,
-chosen by J_S alone.
+Without a band (none given and none carried by the static points' uncertainty, or ``band=inf``)
+the same search picks a black box: LS and ELS fits, chosen by J_S alone.
 """
 
 from __future__ import annotations
@@ -617,10 +617,13 @@ def select_graybox(
     static : StaticPoints, StaticCurve or StaticSurface, optional
         Static information (default: the Dataset's). A curve is sampled at 10 points of its
         domain, a surface (several inputs) on a grid of 6 points per input over its domain.
-        Without ``band`` it is only reported (the table's J_SF).
+        Without a band it is only reported (the table's J_SF).
     band : float, optional
-        B: the bound on J_SF (output units²), the static measurements' uncertainty. Given: a gray
-        box (fronts of J_S against J_SF, D_SF). Omitted: a black box, chosen by J_S alone.
+        B: the bound on J_SF (output units²), the static measurements' uncertainty: a gray box
+        (fronts of J_S against J_SF, D_SF). Omitted: the static points' own band
+        (``StaticPoints.band``, the mean of their uncertainty δ², as :func:`graybox.se_dsf` takes it)
+        when they carry one; otherwise, or with ``band=numpy.inf`` (no static requirement), a
+        black box chosen by J_S alone.
     sizes : sequence of int, optional
         Structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
         (fewer for a small candidate set). Sizes a search does not reach are left out with a
@@ -687,8 +690,7 @@ def select_graybox(
         sizes beyond the candidates; no structure meeting the band (without ``fallback``); bad
         arguments.
     """
-    if band is not None:
-        band = check_real(band, "band", low=0, low_open=True)
+    band = _band(band, data, static)
     if _is_scalar(constraints):
         raise TypeError(f"constraints must be a constraint, a table of them or a sequence, got {constraints!r}")
     constraints = tuple(constraint_entries(constraints))  # read once: a generator is used up
@@ -753,6 +755,20 @@ def select_graybox(
 def _is_scalar(value: object) -> bool:
     """A bool or a number (where a collection or an object is meant)."""
     return isinstance(value, (bool, int, float, np.bool_, np.integer, np.floating))
+
+
+def _band(band: object, data: object, static: object) -> float | None:
+    """B for a gray box, None for a black box: ``band`` as given (inf: no static requirement, a black
+    box), else the static points' own (:attr:`StaticPoints.band`, when they carry their uncertainty),
+    as :func:`graybox.se_dsf` and :func:`graybox.bootstrap_decision` take it."""
+    if isinstance(band, (float, np.floating)) and band == np.inf:
+        return None
+    if band is not None:
+        return check_real(band, "band", low=0, low_open=True)
+    sp = static if static is not None else data.static if isinstance(data, gb.Dataset) else None
+    if isinstance(sp, gb.StaticPoints) and sp.uncertainty is not None:
+        return sp.band
+    return None
 
 
 def _estimators(estimator, band, constraints) -> list[str]:
