@@ -290,6 +290,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "StaticSurface.polynomial": (({(1, 0): 1.0, (0, 1): 2.0},), {}),
     "ParetoSet.from_thetas": ((ST, FRONT.thetas, FRONT.lambdas, DATA, SP), {}),
     "UserConstraint": ((lambda theta: [],), {}),
+    "Term": ((), {"factors": (("u", 1, 2), ("y", 1, 1))}),
 }
 
 # Public callables with options that this test does not call, and why.
@@ -302,7 +303,6 @@ NOT_EXERCISED = {
     "DecisionBootstrap": "a result object (built by bootstrap_decision)",
     "GridRun": "a result object (built by run_grid)", "LocalModel": "a result object (built by local_model)",
     "OperatingCurve": "a result object (built by operating_curve)",
-    "Term": "a value built by parse_term from a term's text (Structure takes the text)",
     "ParetoSet.model": "the deprecated name of member_model (kept one release; its options are member_model's)",
 }
 
