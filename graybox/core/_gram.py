@@ -29,6 +29,7 @@ from ._records import Dataset, as_records
 from ._regressors import input_signals
 from ._terms import Term
 from ._reprs import short_repr
+from ._validation import check_real
 
 __all__ = ["DaskRecord", "GramSums", "gram_sums", "r_factor", "available_memory", "require_memory", "is_dask_data"]
 
@@ -109,8 +110,7 @@ class DaskRecord:
         if self.u.shape[0] != self.y.shape[0] or np.isnan(self.u.shape[0]):
             raise ValueError(f"DaskRecord: u and y must have the same known length, got {self.u.shape[0]} and "
                              f"{self.y.shape[0]}")
-        if not (np.isfinite(self.Ts) and self.Ts > 0):
-            raise ValueError(f"Ts must be a positive number of seconds, got {self.Ts!r}")
+        object.__setattr__(self, "Ts", check_real(self.Ts, "Ts", low=0, low_open=True))  # seconds
         u = self.u.astype(float)
         object.__setattr__(self, "u", u)
         object.__setattr__(self, "y", self.y.astype(float).rechunk(u.chunks))

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
-from ._validation import check_bool, check_int, renamed
+from ._validation import check_bool, check_int, check_sequence, renamed
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
            "default_input_names"]
@@ -98,17 +98,14 @@ class Term:
 
     def __post_init__(self) -> None:
         merged: dict[tuple[str, int], int] = {}
-        for f in self.factors:
-            if len(f) != 3:
-                raise ValueError(f"a factor must be (signal, lag, power), got {f!r}")
+        for f in check_sequence(self.factors, "factors", "a sequence of (signal, lag, power) factors"):
+            if isinstance(f, str) or not isinstance(f, Sequence) or len(f) != 3:
+                raise ValueError(f"factors: a factor must be (signal, lag, power), got {f!r}")
             sig, lag, power = f
             _check_signal(sig)
-            if int(lag) != lag or lag < 1:
-                raise ValueError(f"lag must be an integer >= 1, got {lag!r} in {sig}(k-{lag})")
-            if int(power) != power or power < 1:
-                raise ValueError(f"power must be an integer >= 1, got {power!r} for {sig}(k-{lag})")
-            key = (sig, int(lag))
-            merged[key] = merged.get(key, 0) + int(power)
+            lag = check_int(lag, f"factors: lag of {sig}", low=1)
+            power = check_int(power, f"factors: power of {sig}(k-{lag})", low=1)
+            merged[(sig, lag)] = merged.get((sig, lag), 0) + power
         canon = tuple(
             (s, l, p) for (s, l), p in sorted(merged.items(), key=lambda kv: (_rank(kv[0][0]), kv[0][1]))
         )

@@ -33,6 +33,7 @@ __all__ = [
     "renamed",
     "check_per_point",
     "check_sequence",
+    "check_path",
 ]
 
 # graybox/, not graybox/core/: a frame in any subpackage is graybox's own
@@ -211,6 +212,17 @@ def check_sequence(value: object, name: str, what: str = "a sequence") -> list:
             or not isinstance(value, Iterable)):
         raise TypeError(f"{name} must be {what}, got {value!r} ({type(value).__name__})")
     return list(value)  # type: ignore[call-overload]
+
+
+def check_path(value: object, name: str) -> str | os.PathLike:
+    """``value`` if it is a file or folder name (``str`` or path-like), or ``TypeError`` naming ``name``.
+
+    Python's own message for ``Path(2.5)`` names neither the option nor what it wanted.
+    """
+    if not isinstance(value, (str, os.PathLike)):
+        raise TypeError(f"{name} must be a file or folder name (str or path-like), got {value!r} "
+                        f"({type(value).__name__})")
+    return value
 
 
 def as_1d_finite(x: object, name: str) -> np.ndarray:

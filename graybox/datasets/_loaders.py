@@ -31,7 +31,7 @@ import numpy as np
 from ..static._curves import StaticCurve
 from ..core._records import Dataset, Record, StaticPoints
 from ..core._terms import check_input_names
-from ..core._validation import check_choice
+from ..core._validation import check_choice, check_path, check_real
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -405,12 +405,15 @@ def load_record_csv(
     p = Path(path)
     if time is None and Ts is None:
         raise ValueError(f"{p}: give the time-stamp column (time=...) or the sampling period (Ts=... seconds)")
-    if Ts is not None and not (isinstance(Ts, (int, float)) and math.isfinite(Ts) and Ts > 0):
+    if Ts is not None and (isinstance(Ts, bool) or not isinstance(Ts, (int, float))):
+        raise TypeError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
+    if Ts is not None and not (math.isfinite(Ts) and Ts > 0):
         raise ValueError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
+    if time is not None and not isinstance(time, str):
+        raise TypeError(f"time must name the time-stamp column (a str), got {time!r}")
     if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
         raise ValueError(f"units must be a pair of strings (input unit, output unit), got {units!r}")
-    if not (0 < time_rtol < 1):
-        raise ValueError(f"time_rtol must be in (0, 1), got {time_rtol!r}")
+    check_real(time_rtol, "time_rtol", low=0, high=1, low_open=True, high_open=True)
     ucols, names = _input_columns(p, u, input_names)
     wanted = {f"input {c!r}" if len(ucols) > 1 else "u": c for c in ucols} | {"y": y} | (
         {"time": time} if time is not None else {})
@@ -676,7 +679,7 @@ def find_buck_dir(path: str | os.PathLike | None = None) -> Path:
         return d
 
     if path is not None:
-        return check(Path(path), "given as path=")
+        return check(Path(check_path(path, "path")), "given as path=")
     env = os.environ.get(BUCK_ENV)
     if env:
         return check(Path(env), f"named by {BUCK_ENV}")

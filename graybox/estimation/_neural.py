@@ -128,7 +128,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..core._records import Dataset, Record, as_records
-from ..core._validation import as_1d_finite, check_choice, check_int, check_per_point, check_real, check_seed, frozen
+from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
+                                check_seed, frozen)
 from ..core._simulation import DivergenceError, free_run_inputs
 from ..static._analysis import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
 from ..core._reprs import short_repr
@@ -429,11 +430,8 @@ class NeuralModel:
         if not np.isfinite(b2):
             raise ValueError(f"b2 must be finite, got {self.b2!r}")
         object.__setattr__(self, "b2", b2)
-        for off in ("u_offset", "y_offset"):
-            v = float(getattr(self, off))
-            if not np.isfinite(v):
-                raise ValueError(f"{off} must be finite, got {v!r}")
-            object.__setattr__(self, off, v)
+        for off in ("u_offset", "y_offset"):  # any level in the signal's units
+            object.__setattr__(self, off, check_real(getattr(self, off), off))
         object.__setattr__(self, "u_scale", check_real(self.u_scale, "u_scale", low=0, low_open=True))
         object.__setattr__(self, "y_scale", check_real(self.y_scale, "y_scale", low=0, low_open=True))
 
@@ -650,6 +648,7 @@ class NeuralModel:
         ndarray, shape (M,)
             Output units.
         """
+        strict = check_bool(strict, "strict")
         ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
         y0s = None
         if y0 is not None:

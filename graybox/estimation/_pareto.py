@@ -58,6 +58,21 @@ def nondominated_mask(points: np.ndarray) -> np.ndarray:
     return keep
 
 
+def _failures(method: object, extra: object, failures: object, K: int) -> dict[int, str]:
+    """The failed members as {index: reason}, after checking the set's descriptive fields' types."""
+    if not isinstance(method, str):
+        raise TypeError(f"method must be a description (str), got {method!r} ({type(method).__name__})")
+    for nm, v in (("extra", extra), ("failures", failures)):
+        if v is not None and not isinstance(v, Mapping):
+            raise TypeError(f"{nm} must be a mapping, got {v!r} ({type(v).__name__})")
+    fails = {}
+    for k, why in dict(failures or {}).items():
+        if not (isinstance(k, (int, np.integer)) and not isinstance(k, bool) and 0 <= k < K):
+            raise ValueError(f"failures: member index {k!r} out of range for a set of {K}")
+        fails[int(k)] = str(why)
+    return fails
+
+
 @dataclass(frozen=True, eq=False)
 class ParetoSet:
     """Members of a bi-objective estimate of one structure.
@@ -98,11 +113,7 @@ class ParetoSet:
         if th.ndim != 2 or th.shape[1] != len(self.structure):
             raise ValueError(f"thetas must have shape (K, {len(self.structure)}), got {th.shape}")
         K = th.shape[0]
-        fails = {}
-        for k, why in dict(self.failures).items():
-            if not (isinstance(k, (int, np.integer)) and 0 <= k < K):
-                raise ValueError(f"failures: member index {k!r} out of range for a set of {K}")
-            fails[int(k)] = str(why)
+        fails = _failures(self.method, self.extra, self.failures, K)
         ok = np.ones(K, bool)
         ok[list(fails)] = False
         if not np.all(np.isfinite(th[ok])):
@@ -148,7 +159,7 @@ class ParetoSet:
         """
         th = np.atleast_2d(np.asarray(thetas, float)).copy()
         K = th.shape[0]
-        fails = dict(failures or {})
+        fails = _failures(method, extra, failures, K)
         bad = np.zeros(K, bool)
         bad[list(fails)] = True
         th[bad] = 0.0  # evaluated as a harmless null model, then reported as failed

@@ -25,6 +25,7 @@ from .. import _api as gb
 from ..static._constraints import static_cluster_map
 from ..estimation._decisions import min_jsf_index
 from ..estimation._prediction_error import numerator_surface
+from ..core._validation import check_int
 from ._spec import Cell, build_constraint, canonical_json
 
 __all__ = ["COLUMNS", "JSON_COLUMNS", "STATUSES", "run_cell", "failed_row"]
@@ -268,13 +269,14 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
     threads : int
         Threads for BLAS and numba inside the cell (1: the same numbers on every executor).
     """
+    threads = check_int(threads, "threads", low=1)  # the caller's mistake, not the cell's: raised
     row = _row(cell)
     t0 = time.perf_counter()
     numba_before = numba.get_num_threads()
     caught: list[warnings.WarningMessage] = []
     try:
-        numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
-        with _thread_pools().limit(limits=int(threads)), warnings.catch_warnings(record=True) as caught:
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        with _thread_pools().limit(limits=threads), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             st = make_structure(cell.structure_spec, data, cell.data_hash)
             row["terms"] = [str(t) for t in st]

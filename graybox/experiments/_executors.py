@@ -34,10 +34,12 @@ import numpy as np
 
 from .. import _api as gb
 
+from ..core._validation import check_choice, check_int
 from ._cell import failed_row, run_cell
 from ._spec import Cell
 
-__all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "local_cluster", "make_executor", "worker_threads"]
+__all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "check_cluster", "local_cluster", "make_executor",
+           "worker_threads"]
 
 #: Executor names accepted by :func:`graybox.experiments.run_grid`.
 EXECUTORS = ("inprocess", "processes", "dask")
@@ -568,17 +570,30 @@ class DaskCluster:
                     pass
 
 
+def check_cluster(client: Any, scheduler: Any) -> None:
+    """``client`` and ``scheduler`` checked before anything runs or is written: a wrong one would
+    otherwise fail only when the first job reaches the cluster, or never when no job is left."""
+    if client is not None:
+        from distributed import Client
+
+        if not isinstance(client, Client):
+            raise TypeError(f"client must be a distributed.Client, got {client!r} ({type(client).__name__})")
+    if scheduler is not None:
+        if not isinstance(scheduler, str):
+            raise TypeError(f"scheduler must be an address string such as 'tcp://host:8786', got {scheduler!r}")
+        if ":" not in scheduler:
+            raise ValueError(f"scheduler must be an address such as 'tcp://host:8786', got {scheduler!r}")
+
+
 def make_executor(executor: str | None = None, *, workers: int | None = None, client: Any = None,
                   scheduler: str | None = None, fn: CellFn = run_cell):
     """The executor for :func:`graybox.experiments.run_grid`'s arguments (see there)."""
     if executor is None:
         executor = "dask" if (client is not None or scheduler is not None or workers is not None) else "inprocess"
-    if executor not in EXECUTORS:
-        raise ValueError(f"executor must be one of {', '.join(map(repr, EXECUTORS))}; got {executor!r}")
+    check_choice(executor, "executor", EXECUTORS)
     if workers is not None:
-        if isinstance(workers, bool) or int(workers) != workers or workers < 1:
-            raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-        workers = int(workers)
+        workers = check_int(workers, "workers", low=1)
+    check_cluster(client, scheduler)
     if executor == "inprocess":
         if any(v is not None for v in (workers, client, scheduler)):
             raise ValueError("the in-process executor takes no workers, client or scheduler")

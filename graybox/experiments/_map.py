@@ -17,7 +17,7 @@ from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
 
 from ..core._validation import check_choice, check_int, warn
-from ._executors import EXECUTORS, _environ, _thread_env, local_cluster, worker_threads
+from ._executors import EXECUTORS, _environ, _thread_env, check_cluster, local_cluster, worker_threads
 
 __all__ = ["parallel_map"]
 
@@ -67,8 +67,13 @@ def parallel_map(
                 raise ValueError(f"processes=True contradicts executor={executor!r}")
             executor = "processes"
     executor = check_choice("dask" if executor is None else executor, "executor", EXECUTORS)
+    if workers is not None:
+        workers = check_int(workers, "workers", low=1)
+    check_cluster(client, scheduler)
     if executor != "dask" and (client is not None or scheduler is not None):
         raise ValueError(f"client and scheduler are for executor='dask', not {executor!r}")
+    if executor == "inprocess" and workers is not None:
+        raise ValueError("workers is for executor='processes' or 'dask'; 'inprocess' runs the jobs here, in turn")
     if executor == "dask" and sum(x is not None for x in (workers, client, scheduler)) != 1:
         raise ValueError("executor='dask' needs exactly one of workers, client or scheduler")
     with ExitStack() as stack:
@@ -76,7 +81,7 @@ def parallel_map(
             yield lambda fn, items: [fn(x) for x in items]
             return
         if executor == "processes":
-            n = check_int((os.cpu_count() or 1) if workers is None else workers, "workers", low=1)
+            n = (os.cpu_count() or 1) if workers is None else workers
             stack.enter_context(_environ(_thread_env(worker_threads(n))))
             pool = stack.enter_context(ProcessPoolExecutor(n))
             yield lambda fn, items: list(pool.map(fn, items))
@@ -87,7 +92,7 @@ def parallel_map(
             if scheduler is not None:
                 client = stack.enter_context(Client(scheduler))
             else:
-                cluster = stack.enter_context(local_cluster(check_int(workers, "workers", low=1)))
+                cluster = stack.enter_context(local_cluster(workers))
                 client = stack.enter_context(Client(cluster))
 
         def dmap(fn: Callable, items: Iterable) -> list:

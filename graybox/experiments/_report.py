@@ -30,6 +30,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
+from ..core._validation import check_bool, check_choice, check_real, check_sequence
 from ._cell import STATUSES
 from ._store import compare_results, encode_value, load_results
 
@@ -88,6 +89,20 @@ def _cell_reasons(g: pd.DataFrame, brief: Sequence[str] = ()) -> list[str]:
             msgs = list(dict.fromkeys(_short(m) for m in bad["message"] if isinstance(m, str) and m))
             out.append(f"{len(bad)} {st}: " + ("; ".join(msgs[:2]) if msgs else "no message stored"))
     return out
+
+
+def _checked_options(rule: str = RULES[0], band: float | Mapping[str, float] | None = None,
+                     data: str | None = None, value: str = "JS_valid") -> float | Mapping[str, float] | None:
+    """The report functions' shared options checked where they are given; the band in canonical
+    form (a number B > 0, output units², or a mapping data set name -> B)."""
+    check_choice(rule, "rule", RULES)
+    if data is not None and not isinstance(data, str):
+        raise TypeError(f"data must be a data set's name (str), got {data!r} ({type(data).__name__})")
+    if not isinstance(value, str):
+        raise TypeError(f"value must be a leaderboard column's name (str), got {value!r} ({type(value).__name__})")
+    if isinstance(band, Mapping):
+        return {k: check_real(b, f"band[{k!r}]", low=0, low_open=True) for k, b in band.items()}
+    return None if band is None else check_real(band, "band", low=0, low_open=True)
 
 
 def _band_of(rows: pd.DataFrame, band: float | Mapping[str, float] | None, data: str) -> float:
@@ -166,8 +181,7 @@ def leaderboard(
         figures (rank NaN) and says why in ``reason``: the smallest J_SF reached when no model
         is in the band, and the messages of its infeasible, diverged or failed cells.
     """
-    if rule not in RULES:
-        raise ValueError(f"rule must be one of {', '.join(map(repr, RULES))}; got {rule!r}")
+    band = _checked_options(rule, band)
     df = _frame(results)
     rows = []
     for (d, s, v), g in df.groupby(_KEYS, sort=False):
@@ -250,6 +264,7 @@ def heatmap_table(
     pandas.DataFrame
         Index: structures, columns: variants (grid order); NaN where no model qualified.
     """
+    band = _checked_options(rule, band, data, value)
     df = _frame(results)
     d = _one_data(df, data)
     lb = leaderboard(df[df["data"] == d], rule=rule, band=band)
@@ -344,6 +359,7 @@ def plot_scatter(
     -------
     matplotlib.figure.Figure
     """
+    band = _checked_options(band=band, data=data)
     df = _frame(results)
     names = [_one_data(df, data)] if data is not None else list(dict.fromkeys(df["data"]))
     fig = Figure(figsize=(6.4 * len(names), 4.8), layout="constrained")
@@ -401,13 +417,17 @@ def plot_fronts(
     -------
     matplotlib.figure.Figure
     """
+    band = _checked_options(band=band, data=data)
+    if structures is not None:
+        structures = check_sequence(structures, "structures", "a sequence of structure names")
     df = _frame(results)
     d = _one_data(df, data)
     sub = df[df["data"] == d]
-    names = list(dict.fromkeys(sub["structure"])) if structures is None else list(structures)
+    names = list(dict.fromkeys(sub["structure"])) if structures is None else structures
     unknown = [s for s in names if s not in set(sub["structure"])]
     if unknown:
-        raise ValueError(f"no structure(s) {unknown} in data set {d!r}")
+        raise ValueError(f"structures holds {unknown}: no such structure in data set {d!r}; it has "
+                         f"{list(dict.fromkeys(sub['structure']))}")
     variants = list(dict.fromkeys(sub["variant"]))
     colors = {v: f"C{i % 10}" for i, v in enumerate(variants)}
     ncol = min(3, len(names))
@@ -555,6 +575,8 @@ def write_report(
     list of Path
         The files written.
     """
+    band = _checked_options(rule, band)
+    html = check_bool(html, "html")
     df = _frame(list(store) if isinstance(store, (list, tuple)) else store, spec=spec, attrs=True)
     attrs = dict(df.attrs)
     df = _frame(df)

@@ -12,6 +12,7 @@ from typing import Any, Callable, Mapping
 from .. import _api as gb
 
 from ..core._progress import progress_bar
+from ..core._validation import check_bool
 from ._cell import STATUSES, failed_row, run_cell
 from ._executors import make_executor
 from ._spec import Grid
@@ -139,6 +140,12 @@ def run_grid(
     command need nothing.
     """
     t0 = time.perf_counter()
+    # the options before the data are read or the store is touched
+    retry_failed = check_bool(retry_failed, "retry_failed")
+    if progress is not None:
+        check_bool(progress, "progress")
+    if log is not None and not callable(log):
+        raise TypeError(f"log must be a callable taking a line of text, got {log!r}")
     g = grid if isinstance(grid, Grid) else Grid.from_toml(grid)
     datasets = g.load_data()
     cells = g.cells(datasets)

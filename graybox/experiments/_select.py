@@ -49,6 +49,7 @@ from ..core._progress import progress_bar
 from ..core._records import same_record
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints
+from ._executors import check_cluster
 from ._map import parallel_map
 from ._spec import constraint_entries, constraint_from_object
 
@@ -703,13 +704,7 @@ def select_graybox(
     folds, blocks = check_int(folds, "folds", low=2), check_int(blocks, "blocks", low=1)
     if shortlist is not None:
         shortlist = check_int(shortlist, "shortlist", low=1)
-    if client is not None and (_is_scalar(client) or isinstance(client, str)):
-        raise TypeError(f"client must be a distributed.Client, got {client!r}")
-    if scheduler is not None:
-        if not isinstance(scheduler, str):
-            raise TypeError(f"scheduler must be an address string such as 'tcp://host:8786', got {scheduler!r}")
-        if ":" not in scheduler:
-            raise ValueError(f"scheduler must be an address such as 'tcp://host:8786', got {scheduler!r}")
+    check_cluster(client, scheduler)
     for s in sources:
         check_choice(s, "sources", ("semp", "frols"))
     if not sources:

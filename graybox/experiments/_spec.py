@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import numbers
 import re
 import tomllib
 from dataclasses import dataclass, field
@@ -23,7 +24,7 @@ from .. import _api as gb
 
 from ..core._terms import default_input_names
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
-from ..core._validation import check_choice, check_int, check_lambdas, check_real
+from ..core._validation import check_choice, check_int, check_lambdas, check_path, check_real
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -306,6 +307,8 @@ class DataSpec:
         base_dir : path, optional
             Folder that relative CSV paths are resolved against (default: the working folder).
         """
+        if base_dir is not None:
+            check_path(base_dir, "base_dir")
         if self.dataset is not None:
             ds = self.dataset
         elif self.bundled == "pumping":
@@ -958,6 +961,8 @@ class Grid:
 
     def __post_init__(self) -> None:
         _name(self.name, ())
+        if self.base_dir is not None:
+            check_path(self.base_dir, "base_dir")
         for what, cls_, items in (("data", DataSpec, self.data), ("structures", StructureSpec, self.structures),
                                   ("variants", Variant, self.variants)):
             if isinstance(items, (str, Mapping)) or not isinstance(items, Sequence | tuple) or not items:
@@ -971,7 +976,7 @@ class Grid:
                 raise SpecError(f"duplicated {what} names {dup}: names identify rows in the results",
                                 (what, names.index(dup[0], names.index(dup[0]) + 1)))
             object.__setattr__(self, what, tuple(items))
-        if isinstance(self.seeds, (int, np.integer)):
+        if isinstance(self.seeds, (numbers.Number, np.generic)):  # one seed, or a wrong scalar checked below
             object.__setattr__(self, "seeds", (self.seeds,))
         seeds = [_wrap(check_int, ("seeds", i), s, "seed", low=0) for i, s in enumerate(self.seeds)]
         if not seeds or len(set(seeds)) != len(seeds):
@@ -1088,7 +1093,15 @@ class Grid:
         datasets : mapping name -> Dataset, optional
             The loaded data (default: :meth:`load_data`); keys hash their content.
         """
-        ds = self.load_data() if datasets is None else datasets
+        if datasets is None:
+            ds = self.load_data()
+        elif not isinstance(datasets, Mapping):
+            raise TypeError(f"datasets must map data set names to Datasets, got {datasets!r}")
+        else:
+            missing = [d.name for d in self.data if d.name not in datasets]
+            if missing:
+                raise ValueError(f"datasets has no data set named {missing}")
+            ds = datasets
         version = gb.__version__
         out: list[Cell] = []
         # a key hashes the canonical JSON of {band, data, seed, structure, variant, version}; the

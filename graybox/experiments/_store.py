@@ -27,6 +27,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from ..core._validation import check_sequence
 from ._cell import COLUMNS, JSON_COLUMNS
 from ._spec import Cell, _hash
 
@@ -661,7 +662,7 @@ def compare_results(
         labels = [p.stem for p in paths]
         if len(set(labels)) < len(labels):
             labels = [f"{i + 1}:{p.stem}" for i, p in enumerate(paths)]
-    labels = [str(x) for x in labels]
+    labels = [str(x) for x in check_sequence(labels, "labels", "a sequence of names, one per store")]
     if len(labels) != len(paths) or len(set(labels)) != len(labels):
         raise ValueError(f"labels must be {len(paths)} distinct names, one per store; got {labels}")
     frames = [load_results(p, spec=spec) for p in paths]

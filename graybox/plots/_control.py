@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..control._local import LocalModel, OperatingCurve
+from ..core._validation import as_1d_finite, check_int, check_real, check_sequence
 
 __all__ = ["plot_local_models", "plot_operating_curve"]
 
@@ -49,6 +50,9 @@ def plot_local_models(
         Left: Δy per unit step of the input against time; right: magnitude (output units per
         input unit) and phase (degrees) against frequency (rad/s).
     """
+    if duration is not None:
+        duration = check_real(duration, "duration", low=0, low_open=True)  # seconds
+    n_frequencies = check_int(n_frequencies, "n_frequencies", low=2)
     lms = _models(models)
     shown = [m for m in lms if m.exists]
     missing = [m for m in lms if not m.exists]
@@ -62,7 +66,7 @@ def plot_local_models(
     ax_s = fig.add_subplot(1, 2, 1)
     ax_m = fig.add_subplot(2, 2, 2)
     ax_p = fig.add_subplot(2, 2, 4, sharex=ax_m)
-    w = np.logspace(np.log10(np.pi / Ts) - 3, np.log10(np.pi / Ts), int(n_frequencies))
+    w = np.logspace(np.log10(np.pi / Ts) - 3, np.log10(np.pi / Ts), n_frequencies)
     for m in shown:
         tag = _label(m) + ("" if m.reached else f" ({m.status})")
         line, = ax_s.plot(np.arange(n) * Ts, m.step(n, input), lw=1.2, label=tag)
@@ -110,6 +114,14 @@ def plot_operating_curve(
         raise ValueError(f"curve must be an OperatingCurve, got {type(curve).__name__}")
     if curve.ubar.ndim != 1:
         raise ValueError("plot_operating_curve draws one input; for several, plot slices of the curve's to_frame()")
+    if reference is not None:
+        pair = check_sequence(reference, "reference", "a pair (ubar, time_constant)")
+        if len(pair) != 2:
+            raise ValueError(f"reference must be a pair (ubar, time_constant), got {len(pair)} items")
+        reference = (as_1d_finite(pair[0], "reference[0] (ubar)"),
+                     as_1d_finite(pair[1], "reference[1] (time constant)"))
+        if reference[0].size != reference[1].size:
+            raise ValueError(f"reference holds {reference[0].size} ū and {reference[1].size} time constants")
     u = curve.ubar
     fig = Figure(figsize=(7, 7))
     axes = [fig.add_subplot(3, 1, i + 1) for i in range(3)]
@@ -123,8 +135,7 @@ def plot_operating_curve(
             ax.fill_between(u, lo, hi, alpha=0.25, label=f"{curve.level:.0%} band")
         ax.set_ylabel(lab)
     if reference is not None:
-        ru, rt = (np.asarray(v, float) for v in reference)
-        axes[1].plot(ru, rt, "s", ms=5, color="black", label=reference_label)
+        axes[1].plot(*reference, "s", ms=5, color="black", label=reference_label)
     axes[2].set_ylim(0.0, 1.05)  # ζ of a stable pole lies in [0, 1]
     bad = [f"{v:g}" for v, s in zip(u, curve.status) if s != "reached"]
     if bad:

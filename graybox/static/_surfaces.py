@@ -8,7 +8,6 @@ matched one by one with a model's cluster coefficients (the eq. (22) idea on a s
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
@@ -16,7 +15,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints
-from ..core._validation import check_int
+from ..core._validation import check_int, check_real, check_sequence
 from ..core._reprs import short_repr
 
 __all__ = ["StaticSurface", "monomial_exponents"]
@@ -49,6 +48,15 @@ def _as_inputs(ubar: object, m: int, what: str) -> np.ndarray:
     return u
 
 
+def _exponent_vectors(value: object, name: str) -> tuple[tuple[int, ...], ...]:
+    """Exponent vectors as tuples of integers >= 0, or ``TypeError``/``ValueError`` naming ``name``."""
+    out = []
+    for i, e in enumerate(check_sequence(value, name, "a sequence of exponent vectors")):
+        entries = check_sequence(e, f"{name}[{i}]", "an exponent vector")
+        out.append(tuple(check_int(v, f"{name}[{i}]", low=0) for v in entries))
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class StaticSurface:
     """A polynomial static surface H(ū) = Σ_e c_e ū₁^e₁ … ū_m^e_m (engineering units).
@@ -75,7 +83,7 @@ class StaticSurface:
     input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
-        ex = tuple(tuple(int(v) for v in e) for e in self.exponents)
+        ex = _exponent_vectors(self.exponents, "exponents")
         if not ex:
             raise ValueError(f"{self.name}: a polynomial needs at least one monomial")
         m = len(ex[0])
@@ -95,12 +103,16 @@ class StaticSurface:
         object.__setattr__(self, "exponents", ex)
         object.__setattr__(self, "coefficients", c)
         if self.domain is not None:
-            if len(self.domain) != m:
-                raise ValueError(f"{self.name}: domain needs one (low, high) per input ({m}), got {len(self.domain)}")
+            dom = check_sequence(self.domain, "domain", "a sequence of (low, high) pairs, one per input")
+            if len(dom) != m:
+                raise ValueError(f"{self.name}: domain needs one (low, high) per input ({m}), got {len(dom)}")
             box = []
-            for i, (lo, hi) in enumerate(self.domain):
-                lo, hi = float(lo), float(hi)
-                if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            for i, pair in enumerate(dom):
+                pair = check_sequence(pair, f"domain[{i}]", "a pair (low, high)")
+                if len(pair) != 2:
+                    raise ValueError(f"{self.name}: domain[{i}] must be a pair (low, high), got {len(pair)} values")
+                lo, hi = check_real(pair[0], f"domain[{i}] (low)"), check_real(pair[1], f"domain[{i}] (high)")
+                if not lo < hi:
                     raise ValueError(f"{self.name}: domain of input {i + 1} must be (low, high) with low < high, "
                                      f"got {(lo, hi)}")
                 box.append((lo, hi))
@@ -108,7 +120,7 @@ class StaticSurface:
         if self.input_names is None:
             names = ("u",) if m == 1 else tuple(f"u{i + 1}" for i in range(m))
         else:
-            names = tuple(str(s) for s in self.input_names)
+            names = tuple(str(s) for s in check_sequence(self.input_names, "input_names", "a sequence of names"))
         if len(names) != m or len(set(names)) != m:
             raise ValueError(f"{self.name}: input_names must be {m} distinct names, got {names}")
         object.__setattr__(self, "input_names", names)
@@ -138,10 +150,8 @@ class StaticSurface:
         """
         if not coefficients:
             raise ValueError(f"{name}: give at least one monomial")
-        ex = tuple(tuple(int(v) for v in e) for e in coefficients)
-        return cls(ex, np.array([float(v) for v in coefficients.values()]),
-                   None if domain is None else tuple(domain), name,
-                   None if input_names is None else tuple(input_names))
+        ex = _exponent_vectors(list(coefficients), "coefficients' keys")
+        return cls(ex, np.array([float(v) for v in coefficients.values()]), domain, name, input_names)
 
     @classmethod
     def fit(
@@ -180,7 +190,7 @@ class StaticSurface:
             raise ValueError("StaticSurface.fit needs static points with ubar of shape (K, m) and ybar of shape (K,)")
         m = 1 if ub_raw.ndim == 1 else ub_raw.shape[1]
         ub = _as_inputs(ub_raw, m, "StaticSurface.fit")
-        ex = monomial_exponents(m, degree) if exponents is None else tuple(tuple(int(v) for v in e) for e in exponents)
+        ex = monomial_exponents(m, degree) if exponents is None else _exponent_vectors(exponents, "exponents")
         if len(yb) < len(ex):
             raise ValueError(f"fitting {len(ex)} monomials needs at least {len(ex)} static points, got {len(yb)}")
         V = _monomials(ub, ex)
@@ -190,7 +200,7 @@ class StaticSurface:
             raise ValueError("StaticSurface.fit: the points do not vary every input (a flat direction has no domain)")
         pname = getattr(points, "name", "static points")
         names = input_names if input_names is not None else getattr(points, "input_names", None)
-        return cls(ex, c, box, name or f"fit to {pname}", None if names is None else tuple(names))
+        return cls(ex, c, box, name or f"fit to {pname}", names)
 
     # -- properties ---------------------------------------------------------
     @property
