@@ -11,6 +11,7 @@ it started on exit::
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import ExitStack, contextmanager
@@ -83,7 +84,9 @@ def parallel_map(
         if executor == "processes":
             n = (os.cpu_count() or 1) if workers is None else workers
             stack.enter_context(_environ(_thread_env(worker_threads(n))))
-            pool = stack.enter_context(ProcessPoolExecutor(n))
+            # spawned, not forked: a fork copies a parent whose numba threads are running, and the
+            # child then refuses the NUMBA_NUM_THREADS set above (as ProcessPool spawns too)
+            pool = stack.enter_context(ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn")))
             yield lambda fn, items: list(pool.map(fn, items))
             return
         from distributed import Client
