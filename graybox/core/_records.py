@@ -429,6 +429,65 @@ def same_record(a: Record, b: Record) -> bool:
     return a is b or (a.u.shape == b.u.shape and np.array_equal(a.u, b.u) and np.array_equal(a.y, b.y))
 
 
+#: Places of each record whose windows are looked up in the other (see :func:`shared_stretch`).
+_ANCHORS = 8
+#: Samples in an anchor window.
+_WINDOW = 16
+
+
+def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
+    """A stretch of samples two records share, the same (u, y) in the same order, or None.
+
+    Returns ``(start in a, start in b, length)``, the stretch grown as far as the samples agree.
+    Windows of 16 samples along which y varies (a held input at a constant quantised output
+    repeats without being the same data), at 8 evenly spaced places of each record, are looked
+    up in the other: a shared stretch longer than an eighth of either record (plus a window) is
+    always found, a shorter one may be. Identical records give ``(0, 0, N)``.
+    """
+    za, zb = _samples(a), _samples(b)
+    for x, z, flip in ((za, zb, False), (zb, za, True)):
+        k = min(_WINDOW, len(x), len(z))
+        if k < 2:
+            continue
+        moves = np.concatenate([[0], np.cumsum(np.diff(x[:, -1]) != 0)])
+        varied = np.flatnonzero(moves[k - 1:] - moves[:len(x) - k + 1] > 0)  # windows along which y varies
+        for p in np.linspace(0, len(x) - k, _ANCHORS).astype(int):
+            at = np.searchsorted(varied, p)
+            if at == varied.size:
+                continue  # y constant from here on: no anchor that means anything
+            q = int(varied[at])
+            cands = np.flatnonzero((z[:len(z) - k + 1] == x[q]).all(axis=1))
+            for c in cands:
+                if np.array_equal(z[c:c + k], x[q:q + k]):
+                    i, j, n = _grow(x, z, q, int(c), k)
+                    return (j, i, n) if flip else (i, j, n)
+    return None
+
+
+def _samples(r: Record) -> np.ndarray:
+    """(u, y) as rows of one array, shape (N, m + 1)."""
+    return np.column_stack([r.u.reshape(len(r.y), -1), r.y])
+
+
+def _grow(x: np.ndarray, z: np.ndarray, i: int, j: int, n: int) -> tuple[int, int, int]:
+    """Extend the matching stretch x[i:i+n] == z[j:j+n] backwards and forwards while rows agree."""
+    while i > 0 and j > 0 and np.array_equal(x[i - 1], z[j - 1]):
+        i, j, n = i - 1, j - 1, n + 1
+    while i + n < len(x) and j + n < len(z) and np.array_equal(x[i + n], z[j + n]):
+        n += 1
+    return i, j, n
+
+
+def overlap_message(a: Record, b: Record, a_name: str, b_name: str) -> str:
+    """Empty when the records share no stretch of samples; else a sentence saying where they do."""
+    s = shared_stretch(a, b)
+    if s is None:
+        return ""
+    i, j, n = s
+    return (f"the {a_name} record ({a.name!r}) shares {n} samples with the {b_name} record ({b.name!r}): its "
+            f"samples {i}..{i + n - 1} are samples {j}..{j + n - 1} of the other")
+
+
 def choosing_records(value: object, name: str = "choose_on") -> list[Record]:
     """Records to choose on: a Record or a non-empty list or tuple of them (a Dataset is refused: as one
     record it would stand for its ident, the fitting data). ``TypeError`` for anything else."""
@@ -440,4 +499,4 @@ def choosing_records(value: object, name: str = "choose_on") -> list[Record]:
     return recs
 
 
-__all__ += ["same_record", "choosing_records"]
+__all__ += ["same_record", "shared_stretch", "overlap_message", "choosing_records"]

@@ -45,7 +45,7 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from ..core._progress import progress_bar
-from ..core._records import Dataset, Record, as_records, choosing_records, same_record
+from ..core._records import Dataset, Record, as_records, choosing_records, overlap_message, same_record
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_choice, check_int, check_real, check_seed, check_theta
 from ..models._coerce import as_structure
@@ -201,6 +201,10 @@ def output_error(
         if any(same_record(c, r) for c in crec for r in rec):
             raise ValueError("choose_on: a choosing record is a fitting record; choose on data the fit did not see "
                              "(e.g. data.valid)")
+        for c in crec:
+            for r in rec:
+                if shared := overlap_message(c, r, "choosing", "fitting"):
+                    raise ValueError(f"choose_on: {shared}; choose on data the fit did not see (e.g. data.valid)")
         chooser = SEProblem(st, crec, None)
         chosen_on = ", ".join(r.name for r in crec)
     solvers = ("trf", "dogbox") if solver == "auto" else (solver,)

@@ -46,7 +46,7 @@ from ..io._json import register_type
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
-from ..core._records import same_record
+from ..core._records import overlap_message, same_record
 from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints
 from ._executors import check_cluster
@@ -282,6 +282,8 @@ def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> 
             if rec is not None and same_record(test, rec):
                 raise ValueError(f"the test record is the {name} record: a test must be data nothing was fitted "
                                  "or chosen on")
+            if rec is not None and (shared := overlap_message(test, rec, "test", name)):
+                raise ValueError(f"{shared}: a test must be data nothing was fitted or chosen on")
     blocks = check_int(blocks, "blocks", low=2)
     if valid is not None:
         if not isinstance(valid, gb.Record):
@@ -292,6 +294,8 @@ def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> 
         if same_record(valid, ident):
             raise ValueError("the validation record is the identification record: choose on other data, or pass "
                              "the record alone (folds)")
+        if shared := overlap_message(valid, ident, "validation", "identification"):
+            raise ValueError(f"{shared}: choose on data the fit did not see, or pass the record alone (folds)")
         splits = ((ident, valid, _block_edges(len(valid), L, blocks)),)
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in

@@ -1,0 +1,75 @@
+"""A record that shares samples with another is found, where it starts in each and how long it is."""
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+import graybox as gb
+from graybox.core._records import overlap_message, shared_stretch
+
+
+def _record(seed, n, m=1, quantum=None):
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((n, m)) if m > 1 else rng.standard_normal(n)
+    y = rng.standard_normal(n)
+    if quantum:
+        y = np.round(y / quantum) * quantum
+    return gb.Record(u, y, name=f"r{seed}")
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(40, 600), m=st.integers(1, 2), data=st.data())
+def test_any_stretch_longer_than_an_eighth_plus_a_window_is_found_where_it_is(seed, n, m, data):
+    rec = _record(seed, n, m, quantum=0.5)
+    start = data.draw(st.integers(0, n - 20))
+    length = data.draw(st.integers(20, n - start))
+    part = rec.slice(start, start + length)
+    assume(length > n // 8 + 16 + 1)
+    # a shared stretch grows to its true extent unless the neighbouring samples happen to agree too
+    i, j, k = shared_stretch(rec, part)
+    assert j == 0 and i == start and k == length
+    a, b, k2 = shared_stretch(part, rec)
+    assert (a, b, k2) == (0, start, length)
+    # a new record around the part: shares exactly the part
+    other = _record(seed + 1, 50, m, quantum=0.5)
+    mixed = gb.Record(np.concatenate([other.u, part.u]), np.concatenate([other.y, part.y]))
+    assert shared_stretch(mixed, rec) == (50, start, length)
+
+
+@given(seed=st.integers(0, 10_000))
+def test_independent_records_share_nothing(seed):
+    assert shared_stretch(_record(seed, 300), _record(seed + 1, 300)) is None
+
+
+def test_a_held_input_at_a_constant_output_is_not_an_overlap():
+    """Two runs at the same operating point with a quantised sensor repeat samples without being the same data."""
+    held = gb.Record(np.ones(200), np.full(200, 3.0), name="held")
+    again = gb.Record(np.ones(80), np.full(80, 3.0), name="again")
+    assert shared_stretch(held, again) is None
+    assert overlap_message(held, again, "test", "validation") == ""
+
+
+def test_the_message_names_both_records_and_the_samples():
+    rec = _record(3, 400)
+    msg = overlap_message(rec.slice(100, 400), rec, "test", "validation")
+    assert "test record" in msg and "validation record" in msg and "300 samples" in msg
+    assert "samples 0..299 are samples 100..399" in msg
+
+
+def test_selection_and_output_error_refuse_overlapping_records():
+    true = gb.Structure(["y(k-1)", "u(k-1)", "1"])
+    rng = np.random.default_rng(5)
+    u = np.repeat(rng.uniform(0, 2, 60), 20)
+    y = gb.Model(true, np.array([0.7, 0.4, 0.1])).simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(u.size)
+    ident, valid = gb.Record(u[:800], y[:800], name="ident"), gb.Record(u[800:], y[800:], name="valid")
+    data = gb.Dataset(ident, valid, None)
+    cand = gb.Candidates(2, 2, degree=1)
+    with pytest.raises(ValueError, match=r"test record \('valid'\) shares 200 samples with the validation record"):
+        gb.select_graybox(cand, data, band=np.inf, sizes=[2], test=valid.slice(100, 300))
+    with pytest.raises(ValueError, match="shares 300 samples with the identification record"):
+        gb.select_graybox(cand, data, band=np.inf, sizes=[2], test=ident.slice(500, 800))
+    with pytest.raises(ValueError, match="validation record .* shares 400 samples with the identification"):
+        gb.select_graybox(cand, gb.Dataset(ident, ident.slice(400, 800), None), band=np.inf, sizes=[2])
+    with pytest.raises(ValueError, match="choose_on: the choosing record .* shares 200 samples with the fitting"):
+        gb.output_error(true, ident, choose_on=ident.slice(0, 200))
