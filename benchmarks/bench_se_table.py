@@ -18,8 +18,8 @@ the paper's Table I, without choosing on the validation record. This script meas
   gradient front's members.
 
 Figures per model: J_S on the identification record, on the validation record (Table I's
-score), J_SF, and J_S on three fresh runs of the simulated plant (``PumpingPlant().simulate`` on
-``speed_reference(seed=s)``, s = 7, 8, 9; mean and worst), which nothing saw. Diagnostic bounds,
+score), J_SF, and J_S on three fresh runs of the simulated plant (bench_output_error.py's
+``plant_tests``: seeds 7, 8, 9; mean and worst), which nothing saw. Diagnostic bounds,
 not estimators (they look at the validation record): the least validation J_S among the in-band
 members of a fine gradient front (31 λ1) fitted on the identification record, on identification
 + validation, and ``se_dsf`` fitted on identification + validation.
@@ -44,7 +44,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _common import git_rev, machine  # noqa: E402
 
 import graybox as gb  # noqa: E402
-from graybox.datasets.pumping import PumpingPlant, speed_reference  # noqa: E402
+from bench_output_error import plant_tests  # noqa: E402
 
 BAND = 0.031
 LAM = np.logspace(-2, 0, 10)
@@ -144,10 +144,7 @@ def plant_variants():
 
 def plant(degrees):
     data = gb.load_pumping()
-    tests = []
-    for s in (7, 8, 9):
-        run = PumpingPlant().simulate(speed_reference(seed=s), seed=np.random.default_rng([s, 2]))
-        tests.append(gb.Record(run.u, run.y, Ts=data.ident.Ts, name=f"plant run {s}"))
+    tests = plant_tests(data.ident.Ts)
     cut = int(0.75 * len(data.ident))
     head, tail = data.ident.slice(0, cut, name="head"), data.ident.slice(cut, None, name="tail")
     print("| ℓ | model | choice | J_S ident | J_S valid | J_SF | J_S test (mean, worst) | s |")
