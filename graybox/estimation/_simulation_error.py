@@ -1069,7 +1069,7 @@ def se_pareto(
         wherever the fit restarts (None, the default: ``"pe"``). GA: individuals put into every
         run's initial population in place of random ones (None, the default: none, the paper's
         seeding; beyond the paper, ``"pe"`` lets the GA search from the PE basins: on the bundled
-        plant's ℓ = 3 structure it lowers the D_SF model's validation J_S from 3.05 to 1.3,
+        plant's ℓ = 3 structure it lowers the D_SF model's validation J_S from 3.05 to 1.18,
         BENCHMARKS.md, "SE D_SF against ELS").
     margin : float in [0, 1), optional
         Stability margin (both methods): every member keeps the spectral radius of its local
