@@ -1,6 +1,6 @@
 """Table I's SE D_SF rows against ELS: variants of the SE fits, scored on records they were not fitted or chosen on.
 
-    python benchmarks/bench_se_table.py [--part plant|others|all] [--degrees 2,3]
+    python benchmarks/bench_se_table.py [--part plant|seeds|others|all] [--degrees 2,3]
 
 Issue 26 asks for SE D_SF models (gradient and GA) whose validation J_S is at most ELS's, as in
 the paper's Table I, without choosing on the validation record. This script measures the ideas:
@@ -24,7 +24,8 @@ not estimators (they look at the validation record): the least validation J_S am
 members of a fine gradient front (31 λ1) fitted on the identification record, on identification
 + validation, and ``se_dsf`` fitted on identification + validation.
 
-``--part others``: the GA seeding and the margin of ``se_dsf`` on the buck converter (test: the
+``--part seeds``: the GA with and without ``starts="pe"`` for seeds 1, 2, 3 (is the gain the
+seed's luck?). ``--part others``: the GA seeding and the margin of ``se_dsf`` on the buck converter (test: the
 second half of its validation file) and on two synthetic systems with static points
 (bench_honest.py's "slow disturbance" and "static points off the records").
 """
@@ -210,6 +211,27 @@ def early_stopping_bound(data):
     return best[1], best[2]
 
 
+def ga_seeds():
+    """The GA with and without PE solutions in its initial populations, over three more seeds."""
+    data = gb.load_pumping()
+    tests = plant_tests(data.ident.Ts)
+    print("| ℓ | seed | starts | λ1 | J_S ident | J_S valid | J_SF | J_S test (mean, worst) |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    for degree, n_terms in ((2, 17), (3, 23)):
+        cand = gb.Candidates(6, 6, ne=2, degree=degree, max_y_power=1 if degree == 2 else None)
+        st = quiet(gb.els, quiet(gb.frols, cand, data.ident, n_terms=n_terms, include=["1"]),
+                   data.ident).model.structure.process
+        for seed in (1, 2, 3):
+            for starts in (None, "pe"):
+                se = quiet(gb.se_pareto, st, data, lambdas=LAM, method="ga", seed=seed, margin=MARGIN, starts=starts,
+                           threads=2, options=GA)
+                d = gb.decide_dsf(se, band=BAND, fallback="min_jsf")
+                tj = [js(st, d.model.theta, t) for t in tests]
+                print(f"| {degree} | {seed} | {starts} | {d.lambda1:.3g}{'' if d.in_band else ' (min J_SF)'} | "
+                      f"{fmt(d.JS)} | {fmt(js(st, d.model.theta, data.valid))} | {fmt(d.JSF)} | "
+                      f"{fmt(np.mean(tj))}, {fmt(max(tj))} |", flush=True)
+
+
 def others():
     from bench_honest import TRUE, cases
     print("| case | model | choice | J_S ident | J_S choose | J_SF | band | J_S test | s |")
@@ -240,7 +262,7 @@ def others():
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("plant", "others", "all"), default="all")
+    ap.add_argument("--part", choices=("plant", "seeds", "others", "all"), default="all")
     ap.add_argument("--degrees", default="2,3", help="plant structures: 2 (17 terms), 3 (23 terms)")
     args = ap.parse_args(argv)
     print(f"# bench_se_table.py --part {args.part}: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} "
@@ -248,6 +270,9 @@ def main(argv=None):
     if args.part in ("plant", "all"):
         print("\n## bundled plant (band 0.031 mlc², margin 0.01 unless named)\n")
         plant([int(d) for d in args.degrees.split(",")])
+    if args.part in ("seeds", "all"):
+        print("\n## the GA with and without PE seeds, seeds 1-3 (bundled plant)\n")
+        ga_seeds()
     if args.part in ("others", "all"):
         print("\n## buck converter and synthetic systems with static points (margin 0.01 unless named)\n")
         others()
