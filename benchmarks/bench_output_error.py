@@ -64,12 +64,18 @@ def synthetic():
     return rec(1, 1500, 0.15, "fit"), rec(3, 600, 0.15, "choose"), [rec(2, 1500, 0.0, "test")]
 
 
-def pumping_sets(quick):
-    data = gb.load_pumping()
+def plant_tests(Ts):
+    """Three new 4000-sample runs of the simulated plant (seeds 7, 8, 9): records nothing is fitted or chosen on."""
     tests = []
     for s in (7, 8, 9):
         run = PumpingPlant().simulate(speed_reference(seed=s), seed=np.random.default_rng([s, 2]))
-        tests.append(gb.Record(run.u, run.y, Ts=data.ident.Ts, name=f"plant run {s}"))
+        tests.append(gb.Record(run.u, run.y, Ts=Ts, name=f"plant run {s}"))
+    return tests
+
+
+def pumping_sets(quick):
+    data = gb.load_pumping()
+    tests = plant_tests(data.ident.Ts)
     out = []
     for degree, n_terms in ((2, 17),) if quick else ((2, 17), (3, 23)):
         cand = gb.Candidates(6, 6, ne=2, degree=degree, max_y_power=1 if degree == 2 else None)

@@ -254,3 +254,69 @@ def test_structure_carriers_and_a_choosing_record_that_is_the_fitting_one(oe_dat
     np.testing.assert_array_equal(a.model.theta, b.model.theta)
     with pytest.raises(ValueError, match="choose_on: a choosing record is a fitting record"):
         output_error(OE_STRUCT, fit, choose_on=fit)
+
+
+def _oe_static_problem():
+    fit, _ = oe_record(4, N=800)
+    x_static = np.array([-0.8, 0.0, 0.8])
+    static = gb.StaticPoints(x_static, gb.Model(OE_STRUCT, OE_THETA).static_curve(x_static))
+    return fit, static
+
+
+@pytest.mark.parametrize("margin", [0.35, 0.45])
+def test_se_dsf_keeps_the_margin(margin):
+    fit, static = _oe_static_problem()
+    res = gb.se_dsf(OE_STRUCT, fit, static, band=0.01, margin=margin, lambdas=[0.5, 0.1], max_iter=30)
+    assert res.in_band
+    pts = LocalModels(OE_STRUCT, *record_points(OE_STRUCT, [fit]))
+    assert pts.radius(res.model.theta).max() <= 1 - margin + 1e-9
+    for ub in static.ubar:
+        for eq in res.model.equilibria(float(ub)):
+            if eq.stable:
+                assert eq.spectral_radius <= 1 - margin + 1e-9
+    # the margin binds at 0.45: the fit without it leaves the margin
+    if margin == 0.45:
+        free = gb.se_dsf(OE_STRUCT, fit, static, band=0.01, lambdas=[0.5, 0.1], max_iter=30)
+        assert pts.radius(free.model.theta).max() > 1 - margin
+
+
+def test_se_dsf_pulls_a_start_inside_the_margin():
+    fit, static = _oe_static_problem()
+    outside = np.array([0.95, 0.25, 0.1, 0.0])
+    assert not SEProblem(OE_STRUCT, fit, static, margin=0.4).within_margin(outside)[0]
+    res = gb.se_dsf(OE_STRUCT, fit, static, band=0.05, margin=0.4, theta0=outside, max_iter=10)
+    assert res.start.startswith("theta0, feedback ×")
+    assert LocalModels(OE_STRUCT, *record_points(OE_STRUCT, [fit])).radius(res.model.theta).max() <= 0.6 + 1e-9
+
+
+def test_ga_starts_join_every_initial_population():
+    fit, static = _oe_static_problem()
+    opts = gb.GAOptions(population=20, generations=2)
+    lam = [1.0, 0.3]
+    problem = SEProblem(OE_STRUCT, fit, static)
+    plain = se_pareto(OE_STRUCT, fit, static, lambdas=lam, method="ga", seed=0, options=opts, theta0=None)
+    seeded = se_pareto(OE_STRUCT, fit, static, lambdas=lam, method="ga", seed=0, options=opts, theta0=None,
+                       starts=[OE_THETA])
+    # elitism keeps the start: every member's cost is at most the true θ's at its λ
+    for i, l1 in enumerate(seeded.lambdas):
+        assert seeded.extra["cost"][i] <= problem.cost(OE_THETA[None], l1)[0] * (1 + 1e-12)
+    # from random individuals only, two generations do not get there
+    assert plain.extra["cost"][0] > seeded.extra["cost"][0]
+    with pytest.raises(ValueError, match="starts"):
+        se_pareto(OE_STRUCT, fit, static, lambdas=lam, method="ga", options=opts, starts=[OE_THETA] * 20)
+    with pytest.raises(ValueError, match="starts"):
+        se_pareto(OE_STRUCT, fit, static, lambdas=lam, method="ga", options=opts, starts=[np.zeros(2)])
+
+
+def test_ga_starts_pe_are_the_pe_solutions():
+    from graybox.estimation._simulation_error import _pe_starts
+    fit, static = _oe_static_problem()
+    opts = gb.GAOptions(population=20, generations=2)
+    kw = dict(lambdas=[1.0, 0.3], method="ga", seed=0, options=opts)
+    pe = _pe_starts(SEProblem(OE_STRUCT, fit, static))
+    assert len(pe) == 4
+    named = se_pareto(OE_STRUCT, fit, static, starts="pe", **kw)
+    given = se_pareto(OE_STRUCT, fit, static, starts=pe, **kw)
+    np.testing.assert_array_equal(named.thetas, given.thetas)
+    with pytest.raises(ValueError, match="starts"):
+        se_pareto(OE_STRUCT, fit, static, starts="ls", **kw)

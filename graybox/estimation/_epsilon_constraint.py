@@ -44,7 +44,8 @@ from ._prediction_error import pe_thetas
 from ..models._coerce import as_structure, records_of, static_info
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, warn_static_range
-from ._simulation_error import SEProblem, _Failed, _multistart, _pe_members, _pe_starts, gradient_front
+from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
+                                gradient_front)
 from ..core._terms import Structure
 from ..core._validation import check_int, check_lambdas, check_real, check_theta, warn
 
@@ -113,6 +114,9 @@ class _GN:
         r2 = es / np.sqrt(self.M)
         f = float(r1 @ r1) if np.all(np.isfinite(r1)) else np.inf
         g = float(r2 @ r2) if np.all(np.isfinite(r2)) else np.inf
+        if p.margin is not None and np.isfinite(f) and np.isfinite(g) \
+                and not p.within_margin(z / p.scale, (es + p.static.ybar)[None])[0]:
+            return np.inf, np.inf, None  # outside the stability margin: a wall, as a diverging run is
         if not jac or not (np.isfinite(f) and np.isfinite(g)):
             return f, g, None
         J1 = Jd / (np.sqrt(p.n_dyn) * p.scale)
@@ -261,6 +265,28 @@ def _sweep_starts(problem: SEProblem, band: float, lambdas: np.ndarray,
     return out
 
 
+def _inside_margin(problem: SEProblem, starts: list[tuple[np.ndarray, str]],
+                   why: list[str]) -> list[tuple[np.ndarray, str]]:
+    """The starts inside the stability margin: each outside it pulled in by shrinking its output
+    feedback, or dropped (the reason added to ``why``)."""
+    out = []
+    for th, name in starts:
+        if problem.within_margin(th, problem.static_outputs(th))[0]:
+            out.append((th, name))
+            continue
+        pulled = _pull_inside(problem, th, _HALF)
+        if pulled is None:
+            why.append(f"{name} is outside the stability margin and no scaling of its output feedback brings it in")
+        else:
+            out.append((pulled[0], f"{name}, feedback ×{pulled[1]:g}"))
+    return out
+
+
+#: λ1 at which a start is pulled inside the margin (any λ1 < 1 asks the same: bounded free run, stable
+#: equilibria at the static points, the margin).
+_HALF = 0.5
+
+
 def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
     """The constrained Gauss–Newton iteration from θ0: (θ, J_S, J_SF, J_S0, J_SF0, steps, message), or None
     when θ0 has an unbounded free run or reaches no equilibrium at some static point."""
@@ -343,6 +369,7 @@ def se_dsf(
     max_iter: int = 200,
     tol: float = 1e-9,
     pe_lambdas: np.ndarray | None = None,
+    margin: float | None = None,
 ) -> DSFResult:
     """The D_SF model solved directly: min J_S(θ) subject to J_SF(θ) ≤ ``band``.
 
@@ -370,6 +397,13 @@ def se_dsf(
     pe_lambdas : ndarray, optional
         λ1 values of the PE sweep (closed form) whose member nearest the band is one start
         (default: 60 in logspace(-6, 0)).
+    margin : float in [0, 1), optional
+        Stability margin, as in :func:`graybox.se_pareto`: every local linear model along the
+        identification records and at the static points' equilibria keeps its spectral radius
+        ≤ 1 − margin; no step leaves it, and a start outside it is pulled in by shrinking its output
+        feedback (or dropped). Without it the iteration may buy identification error with
+        near-unit roots that follow the record's slow drift (BENCHMARKS.md, "SE D_SF against
+        ELS"). None (default): no margin.
 
     Returns
     -------
@@ -385,7 +419,7 @@ def se_dsf(
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     warn_static_range(sp.ubar, recs)
-    problem = SEProblem(as_structure(structure), recs, sp)
+    problem = SEProblem(as_structure(structure), recs, sp, margin=margin)
     why: list[str] = []
     if theta0 is not None:
         starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]
@@ -401,6 +435,8 @@ def se_dsf(
             starts += _sweep_starts(problem, band, coarse)
         except (ValueError, np.linalg.LinAlgError) as exc:
             why.append(f"the coarse SE sweep: {exc}")
+    if problem.margin is not None:
+        starts = _inside_margin(problem, starts, why)
     gn = _GN(problem)
     runs = []
     for th_s, start_s in starts:
@@ -409,8 +445,9 @@ def se_dsf(
             runs.append((start_s, r))
     if not runs:
         named = ", ".join(name for _, name in starts) or "none found"
+        inside = "" if problem.margin is None else " inside the stability margin"
         raise ValueError(f"no start ({named}) has a bounded free run and an equilibrium reached at every static "
-                         "point" + (f" ({'; '.join(why)})" if why else "") + "; give another theta0")
+                         f"point{inside}" + (f" ({'; '.join(why)})" if why else "") + "; give another theta0")
     # the feasible run with the smallest J_S, else the run with the smallest J_SF
     start, (th, f, g, f0, g0, it, message) = min(
         runs, key=lambda t: (t[1][2] > band * (1 + 1e-12), t[1][1] if t[1][2] <= band * (1 + 1e-12) else t[1][2]))
