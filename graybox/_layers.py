@@ -48,6 +48,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
      "and ``select_graybox``"),
     ("reproduce", ("_paper_models", "_black_box", "_neural", "_table1"), "the paper's sections, Table I and figures"),
     ("_cli", (), "the ``graybox`` command"),
+    ("__main__", (), "``python -m graybox``, the same command"),
     ("__init__", (), "the package's public names"),
 )
 

@@ -59,3 +59,12 @@ def test_the_cli_passes_fresh_on(monkeypatch, tmp_path):
     monkeypatch.setattr(rp, "run", lambda **kw: seen.update(kw))
     assert main(["reproduce", "--quick", "--fresh", "--out", str(tmp_path)]) == 0
     assert seen == {"quick": True, "out": tmp_path, "fresh": True}
+
+
+def test_python_dash_m_graybox_is_the_same_command():
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "graybox", "reproduce", "--help"], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.startswith("usage: graybox reproduce") and "--fresh" in out.stdout

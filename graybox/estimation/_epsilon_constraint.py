@@ -447,7 +447,9 @@ def se_dsf(
         named = ", ".join(name for _, name in starts) or "none found"
         inside = "" if problem.margin is None else " inside the stability margin"
         raise ValueError(f"no start ({named}) has a bounded free run and an equilibrium reached at every static "
-                         f"point{inside}" + (f" ({'; '.join(why)})" if why else "") + "; give another theta0")
+                         f"point{inside}" + (f" ({'; '.join(why)})" if why else "") + "; give another theta0"
+                         + (", or margin= (e.g. 0.01: the sweep's members then keep stable equilibria)"
+                            if problem.margin is None else ""))
     # the feasible run with the smallest J_S, else the run with the smallest J_SF
     start, (th, f, g, f0, g0, it, message) = min(
         runs, key=lambda t: (t[1][2] > band * (1 + 1e-12), t[1][1] if t[1][2] <= band * (1 + 1e-12) else t[1][2]))
