@@ -456,11 +456,12 @@ def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
             if at == varied.size:
                 continue  # y constant from here on: no anchor that means anything
             q = int(varied[at])
-            cands = np.flatnonzero((z[:len(z) - k + 1] == x[q]).all(axis=1))
-            for c in cands:
-                if np.array_equal(z[c:c + k], x[q:q + k]):
-                    i, j, n = _grow(x, z, q, int(c), k)
-                    return (j, i, n) if flip else (i, j, n)
+            cands = np.flatnonzero(z[:len(z) - k + 1, -1] == x[q, -1])  # y first: one column to scan
+            for t in range(k):  # keep the places whose next samples agree too (few survive a step or two)
+                cands = cands[(z[cands + t] == x[q + t]).all(axis=1)]
+            if cands.size:
+                i, j, n = _grow(x, z, q, int(cands[0]), k)
+                return (j, i, n) if flip else (i, j, n)
     return None
 
 
