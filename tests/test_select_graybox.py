@@ -436,42 +436,35 @@ def _rule_table(js_blocks, n_terms, jsf):
     return table, scores
 
 
-def test_one_se_ties_of_one_size_go_to_the_smaller_static_error_for_a_gray_box():
+def test_one_se_takes_the_fewest_terms_within_one_standard_error_then_the_smaller_js():
     from graybox.experiments._select import _choose
 
     rng = np.random.default_rng(0)
     base = 1.0 + 0.5 * rng.random(5)
-    # rows 0 and 1: five terms, row 1 within one standard error of row 0 (noise across the blocks) but
-    # nearer the static points; rows 2 and 3: clearly worse on every block (row 2 nearest of all)
+    # rows 0 and 1: five terms, row 1 within one standard error of row 0 (noise across the blocks);
+    # rows 2 and 3: clearly worse on every block
     blocks = [base, base * np.exp([0.3, -0.2, 0.25, -0.1, 0.05]), base * 3.0, base * 1.5]
     table, scores = _rule_table(blocks, [5, 5, 5, 9], [0.8, 0.2, 0.01, 0.5])
-    pos, rule = _choose(table.copy(), scores, "one-se", gray=True)
-    assert rule == "one-se" and pos == 1
-    t = table.copy()
-    _choose(t, scores, "one-se", gray=True)
-    assert list(t["eligible"]) == [True, True, False, False]
-    # a black box has no static evidence: the smaller J_S decides
-    assert _choose(table.copy(), scores, "one-se", gray=False)[0] == 0
-    # fewer terms within one standard error still come first, whatever their J_SF
+    pos, rule = _choose(table, scores, "one-se")
+    assert rule == "one-se" and pos == 0  # of one size, the smaller J_S (J_SF does not break the tie)
+    assert list(table["eligible"]) == [True, True, False, False]
+    # fewer terms within one standard error come first
     table, scores = _rule_table(blocks[:2] + [base * np.exp([0.2, 0.1, -0.2, 0.1, -0.1])], [5, 5, 3], [0.8, 0.2, 0.9])
-    assert _choose(table.copy(), scores, "one-se", gray=True)[0] == 2
-    # rule "min" ignores J_SF
-    assert _choose(table.copy(), scores, "min", gray=True)[0] == 0
+    assert _choose(table.copy(), scores, "one-se")[0] == 2
+    assert _choose(table.copy(), scores, "min")[0] == 0
 
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(st.lists(st.floats(0.1, 10.0), min_size=4, max_size=4), st.integers(2, 6),
-                          st.floats(0.0, 1.0)), min_size=1, max_size=8), st.booleans())
-def test_the_one_se_choice_is_eligible_smallest_then_nearest_the_static_points(rows, gray):
+                          st.floats(0.0, 1.0)), min_size=1, max_size=8))
+def test_the_one_se_choice_is_eligible_smallest_then_best_on_the_choosing_data(rows):
     from graybox.experiments._select import _choose
 
     table, scores = _rule_table([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
-    pos, _ = _choose(table, scores, "one-se", gray=gray)
+    pos, _ = _choose(table, scores, "one-se")
     el = table[table["eligible"]]
     assert table["eligible"].iloc[pos]
     assert table["n_terms"].iloc[pos] == el["n_terms"].min()
     same = el[el["n_terms"] == el["n_terms"].min()]
-    key = "JSF" if gray else "JS_valid"
-    assert table[key].iloc[pos] == same[key].min()
-    # the J_SF tie-break never takes a row outside one standard error of the best
+    assert table["JS_valid"].iloc[pos] == same["JS_valid"].min()
     assert table["vs_best"].iloc[pos] <= table["vs_best_se"].fillna(0).iloc[pos] or pos == table["JS_valid"].argmin()

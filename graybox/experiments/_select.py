@@ -17,9 +17,8 @@ for the spread of that score. Its phases (one function each below):
 4. **choice** (:func:`_choose`) — per row the member chosen by D_SF on the choosing data (the
    smallest J_S among the members with J_SF ≤ B; a black box has one member), then the row: with
    ``rule="one-se"`` the fewest parameters among the rows whose per-block log ratio of J_S to the
-   best row's is, on average, within one standard error of zero (a gray box: of those, the
-   smallest J_SF, then the smallest J_S; a black box: the smallest J_S); with ``rule="min"`` the
-   smallest J_S;
+   best row's is, on average, within one standard error of zero; with ``rule="min"`` the smallest
+   J_S;
 5. **refit** — the chosen row's member fitted on all the identification data.
 
 The winner of many candidates scored on one short record is optimistic on that record (the
@@ -531,10 +530,9 @@ def _log_ratio(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     return float(r.mean()), float(se)
 
 
-def _choose(table: pd.DataFrame, scores: list[np.ndarray], rule: str, gray: bool) -> tuple[int, str]:
+def _choose(table: pd.DataFrame, scores: list[np.ndarray], rule: str) -> tuple[int, str]:
     """Position of the chosen row among the in-band rows (``table`` gains vs_best, vs_best_se,
-    eligible); the rule used. ``gray``: among the eligible rows of the fewest parameters the
-    smallest J_SF wins (then the smallest J_S)."""
+    eligible); the rule used."""
     ok = np.flatnonzero(table["in_band"].to_numpy())
     js = table["JS_valid"].to_numpy(float)
     best = int(ok[np.argmin(js[ok])])
@@ -555,11 +553,7 @@ def _choose(table: pd.DataFrame, scores: list[np.ndarray], rule: str, gray: bool
     table["eligible"] = eligible
     c = np.flatnonzero(eligible)
     n = table["n_terms"].to_numpy()
-    # rows of one size within one standard error are not told apart by the choosing data; the static
-    # points are independent evidence, so a gray box's tie goes to the smaller J_SF (BENCHMARKS.md,
-    # honest selection: the choosing statistic)
-    jsf = table["JSF"].to_numpy(float) if gray else np.zeros(len(table))
-    return int(c[np.lexsort((js[c], jsf[c], n[c]))[0]]), rule
+    return int(c[np.lexsort((js[c], n[c]))[0]]), rule
 
 
 def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, estimator: str, in_band: bool):
@@ -651,8 +645,7 @@ def select_graybox(
     rule : {"one-se", "min"}
         How the row is chosen from the scores on the choosing data: ``"one-se"`` (default) the
         fewest parameters among the rows within one standard error of the best (per-block log
-        ratio of J_S), of those the smallest J_SF (gray box; then the smallest J_S), ``"min"``
-        the smallest J_S.
+        ratio of J_S), ``"min"`` the smallest J_S.
     blocks : int
         Contiguous blocks the validation record is cut into for the standard errors (>= 2;
         fewer, with a :class:`SelectionWarning`, when the record is too short for them).
@@ -741,7 +734,7 @@ def select_graybox(
     jobs, results = jobs + more, results + run(more)
     table, members, scores = _table(rows, jobs, results, plan)
     if table["in_band"].any():
-        pos, used = _choose(table, scores, rule, np.isfinite(plan.band))
+        pos, used = _choose(table, scores, rule)
         used_fallback = False
     else:
         pos, used = _fallback(table, results, band, fallback), "min"
