@@ -20,6 +20,11 @@ Nothing a variant chooses with reads the test record. Variants:
 ``--dsf``: instead of the variants, each structure's D_SF model solved directly (``se_dsf`` on the
 identification record, the case's band), scored on the validation and test records.
 
+``--synthetic``: the tie-breaks of (b) on synthetic systems with a known answer (bench_honest's
+system; identification 400 and validation 300 samples with inputs in [0, 1.5], test 3000 samples in
+[0, 3], static points over [0, 3]: family A from the true curve, band 1e-2; family B 0.15 above it,
+band 0.03, so that J_SF lies near the band as on the plant), 40 seeds each.
+
 ``--seeds``: the plant's rows on five fresh simulator runs (seeds + 1 … + 5), a diagnosis of the
 gap (the first run is bench_honest's test record).
 
@@ -191,19 +196,19 @@ def choose(D: dict, *, ests=None, stat="mean", k=1.0, tie="js", member_se=False,
 
 GRAY = ("pe", "se-gradient")
 VARIANTS = {
-    "default before this study (tie: J_S)": dict(ests=GRAY),
-    "(b) tie of one size: smaller J_SF (the default now)": dict(ests=GRAY, tie="jsf"),
+    "default (select_graybox's rule)": dict(ests=GRAY),
+    "(b) tie of one size: smaller J_SF": dict(ests=GRAY, tie="jsf"),
     "(b) tie of one size: SE over PE": dict(ests=GRAY, tie="se"),
-    "(b) median over the blocks": dict(ests=GRAY, stat="median", tie="jsf"),
-    "(b) geometric mean over the blocks": dict(ests=GRAY, stat="geo", tie="jsf"),
-    "(b) within 2 standard errors": dict(ests=GRAY, k=2.0, tie="jsf"),
-    "(b) within 0.5 standard error": dict(ests=GRAY, k=0.5, tie="jsf"),
-    "(a) + SE with margin 0.01": dict(ests=GRAY + ("se-margin",), tie="jsf"),
-    "(a) + SE with margin 0.01 and SE with ridge 1": dict(ests=GRAY + tuple(EXTRA), tie="jsf"),
-    "(a) PE and SE with margin 0.01 (no plain SE)": dict(ests=("pe", "se-margin"), tie="jsf"),
-    "(c) validation blocks + 3 identification folds": dict(ests=GRAY, tie="jsf", folds=True),
-    "(d) refit on identification + validation": dict(ests=GRAY, tie="jsf", refit=True),
-    "(e) member: one standard error towards smaller J_SF": dict(ests=GRAY, tie="jsf", member_se=True),
+    "(b) median over the blocks": dict(ests=GRAY, stat="median"),
+    "(b) geometric mean over the blocks": dict(ests=GRAY, stat="geo"),
+    "(b) within 2 standard errors": dict(ests=GRAY, k=2.0),
+    "(b) within 0.5 standard error": dict(ests=GRAY, k=0.5),
+    "(a) + SE with margin 0.01": dict(ests=GRAY + ("se-margin",)),
+    "(a) + SE with margin 0.01 and SE with ridge 1": dict(ests=GRAY + tuple(EXTRA)),
+    "(a) PE and SE with margin 0.01 (no plain SE)": dict(ests=("pe", "se-margin")),
+    "(c) validation blocks + 3 identification folds": dict(ests=GRAY, folds=True),
+    "(d) refit on identification + validation": dict(ests=GRAY, refit=True),
+    "(e) member: one standard error towards smaller J_SF": dict(ests=GRAY, member_se=True),
 }
 BLACK_KEYS = ("stat", "k", "refit", "folds")  # the black box is chosen by the same variant of the rule
 
@@ -285,16 +290,61 @@ def dsf(name, data, test, cand, band) -> None:
     print(pd.DataFrame(rows).to_markdown(index=False, floatfmt=".4g"))
 
 
+def synthetic(seeds: int = 40) -> None:
+    """Among the eligible rows of the fewest terms: the test J_S of the J_SF and SE-over-PE tie-breaks
+    against the J_S tie-break (select_graybox's), counted over the seeds where more than one row ties."""
+    truth = gb.Model(bench_honest.TRUE, bench_honest.THETA)
+
+    def rec(seed, n, hi):
+        rng = np.random.default_rng(seed)
+        u = np.repeat(rng.uniform(0.0, hi, n // 25 + 1), 25)[:n]
+        return gb.Record(u, truth.simulate(u, np.zeros(2)) + 0.05 * rng.standard_normal(n), name=f"synthetic {seed}")
+
+    ub = np.linspace(0.0, 3.0, 7)
+    rows = []
+    for family, bias, band in (("A: true static points", 0.0, 1e-2), ("B: static points 0.15 off", 0.15, 0.03)):
+        sp = gb.StaticPoints(ub, truth.static_curve(ub) + bias)
+        for seed in range(seeds):
+            data = gb.Dataset(rec(10 * seed, 400, 1.5), rec(10 * seed + 1, 300, 1.5), sp)
+            try:
+                t = gb.select_graybox(gb.Candidates(2, 2, degree=2), data, band=band, sizes=[3, 4, 5, 6],
+                                      test=rec(10 * seed + 2, 3000, 3.0)).table
+            except ValueError:  # no structure in the band
+                continue
+            el = t[t["eligible"]]
+            tied = el[el["n_terms"] == el["n_terms"].min()]
+            if len(tied) < 2:
+                continue
+            by_js = tied.sort_values("JS_valid").iloc[0]["JS_test"]
+            by_jsf = tied.sort_values(["JSF", "JS_valid"]).iloc[0]["JS_test"]
+            se = tied.assign(pe=tied["estimator"] == "pe").sort_values(["pe", "JS_valid"]).iloc[0]["JS_test"]
+            rows.append(dict(family=family, seed=seed, tied=len(tied), JS=by_js, JSF=by_jsf, SE=se))
+    df = pd.DataFrame(rows)
+    out = []
+    for family, g in df.groupby("family"):
+        for key in ("JSF", "SE"):
+            r = g[key] / g["JS"]
+            out.append({"family": family, "tie-break": key, "seeds with a tie": len(g), "better": int((r < 1).sum()),
+                        "worse": int((r > 1).sum()), "equal": int((r == 1).sum()),
+                        "geometric mean test J_S / J_S tie's": float(np.exp(np.log(r).mean()))})
+    print(f"\nsynthetic, {seeds} seeds per family: the tie-breaks against the J_S tie (test J_S)\n")
+    print(pd.DataFrame(out).to_markdown(index=False, floatfmt=".3f"))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--cases", default="", help="comma-separated case names (default all)")
     ap.add_argument("--folds", action="store_true", help="variant (c): 3 refitted folds per job (4× the fits)")
     ap.add_argument("--seeds", action="store_true", help="the plant's rows on five fresh runs")
     ap.add_argument("--dsf", action="store_true", help="se_dsf per structure instead of the variants")
+    ap.add_argument("--synthetic", action="store_true", help="only the tie-breaks on synthetic systems")
     args = ap.parse_args()
     names = [c for c in args.cases.split(",") if c]
     print(f"# bench_honest_variants ({datetime.date.today()}, git {git_rev()}): {machine()}")
     warnings.simplefilter("ignore")
+    if args.synthetic:
+        synthetic()
+        return
     scores = {}
     for name, (data, test, cand, band) in bench_honest.cases().items():
         if names and name not in names:
