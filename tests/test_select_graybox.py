@@ -5,6 +5,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import graybox as gb
 from graybox.static._form_check import static_degree
@@ -444,3 +446,45 @@ def test_worker_processes_run_without_deprecated_options(data):
     res = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, sizes=[3], sources=("frols",),
                             estimator="ls", executor="processes", workers=1)
     assert len(res.structure) == 3
+
+
+def _rule_table(js_blocks, n_terms, jsf):
+    """A table and block scores as select_graybox's scoring makes them (every row in the band)."""
+    scores = [np.asarray(b, float) for b in js_blocks]
+    table = pd.DataFrame({"in_band": True, "JS_valid": [b.mean() for b in scores], "n_terms": n_terms,
+                          "JSF": np.asarray(jsf, float)}, index=[f"row {i}" for i in range(len(scores))])
+    return table, scores
+
+
+def test_one_se_takes_the_fewest_terms_within_one_standard_error_then_the_smaller_js():
+    from graybox.experiments._select import _choose
+
+    rng = np.random.default_rng(0)
+    base = 1.0 + 0.5 * rng.random(5)
+    # rows 0 and 1: five terms, row 1 within one standard error of row 0 (noise across the blocks);
+    # rows 2 and 3: clearly worse on every block
+    blocks = [base, base * np.exp([0.3, -0.2, 0.25, -0.1, 0.05]), base * 3.0, base * 1.5]
+    table, scores = _rule_table(blocks, [5, 5, 5, 9], [0.8, 0.2, 0.01, 0.5])
+    pos, rule = _choose(table, scores, "one-se")
+    assert rule == "one-se" and pos == 0  # of one size, the smaller J_S (J_SF does not break the tie)
+    assert list(table["eligible"]) == [True, True, False, False]
+    # fewer terms within one standard error come first
+    table, scores = _rule_table(blocks[:2] + [base * np.exp([0.2, 0.1, -0.2, 0.1, -0.1])], [5, 5, 3], [0.8, 0.2, 0.9])
+    assert _choose(table.copy(), scores, "one-se")[0] == 2
+    assert _choose(table.copy(), scores, "min")[0] == 0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.lists(st.floats(0.1, 10.0), min_size=4, max_size=4), st.integers(2, 6),
+                          st.floats(0.0, 1.0)), min_size=1, max_size=8))
+def test_the_one_se_choice_is_eligible_smallest_then_best_on_the_choosing_data(rows):
+    from graybox.experiments._select import _choose
+
+    table, scores = _rule_table([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows])
+    pos, _ = _choose(table, scores, "one-se")
+    el = table[table["eligible"]]
+    assert table["eligible"].iloc[pos]
+    assert table["n_terms"].iloc[pos] == el["n_terms"].min()
+    same = el[el["n_terms"] == el["n_terms"].min()]
+    assert table["JS_valid"].iloc[pos] == same["JS_valid"].min()
+    assert table["vs_best"].iloc[pos] <= table["vs_best_se"].fillna(0).iloc[pos] or pos == table["JS_valid"].argmin()
