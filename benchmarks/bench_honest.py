@@ -1,6 +1,7 @@
 """Honest selection: fit / choose / untouched test (issue 26).
 
     .venv/bin/python benchmarks/bench_honest.py [--part speed|protocol|all] [--cases plant,buck,...] [--no-old]
+        [--record-only]
 
 - protocol: on each case, ``select_graybox`` fits on the identification record, chooses on the
   validation record and reports on a test record nothing was fitted or chosen on. Per case: the
@@ -107,7 +108,7 @@ def _test_js(model, rec):
     return gb.mse(rec.y, sim, start=model.max_lag)
 
 
-def protocol(names, with_old: bool) -> None:
+def protocol(names, with_old: bool, record_only: bool = False) -> None:
     old = old_select() if with_old else None
     rows = []
     for name, (data, test, cand, band) in cases().items():
@@ -117,12 +118,16 @@ def protocol(names, with_old: bool) -> None:
         res = {"gray one-se": gb.select_graybox(cand, data, band=band, test=test),
                "gray min": gb.select_graybox(cand, data, band=band, test=test, rule="min"),
                "black one-se": gb.select_graybox(cand, data, band=np.inf, test=test)}
+        if record_only:  # the identification record alone: the choice on refitted folds of it
+            res["gray, folds of ident"] = gb.select_graybox(cand, data.ident, data.static, band=band, test=test)
+            res["black, folds of ident"] = gb.select_graybox(cand, data.ident, data.static, band=np.inf, test=test)
         t_new = time.perf_counter() - t0
         black = res["black one-se"].chosen["JS_test"]
         for label, r in res.items():
+            ref = res["black, folds of ident"].chosen["JS_test"] if "folds" in label else black
             c = r.chosen
             rows.append({"case": name, "choice": label, "n_terms": len(r.structure), "estimator": c["estimator"],
-                         "JS_valid": c["JS_valid"], "JS_test": c["JS_test"], "vs black": c["JS_test"] / black,
+                         "JS_valid": c["JS_valid"], "JS_test": c["JS_test"], "vs black": c["JS_test"] / ref,
                          "JSF": c["JSF_test"], "in band": bool(c["JSF_test"] <= band) if np.isfinite(r.band) else None,
                          "optimism": c["JS_valid"] / c["JS_test"],
                          "regret": c["JS_test"] / r.table["JS_test"].min(), "rows": len(r.table)})
@@ -168,13 +173,15 @@ def main() -> None:
     ap.add_argument("--part", default="all", choices=("speed", "protocol", "all"))
     ap.add_argument("--cases", default="", help="comma-separated case names (default all)")
     ap.add_argument("--no-old", action="store_true", help="skip main's select_graybox")
+    ap.add_argument("--record-only", action="store_true",
+                    help="also choose on refitted folds of the identification record alone (gray and black)")
     args = ap.parse_args()
     print(f"# bench_honest ({datetime.date.today()}, git {git_rev()}): {machine()}")
     warnings.simplefilter("ignore")
     if args.part in ("speed", "all"):
         speed()
     if args.part in ("protocol", "all"):
-        protocol([c for c in args.cases.split(",") if c], not args.no_old)
+        protocol([c for c in args.cases.split(",") if c], not args.no_old, args.record_only)
 
 
 if __name__ == "__main__":
