@@ -572,6 +572,8 @@ def test_bad_values_are_refused_naming_the_option(label, option, value, tmp_path
     except (TypeError, ValueError) as exc:
         msg = str(exc)
         assert option in msg, f"{label}({option}={value!r}) raised {type(exc).__name__} without naming it: {msg}"
+        # a result's field refuses a value by its type alone (check_fields runs before any other check)
+        assert label not in RESULTS or isinstance(exc, TypeError), f"{label}({option}={value!r}): {exc!r}"
         return
     except FileNotFoundError as exc:
         assert (label, option) in MISSING_FILE and value == "x" and "x" in str(exc), exc
