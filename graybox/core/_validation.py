@@ -335,6 +335,7 @@ def _field_rules(cls: type) -> tuple[tuple[str, frozenset, Callable[[object], bo
         hints = {}
         for f in fields:
             try:
+                # the class's own annotation text, evaluated where the class was defined
                 hints[f.name] = eval(f.type, glob) if isinstance(f.type, str) else f.type  # noqa: S307
             except Exception:
                 continue
@@ -349,10 +350,12 @@ def _field_rules(cls: type) -> tuple[tuple[str, frozenset, Callable[[object], bo
 def check_fields(obj: object) -> None:
     """``TypeError`` naming the class, the field and what it takes, for a field of the wrong type.
 
-    For a dataclass's ``__post_init__``: each field is checked against its annotation (``float``:
-    a real number, NaN and inf included, never a bool or a string; ``int``: an integer, not a bool;
-    ``np.ndarray``: an array, list or tuple (the classes freeze their arrays); ``X | None``: None or X; a class: an instance; a container: its outer type). Ranges are the
-    class's own business. The annotations are resolved once per class.
+    For a dataclass's ``__post_init__``, before its other checks: each field is checked against its
+    annotation (``float``: a real number, NaN and inf included, never a bool or a string; ``int``: an
+    integer, not a bool; ``np.ndarray``: an array, list or tuple, which the classes freeze into arrays;
+    ``X | None``: None or X; a class: an instance; a container: its outer type; ``Any``, ``Literal``
+    and the like: unchecked). Ranges are the class's own business. The annotations are resolved once
+    per class.
     """
     cls = type(obj)
     rules = _FIELD_RULES.get(cls)
