@@ -184,3 +184,52 @@ def test_the_bundled_data_carry_the_transmitters_error():
 
     data = gb.load_pumping()
     assert np.all(data.static.uncertainty == 0.175) and data.static.band == pytest.approx(0.175**2)
+
+
+# -- a result object's fields against their annotations (issue 22, the result objects) ------------
+import dataclasses  # noqa: E402
+
+from hypothesis import given, strategies as st  # noqa: E402
+
+from graybox.core._validation import check_fields  # noqa: E402
+
+
+@dataclasses.dataclass(frozen=True)
+class _Result:
+    """Annotations as strings, as every graybox module writes them (postponed evaluation)."""
+
+    model: "Model"
+    count: "int"
+    figure: "float"
+    flag: "bool"
+    rule: "str"
+    values: "np.ndarray"
+    level: "float | None" = None
+    names: "tuple[str, ...]" = ()
+    hidden: "NameOnlyForTypeCheckers" = None  # noqa: F821: does not resolve, so it is not checked
+
+    def __post_init__(self):
+        check_fields(self)
+
+
+_GOOD = dict(model=Model(["y(k-1)"], [0.5]), count=3, figure=0.5, flag=False, rule="D_SF", values=np.zeros(2))
+
+
+@pytest.mark.parametrize("field, value", [
+    ("model", "x"), ("count", True), ("count", 2.5), ("count", "3"), ("figure", True), ("figure", "0.5"),
+    ("flag", 1), ("rule", 1.0), ("values", 2.5), ("values", "x"), ("level", "x"), ("names", "ab"),
+])
+def test_a_result_field_of_the_wrong_type_is_a_type_error_naming_class_and_field(field, value):
+    with pytest.raises(TypeError, match=rf"^_Result: {field} must be "):
+        _Result(**{**_GOOD, field: value})
+
+
+@given(st.floats(allow_nan=True, allow_infinity=True) | st.integers() | st.floats(width=32).map(np.float32))
+def test_a_float_field_takes_any_real_nan_and_inf_included(x):
+    assert _Result(**{**_GOOD, "figure": x, "level": x}).figure is x
+
+
+def test_numpy_scalars_none_and_array_likes_are_accepted_and_unresolved_names_skipped():
+    r = _Result(**{**_GOOD, "count": np.int64(2), "flag": np.bool_(True), "values": [1.0, 2.0], "level": None,
+                   "names": ("a",), "hidden": "anything"})
+    assert r.count == 2 and r.hidden == "anything"

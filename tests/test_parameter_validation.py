@@ -7,6 +7,10 @@ methods); each gets a valid call on small data below, and then one option at a t
 type) or ``ValueError`` (a bad value) whose message names the option, or the value must be one that
 the option legitimately takes (the commented tables ACCEPTED and LABELS).
 
+Result objects (ParetoSet, Decision, ...) are called with the fields of one the library made, as
+keywords, and every field is an option: each must be of the type its annotation names
+(``check_fields``), with what a field of that type legitimately holds in RESULT_ACCEPTED.
+
 Arguments that are files (a grid store, CSV and JSON files) are made once per module by fixtures
 (``Lazy`` below): the store by running a two-cell grid in this process. A callable that returns a
 context manager (``parallel_map``) is entered, as a ``with`` statement would.
@@ -15,9 +19,12 @@ context manager (``parallel_map``) is entered, as a ``with`` statement would.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import inspect
 import math
 import shutil
+import types
+import typing
 import warnings
 
 import dask.array as da
@@ -84,10 +91,16 @@ estimator = "ls"
 
 
 class Lazy:
-    """An argument that a pytest fixture below makes when a call needs it (a store, a file)."""
+    """An argument that a pytest fixture below makes when a call needs it (a store, a file), or its ``attr``."""
 
-    def __init__(self, fixture: str):
+    def __init__(self, fixture: str, attr: str | None = None):
         self.fixture = fixture
+        self.attr = attr
+
+
+def _fields_of(obj) -> dict:
+    """A result object's fields as keywords: calling its class with them rebuilds it (the valid call)."""
+    return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj) if f.init}
 
 
 @pytest.fixture(scope="module")
@@ -115,6 +128,12 @@ def two_stores(store, tmp_path_factory):
 def store_copy(store, tmp_path):
     """A copy that run_grid may grow (its cells are all there: nothing runs again)."""
     return shutil.copyfile(store, tmp_path / "copy.sqlite")
+
+
+@pytest.fixture(scope="module")
+def grid_run(store, tmp_path_factory):
+    """What run_grid returns: GRID again on a copy of the store (its cells are reused)."""
+    return gx.run_grid(GRID, shutil.copyfile(store, tmp_path_factory.mktemp("run") / "g.sqlite"), progress=False)
 
 
 @pytest.fixture
@@ -151,7 +170,8 @@ def _resolve(request, args: tuple, kwargs: dict) -> tuple[tuple, dict]:
     """The call's arguments with each Lazy one made by its fixture (a list of them too)."""
     def get(v):
         if isinstance(v, Lazy):
-            return request.getfixturevalue(v.fixture)
+            made = request.getfixturevalue(v.fixture)
+            return made if v.attr is None else getattr(made, v.attr)
         return v
 
     return tuple(get(a) for a in args), {k: get(v) for k, v in kwargs.items()}
@@ -296,19 +316,25 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "UserConstraint": ((lambda theta: [],), {}),
     "Term": ((), {"factors": (("u", 1, 2), ("y", 1, 1))}),
     "ParetoSet.model": ((0,), {}),  # member_model's deprecated name: it warns, then is member_model
+    # result objects, rebuilt from the fields of one the library made
+    "ELSResult": ((), _fields_of(gb.els(ST, REC))),
+    "ParameterUncertainty": ((), _fields_of(gb.ls_uncertainty(LS, REC))),
+    "StaticCurveBand": ((), _fields_of(gb.static_curve_band(gb.ls_uncertainty(LS, REC), [0.5, 1.0]))),
+    "Selection": ((), _fields_of(gb.frols(gb.Candidates(1, 1, degree=2), REC, n_terms=2))),
+    "ParetoSet": ((), _fields_of(FRONT)),
+    "Decision": ((), _fields_of(DEC)),
+    "DecisionBootstrap": ((), _fields_of(BOOT)),
+    "GridRun": ((), {f.name: Lazy("grid_run", f.name) for f in dataclasses.fields(gx.GridRun)}),
+    "LocalModel": ((), _fields_of(LOCAL)),
+    "OperatingCurve": ((), _fields_of(OPERATING)),
 }
 
+#: The result objects above: every field is an option (none has a default that makes it optional in use).
+RESULTS = {"ELSResult", "ParameterUncertainty", "StaticCurveBand", "Selection", "ParetoSet", "Decision",
+           "DecisionBootstrap", "GridRun", "LocalModel", "OperatingCurve"}
+
 # Public callables with options that this test does not call, and why.
-NOT_EXERCISED = {
-    # result objects: built by the library from a fit, their fields are its outputs, not a user's options
-    "ELSResult": "a result object (built by els)", "ParameterUncertainty": "a result object (built by *_uncertainty)",
-    "StaticCurveBand": "a result object (built by static_curve_band)",
-    "Selection": "a result object (built by frols)", "ParetoSet": "a result object (built by the estimators)",
-    "Decision": "a result object (built by decide_dsf)",
-    "DecisionBootstrap": "a result object (built by bootstrap_decision)",
-    "GridRun": "a result object (built by run_grid)", "LocalModel": "a result object (built by local_model)",
-    "OperatingCurve": "a result object (built by operating_curve)",
-}
+NOT_EXERCISED: dict[str, str] = {}
 
 # free-text labels: any value is shown with str(), so every value is accepted
 LABELS = {"name", "title", "xlabel", "ylabel", "input_label", "output_label", "gain_label", "description",
@@ -410,6 +436,24 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     ("plot_local_models", "duration"): (2.5,),  # seconds
 }
 
+# A result object's field takes any value of the type its annotation names: the type is checked
+# (check_fields), the range is not: a result holds what its computation gave. By the field's type:
+RESULT_ACCEPTED: dict[type, tuple] = {
+    float: (2.5, -1, math.nan, math.inf),  # a result's figure: any real, NaN and inf included (a diverged J_S
+    #                                        is inf, the λ1 of a member from no weight NaN)
+    int: (-1,),  # an integer: a count or a position as the computation gave it (ranges are not re-checked)
+    str: ("x",),  # a name, a method or a rule in words
+    bool: (True,),  # a flag
+}
+
+
+def _result_kind(label: str, option: str) -> type | None:
+    """The type of a result field (float for ``float | None`` and ``float | tuple``), or None for any other."""
+    hint = typing.get_type_hints(PUBLIC[label])[option]
+    args = typing.get_args(hint) if typing.get_origin(hint) in (typing.Union, types.UnionType) else (hint,)
+    return next((t for t in RESULT_ACCEPTED if t in args), None)
+
+
 # (callable, option) naming a file or folder: "x" names none, and FileNotFoundError naming it is Python's
 # own refusal (the other test values are refused with a TypeError naming the option)
 MISSING_FILE: set[tuple[str, str]] = {("load_buck", "path")}
@@ -448,6 +492,8 @@ DEPRECATED: dict[str, set[str]] = {"bootstrap_decision": {"method"},
 
 
 def _options(fn, label: str = "") -> list[str]:
+    if label in RESULTS:
+        return [f.name for f in dataclasses.fields(fn) if f.init]
     try:
         sig = inspect.signature(fn)
     except (TypeError, ValueError):
@@ -526,6 +572,8 @@ def test_bad_values_are_refused_naming_the_option(label, option, value, tmp_path
     except (TypeError, ValueError) as exc:
         msg = str(exc)
         assert option in msg, f"{label}({option}={value!r}) raised {type(exc).__name__} without naming it: {msg}"
+        # a result's field refuses a value by its type alone (check_fields runs before any other check)
+        assert label not in RESULTS or isinstance(exc, TypeError), f"{label}({option}={value!r}): {exc!r}"
         return
     except FileNotFoundError as exc:
         assert (label, option) in MISSING_FILE and value == "x" and "x" in str(exc), exc
@@ -533,6 +581,8 @@ def test_bad_values_are_refused_naming_the_option(label, option, value, tmp_path
     if option in LABELS:
         return
     allowed = ACCEPTED.get((label, option), ())
+    if label in RESULTS:
+        allowed += RESULT_ACCEPTED.get(_result_kind(label, option), ())
     assert any(value is a or (isinstance(a, float) and isinstance(value, float) and a == value) for a in allowed), (
         f"{label}({option}={value!r}) was accepted silently")
 

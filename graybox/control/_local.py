@@ -31,7 +31,7 @@ from scipy.signal import lfilter
 
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
 from ..core._terms import Structure
-from ..core._validation import check_int, check_real, check_seed, frozen, warn
+from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, warn
 from ..models._model import Model
 from ..static._analysis import REACHED, reached_equilibria, schur_stable
 from ..static._linearisation import characteristic_roots, local_coefficients
@@ -142,6 +142,7 @@ class LocalModel:
     name: str = ""
 
     def __post_init__(self) -> None:
+        check_fields(self)
         object.__setattr__(self, "ubar", frozen(np.ravel(self.ubar)))
         object.__setattr__(self, "a", frozen(self.a))
         object.__setattr__(self, "b", frozen(np.reshape(self.b, (len(self.input_names), -1))))
@@ -564,6 +565,7 @@ class OperatingCurve:
     BANDS: ClassVar[tuple[str, ...]] = ("gain_low", "gain_high", "time_constant_low", "time_constant_high", "undefined")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         for f in ("ubar", "ybar", "gain", "time_constant", "damping", "spectral_radius", "settling_time", *self.BANDS):
             v = getattr(self, f)
             if v is not None:

@@ -10,11 +10,15 @@ a value of the right type outside its allowed range (``-1``, ``nan``, ``inf``, a
 
 from __future__ import annotations
 
+import dataclasses
 import numbers
 import os
+import reprlib
 import sys
+import types
+import typing
 import warnings
-from typing import Iterable, Sequence
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -34,6 +38,7 @@ __all__ = [
     "check_per_point",
     "check_sequence",
     "check_path",
+    "check_fields",
 ]
 
 # graybox/, not graybox/core/: a frame in any subpackage is graybox's own
@@ -275,3 +280,89 @@ def renamed(value: object, old_value: object, new: str, old: str) -> object:
         raise TypeError(f"{old}= is the former name of {new}=: give {new}= only")
     warn(f"{old}= is deprecated (one name per concept): use {new}=", DeprecationWarning)
     return old_value
+
+
+# -- the fields of a result object ---------------------------------------------------------------
+#: An annotation's test: (types passed at once, the test for any other type, "what is accepted").
+#: The exact types make the usual case a set look-up: results are built often (a Decision per decision).
+_Rule = tuple[frozenset, Callable[[object], bool], str]
+
+_SIMPLE_RULES: dict[object, _Rule] = {
+    # a result's figure: any real, NaN and inf included (a diverged J_S is inf, λ1 of no weight NaN)
+    float: (frozenset({float, int, np.float64}), _is_number, "a real number"),
+    int: (frozenset({int}), lambda v: isinstance(v, (int, np.integer)) and not _is_bool(v), "an integer"),
+    bool: (frozenset({bool, np.bool_}), _is_bool, "True or False"),
+    str: (frozenset({str}), lambda v: isinstance(v, str), "a string"),
+    # an array, or the list or tuple the class freezes into one (Selection's subset_rss defaults to ())
+    np.ndarray: (frozenset({np.ndarray, list, tuple}), lambda v: isinstance(v, (np.ndarray, list, tuple)),
+                 "an array (a NumPy array, list or tuple)"),
+    type(None): (frozenset({type(None)}), lambda v: False, "None"),
+}
+
+#: class -> ((field, types passed at once, test, what), ...): each dataclass's annotations, resolved once.
+_FIELD_RULES: dict[type, tuple[tuple[str, frozenset, Callable[[object], bool], str], ...]] = {}
+
+
+def _rule(hint: object) -> _Rule | None:
+    """The test of a resolved annotation, or None where it is not checked (Any, Literal, a type variable …)."""
+    if hint in _SIMPLE_RULES:
+        return _SIMPLE_RULES[hint]
+    origin = typing.get_origin(hint)
+    if origin is typing.Union or origin is types.UnionType:
+        rules = [_rule(h) for h in typing.get_args(hint)]
+        if any(r is None for r in rules):
+            return None
+        tests = tuple(r[1] for r in rules)  # type: ignore[index]
+        return (frozenset().union(*(r[0] for r in rules)),  # type: ignore[index]
+                lambda v: any(t(v) for t in tests), " or ".join(r[2] for r in rules))  # type: ignore[index]
+    # a container (tuple[...], Mapping[...], list[...]): its outer type only, the items are the class's to check
+    cls = origin if origin is not None else hint
+    if isinstance(cls, type) and cls is not object:
+        return frozenset({cls}), lambda v: isinstance(v, cls), f"a {cls.__name__}"
+    return None
+
+
+def _field_rules(cls: type) -> tuple[tuple[str, frozenset, Callable[[object], bool], str], ...]:
+    """The rules of ``cls``'s init fields, from its annotations (strings under postponed evaluation).
+
+    An annotation that does not resolve (a name imported for type checkers only) leaves its field unchecked.
+    """
+    fields = [f for f in dataclasses.fields(cls) if f.init]
+    try:
+        hints: dict[str, Any] = typing.get_type_hints(cls)
+    except Exception:  # one unresolvable name: resolve field by field, as get_type_hints would
+        glob = vars(sys.modules[cls.__module__])
+        hints = {}
+        for f in fields:
+            try:
+                # the class's own annotation text, evaluated where the class was defined
+                hints[f.name] = eval(f.type, glob) if isinstance(f.type, str) else f.type  # noqa: S307
+            except Exception:
+                continue
+    out = []
+    for f in fields:
+        r = _rule(hints[f.name]) if f.name in hints else None
+        if r is not None:
+            out.append((f.name, *r))
+    return tuple(out)
+
+
+def check_fields(obj: object) -> None:
+    """``TypeError`` naming the class, the field and what it takes, for a field of the wrong type.
+
+    For a dataclass's ``__post_init__``, before its other checks: each field is checked against its
+    annotation (``float``: a real number, NaN and inf included, never a bool or a string; ``int``: an
+    integer, not a bool; ``np.ndarray``: an array, list or tuple, which the classes freeze into arrays;
+    ``X | None``: None or X; a class: an instance; a container: its outer type; ``Any``, ``Literal``
+    and the like: unchecked). Ranges are the class's own business. The annotations are resolved once
+    per class.
+    """
+    cls = type(obj)
+    rules = _FIELD_RULES.get(cls)
+    if rules is None:
+        rules = _FIELD_RULES[cls] = _field_rules(cls)
+    for name, exact, test, what in rules:
+        value = getattr(obj, name)
+        if type(value) not in exact and not test(value):
+            raise TypeError(f"{cls.__name__}: {name} must be {what}, got {reprlib.repr(value)} "
+                            f"({type(value).__name__})")

@@ -51,7 +51,7 @@ from ..models._coerce import as_structure, records_of, static_info
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
+from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
 from ..core._reprs import short_repr
 
 __all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
@@ -220,6 +220,7 @@ class DecisionBootstrap:
     static_sigma: float | None = None
 
     def __post_init__(self) -> None:
+        check_fields(self)
         B = np.shape(self.lambda1)[0]
         for f in ("lambdas", "lambda1", "JS", "JSF"):
             object.__setattr__(self, f, frozen(getattr(self, f)))

@@ -61,7 +61,7 @@ from ..core._regressors import regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..static._analysis import cluster_key, cluster_map, reached_equilibria, static_theta_gradient
-from ..core._validation import check_choice, check_int, check_real, check_seed, frozen, warn
+from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 
 __all__ = [
     "ParameterUncertainty",
@@ -119,6 +119,7 @@ class ParameterUncertainty:
     static_sigma2: float = float("nan")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         n = self.model.n_params
         cov = frozen(self.cov)
         if cov.shape != (n, n):
@@ -665,6 +666,7 @@ class StaticCurveBand:
     model_name: str = ""
 
     def __post_init__(self) -> None:
+        check_fields(self)
         M = np.shape(self.ubar)[0]
         for f in ("ubar", "ybar", "ybar_low", "ybar_high", "ybar_std", "gain", "gain_low", "gain_high", "gain_std",
                   "undefined"):

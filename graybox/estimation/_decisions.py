@@ -26,7 +26,7 @@ from ._pareto import ParetoSet
 from ..core._records import Record, choosing_records
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
-from ..core._validation import check_band, check_choice
+from ..core._validation import check_band, check_choice, check_fields
 from ..static._constraints import InfeasibleError
 from ..core._records import StaticPoints
 
@@ -82,6 +82,9 @@ class Decision:
     in_band: bool
     score: float
     chosen_on: str = ""
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     def __repr__(self) -> str:
         on = f", chosen_on={self.chosen_on!r}, score={self.score:.4g}" if self.chosen_on else ""

@@ -90,7 +90,7 @@ from ..models._model import Model
 from ..core._records import Dataset, Record
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
-from ..core._validation import check_int, check_real, check_sequence, frozen, warn
+from ..core._validation import check_int, check_real, check_fields, check_sequence, frozen, warn
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 
@@ -133,6 +133,9 @@ class ELSResult:
     residuals: tuple[np.ndarray, ...]
     theta_ls: np.ndarray
     n_direct: int = 0
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     def __repr__(self) -> str:
         return (f"ELSResult(model={self.model.name!r}, n_params={self.model.n_params}, n_iter={self.n_iter}, "

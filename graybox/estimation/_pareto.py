@@ -18,7 +18,7 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, as_records
-from ..core._validation import check_bool, frozen, warn
+from ..core._validation import check_bool, check_fields, frozen, warn
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -109,6 +109,7 @@ class ParetoSet:
     failures: Mapping[int, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        check_fields(self)
         th = frozen(self.thetas)
         if th.ndim != 2 or th.shape[1] != len(self.structure):
             raise ValueError(f"thetas must have shape (K, {len(self.structure)}), got {th.shape}")

@@ -12,7 +12,7 @@ from typing import Any, Callable, Mapping
 from .. import _api as gb
 
 from ..core._progress import progress_bar
-from ..core._validation import check_bool
+from ..core._validation import check_bool, check_fields
 from ._cell import STATUSES, failed_row, run_cell
 from ._executors import make_executor
 from ._spec import Grid
@@ -60,6 +60,9 @@ class GridRun:
     wall_time: float
     spec: int = 1
     notes: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     @property
     def reused(self) -> int:

@@ -69,7 +69,7 @@ from ..core._gram import (
     term_factors,
 )
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import check_choice, check_int, check_real, warn
+from ..core._validation import check_choice, check_fields, check_int, check_real, warn
 from ._stopping import choose_model, stop_rule, StopRule
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem
 
@@ -213,6 +213,7 @@ class Selection:
     subset_rss: np.ndarray = field(default=())
 
     def __post_init__(self) -> None:
+        check_fields(self)
         for name in ("err", "theta", "err_evaluated", "rss", "criterion_curve", "subset_rss"):
             a = np.array(getattr(self, name), dtype=float, copy=True)
             a.setflags(write=False)
