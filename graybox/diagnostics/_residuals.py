@@ -65,7 +65,7 @@ from ..models._model import Model
 from ..estimation._neural import NeuralModel
 from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
-from ..core._validation import check_bool, check_choice, check_int, check_real
+from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
@@ -123,6 +123,9 @@ class CorrelationTest:
     outside: np.ndarray
     passed: bool
 
+    def __post_init__(self) -> None:
+        check_fields(self)
+
     @property
     def worst_lag(self) -> int:
         """The lag with the largest |φ|."""
@@ -159,6 +162,9 @@ class ResidualTests:
     rule: str
     model_name: str
     residuals: tuple[np.ndarray, ...]
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     @property
     def passed(self) -> bool:

@@ -47,7 +47,7 @@ from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, w
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
                                 gradient_front)
 from ..core._terms import Structure
-from ..core._validation import check_int, check_lambdas, check_real, check_theta, warn
+from ..core._validation import check_fields, check_int, check_lambdas, check_real, check_theta, warn
 
 __all__ = ["se_dsf", "DSFResult"]
 
@@ -88,6 +88,9 @@ class DSFResult:
     start_JSF: float
     n_iter: int
     message: str
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     @property
     def feasible(self) -> bool:

@@ -129,7 +129,7 @@ from scipy.optimize import brentq
 
 from ..core._records import Dataset, Record, as_records
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
-                                check_seed, frozen)
+                                check_seed, frozen, check_fields)
 from ..core._simulation import DivergenceError, free_run_inputs
 from ..static._analysis import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
 from ..core._reprs import short_repr
@@ -770,6 +770,9 @@ class NeuralFit:
     seconds: float
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
 
 def _unpack(theta: np.ndarray, H: int, n_in: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:

@@ -47,7 +47,7 @@ from threadpoolctl import threadpool_limits
 from ..core._progress import progress_bar
 from ..core._records import Dataset, Record, as_records, choosing_records, overlap_message, same_record
 from ..core._terms import Structure
-from ..core._validation import check_bool, check_choice, check_int, check_real, check_seed, check_theta
+from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, check_seed, check_theta
 from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
@@ -96,6 +96,9 @@ class OEResult:
     margin: float
     radius: float
     seed: int
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     @property
     def failures(self) -> Mapping[str, str]:

@@ -62,7 +62,7 @@ from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, wa
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
-from ..core._validation import check_bool, check_choice, check_int, check_lambdas, check_real, check_theta, warn
+from ..core._validation import check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta, warn
 
 if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
     import cvxpy as cp
@@ -180,6 +180,9 @@ class CLSResult:
     static: StaticPoints | StaticCurve | StaticSurface | None
     constraints: tuple[str, ...]
     solver: str
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     def __repr__(self) -> str:
         return (f"CLSResult(model={self.model.name!r}, n_params={self.model.n_params}, "

@@ -47,7 +47,7 @@ from ..static._form_check import carried_degree, static_degree, static_fit_mse, 
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
 from ..core._records import overlap_message, same_record
-from ..core._validation import check_choice, check_int, check_lambdas, check_real, check_sequence, warn
+from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints
 from ._executors import check_cluster
 from ._map import parallel_map
@@ -137,6 +137,7 @@ class GrayboxSelection:
     TABLE_COLUMNS = ("source", "size", "n_terms", "added", "estimator", "JS_valid", "JSF", "in_band", "rank")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if not isinstance(self.table, pd.DataFrame):
             raise TypeError(f"table must be a DataFrame, got {type(self.table).__name__}")
         missing = [c for c in self.TABLE_COLUMNS if c not in self.table.columns]

@@ -43,7 +43,7 @@ from ..core._records import Dataset, Record, as_records
 from ._forward_regression import CRITERIA, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
-from ..core._validation import check_bool, check_choice, check_int, check_real, frozen
+from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, frozen
 
 __all__ = ["semp", "SEMPResult"]
 
@@ -90,6 +90,7 @@ class SEMPResult:
     PATH_COLUMNS = ("step", "action", "term", "n_terms", "score", "criterion", "structure")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if len(self.theta) != len(self.structure):
             raise ValueError(f"theta has {len(self.theta)} values but the structure has {len(self.structure)} terms")
         check_choice(self.criterion, "criterion", CRITERIA)

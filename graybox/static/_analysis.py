@@ -57,7 +57,7 @@ from ._equilibrium_kernels import (
     settle_runs,
 )
 from ..core._terms import Structure, Term
-from ..core._validation import as_1d_finite, check_bool, check_per_point
+from ..core._validation import as_1d_finite, check_bool, check_fields, check_per_point
 from ..core._reprs import short_repr
 from ._linearisation import derivative_map, grid_coefficients
 
@@ -406,8 +406,10 @@ class Equilibrium:
 
     Attributes
     ----------
-    ubar, ybar : float
-        Input and output levels.
+    ubar : float or tuple of float
+        Input level (one per input with several inputs: a point of the static surface).
+    ybar : float
+        Output level.
     stable : bool
         True when the linearised recursion is asymptotically stable (every root strictly inside
         the unit circle, by the Schur–Cohn test of :func:`schur_stable`).
@@ -415,10 +417,13 @@ class Equilibrium:
         Largest modulus of those roots (0 for a static model), for information.
     """
 
-    ubar: float
+    ubar: float | tuple[float, ...]
     ybar: float
     stable: bool
     spectral_radius: float
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
 
 def spectral_radius(a: np.ndarray) -> float:

@@ -30,7 +30,7 @@ import numpy as np
 from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name
 from ..core._terms import Structure, Term, check_input_names
-from ..core._validation import check_bool, check_per_point, renamed
+from ..core._validation import check_bool, check_fields, check_per_point, renamed
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -100,6 +100,9 @@ class SurfaceClusterMap:
     inputs: tuple[str, ...]
     keys: tuple[tuple[int, ...], ...]
     R: np.ndarray
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     @property
     def names(self) -> list[str]:
