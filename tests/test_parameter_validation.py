@@ -145,6 +145,12 @@ def grid_run(store, tmp_path_factory):
     return gx.run_grid(GRID, shutil.copyfile(store, tmp_path_factory.mktemp("run") / "g.sqlite"), progress=False)
 
 
+@pytest.fixture(scope="module")
+def status(store):
+    """What grid_status returns for the store."""
+    return gx.grid_status(store)
+
+
 @pytest.fixture
 def out_dir(tmp_path):
     return tmp_path / "report"
@@ -347,13 +353,16 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "OEResult": ((), _fields_of(_made(gb.output_error, ST, REC, n_starts=1, max_nfev=3))),
     "SEMPResult": ((), _fields_of(_made(gb.semp, gb.Candidates(1, 1, degree=2), REC, n_terms=2))),
     "SurfaceClusterMap": ((), _fields_of(gb.surface_cluster_map(ST2))),
+    "Cell": ((), _fields_of(GRID.cells()[0])),
+    "GridStatus": ((), {f.name: Lazy("status", f.name) for f in dataclasses.fields(gx.GridStatus)}),
+    "Structure": ((["y(k-1)", "u(k-1)", "1"],), {}),
 }
 
 #: The result objects above: every field is an option (none has a default that makes it optional in use).
 RESULTS = {"ELSResult", "ParameterUncertainty", "StaticCurveBand", "Selection", "ParetoSet", "Decision",
            "DecisionBootstrap", "GridRun", "LocalModel", "OperatingCurve", "CLSResult", "ResidualTests",
            "CorrelationTest", "DSFResult", "Equilibrium", "GrayboxSelection", "NeuralFit", "OEResult", "SEMPResult",
-           "SurfaceClusterMap"}
+           "SurfaceClusterMap", "Cell", "GridStatus"}
 
 # Public callables with options that this test does not call, and why.
 NOT_EXERCISED: dict[str, str] = {}
@@ -674,3 +683,10 @@ def test_structured_options_keep_their_valid_forms():
     assert gb.Model(ST, THETA, noise_structure=["e(k-1)"], noise_theta=[0.2]).noise_structure[0].is_noise
     psi, _ = gb.stacked_regressors(gb.Structure(["y(k-1)", "e(k-1)"]), REC, residuals=[np.zeros(80)])
     assert psi.shape == (79, 2)
+
+
+def test_every_public_dataclass_is_called():
+    """Values and results alike: each public dataclass is built here (a result from one the library made)."""
+    missing = sorted(k for k, obj in PUBLIC.items()
+                     if isinstance(obj, type) and dataclasses.is_dataclass(obj) and k not in CALLS)
+    assert not missing, f"public dataclasses this test never builds: {missing}"

@@ -30,7 +30,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
-from ..core._validation import check_bool, check_choice, check_real, check_sequence
+from ..core._validation import check_bool, check_choice, check_fields, check_real, check_sequence
 from ._cell import STATUSES
 from ._store import compare_results, encode_value, load_results
 
@@ -690,6 +690,9 @@ class GridStatus:
     last_finished: str | None
     best: pd.DataFrame
     specs: int
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     def summary(self) -> str:
         """A few lines for a terminal."""

@@ -24,7 +24,7 @@ from .. import _api as gb
 
 from ..core._terms import default_input_names
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
-from ..core._validation import check_choice, check_int, check_lambdas, check_path, check_real
+from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_path, check_real
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -928,6 +928,9 @@ class Cell:
     structure_spec: Mapping[str, Any]
     variant_spec: Mapping[str, Any]
     version: str
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
