@@ -73,3 +73,8 @@ def test_selection_and_output_error_refuse_overlapping_records():
         gb.select_graybox(cand, gb.Dataset(ident, ident.slice(400, 800), None), band=np.inf, sizes=[2])
     with pytest.raises(ValueError, match="choose_on: the choosing record .* shares 200 samples with the fitting"):
         gb.output_error(true, ident, choose_on=ident.slice(0, 200))
+
+
+def test_records_of_other_input_counts_share_nothing():
+    one, two = _record(1, 200), _record(1, 200, m=2)
+    assert shared_stretch(one, two) is None and shared_stretch(two, one) is None

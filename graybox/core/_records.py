@@ -445,6 +445,8 @@ def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
     always found, a shorter one may be. Identical records give ``(0, 0, N)``.
     """
     za, zb = _samples(a), _samples(b)
+    if za.shape[1] != zb.shape[1]:
+        return None  # other inputs: not the same data (the caller says what else is wrong)
     for x, z, flip in ((za, zb, False), (zb, za, True)):
         k = min(_WINDOW, len(x), len(z))
         if k < 2:
