@@ -137,15 +137,13 @@ class GrayboxSelection:
     TABLE_COLUMNS = ("source", "size", "n_terms", "added", "estimator", "JS_valid", "JSF", "in_band", "rank")
 
     def __post_init__(self) -> None:
-        check_fields(self)
-        if not isinstance(self.table, pd.DataFrame):
-            raise TypeError(f"table must be a DataFrame, got {type(self.table).__name__}")
+        check_fields(self)  # types first: the table is a DataFrame, the band a real number
         missing = [c for c in self.TABLE_COLUMNS if c not in self.table.columns]
         if missing:
             raise ValueError(f"the table lacks the column(s) {missing}")
         if list(self.model.structure) != list(self.structure):
             raise ValueError("the model's structure is not the chosen structure")
-        if not (isinstance(self.band, (int, float)) and self.band > 0):
+        if not self.band > 0:
             raise ValueError(f"band must be > 0 (inf for a black box), got {self.band!r}")
         check_choice(self.rule, "rule", RULES)
 

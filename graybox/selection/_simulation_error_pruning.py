@@ -90,13 +90,10 @@ class SEMPResult:
     PATH_COLUMNS = ("step", "action", "term", "n_terms", "score", "criterion", "structure")
 
     def __post_init__(self) -> None:
-        check_fields(self)
+        check_fields(self)  # types first: path and forward_scores are DataFrames
         if len(self.theta) != len(self.structure):
             raise ValueError(f"theta has {len(self.theta)} values but the structure has {len(self.structure)} terms")
         check_choice(self.criterion, "criterion", CRITERIA)
-        for name in ("path", "forward_scores"):
-            if not isinstance(getattr(self, name), pd.DataFrame):
-                raise ValueError(f"{name} must be a DataFrame, got {type(getattr(self, name)).__name__}")
         missing = [c for c in self.PATH_COLUMNS if c not in self.path.columns]
         if missing:
             raise ValueError(f"the path lacks the column(s) {missing}")
