@@ -43,6 +43,7 @@ import pandas as pd
 from .. import _api as gb
 
 from ..io._json import register_type
+from ..models._coerce import static_info
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
@@ -251,7 +252,7 @@ def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.St
     return sp, degree
 
 
-def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> tuple[_Plan, int | None]:
+def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tuple[_Plan, int | None]:
     if not isinstance(candidates, gb.Structure):
         raise TypeError(f"candidates must be a candidate set (a Structure, e.g. graybox.Candidates(...)), got "
                         f"{type(candidates).__name__}")
@@ -260,10 +261,9 @@ def _inputs(candidates, data, static, validation, test, band, folds, blocks) -> 
     if isinstance(data, gb.Dataset):
         ident = data.ident
         valid = validation if validation is not None else data.valid
-        sp = static if static is not None else data.static
         extra = dict(data.extra)  # e.g. the curve of an equality with curve="dataset"
     elif isinstance(data, gb.Record):
-        ident, valid, sp = data, validation, static
+        ident, valid = data, validation
     else:
         raise TypeError(f"data must be a Dataset or a Record, got {type(data).__name__}")
     if band is not None and sp is None:
@@ -694,7 +694,8 @@ def select_graybox(
         sizes beyond the candidates; no structure meeting the band (without ``fallback``); bad
         arguments.
     """
-    band = _band(band, data, static)
+    sp = static_info(static, data, curves=True)
+    band = _band(band, sp)
     if _is_scalar(constraints):
         raise TypeError(f"constraints must be a constraint, a table of them or a sequence, got {constraints!r}")
     constraints = tuple(constraint_entries(constraints))  # read once: a generator is used up
@@ -715,7 +716,7 @@ def select_graybox(
     if fallback is not None:
         check_choice(fallback, "fallback", ("min_jsf",))
     check_choice(rule, "rule", RULES)
-    plan, degree = _inputs(candidates, data, static, validation, test, band, folds, blocks)
+    plan, degree = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
     rows = _structures(candidates, plan.ident, sizes, sources, include, degree)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
                             progress=progress)
@@ -755,7 +756,7 @@ def _is_scalar(value: object) -> bool:
     return isinstance(value, (bool, int, float, np.bool_, np.integer, np.floating))
 
 
-def _band(band: object, data: object, static: object) -> float | None:
+def _band(band: object, sp: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None) -> float | None:
     """B for a gray box, None for a black box: ``band`` as given (inf: no static requirement, a black
     box), else the static points' own (:attr:`StaticPoints.band`, when they carry their uncertainty),
     as :func:`graybox.se_dsf` and :func:`graybox.bootstrap_decision` take it."""
@@ -763,7 +764,6 @@ def _band(band: object, data: object, static: object) -> float | None:
         return None
     if band is not None:
         return check_real(band, "band", low=0, low_open=True)
-    sp = static if static is not None else data.static if isinstance(data, gb.Dataset) else None
     if isinstance(sp, gb.StaticPoints) and sp.uncertainty is not None:
         return sp.band
     return None
