@@ -602,22 +602,17 @@ def ga_front(
         raise ValueError(f"starts: {extra.shape[0]} individuals do not fit a population of {options.population} "
                          "besides the carried one")
 
-    def seeded(lam1):
-        out = []
-        for th in extra:
-            if problem.margin is not None and not np.isfinite(problem.cost(th[None], lam1)[0]):
-                pulled = _pull_inside(problem, th, lam1)
-                th = th if pulled is None else pulled[0]
-            out.append(th)
-        return out
+    def inside(th, lam1):
+        """A given individual outside the margin with its feedback shrunk (as it is where no scaling helps)."""
+        if problem.margin is None or np.isfinite(problem.cost(th[None], lam1)[0]):
+            return th
+        pulled = _pull_inside(problem, th, lam1)
+        return th if pulled is None else pulled[0]
 
     def step(i, lam1, thetas, rng):
         near = _nearest(thetas, i, "before", 1)
         carry = thetas[near[0]] if near else first
-        if carry is not None and problem.margin is not None and not np.isfinite(problem.cost(carry[None], lam1)[0]):
-            pulled = _pull_inside(problem, carry, lam1)  # a carried individual outside the margin: shrink its feedback
-            carry = carry if pulled is None else pulled[0]
-        given = ([] if carry is None else [carry]) + seeded(lam1)
+        given = [inside(th, lam1) for th in ([] if carry is None else [carry]) + list(extra)]
         init = problem.random_ls(rng, options.population - len(given), options.random_samples)
         if given:
             init = np.vstack([np.array(given), init])
