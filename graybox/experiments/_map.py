@@ -14,6 +14,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
 
@@ -87,7 +88,7 @@ def parallel_map(
             # spawned, not forked: a fork copies a parent whose numba threads are running, and the
             # child then refuses the NUMBA_NUM_THREADS set above (as ProcessPool spawns too)
             pool = stack.enter_context(ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn")))
-            yield lambda fn, items: list(pool.map(fn, items))
+            yield lambda fn, items: _pool_map(pool, fn, items)
             return
         from distributed import Client
 
@@ -102,3 +103,15 @@ def parallel_map(
             return client.gather(client.map(fn, list(items), pure=False))
 
         yield dmap
+
+
+def _pool_map(pool: ProcessPoolExecutor, fn: Callable, items: Iterable) -> list:
+    """``pool.map``, with a dead worker explained: the usual cause is a script without a main guard."""
+    try:
+        return list(pool.map(fn, items))
+    except BrokenProcessPool as exc:
+        raise RuntimeError(
+            "a worker process died before returning its job. Workers are spawned and import the "
+            "main module again: a script that runs select_graybox or parallel_map on processes must "
+            "do so under `if __name__ == \"__main__\":` (notebooks and the graybox command need "
+            "nothing). Otherwise the worker was killed (out of memory, a signal)") from exc

@@ -670,7 +670,9 @@ def select_graybox(
         reached; ``"min_jsf"`` takes the structure with the smallest J_SF and says so.
     executor : {"inprocess", "processes", "dask"}, optional
         Where the jobs (one per structure × estimator) run: default in the driver, or on Dask
-        when ``workers``, ``client`` or ``scheduler`` is given.
+        when ``workers``, ``client`` or ``scheduler`` is given. Worker processes are spawned and
+        import the main module again: a script must call this under
+        ``if __name__ == "__main__":`` (a notebook needs nothing).
     workers : int, optional
         Local worker processes (Dask ``LocalCluster``, or a process pool with ``"processes"``).
     client : distributed.Client, optional
