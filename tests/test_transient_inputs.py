@@ -152,3 +152,20 @@ def test_names():
     assert gb.transient_name("speed", 2.5) == "speed_tau2p5"
     with pytest.raises(ValueError, match="tau"):
         gb.transient_name("u", -1.0)
+
+
+def test_a_held_input_asks_no_static_form():
+    """The static form is judged over the inputs the points vary: a transient input (z̄ = 0) changes nothing."""
+    from graybox.static._form_check import carried_degree, static_degree, static_inputs, static_terms
+
+    plain = gb.load_pumping().static
+    held = gb.transient_inputs(plain, taus=(10, 30))
+    assert static_inputs(held) == ("u",) and static_inputs(plain) == ("u",)
+    for band in (1e-4, 1e-2, 1.0, 100.0):
+        assert static_degree(held, band=band) == static_degree(plain, band=band)
+    cand = gb.Candidates(2, {"u": 2, "u_tau10": 1, "u_tau30": 1}, degree=2, input_names=held.input_names)
+    assert carried_degree(cand, 2, static_inputs(held)) == 2
+    added = static_terms(gb.Structure(["y(k-1)"]), cand, 2, static_inputs(held))
+    assert {str(t) for t in added} == {"1", "u(k-1)", "u(k-1)^2"}
+    # over every input the same completion would also ask for clusters in the transient inputs
+    assert any("tau" in str(t) for t in static_terms(gb.Structure(["y(k-1)"]), cand, 2))
