@@ -1,7 +1,7 @@
 """Honest selection: fit / choose / untouched test (issue 26).
 
-    .venv/bin/python benchmarks/bench_honest.py [--part speed|protocol|all] [--cases plant,buck,...] [--no-old]
-        [--record-only]
+    .venv/bin/python benchmarks/bench_honest.py [--part speed|protocol|transient|all] [--cases plant,buck,...]
+        [--no-old] [--record-only]
 
 - protocol: on each case, ``select_graybox`` fits on the identification record, chooses on the
   validation record and reports on a test record nothing was fitted or chosen on. Per case: the
@@ -12,6 +12,10 @@
   test J_S) and regret (test J_S of the choice / the best test J_S among the rows it compared).
 - speed: the README's call ``select_graybox(Candidates(ny=6, nu=6, degree=2), data, band=0.031)``
   on the bundled plant, in the driver and on 2 worker processes, with the load average.
+- transient: the gray and the black box chosen as in protocol from the case's candidates, and from
+  the same candidates plus transient inputs (``gb.transient_inputs``, one lag each) on two τ grids
+  given in samples (60, 200, 600, 2000 and 100, 300, 900, 2700: 3–100 s and 5–135 s on the plant),
+  scored on the test record and, for the simulated plants, on five fresh runs (seed + 1 … + 5).
 
 Cases: the bundled plant (test: a fresh simulator run, another seed), the two-speed rig (same),
 the buck converter (choose on the first half of its validation file, test on the second), and
@@ -168,9 +172,75 @@ def speed() -> None:
               flush=True)
 
 
+# candidate lags per case (ny, nu), for the candidates with transient inputs
+_LAGS = {"plant": (6, 6), "two-speed rig": (2, 2), "buck": (2, 2), "short records (45 candidates)": (4, 4),
+         "slow disturbance": (3, 3), "static points off the records": (3, 3)}
+# τ grids in samples: a 1-3-10 series (the plant: 3, 10, 30, 100 s) and one shifted off it (5, 15, 45, 135 s)
+_GRIDS = {"1-3-10": (60, 200, 600, 2000), "off": (100, 300, 900, 2700)}
+
+
+def _more_tests(name, data, n=5):
+    """Fresh simulator runs (seed + 1 … + n) for the simulated plants; the case's own test record otherwise."""
+    from graybox.datasets import pumping
+    from graybox.datasets._pumping_miso import generate_miso
+    if name == "plant":
+        return [pumping.generate(seed=data.extra["seed"] + i)[0].record(f"seed + {i}") for i in range(1, n + 1)]
+    if name == "two-speed rig":
+        return [generate_miso(seed=data.extra["seed"] + i)[0].record(f"seed + {i}") for i in range(1, n + 1)]
+    return []
+
+
+def transient(names) -> None:
+    """Gray and black boxes chosen with and without transient inputs (two τ grids), scored on untouched records."""
+    rows = []
+    for name, (data, test, cand, band) in cases().items():
+        if names and name not in names:
+            continue
+        tests = [test] + _more_tests(name, data)[1:]  # the first fresh run is the case's test record
+        ny, nu = _LAGS[name]
+        variants = {"plain": (data, cand, tests)}
+        for grid, samples in _GRIDS.items():
+            taus = tuple(k * data.Ts for k in samples)
+            aug = gb.transient_inputs(data, taus=taus)
+            lags = {n: (nu if n in data.input_names else 1) for n in aug.input_names}
+            c = gb.Candidates(ny, lags, degree=2, input_names=aug.input_names)
+            ts = [gb.transient_inputs(t, taus=taus) for t in tests]
+            variants[f"transient {grid}"] = (aug, c, ts)
+            # the transient inputs alone or times an input, never times y or squared: the model's
+            # y-dynamics (its poles) stay those of its other terms whatever the transients do
+            new = set(aug.input_names) - set(data.input_names)
+            keep = [t for t in c if not new & set(t.inputs)
+                    or (t.power_of("y") == 0 and sum(t.power_of(n) for n in new) == 1)]
+            variants[f"transient {grid}, z alone or times u"] = (aug, gb.Structure(keep), ts)
+        t0 = time.perf_counter()
+        for label, (d, c, ts) in variants.items():
+            try:
+                res = {box: gb.select_graybox(c, d, band=b, test=ts[0], executor="processes", workers=2)
+                       for box, b in (("gray", band), ("black", np.inf))}
+            except ValueError as e:  # e.g. no structure meets the band: a failed row, the run goes on
+                rows.append({"case": name, "candidates": label, "box": "gray", "estimator": f"error: {e}"[:120]})
+                continue
+            js = {box: [_test_js(r.model, t) for t in ts] for box, r in res.items()}
+            for box, r in res.items():
+                ch = r.chosen
+                z = sorted({n for t in r.structure for n in t.inputs} - set(data.input_names))
+                rows.append({"case": name, "candidates": label, "box": box, "n_terms": len(r.structure),
+                             "estimator": ch["estimator"], "transient inputs used": ", ".join(z) or "none",
+                             "JS_valid": ch["JS_valid"], "JS_test": ch["JS_test"],
+                             "vs black": ch["JS_test"] / res["black"].chosen["JS_test"],
+                             "regret": ch["JS_test"] / r.table["JS_test"].min(),
+                             "JSF": ch["JSF_test"], "in band": bool(ch["JSF_test"] <= band),
+                             f"mean test ({len(ts)})": np.mean(js[box]),
+                             "mean vs black": np.mean(js[box]) / np.mean(js["black"])})
+        print(f"{name}: {time.perf_counter() - t0:.0f} s (load {os.getloadavg()[0]:.1f})", flush=True)
+        print(pd.DataFrame([r for r in rows if r["case"] == name]).drop(columns="case").to_markdown(
+            index=False, floatfmt=".4g"), flush=True)
+    print("\n" + pd.DataFrame(rows).to_markdown(index=False, floatfmt=".4g"))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--part", default="all", choices=("speed", "protocol", "all"))
+    ap.add_argument("--part", default="all", choices=("speed", "protocol", "transient", "all"))
     ap.add_argument("--cases", default="", help="comma-separated case names (default all)")
     ap.add_argument("--no-old", action="store_true", help="skip main's select_graybox")
     ap.add_argument("--record-only", action="store_true",
@@ -182,6 +252,8 @@ def main() -> None:
         speed()
     if args.part in ("protocol", "all"):
         protocol([c for c in args.cases.split(",") if c], not args.no_old, args.record_only)
+    if args.part in ("transient", "all"):
+        transient([c for c in args.cases.split(",") if c])
 
 
 if __name__ == "__main__":

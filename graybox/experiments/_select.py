@@ -44,7 +44,7 @@ from .. import _api as gb
 
 from ..io._json import register_type
 from ..models._coerce import static_info
-from ..static._form_check import carried_degree, static_degree, static_fit_mse, static_terms
+from ..static._form_check import carried_degree, static_degree, static_fit_mse, static_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
 from ..core._records import overlap_message, same_record
@@ -218,8 +218,8 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
     return out
 
 
-def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.StaticPoints | None, int | None]:
-    """Static points for the jobs and the static degree the structures must carry (None: black box)."""
+def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.StaticPoints | None, _Form | None]:
+    """Static points for the jobs and the static form the structures must carry (None: black box)."""
     if sp is None:
         return None, None
     if isinstance(sp, (gb.StaticCurve, gb.StaticSurface)):
@@ -237,9 +237,10 @@ def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.St
         degree = static_degree(sp, band=band)
     if band is None:
         return sp, None
-    top = carried_degree(process, degree)
+    varied = static_inputs(sp)  # an input the points hold (a transient input's z̄ = 0) asks for no cluster
+    top = carried_degree(process, degree, varied)
     if top is None:
-        static_terms(gb.Structure([]), process, degree)  # raises, naming the clusters the candidates lack
+        static_terms(gb.Structure([]), process, degree, varied)  # raises, naming the clusters the candidates lack
     if top < degree:
         # a rational structure (Σ_y) bends its static curve beyond its numerator's degree: ask what the
         # candidates carry, say so, and let the band judge (the table reports every J_SF)
@@ -249,10 +250,17 @@ def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.St
              (f" (a degree-{top} polynomial fits the points with MSE {fit:.4g}, band B = {band:g})"
               if fit is not None else ""), SelectionWarning)
         degree = top
-    return sp, degree
+    return sp, _Form(degree, varied)
 
 
-def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tuple[_Plan, int | None]:
+@dataclass(frozen=True)
+class _Form:
+    """The static form the structures are completed to: its degree, in the inputs the static information varies."""
+    degree: int
+    inputs: tuple[str, ...]
+
+
+def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tuple[_Plan, _Form | None]:
     if not isinstance(candidates, gb.Structure):
         raise TypeError(f"candidates must be a candidate set (a Structure, e.g. graybox.Candidates(...)), got "
                         f"{type(candidates).__name__}")
@@ -269,7 +277,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     if band is not None and sp is None:
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
-    sp, degree = _static_points(sp, process, band)
+    sp, form = _static_points(sp, process, band)
     L = process.max_lag
     if test is not None:
         if not isinstance(test, gb.Record):
@@ -299,12 +307,12 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in
                        _folds(ident, check_int(folds, "folds", low=2), L + 2))
-    return _Plan(ident, splits, test, sp, np.inf if band is None else band, L, extra), degree
+    return _Plan(ident, splits, test, sp, np.inf if band is None else band, L, extra), form
 
 
 # -- 2. structures -----------------------------------------------------------------------------
 
-def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, include, degree) -> list[dict]:
+def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, include, form: _Form | None) -> list[dict]:
     """One dict per distinct structure: name, source(s), size, terms, added static-form terms."""
     process = candidates.process
     n_max = len(process)
@@ -361,7 +369,7 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
     rows, seen = [], {}
     for (src, k), terms in found.items():
         st = gb.Structure(terms)
-        added = static_terms(st, process, degree) if degree is not None else []
+        added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
         st = st + gb.Structure(added)
         key = frozenset(st)
         if key in seen:
@@ -718,8 +726,8 @@ def select_graybox(
     if fallback is not None:
         check_choice(fallback, "fallback", ("min_jsf",))
     check_choice(rule, "rule", RULES)
-    plan, degree = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
-    rows = _structures(candidates, plan.ident, sizes, sources, include, degree)
+    plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
+    rows = _structures(candidates, plan.ident, sizes, sources, include, form)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
                             progress=progress)
     fast = [e for e in estimators if e not in SLOW_ESTIMATORS]
@@ -750,7 +758,8 @@ def select_graybox(
     structure = gb.Structure(job.terms.split(" + "))
     decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
     table = table.sort_values("rank").drop(columns=["terms"])
-    return GrayboxSelection(structure, decision.model, decision, table, degree, plan.band, not used_fallback, used)
+    return GrayboxSelection(structure, decision.model, decision, table, None if form is None else form.degree, plan.band,
+                            not used_fallback, used)
 
 
 def _is_scalar(value: object) -> bool:

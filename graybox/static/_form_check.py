@@ -14,7 +14,10 @@ Notebooks 02 and 04 added "the simplest term per missing cluster" by hand; this 
 
 With several inputs the static information is a surface: the degree is the total degree of the
 polynomial surface (every monomial ū₁^a₁ ⋯ ū_m^a_m with a₁ + … + a_m ≤ d), and the clusters
-needed are every Σ_{u₁^a₁ ⋯ u_m^a_m} of those monomials and Σ_y.
+needed are every Σ_{u₁^a₁ ⋯ u_m^a_m} of those monomials and Σ_y. An input that the static
+points hold at one value (a transient input, zero at every steady state; a second input kept
+fixed during the static test) says nothing about the form: the degree is judged, and the
+clusters asked, over the inputs the points vary (:func:`static_inputs`).
 """
 
 from __future__ import annotations
@@ -30,7 +33,17 @@ from ._surfaces import StaticSurface, _monomials, monomial_exponents
 from ..core._terms import Structure, Term
 from ..core._validation import check_int, check_real
 
-__all__ = ["carried_degree", "static_degree", "static_fit_mse", "static_terms"]
+__all__ = ["carried_degree", "static_degree", "static_fit_mse", "static_inputs", "static_terms"]
+
+
+def static_inputs(static: StaticPoints | StaticCurve | StaticSurface) -> tuple[str, ...]:
+    """The inputs the static information varies: every input of a curve or a surface; for points, those
+    whose ū differs between points (one held at a single value, e.g. a transient input's z̄ = 0,
+    carries no information on the static form)."""
+    if isinstance(static, StaticPoints):
+        u = np.asarray(static.ubar, float).reshape(len(static), static.n_inputs)
+        return tuple(n for n, col in zip(static.input_names, u.T) if np.ptp(col) > 0)
+    return tuple(static.input_names)
 
 
 def static_degree(static: StaticPoints | StaticCurve | StaticSurface, *, band: float, max_degree: int = 3) -> int:
@@ -76,13 +89,20 @@ def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
     points (a surface of that total degree with several inputs); None when the points cannot
     determine it (fewer points than coefficients, or points that leave a direction unvaried, as
     when two inputs always move together). One point is fitted exactly by a constant."""
-    m = static.n_inputs
-    ex = monomial_exponents(m, degree)
+    u = np.asarray(static.ubar, float).reshape(len(static), static.n_inputs)
+    held = [i for i, n in enumerate(static.input_names) if n not in static_inputs(static)]
+    u = np.delete(u, held, axis=1)  # a held input is a constant: the constant monomial carries it
+    if u.shape[1] == 0:
+        ex: tuple = ((),)
+        if degree > 0:
+            return None  # no input varies: only degree 0 is determined
+    else:
+        ex = monomial_exponents(u.shape[1], degree)
     if len(static) < len(ex):
         return None
     # plain least squares on the monomials (no curve object: its domain would refuse one point,
     # or points that do not vary every input)
-    V = _monomials(np.asarray(static.ubar, float).reshape(len(static), m), ex)
+    V = _monomials(u, ex)
     try:
         c = scaled_lstsq(V, static.ybar)
     except ValueError:  # rank deficient: the points do not pin the polynomial down (e.g. one input held)
@@ -94,7 +114,8 @@ def _simplicity(term: Term) -> tuple[int, int, int]:
     return (term.max_lag, len(term.factors), sum(l for _, l, _ in term.factors))
 
 
-def static_terms(structure: Structure, candidates: Structure, degree: int) -> list[Term]:
+def static_terms(structure: Structure, candidates: Structure, degree: int,
+                 inputs: tuple[str, ...] | None = None) -> list[Term]:
     """The simplest candidates that give ``structure`` every cluster a degree-``degree`` curve needs.
 
     Parameters
@@ -106,6 +127,10 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
     degree : int
         Degree d of the static curve: clusters Σ_{u^0} … Σ_{u^d} and Σ_y are needed (several
         inputs: every Σ_{u1^a1 ⋯ um^am} with a1 + … + am ≤ d, and Σ_y).
+    inputs : tuple of str, optional
+        The inputs the form is a polynomial in (default: every input of the candidates and the
+        structure); the others are held by the static information (:func:`static_inputs`), and
+        no cluster in them is asked.
 
     Returns
     -------
@@ -119,7 +144,7 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
         curve's form: e.g. a degree-2 curve and candidates of degree 1), naming the clusters.
     """
     degree = check_int(degree, "degree", low=0)
-    out, missing, inputs = _complete(structure, candidates, degree)
+    out, missing, inputs = _complete(structure, candidates, degree, inputs)
     if missing:
         m = len(inputs)
         names = [cluster_name(*k) if m == 1 else surface_cluster_name(k[0], k[1:], inputs) for k in missing]
@@ -133,11 +158,15 @@ def static_terms(structure: Structure, candidates: Structure, degree: int) -> li
     return out
 
 
-def _complete(structure: Structure, candidates: Structure, degree: int) -> tuple[list[Term], list[tuple], tuple]:
-    """(terms to add, cluster keys no candidate holds, input names) for a degree-``degree`` form."""
+def _complete(structure: Structure, candidates: Structure, degree: int,
+              varied: tuple[str, ...] | None = None) -> tuple[list[Term], list[tuple], tuple]:
+    """(terms to add, cluster keys no candidate holds, input names) for a degree-``degree`` form in the
+    ``varied`` inputs (default: all)."""
     inputs = tuple(dict.fromkeys(candidates.inputs + structure.inputs)) or ("u",)
     m = len(inputs)
-    need = [(0,) + e for e in monomial_exponents(m, degree)] + [(1,) + (0,) * m]
+    pos = [i for i, n in enumerate(inputs) if varied is None or n in varied]
+    need = [(0,) + e for e in _embedded(monomial_exponents(len(pos), degree) if pos else ((),), pos, m)]
+    need += [(1,) + (0,) * m]
     have = {surface_cluster_key(t, inputs) for t in structure if not t.is_noise}
     out, missing = [], []
     for key in need:
@@ -151,7 +180,18 @@ def _complete(structure: Structure, candidates: Structure, degree: int) -> tuple
     return out, missing, inputs
 
 
-def carried_degree(candidates: Structure, degree: int) -> int | None:
+def _embedded(exponents, pos: list[int], m: int) -> list[tuple[int, ...]]:
+    """Exponent vectors over the inputs at ``pos``, written over all ``m`` inputs (zero elsewhere)."""
+    out = []
+    for e in exponents:
+        full = [0] * m
+        for i, k in zip(pos, e):
+            full[i] = k
+        out.append(tuple(full))
+    return out
+
+
+def carried_degree(candidates: Structure, degree: int, inputs: tuple[str, ...] | None = None) -> int | None:
     """The largest degree d <= ``degree`` whose static form (clusters Σ_{u^0} … Σ_{u^d}, Σ_y; every
     monomial of total degree <= d with several inputs) the candidates can complete; None when they
     cannot complete even degree 0 (no constant, or no output term).
@@ -162,6 +202,8 @@ def carried_degree(candidates: Structure, degree: int) -> int | None:
         Candidate terms (noise terms are ignored).
     degree : int
         The degree the static information asks for.
+    inputs : tuple of str, optional
+        The inputs the form is a polynomial in (default: all; see :func:`static_terms`).
 
     Returns
     -------
@@ -169,6 +211,6 @@ def carried_degree(candidates: Structure, degree: int) -> int | None:
     """
     degree = check_int(degree, "degree", low=0)
     for d in range(degree, -1, -1):
-        if not _complete(Structure([]), candidates, d)[1]:
+        if not _complete(Structure([]), candidates, d, inputs)[1]:
             return d
     return None

@@ -1,0 +1,146 @@
+"""Transient inputs: regressors that are zero at every steady state.
+
+Some plants carry effects that a change of the input sets off and that die out while the input
+rests: air drawn into a pump's suction that vents over half a minute, a heater's casing that warms
+after each step, a tank's level that swings and settles. A careful static test waits them out, so
+the static points do not show them; the dynamic records do. A model held to the static points
+within their uncertainty then pays for them on every record (its static curve cannot move to
+absorb their mean), while a black box absorbs them into a static curve that misses the points.
+
+A transient input gives the model a way to carry such an effect without touching its static
+curve. For an input u and a time constant τ it is the low-pass filtered squared change
+
+    z(k) = ρ z(k−1) + (1 − ρ) (u(k) − u(k−1))²,   ρ = exp(−Ts / τ),   z(0) = 0,
+
+zero while u rests (hence zero at every static point), positive after any change (either
+direction), decaying with τ. It is an input channel like any other (``u_tau30`` for τ = 30 s), so
+every estimator, the free runs, the static analysis and ``select_graybox`` use it as they use a
+second input; the static points get z̄ = 0. Which τ (if any) the data support is a choice like the
+structure's: offer a few and let the selection choose on the validation record.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence, TypeVar
+
+import numpy as np
+from scipy.signal import lfilter
+
+from ._records import Dataset, Record, StaticPoints
+from ._validation import check_real, check_sequence
+
+__all__ = ["transient_inputs", "transient_name"]
+
+_Data = TypeVar("_Data", Record, Dataset, StaticPoints)
+
+
+def transient_name(input_name: str, tau: float) -> str:
+    """The name of the transient input of ``input_name`` with time constant ``tau`` seconds: ``u_tau30``, ``u_tau2p5``.
+
+    Parameters
+    ----------
+    input_name : str
+        The input's name, e.g. ``"u"``.
+    tau : float
+        The time constant in seconds (> 0).
+
+    Returns
+    -------
+    str
+        ``{input_name}_tau{τ}``, τ written with ``p`` for the decimal point.
+    """
+    if not isinstance(input_name, str):
+        raise TypeError(f"input_name must be a str, got {input_name!r} ({type(input_name).__name__})")
+    tau = check_real(tau, "tau (seconds)", low=0, low_open=True)
+    tag = f"{tau:g}".replace(".", "p").replace("-", "m").replace("+", "")
+    return f"{input_name}_tau{tag}"
+
+
+def _filtered_square_change(u: np.ndarray, rho: float) -> np.ndarray:
+    du2 = np.empty_like(u)
+    du2[0] = 0.0  # the record is taken to begin at rest
+    du2[1:] = np.diff(u) ** 2
+    return lfilter([1.0 - rho], [1.0, -rho], du2)
+
+
+def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str] | None = None) -> _Data:
+    """Add transient inputs (low-pass filtered squared input changes) to a record, a data set or static points.
+
+    For each input named in ``inputs`` and each ``τ`` in ``taus`` a new input channel
+    ``z(k) = ρ z(k−1) + (1 − ρ) (u(k) − u(k−1))²`` with ``ρ = exp(−Ts/τ)`` and ``z(0) = 0`` is
+    appended, named ``{input}_tau{τ}`` (:func:`transient_name`). It is zero while the input
+    rests, so the static points get ``z̄ = 0`` and a model's static curve at the measured ū is
+    untouched by the terms in z; it lets a gray box carry effects that input changes set off
+    and that a static test waits out (see the module's notes), which otherwise make it pay on
+    the dynamic records for meeting the static points.
+
+    Parameters
+    ----------
+    data : Record, Dataset or StaticPoints
+        What to extend. A Record (e.g. a test record: a model that uses transient inputs needs
+        them in every record it runs on) gets the new channels computed from its own input; a
+        Dataset gets them in both records and ``z̄ = 0`` in its static points; StaticPoints get
+        ``z̄ = 0`` columns.
+    taus : sequence of float
+        Time constants τ in seconds (> 0, finite, distinct), e.g. ``(10, 30, 100)`` when effects
+        that settle over tens of seconds are suspected.
+    inputs : sequence of str, optional
+        The inputs to take changes of (default: every input of ``data``).
+
+    Returns
+    -------
+    Record, Dataset or StaticPoints
+        A new value of the same type with ``len(inputs) × len(taus)`` more inputs, each in the
+        input's units squared, after the existing ones (input by input, τ in the given order).
+        A Dataset keeps its description and extra entries, and lists the new channels as
+        ``extra["transient_inputs"]``: name → (input, τ).
+
+    Notes
+    -----
+    A record is taken to begin at rest (z(0) = 0): one that begins just after a change starts
+    its transient inputs too low for a few τ. The candidates of a selection name the new inputs
+    with one lag each, e.g. ``Candidates(6, {"u": 6, "u_tau30": 1}, degree=2, input_names=…)``.
+
+    Examples
+    --------
+    >>> data = gb.transient_inputs(gb.load_pumping(), taus=(10, 30, 100))
+    >>> data.input_names
+    ('u', 'u_tau10', 'u_tau30', 'u_tau100')
+    """
+    if not isinstance(data, (Record, Dataset, StaticPoints)):
+        raise TypeError(f"transient_inputs: data must be a Record, a Dataset or StaticPoints, got "
+                        f"{type(data).__name__}")
+    tau_list = [check_real(t, "taus (seconds)", low=0, low_open=True) for t in
+                check_sequence(taus, "taus", "a sequence of time constants in seconds")]
+    if not tau_list:
+        raise ValueError("taus is empty: give at least one time constant (seconds)")
+    if len(set(tau_list)) != len(tau_list):
+        raise ValueError(f"taus has repeated values: {tau_list}")
+    names = data.input_names
+    chosen = list(names) if inputs is None else check_sequence(inputs, "inputs", "a sequence of input names")
+    for n in chosen:
+        if not isinstance(n, str):
+            raise TypeError(f"inputs must name inputs (str), got {n!r} ({type(n).__name__})")
+        if n not in names:
+            raise ValueError(f"inputs: no input named {n!r}; the data's inputs are {names}")
+    if len(set(chosen)) != len(chosen) or not chosen:
+        raise ValueError(f"inputs must name at least one input, each once, got {chosen}")
+    new = [(transient_name(n, t), n, t) for n in chosen for t in tau_list]
+    taken = set(names) & {nm for nm, _, _ in new}
+    if taken:
+        raise ValueError(f"the data already have input(s) {sorted(taken)}: transient inputs added twice?")
+    out_names = tuple(names) + tuple(nm for nm, _, _ in new)
+
+    if isinstance(data, StaticPoints):
+        ubar = np.column_stack([data.ubar.reshape(len(data.ybar), -1), np.zeros((len(data.ybar), len(new)))])
+        return StaticPoints(ubar, data.ybar, data.name, out_names, data.uncertainty)
+    if isinstance(data, Record):
+        cols = [data.inputs] + [_filtered_square_change(data.input(n), float(np.exp(-data.Ts / t)))[:, None]
+                                for _, n, t in new]
+        return Record(np.hstack(cols), data.y, data.Ts, data.name, data.units, out_names)
+    extra = dict(data.extra)
+    extra["transient_inputs"] = {**extra.get("transient_inputs", {}), **{nm: (n, t) for nm, n, t in new}}
+    return Dataset(transient_inputs(data.ident, tau_list, inputs=chosen),
+                   transient_inputs(data.valid, tau_list, inputs=chosen),
+                   None if data.static is None else transient_inputs(data.static, tau_list, inputs=chosen),
+                   data.description, extra)
