@@ -124,6 +124,7 @@ def test_selection_finds_a_known_transient_effect_that_meets_the_band_and_holds_
     (dict(taus=[0.0]), ValueError, r"taus \(seconds\) must lie"),
     (dict(taus=[float("nan")]), ValueError, "finite"),
     (dict(taus=[2.0, 2.0]), ValueError, "repeated"),
+    (dict(taus=[2.0, 2.0000001]), ValueError, "same name"),
     (dict(taus=2.0), TypeError, "taus must be a sequence"),
     (dict(taus=[True]), TypeError, "real number"),
     (dict(taus=[1.0], inputs=["v"]), ValueError, "no input named 'v'"),
@@ -143,8 +144,11 @@ def test_bad_data_and_twice_added():
         gb.transient_inputs(once, taus=[1.0], inputs=["u"])
     # a model that uses the channel refuses a record without it, by name
     st_ = gb.parse_structure("y(k-1) + u_tau1(k-1)")
-    with pytest.raises(ValueError, match="u_tau1"):
+    with pytest.raises(ValueError, match=r"u_tau1.*transient_inputs\(record, taus=\[1\]\)"):
         gb.Model(st_, np.array([0.5, 0.1])).simulate(gb.Record(np.arange(5.0), np.zeros(5)))
+    with pytest.raises(ValueError, match=r"transient_inputs\(record, taus=\[2.5\]\)"):
+        gb.simulate(gb.parse_structure("y(k-1) + u(k-1) + u_tau2p5(k-1)"), np.array([0.5, 0.2, 0.1]),
+                    np.c_[np.arange(5.0), np.ones(5)], np.zeros(1), input_names=("u", "v"))
 
 
 def test_names():

@@ -13,6 +13,7 @@ from typing import Literal
 import numpy as np
 
 from ._simulation_kernels import encode, record_inputs, simulate_batch, simulate_one
+from ._transient import missing_input_hint
 from ._records import Record, as_input_array
 from ._terms import check_input_names, default_input_names
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta
@@ -201,5 +202,6 @@ def _inputs_for(structure: Structure, u: np.ndarray, input_names: object):
         return encode(structure), a
     missing = [n for n in structure.inputs if n not in names]
     if missing:
-        raise ValueError(f"the structure uses input {missing[0]!r}, but u's {m} columns are the inputs {names}")
+        raise ValueError(f"the structure uses input {missing[0]!r}, but u's {m} columns are the inputs {names}"
+                         + missing_input_hint(missing[0], names))
     return encode(structure, names), a

@@ -29,6 +29,7 @@ import numba as nb
 import numpy as np
 
 from ._terms import Structure
+from ._transient import missing_input_hint
 
 __all__ = ["Code", "encode", "simulate_one", "simulate_batch", "input_products", "record_inputs", "kernel_inputs"]
 
@@ -170,7 +171,7 @@ def record_inputs(record, inputs: tuple[str, ...]) -> np.ndarray:
     missing = [n for n in inputs if n not in names]
     if missing:
         raise ValueError(f"{record.name}: the structure uses input {missing[0]!r}, but the record's inputs are "
-                         f"{names}")
+                         f"{names}" + missing_input_hint(missing[0], names))
     if len(inputs) == 1:
         return np.ascontiguousarray(record.input(inputs[0]))
     if len(inputs) == 0:

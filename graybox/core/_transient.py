@@ -23,13 +23,14 @@ from __future__ import annotations
 
 from typing import Sequence, TypeVar
 
+import re
+
 import numpy as np
-from scipy.signal import lfilter
 
 from ._records import Dataset, Record, StaticPoints
 from ._validation import check_real, check_sequence
 
-__all__ = ["transient_inputs", "transient_name"]
+__all__ = ["missing_input_hint", "transient_inputs", "transient_name"]
 
 _Data = TypeVar("_Data", Record, Dataset, StaticPoints)
 
@@ -56,7 +57,18 @@ def transient_name(input_name: str, tau: float) -> str:
     return f"{input_name}_tau{tag}"
 
 
+def missing_input_hint(name: str, have: tuple[str, ...]) -> str:
+    """A hint for an input a record lacks: how to add it when it is a transient input of one it has."""
+    m = re.fullmatch(r"(.+)_tau([0-9][0-9pem]*)", name)
+    if m is None or m.group(1) not in have:
+        return ""
+    tau = m.group(2).replace("p", ".").replace("m", "-")
+    return f" (a transient input: add it with graybox.transient_inputs(record, taus=[{tau}]))"
+
+
 def _filtered_square_change(u: np.ndarray, rho: float) -> np.ndarray:
+    from scipy.signal import lfilter  # here: the simulation kernels import this module for the hint above
+
     du2 = np.empty_like(u)
     du2[0] = 0.0  # the record is taken to begin at rest
     du2[1:] = np.diff(u) ** 2
@@ -126,6 +138,8 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
     if len(set(chosen)) != len(chosen) or not chosen:
         raise ValueError(f"inputs must name at least one input, each once, got {chosen}")
     new = [(transient_name(n, t), n, t) for n in chosen for t in tau_list]
+    if len({nm for nm, _, _ in new}) != len(new):
+        raise ValueError(f"taus {tau_list} give channels of the same name (τ is named to 6 significant digits)")
     taken = set(names) & {nm for nm, _, _ in new}
     if taken:
         raise ValueError(f"the data already have input(s) {sorted(taken)}: transient inputs added twice?")
