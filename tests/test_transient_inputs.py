@@ -173,3 +173,12 @@ def test_a_held_input_asks_no_static_form():
     assert {str(t) for t in added} == {"1", "u(k-1)", "u(k-1)^2"}
     # over every input the same completion would also ask for clusters in the transient inputs
     assert any("tau" in str(t) for t in static_terms(gb.Structure(["y(k-1)"]), cand, 2))
+
+
+def test_every_input_check_gives_the_hint():
+    """The model, the free runs and the static surface all check a structure's inputs the same way."""
+    st_ = gb.parse_structure("1 + y(k-1) + u(k-1) + u_tau5(k-1)")
+    with pytest.raises(ValueError, match=r"not among input_names .*taus=\[5\]"):
+        gb.Model(st_, np.array([0.1, 0.5, 0.2, 0.1]), input_names=("u",))
+    with pytest.raises(ValueError, match=r"not among the inputs .*taus=\[5\]"):
+        gb.static_surface(st_, np.array([0.1, 0.5, 0.2, 0.1]), np.array([[1.0]]), input_names=("u",))

@@ -3,9 +3,9 @@
 from .._lazy import attach
 
 __getattr__, __dir__, __all__ = attach(__name__, {
-    "_terms": ("Candidates", "Structure", "Term", "parse_structure", "parse_term"),
+    "_terms": ("Candidates", "Structure", "Term", "parse_structure", "parse_term", "transient_name"),
     "_records": ("Dataset", "Record", "StaticPoints", "StaticRangeWarning"),
-    "_transient": ("transient_inputs", "transient_name"),
+    "_transient": ("transient_inputs",),
     "_regressors": ("regressor_matrix", "stacked_regressors"),
     "_gram": ("DaskRecord",),
     "_simulation": ("DivergenceError", "predict", "simulate", "simulate_many"),

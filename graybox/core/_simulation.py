@@ -13,9 +13,8 @@ from typing import Literal
 import numpy as np
 
 from ._simulation_kernels import encode, record_inputs, simulate_batch, simulate_one
-from ._transient import missing_input_hint
 from ._records import Record, as_input_array
-from ._terms import check_input_names, default_input_names
+from ._terms import check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta
 from ._regressors import regressor_matrix
 from ._terms import Structure
@@ -200,8 +199,5 @@ def _inputs_for(structure: Structure, u: np.ndarray, input_names: object):
             raise ValueError(f"u has one input column ({names[0]!r}) but the structure uses the inputs "
                              f"{structure.inputs}; pass u of shape (N, m) and its input_names")
         return encode(structure), a
-    missing = [n for n in structure.inputs if n not in names]
-    if missing:
-        raise ValueError(f"the structure uses input {missing[0]!r}, but u's {m} columns are the inputs {names}"
-                         + missing_input_hint(missing[0], names))
+    require_inputs(structure.inputs, names, f"but u's {m} columns are the inputs")
     return encode(structure, names), a

@@ -28,8 +28,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from ._terms import Structure
-from ._transient import missing_input_hint
+from ._terms import Structure, require_inputs
 
 __all__ = ["Code", "encode", "simulate_one", "simulate_batch", "input_products", "record_inputs", "kernel_inputs"]
 
@@ -86,9 +85,7 @@ def encode(structure: Structure, inputs: tuple[str, ...] | None = None) -> Code:
 @lru_cache(maxsize=512)
 def _encode(structure: Structure, inputs: tuple[str, ...]) -> Code:
     sig = {"y": 0} | {n: 1 + i for i, n in enumerate(inputs)}
-    missing = [n for n in structure.inputs if n not in sig]
-    if missing:
-        raise ValueError(f"the structure uses input {missing[0]!r}, which is not among the inputs {inputs}")
+    require_inputs(structure.inputs, tuple(inputs), "which is not among the inputs")
     fptr = [0]
     fsig: list[int] = []
     flag: list[int] = []
@@ -168,10 +165,7 @@ def record_inputs(record, inputs: tuple[str, ...]) -> np.ndarray:
     names = record.input_names
     if tuple(inputs) == tuple(names):
         return record.u
-    missing = [n for n in inputs if n not in names]
-    if missing:
-        raise ValueError(f"{record.name}: the structure uses input {missing[0]!r}, but the record's inputs are "
-                         f"{names}" + missing_input_hint(missing[0], names))
+    require_inputs(inputs, names, "but the record's inputs are", prefix=f"{record.name}: ")
     if len(inputs) == 1:
         return np.ascontiguousarray(record.input(inputs[0]))
     if len(inputs) == 0:

@@ -20,10 +20,10 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
-from ._validation import check_bool, check_int, check_sequence, renamed
+from ._validation import check_bool, check_int, check_real, check_sequence, renamed
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
-           "default_input_names"]
+           "default_input_names", "require_inputs", "transient_name"]
 
 #: The signals of a single-input model, in printing order (the paper writes u before y). Any
 #: other identifier except ``y``, ``e`` and ``k`` is accepted as the name of a further input.
@@ -53,6 +53,43 @@ def _check_signal(sig: object) -> str:
 @lru_cache(maxsize=1024)
 def _valid_signal(sig: str) -> bool:
     return bool(_NAME_RE.match(sig)) and sig != "k"
+
+
+def transient_name(input_name: str, tau: float) -> str:
+    """The name of the transient input of ``input_name`` with time constant ``tau`` seconds: ``u_tau30``, ``u_tau2p5``.
+
+    Parameters
+    ----------
+    input_name : str
+        The input's name, e.g. ``"u"``.
+    tau : float
+        The time constant in seconds (> 0).
+
+    Returns
+    -------
+    str
+        ``{input_name}_tau{τ}``, τ written to 6 significant digits with ``p`` for the decimal point.
+    """
+    if not isinstance(input_name, str):
+        raise TypeError(f"input_name must be a str, got {input_name!r} ({type(input_name).__name__})")
+    tau = check_real(tau, "tau (seconds)", low=0, low_open=True)
+    tag = f"{tau:g}".replace(".", "p").replace("-", "m").replace("+", "")
+    return f"{input_name}_tau{tag}"
+
+
+def require_inputs(used: Iterable[str], names: tuple[str, ...], among: str, prefix: str = "") -> None:
+    """``ValueError`` unless every input a structure ``used`` is in ``names``; a missing transient input of
+    an input that is there says how to add it. ``among`` joins the two in the message (e.g. "which is
+    not among the inputs")."""
+    missing = [n for n in used if n not in names]
+    if not missing:
+        return
+    hint = ""
+    m = re.fullmatch(r"(.+)_tau([0-9][0-9pem]*)", missing[0])
+    if m is not None and m.group(1) in names:
+        tau = m.group(2).replace("p", ".").replace("m", "-")
+        hint = f" (a transient input: add it with graybox.transient_inputs(record, taus=[{tau}]))"
+    raise ValueError(f"{prefix}the structure uses input {missing[0]!r}, {among} {names}{hint}")
 
 
 def default_input_names(m: int) -> tuple[str, ...]:

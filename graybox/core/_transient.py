@@ -23,51 +23,19 @@ from __future__ import annotations
 
 from typing import Sequence, TypeVar
 
-import re
-
 import numpy as np
 
 from ._records import Dataset, Record, StaticPoints
+from ._terms import transient_name
 from ._validation import check_real, check_sequence
 
-__all__ = ["missing_input_hint", "transient_inputs", "transient_name"]
+__all__ = ["transient_inputs", "transient_name"]
 
 _Data = TypeVar("_Data", Record, Dataset, StaticPoints)
 
 
-def transient_name(input_name: str, tau: float) -> str:
-    """The name of the transient input of ``input_name`` with time constant ``tau`` seconds: ``u_tau30``, ``u_tau2p5``.
-
-    Parameters
-    ----------
-    input_name : str
-        The input's name, e.g. ``"u"``.
-    tau : float
-        The time constant in seconds (> 0).
-
-    Returns
-    -------
-    str
-        ``{input_name}_tau{τ}``, τ written with ``p`` for the decimal point.
-    """
-    if not isinstance(input_name, str):
-        raise TypeError(f"input_name must be a str, got {input_name!r} ({type(input_name).__name__})")
-    tau = check_real(tau, "tau (seconds)", low=0, low_open=True)
-    tag = f"{tau:g}".replace(".", "p").replace("-", "m").replace("+", "")
-    return f"{input_name}_tau{tag}"
-
-
-def missing_input_hint(name: str, have: tuple[str, ...]) -> str:
-    """A hint for an input a record lacks: how to add it when it is a transient input of one it has."""
-    m = re.fullmatch(r"(.+)_tau([0-9][0-9pem]*)", name)
-    if m is None or m.group(1) not in have:
-        return ""
-    tau = m.group(2).replace("p", ".").replace("m", "-")
-    return f" (a transient input: add it with graybox.transient_inputs(record, taus=[{tau}]))"
-
-
 def _filtered_square_change(u: np.ndarray, rho: float) -> np.ndarray:
-    from scipy.signal import lfilter  # here: the simulation kernels import this module for the hint above
+    from scipy.signal import lfilter  # here: import graybox.core stays light
 
     du2 = np.empty_like(u)
     du2[0] = 0.0  # the record is taken to begin at rest

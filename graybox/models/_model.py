@@ -13,7 +13,7 @@ from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
 from ..core._records import Record
 from ..core._validation import check_int, check_sequence, check_theta, frozen
-from ..core._terms import Structure, check_input_names
+from ..core._terms import Structure, check_input_names, require_inputs
 
 __all__ = ["Model"]
 
@@ -61,9 +61,7 @@ class Model:
         object.__setattr__(self, "theta", frozen(check_theta(len(st), self.theta)))
         object.__setattr__(self, "noise_theta", frozen(check_theta(len(ns), self.noise_theta, "noise_theta")))
         names = (st.inputs or ("u",)) if self.input_names is None else check_input_names(self.input_names)
-        missing = [n for n in st.inputs if n not in names]
-        if missing:
-            raise ValueError(f"the structure uses input {missing[0]!r}, which is not among input_names {names}")
+        require_inputs(st.inputs, names, "which is not among input_names")
         object.__setattr__(self, "input_names", names)
 
     # -- basic facts --------------------------------------------------------

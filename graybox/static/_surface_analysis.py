@@ -29,7 +29,7 @@ import numpy as np
 
 from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name
-from ..core._terms import Structure, Term, check_input_names
+from ..core._terms import Structure, Term, check_input_names, require_inputs
 from ..core._validation import check_bool, check_fields, check_per_point, renamed
 from ..core._reprs import short_repr
 
@@ -55,9 +55,7 @@ def surface_inputs(structure: Structure, inputs: tuple[str, ...] | None = None) 
     if inputs is None:
         return structure.inputs or ("u",)
     names = check_input_names(inputs, what="input_names")
-    missing = [n for n in structure.inputs if n not in names]
-    if missing:
-        raise ValueError(f"the structure uses input {missing[0]!r}, which is not among the inputs {names}")
+    require_inputs(structure.inputs, names, "which is not among the inputs")
     return names
 
 
