@@ -23,7 +23,7 @@ from typing import Iterable, Iterator, Mapping, Sequence
 from ._validation import check_bool, check_int, check_real, check_sequence, renamed
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
-           "default_input_names", "require_inputs", "transient_name"]
+           "default_input_names", "require_inputs", "transient_name", "transient_source"]
 
 #: The signals of a single-input model, in printing order (the paper writes u before y). Any
 #: other identifier except ``y``, ``e`` and ``k`` is accepted as the name of a further input.
@@ -85,11 +85,18 @@ def require_inputs(used: Iterable[str], names: tuple[str, ...], among: str, pref
     if not missing:
         return
     hint = ""
-    m = re.fullmatch(r"(.+)_tau([0-9][0-9pem]*)", missing[0])
-    if m is not None and m.group(1) in names:
-        tau = m.group(2).replace("p", ".").replace("m", "-")
-        hint = f" (a transient input: add it with graybox.transient_inputs(record, taus=[{tau}]))"
+    source = transient_source(missing[0], names)
+    if source is not None:
+        tau = missing[0][len(source) + 4:].replace("p", ".").replace("m", "-")
+        hint = (f" (if it is a transient input, add it with graybox.transient_inputs(record, taus=[{tau}], "
+                f"inputs=[{source!r}]))")
     raise ValueError(f"{prefix}the structure uses input {missing[0]!r}, {among} {names}{hint}")
+
+
+def transient_source(name: str, names: Iterable[str]) -> str | None:
+    """The input among ``names`` whose transient input ``name`` looks like (``"u"`` for ``"u_tau30"``), or None."""
+    m = re.fullmatch(r"(.+)_tau([0-9][0-9pem]*)", name)
+    return m.group(1) if m is not None and m.group(1) in set(names) else None
 
 
 def default_input_names(m: int) -> tuple[str, ...]:

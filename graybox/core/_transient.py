@@ -21,12 +21,12 @@ structure's: offer a few and let the selection choose on the validation record.
 
 from __future__ import annotations
 
-from typing import Sequence, TypeVar
+from typing import Mapping, Sequence, TypeVar
 
 import numpy as np
 
 from ._records import Dataset, Record, StaticPoints
-from ._terms import transient_name
+from ._terms import transient_name, transient_source
 from ._validation import check_real, check_sequence
 
 __all__ = ["transient_inputs", "transient_name"]
@@ -34,13 +34,14 @@ __all__ = ["transient_inputs", "transient_name"]
 _Data = TypeVar("_Data", Record, Dataset, StaticPoints)
 
 
-def _filtered_square_change(u: np.ndarray, rho: float) -> np.ndarray:
+def _filtered_square_change(u: np.ndarray, log_rho: float) -> np.ndarray:
     from scipy.signal import lfilter  # here: import graybox.core stays light
 
     du2 = np.empty_like(u)
     du2[0] = 0.0  # the record is taken to begin at rest
     du2[1:] = np.diff(u) ** 2
-    return lfilter([1.0 - rho], [1.0, -rho], du2)
+    # 1 − ρ as −expm1(−Ts/τ): 1.0 − ρ cancels to nothing for τ ≫ Ts (exactly 0 beyond about 1e16 Ts)
+    return lfilter([-np.expm1(log_rho)], [1.0, -np.exp(log_rho)], du2)
 
 
 def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str] | None = None) -> _Data:
@@ -65,7 +66,8 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
         Time constants τ in seconds (> 0, finite, distinct), e.g. ``(10, 30, 100)`` when effects
         that settle over tens of seconds are suspected.
     inputs : sequence of str, optional
-        The inputs to take changes of (default: every input of ``data``).
+        The inputs to take changes of (default: every input of ``data`` but the transient inputs
+        it already has, named as :func:`transient_name` names them).
 
     Returns
     -------
@@ -97,7 +99,9 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
     if len(set(tau_list)) != len(tau_list):
         raise ValueError(f"taus has repeated values: {tau_list}")
     names = data.input_names
-    chosen = list(names) if inputs is None else check_sequence(inputs, "inputs", "a sequence of input names")
+    # by default every input but the transient inputs already there (no transient of a transient)
+    chosen = ([n for n in names if transient_source(n, names) is None] if inputs is None
+              else check_sequence(inputs, "inputs", "a sequence of input names"))
     for n in chosen:
         if not isinstance(n, str):
             raise TypeError(f"inputs must name inputs (str), got {n!r} ({type(n).__name__})")
@@ -117,11 +121,13 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
         ubar = np.column_stack([data.ubar.reshape(len(data.ybar), -1), np.zeros((len(data.ybar), len(new)))])
         return StaticPoints(ubar, data.ybar, data.name, out_names, data.uncertainty)
     if isinstance(data, Record):
-        cols = [data.inputs] + [_filtered_square_change(data.input(n), float(np.exp(-data.Ts / t)))[:, None]
+        cols = [data.inputs] + [_filtered_square_change(data.input(n), -data.Ts / t)[:, None]
                                 for _, n, t in new]
         return Record(np.hstack(cols), data.y, data.Ts, data.name, data.units, out_names)
     extra = dict(data.extra)
-    extra["transient_inputs"] = {**extra.get("transient_inputs", {}), **{nm: (n, t) for nm, n, t in new}}
+    before = extra.get("transient_inputs")
+    extra["transient_inputs"] = {**(dict(before) if isinstance(before, Mapping) else {}),
+                                 **{nm: (n, t) for nm, n, t in new}}
     return Dataset(transient_inputs(data.ident, tau_list, inputs=chosen),
                    transient_inputs(data.valid, tau_list, inputs=chosen),
                    None if data.static is None else transient_inputs(data.static, tau_list, inputs=chosen),

@@ -54,6 +54,7 @@ from ..static._constraints import (
 from ..static._curves import StaticCurve
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
+from ..static._form_check import varied_inputs
 from ..core._least_squares import column_scales
 from ..models._coerce import as_model, as_structure, static_info
 from ..models._model import Model
@@ -753,6 +754,14 @@ def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
     """
     m = n_static_inputs(cm)
     static_inputs(points.ubar, m, points.name)
+    held = [n for n in points.input_names if n not in varied_inputs(points)]
+    if held and len(points) > 1:
+        # the surface cannot be fitted in an input the points hold, and eq. (22) would force every cluster in
+        # it to the surface's (absent) coefficient, zero: a transient input's terms would be switched off
+        raise ValueError(
+            f"{points.name} hold the input(s) {held} at one value: eq. (22)'s surface cannot be fitted over them. "
+            "Keep the static function within the points' band instead (how='context', "
+            "constraints=graybox.StaticBand()), or use pe_pareto / se_pareto, which take such points")
     exps = sorted({e for p, e in map(cluster_powers, cm.keys) if p == 0}, key=lambda e: (sum(e), tuple(-v for v in e)))
     if not exps:
         raise ValueError("how='curve': the structure has no cluster without y (no Σ_u… or constant term), so its "

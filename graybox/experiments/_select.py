@@ -44,7 +44,7 @@ from .. import _api as gb
 
 from ..io._json import register_type
 from ..models._coerce import static_info
-from ..static._form_check import carried_degree, static_degree, static_fit_mse, static_inputs, static_terms
+from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
 from ..core._records import overlap_message, same_record
@@ -237,7 +237,7 @@ def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.St
         degree = static_degree(sp, band=band)
     if band is None:
         return sp, None
-    varied = static_inputs(sp)  # an input the points hold (a transient input's z̄ = 0) asks for no cluster
+    varied = varied_inputs(sp)  # an input the points hold (a transient input's z̄ = 0) asks for no cluster
     top = carried_degree(process, degree, varied)
     if top is None:
         static_terms(gb.Structure([]), process, degree, varied)  # raises, naming the clusters the candidates lack

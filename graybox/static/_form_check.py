@@ -17,7 +17,7 @@ polynomial surface (every monomial ū₁^a₁ ⋯ ū_m^a_m with a₁ + … + a_m
 needed are every Σ_{u₁^a₁ ⋯ u_m^a_m} of those monomials and Σ_y. An input that the static
 points hold at one value (a transient input, zero at every steady state; a second input kept
 fixed during the static test) says nothing about the form: the degree is judged, and the
-clusters asked, over the inputs the points vary (:func:`static_inputs`).
+clusters asked, over the inputs the points vary (:func:`varied_inputs`).
 """
 
 from __future__ import annotations
@@ -33,10 +33,10 @@ from ._surfaces import StaticSurface, _monomials, monomial_exponents
 from ..core._terms import Structure, Term
 from ..core._validation import check_int, check_real
 
-__all__ = ["carried_degree", "static_degree", "static_fit_mse", "static_inputs", "static_terms"]
+__all__ = ["carried_degree", "static_degree", "static_fit_mse", "static_terms", "varied_inputs"]
 
 
-def static_inputs(static: StaticPoints | StaticCurve | StaticSurface) -> tuple[str, ...]:
+def varied_inputs(static: StaticPoints | StaticCurve | StaticSurface) -> tuple[str, ...]:
     """The inputs the static information varies: every input of a curve or a surface; for points, those
     whose ū differs between points (one held at a single value, e.g. a transient input's z̄ = 0,
     carries no information on the static form)."""
@@ -90,7 +90,7 @@ def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
     determine it (fewer points than coefficients, or points that leave a direction unvaried, as
     when two inputs always move together). One point is fitted exactly by a constant."""
     u = np.asarray(static.ubar, float).reshape(len(static), static.n_inputs)
-    held = [i for i, n in enumerate(static.input_names) if n not in static_inputs(static)]
+    held = [i for i, n in enumerate(static.input_names) if n not in varied_inputs(static)]
     u = np.delete(u, held, axis=1)  # a held input is a constant: the constant monomial carries it
     if u.shape[1] == 0:
         ex: tuple = ((),)
@@ -129,7 +129,7 @@ def static_terms(structure: Structure, candidates: Structure, degree: int,
         inputs: every Σ_{u1^a1 ⋯ um^am} with a1 + … + am ≤ d, and Σ_y).
     inputs : tuple of str, optional
         The inputs the form is a polynomial in (default: every input of the candidates and the
-        structure); the others are held by the static information (:func:`static_inputs`), and
+        structure); the others are held by the static information (:func:`varied_inputs`), and
         no cluster in them is asked.
 
     Returns
@@ -163,6 +163,8 @@ def _complete(structure: Structure, candidates: Structure, degree: int,
     """(terms to add, cluster keys no candidate holds, input names) for a degree-``degree`` form in the
     ``varied`` inputs (default: all)."""
     inputs = tuple(dict.fromkeys(candidates.inputs + structure.inputs)) or ("u",)
+    # an input the static information varies but no candidate has: its clusters are asked, and missing
+    inputs += tuple(n for n in (varied or ()) if n not in inputs)
     m = len(inputs)
     pos = [i for i, n in enumerate(inputs) if varied is None or n in varied]
     need = [(0,) + e for e in _embedded(monomial_exponents(len(pos), degree) if pos else ((),), pos, m)]
