@@ -206,3 +206,11 @@ def test_held_inputs_elsewhere():
     assert form.degree == 0
     z = gb.transient_inputs(gb.Record(np.r_[0.0, np.ones(5)], np.zeros(6)), taus=[1e17]).inputs[:, 1]
     np.testing.assert_allclose(z[1:], 1e-17, rtol=1e-12)
+
+
+def test_select_graybox_says_when_the_static_information_lacks_the_channels():
+    data = gb.transient_inputs(gb.load_pumping(), taus=[10])
+    curve = gb.StaticCurve.fit(gb.load_pumping().static, degree=2)  # a curve in u alone
+    cand = gb.Candidates(2, {"u": 2, "u_tau10": 1}, degree=2, input_names=data.input_names)
+    with pytest.raises(ValueError, match=r"has inputs \('u', 'u_tau10'\) but .* has inputs \('u',\)"):
+        gb.select_graybox(cand, data.ident, curve, validation=data.valid, band=0.031)

@@ -47,7 +47,7 @@ from ..models._coerce import static_info
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
-from ..core._records import overlap_message, same_record
+from ..core._records import check_same_inputs, overlap_message, same_record
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints
 from ._executors import check_cluster
@@ -278,6 +278,8 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
     sp, form = _static_points(sp, process, band)
+    if sp is not None:
+        check_same_inputs(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
     L = process.max_lag
     if test is not None:
         if not isinstance(test, gb.Record):
