@@ -29,7 +29,7 @@ from ._records import Dataset, Record, StaticPoints
 from ._terms import transient_name, transient_source
 from ._validation import check_real, check_sequence
 
-__all__ = ["transient_inputs", "transient_name"]
+__all__ = ["transient_inputs"]
 
 _Data = TypeVar("_Data", Record, Dataset, StaticPoints)
 

@@ -754,7 +754,8 @@ def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
     """
     m = n_static_inputs(cm)
     static_inputs(points.ubar, m, points.name)
-    held = [n for n in points.input_names if n not in varied_inputs(points)]
+    varied = varied_inputs(points)
+    held = [n for n in points.input_names if n not in varied]
     if held and len(points) > 1:
         # the surface cannot be fitted in an input the points hold, and eq. (22) would force every cluster in
         # it to the surface's (absent) coefficient, zero: a transient input's terms would be switched off

@@ -293,7 +293,6 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
                                  "or chosen on")
             if rec is not None and (shared := overlap_message(test, rec, "test", name)):
                 raise ValueError(f"{shared}: a test must be data nothing was fitted or chosen on")
-    blocks = check_int(blocks, "blocks", low=2)
     if valid is not None:
         if not isinstance(valid, gb.Record):
             raise TypeError(f"validation must be a Record, got {type(valid).__name__}")
@@ -308,7 +307,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         splits = ((ident, valid, _block_edges(len(valid), L, blocks)),)
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in
-                       _folds(ident, check_int(folds, "folds", low=2), L + 2))
+                       _folds(ident, folds, L + 2))
     return _Plan(ident, splits, test, sp, np.inf if band is None else band, L, extra), form
 
 
@@ -708,16 +707,16 @@ def select_graybox(
     """
     sp = static_info(static, data, curves=True)
     band = _band(band, sp)
-    if _is_scalar(constraints):
-        raise TypeError(f"constraints must be a constraint, a table of them or a sequence, got {constraints!r}")
-    constraints = tuple(constraint_entries(constraints))  # read once: a generator is used up
+    # read once: a generator is used up
+    constraints = tuple(check_sequence(constraint_entries(constraints), "constraints",
+                                       "a constraint, a table of them or a sequence"))
     estimators = _estimators(estimator, band, constraints)
     sources = (sources,) if isinstance(sources, str) else check_sequence(sources, "sources")
     if sizes is not None:
         sizes = [check_int(s, "sizes", low=1) for s in check_sequence(sizes, "sizes")]
     include = check_sequence(include, "include")
     lam = None if lambdas is None else tuple(float(x) for x in check_lambdas(lambdas))
-    folds, blocks = check_int(folds, "folds", low=2), check_int(blocks, "blocks", low=1)
+    folds, blocks = check_int(folds, "folds", low=2), check_int(blocks, "blocks", low=2)
     if shortlist is not None:
         shortlist = check_int(shortlist, "shortlist", low=1)
     check_cluster(client, scheduler)
@@ -762,11 +761,6 @@ def select_graybox(
     table = table.sort_values("rank").drop(columns=["terms"])
     return GrayboxSelection(structure, decision.model, decision, table, None if form is None else form.degree, plan.band,
                             not used_fallback, used)
-
-
-def _is_scalar(value: object) -> bool:
-    """A bool or a number (where a collection or an object is meant)."""
-    return isinstance(value, (bool, int, float, np.bool_, np.integer, np.floating))
 
 
 def _band(band: object, sp: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None) -> float | None:

@@ -90,8 +90,8 @@ def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
     determine it (fewer points than coefficients, or points that leave a direction unvaried, as
     when two inputs always move together). One point is fitted exactly by a constant."""
     u = np.asarray(static.ubar, float).reshape(len(static), static.n_inputs)
-    held = [i for i, n in enumerate(static.input_names) if n not in varied_inputs(static)]
-    u = np.delete(u, held, axis=1)  # a held input is a constant: the constant monomial carries it
+    # a held input is a constant: the constant monomial carries it
+    u = u[:, [static.input_names.index(n) for n in varied_inputs(static)]]
     if u.shape[1] == 0:
         ex: tuple = ((),)
         if degree > 0:
