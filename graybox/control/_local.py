@@ -32,6 +32,7 @@ from scipy.signal import lfilter
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
 from ..core._terms import Structure
 from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, warn
+from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import REACHED, reached_equilibria, schur_stable
 from ..static._linearisation import characteristic_roots, local_coefficients
@@ -49,11 +50,11 @@ MAX_SETTLING_SAMPLES = 10_000_000
 
 def check_polynomial(model: object, what: str) -> Model:
     """``model`` if it is a polynomial :class:`Model`; a clear ``TypeError`` otherwise (a neural model included)."""
-    if isinstance(model, Model):
-        return model
-    carried = getattr(model, "model", None)  # a result that carries a model (ELSResult, CLSResult, Decision, …)
-    if isinstance(carried, Model):
-        return carried
+    try:  # a Model, or a result that carries one (ELSResult, CLSResult, Decision, …): the one coercion
+        return as_model(model, "model")  # type: ignore[return-value]
+    except TypeError:
+        pass
+    carried = getattr(model, "model", None)
     kind = type(carried if carried is not None and not callable(carried) else model).__name__
     hint = (" A NeuralModel's equilibria and their stability are given by its equilibria() method; its local "
             "linear model is not built here." if kind == "NeuralModel" else "")
