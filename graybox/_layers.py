@@ -37,7 +37,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
      "local linear models at operating points and along the static curve; the bridge to python-control "
      "(LTI local models, the whole model as a discrete nonlinear system)"),
     ("io", ("_json",), "save and load graybox values as JSON (never pickle)"),
-    ("reference", (), "the paper's identified models (Tables II and III) as data"),
+    ("reference", (), "the paper's identified models (Tables II and III) and its comparison (Table I) as data"),
     ("datasets", ("pumping", "_pumping_miso", "_loaders", "_miso_loader"),
      "the bundled plant simulators and their data, the buck converter, CSV loaders"),
     ("_api", (), "every public name below this line, as one namespace"),

@@ -17,6 +17,7 @@ from ..selection._forward_regression import frols
 from ..core._terms import Candidates
 from ..datasets import load_pumping
 from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
+from ..reference import TABLE_I
 
 __all__ = ["section_table1", "PAPER_BAND"]
 
@@ -39,6 +40,23 @@ def _save(fig, out: Path | None, name: str) -> str:
     path = Path(out) / name
     fig.savefig(path, dpi=120)
     return f" [{path}]"
+
+
+def se_against_els(table: pd.DataFrame) -> str:
+    """Table I's central comparison: each SE (D_SF) model's validation J_S over ELS's, here and in the paper.
+
+    ``table`` is :func:`~graybox.models._evaluate.evaluate`'s frame of :func:`section_table1`'s models
+    (index as named there). The paper's ratios are read from :data:`graybox.reference.TABLE_I`:
+    SE beats ELS on validation at ℓ = 2 and loses to it at ℓ = 3.
+    """
+    parts = []
+    for degree, eq in ((2, "15"), (3, "17")):
+        paper = TABLE_I[f"SE (D_SF) l={degree}"][1] / TABLE_I[f"ELS ({eq})"][1]
+        base = table.loc[f"ELS ({eq})", "JS_valid"]
+        here = ", ".join(f"{label} {table.loc[f'{label} (D_SF) ℓ={degree}', 'JS_valid'] / base:.2f}"
+                         for label in ("SE", "SE-grad"))
+        parts.append(f"ℓ = {degree}: paper {paper:.2f}, here {here}")
+    return "SE (D_SF) validation J_S over ELS's (below 1: SE better): " + "; ".join(parts)
 
 
 def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2) -> str:
@@ -125,6 +143,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
     table = evaluate(models, data)
     with pd.option_context("display.width", 140, "display.float_format", "{:.4f}".format):
         lines.append(table.to_string())
+    lines.append(se_against_els(table))
     lines.append("Names ending in 'min J_SF (no member in B)' mark a D_SF choice that fell back because no "
                  "member met the band.")
     for k, m in models.items():
