@@ -24,6 +24,15 @@ not estimators (they look at the validation record): the least validation J_S am
 members of a fine gradient front (31 λ1) fitted on the identification record, on identification
 + validation, and ``se_dsf`` fitted on identification + validation.
 
+``--part draws``: Table I's comparison over many draws of the stand-in (``generate(seed)`` for seeds
+1 … N: new input design, noise and static test each time, as if the experiment were rerun):
+ELS against SE-grad and the GA (reproduce settings) on each draw's own validation record, with
+the paper's own ratios beside them (Table I: SE/ELS validation J_S 0.83 at ℓ = 2, 1.18 at ℓ = 3).
+``--part variants``: the same for ELS and SE-grad on stand-ins with the slow disturbances changed
+(:data:`VARIANTS`): is it the air loss's static–dynamic conflict that makes SE lose?
+``--part windows``: SE-grad fitted on windows of the identification record, each run freely from its
+measured first samples, against the whole free run (does a restarted fit stop following the drift?).
+
 ``--part seeds``: the GA with and without ``starts="pe"`` for seeds 1, 2, 3 (is the gain the
 seed's luck?). ``--part others``: the GA seeding and the margin of ``se_dsf`` on the buck converter (test: the
 second half of its validation file) and on two synthetic systems with static points
@@ -232,6 +241,111 @@ def ga_seeds():
                       f"{fmt(np.mean(tj))}, {fmt(max(tj))} |", flush=True)
 
 
+def _draws(seeds, degrees, estimators, plant=None, show=True):
+    """ELS and each SE estimator on draws ``seeds`` of the simulated plant, scored on each draw's own records.
+
+    Returns {degree: array (draws, 2 + 2 * len(estimators), 2)}: per draw [ELS, SE …] × (J_S valid, J_SF)
+    in columns 0, 2, 4, … and the identification J_S beside them in the last axis."""
+    from graybox.datasets.pumping import N_IDENT, generate
+    rows = {}
+    for seed in seeds:
+        run, static = generate(seed, plant)
+        rec = gb.Record(run.u, run.y, Ts=run.Ts, name=f"draw {seed}")
+        ident, valid = rec.slice(0, N_IDENT, name="ident"), rec.slice(N_IDENT, None, name="valid")
+        for degree, n_terms in ((2, 17), (3, 23)):
+            if degree not in degrees:
+                continue
+            cand = gb.Candidates(6, 6, ne=2, degree=degree, max_y_power=1 if degree == 2 else None)
+            e = quiet(gb.els, quiet(gb.frols, cand, ident, n_terms=n_terms, include=["1"]), ident)
+            ST[0] = st = e.model.structure.process
+            ths = [e.model.theta] + [est(ident, static, BAND)[0] for est in estimators]
+            flat = []
+            for th in ths:
+                flat += [[js(st, th, valid), js(st, th, ident)], [quiet(gb.jsf, gb.Model(st, th), static), np.nan]]
+            rows.setdefault(degree, []).append(flat)
+            if show:
+                print(f"| {seed} | {degree} | " + " | ".join(fmt(f[0]) for f in flat) + " |", flush=True)
+    return {d: np.array(r) for d, r in rows.items()}
+
+
+def _summary(a, c):
+    """Figures of SE column ``c`` (0-based estimator index) against ELS over the draws of ``a``."""
+    v, jsf = a[:, 2 + 2 * c, 0], a[:, 3 + 2 * c, 0]
+    with np.errstate(all="ignore"):
+        ratio = v / a[:, 0, 0]  # inf/inf (both diverge) is NaN: a tie, not a win
+        ident = a[:, 2 + 2 * c, 1] / a[:, 0, 1]
+    return dict(inb=int(np.sum(jsf <= BAND)), wins=int(np.sum(v <= a[:, 0, 0])), median=np.nanmedian(ratio),
+                ident=np.nanmedian(ident), bad=int(np.sum(ratio > 5)))
+
+
+def draws(n, degrees):
+    """Table I's SE-against-ELS comparison over ``n`` draws of the simulated plant (seeds 1 … n)."""
+    from graybox.reference import TABLE_I
+    print("| draw | ℓ | ELS valid | ELS J_SF | SE-grad valid | SE-grad J_SF | GA valid | GA J_SF |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    rows = _draws(range(1, n + 1), degrees, [front_dsf("gradient"), front_dsf("ga", starts="pe")])
+    print("\n| ℓ | draws | ELS J_SF > B | SE in B: grad, GA | SE valid ≤ ELS: grad, GA | median SE/ELS valid: grad, GA "
+          "| median SE/ELS ident: grad, GA | SE/ELS > 5: grad, GA | paper SE/ELS valid, ident |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for degree, a in rows.items():
+        g, ga = _summary(a, 0), _summary(a, 1)
+        se, els_ = TABLE_I[f"SE (D_SF) l={degree}"], TABLE_I[f"ELS ({15 if degree == 2 else 17})"]
+        print(f"| {degree} | {len(a)} | {int(np.sum(a[:, 1, 0] > BAND))} | {g['inb']}, {ga['inb']} | "
+              f"{g['wins']}, {ga['wins']} | {g['median']:.2f}, {ga['median']:.2f} | {g['ident']:.2f}, {ga['ident']:.2f} | "
+              f"{g['bad']}, {ga['bad']} | {se[1] / els_[1]:.2f}, {se[0] / els_[0]:.2f} |")
+
+
+#: Stand-in variants (PumpingPlant keywords) for --part variants: which disturbance makes SE lose to ELS?
+VARIANTS = {
+    "as bundled": {},
+    "no air loss": {"air_loss_per_rpm": 0.0},
+    "air loss / 4": {"air_loss_per_rpm": 2e-5},
+    "air vents in 10 s": {"air_vent_time": 10.0},
+    "no air, surge / 2": {"air_loss_per_rpm": 0.0, "surge_intensity": 0.00275},
+    "no air, surge decays in 2 s": {"air_loss_per_rpm": 0.0, "surge_time": 2.0},
+    "no air, no surge": {"air_loss_per_rpm": 0.0, "surge_intensity": 0.0},
+}
+
+
+def windowed(H, whole=False):
+    """SE-grad D_SF fitted on the identification record cut into windows of ``H`` samples, each run freely
+    from its own measured first samples (with ``whole``, the whole record's free run as well)."""
+    def fit(rec, static, band):
+        w = [rec.slice(i, min(i + H, len(rec)), name=f"window {i}") for i in range(0, len(rec) - H // 2, H)]
+        return front_dsf("gradient")(([rec] if whole else []) + w, static, band)
+    return fit
+
+
+def windows(n, degrees):
+    """SE-grad D_SF fitted on restarted windows, or with a ridge, against the whole free run, over ``n`` draws of three stand-ins."""
+    from graybox.datasets.pumping import PumpingPlant
+    ests = {"whole record": front_dsf("gradient"), "windows of 200": windowed(200), "windows of 400": windowed(400),
+            "whole + windows of 400": windowed(400, whole=True), "whole record, ridge 0.1": front_dsf("gradient", ridge=0.1)}
+    print("| plant | ℓ | fit | SE valid ≤ ELS | median SE/ELS valid | median SE/ELS ident | SE/ELS > 5 |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for name in ("as bundled", "no air loss", "no air, no surge"):
+        rows = _draws(range(1, n + 1), degrees, list(ests.values()), plant=PumpingPlant(**VARIANTS[name]), show=False)
+        for degree, a in rows.items():
+            for c, label in enumerate(ests):
+                g = _summary(a, c)
+                print(f"| {name} | {degree} | {label} | {g['wins']} | {g['median']:.2f} | {g['ident']:.2f} | {g['bad']} |",
+                      flush=True)
+
+
+def variants(n, degrees):
+    """ELS against SE-grad D_SF over ``n`` draws of each stand-in variant of :data:`VARIANTS`."""
+    from graybox.datasets.pumping import PumpingPlant
+    print("| variant | ℓ | median ELS valid | median ELS J_SF | SE in B | SE valid ≤ ELS | median SE/ELS valid "
+          "| median SE/ELS ident | SE/ELS > 5 |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for name, kw in VARIANTS.items():
+        rows = _draws(range(1, n + 1), degrees, [front_dsf("gradient")], plant=PumpingPlant(**kw), show=False)
+        for degree, a in rows.items():
+            g = _summary(a, 0)
+            print(f"| {name} | {degree} | {np.median(a[:, 0, 0]):.3g} | {np.median(a[:, 1, 0]):.3g} | {g['inb']} | "
+                  f"{g['wins']} | {g['median']:.2f} | {g['ident']:.2f} | {g['bad']} |", flush=True)
+
+
 def others():
     from bench_honest import TRUE, cases
     print("| case | model | choice | J_S ident | J_S choose | J_SF | band | J_S test | s |")
@@ -262,7 +376,8 @@ def others():
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("plant", "seeds", "others", "all"), default="all")
+    ap.add_argument("--part", choices=("plant", "seeds", "draws", "variants", "windows", "others", "all"), default="all")
+    ap.add_argument("--draws", type=int, default=30, help="--part draws: how many draws of the plant")
     ap.add_argument("--degrees", default="2,3", help="plant structures: 2 (17 terms), 3 (23 terms)")
     args = ap.parse_args(argv)
     print(f"# bench_se_table.py --part {args.part}: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} "
@@ -273,6 +388,15 @@ def main(argv=None):
     if args.part in ("seeds", "all"):
         print("\n## the GA with and without PE seeds, seeds 1-3 (bundled plant)\n")
         ga_seeds()
+    if args.part in ("draws", "all"):
+        print(f"\n## Table I over {args.draws} draws of the simulated plant (reproduce settings)\n")
+        draws(args.draws, [int(d) for d in args.degrees.split(",")])
+    if args.part in ("variants", "all"):
+        print(f"\n## ELS against SE-grad D_SF over {args.draws} draws of stand-in variants\n")
+        variants(args.draws, [int(d) for d in args.degrees.split(",")])
+    if args.part in ("windows", "all"):
+        print(f"\n## SE-grad D_SF fitted on restarted windows, {args.draws} draws\n")
+        windows(args.draws, [int(d) for d in args.degrees.split(",")])
     if args.part in ("others", "all"):
         print("\n## buck converter and synthetic systems with static points (margin 0.01 unless named)\n")
         others()
