@@ -330,6 +330,20 @@ def windows(n, degrees):
                 g = _summary(a, c)
                 print(f"| {name} | {degree} | {label} | {g['wins']} | {g['median']:.2f} | {g['ident']:.2f} | {g['bad']} |",
                       flush=True)
+    # the same restarts on the buck converter and the synthetic systems with static points (bench_honest's cases)
+    from bench_honest import TRUE, cases
+    print("\n| case | fit | choice | J_S ident | J_S choose | J_SF | band | J_S test |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    all_cases = cases()
+    for name in ("buck", "slow disturbance", "static points off the records"):
+        data, test, cand, band = all_cases[name]
+        ST[0] = st = (quiet(gb.frols, gb.Candidates(2, 2, degree=2), data.ident, n_terms=6, include=["1"]).structure
+                      if name == "buck" else TRUE)
+        for label, est in (("whole record", front_dsf("gradient")), ("whole + windows of 100", windowed(100, True)),
+                           ("whole + windows of 200", windowed(200, True)), ("whole + windows of 400", windowed(400, True))):
+            th, how = est(data.ident, data.static, band)
+            print(f"| {name} | {label} | {how} | {fmt(js(st, th, data.ident))} | {fmt(js(st, th, data.valid))} | "
+                  f"{fmt(gb.jsf(gb.Model(st, th), data.static))} | {band:g} | {fmt(js(st, th, test))} |", flush=True)
 
 
 def variants(n, degrees):
