@@ -78,8 +78,10 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
 
     Beyond the paper, the GA's initial populations hold four PE solutions besides its random
     individuals (``starts="pe"``): from random seeds alone the ℓ = 3 GA stalls far from the front
-    (validation J_S 3.05; with them 1.18). Neither SE row reaches ELS's validation J_S inside the
-    band on this stand-in (BENCHMARKS.md, "SE D_SF against ELS", which measures what blocks it).
+    (validation J_S 3.05; with them 1.18). The last line compares each SE row's validation J_S with
+    ELS's, beside the paper's ratios (:func:`se_against_els`): on this stand-in neither SE row reaches
+    ELS's inside the band (BENCHMARKS.md, "SE D_SF against ELS" and "Table I over many draws of the
+    stand-in", which measure what blocks it).
     """
     data = load_pumping()
     curve = StaticCurve.fit(data.static, 2, name="eq. (1) form fitted to the static points")
