@@ -32,6 +32,7 @@ the paper's own ratios beside them (Table I: SE/ELS validation J_S 0.83 at ℓ =
 (:data:`VARIANTS`): is it the air loss's static–dynamic conflict that makes SE lose?
 ``--part windows``: SE-grad fitted on windows of the identification record, each run freely from its
 measured first samples, against the whole free run (does a restarted fit stop following the drift?).
+``--part startup``: where on the validation record the ℓ = 2 models err (J_S per quarter).
 
 ``--part seeds``: the GA with and without ``starts="pe"`` for seeds 1, 2, 3 (is the gain the
 seed's luck?). ``--part others``: the GA seeding and the margin of ``se_dsf`` on the buck converter (test: the
@@ -346,6 +347,27 @@ def windows(n, degrees):
                   f"{fmt(gb.jsf(gb.Model(st, th), data.static))} | {band:g} | {fmt(js(st, th, test))} |", flush=True)
 
 
+def startup(seeds):
+    """Where on the validation record the ℓ = 2 SE-grad D_SF model and ELS err: J_S over each quarter (200
+    samples), on draws of the stand-in without slow disturbances and of the bundled one."""
+    from graybox.datasets.pumping import N_IDENT, PumpingPlant, generate
+    print("| plant | draw | model | J_S by quarter of the validation record |")
+    print("| --- | --- | --- | --- |")
+    for name in ("no air, no surge", "as bundled"):
+        plant = PumpingPlant(**VARIANTS[name])
+        for seed in seeds:
+            run, static = generate(seed, plant)
+            rec = gb.Record(run.u, run.y, Ts=run.Ts, name=f"draw {seed}")
+            ident, valid = rec.slice(0, N_IDENT, name="ident"), rec.slice(N_IDENT, None, name="valid")
+            cand = gb.Candidates(6, 6, ne=2, degree=2, max_y_power=1)
+            e = quiet(gb.els, quiet(gb.frols, cand, ident, n_terms=17, include=["1"]), ident)
+            ST[0] = st = e.model.structure.process
+            for label, th in (("ELS", e.model.theta), ("SE-grad", front_dsf("gradient")(ident, static, BAND)[0])):
+                err = gb.simulate(st, th, valid, on_diverge="nan") - valid.y
+                q = [np.mean(err[i * 200:(i + 1) * 200] ** 2) for i in range(len(err) // 200)]
+                print(f"| {name} | {seed} | {label} | {', '.join(fmt(v) for v in q)} |", flush=True)
+
+
 def variants(n, degrees):
     """ELS against SE-grad D_SF over ``n`` draws of each stand-in variant of :data:`VARIANTS`."""
     from graybox.datasets.pumping import PumpingPlant
@@ -390,7 +412,7 @@ def others():
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("plant", "seeds", "draws", "variants", "windows", "others", "all"), default="all")
+    ap.add_argument("--part", choices=("plant", "seeds", "draws", "variants", "windows", "startup", "others", "all"), default="all")
     ap.add_argument("--draws", type=int, default=30, help="--part draws: how many draws of the plant")
     ap.add_argument("--degrees", default="2,3", help="plant structures: 2 (17 terms), 3 (23 terms)")
     args = ap.parse_args(argv)
@@ -411,6 +433,9 @@ def main(argv=None):
     if args.part in ("windows", "all"):
         print(f"\n## SE-grad D_SF fitted on restarted windows, {args.draws} draws\n")
         windows(args.draws, [int(d) for d in args.degrees.split(",")])
+    if args.part in ("startup", "all"):
+        print("\n## where the ℓ = 2 models err on the validation record (draws 1-4)\n")
+        startup(range(1, 5))
     if args.part in ("others", "all"):
         print("\n## buck converter and synthetic systems with static points (margin 0.01 unless named)\n")
         others()
