@@ -1,6 +1,7 @@
 """Table I's SE D_SF rows against ELS: variants of the SE fits, scored on records they were not fitted or chosen on.
 
-    python benchmarks/bench_se_table.py [--part plant|seeds|others|all] [--degrees 2,3]
+    python benchmarks/bench_se_table.py [--part plant|seeds|draws|variants|windows|startup|others|all]
+                                        [--degrees 2,3] [--draws N]
 
 Issue 26 asks for SE D_SF models (gradient and GA) whose validation J_S is at most ELS's, as in
 the paper's Table I, without choosing on the validation record. This script measures the ideas:
@@ -245,8 +246,9 @@ def ga_seeds():
 def _draws(seeds, degrees, estimators, plant=None, show=True):
     """ELS and each SE estimator on draws ``seeds`` of the simulated plant, scored on each draw's own records.
 
-    Returns {degree: array (draws, 2 + 2 * len(estimators), 2)}: per draw [ELS, SE …] × (J_S valid, J_SF)
-    in columns 0, 2, 4, … and the identification J_S beside them in the last axis."""
+    Returns {degree: array (draws, 2 (1 + len(estimators)), 2)}: per draw and model (ELS first, then the
+    estimators in order) two columns, [J_S valid, J_S ident] then [J_SF, NaN] (model k in columns 2k
+    and 2k + 1)."""
     from graybox.datasets.pumping import N_IDENT, generate
     rows = {}
     for seed in seeds:
@@ -270,13 +272,19 @@ def _draws(seeds, degrees, estimators, plant=None, show=True):
 
 
 def _summary(a, c):
-    """Figures of SE column ``c`` (0-based estimator index) against ELS over the draws of ``a``."""
-    v, jsf = a[:, 2 + 2 * c, 0], a[:, 3 + 2 * c, 0]
-    with np.errstate(all="ignore"):
-        ratio = v / a[:, 0, 0]  # inf/inf (both diverge) is NaN: a tie, not a win
-        ident = a[:, 2 + 2 * c, 1] / a[:, 0, 1]
-    return dict(inb=int(np.sum(jsf <= BAND)), wins=int(np.sum(v <= a[:, 0, 0])), median=np.nanmedian(ratio),
-                ident=np.nanmedian(ident), bad=int(np.sum(ratio > 5)))
+    """Figures of estimator ``c`` (0-based) against ELS over the draws of ``a`` (see :func:`_draws`).
+
+    A win is a validation J_S at most ELS's where ELS's stays bounded, or any bounded one where ELS's
+    diverges; both diverging is a tie. Medians of the ratios are over the draws where both stay bounded;
+    ``els_inf`` counts ELS's divergences, ``se_inf`` the estimator's."""
+    els_v, els_i = a[:, 0, 0], a[:, 0, 1]
+    v, i, jsf = a[:, 2 + 2 * c, 0], a[:, 2 + 2 * c, 1], a[:, 3 + 2 * c, 0]
+    both = np.isfinite(v) & np.isfinite(els_v)
+    wins = (both & (v <= els_v)) | (np.isfinite(v) & ~np.isfinite(els_v))
+    ratio, ident = v[both] / els_v[both], i[both] / els_i[both]
+    return dict(inb=int(np.sum(jsf <= BAND)), wins=int(np.sum(wins)), median=float(np.median(ratio)),
+                ident=float(np.median(ident)), bad=int(np.sum(ratio > 5)), els_inf=int(np.sum(~np.isfinite(els_v))),
+                se_inf=int(np.sum(~np.isfinite(v))))
 
 
 def draws(n, degrees):
@@ -285,15 +293,17 @@ def draws(n, degrees):
     print("| draw | ℓ | ELS valid | ELS J_SF | SE-grad valid | SE-grad J_SF | GA valid | GA J_SF |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     rows = _draws(range(1, n + 1), degrees, [front_dsf("gradient"), front_dsf("ga", starts="pe")])
-    print("\n| ℓ | draws | ELS J_SF > B | SE in B: grad, GA | SE valid ≤ ELS: grad, GA | median SE/ELS valid: grad, GA "
-          "| median SE/ELS ident: grad, GA | SE/ELS > 5: grad, GA | paper SE/ELS valid, ident |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("\n| ℓ | draws | ELS J_SF > B | ELS diverges, SE-grad, GA | SE in B: grad, GA | SE valid ≤ ELS: grad, GA "
+          "| median SE/ELS valid: grad, GA | median SE/ELS ident: grad, GA | SE/ELS > 5: grad, GA "
+          "| paper SE/ELS valid, ident |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for degree, a in rows.items():
         g, ga = _summary(a, 0), _summary(a, 1)
-        se, els_ = TABLE_I[f"SE (D_SF) l={degree}"], TABLE_I[f"ELS ({15 if degree == 2 else 17})"]
-        print(f"| {degree} | {len(a)} | {int(np.sum(a[:, 1, 0] > BAND))} | {g['inb']}, {ga['inb']} | "
-              f"{g['wins']}, {ga['wins']} | {g['median']:.2f}, {ga['median']:.2f} | {g['ident']:.2f}, {ga['ident']:.2f} | "
-              f"{g['bad']}, {ga['bad']} | {se[1] / els_[1]:.2f}, {se[0] / els_[0]:.2f} |")
+        se, els_ = TABLE_I[f"SE (D_SF) ℓ={degree}"], TABLE_I[f"ELS ({15 if degree == 2 else 17})"]
+        print(f"| {degree} | {len(a)} | {int(np.sum(a[:, 1, 0] > BAND))} | {g['els_inf']}, {g['se_inf']}, {ga['se_inf']} | "
+              f"{g['inb']}, {ga['inb']} | {g['wins']}, {ga['wins']} | {g['median']:.2f}, {ga['median']:.2f} | "
+              f"{g['ident']:.2f}, {ga['ident']:.2f} | {g['bad']}, {ga['bad']} | "
+              f"{se['JS_valid'] / els_['JS_valid']:.2f}, {se['JS_ident'] / els_['JS_ident']:.2f} |")
 
 
 #: Stand-in variants (PumpingPlant keywords) for --part variants: which disturbance makes SE lose to ELS?
@@ -322,15 +332,15 @@ def windows(n, degrees):
     from graybox.datasets.pumping import PumpingPlant
     ests = {"whole record": front_dsf("gradient"), "windows of 200": windowed(200), "windows of 400": windowed(400),
             "whole + windows of 400": windowed(400, whole=True), "whole record, ridge 0.1": front_dsf("gradient", ridge=0.1)}
-    print("| plant | ℓ | fit | SE valid ≤ ELS | median SE/ELS valid | median SE/ELS ident | SE/ELS > 5 |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+    print("| plant | ℓ | fit | ELS, SE diverge | SE valid ≤ ELS | median SE/ELS valid | median SE/ELS ident | SE/ELS > 5 |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for name in ("as bundled", "no air loss", "no air, no surge"):
         rows = _draws(range(1, n + 1), degrees, list(ests.values()), plant=PumpingPlant(**VARIANTS[name]), show=False)
         for degree, a in rows.items():
             for c, label in enumerate(ests):
                 g = _summary(a, c)
-                print(f"| {name} | {degree} | {label} | {g['wins']} | {g['median']:.2f} | {g['ident']:.2f} | {g['bad']} |",
-                      flush=True)
+                print(f"| {name} | {degree} | {label} | {g['els_inf']}, {g['se_inf']} | {g['wins']} | {g['median']:.2f} | "
+                      f"{g['ident']:.2f} | {g['bad']} |", flush=True)
     # the same restarts on the buck converter and the synthetic systems with static points (bench_honest's cases)
     from bench_honest import TRUE, cases
     print("\n| case | fit | choice | J_S ident | J_S choose | J_SF | band | J_S test |")
@@ -371,15 +381,16 @@ def startup(seeds):
 def variants(n, degrees):
     """ELS against SE-grad D_SF over ``n`` draws of each stand-in variant of :data:`VARIANTS`."""
     from graybox.datasets.pumping import PumpingPlant
-    print("| variant | ℓ | median ELS valid | median ELS J_SF | SE in B | SE valid ≤ ELS | median SE/ELS valid "
-          "| median SE/ELS ident | SE/ELS > 5 |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| variant | ℓ | median ELS valid | median ELS J_SF | ELS, SE diverge | SE in B | SE valid ≤ ELS "
+          "| median SE/ELS valid | median SE/ELS ident | SE/ELS > 5 |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for name, kw in VARIANTS.items():
         rows = _draws(range(1, n + 1), degrees, [front_dsf("gradient")], plant=PumpingPlant(**kw), show=False)
         for degree, a in rows.items():
             g = _summary(a, 0)
-            print(f"| {name} | {degree} | {np.median(a[:, 0, 0]):.3g} | {np.median(a[:, 1, 0]):.3g} | {g['inb']} | "
-                  f"{g['wins']} | {g['median']:.2f} | {g['ident']:.2f} | {g['bad']} |", flush=True)
+            print(f"| {name} | {degree} | {np.median(a[:, 0, 0]):.3g} | {np.median(a[:, 1, 0]):.3g} | "
+                  f"{g['els_inf']}, {g['se_inf']} | {g['inb']} | {g['wins']} | {g['median']:.2f} | {g['ident']:.2f} | "
+                  f"{g['bad']} |", flush=True)
 
 
 def others():
@@ -413,7 +424,7 @@ def others():
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--part", choices=("plant", "seeds", "draws", "variants", "windows", "startup", "others", "all"), default="all")
-    ap.add_argument("--draws", type=int, default=30, help="--part draws: how many draws of the plant")
+    ap.add_argument("--draws", type=int, default=30, help="--part draws, variants, windows: how many draws of the plant")
     ap.add_argument("--degrees", default="2,3", help="plant structures: 2 (17 terms), 3 (23 terms)")
     args = ap.parse_args(argv)
     print(f"# bench_se_table.py --part {args.part}: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} "

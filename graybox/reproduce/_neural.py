@@ -16,7 +16,7 @@ from ..reference import TABLE_I
 __all__ = ["PAPER_NEURAL_ROW", "section_neural"]
 
 #: Table I, "Neural" column, as printed (MSE in mlc²).
-PAPER_NEURAL_ROW = dict(zip(("JS_ident", "JS_valid", "JSF", "n_params"), TABLE_I["Neural"]))
+PAPER_NEURAL_ROW = dict(TABLE_I["Neural"])
 
 #: The paper's training: Norgaard's nnnarmax2 alone (one-step prediction error, no weight decay).
 PAPER_TRAINING = {"epochs": PAPER_EPOCHS, "sim_epochs": 0, "weight_decay": 0.0}
