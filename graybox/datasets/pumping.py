@@ -147,17 +147,19 @@ What the stand-in does not reproduce (BENCHMARKS.md, "Table I over many draws of
 
 - In Table I the SE (D_SF) model beats ELS on the validation record at ℓ = 2 (1.751 against 2.116
   mlc²) and loses to it at ℓ = 3 (1.306 against 1.104). Over 30 draws of this stand-in (seeds 1–30
-  of :func:`generate`) the gradient SE model's median ratio to ELS is 1.19 at ℓ = 3, the paper's
-  1.18, but 1.66 at ℓ = 2, where the paper has 0.83.
-- The paper's ℓ = 3 black box nearly meets the static points (J_SF 0.060 mlc², twice the band);
-  here both black boxes miss them by about 1 mlc², *because* the air loss lowers every dynamic record
-  by about 0.9 mlc, which the static test waits out. Transient inputs
-  (:func:`graybox.transient_inputs`) let a gray box carry the air loss without moving its static
-  curve (BENCHMARKS.md, "Transient inputs").
-- The air loss is not what makes the ℓ = 2 SE model lose: without it (``air_loss_per_rpm=0``), and
-  even without the surge, SE beats ELS on the identification record and loses on the validation
-  record (median ratios 4.6 and 1.95): the free-run fit of the ℓ = 2 structure overfits, on any
-  variant measured.
+  of :func:`generate`) the gradient SE model's validation J_S is a median 1.66 times ELS's at ℓ = 2,
+  where the paper has 0.83; at ℓ = 3 it is 1.21 times (the paper: 1.18), a median over a wide
+  spread (1.01 over the first ten).
+- The paper's ℓ = 3 black box nearly meets the static points (J_SF 0.060 mlc², twice the band).
+  Here the ℓ = 2 black box misses them by 0.94 mlc² and the ℓ = 3 one has no equilibrium at one of
+  them, *because* the air loss lowers every dynamic record by about 0.9 mlc, which the static test
+  waits out. Transient inputs (:func:`graybox.transient_inputs`) let a gray box carry the air loss
+  without moving its static curve (BENCHMARKS.md, "Transient inputs").
+- The air loss is not what makes the ℓ = 2 SE model lose. On the bundled stand-in it loses on both
+  records; without the air loss, and even without the surge, it beats ELS on the identification
+  record and loses on the validation record (overfitting): on the stand-in with neither slow
+  disturbance the loss is all start-up, from the validation record's first samples (the rig
+  mid-staircase; the identification record starts at rest).
 
 Run ``python -m graybox.datasets.pumping`` to regenerate the bundled CSVs (see :func:`main`).
 """
