@@ -33,7 +33,8 @@ the paper's own ratios beside them (Table I: SE/ELS validation J_S 0.83 at ℓ =
 (:data:`VARIANTS`): is it the air loss's static–dynamic conflict that makes SE lose?
 ``--part windows``: SE-grad fitted on windows of the identification record, each run freely from its
 measured first samples, against the whole free run (does a restarted fit stop following the drift?).
-``--part startup``: where on the validation record the ℓ = 2 models err (J_S per quarter).
+``--part startup``: where on the validation record the ℓ = 2 models err (J_S per quarter), and their
+errors 1, 20 and 100 samples ahead (``Model.predict(record, horizon=k)``).
 
 ``--part seeds``: the GA with and without ``starts="pe"`` for seeds 1, 2, 3 (is the gain the
 seed's luck?). ``--part others``: the GA seeding and the margin of ``se_dsf`` on the buck converter (test: the
@@ -361,8 +362,8 @@ def startup(seeds):
     """Where on the validation record the ℓ = 2 SE-grad D_SF model and ELS err: J_S over each quarter (200
     samples), on draws of the stand-in without slow disturbances and of the bundled one."""
     from graybox.datasets.pumping import N_IDENT, PumpingPlant, generate
-    print("| plant | draw | model | J_S by quarter of the validation record |")
-    print("| --- | --- | --- | --- |")
+    print("| plant | draw | model | J_S by quarter of the validation record | J_1, J_20, J_100 (k steps ahead) |")
+    print("| --- | --- | --- | --- | --- |")
     for name in ("no air, no surge", "as bundled"):
         plant = PumpingPlant(**VARIANTS[name])
         for seed in seeds:
@@ -375,7 +376,10 @@ def startup(seeds):
             for label, th in (("ELS", e.model.theta), ("SE-grad", front_dsf("gradient")(ident, static, BAND)[0])):
                 err = gb.simulate(st, th, valid, on_diverge="nan") - valid.y
                 q = [np.mean(err[i * 200:(i + 1) * 200] ** 2) for i in range(len(err) // 200)]
-                print(f"| {name} | {seed} | {label} | {', '.join(fmt(v) for v in q)} |", flush=True)
+                m = gb.Model(st, th)
+                jk = [np.mean((m.predict(valid, horizon=h) - valid.y)[st.max_lag:] ** 2) for h in (1, 20, 100)]
+                print(f"| {name} | {seed} | {label} | {', '.join(fmt(v) for v in q)} | {', '.join(fmt(v) for v in jk)} |",
+                      flush=True)
 
 
 def variants(n, degrees):

@@ -504,7 +504,7 @@ def test_bad_model_and_call_arguments(small_net):
         small_net.static_curve([np.nan])
     with pytest.raises(ValueError, match="one value per ū"):
         small_net.static_curve([300.0, 400.0, 500.0], y0=[1.0, 2.0])
-    with pytest.raises(ValueError, match="Record"):
+    with pytest.raises(TypeError, match="Record"):  # a wrong type is a TypeError, as everywhere
         small_net.predict(u)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="fewer than max lag"):
         small_net.predict(Record([1.0, 2.0], [1.0, 2.0]))

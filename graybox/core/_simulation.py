@@ -12,7 +12,7 @@ from typing import Literal
 
 import numpy as np
 
-from ._simulation_kernels import encode, record_inputs, simulate_batch, simulate_one
+from ._simulation_kernels import encode, predict_ahead, record_inputs, simulate_batch, simulate_one
 from ._records import Record, as_input_array
 from ._terms import check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta
@@ -26,8 +26,8 @@ class DivergenceError(ValueError):
     """A free run left every reasonable bound (the model is unstable along this input)."""
 
 
-def predict(structure: Structure, theta: np.ndarray, record: Record) -> np.ndarray:
-    """One-step-ahead prediction ŷ(k) = ψ(k)ᵀθ from measured data.
+def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon: int = 1) -> np.ndarray:
+    """Prediction ``horizon`` steps ahead from measured data (one step: ŷ(k) = ψ(k)ᵀθ).
 
     Parameters
     ----------
@@ -37,18 +37,33 @@ def predict(structure: Structure, theta: np.ndarray, record: Record) -> np.ndarr
     record : Record
         Measured input(s) and output; every input the structure uses must be among the
         record's ``input_names``.
+    horizon : int >= 1, keyword-only
+        Samples ahead. ŷ(k) is the model run freely from the outputs measured up to
+        k − horizon (never before the record's first ``max_lag`` samples) and driven by the
+        measured inputs: 1 (default) is the one-step prediction J_1 scores; a horizon of the
+        record's length is the free run J_S scores. Between them it shows how fast a model's
+        error grows from a measured state, e.g. a start-up transient a free run from rest
+        never meets.
 
     Returns
     -------
     ndarray, shape (N,)
-        ŷ; the first ``max_lag`` samples are the measured ones.
+        ŷ in the output's units; the first ``max_lag`` samples are the measured ones; NaN where
+        the run behind a prediction diverges (|ŷ| above 1e6 · (1 + max|y|)).
     """
+    if not isinstance(record, Record):
+        raise TypeError(f"record must be a Record, got {type(record).__name__}")
     th = check_theta(len(structure), theta)
+    horizon = check_int(horizon, "horizon", low=1)
     L = structure.max_lag
     record.require_length(L)
-    yhat = record.y.copy()
-    yhat[L:] = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
-    return yhat
+    if horizon == 1:
+        yhat = record.y.copy()
+        yhat[L:] = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
+        return yhat
+    code = encode(structure)
+    return predict_ahead(code, th, record_inputs(record, code.inputs), record.y, L, min(horizon, len(record)),
+                         _default_bound(record.y))
 
 
 def _default_bound(y0: np.ndarray) -> float:

@@ -30,7 +30,8 @@ import numpy as np
 
 from ._terms import Structure, require_inputs
 
-__all__ = ["Code", "encode", "simulate_one", "simulate_batch", "input_products", "record_inputs", "kernel_inputs"]
+__all__ = ["Code", "encode", "simulate_one", "simulate_batch", "predict_ahead", "input_products", "record_inputs",
+           "kernel_inputs"]
 
 
 class Code(NamedTuple):
@@ -284,6 +285,66 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
     uc = kernel_inputs(code, u)
     return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc.reshape(-1),
                 uc.shape[1], y0, start, bound)
+
+
+@nb.njit(cache=True, nogil=True)
+def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound):  # pragma: no cover - compiled
+    # The input-only parts X(k), C_g(k) once over the record, then for every target sample t a
+    # recursion of at most ``horizon`` steps from the measured outputs before max(t - horizon + 1, start).
+    nt = theta.shape[0]
+    G = gny.shape[0]
+    X = np.zeros(n)
+    C = np.zeros((G, n))
+    for t in range(nt):
+        g = grp[t]
+        for k in range(start, n):
+            v = theta[t]
+            for f in range(uptr[t], uptr[t + 1]):
+                x = uflat[usig[f] * n + k - ulag[f]]
+                for _ in range(upow[f]):
+                    v *= x
+            if g < 0:
+                X[k] += v
+            else:
+                C[g, k] += v
+    out = np.empty(n)
+    for k in range(start):
+        out[k] = y[k]
+    buf = np.empty(start + horizon)
+    for t in range(start, n):
+        s = max(t - horizon + 1, start)
+        for i in range(start):
+            buf[i] = y[s - start + i]
+        for k in range(s, t + 1):
+            j = start + k - s
+            acc = X[k]
+            for g in range(G):
+                v = C[g, k]
+                for d in range(gny[g]):
+                    v *= buf[j - gylag[g, d]]
+                acc += v
+            if not (abs(acc) <= bound):
+                acc = np.nan
+                break
+            buf[j] = acc
+        out[t] = acc
+    return out
+
+
+def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, start: int, horizon: int,
+                  bound: float) -> np.ndarray:
+    """``horizon``-step-ahead prediction of one model from measured outputs, shape (N,).
+
+    ŷ(t) is the free run started from the measured y(s − start) … y(s − 1), s = max(t − horizon + 1,
+    start), and driven by the measured inputs up to t − 1: the prediction of y(t) from the outputs
+    measured up to t − horizon (horizon 1: one step ahead; horizon ≥ N: the free run from the
+    record's start). The first ``start`` samples are the measured ones; a prediction whose run leaves
+    ``bound`` (or is not finite) is NaN.
+    """
+    uc = kernel_inputs(code, u)
+    return _ahead(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag,
+                  np.ascontiguousarray(theta, dtype=np.float64), uc.reshape(-1), uc.shape[1],
+                  np.ascontiguousarray(y, dtype=np.float64), start, horizon, bound)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

@@ -488,7 +488,7 @@ class NeuralModel:
         samples are the measured ones.
         """
         if not isinstance(record, Record):
-            raise ValueError(f"record must be a Record, got {type(record).__name__}")
+            raise TypeError(f"record must be a Record, got {type(record).__name__}")
         L = self.max_lag
         record.require_length(L)
         N = len(record)
@@ -515,7 +515,7 @@ class NeuralModel:
             Residuals y − ŷ in output units (0 on the first ``max_lag`` samples).
         """
         if not isinstance(record, Record):
-            raise ValueError(f"record must be a Record, got {type(record).__name__}")
+            raise TypeError(f"record must be a Record, got {type(record).__name__}")
         record.require_length(self.max_lag)
         un, yn = self._un(record.u), self._yn(record.y)
         seg = np.array([0, len(record)], dtype=np.int64)

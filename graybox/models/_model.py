@@ -80,9 +80,10 @@ class Model:
         return Model(self.structure, theta, name=self.name if name is None else name, input_names=self.input_names)
 
     # -- dynamics -----------------------------------------------------------
-    def predict(self, record: Record) -> np.ndarray:
-        """One-step-ahead prediction over ``record``, shape (N,); see :func:`graybox.core._simulation.predict`."""
-        return _simulation.predict(self.structure, self.theta, record)
+    def predict(self, record: Record, *, horizon: int = 1) -> np.ndarray:
+        """Prediction ``horizon`` samples ahead over ``record`` (default one step), shape (N,); see
+        :func:`graybox.core._simulation.predict`."""
+        return _simulation.predict(self.structure, self.theta, record, horizon=horizon)
 
     @property
     def n_inputs(self) -> int:
