@@ -8,6 +8,10 @@ Run with the benchmark environment (SysIdentPy is not a project dependency):
 Model (15) of the paper (Table II, ELS column), 3200 samples of a step input in rpm.
 Throughput counts term-evaluations: one term of one model at one sample.
 
+``--ahead`` times ``Model.predict(record, horizon=k)`` (prediction k samples ahead) on 3200 and
+10⁶ samples for k = 1 (the regressor matrix), 20, 100 and the record's length (the free run, run from
+every sample: N·k steps, against the free run's N).
+
 ``--kernels`` prints only graybox's kernel rows (single run, batch, batch SSE, sensitivities),
 for one input and for two inputs: the two-input model is (15) with the input factors of odd
 lag read from a second input (the same terms, lags and powers, so the same work per term).
@@ -23,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _common import machine, sysidentpy_code, timeit  # noqa: E402
+from _common import git_rev, machine, sysidentpy_code, timeit  # noqa: E402
 
 from graybox import Record, reference, simulate as gb_simulate, simulate_many  # noqa: E402
 
@@ -83,7 +87,35 @@ def kernel_rows() -> list[tuple[str, float, float]]:
     return rows
 
 
+def ahead_rows() -> list[tuple[str, float, float]]:
+    """``Model.predict(record, horizon=k)`` on model (15): (case, seconds per call, model steps/s).
+
+    A model step is one sample of one run (every term once); a prediction k ahead of sample t takes
+    min(k, t − L + 1) of them."""
+    rng = np.random.default_rng(0)
+    m = reference.paper_model(15)
+    rows = []
+    for n in (N, 1_000_000):
+        u = np.repeat(rng.uniform(750, 1650, n // 80 + 1), 80)[:n]
+        y0 = np.full(m.max_lag, float(m.static_curve([u[0]])[0]))
+        y = m.simulate(u, y0) + 0.05 * rng.standard_normal(n)
+        rec = Record(u, y, Ts=0.05)
+        for k in (1, 20, 100) + ((N,) if n == N else ()):
+            steps = int(np.minimum(k, np.arange(1, n - m.max_lag + 1)).sum())
+            t = timeit(lambda: m.predict(rec, horizon=k), repeat=5 if n == N else 3, number=3 if n == N else 1)
+            rows.append((f"{n} samples, horizon {k}{' (the free run from every sample)' if k == n else ''}", t,
+                         steps / t))
+    return rows
+
+
 def main() -> None:
+    if "--ahead" in sys.argv:
+        print(f"# bench_simulate --ahead  {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC  "
+              f"git {git_rev()}  {machine()}")
+        print(f"{'case':60s} {'time':>12s} {'model steps/s':>14s}")
+        for name, t, r in ahead_rows():
+            print(f"{name:60s} {t * 1e3:9.3f} ms {r:14.3e}")
+        return
     if "--kernels" in sys.argv:
         print(f"# bench_simulate --kernels  {datetime.date.today()}  {machine()}")
         print(f"{'case':60s} {'time':>12s} {'term-evals/s':>14s}")
