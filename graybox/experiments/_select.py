@@ -111,7 +111,10 @@ class GrayboxSelection:
         record also ``JS_test`` (its refitted model's J_S there) and ``JSF_test`` (that model's
         J_SF). Nothing in the test columns took part in the choice. ``reason``: why a row has no
         qualifying model (every member failed or diverged; the smallest J_SF reached when the band is
-        missed); empty when it has one.
+        missed); empty when it has one. ``warnings``: what its fits warned of (e.g. an ELS
+        iteration that did not converge), each message once; empty when nothing. The call then
+        says once, with a :class:`SelectionWarning`, how many rows warned and whether the chosen
+        one did.
     degree : int or None
         Degree of the static curve the static information asks for (None for a black box).
     band : float
@@ -465,22 +468,27 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     plan = job.plan
     blocks, jsf, weights = [], [], []
     full = None
-    for rec, choose, edges in plan.splits:
-        th, lam = _fit(job, st, rec)
-        if not plan.folds:
-            full = (th, lam)
-        blocks.append(_block_mse(st, th, choose, edges))
-        weights.append(np.diff(edges))
-        jsf.append(_jsf(st, th, plan.static))
-    if full is None:
-        full = _fit(job, st, plan.ident)
-        jsf.append(_jsf(st, full[0], plan.static))
-    w = np.concatenate(weights).astype(float)
-    out = {"blocks": np.concatenate(blocks, axis=1), "weights": w / w.sum(), "jsf": np.max(np.stack(jsf), axis=0),
-           "jsf_full": jsf[-1], "thetas": full[0], "lambdas": full[1]}
-    if plan.test is not None:
-        edges = np.array([plan.lag, len(plan.test)])
-        out["test"] = _block_mse(st, full[0], plan.test, edges)[:, 0]
+    # a fit's warnings belong to its row: kept as text (a worker process's warnings never reach the
+    # driver otherwise), said once by the driver for the whole table
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for rec, choose, edges in plan.splits:
+            th, lam = _fit(job, st, rec)
+            if not plan.folds:
+                full = (th, lam)
+            blocks.append(_block_mse(st, th, choose, edges))
+            weights.append(np.diff(edges))
+            jsf.append(_jsf(st, th, plan.static))
+        if full is None:
+            full = _fit(job, st, plan.ident)
+            jsf.append(_jsf(st, full[0], plan.static))
+        w = np.concatenate(weights).astype(float)
+        out = {"blocks": np.concatenate(blocks, axis=1), "weights": w / w.sum(), "jsf": np.max(np.stack(jsf), axis=0),
+               "jsf_full": jsf[-1], "thetas": full[0], "lambdas": full[1]}
+        if plan.test is not None:
+            edges = np.array([plan.lag, len(plan.test)])
+            out["test"] = _block_mse(st, full[0], plan.test, edges)[:, 0]
+    out["warnings"] = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught))
     return out
 
 
@@ -755,6 +763,12 @@ def select_graybox(
                      if i != pos]
     table["rank"] = 0
     table.iloc[order, table.columns.get_loc("rank")] = np.arange(1, len(table) + 1)
+    said = table["warnings"].to_numpy()
+    if any(said):
+        chosen = said[pos]
+        warn(f"select_graybox: the fits of {sum(map(bool, said))} of {len(said)} structure × estimator rows warned "
+             "(table['warnings'] says what); " + (f"the chosen row's: {chosen}" if chosen else "not the chosen row's"),
+             SelectionWarning)
     job, res, i = jobs[pos], results[pos], members[pos]
     structure = gb.Structure(job.terms.split(" + "))
     decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
@@ -809,6 +823,7 @@ def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.
                    lambda1=float(res["lambdas"][i]) if i >= 0 else np.nan,
                    JS_valid=js, JSF=float(res["jsf"][i]) if i >= 0 else np.inf, in_band=bool(in_band and np.isfinite(js)))
         row["reason"] = _reason(res, i, in_band, js, plan.band)
+        row["warnings"] = "; ".join(res["warnings"])
         if plan.test is not None:
             row["JS_test"] = float(res["test"][i]) if i >= 0 else np.inf
             row["JSF_test"] = float(res["jsf_full"][i]) if i >= 0 else np.inf
