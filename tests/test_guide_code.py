@@ -27,4 +27,6 @@ def test_every_python_block_of_a_page_runs(page):
             exec(compile(code, f"{page.name} block {i + 1}", "exec"), namespace)
     # the only warnings a page may raise are the ones it explains: the selection call's summary
     # of a row whose fit warned (selection.md says so)
-    assert all(w.category is gb.SelectionWarning for w in caught), [str(w.message) for w in caught]
+    explained = "structure × estimator rows warned"
+    assert all(w.category is gb.SelectionWarning and explained in str(w.message) for w in caught), \
+        [str(w.message) for w in caught]

@@ -91,3 +91,54 @@ def test_bad_arguments_are_named():
         gb.predict(ARX, theta, rec, horizon=2.5)
     with pytest.raises(ValueError, match="fewer than max lag"):
         gb.predict(gb.Structure(["y(k-8)"]), np.array([0.5]), rec.slice(0, 5), horizon=3)
+
+
+def _brute(structure, theta, rec, h):
+    """ŷ(t): simulate on the slice of the record from t − h + 1 − L (never before 0) to t, from its measured start."""
+    L = structure.max_lag
+    out = rec.y.copy()
+    for t in range(L, len(rec)):
+        s = max(t - h + 1, L)
+        out[t] = gb.simulate(structure, theta, rec.slice(s - L, t + 1), on_diverge="nan")[-1]
+    return out
+
+
+@pytest.mark.parametrize("h", [2, 3, 5, 17, 119, 500])
+def test_several_lags_and_inputs_match_a_free_run_from_each_measured_state(h):
+    rng = np.random.default_rng(11)
+    n = 120
+    structure = gb.Structure(["y(k-1)", "y(k-3)", "y(k-1)y(k-2)", "b(k-4)", "a(k-2)y(k-2)", "c(k-1)^2", "1"])
+    theta = np.array([0.5, 0.2, -0.02, 0.4, -0.1, 0.05, 0.3])
+    u = np.repeat(rng.uniform(0.0, 1.0, (n // 6 + 1, 3)), 6, axis=0)[:n]
+    y = 0.5 + 0.1 * rng.standard_normal(n)
+    rec = gb.Record(u[:, [2, 0, 1]], y, Ts=1.0, input_names=("c", "a", "b"))  # columns not in the terms' order
+    np.testing.assert_allclose(gb.predict(structure, theta, rec, horizon=h), _brute(structure, theta, rec, h),
+                               rtol=1e-12, atol=1e-12)
+
+
+def test_a_diverging_run_spoils_only_its_own_predictions():
+    rec = _record(n=80, noise=0.0)
+    y = rec.y.copy()
+    y[40] = 1e9  # a spike: runs started from it leave the bound, the later ones do not
+    rec = gb.Record(rec.u, y, Ts=rec.Ts)
+    theta = np.array([1.5, 0.4, 0.2])  # unstable, but 3 steps from a sane state stay in the bound
+    p = gb.predict(ARX, theta, rec, horizon=3)
+    # only ŷ(43) runs from the measured y(40); the runs before start earlier, the ones after later
+    assert np.isnan(p[43])
+    assert np.isfinite(np.delete(p, 43)).all()
+
+
+def test_a_horizon_of_the_records_length_is_simulate_nan_included():
+    rec = _record(n=150)
+    theta = np.array([1.2, 0.4, 0.2])  # diverges within the record
+    free = gb.simulate(ARX, theta, rec, on_diverge="nan")
+    assert np.isnan(free[-1])
+    np.testing.assert_array_equal(gb.predict(ARX, theta, rec, horizon=len(rec)), free)
+
+
+def test_an_output_only_model_on_a_record_whose_input_is_not_named_u():
+    rec = gb.Record(np.zeros(30), np.linspace(1.0, 2.0, 30), Ts=1.0, input_names=("speed",))
+    structure = gb.Structure(["y(k-1)", "1"])
+    p = gb.predict(structure, np.array([0.9, 0.1]), rec, horizon=4)
+    ref = 0.9**4 * rec.y[6:26] + 0.1 * sum(0.9**i for i in range(4))  # ŷ(t) from y(t − 4)
+    np.testing.assert_allclose(p[10:30], ref, rtol=1e-12)

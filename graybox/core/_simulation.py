@@ -48,8 +48,9 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     Returns
     -------
     ndarray, shape (N,)
-        ŷ in the output's units; the first ``max_lag`` samples are the measured ones; NaN where
-        the run behind a prediction diverges (|ŷ| above 1e6 · (1 + max|y|)).
+        ŷ in the output's units; the first ``max_lag`` samples are the measured ones. From
+        horizon 2 on, NaN where the run behind a prediction leaves :func:`simulate`'s bound
+        (|ŷ| above 1e6 · (1 + max|y(0 … L−1)|)); one step ahead is never NaN for finite data.
     """
     if not isinstance(record, Record):
         raise TypeError(f"record must be a Record, got {type(record).__name__}")
@@ -61,9 +62,10 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
         yhat = record.y.copy()
         yhat[L:] = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
         return yhat
-    code = encode(structure)
+    code = encode(structure, record.input_names)
+    # simulate's bound, from the first max_lag samples: a horizon of the record's length is its free run
     return predict_ahead(code, th, record_inputs(record, code.inputs), record.y, L, min(horizon, len(record)),
-                         _default_bound(record.y))
+                         _default_bound(record.y[:L]))
 
 
 def _default_bound(y0: np.ndarray) -> float:

@@ -289,8 +289,9 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
 
 @nb.njit(cache=True, nogil=True)
 def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound):  # pragma: no cover - compiled
-    # The input-only parts X(k), C_g(k) once over the record, then for every target sample t a
-    # recursion of at most ``horizon`` steps from the measured outputs before max(t - horizon + 1, start).
+    # The input-only parts X(k), C_g(k) once over the record; the samples before start + horizon - 1
+    # by one free run from the record's start; every later sample t by a recursion of ``horizon``
+    # steps from the measured outputs before t - horizon + 1: O(N min(horizon, N - horizon)) steps.
     nt = theta.shape[0]
     G = gny.shape[0]
     X = np.zeros(n)
@@ -310,9 +311,28 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     out = np.empty(n)
     for k in range(start):
         out[k] = y[k]
-    buf = np.empty(start + horizon)
-    for t in range(start, n):
-        s = max(t - horizon + 1, start)
+    # every t before start + horizon - 1 is predicted from the record's first samples: one free run
+    prefix = min(start + horizon - 1, n)
+    buf = np.empty(max(prefix, start + horizon))
+    for i in range(start):
+        buf[i] = y[i]
+    gone = False
+    for k in range(start, prefix):
+        acc = np.nan
+        if not gone:
+            acc = X[k]
+            for g in range(G):
+                v = C[g, k]
+                for d in range(gny[g]):
+                    v *= buf[k - gylag[g, d]]
+                acc += v
+            if not (abs(acc) <= bound):
+                acc = np.nan
+                gone = True
+        buf[k] = acc
+        out[k] = acc
+    for t in range(prefix, n):
+        s = t - horizon + 1
         for i in range(start):
             buf[i] = y[s - start + i]
         for k in range(s, t + 1):

@@ -59,7 +59,8 @@ __all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_E
 
 class SelectionWarning(UserWarning):
     """select_graybox took an explicit fallback (fewer blocks, sizes a search did not reach, a
-    lower static degree than the points ask for); the message says which."""
+    lower static degree than the points ask for), or some rows' fits warned (their text is in
+    the table's ``warnings``); the message says which."""
 
 
 #: Estimators that trade J_S against J_SF along λ1 (a front per structure).
@@ -395,6 +396,7 @@ class _Job:
     plan: _Plan
     lambdas: tuple | None
     constraints: tuple
+    filters: tuple = ()  # the caller's warning filters, as warnings.filters held them at the call
 
 
 def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> np.ndarray | None:
@@ -456,6 +458,18 @@ def _jsf(st: gb.Structure, thetas: np.ndarray, sp: gb.StaticPoints | None) -> np
     return out
 
 
+def _apply_filters(filters: tuple) -> None:
+    """Install the caller's warning filters (``warnings.filters`` entries) in this process, with every
+    action that shows a warning turned into "always" (so that each row keeps its own)."""
+    warnings.resetwarnings()
+    for action, message, category, module, lineno in reversed(filters):
+        # an entry holds a compiled pattern, a string (some tools insert those) or None
+        warnings.filterwarnings(action if action in ("ignore", "error") else "always",
+                                getattr(message, "pattern", message) or "", category,
+                                getattr(module, "pattern", module) or "", lineno)
+    warnings.simplefilter("always", append=True)
+
+
 def _score_job(job: _Job) -> dict[str, np.ndarray]:
     """Fit, per split and on all the identification data, and score every member.
 
@@ -469,9 +483,10 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     blocks, jsf, weights = [], [], []
     full = None
     # a fit's warnings belong to its row: kept as text (a worker process's warnings never reach the
-    # driver otherwise), said once by the driver for the whole table
+    # driver otherwise), said once by the driver for the whole table; the caller's filters hold in
+    # the job too (what it ignores is not kept, what it makes an error raises)
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+        _apply_filters(job.filters)
         for rec, choose, edges in plan.splits:
             th, lam = _fit(job, st, rec)
             if not plan.folds:
@@ -740,7 +755,8 @@ def select_graybox(
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
                             progress=progress)
     fast = [e for e in estimators if e not in SLOW_ESTIMATORS]
-    jobs = [_Job(r["structure"], r["terms"], e, plan, lam, constraints) for r in rows for e in fast]
+    filters = tuple(warnings.filters)
+    jobs = [_Job(r["structure"], r["terms"], e, plan, lam, constraints, filters) for r in rows for e in fast]
     results = run(jobs)
     slow_rows = rows
     if fast and shortlist is not None and len(rows) > shortlist:
@@ -749,7 +765,7 @@ def select_graybox(
         order = first.assign(_js=np.where(first["in_band"], first["JS_valid"], np.inf)).groupby(level=0)["_js"].min()
         keep = set(order.sort_values(kind="stable").index[:shortlist])
         slow_rows = [r for r in rows if r["structure"] in keep]
-    more = [_Job(r["structure"], r["terms"], e, plan, lam, constraints) for r in slow_rows for e in estimators
+    more = [_Job(r["structure"], r["terms"], e, plan, lam, constraints, filters) for r in slow_rows for e in estimators
             if e in SLOW_ESTIMATORS]
     jobs, results = jobs + more, results + run(more)
     table, members, scores = _table(rows, jobs, results, plan)
