@@ -287,6 +287,18 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
                 uc.shape[1], y0, start, bound)
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _monomials_step(X, C, gny, gylag, buf, k, j):  # pragma: no cover - compiled
+    # ŷ at sample k of the record, the run's past outputs in buf up to position j - 1
+    acc = X[k]
+    for g in range(gny.shape[0]):
+        v = C[g, k]
+        for d in range(gny[g]):
+            v *= buf[j - gylag[g, d]]
+        acc += v
+    return acc
+
+
 @nb.njit(cache=True, nogil=True)
 def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound):  # pragma: no cover - compiled
     # The input-only parts X(k), C_g(k) once over the record; the samples before start + horizon - 1
@@ -320,12 +332,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     for k in range(start, prefix):
         acc = np.nan
         if not gone:
-            acc = X[k]
-            for g in range(G):
-                v = C[g, k]
-                for d in range(gny[g]):
-                    v *= buf[k - gylag[g, d]]
-                acc += v
+            acc = _monomials_step(X, C, gny, gylag, buf, k, k)
             if not (abs(acc) <= bound):
                 acc = np.nan
                 gone = True
@@ -337,12 +344,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
             buf[i] = y[s - start + i]
         for k in range(s, t + 1):
             j = start + k - s
-            acc = X[k]
-            for g in range(G):
-                v = C[g, k]
-                for d in range(gny[g]):
-                    v *= buf[j - gylag[g, d]]
-                acc += v
+            acc = _monomials_step(X, C, gny, gylag, buf, k, j)
             if not (abs(acc) <= bound):
                 acc = np.nan
                 break
