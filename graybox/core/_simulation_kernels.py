@@ -217,11 +217,38 @@ def _input_products(fptr, fsig, flag, fpow, uc, start):  # pragma: no cover - co
 _CHUNK = 512
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp):  # pragma: no cover - compiled
+    # X[i] and C[g, i] for the samples k0 + i, i < mm: X(k) from the input-only terms and the
+    # coefficient C_g(k) of each output monomial. Loops start at 0 over offset views so that
+    # LLVM drops numba's negative-index checks and vectorises them.
+    for i in range(mm):
+        X[i] = 0.0
+    for g in range(C.shape[0]):
+        for i in range(mm):
+            C[g, i] = 0.0
+    for t in range(theta.shape[0]):
+        th = theta[t]
+        for i in range(mm):
+            tmp[i] = th
+        for f in range(uptr[t], uptr[t + 1]):
+            us = uflat[usig[f] * n + k0 - ulag[f]:]
+            for _ in range(upow[f]):
+                for i in range(mm):
+                    tmp[i] *= us[i]
+        g = grp[t]
+        if g < 0:
+            for i in range(mm):
+                X[i] += tmp[i]
+        else:
+            for i in range(mm):
+                C[g, i] += tmp[i]
+
+
 @nb.njit(cache=True, nogil=True)
 def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound):  # pragma: no cover - compiled
     # uflat: the (m, n) inputs flattened, input i at uflat[i*n:(i+1)*n]; 1-D slices of a 1-D
     # array keep the pass-1 loops as the single-input kernel had them (unit stride, vectorised)
-    nt = theta.shape[0]
     G = gny.shape[0]
     y = np.empty(n)
     for k in range(start):
@@ -232,42 +259,12 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bo
     tmp = np.empty(_CHUNK)
     for k0 in range(start, n, _CHUNK):
         mm = min(_CHUNK, n - k0)
-        # pass 1, off the recursion's critical path: X(k) from the input-only terms and the
-        # coefficient C_g(k) of each output monomial. Loops start at 0 over offset views so
-        # that LLVM drops numba's negative-index checks and vectorises them.
-        for i in range(mm):
-            X[i] = 0.0
-        for g in range(G):
-            for i in range(mm):
-                C[g, i] = 0.0
-        for t in range(nt):
-            th = theta[t]
-            for i in range(mm):
-                tmp[i] = th
-            for f in range(uptr[t], uptr[t + 1]):
-                us = uflat[usig[f] * n + k0 - ulag[f]:]
-                for _ in range(upow[f]):
-                    for i in range(mm):
-                        tmp[i] *= us[i]
-            g = grp[t]
-            if g < 0:
-                for i in range(mm):
-                    X[i] += tmp[i]
-            else:
-                for i in range(mm):
-                    C[g, i] += tmp[i]
+        # pass 1, off the recursion's critical path
+        _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp)
         # pass 2: the recursion over a few output monomials
         for i in range(mm):
             k = k0 + i
-            acc = X[i]
-            for g in range(G):
-                v = C[g, i]
-                if gny[g] == 1:
-                    v *= y[k - gylag[g, 0]]
-                else:
-                    for d in range(gny[g]):
-                        v *= y[k - gylag[g, d]]
-                acc += v
+            acc = _monomials_step(X, C, gny, gylag, y, i, k)
             if not (abs(acc) <= bound):
                 for j in range(k, n):
                     y[j] = np.nan
@@ -288,13 +285,16 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _monomials_step(X, C, gny, gylag, buf, k, j):  # pragma: no cover - compiled
-    # ŷ at sample k of the record, the run's past outputs in buf up to position j - 1
-    acc = X[k]
+def _monomials_step(X, C, gny, gylag, buf, i, j):  # pragma: no cover - compiled
+    # ŷ from the input parts X[i], C[:, i] and the run's past outputs in buf up to position j - 1
+    acc = X[i]
     for g in range(gny.shape[0]):
-        v = C[g, k]
-        for d in range(gny[g]):
-            v *= buf[j - gylag[g, d]]
+        v = C[g, i]
+        if gny[g] == 1:  # the common monomial, a single lagged output
+            v *= buf[j - gylag[g, 0]]
+        else:
+            for d in range(gny[g]):
+                v *= buf[j - gylag[g, d]]
         acc += v
     return acc
 
@@ -304,22 +304,10 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     # The input-only parts X(k), C_g(k) once over the record; the samples before start + horizon - 1
     # by one free run from the record's start; every later sample t by a recursion of ``horizon``
     # steps from the measured outputs before t - horizon + 1: O(N min(horizon, N - horizon)) steps.
-    nt = theta.shape[0]
-    G = gny.shape[0]
-    X = np.zeros(n)
-    C = np.zeros((G, n))
-    for t in range(nt):
-        g = grp[t]
-        for k in range(start, n):
-            v = theta[t]
-            for f in range(uptr[t], uptr[t + 1]):
-                x = uflat[usig[f] * n + k - ulag[f]]
-                for _ in range(upow[f]):
-                    v *= x
-            if g < 0:
-                X[k] += v
-            else:
-                C[g, k] += v
+    m = n - start
+    X = np.empty(m)  # X[k - start], C[:, k - start]: sample k
+    C = np.empty((gny.shape[0], m))
+    _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, start, m, X, C, np.empty(m))
     out = np.empty(n)
     for k in range(start):
         out[k] = y[k]
@@ -332,7 +320,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     for k in range(start, prefix):
         acc = np.nan
         if not gone:
-            acc = _monomials_step(X, C, gny, gylag, buf, k, k)
+            acc = _monomials_step(X, C, gny, gylag, buf, k - start, k)
             if not (abs(acc) <= bound):
                 acc = np.nan
                 gone = True
@@ -344,7 +332,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
             buf[i] = y[s - start + i]
         for k in range(s, t + 1):
             j = start + k - s
-            acc = _monomials_step(X, C, gny, gylag, buf, k, j)
+            acc = _monomials_step(X, C, gny, gylag, buf, k - start, j)
             if not (abs(acc) <= bound):
                 acc = np.nan
                 break
