@@ -14,7 +14,7 @@ import os
 import socket
 import time
 import warnings
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
 import numba
 import numpy as np
@@ -28,7 +28,7 @@ from ..estimation._prediction_error import numerator_surface
 from ..core._validation import check_int
 from ._spec import Cell, build_constraint, canonical_json
 
-__all__ = ["COLUMNS", "JSON_COLUMNS", "STATUSES", "run_cell", "failed_row"]
+__all__ = ["COLUMNS", "JSON_COLUMNS", "STATUSES", "run_cell", "failed_row", "warning_texts"]
 
 #: Statuses of a finished cell.
 STATUSES = ("ok", "infeasible", "diverged", "failed")
@@ -257,6 +257,11 @@ def _figures(m, data: gb.Dataset) -> tuple[dict[str, float], dict[str, tuple[int
     return out, diverged
 
 
+def warning_texts(caught: Iterable[warnings.WarningMessage]) -> list[str]:
+    """What a fit warned of, as text a row keeps: ``"Category: message"``, each once, sorted."""
+    return sorted({f"{w.category.__name__}: {w.message}" for w in caught})
+
+
 def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any]:
     """Run one cell and return its row (see :data:`COLUMNS`); never raises for the cell's own problems.
 
@@ -309,7 +314,7 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
         row.update(status="failed", message=f"{type(exc).__name__}: {exc}")
     finally:
         numba.set_num_threads(numba_before)
-    row["warnings"] = sorted({f"{w.category.__name__}: {w.message}" for w in caught})
+    row["warnings"] = warning_texts(caught)
     row["wall_time"] = time.perf_counter() - t0
     row["finished_at"] = _now()
     return row

@@ -49,7 +49,7 @@ from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar
 from ..core._records import check_same_inputs, overlap_message, same_record
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
-from ._cell import cell_constraints
+from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
 from ._spec import constraint_entries, constraint_from_object
@@ -503,7 +503,7 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
         if plan.test is not None:
             edges = np.array([plan.lag, len(plan.test)])
             out["test"] = _block_mse(st, full[0], plan.test, edges)[:, 0]
-    out["warnings"] = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught))
+    out["warnings"] = warning_texts(caught)
     return out
 
 
