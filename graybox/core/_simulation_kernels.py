@@ -75,11 +75,11 @@ def encode(structure: Structure, inputs: tuple[str, ...] | None = None) -> Code:
     structure : Structure
     inputs : tuple of str, optional
         The input names in the column order the caller will pass (default: the inputs the
-        structure uses, in natural name order; ``("u",)`` when it uses none). Must contain
-        every input the structure uses.
+        structure uses, in natural name order; none for an output-only structure, which then
+        reads no input by name). Must contain every input the structure uses.
     """
     if inputs is None:
-        inputs = structure.inputs or ("u",)
+        inputs = structure.inputs
     return _encode(structure, tuple(inputs))
 
 
