@@ -10,7 +10,8 @@ Throughput counts term-evaluations: one term of one model at one sample.
 
 ``--ahead`` times ``Model.predict(record, horizon=k)`` (prediction k samples ahead) on 3200 and
 10⁶ samples for k = 1 (the regressor matrix), 20, 100 and the record's length (the free run: one
-run, as the samples before L + k − 1 share theirs).
+run, as the samples before L + k − 1 share theirs), and ``NeuralModel.predict`` (a network of the
+paper's size) on 3200 samples.
 
 ``--kernels`` prints only graybox's kernel rows (single run, batch, batch SSE, sensitivities),
 for one input and for two inputs: the two-input model is (15) with the input factors of odd
@@ -106,6 +107,17 @@ def ahead_rows() -> list[tuple[str, float, float]]:
             t = timeit(lambda: m.predict(rec, horizon=k), repeat=5 if n == N else 3, number=3 if n == N else 1)
             rows.append((f"{n} samples, horizon {k}{' (the free run)' if k == n else ''}", t,
                          steps / t))
+    # a network of the paper's size (10 tanh nodes, ny = nu = 4: 99 weights), one vectorised pass per step ahead
+    from graybox import NeuralModel
+    net = NeuralModel(rng.normal(size=(10, 10)) * 0.3, rng.normal(size=10) * 0.1, rng.normal(size=10) * 0.3,
+                      0.0, 4, 4, ne=2, u_offset=1200.0, u_scale=300.0, y_offset=12.0, y_scale=5.0)
+    u = np.repeat(rng.uniform(750, 1650, N // 80 + 1), 80)[:N]
+    rec = Record(u, net.simulate(u, np.full(4, 12.0)) + 0.05 * rng.standard_normal(N), Ts=0.05)
+    for k in (1, 20, 100, N):
+        prefix = min(net.max_lag + k - 1, N)
+        steps = (prefix - net.max_lag) + max(N - prefix, 0) * k
+        t = timeit(lambda: net.predict(rec, horizon=k), repeat=5, number=3)
+        rows.append((f"neural, {N} samples, horizon {k}{' (the free run)' if k == N else ''}", t, steps / t))
     return rows
 
 

@@ -142,3 +142,42 @@ def test_an_output_only_model_on_a_record_whose_input_is_not_named_u():
     p = gb.predict(structure, np.array([0.9, 0.1]), rec, horizon=4)
     ref = 0.9**4 * rec.y[6:26] + 0.1 * sum(0.9**i for i in range(4))  # ŷ(t) from y(t − 4)
     np.testing.assert_allclose(p[10:30], ref, rtol=1e-12)
+
+
+def _network(ny, nu, seed=1, hidden=4):
+    from graybox.estimation._neural import NeuralModel
+    rng = np.random.default_rng(seed)
+    return NeuralModel(rng.normal(size=(hidden, ny + nu)) * 0.5, rng.normal(size=hidden) * 0.3,
+                       rng.normal(size=hidden) * 0.6, 0.1, ny, nu, u_offset=2.0, u_scale=3.0, y_offset=-1.0,
+                       y_scale=0.5)
+
+
+@pytest.mark.parametrize("ny, nu", [(2, 3), (1, 1), (0, 2), (4, 1)])
+@pytest.mark.parametrize("h", [1, 2, 5, 13, 200])
+def test_a_neural_model_predicts_as_a_free_run_from_each_measured_state(ny, nu, h):
+    net = _network(ny, nu)
+    rng = np.random.default_rng(7)
+    rec = gb.Record(rng.uniform(0.0, 4.0, 60), rng.normal(size=60), Ts=1.0)
+    L, free = net.max_lag, net.simulate(rec)
+    ref = rec.y.copy()
+    for t in range(L, len(rec)):
+        o = t - h  # the run behind ŷ(t) starts from the outputs measured up to o
+        ref[t] = free[t] if o < L - 1 else net.simulate(rec.u[o - L + 1:t + 1], rec.y[o - L + 1:o + 1])[-1]
+    np.testing.assert_allclose(net.predict(rec, horizon=h), ref, rtol=1e-12, atol=1e-12)
+
+
+def test_evaluate_scores_the_horizons_asked_between_j1_and_js():
+    data = gb.Dataset(ident=_record(n=200, seed=1), valid=_record(n=120, seed=2))
+    models = {"arx": gb.Model(ARX, np.array([0.6, 0.5, 0.1])), "net": _network(1, 1)}
+    table = gb.evaluate(models, data, horizons=[len(data.valid), 1, 5, 5])
+    assert [c for c in table.columns if c.startswith("J") and c.endswith("_valid") and c != "JS_valid"] == [
+        "J1_valid", "J5_valid", f"J{len(data.valid)}_valid"]
+    for name, m in models.items():
+        assert table.loc[name, "J1_valid"] == pytest.approx(gb.j1(m, data.valid), rel=1e-12)
+        assert table.loc[name, f"J{len(data.valid)}_valid"] == pytest.approx(table.loc[name, "JS_valid"], rel=1e-12)
+    assert table.loc["arx", "J1_valid"] < table.loc["arx", "J5_valid"]  # a wrong ARX errs more further ahead
+    assert "J1_valid" not in gb.evaluate(models, data).columns
+    with pytest.raises(TypeError, match="horizons"):
+        gb.evaluate(models, data, horizons=5)
+    with pytest.raises(ValueError, match="horizons"):
+        gb.evaluate(models, data, horizons=[0])

@@ -480,28 +480,53 @@ class NeuralModel:
         return np.ascontiguousarray(self.W1)
 
     # -- dynamics -----------------------------------------------------------
-    def predict(self, record: Record) -> np.ndarray:
-        """One-step-ahead prediction from measured data with e ≡ 0, shape (N,).
+    def predict(self, record: Record, *, horizon: int = 1) -> np.ndarray:
+        """Prediction ``horizon`` samples ahead from measured data with e ≡ 0, shape (N,).
 
-        ŷ(k) = f(y(k-1) … y(k-ny), u(k-1) … u(k-nu), 0 … 0): the deterministic model, as
-        :meth:`graybox.Model.predict` uses only the process terms. The first ``max_lag``
-        samples are the measured ones.
+        One step (the default): ŷ(k) = f(y(k-1) … y(k-ny), u(k-1) … u(k-nu), 0 … 0), the
+        deterministic model, as :meth:`graybox.Model.predict` uses only the process terms. A
+        longer horizon runs the network freely from the outputs measured up to k − horizon, as
+        :func:`graybox.predict` does for polynomial models: the samples before max_lag + horizon − 1
+        are one free run from the first max_lag, and a horizon of the record's length is the free
+        run. The first ``max_lag`` samples are the measured ones.
+
+        Parameters
+        ----------
+        record : Record
+            Measured data (input and output units), at least ``max_lag`` samples.
+        horizon : int >= 1, keyword-only
+            Samples ahead (default 1).
         """
         if not isinstance(record, Record):
             raise TypeError(f"record must be a Record, got {type(record).__name__}")
+        horizon = check_int(horizon, "horizon", low=1)
         L = self.max_lag
         record.require_length(L)
         N = len(record)
+        first = L + horizon - 1  # samples before this have too few measured outputs behind them
+        if first > L:
+            free = self.simulate(record, on_diverge="nan")  # one free run from the first max_lag
+            if first >= N:
+                return free
         un, yn = self._un(record.u), self._yn(record.y)
-        # lagged inputs, shape (N-L, ny+nu): column i of the y block is y(k-1-i)
-        X = np.empty((N - L, self.ny + self.nu))
-        for i in range(self.ny):
-            X[:, i] = yn[L - 1 - i:N - 1 - i]
-        for i in range(self.nu):
-            X[:, self.ny + i] = un[L - 1 - i:N - 1 - i]
         Wd = self.W1[:, : self.ny + self.nu]
+        # P[j][t]: the j-step prediction of y(t), normalised (P[0] the measured output). Each step is
+        # one vectorised pass over the record: P[j][t] reads P[j - 1 - i][t - 1 - i] (the measured y
+        # when j - 1 - i <= 0); only the last ny passes are kept.
+        P = [yn]
+        for j in range(1, horizon + 1):
+            X = np.empty((N - L, self.ny + self.nu))
+            for i in range(self.ny):
+                X[:, i] = (P[-1 - i] if j - 1 - i > 0 else yn)[L - 1 - i:N - 1 - i]
+            for i in range(self.nu):
+                X[:, self.ny + i] = un[L - 1 - i:N - 1 - i]
+            step = yn.copy()
+            step[L:] = np.tanh(X @ Wd.T + self.b1) @ self.w2 + self.b2
+            P = (P + [step])[-max(self.ny, 1):]
         out = record.y.copy()
-        out[L:] = self._y(np.tanh(X @ Wd.T + self.b1) @ self.w2 + self.b2)
+        out[L:] = self._y(P[-1][L:])
+        if first > L:
+            out[L:first] = free[L:first]
         return out
 
     def predict_narmax(self, record: Record) -> tuple[np.ndarray, np.ndarray]:

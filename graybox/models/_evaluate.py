@@ -19,7 +19,7 @@ with a warning naming ū and why. Neither is a made-up number: both errors are u
 
 from __future__ import annotations
 
-from typing import Mapping
+from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -30,7 +30,7 @@ from ._coerce import as_model, as_record, as_structure, static_info
 from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
-from ..core._validation import check_bool, check_int, check_per_point, warn
+from ..core._validation import check_bool, check_int, check_per_point, check_sequence, warn
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -146,6 +146,8 @@ def evaluate(
     data: Dataset,
     static: StaticPoints | None = None,
     y0: float | None = None,
+    *,
+    horizons: Sequence[int] = (),
 ) -> pd.DataFrame:
     """A table shaped like the paper's Table I.
 
@@ -162,12 +164,16 @@ def evaluate(
         Static points for J_SF (default ``data.static``).
     y0 : float or ndarray, optional
         Initial output of the constant-input runs that define J_SF (default: the measured ȳ_i).
+    horizons : sequence of int >= 1, keyword-only
+        Prediction horizons k (samples) to score on the validation record as well: a column
+        ``J{k}_valid`` each, the MSE of the prediction k samples ahead (``model.predict(valid,
+        horizon=k)``) from sample max_lag on; between J_1 (k = 1) and J_S (k = N). Default none.
 
     Returns
     -------
     pandas.DataFrame
         Index: model names. Columns: ``JS_ident``, ``JS_valid``, ``JSF``, ``n_params``,
-        ``J1_ident``, ``fit_valid`` (MSE in output units²).
+        ``J1_ident``, ``fit_valid`` (MSE in output units²), then ``J{k}_valid`` for each horizon.
     """
     if not isinstance(data, Dataset):
         raise TypeError(f"data must be a Dataset (the table scores its ident and valid records); got "
@@ -175,6 +181,7 @@ def evaluate(
     if not isinstance(models, Mapping):
         raise TypeError(f"models must be a mapping name -> model; got {type(models).__name__}")
     sp = static_info(static, data)
+    horizons = sorted({check_int(k, "horizons", low=1) for k in check_sequence(horizons, "horizons", "a sequence of int")})
     rows = {}
     for name, m in models.items():
         m = as_model(m, f"models[{name!r}]", duck="simulate")
@@ -186,7 +193,7 @@ def evaluate(
             "n_params": m.n_params,
             "J1_ident": j1(m, data.ident),
             "fit_valid": fit_percent(data.valid.y, sim_v, start=m.max_lag),
-        }
+        } | {f"J{k}_valid": mse(data.valid.y, m.predict(data.valid, horizon=k), start=m.max_lag) for k in horizons}
     df = pd.DataFrame.from_dict(rows, orient="index")
     df["n_params"] = df["n_params"].astype(int)
     return df
