@@ -168,7 +168,8 @@ def output_error(
     seed : int
         Seeds the perturbed starts.
     max_nfev, tol : int, float
-        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = gtol = tol``).
+        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = tol``, relative;
+        ``gtol = tol`` × the output's standard deviation, so the stop does not depend on units).
     solver : {"auto", "trf", "dogbox", "lm"}
         ``least_squares`` method; ``"auto"`` fits every start with both "trf" and "dogbox".
     progress : bool, optional

@@ -144,6 +144,9 @@ class SEProblem:
         self.psi, self.target = stacked_regressors(structure, self.records)
         self.n_dyn = self.target.size
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
+        # the output's spread (output units): least_squares' gradient test is absolute, and the
+        # gradient of these residuals is in output units, so its tolerance is scaled by this
+        self.y_scale = float(np.std(self.target)) or 1.0
         self._ls: np.ndarray | None = None
         self._static_memo: tuple[bytes, np.ndarray] | None = None
         self.ridge = check_real(ridge, "ridge", low=0.0)
@@ -784,7 +787,7 @@ def _fit(problem: SEProblem, theta0: np.ndarray, lam1: float, solver: str, max_n
     try:
         with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
             res = least_squares(cp.fun, theta0 * problem.scale, jac=cp.jac, method=solver, x_scale="jac",
-                                max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
+                                max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol * problem.y_scale)
     except _Stop as stop:
         z, cost = stop.args
         return z / problem.scale, cost, cp.nfun
@@ -918,7 +921,8 @@ def gradient_front(
     progress : bool, optional
         Show a progress bar; default: only on a terminal.
     max_nfev, tol : int, float
-        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = gtol = tol``).
+        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = tol``, relative;
+        ``gtol = tol`` × the output's standard deviation, so the stop does not depend on units).
     starts : sequence of ndarray
         Further starts tried wherever the fit restarts. :func:`se_pareto` passes PE solutions
         (convex, with the static points weighted in).

@@ -1,0 +1,35 @@
+"""Bugs found by a bug hunt on one's own data (synthetic NARX systems, inputs not named "u",
+units far from 1): each test fails without its fix."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.estimation._output_error import output_error
+
+#: y(k) = 0.5 y(k-1) − 0.1 y(k-2) + 0.4 s(k-1) + 0.15 s(k-1)² − 0.05 s(k-1) y(k-1) + 0.3, s the speed
+SISO = gb.Structure(["1", "speed(k-1)", "speed(k-1)^2", "y(k-1)", "y(k-2)", "speed(k-1)y(k-1)"])
+SISO_THETA = np.array([0.3, 0.4, 0.15, 0.5, -0.1, -0.05])
+
+
+def siso_record(seed: int, n: int, noise: float, su: float = 1.0, sy: float = 1.0) -> gb.Record:
+    """The SISO system on white input in [0, 2], measured with output noise (``noise`` × std y),
+    the input in units of 1/su and the output in units of 1/sy."""
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(0.0, 2.0, n)
+    y = gb.Model(SISO, SISO_THETA, input_names=("speed",)).simulate(u, np.zeros(2))
+    y = y + noise * np.std(y) * rng.standard_normal(n)
+    return gb.Record(u * su, y * sy, 0.1, input_names=("speed",))
+
+
+@pytest.mark.parametrize("sy", [1e-3, 1e-7])
+def test_output_error_does_not_depend_on_the_output_units(sy):
+    # least_squares' gradient test is absolute and the residuals are in output units: with the output
+    # in small units every fit stopped at its start (one evaluation) and returned it unchanged
+    ref = output_error(SISO, siso_record(0, 500, 0.6), n_starts=2, seed=0, ridge=0.0)
+    small = output_error(SISO, siso_record(0, 500, 0.6, su=1e3, sy=sy), n_starts=2, seed=0, ridge=0.0)
+    to_ref = np.array([1 / sy, 1e3 / sy, 1e6 / sy, 1, 1, 1e3])  # θ in the scaled units → θ in the reference units
+    np.testing.assert_allclose(small.model.theta * to_ref, ref.model.theta, rtol=1e-4)
+    assert small.JS / sy**2 == pytest.approx(ref.JS, rel=1e-8)
+    np.testing.assert_array_equal(small.starts["nfev"].to_numpy(), ref.starts["nfev"].to_numpy())
+
