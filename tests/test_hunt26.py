@@ -33,3 +33,25 @@ def test_output_error_does_not_depend_on_the_output_units(sy):
     assert small.JS / sy**2 == pytest.approx(ref.JS, rel=1e-8)
     np.testing.assert_array_equal(small.starts["nfev"].to_numpy(), ref.starts["nfev"].to_numpy())
 
+
+def staircase_record(seed: int, n: int, noise: float, hold: int = 20) -> gb.Record:
+    """The SISO system on a staircase in [0, 2] held ``hold`` samples, with output noise."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 2.0, n // hold + 1), hold)[:n]
+    y = gb.Model(SISO, SISO_THETA, input_names=("speed",)).simulate(u, np.zeros(2))
+    y = y + noise * np.std(y) * rng.standard_normal(n)
+    return gb.Record(u, y, 0.1, input_names=("speed",))
+
+
+def test_select_graybox_takes_the_sizes_frols_reaches_on_a_short_staircase():
+    # on 60 samples of a staircase FROLS finds only 12 independent terms of the 15 candidates; the
+    # default sizes reach 15, and the call failed with FROLS' "only 12 independent terms" error
+    ident, valid = staircase_record(0, 60, 0.05), staircase_record(1, 60, 0.05)
+    cand = gb.Candidates(2, 2, degree=2, input_names=("speed",))
+    with pytest.raises(ValueError, match="only 12 independent terms"):
+        gb.frols(cand, ident, n_terms=15)
+    res = gb.select_graybox(cand, gb.Dataset(ident, valid, None))
+    frols_rows = res.table[res.table["source"].str.contains("frols")]
+    assert len(frols_rows) and frols_rows["n_terms"].max() <= 12
+    with pytest.warns(gb.SelectionWarning, match=r"frols: \[14\]"):  # asked for: said
+        gb.select_graybox(cand, gb.Dataset(ident, valid, None), sizes=[4, 14], sources=["frols"])

@@ -353,8 +353,9 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
         if "frols" in sources:
             try:
                 sel = gb.frols(candidates, ident, n_terms=max(sizes), include=forced)
-            except ValueError as e:  # fewer usable candidates on these data: the sizes they reach
-                usable = re.search(r"only (\d+) of the \d+ candidates are usable", str(e))
+            except ValueError as e:  # fewer usable (or independent) candidates on these data: the sizes they reach
+                usable = re.search(r"only (\d+) (?:of the \d+ candidates are usable|independent terms could be "
+                                   r"selected)", str(e))
                 if usable is None:
                     raise
                 sel = gb.frols(candidates, ident, n_terms=int(usable.group(1)), include=forced)
