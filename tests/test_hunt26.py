@@ -55,3 +55,25 @@ def test_select_graybox_takes_the_sizes_frols_reaches_on_a_short_staircase():
     assert len(frols_rows) and frols_rows["n_terms"].max() <= 12
     with pytest.warns(gb.SelectionWarning, match=r"frols: \[14\]"):  # asked for: said
         gb.select_graybox(cand, gb.Dataset(ident, valid, None), sizes=[4, 14], sources=["frols"])
+
+
+def test_select_graybox_says_progress_of_a_wrong_type_at_once():
+    ident, valid = siso_record(0, 200, 0.02), siso_record(1, 120, 0.02)
+    cand = gb.Candidates(2, 2, degree=2, input_names=("speed",))
+    with pytest.raises(TypeError, match="progress must be True, False or None"):
+        gb.select_graybox(cand, gb.Dataset(ident, valid, None), progress="yes")
+    with pytest.raises(TypeError, match="progress"):
+        gb.output_error(SISO, ident, progress=1)
+
+
+def test_select_graybox_names_each_source_once():
+    # SEMP's sizes 4 and 6 complete to one structure here: its row said "semp, semp, frols"
+    ident, valid = siso_record(0, 600, 0.02), siso_record(1, 400, 0.02)
+    ub = np.linspace(0.0, 2.0, 7)
+    yb = (0.4 * ub + 0.15 * ub**2 + 0.3) / (0.6 + 0.05 * ub)
+    static = gb.StaticPoints(ub, yb, uncertainty=0.05, input_names=("speed",))
+    cand = gb.Candidates(2, 2, degree=2, input_names=("speed",))
+    res = gb.select_graybox(cand, gb.Dataset(ident, valid, static), sizes=[4, 6], estimator="pe")
+    for src in res.table["source"]:
+        names = src.split(", ")
+        assert len(names) == len(set(names)) and set(names) <= {"semp", "frols"}

@@ -6,6 +6,8 @@ import sys
 
 from tqdm import tqdm
 
+from ._validation import _is_bool
+
 __all__ = ["progress_bar", "show_progress"]
 
 
@@ -19,9 +21,10 @@ def show_progress(progress: bool | None) -> bool:
             return bool(sys.stderr.isatty())
         except (AttributeError, ValueError):
             return False
-    if not isinstance(progress, bool):
-        raise ValueError(f"progress must be True, False or None (on a terminal), got {progress!r}")
-    return progress
+    if not _is_bool(progress):  # a wrong type, as check_bool says it
+        raise TypeError(f"progress must be True, False or None (on a terminal), got {progress!r} "
+                        f"({type(progress).__name__})")
+    return bool(progress)
 
 
 def progress_bar(total: int, desc: str, progress: bool | None, initial: int = 0) -> tqdm:

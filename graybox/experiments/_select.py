@@ -46,7 +46,7 @@ from ..io._json import register_type
 from ..models._coerce import static_info
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
-from ..core._progress import progress_bar
+from ..core._progress import progress_bar, show_progress
 from ..core._records import check_same_inputs, overlap_message, same_record
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
@@ -378,8 +378,9 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
         added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
         st = st + gb.Structure(added)
         key = frozenset(st)
-        if key in seen:
-            seen[key]["source"] += f", {src}"
+        if key in seen:  # e.g. two SEMP sizes that the static terms complete to one structure
+            if src not in seen[key]["source"].split(", "):
+                seen[key]["source"] += f", {src}"
             continue
         seen[key] = {"structure": f"{src}-{k}", "source": src, "size": k, "n_terms": len(st),
                      "added": ", ".join(map(str, added)), "terms": str(st)}
@@ -744,6 +745,7 @@ def select_graybox(
     if shortlist is not None:
         shortlist = check_int(shortlist, "shortlist", low=1)
     check_cluster(client, scheduler)
+    show_progress(progress)  # checked now, not after the structure search
     for s in sources:
         check_choice(s, "sources", ("semp", "frols"))
     if not sources:
