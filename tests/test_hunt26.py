@@ -77,3 +77,17 @@ def test_select_graybox_names_each_source_once():
     for src in res.table["source"]:
         names = src.split(", ")
         assert len(names) == len(set(names)) and set(names) <= {"semp", "frols"}
+
+
+def test_select_graybox_takes_a_static_curve_for_an_input_not_named_u():
+    # a StaticCurve's points were named "u": with records of "speed" the call warned that the
+    # candidates carry degree 0 and then failed ("'fit to …' has inputs ('u',)")
+    ident, valid = siso_record(0, 400, 0.02), siso_record(1, 200, 0.02)
+    ub = np.linspace(0.0, 2.0, 7)
+    points = gb.StaticPoints(ub, (0.4 * ub + 0.15 * ub**2 + 0.3) / (0.6 + 0.05 * ub), input_names=("speed",))
+    curve = gb.StaticCurve.fit(points, degree=2)
+    cand = gb.Candidates(2, 2, degree=2, input_names=("speed",))
+    res = gb.select_graybox(cand, gb.Dataset(ident, valid, None), curve, band=1e-3, estimator="pe", sizes=[4, 6])
+    assert res.degree == 2 and res.in_band
+    assert {"speed(k-1)^2", "speed(k-1)"} <= set(map(str, res.structure))
+    assert curve.points([0.5, 1.0], "speed").input_names == ("speed",)

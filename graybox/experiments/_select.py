@@ -222,8 +222,10 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
     return out
 
 
-def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.StaticPoints | None, _Form | None]:
-    """Static points for the jobs and the static form the structures must carry (None: black box)."""
+def _static_points(sp, process: gb.Structure, band: float | None,
+                   inputs: tuple[str, ...]) -> tuple[gb.StaticPoints | None, _Form | None]:
+    """Static points for the jobs and the static form the structures must carry (None: black box);
+    ``inputs``: the records' input names (a curve's points are of the records' one input)."""
     if sp is None:
         return None, None
     if isinstance(sp, (gb.StaticCurve, gb.StaticSurface)):
@@ -231,7 +233,7 @@ def _static_points(sp, process: gb.Structure, band: float | None) -> tuple[gb.St
             raise ValueError(f"a {type(sp).__name__} without a domain cannot be sampled: give static points")
         degree = sp.degree
         if isinstance(sp, gb.StaticCurve):
-            sp = sp.points(np.linspace(*sp.domain, 10))
+            sp = sp.points(np.linspace(*sp.domain, 10), inputs[0])
         else:  # a grid over the surface's box, 6 points per input
             axes = [np.linspace(lo, hi, 6) for lo, hi in sp.domain]
             sp = sp.points(np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1))
@@ -281,7 +283,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     if band is not None and sp is None:
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
-    sp, form = _static_points(sp, process, band)
+    sp, form = _static_points(sp, process, band, ident.input_names)
     if sp is not None:
         check_same_inputs(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
     L = process.max_lag

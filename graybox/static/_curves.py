@@ -92,9 +92,10 @@ class StaticCurve:
         self.check_domain(ub)
         return np.polynomial.polynomial.polyval(ub, np.polynomial.polynomial.polyder(self.coefficients))
 
-    def points(self, ubar: np.ndarray) -> StaticPoints:
-        """The curve sampled at ``ubar`` as static points."""
+    def points(self, ubar: np.ndarray, input_name: str = "u") -> StaticPoints:
+        """The curve sampled at ``ubar`` as static points of the input ``input_name`` (a curve is
+        of one input, whatever the records call it: e.g. ``record.input_names[0]``)."""
         ub = np.asarray(ubar, dtype=float)
-        return StaticPoints(ub, self(ub), name=self.name)
+        return StaticPoints(ub, self(ub), name=self.name, input_names=(input_name,))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
