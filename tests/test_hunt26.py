@@ -91,3 +91,14 @@ def test_select_graybox_takes_a_static_curve_for_an_input_not_named_u():
     assert res.degree == 2 and res.in_band
     assert {"speed(k-1)^2", "speed(k-1)"} <= set(map(str, res.structure))
     assert curve.points([0.5, 1.0], "speed").input_names == ("speed",)
+
+
+def test_select_graybox_on_noise_free_data_takes_the_exact_structure_with_fewest_terms():
+    # every exact structure's free run is at round-off (J_S ~ 1e-30): the one with the least round-off,
+    # a 10-term structure, led the true 6-term one by a log ratio of 1.3 and the rule took it
+    ident, valid = siso_record(0, 500, 0.0), siso_record(1, 300, 0.0)
+    cand = gb.Candidates(2, 2, degree=2, input_names=("speed",))
+    res = gb.select_graybox(cand, gb.Dataset(ident, valid, None), sizes=[4, 5, 6, 7, 8, 10])
+    assert set(res.structure) == set(SISO)
+    exact = res.table[res.table["JS_valid"] < 1e-12]
+    assert len(exact) > 2 and (exact["n_terms"] >= len(SISO)).all() and exact["eligible"].all()

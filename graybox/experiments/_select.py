@@ -44,6 +44,7 @@ from .. import _api as gb
 
 from ..io._json import register_type
 from ..models._coerce import static_info
+from ..selection._forward_regression import _RSS_FLOOR
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar, show_progress
@@ -105,7 +106,8 @@ class GrayboxSelection:
         ``size`` (terms before the static terms), ``n_terms``, ``added`` (static-form terms),
         ``estimator``, ``lambda1`` (of the member chosen, NaN for a black box), ``JS_valid``
         (its J_S on the choosing data: the validation record, or all the folds' held-out samples;
-        every row's errors counted from the candidates' largest lag on, the same samples for all), ``JSF``
+        every row's errors counted from the candidates' largest lag on, the same samples for all; an
+        error below round-off, 1e-20 of the mean square output, counts as that floor), ``JSF``
         (its static error, worst fold; NaN without static points), ``in_band``, ``vs_best`` and
         ``vs_best_se`` (mean per-block log ratio of its J_S to the best row's, and its standard
         error), ``eligible`` (the rule could choose it), ``rank`` (1: the choice); with a test
@@ -436,7 +438,11 @@ def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.nd
 
 
 def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray) -> np.ndarray:
-    """(P, B) free-run MSE of each member on each block of ``rec`` (one free run from its first L samples)."""
+    """(P, B) free-run MSE of each member on each block of ``rec`` (one free run from its first L samples).
+
+    An MSE below the round-off floor (:data:`_RSS_FLOOR` of the block's mean square output) is
+    that floor: on noise-free data exact structures tie there, instead of the one with the least
+    round-off (often the largest) leading the others by orders of magnitude."""
     P, B = thetas.shape[0], len(edges) - 1
     out = np.full((P, B), np.inf)
     ok = np.all(np.isfinite(thetas), axis=1)
@@ -447,7 +453,8 @@ def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.n
     y = simulate_batch(code, thetas[ok], record_inputs(rec, code.inputs), rec.y, max(L, 1))
     with np.errstate(over="ignore", invalid="ignore"):
         e2 = (y - rec.y[None, :]) ** 2
-        mse = np.stack([e2[:, a:b].mean(axis=1) for a, b in zip(edges[:-1], edges[1:])], axis=1)
+        mse = np.stack([np.maximum(e2[:, a:b].mean(axis=1), _RSS_FLOOR * np.mean(rec.y[a:b] ** 2))
+                        for a, b in zip(edges[:-1], edges[1:])], axis=1)
     out[ok] = np.where(np.isfinite(mse), mse, np.inf)
     return out
 
