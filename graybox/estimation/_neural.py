@@ -514,7 +514,7 @@ class NeuralModel:
         # one vectorised pass over the record: P[j][t] reads P[j - 1 - i][t - 1 - i] (the measured y
         # when j - 1 - i <= 0); only the last ny passes are kept.
         P = [yn]
-        for j in range(1, horizon + 1):
+        for j in range(1, (horizon if self.ny else 1) + 1):  # without output lags every horizon is one step
             X = np.empty((N - L, self.ny + self.nu))
             for i in range(self.ny):
                 X[:, i] = (P[-1 - i] if j - 1 - i > 0 else yn)[L - 1 - i:N - 1 - i]
