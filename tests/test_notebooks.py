@@ -49,7 +49,7 @@ def notebook_code(name: str) -> str:
 EXPECTED_WARNINGS: dict[str, list[tuple[type[Warning], str]]] = {
     "01_black_box.ipynb": [(CandidateWarning, r"u\(k-4\)u\(k-5\)\^2")],
     "02_gray_box_convex.ipynb": [],
-    "03_simulation_error.ipynb": [(RuntimeWarning, r"J_SF of SE \(gradient\) min-corr .* is infinite")],
+    "03_simulation_error.ipynb": [],
     "04_buck_converter.ipynb": [(StaticRangeWarning, r"ū = \[1\.0, 4\.0\]"),
                                 (StaticRangeWarning, r"ū = \[1\.5, 1\.75, 2\.0, 2\.75")],
     "05_constraint_variants.ipynb": [],
@@ -84,7 +84,9 @@ def test_pumping_notebook_runs(name, sandbox):
     ns = run_notebook(name)
     assert ns["QUICK"] is True
     if name.startswith("03"):
-        assert sorted(p.name for p in (sandbox / "checkpoints").iterdir()) == ["se_ga_quick.npz", "se_gradient_quick.npz"]
+        # the gradient sweep's slow members are refitted inside the margin (margin="auto"), by a sweep with its own
+        assert sorted(p.name for p in (sandbox / "checkpoints").iterdir()) == [
+            "se_ga_quick.npz", "se_gradient_quick.margin.npz", "se_gradient_quick.npz"]
 
 
 def test_buck_notebook_runs(sandbox):

@@ -215,6 +215,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "transient_name": (("u", 2.5), {}),
     "StaticCurve.fit": ((SP,), {}),
     "StaticCurve.polynomial": (([1.0, 2.0],), {}),
+    "StaticCurve.points": (([0.5, 1.0],), {"input_name": "speed"}),
     "Model": ((ST, THETA), {}),
     "Model.simulate": ((_u[:20],), {"y0": [0.0]}),
     "Model.predict": ((REC,), {"horizon": 3}),
@@ -467,6 +468,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     **{(k, "strict"): (True,) for k in ("NeuralModel.static_curve", "NeuralModel.static_gain")},
     ("DaskRecord", "Ts"): (2.5,),  # seconds
     ("ParetoSet.from_thetas", "method"): ("x",),  # a description of how the set was made
+    ("StaticCurve.points", "input_name"): ("x",),  # an input's name: "x" is one
     ("load_static_csv", "uncertainty"): (2.5,),  # output units
     ("se_uncertainty", "static_sigma"): (2.5,),  # output units
     ("plot_local_models", "duration"): (2.5,),  # seconds
@@ -546,6 +548,7 @@ def _target(label: str):
         return obj
     cls, meth = obj
     owner = {"Model": MODEL, "ParetoSet": FRONT, "Record": REC, "StaticPoints": SP, "Structure": ST, "Grid": GRID,
+             "StaticCurve": CURVE,
              "DataSpec": DATASPEC, "LocalModel": LOCAL, "NeuralModel": NEURAL}.get(cls.__name__, cls)
     return getattr(owner, meth)
 

@@ -8,6 +8,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "_extended_least_squares": ("ELSConvergenceWarning", "ELSResult", "els"),
     "_neural": ("NeuralFit", "NeuralModel", "neural_narx"),
     "_prediction_error": ("PE_LAMBDAS", "CLSResult", "cls", "pe_pareto", "pe_thetas"),
+    "_local_models": ("SlowModeWarning",),
     "_simulation_error": ("SE_LAMBDAS", "GAOptions", "se_pareto"),
     "_output_error": ("OEResult", "output_error"),
     "_epsilon_constraint": ("DSFResult", "se_dsf"),

@@ -34,12 +34,13 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Literal, Sequence
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ._decisions import resolve_band
+from ._local_models import check_margin, slow_margin
 from ._prediction_error import pe_thetas
 from ..models._coerce import as_structure, records_of, static_info
 from ..models._model import Model
@@ -372,7 +373,7 @@ def se_dsf(
     max_iter: int = 200,
     tol: float = 1e-9,
     pe_lambdas: np.ndarray | None = None,
-    margin: float | None = None,
+    margin: float | Literal["auto"] | None = "auto",
 ) -> DSFResult:
     """The D_SF model solved directly: min J_S(θ) subject to J_SF(θ) ≤ ``band``.
 
@@ -400,13 +401,16 @@ def se_dsf(
     pe_lambdas : ndarray, optional
         λ1 values of the PE sweep (closed form) whose member nearest the band is one start
         (default: 60 in logspace(-6, 0)).
-    margin : float in [0, 1), optional
+    margin : float in [0, 1), "auto" or None
         Stability margin, as in :func:`graybox.se_pareto`: every local linear model along the
         identification records and at the static points' equilibria keeps its spectral radius
         ≤ 1 − margin; no step leaves it, and a start outside it is pulled in by shrinking its output
         feedback (or dropped). Without it the iteration may buy identification error with
         near-unit roots that follow the record's slow drift (BENCHMARKS.md, "SE D_SF against
-        ELS"). None (default): no margin.
+        ELS"). ``"auto"`` (default): solved without a margin, and again with (1 − ρ_LS) / 10 if
+        the model's modes are over 10 times slower than the least-squares model's slowest (as
+        :func:`graybox.se_pareto`). None: no margin; a :class:`~graybox.SlowModeWarning` says when
+        the model is that slow.
 
     Returns
     -------
@@ -422,7 +426,24 @@ def se_dsf(
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     warn_static_range(sp.ubar, recs)
-    problem = SEProblem(as_structure(structure), recs, sp, margin=margin)
+    margin = check_margin(margin)
+    st = as_structure(structure)
+    problem = SEProblem(st, recs, sp, margin=None if margin == "auto" else margin)
+    solve = dict(band=band, theta0=theta0, lambdas=lambdas, max_iter=max_iter, tol=tol, pe_lambdas=pe_lambdas)
+    result = _solve(problem, **solve)
+    if margin == "auto":
+        _, slow, rho_ls = problem.slow_modes(result.model.theta[None])
+        if slow[0]:  # a mode over SLOW_FACTOR times least squares' slowest: solve again inside that margin
+            try:
+                result = _solve(SEProblem(st, recs, sp, margin=slow_margin(rho_ls)), **solve)
+            except ValueError:  # no start inside it: keep the model, and say what it is
+                pass
+    problem.warn_slow(result.model.theta[None], "se_dsf's model", auto=margin == "auto")
+    return result
+
+
+def _solve(problem: SEProblem, *, band, theta0, lambdas, max_iter, tol, pe_lambdas) -> DSFResult:
+    """:func:`se_dsf` on one problem (its margin a number or None)."""
     why: list[str] = []
     if theta0 is not None:
         starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]

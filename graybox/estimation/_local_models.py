@@ -29,21 +29,50 @@ import numpy as np
 from ..core._records import Record
 from ..core._simulation_kernels import encode, record_inputs
 from ..core._terms import Structure
-from ..core._validation import check_real
+from ..core._validation import check_choice, check_real
 from ..static._equilibrium_kernels import schur_stable_rows
 from ..static._linearisation import characteristic_roots, derivative_map, grid_coefficients
 
-__all__ = ["LocalModels", "record_points", "within_at", "check_margin", "RECORD_POINTS"]
+__all__ = ["LocalModels", "record_points", "within_at", "check_margin", "slow_margin", "RECORD_POINTS",
+           "SLOW_FACTOR", "SlowModeWarning"]
 
 #: Samples of the record(s) at which the margin is checked, at most (evenly spaced).
 RECORD_POINTS = 64
 
+#: A mode is slow when its distance to the unit circle, 1 − ρ, is under 1/SLOW_FACTOR of the
+#: least-squares model's along the same record (for ρ near 1, a time constant Ts / (1 − ρ) over
+#: SLOW_FACTOR times the least-squares model's slowest). Over 18 structures × 10 gradient SE members
+#: on six data sets, the members this flags erred 5× to 10⁸× the others on new records and no
+#: member it passed did (BENCHMARKS.md, "A slow-mode check").
+SLOW_FACTOR = 10.0
 
-def check_margin(margin: object) -> float | None:
-    """``margin`` as a float in [0, 1), or None (no margin)."""
+
+class SlowModeWarning(UserWarning):
+    """A fit's local models have modes far slower than the least-squares model's (:data:`SLOW_FACTOR`).
+
+    Such near-integrators buy identification error by following the record's slow drift and err on
+    new records; ``margin="auto"`` keeps every mode within the factor.
+    """
+
+
+def check_margin(margin: object) -> float | str | None:
+    """``margin`` as a float in [0, 1), ``"auto"`` (:func:`slow_margin` of the least-squares fit), or None."""
     if margin is None:
         return None
+    if isinstance(margin, str):
+        return check_choice(margin, "margin", ("auto",))
     return check_real(margin, "margin", low=0.0, high=1.0, high_open=True)
+
+
+def slow_margin(rho_ls: float) -> float | None:
+    """The margin that keeps every mode within :data:`SLOW_FACTOR` of the least-squares model's slowest.
+
+    ``rho_ls`` is the largest spectral radius of the least-squares model's local models along the
+    records; the margin is (1 − ρ_LS) / SLOW_FACTOR, or None when ρ_LS ≥ 1 (a least-squares model
+    unstable somewhere along the record is no reference). Dimensionless and independent of the
+    sampling period: halve Ts and both 1 − ρ halve.
+    """
+    return (1.0 - float(rho_ls)) / SLOW_FACTOR if rho_ls < 1.0 else None
 
 
 def record_points(structure: Structure, records: Sequence[Record], count: int = RECORD_POINTS

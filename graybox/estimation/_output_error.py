@@ -51,6 +51,7 @@ from ..core._validation import check_bool, check_choice, check_fields, check_int
 from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
+from ._local_models import check_margin, slow_margin
 from ._simulation_error import _SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible
 
 __all__ = ["OEResult", "output_error"]
@@ -121,7 +122,7 @@ def output_error(
     n_starts: int = 8,
     subsample: float = 0.5,
     theta0: np.ndarray | None = None,
-    margin: float | None = None,
+    margin: float | Literal["auto"] | None = "auto",
     ridge: float = 1.0,
     choose_on: Record | Sequence[Record] | None = None,
     seed: int = 0,
@@ -149,13 +150,16 @@ def output_error(
         Fraction of the rows in each of those fits (at least n_terms + 1 rows).
     theta0 : ndarray, shape (n_terms,), optional
         A further start (engineering units).
-    margin : float in [0, 1), optional
+    margin : float in [0, 1), "auto" or None
         Stability margin: every local linear model at up to 64 samples (u(k), y(k)) of the
         fitting records keeps its spectral radius ≤ 1 − margin (see
         :class:`~graybox.estimation._simulation_error.SEProblem`); a start outside it is pulled in
         by scaling its output-feedback parameters down, and no step leaves it. ρ = 1 − margin is
         a time constant of about Ts / margin: choose it from the slowest dynamics the system may
-        have, not from this record. None (default): no margin.
+        have, not from this record. ``"auto"`` (default): fitted without a margin, and refitted
+        with (1 − ρ_LS) / 10 if its modes are over 10 times slower than the least-squares
+        model's slowest (as :func:`graybox.se_pareto`; ``margin`` of the result says which).
+        None: no margin; a :class:`~graybox.SlowModeWarning` says when the fit is that slow.
     ridge : float >= 0
         Regularisation towards least squares (dimensionless γ): γ · mean_j (s_j (θ_j − θ_LS,j))²
         is added to J_S, s_j the RMS of regressor j (each term: the change of that term's
@@ -196,7 +200,26 @@ def output_error(
     tol = check_real(tol, "tol", low=0.0, low_open=True)
     check_choice(solver, "solver", _SOLVERS)
     progress = None if progress is None else check_bool(progress, "progress")
-    problem = SEProblem(as_structure(structure), rec, None, margin=margin, ridge=ridge)
+    margin = check_margin(margin)
+    st = as_structure(structure)
+    problem = SEProblem(st, rec, None, margin=None if margin == "auto" else margin, ridge=ridge)
+    fit = dict(n_starts=n_starts, subsample=subsample, theta0=theta0, choose_on=choose_on, seed=seed,
+               max_nfev=max_nfev, tol=tol, solver=solver, progress=progress, name=name)
+    result = _oe_fit(problem, rec, **fit)
+    if margin == "auto":
+        _, slow, rho_ls = problem.slow_modes(result.model.theta[None])
+        if slow[0]:  # a mode over SLOW_FACTOR times least squares' slowest: refit inside that margin
+            try:
+                result = _oe_fit(SEProblem(st, rec, None, margin=slow_margin(rho_ls), ridge=ridge), rec, **fit)
+            except ValueError:  # no start fits inside it: keep the fit, and say what it is
+                pass
+    problem.warn_slow(result.model.theta[None], "the output-error fit", auto=margin == "auto")
+    return result
+
+
+def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta0, choose_on, seed, max_nfev, tol,
+         solver, progress, name) -> OEResult:
+    """:func:`output_error` on one problem (its margin a number or None)."""
     st = problem.structure
     n = len(st)
     chooser = None

@@ -80,8 +80,9 @@ from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..core._terms import Structure
 from ..core._validation import (check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
-                                check_theta, frozen)
-from ._local_models import LocalModels, check_margin, record_points, within_at
+                                check_theta, frozen, warn)
+from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
+                            within_at)
 from ..core._reprs import short_repr
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
@@ -128,8 +129,9 @@ class SEProblem:
         self.record = self.records[0]
         r0 = self.record
         self.margin = check_margin(margin)
-        self.local = LocalModels(structure, *record_points(structure, self.records)) if self.margin is not None \
-            else None
+        if self.margin == "auto":
+            raise ValueError("SEProblem takes a margin in [0, 1) or None; margin='auto' is resolved by the estimators "
+                             "(se_pareto, se_dsf, output_error)")
         if static is not None and (static.n_inputs != r0.n_inputs or (r0.n_inputs > 1
                                                                        and static.input_names != r0.input_names)):
             check_same_inputs(r0, static)
@@ -151,6 +153,8 @@ class SEProblem:
         self._static_memo: tuple[bytes, np.ndarray] | None = None
         self.ridge = check_real(ridge, "ridge", low=0.0)
         self.ridge_ref = self.ls_theta() * self.scale if self.ridge > 0 else None
+        self.local = LocalModels(structure, *record_points(structure, self.records)) if self.margin is not None \
+            else None
 
     def fingerprint(self) -> str:
         """A hash of everything that defines the problem (for checkpoints)."""
@@ -180,6 +184,38 @@ class SEProblem:
         if static_outputs is not None and self.surface_inputs is None and ok.any():
             ok[ok] = within_at(self.structure, th[ok], self.static.ubar, np.atleast_2d(static_outputs)[ok], self.margin)
         return ok
+
+    def slow_modes(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """Each row's largest local spectral radius along the records, whether it is slow, and ρ_LS.
+
+        A row is slow where 1 − ρ < (1 − ρ_LS) / :data:`SLOW_FACTOR`, ρ_LS the least-squares model's
+        (never where ρ_LS ≥ 1: no reference). Returns (radii (K,), slow (K,) bool, ρ_LS); a NaN row
+        has radius NaN and is not slow.
+        """
+        th = np.atleast_2d(np.asarray(thetas, float))
+        radii = np.array([self.radius(t) if np.all(np.isfinite(t)) else np.nan for t in th])
+        rho_ls = self.radius(self.ls_theta())
+        m = slow_margin(rho_ls)
+        with np.errstate(invalid="ignore"):
+            slow = np.zeros(len(th), bool) if m is None else (1.0 - radii) < m
+        return radii, slow, rho_ls
+
+    def warn_slow(self, thetas: np.ndarray, what: str, auto: bool = False) -> np.ndarray:
+        """:class:`SlowModeWarning` when some row of ``thetas`` is slow (:meth:`slow_modes`) and the
+        problem has no margin; returns the rows' radii, shape (K,). ``auto``: the rows are what is
+        left slow after ``margin="auto"`` tried to refit them inside the margin."""
+        radii, slow, rho_ls = self.slow_modes(thetas)
+        if self.margin is None and slow.any():
+            k = int(slow.sum())
+            who = what if len(radii) == 1 else f"{what}: {k} of {len(radii)}"
+            warn(f"{who} {'has' if k == 1 else 'have'} local models along the identification "
+                 f"record with spectral radius up to {np.nanmax(radii[slow]):.6g}, against the least-squares model's "
+                 f"{rho_ls:.4g}: modes over {SLOW_FACTOR:g} times slower than its slowest, or unstable. Such "
+                 "near-integrators follow the record's slow drift and err on new records; "
+                 + ("no fit inside that factor (margin='auto') was found for them: try another structure"
+                    if auto else "margin='auto' refits them inside that factor")
+                 + " (BENCHMARKS.md, 'A slow-mode check')", SlowModeWarning)
+        return radii
 
     def radius(self, theta: np.ndarray) -> float:
         """The largest spectral radius of θ's local models at the record points (dimensionless)."""
@@ -1019,6 +1055,12 @@ def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
 _METHOD_ONLY = {"ga": ("options",), "gradient": ("max_nfev", "tol", "solver")}
 
 
+def _sibling(path: str | os.PathLike, tag: str) -> Path:
+    """``name.tag.ext`` beside ``name.ext``: the checkpoint of a second sweep of the same call."""
+    p = Path(path)
+    return p.with_name(f"{p.stem}.{tag}{p.suffix}")
+
+
 def se_pareto(
     structure: Structure | object,
     data: Record | Dataset | Sequence[Record],
@@ -1036,7 +1078,7 @@ def se_pareto(
     tol: float | None = None,
     solver: Literal["auto", "trf", "dogbox", "lm"] | None = None,
     starts: Sequence[np.ndarray] | Literal["pe"] | None = None,
-    margin: float | None = None,
+    margin: float | Literal["auto"] | None = "auto",
     ridge: float = 0.0,
 ) -> ParetoSet:
     """SE Pareto set of eq. (13) by the paper's GA or the gradient method.
@@ -1060,7 +1102,8 @@ def se_pareto(
     seed : int
         Makes the GA (and its random initial individuals) reproducible.
     checkpoint : path, optional
-        Written after each λ; an existing one for the same problem resumes the sweep.
+        Written after each λ; an existing one for the same problem resumes the sweep. With
+        ``margin="auto"``, the refit of slow members keeps its own beside it (``name.margin.ext``).
     progress : bool, optional
         Show a progress bar; default: only on a terminal.
     threads : int
@@ -1083,15 +1126,21 @@ def se_pareto(
         seeding; beyond the paper, ``"pe"`` lets the GA search from the PE basins: on the bundled
         plant's ℓ = 3 structure it lowers the D_SF model's validation J_S from 3.05 to 1.18,
         BENCHMARKS.md, "SE D_SF against ELS").
-    margin : float in [0, 1), optional
+    margin : float in [0, 1), "auto" or None
         Stability margin (both methods): every member keeps the spectral radius of its local
         linear models ≤ 1 − margin, along the identification records and at the static points'
         equilibria (see :class:`SEProblem`); a θ outside it is infeasible, as an unstable
         equilibrium is. Without it a free-run fit may buy identification error with near-unit
         roots that follow the record's slow drift (BENCHMARKS.md, "Output error"). Dimensionless
         but tied to the sampling period: ρ = 1 − margin is a time constant of about Ts / margin.
-        Starts (and the GA's individuals) outside the margin are infeasible. None (default): no
-        margin, the paper's problem.
+        Starts (and the GA's individuals) outside the margin are infeasible. ``"auto"`` (default):
+        the sweep runs without a margin, and the members whose local models are over 10 times
+        slower than the least-squares model's slowest (1 − ρ < (1 − ρ_LS) / 10, ρ_LS its largest
+        local spectral radius along the records; never where ρ_LS ≥ 1) are refitted with the
+        margin (1 − ρ_LS) / 10: independent of units and of the sampling period. Without it the
+        gradient front on the paper's structure (15) is all near-integrators (D_SF validation J_S
+        1.8e3 mlc² against 1.1 with it; BENCHMARKS.md, "A slow-mode check"). None: no margin, the
+        paper's problem; a :class:`~graybox.SlowModeWarning` then names members that slow.
     ridge : float >= 0
         Regularisation towards least squares (both methods): γ · mean_j (s_j (θ_j − θ_LS,j))² is
         added to every member's cost, s_j the RMS of regressor j (see :class:`SEProblem`). 0
@@ -1101,7 +1150,9 @@ def se_pareto(
     -------
     ParetoSet
         All members (one per λ) with J_1, J_S and J_SF from the shared evaluator; the optimised
-        cost is in ``extra["cost"]``. A λ whose fit failed (no feasible start, or no individual
+        cost is in ``extra["cost"]``, each member's largest local spectral radius along the
+        identification records in ``extra["radius"]`` (dimensionless) and the margin it was fitted
+        with in ``extra["margin"]`` (NaN: none). A λ whose fit failed (no feasible start, or no individual
         with a finite cost) stays in the set as a failed member, with the reason in
         ``failures``. Use ``.nondominated()`` for the front proper.
 
@@ -1127,25 +1178,41 @@ def se_pareto(
     rec = records_of(data)
     sp = static_info(static, data, needed_by="the SE problem")
     warn_static_range(sp.ubar, rec)
-    problem = SEProblem(as_structure(structure), rec, sp, margin=margin, ridge=ridge)
+    margin = check_margin(margin)
+    st = as_structure(structure)
+    problem = SEProblem(st, rec, sp, margin=None if margin == "auto" else margin, ridge=ridge)
     lam_in = SE_LAMBDAS if lambdas is None else lambdas
-    if method == "ga":
-        front = ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
-                         progress=progress, threads=threads, theta0=theta0,
-                         starts=_pe_starts(problem) if starts == "pe" else () if starts is None else starts)
-    else:
-        t0 = None if (isinstance(theta0, str) and theta0 == "ls") else theta0
-        if isinstance(theta0, str) and theta0 != "ls":
-            raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
-        front = gradient_front(
-            problem, lam_in, theta0=t0, seed=seed, checkpoint=checkpoint, progress=progress,
-            max_nfev=50 if max_nfev is None else max_nfev, tol=1e-8 if tol is None else tol,
-            solver="auto" if solver is None else solver,
+    if isinstance(theta0, str) and theta0 != "ls":
+        raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
+
+    def sweep(problem: SEProblem, checkpoint) -> SEFront:
+        if method == "ga":
+            return ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
+                            progress=progress, threads=threads, theta0=theta0,
+                            starts=_pe_starts(problem) if starts == "pe" else () if starts is None else starts)
+        return gradient_front(
+            problem, lam_in, theta0=None if (isinstance(theta0, str) and theta0 == "ls") else theta0, seed=seed,
+            checkpoint=checkpoint, progress=progress, max_nfev=50 if max_nfev is None else max_nfev,
+            tol=1e-8 if tol is None else tol, solver="auto" if solver is None else solver,
             starts=_pe_starts(problem) if starts is None or starts == "pe" else starts)
+
+    front = sweep(problem, checkpoint)
+    thetas, costs, failures = front.thetas.copy(), front.costs.copy(), dict(front.failures)
+    margins = np.full(front.lambdas.size, np.nan if problem.margin is None else problem.margin)
+    if margin == "auto":
+        _, slow, rho_ls = problem.slow_modes(thetas)
+        if slow.any():  # members with modes over SLOW_FACTOR times least squares' slowest: refit inside that
+            m = slow_margin(rho_ls)
+            inside = sweep(SEProblem(st, rec, sp, margin=m, ridge=ridge),
+                           None if checkpoint is None else _sibling(checkpoint, "margin"))
+            redo = slow & np.all(np.isfinite(inside.thetas), axis=1)
+            thetas[redo], costs[redo], margins[redo] = inside.thetas[redo], inside.costs[redo], m
     K = front.lambdas.size
-    if len(front.failures) == K:
-        reasons = "; ".join(f"λ1 = {front.lambdas[i]:g}: {why}" for i, why in sorted(front.failures.items()))
+    if len(failures) == K:
+        reasons = "; ".join(f"λ1 = {front.lambdas[i]:g}: {why}" for i, why in sorted(failures.items()))
         raise ValueError(f"every member of the SE sweep ({method}) failed, so there is no Pareto set: {reasons}. "
                          "Try another structure, theta0, starts or more generations")
-    return ParetoSet.from_thetas(problem.structure, front.thetas, front.lambdas, rec, sp, method=f"SE ({method})",
-                                 extra={"cost": front.costs}, threads=threads, failures=front.failures)
+    radii = problem.warn_slow(thetas, f"SE sweep ({method}) members", auto=margin == "auto")
+    return ParetoSet.from_thetas(problem.structure, thetas, front.lambdas, rec, sp, method=f"SE ({method})",
+                                 extra={"cost": costs, "radius": radii, "margin": margins}, threads=threads,
+                                 failures=failures)

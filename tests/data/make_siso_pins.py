@@ -74,7 +74,7 @@ def compute_pins() -> dict:
         pe = pe_pareto(st, data.ident, data.static, lambdas=np.logspace(-6, 0, 20))
         models[f"PE (D_SF) l={degree}"] = decide_dsf(pe, band=0.031, fallback="min_jsf").model
         for method in ("ga", "gradient"):
-            se = se_pareto(st, data, lambdas=np.logspace(-2, 0, 3), method=method, seed=0, threads=1,
+            se = se_pareto(st, data, lambdas=np.logspace(-2, 0, 3), method=method, seed=0, threads=1, margin=None,
                            options=GAOptions(population=40, generations=5) if method == "ga" else None)
             models[f"SE-{method} (D_SF) l={degree}"] = decide_dsf(se, band=0.031, fallback="min_jsf").model
     out["table1_models"] = {k: {"structure": str(m.structure), "theta": _h(m.theta),
