@@ -1,7 +1,7 @@
 """A slow-mode check for simulation-error fits: does a member's slowest local mode, against the least-squares
 model's, tell which members err on new records? And does ``margin="auto"`` keep the good ones?
 
-    .venv/bin/python benchmarks/bench_slow_modes.py [--cases plant,buck,...] [--method gradient|ga]
+    .venv/bin/python benchmarks/bench_slow_modes.py [--cases plant,buck,...] [--method gradient|ga] [--direct]
 
 On each case of ``bench_honest.py`` (fit on the identification record, D_SF on it, test on a record
 nothing saw) and each FROLS structure of 4, 8 and 12 terms (the plant also the paper's structure (15)),
@@ -15,6 +15,9 @@ the SE front (10 λ1 in logspace(-2, 0); gradient, or ``--method ga`` the paper'
 - auto: the D_SF member (the case's band) of each front, without a margin and with ``margin="auto"`` (the
   default: the slow members refitted with the margin (1 − ρ_LS) / 10): its λ1, J_SF, validation and test
   J_S; and the front's median test J_S.
+- ``--direct``: ``se_dsf`` and ``output_error`` with margin None, "auto" and 0.01 on bench_output_error.py's
+  data sets (the plant's ℓ = 2, ℓ = 3 and (15) structures, tested on three fresh runs; the buck converter's
+  two, tested on the second half of its validation file).
 """
 
 from __future__ import annotations
@@ -108,14 +111,39 @@ def run(names, method="gradient"):
     print("\n".join(auto))
 
 
+def direct():
+    from bench_output_error import buck_sets, pumping_sets
+    print("| data, structure | margin | se_dsf: J_SF, J_S valid, J_S test | output_error: J_S valid, J_S test, ρ |")
+    print("| --- | --- | --- | --- |")
+    for label, st, fit, choose, tests, data in pumping_sets(False) + buck_sets(False):
+        band = 0.031 if "plant" in label else 0.01
+        for m in (None, "auto", 0.01):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    r = gb.se_dsf(st, data, band=band, margin=m)
+                    th = r.model.theta
+                    a = f"{fmt(r.JSF)}, {fmt(js(st, th, choose)[0])}, {fmt(np.mean([js(st, th, t)[0] for t in tests]))}"
+                except ValueError as exc:
+                    a = f"failed: {str(exc)[:60]}…"
+                o = gb.output_error(st, fit, margin=m)
+                th = o.model.theta
+                b = f"{fmt(js(st, th, choose)[0])}, {fmt(np.mean([js(st, th, t)[0] for t in tests]))}, {o.radius:.4f}"
+            print(f"| {label} | {m} | {a} | {b} |", flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", default="", help="comma-separated case names (default: all)")
     ap.add_argument("--method", default="gradient", choices=("gradient", "ga"))
+    ap.add_argument("--direct", action="store_true", help="se_dsf and output_error instead of the fronts")
     args = ap.parse_args(argv)
-    print(f"# bench_slow_modes.py --method {args.method}: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
+    print(f"# bench_slow_modes.py {'--direct' if args.direct else '--method ' + args.method}: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
           f"git {git_rev()}, {machine()}")
-    run([c for c in args.cases.split(",") if c], args.method)
+    if args.direct:
+        direct()
+    else:
+        run([c for c in args.cases.split(",") if c], args.method)
 
 
 if __name__ == "__main__":

@@ -80,7 +80,7 @@ from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..core._terms import Structure
 from ..core._validation import (check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
-                                check_theta, frozen, warn)
+                                check_path, check_theta, frozen, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)
 from ..core._reprs import short_repr
@@ -1103,7 +1103,8 @@ def se_pareto(
         Makes the GA (and its random initial individuals) reproducible.
     checkpoint : path, optional
         Written after each λ; an existing one for the same problem resumes the sweep. With
-        ``margin="auto"``, the refit of slow members keeps its own beside it (``name.margin.ext``).
+        ``margin="auto"``, a sweep fitted inside the margin keeps its own beside it
+        (``name.margin.ext``).
     progress : bool, optional
         Show a progress bar; default: only on a terminal.
     threads : int
@@ -1134,10 +1135,11 @@ def se_pareto(
         roots that follow the record's slow drift (BENCHMARKS.md, "Output error"). Dimensionless
         but tied to the sampling period: ρ = 1 − margin is a time constant of about Ts / margin.
         Starts (and the GA's individuals) outside the margin are infeasible. ``"auto"`` (default):
-        the sweep runs without a margin, and the members whose local models are over 10 times
-        slower than the least-squares model's slowest (1 − ρ < (1 − ρ_LS) / 10, ρ_LS its largest
-        local spectral radius along the records; never where ρ_LS ≥ 1) are refitted with the
-        margin (1 − ρ_LS) / 10: independent of units and of the sampling period. Without it the
+        the members whose local models are over 10 times slower than the least-squares model's
+        slowest (1 − ρ < (1 − ρ_LS) / 10, ρ_LS its largest local spectral radius along the
+        records; never where ρ_LS ≥ 1) are refitted with the margin (1 − ρ_LS) / 10, independent
+        of units and of the sampling period (gradient: when the first member, largest λ1, is that
+        slow, the whole sweep is fitted inside the margin at once). Without it the
         gradient front on the paper's structure (15) is all near-integrators (D_SF validation J_S
         1.8e3 mlc² against 1.1 with it; BENCHMARKS.md, "A slow-mode check"). None: no margin, the
         paper's problem; a :class:`~graybox.SlowModeWarning` then names members that slow.
@@ -1185,26 +1187,35 @@ def se_pareto(
     if isinstance(theta0, str) and theta0 != "ls":
         raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
 
-    def sweep(problem: SEProblem, checkpoint) -> SEFront:
+    def sweep(problem: SEProblem, checkpoint, lams=lam_in, progress=progress) -> SEFront:
         if method == "ga":
-            return ga_front(problem, lam_in, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
+            return ga_front(problem, lams, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
                             progress=progress, threads=threads, theta0=theta0,
                             starts=_pe_starts(problem) if starts == "pe" else () if starts is None else starts)
         return gradient_front(
-            problem, lam_in, theta0=None if (isinstance(theta0, str) and theta0 == "ls") else theta0, seed=seed,
+            problem, lams, theta0=None if (isinstance(theta0, str) and theta0 == "ls") else theta0, seed=seed,
             checkpoint=checkpoint, progress=progress, max_nfev=50 if max_nfev is None else max_nfev,
             tol=1e-8 if tol is None else tol, solver="auto" if solver is None else solver,
             starts=_pe_starts(problem) if starts is None or starts == "pe" else starts)
 
-    front = sweep(problem, checkpoint)
+    inside_ck = None if checkpoint is None else _sibling(check_path(checkpoint, "checkpoint"), "margin")
+    m = None
+    if margin == "auto":
+        rho_ls = problem.radius(problem.ls_theta())
+        m = slow_margin(rho_ls)
+    if m is not None and method == "gradient":
+        # the first member (largest λ1) alone tells, cheaply, whether this structure's fits run slow: then the
+        # whole sweep is fitted inside the margin at once rather than twice
+        probe = sweep(problem, None, [float(np.max(check_lambdas(lam_in)))], progress=False)
+        if problem.slow_modes(probe.thetas)[1][0]:
+            problem = SEProblem(st, rec, sp, margin=m, ridge=ridge)
+    front = sweep(problem, checkpoint if problem.margin is None or margin != "auto" else inside_ck)
     thetas, costs, failures = front.thetas.copy(), front.costs.copy(), dict(front.failures)
     margins = np.full(front.lambdas.size, np.nan if problem.margin is None else problem.margin)
-    if margin == "auto":
-        _, slow, rho_ls = problem.slow_modes(thetas)
+    if m is not None and problem.margin is None:
+        slow = problem.slow_modes(thetas)[1]
         if slow.any():  # members with modes over SLOW_FACTOR times least squares' slowest: refit inside that
-            m = slow_margin(rho_ls)
-            inside = sweep(SEProblem(st, rec, sp, margin=m, ridge=ridge),
-                           None if checkpoint is None else _sibling(checkpoint, "margin"))
+            inside = sweep(SEProblem(st, rec, sp, margin=m, ridge=ridge), inside_ck)
             redo = slow & np.all(np.isfinite(inside.thetas), axis=1)
             thetas[redo], costs[redo], margins[redo] = inside.thetas[redo], inside.costs[redo], m
     K = front.lambdas.size
