@@ -1,5 +1,6 @@
 """margin="auto" and the slow-mode check: modes far slower than the least-squares model's are named, or kept out."""
 
+import contextlib
 import warnings
 
 import numpy as np
@@ -118,3 +119,29 @@ def test_auto_keeps_a_fit_whose_modes_are_not_slow():
     np.testing.assert_array_equal(auto.thetas, plain.thetas)
     assert np.isnan(auto.extra["margin"][0])
     assert np.isfinite(gb.js(auto.member_model(0), data.valid))
+
+
+def test_se_dsf_auto_warns_about_the_band_once_and_of_the_model_it_returns():
+    # margin="auto" solves twice when the first model is slow: only the returned model's band warning is given
+    data, plain, _ = _front(None)
+    with pytest.warns(RuntimeWarning, match="band B = 1e-06 is infeasible") as ws:
+        res = gb.se_dsf(STRUCTURE_15, data, band=1e-6, theta0=plain.thetas[0], max_iter=20)
+    band = [w for w in ws if "is infeasible" in str(w.message)]
+    assert len(band) == 1 and band[0].filename == THIS
+    assert not res.in_band and f"start {res.start}:" in str(band[0].message)
+    assert f"(J_S {res.JS:.4g})" in str(band[0].message)
+
+
+@pytest.mark.parametrize("margin", [None, 0.01, "auto"])
+def test_se_dsf_says_which_margin_its_model_was_solved_with(margin):
+    data, plain, _ = _front(None)
+    # without a margin the model is the slow one, and is named; with one, no SlowModeWarning (an error here)
+    named = pytest.warns(gb.SlowModeWarning, match="se_dsf's model") if margin is None else contextlib.nullcontext()
+    with named, pytest.warns(RuntimeWarning, match="is infeasible"):
+        res = gb.se_dsf(STRUCTURE_15, data, band=1e-6, theta0=plain.thetas[0], max_iter=20, margin=margin)
+    if margin is None:
+        assert np.isnan(res.margin)
+    else:
+        expected = _auto_margin(STRUCTURE_15, data.ident) if margin == "auto" else margin
+        assert res.margin == pytest.approx(expected, rel=1e-12)
+        assert SEProblem(STRUCTURE_15, [data.ident], data.static).radius(res.model.theta) <= 1 - expected + 1e-12

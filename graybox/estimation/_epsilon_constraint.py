@@ -40,13 +40,13 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ._decisions import resolve_band
-from ._local_models import check_margin, slow_margin
+from ._local_models import check_margin
 from ._prediction_error import pe_thetas
 from ..models._coerce import as_structure, records_of, static_info
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, warn_static_range
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
-                                gradient_front)
+                                gradient_front, refit_if_slow)
 from ..core._terms import Structure
 from ..core._validation import check_fields, check_int, check_lambdas, check_real, check_theta, warn
 
@@ -77,6 +77,9 @@ class DSFResult:
         Iterations (trial steps) taken, summed over the starts.
     message : str
         Why the winning run stopped, in words.
+    margin : float
+        The stability margin the model was solved with (NaN: none; with ``margin="auto"``, NaN or
+        the margin of the second solve).
     """
 
     model: Model
@@ -89,6 +92,7 @@ class DSFResult:
     start_JSF: float
     n_iter: int
     message: str
+    margin: float
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -430,15 +434,11 @@ def se_dsf(
     st = as_structure(structure)
     problem = SEProblem(st, recs, sp, margin=None if margin == "auto" else margin)
     solve = dict(band=band, theta0=theta0, lambdas=lambdas, max_iter=max_iter, tol=tol, pe_lambdas=pe_lambdas)
-    result = _solve(problem, **solve)
-    if margin == "auto":
-        _, slow, rho_ls = problem.slow_modes(result.model.theta[None])
-        if slow[0]:  # a mode over SLOW_FACTOR times least squares' slowest: solve again inside that margin
-            try:
-                result = _solve(SEProblem(st, recs, sp, margin=slow_margin(rho_ls)), **solve)
-            except ValueError:  # no start inside it: keep the model, and say what it is
-                pass
-    problem.warn_slow(result.model.theta[None], "se_dsf's model", auto=margin == "auto")
+    result = refit_if_slow(problem, lambda p: _solve(p, **solve), "se_dsf's model", margin == "auto")
+    if not result.in_band:  # said of the model returned only (margin="auto" may have solved twice)
+        warn(f"se_dsf: the band B = {band:g} is infeasible for this structure from the start {result.start}: the "
+             f"smallest J_SF reached is {result.JSF:.4g} (J_S {result.JS:.4g}); widen the band or change the structure",
+             RuntimeWarning)
     return result
 
 
@@ -479,8 +479,6 @@ def _solve(problem: SEProblem, *, band, theta0, lambdas, max_iter, tol, pe_lambd
         runs, key=lambda t: (t[1][2] > band * (1 + 1e-12), t[1][1] if t[1][2] <= band * (1 + 1e-12) else t[1][2]))
     it = sum(r[5] for _, r in runs)
     feasible = bool(g <= band * (1 + 1e-12))
-    if not feasible:
-        warn(f"se_dsf: the band B = {band:g} is infeasible for this structure from the start {start}: the smallest "
-             f"J_SF reached is {g:.4g} (J_S {f:.4g}); widen the band or change the structure", RuntimeWarning)
     name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
-    return DSFResult(Model(problem.structure, th, name=name), f, g, band, feasible, start, f0, g0, it, message)
+    return DSFResult(Model(problem.structure, th, name=name), f, g, band, feasible, start, f0, g0, it, message,
+                     float("nan") if problem.margin is None else problem.margin)

@@ -51,8 +51,8 @@ from ..core._validation import check_bool, check_choice, check_fields, check_int
 from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
-from ._local_models import check_margin, slow_margin
-from ._simulation_error import _SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible
+from ._local_models import check_margin
+from ._simulation_error import _SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible, refit_if_slow
 
 __all__ = ["OEResult", "output_error"]
 
@@ -205,16 +205,7 @@ def output_error(
     problem = SEProblem(st, rec, None, margin=None if margin == "auto" else margin, ridge=ridge)
     fit = dict(n_starts=n_starts, subsample=subsample, theta0=theta0, choose_on=choose_on, seed=seed,
                max_nfev=max_nfev, tol=tol, solver=solver, progress=progress, name=name)
-    result = _oe_fit(problem, rec, **fit)
-    if margin == "auto":
-        _, slow, rho_ls = problem.slow_modes(result.model.theta[None])
-        if slow[0]:  # a mode over SLOW_FACTOR times least squares' slowest: refit inside that margin
-            try:
-                result = _oe_fit(SEProblem(st, rec, None, margin=slow_margin(rho_ls), ridge=ridge), rec, **fit)
-            except ValueError:  # no start fits inside it: keep the fit, and say what it is
-                pass
-    problem.warn_slow(result.model.theta[None], "the output-error fit", auto=margin == "auto")
-    return result
+    return refit_if_slow(problem, lambda p: _oe_fit(p, rec, **fit), "the output-error fit", margin == "auto")
 
 
 def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta0, choose_on, seed, max_nfev, tol,

@@ -45,7 +45,7 @@ import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Literal, Mapping, Sequence
+from typing import Callable, Literal, Mapping, Sequence, TypeVar
 
 import numpy as np
 from scipy.linalg.lapack import dgeqrf
@@ -85,7 +85,7 @@ from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_mar
                             within_at)
 from ..core._reprs import short_repr
 
-__all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS"]
+__all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS", "refit_if_slow"]
 
 #: The paper's SE sweep (Section IV-C), the default ``lambdas``: 100 λ1 in logspace(−2, 0).
 SE_LAMBDAS = np.logspace(-2, 0, 100)
@@ -155,6 +155,10 @@ class SEProblem:
         self.ridge_ref = self.ls_theta() * self.scale if self.ridge > 0 else None
         self.local = LocalModels(structure, *record_points(structure, self.records)) if self.margin is not None \
             else None
+
+    def with_margin(self, margin: float | None) -> SEProblem:
+        """The same problem (structure, records, static points, ridge) with another margin."""
+        return SEProblem(self.structure, self.records, self.static, margin=margin, ridge=self.ridge)
 
     def fingerprint(self) -> str:
         """A hash of everything that defines the problem (for checkpoints)."""
@@ -1055,6 +1059,25 @@ def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
 _METHOD_ONLY = {"ga": ("options",), "gradient": ("max_nfev", "tol", "solver")}
 
 
+_R = TypeVar("_R")
+
+
+def refit_if_slow(problem: SEProblem, fit: Callable[[SEProblem], _R], what: str, auto: bool) -> _R:
+    """``fit(problem)`` (a result with ``.model``), for ``margin="auto"`` fitted again inside :func:`slow_margin`
+    when its model is slow (kept when that refit finds no start: ValueError); a :class:`SlowModeWarning` names
+    a model left slow. ``problem`` has no margin when ``auto``."""
+    result = fit(problem)
+    if auto:
+        _, slow, rho_ls = problem.slow_modes(result.model.theta[None])
+        if slow[0]:  # a mode over SLOW_FACTOR times least squares' slowest: fit again inside that margin
+            try:
+                result = fit(problem.with_margin(slow_margin(rho_ls)))
+            except ValueError:  # no start inside it: keep the model, and say what it is
+                pass
+    problem.warn_slow(result.model.theta[None], what, auto=auto)
+    return result
+
+
 def _sibling(path: str | os.PathLike, tag: str) -> Path:
     """``name.tag.ext`` beside ``name.ext``: the checkpoint of a second sweep of the same call."""
     p = Path(path)
@@ -1208,14 +1231,14 @@ def se_pareto(
         # whole sweep is fitted inside the margin at once rather than twice
         probe = sweep(problem, None, [float(np.max(check_lambdas(lam_in)))], progress=False)
         if problem.slow_modes(probe.thetas)[1][0]:
-            problem = SEProblem(st, rec, sp, margin=m, ridge=ridge)
+            problem = problem.with_margin(m)
     front = sweep(problem, checkpoint if problem.margin is None or margin != "auto" else inside_ck)
     thetas, costs, failures = front.thetas.copy(), front.costs.copy(), dict(front.failures)
     margins = np.full(front.lambdas.size, np.nan if problem.margin is None else problem.margin)
     if m is not None and problem.margin is None:
         slow = problem.slow_modes(thetas)[1]
         if slow.any():  # members with modes over SLOW_FACTOR times least squares' slowest: refit inside that
-            inside = sweep(SEProblem(st, rec, sp, margin=m, ridge=ridge), inside_ck)
+            inside = sweep(problem.with_margin(m), inside_ck)
             redo = slow & np.all(np.isfinite(inside.thetas), axis=1)
             thetas[redo], costs[redo], margins[redo] = inside.thetas[redo], inside.costs[redo], m
     K = front.lambdas.size

@@ -368,7 +368,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                 ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
                               ("in_band", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
-                              ("n_iter", "int"), ("message", "str"))),
+                              ("n_iter", "int"), ("message", "str"), ("margin", "float"))),
     "OEResult": (OEResult, (("model", "Model"), ("JS", "float"), ("JS_choose", "float"), ("chosen_on", "str"),
                             ("start", "str"), ("starts", "frame"), ("margin", "float"), ("radius", "float"),
                             ("seed", "int"))),
@@ -423,6 +423,7 @@ _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 
 #: Fields added after files of this format version were written, with the value a file without them means.
 _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {"chosen_on": ""},
+                                     "DSFResult": {"margin": float("nan")},  # not recorded: none said
                                      # selections saved before the fit / choose / test protocol chose by the
                                      # smallest validation J_S
                                      "GrayboxSelection": {"rule": "min"}}
