@@ -145,3 +145,17 @@ def test_se_dsf_says_which_margin_its_model_was_solved_with(margin):
         expected = _auto_margin(STRUCTURE_15, data.ident) if margin == "auto" else margin
         assert res.margin == pytest.approx(expected, rel=1e-12)
         assert SEProblem(STRUCTURE_15, [data.ident], data.static).radius(res.model.theta) <= 1 - expected + 1e-12
+
+
+def test_the_warning_prints_the_least_squares_radius_below_one_when_it_is():
+    # ρ_LS = 0.99995 printed to 4 digits read "1": a slow member's 0.999999 then looked faster than least squares
+    structure = gb.Structure(["y(k-1)", "u(k-1)"])
+    problem = SEProblem(structure, [_arx_record(0.99995, noise=0.0)], None)
+    rho_ls = problem.radius(problem.ls_theta())
+    assert rho_ls < 1
+    with pytest.warns(gb.SlowModeWarning) as ws:
+        problem.warn_slow(np.array([[0.999999, 0.5]]), "the fit")
+    message = str(ws[0].message)
+    printed = float(message.split("least-squares model's ")[1].split(":")[0])
+    assert printed < 1 and printed == pytest.approx(rho_ls, abs=1e-6)
+    assert ws[0].filename == THIS

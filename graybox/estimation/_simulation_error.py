@@ -214,7 +214,7 @@ class SEProblem:
             who = what if len(radii) == 1 else f"{what}: {k} of {len(radii)}"
             warn(f"{who} {'has' if k == 1 else 'have'} local models along the identification "
                  f"record with spectral radius up to {np.nanmax(radii[slow]):.6g}, against the least-squares model's "
-                 f"{rho_ls:.4g}: modes over {SLOW_FACTOR:g} times slower than its slowest, or unstable. Such "
+                 f"{rho_ls:.6g}: modes over {SLOW_FACTOR:g} times slower than its slowest, or unstable. Such "
                  "near-integrators follow the record's slow drift and err on new records; "
                  + ("no fit inside that factor (margin='auto') was found for them: try another structure"
                     if auto else "margin='auto' refits them inside that factor")
