@@ -1127,7 +1127,9 @@ def se_pareto(
     checkpoint : path, optional
         Written after each λ; an existing one for the same problem resumes the sweep. With
         ``margin="auto"``, a sweep fitted inside the margin keeps its own beside it
-        (``name.margin.ext``).
+        (``name.margin.ext``); when the gradient sweep is fitted inside it from the start (its
+        first member slow), only that file is written. The first member's probe is not
+        checkpointed: a resumed call fits it again (the same result).
     progress : bool, optional
         Show a progress bar; default: only on a terminal.
     threads : int
