@@ -159,3 +159,30 @@ def test_the_warning_prints_the_least_squares_radius_below_one_when_it_is():
     printed = float(message.split("least-squares model's ")[1].split(":")[0])
     assert printed < 1 and printed == pytest.approx(rho_ls, abs=1e-6)
     assert ws[0].filename == THIS
+
+
+def test_a_refit_that_misses_the_band_the_first_fit_met_is_not_taken():
+    from types import SimpleNamespace
+
+    from graybox.estimation._simulation_error import refit_if_slow
+
+    structure = gb.Structure(["y(k-1)", "u(k-1)"])
+    problem = SEProblem(structure, [_arx_record(0.8)], None)
+    slow = SimpleNamespace(model=gb.Model(structure, np.array([0.9999, 0.5])), in_band=True)
+    sane = gb.Model(structure, np.array([0.8, 0.5]))
+    margins = []
+
+    def fit(in_band):
+        def run(p):
+            if p.margin is None:
+                return slow
+            margins.append(p.margin)
+            return SimpleNamespace(model=sane, in_band=in_band)
+        return run
+
+    with pytest.warns(gb.SlowModeWarning, match="no fit inside that factor"):
+        assert refit_if_slow(problem, fit(False), "the fit", auto=True) is slow  # the band is what was asked
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert refit_if_slow(problem, fit(True), "the fit", auto=True).model is sane
+    assert margins[0] == pytest.approx(_auto_margin(structure, _arx_record(0.8)))

@@ -1064,16 +1064,19 @@ _R = TypeVar("_R")
 
 def refit_if_slow(problem: SEProblem, fit: Callable[[SEProblem], _R], what: str, auto: bool) -> _R:
     """``fit(problem)`` (a result with ``.model``), for ``margin="auto"`` fitted again inside :func:`slow_margin`
-    when its model is slow (kept when that refit finds no start: ValueError); a :class:`SlowModeWarning` names
-    a model left slow. ``problem`` has no margin when ``auto``."""
+    when its model is slow (kept when that refit finds no start: ValueError, or when the refit misses a band,
+    ``in_band``, that the first fit met: the band is what the caller asked for); a :class:`SlowModeWarning`
+    names a model left slow. ``problem`` has no margin when ``auto``."""
     result = fit(problem)
     if auto:
         _, slow, rho_ls = problem.slow_modes(result.model.theta[None])
         if slow[0]:  # a mode over SLOW_FACTOR times least squares' slowest: fit again inside that margin
             try:
-                result = fit(problem.with_margin(slow_margin(rho_ls)))
+                inside = fit(problem.with_margin(slow_margin(rho_ls)))
             except ValueError:  # no start inside it: keep the model, and say what it is
-                pass
+                inside = None
+            if inside is not None and (getattr(inside, "in_band", True) or not getattr(result, "in_band", True)):
+                result = inside
     problem.warn_slow(result.model.theta[None], what, auto=auto)
     return result
 
@@ -1228,6 +1231,7 @@ def se_pareto(
     if margin == "auto":
         rho_ls = problem.radius(problem.ls_theta())
         m = slow_margin(rho_ls)
+    base, refit = problem, m is not None
     if m is not None and method == "gradient":
         # the first member (largest λ1) alone tells, cheaply, whether this structure's fits run slow: then the
         # whole sweep is fitted inside the margin at once rather than twice
@@ -1235,9 +1239,13 @@ def se_pareto(
         if problem.slow_modes(probe.thetas)[1][0]:
             problem = problem.with_margin(m)
     front = sweep(problem, checkpoint if problem.margin is None or margin != "auto" else inside_ck)
+    if problem is not base and len(front.failures) == front.lambdas.size:
+        # no member fits inside the margin: the sweep without it (its slow members then named, not refitted)
+        problem, refit = base, False
+        front = sweep(problem, checkpoint)
     thetas, costs, failures = front.thetas.copy(), front.costs.copy(), dict(front.failures)
     margins = np.full(front.lambdas.size, np.nan if problem.margin is None else problem.margin)
-    if m is not None and problem.margin is None:
+    if refit and problem.margin is None:
         slow = problem.slow_modes(thetas)[1]
         if slow.any():  # members with modes over SLOW_FACTOR times least squares' slowest: refit inside that
             inside = sweep(problem.with_margin(m), inside_ck)
