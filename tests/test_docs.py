@@ -23,9 +23,17 @@ def site(tmp_path_factory):
     out = tmp_path_factory.mktemp("html")
     proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
                            str(ROOT / "docs"), str(out)], capture_output=True, text=True, cwd=ROOT)
-    problems = [line for line in proc.stderr.splitlines() if "WARNING:" in line or "ERROR:" in line]
+    problems = [line for line in proc.stderr.splitlines()
+                if ("WARNING:" in line or "ERROR:" in line) and not line.startswith(KERNEL_TEARDOWN)]
     assert proc.returncode == 0 and not problems, "\n".join(problems) or proc.stderr[-3000:]
     return out
+
+
+#: A notebook kernel's shutdown race logged by tornado, not by Sphinx or a notebook: the socket closes while a
+#: last message is sent (seen once in five fresh-clone runs under load with ipykernel 7.4, jupyter_client 8.10;
+#: ipykernel PR #1518 silences one path of it). A failing cell still fails the build (nb_execution_raise_on_error)
+#: and the tests below read every notebook's outputs.
+KERNEL_TEARDOWN = "ERROR:tornado.general:Uncaught exception in ZMQStream callback"
 
 
 def test_every_public_name_has_a_reference_entry(site):
