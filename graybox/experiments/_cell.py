@@ -182,11 +182,14 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
         return gb.cls(st, data, constraints=cons, name=name, **{"how": "context", **opts}).model, None, {}
     if est == "pe":
         return None, gb.pe_pareto(st, data, lambdas=lam, constraints=cons, **opts), {}
+    if "margin" in opts and opts["margin"] == "none":  # the paper's problem: TOML has no null
+        opts["margin"] = None
     if est == "se-ga":
         theta0 = opts.pop("theta0", "ls")
+        margin = opts.pop("margin", "auto")
         ga = gb.GAOptions(**opts)
         return None, gb.se_pareto(st, data, lambdas=lam, method="ga", seed=cell.seed or 0, progress=False,
-                                  options=ga, theta0=None if theta0 == "none" else "ls"), {}
+                                  options=ga, theta0=None if theta0 == "none" else "ls", margin=margin), {}
     if est == "se-gradient":
         return None, gb.se_pareto(st, data, lambdas=lam, method="gradient", progress=False, **opts), {}
     if est == "se-dsf":

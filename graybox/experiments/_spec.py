@@ -512,6 +512,14 @@ def _opt_stall(v: object, name: str) -> int | None:
     return None if v in (None, 0) else check_int(v, name, low=1)
 
 
+def _opt_margin(v: object, name: str) -> str | float:
+    """A stability margin in a spec: "auto" (the estimators' default), "none" (the paper's problem, no margin:
+    TOML has no null) or a number in [0, 1)."""
+    if isinstance(v, str):
+        return check_choice(v, name, ("auto", "none"))
+    return check_real(v, name, low=0.0, high=1.0, high_open=True)
+
+
 _GA_FIELDS = {
     "population": _opt_int(4), "generations": _opt_int(1), "stall": _opt_stall,
     "crossover_prob": _opt_real(0, 1), "crossover_ratio": _opt_real(0, low_open=True),
@@ -526,10 +534,11 @@ OPTIONS: dict[str, dict[str, Any]] = {
     "cls": {"solver": _opt_choice("clarabel", "osqp", "closed"), "reference": _opt_reference},
     "pe": {"solver": _opt_choice("clarabel", "osqp", "closed"), "weights": _opt_choice("mse", "sum"),
            "reference": _opt_reference},
-    "se-ga": {**_GA_FIELDS, "theta0": _opt_choice("ls", "none")},
+    "se-ga": {**_GA_FIELDS, "theta0": _opt_choice("ls", "none"), "margin": _opt_margin},
     "se-gradient": {"max_nfev": _opt_int(1), "tol": _opt_real(0, low_open=True),
-                    "solver": _opt_choice("trf", "dogbox", "lm")},
-    "se-dsf": {"band": _opt_real(0, low_open=True), "max_iter": _opt_int(1), "tol": _opt_real(0, low_open=True)},
+                    "solver": _opt_choice("trf", "dogbox", "lm"), "margin": _opt_margin},
+    "se-dsf": {"band": _opt_real(0, low_open=True), "max_iter": _opt_int(1), "tol": _opt_real(0, low_open=True),
+               "margin": _opt_margin},
     "neural": {"ny": _opt_int(0), "nu": _opt_int(1), "ne": _opt_int(0), "hidden": _opt_int(1), "epochs": _opt_int(1),
                "weight_decay": _opt_real(0), "lam0": _opt_real(0, low_open=True)},
 }
@@ -801,7 +810,8 @@ class Variant:
     options : mapping, optional
         Keyword options of the estimator (e.g. ``{"solver": "closed"}`` for pe,
         ``{"max_nfev": 20}`` for se-gradient, GAOptions fields for se-ga, ``band``, ``max_iter``
-        and ``tol`` for se-dsf).
+        and ``tol`` for se-dsf). The three SE estimators take ``margin``: ``"auto"`` (default, as
+        :func:`graybox.se_pareto`), ``"none"`` (the paper's problem, no margin) or a number in [0, 1).
     """
 
     name: str
