@@ -96,16 +96,18 @@ class Model:
         y0: np.ndarray | None = None,
         *,
         on_diverge: Literal["raise", "nan"] = "raise",
+        bound: float | None = None,
     ) -> np.ndarray:
         """Free run, shape (N,); see :func:`graybox.core._simulation.simulate`.
 
         ``u`` is a Record (inputs taken by name) or an array of shape (N,) or (N, m) with the
-        columns in ``input_names`` order.
+        columns in ``input_names`` order. ``bound`` (output units) is the divergence bound on |y|
+        (default 1e6 · (1 + max|y0|): give one when the output is large and the run starts at 0).
         """
         if not isinstance(u, Record) and self.n_inputs > 1:
-            return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge,
+            return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge, bound=bound,
                                         input_names=self.input_names)
-        return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge)
+        return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge, bound=bound)
 
     # -- statics ------------------------------------------------------------
     # With several inputs the static function is a surface ȳ(ū_1, …, ū_m): ū is then of shape
