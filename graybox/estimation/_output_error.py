@@ -209,7 +209,7 @@ def output_error(
 
 
 def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta0, choose_on, seed, max_nfev, tol,
-         solver, progress, name) -> OEResult:
+            solver, progress, name) -> OEResult:
     """:func:`output_error` on one problem (its margin a number or None)."""
     st = problem.structure
     n = len(st)
