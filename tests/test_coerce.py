@@ -230,8 +230,10 @@ def test_a_data_argument_of_another_type_lists_what_is_accepted(results, data, c
 def test_a_static_argument_of_another_type_lists_what_is_accepted(data):
     with pytest.raises(TypeError, match="static must be StaticPoints, a StaticCurve, a StaticSurface or None"):
         gb.cls(TRUE, data, [1.0, 2.0])
-    with pytest.raises(TypeError, match="static must be StaticPoints or None"):
+    with pytest.raises(TypeError, match="static must be StaticPoints, a StaticCurve, a StaticSurface or None"):
         gb.se_pareto(TRUE, data, data.static.ubar, progress=False)
+    with pytest.raises(TypeError, match="static must be StaticPoints or None"):  # J_SF scores points only
+        gb.jsf(gb.Model(TRUE, np.zeros(len(TRUE))), [1.0, 2.0])
 
 
 # -- the static points: one resolution, cls included --------------------------------------------

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 import graybox as gb
 from graybox.estimation._prediction_error import qr_static_error
+from graybox.models._coerce import SURFACE_LEVELS
 from graybox.static._constraints import (
     StaticContext, cluster_powers, n_static_inputs, static_rows,
 )
@@ -187,7 +188,7 @@ def test_pe_samples_a_surface(ds):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         th = gb.pe_thetas(ST, ds, surf, lambdas=[1e-4], solver="closed")[0]
-    U = grid(5)  # the default sample: 5 levels per input over the surface's domain
+    U = grid(SURFACE_LEVELS)  # the default sample: a grid over the surface's domain
     assert np.sqrt(np.mean((rational_surface(ST, th, U) - surf(U)) ** 2)) < 0.05
 
 

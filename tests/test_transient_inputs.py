@@ -202,7 +202,7 @@ def test_held_inputs_elsewhere():
     assert set(again.extra["transient_inputs"]) == {"u_tau10", "u_tau30"}
     only_z = gb.Candidates(2, {"u": 0, "u_tau10": 2}, degree=2, input_names=data.input_names)
     with pytest.warns(gb.SelectionWarning, match="carry degree 0"):
-        _, form = _static_points(data.static, only_z.process, 0.031, data.input_names)
+        _, form = _static_points(data.static, only_z.process, 0.031, data.ident)
     assert form.degree == 0
     z = gb.transient_inputs(gb.Record(np.r_[0.0, np.ones(5)], np.zeros(6)), taus=[1e17]).inputs[:, 1]
     np.testing.assert_allclose(z[1:], 1e-17, rtol=1e-12)

@@ -42,12 +42,14 @@ from threadpoolctl import threadpool_limits
 from ._decisions import resolve_band
 from ._local_models import check_margin
 from ._prediction_error import pe_thetas
-from ..models._coerce import as_structure, records_of, static_info
+from ..models._coerce import as_structure, records_of, static_points
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, warn_static_range
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
                                 gradient_front, refit_if_slow)
 from ..core._terms import Structure
+from ..static._curves import StaticCurve
+from ..static._surfaces import StaticSurface
 from ..core._validation import check_fields, check_int, check_lambdas, check_real, check_theta, warn
 
 __all__ = ["se_dsf", "DSFResult"]
@@ -369,7 +371,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
 def se_dsf(
     structure: Structure | object,
     data: Record | Dataset | Sequence[Record],
-    static: StaticPoints | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     band: float | None = None,
     theta0: np.ndarray | None = None,
@@ -378,6 +380,7 @@ def se_dsf(
     tol: float = 1e-9,
     pe_lambdas: np.ndarray | None = None,
     margin: float | Literal["auto"] | None = "auto",
+    ubar: np.ndarray | None = None,
 ) -> DSFResult:
     """The D_SF model solved directly: min J_S(θ) subject to J_SF(θ) ≤ ``band``.
 
@@ -387,8 +390,10 @@ def se_dsf(
         Process terms (noise terms are dropped); a Selection, ELSResult, Decision … gives its own.
     data : Record, Dataset or sequence of Record
         Identification data (a Dataset's ``ident``); each record is run freely on its own.
-    static : StaticPoints, optional
-        Static points (default: the Dataset's).
+    static : StaticPoints, StaticCurve or StaticSurface, optional
+        Static points (default: the Dataset's); a curve or surface is sampled at ``ubar`` or over
+        its domain, as :func:`graybox.se_pareto` samples it (sampled points carry no uncertainty:
+        give ``band``).
     band : float
         B > 0, the bound on J_SF in output units² (D_SF's band). Default: the static points' own,
         :attr:`~graybox.StaticPoints.band` (the mean of their uncertainty δ_i²); static points
@@ -415,6 +420,9 @@ def se_dsf(
         the model's modes are over 10 times slower than the least-squares model's slowest (as
         :func:`graybox.se_pareto`). None: no margin; a :class:`~graybox.SlowModeWarning` says when
         the model is that slow.
+    ubar : ndarray, optional
+        Where to sample a StaticCurve (shape (K,)) or StaticSurface (shape (K, m)) given as
+        ``static``, in input units.
 
     Returns
     -------
@@ -423,7 +431,7 @@ def se_dsf(
         J_SF reached when it was not), the start and the iteration count.
     """
     recs = records_of(data)
-    sp = static_info(static, data, needed_by="se_dsf")
+    sp = static_points(static, data, ubar=ubar, needed_by="se_dsf")
     if band is not None and np.ndim(band) != 0:
         raise TypeError(f"se_dsf: band must be a number B > 0 (the bound on J_SF, output units²), got {band!r}")
     band = resolve_band(band, sp, "se_dsf")[1]

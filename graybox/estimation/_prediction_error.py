@@ -56,7 +56,7 @@ from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
 from ..core._least_squares import column_scales
-from ..models._coerce import as_model, as_structure, static_info
+from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
 from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, warn_static_range
@@ -778,27 +778,6 @@ def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
 # --------------------------------------------------------------------------------------------
 # PE bi-objective
 # --------------------------------------------------------------------------------------------
-def _static_points(static: StaticPoints | StaticCurve | StaticSurface | None, ubar: np.ndarray | None, data: object) -> StaticPoints:
-    static = static_info(static, data, needed_by="the PE problem", curves=True)
-    if isinstance(static, StaticPoints):
-        if ubar is not None:
-            raise ValueError("ubar is for sampling a StaticCurve; static points carry their own ū")
-        return static
-    if isinstance(static, StaticCurve):
-        if ubar is None:
-            if static.domain is None:
-                raise ValueError("a StaticCurve without a domain needs ubar: where to sample it")
-            ubar = np.linspace(static.domain[0], static.domain[1], 10)
-        return static.points(np.asarray(ubar, float))
-    # a StaticSurface: static_info admits nothing else
-    if ubar is None:
-        if static.domain is None:
-            raise ValueError("a StaticSurface without a domain needs ubar of shape (K, m): where to sample it")
-        axes = [np.linspace(lo, hi, 5) for lo, hi in static.domain]  # 5 levels per input
-        ubar = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
-    return static.points(np.asarray(ubar, float))
-
-
 def _check_reference(reference: object, n_terms: int) -> None:
     """``reference`` is one of the forms :func:`_sigma_y` reads, checked even where no constraint needs it."""
     if reference is None or isinstance(reference, Model) or isinstance(getattr(reference, "model", None), Model):
@@ -837,7 +816,7 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     check_choice(weights, "weights", ("mse", "sum"))
     recs = as_gram_records(data)
     d = _dynamic(st, recs)
-    pts = _static_points(static, ubar, data)
+    pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
     curve = static if isinstance(static, (StaticCurve, StaticSurface)) else None
     cons = as_constraint_list(constraints)
     for p in [pts] + [getattr(c, "points", None) for c in cons]:
@@ -937,8 +916,9 @@ def pe_pareto(
         Dynamic identification data. (For a :class:`~graybox.DaskRecord` use
         :func:`pe_thetas`: the members' free-run J_S needs the record in memory.)
     static : StaticPoints, StaticCurve or StaticSurface, optional
-        Static information; a curve is sampled at ``ubar`` (default: 10 points over its domain),
-        a surface at ``ubar`` of shape (K, m) (default: 5 levels per input over its domain box).
+        Static information; a curve is sampled at ``ubar`` (default: 10 levels over its domain),
+        a surface at ``ubar`` of shape (K, m) (default: a grid of 6 levels per input over its
+        domain box), as everywhere a curve stands for points.
         Default: the Dataset's static points. Points outside the records' input range are
         welcome (a :class:`StaticRangeWarning` names them once).
     lambdas : array_like, shape (K,), optional
@@ -953,7 +933,8 @@ def pe_pareto(
     solver_options : mapping, optional
         Passed to ``cvxpy.Problem.solve`` (overrides graybox's tight defaults).
     ubar : ndarray, optional
-        Where to sample a StaticCurve given as ``static``.
+        Where to sample a StaticCurve (shape (K,)) or StaticSurface (shape (K, m)) given as
+        ``static``, in input units.
     eval_static : StaticPoints, optional
         Points for the members' J_SF (default: the static points used in the objective).
     warm_start : bool
@@ -980,7 +961,7 @@ def pe_pareto(
                        solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
                        reference=reference)
     st = _process_structure(structure)
-    pts = _static_points(static, ubar, data)
+    pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
     ev = pts if eval_static is None else eval_static
     return ParetoSet.from_thetas(
         st, thetas, check_lambdas(PE_LAMBDAS if lambdas is None else lambdas), data, ev, method=f"PE ({solver}, {weights})",

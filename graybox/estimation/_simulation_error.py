@@ -63,7 +63,7 @@ from ..core._simulation_kernels import (
     simulate_one,
 )
 from ..core._least_squares import column_scales, scaled_lstsq
-from ..models._coerce import as_structure, records_of, static_info
+from ..models._coerce import as_structure, records_of, static_points
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
 from ..core._records import (
@@ -78,6 +78,8 @@ from ..core._records import (
 from ..core._regressors import stacked_regressors
 from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
+from ..static._curves import StaticCurve
+from ..static._surfaces import StaticSurface
 from ..core._terms import Structure
 from ..core._validation import (check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
@@ -1090,7 +1092,7 @@ def _sibling(path: str | os.PathLike, tag: str) -> Path:
 def se_pareto(
     structure: Structure | object,
     data: Record | Dataset | Sequence[Record],
-    static: StaticPoints | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     lambdas: Sequence[float] | np.ndarray | None = None,
     method: Literal["ga", "gradient"] = "ga",
@@ -1106,6 +1108,7 @@ def se_pareto(
     starts: Sequence[np.ndarray] | Literal["pe"] | None = None,
     margin: float | Literal["auto"] | None = "auto",
     ridge: float = 0.0,
+    ubar: np.ndarray | None = None,
 ) -> ParetoSet:
     """SE Pareto set of eq. (13) by the paper's GA or the gradient method.
 
@@ -1117,9 +1120,11 @@ def se_pareto(
     data : Record, Dataset or sequence of Record
         Identification data (a Dataset's ``ident``); with several records each is run freely
         on its own and J_S is the mean over all their samples.
-    static : StaticPoints, optional
-        Static points (default: the Dataset's). Points outside the records' input range are
-        welcome (a :class:`StaticRangeWarning` names them once).
+    static : StaticPoints, StaticCurve or StaticSurface, optional
+        Static points (default: the Dataset's); a curve or surface is sampled at ``ubar``, or
+        over its domain (10 levels; a surface: a grid of 6 levels per input), as :func:`pe_pareto`
+        samples it. Points outside the records' input range are welcome (a
+        :class:`StaticRangeWarning` names them once).
     lambdas : sequence of float in (0, 1], optional
         λ1 values; default: the paper's logspace(-2, 0, 100). Runs go from λ1 = 1 down.
     method : {"ga", "gradient"}
@@ -1175,6 +1180,9 @@ def se_pareto(
         Regularisation towards least squares (both methods): γ · mean_j (s_j (θ_j − θ_LS,j))² is
         added to every member's cost, s_j the RMS of regressor j (see :class:`SEProblem`). 0
         (default): none, the paper's problem; ``extra["cost"]`` then holds the regularised cost.
+    ubar : ndarray, optional
+        Where to sample a StaticCurve (shape (K,)) or StaticSurface (shape (K, m)) given as
+        ``static``, in input units; refused with static points, which carry their own ū.
 
     Returns
     -------
@@ -1206,7 +1214,7 @@ def se_pareto(
     elif starts is not None:
         starts = check_sequence(starts, "starts", "a sequence of θ arrays or 'pe'")
     rec = records_of(data)
-    sp = static_info(static, data, needed_by="the SE problem")
+    sp = static_points(static, data, ubar=ubar, needed_by="the SE problem")
     warn_static_range(sp.ubar, rec)
     margin = check_margin(margin)
     st = as_structure(structure)

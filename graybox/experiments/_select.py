@@ -43,7 +43,7 @@ import pandas as pd
 from .. import _api as gb
 
 from ..io._json import register_type
-from ..models._coerce import static_info
+from ..models._coerce import static_info, static_points
 from ..selection._forward_regression import _RSS_FLOOR
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
@@ -225,20 +225,14 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
 
 
 def _static_points(sp, process: gb.Structure, band: float | None,
-                   inputs: tuple[str, ...]) -> tuple[gb.StaticPoints | None, _Form | None]:
+                   record: gb.Record) -> tuple[gb.StaticPoints | None, _Form | None]:
     """Static points for the jobs and the static form the structures must carry (None: black box);
-    ``inputs``: the records' input names (a curve's points are of the records' one input)."""
+    ``record``: the identification record (a curve's points are of its one input)."""
     if sp is None:
         return None, None
     if isinstance(sp, (gb.StaticCurve, gb.StaticSurface)):
-        if sp.domain is None:
-            raise ValueError(f"a {type(sp).__name__} without a domain cannot be sampled: give static points")
         degree = sp.degree
-        if isinstance(sp, gb.StaticCurve):
-            sp = sp.points(np.linspace(*sp.domain, 10), inputs[0])
-        else:  # a grid over the surface's box, 6 points per input
-            axes = [np.linspace(lo, hi, 6) for lo, hi in sp.domain]
-            sp = sp.points(np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1))
+        sp = static_points(sp, record)  # sampled over its domain, of the records' input
     elif band is None:
         return sp, None  # J_SF reported, no form asked
     else:
@@ -285,7 +279,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     if band is not None and sp is None:
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
-    sp, form = _static_points(sp, process, band, ident.input_names)
+    sp, form = _static_points(sp, process, band, ident)
     if sp is not None:
         check_same_inputs(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
     L = process.max_lag
@@ -662,8 +656,9 @@ def select_graybox(
         A Dataset brings the identification and validation records and the static points; a
         Record is identification data only (the choice on ``folds`` contiguous folds of it).
     static : StaticPoints, StaticCurve or StaticSurface, optional
-        Static information (default: the Dataset's). A curve is sampled at 10 points of its
-        domain, a surface (several inputs) on a grid of 6 points per input over its domain.
+        Static information (default: the Dataset's). A curve is sampled at 10 levels over its
+        domain, a surface (several inputs) on a grid of 6 levels per input over its domain box
+        (as by every estimator that takes a curve for points).
         Without a band it is only reported (the table's J_SF).
     band : float, optional
         B: the bound on J_SF (output units²), the static measurements' uncertainty: a gray box

@@ -4,7 +4,9 @@
   (``.structure`` of a Selection, SEMPResult, ParetoSet or GrayboxSelection; ``.model`` of an
   ELSResult, CLSResult, Decision, DSFResult …);
 - a **model** from a Model or a result that carries one in ``.model``;
-- the **static information** from an explicit argument, else the Dataset's static points;
+- the **static information** from an explicit argument, else the Dataset's static points, and
+  the **static points** an estimator scores: given points, or a curve or surface sampled at ``ubar``
+  or over its domain (:func:`static_points`: one sampling for PE, SE and the selection);
 - a **record** from a Record, or the part of a Dataset the entry means (``ident`` for an
   estimate, ``valid`` for a judgement): :func:`as_record` for one, ``records_of`` (core's
   ``as_records``, which core's own regressors use too) for a Record, a sequence or a Dataset.
@@ -16,15 +18,23 @@ their class.
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..core._records import Dataset, Record, StaticPoints
 from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
 from ..core._terms import Structure, Term
+from ..core._validation import as_1d_finite
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ._model import Model
 
-__all__ = ["STRUCTURE_ACCEPTED", "MODEL_ACCEPTED", "as_structure", "as_model", "static_info", "as_record",
-           "records_of"]
+__all__ = ["STRUCTURE_ACCEPTED", "MODEL_ACCEPTED", "as_structure", "as_model", "static_info", "static_points",
+           "as_record", "records_of", "CURVE_LEVELS", "SURFACE_LEVELS"]
+
+#: Levels a StaticCurve is sampled at over its domain when no ū is given.
+CURVE_LEVELS = 10
+#: Levels per input a StaticSurface is sampled at over its domain box (a grid) when no ū is given.
+SURFACE_LEVELS = 6
 
 #: What a structure argument may be, in words (the TypeError lists it).
 STRUCTURE_ACCEPTED = ("a Structure, a sequence of terms (str or Term), a Model, or a result that carries one "
@@ -163,6 +173,61 @@ def static_info(static: object, data: object, *, needed_by: str | None = None, n
     if out is None and needed_by is not None:
         raise ValueError(f"{needed_by} needs static points: pass {name}= or a Dataset with static points")
     return out
+
+
+def static_points(static: object, data: object, *, ubar: object = None, needed_by: str | None = None,
+                  name: str = "static") -> StaticPoints | None:
+    """The static points an entry scores: given points, a curve or surface sampled, or the Dataset's.
+
+    Parameters
+    ----------
+    static : StaticPoints, StaticCurve, StaticSurface or None
+        The explicit argument; None takes a :class:`~graybox.Dataset`'s static points.
+    data : object
+        The entry's data argument (a Record, records or a Dataset): a curve's points are of the
+        records' (first) input, named as the records name it.
+    ubar : ndarray, optional
+        Where to sample a curve (shape (K,), input units) or a surface (shape (K, m)). Default:
+        :data:`CURVE_LEVELS` levels over a curve's domain, a grid of :data:`SURFACE_LEVELS` levels
+        per input over a surface's domain box. Refused with static points, which carry their own ū.
+    needed_by : str, optional
+        The entry's name when it cannot work without static information.
+    name : str
+        The argument's name, for the error message.
+
+    Returns
+    -------
+    StaticPoints or None
+        None only when nothing is given and ``needed_by`` is None.
+
+    Raises
+    ------
+    TypeError
+        ``static`` is of another type.
+    ValueError
+        ``ubar`` with static points; a curve or surface without a domain and no ``ubar``; no
+        static information and ``needed_by`` is given.
+    """
+    static = static_info(static, data, needed_by=needed_by, name=name, curves=True)
+    if static is None or isinstance(static, StaticPoints):
+        if ubar is not None:
+            raise ValueError("ubar is for sampling a StaticCurve or StaticSurface; static points carry their own ū")
+        return static
+    kind = type(static).__name__
+    if ubar is None and static.domain is None:
+        shape = "(K,)" if isinstance(static, StaticCurve) else "(K, m)"
+        raise ValueError(f"a {kind} without a domain needs ubar of shape {shape}: where to sample it")
+    if isinstance(static, StaticCurve):
+        ub = (np.linspace(static.domain[0], static.domain[1], CURVE_LEVELS) if ubar is None
+              else as_1d_finite(ubar, "ubar"))
+        # a curve is of one input, whatever the records (a Record, a Dataset, a sequence) call it
+        first = data[0] if isinstance(data, (list, tuple)) and data else data
+        names = getattr(first, "input_names", None) or ("u",)
+        return static.points(ub, names[0])
+    if ubar is None:
+        axes = [np.linspace(lo, hi, SURFACE_LEVELS) for lo, hi in static.domain]
+        ubar = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+    return static.points(np.asarray(ubar, dtype=float))
 
 
 def as_record(data: object, part: str, name: str = "data") -> Record:
