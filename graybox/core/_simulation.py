@@ -12,14 +12,14 @@ from typing import Literal
 
 import numpy as np
 
-from ._simulation_kernels import encode, predict_ahead, record_inputs, simulate_batch, simulate_one
+from ._simulation_kernels import BOUND_FACTOR, encode, predict_ahead, record_inputs, simulate_batch, simulate_one
 from ._records import Record, as_input_array
 from ._terms import check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta
 from ._regressors import regressor_matrix
 from ._terms import Structure
 
-__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "free_run_inputs"]
+__all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "free_run_inputs", "default_bound"]
 
 
 class DivergenceError(ValueError):
@@ -49,8 +49,9 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     -------
     ndarray, shape (N,)
         ŷ in the output's units; the first ``max_lag`` samples are the measured ones. From
-        horizon 2 on, NaN where the run behind a prediction leaves :func:`simulate`'s bound
-        (|ŷ| above 1e6 · (1 + max|y(0 … L−1)|)); one step ahead is never NaN for finite data.
+        horizon 2 on, NaN where the run behind a prediction leaves :func:`simulate`'s default
+        bound (from y(0 … L−1) and the record's inputs); one step ahead is never NaN for finite
+        data.
     """
     if not isinstance(record, Record):
         raise TypeError(f"record must be a Record, got {type(record).__name__}")
@@ -65,16 +66,25 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     code = encode(structure, record.input_names)
     # simulate's bound, from the first max_lag samples: a horizon of the record's length is its free run
     return predict_ahead(code, th, record_inputs(record, code.inputs), record.y, L, min(horizon, len(record)),
-                         _default_bound(record.y[:L]))
+                         None)
 
 
-def _default_bound(y0: np.ndarray) -> float:
-    return 1e6 * (1.0 + float(np.max(np.abs(y0), initial=0.0)))
+def default_bound(y0: np.ndarray, scale: float = 0.0) -> float:
+    """A divergence bound on |y| in output units: ``BOUND_FACTOR`` × max(max|y0|, ``scale``).
+
+    ``scale`` is what the model says of its output's size (a network's output range); where both
+    are 0 only an overflow counts (the largest float). A polynomial model's free run applies the
+    same rule sample by sample in its kernel, with the inputs' direct push so far as the scale
+    (:func:`~graybox.core._simulation_kernels.simulate_one`).
+    """
+    ref = max(float(np.max(np.abs(y0), initial=0.0)), float(scale))
+    b = BOUND_FACTOR * ref
+    return b if 0.0 < b < np.finfo(float).max else float(np.finfo(float).max)
 
 
 def free_run_inputs(
     u: np.ndarray | Record, y0: np.ndarray | None, L: int, bound: float | None, what: str = "structure"
-) -> tuple[np.ndarray, np.ndarray, float]:
+) -> tuple[np.ndarray, np.ndarray, float | None]:
     """Validate a free run's input and initial conditions (shared by every model kind).
 
     Parameters
@@ -86,7 +96,7 @@ def free_run_inputs(
     L : int
         Number of initial conditions (the model's max lag).
     bound : float or None
-        Divergence bound on |y|; None gives 1e6 · (1 + max|y0|).
+        Divergence bound on |y|, checked; None (the model's default) is returned as None.
     what : str
         What needs the lags, for messages ("structure", "network").
 
@@ -94,7 +104,7 @@ def free_run_inputs(
     -------
     u : ndarray, shape (N,) or (N, m), contiguous
     y0 : ndarray, shape (L,), contiguous
-    bound : float
+    bound : float or None
     """
     if isinstance(u, Record):  # already validated
         if y0 is None:
@@ -115,7 +125,7 @@ def free_run_inputs(
     y0 = as_1d_finite(y0[:L], "y0")
     if u.shape[0] < L + 1:
         raise ValueError(f"input has {u.shape[0]} samples, fewer than max lag + 1 = {L + 1}")
-    b = _default_bound(y0) if bound is None else check_real(bound, "bound", low=0, low_open=True)
+    b = None if bound is None else check_real(bound, "bound", low=0, low_open=True)
     return np.ascontiguousarray(u), np.ascontiguousarray(y0), b
 
 
@@ -145,7 +155,10 @@ def simulate(
         When the output leaves ``bound``: raise :class:`DivergenceError` naming the sample,
         or return NaN from that sample on.
     bound : float, optional
-        Divergence bound on |y| (default 1e6 · (1 + max|y0|)).
+        Divergence bound on |y|, output units. Default: at each sample k, 1e6 × the larger of
+        max|y0| and max_j≤k |X(j)|, X the sum of the terms without y (the inputs' direct push on
+        the output, and the constant), so it does not depend on the output's units, also for a
+        run from rest (y0 = 0).
     input_names : tuple of str, optional
         Names of the columns of an array ``u`` (default ``"u"`` for 1-D, ``u1 … um`` for
         (N, m)); ignored for a Record, which names its inputs.
@@ -167,7 +180,8 @@ def simulate(
     y = simulate_one(code, th, uu, y0, L, b)
     if on_diverge == "raise" and not np.isfinite(y[-1]):
         k = int(np.flatnonzero(~np.isfinite(y))[0])
-        raise DivergenceError(f"free run diverged at sample {k} (|y| > {b:g}): the model is unstable along this input")
+        limit = f"{b:g}" if b is not None else f"{BOUND_FACTOR:g} × the larger of max|y0| and the inputs' direct push"
+        raise DivergenceError(f"free run diverged at sample {k} (|y| > {limit}): the model is unstable along this input")
     return y
 
 

@@ -245,14 +245,40 @@ def _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp
                 C[g, i] += tmp[i]
 
 
+#: The default divergence bound is this many times the run's own output scale: the larger of
+#: max|y0| and the largest direct push of the inputs so far, max_j≤k |X(j)| (X: the terms without
+#: y, in output units), so that it does not depend on the output's units, also from rest.
+BOUND_FACTOR = 1e6
+_BIG = np.finfo(np.float64).max  # nothing drives the output yet: only an overflow counts
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _scaled_bound(ref):  # pragma: no cover - compiled
+    b = BOUND_FACTOR * ref
+    return b if 0.0 < b < _BIG else _BIG
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _start_ref(y, start):  # pragma: no cover - compiled
+    ref = 0.0
+    for k in range(start):
+        a = abs(y[k])
+        if a > ref:
+            ref = a
+    return ref
+
+
 @nb.njit(cache=True, nogil=True)
-def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound):  # pragma: no cover - compiled
+def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound, auto):  # pragma: no cover - compiled
     # uflat: the (m, n) inputs flattened, input i at uflat[i*n:(i+1)*n]; 1-D slices of a 1-D
     # array keep the pass-1 loops as the single-input kernel had them (unit stride, vectorised)
     G = gny.shape[0]
     y = np.empty(n)
     for k in range(start):
         y[k] = y0[k]
+    ref = _start_ref(y0, start)
+    if auto:
+        bound = _scaled_bound(ref)
     # Chunks of samples keep the work buffers in cache (no large allocation per call).
     X = np.empty(_CHUNK)
     C = np.empty((G, _CHUNK))
@@ -264,6 +290,9 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bo
         # pass 2: the recursion over a few output monomials
         for i in range(mm):
             k = k0 + i
+            if auto and abs(X[i]) > ref:  # off the recursion's critical path
+                ref = abs(X[i])
+                bound = _scaled_bound(ref)
             acc = _monomials_step(X, C, gny, gylag, y, i, k)
             if not (abs(acc) <= bound):
                 for j in range(k, n):
@@ -273,15 +302,17 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bo
     return y
 
 
-def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int, bound: float) -> np.ndarray:
+def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int,
+                 bound: float | None) -> np.ndarray:
     """Free run of one model; ``y0`` gives samples ``0 … start-1``; returns y, shape (N,).
 
     ``u`` is (N,) or (N, m) in ``code.inputs`` order. The run stops at the first sample whose
     magnitude exceeds ``bound`` (or is not finite); that sample and all later ones are NaN.
+    ``bound=None``: the default, :data:`BOUND_FACTOR` × the run's own scale at each sample.
     """
     uc = kernel_inputs(code, u)
     return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc.reshape(-1),
-                uc.shape[1], y0, start, bound)
+                uc.shape[1], y0, start, 0.0 if bound is None else float(bound), bound is None)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -300,7 +331,7 @@ def _monomials_step(X, C, gny, gylag, buf, i, j):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound):  # pragma: no cover - compiled
+def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound, auto):  # pragma: no cover - compiled
     # The input-only parts X(k), C_g(k) once over the record; the samples before start + horizon - 1
     # by one free run from the record's start; every later sample t by a recursion of ``horizon``
     # steps from the measured outputs before t - horizon + 1: O(N min(horizon, N - horizon)) steps.
@@ -308,6 +339,13 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     X = np.empty(m)  # X[k - start], C[:, k - start]: sample k
     C = np.empty((gny.shape[0], m))
     _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, start, m, X, C, np.empty(m))
+    B = np.full(m, bound)  # B[k - start]: the bound at sample k, as the free run has it (_one)
+    if auto:
+        ref = _start_ref(y, start)
+        for i in range(m):
+            if abs(X[i]) > ref:
+                ref = abs(X[i])
+            B[i] = _scaled_bound(ref)
     out = np.empty(n)
     for k in range(start):
         out[k] = y[k]
@@ -321,7 +359,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
         acc = np.nan
         if not gone:
             acc = _monomials_step(X, C, gny, gylag, buf, k - start, k)
-            if not (abs(acc) <= bound):
+            if not (abs(acc) <= B[k - start]):
                 acc = np.nan
                 gone = True
         buf[k] = acc
@@ -333,7 +371,7 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
         for k in range(s, t + 1):
             j = start + k - s
             acc = _monomials_step(X, C, gny, gylag, buf, k - start, j)
-            if not (abs(acc) <= bound):
+            if not (abs(acc) <= B[k - start]):
                 acc = np.nan
                 break
             buf[j] = acc
@@ -342,19 +380,21 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
 
 
 def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, start: int, horizon: int,
-                  bound: float) -> np.ndarray:
+                  bound: float | None) -> np.ndarray:
     """``horizon``-step-ahead prediction of one model from measured outputs, shape (N,).
 
     ŷ(t) is the free run started from the measured y(s − start) … y(s − 1), s = max(t − horizon + 1,
     start), and driven by the measured inputs up to t − 1: the prediction of y(t) from the outputs
     measured up to t − horizon (horizon 1: one step ahead; horizon ≥ N: the free run from the
     record's start). The first ``start`` samples are the measured ones; a prediction whose run leaves
-    ``bound`` (or is not finite) is NaN.
+    ``bound`` (or is not finite) is NaN. ``bound=None``: the free run's default (:func:`simulate_one`),
+    from the record's first ``start`` outputs, at every prediction.
     """
     uc = kernel_inputs(code, u)
     return _ahead(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag,
                   np.ascontiguousarray(theta, dtype=np.float64), uc.reshape(-1), uc.shape[1],
-                  np.ascontiguousarray(y, dtype=np.float64), start, horizon, bound)
+                  np.ascontiguousarray(y, dtype=np.float64), start, horizon,
+                  0.0 if bound is None else float(bound), bound is None)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

@@ -130,7 +130,7 @@ from scipy.optimize import brentq
 from ..core._records import Dataset, Record, as_records
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, frozen, check_fields)
-from ..core._simulation import DivergenceError, free_run_inputs
+from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..static._analysis import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
 from ..core._reprs import short_repr
 
@@ -575,7 +575,9 @@ class NeuralModel:
             When |y| exceeds ``bound``: raise :class:`~graybox.DivergenceError`
             naming the sample, or return NaN from that sample on.
         bound : float, optional
-            Divergence bound on |y| (default 1e6 · (1 + max|y0|), as for polynomial models).
+            Divergence bound on |y|, output units (default 1e6 × the larger of max|y0| and the
+            network's output range |offset| + scale (|b2| + Σ|w2|), in the output's units as for
+            polynomial models).
 
         Returns
         -------
@@ -584,7 +586,9 @@ class NeuralModel:
         """
         check_choice(on_diverge, "on_diverge", ("raise", "nan"))
         L = self.max_lag
+        reach = abs(self.y_offset) + abs(self.y_scale) * (abs(self.b2) + float(np.sum(np.abs(self.w2))))
         u, y0, b = free_run_inputs(u, y0, L, bound, what="network")
+        b = default_bound(y0, reach) if b is None else b
         yn = _free_run_kernel(self._W1c, self.b1, self.w2, self.b2, np.ascontiguousarray(self._un(u)),
                               np.ascontiguousarray(self._yn(y0)), self.ny, self.nu)
         y = self._y(yn)

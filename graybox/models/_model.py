@@ -102,7 +102,8 @@ class Model:
 
         ``u`` is a Record (inputs taken by name) or an array of shape (N,) or (N, m) with the
         columns in ``input_names`` order. ``bound`` (output units) is the divergence bound on |y|
-        (default 1e6 · (1 + max|y0|): give one when the output is large and the run starts at 0).
+        (default: 1e6 × the larger of max|y0| and the inputs' direct push on the output, in the
+        output's units whatever they are, also from rest).
         """
         if not isinstance(u, Record) and self.n_inputs > 1:
             return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge, bound=bound,

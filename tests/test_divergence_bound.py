@@ -1,0 +1,90 @@
+"""The default divergence bound of a free run is in the output's units (graybox.core._simulation.default_bound):
+a run that diverges in one set of units diverges at the same sample in any other, also from rest."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+import graybox as gb
+from graybox.core._simulation import default_bound
+from graybox.core._simulation_kernels import BOUND_FACTOR
+
+ST = gb.Structure(["1", "u(k-1)", "y(k-1)", "u(k-1)y(k-1)", "y(k-2)^2"])
+
+
+def scaled(theta: np.ndarray, s: float) -> np.ndarray:
+    """θ for the output in units 1/s of the original (y' = s y): y-free terms × s, y-linear × 1, y² × 1/s."""
+    return theta * np.array([s, s, 1.0, 1.0, 1.0 / s])
+
+
+@settings(max_examples=60, deadline=None)
+@given(a=st.floats(0.5, 1.3), c=st.floats(-0.5, 0.5), d=st.floats(-0.2, 0.2), e=st.floats(-0.05, 0.05),
+       k=st.integers(-40, 40), start=st.sampled_from(["rest", "measured"]), seed=st.integers(0, 50))
+def test_the_sample_a_run_is_called_divergent_does_not_depend_on_the_output_units(a, c, d, e, k, start, seed):
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(0.0, 2.0, 300)
+    theta = np.array([c, 0.4, a, d, e])
+    y0 = np.zeros(2) if start == "rest" else rng.uniform(0.5, 2.0, 2)
+    s = 2.0**k  # a power of two: the scaled run is the same run, bit for bit
+    y = gb.simulate(ST, theta, u, y0, on_diverge="nan")
+    ys = gb.simulate(ST, scaled(theta, s), u, y0 * s, on_diverge="nan")
+    assume(np.all(np.isfinite(y * s)))  # no overflow of the scaled copy
+    np.testing.assert_array_equal(np.isnan(ys), np.isnan(y))
+    np.testing.assert_allclose(ys[np.isfinite(ys)], s * y[np.isfinite(y)], rtol=1e-12)
+
+
+def test_a_large_output_from_rest_is_not_divergence_and_a_runaway_still_is():
+    # pressure in Pa near 2e7 from rest; the same model made unstable runs off and is caught
+    u = np.ones(400)
+    stable = gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), np.array([0.99, 2e5]))
+    assert stable.simulate(u, np.zeros(1))[-1] == pytest.approx(2e7 * (1 - 0.99**399), rel=1e-9)
+    with pytest.raises(gb.DivergenceError, match="diverged at sample"):
+        gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), np.array([1.2, 2e5])).simulate(u, np.zeros(1))
+
+
+def test_tiny_units_are_not_given_room_in_the_units_of_one():
+    # outputs near 1e-6 V: a runaway is caught within 1e6 times that size, as in any other units
+    u = np.ones(400)
+    y = gb.simulate(gb.Structure(["y(k-1)", "u(k-1)"]), np.array([1.2, 1e-7]), u, np.zeros(1), on_diverge="nan")
+    first = int(np.flatnonzero(np.isnan(y))[0])
+    last = np.nanmax(np.abs(y))
+    assert last <= BOUND_FACTOR * 1e-7 < 1.2 * last + 1e-7  # stopped at the first step past 1e6 × the push
+    assert first < 80  # 5e-7 · 1.2^k passes 0.1 near k = 67 (in units of 1, 1e6 held until k ≈ 140)
+
+
+def test_the_default_bound_follows_the_largest_push_so_far():
+    assert default_bound(np.array([3.0, -5.0])) == BOUND_FACTOR * 5.0
+    assert default_bound(np.zeros(2), 0.25) == BOUND_FACTOR * 0.25
+    assert default_bound(np.zeros(2)) == np.finfo(float).max  # nothing drives the output: only overflow counts
+    # y(k) = 1.5 y(k-1) + c(k-1): the push is 1e-3 for 50 samples, then 1; the run from rest is caught
+    # when it passes 1e6 × the push so far, not 1e6 × the record's largest
+    u = np.r_[np.full(50, 1e-3), np.ones(50)]
+    y = gb.simulate(gb.Structure(["y(k-1)", "u(k-1)"]), np.array([1.5, 1.0]), u, np.zeros(1), on_diverge="nan")
+    k = int(np.flatnonzero(np.isnan(y))[0])
+    assert k < 50 and abs(y[k - 1]) <= 1e3 < 1.5 * abs(y[k - 1]) + 1e-3
+    # nothing drives a run that starts at 0: it stays at 0 and is never divergent
+    z = gb.simulate(gb.Structure(["y(k-1)", "u(k-1)y(k-1)"]), np.array([1.5, 2.0]), np.ones(100), np.zeros(1))
+    assert np.all(z == 0.0)
+
+
+def test_predict_ahead_to_the_records_length_is_the_free_run_also_when_it_diverges():
+    rng = np.random.default_rng(3)
+    u = rng.uniform(0, 2, 300)
+    rec = gb.Record(u, np.zeros(300) + 1e-3 * rng.standard_normal(300), 1.0)
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), np.array([1.1, 3e4]))
+    free = model.simulate(rec, on_diverge="nan")
+    ahead = model.predict(rec, horizon=300)
+    assert np.isnan(free[-1])
+    np.testing.assert_array_equal(np.isnan(ahead), np.isnan(free))
+
+
+def test_a_network_is_never_called_divergent_at_its_default_bound():
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 1, 400)
+    y = 2e7 * np.convolve(u, [0.0, 0.3, 0.2], mode="full")[:400] + 1e4 * rng.standard_normal(400)
+    net = gb.neural_narx(gb.Record(u, y, 1.0), ny=2, nu=2, ne=0, hidden=3, seed=0, epochs=3, sim_epochs=3)
+    out = net.model.simulate(u, np.zeros(2))  # from rest, an output near 1e7 Pa
+    assert np.all(np.isfinite(out))
