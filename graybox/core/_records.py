@@ -436,13 +436,21 @@ _WINDOW = 16
 
 
 def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
-    """A stretch of samples two records share, the same (u, y) in the same order, or None.
+    """A stretch of samples two records share as slices of one record would, or None.
 
     Returns ``(start in a, start in b, length)``, the stretch grown as far as the samples agree.
     Windows of 16 samples along which y varies (a held input at a constant quantised output
     repeats without being the same data), at 8 evenly spaced places of each record, are looked
     up in the other: a shared stretch longer than an eighth of either record (plus a window) is
     always found, a shorter one may be. Identical records give ``(0, 0, N)``.
+
+    Noise-free runs of one system with inputs at designed levels repeat stretches of separate
+    experiments wherever their states meet (the same first steps from rest, the same steps after
+    the same settled level). So a stretch counts where it is one record inside the other, where
+    slicing one record puts it (the end of one, the start of the other), or, inside both, where
+    the records then part in the output (the output at the first differing sample is set by the
+    past they share in one system's runs; measured data differ there). A stretch of a record
+    built around a piece of another is found when the piece is inside both.
     """
     za, zb = _samples(a), _samples(b)
     if za.shape[1] != zb.shape[1]:
@@ -461,10 +469,23 @@ def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
             cands = np.flatnonzero(z[:len(z) - k + 1, -1] == x[q, -1])  # y first: one column to scan
             for t in range(k):  # keep the places whose next samples agree too (few survive a step or two)
                 cands = cands[(z[cands + t] == x[q + t]).all(axis=1)]
-            if cands.size:
-                i, j, n = _grow(x, z, q, int(cands[0]), k)
-                return (j, i, n) if flip else (i, j, n)
+            for c in cands:
+                i, j, n = _grow(x, z, q, int(c), k)
+                if _counts(x, z, i, j, n):
+                    return (j, i, n) if flip else (i, j, n)
     return None
+
+
+def _counts(x: np.ndarray, z: np.ndarray, i: int, j: int, n: int) -> bool:
+    """Whether the shared stretch x[i:i+n] == z[j:j+n] is the same data, not two runs of one
+    noise-free system whose states met (see :func:`shared_stretch`)."""
+    nx, nz = len(x), len(z)
+    if n == nx or n == nz:  # one record inside the other
+        return True
+    if i + n < nx and j + n < nz:  # both go on: measured data part in the output, one system's runs do not
+        return bool(x[i + n, -1] != z[j + n, -1])
+    # at a record's end: counted where slicing one record puts it, the end of one the start of the other
+    return (i == 0 and j + n == nz) or (j == 0 and i + n == nx)
 
 
 def _samples(r: Record) -> np.ndarray:
