@@ -186,3 +186,31 @@ def test_a_refit_that_misses_the_band_the_first_fit_met_is_not_taken():
         warnings.simplefilter("error")
         assert refit_if_slow(problem, fit(True), "the fit", auto=True).model is sane
     assert margins[0] == pytest.approx(_auto_margin(structure, _arx_record(0.8)))
+
+
+def test_the_probe_of_the_first_member_is_not_fitted_again(monkeypatch):
+    # se_pareto's probe (the largest λ1 fitted alone, to tell whether the fits run slow) is the gradient sweep's
+    # own first member: the sweep takes it as fitted, and gives the same front as the sweep without a probe
+    import graybox.estimation._simulation_error as se
+
+    data = gb.load_pumping()
+    structure = gb.frols(gb.Candidates(6, 6, degree=2), data.ident, n_terms=4).structure
+    lam = [1.0, 0.3, 0.05]
+    calls = []
+    real = se._multistart
+
+    def counted(problem, lam1, *args, **kwargs):
+        calls.append(lam1)
+        return real(problem, lam1, *args, **kwargs)
+
+    monkeypatch.setattr(se, "_multistart", counted)
+    problem = se.SEProblem(structure, [data.ident], data.static)
+    alone = se.gradient_front(problem, lam, progress=False, starts=se._pe_starts(problem))
+    n_alone, calls[:] = len(calls), []
+    front = gb.se_pareto(structure, data, lambdas=lam, method="gradient", progress=False)
+    assert np.isnan(front.extra["margin"]).all()  # not slow: the sweep without a margin, after the probe
+    np.testing.assert_array_equal(front.thetas, alone.thetas)
+    assert len(calls) == n_alone and calls.count(1.0) == 1  # the first member's restarts ran once, in the probe
+    with pytest.raises(ValueError, match="first λ1"):
+        se.gradient_front(problem, lam, progress=False, fitted=se.SEFront(np.array([0.3]), alone.thetas[:1],
+                                                                          alone.costs[:1]))

@@ -536,12 +536,14 @@ class _Failed(Exception):
 
 
 def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, seed: int | None,
-           checkpoint: str | os.PathLike | None, progress: bool, step) -> SEFront:
+           checkpoint: str | os.PathLike | None, progress: bool, step, fitted: SEFront | None = None) -> SEFront:
     """Run ``step(i, lam1, thetas, rng) -> (θ, cost, nfev)`` over the λ's (descending).
 
     ``thetas`` holds the members so far (NaN rows for failed ones). A step that raises
     :class:`_Failed` leaves a failed member with its reason and the sweep goes on. Each λ is
     checkpointed, failures included, so a resumed sweep gives the uninterrupted one's set.
+    ``fitted``: the first members of this very sweep, fitted already (a probe), taken as a
+    checkpoint's are.
     """
     K = lam.size
     n = len(problem.structure)
@@ -560,6 +562,16 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
         done = ck["done"]
         thetas[:done], costs[:done], nfev[:done] = ck["thetas"][:done], ck["costs"][:done], ck["nfev"][:done]
         failures.update(ck["failures"])
+    if fitted is not None and fitted.lambdas.size > done:
+        p = fitted.lambdas.size
+        if p > K or not np.array_equal(fitted.lambdas, lam[:p]):
+            raise ValueError("fitted members must be those of the sweep's first λ1 values")
+        thetas[:p], costs[:p] = fitted.thetas, fitted.costs
+        nfev[:p] = 0 if fitted.nfev is None else fitted.nfev
+        failures.update(fitted.failures)
+        done = p
+        if path is not None:
+            _save_checkpoint(path, meta, thetas, costs, done, failures, nfev)
     bar = progress_bar(K, f"SE front ({method})", progress, initial=done)
     # The sweeps make thousands of small BLAS calls (QR of a few thousand rows, 30-row least
     # squares): a multi-threaded BLAS only adds synchronisation, and on a loaded 2-core machine
@@ -935,6 +947,7 @@ def gradient_front(
     tol: float = 1e-8,
     starts: Sequence[np.ndarray] = (),
     solver: Literal["auto", "trf", "dogbox", "lm"] = "auto",
+    fitted: SEFront | None = None,
 ) -> SEFront:
     """Gradient SE front: ``scipy.optimize.least_squares`` per λ1, continued along the sweep.
 
@@ -973,6 +986,10 @@ def gradient_front(
         continues with "trf": on the plant's ℓ = 2 problem "dogbox" finds far lower minima of
         the simulation error where it starts afresh, while along the sweep, where unstable static
         equilibria are walls, it stalls in poorer minima than "trf" (BENCHMARKS.md, SE section).
+    fitted : SEFront, optional
+        The first pass's members for the largest λ1 values, fitted already by this function on
+        the same problem and settings (e.g. :func:`se_pareto`'s probe of the first member): kept
+        as a checkpoint's are, not fitted again (the method is deterministic: the same members).
 
     Returns
     -------
@@ -1009,7 +1026,7 @@ def gradient_front(
     settings = {"max_nfev": max_nfev, "tol": tol, "solver": solver,
                 "theta0": None if theta0 is None else list(map(float, start)),
                 "starts": [list(map(float, s_)) for s_ in extra]}
-    front = _sweep(problem, lam, "gradient", settings, seed, checkpoint, progress, step)
+    front = _sweep(problem, lam, "gradient", settings, seed, checkpoint, progress, step, fitted)
     if lam.size == 1 or len(front.failures) == lam.size:
         return front
     # Second pass, from the smallest λ1 up (deterministic, so a resumed sweep gives the same set).
@@ -1223,7 +1240,7 @@ def se_pareto(
     if isinstance(theta0, str) and theta0 != "ls":
         raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
 
-    def sweep(problem: SEProblem, checkpoint, lams=lam_in, progress=progress) -> SEFront:
+    def sweep(problem: SEProblem, checkpoint, lams=lam_in, progress=progress, fitted=None) -> SEFront:
         if method == "ga":
             return ga_front(problem, lams, options=options or GAOptions(), seed=seed, checkpoint=checkpoint,
                             progress=progress, threads=threads, theta0=theta0,
@@ -1232,21 +1249,23 @@ def se_pareto(
             problem, lams, theta0=None if (isinstance(theta0, str) and theta0 == "ls") else theta0, seed=seed,
             checkpoint=checkpoint, progress=progress, max_nfev=50 if max_nfev is None else max_nfev,
             tol=1e-8 if tol is None else tol, solver="auto" if solver is None else solver,
-            starts=_pe_starts(problem) if starts is None or starts == "pe" else starts)
+            starts=_pe_starts(problem) if starts is None or starts == "pe" else starts, fitted=fitted)
 
     inside_ck = None if checkpoint is None else _sibling(check_path(checkpoint, "checkpoint"), "margin")
     m = None
     if margin == "auto":
         rho_ls = problem.radius(problem.ls_theta())
         m = slow_margin(rho_ls)
-    base, refit = problem, m is not None
+    base, refit, probe = problem, m is not None, None
     if m is not None and method == "gradient":
         # the first member (largest λ1) alone tells, cheaply, whether this structure's fits run slow: then the
         # whole sweep is fitted inside the margin at once rather than twice
         probe = sweep(problem, None, [float(np.max(check_lambdas(lam_in)))], progress=False)
         if problem.slow_modes(probe.thetas)[1][0]:
             problem = problem.with_margin(m)
-    front = sweep(problem, checkpoint if problem.margin is None or margin != "auto" else inside_ck)
+    # a probe of the sweep's own first member is that member (the method is deterministic): not fitted again
+    front = sweep(problem, checkpoint if problem.margin is None or margin != "auto" else inside_ck,
+                  fitted=probe if problem is base else None)
     if problem is not base and len(front.failures) == front.lambdas.size:
         # no member fits inside the margin: the sweep without it (its slow members then named, not refitted)
         problem, refit = base, False
