@@ -433,10 +433,12 @@ def same_record(a: Record, b: Record) -> bool:
 _ANCHORS = 8
 #: Samples in an anchor window.
 _WINDOW = 16
+#: Places an anchor's window is grown at, at most (each a stretch of its own).
+_GROWN = 8
 
 
 def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
-    """A stretch of samples two records share as slices of one record would, or None.
+    """A stretch of samples two records share, the same (u, y) in the same order, or None.
 
     Returns ``(start in a, start in b, length)``, the stretch grown as far as the samples agree.
     Windows of 16 samples along which y varies (a held input at a constant quantised output
@@ -444,17 +446,16 @@ def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
     up in the other: a shared stretch longer than an eighth of either record (plus a window) is
     always found, a shorter one may be. Identical records give ``(0, 0, N)``.
 
-    Noise-free runs of one system with inputs at designed levels repeat stretches of separate
-    experiments wherever their states meet (the same first steps from rest, the same steps after
-    the same settled level). So a stretch counts where it is one record inside the other, where
-    slicing one record puts it (the end of one, the start of the other), or, inside both, where
-    the records then part in the output (the output at the first differing sample is set by the
-    past they share in one system's runs; measured data differ there). A stretch of a record
-    built around a piece of another is found when the piece is inside both.
+    A stretch that slicing one record gives (:func:`sliced`: one record inside the other, or the
+    end of one the start of the other) is returned before any other found. Any other is
+    ambiguous: a record built around a piece of another shares one, and so do separate
+    noise-free runs of one system at designed input levels, wherever their states meet (the
+    same first steps from rest, the same steps after the same level).
     """
     za, zb = _samples(a), _samples(b)
     if za.shape[1] != zb.shape[1]:
         return None  # other inputs: not the same data (the caller says what else is wrong)
+    found = None
     for x, z, flip in ((za, zb, False), (zb, za, True)):
         k = min(_WINDOW, len(x), len(z))
         if k < 2:
@@ -469,23 +470,54 @@ def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
             cands = np.flatnonzero(z[:len(z) - k + 1, -1] == x[q, -1])  # y first: one column to scan
             for t in range(k):  # keep the places whose next samples agree too (few survive a step or two)
                 cands = cands[(z[cands + t] == x[q + t]).all(axis=1)]
-            for c in cands:
+            end = -1
+            for c in cands[:_GROWN]:  # a few places per anchor: noise-free runs repeat a window many times
+                if c < end:
+                    continue  # inside the stretch just grown
                 i, j, n = _grow(x, z, q, int(c), k)
-                if _counts(x, z, i, j, n):
-                    return (j, i, n) if flip else (i, j, n)
-    return None
+                end = j + n
+                s = (j, i, n) if flip else (i, j, n)
+                if sliced(s, len(a), len(b)):
+                    return s
+                found = s if found is None else found
+    return found
 
 
-def _counts(x: np.ndarray, z: np.ndarray, i: int, j: int, n: int) -> bool:
-    """Whether the shared stretch x[i:i+n] == z[j:j+n] is the same data, not two runs of one
-    noise-free system whose states met (see :func:`shared_stretch`)."""
-    nx, nz = len(x), len(z)
-    if n == nx or n == nz:  # one record inside the other
-        return True
-    if i + n < nx and j + n < nz:  # both go on: measured data part in the output, one system's runs do not
-        return bool(x[i + n, -1] != z[j + n, -1])
-    # at a record's end: counted where slicing one record puts it, the end of one the start of the other
-    return (i == 0 and j + n == nz) or (j == 0 and i + n == nx)
+def sliced(stretch: tuple[int, int, int], na: int, nb: int) -> bool:
+    """Whether a shared stretch ``(start in a, start in b, length)`` of records of ``na`` and
+    ``nb`` samples is what slicing one record gives: one inside the other, or the end of one
+    the start of the other."""
+    i, j, n = stretch
+    return n == na or n == nb or (i == 0 and j + n == nb) or (j == 0 and i + n == na)
+
+
+class RecordOverlapWarning(UserWarning):
+    """Two records share a stretch of samples that slicing one record would not give.
+
+    A record built around a piece of another shares one (then it is the same data there); so do
+    separate noise-free runs of one system at designed input levels, wherever their states meet
+    (then it is not). The warning names the stretch; a stretch that slicing gives is an error.
+    """
+
+
+def check_overlap(a: Record, b: Record, a_name: str, b_name: str, advice: str, prefix: str = "") -> None:
+    """Refuse ``a`` where it shares data with ``b`` as slices of one record would; warn where it
+    shares a stretch that separate noise-free runs could share too.
+
+    Raises
+    ------
+    ValueError
+        The records share a stretch that slicing gives (:func:`sliced`); the message (after
+        ``prefix``, e.g. the argument's name) names it and ends with ``advice``.
+    """
+    s = shared_stretch(a, b)
+    if s is None:
+        return
+    said = _stretch_message(a, b, a_name, b_name, s)
+    if sliced(s, len(a), len(b)):
+        raise ValueError(f"{prefix}{said}: {advice}")
+    warn(f"{prefix}{said}. Separate noise-free runs of one system share such stretches where their states meet; if it is "
+         f"a piece of the {b_name} record instead, {advice}", RecordOverlapWarning)
 
 
 def _samples(r: Record) -> np.ndarray:
@@ -495,18 +527,31 @@ def _samples(r: Record) -> np.ndarray:
 
 def _grow(x: np.ndarray, z: np.ndarray, i: int, j: int, n: int) -> tuple[int, int, int]:
     """Extend the matching stretch x[i:i+n] == z[j:j+n] backwards and forwards while rows agree."""
-    while i > 0 and j > 0 and np.array_equal(x[i - 1], z[j - 1]):
-        i, j, n = i - 1, j - 1, n + 1
-    while i + n < len(x) and j + n < len(z) and np.array_equal(x[i + n], z[j + n]):
-        n += 1
-    return i, j, n
+    back = _agreeing(x[:i][::-1], z[:j][::-1])
+    i, j, n = i - back, j - back, n + back
+    return i, j, n + _agreeing(x[i + n:], z[j + n:])
+
+
+def _agreeing(x: np.ndarray, z: np.ndarray) -> int:
+    """How many leading rows of x and z agree, compared in blocks that double (most stop early)."""
+    m = min(len(x), len(z))
+    k, step = 0, 16
+    while k < m:
+        stop = min(m, k + step)
+        differ = np.flatnonzero((x[k:stop] != z[k:stop]).any(axis=1))
+        if differ.size:
+            return k + int(differ[0])
+        k, step = stop, 2 * step
+    return m
 
 
 def overlap_message(a: Record, b: Record, a_name: str, b_name: str) -> str:
     """Empty when the records share no stretch of samples; else a sentence saying where they do."""
     s = shared_stretch(a, b)
-    if s is None:
-        return ""
+    return "" if s is None else _stretch_message(a, b, a_name, b_name, s)
+
+
+def _stretch_message(a: Record, b: Record, a_name: str, b_name: str, s: tuple[int, int, int]) -> str:
     i, j, n = s
     return (f"the {a_name} record ({a.name!r}) shares {n} samples with the {b_name} record ({b.name!r}): its "
             f"samples {i}..{i + n - 1} are samples {j}..{j + n - 1} of the other")
@@ -523,4 +568,5 @@ def choosing_records(value: object, name: str = "choose_on") -> list[Record]:
     return recs
 
 
-__all__ += ["same_record", "shared_stretch", "overlap_message", "choosing_records"]
+__all__ += ["same_record", "shared_stretch", "sliced", "overlap_message", "check_overlap", "RecordOverlapWarning",
+            "choosing_records"]

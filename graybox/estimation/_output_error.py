@@ -45,7 +45,7 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from ..core._progress import progress_bar
-from ..core._records import Dataset, Record, as_records, choosing_records, overlap_message, same_record
+from ..core._records import Dataset, Record, as_records, check_overlap, choosing_records, same_record
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, check_seed, check_theta
 from ..models._coerce import as_structure
@@ -221,8 +221,8 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
                              "(e.g. data.valid)")
         for c in crec:
             for r in rec:
-                if shared := overlap_message(c, r, "choosing", "fitting"):
-                    raise ValueError(f"choose_on: {shared}; choose on data the fit did not see (e.g. data.valid)")
+                check_overlap(c, r, "choosing", "fitting", "choose on data the fit did not see (e.g. data.valid)",
+                              prefix="choose_on: ")
         chooser = SEProblem(st, crec, None)
         chosen_on = ", ".join(r.name for r in crec)
     solvers = ("trf", "dogbox") if solver == "auto" else (solver,)

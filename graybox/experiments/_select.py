@@ -48,7 +48,7 @@ from ..selection._forward_regression import _RSS_FLOOR
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar, show_progress
-from ..core._records import check_same_inputs, overlap_message, same_record
+from ..core._records import check_overlap, check_same_inputs, same_record
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
@@ -293,8 +293,8 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
             if rec is not None and same_record(test, rec):
                 raise ValueError(f"the test record is the {name} record: a test must be data nothing was fitted "
                                  "or chosen on")
-            if rec is not None and (shared := overlap_message(test, rec, "test", name)):
-                raise ValueError(f"{shared}: a test must be data nothing was fitted or chosen on")
+            if rec is not None:
+                check_overlap(test, rec, "test", name, "a test must be data nothing was fitted or chosen on")
     if valid is not None:
         if not isinstance(valid, gb.Record):
             raise TypeError(f"validation must be a Record, got {type(valid).__name__}")
@@ -304,8 +304,8 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         if same_record(valid, ident):
             raise ValueError("the validation record is the identification record: choose on other data, or pass "
                              "the record alone (folds)")
-        if shared := overlap_message(valid, ident, "validation", "identification"):
-            raise ValueError(f"{shared}: choose on data the fit did not see, or pass the record alone (folds)")
+        check_overlap(valid, ident, "validation", "identification",
+                      "choose on data the fit did not see, or pass the record alone (folds)")
         splits = ((ident, valid, _block_edges(len(valid), L, blocks)),)
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in
