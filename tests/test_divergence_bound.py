@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 import graybox as gb
 from graybox.core._simulation import default_bound
-from graybox.core._simulation_kernels import BOUND_FACTOR
+from graybox.core._simulation_kernels import BOUND_FACTOR, encode, feedback_scale
 
 ST = gb.Structure(["1", "u(k-1)", "y(k-1)", "u(k-1)y(k-1)", "y(k-2)^2"])
 
@@ -78,7 +78,36 @@ def test_predict_ahead_to_the_records_length_is_the_free_run_also_when_it_diverg
     free = model.simulate(rec, on_diverge="nan")
     ahead = model.predict(rec, horizon=300)
     assert np.isnan(free[-1])
-    np.testing.assert_array_equal(np.isnan(ahead), np.isnan(free))
+    assert np.array_equal(ahead, free, equal_nan=True)  # bit for bit, the NaN from the same sample
+
+
+def test_a_limit_cycle_from_a_tiny_start_is_not_divergence():
+    # a discretised Van der Pol oscillator (no input, no constant): from y0 = 1e-6 its run grows to the limit
+    # cycle (amplitude about 2); the model's feedback scale (|θ of y³|^(-1/2) = 3.2) keeps the bound there
+    st = gb.Structure(["y(k-1)", "y(k-2)", "y(k-1)^3", "y(k-1)^2y(k-2)"])
+    mu, h = 1.0, 0.1
+    theta = np.array([2 + h * mu, -1 - h * mu - h * h, -h * mu, h * mu])
+    y = gb.simulate(st, theta, np.zeros(2000), np.array([1e-6, 0.0]))
+    assert np.max(np.abs(y[1000:])) == pytest.approx(2.04, abs=0.05)
+    assert feedback_scale(encode(st), theta, np.zeros(10)) == pytest.approx(1 / np.sqrt(h * mu))
+    # in other units (y' = 4 y) the same run, scaled
+    ys = gb.simulate(st, theta * np.array([1, 1, 1 / 16, 1 / 16]), np.zeros(2000), np.array([4e-6, 0.0]))
+    np.testing.assert_allclose(ys, 4 * y, rtol=1e-12)
+
+
+def test_each_run_ahead_is_bounded_from_the_outputs_it_starts_from():
+    # an AR(2) record whose first outputs are near 0 and the rest of size 10: the runs k samples ahead start from
+    # measured outputs of size 10, and are not cut off by a bound taken from the record's first samples
+    rng = np.random.default_rng(0)
+    y = np.zeros(400)
+    y[1] = 1e-6
+    e = rng.standard_normal(400)
+    for k in range(2, 400):
+        y[k] = 1.5 * y[k - 1] - 0.7 * y[k - 2] + e[k]
+    rec = gb.Record(np.zeros(400), y, 1.0)
+    model = gb.Model(gb.Structure(["y(k-1)", "y(k-2)"]), np.array([1.5, -0.7]))
+    for horizon in (2, 5, 50):
+        assert np.all(np.isfinite(model.predict(rec, horizon=horizon)))
 
 
 def test_a_network_is_never_called_divergent_at_its_default_bound():

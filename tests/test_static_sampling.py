@@ -94,3 +94,33 @@ def test_select_graybox_samples_a_curve_the_same_way(rec, curve):
     # J_SF in the table is against the curve's points sampled as everywhere else
     pts = static_points(curve, rec)
     assert gb.jsf(sel.model, pts) == pytest.approx(sel.table.iloc[0]["JSF"], rel=1e-6)
+
+
+def test_the_errors_name_what_to_give(rec, curve):
+    bare = gb.StaticCurve.polynomial([0.25, 0.75, 0.125])
+    cand = gb.Candidates(1, 1, degree=2, input_names=("speed",))
+    # select_graybox has no ubar: it asks for points
+    with pytest.raises(ValueError, match=r"without a domain needs static points \(e.g. its .points\(ubar\)\)"):
+        gb.select_graybox(cand, rec, bare, validation=rec.slice(0, 100), band=1e-3, progress=False)
+    with pytest.raises(ValueError, match="carries no uncertainty .* give band=B"):
+        gb.se_dsf(ST, rec, curve)
+    surface = gb.StaticSurface.fit(gb.StaticPoints(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]),
+                                                   np.array([0.0, 1.0, 2.0, 3.0]), input_names=("a", "b")), 1)
+    for bad, said in (("abc", "ubar must be an array of numbers"), ([1.0, 2.0], r"ubar must have shape \(K, 2\)"),
+                      ([[0.5, np.nan]], "ubar has NaN or inf at rows")):
+        with pytest.raises(ValueError, match=said):
+            static_points(surface, None, ubar=bad)
+    np.testing.assert_allclose(static_points(surface, None, ubar=[[0.5, 0.5]]).ybar, [1.5])
+
+
+def test_pe_takes_a_surface_of_one_input(rec):
+    # a one-input StaticSurface (a polynomial in one input) is a curve by another name: PE takes it as it takes one
+    ub = np.linspace(0.0, 2.0, 7)
+    pts = gb.StaticPoints(ub, true_curve(ub), input_names=("speed",))
+    surface = gb.StaticSurface.fit(pts, 2)
+    curve = gb.StaticCurve.fit(pts, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        a = gb.pe_pareto(ST, rec, surface, lambdas=[0.5])
+        b = gb.pe_pareto(ST, rec, curve, lambdas=[0.5], ubar=static_points(surface, rec).ubar)
+    np.testing.assert_allclose(a.thetas, b.thetas, rtol=1e-9)

@@ -12,7 +12,8 @@ from typing import Literal
 
 import numpy as np
 
-from ._simulation_kernels import BOUND_FACTOR, encode, predict_ahead, record_inputs, simulate_batch, simulate_one
+from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_inputs, scaled_bound, simulate_batch,
+                                 simulate_one)
 from ._records import Record, as_input_array
 from ._terms import check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta
@@ -70,16 +71,13 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
 
 
 def default_bound(y0: np.ndarray, scale: float = 0.0) -> float:
-    """A divergence bound on |y| in output units: ``BOUND_FACTOR`` × max(max|y0|, ``scale``).
+    """A divergence bound on |y| in output units: :data:`BOUND_FACTOR` × max(max|y0|, ``scale``).
 
     ``scale`` is what the model says of its output's size (a network's output range); where both
     are 0 only an overflow counts (the largest float). A polynomial model's free run applies the
-    same rule sample by sample in its kernel, with the inputs' direct push so far as the scale
-    (:func:`~graybox.core._simulation_kernels.simulate_one`).
+    same rule sample by sample in its kernel (:func:`~graybox.core._simulation_kernels.simulate_one`).
     """
-    ref = max(float(np.max(np.abs(y0), initial=0.0)), float(scale))
-    b = BOUND_FACTOR * ref
-    return b if 0.0 < b < np.finfo(float).max else float(np.finfo(float).max)
+    return float(scaled_bound(max(float(np.max(np.abs(y0), initial=0.0)), float(scale))))
 
 
 def free_run_inputs(
@@ -155,10 +153,11 @@ def simulate(
         When the output leaves ``bound``: raise :class:`DivergenceError` naming the sample,
         or return NaN from that sample on.
     bound : float, optional
-        Divergence bound on |y|, output units. Default: at each sample k, 1e6 × the larger of
-        max|y0| and max_j≤k |X(j)|, X the sum of the terms without y (the inputs' direct push on
-        the output, and the constant), so it does not depend on the output's units, also for a
-        run from rest (y0 = 0).
+        Divergence bound on |y|, output units. Default: at each sample k, 1e6 × the largest of
+        max|y0|, max_j≤k |X(j)|, X the sum of the terms without y (the inputs' direct push on
+        the output, and the constant), and the size at which the model's nonlinear output
+        feedback matters (a limit cycle's scale), so it does not depend on the output's units,
+        also for a run from rest (y0 = 0).
     input_names : tuple of str, optional
         Names of the columns of an array ``u`` (default ``"u"`` for 1-D, ``u1 … um`` for
         (N, m)); ignored for a Record, which names its inputs.
@@ -180,7 +179,8 @@ def simulate(
     y = simulate_one(code, th, uu, y0, L, b)
     if on_diverge == "raise" and not np.isfinite(y[-1]):
         k = int(np.flatnonzero(~np.isfinite(y))[0])
-        limit = f"{b:g}" if b is not None else f"{BOUND_FACTOR:g} × the larger of max|y0| and the inputs' direct push"
+        limit = f"{b:g}" if b is not None else (f"{BOUND_FACTOR:g} × the run's own scale: its initial outputs, the inputs' "
+                                                 "direct push so far and the model's output feedback")
         raise DivergenceError(f"free run diverged at sample {k} (|y| > {limit}): the model is unstable along this input")
     return y
 

@@ -31,7 +31,7 @@ import numpy as np
 from ._terms import Structure, require_inputs
 
 __all__ = ["Code", "encode", "simulate_one", "simulate_batch", "predict_ahead", "input_products", "record_inputs",
-           "kernel_inputs"]
+           "kernel_inputs", "BOUND_FACTOR", "scaled_bound", "feedback_scale"]
 
 
 class Code(NamedTuple):
@@ -245,17 +245,42 @@ def _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, k0, mm, X, C, tmp
                 C[g, i] += tmp[i]
 
 
-#: The default divergence bound is this many times the run's own output scale: the larger of
-#: max|y0| and the largest direct push of the inputs so far, max_j≤k |X(j)| (X: the terms without
-#: y, in output units), so that it does not depend on the output's units, also from rest.
+#: The default divergence bound is this many times the run's own output scale: the largest of
+#: max|y0|, the model's feedback scale (:func:`feedback_scale`) and the largest direct push of the
+#: inputs so far, max_j≤k |X(j)| (X: the terms without y), all in output units, so that it does not
+#: depend on the output's units, also from rest.
 BOUND_FACTOR = 1e6
 _BIG = np.finfo(np.float64).max  # nothing drives the output yet: only an overflow counts
 
 
-@nb.njit(cache=True, nogil=True, inline="always")
-def _scaled_bound(ref):  # pragma: no cover - compiled
+@nb.njit(cache=True, nogil=True)
+def scaled_bound(ref):  # pragma: no cover - compiled
+    """``BOUND_FACTOR`` × ``ref``, or the largest float where that is 0 or not finite (only an overflow counts)."""
     b = BOUND_FACTOR * ref
     return b if 0.0 < b < _BIG else _BIG
+
+
+def feedback_scale(code: Code, theta: np.ndarray, u: np.ndarray) -> float:
+    """The output size at which the model's nonlinear output feedback matters (output units).
+
+    For a term θ_t · (input part) · y-monomial of output power p ≥ 2, the amplitude where it
+    weighs as much as a linear term, (|θ_t| max|input part|)^(−1/(p−1)) (θ_t is in units of
+    y^(1−p) per input units): the largest over such terms, 0 without them. A limit cycle of such a
+    model lives at this scale whatever the run's start (e.g. from y0 near 0).
+    """
+    th = np.asarray(theta, dtype=float)
+    umax = np.abs(np.asarray(u, dtype=float)).reshape(u.shape[0], -1).max(axis=0) if u.size else np.zeros(0)
+    out = 0.0
+    for t in range(th.size):
+        p = int(code.ny[t])
+        if p < 2 or th[t] == 0.0:
+            continue
+        c = abs(th[t])
+        for f in range(code.uptr[t], code.uptr[t + 1]):
+            c *= umax[code.usig[f]] ** code.upow[f]
+        if 0.0 < c < np.inf:
+            out = max(out, c ** (-1.0 / (p - 1)))
+    return out
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -269,16 +294,16 @@ def _start_ref(y, start):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound, auto):  # pragma: no cover - compiled
+def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bound, auto, scale):  # pragma: no cover - compiled
     # uflat: the (m, n) inputs flattened, input i at uflat[i*n:(i+1)*n]; 1-D slices of a 1-D
     # array keep the pass-1 loops as the single-input kernel had them (unit stride, vectorised)
     G = gny.shape[0]
     y = np.empty(n)
     for k in range(start):
         y[k] = y0[k]
-    ref = _start_ref(y0, start)
+    ref = max(_start_ref(y0, start), scale)
     if auto:
-        bound = _scaled_bound(ref)
+        bound = scaled_bound(ref)
     # Chunks of samples keep the work buffers in cache (no large allocation per call).
     X = np.empty(_CHUNK)
     C = np.empty((G, _CHUNK))
@@ -292,7 +317,7 @@ def _one(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y0, start, bo
             k = k0 + i
             if auto and abs(X[i]) > ref:  # off the recursion's critical path
                 ref = abs(X[i])
-                bound = _scaled_bound(ref)
+                bound = scaled_bound(ref)
             acc = _monomials_step(X, C, gny, gylag, y, i, k)
             if not (abs(acc) <= bound):
                 for j in range(k, n):
@@ -311,8 +336,9 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
     ``bound=None``: the default, :data:`BOUND_FACTOR` × the run's own scale at each sample.
     """
     uc = kernel_inputs(code, u)
+    scale = feedback_scale(code, theta, u) if bound is None else 0.0
     return _one(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag, theta, uc.reshape(-1),
-                uc.shape[1], y0, start, 0.0 if bound is None else float(bound), bound is None)
+                uc.shape[1], y0, start, 0.0 if bound is None else float(bound), bound is None, scale)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -331,7 +357,7 @@ def _monomials_step(X, C, gny, gylag, buf, i, j):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound, auto):  # pragma: no cover - compiled
+def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, horizon, bound, auto, scale):  # pragma: no cover - compiled
     # The input-only parts X(k), C_g(k) once over the record; the samples before start + horizon - 1
     # by one free run from the record's start; every later sample t by a recursion of ``horizon``
     # steps from the measured outputs before t - horizon + 1: O(N min(horizon, N - horizon)) steps.
@@ -339,13 +365,14 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
     X = np.empty(m)  # X[k - start], C[:, k - start]: sample k
     C = np.empty((gny.shape[0], m))
     _input_parts(uptr, ulag, upow, usig, grp, theta, uflat, n, start, m, X, C, np.empty(m))
-    B = np.full(m, bound)  # B[k - start]: the bound at sample k, as the free run has it (_one)
-    if auto:
-        ref = _start_ref(y, start)
-        for i in range(m):
-            if abs(X[i]) > ref:
-                ref = abs(X[i])
-            B[i] = _scaled_bound(ref)
+    # the default bound's scale without the run's start: the feedback scale and the push so far
+    P = np.full(m, scale)
+    ref = scale
+    for i in range(m):
+        if abs(X[i]) > ref:
+            ref = abs(X[i])
+        P[i] = ref
+    start_ref = _start_ref(y, start)
     out = np.empty(n)
     for k in range(start):
         out[k] = y[k]
@@ -359,19 +386,21 @@ def _ahead(uptr, ulag, upow, usig, grp, gny, gylag, theta, uflat, n, y, start, h
         acc = np.nan
         if not gone:
             acc = _monomials_step(X, C, gny, gylag, buf, k - start, k)
-            if not (abs(acc) <= B[k - start]):
+            if not (abs(acc) <= (scaled_bound(max(start_ref, P[k - start])) if auto else bound)):
                 acc = np.nan
                 gone = True
         buf[k] = acc
         out[k] = acc
     for t in range(prefix, n):
         s = t - horizon + 1
+        w = 0.0  # this run's own start: the measured outputs it begins from
         for i in range(start):
             buf[i] = y[s - start + i]
+            w = max(w, abs(buf[i]))
         for k in range(s, t + 1):
             j = start + k - s
             acc = _monomials_step(X, C, gny, gylag, buf, k - start, j)
-            if not (abs(acc) <= B[k - start]):
+            if not (abs(acc) <= (scaled_bound(max(w, P[k - start])) if auto else bound)):
                 acc = np.nan
                 break
             buf[j] = acc
@@ -388,13 +417,15 @@ def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, s
     measured up to t − horizon (horizon 1: one step ahead; horizon ≥ N: the free run from the
     record's start). The first ``start`` samples are the measured ones; a prediction whose run leaves
     ``bound`` (or is not finite) is NaN. ``bound=None``: the free run's default (:func:`simulate_one`),
-    from the record's first ``start`` outputs, at every prediction.
+    each run's own start being the measured outputs it begins from (so a horizon of the record's
+    length is the free run, bit for bit).
     """
     uc = kernel_inputs(code, u)
+    scale = feedback_scale(code, theta, u) if bound is None else 0.0
     return _ahead(code.uptr, code.ulag, code.upow, code.usig, code.grp, code.gny, code.gylag,
                   np.ascontiguousarray(theta, dtype=np.float64), uc.reshape(-1), uc.shape[1],
                   np.ascontiguousarray(y, dtype=np.float64), start, horizon,
-                  0.0 if bound is None else float(bound), bound is None)
+                  0.0 if bound is None else float(bound), bound is None, scale)
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

@@ -432,6 +432,9 @@ def se_dsf(
     """
     recs = records_of(data)
     sp = static_points(static, data, ubar=ubar, needed_by="se_dsf")
+    if band is None and isinstance(static, (StaticCurve, StaticSurface)):
+        raise ValueError(f"se_dsf: a {type(static).__name__} carries no uncertainty to take the band from: give band=B "
+                         "(output units², the bound on J_SF)")
     if band is not None and np.ndim(band) != 0:
         raise TypeError(f"se_dsf: band must be a number B > 0 (the bound on J_SF, output units²), got {band!r}")
     band = resolve_band(band, sp, "se_dsf")[1]

@@ -806,7 +806,8 @@ def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: 
     ub += [c.points.ubar for c in cons if getattr(c, "points", None) is not None]
     if curve is not None and curve.domain is not None:
         # a surface's domain is one (low, high) per input: its two corners are the rows of the transpose
-        ub.append(np.array(curve.domain).T if isinstance(curve, StaticSurface) else np.array(curve.domain))
+        dom = np.array(curve.domain, dtype=float)
+        ub.append(dom.T if isinstance(curve, StaticSurface) and curve.n_inputs > 1 else dom.ravel())
     if ub:
         warn_static_range(np.concatenate(ub), recs)
 

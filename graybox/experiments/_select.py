@@ -232,7 +232,7 @@ def _static_points(sp, process: gb.Structure, band: float | None,
         return None, None
     if isinstance(sp, (gb.StaticCurve, gb.StaticSurface)):
         degree = sp.degree
-        sp = static_points(sp, record)  # sampled over its domain, of the records' input
+        sp = static_points(sp, record, takes_ubar=False)  # sampled over its domain, of the records' input
     elif band is None:
         return sp, None  # J_SF reported, no form asked
     else:

@@ -25,7 +25,7 @@ from ..core._records import as_records as records_of  # records: coerced in core
 from ..core._terms import Structure, Term
 from ..core._validation import as_1d_finite
 from ..static._curves import StaticCurve
-from ..static._surfaces import StaticSurface
+from ..static._surfaces import StaticSurface, box_grid
 from ._model import Model
 
 __all__ = ["STRUCTURE_ACCEPTED", "MODEL_ACCEPTED", "as_structure", "as_model", "static_info", "static_points",
@@ -176,7 +176,7 @@ def static_info(static: object, data: object, *, needed_by: str | None = None, n
 
 
 def static_points(static: object, data: object, *, ubar: object = None, needed_by: str | None = None,
-                  name: str = "static") -> StaticPoints | None:
+                  name: str = "static", takes_ubar: bool = True) -> StaticPoints | None:
     """The static points an entry scores: given points, a curve or surface sampled, or the Dataset's.
 
     Parameters
@@ -194,6 +194,9 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
         The entry's name when it cannot work without static information.
     name : str
         The argument's name, for the error message.
+    takes_ubar : bool
+        Whether the entry has a ``ubar`` argument (the error for a curve without a domain says
+        what to give).
 
     Returns
     -------
@@ -205,8 +208,8 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
     TypeError
         ``static`` is of another type.
     ValueError
-        ``ubar`` with static points; a curve or surface without a domain and no ``ubar``; no
-        static information and ``needed_by`` is given.
+        ``ubar`` with static points, of the wrong shape or not finite; a curve or surface without
+        a domain and no ``ubar``; no static information and ``needed_by`` is given.
     """
     static = static_info(static, data, needed_by=needed_by, name=name, curves=True)
     if static is None or isinstance(static, StaticPoints):
@@ -214,10 +217,12 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
             raise ValueError("ubar is for sampling a StaticCurve or StaticSurface; static points carry their own ū")
         return static
     kind = type(static).__name__
+    surface = isinstance(static, StaticSurface)
     if ubar is None and static.domain is None:
-        shape = "(K,)" if isinstance(static, StaticCurve) else "(K, m)"
-        raise ValueError(f"a {kind} without a domain needs ubar of shape {shape}: where to sample it")
-    if isinstance(static, StaticCurve):
+        shape = f"(K, {static.n_inputs})" if surface else "(K,)"
+        give = f"ubar of shape {shape}: where to sample it" if takes_ubar else "static points (e.g. its .points(ubar))"
+        raise ValueError(f"a {kind} without a domain needs {give}")
+    if not surface:
         ub = (np.linspace(static.domain[0], static.domain[1], CURVE_LEVELS) if ubar is None
               else as_1d_finite(ubar, "ubar"))
         # a curve is of one input, whatever the records (a Record, a Dataset, a sequence) call it
@@ -225,9 +230,19 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
         names = getattr(first, "input_names", None) or ("u",)
         return static.points(ub, names[0])
     if ubar is None:
-        axes = [np.linspace(lo, hi, SURFACE_LEVELS) for lo, hi in static.domain]
-        ubar = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
-    return static.points(np.asarray(ubar, dtype=float))
+        return static.points(box_grid(static.domain, SURFACE_LEVELS))
+    m = static.n_inputs
+    try:
+        ub = np.array(ubar, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"ubar must be an array of numbers of shape (K, {m}), got {type(ubar).__name__}") from None
+    if m == 1 and ub.ndim == 1:
+        ub = ub[:, None]
+    if ub.ndim != 2 or ub.shape[1] != m or ub.shape[0] == 0:
+        raise ValueError(f"ubar must have shape (K, {m}) for a surface of {m} inputs, got shape {ub.shape}")
+    if not np.all(np.isfinite(ub)):
+        raise ValueError(f"ubar has NaN or inf at rows {np.flatnonzero(~np.isfinite(ub).all(axis=1)).tolist()}")
+    return static.points(ub)
 
 
 def as_record(data: object, part: str, name: str = "data") -> Record:

@@ -45,7 +45,7 @@ import numpy as np
 
 from ._curves import StaticCurve
 from ..core._records import StaticPoints
-from ._surfaces import StaticSurface
+from ._surfaces import StaticSurface, box_grid
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
@@ -901,8 +901,7 @@ class GainBounds(StaticConstraint):
                 rng = tuple((float(U[:, j].min()), float(U[:, j].max())) for j in range(m))
             else:
                 raise ValueError(f"{self.describe()}: give ubar_range (no surface domain or static points to take it from)")
-        axes = [np.linspace(lo, hi, int(self.n)) for lo, hi in rng]
-        U = np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
+        U = box_grid(rng, int(self.n))
         yb = np.asarray(ref(U), float).reshape(-1)
         if yb.shape != (U.shape[0],) or not np.all(np.isfinite(yb)):
             raise ValueError(f"{self.describe()}: the reference must map ū of shape {U.shape} to finite ȳ of shape "

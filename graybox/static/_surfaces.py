@@ -18,7 +18,14 @@ from ..core._records import StaticPoints
 from ..core._validation import check_int, check_real, check_sequence
 from ..core._reprs import short_repr
 
-__all__ = ["StaticSurface", "monomial_exponents"]
+__all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
+
+
+def box_grid(box: Sequence[tuple[float, float]], levels: int) -> np.ndarray:
+    """Every combination of ``levels`` evenly spaced levels per input over ``box`` (one (low,
+    high) per input), shape (levels^m, m), the first input varying slowest."""
+    axes = [np.linspace(lo, hi, levels) for lo, hi in box]
+    return np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
 
 
 def monomial_exponents(n_inputs: int, degree: int) -> tuple[tuple[int, ...], ...]:
