@@ -48,7 +48,7 @@ from ..selection._forward_regression import _RSS_FLOOR
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar, show_progress
-from ..core._records import check_overlap, check_same_inputs, same_record
+from ..core._records import check_overlap, check_same_inputs, same_record, warn_static_range
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
@@ -279,6 +279,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     if band is not None and sp is None:
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
+    given = sp
     sp, form = _static_points(sp, process, band, ident)
     if sp is not None:
         check_same_inputs(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
@@ -310,6 +311,10 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in
                        _folds(ident, folds, L + 2))
+    if sp is not None:
+        # said here, once, after the errors: every job's fits silence it (a units mix-up must not go unsaid)
+        warn_static_range(sp.ubar, [ident], "static points" if isinstance(given, gb.StaticPoints) else
+                          f"the {type(given).__name__}'s domain")
     return _Plan(ident, splits, test, sp, np.inf if band is None else band, L, extra), form
 
 

@@ -1,0 +1,53 @@
+"""Bugs found by a second bug hunt on one's own data (a two-input NARX system, inputs "valve" and
+"speed", an output in Pa near 2e5 or in tiny units): each test fails without its fix."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+#: y(k) = 3e4 + 100 valve(k-1) + 1e-3 speed(k-1)² + 0.05 valve(k-1) speed(k-1) + 0.6 y(k-1) + 0.2 y(k-2), in Pa
+TRUE = gb.Structure(["1", "valve(k-1)", "speed(k-1)^2", "valve(k-1)speed(k-1)", "y(k-1)", "y(k-2)"])
+THETA = np.array([3e4, 100.0, 1e-3, 0.05, 0.6, 0.2])
+INPUTS = ("valve", "speed")
+
+
+def record(seed: int, n: int, noise: float = 0.02, scale: float = 1.0, name: str | None = None) -> gb.Record:
+    """The system on a staircase (valve in [20, 80] %, speed in [1000, 3000] rpm), output noise of
+    ``noise`` × std y, the output in Pa × ``scale``."""
+    rng = np.random.default_rng(seed)
+    u = np.column_stack([np.repeat(rng.uniform(20, 80, n // 15 + 1), 15)[:n],
+                         np.repeat(rng.uniform(1000, 3000, n // 15 + 1), 18)[:n]])
+    y = gb.Model(TRUE, THETA, input_names=INPUTS).simulate(u, np.full(2, 2e5))
+    y = y + noise * np.std(y) * rng.standard_normal(n)
+    return gb.Record(u, y * scale, 0.1, name=name or f"r{seed}", input_names=INPUTS, units=("", "Pa"))
+
+
+def static(ub: np.ndarray, scale: float = 1.0, uncertainty: float | None = None) -> gb.StaticPoints:
+    yb = (THETA[0] + THETA[1] * ub[:, 0] + THETA[2] * ub[:, 1] ** 2 + THETA[3] * ub[:, 0] * ub[:, 1]) / 0.2
+    return gb.StaticPoints(ub, yb * scale, input_names=INPUTS,
+                           uncertainty=None if uncertainty is None else uncertainty * scale)
+
+
+def grid(valve, speed) -> np.ndarray:
+    vv, ss = np.meshgrid(valve, speed)
+    return np.column_stack([vv.ravel(), ss.ravel()])
+
+
+CAND = gb.Candidates(2, 2, degree=2, input_names=INPUTS, max_y_power=1)
+
+
+def test_select_graybox_says_when_static_points_lie_outside_the_records():
+    # every fit inside select_graybox silences StaticRangeWarning and nothing said it once: speeds
+    # given in rad/s instead of rpm (or any units mix-up) went unsaid, as pe_thetas and se_dsf say it
+    data = gb.Dataset(record(0, 400), record(1, 300), static(grid([30, 50, 70], [1200, 2000, 2800]), uncertainty=500.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # inside the records' range: nothing to say
+        gb.select_graybox(CAND, data, sizes=[6], estimator="pe")
+    far = static(grid([30, 50, 70], [1200, 2000, 2800]) * [1, 3], uncertainty=500.0)
+    with pytest.warns(gb.StaticRangeWarning, match="outside the input box") as caught:
+        gb.select_graybox(CAND, gb.Dataset(data.ident, data.valid, far), sizes=[6], estimator="pe",
+                          fallback="min_jsf")
+    assert sum(issubclass(w.category, gb.StaticRangeWarning) for w in caught) == 1  # once per call
