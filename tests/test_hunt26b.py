@@ -51,3 +51,22 @@ def test_select_graybox_says_when_static_points_lie_outside_the_records():
         gb.select_graybox(CAND, gb.Dataset(data.ident, data.valid, far), sizes=[6], estimator="pe",
                           fallback="min_jsf")
     assert sum(issubclass(w.category, gb.StaticRangeWarning) for w in caught) == 1  # once per call
+
+
+def test_records_at_another_sampling_period_are_refused_where_they_meet():
+    # a validation, test or choosing record sampled at 0.2 s beside a 0.1 s identification record was
+    # scored as if sampled at 0.1 s: a discrete-time model's J_S on it is silent nonsense
+    ident, other = record(0, 400, name="ident"), record(1, 300)
+    slow = gb.Record(other.u, other.y, 0.2, name="slow", input_names=INPUTS)
+    with pytest.raises(ValueError, match="'ident' is sampled every 0.1 s but 'slow' every 0.2 s"):
+        gb.Dataset(ident, slow)
+    with pytest.raises(ValueError, match="sampled every"):
+        gb.output_error(TRUE, ident, choose_on=slow, n_starts=0)
+    with pytest.raises(ValueError, match="sampled every"):
+        gb.output_error(TRUE, [ident, slow], n_starts=0)
+    for where in ("test", "validation"):
+        with pytest.raises(ValueError, match="sampled every"):
+            gb.select_graybox(CAND, ident, sizes=[6], **{where: slow})
+    # a period read from printed stamps may differ in its last digits: the same period
+    near = gb.Record(other.u, other.y, 0.1 * (1 + 1e-9), name="near", input_names=INPUTS)
+    assert gb.Dataset(ident, near).Ts == 0.1

@@ -279,10 +279,21 @@ def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.nda
 
 
 def check_same_inputs(a: object, b: object) -> None:
-    """``ValueError`` naming both unless ``a`` and ``b`` (records, static points) have the same inputs."""
+    """``ValueError`` naming both unless ``a`` and ``b`` (records, static points) have the same inputs
+    (and, two records, the same sampling period)."""
     if a.input_names != b.input_names:  # type: ignore[attr-defined]
         raise ValueError(f"{a.name!r} has inputs {a.input_names} but {b.name!r} has inputs {b.input_names}: "  # type: ignore[attr-defined]
                          "all data of one identification must have the same inputs, in the same order")
+    if isinstance(a, Record) and isinstance(b, Record):
+        check_same_period(a, b)
+
+
+def check_same_period(a: Record, b: Record) -> None:
+    """``ValueError`` naming both unless two records share their sampling period (to 1e-6, relative: a
+    period read from printed time stamps is rounded)."""
+    if abs(a.Ts - b.Ts) > 1e-6 * max(a.Ts, b.Ts):
+        raise ValueError(f"{a.name!r} is sampled every {a.Ts:g} s but {b.name!r} every {b.Ts:g} s: a discrete-time "
+                         "model holds at one sampling period; resample one of them")
 
 
 @dataclass(frozen=True)
@@ -375,7 +386,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["as_records", "as_input_array", "check_same_inputs", "static_point_inputs"]
+__all__ += ["as_records", "as_input_array", "check_same_inputs", "check_same_period", "static_point_inputs"]
 
 
 class StaticRangeWarning(UserWarning):

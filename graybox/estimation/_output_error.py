@@ -45,7 +45,8 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from ..core._progress import progress_bar
-from ..core._records import Dataset, Record, as_records, check_overlap, choosing_records, same_record
+from ..core._records import (Dataset, Record, as_records, check_overlap, check_same_period, choosing_records,
+                             same_record)
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, check_seed, check_theta
 from ..models._coerce import as_structure
@@ -216,6 +217,8 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
     chooser = None
     if choose_on is not None:
         crec = choosing_records(choose_on)
+        for c in crec:
+            check_same_period(rec[0], c)
         if any(same_record(c, r) for c in crec for r in rec):
             raise ValueError("choose_on: a choosing record is a fitting record; choose on data the fit did not see "
                              "(e.g. data.valid)")

@@ -48,7 +48,8 @@ from ..selection._forward_regression import _RSS_FLOOR
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar, show_progress
-from ..core._records import check_overlap, check_same_inputs, same_record, warn_static_range
+from ..core._records import (check_overlap, check_same_inputs, check_same_period, same_record,
+                             warn_static_range)
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
@@ -284,9 +285,13 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     if sp is not None:
         check_same_inputs(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
     L = process.max_lag
+    for role, rec in (("test", test), ("validation", valid)):
+        if rec is None:
+            continue
+        if not isinstance(rec, gb.Record):
+            raise TypeError(f"{role} must be a Record, got {type(rec).__name__}")
+        check_same_period(ident, rec)
     if test is not None:
-        if not isinstance(test, gb.Record):
-            raise TypeError(f"test must be a Record, got {type(test).__name__}")
         if len(test) <= L + 1:
             raise ValueError(f"the test record ({len(test)} samples) is shorter than the candidates' lags + 2 "
                              f"({L + 2})")
@@ -297,8 +302,6 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
             if rec is not None:
                 check_overlap(test, rec, "test", name, "a test must be data nothing was fitted or chosen on")
     if valid is not None:
-        if not isinstance(valid, gb.Record):
-            raise TypeError(f"validation must be a Record, got {type(valid).__name__}")
         valid.require_length(L)
         if len(valid) <= L + 1:
             raise ValueError(f"the validation record ({len(valid)} samples) is shorter than the candidates' lags + 2")
