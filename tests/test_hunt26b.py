@@ -70,3 +70,24 @@ def test_records_at_another_sampling_period_are_refused_where_they_meet():
     # a period read from printed stamps may differ in its last digits: the same period
     near = gb.Record(other.u, other.y, 0.1 * (1 + 1e-9), name="near", input_names=INPUTS)
     assert gb.Dataset(ident, near).Ts == 0.1
+
+
+def test_select_graybox_says_at_once_when_a_choosing_or_test_record_lacks_a_candidate_input(monkeypatch):
+    # a validation or test record without an input the candidates use (e.g. a transient input added to
+    # the data set but not to the test record) failed only after the structure search and the fits
+    # (minutes with SE fronts), from inside a job; with a test record it failed or not by the chance
+    # of which structures the search found
+    data = gb.transient_inputs(gb.Dataset(record(0, 400), record(1, 300)), taus=(1.0,), inputs=["speed"])
+    cand = gb.Candidates(2, {"valve": 2, "speed": 2, "speed_tau1": 1}, degree=2, input_names=data.input_names,
+                         max_y_power=1)
+    import graybox._api as api
+
+    def no_search(*args, **kwargs):
+        raise AssertionError("the structure search ran")
+
+    monkeypatch.setattr(api, "semp", no_search)
+    monkeypatch.setattr(api, "frols", no_search)
+    with pytest.raises(ValueError, match="the test record 'r2': the structure uses input 'speed_tau1'.*transient_inputs"):
+        gb.select_graybox(cand, data, test=record(2, 300), sizes=[6])
+    with pytest.raises(ValueError, match="the validation record 'r2': the structure uses input 'speed_tau1'"):
+        gb.select_graybox(cand, data.ident, validation=record(2, 300), sizes=[6])

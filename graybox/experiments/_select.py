@@ -50,6 +50,7 @@ from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar, show_progress
 from ..core._records import (check_overlap, check_same_inputs, check_same_period, same_record,
                              warn_static_range)
+from ..core._terms import require_inputs
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
@@ -290,7 +291,10 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
             continue
         if not isinstance(rec, gb.Record):
             raise TypeError(f"{role} must be a Record, got {type(rec).__name__}")
+        # said now, not after the structure search and the fits
         check_same_period(ident, rec)
+        require_inputs(process.inputs, rec.input_names, "but the record's inputs are",
+                       prefix=f"the {role} record {rec.name!r}: ")
     if test is not None:
         if len(test) <= L + 1:
             raise ValueError(f"the test record ({len(test)} samples) is shorter than the candidates' lags + 2 "
