@@ -91,3 +91,30 @@ def test_select_graybox_says_at_once_when_a_choosing_or_test_record_lacks_a_cand
         gb.select_graybox(cand, data, test=record(2, 300), sizes=[6])
     with pytest.raises(ValueError, match="the validation record 'r2': the structure uses input 'speed_tau1'"):
         gb.select_graybox(cand, data.ident, validation=record(2, 300), sizes=[6])
+
+
+def test_slow_mode_warning_says_why_the_slow_model_was_kept():
+    # margin="auto" kept a slow in-band fit because its refit inside the margin missed the band, and the
+    # warning said "no fit inside that factor (margin='auto') was found": one was found, and missed the band
+    from types import SimpleNamespace
+
+    from graybox.estimation._simulation_error import SEProblem, refit_if_slow
+
+    problem = SEProblem(TRUE, [record(0, 400)], None)
+    slow = SimpleNamespace(model=gb.Model(TRUE, THETA * [1, 1, 1, 1, 1.333, 1], input_names=INPUTS), in_band=True)
+    assert problem.slow_modes(slow.model.theta[None])[1][0]
+    inside = SimpleNamespace(model=gb.Model(TRUE, THETA, input_names=INPUTS), in_band=False)
+
+    def misses_the_band(p):
+        return slow if p.margin is None else inside
+
+    def finds_none(p):
+        if p.margin is None:
+            return slow
+        raise ValueError("no start inside the margin")
+
+    with pytest.warns(gb.SlowModeWarning, match="misses the band this one meets") as caught:
+        assert refit_if_slow(problem, misses_the_band, "the fit", auto=True) is slow
+    assert "was found" not in str(caught[0].message)
+    with pytest.warns(gb.SlowModeWarning, match=r"no fit inside that factor \(margin='auto'\) was found"):
+        assert refit_if_slow(problem, finds_none, "the fit", auto=True) is slow

@@ -206,10 +206,11 @@ class SEProblem:
             slow = np.zeros(len(th), bool) if m is None else (1.0 - radii) < m
         return radii, slow, rho_ls
 
-    def warn_slow(self, thetas: np.ndarray, what: str, auto: bool = False) -> np.ndarray:
+    def warn_slow(self, thetas: np.ndarray, what: str, auto: bool = False, kept: str | None = None) -> np.ndarray:
         """:class:`SlowModeWarning` when some row of ``thetas`` is slow (:meth:`slow_modes`) and the
         problem has no margin; returns the rows' radii, shape (K,). ``auto``: the rows are what is
-        left slow after ``margin="auto"`` tried to refit them inside the margin."""
+        left slow after ``margin="auto"`` tried to refit them inside the margin; ``kept``: why they
+        were kept (default: no fit inside the margin was found)."""
         radii, slow, rho_ls = self.slow_modes(thetas)
         if self.margin is None and slow.any():
             k = int(slow.sum())
@@ -218,7 +219,7 @@ class SEProblem:
                  f"record with spectral radius up to {np.nanmax(radii[slow]):.6g}, against the least-squares model's "
                  f"{rho_ls:.6g}: modes over {SLOW_FACTOR:g} times slower than its slowest, or unstable. Such "
                  "near-integrators follow the record's slow drift and err on new records; "
-                 + ("no fit inside that factor (margin='auto') was found for them: try another structure"
+                 + (kept or "no fit inside that factor (margin='auto') was found for them: try another structure"
                     if auto else "margin='auto' refits them inside that factor")
                  + " (BENCHMARKS.md, 'A slow-mode check')", SlowModeWarning)
         return radii
@@ -1087,6 +1088,7 @@ def refit_if_slow(problem: SEProblem, fit: Callable[[SEProblem], _R], what: str,
     ``in_band``, that the first fit met: the band is what the caller asked for); a :class:`SlowModeWarning`
     names a model left slow. ``problem`` has no margin when ``auto``."""
     result = fit(problem)
+    kept = None  # why a slow model is kept, for the warning
     if auto:
         _, slow, rho_ls = problem.slow_modes(result.model.theta[None])
         if slow[0]:  # a mode over SLOW_FACTOR times least squares' slowest: fit again inside that margin
@@ -1096,7 +1098,10 @@ def refit_if_slow(problem: SEProblem, fit: Callable[[SEProblem], _R], what: str,
                 inside = None
             if inside is not None and (getattr(inside, "in_band", True) or not getattr(result, "in_band", True)):
                 result = inside
-    problem.warn_slow(result.model.theta[None], what, auto=auto)
+            elif inside is not None:
+                kept = ("the fit inside that factor (margin='auto') misses the band this one meets, so this one is "
+                        "kept: widen the band or try another structure")
+    problem.warn_slow(result.model.theta[None], what, auto=auto, kept=kept)
     return result
 
 
