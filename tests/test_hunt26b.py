@@ -118,3 +118,14 @@ def test_slow_mode_warning_says_why_the_slow_model_was_kept():
     assert "was found" not in str(caught[0].message)
     with pytest.warns(gb.SlowModeWarning, match=r"no fit inside that factor \(margin='auto'\) was found"):
         assert refit_if_slow(problem, finds_none, "the fit", auto=True) is slow
+
+
+def test_select_graybox_keeps_every_included_term_in_every_frols_structure():
+    # with 4 included terms and sizes=[2, 6], the FROLS row of size 2 was its path's first 2 terms:
+    # "1 + y(k-1)", without the included y(k-2) and valve(k-1) ("include: terms in every structure")
+    include = ["1", "y(k-1)", "y(k-2)", "valve(k-1)"]
+    data = gb.Dataset(record(0, 400), record(1, 300))
+    with pytest.warns(gb.SelectionWarning, match=r"semp: \[2\]; frols: \[2\]"):
+        res = gb.select_graybox(CAND, data, include=include, sizes=[2, 6], estimator="ls")
+    assert (res.table["size"] == 6).all()
+    assert set(gb.Structure(include)) <= set(res.structure)

@@ -369,9 +369,11 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
                 if usable is None:
                     raise
                 sel = gb.frols(candidates, ident, n_terms=int(usable.group(1)), include=forced)
-            reached["frols"] = set(range(1, len(sel.structure) + 1))
+            # its structure begins with the included terms: a size below their number would drop some
+            n0 = max(len(gb.Structure(list(forced))), 1)
+            reached["frols"] = set(range(n0, len(sel.structure) + 1))
             for k in sizes:
-                if k <= len(sel.structure):
+                if n0 <= k <= len(sel.structure):
                     found[("frols", k)] = [str(t) for t in sel.structure[:k]]
     if not found:
         raise ValueError(f"no search reached any of the sizes {sizes} (reached: "
