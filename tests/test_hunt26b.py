@@ -129,3 +129,23 @@ def test_select_graybox_keeps_every_included_term_in_every_frols_structure():
         res = gb.select_graybox(CAND, data, include=include, sizes=[2, 6], estimator="ls")
     assert (res.table["size"] == 6).all()
     assert set(gb.Structure(include)) <= set(res.structure)
+
+
+def test_select_graybox_and_se_dsf_models_take_the_records_input_order(tmp_path):
+    # their models' inputs were the structure's, in name order ("speed", "valve"): an input array or
+    # static ū given in the records' column order (valve, speed) was read the other way round, silently
+    # (the chosen model's static curve at valve 50 %, 2000 rpm read 1.2e6 Pa for the true 2.2e5)
+    data = gb.Dataset(record(0, 400), record(1, 300), static(grid([30, 50, 70], [1200, 2000, 2800]), uncertainty=500.0))
+    test = record(2, 300)
+    u = np.array([[50.0, 2000.0]])
+    true = (THETA[0] + THETA[1] * 50 + THETA[2] * 2000**2 + THETA[3] * 50 * 2000) / 0.2
+    for estimator in ("pe", "ls"):
+        res = gb.select_graybox(CAND, data, sizes=[6], estimator=estimator, band=None if estimator == "pe" else np.inf)
+        assert res.model.input_names == INPUTS
+        np.testing.assert_allclose(res.model.simulate(test.u, test.y[:2]), res.model.simulate(test), rtol=1e-12)
+        assert res.model.static_curve(u)[0] == pytest.approx(true, rel=0.01)
+    gb.save(res, tmp_path / "sel.json")
+    assert gb.load(tmp_path / "sel.json").model.input_names == INPUTS
+    dsf = gb.se_dsf(TRUE, data)
+    assert dsf.model.input_names == INPUTS
+    assert dsf.model.static_curve(u)[0] == pytest.approx(true, rel=0.01)

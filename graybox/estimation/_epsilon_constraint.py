@@ -491,5 +491,7 @@ def _solve(problem: SEProblem, *, band, theta0, lambdas, max_iter, tol, pe_lambd
     it = sum(r[5] for _, r in runs)
     feasible = bool(g <= band * (1 + 1e-12))
     name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
-    return DSFResult(Model(problem.structure, th, name=name), f, g, band, feasible, start, f0, g0, it, message,
+    # the records' input order (not the structure's name order): an input array's columns as the user has them
+    model = Model(problem.structure, th, name=name, input_names=problem.records[0].input_names)
+    return DSFResult(model, f, g, band, feasible, start, f0, g0, it, message,
                      float("nan") if problem.margin is None else problem.margin)

@@ -31,6 +31,7 @@ the same search picks a black box: LS and ELS fits, chosen by J_S alone.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import re
 import warnings
@@ -809,6 +810,10 @@ def select_graybox(
     job, res, i = jobs[pos], results[pos], members[pos]
     structure = gb.Structure(job.terms.split(" + "))
     decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
+    # the records' input order (not the structure's name order): an input array's columns as the user has them
+    m = decision.model
+    decision = dataclasses.replace(decision, model=gb.Model(m.structure, m.theta, name=m.name,
+                                                            input_names=plan.ident.input_names))
     table = table.sort_values("rank").drop(columns=["terms"])
     return GrayboxSelection(structure, decision.model, decision, table, None if form is None else form.degree, plan.band,
                             not used_fallback, used)
