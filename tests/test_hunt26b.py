@@ -149,3 +149,24 @@ def test_select_graybox_and_se_dsf_models_take_the_records_input_order(tmp_path)
     dsf = gb.se_dsf(TRUE, data)
     assert dsf.model.input_names == INPUTS
     assert dsf.model.static_curve(u)[0] == pytest.approx(true, rel=0.01)
+
+
+def test_a_test_record_with_its_columns_in_another_order_is_still_the_fitting_record():
+    # the overlap checks compared (u, y) column by column: the identification record loaded again with
+    # its inputs in another order (or with a transient input added) passed as new data
+    ident, valid = record(0, 400, name="ident"), record(1, 300, name="valid")
+    swapped = gb.Record(ident.u[:, ::-1], ident.y, 0.1, name="again", input_names=INPUTS[::-1])
+    part = swapped.slice(100, 300, name="part")
+    with pytest.raises(ValueError, match="the test record is the identification record"):
+        gb.select_graybox(CAND, gb.Dataset(ident, valid), test=swapped, sizes=[6])
+    with pytest.raises(ValueError, match="shares 200 samples with the identification record"):
+        gb.select_graybox(CAND, gb.Dataset(ident, valid), test=part, sizes=[6])
+    with pytest.raises(ValueError, match="a choosing record is a fitting record"):
+        gb.output_error(TRUE, ident, choose_on=swapped, n_starts=0)
+    extended = gb.transient_inputs(ident, taus=(1.0,), inputs=["speed"])
+    with pytest.raises(ValueError, match="a choosing record is a fitting record"):
+        gb.output_error(TRUE, ident, choose_on=extended, n_starts=0)
+    # new data in another column order is new data
+    other = record(2, 300)
+    reordered = gb.Record(other.u[:, ::-1], other.y, 0.1, name="new", input_names=INPUTS[::-1])
+    assert gb.output_error(TRUE, ident, choose_on=reordered, n_starts=0).chosen_on == "new"

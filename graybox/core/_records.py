@@ -435,9 +435,12 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
 
 
 def same_record(a: Record, b: Record) -> bool:
-    """Whether two records hold the same data (the same object, or equal inputs and outputs): a
-    choosing or test record must not be one the fit saw."""
-    return a is b or (a.u.shape == b.u.shape and np.array_equal(a.u, b.u) and np.array_equal(a.y, b.y))
+    """Whether two records hold the same data (the same object, or equal inputs, matched by name,
+    and outputs): a choosing or test record must not be one the fit saw."""
+    if a is b:
+        return True
+    za, zb = _samples(a, b)
+    return za.shape == zb.shape and za.shape[1] > 1 and np.array_equal(za, zb)
 
 
 #: Places of each record whose windows are looked up in the other (see :func:`shared_stretch`).
@@ -463,9 +466,9 @@ def shared_stretch(a: Record, b: Record) -> tuple[int, int, int] | None:
     noise-free runs of one system at designed input levels, wherever their states meet (the
     same first steps from rest, the same steps after the same level).
     """
-    za, zb = _samples(a), _samples(b)
-    if za.shape[1] != zb.shape[1]:
-        return None  # other inputs: not the same data (the caller says what else is wrong)
+    za, zb = _samples(a, b)
+    if za.shape[1] < 2:
+        return None  # no input in common: not the same data (the caller says what else is wrong)
     found = None
     for x, z, flip in ((za, zb, False), (zb, za, True)):
         k = min(_WINDOW, len(x), len(z))
@@ -531,9 +534,12 @@ def check_overlap(a: Record, b: Record, a_name: str, b_name: str, advice: str, p
          f"a piece of the {b_name} record instead, {advice}", RecordOverlapWarning)
 
 
-def _samples(r: Record) -> np.ndarray:
-    """(u, y) as rows of one array, shape (N, m + 1)."""
-    return np.column_stack([r.u.reshape(len(r.y), -1), r.y])
+def _samples(a: Record, b: Record) -> tuple[np.ndarray, np.ndarray]:
+    """Each record's (u, y) as rows of one array, shape (N, c + 1): the c inputs both have, taken by
+    name in ``a``'s order (the same data read with its columns in another order, or with transient
+    inputs added, is still the same data)."""
+    names = [n for n in a.input_names if n in b.input_names]
+    return tuple(np.column_stack([r.input(n) for n in names] + [r.y]) for r in (a, b))  # type: ignore[return-value]
 
 
 def _grow(x: np.ndarray, z: np.ndarray, i: int, j: int, n: int) -> tuple[int, int, int]:
