@@ -170,3 +170,12 @@ def test_a_test_record_with_its_columns_in_another_order_is_still_the_fitting_re
     other = record(2, 300)
     reordered = gb.Record(other.u[:, ::-1], other.y, 0.1, name="new", input_names=INPUTS[::-1])
     assert gb.output_error(TRUE, ident, choose_on=reordered, n_starts=0).chosen_on == "new"
+
+
+@pytest.mark.parametrize("estimator", ["se-gradient", "pe"])
+def test_a_shortlist_that_cannot_act_is_refused(estimator):
+    # with the SE estimators alone nothing ranks the structures first, and with PE alone there is no slow
+    # fit to spare: shortlist=1 was ignored, silently, and every structure fitted (hours with SE fronts)
+    data = gb.Dataset(record(0, 300), record(1, 200), static(grid([30, 50, 70], [1200, 2000, 2800]), uncertainty=500.0))
+    with pytest.raises(ValueError, match="shortlist has nothing to do"):
+        gb.select_graybox(CAND, data, sizes=[4, 6], estimator=estimator, shortlist=1)

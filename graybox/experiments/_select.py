@@ -715,7 +715,8 @@ def select_graybox(
         Faster, less thorough: with PE (or a black-box estimator) among the estimators, the SE
         estimators (seconds per structure) fit only the ``shortlist`` structures those rank best
         (in band first, then by J_S on the choosing data). Default: every structure (PE's ranking
-        does not predict SE's: BENCHMARKS.md, honest selection).
+        does not predict SE's: BENCHMARKS.md, honest selection). Refused (``ValueError``) unless the
+        estimators hold a fast and a slow one.
     include : sequence of str
         Terms in every structure (default the constant, which eq. (22)-style static fits need).
     fallback : {None, "min_jsf"}
@@ -763,6 +764,11 @@ def select_graybox(
     folds, blocks = check_int(folds, "folds", low=2), check_int(blocks, "blocks", low=2)
     if shortlist is not None:
         shortlist = check_int(shortlist, "shortlist", low=1)
+        slow = [e for e in estimators if e in SLOW_ESTIMATORS]
+        if not slow or len(slow) == len(estimators):
+            raise ValueError(f"shortlist has nothing to do with estimator(s) {estimators}: it lets the fast "
+                             f"estimators (PE, LS, ELS) choose the structures the slow ones {SLOW_ESTIMATORS} fit, "
+                             "so name one of each (e.g. estimator=['pe', 'se-gradient']), or drop shortlist")
     check_cluster(client, scheduler)
     show_progress(progress)  # checked now, not after the structure search
     for s in sources:
