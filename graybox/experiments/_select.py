@@ -756,6 +756,11 @@ def select_graybox(
     constraints = tuple(check_sequence(constraint_entries(constraints), "constraints",
                                        "a constraint, a table of them or a sequence"))
     estimators = _estimators(estimator, band, constraints)
+    if band is None and (lambdas is not None or fallback is not None):
+        # a black box has no front and no band to miss: said, not ignored
+        raise ValueError(f"{'lambdas' if lambdas is not None else 'fallback'} applies to a gray box (a band on J_SF), "
+                         f"but this search is a black box ({', '.join(estimators)}): no band was given and the static "
+                         "points carry no uncertainty; give band= (and static points), or drop it")
     sources = (sources,) if isinstance(sources, str) else check_sequence(sources, "sources")
     if sizes is not None:
         sizes = [check_int(s, "sizes", low=1) for s in check_sequence(sizes, "sizes")]
