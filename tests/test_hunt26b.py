@@ -193,3 +193,22 @@ def test_gray_box_options_given_to_a_black_box_search_are_refused():
         gb.select_graybox(CAND, data, band=np.inf, sizes=[6], lambdas=[0.5])
     res = gb.select_graybox(CAND, data, band=1e6, sizes=[6], lambdas=[0.5, 1.0], estimator="pe")
     assert set(res.table["lambda1"]) <= {0.5, 1.0}
+
+
+def test_select_graybox_checks_its_executor_and_workers_before_the_search(monkeypatch):
+    # executor="threads" (or workers with executor="inprocess") was refused only after the structure
+    # search, and workers=0 ran on 2 processes, silently, where workers=-1 was refused
+    data = gb.Dataset(record(0, 300), record(1, 200))
+    import graybox._api as api
+
+    def no_search(*args, **kwargs):
+        raise AssertionError("the structure search ran")
+
+    monkeypatch.setattr(api, "semp", no_search)
+    monkeypatch.setattr(api, "frols", no_search)
+    with pytest.raises(ValueError, match="executor must be one of"):
+        gb.select_graybox(CAND, data, sizes=[6], executor="threads")
+    with pytest.raises(ValueError, match="workers must be an integer >= 1, got 0"):
+        gb.select_graybox(CAND, data, sizes=[6], executor="processes", workers=0)
+    with pytest.raises(ValueError, match="workers, client and scheduler need"):
+        gb.select_graybox(CAND, data, sizes=[6], executor="inprocess", workers=2)

@@ -532,10 +532,7 @@ def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progres
         return []
     if executor is None:
         executor = "inprocess" if workers is None and client is None and scheduler is None else "dask"
-    check_choice(executor, "executor", ("inprocess", "processes", "dask"))
-    if executor == "inprocess":
-        if workers is not None or client is not None or scheduler is not None:
-            raise ValueError("workers, client and scheduler need executor='processes' or 'dask'")
+    if executor == "inprocess":  # (executor, workers, client and scheduler checked by select_graybox)
         bar = progress_bar(len(jobs), "select_graybox", progress)
         out = []
         for j in jobs:
@@ -776,6 +773,12 @@ def select_graybox(
                              "so name one of each (e.g. estimator=['pe', 'se-gradient']), or drop shortlist")
     check_cluster(client, scheduler)
     show_progress(progress)  # checked now, not after the structure search
+    if executor is not None:
+        check_choice(executor, "executor", ("inprocess", "processes", "dask"))
+    if workers is not None:
+        workers = check_int(workers, "workers", low=1)  # 0 is no count of processes (it read as the default 2)
+    if executor == "inprocess" and (workers is not None or client is not None or scheduler is not None):
+        raise ValueError("workers, client and scheduler need executor='processes' or 'dask'")
     for s in sources:
         check_choice(s, "sources", ("semp", "frols"))
     if not sources:
