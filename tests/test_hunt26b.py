@@ -212,3 +212,23 @@ def test_select_graybox_checks_its_executor_and_workers_before_the_search(monkey
         gb.select_graybox(CAND, data, sizes=[6], executor="processes", workers=0)
     with pytest.raises(ValueError, match="workers, client and scheduler need"):
         gb.select_graybox(CAND, data, sizes=[6], executor="inprocess", workers=2)
+
+
+def test_estimators_and_fronts_give_models_in_the_records_input_order(tmp_path):
+    # ELS, CLS and every member of a PE or SE front (hence decide_dsf's model) named their inputs in
+    # the structure's name order ("speed", "valve"): a static ū or input array in the records' order
+    # (valve, speed) was read the other way round, silently
+    data = gb.Dataset(record(0, 400), record(1, 300), static(grid([30, 50, 70], [1200, 2000, 2800]), uncertainty=500.0))
+    u = np.array([[50.0, 2000.0]])
+    true = (THETA[0] + THETA[1] * 50 + THETA[2] * 2000**2 + THETA[3] * 50 * 2000) / 0.2
+    front = gb.se_pareto(TRUE, data, method="gradient", lambdas=[1.0, 0.5])
+    models = [gb.els(TRUE, data).model, gb.cls(TRUE, data).model, front.member_model(0),
+              gb.decide_dsf(gb.pe_pareto(TRUE, data), band=data.static.band).model]
+    for m in models:
+        assert m.input_names == INPUTS
+        assert m.static_curve(u)[0] == pytest.approx(true, rel=0.01)
+    assert front.subset([1]).member_model(0).input_names == INPUTS
+    gb.save(front, tmp_path / "front.json")
+    assert gb.load(tmp_path / "front.json").input_names == INPUTS
+    # a set built without records keeps a Model's default
+    assert gb.ParetoSet(TRUE, front.thetas, front.lambdas, front.J1, front.JS, front.JSF).input_names == ("speed", "valve")

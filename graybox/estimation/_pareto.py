@@ -96,6 +96,9 @@ class ParetoSet:
         Members whose estimate failed (e.g. no start of an SE fit was feasible at that λ), with
         the reason in words. Such a member stays in the set so that a sweep reports every λ: its
         θ row is NaN and its J's are inf; :meth:`member_model` refuses it, naming the reason.
+    input_names : tuple of str, optional
+        The members' inputs, in the column order of an input array (default: as
+        :class:`~graybox.Model`'s; :meth:`from_thetas` takes the records').
     """
 
     structure: Structure
@@ -107,9 +110,13 @@ class ParetoSet:
     method: str = ""
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
     failures: Mapping[int, str] = field(default_factory=dict)
+    input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # checked and defaulted as a Model's (the members' models carry them)
+        names = Model(self.structure, np.zeros(len(self.structure)), input_names=self.input_names).input_names
+        object.__setattr__(self, "input_names", names)
         th = frozen(self.thetas)
         if th.ndim != 2 or th.shape[1] != len(self.structure):
             raise ValueError(f"thetas must have shape (K, {len(self.structure)}), got {th.shape}")
@@ -179,7 +186,7 @@ class ParetoSet:
         jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, th, None, static)["JSF"]
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
-        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails)
+        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails, recs[0].input_names)
 
     # -- access -------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -207,7 +214,7 @@ class ParetoSet:
             raise ValueError(f"member {int(i) % K} of this set failed: {self.failures[int(i) % K]}")
         lam = self.lambdas[i]
         label = name or (f"{self.method} λ1={lam:.3g}" if np.isfinite(lam) else f"{self.method} #{int(i) % K}")
-        return Model(self.structure, self.thetas[i], name=label)
+        return Model(self.structure, self.thetas[i], name=label, input_names=self.input_names)
 
     def models(self) -> list[Model]:
         """Every member that did not fail, as a Model, in order."""
@@ -229,7 +236,8 @@ class ParetoSet:
         pos = {int(old): new for new, old in enumerate(idx)}
         fails = {pos[k]: why for k, why in self.failures.items() if k in pos}
         return ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
-                         self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails)
+                         self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
+                         self.input_names)
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
         """The members that no other member dominates in ``objectives`` (order kept)."""

@@ -351,7 +351,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                   ("u_scale", "float"), ("y_offset", "float"), ("y_scale", "float"))),
     "ParetoSet": (ParetoSet, (("method", "str"), ("structure", "structure"), ("lambdas", "array1"),
                               ("thetas", "array2"), ("J1", "array1"), ("JS", "array1"), ("JSF", "array1"),
-                              ("extra", "dict_arrays"), ("failures", "failures"))),
+                              ("extra", "dict_arrays"), ("failures", "failures"), ("input_names", "names"))),
     "Selection": (Selection, (("structure", "structure"), ("err", "array1"), ("theta", "array1"),
                               ("noise", "structure"), ("evaluated", "structure"), ("err_evaluated", "array1"),
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
@@ -416,7 +416,7 @@ _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]]
 }
 
 #: Fields added after a format was published: a file without them gets the constructor's default.
-_OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"}),
+_OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"}), "ParetoSet": frozenset({"input_names"}),
                                          "Selection": frozenset({"search", "subsets", "subset_rss"})}
 
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
