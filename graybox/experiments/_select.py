@@ -31,7 +31,6 @@ the same search picks a black box: LS and ELS fits, chosen by J_S alone.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import re
 import warnings
@@ -613,7 +612,7 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     """The chosen member as a Decision: J_S on the choosing data, J_SF of the refitted member."""
     js_choose = res["blocks"] @ res["weights"]
     if estimator in _BLACK_BOX_FITS:
-        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})")
+        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})", input_names=plan.ident.input_names)
         return gb.Decision(model, 0, float("nan"), float(js_choose[0]), float(res["jsf_full"][0]), "min J_S", True,
                            float(js_choose[0]))
     thetas = res["thetas"]
@@ -621,7 +620,7 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     failures = {int(k): "the fit failed at this λ" for k in np.flatnonzero(~keep)}
     th = np.where(keep[:, None], thetas, 0.0)
     scored = gb.ParetoSet(st, th, res["lambdas"], np.full(len(th), np.nan), js_choose, res["jsf_full"],
-                          f"{estimator}, J_S on the choosing data", {}, failures)
+                          f"{estimator}, J_S on the choosing data", {}, failures, plan.ident.input_names)
     if in_band:
         d = gb.decide_dsf(scored, band=plan.band, fallback="min_jsf")
         if d.index == i:
@@ -824,10 +823,6 @@ def select_graybox(
     job, res, i = jobs[pos], results[pos], members[pos]
     structure = gb.Structure(job.terms.split(" + "))
     decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
-    # the records' input order (not the structure's name order): an input array's columns as the user has them
-    m = decision.model
-    decision = dataclasses.replace(decision, model=gb.Model(m.structure, m.theta, name=m.name,
-                                                            input_names=plan.ident.input_names))
     table = table.sort_values("rank").drop(columns=["terms"])
     return GrayboxSelection(structure, decision.model, decision, table, None if form is None else form.degree, plan.band,
                             not used_fallback, used)
