@@ -222,11 +222,19 @@ def test_estimators_and_fronts_give_models_in_the_records_input_order(tmp_path):
     u = np.array([[50.0, 2000.0]])
     true = (THETA[0] + THETA[1] * 50 + THETA[2] * 2000**2 + THETA[3] * 50 * 2000) / 0.2
     front = gb.se_pareto(TRUE, data, method="gradient", lambdas=[1.0, 0.5])
+    sel, semp = gb.frols(CAND, data, n_terms=8), gb.semp(CAND, data, n_terms=8)
     models = [gb.els(TRUE, data).model, gb.cls(TRUE, data).model, front.member_model(0),
-              gb.decide_dsf(gb.pe_pareto(TRUE, data), band=data.static.band).model]
-    for m in models:
+              gb.decide_dsf(gb.pe_pareto(TRUE, data), band=data.static.band).model, sel.model, semp.model]
+    for m in models[:4]:
         assert m.input_names == INPUTS
         assert m.static_curve(u)[0] == pytest.approx(true, rel=0.01)
+    for m in models[4:]:  # least squares of the selected structures: ū read in the records' order
+        assert m.input_names == INPUTS
+        other = gb.Model(m.structure, m.theta, input_names=INPUTS[::-1])
+        np.testing.assert_allclose(m.static_curve(u), other.static_curve(u[:, ::-1]), rtol=1e-9)
+    for res in (sel, semp):
+        gb.save(res, tmp_path / "res.json")
+        assert gb.load(tmp_path / "res.json").model.input_names == INPUTS
     assert front.subset([1]).member_model(0).input_names == INPUTS
     gb.save(front, tmp_path / "front.json")
     assert gb.load(tmp_path / "front.json").input_names == INPUTS

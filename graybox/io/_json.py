@@ -356,7 +356,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                               ("noise", "structure"), ("evaluated", "structure"), ("err_evaluated", "array1"),
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
                               ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"), ("search", "str"),
-                              ("subsets", "structures"), ("subset_rss", "array1"))),
+                              ("subsets", "structures"), ("subset_rss", "array1"), ("input_names", "names"))),
     "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
                               ("theta_ls", "array1"), ("residuals", "arrays"), ("n_direct", "int"))),
     "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("prediction_cost", "floats"), ("simulation_cost", "floats"),
@@ -365,7 +365,8 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "Decision": (Decision, (("rule", "str"), ("index", "int"), ("lambda1", "float"), ("JS", "float"), ("JSF", "float"),
                             ("in_band", "bool"), ("score", "float"), ("model", "Model"), ("chosen_on", "str"))),
     "SEMPResult": (SEMPResult, (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
-                                ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"))),
+                                ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"),
+                                ("input_names", "names"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
                               ("in_band", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
                               ("n_iter", "int"), ("message", "str"), ("margin", "float"))),
@@ -417,7 +418,8 @@ _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]]
 
 #: Fields added after a format was published: a file without them gets the constructor's default.
 _OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"}), "ParetoSet": frozenset({"input_names"}),
-                                         "Selection": frozenset({"search", "subsets", "subset_rss"})}
+                                         "Selection": frozenset({"search", "subsets", "subset_rss", "input_names"}),
+                                         "SEMPResult": frozenset({"input_names"})}
 
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 

@@ -193,6 +193,9 @@ class Selection:
     subset_rss : ndarray, shape (len(subsets),)
         Their residual sums of squares on the selection rows (output units²), from the Gram matrix
         of the scaled candidates: values below 1e-13 yᵀy are that floor (round-off, not signal).
+    input_names : tuple of str, optional
+        The model's inputs, in the column order of an input array (default: as
+        :class:`~graybox.Model`'s; :func:`frols` takes the records').
     """
 
     structure: Structure
@@ -211,9 +214,13 @@ class Selection:
     search: str = "greedy"
     subsets: tuple[Structure, ...] = field(default=())
     subset_rss: np.ndarray = field(default=())
+    input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # checked and defaulted as a Model's (:attr:`model` carries them)
+        names = Model(self.structure, np.zeros(len(self.structure)), input_names=self.input_names).input_names
+        object.__setattr__(self, "input_names", names)
         for name in ("err", "theta", "err_evaluated", "rss", "criterion_curve", "subset_rss"):
             a = np.array(getattr(self, name), dtype=float, copy=True)
             a.setflags(write=False)
@@ -235,7 +242,7 @@ class Selection:
     @property
     def model(self) -> Model:
         """The selected structure with its least-squares parameters (no MA part), named ``"LS"``."""
-        return Model(self.structure, self.theta, name="LS")
+        return Model(self.structure, self.theta, name="LS", input_names=self.input_names)
 
     def to_frame(self) -> pd.DataFrame:
         """One row per evaluated term, in order.
@@ -719,6 +726,7 @@ def frols(
         search=search,
         subsets=() if plan is None else tuple(Structure([process[j] for j in S]) for S in plan.subsets),
         subset_rss=() if plan is None else plan.rss,
+        input_names=as_gram_records(data)[0].input_names,
     )
 
 

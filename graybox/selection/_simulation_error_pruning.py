@@ -75,6 +75,9 @@ class SEMPResult:
         Why selection stopped, in words.
     n_rows : int
         Samples scored (after the largest lag, summed over records).
+    input_names : tuple of str, optional
+        The model's inputs, in the column order of an input array (default: as
+        :class:`~graybox.Model`'s; :func:`semp` takes the records').
     """
 
     structure: Structure
@@ -85,12 +88,16 @@ class SEMPResult:
     criterion: str
     stop: str
     n_rows: int
+    input_names: tuple[str, ...] | None = None
 
     #: Columns every path holds (a loaded file is checked against them).
     PATH_COLUMNS = ("step", "action", "term", "n_terms", "score", "criterion", "structure")
 
     def __post_init__(self) -> None:
         check_fields(self)  # types first: path and forward_scores are DataFrames
+        # checked and defaulted as a Model's (:attr:`model` carries them)
+        names = Model(self.structure, np.zeros(len(self.structure)), input_names=self.input_names).input_names
+        object.__setattr__(self, "input_names", names)
         if len(self.theta) != len(self.structure):
             raise ValueError(f"theta has {len(self.theta)} values but the structure has {len(self.structure)} terms")
         check_choice(self.criterion, "criterion", CRITERIA)
@@ -101,7 +108,7 @@ class SEMPResult:
     @property
     def model(self) -> Model:
         """The selected structure with its least-squares parameters, named ``"SEMP"``."""
-        return Model(self.structure, self.theta, name="SEMP")
+        return Model(self.structure, self.theta, name="SEMP", input_names=self.input_names)
 
     def __repr__(self) -> str:
         return (f"SEMPResult(n_terms={len(self.structure)}, score={self.score:.4g}, steps={len(self.path)}, "
@@ -486,4 +493,5 @@ def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
     fwd.index.name = "forward step"
     return SEMPResult(Structure([opt.process[j] for j in current]), frozen(best["_theta"][current]),
                       float(best["score"]), path.drop(columns=["_set", "_theta"]), fwd, opt.crit,
-                      f"{why}: step {int(best['step'])} of the path; search: {stop}", sc.n_rows)
+                      f"{why}: step {int(best['step'])} of the path; search: {stop}", sc.n_rows,
+                      sc.records[0].input_names)
