@@ -240,3 +240,23 @@ def test_estimators_and_fronts_give_models_in_the_records_input_order(tmp_path):
     assert gb.load(tmp_path / "front.json").input_names == INPUTS
     # a set built without records keeps a Model's default
     assert gb.ParetoSet(TRUE, front.thetas, front.lambdas, front.J1, front.JS, front.JSF).input_names == ("speed", "valve")
+
+
+def test_a_grid_cell_reads_the_static_points_in_the_records_input_order(tmp_path):
+    # a grid cell's static_miss evaluated the model's static curve at the static points' ū (the records'
+    # column order: valve, speed) with a model that named its inputs in name order (speed, valve)
+    from graybox import experiments as gx
+
+    data = gb.Dataset(record(0, 400), record(1, 300), static(grid([30, 50, 70], [1200, 2000, 2800]), uncertainty=500.0))
+    g = gx.Grid([gx.DataSpec("mine", dataset=data)], [gx.StructureSpec("true", terms=[str(t) for t in TRUE])],
+                [gx.Variant("pe", "pe", lambdas=[1e-3, 0.5]), gx.Variant("dsf", "se-dsf", lambdas=[0.5, 1.0])],
+                name="order")
+    gx.run_grid(g, tmp_path / "order.sqlite")
+    df = gx.load_results(tmp_path / "order.sqlite").set_index("variant")
+    for v in ("pe", "dsf"):
+        r = df.loc[v]
+        assert r["status"] == "ok"
+        m = gb.Model(TRUE, r["theta"], input_names=INPUTS)
+        miss = np.abs(m.static_curve(data.static.ubar, y0=data.static.ybar) - data.static.ybar).max()
+        assert r["static_miss"] == pytest.approx(miss, rel=1e-9)
+        assert r["static_miss"] < 1e3  # the model is near the true one: a few hundred Pa at most

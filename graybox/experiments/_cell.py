@@ -199,7 +199,7 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
         res = gb.se_dsf(st, data, band=band, lambdas=lam, **opts)
         # a band the structure cannot reach gives the model with the smallest J_SF (and a warning), as
         # D_SF with fallback "min_jsf" does
-        return gb.Model(res.model.structure, res.model.theta, name=name), None, \
+        return res.model.with_theta(res.model.theta, name=name), None, \
             {"rule": "D_SF (direct)" if res.in_band else "min J_SF (band infeasible)", "in_band": int(res.in_band)}
     raise ValueError(f"unknown estimator {est!r}")  # pragma: no cover - the spec refuses it
 
