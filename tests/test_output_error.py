@@ -320,3 +320,21 @@ def test_ga_starts_pe_are_the_pe_solutions():
     np.testing.assert_array_equal(named.thetas, given.thetas)
     with pytest.raises(ValueError, match="starts"):
         se_pareto(OE_STRUCT, fit, static, starts="ls", **kw)
+
+
+def test_a_fit_that_ends_diverging_is_not_reported_fitted():
+    # a start whose free run diverges slowly (a huge but finite J_S) that the solver cannot bring back within one
+    # evaluation: its row says it failed where the run diverges, as simulate would call it, not "fitted"
+    from graybox.estimation._simulation_error import SEProblem
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 1, 300)
+    y = gb.simulate(gb.Structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 1.0]), u, np.zeros(1))
+    rec = gb.Record(u, y + 0.01 * rng.standard_normal(300), 1.0)
+    st = gb.Structure(["y(k-1)", "u(k-1)"])
+    bad = np.array([1.5, 1.0])
+    p = SEProblem(st, [rec], None)
+    assert np.isfinite(p.js(bad[None])[0]) and p.diverges(bad) and not p.diverges(np.array([0.5, 1.0]))
+    res = gb.output_error(st, rec, theta0=bad, n_starts=0, max_nfev=1, ridge=0.0, margin=None)
+    row = res.starts[res.starts["start"].str.startswith("theta0")]
+    assert set(row["status"]) <= {"failed"} and row["message"].str.contains("diverges").all()

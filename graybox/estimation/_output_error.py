@@ -300,7 +300,7 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
                         row(label, sv, "failed", str(exc), js0)
                         continue
                     js = float(problem.js(th[None])[0])
-                    if not np.isfinite(js):
+                    if not np.isfinite(js) or problem.diverges(th):
                         row(label, sv, "failed", "the fit ended where the free run diverges", js0, nfev=k)
                         continue
                     if chooser is None:

@@ -231,9 +231,16 @@ class SEProblem:
         r = local.radius(theta)
         return float(r.max()) if r.size else 0.0
 
+    def diverges(self, theta: np.ndarray) -> bool:
+        """Whether θ's free run on some record leaves :func:`graybox.simulate`'s default bound
+        (10⁶ × the run's own scale); :meth:`js` is finite there until the run overflows."""
+        return any(np.isnan(simulate_one(self.code, theta, record_inputs(r, self.code.inputs), r.y[:self.L], self.L,
+                                         None)[-1]) for r in self.records)
+
     # -- objectives -------------------------------------------------------------------
     def js(self, thetas: np.ndarray, threads: int = 1) -> np.ndarray:
-        """J_S of each row of ``thetas`` (inf where a free run diverges), shape (P,)."""
+        """J_S of each row of ``thetas`` (inf where a free run overflows; huge where it diverges
+        more slowly, see :meth:`diverges`), shape (P,)."""
         sse = sum(batch_sse(self.code, thetas, record_inputs(r, self.code.inputs), r.y, self.L, threads, U)
                   for r, U in zip(self.records, self.U))
         js = sse / self.n_dyn
