@@ -124,3 +124,17 @@ def test_pe_takes_a_surface_of_one_input(rec):
         a = gb.pe_pareto(ST, rec, surface, lambdas=[0.5])
         b = gb.pe_pareto(ST, rec, curve, lambdas=[0.5], ubar=static_points(surface, rec).ubar)
     np.testing.assert_allclose(a.thetas, b.thetas, rtol=1e-9)
+
+
+def test_a_curve_beside_transient_inputs_says_the_way_through():
+    data = gb.load_pumping()
+    curve = gb.StaticCurve.fit(data.static, degree=2)
+    td = gb.transient_inputs(data, taus=[30])
+    cand = gb.Candidates(2, {"u": 2, "u_tau30": 1}, degree=2, input_names=td.input_names)
+    with pytest.raises(ValueError, match=r"sample it into static points .* gb.transient_inputs\(points"):
+        gb.select_graybox(cand, td, curve, band=0.031, progress=False)
+    with pytest.raises(TypeError, match=r"sample it into static points first"):
+        gb.transient_inputs(curve, taus=[30])
+    # the way through: the curve's points, given the transient channels (z̄ = 0 at rest)
+    pts = gb.transient_inputs(static_points(curve, data), taus=[30])
+    assert pts.input_names == ("u", "u_tau30") and np.all(np.asarray(pts.ubar)[:, 1] == 0.0)

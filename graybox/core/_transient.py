@@ -90,8 +90,10 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
     ('u', 'u_tau10', 'u_tau30', 'u_tau100')
     """
     if not isinstance(data, (Record, Dataset, StaticPoints)):
+        hint = (": sample it into static points first (e.g. curve.points(ubar, 'u')) and pass those"
+                if hasattr(data, "points") else "")
         raise TypeError(f"transient_inputs: data must be a Record, a Dataset or StaticPoints, got "
-                        f"{type(data).__name__}")
+                        f"{type(data).__name__}{hint}")
     tau_list = [check_real(t, "taus (seconds)", low=0, low_open=True) for t in
                 check_sequence(taus, "taus", "a sequence of time constants in seconds")]
     if not tau_list:

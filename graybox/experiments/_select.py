@@ -284,7 +284,14 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     given = sp
     sp, form = _static_points(sp, process, band, ident)
     if sp is not None:
-        check_same_inputs(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
+        try:
+            check_same_inputs(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
+        except ValueError as exc:
+            if isinstance(given, (gb.StaticCurve, gb.StaticSurface)):
+                raise ValueError(f"{exc}; a {type(given).__name__} speaks of the records' first input only: sample it "
+                                 "into static points (its .points(ubar, name)) and give those the records' other "
+                                 "inputs (e.g. gb.transient_inputs(points, taus=...))") from None
+            raise
     L = process.max_lag
     for role, rec in (("test", test), ("validation", valid)):
         if rec is None:
