@@ -295,21 +295,31 @@ def _summary(a, c):
 
 def draws(n, degrees):
     """Table I's SE-against-ELS comparison over ``n`` draws of the simulated plant (seeds 1 … n)."""
-    from graybox.reference import TABLE_I
     print("| draw | ℓ | ELS valid | ELS J_SF | SE-grad valid | SE-grad J_SF | GA valid | GA J_SF |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     rows = _draws(range(1, n + 1), degrees, [front_dsf("gradient"), front_dsf("ga", starts="pe")])
-    print("\n| ℓ | draws | ELS J_SF > B | ELS diverges, SE-grad, GA | SE in B: grad, GA | SE valid ≤ ELS: grad, GA "
-          "| median SE/ELS valid: grad, GA | median SE/ELS ident: grad, GA | SE/ELS > 5: grad, GA "
-          "| paper SE/ELS valid, ident |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print()
+    summary_table(rows)
+
+
+def summary_table(rows, label=None, header=True):
+    """The SE-grad and GA (estimators 0 and 1 of :func:`_draws`) against ELS summary, one line per degree of
+    ``rows``, beside Table I's own ratios; ``label`` (a stand-in's name) adds a first column."""
+    from graybox.reference import TABLE_I
+    first = "" if label is None else "| stand-in "
+    if header:
+        print(f"{first}| ℓ | draws | ELS J_SF > B | ELS diverges, SE-grad, GA | SE in B: grad, GA | SE valid ≤ ELS: grad, GA "
+              "| median SE/ELS valid: grad, GA | median SE/ELS ident: grad, GA | SE/ELS > 5: grad, GA "
+              "| paper SE/ELS valid, ident |")
+        print(("| --- " if label is not None else "") + "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for degree, a in rows.items():
         g, ga = _summary(a, 0), _summary(a, 1)
         se, els_ = TABLE_I[f"SE (D_SF) ℓ={degree}"], TABLE_I[f"ELS ({15 if degree == 2 else 17})"]
-        print(f"| {degree} | {len(a)} | {int(np.sum(a[:, 1, 0] > BAND))} | {g['els_inf']}, {g['se_inf']}, {ga['se_inf']} | "
+        print(("" if label is None else f"| {label} ") +
+              f"| {degree} | {len(a)} | {int(np.sum(a[:, 1, 0] > BAND))} | {g['els_inf']}, {g['se_inf']}, {ga['se_inf']} | "
               f"{g['inb']}, {ga['inb']} | {g['wins']}, {ga['wins']} | {g['median']:.2f}, {ga['median']:.2f} | "
               f"{g['ident']:.2f}, {ga['ident']:.2f} | {g['bad']}, {ga['bad']} | "
-              f"{se['JS_valid'] / els_['JS_valid']:.2f}, {se['JS_ident'] / els_['JS_ident']:.2f} |")
+              f"{se['JS_valid'] / els_['JS_valid']:.2f}, {se['JS_ident'] / els_['JS_ident']:.2f} |", flush=True)
 
 
 #: Stand-in variants (PumpingPlant keywords) for --part variants: which disturbance makes SE lose to ELS?

@@ -311,6 +311,11 @@ class PumpingPlant:
         γ_a: mean fraction of the pumps' head lost to air per rpm of speed change; 0 switches it off.
     air_vent_time : float
         Time τ_a in which the air vents, i.e. the decay time of the head loss (s).
+    ramp_up, ramp_down : float
+        The drive's acceleration and deceleration ramps (rpm/s): the commanded speed n_c rises at
+        most ``ramp_up`` and falls at most ``ramp_down`` rpm per second (module docs, "Drive
+        ramps"); default ``math.inf``, no ramp (the bundled stand-in). Used by the calibration study of BENCHMARKS.md, "A stand-in
+        calibrated to Table I's other facts".
     speed_range : tuple of float
         References accepted by :meth:`simulate` (rpm); the turbine characteristic is calibrated
         for the rig's 750–1650 rpm and extrapolates smoothly a little beyond, down to the flow at
@@ -337,6 +342,8 @@ class PumpingPlant:
     surge_time: float = 6.0
     air_loss_per_rpm: float = 8.0e-5
     air_vent_time: float = 30.0
+    ramp_up: float = math.inf
+    ramp_down: float = math.inf
     speed_range: tuple[float, float] = (500.0, 1800.0)
 
     def __post_init__(self) -> None:
@@ -361,6 +368,10 @@ class PumpingPlant:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"PumpingPlant: {name} must be a positive finite number, got {v!r}")
+        for name in ("ramp_up", "ramp_down"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and v > 0 and not math.isnan(v)):
+                raise ValueError(f"PumpingPlant: {name} must be a positive number of rpm/s (inf: no ramp), got {v!r}")
         if not 0 <= self.process_noise_pole < 1:
             raise ValueError(f"PumpingPlant: process_noise_pole must be in [0, 1), got {self.process_noise_pole!r}")
         k, a, b = (float(c) for c in self.static_coefficients)
@@ -540,7 +551,7 @@ class PumpingPlant:
         qj, hj, m = self._low_flow
         consts = np.array([k0, a0, self.shutoff_head - b0, self.drive_lag, self.inertia * math.pi / 30.0,
                            self.speed_stiffness, self.pump_torque, self.shutoff_head, self.loss, self.inertance,
-                           qj, hj, m])
+                           qj, hj, m, float(self.ramp_up), float(self.ramp_down)])
         consts.setflags(write=False)
         return S, delay, dt, consts
 
@@ -734,7 +745,9 @@ def _rhs(nc, n, q, r, w, air, c):  # pragma: no cover - compiled
     dq = (h0 * (1.0 - air) * n * n - rq2 - ht + w) / inert
     if q <= 0.0 and dq < 0.0:
         dq = 0.0  # the non-return valves hold the column: the flow stops, it does not reverse
-    return (r - nc) / tv, (ks * (nc - n) + cp * (nc * nc - n * n)) / jp, dq
+    # the drive's ramps limit the rate of its commanded speed (inf: no ramp, the rate passes unchanged)
+    dnc = min(max((r - nc) / tv, -c[14]), c[13])
+    return dnc, (ks * (nc - n) + cp * (nc * nc - n * n)) / jp, dq
 
 
 @nb.njit(cache=True, nogil=True)
