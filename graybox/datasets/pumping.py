@@ -61,6 +61,15 @@ one pump curve with Q/2 per pump describe both. State x = (n_c, n, Q):
    of air delivers no head). None of this touches the bundled records, whose flow stays above
    28 L/s.
 
+7. **Drive ramps** (off by default). A drive may limit how fast its commanded speed moves:
+   ``dn_c/dt`` is clipped to [−``ramp_down``, ``ramp_up``] rpm/s (a drive without a braking
+   resistor decelerates on a ramp, so as not to trip on DC-bus overvoltage). A ramp makes the
+   response to a step depend on its size (a 900 rpm step at 150 rpm/s takes 6 s, a 50 rpm one is
+   over in about a second), a dynamic that polynomial NARX models of low degree represent poorly.
+   It delays the steady state and does not move it. The bundled stand-in has no ramp (both
+   default to ``math.inf``); BENCHMARKS.md, "A stand-in calibrated to Table I's other facts",
+   tries ramps among other variants.
+
 Integration: classical RK4 with ``substeps`` steps per sample (default 10, i.e. 5 ms, against a
 fastest time constant of 80 ms), compiled with numba (about 1 s per 10⁶ samples). Sampling: y(k) is read at t = k Ts, then u(k) is applied over
 [k Ts, (k+1) Ts), so y(k) depends on u(k−1), u(k−2), …
@@ -314,8 +323,7 @@ class PumpingPlant:
     ramp_up, ramp_down : float
         The drive's acceleration and deceleration ramps (rpm/s): the commanded speed n_c rises at
         most ``ramp_up`` and falls at most ``ramp_down`` rpm per second (module docs, "Drive
-        ramps"); default ``math.inf``, no ramp (the bundled stand-in). Used by the calibration study of BENCHMARKS.md, "A stand-in
-        calibrated to Table I's other facts".
+        ramps"); default ``math.inf``, no ramp (the bundled stand-in).
     speed_range : tuple of float
         References accepted by :meth:`simulate` (rpm); the turbine characteristic is calibrated
         for the rig's 750–1650 rpm and extrapolates smoothly a little beyond, down to the flow at
