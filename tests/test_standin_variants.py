@@ -74,3 +74,10 @@ def test_ramps_are_validated(bad):
     for name in ("ramp_up", "ramp_down"):
         with pytest.raises(ValueError, match=name):
             PumpingPlant(**{name: bad})
+
+
+def test_two_speed_rig_refuses_ramps():
+    from graybox.datasets._pumping_miso import TwoSpeedPumpingPlant
+    with pytest.raises(ValueError, match="no drive ramps"):
+        TwoSpeedPumpingPlant(rig=PumpingPlant(ramp_down=300.0))
+    TwoSpeedPumpingPlant(rig=PumpingPlant())  # the default rig has none

@@ -167,7 +167,8 @@ class TwoSpeedPumpingPlant:
     ----------
     rig : PumpingPlant
         Every physical constant, the noise and the disturbances (default: the bundled rig). Its
-        ``speed_range`` bounds each reference.
+        ``speed_range`` bounds each reference. The two drives have no ramps: a rig with a finite
+        ``ramp_up`` or ``ramp_down`` is refused rather than run without them.
     """
 
     rig: PumpingPlant = field(default_factory=PumpingPlant)
@@ -175,6 +176,9 @@ class TwoSpeedPumpingPlant:
     def __post_init__(self) -> None:
         if not isinstance(self.rig, PumpingPlant):
             raise TypeError(f"TwoSpeedPumpingPlant: rig must be a PumpingPlant, got {type(self.rig).__name__}")
+        if math.isfinite(self.rig.ramp_up) or math.isfinite(self.rig.ramp_down):
+            raise ValueError("TwoSpeedPumpingPlant: the two-speed rig has no drive ramps; pass a rig with "
+                             f"ramp_up = ramp_down = inf, got {self.rig.ramp_up!r} and {self.rig.ramp_down!r}")
 
     @property
     def Ts(self) -> float:
