@@ -25,7 +25,8 @@ at least 1 mlc², the one whose ℓ = 3 ELS J_SF is nearest Table I's 0.0603.
 ``--part outcome``: SE-grad and the GA (reproduce settings, ``bench_se_table.front_dsf``) against ELS
 over draws 1 … N of :data:`CALIBRATED` (the winner of ``--part calibrate``, written into this file
 before the outcome was run), :data:`A_FIRST` (the second rule's pick), :data:`RUNNERS_UP` (the next
-eligible candidates by score) or the bundled stand-in, in ``bench_se_table.py --part draws``'s tables.
+eligible candidates by score), :data:`CONTROLS` (uncalibrated stand-ins with less air loss) or the
+bundled stand-in, in ``bench_se_table.py --part draws``'s tables.
 """
 
 from __future__ import annotations
@@ -146,6 +147,12 @@ RUNNERS_UP: dict[str, dict] = {
     "runner-up 3": dict(air_loss_per_rpm=4e-5, air_vent_time=15.0, surge_intensity=0.022, surge_time=1.0),
 }
 
+#: Controls, not calibrated to anything (bench_se_table.VARIANTS): does SE beat ELS on any stand-in with less air loss?
+CONTROLS: dict[str, dict] = {
+    "control: no air loss": se_table.VARIANTS["no air loss"],
+    "control: no air, no surge": se_table.VARIANTS["no air, no surge"],
+}
+
 
 def outcome(n: int, which: list[str]) -> None:
     """SE-grad and the GA against ELS over draws 1 … n of the stand-ins ``which`` (names of :func:`stand_ins`)."""
@@ -166,7 +173,7 @@ def outcome(n: int, which: list[str]) -> None:
 
 def stand_ins() -> dict[str, dict]:
     """The stand-ins ``--part outcome`` can run: the bundled one, the calibrated one and the runners-up."""
-    return {"as bundled": {}, "calibrated": CALIBRATED, "fact (a) first": A_FIRST, **RUNNERS_UP}
+    return {"as bundled": {}, "calibrated": CALIBRATED, "fact (a) first": A_FIRST, **RUNNERS_UP, **CONTROLS}
 
 
 def main(argv=None):
