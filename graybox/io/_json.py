@@ -5,7 +5,7 @@ One file holds one value::
     {
       "format": "graybox",
       "format_version": 1,
-      "graybox_version": "0.2.0",
+      "graybox_version": "0.2.1",
       "type": "Model",
       "units": {"u": "rpm", "y": "mlc"},
       "object": {
