@@ -138,3 +138,17 @@ def test_a_curve_beside_transient_inputs_says_the_way_through():
     # the way through: the curve's points, given the transient channels (z̄ = 0 at rest)
     pts = gb.transient_inputs(static_points(curve, data), taus=[30])
     assert pts.input_names == ("u", "u_tau30") and np.all(np.asarray(pts.ubar)[:, 1] == 0.0)
+
+
+def test_the_diagnostics_take_a_curve_as_the_estimators_do(rec, curve):
+    # se_uncertainty and bootstrap_decision score the same points a curve stands for everywhere else
+    pts = static_points(curve, rec)
+    front = gb.se_pareto(ST, rec, pts, lambdas=[0.3], method="gradient", progress=False)
+    member = front.member_model(0)
+    a = gb.se_uncertainty(member, rec, curve, lambda1=0.3)
+    b = gb.se_uncertainty(member, rec, pts, lambda1=0.3)
+    np.testing.assert_array_equal(a.std, b.std)
+    kw = dict(estimator="pe", lambdas=[1.0, 0.3], n_boot=2, seed=0, band=1e-3)
+    c = gb.bootstrap_decision(ST, rec, curve, **kw)
+    d = gb.bootstrap_decision(ST, rec, pts, **kw)
+    np.testing.assert_array_equal(c.thetas, d.thetas)

@@ -47,8 +47,10 @@ import pandas as pd
 from ..estimation._prediction_error import PE_LAMBDAS, pe_pareto
 from ..estimation._decisions import FALLBACKS, decide_dsf, resolve_band
 from ..core._progress import progress_bar
-from ..models._coerce import as_structure, records_of, static_info
+from ..models._coerce import as_structure, records_of, static_points
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
+from ..static._curves import StaticCurve
+from ..static._surfaces import StaticSurface
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
@@ -319,7 +321,7 @@ def _estimator_options(estimator: str, options: Mapping | None) -> dict:
 def bootstrap_decision(
     structure: Structure,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     estimator: str = "pe",
     lambdas: Sequence[float] | np.ndarray | None = None,
@@ -342,8 +344,9 @@ def bootstrap_decision(
         Process terms (a Selection, ELSResult, Decision … gives its own).
     data : Record, sequence of Record, or Dataset
         Identification data (a Dataset's ``ident``, and its static points by default).
-    static : StaticPoints, optional
-        Static points (default: the Dataset's).
+    static : StaticPoints, StaticCurve or StaticSurface, optional
+        Static points (default: the Dataset's); a curve or surface is sampled over its domain as
+        every estimator samples it (sampled points carry no uncertainty: give ``band``).
     estimator : {"pe", "se"}
         The sweep: :func:`graybox.pe_pareto` or :func:`graybox.se_pareto`.
     lambdas : array_like, optional
@@ -394,7 +397,7 @@ def bootstrap_decision(
     estimator = check_choice(renamed(estimator if method is None else None, method, "estimator", "method"),
                              "estimator", ESTIMATORS)
     recs = records_of(data)
-    sp = static_info(static, data, needed_by="bootstrap_decision")
+    sp = static_points(static, data, needed_by="bootstrap_decision", takes_ubar=False)
     lam = check_lambdas((PE_LAMBDAS if estimator == "pe" else SE_LAMBDAS) if lambdas is None else lambdas)
     n_boot = check_int(n_boot, "n_boot", low=1)
     seed = check_seed(seed)

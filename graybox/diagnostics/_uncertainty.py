@@ -53,8 +53,9 @@ from threadpoolctl import ThreadpoolController
 from ..static._constraints import StaticConstraint, static_rows
 from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure
 from ..static._curves import StaticCurve
+from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
-from ..models._coerce import as_model, records_of, static_info
+from ..models._coerce import as_model, records_of, static_points
 from ..models._model import Model
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import regressor_matrix, stacked_regressors
@@ -539,7 +540,7 @@ def pe_uncertainty(
 def se_uncertainty(
     model: Model | Decision,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     lambda1: float | None = None,
     static_sigma: float | None = None,
@@ -553,8 +554,9 @@ def se_uncertainty(
         The member (from :func:`graybox.se_pareto`, gradient or GA; a Decision brings its λ1).
     data : Record, sequence of Record, or Dataset
         Its identification data (each record run freely from its own first samples).
-    static : StaticPoints, optional
-        Its static points (default: the Dataset's).
+    static : StaticPoints, StaticCurve or StaticSurface, optional
+        Its static points (default: the Dataset's); a curve or surface is sampled over its domain
+        as every estimator samples it.
     lambda1 : float, optional
         The member's λ1 in (0, 1] (default: the Decision's).
     static_sigma : float, optional
@@ -584,7 +586,7 @@ def se_uncertainty(
     lam = _lambda_arg(model, lambda1, "se_uncertainty")
     level = _check_level(level)
     recs = records_of(data)
-    sp = static_info(static, data, needed_by=None if lam == 1 else "se_uncertainty")
+    sp = static_points(static, data, needed_by=None if lam == 1 else "se_uncertainty", takes_ubar=False)
     if sp is None:  # λ1 = 1 ignores the static points; SEProblem still wants some
         sp = StaticPoints([0.0], [0.0])
     problem = SEProblem(m.structure, recs, sp)
