@@ -387,3 +387,15 @@ def test_gram_form_does_not_depend_on_units(seed):
         [th * sy / (su ** t.power_of("u") * sy ** t.power_of("y")) for th, t in zip(unit.theta, unit.structure)]
     )
     np.testing.assert_allclose(eng.theta, back, rtol=1e-6)
+
+
+def test_dask_records_at_another_period_are_refused():
+    # as in-memory records are: a 0.1 s record beside a 0.2 s one is one discrete-time model's data by mistake
+    import dask.array as da
+
+    rng = np.random.default_rng(0)
+    u, y = rng.standard_normal(300), rng.standard_normal(300)
+    a = gb.DaskRecord(da.from_array(u, chunks=100), da.from_array(y, chunks=100), Ts=0.1, name="a")
+    b = gb.DaskRecord(da.from_array(u, chunks=100), da.from_array(y, chunks=100), Ts=0.2, name="b")
+    with pytest.raises(ValueError, match="'a' is sampled every 0.1 s but 'b' every 0.2 s"):
+        gb.frols(gb.Candidates(1, 1, degree=1), [a, b], n_terms=2)

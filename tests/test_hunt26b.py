@@ -260,3 +260,31 @@ def test_a_grid_cell_reads_the_static_points_in_the_records_input_order(tmp_path
         miss = np.abs(m.static_curve(data.static.ubar, y0=data.static.ybar) - data.static.ybar).max()
         assert r["static_miss"] == pytest.approx(miss, rel=1e-9)
         assert r["static_miss"] < 1e3  # the model is near the true one: a few hundred Pa at most
+
+
+def test_periods_from_rounded_time_stamps_are_one_period(tmp_path):
+    # two files of one 30 Hz logger, stamps printed to 5 decimals: their mean steps differ by about 1e-6
+    # relative, which is rounding, not another period; 0.1 s against 0.2 s still is
+    for name, n in (("a", 200), ("b", 150)):
+        t = np.arange(n) / 30.0
+        (tmp_path / f"{name}.csv").write_text("t,u,y\n" + "".join(f"{x:.5f},{i % 7},{i % 5}\n"
+                                                                   for i, x in enumerate(t)))
+    a = gb.load_record_csv(tmp_path / "a.csv", u="u", y="y", time="t", name="a")
+    b = gb.load_record_csv(tmp_path / "b.csv", u="u", y="y", time="t", name="b")
+    assert a.Ts != b.Ts
+    gb.Dataset(a, b)
+    with pytest.raises(ValueError, match="sampled every 0.1 s but .* every 0.2 s"):
+        gb.Dataset(gb.Record(np.ones(50), np.ones(50), 0.1, name="x"), gb.Record(np.ones(50), np.ones(50), 0.2))
+
+
+def test_local_model_checks_the_data_range_by_input_name():
+    # a model whose inputs are in another order than the data's columns: the range check reads them by name
+    valve, speed = np.repeat([20.0, 50.0, 80.0], 40), np.repeat([1000.0, 2000.0, 3000.0], 40)[::-1]
+    rec = gb.Record(np.column_stack([valve, speed]), np.linspace(1, 2, 120), 1.0, input_names=("valve", "speed"))
+    m = gb.Model(gb.Structure(["y(k-1)", "valve(k-1)", "speed(k-1)"]), np.array([0.5, 0.01, 0.001]),
+                 input_names=("speed", "valve"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", gb.StaticRangeWarning)
+        gb.local_model(m, [2000.0, 50.0], data=rec)  # speed 2000, valve 50: inside
+    with pytest.warns(gb.StaticRangeWarning, match="outside the input range"):
+        gb.local_model(m, [50.0, 2000.0], data=rec)  # speed 50: outside

@@ -29,7 +29,7 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 from scipy.signal import lfilter
 
-from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, as_records, static_point_inputs
 from ..core._terms import Structure
 from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, warn
 from ..models._coerce import as_model
@@ -433,7 +433,12 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
         recs, static = [], data
     else:
         recs, static = as_records(data), None
-    cols = [r.inputs for r in recs] + ([static.ubar.reshape(len(static), -1)] if static is not None else [])
+    # each input by name, in the model's order (the data's columns may be in another)
+    names = model.input_names
+    cols = [np.column_stack([r.input(n) for n in names]) if len(names) > 1 else r.inputs.reshape(len(r), -1)
+            for r in recs]
+    if static is not None:
+        cols.append(static_point_inputs(static, names).reshape(len(static), -1))
     lo = np.min([c.min(axis=0) for c in cols], axis=0)
     hi = np.max([c.max(axis=0) for c in cols], axis=0)
     if lo.size != ub.shape[1]:

@@ -25,7 +25,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ._records import Dataset, as_records
+from ._records import Dataset, as_records, check_same_period
 from ._regressors import input_signals
 from ._terms import Term
 from ._reprs import short_repr
@@ -387,7 +387,10 @@ def dask_input_range(data: object) -> np.ndarray:
 def as_gram_records(data: object) -> list:
     """Records as a list (in-memory or Dask), for code that only needs lengths."""
     if is_dask_data(data):
-        return [data] if isinstance(data, DaskRecord) else list(data)
+        recs = [data] if isinstance(data, DaskRecord) else list(data)
+        for r in recs[1:]:
+            check_same_period(recs[0], r)
+        return recs
     if isinstance(data, Dataset):
         return [data.ident]
     return as_records(data)

@@ -288,17 +288,26 @@ def check_same_inputs(a: object, b: object) -> None:
         check_same_period(a, b)
 
 
+#: Relative difference of two sampling periods taken as one period: a period read from printed time
+#: stamps is their mean step, rounded by the print (the CSV loader accepts steps within 1e-3 too).
+PERIOD_RTOL = 1e-3
+
+
 def check_same_period(a: Record, b: Record) -> None:
-    """``ValueError`` naming both unless two records share their sampling period (to 1e-6, relative: a
-    period read from printed time stamps is rounded)."""
-    if abs(a.Ts - b.Ts) > 1e-6 * max(a.Ts, b.Ts):
-        raise ValueError(f"{a.name!r} is sampled every {a.Ts:g} s but {b.name!r} every {b.Ts:g} s: a discrete-time "
-                         "model holds at one sampling period; resample one of them")
+    """``ValueError`` naming both unless two records (in memory or Dask) share their sampling
+    period, to :data:`PERIOD_RTOL` relative."""
+    if abs(a.Ts - b.Ts) > PERIOD_RTOL * max(a.Ts, b.Ts):
+        raise ValueError(f"{a.name!r} is sampled every {a.Ts:.9g} s but {b.name!r} every {b.Ts:.9g} s: a "
+                         "discrete-time model holds at one sampling period; resample one of them (a Record "
+                         "made without Ts= has Ts = 1 s)")
 
 
 @dataclass(frozen=True)
 class Dataset:
     """A named bundle: identification and validation records plus static points.
+
+    The records and the static points must have the same inputs, in the same order, and the
+    records one sampling period (:data:`PERIOD_RTOL`); ``ValueError`` otherwise.
 
     Attributes
     ----------
@@ -365,7 +374,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     TypeError
         ``data`` (or an element) is of another type; the message lists what is accepted.
     ValueError
-        No records, or records whose inputs differ.
+        No records, or records whose inputs or sampling periods differ.
     """
     if isinstance(data, Dataset):
         return [getattr(data, part)]
@@ -386,7 +395,8 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["as_records", "as_input_array", "check_same_inputs", "check_same_period", "static_point_inputs"]
+__all__ += ["as_records", "as_input_array", "check_same_inputs", "check_same_period", "static_point_inputs",
+            "PERIOD_RTOL"]
 
 
 class StaticRangeWarning(UserWarning):

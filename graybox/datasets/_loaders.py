@@ -29,7 +29,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..static._curves import StaticCurve
-from ..core._records import Dataset, Record, StaticPoints
+from ..core._records import Dataset, Record, StaticPoints, check_same_period
 from ..core._terms import check_input_names
 from ..core._validation import check_choice, check_path, check_real
 from ..reference import EQ1_COEFFICIENTS
@@ -714,9 +714,10 @@ def load_buck(path: str | os.PathLike | None = None) -> Dataset:
     kw = dict(u="input", y="y", time="sampling_time", units=("", "V"))
     ident = load_record_csv(d / _BUCK_FILES[0], name="buck ident", **kw)
     valid = load_record_csv(d / _BUCK_FILES[1], name="buck valid", **kw)
-    if abs(ident.Ts - valid.Ts) > 1e-6 * ident.Ts:
-        raise ValueError(f"{d}: identification and validation files have different sampling periods "
-                         f"({ident.Ts:g} s and {valid.Ts:g} s)")
+    try:
+        check_same_period(ident, valid)
+    except ValueError as exc:
+        raise ValueError(f"{d}: {exc}") from None
     ubar = np.linspace(1.5, 3.5, 9)
     static = StaticPoints(ubar, BUCK_STATIC_CURVE(ubar), name="buck theoretical static points",
                           uncertainty=BUCK_STATIC_UNCERTAINTY)
