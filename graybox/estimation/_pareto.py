@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ..models._evaluate import evaluate_thetas
-from ..models._model import Model
+from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, StaticPoints, as_records
 from ..core._validation import check_bool, check_fields, frozen, warn
 from ..core._terms import Structure
@@ -115,7 +115,7 @@ class ParetoSet:
     def __post_init__(self) -> None:
         check_fields(self)
         # checked and defaulted as a Model's (the members' models carry them)
-        names = Model(self.structure, np.zeros(len(self.structure)), input_names=self.input_names).input_names
+        names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
         th = frozen(self.thetas)
         if th.ndim != 2 or th.shape[1] != len(self.structure):

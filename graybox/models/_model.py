@@ -15,7 +15,16 @@ from ..core._records import Record
 from ..core._validation import check_int, check_sequence, check_theta, frozen
 from ..core._terms import Structure, check_input_names, require_inputs
 
-__all__ = ["Model"]
+__all__ = ["Model", "model_input_names"]
+
+
+def model_input_names(structure: Structure, input_names: object = None) -> tuple[str, ...]:
+    """The input names of a model of ``structure``: ``input_names`` checked (every input the
+    structure uses among them), or by default the structure's inputs sorted by name (``("u",)``
+    for an output-only structure). Results that hand out models (fronts, selections) use it too."""
+    names = (structure.inputs or ("u",)) if input_names is None else check_input_names(input_names)
+    require_inputs(structure.inputs, names, "which is not among input_names")
+    return names
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,9 +69,7 @@ class Model:
         object.__setattr__(self, "noise_structure", ns)
         object.__setattr__(self, "theta", frozen(check_theta(len(st), self.theta)))
         object.__setattr__(self, "noise_theta", frozen(check_theta(len(ns), self.noise_theta, "noise_theta")))
-        names = (st.inputs or ("u",)) if self.input_names is None else check_input_names(self.input_names)
-        require_inputs(st.inputs, names, "which is not among input_names")
-        object.__setattr__(self, "input_names", names)
+        object.__setattr__(self, "input_names", model_input_names(st, self.input_names))
 
     # -- basic facts --------------------------------------------------------
     @property

@@ -53,7 +53,7 @@ import numba as nb
 import numpy as np
 import pandas as pd
 
-from ..models._model import Model
+from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record
 from ..core._terms import Structure, Term, parse_term
 from ..core._gram import (
@@ -219,7 +219,7 @@ class Selection:
     def __post_init__(self) -> None:
         check_fields(self)
         # checked and defaulted as a Model's (:attr:`model` carries them)
-        names = Model(self.structure, np.zeros(len(self.structure)), input_names=self.input_names).input_names
+        names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
         for name in ("err", "theta", "err_evaluated", "rss", "criterion_curve", "subset_rss"):
             a = np.array(getattr(self, name), dtype=float, copy=True)

@@ -38,7 +38,7 @@ import pandas as pd
 import scipy.linalg
 
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
-from ..models._model import Model
+from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, as_records
 from ._forward_regression import CRITERIA, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
@@ -96,7 +96,7 @@ class SEMPResult:
     def __post_init__(self) -> None:
         check_fields(self)  # types first: path and forward_scores are DataFrames
         # checked and defaulted as a Model's (:attr:`model` carries them)
-        names = Model(self.structure, np.zeros(len(self.structure)), input_names=self.input_names).input_names
+        names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
         if len(self.theta) != len(self.structure):
             raise ValueError(f"theta has {len(self.theta)} values but the structure has {len(self.structure)} terms")
