@@ -416,19 +416,22 @@ _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]]
               lambda m: {"equation": m.equation(digits=6), "clusters": {k: _num(v) for k, v in m.clusters().items()}}),
 }
 
-#: Fields added after a format was published: a file without them gets the constructor's default.
-_OPTIONAL: dict[str, frozenset[str]] = {"Model": frozenset({"input_names"}), "ParetoSet": frozenset({"input_names"}),
-                                         "Selection": frozenset({"search", "subsets", "subset_rss", "input_names"}),
-                                         "SEMPResult": frozenset({"input_names"})}
-
 _TYPES = {cls: name for name, (cls, _) in _CODECS.items()}
 
-#: Fields added after files of this format version were written, with the value a file without them means.
+#: A field a file may lack reads as the constructor's default (see :data:`_ADDED`).
+_DEFAULT = object()
+
+#: Fields added after files of this format version were written, with the value a file without them
+#: means (:data:`_DEFAULT`: the constructor's own).
 _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {"chosen_on": ""},
                                      "DSFResult": {"margin": float("nan")},  # not recorded: none said
                                      # selections saved before the fit / choose / test protocol chose by the
                                      # smallest validation J_S
-                                     "GrayboxSelection": {"rule": "min"}}
+                                     "GrayboxSelection": {"rule": "min"},
+                                     "Model": {"input_names": _DEFAULT}, "ParetoSet": {"input_names": _DEFAULT},
+                                     "Selection": {k: _DEFAULT for k in ("search", "subsets", "subset_rss",
+                                                                         "input_names")},
+                                     "SEMPResult": {"input_names": _DEFAULT}}
 
 #: Fields that files written by an older graybox carry and this one no longer has: read and dropped.
 #: A GrayboxSelection named the SQLite store its cells ran in; it no longer runs through a store.
@@ -462,12 +465,11 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
     if unknown:
         raise rd.fail(where, f"unknown field(s) {unknown} for a {name}")
     added = _ADDED.get(name, {})
-    optional = _OPTIONAL.get(name, frozenset())
-    missing = [k for k, _ in spec if k not in d and k not in added and k not in optional]
+    missing = [k for k, _ in spec if k not in d and k not in added]
     if missing:
         raise rd.fail(where, f"missing field(s) {missing} for a {name}")
     kwargs = {k: _dec(kind, d[k], f"{where}.{k}", rd) if k in d else added[k] for k, kind in spec
-              if k in d or k in added}
+              if k in d or added[k] is not _DEFAULT}
     try:
         return cls(**kwargs)
     except (ValueError, TypeError) as exc:
