@@ -204,18 +204,8 @@ def output_error(
     margin = check_margin(margin)
     st = as_structure(structure)
     problem = SEProblem(st, rec, None, margin=None if margin == "auto" else margin, ridge=ridge)
-    fit = dict(n_starts=n_starts, subsample=subsample, theta0=theta0, choose_on=choose_on, seed=seed,
-               max_nfev=max_nfev, tol=tol, solver=solver, progress=progress, name=name)
-    return refit_if_slow(problem, lambda p: _oe_fit(p, rec, **fit), "the output-error fit", margin == "auto")
-
-
-def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta0, choose_on, seed, max_nfev, tol,
-            solver, progress, name) -> OEResult:
-    """:func:`output_error` on one problem (its margin a number or None)."""
-    st = problem.structure
-    n = len(st)
-    chooser = None
-    if choose_on is not None:
+    chooser, chosen_on = None, ""
+    if choose_on is not None:  # checked once here, not again by a refit inside the margin
         crec = choosing_records(choose_on)
         for c in crec:
             check_same_period(rec[0], c)
@@ -226,8 +216,18 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
             for r in rec:
                 check_overlap(c, r, "choosing", "fitting", "choose on data the fit did not see (e.g. data.valid)",
                               prefix="choose_on: ")
-        chooser = SEProblem(st, crec, None)
-        chosen_on = ", ".join(r.name for r in crec)
+        chooser, chosen_on = SEProblem(st, crec, None), ", ".join(r.name for r in crec)
+    fit = dict(n_starts=n_starts, subsample=subsample, theta0=theta0, chooser=chooser, chosen_on=chosen_on, seed=seed,
+               max_nfev=max_nfev, tol=tol, solver=solver, progress=progress, name=name)
+    return refit_if_slow(problem, lambda p: _oe_fit(p, rec, **fit), "the output-error fit", margin == "auto")
+
+
+def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta0, chooser, chosen_on, seed, max_nfev,
+            tol, solver, progress, name) -> OEResult:
+    """:func:`output_error` on one problem (its margin a number or None); ``chooser``: the choosing
+    records' problem (None: the choice is on the fitting records)."""
+    st = problem.structure
+    n = len(st)
     solvers = ("trf", "dogbox") if solver == "auto" else (solver,)
 
     rows: list[dict] = []
@@ -324,7 +324,7 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
         model=model,
         JS=float(problem.js(th[None])[0]),
         JS_choose=float(best["score"]) if chooser is not None else float("nan"),
-        chosen_on=chosen_on if chooser is not None else "",
+        chosen_on=chosen_on,
         start=best["start"],
         starts=starts,
         margin=float("nan") if problem.margin is None else problem.margin,

@@ -575,7 +575,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
         if p > K or not np.array_equal(fitted.lambdas, lam[:p]):
             raise ValueError("fitted members must be those of the sweep's first λ1 values")
         thetas[:p], costs[:p] = fitted.thetas, fitted.costs
-        nfev[:p] = 0 if fitted.nfev is None else fitted.nfev
+        nfev[:p] = fitted.nfev  # an SEFront's nfev is never None (zeros by default)
         failures.update(fitted.failures)
         done = p
         if path is not None:
@@ -1281,7 +1281,7 @@ def se_pareto(
     if problem is not base and len(front.failures) == front.lambdas.size:
         # no member fits inside the margin: the sweep without it (its slow members then named, not refitted)
         problem, refit = base, False
-        front = sweep(problem, checkpoint)
+        front = sweep(problem, checkpoint, fitted=probe)
     thetas, costs, failures = front.thetas.copy(), front.costs.copy(), dict(front.failures)
     margins = np.full(front.lambdas.size, np.nan if problem.margin is None else problem.margin)
     if refit and problem.margin is None:
