@@ -8,7 +8,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import graybox as gb
-from graybox.core._records import check_overlap, overlap_message, shared_stretch, sliced
+from graybox.core._records import check_overlap, shared_stretch, sliced
 
 
 def _record(seed, n, m=1, quantum=None):
@@ -107,14 +107,18 @@ def test_a_held_input_at_a_constant_output_is_not_an_overlap():
     held = gb.Record(np.ones(200), np.full(200, 3.0), name="held")
     again = gb.Record(np.ones(80), np.full(80, 3.0), name="again")
     assert shared_stretch(held, again) is None
-    assert overlap_message(held, again, "test", "validation") == ""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_overlap(held, again, "test", "validation", "test on other data")  # neither refused nor warned of
 
 
 def test_the_message_names_both_records_and_the_samples():
     rec = _record(3, 400)
-    msg = overlap_message(rec.slice(100, 400), rec, "test", "validation")
+    with pytest.raises(ValueError) as caught:
+        check_overlap(rec.slice(100, 400), rec, "test", "validation", "test on other data")
+    msg = str(caught.value)
     assert "test record" in msg and "validation record" in msg and "300 samples" in msg
-    assert "samples 0..299 are samples 100..399" in msg
+    assert "samples 0..299 are samples 100..399" in msg and msg.endswith(": test on other data")
 
 
 def test_selection_and_output_error_refuse_overlapping_records():

@@ -572,12 +572,6 @@ def _agreeing(x: np.ndarray, z: np.ndarray) -> int:
     return m
 
 
-def overlap_message(a: Record, b: Record, a_name: str, b_name: str) -> str:
-    """Empty when the records share no stretch of samples; else a sentence saying where they do."""
-    s = shared_stretch(a, b)
-    return "" if s is None else _stretch_message(a, b, a_name, b_name, s)
-
-
 def _stretch_message(a: Record, b: Record, a_name: str, b_name: str, s: tuple[int, int, int]) -> str:
     i, j, n = s
     return (f"the {a_name} record ({a.name!r}) shares {n} samples with the {b_name} record ({b.name!r}): its "
@@ -595,5 +589,4 @@ def choosing_records(value: object, name: str = "choose_on") -> list[Record]:
     return recs
 
 
-__all__ += ["same_record", "shared_stretch", "sliced", "overlap_message", "check_overlap", "RecordOverlapWarning",
-            "choosing_records"]
+__all__ += ["same_record", "shared_stretch", "sliced", "check_overlap", "RecordOverlapWarning", "choosing_records"]
