@@ -586,9 +586,10 @@ class NeuralModel:
         """
         check_choice(on_diverge, "on_diverge", ("raise", "nan"))
         L = self.max_lag
-        reach = abs(self.y_offset) + abs(self.y_scale) * (abs(self.b2) + float(np.sum(np.abs(self.w2))))
         u, y0, b = free_run_inputs(u, y0, L, bound, what="network")
-        b = default_bound(y0, reach) if b is None else b
+        if b is None:  # the default: from the network's output range, |offset| + scale (|b2| + Σ|w2|)
+            reach = abs(self.y_offset) + abs(self.y_scale) * (abs(self.b2) + float(np.sum(np.abs(self.w2))))
+            b = default_bound(y0, reach)
         yn = _free_run_kernel(self._W1c, self.b1, self.w2, self.b2, np.ascontiguousarray(self._un(u)),
                               np.ascontiguousarray(self._yn(y0)), self.ny, self.nu)
         y = self._y(yn)
