@@ -54,6 +54,7 @@ from ._equilibrium_kernels import (
     REACHED,
     real_roots_upto_cubic,
     schur_stable_rows,
+    settle_candidates,
     settle_runs,
 )
 from ..core._terms import Structure, Term
@@ -663,24 +664,19 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     status : ndarray of int8, shape (K,)
         As in :class:`Reached`: 0, 2 (no stable equilibrium), 3 or 4.
     """
-    r = np.asarray(roots, float)
-    y0a = np.asarray(y0, float)
-    st = np.asarray(stable, bool) & np.isfinite(r)
-    with np.errstate(all="ignore"):
-        gaps = np.abs(r[:, :, None] - r[:, None, :])
-        gaps[:, np.arange(r.shape[1]), np.arange(r.shape[1])] = np.inf
-        gap = np.min(np.where(np.isfinite(gaps), gaps, np.inf), axis=2)
-        scale = np.minimum(np.maximum(np.maximum(np.abs(r), np.abs(y0a)[:, None]), floor), gap)
-    order = np.argsort(~st, axis=1, kind="stable")  # stable candidates first
-    cand = np.ascontiguousarray(np.take_along_axis(np.where(st, r, np.nan), order, axis=1))
-    scale = np.take_along_axis(scale, order, axis=1)
-    ncand = st.sum(axis=1).astype(np.int64)
-    tol = np.ascontiguousarray(SETTLE_RTOL * scale)
-    ntol = np.ascontiguousarray(1000.0 * SETTLE_RTOL * scale)
+    y0a = np.ascontiguousarray(y0, dtype=float)
+    cand, ncand, tol, ntol = settle_candidates(np.ascontiguousarray(roots, dtype=float),
+                                               np.ascontiguousarray(stable, dtype=np.bool_), y0a, float(floor),
+                                               SETTLE_RTOL)
     run = ncand > 0
     ybar = np.full(y0a.shape, np.nan)
     status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
-    if run.any():
+    if run.all():
+        with np.errstate(all="ignore"):
+            ybar, status = settle_runs(int(kind), np.ascontiguousarray(ip, dtype=np.int64),
+                                       np.ascontiguousarray(fp, dtype=float), y0a, cand, ncand, tol, ntol,
+                                       max(int(L), 1), float(floor), SETTLE_STEPS, STALL_RTOL)
+    elif run.any():
         with np.errstate(all="ignore"):
             ybar[run], status[run] = settle_runs(
                 int(kind), np.ascontiguousarray(ip, dtype=np.int64), np.ascontiguousarray(fp[run], dtype=float),

@@ -4,6 +4,9 @@
   characteristic polynomial of a linearised recursion (no eigenvalues are computed, which keeps it
   cheap enough for every generation of a GA); the coefficients come from
   :mod:`graybox.static._linearisation`.
+- :func:`entry_sums` — the coefficients a_l of a linearised recursion from the term structure's
+  entries (the arithmetic of :mod:`graybox.static._linearisation`, compiled: it runs at every trial
+  point of a fit).
 - :func:`real_roots_upto_cubic` — real roots of the static equation (degree ≤ 3) for every
   (member, point) pair, with the variable scaled by a power of two so that the extreme
   coefficients are balanced (the decisions do not depend on the units of y), then Kahan's cubic
@@ -22,7 +25,7 @@ import numba as nb
 import numpy as np
 
 __all__ = [
-    "schur_stable_rows", "real_roots_upto_cubic", "settle_runs",
+    "schur_stable_rows", "entry_sums", "real_roots_upto_cubic", "settle_candidates", "settle_runs",
     "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED",
 ]
 
@@ -72,6 +75,37 @@ def schur_stable_rows(a):  # pragma: no cover - compiled
             c[i + 1] = -a[r, i]
         out[r] = _schur_cohn(c, L, nxt)
     return out
+
+
+@nb.njit(cache=True, nogil=True)
+def entry_sums(th, yb, U, t, l, g, yexp, Ly):  # pragma: no cover - compiled
+    """a[r, l_e] = Σ_e θ[r, t_e] g_e ȳ_r^(yexp_e) U[r, e], summed entry by entry in order, shape (R, Ly).
+
+    One row r per (θ, steady state) pair: ``th`` (R, T), ``yb`` (R,), ``U`` (R, E) the entries'
+    input parts; entry e is (term t_e, lag l_e, lag count g_e, output exponent yexp_e ≥ 0). An
+    entry whose θ is 0 adds nothing (an overflowing weight of a zero term is no NaN). The product
+    is formed as ((θ g) Y) U, Y = ȳ^yexp with ȳ¹ = ȳ and ȳ² = ȳ·ȳ, as numpy forms it.
+    """
+    R = th.shape[0]
+    E = t.shape[0]
+    a = np.zeros((R, Ly))
+    for r in range(R):
+        y = yb[r]
+        for e in range(E):
+            v = th[r, t[e]]
+            if v == 0.0:
+                continue
+            x = yexp[e]
+            if x == 0.0:
+                Y = 1.0
+            elif x == 1.0:
+                Y = y
+            elif x == 2.0:
+                Y = y * y
+            else:
+                Y = y ** x
+            a[r, l[e]] += v * g[e] * Y * U[r, e]
+    return a
 
 
 # -- real roots of the static equation -----------------------------------------------------------
@@ -311,6 +345,42 @@ def _static_residual(kind, ip, fp, y):  # pragma: no cover - compiled
         F += fp[1 + j] * th
         dF += fp[1 + j] * a * (1.0 - th * th)
     return F, dF
+
+
+@nb.njit(cache=True, nogil=True)
+def settle_candidates(roots, stable, y0, floor, rtol):  # pragma: no cover - compiled
+    """The targets of :func:`settle_runs`: each pair's stable roots first (in their order), and their tolerances.
+
+    ``roots`` (K, D) NaN-padded, ``stable`` (K, D), ``y0`` (K,). A root's scale is
+    min(max(|root|, |y0|, floor), its distance to the nearest other finite root); ``tol`` is
+    ``rtol`` × scale and ``ntol`` 1000 ``rtol`` × scale. Returns (cand (K, D) NaN-padded,
+    ncand (K,), tol (K, D), ntol (K, D)).
+    """
+    K, D = roots.shape
+    cand = np.full((K, D), np.nan)
+    tol = np.full((K, D), np.nan)
+    ntol = np.full((K, D), np.nan)
+    ncand = np.zeros(K, dtype=np.int64)
+    big = 1000.0 * rtol
+    for k in range(K):
+        c = 0
+        for i in range(D):
+            r = roots[k, i]
+            if not (stable[k, i] and np.isfinite(r)):
+                continue
+            gap = np.inf
+            for j in range(D):
+                if j != i:
+                    d = abs(r - roots[k, j])
+                    if np.isfinite(d) and d < gap:
+                        gap = d
+            scale = min(max(max(abs(r), abs(y0[k])), floor), gap)
+            cand[k, c] = r
+            tol[k, c] = rtol * scale
+            ntol[k, c] = big * scale
+            c += 1
+        ncand[k] = c
+    return cand, ncand, tol, ntol
 
 
 @nb.njit(cache=True, nogil=True)

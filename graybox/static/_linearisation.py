@@ -19,12 +19,13 @@ The poles are the roots of z^L − a_1 z^(L−1) − … − a_L (:func:`charact
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
 from ..core._simulation_kernels import Code, encode
 from ..core._terms import Structure
+from ._equilibrium_kernels import entry_sums
 
 __all__ = ["DerivativeMap", "derivative_map", "local_coefficients", "grid_coefficients", "characteristic_roots"]
 
@@ -93,29 +94,45 @@ class DerivativeMap:
         ``thetas`` (K, n_terms), ``ybar`` (K,), ``ubar`` as for :meth:`input_part`. Summed term by
         term in structure order, θ_t = 0 skipped (so an overflowing weight of a zero term is no NaN).
         """
-        t, _ = np.nonzero(self.G)
-        return self._sum_entries(np.asarray(thetas, float), self._entry_parts(ybar, t),
-                                 self.input_part(ubar)[:, t])
+        return self._sum_entries(np.asarray(thetas, float), np.asarray(ybar, float).ravel(),
+                                 self.input_part(ubar)[:, self._entries[0]])
 
-    def _entry_parts(self, ybar: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """ȳ^(P_y − 1) of the terms ``t`` of the entries of G, shape (K, entries); 1 where P_y <= 1."""
-        yb = np.asarray(ybar, float)
-        Y = np.ones((yb.size, t.size))
-        with np.errstate(all="ignore"):
-            for e in np.flatnonzero(self.powers[t, 0] > 1):
-                Y[:, e] = yb ** (self.powers[t[e], 0] - 1.0)
-        return Y
+    @cached_property
+    def _entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The nonzero entries of G in structure order: (term t, lag index l, count G_tl, output exponent
+        max(P_y − 1, 0) of term t), each shape (entries,)."""
+        t, l = np.nonzero(self.G)
+        out = (t.astype(np.int64), l.astype(np.int64), self.G[t, l].copy(), np.maximum(self.powers[t, 0] - 1.0, 0.0))
+        for arr in out:
+            arr.setflags(write=False)
+        return out
 
-    def _sum_entries(self, th: np.ndarray, Y: np.ndarray, U: np.ndarray) -> np.ndarray:
-        """a from the entries' output and input parts: ((θ_t G_tl) ȳ^(P_y − 1)) ∏ ū^P, summed per lag in order."""
-        t, l = np.nonzero(self.G)  # entries in structure order
-        a = np.zeros((th.shape[0], self.Ly))
-        with np.errstate(all="ignore"):
-            v = th[:, t] * self.G[t, l] * Y * U
-            v[th[:, t] == 0.0] = 0.0
-        for e in range(t.size):  # one sum per lag, term by term in order (no pairwise reordering)
-            a[:, l[e]] += v[:, e]
-        return a
+    def _sum_entries(self, th: np.ndarray, yb: np.ndarray, U: np.ndarray) -> np.ndarray:
+        """a from each row's θ (R, T), ȳ (R,) and the entries' input parts U (R, entries): ((θ_t G_tl) ȳ^(P_y − 1)) ∏ ū^P,
+        summed per lag entry by entry in order (no pairwise reordering), compiled (:func:`entry_sums`)."""
+        t, l, g, yexp = self._entries
+        return entry_sums(np.ascontiguousarray(th, dtype=float), np.ascontiguousarray(yb, dtype=float),
+                          np.ascontiguousarray(U, dtype=float), t, l, g, yexp, self.Ly)
+
+    def entry_inputs(self, ubar: np.ndarray) -> np.ndarray:
+        """The input part ∏ ū^P of each entry of G at fixed points ``ubar`` (as for :meth:`input_part`), shape
+        (K, entries), read-only. Remembered for the last few point sets: a fit asks for the same static
+        points at every trial θ."""
+        ub = np.ascontiguousarray(ubar, dtype=float)
+        key = (ub.shape, ub.tobytes())
+        cache = self._point_cache
+        U = cache.get(key)
+        if U is None:
+            U = self.input_part(ub)[:, self._entries[0]]
+            U.setflags(write=False)
+            if len(cache) >= 16:
+                cache.clear()
+            cache[key] = U
+        return U
+
+    @cached_property
+    def _point_cache(self) -> dict:
+        return {}
 
     def input_coefficients(self, thetas: np.ndarray, ybar: np.ndarray, ubar: np.ndarray) -> np.ndarray:
         """b_il = Σ_t θ_t H_itl ȳ^P_y ū_i^(P_i − 1) ∏_(i' ≠ i) ū_i'^P_i', shape (K, m, Lu).
@@ -220,9 +237,8 @@ def grid_coefficients(structure: Structure, thetas: np.ndarray, ubar: np.ndarray
     yb = np.atleast_2d(np.asarray(ybar, float))
     P, M = yb.shape
     th = np.broadcast_to(np.atleast_2d(np.asarray(thetas, float)), (P, len(structure)))
-    t, _ = np.nonzero(dm.G)
-    U = dm.input_part(np.asarray(ubar, float))[:, t]  # the input part depends on the points only
-    a = dm._sum_entries(np.repeat(th, M, axis=0), dm._entry_parts(yb.ravel(), t), np.tile(U, (P, 1)))
+    U = dm.entry_inputs(np.asarray(ubar, float))  # the input part depends on the points only
+    a = dm._sum_entries(np.repeat(th, M, axis=0), yb.ravel(), np.tile(U, (P, 1)) if P > 1 else U)
     return a.reshape(P, M, dm.Ly)
 
 
