@@ -7,9 +7,29 @@ solution back: results do not depend on the units the user chose.
 
 from __future__ import annotations
 
-import numpy as np
+from contextlib import AbstractContextManager
 
-__all__ = ["column_scales", "scaled_lstsq"]
+import numpy as np
+from threadpoolctl import ThreadpoolController
+
+__all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread"]
+
+_CONTROLLER: list[ThreadpoolController] = []
+
+
+def thread_pools() -> ThreadpoolController:
+    """This process's BLAS/OpenMP thread pools, found once: building a controller scans the loaded
+    libraries (``threadpool_limits`` does on every call, which costs as much as a short fit);
+    limiting with it is cheap."""
+    if not _CONTROLLER:
+        _CONTROLLER.append(ThreadpoolController())
+    return _CONTROLLER[0]
+
+
+def one_blas_thread() -> AbstractContextManager:
+    """A context in which BLAS runs on one thread: the fits make thousands of small BLAS calls, where
+    a multi-threaded BLAS only adds synchronisation (30× slower on a loaded 2-core machine)."""
+    return thread_pools().limit(limits=1, user_api="blas")
 
 
 def column_scales(A: np.ndarray) -> np.ndarray:

@@ -48,7 +48,6 @@ from typing import Iterable, Sequence
 import numpy as np
 import pandas as pd
 from scipy import stats
-from threadpoolctl import ThreadpoolController
 
 from ..static._constraints import StaticConstraint, static_rows
 from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure
@@ -57,6 +56,7 @@ from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
 from ..models._coerce import as_model, records_of, static_points
 from ..models._model import Model
+from ..core._least_squares import one_blas_thread
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
@@ -219,16 +219,6 @@ def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
     return Vt[r:].T, r
 
 
-_CONTROLLER: list[ThreadpoolController] = []
-
-
-def _blas() -> ThreadpoolController:
-    """One controller for the process: building one scans the loaded libraries, limiting with it is cheap."""
-    if not _CONTROLLER:
-        _CONTROLLER.append(ThreadpoolController())
-    return _CONTROLLER[0]
-
-
 def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> np.ndarray:
     """Z (ZᵀHZ)⁻¹ ZᵀMZ (ZᵀHZ)⁻¹ Zᵀ with H = AᵀA and M = GᵀG, from the factors (never forming H).
 
@@ -243,7 +233,7 @@ def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> np.ndar
     if not (np.all(np.isfinite(AZ)) and np.all(np.isfinite(G))):
         raise ValueError(f"{what}: non-finite derivatives; the covariance is undefined here")
     # one BLAS thread: a threaded SVD of a thin matrix mostly waits for threads on a busy machine (BENCHMARKS.md)
-    with _blas().limit(limits=1, user_api="blas"):
+    with one_blas_thread():
         _, S, Vt = np.linalg.svd(AZ, full_matrices=False)
         if S.size < Z.shape[1] or S[0] == 0 or S[-1] <= 1e-12 * S[0]:
             raise ValueError(f"{what}: the parameters are not identifiable from these data and constraints "

@@ -37,13 +37,13 @@ from dataclasses import dataclass
 from typing import Literal, Sequence
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from ._decisions import resolve_band
 from ._local_models import check_margin
 from ._prediction_error import pe_thetas
 from ..models._coerce import as_structure, records_of, static_points
 from ..models._model import Model
+from ..core._least_squares import one_blas_thread
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, warn_static_range
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
                                 gradient_front, refit_if_slow)
@@ -206,7 +206,7 @@ _MU_RTOL = 1e-4
 
 
 def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray, str]:
-    with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
+    with one_blas_thread(), warnings.catch_warnings():
         warnings.simplefilter("ignore", StaticRangeWarning)
         try:
             th = pe_thetas(problem.structure, problem.records, problem.static, lambdas=lambdas, solver="closed")

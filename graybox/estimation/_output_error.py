@@ -42,8 +42,8 @@ from typing import Literal, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
-from threadpoolctl import threadpool_limits
 
+from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, check_overlap, check_same_period, choosing_records,
                              same_record)
@@ -268,7 +268,7 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
 
     bar = progress_bar(len(cands), f"output error ({len(cands)} starts)", progress)
     try:
-        with threadpool_limits(limits=1, user_api="blas"):
+        with one_blas_thread():
             for label, th0 in cands:
                 bar.update(1)
                 js0 = float(problem.js(th0[None])[0])

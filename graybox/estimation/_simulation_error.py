@@ -50,7 +50,6 @@ from typing import Callable, Literal, Mapping, Sequence, TypeVar
 import numpy as np
 from scipy.linalg.lapack import dgeqrf
 from scipy.optimize import least_squares
-from threadpoolctl import threadpool_limits
 
 from ._prediction_error import pe_thetas
 from ..core._simulation_kernels import (
@@ -62,7 +61,7 @@ from ..core._simulation_kernels import (
     record_inputs,
     simulate_one,
 )
-from ..core._least_squares import column_scales, scaled_lstsq
+from ..core._least_squares import column_scales, one_blas_thread, scaled_lstsq
 from ..models._coerce import as_structure, records_of, static_points
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
@@ -151,7 +150,7 @@ class SEProblem:
         # the output's spread (output units): least_squares' gradient test is absolute, and the
         # gradient of these residuals is in output units, so its tolerance is scaled by this
         self.y_scale = float(np.std(self.target)) or 1.0
-        self._ls: np.ndarray | None = None
+        self._memo: dict = {}  # least squares and PE solutions, shared with with_margin's copies
         self._static_memo: tuple[bytes, np.ndarray] | None = None
         self.ridge = check_real(ridge, "ridge", low=0.0)
         self.ridge_ref = self.ls_theta() * self.scale if self.ridge > 0 else None
@@ -159,8 +158,11 @@ class SEProblem:
             else None
 
     def with_margin(self, margin: float | None) -> SEProblem:
-        """The same problem (structure, records, static points, ridge) with another margin."""
-        return SEProblem(self.structure, self.records, self.static, margin=margin, ridge=self.ridge)
+        """The same problem (structure, records, static points, ridge) with another margin; what does not
+        depend on the margin (the least-squares and PE solutions) is computed once for both."""
+        other = SEProblem(self.structure, self.records, self.static, margin=margin, ridge=self.ridge)
+        other._memo = self._memo
+        return other
 
     def fingerprint(self) -> str:
         """A hash of everything that defines the problem (for checkpoints)."""
@@ -334,9 +336,9 @@ class SEProblem:
 
     def ls_theta(self) -> np.ndarray:
         """Least-squares (one-step) estimate on all samples (computed once; a copy)."""
-        if self._ls is None:
-            self._ls = scaled_lstsq(self.psi, self.target)
-        return self._ls.copy()
+        if "ls" not in self._memo:
+            self._memo["ls"] = scaled_lstsq(self.psi, self.target)
+        return self._memo["ls"].copy()
 
     def random_ls(self, rng: np.random.Generator, count: int, samples: int = 30) -> np.ndarray:
         """``count`` θ's, each least squares on ``samples`` randomly chosen rows (the paper's seeds)."""
@@ -584,7 +586,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     # The sweeps make thousands of small BLAS calls (QR of a few thousand rows, 30-row least
     # squares): a multi-threaded BLAS only adds synchronisation, and on a loaded 2-core machine
     # it measured 30x slower than one thread. Our own parallelism is the population threads.
-    limits = threadpool_limits(limits=1, user_api="blas")
+    limits = one_blas_thread()
     try:
         for i in range(done, K):
             # one generator per λ index: a resumed sweep draws exactly what an uninterrupted one does
@@ -929,14 +931,22 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
 
 
 def _pe_members(problem: SEProblem, lambdas: np.ndarray) -> np.ndarray | None:
-    """The PE member (closed form) of each λ1, a start of the same λ; None if PE cannot solve it."""
-    try:
-        with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
-            th = pe_thetas(problem.structure, problem.records, problem.static, lambdas=lambdas, solver="closed")
-    except ValueError:  # e.g. not identifiable with the static rows
-        return None
-    return th if np.all(np.isfinite(th)) else None
+    """The PE member (closed form) of each λ1, a start of the same λ; None if PE cannot solve it.
+    Remembered by the problem (and its :meth:`SEProblem.with_margin` copies): a sweep inside the
+    margin starts from the same PE members."""
+    lambdas = np.asarray(lambdas, float)
+    key = ("pe", lambdas.tobytes())
+    if key not in problem._memo:
+        try:
+            with one_blas_thread(), warnings.catch_warnings():
+                warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
+                th = pe_thetas(problem.structure, problem.records, problem.static, lambdas=lambdas, solver="closed")
+        except ValueError:  # e.g. not identifiable with the static rows
+            th = None
+        if th is not None:
+            th.setflags(write=False)
+        problem._memo[key] = th if th is not None and np.all(np.isfinite(th)) else None
+    return problem._memo[key]
 
 
 #: The gradient method's solver choices; "auto" picks per phase (see :func:`gradient_front`).
@@ -1046,7 +1056,7 @@ def gradient_front(
     thetas, costs, nfev = front.thetas.copy(), front.costs.copy(), front.nfev.copy()
     failures = dict(front.failures)
     K = lam.size
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         for i in range(K - 1, -1, -1):
             lam1 = float(lam[i])
             after = _nearest(thetas, i, "after", 2)

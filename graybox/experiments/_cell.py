@@ -18,13 +18,13 @@ from typing import Any, Iterable, Mapping
 
 import numba
 import numpy as np
-from threadpoolctl import ThreadpoolController
 
 from .. import _api as gb
 
 from ..static._constraints import static_cluster_map
 from ..estimation._decisions import min_jsf_index
 from ..estimation._prediction_error import numerator_surface
+from ..core._least_squares import thread_pools
 from ..core._validation import check_int
 from ._spec import Cell, build_constraint, canonical_json
 
@@ -73,18 +73,6 @@ JSON_COLUMNS = ("terms", "theta", "members", "warnings")
 # the structures it has made.
 _STRUCTURES: dict[tuple[str, str], tuple[str, ...]] = {}
 _STRUCTURE_CACHE_SIZE = 256
-
-
-_CONTROLLER: ThreadpoolController | None = None
-
-
-def _thread_pools() -> ThreadpoolController:
-    """This process's BLAS/OpenMP pools, found once (``threadpool_limits`` searches for them on
-    every call, which costs as much as a short cell)."""
-    global _CONTROLLER
-    if _CONTROLLER is None:
-        _CONTROLLER = ThreadpoolController()
-    return _CONTROLLER
 
 
 def _row(cell: Cell) -> dict[str, Any]:
@@ -284,7 +272,7 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
     caught: list[warnings.WarningMessage] = []
     try:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-        with _thread_pools().limit(limits=threads), warnings.catch_warnings(record=True) as caught:
+        with thread_pools().limit(limits=threads), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             st = make_structure(cell.structure_spec, data, cell.data_hash)
             row["terms"] = [str(t) for t in st]
