@@ -278,9 +278,10 @@ def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.nda
     return static.ubar[:, [static.input_names.index(n) for n in inputs]]
 
 
-def check_same_inputs(a: object, b: object) -> None:
-    """``ValueError`` naming both unless ``a`` and ``b`` (records, static points) have the same inputs
-    (and, two records, the same sampling period)."""
+def check_compatible(a: object, b: object) -> None:
+    """``ValueError`` naming both unless ``a`` and ``b`` (records, static points) can belong to one
+    identification: the same inputs in the same order and, two records, the same sampling period
+    (:func:`check_same_period`)."""
     if a.input_names != b.input_names:  # type: ignore[attr-defined]
         raise ValueError(f"{a.name!r} has inputs {a.input_names} but {b.name!r} has inputs {b.input_names}: "  # type: ignore[attr-defined]
                          "all data of one identification must have the same inputs, in the same order")
@@ -335,9 +336,9 @@ class Dataset:
             raise TypeError(f"Dataset: static must be StaticPoints or None, got {type(self.static).__name__}")
         if not isinstance(self.extra, dict):
             raise TypeError(f"Dataset: extra must be a dict, got {type(self.extra).__name__}")
-        check_same_inputs(self.ident, self.valid)
+        check_compatible(self.ident, self.valid)
         if self.static is not None:
-            check_same_inputs(self.ident, self.static)
+            check_compatible(self.ident, self.static)
 
     @property
     def input_names(self) -> tuple[str, ...]:
@@ -391,11 +392,11 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
             raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset; got a sequence holding a "
                             f"{type(r).__name__}")
     for r in recs[1:]:
-        check_same_inputs(recs[0], r)
+        check_compatible(recs[0], r)
     return recs
 
 
-__all__ += ["as_records", "as_input_array", "check_same_inputs", "check_same_period", "static_point_inputs",
+__all__ += ["as_records", "as_input_array", "check_compatible", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

@@ -59,7 +59,7 @@ from ..core._least_squares import column_scales
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import Dataset, Record, StaticPoints, check_same_inputs, warn_static_range
+from ..core._records import Dataset, Record, StaticPoints, check_compatible, warn_static_range
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
@@ -744,7 +744,7 @@ def _check_point_inputs(recs: list[Record], points: StaticPoints | None) -> None
         return
     r = recs[0]
     if points.n_inputs != r.n_inputs or (r.n_inputs > 1 and points.input_names != r.input_names):
-        check_same_inputs(r, points)
+        check_compatible(r, points)
 
 
 def numerator_surface(cm, points: StaticPoints) -> StaticSurface:

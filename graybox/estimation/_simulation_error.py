@@ -71,7 +71,7 @@ from ..core._records import (
     StaticPoints,
     StaticRangeWarning,
     as_records,
-    check_same_inputs,
+    check_compatible,
     warn_static_range,
 )
 from ..core._regressors import stacked_regressors
@@ -135,7 +135,7 @@ class SEProblem:
                              "(se_pareto, se_dsf, output_error)")
         if static is not None and (static.n_inputs != r0.n_inputs or (r0.n_inputs > 1
                                                                        and static.input_names != r0.input_names)):
-            check_same_inputs(r0, static)
+            check_compatible(r0, static)
         # several inputs: the static part lives on the surface ȳ(ū_1, …, ū_m), columns in the records' order
         self.surface_inputs = r0.input_names if (r0.n_inputs > 1 or len(structure.inputs) > 1) else None
         self.static = static

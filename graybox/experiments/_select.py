@@ -48,7 +48,7 @@ from ..selection._forward_regression import _RSS_FLOOR
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._progress import progress_bar, show_progress
-from ..core._records import (check_overlap, check_same_inputs, check_same_period, same_record,
+from ..core._records import (check_compatible, check_overlap, check_same_period, same_record,
                              warn_static_range)
 from ..core._terms import require_inputs
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
@@ -285,7 +285,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     sp, form = _static_points(sp, process, band, ident)
     if sp is not None:
         try:
-            check_same_inputs(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
+            check_compatible(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
         except ValueError as exc:
             if isinstance(given, (gb.StaticCurve, gb.StaticSurface)):
                 raise ValueError(f"{exc}; a {type(given).__name__} speaks of the records' first input only: sample it "
