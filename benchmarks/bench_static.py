@@ -11,6 +11,13 @@ generations of a sweep evaluate. Reported: the median CPU time of the process (l
 wall time to the steal time of a shared VM) of `SEProblem.jsf` (every member × every static point)
 and of `SEProblem.js` (the free runs, for scale), and how the members' static points end (reached /
 no stable equilibrium / diverged / did not settle).
+
+    benchmarks/.env/bin/python benchmarks/bench_static.py --part single [--repeat 7]
+
+"single": what a gradient SE fit pays at every trial θ, one member at a time: the equilibria reached
+at the static points (`reached_equilibria`, P = 1) and the stability-margin check (`within_margin`,
+along the record and at those equilibria), for the README's selection structures on the plant
+(SEMP from Candidates(6, 6, degree=2), 6, 12 and 16 terms, least-squares θ).
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _common import machine  # noqa: E402
@@ -47,22 +55,46 @@ def populations(prob: SEProblem) -> dict[str, np.ndarray]:
     return {"seeds": seeds, "late": np.vstack([best[None, :], kids])}
 
 
-def cpu_time(fn, repeat: int, number: int = 5) -> float:
-    """Median CPU seconds per call of ``fn`` (after a warm-up call)."""
+def cpu_time(fn, repeat: int, number: int = 5, clock=time.process_time) -> float:
+    """Median CPU seconds per call of ``fn`` (after a warm-up call); or of another ``clock``."""
     fn()
     times = []
     for _ in range(repeat):
-        t0 = time.process_time()
+        t0 = clock()
         for _ in range(number):
             fn()
-        times.append((time.process_time() - t0) / number)
+        times.append((clock() - t0) / number)
     return statistics.median(times)
+
+
+def single(repeat: int) -> None:
+    from graybox import semp
+    from graybox.static._analysis import reached_equilibria
+
+    data = load_pumping()
+    print(f"# bench_static --part single  {datetime.date.today()}  {machine()}")
+    for n in (6, 12, 16):
+        st = semp(Candidates(6, 6, degree=2), data, n_terms=n).structure
+        prob = SEProblem(st, data.ident, data.static, margin=0.006)
+        th = prob.ls_theta()[None, :]
+        sp = data.static
+        # wall time, one BLAS thread as inside a sweep: the process's CPU time counts the BLAS threads
+        # still spinning after SEMP's fits (measured up to 2× the wall time of these calls)
+        with threadpool_limits(limits=1, user_api="blas"):
+            t_r = cpu_time(lambda: reached_equilibria(st, th, sp.ubar, sp.ybar), repeat, 200, time.perf_counter)
+            t_m = cpu_time(lambda: prob.within_margin(th, sp.ybar[None, :]), repeat, 200, time.perf_counter)
+        print(f"semp-{n} ({len(st)} terms): reached_equilibria {1e3 * t_r:.3f} ms, within_margin {1e3 * t_m:.3f} ms "
+              f"per θ ({len(sp)} static points)")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--part", default="generation", choices=("generation", "single"))
     args = ap.parse_args()
+    if args.part == "single":
+        single(args.repeat)
+        return
     data = load_pumping()
     sel = frols(Candidates(6, 6, ne=2, degree=3), data.ident, n_terms=23, include=["1"])
     prob = SEProblem(sel.structure, data.ident, data.static)
