@@ -453,8 +453,14 @@ def se_dsf(
     return result
 
 
-def _solve(problem: SEProblem, *, band, theta0, lambdas, max_iter, tol, pe_lambdas) -> DSFResult:
-    """:func:`se_dsf` on one problem (its margin a number or None)."""
+def _solve(problem: SEProblem, **options) -> DSFResult:
+    """:func:`se_dsf` on one problem (its margin a number or None), BLAS on one thread: the fits and
+    edge steps make thousands of small BLAS calls, which a multi-threaded BLAS only slows down."""
+    with one_blas_thread():
+        return _solve_one_thread(problem, **options)
+
+
+def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, tol, pe_lambdas) -> DSFResult:
     why: list[str] = []
     if theta0 is not None:
         starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]

@@ -744,18 +744,19 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     w1 = np.sqrt(lam1 / problem.n_dyn)
     colw = w1 / problem.scale
     T = np.zeros((0, n + 1))
-    work = np.empty((n + 1 + _BLOCK, n + 1))
     for rec, U in zip(problem.records, problem.U):
         for k0, k1, yh, S in free_run_sensitivity_blocks(problem.code, th, U, rec.y[:L], L, _BLOCK):
             m = T.shape[0]
             b = k1 - k0
+            # column-major, as LAPACK takes it: factored in place, with no copy of the block
+            work = np.empty((m + b, n + 1), order="F")
             work[:m] = T
-            np.multiply(S, colw, out=work[m:m + b, :n])
-            np.subtract(yh[k0:k1], rec.y[k0:k1], out=work[m:m + b, n])
-            work[m:m + b, n] *= w1
-            if not np.all(np.isfinite(work[:m + b])):
+            np.multiply(S, colw, out=work[m:, :n])
+            np.subtract(yh[k0:k1], rec.y[k0:k1], out=work[m:, n])
+            work[m:, n] *= w1
+            if not np.all(np.isfinite(work)):
                 return np.full((n + 1, n + 1), np.nan)
-            T = _triangle(work[:m + b])
+            T = _triangle(work, overwrite=True)
     if lam1 < 1.0:
         sp = problem.static
         w2 = np.sqrt((1.0 - lam1) / len(sp))
@@ -773,9 +774,10 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     return T
 
 
-def _triangle(A: np.ndarray) -> np.ndarray:
-    """R of A = QR (Householder, LAPACK): its first min(A.shape) rows."""
-    qr, _, _, _ = dgeqrf(A, overwrite_a=False)
+def _triangle(A: np.ndarray, overwrite: bool = False) -> np.ndarray:
+    """R of A = QR (Householder, LAPACK): its first min(A.shape) rows. ``overwrite``: A (column-major)
+    is scratch and is factored in place."""
+    qr, _, _, _ = dgeqrf(A, overwrite_a=overwrite)
     return np.triu(qr[: min(A.shape)])
 
 
