@@ -433,16 +433,14 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
         recs, static = [], data
     else:
         recs, static = as_records(data), None
-    # each input by name, in the model's order (the data's columns may be in another)
+    # each input by name, in the model's order (the data's columns may be in another, and a record
+    # may hold inputs the model does not use, one input included)
     names = model.input_names
-    cols = [np.column_stack([r.input(n) for n in names]) if len(names) > 1 else r.inputs.reshape(len(r), -1)
-            for r in recs]
+    cols = [np.column_stack([r.input(n) for n in names]) for r in recs]
     if static is not None:
         cols.append(static_point_inputs(static, names).reshape(len(static), -1))
     lo = np.min([c.min(axis=0) for c in cols], axis=0)
     hi = np.max([c.max(axis=0) for c in cols], axis=0)
-    if lo.size != ub.shape[1]:
-        raise ValueError(f"data has {lo.size} input(s) but the model has {ub.shape[1]} {model.input_names}")
     tol = 1e-9 * np.maximum(np.maximum(np.abs(lo), np.abs(hi)), 1.0)
     out = ub[((ub < lo - tol) | (ub > hi + tol)).any(axis=1)]
     if out.size:
