@@ -37,3 +37,21 @@ def test_range_of_a_one_input_model_is_read_from_its_own_input_of_the_record():
     other = gb.Record(rec.input("valve"), rec.y, 1.0, input_names=("valve",))
     with pytest.raises(ValueError, match="speed"):
         gb.local_model(SPEED, 0.5, data=other)
+
+
+def test_two_input_operating_curve_frame_keeps_the_gain_bands():
+    # to_frame kept only one-dimensional bands: a two-input curve's gain bands were silently left out
+    two = gb.Model(["1", "y(k-1)", "u1(k-1)", "u2(k-1)", "u1(k-1)u2(k-1)"], [0.2, 0.5, 0.3, -0.2, 0.05],
+                   input_names=("u1", "u2"))
+    rng = np.random.default_rng(1)
+    U = np.column_stack([rng.uniform(0.5, 1.5, 400), rng.uniform(0.2, 0.8, 400)])
+    rec = gb.Record(U, two.simulate(U, np.zeros(1)) + 0.01 * rng.standard_normal(400), 0.1,
+                    input_names=("u1", "u2"))
+    model = gb.els(two.structure, rec, noise=0).model
+    oc = gb.operating_curve(model, [[1.0, 0.5], [1.2, 0.4]], data=rec,
+                            uncertainty=gb.ls_uncertainty(model, rec), n_samples=50)
+    frame = oc.to_frame()
+    for i, name in enumerate(("u1", "u2")):
+        assert np.array_equal(frame[f"gain low {name}"], oc.gain_low[:, i])
+        assert np.array_equal(frame[f"gain high {name}"], oc.gain_high[:, i])
+    assert np.array_equal(frame["time constant low"], oc.time_constant_low)

@@ -585,20 +585,18 @@ class OperatingCurve:
         import pandas as pd
 
         single = self.ubar.ndim == 1
-        cols: dict[str, Any] = {"ybar": self.ybar}
-        if single:
-            cols["gain"] = self.gain
-        else:
-            for i in range(self.gain.shape[1]):
-                cols[f"gain {self.local_models[0].input_names[i]}"] = self.gain[:, i]
+        names = self.local_models[0].input_names
+
+        def per_input(label: str, v: np.ndarray) -> dict[str, np.ndarray]:  # one column per input when (M, m)
+            return {label: v} if v.ndim == 1 else {f"{label} {n}": v[:, i] for i, n in enumerate(names)}
+
+        cols: dict[str, Any] = {"ybar": self.ybar, **per_input("gain", self.gain)}
         cols.update({"time constant": self.time_constant, "damping": self.damping,
                      "spectral radius": self.spectral_radius, "settling time": self.settling_time,
                      "status": list(self.status)})
         if self.has_band:
             for f in self.BANDS:
-                v = getattr(self, f)
-                if v.ndim == 1:
-                    cols[f.replace("_", " ")] = v
+                cols.update(per_input(f.replace("_", " "), getattr(self, f)))
         index = pd.Index(self.ubar, name="ubar") if single else pd.MultiIndex.from_arrays(
             self.ubar.T, names=list(self.local_models[0].input_names))
         return pd.DataFrame(cols, index=index)
