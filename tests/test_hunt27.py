@@ -55,3 +55,35 @@ def test_two_input_operating_curve_frame_keeps_the_gain_bands():
         assert np.array_equal(frame[f"gain low {name}"], oc.gain_low[:, i])
         assert np.array_equal(frame[f"gain high {name}"], oc.gain_high[:, i])
     assert np.array_equal(frame["time constant low"], oc.time_constant_low)
+
+
+def saturated_record(seed: int, n: int = 400) -> gb.Record:
+    """An unstable first-order system held by a saturation: y(k) = clip(1.5 y(k-1) + u(k-1), ±3)."""
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-0.1, 0.1, n)
+    y = np.zeros(n)
+    y[0] = 1.0
+    for k in range(1, n):
+        y[k] = np.clip(1.5 * y[k - 1] + u[k - 1], -3.0, 3.0)
+    return gb.Record(u, y + 0.001 * rng.standard_normal(n), 1.0)
+
+
+def test_leaderboard_says_why_when_a_pareto_member_failed(tmp_path):
+    # a member whose fit failed was counted as a model "with an undefined static curve", and the
+    # reason its fit failed, kept in the store, was said nowhere
+    from graybox import experiments as gx
+
+    data = gb.Dataset(saturated_record(0), saturated_record(1),
+                      gb.StaticPoints([-0.1, 0.0, 0.1], [-2.0, 0.0, 2.0], uncertainty=0.1))
+    ga = gx.Variant("GA", "se-ga", lambdas=[0.1, 1.0],
+                    options={"population": 6, "generations": 1, "theta0": "none", "margin": "none"})
+    grid = gx.Grid([gx.DataSpec("saturated", dataset=data)],
+                   [gx.StructureSpec("cubic", terms=["y(k-1)", "u(k-1)", "y(k-1)^3"])], [ga], name="g")
+    gx.run_grid(grid, tmp_path / "s.sqlite")
+    df = gb.load_results(tmp_path / "s.sqlite")
+    failure = [f for f in df["members"].iloc[0]["failure"] if f]
+    assert len(failure) == 1  # the set-up: one of the two members failed
+    row = gx.leaderboard(df).iloc[0]
+    assert row["candidates"] == 1  # the one model that was fitted
+    assert "1 member fit(s) failed" in row["reason"] and failure[0][:60] in row["reason"]
+    assert "every one of the 2 model(s)" not in row["reason"]

@@ -118,7 +118,8 @@ def _band_of(rows: pd.DataFrame, band: float | Mapping[str, float] | None, data:
     return float(b.iloc[0])
 
 
-_CANDIDATE_COLUMNS = ("seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params", "chosen", "status")
+_CANDIDATE_COLUMNS = ("seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params", "chosen", "status",
+                      "failure")
 
 
 def _candidates(g: pd.DataFrame) -> pd.DataFrame:
@@ -135,11 +136,11 @@ def _candidates(g: pd.DataFrame) -> pd.DataFrame:
             parts = {"seed": [r.seed] * K, "lambda1": lam, "JS_ident": m["JS"], "JS_valid": m["JS_valid"],
                      "JSF": m["JSF"], "fit_valid": m.get("fit_valid", np.full(K, np.nan)), "n_params": [n_p] * K,
                      "chosen": np.isclose(lam, r.lambda1) if pd.notna(r.lambda1) else np.zeros(K, bool),
-                     "status": [r.status] * K}
+                     "status": [r.status] * K, "failure": list(m.get("failure", [""] * K))}
         elif r.status == "ok":
             parts = {"seed": [r.seed], "lambda1": [np.nan], "JS_ident": [r.JS_ident], "JS_valid": [r.JS_valid],
                      "JSF": [r.JSF], "fit_valid": [r.fit_valid], "n_params": [n_p], "chosen": [True],
-                     "status": [r.status]}
+                     "status": [r.status], "failure": [""]}
         else:
             continue
         for k, v in parts.items():
@@ -194,6 +195,10 @@ def leaderboard(
         else:
             b = _band_of(g, band, d)
             allc = _candidates(g)
+            failed = allc["failure"] != ""
+            # a member whose fit failed is no model: not compared, its reason said when nothing qualifies
+            failures = list(dict.fromkeys(_short(f) for f in allc.loc[failed, "failure"]))
+            allc = allc[~failed]
             n = len(allc)
             jsf = allc["JSF"].astype(float)
             inside = jsf <= b
@@ -211,6 +216,8 @@ def leaderboard(
                                f"{lam}{seed} ({n} model(s) compared)")
                 else:
                     why.append(f"every one of the {n} model(s) has an undefined static curve (J_SF = inf)")
+            if failures and not len(cand):
+                why.append(f"{int(failed.sum())} member fit(s) failed: " + "; ".join(failures[:2]))
         if len(cand):
             best = cand.sort_values(["JS_valid", "JSF"], kind="stable").iloc[0]
             base.update({k: best.get(k, np.nan) for k in ("JS_valid", "JS_ident", "JSF", "fit_valid", "n_params",
