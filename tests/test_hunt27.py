@@ -87,3 +87,20 @@ def test_leaderboard_says_why_when_a_pareto_member_failed(tmp_path):
     assert row["candidates"] == 1  # the one model that was fitted
     assert "1 member fit(s) failed" in row["reason"] and failure[0][:60] in row["reason"]
     assert "every one of the 2 model(s)" not in row["reason"]
+
+
+def test_local_models_of_different_sampling_periods_are_drawn_on_their_own_time_and_frequency_axes():
+    # every response was drawn on the first model's time grid and its frequencies up to the first
+    # model's Nyquist frequency: a slower-sampled model's step was squeezed in time and its Bode
+    # diagram aliased beyond its own Nyquist frequency
+    model = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    fast, slow = gb.local_model(model, 1.0, Ts=0.1), gb.local_model(model, 1.0, Ts=1.0)
+    fig = gb.plots.plot_local_models([fast, slow], duration=5.0)
+    steps, bode = fig.axes[0].get_lines(), fig.axes[1].get_lines()
+    for lm, step, mag in zip((fast, slow), steps, bode):
+        t = np.asarray(step.get_xdata())
+        assert np.allclose(np.diff(t), lm.Ts) and t[-1] == pytest.approx(5.0)
+        assert np.allclose(step.get_ydata(), lm.step(t.size))
+        w = np.asarray(mag.get_xdata())
+        assert w.max() == pytest.approx(np.pi / lm.Ts)
+        assert np.allclose(mag.get_ydata(), np.abs(lm.frequency_response(w)))

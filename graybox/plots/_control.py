@@ -42,7 +42,8 @@ def plot_local_models(
     duration : float, optional
         Length of the step responses (s); default six times the largest finite time constant.
     n_frequencies : int
-        Frequencies of the Bode diagram, log-spaced up to the Nyquist frequency π/Ts.
+        Frequencies of the Bode diagram, log-spaced up to each model's Nyquist frequency π/Ts
+        (each model is drawn on its own sampling period).
 
     Returns
     -------
@@ -58,18 +59,18 @@ def plot_local_models(
     missing = [m for m in lms if not m.exists]
     if not shown:
         raise ValueError("none of the local models has an equilibrium: " + "; ".join(m.reason for m in missing))
-    Ts = shown[0].Ts
     taus = [m.time_constant for m in shown if np.isfinite(m.time_constant) and m.time_constant > 0]
-    T = duration if duration is not None else 6 * max(taus, default=20 * Ts)
-    n = max(int(np.ceil(T / Ts)) + 1, 2)
+    T = duration if duration is not None else 6 * max(taus, default=20 * max(m.Ts for m in shown))
     fig = Figure(figsize=(10, 5))
     ax_s = fig.add_subplot(1, 2, 1)
     ax_m = fig.add_subplot(2, 2, 2)
     ax_p = fig.add_subplot(2, 2, 4, sharex=ax_m)
-    w = np.logspace(np.log10(np.pi / Ts) - 3, np.log10(np.pi / Ts), n_frequencies)
     for m in shown:
+        # each model on its own sampling: its samples in time, its frequencies up to its Nyquist π/Ts
+        n = max(int(np.ceil(T / m.Ts - 1e-9)) + 1, 2)
+        w = np.logspace(np.log10(np.pi / m.Ts) - 3, np.log10(np.pi / m.Ts), n_frequencies)
         tag = _label(m) + ("" if m.reached else f" ({m.status})")
-        line, = ax_s.plot(np.arange(n) * Ts, m.step(n, input), lw=1.2, label=tag)
+        line, = ax_s.plot(np.arange(n) * m.Ts, m.step(n, input), lw=1.2, label=tag)
         G = m.frequency_response(w, input)
         ax_m.loglog(w, np.abs(G), color=line.get_color(), lw=1.0)
         ax_p.semilogx(w, np.degrees(np.unwrap(np.angle(G))), color=line.get_color(), lw=1.0)
