@@ -104,3 +104,25 @@ def test_local_models_of_different_sampling_periods_are_drawn_on_their_own_time_
         w = np.asarray(mag.get_xdata())
         assert w.max() == pytest.approx(np.pi / lm.Ts)
         assert np.allclose(mag.get_ydata(), np.abs(lm.frequency_response(w)))
+
+
+def test_a_cell_another_run_wrote_meanwhile_is_kept_and_the_run_goes_on(tmp_path):
+    # two runs into one store (a resume started while the first still runs, or two grids sharing
+    # cells): the second to finish a cell crashed with sqlite3.IntegrityError and ran no further
+    from graybox import experiments as gx
+
+    structures = [gx.StructureSpec("first", terms=["y(k-1)", "u(k-1)", "1"]),
+                  gx.StructureSpec("second", terms=["y(k-1)", "y(k-2)", "u(k-1)", "1"])]
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], structures, [gx.Variant("LS", "ls")], name="g")
+    store = tmp_path / "s.sqlite"
+    other: list = []
+
+    def meanwhile(line: str) -> None:  # called once the run knows which cells to run, before any runs
+        if not other:
+            other.append(gx.run_grid(grid, store))
+
+    run = gx.run_grid(grid, store, log=meanwhile)
+    assert other[0].ran == 2 and run.counts["ok"] == 2
+    assert any("another run" in n for n in run.notes)
+    df = gb.load_results(store)
+    assert len(df) == 2 and (df["status"] == "ok").all()

@@ -102,7 +102,8 @@ def run_grid(
     store : path
         The SQLite store (created if missing, grown if not). A store whose data set of the same
         name holds other data, a store of a newer graybox, a damaged file or a file that is not
-        a graybox store is refused and left untouched.
+        a graybox store is refused and left untouched. Another run may write into it meanwhile: a
+        cell it wrote first is kept (the run's notes say how many).
     executor : {"inprocess", "processes", "dask"}, optional
         Default: "dask" when ``client``, ``scheduler`` or ``workers`` is given, else "inprocess".
     workers : int, optional
@@ -170,18 +171,21 @@ def run_grid(
         for n in notes:
             say(f"  {n}")
         bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo))
-        ran = 0
+        ran = taken = 0
         try:
             for row in ex.run(todo, by_hash, log=say):
                 if row.get("version") != version:
                     row = failed_row(next(c for c in todo if c.key == row["key"]),
                                      f"the worker runs graybox {row.get('version')}, the driver {version}: "
                                      "install the same graybox on every worker")
-                st.write(row, replace=row["key"] in done)
+                taken += not st.write(row, replace=row["key"] in done)
                 ran += 1
                 bar.update(1)
         finally:
             bar.close()
+        if taken:
+            notes.append(f"{taken} cell(s) run now were written meanwhile by another run on this store: "
+                         "its rows are kept")
         counts = st.counts()
         spec_id = st.spec_id
     return GridRun(str(Path(store)), g.name, len(cells), ran, len(cells) - len(todo),

@@ -300,18 +300,23 @@ class ResultStore:
         """Status of every cell the store holds, by key."""
         return dict(self._conn.execute("SELECT key, status FROM cells").fetchall())
 
-    def write(self, row: Mapping[str, Any], replace: bool = False) -> None:
-        """Commit one finished cell (``replace``: overwrite a failed row of the same key)."""
+    def write(self, row: Mapping[str, Any], replace: bool = False) -> bool:
+        """Commit one finished cell (``replace``: overwrite a failed row of the same key).
+
+        Returns False when the store already holds the cell (another run on the store wrote it
+        since this one looked): a cell is its content, so that row is kept.
+        """
         values = [encode_value(k, row.get(k)) for k in COLUMNS]
-        verb = "INSERT OR REPLACE" if replace else "INSERT"
+        verb = "INSERT OR REPLACE" if replace else "INSERT OR IGNORE"
         self._conn.execute("BEGIN IMMEDIATE")
         try:
-            self._conn.execute(f"{verb} INTO cells ({', '.join(COLUMNS)}) VALUES ({', '.join('?' * len(COLUMNS))})",
-                               values)
+            cur = self._conn.execute(f"{verb} INTO cells ({', '.join(COLUMNS)}) "
+                                     f"VALUES ({', '.join('?' * len(COLUMNS))})", values)
         except BaseException:
             self._conn.execute("ROLLBACK")
             raise
         self._conn.execute("COMMIT")
+        return cur.rowcount == 1
 
     def versions(self) -> set[str]:
         """The graybox versions that made the store's cells."""
