@@ -126,3 +126,35 @@ def test_a_cell_another_run_wrote_meanwhile_is_kept_and_the_run_goes_on(tmp_path
     assert any("another run" in n for n in run.notes)
     df = gb.load_results(store)
     assert len(df) == 2 and (df["status"] == "ok").all()
+
+
+def _scaled_theta(structure: gb.Structure, theta: np.ndarray, cu: float, cy: float) -> np.ndarray:
+    """θ of the same model with u in units cu times smaller and y in units cy times smaller."""
+    out = []
+    for t, v in zip(structure, theta):
+        py = sum(p for s, _, p in t.factors if s == "y")
+        pu = sum(p for s, _, p in t.factors if s != "y")
+        out.append(v * cy / (cy**py * cu**pu))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("cy", [1e-3, 1e3])
+def test_pe_with_inequality_constraints_does_not_depend_on_the_output_units(cy):
+    # Clarabel's tolerances and starting point are absolute, and its QP was in output units: with the
+    # output in mV instead of V the front moved (J_S of the λ1 = 1e-3 member 25 % off)
+    d = gb.load_pumping()
+    cu = 1e3
+
+    def scaled(r: gb.Record) -> gb.Record:
+        return gb.Record(r.u * cu, r.y * cy, r.Ts, r.name)
+
+    other = gb.Dataset(scaled(d.ident), scaled(d.valid),
+                       gb.StaticPoints(d.static.ubar * cu, d.static.ybar * cy, uncertainty=d.static.uncertainty * cy))
+    st = gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"])
+    lam = [1e-3, 1e-2, 1e-1, 1.0]
+    a = gb.pe_pareto(st, d, lambdas=lam, constraints=gb.GainBounds(lower=0))
+    b = gb.pe_pareto(st, other, lambdas=lam, constraints=gb.GainBounds(lower=0))
+    assert np.allclose(b.JS, a.JS * cy**2, rtol=1e-6)
+    assert np.allclose(b.JSF, a.JSF * cy**2, rtol=1e-6)
+    for ta, tb in zip(a.thetas, b.thetas):
+        assert np.allclose(_scaled_theta(st, ta, cu, cy), tb, rtol=1e-5)

@@ -466,8 +466,9 @@ def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
 class _QP:
     """min w1 (δᵀH1δ + 2l1ᵀδ) + w2 (δᵀH2δ + 2l2ᵀδ)  s.t.  V δ = g', G δ <= h', user(θ(δ)).
 
-    The variable is δ = y − y_LS, the step from the unconstrained least-squares estimate in the
-    solver basis. Centring matters: the objective is then the *change* of the weighted squared
+    The variable is δ = (y − y_LS) / σ, the step from the unconstrained least-squares estimate in
+    the solver basis in units of the output's RMS σ (so that the problem the solver sees, and its
+    optimum, do not depend on the output's units). Centring matters: the objective is then the *change* of the weighted squared
     errors (0 at the LS estimate), so the solvers' relative gap tolerances apply to what is being
     traded instead of to ‖y‖² ≈ N·mean(y²), which would leave active constraints ~1e-6 loose.
 
@@ -483,19 +484,24 @@ class _QP:
         self.basis = b = _basis(d, static)
         rows = _rows(cons, ctx, d.s, b.T)
         self.y0 = y0 = b.g1 / b.H1 if b.H1.ndim == 1 else np.linalg.lstsq(b.H1, b.g1, rcond=None)[0]
-        self.dy = cp.Variable(n, name="dy")
-        theta = cp.multiply(1.0 / d.s, b.T @ (y0 + self.dy))  # engineering units, for user constraints
+        # y is in output units (y0 and the linear terms scale with the output, the objective with its
+        # square): the variable is the step in units of the output's RMS, σ, because Clarabel's
+        # tolerances and starting point are absolute and its optimum moved with the output's units
+        sig = float(np.sqrt((d.c1 @ d.c1 + d.rss) / d.N))
+        self.sigma = sig = sig if np.isfinite(sig) and sig > 0 else 1.0
+        self.dy = cp.Variable(n, name="dy")  # (y − y0) / σ
+        theta = cp.multiply(1.0 / d.s, b.T @ (y0 + sig * self.dy))  # engineering units, for user constraints
         self.w1 = cp.Parameter(nonneg=True, name="w1")
         self.w2 = cp.Parameter(nonneg=True, name="w2")
         Hy0 = (lambda H: H * y0 if H.ndim == 1 else H @ y0)
-        obj = self.w1 * (_quad(self.dy, b.H1) + 2 * (Hy0(b.H1) - b.g1) @ self.dy)
+        obj = self.w1 * (_quad(self.dy, b.H1) + 2 * ((Hy0(b.H1) - b.g1) / sig) @ self.dy)
         if b.H2 is not None:
-            obj = obj + self.w2 * (_quad(self.dy, b.H2) + 2 * (Hy0(b.H2) - b.g2) @ self.dy)
+            obj = obj + self.w2 * (_quad(self.dy, b.H2) + 2 * ((Hy0(b.H2) - b.g2) / sig) @ self.dy)
         cons_cp: list[cp.Constraint] = []
         if rows.V.shape[0]:
-            cons_cp.append(rows.V @ self.dy == rows.g - rows.V @ y0)
+            cons_cp.append(rows.V @ self.dy == (rows.g - rows.V @ y0) / sig)
         if rows.G.shape[0]:
-            cons_cp.append(rows.G @ self.dy <= rows.h - rows.G @ y0)
+            cons_cp.append(rows.G @ self.dy <= (rows.h - rows.G @ y0) / sig)
         for c in rows.user:
             cons_cp.extend(c.constraints(theta, ctx))
         self.problem = cp.Problem(cp.Minimize(obj), cons_cp)
@@ -535,7 +541,7 @@ class _QP:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
             self.inaccurate.append((float(w1), float(w2)))
-        return self.basis.T @ (self.y0 + np.array(self.dy.value, float))
+        return self.basis.T @ (self.y0 + self.sigma * np.array(self.dy.value, float))
 
     def warn_inaccurate(self) -> None:
         """One warning for the whole sweep, naming the weights whose optimum the solver called inaccurate."""
