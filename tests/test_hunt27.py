@@ -158,3 +158,26 @@ def test_pe_with_inequality_constraints_does_not_depend_on_the_output_units(cy):
     assert np.allclose(b.JSF, a.JSF * cy**2, rtol=1e-6)
     for ta, tb in zip(a.thetas, b.thetas):
         assert np.allclose(_scaled_theta(st, ta, cu, cy), tb, rtol=1e-5)
+
+
+def test_monte_carlo_bands_do_not_depend_on_the_units():
+    # the draws θ ~ N(θ̂, cov) came from the eigenvectors of cov itself, whose entries span decades in
+    # engineering units: the eigensolver's round-off, of the size of the largest entry, swamped the
+    # small-scale parameters, and the bands changed with the units (the gain's lower bound 3-7x)
+    d = gb.load_pumping()
+    cu, cy = 1e3, 1e-3
+    st = gb.parse_structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"])
+    other = gb.Record(d.ident.u * cu, d.ident.y * cy, d.ident.Ts)
+    a, b = gb.els(st, d.ident, noise=0).model, gb.els(st, other, noise=0).model
+    ua, ub = gb.ls_uncertainty(a, d.ident), gb.ls_uncertainty(b, other)
+    grid = np.linspace(900.0, 1500.0, 4)
+    oa = gb.operating_curve(a, grid, Ts=d.Ts, uncertainty=ua, n_samples=200)
+    ob = gb.operating_curve(b, grid * cu, Ts=d.Ts, uncertainty=ub, n_samples=200)
+    for lo_hi in ("gain_low", "gain_high"):
+        assert np.allclose(getattr(ob, lo_hi), getattr(oa, lo_hi) * cy / cu, rtol=1e-6)
+    for lo_hi in ("time_constant_low", "time_constant_high"):
+        assert np.allclose(getattr(ob, lo_hi), getattr(oa, lo_hi), rtol=1e-6)
+    sa = gb.static_curve_band(ua, grid, method="monte-carlo", n_samples=200)
+    sb = gb.static_curve_band(ub, grid * cu, method="monte-carlo", n_samples=200)
+    assert np.allclose(sb.ybar_low, sa.ybar_low * cy, rtol=1e-6)
+    assert np.allclose(sb.gain_low, sa.gain_low * cy / cu, rtol=1e-6)

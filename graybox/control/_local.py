@@ -672,6 +672,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
 def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: float, n: int, seed: int,
           single: bool) -> dict[str, Any]:
     """Monte Carlo quantiles of the gain and the time constant under θ ~ N(θ̂, cov)."""
+    from ..diagnostics._uncertainty import theta_draws  # here: the estimators it loads cost a local model nothing
+
     cov = getattr(uncertainty, "cov", None)
     um = getattr(uncertainty, "model", None)
     if cov is None or not isinstance(um, Model) or um.structure != model.structure:
@@ -681,8 +683,7 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
         raise ValueError("the gain and time-constant bands need an equilibrium at every operating point")
     th = model.theta
     rng = np.random.default_rng(seed)
-    w, V = np.linalg.eigh((cov + cov.T) / 2)
-    thetas = th[None, :] + (rng.standard_normal((n, th.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T
+    thetas = theta_draws(th, cov, n, rng)
     M = ub.shape[0]
     r = _reached(model, thetas, ub, ybar)
     ok = r.status == REACHED  # (n, M)

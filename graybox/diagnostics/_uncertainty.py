@@ -73,6 +73,7 @@ __all__ = [
     "se_uncertainty",
     "StaticCurveBand",
     "static_curve_band",
+    "theta_draws",
 ]
 
 
@@ -723,6 +724,32 @@ def _gain_gradient(structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndar
     return -(dFu_tot * Fy[:, None] - Fu[:, None] * dFy_tot) / (Fy**2)[:, None]
 
 
+def theta_draws(theta: np.ndarray, cov: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` draws θ ~ N(θ, cov), shape (n, n_terms), in the units of θ.
+
+    Drawn in standardised coordinates (the correlation matrix's eigenvectors, scaled back by the
+    standard deviations): in engineering units the entries of ``cov`` span decades, and the
+    eigensolver's round-off on ``cov`` itself, of the size of its largest entry, swamps the
+    small-scale parameters, so the draws (and every band built on them) changed with the units.
+
+    Parameters
+    ----------
+    theta : ndarray, shape (n_terms,)
+        The mean.
+    cov : ndarray, shape (n_terms, n_terms)
+        The covariance (symmetrised; negative eigenvalues of round-off taken as 0).
+    n : int
+        Number of draws.
+    rng : numpy.random.Generator
+        Source of the normal deviates.
+    """
+    cov = (cov + cov.T) / 2
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+    sd = np.where(sd > 0, sd, 1.0)
+    w, V = np.linalg.eigh(cov / np.outer(sd, sd))
+    return theta[None, :] + ((rng.standard_normal((n, theta.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T) * sd
+
+
 def static_curve_band(
     uncertainty: ParameterUncertainty,
     ubar: np.ndarray | Sequence[float],
@@ -790,8 +817,7 @@ def static_curve_band(
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name)
     n_samples = check_int(n_samples, "n_samples", low=10)
     rng = np.random.default_rng(check_seed(seed))
-    w, V = np.linalg.eigh((cov + cov.T) / 2)
-    thetas = th[None, :] + (rng.standard_normal((n_samples, th.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T
+    thetas = theta_draws(th, cov, n_samples, rng)
     Y = reached_equilibria(st, thetas, ub, yb).ybar
     G = _gains(st, thetas, ub, Y)
     ok = np.isfinite(Y) & np.isfinite(G)
