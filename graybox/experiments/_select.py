@@ -47,6 +47,7 @@ from ..models._coerce import static_info, static_points
 from ..selection._forward_regression import _RSS_FLOOR
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
+from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar, show_progress
 from ..core._records import (check_compatible, check_overlap, check_same_period, same_record,
                              warn_static_range)
@@ -511,7 +512,8 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     # a fit's warnings belong to its row: kept as text (a worker process's warnings never reach the
     # driver otherwise), said once by the driver for the whole table; the caller's filters hold in
     # the job too (what it ignores is not kept, what it makes an error raises)
-    with warnings.catch_warnings(record=True) as caught:
+    # one BLAS thread: the fits make thousands of small BLAS calls (see core._least_squares.one_blas_thread)
+    with warnings.catch_warnings(record=True) as caught, one_blas_thread():
         _apply_filters(job.filters)
         for rec, choose, edges in plan.splits:
             th, lam = _fit(job, st, rec)
