@@ -15,8 +15,8 @@ no stable equilibrium / diverged / did not settle).
     benchmarks/.env/bin/python benchmarks/bench_static.py --part single [--repeat 7]
 
 "single": what a gradient SE fit pays at every trial θ, one member at a time: the equilibria reached
-at the static points (`reached_equilibria`, P = 1) and the stability-margin check (`within_margin`,
-along the record and at those equilibria), for the README's selection structures on the plant
+at the static points (`reached_equilibria`, P = 1) the stability-margin check (`within_margin`,
+along the record and at those equilibria) and the streamed QR factor of the free run's Jacobian, for the README's selection structures on the plant
 (SEMP from Candidates(6, 6, degree=2), 6, 12 and 16 terms, least-squares θ).
 """
 
@@ -69,6 +69,7 @@ def cpu_time(fn, repeat: int, number: int = 5, clock=time.process_time) -> float
 
 def single(repeat: int) -> None:
     from graybox import semp
+    from graybox.estimation._simulation_error import _r_factor
     from graybox.static._analysis import reached_equilibria
 
     data = load_pumping()
@@ -83,8 +84,11 @@ def single(repeat: int) -> None:
         with threadpool_limits(limits=1, user_api="blas"):
             t_r = cpu_time(lambda: reached_equilibria(st, th, sp.ubar, sp.ybar), repeat, 200, time.perf_counter)
             t_m = cpu_time(lambda: prob.within_margin(th, sp.ybar[None, :]), repeat, 200, time.perf_counter)
+            z = th[0] * prob.scale
+            t_j = cpu_time(lambda: _r_factor(prob, z, 0.5), repeat, 50, time.perf_counter)
         print(f"semp-{n} ({len(st)} terms): reached_equilibria {1e3 * t_r:.3f} ms, within_margin {1e3 * t_m:.3f} ms "
-              f"per θ ({len(sp)} static points)")
+              f"per θ ({len(sp)} static points); the Jacobian's factor (_r_factor, {len(data.ident)} samples, "
+              f"λ1 = 0.5) {1e3 * t_j:.3f} ms")
 
 
 def main() -> None:
