@@ -117,3 +117,40 @@ def test_a_network_is_never_called_divergent_at_its_default_bound():
     net = gb.neural_narx(gb.Record(u, y, 1.0), ny=2, nu=2, ne=0, hidden=3, seed=0, epochs=3, sim_epochs=3)
     out = net.model.simulate(u, np.zeros(2))  # from rest, an output near 1e7 Pa
     assert np.all(np.isfinite(out))
+
+
+@settings(max_examples=60, deadline=None)
+@given(a=st.floats(0.5, 1.3), c=st.floats(-0.5, 0.5), d=st.floats(-0.2, 0.2), e=st.floats(-0.05, 0.05),
+       spread=st.floats(0.0, 0.1), seed=st.integers(0, 50), threads=st.sampled_from([1, 2]))
+def test_a_population_diverges_where_each_member_does_alone(a, c, d, e, spread, seed, threads):
+    # one J_S and one free run per member, whatever computes them: the batch kernels behind
+    # evaluate_thetas, simulate_many and ParetoSet stop a run where simulate's default bound does
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(0.0, 2.0, 300)
+    y = rng.uniform(0.5, 2.0, 300)
+    rec = gb.Record(u, y)
+    base = np.array([c, 0.4, a, d, e])
+    thetas = base * (1.0 + spread * rng.standard_normal((6, base.size)))
+    runs = gb.simulate_many(ST, thetas, rec, threads=threads)
+    alone = np.array([gb.simulate(ST, th, u, y[:2], on_diverge="nan") for th in thetas])
+    assume(np.all(np.isfinite(alone) | np.isnan(alone)))
+    np.testing.assert_array_equal(np.isnan(runs), np.isnan(alone))
+    np.testing.assert_allclose(runs[np.isfinite(runs)], alone[np.isfinite(alone)], rtol=1e-12)
+    js = gb.evaluate_thetas(ST, thetas, rec, None, one_step=False, threads=threads)["JS"]
+    np.testing.assert_array_equal(np.isinf(js), ~np.all(np.isfinite(alone[:, 2:]), axis=1))
+
+
+def test_a_slowly_diverging_member_has_an_infinite_js_in_a_front_as_alone():
+    # 1.01^3000 ≈ 1e13: no overflow, but far past 1e6 × the run's scale
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.0, 1.0, 3000)
+    y = np.zeros(3000)
+    for k in range(1, 3000):
+        y[k] = 0.9 * y[k - 1] + u[k - 1]
+    rec = gb.Record(u, y)
+    st_ = gb.Structure(["y(k-1)", "u(k-1)"])
+    th = np.array([[1.01, 1.0], [0.9, 1.0]])
+    assert gb.js(gb.Model(st_, th[0]), rec) == np.inf
+    front = gb.ParetoSet.from_thetas(st_, th, None, rec, None)
+    assert front.JS[0] == np.inf and front.JS[1] == pytest.approx(gb.js(gb.Model(st_, th[1]), rec), abs=1e-20)
+    assert gb.evaluate_thetas(st_, th, rec, None)["JS"][0] == np.inf

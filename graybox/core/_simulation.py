@@ -215,7 +215,7 @@ def simulate_many(
     L = structure.max_lag
     record.require_length(L)
     code = encode(structure)
-    return simulate_batch(code, th, record_inputs(record, code.inputs), record.y[:L], L, threads)
+    return simulate_batch(code, th, record_inputs(record, code.inputs), record.y[:L], L, threads, bounded=True)
 
 
 def _inputs_for(structure: Structure, u: np.ndarray, input_names: object):

@@ -31,7 +31,7 @@ import numpy as np
 from ._terms import Structure, require_inputs
 
 __all__ = ["Code", "encode", "simulate_one", "simulate_batch", "predict_ahead", "input_products", "record_inputs",
-           "kernel_inputs", "BOUND_FACTOR", "scaled_bound", "feedback_scale"]
+           "kernel_inputs", "BOUND_FACTOR", "scaled_bound", "feedback_scale", "feedback_scales"]
 
 
 class Code(NamedTuple):
@@ -268,18 +268,24 @@ def feedback_scale(code: Code, theta: np.ndarray, u: np.ndarray) -> float:
     y^(1−p) per input units): the largest over such terms, 0 without them. A limit cycle of such a
     model lives at this scale whatever the run's start (e.g. from y0 near 0).
     """
-    th = np.asarray(theta, dtype=float)
+    return float(feedback_scales(code, np.asarray(theta, dtype=float)[None, :], u)[0])
+
+
+def feedback_scales(code: Code, thetas: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """:func:`feedback_scale` of every row of ``thetas`` (P, n_terms) at once, shape (P,)."""
+    th = np.atleast_2d(np.asarray(thetas, dtype=float))
     umax = np.abs(np.asarray(u, dtype=float)).reshape(u.shape[0], -1).max(axis=0) if u.size else np.zeros(0)
-    out = 0.0
-    for t in range(th.size):
-        p = int(code.ny[t])
-        if p < 2 or th[t] == 0.0:
-            continue
-        c = abs(th[t])
-        for f in range(code.uptr[t], code.uptr[t + 1]):
-            c *= umax[code.usig[f]] ** code.upow[f]
-        if 0.0 < c < np.inf:
-            out = max(out, c ** (-1.0 / (p - 1)))
+    out = np.zeros(th.shape[0])
+    with np.errstate(all="ignore"):
+        for t in range(th.shape[1]):
+            p = int(code.ny[t])
+            if p < 2:
+                continue
+            c = np.abs(th[:, t])
+            for f in range(code.uptr[t], code.uptr[t + 1]):
+                c = c * umax[code.usig[f]] ** code.upow[f]
+            ok = (c > 0.0) & (c < np.inf)
+            out = np.where(ok, np.maximum(out, np.where(ok, c, 1.0) ** (-1.0 / (p - 1))), out)
     return out
 
 
@@ -467,23 +473,55 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc):  # pragma: no cover - compiled
                 acc[p] += v
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _bound_members(thT, U, k, free, ref, bnd, xacc, acc):  # pragma: no cover - compiled
+    # The default bound of _one for every member p: its scale ref[p] grows with |X_p(k)|, the sum
+    # of its terms without y (rows ``free`` of thT), and a sample beyond BOUND_FACTOR × that scale
+    # is NaN (and so is every later one: NaN feeds the recursion).
+    P = acc.shape[0]
+    for p in range(P):
+        xacc[p] = 0.0
+    for i in range(free.shape[0]):
+        t = free[i]
+        c = U[k, t]
+        for p in range(P):
+            xacc[p] += thT[t, p] * c
+    for p in range(P):
+        a = abs(xacc[p])
+        if a > ref[p]:
+            ref[p] = a
+            bnd[p] = scaled_bound(a)
+        if not (abs(acc[p]) <= bnd[p]):
+            acc[p] = np.nan
+
+
 @nb.njit(cache=True, nogil=True)
-def _batch_block(thT, U, ny, ylag, Y, start):  # pragma: no cover - compiled
+def _batch_block(thT, U, ny, ylag, Y, start, free, ref):  # pragma: no cover - compiled
+    # ``ref`` (P,): each member's starting scale, for the default bound; empty: no bound
     n, P = Y.shape
     mask = -1  # all ones: (k - lag) & mask == k - lag, the whole record is kept
     acc = np.empty(P)
+    bounded = ref.shape[0] > 0
+    ref = ref.copy()
+    bnd = np.empty(ref.shape[0])
+    for p in range(ref.shape[0]):
+        bnd[p] = scaled_bound(ref[p])
+    xacc = np.empty(P)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc)
+        if bounded:
+            _bound_members(thT, U, k, free, ref, bnd, xacc, acc)
         for p in range(P):
             Y[k, p] = acc[p]
 
 
 @nb.njit(cache=True, parallel=True)
-def _batch_block_parallel(blocks, U, ny, ylag, Y, start):  # pragma: no cover - compiled
-    # blocks: (n_blocks, T, step); Y: (n_blocks, N, step) with the initial rows filled. An
-    # OpenMP team (see _batch_sse_parallel) rather than a Python thread pool.
+def _batch_block_parallel(blocks, U, ny, ylag, Y, start, free, refs):  # pragma: no cover - compiled
+    # blocks: (n_blocks, T, step); Y: (n_blocks, N, step) with the initial rows filled; refs
+    # (n_blocks, step) or (n_blocks, 0). An OpenMP team (see _batch_sse_parallel) rather than a
+    # Python thread pool.
     for b in nb.prange(blocks.shape[0]):
-        _batch_block(blocks[b], U, ny, ylag, Y[b], start)
+        _batch_block(blocks[b], U, ny, ylag, Y[b], start, free, refs[b])
 
 
 def _blocks(thT: np.ndarray, threads: int) -> np.ndarray:
@@ -504,6 +542,8 @@ def simulate_batch(
     y0: np.ndarray,
     start: int,
     threads: int = 1,
+    *,
+    bounded: bool = False,
 ) -> np.ndarray:
     """Free runs of P parameter vectors of one structure.
 
@@ -520,6 +560,10 @@ def simulate_batch(
         Number of initial samples (>= the structure's max lag).
     threads : int
         Population blocks run in parallel (an OpenMP team); 1 runs in the calling thread.
+    bounded : bool
+        Stop each member's run where :func:`simulate_one`'s default bound stops it (the samples
+        from there on NaN), so that a member diverges here exactly where its own free run does.
+        False: only an overflow ends a run (a cost inside an optimiser).
 
     Returns
     -------
@@ -531,25 +575,47 @@ def simulate_batch(
     n = u.shape[0]
     thT = np.ascontiguousarray(thetas.T, dtype=np.float64)
     U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
+    free, ref = _member_scales(code, thetas, u, y0, start, bounded)
     with np.errstate(all="ignore"):
         if threads <= 1 or P < 2 * threads:
             Y = np.empty((n, P))
             Y[:start, :] = y0[:start, None]
-            _batch_block(thT, U, code.ny, code.ylag, Y, start)
+            _batch_block(thT, U, code.ny, code.ylag, Y, start, free, ref)
             # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
             return Y.T
         blocks = _blocks(thT, int(threads))
         Y = np.empty((blocks.shape[0], n, blocks.shape[2]))
         Y[:, :start, :] = y0[None, :start, None]
-        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start)
+        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, free, _ref_blocks(ref, blocks))
         return np.concatenate([Yb.T for Yb in Y])[:P]
 
 
+def _member_scales(code: Code, thetas: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int, bounded: bool
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The batch kernels' bound data: the terms without y (int64) and each member's starting scale
+    max(max|y0|, :func:`feedback_scales`), shape (P,); an empty scale array when not ``bounded``."""
+    free = np.flatnonzero(np.asarray(code.ny) == 0).astype(np.int64)
+    if not bounded:
+        return free, np.zeros(0)
+    y_start = float(np.max(np.abs(np.asarray(y0[:start], dtype=float)), initial=0.0))
+    return free, np.maximum(y_start, feedback_scales(code, thetas, u))
+
+
+def _ref_blocks(ref: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """``ref`` laid out as :func:`_blocks` lays out the members, (n_blocks, step); (n_blocks, 0) when empty."""
+    nb_, step = blocks.shape[0], blocks.shape[2]
+    if ref.size == 0:
+        return np.zeros((nb_, 0))
+    out = np.zeros(nb_ * step)  # the padding members (θ = 0) start from scale 0 as well
+    out[: ref.size] = ref
+    return out.reshape(nb_, step)
+
+
 @nb.njit(cache=True, nogil=True)
-def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
+def _batch_sse(thT, U, ny, ylag, y, start, ring, free, ref):  # pragma: no cover - compiled
     # Same update as _batch_block, but the outputs live in a ring buffer of `ring` rows (a
     # power of two > max lag) and only the squared free-run error is kept: the population's
-    # working set stays in L1 whatever N is.
+    # working set stays in L1 whatever N is. ``ref`` as for _batch_block.
     n = U.shape[0]
     P = thT.shape[1]
     mask = ring - 1
@@ -559,8 +625,16 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
             Y[k & mask, p] = y[k]
     sse = np.zeros(P)
     acc = np.empty(P)
+    bounded = ref.shape[0] > 0
+    ref = ref.copy()
+    bnd = np.empty(ref.shape[0])
+    for p in range(ref.shape[0]):
+        bnd[p] = scaled_bound(ref[p])
+    xacc = np.empty(P)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc)
+        if bounded:
+            _bound_members(thT, U, k, free, ref, bnd, xacc, acc)
         kk = k & mask
         yk = y[k]
         for p in range(P):
@@ -571,14 +645,14 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, parallel=True)
-def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring):  # pragma: no cover - compiled
+def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring, free, refs):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step) contiguous population blocks. An OpenMP team keeps its workers
     # spinning for a moment between calls, so a GA's millisecond calls do not pay for waking an
     # idle core each time (a Python thread pool did not beat one thread for them: BENCHMARKS.md).
     nb_ = blocks.shape[0]
     out = np.empty((nb_, blocks.shape[2]))
     for b in nb.prange(nb_):
-        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring)
+        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, free, refs[b])
     return out
 
 
@@ -590,6 +664,8 @@ def batch_sse(
     start: int,
     threads: int = 1,
     U: np.ndarray | None = None,
+    *,
+    bounded: bool = False,
 ) -> np.ndarray:
     """Sum of squared free-run errors of P parameter vectors, samples ``start … N-1``.
 
@@ -609,6 +685,10 @@ def batch_sse(
         Parallel population blocks.
     U : ndarray, shape (N, n_terms), optional
         :func:`input_products` of ``u``, when the caller keeps it across calls (a GA does).
+    bounded : bool
+        As for :func:`simulate_batch`: a member whose free run leaves :func:`simulate_one`'s
+        default bound has a non-finite sum, as its own free run has. False (optimisers' costs):
+        only an overflow makes it non-finite.
 
     Returns
     -------
@@ -617,13 +697,15 @@ def batch_sse(
     thT = np.ascontiguousarray(np.asarray(thetas, dtype=np.float64).T)
     if U is None:
         U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
+    free, ref = _member_scales(code, np.atleast_2d(np.asarray(thetas, dtype=np.float64)), u, y, start, bounded)
     ring = 1 << int(np.ceil(np.log2(start + 1)))
     with np.errstate(all="ignore"):
         P = thT.shape[1]
         if threads <= 1 or P < 2 * threads:
-            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring)
+            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, free, ref)
         blocks = _blocks(thT, int(threads))
-        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring).ravel()[:P]
+        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring, free,
+                                   _ref_blocks(ref, blocks)).ravel()[:P]
 
 
 @nb.njit(cache=True, nogil=True)

@@ -466,7 +466,7 @@ def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.n
         return out
     code = encode(st)
     L = st.max_lag
-    y = simulate_batch(code, thetas[ok], record_inputs(rec, code.inputs), rec.y, max(L, 1))
+    y = simulate_batch(code, thetas[ok], record_inputs(rec, code.inputs), rec.y, max(L, 1), bounded=True)
     with np.errstate(over="ignore", invalid="ignore"):
         e2 = (y - rec.y[None, :]) ** 2
         mse = np.stack([np.maximum(e2[:, a:b].mean(axis=1), _RSS_FLOOR * np.mean(rec.y[a:b] ** 2))

@@ -263,7 +263,7 @@ def evaluate_thetas(
         # the compiled kernel sums squared free-run errors as it simulates: no P × N output
         with np.errstate(over="ignore", invalid="ignore"):
             code = encode(structure)
-            js_ = batch_sse(code, th, record_inputs(record, code.inputs), record.y, L, threads) / n_rows
+            js_ = batch_sse(code, th, record_inputs(record, code.inputs), record.y, L, threads, bounded=True) / n_rows
         out["JS"] = np.where(np.isfinite(js_), js_, np.inf)
     if static is not None:
         if static.n_inputs > 1 or len(structure.inputs) > 1:  # a static surface: ū's columns by name
