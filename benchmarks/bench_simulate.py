@@ -13,7 +13,8 @@ Throughput counts term-evaluations: one term of one model at one sample.
 run, as the samples before L + k − 1 share theirs), and ``NeuralModel.predict`` (a network of the
 paper's size) on 3200 samples.
 
-``--kernels`` prints only graybox's kernel rows (single run, batch, batch SSE, sensitivities),
+``--kernels`` prints only graybox's kernel rows (single run, batch, batch SSE unbounded as the
+optimisers use it and bounded as the evaluators do, sensitivities),
 for one input and for two inputs: the two-input model is (15) with the input factors of odd
 lag read from a second input (the same terms, lags and powers, so the same work per term).
 """
@@ -72,6 +73,12 @@ def kernel_rows() -> list[tuple[str, float, float]]:
         fns[f"{label} batch of {P}, 1 thread"] = (lambda st=st, r=r: simulate_many(st, thetas, r, threads=1), P * evals)
         fns[f"{label} batch SSE of {P}, 1 thread"] = (lambda code=code, r=r, uu=uu: batch_sse(code, thetas, uu, r.y, L),
                                                        P * evals)
+        try:  # the divergence bound per member (evaluate_thetas, ParetoSet): absent before 2026-11-26
+            batch_sse(code, thetas[:2], uu, r.y, L, bounded=True)
+            fns[f"{label} batch SSE of {P}, bounded, 1 thread"] = (
+                lambda code=code, r=r, uu=uu: batch_sse(code, thetas, uu, r.y, L, bounded=True), P * evals)
+        except TypeError:
+            pass
         fns[f"{label} free-run sensitivities"] = (lambda code=code, r=r, uu=uu: free_run_sensitivity(
             code, m.theta, uu, r.y[:L], L), evals)
     # every case in alternation, many short rounds, the minimum kept: on a shared machine the
