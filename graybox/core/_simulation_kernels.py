@@ -435,8 +435,9 @@ def predict_ahead(code: Code, theta: np.ndarray, u: np.ndarray, y: np.ndarray, s
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _advance(thT, U, ny, ylag, Y, k, mask, acc):  # pragma: no cover - compiled
-    # acc[p] = ŷ_p(k) for every member p, reading past outputs from rows (k - lag) & mask of Y.
+def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded):  # pragma: no cover - compiled
+    # acc[p] = ŷ_p(k) for every member p, reading past outputs from rows (k - lag) & mask of Y;
+    # when ``bounded`` also xacc[p] = X_p(k), the sum of the terms without y (for the bound).
     # The accumulator is a separate array, every access is 2-D indexed and every population
     # loop runs over the whole second axis (range(P) with P = Y.shape[1]): in this form LLVM
     # vectorises each term update, which a loop over a sub-range p0:p1 does not (BENCHMARKS.md).
@@ -444,12 +445,21 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc):  # pragma: no cover - compiled
     nt = thT.shape[0]
     for p in range(P):
         acc[p] = 0.0
+    if bounded:
+        for p in range(P):
+            xacc[p] = 0.0
     for t in range(nt):
         c = U[k, t]
         m = ny[t]
         if m == 0:
-            for p in range(P):
-                acc[p] += thT[t, p] * c
+            if bounded:
+                for p in range(P):
+                    v = thT[t, p] * c
+                    acc[p] += v
+                    xacc[p] += v
+            else:
+                for p in range(P):
+                    acc[p] += thT[t, p] * c
         elif m == 1:
             a = (k - ylag[t, 0]) & mask
             for p in range(P):
@@ -474,18 +484,11 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
-def _bound_members(thT, U, k, free, ref, bnd, xacc, acc):  # pragma: no cover - compiled
-    # The default bound of _one for every member p: its scale ref[p] grows with |X_p(k)|, the sum
-    # of its terms without y (rows ``free`` of thT), and a sample beyond BOUND_FACTOR × that scale
-    # is NaN (and so is every later one: NaN feeds the recursion).
+def _bound_members(ref, bnd, xacc, acc):  # pragma: no cover - compiled
+    # The default bound of _one for every member p: its scale ref[p] grows with |X_p(k)| (xacc, the
+    # sum of its terms without y), and a sample beyond BOUND_FACTOR × that scale is NaN (and so is
+    # every later one: NaN feeds the recursion).
     P = acc.shape[0]
-    for p in range(P):
-        xacc[p] = 0.0
-    for i in range(free.shape[0]):
-        t = free[i]
-        c = U[k, t]
-        for p in range(P):
-            xacc[p] += thT[t, p] * c
     for p in range(P):
         a = abs(xacc[p])
         if a > ref[p]:
@@ -496,7 +499,7 @@ def _bound_members(thT, U, k, free, ref, bnd, xacc, acc):  # pragma: no cover - 
 
 
 @nb.njit(cache=True, nogil=True)
-def _batch_block(thT, U, ny, ylag, Y, start, free, ref):  # pragma: no cover - compiled
+def _batch_block(thT, U, ny, ylag, Y, start, ref):  # pragma: no cover - compiled
     # ``ref`` (P,): each member's starting scale, for the default bound; empty: no bound
     n, P = Y.shape
     mask = -1  # all ones: (k - lag) & mask == k - lag, the whole record is kept
@@ -508,20 +511,20 @@ def _batch_block(thT, U, ny, ylag, Y, start, free, ref):  # pragma: no cover - c
         bnd[p] = scaled_bound(ref[p])
     xacc = np.empty(P)
     for k in range(start, n):
-        _advance(thT, U, ny, ylag, Y, k, mask, acc)
+        _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded)
         if bounded:
-            _bound_members(thT, U, k, free, ref, bnd, xacc, acc)
+            _bound_members(ref, bnd, xacc, acc)
         for p in range(P):
             Y[k, p] = acc[p]
 
 
 @nb.njit(cache=True, parallel=True)
-def _batch_block_parallel(blocks, U, ny, ylag, Y, start, free, refs):  # pragma: no cover - compiled
+def _batch_block_parallel(blocks, U, ny, ylag, Y, start, refs):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step); Y: (n_blocks, N, step) with the initial rows filled; refs
     # (n_blocks, step) or (n_blocks, 0). An OpenMP team (see _batch_sse_parallel) rather than a
     # Python thread pool.
     for b in nb.prange(blocks.shape[0]):
-        _batch_block(blocks[b], U, ny, ylag, Y[b], start, free, refs[b])
+        _batch_block(blocks[b], U, ny, ylag, Y[b], start, refs[b])
 
 
 def _blocks(thT: np.ndarray, threads: int) -> np.ndarray:
@@ -575,30 +578,29 @@ def simulate_batch(
     n = u.shape[0]
     thT = np.ascontiguousarray(thetas.T, dtype=np.float64)
     U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
-    free, ref = _member_scales(code, thetas, u, y0, start, bounded)
+    ref = _member_scales(code, thetas, u, y0, start, bounded)
     with np.errstate(all="ignore"):
         if threads <= 1 or P < 2 * threads:
             Y = np.empty((n, P))
             Y[:start, :] = y0[:start, None]
-            _batch_block(thT, U, code.ny, code.ylag, Y, start, free, ref)
+            _batch_block(thT, U, code.ny, code.ylag, Y, start, ref)
             # a transposed view, not a copy: copying 5 MB cost more than the whole batch run
             return Y.T
         blocks = _blocks(thT, int(threads))
         Y = np.empty((blocks.shape[0], n, blocks.shape[2]))
         Y[:, :start, :] = y0[None, :start, None]
-        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, free, _ref_blocks(ref, blocks))
+        _batch_block_parallel(blocks, U, code.ny, code.ylag, Y, start, _ref_blocks(ref, blocks))
         return np.concatenate([Yb.T for Yb in Y])[:P]
 
 
 def _member_scales(code: Code, thetas: np.ndarray, u: np.ndarray, y0: np.ndarray, start: int, bounded: bool
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """The batch kernels' bound data: the terms without y (int64) and each member's starting scale
-    max(max|y0|, :func:`feedback_scales`), shape (P,); an empty scale array when not ``bounded``."""
-    free = np.flatnonzero(np.asarray(code.ny) == 0).astype(np.int64)
+                   ) -> np.ndarray:
+    """Each member's starting scale for the batch kernels' bound, max(max|y0|, :func:`feedback_scales`),
+    shape (P,); empty when not ``bounded`` (no bound)."""
     if not bounded:
-        return free, np.zeros(0)
+        return np.zeros(0)
     y_start = float(np.max(np.abs(np.asarray(y0[:start], dtype=float)), initial=0.0))
-    return free, np.maximum(y_start, feedback_scales(code, thetas, u))
+    return np.maximum(y_start, feedback_scales(code, thetas, u))
 
 
 def _ref_blocks(ref: np.ndarray, blocks: np.ndarray) -> np.ndarray:
@@ -612,7 +614,7 @@ def _ref_blocks(ref: np.ndarray, blocks: np.ndarray) -> np.ndarray:
 
 
 @nb.njit(cache=True, nogil=True)
-def _batch_sse(thT, U, ny, ylag, y, start, ring, free, ref):  # pragma: no cover - compiled
+def _batch_sse(thT, U, ny, ylag, y, start, ring, ref):  # pragma: no cover - compiled
     # Same update as _batch_block, but the outputs live in a ring buffer of `ring` rows (a
     # power of two > max lag) and only the squared free-run error is kept: the population's
     # working set stays in L1 whatever N is. ``ref`` as for _batch_block.
@@ -632,9 +634,9 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, free, ref):  # pragma: no cover
         bnd[p] = scaled_bound(ref[p])
     xacc = np.empty(P)
     for k in range(start, n):
-        _advance(thT, U, ny, ylag, Y, k, mask, acc)
+        _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded)
         if bounded:
-            _bound_members(thT, U, k, free, ref, bnd, xacc, acc)
+            _bound_members(ref, bnd, xacc, acc)
         kk = k & mask
         yk = y[k]
         for p in range(P):
@@ -645,14 +647,14 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, free, ref):  # pragma: no cover
 
 
 @nb.njit(cache=True, parallel=True)
-def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring, free, refs):  # pragma: no cover - compiled
+def _batch_sse_parallel(blocks, U, ny, ylag, y, start, ring, refs):  # pragma: no cover - compiled
     # blocks: (n_blocks, T, step) contiguous population blocks. An OpenMP team keeps its workers
     # spinning for a moment between calls, so a GA's millisecond calls do not pay for waking an
     # idle core each time (a Python thread pool did not beat one thread for them: BENCHMARKS.md).
     nb_ = blocks.shape[0]
     out = np.empty((nb_, blocks.shape[2]))
     for b in nb.prange(nb_):
-        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, free, refs[b])
+        out[b] = _batch_sse(blocks[b], U, ny, ylag, y, start, ring, refs[b])
     return out
 
 
@@ -697,15 +699,14 @@ def batch_sse(
     thT = np.ascontiguousarray(np.asarray(thetas, dtype=np.float64).T)
     if U is None:
         U = _input_products(code.fptr, code.fsig, code.flag, code.fpow, kernel_inputs(code, u), start)
-    free, ref = _member_scales(code, np.atleast_2d(np.asarray(thetas, dtype=np.float64)), u, y, start, bounded)
+    ref = _member_scales(code, np.atleast_2d(np.asarray(thetas, dtype=np.float64)), u, y, start, bounded)
     ring = 1 << int(np.ceil(np.log2(start + 1)))
     with np.errstate(all="ignore"):
         P = thT.shape[1]
         if threads <= 1 or P < 2 * threads:
-            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, free, ref)
+            return _batch_sse(thT, U, code.ny, code.ylag, y, start, ring, ref)
         blocks = _blocks(thT, int(threads))
-        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring, free,
-                                   _ref_blocks(ref, blocks)).ravel()[:P]
+        return _batch_sse_parallel(blocks, U, code.ny, code.ylag, y, start, ring, _ref_blocks(ref, blocks)).ravel()[:P]
 
 
 @nb.njit(cache=True, nogil=True)
