@@ -546,7 +546,7 @@ def _header(doc: Any, rd: _Reader) -> dict:
         raise rd.fail("header", f"written by a newer graybox ({doc.get('graybox_version', '?')}, format version {ver}); "
                       f"this graybox ({_version()}) reads format version {FORMAT_VERSION}: upgrade graybox to load it")
     typ = doc.get("type")
-    if typ not in _CODECS:
+    if not isinstance(typ, str) or typ not in _CODECS:  # a list or an object cannot even be looked up
         raise rd.fail("header", f"unknown type {typ!r}; graybox loads {sorted(_CODECS)}")
     units = doc.get("units")
     if units is not None:
