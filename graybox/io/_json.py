@@ -43,7 +43,8 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
+import secrets
+import stat
 from pathlib import Path
 from types import MappingProxyType
 from collections.abc import Mapping
@@ -614,6 +615,24 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     return _decode_fields(head["type"], doc["object"], "object", _Reader(source))
 
 
+def _temporary_beside(p: Path) -> tuple[int, str]:
+    """A new file next to ``p`` with the mode ``open(p, "w")`` would leave: ``p``'s own when it exists,
+    else 0666 less the umask (``mkstemp`` makes every file private, 0600)."""
+    try:
+        mode = stat.S_IMODE(os.stat(p).st_mode)
+    except OSError:
+        mode = None
+    while True:
+        tmp = str(p.with_name(f"{p.name}.{secrets.token_hex(4)}.tmp"))
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
+        except FileExistsError:  # pragma: no cover - a name drawn twice
+            continue
+        if mode is not None:
+            os.chmod(fd, mode)
+        return fd, tmp
+
+
 def save(
     obj: Any,
     path: str | os.PathLike,
@@ -638,7 +657,7 @@ def save(
     """
     text = to_json(obj, units=units)
     p = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=p.name + ".", suffix=".tmp", dir=p.parent if str(p.parent) else ".")
+    fd, tmp = _temporary_beside(p)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
