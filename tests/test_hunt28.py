@@ -36,3 +36,24 @@ def test_save_gives_the_file_the_permissions_a_plain_write_would(tmp_path):
     finally:
         os.umask(old)
     assert gb.load(p).name == MODEL.name and sorted(x.name for x in tmp_path.iterdir()) == ["m.json"]
+
+
+def siso_record(seed: int = 0, n: int = 300, su: float = 1.0, sy: float = 1.0, name: str = "u") -> gb.Record:
+    """A staircase input in [1, 3] through y(k) = 0.6 y(k-1) + 0.5 u(k-1) − 0.1 u(k-1)², small noise."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(1.0, 3.0, n // 10 + 1), 10)[:n]
+    y = gb.Model(["y(k-1)", "u(k-1)", "u(k-1)^2"], [0.6, 0.5, -0.1]).simulate(u, np.zeros(1))
+    return gb.Record(u * su, (y + 0.01 * rng.standard_normal(n)) * sy, 0.1, input_names=(name,))
+
+
+def test_a_neural_model_refuses_several_inputs_clearly():
+    # the network has one input: a record of two inputs (or an (N, 2) array) reached the compiled kernels and
+    # failed there with a numba TypingError or a broadcasting error that named neither the inputs nor the cause
+    net = gb.neural_narx(siso_record(), ny=2, nu=2, ne=1, hidden=2, epochs=3, sim_epochs=3, seed=0).model
+    rec = siso_record()
+    two = gb.Record(np.column_stack([rec.u, rec.u[::-1]]), rec.y, rec.Ts, input_names=("u", "v"))
+    for call in (lambda: net.predict(two), lambda: net.predict(two, horizon=3), lambda: net.predict_narmax(two),
+                 lambda: net.simulate(two), lambda: net.simulate(two.u, rec.y[:2])):
+        with pytest.raises(ValueError, match=r"one input.*2"):
+            call()
+    assert np.array_equal(net.simulate(rec.u[:, None], rec.y[:2]), net.simulate(rec))  # (N, 1) is one input

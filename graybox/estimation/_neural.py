@@ -467,7 +467,11 @@ class NeuralModel:
 
     # -- normalisation ------------------------------------------------------
     def _un(self, u: np.ndarray) -> np.ndarray:
-        return (np.asarray(u, float) - self.u_offset) / self.u_scale
+        u = np.asarray(u, float)
+        if u.ndim > 1:  # several inputs: the compiled kernels would fail on them with a typing error
+            raise ValueError(f"the network has one input; got {u.shape[1]} inputs (shape {u.shape}): pass a record "
+                             "or an array of the one input it was trained on")
+        return (u - self.u_offset) / self.u_scale
 
     def _yn(self, y: np.ndarray) -> np.ndarray:
         return (np.asarray(y, float) - self.y_offset) / self.y_scale
