@@ -128,7 +128,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "reproduce":
         from .reproduce import run as reproduce
 
-        reproduce(quick=args.quick, out=args.out, fresh=args.fresh)
+        try:
+            reproduce(quick=args.quick, out=args.out, fresh=args.fresh)
+        except OSError as exc:  # --out unusable, a disk full: the environment's, not a bug to trace back
+            print(f"graybox reproduce: {exc}", file=sys.stderr)
+            return 2
         return 0
     return _grid(args)
 

@@ -57,3 +57,24 @@ def test_a_neural_model_refuses_several_inputs_clearly():
         with pytest.raises(ValueError, match=r"one input.*2"):
             call()
     assert np.array_equal(net.simulate(rec.u[:, None], rec.y[:2]), net.simulate(rec))  # (N, 1) is one input
+
+
+def _cli(*argv: str, cwd=None):
+    """``python -m graybox ARGV`` as a user runs it: (exit status, stdout, stderr)."""
+    import subprocess
+    import sys
+
+    p = subprocess.run([sys.executable, "-m", "graybox", *argv], capture_output=True, text=True, cwd=cwd, timeout=300)
+    return p.returncode, p.stdout, p.stderr
+
+
+def test_reproduce_refuses_an_out_that_is_not_a_folder_in_one_line(tmp_path):
+    # --out naming a file (or a path under one) ended in a FileExistsError / NotADirectoryError traceback
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    for out in (afile, afile / "sub"):
+        code, stdout, stderr = _cli("reproduce", "--quick", "--out", str(out))
+        assert code == 2 and "Traceback" not in stderr and stdout == "", stderr
+        assert stderr.startswith("graybox reproduce: ") and str(afile) in stderr and "folder" in stderr
+    assert afile.read_text() == "mine"
+

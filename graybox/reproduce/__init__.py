@@ -10,6 +10,7 @@ package; the estimators never import it.
 from __future__ import annotations
 
 import sys
+import tempfile
 import warnings
 from pathlib import Path
 from typing import Callable, TextIO
@@ -25,6 +26,19 @@ __all__ = ["run", "SECTIONS", "section_reference_models", "section_black_box", "
 #: The sections of ``graybox reproduce``, in order.
 SECTIONS: tuple[Callable[..., str], ...] = (section_reference_models, section_black_box, section_neural,
                                             section_table1)
+
+
+def _writable_folder(out: Path) -> None:
+    """Create ``out`` if missing and check that files can be written in it, before any section runs (a
+    section would otherwise fail at its first figure)."""
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"{out} is a file, not a folder for the figures and checkpoints")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise type(exc)(f"cannot write in the folder {out}: {exc.strerror or exc}") from None
 
 
 def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout, fresh: bool = False) -> None:
@@ -48,7 +62,7 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout
     from ._table1 import checkpoint_paths
 
     if out is not None:
-        Path(out).mkdir(parents=True, exist_ok=True)
+        _writable_folder(Path(out))
         found = [c for c in checkpoint_paths(out, quick) if c.exists()]
         if fresh:
             for c in found:
