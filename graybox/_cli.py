@@ -126,10 +126,15 @@ def main(argv: list[str] | None = None) -> int:
                      help="also write report.html: one self-contained page (figures, tables, spec, reasons)")
     args = parser.parse_args(argv)
     if args.command == "reproduce":
+        from .estimation._simulation_error import CheckpointError
         from .reproduce import run as reproduce
 
         try:
             reproduce(quick=args.quick, out=args.out, fresh=args.fresh)
+        except CheckpointError as exc:
+            print(f"graybox reproduce: {exc}; or run with --fresh, which starts every sweep of this mode over",
+                  file=sys.stderr)
+            return 2
         except OSError as exc:  # --out unusable, a disk full: the environment's, not a bug to trace back
             print(f"graybox reproduce: {exc}", file=sys.stderr)
             return 2

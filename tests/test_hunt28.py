@@ -78,3 +78,26 @@ def test_reproduce_refuses_an_out_that_is_not_a_folder_in_one_line(tmp_path):
         assert stderr.startswith("graybox reproduce: ") and str(afile) in stderr and "folder" in stderr
     assert afile.read_text() == "mine"
 
+
+def test_reproduce_says_in_one_line_which_checkpoint_is_corrupt_and_how_to_start_over(tmp_path, monkeypatch, capsys):
+    # a corrupt checkpoint in --out ended the run in a ValueError traceback (after the sections before Table I)
+    # that told to "choose another checkpoint path", which the command has no option for
+    import graybox.reproduce as rp
+    from graybox._cli import main
+    from graybox.reproduce._table1 import checkpoint_path
+
+    ck = checkpoint_path(tmp_path, "gradient", 2, quick=True)
+    ck.write_bytes(b"half a checkpoint")
+    rec = siso_record()
+
+    def section(quick, out):  # Table I's sweep meeting its checkpoint, without the plant-sized work
+        static = gb.StaticPoints([1.0, 2.0, 3.0], [1.0, 1.5, 1.5])
+        gb.se_pareto(["y(k-1)", "u(k-1)", "u(k-1)^2"], rec, static, lambdas=[1.0], method="gradient", checkpoint=ck)
+        return "unreachable"
+
+    monkeypatch.setattr(rp, "SECTIONS", (section,))
+    assert main(["reproduce", "--quick", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("graybox reproduce: ") and ck.name in err and "--fresh" in err
+    assert ck.exists()  # nothing deleted behind the user's back
+

@@ -502,10 +502,14 @@ class SEFront:
 _CHECKPOINT_ARRAYS = ("thetas", "costs", "done", "failures", "nfev")
 
 
+class CheckpointError(ValueError):
+    """A checkpoint file that cannot be resumed: unreadable, corrupt, of another problem or an older graybox."""
+
+
 def _load_checkpoint(path: Path, meta: dict) -> dict:
     def unreadable(exc: Exception) -> ValueError:
-        return ValueError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose another "
-                          "checkpoint path")
+        return CheckpointError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose "
+                               "another checkpoint path")
 
     try:
         with np.load(path, allow_pickle=False) as z:
@@ -515,13 +519,13 @@ def _load_checkpoint(path: Path, meta: dict) -> dict:
         raise unreadable(exc) from None
     if stored != meta:
         diff = sorted(k for k in set(stored) | set(meta) if stored.get(k) != meta.get(k))
-        raise ValueError(
+        raise CheckpointError(
             f"checkpoint {path} was written for another problem or settings (differs in: {', '.join(diff)}); "
             "delete it or choose another checkpoint path"
         )
     if set(raw) != set(_CHECKPOINT_ARRAYS):
-        raise ValueError(f"checkpoint {path} was written by an older graybox (it does not record failed members); "
-                         "delete it or choose another checkpoint path")
+        raise CheckpointError(f"checkpoint {path} was written by an older graybox (it does not record failed "
+                              "members); delete it or choose another checkpoint path")
     try:
         out = {"thetas": raw["thetas"], "costs": raw["costs"], "done": int(raw["done"]), "nfev": raw["nfev"],
                "failures": {int(k): str(v) for k, v in json.loads(str(raw["failures"])).items()}}
@@ -529,7 +533,7 @@ def _load_checkpoint(path: Path, meta: dict) -> dict:
         raise unreadable(exc) from None
     K = len(meta["lambdas"])
     if out["thetas"].shape[0] != K or not 0 <= out["done"] <= K or any(not 0 <= k < out["done"] for k in out["failures"]):
-        raise ValueError(f"checkpoint {path} is corrupt (inconsistent sizes); delete it or choose another path")
+        raise CheckpointError(f"checkpoint {path} is corrupt (inconsistent sizes); delete it or choose another path")
     return out
 
 
