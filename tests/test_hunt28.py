@@ -101,3 +101,21 @@ def test_reproduce_says_in_one_line_which_checkpoint_is_corrupt_and_how_to_start
     assert err.startswith("graybox reproduce: ") and ck.name in err and "--fresh" in err
     assert ck.exists()  # nothing deleted behind the user's back
 
+
+@pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
+def test_a_torn_or_foreign_checkpoint_is_refused_without_leaving_it_open(tmp_path):
+    # np.load(path) left the file open when a torn zip (a checkpoint cut short) failed to read (a ResourceWarning);
+    # a plain .npy array under the checkpoint's name raised TypeError (an array is no context manager)
+    import gc
+
+    from graybox.estimation._simulation_error import _load_checkpoint
+
+    torn, npy = tmp_path / "torn.npz", tmp_path / "array.npz"
+    np.savez(torn, meta="{}", thetas=np.zeros((1, 2)))
+    torn.write_bytes(torn.read_bytes()[:40])
+    with open(npy, "wb") as f:
+        np.save(f, np.zeros(3))
+    for path in (torn, npy):
+        with pytest.raises(ValueError, match="not a readable SE checkpoint"):
+            _load_checkpoint(path, {})
+        gc.collect()  # an unclosed file says so when collected

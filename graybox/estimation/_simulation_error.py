@@ -512,10 +512,12 @@ def _load_checkpoint(path: Path, meta: dict) -> dict:
                                "another checkpoint path")
 
     try:
-        with np.load(path, allow_pickle=False) as z:
+        # opened here: np.load leaves the file it opened open when a torn zip fails to read
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
             stored = json.loads(str(z["meta"]))
             raw = {k: z[k] for k in _CHECKPOINT_ARRAYS if k in z.files}
-    except (ValueError, KeyError, OSError, EOFError, zipfile.BadZipFile) as exc:  # JSONDecodeError is a ValueError
+    # JSONDecodeError is a ValueError; TypeError: a plain .npy array, which is no context manager
+    except (ValueError, TypeError, KeyError, OSError, EOFError, zipfile.BadZipFile) as exc:
         raise unreadable(exc) from None
     if stored != meta:
         diff = sorted(k for k in set(stored) | set(meta) if stored.get(k) != meta.get(k))
