@@ -46,7 +46,7 @@ def _grid(args: argparse.Namespace) -> int:
         written = gx.write_report(store, args.out, rule=args.rule, band=args.band, spec=args.spec, html=args.html)
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
         return 0
-    except (gx.SpecError, gx.StoreError, ConnectionError) as exc:
+    except (gx.SpecError, gx.StoreError, OSError) as exc:  # OSError: ConnectionError, an --out that is a file, …
         print(f"graybox grid {args.grid_command}: {exc}", file=sys.stderr)
         return 2
     except ValueError as exc:  # an argument refused (e.g. --workers 0, a spec number the store lacks)

@@ -102,6 +102,24 @@ def test_reproduce_says_in_one_line_which_checkpoint_is_corrupt_and_how_to_start
     assert ck.exists()  # nothing deleted behind the user's back
 
 
+def test_grid_commands_refuse_unusable_paths_in_one_line(tmp_path):
+    # grid report --out naming a file ended in a FileExistsError traceback; grid run --store in a folder that
+    # cannot hold a file ended in sqlite3.OperationalError "unable to open database file"
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    spec = tmp_path / "spec.toml"
+    spec.write_text('name = "tiny"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\n'
+                    'name = "first-order"\nterms = ["y(k-1)", "u(k-1)", "1"]\n[[variants]]\nname = "LS"\n'
+                    'estimator = "ls"\n')
+    code, _, stderr = _cli("grid", "run", str(spec), "--store", str(afile / "s.sqlite"))
+    assert code == 2 and "Traceback" not in stderr and str(afile) in stderr, stderr
+    store = tmp_path / "s.sqlite"
+    assert _cli("grid", "run", str(spec), "--store", str(store))[0] == 0
+    code, _, stderr = _cli("grid", "report", str(store), "--out", str(afile))
+    assert code == 2 and "Traceback" not in stderr and str(afile) in stderr, stderr
+    assert afile.read_text() == "mine"
+
+
 @pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
 def test_a_torn_or_foreign_checkpoint_is_refused_without_leaving_it_open(tmp_path):
     # np.load(path) left the file open when a torn zip (a checkpoint cut short) failed to read (a ResourceWarning);

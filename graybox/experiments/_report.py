@@ -588,6 +588,8 @@ def write_report(
     attrs = dict(df.attrs)
     df = _frame(df)
     o = Path(out)
+    if o.exists() and not o.is_dir():
+        raise NotADirectoryError(f"{o} is a file, not a folder for the report")
     o.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     pngs: dict[str, bytes] = {}

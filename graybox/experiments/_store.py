@@ -238,6 +238,8 @@ class ResultStore:
         exists = p.exists()
         if not exists and not p.parent.exists():
             raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
+        if not exists and not p.parent.is_dir():
+            raise StoreError(f"{p.parent} is a file, not a folder; give a store path inside a folder")
         migrate = False
         known: dict[str, str] = {}
         if exists:
@@ -272,7 +274,11 @@ class ResultStore:
                 raise StoreError(f"{p} is damaged ({exc}); nothing was written to it; {_DAMAGED}") from None
             finally:
                 ro.close()
-        conn = _connect(p)
+        try:
+            conn = _connect(p)
+        except sqlite3.OperationalError as exc:  # e.g. a folder this user cannot write in
+            raise StoreError(f"cannot open the store {p} ({exc}); choose a --store path in a folder you can write "
+                             "in") from None
         try:
             if exists:
                 _settings(conn)
