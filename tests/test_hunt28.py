@@ -137,3 +137,18 @@ def test_a_torn_or_foreign_checkpoint_is_refused_without_leaving_it_open(tmp_pat
         with pytest.raises(ValueError, match="not a readable SE checkpoint"):
             _load_checkpoint(path, {})
         gc.collect()  # an unclosed file says so when collected
+
+
+@pytest.mark.parametrize("edit", ["theta", "err", "evaluated", "err_evaluated", "rss", "criterion_curve"])
+def test_a_hand_edited_selection_file_whose_arrays_disagree_is_refused(edit):
+    # a Selection took arrays of any length: a file with one θ (or one evaluated term, one ERR …) fewer or more
+    # loaded, and the value then failed in str(), .model or to_frame() with an IndexError or a broadcasting error
+    sel = gb.frols(gb.Candidates(ny=2, nu=2, degree=2), siso_record(), n_terms=3)
+    doc = json.loads(gb.to_json(sel))
+    for change in (lambda v: v[:-1], lambda v: v + v[-1:]):
+        d = json.loads(json.dumps(doc))
+        d["object"][edit] = change(d["object"][edit])
+        with pytest.raises(gb.GrayboxFileError, match="not a valid Selection|duplicated term"):
+            gb.from_json(json.dumps(d))
+    back = gb.from_json(json.dumps(doc))  # the file as written still loads
+    assert str(back) and back.model.n_params == 3 and len(back.to_frame()) == len(sel.evaluated)

@@ -221,8 +221,15 @@ class Selection:
         # checked and defaulted as a Model's (:attr:`model` carries them)
         names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
-        for name in ("err", "theta", "err_evaluated", "rss", "criterion_curve", "subset_rss"):
+        n, k = len(self.structure), len(self.evaluated)
+        if tuple(self.evaluated)[:n] != tuple(self.structure):
+            raise ValueError(f"the selected terms {self.structure} must be the first {n} evaluated terms, "
+                             f"got {self.evaluated}")
+        for name, size in (("err", n), ("theta", n), ("err_evaluated", k), ("rss", k), ("criterion_curve", k),
+                           ("subset_rss", len(self.subsets))):
             a = np.array(getattr(self, name), dtype=float, copy=True)
+            if a.shape != (size,):  # one value per selected term, per evaluated term or per subset
+                raise ValueError(f"{name} must have shape ({size},), got {a.shape}")
             a.setflags(write=False)
             object.__setattr__(self, name, a)
 
