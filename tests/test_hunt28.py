@@ -152,3 +152,18 @@ def test_a_hand_edited_selection_file_whose_arrays_disagree_is_refused(edit):
             gb.from_json(json.dumps(d))
     back = gb.from_json(json.dumps(doc))  # the file as written still loads
     assert str(back) and back.model.n_params == 3 and len(back.to_frame()) == len(sel.evaluated)
+
+
+def test_a_one_input_static_curve_refuses_points_of_several_inputs():
+    # ū of shape (M, 2) given to a one-input model was flattened: static_curve answered 2M levels (the two
+    # columns read as more levels of the one input), static_gain failed to broadcast or, for (1, 2), gave a
+    # 2-D gain; a polynomial model and a neural network alike
+    net = gb.neural_narx(siso_record(), ny=1, nu=1, ne=0, hidden=2, epochs=3, sim_epochs=3, seed=0).model
+    for model in (gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]), net):
+        for ub in ([[1.5, 2.0], [2.5, 2.2]], [[1.5, 2.5]]):
+            for f in (model.static_curve, model.static_gain):
+                with pytest.raises(ValueError, match=r"ubar.*one input.*shape \(\d, 2\)"):
+                    f(ub)
+        column = np.array([[1.5], [2.5]])  # a column of levels is one input's
+        assert np.array_equal(model.static_curve(column), model.static_curve([1.5, 2.5]))
+        assert np.array_equal(model.static_gain(column), model.static_gain([1.5, 2.5]))

@@ -131,7 +131,7 @@ from ..core._records import Dataset, Record, as_records
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, frozen, check_fields)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
-from ..static._analysis import NET, Equilibrium, Reached, schur_stable, settle, spectral_radius
+from ..static._analysis import NET, Equilibrium, Reached, one_input_levels, schur_stable, settle, spectral_radius
 from ..core._reprs import short_repr
 
 __all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
@@ -683,7 +683,7 @@ class NeuralModel:
             Output units.
         """
         strict = check_bool(strict, "strict")
-        ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
+        ub = one_input_levels(ubar)
         y0s = None
         if y0 is not None:
             y0s = check_per_point(y0, ub.size, "y0")
@@ -721,7 +721,7 @@ class NeuralModel:
 
         Implicit differentiation of ȳ = g(ȳ, ū): dȳ/dū = g_ū / (1 − g_ȳ).
         """
-        ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
+        ub = one_input_levels(ubar)
         yb = self.static_curve(ub, y0=y0, strict=strict)
         out = np.full(ub.size, np.nan)
         wu = self.W1[:, self.ny: self.ny + self.nu].sum(axis=1)

@@ -764,6 +764,18 @@ def _describe_failures(res: Reached, what: str = "model") -> str:
     return f"the {what} reaches no equilibrium at " + "; ".join(res.explain(0))
 
 
+def one_input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
+    """Levels of one input, shape (M,): a number, a 1-D array or a column (M, 1); finite.
+
+    Points of several inputs, shape (M, m), are refused rather than flattened into M·m levels.
+    """
+    shape = np.shape(ubar)
+    if len(shape) > 2 or (len(shape) == 2 and shape[1] != 1):
+        raise ValueError(f"{name} must be levels of the one input (a number, shape (M,) or (M, 1)), got shape "
+                         f"{shape}: a model of several inputs takes points of shape (M, m)")
+    return np.atleast_1d(as_1d_finite(np.ravel(ubar), name))
+
+
 def static_curve(
     structure: Structure,
     theta: np.ndarray,
@@ -798,7 +810,7 @@ def static_curve(
         Output units.
     """
     strict = check_bool(strict, "strict")
-    ub = np.atleast_1d(as_1d_finite(np.ravel(ubar), "ubar"))
+    ub = one_input_levels(ubar)
     th = np.asarray(theta, float)
     if y0 is not None:
         y0s = check_per_point(y0, ub.size, "y0")
@@ -850,7 +862,7 @@ def static_gain(
     ndarray, shape (M,)
         Gain in output units per input unit.
     """
-    ub = np.atleast_1d(np.asarray(ubar, dtype=float))
+    ub = one_input_levels(ubar)
     yb = static_curve(structure, theta, ub, y0=y0, strict=strict)
     cm = cluster_map(structure)
     sigma = cm.R @ theta
