@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -46,6 +47,8 @@ def _grid(args: argparse.Namespace) -> int:
         written = gx.write_report(store, args.out, rule=args.rule, band=args.band, spec=args.spec, html=args.html)
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
         return 0
+    except BrokenPipeError:
+        raise
     except (gx.SpecError, gx.StoreError, OSError) as exc:  # OSError: ConnectionError, an --out that is a file, …
         print(f"graybox grid {args.grid_command}: {exc}", file=sys.stderr)
         return 2
@@ -85,6 +88,16 @@ start over, pass --fresh (or delete those .npz files, or choose another --out)."
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``graybox`` command; returns the exit status."""
+    try:
+        return _main(argv)
+    except BrokenPipeError:
+        # the reader left (graybox grid init | head): stop quietly, as cat does; stdout goes to the null
+        # device so that the flush at exit does not fail on the closed pipe again
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+
+
+def _main(argv: list[str] | None) -> int:
     parser = argparse.ArgumentParser(prog="graybox", description=_DESCRIPTION, epilog=_EPILOG,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(title="commands", dest="command", required=True, metavar="COMMAND")
@@ -135,6 +148,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"graybox reproduce: {exc}; or run with --fresh, which starts every sweep of this mode over",
                   file=sys.stderr)
             return 2
+        except BrokenPipeError:
+            raise
         except OSError as exc:  # --out unusable, a disk full: the environment's, not a bug to trace back
             print(f"graybox reproduce: {exc}", file=sys.stderr)
             return 2

@@ -167,3 +167,25 @@ def test_a_one_input_static_curve_refuses_points_of_several_inputs():
         column = np.array([[1.5], [2.5]])  # a column of levels is one input's
         assert np.array_equal(model.static_curve(column), model.static_curve([1.5, 2.5]))
         assert np.array_equal(model.static_gain(column), model.static_gain([1.5, 2.5]))
+
+
+@pytest.mark.parametrize("argv", [("grid", "init"), ("reproduce", "--help"), ("grid", "status", "STORE")])
+def test_a_reader_that_leaves_the_pipe_early_ends_the_command_quietly(argv, tmp_path):
+    # graybox grid init | head -3: the reader closing the pipe ended in a BrokenPipeError traceback (grid init)
+    # or an "[Errno 32] Broken pipe" error line (commands that print as they go)
+    import subprocess
+    import sys
+
+    store = tmp_path / "s.sqlite"
+    if "STORE" in argv:
+        spec = tmp_path / "spec.toml"
+        spec.write_text('name = "tiny"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\n'
+                        'name = "first-order"\nterms = ["y(k-1)", "u(k-1)", "1"]\n[[variants]]\nname = "LS"\n'
+                        'estimator = "ls"\n')
+        assert _cli("grid", "run", str(spec), "--store", str(store))[0] == 0
+    p = subprocess.Popen([sys.executable, "-m", "graybox", *[str(store) if a == "STORE" else a for a in argv]],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p.stdout.close()  # the reader is gone before the command writes (it is still importing)
+    err = p.stderr.read().decode()
+    p.stderr.close()
+    assert p.wait(timeout=120) in (0, 1) and err == "", err
