@@ -100,6 +100,9 @@ def main(argv: list[str] | None = None) -> int:
 def _main(argv: list[str] | None) -> int:
     parser = argparse.ArgumentParser(prog="graybox", description=_DESCRIPTION, epilog=_EPILOG,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
+    from . import __version__
+
+    parser.add_argument("--version", action="version", version=f"graybox {__version__}")
     sub = parser.add_subparsers(title="commands", dest="command", required=True, metavar="COMMAND")
     rp = sub.add_parser("reproduce", help="reproduce the paper's Table I and figures on the bundled plant data",
                         description=_REPRODUCE, formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -189,3 +189,12 @@ def test_a_reader_that_leaves_the_pipe_early_ends_the_command_quietly(argv, tmp_
     err = p.stderr.read().decode()
     p.stderr.close()
     assert p.wait(timeout=120) in (0, 1) and err == "", err
+
+
+def test_the_command_says_its_version(capsys):
+    # graybox --version answered "the following arguments are required: COMMAND"
+    from graybox._cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.strip() == f"graybox {gb.__version__}"
