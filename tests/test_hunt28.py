@@ -198,3 +198,18 @@ def test_the_command_says_its_version(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["--version"])
     assert exc.value.code == 0 and capsys.readouterr().out.strip() == f"graybox {gb.__version__}"
+
+
+@pytest.mark.parametrize("name", [None, 3, 2.5])
+def test_a_model_name_that_is_not_text_is_refused_where_it_is_given(name):
+    # a Model or NeuralModel took any name (e.g. els(..., name=None)): the file saved from it could not be loaded
+    # ("object.name: expected a string"), so a fit was lost on the way to disk
+    rec = siso_record()
+    with pytest.raises(TypeError, match="name"):
+        gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], name=name)
+    with pytest.raises(TypeError, match="name"):
+        gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], rec, name=name)
+    with pytest.raises(TypeError, match="name"):
+        gb.NeuralModel(np.zeros((1, 2)), [0.0], [1.0], 0.0, 1, 1, name=name)
+    with pytest.raises(TypeError, match="name"):
+        gb.neural_narx(rec, ny=1, nu=1, ne=0, hidden=1, epochs=1, sim_epochs=0, name=name)

@@ -65,6 +65,13 @@ def check_bool(value: object, name: str) -> bool:
     return bool(value)
 
 
+def check_str(value: object, name: str) -> str:
+    """``value`` as text, or ``TypeError`` (a label saved to a file must load back as the same text)."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a str, got {value!r} ({type(value).__name__})")
+    return value
+
+
 def check_int(value: object, name: str, *, low: int | None = None, high: int | None = None) -> int:
     """``value`` as an ``int`` in [low, high].
 

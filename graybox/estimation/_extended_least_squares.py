@@ -90,7 +90,7 @@ from ..models._model import Model
 from ..core._records import Dataset, Record
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
-from ..core._validation import check_int, check_real, check_fields, check_sequence, frozen, warn
+from ..core._validation import check_int, check_real, check_fields, check_sequence, check_str, frozen, warn
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 
@@ -544,6 +544,7 @@ def els(
         When ``max_iter`` iterations pass without meeting the stopping rule.
     """
     process, ns = _resolve(structure, noise)
+    name = check_str(name, "name")
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)

@@ -129,7 +129,7 @@ from scipy.optimize import brentq
 
 from ..core._records import Dataset, Record, as_records
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
-                                check_seed, frozen, check_fields)
+                                check_seed, check_str, frozen, check_fields)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..static._analysis import NET, Equilibrium, Reached, one_input_levels, schur_stable, settle, spectral_radius
 from ..core._reprs import short_repr
@@ -413,6 +413,7 @@ class NeuralModel:
     name: str = "Neural"
 
     def __post_init__(self) -> None:
+        check_str(self.name, "name")
         ny = check_int(self.ny, "ny", low=0)
         nu = check_int(self.nu, "nu", low=1)
         ne = check_int(self.ne, "ne", low=0)
@@ -1045,6 +1046,7 @@ def neural_narx(
             raise ValueError("patience applies to early stopping only: pass holdout > 0 with it")
         patience = check_int(patience, "patience", low=1)
     seed = check_seed(seed)
+    name = check_str(name, "name")
     L = max(ny, nu)
     for r in recs:
         r.require_length(L)

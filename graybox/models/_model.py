@@ -12,7 +12,7 @@ from ..static import _analysis as _static
 from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
 from ..core._records import Record
-from ..core._validation import check_int, check_sequence, check_theta, frozen
+from ..core._validation import check_int, check_sequence, check_str, check_theta, frozen
 from ..core._terms import Structure, check_input_names, require_inputs
 
 __all__ = ["Model", "model_input_names"]
@@ -57,6 +57,7 @@ class Model:
     input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
+        check_str(self.name, "name")
         st = self.structure if isinstance(self.structure, Structure) else Structure(self.structure)
         if any(t.is_noise for t in st):
             raise ValueError("noise terms belong in noise_structure, not in the process structure")
