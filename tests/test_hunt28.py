@@ -213,3 +213,25 @@ def test_a_model_name_that_is_not_text_is_refused_where_it_is_given(name):
         gb.NeuralModel(np.zeros((1, 2)), [0.0], [1.0], 0.0, 1, 1, name=name)
     with pytest.raises(TypeError, match="name"):
         gb.neural_narx(rec, ny=1, nu=1, ne=0, hidden=1, epochs=1, sim_epochs=0, name=name)
+
+
+def test_a_report_of_a_store_without_finished_cells_says_so(tmp_path):
+    # a store whose run was stopped before its first cell finished (Ctrl-C, a closed pipe) made grid report fail
+    # in matplotlib: "Number of columns must be a positive integer, not 0"
+    import graybox.experiments as gx
+
+    spec = tmp_path / "spec.toml"
+    spec.write_text('name = "tiny"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\n'
+                    'name = "first-order"\nterms = ["y(k-1)", "u(k-1)", "1"]\n[[variants]]\nname = "LS"\n'
+                    'estimator = "ls"\n')
+    store = tmp_path / "s.sqlite"
+
+    def interrupt(line):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        gx.run_grid(spec, store, log=interrupt)
+    assert gx.grid_status(store).summary()  # the store is there, its spec registered, no cell done
+    with pytest.raises(ValueError, match=r"no finished cell.*grid status"):
+        gx.write_report(store, tmp_path / "report")
+    assert not (tmp_path / "report").exists()

@@ -587,6 +587,9 @@ def write_report(
     df = _frame(list(store) if isinstance(store, (list, tuple)) else store, spec=spec, attrs=True)
     attrs = dict(df.attrs)
     df = _frame(df)
+    if df.empty:  # a run stopped before its first cell finished: no table or figure has anything to show
+        raise ValueError(f"{store}: no finished cell to report (spec {spec!r}); graybox grid status shows the "
+                         "store's progress")
     o = Path(out)
     if o.exists() and not o.is_dir():
         raise NotADirectoryError(f"{o} is a file, not a folder for the report")
