@@ -235,3 +235,12 @@ def test_a_report_of_a_store_without_finished_cells_says_so(tmp_path):
     with pytest.raises(ValueError, match=r"no finished cell.*grid status"):
         gx.write_report(store, tmp_path / "report")
     assert not (tmp_path / "report").exists()
+
+
+def test_a_file_an_editor_saved_with_a_byte_order_mark_loads(tmp_path):
+    # a graybox file opened and saved again in an editor that writes "UTF-8 with BOM" (Notepad) was refused as
+    # "corrupt file (Unexpected UTF-8 BOM …)"; the text is the same JSON
+    p = gb.save(MODEL, tmp_path / "m.json", units=("rpm", "mlc"))
+    p.write_bytes(b"\xef\xbb\xbf" + p.read_bytes())
+    back = gb.load(p)
+    assert np.array_equal(back.theta, MODEL.theta) and gb.read_header(p)["units"] == ("rpm", "mlc")

@@ -672,7 +672,7 @@ def save(
 def _read(path: str | os.PathLike) -> str:
     p = Path(path)
     try:
-        return p.read_text(encoding="utf-8")
+        return p.read_text(encoding="utf-8-sig")  # "-sig": a byte-order mark an editor added is not text
     except UnicodeDecodeError:
         raise GrayboxFileError(f"{p}: not a graybox file (not UTF-8 text)") from None
 
