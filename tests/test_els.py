@@ -169,7 +169,7 @@ def test_bad_arguments():
         els(PROCESS, rec, max_iter=0)
     with pytest.raises(ValueError, match="tol"):
         els(PROCESS, rec, tol=0.0)
-    with pytest.raises(ValueError, match="direct must be True or False"):
+    with pytest.raises(TypeError, match="direct must be True or False"):  # a wrong type, as every flag says it
         els(PROCESS, rec, direct="yes")
     with pytest.raises(ValueError, match="no process terms"):
         els(Structure(["e(k-1)"]), rec)

@@ -244,3 +244,10 @@ def test_a_file_an_editor_saved_with_a_byte_order_mark_loads(tmp_path):
     p.write_bytes(b"\xef\xbb\xbf" + p.read_bytes())
     back = gb.load(p)
     assert np.array_equal(back.theta, MODEL.theta) and gb.read_header(p)["units"] == ("rpm", "mlc")
+
+
+@pytest.mark.parametrize("direct", ["yes", 1, None])
+def test_els_refuses_a_direct_flag_of_another_type_as_a_type_error(direct):
+    # every flag of the library refuses a wrong type with TypeError (check_bool); els's direct raised ValueError
+    with pytest.raises(TypeError, match="direct must be True or False"):
+        gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], siso_record(), direct=direct)

@@ -90,7 +90,8 @@ from ..models._model import Model
 from ..core._records import Dataset, Record
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
-from ..core._validation import check_int, check_real, check_fields, check_sequence, check_str, frozen, warn
+from ..core._validation import (check_bool, check_int, check_real, check_fields, check_sequence, check_str, frozen,
+                                warn)
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 
@@ -548,8 +549,7 @@ def els(
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
     relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)
-    if not isinstance(direct, (bool, np.bool_)):
-        raise ValueError(f"direct must be True or False, got {direct!r}")
+    direct = check_bool(direct, "direct")
     recs = records_of(data)
     reg = _regression(process, ns, recs)
     theta_ls = scaled_lstsq(reg.psi, reg.y)
