@@ -251,3 +251,9 @@ def test_els_refuses_a_direct_flag_of_another_type_as_a_type_error(direct):
     # every flag of the library refuses a wrong type with TypeError (check_bool); els's direct raised ValueError
     with pytest.raises(TypeError, match="direct must be True or False"):
         gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], siso_record(), direct=direct)
+
+
+def test_from_json_refuses_bytes_as_a_type_error():
+    # from_json(b"…") (a file read in binary mode) raised ValueError; a wrong type is a TypeError everywhere else
+    with pytest.raises(TypeError, match="text must be a str"):
+        gb.from_json(gb.to_json(MODEL).encode())

@@ -607,7 +607,7 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
         unexpected type, a missing, unknown or malformed field.
     """
     if not isinstance(text, str):
-        raise ValueError(f"text must be a str, got {type(text).__name__}")
+        raise TypeError(f"text must be a str, got {type(text).__name__} (decode the bytes of a file as UTF-8)")
     head, doc = _parse(text, source)
     _expect(expect, head["type"], source)
     if "object" not in doc:
