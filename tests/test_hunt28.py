@@ -257,3 +257,16 @@ def test_from_json_refuses_bytes_as_a_type_error():
     # from_json(b"…") (a file read in binary mode) raised ValueError; a wrong type is a TypeError everywhere else
     with pytest.raises(TypeError, match="text must be a str"):
         gb.from_json(gb.to_json(MODEL).encode())
+
+
+@pytest.mark.parametrize("term", ["y(k-99999999999999999999)", "u(k-1)^99999999999999999999",
+                                  "u(k-1)^9223372036854775807u(k-1)"])
+def test_a_lag_or_power_beyond_64_bits_is_refused_where_the_term_is_read(term):
+    # such a term (a typo in a hand-edited file) was accepted: the file loaded, and simulate and static_curve then
+    # failed with OverflowError ("Python int too large to convert to C long")
+    with pytest.raises(ValueError, match="64-bit"):
+        gb.Structure([term])
+    doc = json.loads(gb.to_json(MODEL))
+    doc["object"]["structure"][1] = term
+    with pytest.raises(gb.GrayboxFileError, match="64-bit"):
+        gb.from_json(json.dumps(doc))

@@ -126,6 +126,10 @@ def check_input_names(names: object, m: int | None = None, what: str = "input_na
 _FACTOR_RE = re.compile(r"\s*([a-zA-Z]\w*)\s*\(\s*k\s*-\s*(\d+)\s*\)\s*(?:\^\s*(\d+))?\s*\*?")
 
 
+#: Largest lag or power of a factor (the compiled kernels encode terms as int64).
+_INT64_MAX = 2**63 - 1
+
+
 @dataclass(frozen=True, order=False)
 class Term:
     """A monomial in lagged signals.
@@ -150,6 +154,9 @@ class Term:
             lag = check_int(lag, f"factors: lag of {sig}", low=1)
             power = check_int(power, f"factors: power of {sig}(k-{lag})", low=1)
             merged[(sig, lag)] = merged.get((sig, lag), 0) + power
+            if max(lag, merged[(sig, lag)]) > _INT64_MAX:  # the compiled kernels hold lags and powers as int64
+                raise ValueError(f"factors: {sig}(k-{lag})^{merged[(sig, lag)]}: a lag or power beyond the 64-bit "
+                                 "integer range")
         canon = tuple(
             (s, l, p) for (s, l), p in sorted(merged.items(), key=lambda kv: (_rank(kv[0][0]), kv[0][1]))
         )
