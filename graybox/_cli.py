@@ -151,6 +151,10 @@ def _main(argv: list[str] | None) -> int:
             print(f"graybox reproduce: {exc}; or run with --fresh, which starts every sweep of this mode over",
                   file=sys.stderr)
             return 2
+        except KeyboardInterrupt:  # Ctrl-C: the sweeps checkpointed what they finished
+            print(f"graybox reproduce: interrupted; the checkpoints in {args.out} are kept, and the same command "
+                  "resumes from them", file=sys.stderr)
+            return 130
         except BrokenPipeError:
             raise
         except OSError as exc:  # --out unusable, a disk full: the environment's, not a bug to trace back

@@ -270,3 +270,18 @@ def test_a_lag_or_power_beyond_64_bits_is_refused_where_the_term_is_read(term):
     doc["object"]["structure"][1] = term
     with pytest.raises(gb.GrayboxFileError, match="64-bit"):
         gb.from_json(json.dumps(doc))
+
+
+def test_an_interrupted_reproduce_says_it_resumes_instead_of_a_traceback(tmp_path, monkeypatch, capsys):
+    # Ctrl-C during graybox reproduce (hours in full mode) ended in a KeyboardInterrupt traceback through numba
+    # and scipy frames, and did not say that the checkpoints are kept and a second run resumes
+    import graybox.reproduce as rp
+    from graybox._cli import main
+
+    def section(quick, out):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(rp, "SECTIONS", (section,))
+    assert main(["reproduce", "--quick", "--out", str(tmp_path)]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("graybox reproduce: interrupted") and "resume" in err and str(tmp_path) in err
