@@ -285,3 +285,30 @@ def test_an_interrupted_reproduce_says_it_resumes_instead_of_a_traceback(tmp_pat
     assert main(["reproduce", "--quick", "--out", str(tmp_path)]) == 130
     err = capsys.readouterr().err
     assert err.startswith("graybox reproduce: interrupted") and "resume" in err and str(tmp_path) in err
+
+
+def test_a_saved_graybox_selection_loads_in_a_new_session(tmp_path):
+    # GrayboxSelection is registered with the file format by the experiment layer when it is imported: a fresh
+    # Python session that only did `import graybox` refused the file as "unknown type 'GrayboxSelection'"
+    import subprocess
+    import sys
+    import warnings
+
+    rec = siso_record(seed=3, n=400)
+    static = gb.StaticPoints([1.2, 2.0, 2.8], gb.Model(["y(k-1)", "u(k-1)", "u(k-1)^2"], [0.6, 0.5, -0.1])
+                             .static_curve([1.2, 2.0, 2.8]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sel = gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2), rec, static, band=1.0, sizes=[3],
+                                estimator="pe", folds=2)
+    p = gb.save(sel, tmp_path / "sel.json")
+    code = ("import sys, graybox as gb\n"
+            "print(gb.read_header(sys.argv[1])['type'], type(gb.load(sys.argv[1])).__name__, "
+            "gb.load(sys.argv[1]).model.n_params)")
+    out = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["GrayboxSelection", "GrayboxSelection", str(sel.model.n_params)]
+    from graybox.io import _json as io
+
+    above = {name for name, (cls, _) in io._CODECS.items() if cls.__module__.startswith("graybox.experiments")}
+    assert above == set(io._REGISTERED_ABOVE)  # every type a layer above registers is found from its name

@@ -40,6 +40,7 @@ constructor then validates shapes and meaning (e.g. θ's length against the stru
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import os
@@ -407,6 +408,9 @@ def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> No
     _TYPES[cls] = name
 
 
+#: Saved types defined above this layer, by the module whose import registers them (:func:`register_type`).
+_REGISTERED_ABOVE = {"GrayboxSelection": "graybox.experiments._select"}
+
 #: Field kinds other than the saved types themselves.
 _KINDS = frozenset({"float", "array1", "array2", "int", "int_or_none", "str", "bool", "floats", "structure",
                     "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame"})
@@ -547,6 +551,10 @@ def _header(doc: Any, rd: _Reader) -> dict:
         raise rd.fail("header", f"written by a newer graybox ({doc.get('graybox_version', '?')}, format version {ver}); "
                       f"this graybox ({_version()}) reads format version {FORMAT_VERSION}: upgrade graybox to load it")
     typ = doc.get("type")
+    if isinstance(typ, str) and typ not in _CODECS and typ in _REGISTERED_ABOVE:
+        # a type of a layer above this one registers itself when its module is imported: import it by
+        # name (as graybox's lazy attributes do), so that a fresh session loads the file
+        importlib.import_module(_REGISTERED_ABOVE[typ])
     if not isinstance(typ, str) or typ not in _CODECS:  # a list or an object cannot even be looked up
         raise rd.fail("header", f"unknown type {typ!r}; graybox loads {sorted(_CODECS)}")
     units = doc.get("units")
