@@ -312,3 +312,17 @@ def test_a_saved_graybox_selection_loads_in_a_new_session(tmp_path):
 
     above = {name for name, (cls, _) in io._CODECS.items() if cls.__module__.startswith("graybox.experiments")}
     assert above == set(io._REGISTERED_ABOVE)  # every type a layer above registers is found from its name
+
+
+def test_a_file_a_newer_graybox_wrote_with_a_field_this_one_lacks_says_to_upgrade():
+    # a file of the same format version written by a newer graybox with a field added since was refused as
+    # "unknown field(s) ['…'] for a Model", which reads as a corrupt file rather than as version skew
+    doc = json.loads(gb.to_json(MODEL))
+    doc["object"]["sampling_period"] = 0.1
+    doc["graybox_version"] = "99.0.0"
+    with pytest.raises(gb.GrayboxFileError, match=r"unknown field.*sampling_period.*graybox 99\.0\.0.*upgrade"):
+        gb.from_json(json.dumps(doc))
+    doc["graybox_version"] = gb.__version__  # same version: a hand-edited file, no advice to upgrade
+    with pytest.raises(gb.GrayboxFileError, match="unknown field") as exc:
+        gb.from_json(json.dumps(doc))
+    assert "upgrade" not in str(exc.value)

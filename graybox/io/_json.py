@@ -44,6 +44,7 @@ import importlib
 import json
 import math
 import os
+import re
 import secrets
 import stat
 from pathlib import Path
@@ -620,7 +621,20 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     _expect(expect, head["type"], source)
     if "object" not in doc:
         raise GrayboxFileError(f"{source}: no \"object\" in the document")
-    return _decode_fields(head["type"], doc["object"], "object", _Reader(source))
+    try:
+        return _decode_fields(head["type"], doc["object"], "object", _Reader(source))
+    except GrayboxFileError as exc:
+        ours = _version()
+        if ours != "0+unknown" and _release(head["graybox_version"]) > _release(ours):  # a field added since
+            raise GrayboxFileError(f"{exc} (the file was written by graybox {head['graybox_version']}, newer than "
+                                   f"this {ours}: upgrade graybox to load it)") from None
+        raise
+
+
+def _release(version: str) -> tuple[int, ...]:
+    """The release numbers of a version text (``"0.2.1"`` → (0, 2, 1)), for telling a newer writer."""
+    m = re.match(r"\d+(?:\.\d+)*", version.strip())
+    return tuple(int(x) for x in m.group(0).split(".")) if m else ()
 
 
 def _temporary_beside(p: Path) -> tuple[int, str]:
