@@ -126,8 +126,13 @@ def check_input_names(names: object, m: int | None = None, what: str = "input_na
 _FACTOR_RE = re.compile(r"\s*([a-zA-Z]\w*)\s*\(\s*k\s*-\s*(\d+)\s*\)\s*(?:\^\s*(\d+))?\s*\*?")
 
 
-#: Largest lag or power of a factor (the compiled kernels encode terms as int64).
+#: Largest lag of a factor (the compiled kernels encode terms as int64).
 _INT64_MAX = 2**63 - 1
+
+#: Largest power of a factor: x^1024 overflows a float for every |x| >= 2 and underflows for every
+#: |x| <= 1/2, so no larger power means anything; the kernels raise to a power by repeated
+#: multiplication, and a power near 2^63 never finished.
+MAX_POWER = 1023
 
 
 @dataclass(frozen=True, order=False)
@@ -154,9 +159,11 @@ class Term:
             lag = check_int(lag, f"factors: lag of {sig}", low=1)
             power = check_int(power, f"factors: power of {sig}(k-{lag})", low=1)
             merged[(sig, lag)] = merged.get((sig, lag), 0) + power
-            if max(lag, merged[(sig, lag)]) > _INT64_MAX:  # the compiled kernels hold lags and powers as int64
-                raise ValueError(f"factors: {sig}(k-{lag})^{merged[(sig, lag)]}: a lag or power beyond the 64-bit "
-                                 "integer range")
+            if lag > _INT64_MAX:  # the compiled kernels hold lags as int64
+                raise ValueError(f"factors: {sig}(k-{lag}): a lag beyond the 64-bit integer range")
+            if merged[(sig, lag)] > MAX_POWER:
+                raise ValueError(f"factors: {sig}(k-{lag})^{merged[(sig, lag)]}: a power above {MAX_POWER} (a float "
+                                 "raised to it overflows or underflows unless its size is within a factor 2 of 1)")
         canon = tuple(
             (s, l, p) for (s, l), p in sorted(merged.items(), key=lambda kv: (_rank(kv[0][0]), kv[0][1]))
         )
