@@ -52,11 +52,18 @@ def test_a_neural_model_refuses_several_inputs_clearly():
     net = gb.neural_narx(siso_record(), ny=2, nu=2, ne=1, hidden=2, epochs=3, sim_epochs=3, seed=0).model
     rec = siso_record()
     two = gb.Record(np.column_stack([rec.u, rec.u[::-1]]), rec.y, rec.Ts, input_names=("u", "v"))
-    for call in (lambda: net.predict(two), lambda: net.predict(two, horizon=3), lambda: net.predict_narmax(two),
-                 lambda: net.simulate(two), lambda: net.simulate(two.u, rec.y[:2])):
-        with pytest.raises(ValueError, match=r"one input.*2"):
-            call()
+    with pytest.raises(ValueError, match=r"one input.*2"):  # an array has no names: two columns are refused
+        net.simulate(two.u, rec.y[:2])
     assert np.array_equal(net.simulate(rec.u[:, None], rec.y[:2]), net.simulate(rec))  # (N, 1) is one input
+    # a record's input is read by name, as a polynomial model reads it (the network's is "u")
+    assert np.array_equal(net.predict(two), net.predict(rec))
+    assert np.array_equal(net.predict(two, horizon=3), net.predict(rec, horizon=3))
+    assert np.array_equal(net.predict_narmax(two)[0], net.predict_narmax(rec)[0])
+    assert np.array_equal(net.simulate(two), net.simulate(rec))
+    other = gb.Record(rec.u[:, None], rec.y, rec.Ts, input_names=("v",))
+    for call in (lambda: net.predict(other), lambda: net.predict_narmax(other), lambda: net.simulate(other)):
+        with pytest.raises(ValueError, match=r"'u'.*\('v',\)|\('v',\).*'u'|u.*v"):
+            call()
 
 
 def _cli(*argv: str, cwd=None):
@@ -336,3 +343,27 @@ def test_a_file_a_newer_graybox_wrote_with_a_field_this_one_lacks_says_to_upgrad
     with pytest.raises(gb.GrayboxFileError, match="unknown field") as exc:
         gb.from_json(json.dumps(doc))
     assert "upgrade" not in str(exc.value)
+
+
+def test_a_network_keeps_the_name_of_the_input_it_was_trained_on():
+    # a network trained on "speed" read whatever one input a record had ("valve" included); a polynomial model
+    # reads its inputs by name and refuses a record without them: the network now does the same, and the name
+    # is saved (a file written before it existed reads as "u")
+    rec = siso_record()
+    speed = gb.Record(rec.u, rec.y, rec.Ts, input_names=("speed",))
+    net = gb.neural_narx(speed, ny=2, nu=2, ne=0, hidden=2, epochs=3, sim_epochs=3, seed=0).model
+    assert net.input_names == ("speed",)
+    valve = gb.Record(rec.u, rec.y, rec.Ts, input_names=("valve",))
+    with pytest.raises(ValueError, match="speed"):
+        net.simulate(valve)
+    with pytest.raises(ValueError, match="speed"):
+        gb.js(net, valve)
+    both = gb.Record(np.column_stack([rec.u[::-1], rec.u]), rec.y, rec.Ts, input_names=("valve", "speed"))
+    assert np.array_equal(net.simulate(both), net.simulate(speed))
+    back = gb.from_json(gb.to_json(net))
+    assert back.input_names == ("speed",) and np.array_equal(back.simulate(speed), net.simulate(speed))
+    doc = json.loads(gb.to_json(net))
+    del doc["object"]["input_names"]
+    assert gb.from_json(json.dumps(doc)).input_names == ("u",)
+    with pytest.raises(ValueError, match="one input"):
+        gb.NeuralModel(net.W1, net.b1, net.w2, net.b2, net.ny, net.nu, net.ne, input_names=("a", "b"))

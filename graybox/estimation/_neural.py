@@ -131,6 +131,8 @@ from ..core._records import Dataset, Record, as_records
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
+from ..core._simulation_kernels import record_inputs
+from ..core._terms import check_input_names
 from ..static._analysis import NET, Equilibrium, Reached, one_input_levels, schur_stable, settle, spectral_radius
 from ..core._reprs import short_repr
 
@@ -397,6 +399,9 @@ class NeuralModel:
         y_scale too.
     name : str
         Label for tables and plots.
+    input_names : sequence of str
+        The one input's name, as one name in a tuple (as :class:`~graybox.Model`'s): given a
+        Record, the network reads that input of it, by name (default ``("u",)``).
     """
 
     W1: np.ndarray
@@ -411,9 +416,14 @@ class NeuralModel:
     y_offset: float = 0.0
     y_scale: float = 1.0
     name: str = "Neural"
+    input_names: tuple[str, ...] = ("u",)
 
     def __post_init__(self) -> None:
         check_str(self.name, "name")
+        names = check_input_names(self.input_names)
+        if len(names) != 1:
+            raise ValueError(f"input_names: a network has one input, got {len(names)} names {names}")
+        object.__setattr__(self, "input_names", names)
         ny = check_int(self.ny, "ny", low=0)
         nu = check_int(self.nu, "nu", low=1)
         ne = check_int(self.ne, "ne", low=0)
@@ -464,7 +474,11 @@ class NeuralModel:
     def with_name(self, name: str) -> "NeuralModel":
         """The same network under another label."""
         return NeuralModel(self.W1, self.b1, self.w2, self.b2, self.ny, self.nu, self.ne,
-                           self.u_offset, self.u_scale, self.y_offset, self.y_scale, name)
+                           self.u_offset, self.u_scale, self.y_offset, self.y_scale, name, self.input_names)
+
+    def _input(self, record: Record) -> np.ndarray:
+        """The record's input the network reads, by name, shape (N,) (ValueError naming both when it lacks it)."""
+        return record_inputs(record, self.input_names)
 
     # -- normalisation ------------------------------------------------------
     def _un(self, u: np.ndarray) -> np.ndarray:
@@ -513,7 +527,7 @@ class NeuralModel:
             free = self.simulate(record, on_diverge="nan")  # one free run from the first max_lag
             if first >= N:
                 return free
-        un, yn = self._un(record.u), self._yn(record.y)
+        un, yn = self._un(self._input(record)), self._yn(record.y)
         Wd = self.W1[:, : self.ny + self.nu]
         # P[j][t]: the j-step prediction of y(t), normalised (P[0] the measured output). Each step is
         # one vectorised pass over the record: P[j][t] reads P[j - 1 - i][t - 1 - i] (the measured y
@@ -547,7 +561,7 @@ class NeuralModel:
         if not isinstance(record, Record):
             raise TypeError(f"record must be a Record, got {type(record).__name__}")
         record.require_length(self.max_lag)
-        un, yn = self._un(record.u), self._yn(record.y)
+        un, yn = self._un(self._input(record)), self._yn(record.y)
         seg = np.array([0, len(record)], dtype=np.int64)
         yh, e = _pe_kernel(self._W1c, self.b1, self.w2, self.b2, un, yn, seg, self.ny, self.nu, self.ne)
         out = record.y.copy()
@@ -591,6 +605,8 @@ class NeuralModel:
         """
         check_choice(on_diverge, "on_diverge", ("raise", "nan"))
         L = self.max_lag
+        if isinstance(u, Record):
+            u, y0 = self._input(u), u.y[:L] if y0 is None else y0
         u, y0, b = free_run_inputs(u, y0, L, bound, what="network")
         if b is None:  # the default: from the network's output range, |offset| + scale (|b2| + Σ|w2|)
             reach = abs(self.y_offset) + abs(self.y_scale) * (abs(self.b2) + float(np.sum(np.abs(self.w2))))
@@ -1121,7 +1137,7 @@ def neural_narx(
             n_epochs += s3.epochs
     last = stages[-1]
     W1, b1, w2, b2 = _unpack(theta, hidden, n_in)
-    model = NeuralModel(W1, b1, w2, b2, ny, nu, ne, u_off, u_sc, y_off, y_sc, name)
+    model = NeuralModel(W1, b1, w2, b2, ny, nu, ne, u_off, u_sc, y_off, y_sc, name, recs[0].input_names)
     r_pe = pe_residual(theta)
     r_sim = sim(theta, sig, False)[0]
     return NeuralFit(

@@ -351,7 +351,8 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                       ("noise_structure", "structure"), ("noise_theta", "array1"), ("input_names", "names"))),
     "NeuralModel": (NeuralModel, (("name", "str"), ("ny", "int"), ("nu", "int"), ("ne", "int"), ("W1", "array2"),
                                   ("b1", "array1"), ("w2", "array1"), ("b2", "float"), ("u_offset", "float"),
-                                  ("u_scale", "float"), ("y_offset", "float"), ("y_scale", "float"))),
+                                  ("u_scale", "float"), ("y_offset", "float"), ("y_scale", "float"),
+                                  ("input_names", "names"))),
     "ParetoSet": (ParetoSet, (("method", "str"), ("structure", "structure"), ("lambdas", "array1"),
                               ("thetas", "array2"), ("J1", "array1"), ("JS", "array1"), ("JSF", "array1"),
                               ("extra", "dict_arrays"), ("failures", "failures"), ("input_names", "names"))),
@@ -434,7 +435,8 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      # selections saved before the fit / choose / test protocol chose by the
                                      # smallest validation J_S
                                      "GrayboxSelection": {"rule": "min"},
-                                     "Model": {"input_names": _DEFAULT}, "ParetoSet": {"input_names": _DEFAULT},
+                                     "Model": {"input_names": _DEFAULT}, "NeuralModel": {"input_names": _DEFAULT},
+                                     "ParetoSet": {"input_names": _DEFAULT},
                                      "Selection": {k: _DEFAULT for k in ("search", "subsets", "subset_rss",
                                                                          "input_names")},
                                      "SEMPResult": {"input_names": _DEFAULT}}
