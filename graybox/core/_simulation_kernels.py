@@ -486,8 +486,9 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded):  # pragma: no co
 @nb.njit(cache=True, nogil=True, inline="always")
 def _bound_members(ref, bnd, xacc, acc):  # pragma: no cover - compiled
     # The default bound of _one for every member p: its scale ref[p] grows with |X_p(k)| (xacc, the
-    # sum of its terms without y), and a sample beyond BOUND_FACTOR × that scale is NaN (and so is
-    # every later one: NaN feeds the recursion).
+    # sum of its terms without y), and a sample beyond BOUND_FACTOR × that scale is NaN, and so is
+    # every later one, as _one stops there: a stopped member's bound is -1 for good (its NaN need
+    # not reach a later sample, e.g. y(k) = a y(k-2) reads only every other one).
     P = acc.shape[0]
     for p in range(P):
         a = abs(xacc[p])
@@ -496,6 +497,8 @@ def _bound_members(ref, bnd, xacc, acc):  # pragma: no cover - compiled
             bnd[p] = scaled_bound(a)
         if not (abs(acc[p]) <= bnd[p]):
             acc[p] = np.nan
+            ref[p] = np.inf
+            bnd[p] = -1.0
 
 
 @nb.njit(cache=True, nogil=True)
