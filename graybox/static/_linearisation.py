@@ -30,6 +30,11 @@ from ._equilibrium_kernels import entry_sums
 __all__ = ["DerivativeMap", "derivative_map", "local_coefficients", "grid_coefficients", "characteristic_roots"]
 
 
+#: Bytes of point sets (ū and their entries' input parts) a map remembers: a fit's static points take a few
+#: kB; the maps live as long as the process (derivative_map's cache), so large sets are not kept.
+_POINT_CACHE_BYTES = 1 << 18
+
+
 @dataclass(frozen=True, eq=False)
 class DerivativeMap:
     """The lag counts of a structure's steady-state Jacobian, and its weights at any points.
@@ -116,18 +121,22 @@ class DerivativeMap:
 
     def entry_inputs(self, ubar: np.ndarray) -> np.ndarray:
         """The input part ∏ ū^P of each entry of G at fixed points ``ubar`` (as for :meth:`input_part`), shape
-        (K, entries), read-only. Remembered for the last few point sets: a fit asks for the same static
+        (K, entries), read-only. Remembered for the last few small point sets: a fit asks for the same static
         points at every trial θ."""
         ub = np.ascontiguousarray(ubar, dtype=float)
+        if ub.nbytes > _POINT_CACHE_BYTES:  # a fine static curve: not a fit's points, not kept (the map lives on)
+            return self.input_part(ub)[:, self._entries[0]]
         key = (ub.shape, ub.tobytes())
         cache = self._point_cache
         U = cache.get(key)
         if U is None:
             U = self.input_part(ub)[:, self._entries[0]]
             U.setflags(write=False)
-            if len(cache) >= 16:
-                cache.clear()
-            cache[key] = U
+            size = U.nbytes + ub.nbytes
+            if size <= _POINT_CACHE_BYTES:
+                if len(cache) >= 16 or size + sum(v.nbytes + len(k[1]) for k, v in cache.items()) > _POINT_CACHE_BYTES:
+                    cache.clear()
+                cache[key] = U
         return U
 
     @cached_property
