@@ -43,3 +43,30 @@ def test_a_static_curve_at_many_levels_leaves_no_copy_of_its_points_behind():
     dm = derivative_map(st_)
     pts = np.array([0.2, 0.5, 0.9])
     assert dm.entry_inputs(pts) is dm.entry_inputs(pts.copy())
+
+
+ST_POLE = gb.Structure(["y(k-1)", "u(k-1)y(k-1)", "u(k-1)"])
+
+
+def _pole_moving_record(seed: int, name: str) -> gb.Record:
+    # y(k) = 0.6 y(k-1) + 0.2 u(k-1) y(k-1) + u(k-1): pole 0.6 + 0.2 u, stable for u in [0, 1]
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(0.0, 1.0, 600)
+    y = np.zeros(600)
+    y[0] = 1.0
+    for k in range(1, 600):
+        y[k] = 0.6 * y[k - 1] + 0.2 * u[k - 1] * y[k - 1] + u[k - 1]
+    return gb.Record(u, y, name=name)
+
+
+def test_output_error_does_not_choose_a_model_whose_free_run_diverges_on_the_choosing_record():
+    # the choice scored each candidate by an unbounded J_S on the choosing records: at u = 2.05 the pole
+    # is 1.01, a slow divergence (1.01^3000 ≈ 1e13: beyond simulate's bound, far from an overflow), and
+    # the model was chosen there with JS_choose 6e28 where gb.js says inf
+    fit = _pole_moving_record(0, "fit")
+    diverging = gb.Record(np.full(3000, 2.05), np.ones(3000), name="choose")
+    with pytest.raises(ValueError, match="diverges on the choosing record"):
+        gb.output_error(ST_POLE, fit, choose_on=diverging, n_starts=2, progress=False)
+    choose = _pole_moving_record(1, "choose")
+    result = gb.output_error(ST_POLE, fit, choose_on=choose, n_starts=2, progress=False)
+    assert result.JS_choose == pytest.approx(gb.js(result.model, choose), rel=1e-9)

@@ -289,7 +289,7 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
 
                     def watch(th, label=label, sv=sv, watched=watched):
                         if chooser is not None:
-                            s = float(chooser.js(th[None])[0])
+                            s = float(chooser.js(th[None], bounded=True)[0])
                             if s < watched["score"]:
                                 watched.update(score=s, theta=np.array(th))
                             offer(th, s, f"{label} ({sv})")
@@ -307,9 +307,11 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
                         offer(th, cost, f"{label} ({sv})")  # the optimised cost: J_S (+ the ridge term)
                         row(label, sv, "fitted", "", js0, js, nfev=k)
                     else:
-                        jc = float(chooser.js(th[None])[0])
+                        jc = float(chooser.js(th[None], bounded=True)[0])  # as gb.js: inf where the run diverges
                         offer(th, jc, f"{label} ({sv})")
-                        row(label, sv, "fitted", "", js0, js, min(jc, watched["score"]), nfev=k)
+                        jc = min(jc, watched["score"])
+                        row(label, sv, "fitted", "" if np.isfinite(jc) else "its free run diverges on the choosing "
+                            "record(s)", js0, js, jc, nfev=k)
     finally:
         bar.close()
     starts = pd.DataFrame(rows, columns=list(START_COLUMNS))

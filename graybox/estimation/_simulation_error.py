@@ -240,11 +240,12 @@ class SEProblem:
                                          None)[-1]) for r in self.records)
 
     # -- objectives -------------------------------------------------------------------
-    def js(self, thetas: np.ndarray, threads: int = 1) -> np.ndarray:
+    def js(self, thetas: np.ndarray, threads: int = 1, *, bounded: bool = False) -> np.ndarray:
         """J_S of each row of ``thetas`` (inf where a free run overflows; huge where it diverges
-        more slowly, see :meth:`diverges`), shape (P,)."""
-        sse = sum(batch_sse(self.code, thetas, record_inputs(r, self.code.inputs), r.y, self.L, threads, U)
-                  for r, U in zip(self.records, self.U))
+        more slowly, see :meth:`diverges`), shape (P,). ``bounded``: inf also where a free run leaves
+        :func:`graybox.simulate`'s default bound (J_S as :func:`graybox.js` gives it; a score, not a cost)."""
+        sse = sum(batch_sse(self.code, thetas, record_inputs(r, self.code.inputs), r.y, self.L, threads, U,
+                            bounded=bounded) for r, U in zip(self.records, self.U))
         js = sse / self.n_dyn
         return np.where(np.isfinite(js), js, np.inf)
 
