@@ -484,6 +484,16 @@ def _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded):  # pragma: no co
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
+def _bound_start(ref):  # pragma: no cover - compiled
+    # (bounded, the members' scales (a copy: they grow), their bounds); ``ref`` empty: no bound
+    own = ref.copy()
+    bnd = np.empty(own.shape[0])
+    for p in range(own.shape[0]):
+        bnd[p] = scaled_bound(own[p])
+    return own.shape[0] > 0, own, bnd
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
 def _bound_members(ref, bnd, xacc, acc):  # pragma: no cover - compiled
     # The default bound of _one for every member p: its scale ref[p] grows with |X_p(k)| (xacc, the
     # sum of its terms without y), and a sample beyond BOUND_FACTOR × that scale is NaN, and so is
@@ -507,11 +517,7 @@ def _batch_block(thT, U, ny, ylag, Y, start, ref):  # pragma: no cover - compile
     n, P = Y.shape
     mask = -1  # all ones: (k - lag) & mask == k - lag, the whole record is kept
     acc = np.empty(P)
-    bounded = ref.shape[0] > 0
-    ref = ref.copy()
-    bnd = np.empty(ref.shape[0])
-    for p in range(ref.shape[0]):
-        bnd[p] = scaled_bound(ref[p])
+    bounded, ref, bnd = _bound_start(ref)
     xacc = np.empty(P)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded)
@@ -630,11 +636,7 @@ def _batch_sse(thT, U, ny, ylag, y, start, ring, ref):  # pragma: no cover - com
             Y[k & mask, p] = y[k]
     sse = np.zeros(P)
     acc = np.empty(P)
-    bounded = ref.shape[0] > 0
-    ref = ref.copy()
-    bnd = np.empty(ref.shape[0])
-    for p in range(ref.shape[0]):
-        bnd[p] = scaled_bound(ref[p])
+    bounded, ref, bnd = _bound_start(ref)
     xacc = np.empty(P)
     for k in range(start, n):
         _advance(thT, U, ny, ylag, Y, k, mask, acc, xacc, bounded)
