@@ -156,3 +156,21 @@ def test_a_slowly_diverging_member_has_an_infinite_js_in_a_front_as_alone():
     front = gb.ParetoSet.from_thetas(st_, th, None, rec, None)
     assert front.JS[0] == np.inf and front.JS[1] == pytest.approx(gb.js(gb.Model(st_, th[1]), rec), abs=1e-20)
     assert gb.evaluate_thetas(st_, th, rec, None)["JS"][0] == np.inf
+
+
+def test_semp_scores_a_slowly_diverging_candidate_as_gb_js_does():
+    # SEMP ranks candidates by their free-run J_S: a slowly diverging one scored 4e27 (the batch kernel stopped
+    # only at an overflow), so a search where every extension diverges went on instead of saying so
+    from graybox.selection._simulation_error_pruning import _Scorer
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.0, 1.0, 3000)
+    y = np.zeros(3000)
+    for k in range(1, 3000):
+        y[k] = 0.9 * y[k - 1] + u[k - 1]
+    rec = gb.Record(u, y)
+    st_ = gb.Structure(["y(k-1)", "u(k-1)"])
+    th = np.array([[1.01, 1.0], [0.9, 1.0]])
+    scores = _Scorer(st_, [rec], 1).scores(th)
+    assert scores[0] == np.inf == gb.js(gb.Model(st_, th[0]), rec)
+    assert np.isfinite(scores[1])

@@ -193,8 +193,9 @@ class _Scorer:
         good = np.all(np.isfinite(th), axis=1)
         out = np.full(th.shape[0], np.inf)
         if good.any():
+            # bounded as gb.js is: a candidate whose free run diverges slowly scores inf, not 1e27
             sse = sum(batch_sse(self.code, th[good], record_inputs(r, self.code.inputs), r.y, self.L, self.threads,
-                                U)
+                                U, bounded=True)
                       for r, U in zip(self.records, self.U))
             mse = np.maximum(sse / self.n_rows, self.floor)
             out[good] = np.where(np.isfinite(mse), mse, np.inf)
