@@ -411,6 +411,8 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     **{(k, "reference"): (2.5, -1) for k in ("pe_pareto", "pe_thetas", "pe_uncertainty")},
     # positive quantities in their own units, where 2.5 is an ordinary value
     ("Record", "Ts"): (2.5,),  # seconds
+    ("Model", "Ts"): (2.5,),  # seconds: the period it was identified at
+    ("NeuralModel", "Ts"): (2.5,),
     ("StaticBand", "b"): (2.5,),  # output units
     ("StaticPoints", "uncertainty"): (2.5,),
     ("StaticPoints.from_repeats", "uncertainty"): (2.5,),

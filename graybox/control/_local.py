@@ -450,13 +450,15 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
              "the local models there are extrapolations of the model", StaticRangeWarning)
 
 
-def _check_Ts(Ts: float | None, data: object) -> float:
+def _check_Ts(Ts: float | None, data: object, model: Model) -> float:
+    """The local models' sampling period: ``Ts``, else ``data``'s, else the one the model was identified at."""
     if Ts is None:
-        if isinstance(data, Dataset):
+        if isinstance(data, (Dataset, Record)):
             return float(data.Ts)
-        if isinstance(data, Record):
-            return float(data.Ts)
-        raise ValueError("Ts (the sampling period, s) is needed: pass Ts= or data= (a Record or Dataset)")
+        if model.Ts is not None:
+            return float(model.Ts)
+        raise ValueError("Ts (the sampling period, s) is needed: pass Ts= or data= (a Record or Dataset), or use a "
+                         "model an estimator made (it knows the period it was identified at)")
     return check_real(Ts, "Ts", low=0, low_open=True)
 
 
@@ -500,7 +502,8 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
     ubar : float or array_like, shape (m,)
         The operating input (input units); one value per input, in ``model.input_names`` order.
     Ts : float, optional
-        Sampling period (s); default ``data``'s.
+        Sampling period (s); default ``data``'s, else the model's own (``model.Ts``, the period it
+        was identified at).
     y0 : float, optional
         Initial output of the settling run that picks the equilibrium (output units), e.g. the
         measured ȳ; needed when several equilibria are stable.
@@ -518,7 +521,7 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
     ub = _as_points(model, ubar)
     if ub.shape[0] != 1:
         raise ValueError(f"ubar: local_model takes one operating point, got {ub.shape[0]} (use operating_curve)")
-    Ts_ = _check_Ts(Ts, data)
+    Ts_ = _check_Ts(Ts, data, model)
     _range_warning(model, ub, data)
     return _linearise(model, ub[0], _y0s(y0, 1)[0], Ts_)
 
@@ -631,7 +634,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     ubar : array_like, shape (M,) or (M, m)
         Operating inputs (input units).
     Ts : float, optional
-        Sampling period (s); default ``data``'s.
+        Sampling period (s); default ``data``'s, else the model's own (``model.Ts``, the period it
+        was identified at).
     y0 : float or array_like of shape (M,), optional
         Initial output of each point's settling run (see :func:`local_model`).
     data : Record, Dataset, sequence of Record or StaticPoints, optional
@@ -653,7 +657,7 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     model = check_polynomial(model, "operating_curve")
     n_samples, seed = check_int(n_samples, "n_samples", low=10), check_seed(seed)
     ub = _as_points(model, ubar)
-    Ts_ = _check_Ts(Ts, data)
+    Ts_ = _check_Ts(Ts, data, model)
     _range_warning(model, ub, data)
     lms = tuple(_linearise(model, u, y, Ts_) for u, y in zip(ub, _y0s(y0, ub.shape[0])))
     rows = [_summary(lm) for lm in lms]

@@ -297,8 +297,15 @@ PERIOD_RTOL = 1e-3
 def check_same_period(a: Record, b: Record) -> None:
     """``ValueError`` naming both unless two records (in memory or Dask) share their sampling
     period, to :data:`PERIOD_RTOL` relative."""
-    if abs(a.Ts - b.Ts) > PERIOD_RTOL * max(a.Ts, b.Ts):
-        raise ValueError(f"{a.name!r} is sampled every {a.Ts:.9g} s but {b.name!r} every {b.Ts:.9g} s: a "
+    check_period(a.Ts, f"{a.name!r} is sampled", b)
+
+
+def check_period(Ts: float | None, what: str, record: Record) -> None:
+    """``ValueError`` unless ``record`` is sampled every ``Ts`` seconds (to :data:`PERIOD_RTOL`; None:
+    unknown, nothing to check). ``what`` names the other side, e.g. "'ident' is sampled" or "model
+    'ELS' was identified on records sampled"."""
+    if Ts is not None and abs(Ts - record.Ts) > PERIOD_RTOL * max(Ts, record.Ts):
+        raise ValueError(f"{what} every {Ts:.9g} s but {record.name!r} every {record.Ts:.9g} s: a "
                          "discrete-time model holds at one sampling period; resample one of them (a Record "
                          "made without Ts= has Ts = 1 s)")
 
@@ -396,7 +403,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["as_records", "as_input_array", "check_compatible", "check_same_period", "static_point_inputs",
+__all__ += ["as_records", "as_input_array", "check_compatible", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

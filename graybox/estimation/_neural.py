@@ -127,7 +127,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from ..core._records import Dataset, Record, as_records
+from ..core._records import Dataset, Record, as_records, check_period
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
@@ -402,6 +402,9 @@ class NeuralModel:
     input_names : sequence of str
         The one input's name, as one name in a tuple (as :class:`~graybox.Model`'s): given a
         Record, the network reads that input of it, by name (default ``("u",)``).
+    Ts : float, optional
+        The sampling period (s) of the training records (:func:`neural_narx` sets it); a Record at
+        another period is refused. None: unknown, not checked.
     """
 
     W1: np.ndarray
@@ -417,9 +420,12 @@ class NeuralModel:
     y_scale: float = 1.0
     name: str = "Neural"
     input_names: tuple[str, ...] = ("u",)
+    Ts: float | None = None
 
     def __post_init__(self) -> None:
         check_str(self.name, "name")
+        if self.Ts is not None:
+            object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         names = check_input_names(self.input_names)
         if len(names) != 1:
             raise ValueError(f"input_names: a network has one input, got {len(names)} names {names}")
@@ -474,10 +480,13 @@ class NeuralModel:
     def with_name(self, name: str) -> "NeuralModel":
         """The same network under another label."""
         return NeuralModel(self.W1, self.b1, self.w2, self.b2, self.ny, self.nu, self.ne,
-                           self.u_offset, self.u_scale, self.y_offset, self.y_scale, name, self.input_names)
+                           self.u_offset, self.u_scale, self.y_offset, self.y_scale, name, self.input_names,
+                           self.Ts)
 
     def _input(self, record: Record) -> np.ndarray:
-        """The record's input the network reads, by name, shape (N,) (ValueError naming both when it lacks it)."""
+        """The record's input the network reads, by name, shape (N,) (ValueError naming both when it lacks it, or
+        when the record is sampled at another period than the network was trained at)."""
+        check_period(self.Ts, f"network {self.name!r} was trained on records sampled", record)
         return record_inputs(record, self.input_names)
 
     # -- normalisation ------------------------------------------------------
@@ -1137,7 +1146,7 @@ def neural_narx(
             n_epochs += s3.epochs
     last = stages[-1]
     W1, b1, w2, b2 = _unpack(theta, hidden, n_in)
-    model = NeuralModel(W1, b1, w2, b2, ny, nu, ne, u_off, u_sc, y_off, y_sc, name, recs[0].input_names)
+    model = NeuralModel(W1, b1, w2, b2, ny, nu, ne, u_off, u_sc, y_off, y_sc, name, recs[0].input_names, recs[0].Ts)
     r_pe = pe_residual(theta)
     r_sim = sim(theta, sig, False)[0]
     return NeuralFit(

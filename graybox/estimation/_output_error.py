@@ -321,7 +321,7 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
         raise ValueError(f"no start of the output-error fit gave a model: {reasons}. Try theta0, more starts, a "
                          "smaller margin or another structure")
     th = best["theta"]
-    model = Model(st, th, name=name, input_names=rec[0].input_names)
+    model = Model(st, th, name=name, input_names=rec[0].input_names, Ts=rec[0].Ts)
     return OEResult(
         model=model,
         JS=float(problem.js(th[None])[0]),

@@ -18,7 +18,7 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, StaticPoints, as_records
-from ..core._validation import check_bool, check_fields, frozen, warn
+from ..core._validation import check_bool, check_fields, check_real, frozen, warn
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -99,6 +99,10 @@ class ParetoSet:
     input_names : tuple of str, optional
         The members' inputs, in the column order of an input array (default: as
         :class:`~graybox.Model`'s; :meth:`from_thetas` takes the records').
+    Ts : float, optional
+        The sampling period (s) of the records the set was fitted on (:meth:`from_thetas` takes the
+        records'); its members' models carry it, and choosing records at another period are
+        refused. None: unknown.
     """
 
     structure: Structure
@@ -111,9 +115,12 @@ class ParetoSet:
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
     failures: Mapping[int, str] = field(default_factory=dict)
     input_names: tuple[str, ...] | None = None
+    Ts: float | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
+        if self.Ts is not None:
+            object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         # checked and defaulted as a Model's (the members' models carry them)
         names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
@@ -186,7 +193,8 @@ class ParetoSet:
         jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, th, None, static)["JSF"]
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
-        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails, recs[0].input_names)
+        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails, recs[0].input_names,
+                   recs[0].Ts)
 
     # -- access -------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -214,7 +222,7 @@ class ParetoSet:
             raise ValueError(f"member {int(i) % K} of this set failed: {self.failures[int(i) % K]}")
         lam = self.lambdas[i]
         label = name or (f"{self.method} λ1={lam:.3g}" if np.isfinite(lam) else f"{self.method} #{int(i) % K}")
-        return Model(self.structure, self.thetas[i], name=label, input_names=self.input_names)
+        return Model(self.structure, self.thetas[i], name=label, input_names=self.input_names, Ts=self.Ts)
 
     def models(self) -> list[Model]:
         """Every member that did not fail, as a Model, in order."""

@@ -689,7 +689,7 @@ def cls(
     theta = z / d.s
     for c in cons:
         c.after_solve(theta, ctx)
-    model = Model(st, theta, name=name, input_names=recs[0].input_names)  # the records' input order
+    model = Model(st, theta, name=name, input_names=recs[0].input_names, Ts=recs[0].Ts)  # the records' input order
     return CLSResult(model, static_info(static, data, curves=True),
                      tuple(c.describe() for c in cons), solver)
 

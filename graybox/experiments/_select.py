@@ -621,7 +621,8 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     """The chosen member as a Decision: J_S on the choosing data, J_SF of the refitted member."""
     js_choose = res["blocks"] @ res["weights"]
     if estimator in _BLACK_BOX_FITS:
-        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})", input_names=plan.ident.input_names)
+        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})", input_names=plan.ident.input_names,
+                         Ts=plan.ident.Ts)
         return gb.Decision(model, 0, float("nan"), float(js_choose[0]), float(res["jsf_full"][0]), "min J_S", True,
                            float(js_choose[0]))
     thetas = res["thetas"]
@@ -629,7 +630,7 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     failures = {int(k): "the fit failed at this λ" for k in np.flatnonzero(~keep)}
     th = np.where(keep[:, None], thetas, 0.0)
     scored = gb.ParetoSet(st, th, res["lambdas"], np.full(len(th), np.nan), js_choose, res["jsf_full"],
-                          f"{estimator}, J_S on the choosing data", {}, failures, plan.ident.input_names)
+                          f"{estimator}, J_S on the choosing data", {}, failures, plan.ident.input_names, plan.ident.Ts)
     if in_band:
         d = gb.decide_dsf(scored, band=plan.band, fallback="min_jsf")
         if d.index == i:

@@ -183,6 +183,8 @@ def _enc(kind: str, v: Any) -> Any:
         return v if kind != "int" else int(v)
     if kind == "int_or_none":
         return None if v is None else int(v)
+    if kind == "float_or_none":
+        return None if v is None else _arr(v)
     if kind == "floats":
         return [_num(x) for x in v]
     if kind == "structure":
@@ -217,6 +219,8 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return rd.int(v, where)
     if kind == "int_or_none":
         return None if v is None else rd.int(v, where)
+    if kind == "float_or_none":
+        return None if v is None else rd.float(v, where)
     if kind == "str":
         return rd.str(v, where)
     if kind == "bool":
@@ -348,19 +352,22 @@ def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "Model": (Model, (("name", "str"), ("structure", "structure"), ("theta", "array1"),
-                      ("noise_structure", "structure"), ("noise_theta", "array1"), ("input_names", "names"))),
+                      ("noise_structure", "structure"), ("noise_theta", "array1"), ("input_names", "names"),
+                      ("Ts", "float_or_none"))),
     "NeuralModel": (NeuralModel, (("name", "str"), ("ny", "int"), ("nu", "int"), ("ne", "int"), ("W1", "array2"),
                                   ("b1", "array1"), ("w2", "array1"), ("b2", "float"), ("u_offset", "float"),
                                   ("u_scale", "float"), ("y_offset", "float"), ("y_scale", "float"),
-                                  ("input_names", "names"))),
+                                  ("input_names", "names"), ("Ts", "float_or_none"))),
     "ParetoSet": (ParetoSet, (("method", "str"), ("structure", "structure"), ("lambdas", "array1"),
                               ("thetas", "array2"), ("J1", "array1"), ("JS", "array1"), ("JSF", "array1"),
-                              ("extra", "dict_arrays"), ("failures", "failures"), ("input_names", "names"))),
+                              ("extra", "dict_arrays"), ("failures", "failures"), ("input_names", "names"),
+                              ("Ts", "float_or_none"))),
     "Selection": (Selection, (("structure", "structure"), ("err", "array1"), ("theta", "array1"),
                               ("noise", "structure"), ("evaluated", "structure"), ("err_evaluated", "array1"),
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
                               ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"), ("search", "str"),
-                              ("subsets", "structures"), ("subset_rss", "array1"), ("input_names", "names"))),
+                              ("subsets", "structures"), ("subset_rss", "array1"), ("input_names", "names"),
+                              ("Ts", "float_or_none"))),
     "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
                               ("theta_ls", "array1"), ("residuals", "arrays"), ("n_direct", "int"))),
     "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("prediction_cost", "floats"), ("simulation_cost", "floats"),
@@ -370,7 +377,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                             ("in_band", "bool"), ("score", "float"), ("model", "Model"), ("chosen_on", "str"))),
     "SEMPResult": (SEMPResult, (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
                                 ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"),
-                                ("input_names", "names"))),
+                                ("input_names", "names"), ("Ts", "float_or_none"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
                               ("in_band", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
                               ("n_iter", "int"), ("message", "str"), ("margin", "float"))),
@@ -414,7 +421,7 @@ def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> No
 _REGISTERED_ABOVE = {"GrayboxSelection": "graybox.experiments._select"}
 
 #: Field kinds other than the saved types themselves.
-_KINDS = frozenset({"float", "array1", "array2", "int", "int_or_none", "str", "bool", "floats", "structure",
+_KINDS = frozenset({"float", "float_or_none", "array1", "array2", "int", "int_or_none", "str", "bool", "floats", "structure",
                     "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame"})
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
@@ -431,15 +438,17 @@ _DEFAULT = object()
 #: Fields added after files of this format version were written, with the value a file without them
 #: means (:data:`_DEFAULT`: the constructor's own).
 _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {"chosen_on": ""},
+                                     # the sampling period, carried since 0.2.2: unknown (None) in older files
                                      "DSFResult": {"margin": float("nan")},  # not recorded: none said
                                      # selections saved before the fit / choose / test protocol chose by the
                                      # smallest validation J_S
                                      "GrayboxSelection": {"rule": "min"},
-                                     "Model": {"input_names": _DEFAULT}, "NeuralModel": {"input_names": _DEFAULT},
-                                     "ParetoSet": {"input_names": _DEFAULT},
+                                     "Model": {"input_names": _DEFAULT, "Ts": None},
+                                     "NeuralModel": {"input_names": _DEFAULT, "Ts": None},
+                                     "ParetoSet": {"input_names": _DEFAULT, "Ts": None},
                                      "Selection": {k: _DEFAULT for k in ("search", "subsets", "subset_rss",
-                                                                         "input_names")},
-                                     "SEMPResult": {"input_names": _DEFAULT}}
+                                                                         "input_names")} | {"Ts": None},
+                                     "SEMPResult": {"input_names": _DEFAULT, "Ts": None}}
 
 #: Fields that files written by an older graybox carry and this one no longer has: read and dropped.
 #: A GrayboxSelection named the SQLite store its cells ran in; it no longer runs through a store.

@@ -11,8 +11,8 @@ from ..core import _simulation
 from ..static import _analysis as _static
 from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
-from ..core._records import Record
-from ..core._validation import check_int, check_sequence, check_str, check_theta, frozen
+from ..core._records import Record, check_period
+from ..core._validation import check_int, check_real, check_sequence, check_str, check_theta, frozen
 from ..core._terms import Structure, check_input_names, require_inputs
 
 __all__ = ["Model", "model_input_names"]
@@ -47,6 +47,11 @@ class Model:
         The model's inputs, in the column order of an input array (default: the inputs the
         structure uses, in natural name order, or ``("u",)`` when it uses none). Must contain
         every input the structure uses.
+    Ts : float, optional
+        The sampling period (s) of the records the model was identified on; a Record sampled at
+        another period is refused where the model meets it (``simulate``, ``predict``, and the
+        scores built on them). None (default: a model written by hand, or read from a file of an
+        earlier graybox): unknown, not checked. Estimators set it from their records.
     """
 
     structure: Structure
@@ -55,9 +60,12 @@ class Model:
     noise_theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
     name: str = ""
     input_names: tuple[str, ...] | None = None
+    Ts: float | None = None
 
     def __post_init__(self) -> None:
         check_str(self.name, "name")
+        if self.Ts is not None:
+            object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         st = self.structure if isinstance(self.structure, Structure) else Structure(self.structure)
         if any(t.is_noise for t in st):
             raise ValueError("noise terms belong in noise_structure, not in the process structure")
@@ -85,12 +93,19 @@ class Model:
 
     def with_theta(self, theta: np.ndarray, *, name: str | None = None) -> "Model":
         """The same structure with other parameters (the noise part is dropped)."""
-        return Model(self.structure, theta, name=self.name if name is None else name, input_names=self.input_names)
+        return Model(self.structure, theta, name=self.name if name is None else name, input_names=self.input_names,
+                     Ts=self.Ts)
+
+    def check_period(self, record: Record) -> None:
+        """``ValueError`` when ``record`` is sampled at another period than the model was identified at
+        (nothing when the model's ``Ts`` is unknown)."""
+        check_period(self.Ts, f"model {self.name!r} was identified on records sampled", record)
 
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record, *, horizon: int = 1) -> np.ndarray:
         """Prediction ``horizon`` samples ahead over ``record`` (default one step), shape (N,); see
         :func:`graybox.core._simulation.predict`."""
+        self.check_period(record)
         return _simulation.predict(self.structure, self.theta, record, horizon=horizon)
 
     @property
@@ -113,6 +128,8 @@ class Model:
         (default: 1e6 × the larger of max|y0| and the inputs' direct push on the output, in the
         output's units whatever they are, also from rest).
         """
+        if isinstance(u, Record):
+            self.check_period(u)
         if not isinstance(u, Record) and self.n_inputs > 1:
             return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge, bound=bound,
                                         input_names=self.input_names)

@@ -196,6 +196,8 @@ class Selection:
     input_names : tuple of str, optional
         The model's inputs, in the column order of an input array (default: as
         :class:`~graybox.Model`'s; :func:`frols` takes the records').
+    Ts : float, optional
+        The sampling period (s) of the records it was fitted on (None: unknown); :attr:`model` carries it.
     """
 
     structure: Structure
@@ -215,12 +217,15 @@ class Selection:
     subsets: tuple[Structure, ...] = field(default=())
     subset_rss: np.ndarray = field(default=())
     input_names: tuple[str, ...] | None = None
+    Ts: float | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
         # checked and defaulted as a Model's (:attr:`model` carries them)
         names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
+        if self.Ts is not None:
+            object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         n, k = len(self.structure), len(self.evaluated)
         if tuple(self.evaluated)[:n] != tuple(self.structure):
             raise ValueError(f"the selected terms {self.structure} must be the first {n} evaluated terms, "
@@ -249,7 +254,7 @@ class Selection:
     @property
     def model(self) -> Model:
         """The selected structure with its least-squares parameters (no MA part), named ``"LS"``."""
-        return Model(self.structure, self.theta, name="LS", input_names=self.input_names)
+        return Model(self.structure, self.theta, name="LS", input_names=self.input_names, Ts=self.Ts)
 
     def to_frame(self) -> pd.DataFrame:
         """One row per evaluated term, in order.
@@ -734,6 +739,7 @@ def frols(
         subsets=() if plan is None else tuple(Structure([process[j] for j in S]) for S in plan.subsets),
         subset_rss=() if plan is None else plan.rss,
         input_names=as_gram_records(data)[0].input_names,
+        Ts=as_gram_records(data)[0].Ts,
     )
 
 

@@ -78,6 +78,8 @@ class SEMPResult:
     input_names : tuple of str, optional
         The model's inputs, in the column order of an input array (default: as
         :class:`~graybox.Model`'s; :func:`semp` takes the records').
+    Ts : float, optional
+        The sampling period (s) of the records it was fitted on (None: unknown); :attr:`model` carries it.
     """
 
     structure: Structure
@@ -89,6 +91,7 @@ class SEMPResult:
     stop: str
     n_rows: int
     input_names: tuple[str, ...] | None = None
+    Ts: float | None = None
 
     #: Columns every path holds (a loaded file is checked against them).
     PATH_COLUMNS = ("step", "action", "term", "n_terms", "score", "criterion", "structure")
@@ -98,6 +101,8 @@ class SEMPResult:
         # checked and defaulted as a Model's (:attr:`model` carries them)
         names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
+        if self.Ts is not None:
+            object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         if len(self.theta) != len(self.structure):
             raise ValueError(f"theta has {len(self.theta)} values but the structure has {len(self.structure)} terms")
         check_choice(self.criterion, "criterion", CRITERIA)
@@ -108,7 +113,7 @@ class SEMPResult:
     @property
     def model(self) -> Model:
         """The selected structure with its least-squares parameters, named ``"SEMP"``."""
-        return Model(self.structure, self.theta, name="SEMP", input_names=self.input_names)
+        return Model(self.structure, self.theta, name="SEMP", input_names=self.input_names, Ts=self.Ts)
 
     def __repr__(self) -> str:
         return (f"SEMPResult(n_terms={len(self.structure)}, score={self.score:.4g}, steps={len(self.path)}, "
@@ -495,4 +500,4 @@ def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
     return SEMPResult(Structure([opt.process[j] for j in current]), frozen(best["_theta"][current]),
                       float(best["score"]), path.drop(columns=["_set", "_theta"]), fwd, opt.crit,
                       f"{why}: step {int(best['step'])} of the path; search: {stop}", sc.n_rows,
-                      sc.records[0].input_names)
+                      sc.records[0].input_names, sc.records[0].Ts)
