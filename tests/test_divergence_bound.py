@@ -142,16 +142,19 @@ def test_a_population_diverges_where_each_member_does_alone(a, c, d, e, spread, 
     np.testing.assert_array_equal(np.isinf(js), ~np.all(np.isfinite(alone[:, 2:]), axis=1))
 
 
-def test_a_slowly_diverging_member_has_an_infinite_js_in_a_front_as_alone():
-    # 1.01^3000 ≈ 1e13: no overflow, but far past 1e6 × the run's scale
+def _slow_divergence():
+    """A first-order record and two members of y(k-1) + u(k-1): 1.01 (1.01^3000 ≈ 1e13: no overflow, but far
+    past 1e6 × the run's scale) and the system's own 0.9."""
     rng = np.random.default_rng(0)
     u = rng.uniform(0.0, 1.0, 3000)
     y = np.zeros(3000)
     for k in range(1, 3000):
         y[k] = 0.9 * y[k - 1] + u[k - 1]
-    rec = gb.Record(u, y)
-    st_ = gb.Structure(["y(k-1)", "u(k-1)"])
-    th = np.array([[1.01, 1.0], [0.9, 1.0]])
+    return gb.Record(u, y), gb.Structure(["y(k-1)", "u(k-1)"]), np.array([[1.01, 1.0], [0.9, 1.0]])
+
+
+def test_a_slowly_diverging_member_has_an_infinite_js_in_a_front_as_alone():
+    rec, st_, th = _slow_divergence()
     assert gb.js(gb.Model(st_, th[0]), rec) == np.inf
     front = gb.ParetoSet.from_thetas(st_, th, None, rec, None)
     assert front.JS[0] == np.inf and front.JS[1] == pytest.approx(gb.js(gb.Model(st_, th[1]), rec), abs=1e-20)
@@ -163,14 +166,7 @@ def test_semp_scores_a_slowly_diverging_candidate_as_gb_js_does():
     # only at an overflow), so a search where every extension diverges went on instead of saying so
     from graybox.selection._simulation_error_pruning import _Scorer
 
-    rng = np.random.default_rng(0)
-    u = rng.uniform(0.0, 1.0, 3000)
-    y = np.zeros(3000)
-    for k in range(1, 3000):
-        y[k] = 0.9 * y[k - 1] + u[k - 1]
-    rec = gb.Record(u, y)
-    st_ = gb.Structure(["y(k-1)", "u(k-1)"])
-    th = np.array([[1.01, 1.0], [0.9, 1.0]])
+    rec, st_, th = _slow_divergence()
     scores = _Scorer(st_, [rec], 1).scores(th)
     assert scores[0] == np.inf == gb.js(gb.Model(st_, th[0]), rec)
     assert np.isfinite(scores[1])
