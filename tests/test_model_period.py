@@ -85,3 +85,11 @@ def test_a_local_model_takes_the_period_the_model_was_identified_at():
     assert gb.local_model(m, 0.5, Ts=0.2).Ts == 0.2  # given: it is the user's
     with pytest.raises(ValueError, match="Ts .*is needed"):
         gb.local_model(gb.Model(m.structure, m.theta), 0.5)  # a hand-made model: no period known
+
+
+def test_a_models_repr_says_its_period_and_a_networks_its_input():
+    m = gb.Model(ST, np.array([0.4, 0.6, 0.2, 0.3, 0.05]), name="M", Ts=0.1)
+    assert "Ts=0.1 s" in repr(m) and "Ts=" not in repr(gb.Model(ST, m.theta))
+    net = gb.neural_narx(gb.Record(_records(0.1).u, _records(0.1).y, Ts=0.1, input_names=("speed",)), ny=2, nu=2,
+                         ne=0, hidden=2, epochs=2, sim_epochs=2, seed=0).model
+    assert "input='speed'" in repr(net) and "Ts=0.1 s" in repr(net)

@@ -771,8 +771,9 @@ class NeuralModel:
                 + f"; normalisation u: ({self.u_offset:.6g}, {self.u_scale:.6g}), y: ({self.y_offset:.6g}, {self.y_scale:.6g})")
 
     def __repr__(self) -> str:
-        return (f"NeuralModel(name={self.name!r}, ny={self.ny}, nu={self.nu}, ne={self.ne}, "
-                f"hidden={self.hidden}, n_params={self.n_params})")
+        period = "" if self.Ts is None else f", Ts={self.Ts:g} s"
+        return (f"NeuralModel(name={self.name!r}, input={self.input_names[0]!r}, ny={self.ny}, nu={self.nu}, "
+                f"ne={self.ne}, hidden={self.hidden}, n_params={self.n_params}{period})")
 
 
 # ---------------------------------------------------------------------------

@@ -212,4 +212,5 @@ class Model:
         return head + self.equation()
 
     def __repr__(self) -> str:
-        return f"Model(name={self.name!r}, n_params={self.n_params}, max_lag={self.max_lag})"
+        period = "" if self.Ts is None else f", Ts={self.Ts:g} s"
+        return f"Model(name={self.name!r}, n_params={self.n_params}, max_lag={self.max_lag}{period})"
