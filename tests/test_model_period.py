@@ -93,3 +93,13 @@ def test_a_models_repr_says_its_period_and_a_networks_its_input():
     net = gb.neural_narx(gb.Record(_records(0.1).u, _records(0.1).y, Ts=0.1, input_names=("speed",)), ny=2, nu=2,
                          ne=0, hidden=2, epochs=2, sim_epochs=2, seed=0).model
     assert "input='speed'" in repr(net) and "Ts=0.1 s" in repr(net)
+
+
+def test_a_local_model_refuses_data_at_another_period_than_its_model():
+    # the model's coefficients a_l hold per step of the period it was identified at: data at another period
+    # cannot lend the local model theirs (an explicit Ts= stays the user's word)
+    m = gb.els(ST, gb.Dataset(_records(0.1), _records(0.1, seed=1), None)).model
+    assert gb.local_model(m, 0.5, data=_records(0.1, seed=2)).Ts == 0.1
+    with pytest.raises(ValueError, match="every 0.1 s"):
+        gb.local_model(m, 0.5, data=_records(0.2, seed=2))
+    assert gb.local_model(gb.Model(m.structure, m.theta), 0.5, data=_records(0.2, seed=2)).Ts == 0.2

@@ -451,12 +451,15 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
 
 
 def _check_Ts(Ts: float | None, data: object, model: Model) -> float:
-    """The local models' sampling period: ``Ts``, else ``data``'s, else the one the model was identified at."""
+    """The local models' sampling period: ``Ts``, else the one the model was identified at (``data`` at another
+    period is refused: the model's coefficients hold at its own), else ``data``'s."""
     if Ts is None:
+        if model.Ts is not None:
+            if isinstance(data, (Dataset, Record)):
+                model.check_period(data.ident if isinstance(data, Dataset) else data)
+            return float(model.Ts)
         if isinstance(data, (Dataset, Record)):
             return float(data.Ts)
-        if model.Ts is not None:
-            return float(model.Ts)
         raise ValueError("Ts (the sampling period, s) is needed: pass Ts= or data= (a Record or Dataset), or use a "
                          "model an estimator made (it knows the period it was identified at)")
     return check_real(Ts, "Ts", low=0, low_open=True)
@@ -502,8 +505,8 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
     ubar : float or array_like, shape (m,)
         The operating input (input units); one value per input, in ``model.input_names`` order.
     Ts : float, optional
-        Sampling period (s); default ``data``'s, else the model's own (``model.Ts``, the period it
-        was identified at).
+        Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
+        ``data`` at another period is refused), else ``data``'s.
     y0 : float, optional
         Initial output of the settling run that picks the equilibrium (output units), e.g. the
         measured ȳ; needed when several equilibria are stable.
@@ -634,8 +637,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     ubar : array_like, shape (M,) or (M, m)
         Operating inputs (input units).
     Ts : float, optional
-        Sampling period (s); default ``data``'s, else the model's own (``model.Ts``, the period it
-        was identified at).
+        Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
+        ``data`` at another period is refused), else ``data``'s.
     y0 : float or array_like of shape (M,), optional
         Initial output of each point's settling run (see :func:`local_model`).
     data : Record, Dataset, sequence of Record or StaticPoints, optional
