@@ -613,13 +613,11 @@ def _member_scales(code: Code, thetas: np.ndarray, u: np.ndarray, y0: np.ndarray
 
 
 def _ref_blocks(ref: np.ndarray, blocks: np.ndarray) -> np.ndarray:
-    """``ref`` laid out as :func:`_blocks` lays out the members, (n_blocks, step); (n_blocks, 0) when empty."""
-    nb_, step = blocks.shape[0], blocks.shape[2]
+    """``ref`` laid out by :func:`_blocks` as the members are, (n_blocks, step); (n_blocks, 0) when empty
+    (the padding members, θ = 0, start from scale 0)."""
     if ref.size == 0:
-        return np.zeros((nb_, 0))
-    out = np.zeros(nb_ * step)  # the padding members (θ = 0) start from scale 0 as well
-    out[: ref.size] = ref
-    return out.reshape(nb_, step)
+        return np.zeros((blocks.shape[0], 0))
+    return np.ascontiguousarray(_blocks(ref[None, :], blocks.shape[0])[:, 0, :])
 
 
 @nb.njit(cache=True, nogil=True)
