@@ -671,17 +671,13 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     run = ncand > 0
     ybar = np.full(y0a.shape, np.nan)
     status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
-    if run.all():
+    if run.any():
+        sel = slice(None) if run.all() else run  # every pair runs: views, no copies
         with np.errstate(all="ignore"):
-            ybar, status = settle_runs(int(kind), np.ascontiguousarray(ip, dtype=np.int64),
-                                       np.ascontiguousarray(fp, dtype=float), y0a, cand, ncand, tol, ntol,
-                                       max(int(L), 1), float(floor), SETTLE_STEPS, STALL_RTOL)
-    elif run.any():
-        with np.errstate(all="ignore"):
-            ybar[run], status[run] = settle_runs(
-                int(kind), np.ascontiguousarray(ip, dtype=np.int64), np.ascontiguousarray(fp[run], dtype=float),
-                np.ascontiguousarray(y0a[run]), np.ascontiguousarray(cand[run]), ncand[run],
-                np.ascontiguousarray(tol[run]), np.ascontiguousarray(ntol[run]), max(int(L), 1), float(floor),
+            ybar[sel], status[sel] = settle_runs(
+                int(kind), np.ascontiguousarray(ip, dtype=np.int64), np.ascontiguousarray(fp[sel], dtype=float),
+                np.ascontiguousarray(y0a[sel]), np.ascontiguousarray(cand[sel]), ncand[sel],
+                np.ascontiguousarray(tol[sel]), np.ascontiguousarray(ntol[sel]), max(int(L), 1), float(floor),
                 SETTLE_STEPS, STALL_RTOL)
     return ybar, status
 
