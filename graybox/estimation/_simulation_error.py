@@ -235,9 +235,9 @@ class SEProblem:
 
     def diverges(self, theta: np.ndarray) -> bool:
         """Whether θ's free run on some record leaves :func:`graybox.simulate`'s default bound
-        (10⁶ × the run's own scale); :meth:`js` is finite there until the run overflows."""
-        return any(np.isnan(simulate_one(self.code, theta, record_inputs(r, self.code.inputs), r.y[:self.L], self.L,
-                                         None)[-1]) for r in self.records)
+        (10⁶ × the run's own scale); :meth:`js` is finite there until the run overflows, ``js(bounded=True)``
+        is not."""
+        return not np.isfinite(self.js(np.asarray(theta, float)[None, :], bounded=True)[0])
 
     # -- objectives -------------------------------------------------------------------
     def js(self, thetas: np.ndarray, threads: int = 1, *, bounded: bool = False) -> np.ndarray:
