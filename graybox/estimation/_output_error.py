@@ -299,8 +299,8 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
                     except (ValueError, np.linalg.LinAlgError) as exc:  # a numerical breakdown ends this run
                         row(label, sv, "failed", str(exc), js0)
                         continue
-                    js = float(problem.js(th[None])[0])
-                    if not np.isfinite(js) or problem.diverges(th):
+                    js = float(problem.js(th[None], bounded=True)[0])  # inf where the run leaves the bound (diverges)
+                    if not np.isfinite(js):
                         row(label, sv, "failed", "the fit ended where the free run diverges", js0, nfev=k)
                         continue
                     if chooser is None:
