@@ -81,12 +81,28 @@ def values():
         exact = gb.frols(gb.Candidates(ny=2, nu=1, degree=2), rec, max_terms=4, search="exact")
         oe = gb.output_error(STRUCT, rec, n_starts=1, max_nfev=5, margin=0.05, choose_on=record(seed=1))
         chosen = gb.decide_dsf(pe, band=100.0, choose_on=record(seed=1))
-    return {"exact selection": exact, "oe": oe, "chosen decision": chosen, "model": fit.model, "plain model": sel.model, "neural": nfit.model, "pareto": pe, "failed": failed,
+        # the static information a user passes, and the results that keep it
+        points = gb.StaticPoints(np.linspace(800, 1600, 5), np.linspace(5, 19, 5), "bench", ("speed",), 0.175)
+        points2 = gb.StaticPoints([[1.0, 2e5], [2.0, 2e5], [1.0, 3e5]], [3.0, 4.0, 5.5], input_names=("valve", "p"))
+        curve = gb.StaticCurve.fit(static, degree=2)
+        surface = gb.StaticSurface.fit(points2, degree=1)
+        cls_points = gb.cls(STRUCT, rec, static=static)
+        cls_curve = gb.cls(STRUCT, rec, static=curve)
+        local = gb.local_model(fit.model, 1200.0, Ts=0.1)
+        no_eq = gb.local_model(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [1.0, 0.5]), 1.0, Ts=0.1)
+        curve_band = gb.operating_curve(pe.member_model(0), [900.0, 1200.0, 1500.0], Ts=0.1,
+                                        uncertainty=gb.ls_uncertainty(pe.member_model(0), rec), n_samples=50)
+    return {"static points": static, "points with uncertainty": points, "points of two inputs": points2,
+            "curve": curve, "curve without domain": gb.StaticCurve.polynomial([1.0, -2.5, 1e-4]),
+            "surface": surface, "cls": cls_points, "cls on a curve": cls_curve, "cls without static": gb.cls(STRUCT, rec),
+            "local model": local, "no local model": no_eq, "operating curve": curve_band,
+            "exact selection": exact, "oe": oe, "chosen decision": chosen, "model": fit.model, "plain model": sel.model, "neural": nfit.model, "pareto": pe, "failed": failed,
             "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band,
             "dsf": dsf, "semp": path}
 
 
-TYPES = ["model", "plain model", "neural", "pareto", "failed", "selection", "exact selection", "els", "neural fit",
+TYPES = ["static points", "points with uncertainty", "points of two inputs", "curve", "curve without domain", "surface",
+         "cls", "cls on a curve", "cls without static", "local model", "no local model", "operating curve", "model", "plain model", "neural", "pareto", "failed", "selection", "exact selection", "els", "neural fit",
          "decision", "uncertainty", "band", "dsf", "semp", "oe", "chosen decision"]
 
 
@@ -398,3 +414,27 @@ def test_registering_a_saved_type_cannot_replace_or_duplicate_one():
 def test_tables_round_trip_exactly(frame):
     back = _io._dec_frame(_io._enc_frame(frame), "table", _io._Reader("test"))
     pd.testing.assert_frame_equal(frame, back, check_exact=True)
+
+
+def test_a_cls_result_keeps_its_static_information_and_refuses_another_type(values):
+    # a CLS result could not be saved: its static field (points, a curve or a surface) had no codec
+    for name in ("cls", "cls on a curve"):
+        back = gb.from_json(gb.to_json(values[name]))
+        assert type(back.static) is type(values[name].static)
+        assert back.model.theta.tobytes() == values[name].model.theta.tobytes()
+    doc = json.loads(gb.to_json(values["cls"]))
+    doc["object"]["static"]["type"] = "Model"  # a saved type, but not static information
+    with pytest.raises(gb.GrayboxFileError, match=r"object\.static: expected .*StaticPoints"):
+        gb.from_json(json.dumps(doc))
+    doc["object"]["static"] = [1.0, 2.0]
+    with pytest.raises(gb.GrayboxFileError, match="expected an object"):
+        gb.from_json(json.dumps(doc))
+
+
+def test_an_operating_curve_of_two_inputs_round_trips_with_its_shapes():
+    st2 = gb.Structure(["1", "a(k-1)", "b(k-1)", "a(k-1)b(k-1)", "y(k-1)"])
+    m = gb.Model(st2, [0.5, 1.0, -2.0, 0.1, 0.6], input_names=("a", "b"), Ts=0.5)
+    oc = gb.operating_curve(m, [[1.0, 2.0], [2.0, 3.0]])
+    back = gb.from_json(gb.to_json(oc))
+    assert back.ubar.shape == (2, 2) and back.gain.shape == (2, 2) and back.local_models[1].b.shape == (2, 1)
+    same(oc, back)

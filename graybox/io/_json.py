@@ -25,7 +25,9 @@ line.
 Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.ParetoSet`,
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
 :class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.OEResult`, :class:`~graybox.SEMPResult`,
-:class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand` and (registered by the experiment
+:class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand`, :class:`~graybox.CLSResult`, the static
+information (:class:`~graybox.StaticPoints`, :class:`~graybox.StaticCurve`, :class:`~graybox.StaticSurface`), the
+local models (:class:`~graybox.LocalModel`, :class:`~graybox.OperatingCurve`) and (registered by the experiment
 layer) :class:`~graybox.GrayboxSelection`. Their tables (pandas DataFrames of int64, float64, bool or
 text columns with distinct text labels) are written one column per line, with the index and each
 column's kind; text loads as pandas' default text dtype. A table the format cannot carry is
@@ -64,7 +66,12 @@ from ..estimation._epsilon_constraint import DSFResult
 from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
+from ..core._records import StaticPoints
 from ..core._terms import Structure, parse_term
+from ..static._curves import StaticCurve
+from ..static._surfaces import StaticSurface
+from ..estimation._prediction_error import CLSResult
+from ..control._local import LocalModel, OperatingCurve
 from ..diagnostics._uncertainty import ParameterUncertainty, StaticCurveBand
 
 __all__ = ["FORMAT_VERSION", "GrayboxFileError", "save", "load", "to_json", "from_json", "read_header"]
@@ -177,21 +184,27 @@ class _Reader:
 # codecs: per type, its fields as (name, kind); kinds map to an encoder and a reader method
 # --------------------------------------------------------------------------------------------
 def _enc(kind: str, v: Any) -> Any:
-    if kind in ("float", "array1", "array2"):
+    if kind.endswith(_OR_NONE):
+        return None if v is None else _enc(kind[:-len(_OR_NONE)], v)
+    if kind in ("float", "array1", "array2", "inputs"):
         return _arr(v)
     if kind in ("int", "str", "bool"):
         return v if kind != "int" else int(v)
-    if kind == "int_or_none":
-        return None if v is None else int(v)
-    if kind == "float_or_none":
-        return None if v is None else _arr(v)
-    if kind == "floats":
+    if kind in ("floats", "pair"):
         return [_num(x) for x in v]
+    if kind == "pairs":
+        return [[_num(x) for x in p] for p in v]
+    if kind == "exponents":
+        return [[int(x) for x in e] for e in v]
+    if kind == "static":
+        return {"type": _TYPES[type(v)], "object": _encode_fields(v)}
+    if kind == "local_models":
+        return [_encode_fields(m) for m in v]
     if kind == "structure":
         return [str(t) for t in v]
     if kind == "structures":
         return [[str(t) for t in x] for x in v]
-    if kind == "names":
+    if kind in ("names", "texts"):
         return [str(n) for n in v]
     if kind == "arrays":
         return [_arr(a) for a in v]
@@ -209,18 +222,33 @@ def _enc(kind: str, v: Any) -> Any:
 
 
 def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
+    if kind.endswith(_OR_NONE):
+        return None if v is None else _dec(kind[:-len(_OR_NONE)], v, where, rd)
     if kind == "float":
         return rd.float(v, where)
     if kind == "array1":
         return rd.array(v, where, 1)
     if kind == "array2":
         return rd.array(v, where, 2)
+    if kind == "inputs":  # shape (M,) for one input, (M, m) for several: the nesting says which
+        return rd.array(v, where, 2 if rd.list(v, where) and isinstance(v[0], list) else 1)
     if kind == "int":
         return rd.int(v, where)
-    if kind == "int_or_none":
-        return None if v is None else rd.int(v, where)
-    if kind == "float_or_none":
-        return None if v is None else rd.float(v, where)
+    if kind == "pair":
+        return rd.floats(v, where)
+    if kind == "pairs":
+        return tuple(rd.floats(p, f"{where}[{i}]") for i, p in enumerate(rd.list(v, where)))
+    if kind == "exponents":
+        return tuple(tuple(rd.int(x, f"{where}[{i}][{j}]") for j, x in enumerate(rd.list(e, f"{where}[{i}]")))
+                     for i, e in enumerate(rd.list(v, where)))
+    if kind == "static":
+        d = rd.dict(v, where)
+        typ = d.get("type")
+        if typ not in _STATIC or set(d) != {"type", "object"}:
+            raise rd.fail(where, f"expected {{\"type\": one of {list(_STATIC)}, \"object\": …}}")
+        return _decode_fields(typ, d["object"], f"{where}.object", rd)
+    if kind == "local_models":
+        return tuple(_decode_fields("LocalModel", m, f"{where}[{i}]", rd) for i, m in enumerate(rd.list(v, where)))
     if kind == "str":
         return rd.str(v, where)
     if kind == "bool":
@@ -231,7 +259,7 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return rd.structure(v, where)
     if kind == "structures":
         return tuple(rd.structure(x, f"{where}[{i}]") for i, x in enumerate(rd.list(v, where)))
-    if kind == "names":
+    if kind in ("names", "texts"):
         return tuple(rd.str(n, f"{where}[{i}]") for i, n in enumerate(rd.list(v, where)))
     if kind == "arrays":
         return tuple(rd.array(a, f"{where}[{i}]", 1) for i, a in enumerate(rd.list(v, where)))
@@ -351,6 +379,11 @@ def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
 
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
+    "StaticPoints": (StaticPoints, (("ubar", "inputs"), ("ybar", "array1"), ("name", "str"), ("input_names", "names"),
+                                    ("uncertainty", "array1_or_none"))),
+    "StaticCurve": (StaticCurve, (("coefficients", "array1"), ("domain", "pair_or_none"), ("name", "str"))),
+    "StaticSurface": (StaticSurface, (("exponents", "exponents"), ("coefficients", "array1"), ("domain", "pairs_or_none"),
+                                      ("name", "str"), ("input_names", "names"))),
     "Model": (Model, (("name", "str"), ("structure", "structure"), ("theta", "array1"),
                       ("noise_structure", "structure"), ("noise_theta", "array1"), ("input_names", "names"),
                       ("Ts", "float_or_none"))),
@@ -393,6 +426,16 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                           ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
                                           ("gain", "array1"), ("gain_low", "array1"), ("gain_high", "array1"),
                                           ("gain_std", "array1"), ("undefined", "array1"))),
+    "CLSResult": (CLSResult, (("model", "Model"), ("static", "static_or_none"), ("constraints", "texts"), ("solver", "str"))),
+    "LocalModel": (LocalModel, (("ubar", "array1"), ("ybar", "float_or_none"), ("status", "str"), ("reason", "str"),
+                                ("a", "array1"), ("b", "array2"), ("Ts", "float"), ("input_names", "names"), ("name", "str"))),
+    "OperatingCurve": (OperatingCurve, (("local_models", "local_models"), ("ubar", "inputs"), ("ybar", "array1"),
+                                        ("gain", "inputs"), ("time_constant", "array1"), ("damping", "array1"),
+                                        ("spectral_radius", "array1"), ("settling_time", "array1"), ("status", "texts"),
+                                        ("level", "float"), ("gain_low", "inputs_or_none"), ("gain_high", "inputs_or_none"),
+                                        ("time_constant_low", "array1_or_none"),
+                                        ("time_constant_high", "array1_or_none"), ("undefined", "array1_or_none"),
+                                        ("model_name", "str"))),
 }
 
 
@@ -420,9 +463,17 @@ def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> No
 #: Saved types defined above this layer, by the module whose import registers them (:func:`register_type`).
 _REGISTERED_ABOVE = {"GrayboxSelection": "graybox.experiments._select"}
 
+#: A kind ending so is that kind or None (JSON null).
+_OR_NONE = "_or_none"
+
+#: The saved types a static field (e.g. CLSResult.static) may hold, written with their type's name.
+_STATIC = ("StaticPoints", "StaticCurve", "StaticSurface")
+
 #: Field kinds other than the saved types themselves.
-_KINDS = frozenset({"float", "float_or_none", "array1", "array2", "int", "int_or_none", "str", "bool", "floats", "structure",
-                    "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame"})
+_KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "str", "bool", "floats", "pair", "pairs", "exponents",
+                    "structure", "structures", "names", "texts", "arrays", "dict_arrays", "failures", "skipped", "frame",
+                    "static", "local_models"})
+_KINDS = _KINDS | {k + _OR_NONE for k in _KINDS}
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
 _READABLE: dict[str, tuple[tuple[str, ...], Callable[[Any], Mapping[str, Any]]]] = {
@@ -531,7 +582,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
         The value to write.
     units : (str, str) or mapping, optional
         Units of the input and output (e.g. ``("rpm", "mlc")``, or a Record's ``units``), written
@@ -676,7 +727,7 @@ def save(
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
         The value.
     path : str or PathLike
         Where to write (conventionally ``*.json``).
