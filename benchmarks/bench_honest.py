@@ -1,6 +1,6 @@
 """Honest selection: fit / choose / untouched test (issue 26).
 
-    .venv/bin/python benchmarks/bench_honest.py [--part speed|protocol|transient|all] [--cases plant,buck,...]
+    .venv/bin/python benchmarks/bench_honest.py [--part speed|protocol|transient|blackbox|all] [--cases plant,buck,...]
         [--no-old] [--record-only]
 
 - protocol: on each case, ``select_graybox`` fits on the identification record, chooses on the
@@ -16,6 +16,8 @@
   the same candidates plus transient inputs (``gb.transient_inputs``, one lag each) on two τ grids
   given in samples (60, 200, 600, 2000 and 100, 300, 900, 2700: 3–100 s and 5–135 s on the plant),
   scored on the test record and, for the simulated plants, on five fresh runs (seed + 1 … + 5).
+- blackbox: the black box chosen among LS and ELS, among LS, ELS and output error (the default),
+  and by output error alone; the gray box's test J_S against each.
 
 Cases: the bundled plant (test: a fresh simulator run, another seed), the two-speed rig (same),
 the buck converter (choose on the first half of its validation file, test on the second), and
@@ -238,9 +240,29 @@ def transient(names) -> None:
     print("\n" + pd.DataFrame(rows).to_markdown(index=False, floatfmt=".4g"))
 
 
+def blackbox(names) -> None:
+    """The black box chosen among LS and ELS (before output error joined), among LS, ELS and output
+    error (the default now) and by output error alone, against the gray box chosen the same way."""
+    rows = []
+    for name, (data, test, cand, band) in cases().items():
+        if names and name not in names:
+            continue
+        gray = gb.select_graybox(cand, data, band=band, test=test).chosen
+        for label, est in (("LS, ELS", ("ls", "els")), ("LS, ELS, OE (default)", None), ("OE", "oe")):
+            t0 = time.perf_counter()
+            c = gb.select_graybox(cand, data, band=np.inf, test=test, estimator=est).chosen
+            rows.append({"case": name, "black box among": label, "chosen": f"{c.name} {c['estimator']}",
+                         "n_terms": c["n_terms"], "JS_valid": c["JS_valid"], "JS_test": c["JS_test"],
+                         "gray JS_test": gray["JS_test"], "gray / black": gray["JS_test"] / c["JS_test"],
+                         "s": time.perf_counter() - t0})
+        print(pd.DataFrame([r for r in rows if r["case"] == name]).drop(columns="case").to_markdown(
+            index=False, floatfmt=".4g"), flush=True)
+    print("\n" + pd.DataFrame(rows).to_markdown(index=False, floatfmt=".4g"))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--part", default="all", choices=("speed", "protocol", "transient", "all"))
+    ap.add_argument("--part", default="all", choices=("speed", "protocol", "transient", "blackbox", "all"))
     ap.add_argument("--cases", default="", help="comma-separated case names (default all)")
     ap.add_argument("--no-old", action="store_true", help="skip main's select_graybox")
     ap.add_argument("--record-only", action="store_true",
@@ -254,6 +276,8 @@ def main() -> None:
         protocol([c for c in args.cases.split(",") if c], not args.no_old, args.record_only)
     if args.part in ("transient", "all"):
         transient([c for c in args.cases.split(",") if c])
+    if args.part in ("blackbox", "all"):
+        blackbox([c for c in args.cases.split(",") if c])
 
 
 if __name__ == "__main__":

@@ -185,7 +185,7 @@ def test_gray_box_options_given_to_a_black_box_search_are_refused():
     # without a band (none given, static points without uncertainty) the search is a black box: the
     # lambdas and fallback given with it were ignored, silently (lambda1 NaN in every row)
     data = gb.Dataset(record(0, 300), record(1, 200), static(grid([30, 50, 70], [1200, 2000, 2800])))
-    with pytest.raises(ValueError, match="lambdas applies to a gray box .* black box \\(ls, els\\)"):
+    with pytest.raises(ValueError, match="lambdas applies to a gray box .* black box \\(ls, els, oe\\)"):
         gb.select_graybox(CAND, data, sizes=[6], lambdas=[0.5, 1.0])
     with pytest.raises(ValueError, match="fallback applies to a gray box"):
         gb.select_graybox(CAND, data, sizes=[6], fallback="min_jsf")

@@ -277,11 +277,11 @@ def test_a_test_record_must_be_new_data(data):
 
 
 def test_without_a_band_the_search_picks_a_black_box(data):
-    """No band: LS and ELS fits chosen by J_S alone; J_SF only reported; the model is the LS/ELS fit."""
+    """No band: LS, ELS and output-error fits chosen by J_S alone; J_SF only reported; the model is that fit."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, sizes=[3, 5], test=plant(4))
-    assert set(res.table["estimator"]) == {"ls", "els"} and res.degree is None and res.band == np.inf
+    assert set(res.table["estimator"]) == {"ls", "els", "oe"} and res.degree is None and res.band == np.inf
     assert res.table["added"].eq("").all() and res.table["in_band"].all()
     assert res.table["lambda1"].isna().all()
     row = res.chosen
@@ -308,7 +308,7 @@ def test_the_band_the_static_points_carry_is_the_default_and_inf_asks_for_a_blac
     assert own.band == pytest.approx(1e-3) and own.band == given.band and own.degree == given.degree == 2
     np.testing.assert_array_equal(own.model.theta, given.model.theta)
     pd.testing.assert_frame_equal(own.table, given.table)
-    assert black.band == np.inf and black.degree is None and set(black.table["estimator"]) == {"ls", "els"}
+    assert black.band == np.inf and black.degree is None and set(black.table["estimator"]) == {"ls", "els", "oe"}
     np.testing.assert_array_equal(black.model.theta, plain.model.theta)
     with pytest.raises(ValueError, match="give band="):
         gb.select_graybox(cand, carried, estimator="pe", band=np.inf)
@@ -418,6 +418,42 @@ def test_a_shortlist_fits_se_on_the_structures_pe_ranks_best(data):
     pe = t[(t["estimator"] == "pe") & t["in_band"]]
     assert len(se) == 1 and len(t[t["estimator"] == "pe"]) >= 2
     assert se.index[0] == pe["JS_valid"].idxmin()  # the structure PE ranks first
+
+
+def test_output_error_is_a_black_box_row_fitted_by_output_error(data):
+    """estimator="oe": every structure fitted by gb.output_error on the identification record alone;
+    the chosen model is that fit, scored on the validation record as gb.js scores it."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, sizes=[3, 5], estimator="oe")
+        oe = gb.output_error(res.structure, data.ident)
+    assert set(res.table["estimator"]) == {"oe"} and res.chosen["estimator"] == "oe"
+    np.testing.assert_array_equal(res.model.theta, oe.model.theta)
+    assert res.model.Ts == data.ident.Ts and res.model.input_names == data.ident.input_names
+    assert gb.mse(data.valid.y, res.model.simulate(data.valid), start=3) == pytest.approx(res.chosen["JS_valid"],
+                                                                                         rel=1e-9)
+
+
+def test_an_output_error_fit_that_fails_is_a_failed_row_and_the_search_goes_on(data, monkeypatch):
+    import graybox._api as api
+
+    real = api.output_error
+
+    def fail_on_five_terms(structure, rec, **kw):
+        if len(structure) == 5:
+            raise ValueError("no start gave a fit: every free run diverged")
+        return real(structure, rec, **kw)
+
+    monkeypatch.setattr(api, "output_error", fail_on_five_terms)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, sizes=[3, 5], estimator=("ls", "oe"))
+    t = res.table
+    failed = t[(t["estimator"] == "oe") & (t["n_terms"] == 5)]
+    assert len(failed) >= 1 and np.isinf(failed["JS_valid"]).all() and not failed["in_band"].any()
+    assert failed["warnings"].str.contains("every free run diverged").all() and failed["reason"].ne("").all()
+    assert res.chosen["n_terms"] != 5 or res.chosen["estimator"] == "ls"
+    assert any(issubclass(w.category, gb.SelectionWarning) and "warned" in str(w.message) for w in caught)
 
 
 def test_a_black_box_selection_without_static_points_round_trips(data, tmp_path):

@@ -85,7 +85,8 @@ def test_a_worker_process_warning_reaches_the_driver_through_the_table():
     process its warning would never reach the caller; the table carries it and the call says it."""
     data = gb.load_pumping()
     with pytest.warns(gb.SelectionWarning, match="1 of 28 structure × estimator rows warned") as rec:
-        res = gb.select_graybox(gb.Candidates(6, 6, degree=2), data, band=np.inf, executor="processes", workers=2)
+        res = gb.select_graybox(gb.Candidates(6, 6, degree=2), data, band=np.inf, executor="processes", workers=2,
+                                estimator=("ls", "els"))
     assert all(w.category is gb.SelectionWarning for w in rec)
     row = res.table[res.table["warnings"] != ""]
     assert list(row["estimator"]) == ["els"]

@@ -69,12 +69,12 @@ class SelectionWarning(UserWarning):
 
 #: Estimators that trade J_S against J_SF along λ1 (a front per structure).
 GRAY_BOX_ESTIMATORS = ("pe", "se-gradient", "se-ga")
-#: Estimators of one model per structure, chosen by J_S alone. An output-error (simulation-error,
-#: no static points) estimator joins here: one entry in ``_BLACK_BOX_FITS``.
-BLACK_BOX_ESTIMATORS = ("ls", "els")
+#: Estimators of one model per structure, chosen by J_S alone: least squares, extended least
+#: squares and output error (simulation error, no static points; :func:`graybox.output_error`).
+BLACK_BOX_ESTIMATORS = ("ls", "els", "oe")
 RULES = ("one-se", "min")
-#: Estimators whose fronts cost seconds per structure: run on the shortlist the others rank best.
-SLOW_ESTIMATORS = ("se-gradient", "se-ga")
+#: Estimators whose fits cost seconds per structure: run on the shortlist the others rank best.
+SLOW_ESTIMATORS = ("se-gradient", "se-ga", "oe")
 
 
 def _fit_ls(st: gb.Structure, rec: gb.Record) -> np.ndarray:
@@ -87,8 +87,17 @@ def _fit_els(st: gb.Structure, rec: gb.Record) -> np.ndarray:
     return np.array([th for t, th in zip(m.structure, m.theta) if not t.is_noise], float)
 
 
-#: name -> fit(process structure, identification record) -> θ of the process terms.
-_BLACK_BOX_FITS: dict[str, Callable[[gb.Structure, gb.Record], np.ndarray]] = {"ls": _fit_ls, "els": _fit_els}
+def _fit_oe(st: gb.Structure, rec: gb.Record) -> np.ndarray:
+    try:
+        return np.asarray(gb.output_error(st, rec, progress=False).model.theta, float)
+    except ValueError as exc:  # no start gave a fit: a failed row, its reason among the row's warnings
+        warn(f"output_error: {exc}", SelectionWarning)
+        return np.full(len(st), np.nan)
+
+
+#: name -> fit(process structure, identification record) -> θ of the process terms (NaN: no fit).
+_BLACK_BOX_FITS: dict[str, Callable[[gb.Structure, gb.Record], np.ndarray]] = {"ls": _fit_ls, "els": _fit_els,
+                                                                               "oe": _fit_oe}
 
 
 @dataclass(frozen=True, eq=False)
@@ -696,8 +705,9 @@ def select_graybox(
     estimator : str or sequence of str, optional
         Gray box: ``"pe"`` (closed form unless constraints need a QP), ``"se-gradient"``,
         ``"se-ga"`` (default PE and SE gradient; PE alone with constraints). Black box: ``"ls"``,
-        ``"els"`` (default both). Every structure is scored with each; the rule chooses among all
-        (structure, estimator) rows.
+        ``"els"``, ``"oe"`` (output error, :func:`graybox.output_error` with its defaults; default
+        all three). Every structure is scored with each; the rule chooses among all (structure,
+        estimator) rows.
     constraints : optional
         Constraint objects or tables imposed by PE, as in :class:`Variant`. Naming another
         estimator with them is an error.
@@ -718,8 +728,8 @@ def select_graybox(
     folds : int
         Contiguous folds when there is no validation record (>= 2); each fold is one block.
     shortlist : int, optional
-        Faster, less thorough: with PE (or a black-box estimator) among the estimators, the SE
-        estimators (seconds per structure) fit only the ``shortlist`` structures those rank best
+        Faster, less thorough: with PE, LS or ELS among the estimators, the slow ones (SE and
+        output error, seconds per structure) fit only the ``shortlist`` structures those rank best
         (in band first, then by J_S on the choosing data). Default: every structure (PE's ranking
         does not predict SE's: BENCHMARKS.md, honest selection). Refused (``ValueError``) unless the
         estimators hold a fast and a slow one.
