@@ -390,3 +390,14 @@ def test_results_that_carry_a_model_are_accepted_as_it():
     assert a.dc_gain == b.dc_gain
     with pytest.raises(TypeError, match="needs a polynomial NARX Model, got str"):
         gb.local_model("model", 3.0, Ts=Ts)
+
+
+def test_an_integrator_has_no_local_model_and_the_reason_names_the_vanishing_denominator():
+    # y(k) = y(k-1) + 0.5 u(k-1): at ū = 0 every output is an equilibrium, at ū ≠ 0 none; the reason
+    # said "the static equation has no real root" (its denominator 1 − Σy is what vanishes)
+    m = gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [1.0, 0.5], Ts=0.1)
+    for u in (0.0, 2.0):
+        lm = gb.local_model(m, u)
+        assert not lm.exists and lm.status == "no equilibrium" and "denominator vanishes" in lm.reason
+        with pytest.raises(ValueError, match="no local model: .*denominator vanishes"):
+            lm.poles

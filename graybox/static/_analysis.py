@@ -570,6 +570,9 @@ def rational_static_curve(structure: Structure, theta: np.ndarray, ubar: np.ndar
 
 # -- the equilibrium reached -----------------------------------------------------------------------
 NO_EQUILIBRIUM, NONE_STABLE = 1, 2
+#: Why a point has no equilibrium, in words: no real root of eq. (5), or (rational form) a vanishing
+#: denominator, which is no equilibrium or, where the numerator vanishes too, every output one.
+NO_EQUILIBRIUM_WHY = "no equilibrium (the static equation has no real root, or its denominator vanishes)"
 
 
 @dataclass(frozen=True, eq=False)
@@ -612,7 +615,7 @@ class Reached:
             u = float(self.ubar[j]) if self.ubar.ndim == 1 else "(" + ", ".join(f"{v:g}" for v in self.ubar[j]) + ")"
             s = int(self.status[member, j])
             if s == NO_EQUILIBRIUM:
-                why = "no equilibrium (the static equation has no real root, or its denominator vanishes)"
+                why = NO_EQUILIBRIUM_WHY
             elif s == NONE_STABLE:
                 why = "no stable equilibrium"
             elif s == DIVERGED:
