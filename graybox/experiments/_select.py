@@ -63,8 +63,9 @@ __all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_E
 
 class SelectionWarning(UserWarning):
     """select_graybox took an explicit fallback (fewer blocks, sizes a search did not reach, a
-    lower static degree than the points ask for), or some rows' fits warned (their text is in
-    the table's ``warnings``); the message says which."""
+    lower static degree than the points ask for), some rows' fits warned (their text is in the
+    table's ``warnings``), or some rows' fits failed on these data (e.g. terms collinear on a
+    fold: those rows are left out of the choice, their ``reason`` says why); the message says which."""
 
 
 #: Estimators that trade J_S against J_SF along λ1 (a front per structure).
@@ -125,8 +126,8 @@ class GrayboxSelection:
         error), ``eligible`` (the rule could choose it), ``rank`` (1: the choice); with a test
         record also ``JS_test`` (its refitted model's J_S there) and ``JSF_test`` (that model's
         J_SF). Nothing in the test columns took part in the choice. ``reason``: why a row has no
-        qualifying model (every member failed or diverged; the smallest J_SF reached when the band is
-        missed); empty when it has one. ``warnings``: what its fits warned of (e.g. an ELS
+        qualifying model (every member failed, with which fit and why, or diverged; the smallest
+        J_SF reached when the band is missed); empty when it has one. ``warnings``: what its fits warned of (e.g. an ELS
         iteration that did not converge), each message once; empty when nothing. The call then
         says once, with a :class:`SelectionWarning`, how many rows warned and whether the chosen
         one did.
@@ -462,6 +463,19 @@ def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.nd
         return th, np.asarray(front.lambdas, float)
 
 
+def _fit_or_fail(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """:func:`_fit`, with a fit these data cannot make (e.g. terms collinear on a fold's two input
+    levels) a failed member at every λ and its reason, not an error that ends the whole search:
+    as a grid cell's, a row's failure is data."""
+    try:
+        th, lam = _fit(job, st, rec)
+        return th, lam, []
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        lam = _lambdas(job.estimator, job.lambdas)
+        lam = np.array([np.nan]) if lam is None else lam
+        return np.full((lam.size, len(st)), np.nan), lam, [f"the fit on {rec.name!r} failed: {exc}"]
+
+
 def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray) -> np.ndarray:
     """(P, B) free-run MSE of each member on each block of ``rec`` (one free run from its first L samples).
 
@@ -524,19 +538,25 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     # one BLAS thread: the fits make thousands of small BLAS calls (see core._least_squares.one_blas_thread)
     with warnings.catch_warnings(record=True) as caught, one_blas_thread():
         _apply_filters(job.filters)
+        failed = []
         for rec, choose, edges in plan.splits:
-            th, lam = _fit(job, st, rec)
+            th, lam, why = _fit_or_fail(job, st, rec)
+            failed += why
             if not plan.folds:
                 full = (th, lam)
             blocks.append(_block_mse(st, th, choose, edges))
             weights.append(np.diff(edges))
             jsf.append(_jsf(st, th, plan.static))
         if full is None:
-            full = _fit(job, st, plan.ident)
+            th, lam, why = _fit_or_fail(job, st, plan.ident)
+            failed += why
+            full = (th, lam)
             jsf.append(_jsf(st, full[0], plan.static))
         w = np.concatenate(weights).astype(float)
         out = {"blocks": np.concatenate(blocks, axis=1), "weights": w / w.sum(), "jsf": np.max(np.stack(jsf), axis=0),
-               "jsf_full": jsf[-1], "thetas": full[0], "lambdas": full[1]}
+               "jsf_full": jsf[-1], "thetas": full[0], "lambdas": full[1], "failed": failed}
+        # a member the refit on all the identification data failed has no model to give: it cannot be chosen
+        out["blocks"][~np.all(np.isfinite(full[0]), axis=1)] = np.inf
         if plan.test is not None:
             edges = np.array([plan.lag, len(plan.test)])
             out["test"] = _block_mse(st, full[0], plan.test, edges)[:, 0]
@@ -840,6 +860,10 @@ def select_graybox(
         warn(f"select_graybox: the fits of {sum(map(bool, said))} of {len(said)} structure × estimator rows warned "
              "(table['warnings'] says what); " + (f"the chosen row's: {chosen}" if chosen else "not the chosen row's"),
              SelectionWarning)
+    failed = [r["failed"][0] for r in results if r["failed"]]
+    if failed:
+        warn(f"select_graybox: the fits of {len(failed)} of {len(results)} structure × estimator rows failed and "
+             f"those rows were left out of the choice (table['reason'] says why), e.g. {failed[0]}", SelectionWarning)
     job, res, i = jobs[pos], results[pos], members[pos]
     structure = gb.Structure(job.terms.split(" + "))
     decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
@@ -908,6 +932,8 @@ def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> 
     or the band was missed, with the smallest J_SF its members reached."""
     finite = np.isfinite(res["blocks"]).all(axis=1)
     if not finite.any():
+        if res["failed"]:
+            return "every member failed: " + "; ".join(res["failed"])
         bad = int(np.sum(~np.all(np.isfinite(res["thetas"]), axis=1)))
         return (f"every member failed or diverged on the choosing data ({bad} of {len(finite)} fits failed, "
                 f"the others' free runs diverged)")
@@ -921,8 +947,10 @@ def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> 
 
 
 def _fallback(table: pd.DataFrame, results: list[dict], band: float | None, fallback: str | None) -> int:
-    if band is None:
-        raise ValueError("no structure has a finite free-run J_S on the choosing data (every fit diverged)")
+    if not np.isfinite(table["JS_valid"].to_numpy(float)).any():
+        row = table.iloc[0]
+        raise ValueError(f"no structure has a finite free-run J_S on the choosing data (over {len(table)} structure × "
+                         f"estimator rows), e.g. {row.name} by {row['estimator']}: {row['reason']}")
     # the smallest static error reached by any member of any structure
     finite = [r["jsf"][np.isfinite(r["jsf"])] for r in results]
     best = min((float(f.min()) for f in finite if f.size), default=np.inf)
