@@ -48,3 +48,25 @@ def test_a_fit_a_fold_cannot_identify_fails_its_row_not_the_search(estimator):
     assert np.isinf(failed["JS_valid"]).all() and not failed["in_band"].any()
     assert np.isfinite(res.chosen["JS_valid"]) and res.chosen["reason"] == ""
     assert np.all(np.isfinite(res.model.theta))
+
+
+def short_record(n, seed=0):
+    """n samples of the first-order plant under a random input in rpm, output in Pa."""
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(800.0, 1900.0, n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.7 * y[k - 1] + 200.0 * (u[k - 1] / 1000) + 50.0 * (u[k - 1] / 1000) ** 2 + 2e5 * 0.3
+    return gb.Record(u, y, name="short", input_names=("n",))
+
+
+def test_semp_gives_a_size_a_short_record_can_carry():
+    # was: semp(n_terms=4) on 12 rows after the largest lag raised "12 samples after the largest
+    # lag are too few for 12 terms": 12 is the look-ahead of its search (2·n_terms + 4), not the
+    # size asked for; the look-ahead is now cut to what the rows carry, and only a size the rows
+    # cannot carry is refused
+    rec = short_record(14)
+    res = gb.semp(CAND, rec, n_terms=4)
+    assert len(res.structure) == 4 and res.path["n_terms"].max() <= 11
+    with pytest.raises(ValueError, match="12 samples after the largest lag are too few for 12 terms"):
+        gb.semp(CAND, rec, n_terms=12)

@@ -30,7 +30,7 @@ on the same samples. A free run that diverges scores inf.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal, Sequence
 
 import numpy as np
@@ -289,8 +289,11 @@ def semp(
     """
     opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
     sc = _Scorer(opt.process, as_records(data), opt.threads)
-    if sc.n_rows <= opt.limit:
-        raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for {opt.limit} terms")
+    # n_terms: the look-ahead past that size stops where the rows do; only the size asked must fit
+    needed = opt.n_terms if opt.mode == "n_terms" else opt.limit
+    if sc.n_rows <= needed:
+        raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for {needed} terms")
+    opt = replace(opt, limit=min(opt.limit, sc.n_rows - 1))
     run = _Search(sc, opt)
     stop, capped = _grow(run)
     return _result(run, stop, capped)
