@@ -70,3 +70,20 @@ def test_semp_gives_a_size_a_short_record_can_carry():
     assert len(res.structure) == 4 and res.path["n_terms"].max() <= 11
     with pytest.raises(ValueError, match="12 samples after the largest lag are too few for 12 terms"):
         gb.semp(CAND, rec, n_terms=12)
+
+
+def test_select_graybox_sizes_are_checked_against_the_record_and_the_included_terms():
+    # was: on a 14-sample identification record the default sizes (up to 15) failed inside SEMP with
+    # "12 samples after the largest lag are too few for 15 terms", and sizes below the included
+    # terms' count with "2 included terms exceed the 1 terms asked for" (or FROLS's "n_terms = 1"):
+    # arguments the caller never gave. The default sizes now stop below the record's rows; sizes it
+    # cannot carry, or that cannot hold the included terms, are refused naming sizes.
+    valid = short_record(100, seed=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(CAND, gb.Dataset(short_record(14), valid))
+    assert res.table["size"].max() <= 11
+    with pytest.raises(ValueError, match=r"sizes \[12\] need more than the identification record's 12 samples"):
+        gb.select_graybox(CAND, gb.Dataset(short_record(14), valid), sizes=[4, 12])
+    with pytest.raises(ValueError, match=r"sizes \[1\] are fewer than the 2 included terms"):
+        gb.select_graybox(CAND, gb.Dataset(short_record(300), valid), sizes=[1], include=("1", "y(k-1)"))

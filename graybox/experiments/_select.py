@@ -349,6 +349,8 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
     """One dict per distinct structure: name, source(s), size, terms, added static-form terms."""
     process = candidates.process
     n_max = len(process)
+    rows = len(ident) - process.max_lag  # the searches' regression rows: a structure has fewer terms
+    forced = list(include)
     asked = sizes is not None
     if asked:
         sizes = sorted({check_int(s, "sizes", low=1) for s in sizes})
@@ -356,13 +358,22 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
             raise ValueError(f"sizes {[s for s in sizes if s > n_max]} exceed the {n_max} candidate process terms")
         if not sizes:
             raise ValueError("sizes must name at least one size")
+        if sizes[-1] >= rows:
+            raise ValueError(f"sizes {[s for s in sizes if s >= rows]} need more than the identification record's "
+                             f"{max(rows, 0)} samples after the candidates' largest lag {process.max_lag}")
+        n_forced = len(gb.Structure(forced))
+        if sizes[-1] < n_forced:
+            raise ValueError(f"sizes {sizes} are fewer than the {n_forced} included terms {forced}: every "
+                             "structure holds them")
     else:
-        # derived from the candidate space: even sizes from 4 (or fewer, for small spaces) to min(16, n)
-        # (larger structures were never the honest choice in BENCHMARKS.md, honest selection, and
-        # the SEMP path's cost grows quickly past them)
-        top = min(16, n_max)
+        # derived from the candidate space: even sizes from 4 (or fewer, for small spaces or short
+        # records) to min(16, n) (larger structures were never the honest choice in BENCHMARKS.md,
+        # honest selection, and the SEMP path's cost grows quickly past them)
+        top = min(16, n_max, rows - 1)
+        if top < 1:
+            raise ValueError(f"the identification record ({len(ident)} samples) is too short for the candidates' "
+                             f"largest lag {process.max_lag}: no structure can be fitted")
         sizes = sorted(set(range(min(4, top), top + 1, 2)) | {top})
-    forced = list(include)
     found: dict[tuple, list[str]] = {}
     reached: dict[str, set] = {}
     with warnings.catch_warnings():
@@ -718,7 +729,7 @@ def select_graybox(
         black box chosen by J_S alone.
     sizes : sequence of int, optional
         Structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
-        (fewer for a small candidate set). Sizes a search does not reach are left out with a
+        (fewer for a small candidate set or an identification record of few samples). Sizes a search does not reach are left out with a
         :class:`SelectionWarning`.
     sources : sequence of {"semp", "frols"}
         Where the structures of each size come from.
