@@ -87,3 +87,15 @@ def test_select_graybox_sizes_are_checked_against_the_record_and_the_included_te
         gb.select_graybox(CAND, gb.Dataset(short_record(14), valid), sizes=[4, 12])
     with pytest.raises(ValueError, match=r"sizes \[1\] are fewer than the 2 included terms"):
         gb.select_graybox(CAND, gb.Dataset(short_record(300), valid), sizes=[1], include=("1", "y(k-1)"))
+
+
+def test_semp_refuses_an_output_that_is_identically_zero_as_frols_does():
+    # was: semp on an all-zero output (a sensor not connected) emitted numpy's "divide by zero
+    # encountered in log" once per step (its criterion is N ln 0) and returned the structure "1"
+    # with θ = 0 and a criterion of -inf; frols refuses the same data in words
+    rec = short_record(200)
+    zero = gb.Record(rec.u, np.zeros(200), input_names=("n",))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="the output is identically zero"):
+            gb.semp(CAND, zero, max_terms=6)

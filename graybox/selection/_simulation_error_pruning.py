@@ -141,6 +141,10 @@ class _Scorer:
         y = np.concatenate(targets)
         if not (np.all(np.isfinite(psi)) and np.all(np.isfinite(y))):
             raise ValueError("candidate regressors overflow to non-finite values (a high power of u or y?)")
+        if not np.any(y):
+            # every model then scores 0 (its criterion N ln 0): nothing to rank, as for frols
+            raise ValueError("the output is identically zero on the scored samples (after the largest lag): "
+                             "free-run errors cannot rank structures")
         self.n_rows = y.size
         s = np.sqrt(np.mean(psi**2, axis=0))
         self.zero = s == 0.0
@@ -278,7 +282,8 @@ def semp(
     ------
     ValueError
         Conflicting or out-of-range arguments, no process candidates, records shorter than the
-        candidates' largest lag, or no candidate that can be added (all collinear or diverging).
+        candidates' largest lag, an output that is identically zero, or no candidate that can be
+        added (all collinear or diverging).
 
     Warns
     -----
