@@ -99,3 +99,18 @@ def test_semp_refuses_an_output_that_is_identically_zero_as_frols_does():
         warnings.simplefilter("error")
         with pytest.raises(ValueError, match="the output is identically zero"):
             gb.semp(CAND, zero, max_terms=6)
+
+
+def test_select_graybox_on_dask_workers_leaves_nothing_in_the_temporary_folder(tmp_path, monkeypatch):
+    # was: the LocalCluster graybox starts made Dask's "dask-scratch-space" folder in the temporary
+    # folder and left it there after the call ("Nothing is written to disk", says select_graybox)
+    import tempfile
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    data = gb.Dataset(short_record(200), short_record(100, seed=1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(CAND, data, sizes=[3], sources="frols", estimator="ls", workers=1)
+    assert np.all(np.isfinite(res.model.theta))
+    assert list(tmp_path.iterdir()) == []

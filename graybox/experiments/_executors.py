@@ -22,6 +22,8 @@ import itertools
 import logging
 import multiprocessing as mp
 import os
+import shutil
+import tempfile
 import time
 import uuid
 from collections import deque
@@ -402,6 +404,8 @@ def local_cluster(workers: int, dashboard: bool = False):
     is mapped and unmapped afresh, which made graybox's cells about 1.5–2 times slower on a
     worker than in the driver (BENCHMARKS.md, grids).
 
+    The workers' scratch folders live in a temporary folder of the cluster's own, removed on exit.
+
     ``dashboard``: serve Dask's dashboard on a free port when bokeh is installed (off by default:
     it costs start-up time and a port).
     """
@@ -413,8 +417,11 @@ def local_cluster(workers: int, dashboard: bool = False):
     # a nanny started earlier in this process (another cluster) leaves the variable in os.environ,
     # whence every worker spawned later (a restarted one too) would inherit it: off while we run
     inherited = os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    # the workers' scratch folders in a folder of our own, removed on exit: Dask's default
+    # ("dask-scratch-space" in the temporary folder) outlives the cluster
+    scratch = tempfile.mkdtemp(prefix="graybox-dask-")
     try:
-        with dask.config.set({"distributed.scheduler.allowed-failures": 0,
+        with dask.config.set({"distributed.scheduler.allowed-failures": 0, "temporary-directory": scratch,
                               "distributed.nanny.pre-spawn-environ": environ, **_QUIET}):
             # ":0": any free port; None still binds 8787 and warns when another cluster holds it
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
@@ -427,6 +434,7 @@ def local_cluster(workers: int, dashboard: bool = False):
         finally:
             cluster.close()
     finally:
+        shutil.rmtree(scratch, ignore_errors=True)
         if inherited is not None:
             os.environ["MALLOC_TRIM_THRESHOLD_"] = inherited
 
