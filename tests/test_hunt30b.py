@@ -114,3 +114,30 @@ def test_select_graybox_on_dask_workers_leaves_nothing_in_the_temporary_folder(t
         res = gb.select_graybox(CAND, data, sizes=[3], sources="frols", estimator="ls", workers=1)
     assert np.all(np.isfinite(res.model.theta))
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("search", ["swap", "exact"])
+def test_subset_searches_keep_to_independent_columns_on_noise_free_data(search):
+    # was: on a noise-free record of the first-order plant, y(k-1), y(k-2), n(k-2), n(k-2)² and the
+    # constant are exactly dependent (y(k-1) is the plant's own equation one step back); every
+    # subset holding the true terms ties at the round-off floor, and the swap and exact searches
+    # returned one holding all five, so frols(n_terms=10..13, search=...) failed with "included
+    # term n(k-2)^2 cannot be used on these data" though nothing was included, where greedy search
+    # gives 10..13 independent terms. Of candidates tied at the floor the search now adds the one
+    # most independent of its subset, and one its Gram form finds dependent never; a subset whose
+    # dependence only the QR of the final fit sees is refused naming the search, not an included term
+    rec = short_record(200, seed=3)
+    for n in (10, 12):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.CandidateWarning)
+            sel = gb.frols(CAND, rec, n_terms=n, search=search)
+        assert len(sel.structure) == n and np.all(np.isfinite(sel.theta))
+        psi = gb.regressor_matrix(sel.structure, rec.u, rec.y, start=2, input_names=rec.input_names)
+        assert np.linalg.matrix_rank(psi / np.sqrt(np.mean(psi ** 2, axis=0))) == n
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        with pytest.raises(ValueError, match=f"the best subset of 13 terms the {search} search found holds"):
+            gb.frols(CAND, rec, n_terms=13, search=search)
+        # more than the data's independent terms: said as greedy search says it
+        with pytest.raises(ValueError, match="independent terms"):
+            gb.frols(CAND, rec, n_terms=14, search=search)

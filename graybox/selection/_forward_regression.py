@@ -687,12 +687,14 @@ def frols(
         raise ValueError(f"criterion needs more rows ({N}) than model terms ({K}); lower max_terms")
 
     plan = None
+    n_included = len(forced)
     if search != "greedy":
         plan = _search_subsets(cols, forced, K, rule, search, rank_tol, process)
         n_plan = len(plan.subsets[plan.chosen])
         # the chosen subset first (ERR order within it), then, for the stored curve, greedy terms after it
         forced, K = list(plan.order), (K if mode == "criterion" else n_plan)
-    chosen, n_dependent = _forward(cols, process, forced, K, rule if plan is None else None, rank_tol)
+    chosen, n_dependent = _forward(cols, process, forced, K, rule if plan is None else None, rank_tol,
+                                   n_included=n_included, search=search)
     C, g = _chosen_factors(cols, process, chosen)
     if n_dependent:
         dep_terms = [t for t, why in skipped if why.startswith("linear")]
@@ -832,8 +834,11 @@ def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms:
 
 
 def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule: StopRule | None,
-             rank_tol: float) -> tuple[list[int], int]:
+             rank_tol: float, *, n_included: int | None = None, search: str = "greedy") -> tuple[list[int], int]:
     """Forward selection of up to K terms (``forced`` first, in order), orthogonalising as it goes.
+
+    ``forced``: the ``n_included`` included terms (default: all of them), then those of the
+    subset ``search`` chose.
 
     Returns the chosen candidates' indices and how many candidates turned out to be linear
     combinations of them (added to ``cols.skipped``). A tolerance ``rule`` ends it early.
@@ -866,7 +871,13 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
             j = forced[k]
             if not active[j]:
                 why = next((w for t, w in skipped if t == process[j]), "skipped")
-                raise ValueError(f"included term {process[j]} cannot be used on these data: {why}")
+                if n_included is None or k < n_included:
+                    raise ValueError(f"included term {process[j]} cannot be used on these data: {why}")
+                # the Gram form the search runs on squares the conditioning: on noise-free data,
+                # where the fit is exact with fewer terms, it may not see a dependence QR sees
+                raise ValueError(f"the best subset of {len(forced)} terms the {search} search found holds "
+                                 f"{process[j]}: {why} on these data, which the Gram form the search runs on "
+                                 "could not tell (noise-free data?); ask for fewer terms, or search='greedy'")
         else:
             with np.errstate(divide="ignore", invalid="ignore"):
                 score = np.where(active, num * num / nrm, -1.0)

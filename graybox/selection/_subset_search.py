@@ -39,13 +39,17 @@ RSS_FLOOR = 1e-13
 
 
 @nb.njit(cache=True, nogil=True)
-def _eliminate(G, b, yy, idx, p, dep_tol, nested, border):  # pragma: no cover - compiled
+def _eliminate(G, b, yy, idx, p, dep_tol, nested, border, energy):  # pragma: no cover - compiled
     """Symmetric elimination on the Gram matrix of the columns ``idx`` bordered by y.
 
     The first ``p`` columns of ``idx`` are eliminated in order; ``nested[t]`` is the RSS of the
     first t + 1 of them. For every later column c, ``border[c - p]`` is the RSS of the p columns
     together with c. A column whose remaining energy is at most ``dep_tol`` of its own is a linear
-    combination of those before it and adds nothing.
+    combination of those before it and adds nothing: ``nested`` (the RSS of their span, a bound)
+    goes on, but ``border`` is inf where c is one, or the p columns hold one (a subset is of
+    independent columns: on noise-free data a dependent column ties with the true terms at the
+    round-off floor, and a fit of that subset is not defined). ``energy[c - p]`` is c's remaining
+    energy as a fraction of its own.
     """
     m = idx.size
     A = np.empty((m + 1, m + 1))
@@ -55,10 +59,12 @@ def _eliminate(G, b, yy, idx, p, dep_tol, nested, border):  # pragma: no cover -
         A[r, m] = b[idx[r]]
         A[m, r] = b[idx[r]]
     A[m, m] = yy
+    dependent = False
     for t in range(p):
         d = A[t, t]
         if d <= dep_tol * G[idx[t], idx[t]]:
             nested[t] = A[m, m]
+            dependent = True
             continue
         for r in range(t + 1, m + 1):
             f = A[t, r] / d
@@ -72,8 +78,9 @@ def _eliminate(G, b, yy, idx, p, dep_tol, nested, border):  # pragma: no cover -
         nested[t] = A[m, m]
     for c in range(p, m):
         d = A[c, c]
-        if d <= dep_tol * G[idx[c], idx[c]]:
-            border[c - p] = A[m, m]
+        energy[c - p] = d / G[idx[c], idx[c]]
+        if dependent or d <= dep_tol * G[idx[c], idx[c]]:
+            border[c - p] = np.inf
         else:
             border[c - p] = A[m, m] - A[c, m] * A[c, m] / d
 
@@ -104,13 +111,14 @@ class SubsetProblem:
         self.floor = RSS_FLOOR * self.yy
         self.evaluations = 0
 
-    def _run(self, idx: list[int] | np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
+    def _run(self, idx: list[int] | np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         idx = np.asarray(idx, dtype=np.int64)
         nested = np.empty(p)
         border = np.empty(idx.size - p)
-        _eliminate(self.G, self.b, self.yy, idx, p, self.dep_tol, nested, border)
+        energy = np.empty(idx.size - p)
+        _eliminate(self.G, self.b, self.yy, idx, p, self.dep_tol, nested, border, energy)
         self.evaluations += 1
-        return np.maximum(nested, self.floor), np.maximum(border, self.floor)
+        return np.maximum(nested, self.floor), np.maximum(border, self.floor), energy
 
     def rss(self, S: list[int]) -> float:
         """RSS of the least-squares fit on the columns S (yᵀy for the empty set)."""
@@ -121,7 +129,7 @@ class SubsetProblem:
         return self._run(order, len(order))[0]
 
     def added(self, S: list[int], cands: np.ndarray) -> np.ndarray:
-        """RSS of S ∪ {c} for every c in ``cands``."""
+        """RSS of S ∪ {c} for every c in ``cands`` (inf where the columns are dependent)."""
         return self._run(list(S) + list(cands), len(S))[1]
 
     def outside(self, S: list[int]) -> np.ndarray:
@@ -135,7 +143,14 @@ class SubsetProblem:
             cands = self.outside(S)
             if cands.size == 0:
                 break
-            S.append(int(cands[int(np.argmin(self.added(S, cands)))]))
+            _, r, energy = self._run(list(S) + list(cands), len(S))
+            if not np.isfinite(r.min()):
+                break  # every candidate left is a combination of S
+            # on noise-free data every extension of the true terms ties at the round-off floor, where
+            # the Gram form cannot tell a column that is a combination of S (its squared conditioning
+            # leaves it ~1e-9 of its energy): of tied candidates, the one most independent of S
+            tied = np.flatnonzero(r == r.min())
+            S.append(int(cands[tied[int(np.argmax(energy[tied]))]]))
         return S
 
     def ordered(self, S: list[int], fixed: int = 0) -> list[int]:
