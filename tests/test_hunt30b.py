@@ -141,3 +141,13 @@ def test_subset_searches_keep_to_independent_columns_on_noise_free_data(search):
         # more than the data's independent terms: said as greedy search says it
         with pytest.raises(ValueError, match="independent terms"):
             gb.frols(CAND, rec, n_terms=14, search=search)
+
+
+@pytest.mark.parametrize("search", ["greedy", "swap", "exact"])
+def test_frols_says_too_many_terms_for_the_rows_in_the_same_words_for_every_search(search):
+    # was: with search="swap" or "exact", n_terms = 12 on 12 regression rows failed with "criterion
+    # aic needs fewer terms (12) than rows (12)": a criterion the caller did not ask for
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        with pytest.raises(ValueError, match=r"more terms \(12\) than regression rows \(12\)"):
+            gb.frols(CAND, short_record(14, seed=3), n_terms=12, search=search)

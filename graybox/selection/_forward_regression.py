@@ -685,6 +685,8 @@ def frols(
         K = min(n_usable, max_terms or _DEFAULT_MAX_TERMS)
     if mode == "criterion" and K >= N:
         raise ValueError(f"criterion needs more rows ({N}) than model terms ({K}); lower max_terms")
+    if mode == "n_terms" and K >= N:  # said before any search, in the same words for all of them
+        raise ValueError(f"more terms ({K}) than regression rows ({N})")
 
     plan = None
     n_included = len(forced)
