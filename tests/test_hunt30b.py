@@ -151,3 +151,21 @@ def test_frols_says_too_many_terms_for_the_rows_in_the_same_words_for_every_sear
         warnings.simplefilter("ignore", gb.CandidateWarning)
         with pytest.raises(ValueError, match=r"more terms \(12\) than regression rows \(12\)"):
             gb.frols(CAND, short_record(14, seed=3), n_terms=12, search=search)
+
+
+@pytest.mark.parametrize("rss, n_rows, error, match", [
+    ([0.0], 10, ValueError, "rss must be > 0"),
+    ([-1.0], 10, ValueError, "rss must be > 0"),
+    ([np.nan], 10, ValueError, "rss has 1 non-finite"),
+    ([[1.0, 2.0]], 10, ValueError, "rss must be 1-D"),
+    ([1.0], 2.5, TypeError, "n_rows must be an integer"),
+    ([1.0], True, TypeError, "n_rows must be an integer"),
+    ([1.0], 0, ValueError, "n_rows must be an integer >= 1"),
+])
+def test_information_criterion_refuses_what_it_cannot_score(rss, n_rows, error, match):
+    # was: an RSS of 0 gave -inf and a negative one NaN (with numpy's "divide by zero" / "invalid
+    # value encountered in log"), 2.5 rows a number, a 2-D rss a 2-D curve, n_rows=True one row
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(error, match=match):
+            gb.information_criterion("aic", rss, n_rows)

@@ -69,7 +69,7 @@ from ..core._gram import (
     term_factors,
 )
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import check_choice, check_fields, check_int, check_real, warn
+from ..core._validation import as_1d_finite, check_choice, check_fields, check_int, check_real, warn
 from ._stopping import choose_model, stop_rule, StopRule
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem
 
@@ -131,9 +131,20 @@ def information_criterion(name: str, rss: np.ndarray, n_rows: int) -> np.ndarray
     ndarray, shape (K,)
         With σ²_k = rss_k / N: ``N ln σ² + 2k`` (AIC), ``N ln σ² + k ln N`` (BIC),
         ``N ln σ² + N ln((N + k)/(N − k))`` (FPE, in its logarithmic form as in SysIdentPy).
+
+    Raises
+    ------
+    ValueError
+        An unknown criterion; an RSS that is not a 1-D array of finite values > 0; as many terms
+        as rows or more. (``TypeError`` for ``n_rows`` that is not an integer.)
     """
     check_choice(name, "name (the criterion)", CRITERIA)
-    rss = np.asarray(rss, dtype=float)
+    n_rows = check_int(n_rows, "n_rows", low=1)
+    rss = as_1d_finite(rss, "rss")
+    if np.any(rss <= 0):
+        # ln 0 = -inf: an exact fit's residual is round-off (frols floors it at 1e-20 of yᵀy)
+        raise ValueError(f"rss must be > 0 (output units²), got {float(rss.min())!r}: an exact fit's residual sum "
+                         "of squares is its round-off; floor it at a small fraction of yᵀy")
     k = np.arange(1, rss.size + 1, dtype=float)
     N = float(n_rows)
     if np.any(k >= N):
