@@ -948,8 +948,14 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
     lo = max(1, len(forced)) if rule.mode != "n_terms" else rule.n_terms
     sizes = list(range(lo, K + 1))
     budget = SearchBudget(EXACT_NODES)
-    plan = search_sizes(problem, sizes, forced, exact=search == "exact", rule=rule,
-                        criterion=lambda k, r: criterion_of_sizes(rule.criterion, k, r, N), n_rows=N, budget=budget)
+    try:
+        plan = search_sizes(problem, sizes, forced, exact=search == "exact", rule=rule,
+                            criterion=lambda k, r: criterion_of_sizes(rule.criterion, k, r, N), n_rows=N, budget=budget)
+    except ValueError:
+        # no independent subset holds the included terms: if they are dependent themselves, said as
+        # greedy search says it (the forward pass raises, naming the term); the columns are spent then
+        _forward(cols, process, forced, len(forced), None, rank_tol)
+        raise
     ks = np.array([len(S) for S in plan.subsets])
     crit = criterion_of_sizes(rule.criterion, ks, plan.rss, N)
     i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy, can_grow=ks.max() < n_free + len(forced),
