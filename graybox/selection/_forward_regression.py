@@ -626,7 +626,9 @@ def frols(
     ------
     ValueError
         Conflicting or out-of-range arguments; no process candidates; an output that is
-        identically zero; more terms asked than independent candidates on these data.
+        identically zero; more terms asked than independent candidates on these data; a selected
+        term that the accurate factor of the chosen columns finds dependent on those before it
+        (noise-free data, where the Gram form's ranking cannot tell).
     MemoryError
         Before allocating, when the work of the chosen method would not fit in the memory
         available (the message names both, in bytes).
@@ -733,6 +735,14 @@ def frols(
     # θ of the selected terms: back-substitution in the triangular factor, then undo scaling
     idx = np.array(chosen[:n_sel], dtype=int)
     R = C[:n_sel][:, idx]
+    # the factor of unit-RMS columns (norm √N): a selected term with almost no norm of its own is a
+    # combination of those before it, which the Gram form's squared conditioning can hide from the
+    # ranking (noise-free data); its θ would be an arbitrary point of a null space
+    weak = np.flatnonzero(np.abs(np.diag(R)) <= rank_tol * math.sqrt(N))
+    if weak.size:
+        raise ValueError(f"selected term {process[idx[weak[0]]]} is a linear combination of the terms selected before "
+                         f"it on these data, which the {cols.method} form could not tell (noise-free data?): ask for "
+                         "fewer terms" + (", or method='mgs'" if cols.method == "gram" else ""))
     theta_scaled = _back_substitute(np.triu(R), g[:n_sel])
     theta = theta_scaled / cols.scales[idx]
     evaluated = Structure([process[j] for j in chosen])
