@@ -193,3 +193,11 @@ def test_frols_on_the_gram_form_refuses_a_selected_term_its_qr_factor_finds_depe
         assert len(sel.structure) == 6
         with pytest.raises(ValueError, match=r"is a linear combination of the terms selected before it.*method='mgs'"):
             gb.frols(CAND, rec, n_terms=10, method="gram")
+
+
+def test_select_graybox_names_an_included_term_given_twice_as_the_searches_do():
+    # (kept while sizes learnt to be checked against the included terms: that check first said
+    # "duplicated term 1 in structure", where the searches say which argument holds it)
+    data = gb.Dataset(short_record(200), short_record(100, seed=1))
+    with pytest.raises(ValueError, match="included term 1 is given twice"):
+        gb.select_graybox(CAND, data, sizes=[3], include=("1", "y(k-1)", "1"))

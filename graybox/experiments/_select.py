@@ -361,7 +361,7 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
         if sizes[-1] >= rows:
             raise ValueError(f"sizes {[s for s in sizes if s >= rows]} need more than the identification record's "
                              f"{max(rows, 0)} samples after the candidates' largest lag {process.max_lag}")
-        n_forced = len(gb.Structure(forced))
+        n_forced = len(process.positions(forced, "included term"))  # each checked, as the searches check them
         if sizes[-1] < n_forced:
             raise ValueError(f"sizes {sizes} are fewer than the {n_forced} included terms {forced}: every "
                              "structure holds them")
