@@ -201,3 +201,15 @@ def test_select_graybox_names_an_included_term_given_twice_as_the_searches_do():
     data = gb.Dataset(short_record(200), short_record(100, seed=1))
     with pytest.raises(ValueError, match="included term 1 is given twice"):
         gb.select_graybox(CAND, data, sizes=[3], include=("1", "y(k-1)", "1"))
+
+
+def test_semp_tolerance_on_a_constant_output_does_not_depend_on_the_units():
+    # was: with var(y) = 0 (a constant output) semp divided the free-run MSE by 1 output unit², so
+    # the same record in two units gave ratios 1e12 apart (4e-10 and 4e+02, the tolerance reached in
+    # one and not in the other): it is now read on the mean square output there
+    rec = short_record(200)
+    stops = []
+    for scale in (1.0, 1e6):
+        flat = gb.Record(rec.u, np.full(200, 2e5 * scale), input_names=("n",))
+        stops.append(gb.semp(CAND, flat, tol=1e-3, max_terms=4).stop)
+    assert stops[0] == stops[1]

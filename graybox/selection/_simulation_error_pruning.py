@@ -152,7 +152,8 @@ class _Scorer:
         ps = psi / self.s
         self.G = ps.T @ ps
         self.b = ps.T @ y
-        self.yvar = float(np.var(y)) if np.var(y) > 0 else 1.0
+        # the tolerance's scale: var(y), or for a constant output its mean square (not 1 output unit²)
+        self.yvar = float(np.var(y)) if np.var(y) > 0 else float(np.mean(y**2))
         # free-run errors below this are round-off, not signal: such structures tie (noise-free data)
         self.floor = 1e-20 * max(float(np.mean(y**2)), np.finfo(float).tiny)
 
@@ -240,7 +241,8 @@ def semp(
 
     * ``n_terms``: stop when the structure (after pruning) holds ``n_terms`` terms;
     * ``tol``: stop at the first structure whose free-run error is at most ``tol`` of the output's
-      variance (``MSE_free-run / var(y) <= tol``, a unit-free 1 − R² of the free run);
+      variance (``MSE_free-run / var(y) <= tol``, a unit-free 1 − R² of the free run; for a constant
+      output, its mean square instead of var(y));
     * ``criterion`` (the default, ``"bic"``): grow the structure to ``max_terms`` and return the
       structure of the path with the smallest criterion ``N ln MSE_free-run + penalty(k)``.
 
