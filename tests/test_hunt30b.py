@@ -213,3 +213,15 @@ def test_semp_tolerance_on_a_constant_output_does_not_depend_on_the_units():
         flat = gb.Record(rec.u, np.full(200, 2e5 * scale), input_names=("n",))
         stops.append(gb.semp(CAND, flat, tol=1e-3, max_terms=4).stop)
     assert stops[0] == stops[1]
+
+
+def test_a_black_box_row_without_a_model_has_no_static_error_either():
+    # was: a black-box row whose fits failed (or diverged) had JSF = inf and JSF_test = inf, where
+    # the table's promise is NaN without static points (there is no static error to be infinite)
+    rec = step_test([0.8, 1.9, 1.3], 100)
+    test = step_test([1.1, 1.6, 0.9], 60, seed=9)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.SelectionWarning)
+        res = gb.select_graybox(CAND, rec, sizes=[3, 4, 6], folds=3, estimator="ls", test=test)
+    assert np.isinf(res.table["JS_valid"]).any()  # some rows have no model
+    assert res.table["JSF"].isna().all() and res.table["JSF_test"].isna().all()

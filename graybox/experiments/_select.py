@@ -918,6 +918,7 @@ def _estimators(estimator, band, constraints) -> list[str]:
 def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.ndarray]]:
     """One row per job: its member chosen on the choosing data and that member's figures."""
     by_name = {r["structure"]: r for r in rows}
+    no_jsf = np.inf if plan.static is not None else np.nan  # a row without a model: no static error to speak of
     out, members, scores = [], [], []
     for job, res in zip(jobs, results):
         i, in_band = _member(res, plan.band)
@@ -927,12 +928,12 @@ def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.
         js = float(blk @ res["weights"])
         row = dict(by_name[job.name], estimator=job.estimator,
                    lambda1=float(res["lambdas"][i]) if i >= 0 else np.nan,
-                   JS_valid=js, JSF=float(res["jsf"][i]) if i >= 0 else np.inf, in_band=bool(in_band and np.isfinite(js)))
+                   JS_valid=js, JSF=float(res["jsf"][i]) if i >= 0 else no_jsf, in_band=bool(in_band and np.isfinite(js)))
         row["reason"] = _reason(res, i, in_band, js, plan.band)
         row["warnings"] = "; ".join(res["warnings"])
         if plan.test is not None:
             row["JS_test"] = float(res["test"][i]) if i >= 0 else np.inf
-            row["JSF_test"] = float(res["jsf_full"][i]) if i >= 0 else np.inf
+            row["JSF_test"] = float(res["jsf_full"][i]) if i >= 0 else no_jsf
         out.append(row)
     table = pd.DataFrame(out).set_index("structure")
     return table, members, scores
