@@ -225,3 +225,22 @@ def test_a_black_box_row_without_a_model_has_no_static_error_either():
         res = gb.select_graybox(CAND, rec, sizes=[3, 4, 6], folds=3, estimator="ls", test=test)
     assert np.isinf(res.table["JS_valid"]).any()  # some rows have no model
     assert res.table["JSF"].isna().all() and res.table["JSF_test"].isna().all()
+
+
+@pytest.mark.parametrize("search", ["greedy", "swap", "exact"])
+def test_frols_keeps_every_included_term_whatever_rule_stops_it(search):
+    # was: greedy frols(tol=0.5, include=[six terms]) returned "y(k-1)" alone (the tolerance was
+    # met after the first included term and the others were dropped, where swap and exact keep all
+    # six); a criterion minimum below their count dropped them likewise; and max_terms below their
+    # count returned the first max_terms of them (greedy) or failed with numpy's "zero-size array
+    # to reduction operation maximum" (swap, exact)
+    r0 = short_record(300, seed=3)
+    rec = gb.Record(r0.u, r0.y + np.random.default_rng(1).normal(0, 1.0, 300), input_names=("n",))
+    include = ["y(k-1)", "n(k-1)", "n(k-1)^2", "1", "y(k-2)^2", "n(k-2)y(k-1)"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a tolerance or criterion cut short: not the point
+        for kw in (dict(tol=0.5), dict(criterion="bic", max_terms=8)):
+            sel = gb.frols(CAND, rec, include=include, search=search, **kw)
+            assert [str(t) for t in sel.structure][:6] == include
+        with pytest.raises(ValueError, match="6 included terms exceed the 5 terms max_terms allows"):
+            gb.frols(CAND, rec, include=include, search=search, max_terms=5)

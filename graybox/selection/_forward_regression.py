@@ -590,7 +590,8 @@ def frols(
     include : sequence of Term or str, optional
         Terms selected first, in this order, whatever their ERR (e.g. ``["1"]``: gray-box
         estimation with eq. (22) needs the constant, which ERR may rank late when slow
-        disturbances dominate). They count towards ``n_terms`` and their ERR is reported.
+        disturbances dominate). They count towards ``n_terms`` and their ERR is reported; every
+        model the stopping rule looks at holds them (``max_terms`` at least their count).
     method : {"auto", "mgs", "gram"}, optional
         How candidates are orthogonalised. ``"mgs"``: modified Gram–Schmidt on the N × n
         candidate matrix (most accurate; memory ~8·N·(n + n_terms) bytes, checked before
@@ -673,6 +674,8 @@ def frols(
     forced = process.positions(include, "included term")
     if n_terms is not None and n_terms < len(forced):
         raise ValueError(f"n_terms = {n_terms} is fewer than the {len(forced)} included terms")
+    if max_terms is not None and max_terms < len(forced):
+        raise ValueError(f"{len(forced)} included terms exceed the {max_terms} terms max_terms allows")
 
     rule = stop_rule(n_terms, tol, criterion, curve_default="aic")
     check_choice(search, "search", SEARCHES)
@@ -726,9 +729,11 @@ def frols(
         raise ValueError(f"more terms ({k_eval}) than regression rows ({N})")
     curve = information_criterion(curve_name, rss, N)
     if plan is None:
-        i, stop = choose_model(rule, np.arange(1, k_eval + 1), curve, rss / yy, can_grow=k_eval < n_usable,
-                               fraction="1 - ΣERR")
-        n_sel = i + 1
+        # every model looked at holds the included terms: none of fewer terms is a candidate
+        n0 = max(n_included, 1) - 1
+        i, stop = choose_model(rule, np.arange(1, k_eval + 1)[n0:], curve[n0:], (rss / yy)[n0:],
+                               can_grow=k_eval < n_usable, fraction="1 - ΣERR")
+        n_sel = n0 + i + 1
     else:
         n_sel, stop = n_plan, plan.stop
 
@@ -908,7 +913,7 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
         active[j] = False
         engine.choose(k, j, active, last=k + 1 == K)
         chosen.append(j)
-        if rule is not None and rule.mode == "tol" and engine.rss(k) / yy <= rule.tol:
+        if rule is not None and rule.mode == "tol" and k + 1 >= len(forced) and engine.rss(k) / yy <= rule.tol:
             break
     cols.engine = engine
     return chosen, n_dependent
