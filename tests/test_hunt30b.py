@@ -244,3 +244,18 @@ def test_frols_keeps_every_included_term_whatever_rule_stops_it(search):
             assert [str(t) for t in sel.structure][:6] == include
         with pytest.raises(ValueError, match="6 included terms exceed the 5 terms max_terms allows"):
             gb.frols(CAND, rec, include=include, search=search, max_terms=5)
+
+
+def test_select_graybox_says_when_it_falls_back_to_the_smallest_static_error():
+    # was: with fallback="min_jsf" and a band no structure reaches, the call chose the smallest J_SF
+    # without a word (se_dsf warns in the same case; the docstring says the fallback "says so")
+    rec1, rec2 = step_test([0.8, 1.9, 1.3, 1.6], 50, seed=1), step_test([1.0, 1.7, 0.9, 1.4], 50, seed=2)
+    ub = np.linspace(0.8, 1.9, 5)
+    far = gb.StaticPoints(ub, (0.2 * ub + 0.05 * ub ** 2 + 0.1) / 0.3 + np.array([0.5, -0.5, 0.5, -0.5, 0.5]),
+                          input_names=("n",))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.SelectionWarning)
+        warnings.filterwarnings("error", "no structure meets the band", gb.SelectionWarning)
+        with pytest.raises(gb.SelectionWarning, match=r"no structure meets the band B = 1e-06.*smallest J_SF"):
+            gb.select_graybox(CAND, gb.Dataset(rec1, rec2, far), band=1e-6, estimator="pe", sizes=[3],
+                              fallback="min_jsf")

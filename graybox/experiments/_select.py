@@ -63,7 +63,7 @@ __all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_E
 
 class SelectionWarning(UserWarning):
     """select_graybox took an explicit fallback (fewer blocks, sizes a search did not reach, a
-    lower static degree than the points ask for), some rows' fits warned (their text is in the
+    lower static degree than the points ask for, the smallest J_SF when no structure meets the band), some rows' fits warned (their text is in the
     table's ``warnings``), or some rows' fits failed on these data (e.g. terms collinear on a
     fold: those rows are left out of the choice, their ``reason`` says why); the message says which."""
 
@@ -861,6 +861,9 @@ def select_graybox(
     else:
         pos, used = _fallback(table, results, band, fallback), "min"
         used_fallback = True
+        warn(f"no structure meets the band B = {band:g}: fallback 'min_jsf' chose {table.index[pos]} "
+             f"({table.iloc[pos]['estimator']}), the smallest J_SF reached, {table.iloc[pos]['JSF']:.4g}",
+             SelectionWarning)
     order = [pos] + [i for i in np.lexsort((table["JS_valid"].to_numpy(float), ~table["in_band"].to_numpy()))
                      if i != pos]
     table["rank"] = 0
