@@ -81,7 +81,7 @@ def test_select_graybox_sizes_are_checked_against_the_record_and_the_included_te
     valid = short_record(100, seed=1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = gb.select_graybox(CAND, gb.Dataset(short_record(14), valid))
+        res = gb.select_graybox(CAND, gb.Dataset(short_record(14), valid), estimator="ls")
     assert res.table["size"].max() <= 11
     with pytest.raises(ValueError, match=r"sizes \[12\] need more than the identification record's 12 samples"):
         gb.select_graybox(CAND, gb.Dataset(short_record(14), valid), sizes=[4, 12])
