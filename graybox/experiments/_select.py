@@ -63,9 +63,10 @@ __all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_E
 
 class SelectionWarning(UserWarning):
     """select_graybox took an explicit fallback (fewer blocks, sizes a search did not reach, a
-    lower static degree than the points ask for, the smallest J_SF when no structure meets the band), some rows' fits warned (their text is in the
-    table's ``warnings``), or some rows' fits failed on these data (e.g. terms collinear on a
-    fold: those rows are left out of the choice, their ``reason`` says why); the message says which."""
+    lower static degree than the points ask for, the smallest J_SF when no structure meets the
+    band), some rows' fits warned (their text is in the table's ``warnings``), or some rows' fits
+    failed on these data (e.g. terms collinear on a fold: those rows are left out of the choice,
+    their ``reason`` says why); the message says which."""
 
 
 #: Estimators that trade J_S against J_SF along λ1 (a front per structure).
@@ -127,10 +128,10 @@ class GrayboxSelection:
         record also ``JS_test`` (its refitted model's J_S there) and ``JSF_test`` (that model's
         J_SF). Nothing in the test columns took part in the choice. ``reason``: why a row has no
         qualifying model (every member failed, with which fit and why, or diverged; the smallest
-        J_SF reached when the band is missed); empty when it has one. ``warnings``: what its fits warned of (e.g. an ELS
-        iteration that did not converge), each message once; empty when nothing. The call then
-        says once, with a :class:`SelectionWarning`, how many rows warned and whether the chosen
-        one did.
+        J_SF reached when the band is missed); empty when it has one. ``warnings``: what its fits
+        warned of (e.g. an ELS iteration that did not converge), each message once; empty when
+        nothing. The call then says once, with a :class:`SelectionWarning`, how many rows warned
+        and whether the chosen one did.
     degree : int or None
         Degree of the static curve the static information asks for (None for a black box).
     band : float
@@ -729,8 +730,8 @@ def select_graybox(
         black box chosen by J_S alone.
     sizes : sequence of int, optional
         Structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
-        (fewer for a small candidate set or an identification record of few samples). Sizes a search does not reach are left out with a
-        :class:`SelectionWarning`.
+        (fewer for a small candidate set or an identification record of few samples). Sizes a
+        search does not reach are left out with a :class:`SelectionWarning`.
     sources : sequence of {"semp", "frols"}
         Where the structures of each size come from.
     estimator : str or sequence of str, optional
