@@ -191,7 +191,9 @@ def test_frols_on_the_gram_form_refuses_a_selected_term_its_qr_factor_finds_depe
         warnings.simplefilter("ignore", gb.CandidateWarning)
         sel = gb.frols(CAND, rec, n_terms=6, method="gram")
         assert len(sel.structure) == 6
-        with pytest.raises(ValueError, match=r"is a linear combination of the terms selected before it.*method='mgs'"):
+        with pytest.raises(ValueError, match=r"only 6 independent terms could be selected on these data: selected "
+                                             r"term .* is a linear combination of the terms selected before it.*"
+                                             r"method='mgs'"):
             gb.frols(CAND, rec, n_terms=10, method="gram")
 
 

@@ -745,9 +745,11 @@ def frols(
     # ranking (noise-free data); its θ would be an arbitrary point of a null space
     weak = np.flatnonzero(np.abs(np.diag(R)) <= rank_tol * math.sqrt(N))
     if weak.size:
-        raise ValueError(f"selected term {process[idx[weak[0]]]} is a linear combination of the terms selected before "
-                         f"it on these data, which the {cols.method} form could not tell (noise-free data?): ask for "
-                         "fewer terms" + (", or method='mgs'" if cols.method == "gram" else ""))
+        # in greedy's words ("only k independent terms"), which select_graybox reads to take the sizes reached
+        raise ValueError(f"only {weak[0]} independent terms could be selected on these data: selected term "
+                         f"{process[idx[weak[0]]]} is a linear combination of the terms selected before it, which the "
+                         f"{cols.method} form could not tell (noise-free data?); ask for fewer terms"
+                         + (", or method='mgs'" if cols.method == "gram" else ""))
     theta_scaled = _back_substitute(np.triu(R), g[:n_sel])
     theta = theta_scaled / cols.scales[idx]
     evaluated = Structure([process[j] for j in chosen])
