@@ -769,9 +769,12 @@ def static_curve_band(
     ubar : array_like, shape (M,)
         Input levels (engineering units).
     method : {"delta", "monte-carlo"}
-        ``"delta"``: first order through the static map, ±z·std with std² = gᵀ cov g and g the
-        gradient of ȳ(ū) (implicit differentiation of eq. (5)) or of the gain. ``"monte-carlo"``:
-        θ drawn from N(θ̂, cov), the stable equilibrium nearest the estimate's taken for each
+        ``"delta"``: first order through the static map, ±t·std with std² = gᵀ cov g, g the
+        gradient of ȳ(ū) (implicit differentiation of eq. (5)) or of the gain, and t the
+        quantile of the parameters' intervals (Student's, :attr:`ParameterUncertainty.quantile`).
+        ``"monte-carlo"``: θ drawn from the multivariate t around θ̂ with scale ``cov`` and the
+        same degrees of freedom (the normal's draws, like a z band, are too narrow on a short
+        record), the stable equilibrium nearest the estimate's taken for each
         draw, the band from the draws' quantiles (honest where the map is curved, e.g. near a
         vanishing denominator).
     n_samples : int
@@ -807,8 +810,8 @@ def static_curve_band(
     st, th, cov = m.structure, m.theta, uncertainty.cov
     yb = m.static_curve(ub, y0=y0)
     gain = _gains(st, th[None], ub, yb[None])[0]
-    z = stats.norm.ppf(0.5 + uncertainty.level / 2)
     if method == "delta":
+        z = uncertainty.quantile  # Student's t, as the parameters' intervals: σ² is estimated
         Gy = static_theta_gradient(st, th, ub, yb)
         Gg = _gain_gradient(st, th, ub, yb)
         sy = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", Gy, cov, Gy), 0, None))
@@ -817,7 +820,9 @@ def static_curve_band(
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name)
     n_samples = check_int(n_samples, "n_samples", low=10)
     rng = np.random.default_rng(check_seed(seed))
-    thetas = theta_draws(th, cov, n_samples, rng)
+    # multivariate t: normal draws over √(χ²_dof / dof), the spread of an estimated σ²
+    chi = np.sqrt(rng.chisquare(uncertainty.dof, n_samples) / uncertainty.dof)
+    thetas = th + (theta_draws(th, cov, n_samples, rng) - th) / chi[:, None]
     Y = reached_equilibria(st, thetas, ub, yb).ybar
     G = _gains(st, thetas, ub, Y)
     ok = np.isfinite(Y) & np.isfinite(G)
