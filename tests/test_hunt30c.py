@@ -56,3 +56,20 @@ def test_static_band_covers_the_truth_on_a_short_record():
         np.testing.assert_allclose(b.ybar_high - b.ybar, unc.quantile * b.ybar_std, rtol=1e-12)
     for method, h in hits.items():
         assert 0.915 <= np.mean(h) <= 0.975, (method, np.mean(h))
+
+
+def test_residual_tests_refuse_an_exact_model_in_any_units():
+    # An exact model of noise-free data in Pa near 2e5 left residuals of round-off (~1e-11 Pa), and
+    # "constant" was measured against 1e-14 absolute, so the tests judged that round-off and reported
+    # pass/fail verdicts on it; in tiny units (an output near 2e-13) a noisy record was refused as exact.
+    rng = np.random.default_rng(0)
+    noisy = speed_record(rng, 400, hold=1)
+    truth = gb.Model(SPEED_TERMS, [A1, B1, B2, C0], input_names=("speed",))
+    exact = gb.Record(noisy.u, truth.simulate(noisy), input_names=("speed",))
+    with pytest.raises(ValueError, match="reproduces the data exactly"):
+        gb.residual_tests(truth, exact)
+    base = gb.residual_tests(gb.els(SPEED_TERMS, noisy, noise=0).model, noisy)
+    tiny = gb.Record(noisy.u, noisy.y * 1e-18, input_names=("speed",))
+    other = gb.residual_tests(gb.els(SPEED_TERMS, tiny, noise=0).model, tiny)
+    for k in base.tests:
+        np.testing.assert_allclose(other[k].phi, base[k].phi, atol=1e-7)
