@@ -73,3 +73,17 @@ def test_residual_tests_refuse_an_exact_model_in_any_units():
     other = gb.residual_tests(gb.els(SPEED_TERMS, tiny, noise=0).model, tiny)
     for k in base.tests:
         np.testing.assert_allclose(other[k].phi, base[k].phi, atol=1e-7)
+
+
+@pytest.mark.parametrize("offset", [-2e5, 0.0])  # gauge pressure (near 0 Pa) or absolute (near 2e5 Pa)
+def test_ls_uncertainty_refuses_a_model_of_other_data_in_absolute_units(offset):
+    # ls_uncertainty checks that θ is the least-squares estimate on the data it is given, but measured
+    # the gradient against |Aᵀy|, which grows with the output's offset: the model of another record was
+    # refused in gauge pressure (near 0 Pa) and silently accepted in absolute pressure (near 2e5 Pa).
+    rng = np.random.default_rng(0)
+    a, b = (speed_record(rng, 300, hold=5) for _ in range(2))
+    a, b = (gb.Record(r.u, r.y + offset, input_names=("speed",)) for r in (a, b))
+    model_a = gb.els(SPEED_TERMS, a, noise=0).model
+    assert gb.ls_uncertainty(model_a, a).dof == 295  # its own data: accepted
+    with pytest.raises(ValueError, match="not the optimum"):
+        gb.ls_uncertainty(model_a, b)
