@@ -87,3 +87,31 @@ def test_ls_uncertainty_refuses_a_model_of_other_data_in_absolute_units(offset):
     assert gb.ls_uncertainty(model_a, a).dof == 295  # its own data: accepted
     with pytest.raises(ValueError, match="not the optimum"):
         gb.ls_uncertainty(model_a, b)
+
+
+def _write(path, text):
+    path.write_bytes(text.encode("utf-8"))
+    return path
+
+
+def test_loaders_refuse_wrong_column_argument_types_naming_them(tmp_path):
+    # A list where one column name belongs (y=["p"]) failed with AttributeError deep in difflib, a
+    # number as a column (u=1) was a ValueError, a float32 period (Ts=np.float32(0.1), e.g. from an
+    # array) was refused as "not a number", and a path that is a number failed in pathlib unnamed.
+    rec = _write(tmp_path / "run.csv", "t;speed;p\n0;3000;2e5\n0,1;3010;2,01e5\n0,2;3020;2,02e5\n")
+    pts = _write(tmp_path / "steady.csv", "speed;p\n3000;2e5\n2500;1,5e5\n")
+    with pytest.raises(TypeError, match="y must name"):
+        gb.load_record_csv(rec, u="speed", y=["p"], time="t")
+    with pytest.raises(TypeError, match="y must name"):
+        gb.load_static_csv(pts, u="speed", y=["p"])
+    with pytest.raises(TypeError, match="u must name"):
+        gb.load_record_csv(rec, u=1, y="p", time="t")
+    with pytest.raises(TypeError, match="u must name"):
+        gb.load_static_csv(pts, u=[1], y="p")
+    with pytest.raises(TypeError, match="path must be a file"):
+        gb.load_record_csv(3, u="speed", y="p", Ts=0.1)
+    with pytest.raises(TypeError, match="path must be a file"):
+        gb.load_static_csv(None, u="speed", y="p")
+    assert gb.load_record_csv(rec, u="speed", y="p", Ts=np.float32(0.1), time="t").Ts == pytest.approx(0.1)
+    with pytest.raises(ValueError, match="u must name"):
+        gb.load_record_csv(rec, u=[], y="p", time="t")

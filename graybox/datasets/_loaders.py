@@ -401,11 +401,13 @@ def load_record_csv(
         with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
         rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, or a delimiter or
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``).
+    TypeError
+        ``path``, ``u``, ``y``, ``time`` or ``Ts`` of the wrong type (a column is named by a str).
     """
-    p = Path(path)
+    p = Path(check_path(path, "path"))
     if time is None and Ts is None:
         raise ValueError(f"{p}: give the time-stamp column (time=...) or the sampling period (Ts=... seconds)")
-    if Ts is not None and (isinstance(Ts, bool) or not isinstance(Ts, (int, float))):
+    if Ts is not None and (isinstance(Ts, bool) or not isinstance(Ts, (int, float, np.integer, np.floating))):
         raise TypeError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
     if Ts is not None and not (math.isfinite(Ts) and Ts > 0):
         raise ValueError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
@@ -414,7 +416,7 @@ def load_record_csv(
     if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
         raise ValueError(f"units must be a pair of strings (input unit, output unit), got {units!r}")
     check_real(time_rtol, "time_rtol", low=0, high=1, low_open=True, high_open=True)
-    ucols, names = _input_columns(p, u, input_names)
+    ucols, names = _input_columns(p, u, y, input_names)
     wanted = {f"input {c!r}" if len(ucols) > 1 else "u": c for c in ucols} | {"y": y} | (
         {"time": time} if time is not None else {})
     cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal)
@@ -425,13 +427,17 @@ def load_record_csv(
     return Record(uarr, cols["y"], Ts=float(Ts), name=name or p.stem, units=tuple(units), input_names=names)
 
 
-def _input_columns(p: Path, u: object, input_names: object) -> tuple[list[str], tuple[str, ...] | None]:
-    """The input column names and the input names of a loader's ``u`` argument."""
+def _input_columns(p: Path, u: object, y: object, input_names: object) -> tuple[list[str], tuple[str, ...] | None]:
+    """The input column names and the input names of a loader's ``u`` argument (its ``y`` checked too)."""
+    if not isinstance(y, str):
+        raise TypeError(f"{p}: y must name the output column (a str), got {y!r}")
     if isinstance(u, str):
         ucols = [u]
-    elif hasattr(u, "__iter__") and all(isinstance(c, str) for c in u) and len(list(u)) > 0:  # type: ignore[arg-type]
-        ucols = list(u)  # type: ignore[arg-type]
+    elif hasattr(u, "__iter__") and hasattr(u, "__len__") and all(isinstance(c, str) for c in u):  # type: ignore[attr-defined]
+        ucols = [str(c) for c in u]  # type: ignore[attr-defined]  # a list, a tuple, a pandas Index of names
     else:
+        raise TypeError(f"{p}: u must name an input column (a str) or be a list of input column names, got {u!r}")
+    if not ucols:
         raise ValueError(f"{p}: u must name an input column or a non-empty list of input columns, got {u!r}")
     dup = sorted({c for c in ucols if ucols.count(c) > 1})
     if dup:
@@ -523,10 +529,12 @@ def load_static_csv(
         Naming the file and line or column: a missing column, an empty, NaN or non-numeric cell,
         or two lines with the same ū (unless ``repeats="mean"``); the file's faults listed in
         :func:`load_record_csv`.
+    TypeError
+        ``path``, ``u`` or ``y`` of the wrong type (a column is named by a str).
     """
-    p = Path(path)
+    p = Path(check_path(path, "path"))
     check_choice(repeats, "repeats", ("error", "mean"))
-    ucols, names = _input_columns(p, u, input_names)
+    ucols, names = _input_columns(p, u, y, input_names)
     label = name or p.stem
     if len(ucols) > 1:
         cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y}, delimiter=delimiter, decimal=decimal)
