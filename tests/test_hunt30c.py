@@ -115,3 +115,24 @@ def test_loaders_refuse_wrong_column_argument_types_naming_them(tmp_path):
     assert gb.load_record_csv(rec, u="speed", y="p", Ts=np.float32(0.1), time="t").Ts == pytest.approx(0.1)
     with pytest.raises(ValueError, match="u must name"):
         gb.load_record_csv(rec, u=[], y="p", time="t")
+
+
+@pytest.mark.parametrize("levels", [(2900.7, 3100.3), (0.37, 2.91)])
+def test_residual_tests_on_a_balanced_binary_input_say_the_u2_tests_are_undefined(levels):
+    # A two-level input (a PRBS) taken equally often has u'² constant: φ_(u²)'ξ and φ_(u²)'ξ² are 0/0.
+    # They came out NaN and "FAIL" for a correct model at 2900.7/3100.3 rpm, and as correlations of
+    # round-off, passing or failing by chance, at 0.37/2.91 (the verdict depended on the units).
+    rng = np.random.default_rng(3)
+    bits = np.repeat(rng.permutation(np.r_[np.zeros(50), np.ones(50)]), 4)
+    u = np.r_[levels[0], np.where(bits > 0, levels[1], levels[0])]  # samples 1 … 400 balanced
+    y = np.zeros(u.size)
+    e = 0.05 * rng.standard_normal(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.8 * y[k - 1] + u[k - 1] + e[k]
+    rec = gb.Record(u, y, input_names=("speed",))
+    model = gb.els(["y(k-1)", "speed(k-1)"], rec, noise=0).model
+    with pytest.raises(ValueError, match=r"input 'speed' takes two levels.*φ_\(u²\)'ξ"):
+        gb.residual_tests(model, rec)
+    # one sample more of one level: u'² is then an affine function of u', and the u² tests repeat φ_uξ
+    t = gb.residual_tests(model, rec.slice(0, 400))
+    np.testing.assert_allclose(np.abs(t["u2_xi"].phi), np.abs(t["u_xi"].phi), rtol=1e-6)

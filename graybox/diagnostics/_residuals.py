@@ -350,7 +350,8 @@ def residual_tests(
     ValueError
         A record shorter than the model's lags plus ``max_lag`` + 2, constant residuals (within
         1e-10 of the largest |y|, round-off: a model that reproduces the data exactly has nothing
-        to test), a constant input, bad options.
+        to test), a constant input, an input taking two levels equally often (u'² constant: the
+        u² tests are undefined), bad options.
 
     Notes
     -----
@@ -381,9 +382,14 @@ def residual_tests(
                          "nothing to test")
     allu = np.concatenate(us)
     for j, nm in enumerate(names):
+        what = "the input" if len(names) == 1 else f"input {nm!r}"
         if np.ptp(allu[:, j]) == 0.0:
-            what = "the input is" if len(names) == 1 else f"input {nm!r} is"
-            raise ValueError(f"{what} constant: the input correlation tests are undefined")
+            raise ValueError(f"{what} is constant: the input correlation tests are undefined")
+        u2 = ((allu[:, j] - np.mean(allu[:, j])) / np.std(allu[:, j])) ** 2
+        if np.ptp(u2) <= 1e-9 * np.max(u2):  # round-off of ±1: its correlations would be noise
+            raise ValueError(f"input {nm!r} takes two levels equally often, so u'² is constant and φ_(u²)'ξ, "
+                             "φ_(u²)'ξ² are undefined (for any two-level input they repeat φ_uξ); test on a record "
+                             "where the input takes more levels, or its levels unequally often")
     z = stats.norm.ppf(0.5 + level / 2)
     band = float(z / np.sqrt(n))
     out = {}
