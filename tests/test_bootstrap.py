@@ -171,5 +171,5 @@ def test_figure(data, tmp_path):
     np.testing.assert_array_equal(pts.get_xdata(), boot.JS)
     assert right.lines[1].get_marker() == "*"
     fig.savefig(tmp_path / "boot.png", dpi=50)
-    with pytest.raises(ValueError, match="DecisionBootstrap"):
+    with pytest.raises(TypeError, match="DecisionBootstrap"):
         plot_decision_bootstrap(boot.to_frame())

@@ -136,3 +136,39 @@ def test_residual_tests_on_a_balanced_binary_input_say_the_u2_tests_are_undefine
     # one sample more of one level: u'² is then an affine function of u', and the u² tests repeat φ_uξ
     t = gb.residual_tests(model, rec.slice(0, 400))
     np.testing.assert_allclose(np.abs(t["u2_xi"].phi), np.abs(t["u_xi"].phi), rtol=1e-6)
+
+
+def _speed_fit():
+    rng = np.random.default_rng(0)
+    rec = speed_record(rng, 400, hold=10)
+    model = gb.els(SPEED_TERMS, rec, noise=0).model
+    unc = gb.ls_uncertainty(model, rec)
+    return rec, model, unc
+
+
+def test_plots_and_bands_refuse_a_wrong_argument_type_with_a_type_error():
+    # Passing the wrong object where a diagnostics result or static points belong failed with an
+    # AttributeError deep inside (plot_static_curve(data), plot_static_curve(curve), plot_record(data))
+    # or a ValueError (plot_residual_tests(model), static_curve_band(model)): the rule is a TypeError
+    # that names the argument and what it takes.
+    from graybox import plots
+
+    rec, model, unc = _speed_fit()
+    pts = gb.StaticPoints([2500.0, 3500.0], speed_ybar(np.array([2500.0, 3500.0])), input_names=("speed",))
+    data = gb.Dataset(rec, rec, pts)
+    with pytest.raises(TypeError, match="points must be StaticPoints.*data.static"):
+        plots.plot_static_curve(data)
+    with pytest.raises(TypeError, match="points must be StaticPoints.*curve="):
+        plots.plot_static_curve(gb.StaticCurve.fit(pts, degree=1))
+    with pytest.raises(TypeError, match="record must be a Record.*data.ident or data.valid"):
+        plots.plot_record(data)
+    with pytest.raises(TypeError, match="record must be a Record"):
+        plots.plot_record(rec.y)
+    with pytest.raises(TypeError, match="tests must be a ResidualTests"):
+        plots.plot_residual_tests(model)
+    with pytest.raises(TypeError, match="band must be a StaticCurveBand.*static_curve_band"):
+        plots.plot_static_band(unc)
+    with pytest.raises(TypeError, match="boot must be a DecisionBootstrap"):
+        plots.plot_decision_bootstrap(unc)
+    with pytest.raises(TypeError, match="uncertainty must be a ParameterUncertainty.*ls_uncertainty"):
+        gb.static_curve_band(model, [3000.0])

@@ -233,7 +233,7 @@ def test_static_band_delta_gradients_and_monte_carlo():
     assert list(df.columns[:3]) == ["ybar", "ybar low", "ybar high"]
     with pytest.raises(ValueError, match="method"):
         gb.static_curve_band(u, ub, method="bootstrap")
-    with pytest.raises(ValueError, match="ParameterUncertainty"):
+    with pytest.raises(TypeError, match="ParameterUncertainty"):
         gb.static_curve_band(m, ub)
 
 
@@ -259,5 +259,5 @@ def test_static_band_figure(tmp_path):
     assert "95% band (delta)" in [t.get_text() for t in ax.get_legend().get_texts()]
     fig.savefig(tmp_path / "band.png", dpi=50)
     assert len(plot_static_band(band, gain=False).axes) == 1
-    with pytest.raises(ValueError, match="StaticCurveBand"):
+    with pytest.raises(TypeError, match="StaticCurveBand"):
         plot_static_band(u)

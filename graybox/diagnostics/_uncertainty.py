@@ -799,9 +799,12 @@ def static_curve_band(
     ------
     ValueError
         The estimate has no stable equilibrium at some ū; a model with several inputs.
+    TypeError
+        ``uncertainty`` is not a :class:`ParameterUncertainty`.
     """
     if not isinstance(uncertainty, ParameterUncertainty):
-        raise ValueError(f"static_curve_band needs a ParameterUncertainty, got {type(uncertainty).__name__}")
+        raise TypeError(f"uncertainty must be a ParameterUncertainty (from ls_uncertainty, cls_uncertainty, "
+                        f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
     check_choice(method, "method", ("delta", "monte-carlo"))
     n_samples = check_int(n_samples, "n_samples", low=2)  # checked for either method: a bad value is never ignored
     seed = check_seed(seed)

@@ -20,6 +20,10 @@ from ..core._validation import check_int, check_real, check_sequence
 __all__ = ["plot_static_curve", "plot_record"]
 
 
+#: What to pass instead of the objects most often given where static points belong.
+_POINTS_HINT = {"Dataset": " (pass data.static)", "StaticCurve": " (pass a curve as curve=)"}
+
+
 def _label(text: str, unit: str) -> str:
     return f"{text} ({unit})" if unit else text
 
@@ -73,7 +77,12 @@ def plot_static_curve(
     ------
     ValueError
         When there is nothing to draw, or a curve has no domain and there are no points.
+    TypeError
+        ``points`` that are not :class:`~graybox.StaticPoints` (a Dataset's are ``data.static``).
     """
+    if points is not None and not isinstance(points, StaticPoints):
+        raise TypeError(f"points must be StaticPoints, got {type(points).__name__}"
+                        + _POINTS_HINT.get(type(points).__name__, ""))
     curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else list(curve))
     if points is None and not curves:
         raise ValueError("plot_static_curve: give static points, a curve, or both")
@@ -130,6 +139,9 @@ def plot_record(
         Two axes, one line each: the input drawn as steps held over each sample, the output as
         a line through the samples.
     """
+    if not isinstance(record, Record):
+        hint = " (pass data.ident or data.valid)" if type(record).__name__ == "Dataset" else ""
+        raise TypeError(f"record must be a Record, got {type(record).__name__}{hint}")
     n = len(record)
     start = check_int(start, "start", low=0)
     stop = n if stop is None else check_int(stop, "stop", low=1)

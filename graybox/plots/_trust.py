@@ -45,7 +45,7 @@ def plot_residual_tests(
         simultaneous rule, the limit the verdict uses (dotted); the panel title says pass or FAIL.
     """
     if not isinstance(tests, ResidualTests):
-        raise ValueError(f"plot_residual_tests needs a ResidualTests, got {type(tests).__name__}")
+        raise TypeError(f"tests must be a ResidualTests (from residual_tests), got {type(tests).__name__}")
     items = list(tests.tests.values())
     if axes is None:
         fig = Figure(figsize=(7.0, 1.8 * len(items)), layout="constrained")  # 9 in for the five tests of one input
@@ -112,7 +112,7 @@ def plot_static_band(
         points as asterisks; the gain panel likewise.
     """
     if not isinstance(band, StaticCurveBand):
-        raise ValueError(f"plot_static_band needs a StaticCurveBand, got {type(band).__name__}")
+        raise TypeError(f"band must be a StaticCurveBand (from static_curve_band), got {type(band).__name__}")
     gain = check_bool(gain, "gain")
     if points is not None and not isinstance(points, StaticPoints):
         raise TypeError(f"points must be StaticPoints, got {type(points).__name__}")
@@ -171,7 +171,7 @@ def plot_decision_bootstrap(
         shaded, the reference decision as a star; failed replicates are counted in the title.
     """
     if not isinstance(boot, DecisionBootstrap):
-        raise ValueError(f"plot_decision_bootstrap needs a DecisionBootstrap, got {type(boot).__name__}")
+        raise TypeError(f"boot must be a DecisionBootstrap (from bootstrap_decision), got {type(boot).__name__}")
     if axes is None:
         fig = Figure(figsize=(10.0, 4.0), layout="constrained")
         ax_l, ax_r = fig.subplots(1, 2)
