@@ -172,3 +172,19 @@ def test_plots_and_bands_refuse_a_wrong_argument_type_with_a_type_error():
         plots.plot_decision_bootstrap(unc)
     with pytest.raises(TypeError, match="uncertainty must be a ParameterUncertainty.*ls_uncertainty"):
         gb.static_curve_band(model, [3000.0])
+
+
+def test_static_curve_plots_refuse_points_of_two_inputs():
+    # Static points of two inputs (ū of shape (M, 2)) were drawn by plot_static_curve and
+    # plot_static_band as two series of ȳ against each input's column on one ū axis, a figure of
+    # nothing; the surface plots are the ones for them.
+    from graybox import plots
+
+    _, _, unc = _speed_fit()
+    band = gb.static_curve_band(unc, [2500.0, 3000.0, 3500.0])
+    pts = gb.StaticPoints(np.c_[[2500.0, 3000.0, 3500.0], [0.1, 0.5, 0.9]], [1.9e5, 2e5, 2.1e5],
+                          input_names=("speed", "valve"))
+    with pytest.raises(ValueError, match="2 inputs.*plot_surface_slices"):
+        plots.plot_static_curve(pts)
+    with pytest.raises(ValueError, match="2 inputs.*plot_surface_slices"):
+        plots.plot_static_band(band, pts)

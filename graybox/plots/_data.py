@@ -24,6 +24,18 @@ __all__ = ["plot_static_curve", "plot_record"]
 _POINTS_HINT = {"Dataset": " (pass data.static)", "StaticCurve": " (pass a curve as curve=)"}
 
 
+def check_one_input_points(points: object, who: str) -> None:
+    """``points`` None or StaticPoints of one input, else ``TypeError``/``ValueError`` saying what to pass."""
+    if points is None:
+        return
+    if not isinstance(points, StaticPoints):
+        raise TypeError(f"points must be StaticPoints, got {type(points).__name__}"
+                        + _POINTS_HINT.get(type(points).__name__, ""))
+    if points.n_inputs != 1:
+        raise ValueError(f"{who}: the points have {points.n_inputs} inputs {points.input_names}; a static curve is "
+                         "drawn against one input: use plot_surface_slices or plot_surface_contours")
+
+
 def _label(text: str, unit: str) -> str:
     return f"{text} ({unit})" if unit else text
 
@@ -79,10 +91,10 @@ def plot_static_curve(
         When there is nothing to draw, or a curve has no domain and there are no points.
     TypeError
         ``points`` that are not :class:`~graybox.StaticPoints` (a Dataset's are ``data.static``).
+    ValueError
+        Points of several inputs (draw them with :func:`plot_surface_slices`).
     """
-    if points is not None and not isinstance(points, StaticPoints):
-        raise TypeError(f"points must be StaticPoints, got {type(points).__name__}"
-                        + _POINTS_HINT.get(type(points).__name__, ""))
+    check_one_input_points(points, "plot_static_curve")
     curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else list(curve))
     if points is None and not curves:
         raise ValueError("plot_static_curve: give static points, a curve, or both")

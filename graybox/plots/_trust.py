@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints
 from ..core._validation import check_bool
-from ._data import check_axes
+from ._data import check_axes, check_one_input_points
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._uncertainty import StaticCurveBand
 
@@ -114,8 +114,7 @@ def plot_static_band(
     if not isinstance(band, StaticCurveBand):
         raise TypeError(f"band must be a StaticCurveBand (from static_curve_band), got {type(band).__name__}")
     gain = check_bool(gain, "gain")
-    if points is not None and not isinstance(points, StaticPoints):
-        raise TypeError(f"points must be StaticPoints, got {type(points).__name__}")
+    check_one_input_points(points, "plot_static_band")
     need = 2 if gain else 1
     if axes is None:
         fig = Figure(figsize=(10.0 if gain else 6.4, 4.0), layout="constrained")
