@@ -188,3 +188,22 @@ def test_static_curve_plots_refuse_points_of_two_inputs():
         plots.plot_static_curve(pts)
     with pytest.raises(ValueError, match="2 inputs.*plot_surface_slices"):
         plots.plot_static_band(band, pts)
+
+
+def test_bootstrap_figure_draws_a_band_with_a_lower_edge_as_given():
+    # D_SF's band B = [lo, hi] with lo > 0 was drawn and labelled as [0, hi] in the bootstrap figure.
+    from graybox import plots
+
+    rng = np.random.default_rng(0)
+    rec = speed_record(rng, 400, hold=10)
+    ub = np.linspace(2000, 4000, 5)
+    pts = gb.StaticPoints(ub, speed_ybar(ub) + 20 * rng.standard_normal(5), input_names=("speed",))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)  # the points reach beyond the record: on purpose
+        boot = gb.bootstrap_decision(SPEED_TERMS, rec, pts, lambdas=np.logspace(-4, 0, 5), n_boot=3,
+                                     band=(10.0, 2500.0), options={"solver": "closed"}, fallback="min_jsf")
+    ax = plots.plot_decision_bootstrap(boot).axes[1]
+    assert "B = [10, 2500]" in [t.get_text() for t in ax.get_legend().get_texts()]
+    (span,) = [p for p in ax.patches if p.get_label().startswith("B = ")]
+    ys = span.get_path().transformed(span.get_patch_transform()).vertices[:, 1]
+    assert min(ys) == pytest.approx(10.0) and max(ys) == pytest.approx(2500.0)

@@ -199,9 +199,12 @@ def plot_decision_bootstrap(
                   label="original data", zorder=5)
     ax_r.set_xscale("log")
     ax_r.set_yscale("log")
-    band_hi = boot.band if np.ndim(boot.band) == 0 else boot.band[1]
+    band_lo, band_hi = (0.0, boot.band) if np.ndim(boot.band) == 0 else boot.band
     ylo, yhi = ax_r.get_ylim()
-    ax_r.axhspan(ylo, band_hi, color="0.85", zorder=0, label=f"B = [0, {band_hi:g}]")
+    if band_lo > 0:  # a log axis has no 0: a band from 0 is shaded from the bottom
+        ylo = min(ylo, band_lo)
+    ax_r.axhspan(band_lo if band_lo > 0 else ylo, band_hi, color="0.85", zorder=0,
+                 label=f"B = [{band_lo:g}, {band_hi:g}]")
     ax_r.set_ylim(ylo, max(yhi, band_hi))
     ax_r.set_xlabel(xlabel)
     ax_r.set_ylabel(ylabel)
