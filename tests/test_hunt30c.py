@@ -259,3 +259,14 @@ def test_els_residual_gradient_is_the_derivative_of_the_residuals(noise, c):
         up, down = (_model_residuals(gb.Model(model.structure, s[:n], noise_structure=model.noise_structure,
                                               noise_theta=s[n:], input_names=("speed",)), rec, True)[0] for s in step)
         np.testing.assert_allclose(g[:, i], -(up - down) / (2 * h), rtol=1e-4, atol=1e-6 * np.max(np.abs(g[:, i])))
+
+
+def test_covers_refuses_a_theta_of_another_length():
+    # covers() with a θ of the wrong length failed inside numpy ("operands could not be broadcast")
+    # or, for one number, silently compared it with every interval.
+    _, _, unc = _speed_fit()
+    with pytest.raises(ValueError, match=r"theta must have shape \(4,\)"):
+        unc.covers([A1, B1])
+    with pytest.raises(ValueError, match=r"theta must have shape \(4,\)"):
+        unc.covers(A1)
+    assert unc.covers(unc.theta).all()

@@ -172,6 +172,8 @@ class ParameterUncertainty:
     def covers(self, theta: np.ndarray) -> np.ndarray:
         """Which components of ``theta`` (shape (n_terms,)) lie in their interval, shape (n_terms,) bool."""
         th = np.asarray(theta, float)
+        if th.shape != self.theta.shape:
+            raise ValueError(f"theta must have shape {self.theta.shape} (one value per term), got {th.shape}")
         iv = self.intervals
         return (th >= iv[:, 0]) & (th <= iv[:, 1])
 
