@@ -270,3 +270,15 @@ def test_covers_refuses_a_theta_of_another_length():
     with pytest.raises(ValueError, match=r"theta must have shape \(4,\)"):
         unc.covers(A1)
     assert unc.covers(unc.theta).all()
+
+
+def test_rounded_time_stamps_are_told_how_to_load(tmp_path):
+    # A logger at 3 Hz printing its stamps with two decimals (0.33, 0.67, 1.00, ...) is evenly sampled,
+    # but the loader's message told the user to "resample the data", never that time_rtol= accepts
+    # rounded stamps (nor by how much this step was off).
+    p = _write(tmp_path / "log.csv", "t;speed;p\n" + "".join(f"{k / 3:.2f};{3000 + k % 7};2e5\n" for k in range(60)))
+    with pytest.raises(ValueError, match=r"off by 3(\.\d+)?e-02 relative.*time_rtol=") as info:
+        gb.load_record_csv(p, u="speed", y="p", time="t")
+    assert "resample" in str(info.value)
+    rec = gb.load_record_csv(p, u="speed", y="p", time="t", time_rtol=0.05)
+    assert rec.Ts == pytest.approx(1 / 3, rel=1e-3)

@@ -468,8 +468,10 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     if off.any():
         i = int(np.flatnonzero(off)[0])
         raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s from line {lines[i]} to "
-                         f"line {lines[i + 1]}, but the usual (median) step is {ref:g} s (tolerance {rtol:g} "
-                         "relative); resample the data to a constant period first")
+                         f"line {lines[i + 1]}, but the usual (median) step is {ref:g} s (off by "
+                         f"{abs(dt[i] - ref) / ref:.1e} relative, tolerance {rtol:g}); resample the data to a "
+                         "constant period first, or, if the stamps are only rounded (printed with few digits), "
+                         "pass a larger time_rtol=")
     step = (t[-1] - t[0]) / (t.size - 1)
     if Ts is not None and abs(Ts - step) > rtol * step:
         raise ValueError(f"{p}: Ts = {Ts:g} s disagrees with column {col!r}, whose mean step is {step:g} s")
