@@ -282,3 +282,15 @@ def test_rounded_time_stamps_are_told_how_to_load(tmp_path):
     assert "resample" in str(info.value)
     rec = gb.load_record_csv(p, u="speed", y="p", time="t", time_rtol=0.05)
     assert rec.Ts == pytest.approx(1 / 3, rel=1e-3)
+
+
+def test_residual_tests_refuse_a_record_at_another_period():
+    # A model identified at Ts = 0.1 s was tested on a record sampled every 1 s without a word
+    # (predict, simulate and the scores refuse it; the residual tests built their regressors directly).
+    rec, model, _ = _speed_fit()
+    assert model.Ts == 0.1
+    slow = gb.Record(rec.u, rec.y, Ts=1.0, input_names=("speed",), name="slow")
+    with pytest.raises(ValueError, match="identified on records sampled every 0.1 s but 'slow' every 1 s"):
+        gb.residual_tests(model, slow)
+    with pytest.raises(ValueError, match="identified on records sampled every 0.1 s"):
+        gb.one_step_residuals(model, slow)

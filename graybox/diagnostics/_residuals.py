@@ -215,6 +215,7 @@ def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bo
             _, e = model.predict_narmax(rec)
             return e[L:].copy(), L
         return (rec.y - model.predict(rec))[L:], L
+    model.check_period(rec)  # a discrete-time model holds at the period it was identified at
     ns = model.noise_structure if moving_average else model.noise_structure[:0]
     L = max(model.max_lag, ns.max_lag)
     rec.require_length(L)
@@ -351,7 +352,8 @@ def residual_tests(
         A record shorter than the model's lags plus ``max_lag`` + 2, constant residuals (within
         1e-10 of the largest |y|, round-off: a model that reproduces the data exactly has nothing
         to test), a constant input, an input taking two levels equally often (u'² constant: the
-        u² tests are undefined), bad options.
+        u² tests are undefined), a record sampled at another period than the model was identified
+        at, bad options.
 
     Notes
     -----
