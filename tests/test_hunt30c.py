@@ -294,3 +294,20 @@ def test_residual_tests_refuse_a_record_at_another_period():
         gb.residual_tests(model, slow)
     with pytest.raises(ValueError, match="identified on records sampled every 0.1 s"):
         gb.one_step_residuals(model, slow)
+
+
+def test_se_uncertainty_at_lambda_one_needs_no_static_points_with_two_inputs():
+    # At λ1 = 1 se_uncertainty ignores the static points and stood in a placeholder point of one
+    # input named "u": with a model of inputs ("speed", "valve") it failed with "'static points' has
+    # inputs ('u',)", about points the user never gave.
+    rng = np.random.default_rng(0)
+    u = np.c_[np.repeat(rng.uniform(2400, 3600, 40), 10), np.repeat(rng.uniform(0.1, 0.9, 50), 8)]
+    y = np.full(400, 2e5)
+    for k in range(1, 400):
+        y[k] = 0.8 * y[k - 1] + 10 * u[k - 1, 0] + 5e3 * u[k - 1, 1] + 1000 + 50 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1, input_names=("speed", "valve"))
+    terms = ["y(k-1)", "speed(k-1)", "valve(k-1)", "1"]
+    oe = gb.output_error(terms, rec, n_starts=0, ridge=0.0).model  # the SE optimum at λ1 = 1
+    unc = gb.se_uncertainty(oe, rec, lambda1=1.0)
+    assert unc.model.input_names == ("speed", "valve") and np.all(unc.std > 0)
+    assert np.isnan(unc.static_sigma2)

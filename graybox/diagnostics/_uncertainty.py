@@ -642,8 +642,9 @@ def se_uncertainty(
     level = _check_level(level)
     recs = records_of(data)
     sp = static_points(static, data, needed_by=None if lam == 1 else "se_uncertainty", takes_ubar=False)
-    if sp is None:  # λ1 = 1 ignores the static points; SEProblem still wants some
-        sp = StaticPoints([0.0], [0.0])
+    if sp is None:  # λ1 = 1 ignores the static points; SEProblem still wants some, of the records' inputs
+        names = recs[0].input_names
+        sp = StaticPoints(np.zeros((1, len(names))) if len(names) > 1 else [0.0], [0.0], input_names=names)
     problem = SEProblem(m.structure, recs, sp)
     n = len(m.structure)
     with np.errstate(all="ignore"):
