@@ -296,18 +296,43 @@ def test_residual_tests_refuse_a_record_at_another_period():
         gb.one_step_residuals(model, slow)
 
 
-def test_se_uncertainty_at_lambda_one_needs_no_static_points_with_two_inputs():
-    # At λ1 = 1 se_uncertainty ignores the static points and stood in a placeholder point of one
-    # input named "u": with a model of inputs ("speed", "valve") it failed with "'static points' has
-    # inputs ('u',)", about points the user never gave.
+TWO_TERMS = ["y(k-1)", "speed(k-1)", "valve(k-1)", "1"]
+
+
+def two_input_record():
+    """Pressure (Pa, near 2e5) driven by a speed (rpm) and a valve opening (0-1), white equation noise."""
     rng = np.random.default_rng(0)
     u = np.c_[np.repeat(rng.uniform(2400, 3600, 40), 10), np.repeat(rng.uniform(0.1, 0.9, 50), 8)]
     y = np.full(400, 2e5)
     for k in range(1, 400):
         y[k] = 0.8 * y[k - 1] + 10 * u[k - 1, 0] + 5e3 * u[k - 1, 1] + 1000 + 50 * rng.standard_normal()
-    rec = gb.Record(u, y, Ts=0.1, input_names=("speed", "valve"))
-    terms = ["y(k-1)", "speed(k-1)", "valve(k-1)", "1"]
+    return gb.Record(u, y, Ts=0.1, input_names=("speed", "valve"))
+
+
+def test_se_uncertainty_at_lambda_one_needs_no_static_points_with_two_inputs():
+    # At λ1 = 1 se_uncertainty ignores the static points and stood in a placeholder point of one
+    # input named "u": with a model of inputs ("speed", "valve") it failed with "'static points' has
+    # inputs ('u',)", about points the user never gave.
+    rec = two_input_record()
+    terms = TWO_TERMS
     oe = gb.output_error(terms, rec, n_starts=0, ridge=0.0).model  # the SE optimum at λ1 = 1
     unc = gb.se_uncertainty(oe, rec, lambda1=1.0)
     assert unc.model.input_names == ("speed", "valve") and np.all(unc.std > 0)
     assert np.isnan(unc.static_sigma2)
+
+
+def test_pe_uncertainty_of_a_two_input_member():
+    # pe_pareto takes static points of several inputs, but pe_uncertainty built the static rows with
+    # the one-input cluster map and failed with "its static function is a surface (use the surface
+    # functions …)", a message for a developer.
+    rec = two_input_record()
+    grid = np.array([[s, v] for s in (2500.0, 3000.0, 3500.0) for v in (0.2, 0.5, 0.8)])
+    ybar = (10 * grid[:, 0] + 5e3 * grid[:, 1] + 1000) / 0.2 + np.random.default_rng(1).standard_normal(9)
+    pts = gb.StaticPoints(grid, ybar, input_names=("speed", "valve"))
+    front = gb.pe_pareto(TWO_TERMS, rec, pts, lambdas=[0.5, 1.0], solver="closed")
+    half = gb.pe_uncertainty(front.member_model(0), rec, pts, lambda1=0.5)
+    assert np.all(half.std > 0) and half.static_sigma2 > 0
+    # λ1 = 1 is least squares: the same covariance
+    one = gb.pe_uncertainty(front.member_model(1), rec, pts, lambda1=1.0)
+    ls = gb.ls_uncertainty(gb.els(TWO_TERMS, rec, noise=0).model, rec)
+    np.testing.assert_allclose(one.cov, ls.cov, rtol=1e-6, atol=1e-9 * np.max(np.abs(ls.cov)))

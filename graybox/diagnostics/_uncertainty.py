@@ -53,7 +53,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal, stats
 
-from ..static._constraints import StaticConstraint, static_rows
+from ..static._constraints import StaticConstraint, static_cluster_map, static_rows
 from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
@@ -65,7 +65,7 @@ from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
-from ..static._analysis import cluster_key, cluster_map, reached_equilibria, static_theta_gradient
+from ..static._analysis import cluster_key, reached_equilibria, static_theta_gradient
 from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 
 __all__ = [
@@ -565,7 +565,7 @@ def pe_uncertainty(
     Z, r = _null_space(A / d.s, n)
     w1 = lam / d.N if weights == "mse" else lam
     w2 = (1 - lam) / M if weights == "mse" else 1 - lam
-    cm = cluster_map(st)
+    cm = static_cluster_map(st, recs[0].input_names)  # a surface's clusters for several inputs
     QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R / d.s  # (M, n) in z
     dQR = static_rows(cm, pts.ubar, pts.ybar, wrt="y") @ cm.R / d.s
     z = theta * d.s
