@@ -336,3 +336,25 @@ def test_pe_uncertainty_of_a_two_input_member():
     one = gb.pe_uncertainty(front.member_model(1), rec, pts, lambda1=1.0)
     ls = gb.ls_uncertainty(gb.els(TWO_TERMS, rec, noise=0).model, rec)
     np.testing.assert_allclose(one.cov, ls.cov, rtol=1e-6, atol=1e-9 * np.max(np.abs(ls.cov)))
+
+
+def test_readme_own_plant_names_who_warns(tmp_path, monkeypatch):
+    # The README said "frols and the loaders" warn that the steady states lie outside the runs' input
+    # range; the loaders and the Dataset say nothing of it, pe_pareto does (where the points are used).
+    from pathlib import Path
+    import re
+
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## Your own plant", 1)[1].split("\n## ", 1)[0]
+    make, pipeline = re.findall(r"```python\n(.*?)```", section, re.S)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(make, "README.md (files)", "exec"), {})
+    loading = pipeline.split("cand = ")[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ns: dict = {}
+        exec(compile(loading, "README.md (loading)", "exec"), ns)
+    with pytest.warns(gb.StaticRangeWarning):
+        gb.pe_pareto(["y(k-1)", "u(k-1)", "1"], ns["data"], lambdas=[0.5])
+    said = " ".join(section.split("Both ", 1)[1].split(".")[0].split())
+    assert said.startswith("`frols` and `pe_pareto` say what they notice as warnings"), said
