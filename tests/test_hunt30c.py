@@ -358,3 +358,13 @@ def test_readme_own_plant_names_who_warns(tmp_path, monkeypatch):
         gb.pe_pareto(["y(k-1)", "u(k-1)", "1"], ns["data"], lambdas=[0.5])
     said = " ".join(section.split("Both ", 1)[1].split(".")[0].split())
     assert said.startswith("`frols` and `pe_pareto` say what they notice as warnings"), said
+
+
+def test_ls_uncertainty_says_when_an_ma_part_is_not_invertible():
+    # An MA part 1 + 1.5q⁻¹ (a root outside the unit circle: residuals that grow as 1.5^k, no ELS
+    # fixed point) was reported as "the parameters are not identifiable from these data".
+    rec, model, _ = _speed_fit()
+    bad = gb.Model(model.structure, model.theta, noise_structure=["e(k-1)"], noise_theta=[1.5],
+                   input_names=("speed",), Ts=0.1)
+    with pytest.raises(ValueError, match=r"MA part .* is not invertible"):
+        gb.ls_uncertainty(bad, rec)

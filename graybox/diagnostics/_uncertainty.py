@@ -65,6 +65,7 @@ from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
+from ..estimation._extended_least_squares import _ma_coefficients, _ma_text, _pure_lags
 from ..static._analysis import cluster_key, reached_equilibria, static_theta_gradient
 from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 
@@ -394,11 +395,13 @@ def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.nd
 
     An MA part of plain lags e(k−l) filters φ by 1/C(q); products with e follow ξ's own recursion.
     """
-    if all(len(t.factors) == 1 and t.factors[0][2] == 1 for t in ns):
-        a = np.zeros(ns.max_lag + 1)
-        a[0] = 1.0
-        for cj, t in zip(c, ns):
-            a[t.factors[0][1]] += cj
+    lags = _pure_lags(ns)
+    if None not in lags:
+        a = _ma_coefficients(c, lags)
+        if np.any(np.abs(np.roots(a)) >= 1.0):
+            raise ValueError(f"ls_uncertainty (ELS): the MA part C(q) = {_ma_text(a)} is not invertible (a root on or "
+                             "outside the unit circle): its one-step residuals grow without bound, so it is no ELS "
+                             "estimate and has no covariance")
         return signal.lfilter([1.0], a, phi, axis=0)
     sig = record_signals(rec) | {"e": e}
     # each noise term's derivative in one lagged e: (c_j · ∂term/∂e(k−lag) as a series over k, lag)
