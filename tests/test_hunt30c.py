@@ -368,3 +368,15 @@ def test_ls_uncertainty_says_when_an_ma_part_is_not_invertible():
                    input_names=("speed",), Ts=0.1)
     with pytest.raises(ValueError, match=r"MA part .* is not invertible"):
         gb.ls_uncertainty(bad, rec)
+
+
+def test_plot_static_curve_refuses_a_curve_that_is_not_one():
+    # A model (or a function, or an array) given as curve= failed with "'Model' object is not
+    # iterable" or "has no attribute 'domain'", naming neither the argument nor what it takes.
+    from graybox import plots
+
+    _, model, _ = _speed_fit()
+    pts = gb.StaticPoints([2500.0, 3500.0], speed_ybar(np.array([2500.0, 3500.0])), input_names=("speed",))
+    for bad in (model, [model], lambda u: u, np.array([1.0, 2.0])):
+        with pytest.raises(TypeError, match="curve must be a StaticCurve or a sequence of them"):
+            plots.plot_static_curve(pts, bad)

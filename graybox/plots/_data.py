@@ -90,12 +90,20 @@ def plot_static_curve(
     ValueError
         When there is nothing to draw, or a curve has no domain and there are no points.
     TypeError
-        ``points`` that are not :class:`~graybox.StaticPoints` (a Dataset's are ``data.static``).
+        ``points`` that are not :class:`~graybox.StaticPoints` (a Dataset's are ``data.static``), a
+        ``curve`` that is not a :class:`~graybox.StaticCurve` (or a sequence of them).
     ValueError
         Points of several inputs (draw them with :func:`plot_surface_slices`).
     """
     check_one_input_points(points, "plot_static_curve")
-    curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else list(curve))
+    curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else None)
+    if curves is None:
+        given = list(curve) if isinstance(curve, Sequence) and not isinstance(curve, str) else [curve]
+        bad = [type(c).__name__ for c in given if not isinstance(c, StaticCurve)]
+        if bad:
+            raise TypeError(f"curve must be a StaticCurve or a sequence of them, got {', '.join(bad)} (a model's static "
+                            "curve: draw ax.plot(ubar, model.static_curve(ubar, strict=False)) on the figure)")
+        curves = given
     if points is None and not curves:
         raise ValueError("plot_static_curve: give static points, a curve, or both")
     n_grid = check_int(n_grid, "n_grid", low=2)
