@@ -374,8 +374,8 @@ def static_surface_gain(
     th = np.asarray(theta, float)
     yb = static_surface(structure, th, ub, y0, strict=strict, input_names=names)
     Fy, Fu = _fderivs(structure, th, ub, yb, names)
-    with np.errstate(all="ignore"):
-        return -Fu / Fy[:, None]
+    with np.errstate(all="ignore"):  # NaN⁰ is 1: no gain where no equilibrium is reached
+        return np.where(np.isfinite(yb)[:, None], -Fu / Fy[:, None], np.nan)
 
 
 def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray, *,
