@@ -18,3 +18,21 @@ def test_the_static_gain_is_nan_where_the_static_curve_is():
     assert np.isnan(gb.static_gain(st, th, [1.0, 2.0], strict=False)).all()
     two = gb.Structure(["y(k-1)", "a(k-1)", "b(k-1)"])
     assert np.isnan(gb.static_surface_gain(two, [1.5, 1.0, 2.0], [[1.0, 2.0]], strict=False)).all()
+
+
+#: y(k) = 1.5 y(k-1) − 0.5 y(k-1)³/s² + 0.1 s v(k-1): bistable, its equilibria near ±s (s the output's unit)
+def bistable(s: float) -> gb.Model:
+    return gb.Model(["y(k-1)", "y(k-1)^3", "v(k-1)"], [1.5, -0.5 / s**2, 0.1 * s], input_names=("v",))
+
+
+def test_the_equilibria_a_static_curve_cannot_choose_between_are_named_in_any_units():
+    # two stable equilibria near ±1e-7 V: the message rounded them to 6 decimals, "[-0.0, 0.0]"
+    s = 1e-7
+    ys = [e.ybar for e in bistable(s).equilibria(0.5) if e.stable]
+    with pytest.raises(ValueError, match="pass y0") as info:
+        bistable(s).static_curve([0.5])
+    assert all(f"{y:.6g}" in str(info.value) for y in ys)
+    two = gb.Model(["y(k-1)", "y(k-1)^3", "a(k-1)", "b(k-1)"], [1.5, -0.5 / s**2, 0.1 * s, 0.0])
+    with pytest.raises(ValueError, match="pass y0") as info:
+        two.static_curve([[0.5, 1.0]])
+    assert all(f"{y:.6g}" in str(info.value) for y in ys)

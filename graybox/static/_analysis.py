@@ -833,7 +833,7 @@ def static_curve(
             raise ValueError(f"the model has no stable equilibrium at ū = {u_:g}")
         elif strict:
             raise ValueError(f"the model has {stable.size} stable equilibria at ū = {u_:g} "
-                             f"({[round(float(e), 6) for e in stable]}); pass y0 to choose the one reached from it")
+                             f"([{', '.join(f'{e:.6g}' for e in stable)}]); pass y0 to choose the one reached from it")
     return out
 
 

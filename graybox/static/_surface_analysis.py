@@ -319,7 +319,7 @@ def static_surface(
         else:
             pt = "(" + ", ".join(f"{v:g}" for v in ub[j]) + ")"
             problems.append(f"ū = {pt}: " + ("no stable equilibrium" if not stable else
-                                            f"{len(stable)} stable equilibria {np.round(stable, 6).tolist()}; "
+                                            f"{len(stable)} stable equilibria [{', '.join(f'{e:.6g}' for e in stable)}]; "
                                             "pass y0 to choose the one reached from it"))
     if strict and problems:
         raise ValueError("the static surface is undefined at " + "; ".join(problems))
