@@ -36,3 +36,10 @@ def test_the_equilibria_a_static_curve_cannot_choose_between_are_named_in_any_un
     with pytest.raises(ValueError, match="pass y0") as info:
         two.static_curve([[0.5, 1.0]])
     assert all(f"{y:.6g}" in str(info.value) for y in ys)
+
+
+def test_the_gain_of_an_integrator_is_nan_without_a_numpy_warning():
+    # y(k) = y(k-1) + 2 q(k-1) has no equilibrium at q̄ ≠ 0 (F_ȳ = 0): with strict=False the gain is
+    # NaN, but dividing by F_ȳ = 0 let numpy's "divide by zero" RuntimeWarning out (an error here)
+    st = gb.Structure(["y(k-1)", "q(k-1)"])
+    assert np.isnan(gb.static_gain(st, [1.0, 2.0], [1.0, 3.0], strict=False)).all()

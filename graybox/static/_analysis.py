@@ -872,8 +872,10 @@ def static_gain(
             Fu += s * m * yb**p * ub ** (m - 1)
         if p:
             Fy += s * p * yb ** (p - 1) * ub**m
-    # NaN⁰ is 1: where no equilibrium is reached F_ū and F_ȳ may still be finite, the gain is not
-    return np.where(np.isfinite(yb), -Fu / Fy, np.nan)
+    # NaN⁰ is 1: where no equilibrium is reached F_ū and F_ȳ may still be finite (F_ȳ = 0 for an
+    # integrator), the gain is not
+    with np.errstate(all="ignore"):
+        return np.where(np.isfinite(yb), -Fu / Fy, np.nan)
 
 
 @lru_cache(maxsize=256)
