@@ -43,3 +43,21 @@ def test_the_gain_of_an_integrator_is_nan_without_a_numpy_warning():
     # NaN, but dividing by F_ȳ = 0 let numpy's "divide by zero" RuntimeWarning out (an error here)
     st = gb.Structure(["y(k-1)", "q(k-1)"])
     assert np.isnan(gb.static_gain(st, [1.0, 2.0], [1.0, 3.0], strict=False)).all()
+
+
+def test_a_static_curve_without_y0_names_every_level_it_fails_at_and_why():
+    # y(k) = y(k-1)² + 1 + u(k-1): no real equilibrium at ū = 1 and 2, two unstable ones at ū = −3.
+    # The docstring promises every such ū named; the one-input curve stopped at the first, and both
+    # it and the surface said "no stable equilibrium" where there is no equilibrium at all.
+    one = gb.Model(["y(k-1)^2", "1", "u(k-1)"], [1.0, 1.0, 1.0])
+    with pytest.raises(ValueError) as info:
+        one.static_curve([1.0, 2.0, -3.0])
+    msg = str(info.value)
+    assert "no equilibrium at ū = 1 " in msg and "no equilibrium at ū = 2 " in msg
+    assert "no stable equilibrium at ū = -3" in msg
+    two = gb.Model(["y(k-1)^2", "1", "a(k-1)", "b(k-1)"], [1.0, 1.0, 1.0, 0.0])
+    with pytest.raises(ValueError) as info:
+        two.static_curve([[1.0, 0.0], [2.0, 5.0], [-3.0, 0.0]])
+    msg = str(info.value)
+    assert "no equilibrium at ū = (1, 0)" in msg and "no equilibrium at ū = (2, 5)" in msg
+    assert "no stable equilibrium at ū = (-3, 0)" in msg

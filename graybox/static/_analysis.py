@@ -775,6 +775,28 @@ def one_input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
     return np.atleast_1d(as_1d_finite(np.ravel(ubar), name))
 
 
+def only_stable(roots: np.ndarray, stable: np.ndarray, where: list[str]) -> tuple[np.ndarray, list[str]]:
+    """The one locally stable equilibrium at each point, shape (M,), NaN where there is none or there
+    are several; and a phrase for each such point, naming it by ``where`` (e.g. "ū = 100").
+
+    ``roots`` (M, D): every real root at each point, NaN-padded; ``stable`` (M, D) their stability.
+    """
+    out = np.full(roots.shape[0], np.nan)
+    problems = []
+    for i in range(roots.shape[0]):
+        ys = roots[i][stable[i]]
+        if ys.size == 1:
+            out[i] = ys[0]
+        elif ys.size:
+            problems.append(f"{ys.size} stable equilibria at {where[i]} ([{', '.join(f'{e:.6g}' for e in ys)}]); "
+                            "pass y0 to choose the one reached from it")
+        elif np.isfinite(roots[i]).any():
+            problems.append(f"no stable equilibrium at {where[i]}")
+        else:
+            problems.append(f"no equilibrium at {where[i]} (the static equation has no real root)")
+    return out, problems
+
+
 def static_curve(
     structure: Structure,
     theta: np.ndarray,
@@ -823,17 +845,10 @@ def static_curve(
             raise ValueError(_describe_failures(res))
         return res.ybar[0].copy()
     roots = real_roots(structure, th[None, :], ub)[0]  # (M, D)
-    stab = _roots_stable(structure, th[None, :], ub, roots[None])[0]
-    out = np.full(ub.size, np.nan)
-    for i, u_ in enumerate(ub):
-        stable = roots[i][stab[i]]
-        if stable.size == 1:
-            out[i] = stable[0]
-        elif strict and stable.size == 0:
-            raise ValueError(f"the model has no stable equilibrium at ū = {u_:g}")
-        elif strict:
-            raise ValueError(f"the model has {stable.size} stable equilibria at ū = {u_:g} "
-                             f"([{', '.join(f'{e:.6g}' for e in stable)}]); pass y0 to choose the one reached from it")
+    out, problems = only_stable(roots, _roots_stable(structure, th[None, :], ub, roots[None])[0],
+                                [f"ū = {u:g}" for u in ub])
+    if strict and problems:
+        raise ValueError("the model has " + "; ".join(problems))
     return out
 
 

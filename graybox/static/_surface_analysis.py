@@ -310,19 +310,13 @@ def static_surface(
         if strict and not res.ok.all():
             raise ValueError("the model reaches no equilibrium at " + "; ".join(res.explain(0)))
         return res.ybar[0].copy()
-    out = np.full(ub.shape[0], np.nan)
-    problems = []
-    for j in range(ub.shape[0]):
-        stable = [e.ybar for e in _static.equilibria(sk, thf[0, j], 1.0) if e.stable]
-        if len(stable) == 1:
-            out[j] = stable[0]
-        else:
-            pt = "(" + ", ".join(f"{v:g}" for v in ub[j]) + ")"
-            problems.append(f"ū = {pt}: " + ("no stable equilibrium" if not stable else
-                                            f"{len(stable)} stable equilibria [{', '.join(f'{e:.6g}' for e in stable)}]; "
-                                            "pass y0 to choose the one reached from it"))
+    # every point is a member of the folded model at ū' = 1: its roots and their stability in one call
+    roots = _static.real_roots(sk, thf[0], np.ones(1))  # (M, 1, D)
+    stab = _static.stable_mask(sk, thf[0], np.ones(roots.shape[2]), roots[:, 0, :])
+    out, problems = _static.only_stable(roots[:, 0, :], stab,
+                                        ["ū = (" + ", ".join(f"{v:g}" for v in u) + ")" for u in ub])
     if strict and problems:
-        raise ValueError("the static surface is undefined at " + "; ".join(problems))
+        raise ValueError("the static surface is undefined: the model has " + "; ".join(problems))
     return out
 
 
