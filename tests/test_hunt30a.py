@@ -61,3 +61,15 @@ def test_a_static_curve_without_y0_names_every_level_it_fails_at_and_why():
     msg = str(info.value)
     assert "no equilibrium at ū = (1, 0)" in msg and "no equilibrium at ū = (2, 5)" in msg
     assert "no stable equilibrium at ū = (-3, 0)" in msg
+
+
+def test_a_curve_or_surface_refuses_a_level_outside_its_domain_in_any_units():
+    # known over [1, 2] pA (1e-12 A): the tolerance at the domain's ends was 1e-9 absolute (at least
+    # 1e-9 × 1), so 5 pA, 2.5 times the upper end, was accepted as inside the domain in amperes
+    curve = gb.StaticCurve.polynomial([1.0, 2.0], domain=(1e-12, 2e-12))
+    assert curve(2e-12) == pytest.approx(1.0 + 4e-12)
+    with pytest.raises(ValueError, match="outside the domain"):
+        curve(5e-12)
+    surface = gb.StaticSurface.polynomial({(0, 0): 1.0, (1, 0): 2.0}, domain=[(1e-12, 2e-12), (0.0, 1.0)])
+    with pytest.raises(ValueError, match="outside the domain"):
+        surface([[5e-12, 0.5]])

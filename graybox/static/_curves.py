@@ -75,7 +75,7 @@ class StaticCurve:
             return
         lo, hi = self.domain
         ub = np.atleast_1d(ubar)
-        tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+        tol = 1e-9 * max(abs(lo), abs(hi))  # relative: the same in any units (hi > lo, so not 0)
         out = ub[(ub < lo - tol) | (ub > hi + tol)]
         if out.size:
             raise ValueError(f"ū = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")

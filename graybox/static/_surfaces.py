@@ -241,7 +241,7 @@ class StaticSurface:
             return
         u = _as_inputs(ubar, self.n_inputs, self.name)
         for i, (lo, hi) in enumerate(self.domain):
-            tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+            tol = 1e-9 * max(abs(lo), abs(hi))  # relative: the same in any units (hi > lo, so not 0)
             col = u[:, i]
             out = col[(col < lo - tol) | (col > hi + tol)]
             if out.size:
