@@ -73,3 +73,19 @@ def test_a_curve_or_surface_refuses_a_level_outside_its_domain_in_any_units():
     surface = gb.StaticSurface.polynomial({(0, 0): 1.0, (1, 0): 2.0}, domain=[(1e-12, 2e-12), (0.0, 1.0)])
     with pytest.raises(ValueError, match="outside the domain"):
         surface([[5e-12, 0.5]])
+
+
+@pytest.mark.parametrize("points", [[1.0, 2.0, 3.0], np.array([1.0, 2.0, 3.0])])
+def test_a_curve_or_surface_refuses_points_that_are_not_static_points_as_a_type_error(points):
+    # StaticCurve.fit read points.ubar and failed with AttributeError; StaticSurface.fit with a ValueError
+    with pytest.raises(TypeError, match="points must be StaticPoints"):
+        gb.StaticCurve.fit(points)
+    with pytest.raises(TypeError, match="points must be StaticPoints"):
+        gb.StaticSurface.fit(points)
+
+
+def test_a_curve_fitted_to_points_of_two_inputs_says_to_fit_a_surface():
+    # numpy's "x must be a one-dimensional array or sequence." came out of np.vander
+    pts = gb.StaticPoints([[1.0, 2.0], [2.0, 3.0], [3.0, 1.0]], [1.0, 2.0, 3.0], input_names=("valve", "speed"))
+    with pytest.raises(ValueError, match=r"2 inputs \('valve', 'speed'\).*StaticSurface.fit"):
+        gb.StaticCurve.fit(pts, degree=1)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -95,7 +94,7 @@ def test_bad_surfaces():
     with pytest.raises(ValueError, match="distinct names"):
         StaticSurface.polynomial(TRUE, input_names=("a", "a"))
     with pytest.raises(ValueError, match="needs at least 6 static points"):
-        StaticSurface.fit(SimpleNamespace(ubar=np.ones((4, 2)), ybar=np.ones(4)), 2)
+        StaticSurface.fit(_points(np.c_[np.arange(4.0), np.ones(4)], np.ones(4)), 2)
     with pytest.raises(ValueError, match="rank"):  # all points on a line: u1*u2, u1², u2² collinear
         t = np.linspace(0, 1, 10)
         StaticSurface.fit(_points(np.c_[t, t], t), 2)

@@ -57,6 +57,11 @@ class StaticCurve:
 
         The domain is the points' ū range. Needs at least ``degree + 1`` points.
         """
+        if not isinstance(points, StaticPoints):
+            raise TypeError(f"StaticCurve.fit: points must be StaticPoints, got {type(points).__name__}")
+        if points.n_inputs > 1:
+            raise ValueError(f"StaticCurve.fit: the points have {points.n_inputs} inputs {points.input_names}; a curve "
+                             "is of one input (fit a surface: StaticSurface.fit)")
         degree = check_int(degree, "degree", low=0)
         if len(points) < degree + 1:
             raise ValueError(f"fitting degree {degree} needs at least {degree + 1} static points, got {len(points)}")

@@ -163,7 +163,7 @@ class StaticSurface:
     @classmethod
     def fit(
         cls,
-        points: object,
+        points: StaticPoints,
         degree: int = 2,
         *,
         name: str | None = None,
@@ -191,12 +191,11 @@ class StaticSurface:
         The domain is the box spanned by the points. Needs at least as many points as monomials,
         spread so that the monomials are identifiable (else ``ValueError``).
         """
-        yb = np.asarray(getattr(points, "ybar", None), dtype=float)
-        ub_raw = np.asarray(getattr(points, "ubar", None), dtype=float)
-        if yb.ndim != 1 or ub_raw.ndim not in (1, 2) or ub_raw.shape[0] != yb.size:
-            raise ValueError("StaticSurface.fit needs static points with ubar of shape (K, m) and ybar of shape (K,)")
-        m = 1 if ub_raw.ndim == 1 else ub_raw.shape[1]
-        ub = _as_inputs(ub_raw, m, "StaticSurface.fit")
+        if not isinstance(points, StaticPoints):
+            raise TypeError(f"StaticSurface.fit: points must be StaticPoints, got {type(points).__name__}")
+        yb = points.ybar
+        m = points.n_inputs
+        ub = _as_inputs(points.ubar, m, "StaticSurface.fit")
         ex = monomial_exponents(m, degree) if exponents is None else _exponent_vectors(exponents, "exponents")
         if len(yb) < len(ex):
             raise ValueError(f"fitting {len(ex)} monomials needs at least {len(ex)} static points, got {len(yb)}")
@@ -205,9 +204,8 @@ class StaticSurface:
         box = tuple((float(ub[:, i].min()), float(ub[:, i].max())) for i in range(m))
         if any(lo == hi for lo, hi in box):
             raise ValueError("StaticSurface.fit: the points do not vary every input (a flat direction has no domain)")
-        pname = getattr(points, "name", "static points")
-        names = input_names if input_names is not None else getattr(points, "input_names", None)
-        return cls(ex, c, box, name or f"fit to {pname}", names)
+        names = input_names if input_names is not None else points.input_names
+        return cls(ex, c, box, name or f"fit to {points.name}", names)
 
     # -- properties ---------------------------------------------------------
     @property
