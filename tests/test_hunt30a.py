@@ -89,3 +89,10 @@ def test_a_curve_fitted_to_points_of_two_inputs_says_to_fit_a_surface():
     pts = gb.StaticPoints([[1.0, 2.0], [2.0, 3.0], [3.0, 1.0]], [1.0, 2.0, 3.0], input_names=("valve", "speed"))
     with pytest.raises(ValueError, match=r"2 inputs \('valve', 'speed'\).*StaticSurface.fit"):
         gb.StaticCurve.fit(pts, degree=1)
+
+
+def test_a_curve_fitted_to_a_single_static_point_says_why_it_cannot():
+    # the domain check's "domain high must lie in (2000, inf), got 2000.0" came out: true but not the reason
+    one = gb.StaticPoints([2000.0], [2e5], input_names=("speed",))
+    with pytest.raises(ValueError, match="one level.*two levels or more"):
+        gb.StaticCurve.fit(one, degree=0)

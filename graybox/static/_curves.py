@@ -63,6 +63,9 @@ class StaticCurve:
             raise ValueError(f"StaticCurve.fit: the points have {points.n_inputs} inputs {points.input_names}; a curve "
                              "is of one input (fit a surface: StaticSurface.fit)")
         degree = check_int(degree, "degree", low=0)
+        if len(points) == 1:  # a curve is known over the points' range: one level has none
+            raise ValueError(f"StaticCurve.fit: {points.name} is one level (ū = {points.ubar[0]:g}); a fitted curve "
+                             "needs points at two levels or more (its domain is their range)")
         if len(points) < degree + 1:
             raise ValueError(f"fitting degree {degree} needs at least {degree + 1} static points, got {len(points)}")
         V = np.vander(points.ubar, degree + 1, increasing=True)
