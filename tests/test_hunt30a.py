@@ -96,3 +96,21 @@ def test_a_curve_fitted_to_a_single_static_point_says_why_it_cannot():
     one = gb.StaticPoints([2000.0], [2e5], input_names=("speed",))
     with pytest.raises(ValueError, match="one level.*two levels or more"):
         gb.StaticCurve.fit(one, degree=0)
+
+
+def test_a_surface_imposed_on_two_inputs_is_matched_by_its_input_names():
+    # the data's inputs are (valve, speed); a surface written in (speed, valve) was matched by position,
+    # so eq. (22) and the gain bounds gave valve the speed coefficient: CLS imposed 2 + 1 valve + 4 speed
+    # for the surface 2 + 4 valve + 1 speed, without a word
+    st = gb.Structure(["1", "valve(k-1)", "speed(k-1)", "y(k-1)"])
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.0, 1.0, (300, 2))
+    y = gb.Model(st, [1.0, 2.0, 0.5, 0.5], input_names=("valve", "speed")).simulate(u, np.zeros(1))
+    rec = gb.Record(u, y, input_names=("valve", "speed"))
+    swapped = gb.StaticSurface.polynomial({(0, 0): 2.0, (0, 1): 4.0, (1, 0): 1.0}, input_names=("speed", "valve"))
+    with pytest.raises(ValueError, match=r"\('speed', 'valve'\).*\('valve', 'speed'\)"):
+        gb.cls(st, rec, swapped)
+    with pytest.raises(ValueError, match=r"\('speed', 'valve'\).*\('valve', 'speed'\)"):
+        gb.pe_pareto(st, rec, gb.StaticPoints([[0.0, 0.0], [1.0, 1.0], [0.5, 0.2], [0.2, 0.9]], [2.0, 7.0, 4.2, 3.7],
+                                              input_names=("valve", "speed")),
+                     constraints=gb.GainBounds(lower=0.0, reference=swapped), lambdas=[0.5])

@@ -541,6 +541,7 @@ class CurveEquality(StaticConstraint):
         if surf.n_inputs != m:
             raise ValueError(f"{surf.name} is a surface in {surf.n_inputs} input(s) but the structure has {m}: "
                              "they must speak of the same inputs, in the same order")
+        _check_surface_inputs(surf, cm)
         powers = [cluster_powers(k) for k in cm.keys]
         numer = {e for p, e in powers if p == 0}
         missing = [e for e, c in zip(surf.exponents, surf.coefficients) if c != 0.0 and e not in numer]
@@ -561,6 +562,15 @@ class CurveEquality(StaticConstraint):
             A.append(cm.R[k])
             b.append(target)
         return AffineRows.make(ctx.n_terms, A, b)
+
+
+def _check_surface_inputs(surface: StaticSurface, cm: SurfaceClusterMap) -> None:
+    """A surface's monomials are read by position in the data's inputs: its input names must be theirs,
+    in their order (as for static points), or a permuted surface would be imposed silently."""
+    if surface.input_names != cm.inputs:
+        raise ValueError(f"{surface.name} is a surface in the inputs {surface.input_names} but the data's inputs are "
+                         f"{cm.inputs}: all data of one identification must have the same inputs, in the same order "
+                         "(write the surface with input_names in the data's order)")
 
 
 # --------------------------------------------------------------------------------------------
@@ -878,6 +888,8 @@ class GainBounds(StaticConstraint):
         if isinstance(ref, StaticCurve):
             raise ValueError(f"{self.describe()}: the reference {ref.name} is a curve in one input but the structure "
                              f"has {m}; give a StaticSurface or a function of ū of shape (K, {m})")
+        if isinstance(ref, StaticSurface):
+            _check_surface_inputs(ref, ctx.cluster_map)
         rng = self.ubar_range
         if rng is not None and (np.ndim(rng[0]) == 0 or len(rng) != m):
             raise ValueError(f"{self.describe()}: ubar_range must give one (low, high) per input ({m})")
