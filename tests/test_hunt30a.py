@@ -114,3 +114,15 @@ def test_a_surface_imposed_on_two_inputs_is_matched_by_its_input_names():
         gb.pe_pareto(st, rec, gb.StaticPoints([[0.0, 0.0], [1.0, 1.0], [0.5, 0.2], [0.2, 0.9]], [2.0, 7.0, 4.2, 3.7],
                                               input_names=("valve", "speed")),
                      constraints=gb.GainBounds(lower=0.0, reference=swapped), lambdas=[0.5])
+
+
+def test_constraints_refuse_an_argument_of_another_type_as_a_type_error():
+    # a list for the curve and a number for the function came out as ValueError; a text bound of
+    # ClusterBounds as numpy's "ufunc 'isfinite' not supported", and True was taken as the bound 1
+    with pytest.raises(TypeError, match="CurveEquality.*list"):
+        gb.CurveEquality([1.0, 2.0, 3.0])
+    with pytest.raises(TypeError, match="UserConstraint.*int"):
+        gb.UserConstraint(3)
+    for bad in ("a", True):
+        with pytest.raises(TypeError, match="Σy"):
+            gb.ClusterBounds({"Σy": (None, bad)})

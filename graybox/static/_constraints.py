@@ -471,7 +471,7 @@ class CurveEquality(StaticConstraint):
 
     def __post_init__(self) -> None:
         if not isinstance(self.curve, (StaticCurve, StaticSurface)):
-            raise ValueError(f"CurveEquality needs a StaticCurve or a StaticSurface, got {type(self.curve).__name__}")
+            raise TypeError(f"CurveEquality needs a StaticCurve or a StaticSurface, got {type(self.curve).__name__}")
         if self.sigma_y is not None:
             object.__setattr__(self, "sigma_y", check_real(self.sigma_y, "CurveEquality: sigma_y"))
 
@@ -985,9 +985,8 @@ class ClusterBounds(StaticConstraint):
                 lo, hi = v
             except (TypeError, ValueError):
                 raise ValueError(f"bounds for cluster {k!r} must be (lower, upper), got {v!r}") from None
-            for b in (lo, hi):
-                if b is not None and not np.isfinite(b):
-                    raise ValueError(f"bound {b!r} for cluster {k!r} must be finite or None")
+            lo, hi = (None if b is None else check_real(b, f"bound for cluster {k!r} (a finite number or None)")
+                      for b in (lo, hi))
             if lo is None and hi is None:
                 raise ValueError(f"cluster {k!r}: give a lower or an upper bound")
             if lo is not None and hi is not None and lo > hi:
@@ -1047,7 +1046,7 @@ class UserConstraint(StaticConstraint):
 
     def __post_init__(self) -> None:
         if not callable(self.fn):
-            raise ValueError(f"UserConstraint needs a callable θ ↦ constraint(s), got {type(self.fn).__name__}")
+            raise TypeError(f"UserConstraint needs a callable θ ↦ constraint(s), got {type(self.fn).__name__}")
 
     def describe(self) -> str:
         return self.name
