@@ -126,3 +126,38 @@ def test_constraints_refuse_an_argument_of_another_type_as_a_type_error():
     for bad in ("a", True):
         with pytest.raises(TypeError, match="Σy"):
             gb.ClusterBounds({"Σy": (None, bad)})
+
+
+@pytest.mark.parametrize("call", [
+    lambda st, th: gb.static_curve(st, th, [1.0]),
+    lambda st, th: gb.static_gain(st, th, [1.0]),
+    lambda st, th: gb.equilibria(st, th, 1.0),
+])
+def test_the_static_functions_name_a_theta_of_the_wrong_length_or_not_finite(call):
+    # θ of 2 values for a structure of 3 terms came out as numpy's "matmul: Input operand 1 has a mismatch
+    # in its core dimension"; a NaN in θ gave "no equilibrium (the static equation has no real root)", or []
+    st = gb.Structure(["y(k-1)", "y(k-1)^2", "p(k-1)"])
+    with pytest.raises(ValueError, match="theta has 2 values but the structure has 3 terms"):
+        call(st, [0.5, -0.1])
+    with pytest.raises(ValueError, match="theta has non-finite values at \\[1\\]"):
+        call(st, [0.5, np.nan, 1.0])
+    # a structure written as its terms is read as one (it was "unhashable type: 'list'")
+    assert str(call(["y(k-1)", "y(k-1)^2", "p(k-1)"], [0.5, -0.1, 1.0])) == str(call(st, [0.5, -0.1, 1.0]))
+
+
+@pytest.mark.parametrize("call", [
+    lambda st, th: gb.static_surface(st, th, [[1.0, 1.0]]),
+    lambda st, th: gb.static_surface_gain(st, th, [[1.0, 1.0]]),
+    lambda st, th: gb.surface_equilibria(st, th, [1.0, 1.0]),
+])
+def test_the_surface_functions_name_a_theta_of_the_wrong_length(call):
+    # "operands could not be broadcast together with shapes (1,1,2) (1,1,3)"
+    st = gb.Structure(["y(k-1)", "a(k-1)", "b(k-1)"])
+    with pytest.raises(ValueError, match="theta has 2 values but the structure has 3 terms"):
+        call(st, [0.5, 1.0])
+
+
+def test_equilibria_takes_one_input_level_and_says_so():
+    # [1.0, 2.0] gave "ubar must be 1-D, got shape (1, 2)", and "x" "ubar must be an array of numbers, got list"
+    with pytest.raises(TypeError, match="ubar \\(one input level\\) must be a real number, got \\[1.0, 2.0\\]"):
+        gb.equilibria(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0], [1.0, 2.0])

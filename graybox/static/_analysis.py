@@ -58,7 +58,8 @@ from ._equilibrium_kernels import (
     settle_runs,
 )
 from ..core._terms import Structure, Term
-from ..core._validation import as_1d_finite, check_bool, check_fields, check_per_point
+from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real, check_sequence,
+                                check_theta)
 from ..core._reprs import short_repr
 from ._linearisation import derivative_map, grid_coefficients
 
@@ -85,6 +86,8 @@ __all__ = [
     "reached_equilibria",
     "settle",
     "static_theta_gradient",
+    "checked_model",
+    "folded_equilibria",
     "DENOMINATOR_RTOL",
     "SETTLE_STEPS",
     "SETTLE_RTOL",
@@ -454,10 +457,15 @@ def equilibria(structure: Structure, theta: np.ndarray, ubar: float) -> list[Equ
         Empty when eq. (5) has no real root (or, for a rational structure, its denominator
         vanishes: no equilibrium or infinitely many).
     """
+    structure, theta = checked_model(structure, theta)
     if len(structure.inputs) > 1:
         raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its equilibria lie on "
                          "a surface; use graybox.surface_equilibria(structure, theta, ū) with ū of shape (m,)")
-    ub = float(as_1d_finite([ubar], "ubar")[0])
+    return folded_equilibria(structure, theta, check_real(ubar, "ubar (one input level)"))
+
+
+def folded_equilibria(structure: Structure, theta: np.ndarray, ub: float) -> list[Equilibrium]:
+    """:func:`equilibria` of checked arguments (a folded surface model's θ may exceed the float range)."""
     th = np.asarray(theta, float)[None, :]
     if is_rational(structure):
         yb = _rational_roots(structure, th, np.array([ub]))[0]
@@ -763,6 +771,14 @@ def _describe_failures(res: Reached, what: str = "model") -> str:
     return f"the {what} reaches no equilibrium at " + "; ".join(res.explain(0))
 
 
+def checked_model(structure: object, theta: object) -> tuple[Structure, np.ndarray]:
+    """The arguments of a public static function: a Structure (a sequence of terms is read as one) and θ
+    of its length, finite (``TypeError``/``ValueError`` naming the problem)."""
+    if not isinstance(structure, Structure):
+        structure = Structure(check_sequence(structure, "structure", "a Structure or a sequence of terms"))
+    return structure, check_theta(len(structure), theta)
+
+
 def one_input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
     """Levels of one input, shape (M,): a number, a 1-D array or a column (M, 1); finite.
 
@@ -831,8 +847,8 @@ def static_curve(
         Output units.
     """
     strict = check_bool(strict, "strict")
+    structure, th = checked_model(structure, theta)
     ub = one_input_levels(ubar)
-    th = np.asarray(theta, float)
     if y0 is not None:
         y0s = check_per_point(y0, ub.size, "y0")
         res = reached_equilibria(structure, th[None, :], ub, y0s)
@@ -876,6 +892,7 @@ def static_gain(
     ndarray, shape (M,)
         Gain in output units per input unit.
     """
+    structure, theta = checked_model(structure, theta)
     ub = one_input_levels(ubar)
     yb = static_curve(structure, theta, ub, y0=y0, strict=strict)
     cm = cluster_map(structure)

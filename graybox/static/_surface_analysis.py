@@ -220,13 +220,15 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
     list of Equilibrium
         ``ubar`` of each is the tuple (ū_1, …, ū_m).
     """
+    structure, theta = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
     ub = _as_points(ubar, len(names))
     if ub.shape[0] != 1:
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
     sk, th = _folded(structure, theta, ub, names)
     point = tuple(float(v) for v in ub[0])
-    return [Equilibrium(point, e.ybar, e.stable, e.spectral_radius) for e in _static.equilibria(sk, th[0, 0], 1.0)]
+    return [Equilibrium(point, e.ybar, e.stable, e.spectral_radius)
+            for e in _static.folded_equilibria(sk, th[0, 0], 1.0)]
 
 
 def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray, *,
@@ -299,9 +301,9 @@ def static_surface(
         Output units.
     """
     strict = check_bool(strict, "strict")
+    structure, th = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
     ub = _as_points(ubar, len(names))
-    th = np.asarray(theta, float)
     if y0 is not None:
         y0 = check_per_point(y0, ub.shape[0], "y0")
     sk, thf = _folded(structure, th, ub, names)
@@ -363,9 +365,9 @@ def static_surface_gain(
     ndarray, shape (M, m)
         Entry (j, i) in output units per unit of input i.
     """
+    structure, th = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
     ub = _as_points(ubar, len(names))
-    th = np.asarray(theta, float)
     yb = static_surface(structure, th, ub, y0, strict=strict, input_names=names)
     Fy, Fu = _fderivs(structure, th, ub, yb, names)
     with np.errstate(all="ignore"):  # NaN⁰ is 1: no gain where no equilibrium is reached
