@@ -161,3 +161,19 @@ def test_equilibria_takes_one_input_level_and_says_so():
     # [1.0, 2.0] gave "ubar must be 1-D, got shape (1, 2)", and "x" "ubar must be an array of numbers, got list"
     with pytest.raises(TypeError, match="ubar \\(one input level\\) must be a real number, got \\[1.0, 2.0\\]"):
         gb.equilibria(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0], [1.0, 2.0])
+
+
+def test_levels_outside_the_records_are_named_in_any_units():
+    # a current in units of 1e-8 A: the static points and operating points beyond the records were
+    # named rounded to 6 decimals, "ū = [0.0, 0.0]", in the very warning meant to catch a units mix-up;
+    # and local_model's absolute 1e-9 tolerance took 1.05e-8 as inside records that end at 1e-8
+    s = 1e-8
+    st = gb.Structure(["1", "y(k-1)", "i(k-1)"])
+    u = np.linspace(0.0, 1.0, 300) * s
+    m = gb.Model(st, [1.0, 0.5, 1.0 / s], input_names=("i",), Ts=1.0)
+    rec = gb.Record(u, m.simulate(u, np.zeros(1)), input_names=("i",))
+    pts = gb.StaticPoints(np.array([0.5, 3.0, 4.0]) * s, [3.0, 8.0, 10.0], input_names=("i",))
+    with pytest.warns(gb.StaticRangeWarning, match=r"ū = \[3e-08, 4e-08\]"):
+        gb.cls(st, rec, pts)
+    with pytest.warns(gb.StaticRangeWarning, match=r"ū = \[1.05e-08\]"):
+        gb.local_model(m, 1.05 * s, data=rec)

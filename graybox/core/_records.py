@@ -430,12 +430,12 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
     if ubar.ndim == 2 and ubar.shape[1] > 1:
         lo_ = np.min([r.inputs.min(axis=0) for r in records], axis=0)
         hi_ = np.max([r.inputs.max(axis=0) for r in records], axis=0)
-        tol_ = np.maximum(1e-9 * np.maximum(np.maximum(abs(lo_), abs(hi_)), 1.0), RANGE_MARGIN * (hi_ - lo_))
+        tol_ = np.maximum(1e-9 * np.maximum(abs(lo_), abs(hi_)), RANGE_MARGIN * (hi_ - lo_))
         rows = np.unique(ubar, axis=0)
         out_ = rows[((rows < lo_ - tol_) | (rows > hi_ + tol_)).any(axis=1)]
         if out_.size:
             box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo_, hi_))
-            msg = (f"{what}: ū = {np.round(out_, 6).tolist()} lie outside the input box {box} of the dynamic "
+            msg = (f"{what}: ū = {rounded_levels(out_)} lie outside the input box {box} of the dynamic "
                    "records; the model is extrapolated there by the static information (if the points and the "
                    "records should overlap, check their units)")
             warn(msg, StaticRangeWarning)
@@ -443,13 +443,19 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
     ub = np.unique(np.atleast_1d(np.asarray(ubar, float)))
     lo = min(float(r.u.min()) for r in records)
     hi = max(float(r.u.max()) for r in records)
-    tol = max(1e-9 * max(abs(lo), abs(hi), 1.0), RANGE_MARGIN * (hi - lo))
+    tol = max(1e-9 * max(abs(lo), abs(hi)), RANGE_MARGIN * (hi - lo))
     out = ub[(ub < lo - tol) | (ub > hi + tol)]
     if out.size:
-        msg = (f"{what}: ū = {np.round(out, 6).tolist()} lie outside the input range [{lo:.6g}, {hi:.6g}] of the "
+        msg = (f"{what}: ū = {rounded_levels(out)} lie outside the input range [{lo:.6g}, {hi:.6g}] of the "
                "dynamic records; the model is extrapolated there by the static information (if the points and the "
                "records should overlap, check their units)")
         warn(msg, StaticRangeWarning)
+
+
+def rounded_levels(values: np.ndarray) -> list:
+    """Input levels for a message, as a (nested) list, each to 6 significant digits: the same digits in
+    any units (rounding to decimals printed levels of 1e-8 A as 0.0)."""
+    return np.vectorize(lambda v: float(f"{v:.6g}"), otypes=[float])(np.asarray(values, float)).tolist()
 
 
 def same_record(a: Record, b: Record) -> bool:
@@ -597,4 +603,4 @@ def choosing_records(value: object, name: str = "choose_on") -> list[Record]:
     return recs
 
 
-__all__ += ["same_record", "shared_stretch", "sliced", "check_overlap", "RecordOverlapWarning", "choosing_records"]
+__all__ += ["rounded_levels", "same_record", "shared_stretch", "sliced", "check_overlap", "RecordOverlapWarning", "choosing_records"]
