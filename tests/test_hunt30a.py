@@ -177,3 +177,15 @@ def test_levels_outside_the_records_are_named_in_any_units():
         gb.cls(st, rec, pts)
     with pytest.warns(gb.StaticRangeWarning, match=r"ū = \[1.05e-08\]"):
         gb.local_model(m, 1.05 * s, data=rec)
+
+
+def test_a_models_gain_curve_over_a_grid_is_nan_where_it_has_no_equilibrium():
+    # Model.static_curve takes strict=False (NaN where no equilibrium is reached) but Model.static_gain
+    # did not pass it on: a gain curve over a grid crossing a region without equilibrium could not be drawn
+    # y(k) = (0.5 + 0.001 s) y(k-1) + s(k-1): stable below s = 500, unstable above
+    m = gb.Model(["y(k-1)", "s(k-1)y(k-1)", "s(k-1)"], [0.5, 0.001, 1.0], input_names=("s",))
+    g = m.static_gain([100.0, 700.0], strict=False)
+    assert g[0] == pytest.approx(0.5 / (0.5 - 0.1) ** 2) and np.isnan(g[1])
+    two = gb.Model(["y(k-1)", "a(k-1)y(k-1)", "a(k-1)", "b(k-1)"], [0.5, 0.001, 1.0, 2.0])
+    g = two.static_gain([[100.0, 0.0], [700.0, 0.0]], strict=False)
+    assert g[0] == pytest.approx([0.5 / (0.5 - 0.1) ** 2, 2.0 / 0.4]) and np.isnan(g[1]).all()

@@ -171,11 +171,15 @@ class Model:
             return _static_surface.surface_equilibria(self.structure, self.theta, ubar, input_names=self.input_names)
         return _static.equilibria(self.structure, self.theta, ubar)
 
-    def static_gain(self, ubar: np.ndarray, y0: float | None = None) -> np.ndarray:
-        """dȳ/dū along the static curve, shape (M,); with several inputs the gradient, shape (M, m)."""
+    def static_gain(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
+        """dȳ/dū along the static curve, shape (M,); with several inputs the gradient, shape (M, m).
+
+        ``y0`` and ``strict`` as for :meth:`static_curve` (``strict=False``: NaN where no equilibrium is reached).
+        """
         if self.n_inputs > 1:
-            return _static_surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, input_names=self.input_names)
-        return _static.static_gain(self.structure, self.theta, ubar, y0=y0)
+            return _static_surface.static_surface_gain(self.structure, self.theta, ubar, y0=y0, strict=strict,
+                                                       input_names=self.input_names)
+        return _static.static_gain(self.structure, self.theta, ubar, y0=y0, strict=strict)
 
     @property
     def is_rational(self) -> bool:
