@@ -189,3 +189,15 @@ def test_a_models_gain_curve_over_a_grid_is_nan_where_it_has_no_equilibrium():
     two = gb.Model(["y(k-1)", "a(k-1)y(k-1)", "a(k-1)", "b(k-1)"], [0.5, 0.001, 1.0, 2.0])
     g = two.static_gain([[100.0, 0.0], [700.0, 0.0]], strict=False)
     assert g[0] == pytest.approx([0.5 / (0.5 - 0.1) ** 2, 2.0 / 0.4]) and np.isnan(g[1]).all()
+
+
+@pytest.mark.parametrize("exponents, match", [
+    ([(0, 0, 0), (1, 0, 0)], "2 inputs.*3 entries"),  # was numpy's "operands could not be broadcast together"
+    ([(0, 0), (1, 0), (1, 0)], r"\(1, 0\).*given twice"),  # was "regressor matrix has rank 2 < 3 columns"
+    ([], "at least one monomial"),  # was IndexError "too many indices for array"
+])
+def test_a_surface_fitted_on_given_monomials_checks_them_first(exponents, match):
+    u = np.array([[0, 0], [1, 0], [0, 1], [1, 1], [2, 1], [1, 2.0]])
+    pts = gb.StaticPoints(u, u[:, 0] + 2 * u[:, 1], input_names=("a", "b"))
+    with pytest.raises(ValueError, match=match):
+        gb.StaticSurface.fit(pts, exponents=exponents)

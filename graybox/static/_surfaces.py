@@ -55,6 +55,23 @@ def _as_inputs(ubar: object, m: int, what: str) -> np.ndarray:
     return u
 
 
+def _monomial_set(value: object, name: str, n_inputs: int | None = None) -> tuple[tuple[int, ...], ...]:
+    """The exponent vectors of a surface's monomials: at least one, all of one length >= 1 (``n_inputs``
+    when given), distinct; ``ValueError`` naming ``name`` (the surface) otherwise."""
+    ex = _exponent_vectors(value, "exponents")
+    if not ex:
+        raise ValueError(f"{name}: a polynomial needs at least one monomial")
+    m = len(ex[0]) if n_inputs is None else n_inputs
+    if m < 1 or any(len(e) != m for e in ex):
+        bad = next((len(e) for e in ex if len(e) != m), m)
+        raise ValueError(f"{name}: every exponent vector must have the same length >= 1 (one entry per input"
+                         + ("" if n_inputs is None else f": {m} inputs") + f"), got one of {bad} entries")
+    if len(set(ex)) != len(ex):
+        dup = sorted({e for e in ex if ex.count(e) > 1})
+        raise ValueError(f"{name}: monomial(s) {dup} given twice")
+    return ex
+
+
 def _exponent_vectors(value: object, name: str) -> tuple[tuple[int, ...], ...]:
     """Exponent vectors as tuples of integers >= 0, or ``TypeError``/``ValueError`` naming ``name``."""
     out = []
@@ -90,17 +107,8 @@ class StaticSurface:
     input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
-        ex = _exponent_vectors(self.exponents, "exponents")
-        if not ex:
-            raise ValueError(f"{self.name}: a polynomial needs at least one monomial")
+        ex = _monomial_set(self.exponents, self.name)
         m = len(ex[0])
-        if m < 1 or any(len(e) != m for e in ex):
-            raise ValueError(f"{self.name}: every exponent vector must have the same length >= 1 (one entry per input)")
-        if any(v < 0 for e in ex for v in e):
-            raise ValueError(f"{self.name}: exponents must be >= 0")
-        if len(set(ex)) != len(ex):
-            dup = sorted({e for e in ex if ex.count(e) > 1})
-            raise ValueError(f"{self.name}: monomial(s) {dup} given twice")
         c = np.array(self.coefficients, dtype=float).reshape(-1)
         if c.size != len(ex):
             raise ValueError(f"{self.name}: {c.size} coefficients for {len(ex)} monomials")
@@ -196,7 +204,7 @@ class StaticSurface:
         yb = points.ybar
         m = points.n_inputs
         ub = _as_inputs(points.ubar, m, "StaticSurface.fit")
-        ex = monomial_exponents(m, degree) if exponents is None else _exponent_vectors(exponents, "exponents")
+        ex = monomial_exponents(m, degree) if exponents is None else _monomial_set(exponents, "StaticSurface.fit", m)
         if len(yb) < len(ex):
             raise ValueError(f"fitting {len(ex)} monomials needs at least {len(ex)} static points, got {len(yb)}")
         V = _monomials(ub, ex)
