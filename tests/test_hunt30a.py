@@ -201,3 +201,11 @@ def test_a_surface_fitted_on_given_monomials_checks_them_first(exponents, match)
     pts = gb.StaticPoints(u, u[:, 0] + 2 * u[:, 1], input_names=("a", "b"))
     with pytest.raises(ValueError, match=match):
         gb.StaticSurface.fit(pts, exponents=exponents)
+
+
+def test_the_cluster_maps_read_a_structure_given_as_its_terms():
+    # "unhashable type: 'list'" and "'list' object has no attribute 'inputs'" came out of the caches
+    assert gb.cluster_map(["y(k-1)", "u(k-1)", "u(k-2)"]).names == ["Σu", "Σy"]
+    assert gb.surface_cluster_map(["y(k-1)", "a(k-1)", "b(k-1)"]).names == ["Σb", "Σa", "Σy"]
+    with pytest.raises(TypeError, match="structure must be a Structure or a sequence of terms"):
+        gb.cluster_map(3)

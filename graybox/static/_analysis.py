@@ -87,6 +87,7 @@ __all__ = [
     "settle",
     "static_theta_gradient",
     "checked_model",
+    "structure_arg",
     "folded_equilibria",
     "DENOMINATOR_RTOL",
     "SETTLE_STEPS",
@@ -191,13 +192,25 @@ class ClusterMap:
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
-@lru_cache(maxsize=256)
 def cluster_map(structure: Structure) -> ClusterMap:
     """Build the :class:`ClusterMap` of the process terms of ``structure`` (cached: it is immutable).
 
     Single-input structures only (a structure with several inputs has a static *surface*:
-    :func:`graybox.static._surface_analysis.surface_cluster_map`); ``ValueError`` otherwise.
+    :func:`graybox.static._surface_analysis.surface_cluster_map`); ``ValueError`` otherwise. A
+    sequence of terms is read as a Structure.
     """
+    return _cluster_map(structure_arg(structure))
+
+
+def structure_arg(structure: object) -> Structure:
+    """A public static function's ``structure``: a Structure, or a sequence of terms read as one."""
+    if isinstance(structure, Structure):
+        return structure
+    return Structure(check_sequence(structure, "structure", "a Structure or a sequence of terms"))
+
+
+@lru_cache(maxsize=256)
+def _cluster_map(structure: Structure) -> ClusterMap:
     if len(structure.inputs) > 1:
         raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its static function "
                          "is a surface (use the surface functions, e.g. Model.static_curve with ū of shape (M, m))")
@@ -774,8 +787,7 @@ def _describe_failures(res: Reached, what: str = "model") -> str:
 def checked_model(structure: object, theta: object) -> tuple[Structure, np.ndarray]:
     """The arguments of a public static function: a Structure (a sequence of terms is read as one) and θ
     of its length, finite (``TypeError``/``ValueError`` naming the problem)."""
-    if not isinstance(structure, Structure):
-        structure = Structure(check_sequence(structure, "structure", "a Structure or a sequence of terms"))
+    structure = structure_arg(structure)
     return structure, check_theta(len(structure), theta)
 
 

@@ -150,6 +150,7 @@ def surface_cluster_map(structure: Structure, *, input_names: tuple[str, ...] | 
     SurfaceClusterMap
     """
     names = renamed(input_names, inputs, "input_names", "inputs")
+    structure = _static.structure_arg(structure)
     return _surface_cluster_map(structure, surface_inputs(structure, names))
 
 
