@@ -87,6 +87,8 @@ __all__ = [
     "settle",
     "static_theta_gradient",
     "checked_model",
+    "several_stable",
+    "why_no_equilibrium",
     "structure_arg",
     "folded_equilibria",
     "DENOMINATOR_RTOL",
@@ -816,13 +818,27 @@ def only_stable(roots: np.ndarray, stable: np.ndarray, where: list[str]) -> tupl
         if ys.size == 1:
             out[i] = ys[0]
         elif ys.size:
-            problems.append(f"{ys.size} stable equilibria at {where[i]} ([{', '.join(f'{e:.6g}' for e in ys)}]); "
-                            "pass y0 to choose the one reached from it")
+            problems.append(several_stable(ys, where[i]))
         elif np.isfinite(roots[i]).any():
             problems.append(f"no stable equilibrium at {where[i]}")
         else:
             problems.append(f"no equilibrium at {where[i]} (the static equation has no real root)")
     return out, problems
+
+
+def several_stable(ybar: np.ndarray, where: str) -> str:
+    """The phrase for several stable equilibria ``ybar`` at ``where`` (e.g. "ū = 100"), each to 6 significant
+    digits (the same in any units)."""
+    return (f"{len(ybar)} stable equilibria at {where} ([{', '.join(f'{e:.6g}' for e in ybar)}]); "
+            "pass y0 to choose the one reached from it")
+
+
+def why_no_equilibrium(structure: Structure) -> str:
+    """Why a structure has no equilibrium where :func:`equilibria` finds none."""
+    if is_rational(structure):
+        return ("the denominator 1 − Σy − Σyu ū − … of its static function vanishes: no steady state, or a "
+                "continuum of them (an integrator)")
+    return "the static equation has no real root"
 
 
 def static_curve(
