@@ -223,3 +223,12 @@ def test_a_local_model_without_an_equilibrium_or_with_several_says_why_in_any_un
     integrator = gb.Model(["y(k-1)", "q(k-1)"], [1.0, 2.0], input_names=("q",))
     lm = gb.local_model(integrator, 1.0, Ts=1.0)
     assert lm.status == "no equilibrium" and "denominator" in lm.reason and "real root" not in lm.reason
+
+
+def test_a_surface_fitted_to_points_that_hold_an_input_says_which():
+    # the points hold z at 2: the fit failed first with the least-squares "rank 2 < 3 columns", so the
+    # message meant for this case ("the points do not vary every input") never came out; it names z now
+    u = np.column_stack([np.arange(5.0), np.full(5, 2.0)])
+    pts = gb.StaticPoints(u, np.arange(5.0), input_names=("a", "z"))
+    with pytest.raises(ValueError, match=r"do not vary every input.*\['z'\]"):
+        gb.StaticSurface.fit(pts, 1)

@@ -207,11 +207,13 @@ class StaticSurface:
         ex = monomial_exponents(m, degree) if exponents is None else _monomial_set(exponents, "StaticSurface.fit", m)
         if len(yb) < len(ex):
             raise ValueError(f"fitting {len(ex)} monomials needs at least {len(ex)} static points, got {len(yb)}")
+        box = tuple((float(ub[:, i].min()), float(ub[:, i].max())) for i in range(m))
+        held = [n for n, (lo, hi) in zip(points.input_names, box) if lo == hi]
+        if held:  # before the fit, whose rank test would say less
+            raise ValueError(f"StaticSurface.fit: the points do not vary every input: they hold {held} at one value "
+                             "(a flat direction has no domain)")
         V = _monomials(ub, ex)
         c = scaled_lstsq(V, yb)
-        box = tuple((float(ub[:, i].min()), float(ub[:, i].max())) for i in range(m))
-        if any(lo == hi for lo, hi in box):
-            raise ValueError("StaticSurface.fit: the points do not vary every input (a flat direction has no domain)")
         names = input_names if input_names is not None else points.input_names
         return cls(ex, c, box, name or f"fit to {points.name}", names)
 
