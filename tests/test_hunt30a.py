@@ -232,3 +232,18 @@ def test_a_surface_fitted_to_points_that_hold_an_input_says_which():
     pts = gb.StaticPoints(u, np.arange(5.0), input_names=("a", "z"))
     with pytest.raises(ValueError, match=r"do not vary every input.*\['z'\]"):
         gb.StaticSurface.fit(pts, 1)
+
+
+def test_a_network_that_cannot_choose_an_equilibrium_names_them_and_every_level_in_any_units():
+    # NeuralModel.static_curve had its own copy of the rule: equilibria near ±2e-7 V rounded to 6
+    # decimals ("[-0.0, 0.0]"), and only the first failing ū named; it now shares the polynomial model's
+    from graybox.estimation._neural import NeuralModel
+
+    W1 = np.array([[2.0, 0.001]])  # y_n(k) = 2 tanh(2 y_n(k-1) + 0.001 u(k-1)): bistable at ū = 0
+    net = NeuralModel(W1, [0.0], [2.0], 0.0, ny=1, nu=1, y_scale=1e-7)
+    ys = [e.ybar for e in net.equilibria(0.0) if e.stable]
+    with pytest.raises(ValueError, match="pass y0") as info:
+        net.static_curve([0.0, 1.0])
+    msg = str(info.value)
+    assert all(f"{y:.6g}" in msg for y in ys) and "ū = 0 " in msg and "ū = 1 " in msg
+    assert net.static_curve([]).shape == (0,)

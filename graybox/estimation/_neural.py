@@ -133,7 +133,8 @@ from ..core._validation import (as_1d_finite, check_bool, check_choice, check_in
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..core._simulation_kernels import record_inputs
 from ..core._terms import check_input_names
-from ..static._analysis import NET, Equilibrium, Reached, one_input_levels, schur_stable, settle, spectral_radius
+from ..static._analysis import (NET, Equilibrium, Reached, one_input_levels, only_stable, schur_stable, settle,
+                                spectral_radius)
 from ..core._reprs import short_repr
 
 __all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
@@ -713,15 +714,14 @@ class NeuralModel:
         y0s = None
         if y0 is not None:
             y0s = check_per_point(y0, ub.size, "y0")
-        out = np.full(ub.size, np.nan)
         eqs = [self._equilibria_n(self._un(u_)) for u_ in ub]
+        D = max((len(e) for e in eqs), default=0)
+        roots = np.full((ub.size, D), np.nan)  # normalised
+        stable = np.zeros((ub.size, D), bool)
+        for i, e in enumerate(eqs):
+            roots[i, : len(e)] = [yb for yb, _, _ in e]
+            stable[i, : len(e)] = [s for _, s, _ in e]
         if y0s is not None:
-            D = max(len(e) for e in eqs)
-            roots = np.full((ub.size, D), np.nan)
-            stable = np.zeros((ub.size, D), bool)
-            for i, e in enumerate(eqs):
-                roots[i, : len(e)] = [yb for yb, _, _ in e]
-                stable[i, : len(e)] = [s for _, s, _ in e]
             fp = np.array([self._settle_params(self._un(u_)) for u_ in ub])
             ip = np.array([self.hidden, self.ny], dtype=np.int64)
             yn, status = settle(NET, ip, fp, self._yn(y0s), roots, stable, self.ny, floor=1.0)
@@ -730,16 +730,10 @@ class NeuralModel:
                 res = Reached(ub, np.asarray(y0s, float), out[None, :], status[None, :])
                 raise ValueError("the network reaches no equilibrium at " + "; ".join(res.explain(0)))
             return out
-        for i, u_ in enumerate(ub):
-            stable_n = [yb for yb, s, _ in eqs[i] if s]
-            if len(stable_n) == 1:
-                out[i] = self._y(stable_n[0])
-            elif strict and not stable_n:
-                raise ValueError(f"the network has no stable equilibrium at ū = {u_:g}")
-            elif strict:
-                raise ValueError(
-                    f"the network has {len(stable_n)} stable equilibria at ū = {u_:g} "
-                    f"({[round(float(self._y(s)), 6) for s in stable_n]}); pass y0 to choose the one reached from it")
+        # the polynomial model's rule and phrases (every ū named, equilibria to 6 significant digits)
+        out, problems = only_stable(self._y(roots), stable, [f"ū = {u_:g}" for u_ in ub])
+        if strict and problems:
+            raise ValueError("the network has " + "; ".join(problems))
         return out
 
     def static_gain(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, *, strict: bool = True) -> np.ndarray:
