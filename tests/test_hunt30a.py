@@ -116,6 +116,18 @@ def test_a_surface_imposed_on_two_inputs_is_matched_by_its_input_names():
                      constraints=gb.GainBounds(lower=0.0, reference=swapped), lambdas=[0.5])
 
 
+def test_a_surface_of_one_input_is_still_imposed_whatever_it_calls_its_input():
+    # the check of the surface's input names (above) read the cluster map's inputs, which a one-input
+    # structure's map does not have: CLS with a one-input StaticSurface raised AttributeError
+    st = gb.Structure(["1", "y(k-1)", "speed(k-1)", "speed(k-1)^2"])
+    model = gb.Model(st, [0.1, 0.5, 0.2, 0.01], input_names=("speed",))
+    u = np.linspace(0.0, 2.0, 200)
+    rec = gb.Record(u, model.simulate(u, np.zeros(1)), input_names=("speed",))
+    for names in [("speed",), None]:  # None: the default name "u"
+        surface = gb.StaticSurface.polynomial({(0,): 0.2, (1,): 0.4, (2,): 0.02}, input_names=names)
+        np.testing.assert_allclose(gb.cls(st, rec, surface).model.theta, model.theta, atol=1e-9)
+
+
 def test_constraints_refuse_an_argument_of_another_type_as_a_type_error():
     # a list for the curve and a number for the function came out as ValueError; a text bound of
     # ClusterBounds as numpy's "ufunc 'isfinite' not supported", and True was taken as the bound 1

@@ -564,10 +564,11 @@ class CurveEquality(StaticConstraint):
         return AffineRows.make(ctx.n_terms, A, b)
 
 
-def _check_surface_inputs(surface: StaticSurface, cm: SurfaceClusterMap) -> None:
-    """A surface's monomials are read by position in the data's inputs: its input names must be theirs,
-    in their order (as for static points), or a permuted surface would be imposed silently."""
-    if surface.input_names != cm.inputs:
+def _check_surface_inputs(surface: StaticSurface, cm: ClusterMap | SurfaceClusterMap) -> None:
+    """A surface's monomials are read by position in the data's inputs: with several, its input names must
+    be theirs, in their order (as for static points), or a permuted surface would be imposed silently. A
+    surface of one input is of that input, whatever it calls it (as a curve)."""
+    if isinstance(cm, SurfaceClusterMap) and surface.input_names != cm.inputs:
         raise ValueError(f"{surface.name} is a surface in the inputs {surface.input_names} but the data's inputs are "
                          f"{cm.inputs}: all data of one identification must have the same inputs, in the same order "
                          "(write the surface with input_names in the data's order)")
