@@ -245,7 +245,13 @@ def evaluate_thetas(
     record = None if record is None else as_record(record, "valid", "record")
     one_step = check_bool(one_step, "one_step")
     threads = check_int(threads, "threads", low=1)
-    th = np.atleast_2d(np.asarray(thetas, float))
+    try:
+        th = np.atleast_2d(np.asarray(thetas, dtype=float))
+    except (TypeError, ValueError):
+        raise TypeError(f"thetas must be an array of numbers, got {type(thetas).__name__}") from None
+    if th.ndim != 2 or th.shape[1] != len(structure):
+        raise ValueError(f"thetas must have shape (P, {len(structure)}) (one parameter vector per row, one value per "
+                         f"term) or ({len(structure)},), got shape {np.shape(thetas)}")
     out: dict[str, np.ndarray] = {}
     if record is not None:
         L = structure.max_lag
@@ -259,7 +265,7 @@ def evaluate_thetas(
             for k in range(0, n_rows, step):
                 r = record.y[L + k : L + k + step, None] - psi[k : k + step] @ th.T
                 sse1 += np.einsum("ij,ij->j", r, r)
-            out["J1"] = sse1 / n_rows
+            out["J1"] = np.where(np.isfinite(sse1), sse1 / n_rows, np.inf)  # as J_S: a non-finite member scores inf
         # the compiled kernel sums squared free-run errors as it simulates: no P × N output
         with np.errstate(over="ignore", invalid="ignore"):
             code = encode(structure)
