@@ -35,7 +35,7 @@ from ..core._terms import Structure
 from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, warn
 from ..models._coerce import as_model
 from ..models._model import Model
-from ..static._analysis import REACHED, reached_equilibria, schur_stable, several_stable, why_no_equilibrium
+from ..static._analysis import NO_EQUILIBRIUM_WHY, REACHED, reached_equilibria, schur_stable, several_stable
 from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import reached_surface
 
@@ -407,7 +407,7 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float |
         if len(stable) > 1:
             raise ValueError("the model has " + several_stable(np.array([e.ybar for e in stable]), f"ū = {label}"))
         if not eqs:
-            return None, "no equilibrium", f"ū = {label}: no equilibrium ({why_no_equilibrium(model.structure)})"
+            return None, "no equilibrium", f"ū = {label}: {NO_EQUILIBRIUM_WHY}"
         e = min(eqs, key=lambda e: e.spectral_radius)
         return e.ybar, "no stable equilibrium", (f"ū = {label}: no stable equilibrium; linearised at the unstable "
                                                  f"ȳ = {e.ybar:.6g} (spectral radius {e.spectral_radius:.4g})")

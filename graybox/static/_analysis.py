@@ -88,7 +88,6 @@ __all__ = [
     "static_theta_gradient",
     "checked_model",
     "several_stable",
-    "why_no_equilibrium",
     "structure_arg",
     "folded_equilibria",
     "DENOMINATOR_RTOL",
@@ -831,14 +830,6 @@ def several_stable(ybar: np.ndarray, where: str) -> str:
     digits (the same in any units)."""
     return (f"{len(ybar)} stable equilibria at {where} ([{', '.join(f'{e:.6g}' for e in ybar)}]); "
             "pass y0 to choose the one reached from it")
-
-
-def why_no_equilibrium(structure: Structure) -> str:
-    """Why a structure has no equilibrium where :func:`equilibria` finds none."""
-    if is_rational(structure):
-        return ("the denominator 1 − Σy − Σyu ū − … of its static function vanishes: no steady state, or a "
-                "continuum of them (an integrator)")
-    return "the static equation has no real root"
 
 
 def static_curve(
