@@ -55,7 +55,8 @@ class StaticCurve:
     def fit(cls, points: StaticPoints, degree: int = 2, name: str | None = None) -> "StaticCurve":
         """Least-squares polynomial of ``degree`` through static points (columns scaled internally).
 
-        The domain is the points' ū range. Needs at least ``degree + 1`` points.
+        The domain is the points' ū range. Needs at least ``degree + 1`` points, and two at least
+        (one level has no range). ``points`` must be of one input (several: :meth:`StaticSurface.fit`).
         """
         if not isinstance(points, StaticPoints):
             raise TypeError(f"StaticCurve.fit: points must be StaticPoints, got {type(points).__name__}")
