@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import sys
-
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -400,7 +399,7 @@ def test_an_integrator_has_no_local_model_and_the_reason_names_the_vanishing_den
     m = gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [1.0, 0.5], Ts=0.1)
     for u in (0.0, 2.0):
         lm = gb.local_model(m, u)
-        assert not lm.exists and lm.status == "no equilibrium" and "no real root" not in lm.reason
-        assert re.search("denominator .* vanishes", lm.reason)
-        with pytest.raises(ValueError, match="no local model: .*denominator .* vanishes"):
+        assert not lm.exists and lm.status == "no equilibrium"
+        assert re.search("denominator.*vanishes", lm.reason)
+        with pytest.raises(ValueError, match="no local model: .*denominator.*vanishes"):
             lm.poles
