@@ -453,9 +453,9 @@ def test_an_output_error_fit_that_fails_is_a_failed_row_and_the_search_goes_on(d
     t = res.table
     failed = t[(t["estimator"] == "oe") & (t["n_terms"] == 5)]
     assert len(failed) >= 1 and np.isinf(failed["JS_valid"]).all() and not failed["in_band"].any()
-    assert failed["warnings"].str.contains("every free run diverged").all() and failed["reason"].ne("").all()
+    assert failed["reason"].str.contains("every free run diverged").all()
     assert res.chosen["n_terms"] != 5 or res.chosen["estimator"] == "ls"
-    assert any(issubclass(w.category, gb.SelectionWarning) and "warned" in str(w.message) for w in caught)
+    assert any(issubclass(w.category, gb.SelectionWarning) and "failed" in str(w.message) for w in caught)
 
 
 def test_a_black_box_selection_without_static_points_round_trips(data, tmp_path):

@@ -90,14 +90,11 @@ def _fit_els(st: gb.Structure, rec: gb.Record) -> np.ndarray:
 
 
 def _fit_oe(st: gb.Structure, rec: gb.Record) -> np.ndarray:
-    try:
-        return np.asarray(gb.output_error(st, rec, progress=False).model.theta, float)
-    except ValueError as exc:  # no start gave a fit: a failed row, its reason among the row's warnings
-        warn(f"output_error: {exc}", SelectionWarning)
-        return np.full(len(st), np.nan)
+    # no start gave a fit: a ValueError, which _fit_or_fail makes a failed row with its reason
+    return np.asarray(gb.output_error(st, rec, progress=False).model.theta, float)
 
 
-#: name -> fit(process structure, identification record) -> θ of the process terms (NaN: no fit).
+#: name -> fit(process structure, identification record) -> θ of the process terms.
 _BLACK_BOX_FITS: dict[str, Callable[[gb.Structure, gb.Record], np.ndarray]] = {"ls": _fit_ls, "els": _fit_els,
                                                                                "oe": _fit_oe}
 
