@@ -1,6 +1,6 @@
 """Honest selection: fit / choose / untouched test (issue 26).
 
-    .venv/bin/python benchmarks/bench_honest.py [--part speed|protocol|transient|blackbox|all] [--cases plant,buck,...]
+    .venv/bin/python benchmarks/bench_honest.py [--part speed|protocol|transient|blackbox|sources|all] [--cases plant,buck,...]
         [--no-old] [--record-only]
 
 - protocol: on each case, ``select_graybox`` fits on the identification record, chooses on the
@@ -16,6 +16,8 @@
   the same candidates plus transient inputs (``gb.transient_inputs``, one lag each) on two τ grids
   given in samples (60, 200, 600, 2000 and 100, 300, 900, 2700: 3–100 s and 5–135 s on the plant),
   scored on the test record and, for the simulated plants, on five fresh runs (seed + 1 … + 5).
+- sources: the default sources of structures (SEMP, FROLS) against the swap search's best subsets
+  added or in FROLS's place, on the cases and on bench_search's staircase systems.
 - blackbox: the black box chosen among LS and ELS, among LS, ELS and output error (the default),
   and by output error alone; the gray box's test J_S against each.
 
@@ -260,11 +262,64 @@ def blackbox(names) -> None:
     print("\n" + pd.DataFrame(rows).to_markdown(index=False, floatfmt=".4g"))
 
 
+SOURCE_SETS = {"semp, frols (default)": ("semp", "frols"), "semp, frols, swap": ("semp", "frols", "swap"),
+               "semp, swap": ("semp", "swap")}
+
+
+def sources(names, seeds: int) -> None:
+    """The structures' sources: the default (SEMP and greedy FROLS paths) against the swap search's
+    best subsets added or in FROLS's place. The six cases (gray and black box, test J_S against the
+    black box chosen from the same sources, regret), and bench_search's staircase systems (black box
+    with LS alone on 1 % equation noise: whether the chosen structure is the true one)."""
+    import bench_search as bs
+
+    rows = []
+    for name, (data, test, cand, band) in cases().items():
+        if names and name not in names:
+            continue
+        for label, src in SOURCE_SETS.items():
+            t0 = time.perf_counter()
+            gray = gb.select_graybox(cand, data, band=band, test=test, sources=src)
+            t_gray = time.perf_counter() - t0
+            black = gb.select_graybox(cand, data, band=np.inf, test=test, sources=src).chosen
+            g = gray.chosen
+            ok = gray.table[gray.table["in_band"]]
+            rows.append({"case": name, "sources": label, "gray": f"{g.name} {g['estimator']}",
+                         "gray JS_test": g["JS_test"], "black": f"{black.name} {black['estimator']}",
+                         "black JS_test": black["JS_test"], "gray / black": g["JS_test"] / black["JS_test"],
+                         "gray regret": g["JS_test"] / ok["JS_test"].min(), "rows": len(gray.table),
+                         "gray s": t_gray})
+        print(pd.DataFrame([r for r in rows if r["case"] == name]).drop(columns="case").to_markdown(
+            index=False, floatfmt=".4g"), flush=True)
+    print("\n" + pd.DataFrame(rows).to_markdown(index=False, floatfmt=".4g"))
+    rec_rows = []
+    for system in bs.SYSTEMS:
+        true = frozenset(gb.Structure(bs.SYSTEMS[system][0]))
+        cand = bs.candidates(system)
+        for seed in range(seeds):
+            recs = [bs.record(system, "staircase", 0.01, 1000 * seed + k, n) for k, n in ((1, 1000), (2, 500), (3, 2000))]
+            for label, src in SOURCE_SETS.items():
+                r = gb.select_graybox(cand, gb.Dataset(recs[0], recs[1], None), band=np.inf, estimator="ls",
+                                      test=recs[2], sources=src, include=())
+                compared = {frozenset(r.structure_of(n)) for n in set(r.table.index)}
+                rec_rows.append({"system": system, "seed": seed, "sources": label,
+                                 "true structure compared": true in compared,
+                                 "true structure chosen": frozenset(r.structure) == true,
+                                 "JS_test": r.chosen["JS_test"]})
+    df = pd.DataFrame(rec_rows)
+    out = df.groupby(["system", "sources"]).agg(compared=("true structure compared", "sum"),
+                                                 chosen=("true structure chosen", "sum"),
+                                                 JS_test_median=("JS_test", "median")).reset_index()
+    print(f"\nstaircase systems (1 % equation noise, {seeds} seeds; black box, LS):\n"
+          + out.to_markdown(index=False, floatfmt=".4g"))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--part", default="all", choices=("speed", "protocol", "transient", "blackbox", "all"))
+    ap.add_argument("--part", default="all", choices=("speed", "protocol", "transient", "blackbox", "sources", "all"))
     ap.add_argument("--cases", default="", help="comma-separated case names (default all)")
     ap.add_argument("--no-old", action="store_true", help="skip main's select_graybox")
+    ap.add_argument("--seeds", type=int, default=5, help="seeds per staircase system (--part sources)")
     ap.add_argument("--record-only", action="store_true",
                     help="also choose on refitted folds of the identification record alone (gray and black)")
     args = ap.parse_args()
@@ -278,6 +333,8 @@ def main() -> None:
         transient([c for c in args.cases.split(",") if c])
     if args.part in ("blackbox", "all"):
         blackbox([c for c in args.cases.split(",") if c])
+    if args.part in ("sources", "all"):
+        sources([c for c in args.cases.split(",") if c], args.seeds)
 
 
 if __name__ == "__main__":

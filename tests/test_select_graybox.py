@@ -529,3 +529,38 @@ def test_the_one_se_choice_is_eligible_smallest_then_best_on_the_choosing_data(r
     same = el[el["n_terms"] == el["n_terms"].min()]
     assert table["JS_valid"].iloc[pos] == same["JS_valid"].min()
     assert table["vs_best"].iloc[pos] <= table["vs_best_se"].fillna(0).iloc[pos] or pos == table["JS_valid"].argmin()
+
+
+def test_a_non_greedy_source_offers_the_best_subset_of_each_size_and_every_row_keeps_its_terms():
+    """sources=("swap",): each size's structure is frols(search="swap")'s; on a two-input staircase,
+    where greedy picks lag-shifted look-alikes, it offers the true structure and the black box finds it.
+    Every row's structure is read back from the table (GrayboxSelection.structure_of)."""
+    true = gb.Structure(["y(k-1)", "y(k-2)", "a(k-2)", "b(k-1)", "a(k-1)y(k-1)", "b(k-2)^2"])
+    theta = np.array([0.6, 0.2, 0.5, -0.4, -0.15, 0.2])
+
+    def stairs(seed, n):
+        rng = np.random.default_rng(seed)
+        u = np.column_stack([np.repeat(rng.uniform(-1, 1, n // 5 + 1), 5)[:n] for _ in range(2)])
+        y = gb.Model(true, theta, input_names=("a", "b")).simulate(u, np.zeros(2))
+        return gb.Record(u, y + 0.002 * rng.standard_normal(n), input_names=("a", "b"), name=f"s{seed}")
+
+    data = gb.Dataset(stairs(1, 800), stairs(2, 400), None)
+    cand = gb.Candidates(3, 3, degree=2, input_names=("a", "b"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(cand, data, band=np.inf, estimator="ls", sources=("swap",), sizes=[4, 6, 8],
+                                include=())
+        swap6 = gb.frols(cand, data.ident, n_terms=6, search="swap")
+        greedy6 = gb.frols(cand, data.ident, n_terms=6)
+    assert frozenset(greedy6.structure) != frozenset(true)  # the look-alike: a(k-1)y(k-2) for a(k-1)y(k-1)
+    assert set(res.table["source"]) == {"swap"}
+    assert frozenset(res.structure_of("swap-6")) == frozenset(swap6.structure) == frozenset(true)
+    assert frozenset(res.structure) == frozenset(true)
+    for name in set(res.table.index):
+        assert len(res.structure_of(name)) == res.table.loc[[name], "n_terms"].iloc[0]
+    with pytest.raises(ValueError, match="no row 'frols-6'"):
+        res.structure_of("frols-6")
+    with pytest.raises(TypeError, match="row must be"):
+        res.structure_of(6)
+    with pytest.raises(ValueError, match="sources"):
+        gb.select_graybox(cand, data, band=np.inf, sources=("greedy",))

@@ -75,6 +75,10 @@ GRAY_BOX_ESTIMATORS = ("pe", "se-gradient", "se-ga")
 #: squares and output error (simulation error, no static points; :func:`graybox.output_error`).
 BLACK_BOX_ESTIMATORS = ("ls", "els", "oe")
 RULES = ("one-se", "min")
+#: Where the structures of each size come from: the SEMP path, the FROLS (greedy) path, and the best
+#: subsets of each size found by exchanging terms (``frols(search="swap")``) or by branch and bound
+#: (``search="exact"``, proven or best found within its node budget).
+SOURCES = ("semp", "frols", "swap", "exact")
 #: Estimators whose fits cost seconds per structure: run on the shortlist the others rank best.
 SLOW_ESTIMATORS = ("se-gradient", "se-ga", "oe")
 
@@ -128,7 +132,8 @@ class GrayboxSelection:
         J_SF reached when the band is missed); empty when it has one. ``warnings``: what its fits
         warned of (e.g. an ELS iteration that did not converge), each message once; empty when
         nothing. The call then says once, with a :class:`SelectionWarning`, how many rows warned
-        and whether the chosen one did.
+        and whether the chosen one did. ``terms``: the row's structure, its terms joined by
+        ``" + "`` (:meth:`structure_of` reads it back).
     degree : int or None
         Degree of the static curve the static information asks for (None for a black box).
     band : float
@@ -169,6 +174,26 @@ class GrayboxSelection:
     def chosen(self) -> pd.Series:
         """The table's row of the choice."""
         return self.table[self.table["rank"] == 1].iloc[0]
+
+    def structure_of(self, row: str) -> gb.Structure:
+        """The structure of the table's row named ``row`` (e.g. ``"frols-10"``), static terms included.
+
+        Parameters
+        ----------
+        row : str
+            A name in the table's index.
+
+        Returns
+        -------
+        Structure
+        """
+        if not isinstance(row, str):
+            raise TypeError(f"row must be a row name (str), got {type(row).__name__}")
+        if "terms" not in self.table.columns:
+            raise ValueError("this table keeps no terms (a selection saved by graybox 0.2.2 or earlier)")
+        if row not in self.table.index:
+            raise ValueError(f"no row {row!r}; rows: {sorted(set(self.table.index))}")
+        return gb.Structure(str(self.table.loc[[row], "terms"].iloc[0]).split(" + "))
 
     @property
     def fallback(self) -> bool:
@@ -402,6 +427,20 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
             for k in sizes:
                 if n0 <= k <= len(sel.structure):
                     found[("frols", k)] = [str(t) for t in sel.structure[:k]]
+        for src in (s for s in ("swap", "exact") if s in sources):
+            # the best subset of each size by a non-greedy search (frols(search=...)), one size at a time:
+            # a criterion run would cut the sizes its criterion rules out, which the choice here compares
+            reached[src] = set()
+            for k in sizes:
+                try:
+                    sel = gb.frols(candidates, ident, n_terms=k, include=forced, search=src)
+                except ValueError as e:  # fewer usable or independent candidates: the sizes below are reached
+                    if re.search(r"only \d+ (?:of the \d+ candidates are usable|independent terms)|no subset of \d+ "
+                                 r"independent terms", str(e)) is None:
+                        raise
+                    break
+                reached[src].add(k)
+                found[(src, k)] = [str(t) for t in sel.structure]
     if not found:
         raise ValueError(f"no search reached any of the sizes {sizes} (reached: "
                          f"{ {s: sorted(r) for s, r in reached.items()} })")
@@ -729,8 +768,11 @@ def select_graybox(
         Structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
         (fewer for a small candidate set or an identification record of few samples). Sizes a
         search does not reach are left out with a :class:`SelectionWarning`.
-    sources : sequence of {"semp", "frols"}
-        Where the structures of each size come from.
+    sources : sequence of {"semp", "frols", "swap", "exact"}
+        Where the structures of each size come from: the SEMP path, the FROLS path (greedy), the
+        best subset of each size by term exchanges from the greedy paths (``frols(search="swap")``,
+        about 0.1 s a size on the bundled plant) or by branch and bound (``search="exact"``: up to
+        100 usable candidates, seconds a size). Structures several sources give are one row.
     estimator : str or sequence of str, optional
         Gray box: ``"pe"`` (closed form unless constraints need a QP), ``"se-gradient"``,
         ``"se-ga"`` (default PE and SE gradient; PE alone with constraints). Black box: ``"ls"``,
@@ -828,9 +870,9 @@ def select_graybox(
     if executor == "inprocess" and (workers is not None or client is not None or scheduler is not None):
         raise ValueError("workers, client and scheduler need executor='processes' or 'dask'")
     for s in sources:
-        check_choice(s, "sources", ("semp", "frols"))
+        check_choice(s, "sources", SOURCES)
     if not sources:
-        raise ValueError("sources must name at least one of 'semp', 'frols'")
+        raise ValueError(f"sources must name at least one of {SOURCES}")
     if fallback is not None:
         check_choice(fallback, "fallback", ("min_jsf",))
     check_choice(rule, "rule", RULES)
@@ -879,7 +921,8 @@ def select_graybox(
     job, res, i = jobs[pos], results[pos], members[pos]
     structure = gb.Structure(job.terms.split(" + "))
     decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
-    table = table.sort_values("rank").drop(columns=["terms"])
+    table = table.sort_values("rank")
+    table = table[[c for c in table.columns if c != "terms"] + ["terms"]]  # long: last
     return GrayboxSelection(structure, decision.model, decision, table, None if form is None else form.degree, plan.band,
                             not used_fallback, used)
 
