@@ -380,3 +380,23 @@ def test_plot_static_curve_refuses_a_curve_that_is_not_one():
     for bad in (model, [model], lambda u: u, np.array([1.0, 2.0])):
         with pytest.raises(TypeError, match="curve must be a StaticCurve or a sequence of them"):
             plots.plot_static_curve(pts, bad)
+
+
+def test_bootstrap_figure_with_every_replicate_failed_builds_without_warnings():
+    # With no replicate in the band (and no fallback) the right panel has no point on its log axes,
+    # and the figure warned "Attempt to set non-positive ylim on a log-scaled axis".
+    from graybox import plots
+
+    rng = np.random.default_rng(0)
+    rec = speed_record(rng, 300, hold=10)
+    ub = np.array([2500.0, 3000.0, 3500.0])
+    pts = gb.StaticPoints(ub, speed_ybar(ub) + 1e4, input_names=("speed",))
+    boot = gb.bootstrap_decision(SPEED_TERMS, rec, pts, lambdas=[1.0], n_boot=3, band=1e-6, options={"solver": "closed"})
+    assert len(boot.failures) == 3 and "failure" in boot.reference
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = plots.plot_decision_bootstrap(boot)
+    ax = fig.axes[1]
+    assert "3 failed" in ax.get_title()
+    lo, hi = ax.get_ylim()
+    assert 0 < lo < 1e-6 < hi

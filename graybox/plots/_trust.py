@@ -194,13 +194,16 @@ def plot_decision_bootstrap(
     ax_l.grid(True, which="both", alpha=0.3)
     ok = boot.ok & np.isfinite(boot.JS) & np.isfinite(boot.JSF) & (boot.JS > 0) & (boot.JSF > 0)
     ax_r.plot(boot.JS[ok], boot.JSF[ok], "o", ms=4, alpha=0.6, color="C0", label=f"replicates ({int(ok.sum())})")
-    if "JS" in boot.reference and boot.reference["JS"] > 0 and boot.reference["JSF"] > 0:
+    drew_ref = "JS" in boot.reference and boot.reference["JS"] > 0 and boot.reference["JSF"] > 0
+    if drew_ref:
         ax_r.plot([boot.reference["JS"]], [boot.reference["JSF"]], "*", ms=14, mec="k", color="C1",
                   label="original data", zorder=5)
     ax_r.set_xscale("log")
     ax_r.set_yscale("log")
     band_lo, band_hi = (0.0, boot.band) if np.ndim(boot.band) == 0 else boot.band
     ylo, yhi = ax_r.get_ylim()
+    if not ok.any() and not drew_ref:  # nothing on the log axes: their limits are matplotlib's (0, 1)
+        ylo, yhi = band_hi / 100, band_hi * 10
     if band_lo > 0:  # a log axis has no 0: a band from 0 is shaded from the bottom
         ylo = min(ylo, band_lo)
     ax_r.axhspan(band_lo if band_lo > 0 else ylo, band_hi, color="0.85", zorder=0,
