@@ -400,3 +400,24 @@ def test_bootstrap_figure_with_every_replicate_failed_builds_without_warnings():
     assert "3 failed" in ax.get_title()
     lo, hi = ax.get_ylim()
     assert 0 < lo < 1e-6 < hi
+
+
+def test_pareto_figure_of_a_front_that_diverged_everywhere_can_be_saved(tmp_path):
+    # A front whose every member diverged (J = inf) built a figure that could not be drawn: saving it
+    # failed inside matplotlib with "Data cannot be log-scaled because all values are <= 0", and with a
+    # band it warned "Attempt to set non-positive ylim on a log-scaled axis".
+    from graybox import plots
+
+    rng = np.random.default_rng(0)
+    rec = speed_record(rng, 100, hold=10)
+    ub = np.array([2500.0, 3500.0])
+    pts = gb.StaticPoints(ub, speed_ybar(ub), input_names=("speed",))
+    unstable = np.array([[1.5, B1, B2, C0], [1.7, B1, B2, C0]])
+    front = gb.ParetoSet.from_thetas(gb.Structure(SPEED_TERMS), unstable, np.array([0.5, 1.0]), rec, pts)
+    assert np.isinf(front.JS).all()
+    for band in (None, 100.0):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            fig = plots.plot_pareto(front, band=band)
+            fig.savefig(tmp_path / "front.png", dpi=30)
+        assert "2 not drawn" in fig.axes[0].get_legend().get_texts()[0].get_text()

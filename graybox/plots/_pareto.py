@@ -125,7 +125,11 @@ def plot_pareto(
             continue
         ax.plot([js], [jsf], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k", label=name, zorder=5)
         ax.annotate(name, (js, jsf), textcoords="offset points", xytext=(6, 6), fontsize=9)
+    drawn = any(ln.get_xdata().size for ln in ax.lines)
     if log:
+        if not drawn:  # every J infinite: no data limits, and a log axis cannot take matplotlib's (0, 1)
+            ax.set_xlim(0.1, 10.0)
+            ax.set_ylim(*((0.1, 10.0) if band is None else (band / 100, band * 10)))
         ax.set_xscale("log")
         ax.set_yscale("log")
     if band is not None:
