@@ -645,8 +645,9 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         The identification data: ū outside their range gets a :class:`~graybox.StaticRangeWarning`.
     uncertainty : ParameterUncertainty, optional
         The model's parameter covariance (:func:`graybox.ls_uncertainty` and the others): the
-        gain and time-constant bands at its level are the quantiles of ``n_samples`` draws
-        θ ~ N(θ̂, cov), each at the equilibrium it reaches from the estimate's ȳ.
+        gain and time-constant bands at its level are the quantiles of ``n_samples`` draws of θ
+        around θ̂ with scale ``cov`` (multivariate t with its degrees of freedom, as its intervals),
+        each at the equilibrium it reaches from the estimate's ȳ.
     n_samples : int
         Monte Carlo draws for the bands.
     seed : int
@@ -678,7 +679,7 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
 
 def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: float, n: int, seed: int,
           single: bool) -> dict[str, Any]:
-    """Monte Carlo quantiles of the gain and the time constant under θ ~ N(θ̂, cov)."""
+    """Monte Carlo quantiles of the gain and the time constant under θ drawn around θ̂ (multivariate t)."""
     from ..diagnostics._uncertainty import theta_draws  # here: the estimators it loads cost a local model nothing
 
     cov = getattr(uncertainty, "cov", None)
@@ -690,7 +691,7 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
         raise ValueError("the gain and time-constant bands need an equilibrium at every operating point")
     th = model.theta
     rng = np.random.default_rng(seed)
-    thetas = theta_draws(th, cov, n, rng)
+    thetas = theta_draws(th, cov, n, rng, dof=getattr(uncertainty, "dof", None))  # t, as the intervals
     M = ub.shape[0]
     r = _reached(model, thetas, ub, ybar)
     ok = r.status == REACHED  # (n, M)

@@ -792,8 +792,9 @@ def _gain_gradient(structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndar
     return -(dFu_tot * Fy[:, None] - Fu[:, None] * dFy_tot) / (Fy**2)[:, None]
 
 
-def theta_draws(theta: np.ndarray, cov: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
-    """``n`` draws θ ~ N(θ, cov), shape (n, n_terms), in the units of θ.
+def theta_draws(theta: np.ndarray, cov: np.ndarray, n: int, rng: np.random.Generator,
+                dof: int | None = None) -> np.ndarray:
+    """``n`` draws θ ~ N(θ, cov) (or the multivariate t with ``dof``), shape (n, n_terms), in the units of θ.
 
     Drawn in standardised coordinates (the correlation matrix's eigenvectors, scaled back by the
     standard deviations): in engineering units the entries of ``cov`` span decades, and the
@@ -810,12 +811,19 @@ def theta_draws(theta: np.ndarray, cov: np.ndarray, n: int, rng: np.random.Gener
         Number of draws.
     rng : numpy.random.Generator
         Source of the normal deviates.
+    dof : int, optional
+        Degrees of freedom of an estimated covariance (:attr:`ParameterUncertainty.dof`): the draws
+        are then multivariate t, normal draws over √(χ²_dof / dof), the spread the intervals'
+        Student's t quantile stands for (normal draws are too narrow on a short record).
     """
     cov = (cov + cov.T) / 2
     sd = np.sqrt(np.clip(np.diag(cov), 0, None))
     sd = np.where(sd > 0, sd, 1.0)
     w, V = np.linalg.eigh(cov / np.outer(sd, sd))
-    return theta[None, :] + ((rng.standard_normal((n, theta.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T) * sd
+    dev = ((rng.standard_normal((n, theta.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T) * sd
+    if dof is not None:
+        dev /= np.sqrt(rng.chisquare(dof, n) / dof)[:, None]
+    return theta[None, :] + dev
 
 
 def static_curve_band(
@@ -891,9 +899,7 @@ def static_curve_band(
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name)
     n_samples = check_int(n_samples, "n_samples", low=10)
     rng = np.random.default_rng(check_seed(seed))
-    # multivariate t: normal draws over √(χ²_dof / dof), the spread of an estimated σ²
-    chi = np.sqrt(rng.chisquare(uncertainty.dof, n_samples) / uncertainty.dof)
-    thetas = th + (theta_draws(th, cov, n_samples, rng) - th) / chi[:, None]
+    thetas = theta_draws(th, cov, n_samples, rng, dof=uncertainty.dof)
     Y = reached_equilibria(st, thetas, ub, yb).ybar
     G = _gains(st, thetas, ub, Y)
     ok = np.isfinite(Y) & np.isfinite(G)
