@@ -439,3 +439,15 @@ def test_operating_curve_gain_band_covers_the_truth_on_a_short_record():
             oc = gb.operating_curve(model, ub, uncertainty=unc, n_samples=200, seed=r)
         hits.append((oc.gain_low <= speed_gain(ub)) & (speed_gain(ub) <= oc.gain_high))
     assert 0.9 <= np.mean(hits) <= 0.975, np.mean(hits, axis=0)  # the parameters' own: about 0.94 here
+
+
+@pytest.mark.parametrize("estimator", ["pe", "se"])
+def test_bootstrap_refuses_lambdas_among_the_sweep_options(estimator):
+    # options={"lambdas": …} was listed as a sweep option the bootstrap can pass, then collided with
+    # its own lambdas=: "pe_pareto() got multiple values for keyword argument 'lambdas'" from inside.
+    rec = speed_record(np.random.default_rng(0), 200, hold=10)
+    ub = np.array([2500.0, 3000.0, 3500.0])
+    pts = gb.StaticPoints(ub, speed_ybar(ub), input_names=("speed",), uncertainty=50.0)
+    with pytest.raises(ValueError, match=r"options \['lambdas'\].*pass lambdas= to bootstrap_decision"):
+        gb.bootstrap_decision(SPEED_TERMS, rec, pts, estimator=estimator, lambdas=[0.5, 1.0], n_boot=1,
+                              options={"lambdas": [0.5]})

@@ -310,10 +310,11 @@ def _estimator_options(estimator: str, options: Mapping | None) -> dict:
     opts = dict(options or {})
     fn = pe_pareto if estimator == "pe" else se_pareto
     allowed = [p.name for p in inspect.signature(fn).parameters.values() if p.kind == p.KEYWORD_ONLY]
-    taken = {"progress", "checkpoint"} if estimator == "se" else set()
+    taken = {"lambdas"} | ({"progress", "checkpoint"} if estimator == "se" else set())  # the bootstrap's own
     bad = [k for k in opts if k not in allowed or k in taken]
     if bad:
-        raise ValueError(f"options {bad} are not keyword options of {fn.__name__} the bootstrap can pass "
+        own = " (pass lambdas= to bootstrap_decision itself)" if "lambdas" in bad else ""
+        raise ValueError(f"options {bad} are not keyword options of {fn.__name__} the bootstrap can pass{own} "
                          f"(allowed: {sorted(set(allowed) - taken)})")
     return opts
 
