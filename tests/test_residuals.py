@@ -205,3 +205,18 @@ def test_figure(tmp_path):
     assert plot_residual_tests(t, axes=axes) is host
     with pytest.raises(ValueError, match="5 Axes"):
         plot_residual_tests(t, axes=axes[:2])
+
+
+def test_an_input_held_constant_leaves_its_tests_out_and_the_others_are_made():
+    # a record with a second input held at one value (a valve never moved) refused every test
+    # ("input 'valve' is constant"), the model not even using it
+    rec = simulate(0, N=400)
+    m = ls(GOOD, rec)
+    two = gb.Record(np.column_stack([rec.u, np.full(len(rec), 0.5)]), rec.y, input_names=("u", "valve"))
+    with pytest.warns(UserWarning, match="4 test\\(s\\) undefined.*'valve' is constant"):
+        t = gb.residual_tests(m, two)
+    assert set(t.undefined) == {f"{k}:valve" for k in ("u_xi", "xi_xiu", "u2_xi", "u2_xi2")}
+    assert set(t.tests) == {"xi_xi"} | {f"{k}:u" for k in ("u_xi", "xi_xiu", "u2_xi", "u2_xi2")}
+    one = gb.residual_tests(m, rec)
+    np.testing.assert_allclose(t["u_xi:u"].phi, one["u_xi"].phi)
+    assert t.passed == one.passed

@@ -52,7 +52,7 @@ coloured whenever the noise is). A neural model's residuals are those of its tra
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping, Sequence
 
@@ -65,7 +65,7 @@ from ..models._model import Model
 from ..estimation._neural import NeuralModel
 from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
-from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real
+from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, warn
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
@@ -154,6 +154,10 @@ class ResidualTests:
         Name of the model tested.
     residuals : tuple of ndarray
         ξ per record, shape (N_r − L,) (samples L … N_r − 1).
+    undefined : mapping str -> str
+        The tests these data cannot make, keyed as ``tests`` would be, with why: an input held
+        constant (its four input tests), or one taking two levels equally often (u'² constant: its
+        two u² tests). They are not in ``tests`` and take no part in :attr:`passed`.
     """
 
     tests: Mapping[str, CorrelationTest]
@@ -162,6 +166,7 @@ class ResidualTests:
     rule: str
     model_name: str
     residuals: tuple[np.ndarray, ...]
+    undefined: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -197,10 +202,13 @@ class ResidualTests:
                 "lags outside band": t.outside.tolist()}
             for k, t in self.tests.items()
         }
+        rows.update({k: {"test": k, "passed": None, "undefined": why} for k, why in self.undefined.items()})
         return pd.DataFrame.from_dict(rows, orient="index")
 
     def __repr__(self) -> str:
         verdict = "all passed" if self.passed else f"failed: {', '.join(self.tests[k].label for k in self.failed)}"
+        if self.undefined:
+            verdict += f"; {len(self.undefined)} undefined on these data ({', '.join(self.undefined)})"
         return f"ResidualTests({self.model_name or 'model'}: N = {self.n}, {self.rule} {self.level:.0%}; {verdict})"
 
 
@@ -351,8 +359,7 @@ def residual_tests(
     ValueError
         A record shorter than the model's lags plus ``max_lag`` + 2, constant residuals (within
         1e-10 of the largest |y|, round-off: a model that reproduces the data exactly has nothing
-        to test), a constant input, an input taking two levels equally often (u'² constant: the
-        u² tests are undefined), a record sampled at another period than the model was identified
+        to test), every input constant, a record sampled at another period than the model was identified
         at, bad options.
 
     Notes
@@ -383,15 +390,25 @@ def residual_tests(
         raise ValueError("the residuals are constant to round-off: the model reproduces the data exactly, there is "
                          "nothing to test")
     allu = np.concatenate(us)
+    # tests these data cannot make: left out and named (a held input, a balanced PRBS), not NaN verdicts
+    undefined: dict[str, str] = {}
     for j, nm in enumerate(names):
-        what = "the input" if len(names) == 1 else f"input {nm!r}"
+        tag = "" if len(names) == 1 else f":{nm}"
         if np.ptp(allu[:, j]) == 0.0:
-            raise ValueError(f"{what} is constant: the input correlation tests are undefined")
+            for key in ("u_xi", "xi_xiu", "u2_xi", "u2_xi2"):
+                undefined[key + tag] = f"input {nm!r} is constant on these data"
+            continue
         u2 = ((allu[:, j] - np.mean(allu[:, j])) / np.std(allu[:, j])) ** 2
         if np.ptp(u2) <= 1e-9 * np.max(u2):  # round-off of ±1: its correlations would be noise
-            raise ValueError(f"input {nm!r} takes two levels equally often, so u'² is constant and φ_(u²)'ξ, "
-                             "φ_(u²)'ξ² are undefined (for any two-level input they repeat φ_uξ); test on a record "
-                             "where the input takes more levels, or its levels unequally often")
+            for key in ("u2_xi", "u2_xi2"):
+                undefined[key + tag] = (f"input {nm!r} takes two levels equally often: u'² is constant (for any "
+                                        "two-level input these tests repeat φ_uξ)")
+    if len(undefined) == 4 * len(names):
+        raise ValueError(("the input is constant" if len(names) == 1 else "every input is constant")
+                         + ": the input correlation tests are undefined")
+    if undefined:
+        warn(f"residual_tests: {len(undefined)} test(s) undefined on these data, left out: "
+             + "; ".join(f"{k} ({why})" for k, why in undefined.items()), UserWarning)
     z = stats.norm.ppf(0.5 + level / 2)
     band = float(z / np.sqrt(n))
     out = {}
@@ -404,6 +421,9 @@ def residual_tests(
         else:
             limit = float(stats.norm.ppf(1 - (1 - level) / (2 * lags.size)) / np.sqrt(n))
         for nm, j in ([(None, 0)] if key == "xi_xi" else per_input):
+            k = key if nm is None else f"{key}:{nm}"
+            if k in undefined:
+                continue
             # u in units of its own spread: u² of 1e3 rpm would otherwise lose digits to the mean removal
             col = allu[:, j]
             uc = [(u[:, j] - np.mean(col)) / np.std(col) for u in us]
@@ -417,13 +437,12 @@ def residual_tests(
                 phi = _xcorr([u**2 for u in uc], xi, lags)
             else:
                 phi = _xcorr([u**2 for u in uc], [e**2 for e in xi], lags)
-            k = key if nm is None else f"{key}:{nm}"
             lab = label if nm is None else label.replace("u", nm)
             outside = lags[np.abs(phi) > band]
             out[k] = CorrelationTest(k, lab, kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
                                      bool(np.all(np.abs(phi) <= limit)))
     return ResidualTests(MappingProxyType(out), n, level, rule, getattr(model, "name", ""),
-                         tuple(_ro(e) for e in xi))
+                         tuple(_ro(e) for e in xi), MappingProxyType(undefined))
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
