@@ -298,6 +298,22 @@ class _Form:
     inputs: tuple[str, ...]
 
 
+#: Blocks of the validation record and folds of a record alone, when not given.
+BLOCKS, FOLDS = 5, 3
+
+
+def _moot_split(folds: int | None, blocks: int | None, valid: gb.Record | None) -> None:
+    """An explicit ``folds`` or ``blocks`` the data make moot: said, not ignored (``ValueError``)."""
+    if valid is not None and folds is not None:
+        raise ValueError(f"folds={folds} applies when the choice is on folds of one record, but there is a "
+                         f"validation record ({valid.name!r}): the choice is on blocks of it; drop folds "
+                         "(blocks= sets how many), or pass the identification record alone")
+    if valid is None and blocks is not None:
+        raise ValueError(f"blocks={blocks} cuts a validation record, but there is no validation record: the "
+                         "choice is on folds of the identification record (each fold one block); drop blocks "
+                         "(folds= sets how many), or pass validation=")
+
+
 def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tuple[_Plan, _Form | None]:
     if not isinstance(candidates, gb.Structure):
         raise TypeError(f"candidates must be a candidate set (a Structure, e.g. graybox.Candidates(...)), got "
@@ -312,6 +328,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         ident, valid = data, validation
     else:
         raise TypeError(f"data must be a Dataset or a Record, got {type(data).__name__}")
+    _moot_split(folds, blocks, valid)
     if band is not None and sp is None:
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
@@ -355,10 +372,10 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
                              "the record alone (folds)")
         check_overlap(valid, ident, "validation", "identification",
                       "choose on data the fit did not see, or pass the record alone (folds)")
-        splits = ((ident, valid, _block_edges(len(valid), L, blocks)),)
+        splits = ((ident, valid, _block_edges(len(valid), L, BLOCKS if blocks is None else blocks)),)
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in
-                       _folds(ident, folds, L + 2))
+                       _folds(ident, FOLDS if folds is None else folds, L + 2))
     if sp is not None:
         # said here, once, after the errors: every job's fits silence it (a units mix-up must not go unsaid)
         warn_static_range(sp.ubar, [ident], "static points" if isinstance(given, gb.StaticPoints) else
@@ -733,8 +750,8 @@ def select_graybox(
     validation: gb.Record | None = None,
     test: gb.Record | None = None,
     rule: str = "one-se",
-    blocks: int = 5,
-    folds: int = 3,
+    blocks: int | None = None,
+    folds: int | None = None,
     shortlist: int | None = None,
     include: Sequence[str] = ("1",),
     fallback: str | None = None,
@@ -793,11 +810,13 @@ def select_graybox(
         How the row is chosen from the scores on the choosing data: ``"one-se"`` (default) the
         fewest parameters among the rows within one standard error of the best (per-block log
         ratio of J_S), ``"min"`` the smallest J_S.
-    blocks : int
+    blocks : int, optional
         Contiguous blocks the validation record is cut into for the standard errors (>= 2;
-        fewer, with a :class:`SelectionWarning`, when the record is too short for them).
-    folds : int
-        Contiguous folds when there is no validation record (>= 2); each fold is one block.
+        default 5; fewer, with a :class:`SelectionWarning`, when the record is too short for
+        them). Refused (``ValueError``) without a validation record: the choice is then on folds.
+    folds : int, optional
+        Contiguous folds when there is no validation record (>= 2; default 3); each fold is one
+        block. Refused (``ValueError``) with a validation record: the choice is then on its blocks.
     shortlist : int, optional
         Faster, less thorough: with PE, LS or ELS among the estimators, the slow ones (SE and
         output error, seconds per structure) fit only the ``shortlist`` structures those rank best
@@ -853,7 +872,7 @@ def select_graybox(
         sizes = [check_int(s, "sizes", low=1) for s in check_sequence(sizes, "sizes")]
     include = check_sequence(include, "include")
     lam = None if lambdas is None else tuple(float(x) for x in check_lambdas(lambdas))
-    folds, blocks = check_int(folds, "folds", low=2), check_int(blocks, "blocks", low=2)
+    folds, blocks = (None if v is None else check_int(v, k, low=2) for v, k in ((folds, "folds"), (blocks, "blocks")))
     if shortlist is not None:
         shortlist = check_int(shortlist, "shortlist", low=1)
         slow = [e for e in estimators if e in SLOW_ESTIMATORS]

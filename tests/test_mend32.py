@@ -1,0 +1,57 @@
+"""Mend 32: options a call cannot use are refused, not ignored (select_graybox's folds and blocks);
+defaults that follow the data (frols' and semp's max_terms on short records); a band message that
+says what it accepts; value objects that compare and hash; from_repeats' uncertainty per measurement."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+CAND = gb.Candidates(ny=1, nu=1, degree=2)
+
+
+def first_order(n, seed, noise=0.01):
+    """y = 0.6 y + 0.3 u + 0.05 u² + 0.1 under a staircase of random levels held 10 samples."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 2.0, n // 10 + 1), 10)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.6 * y[k - 1] + 0.3 * u[k - 1] + 0.05 * u[k - 1] ** 2 + 0.1
+    return gb.Record(u, y + noise * rng.standard_normal(n), name=f"r{seed}")
+
+
+def black_box(data, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.SelectionWarning)
+        return gb.select_graybox(CAND, data, sizes=[2, 3], sources=("frols",), estimator="ls", **kw)
+
+
+# -- 1. select_graybox: folds without folds, blocks without blocks ---------------------------------
+
+@pytest.mark.parametrize("how", ["dataset", "validation="])
+def test_folds_with_a_validation_record_is_refused_naming_it(how):
+    # was: folds was silently ignored (the choice is on blocks of the validation record)
+    ident, valid = first_order(200, 1), first_order(200, 2)
+    data, kw = (gb.Dataset(ident, valid), {}) if how == "dataset" else (ident, {"validation": valid})
+    with pytest.raises(ValueError, match="folds.*validation record"):
+        black_box(data, folds=4, **kw)
+
+
+def test_blocks_without_a_validation_record_is_refused_naming_it():
+    # was: blocks was silently ignored (the choice is on folds of the one record)
+    with pytest.raises(ValueError, match="blocks.*no validation record"):
+        black_box(first_order(200, 1), blocks=4)
+
+
+def test_the_defaults_are_the_values_they_were():
+    """None means blocks=5 with a validation record and folds=3 without: the same tables."""
+    ident, valid = first_order(200, 1), first_order(200, 2)
+    cols = ["source", "n_terms", "estimator", "JS_valid", "vs_best", "vs_best_se", "rank"]
+    a, b = black_box(gb.Dataset(ident, valid)), black_box(gb.Dataset(ident, valid), blocks=5)
+    assert a.table[cols].equals(b.table[cols])
+    assert not a.table[cols].equals(black_box(gb.Dataset(ident, valid), blocks=2).table[cols])
+    a, b = black_box(ident), black_box(ident, folds=3)
+    assert a.table[cols].equals(b.table[cols])
+    assert not a.table[cols].equals(black_box(ident, folds=2).table[cols])
