@@ -55,3 +55,44 @@ def test_the_defaults_are_the_values_they_were():
     a, b = black_box(ident), black_box(ident, folds=3)
     assert a.table[cols].equals(b.table[cols])
     assert not a.table[cols].equals(black_box(ident, folds=2).table[cols])
+
+
+# -- 2. frols and semp: the default max_terms follows the record ------------------------------------
+
+WIDE = gb.Candidates(ny=2, nu=2, degree=3)  # 34 process candidates: more than a short record's rows
+
+
+@pytest.mark.parametrize("select", [gb.frols, gb.semp], ids=["frols", "semp"])
+def test_the_default_max_terms_is_what_a_short_record_carries(select):
+    # was: frols asked to "lower max_terms" and semp found "20 samples … too few for 30 terms",
+    # though nobody passed max_terms
+    rec = first_order(22, 3)
+    rows = len(rec) - WIDE.process.max_lag
+    assert rows < len(WIDE.process) and rows < 30
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing said: nobody asked for more than the rows carry
+        warnings.simplefilter("ignore", gb.CandidateWarning)  # a short staircase repeats some columns
+        res = select(WIDE, rec, criterion="bic")
+    assert 1 <= len(res.structure) < rows
+
+
+@pytest.mark.parametrize("select", [gb.frols, gb.semp], ids=["frols", "semp"])
+def test_an_explicit_max_terms_the_rows_cannot_carry_is_an_error_naming_it(select):
+    rec = first_order(22, 3)
+    rows = len(rec) - WIDE.process.max_lag
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        with pytest.raises(ValueError, match="max_terms"):
+            select(WIDE, rec, criterion="bic", max_terms=rows)
+        assert len(select(WIDE, rec, criterion="bic", max_terms=rows - 1).structure) < rows
+
+
+@pytest.mark.parametrize("select", [gb.frols, gb.semp], ids=["frols", "semp"])
+def test_a_long_record_keeps_the_default_max_terms(select):
+    """The cap only binds on short records: on a long one the default is what it was (frols 50, semp 30)."""
+    rec = first_order(400, 4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = select(WIDE, rec, criterion="bic")
+        b = select(WIDE, rec, criterion="bic", max_terms=min(len(WIDE.process), 50 if select is gb.frols else 30))
+    assert a.structure == b.structure

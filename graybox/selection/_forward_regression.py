@@ -583,7 +583,8 @@ def frols(
         Information criterion (see :func:`information_criterion`).
     max_terms : int, optional
         Largest model size looked at for ``tol`` (default: all candidates) and ``criterion``
-        (default: min(50, candidates)). Not allowed with ``n_terms``.
+        (default: min(50, candidates, regression rows − 1), what the record carries; a larger
+        explicit one is an error naming it). Not allowed with ``n_terms``.
     rank_tol : float, optional
         A candidate whose orthogonalised norm is below ``rank_tol`` times its original norm
         is treated as a linear combination of the selected terms and dropped.
@@ -698,9 +699,12 @@ def frols(
     elif mode == "tol":
         K = min(n_usable, max_terms or n_usable)
     else:
-        K = min(n_usable, max_terms or _DEFAULT_MAX_TERMS)
-    if mode == "criterion" and K >= N:
-        raise ValueError(f"criterion needs more rows ({N}) than model terms ({K}); lower max_terms")
+        # a default follows the data: no more terms than the rows carry (nobody asked for more: nothing said)
+        K = min(n_usable, max_terms or min(_DEFAULT_MAX_TERMS, N - 1))
+    if mode == "criterion" and max(K, max_terms or 0) >= N:  # what was asked, even where fewer candidates are usable
+        raise ValueError(f"criterion needs more rows ({N}) than model terms ({max(K, max_terms or 0)}); lower max_terms")
+    if mode == "criterion" and K < len(forced):
+        raise ValueError(f"criterion needs more rows ({N}) than the {len(forced)} included terms")
     if mode == "n_terms" and K >= N:  # said before any search, in the same words for all of them
         raise ValueError(f"more terms ({K}) than regression rows ({N})")
 
@@ -732,7 +736,8 @@ def frols(
         # every model looked at holds the included terms: none of fewer terms is a candidate
         n0 = max(n_included, 1) - 1
         i, stop = choose_model(rule, np.arange(1, k_eval + 1)[n0:], curve[n0:], (rss / yy)[n0:],
-                               can_grow=k_eval < n_usable, fraction="1 - ΣERR")
+                               can_grow=k_eval < min(n_usable - n_dependent, N - 1),
+                               fraction="1 - ΣERR")
         n_sel = n0 + i + 1
     else:
         n_sel, stop = n_plan, plan.stop
@@ -975,7 +980,7 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
         raise
     ks = np.array([len(S) for S in plan.subsets])
     crit = criterion_of_sizes(rule.criterion, ks, plan.rss, N)
-    i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy, can_grow=ks.max() < n_free + len(forced),
+    i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy, can_grow=ks.max() < min(n_free + len(forced), N - 1),
                            fraction="1 - ΣERR")
     how = ("exact (branch and bound, proven)" if plan.proven else
            f"exact search ran out of its {EXACT_NODES} nodes: best found, not proven") if search == "exact" else \

@@ -260,7 +260,9 @@ def semp(
     criterion : {"aic", "bic", "fpe"}, optional
         Information criterion of the free-run error (see :func:`graybox.information_criterion`).
     max_terms : int, optional
-        Largest structure looked at (``tol`` and ``criterion``; default min(30, candidates)).
+        Largest structure looked at (``tol`` and ``criterion``; default min(30, candidates,
+        samples after the largest lag − 1), what the record carries; a larger explicit one is an
+        error naming it).
     include : sequence of Term or str
         Terms in every structure, added first (e.g. ``["1"]``); never pruned.
     prune : bool
@@ -296,11 +298,17 @@ def semp(
     """
     opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
     sc = _Scorer(opt.process, as_records(data), opt.threads)
-    # n_terms: the look-ahead past that size stops where the rows do; only the size asked must fit
-    needed = opt.n_terms if opt.mode == "n_terms" else opt.limit
-    if sc.n_rows <= needed:
-        raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for {needed} terms")
+    # the size asked for (n_terms, an explicit max_terms) must fit the rows; the look-ahead past n_terms
+    # and a default max_terms stop where the rows do (nobody asked for more: nothing said)
+    if opt.mode == "n_terms" and sc.n_rows <= opt.n_terms:
+        raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for {opt.n_terms} terms")
+    if max_terms is not None and sc.n_rows <= opt.limit:
+        raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for max_terms = {opt.limit} terms: "
+                         "lower it, or leave it out (then it is what the rows carry)")
     opt = replace(opt, limit=min(opt.limit, sc.n_rows - 1))
+    if len(opt.forced) > opt.limit:
+        raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for the {len(opt.forced)} "
+                         "included terms")
     run = _Search(sc, opt)
     stop, capped = _grow(run)
     return _result(run, stop, capped)
@@ -437,7 +445,8 @@ def _stop_reason(run: _Search, cands: np.ndarray) -> tuple[str, bool]:
     if opt.mode == "tol" and current and score / sc.yvar <= opt.tol:
         return f"free-run MSE / var(y) = {score / sc.yvar:.3g} ≤ {opt.tol:g}", False
     if len(current) >= opt.limit:
-        return f"{opt.limit} terms reached", opt.limit < int(np.sum(~sc.zero))
+        # cut short only if a larger structure could have been looked at: candidates and rows left
+        return f"{opt.limit} terms reached", opt.limit < min(int(np.sum(~sc.zero)), sc.n_rows - 1)
     if opt.mode == "n_terms" and score <= sc.floor and len(current) > opt.n_terms:
         return "exact free run (noise-free data) reached", False
     if cands.size == 0:
