@@ -96,3 +96,13 @@ def test_a_long_record_keeps_the_default_max_terms(select):
         a = select(WIDE, rec, criterion="bic")
         b = select(WIDE, rec, criterion="bic", max_terms=min(len(WIDE.process), 50 if select is gb.frols else 30))
     assert a.structure == b.structure
+
+
+# -- 3. select_graybox: the band message says what is accepted ---------------------------------------
+
+@pytest.mark.parametrize("band", [np.nan, -np.inf, 0.0, -1.0])
+def test_a_bad_band_is_refused_saying_that_inf_is_accepted(band):
+    # was: "band must be a finite number" for nan, though band=inf is accepted (the black box)
+    sp = gb.StaticPoints([0.5, 1.0, 1.5], [1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match=r"band must be a number B > 0 .*or inf .*black box"):
+        black_box(first_order(200, 1), static=sp, band=band)

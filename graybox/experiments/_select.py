@@ -953,7 +953,11 @@ def _band(band: object, sp: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface 
     if isinstance(band, (float, np.floating)) and band == np.inf:
         return None
     if band is not None:
-        return check_real(band, "band", low=0, low_open=True)
+        try:
+            return check_real(band, "band", low=0, low_open=True)
+        except ValueError:  # check_real's "finite" would deny the inf this option takes
+            raise ValueError(f"band must be a number B > 0 (J_SF's bound, output units²) or inf (no static "
+                             f"requirement: a black box), got {band!r}") from None
     if isinstance(sp, gb.StaticPoints) and sp.uncertainty is not None:
         return sp.band
     return None
