@@ -695,6 +695,27 @@ def test_structured_options_keep_their_valid_forms():
     assert psi.shape == (79, 2)
 
 
+def test_every_public_value_equals_itself_and_hashes(request, tmp_path, monkeypatch):
+    """One agreement for every public class built here: ``x == x`` is True, ``hash(x)`` works and ``==``
+    against a copy gives a bool (a frozen dataclass holding arrays raised "truth value … ambiguous")."""
+    import copy
+
+    monkeypatch.chdir(tmp_path)
+    built = 0
+    for label, (args, kwargs) in CALLS.items():
+        if not inspect.isclass(PUBLIC.get(label)):
+            continue
+        args, kwargs = _resolve(request, args, kwargs)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            x = _invoke(PUBLIC[label], args, kwargs)
+        assert (x == x) is True, label
+        hash(x)
+        assert isinstance(x == copy.copy(x), bool), label
+        built += 1
+    assert built >= 40  # the walk found the public classes
+
+
 def test_every_public_dataclass_is_called():
     """Values and results alike: each public dataclass is built here (a result from one the library made)."""
     missing = sorted(k for k, obj in PUBLIC.items()

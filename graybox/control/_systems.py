@@ -35,7 +35,7 @@ from ._local import system_name, check_polynomial, require_control
 __all__ = ["narx_iosystem", "narx_initial_state", "narx_state_names", "narx_steady_state"]
 
 # -- the whole model ------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Layout:
     """Where each lag sits in the state, and the exponents of every term in the state variables."""
 

@@ -44,7 +44,9 @@ def as_input_array(x: object, name: str) -> np.ndarray:
     return a
 
 
-@dataclass(frozen=True)
+# eq=False here and on every value holding arrays: == on arrays has no single truth value, so these
+# compare by identity and hash, as Model and the results do
+@dataclass(frozen=True, eq=False)
 class Record:
     """One dynamic experiment: input ``u`` and output ``y`` sampled every ``Ts`` seconds.
 
@@ -135,7 +137,7 @@ class Record:
             )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StaticPoints:
     """Measured steady states: at constant input ``ubar[i]`` the output settled at ``ybar[i]``.
 
@@ -310,7 +312,7 @@ def check_period(Ts: float | None, what: str, record: Record) -> None:
                          "made without Ts= has Ts = 1 s)")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Dataset:
     """A named bundle: identification and validation records plus static points.
 

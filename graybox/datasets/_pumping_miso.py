@@ -101,7 +101,7 @@ DYNAMIC_COLUMNS_MISO = ("time_s", "speed1_ref_rpm", "speed2_ref_rpm", "pressure_
 STATIC_COLUMNS_MISO = ("speed1_rpm", "speed2_rpm", "pressure_mlc")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TwoSpeedRun:
     """The result of one simulation of :class:`TwoSpeedPumpingPlant`, sampled at t = k Ts.
 

@@ -232,7 +232,7 @@ DEFAULT_SEED = 2011
 NOISE_STD = 0.175 / 1.96
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PlantRun:
     """The result of one simulation, all arrays of shape (N,) sampled at t = k Ts.
 

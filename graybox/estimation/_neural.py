@@ -846,7 +846,7 @@ def _deterministic(H: int, ny: int, nu: int, ne: int) -> np.ndarray:
     return det
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Signals:
     """Records concatenated in normalised units, with the training-row mask (each record's samples L …)."""
 

@@ -662,7 +662,7 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
     return lines
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class GridStatus:
     """Where a grid stands (:func:`grid_status`): readable while another process writes the store.
 

@@ -21,7 +21,7 @@ from ._store import ResultStore
 __all__ = ["GridRun", "run_grid"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class GridRun:
     """What :func:`run_grid` did.
 

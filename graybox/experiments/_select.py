@@ -215,7 +215,7 @@ register_type("GrayboxSelection", GrayboxSelection,
 
 # -- 1. inputs ---------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Plan:
     """What every job needs: where to fit, where to choose (blocks), where to report."""
 
@@ -485,7 +485,7 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
 
 # -- 3. scoring --------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Job:
     name: str
     terms: str

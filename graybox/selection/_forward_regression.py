@@ -944,7 +944,7 @@ def _chosen_factors(cols: _Columns, process: Structure, chosen: list[int]) -> tu
     return C, g
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Plan:
     """What the subset search found: the best subset of each size, the chosen one and its order."""
 

@@ -318,7 +318,7 @@ def semp(
 # SEMP's phases: options, the search state, forward steps with pruning, the chosen structure
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Options:
     """The checked arguments of :func:`semp`, its stopping mode and the size limit of the search."""
 

@@ -283,7 +283,7 @@ def exact_search(problem: SubsetProblem, k: int, forced: list[int], incumbent: l
     return best[0], best[1], proven
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SizePlan:
     """The outcome of a subset search over sizes.
 

@@ -155,7 +155,7 @@ def ascii_cluster_name(name: object, *, single_input: bool) -> object:
     return "Σ" + body
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ClusterMap:
     """The clusters of a structure and the 0/1 map R with Σ = R θ.
 

@@ -14,7 +14,7 @@ from ..core._reprs import short_repr
 __all__ = ["StaticCurve"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StaticCurve:
     """A polynomial static curve H(ū) = c0 + c1 ū + c2 ū² + … (engineering units).
 

@@ -82,7 +82,7 @@ def surface_cluster_name(p: int, powers: tuple[int, ...], inputs: tuple[str, ...
     return "Σ0" if s == "Σ" else s
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SurfaceClusterMap:
     """The clusters Ω_{y^p u1^a1 ⋯ um^am} of a structure with several inputs and the 0/1 map R (Σ = R θ).
 

@@ -81,7 +81,7 @@ def _exponent_vectors(value: object, name: str) -> tuple[tuple[int, ...], ...]:
     return tuple(out)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StaticSurface:
     """A polynomial static surface H(ū) = Σ_e c_e ū₁^e₁ … ū_m^e_m (engineering units).
 
