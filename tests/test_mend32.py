@@ -6,6 +6,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import graybox as gb
 
@@ -197,3 +199,45 @@ def test_the_value_equality_kept_works():
         c = copy.deepcopy(a)
         assert c is not a and c == a and hash(c) == hash(a), name
         assert a != b, name
+
+
+# -- 5. from_repeats: one δ per measurement, combined per level as the mean is -----------------------
+
+def test_a_per_level_uncertainty_is_refused_its_order_being_ambiguous():
+    # was: [0.1, 0.5] was paired with the levels sorted (1000 -> 0.1), not as written (3000 -> 0.1)
+    with pytest.raises(ValueError, match=r"uncertainty.*one δ per measurement \(4, as ybar\).*with_uncertainty"):
+        gb.StaticPoints.from_repeats([3000, 3000, 1000, 1000], [1.0, 1.2, 3.0, 3.4], uncertainty=[0.1, 0.5])
+
+
+def test_one_uncertainty_per_measurement_is_paired_as_written_and_averaged_per_level():
+    sp = gb.StaticPoints.from_repeats([3000, 3000, 1000, 1000], [1.0, 1.2, 3.0, 3.4],
+                                      uncertainty=[0.1, 0.1, 0.5, 0.3])
+    assert sp.ubar.tolist() == [1000, 3000]
+    assert sp.ybar == pytest.approx([3.2, 1.1]) and sp.uncertainty == pytest.approx([0.4, 0.1])
+    # no repeats: the δ stay with their measurements, whatever the order of the levels
+    sp = gb.StaticPoints.from_repeats([3000, 1000], [1.0, 3.0], uncertainty=[0.1, 0.5])
+    assert sp.uncertainty.tolist() == [0.5, 0.1]
+    assert gb.StaticPoints.from_repeats([3000, 1000, 1000], [1.0, 3.0, 3.2], uncertainty=0.2).uncertainty.tolist() == [0.2, 0.2]
+
+
+def test_a_measurement_without_uncertainty_is_refused_though_its_level_mean_is_positive():
+    with pytest.raises(ValueError, match=r"uncertainty must be > 0"):
+        gb.StaticPoints.from_repeats([1000, 1000], [3.0, 3.2], uncertainty=[0.0, 0.4])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from([1.0, 2.0, 3.0]), st.floats(-5, 5), st.floats(0.01, 1.0)),
+                min_size=1, max_size=8), st.randoms(use_true_random=False))
+def test_the_points_do_not_depend_on_the_order_the_measurements_are_listed(rows, rnd):
+    """(ū, ȳ, δ) of each measurement travel together: any order gives the same points."""
+    shuffled = list(rows)
+    rnd.shuffle(shuffled)
+    a, b = (gb.StaticPoints.from_repeats([u for u, _, _ in r], [y for _, y, _ in r], uncertainty=[d for _, _, d in r])
+            for r in (rows, shuffled))
+    assert a.ubar.tolist() == b.ubar.tolist()
+    np.testing.assert_allclose(a.ybar, b.ybar, atol=1e-12)
+    np.testing.assert_allclose(a.uncertainty, b.uncertainty, rtol=1e-12)
+    levels = {u for u, _, _ in rows}
+    assert len(a) == len(levels)
+    for u, d in zip(a.ubar, a.uncertainty):
+        assert d == pytest.approx(np.mean([dd for uu, _, dd in rows if uu == u]))

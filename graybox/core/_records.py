@@ -183,10 +183,7 @@ class StaticPoints:
         object.__setattr__(self, "ybar", y)
         object.__setattr__(self, "input_names", names)
         if self.uncertainty is not None:
-            d = np.array(check_per_point(self.uncertainty, y.size, f"{self.name}: uncertainty"), dtype=float)
-            if (d <= 0).any():
-                raise ValueError(f"{self.name}: uncertainty must be > 0 at every point (output units), got "
-                                 f"{d[d <= 0][:3].tolist()}")
+            d = _uncertainty(self.uncertainty, y.size, self.name, "point")
             d.setflags(write=False)
             object.__setattr__(self, "uncertainty", d)
 
@@ -223,9 +220,15 @@ class StaticPoints:
             Input level of each measurement (engineering units); levels may repeat.
         ybar : array_like, shape (N,)
             Settled output of each measurement.
-        name, input_names, uncertainty
-            As for :class:`StaticPoints` (``uncertainty``: of the averaged points, one number or
-            one per distinct level).
+        name, input_names
+            As for :class:`StaticPoints`.
+        uncertainty : float or array_like of shape (N,), optional
+            δ (output units, each > 0): one number for every measurement, or one per measurement,
+            paired with ``ybar`` as written; a level's δ is the mean of its measurements' (as its
+            ȳ is: when each measured ȳ_j is within δ_j of the steady state, their mean is within
+            the mean δ_j). One per distinct level is refused (``ValueError``): the order of the
+            levels is ambiguous. To give those, set them on the result,
+            ``points.with_uncertainty(δ)``, in the order of ``points.ubar`` (sorted).
 
         Returns
         -------
@@ -241,7 +244,16 @@ class StaticPoints:
             raise ValueError(f"{name}: no static points")
         uniq, inverse = np.unique(u, return_inverse=True, axis=0)
         inverse = np.asarray(inverse).reshape(-1)
-        mean = np.bincount(inverse, weights=y) / np.bincount(inverse)
+        count = np.bincount(inverse)
+        mean = np.bincount(inverse, weights=y) / count
+        if uncertainty is not None:
+            given = np.shape(uncertainty)
+            if len(given) == 1 and given[0] not in (1, y.size):
+                raise ValueError(f"{name}: uncertainty must be one number or one δ per measurement ({y.size}, as "
+                                 f"ybar), got {given[0]}: paired with the {uniq.shape[0]} levels it would "
+                                 "follow their sorted order, not the order written; give it per measurement, or "
+                                 "set it on the points: points.with_uncertainty(δ), in the order of points.ubar")
+            uncertainty = np.bincount(inverse, weights=_uncertainty(uncertainty, y.size, name, "measurement")) / count
         names = None if input_names is None else check_input_names(input_names, what=f"{name}: input_names")
         return cls(uniq, mean, name, names, uncertainty)
 
@@ -258,6 +270,15 @@ class StaticPoints:
         unc = "" if self.uncertainty is None else f", ±{np.max(self.uncertainty):.4g}"
         return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in [{self.ybar.min():.4g}, "
                 f"{self.ybar.max():.4g}]{unc})")
+
+
+def _uncertainty(value: object, n: int, name: str, each: str) -> np.ndarray:
+    """δ as a float array of shape (n,), each > 0 (output units), or ``TypeError``/``ValueError`` naming it."""
+    d = np.array(check_per_point(value, n, f"{name}: uncertainty"), dtype=float)
+    if (d <= 0).any():
+        raise ValueError(f"{name}: uncertainty must be > 0 at every {each} (output units), got "
+                         f"{d[d <= 0][:3].tolist()}")
+    return d
 
 
 def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.ndarray:

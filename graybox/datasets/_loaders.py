@@ -515,7 +515,8 @@ def load_static_csv(
         The decimal mark (as in :func:`load_record_csv`; detected by default).
     uncertainty : float or sequence of float, optional
         δ, how far each ȳ may lie from the true steady state (output units; one number, or one
-        per point in the returned order), carried on the points: D_SF's band and
+        per line of the file, with ``repeats="mean"`` averaged per level as ȳ is), carried on the
+        points: D_SF's band and
         :class:`~graybox.StaticBand`'s half-widths then follow from it. Default: none (bands
         must be given).
 
