@@ -393,9 +393,11 @@ def test_decision_makers_take_a_pareto_set_only(results, data):
     assert a.index == gb.decide_min_correlation(front, data.ident).index
 
 
-def test_a_cls_result_is_saved_through_its_model(results, tmp_path):
+def test_a_cls_result_is_saved_whole_and_through_its_model(results, tmp_path):
+    # a CLSResult is a saved type since its static information (points, curve, surface) has codecs
     res = results["CLSResult"]
-    with pytest.raises(ValueError, match="save its .model"):
-        gb.to_json(res)
+    whole = gb.load(gb.save(res, tmp_path / "cls_result.json"), expect=gb.CLSResult)
+    np.testing.assert_array_equal(whole.model.theta, res.model.theta)
+    assert whole.constraints == res.constraints and whole.solver == res.solver
     back = gb.load(gb.save(res.model, tmp_path / "cls.json"), expect=gb.Model)
     np.testing.assert_array_equal(back.theta, res.model.theta)
