@@ -1,0 +1,98 @@
+"""Slow plants sampled fast: whether an equilibrium is reached, and the static band's stability margin,
+must not depend on how many samples the plant's time constant spans."""
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings, strategies as st
+
+import graybox as gb
+from graybox.static import _analysis
+from graybox.static._analysis import SETTLE_STEPS, reached_equilibria
+from graybox.static._equilibrium_kernels import NOT_SETTLED, REACHED
+
+#: A term in y² keeps the settling run in play (a rational structure is decided in closed form).
+QUAD = gb.Structure(["y(k-1)", "y(k-1)^2", "u(k-1)"])
+QUAD2 = gb.Structure(["y(k-1)", "y(k-1)^2", "u1(k-1)", "u2(k-1)"])
+TAUS = [10.0, 100.0, 1e3, 1e4, 1e5]  # samples
+
+
+def _slow_quad(tau: float) -> tuple[np.ndarray, float]:
+    """θ of y = a y1 + c y1² + u1 whose equilibrium ȳ = 1 has the pole ρ = exp(−1/τ), and the ū that puts it there.
+
+    c = (1 − ρ)/10 and a = ρ − 2c (f'(1) = a + 2c = ρ): the other equilibrium is ū/c = 11, far off.
+    """
+    rho = np.exp(-1.0 / tau)
+    c = (1.0 - rho) / 10.0
+    a = rho - 2.0 * c
+    return np.array([a, c, 1.0]), 1.0 - a - c
+
+
+def _stable_root(a: float, c: float, u: float) -> float:
+    """The root of c ȳ² + (a − 1) ȳ + u = 0 where 1 − a − 2 c ȳ > 0 (the stable one), by the quadratic formula."""
+    disc = np.sqrt((a - 1.0) ** 2 - 4.0 * c * u)
+    roots = [(1.0 - a + s * disc) / (2.0 * c) for s in (-1.0, 1.0)]
+    return next(r for r in roots if abs(a + 2.0 * c * r) < 1.0)
+
+
+def test_the_reproducer_a_pole_of_0_9999_is_reached():
+    a = 0.5
+    b = (0.9999 - a) / 2
+    u = 1 - a - b
+    m = gb.Model(QUAD, [a, b, 1.0])
+    end = m.simulate(np.full(200000, u), np.zeros(1))[-1]
+    assert end == pytest.approx(1.0, rel=1e-6)
+    assert m.static_curve([u], y0=0.0, strict=False)[0] == pytest.approx(end, rel=1e-6)
+
+
+@pytest.mark.parametrize("tau", TAUS)
+def test_one_input_the_equilibrium_is_reached_whatever_the_time_constant(tau):
+    th, u = _slow_quad(tau)
+    res = reached_equilibria(QUAD, th[None], [u, u], [0.0, 5.0])
+    assert res.status[0].tolist() == [REACHED, REACHED]
+    np.testing.assert_allclose(res.ybar[0], [1.0, 1.0], rtol=1e-12)
+    pts = gb.StaticPoints([u], [1.0])
+    assert gb.jsf(gb.Model(QUAD, th), pts) == pytest.approx(0.0, abs=1e-20)
+
+
+@pytest.mark.parametrize("tau", TAUS[:4])
+def test_the_reached_equilibrium_is_where_a_long_free_run_ends(tau):
+    th, u = _slow_quad(tau)
+    ub = 0.8 * u  # off the constructed point: an equilibrium the test finds by the quadratic formula
+    y = gb.Model(QUAD, th).simulate(np.full(int(60 * tau) + 100, ub), np.zeros(1))
+    root = _stable_root(th[0], th[1], ub)
+    assert y[-1] == pytest.approx(root, rel=1e-9)
+    assert gb.Model(QUAD, th).static_curve([ub], y0=0.0)[0] == pytest.approx(root, rel=1e-9)
+
+
+@pytest.mark.parametrize("tau", TAUS)
+def test_two_inputs_the_equilibrium_is_reached_whatever_the_time_constant(tau):
+    th1, u = _slow_quad(tau)
+    th = np.array([th1[0], th1[1], 1.0, 1.0])  # ū1 + ū2 plays the one input's part
+    m = gb.Model(QUAD2, th, input_names=("u1", "u2"))
+    ys = m.static_curve(np.array([[u / 2, u / 2], [u, 0.0]]), y0=0.0)
+    np.testing.assert_allclose(ys, [1.0, 1.0], rtol=1e-12)
+
+
+def test_a_run_slower_than_the_longest_budget_is_named_not_settled(monkeypatch):
+    monkeypatch.setattr(_analysis, "SETTLE_MAX_STEPS", 2 * SETTLE_STEPS)
+    th, u = _slow_quad(1e4)
+    res = reached_equilibria(QUAD, th[None], [u], [0.0])
+    assert res.status[0, 0] == NOT_SETTLED
+    assert "20000 to 40000 steps" in res.explain(0)[0]
+
+
+def _first_order(a: float, gain: float, k: int) -> np.ndarray:
+    """y = a y1 + 0 y1² + b u1 with static gain ``gain``, sampled k times faster under a zero-order hold."""
+    ak = a ** (1.0 / k)
+    return np.array([ak, 0.0, gain * (1.0 - ak)])
+
+
+@settings(max_examples=40, deadline=None)
+@given(a=st.floats(0.5, 0.999), k=st.integers(1, 200), u=st.floats(-5.0, 5.0), y0=st.floats(-5.0, 5.0),
+       gain=st.floats(0.2, 5.0))
+def test_reached_does_not_depend_on_the_sampling_rate(a, k, u, y0, gain):
+    slow, fast = _first_order(a, gain, 1), _first_order(a, gain, k)
+    assume(-k / np.log(a) <= 1e5)  # time constants up to 10⁵ samples (the budget's cap lies beyond)
+    res = reached_equilibria(QUAD, np.vstack([slow, fast]), [u], [y0])
+    assert res.status[0, 0] == res.status[1, 0] == REACHED
+    np.testing.assert_allclose(res.ybar[:, 0], [gain * u, gain * u], rtol=1e-9, atol=1e-9 * (1 + abs(y0)))
