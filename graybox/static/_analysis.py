@@ -28,7 +28,9 @@ started exactly on it.
   ȳ_i (:func:`settle`, compiled, all (member, point) pairs at once) until its last L outputs lie
   within ``SETTLE_RTOL`` (relative) of one stable root, or its increments vanish and Newton's
   method on eq. (5) lands on one; it is stopped as diverged when |y| exceeds 10⁶ times the scale of
-  the point, and as not settled after ``SETTLE_STEPS`` steps.
+  the point, and as not settled after ``SETTLE_STEPS`` steps, or, when a stable root it may be
+  heading for is slow, after ``SETTLE_TAUS`` time constants of the slowest (at most
+  ``SETTLE_MAX_STEPS`` steps): a slow plant sampled fast is judged as it is sampled slowly.
 
 Units do not matter: the roots are computed with the variable ȳ scaled by a power of two that
 balances the polynomial's extreme coefficients (degree >= 4: each group of roots of similar size in
@@ -50,8 +52,10 @@ from ..core._simulation_kernels import encode
 from ._equilibrium_kernels import (
     DIVERGED,
     NET,
+    NOT_SETTLED,
     POLY,
     REACHED,
+    candidate_linearisations,
     real_roots_upto_cubic,
     schur_stable_rows,
     settle_candidates,
@@ -92,6 +96,8 @@ __all__ = [
     "folded_equilibria",
     "DENOMINATOR_RTOL",
     "SETTLE_STEPS",
+    "SETTLE_TAUS",
+    "SETTLE_MAX_STEPS",
     "SETTLE_RTOL",
     "POLY",
     "NET",
@@ -101,8 +107,15 @@ __all__ = [
 #: when its magnitude is at most this fraction of the sum of the magnitudes of its terms (the
 #: static gain would exceed 10⁹ times the numerator's): the static function does not exist there.
 DENOMINATOR_RTOL = 1e-9
-#: Step budget of a settling run (:func:`settle`).
+#: Step budget of a settling run (:func:`settle`) ...
 SETTLE_STEPS = 20000
+#: ... raised, for a run still unsettled after it, to SETTLE_TAUS time constants −1/ln ρ of the
+#: slowest stable candidate it may be heading for (ρ the spectral radius of the recursion
+#: linearised there), so that a slow plant sampled fast is judged as it is sampled slowly ...
+SETTLE_TAUS = 50
+#: ... and at most this many steps (time constants beyond SETTLE_MAX_STEPS / SETTLE_TAUS = 2·10⁵
+#: samples count as not settled: the cost of a run grows with its budget).
+SETTLE_MAX_STEPS = 10_000_000
 #: A settling run has reached a stable equilibrium ȳ_e once its last L outputs lie within
 #: SETTLE_RTOL · min(max(|ȳ_e|, |y0|), distance to the nearest other equilibrium) of it ...
 SETTLE_RTOL = 1e-6
@@ -612,7 +625,8 @@ class Reached:
     status : ndarray of int8, shape (P, M)
         0 reached; 1 no equilibrium (eq. (5) has no real root, or a rational denominator
         vanishes); 2 no locally stable equilibrium; 3 the run diverged; 4 the run did not settle
-        within the step budget (an oscillation, a limit cycle, a very slow approach).
+        within the step budget (an oscillation, a limit cycle, an approach slower than
+        ``SETTLE_MAX_STEPS`` / ``SETTLE_TAUS`` samples per time constant).
     """
 
     ubar: np.ndarray
@@ -643,8 +657,9 @@ class Reached:
             elif s == DIVERGED:
                 why = f"the free run from y0 = {y0:g} diverged"
             else:
-                why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within "
-                       f"{SETTLE_STEPS} steps")
+                why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within its step "
+                       f"budget ({SETTLE_TAUS} time constants of the slowest, {SETTLE_STEPS} to "
+                       f"{SETTLE_MAX_STEPS} steps)")
             out.append(f"ū = {u:g}: {why}" if isinstance(u, float) else f"ū = {u}: {why}")
         return out
 
@@ -659,9 +674,11 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     within ``SETTLE_RTOL`` (relative; at most that fraction of the distance to the nearest other
     equilibrium) of one of its stable equilibria, or it creeps towards one so slowly that its
     increments vanish and Newton's method on the static equation lands on it; it is stopped as
-    diverged (|y| beyond 10⁶ times the pair's scale) or as not settled after ``SETTLE_STEPS``
-    steps (:func:`graybox.static._equilibrium_kernels.settle_runs`, whose docstring gives ``kind``, ``ip``
-    and ``fp``). Pairs with no stable equilibrium are not run: they settle on none.
+    diverged (|y| beyond 10⁶ times the pair's scale) or as not settled after its step budget,
+    ``SETTLE_STEPS`` or, for a run still unsettled then, ``SETTLE_TAUS`` time constants of its
+    slowest stable equilibrium (:func:`settle_budget`); see
+    :func:`graybox.static._equilibrium_kernels.settle_runs`, whose docstring gives ``kind``, ``ip``
+    and ``fp``. Pairs with no stable equilibrium are not run: they settle on none.
 
     Parameters
     ----------
@@ -696,15 +713,50 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     run = ncand > 0
     ybar = np.full(y0a.shape, np.nan)
     status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
-    if run.any():
-        sel = slice(None) if run.all() else run  # every pair runs: views, no copies
+    ip = np.ascontiguousarray(ip, dtype=np.int64)
+    L = max(int(L), 1)
+
+    def runs(sel, budget):
         with np.errstate(all="ignore"):
             ybar[sel], status[sel] = settle_runs(
-                int(kind), np.ascontiguousarray(ip, dtype=np.int64), np.ascontiguousarray(fp[sel], dtype=float),
-                np.ascontiguousarray(y0a[sel]), np.ascontiguousarray(cand[sel]), ncand[sel],
-                np.ascontiguousarray(tol[sel]), np.ascontiguousarray(ntol[sel]), max(int(L), 1), float(floor),
-                SETTLE_STEPS, STALL_RTOL)
+                int(kind), ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0a[sel]),
+                np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
+                np.ascontiguousarray(ntol[sel]), L, float(floor), budget, STALL_RTOL)
+
+    if run.any():
+        sel = slice(None) if run.all() else run  # every pair runs: views, no copies
+        runs(sel, np.full(int(run.sum()), SETTLE_STEPS, dtype=np.int64))
+        # a run still unsettled runs again with the budget its slowest candidate needs (the
+        # common, fast case never gets here: its cost is that of one pass)
+        again = np.flatnonzero(status == NOT_SETTLED)
+        if again.size:
+            budget = settle_budget(kind, ip, fp[again], cand[again], ncand[again], L)
+            longer = budget > SETTLE_STEPS
+            if longer.any():
+                runs(again[longer], budget[longer])
     return ybar, status
+
+
+def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, ncand: np.ndarray, L: int
+                  ) -> np.ndarray:
+    """Each pair's step budget: ``SETTLE_TAUS`` time constants of its slowest stable candidate.
+
+    The time constant of a candidate is −1/ln ρ samples, ρ the spectral radius of the recursion
+    linearised there; the budget is at least ``SETTLE_STEPS`` and at most ``SETTLE_MAX_STEPS``.
+    Shapes: ``fp`` (K, nf), ``cand`` (K, C), ``ncand`` (K,); returns int64 (K,).
+    """
+    a = candidate_linearisations(int(kind), ip, np.ascontiguousarray(fp, dtype=float),
+                                 np.ascontiguousarray(cand, dtype=float), ncand, int(L))  # (K, C, L)
+    K, C, _ = a.shape
+    comp = np.zeros((K, C, L, L))  # companion matrices of y(t) = Σ_l a_l y(t − l)
+    comp[:, :, 0, :] = a
+    comp[:, :, np.arange(1, L), np.arange(L - 1)] = 1.0
+    with np.errstate(all="ignore"):
+        rho = np.abs(np.linalg.eigvals(np.where(np.isfinite(comp), comp, 0.0))).max(axis=-1)  # (K, C)
+        rho = np.where(np.arange(C)[None, :] < ncand[:, None], rho, 0.0).max(axis=1)
+        tau = -1.0 / np.log(np.minimum(rho, 1.0))  # a stable candidate has ρ < 1; rounding may not
+    steps = np.where(np.isfinite(tau), np.ceil(SETTLE_TAUS * np.minimum(tau, SETTLE_MAX_STEPS)), SETTLE_MAX_STEPS)
+    return np.clip(steps, SETTLE_STEPS, SETTLE_MAX_STEPS).astype(np.int64)
 
 
 @lru_cache(maxsize=256)

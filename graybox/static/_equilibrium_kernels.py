@@ -26,6 +26,7 @@ import numpy as np
 
 __all__ = [
     "schur_stable_rows", "entry_sums", "real_roots_upto_cubic", "settle_candidates", "settle_runs",
+    "candidate_linearisations",
     "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED",
 ]
 
@@ -348,6 +349,42 @@ def _static_residual(kind, ip, fp, y):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
+def candidate_linearisations(kind, ip, fp, cand, ncand, L):  # pragma: no cover - compiled
+    """a[k, c, l − 1] = ∂f/∂y(t − l) of pair k's recursion at the constant output cand[k, c], shape (K, C, L).
+
+    The linearised recursion y(t) = Σ_l a_l y(t − l) at each pair's first ``ncand[k]`` candidates
+    (zeros elsewhere); layouts of ``ip`` and ``fp`` as in :func:`_step_lanes`.
+    """
+    K, C = cand.shape
+    a = np.zeros((K, C, L))
+    for k in range(K):
+        for c in range(ncand[k]):
+            y = cand[k, c]
+            if kind == POLY:
+                G = ip[0]
+                Dg = ip[1]
+                for g in range(G):
+                    m = ip[2 + g]
+                    v = fp[k, 1 + g]
+                    for _ in range(m - 1):
+                        v *= y
+                    for d in range(m):  # each factor y(t − lag_d) contributes C_g y^(m−1)
+                        a[k, c, ip[2 + G + g * Dg + d] - 1] += v
+            else:
+                H = ip[0]
+                ny = ip[1]
+                for j in range(H):
+                    s = 0.0
+                    for i in range(ny):
+                        s += fp[k, 1 + 2 * H + j * ny + i]
+                    th = np.tanh(fp[k, 1 + H + j] + s * y)
+                    w = fp[k, 1 + j] * (1.0 - th * th)
+                    for i in range(ny):
+                        a[k, c, i] += w * fp[k, 1 + 2 * H + j * ny + i]
+    return a
+
+
+@nb.njit(cache=True, nogil=True)
 def settle_candidates(roots, stable, y0, floor, rtol):  # pragma: no cover - compiled
     """The targets of :func:`settle_runs`: each pair's stable roots first (in their order), and their tolerances.
 
@@ -408,8 +445,8 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, s
         Number of past outputs the recursion reads (its largest output lag, >= 1).
     floor : float
         Smallest output scale (0 where only ratios of outputs are meaningful).
-    max_steps : int
-        Step budget.
+    max_steps : ndarray of int64, shape (K,)
+        Each pair's step budget.
     stall_rtol : float
         Relative size of a vanishing increment.
 
@@ -513,7 +550,7 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, s
                         break
                 if abs(x - goal[b]) <= tol[k, c0]:
                     end = REACHED
-            if end < 0 and t - start[b] >= max_steps:
+            if end < 0 and t - start[b] >= max_steps[k]:
                 end = NOT_SETTLED
             if end >= 0:
                 status[k] = end
