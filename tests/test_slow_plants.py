@@ -1,6 +1,8 @@
 """Slow plants sampled fast: whether an equilibrium is reached, and the static band's stability margin,
 must not depend on how many samples the plant's time constant spans."""
 
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
@@ -96,3 +98,75 @@ def test_reached_does_not_depend_on_the_sampling_rate(a, k, u, y0, gain):
     res = reached_equilibria(QUAD, np.vstack([slow, fast]), [u], [y0])
     assert res.status[0, 0] == res.status[1, 0] == REACHED
     np.testing.assert_allclose(res.ybar[:, 0], [gain * u, gain * u], rtol=1e-9, atol=1e-9 * (1 + abs(y0)))
+
+
+# -- the static band's stability margin -------------------------------------------------------------
+FIRST = gb.Structure(["y(k-1)", "u(k-1)"])
+
+
+def _first_order_records(a: float, *, n: int = 5000, R: int = 10, noise: float = 1e-3, seed: int = 0):
+    """R records of y = a y1 + (1 − a) u1 (static gain 1) under steps of 500 samples, and 10 static points."""
+    rng = np.random.default_rng(seed)
+    recs = []
+    for _ in range(R):
+        u = np.repeat(rng.uniform(0.0, 2.0, n // 500 + 1), 500)[:n]
+        y = gb.simulate(FIRST, np.array([a, 1.0 - a]), u, np.array([rng.uniform(0.0, 2.0)]))
+        recs.append(gb.Record(u, y + noise * rng.standard_normal(n)))
+    ub = np.linspace(0.2, 1.8, 10)
+    pts = gb.StaticPoints(ub, ub + 0.01 * rng.standard_normal(10), uncertainty=np.full(10, 0.05))
+    return recs, pts
+
+
+def _fit(recs, pts, constraints):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        return gb.cls(FIRST, recs, pts, how="context", constraints=constraints).model.theta
+
+
+def test_the_band_does_not_force_a_slow_plant_faster():
+    # y = 0.9998 y1 + 0.0002 u1 (τ ≈ 5000 samples): the least-squares estimate meets the band, so the
+    # band must leave it alone; a fixed margin D >= 10⁻³ made it θ = [0.999, 9.9e-4]
+    recs, pts = _first_order_records(0.9998)
+    ls = _fit(recs, pts, [])
+    assert ls[0] > 0.9995
+    assert np.abs(gb.Model(FIRST, ls).static_curve(pts.ubar) - pts.ybar).max() < 0.05  # inside the band
+    np.testing.assert_allclose(_fit(recs, pts, gb.StaticBand()), ls, rtol=1e-6)
+    np.testing.assert_allclose(_fit(recs, pts, gb.GainBounds(lower=0.0)), ls, rtol=1e-6)
+
+
+@settings(max_examples=12, deadline=None)
+@given(tau=st.floats(5.0, 1e5), seed=st.integers(0, 100))
+def test_the_band_leaves_a_least_squares_estimate_inside_it_alone_whatever_the_sampling_rate(tau, seed):
+    a = float(np.exp(-1.0 / tau))
+    recs, pts = _first_order_records(a, n=2000, R=6, noise=0.0, seed=seed)
+    ls = _fit(recs, pts, [])
+    assume(ls[0] < 1.0)
+    assume(np.abs(gb.Model(FIRST, ls).static_curve(pts.ubar) - pts.ybar).max() < 0.05)
+    th = _fit(recs, pts, gb.StaticBand())
+    # the time scale 1 − a and the static gain, to the QP solver's accuracy (a fixed margin of 10⁻³ on
+    # 1 − a moved a plant with τ = 10⁴ samples tenfold)
+    assert 1.0 - th[0] == pytest.approx(1.0 - ls[0], rel=1e-3)
+    assert th[1] / (1.0 - th[0]) == pytest.approx(ls[1] / (1.0 - ls[0]), rel=1e-3)
+
+
+def test_the_default_margin_still_keeps_the_band_from_going_vacuous():
+    # a cluster bound that pushes Σy to within a twentieth of the least-squares estimate's 1 − Σy:
+    # the band's margin (a tenth of it) refuses, as 10⁻³ refuses on a fast plant
+    recs, pts = _first_order_records(0.9998)
+    ls = _fit(recs, pts, [])
+    push = gb.ClusterBounds({"Σy": (1.0 - (1.0 - ls[0]) / 20.0, None)})
+    with pytest.raises(gb.InfeasibleError):
+        _fit(recs, pts, [gb.StaticBand(), push])
+    # with the margin given, as small as the push, the band holds it
+    th = _fit(recs, pts, [gb.StaticBand(min_denominator=(1.0 - ls[0]) / 40.0), push])
+    assert th[0] >= 1.0 - (1.0 - ls[0]) / 20.0 - 1e-12
+
+
+def test_gain_bounds_do_not_force_a_very_slow_plant_faster():
+    # τ = 5·10⁶ samples: 1 − a = 2·10⁻⁷, under GainBounds' former fixed margin of 10⁻⁶ (noise-free data)
+    a = 1.0 - 2e-7
+    recs, pts = _first_order_records(a, n=2000, R=6, noise=0.0)
+    ls = _fit(recs, pts, [])
+    assert 1.0 - ls[0] == pytest.approx(2e-7, rel=1e-3)
+    th = _fit(recs, pts, gb.GainBounds(lower=0.0, upper=2.0))
+    assert 1.0 - th[0] == pytest.approx(1.0 - ls[0], rel=0.05)  # the QP's accuracy here; 10⁻⁶ was 5×
