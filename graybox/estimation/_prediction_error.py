@@ -740,7 +740,8 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
     for c in cons:  # every set of static points speaks of the records' inputs
         _check_point_inputs(recs, getattr(c, "points", None))
     _check_point_inputs(recs, ctx_points)
-    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference), inputs)
+    ctx = StaticContext(st, ctx_points, curve, _needed_sigma_y(cons, d, recs, reference), inputs,
+                        _needed_ls_theta(cons, d))
     return cons, ctx, curve
 
 
@@ -806,6 +807,17 @@ def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], 
     return None
 
 
+def _needed_ls_theta(cons: list[StaticConstraint], d: _Data) -> np.ndarray | None:
+    """The least-squares θ when some constraint's ``min_denominator`` is "auto" (None when not identifiable:
+    the constraint then keeps its fixed margin)."""
+    if not any(isinstance(getattr(c, "min_denominator", None), str) for c in cons):
+        return None
+    try:
+        return _ls_theta(d)
+    except ValueError:
+        return None
+
+
 def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: StaticCurve | StaticSurface | None,
                        recs: list[Record]) -> None:
     """One warning per estimate naming every static ū (points, constraints' points) outside the records."""
@@ -829,7 +841,8 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     cons = as_constraint_list(constraints)
     for p in [pts] + [getattr(c, "points", None) for c in cons]:
         _check_point_inputs(recs, p)
-    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), recs[0].input_names)
+    ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), recs[0].input_names,
+                        _needed_ls_theta(cons, d))
     rows = _rows(cons, ctx, d.s)
     _warn_static_range(cons, ctx, curve, recs)
     R2, c2, M = _static_part(d, pts)

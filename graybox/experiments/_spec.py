@@ -26,6 +26,7 @@ from ..core._terms import default_input_names
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_path, check_real
 from ..core._reprs import short_repr
+from ..static._constraints import check_min_denominator
 
 __all__ = [
     "SpecError",
@@ -589,8 +590,8 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
         # no b: each static point's own uncertainty (carried by the data set's static points)
         b = None if c.get("b") is None else _wrap(check_real, path + ("b",), c["b"], "b", low=0, low_open=True)
         form = _wrap(check_choice, path + ("form",), c.get("form", "exact"), "form", ("exact", "residual"))
-        md = _wrap(check_real, path + ("min_denominator",), c.get("min_denominator", 1e-3), "min_denominator",
-                   low=0, high=1, low_open=True, high_open=True)
+        md = _wrap(check_min_denominator, path + ("min_denominator",), c.get("min_denominator", "auto"),
+                   "min_denominator", 1.0)
         return {"type": kind, "b": b, "form": form, "min_denominator": md}
     if kind == "gain":
         lo = _gain_bound(c.get("lower"), path + ("lower",), "lower")
@@ -611,8 +612,8 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
                     raise SpecError(f"ubar_range must be [low, high], got {rng!r}", path + ("ubar_range",))
                 rng = [_wrap(check_real, path + ("ubar_range",), v, "ubar_range") for v in rng]
         n = _wrap(check_int, path + ("n",), c.get("n", 25), "n", low=1)
-        md = _wrap(check_real, path + ("min_denominator",), c.get("min_denominator", 1e-6), "min_denominator",
-                   low=0, low_open=True)
+        md = _wrap(check_min_denominator, path + ("min_denominator",), c.get("min_denominator", "auto"),
+                   "min_denominator", None)
         out = {"type": kind, "lower": lo, "upper": hi, "ubar_range": rng, "n": n, "min_denominator": md}
         _wrap(build_constraint, path, out)  # the object's own checks (e.g. lower <= upper)
         return out

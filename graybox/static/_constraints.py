@@ -58,6 +58,9 @@ if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constrai
 __all__ = [
     "InfeasibleError",
     "StaticContext",
+    "auto_min_denominator",
+    "check_min_denominator",
+    "DENOMINATOR_FACTOR",
     "AffineRows",
     "StaticConstraint",
     "CurveEquality",
@@ -211,6 +214,10 @@ class StaticContext:
         given its own value.
     inputs : tuple of str or None
         The data's input names, the order of ū's columns (None: the structure's own inputs).
+    ls_theta : ndarray of shape (n_terms,) or None
+        The problem's unconstrained least-squares estimate (engineering units): the reference of
+        ``min_denominator="auto"`` (:func:`auto_min_denominator`); None when not needed or not
+        identifiable.
     """
 
     structure: Structure
@@ -218,6 +225,7 @@ class StaticContext:
     curve: StaticCurve | StaticSurface | None = None
     sigma_y: float | None = None
     inputs: tuple[str, ...] | None = None
+    ls_theta: np.ndarray | None = None
 
     @cached_property
     def cluster_map(self) -> ClusterMap | SurfaceClusterMap:
@@ -583,6 +591,44 @@ def _denominator_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray) -> tup
     return np.ones(len(ubar)), d
 
 
+#: ``min_denominator="auto"`` keeps every denominator D_i >= min(ceiling, min_i D_i(θ_LS) / DENOMINATOR_FACTOR):
+#: at most this factor below the least-squares estimate's own (D = Π (1 − λ_j) over the modes λ_j
+#: of the linearised model, so D scales with the sampling period as the plant's does) ...
+DENOMINATOR_FACTOR = 10.0
+#: ... and never above the former fixed margins, so a plant whose least-squares D is over ten times
+#: these keeps exactly the rows it had (StaticBand's exact form; GainBounds).
+BAND_MIN_DENOMINATOR = 1e-3
+GAIN_MIN_DENOMINATOR = 1e-6
+
+
+def check_min_denominator(value: object, what: str, high: float | None) -> float | str:
+    """``"auto"``, or a number in (0, high) (``high`` None: no upper end)."""
+    if isinstance(value, str):
+        return check_choice(value, what, ("auto",))
+    if high is None:
+        return check_real(value, what, low=0, low_open=True)
+    return check_real(value, what, low=0, high=high, low_open=True, high_open=True)
+
+
+def auto_min_denominator(value: float | str, ceiling: float, ctx: StaticContext, one: np.ndarray,
+                         dR: np.ndarray) -> float:
+    """The smallest denominator D_i = ``one`` − ``dR`` θ a constraint allows (dimensionless).
+
+    A number is used as it is. ``"auto"``: ``ceiling``, lowered to the least-squares estimate's
+    smallest positive D_i over the same rows divided by :data:`DENOMINATOR_FACTOR` when that is
+    smaller: the margin follows the plant's time scale on these data (a slow plant sampled fast has
+    a small D, and so has its least-squares estimate), not a number of samples. Without a
+    least-squares reference (``ctx.ls_theta`` None, or no D_i(θ_LS) > 0) it is ``ceiling``.
+    """
+    if not isinstance(value, str):
+        return float(value)
+    if ctx.ls_theta is None:
+        return ceiling
+    d_ls = one - dR @ ctx.ls_theta
+    d_ls = d_ls[np.isfinite(d_ls) & (d_ls > 0)]
+    return min(ceiling, float(d_ls.min()) / DENOMINATOR_FACTOR) if d_ls.size else ceiling
+
+
 def _vanishing_denominator(ctx: StaticContext, theta: np.ndarray, ub: np.ndarray) -> np.ndarray:
     """Where the rational static function's denominator vanishes, shape (M,) (several inputs too)."""
     cm = ctx.cluster_map
@@ -667,7 +713,10 @@ class StaticBand(StaticConstraint):
 
     The exact form also keeps ``D_i >= min_denominator``: the two band rows alone imply only
     D_i >= 0, and as D_i → 0 they become vacuous (the residual bound b·D_i shrinks with the
-    error it is meant to bound), which other constraints can drive a solver into.
+    error it is meant to bound), which other constraints can drive a solver into. D_i is a number
+    of the plant's time scale in samples (1 − a for y(k) = a y(k−1) + …: about Ts/τ), so the
+    default margin follows the least-squares estimate's own D_i (:func:`auto_min_denominator`):
+    a plant sampled ten times faster gets a margin ten times smaller.
 
     ``form="residual"`` bounds the static-equation residual ``|ȳ_i − q_iᵀRθ| <= b`` instead;
     it is looser by the factor 1/D (≈ 14 for the paper's model (15), whose D ≈ 0.07).
@@ -681,14 +730,16 @@ class StaticBand(StaticConstraint):
     points : StaticPoints, optional
         Default: the problem's static points.
     form : {"exact", "residual"}
-    min_denominator : float
-        Smallest D_i allowed by the exact form (a stability margin: 1 − Σ a_i >= it).
+    min_denominator : float or "auto"
+        Smallest D_i allowed by the exact form (a stability margin: 1 − Σ a_i >= it), in (0, 1).
+        ``"auto"`` (default): 10⁻³, or a tenth of the smallest D_i of the problem's least-squares
+        estimate at the points when that is smaller (:func:`auto_min_denominator`).
     """
 
     b: float | None = None
     points: StaticPoints | None = None
     form: str = "exact"
-    min_denominator: float = 1e-3
+    min_denominator: float | str = "auto"
 
     def __post_init__(self) -> None:
         if self.b is not None:
@@ -696,7 +747,8 @@ class StaticBand(StaticConstraint):
         if self.points is not None and not isinstance(self.points, StaticPoints):
             raise TypeError(f"StaticBand: points must be StaticPoints, got {type(self.points).__name__}")
         check_choice(self.form, "StaticBand: form", ("exact", "residual"))
-        check_real(self.min_denominator, "StaticBand: min_denominator", low=0, high=1, low_open=True, high_open=True)
+        object.__setattr__(self, "min_denominator",
+                           check_min_denominator(self.min_denominator, "StaticBand: min_denominator", 1.0))
 
     def half_widths(self, pts: StaticPoints) -> np.ndarray:
         """b at each of ``pts``, shape (M,): ``b``, or the points' own uncertainty when ``b`` is None."""
@@ -726,7 +778,7 @@ class StaticBand(StaticConstraint):
         rhs = [pts.ybar + b * one, b * one - pts.ybar]
         if self.form == "exact":
             A.append(dR)  # 1 − dθ >= min_denominator
-            rhs.append(one - self.min_denominator)
+            rhs.append(one - auto_min_denominator(self.min_denominator, BAND_MIN_DENOMINATOR, ctx, one, dR))
         return AffineRows.make(ctx.n_terms, A_ub=np.vstack(A), b_ub=np.concatenate(rhs))
 
     def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
@@ -773,8 +825,10 @@ class GainBounds(StaticConstraint):
     reference : StaticCurve, StaticSurface or callable ū ↦ ȳ, optional
         Default: the problem's static curve (or surface), else the problem's static points
         (interpolated linearly for one input, used as they are for several).
-    min_denominator : float
-        D >= this (also a necessary condition for a stable equilibrium).
+    min_denominator : float or "auto"
+        D >= this (also a necessary condition for a stable equilibrium), > 0. ``"auto"``
+        (default): 10⁻⁶, or a tenth of the smallest D of the problem's least-squares estimate on
+        the grid when that is smaller (:func:`auto_min_denominator`; as :class:`StaticBand`).
     """
 
     lower: float | Sequence[float | None] | None = None
@@ -782,7 +836,7 @@ class GainBounds(StaticConstraint):
     ubar_range: tuple | None = None
     n: int = 25
     reference: StaticCurve | StaticSurface | Callable[[np.ndarray], np.ndarray] | None = None
-    min_denominator: float = 1e-6
+    min_denominator: float | str = "auto"
 
     def __post_init__(self) -> None:
         lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
@@ -821,7 +875,7 @@ class GainBounds(StaticConstraint):
                     box.append((lo, hi))
                 object.__setattr__(self, "ubar_range", tuple(box))
         object.__setattr__(self, "min_denominator",
-                           check_real(self.min_denominator, "GainBounds: min_denominator", low=0, low_open=True))
+                           check_min_denominator(self.min_denominator, "GainBounds: min_denominator", None))
 
     def describe(self) -> str:
         def one(v):
@@ -930,7 +984,7 @@ class GainBounds(StaticConstraint):
         rows, rhs = [], []
         # D = 1 − dR θ >= min_denominator   ⇔   dR θ <= 1 − δ
         rows.append(dR)
-        rhs.append(one - self.min_denominator)
+        rhs.append(one - auto_min_denominator(self.min_denominator, GAIN_MIN_DENOMINATOR, ctx, one, dR))
         for j, (lower, upper) in enumerate(bounds):
             if lower is None and upper is None:
                 continue
