@@ -29,8 +29,8 @@ started exactly on it.
   within ``SETTLE_RTOL`` (relative) of one stable root, or its increments vanish and Newton's
   method on eq. (5) lands on one; it is stopped as diverged when |y| exceeds 10⁶ times the scale of
   the point, and as not settled after ``SETTLE_STEPS`` steps, or, when a stable root it may be
-  heading for is slow, after ``SETTLE_TAUS`` time constants of the slowest (at most
-  ``SETTLE_MAX_STEPS`` steps): a slow plant sampled fast is judged as it is sampled slowly.
+  heading for is slow, after ``SETTLE_TAUS`` time constants of the slowest (a slow plant sampled
+  fast is judged as it is sampled slowly), unless that exceeds ``SETTLE_MAX_STEPS`` steps.
 
 Units do not matter: the roots are computed with the variable ȳ scaled by a power of two that
 balances the polynomial's extreme coefficients (degree >= 4: each group of roots of similar size in
@@ -113,8 +113,9 @@ SETTLE_STEPS = 20000
 #: slowest stable candidate it may be heading for (ρ the spectral radius of the recursion
 #: linearised there), so that a slow plant sampled fast is judged as it is sampled slowly ...
 SETTLE_TAUS = 50
-#: ... and at most this many steps (time constants beyond SETTLE_MAX_STEPS / SETTLE_TAUS = 2·10⁵
-#: samples count as not settled: the cost of a run grows with its budget).
+#: ... when that is at most this many steps: a run heading for a time constant beyond
+#: SETTLE_MAX_STEPS / SETTLE_TAUS = 2·10⁵ samples cannot be judged at a bearable cost (a run's cost
+#: grows with its budget; near-integrators a fit tries would pay it), and counts as not settled.
 SETTLE_MAX_STEPS = 10_000_000
 #: A settling run has reached a stable equilibrium ȳ_e once its last L outputs lie within
 #: SETTLE_RTOL · min(max(|ȳ_e|, |y0|), distance to the nearest other equilibrium) of it ...
@@ -657,9 +658,9 @@ class Reached:
             elif s == DIVERGED:
                 why = f"the free run from y0 = {y0:g} diverged"
             else:
-                why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within its step "
-                       f"budget ({SETTLE_TAUS} time constants of the slowest, {SETTLE_STEPS} to "
-                       f"{SETTLE_MAX_STEPS} steps)")
+                why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within "
+                       f"{SETTLE_STEPS} steps, nor within {SETTLE_TAUS} time constants of the slowest (one over "
+                       f"{SETTLE_MAX_STEPS // SETTLE_TAUS} samples is not run)")
             out.append(f"ū = {u:g}: {why}" if isinstance(u, float) else f"ū = {u}: {why}")
         return out
 
@@ -727,11 +728,12 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
         sel = slice(None) if run.all() else run  # every pair runs: views, no copies
         runs(sel, np.full(int(run.sum()), SETTLE_STEPS, dtype=np.int64))
         # a run still unsettled runs again with the budget its slowest candidate needs (the
-        # common, fast case never gets here: its cost is that of one pass)
+        # common, fast case never gets here: its cost is that of one pass); one whose candidate is
+        # too slow to judge within SETTLE_MAX_STEPS is not run again: it stays not settled
         again = np.flatnonzero(status == NOT_SETTLED)
         if again.size:
             budget = settle_budget(kind, ip, fp[again], cand[again], ncand[again], L)
-            longer = budget > SETTLE_STEPS
+            longer = (budget > SETTLE_STEPS) & (budget <= SETTLE_MAX_STEPS)
             if longer.any():
                 runs(again[longer], budget[longer])
     return ybar, status
@@ -742,8 +744,9 @@ def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, n
     """Each pair's step budget: ``SETTLE_TAUS`` time constants of its slowest stable candidate.
 
     The time constant of a candidate is −1/ln ρ samples, ρ the spectral radius of the recursion
-    linearised there; the budget is at least ``SETTLE_STEPS`` and at most ``SETTLE_MAX_STEPS``.
-    Shapes: ``fp`` (K, nf), ``cand`` (K, C), ``ncand`` (K,); returns int64 (K,).
+    linearised there; the budget is at least ``SETTLE_STEPS``; one above ``SETTLE_MAX_STEPS`` is
+    returned as ``SETTLE_MAX_STEPS + 1`` (the run cannot be judged). Shapes: ``fp`` (K, nf),
+    ``cand`` (K, C), ``ncand`` (K,); returns int64 (K,).
     """
     a = candidate_linearisations(int(kind), ip, np.ascontiguousarray(fp, dtype=float),
                                  np.ascontiguousarray(cand, dtype=float), ncand, int(L))  # (K, C, L)
@@ -755,8 +758,8 @@ def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, n
         rho = np.abs(np.linalg.eigvals(np.where(np.isfinite(comp), comp, 0.0))).max(axis=-1)  # (K, C)
         rho = np.where(np.arange(C)[None, :] < ncand[:, None], rho, 0.0).max(axis=1)
         tau = -1.0 / np.log(np.minimum(rho, 1.0))  # a stable candidate has ρ < 1; rounding may not
-    steps = np.where(np.isfinite(tau), np.ceil(SETTLE_TAUS * np.minimum(tau, SETTLE_MAX_STEPS)), SETTLE_MAX_STEPS)
-    return np.clip(steps, SETTLE_STEPS, SETTLE_MAX_STEPS).astype(np.int64)
+    steps = np.where(np.isfinite(tau), np.ceil(SETTLE_TAUS * np.minimum(tau, SETTLE_MAX_STEPS)), np.inf)
+    return np.clip(steps, SETTLE_STEPS, SETTLE_MAX_STEPS + 1).astype(np.int64)
 
 
 @lru_cache(maxsize=256)
