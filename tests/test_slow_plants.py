@@ -170,3 +170,25 @@ def test_gain_bounds_do_not_force_a_very_slow_plant_faster():
     assert 1.0 - ls[0] == pytest.approx(2e-7, rel=1e-3)
     th = _fit(recs, pts, gb.GainBounds(lower=0.0, upper=2.0))
     assert 1.0 - th[0] == pytest.approx(1.0 - ls[0], rel=0.05)  # the QP's accuracy here; 10⁻⁶ was 5×
+
+
+# -- the budget's time constant ---------------------------------------------------------------------
+@settings(max_examples=30, deadline=None)
+@given(th=st.lists(st.floats(-0.6, 0.6), min_size=5, max_size=5), u=st.floats(0.1, 2.0))
+def test_the_budget_reads_the_spectral_radius_the_equilibria_report(th, u):
+    # the compiled linearisation of the folded recursion against Model.equilibria's (numpy roots)
+    from graybox.core._simulation_kernels import encode
+    from graybox.static._analysis import POLY, _fold_map
+    from graybox.static._equilibrium_kernels import candidate_linearisations
+
+    structure = gb.Structure(["y(k-1)", "y(k-2)", "y(k-1)y(k-3)", "y(k-2)^2", "u(k-1)"])
+    theta = np.array(th)
+    eqs = [e for e in gb.Model(structure, theta).equilibria(u) if e.stable]
+    assume(eqs)
+    ip, onehot, L = _fold_map(structure)
+    fp = ((theta * u ** encode(structure).mu)[None, :]) @ onehot
+    cand = np.array([[e.ybar for e in eqs]])
+    a = candidate_linearisations(POLY, ip, fp, cand, np.array([len(eqs)]), L)[0]
+    for e, row in zip(eqs, a):
+        rho = np.abs(np.roots(np.concatenate(([1.0], -row)))).max()
+        assert rho == pytest.approx(e.spectral_radius, rel=1e-9, abs=1e-12)
