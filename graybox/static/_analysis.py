@@ -714,29 +714,35 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     run = ncand > 0
     ybar = np.full(y0a.shape, np.nan)
     status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
-    ip = np.ascontiguousarray(ip, dtype=np.int64)
-    L = max(int(L), 1)
-
-    def runs(sel, budget):
-        with np.errstate(all="ignore"):
-            ybar[sel], status[sel] = settle_runs(
-                int(kind), ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0a[sel]),
-                np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
-                np.ascontiguousarray(ntol[sel]), L, float(floor), budget, STALL_RTOL)
-
     if run.any():
         sel = slice(None) if run.all() else run  # every pair runs: views, no copies
-        runs(sel, np.full(int(run.sum()), SETTLE_STEPS, dtype=np.int64))
+        args = (int(kind), np.ascontiguousarray(ip, dtype=np.int64), fp, y0a, cand, ncand, tol, ntol, max(int(L), 1),
+                float(floor))
+        ybar[sel], status[sel] = _settle_runs(args, sel, SETTLE_STEPS, _ONE_BUDGET)
         # a run still unsettled runs again with the budget its slowest candidate needs (the
         # common, fast case never gets here: its cost is that of one pass); one whose candidate is
         # too slow to judge within SETTLE_MAX_STEPS is not run again: it stays not settled
-        again = np.flatnonzero(status == NOT_SETTLED)
-        if again.size:
-            budget = settle_budget(kind, ip, fp[again], cand[again], ncand[again], L)
+        if (status == NOT_SETTLED).any():
+            again = np.flatnonzero(status == NOT_SETTLED)
+            budget = settle_budget(kind, args[1], fp[again], cand[again], ncand[again], args[8])
             longer = (budget > SETTLE_STEPS) & (budget <= SETTLE_MAX_STEPS)
             if longer.any():
-                runs(again[longer], budget[longer])
+                sel = again[longer]
+                ybar[sel], status[sel] = _settle_runs(args, sel, 0, budget[longer])
     return ybar, status
+
+
+#: No per-pair budgets: every pair of a :func:`settle_runs` call has the one ``max_steps``.
+_ONE_BUDGET = np.zeros(0, dtype=np.int64)
+
+
+def _settle_runs(args: tuple, sel, max_steps: int, budgets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`settle_runs` on the pairs ``sel`` of ``args`` = (kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor)."""
+    kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor = args
+    with np.errstate(all="ignore"):
+        return settle_runs(kind, ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0[sel]),
+                           np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
+                           np.ascontiguousarray(ntol[sel]), L, floor, max_steps, budgets, STALL_RTOL)
 
 
 def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, ncand: np.ndarray, L: int

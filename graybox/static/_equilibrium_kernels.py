@@ -421,7 +421,7 @@ def settle_candidates(roots, stable, y0, floor, rtol):  # pragma: no cover - com
 
 
 @nb.njit(cache=True, nogil=True)
-def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, stall_rtol):  # pragma: no cover - compiled
+def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, budgets, stall_rtol):  # pragma: no cover - compiled
     """Run each pair's recursion at constant input from y0 until it settles; classify the end.
 
     Parameters
@@ -445,8 +445,10 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, s
         Number of past outputs the recursion reads (its largest output lag, >= 1).
     floor : float
         Smallest output scale (0 where only ratios of outputs are meaningful).
-    max_steps : ndarray of int64, shape (K,)
-        Each pair's step budget.
+    max_steps : int
+        Step budget of every pair ...
+    budgets : ndarray of int64, shape (K,) or (0,)
+        ... or each pair's own (when not empty).
     stall_rtol : float
         Relative size of a vanishing increment.
 
@@ -473,6 +475,8 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, s
     acc = np.empty(B)
     pair = np.full(B, -1, dtype=np.int64)
     start = np.zeros(B, dtype=np.int64)
+    limit = np.zeros(B, dtype=np.int64)
+    own = budgets.shape[0] > 0
     target = np.zeros(B, dtype=np.int64)  # the candidate this lane's window is measured against
     goal = np.zeros(B)
     dev = np.zeros(B)  # largest |y − goal| since the last check
@@ -502,6 +506,7 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, s
                 pair[b] = k
                 active += 1
                 start[b] = t
+                limit[b] = budgets[k] if own else max_steps
                 target[b] = best
                 goal[b] = cand[k, best]
                 dev[b] = 0.0
@@ -550,7 +555,7 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, s
                         break
                 if abs(x - goal[b]) <= tol[k, c0]:
                     end = REACHED
-            if end < 0 and t - start[b] >= max_steps[k]:
+            if end < 0 and t - start[b] >= limit[b]:
                 end = NOT_SETTLED
             if end >= 0:
                 status[k] = end
