@@ -192,3 +192,19 @@ def test_the_budget_reads_the_spectral_radius_the_equilibria_report(th, u):
     for e, row in zip(eqs, a):
         rho = np.abs(np.roots(np.concatenate(([1.0], -row)))).max()
         assert rho == pytest.approx(e.spectral_radius, rel=1e-9, abs=1e-12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(r=st.floats(0.99, 0.9999), angle=st.floats(0.0, 0.5), y0=st.floats(-3.0, 3.0), c=st.floats(-0.02, 0.02))
+def test_going_on_after_the_first_budget_is_one_longer_run(r, angle, y0, c):
+    # two lags (the history handed over has two outputs), a slow pair of poles r e^(±i angle) at ȳ = 0
+    # and a y² term: the run that stops at SETTLE_STEPS and goes on ends as one run given the whole budget
+    structure = gb.Structure(["y(k-1)", "y(k-2)", "y(k-1)^2", "u(k-1)"])
+    theta = np.array([2 * r * np.cos(angle), -r * r, c, 1.0])
+    u = [0.0, 1e-4, -1e-4]
+    two = reached_equilibria(structure, theta[None], u, [y0] * 3)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_analysis, "SETTLE_STEPS", _analysis.SETTLE_MAX_STEPS)
+        one = reached_equilibria(structure, theta[None], u, [y0] * 3)
+    np.testing.assert_array_equal(two.status, one.status)
+    np.testing.assert_array_equal(two.ybar, one.ybar)

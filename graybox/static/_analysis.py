@@ -718,31 +718,37 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
         sel = slice(None) if run.all() else run  # every pair runs: views, no copies
         args = (int(kind), np.ascontiguousarray(ip, dtype=np.int64), fp, y0a, cand, ncand, tol, ntol, max(int(L), 1),
                 float(floor))
-        ybar[sel], status[sel] = _settle_runs(args, sel, SETTLE_STEPS, _ONE_BUDGET)
-        # a run still unsettled runs again with the budget its slowest candidate needs (the
-        # common, fast case never gets here: its cost is that of one pass); one whose candidate is
-        # too slow to judge within SETTLE_MAX_STEPS is not run again: it stays not settled
+        ybar[sel], status[sel], last = _settle_runs(args, sel, SETTLE_STEPS, _ONE_BUDGET, _NO_HISTORY)
+        # a run still unsettled goes on for the budget its slowest candidate needs (the common,
+        # fast case never gets here: its cost is that of one pass); one whose candidate is too
+        # slow to judge within SETTLE_MAX_STEPS stops here: it stays not settled
         if (status == NOT_SETTLED).any():
             again = np.flatnonzero(status == NOT_SETTLED)
             budget = settle_budget(kind, args[1], fp[again], cand[again], ncand[again], args[8])
             longer = (budget > SETTLE_STEPS) & (budget <= SETTLE_MAX_STEPS)
             if longer.any():
                 sel = again[longer]
-                ybar[sel], status[sel] = _settle_runs(args, sel, 0, budget[longer])
+                # where the first pass left them: last is indexed as the pairs it ran
+                done = np.flatnonzero(run)
+                hist = last[np.searchsorted(done, sel)]
+                ybar[sel], status[sel], _ = _settle_runs(args, sel, 0, budget[longer] - SETTLE_STEPS, hist)
     return ybar, status
 
 
-#: No per-pair budgets: every pair of a :func:`settle_runs` call has the one ``max_steps``.
+#: No per-pair budgets, no earlier runs to go on from: the first pass of :func:`settle`.
 _ONE_BUDGET = np.zeros(0, dtype=np.int64)
+_NO_HISTORY = np.zeros((0, 1))
 
 
-def _settle_runs(args: tuple, sel, max_steps: int, budgets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _settle_runs(args: tuple, sel, max_steps: int, budgets: np.ndarray, hist: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`settle_runs` on the pairs ``sel`` of ``args`` = (kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor)."""
     kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor = args
     with np.errstate(all="ignore"):
         return settle_runs(kind, ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0[sel]),
                            np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
-                           np.ascontiguousarray(ntol[sel]), L, floor, max_steps, budgets, STALL_RTOL)
+                           np.ascontiguousarray(ntol[sel]), L, floor, max_steps, budgets,
+                           np.ascontiguousarray(hist, dtype=float), STALL_RTOL)
 
 
 def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, ncand: np.ndarray, L: int

@@ -421,7 +421,7 @@ def settle_candidates(roots, stable, y0, floor, rtol):  # pragma: no cover - com
 
 
 @nb.njit(cache=True, nogil=True)
-def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, budgets, stall_rtol):  # pragma: no cover - compiled
+def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, budgets, hist, stall_rtol):  # pragma: no cover - compiled
     """Run each pair's recursion at constant input from y0 until it settles; classify the end.
 
     Parameters
@@ -449,6 +449,9 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
         Step budget of every pair ...
     budgets : ndarray of int64, shape (K,) or (0,)
         ... or each pair's own (when not empty).
+    hist : ndarray, shape (K, L) or (0, L)
+        When not empty, each pair goes on from these last L outputs (oldest first) of an earlier
+        call that left it not settled, as one longer run would (``y0`` still sets its scales).
     stall_rtol : float
         Relative size of a vanishing increment.
 
@@ -460,6 +463,9 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
         :data:`REACHED`, :data:`DIVERGED` (the output left 10⁶ times the pair's scale or is not
         finite) or :data:`NOT_SETTLED` (neither within the budget: an oscillation, a limit
         cycle, a run too slow).
+    last : ndarray, shape (K, L)
+        The last L outputs (oldest first) of each pair left not settled (``hist`` of a call that
+        goes on with it); undefined for the others.
     """
     K = y0.shape[0]
     nf = fp.shape[1]
@@ -470,6 +476,8 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
     mask = ring_n - 1
     ybar = np.full(K, np.nan)
     status = np.full(K, NOT_SETTLED, dtype=np.int8)
+    last_out = np.empty((K, L))
+    resume = hist.shape[0] > 0
     ring = np.zeros(ring_n * B)
     Cl = np.zeros((nf, B))
     acc = np.empty(B)
@@ -493,13 +501,14 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
                 k = nxt
                 nxt += 1
                 yk0 = y0[k]
+                ycur = hist[k, L - 1] if resume else yk0  # a resumed run is measured from where it is
                 ref = max(abs(yk0), floor)
                 best = 0
                 for c_ in range(ncand[k]):
                     ref = max(ref, abs(cand[k, c_]))
-                    if abs(yk0 - cand[k, c_]) < abs(yk0 - cand[k, best]):
+                    if abs(ycur - cand[k, c_]) < abs(ycur - cand[k, best]):
                         best = c_
-                if abs(yk0 - cand[k, best]) <= tol[k, best]:
+                if not resume and abs(yk0 - cand[k, best]) <= tol[k, best]:
                     ybar[k] = cand[k, best]
                     status[k] = REACHED
                     continue
@@ -515,6 +524,9 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
                 sref[b] = max(abs(yk0), floor)
                 for i in range(ring_n):
                     ring[i * B + b] = yk0
+                if resume:
+                    for i in range(L):
+                        ring[((t - L + i) & mask) * B + b] = hist[k, i]
                 for f in range(nf):
                     Cl[f, b] = fp[k, f]
         if active == 0:
@@ -559,6 +571,9 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
                 end = NOT_SETTLED
             if end >= 0:
                 status[k] = end
+                if end == NOT_SETTLED:
+                    for i in range(L):
+                        last_out[k, i] = ring[((t - L + i) & mask) * B + b]
                 if end == REACHED:
                     ybar[k] = goal[b]
                 pair[b] = -1
@@ -578,4 +593,4 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
             goal[b] = cand[k, best]
             dev[b] = 0.0
             inc[b] = 0.0
-    return ybar, status
+    return ybar, status, last_out
