@@ -716,39 +716,42 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
     if run.any():
         sel = slice(None) if run.all() else run  # every pair runs: views, no copies
-        args = (int(kind), np.ascontiguousarray(ip, dtype=np.int64), fp, y0a, cand, ncand, tol, ntol, max(int(L), 1),
-                float(floor))
-        ybar[sel], status[sel], last = _settle_runs(args, sel, SETTLE_STEPS, _ONE_BUDGET, _NO_HISTORY)
-        # a run still unsettled goes on for the budget its slowest candidate needs (the common,
-        # fast case never gets here: its cost is that of one pass); one whose candidate is too
-        # slow to judge within SETTLE_MAX_STEPS stops here: it stays not settled
-        if (status == NOT_SETTLED).any():
-            again = np.flatnonzero(status == NOT_SETTLED)
-            budget = settle_budget(kind, args[1], fp[again], cand[again], ncand[again], args[8])
-            longer = (budget > SETTLE_STEPS) & (budget <= SETTLE_MAX_STEPS)
-            if longer.any():
-                sel = again[longer]
-                # where the first pass left them: last is indexed as the pairs it ran
-                done = np.flatnonzero(run)
-                hist = last[np.searchsorted(done, sel)]
-                ybar[sel], status[sel], _ = _settle_runs(args, sel, 0, budget[longer] - SETTLE_STEPS, hist)
+        ip = np.ascontiguousarray(ip, dtype=np.int64)
+        L = max(int(L), 1)
+        with np.errstate(all="ignore"):
+            ybar[sel], status[sel], last, left = settle_runs(
+                int(kind), ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0a[sel]),
+                np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
+                np.ascontiguousarray(ntol[sel]), L, float(floor), SETTLE_STEPS, _ONE_BUDGET, _NO_HISTORY, STALL_RTOL)
+        if left:
+            _settle_longer(int(kind), ip, fp, y0a, cand, ncand, tol, ntol, L, float(floor), run, ybar, status, last)
     return ybar, status
+
+
+def _settle_longer(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, cand: np.ndarray, ncand: np.ndarray,
+                   tol: np.ndarray, ntol: np.ndarray, L: int, floor: float, run: np.ndarray, ybar: np.ndarray,
+                   status: np.ndarray, last: np.ndarray) -> None:
+    """Let the runs :func:`settle`'s first pass left unsettled go on for the budget their slowest candidate
+    needs (:func:`settle_budget`), from where they are (``last``: the first pass's, indexed as the pairs
+    it ran); one whose candidate is too slow to judge within SETTLE_MAX_STEPS stays not settled.
+    ``ybar`` and ``status`` are updated in place."""
+    again = np.flatnonzero(status == NOT_SETTLED)
+    budget = settle_budget(kind, ip, fp[again], cand[again], ncand[again], L)
+    longer = (budget > SETTLE_STEPS) & (budget <= SETTLE_MAX_STEPS)
+    if not longer.any():
+        return
+    sel = again[longer]
+    hist = np.ascontiguousarray(last[np.searchsorted(np.flatnonzero(run), sel)])
+    with np.errstate(all="ignore"):
+        ybar[sel], status[sel], _, _ = settle_runs(
+            kind, ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0[sel]),
+            np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
+            np.ascontiguousarray(ntol[sel]), L, floor, 0, budget[longer] - SETTLE_STEPS, hist, STALL_RTOL)
 
 
 #: No per-pair budgets, no earlier runs to go on from: the first pass of :func:`settle`.
 _ONE_BUDGET = np.zeros(0, dtype=np.int64)
 _NO_HISTORY = np.zeros((0, 1))
-
-
-def _settle_runs(args: tuple, sel, max_steps: int, budgets: np.ndarray, hist: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`settle_runs` on the pairs ``sel`` of ``args`` = (kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor)."""
-    kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor = args
-    with np.errstate(all="ignore"):
-        return settle_runs(kind, ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0[sel]),
-                           np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
-                           np.ascontiguousarray(ntol[sel]), L, floor, max_steps, budgets,
-                           np.ascontiguousarray(hist, dtype=float), STALL_RTOL)
 
 
 def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, ncand: np.ndarray, L: int

@@ -466,6 +466,8 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
     last : ndarray, shape (K, L)
         The last L outputs (oldest first) of each pair left not settled (``hist`` of a call that
         goes on with it); undefined for the others.
+    left : int
+        How many pairs were left not settled.
     """
     K = y0.shape[0]
     nf = fp.shape[1]
@@ -477,6 +479,7 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
     ybar = np.full(K, np.nan)
     status = np.full(K, NOT_SETTLED, dtype=np.int8)
     last_out = np.empty((K, L))
+    left = 0
     resume = hist.shape[0] > 0
     ring = np.zeros(ring_n * B)
     Cl = np.zeros((nf, B))
@@ -572,6 +575,7 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
             if end >= 0:
                 status[k] = end
                 if end == NOT_SETTLED:
+                    left += 1
                     for i in range(L):
                         last_out[k, i] = ring[((t - L + i) & mask) * B + b]
                 if end == REACHED:
@@ -593,4 +597,4 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
             goal[b] = cand[k, best]
             dev[b] = 0.0
             inc[b] = 0.0
-    return ybar, status, last_out
+    return ybar, status, last_out, left
