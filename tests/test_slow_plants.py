@@ -209,3 +209,49 @@ def test_going_on_after_the_first_budget_is_one_longer_run(r, angle, y0, c):
         one = reached_equilibria(structure, theta[None], u, [y0] * 3)
     np.testing.assert_array_equal(two.status, one.status)
     np.testing.assert_array_equal(two.ybar, one.ybar)
+
+
+def test_two_inputs_the_band_does_not_force_a_slow_plant_faster():
+    # y = 0.9998 y1 + 10⁻⁴ u1 + 10⁻⁴ u2: static ȳ = (ū1 + ū2) / 2, τ ≈ 5000 samples
+    structure = gb.Structure(["y(k-1)", "u1(k-1)", "u2(k-1)"])
+    a = 0.9998
+    rng = np.random.default_rng(1)
+    recs = []
+    for _ in range(8):
+        u = np.repeat(rng.uniform(0.0, 2.0, (11, 2)), 500, axis=0)[:5000]
+        y = gb.simulate(structure, np.array([a, (1 - a) / 2, (1 - a) / 2]), u, np.array([rng.uniform(0.0, 2.0)]))
+        recs.append(gb.Record(u, y + 1e-3 * rng.standard_normal(5000), input_names=("u1", "u2")))
+    ub = rng.uniform(0.2, 1.8, (10, 2))
+    pts = gb.StaticPoints(ub, ub.mean(axis=1) + 0.01 * rng.standard_normal(10), uncertainty=np.full(10, 0.05),
+                          input_names=("u1", "u2"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        ls = gb.cls(structure, recs, pts, how="context", constraints=[]).model.theta
+        th = gb.cls(structure, recs, pts, how="context", constraints=gb.StaticBand()).model.theta
+    assert ls[0] > 0.9995
+    assert 1.0 - th[0] == pytest.approx(1.0 - ls[0], rel=1e-3)  # a fixed 10⁻³ made it 0.999
+
+
+def test_auto_margin_without_a_least_squares_reference_is_the_former_fixed_one():
+    from graybox.static._constraints import StaticContext, auto_min_denominator
+
+    ctx = StaticContext(FIRST)  # no ls_theta: e.g. the regressors do not identify θ
+    one, dR = np.ones(3), np.full((3, 2), 0.5)
+    assert auto_min_denominator("auto", 1e-3, ctx, one, dR) == 1e-3
+    assert auto_min_denominator(2e-5, 1e-3, ctx, one, dR) == 2e-5
+    # with one whose D_i are 0.02, 0.01 and -0.5 (not a reference there): a tenth of the smallest positive
+    ls = StaticContext(FIRST, ls_theta=np.array([0.98, 0.0]))
+    dR = np.array([[1.0, 0.0], [0.99 / 0.98, 0.0], [1.5 / 0.98, 0.0]])
+    assert auto_min_denominator("auto", 1e-2, ls, one, dR) == pytest.approx(0.001, rel=1e-9)
+    assert auto_min_denominator("auto", 1e-4, ls, one, dR) == 1e-4  # never above the ceiling
+
+
+def test_a_grid_spec_band_takes_auto_by_default():
+    from graybox.experiments._spec import build_constraint, canonical_constraint
+
+    d = canonical_constraint({"type": "band"}, ())
+    assert d["min_denominator"] == "auto"
+    assert build_constraint(d).min_denominator == "auto"
+    assert canonical_constraint({"type": "band", "min_denominator": 1e-5}, ())["min_denominator"] == 1e-5
+    g = canonical_constraint({"type": "gain", "lower": 0.0}, ())
+    assert g["min_denominator"] == "auto"
