@@ -190,7 +190,7 @@ def _enc(kind: str, v: Any) -> Any:
         return _arr(v)
     if kind in ("int", "str", "bool"):
         return v if kind != "int" else int(v)
-    if kind in ("floats", "pair"):
+    if kind == "floats":
         return [_num(x) for x in v]
     if kind == "pairs":
         return [[_num(x) for x in p] for p in v]
@@ -204,7 +204,7 @@ def _enc(kind: str, v: Any) -> Any:
         return [str(t) for t in v]
     if kind == "structures":
         return [[str(t) for t in x] for x in v]
-    if kind in ("names", "texts"):
+    if kind == "names":
         return [str(n) for n in v]
     if kind == "arrays":
         return [_arr(a) for a in v]
@@ -234,8 +234,6 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return rd.array(v, where, 2 if rd.list(v, where) and isinstance(v[0], list) else 1)
     if kind == "int":
         return rd.int(v, where)
-    if kind == "pair":
-        return rd.floats(v, where)
     if kind == "pairs":
         return tuple(rd.floats(p, f"{where}[{i}]") for i, p in enumerate(rd.list(v, where)))
     if kind == "exponents":
@@ -259,7 +257,7 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return rd.structure(v, where)
     if kind == "structures":
         return tuple(rd.structure(x, f"{where}[{i}]") for i, x in enumerate(rd.list(v, where)))
-    if kind in ("names", "texts"):
+    if kind == "names":
         return tuple(rd.str(n, f"{where}[{i}]") for i, n in enumerate(rd.list(v, where)))
     if kind == "arrays":
         return tuple(rd.array(a, f"{where}[{i}]", 1) for i, a in enumerate(rd.list(v, where)))
@@ -381,7 +379,7 @@ def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "StaticPoints": (StaticPoints, (("ubar", "inputs"), ("ybar", "array1"), ("name", "str"), ("input_names", "names"),
                                     ("uncertainty", "array1_or_none"))),
-    "StaticCurve": (StaticCurve, (("coefficients", "array1"), ("domain", "pair_or_none"), ("name", "str"))),
+    "StaticCurve": (StaticCurve, (("coefficients", "array1"), ("domain", "floats_or_none"), ("name", "str"))),
     "StaticSurface": (StaticSurface, (("exponents", "exponents"), ("coefficients", "array1"), ("domain", "pairs_or_none"),
                                       ("name", "str"), ("input_names", "names"))),
     "Model": (Model, (("name", "str"), ("structure", "structure"), ("theta", "array1"),
@@ -426,12 +424,12 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                           ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
                                           ("gain", "array1"), ("gain_low", "array1"), ("gain_high", "array1"),
                                           ("gain_std", "array1"), ("undefined", "array1"))),
-    "CLSResult": (CLSResult, (("model", "Model"), ("static", "static_or_none"), ("constraints", "texts"), ("solver", "str"))),
+    "CLSResult": (CLSResult, (("model", "Model"), ("static", "static_or_none"), ("constraints", "names"), ("solver", "str"))),
     "LocalModel": (LocalModel, (("ubar", "array1"), ("ybar", "float_or_none"), ("status", "str"), ("reason", "str"),
                                 ("a", "array1"), ("b", "array2"), ("Ts", "float"), ("input_names", "names"), ("name", "str"))),
     "OperatingCurve": (OperatingCurve, (("local_models", "local_models"), ("ubar", "inputs"), ("ybar", "array1"),
                                         ("gain", "inputs"), ("time_constant", "array1"), ("damping", "array1"),
-                                        ("spectral_radius", "array1"), ("settling_time", "array1"), ("status", "texts"),
+                                        ("spectral_radius", "array1"), ("settling_time", "array1"), ("status", "names"),
                                         ("level", "float"), ("gain_low", "inputs_or_none"), ("gain_high", "inputs_or_none"),
                                         ("time_constant_low", "array1_or_none"),
                                         ("time_constant_high", "array1_or_none"), ("undefined", "array1_or_none"),
@@ -470,8 +468,8 @@ _OR_NONE = "_or_none"
 _STATIC = ("StaticPoints", "StaticCurve", "StaticSurface")
 
 #: Field kinds other than the saved types themselves.
-_KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "str", "bool", "floats", "pair", "pairs", "exponents",
-                    "structure", "structures", "names", "texts", "arrays", "dict_arrays", "failures", "skipped", "frame",
+_KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "str", "bool", "floats", "pairs", "exponents",
+                    "structure", "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame",
                     "static", "local_models"})
 _KINDS = _KINDS | {k + _OR_NONE for k in _KINDS}
 
