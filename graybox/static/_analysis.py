@@ -65,7 +65,7 @@ from ..core._terms import Structure, Term
 from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real, check_sequence,
                                 check_theta)
 from ..core._reprs import short_repr
-from ._linearisation import derivative_map, grid_coefficients
+from ._linearisation import characteristic_roots, derivative_map, grid_coefficients
 
 __all__ = [
     "cluster_key",
@@ -766,11 +766,9 @@ def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, n
     a = candidate_linearisations(int(kind), ip, np.ascontiguousarray(fp, dtype=float),
                                  np.ascontiguousarray(cand, dtype=float), ncand, int(L))  # (K, C, L)
     K, C, _ = a.shape
-    comp = np.zeros((K, C, L, L))  # companion matrices of y(t) = Σ_l a_l y(t − l)
-    comp[:, :, 0, :] = a
-    comp[:, :, np.arange(1, L), np.arange(L - 1)] = 1.0
     with np.errstate(all="ignore"):
-        rho = np.abs(np.linalg.eigvals(np.where(np.isfinite(comp), comp, 0.0))).max(axis=-1)  # (K, C)
+        roots = characteristic_roots(np.where(np.isfinite(a), a, 0.0).reshape(K * C, L))  # of y(t) = Σ_l a_l y(t − l)
+        rho = np.abs(roots).max(axis=1).reshape(K, C)
         rho = np.where(np.arange(C)[None, :] < ncand[:, None], rho, 0.0).max(axis=1)
         tau = -1.0 / np.log(np.minimum(rho, 1.0))  # a stable candidate has ρ < 1; rounding may not
     steps = np.where(np.isfinite(tau), np.ceil(SETTLE_TAUS * np.minimum(tau, SETTLE_MAX_STEPS)), np.inf)

@@ -315,7 +315,7 @@ def static_surface(
         return res.ybar[0].copy()
     # every point is a member of the folded model at ū' = 1: its roots and their stability in one call
     roots = _static.real_roots(sk, thf[0], np.ones(1))  # (M, 1, D)
-    stab = _static.stable_mask(sk, thf[0], np.ones(roots.shape[2]), roots[:, 0, :])
+    stab = _static._roots_stable(sk, thf[0], np.ones(1), roots)[:, 0]
     out, problems = _static.only_stable(roots[:, 0, :], stab,
                                         ["ū = (" + ", ".join(f"{v:g}" for v in u) + ")" for u in ub])
     if strict and problems:
