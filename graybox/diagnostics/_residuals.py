@@ -82,6 +82,10 @@ TESTS: Mapping[str, tuple[str, str, str]] = MappingProxyType({
     "u2_xi2": ("φ_(u²)'ξ²(τ)", "nonlinear", "both"),
 })
 
+#: The tests made once per input, and of them those of u'² (undefined where u'² is constant).
+INPUT_TESTS = tuple(k for k in TESTS if k != "xi_xi")
+U2_TESTS = tuple(k for k in INPUT_TESTS if k.startswith("u2_"))
+
 RULES = ("simultaneous", "pointwise")
 
 
@@ -395,15 +399,15 @@ def residual_tests(
     for j, nm in enumerate(names):
         tag = "" if len(names) == 1 else f":{nm}"
         if np.ptp(allu[:, j]) == 0.0:
-            for key in ("u_xi", "xi_xiu", "u2_xi", "u2_xi2"):
+            for key in INPUT_TESTS:
                 undefined[key + tag] = f"input {nm!r} is constant on these data"
             continue
         u2 = ((allu[:, j] - np.mean(allu[:, j])) / np.std(allu[:, j])) ** 2
         if np.ptp(u2) <= 1e-9 * np.max(u2):  # round-off of ±1: its correlations would be noise
-            for key in ("u2_xi", "u2_xi2"):
+            for key in U2_TESTS:
                 undefined[key + tag] = (f"input {nm!r} takes two levels equally often: u'² is constant (for any "
                                         "two-level input these tests repeat φ_uξ)")
-    if len(undefined) == 4 * len(names):
+    if len(undefined) == len(INPUT_TESTS) * len(names):
         raise ValueError(("the input is constant" if len(names) == 1 else "every input is constant")
                          + ": the input correlation tests are undefined")
     if undefined:
