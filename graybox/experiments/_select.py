@@ -9,8 +9,9 @@ for the spread of that score. Its phases (one function each below):
    contiguous folds of it (refitting per fold), and *report* on an optional test record that no
    step of the choice reads;
 2. **structures** (:func:`_structures`) — for each size, the best structure of that size on the
-   SEMP path (:func:`graybox.semp`) and the FROLS structure of that size, completed (gray box)
-   with the simplest terms the static curve's form needs (:func:`static_terms`);
+   SEMP path (:func:`graybox.semp`) and the FROLS structure of that size (and, with ``sources``,
+   the best subset of that size by a swap or exact search), completed (gray box) with the
+   simplest terms the static curve's form needs (:func:`static_terms`);
 3. **scoring** (:func:`_score_job`, one job per structure × estimator, in the driver or on the
    experiment layer's executors) — every member's free-run J_S on each block, its J_SF, and its
    J_S on the test record;
@@ -26,13 +27,12 @@ winner's curse); the blocks measure how much of its lead is noise, and the rule 
 to the simpler structure when it is. The test columns measure what the choice is worth.
 
 Without a band (none given and none carried by the static points' uncertainty, or ``band=inf``)
-the same search picks a black box: LS and ELS fits, chosen by J_S alone.
+the same search picks a black box: LS, ELS and output-error fits, chosen by J_S alone.
 """
 
 from __future__ import annotations
 
 import functools
-import re
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
@@ -45,6 +45,7 @@ from .. import _api as gb
 from ..io._json import register_type
 from ..models._coerce import static_info, static_points
 from ..selection._forward_regression import _RSS_FLOOR
+from ..selection._stopping import FewerTermsError
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._least_squares import one_blas_thread
@@ -117,8 +118,9 @@ class GrayboxSelection:
     decision : Decision
         How that member was chosen (``JS`` is its J_S on the choosing data).
     table : pandas.DataFrame
-        Everything compared, one row per structure and estimator: ``source`` (semp / frols),
-        ``size`` (terms before the static terms), ``n_terms``, ``added`` (static-form terms),
+        Everything compared, one row per structure and estimator: ``source`` (semp, frols, swap or
+        exact; several when they give one structure), ``size`` (terms before the static terms),
+        ``n_terms``, ``added`` (static-form terms),
         ``estimator``, ``lambda1`` (of the member chosen, NaN for a black box), ``JS_valid``
         (its J_S on the choosing data: the validation record, or all the folds' held-out samples;
         every row's errors counted from the candidates' largest lag on, the same samples for all; an
@@ -193,7 +195,7 @@ class GrayboxSelection:
             raise ValueError("this table keeps no terms (a selection saved by graybox 0.2.2 or earlier)")
         if row not in self.table.index:
             raise ValueError(f"no row {row!r}; rows: {sorted(set(self.table.index))}")
-        return gb.Structure(str(self.table.loc[[row], "terms"].iloc[0]).split(" + "))
+        return gb.parse_structure(str(self.table.loc[[row], "terms"].iloc[0]))
 
     @property
     def fallback(self) -> bool:
@@ -432,12 +434,10 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
         if "frols" in sources:
             try:
                 sel = gb.frols(candidates, ident, n_terms=max(sizes), include=forced)
-            except ValueError as e:  # fewer usable (or independent) candidates on these data: the sizes they reach
-                usable = re.search(r"only (\d+) (?:of the \d+ candidates are usable|independent terms could be "
-                                   r"selected)", str(e))
-                if usable is None:
+            except FewerTermsError as e:  # fewer usable (or independent) candidates on these data: the sizes they reach
+                if e.reached is None:
                     raise
-                sel = gb.frols(candidates, ident, n_terms=int(usable.group(1)), include=forced)
+                sel = gb.frols(candidates, ident, n_terms=e.reached, include=forced)
             # its structure begins with the included terms: a size below their number would drop some
             n0 = max(len(gb.Structure(list(forced))), 1)
             reached["frols"] = set(range(n0, len(sel.structure) + 1))
@@ -451,10 +451,7 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
             for k in sizes:
                 try:
                     sel = gb.frols(candidates, ident, n_terms=k, include=forced, search=src)
-                except ValueError as e:  # fewer usable or independent candidates: the sizes below are reached
-                    if re.search(r"only \d+ (?:of the \d+ candidates are usable|independent terms)|no subset of \d+ "
-                                 r"independent terms", str(e)) is None:
-                        raise
+                except FewerTermsError:  # fewer usable or independent candidates: the sizes below are reached
                     break
                 reached[src].add(k)
                 found[(src, k)] = [str(t) for t in sel.structure]
@@ -593,7 +590,7 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     weights`` is J_S on all the choosing samples); ``jsf`` (P,): the worst J_SF over the fits; ``thetas`` (P, n) and
     ``lambdas`` of the fit on all the identification data; ``test`` (P,): their J_S on the test record.
     """
-    st = gb.Structure(job.terms.split(" + "))
+    st = gb.parse_structure(job.terms)
     plan = job.plan
     blocks, jsf, weights = [], [], []
     full = None
@@ -938,7 +935,7 @@ def select_graybox(
         warn(f"select_graybox: the fits of {len(failed)} of {len(results)} structure × estimator rows failed and "
              f"those rows were left out of the choice (table['reason'] says why), e.g. {failed[0]}", SelectionWarning)
     job, res, i = jobs[pos], results[pos], members[pos]
-    structure = gb.Structure(job.terms.split(" + "))
+    structure = gb.parse_structure(job.terms)
     decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
     table = table.sort_values("rank")
     table = table[[c for c in table.columns if c != "terms"] + ["terms"]]  # long: last

@@ -70,7 +70,7 @@ from ..core._gram import (
 )
 from ..core._regressors import check_structure_inputs, record_signals
 from ..core._validation import as_1d_finite, check_choice, check_fields, check_int, check_real, warn
-from ._stopping import choose_model, stop_rule, StopRule
+from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
@@ -690,10 +690,10 @@ def frols(
     if n_terms is not None and n_terms > n_usable:
         if said:
             warn("; ".join(said), CandidateWarning)
-        raise ValueError(
+        raise FewerTermsError(
             f"n_terms = {n_terms} but only {n_usable} of the {n_cand} candidates are usable on these data "
-            f"({len(skipped)} skipped: {', '.join(str(t) for t, _ in skipped[:5])}{', …' if len(skipped) > 5 else ''})"
-        )
+            f"({len(skipped)} skipped: {', '.join(str(t) for t, _ in skipped[:5])}{', …' if len(skipped) > 5 else ''})",
+            n_usable)
     if mode == "n_terms":
         K = n_terms
     elif mode == "tol":
@@ -750,11 +750,11 @@ def frols(
     # ranking (noise-free data); its θ would be an arbitrary point of a null space
     weak = np.flatnonzero(np.abs(np.diag(R)) <= rank_tol * math.sqrt(N))
     if weak.size:
-        # in greedy's words ("only k independent terms"), which select_graybox reads to take the sizes reached
-        raise ValueError(f"only {weak[0]} independent terms could be selected on these data: selected term "
-                         f"{process[idx[weak[0]]]} is a linear combination of the terms selected before it, which the "
-                         f"{cols.method} form could not tell (noise-free data?); ask for fewer terms"
-                         + (", or method='mgs'" if cols.method == "gram" else ""))
+        # in greedy's words ("only k independent terms"); select_graybox takes the sizes reached
+        raise FewerTermsError(f"only {weak[0]} independent terms could be selected on these data: selected term "
+                              f"{process[idx[weak[0]]]} is a linear combination of the terms selected before it, which "
+                              f"the {cols.method} form could not tell (noise-free data?); ask for fewer terms"
+                              + (", or method='mgs'" if cols.method == "gram" else ""), int(weak[0]))
     theta_scaled = _back_substitute(np.triu(R), g[:n_sel])
     theta = theta_scaled / cols.scales[idx]
     evaluated = Structure([process[j] for j in chosen])
@@ -896,11 +896,10 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
         if not active.any():
             if rule is not None and rule.mode == "n_terms":
                 dep_terms = [str(t) for t, why in skipped if why.startswith("linear")]
-                raise ValueError(
+                raise FewerTermsError(
                     f"only {k} independent terms could be selected on these data, n_terms = {rule.n_terms} asked: "
                     f"the remaining candidates are linear combinations of the selected ones "
-                    f"({', '.join(dep_terms[:8])}{', …' if len(dep_terms) > 8 else ''})"
-                )
+                    f"({', '.join(dep_terms[:8])}{', …' if len(dep_terms) > 8 else ''})", k)
             break
         if k < len(forced):
             j = forced[k]

@@ -17,9 +17,21 @@ import numpy as np
 
 from ..core._validation import warn
 
-__all__ = ["StopRule", "stop_rule", "choose_model"]
+__all__ = ["StopRule", "stop_rule", "choose_model", "FewerTermsError"]
 
 Mode = Literal["n_terms", "tol", "criterion"]
+
+
+class FewerTermsError(ValueError):
+    """A search cannot give the size asked for on these data (fewer usable or independent candidates).
+
+    ``reached``: the most terms it can give, when known (None otherwise), so that a caller that asks
+    for several sizes (``select_graybox``) takes the ones reached instead of reading the message.
+    """
+
+    def __init__(self, message: str, reached: int | None = None):
+        super().__init__(message)
+        self.reached = reached
 
 
 @dataclass(frozen=True)

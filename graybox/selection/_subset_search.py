@@ -30,7 +30,7 @@ from typing import Callable, Sequence
 import numba as nb
 import numpy as np
 
-from ._stopping import StopRule
+from ._stopping import FewerTermsError, StopRule
 
 __all__ = ["SubsetProblem", "SearchBudget", "SizePlan", "swap_search", "exact_search", "search_sizes", "RSS_FLOOR"]
 
@@ -219,7 +219,7 @@ def swap_search(problem: SubsetProblem, k: int, forced: list[int], extra_starts:
         if best is None or r < best[1]:
             best = (S, r)
     if best is None:
-        raise ValueError(f"no subset of {k} independent terms on these data")
+        raise FewerTermsError(f"no subset of {k} independent terms on these data")
     return best
 
 
