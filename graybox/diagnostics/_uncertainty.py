@@ -65,7 +65,7 @@ from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
-from ..estimation._extended_least_squares import _ma_coefficients, _ma_text, _pure_lags
+from ..estimation._extended_least_squares import _ma_coefficients, _ma_invertible, _ma_text, _pure_lags
 from ..static._analysis import cluster_key, reached_equilibria, static_theta_gradient
 from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 
@@ -379,12 +379,11 @@ def ls_uncertainty(
     sigma2 = float(res @ res) / dof
     if ne == 0:
         cov = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what), s)
-    else:
-        cov = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
-    if ne == 0:
         _check_stationary(np.eye(n), A.T @ res, _size(A.T @ (A @ (theta_all * s)), A.T @ y), what,
                           "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty)",
                           tol=1e-10)  # LS and FROLS land within 1e-15 of it, even at 2e9 ± 50
+    else:
+        cov = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
                                 cov[n:, n:])
 
@@ -398,7 +397,7 @@ def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.nd
     lags = _pure_lags(ns)
     if None not in lags:
         a = _ma_coefficients(c, lags)
-        if np.any(np.abs(np.roots(a)) >= 1.0):
+        if not _ma_invertible(a):
             raise ValueError(f"ls_uncertainty (ELS): the MA part C(q) = {_ma_text(a)} is not invertible (a root on or "
                              "outside the unit circle): its one-step residuals grow without bound, so it is no ELS "
                              "estimate and has no covariance")

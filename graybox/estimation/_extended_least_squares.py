@@ -172,6 +172,11 @@ def _ma_coefficients(c: np.ndarray, lags: list[int | None]) -> np.ndarray:
     return out
 
 
+def _ma_invertible(C: np.ndarray) -> bool:
+    """1/C(q) is stable: every root of C inside the unit circle (ξ = C⁻¹(q)(…) does not grow)."""
+    return len(C) < 2 or bool(np.max(np.abs(np.roots(C))) < 1.0)
+
+
 def _frequency_response(C: np.ndarray) -> np.ndarray:
     """C(e^{jω}) on a grid of [0, π] fine enough for its degree."""
     w = np.linspace(0.0, np.pi, max(513, 64 * len(C)))
@@ -249,7 +254,7 @@ class _DirectMA:
     def _xi(self, c: np.ndarray):
         """(ξ, E(ξ)) with θ eliminated (Ψᵀξ = 0 solved for θ), or None when 1/C(q) is unstable."""
         C = _ma_coefficients(c, self.lags)
-        if len(C) > 1 and np.max(np.abs(np.roots(C))) >= 1.0:
+        if not _ma_invertible(C):
             return None
         F = inverse_ma_filter(self.X, C, self.bounds)  # [Ψ_C y_C]
         G = self.X[:, : self.n].T @ F  # [Ψᵀ Ψ_C, Ψᵀ y_C]
