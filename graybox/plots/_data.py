@@ -14,7 +14,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..static._curves import StaticCurve
-from ..core._records import Record, StaticPoints
+from ..core._records import Dataset, Record, StaticPoints
 from ..core._validation import check_int, check_real, check_sequence
 
 __all__ = ["plot_static_curve", "plot_record"]
@@ -160,7 +160,7 @@ def plot_record(
         a line through the samples.
     """
     if not isinstance(record, Record):
-        hint = " (pass data.ident or data.valid)" if type(record).__name__ == "Dataset" else ""
+        hint = " (pass data.ident or data.valid)" if isinstance(record, Dataset) else ""
         raise TypeError(f"record must be a Record, got {type(record).__name__}{hint}")
     n = len(record)
     start = check_int(start, "start", low=0)
