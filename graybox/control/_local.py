@@ -29,8 +29,8 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 from scipy.signal import lfilter
 
-from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, rounded_levels,
-                              static_point_inputs)
+from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, outside_range,
+                              rounded_levels, static_point_inputs)
 from ..core._terms import Structure
 from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, warn
 from ..models._coerce import as_model
@@ -441,8 +441,7 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
         cols.append(static_point_inputs(static, names).reshape(len(static), -1))
     lo = np.min([c.min(axis=0) for c in cols], axis=0)
     hi = np.max([c.max(axis=0) for c in cols], axis=0)
-    tol = 1e-9 * np.maximum(np.abs(lo), np.abs(hi))  # relative: the same in any units
-    out = ub[((ub < lo - tol) | (ub > hi + tol)).any(axis=1)]
+    out = ub[outside_range(ub, lo, hi).any(axis=1)]
     if out.size:
         box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo, hi))
         pts = rounded_levels(out[:, 0] if out.shape[1] == 1 else out)

@@ -444,6 +444,17 @@ class StaticRangeWarning(UserWarning):
 RANGE_MARGIN = 0.05
 
 
+def outside_range(u: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float, margin: float = 0.0) -> np.ndarray:
+    """Where ``u`` lies outside [lo, hi] (element-wise, broadcast: per column with per-input bounds).
+
+    The tolerance is relative, 1e-9 of the larger bound's magnitude, so the same in any units, or
+    ``margin`` × (hi − lo) when that is larger.
+    """
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    tol = np.maximum(1e-9 * np.maximum(np.abs(lo), np.abs(hi)), margin * (hi - lo))
+    return (u < lo - tol) | (u > hi + tol)
+
+
 def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "static points") -> None:
     """Warn once, in words, which static ū lie well outside the dynamic records' input range (box, per input).
 
@@ -453,9 +464,8 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
     if ubar.ndim == 2 and ubar.shape[1] > 1:
         lo_ = np.min([r.inputs.min(axis=0) for r in records], axis=0)
         hi_ = np.max([r.inputs.max(axis=0) for r in records], axis=0)
-        tol_ = np.maximum(1e-9 * np.maximum(abs(lo_), abs(hi_)), RANGE_MARGIN * (hi_ - lo_))
         rows = np.unique(ubar, axis=0)
-        out_ = rows[((rows < lo_ - tol_) | (rows > hi_ + tol_)).any(axis=1)]
+        out_ = rows[outside_range(rows, lo_, hi_, RANGE_MARGIN).any(axis=1)]
         if out_.size:
             box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo_, hi_))
             msg = (f"{what}: ū = {rounded_levels(out_)} lie outside the input box {box} of the dynamic "
@@ -466,8 +476,7 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
     ub = np.unique(np.atleast_1d(np.asarray(ubar, float)))
     lo = min(float(r.u.min()) for r in records)
     hi = max(float(r.u.max()) for r in records)
-    tol = max(1e-9 * max(abs(lo), abs(hi)), RANGE_MARGIN * (hi - lo))
-    out = ub[(ub < lo - tol) | (ub > hi + tol)]
+    out = ub[outside_range(ub, lo, hi, RANGE_MARGIN)]
     if out.size:
         msg = (f"{what}: ū = {rounded_levels(out)} lie outside the input range [{lo:.6g}, {hi:.6g}] of the "
                "dynamic records; the model is extrapolated there by the static information (if the points and the "
@@ -626,4 +635,4 @@ def choosing_records(value: object, name: str = "choose_on") -> list[Record]:
     return recs
 
 
-__all__ += ["rounded_levels", "same_record", "shared_stretch", "sliced", "check_overlap", "RecordOverlapWarning", "choosing_records"]
+__all__ += ["outside_range", "rounded_levels", "same_record", "shared_stretch", "sliced", "check_overlap", "RecordOverlapWarning", "choosing_records"]

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core._least_squares import scaled_lstsq
-from ..core._records import StaticPoints
+from ..core._records import StaticPoints, outside_range
 from ..core._validation import as_1d_finite, check_int, check_real
 from ..core._reprs import short_repr
 
@@ -84,8 +84,7 @@ class StaticCurve:
             return
         lo, hi = self.domain
         ub = np.atleast_1d(ubar)
-        tol = 1e-9 * max(abs(lo), abs(hi))  # relative: the same in any units (hi > lo, so not 0)
-        out = ub[(ub < lo - tol) | (ub > hi + tol)]
+        out = ub[outside_range(ub, lo, hi)]
         if out.size:
             raise ValueError(f"ū = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")
 

@@ -14,7 +14,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..core._least_squares import scaled_lstsq
-from ..core._records import StaticPoints
+from ..core._records import StaticPoints, outside_range
 from ..core._validation import check_int, check_real, check_sequence
 from ..core._reprs import short_repr
 
@@ -249,9 +249,8 @@ class StaticSurface:
             return
         u = _as_inputs(ubar, self.n_inputs, self.name)
         for i, (lo, hi) in enumerate(self.domain):
-            tol = 1e-9 * max(abs(lo), abs(hi))  # relative: the same in any units (hi > lo, so not 0)
             col = u[:, i]
-            out = col[(col < lo - tol) | (col > hi + tol)]
+            out = col[outside_range(col, lo, hi)]
             if out.size:
                 raise ValueError(f"{self.input_names[i]} = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")
 
