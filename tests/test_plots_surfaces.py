@@ -50,6 +50,17 @@ def test_slices_draw_one_line_per_level_and_surface_with_the_points(tmp_path):
     assert (tmp_path / "s.png").read_bytes().startswith(PNG_MAGIC)
 
 
+def test_the_points_of_a_level_are_found_in_any_units():
+    # "on the level" had an absolute floor (1e-9 × max(|level|, 1)): with the inputs in units of 1e-12
+    # (levels 1e-10 apart) every point was drawn on every level
+    U = static_grid() * 1e-12
+    pts = StaticPoints(U, theory(static_grid()), name="grid")
+    fig = plot_surface_slices(StaticSurface.fit(pts, 2), pts)
+    markers = fig.axes[0].lines[6:]
+    assert len(markers) == 6 and all(m.get_xdata().size == 6 for m in markers)
+    np.testing.assert_array_equal(np.sort(markers[2].get_xdata()), U[:6, 1])
+
+
 def test_slices_against_the_second_input_at_chosen_levels():
     fit = StaticSurface.fit(_grid_points(), 2)
     fig = plot_surface_slices(fit, against=1, at=[1200.0, 1600.0], n_grid=11)

@@ -203,8 +203,9 @@ def plot_surface_slices(
     if pts is not None:
         ub, yb, pname = pts
         labelled = False
+        scale = float(np.max(np.abs(ub[:, held])))  # "on the level" relative to the input's size: any units
         for lev, col in zip(levels, colors):
-            on = np.abs(ub[:, held] - lev) <= 1e-9 * max(abs(lev), 1.0)
+            on = np.abs(ub[:, held] - lev) <= 1e-9 * max(abs(lev), scale)
             if on.any():
                 # one legend entry for the points (their colour already names the level)
                 ax.plot(ub[on, against], yb[on], "*", linestyle="none", markersize=9, color=col,
