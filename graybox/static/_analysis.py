@@ -121,7 +121,10 @@ SETTLE_MAX_STEPS = 10_000_000
 #: SETTLE_RTOL · min(max(|ȳ_e|, |y0|), distance to the nearest other equilibrium) of it ...
 SETTLE_RTOL = 1e-6
 #: ... or once it lies within 1000 times that distance of it, its last L increments are below
-#: STALL_RTOL · max(|y|, |y0|), and Newton's method on eq. (5) from there lands on it (a slow approach).
+#: STALL_RTOL · max(|y|, |y0|), and Newton's method on eq. (5) from there lands on it (a slow approach);
+#: a run given the longer budget also once its distance to it shrinks at its own rate (the geometric
+#: test of :func:`graybox.static._equilibrium_kernels.settle_runs`: a slow mode near −1, whose
+#: increments never vanish, is otherwise run until it has decayed to the tolerance).
 STALL_RTOL = 1e-7
 #: A root of a static polynomial of degree >= 4 (companion eigenvalues) counts as real when its
 #: imaginary part is at most this fraction of its modulus.
@@ -677,7 +680,8 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     increments vanish and Newton's method on the static equation lands on it; it is stopped as
     diverged (|y| beyond 10⁶ times the pair's scale) or as not settled after its step budget,
     ``SETTLE_STEPS`` or, for a run still unsettled then, ``SETTLE_TAUS`` time constants of its
-    slowest stable equilibrium (:func:`settle_budget`); see
+    slowest stable equilibrium (:func:`settle_budget`), where it also ends once its distance to an
+    equilibrium shrinks at that equilibrium's own rate (the geometric test); see
     :func:`graybox.static._equilibrium_kernels.settle_runs`, whose docstring gives ``kind``, ``ip``
     and ``fp``. Pairs with no stable equilibrium are not run: they settle on none.
 
@@ -722,7 +726,8 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
             ybar[sel], status[sel], last, left = settle_runs(
                 int(kind), ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0a[sel]),
                 np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
-                np.ascontiguousarray(ntol[sel]), L, float(floor), SETTLE_STEPS, _ONE_BUDGET, _NO_HISTORY, STALL_RTOL)
+                np.ascontiguousarray(ntol[sel]), L, float(floor), SETTLE_STEPS, _ONE_BUDGET, _NO_HISTORY, STALL_RTOL,
+                _NO_RATES)
         if left:
             _settle_longer(int(kind), ip, fp, y0a, cand, ncand, tol, ntol, L, float(floor), run, ybar, status, last)
     return ybar, status
@@ -734,9 +739,10 @@ def _settle_longer(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, ca
     """Let the runs :func:`settle`'s first pass left unsettled go on for the budget their slowest candidate
     needs (:func:`settle_budget`), from where they are (``last``: the first pass's, indexed as the pairs
     it ran); one whose candidate is too slow to judge within SETTLE_MAX_STEPS stays not settled.
-    ``ybar`` and ``status`` are updated in place."""
+    These runs also end on the geometric test (an approach at the candidate's own rate; see
+    :func:`graybox.static._equilibrium_kernels.settle_runs`). ``ybar`` and ``status`` are updated in place."""
     again = np.flatnonzero(status == NOT_SETTLED)
-    budget = settle_budget(kind, ip, fp[again], cand[again], ncand[again], L)
+    budget, lograte = settle_budget(kind, ip, fp[again], cand[again], ncand[again], L)
     longer = (budget > SETTLE_STEPS) & (budget <= SETTLE_MAX_STEPS)
     if not longer.any():
         return
@@ -746,22 +752,25 @@ def _settle_longer(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, ca
         ybar[sel], status[sel], _, _ = settle_runs(
             kind, ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0[sel]),
             np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
-            np.ascontiguousarray(ntol[sel]), L, floor, 0, budget[longer] - SETTLE_STEPS, hist, STALL_RTOL)
+            np.ascontiguousarray(ntol[sel]), L, floor, 0, budget[longer] - SETTLE_STEPS, hist, STALL_RTOL,
+            np.ascontiguousarray(lograte[longer]))
 
 
 #: No per-pair budgets, no earlier runs to go on from: the first pass of :func:`settle`.
 _ONE_BUDGET = np.zeros(0, dtype=np.int64)
 _NO_HISTORY = np.zeros((0, 1))
+_NO_RATES = np.zeros((0, 1))
 
 
 def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, ncand: np.ndarray, L: int
-                  ) -> np.ndarray:
-    """Each pair's step budget: ``SETTLE_TAUS`` time constants of its slowest stable candidate.
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Each pair's step budget: ``SETTLE_TAUS`` time constants of its slowest stable candidate; and ln ρ
+    of each candidate.
 
     The time constant of a candidate is −1/ln ρ samples, ρ the spectral radius of the recursion
     linearised there; the budget is at least ``SETTLE_STEPS``; one above ``SETTLE_MAX_STEPS`` is
     returned as ``SETTLE_MAX_STEPS + 1`` (the run cannot be judged). Shapes: ``fp`` (K, nf),
-    ``cand`` (K, C), ``ncand`` (K,); returns int64 (K,).
+    ``cand`` (K, C), ``ncand`` (K,); returns int64 (K,) and ln ρ (K, C), NaN past a pair's candidates.
     """
     a = candidate_linearisations(int(kind), ip, np.ascontiguousarray(fp, dtype=float),
                                  np.ascontiguousarray(cand, dtype=float), ncand, int(L))  # (K, C, L)
@@ -769,10 +778,11 @@ def settle_budget(kind: int, ip: np.ndarray, fp: np.ndarray, cand: np.ndarray, n
     with np.errstate(all="ignore"):
         roots = characteristic_roots(np.where(np.isfinite(a), a, 0.0).reshape(K * C, L))  # of y(t) = Σ_l a_l y(t − l)
         rho = np.abs(roots).max(axis=1).reshape(K, C)
-        rho = np.where(np.arange(C)[None, :] < ncand[:, None], rho, 0.0).max(axis=1)
-        tau = -1.0 / np.log(np.minimum(rho, 1.0))  # a stable candidate has ρ < 1; rounding may not
+        valid = np.arange(C)[None, :] < ncand[:, None]
+        lograte = np.where(valid, np.log(rho), np.nan)
+        tau = -1.0 / np.log(np.minimum(np.where(valid, rho, 0.0).max(axis=1), 1.0))  # stable: ρ < 1; rounding may not
     steps = np.where(np.isfinite(tau), np.ceil(SETTLE_TAUS * np.minimum(tau, SETTLE_MAX_STEPS)), np.inf)
-    return np.clip(steps, SETTLE_STEPS, SETTLE_MAX_STEPS + 1).astype(np.int64)
+    return np.clip(steps, SETTLE_STEPS, SETTLE_MAX_STEPS + 1).astype(np.int64), lograte
 
 
 @lru_cache(maxsize=256)

@@ -267,6 +267,16 @@ def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
 # -- running until settled ---------------------------------------------------------------------------
 #: Pairs run side by side (lanes): independent recursions interleaved hide each one's latency.
 LANES = 8
+#: The geometric test of :func:`settle_runs` (runs given their candidates' rates): windows of
+#: GEOM_TAUS time constants, GEOM_WINDOWS of them in a row each shrinking the distance to the
+#: candidate by at least ρ^(GEOM_SLACK · window). The linearised recursion shrinks it by ρ^window
+#: once the faster modes have died (faster while they have not); the slack leaves room for the
+#: window's maximum to fall between samples of a mode near −1 or of a complex pair. Four windows,
+#: 0.2 time constants, against the decay to SETTLE_RTOL that a run close to its candidate otherwise
+#: needs (ln(distance / tol) ≈ 2 time constants on the plant's near-integrators).
+GEOM_TAUS = 0.05
+GEOM_WINDOWS = 3
+GEOM_SLACK = 0.9
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -421,7 +431,7 @@ def settle_candidates(roots, stable, y0, floor, rtol):  # pragma: no cover - com
 
 
 @nb.njit(cache=True, nogil=True)
-def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, budgets, hist, stall_rtol):  # pragma: no cover - compiled
+def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, budgets, hist, stall_rtol, lograte):  # pragma: no cover - compiled
     """Run each pair's recursion at constant input from y0 until it settles; classify the end.
 
     Parameters
@@ -454,6 +464,15 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
         call that left it not settled, as one longer run would (``y0`` still sets its scales).
     stall_rtol : float
         Relative size of a vanishing increment.
+    lograte : ndarray, shape (K, C) or (0, C)
+        When not empty, ln ρ of each candidate (ρ the spectral radius of the recursion linearised
+        there, < 1): a run also reaches candidate c once, over :data:`GEOM_WINDOWS` consecutive
+        windows of :data:`GEOM_TAUS` time constants −1/ln ρ each, its largest distance to c has
+        shrunk window by window at least as fast as ρ^(GEOM_SLACK · window) and lies within
+        ``ntol`` of c: the approach is geometric at the candidate's own rate (the linearised
+        recursion's), which a run heading elsewhere, cycling or stalling does not show. A slow
+        mode near −1 (an oscillation about c that dies out over 10⁵ samples) ends no other way
+        short of its decay to ``tol``.
 
     Returns
     -------
@@ -494,6 +513,12 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
     inc = np.zeros(B)  # largest |y(k) − y(k−1)| since the last check
     bound = np.zeros(B)
     sref = np.zeros(B)
+    geo = lograte.shape[0] > 0
+    gwin = np.zeros(B, dtype=np.int64)  # steps per geometric window (0: no geometric test for this lane)
+    gsteps = np.zeros(B, dtype=np.int64)  # steps into the current window
+    gdev = np.zeros(B)  # largest |y − goal| in the current window ...
+    gprev = np.zeros(B)  # ... and in the window before (0: none yet)
+    gcount = np.zeros(B, dtype=np.int64)  # consecutive windows that shrank at the candidate's rate
     nxt = 0
     active = 0
     t = L
@@ -523,6 +548,12 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
                 goal[b] = cand[k, best]
                 dev[b] = 0.0
                 inc[b] = 0.0
+                if geo:
+                    gwin[b] = _geom_window(lograte[k, best], L)
+                    gsteps[b] = 0
+                    gdev[b] = 0.0
+                    gprev[b] = 0.0
+                    gcount[b] = 0
                 bound[b] = 1e6 * ref
                 sref[b] = max(abs(yk0), floor)
                 for i in range(ring_n):
@@ -570,6 +601,21 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
                         break
                 if abs(x - goal[b]) <= tol[k, c0]:
                     end = REACHED
+            if end < 0 and gwin[b] > 0:
+                gdev[b] = max(gdev[b], dev[b])
+                gsteps[b] += L
+                if gsteps[b] >= gwin[b]:
+                    # this window against the one before: shrunk at least at the candidate's own rate?
+                    if gprev[b] > 0.0 and gdev[b] <= ntol[k, c0] and \
+                            gdev[b] <= gprev[b] * np.exp(GEOM_SLACK * gsteps[b] * lograte[k, c0]):
+                        gcount[b] += 1
+                    else:
+                        gcount[b] = 0
+                    if gcount[b] >= GEOM_WINDOWS:
+                        end = REACHED
+                    gprev[b] = gdev[b]
+                    gdev[b] = 0.0
+                    gsteps[b] = 0
             if end < 0 and t - start[b] >= limit[b]:
                 end = NOT_SETTLED
             if end >= 0:
@@ -593,8 +639,23 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
             for c_ in range(ncand[k]):
                 if abs(y - cand[k, c_]) < abs(y - cand[k, best]):
                     best = c_
+            if geo and best != target[b]:  # another candidate: its own rate, windows from scratch
+                gwin[b] = _geom_window(lograte[k, best], L)
+                gsteps[b] = 0
+                gdev[b] = 0.0
+                gprev[b] = 0.0
+                gcount[b] = 0
             target[b] = best
             goal[b] = cand[k, best]
             dev[b] = 0.0
             inc[b] = 0.0
     return ybar, status, last_out, left
+
+
+@nb.njit(cache=True, nogil=True)
+def _geom_window(lr, L):  # pragma: no cover - compiled
+    """Steps of one geometric window: GEOM_TAUS time constants −1/ln ρ, a multiple of L (0: no test)."""
+    if not (lr < 0.0):
+        return 0
+    n = int(np.ceil(GEOM_TAUS / (-lr) / L))
+    return max(n, 1) * L
