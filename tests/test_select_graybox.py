@@ -564,3 +564,23 @@ def test_a_non_greedy_source_offers_the_best_subset_of_each_size_and_every_row_k
         res.structure_of(6)
     with pytest.raises(ValueError, match="sources"):
         gb.select_graybox(cand, data, band=np.inf, sources=("greedy",))
+
+
+def test_the_ranking_fits_tolerance_changes_no_choice(data, monkeypatch):
+    # the gradient SE fits that rank the rows stop at a relative tolerance of 1e-6 (se_pareto's default:
+    # 1e-8): the same rows chosen in the same order, each row's score moved far less than the rule's spread
+    from graybox.experiments import _select
+
+    def run():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5, 7],
+                                     estimator="se-gradient")
+
+    loose = run()
+    monkeypatch.setattr(_select, "_SE_TOL", 1e-8)
+    tight = run()
+    assert _select._SE_TOL == 1e-8 and loose.structure == tight.structure
+    assert loose.table.index.tolist() == tight.table.index.tolist()
+    np.testing.assert_allclose(loose.table["JS_valid"], tight.table["JS_valid"], rtol=1e-4)  # 1e-3 moves them 5e-4
+    assert loose.decision.JS == pytest.approx(tight.decision.JS, rel=1e-4)

@@ -503,6 +503,13 @@ def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> np.ndarray | No
     return None
 
 
+#: Tolerance of the gradient SE fits that rank the rows (``se_pareto``'s ``tol``, relative; its default
+#: is 1e-8): the rows' scores differ by per cents and the rule's standard errors are per cents too, so
+#: solving each fit to 1e-8 bought nothing the choice can see (BENCHMARKS.md, "Session of 2026-11-26,
+#: 08:48"); the chosen member is the fit made here.
+_SE_TOL = 1e-6
+
+
 def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.ndarray]:
     """(θ rows (P, n), λ1 (P,)); a failed member's row is NaN."""
     est, plan = job.estimator, job.plan
@@ -518,8 +525,9 @@ def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.nd
             th = gb.pe_thetas(st, rec, plan.static, lambdas=lam, constraints=cons or None,
                               solver="clarabel" if cons else "closed")
             return th, lam
+        gradient = est == "se-gradient"
         front = gb.se_pareto(st, rec, plan.static, lambdas=lam, progress=False,
-                             method="gradient" if est == "se-gradient" else "ga")
+                             method="gradient" if gradient else "ga", **({"tol": _SE_TOL} if gradient else {}))
         th = np.array(front.thetas, float)
         th[list(front.failures)] = np.nan
         return th, np.asarray(front.lambdas, float)
