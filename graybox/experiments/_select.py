@@ -800,7 +800,9 @@ def select_graybox(
         ``"se-ga"`` (default PE and SE gradient; PE alone with constraints). Black box: ``"ls"``,
         ``"els"``, ``"oe"`` (output error, :func:`graybox.output_error` with its defaults; default
         all three). Every structure is scored with each; the rule chooses among all (structure,
-        estimator) rows.
+        estimator) rows. The gradient SE fits stop at a relative tolerance of 1e-6 (``se_pareto``'s
+        default is 1e-8; the scores move by about 1e-5, far below the rule's spread): refit the
+        chosen structure with ``se_pareto``/``se_dsf`` for a tighter solution.
     constraints : optional
         Constraint objects or tables imposed by PE, as in :class:`Variant`. Naming another
         estimator with them is an error.
