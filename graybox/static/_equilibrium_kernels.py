@@ -655,7 +655,7 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
 @nb.njit(cache=True, nogil=True)
 def _geom_window(lr, L):  # pragma: no cover - compiled
     """Steps of one geometric window: GEOM_TAUS time constants −1/ln ρ, a multiple of L (0: no test)."""
-    if not (lr < 0.0):
+    w = GEOM_TAUS / (-lr) / L
+    if not (0.0 < w < 1e15):  # ρ >= 1 or NaN: no rate to test against; a window no int holds: none either
         return 0
-    n = int(np.ceil(GEOM_TAUS / (-lr) / L))
-    return max(n, 1) * L
+    return max(int(np.ceil(w)), 1) * L
