@@ -584,3 +584,43 @@ def test_the_ranking_fits_tolerance_changes_no_choice(data, monkeypatch):
     assert loose.table.index.tolist() == tight.table.index.tolist()
     np.testing.assert_allclose(loose.table["JS_valid"], tight.table["JS_valid"], rtol=1e-4)  # 1e-3 moves them 5e-4
     assert loose.decision.JS == pytest.approx(tight.decision.JS, rel=1e-4)
+
+
+def test_every_row_gives_back_the_model_its_test_columns_score(data, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5],
+                                test=plant(3, n=800))
+        black = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=np.inf, sizes=[3, 5],
+                                  estimator=("ls", "els"), test=plant(3, n=800))
+    for sel in (res, black):
+        t = sel.table
+        lag = 3  # the candidates' largest lag: every row is scored from there
+        for name, r in t.iterrows():
+            if not r["theta"]:
+                with pytest.raises(ValueError, match="has no model"):
+                    sel.model_of(name, estimator=r["estimator"])
+                continue
+            m = sel.model_of(name, estimator=r["estimator"])
+            assert list(m.structure) == list(sel.structure_of(name))
+            # its J_S on the test record is the row's JS_test: the same model, nothing refitted
+            test = plant(3, n=800)
+            assert gb.mse(test.y, m.simulate(test), start=lag) == pytest.approx(r["JS_test"], rel=1e-9)
+        chosen = sel.chosen
+        np.testing.assert_array_equal(sel.model_of(chosen.name, estimator=chosen["estimator"]).theta, sel.model.theta)
+    # a structure fitted by several estimators needs the estimator named; an estimator it was not fitted by is refused
+    name = res.table.index[res.table.index.duplicated()][0]
+    with pytest.raises(ValueError, match="pass estimator="):
+        res.model_of(name)
+    with pytest.raises(ValueError, match="estimator"):
+        res.model_of(name, estimator="ls")
+    with pytest.raises(ValueError, match="no row"):
+        res.model_of("frols-99")
+    # saved and loaded, every row's model is the same to the last bit
+    path = tmp_path / "sel.json"
+    gb.save(res, path)
+    back = gb.load(path)
+    for name, r in res.table.iterrows():
+        if r["theta"]:
+            np.testing.assert_array_equal(back.model_of(name, r["estimator"]).theta,
+                                          res.model_of(name, r["estimator"]).theta)

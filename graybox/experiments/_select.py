@@ -135,7 +135,9 @@ class GrayboxSelection:
         warned of (e.g. an ELS iteration that did not converge), each message once; empty when
         nothing. The call then says once, with a :class:`SelectionWarning`, how many rows warned
         and whether the chosen one did. ``terms``: the row's structure, its terms joined by
-        ``" + "`` (:meth:`structure_of` reads it back).
+        ``" + "`` (:meth:`structure_of` reads it back); ``theta``: the parameters of its member
+        (the model the test columns score), exact decimal text, empty for a row without a model
+        (:meth:`model_of` reads it back).
     degree : int or None
         Degree of the static curve the static information asks for (None for a black box).
     band : float
@@ -196,6 +198,41 @@ class GrayboxSelection:
         if row not in self.table.index:
             raise ValueError(f"no row {row!r}; rows: {sorted(set(self.table.index))}")
         return gb.parse_structure(str(self.table.loc[[row], "terms"].iloc[0]))
+
+    def model_of(self, row: str, estimator: str | None = None) -> gb.Model:
+        """The model of the table's row named ``row`` (e.g. ``"frols-10"``): its member chosen on the choosing
+        data, fitted on all the identification data (the model the row's ``JS_test`` scores).
+
+        Parameters
+        ----------
+        row : str
+            A name in the table's index.
+        estimator : str, optional
+            Which of the row's estimators (e.g. ``"pe"``, ``"se-gradient"``, ``"ls"``); needed when the
+            structure was fitted by more than one.
+
+        Returns
+        -------
+        Model
+            With the chosen model's input names and sampling period.
+        """
+        structure = self.structure_of(row)
+        if "theta" not in self.table.columns:
+            raise ValueError("this table keeps no parameters (a selection saved by graybox 0.2.3 or earlier)")
+        rows = self.table.loc[[row]]
+        ests = list(rows["estimator"])
+        if estimator is None and len(ests) > 1:
+            raise ValueError(f"row {row!r} was fitted by {ests}: pass estimator= to say which")
+        if estimator is not None:
+            check_choice(estimator, "estimator", tuple(ests))
+            rows = rows[rows["estimator"] == estimator]
+        r = rows.iloc[0]
+        text = r["theta"]
+        if not isinstance(text, str) or not text:  # "" (or NaN, as a CSV reader gives it back)
+            raise ValueError(f"row {row!r} ({r['estimator']}) has no model: {r['reason']}")
+        theta = np.array([float(v) for v in text.split()])
+        return gb.Model(structure, theta, name=f"{r['estimator']} ({row})", input_names=self.model.input_names,
+                        Ts=self.model.Ts)
 
     @property
     def fallback(self) -> bool:
@@ -948,7 +985,8 @@ def select_graybox(
     structure = gb.parse_structure(job.terms)
     decision = _decision(table.iloc[pos], res, i, structure, plan, job.estimator, not used_fallback)
     table = table.sort_values("rank")
-    table = table[[c for c in table.columns if c != "terms"] + ["terms"]]  # long: last
+    long = ["terms", "theta"]  # long: last
+    table = table[[c for c in table.columns if c not in long] + long]
     return GrayboxSelection(structure, decision.model, decision, table, None if form is None else form.degree, plan.band,
                             not used_fallback, used)
 
@@ -1005,6 +1043,9 @@ def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.
                    JS_valid=js, JSF=float(res["jsf"][i]) if i >= 0 else no_jsf, in_band=bool(in_band and np.isfinite(js)))
         row["reason"] = _reason(res, i, in_band, js, plan.band)
         row["warnings"] = "; ".join(res["warnings"])
+        th = res["thetas"][i] if i >= 0 else np.full(1, np.nan)
+        # exact decimal text (repr round-trips a float): a table saved to JSON or CSV keeps every row's model
+        row["theta"] = " ".join(repr(float(v)) for v in th) if np.all(np.isfinite(th)) else ""
         if plan.test is not None:
             row["JS_test"] = float(res["test"][i]) if i >= 0 else np.inf
             row["JSF_test"] = float(res["jsf_full"][i]) if i >= 0 else no_jsf
