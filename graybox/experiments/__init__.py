@@ -28,6 +28,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "_map": ("parallel_map",),
     "_run": ("GridRun", "run_grid"),
     "_select": ("BLACK_BOX_ESTIMATORS", "GRAY_BOX_ESTIMATORS", "GrayboxSelection", "SelectionWarning", "select_graybox"),
+    "_selection_plot": ("plot_selection",),
     "_spec": ("BUNDLED", "CONSTRAINT_TYPES", "DECISION_RULES", "ESTIMATORS", "Cell", "DataSpec", "DecisionRule", "Grid",
               "SpecError", "StructureSpec", "Variant"),
     "_store": ("StoreError", "compare_results", "load_results", "store_specs"),

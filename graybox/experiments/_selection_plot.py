@@ -1,0 +1,138 @@
+"""A picture of a :func:`graybox.select_graybox` choice: why that row, and how it fared.
+
+Built with :class:`matplotlib.figure.Figure` directly (no pyplot state), as every graybox figure.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
+
+from ..core._validation import check_sequence
+from ._report import _MARKERS, _band_on, _finite_pos, _scale
+from ._select import GrayboxSelection
+
+__all__ = ["plot_selection"]
+
+
+def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None = None, title: str | None = None
+                   ) -> Figure:
+    """Every row :func:`graybox.select_graybox` compared, against its number of terms, in two or three panels.
+
+    1. **The rule.** Each row's J_S on the choosing data over the best row's (the mean over the
+       blocks of log(J_S / J_S of the best row), as a ratio; dimensionless, 1 = the best row) with
+       ± one standard error of that mean. A row whose bar reaches 1 is within one standard error
+       of the best: eligible, drawn filled (hollow otherwise); ``rule="one-se"`` takes the
+       fewest terms among them. Rows without a qualifying model are left out and counted.
+    2. **The static error.** J_SF of each row's member (output units²), the band B shaded (gray
+       boxes; left out when no row has a J_SF, as for a black box without static points).
+    3. **The test record**, when the selection was given one: each row's J_S there (output
+       units²). Nothing in it took part in the choice; it shows what the choice cost against
+       the best row on new data (the regret).
+
+    One marker per estimator; the chosen row is ringed in red on every panel.
+
+    Parameters
+    ----------
+    selection : GrayboxSelection
+        From :func:`graybox.select_graybox` (or loaded with :func:`graybox.load`).
+    axes : sequence of Axes, optional
+        Draw here, one Axes per panel (2, or 3 with a test record); by default a new figure with
+        the panels side by side is made.
+    title : str, optional
+        Figure title (default: the chosen row, its estimator and the rule).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if not isinstance(selection, GrayboxSelection):
+        raise TypeError(f"selection must be a GrayboxSelection (from select_graybox), got {type(selection).__name__}")
+    if title is not None and not isinstance(title, str):
+        raise TypeError(f"title must be a str, got {type(title).__name__}")
+    t = selection.table
+    panels = ["rule"]
+    if np.isfinite(t["JSF"].to_numpy(float)).any():
+        panels.append("static")
+    if "JS_test" in t.columns:
+        panels.append("test")
+    if axes is None:
+        fig = Figure(figsize=(4.6 * len(panels), 4.2), layout="constrained")
+        axs = list(fig.subplots(1, len(panels), squeeze=False)[0])
+    else:
+        axs = check_sequence(axes, "axes", f"a sequence of {len(panels)} matplotlib Axes")
+        if len(axs) != len(panels) or not all(isinstance(a, Axes) for a in axs):
+            raise ValueError(f"axes must hold {len(panels)} matplotlib Axes (panels {panels}), got {len(axs)} items")
+        fig = axs[0].figure
+    chosen = t[t["rank"] == 1].iloc[0]
+    estimators = list(dict.fromkeys(t["estimator"]))
+    mark = {e: _MARKERS[i % len(_MARKERS)] for i, e in enumerate(estimators)}
+    color = {e: f"C{i % 10}" for i, e in enumerate(estimators)}
+    n = t["n_terms"].to_numpy(float)
+    est = t["estimator"].to_numpy()
+    elig = t["eligible"].to_numpy(bool) if "eligible" in t.columns else np.zeros(len(t), bool)
+    has_model = np.isfinite(t["JS_valid"].to_numpy(float))
+    for ax, panel in zip(axs, panels):
+        if panel == "rule":
+            vs = t["vs_best"].to_numpy(float) if "vs_best" in t.columns else np.full(len(t), np.nan)
+            se = t["vs_best_se"].to_numpy(float) if "vs_best_se" in t.columns else np.full(len(t), np.nan)
+            y, ok = np.exp(vs), has_model & np.isfinite(vs)
+            values = y[ok]
+            err = np.where(np.isfinite(se), se, 0.0)  # no error bar where one block only was cut
+            _points(ax, est, elig, ok, n, y, mark, color, (y - np.exp(vs - err), np.exp(vs + err) - y))
+            ax.axhline(1.0, color="0.45", lw=0.8, ls="--", zorder=1)
+            ax.set_ylabel("J_S on the choosing data / the best row's")
+            ax.set_title(f"rule {selection.rule!r}: {int(ok.sum())} of {len(t)} rows drawn", fontsize=9)
+            _ring(ax, chosen["n_terms"], np.exp(chosen["vs_best"]) if "vs_best" in t.columns else np.nan)
+        elif panel == "static":
+            jsf = t["JSF"].to_numpy(float)
+            ok = _finite_pos(jsf)
+            values = jsf[ok]
+            _points(ax, est, elig, ok, n, jsf, mark, color)
+            ax.set_ylabel("J_SF of the row's member (output units²)")
+            ax.set_title(f"static error: {int(ok.sum())} of {len(t)} rows drawn", fontsize=9)
+            _ring(ax, chosen["n_terms"], chosen["JSF"])
+        else:
+            js = t["JS_test"].to_numpy(float)
+            ok = _finite_pos(js)
+            values = js[ok]
+            _points(ax, est, elig, ok, n, js, mark, color)
+            best = float(np.min(values)) if values.size else np.nan
+            ax.set_ylabel("J_S on the test record (output units²)")
+            regret = chosen["JS_test"] / best if np.isfinite(best) else np.nan
+            ax.set_title(f"test record (not used to choose): the choice is {regret:.3g}× the best row",
+                         fontsize=9)
+            _ring(ax, chosen["n_terms"], chosen["JS_test"])
+        _scale(ax, "y", values)
+        if panel == "static" and np.isfinite(selection.band):
+            _band_on(ax, selection.band, label=True)
+        ax.set_xlabel("terms")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.grid(True, which="major", alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    fig.suptitle(title if title is not None else
+                 f"chosen: {chosen.name} by {chosen['estimator']} ({int(chosen['n_terms'])} terms)", fontsize=10)
+    return fig
+
+
+def _points(ax: Axes, est: np.ndarray, elig: np.ndarray, ok: np.ndarray, n: np.ndarray, y: np.ndarray, mark: dict,
+            color: dict, yerr: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+    """The rows ``ok``: one marker per estimator, filled where the row was eligible; error bars ``yerr``
+    (below, above) when given."""
+    for e in mark:
+        for yes in (True, False):
+            m = ok & (est == e) & (elig == yes)
+            if m.any():
+                ax.errorbar(n[m], y[m], yerr=None if yerr is None else [yerr[0][m], yerr[1][m]], fmt=mark[e],
+                            color=color[e], ms=6, capsize=2, lw=0.8, mfc=color[e] if yes else "none",
+                            label=f"{e} ({'eligible' if yes else 'not eligible'})")
+
+
+def _ring(ax: Axes, x: float, y: float) -> None:
+    """The chosen row, ringed in red."""
+    if np.isfinite(y) and y > 0:
+        ax.plot([x], [y], "o", ms=14, mfc="none", mec="red", mew=1.5, label="chosen", zorder=5)
