@@ -321,10 +321,19 @@ def test_every_dialect_loads_the_same_floats(rows, dialect, bom, crlf):
         plain = _write_dialect(Path(d) / "plain.csv", header, rows, ",", ".", False)
         other = _write_dialect(Path(d) / "other.csv", header, rows, delimiter, decimal, quote, bom, crlf)
         want = load_record_csv(plain, u=["speed", "count"], y="pressure", Ts=1.0)
-        for kw in ({}, {"delimiter": delimiter, "decimal": decimal}):
+        # every decimal of the form 1.234 (it may be 1234 with a thousands separator): refused unless
+        # decimal= is given, but where a comma separates the columns a point decimal is plain
+        decimals = [repr(v) for row in rows for v in row[:2] if re.fullmatch(r"-?\d*\.\d+(e[+-]\d+)?", repr(v))]
+        ambiguous = (delimiter, decimal) != (",", ".") and decimals and all(
+            re.fullmatch(r"-?[1-9]\d{0,2}\.\d{3}", c) for c in decimals)
+        if ambiguous:
+            with pytest.raises(ValueError, match="the decimal mark is ambiguous"):
+                load_record_csv(other, u=["speed", "count"], y="pressure", Ts=1.0)
+        given_ = {"delimiter": delimiter, "decimal": decimal}
+        for kw in ([given_] if ambiguous else [{}, given_]):
             got = load_record_csv(other, u=["speed", "count"], y="pressure", Ts=1.0, **kw)
             assert got.u.tobytes() == want.u.tobytes() and got.y.tobytes() == want.y.tobytes()
-        pts = load_static_csv(other, u="speed", y="pressure", repeats="mean")
+        pts = load_static_csv(other, u="speed", y="pressure", repeats="mean", **(given_ if ambiguous else {}))
         assert pts.ubar.tobytes() == load_static_csv(plain, u="speed", y="pressure", repeats="mean").ubar.tobytes()
 
 

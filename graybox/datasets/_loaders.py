@@ -3,9 +3,12 @@
 CSV conventions (all loaders): one header line naming the columns, one sample per line, numbers
 in any form Python's ``float`` reads. Files as spreadsheets export them are read: the delimiter
 (``,`` ``;`` or tab) and the decimal mark (``.`` or ``,``) are detected from the header and the
-first lines (``delimiter=`` and ``decimal=`` override), a UTF-8 byte-order mark is skipped. A file
-that allows two readings is refused with what was seen. Columns are picked by name, so a file may
-hold other columns too. Every problem found is a ``ValueError`` naming the file and the line
+first lines (``delimiter=`` and ``decimal=`` override). The text is UTF-8 (a byte-order mark
+skipped), UTF-16 or UTF-32 when a byte-order mark says so (Excel's "Unicode text"), or what
+``encoding=`` names (e.g. ``"cp1252"``, Excel's "CSV" on Windows). A file that allows two readings
+is refused with what was seen, among them numbers that may hold a thousands separator (``1,234``
+with no other decimal in sight); thousands separators themselves are never read. Columns are
+picked by name, so a file may hold other columns too. Every problem found is a ``ValueError`` naming the file and the line
 (1-based, the header is line 1) or the column: empty cells, NaN or inf, text where a number
 belongs, rows with too few fields, a missing column (with the closest existing names), time stamps
 that do not increase or are unevenly spaced, repeated static input levels.
@@ -60,11 +63,11 @@ BUCK_STATIC_CURVE = StaticCurve.polynomial([32.0, -8.0], domain=(1.0, 4.0),
 # ---------------------------------------------------------------------------
 
 def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter: str | None = None,
-                  decimal: str | None = None) -> dict[str, np.ndarray]:
+                  decimal: str | None = None, encoding: str | None = None) -> dict[str, np.ndarray]:
     """Read the columns ``wanted`` (role -> column name) of a CSV file as finite float arrays.
 
-    The delimiter and the decimal mark are detected (:func:`_dialect`) unless given. Raises
-    ``ValueError`` naming the file and the line or column of the first problem.
+    The encoding (:func:`_utf8`), the delimiter and the decimal mark are detected (:func:`_dialect`)
+    unless given. Raises ``ValueError`` naming the file and the line or column of the first problem.
     """
     p = Path(path)
     names = list(wanted.values())
@@ -72,8 +75,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if dup:
         roles = [r for r, n in wanted.items() if n in dup]
         raise ValueError(f"{p}: {', '.join(roles)} all name the column {sorted(dup)[0]!r}; each must be a different column")
-    raw = p.read_bytes()
-    start = 3 if raw.startswith(codecs.BOM_UTF8) else 0  # spreadsheet exports often start with one
+    raw, start, own = _utf8(p, p.read_bytes(), encoding)
     # The dialect and the header come from the first lines alone: a long file is decoded whole
     # only when the careful reader (or a decimal comma) needs its text.
     end = start
@@ -99,7 +101,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
         index[role] = header.index(col)
     text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
-    fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header))
+    fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header),
+                         reread=own)
     if fast is not None:
         return fast
     reader = csv.reader(io.StringIO(text(), newline=""), delimiter=delim)
@@ -135,7 +138,45 @@ def _decode(p: Path, raw: bytes, start: int, end: int) -> str:
     except UnicodeDecodeError as exc:
         at = start + exc.start
         line = raw.count(b"\n", 0, at) + 1
-        raise ValueError(f"{p}: line {line} is not UTF-8 text (byte {raw[at]:#04x}); save the file as UTF-8 CSV") from None
+        raise ValueError(f"{p}: line {line} is not UTF-8 text (byte {raw[at]:#04x}); save the file as UTF-8 CSV, "
+                         "or pass the encoding it was saved in, e.g. encoding='cp1252' (Excel's \"CSV\" on "
+                         "Windows in Western Europe and the Americas)") from None
+
+
+# Byte-order marks, UTF-32's first: its little-endian mark starts with UTF-16's.
+_BOMS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8"),
+         (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))
+
+
+def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
+    """The file's bytes as UTF-8, where its text starts in them (after a UTF-8 byte-order mark), and
+    whether they are the file's own bytes (numpy's reader may then read the file itself).
+
+    Without ``encoding`` a byte-order mark decides (UTF-8, UTF-16 or UTF-32), else UTF-8, checked
+    lazily by :func:`_decode`. Text in another encoding is decoded here and written again as UTF-8.
+    """
+    if encoding is not None:
+        if not isinstance(encoding, str):
+            raise TypeError(f"encoding must name a text encoding (a str) such as 'cp1252', got {encoding!r}")
+        try:
+            enc = codecs.lookup(encoding).name
+        except LookupError:
+            raise ValueError(f"{p}: encoding {encoding!r} is not a text encoding Python knows (e.g. 'utf-8', "
+                             "'utf-16', 'cp1252')") from None
+    else:
+        enc = next((e for bom, e in _BOMS if raw.startswith(bom)), "utf-8")
+    if enc == "utf-8":
+        if encoding is None and b"\x00" in raw[:4096]:
+            raise ValueError(f"{p}: the file holds NUL bytes, so it is not UTF-8 text: UTF-16 without a byte-order "
+                             "mark? Pass encoding='utf-16-le' (or the encoding it was saved in)")
+        return raw, (3 if raw.startswith(codecs.BOM_UTF8) else 0), True
+    try:
+        text = raw.decode(enc)
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].decode(enc, errors="replace").count("\n") + 1
+        raise ValueError(f"{p}: line {line} is not {enc} text (bytes {raw[exc.start:exc.end].hex(' ')}); pass "
+                         "the encoding it was saved in as encoding=") from None
+    return text.removeprefix("\ufeff").encode("utf-8"), 0, False
 
 
 #: Delimiters tried when none is given, and how many lines the detection reads.
@@ -143,6 +184,11 @@ _DELIMITERS = (",", ";", "\t")
 _SNIFF_LINES = 50
 # A number written with a decimal comma: digits, one comma, digits (an exponent allowed).
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
+# A decimal number that also reads as an integer with a thousands separator (1,234 or 1.234).
+_GROUPED = re.compile(r"^[+-]?[1-9]\d{0,2}[.,]\d{3}$")
+# Digits in groups of three after a thousands separator (, . ' space, no-break or narrow no-break
+# space), maybe with a decimal part: what a spreadsheet's number format writes.
+_THOUSANDS = re.compile(r"^[+-]?\d{1,3}(?:([,.'\u2019 \u00a0\u202f])\d{3})(?:\1\d{3})*(?:[.,]\d*)?$")
 _DECIMAL_POINT = re.compile(r"^[+-]?\d*\.\d+(?:[eE][+-]?\d+)?$")
 _INTEGER = re.compile(r"^[+-]?\d+(?:[eE][+-]?\d+)?$")
 
@@ -174,7 +220,7 @@ def _dialect(p: Path, text: str, delimiter: str | None, decimal: str | None) -> 
     if delimiter is None:
         delimiter = _detect_delimiter(p, head[0][1], data)
     if decimal is None:
-        decimal = _detect_decimal(p, data, delimiter)
+        decimal = _detect_decimal(p, head[0][1], data, delimiter)
     if delimiter == decimal and '"' not in text:
         # only quotes keep a decimal comma from splitting a number in two
         raise ValueError(f"{p}: the delimiter is {_name(delimiter)} and so is the decimal mark, but no field is "
@@ -234,19 +280,32 @@ def _decimal_comma_cells(cells: Sequence[str]) -> bool:
     return len(cells) > 1 and all(_INTEGER.match(c) for c in cells if c)
 
 
-def _detect_decimal(p: Path, data: list[tuple[int, str]], delimiter: str) -> str:
-    comma = point = None
+def _detect_decimal(p: Path, header: str, data: list[tuple[int, str]], delimiter: str) -> str:
+    seen: dict[str, list[tuple[int, int, str]]] = {",": [], ".": []}  # (line, field, cell): each mark's evidence
     for line, ln in data:
-        for cell in _split(ln, delimiter):
+        for i, cell in enumerate(_split(ln, delimiter)):
             c = cell.strip()
-            if comma is None and _DECIMAL_COMMA.match(c):
-                comma = (line, c)
-            elif point is None and _DECIMAL_POINT.match(c):
-                point = (line, c)
-    if comma and point:
-        raise ValueError(f"{p}: the decimal mark is ambiguous: line {point[0]} has {point[1]!r} and line "
-                         f"{comma[0]} has {comma[1]!r}; pass decimal='.' or decimal=','")
-    return "," if comma else "."
+            if _DECIMAL_COMMA.match(c):
+                seen[","].append((line, i, c))
+            elif _DECIMAL_POINT.match(c):
+                seen["."].append((line, i, c))
+    if seen[","] and seen["."]:
+        (pl, _, pc), (cl, _, cc) = seen["."][0], seen[","][0]
+        raise ValueError(f"{p}: the decimal mark is ambiguous: line {pl} has {pc!r} and line {cl} has {cc!r}; "
+                         "pass decimal='.' or decimal=','")
+    mark = "," if seen[","] else "."
+    # 1,234 may be 1234 as a thousands separator writes it; a comma delimiter leaves no room for a
+    # thousands point (it would need a decimal comma)
+    if seen[mark] and (delimiter != "," or mark == ",") and all(_GROUPED.match(c) for *_, c in seen[mark]):
+        line, i, c = seen[mark][0]
+        names = _split(header, delimiter)
+        col = f", column {names[i].strip()!r}" if i < len(names) else ""
+        raise ValueError(f"{p}: the decimal mark is ambiguous: every number with a separator on the first "
+                         f"{len(data) + 1} lines reads as a decimal or as an integer with a thousands separator "
+                         f"(line {line}{col}: {c!r}, {c.replace(',', '.')} or {c.replace(mark, '')}); pass "
+                         f"decimal={mark!r} if {mark!r} is the decimal mark, else export the numbers without "
+                         "thousands separators")
+    return mark
 
 
 def _number(p: Path, line: int, col: str, cell: str, decimal: str) -> float:
@@ -265,6 +324,9 @@ def _number(p: Path, line: int, col: str, cell: str, decimal: str) -> float:
     try:
         v = float(c)
     except ValueError:
+        if _THOUSANDS.match(cell.strip()):  # float() reads no spreadsheet's separator, and none is guessed
+            hint += ("; it looks like a number with a thousands separator, which is not read: export the "
+                     "numbers without thousands separators")
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a number{hint}") from None
     if not math.isfinite(v):
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a finite number")
@@ -285,12 +347,13 @@ def _decimal_comma_hint(row: Sequence[str], delimiter: str) -> str:
 
 
 def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: Callable[[], str], delimiter: str,
-                  decimal: str, n_fields: int) -> dict[str, np.ndarray] | None:
+                  decimal: str, n_fields: int, reread: bool = True) -> dict[str, np.ndarray] | None:
     """The columns by numpy's reader (faster on long records), or None when the file needs the
     careful reader: quotes, blank lines, bare carriage returns, a line with another number of fields
     than the header, a field that is not a finite number or that only Python reads (``1_000``), a
     point in a decimal-comma file. Where numpy reads a field it gives the same float as Python's
-    ``float``, so a record's content, and the cells' keys, do not depend on the reader."""
+    ``float``, so a record's content, and the cells' keys, do not depend on the reader. ``raw``
+    holds UTF-8; ``reread`` says whether they are the file's own bytes, which numpy then reads."""
     if b'"' in raw or raw.count(b"\r") != raw.count(b"\r\n"):
         return None
     rows = raw.count(b"\n") + (0 if raw.endswith(b"\n") else 1) - 1  # physical lines after the header
@@ -311,7 +374,8 @@ def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: Callable[
             return None
         del buf, marks
     roles = list(index)
-    source: object = p  # numpy reads the file again itself: faster than parsing the text held here
+    # numpy reads the file again itself: faster than parsing the text held here
+    source: object = p if reread else io.StringIO(text())
     if decimal == ",":
         whole = text()
         if "." in whole[whole.find("\n") + 1:]:
@@ -351,6 +415,7 @@ def load_record_csv(
     input_names: Sequence[str] | None = None,
     delimiter: str | None = None,
     decimal: str | None = None,
+    encoding: str | None = None,
 ) -> Record:
     """A dynamic record (input, output, sampling period) from a CSV file.
 
@@ -386,7 +451,15 @@ def load_record_csv(
     decimal : {".", ","}, optional
         The decimal mark. Default: detected (``,`` where numbers such as ``2,5`` appear with a
         ``;`` or tab delimiter, or quoted). With ``","`` a point in a number is an error, never a
-        thousands separator.
+        thousands separator. Thousands separators (``1,234.5``, ``1.234,5``, ``1 234,5`` with a
+        space or a no-break space) are never read: such a number is an error naming its line, and a
+        file whose every decimal could also be an integer with a thousands separator (``1,234``
+        and no other decimal in the first 50 lines) is refused unless ``decimal=`` is given.
+    encoding : str, optional
+        The text encoding, any name Python knows (e.g. ``"cp1252"``, what Excel writes as "CSV"
+        on Windows in Western Europe and the Americas; ``"utf-16-le"``). Default: UTF-8, or UTF-16
+        or UTF-32 when the file starts with their byte-order mark (Excel's "Unicode text"); a file
+        that is not UTF-8 is an error naming the line and suggesting ``encoding=``.
 
     Returns
     -------
@@ -399,10 +472,13 @@ def load_record_csv(
         Naming the file and the line or column: a missing column (with close names), an empty
         cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
         with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
-        rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, or a delimiter or
-        decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``).
+        rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, a delimiter or
+        decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a
+        thousands separator, text that is not in the encoding (UTF-8 by default), or an unknown
+        ``encoding``.
     TypeError
-        ``path``, ``u``, ``y``, ``time`` or ``Ts`` of the wrong type (a column is named by a str).
+        ``path``, ``u``, ``y``, ``time``, ``Ts`` or ``encoding`` of the wrong type (a column is named
+        by a str).
     """
     p = Path(check_path(path, "path"))
     if time is None and Ts is None:
@@ -419,7 +495,7 @@ def load_record_csv(
     ucols, names = _input_columns(p, u, y, input_names)
     wanted = {f"input {c!r}" if len(ucols) > 1 else "u": c for c in ucols} | {"y": y} | (
         {"time": time} if time is not None else {})
-    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal)
+    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding)
     lines = cols["_lines"]
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
@@ -491,6 +567,7 @@ def load_static_csv(
     delimiter: str | None = None,
     decimal: str | None = None,
     uncertainty: float | Sequence[float] | None = None,
+    encoding: str | None = None,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
@@ -519,6 +596,9 @@ def load_static_csv(
         points: D_SF's band and
         :class:`~graybox.StaticBand`'s half-widths then follow from it. Default: none (bands
         must be given).
+    encoding : str, optional
+        The text encoding (as in :func:`load_record_csv`; UTF-8, or UTF-16/32 by their byte-order
+        mark, by default).
 
     Returns
     -------
@@ -533,18 +613,19 @@ def load_static_csv(
         or two lines with the same ū (unless ``repeats="mean"``); the file's faults listed in
         :func:`load_record_csv`.
     TypeError
-        ``path``, ``u`` or ``y`` of the wrong type (a column is named by a str).
+        ``path``, ``u``, ``y`` or ``encoding`` of the wrong type (a column is named by a str).
     """
     p = Path(check_path(path, "path"))
     check_choice(repeats, "repeats", ("error", "mean"))
     ucols, names = _input_columns(p, u, y, input_names)
     label = name or p.stem
     if len(ucols) > 1:
-        cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y}, delimiter=delimiter, decimal=decimal)
+        cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y}, delimiter=delimiter, decimal=decimal,
+                             encoding=encoding)
         ub = np.column_stack([cols[f"input {c!r}"] for c in ucols])
         where = f"columns {ucols}"
     else:
-        cols = _read_columns(p, {"u": ucols[0], "y": y}, delimiter=delimiter, decimal=decimal)
+        cols = _read_columns(p, {"u": ucols[0], "y": y}, delimiter=delimiter, decimal=decimal, encoding=encoding)
         ub = cols["u"]
         where = f"column {ucols[0]!r}"
     if repeats == "mean":

@@ -1,0 +1,125 @@
+"""Mends of batch 34b: CSV files as spreadsheets in other locales write them (thousands separators,
+UTF-16 and cp1252 text), SE checkpoints keyed by the graybox version as well as the problem, and
+what the residual tests' 95 % bands promise on fresh data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from graybox.datasets import load_record_csv, load_static_csv
+
+
+# -- 1. CSV files in other locales ---------------------------------------------------------------
+
+@pytest.mark.parametrize("text, line", [
+    ("u;y\n1;2.5\n2;1,234.5\n3;4.5\n", 3),             # English grouping, ';' between columns
+    ('u,y\n1,2.5\n2,"1,234.5"\n3,4.5\n', 3),           # English Excel's CSV quotes grouped numbers
+    ("u;y\n1;2,5\n2;1.234,5\n3;4,5\n", 3),             # German grouping with decimal commas
+    ("u;y\n1;1.234,5\n2;2,5\n", 2),
+    ("u;y\n1;2,5\n2;1 234,5\n3;4,5\n", 3),             # a space, as French writes it
+    ("u;y\n1;2,5\n2;1\u202f234,5\n3;4,5\n", 3),        # a narrow no-break space (French Excel)
+    ("u\ty\n1\t2,5\n2\t1\u00a0234,5\n", 3),            # a no-break space
+    ("u,y\n1,2.5\n2,1'234.5\n", 3),                    # Swiss grouping
+])
+def test_a_thousands_separator_is_refused_naming_the_file_column_and_line(tmp_path, text, line):
+    # was: refused as "is not a number" without saying why; the message now names the separator
+    p = tmp_path / "grouped.csv"
+    p.write_text(text, encoding="utf-8")
+    with pytest.raises(ValueError, match=rf"grouped.csv: line {line}, column 'y': .* is not a number.*thousands "
+                                         "separator"):
+        load_static_csv(p, u="u", y="y")
+
+
+@pytest.mark.parametrize("text, mark, as_decimal", [
+    ("u;y\n1;1,234\n2;2,345\n3;14,567\n", ",", [1.234, 2.345, 14.567]),
+    ('u,y\n1,"1,234"\n2,"2,345"\n', ",", [1.234, 2.345]),  # English Excel's CSV, thousands format
+    ("u;y\n1;1.234\n2;-2.345\n", ".", [1.234, -2.345]),    # German Excel, integers with grouping
+    ("u\ty\n1\t1.234\n2\t2.345\n", ".", [1.234, 2.345]),
+])
+def test_decimals_that_may_be_thousands_groups_are_refused_unless_the_mark_is_given(tmp_path, text, mark,
+                                                                                      as_decimal):
+    # was: read silently as decimals (1,234 -> 1.234), a thousand times too small if the comma
+    # grouped thousands, as English Excel writes quoted "1,234"
+    p = tmp_path / "groups.csv"
+    p.write_text(text, encoding="utf-8")
+    with pytest.raises(ValueError, match=r"groups.csv: the decimal mark is ambiguous.*line 2, column 'y': '-?1[.,]234'.*"
+                                         rf"pass decimal='\{mark}'"):
+        load_static_csv(p, u="u", y="y")
+    np.testing.assert_array_equal(load_static_csv(p, u="u", y="y", decimal=mark).ybar, as_decimal)
+    with pytest.raises(ValueError, match=r"line 2, column 'y'.*thousands separator"):
+        load_static_csv(p, u="u", y="y", decimal="." if mark == "," else ",")
+
+
+def test_one_decimal_that_cannot_be_a_thousands_group_settles_the_mark(tmp_path):
+    # 0,125 and 2,5 are decimals in any locale, so 1,234 beside them is one too
+    p = tmp_path / "settled.csv"
+    p.write_text("u;y\n1;1,234\n2;0,125\n3;2,5\n", encoding="utf-8")
+    np.testing.assert_array_equal(load_static_csv(p, u="u", y="y").ybar, [1.234, 0.125, 2.5])
+
+
+def _table(n: int = 80) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(5)
+    return np.arange(n) * 0.5, rng.uniform(30, 60, n).round(2), rng.uniform(20, 90, n).round(4)
+
+
+def _text(header: str, delimiter: str, decimal: str) -> str:
+    t, u, y = _table()
+    rows = [delimiter.join(repr(float(v)).replace(".", decimal) for v in row) for row in zip(t, u, y)]
+    return "\n".join([delimiter.join(["time", "Leistung %", header])] + rows) + "\n"
+
+
+@pytest.mark.parametrize("codec", ["utf-16", "utf-16-be", "utf-32"])
+def test_unicode_text_with_a_byte_order_mark_is_read(tmp_path, codec):
+    # was: "line 1 is not UTF-8 text (byte 0xff)"; Excel's "Unicode text" is UTF-16 with a byte-order
+    # mark, tab-separated
+    t, u, y = _table()
+    p = tmp_path / "unicode.txt"
+    bom = {"utf-16-be": b"\xfe\xff"}.get(codec, b"")
+    p.write_bytes(bom + _text("Temperatur °C", "\t", ",").encode(codec))
+    r = load_record_csv(p, u="Leistung %", y="Temperatur °C", time="time")
+    np.testing.assert_array_equal(r.u, u)
+    np.testing.assert_array_equal(r.y, y)
+    assert r.Ts == 0.5
+    s = load_static_csv(p, u="Leistung %", y="Temperatur °C", repeats="mean")
+    np.testing.assert_array_equal(np.sort(s.ybar), np.sort(y))
+
+
+@pytest.mark.parametrize("header", ["Temperatur °C", "Druck µbar"])
+@pytest.mark.parametrize("delimiter, decimal", [(";", ","), (",", ".")])
+def test_a_cp1252_file_is_named_as_such_and_read_with_its_encoding(tmp_path, header, delimiter, decimal):
+    # was: only "save the file as UTF-8"; encoding= now reads Excel's Windows "CSV" as it is
+    t, u, y = _table()
+    p = tmp_path / "ansi.csv"
+    p.write_bytes(_text(header, delimiter, decimal).encode("cp1252"))
+    with pytest.raises(ValueError, match=r"ansi.csv: line 1 is not UTF-8 text.*encoding='cp1252'") as info:
+        load_record_csv(p, u="Leistung %", y=header, time="time")
+    assert info.type is ValueError  # never a UnicodeDecodeError traceback
+    r = load_record_csv(p, u="Leistung %", y=header, time="time", encoding="cp1252")
+    np.testing.assert_array_equal(r.u, u)
+    np.testing.assert_array_equal(r.y, y)
+    pts = load_static_csv(p, u="time", y=header, encoding="cp1252")
+    np.testing.assert_array_equal(pts.ybar, y)
+
+
+def test_encoding_faults_are_value_errors_naming_the_encoding(tmp_path):
+    p = tmp_path / "late.csv"
+    p.write_bytes(("u;y;note\n" + "1;2,5;-\n" * 60 + "2;3,5;20 °C\n").encode("cp1252"))
+    with pytest.raises(ValueError, match=r"late.csv: line 62 is not UTF-8 text") as info:
+        load_static_csv(p, u="u", y="y", repeats="mean")
+    assert info.type is ValueError
+    np.testing.assert_array_equal(load_static_csv(p, u="u", y="y", repeats="mean", encoding="cp1252").ybar, [2.5, 3.5])
+    with pytest.raises(ValueError, match=r"late.csv: line 62 is not ascii text") as info:
+        load_static_csv(p, u="u", y="y", repeats="mean", encoding="ascii")
+    assert info.type is ValueError
+    with pytest.raises(ValueError, match=r"late.csv: encoding 'klingon' is not a text encoding"):
+        load_static_csv(p, u="u", y="y", encoding="klingon")
+    with pytest.raises(TypeError, match=r"encoding must name a text encoding"):
+        load_static_csv(p, u="u", y="y", encoding=1252)
+    q = tmp_path / "bomless.txt"
+    q.write_bytes("u\ty\n1\t2,5\n2\t3,5\n".encode("utf-16-le"))
+    with pytest.raises(ValueError, match=r"bomless.txt: the file holds NUL bytes.*encoding='utf-16-le'"):
+        load_static_csv(q, u="u", y="y")
+    np.testing.assert_array_equal(load_static_csv(q, u="u", y="y", encoding="utf-16-le").ybar, [2.5, 3.5])
