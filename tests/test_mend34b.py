@@ -4,6 +4,7 @@ what the residual tests' 95 % bands promise on fresh data."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -123,3 +124,107 @@ def test_encoding_faults_are_value_errors_naming_the_encoding(tmp_path):
     with pytest.raises(ValueError, match=r"bomless.txt: the file holds NUL bytes.*encoding='utf-16-le'"):
         load_static_csv(q, u="u", y="y")
     np.testing.assert_array_equal(load_static_csv(q, u="u", y="y", encoding="utf-16-le").ybar, [2.5, 3.5])
+
+
+# -- 2. SE checkpoints of another graybox version ----------------------------------------------
+
+def _se_problem():
+    from graybox import Record, StaticPoints
+    from graybox.estimation._simulation_error import SEProblem
+
+    rng = np.random.default_rng(3)
+    n = 300
+    u = np.repeat(rng.uniform(0.0, 2.0, n // 20 + 1), 20)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.1 * u[k - 1] ** 2
+    y += 0.01 * rng.standard_normal(n)
+    ub = np.array([0.25, 1.0, 1.75])
+    static = StaticPoints(ub, (0.3 * ub + 0.1 * ub ** 2) / 0.5 + 0.02)  # a static bias the fit must trade
+    return SEProblem(["y(k-1)", "u(k-1)", "u(k-1)^2"], [Record(u, y, Ts=1.0)], static)
+
+
+def _sweep(method, problem, checkpoint=None):
+    from graybox.estimation._simulation_error import GAOptions, ga_front, gradient_front
+
+    lam = [1.0, 0.5, 0.1]
+    if method == "ga":
+        return ga_front(problem, lam, options=GAOptions(population=20, generations=4), seed=2, checkpoint=checkpoint,
+                        progress=False)
+    return gradient_front(problem, lam, checkpoint=checkpoint, progress=False)
+
+
+@pytest.mark.parametrize("method", ["ga", "gradient"])
+def test_a_checkpoint_of_another_graybox_version_is_started_over_with_a_warning(tmp_path, monkeypatch, method):
+    # was: resumed as if this version had written it, so a front mixed the members of two
+    # algorithms; the version now keys the checkpoint as it keys the grid store's cells
+    import graybox.estimation._simulation_error as se
+
+    problem = _se_problem()
+    fresh = _sweep(method, problem)
+    this = se.graybox_version()
+    ck = tmp_path / "front.npz"
+    # another version whose algorithm differed: its members are not this version's
+    inner = "_ga_run" if method == "ga" else "_multistart"
+    real = getattr(se, inner)
+
+    def older_algorithm(*args, **kw):
+        th, cost, n = real(*args, **kw)
+        return th * 1.5, cost, n
+
+    with monkeypatch.context() as m:
+        m.setattr(se, "graybox_version", lambda: "0.0.1")
+        m.setattr(se, inner, older_algorithm)
+        old = _sweep(method, problem, ck)
+    assert se.checkpoint_version(ck) == "0.0.1"
+    assert not np.array_equal(old.thetas, fresh.thetas)
+    with pytest.warns(UserWarning, match=rf"front.npz was written by graybox 0\.0\.1, this is graybox "
+                                         rf"{re.escape(this)}.*starts over"):
+        again = _sweep(method, problem, ck)
+    np.testing.assert_array_equal(again.thetas, fresh.thetas)
+    assert se.checkpoint_version(ck) == this
+    resumed = _sweep(method, problem, ck)  # this version's own checkpoint resumes, silently
+    np.testing.assert_array_equal(resumed.thetas, fresh.thetas)
+
+
+def test_a_checkpoint_that_records_no_version_is_started_over(tmp_path):
+    # checkpoints written before versions were recorded hold no version: they start over too
+    import json
+
+    import graybox.estimation._simulation_error as se
+
+    problem = _se_problem()
+    ck = tmp_path / "front.npz"
+    fresh = _sweep("gradient", problem, ck)
+    with np.load(ck) as z:
+        kept = {k: z[k] for k in z.files}
+    meta = json.loads(str(kept["meta"]))
+    del meta["graybox"]
+    np.savez(ck, **(kept | {"meta": json.dumps(meta)}))
+    assert se.checkpoint_version(ck) == ""
+    with pytest.warns(UserWarning, match="written by a graybox that did not record its version"):
+        again = _sweep("gradient", problem, ck)
+    np.testing.assert_array_equal(again.thetas, fresh.thetas)
+
+
+def test_reproduce_says_which_checkpoints_it_resumes_and_which_start_over(tmp_path, monkeypatch):
+    # was: "resuming from 2 checkpoint(s)" also for checkpoints another graybox version wrote
+    import io
+
+    import graybox.estimation._simulation_error as se
+    import graybox.reproduce as rp
+    from graybox.reproduce._table1 import checkpoint_paths
+
+    monkeypatch.setattr(rp, "SECTIONS", ())
+    problem = _se_problem()
+    mine, theirs = checkpoint_paths(tmp_path, quick=True)[:2]
+    _sweep("gradient", problem, mine)
+    with monkeypatch.context() as m:
+        m.setattr(se, "graybox_version", lambda: "0.0.1")
+        _sweep("gradient", problem, theirs)
+    out = io.StringIO()
+    rp.run(quick=True, out=tmp_path, stream=out)
+    text = out.getvalue()
+    assert f"resuming from 1 checkpoint(s) in {tmp_path}: {mine.name} " in text
+    assert (f"starting over 1 checkpoint(s) of another graybox version (this is {se.graybox_version()}): "
+            f"{theirs.name} (0.0.1)") in text

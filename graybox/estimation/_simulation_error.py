@@ -24,7 +24,8 @@ bundled plant buy identification error with near-unit roots that follow the reco
 from the shared evaluator. A λ whose fit fails (no feasible start; no individual with a finite
 cost) stays in the set as a failed member with the reason, and the sweep goes on. Long sweeps show
 a progress bar, write a checkpoint after each λ (failed members included) and resume from it; a
-checkpoint written for another problem is refused.
+checkpoint written for another problem is refused, one written by another graybox version (whose
+algorithm may differ) is started over with a warning naming both versions.
 
 Inside the optimisers J_S is computed by the fused batch kernel (same definition as
 :func:`graybox.js`) and J_SF by the package's one static definition
@@ -80,7 +81,7 @@ from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..core._terms import Structure
-from ..core._validation import (check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
+from ..core._validation import (warn, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)
@@ -503,11 +504,33 @@ class SEFront:
 _CHECKPOINT_ARRAYS = ("thetas", "costs", "done", "failures", "nfev")
 
 
+def graybox_version() -> str:
+    """This graybox's version, which checkpoints record: another version's algorithm may differ."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("graybox")
+    except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
+        return "0+unknown"
+
+
+def checkpoint_version(path: str | os.PathLike) -> str | None:
+    """The graybox version a checkpoint file records: ``""`` when it records none (written before
+    versions were), None when it is no readable checkpoint (resuming it names the fault)."""
+    try:
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
+            stored = json.loads(str(z["meta"]))
+    except (ValueError, TypeError, KeyError, OSError, EOFError, zipfile.BadZipFile):
+        return None
+    return str(stored.get("graybox", "")) if isinstance(stored, dict) else None
+
+
 class CheckpointError(ValueError):
     """A checkpoint file that cannot be resumed: unreadable, corrupt, of another problem or an older graybox."""
 
 
-def _load_checkpoint(path: Path, meta: dict) -> dict:
+def _load_checkpoint(path: Path, meta: dict) -> dict | None:
+    """The state a checkpoint holds, or None (with a warning) when another graybox version wrote it."""
     def unreadable(exc: Exception) -> ValueError:
         return CheckpointError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose "
                                "another checkpoint path")
@@ -520,6 +543,14 @@ def _load_checkpoint(path: Path, meta: dict) -> dict:
     # JSONDecodeError is a ValueError; TypeError: a plain .npy array, which is no context manager
     except (ValueError, TypeError, KeyError, OSError, EOFError, zipfile.BadZipFile) as exc:
         raise unreadable(exc) from None
+    if not isinstance(stored, dict):
+        raise unreadable(TypeError(f"its metadata is a {type(stored).__name__}, not a mapping"))
+    if stored.get("graybox") != meta["graybox"]:
+        # members of two algorithms must not share a front; the stale file is this path's to replace
+        by = f"graybox {stored['graybox']}" if "graybox" in stored else "a graybox that did not record its version"
+        warn(f"checkpoint {path} was written by {by}, this is graybox {meta['graybox']}, whose algorithm may "
+             "differ: the sweep starts over and overwrites it", UserWarning)
+        return None
     if stored != meta:
         diff = sorted(k for k in set(stored) | set(meta) if stored.get(k) != meta.get(k))
         raise CheckpointError(
@@ -570,12 +601,12 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     failures: dict[int, str] = {}
     done = 0
     meta = {"problem": problem.fingerprint(), "method": method, "lambdas": lam.tolist(), "seed": seed,
-            "settings": settings}
+            "settings": settings, "graybox": graybox_version()}
     if checkpoint is not None and not isinstance(checkpoint, (str, os.PathLike)):
         raise TypeError(f"checkpoint must be a file path, got {checkpoint!r}")
     path = Path(checkpoint) if checkpoint is not None else None
-    if path is not None and path.exists():
-        ck = _load_checkpoint(path, meta)
+    ck = _load_checkpoint(path, meta) if path is not None and path.exists() else None
+    if ck is not None:
         done = ck["done"]
         thetas[:done], costs[:done], nfev[:done] = ck["thetas"][:done], ck["costs"][:done], ck["nfev"][:done]
         failures.update(ck["failures"])
@@ -640,6 +671,7 @@ def ga_front(
     seed : int
         Seeds every random draw; with a checkpoint, a resumed sweep equals an uninterrupted one.
     checkpoint : path, optional
+        Written after each λ; resumed, refused or started over as in :func:`gradient_front`.
     progress : bool
     threads : int
     theta0 : ndarray, "ls" or None
@@ -999,7 +1031,8 @@ def gradient_front(
     seed : int
         Recorded in checkpoints (the method draws no random numbers).
     checkpoint : path, optional
-        Written after each λ; an existing one for the same problem and settings resumes the sweep.
+        Written after each λ; an existing one for the same problem and settings resumes the sweep
+        (one written by another graybox version is started over, with a warning).
     progress : bool, optional
         Show a progress bar; default: only on a terminal.
     max_nfev, tol : int, float
@@ -1181,7 +1214,9 @@ def se_pareto(
     seed : int
         Makes the GA (and its random initial individuals) reproducible.
     checkpoint : path, optional
-        Written after each λ; an existing one for the same problem resumes the sweep. With
+        Written after each λ; an existing one for the same problem resumes the sweep; one for
+        another problem is refused, one written by another graybox version (``graybox.__version__``
+        is recorded) is started over and overwritten, with a warning naming both versions. With
         ``margin="auto"``, a sweep fitted inside the margin keeps its own beside it
         (``name.margin.ext``); when the gradient sweep is fitted inside it from the start (its
         first member slow), only that file is written. The first member's probe is not

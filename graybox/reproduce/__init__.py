@@ -46,7 +46,8 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout
 
     The SE sweeps of Table I keep checkpoints under ``out`` (``se_<method>_l<degree>[_quick].npz``)
     and resume from them: a second run in the same folder, or a run after a kill, skips the λ1
-    values already done. Each checkpoint resumed is named in the output.
+    values already done. Each checkpoint resumed is named in the output; one written by another
+    graybox version is named too, and its sweep starts over (its algorithm may have changed).
 
     Parameters
     ----------
@@ -59,6 +60,7 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout
     fresh : bool
         Delete this mode's checkpoints under ``out`` first, so every sweep starts over.
     """
+    from ..estimation._simulation_error import checkpoint_version, graybox_version
     from ._table1 import checkpoint_paths
 
     if out is not None:
@@ -71,8 +73,17 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout
                 print(f"--fresh: deleted {len(found)} checkpoint(s): {', '.join(c.name for c in found)}",
                       file=stream, flush=True)
         elif found:
-            print(f"resuming from {len(found)} checkpoint(s) in {out}: {', '.join(c.name for c in found)} "
-                  "(--fresh starts over)", file=stream, flush=True)
+            this = graybox_version()
+            versions = {c: checkpoint_version(c) for c in found}
+            stale = {c: v for c, v in versions.items() if v is not None and v != this}
+            if len(stale) < len(found):
+                print(f"resuming from {len(found) - len(stale)} checkpoint(s) in {out}: "
+                      f"{', '.join(c.name for c in found if c not in stale)} (--fresh starts over)", file=stream,
+                      flush=True)
+            if stale:
+                print(f"starting over {len(stale)} checkpoint(s) of another graybox version (this is {this}): "
+                      + ", ".join(f"{c.name} ({v or 'no version recorded'})" for c, v in stale.items()), file=stream,
+                      flush=True)
     said: set[str] = set()
     for sec in SECTIONS:
         # warnings raised inside a section are facts about the bundled data (e.g. static points
