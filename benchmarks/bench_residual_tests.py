@@ -1,0 +1,104 @@
+"""How often the residual tests reject the true structure (their size), on fresh data and on the
+identification data.
+
+A NARX system of known structure, y(k) = 0.6 y(k−1) + 0.2 y(k−2) + 0.3 u(k−1) + 0.05 u(k−2)² + 0.4
++ e(k), white equation noise e (σ = 0.03), driven by a random staircase (levels uniform in [0, 2]
+held 10 samples) or by white uniform input on [0, 2]; N samples per record. ``gb.residual_tests``
+runs under both rules on ``--records`` records in four cases that separate the test from the fit:
+
+- ``true θ, fresh``: the system's own θ (no estimation error): the test's size itself;
+- ``θ̂ on its own record``: the true structure fitted by least squares (``gb.els(..., noise=0)``)
+  on each record and tested on it (the identification record);
+- ``θ̂ (new fit), fresh``: fitted on one record (``--n-ident`` samples, default N), tested on
+  another seed's, a new fit each time;
+- ``one θ̂ (seed 0), fresh``: a single fit (``--n-ident`` samples) tested on every fresh record.
+
+Under the null (true θ, white noise) a test fails at most 1 − level of the time under the
+simultaneous rule (Bonferroni over its K lags) and about 1 − 0.95^K under the pointwise one (any of
+K lags outside the pointwise band, were the lags independent). ± is one binomial standard error.
+
+    python benchmarks/bench_residual_tests.py [--records 200] [--n 1000] [--n-ident 1000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _common import git_rev, machine  # noqa: E402
+
+import graybox as gb  # noqa: E402
+from graybox.diagnostics._residuals import TESTS, _lags  # noqa: E402
+
+STRUCTURE = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"]
+THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+SIGMA = 0.03
+WARMUP = 200  # samples simulated and dropped: a record starts in steady motion
+
+
+def record(seed: int, n: int, kind: str) -> gb.Record:
+    rng = np.random.default_rng(seed)
+    m = n + WARMUP
+    u = np.repeat(rng.uniform(0.0, 2.0, m // 10 + 1), 10)[:m] if kind == "staircase" else rng.uniform(0.0, 2.0, m)
+    e = SIGMA * rng.standard_normal(m)
+    y = np.zeros(m)
+    for k in range(2, m):
+        y[k] = (THETA[0] * y[k - 1] + THETA[1] * y[k - 2] + THETA[2] * u[k - 1] + THETA[3] * u[k - 2] ** 2
+                + THETA[4] + e[k])
+    return gb.Record(u[WARMUP:], y[WARMUP:], Ts=1.0, name=f"seed {seed}")
+
+
+def fit(rec: gb.Record) -> gb.Model:
+    return gb.els(STRUCTURE, rec, noise=0).model
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--records", type=int, default=200)
+    ap.add_argument("--n", type=int, default=1000)
+    ap.add_argument("--n-ident", type=int, default=None, help="samples of the fits' records in the fresh cases")
+    ap.add_argument("--max-lag", type=int, default=20)
+    args = ap.parse_args()
+    R, n = args.records, args.n
+    ni = args.n_ident or n
+    print(f"# {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, {machine()}, git {git_rev()}")
+    print(f"# N = {n} per record (fits for fresh data: {ni}), max_lag = {args.max_lag}, {R} records per case, σ_e = {SIGMA}")
+    K = {k: _lags(side, args.max_lag).size for k, (_, _, side) in TESTS.items()}
+    for kind in ("staircase", "white"):
+        truth = fit(record(0, n, kind)).with_theta(THETA, name="true θ")
+        one = fit(record(0, ni, kind))
+        cases = {
+            "true θ, fresh": lambda s: (truth, record(1000 + s, n, kind)),
+            "θ̂ on its own record": lambda s: ((lambda r: (fit(r), r))(record(1000 + s, n, kind))),
+            "θ̂ (new fit), fresh": lambda s: (fit(record(1000 + s, ni, kind)), record(5000 + s, n, kind)),
+            "one θ̂ (seed 0), fresh": lambda s: (one, record(1000 + s, n, kind)),
+        }
+        print(f"\n## input: {kind}; failure rates per test, pointwise rule / simultaneous rule "
+              f"(one θ̂ − θ = {np.array2string(one.theta - THETA, precision=4)})")
+        print("| case | " + " | ".join(f"{TESTS[k][0]} (K = {K[k]})" for k in TESTS) + " | any of the five |")
+        print("| --- " * (len(TESTS) + 2) + "|")
+        print("| expected under the null | " + " | ".join(f"≈ {100 * (1 - 0.95 ** K[k]):.0f} % / ≤ 5 %" for k in TESTS)
+              + " | / ≤ 25 % |")
+        for case, draw in cases.items():
+            fails = {rule: np.zeros((R, len(TESTS)), bool) for rule in ("pointwise", "simultaneous")}
+            for s in range(R):
+                model, rec = draw(s)
+                for rule, f in fails.items():
+                    r = gb.residual_tests(model, rec, max_lag=args.max_lag, rule=rule)
+                    f[s] = [not r[k].passed for k in TESTS]
+            cells = []
+            for j in range(len(TESTS)):
+                pw, si = fails["pointwise"][:, j].mean(), fails["simultaneous"][:, j].mean()
+                cells.append(f"{100 * pw:.0f} / {100 * si:.1f} ± {100 * np.sqrt(si * (1 - si) / R):.1f} %")
+            anyf = {rule: f.any(axis=1).mean() for rule, f in fails.items()}
+            cells.append(f"{100 * anyf['pointwise']:.0f} / {100 * anyf['simultaneous']:.1f} %")
+            print(f"| {case} | " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    main()
