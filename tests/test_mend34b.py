@@ -5,7 +5,6 @@ what the residual tests' 95 % bands promise on fresh data."""
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
