@@ -8,15 +8,12 @@ package that imports it. Names are loaded on first use (see :mod:`graybox._lazy`
 from __future__ import annotations
 
 import importlib
-from importlib.metadata import PackageNotFoundError, version as _version
 
 from ._layers import PUBLIC_SUBPACKAGES
+from .core._version import graybox_version
 from ._lazy import attach
 
-try:
-    __version__ = _version("graybox")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree that was never installed
-    __version__ = "0+unknown"
+__version__ = graybox_version()
 
 # the simulators' names stay in graybox.datasets; only its loaders come up
 __getattr__, __dir__, __all__ = attach(

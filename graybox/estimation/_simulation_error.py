@@ -86,6 +86,7 @@ from ..core._validation import (warn, check_choice, check_int, check_lambdas, ch
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)
 from ..core._reprs import short_repr
+from ..core._version import graybox_version
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS", "refit_if_slow"]
 
@@ -503,15 +504,6 @@ class SEFront:
 
 _CHECKPOINT_ARRAYS = ("thetas", "costs", "done", "failures", "nfev")
 
-
-def graybox_version() -> str:
-    """This graybox's version, which checkpoints record: another version's algorithm may differ."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("graybox")
-    except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
-        return "0+unknown"
 
 
 def checkpoint_version(path: str | os.PathLike) -> str | None:

@@ -67,6 +67,7 @@ from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
 from ..core._records import StaticPoints
+from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
@@ -83,14 +84,6 @@ FORMAT_VERSION = 1
 class GrayboxFileError(ValueError):
     """A file (or JSON text) cannot be loaded: not graybox's, a newer format, corrupt, or of another type."""
 
-
-def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("graybox")
-    except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
-        return "0+unknown"
 
 
 # --------------------------------------------------------------------------------------------
@@ -593,7 +586,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     if type(obj) not in _TYPES:
         hint = "; save its .model" if type(getattr(obj, "model", None)) in _TYPES else ""
         raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}{hint}")
-    doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": _version(),
+    doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": graybox_version(),
                            "type": _TYPES[type(obj)]}
     u = _units_arg(units)
     if u is not None:
@@ -610,7 +603,7 @@ def _header(doc: Any, rd: _Reader) -> dict:
         raise rd.fail("header", f"unknown format_version {ver!r}")
     if ver > FORMAT_VERSION:
         raise rd.fail("header", f"written by a newer graybox ({doc.get('graybox_version', '?')}, format version {ver}); "
-                      f"this graybox ({_version()}) reads format version {FORMAT_VERSION}: upgrade graybox to load it")
+                      f"this graybox ({graybox_version()}) reads format version {FORMAT_VERSION}: upgrade graybox to load it")
     typ = doc.get("type")
     if isinstance(typ, str) and typ not in _CODECS and typ in _REGISTERED_ABOVE:
         # a type of a layer above this one registers itself when its module is imported: import it by
@@ -684,7 +677,7 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     try:
         return _decode_fields(head["type"], doc["object"], "object", _Reader(source))
     except GrayboxFileError as exc:
-        ours = _version()
+        ours = graybox_version()
         if ours != "0+unknown" and _release(head["graybox_version"]) > _release(ours):  # a field added since
             raise GrayboxFileError(f"{exc} (the file was written by graybox {head['graybox_version']}, newer than "
                                    f"this {ours}: upgrade graybox to load it)") from None

@@ -60,7 +60,8 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout
     fresh : bool
         Delete this mode's checkpoints under ``out`` first, so every sweep starts over.
     """
-    from ..estimation._simulation_error import checkpoint_version, graybox_version
+    from ..core._version import graybox_version
+    from ..estimation._simulation_error import checkpoint_version
     from ._table1 import checkpoint_paths
 
     if out is not None:
