@@ -624,3 +624,21 @@ def test_every_row_gives_back_the_model_its_test_columns_score(data, tmp_path):
         if r["theta"]:
             np.testing.assert_array_equal(back.model_of(name, r["estimator"]).theta,
                                           res.model_of(name, r["estimator"]).theta)
+
+
+def test_regret_and_optimism_are_read_off_the_test_columns(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5],
+                                test=plant(3, n=800))
+        bare = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5])
+    test = plant(3, n=800)
+    js_test = gb.mse(test.y, res.model.simulate(test), start=3)  # the chosen model on the test record
+    best = min(gb.mse(test.y, res.model_of(n, r["estimator"]).simulate(test), start=3)
+               for n, r in res.table.iterrows() if r["theta"])
+    assert res.regret == pytest.approx(js_test / best, rel=1e-9) and res.regret >= 1.0
+    assert res.optimism == pytest.approx(res.decision.JS / js_test, rel=1e-9)
+    assert "regret=" in repr(res)
+    for name in ("regret", "optimism"):
+        with pytest.raises(ValueError, match="without a test record"):
+            getattr(bare, name)

@@ -235,6 +235,25 @@ class GrayboxSelection:
                         Ts=self.model.Ts)
 
     @property
+    def regret(self) -> float:
+        """The choice's J_S on the test record over the best J_S there among the rows compared (>= 1;
+        1: no row would have done better on new data). Needs the call's ``test=`` record."""
+        js = self._test_column()
+        return float(self.chosen["JS_test"] / js[np.isfinite(js)].min())
+
+    @property
+    def optimism(self) -> float:
+        """The choice's J_S on the choosing data over its J_S on the test record (below 1: the choosing data
+        flattered it, as the smallest of many scores on one record tends to). Needs the call's ``test=`` record."""
+        self._test_column()
+        return float(self.chosen["JS_valid"] / self.chosen["JS_test"])
+
+    def _test_column(self) -> np.ndarray:
+        if "JS_test" not in self.table.columns:
+            raise ValueError("this selection was made without a test record: pass test= to select_graybox")
+        return self.table["JS_test"].to_numpy(float)
+
+    @property
     def fallback(self) -> bool:
         """Deprecated (one name per concept): ``not in_band``, the name :class:`Decision` uses."""
         warn("GrayboxSelection.fallback is deprecated: use GrayboxSelection.in_band (its negation)", DeprecationWarning)
@@ -242,7 +261,7 @@ class GrayboxSelection:
 
     def __repr__(self) -> str:
         row = self.chosen
-        test = f", J_S test={row['JS_test']:.4g}" if "JS_test" in self.table else ""
+        test = f", J_S test={row['JS_test']:.4g}, regret={self.regret:.3g}" if "JS_test" in self.table else ""
         return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, rule={self.rule!r}, "
                 f"J_S valid={row['JS_valid']:.4g}{test}, in_band={self.in_band})")
 
