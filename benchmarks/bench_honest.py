@@ -137,8 +137,8 @@ def protocol(names, with_old: bool, record_only: bool = False) -> None:
             rows.append({"case": name, "choice": label, "n_terms": len(r.structure), "estimator": c["estimator"],
                          "JS_valid": c["JS_valid"], "JS_test": c["JS_test"], "vs black": c["JS_test"] / ref,
                          "JSF": c["JSF_test"], "in band": bool(c["JSF_test"] <= band) if np.isfinite(r.band) else None,
-                         "optimism": c["JS_valid"] / c["JS_test"],
-                         "regret": c["JS_test"] / r.table["JS_test"].min(), "rows": len(r.table)})
+                         "optimism": r.optimism,
+                         "regret": r.regret, "rows": len(r.table)})
         t_old = np.nan
         if old is not None:
             t0 = time.perf_counter()
@@ -232,7 +232,7 @@ def transient(names) -> None:
                              "estimator": ch["estimator"], "transient inputs used": ", ".join(z) or "none",
                              "JS_valid": ch["JS_valid"], "JS_test": ch["JS_test"],
                              "vs black": ch["JS_test"] / res["black"].chosen["JS_test"],
-                             "regret": ch["JS_test"] / r.table["JS_test"].min(),
+                             "regret": r.regret,
                              "JSF": ch["JSF_test"], "in band": bool(ch["JSF_test"] <= band),
                              f"mean test ({len(ts)})": np.mean(js[box]),
                              "mean vs black": np.mean(js[box]) / np.mean(js["black"])})
