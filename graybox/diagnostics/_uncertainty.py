@@ -256,20 +256,29 @@ def _to_theta(cov_z: np.ndarray, s: np.ndarray) -> np.ndarray:
     return cov_z / np.outer(s, s)
 
 
-def _check_stationary(Z: np.ndarray, grad: np.ndarray, size: float, what: str, hint: str, tol: float = 1e-5) -> None:
-    """θ̂ must be the optimum of the problem whose covariance is asked for: |gradient| <= tol · size.
+def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float, size: float, what: str,
+                      hint: str) -> None:
+    """θ̂ must be the optimum of the problem whose covariance is asked for.
 
-    ``size`` grows with the output's offset (|Aᵀy|), so a loose ``tol`` passes a wrong θ on data
-    far from zero: 1e-5 suits a QP solver's accuracy, exact least squares takes a far tighter one.
+    The objective is ‖r‖² + rest2 with residuals r = A z − c (A in the scaled coordinates z, rest2
+    the part no parameter reaches), and θ may move along the columns of Z. ‖Uᵀr‖, U an orthonormal
+    basis of AZ's columns, is the square root of what a step could still remove from the objective:
+    it must be at most 1e-6 of the whole residual norm (a units-free angle, unchanged by the output's
+    offset or scale, which a gradient measured against |Aᵀy| was not), or at the round-off level of
+    the fit, 1e-11 of ``size`` (the fitted values' and targets' norms).
     """
-    g = np.linalg.norm(Z.T @ grad)
-    if not np.isfinite(g) or g > tol * max(size, 1e-300):
-        raise ValueError(f"{what}: the model's θ is not the optimum of this problem (relative gradient "
-                         f"{g / max(size, 1e-300):.1e}); {hint}")
+    if Z.shape[1] == 0:
+        return  # the constraints fix θ: nothing left to optimise
+    U, S, _ = np.linalg.svd(A @ Z, full_matrices=False)
+    g = float(np.linalg.norm(U[:, S > 1e-12 * S[0]].T @ r)) if S.size and S[0] > 0 else 0.0
+    whole = float(np.sqrt(r @ r + rest2))
+    if not np.isfinite(g) or g > 1e-6 * whole + 1e-11 * size:
+        raise ValueError(f"{what}: the model's θ is not the optimum of this problem (a fraction "
+                         f"{g / max(whole, 1e-300):.1e} of its residual lies along the directions θ may move); {hint}")
 
 
 def _size(*parts: np.ndarray) -> float:
-    """The magnitude of a gradient's parts: what "zero" is measured against."""
+    """The magnitude of a fit's parts: what round-off is measured against."""
     return float(sum(np.linalg.norm(p) for p in parts))
 
 
@@ -379,9 +388,8 @@ def ls_uncertainty(
     sigma2 = float(res @ res) / dof
     if ne == 0:
         cov = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what), s)
-        _check_stationary(np.eye(n), A.T @ res, _size(A.T @ (A @ (theta_all * s)), A.T @ y), what,
-                          "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty)",
-                          tol=1e-10)  # LS and FROLS land within 1e-15 of it, even at 2e9 ± 50
+        _check_stationary(np.eye(n), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
+                          "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty)")
     else:
         cov = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
@@ -499,8 +507,7 @@ def cls_uncertainty(
     rss = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss)
     sigma2 = rss / dof
     cov = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty"), d.s)
-    grad = d.R1.T @ (d.R1 @ z - d.c1)
-    _check_stationary(Z, grad, _size(d.R1.T @ (d.R1 @ z), d.R1.T @ d.c1), "cls_uncertainty",
+    _check_stationary(Z, d.R1, d.R1 @ z - d.c1, d.rss, _size(d.R1 @ z, d.c1), "cls_uncertainty",
                       "pass the CLS estimate with the data, static information and constraints it was estimated with")
     return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)))
 
@@ -576,16 +583,16 @@ def pe_uncertainty(
     if np.any(np.abs(g) < 1e-12):
         raise ValueError("pe_uncertainty: the static equation does not depend on ȳ at some static point "
                          "(its denominator vanishes): the member's static function is undefined there")
-    grad = w1 * (d.R1.T @ (d.R1 @ z - d.c1)) + w2 * (QR.T @ sres)
-    size = _size(w1 * (d.R1.T @ (d.R1 @ z)), w1 * (d.R1.T @ d.c1), w2 * (QR.T @ (QR @ z)), w2 * (QR.T @ pts.ybar))
-    _check_stationary(Z, grad, size, "pe_uncertainty", f"pass the member's own λ1 (got {lam:g}) and the data, static "
+    A2 = np.vstack([np.sqrt(w1) * d.R1, np.sqrt(w2) * QR])  # the stacked rows: H = A2ᵀA2
+    r2 = np.concatenate([np.sqrt(w1) * (d.R1 @ z - d.c1), np.sqrt(w2) * sres])
+    _check_stationary(Z, A2, r2, w1 * d.rss, _size(A2 @ z, np.sqrt(w1) * d.c1, np.sqrt(w2) * pts.ybar),
+                      "pe_uncertainty", f"pass the member's own λ1 (got {lam:g}) and the data, static "
                       "points and constraints of its estimate")
     dof_ls = d.N - n
     sigma2 = d.rss / dof_ls  # the data's noise, from least squares on the same data
     ss2 = (check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2 if static_sigma is not None
            else float(np.mean((sres / g) ** 2)))
     B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
-    A2 = np.vstack([np.sqrt(w1) * d.R1, np.sqrt(w2) * QR])  # H = A2ᵀA2
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
     cov = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty"), d.s)
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2)
