@@ -128,15 +128,20 @@ def test_static_noise_and_se(data):
 
 
 def test_failures_are_kept_with_their_reason(data):
-    boot = run(data, band=1e-9, fallback=None, n_boot=3)
-    assert sorted(boot.failures) == [0, 1, 2]
+    fb = run(data, band=1e-9, fallback="min_jsf", n_boot=4)  # each replicate's smallest J_SF, none in the band
+    assert not fb.failures and fb.rules == ("min J_SF",) * 4 and not fb.in_band.any()
+    band = float(np.median(fb.JSF))  # about half the replicates reach it
+    failed = [int(i) for i in np.flatnonzero(fb.JSF > band)]
+    with pytest.warns(gb.UncertaintyWarning, match=f"{len(failed)} of 4 replicates failed"):
+        boot = run(data, band=band, fallback=None, n_boot=4)
+    assert sorted(boot.failures) == failed and 0 < len(failed) < 4
     assert all("no member of the Pareto set" in why for why in boot.failures.values())
-    assert "failure" in boot.reference
-    assert np.all(np.isnan(boot.lambda1)) and not boot.in_band.any() and boot.rules == ("", "", "")
-    assert np.isnan(boot.agreement)
-    assert list(boot.to_frame()["failure"].str.startswith("InfeasibleError")) == [True] * 3  # a ValueError
-    fb = run(data, band=1e-9, fallback="min_jsf", n_boot=3)
-    assert not fb.failures and fb.rules == ("min J_SF",) * 3 and not fb.in_band.any()
+    assert ("failure" in boot.reference) == (fb.reference["JSF"] > band)
+    assert np.all(np.isnan(boot.lambda1[failed])) and not boot.in_band[failed].any()
+    assert [boot.rules[i] for i in failed] == [""] * len(failed)
+    assert list(boot.to_frame()["failure"][failed].str.startswith("InfeasibleError")) == [True] * len(failed)
+    with pytest.raises(ValueError, match="every one of the 3 replicates failed"):  # nothing left to summarise
+        run(data, band=1e-9, fallback=None, n_boot=3)
 
 
 def test_bad_options(data):

@@ -5,6 +5,7 @@ short records, and files in several spreadsheet dialects. Each test fails withou
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -395,8 +396,15 @@ def test_bootstrap_figure_with_every_replicate_failed_builds_without_warnings():
     rec = speed_record(rng, 300, hold=10)
     ub = np.array([2500.0, 3000.0, 3500.0])
     pts = gb.StaticPoints(ub, speed_ybar(ub) + 1e4, input_names=("speed",))
-    boot = gb.bootstrap_decision(SPEED_TERMS, rec, pts, lambdas=[1.0], n_boot=3, band=1e-6, options={"solver": "closed"})
-    assert len(boot.failures) == 3 and "failure" in boot.reference
+    kw = dict(lambdas=[1.0], n_boot=3, band=1e-6, options={"solver": "closed"})
+    with pytest.raises(ValueError, match="every one of the 3 replicates failed"):
+        gb.bootstrap_decision(SPEED_TERMS, rec, pts, **kw)
+    # bootstrap_decision refuses such a result; one built from its parts (or loaded) is still drawn
+    ok = gb.bootstrap_decision(SPEED_TERMS, rec, pts, fallback="min_jsf", **kw)
+    nan = np.full(3, np.nan)
+    boot = dataclasses.replace(ok, lambda1=nan, JS=nan, JSF=nan, in_band=np.zeros(3, bool),
+                               thetas=np.full(ok.thetas.shape, np.nan), rules=("",) * 3,
+                               reference={"failure": "no member"}, failures={i: "no member" for i in range(3)})
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         fig = plots.plot_decision_bootstrap(boot)

@@ -64,3 +64,71 @@ def test_cls_and_pe_uncertainty_verdicts_do_not_depend_on_the_output_units():
     for other in seen[1:]:
         for x, y in zip(seen[0], other):
             np.testing.assert_allclose(x, y, rtol=1e-6)
+
+
+# --------------------------------------------------------------------------------------------
+# bootstrap_decision when replicates fail
+# --------------------------------------------------------------------------------------------
+BOOT_STRUCT = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"])
+BOOT_TRUE = gb.Model(BOOT_STRUCT, [0.6, 0.2, 2e-3, 1e-3, -5e-7, 0.3])
+
+
+@pytest.fixture(scope="module")
+def boot_data():
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(750, 1650, 61), 10)[:600]
+    y = BOOT_TRUE.simulate(u, np.full(2, BOOT_TRUE.static_curve([u[0]])[0])) + 0.05 * rng.standard_normal(600)
+    ub = np.linspace(750, 1650, 8)
+    static = gb.StaticPoints(ub, BOOT_TRUE.static_curve(ub) + 0.05 * rng.standard_normal(8))
+    return gb.Dataset(gb.Record(u, y, name="ident"), gb.Record(u, y, name="valid"), static)
+
+
+def _boot(data, **kw):
+    args = dict(estimator="pe", lambdas=np.logspace(-4, 0, 8), n_boot=6, band=0.05,
+                options={"solver": "closed"}, progress=False)
+    args.update(kw)
+    return gb.bootstrap_decision(BOOT_STRUCT, data, **args)
+
+
+def test_bootstrap_with_every_replicate_failing_raises_the_first_reason(boot_data):
+    # A band no member reaches (and no fallback) made every replicate fail, and the user got a
+    # DecisionBootstrap full of NaN (agreement NaN, an empty summary) instead of an error.
+    with pytest.raises(ValueError, match=r"every one of the 6 replicates failed.*replicate 0.*no member of the Pareto "
+                                         r"set") as info:
+        _boot(boot_data, band=1e-12)
+    assert "InfeasibleError" in str(info.value)  # decide_dsf's own reason, with its type
+
+
+@pytest.mark.parametrize("estimator, options, error, says", [
+    ("pe", {"solver": "bogus"}, ValueError, "solver must be one of"),
+    ("pe", {"solver": "closed", "weights": "bogus"}, ValueError, "weights must be one of"),
+    ("se", {"method": "bogus"}, ValueError, "method must be one of"),
+    ("se", {"method": "gradient", "max_nfev": 0}, ValueError, "max_nfev must be an integer >= 1"),
+    ("se", {"method": "gradient", "max_nfev": "ten"}, TypeError, "max_nfev must be an integer"),
+    ("se", {"max_nfev": 3}, ValueError, "applies to method='gradient' only"),
+])
+def test_bootstrap_refuses_an_option_the_sweep_refuses_before_any_replicate_runs(boot_data, estimator, options, error,
+                                                                                  says):
+    # An option value the sweep refuses made every replicate fail with the same reason (a result full
+    # of NaN), or, for a wrong type, raised a TypeError out of the first job on the executor.
+    ran = []
+
+    def spy_map(job, ids):
+        ran.extend(ids)
+        return [job(i) for i in ids]
+
+    with pytest.raises(error, match=says):
+        _boot(boot_data, estimator=estimator, lambdas=[1.0, 0.1], options=options, map=spy_map)
+    assert ran == []
+
+
+def test_bootstrap_counts_and_says_a_few_failing_replicates(boot_data):
+    # A few failing replicates were kept in .failures without a word: the summary, frequencies and
+    # agreement silently described the replicates that succeeded only.
+    smallest = _boot(boot_data, band=1e-12, fallback="min_jsf").JSF  # each replicate's smallest J_SF
+    band = float(np.median(smallest))
+    expected = int(np.sum(smallest > band))
+    assert 0 < expected < smallest.size
+    with pytest.warns(gb.UncertaintyWarning, match=rf"{expected} of 6 replicates failed.*no member of the Pareto set"):
+        boot = _boot(boot_data, band=band)
+    assert len(boot.failures) == expected and int(np.sum(~boot.ok)) == expected

@@ -233,8 +233,10 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "se_dsf": ((ST, DATA), {"lambdas": [0.5], "max_iter": 3, "pe_lambdas": [1.0, 0.1]}),
     "decide_dsf": ((FRONT,), {"band": SP.band, "fallback": "min_jsf"}),
     "decide_min_correlation": ((FRONT, REC), {}),
+    # fallback: an accepted static_sigma (output units) may take every replicate out of the band, and a
+    # bootstrap whose every replicate fails is an error
     "bootstrap_decision": ((ST, DATA), {"lambdas": [1.0, 0.1], "n_boot": 2, "options": {"solver": "closed"},
-                                        "progress": False}),
+                                        "progress": False, "fallback": "min_jsf"}),
     "evaluate": (({"m": MODEL}, DATA), {"horizons": [2]}),
     "evaluate_thetas": ((ST, FRONT.thetas, REC, SP), {}),
     "jsf": ((MODEL, SP), {}),

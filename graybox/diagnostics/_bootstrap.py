@@ -30,7 +30,11 @@ the signature of the built-in ``map`` that returns the results in order:
 The job object (:class:`BootstrapJob`) is a frozen dataclass of plain values and records, so it
 pickles for processes and Dask workers alike (these are graybox's own objects in transit, never a
 user's file). A replicate that fails (no member in the band without a fallback, a sweep with no
-finite member, …) is kept with its reason and the bootstrap goes on.
+finite member, …) is kept with its reason and the bootstrap goes on; the failures are counted in
+one :class:`~graybox.UncertaintyWarning` (the summary describes the replicates that succeeded), and
+when every replicate fails the bootstrap is a ValueError naming the first one's reason. The sweep
+on the original data (the reference decision) runs first, in this process: an option the sweep
+refuses raises there, before any replicate runs.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ import pandas as pd
 
 from ..estimation._prediction_error import PE_LAMBDAS, pe_pareto
 from ..estimation._decisions import FALLBACKS, decide_dsf, resolve_band
+from ..estimation._pareto import ParetoSet
 from ..core._progress import progress_bar
 from ..models._coerce import as_structure, records_of, static_points
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
@@ -55,10 +60,13 @@ from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
 from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
 from ..core._reprs import short_repr
+from ._uncertainty import UncertaintyWarning
 
 __all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
 
 ESTIMATORS = ("pe", "se")
+#: What a replicate may fail with and go on (InfeasibleError, DivergenceError are ValueErrors); anything else is a bug
+_FAILURES = (ValueError, ArithmeticError, np.linalg.LinAlgError)
 
 
 def block_resample(
@@ -148,21 +156,34 @@ class BootstrapJob:
                               sp.input_names, sp.uncertainty)
         return recs, sp
 
-    def __call__(self, i: int) -> dict:
+    def _sweep(self, recs: list[Record], sp: StaticPoints) -> ParetoSet:
+        with warnings.catch_warnings():
+            # said once by bootstrap_decision; block records cover a narrower input range than the whole
+            warnings.simplefilter("ignore", StaticRangeWarning)
+            if self.estimator == "pe":
+                return pe_pareto(self.structure, recs, sp, lambdas=self.lambdas, **dict(self.options))
+            return se_pareto(self.structure, recs, sp, lambdas=self.lambdas, progress=False, **dict(self.options))
+
+    def _decide(self, front: ParetoSet) -> dict:
         try:
-            recs, sp = self.data(int(i))
-            with warnings.catch_warnings():
-                # said once by bootstrap_decision; block records cover a narrower input range than the whole
-                warnings.simplefilter("ignore", StaticRangeWarning)
-                if self.estimator == "pe":
-                    front = pe_pareto(self.structure, recs, sp, lambdas=self.lambdas, **dict(self.options))
-                else:
-                    front = se_pareto(self.structure, recs, sp, lambdas=self.lambdas, progress=False, **dict(self.options))
             d = decide_dsf(front, band=self.band, fallback=self.fallback)
-        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:  # InfeasibleError, DivergenceError are ValueErrors
+        except _FAILURES as exc:
             return {"failure": f"{type(exc).__name__}: {exc}"}
         return {"lambda1": d.lambda1, "index": d.index, "JS": d.JS, "JSF": d.JSF, "in_band": d.in_band,
                 "rule": d.rule, "theta": [float(v) for v in d.model.theta]}
+
+    def __call__(self, i: int) -> dict:
+        try:
+            front = self._sweep(*self.data(int(i)))
+        except _FAILURES as exc:
+            return {"failure": f"{type(exc).__name__}: {exc}"}
+        return self._decide(front)
+
+    def reference(self) -> dict:
+        """The decision on the original data, as ``job(-1)``, except that the sweep's own errors raise:
+        an option it refuses (or a sweep with no member on the original data) fails here, before any
+        replicate runs, instead of failing every replicate alike."""
+        return self._decide(self._sweep(*self.data(-1)))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
@@ -391,8 +412,17 @@ def bootstrap_decision(
     Raises
     ------
     ValueError
-        Bad options (an unknown estimator option, a block too short for the lags or longer than
-        every record, no static points).
+        Bad options (an unknown estimator option or a value the sweep refuses, a block too short
+        for the lags or longer than every record, no static points); the sweep on the original
+        data fails; every replicate fails (the first one's reason is named).
+    TypeError
+        An option of a type the sweep refuses.
+
+    Warns
+    -----
+    UncertaintyWarning
+        Some replicates failed: they are counted and the first one's reason is named (all reasons
+        in ``failures``).
     """
     structure = as_structure(structure)
     estimator = check_choice(renamed(estimator if method is None else None, method, "estimator", "method"),
@@ -420,21 +450,22 @@ def bootstrap_decision(
         raise ValueError(f"block_length {block_length} is longer than every record ({[len(r) for r in recs]} samples)")
     job = BootstrapJob(structure.process, tuple(recs), sp, estimator, lam, band, fallback, block_length, seed,
                        static_sigma, opts)
-    ids = [-1] + list(range(n_boot))
-    results: list[dict] = []
-    if map is None:
-        bar = progress_bar(len(ids), f"bootstrap of D_SF ({estimator.upper()})", progress)
-        try:
+    ids = list(range(n_boot))
+    reps: list[dict] = []
+    bar = progress_bar(len(ids) + 1, f"bootstrap of D_SF ({estimator.upper()})", progress if map is None else False)
+    try:
+        ref = job.reference()  # the sweep's own checks of the options, before any replicate runs
+        bar.update(1)
+        if map is None:
             for i in ids:
-                results.append(job(i))
+                reps.append(job(i))
                 bar.update(1)
-        finally:
-            bar.close()
-    else:
-        results = list(map(job, ids))
-        if len(results) != len(ids):
-            raise ValueError(f"map returned {len(results)} results for {len(ids)} jobs")
-    ref, reps = results[0], results[1:]
+        else:
+            reps = list(map(job, ids))
+            if len(reps) != len(ids):
+                raise ValueError(f"map returned {len(reps)} results for {len(ids)} jobs")
+    finally:
+        bar.close()
     n = len(structure.process)
     lam1 = np.full(n_boot, np.nan)
     js, jsf = np.full(n_boot, np.nan), np.full(n_boot, np.nan)
@@ -449,6 +480,14 @@ def bootstrap_decision(
         lam1[i], js[i], jsf[i], inb[i] = r["lambda1"], r["JS"], r["JSF"], r["in_band"]
         th[i] = r["theta"]
         rules.append(r["rule"])
+    if len(fails) == n_boot:
+        raise ValueError(f"bootstrap_decision: every one of the {n_boot} replicates failed, so there is no "
+                         f"decision to summarise; the first, replicate 0: {fails[0]}")
+    if fails:
+        first = min(fails)
+        warn(f"bootstrap_decision: {len(fails)} of {n_boot} replicates failed and are left out of the frequencies, "
+             f"agreement and summary (the first, replicate {first}: {fails[first]}); their reasons are in .failures",
+             UncertaintyWarning)
     n_blocks = max(1, int(round(total / block_length)))
     return DecisionBootstrap(structure.process, estimator, lam, band, block_length, n_blocks, seed, lam1, js, jsf, inb, th,
                              tuple(rules), ref, fails, opts, static_sigma)
