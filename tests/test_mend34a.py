@@ -132,3 +132,38 @@ def test_bootstrap_counts_and_says_a_few_failing_replicates(boot_data):
     with pytest.warns(gb.UncertaintyWarning, match=rf"{expected} of 6 replicates failed.*no member of the Pareto set"):
         boot = _boot(boot_data, band=band)
     assert len(boot.failures) == expected and int(np.sum(~boot.ok)) == expected
+
+
+# --------------------------------------------------------------------------------------------
+# SE costs of diverging members
+# --------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def growing_record():
+    # A record that grows as 1.01^k over 3000 samples (to ~5e14, no overflow): its own model
+    # y(k) = 1.01 y(k-1) + u(k-1) leaves simulate's default bound (10⁶ × the run's own scale), so
+    # gb.js calls it diverging (inf).
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 1, 3000)
+    y = np.zeros(3000)
+    for k in range(1, 3000):
+        y[k] = 1.01 * y[k - 1] + u[k - 1]
+    return gb.Record(u, y, Ts=1.0)
+
+
+def test_se_sweeps_never_return_a_member_whose_free_run_leaves_the_bound(growing_record):
+    # The GA's and the gradient sweep's costs used an unbounded J_S (inf only on overflow), while the
+    # front's reported J_S is bounded as gb.js: a run that leaves the bound was fitted with a finite
+    # cost (0 for the gradient, 1e14 for the GA) and returned as a member of the front, its reported
+    # J_S inf (nondominated all the same) against the optimiser's finite cost. Now the costs are
+    # bounded too: the GA keeps a member whose run stays bounded, at the cost it reports; the
+    # gradient sweep, whose every start leaves the bound, has no member.
+    structure = ["y(k-1)", "u(k-1)"]
+    assert not np.isfinite(gb.js(gb.Model(structure, [1.01, 1.0]), growing_record))
+    pts = gb.StaticPoints([0.2, 0.8], [1.0, 4.0])
+    kw = dict(lambdas=[1.0], margin=None, progress=False)
+    ga = gb.se_pareto(structure, growing_record, pts, method="ga", options=gb.GAOptions(population=20, generations=3),
+                      **kw)
+    assert np.all(np.isfinite(ga.JS)) and not ga.failures
+    np.testing.assert_allclose(ga.JS, ga.extra["cost"], rtol=1e-9)  # λ1 = 1: the cost is J_S
+    with pytest.raises(ValueError, match="every member of the SE sweep.*free run diverges"):
+        gb.se_pareto(structure, growing_record, pts, method="gradient", **kw)

@@ -237,15 +237,16 @@ class SEProblem:
 
     def diverges(self, theta: np.ndarray) -> bool:
         """Whether θ's free run on some record leaves :func:`graybox.simulate`'s default bound
-        (10⁶ × the run's own scale); :meth:`js` is finite there until the run overflows, ``js(bounded=True)``
-        is not."""
-        return not np.isfinite(self.js(np.asarray(theta, float)[None, :], bounded=True)[0])
+        (10⁶ × the run's own scale): :meth:`js` is inf there."""
+        return not np.isfinite(self.js(np.asarray(theta, float)[None, :])[0])
 
     # -- objectives -------------------------------------------------------------------
-    def js(self, thetas: np.ndarray, threads: int = 1, *, bounded: bool = False) -> np.ndarray:
-        """J_S of each row of ``thetas`` (inf where a free run overflows; huge where it diverges
-        more slowly, see :meth:`diverges`), shape (P,). ``bounded``: inf also where a free run leaves
-        :func:`graybox.simulate`'s default bound (J_S as :func:`graybox.js` gives it; a score, not a cost)."""
+    def js(self, thetas: np.ndarray, threads: int = 1, *, bounded: bool = True) -> np.ndarray:
+        """J_S of each row of ``thetas``, shape (P,): inf where a free run leaves :func:`graybox.simulate`'s
+        default bound (J_S as :func:`graybox.js` and the fronts report it, and as the optimisers' costs
+        take it: a slowly diverging run, y(k) = 1.01 y(k−1) + … over 3000 samples, has a huge finite sum
+        of squares that would still beat an infinite cost). ``bounded=False``: inf only where a run
+        overflows."""
         sse = sum(batch_sse(self.code, thetas, record_inputs(r, self.code.inputs), r.y, self.L, threads, U,
                             bounded=bounded) for r, U in zip(self.records, self.U))
         js = sse / self.n_dyn
@@ -740,7 +741,8 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     r = np.empty(problem.n_dyn + M + n_ridge)
     a = 0
     for rec in problem.records:
-        y = simulate_one(problem.code, th, record_inputs(rec, problem.code.inputs), rec.y[:L], L, 1e300)
+        # simulate's default bound: a run that leaves it is NaN from there, so its residuals are inf (as its J_S)
+        y = simulate_one(problem.code, th, record_inputs(rec, problem.code.inputs), rec.y[:L], L, None)
         b = a + y.size - L
         np.subtract(y[L:], rec.y[L:], out=r[a:b])  # written in place: long records make no copies
         a = b
