@@ -66,6 +66,31 @@ def test_cls_and_pe_uncertainty_verdicts_do_not_depend_on_the_output_units():
             np.testing.assert_allclose(x, y, rtol=1e-6)
 
 
+
+@pytest.mark.parametrize("solver", ["clarabel", "osqp", "closed"])
+def test_cls_uncertainty_takes_a_qp_estimate_whose_constrained_cluster_is_round_off_from_zero(solver):
+    # Eq. (22) sets a cluster Σ_yu of one term to 0; a QP leaves it at round-off (2e-17), and
+    # cls_uncertainty measured the constraint's residual against |A||θ|, i.e. against that residual
+    # itself: the CLS estimate on its own data was refused as "does not satisfy (22)" (the closed
+    # form's exact 0 passed). The residual is now measured in the solver's scaled coordinates.
+    rng = np.random.default_rng(0)
+    terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "y(k-1)u(k-1)", "1", "y(k-2)"]
+    v = np.repeat(rng.uniform(-50, 50, 101), 30)[:3000]
+    y = np.zeros(3000)
+    for k in range(1, 3000):
+        y[k] = (0.8 + 2e-4 * v[k - 1]) * y[k - 1] + v[k - 1] + 4e-3 * v[k - 1] ** 2 + 20 + 0.02 * rng.standard_normal()
+    rec = gb.Record(v, y, Ts=1.0)
+    vb = np.linspace(-50, 50, 7)
+    pts = gb.StaticPoints(vb, (20 + vb + 4e-3 * vb**2) / (0.2 - 2e-4 * vb))
+    curve = gb.StaticCurve.fit(pts, 2)
+    model = gb.cls(terms, rec, curve, solver=solver).model
+    unc = gb.cls_uncertainty(model, rec, curve)
+    # Σ_yu = 0, Σ_y = Σ*_y, Σ_0, Σ_u, Σ_u² fixed: y(k-1) and y(k-2) share the one free direction
+    assert unc.constraints.shape[0] == 5 and unc.std[0] > 0 and unc.std[5] == pytest.approx(unc.std[0])
+    other = gb.Model(model.structure, model.theta + np.array([0, 0, 0, 1e-6, 0, 0]))  # (22) broken by 1e-6
+    with pytest.raises(ValueError, match="does not satisfy static curve equality"):
+        gb.cls_uncertainty(other, rec, curve)
+
 # --------------------------------------------------------------------------------------------
 # bootstrap_decision when replicates fail
 # --------------------------------------------------------------------------------------------

@@ -295,9 +295,23 @@ def _lambda_arg(model: object, lambda1: float | None, what: str) -> float:
     return check_real(lambda1, "lambda1", low=0, high=1, low_open=True)
 
 
-def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, what: str) -> np.ndarray:
-    """Equality rows and the inequality rows active at θ (engineering units); user constraints refused."""
+def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndarray, what: str) -> np.ndarray:
+    """Equality rows and the inequality rows active at θ (engineering units); user constraints refused.
+
+    A row holds (or is active) when θ lies within 1e-6 ‖z‖ of its hyperplane in the estimators'
+    scaled coordinates z = s ⊙ θ (each z_j in output units: the solver's own measure): a residual
+    measured against |A||θ| alone was its own scale for a cluster of one term set to 0 (eq. (22)'s
+    Σ_yu), which a QP leaves at round-off, not at 0.
+    """
     n = theta.size
+    z = theta * s
+    tol = 1e-6 * max(float(np.linalg.norm(z)), 1e-300)
+
+    def off(A: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Distance of z from each row's hyperplane (signed like ``r``, output units)."""
+        nrm = np.linalg.norm(A / s, axis=1)
+        return r / np.where(nrm > 0, nrm, 1.0)
+
     rows = [np.zeros((0, n))]
     for c in cons:
         r = c.affine(ctx)
@@ -305,16 +319,12 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, what: str)
             raise ValueError(f"{what}: {c.describe()} is not affine in θ; the covariance is defined for affine "
                              "constraints (equalities, bands, gain and cluster bounds) only")
         if r.n_eq:
-            res = r.A_eq @ theta - r.b_eq
-            scale = np.abs(r.b_eq) + np.abs(r.A_eq) @ np.abs(theta)
-            if np.any(np.abs(res) > 1e-6 * np.where(scale > 0, scale, 1.0)):
+            if np.any(np.abs(off(r.A_eq, r.A_eq @ theta - r.b_eq)) > tol):
                 raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
                                  "constraints, data and reference (Σ*_y)?")
             rows.append(np.asarray(r.A_eq))
         if r.n_ub:
-            slack = r.b_ub - r.A_ub @ theta
-            scale = np.abs(r.b_ub) + np.abs(r.A_ub) @ np.abs(theta)
-            active = slack <= 1e-6 * np.where(scale > 0, scale, 1.0)
+            active = off(r.A_ub, r.b_ub - r.A_ub @ theta) <= tol
             rows.append(np.asarray(r.A_ub)[active])
     return np.vstack(rows)
 
@@ -499,7 +509,7 @@ def cls_uncertainty(
     recs = records_of(data)
     d = _dynamic(st, recs)
     cons, ctx, _ = _cls_setup(st, recs, d, data, static, how, reference, constraints)
-    A = _equalities(cons, ctx, model.theta, "cls_uncertainty")
+    A = _equalities(cons, ctx, model.theta, d.s, "cls_uncertainty")
     n = len(st)
     Z, r = _null_space(A / d.s, n)
     z = model.theta * d.s
@@ -570,7 +580,7 @@ def pe_uncertainty(
         st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(m, data, static, constraints, weights, ubar, reference)
     n = len(st)
     theta = m.theta
-    A = _equalities(cons, ctx, theta, "pe_uncertainty")
+    A = _equalities(cons, ctx, theta, d.s, "pe_uncertainty")
     Z, r = _null_space(A / d.s, n)
     w1 = lam / d.N if weights == "mse" else lam
     w2 = (1 - lam) / M if weights == "mse" else 1 - lam
