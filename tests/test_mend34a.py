@@ -9,26 +9,11 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from test_bootstrap import STRUCT as BOOT_STRUCT
+from test_bootstrap import data  # noqa: F401 (the fixture)
+from test_hunt30c import SPEED_TERMS, speed_record, speed_ybar
 
-# A known NARX system: pressure (Pa, near 2e5) driven by a speed (rpm, near 3000), white equation noise.
-SPEED_TERMS = ["y(k-1)", "speed(k-1)", "speed(k-1)^2", "1"]
-A1, B1, B2 = 0.8, 10.0, 0.004
-C0 = 2e5 * (1 - A1) - B1 * 3000 - B2 * 3000**2
 UBAR = np.array([2500.0, 2800.0, 3100.0, 3400.0])
-
-
-def speed_ybar(u):
-    return (C0 + B1 * u + B2 * u**2) / (1 - A1)
-
-
-def speed_record(rng, n, hold=5, sigma=50.0):
-    u = np.repeat(rng.uniform(2400, 3600, n // hold + 1), hold)[:n]
-    y = np.zeros(n)
-    y[0] = speed_ybar(u[0])
-    e = sigma * rng.standard_normal(n)
-    for k in range(1, n):
-        y[k] = A1 * y[k - 1] + B1 * u[k - 1] + B2 * u[k - 1] ** 2 + C0 + e[k]
-    return gb.Record(u, y, Ts=0.1, input_names=("speed",), units=("rpm", "Pa"))
 
 
 def _verdict(call):
@@ -45,7 +30,7 @@ def test_cls_and_pe_uncertainty_verdicts_do_not_depend_on_the_output_units():
     # the CLS estimate of another record was accepted in any units, and a PE member of another record
     # was refused in gauge pressure (near 0 Pa) but accepted in absolute pressure (near 2e5 Pa).
     rng = np.random.default_rng(0)
-    a, b = speed_record(rng, 300), speed_record(rng, 300)
+    a, b = speed_record(rng, 300, hold=5), speed_record(rng, 300, hold=5)
     seen = []
     for offset, scale in [(-2e5, 1.0), (0.0, 1.0), (2e5, 1.0), (0.0, 1e-3)]:  # gauge Pa, absolute Pa, ×2, kPa
         ra, rb = (gb.Record(r.u, (r.y + offset) * scale, Ts=0.1, input_names=("speed",)) for r in (a, b))
@@ -91,23 +76,10 @@ def test_cls_uncertainty_takes_a_qp_estimate_whose_constrained_cluster_is_round_
     with pytest.raises(ValueError, match="does not satisfy static curve equality"):
         gb.cls_uncertainty(other, rec, curve)
 
+
 # --------------------------------------------------------------------------------------------
 # bootstrap_decision when replicates fail
 # --------------------------------------------------------------------------------------------
-BOOT_STRUCT = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"])
-BOOT_TRUE = gb.Model(BOOT_STRUCT, [0.6, 0.2, 2e-3, 1e-3, -5e-7, 0.3])
-
-
-@pytest.fixture(scope="module")
-def boot_data():
-    rng = np.random.default_rng(0)
-    u = np.repeat(rng.uniform(750, 1650, 61), 10)[:600]
-    y = BOOT_TRUE.simulate(u, np.full(2, BOOT_TRUE.static_curve([u[0]])[0])) + 0.05 * rng.standard_normal(600)
-    ub = np.linspace(750, 1650, 8)
-    static = gb.StaticPoints(ub, BOOT_TRUE.static_curve(ub) + 0.05 * rng.standard_normal(8))
-    return gb.Dataset(gb.Record(u, y, name="ident"), gb.Record(u, y, name="valid"), static)
-
-
 def _boot(data, **kw):
     args = dict(estimator="pe", lambdas=np.logspace(-4, 0, 8), n_boot=6, band=0.05,
                 options={"solver": "closed"}, progress=False)
@@ -115,12 +87,12 @@ def _boot(data, **kw):
     return gb.bootstrap_decision(BOOT_STRUCT, data, **args)
 
 
-def test_bootstrap_with_every_replicate_failing_raises_the_first_reason(boot_data):
+def test_bootstrap_with_every_replicate_failing_raises_the_first_reason(data):
     # A band no member reaches (and no fallback) made every replicate fail, and the user got a
     # DecisionBootstrap full of NaN (agreement NaN, an empty summary) instead of an error.
     with pytest.raises(ValueError, match=r"every one of the 6 replicates failed.*replicate 0.*no member of the Pareto "
                                          r"set") as info:
-        _boot(boot_data, band=1e-12)
+        _boot(data, band=1e-12)
     assert "InfeasibleError" in str(info.value)  # decide_dsf's own reason, with its type
 
 
@@ -132,7 +104,7 @@ def test_bootstrap_with_every_replicate_failing_raises_the_first_reason(boot_dat
     ("se", {"method": "gradient", "max_nfev": "ten"}, TypeError, "max_nfev must be an integer"),
     ("se", {"max_nfev": 3}, ValueError, "applies to method='gradient' only"),
 ])
-def test_bootstrap_refuses_an_option_the_sweep_refuses_before_any_replicate_runs(boot_data, estimator, options, error,
+def test_bootstrap_refuses_an_option_the_sweep_refuses_before_any_replicate_runs(data, estimator, options, error,
                                                                                   says):
     # An option value the sweep refuses made every replicate fail with the same reason (a result full
     # of NaN), or, for a wrong type, raised a TypeError out of the first job on the executor.
@@ -143,19 +115,19 @@ def test_bootstrap_refuses_an_option_the_sweep_refuses_before_any_replicate_runs
         return [job(i) for i in ids]
 
     with pytest.raises(error, match=says):
-        _boot(boot_data, estimator=estimator, lambdas=[1.0, 0.1], options=options, map=spy_map)
+        _boot(data, estimator=estimator, lambdas=[1.0, 0.1], options=options, map=spy_map)
     assert ran == []
 
 
-def test_bootstrap_counts_and_says_a_few_failing_replicates(boot_data):
+def test_bootstrap_counts_and_says_a_few_failing_replicates(data):
     # A few failing replicates were kept in .failures without a word: the summary, frequencies and
     # agreement silently described the replicates that succeeded only.
-    smallest = _boot(boot_data, band=1e-12, fallback="min_jsf").JSF  # each replicate's smallest J_SF
+    smallest = _boot(data, band=1e-12, fallback="min_jsf").JSF  # each replicate's smallest J_SF
     band = float(np.median(smallest))
     expected = int(np.sum(smallest > band))
     assert 0 < expected < smallest.size
     with pytest.warns(gb.UncertaintyWarning, match=rf"{expected} of 6 replicates failed.*no member of the Pareto set"):
-        boot = _boot(boot_data, band=band)
+        boot = _boot(data, band=band)
     assert len(boot.failures) == expected and int(np.sum(~boot.ok)) == expected
 
 
