@@ -71,13 +71,14 @@ from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
-from scipy import signal, stats
+from scipy import stats
 
 from ..models._coerce import MODEL_ACCEPTED, as_model, records_of
 from ..models._model import Model
 from ..estimation._neural import NeuralModel
 from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
+from ..core._simulation_kernels import inverse_ma_filter
 from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, warn
 
 #: What a model argument of the residual tests may be, in words.
@@ -257,7 +258,7 @@ def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bo
         a[0] = 1.0
         for cj, t in zip(c, ns):
             a[t.factors[0][1]] += cj
-        return signal.lfilter([1.0], a, v), L
+        return inverse_ma_filter(v[:, None], a, np.array([0, v.size]))[:, 0], L
     # products of residuals with u, y or each other: the recursion sample by sample
     N = len(rec)
     e = np.zeros(N)

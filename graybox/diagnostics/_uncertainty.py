@@ -51,7 +51,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 import pandas as pd
-from scipy import signal, stats
+from scipy import stats
 
 from ..static._constraints import StaticConstraint, static_cluster_map, static_rows
 from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure
@@ -61,6 +61,7 @@ from ..estimation._decisions import Decision
 from ..models._coerce import as_model, records_of, static_points
 from ..models._model import Model
 from ..core._least_squares import one_blas_thread
+from ..core._simulation_kernels import inverse_ma_filter
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
@@ -419,7 +420,7 @@ def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.nd
             raise ValueError(f"ls_uncertainty (ELS): the MA part C(q) = {_ma_text(a)} is not invertible (a root on or "
                              "outside the unit circle): its one-step residuals grow without bound, so it is no ELS "
                              "estimate and has no covariance")
-        return signal.lfilter([1.0], a, phi, axis=0)
+        return inverse_ma_filter(phi, a, np.array([0, phi.shape[0]]))  # 1/C(q) from rest
     sig = record_signals(rec) | {"e": e}
     # each noise term's derivative in one lagged e: (c_j · ∂term/∂e(k−lag) as a series over k, lag)
     parts = []
