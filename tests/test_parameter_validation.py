@@ -107,6 +107,9 @@ def _made(fn, *args, **kwargs):
         return fn(*args, **kwargs)
 
 
+SELECTION = _made(gb.select_graybox, gb.Candidates(1, 1, degree=2), DATA, sizes=[2], sources=("frols",), estimator="ls")
+
+
 def _fields_of(obj) -> dict:
     """A result object's fields as keywords: calling its class with them rebuilds it (the valid call)."""
     return {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj) if f.init}
@@ -306,6 +309,8 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "heatmap_table": ((Lazy("results"),), {}),
     "plot_heatmap": ((Lazy("results"),), {}),
     "plot_fronts": ((Lazy("results"),), {}),
+    "plot_selection": ((SELECTION,), {}),
+    "GrayboxSelection.model_of": ((SELECTION.table.index[0],), {"estimator": "ls"}),
     "plot_scatter": ((Lazy("results"),), {}),
     "write_report": ((Lazy("store"), Lazy("out_dir")), {}),
     "parallel_map": ((), {"executor": "inprocess"}),
@@ -355,8 +360,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "CorrelationTest": ((), _fields_of(next(iter(RESIDUALS.tests.values())))),
     "DSFResult": ((), _fields_of(_made(gb.se_dsf, ST, DATA, lambdas=[0.5], max_iter=3, pe_lambdas=[1.0, 0.1]))),
     "Equilibrium": ((), _fields_of(MODEL.equilibria(0.5)[0])),
-    "GrayboxSelection": ((), _fields_of(_made(gb.select_graybox, gb.Candidates(1, 1, degree=2), DATA, sizes=[2],
-                                                          sources=("frols",), estimator="ls"))),
+    "GrayboxSelection": ((), _fields_of(SELECTION)),
     "NeuralFit": ((), _fields_of(_made(gb.neural_narx, REC, ny=1, nu=1, ne=0, hidden=2, epochs=2, sim_epochs=2))),
     "OEResult": ((), _fields_of(_made(gb.output_error, ST, REC, n_starts=1, max_nfev=3))),
     "SEMPResult": ((), _fields_of(_made(gb.semp, gb.Candidates(1, 1, degree=2), REC, n_terms=2))),
@@ -553,7 +557,8 @@ def _target(label: str):
     cls, meth = obj
     owner = {"Model": MODEL, "ParetoSet": FRONT, "Record": REC, "StaticPoints": SP, "Structure": ST, "Grid": GRID,
              "StaticCurve": CURVE,
-             "DataSpec": DATASPEC, "LocalModel": LOCAL, "NeuralModel": NEURAL}.get(cls.__name__, cls)
+             "DataSpec": DATASPEC, "LocalModel": LOCAL, "NeuralModel": NEURAL, "GrayboxSelection": SELECTION,
+             }.get(cls.__name__, cls)
     return getattr(owner, meth)
 
 

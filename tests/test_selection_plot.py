@@ -94,7 +94,5 @@ def test_bad_arguments_are_named(selections):
     fig = Figure()
     with pytest.raises(ValueError, match="axes must hold 3"):
         plot_selection(gray, axes=fig.subplots(1, 2))
-    with pytest.raises(TypeError, match="title must be a str"):
-        plot_selection(gray, title=3)
     axs = Figure().subplots(1, 3)
     assert plot_selection(gray, axes=list(axs)) is axs[0].figure

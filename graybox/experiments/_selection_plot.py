@@ -52,8 +52,6 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
     """
     if not isinstance(selection, GrayboxSelection):
         raise TypeError(f"selection must be a GrayboxSelection (from select_graybox), got {type(selection).__name__}")
-    if title is not None and not isinstance(title, str):
-        raise TypeError(f"title must be a str, got {type(title).__name__}")
     t = selection.table
     panels = ["rule"]
     if np.isfinite(t["JSF"].to_numpy(float)).any():
@@ -114,7 +112,7 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7, loc="best")
-    fig.suptitle(title if title is not None else
+    fig.suptitle(str(title) if title is not None else
                  f"chosen: {chosen.name} by {chosen['estimator']} ({int(chosen['n_terms'])} terms)", fontsize=10)
     return fig
 
