@@ -245,7 +245,7 @@ class ParetoSet:
         fails = {pos[k]: why for k, why in self.failures.items() if k in pos}
         return ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
                          self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
-                         self.input_names)
+                         self.input_names, self.Ts)
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
         """The members that no other member dominates in ``objectives`` (order kept)."""

@@ -1,0 +1,37 @@
+"""Bugs found by a bug hunt in the estimation layer (graybox.estimation: output error, SE by gradient
+and GA, se_dsf, PE, CLS, ELS, the decision makers, ParetoSet, the stability margin, ridge= and
+choose_on=) used as a control engineer would on their own data: inputs not named "u", units far from
+1 (Pa near 2e5, rpm near 3000), one and two inputs, several and short records, synthetic NARX systems
+of known structure, edge cases and bad input. Each test fails without its fix."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+ST = gb.parse_structure(["1", "y(k-1)", "y(k-2)", "speed(k-1)", "speed(k-1)^2"])
+
+
+def plant(n: int = 400, seed: int = 0, su: float = 3000.0, sy: float = 2e5) -> gb.Record:
+    """y = 0.6 y(k-1) − 0.1 y(k-2) + 0.4 s(k-1) + 0.2 s(k-1)² + 0.05 in units su (rpm) and sy (Pa)."""
+    rng = np.random.default_rng(seed)
+    s = np.repeat(rng.uniform(0.5, 1.5, n // 20 + 1), 20)[:n]
+    y = np.full(n, 0.5)
+    for k in range(2, n):
+        y[k] = 0.6 * y[k - 1] - 0.1 * y[k - 2] + 0.4 * s[k - 1] + 0.2 * s[k - 1] ** 2 + 0.05
+    return gb.Record(s * su, y * sy, Ts=0.1, input_names=("speed",), name=f"run{seed}")
+
+
+def steady(su: float = 3000.0, sy: float = 2e5) -> gb.StaticPoints:
+    lv = np.linspace(0.6, 1.4, 6)
+    return gb.StaticPoints(lv * su, (0.4 * lv + 0.2 * lv**2 + 0.05) / 0.5 * sy, input_names=("speed",))
+
+
+def test_a_subset_of_a_pareto_set_keeps_its_sampling_period():
+    # ParetoSet.subset (and so .nondominated) dropped Ts: the kept members' models had Ts None, and a
+    # choosing record at another period was no longer refused.
+    front = gb.pe_pareto(ST, plant(), steady(), lambdas=[1.0, 0.5, 0.1])
+    assert front.Ts == 0.1
+    assert front.subset([0, 2]).Ts == 0.1
+    assert front.nondominated().Ts == 0.1
+    assert front.nondominated().member_model(0).Ts == 0.1
