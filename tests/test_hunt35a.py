@@ -35,3 +35,14 @@ def test_a_subset_of_a_pareto_set_keeps_its_sampling_period():
     assert front.subset([0, 2]).Ts == 0.1
     assert front.nondominated().Ts == 0.1
     assert front.nondominated().member_model(0).Ts == 0.1
+
+
+def test_the_minimal_correlation_rule_refuses_a_record_at_another_sampling_period():
+    # decide_min_correlation ran the members freely on a record sampled every 0.2 s although the set
+    # was fitted at 0.1 s (its models' simulate refuses that record), and returned a decision.
+    front = gb.pe_pareto(ST, plant(), steady(), lambdas=[1.0, 0.5, 0.1])
+    r = plant()
+    slow = gb.Record(r.u, r.y, Ts=0.2, input_names=("speed",), name="slow")
+    with pytest.raises(ValueError, match="every 0.1 s but 'slow' every 0.2 s"):
+        gb.decide_min_correlation(front, slow)
+    assert gb.decide_min_correlation(front, r).rule == "min correlation"

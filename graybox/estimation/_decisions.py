@@ -227,6 +227,7 @@ def decide_min_correlation(
         raise TypeError(f"pareto must be a ParetoSet (from pe_pareto or se_pareto); got {type(pareto).__name__}")
     check_choice(output, "output", ("free-run", "one-step"))
     record = as_record(record, "ident", "record")
+    check_period(pareto.Ts, "the Pareto set was fitted on records sampled", record)
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
     st = pareto.structure
