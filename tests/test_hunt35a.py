@@ -4,6 +4,8 @@ choose_on=) used as a control engineer would on their own data: inputs not named
 1 (Pa near 2e5, rpm near 3000), one and two inputs, several and short records, synthetic NARX systems
 of known structure, edge cases and bad input. Each test fails without its fix."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -46,3 +48,22 @@ def test_the_minimal_correlation_rule_refuses_a_record_at_another_sampling_perio
     with pytest.raises(ValueError, match="every 0.1 s but 'slow' every 0.2 s"):
         gb.decide_min_correlation(front, slow)
     assert gb.decide_min_correlation(front, r).rule == "min correlation"
+
+
+def test_se_refuses_static_points_of_other_inputs_without_a_range_warning_first():
+    # se_pareto (both methods) and se_dsf compared the points' ū with the records' input range before
+    # checking that they have the same inputs: a one-input record and two-input points gave a
+    # StaticRangeWarning listing every point against a one-input "box", then the ValueError (pe_pareto
+    # and cls refuse it alone).
+    r = plant()
+    grid = np.array([(a, b) for a in (2000.0, 3000.0, 4000.0) for b in (1e-3, 2e-3)])
+    two = gb.StaticPoints(grid, np.full(6, 2e5), input_names=("speed", "volts"))
+    calls = [lambda: gb.se_pareto(ST, r, two, lambdas=[1.0], method="gradient"),
+             lambda: gb.se_pareto(ST, r, two, lambdas=[1.0], method="ga"),
+             lambda: gb.se_dsf(ST, r, two, band=1e8)]
+    for call in calls:
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            with pytest.raises(ValueError, match="same inputs"):
+                call()
+        assert [str(w.message) for w in seen] == []

@@ -440,10 +440,10 @@ def se_dsf(
     band = resolve_band(band, sp, "se_dsf")[1]
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
-    warn_static_range(sp.ubar, recs)
     margin = check_margin(margin)
     st = as_structure(structure)
     problem = SEProblem(st, recs, sp, margin=None if margin == "auto" else margin)
+    warn_static_range(sp.ubar, recs)  # after: bad input is an error, not a warning and an error
     solve = dict(band=band, theta0=theta0, lambdas=lambdas, max_iter=max_iter, tol=tol, pe_lambdas=pe_lambdas)
     result = refit_if_slow(problem, lambda p: _solve(p, **solve), "se_dsf's model", margin == "auto")
     if not result.in_band:  # said of the model returned only (margin="auto" may have solved twice)

@@ -1292,10 +1292,10 @@ def se_pareto(
         starts = check_sequence(starts, "starts", "a sequence of θ arrays or 'pe'")
     rec = records_of(data)
     sp = static_points(static, data, ubar=ubar, needed_by="the SE problem")
-    warn_static_range(sp.ubar, rec)
     margin = check_margin(margin)
     st = as_structure(structure)
     problem = SEProblem(st, rec, sp, margin=None if margin == "auto" else margin, ridge=ridge)
+    warn_static_range(sp.ubar, rec)  # after: bad input is an error, not a warning and an error
     lam_in = SE_LAMBDAS if lambdas is None else lambdas
     if isinstance(theta0, str) and theta0 != "ls":
         raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
