@@ -67,3 +67,24 @@ def test_se_refuses_static_points_of_other_inputs_without_a_range_warning_first(
             with pytest.raises(ValueError, match="same inputs"):
                 call()
         assert [str(w.message) for w in seen] == []
+
+
+def failed_middle() -> gb.ParetoSet:
+    """Three members of s(k-1) → y, the middle one failed."""
+    th = np.array([[1.0, 0.5, 2.0], [np.nan] * 3, [1.1, 0.4, 2.1]])
+    return gb.ParetoSet(gb.parse_structure(["1", "y(k-1)", "s(k-1)"]), th, [1.0, 0.5, 0.1], [1, 2, 3], [1, 2, 3],
+                        [3, 2, 1], "test", {}, {1: "no start"}, Ts=0.1)
+
+
+def test_a_subset_keeps_a_failed_member_named_by_a_negative_or_repeated_index():
+    # subset mapped failures by the index as given: a failed member named by -2, or twice, lost its
+    # failure and the subset raised "thetas must be finite"; an index out of range, a float or an empty
+    # list raised numpy's IndexError.
+    ps = failed_middle()
+    assert dict(ps.subset([-2, 0]).failures) == {0: "no start"}
+    assert dict(ps.subset([1, 1]).failures) == {0: "no start", 1: "no start"}
+    assert len(ps.subset([])) == 0
+    with pytest.raises(ValueError, match="index 5 out of range for a set of 3"):
+        ps.subset([5])
+    with pytest.raises(TypeError, match="integer member indices"):
+        ps.subset([0.0, 1.0])

@@ -236,13 +236,19 @@ class ParetoSet:
 
     def subset(self, index: np.ndarray | Sequence[int]) -> "ParetoSet":
         """The members at ``index`` (a boolean mask or integer indices), in that order."""
-        idx = np.asarray(index)
+        idx, K = np.asarray(index), len(self)
         if idx.dtype == bool:
-            if idx.shape != (len(self),):
-                raise ValueError(f"mask must have shape ({len(self)},), got {idx.shape}")
+            if idx.shape != (K,):
+                raise ValueError(f"mask must have shape ({K},), got {idx.shape}")
             idx = np.flatnonzero(idx)
-        pos = {int(old): new for new, old in enumerate(idx)}
-        fails = {pos[k]: why for k, why in self.failures.items() if k in pos}
+        if idx.ndim != 1 or (idx.size and idx.dtype.kind not in "iu"):
+            raise TypeError(f"index must be a boolean mask or a sequence of integer member indices, got {index!r}")
+        idx = idx.astype(int)
+        bad = idx[(idx < -K) | (idx >= K)]
+        if bad.size:
+            raise ValueError(f"member index {bad[0]} out of range for a set of {K}")
+        idx = idx % max(K, 1)  # a failed member named from the end, or twice, keeps its failure
+        fails = {new: self.failures[old] for new, old in enumerate(idx.tolist()) if old in self.failures}
         return ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
                          self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
                          self.input_names, self.Ts)
