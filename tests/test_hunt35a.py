@@ -88,3 +88,14 @@ def test_a_subset_keeps_a_failed_member_named_by_a_negative_or_repeated_index():
         ps.subset([5])
     with pytest.raises(TypeError, match="integer member indices"):
         ps.subset([0.0, 1.0])
+
+
+def test_member_model_refuses_an_index_that_is_not_an_integer():
+    # member_model(2.5) truncated to member 2 and member_model(True) gave member 1, silently;
+    # member_model("0") reached numpy's IndexError.
+    ps = failed_middle()
+    for bad in (2.5, True, "0"):
+        with pytest.raises(TypeError, match="i must be an integer"):
+            ps.member_model(bad)
+    assert ps.member_model(np.int64(-1)).theta.tolist() == [1.1, 0.4, 2.1]
+    assert ps.member_model(2.0).theta.tolist() == [1.1, 0.4, 2.1]

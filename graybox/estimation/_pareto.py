@@ -18,7 +18,7 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, StaticPoints, as_records
-from ..core._validation import check_bool, check_fields, check_real, frozen, warn
+from ..core._validation import check_bool, check_fields, check_int, check_real, frozen, warn
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -216,12 +216,14 @@ class ParetoSet:
         :func:`graybox.decide_dsf`.
         """
         K = len(self)
-        if not -K <= int(i) < K:
+        i = check_int(i, "i")
+        if not -K <= i < K:
             raise ValueError(f"member index {i} out of range for a set of {K}")
-        if int(i) % K in self.failures:
-            raise ValueError(f"member {int(i) % K} of this set failed: {self.failures[int(i) % K]}")
+        i %= K
+        if i in self.failures:
+            raise ValueError(f"member {i} of this set failed: {self.failures[i]}")
         lam = self.lambdas[i]
-        label = name or (f"{self.method} λ1={lam:.3g}" if np.isfinite(lam) else f"{self.method} #{int(i) % K}")
+        label = name or (f"{self.method} λ1={lam:.3g}" if np.isfinite(lam) else f"{self.method} #{i}")
         return Model(self.structure, self.thetas[i], name=label, input_names=self.input_names, Ts=self.Ts)
 
     def models(self) -> list[Model]:
