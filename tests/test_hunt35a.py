@@ -99,3 +99,12 @@ def test_member_model_refuses_an_index_that_is_not_an_integer():
             ps.member_model(bad)
     assert ps.member_model(np.int64(-1)).theta.tolist() == [1.1, 0.4, 2.1]
     assert ps.member_model(2.0).theta.tolist() == [1.1, 0.4, 2.1]
+
+
+def test_pe_pareto_refuses_evaluation_points_of_other_inputs():
+    # eval_static with two inputs (speed, volts) on one-input records was taken silently: J_SF was
+    # computed at the speed column alone, the volts ignored (the points used in the fit are refused so).
+    grid = np.array([(a, b) for a in (2000.0, 3000.0, 4000.0) for b in (1e-3, 2e-3)])
+    two = gb.StaticPoints(grid, np.full(6, 2e5), input_names=("speed", "volts"))
+    with pytest.raises(ValueError, match="same inputs"):
+        gb.pe_pareto(ST, plant(), steady(), lambdas=[1.0], eval_static=two)

@@ -59,7 +59,7 @@ from ..core._least_squares import column_scales
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import Dataset, Record, StaticPoints, check_compatible, warn_static_range
+from ..core._records import Dataset, Record, StaticPoints, as_records, check_compatible, warn_static_range
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
@@ -974,6 +974,8 @@ def pe_pareto(
     threads = check_int(threads, "threads", low=1)
     if eval_static is not None and not isinstance(eval_static, StaticPoints):
         raise TypeError(f"eval_static must be StaticPoints, got {type(eval_static).__name__}")
+    if eval_static is not None and not is_dask_data(data):  # they speak of the records' inputs, as the fit's
+        _check_point_inputs(as_records(data), eval_static)
     if is_dask_data(data):
         raise ValueError("pe_pareto evaluates every member by a free run on the record, which needs it in memory; "
                          "for a DaskRecord call pe_thetas (it reduces the record on the Dask scheduler) and evaluate "
