@@ -108,3 +108,17 @@ def test_pe_pareto_refuses_evaluation_points_of_other_inputs():
     two = gb.StaticPoints(grid, np.full(6, 2e5), input_names=("speed", "volts"))
     with pytest.raises(ValueError, match="same inputs"):
         gb.pe_pareto(ST, plant(), steady(), lambdas=[1.0], eval_static=two)
+
+
+@pytest.mark.parametrize("terms", [[], ["e(k-1)"]])
+def test_the_free_run_estimators_refuse_a_structure_without_process_terms(terms):
+    # se_pareto (both methods), se_dsf and output_error got as far as numpy ("cannot reshape array of
+    # size 0", "need at least one array to stack") or a ZeroDivisionError; els, cls and pe name it.
+    r, sp = plant(), steady()
+    calls = [lambda: gb.se_pareto(terms, r, sp, lambdas=[1.0], method="gradient"),
+             lambda: gb.se_pareto(terms, r, sp, lambdas=[1.0], method="ga"),
+             lambda: gb.se_dsf(terms, r, sp, band=1e8),
+             lambda: gb.output_error(terms, r)]
+    for call in calls:
+        with pytest.raises(ValueError, match="no process terms"):
+            call()

@@ -128,6 +128,8 @@ class SEProblem:
         structure = structure if isinstance(structure, Structure) else Structure(structure)
         if any(t.is_noise for t in structure):
             structure = structure.process
+        if not len(structure):
+            raise ValueError("the structure has no process terms to estimate")
         self.structure = structure
         self.record = self.records[0]
         r0 = self.record
