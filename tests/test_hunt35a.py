@@ -122,3 +122,10 @@ def test_the_free_run_estimators_refuse_a_structure_without_process_terms(terms)
     for call in calls:
         with pytest.raises(ValueError, match="no process terms"):
             call()
+
+
+def test_se_pareto_refuses_ga_options_that_are_not_gaoptions():
+    # options={"population": 10} reached the GA and failed there with AttributeError ('dict' object
+    # has no attribute 'population').
+    with pytest.raises(TypeError, match="options must be a GAOptions"):
+        gb.se_pareto(ST, plant(), steady(), lambdas=[1.0], method="ga", options={"population": 10})

@@ -1288,6 +1288,9 @@ def se_pareto(
     if wrong:
         raise ValueError(f"{', '.join(wrong)} appl{'y' if len(wrong) > 1 else 'ies'} to method={other!r} only, "
                          f"not to method={method!r}")
+    if options is not None and not isinstance(options, GAOptions):
+        raise TypeError(f"options must be a GAOptions (e.g. GAOptions(population=100)), got {options!r} "
+                        f"({type(options).__name__})")
     if isinstance(starts, str):
         check_choice(starts, "starts", ("pe",))
     elif starts is not None:
