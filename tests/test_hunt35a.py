@@ -129,3 +129,16 @@ def test_se_pareto_refuses_ga_options_that_are_not_gaoptions():
     # has no attribute 'population').
     with pytest.raises(TypeError, match="options must be a GAOptions"):
         gb.se_pareto(ST, plant(), steady(), lambdas=[1.0], method="ga", options={"population": 10})
+
+
+@pytest.mark.parametrize("method", ["gradient", "ga"])
+def test_se_pareto_checks_its_checkpoint_path_before_the_sweep(method, tmp_path):
+    # checkpoint="" failed in pathlib ("PosixPath('.') has an empty name"); a checkpoint in a folder that
+    # does not exist failed only after the first member was fitted, with a FileNotFoundError naming a
+    # temporary file (f.npz.tmp.npz), not the option.
+    opts = {"options": gb.GAOptions(population=8, generations=2)} if method == "ga" else {}
+    with pytest.raises(ValueError, match="checkpoint: an empty file name"):
+        gb.se_pareto(ST, plant(), steady(), lambdas=[1.0], method=method, checkpoint="", **opts)
+    with pytest.raises(ValueError, match="checkpoint: the folder .*nowhere does not exist"):
+        gb.se_pareto(ST, plant(), steady(), lambdas=[1.0], method=method, checkpoint=tmp_path / "nowhere" / "f.npz",
+                     **opts)

@@ -597,9 +597,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     done = 0
     meta = {"problem": problem.fingerprint(), "method": method, "lambdas": lam.tolist(), "seed": seed,
             "settings": settings, "graybox": graybox_version()}
-    if checkpoint is not None and not isinstance(checkpoint, (str, os.PathLike)):
-        raise TypeError(f"checkpoint must be a file path, got {checkpoint!r}")
-    path = Path(checkpoint) if checkpoint is not None else None
+    path = None if checkpoint is None else checkpoint_path(checkpoint)
     ck = _load_checkpoint(path, meta) if path is not None and path.exists() else None
     if ck is not None:
         done = ck["done"]
@@ -1160,6 +1158,18 @@ def refit_if_slow(problem: SEProblem, fit: Callable[[SEProblem], _R], what: str,
     return result
 
 
+def checkpoint_path(checkpoint: object) -> Path:
+    """``checkpoint`` as a Path, checked before any fit: ``TypeError`` for what is no path, ``ValueError``
+    for an empty name or a folder that does not exist (the first write would fail only after a member)."""
+    checkpoint = check_path(checkpoint, "checkpoint")
+    if not os.fspath(checkpoint):
+        raise ValueError("checkpoint: an empty file name; give a file path such as 'front.npz'")
+    path = Path(checkpoint)
+    if not path.parent.is_dir():
+        raise ValueError(f"checkpoint: the folder {path.parent} does not exist; create it or choose another path")
+    return path
+
+
 def _sibling(path: str | os.PathLike, tag: str) -> Path:
     """``name.tag.ext`` beside ``name.ext``: the checkpoint of a second sweep of the same call."""
     p = Path(path)
@@ -1316,7 +1326,7 @@ def se_pareto(
             tol=1e-8 if tol is None else tol, solver="auto" if solver is None else solver,
             starts=_pe_starts(problem) if starts is None or starts == "pe" else starts, fitted=fitted)
 
-    inside_ck = None if checkpoint is None else _sibling(check_path(checkpoint, "checkpoint"), "margin")
+    inside_ck = None if checkpoint is None else _sibling(checkpoint_path(checkpoint), "margin")
     m = None
     if margin == "auto":
         rho_ls = problem.radius(problem.ls_theta())
