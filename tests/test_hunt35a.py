@@ -142,3 +142,17 @@ def test_se_pareto_checks_its_checkpoint_path_before_the_sweep(method, tmp_path)
     with pytest.raises(ValueError, match="checkpoint: the folder .*nowhere does not exist"):
         gb.se_pareto(ST, plant(), steady(), lambdas=[1.0], method=method, checkpoint=tmp_path / "nowhere" / "f.npz",
                      **opts)
+
+
+def test_from_thetas_takes_a_structure_as_every_estimator_does():
+    # ParetoSet.from_thetas(["1", "y(k-1)", …], …) failed with AttributeError ('list' object has no
+    # attribute 'max_lag'); wherever a structure is meant, a list of terms or a Model will do.
+    r, sp = plant(), steady()
+    th = gb.els(ST, r).model.theta
+    ref = gb.ParetoSet.from_thetas(ST, th, [1.0], r, sp)
+    for given in ([str(t) for t in ST], gb.Model(ST, th, input_names=("speed",))):
+        front = gb.ParetoSet.from_thetas(given, th, [1.0], r, sp)
+        assert front.structure == ST
+        assert front.JS.tolist() == ref.JS.tolist() and front.JSF.tolist() == ref.JSF.tolist()
+    with pytest.raises(TypeError, match="structure must be"):
+        gb.ParetoSet.from_thetas(5, th, [1.0], r, sp)

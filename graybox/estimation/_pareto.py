@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ..models._evaluate import evaluate_thetas
+from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, StaticPoints, as_records
 from ..core._validation import check_bool, check_fields, check_int, check_real, frozen, warn
@@ -170,8 +171,10 @@ class ParetoSet:
 
         With several records J_1 and J_S are the sample-weighted means over the records (each
         counted from its own max-lag on). ``static=None`` leaves J_SF as NaN. Rows listed in
-        ``failures`` (index -> reason) are kept as failed members (θ NaN, J's inf).
+        ``failures`` (index -> reason) are kept as failed members (θ NaN, J's inf). ``structure``
+        may be a Structure, a sequence of terms, a Model or a result that carries one.
         """
+        structure = as_structure(structure)
         th = np.atleast_2d(np.asarray(thetas, float)).copy()
         K = th.shape[0]
         fails = _failures(method, extra, failures, K)
