@@ -156,3 +156,13 @@ def test_from_thetas_takes_a_structure_as_every_estimator_does():
         assert front.JS.tolist() == ref.JS.tolist() and front.JSF.tolist() == ref.JSF.tolist()
     with pytest.raises(TypeError, match="structure must be"):
         gb.ParetoSet.from_thetas(5, th, [1.0], r, sp)
+
+
+def test_se_dsf_checks_its_sweep_weights_even_with_theta0():
+    # with theta0 given, lambdas=[5.0] and pe_lambdas="x" were never looked at: bad input accepted silently
+    r, sp = plant(), steady()
+    th = gb.els(ST, r).model.theta
+    with pytest.raises(ValueError, match=r"every λ1 in lambdas must lie in \(0, 1\]"):
+        gb.se_dsf(ST, r, sp, band=1e8, theta0=th, lambdas=[5.0])
+    with pytest.raises(TypeError, match="pe_lambdas must be numbers"):
+        gb.se_dsf(ST, r, sp, band=1e8, theta0=th, pe_lambdas="x")

@@ -440,6 +440,9 @@ def se_dsf(
     band = resolve_band(band, sp, "se_dsf")[1]
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
+    # checked here, not only where the sweeps run: with theta0 they do not, and bad weights would pass unseen
+    lambdas = None if lambdas is None else check_lambdas(lambdas)
+    pe_lambdas = None if pe_lambdas is None else check_lambdas(pe_lambdas, "pe_lambdas")
     margin = check_margin(margin)
     st = as_structure(structure)
     problem = SEProblem(st, recs, sp, margin=None if margin == "auto" else margin)
@@ -465,8 +468,8 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
     if theta0 is not None:
         starts = [(check_theta(len(problem.structure), theta0, "theta0"), "theta0")]
     else:
-        lams = np.logspace(-6, 0, 60) if pe_lambdas is None else check_lambdas(pe_lambdas, "pe_lambdas")
-        coarse = _COARSE if lambdas is None else check_lambdas(lambdas)
+        lams = np.logspace(-6, 0, 60) if pe_lambdas is None else pe_lambdas
+        coarse = _COARSE if lambdas is None else lambdas
         starts = []
         try:
             starts.append(_pe_start(problem, band, lams))
