@@ -166,3 +166,14 @@ def test_se_dsf_checks_its_sweep_weights_even_with_theta0():
         gb.se_dsf(ST, r, sp, band=1e8, theta0=th, lambdas=[5.0])
     with pytest.raises(TypeError, match="pe_lambdas must be numbers"):
         gb.se_dsf(ST, r, sp, band=1e8, theta0=th, pe_lambdas="x")
+
+
+def test_solver_options_for_the_closed_form_are_refused_not_ignored():
+    # solver="closed" solves no cvxpy problem, so solver_options={"max_iter": 5} were dropped silently
+    # (se_pareto refuses the options of the other method the same way)
+    r, sp = plant(), steady()
+    with pytest.raises(ValueError, match="solver_options apply to the cvxpy solvers"):
+        gb.pe_pareto(ST, r, sp, lambdas=[1.0], solver="closed", solver_options={"max_iter": 5})
+    with pytest.raises(ValueError, match="solver_options apply to the cvxpy solvers"):
+        gb.cls(ST, r, sp, solver="closed", solver_options={"max_iter": 5})
+    assert len(gb.pe_pareto(ST, r, sp, lambdas=[1.0], solver="closed", solver_options={})) == 1

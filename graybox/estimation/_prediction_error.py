@@ -674,6 +674,7 @@ def cls(
     """
     st = _process_structure(structure)
     solver = _check_solver(solver)
+    _check_solver_options(solver_options, solver)
     recs = as_gram_records(data)
     d = _dynamic(st, recs)
     cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
@@ -682,7 +683,6 @@ def cls(
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
     else:
-        _check_solver_options(solver_options)
         qp = _QP(d, None, cons, ctx, solver, solver_options)
         z = qp.solve(1.0, 0.0)
         qp.warn_inaccurate()
@@ -849,9 +849,12 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
 
 
-def _check_solver_options(options: object) -> None:
+def _check_solver_options(options: object, solver: str) -> None:
     if options is not None and not isinstance(options, Mapping):
         raise TypeError(f"solver_options must be a mapping of the solver's keyword options, got {options!r}")
+    if options and solver == "closed":  # not dropped unseen
+        raise ValueError(f"solver_options apply to the cvxpy solvers ('clarabel', 'osqp'), not to solver='closed'; "
+                         f"got {dict(options)!r}")
 
 
 def pe_thetas(
@@ -889,7 +892,7 @@ def pe_thetas(
     solver = _check_solver(solver)
     lam = check_lambdas(PE_LAMBDAS if lambdas is None else lambdas)
     warm_start = check_bool(warm_start, "warm_start")
-    _check_solver_options(solver_options)
+    _check_solver_options(solver_options, solver)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
                                                             reference)
     w1 = lam / d.N if weights == "mse" else lam.copy()
