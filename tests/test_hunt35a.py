@@ -177,3 +177,14 @@ def test_solver_options_for_the_closed_form_are_refused_not_ignored():
     with pytest.raises(ValueError, match="solver_options apply to the cvxpy solvers"):
         gb.cls(ST, r, sp, solver="closed", solver_options={"max_iter": 5})
     assert len(gb.pe_pareto(ST, r, sp, lambdas=[1.0], solver="closed", solver_options={})) == 1
+
+
+def test_cls_docstring_says_what_points_outside_the_records_do():
+    # cls's Raises section promised a ValueError for "ū outside the data's range"; cls (as pe_pareto and
+    # se_pareto) welcomes such points with a StaticRangeWarning and returns a model.
+    far = gb.StaticPoints([1000.0, 3000.0, 6000.0], [1.2e5, 2.6e5, 6e5], input_names=("speed",))
+    with pytest.warns(gb.StaticRangeWarning, match=r"ū = \[1000.0, 6000.0\] lie outside"):
+        model = gb.cls(ST, plant(), far).model
+    assert np.all(np.isfinite(model.theta))
+    doc = " ".join(gb.cls.__doc__.split())
+    assert "ū outside the data's range" not in doc and "StaticRangeWarning" in doc

@@ -667,8 +667,9 @@ def cls(
     Raises
     ------
     ValueError
-        Bad input (non-rational structure with a curve, too few points, ū outside the data's
-        range, a zero denominator of the estimated static function at a static point, …).
+        Bad input (non-rational structure with a curve, too few points, a zero denominator of the
+        estimated static function at a static point, …). Static points outside the records'
+        input range are welcome: a :class:`StaticRangeWarning` names them once.
     InfeasibleError
         The constraints admit no θ; the message names them and the solver status.
     """
