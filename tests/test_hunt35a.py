@@ -188,3 +188,20 @@ def test_cls_docstring_says_what_points_outside_the_records_do():
     assert np.all(np.isfinite(model.theta))
     doc = " ".join(gb.cls.__doc__.split())
     assert "ū outside the data's range" not in doc and "StaticRangeWarning" in doc
+
+
+def test_dsf_says_when_the_members_in_the_band_diverge_rather_than_miss_it():
+    # both members have J_SF in B = [0, 1] but their free runs diverge on the choosing record: the
+    # message said "no member has J_SF in B …; the smallest J_SF is 0.05. Widen the band", advice that
+    # cannot help.
+    st = gb.Structure(["1", "y(k-1)", "s(k-1)"])
+    ps = gb.ParetoSet(st, [[1.0, 1.5, 1.0], [1.0, 1.6, 1.0]], [1.0, 0.5], [1.0, 2.0], [1.0, 2.0], [0.1, 0.05],
+                      "unstable", Ts=1.0)
+    rng = np.random.default_rng(0)
+    valid = gb.Record(rng.uniform(0, 1, 500), rng.uniform(0, 1, 500), input_names=("s",), name="valid")
+    with pytest.raises(gb.InfeasibleError, match="the 2 members with J_SF in B all diverge on valid") as info:
+        gb.decide_dsf(ps, band=1.0, choose_on=valid)
+    assert "Widen the band" not in str(info.value)
+    ps = gb.ParetoSet(st, [[1.0, 0.5, 1.0]], [1.0], [1.0], [np.inf], [0.1], "diverged")
+    with pytest.raises(gb.InfeasibleError, match="the 1 member with J_SF in B diverges on the identification data"):
+        gb.decide_dsf(ps, band=1.0)

@@ -186,6 +186,15 @@ def decide_dsf(
     else:
         finite = jsf[np.isfinite(jsf)]
         best = f"{finite.min():.4g}" if finite.size else "inf for every member"
+        n_in = int(((jsf >= lo) & (jsf <= hi)).sum())
+        if fallback is None and n_in:  # in the band, but no free run to score: a wider band would not help
+            on = chosen_on or "the identification data"
+            raise InfeasibleError(
+                f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
+                f"B = [{lo:g}, {hi:g}] with a finite J_S: the {n_in} member{'s' if n_in > 1 else ''} with J_SF in B "
+                f"{'all diverge' if n_in > 1 else 'diverges'} on {on} (free run). Extend the λ sweep, fit with a "
+                "stability margin, or pass fallback='min_jsf' to take the member with the smallest J_SF"
+            )
         if fallback is None:
             raise InfeasibleError(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
