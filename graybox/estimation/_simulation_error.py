@@ -160,6 +160,11 @@ class SEProblem:
         self.ridge_ref = self.ls_theta() * self.scale if self.ridge > 0 else None
         self.local = LocalModels(structure, *record_points(structure, self.records)) if self.margin is not None \
             else None
+        # the static points' ū as the local models read them: on a surface, columns in the kernel's input order
+        self.margin_ubar = None if static is None else static.ubar
+        if static is not None and self.surface_inputs is not None:
+            mu = static.ubar[:, [static.input_names.index(n) for n in c.inputs]]
+            self.margin_ubar = mu[:, 0] if mu.shape[1] == 1 else mu
 
     def with_margin(self, margin: float | None) -> SEProblem:
         """The same problem (structure, records, static points, ridge) with another margin; what does not
@@ -193,8 +198,8 @@ class SEProblem:
         if self.margin is None:
             return np.ones(th.shape[0], bool)
         ok = self.local.within(th, self.margin)
-        if static_outputs is not None and self.surface_inputs is None and ok.any():
-            ok[ok] = within_at(self.structure, th[ok], self.static.ubar, np.atleast_2d(static_outputs)[ok], self.margin)
+        if static_outputs is not None and ok.any():
+            ok[ok] = within_at(self.structure, th[ok], self.margin_ubar, np.atleast_2d(static_outputs)[ok], self.margin)
         return ok
 
     def slow_modes(self, thetas: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
