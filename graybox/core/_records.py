@@ -80,6 +80,8 @@ class Record:
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: u and y must have the same length, got {u.shape[0]} and {y.size}")
+        if y.size == 0:  # nothing downstream (nor the repr's ranges) has a meaning for an empty run
+            raise ValueError(f"{self.name}: no samples")
         object.__setattr__(self, "Ts", check_real(self.Ts, f"{self.name}: Ts (seconds)", low=0, low_open=True))
         units = self.units
         if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):

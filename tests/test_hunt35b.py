@@ -1,0 +1,20 @@
+"""Hunt 35b: the models and core layers (and today's changes on main) used as a control engineer
+would on their own data: engineering units far from 1, inputs not named u, short records, odd
+term strings and bad input. Each test names what was wrong before its fix."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+# An empty Record was accepted and its repr (and so any message or print naming it) raised numpy's
+# "zero-size array to reduction operation minimum"; a slice past the end made one silently.
+def test_empty_record_is_refused_by_name():
+    with pytest.raises(ValueError, match="no samples"):
+        gb.Record([], [], name="run1")
+    rec = gb.Record(np.linspace(2900.0, 3100.0, 50), np.linspace(2e5, 2.1e5, 50), input_names=["speed"])
+    with pytest.raises(ValueError, match="no samples"):
+        rec.slice(40, 10)
