@@ -18,3 +18,19 @@ def test_empty_record_is_refused_by_name():
     rec = gb.Record(np.linspace(2900.0, 3100.0, 50), np.linspace(2e5, 2.1e5, 50), input_names=["speed"])
     with pytest.raises(ValueError, match="no samples"):
         rec.slice(40, 10)
+
+
+# Complex samples (a spectrum or an FFT left in place of a signal) were cast to their real part,
+# with at most numpy's ComplexWarning: a silent wrong number in a record, a free run's input, a
+# static level or θ.
+@pytest.mark.parametrize("make", [
+    lambda z: gb.Record(np.full(5, 3000.0) + z, np.full(5, 2e5), input_names=["speed"]),
+    lambda z: gb.Record(np.full(5, 3000.0), np.full(5, 2e5) + z),
+    lambda z: gb.StaticPoints([3000.0 + z], [2e5]),
+    lambda z: gb.Model(["y(k-1)", "u(k-1)"], [0.5 + z, 1.0]),
+    lambda z: gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]).simulate(np.full(5, 3000.0) + z, [0.0]),
+    lambda z: gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]).static_curve([3000.0 + z]),
+])
+def test_complex_values_are_refused(make):
+    with pytest.raises((TypeError, ValueError), match="complex"):
+        make(1e-3j)

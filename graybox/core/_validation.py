@@ -161,8 +161,20 @@ def check_seed(seed: object, name: str = "seed") -> int:
     return check_int(seed, name, low=0)
 
 
+def refuse_complex(x: object, name: str) -> None:
+    """``TypeError`` naming ``name`` when ``x`` holds complex numbers: converting them to float keeps
+    the real part (with at most numpy's warning), a silent wrong number."""
+    try:
+        complex_ = np.iscomplexobj(x)
+    except (TypeError, ValueError):  # ragged or not numbers: the conversion that follows says so
+        return
+    if complex_:
+        raise TypeError(f"{name} must be real numbers, got complex values")
+
+
 def check_theta(n_terms: int, theta: object, name: str = "theta") -> np.ndarray:
     """θ as a finite float array of length ``n_terms``, shape (n_terms,), or ``ValueError``."""
+    refuse_complex(theta, name)
     try:
         th = np.asarray(theta, dtype=float)
     except (TypeError, ValueError):
@@ -239,6 +251,7 @@ def check_path(value: object, name: str) -> str | os.PathLike:
 
 def as_1d_finite(x: object, name: str) -> np.ndarray:
     """``x`` as a read-only 1-D float64 copy, or ``ValueError`` naming ``name`` and the problem."""
+    refuse_complex(x, name)
     try:
         a = np.array(x, dtype=float, copy=True)
     except (TypeError, ValueError):
