@@ -34,3 +34,15 @@ def test_empty_record_is_refused_by_name():
 def test_complex_values_are_refused(make):
     with pytest.raises((TypeError, ValueError), match="complex"):
         make(1e-3j)
+
+
+# A single string where a sequence of terms is meant was iterated character by character:
+# Structure("y(k-1)") and Model("y(k-1)", [0.5]) said "cannot parse term 'y'", naming neither the
+# argument nor the fix (a list, or parse_structure).
+def test_structure_of_one_string_names_the_fix():
+    with pytest.raises(TypeError, match="parse_structure"):
+        gb.Structure("y(k-1)")
+    with pytest.raises(TypeError, match="parse_structure"):
+        gb.Model("speed(k-1)", [0.5])
+    assert gb.parse_structure("y(k-1)") == gb.Structure(["y(k-1)"])
+

@@ -270,6 +270,9 @@ class Structure:
     terms: tuple[Term, ...]
 
     def __init__(self, terms: Iterable[Term | str]):
+        if isinstance(terms, str):  # iterated, it would be read character by character
+            raise TypeError(f"a structure is a sequence of terms, got the string {terms!r}: pass a list of terms, "
+                            "or parse a '+'-joined string with parse_structure")
         ts = tuple(t if isinstance(t, Term) else parse_term(t) for t in terms)
         seen: set[Term] = set()
         for t in ts:
