@@ -46,3 +46,10 @@ def test_structure_of_one_string_names_the_fix():
         gb.Model("speed(k-1)", [0.5])
     assert gb.parse_structure("y(k-1)") == gb.Structure(["y(k-1)"])
 
+
+# A lag of 0 written y(k) or speed(k) was "cannot parse term 'speed(k)' at position 0", while the
+# same lag written speed(k-0) said what is wrong (lags start at 1).
+@pytest.mark.parametrize("text", ["speed(k)", "y(k)", "e(k)", "y(k-1)speed(k)"])
+def test_lag_zero_says_lags_start_at_one(text):
+    with pytest.raises(ValueError, match=r"lag of \w+ must be an integer >= 1, got 0"):
+        gb.Structure([text])

@@ -123,7 +123,8 @@ def check_input_names(names: object, m: int | None = None, what: str = "input_na
         raise ValueError(f"{what}: {len(out)} names {out} for {m} input column(s)")
     return out
 
-_FACTOR_RE = re.compile(r"\s*([a-zA-Z]\w*)\s*\(\s*k\s*-\s*(\d+)\s*\)\s*(?:\^\s*(\d+))?\s*\*?")
+#: y(k) reads as lag 0, which Term refuses by name (lags start at 1), as it does y(k-0)
+_FACTOR_RE = re.compile(r"\s*([a-zA-Z]\w*)\s*\(\s*k\s*(?:-\s*(\d+)\s*)?\)\s*(?:\^\s*(\d+))?\s*\*?")
 
 
 #: Largest lag of a factor (the compiled kernels encode terms as int64).
@@ -240,7 +241,7 @@ def parse_term(text: str) -> Term:
         m = _FACTOR_RE.match(s, pos)
         if m is None or m.end() == pos:
             raise ValueError(f"cannot parse term {text!r} at position {pos}: {s[pos:]!r}")
-        sig, lag, power = m.group(1), int(m.group(2)), int(m.group(3) or 1)
+        sig, lag, power = m.group(1), int(m.group(2) or 0), int(m.group(3) or 1)
         try:
             _check_signal(sig)
         except ValueError as exc:
