@@ -53,3 +53,28 @@ def test_structure_of_one_string_names_the_fix():
 def test_lag_zero_says_lags_start_at_one(text):
     with pytest.raises(ValueError, match=r"lag of \w+ must be an integer >= 1, got 0"):
         gb.Structure([text])
+
+
+def _quadratic_record(rng, n, lo, hi, name, cap=np.inf):
+    """y(k) = 0.5 y(k−1) + 0.1 min(y(k−1)², cap) + v(k−1): a capped square saturates where the model's diverges."""
+    v = np.repeat(rng.uniform(lo, hi, n // 10 + 1), 10)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + 0.1 * min(y[k - 1] ** 2, cap) + v[k - 1]
+    return gb.Record(v, y + 1e-3 * rng.standard_normal(n), name=name, input_names=["v"])
+
+
+# GrayboxSelection.regret, and so the selection's repr, raised numpy's "zero-size array to reduction
+# operation minimum" when no row's model ran through the test record (every JS_test inf: each
+# free run diverged there).
+def test_regret_when_every_row_diverges_on_the_test_record():
+    rng = np.random.default_rng(0)
+    data = gb.Dataset(_quadratic_record(rng, 300, -0.5, 0.5, "ident"), _quadratic_record(rng, 200, -0.5, 0.5, "valid"))
+    test = _quadratic_record(rng, 200, 2.0, 3.0, "test", cap=4.0)  # no equilibrium of the model there
+    cand = gb.Structure(["1", "v(k-1)", "y(k-1)", "y(k-1)^2"])
+    sel = gb.experiments.select_graybox(cand, data, test=test, sizes=[3, 4], sources=("frols",),
+                                        include=["1", "y(k-1)^2"])
+    assert np.isinf(sel.table["JS_test"]).all()
+    with pytest.raises(ValueError, match="test record"):
+        sel.regret
+    assert "J_S test=inf" in repr(sel) and "regret" not in repr(sel)

@@ -237,8 +237,12 @@ class GrayboxSelection:
     @property
     def regret(self) -> float:
         """The choice's J_S on the test record over the best J_S there among the rows compared (>= 1;
-        1: no row would have done better on new data). Needs the call's ``test=`` record."""
+        1: no row would have done better on new data; inf: the choice diverged there). Needs the call's
+        ``test=`` record; ``ValueError`` when every row's free run diverged on it."""
         js = self._test_column()
+        if not np.isfinite(js).any():
+            raise ValueError("no row's model ran through the test record (every JS_test is inf: its free run "
+                             "diverged there, or the row has no model): no best row to compare the choice with")
         return float(self.chosen["JS_test"] / js[np.isfinite(js)].min())
 
     @property
@@ -261,7 +265,11 @@ class GrayboxSelection:
 
     def __repr__(self) -> str:
         row = self.chosen
-        test = f", J_S test={row['JS_test']:.4g}, regret={self.regret:.3g}" if "JS_test" in self.table else ""
+        test = ""
+        if "JS_test" in self.table:
+            test = f", J_S test={row['JS_test']:.4g}"
+            if np.isfinite(self.table["JS_test"].to_numpy(float)).any():  # else no regret to give
+                test += f", regret={self.regret:.3g}"
         return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, rule={self.rule!r}, "
                 f"J_S valid={row['JS_valid']:.4g}{test}, in_band={self.in_band})")
 
