@@ -78,3 +78,19 @@ def test_regret_when_every_row_diverges_on_the_test_record():
     with pytest.raises(ValueError, match="test record"):
         sel.regret
     assert "J_S test=inf" in repr(sel) and "regret" not in repr(sel)
+
+
+# gb.mse took its arrays unchecked: start=-1 scored the last sample only (rrse refused it), a
+# measured NaN gave inf as a diverged model does, and arrays of different lengths (mse and rrse)
+# raised numpy's "operands could not be broadcast together".
+@pytest.mark.parametrize("score", [gb.mse, gb.rrse, gb.fit_percent])
+def test_error_measures_check_their_arrays(score):
+    y = 2e5 + np.arange(5.0)
+    assert np.isfinite(score(y, y + 0.5 * np.arange(5.0), start=1))
+    assert score(y, np.r_[y[:4], np.nan]) == (-np.inf if score is gb.fit_percent else np.inf)  # a diverged run
+    with pytest.raises(ValueError, match="start"):
+        score(y, y, start=-1)
+    with pytest.raises(ValueError, match="same length"):
+        score(y, y[:4])
+    with pytest.raises(ValueError, match="y has 1 non-finite"):
+        score(np.r_[y[:4], np.nan], y)

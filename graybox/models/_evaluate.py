@@ -30,7 +30,7 @@ from ._coerce import as_model, as_record, as_structure, static_info
 from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
-from ..core._validation import check_bool, check_int, check_per_point, check_sequence, warn
+from ..core._validation import as_1d_finite, check_bool, check_int, check_per_point, check_sequence, warn
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -38,10 +38,23 @@ from ..core._terms import Structure
 __all__ = ["mse", "j1", "js", "jsf", "rrse", "fit_percent", "evaluate"]
 
 
+def _measured_and_model(y: object, yhat: object, start: object) -> tuple[np.ndarray, np.ndarray]:
+    """``y[start:]`` (measured: finite) and ``yhat[start:]`` (a model's: inf/NaN where it diverged), 1-D, one length."""
+    start = check_int(start, "start", low=0)
+    y = as_1d_finite(y, "y")
+    yhat = np.asarray(yhat, dtype=float)
+    if yhat.shape != y.shape:
+        raise ValueError(f"y and yhat must have the same length, got shapes {y.shape} and {yhat.shape}")
+    return y[start:], yhat[start:]
+
+
 def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
-    """Mean squared error of ``yhat`` against ``y`` over samples ``start …``; inf if ŷ is not finite."""
-    start = check_int(start, "start")
-    e = np.asarray(y)[start:] - np.asarray(yhat)[start:]
+    """Mean squared error of ``yhat`` against ``y`` over samples ``start …``; inf if ŷ is not finite.
+
+    ``y`` (measured) and ``yhat`` are 1-D of one length, ``y`` finite; ``start`` >= 0.
+    """
+    y, yhat = _measured_and_model(y, yhat, start)
+    e = y - yhat
     if e.size == 0:
         raise ValueError("no samples left to evaluate")
     if not np.all(np.isfinite(e)):
@@ -122,9 +135,7 @@ def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
 
     ``y`` is measured, ``yhat`` the model's output (inf when ``yhat`` is not finite).
     """
-    start = check_int(start, "start", low=0)
-    y = np.asarray(y)[start:]
-    yhat = np.asarray(yhat)[start:]
+    y, yhat = _measured_and_model(y, yhat, start)
     if not np.all(np.isfinite(yhat)):
         return float("inf")
     den = np.linalg.norm(y - y.mean())
