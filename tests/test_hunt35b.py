@@ -94,3 +94,10 @@ def test_error_measures_check_their_arrays(score):
         score(y, y[:4])
     with pytest.raises(ValueError, match="y has 1 non-finite"):
         score(np.r_[y[:4], np.nan], y)
+
+
+# evaluate_thetas cast complex parameter vectors to their real part (numpy's ComplexWarning only).
+def test_evaluate_thetas_refuses_complex_thetas():
+    rec = gb.Record(3000.0 + np.arange(20.0), 2e5 + np.arange(20.0), input_names=["speed"])
+    with pytest.raises(TypeError, match="complex"):
+        gb.evaluate_thetas(["y(k-1)", "speed(k-1)"], np.array([[0.5 + 1e-3j, 1.0]]), rec)
