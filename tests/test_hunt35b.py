@@ -101,3 +101,18 @@ def test_evaluate_thetas_refuses_complex_thetas():
     rec = gb.Record(3000.0 + np.arange(20.0), 2e5 + np.arange(20.0), input_names=["speed"])
     with pytest.raises(TypeError, match="complex"):
         gb.evaluate_thetas(["y(k-1)", "speed(k-1)"], np.array([[0.5 + 1e-3j, 1.0]]), rec)
+
+
+# Model.to_latex raised KeyError for any input not named u (speed, u1, a transient input u_tau2p5):
+# the LaTeX names were a table of u, y and e only.
+def test_to_latex_writes_any_input_name():
+    from matplotlib.mathtext import MathTextParser
+
+    m = gb.Model(["y(k-1)", "u_tau2p5(k-1)", "flow_rate(k-2)^2", "u1(k-1)y(k-1)", "speed(k-1)", "1"],
+                 [0.5, -1e-3, 2e5, 1.5e-12, 7.0, -3.0], noise_structure=["e(k-1)"], noise_theta=[0.2],
+                 input_names=["u1", "u_tau2p5", "flow_rate", "speed"])
+    tex = m.to_latex()
+    assert r"\mathrm{speed}(k-1)" in tex and "u_{1}(k-1)" in tex and r"\mathrm{flow\_rate}(k-2)^{2}" in tex
+    assert r"\xi(k-1)" in tex and r"0.5\,y(k-1)" in tex
+    MathTextParser("path").parse(f"${tex}$")  # valid math: one subscript per name, no stray _
+    assert gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]).to_latex() == r"y(k) = 0.5\,y(k-1) + 1\,u(k-1)"

@@ -2,13 +2,26 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from ._terms import Structure, Term
 
 __all__ = ["latex_number", "latex_term", "latex_equation"]
 
-_SIGNAL = {"u": "u", "y": "y", "e": r"\xi"}
+_SIGNAL = {"y": "y", "e": r"\xi"}
+
+
+def _latex_signal(name: str) -> str:
+    """A signal's name in math mode: y, ξ for e, one letter as it is (``u``), a letter and digits
+    with the digits as subscript (``u_{1}``), any other input name upright with ``_`` escaped."""
+    if name in _SIGNAL:
+        return _SIGNAL[name]
+    m = re.fullmatch(r"([A-Za-z])(\d*)", name)
+    if m:
+        return m.group(1) + (f"_{{{m.group(2)}}}" if m.group(2) else "")
+    return r"\mathrm{" + name.replace("_", r"\_") + "}"
 
 
 def latex_number(value: float, digits: int = 4) -> str:
@@ -24,7 +37,7 @@ def latex_term(term: Term) -> str:
     """``u(k-2)\\,y(k-6)``, ``u(k-6)^{2}``, ``\\xi(k-1)``; the constant term is the empty string."""
     parts = []
     for s, lag, p in term.factors:
-        f = f"{_SIGNAL[s]}(k-{lag})"
+        f = f"{_latex_signal(s)}(k-{lag})"
         parts.append(f + (f"^{{{p}}}" if p > 1 else ""))
     return r"\,".join(parts)
 
