@@ -116,3 +116,12 @@ def test_to_latex_writes_any_input_name():
     assert r"\xi(k-1)" in tex and r"0.5\,y(k-1)" in tex
     MathTextParser("path").parse(f"${tex}$")  # valid math: one subscript per name, no stray _
     assert gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]).to_latex() == r"y(k) = 0.5\,y(k-1) + 1\,u(k-1)"
+
+
+# Structure.index of a term not in the structure raised Python's bare "tuple.index(x): x not in
+# tuple", naming neither the term nor the structure.
+def test_structure_index_names_the_missing_term():
+    s = gb.Structure(["y(k-1)", "speed(k-1)"])
+    assert s.index("speed(k - 1)") == 1
+    with pytest.raises(ValueError, match=r"u\(k-1\) is not in the structure"):
+        s.index("u(k-1)")

@@ -310,6 +310,8 @@ class Structure:
     def index(self, term: Term | str) -> int:
         """Position of ``term`` (a Term or a string) in the structure."""
         t = term if isinstance(term, Term) else parse_term(term)
+        if t not in self.terms:
+            raise ValueError(f"{t} is not in the structure {self}")
         return self.terms.index(t)
 
     def positions(self, terms: Iterable[Term | str], what: str = "term") -> list[int]:
