@@ -125,3 +125,17 @@ def test_structure_index_names_the_missing_term():
     assert s.index("speed(k - 1)") == 1
     with pytest.raises(ValueError, match=r"u\(k-1\) is not in the structure"):
         s.index("u(k-1)")
+
+
+# A file whose thousands separator shows only in a cell with both marks (1,234.5 or 1.234,5) and
+# otherwise in grouped integers (1,236) was called ambiguous at the grouped integer, with the hint
+# to pass the wrong decimal mark (decimal=',' for 1,234.5); the cell with both marks is the
+# thousands separator the loaders refuse by its line.
+@pytest.mark.parametrize("text", ['t,u,y\n0,"1,234.5",2\n1,"1,235.5",3\n2,"1,236",4\n',
+                                  "t;u;y\n0;1.234,5;2\n1;1.235,5;3\n2;1.236;4\n"])
+def test_csv_thousands_separator_in_a_cell_with_both_marks_is_named(tmp_path, text):
+    path = tmp_path / "run.csv"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ValueError, match=r"line 2, column 'u': '1[.,]234[.,]5' .*thousands separator") as info:
+        gb.load_record_csv(path, u="u", y="y", time="t")
+    assert "ambiguous" not in str(info.value)

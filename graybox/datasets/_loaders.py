@@ -189,6 +189,8 @@ _GROUPED = re.compile(r"^[+-]?[1-9]\d{0,2}[.,]\d{3}$")
 # Digits in groups of three after a thousands separator (, . ' space, no-break or narrow no-break
 # space), maybe with a decimal part: what a spreadsheet's number format writes.
 _THOUSANDS = re.compile(r"^[+-]?\d{1,3}(?:([,.'\u2019 \u00a0\u202f])\d{3})(?:\1\d{3})*(?:[.,]\d*)?$")
+_THOUSANDS_HINT = ("; it looks like a number with a thousands separator, which is not read: export the numbers "
+                   "without thousands separators")
 _DECIMAL_POINT = re.compile(r"^[+-]?\d*\.\d+(?:[eE][+-]?\d+)?$")
 _INTEGER = re.compile(r"^[+-]?\d+(?:[eE][+-]?\d+)?$")
 
@@ -285,6 +287,10 @@ def _detect_decimal(p: Path, header: str, data: list[tuple[int, str]], delimiter
     for line, ln in data:
         for i, cell in enumerate(_split(ln, delimiter)):
             c = cell.strip()
+            if "," in c and "." in c and _THOUSANDS.match(c):  # both marks: one groups thousands, never guessed
+                names = _split(header, delimiter)
+                col = names[i].strip() if i < len(names) else str(i + 1)
+                raise ValueError(f"{p}: line {line}, column {col!r}: {c!r} is not a number{_THOUSANDS_HINT}")
             if _DECIMAL_COMMA.match(c):
                 seen[","].append((line, i, c))
             elif _DECIMAL_POINT.match(c):
@@ -325,8 +331,7 @@ def _number(p: Path, line: int, col: str, cell: str, decimal: str) -> float:
         v = float(c)
     except ValueError:
         if _THOUSANDS.match(cell.strip()):  # float() reads no spreadsheet's separator, and none is guessed
-            hint += ("; it looks like a number with a thousands separator, which is not read: export the "
-                     "numbers without thousands separators")
+            hint += _THOUSANDS_HINT
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a number{hint}") from None
     if not math.isfinite(v):
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a finite number")
