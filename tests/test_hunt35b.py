@@ -139,3 +139,14 @@ def test_csv_thousands_separator_in_a_cell_with_both_marks_is_named(tmp_path, te
     with pytest.raises(ValueError, match=r"line 2, column 'u': '1[.,]234[.,]5' .*thousands separator") as info:
         gb.load_record_csv(path, u="u", y="y", time="t")
     assert "ambiguous" not in str(info.value)
+
+
+# encoding= naming one of Python's codecs that is no text encoding (hex, rot13, base64) raised
+# Python's LookupError from deep inside the decoder, not the ValueError an unknown name gets.
+@pytest.mark.parametrize("encoding", ["hex", "rot13", "base64"])
+def test_csv_encoding_that_is_no_text_encoding(tmp_path, encoding):
+    path = tmp_path / "steady.csv"
+    path.write_bytes(b"speed;pressure\n3000;200000\n3100;201000\n")
+    with pytest.raises(ValueError, match=f"encoding '{encoding}' is not a text encoding"):
+        gb.load_static_csv(path, u="speed", y="pressure", encoding=encoding)
+

@@ -160,6 +160,7 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
             raise TypeError(f"encoding must name a text encoding (a str) such as 'cp1252', got {encoding!r}")
         try:
             enc = codecs.lookup(encoding).name
+            "".encode(enc)  # a codec that is no text encoding (hex, rot13, base64) is a LookupError here
         except LookupError:
             raise ValueError(f"{p}: encoding {encoding!r} is not a text encoding Python knows (e.g. 'utf-8', "
                              "'utf-16', 'cp1252')") from None
