@@ -150,3 +150,17 @@ def test_csv_encoding_that_is_no_text_encoding(tmp_path, encoding):
     with pytest.raises(ValueError, match=f"encoding '{encoding}' is not a text encoding"):
         gb.load_static_csv(path, u="speed", y="pressure", encoding=encoding)
 
+
+# An encoding= that contradicts the file's byte-order mark was obeyed: a UTF-8-with-BOM file read as
+# cp1252 had no column 'u' (its header read 'ï»¿u'), and a UTF-16 file read as UTF-8 was told to
+# try encoding='cp1252'.
+@pytest.mark.parametrize("bom, text_encoding, given", [(b"\xef\xbb\xbf", "utf-8", "cp1252"),
+                                                        (b"\xff\xfe", "utf-16-le", "utf-8"),
+                                                        (b"\xff\xfe", "utf-16-le", "cp1252")])
+def test_csv_encoding_that_contradicts_the_byte_order_mark(tmp_path, bom, text_encoding, given):
+    path = tmp_path / "steady.csv"
+    path.write_bytes(bom + "u;y\n3000;200000\n3100;201000\n".encode(text_encoding))
+    with pytest.raises(ValueError, match=f"byte-order mark.*encoding='{given}'"):
+        gb.load_static_csv(path, u="u", y="y", encoding=given)
+    assert gb.load_static_csv(path, u="u", y="y").ubar.tolist() == [3000.0, 3100.0]
+    assert gb.load_static_csv(path, u="u", y="y", encoding=text_encoding.split("-le")[0]).ubar.tolist() == [3000.0, 3100.0]

@@ -164,6 +164,10 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
         except LookupError:
             raise ValueError(f"{p}: encoding {encoding!r} is not a text encoding Python knows (e.g. 'utf-8', "
                              "'utf-16', 'cp1252')") from None
+        marked = next((e for bom, e in _BOMS if raw.startswith(bom)), None)
+        if marked is not None and not enc.startswith(marked):  # the mark's bytes would be read as text
+            raise ValueError(f"{p}: the file starts with a {marked.upper()} byte-order mark, but encoding="
+                             f"{encoding!r} was given; omit encoding= (the mark decides) or pass encoding={marked!r}")
     else:
         enc = next((e for bom, e in _BOMS if raw.startswith(bom)), "utf-8")
     if enc == "utf-8":
@@ -465,7 +469,8 @@ def load_record_csv(
         The text encoding, any name Python knows (e.g. ``"cp1252"``, what Excel writes as "CSV"
         on Windows in Western Europe and the Americas; ``"utf-16-le"``). Default: UTF-8, or UTF-16
         or UTF-32 when the file starts with their byte-order mark (Excel's "Unicode text"); a file
-        that is not UTF-8 is an error naming the line and suggesting ``encoding=``.
+        that is not UTF-8 is an error naming the line and suggesting ``encoding=``; an encoding
+        that contradicts the file's byte-order mark is an error.
 
     Returns
     -------
@@ -481,7 +486,7 @@ def load_record_csv(
         rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, a delimiter or
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a
         thousands separator, text that is not in the encoding (UTF-8 by default), or an unknown
-        ``encoding``.
+        ``encoding`` (or one that contradicts the file's byte-order mark).
     TypeError
         ``path``, ``u``, ``y``, ``time``, ``Ts`` or ``encoding`` of the wrong type (a column is named
         by a str).
