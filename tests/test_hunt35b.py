@@ -164,3 +164,18 @@ def test_csv_encoding_that_contradicts_the_byte_order_mark(tmp_path, bom, text_e
         gb.load_static_csv(path, u="u", y="y", encoding=given)
     assert gb.load_static_csv(path, u="u", y="y").ubar.tolist() == [3000.0, 3100.0]
     assert gb.load_static_csv(path, u="u", y="y", encoding=text_encoding.split("-le")[0]).ubar.tolist() == [3000.0, 3100.0]
+
+
+# plot_selection's test panel, for a selection whose every row diverged on the test record, was
+# titled "the choice is nan× the best row" (it computed the regret itself, over positive J_S only,
+# apart from GrayboxSelection.regret), and its empty legend raised matplotlib's "No artists with
+# labels found" warning.
+def test_plot_selection_when_every_row_diverges_on_the_test_record():
+    rng = np.random.default_rng(0)
+    data = gb.Dataset(_quadratic_record(rng, 300, -0.5, 0.5, "ident"), _quadratic_record(rng, 200, -0.5, 0.5, "valid"))
+    test = _quadratic_record(rng, 200, 2.0, 3.0, "test", cap=4.0)
+    cand = gb.Structure(["1", "v(k-1)", "y(k-1)", "y(k-1)^2"])
+    sel = gb.experiments.select_graybox(cand, data, test=test, sizes=[3, 4], sources=("frols",),
+                                        include=["1", "y(k-1)^2"])
+    title = gb.experiments.plot_selection(sel).axes[-1].get_title()
+    assert "nan" not in title and "diverged" in title

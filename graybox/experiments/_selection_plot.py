@@ -99,11 +99,12 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
             ok = _finite_pos(js)
             values = js[ok]
             _points(ax, est, elig, ok, n, js, mark, color)
-            best = float(np.min(values)) if values.size else np.nan
             ax.set_ylabel("J_S on the test record (output units²)")
-            regret = chosen["JS_test"] / best if np.isfinite(best) else np.nan
-            ax.set_title(f"test record (not used to choose): the choice is {regret:.3g}× the best row",
-                         fontsize=9)
+            if np.isfinite(js).any():
+                said = f"the choice is {selection.regret:.3g}× the best row"
+            else:
+                said = "every row's free run diverged there"
+            ax.set_title(f"test record (not used to choose): {said}", fontsize=9)
             _ring(ax, chosen["n_terms"], chosen["JS_test"])
         _scale(ax, "y", values)
         if panel == "static" and np.isfinite(selection.band):
@@ -111,7 +112,8 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
         ax.set_xlabel("terms")
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
+        if ax.get_legend_handles_labels()[0]:  # a panel with no row drawn has nothing to name
+            ax.legend(fontsize=7, loc="best")
     fig.suptitle(str(title) if title is not None else
                  f"chosen: {chosen.name} by {chosen['estimator']} ({int(chosen['n_terms'])} terms)", fontsize=10)
     return fig
