@@ -179,3 +179,11 @@ def test_plot_selection_when_every_row_diverges_on_the_test_record():
                                         include=["1", "y(k-1)^2"])
     title = gb.experiments.plot_selection(sel).axes[-1].get_title()
     assert "nan" not in title and "diverged" in title
+
+
+# A free run of a structure without lags (a static map, "1" and nothing else) from an input array
+# asked for y0, "the first max-lag outputs", of which there are none.
+def test_free_run_without_lags_needs_no_initial_outputs():
+    m = gb.Model(["1"], [2e5])
+    assert m.simulate(np.full(10, 3000.0)).tolist() == [2e5] * 10
+    assert gb.simulate(gb.Structure(["1"]), [2e5], np.full(10, 3000.0)).tolist() == [2e5] * 10

@@ -111,7 +111,9 @@ def free_run_inputs(
     else:
         u = as_input_array(u, "u")
         if y0 is None:
-            raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
+            if L > 0:
+                raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
+            y0 = np.zeros(0)  # no lags: no initial outputs
     try:
         y0 = np.asarray(y0, dtype=float)
     except (TypeError, ValueError):
