@@ -187,3 +187,18 @@ def test_free_run_without_lags_needs_no_initial_outputs():
     m = gb.Model(["1"], [2e5])
     assert m.simulate(np.full(10, 3000.0)).tolist() == [2e5] * 10
     assert gb.simulate(gb.Structure(["1"]), [2e5], np.full(10, 3000.0)).tolist() == [2e5] * 10
+
+
+# gb.simulate, gb.predict and gb.simulate_many took only a Structure: a list of terms (which the
+# README says will do wherever a structure is meant) raised AttributeError "'list' object has no
+# attribute 'max_lag'", and a Model "object of type 'Model' has no len()".
+@pytest.mark.parametrize("structure", [["y(k-1)", "speed(k-1)"], gb.Model(["y(k-1)", "speed(k-1)"], [0.0, 0.0])])
+def test_core_free_runs_take_any_structure(structure):
+    u = 3000.0 + 10 * np.sin(np.arange(30.0))
+    rec = gb.Record(u, 2e5 + np.cos(np.arange(30.0)), input_names=["speed"])
+    m = gb.Model(["y(k-1)", "speed(k-1)"], [0.5, 30.0])
+    assert np.array_equal(gb.simulate(structure, m.theta, rec), m.simulate(rec))
+    assert np.array_equal(gb.predict(structure, m.theta, rec, horizon=2), m.predict(rec, horizon=2))
+    assert np.array_equal(gb.simulate_many(structure, m.theta[None, :], rec)[0], m.simulate(rec))
+    with pytest.raises(TypeError, match="structure"):
+        gb.simulate(3, m.theta, rec)

@@ -18,7 +18,7 @@ from ._records import Record, as_input_array
 from ._terms import check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta
 from ._regressors import regressor_matrix
-from ._terms import Structure
+from ._terms import Structure, structure_of
 
 __all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "free_run_inputs", "default_bound"]
 
@@ -32,8 +32,8 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
 
     Parameters
     ----------
-    structure : Structure
-        Process terms.
+    structure : Structure, sequence of str, or a model
+        Process terms (a model, or a result with ``.structure``, gives its own).
     theta : ndarray, shape (n_terms,)
     record : Record
         Measured input(s) and output; every input the structure uses must be among the
@@ -56,6 +56,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     """
     if not isinstance(record, Record):
         raise TypeError(f"record must be a Record, got {type(record).__name__}")
+    structure = structure_of(structure)
     th = check_theta(len(structure), theta)
     horizon = check_int(horizon, "horizon", low=1)
     L = structure.max_lag
@@ -143,8 +144,9 @@ def simulate(
 
     Parameters
     ----------
-    structure : Structure
-        Process terms (noise terms are not simulated).
+    structure : Structure, sequence of str, or a model
+        Process terms (noise terms are not simulated; a model, or a result with ``.structure``,
+        gives its own).
     theta : ndarray, shape (n_terms,)
     u : ndarray, shape (N,) or (N, m), or Record
         Input(s). With a Record, ``y0`` defaults to its first ``max_lag`` outputs and the
@@ -168,6 +170,7 @@ def simulate(
     -------
     ndarray, shape (N,)
     """
+    structure = structure_of(structure)
     th = check_theta(len(structure), theta)
     check_choice(on_diverge, "on_diverge", ("raise", "nan"))
     L = structure.max_lag
@@ -198,7 +201,8 @@ def simulate_many(
 
     Parameters
     ----------
-    structure : Structure
+    structure : Structure, sequence of str, or a model
+        Process terms (a model, or a result with ``.structure``, gives its own).
     thetas : ndarray, shape (P, n_terms)
     record : Record
         Input and initial outputs (its first ``max_lag`` samples).
@@ -211,6 +215,7 @@ def simulate_many(
         A diverging member has non-finite samples; this never raises for divergence.
     """
     threads = check_int(threads, "threads", low=1)
+    structure = structure_of(structure)
     th = np.asarray(thetas, dtype=float)
     if th.ndim != 2 or th.shape[1] != len(structure):
         raise ValueError(f"thetas must have shape (P, {len(structure)}), got {th.shape}")

@@ -387,6 +387,19 @@ class Structure:
                 f"[{', '.join(names[:3])}, …, {', '.join(names[-2:])}])")
 
 
+def structure_of(obj: object, name: str = "structure") -> Structure:
+    """``obj`` as a Structure: a Structure, a sequence of terms (Terms or strings), or anything that
+    carries one in ``.structure`` (a Model, a result); ``TypeError`` naming ``name`` otherwise."""
+    if isinstance(obj, Structure):
+        return obj
+    carried = getattr(obj, "structure", None)
+    if isinstance(carried, Structure):
+        return carried
+    if isinstance(obj, (bytes, Mapping)) or not isinstance(obj, Iterable):
+        raise TypeError(f"{name} must be a Structure, a sequence of terms or a model, got {type(obj).__name__}")
+    return Structure(obj)  # a lone string is refused there, naming parse_structure
+
+
 def parse_structure(text: str | Sequence[str]) -> Structure:
     """Parse ``"y(k-1) + u(k-2)y(k-6) + 1"`` (or a list of term strings) into a Structure.
 
