@@ -202,3 +202,21 @@ def test_core_free_runs_take_any_structure(structure):
     assert np.array_equal(gb.simulate_many(structure, m.theta[None, :], rec)[0], m.simulate(rec))
     with pytest.raises(TypeError, match="structure"):
         gb.simulate(3, m.theta, rec)
+
+
+# evaluate refused the whole table ("RRSE undefined: the measured output is constant") when the
+# validation output was constant (a record held at one steady state), for the sake of its fit_valid
+# column alone: J_S and J_SF, defined there, were lost with it.
+def test_evaluate_with_a_constant_validation_output():
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.uniform(2900.0, 3100.0, 10), 10)
+    m = gb.Model(["y(k-1)", "speed(k-1)", "1"], [0.5, 30.0, 1e5], input_names=["speed"])
+    ident = gb.Record(u, m.simulate(u, [2e5]) + rng.standard_normal(100), name="ident", input_names=["speed"])
+    ybar = m.static_curve([3000.0])[0]
+    valid = gb.Record(np.full(50, 3000.0), np.full(50, ybar), name="valid", input_names=["speed"])
+    data = gb.Dataset(ident, valid, gb.StaticPoints([3000.0], [ybar], input_names=["speed"]))
+    with pytest.warns(RuntimeWarning, match="fit_valid.*constant"):
+        table = gb.evaluate({"m": m}, data)
+    assert np.isnan(table.loc["m", "fit_valid"])
+    assert table.loc["m", "JS_valid"] == pytest.approx(0.0, abs=1e-12 * ybar**2)
+    assert table.loc["m", "JSF"] == pytest.approx(0.0, abs=1e-12 * ybar**2)

@@ -184,7 +184,10 @@ def evaluate(
     -------
     pandas.DataFrame
         Index: model names. Columns: ``JS_ident``, ``JS_valid``, ``JSF``, ``n_params``,
-        ``J1_ident``, ``fit_valid`` (MSE in output units²), then ``J{k}_valid`` for each horizon.
+        ``J1_ident`` (MSE in output units²), ``fit_valid`` (%, MATLAB's ``compare`` fit of the free run),
+        then ``J{k}_valid`` for each horizon (output units²).
+        ``fit_valid`` is NaN, with a ``RuntimeWarning``, when the validation output is constant
+        (the fit % is undefined there).
     """
     if not isinstance(data, Dataset):
         raise TypeError(f"data must be a Dataset (the table scores its ident and valid records); got "
@@ -194,17 +197,26 @@ def evaluate(
     sp = static_info(static, data)
     horizons = sorted({check_int(k, "horizons", low=1) for k in check_sequence(horizons, "horizons", "a sequence of int")})
     rows = {}
+    undefined_fit = []  # models whose fit % is undefined: the validation output is constant after their lags
     for name, m in models.items():
         m = as_model(m, f"models[{name!r}]", duck="simulate")
         sim_v = m.simulate(data.valid, on_diverge="nan")
+        try:
+            fit = fit_percent(data.valid.y, sim_v, start=m.max_lag)
+        except ValueError:  # the one ValueError fit_percent raises on checked arrays: RRSE undefined
+            fit = float("nan")
+            undefined_fit.append(name)
         rows[name] = {
             "JS_ident": js(m, data.ident),
             "JS_valid": mse(data.valid.y, sim_v, start=m.max_lag),
             "JSF": jsf(m, sp, y0) if sp is not None else float("nan"),
             "n_params": m.n_params,
             "J1_ident": j1(m, data.ident),
-            "fit_valid": fit_percent(data.valid.y, sim_v, start=m.max_lag),
+            "fit_valid": fit,
         } | {f"J{k}_valid": mse(data.valid.y, m.predict(data.valid, horizon=k), start=m.max_lag) for k in horizons}
+    if undefined_fit:
+        warn(f"fit_valid is NaN for {undefined_fit}: the validation output {data.valid.name!r} is constant, so the "
+             "fit % (1 − ‖y − ŷ‖ / ‖y − mean y‖) is undefined; JS_valid scores the run", RuntimeWarning)
     df = pd.DataFrame.from_dict(rows, orient="index")
     df["n_params"] = df["n_params"].astype(int)
     return df
