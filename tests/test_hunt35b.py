@@ -220,3 +220,18 @@ def test_evaluate_with_a_constant_validation_output():
     assert np.isnan(table.loc["m", "fit_valid"])
     assert table.loc["m", "JS_valid"] == pytest.approx(0.0, abs=1e-12 * ybar**2)
     assert table.loc["m", "JSF"] == pytest.approx(0.0, abs=1e-12 * ybar**2)
+
+
+# Numbers given as strings (a column read as text) were parsed silently by numpy where samples,
+# levels or θ are meant (Record, StaticPoints, Model, a static curve's ū), while Model.equilibria
+# refused the same '3000' with a TypeError; strings are a wrong type.
+@pytest.mark.parametrize("make", [
+    lambda: gb.Record(["3000", "3001"], [2e5, 2e5]),
+    lambda: gb.Record([3000.0, 3001.0], np.array([b"2e5", b"2e5"])),
+    lambda: gb.StaticPoints(["3000"], [2e5]),
+    lambda: gb.Model(["y(k-1)"], ["0.5"]),
+    lambda: gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]).static_curve("3000"),
+])
+def test_numbers_as_strings_are_refused(make):
+    with pytest.raises(TypeError, match="strings"):
+        make()

@@ -17,14 +17,14 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ._terms import check_input_names, default_input_names
-from ._validation import as_1d_finite, check_per_point, check_real, refuse_complex, warn
+from ._validation import as_1d_finite, check_per_point, check_real, refuse_non_real, warn
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
 
 def as_input_array(x: object, name: str) -> np.ndarray:
     """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several."""
-    refuse_complex(x, name)
+    refuse_non_real(x, name)
     try:
         a = np.array(x, dtype=float, copy=True)
     except (TypeError, ValueError):

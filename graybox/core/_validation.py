@@ -161,20 +161,24 @@ def check_seed(seed: object, name: str = "seed") -> int:
     return check_int(seed, name, low=0)
 
 
-def refuse_complex(x: object, name: str) -> None:
-    """``TypeError`` naming ``name`` when ``x`` holds complex numbers: converting them to float keeps
-    the real part (with at most numpy's warning), a silent wrong number."""
+def refuse_non_real(x: object, name: str) -> None:
+    """``TypeError`` naming ``name`` when ``x`` holds complex numbers or strings, which converting to
+    float would take silently: a complex number's real part (with at most numpy's warning), a
+    string's parse (a column read as text)."""
     try:
-        complex_ = np.iscomplexobj(x)
+        kind = np.asarray(x).dtype.kind
     except (TypeError, ValueError):  # ragged or not numbers: the conversion that follows says so
         return
-    if complex_:
+    if kind == "c":
         raise TypeError(f"{name} must be real numbers, got complex values")
+    if kind in "US":
+        raise TypeError(f"{name} must be numbers, got strings; convert them first (e.g. with float), or read a "
+                        "file with graybox.load_record_csv / load_static_csv")
 
 
 def check_theta(n_terms: int, theta: object, name: str = "theta") -> np.ndarray:
     """θ as a finite float array of length ``n_terms``, shape (n_terms,), or ``ValueError``."""
-    refuse_complex(theta, name)
+    refuse_non_real(theta, name)
     try:
         th = np.asarray(theta, dtype=float)
     except (TypeError, ValueError):
@@ -251,7 +255,7 @@ def check_path(value: object, name: str) -> str | os.PathLike:
 
 def as_1d_finite(x: object, name: str) -> np.ndarray:
     """``x`` as a read-only 1-D float64 copy, or ``ValueError`` naming ``name`` and the problem."""
-    refuse_complex(x, name)
+    refuse_non_real(x, name)
     try:
         a = np.array(x, dtype=float, copy=True)
     except (TypeError, ValueError):

@@ -30,7 +30,7 @@ from ._coerce import as_model, as_record, as_structure, static_info
 from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
-from ..core._validation import as_1d_finite, check_bool, check_int, check_per_point, check_sequence, refuse_complex, warn
+from ..core._validation import as_1d_finite, check_bool, check_int, check_per_point, check_sequence, refuse_non_real, warn
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -268,7 +268,7 @@ def evaluate_thetas(
     record = None if record is None else as_record(record, "valid", "record")
     one_step = check_bool(one_step, "one_step")
     threads = check_int(threads, "threads", low=1)
-    refuse_complex(thetas, "thetas")
+    refuse_non_real(thetas, "thetas")
     try:
         th = np.atleast_2d(np.asarray(thetas, dtype=float))
     except (TypeError, ValueError):
