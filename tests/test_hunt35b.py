@@ -235,3 +235,13 @@ def test_evaluate_with_a_constant_validation_output():
 def test_numbers_as_strings_are_refused(make):
     with pytest.raises(TypeError, match="strings"):
         make()
+
+
+# A Record (or StaticPoints) with no input column, u of shape (N, 0), was accepted, printed as
+# "Record('record': 100 samples, Ts = 1 s, , y in …)", and then failed in j1, frols or els with
+# "input_names: at least one input name is needed", an argument the user never gave.
+def test_data_without_an_input_column_is_refused_where_made():
+    with pytest.raises(ValueError, match="no input column"):
+        gb.Record(np.ones((100, 0)), np.ones(100))
+    with pytest.raises(ValueError, match="no input column"):
+        gb.StaticPoints(np.ones((1, 0)), [1.0])

@@ -36,6 +36,9 @@ def as_input_array(x: object, name: str) -> np.ndarray:
     if a.ndim != 2:
         raise ValueError(f"{name} must be 1-D (one input) or 2-D of shape (N, m) (m inputs), got {a.ndim}-D "
                          f"with shape {a.shape}")
+    if a.shape[1] == 0:
+        raise ValueError(f"{name} has no input column (shape {a.shape}); for output-only data (a structure "
+                         "without input terms) pass a column of zeros")
     bad = ~np.isfinite(a)
     if bad.any():
         r, c = np.argwhere(bad)[0]
