@@ -245,3 +245,12 @@ def test_data_without_an_input_column_is_refused_where_made():
         gb.Record(np.ones((100, 0)), np.ones(100))
     with pytest.raises(ValueError, match="no input column"):
         gb.StaticPoints(np.ones((1, 0)), [1.0])
+
+
+# Structure + "u(k-1)" split the string into characters ("cannot parse term 'u'"); a list of terms
+# worked, so one string reads as a slip for [string] and is a TypeError naming the fix.
+def test_structure_plus_one_string():
+    s = gb.Structure(["y(k-1)"])
+    assert s + ["speed(k-1)"] == gb.Structure(["y(k-1)", "speed(k-1)"])
+    with pytest.raises(TypeError, match="parse_structure"):
+        s + "speed(k-1)"

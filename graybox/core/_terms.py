@@ -305,7 +305,7 @@ class Structure:
         return self.terms[i]
 
     def __add__(self, other: "Structure") -> "Structure":
-        return Structure(self.terms + tuple(other))
+        return Structure(self.terms + structure_of(other, "the terms added").terms)
 
     def index(self, term: Term | str) -> int:
         """Position of ``term`` (a Term or a string) in the structure."""
