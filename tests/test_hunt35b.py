@@ -254,3 +254,16 @@ def test_structure_plus_one_string():
     assert s + ["speed(k-1)"] == gb.Structure(["y(k-1)", "speed(k-1)"])
     with pytest.raises(TypeError, match="parse_structure"):
         s + "speed(k-1)"
+
+
+# gb.simulate_many checked neither its record (an array raised AttributeError "'numpy.ndarray'
+# object has no attribute 'require_length'") nor its thetas (text raised numpy's "could not convert
+# string to float: 'a'").
+def test_simulate_many_checks_its_arguments():
+    rec = gb.Record(3000.0 + np.arange(10.0), 2e5 + np.arange(10.0), input_names=["speed"])
+    st = ["y(k-1)", "speed(k-1)"]
+    with pytest.raises(TypeError, match="record must be a Record"):
+        gb.simulate_many(st, [[0.5, 1.0]], rec.u)
+    with pytest.raises(TypeError, match="thetas"):
+        gb.simulate_many(st, [["a", 1.0]], rec)
+    assert gb.simulate_many(st, [[0.5, 1.0]], rec).shape == (1, 10)

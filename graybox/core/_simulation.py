@@ -16,7 +16,7 @@ from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_in
                                  simulate_one)
 from ._records import Record, as_input_array
 from ._terms import check_input_names, default_input_names, require_inputs
-from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta
+from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta, refuse_non_real
 from ._regressors import regressor_matrix
 from ._terms import Structure, structure_of
 
@@ -216,7 +216,13 @@ def simulate_many(
     """
     threads = check_int(threads, "threads", low=1)
     structure = structure_of(structure)
-    th = np.asarray(thetas, dtype=float)
+    if not isinstance(record, Record):
+        raise TypeError(f"record must be a Record, got {type(record).__name__}")
+    refuse_non_real(thetas, "thetas")
+    try:
+        th = np.asarray(thetas, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"thetas must be an array of numbers, shape (P, n_terms), got {type(thetas).__name__}") from None
     if th.ndim != 2 or th.shape[1] != len(structure):
         raise ValueError(f"thetas must have shape (P, {len(structure)}), got {th.shape}")
     L = structure.max_lag
