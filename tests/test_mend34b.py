@@ -263,3 +263,21 @@ def test_each_residual_test_has_its_stated_size_for_the_true_model():
     pointwise = fails["pointwise"].mean(axis=0)
     assert np.all(np.abs(pointwise - expected) <= 3 * np.sqrt(expected * (1 - expected) / R) + 0.05), (pointwise,
                                                                                                        expected)
+
+
+def test_a_checkpoint_of_another_problem_is_refused_whichever_version_wrote_it(tmp_path, monkeypatch):
+    # was: the version was checked first, so another problem's checkpoint written by another graybox (or
+    # by one that did not record its version) was overwritten with a warning, the other run's work lost
+    import graybox.estimation._simulation_error as se
+    from graybox.estimation._simulation_error import CheckpointError
+
+    problem = _se_problem()
+    ck = tmp_path / "front.npz"
+    with monkeypatch.context() as m:
+        m.setattr(se, "graybox_version", lambda: "0.0.1")
+        _sweep("gradient", problem, ck)
+    before = ck.read_bytes()
+    other = se.SEProblem(problem.structure[:-1], problem.records, problem.static)  # another structure
+    with pytest.raises(CheckpointError, match="another problem"):
+        _sweep("gradient", other, ck)
+    assert ck.read_bytes() == before  # not overwritten

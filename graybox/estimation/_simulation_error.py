@@ -529,6 +529,10 @@ class CheckpointError(ValueError):
     """A checkpoint file that cannot be resumed: unreadable, corrupt, of another problem or an older graybox."""
 
 
+#: What names a sweep's problem in its checkpoint (the rest, settings and version, may change between versions).
+_CHECKPOINT_IDENTITY = ("problem", "method", "lambdas", "seed")
+
+
 def _load_checkpoint(path: Path, meta: dict) -> dict | None:
     """The state a checkpoint holds, or None (with a warning) when another graybox version wrote it."""
     def unreadable(exc: Exception) -> ValueError:
@@ -545,8 +549,13 @@ def _load_checkpoint(path: Path, meta: dict) -> dict | None:
         raise unreadable(exc) from None
     if not isinstance(stored, dict):
         raise unreadable(TypeError(f"its metadata is a {type(stored).__name__}, not a mapping"))
+    other = sorted(k for k in _CHECKPOINT_IDENTITY if stored.get(k) != meta.get(k))
+    if other:  # another problem's file, whichever version wrote it: never overwritten
+        raise CheckpointError(f"checkpoint {path} was written for another problem (differs in: {', '.join(other)}); "
+                              "delete it or choose another checkpoint path")
     if stored.get("graybox") != meta["graybox"]:
-        # members of two algorithms must not share a front; the stale file is this path's to replace
+        # members of two algorithms must not share a front; the stale file of this very problem is
+        # this path's to replace
         by = f"graybox {stored['graybox']}" if "graybox" in stored else "a graybox that did not record its version"
         warn(f"checkpoint {path} was written by {by}, this is graybox {meta['graybox']}, whose algorithm may "
              "differ: the sweep starts over and overwrites it", UserWarning)
