@@ -26,6 +26,7 @@ from ..estimation._decisions import min_jsf_index
 from ..estimation._prediction_error import numerator_surface
 from ..core._least_squares import thread_pools
 from ..core._validation import check_int
+from ..models._evaluate import output_spread
 from ._spec import Cell, build_constraint, canonical_json
 
 __all__ = ["COLUMNS", "JSON_COLUMNS", "STATUSES", "run_cell", "failed_row", "warning_texts"]
@@ -216,10 +217,12 @@ def _members(pareto: gb.ParetoSet, data: gb.Dataset) -> dict[str, Any]:
     js_valid = np.full(K, np.inf)
     if ok.any():
         js_valid[ok] = gb.evaluate_thetas(pareto.structure, pareto.thetas[ok], data.valid, one_step=False)["JS"]
-    # fit % from J_S as gb.fit_percent defines it: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖) from sample L on
+    # fit % from J_S as gb.fit_percent defines it: 100 (1 − ‖y − ŷ‖ / ‖y − mean(y)‖) from sample L on;
+    # NaN where a held (constant) validation output leaves it undefined
     y = data.valid.y[pareto.structure.max_lag:]
+    spread = output_spread(y)
     with np.errstate(invalid="ignore"):
-        fit = 100.0 * (1.0 - np.sqrt(js_valid * y.size / np.sum((y - y.mean()) ** 2)))
+        fit = 100.0 * (1.0 - np.sqrt(js_valid * y.size) / spread) if spread > 0 else np.full(K, np.nan)
     figures = {"lambda1": pareto.lambdas, "J1": pareto.J1, "JS": pareto.JS, "JSF": pareto.JSF, "JS_valid": js_valid,
                "fit_valid": fit}
     out: dict[str, Any] = {k: np.array(v, dtype=np.float64) for k, v in figures.items()}  # copies, own memory
@@ -237,7 +240,8 @@ def _figures(m, data: gb.Dataset) -> tuple[dict[str, float], dict[str, tuple[int
         out[f"J1_{tag}"] = gb.j1(m, rec)
         sim = m.simulate(rec, on_diverge="nan")
         out[f"JS_{tag}"] = gb.mse(rec.y, sim, start=L)
-        out[f"fit_{tag}"] = gb.fit_percent(rec.y, sim, start=L)
+        # NaN where the record's output is held constant: fit % is undefined there, J_S is not
+        out[f"fit_{tag}"] = gb.fit_percent(rec.y, sim, start=L) if output_spread(rec.y[L:]) > 0 else float("nan")
         bad = np.flatnonzero(~np.isfinite(np.asarray(sim, float)[L:]))
         if bad.size:
             diverged[tag] = (int(bad[0]) + L, len(rec))
