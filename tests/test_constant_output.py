@@ -41,3 +41,24 @@ def test_a_grid_cell_with_a_held_validation_output_is_a_row_with_fit_undefined(t
         df = gx.load_results(path)
         assert (df["status"] == "ok").all()
         assert df["fit_valid"].isna().all() and np.isfinite(df["JS_valid"].astype(float)).all()
+
+
+@pytest.mark.filterwarnings("ignore::graybox.StaticRangeWarning")  # points beyond 7 samples' range: not the point
+@pytest.mark.parametrize("fit", ["se_pareto", "se_dsf", "output_error", "els", "cls", "pe_pareto"])
+def test_every_estimator_refuses_as_many_regression_rows_as_parameters(fit):
+    # was: the SE estimators (se_pareto, se_dsf, output_error) fitted a record of exactly n rows for n
+    # parameters, which the least-squares start interpolates, while els, cls and pe refused it
+    st = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "1"])
+    rng = np.random.default_rng(1)
+    u = rng.uniform(0, 2, 7)  # 7 samples, largest lag 2: 5 rows for 5 parameters
+    rec = gb.Record(u, rng.standard_normal(7))
+    ub = np.linspace(0.2, 1.8, 5)
+    sp = gb.StaticPoints(ub, ub, uncertainty=0.1)
+    call = {"se_pareto": lambda: gb.se_pareto(st, rec, sp, lambdas=[1.0, 0.5], progress=False),
+            "se_dsf": lambda: gb.se_dsf(st, rec, sp),
+            "output_error": lambda: gb.output_error(st, rec, progress=False),
+            "els": lambda: gb.els(st, rec, noise=0),
+            "cls": lambda: gb.cls(st, rec, sp),
+            "pe_pareto": lambda: gb.pe_pareto(st, rec, sp, lambdas=[1.0])}[fit]
+    with pytest.raises(ValueError, match="5 regression rows for 5 parameters"):
+        call()

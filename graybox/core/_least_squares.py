@@ -12,7 +12,7 @@ from contextlib import AbstractContextManager
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread"]
+__all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -30,6 +30,13 @@ def one_blas_thread() -> AbstractContextManager:
     """A context in which BLAS runs on one thread: the fits make thousands of small BLAS calls, where
     a multi-threaded BLAS only adds synchronisation (30× slower on a loaded 2-core machine)."""
     return thread_pools().limit(limits=1, user_api="blas")
+
+
+def check_rows(rows: int, n: int, what: str = "") -> None:
+    """``ValueError`` unless there are more regression rows than parameters (every estimator's one rule:
+    with as many rows as parameters least squares interpolates, and no error is left to fit or judge)."""
+    if rows <= n:
+        raise ValueError(f"{what}{rows} regression rows for {n} parameters: the data are too short")
 
 
 def column_scales(A: np.ndarray) -> np.ndarray:

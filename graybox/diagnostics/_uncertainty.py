@@ -60,7 +60,7 @@ from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
 from ..models._coerce import as_model, records_of, static_points
 from ..models._model import Model
-from ..core._least_squares import one_blas_thread
+from ..core._least_squares import check_rows, one_blas_thread
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
@@ -389,8 +389,7 @@ def ls_uncertainty(
         what = "ls_uncertainty (ELS)"
         theta_all = np.concatenate([model.theta, model.noise_theta])
     N = phi.shape[0]
-    if N <= n + ne:
-        raise ValueError(f"{what}: {N} regression rows for {n + ne} parameters")
+    check_rows(N, n + ne, f"{what}: ")
     s = np.sqrt(np.mean(phi**2, axis=0))
     s = np.where(s > 0, s, 1.0)
     A = phi / s

@@ -84,7 +84,7 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
 from ..core._simulation_kernels import inverse_ma_filter
-from ..core._least_squares import column_scales, scaled_lstsq
+from ..core._least_squares import check_rows, column_scales, scaled_lstsq
 from ..models._coerce import as_structure, records_of
 from ..models._model import Model
 from ..core._records import Dataset, Record
@@ -370,8 +370,7 @@ def _regression(process: Structure, ns: Structure, recs: list[Record]) -> _Regre
     L = max(process.max_lag, ns.max_lag)
     psi, y = stacked_regressors(process, recs, start=L)
     n_p = len(process)
-    if psi.shape[0] <= n_p + len(ns):
-        raise ValueError(f"{psi.shape[0]} regression rows are too few for {n_p + len(ns)} parameters")
+    check_rows(psi.shape[0], n_p + len(ns))
     bounds = np.cumsum([0] + [len(r) - L for r in recs])
     return _Regression(process, ns, recs, L, psi, y, bounds)
 

@@ -55,7 +55,7 @@ from ..static._curves import StaticCurve
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
-from ..core._least_squares import column_scales
+from ..core._least_squares import check_rows, column_scales
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -263,8 +263,7 @@ def _dynamic(structure: Structure, records: list) -> _Data:
         return _dynamic_chunked(structure, records)
     psi, y = stacked_regressors(structure, records)
     n = len(structure)
-    if psi.shape[0] <= n:
-        raise ValueError(f"{psi.shape[0]} regression rows for {n} parameters: the data are too short")
+    check_rows(psi.shape[0], n)
     if not (np.all(np.isfinite(psi)) and np.all(np.isfinite(y))):
         raise ValueError("non-finite regressors (overflow of a high power of u or y?)")
     s = column_scales(psi)
@@ -280,8 +279,7 @@ def _dynamic_chunked(structure: Structure, records: list) -> _Data:
     fit in memory."""
     n = len(structure)
     R, N = r_factor(structure.terms, records, structure.max_lag)
-    if N <= n:
-        raise ValueError(f"{N} regression rows for {n} parameters: the data are too short")
+    check_rows(N, n)
     # column RMS from the factor (‖A e_j‖ = ‖R e_j‖); R D⁻¹ is the factor of the scaled matrix
     s = np.sqrt(np.einsum("ij,ij->j", R[:, :n], R[:, :n]) / N)
     s = np.where(s > 0, s, 1.0)

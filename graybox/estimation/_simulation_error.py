@@ -62,7 +62,7 @@ from ..core._simulation_kernels import (
     record_inputs,
     simulate_one,
 )
-from ..core._least_squares import column_scales, one_blas_thread, scaled_lstsq
+from ..core._least_squares import check_rows, column_scales, one_blas_thread, scaled_lstsq
 from ..models._coerce import as_structure, records_of, static_points
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
@@ -149,6 +149,7 @@ class SEProblem:
         self.U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L)
                   for r in self.records]
         self.psi, self.target = stacked_regressors(structure, self.records)
+        check_rows(self.psi.shape[0], len(structure))  # as els, cls and pe: no error left to fit
         self.n_dyn = self.target.size
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
         # the output's spread (output units): least_squares' gradient test is absolute, and the
