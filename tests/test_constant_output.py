@@ -62,3 +62,24 @@ def test_every_estimator_refuses_as_many_regression_rows_as_parameters(fit):
             "pe_pareto": lambda: gb.pe_pareto(st, rec, sp, lambdas=[1.0])}[fit]
     with pytest.raises(ValueError, match="5 regression rows for 5 parameters"):
         call()
+
+
+def test_the_min_jsf_fallback_with_choosing_records_never_takes_a_member_that_diverges_there():
+    # was: fallback='min_jsf' ignored choose_on: it took the smallest J_SF even when that member's free run
+    # diverged on the choosing record, and the decision did not say what it was chosen on
+    st = gb.Structure(["y(k-1)", "y(k-1)^2", "u(k-1)"])
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.uniform(0.0, 0.3, 12), 10)  # small inputs: both members run on the identification data
+    rec = gb.Record(u, gb.Model(st, [0.5, 0.0, 0.3]).simulate(u, np.zeros(1)), name="ident")
+    choose = gb.Record(np.repeat(rng.uniform(1.5, 2.0, 20), 10), np.zeros(200), name="choose")
+    # member 0 (0.2 y²) has a stable equilibrium only for ū < 1.04: its free run diverges on the choosing
+    # record; the static points lie on its curve, so its J_SF is the smaller
+    thetas = np.array([[0.5, 0.2, 0.3], [0.5, 0.0, 0.3]])
+    ub = np.array([0.1, 0.2, 0.3])
+    sp = gb.StaticPoints(ub, (0.5 - np.sqrt(0.25 - 0.24 * ub)) / 0.4)
+    front = gb.ParetoSet.from_thetas(st, thetas, [1.0, 0.5], gb.Dataset(rec, rec, sp), sp)
+    assert np.isfinite(front.JSF).all() and front.JSF[0] < front.JSF[1] and np.isfinite(front.JS).all()
+    d = gb.decide_dsf(front, band=1e-40, fallback="min_jsf", choose_on=choose)
+    assert d.index == 1 and not d.in_band and d.chosen_on == "choose"
+    plain = gb.decide_dsf(front, band=1e-40, fallback="min_jsf")  # on the set's own J_S: as before
+    assert plain.index == 0

@@ -97,14 +97,21 @@ def _decision(pareto: ParetoSet, i: int, rule: str, in_band: bool, score: float,
     return Decision(pareto.member_model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
                     float(pareto.JSF[i]), rule, in_band, float(score), chosen_on)
 
-def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF") -> int:
+def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF", js: np.ndarray | None = None,
+                  on: str = "") -> int:
     """The member with the smallest J_SF (ties: the smaller J_S, then the lower index);
-    ``InfeasibleError`` naming ``what`` when every member's static curve is undefined."""
+    ``InfeasibleError`` naming ``what`` when every member's static curve is undefined. ``js``: J_S
+    on choosing records (``on`` names them), whose free runs must then stay finite there too."""
     jsf = pareto.JSF
+    js = pareto.JS if js is None else js
     ok = np.flatnonzero(np.isfinite(jsf))
     if ok.size == 0:
         raise InfeasibleError(f"{what}: every member has an undefined static curve (J_SF = inf)")
-    return int(ok[np.lexsort((ok, pareto.JS[ok], jsf[ok]))[0]])
+    if on:
+        ok = ok[np.isfinite(js[ok])]
+        if ok.size == 0:
+            raise InfeasibleError(f"{what}: every member with a static curve diverges on {on} (free run)")
+    return int(ok[np.lexsort((ok, js[ok], jsf[ok]))[0]])
 
 
 #: What :func:`decide_dsf` may do when no member lies in the band, if the user says so.
@@ -151,7 +158,8 @@ def decide_dsf(
     fallback : {None, "min_jsf"}
         When no member has J_SF in B (with a finite J_S): None (default) raises
         ``InfeasibleError`` (a ``ValueError``) naming the smallest J_SF reached;
-        ``"min_jsf"`` picks the member with the smallest J_SF (ties: smaller J_S) instead. The
+        ``"min_jsf"`` picks the member with the smallest J_SF (ties: smaller J_S) instead; with
+        ``choose_on``, among the members whose free run stays finite there, ties by J_S there. The
         choice must be explicit because the result then is *not* a D_SF decision.
     choose_on : Record or sequence of Record, optional
         Choosing record(s), not the identification data the set was fitted on: the J_S that is
@@ -201,8 +209,9 @@ def decide_dsf(
                 f"B = [{lo:g}, {hi:g}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
                 "the λ sweep, or pass fallback='min_jsf' to take the member with the smallest J_SF"
             )
-        i = min_jsf_index(pareto, "fallback 'min_jsf'")
-        return _decision(pareto, i, "min J_SF", False, jsf[i], f"{pareto.method} min J_SF (no member in B)")
+        # on choosing records, as D_SF would have chosen: a member whose free run diverges there is none
+        i = min_jsf_index(pareto, "fallback 'min_jsf'", js, chosen_on)
+        return _decision(pareto, i, "min J_SF", False, jsf[i], f"{pareto.method} min J_SF (no member in B)", chosen_on)
 
 
 def decide_min_correlation(
