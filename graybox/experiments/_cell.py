@@ -26,7 +26,7 @@ from ..estimation._decisions import min_jsf_index
 from ..estimation._prediction_error import numerator_surface
 from ..core._least_squares import thread_pools
 from ..core._validation import check_int
-from ..models._evaluate import output_spread
+from ..models._evaluate import fit_or_nan, output_spread
 from ._spec import Cell, build_constraint, canonical_json
 
 __all__ = ["COLUMNS", "JSON_COLUMNS", "STATUSES", "run_cell", "failed_row", "warning_texts"]
@@ -240,8 +240,7 @@ def _figures(m, data: gb.Dataset) -> tuple[dict[str, float], dict[str, tuple[int
         out[f"J1_{tag}"] = gb.j1(m, rec)
         sim = m.simulate(rec, on_diverge="nan")
         out[f"JS_{tag}"] = gb.mse(rec.y, sim, start=L)
-        # NaN where the record's output is held constant: fit % is undefined there, J_S is not
-        out[f"fit_{tag}"] = gb.fit_percent(rec.y, sim, start=L) if output_spread(rec.y[L:]) > 0 else float("nan")
+        out[f"fit_{tag}"] = fit_or_nan(rec.y, sim, L)
         bad = np.flatnonzero(~np.isfinite(np.asarray(sim, float)[L:]))
         if bad.size:
             diverged[tag] = (int(bad[0]) + L, len(rec))

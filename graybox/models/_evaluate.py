@@ -165,6 +165,13 @@ def fit_percent(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     return 100.0 * (1.0 - rrse(y, yhat, start=start))
 
 
+def fit_or_nan(y: np.ndarray, yhat: np.ndarray, start: int) -> float:
+    """:func:`fit_percent`, NaN where the measured output is held constant (the fit % is undefined there,
+    the J_S of the same run is not): what a table of many models' figures keeps for such a record."""
+    y = np.asarray(y, float)
+    return fit_percent(y, yhat, start=start) if output_spread(y[start:]) > 0 else float("nan")
+
+
 def evaluate(
     models: Mapping[str, object],
     data: Dataset,
@@ -214,10 +221,8 @@ def evaluate(
     for name, m in models.items():
         m = as_model(m, f"models[{name!r}]", duck="simulate")
         sim_v = m.simulate(data.valid, on_diverge="nan")
-        try:
-            fit = fit_percent(data.valid.y, sim_v, start=m.max_lag)
-        except ValueError:  # the one ValueError fit_percent raises on checked arrays: RRSE undefined
-            fit = float("nan")
+        fit = fit_or_nan(data.valid.y, sim_v, m.max_lag)
+        if np.isnan(fit):
             undefined_fit.append(name)
         rows[name] = {
             "JS_ident": js(m, data.ident),
