@@ -66,7 +66,7 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
         if len(axs) != len(panels) or not all(isinstance(a, Axes) for a in axs):
             raise ValueError(f"axes must hold {len(panels)} matplotlib Axes (panels {panels}), got {len(axs)} items")
         fig = axs[0].figure
-    chosen = t[t["rank"] == 1].iloc[0]
+    chosen = selection.chosen
     estimators = list(dict.fromkeys(t["estimator"]))
     mark = {e: _MARKERS[i % len(_MARKERS)] for i, e in enumerate(estimators)}
     color = {e: f"C{i % 10}" for i, e in enumerate(estimators)}
