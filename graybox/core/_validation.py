@@ -279,6 +279,38 @@ def frozen(a: object, dtype: type = float) -> np.ndarray:
     return x
 
 
+class FrozenFrame:
+    """A dataclass field holding a pandas DataFrame: how every immutable value in graybox stores its tables.
+
+    A DataFrame cannot be made read-only (``.loc``, ``.iloc``, new columns and ``inplace=``
+    methods all change it), so the value keeps a copy of the frame it was made with and every read
+    of the field gives a fresh copy: what a user does to the table they get never changes the result
+    (nor, through it, what its methods read). Declared as the field's default
+    (``table: pd.DataFrame = FrozenFrame()``), it gives the field no default value; the class keeps
+    its own checks in ``__post_init__``.
+    """
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj: object, objtype: type | None = None) -> Any:
+        if obj is None:  # the class's own attribute: dataclasses reads "no default" from this
+            raise AttributeError(self.name)
+        try:
+            df = obj.__dict__[self.name]
+        except KeyError:
+            raise AttributeError(f"{type(obj).__name__} has no {self.name} yet") from None
+        return df.copy(deep=True)
+
+    def __set__(self, obj: object, value: object) -> None:
+        import pandas as pd  # only where a table is made: `import graybox` stays light
+
+        if not isinstance(value, pd.DataFrame):
+            raise TypeError(f"{type(obj).__name__}: {self.name} must be a pandas DataFrame, got "
+                            f"{reprlib.repr(value)} ({type(value).__name__})")
+        obj.__dict__[self.name] = value.copy(deep=True)
+
+
 def warn(message: str, category: type[Warning]) -> None:
     """``warnings.warn`` attributed to the caller's code, not to graybox's internals.
 

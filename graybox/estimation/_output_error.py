@@ -48,7 +48,7 @@ from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, check_overlap, check_same_period, choosing_records,
                              same_record)
 from ..core._terms import Structure
-from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, check_seed, check_theta
+from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_real, check_seed, check_theta
 from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
@@ -94,7 +94,7 @@ class OEResult:
     JS_choose: float
     chosen_on: str
     start: str
-    starts: pd.DataFrame
+    starts: pd.DataFrame = FrozenFrame()
     margin: float
     radius: float
     seed: int

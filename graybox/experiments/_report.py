@@ -30,7 +30,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
-from ..core._validation import check_bool, check_choice, check_fields, check_real, check_sequence
+from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_real, check_sequence
 from ._cell import STATUSES
 from ._store import compare_results, encode_value, load_results
 
@@ -700,11 +700,12 @@ class GridStatus:
     counts: Mapping[str, int]
     time_per_cell: float
     last_finished: str | None
-    best: pd.DataFrame
+    best: pd.DataFrame = FrozenFrame()
     specs: int
 
     def __post_init__(self) -> None:
         check_fields(self)
+        object.__setattr__(self, "counts", MappingProxyType(dict(self.counts)))  # not the caller's dict
 
     def summary(self) -> str:
         """A few lines for a terminal."""

@@ -63,6 +63,7 @@ class GridRun:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        object.__setattr__(self, "counts", MappingProxyType(dict(self.counts)))  # not the caller's dict
 
     @property
     def reused(self) -> int:

@@ -53,7 +53,7 @@ from ..core._progress import progress_bar, show_progress
 from ..core._records import (check_compatible, check_overlap, check_same_period, same_record,
                              warn_static_range)
 from ..core._terms import require_inputs
-from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
+from ..core._validation import FrozenFrame, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
@@ -154,7 +154,7 @@ class GrayboxSelection:
     structure: gb.Structure
     model: gb.Model
     decision: gb.Decision
-    table: pd.DataFrame
+    table: pd.DataFrame = FrozenFrame()
     degree: int | None
     band: float
     in_band: bool

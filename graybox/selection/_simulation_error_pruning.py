@@ -43,7 +43,7 @@ from ..core._records import Dataset, Record, as_records
 from ._forward_regression import CRITERIA, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
-from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, frozen
+from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_real, frozen
 
 __all__ = ["semp", "SEMPResult"]
 
@@ -85,8 +85,8 @@ class SEMPResult:
     structure: Structure
     theta: np.ndarray
     score: float
-    path: pd.DataFrame
-    forward_scores: pd.DataFrame
+    path: pd.DataFrame = FrozenFrame()
+    forward_scores: pd.DataFrame = FrozenFrame()
     criterion: str
     stop: str
     n_rows: int
