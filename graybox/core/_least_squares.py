@@ -8,11 +8,13 @@ solution back: results do not depend on the units the user chose.
 from __future__ import annotations
 
 from contextlib import AbstractContextManager
+from typing import Sequence
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows"]
+__all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
+           "check_identified"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -77,3 +79,85 @@ def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np
             "(collinear or constant terms: the parameters are not identifiable from these data)"
         )
     return x / s
+
+
+def free_directions(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
+    """The directions of θ that the stacked regression of ``blocks`` leaves free, units-free.
+
+    Each block is (A, rows): A (k, n) in θ's coordinates with AᵀA the Gram matrix of ``rows`` regression
+    rows (A may be those rows or a triangular factor of them). Each block is taken as a mean square
+    (A / √rows, so a block's weight does not depend on its length), the stack's columns are scaled to
+    unit RMS (so the judgement does not depend on units), and its rank is judged as
+    ``numpy.linalg.lstsq`` judges it (singular values ≤ eps · max(rows, n) · the largest): with one
+    block this is exactly :func:`scaled_lstsq`'s rank test.
+
+    Returns
+    -------
+    ndarray, shape (n, n − rank)
+        An orthonormal basis of the free directions in the scaled coordinates (θ_j times the stack's
+        column RMS c_j); no columns when the blocks identify θ.
+    """
+    parts = [np.asarray(A, float) / np.sqrt(max(int(m), 1)) for A, m in blocks]
+    A = np.vstack(parts)
+    n = A.shape[1]
+    A = A / column_scales(A)
+    if not np.all(np.isfinite(A)):
+        raise ValueError("non-finite regressors: identifiability cannot be judged")
+    _, sv, Vt = np.linalg.svd(A, full_matrices=True)
+    rows = max(sum(int(m) for _, m in blocks), n)
+    tol = (sv[0] if sv.size else 0.0) * np.finfo(float).eps * rows
+    rank = int(np.sum(sv > tol))
+    return Vt[rank:].T
+
+
+#: What data would identify the free directions: when rows fixing every static cluster would (static
+#: points could), and when they would not (terms that differ within one cluster).
+REMEDIES = ("give a record whose input moves, or static points at more input levels (with a weight on them: λ1 < 1)",
+            "give a record whose input moves (static points fix only the static clusters, and these terms differ "
+            "within one, e.g. one power of u at two lags)")
+
+
+def check_identified(blocks: Sequence[tuple[str, np.ndarray, int]], terms: Sequence[str], *,
+                     clusters: np.ndarray | None = None, what: str = "θ",
+                     remedies: tuple[str, str] = REMEDIES) -> None:
+    """The one identifiability rule: ``ValueError`` unless the stacked regression of ``blocks`` has full rank.
+
+    Parameters
+    ----------
+    blocks : sequence of (str, ndarray (k, n), int)
+        What each block is (e.g. ``"the identification records"``), its rows in θ's coordinates (or a
+        triangular factor of them) and how many regression rows it stands for (:func:`free_directions`).
+    terms : sequence of str
+        The n terms, to name those a free direction moves.
+    clusters : ndarray, shape (n_clusters, n), optional
+        The 0/1 map from θ to the static clusters: with it the message tells whether static points
+        (which fix only the clusters) could identify what is left free.
+    what : str
+        What is estimated, for the message.
+    remedies : (str, str)
+        What to give when static points could identify the free directions, and when they could not
+        (default :data:`REMEDIES`).
+
+    Raises
+    ------
+    ValueError
+        Naming the rank, the terms that the free directions move and what data would identify them.
+    """
+    free = free_directions([(A, m) for _, A, m in blocks])
+    if not free.shape[1]:
+        return
+    n = len(terms)
+    moved = [str(terms[j]) for j in range(n) if np.max(np.abs(free[j])) > 1e-8]
+    by = " and ".join(name for name, _, _ in blocks)
+    msg = (f"{what} is not identifiable from {by}: their stacked regression has rank {n - free.shape[1]} for {n} "
+           f"terms (judged with every column at unit RMS), and leaves free {free.shape[1]} combination(s) of {moved}")
+    static_helps = True
+    if clusters is not None:
+        # whether rows fixing every cluster would remove the free directions (units-free: R's columns are scaled
+        # as the directions' are, each row to unit norm)
+        c = column_scales(np.vstack([np.asarray(A, float) / np.sqrt(max(int(m), 1)) for _, A, m in blocks]))
+        Rs = np.asarray(clusters, float) / c
+        Rs = Rs[np.linalg.norm(Rs, axis=1) > 0]
+        Rs = Rs / np.linalg.norm(Rs, axis=1, keepdims=True)
+        static_helps = np.linalg.matrix_rank(Rs @ free, tol=1e-8) == free.shape[1]
+    raise ValueError(f"{msg}: {remedies[0] if static_helps else remedies[1]}")

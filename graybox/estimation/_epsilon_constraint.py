@@ -32,7 +32,6 @@ front is not convex.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import Literal, Sequence
 
@@ -40,11 +39,10 @@ import numpy as np
 
 from ._decisions import resolve_band
 from ._local_models import check_margin
-from ._prediction_error import pe_thetas
 from ..models._coerce import as_structure, records_of, static_points
 from ..models._model import Model
 from ..core._least_squares import one_blas_thread
-from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, warn_static_range
+from ..core._records import Dataset, Record, StaticPoints, warn_static_range
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
                                 gradient_front, refit_if_slow)
 from ..core._terms import Structure
@@ -206,14 +204,11 @@ _MU_RTOL = 1e-4
 
 
 def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray, str]:
-    with one_blas_thread(), warnings.catch_warnings():
-        warnings.simplefilter("ignore", StaticRangeWarning)
-        try:
-            th = pe_thetas(problem.structure, problem.records, problem.static, lambdas=lambdas, solver="closed")
-        except ValueError:
-            th = np.zeros((0, len(problem.structure)))
-    th = np.vstack([th, problem.ls_theta()[None, :]])
-    lam = np.r_[lambdas, 1.0]
+    th = _pe_members(problem, lambdas)  # NaN rows where the weights do not identify θ (λ1 = 1, a held input)
+    th = np.zeros((0, len(problem.structure))) if th is None else th
+    ok = np.all(np.isfinite(th), axis=1)
+    th = np.vstack([th[ok], problem.ls_theta()[None, :]])
+    lam = np.r_[np.asarray(lambdas, float)[ok], 1.0]
     js, jsf = problem.js(th), problem.jsf(th)
     inside = np.isfinite(js) & (jsf <= band)
     if inside.any():
@@ -253,7 +248,7 @@ def _sweep_starts(problem: SEProblem, band: float, lambdas: np.ndarray,
     fresh = np.array(_FRESH)
     pe = _pe_members(problem, fresh)
     for k, lam in enumerate(fresh):
-        starts = [("least squares", ls)] + ([("PE", pe[k])] if pe is not None else [])
+        starts = [("least squares", ls)] + ([("PE", pe[k])] if pe is not None and np.all(np.isfinite(pe[k])) else [])
         try:
             cands.append((_multistart(problem, float(lam), starts, ("dogbox",), 50, 1e-8)[0],
                           f"SE λ1={lam:.4g} (fresh fit)"))
@@ -429,6 +424,14 @@ def se_dsf(
     DSFResult
         The model, its J_S and J_SF, whether the band was met (with a warning naming the smallest
         J_SF reached when it was not), the start and the iteration count.
+
+    Raises
+    ------
+    ValueError
+        θ is not identified by the records and the static points together (the one rule of
+        :func:`~graybox.estimation._prediction_error.identified_by`; the message names the free terms and
+        what data would identify them); records whose input is held constant are fitted when the static
+        points identify θ. No start has a bounded free run and a reached equilibrium at every point.
     """
     recs = records_of(data)
     sp = static_points(static, data, ubar=ubar, needed_by="se_dsf")
@@ -446,6 +449,7 @@ def se_dsf(
     margin = check_margin(margin)
     st = as_structure(structure)
     problem = SEProblem(st, recs, sp, margin=None if margin == "auto" else margin)
+    problem.check_identified()  # the records with the static points (an input held constant needs them)
     warn_static_range(sp.ubar, recs)  # after: bad input is an error, not a warning and an error
     solve = dict(band=band, theta0=theta0, lambdas=lambdas, max_iter=max_iter, tol=tol, pe_lambdas=pe_lambdas)
     result = refit_if_slow(problem, lambda p: _solve(p, **solve), "se_dsf's model", margin == "auto")

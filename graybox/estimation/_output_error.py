@@ -191,7 +191,10 @@ def output_error(
     Raises
     ------
     ValueError
-        No start gave a fit (the reasons are listed).
+        No start gave a fit (the reasons are listed); or the records do not identify θ (the one rule of
+        :func:`~graybox.estimation._prediction_error.identified_by`: e.g. an input held constant, whose
+        terms and the constant are then collinear; the message names them: give a record whose input
+        moves, or static points to :func:`~graybox.se_pareto` / :func:`~graybox.se_dsf`).
     """
     rec = as_records(data)
     n_starts = check_int(n_starts, "n_starts", low=0)
@@ -204,6 +207,7 @@ def output_error(
     margin = check_margin(margin)
     st = as_structure(structure)
     problem = SEProblem(st, rec, None, margin=None if margin == "auto" else margin, ridge=ridge)
+    problem.check_identified()  # the records alone must identify θ: an input held constant does not
     chooser, chosen_on = None, ""
     if choose_on is not None:  # checked once here, not again by a refit inside the margin
         crec = choosing_records(choose_on)

@@ -55,7 +55,7 @@ from ..static._curves import StaticCurve
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
-from ..core._least_squares import check_rows, column_scales
+from ..core._least_squares import REMEDIES, check_identified, check_rows, column_scales
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -71,6 +71,7 @@ if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to imp
 __all__ = [
     "SOLVERS",
     "static_matrices",
+    "identified_by",
     "static_prediction",
     "qr_static_error",
     "cls",
@@ -124,6 +125,34 @@ def static_matrices(structure: Structure, points: StaticPoints) -> tuple[np.ndar
     st = _process_structure(structure)
     cm = static_cluster_map(st, points.input_names)
     return static_rows(cm, points.ubar, points.ybar), np.array(cm.R)
+
+
+def identified_by(structure: Structure, dynamic: np.ndarray, rows: int, *, points: StaticPoints | None = None,
+                  equalities: np.ndarray | None = None, inputs: tuple[str, ...] | None = None,
+                  what: str = "θ") -> None:
+    """Every estimator's one identifiability rule (LS, CLS, PE, SE, output error): ``ValueError`` unless the
+    records' regression, stacked with the static rows Q R of eq. (12) where the static points carry weight
+    and with the equality constraints' rows, has full rank, judged units-free
+    (:func:`graybox.core._least_squares.check_identified`). An input held constant leaves its terms and the
+    constant collinear in the records; static points at several levels (weighted) or a constraint can
+    still identify θ, and then the estimate is made.
+
+    ``dynamic``: the records' regressors Ψ (N, n) or a triangular factor of them, in θ's coordinates
+    (``rows`` = N); ``points``: the static points when they carry weight; ``equalities``: equality rows
+    (r, n) in θ's coordinates; ``inputs``: the records' input names (for the clusters).
+    """
+    blocks = [("the identification records", dynamic, rows)]
+    if points is not None:
+        Q, R = static_matrices(structure, points)
+        blocks.append((f"the {len(points)} static points", Q @ R, len(points)))
+    if equalities is not None and equalities.shape[0]:
+        blocks.append(("the equality constraints", equalities, equalities.shape[0]))
+    clusters = np.array(static_cluster_map(structure, inputs).R, float)
+    remedies = REMEDIES
+    if len(blocks) == 1:  # no static points weighted: say where they would be
+        remedies = ("give a record whose input moves, or static points at several input levels, with a weight on "
+                    "them (λ1 < 1 of se_pareto, pe_pareto; se_dsf)", REMEDIES[1])
+    check_identified(blocks, [str(t) for t in structure], clusters=clusters, what=what, remedies=remedies)
 
 
 def static_prediction(structure: Structure, thetas: np.ndarray, points: StaticPoints) -> np.ndarray:
@@ -304,11 +333,9 @@ def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray
     return A2, np.array(points.ybar), M
 
 
-def _ls_theta(d: _Data) -> np.ndarray:
-    """Unconstrained least squares, engineering units (rank checked)."""
-    diag = np.abs(np.diag(d.R1))
-    if diag.min() <= 1e-12 * diag.max():
-        raise ValueError("the regressor matrix is rank deficient: θ is not identifiable from these data")
+def _ls_theta(d: _Data, what: str = "the least-squares θ") -> np.ndarray:
+    """Unconstrained least squares, engineering units (identifiability checked: :func:`identified_by`)."""
+    identified_by(d.structure, d.R1 * d.s, d.N, what=what)
     return scipy.linalg.solve_triangular(d.R1, d.c1) / d.s
 
 
@@ -319,7 +346,7 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
     if iy is None:
         return None
     if reference is None or (isinstance(reference, str) and reference == "ls"):
-        th = _ls_theta(d)
+        th = _ls_theta(d, "the least-squares reference for Σ*_y (reference='ls'; or give it as a number or a Model)")
     elif isinstance(reference, str) and reference == "els":
         return float(els(d.structure, records).model.clusters().get("Σy", 0.0))
     elif isinstance(reference, str):
@@ -668,6 +695,9 @@ def cls(
         Bad input (non-rational structure with a curve, too few points, a zero denominator of the
         estimated static function at a static point, …). Static points outside the records'
         input range are welcome: a :class:`StaticRangeWarning` names them once.
+        Also when the records and the equality constraints do not identify θ (:func:`identified_by`; an
+        input held constant leaves its terms free unless eq. (22) or the points fix them), or when
+        ``reference="ls"`` and the records alone do not; the message says what is missing.
     InfeasibleError
         The constraints admit no θ; the message names them and the solver status.
     """
@@ -679,6 +709,8 @@ def cls(
     cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
     rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
     _warn_static_range(cons, ctx, curve, recs)  # after: bad input is an error, not a warning and an error
+    # the records and the equality constraints must identify θ (an input held constant leaves its terms free)
+    identified_by(st, d.R1 * d.s, d.N, equalities=rows.V * d.s, inputs=recs[0].input_names, what="the CLS θ")
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
     else:
@@ -887,30 +919,68 @@ def pe_thetas(
     Returns
     -------
     ndarray, shape (K, n_terms), engineering units, in the order of ``lambdas``.
+
+    Raises
+    ------
+    ValueError
+        Some λ1 whose weights do not identify θ (:func:`identified_by`): the records, with the static
+        points where λ1 < 1 and the equality constraints, must have a stacked regression of full rank.
+        An input held constant leaves θ free at λ1 = 1 (the static points carry no weight there); the
+        message names the λ1, the free terms and what data would identify them. :func:`pe_pareto`
+        keeps such a λ1 as a failed member instead.
     """
+    thetas, failures = _pe_solve(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
+                                 solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
+                                 reference=reference)
+    if failures:
+        raise ValueError("; ".join(failures.values()))
+    return thetas
+
+
+def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: np.ndarray,
+                  inputs: tuple[str, ...]) -> dict[int, str]:
+    """The members whose weights do not identify θ (:func:`identified_by`: at λ1 = 1 the static points carry
+    no weight), as {index: reason}."""
+    reasons: dict[bool, str] = {}
+    for weighted in sorted(set((lam < 1.0).tolist())):
+        try:
+            identified_by(st, d.R1 * d.s, d.N, points=pts if weighted else None, equalities=rows.V * d.s,
+                          inputs=inputs, what="θ" if weighted else "θ at λ1 = 1 (no weight on the static points)")
+        except ValueError as exc:
+            reasons[weighted] = str(exc)
+    return {i: f"λ1 = {v:g}: {reasons[bool(v < 1.0)]}" for i, v in enumerate(lam) if bool(v < 1.0) in reasons}
+
+
+def _pe_solve(structure, data, static, *, lambdas, constraints, solver, solver_options, weights, ubar, warm_start,
+              reference) -> tuple[np.ndarray, dict[int, str]]:
+    """:func:`pe_thetas`' θs (NaN rows for the members whose weights do not identify θ) and those members'
+    reasons, {index: reason}."""
     solver = _check_solver(solver)
     lam = check_lambdas(PE_LAMBDAS if lambdas is None else lambdas)
     warm_start = check_bool(warm_start, "warm_start")
     _check_solver_options(solver_options, solver)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
                                                             reference)
+    failures = _unidentified(st, d, pts, rows, lam, recs[0].input_names)
+    ok = np.array([i not in failures for i in range(lam.size)])
     w1 = lam / d.N if weights == "mse" else lam.copy()
     w2 = (1.0 - lam) / M if weights == "mse" else 1.0 - lam
-    if solver == "closed":
-        Z = _closed_form(d, stat, rows, w1, w2)
-    else:
+    Z = np.full((lam.size, d.s.size), np.nan)
+    if ok.any() and solver == "closed":
+        Z[ok] = _closed_form(d, stat, rows, w1[ok], w2[ok])
+    elif ok.any():
         qp = _QP(d, stat, cons, ctx, solver, solver_options)
         # sweep from λ1 = 1 (least squares) towards the static end, each solve warm-started from
         # its neighbour; results are returned in the caller's order
-        Z = np.empty((lam.size, d.s.size))
         for i in np.argsort(-lam, kind="stable"):
-            Z[i] = qp.solve(w1[i], w2[i], warm_start)
+            if ok[i]:
+                Z[i] = qp.solve(w1[i], w2[i], warm_start)
         qp.warn_inaccurate()
     thetas = Z / d.s
-    for th in thetas:
+    for th in thetas[ok]:
         for c in cons:
             c.after_solve(th, ctx)
-    return thetas
+    return thetas, failures
 
 
 def pe_pareto(
@@ -971,7 +1041,10 @@ def pe_pareto(
     -------
     ParetoSet
         θ, λ1, J_1 and J_S on ``data``, J_SF (true static-curve MSE, stable equilibria only) and,
-        in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²).
+        in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²). A λ1 whose
+        weights do not identify θ (e.g. λ1 = 1 on a record whose input is held constant: the static
+        points carry no weight there) is a failed member with the reason in ``failures``, as in
+        :func:`~graybox.se_pareto`; when every λ1 is such, ``ValueError`` (see :func:`pe_thetas`).
     """
     threads = check_int(threads, "threads", low=1)
     if eval_static is not None and not isinstance(eval_static, StaticPoints):
@@ -982,13 +1055,15 @@ def pe_pareto(
         raise ValueError("pe_pareto evaluates every member by a free run on the record, which needs it in memory; "
                          "for a DaskRecord call pe_thetas (it reduces the record on the Dask scheduler) and evaluate "
                          "the θs on a record that fits")
-    thetas = pe_thetas(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
-                       solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
-                       reference=reference)
+    thetas, failures = _pe_solve(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
+                                 solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
+                                 reference=reference)
+    if len(failures) == len(thetas):
+        raise ValueError("; ".join(failures.values()))
     st = _process_structure(structure)
     pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
     ev = pts if eval_static is None else eval_static
     return ParetoSet.from_thetas(
         st, thetas, check_lambdas(PE_LAMBDAS if lambdas is None else lambdas), data, ev, method=f"PE ({solver}, {weights})",
-        extra={"JSF_QR": qr_static_error(st, thetas, pts)}, threads=threads,
+        extra={"JSF_QR": qr_static_error(st, thetas, pts)}, threads=threads, failures=failures,
     )

@@ -52,7 +52,7 @@ import numpy as np
 from scipy.linalg.lapack import dgeqrf
 from scipy.optimize import least_squares
 
-from ._prediction_error import pe_thetas
+from ._prediction_error import _pe_solve, identified_by, static_matrices
 from ..core._simulation_kernels import (
     batch_sse,
     encode,
@@ -346,10 +346,46 @@ class SEProblem:
             Js = self.static_theta_gradient(th, yb)
         return np.concatenate(e), e_static, np.vstack(J), Js
 
+    def records_identify(self) -> bool:
+        """Whether the records alone identify θ (:func:`~graybox.estimation._prediction_error.identified_by`);
+        not where an input is held constant, where the static points must (λ1 < 1)."""
+        return self._unidentified(False) is None
+
+    def check_identified(self, lam1: float | None = None) -> None:
+        """``ValueError`` (saying what is missing) unless the records, with the static points where they carry
+        weight (λ1 < 1; ``None``: wherever they are given), identify θ: the one rule of every estimator
+        (:func:`~graybox.estimation._prediction_error.identified_by`)."""
+        why = self._unidentified(self.static is not None and (lam1 is None or lam1 < 1.0))
+        if why is not None:
+            raise ValueError(why)
+
+    def _unidentified(self, weighted: bool) -> str | None:
+        """Why θ is not identified by the records (and the static points when ``weighted``), or None (remembered)."""
+        key = ("unidentified", weighted)
+        if key not in self._memo:
+            what = "θ at λ1 = 1 (no weight on the static points)" if self.static is not None and not weighted else "θ"
+            try:
+                identified_by(self.structure, self.psi, self.psi.shape[0], points=self.static if weighted else None,
+                              inputs=self.record.input_names, what=what)
+                self._memo[key] = None
+            except ValueError as exc:
+                self._memo[key] = str(exc)
+        return self._memo[key]
+
     def ls_theta(self) -> np.ndarray:
-        """Least-squares (one-step) estimate on all samples (computed once; a copy)."""
+        """Least-squares (one-step) estimate on all samples (computed once; a copy). Where the records alone
+        do not identify θ (an input held constant) but the static points do: the least squares of the
+        records' regression and the static rows Q R θ = ȳ of eq. (12), each as a mean square (PE's closed
+        form at λ1 = 1/2); neither: ``ValueError`` saying what is missing."""
         if "ls" not in self._memo:
-            self._memo["ls"] = scaled_lstsq(self.psi, self.target)
+            if self.records_identify():
+                self._memo["ls"] = scaled_lstsq(self.psi, self.target)
+            else:
+                self.check_identified()
+                Q, R = static_matrices(self.structure, self.static)
+                N, M = self.psi.shape[0], len(self.static)
+                self._memo["ls"] = scaled_lstsq(np.vstack([self.psi / np.sqrt(N), (Q @ R) / np.sqrt(M)]),
+                                                np.r_[self.target / np.sqrt(N), self.static.ybar / np.sqrt(M)])
         return self._memo["ls"].copy()
 
     def random_ls(self, rng: np.random.Generator, count: int, samples: int = 30) -> np.ndarray:
@@ -603,6 +639,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     ``fitted``: the first members of this very sweep, fitted already (a probe), taken as a
     checkpoint's are.
     """
+    problem.check_identified()  # refused before any fit when not even the weighted static points identify θ
     K = lam.size
     n = len(problem.structure)
     thetas = np.full((K, n), np.nan)
@@ -638,6 +675,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
             # one generator per λ index: a resumed sweep draws exactly what an uninterrupted one does
             rng = np.random.default_rng([0 if seed is None else seed, i])
             try:
+                _check_weight(problem, float(lam[i]))
                 thetas[i], costs[i], nfev[i] = step(i, float(lam[i]), thetas, rng)
             except _Failed as why:
                 failures[i] = str(why)
@@ -649,6 +687,15 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
         bar.close()
         limits.restore_original_limits()
     return SEFront(lam, thetas, costs, failures, nfev)
+
+
+def _check_weight(problem: SEProblem, lam1: float) -> None:
+    """:class:`_Failed` when θ is not identified at λ1: at λ1 = 1 the static points carry no weight, and where
+    the records alone leave θ free (an input held constant) any fit there would pick one θ of many."""
+    try:
+        problem.check_identified(lam1)
+    except ValueError as exc:
+        raise _Failed(str(exc)) from None
 
 
 def _nearest(thetas: np.ndarray, i: int, side: str, count: int) -> list[int]:
@@ -990,12 +1037,15 @@ def _pe_members(problem: SEProblem, lambdas: np.ndarray) -> np.ndarray | None:
         try:
             with one_blas_thread(), warnings.catch_warnings():
                 warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
-                th = pe_thetas(problem.structure, problem.records, problem.static, lambdas=lambdas, solver="closed")
+                # a member whose weights do not identify θ (λ1 = 1, an input held constant) is a NaN row
+                th = _pe_solve(problem.structure, problem.records, problem.static, lambdas=lambdas, constraints=None,
+                               solver="closed", solver_options=None, weights="mse", ubar=None, warm_start=True,
+                               reference="ls")[0]
         except ValueError:  # e.g. not identifiable with the static rows
             th = None
         if th is not None:
             th.setflags(write=False)
-        problem._memo[key] = th if th is not None and np.all(np.isfinite(th)) else None
+        problem._memo[key] = th if th is not None and np.any(np.all(np.isfinite(th), axis=1)) else None
     return problem._memo[key]
 
 
@@ -1077,7 +1127,7 @@ def gradient_front(
 
     def candidates(i, thetas, neighbours):
         c = [(f"member λ1 = {lam[j]:g}", thetas[j]) for j in neighbours]
-        if pe is not None:
+        if pe is not None and np.all(np.isfinite(pe[i])):
             c.append(("PE member of this λ", pe[i]))
         c.append(("theta0" if theta0 is not None else "least squares", start))
         c += [(f"starts[{k}]", s_) for k, s_ in enumerate(extra)]
@@ -1112,6 +1162,10 @@ def gradient_front(
             lam1 = float(lam[i])
             after = _nearest(thetas, i, "after", 2)
             if i == K - 1 or i in failures:
+                try:
+                    _check_weight(problem, lam1)
+                except _Failed:
+                    continue  # stays failed, with its reason
                 cands = ([] if i in failures else [("this member", thetas[i])]) + \
                     [(f"member λ1 = {lam[j]:g}", thetas[j]) for j in after]
                 if i == K - 1:
@@ -1140,7 +1194,7 @@ def gradient_front(
 def _pe_starts(problem: SEProblem) -> list[np.ndarray]:
     """PE solutions (closed form) leaning more and more on the static points: further starts."""
     th = _pe_members(problem, np.array([1e-1, 1e-2, 1e-3, 1e-4]))
-    return [] if th is None else list(th)
+    return [] if th is None else [t for t in th if np.all(np.isfinite(t))]
 
 
 #: Options of :func:`se_pareto` that apply to one method only.
@@ -1302,7 +1356,12 @@ def se_pareto(
     ------
     ValueError
         An option of the other method is given, an unknown method, no static points, or every
-        member failed (the reasons are listed).
+        member failed (the reasons are listed); or θ is not identified by the records and the static
+        points together (the one rule of :func:`~graybox.estimation._prediction_error.identified_by`;
+        the message names the free terms and what data would identify them). Records whose input is
+        held constant are fitted when the static points identify θ: the start is then the least
+        squares of both (:meth:`SEProblem.ls_theta`), and the λ1 = 1 member, where the points carry no
+        weight, is a failed member saying so.
     """
     check_choice(method, "method", ("ga", "gradient"))
     seed = check_seed(seed)
@@ -1325,6 +1384,7 @@ def se_pareto(
     margin = check_margin(margin)
     st = as_structure(structure)
     problem = SEProblem(st, rec, sp, margin=None if margin == "auto" else margin, ridge=ridge)
+    problem.check_identified()  # the records with the static points (an input held constant needs them)
     warn_static_range(sp.ubar, rec)  # after: bad input is an error, not a warning and an error
     lam_in = SE_LAMBDAS if lambdas is None else lambdas
     if isinstance(theta0, str) and theta0 != "ls":

@@ -1,0 +1,140 @@
+"""Mend 36b: items left open by earlier bug hunts.
+
+1. Identifiability is one rule (core._least_squares.check_identified, through
+   estimation._prediction_error.identified_by) for the least-squares start, CLS, PE and the SE
+   estimators: the records' regression stacked with the static rows where they carry weight must
+   have full rank, judged units-free. An input held constant is refused only when the static points
+   do not identify θ either, with a message that says what is missing.
+"""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.estimation._prediction_error import pe_thetas
+from graybox.estimation._simulation_error import SEProblem
+
+# y(k) = 0.5 y(k−1) + 0.2 u(k−1) + 0.01 u(k−1)² + 1: a known answer
+TRUE = np.array([0.5, 0.2, 0.01, 1.0])
+STRUCT = ["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]
+
+
+def held(level, n=200, y0=0.0, noise=0.01, seed=0, unit=1.0):
+    """A record whose input is held at ``level`` (u in ``unit``s), y starting from ``y0``."""
+    rng = np.random.default_rng(seed)
+    y = np.empty(n)
+    y[0] = y0
+    for k in range(1, n):
+        y[k] = TRUE[0] * y[k - 1] + TRUE[1] * level + TRUE[2] * level ** 2 + TRUE[3]
+    return gb.Record(np.full(n, level * unit), y + noise * rng.standard_normal(n), name=f"held at {level:g}")
+
+
+def points(levels=(1.0, 2.0, 4.0, 5.0, 6.0), unit=1.0):
+    ub = np.asarray(levels, float)
+    return gb.StaticPoints(ub * unit, (TRUE[1] * ub + TRUE[2] * ub ** 2 + TRUE[3]) / (1 - TRUE[0]))
+
+
+def in_units(theta, unit):
+    """θ of the true system written for u in ``unit``s."""
+    return np.asarray(theta) * np.array([1.0, 1.0 / unit, 1.0 / unit ** 2, 1.0])
+
+
+@pytest.fixture(autouse=True)
+def _quiet_range():
+    # the static points lie outside a held record's one level on purpose
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        yield
+
+
+# -- 1. one identifiability rule ---------------------------------------------------------------
+
+@pytest.mark.parametrize("method", ["gradient", "ga"])
+def test_se_pareto_fits_a_held_record_that_static_points_identify(method):
+    # was: "least squares: regressor matrix has rank 2 < 4 columns": the least-squares start was
+    # taken on the record alone, so a record at one level was refused although the static points
+    # at five levels identify θ (PE fitted the same data)
+    kw = dict(options=gb.GAOptions(population=30, generations=10)) if method == "ga" else {}
+    front = gb.se_pareto(STRUCT, held(3.0), points(), lambdas=[1.0, 0.5, 0.1], method=method, **kw)
+    # λ1 = 1 gives the static points no weight: θ is not identified there, and the member says so
+    assert set(front.failures) == {0}
+    assert "λ1 = 1" in front.failures[0] and "not identifiable" in front.failures[0]
+    for i in (1, 2):
+        assert np.allclose(front.thetas[i], TRUE, rtol=0.02, atol=0.01)
+        assert front.JSF[i] < 1e-3
+
+
+def test_se_dsf_fits_a_held_record_that_static_points_identify():
+    # was: "no start (none found) ... least squares: regressor matrix has rank 2 < 4 columns"
+    res = gb.se_dsf(STRUCT, held(3.0), points(), band=1e-3)
+    assert res.in_band
+    assert np.allclose(res.model.theta, TRUE, rtol=0.02, atol=0.01)
+
+
+def test_several_records_each_held_at_its_level_with_static_points():
+    # two levels do not separate u, u² and the constant; the static points do: SE fits, PE agrees
+    recs = [held(1.0, 80, seed=1), held(4.0, 80, seed=2)]
+    with pytest.raises(ValueError, match=r"not identifiable from the identification records:.*u\(k-1\)\^2"):
+        gb.output_error(STRUCT, recs)
+    front = gb.se_pareto(STRUCT, recs, points(), lambdas=[0.5], method="gradient")
+    assert np.allclose(front.thetas[0], TRUE, rtol=0.02, atol=0.01)
+
+
+def test_least_squares_start_of_a_held_record_is_the_stacked_least_squares():
+    # the start where the records alone leave θ free: records and static rows, each as a mean
+    # square, i.e. PE's closed form at λ1 = 1/2 (an independent computation)
+    rec, pts = held(3.0), points()
+    ls = SEProblem(gb.Structure(STRUCT), rec, pts).ls_theta()
+    pe = pe_thetas(STRUCT, rec, pts, lambdas=[0.5], solver="closed")[0]
+    assert np.allclose(ls, pe, rtol=1e-8, atol=1e-10)
+    # where the records identify θ the start is least squares on them, as before
+    moving = gb.Record(np.repeat([1.0, 3.0, 5.0], 60), np.r_[held(1.0, 60).y, held(3.0, 60).y, held(5.0, 60).y])
+    ls2 = SEProblem(gb.Structure(STRUCT), moving, pts).ls_theta()
+    assert np.allclose(ls2, gb.els(STRUCT, moving, noise=0).model.theta, rtol=1e-8, atol=1e-10)
+
+
+def test_pe_member_at_lambda_one_on_a_held_record_is_failed_not_made_up():
+    # was: pe_pareto returned a θ at λ1 = 1 (one of infinitely many minimisers: [0.499, 0.188,
+    # 0.063, 0.564] against the system's [0.5, 0.2, 0.01, 1]) without a word
+    rec, pts = held(3.0), points()
+    front = gb.pe_pareto(STRUCT, rec, pts, lambdas=[1.0, 0.5])
+    assert set(front.failures) == {0} and "λ1 = 1" in front.failures[0]
+    assert np.allclose(front.thetas[1], TRUE, rtol=0.02, atol=0.01)
+    with pytest.raises(ValueError, match=r"λ1 = 1.*not identifiable.*static points at several input levels"):
+        pe_thetas(STRUCT, rec, pts, lambdas=[1.0, 0.5])
+    with pytest.raises(ValueError, match="not identifiable"):  # no member left: refused
+        gb.pe_pareto(STRUCT, rec, pts, lambdas=[1.0])
+
+
+def test_cls_on_a_held_record_follows_the_same_rule():
+    # the curve's equality rows identify θ with the record: CLS fits (given Σ*_y); its least-squares
+    # reference is refused in the rule's words, saying what else to give
+    rec, pts = held(3.0), points()
+    with pytest.raises(ValueError, match=r"reference='ls'.*not identifiable from the identification records"):
+        gb.cls(STRUCT, rec, pts)
+    assert np.allclose(gb.cls(STRUCT, rec, pts, reference=TRUE[0]).model.theta, TRUE, rtol=0.02, atol=0.01)
+
+
+def test_terms_static_points_cannot_separate_name_a_moving_input_as_what_is_missing():
+    # u(k−1) and u(k−2) share the cluster Σu: no static point separates them, only a moving input
+    st = ["y(k-1)", "u(k-1)", "u(k-2)", "1"]
+    for call in (lambda: gb.se_pareto(st, held(3.0), points(), lambdas=[0.5], method="gradient"),
+                 lambda: gb.se_dsf(st, held(3.0), points(), band=1e-3),
+                 lambda: pe_thetas(st, held(3.0), points(), lambdas=[0.5])):
+        with pytest.raises(ValueError, match=r"\['u\(k-1\)', 'u\(k-2\)'\]: give a record whose input moves \("):
+            call()
+
+
+@pytest.mark.parametrize("unit", [1e-3, 1.0, 1e3])
+def test_the_rule_does_not_depend_on_units(unit):
+    # the same data in other input units: the same verdicts and the same estimate (in those units)
+    rec, pts = held(3.0, unit=unit), points(unit=unit)
+    problem = SEProblem(gb.Structure(STRUCT), rec, pts)
+    assert not problem.records_identify()
+    problem.check_identified()  # the static points identify θ
+    assert np.allclose(problem.ls_theta(), in_units(SEProblem(gb.Structure(STRUCT), held(3.0), points()).ls_theta(),
+                                                     unit), rtol=1e-6)
+    with pytest.raises(ValueError, match="not identifiable"):
+        problem.check_identified(1.0)
