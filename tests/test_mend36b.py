@@ -5,6 +5,9 @@
    estimators: the records' regression stacked with the static rows where they carry weight must
    have full rank, judged units-free. An input held constant is refused only when the static points
    do not identify θ either, with a message that says what is missing.
+2. A pandas DataFrame of inputs is read by column name where its columns are the inputs' names, by
+   position where they name none, and refused where they name some: one rule in the one coercion of
+   inputs (core._records.frame_inputs, used by as_input_array and the static-surface paths).
 """
 
 import warnings
@@ -138,3 +141,53 @@ def test_the_rule_does_not_depend_on_units(unit):
                                                      unit), rtol=1e-6)
     with pytest.raises(ValueError, match="not identifiable"):
         problem.check_identified(1.0)
+
+
+# -- 2. a DataFrame of inputs is read by name where its columns are the inputs ---------------------
+
+def _frame(n=40, seed=0):
+    import pandas as pd
+
+    rng = np.random.default_rng(seed)
+    return pd.DataFrame({"p": rng.uniform(0.0, 1.0, n), "n": rng.uniform(10.0, 20.0, n)})
+
+
+def test_record_reads_a_dataframe_by_its_column_names():
+    # was: read by position, so columns ("p", "n") for input_names ("n", "p") swapped the inputs
+    df = _frame()
+    rec = gb.Record(df, np.zeros(len(df)), input_names=("n", "p"))
+    assert np.array_equal(rec.input("n"), df["n"].to_numpy()) and np.array_equal(rec.input("p"), df["p"].to_numpy())
+    # the default names are names too: columns u2, u1 are read as u2, u1
+    rec2 = gb.Record(df.set_axis(["u2", "u1"], axis=1), np.zeros(len(df)))
+    assert np.array_equal(rec2.input("u1"), df["n"].to_numpy())
+    # columns that name no input (here pandas' 0, 1) are read by position, as documented
+    rec3 = gb.Record(df.set_axis([0, 1], axis=1), np.zeros(len(df)), input_names=("n", "p"))
+    assert np.array_equal(rec3.input("n"), df["p"].to_numpy())
+
+
+@pytest.mark.parametrize("columns", [["p", "speed"], ["n", "p", "time"], ["n", "n"]])
+def test_a_dataframe_naming_some_inputs_is_refused_naming_its_columns(columns):
+    # was: read by position: "p" landed on the input "n" (or a column was taken as an input unseen)
+    df = _frame().iloc[:, [0, 1, 1][:len(columns)]].set_axis(columns, axis=1)
+    with pytest.raises(ValueError, match=r"columns \[.*\] name only some of the inputs \['n', 'p'\]"):
+        gb.Record(df, np.zeros(len(df)), input_names=("n", "p"))
+
+
+def test_every_input_path_reads_a_dataframe_by_name():
+    # the one coercion (core._records.frame_inputs) serves records, static points, free runs and surfaces:
+    # each of these read ("p", "n") as ("n", "p") before
+    df = _frame()
+    model = gb.Model(["n(k-1)", "p(k-1)", "y(k-1)"], [1.0, 10.0, 0.5], input_names=("n", "p"))
+    arr = df[["n", "p"]].to_numpy()
+    y0 = np.zeros(1)
+    assert np.array_equal(model.simulate(df, y0), model.simulate(arr, y0))
+    assert np.array_equal(gb.simulate(model.structure, model.theta, df, y0), model.simulate(arr, y0))
+    assert np.array_equal(model.static_curve(df.iloc[:5]), model.static_curve(arr[:5]))
+    pts = gb.StaticPoints(df.iloc[:5], np.ones(5), input_names=("n", "p"))
+    assert np.array_equal(pts.ubar, arr[:5])
+    rep = gb.StaticPoints.from_repeats(df.iloc[:5], np.ones(5), input_names=("n", "p"))
+    assert np.array_equal(rep.ubar, np.unique(arr[:5], axis=0))
+    surface = gb.StaticSurface.fit(gb.StaticPoints(arr[:6], arr[:6] @ [1.0, 2.0], input_names=("n", "p")), degree=1)
+    assert np.allclose(surface(df.iloc[:3]), surface(arr[:3]))
+    with pytest.raises(ValueError, match="name only some"):
+        model.simulate(df.set_axis(["n", "q"], axis=1), y0)

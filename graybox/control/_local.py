@@ -29,7 +29,7 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 from scipy.signal import lfilter
 
-from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, outside_range,
+from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure
 from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, warn
@@ -376,7 +376,7 @@ def system_name(name: str, what: str) -> str | None:
 def _as_points(model: Model, ubar: object) -> np.ndarray:
     """ū as points of shape (M, m) in the model's input order."""
     m = model.n_inputs
-    ub = np.asarray(ubar, dtype=float)
+    ub = np.asarray(frame_inputs(ubar, model.input_names, "ubar"), dtype=float)  # a DataFrame: by column name
     if m == 1:
         ub = np.atleast_1d(ub).reshape(-1, 1) if ub.ndim <= 1 else ub
     elif ub.ndim == 1 and ub.size == m:

@@ -22,8 +22,48 @@ from ._validation import as_1d_finite, check_per_point, check_real, refuse_non_r
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
 
-def as_input_array(x: object, name: str) -> np.ndarray:
-    """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several."""
+def is_frame(x: object) -> bool:
+    """Whether ``x`` is a pandas DataFrame (told without importing pandas: ``import graybox`` stays fast)."""
+    return type(x).__module__.split(".")[0] == "pandas" and hasattr(x, "columns") and hasattr(x, "iloc")
+
+
+def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
+    """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
+
+    Columns named exactly as the inputs (every name once, no other column) are read by name, reordered as
+    needed; columns named as none of them (e.g. pandas' default 0, 1, …) are read by position. Anything
+    between would be read by position with some named column landing on another input, or a column
+    dropped unseen: ``ValueError`` naming the columns. ``names`` None: the default names
+    (``u`` for one column, ``u1 … um`` for m). Anything but a DataFrame is returned as it is.
+    """
+    if not is_frame(x):
+        return x
+    cols = list(x.columns)
+    labels = [str(c) for c in cols]
+    expected = tuple(default_input_names(len(cols)) if names is None else names)
+    hits = [c for c in labels if c in expected]
+    if not hits:
+        return x
+    if len(labels) == len(expected) and sorted(labels) == sorted(expected):
+        return x[[cols[labels.index(n)] for n in expected]]
+    extra = [c for c in labels if c not in expected]
+    missing = [n for n in expected if n not in labels]
+    raise ValueError(f"{name}: the DataFrame's columns {labels} name only some of the inputs {list(expected)} "
+                     f"(not inputs: {extra or 'none'}; inputs without a column: {missing or 'none'}; repeated: "
+                     f"{sorted({c for c in labels if labels.count(c) > 1}) or 'none'}): read by position they "
+                     "would land on other inputs. Name every column as an input (any order: read by name) or none "
+                     "(read by position)")
+
+
+def as_input_array(x: object, name: str, names: Sequence[str] | None = None) -> np.ndarray:
+    """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several.
+
+    The one coercion of inputs (records, static points, free runs, static surfaces): a pandas DataFrame
+    is read by column name where its columns are the inputs ``names`` (default ``u`` / ``u1 … um``), in
+    any order, by position where they name none of them, and refused where they name some
+    (:func:`frame_inputs`).
+    """
+    x = frame_inputs(x, names, name)
     refuse_non_real(x, name)
     try:
         a = np.array(x, dtype=float, copy=True)
@@ -56,9 +96,12 @@ class Record:
 
     Parameters
     ----------
-    u : array_like, shape (N,) or (N, m)
+    u : array_like or pandas.DataFrame, shape (N,) or (N, m)
         Input samples (engineering units, e.g. rpm); one column per input. One input is
-        stored 1-D (an (N, 1) array is flattened), several as a C-contiguous (N, m) array.
+        stored 1-D (an (N, 1) array is flattened), several as a C-contiguous (N, m) array. A
+        DataFrame whose columns are the ``input_names`` (default ``u`` / ``u1 … um``) is read by
+        name, in any column order; one whose columns name none of them, by position; one whose
+        columns name some of them is refused (``ValueError`` naming the columns).
     y : array_like, shape (N,)
         Output samples (engineering units, e.g. mlc).
     Ts : float, optional
@@ -80,7 +123,7 @@ class Record:
     input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
-        u = as_input_array(self.u, f"{self.name}: u")
+        u = as_input_array(self.u, f"{self.name}: u", self.input_names)
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: u and y must have the same length, got {u.shape[0]} and {y.size}")
@@ -149,9 +192,11 @@ class StaticPoints:
 
     Parameters
     ----------
-    ubar : array_like, shape (M,) or (M, m)
+    ubar : array_like or pandas.DataFrame, shape (M,) or (M, m)
         Constant input levels (engineering units), all distinct; one column per input (a
-        point ū in input space per row) for several inputs.
+        point ū in input space per row) for several inputs. A DataFrame is read by column name
+        where its columns are the ``input_names``, by position where they name none of them, and
+        refused where they name some (as :class:`Record`'s ``u``).
     ybar : array_like, shape (M,)
         Settled output at each level.
     name : str, optional
@@ -172,7 +217,7 @@ class StaticPoints:
     uncertainty: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        u = as_input_array(self.ubar, f"{self.name}: ubar")
+        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names)
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
@@ -222,8 +267,9 @@ class StaticPoints:
 
         Parameters
         ----------
-        ubar : array_like, shape (N,) or (N, m)
-            Input level of each measurement (engineering units); levels may repeat.
+        ubar : array_like or pandas.DataFrame, shape (N,) or (N, m)
+            Input level of each measurement (engineering units); levels may repeat. A DataFrame
+            is read as :class:`StaticPoints` reads one (by name where its columns are the inputs).
         ybar : array_like, shape (N,)
             Settled output of each measurement.
         name, input_names
@@ -242,7 +288,7 @@ class StaticPoints:
             One point per distinct level, sorted by ū; its ȳ is the mean of the measurements
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
-        u = as_input_array(ubar, f"{name}: ubar")
+        u = as_input_array(ubar, f"{name}: ubar", input_names)
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
@@ -432,7 +478,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["as_records", "as_input_array", "check_compatible", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

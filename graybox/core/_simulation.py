@@ -14,7 +14,7 @@ import numpy as np
 
 from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_inputs, scaled_bound, simulate_batch,
                                  simulate_one)
-from ._records import Record, as_input_array
+from ._records import Record, as_input_array, is_frame
 from ._terms import check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta, refuse_non_real
 from ._regressors import regressor_matrix
@@ -82,7 +82,8 @@ def default_bound(y0: np.ndarray, scale: float = 0.0) -> float:
 
 
 def free_run_inputs(
-    u: np.ndarray | Record, y0: np.ndarray | None, L: int, bound: float | None, what: str = "structure"
+    u: np.ndarray | Record, y0: np.ndarray | None, L: int, bound: float | None, what: str = "structure",
+    names: tuple[str, ...] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, float | None]:
     """Validate a free run's input and initial conditions (shared by every model kind).
 
@@ -98,6 +99,9 @@ def free_run_inputs(
         Divergence bound on |y|, checked; None (the model's default) is returned as None.
     what : str
         What needs the lags, for messages ("structure", "network").
+    names : tuple of str, optional
+        The inputs' names in the order of an array's columns: a DataFrame ``u`` is read by them
+        (:func:`~graybox.core._records.frame_inputs`).
 
     Returns
     -------
@@ -110,7 +114,7 @@ def free_run_inputs(
             y0 = u.y[:L]
         u = u.u
     else:
-        u = as_input_array(u, "u")
+        u = as_input_array(u, "u", names)
         if y0 is None:
             if L > 0:
                 raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
@@ -148,9 +152,12 @@ def simulate(
         Process terms (noise terms are not simulated; a model, or a result with ``.structure``,
         gives its own).
     theta : ndarray, shape (n_terms,)
-    u : ndarray, shape (N,) or (N, m), or Record
+    u : ndarray or pandas.DataFrame, shape (N,) or (N, m), or Record
         Input(s). With a Record, ``y0`` defaults to its first ``max_lag`` outputs and the
-        inputs are taken by name.
+        inputs are taken by name. A DataFrame whose columns are the inputs (``input_names``, else
+        the structure's inputs when it has as many as the frame has columns, else ``u1 … um``) is
+        read by name in any column order; one whose columns name none of them, by position; one
+        whose columns name some of them is refused (``ValueError`` naming the columns).
     y0 : ndarray, shape (>= max_lag,), optional
         Initial outputs y(0) … y(L-1); only the first L = max_lag are used.
     on_diverge : {"raise", "nan"}
@@ -179,7 +186,9 @@ def simulate(
         _, y0, b = free_run_inputs(u, y0, L, bound)
         uu = record_inputs(u, code.inputs)
     else:
-        uu, y0, b = free_run_inputs(u, y0, L, bound)
+        if input_names is None and is_frame(u) and len(structure.inputs) == u.shape[1]:
+            input_names = structure.inputs  # a DataFrame's columns are read by the structure's names
+        uu, y0, b = free_run_inputs(u, y0, L, bound, names=input_names)
         code, uu = _inputs_for(structure, uu, input_names)
     y = simulate_one(code, th, uu, y0, L, b)
     if on_diverge == "raise" and not np.isfinite(y[-1]):

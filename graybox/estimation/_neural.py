@@ -596,8 +596,10 @@ class NeuralModel:
 
         Parameters
         ----------
-        u : ndarray, shape (N,), or Record
-            Input (input units). With a Record, ``y0`` defaults to its first ``max_lag`` outputs.
+        u : ndarray or pandas.DataFrame, shape (N,), or Record
+            Input (input units). With a Record, ``y0`` defaults to its first ``max_lag`` outputs. A
+            one-column DataFrame is read as :func:`graybox.simulate` reads one (its column named
+            as the input, or not named as any).
         y0 : ndarray, shape (>= max_lag,), optional
             Initial outputs y(0) … y(L-1) (output units); only the first L = max_lag are used.
         on_diverge : {"raise", "nan"}
@@ -617,7 +619,7 @@ class NeuralModel:
         L = self.max_lag
         if isinstance(u, Record):
             u, y0 = self._input(u), u.y[:L] if y0 is None else y0
-        u, y0, b = free_run_inputs(u, y0, L, bound, what="network")
+        u, y0, b = free_run_inputs(u, y0, L, bound, what="network", names=self.input_names)
         if b is None:  # the default: from the network's output range, |offset| + scale (|b2| + Σ|w2|)
             reach = abs(self.y_offset) + abs(self.y_scale) * (abs(self.b2) + float(np.sum(np.abs(self.w2))))
             b = default_bound(y0, reach)

@@ -124,7 +124,9 @@ class Model:
         """Free run, shape (N,); see :func:`graybox.core._simulation.simulate`.
 
         ``u`` is a Record (inputs taken by name) or an array of shape (N,) or (N, m) with the
-        columns in ``input_names`` order. ``bound`` (output units) is the divergence bound on |y|
+        columns in ``input_names`` order; a pandas DataFrame is read by column name where its
+        columns are the ``input_names`` (any order), by position where they name none of them,
+        and refused where they name some (``ValueError`` naming the columns). ``bound`` (output units) is the divergence bound on |y|
         (default: 1e6 × the larger of max|y0| and the inputs' direct push on the output, in the
         output's units whatever they are, also from rest).
         """
@@ -137,7 +139,8 @@ class Model:
 
     # -- statics ------------------------------------------------------------
     # With several inputs the static function is a surface ȳ(ū_1, …, ū_m): ū is then of shape
-    # (M, m) (columns in input_names order; a single point may be given as shape (m,)).
+    # (M, m) (columns in input_names order; a single point may be given as shape (m,)); a DataFrame
+    # is read by column name as every input is (graybox.core._records.frame_inputs).
     def clusters(self) -> dict[str, float]:
         """Cluster coefficients by name, Σ = R θ.
 
@@ -158,7 +161,8 @@ class Model:
         """Steady-state output at each ū, shape (M,); see :func:`graybox.static._analysis.static_curve`.
 
         With several inputs, the static surface at the points ``ubar`` of shape (M, m)
-        (:func:`graybox.static._surface_analysis.static_surface`).
+        (:func:`graybox.static._surface_analysis.static_surface`): columns in ``input_names`` order,
+        or a pandas DataFrame whose columns are the ``input_names`` (read by name, any order).
         """
         if self.n_inputs > 1:
             return _static_surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,

@@ -29,6 +29,7 @@ import numpy as np
 
 from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name
+from ..core._records import frame_inputs
 from ..core._terms import Structure, Term, check_input_names, require_inputs
 from ..core._validation import check_bool, check_fields, check_per_point, renamed
 from ..core._reprs import short_repr
@@ -175,15 +176,17 @@ def _skeleton(structure: Structure) -> Structure:
 def input_monomials(structure: Structure, ubar: np.ndarray, inputs: tuple[str, ...] | None = None) -> np.ndarray:
     """g_t(ū) = ū_1^a_t1 ⋯ ū_m^a_tm for every term t at every point, shape (M, n_terms)."""
     names = surface_inputs(structure, inputs)
-    ub = _as_points(ubar, len(names))
+    ub = _as_points(ubar, names)
     A = np.array([_powers(t, names) for t in structure], dtype=float).reshape(len(structure), len(names))
     with np.errstate(all="ignore"):
         return np.prod(ub[:, None, :] ** A[None, :, :], axis=2)
 
 
-def _as_points(ubar: object, m: int) -> np.ndarray:
-    """ū as finite points, shape (M, m); a 1-D ū of length m is one point."""
-    ub = np.asarray(ubar, dtype=float)
+def _as_points(ubar: object, names: tuple[str, ...]) -> np.ndarray:
+    """ū as finite points, shape (M, m), columns in the order of the inputs ``names``; a 1-D ū of length m is
+    one point; a DataFrame is read by column name as every input is (:func:`~graybox.core._records.frame_inputs`)."""
+    m = len(names)
+    ub = np.asarray(frame_inputs(ubar, names, "ubar"), dtype=float)
     if ub.ndim == 1 and ub.size == m:
         ub = ub[None, :]
     if ub.ndim != 2 or ub.shape[1] != m:
@@ -223,7 +226,7 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
     """
     structure, theta = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
-    ub = _as_points(ubar, len(names))
+    ub = _as_points(ubar, names)
     if ub.shape[0] != 1:
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
     sk, th = _folded(structure, theta, ub, names)
@@ -254,7 +257,7 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
         ``ubar`` (M, m), ``ybar`` and ``status`` (P, M).
     """
     names = surface_inputs(structure, inputs)
-    ub = _as_points(ubar, len(names))
+    ub = _as_points(ubar, names)
     M = ub.shape[0]
     y0s = np.broadcast_to(np.asarray(y0, float), (M,)).copy()
     sk, th = _folded(structure, thetas, ub, names)
@@ -304,7 +307,7 @@ def static_surface(
     strict = check_bool(strict, "strict")
     structure, th = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
-    ub = _as_points(ubar, len(names))
+    ub = _as_points(ubar, names)
     if y0 is not None:
         y0 = check_per_point(y0, ub.shape[0], "y0")
     sk, thf = _folded(structure, th, ub, names)
@@ -368,7 +371,7 @@ def static_surface_gain(
     """
     structure, th = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
-    ub = _as_points(ubar, len(names))
+    ub = _as_points(ubar, names)
     yb = static_surface(structure, th, ub, y0, strict=strict, input_names=names)
     Fy, Fu = _fderivs(structure, th, ub, yb, names)
     with np.errstate(all="ignore"):  # NaN⁰ is 1: no gain where no equilibrium is reached
@@ -382,7 +385,7 @@ def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.nda
     ``ubar`` (M, m) in ``inputs`` order (default: the structure's inputs), ``ybar`` (M,).
     """
     names = surface_inputs(structure, inputs)
-    ub = _as_points(ubar, len(names))
+    ub = _as_points(ubar, names)
     yb = np.asarray(ybar, float)
     th = np.asarray(theta, float)
     g = input_monomials(structure, ub, names)
@@ -411,7 +414,7 @@ def surface_static_rows(cm: SurfaceClusterMap, ubar: np.ndarray, ybar: np.ndarra
     -------
     ndarray, shape (M, n_clusters)
     """
-    ub = _as_points(ubar, len(cm.inputs))
+    ub = _as_points(ubar, cm.inputs)
     yb = np.asarray(ybar, float)[:, None]
     K = np.array(cm.keys, float).reshape(len(cm.keys), 1 + len(cm.inputs))
     p, A = K[None, :, 0], K[:, 1:]

@@ -14,7 +14,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..core._least_squares import scaled_lstsq
-from ..core._records import StaticPoints, outside_range
+from ..core._records import StaticPoints, frame_inputs, outside_range
 from ..core._validation import check_int, check_real, check_sequence
 from ..core._reprs import short_repr
 
@@ -43,9 +43,10 @@ def monomial_exponents(n_inputs: int, degree: int) -> tuple[tuple[int, ...], ...
     return tuple(out)
 
 
-def _as_inputs(ubar: object, m: int, what: str) -> np.ndarray:
-    """ū as a finite array of shape (K, m); a 1-D array is K points when m = 1, one point otherwise."""
-    u = np.asarray(ubar, dtype=float)
+def _as_inputs(ubar: object, m: int, what: str, names: Sequence[str] | None = None) -> np.ndarray:
+    """ū as a finite array of shape (K, m); a 1-D array is K points when m = 1, one point otherwise; a DataFrame
+    is read by column name where its columns are the inputs ``names`` (:func:`~graybox.core._records.frame_inputs`)."""
+    u = np.asarray(frame_inputs(ubar, names, f"{what}: ū"), dtype=float)
     if u.ndim == 1:
         u = u[:, None] if m == 1 else u[None, :]
     if u.ndim != 2 or u.shape[1] != m:
@@ -247,7 +248,7 @@ class StaticSurface:
         """Raise ``ValueError`` if any point lies outside the domain box (when there is one)."""
         if self.domain is None:
             return
-        u = _as_inputs(ubar, self.n_inputs, self.name)
+        u = _as_inputs(ubar, self.n_inputs, self.name, self.input_names)
         for i, (lo, hi) in enumerate(self.domain):
             col = u[:, i]
             out = col[outside_range(col, lo, hi)]
@@ -256,13 +257,13 @@ class StaticSurface:
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
         """H(ū) at points ``ubar`` of shape (K, m) (or (m,) for one point); returns shape (K,)."""
-        u = _as_inputs(ubar, self.n_inputs, self.name)
+        u = _as_inputs(ubar, self.n_inputs, self.name, self.input_names)
         self.check_domain(u)
         return _monomials(u, self.exponents) @ self.coefficients
 
     def gradient(self, ubar: np.ndarray) -> np.ndarray:
         """∂H/∂ū_j at points ``ubar`` of shape (K, m); returns shape (K, m), one column per input."""
-        u = _as_inputs(ubar, self.n_inputs, self.name)
+        u = _as_inputs(ubar, self.n_inputs, self.name, self.input_names)
         self.check_domain(u)
         out = np.zeros(u.shape)
         for j in range(self.n_inputs):
@@ -275,7 +276,7 @@ class StaticSurface:
 
     def points(self, ubar: np.ndarray) -> StaticPoints:
         """The surface sampled at ``ubar`` (shape (K, m)) as static points."""
-        u = _as_inputs(ubar, self.n_inputs, self.name)
+        u = _as_inputs(ubar, self.n_inputs, self.name, self.input_names)
         return StaticPoints(u if self.n_inputs > 1 else u[:, 0], self(u), name=self.name, input_names=self.input_names)
 
     def describe(self) -> str:
