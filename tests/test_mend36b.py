@@ -8,6 +8,8 @@
 2. A pandas DataFrame of inputs is read by column name where its columns are the inputs' names, by
    position where they name none, and refused where they name some: one rule in the one coercion of
    inputs (core._records.frame_inputs, used by as_input_array and the static-surface paths).
+3. A ParetoSet's members are in the caller's order of ``lambdas`` for se_pareto as for pe_pareto
+   (the sweep from λ1 = 1 down is an internal matter of the SE solvers).
 """
 
 import warnings
@@ -191,3 +193,30 @@ def test_every_input_path_reads_a_dataframe_by_name():
     assert np.allclose(surface(df.iloc[:3]), surface(arr[:3]))
     with pytest.raises(ValueError, match="name only some"):
         model.simulate(df.set_axis(["n", "q"], axis=1), y0)
+
+
+# -- 3. a Pareto set's members are in the caller's order of lambdas --------------------------------
+
+@pytest.mark.parametrize("method", ["gradient", "ga"])
+def test_se_pareto_keeps_the_callers_order_of_lambdas_as_pe_pareto_does(method):
+    # was: se_pareto returned its members from λ1 = 1 down (the sweep's order) while pe_pareto kept
+    # the caller's, so member i of the two sets of one call named different λ1
+    rec = gb.Record(np.repeat([1.0, 3.0, 5.0, 2.0], 50), np.r_[held(1.0, 50).y, held(3.0, 50, y0=3.0).y,
+                                                              held(5.0, 50, y0=5.0).y, held(2.0, 50, y0=9.0).y])
+    lams = [0.1, 1.0, 0.5]
+    kw = dict(options=gb.GAOptions(population=20, generations=5)) if method == "ga" else {}
+    front = gb.se_pareto(STRUCT, rec, points(), lambdas=lams, method=method, seed=0, **kw)
+    pe = gb.pe_pareto(STRUCT, rec, points(), lambdas=lams)
+    assert front.lambdas.tolist() == lams == pe.lambdas.tolist()
+    # the sweep runs from λ1 = 1 down whatever the order given: the same members, in the caller's order
+    swept = gb.se_pareto(STRUCT, rec, points(), lambdas=sorted(lams, reverse=True), method=method, seed=0, **kw)
+    assert np.array_equal(front.thetas, swept.thetas[[2, 0, 1]])
+    assert np.array_equal(front.extra["cost"], swept.extra["cost"][[2, 0, 1]])
+    assert np.array_equal(front.JS, swept.JS[[2, 0, 1]])
+
+
+def test_se_pareto_failed_members_keep_their_lambda_in_the_callers_order():
+    # a failure's key is the member's index in the caller's order (here λ1 = 1, given second)
+    front = gb.se_pareto(STRUCT, held(3.0), points(), lambdas=[0.5, 1.0], method="gradient")
+    assert set(front.failures) == {1} and front.lambdas[1] == 1.0
+    assert np.all(np.isfinite(front.thetas[0])) and np.all(np.isnan(front.thetas[1]))

@@ -84,7 +84,9 @@ class ParetoSet:
     thetas : ndarray, shape (K, n_terms)
         Parameters, engineering units.
     lambdas : ndarray, shape (K,)
-        λ1 of each member (λ2 = 1 − λ1); NaN when a member came from no weight.
+        λ1 of each member (λ2 = 1 − λ1); NaN when a member came from no weight. The estimators
+        (:func:`~graybox.pe_pareto`, :func:`~graybox.se_pareto`) keep the caller's order of their
+        ``lambdas``, whatever order their sweeps run in.
     J1, JS, JSF : ndarray, shape (K,)
         One-step-ahead MSE and free-run MSE on the identification data, static-function MSE at
         the static points (output units²; inf where a free run diverges or the static curve is

@@ -1282,7 +1282,8 @@ def se_pareto(
         samples it. Points outside the records' input range are welcome (a
         :class:`StaticRangeWarning` names them once).
     lambdas : sequence of float in (0, 1], optional
-        λ1 values; default: the paper's logspace(-2, 0, 100). Runs go from λ1 = 1 down.
+        λ1 values; default: the paper's logspace(-2, 0, 100). The runs go from λ1 = 1 down whatever
+        the order given; the set's members are in the order given (as :func:`pe_pareto`'s).
     method : {"ga", "gradient"}
         The paper's genetic algorithm, or ``scipy.optimize.least_squares`` with the analytic
         Jacobian of the free run.
@@ -1345,8 +1346,8 @@ def se_pareto(
     Returns
     -------
     ParetoSet
-        All members (one per λ) with J_1, J_S and J_SF from the shared evaluator; the optimised
-        cost is in ``extra["cost"]``, each member's largest local spectral radius along the
+        All members, one per λ in the order of ``lambdas``, with J_1, J_S and J_SF from the shared
+        evaluator; the optimised cost is in ``extra["cost"]``, each member's largest local spectral radius along the
         identification records in ``extra["radius"]`` (dimensionless) and the margin it was fitted
         with in ``extra["margin"]`` (NaN: none). A λ whose fit failed (no feasible start, or no individual
         with a finite cost) stays in the set as a failed member, with the reason in
@@ -1434,6 +1435,10 @@ def se_pareto(
         raise ValueError(f"every member of the SE sweep ({method}) failed, so there is no Pareto set: {reasons}. "
                          "Try another structure, theta0, starts or more generations")
     radii = problem.warn_slow(thetas, f"SE sweep ({method}) members", auto=margin == "auto")
-    return ParetoSet.from_thetas(problem.structure, thetas, front.lambdas, rec, sp, method=f"SE ({method})",
-                                 extra={"cost": costs, "radius": radii, "margin": margins}, threads=threads,
-                                 failures=failures)
+    # the sweep runs from λ1 = 1 down (an internal matter); the set keeps the caller's order of lambdas, as
+    # pe_pareto's does: sweep position p holds the caller's member order[p]
+    order = np.argsort(-check_lambdas(lam_in), kind="stable")
+    back = np.argsort(order)
+    return ParetoSet.from_thetas(problem.structure, thetas[back], front.lambdas[back], rec, sp, method=f"SE ({method})",
+                                 extra={"cost": costs[back], "radius": radii[back], "margin": margins[back]},
+                                 threads=threads, failures={int(order[p]): why for p, why in failures.items()})
