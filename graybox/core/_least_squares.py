@@ -81,6 +81,11 @@ def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np
     return x / s
 
 
+def _mean_square_stack(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
+    """The blocks stacked, each as a mean square (A / √rows)."""
+    return np.vstack([np.asarray(A, float) / np.sqrt(max(int(m), 1)) for A, m in blocks])
+
+
 def free_directions(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
     """The directions of θ that the stacked regression of ``blocks`` leaves free, units-free.
 
@@ -97,8 +102,7 @@ def free_directions(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
         An orthonormal basis of the free directions in the scaled coordinates (θ_j times the stack's
         column RMS c_j); no columns when the blocks identify θ.
     """
-    parts = [np.asarray(A, float) / np.sqrt(max(int(m), 1)) for A, m in blocks]
-    A = np.vstack(parts)
+    A = _mean_square_stack(blocks)
     n = A.shape[1]
     A = A / column_scales(A)
     if not np.all(np.isfinite(A)):
@@ -155,7 +159,7 @@ def check_identified(blocks: Sequence[tuple[str, np.ndarray, int]], terms: Seque
     if clusters is not None:
         # whether rows fixing every cluster would remove the free directions (units-free: R's columns are scaled
         # as the directions' are, each row to unit norm)
-        c = column_scales(np.vstack([np.asarray(A, float) / np.sqrt(max(int(m), 1)) for _, A, m in blocks]))
+        c = column_scales(_mean_square_stack([(A, m) for _, A, m in blocks]))
         Rs = np.asarray(clusters, float) / c
         Rs = Rs[np.linalg.norm(Rs, axis=1) > 0]
         Rs = Rs / np.linalg.norm(Rs, axis=1, keepdims=True)
