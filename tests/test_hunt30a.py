@@ -261,9 +261,10 @@ def test_a_network_that_cannot_choose_an_equilibrium_names_them_and_every_level_
     assert net.static_curve([]).shape == (0,)
 
 
-def test_evaluate_thetas_checks_the_shape_of_thetas_and_scores_a_non_finite_member_as_infinite():
+def test_evaluate_thetas_checks_the_shape_of_thetas_and_refuses_a_non_finite_member():
     # θ rows of the wrong length came out as numpy's matmul, einsum or unpacking errors; a member with
-    # a NaN had J_S = J_SF = inf but J_1 = NaN
+    # a NaN had J_S = J_SF = inf but J_1 = NaN (scored inf since, and refused naming its row since mend36a:
+    # a NaN θ is no model, and every caller leaves failed members out before scoring)
     st = gb.Structure(["1", "y(k-1)", "speed(k-1)"])
     rec = gb.Record(np.linspace(0.0, 1.0, 50), np.linspace(0.0, 1.0, 50), input_names=("speed",))
     pts = gb.StaticPoints([0.0, 1.0], [0.2, 2.2], input_names=("speed",))
@@ -272,5 +273,7 @@ def test_evaluate_thetas_checks_the_shape_of_thetas_and_scores_a_non_finite_memb
             gb.evaluate_thetas(st, bad, rec, pts)
     with pytest.raises(TypeError, match="thetas"):
         gb.evaluate_thetas(st, "abc", rec)
-    out = gb.evaluate_thetas(st, [[0.1, 0.5, 1.0], [np.nan, 0.5, 1.0]], rec, pts)
-    assert all(np.isfinite(out[k][0]) and out[k][1] == np.inf for k in ("J1", "JS", "JSF"))
+    with pytest.raises(ValueError, match=r"thetas: row \[1\]"):
+        gb.evaluate_thetas(st, [[0.1, 0.5, 1.0], [np.nan, 0.5, 1.0]], rec, pts)
+    out = gb.evaluate_thetas(st, [[0.1, 0.5, 1.0]], rec, pts)
+    assert all(np.isfinite(out[k][0]) for k in ("J1", "JS", "JSF"))

@@ -256,7 +256,8 @@ def evaluate_thetas(
     runs; J_SF from the equilibrium each member reaches from each measured ȳ_i). Errors are
     counted from sample max_lag on; a diverging free run gives J_S = inf, a static point where a
     member reaches no equilibrium gives its J_SF = inf. Nothing warns: use :func:`jsf` on a single
-    model to learn which point failed and why.
+    model to learn which point failed and why. A row that is not finite (NaN or inf) is no model
+    and is refused: a front's failed members are left out by its caller, not scored here.
 
     Parameters
     ----------
@@ -279,6 +280,11 @@ def evaluate_thetas(
     dict
         Keys among ``"J1"``, ``"JS"`` (with ``record``) and ``"JSF"`` (with ``static``), each an
         ndarray of shape (P,) in output units².
+
+    Raises
+    ------
+    ValueError
+        ``thetas`` of the wrong shape, or with a row that is not finite (the rows are named).
     """
 
     structure = as_structure(structure)
@@ -294,6 +300,12 @@ def evaluate_thetas(
     if th.ndim != 2 or th.shape[1] != len(structure):
         raise ValueError(f"thetas must have shape (P, {len(structure)}) (one parameter vector per row, one value per "
                          f"term) or ({len(structure)},), got shape {np.shape(thetas)}")
+    bad = np.flatnonzero(~np.all(np.isfinite(th), axis=1))
+    if bad.size:
+        rows = bad[:10].tolist()
+        raise ValueError(f"thetas: row{'s' if bad.size > 1 else ''} {rows}{' …' if bad.size > 10 else ''} "
+                         f"({bad.size} of {th.shape[0]}) not finite (NaN or inf): such a θ is no model to score; "
+                         "leave failed members out")
     out: dict[str, np.ndarray] = {}
     if record is not None:
         L = structure.max_lag
