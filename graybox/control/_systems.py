@@ -28,7 +28,7 @@ import numpy as np
 
 from ..core._records import Record
 from ..core._terms import Structure
-from ..core._validation import check_bool, check_int, check_real
+from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
 from ._local import system_name, check_polynomial, require_control
 
@@ -200,8 +200,8 @@ def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | N
     """
     model = check_polynomial(model, "narx_iosystem")
     noise = check_bool(noise, "noise")
-    if name is not None and not isinstance(name, str):
-        raise TypeError(f"name must be a string, got {name!r}")
+    if name is not None:
+        check_str(name, "name")
     Ts = check_real(Ts, "Ts", low=0, low_open=True)
     c = _noise_coefficients(model) if noise else np.zeros(0)
     ct = require_control()

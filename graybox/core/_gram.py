@@ -29,7 +29,7 @@ from ._records import Dataset, as_records, check_same_period
 from ._regressors import input_signals
 from ._terms import Term
 from ._reprs import short_repr
-from ._validation import check_real
+from ._validation import check_real, check_str
 
 __all__ = ["DaskRecord", "GramSums", "gram_sums", "r_factor", "available_memory", "require_memory", "is_dask_data"]
 
@@ -95,6 +95,7 @@ class DaskRecord:
     name: str = ""
 
     def __post_init__(self) -> None:
+        check_str(self.name, "DaskRecord: name")
         try:
             import dask.array as da
         except ImportError as exc:  # pragma: no cover - dask is optional

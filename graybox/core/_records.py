@@ -17,7 +17,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ._terms import check_input_names, default_input_names
-from ._validation import as_1d_finite, check_per_point, check_real, refuse_non_real, warn
+from ._validation import as_1d_finite, check_per_point, check_real, check_str, refuse_non_real, warn
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -123,6 +123,7 @@ class Record:
     input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
+        check_str(self.name, "Record: name")  # a label every message and file carries
         u = as_input_array(self.u, f"{self.name}: u", self.input_names)
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
@@ -217,6 +218,7 @@ class StaticPoints:
     uncertainty: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        check_str(self.name, "StaticPoints: name")
         u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names)
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
@@ -288,6 +290,7 @@ class StaticPoints:
             One point per distinct level, sorted by ū; its ȳ is the mean of the measurements
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
+        check_str(name, "StaticPoints: name")
         u = as_input_array(ubar, f"{name}: ubar", input_names)
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:

@@ -49,7 +49,7 @@ from ._surfaces import StaticSurface, box_grid
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_int, check_real, check_sequence
+from ..core._validation import check_choice, check_int, check_real, check_sequence, check_str
 from ..core._reprs import short_repr
 
 if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it
@@ -1100,6 +1100,7 @@ class UserConstraint(StaticConstraint):
     name: str = "user constraint"
 
     def __post_init__(self) -> None:
+        check_str(self.name, "UserConstraint: name")
         if not callable(self.fn):
             raise TypeError(f"UserConstraint needs a callable θ ↦ constraint(s), got {type(self.fn).__name__}")
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, outside_range
-from ..core._validation import as_1d_finite, check_int, check_real
+from ..core._validation import as_1d_finite, check_int, check_real, check_str
 from ..core._reprs import short_repr
 
 __all__ = ["StaticCurve"]
@@ -33,6 +33,7 @@ class StaticCurve:
     name: str = "static curve"
 
     def __post_init__(self) -> None:
+        check_str(self.name, "StaticCurve: name")
         c = np.array(as_1d_finite(self.coefficients, f"{self.name}: coefficients"))
         if c.size == 0:
             raise ValueError(f"{self.name}: a polynomial needs at least one coefficient")

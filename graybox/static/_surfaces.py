@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, frame_inputs, outside_range
-from ..core._validation import check_int, check_real, check_sequence
+from ..core._validation import check_int, check_real, check_sequence, check_str
 from ..core._reprs import short_repr
 
 __all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
@@ -108,6 +108,7 @@ class StaticSurface:
     input_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
+        check_str(self.name, "StaticSurface: name")
         ex = _monomial_set(self.exponents, self.name)
         m = len(ex[0])
         c = np.array(self.coefficients, dtype=float).reshape(-1)
