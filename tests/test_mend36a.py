@@ -67,3 +67,58 @@ def test_a_name_that_is_not_a_string_is_a_type_error(kind):
         with pytest.raises(TypeError, match=r"name must be a str, got"):
             _named(kind, bad)
     assert _named(kind, "label") is not None
+
+
+# -- 2. PE's QP at an output offset -------------------------------------------------------------
+
+def _offset_plant(offset):
+    """A rational NARX plant whose output sits at ``offset`` ± ~25, and static points beyond its run."""
+    rng = np.random.default_rng(3)
+    n = 1500
+    u = np.repeat(rng.uniform(0, 10, n // 30 + 1), 30)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.6 * y[k - 1] + 0.5 * u[k - 1] - 0.01 * u[k - 1] ** 2 + 0.002 * u[k - 1] * y[k - 1] + 1.0 \
+            + 0.05 * rng.standard_normal()
+    ub = np.linspace(-2.0, 14.0, 8)
+    yb = (1 + 0.5 * ub - 0.01 * ub**2) / (1 - 0.6 - 0.002 * ub) + 0.02 * rng.standard_normal(ub.size)
+    return gb.Record(u, y + offset), gb.StaticPoints(ub, yb + offset, uncertainty=0.05), np.ptp(y)
+
+
+def _fitted_and_static(st, rec, sp, th, offset):
+    # the structure is closed under a shift of y (1, y, u, u², uy), so the shifted problem is the same problem
+    from graybox.core._regressors import stacked_regressors
+    psi, _ = stacked_regressors(st, [rec])
+    ub = sp.ubar
+    curve = (th[0] + th[2] * ub + th[3] * ub**2) / (1 - th[1] - th[4] * ub)  # the rational static function
+    return psi @ th - offset, curve - offset
+
+
+@pytest.mark.parametrize("solver", ["clarabel", "osqp"])
+def test_pe_qp_at_an_output_offset_agrees_with_the_same_problem_near_zero(solver):
+    # was: at y = 2e9 ± 25 the QP's step was in units of RMS(y) (the offset: steps ~1e-8, at the solvers'
+    # tolerances) and its basis carried the least-squares point ‖ŷ‖ ≈ offset·√N through an explicit
+    # inverse of a factor with cond ≈ 1e10: even λ1 = 1 (least squares) moved the fitted output by half its
+    # spread, a static band by 2000 spreads; the closed form agreed with the shifted problem to 2e-7
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)"])
+    runs = {}
+    for offset in (0.0, 2e9):
+        rec, sp, spread = _offset_plant(offset)
+        with pytest.warns(gb.StaticRangeWarning):
+            free = gb.pe_thetas(st, rec, sp, lambdas=[1.0, 0.5, 0.01], solver=solver)
+        with pytest.warns(gb.StaticRangeWarning):
+            band = gb.pe_thetas(st, rec, sp, lambdas=[0.5], constraints=gb.StaticBand(), solver=solver)
+        runs[offset] = [_fitted_and_static(st, rec, sp, th, offset) for th in np.vstack([free, band])]
+    for (f0, s0), (f1, s1) in zip(runs[0.0], runs[2e9]):
+        assert np.max(np.abs(f1 - f0)) <= 1e-6 * spread
+        assert np.max(np.abs(s1 - s0)) <= 1e-6 * spread
+
+
+def test_output_scale_is_the_spread_about_the_mean_with_a_units_free_floor():
+    from graybox.core._least_squares import output_scale
+    rng = np.random.default_rng(0)
+    y = rng.standard_normal(500)
+    for c, k in ((0.0, 1.0), (2e9, 1.0), (2e9, 1e-3), (-7.0, 1e4)):
+        assert output_scale(c + k * y) == pytest.approx(k * np.std(y), rel=1e-6)  # no offset in it, units in it
+    assert output_scale(np.full(50, 2e9)) == 2e9  # held constant: its level is its scale (not 1 output unit)
+    assert output_scale(np.zeros(50)) == 1.0  # 0 in every unit

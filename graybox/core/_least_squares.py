@@ -14,7 +14,7 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
-           "check_identified"]
+           "check_identified", "CONSTANT_RTOL", "output_spread", "output_scale", "spread_scale"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -45,6 +45,40 @@ def column_scales(A: np.ndarray) -> np.ndarray:
     """RMS of each column of ``A`` (1 for an all-zero column), shape (n,)."""
     s = np.sqrt(np.mean(np.asarray(A) ** 2, axis=0))
     return np.where(s > 0, s, 1.0)
+
+
+#: A measured output whose spread ‖y − mean(y)‖ is at most this fraction of ‖y‖ is constant: what is left
+#: is the mean's own round-off (a level of 0.8 held for 39 samples leaves 1e-16), not a signal.
+CONSTANT_RTOL = 1e-13
+
+
+def output_spread(y: np.ndarray) -> float:
+    """‖y − mean(y)‖ of a measured output (output units), 0.0 where it is constant to round-off
+    (:data:`CONSTANT_RTOL`): the denominator of RRSE and fit %, undefined for a held output."""
+    y = np.asarray(y, float)
+    den = float(np.linalg.norm(y - y.mean()))
+    return 0.0 if den <= CONSTANT_RTOL * float(np.linalg.norm(y)) else den
+
+
+def spread_scale(std: float, rms: float) -> float:
+    """:func:`output_scale` from the output's standard deviation and RMS (for data reduced elsewhere)."""
+    if np.isfinite(std) and std > CONSTANT_RTOL * rms:
+        return float(std)
+    return float(rms) if np.isfinite(rms) and rms > 0 else 1.0
+
+
+def output_scale(y: np.ndarray) -> float:
+    """The output's scale for a solver or a tolerance, output units: its spread about its mean, RMS(y − mean y).
+
+    Not RMS(y): that counts the offset, so an output of 2e9 ± 50 (a pressure in Pa) made every step the
+    solvers take a relative 1e-8 of their variable, at their tolerances. The floor is units-free too:
+    an output constant to round-off (:data:`CONSTANT_RTOL`) has its RMS as its scale, one identically 0
+    has 1 (0 in any units).
+    """
+    y = np.asarray(y, float).ravel()
+    if y.size == 0:
+        return 1.0
+    return spread_scale(float(np.std(y)), float(np.sqrt(np.mean(y**2))))
 
 
 def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np.ndarray:

@@ -55,7 +55,7 @@ from ..static._curves import StaticCurve
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
-from ..core._least_squares import REMEDIES, check_identified, check_rows, column_scales
+from ..core._least_squares import REMEDIES, check_identified, check_rows, column_scales, output_scale, spread_scale
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -250,6 +250,7 @@ class _Data:
     c1: np.ndarray  # (n,)
     rss: float  # residual sum of squares of the unconstrained LS fit
     N: int  # regression rows
+    y_scale: float  # the target's spread about its mean (core._least_squares.output_scale), output units
 
 
 def _tri_inv(R: np.ndarray) -> np.ndarray:
@@ -299,7 +300,7 @@ def _dynamic(structure: Structure, records: list) -> _Data:
     # R-factor of [Ψ/s, y]: its top-left block is Ψ's triangular factor, its last column Q1ᵀy and
     # its corner the LS residual norm; Q itself is never formed.
     Raug = _r_factor(np.column_stack([psi / s, y]))
-    return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0])
+    return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0], output_scale(y))
 
 
 def _dynamic_chunked(structure: Structure, records: list) -> _Data:
@@ -316,7 +317,19 @@ def _dynamic_chunked(structure: Structure, records: list) -> _Data:
     # QR sign convention: make the diagonal positive, as the Cholesky-based factor has it
     sign = np.where(np.diag(R) < 0, -1.0, 1.0)[:, None]
     Rs, c = sign * Rs, sign[:, 0] * R[:, n]
-    return _Data(structure, s, Rs[:n, :n], c[:n], float(c[n] ** 2), N)
+    return _Data(structure, s, Rs[:n, :n], c[:n], float(c[n] ** 2), N, _target_scale(records, structure.max_lag))
+
+
+def _target_scale(records: list, L: int) -> float:
+    """output_scale of the regression targets y[L:] of every record, on the Dask scheduler for Dask records."""
+    if not is_dask_data(records):
+        return output_scale(np.concatenate([np.asarray(r.y[L:], float) for r in as_records(records)]))
+    import dask
+    import dask.array as da
+
+    y = da.concatenate([r.y[L:] for r in records])
+    std, ms = dask.compute(da.std(y), da.mean(y**2))
+    return spread_scale(float(std), float(np.sqrt(ms)))
 
 
 def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray, int]:
@@ -377,9 +390,13 @@ class _Rows:
     names: tuple[str, ...]
 
 
-def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, T: np.ndarray | None = None) -> _Rows:
+def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, T: np.ndarray | None = None,
+          at: np.ndarray | None = None) -> _Rows:
+    """The rows in y (z = T y); with ``at`` (a z) their right-hand sides are those of the step y − T⁻¹ at,
+    each row's residual at ``at`` formed in z, where no ill-conditioned T has touched it."""
     n = s.size
     T = np.eye(n) if T is None else T
+    at = np.zeros(n) if at is None else at
     E, f, G, h, user, eq_names = [np.zeros((0, n))], [np.zeros(0)], [np.zeros((0, n))], [np.zeros(0)], [], []
     for c in cons:
         c.check(ctx)
@@ -389,11 +406,11 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, T: np
             continue
         if r.n_eq:
             E.append((r.A_eq / s) @ T)
-            f.append(r.b_eq)
+            f.append(r.b_eq - (r.A_eq / s) @ at)
             eq_names.append(c.describe())
         if r.n_ub:
             G.append((r.A_ub / s) @ T)
-            h.append(r.b_ub)
+            h.append(r.b_ub - (r.A_ub / s) @ at)
     names = tuple(c.describe() for c in cons)
     E, f, G, h = np.vstack(E), np.concatenate(f), np.vstack(G), np.concatenate(h)
     G, h = _normalise_ub(G, h, names)
@@ -439,42 +456,56 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class _Basis:
-    """Solver coordinates y with z = T y in which both quadratic forms are as simple as possible.
+    """The QP's coordinates: z = z0 + T y, the step y from the least-squares estimate z0, in which both
+    quadratic forms are diagonal.
 
-    With Ψ of full rank, T = R1⁻¹ V (V from the SVD of the whitened static rows R2 R1⁻¹ = W Σ Vᵀ)
-    makes both the dynamic and the static Hessians diagonal (a generalised SVD): the objective
-    is w1 (‖y‖² − 2 g1ᵀy) + w2 (yᵀ diag(H2) y − 2 g2ᵀy) up to constants, whatever λ is. The
-    ill-conditioning of the data then lives in T (applied once, by backward-stable triangular
-    solves) instead of in the solver's KKT system, which is why Clarabel and OSQP reach the
-    closed form to ~1e-8 down to λ1 = 1e-6. Without full rank, T = I and the forms are dense.
+    With Ψ of full rank and static rows R2, T = R_s⁻¹ V from the CS decomposition of the stacked
+    factors, [R1; R2] = [Q1; Q2] R_s and Q2 = W S Vᵀ (Q1ᵀQ1 = I − Q2ᵀQ2, so V diagonalises both): the
+    objective is w1 yᵀdiag(H1)y + w2 (yᵀdiag(H2)y + 2 l2ᵀy) up to constants, whatever λ is, H2 = S²
+    and H1 the column norms² of Q1 V. The ill-conditioning of the data then lives in T (applied once,
+    by backward-stable triangular solves) instead of in the solver's KKT system, which is why Clarabel
+    and OSQP reach the closed form to ~1e-8 down to λ1 = 1e-6. Without static rows T = R1⁻¹ and
+    H1 = 1; without full rank, T = I and the forms are dense.
+
+    Only the step goes through T, and l2 = S Wᵀ(R2 z0 − c2) is formed from the static residual at z0:
+    the former basis R1⁻¹V from the SVD of R2 R1⁻¹, and the least-squares point and gradient taken in
+    it, carried ‖ŷ‖, an output's offset included, through the explicit inverse; at an output of
+    2e9 ± 50 (cond R1 ≈ 1e10) that moved the fitted output by its whole spread.
     """
 
     T: np.ndarray  # (n, n)
     H1: np.ndarray  # (n,) diagonal, or (n, n)
-    g1: np.ndarray  # (n,)
-    H2: np.ndarray | None
-    g2: np.ndarray | None
+    H2: np.ndarray | None  # (n,) diagonal, or (n, n)
+    z0: np.ndarray  # (n,) the least-squares estimate (a minimiser of the dynamic term), scaled coordinates
+    l1: np.ndarray  # (n,) half the dynamic term's gradient at z0 in y (0 up to round-off)
+    l2: np.ndarray | None  # half the static term's
 
 
 def _basis(d: _Data, static: tuple[np.ndarray, np.ndarray] | None) -> _Basis:
     n = d.s.size
     diag = np.abs(np.diag(d.R1))
     if diag.min() > 1e-12 * diag.max():
-        Rinv = _tri_inv(d.R1)
+        z0 = scipy.linalg.solve_triangular(d.R1, d.c1)
         if static is None:
-            return _Basis(Rinv, np.ones(n), d.c1.copy(), None, None)
+            return _Basis(_tri_inv(d.R1), np.ones(n), None, z0, np.zeros(n), None)
         R2, c2 = static
-        W, S, Vt = np.linalg.svd(R2 @ Rinv, full_matrices=True)
+        Qs, Rs = np.linalg.qr(np.vstack([d.R1, R2]))
+        W, S, Vt = np.linalg.svd(Qs[n:], full_matrices=True)
         k = S.size
         H2 = np.zeros(n)
         H2[:k] = S**2
-        g2 = np.zeros(n)
-        g2[:k] = S * (W.T @ c2)[:k]
-        return _Basis(Rinv @ Vt.T, np.ones(n), Vt @ d.c1, H2, g2)
+        Q1V = Qs[:n] @ Vt.T  # orthogonal columns: their squared norms (1 − S² without its cancellation)
+        l2 = np.zeros(n)
+        l2[:k] = S * (W.T @ (R2 @ z0 - c2))[:k]
+        return _Basis(scipy.linalg.solve_triangular(Rs, Vt.T), np.einsum("ij,ij->j", Q1V, Q1V), H2, z0,
+                      np.zeros(n), l2)
     # rank-deficient Ψ (the constraints may still identify θ): plain normal forms
-    H2 = None if static is None else static[0].T @ static[0]
-    g2 = None if static is None else static[0].T @ static[1]
-    return _Basis(np.eye(n), d.R1.T @ d.R1, d.R1.T @ d.c1, H2, g2)
+    H1, g1 = d.R1.T @ d.R1, d.R1.T @ d.c1
+    z0 = np.linalg.lstsq(H1, g1, rcond=None)[0]
+    if static is None:
+        return _Basis(np.eye(n), H1, None, z0, H1 @ z0 - g1, None)
+    H2 = static[0].T @ static[0]
+    return _Basis(np.eye(n), H1, H2, z0, H1 @ z0 - g1, H2 @ z0 - static[0].T @ static[1])
 
 
 def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
@@ -491,8 +522,8 @@ def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
 class _QP:
     """min w1 (δᵀH1δ + 2l1ᵀδ) + w2 (δᵀH2δ + 2l2ᵀδ)  s.t.  V δ = g', G δ <= h', user(θ(δ)).
 
-    The variable is δ = (y − y_LS) / σ, the step from the unconstrained least-squares estimate in
-    the solver basis in units of the output's RMS σ (so that the problem the solver sees, and its
+    The variable is δ = y / σ, the step from the unconstrained least-squares estimate in
+    the solver basis (:class:`_Basis`) in units of the output's spread σ about its mean (so that the problem the solver sees, and its
     optimum, do not depend on the output's units). Centring matters: the objective is then the *change* of the weighted squared
     errors (0 at the LS estimate), so the solvers' relative gap tolerances apply to what is being
     traded instead of to ‖y‖² ≈ N·mean(y²), which would leave active constraints ~1e-6 loose.
@@ -507,26 +538,25 @@ class _QP:
 
         n = d.s.size
         self.basis = b = _basis(d, static)
-        rows = _rows(cons, ctx, d.s, b.T)
-        self.y0 = y0 = b.g1 / b.H1 if b.H1.ndim == 1 else np.linalg.lstsq(b.H1, b.g1, rcond=None)[0]
-        # y is in output units (y0 and the linear terms scale with the output, the objective with its
-        # square): the variable is the step in units of the output's RMS, σ, because Clarabel's
-        # tolerances and starting point are absolute and its optimum moved with the output's units
-        sig = float(np.sqrt((d.c1 @ d.c1 + d.rss) / d.N))
-        self.sigma = sig = sig if np.isfinite(sig) and sig > 0 else 1.0
-        self.dy = cp.Variable(n, name="dy")  # (y − y0) / σ
-        theta = cp.multiply(1.0 / d.s, b.T @ (y0 + sig * self.dy))  # engineering units, for user constraints
+        z0 = b.z0  # T only ever carries the step, whose size is the output's spread (see _Basis)
+        rows = _rows(cons, ctx, d.s, b.T, at=z0)
+        # y is in output units (the linear terms scale with the output, the objective with its
+        # square): the variable is the step in units of the output's spread σ, because Clarabel's
+        # tolerances and starting point are absolute and its optimum moved with the output's units.
+        # The spread about the mean, not the RMS: an offset (2e9 ± 50) made every step ~1e-8 of σ.
+        self.sigma = sig = d.y_scale
+        self.dy = cp.Variable(n, name="dy")  # y / σ
+        theta = z0 / d.s + cp.multiply(sig / d.s, b.T @ self.dy)  # engineering units, for user constraints
         self.w1 = cp.Parameter(nonneg=True, name="w1")
         self.w2 = cp.Parameter(nonneg=True, name="w2")
-        Hy0 = (lambda H: H * y0 if H.ndim == 1 else H @ y0)
-        obj = self.w1 * (_quad(self.dy, b.H1) + 2 * ((Hy0(b.H1) - b.g1) / sig) @ self.dy)
+        obj = self.w1 * (_quad(self.dy, b.H1) + 2 * (b.l1 / sig) @ self.dy)
         if b.H2 is not None:
-            obj = obj + self.w2 * (_quad(self.dy, b.H2) + 2 * ((Hy0(b.H2) - b.g2) / sig) @ self.dy)
+            obj = obj + self.w2 * (_quad(self.dy, b.H2) + 2 * (b.l2 / sig) @ self.dy)
         cons_cp: list[cp.Constraint] = []
         if rows.V.shape[0]:
-            cons_cp.append(rows.V @ self.dy == (rows.g - rows.V @ y0) / sig)
+            cons_cp.append(rows.V @ self.dy == rows.g / sig)
         if rows.G.shape[0]:
-            cons_cp.append(rows.G @ self.dy <= (rows.h - rows.G @ y0) / sig)
+            cons_cp.append(rows.G @ self.dy <= rows.h / sig)
         for c in rows.user:
             cons_cp.extend(c.constraints(theta, ctx))
         self.problem = cp.Problem(cp.Minimize(obj), cons_cp)
@@ -566,7 +596,7 @@ class _QP:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
             self.inaccurate.append((float(w1), float(w2)))
-        return self.basis.T @ (self.y0 + self.sigma * np.array(self.dy.value, float))
+        return self.basis.z0 + self.sigma * (self.basis.T @ np.array(self.dy.value, float))
 
     def warn_inaccurate(self) -> None:
         """One warning for the whole sweep, naming the weights whose optimum the solver called inaccurate."""

@@ -62,7 +62,7 @@ from ..core._simulation_kernels import (
     record_inputs,
     simulate_one,
 )
-from ..core._least_squares import check_rows, column_scales, one_blas_thread, scaled_lstsq
+from ..core._least_squares import check_rows, column_scales, one_blas_thread, output_scale, scaled_lstsq
 from ..models._coerce import as_structure, records_of, static_points
 from ._pareto import ParetoSet
 from ..core._progress import progress_bar
@@ -154,7 +154,7 @@ class SEProblem:
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
         # the output's spread (output units): least_squares' gradient test is absolute, and the
         # gradient of these residuals is in output units, so its tolerance is scaled by this
-        self.y_scale = float(np.std(self.target)) or 1.0
+        self.y_scale = output_scale(self.target)
         self._memo: dict = {}  # least squares and PE solutions, shared with with_margin's copies
         self._static_memo: tuple[bytes, np.ndarray] | None = None
         self.ridge = check_real(ridge, "ridge", low=0.0)

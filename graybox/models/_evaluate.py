@@ -24,6 +24,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from ..core._least_squares import CONSTANT_RTOL, output_spread  # noqa: F401 (their home is core; named here too)
 from ..core._simulation_kernels import batch_sse, encode, record_inputs
 from ._model import Model
 from ._coerce import as_model, as_record, as_structure, static_info
@@ -142,19 +143,6 @@ def rrse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     if den == 0:
         raise ValueError("RRSE undefined: the measured output is constant")
     return float(np.linalg.norm(y - yhat) / den)
-
-
-#: A measured output whose spread ‖y − mean(y)‖ is at most this fraction of ‖y‖ is constant: what is left
-#: is the mean's own round-off (a level of 0.8 held for 39 samples leaves 1e-16), not a signal.
-CONSTANT_RTOL = 1e-13
-
-
-def output_spread(y: np.ndarray) -> float:
-    """‖y − mean(y)‖ of a measured output (output units), 0.0 where it is constant to round-off
-    (:data:`CONSTANT_RTOL`): the denominator of RRSE and fit %, undefined for a held output."""
-    y = np.asarray(y, float)
-    den = float(np.linalg.norm(y - y.mean()))
-    return 0.0 if den <= CONSTANT_RTOL * float(np.linalg.norm(y)) else den
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:

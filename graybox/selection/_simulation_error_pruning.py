@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg
 
+from ..core._least_squares import output_scale
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, as_records
@@ -153,7 +154,7 @@ class _Scorer:
         self.G = ps.T @ ps
         self.b = ps.T @ y
         # the tolerance's scale: var(y), or for a constant output its mean square (not 1 output unit²)
-        self.yvar = float(np.var(y)) if np.var(y) > 0 else float(np.mean(y**2))
+        self.yvar = output_scale(y) ** 2
         # free-run errors below this are round-off, not signal: such structures tie (noise-free data)
         self.floor = 1e-20 * max(float(np.mean(y**2)), np.finfo(float).tiny)
 
