@@ -114,6 +114,12 @@ class ParameterUncertainty:
         Covariance of the MA parameters (ELS); empty otherwise.
     static_sigma2 : float
         Variance of the static points' ȳ used (PE and SE), output units²; NaN otherwise.
+    cov_factor : ndarray, shape (k, n_terms), optional
+        F with ``cov`` = FᵀF, in the units of θ, as the estimators' scaled coordinates give it.
+        Contractions gᵀ cov g (bands, cluster variances) are taken as ‖F g‖²: ``cov`` itself holds
+        its small directions only to eps × its largest entry, which lost 1 % of a static band's
+        std at an input offset of 1e4 ± 10 (cond of the scaled regressors 3e7). None (a covariance
+        given by hand, or read from an older file): contractions use ``cov``.
     """
 
     model: Model
@@ -125,6 +131,7 @@ class ParameterUncertainty:
     constraints: np.ndarray
     noise_cov: np.ndarray
     static_sigma2: float = float("nan")
+    cov_factor: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -137,6 +144,20 @@ class ParameterUncertainty:
         ne = len(self.model.noise_structure)
         nc = frozen(np.reshape(self.noise_cov, (ne, ne)) if ne else np.zeros((0, 0)))
         object.__setattr__(self, "noise_cov", nc)
+        if self.cov_factor is not None:
+            F = frozen(self.cov_factor)
+            if F.ndim != 2 or F.shape[1] != n:
+                raise ValueError(f"cov_factor must have shape (k, {n}), got {F.shape}")
+            object.__setattr__(self, "cov_factor", F)
+
+    def contract(self, G: np.ndarray) -> np.ndarray:
+        """The variances gᵀ cov g of the linear functions g of θ in the rows of ``G`` (shape (M, n_terms)),
+        shape (M,): ‖F g‖² through :attr:`cov_factor` where there is one (accurate to eps × cond of the
+        estimate's scaled problem, where contracting ``cov`` is accurate to eps × cond²)."""
+        G = np.atleast_2d(np.asarray(G, float))
+        if self.cov_factor is not None:
+            return np.einsum("ij,ij->i", G @ self.cov_factor.T, G @ self.cov_factor.T)
+        return np.clip(np.einsum("ij,jk,ik->i", G, self.cov, G), 0, None)
 
     @property
     def theta(self) -> np.ndarray:
@@ -183,18 +204,21 @@ class ParameterUncertainty:
         """The same covariance with intervals at another confidence level."""
         level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
         return ParameterUncertainty(self.model, self.cov, level, self.dof, self.sigma2, self.method,
-                                    self.constraints, self.noise_cov, self.static_sigma2)
+                                    self.constraints, self.noise_cov, self.static_sigma2, self.cov_factor)
 
     def cluster_cov(self) -> np.ndarray:
         """Covariance of the cluster coefficients Σ = Rθ, shape (n_clusters, n_clusters)."""
         R = self.model.cluster_map().R
+        if self.cov_factor is not None:
+            FR = self.cov_factor @ R.T
+            return FR.T @ FR
         return R @ self.cov @ R.T
 
     def cluster_frame(self) -> pd.DataFrame:
         """One row per cluster: Σ, its standard deviation and interval (a constrained cluster has 0)."""
         cm = self.model.cluster_map()
         sig = cm.R @ self.theta
-        sd = np.sqrt(np.clip(np.diag(self.cluster_cov()), 0.0, None))
+        sd = np.sqrt(self.contract(cm.R))
         h = self.quantile * sd
         return pd.DataFrame({"value": sig, "std": sd, "low": sig - h, "high": sig + h},
                             index=pd.Index(cm.names, name="cluster"))
@@ -228,16 +252,19 @@ def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
     return Vt[r:].T, r
 
 
-def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> np.ndarray:
-    """Z (ZᵀHZ)⁻¹ ZᵀMZ (ZᵀHZ)⁻¹ Zᵀ with H = AᵀA and M = GᵀG, from the factors (never forming H).
+def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Z (ZᵀHZ)⁻¹ ZᵀMZ (ZᵀHZ)⁻¹ Zᵀ with H = AᵀA and M = GᵀG, from the factors (never forming H), and
+    a square-root factor F of it (k × n, the same matrix as FᵀF).
 
     With AZ = U S Vᵀ the result is WᵀW, W = (GZV S⁻²)(ZV)ᵀ: positive semidefinite by construction,
     and accurate to about eps·cond(AZ) where forming H would lose eps·cond(AZ)² (an SE Jacobian of
-    a slow plant can have cond ≈ 1e9). ValueError when AZ is rank deficient (not identifiable).
+    a slow plant can have cond ≈ 1e9). F = R_G S⁻²(ZV)ᵀ with R_G the triangular factor of GZV keeps
+    that accuracy for a contraction ‖F g‖, which the matrix itself has only relative to its largest
+    entry. ValueError when AZ is rank deficient (not identifiable).
     """
     n = A.shape[1]
     if Z.shape[1] == 0:
-        return np.zeros((n, n))
+        return np.zeros((n, n)), np.zeros((0, n))
     AZ = A @ Z
     if not (np.all(np.isfinite(AZ)) and np.all(np.isfinite(G))):
         raise ValueError(f"{what}: non-finite derivatives; the covariance is undefined here")
@@ -248,13 +275,14 @@ def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> np.ndar
             raise ValueError(f"{what}: the parameters are not identifiable from these data and constraints "
                              "(singular information matrix), so they have no finite covariance")
         ZV = Z @ Vt.T
-        W = ((G @ ZV) / S**2) @ ZV.T
-        return W.T @ W
+        GZV = G @ ZV
+        W = (GZV / S**2) @ ZV.T
+        return W.T @ W, (np.linalg.qr(GZV, mode="r") / S**2) @ ZV.T
 
 
-def _to_theta(cov_z: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Covariance in z = s ⊙ θ → in θ."""
-    return cov_z / np.outer(s, s)
+def _to_theta(cov_z: tuple[np.ndarray, np.ndarray], s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Covariance and its factor in z = s ⊙ θ → in θ."""
+    return cov_z[0] / np.outer(s, s), cov_z[1] / s
 
 
 def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float, size: float, what: str,
@@ -397,13 +425,13 @@ def ls_uncertainty(
     dof = N - n - ne
     sigma2 = float(res @ res) / dof
     if ne == 0:
-        cov = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what), s)
+        cov, F = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what), s)
         _check_stationary(np.eye(n), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
                           "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty)")
     else:
-        cov = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
+        cov, F = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
-                                cov[n:, n:])
+                                cov[n:, n:], cov_factor=F[:, :n])
 
 
 def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.ndarray, L: int) -> np.ndarray:
@@ -442,8 +470,9 @@ def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.nd
     return g[L:]
 
 
-def _pseudo_linear_cov(A: np.ndarray, G: np.ndarray, sigma2: float, what: str) -> np.ndarray:
-    """σ² (AᵀG)⁻¹ AᵀA (GᵀA)⁻¹ = σ² K Kᵀ with K = (QᵀG)⁻¹ and A = QR (σ²(AᵀA)⁻¹ when G = A)."""
+def _pseudo_linear_cov(A: np.ndarray, G: np.ndarray, sigma2: float, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """σ² (AᵀG)⁻¹ AᵀA (GᵀA)⁻¹ = σ² K Kᵀ with K = (QᵀG)⁻¹ and A = QR (σ²(AᵀA)⁻¹ when G = A), and its
+    factor σKᵀ."""
     with one_blas_thread():
         Q, _ = np.linalg.qr(A)
         M = Q.T @ G
@@ -452,7 +481,7 @@ def _pseudo_linear_cov(A: np.ndarray, G: np.ndarray, sigma2: float, what: str) -
             raise ValueError(f"{what}: the parameters are not identifiable from these data (singular information "
                              "matrix), so they have no finite covariance")
         K = np.linalg.inv(M)
-        return sigma2 * (K @ K.T)
+        return sigma2 * (K @ K.T), np.sqrt(sigma2) * K.T
 
 
 # --------------------------------------------------------------------------------------------
@@ -516,10 +545,10 @@ def cls_uncertainty(
     dof = d.N - (n - r)
     rss = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss)
     sigma2 = rss / dof
-    cov = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty"), d.s)
+    cov, F = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty"), d.s)
     _check_stationary(Z, d.R1, d.R1 @ z - d.c1, d.rss, _size(d.R1 @ z, d.c1), "cls_uncertainty",
                       "pass the CLS estimate with the data, static information and constraints it was estimated with")
-    return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)))
+    return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)), cov_factor=F)
 
 
 # --------------------------------------------------------------------------------------------
@@ -604,8 +633,9 @@ def pe_uncertainty(
            else float(np.mean((sres / g) ** 2)))
     B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
-    cov = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty"), d.s)
-    return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2)
+    cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty"), d.s)
+    return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
+                                cov_factor=F)
 
 
 # --------------------------------------------------------------------------------------------
@@ -694,9 +724,9 @@ def se_uncertainty(
     if rel > 1e-3:
         warn(f"se_uncertainty: θ is not a stationary point of the SE objective at λ1 = {lam:g} (relative gradient "
              f"{rel:.1e}); the intervals describe the curvature at this θ, not at an optimum", UncertaintyWarning)
-    cov = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty"), problem.scale)
+    cov, F = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty"), problem.scale)
     return ParameterUncertainty(m, cov, level, nd - n, sigma2, f"SE λ1={lam:.4g}", np.zeros((0, n)),
-                                np.zeros((0, 0)), ss2)
+                                np.zeros((0, 0)), ss2, cov_factor=F)
 
 
 # --------------------------------------------------------------------------------------------
@@ -909,8 +939,7 @@ def static_curve_band(
         z = uncertainty.quantile  # Student's t, as the parameters' intervals: σ² is estimated
         Gy = static_theta_gradient(st, th, ub, yb)
         Gg = _gain_gradient(st, th, ub, yb)
-        sy = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", Gy, cov, Gy), 0, None))
-        sg = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", Gg, cov, Gg), 0, None))
+        sy, sg = np.sqrt(uncertainty.contract(Gy)), np.sqrt(uncertainty.contract(Gg))
         return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name)
     n_samples = check_int(n_samples, "n_samples", low=10)

@@ -411,7 +411,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "ParameterUncertainty": (ParameterUncertainty, (("method", "str"), ("model", "Model"), ("cov", "array2"),
                                                     ("level", "float"), ("dof", "int"), ("sigma2", "float"),
                                                     ("constraints", "array2"), ("noise_cov", "array2"),
-                                                    ("static_sigma2", "float"))),
+                                                    ("static_sigma2", "float"), ("cov_factor", "array2_or_none"))),
     "StaticCurveBand": (StaticCurveBand, (("model_name", "str"), ("method", "str"), ("level", "float"),
                                           ("n_samples", "int"), ("ubar", "array1"), ("ybar", "array1"),
                                           ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
@@ -490,7 +490,9 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      "ParetoSet": {"input_names": _DEFAULT, "Ts": None},
                                      "Selection": {k: _DEFAULT for k in ("search", "subsets", "subset_rss",
                                                                          "input_names")} | {"Ts": None},
-                                     "SEMPResult": {"input_names": _DEFAULT, "Ts": None}}
+                                     "SEMPResult": {"input_names": _DEFAULT, "Ts": None},
+                                     # the covariance's factor, carried since mend36a: contractions use cov
+                                     "ParameterUncertainty": {"cov_factor": None}}
 
 #: Fields that files written by an older graybox carry and this one no longer has: read and dropped.
 #: A GrayboxSelection named the SQLite store its cells ran in; it no longer runs through a store.
