@@ -6,6 +6,8 @@ import warnings
 import numpy as np
 import pytest
 
+import graybox as gb
+
 from graybox import Candidates, Model, Record, Structure, stacked_regressors
 from graybox.estimation._extended_least_squares import ELSConvergenceWarning, ELSResult, els, noise_terms
 from graybox.reproduce import section_black_box
@@ -273,3 +275,16 @@ def test_an_iteration_that_cannot_converge_warns_once_in_words():
     text = str(mine[0].message)
     assert "did not converge in 80 iterations" in text and "returning the last iterate" in text
     assert min(info.history[-20:]) > 0.05
+
+
+def test_els_names_the_terms_a_held_input_leaves_free_as_the_other_estimators_do():
+    # was: "least squares: regressor matrix has rank 2 < 3 columns", while CLS, PE and SE on the same
+    # record named the free terms and what would identify them (one identifiability rule for all)
+    u = np.full(200, 3.0)
+    y = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), [0.5, 0.2, 1.0]).simulate(u, np.zeros(1))
+    rec = gb.Record(u, y + 0.01 * np.random.default_rng(0).standard_normal(200))
+    msg = r"ELS process θ is not identifiable.*\['u\(k-1\)', '1'\].*record whose input moves"
+    with pytest.raises(ValueError, match=msg):
+        gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1", "e(k-1)"]), rec)
+    with pytest.raises(ValueError, match=r"not identifiable from the identification records.*\['u\(k-1\)', '1'\]"):
+        gb.cls(gb.Structure(["y(k-1)", "u(k-1)", "1"]), rec)

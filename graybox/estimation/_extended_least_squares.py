@@ -84,7 +84,7 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
 from ..core._simulation_kernels import inverse_ma_filter
-from ..core._least_squares import check_rows, column_scales, scaled_lstsq
+from ..core._least_squares import check_identified, check_rows, column_scales, scaled_lstsq
 from ..models._coerce import as_structure, records_of
 from ..models._model import Model
 from ..core._records import Dataset, Record
@@ -489,6 +489,11 @@ def _warn_not_converged(max_iter: int, hist: list[float], tol: float, relaxation
          ELSConvergenceWarning)
 
 
+#: What identifies terms the records leave free, for an estimator that takes no static points.
+_NO_STATIC_REMEDY = ("give a record whose input moves (ELS takes no static points: cls, pe_pareto or se_pareto fit the "
+                     "records together with static points at several input levels)")
+
+
 def els(
     structure: object,
     data: Record | Sequence[Record] | Dataset,
@@ -557,6 +562,9 @@ def els(
     direct = check_bool(direct, "direct")
     recs = records_of(data)
     reg = _regression(process, ns, recs)
+    # the rule every estimator applies, so that ELS names the terms left free as CLS, PE and SE do
+    check_identified([("the identification records", reg.psi, reg.psi.shape[0])], [str(t) for t in process],
+                     what="the ELS process θ", remedies=(_NO_STATIC_REMEDY, _NO_STATIC_REMEDY))
     theta_ls = scaled_lstsq(reg.psi, reg.y)
     xi = reg.y - reg.psi @ theta_ls
     # No MA part, or a model that explains the data to round-off: then the MA regressors
