@@ -634,7 +634,7 @@ def load_static_csv(
         per line of the file, with ``repeats="mean"`` averaged per level as ȳ is), carried on the
         points: D_SF's band and
         :class:`~graybox.StaticBand`'s half-widths then follow from it. Default: none (bands
-        must be given).
+        must be given). A column of the file is not read as δ: pass its values.
     encoding : str, optional
         The text encoding (as in :func:`load_record_csv`; UTF-8, or UTF-16/32 by their byte-order
         mark, by default).
@@ -652,10 +652,15 @@ def load_static_csv(
         or two lines with the same ū (unless ``repeats="mean"``); the file's faults listed in
         :func:`load_record_csv`.
     TypeError
-        ``path``, ``u``, ``y`` or ``encoding`` of the wrong type (a column is named by a str).
+        ``path``, ``u``, ``y``, ``uncertainty`` or ``encoding`` of the wrong type (a column is named by a
+        str; ``uncertainty`` is numbers, not a column name).
     """
     p = Path(check_path(path, "path"))
     check_choice(repeats, "repeats", ("error", "mean"))
+    if isinstance(uncertainty, str):
+        raise TypeError(f"{p}: uncertainty is δ itself (output units: one number, or one per line of the file), not "
+                        f"a column name; to take δ from the column {uncertainty!r}, read its values (e.g. "
+                        f"pandas.read_csv(path, sep=..., decimal=...)[{uncertainty!r}].to_numpy()) and pass them")
     ucols, names = _input_columns(p, u, y, input_names)
     label = name or p.stem
     if len(ucols) > 1:
