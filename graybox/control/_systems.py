@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..core._records import Record
+from ..core._simulation import DivergenceError
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
@@ -196,7 +197,9 @@ def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | N
     Returns
     -------
     control.NonlinearIOSystem
-        Needs python-control (``pip install graybox[control]``).
+        Needs python-control (``pip install graybox[control]``). Its output raises
+        :class:`~graybox.DivergenceError`, naming the time, once it is no longer a finite number
+        (a diverging loop or free run), out of ``control.input_output_response``.
     """
     model = check_polynomial(model, "narx_iosystem")
     noise = check_bool(noise, "noise")
@@ -211,11 +214,21 @@ def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | N
     n_proc = E.shape[1]  # the process states; the noise lags follow
     m = model.n_inputs
 
+    label = name if name is not None else system_name(model.name, "narx")
+
     def output(t, x, u, params):
         x = np.asarray(x, float)
-        y = theta @ np.prod(x[None, :n_proc] ** E, axis=1)
-        if noise:
-            y += c @ x[n_proc:] + np.atleast_1d(np.asarray(u, float))[m]
+        with np.errstate(over="ignore", invalid="ignore"):
+            y = theta @ np.prod(x[None, :n_proc] ** E, axis=1)
+            if noise:
+                y += c @ x[n_proc:] + np.atleast_1d(np.asarray(u, float))[m]
+        if not np.isfinite(y):
+            # numpy's overflow warnings and python-control's "algebraic loop detected" (there is no
+            # feedthrough) would hide what happened: the run diverged, as Model.simulate says it
+            raise DivergenceError(
+                f"{label}: the model's output is no longer a finite number at t = {float(t):g} s (its state "
+                f"reached {np.max(np.abs(x)):.3g}): the run diverged, e.g. a loop whose controller gain is too "
+                "high or of the wrong sign at this operating point, or a model unstable along this input")
         return np.array([y])
 
     def update(t, x, u, params):
@@ -236,4 +249,4 @@ def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | N
 
     inputs = list(model.input_names) + (["e"] if noise else [])
     return ct.nlsys(update, output, inputs=inputs, outputs=["y"], states=narx_state_names(model, noise=noise),
-                    dt=Ts, name=name if name is not None else system_name(model.name, "narx"))
+                    dt=Ts, name=label)
