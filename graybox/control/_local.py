@@ -219,7 +219,14 @@ class LocalModel:
 
     @property
     def time_constant(self) -> float:
-        """−Ts / ln|p| of the dominant pole (s); 0 without recursion; inf when |p| >= 1 (nothing settles)."""
+        """−Ts / ln|p| of the dominant pole (s); 0 without recursion; inf when |p| >= 1 (nothing settles).
+
+        The decay of the slowest mode's envelope, a first-order time constant only for a positive
+        real dominant pole (:attr:`damping` 1). A negative or complex one oscillates, and a pole
+        nearly cancelled by a zero (:meth:`zeros`) barely shows in the step response: a fitted
+        model can carry a pole near −1 with a zero beside it, a τ longer than the time its step
+        takes to settle. Read :meth:`settling_time` and :meth:`step` before tuning on it.
+        """
         return _dominant(self.poles, self.Ts)[1]
 
     @property
