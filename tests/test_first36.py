@@ -64,3 +64,17 @@ def test_a_diverging_loop_through_narx_iosystem_raises_divergence_error_naming_t
     stable = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
     out = ct.input_output_response(gb.narx_iosystem(stable, 0.5), t[:20], np.ones(20), np.zeros(2))
     assert np.allclose(out.outputs, stable.simulate(np.ones(20), [0.0]))
+
+
+def test_the_static_degree_the_candidates_cannot_carry_says_what_would_carry_it():
+    from graybox.experiments._select import _static_points
+    from graybox.static._form_check import static_fit_mse
+
+    ub = np.linspace(0.5, 2.0, 8)
+    static = gb.StaticPoints(ub, (0.2 * ub + 0.05 * ub**2) / 0.3 + 0.01 * ub**3)  # a small cubic part
+    band = static_fit_mse(static, 2) / 10  # a quadratic misses it, a cubic does not
+    cand = gb.Candidates(ny=2, nu=2, degree=2)
+    record = gb.Record(np.linspace(0.5, 2.0, 50), np.zeros(50))
+    with pytest.warns(gb.SelectionWarning, match=r"degree-3 curve.*carry degree 2.*Candidates\(\.\.\., degree=3\)"):
+        _, form = _static_points(static, cand.process, band, record)
+    assert form.degree == 2

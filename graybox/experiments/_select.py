@@ -349,10 +349,15 @@ def _static_points(sp, process: gb.Structure, band: float | None,
         # a rational structure (Σ_y) bends its static curve beyond its numerator's degree: ask what the
         # candidates carry, say so, and let the band judge (the table reports every J_SF)
         fit = static_fit_mse(sp, top) if isinstance(sp, gb.StaticPoints) else None
+        carry = (f"candidates of degree {degree} (Candidates(..., degree={degree}))"
+                 if max(t.degree for t in process) < degree else
+                 f"candidates with terms in {', '.join(varied)} up to power {degree} (a lag of at least 1 for each)")
         warn(f"the static information asks for a degree-{degree} curve, the candidates carry degree {top} at most: "
              f"the structures get the clusters of degree {top}" +
              (f" (a degree-{top} polynomial fits the points with MSE {fit:.4g}, band B = {band:g})"
-              if fit is not None else ""), SelectionWarning)
+              if fit is not None else "") +
+             f"; {carry} would carry it, and the band judges these structures (a rational one can still meet "
+             "it: the table's JSF says)", SelectionWarning)
         degree = top
     return sp, _Form(degree, varied)
 
