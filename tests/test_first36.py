@@ -78,3 +78,28 @@ def test_the_static_degree_the_candidates_cannot_carry_says_what_would_carry_it(
     with pytest.warns(gb.SelectionWarning, match=r"degree-3 curve.*carry degree 2.*Candidates\(\.\.\., degree=3\)"):
         _, form = _static_points(static, cand.process, band, record)
     assert form.degree == 2
+
+
+def test_a_warning_of_the_chosen_rows_fit_says_how_to_act_on_it(monkeypatch):
+    """An ELS that did not converge says "raise max_iter or tol", which select_graybox does not take."""
+    import warnings
+
+    import graybox.experiments._select as sel
+
+    fit_ls = sel._BLACK_BOX_FITS["ls"]
+
+    def doubtful_ls(st, rec):
+        warnings.warn("did not converge: raise max_iter", RuntimeWarning)
+        return fit_ls(st, rec)
+
+    monkeypatch.setitem(sel._BLACK_BOX_FITS, "ls", doubtful_ls)
+    rng = np.random.default_rng(0)
+    records = []
+    for seed in (1, 2):
+        u = np.repeat(np.random.default_rng(seed).uniform(0.0, 2.0, 21), 20)[:400]
+        y = gb.simulate(gb.Structure(["y(k-1)", "u(k-1)", "1"]), np.array([0.7, 0.3, 0.2]), u, np.zeros(1))
+        records.append(gb.Record(u, y + 0.01 * rng.standard_normal(400), name=f"r{seed}"))
+    with pytest.warns(gb.SelectionWarning, match=r"the chosen row's: RuntimeWarning.*default options.*refit the chosen "
+                                                  r"structure \(\.structure\) with ls"):
+        gb.select_graybox(gb.Candidates(2, 2, degree=2), gb.Dataset(*records), band=np.inf, estimator="ls",
+                          sizes=[2, 4])

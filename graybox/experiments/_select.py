@@ -1007,8 +1007,11 @@ def select_graybox(
     if any(said):
         chosen = said[pos]
         warn(f"select_graybox: the fits of {sum(map(bool, said))} of {len(said)} structure × estimator rows warned "
-             "(table['warnings'] says what); " + (f"the chosen row's: {chosen}" if chosen else "not the chosen row's"),
-             SelectionWarning)
+             "(table['warnings'] says what); " +
+             (f"the chosen row's: {chosen} (its fits used {table.iloc[pos]['estimator']}'s default options, which "
+              "select_graybox does not change: to act on this, refit the chosen structure (.structure) with "
+              f"{table.iloc[pos]['estimator']} and the options the warning names)" if chosen
+              else "not the chosen row's"), SelectionWarning)
     failed = [r["failed"][0] for r in results if r["failed"]]
     if failed:
         warn(f"select_graybox: the fits of {len(failed)} of {len(results)} structure × estimator rows failed and "
