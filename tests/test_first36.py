@@ -93,13 +93,26 @@ def test_a_warning_of_the_chosen_rows_fit_says_how_to_act_on_it(monkeypatch):
         return fit_ls(st, rec)
 
     monkeypatch.setitem(sel._BLACK_BOX_FITS, "ls", doubtful_ls)
+    with pytest.warns(gb.SelectionWarning, match=r"the chosen row's: RuntimeWarning.*default options.*refit the chosen "
+                                                  r"structure \(\.structure\) with ls"):
+        gb.select_graybox(gb.Candidates(2, 2, degree=2), _first_order_data(), band=np.inf, estimator="ls",
+                          sizes=[2, 4])
+
+
+def _first_order_data(static: gb.StaticPoints | None = None) -> gb.Dataset:
     rng = np.random.default_rng(0)
     records = []
     for seed in (1, 2):
         u = np.repeat(np.random.default_rng(seed).uniform(0.0, 2.0, 21), 20)[:400]
         y = gb.simulate(gb.Structure(["y(k-1)", "u(k-1)", "1"]), np.array([0.7, 0.3, 0.2]), u, np.zeros(1))
         records.append(gb.Record(u, y + 0.01 * rng.standard_normal(400), name=f"r{seed}"))
-    with pytest.warns(gb.SelectionWarning, match=r"the chosen row's: RuntimeWarning.*default options.*refit the chosen "
-                                                  r"structure \(\.structure\) with ls"):
-        gb.select_graybox(gb.Candidates(2, 2, degree=2), gb.Dataset(*records), band=np.inf, estimator="ls",
-                          sizes=[2, 4])
+    return gb.Dataset(*records, static)
+
+
+def test_a_black_box_selection_does_not_claim_to_be_in_a_band():
+    """Chosen with band=inf, every row is 'in band'; its repr said in_band=True beside a J_SF far off the points."""
+    points = gb.StaticPoints([0.5, 1.0, 1.5], [5.0, 6.0, 7.0], uncertainty=0.01)  # not the system's: J_SF large
+    black = gb.select_graybox(gb.Candidates(2, 2, degree=2), _first_order_data(points), band=np.inf, estimator="ls",
+                              sizes=[2, 4])
+    assert black.in_band and black.chosen["JSF"] > points.band  # the field keeps its documented meaning
+    assert "in_band" not in repr(black) and "black box" in repr(black)

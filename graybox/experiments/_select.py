@@ -145,7 +145,8 @@ class GrayboxSelection:
     in_band : bool
         Whether the chosen structure met the band (the name :class:`Decision` and
         :class:`DSFResult` use); False when none did and ``fallback="min_jsf"`` chose the
-        smallest J_SF.
+        smallest J_SF. Always True for a black box (band inf), whatever its J_SF (the table's
+        ``JSF``); its repr then says "black box" instead.
     rule : str
         The rule that chose (``"one-se"`` or ``"min"``; ``"min"`` also when one block only could
         be cut).
@@ -270,8 +271,10 @@ class GrayboxSelection:
             test = f", J_S test={row['JS_test']:.4g}"
             if np.isfinite(self.table["JS_test"].to_numpy(float)).any():  # else no regret to give
                 test += f", regret={self.regret:.3g}"
+        # a black box's band is inf, which every row meets: in_band=True there says nothing of the points
+        band = "black box (band=inf)" if np.isinf(self.band) else f"in_band={self.in_band}"
         return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, rule={self.rule!r}, "
-                f"J_S valid={row['JS_valid']:.4g}{test}, in_band={self.in_band})")
+                f"J_S valid={row['JS_valid']:.4g}{test}, {band})")
 
 
 register_type("GrayboxSelection", GrayboxSelection,
