@@ -116,3 +116,16 @@ def test_a_black_box_selection_does_not_claim_to_be_in_a_band():
                               sizes=[2, 4])
     assert black.in_band and black.chosen["JSF"] > points.band  # the field keeps its documented meaning
     assert "in_band" not in repr(black) and "black box" in repr(black)
+
+
+@pytest.mark.parametrize("stamp", ["2026-11-20 09:14:{:04.1f}", "20.11.2026 09:14:{:04.1f}", "09:14:{:04.1f}"])
+def test_clock_time_stamps_say_that_time_is_seconds_and_what_to_pass(tmp_path, stamp):
+    path = tmp_path / "logger.csv"
+    path.write_text("timestamp,speed,pressure\n" + "".join(f"{stamp.format(0.5 * k)},1500,2e5\n" for k in range(6)),
+                    encoding="utf-8")
+    with pytest.raises(ValueError, match=r"line 2, column 'timestamp'.*not a number.*seconds.*Ts="):
+        gb.load_record_csv(path, u="speed", y="pressure", time="timestamp")
+    record = gb.load_record_csv(path, u="speed", y="pressure", Ts=0.5)  # what it says to do
+    assert record.Ts == 0.5 and record.y.size == 6
+    with pytest.raises(ValueError, match=r"column 'timestamp'.*is not a number$"):  # said of the time column only
+        gb.load_record_csv(path, u="timestamp", y="pressure", Ts=0.5)

@@ -124,7 +124,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             raise ValueError(f"{p}: line {line} has {len(row)} fields but the header names {len(header)} "
                              f"columns{_decimal_comma_hint(row, delim)}")
         for role, i in index.items():
-            values[role].append(_number(p, line, wanted[role], row[i], dec))
+            values[role].append(_number(p, line, wanted[role], row[i], dec, time=role == "time"))
         lines.append(line)
     if not lines:
         raise ValueError(f"{p}: line 2: no data rows after the header; expected one sample per line")
@@ -214,6 +214,8 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
 _DELIMITERS = (",", ";", "\t")
 _SNIFF_LINES = 50
 # A number written with a decimal comma: digits, one comma, digits (an exponent allowed).
+#: A date (2026-11-20, 20.11.2026, 11/20/2026) or a clock time (09:14) in a cell.
+_CLOCK = re.compile(r"\d:\d\d|\d[-/.]\d{1,2}[-/.]\d")
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
 # A decimal number that also reads as an integer with a thousands separator (1,234 or 1.234).
 _GROUPED = re.compile(r"^[+-]?[1-9]\d{0,2}[.,]\d{3}$")
@@ -345,8 +347,9 @@ def _detect_decimal(p: Path, header: str, data: list[tuple[int, str]], delimiter
     return mark
 
 
-def _number(p: Path, line: int, col: str, cell: str, decimal: str) -> float:
-    """One cell as a finite float, or a ``ValueError`` naming the file, line and column."""
+def _number(p: Path, line: int, col: str, cell: str, decimal: str, *, time: bool = False) -> float:
+    """One cell as a finite float, or a ``ValueError`` naming the file, line and column (``time``: a
+    time-stamp cell, whose date or clock time gets a hint)."""
     c = cell.strip()
     if c == "":
         raise ValueError(f"{p}: line {line}, column {col!r}: empty cell")
@@ -363,6 +366,9 @@ def _number(p: Path, line: int, col: str, cell: str, decimal: str) -> float:
     except ValueError:
         if _THOUSANDS.match(cell.strip()):  # float() reads no spreadsheet's separator, and none is guessed
             hint += _THOUSANDS_HINT
+        if time and _CLOCK.search(cell):
+            hint += ("; time stamps are seconds (numbers), not dates or clock times: leave time= out and give the "
+                     "sampling period Ts= (seconds), or convert the column to seconds first")
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a number{hint}") from None
     if not math.isfinite(v):
         raise ValueError(f"{p}: line {line}, column {col!r}: {cell.strip()!r} is not a finite number")
@@ -466,7 +472,9 @@ def load_record_csv(
     y : str
         Name of the output column.
     time : str, optional
-        Name of a time-stamp column (seconds). Stamps must increase strictly and evenly: every
+        Name of a time-stamp column (seconds, as numbers: dates and clock times such as
+        ``2026-11-20 09:14:03.5`` are refused; leave ``time`` out and give ``Ts``). Stamps must
+        increase strictly and evenly: every
         step within ``time_rtol`` × (median step) of the median step. The sampling period is the mean
         step, rounded to 12 significant digits. Records restart at t = 0 whatever the first stamp is.
     Ts : float, optional
