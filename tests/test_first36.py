@@ -129,3 +129,24 @@ def test_clock_time_stamps_say_that_time_is_seconds_and_what_to_pass(tmp_path, s
     assert record.Ts == 0.5 and record.y.size == 6
     with pytest.raises(ValueError, match=r"column 'timestamp'.*is not a number$"):  # said of the time column only
         gb.load_record_csv(path, u="timestamp", y="pressure", Ts=0.5)
+
+
+def test_uncertainty_of_a_selected_els_model_without_its_ma_part_says_to_refit_it():
+    """select_graybox keeps an ELS fit's process part (a free run sets the noise to zero); ls_uncertainty
+    refused that model as 'not the least-squares estimate' without saying where its MA part went."""
+    rng = np.random.default_rng(3)
+    records = []
+    for seed in (1, 2):
+        u = np.repeat(np.random.default_rng(seed).uniform(0.0, 2.0, 41), 20)[:800]
+        e = 0.05 * rng.standard_normal(800)
+        y = np.zeros(800)
+        for k in range(1, 800):
+            y[k] = 0.7 * y[k - 1] + 0.3 * u[k - 1] + 0.2 + e[k] + 0.9 * e[k - 1]  # coloured: ELS is not LS
+        records.append(gb.Record(u, y, name=f"r{seed}"))
+    black = gb.select_graybox(gb.Candidates(1, 1, degree=1), gb.Dataset(*records), band=np.inf, estimator="els",
+                              sizes=[2])
+    assert not len(black.model.noise_structure)
+    with pytest.raises(ValueError, match=r"MA part.*els\("):
+        gb.ls_uncertainty(black.model, records[0])
+    refit = gb.els(black.structure, records[0])  # what it says to do
+    assert gb.ls_uncertainty(refit, records[0]).cov.shape == (len(black.structure),) * 2

@@ -390,7 +390,8 @@ def ls_uncertainty(
     ------
     ValueError
         A plain LS model that is not the least-squares estimate on ``data`` (its gradient is not
-        zero), collinear regressors, too few rows.
+        zero; among them an ELS estimate without its MA part, as :func:`graybox.select_graybox`
+        returns it), collinear regressors, too few rows.
     """
     model = as_model(model)
     level = _check_level(level)
@@ -427,7 +428,9 @@ def ls_uncertainty(
     if ne == 0:
         cov, F = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what), s)
         _check_stationary(np.eye(n), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
-                          "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty)")
+                          "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty); an ELS "
+                          "estimate needs its MA part, which select_graybox's models leave out (a free run sets the "
+                          "noise to zero): refit it with graybox.els(model.structure, data)")
     else:
         cov, F = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),

@@ -114,7 +114,9 @@ class GrayboxSelection:
         The chosen structure (static-form terms included).
     model : Model
         Its model, refitted on all the identification data (gray box: the member chosen by D_SF
-        on the choosing data).
+        on the choosing data). The process part only: an ELS fit's MA part is left out (free runs
+        set the noise to zero); for it (residual tests with the noise model, ``ls_uncertainty``)
+        refit ``graybox.els(sel.structure, data)``.
     decision : Decision
         How that member was chosen (``JS`` is its J_S on the choosing data).
     table : pandas.DataFrame
