@@ -150,3 +150,15 @@ def test_uncertainty_of_a_selected_els_model_without_its_ma_part_says_to_refit_i
         gb.ls_uncertainty(black.model, records[0])
     refit = gb.els(black.structure, records[0])  # what it says to do
     assert gb.ls_uncertainty(refit, records[0]).cov.shape == (len(black.structure),) * 2
+
+
+def test_the_chosen_gray_model_is_named_as_its_row():
+    """print(sel.model) began 'pe, J_S on the choosing data D_SF:' (an internal front's name), where
+    model_of and a black box's model say 'pe (frols-2)'; python-control systems inherit the name."""
+    ub = np.array([0.5, 1.0, 1.5])
+    points = gb.StaticPoints(ub, (0.3 * ub + 0.2) / 0.3, uncertainty=0.05)  # the system's own steady states
+    gray = gb.select_graybox(gb.Candidates(1, 1, degree=1), _first_order_data(points), estimator="pe", sizes=[2])
+    row = gray.chosen
+    assert gray.model.name == f"{row['estimator']} ({row.name})" == gray.model_of(row.name, row["estimator"]).name
+    assert np.array_equal(gray.model.theta, gray.model_of(row.name, row["estimator"]).theta)
+    assert str(gray.model).startswith(f"{row['estimator']} ({row.name}): y(k) =")

@@ -32,6 +32,7 @@ the same search picks a black box: LS, ELS and output-error fits, chosen by J_S 
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import warnings
 from dataclasses import dataclass, field
@@ -114,7 +115,7 @@ class GrayboxSelection:
         The chosen structure (static-form terms included).
     model : Model
         Its model, refitted on all the identification data (gray box: the member chosen by D_SF
-        on the choosing data). The process part only: an ELS fit's MA part is left out (free runs
+        on the choosing data), named as :meth:`model_of` names it (``"se-gradient (frols-8)"``). The process part only: an ELS fit's MA part is left out (free runs
         set the noise to zero); for it (residual tests with the noise model, ``ls_uncertainty``)
         refit ``graybox.els(sel.structure, data)``.
     decision : Decision
@@ -804,11 +805,12 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     th = np.where(keep[:, None], thetas, 0.0)
     scored = gb.ParetoSet(st, th, res["lambdas"], np.full(len(th), np.nan), js_choose, res["jsf_full"],
                           f"{estimator}, J_S on the choosing data", {}, failures, plan.ident.input_names, plan.ident.Ts)
+    name = f"{estimator} ({row.name})"  # as model_of names it, not after the internal front
     if in_band:
         d = gb.decide_dsf(scored, band=plan.band, fallback="min_jsf")
         if d.index == i:
-            return d
-    return gb.Decision(scored.member_model(i, name=f"{estimator} ({row.name})"), int(i), float(res["lambdas"][i]),
+            return dataclasses.replace(d, model=scored.member_model(i, name=name))
+    return gb.Decision(scored.member_model(i, name=name), int(i), float(res["lambdas"][i]),
                        float(js_choose[i]), float(res["jsf_full"][i]), "D_SF" if in_band else "min J_SF", in_band,
                        float(js_choose[i] if in_band else res["jsf_full"][i]))
 
