@@ -861,7 +861,10 @@ def select_graybox(
         (fronts of J_S against J_SF, D_SF). Omitted: the static points' own band
         (``StaticPoints.band``, the mean of their uncertainty δ², as :func:`graybox.se_dsf` takes it)
         when they carry one; otherwise, or with ``band=numpy.inf`` (no static requirement), a
-        black box chosen by J_S alone.
+        black box chosen by J_S alone. A gray box's structures are completed with the clusters of
+        a static curve of degree d: a curve's or surface's own, or for points the smallest degree
+        whose least-squares polynomial fits them with a mean squared error within B (at most 3);
+        lowered, with a :class:`SelectionWarning`, to the degree the candidates carry.
     sizes : sequence of int, optional
         Structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
         (fewer for a small candidate set or an identification record of few samples). Sizes a
