@@ -49,6 +49,18 @@ def test_time_stamps_may_start_anywhere(tmp_path):
     assert r.Ts == 0.5 and r.t[0] == 0.0
 
 
+@pytest.mark.parametrize("col", ["t [ms]", "time (min)", "t_ms", "Zeit/h", "t [µs]"])
+def test_a_time_column_named_in_another_unit_is_refused(tmp_path, col):
+    # was: stamps 0, 500, 1000 ms read as seconds, Ts = 500 s without a word (local models' time
+    # constants and every controller designed on them off by 1000)
+    p = write(tmp_path, f"{col},u,y\n0,1,2\n500,1,2\n1000,1,3\n")
+    with pytest.raises(ValueError, match=re.escape(repr(col)) + r" names its unit .*read as seconds.*Ts="):
+        load_record_csv(p, u="u", y="y", time=col)
+    for ok in ("t [s]", "time_s", "Zeit (s)", "timestamp"):  # seconds, or no unit named: read as before
+        q = write(tmp_path, f"{ok},u,y\n0,1,2\n0.5,1,2\n1.0,1,3\n", "ok.csv")
+        assert load_record_csv(q, u="u", y="y", time=ok).Ts == 0.5
+
+
 def test_needs_time_or_Ts(tmp_path):
     p = write(tmp_path, GOOD)
     with pytest.raises(ValueError, match=re.escape(str(p)) + ".*time=.*Ts="):

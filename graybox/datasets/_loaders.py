@@ -473,7 +473,8 @@ def load_record_csv(
         Name of the output column.
     time : str, optional
         Name of a time-stamp column (seconds, as numbers: dates and clock times such as
-        ``2026-11-20 09:14:03.5`` are refused; leave ``time`` out and give ``Ts``). Stamps must
+        ``2026-11-20 09:14:03.5`` are refused, and so is a column whose name states another unit,
+        e.g. ``t [ms]``, ``time (min)``, ``t_ms``; leave ``time`` out and give ``Ts``). Stamps must
         increase strictly and evenly: every
         step within ``time_rtol`` × (median step) of the median step. The sampling period is the mean
         step, rounded to 12 significant digits. Records restart at t = 0 whatever the first stamp is.
@@ -575,7 +576,17 @@ def _input_columns(p: Path, u: object, y: object, input_names: object) -> tuple[
         raise ValueError(f"{exc}; name the inputs with input_names=[...]") from None
 
 
+#: A time column's name that states a unit other than seconds: "t [ms]", "time (min)", "t_ms", "Zeit/h".
+_TIME_UNIT = re.compile(r"(?:[\[(]\s*|[_/ -])(ms|msec|millis(?:econds?)?|us|µs|μs|usec|micros(?:econds?)?|ns|"
+                        r"min|mins|minutes?|h|hr|hrs|hours?|d|days?)\s*[\])]?\s*$", re.IGNORECASE)
+
+
 def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float | None, rtol: float) -> float:
+    unit = _TIME_UNIT.search(col)
+    if unit:  # read as seconds they would give a sampling period off by 1000 or 60 without a word
+        raise ValueError(f"{p}: column {col!r} names its unit {unit.group(1)!r}, but time stamps are read as seconds: "
+                         "convert the column to seconds, or leave time= out and give the sampling period Ts= in "
+                         "seconds")
     if t.size < 2:
         raise ValueError(f"{p}: column {col!r} has a single time stamp; the sampling period needs two")
     dt = np.diff(t)
