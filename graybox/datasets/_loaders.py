@@ -149,6 +149,9 @@ def _refuse_header_block(p: Path, head: str, names: Sequence[str]) -> None:
     if named(lines[0]):
         return
     for i, line in enumerate(lines[1:], start=2):
+        if named(line) and i == 2 and re.fullmatch(r"\s*sep=.\s*", lines[0]):
+            raise ValueError(f"{p}: line 1 is {lines[0].strip()!r}, the delimiter hint Excel writes, and line 2 names "
+                             "the columns, which must be on line 1: delete line 1 (the delimiter is detected)")
         if named(line):
             raise ValueError(f"{p}: line {i} names the columns ({line!r}), but the column names must be on line 1: "
                              f"the file has {i - 1} line(s) before them (a data logger's header block?). Delete "
