@@ -32,7 +32,7 @@ from scipy.signal import lfilter
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure
-from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, warn
+from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, refuse_non_real, warn
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import NO_EQUILIBRIUM_WHY, REACHED, reached_equilibria, schur_stable, several_stable
@@ -40,7 +40,8 @@ from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import reached_surface
 
 __all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "jacobian_rows", "check_polynomial",
-           "require_control", "local_statespace", "local_transfer_function", "system_name", "CONTROL_EXTRA"]
+           "require_control", "local_statespace", "local_transfer_function", "system_name", "CONTROL_EXTRA",
+           "input_levels"]
 
 #: Settling band of :attr:`LocalModel.settling_time`: the step response stays within this fraction
 #: of its final value (dimensionless).
@@ -380,10 +381,23 @@ def system_name(name: str, what: str) -> str | None:
 
 
 # -- the equilibrium and the linearisation --------------------------------------------------------
+def input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
+    """``ubar`` as a float array, or a ``TypeError`` naming it for strings, complex values, None or booleans
+    (numpy's own conversion names neither the argument nor the problem, and takes None for NaN)."""
+    refuse_non_real(ubar, name)
+    try:
+        raw = np.asarray(ubar)
+        if ubar is None or raw.dtype == bool:
+            raise TypeError
+        return raw.astype(float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be input levels (numbers), got {ubar!r}") from None
+
+
 def _as_points(model: Model, ubar: object) -> np.ndarray:
     """ū as points of shape (M, m) in the model's input order."""
     m = model.n_inputs
-    ub = np.asarray(frame_inputs(ubar, model.input_names, "ubar"), dtype=float)  # a DataFrame: by column name
+    ub = input_levels(frame_inputs(ubar, model.input_names, "ubar"))  # a DataFrame: by column name
     if m == 1:
         ub = np.atleast_1d(ub).reshape(-1, 1) if ub.ndim <= 1 else ub
     elif ub.ndim == 1 and ub.size == m:

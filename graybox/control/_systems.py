@@ -31,7 +31,7 @@ from ..core._simulation import DivergenceError
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
-from ._local import system_name, check_polynomial, require_control
+from ._local import check_polynomial, input_levels, require_control, system_name
 
 __all__ = ["narx_iosystem", "narx_initial_state", "narx_state_names", "narx_steady_state"]
 
@@ -158,7 +158,7 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
     """
     model = check_polynomial(model, "narx_steady_state")
     noise = check_bool(noise, "noise")
-    ub = np.atleast_1d(np.asarray(ubar, float)).ravel()
+    ub = np.atleast_1d(input_levels(ubar)).ravel()
     if ub.size != model.n_inputs or not np.all(np.isfinite(ub)):
         raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
     yb = check_real(ybar, "ybar")
