@@ -47,6 +47,13 @@ def _grid(args: argparse.Namespace) -> int:
         written = gx.write_report(store, args.out, rule=args.rule, band=args.band, spec=args.spec, html=args.html)
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
         return 0
+    except KeyboardInterrupt:
+        if args.grid_command != "run":
+            raise
+        # Ctrl-C: every cell finished so far was committed as it came
+        print(f"graybox grid run: interrupted; the cells finished so far are kept in {args.store}, and the same "
+              "command runs only the cells left", file=sys.stderr)
+        return 130
     except BrokenPipeError:
         raise
     except (gx.SpecError, gx.StoreError, OSError) as exc:  # OSError: ConnectionError, an --out that is a file, …

@@ -26,3 +26,75 @@ def test_operating_points_that_are_not_numbers_are_a_type_error_naming_ubar(call
     # (naming no argument), None became NaN ("ubar has non-finite values"), True became the level 1.0
     with pytest.raises(TypeError, match="ubar"):
         call(bad)
+
+
+SLOW_SPEC = """name = "slow"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "s1"
+terms = ["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)"]
+[[structures]]
+name = "s2"
+terms = ["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-2)y(k-1)"]
+[[variants]]
+name = "LS"
+estimator = "ls"
+[[variants]]
+name = "SE"
+estimator = "se-gradient"
+lambdas = {logspace = [-3, 0, 8]}
+decision = {rule = "dsf", fallback = "min_jsf"}
+"""
+
+
+def _cells_in(store) -> int:
+    import sqlite3
+
+    try:
+        con = sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=0.1)
+        try:
+            return con.execute("SELECT COUNT(*) FROM cells").fetchone()[0]
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return 0
+
+
+@pytest.mark.parametrize("where", [["--processes", "1"], ["--workers", "1"]], ids=["processes", "dask"])
+def test_ctrl_c_during_grid_run_says_what_is_kept_instead_of_tracebacks(tmp_path, where):
+    # Ctrl-C (SIGINT to the terminal's whole process group) during `graybox grid run` ended in a KeyboardInterrupt
+    # traceback from the driver and one from every worker process (local pool or Dask LocalCluster), and did not
+    # say that the finished cells are kept and the same command resumes; `graybox reproduce` did
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from graybox import experiments as gx
+
+    spec, store = tmp_path / "spec.toml", tmp_path / "s.sqlite"
+    spec.write_text(SLOW_SPEC)
+    proc = subprocess.Popen([sys.executable, "-m", "graybox", "grid", "run", str(spec), "--store", str(store), *where],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while _cells_in(store) < 1:  # the first cell (LS) is in; an SE cell runs
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "the grid did not start"
+            time.sleep(0.02)
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the driver and its workers
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    done = _cells_in(store)
+    assert done < 4, "the grid finished before it was interrupted"
+    assert proc.returncode == 130
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err and "leaked" not in err, err
+    assert err.startswith("graybox grid run: interrupted") and str(store) in err and "cells left" in err
+    again = gx.run_grid(spec, store)
+    assert again.skipped == done and again.ran == 4 - done

@@ -23,7 +23,9 @@ import logging
 import multiprocessing as mp
 import os
 import shutil
+import signal
 import tempfile
+import threading
 import time
 import uuid
 from collections import deque
@@ -130,8 +132,15 @@ class InProcess:
 # --------------------------------------------------------------------------------------------
 # local worker processes
 # --------------------------------------------------------------------------------------------
+def _exit_on_sigterm(signum, frame) -> None:  # pragma: no cover - runs in the child process
+    raise SystemExit(0)
+
+
 def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the child process
-    """A worker process: receive (cell, data or None), run it, send the row; stop on None or EOF."""
+    """A worker process: receive (cell, data or None), run it, send the row; stop on None, EOF or SIGTERM."""
+    # stopped mid-cell (the driver interrupted), exit through Python's clean-up: a killed worker leaves
+    # numba's named semaphore behind, for the resource tracker to warn of
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)
     cache: dict[str, gb.Dataset] = {}
     while True:
         try:
@@ -148,6 +157,23 @@ def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the ch
             conn.send(row)
         except (BrokenPipeError, OSError):
             return
+
+
+@contextmanager
+def _sigint_ignored():
+    """Processes started inside ignore SIGINT for good (a spawned Python keeps an ignored SIGINT ignored).
+
+    Ctrl-C at a terminal reaches the whole process group: the workers died of it, each with its
+    traceback, while the driver, which stops them anyway, is the one to say what was kept.
+    """
+    if threading.current_thread() is not threading.main_thread():  # signal handlers are the main thread's
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 @dataclass
@@ -181,7 +207,7 @@ class ProcessPool:
         parent, child = self._ctx.Pipe()
         proc = self._ctx.Process(target=_worker_main, args=(child, self.fn), daemon=True,
                                  name="graybox-grid-worker")
-        with _environ(_thread_env(self.threads)):
+        with _environ(_thread_env(self.threads)), _sigint_ignored():
             proc.start()
         child.close()
         return _Slot(proc, parent)
@@ -193,7 +219,7 @@ class ProcessPool:
                 slot.conn.send(None)
         except (BrokenPipeError, OSError):
             pass
-        slot.proc.join(timeout=5 if graceful else 0.1)
+        slot.proc.join(timeout=5 if graceful else 2)  # not graceful: dead, or sent SIGTERM (run's clean-up)
         if slot.proc.is_alive():
             slot.proc.kill()
             slot.proc.join(timeout=5)
@@ -203,6 +229,7 @@ class ProcessPool:
         """Yield each cell's row as it completes."""
         pending: deque[tuple[Cell, int]] = deque((c, 0) for c in cells)
         slots: list[_Slot] = []
+        graceful = True
         try:
             slots = [self._start() for _ in range(min(self.workers, max(1, len(pending))))]
             while pending or any(s.cell is not None for s in slots):
@@ -238,9 +265,16 @@ class ProcessPool:
                     else:
                         yield failed_row(cell, f"the worker process died twice while running this cell "
                                                f"(last exit code {code}); it was retried once")
+        except BaseException:  # interrupted (Ctrl-C, the caller stopped): the cells in flight are not waited for
+            graceful = False
+            raise
         finally:
+            if not graceful:  # all at once: each takes a moment to exit cleanly
+                for s in slots:
+                    if s.proc.is_alive():
+                        s.proc.terminate()
             for s in slots:
-                self._stop(s, graceful=s.proc.is_alive())
+                self._stop(s, graceful=graceful and s.proc.is_alive())
 
 
 def _size(cell: Cell) -> int:
@@ -405,6 +439,7 @@ def local_cluster(workers: int, dashboard: bool = False):
     worker than in the driver (BENCHMARKS.md, grids).
 
     The workers' scratch folders live in a temporary folder of the cluster's own, removed on exit.
+    The workers ignore SIGINT, as the local pool's do: Ctrl-C is the driver's to handle.
 
     ``dashboard``: serve Dask's dashboard on a free port when bokeh is installed (off by default:
     it costs start-up time and a port).
@@ -422,7 +457,7 @@ def local_cluster(workers: int, dashboard: bool = False):
     scratch = tempfile.mkdtemp(prefix="graybox-dask-")
     try:
         with dask.config.set({"distributed.scheduler.allowed-failures": 0, "temporary-directory": scratch,
-                              "distributed.nanny.pre-spawn-environ": environ, **_QUIET}):
+                              "distributed.nanny.pre-spawn-environ": environ, **_QUIET}), _sigint_ignored():
             # ":0": any free port; None still binds 8787 and warns when another cluster holds it
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
                                    # ":0": a free port; None would still bind 8787, taken by any other cluster
