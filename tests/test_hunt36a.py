@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from graybox import plots
 
 #: p(k) = 0.5 p(k-1) + 2e-5 n(k-1) + 3 (a pressure in bar against a speed in rpm).
 RPM = gb.Model(["1", "y(k-1)", "n(k-1)"], [3.0, 0.5, 2e-5], input_names=("n",))
@@ -98,3 +99,17 @@ def test_ctrl_c_during_grid_run_says_what_is_kept_instead_of_tracebacks(tmp_path
     assert err.startswith("graybox grid run: interrupted") and str(store) in err and "cells left" in err
     again = gx.run_grid(spec, store)
     assert again.skipped == done and again.ran == 4 - done
+
+
+@pytest.mark.parametrize("call", [
+    lambda: plots.plot_operating_curve(gb.local_model(RPM, 3000.0, Ts=0.1)),
+    lambda: plots.plot_local_models(gb.local_model(RPM, 3000.0, Ts=0.1)),
+    lambda: plots.plot_local_models(3000.0),
+    lambda: plots.plot_local_models([RPM]),
+])
+def test_the_control_pictures_refuse_a_wrong_type_with_a_type_error(call):
+    # plot_operating_curve and plot_local_models raised ValueError for an object of the wrong type (a LocalModel
+    # for the curve, a Model in the list), and plot_local_models(3000.0) Python's "'float' object is
+    # not iterable", naming no argument
+    with pytest.raises(TypeError, match="curve must be an OperatingCurve|models must be an OperatingCurve"):
+        call()

@@ -14,9 +14,12 @@ __all__ = ["plot_local_models", "plot_operating_curve"]
 
 
 def _models(models: OperatingCurve | Sequence[LocalModel]) -> list[LocalModel]:
-    lms = list(models.local_models if isinstance(models, OperatingCurve) else models)
-    if not lms or not all(isinstance(m, LocalModel) for m in lms):
-        raise ValueError("models must be an OperatingCurve or a non-empty sequence of LocalModel")
+    what = "an OperatingCurve or a non-empty sequence of LocalModel"
+    lms = list(models.local_models) if isinstance(models, OperatingCurve) else check_sequence(models, "models", what)
+    if not all(isinstance(m, LocalModel) for m in lms):
+        raise TypeError(f"models must be {what}, got {sorted({type(m).__name__ for m in lms} - {'LocalModel'})} items")
+    if not lms:
+        raise ValueError(f"models must be {what}, got an empty sequence")
     return lms
 
 
@@ -112,7 +115,7 @@ def plot_operating_curve(
         Three stacked panels sharing ū: gain, time constant (s), damping.
     """
     if not isinstance(curve, OperatingCurve):
-        raise ValueError(f"curve must be an OperatingCurve, got {type(curve).__name__}")
+        raise TypeError(f"curve must be an OperatingCurve, got {type(curve).__name__}")
     if curve.ubar.ndim != 1:
         raise ValueError("plot_operating_curve draws one input; for several, plot slices of the curve's to_frame()")
     if reference is not None:
