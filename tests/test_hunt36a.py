@@ -113,3 +113,15 @@ def test_the_control_pictures_refuse_a_wrong_type_with_a_type_error(call):
     # not iterable", naming no argument
     with pytest.raises(TypeError, match="curve must be an OperatingCurve|models must be an OperatingCurve"):
         call()
+
+
+@pytest.mark.parametrize("call", [gb.local_model, gb.operating_curve])
+def test_a_list_of_records_at_another_period_is_refused_as_one_record_is(call):
+    # the local models' period check read only a Record or a Dataset: data=[record] at 0.2 s gave a 0.1 s model's
+    # local model without a word, and a model without a period was told "Ts is needed" though its docstring takes
+    # the period of data's records
+    rec = gb.Record(np.linspace(2000.0, 4000.0, 50), np.full(50, 9.0), 0.2, input_names=("n",))
+    with pytest.raises(ValueError, match="every 0.1 s but 'record' every 0.2 s"):
+        call(gb.Model(RPM.structure, RPM.theta, input_names=("n",), Ts=0.1), [3000.0], data=[rec])
+    lm = gb.local_model(RPM, 3000.0, data=[rec])  # RPM has no period: the records' own
+    assert lm.Ts == 0.2 and lm.time_constant == pytest.approx(-0.2 / np.log(0.5))

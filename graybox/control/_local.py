@@ -474,13 +474,15 @@ def _check_Ts(Ts: float | None, data: object, model: Model) -> float:
     """The local models' sampling period: ``Ts``, else the one the model was identified at (``data`` at another
     period is refused: the model's coefficients hold at its own), else ``data``'s."""
     if Ts is None:
+        # records (a Dataset's, or a sequence of them, which share one period); static points have none
+        recs = None if data is None or isinstance(data, StaticPoints) else as_records(data)
         if model.Ts is not None:
-            if isinstance(data, (Dataset, Record)):
-                model.check_period(data.ident if isinstance(data, Dataset) else data)
+            if recs is not None:
+                model.check_period(recs[0])
             return float(model.Ts)
-        if isinstance(data, (Dataset, Record)):
-            return float(data.Ts)
-        raise ValueError("Ts (the sampling period, s) is needed: pass Ts= or data= (a Record or Dataset), or use a "
+        if recs is not None:
+            return float(recs[0].Ts)
+        raise ValueError("Ts (the sampling period, s) is needed: pass Ts= or data= (records), or use a "
                          "model an estimator made (it knows the period it was identified at)")
     return check_real(Ts, "Ts", low=0, low_open=True)
 
