@@ -121,7 +121,7 @@ def _main(argv: list[str] | None) -> int:
     gp = sub.add_parser("grid", help="grids of structures × constraint variants × estimators, kept in SQLite",
                         description="Grids of data sets × structures × constraint variants × estimators, scored "
                                     "on the validation record and kept in a SQLite store (a killed run resumes).")
-    gsub = gp.add_subparsers(dest="grid_command", required=True)
+    gsub = gp.add_subparsers(title="commands", dest="grid_command", required=True, metavar="COMMAND")
     gsub.add_parser("init", help="print a commented example spec for the bundled plant (graybox grid init > spec.toml)")
     run = gsub.add_parser("run", help="run the cells of a spec that are not in the store yet")
     run.add_argument("spec", type=Path, help="the grid's TOML spec")

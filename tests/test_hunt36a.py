@@ -125,3 +125,15 @@ def test_a_list_of_records_at_another_period_is_refused_as_one_record_is(call):
         call(gb.Model(RPM.structure, RPM.theta, input_names=("n",), Ts=0.1), [3000.0], data=[rec])
     lm = gb.local_model(RPM, 3000.0, data=[rec])  # RPM has no period: the records' own
     assert lm.Ts == 0.2 and lm.time_constant == pytest.approx(-0.2 / np.log(0.5))
+
+
+def test_graybox_grid_without_a_command_names_what_is_missing_in_the_help_s_words(capsys):
+    # `graybox grid` alone said "the following arguments are required: grid_command", the name of an internal
+    # variable that the help shows nowhere
+    from graybox._cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["grid"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "grid_command" not in err and "required: COMMAND" in err and "usage: graybox grid [-h] COMMAND" in err
