@@ -4,6 +4,7 @@ engineer would on a plant of their own (Pa and rpm, inputs not named "u", two in
 fails without its fix."""
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import graybox as gb
@@ -137,3 +138,35 @@ def test_graybox_grid_without_a_command_names_what_is_missing_in_the_help_s_word
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "grid_command" not in err and "required: COMMAND" in err and "usage: graybox grid [-h] COMMAND" in err
+
+
+def _rpm_dataset(seed: int, n: int = 300) -> gb.Dataset:
+    """A plant in rpm and bar (RPM's dynamics), noisy, with its static points at ±0.05 bar."""
+    rng = np.random.default_rng(seed)
+    recs = []
+    for part in range(2):
+        n_ = np.repeat(rng.uniform(2500.0, 3500.0, n // 20 + 1), 20)[:n]
+        y = RPM.simulate(n_, np.full(1, 9.0)) + 0.01 * rng.standard_normal(n)
+        recs.append(gb.Record(n_, y, 0.1, input_names=("n",), name=f"run {seed}.{part}"))
+    levels = np.linspace(2500.0, 3500.0, 5)
+    return gb.Dataset(*recs, gb.StaticPoints(levels, RPM.static_curve(levels), input_names=("n",), uncertainty=0.05))
+
+
+def test_data_set_names_that_differ_only_in_other_characters_keep_their_own_report_files(tmp_path):
+    # the report's file names kept only ASCII letters, digits and ._- of a data set's name: "plant A" and "plant_A"
+    # (or "Kessel ü" and "Kessel ö", or two names in another script, both "data") wrote the same heatmap and fronts files, the second data set's
+    # overwriting the first's, while write_report listed both and the HTML page showed one
+    from graybox import experiments as gx
+
+    names = ("plant A", "plant_A", "Kessel ü", "Kessel ö")
+    grid = gx.Grid([gx.DataSpec(nm, dataset=_rpm_dataset(i)) for i, nm in enumerate(names)],
+                   [gx.StructureSpec("first order", terms=["1", "y(k-1)", "n(k-1)"])], [gx.Variant("LS", "ls")])
+    gx.run_grid(grid, tmp_path / "s.sqlite")
+    written = gx.write_report(tmp_path / "s.sqlite", tmp_path / "report", html=True)
+    assert len(set(written)) == len(written) and all(p.exists() for p in written)
+    tables = sorted(p for p in written if p.name.startswith("heatmap_") and p.suffix == ".csv")
+    assert len(tables) == len(names)
+    df = gx.load_results(tmp_path / "s.sqlite")
+    for nm, p in zip(names, [p for p in written if p in tables]):
+        js = pd.read_csv(p, index_col=0).loc["first order", "LS"]
+        assert js == pytest.approx(gx.heatmap_table(df, data=nm).loc["first order", "LS"], rel=1e-12)

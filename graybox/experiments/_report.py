@@ -542,8 +542,19 @@ def plot_heatmap(
     return fig
 
 
-def _slug(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "data"
+def _slugs(names: Sequence[str]) -> dict[str, str]:
+    """A distinct file-name part per data set name (ASCII letters, digits, ``._-``): names that differ only in
+    other characters ("plant A" and "plant_A", or two names in another script) get ``_2``, ``_3`` … in order,
+    lest one data set's files overwrite another's."""
+    out: dict[str, str] = {}
+    for name in names:
+        base = re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "data"
+        slug, i = base, 1
+        while slug in out.values():
+            i += 1
+            slug = f"{base}_{i}"
+        out[name] = slug
+    return out
 
 
 def write_report(
@@ -618,8 +629,7 @@ def write_report(
     lb = leaderboard(df, rule=rule, band=band)
     save(o / "leaderboard.csv", lb)
     lines = _summary_lines(df, lb, rule, attrs)
-    for d in dict.fromkeys(df["data"]):
-        slug = _slug(d)
+    for d, slug in _slugs(list(dict.fromkeys(df["data"]))).items():
         save(o / f"heatmap_{slug}.csv", heatmap_table(df, data=d, rule=rule, band=band))
         save(o / f"heatmap_{slug}.png", plot_heatmap(df, data=d, rule=rule, band=band))
         save(o / f"fronts_{slug}.png", plot_fronts(df, data=d, band=band))
