@@ -35,10 +35,18 @@ def _grid(args: argparse.Namespace) -> int:
                 if n is not None and n < 1:
                     raise ValueError(f"{flag} must be an integer >= 1, got {n}")
             processes = args.processes is not None
+            said: set[str] = set()
+
+            def log(line: str) -> None:
+                said.add(line.strip())
+                print(line, flush=True)
+
             res = gx.run_grid(args.spec, args.store, executor="processes" if processes else None,
                               workers=args.processes if processes else args.workers, scheduler=args.scheduler,
-                              retry_failed=args.retry_failed, log=lambda line: print(line, flush=True))
-            print(res.summary().splitlines()[0])  # its notes were printed at the start
+                              retry_failed=args.retry_failed, log=log)
+            head, *notes = res.summary().splitlines()
+            # the notes said at the start are not repeated; those of the end (cells another run wrote meanwhile) are
+            print("\n".join([head, *(n for n in notes if n.strip() not in said)]))
             return 0
         if args.grid_command == "status":
             print(gx.grid_status(args.store, spec=args.spec).summary())

@@ -170,3 +170,28 @@ def test_data_set_names_that_differ_only_in_other_characters_keep_their_own_repo
     for nm, p in zip(names, [p for p in written if p in tables]):
         js = pd.read_csv(p, index_col=0).loc["first order", "LS"]
         assert js == pytest.approx(gx.heatmap_table(df, data=nm).loc["first order", "LS"], rel=1e-12)
+
+
+def test_graybox_grid_run_says_when_another_run_wrote_its_cells_meanwhile(tmp_path, monkeypatch, capsys):
+    # run_grid adds a note when cells it ran were meanwhile written by another run on the store (their rows kept,
+    # its own dropped), but the command printed only the summary's first line ("its notes were printed at the
+    # start"), and that note comes at the end: the command never said it
+    from graybox import experiments as gx
+    from graybox._cli import main
+    from graybox.experiments import _run
+
+    spec, store = tmp_path / "spec.toml", tmp_path / "s.sqlite"
+    spec.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first"\n'
+                    'terms = ["y(k-1)", "u(k-1)", "1"]\n[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    notes, other = _run._notes, []
+
+    def meanwhile(*args, **kwargs):  # once the command's run knows its cells, another run does them first
+        if not other:
+            other.append(None)  # the other run passes here too
+            other[0] = gx.run_grid(spec, store)
+        return notes(*args, **kwargs)
+
+    monkeypatch.setattr(_run, "_notes", meanwhile)
+    assert main(["grid", "run", str(spec), "--store", str(store)]) == 0
+    assert other[0].ran == 1
+    assert "1 cell(s) run now were written meanwhile by another run" in capsys.readouterr().out
