@@ -195,3 +195,18 @@ def test_graybox_grid_run_says_when_another_run_wrote_its_cells_meanwhile(tmp_pa
     assert main(["grid", "run", str(spec), "--store", str(store)]) == 0
     assert other[0].ran == 1
     assert "1 cell(s) run now were written meanwhile by another run" in capsys.readouterr().out
+
+
+def test_the_status_of_all_specs_says_all_instead_of_a_spec_zero(tmp_path):
+    # grid_status(store, spec="all") (graybox grid status --spec all) printed "spec 0 of 2": a spec number the
+    # store does not have
+    from graybox import experiments as gx
+
+    data = [gx.DataSpec("plant", dataset=_rpm_dataset(0))]
+    variants = [gx.Variant("LS", "ls")]
+    store = tmp_path / "s.sqlite"
+    for terms in (["1", "y(k-1)", "n(k-1)"], ["1", "y(k-1)", "n(k-1)", "n(k-1)^2"]):
+        gx.run_grid(gx.Grid(data, [gx.StructureSpec("s", terms=terms)], variants), store)
+    status = gx.grid_status(store, spec="all")
+    assert status.done == 2 and status.summary().startswith(f"{store}: all 2 specs (")
+    assert gx.grid_status(store, spec=1).summary().startswith(f"{store}: spec 1 of 2 (")

@@ -680,7 +680,7 @@ class GridStatus:
     ----------
     store : str
     spec : int
-        The spec shown (by default the one run last).
+        The spec shown (by default the one run last); 0 when the cells of all specs are (``spec="all"``).
     grid : str
         Its name.
     cells : int
@@ -721,7 +721,8 @@ class GridStatus:
         """A few lines for a terminal."""
         st = ", ".join(f"{self.counts.get(s, 0)} {s}" for s in STATUSES)
         tpc = f"{self.time_per_cell:.3g} s per cell" if np.isfinite(self.time_per_cell) else "no cell finished yet"
-        lines = [f"{self.store}: spec {self.spec} of {self.specs} ({self.grid!r}): {self.done} of {self.cells} cells "
+        which = f"spec {self.spec} of {self.specs}" if self.spec else f"all {self.specs} specs"
+        lines = [f"{self.store}: {which} ({self.grid!r}): {self.done} of {self.cells} cells "
                  f"done ({st}), {self.left} left; {tpc}"
                  + (f"; last finished {self.last_finished}" if self.last_finished else "")]
         if len(self.best):
