@@ -210,3 +210,24 @@ def test_the_status_of_all_specs_says_all_instead_of_a_spec_zero(tmp_path):
     status = gx.grid_status(store, spec="all")
     assert status.done == 2 and status.summary().startswith(f"{store}: all 2 specs (")
     assert gx.grid_status(store, spec=1).summary().startswith(f"{store}: spec 1 of 2 (")
+
+
+def test_operating_curve_bands_are_nan_where_the_model_has_no_equilibrium_not_an_error():
+    # the Monte Carlo bands refused the whole curve ("the gain and time-constant bands need an equilibrium at
+    # every operating point") when one ū lay past the model's fold, where the same call without uncertainty
+    # gives NaN and says "no equilibrium"
+    true = gb.Model(["y(k-1)", "y(k-1)^2", "p(k-1)"], [0.5, 0.1, 1e-5], input_names=("p",))  # fold at ū = 62 500
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.0, 5e4, 40), 10)
+    rec = gb.Record(u, true.simulate(u, [0.0]) + 1e-3 * rng.standard_normal(u.size), 0.5, input_names=("p",))
+    model = gb.els(true.structure, rec, noise=0).model
+    unc = gb.ls_uncertainty(model, rec)
+    levels = np.array([1e4, 3e4, 7e4])
+    oc = gb.operating_curve(model, levels, uncertainty=unc, n_samples=100)
+    assert oc.status[-1] == "no equilibrium"
+    for band in (oc.gain_low, oc.gain_high, oc.time_constant_low, oc.time_constant_high, oc.undefined):
+        assert np.isnan(band[-1]) and np.all(np.isfinite(band[:-1]))
+    assert np.all(oc.gain_low[:-1] <= oc.gain[:-1]) and np.all(oc.gain[:-1] <= oc.gain_high[:-1])
+    # the defined points' bands are those of the curve without the point past the fold
+    inside = gb.operating_curve(model, levels[:-1], uncertainty=unc, n_samples=100)
+    assert np.array_equal(inside.gain_low, oc.gain_low[:-1]) and np.array_equal(inside.undefined, oc.undefined[:-1])

@@ -574,7 +574,8 @@ class OperatingCurve:
     gain_low, gain_high, time_constant_low, time_constant_high : ndarray or None
         Monte Carlo band from the parameter covariance (None when none was given).
     undefined : ndarray, shape (M,) or None
-        Fraction of draws that reach no stable equilibrium at each ū (left out of the band).
+        Fraction of draws that reach no stable equilibrium at each ū (left out of the band); NaN,
+        with NaN bands, where the model itself has no equilibrium (no draws are made there).
     """
 
     local_models: tuple[LocalModel, ...]
@@ -669,7 +670,7 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         The model's parameter covariance (:func:`graybox.ls_uncertainty` and the others): the
         gain and time-constant bands at its level are the quantiles of ``n_samples`` draws of θ
         around θ̂ with scale ``cov`` (multivariate t with its degrees of freedom, as its intervals),
-        each at the equilibrium it reaches from the estimate's ȳ.
+        each at the equilibrium it reaches from the estimate's ȳ (NaN bands where there is none).
     n_samples : int
         Monte Carlo draws for the bands.
     seed : int
@@ -709,29 +710,34 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
     if cov is None or not isinstance(um, Model) or um.structure != model.structure:
         raise ValueError("uncertainty must be the ParameterUncertainty of this model (same structure), e.g. "
                          "graybox.ls_uncertainty(model, data)")
-    if not np.all(np.isfinite(ybar)):
-        raise ValueError("the gain and time-constant bands need an equilibrium at every operating point")
     th = model.theta
     rng = np.random.default_rng(seed)
     thetas = theta_draws(th, cov, n, rng, dof=getattr(uncertainty, "dof", None))  # t, as the intervals
-    M = ub.shape[0]
-    r = _reached(model, thetas, ub, ybar)
-    ok = r.status == REACHED  # (n, M)
-    Y = np.where(ok, r.ybar, 0.0)
-    a, b = jacobian_rows(model.structure, model.input_names, np.repeat(thetas, M, axis=0), Y.ravel(),
-                         np.tile(ub, (n, 1)))
-    rho = np.abs(characteristic_roots(a)).max(axis=1, initial=0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tau = np.where(rho > 0, -Ts / np.log(rho), 0.0).reshape(n, M)
-        gain = (b.sum(axis=2) / (1.0 - a.sum(axis=1))[:, None]).reshape(n, M, -1)
-    tau = np.where(ok, tau, np.nan)
-    gain = np.where(ok[:, :, None], gain, np.nan)
-    q = (1 - uncertainty.level) / 2
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # a point no draw reaches has an all-NaN column
-        glo, ghi = np.nanquantile(gain, [q, 1 - q], axis=0)
-        tlo, thi = np.nanquantile(tau, [q, 1 - q], axis=0)
+    # the draws start from the estimate's equilibrium: where it has none, none is drawn and the band is NaN
+    has = np.isfinite(ybar)
+    M, full = int(has.sum()), ub.shape[0]
+    glo, ghi = np.full((full, model.n_inputs), np.nan), np.full((full, model.n_inputs), np.nan)
+    tlo, thi, undefined = np.full(full, np.nan), np.full(full, np.nan), np.full(full, np.nan)
+    if M:
+        sub = ub[has]
+        r = _reached(model, thetas, sub, ybar[has])
+        ok = r.status == REACHED  # (n, M)
+        Y = np.where(ok, r.ybar, 0.0)
+        a, b = jacobian_rows(model.structure, model.input_names, np.repeat(thetas, M, axis=0), Y.ravel(),
+                             np.tile(sub, (n, 1)))
+        rho = np.abs(characteristic_roots(a)).max(axis=1, initial=0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tau = np.where(rho > 0, -Ts / np.log(rho), 0.0).reshape(n, M)
+            gain = (b.sum(axis=2) / (1.0 - a.sum(axis=1))[:, None]).reshape(n, M, -1)
+        tau = np.where(ok, tau, np.nan)
+        gain = np.where(ok[:, :, None], gain, np.nan)
+        q = (1 - uncertainty.level) / 2
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a point no draw reaches has an all-NaN column
+            glo[has], ghi[has] = np.nanquantile(gain, [q, 1 - q], axis=0)
+            tlo[has], thi[has] = np.nanquantile(tau, [q, 1 - q], axis=0)
+        undefined[has] = 1.0 - ok.mean(axis=0)
     if single:
         glo, ghi = glo[:, 0], ghi[:, 0]
     return {"level": float(uncertainty.level), "gain_low": glo, "gain_high": ghi, "time_constant_low": tlo,
-            "time_constant_high": thi, "undefined": 1.0 - ok.mean(axis=0)}
+            "time_constant_high": thi, "undefined": undefined}
