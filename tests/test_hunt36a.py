@@ -231,3 +231,28 @@ def test_operating_curve_bands_are_nan_where_the_model_has_no_equilibrium_not_an
     # the defined points' bands are those of the curve without the point past the fold
     inside = gb.operating_curve(model, levels[:-1], uncertainty=unc, n_samples=100)
     assert np.array_equal(inside.gain_low, oc.gain_low[:-1]) and np.array_equal(inside.undefined, oc.undefined[:-1])
+
+
+SMALL_SPEC = """name = "g"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first"
+terms = ["y(k-1)", "u(k-1)", "1"]
+[[variants]]
+name = "LS"
+estimator = "ls"
+"""
+
+
+def test_a_spec_an_editor_saved_with_a_byte_order_mark_reads(tmp_path):
+    # a spec saved as "UTF-8 with BOM" (Notepad) was refused as "line 1: invalid TOML: Invalid statement", while the
+    # JSON files and the CSV loaders skip the mark
+    from graybox import experiments as gx
+
+    plain, marked = tmp_path / "plain.toml", tmp_path / "marked.toml"
+    plain.write_text(SMALL_SPEC, encoding="utf-8")
+    marked.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes())
+    a, b = gx.Grid.from_toml(plain), gx.Grid.from_toml(marked)
+    assert [c.key for c in b.cells()] == [c.key for c in a.cells()]

@@ -1025,7 +1025,7 @@ class Grid:
         """
         p = Path(path)
         try:
-            text = p.read_text(encoding="utf-8")
+            text = p.read_text(encoding="utf-8-sig")  # "-sig": a byte-order mark an editor added is not TOML
         except OSError as exc:
             raise SpecError(f"cannot read the spec: {exc}", source=str(p)) from None
         return cls.from_toml_text(text, source=str(p), base_dir=str(p.resolve().parent))
