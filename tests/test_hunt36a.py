@@ -256,3 +256,24 @@ def test_a_spec_an_editor_saved_with_a_byte_order_mark_reads(tmp_path):
     marked.write_bytes(b"\xef\xbb\xbf" + plain.read_bytes())
     a, b = gx.Grid.from_toml(plain), gx.Grid.from_toml(marked)
     assert [c.key for c in b.cells()] == [c.key for c in a.cells()]
+
+
+def test_a_spec_that_is_not_text_is_refused_naming_the_file_and_what_it_is(tmp_path, capsys):
+    # the store given as the spec (`graybox grid run results.sqlite --store spec.toml`, arguments swapped), or any
+    # binary file, gave "graybox grid run: 'utf-8' codec can't decode byte 0xf8 in position 102": neither the
+    # file nor what was wrong with it
+    from graybox import experiments as gx
+    from graybox._cli import main
+
+    spec, store = tmp_path / "spec.toml", tmp_path / "results.sqlite"
+    spec.write_text(SMALL_SPEC)
+    gx.run_grid(spec, store)
+    before = spec.read_bytes()
+    assert main(["grid", "run", str(store), "--store", str(spec)]) == 2
+    err = capsys.readouterr().err
+    assert str(store) in err and "grid store (SQLite), not a spec" in err
+    assert spec.read_bytes() == before
+    binary = tmp_path / "image.toml"
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
+    with pytest.raises(gx.SpecError, match=r"image.toml.*not UTF-8 text \(byte 0\)"):
+        gx.Grid.from_toml(binary)

@@ -1025,9 +1025,16 @@ class Grid:
         """
         p = Path(path)
         try:
-            text = p.read_text(encoding="utf-8-sig")  # "-sig": a byte-order mark an editor added is not TOML
+            raw = p.read_bytes()
         except OSError as exc:
             raise SpecError(f"cannot read the spec: {exc}", source=str(p)) from None
+        try:
+            text = raw.decode("utf-8-sig")  # "-sig": a byte-order mark an editor added is not TOML
+        except UnicodeDecodeError as exc:
+            what = ("it is a grid store (SQLite), not a spec: graybox grid run SPEC.toml --store STORE"
+                    if raw.startswith(b"SQLite format 3\x00") else
+                    f"it is not UTF-8 text (byte {exc.start}); a spec is a TOML text file (graybox grid init prints one)")
+            raise SpecError(f"cannot read the spec: {what}", source=str(p)) from None
         return cls.from_toml_text(text, source=str(p), base_dir=str(p.resolve().parent))
 
     @classmethod
