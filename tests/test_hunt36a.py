@@ -277,3 +277,18 @@ def test_a_spec_that_is_not_text_is_refused_naming_the_file_and_what_it_is(tmp_p
     binary.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
     with pytest.raises(gx.SpecError, match=r"image.toml.*not UTF-8 text \(byte 0\)"):
         gx.Grid.from_toml(binary)
+
+
+def test_a_grid_whose_cells_are_all_reused_starts_no_worker_process(tmp_path, monkeypatch):
+    # the local process pool started a worker (a Python start-up and graybox's imports, about a second) when every
+    # cell was reused and there was nothing to run; the Dask executor starts no cluster then
+    from graybox import experiments as gx
+    from graybox.experiments._executors import ProcessPool
+
+    spec, store = tmp_path / "spec.toml", tmp_path / "s.sqlite"
+    spec.write_text(SMALL_SPEC)
+    gx.run_grid(spec, store)
+    started = []
+    monkeypatch.setattr(ProcessPool, "_start", lambda self: started.append(1) or pytest.fail("a worker started"))
+    again = gx.run_grid(spec, store, executor="processes", workers=2)
+    assert again.ran == 0 and again.skipped == 1 and not started

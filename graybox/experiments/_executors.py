@@ -227,11 +227,13 @@ class ProcessPool:
 
     def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None) -> Iterator[dict]:
         """Yield each cell's row as it completes."""
+        if not cells:  # every cell reused: no worker to start (each costs a Python start-up and graybox's imports)
+            return
         pending: deque[tuple[Cell, int]] = deque((c, 0) for c in cells)
         slots: list[_Slot] = []
         graceful = True
         try:
-            slots = [self._start() for _ in range(min(self.workers, max(1, len(pending))))]
+            slots = [self._start() for _ in range(min(self.workers, len(pending)))]
             while pending or any(s.cell is not None for s in slots):
                 for s in slots:
                     if s.cell is None and pending:
