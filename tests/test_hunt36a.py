@@ -148,7 +148,7 @@ def _rpm_dataset(seed: int, n: int = 300) -> gb.Dataset:
         n_ = np.repeat(rng.uniform(2500.0, 3500.0, n // 20 + 1), 20)[:n]
         y = RPM.simulate(n_, np.full(1, 9.0)) + 0.01 * rng.standard_normal(n)
         recs.append(gb.Record(n_, y, 0.1, input_names=("n",), name=f"run {seed}.{part}"))
-    levels = np.linspace(2500.0, 3500.0, 5)
+    levels = np.linspace(2600.0, 3400.0, 5)
     return gb.Dataset(*recs, gb.StaticPoints(levels, RPM.static_curve(levels), input_names=("n",), uncertainty=0.05))
 
 
@@ -292,3 +292,54 @@ def test_a_grid_whose_cells_are_all_reused_starts_no_worker_process(tmp_path, mo
     monkeypatch.setattr(ProcessPool, "_start", lambda self: started.append(1) or pytest.fail("a worker started"))
     again = gx.run_grid(spec, store, executor="processes", workers=2)
     assert again.ran == 0 and again.skipped == 1 and not started
+
+
+def _delta_dataset(delta) -> gb.Dataset:
+    """_rpm_dataset(0) with static points off the model's curve by ±0.02 bar, of uncertainty δ (bar): a band
+    constraint binds where δ is small."""
+    d = _rpm_dataset(0)
+    sp = d.static
+    ybar = sp.ybar + 0.02 * np.array([1.0, -1.0, 1.0, -1.0, 1.0])
+    return gb.Dataset(d.ident, d.valid, gb.StaticPoints(sp.ubar, ybar, input_names=("n",), uncertainty=delta))
+
+
+def test_a_band_constraint_that_takes_the_points_uncertainty_is_a_new_cell_when_that_uncertainty_changes(tmp_path):
+    # a cell's key held the data (records and points) and the band, not the points' uncertainty δ, which a band
+    # constraint without b takes point by point: the same points with δ = 0.01, 0.07, … and 0.07, 0.01, … under
+    # one band had the same key, and the store gave the second grid the first grid's stale result
+    from graybox import experiments as gx
+
+    structure = [gx.StructureSpec("quadratic", terms=["1", "y(k-1)", "n(k-1)", "n(k-1)^2"])]
+    variants = [gx.Variant("PE band", "pe", lambdas=[1e-3, 1.0], constraints=[{"type": "band"}]), gx.Variant("LS", "ls")]
+    store = tmp_path / "s.sqlite"
+    runs, thetas = [], []
+    for delta in ([0.01, 0.07, 0.04, 0.07, 0.01], [0.07, 0.01, 0.04, 0.01, 0.07]):
+        data = _delta_dataset(delta)
+        runs.append(gx.run_grid(gx.Grid([gx.DataSpec("plant", dataset=data, band=0.003)], structure, variants), store))
+        row = gb.load_results(store).set_index("variant").loc["PE band"]
+        front = gb.pe_pareto(structure[0].terms, data, lambdas=[1e-3, 1.0], constraints=gb.StaticBand())
+        thetas.append(gb.decide_dsf(front, band=0.003).model.theta)
+        assert np.allclose(row["theta"], thetas[-1], rtol=1e-9)
+    assert not np.allclose(thetas[0], thetas[1], rtol=0.01)  # δ decides the fit
+    assert runs[1].ran == 1 and runs[1].skipped == 1  # LS does not read δ: reused
+    # one δ whose square is the band (the bundled sets, a CSV file's uncertainty) keeps the key it had
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], structure, variants[:1])
+    from graybox.experiments._spec import _hash
+
+    (cell,) = grid.cells()
+    assert cell.key == _hash({"data": cell.data_hash, "band": cell.band, "structure": structure[0].content(),
+                              "variant": variants[0].content(), "seed": None, "version": gb.__version__}, 32)
+
+
+def test_two_data_sets_of_the_same_points_with_other_uncertainties_in_one_grid_are_refused(tmp_path):
+    # workers find a cell's data by its content hash, which leaves δ out: the cells of the first data set ran on
+    # the second's δ
+    from graybox import experiments as gx
+
+    data = [gx.DataSpec("a", dataset=_delta_dataset([0.01, 0.07, 0.04, 0.07, 0.01]), band=0.003),
+            gx.DataSpec("b", dataset=_delta_dataset([0.07, 0.01, 0.04, 0.01, 0.07]), band=0.003)]
+    structure = [gx.StructureSpec("quadratic", terms=["1", "y(k-1)", "n(k-1)", "n(k-1)^2"])]
+    band = gx.Variant("PE band", "pe", lambdas=[1e-3, 1.0], constraints=[{"type": "band"}])
+    with pytest.raises(gx.SpecError, match="'a' and 'b' hold the same records and static points"):
+        gx.run_grid(gx.Grid(data, structure, [band]), tmp_path / "s.sqlite")
+    assert gx.run_grid(gx.Grid(data, structure, [gx.Variant("LS", "ls")]), tmp_path / "t.sqlite").ran == 1

@@ -9,13 +9,15 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Callable, Mapping
 
+import numpy as np
+
 from .. import _api as gb
 
 from ..core._progress import progress_bar
 from ..core._validation import check_bool, check_fields
 from ._cell import STATUSES, failed_row, run_cell
 from ._executors import make_executor
-from ._spec import Grid
+from ._spec import Grid, SpecError, reads_uncertainty
 from ._store import ResultStore
 
 __all__ = ["GridRun", "run_grid"]
@@ -154,7 +156,7 @@ def run_grid(
     g = grid if isinstance(grid, Grid) else Grid.from_toml(grid)
     datasets = g.load_data()
     cells = g.cells(datasets)
-    by_hash = {c.data_hash: datasets[c.data] for c in cells}
+    by_hash = _by_hash(cells, datasets)
     ex = make_executor(executor, workers=workers, client=client, scheduler=scheduler, fn=run_cell)
     version = gb.__version__
     say = log or (lambda line: None)
@@ -192,6 +194,25 @@ def run_grid(
     return GridRun(str(Path(store)), g.name, len(cells), ran, len(cells) - len(todo),
                    MappingProxyType({s: counts.get(s, 0) for s in STATUSES}), ex.name, time.perf_counter() - t0,
                    spec_id, tuple(notes))
+
+
+def _by_hash(cells, datasets: Mapping[str, gb.Dataset]) -> dict[str, gb.Dataset]:
+    """The data sets by content hash (how workers find a cell's data); ``SpecError`` for two data sets of
+    the same records and points whose uncertainties differ, which one hash cannot tell apart."""
+    out: dict[str, gb.Dataset] = {}
+    names: dict[str, str] = {}
+    reads = any(reads_uncertainty(c.variant_spec) for c in cells)
+    for c in cells:
+        ds = datasets[c.data]
+        if reads and c.data_hash in out and out[c.data_hash] is not ds:
+            a, b = (x.static.uncertainty for x in (out[c.data_hash], ds))
+            if (a is None) != (b is None) or (a is not None and not np.array_equal(a, b)):
+                raise SpecError(f"data sets {names[c.data_hash]!r} and {c.data!r} hold the same records and static "
+                                "points with other uncertainties, which their cells cannot tell apart: run them in "
+                                "two grids, or give the band constraints their half-width b")
+        out.setdefault(c.data_hash, ds)
+        names.setdefault(c.data_hash, c.data)
+    return out
 
 
 def _notes(st: ResultStore, cells, done: Mapping[str, str], version: str) -> list[str]:

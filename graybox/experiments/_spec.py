@@ -363,6 +363,21 @@ def data_fingerprint(ds: gb.Dataset) -> str:
     return h.hexdigest()[:16]
 
 
+def uncertainty_key(ds: gb.Dataset, band: float | None) -> list[float] | None:
+    """The static points' uncertainty δ (output units) as a cell key holds it, or None when the key needs
+    none: no δ, or one δ for every point whose square is the data set's band (already in the key)."""
+    d = None if ds.static is None else ds.static.uncertainty
+    if d is None or (band is not None and np.all(d == d[0]) and float(d[0]) ** 2 == band):
+        return None
+    return [float(v) for v in d]
+
+
+def reads_uncertainty(variant_content: Mapping[str, Any]) -> bool:
+    """Whether a variant's result depends on the static points' uncertainty δ: a band constraint without
+    its half-width b takes each point's δ."""
+    return any(c["type"] == "band" and c.get("b") is None for c in variant_content["constraints"])
+
+
 # --------------------------------------------------------------------------------------------
 # structures
 # --------------------------------------------------------------------------------------------
@@ -913,7 +928,9 @@ class Cell:
     index : int
         Position in the grid's cell order (data, then structure, then variant, then seed).
     key : str
-        Hash of the data's content, the structure, the variant, the seed and graybox's version.
+        Hash of the data's content, the band, the structure, the variant, the seed and graybox's
+        version; and of the static points' uncertainty when the variant's band constraint takes it
+        and the band does not say it (per-point δ, or a δ other than √band).
     data, structure, variant : str
         Names.
     seed : int or None
@@ -1136,10 +1153,15 @@ class Grid:
             dh = data_fingerprint(ds[d.name])
             band = d.band
             head = '{"band":' + canonical_json(band) + ',"data":' + canonical_json(dh) + ',"seed":'
+            # the points' δ where a variant reads it and the band does not say it (keys written before unchanged)
+            unc = uncertainty_key(ds[d.name], band)
+            unc_text = "" if unc is None else ',"uncertainty":' + canonical_json(unc)
             for s, sc, frozen_s in structures:
                 for v, vc, frozen_v in variants:
+                    extra = unc_text if reads_uncertainty(frozen_v) else ""
                     for seed in (self.seeds if v.stochastic else (None,)):
-                        text = head + canonical_json(seed) + ',"structure":' + sc + ',"variant":' + vc + tail
+                        text = (head + canonical_json(seed) + ',"structure":' + sc + extra + ',"variant":' + vc
+                                + tail)
                         key = hashlib.sha256(text.encode()).hexdigest()[:32]
                         out.append(Cell(len(out), key, d.name, s.name, v.name, seed, dh, band, frozen_s, frozen_v,
                                         version))
