@@ -343,3 +343,16 @@ def test_two_data_sets_of_the_same_points_with_other_uncertainties_in_one_grid_a
     with pytest.raises(gx.SpecError, match="'a' and 'b' hold the same records and static points"):
         gx.run_grid(gx.Grid(data, structure, [band]), tmp_path / "s.sqlite")
     assert gx.run_grid(gx.Grid(data, structure, [gx.Variant("LS", "ls")]), tmp_path / "t.sqlite").ran == 1
+
+
+def test_plot_fronts_refuses_an_empty_list_of_structures_with_a_value_error(tmp_path):
+    # plot_fronts(results, structures=[]) failed with "ZeroDivisionError: integer division or modulo by zero"
+    # while laying out its panels
+    from graybox import experiments as gx
+
+    spec, store = tmp_path / "spec.toml", tmp_path / "s.sqlite"
+    spec.write_text(SMALL_SPEC)
+    gx.run_grid(spec, store)
+    with pytest.raises(ValueError, match="structures must name at least one structure"):
+        gx.plot_fronts(store, structures=[])
+    assert gx.plot_fronts(store, structures=["first"]).axes

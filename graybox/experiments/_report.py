@@ -427,6 +427,8 @@ def plot_fronts(
     band = _checked_options(band=band, data=data)
     if structures is not None:
         structures = check_sequence(structures, "structures", "a sequence of structure names")
+        if not structures:
+            raise ValueError("structures must name at least one structure (None: every structure)")
     df = _frame(results)
     d = _one_data(df, data)
     sub = df[df["data"] == d]
