@@ -356,3 +356,16 @@ def test_plot_fronts_refuses_an_empty_list_of_structures_with_a_value_error(tmp_
     with pytest.raises(ValueError, match="structures must name at least one structure"):
         gx.plot_fronts(store, structures=[])
     assert gx.plot_fronts(store, structures=["first"]).axes
+
+
+def test_plot_heatmap_of_a_text_column_says_it_cannot_colour_text(tmp_path):
+    # plot_heatmap(results, value="reason"), a leaderboard column as its docstring asks, failed with numpy's
+    # "could not convert string to float: ''"
+    from graybox import experiments as gx
+
+    spec, store = tmp_path / "spec.toml", tmp_path / "s.sqlite"
+    spec.write_text(SMALL_SPEC)
+    gx.run_grid(spec, store)
+    with pytest.raises(ValueError, match="numeric leaderboard column.*'reason'"):
+        gx.plot_heatmap(store, value="reason")
+    assert gx.heatmap_table(store, value="reason").loc["first", "LS"].startswith("no model has J_SF")

@@ -517,7 +517,11 @@ def plot_heatmap(
         Each cell annotated with its value; "—" where no model qualified.
     """
     t = heatmap_table(results, data=data, value=value, rule=rule, band=band)
-    vals = t.to_numpy(dtype=float)
+    try:
+        vals = t.to_numpy(dtype=float)
+    except (TypeError, ValueError):  # a text column (reason): heatmap_table shows it, a colour scale cannot
+        raise ValueError(f"value must be a numeric leaderboard column to colour, got {value!r} (text); "
+                         "heatmap_table gives it as a table") from None
     fig = Figure(figsize=(1.2 + 1.1 * t.shape[1], 1.4 + 0.5 * t.shape[0]), layout="constrained")
     ax = fig.add_subplot()
     pos = np.isfinite(vals) & (vals > 0)
