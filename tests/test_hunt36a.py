@@ -369,3 +369,19 @@ def test_plot_heatmap_of_a_text_column_says_it_cannot_colour_text(tmp_path):
     with pytest.raises(ValueError, match="numeric leaderboard column.*'reason'"):
         gx.plot_heatmap(store, value="reason")
     assert gx.heatmap_table(store, value="reason").loc["first", "LS"].startswith("no model has J_SF")
+
+
+def test_parallel_map_on_a_scheduler_without_workers_says_so_instead_of_waiting_for_ever(monkeypatch):
+    # parallel_map(scheduler=…) (select_graybox's and bootstrap_decision's Dask path) sent its jobs to a scheduler
+    # that had no worker and waited for them for ever; run_grid waited a minute, then raised distributed's
+    # "Only 0/1 workers arrived after 60"
+    from distributed import LocalCluster
+
+    from graybox import experiments as gx
+    from graybox.experiments import _executors
+
+    monkeypatch.setattr(_executors, "WORKER_TIMEOUT", 1)
+    with LocalCluster(n_workers=0, dashboard_address=":0") as cluster:
+        with pytest.raises(ConnectionError, match=f"scheduler at {cluster.scheduler_address} has no worker"):
+            with gx.parallel_map(scheduler=cluster.scheduler_address) as pmap:
+                pmap(abs, [1.0, -2.0])

@@ -43,7 +43,7 @@ from ._cell import failed_row, run_cell
 from ._spec import Cell
 
 __all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "check_cluster", "local_cluster", "make_executor",
-           "worker_threads"]
+           "scheduler_client", "worker_threads"]
 
 #: Executor names accepted by :func:`graybox.experiments.run_grid`.
 EXECUTORS = ("inprocess", "processes", "dask")
@@ -87,6 +87,8 @@ MAX_BATCH = 64
 IN_FLIGHT = 2
 #: How long the driver tries to reach a Dask scheduler given by its address.
 CONNECT_TIMEOUT = "30s"
+#: How long the driver waits for the first worker of a Dask scheduler given by its address (seconds).
+WORKER_TIMEOUT = 60
 
 
 def worker_threads(workers: int, cores: int | None = None) -> int:
@@ -515,16 +517,8 @@ class DaskCluster:
             yield self.client
             return
         if self.scheduler is not None:
-            try:
-                client = Client(self.scheduler, timeout=CONNECT_TIMEOUT)
-            except OSError as exc:
-                raise ConnectionError(f"cannot reach the Dask scheduler at {self.scheduler} ({exc}); is it running, "
-                                      "and is the address right?") from None
-            try:
-                client.wait_for_workers(1, timeout=60)
+            with scheduler_client(self.scheduler) as client:
                 yield client
-            finally:
-                client.close()
             return
         with local_cluster(self.workers, dashboard) as cluster:
             client = Client(cluster)
@@ -613,6 +607,30 @@ class DaskCluster:
                     client.unregister_worker_plugin(plugin)
                 except Exception:  # the cluster may be going away; the plugin goes with it
                     pass
+
+
+@contextmanager
+def scheduler_client(scheduler: str):
+    """A ``distributed.Client`` of the Dask scheduler at ``scheduler`` with a worker to run on (closed on
+    exit); a ``ConnectionError`` naming the address when it cannot be reached, or when no worker joins it
+    within ``WORKER_TIMEOUT`` seconds (jobs sent to a scheduler without workers wait for ever)."""
+    from distributed import Client
+
+    try:
+        client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+    except OSError as exc:
+        raise ConnectionError(f"cannot reach the Dask scheduler at {scheduler} ({exc}); is it running, "
+                              "and is the address right?") from None
+    try:
+        try:
+            client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
+        except (TimeoutError, OSError):
+            raise ConnectionError(f"the Dask scheduler at {scheduler} has no worker (none joined in "
+                                  f"{WORKER_TIMEOUT} s): start some (dask worker {scheduler}), or check the "
+                                  "address") from None
+        yield client
+    finally:
+        client.close()
 
 
 def check_cluster(client: Any, scheduler: Any) -> None:

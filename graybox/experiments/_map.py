@@ -19,7 +19,8 @@ from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
 
 from ..core._validation import check_choice, check_int, warn
-from ._executors import EXECUTORS, _environ, _thread_env, check_cluster, local_cluster, worker_threads
+from ._executors import (EXECUTORS, _environ, _thread_env, check_cluster, local_cluster, scheduler_client,
+                         worker_threads)
 
 __all__ = ["parallel_map"]
 
@@ -94,7 +95,7 @@ def parallel_map(
 
         if client is None:
             if scheduler is not None:
-                client = stack.enter_context(Client(scheduler))
+                client = stack.enter_context(scheduler_client(scheduler))
             else:
                 cluster = stack.enter_context(local_cluster(workers))
                 client = stack.enter_context(Client(cluster))
