@@ -67,8 +67,8 @@ class DSFResult:
     band : float
         B, the bound on J_SF (output units²).
     in_band : bool
-        Whether J_SF ≤ B holds (the name :class:`Decision` uses too). When False, ``model`` is the
-        member with the smallest J_SF reached.
+        Whether J_SF ≤ B holds (the name :class:`Decision` uses too). When False, ``model`` has the
+        smallest J_S among the solutions whose J_SF is within 0.1 % of the smallest J_SF reached.
     start : str
         Where the winning run started (e.g. ``"PE λ1=0.0123"``, ``"SE λ1=0.7197"`` or ``"theta0"``).
     start_JS, start_JSF : float
@@ -240,7 +240,8 @@ def _sweep_starts(problem: SEProblem, band: float, lambdas: np.ndarray,
     solvers), so the edge iteration from its best in-band member ends no worse than sweep + D_SF
     on the same λ1. Returned: that member, then the (at most ``n_out``) solutions outside the band
     with J_SF ≤ 4 B and a smaller J_S, best first, which restoration brings into the band
-    (better basins); each as (θ, description).
+    (better basins); when there are none, the ``n_out`` of the smallest J_SF (the band may be out
+    of reach: then they compete on J_S, see :data:`_JSF_TIE`); each as (θ, description).
     """
     front = gradient_front(problem, lambdas, progress=False, starts=_pe_starts(problem))
     cands = [(th, f"SE λ1={lam:.4g}") for th, lam in zip(front.thetas, front.lambdas)]
@@ -267,6 +268,9 @@ def _sweep_starts(problem: SEProblem, band: float, lambdas: np.ndarray,
         best = js[i]
     near = [k for k in np.argsort(js) if np.isfinite(js[k]) and band < jsf[k] <= 4 * band and js[k] < best]
     out += [(cands[k][0], cands[k][1] + " (outside the band, restored)") for k in near[:n_out]]
+    if not out:  # none near the band (maybe out of reach): those of the smallest J_SF, whose J_S differ
+        low = [k for k in np.argsort(jsf) if np.isfinite(js[k]) and np.isfinite(jsf[k])]
+        out += [(cands[k][0], cands[k][1] + " (smallest J_SF)") for k in low[:n_out]]
     return out
 
 
@@ -467,6 +471,13 @@ def _solve(problem: SEProblem, **options) -> DSFResult:
         return _solve_one_thread(problem, **options)
 
 
+#: Relative tolerance on J_SF when the band is out of reach: the model is the run of the smallest J_S
+#: among those within it of the smallest J_SF reached. J_SF depends on the static clusters only, so
+#: its minimisers form a valley along which J_S is free: the smallest J_SF alone returned an arbitrary
+#: point of it (J_S 100 times another run's, whose J_SF was 3e-5 larger).
+_JSF_TIE = 1e-3
+
+
 def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, tol, pe_lambdas) -> DSFResult:
     why: list[str] = []
     if theta0 is not None:
@@ -498,9 +509,13 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
                          f"point{inside}" + (f" ({'; '.join(why)})" if why else "") + "; give another theta0"
                          + (", or margin= (e.g. 0.01: the sweep's members then keep stable equilibria)"
                             if problem.margin is None else ""))
-    # the feasible run with the smallest J_S, else the run with the smallest J_SF
-    start, (th, f, g, f0, g0, it, message) = min(
-        runs, key=lambda t: (t[1][2] > band * (1 + 1e-12), t[1][1] if t[1][2] <= band * (1 + 1e-12) else t[1][2]))
+    # the feasible run with the smallest J_S; else, among the runs within _JSF_TIE of the smallest J_SF
+    # reached, the smallest J_S
+    inside = [t for t in runs if t[1][2] <= band * (1 + 1e-12)]
+    if not inside:
+        g_min = min(t[1][2] for t in runs)
+        inside = [t for t in runs if t[1][2] <= g_min * (1 + _JSF_TIE)]
+    start, (th, f, g, f0, g0, it, message) = min(inside, key=lambda t: t[1][1])
     it = sum(r[5] for _, r in runs)
     feasible = bool(g <= band * (1 + 1e-12))
     name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
