@@ -385,3 +385,13 @@ def test_parallel_map_on_a_scheduler_without_workers_says_so_instead_of_waiting_
         with pytest.raises(ConnectionError, match=f"scheduler at {cluster.scheduler_address} has no worker"):
             with gx.parallel_map(scheduler=cluster.scheduler_address) as pmap:
                 pmap(abs, [1.0, -2.0])
+
+
+def test_narx_iosystem_takes_the_model_s_own_period_as_local_model_does():
+    # was: narx_iosystem(model, Ts) needed Ts even from a model that knows the period it was identified at
+    pytest.importorskip("control")
+    m = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), [0.5, 0.2, 1.0], Ts=0.1)
+    assert gb.narx_iosystem(m).dt == 0.1 == gb.local_model(m, 1.0).Ts
+    assert gb.narx_iosystem(m, 0.2).dt == 0.2  # given: the user's word, as for local_model
+    with pytest.raises(ValueError, match="Ts .*is needed"):
+        gb.narx_iosystem(gb.Model(m.structure, m.theta))

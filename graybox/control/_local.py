@@ -470,9 +470,9 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
              "the local models there are extrapolations of the model", StaticRangeWarning)
 
 
-def _check_Ts(Ts: float | None, data: object, model: Model) -> float:
-    """The local models' sampling period: ``Ts``, else the one the model was identified at (``data`` at another
-    period is refused: the model's coefficients hold at its own), else ``data``'s."""
+def check_Ts(Ts: float | None, data: object, model: Model) -> float:
+    """The sampling period of a model's linear or nonlinear systems: ``Ts``, else the one the model was identified
+    at (``data`` at another period is refused: its coefficients hold at its own), else ``data``'s."""
     if Ts is None:
         # records (a Dataset's, or a sequence of them, which share one period); static points have none
         recs = None if data is None or isinstance(data, StaticPoints) else as_records(data)
@@ -484,6 +484,8 @@ def _check_Ts(Ts: float | None, data: object, model: Model) -> float:
             return float(recs[0].Ts)
         raise ValueError("Ts (the sampling period, s) is needed: pass Ts= or data= (records), or use a "
                          "model an estimator made (it knows the period it was identified at)")
+    # given, it is the user's word: a record made without Ts= has the default period 1 s, and its
+    # model's local models are then asked for at the real one
     return check_real(Ts, "Ts", low=0, low_open=True)
 
 
@@ -546,7 +548,7 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
     ub = _as_points(model, ubar)
     if ub.shape[0] != 1:
         raise ValueError(f"ubar: local_model takes one operating point, got {ub.shape[0]} (use operating_curve)")
-    Ts_ = _check_Ts(Ts, data, model)
+    Ts_ = check_Ts(Ts, data, model)
     _range_warning(model, ub, data)
     return _linearise(model, ub[0], _y0s(y0, 1)[0], Ts_)
 
@@ -684,7 +686,7 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     model = check_polynomial(model, "operating_curve")
     n_samples, seed = check_int(n_samples, "n_samples", low=10), check_seed(seed)
     ub = _as_points(model, ubar)
-    Ts_ = _check_Ts(Ts, data, model)
+    Ts_ = check_Ts(Ts, data, model)
     _range_warning(model, ub, data)
     lms = tuple(_linearise(model, u, y, Ts_) for u, y in zip(ub, _y0s(y0, ub.shape[0])))
     rows = [_summary(lm) for lm in lms]

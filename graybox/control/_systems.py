@@ -31,7 +31,7 @@ from ..core._simulation import DivergenceError
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
-from ._local import check_polynomial, input_levels, require_control, system_name
+from ._local import check_Ts, check_polynomial, input_levels, require_control, system_name
 
 __all__ = ["narx_iosystem", "narx_initial_state", "narx_state_names", "narx_steady_state"]
 
@@ -167,7 +167,7 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
     return np.concatenate([np.full(lay.Ly, yb)] + [np.full(L, u) for u, L in zip(ub, lay.Lu)] + [np.zeros(ne)])
 
 
-def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | None = None) -> Any:
+def narx_iosystem(model: Model, Ts: float | None = None, *, noise: bool = False, name: str | None = None) -> Any:
     """The whole NARX model as a discrete ``control.NonlinearIOSystem`` (dt = Ts).
 
     State, update and output as in the module docstring: the state holds the lagged outputs and
@@ -182,8 +182,9 @@ def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | N
     ----------
     model : Model
         A polynomial NARX model.
-    Ts : float
-        Sampling period (s).
+    Ts : float, optional
+        Sampling period (s); default the model's own (``model.Ts``, the period it was identified at), as
+        for :func:`local_model`. Needed for a model that does not know its period.
     noise : bool
         Add the noise e(k) as a last system input ``"e"`` (output units) and the model's linear MA
         part: y(k) = F(x(k)) + Σ_l c_l e(k−l) + e(k), with e(k−1) … e(k−n_e) appended to the
@@ -205,7 +206,7 @@ def narx_iosystem(model: Model, Ts: float, *, noise: bool = False, name: str | N
     noise = check_bool(noise, "noise")
     if name is not None:
         check_str(name, "name")
-    Ts = check_real(Ts, "Ts", low=0, low_open=True)
+    Ts = check_Ts(Ts, None, model)
     c = _noise_coefficients(model) if noise else np.zeros(0)
     ct = require_control()
     lay = _layout(model.structure, model.input_names)
