@@ -79,7 +79,7 @@ def main() -> None:
     t_band = timeit(lambda: gb.operating_curve(cls, g19, Ts=Ts, uncertainty=unc, n_samples=1000), repeat=args.repeat)
     rec = data.valid
     L = cls.max_lag
-    sysm = gb.narx_iosystem(cls, Ts)
+    sysm = gb.narx_iosystem(cls, Ts=Ts)
     x0 = gb.narx_initial_state(cls, rec)
     T = Ts * np.arange(len(rec) - L)
     t_ct = timeit(lambda: ct.input_output_response(sysm, T, rec.u[L:], x0), repeat=args.repeat)

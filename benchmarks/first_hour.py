@@ -213,7 +213,7 @@ def first_hour(files: dict[str, Path], folder: Path) -> None:
         kp = tau / (K * lam)  # IMC PI for a first-order plant K/(τs+1) and a closed loop of time constant λ
         pi = ct.ss([[1.0]], [[kp / tau * TS]], [[1.0]], [[kp * (1 + TS / tau)]], dt=TS, inputs="e", outputs="u",
                    name="pi")
-        loop = ct.interconnect([gb.narx_iosystem(gray.model, TS, name="tank model"), pi,
+        loop = ct.interconnect([gb.narx_iosystem(gray.model, Ts=TS, name="tank model"), pi,
                                 ct.summing_junction(["r", "-y"], "e", dt=TS)], inputs="r", outputs=["y", "u"])
         x0 = np.r_[gb.narx_steady_state(gray.model, 2000.0, lm.ybar), 2000.0]
         return kp, ct.input_output_response(loop, TS * np.arange(120), np.full(120, lm.ybar + 5000.0), x0)

@@ -179,7 +179,7 @@ def test_nonlinear_system_free_run_equals_simulate_one_input():
     for model in (reference.paper_model(15), reference.paper_model(17)):
         rec = data.valid
         L = model.max_lag
-        sysm = gb.narx_iosystem(model, rec.Ts)
+        sysm = gb.narx_iosystem(model, Ts=rec.Ts)
         x0 = gb.narx_initial_state(model, rec)
         assert sysm.nstates == x0.size and sysm.state_labels == gb.narx_state_names(model)
         r = ct.input_output_response(sysm, rec.Ts * np.arange(len(rec) - L), rec.u[L:], x0)
@@ -195,7 +195,7 @@ def test_nonlinear_system_free_run_equals_simulate_two_inputs():
     assert set(model.structure.inputs) == set(names)
     rec = data.valid
     L = model.max_lag
-    sysm = gb.narx_iosystem(model, rec.Ts)
+    sysm = gb.narx_iosystem(model, Ts=rec.Ts)
     assert sysm.ninputs == 2 and sysm.input_labels == list(names)
     r = ct.input_output_response(sysm, rec.Ts * np.arange(len(rec) - L), rec.inputs[L:].T,
                                  gb.narx_initial_state(model, rec))
@@ -210,7 +210,7 @@ def test_closed_loop_with_the_model_reaches_the_reference():
     g, tau = lm.dc_gain[0], lm.time_constant
     kp, ki = 0.5 / g, 0.5 / (g * tau)  # a slow PI: integral action brings the error to zero
     pi = ct.ss([[1.0]], [[ki * Ts]], [[1.0]], [[kp + ki * Ts]], dt=Ts, inputs="e", outputs="u", name="pi")
-    plant = gb.narx_iosystem(model, Ts, name="plant")
+    plant = gb.narx_iosystem(model, Ts=Ts, name="plant")
     loop = ct.interconnect([plant, pi, ct.summing_junction(["r", "-y"], "e", dt=Ts)], inputs="r", outputs=["y", "u"])
     x0 = np.r_[gb.narx_steady_state(model, u0, y0), u0]  # the PI's integrator holds u0
     n = 600
@@ -321,7 +321,7 @@ def test_equilibrium_not_reached_from_y0_is_said():
 def test_python_control_missing_names_the_extra(monkeypatch):
     lm = gb.local_model(reference.paper_model(15), 1200.0, Ts=0.05)
     monkeypatch.setitem(sys.modules, "control", None)
-    for call in (lm.to_statespace, lm.to_transfer_function, lambda: gb.narx_iosystem(reference.paper_model(15), 0.05)):
+    for call in (lm.to_statespace, lm.to_transfer_function, lambda: gb.narx_iosystem(reference.paper_model(15), Ts=0.05)):
         with pytest.raises(ImportError, match=r"pip install graybox\[control\]"):
             call()
 
@@ -329,7 +329,7 @@ def test_python_control_missing_names_the_extra(monkeypatch):
 def test_neural_model_gets_a_clear_error():
     net = gb.NeuralModel(np.zeros((2, 2)), np.zeros(2), np.zeros(2), 0.0, ny=1, nu=1)
     for fn in (lambda: gb.local_model(net, 1.0, Ts=1.0), lambda: gb.operating_curve(net, [1.0], Ts=1.0),
-               lambda: gb.narx_iosystem(net, 1.0)):
+               lambda: gb.narx_iosystem(net, Ts=1.0)):
         with pytest.raises(TypeError, match="polynomial NARX Model, got NeuralModel"):
             fn()
 
@@ -341,7 +341,7 @@ def test_arguments_are_checked():
     with pytest.raises(ValueError, match="ubar"):
         gb.local_model(m, [1000.0, 1100.0], Ts=0.05)
     with pytest.raises(ValueError, match="Ts"):
-        gb.narx_iosystem(m, -1.0)
+        gb.narx_iosystem(m, Ts=-1.0)
     with pytest.raises(ValueError, match="start"):
         gb.narx_initial_state(m, gb.load_pumping().valid, start=2)
     with pytest.raises(ValueError, match="uncertainty"):
@@ -366,16 +366,16 @@ def test_nonlinear_system_with_its_noise_input_reproduces_the_record():
     rec = data.valid
     L = model.max_lag
     xi = gb.one_step_residuals(model, rec)[0]  # ξ(k), k = L … N−1 (0 before L)
-    sysm = gb.narx_iosystem(model, rec.Ts, noise=True)
+    sysm = gb.narx_iosystem(model, Ts=rec.Ts, noise=True)
     assert sysm.input_labels == ["u", "e"] and sysm.state_labels[-2:] == ["e[k-1]", "e[k-2]"]
     x0 = gb.narx_initial_state(model, rec, noise=True)
     r = ct.input_output_response(sysm, rec.Ts * np.arange(len(rec) - L), np.vstack([rec.u[L:], xi]), x0)
     np.testing.assert_allclose(r.outputs[0], rec.y[L:], rtol=0, atol=1e-9)
     # without the noise input it is the free run
-    assert gb.narx_iosystem(model, rec.Ts).ninputs == 1
+    assert gb.narx_iosystem(model, Ts=rec.Ts).ninputs == 1
     bad = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], noise_structure=["e(k-1)y(k-1)"], noise_theta=[0.1])
     with pytest.raises(ValueError, match="linear MA part"):
-        gb.narx_iosystem(bad, 1.0, noise=True)
+        gb.narx_iosystem(bad, Ts=1.0, noise=True)
 
 
 def test_results_that_carry_a_model_are_accepted_as_it():

@@ -55,14 +55,14 @@ def test_a_column_name_given_as_uncertainty_says_to_pass_its_values(tmp_path):
 def test_a_diverging_loop_through_narx_iosystem_raises_divergence_error_naming_the_time():
     ct = pytest.importorskip("control")
     unstable = Model(["y(k-1)", "u(k-1)"], [1e3, 1.0], name="runaway")
-    sys = gb.narx_iosystem(unstable, 0.5)
+    sys = gb.narx_iosystem(unstable, Ts=0.5)
     t = 0.5 * np.arange(400)
     with pytest.raises(gb.DivergenceError, match=r"runaway.*t = \d+(\.\d+)? s") as err:
         ct.input_output_response(sys, t, np.ones(t.size), np.array([1.0, 0.0]))
     assert "controller" in str(err.value)
     # a stable model is untouched: its response is the free run of Model.simulate
     stable = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
-    out = ct.input_output_response(gb.narx_iosystem(stable, 0.5), t[:20], np.ones(20), np.zeros(2))
+    out = ct.input_output_response(gb.narx_iosystem(stable, Ts=0.5), t[:20], np.ones(20), np.zeros(2))
     assert np.allclose(out.outputs, stable.simulate(np.ones(20), [0.0]))
 
 

@@ -53,7 +53,7 @@ def _named(kind, name):
     if kind == "narx_iosystem":
         pytest.importorskip("control")
         m = gb.Model(gb.parse_structure(["1", "y(k-1)", "u(k-1)"]), np.array([0.1, 0.5, 1e-3]))
-        return gb.narx_iosystem(m, 1.0, name=name)
+        return gb.narx_iosystem(m, Ts=1.0, name=name)
     raise AssertionError(kind)
 
 

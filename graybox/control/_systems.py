@@ -167,7 +167,7 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
     return np.concatenate([np.full(lay.Ly, yb)] + [np.full(L, u) for u, L in zip(ub, lay.Lu)] + [np.zeros(ne)])
 
 
-def narx_iosystem(model: Model, Ts: float | None = None, *, noise: bool = False, name: str | None = None) -> Any:
+def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False, name: str | None = None) -> Any:
     """The whole NARX model as a discrete ``control.NonlinearIOSystem`` (dt = Ts).
 
     State, update and output as in the module docstring: the state holds the lagged outputs and
