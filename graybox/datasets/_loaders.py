@@ -1,7 +1,8 @@
 """Load data sets: the bundled pumping plant, the buck converter, and users' CSV files.
 
-CSV conventions (all loaders): one header line naming the columns (line 1: a block of lines before it,
-as data loggers write, is refused with the line that names the columns), one sample per line, numbers
+CSV conventions (all loaders): one header line naming the columns (line 1, or the line after the
+``skiprows=N`` lines of a data logger's header block, or after Excel's ``sep=;`` line, whose delimiter
+is used; a block not skipped is refused with the line that names the columns), one sample per line, numbers
 in any form Python's ``float`` reads. Files as spreadsheets export them are read: the delimiter
 (``,`` ``;`` or tab) and the decimal mark (``.`` or ``,``) are detected from the header and the
 first lines (``delimiter=`` and ``decimal=`` override). The text is UTF-8 (a byte-order mark
@@ -10,7 +11,7 @@ skipped), UTF-16 or UTF-32 when a byte-order mark says so (Excel's "Unicode text
 is refused with what was seen, among them numbers that may hold a thousands separator (``1,234``
 with no other decimal in sight); thousands separators themselves are never read. Columns are
 picked by name, so a file may hold other columns too. Every problem found is a ``ValueError`` naming the file and the line
-(1-based, the header is line 1) or the column: empty cells, NaN or inf, text where a number
+(the file's own, 1-based: line 1 is its first line, skipped or not) or the column: empty cells, NaN or inf, text where a number
 belongs, rows with too few fields, a missing column (with the closest existing names), time stamps
 that do not increase or are unevenly spaced, repeated static input levels.
 """
@@ -35,7 +36,7 @@ import numpy as np
 from ..static._curves import StaticCurve
 from ..core._records import Dataset, Record, StaticPoints, check_same_period
 from ..core._terms import check_input_names
-from ..core._validation import check_choice, check_path, check_real
+from ..core._validation import check_choice, check_int, check_path, check_real
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -64,11 +65,14 @@ BUCK_STATIC_CURVE = StaticCurve.polynomial([32.0, -8.0], domain=(1.0, 4.0),
 # ---------------------------------------------------------------------------
 
 def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter: str | None = None,
-                  decimal: str | None = None, encoding: str | None = None) -> dict[str, np.ndarray]:
+                  decimal: str | None = None, encoding: str | None = None,
+                  skiprows: int = 0) -> dict[str, np.ndarray]:
     """Read the columns ``wanted`` (role -> column name) of a CSV file as finite float arrays.
 
     The encoding (:func:`_utf8`), the delimiter and the decimal mark are detected (:func:`_dialect`)
-    unless given. Raises ``ValueError`` naming the file and the line or column of the first problem.
+    unless given. The first ``skiprows`` lines are not read, and an Excel ``sep=X`` line where the
+    header belongs gives the delimiter (the header is the line after it). Raises ``ValueError``
+    naming the file and the line (the file's own: line 1 is its first) or column of the first problem.
     """
     p = Path(path)
     names = list(wanted.values())
@@ -77,24 +81,36 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         roles = [r for r, n in wanted.items() if n in dup]
         raise ValueError(f"{p}: {', '.join(roles)} all name the column {sorted(dup)[0]!r}; each must be a different column")
     raw, start, own = _utf8(p, p.read_bytes(), encoding)
+    first = skiprows + 1  # the file's line number of the header
+    skipped_from = start
+    start = _skip_lines(raw, start, skiprows)
+    if start >= len(raw) and skiprows:
+        raise ValueError(f"{p}: line {first}: the file is empty after the {skiprows} line(s) skipped (skiprows="
+                         f"{skiprows}); expected a header line naming the columns, then one sample per line")
+    end = _skip_lines(raw, start, 1)
+    hint = re.fullmatch(r"sep=([^\r\n])\r?\n?", _decode(p, raw, start, end))
+    if hint:  # Excel's "sep=;" line: the delimiter it names, the header on the next line
+        if delimiter is not None and delimiter != hint.group(1):
+            raise ValueError(f"{p}: line {first} is {hint.group(0).strip(chr(13) + chr(10))!r}, Excel's delimiter hint, "
+                             f"but delimiter={delimiter!r} was given; omit delimiter= (the hint is used) or correct "
+                             f"line {first}")
+        delimiter, start, first = hint.group(1), end, first + 1
     # The dialect and the header come from the first lines alone: a long file is decoded whole
     # only when the careful reader (or a decimal comma) needs its text.
-    end = start
-    for _ in range(_SNIFF_LINES):
-        end = raw.find(b"\n", end) + 1
-        if end == 0:
-            end = len(raw)
-            break
+    end = _skip_lines(raw, start, _SNIFF_LINES)
     head = _decode(p, raw, start, end)
-    _refuse_header_block(p, head, names)
-    delim, dec = _dialect(p, head, delimiter, decimal)
+    _refuse_header_block(p, head, names, first)
+    if skiprows:
+        _refuse_skipped_header(p, _decode(p, raw, skipped_from, start), head, names, skiprows)
+    delim, dec = _dialect(p, head, delimiter, decimal, first)
     header = next(csv.reader(io.StringIO(head, newline=""), delimiter=delim), None)
     if header is None:
-        raise ValueError(f"{p}: line 1: the file is empty; expected a header line naming the columns, then "
+        raise ValueError(f"{p}: line {first}: the file is empty; expected a header line naming the columns, then "
                          "one sample per line")
     header = [h.strip() for h in header]
     if not any(header):
-        raise ValueError(f"{p}: line 1 is blank; expected a header line naming the columns, then one sample per line")
+        raise ValueError(f"{p}: line {first} is blank; expected a header line naming the columns, then one sample "
+                         "per line")
     index: dict[str, int] = {}
     for role, col in wanted.items():
         if col not in header:
@@ -103,8 +119,12 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
         index[role] = header.index(col)
     text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
-    fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header),
-                         reread=own)
+    if start == 0 or (start <= 3 and raw.startswith(codecs.BOM_UTF8)):
+        fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header),
+                             reread=own)
+    else:  # lines skipped: numpy reads the text from the header on, and the file's line numbers follow
+        fast = _fast_columns(p, index, raw=raw[start:], text=text, delimiter=delim, decimal=dec,
+                             n_fields=len(header), reread=False, first=first)
     if fast is not None:
         return fast
     reader = csv.reader(io.StringIO(text(), newline=""), delimiter=delim)
@@ -113,7 +133,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     values: dict[str, list[float]] = {role: [] for role in wanted}
     lines: list[int] = []
     for row in reader:
-        line = reader.line_num
+        line = reader.line_num + first - 1
         if not row or all(not c.strip() for c in row):
             continue  # blank line (e.g. a trailing newline): not a sample
         if len(row) < need:
@@ -127,37 +147,54 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             values[role].append(_number(p, line, wanted[role], row[i], dec, time=role == "time"))
         lines.append(line)
     if not lines:
-        raise ValueError(f"{p}: line 2: no data rows after the header; expected one sample per line")
+        raise ValueError(f"{p}: line {first + 1}: no data rows after the header; expected one sample per line")
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
     return out
 
 
-def _refuse_header_block(p: Path, head: str, names: Sequence[str]) -> None:
-    """A ``ValueError`` when line 1 does not name the columns but a later line of ``head`` names them all.
+def _skip_lines(raw: bytes, start: int, n: int) -> int:
+    """Where the line ``n`` lines after the one starting at ``start`` starts in ``raw`` (its end when
+    there are fewer)."""
+    for _ in range(n):
+        start = raw.find(b"\n", start) + 1
+        if start == 0:
+            return len(raw)
+    return start
+
+
+def _names_columns(line: str, names: Sequence[str]) -> bool:
+    """Whether ``line``, split at one of the delimiters, holds every name of ``names`` as a cell."""
+    return any(set(names) <= {c.strip() for c in _split(line, d)} for d in _DELIMITERS)
+
+
+def _refuse_header_block(p: Path, head: str, names: Sequence[str], first: int = 1) -> None:
+    """A ``ValueError`` when the header line (file line ``first``, the first of ``head``) does not name
+    the columns but a later line of ``head`` names them all.
 
     Data loggers write a block of lines (instrument, date, channels) before the column names; read
-    as the header, line 1 would be reported as a wrong delimiter or a missing column.
+    as the header, its first line would be reported as a wrong delimiter or a missing column.
     """
     lines = head.splitlines()
-    if not lines or all(n in lines[0] for n in names):
-        return  # line 1 may be the header (the reader checks it cell by cell)
+    if not lines or all(n in lines[0] for n in names) or _names_columns(lines[0], names):
+        return  # the header line may name them (the reader checks it cell by cell)
+    for i, line in enumerate(lines[1:], start=first + 1):
+        if _names_columns(line, names):
+            raise ValueError(f"{p}: line {i} names the columns ({line!r}), but the header was read from line {first}: "
+                             f"the file has {i - 1} line(s) before the column names (a data logger's header "
+                             f"block?); pass skiprows={i - 1}")
 
-    def named(line: str) -> bool:
-        return any(set(names) <= {c.strip() for c in _split(line, d)} for d in _DELIMITERS)
 
-    if named(lines[0]):
+def _refuse_skipped_header(p: Path, skipped: str, head: str, names: Sequence[str], skiprows: int) -> None:
+    """A ``ValueError`` when one of the ``skiprows`` lines skipped named the columns and the header
+    read below them does not."""
+    header = head.splitlines()[:1]
+    if header and _names_columns(header[0], names):
         return
-    for i, line in enumerate(lines[1:], start=2):
-        if named(line) and i == 2 and re.fullmatch(r"\s*sep=.\s*", lines[0]):
-            raise ValueError(f"{p}: line 1 is {lines[0].strip()!r}, the delimiter hint Excel writes, and line 2 names "
-                             "the columns, which must be on line 1: delete line 1 (the delimiter is detected)")
-        if named(line):
-            raise ValueError(f"{p}: line {i} names the columns ({line!r}), but the column names must be on line 1: "
-                             f"the file has {i - 1} line(s) before them (a data logger's header block?). Delete "
-                             f"those lines, or read the file yourself (e.g. pandas.read_csv(path, skiprows={i - 1})) "
-                             "and build graybox.Record(u, y, Ts=...) or graybox.StaticPoints(ubar, ybar) from its "
-                             "columns")
+    lines = skipped.splitlines()
+    for i in range(len(lines), 0, -1):  # the last such line: the one just above the data
+        if _names_columns(lines[i - 1], names):
+            raise ValueError(f"{p}: skiprows={skiprows} skips line {i}, which names the columns: pass skiprows={i - 1}")
 
 
 def _decode(p: Path, raw: bytes, start: int, end: int) -> str:
@@ -235,28 +272,28 @@ def _name(d: str) -> str:
     return {"\t": "tab", ",": "','", ";": "';'"}.get(d, repr(d))
 
 
-def _dialect(p: Path, text: str, delimiter: str | None, decimal: str | None) -> tuple[str, str]:
+def _dialect(p: Path, text: str, delimiter: str | None, decimal: str | None, first: int = 1) -> tuple[str, str]:
     """The delimiter and the decimal mark of a CSV text, from its header and first data lines.
 
     The delimiter is the one of ``, ; tab`` that splits the header into several columns and every
     sampled data line into as many; the decimal mark is ``,`` when numbers such as ``2,5`` appear
     (with ``;`` or tab as delimiter, or in quoted fields), else ``.``. A file that allows two
     readings, mixes delimiters, or uses a decimal comma with an unquoted comma delimiter is refused
-    with what was seen and what to pass.
+    with what was seen and what to pass. ``first`` is the file's line number of the text's first line.
     """
     if delimiter is not None and (not isinstance(delimiter, str) or len(delimiter) != 1
                                   or delimiter in "\"\r\n" or delimiter.isalnum()):
         raise ValueError(f"{p}: delimiter must be one character such as ',', ';' or '\\t', got {delimiter!r}")
     if decimal is not None and decimal not in (".", ","):
         raise ValueError(f"{p}: decimal must be '.' or ',', got {decimal!r}")
-    head = [(i + 1, ln) for i, ln in enumerate(itertools.islice(io.StringIO(text, newline=""), _SNIFF_LINES))]
+    head = [(i + first, ln) for i, ln in enumerate(itertools.islice(io.StringIO(text, newline=""), _SNIFF_LINES))]
     head = [(i, ln.rstrip("\r\n")) for i, ln in head]
     if not head:
-        raise ValueError(f"{p}: line 1: the file is empty; expected a header line naming the columns, then "
+        raise ValueError(f"{p}: line {first}: the file is empty; expected a header line naming the columns, then "
                          "one sample per line")
     data = [(i, ln) for i, ln in head[1:] if ln.strip()]
     if delimiter is None:
-        delimiter = _detect_delimiter(p, head[0][1], data)
+        delimiter = _detect_delimiter(p, head[0][1], data, head[0][0])
     if decimal is None:
         decimal = _detect_decimal(p, head[0][1], data, delimiter)
     if delimiter == decimal and '"' not in text:
@@ -280,7 +317,7 @@ def _width(line: str, d: str, header_width: int) -> int:
     return len(cells)
 
 
-def _detect_delimiter(p: Path, header: str, data: list[tuple[int, str]]) -> str:
+def _detect_delimiter(p: Path, header: str, data: list[tuple[int, str]], first: int = 1) -> str:
     widths = {d: len(_split(header, d)) for d in _DELIMITERS}
     fits = [d for d in _DELIMITERS if widths[d] > 1 and all(_width(ln, d, widths[d]) == widths[d] for _, ln in data)]
     if len(fits) == 1:
@@ -299,13 +336,13 @@ def _detect_delimiter(p: Path, header: str, data: list[tuple[int, str]]) -> str:
             continue
         other = [d for d in _DELIMITERS if d != best and _width(ln, d, widths[best]) == widths[best]]
         if best == "," and n > widths[best] and _decimal_comma_cells(ln.split(",")):
-            raise ValueError(f"{p}: line {line} has {n} comma-separated fields but the header (line 1) has "
+            raise ValueError(f"{p}: line {line} has {n} comma-separated fields but the header (line {first}) has "
                              f"{widths[best]} ({ln!r}). If its numbers use a decimal comma, commas also separate "
                              "the columns, which cannot be read unambiguously: export the file again with ';' as "
                              "the delimiter (the decimal comma is then detected), with '.' as the decimal mark, "
                              f"or with quoted fields; otherwise correct line {line}")
         if other and n == 1:
-            raise ValueError(f"{p}: mixed delimiters: the header (line 1) is separated by {_name(best)} but line "
+            raise ValueError(f"{p}: mixed delimiters: the header (line {first}) is separated by {_name(best)} but line "
                              f"{line} by {_name(other[0])} ({ln!r}); use one delimiter throughout, or pass "
                              f"delimiter={best!r} and correct line {line}")
         break  # another fault (a short row, say): the reader reports it with its line
@@ -392,13 +429,14 @@ def _decimal_comma_hint(row: Sequence[str], delimiter: str) -> str:
 
 
 def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: Callable[[], str], delimiter: str,
-                  decimal: str, n_fields: int, reread: bool = True) -> dict[str, np.ndarray] | None:
+                  decimal: str, n_fields: int, reread: bool = True, first: int = 1) -> dict[str, np.ndarray] | None:
     """The columns by numpy's reader (faster on long records), or None when the file needs the
     careful reader: quotes, blank lines, bare carriage returns, a line with another number of fields
     than the header, a field that is not a finite number or that only Python reads (``1_000``), a
     point in a decimal-comma file. Where numpy reads a field it gives the same float as Python's
     ``float``, so a record's content, and the cells' keys, do not depend on the reader. ``raw``
-    holds UTF-8; ``reread`` says whether they are the file's own bytes, which numpy then reads."""
+    holds UTF-8 from the header on (file line ``first``); ``reread`` says whether they are the file's own
+    bytes, which numpy then reads."""
     if b'"' in raw or raw.count(b"\r") != raw.count(b"\r\n"):
         return None
     rows = raw.count(b"\n") + (0 if raw.endswith(b"\n") else 1) - 1  # physical lines after the header
@@ -434,7 +472,7 @@ def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: Callable[
     if arr.shape[0] != rows or not np.isfinite(arr).all():
         return None
     out = {role: np.ascontiguousarray(arr[:, j]) for j, role in enumerate(roles)}
-    out["_lines"] = np.arange(2, rows + 2)
+    out["_lines"] = np.arange(first + 1, first + rows + 1)
     return out
 
 
@@ -461,6 +499,7 @@ def load_record_csv(
     delimiter: str | None = None,
     decimal: str | None = None,
     encoding: str | None = None,
+    skiprows: int = 0,
 ) -> Record:
     """A dynamic record (input, output, sampling period) from a CSV file.
 
@@ -468,8 +507,10 @@ def load_record_csv(
     ----------
     path : str or path-like
         The CSV file (header line with column names, one sample per line). The column names are
-        line 1: a file with lines before them (a data logger's header block) is refused, naming the
-        line that holds them; delete the block first.
+        line 1, or the line after ``skiprows`` lines; a file with lines before them that are not
+        skipped (a data logger's header block) is refused, naming the line that holds them and
+        the ``skiprows=`` to pass. A first line ``sep=;`` (Excel's delimiter hint) gives the
+        delimiter, and the column names are the line after it.
     u : str or sequence of str
         Name of the input column, or of several input columns (``["n1", "n2"]``).
     y : str
@@ -511,6 +552,10 @@ def load_record_csv(
         or UTF-32 when the file starts with their byte-order mark (Excel's "Unicode text"); a file
         that is not UTF-8 is an error naming the line and suggesting ``encoding=``; an encoding
         that contradicts the file's byte-order mark is an error.
+    skiprows : int
+        Lines before the column names that are not read (default 0), e.g. a data logger's header
+        block of instrument, date and channels. Messages still name the file's own lines (line 1
+        is its first line, skipped or not).
 
     Returns
     -------
@@ -521,15 +566,16 @@ def load_record_csv(
     ------
     ValueError
         Naming the file and the line or column: a missing column (with close names), column names
-        below line 1 (a header block before them), an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
+        below the header line (a header block not skipped, or skipped too far), a ``sep=`` line that
+        disagrees with ``delimiter=``, a negative ``skiprows``, an empty cell, NaN/inf or text in a used column, non-increasing or uneven stamps, Ts disagreeing
         with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
         rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, a delimiter or
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a
         thousands separator, text that is not in the encoding (UTF-8 by default), or an unknown
         ``encoding`` (or one that contradicts the file's byte-order mark).
     TypeError
-        ``path``, ``u``, ``y``, ``time``, ``Ts`` or ``encoding`` of the wrong type (a column is named
-        by a str).
+        ``path``, ``u``, ``y``, ``time``, ``Ts``, ``encoding`` or ``skiprows`` of the wrong type (a
+        column is named by a str).
     """
     p = Path(check_path(path, "path"))
     if time is None and Ts is None:
@@ -543,10 +589,11 @@ def load_record_csv(
     if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
         raise ValueError(f"units must be a pair of strings (input unit, output unit), got {units!r}")
     check_real(time_rtol, "time_rtol", low=0, high=1, low_open=True, high_open=True)
+    skiprows = check_int(skiprows, "skiprows", low=0)
     ucols, names = _input_columns(p, u, y, input_names)
     wanted = {f"input {c!r}" if len(ucols) > 1 else "u": c for c in ucols} | {"y": y} | (
         {"time": time} if time is not None else {})
-    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding)
+    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows)
     lines = cols["_lines"]
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
@@ -629,13 +676,15 @@ def load_static_csv(
     decimal: str | None = None,
     uncertainty: float | Sequence[float] | None = None,
     encoding: str | None = None,
+    skiprows: int = 0,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
     Parameters
     ----------
     path : str or path-like
-        The CSV file (header line with column names, one point per line).
+        The CSV file (header line with column names, one point per line; lines before the header
+        as in :func:`load_record_csv`).
     u : str or sequence of str
         Name of the column holding the constant input level ū, or of one column per input.
     y : str
@@ -660,6 +709,8 @@ def load_static_csv(
     encoding : str, optional
         The text encoding (as in :func:`load_record_csv`; UTF-8, or UTF-16/32 by their byte-order
         mark, by default).
+    skiprows : int
+        Lines before the column names that are not read (as in :func:`load_record_csv`; default 0).
 
     Returns
     -------
@@ -679,6 +730,7 @@ def load_static_csv(
     """
     p = Path(check_path(path, "path"))
     check_choice(repeats, "repeats", ("error", "mean"))
+    skiprows = check_int(skiprows, "skiprows", low=0)
     if isinstance(uncertainty, str):
         raise TypeError(f"{p}: uncertainty is δ itself (output units: one number, or one per line of the file), not "
                         f"a column name; to take δ from the column {uncertainty!r}, read its values (e.g. "
@@ -687,11 +739,12 @@ def load_static_csv(
     label = name or p.stem
     if len(ucols) > 1:
         cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y}, delimiter=delimiter, decimal=decimal,
-                             encoding=encoding)
+                             encoding=encoding, skiprows=skiprows)
         ub = np.column_stack([cols[f"input {c!r}"] for c in ucols])
         where = f"columns {ucols}"
     else:
-        cols = _read_columns(p, {"u": ucols[0], "y": y}, delimiter=delimiter, decimal=decimal, encoding=encoding)
+        cols = _read_columns(p, {"u": ucols[0], "y": y}, delimiter=delimiter, decimal=decimal, encoding=encoding,
+                             skiprows=skiprows)
         ub = cols["u"]
         where = f"column {ucols[0]!r}"
     if repeats == "mean":

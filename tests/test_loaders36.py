@@ -1,0 +1,161 @@
+"""A lab's own files as they come (loaders36): a data logger's header block read with ``skiprows=``,
+Excel's ``sep=;`` first line used as the delimiter it names, δ read from a column, units carried
+on static points. Every message names the file's own line numbers (line 1 = its first line), on
+the fast reader (numpy's) and on the careful one (Python's csv, taken for quoted fields)."""
+
+from __future__ import annotations
+
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from graybox.datasets import load_record_csv, load_static_csv
+
+BLOCK = "# Logger TL-400 serial 0412\n# started 2026-11-20 09:14:03\nchannels: speed, pressure; 0.5 s\n"
+
+
+def write(tmp_path: Path, text: str, name: str = "data.csv") -> Path:
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+def quoted(text: str) -> str:
+    """The same rows with every field of the data lines quoted: numpy's reader is then not taken."""
+    head, *rows = text.split("\n")
+    return "\n".join([head] + [",".join(f'"{c}"' for c in r.split(",")) if r else r for r in rows])
+
+
+ROWS = "t,speed,pressure\n0.0,1000,8.1\n0.5,1000,8.2\n1.0,1100,8.3\n1.5,1100,8.9\n"
+
+
+# -- skiprows: a data logger's header block ------------------------------------------------------
+
+@pytest.mark.parametrize("form", [str, quoted], ids=["fast", "careful"])
+def test_skiprows_reads_the_file_below_a_header_block(tmp_path, form):
+    plain = load_record_csv(write(tmp_path, form(ROWS), "plain.csv"), u="speed", y="pressure", time="t")
+    logged = load_record_csv(write(tmp_path, BLOCK + form(ROWS)), u="speed", y="pressure", time="t", skiprows=3)
+    np.testing.assert_array_equal(logged.u, plain.u)
+    np.testing.assert_array_equal(logged.y, plain.y)
+    assert logged.Ts == plain.Ts == 0.5
+    steady = write(tmp_path, BLOCK + form("speed,pressure\n1000,1.5\n2000,2.5\n"), "steady.csv")
+    points = load_static_csv(steady, u="speed", y="pressure", skiprows=3)
+    np.testing.assert_array_equal(points.ubar, [1000, 2000])
+
+
+@pytest.mark.parametrize("form", [str, quoted], ids=["fast", "careful"])
+def test_lines_named_below_a_skipped_block_are_the_file_s_own(tmp_path, form):
+    # a missing sample between file lines 7 and 8 (lines 4 and 5 of the file without its block)
+    uneven = BLOCK + form("t,u,y\n0,1,2\n0.1,1,2\n0.2,1,2\n0.4,1,2\n0.5,1,2\n")
+    p = write(tmp_path, uneven)
+    with pytest.raises(ValueError, match=re.escape(f"{p}: column 't': uneven time stamps") + ".*line 7 to line 8"):
+        load_record_csv(p, u="u", y="y", time="t", skiprows=3)
+    p = write(tmp_path, BLOCK + form("rpm,mlc\n750,3.9\n850,5.2\n750.0,4.0\n"), "static.csv")
+    with pytest.raises(ValueError, match=re.escape(f"{p}: column 'rpm': lines 5 and 7 have the same input level")):
+        load_static_csv(p, u="rpm", y="mlc", skiprows=3)
+    p = write(tmp_path, BLOCK + form("t,u,y\n0,1,2\n0.1,1,nan\n"), "nan.csv")
+    with pytest.raises(ValueError, match=re.escape(f"{p}: line 6, column 'y'")):
+        load_record_csv(p, u="u", y="y", time="t", skiprows=3)
+
+
+def test_dialect_messages_below_a_skipped_block_name_the_file_s_lines(tmp_path):
+    p = write(tmp_path, BLOCK + "t;u;y\n0;1;2\n0,5;1;2\n1.0;1;2\n")
+    with pytest.raises(ValueError, match=r"decimal mark is ambiguous: line 7 has '1\.0' and line 6 has '0,5'"):
+        load_record_csv(p, u="u", y="y", time="t", skiprows=3)
+    p = write(tmp_path, BLOCK + "t,u,y\n0,1,2\n1;1;2\n", "mixed.csv")
+    with pytest.raises(ValueError, match=r"the header \(line 4\) is separated by ',' but line 6 by ';'"):
+        load_record_csv(p, u="u", y="y", time="t", skiprows=3)
+    with pytest.raises(ValueError, match=r"line 5: no data rows after the header"):
+        load_record_csv(write(tmp_path, BLOCK + "u,y\n", "h.csv"), u="u", y="y", Ts=1.0, skiprows=3)
+    with pytest.raises(ValueError, match=r"line 5 names the columns.*pass skiprows=4"):  # a blank line left
+        load_record_csv(write(tmp_path, BLOCK + "\nu,y\n1,2\n", "b.csv"), u="u", y="y", Ts=1.0, skiprows=3)
+    with pytest.raises(ValueError, match=r"line 4: the file is empty after the 3 line\(s\) skipped"):
+        load_record_csv(write(tmp_path, BLOCK, "e.csv"), u="u", y="y", Ts=1.0, skiprows=3)
+
+
+def test_a_bad_byte_below_a_skipped_block_names_its_own_line(tmp_path):
+    p = tmp_path / "latin.csv"
+    p.write_bytes(BLOCK.encode() + "u,y\n1,2\n3,4\n5,\xb0\n".encode("cp1252"))
+    with pytest.raises(ValueError, match=re.escape(f"{p}: line 7 is not UTF-8 text")):
+        load_record_csv(p, u="u", y="y", Ts=1.0, skiprows=3)
+
+
+def test_an_unskipped_header_block_is_refused_naming_skiprows(tmp_path):
+    p = write(tmp_path, BLOCK + ROWS)
+    with pytest.raises(ValueError, match=r"line 4 names the columns.*3 line\(s\) before.*pass skiprows=3") as err:
+        load_record_csv(p, u="speed", y="pressure", time="t")
+    assert "pandas" not in str(err.value)  # the loader itself does it now
+    with pytest.raises(ValueError, match=r"line 4 names the columns.*pass skiprows=3"):
+        load_record_csv(p, u="speed", y="pressure", time="t", skiprows=1)  # too few: still the file's own count
+    with pytest.raises(ValueError, match=r"line 4 names the columns.*pass skiprows=3"):
+        load_static_csv(p, u="speed", y="pressure")
+
+
+def test_skipping_the_column_names_themselves_is_named(tmp_path):
+    p = write(tmp_path, BLOCK + ROWS)
+    with pytest.raises(ValueError, match=r"skiprows=4 skips line 4, which names the columns: pass skiprows=3"):
+        load_record_csv(p, u="speed", y="pressure", time="t", skiprows=4)
+
+
+@pytest.mark.parametrize("bad, exc", [(-1, ValueError), (1.5, TypeError), ("3", TypeError), (True, TypeError)])
+def test_skiprows_is_a_count(tmp_path, bad, exc):
+    with pytest.raises(exc, match="skiprows"):
+        load_record_csv(write(tmp_path, ROWS), u="speed", y="pressure", time="t", skiprows=bad)
+    with pytest.raises(exc, match="skiprows"):
+        load_static_csv(write(tmp_path, ROWS), u="speed", y="pressure", skiprows=bad)
+
+
+@settings(max_examples=30, deadline=None)
+@given(block=st.lists(st.sampled_from(["# logger", "serial;0412", "a,b", "", "date\t2026-11-20", '"x, y"']),
+                      max_size=6),
+       bad=st.integers(0, 5), careful=st.booleans())
+def test_a_block_shifts_every_line_named_by_its_length(block, bad, careful):
+    # law: the line a message names in a file with a skipped block of k lines is the line it names
+    # in the same file without the block, plus k
+    rows = [f"{0.5 * i},{i},{i * 2}" for i in range(6)]
+    rows[bad] = rows[bad].rsplit(",", 1)[0] + ",oops"
+    body = "t,u,y\n" + "\n".join(rows) + "\n"
+    if careful:
+        body = quoted(body)
+    with tempfile.TemporaryDirectory() as d:
+        lines = []
+        for k, text in ((0, body), (len(block), "".join(b + "\n" for b in block) + body)):
+            p = Path(d) / f"f{k}.csv"
+            p.write_text(text, encoding="utf-8")
+            with pytest.raises(ValueError) as err:
+                load_record_csv(p, u="u", y="y", time="t", skiprows=k)
+            lines.append(int(re.search(r"line (\d+)", str(err.value)).group(1)))
+    assert lines[1] == lines[0] + len(block)
+    assert lines[0] == bad + 2
+
+
+# -- Excel's sep= first line -------------------------------------------------------------------
+
+def test_excel_s_delimiter_hint_is_used(tmp_path):
+    p = write(tmp_path, "sep=;\nt;u;y\n0;1;2\n0,5;1;2\n")
+    r = load_record_csv(p, u="u", y="y", time="t")
+    assert r.Ts == 0.5 and len(r) == 2
+    assert load_record_csv(p, u="u", y="y", time="t", delimiter=";").Ts == 0.5  # agrees: fine
+    with pytest.raises(ValueError, match=re.escape(f"{p}: line 1 is 'sep=;'") + ".*delimiter=','"):
+        load_record_csv(p, u="u", y="y", time="t", delimiter=",")
+    tab = write(tmp_path, "sep=\t\nu\ty\n1\t2\n3\t4\n", "tab.csv")
+    np.testing.assert_array_equal(load_static_csv(tab, u="u", y="y").ybar, [2, 4])
+
+
+@pytest.mark.parametrize("form", [str, quoted], ids=["fast", "careful"])
+def test_lines_below_a_sep_line_are_the_file_s_own(tmp_path, form):
+    p = write(tmp_path, "sep=,\n" + form("t,u,y\n0,1,2\n0.1,1,2\n0.2,1,2\n0.4,1,2\n"))
+    with pytest.raises(ValueError, match=r"uneven time stamps.*line 5 to line 6"):
+        load_record_csv(p, u="u", y="y", time="t")
+    p = write(tmp_path, "sep=,\n" + form("u,y\n1,2\n3,x\n"), "x.csv")
+    with pytest.raises(ValueError, match=re.escape(f"{p}: line 4, column 'y': 'x' is not a number")):
+        load_record_csv(p, u="u", y="y", Ts=1.0)
+    # a sep= line below a skipped block is the delimiter hint too
+    p = write(tmp_path, BLOCK + "sep=;\n" + "u;y\n1;2\n3;x\n", "both.csv")
+    with pytest.raises(ValueError, match=re.escape(f"{p}: line 7, column 'y'")):
+        load_record_csv(p, u="u", y="y", Ts=1.0, skiprows=3)
