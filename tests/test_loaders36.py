@@ -159,3 +159,46 @@ def test_lines_below_a_sep_line_are_the_file_s_own(tmp_path, form):
     p = write(tmp_path, BLOCK + "sep=;\n" + "u;y\n1;2\n3;x\n", "both.csv")
     with pytest.raises(ValueError, match=re.escape(f"{p}: line 7, column 'y'")):
         load_record_csv(p, u="u", y="y", Ts=1.0, skiprows=3)
+
+
+# -- uncertainty="column" --------------------------------------------------------------------
+
+STEADY = "speed,pressure,sem\n1000,1.5,0.02\n1500,2.0,0.03\n2000,2.5,0.05\n"
+
+
+@pytest.mark.parametrize("form", [str, quoted], ids=["fast", "careful"])
+def test_uncertainty_read_from_a_column(tmp_path, form):
+    p = write(tmp_path, form(STEADY))
+    points = load_static_csv(p, u="speed", y="pressure", uncertainty="sem")
+    np.testing.assert_array_equal(points.uncertainty, [0.02, 0.03, 0.05])
+    same = load_static_csv(p, u="speed", y="pressure", uncertainty=[0.02, 0.03, 0.05])
+    assert points.band == same.band
+    # the column's numbers follow the file's decimal mark, as the other columns do
+    semi = write(tmp_path, BLOCK + STEADY.replace(",", ";").replace(".", ","), "semi.csv")
+    np.testing.assert_array_equal(load_static_csv(semi, u="speed", y="pressure", uncertainty="sem",
+                                                  skiprows=3).uncertainty, [0.02, 0.03, 0.05])
+
+
+def test_uncertainty_column_with_repeats_is_averaged_per_level_as_ybar(tmp_path):
+    p = write(tmp_path, "u1,u2,p,sem\n1,1,2.0,0.1\n2,1,3.0,0.2\n1,1,2.2,0.3\n")
+    points = load_static_csv(p, u=["u1", "u2"], y="p", uncertainty="sem", repeats="mean")
+    given_ = load_static_csv(p, u=["u1", "u2"], y="p", uncertainty=[0.1, 0.2, 0.3], repeats="mean")
+    np.testing.assert_allclose(points.uncertainty, given_.uncertainty)
+    np.testing.assert_allclose(points.uncertainty, [0.2, 0.2])
+
+
+@pytest.mark.parametrize("form", [str, quoted], ids=["fast", "careful"])
+@pytest.mark.parametrize("cell, what", [("nan", "not a finite number"), ("", "empty cell"), ("-0.03", "> 0"),
+                                        ("0", "> 0"), ("n/a", "'n/a' is not a number")])
+def test_a_bad_uncertainty_cell_names_file_line_and_column(tmp_path, form, cell, what):
+    p = write(tmp_path, BLOCK + form(STEADY.replace("0.03", cell)))
+    with pytest.raises(ValueError, match=re.escape(f"{p}: line 6, column 'sem'") + ".*" + re.escape(what)):
+        load_static_csv(p, u="speed", y="pressure", uncertainty="sem", skiprows=3)
+
+
+def test_an_uncertainty_column_is_named_like_the_others(tmp_path):
+    p = write(tmp_path, STEADY)
+    with pytest.raises(ValueError, match=r"no column 'SEM' \(asked for as uncertainty\).*Did you mean 'sem'"):
+        load_static_csv(p, u="speed", y="pressure", uncertainty="SEM")
+    with pytest.raises(ValueError, match=r"y, uncertainty all name the column 'pressure'"):
+        load_static_csv(p, u="speed", y="pressure", uncertainty="pressure")

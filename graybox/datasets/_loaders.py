@@ -591,14 +591,24 @@ def load_record_csv(
     check_real(time_rtol, "time_rtol", low=0, high=1, low_open=True, high_open=True)
     skiprows = check_int(skiprows, "skiprows", low=0)
     ucols, names = _input_columns(p, u, y, input_names)
-    wanted = {f"input {c!r}" if len(ucols) > 1 else "u": c for c in ucols} | {"y": y} | (
-        {"time": time} if time is not None else {})
+    wanted = _wanted(ucols, y, time=time)
     cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows)
     lines = cols["_lines"]
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
-    uarr = cols["u"] if len(ucols) == 1 else np.column_stack([cols[f"input {c!r}"] for c in ucols])
-    return Record(uarr, cols["y"], Ts=float(Ts), name=name or p.stem, units=tuple(units), input_names=names)
+    return Record(_inputs(cols, ucols), cols["y"], Ts=float(Ts), name=name or p.stem, units=tuple(units), input_names=names)
+
+
+def _wanted(ucols: Sequence[str], y: str, **more: str | None) -> dict[str, str]:
+    """The columns a loader reads, by role: the inputs (``u``, or ``input 'name'`` each), ``y``, and
+    the roles of ``more`` that name a column."""
+    return ({f"input {c!r}" if len(ucols) > 1 else "u": c for c in ucols} | {"y": y}
+            | {role: col for role, col in more.items() if col is not None})
+
+
+def _inputs(cols: dict[str, np.ndarray], ucols: Sequence[str]) -> np.ndarray:
+    """The input columns read by :func:`_read_columns`: shape (N,) for one, (N, m) for several."""
+    return cols["u"] if len(ucols) == 1 else np.column_stack([cols[f"input {c!r}"] for c in ucols])
 
 
 def _input_columns(p: Path, u: object, y: object, input_names: object) -> tuple[list[str], tuple[str, ...] | None]:
@@ -674,7 +684,7 @@ def load_static_csv(
     repeats: str = "error",
     delimiter: str | None = None,
     decimal: str | None = None,
-    uncertainty: float | Sequence[float] | None = None,
+    uncertainty: float | Sequence[float] | str | None = None,
     encoding: str | None = None,
     skiprows: int = 0,
 ) -> StaticPoints:
@@ -700,12 +710,12 @@ def load_static_csv(
         The column delimiter (as in :func:`load_record_csv`; detected by default).
     decimal : {".", ","}, optional
         The decimal mark (as in :func:`load_record_csv`; detected by default).
-    uncertainty : float or sequence of float, optional
-        δ, how far each ȳ may lie from the true steady state (output units; one number, or one
-        per line of the file, with ``repeats="mean"`` averaged per level as ȳ is), carried on the
-        points: D_SF's band and
-        :class:`~graybox.StaticBand`'s half-widths then follow from it. Default: none (bands
-        must be given). A column of the file is not read as δ: pass its values.
+    uncertainty : float, sequence of float or str, optional
+        δ, how far each ȳ may lie from the true steady state (output units; one number, one per
+        line of the file, or the name of the column holding each line's δ, read as the other
+        columns are; with ``repeats="mean"`` averaged per level as ȳ is), carried on the points:
+        D_SF's band and :class:`~graybox.StaticBand`'s half-widths then follow from it. Default:
+        none (bands must be given).
     encoding : str, optional
         The text encoding (as in :func:`load_record_csv`; UTF-8, or UTF-16/32 by their byte-order
         mark, by default).
@@ -722,31 +732,28 @@ def load_static_csv(
     ------
     ValueError
         Naming the file and line or column: a missing column, an empty, NaN or non-numeric cell,
-        or two lines with the same ū (unless ``repeats="mean"``); the file's faults listed in
-        :func:`load_record_csv`.
+        a δ ≤ 0 in the ``uncertainty`` column, or two lines with the same ū (unless
+        ``repeats="mean"``); the file's faults listed in :func:`load_record_csv`.
     TypeError
-        ``path``, ``u``, ``y``, ``uncertainty`` or ``encoding`` of the wrong type (a column is named by a
-        str; ``uncertainty`` is numbers, not a column name).
+        ``path``, ``u``, ``y``, ``uncertainty``, ``encoding`` or ``skiprows`` of the wrong type (a
+        column is named by a str).
     """
     p = Path(check_path(path, "path"))
     check_choice(repeats, "repeats", ("error", "mean"))
     skiprows = check_int(skiprows, "skiprows", low=0)
-    if isinstance(uncertainty, str):
-        raise TypeError(f"{p}: uncertainty is δ itself (output units: one number, or one per line of the file), not "
-                        f"a column name; to take δ from the column {uncertainty!r}, read its values (e.g. "
-                        f"pandas.read_csv(path, sep=..., decimal=...)[{uncertainty!r}].to_numpy()) and pass them")
     ucols, names = _input_columns(p, u, y, input_names)
     label = name or p.stem
-    if len(ucols) > 1:
-        cols = _read_columns(p, {f"input {c!r}": c for c in ucols} | {"y": y}, delimiter=delimiter, decimal=decimal,
-                             encoding=encoding, skiprows=skiprows)
-        ub = np.column_stack([cols[f"input {c!r}"] for c in ucols])
-        where = f"columns {ucols}"
-    else:
-        cols = _read_columns(p, {"u": ucols[0], "y": y}, delimiter=delimiter, decimal=decimal, encoding=encoding,
-                             skiprows=skiprows)
-        ub = cols["u"]
-        where = f"column {ucols[0]!r}"
+    wanted = _wanted(ucols, y, uncertainty=uncertainty if isinstance(uncertainty, str) else None)
+    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows)
+    ub = _inputs(cols, ucols)
+    where = f"column {ucols[0]!r}" if len(ucols) == 1 else f"columns {ucols}"
+    if isinstance(uncertainty, str):
+        uncertainty = cols["uncertainty"]
+        bad = np.flatnonzero(uncertainty <= 0)
+        if bad.size:  # named here, with its line: StaticPoints would name only the value
+            i = int(bad[0])
+            raise ValueError(f"{p}: line {cols['_lines'][i]}, column {wanted['uncertainty']!r}: δ = "
+                             f"{uncertainty[i]:g}, but an uncertainty must be > 0 (output units)")
     if repeats == "mean":
         return StaticPoints.from_repeats(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty)
     seen: dict[object, int] = {}
