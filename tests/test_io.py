@@ -82,7 +82,8 @@ def values():
         oe = gb.output_error(STRUCT, rec, n_starts=1, max_nfev=5, margin=0.05, choose_on=record(seed=1))
         chosen = gb.decide_dsf(pe, band=100.0, choose_on=record(seed=1))
         # the static information a user passes, and the results that keep it
-        points = gb.StaticPoints(np.linspace(800, 1600, 5), np.linspace(5, 19, 5), "bench", ("speed",), 0.175)
+        points = gb.StaticPoints(np.linspace(800, 1600, 5), np.linspace(5, 19, 5), "bench", ("speed",), 0.175,
+                                 ("rpm", "mlc"))
         points2 = gb.StaticPoints([[1.0, 2e5], [2.0, 2e5], [1.0, 3e5]], [3.0, 4.0, 5.5], input_names=("valve", "p"))
         curve = gb.StaticCurve.fit(static, degree=2)
         surface = gb.StaticSurface.fit(points2, degree=1)
@@ -315,6 +316,21 @@ def test_a_decision_file_written_before_chosen_on_existed_still_loads(values):
     assert doc["object"].pop("chosen_on") == "ident"
     back = gb.from_json(json.dumps(doc))
     assert back.chosen_on == "" and back.index == values["chosen decision"].index
+
+
+def test_static_points_keep_their_units_and_a_file_written_before_them_still_loads(values):
+    import json
+
+    points = values["points with uncertainty"]
+    assert gb.from_json(gb.to_json(points)).units == points.units == ("rpm", "mlc")
+    doc = json.loads(gb.to_json(points))
+    assert doc["object"].pop("units") == ["rpm", "mlc"]
+    back = gb.from_json(json.dumps(doc))
+    assert back.units == ("", "")  # the default: no unit said
+    np.testing.assert_array_equal(back.uncertainty, points.uncertainty)
+    doc["object"]["units"] = ["rpm"]
+    with pytest.raises(gb.GrayboxFileError, match=r"units must be a pair of strings"):
+        gb.from_json(json.dumps(doc))
 
 
 def test_an_output_error_result_keeps_its_starts(values):

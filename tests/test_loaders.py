@@ -153,7 +153,8 @@ def test_bad_Ts(tmp_path):
 
 
 def test_bad_units(tmp_path):
-    with pytest.raises(ValueError, match="units must be a pair of strings"):
+    # a TypeError, as Record's and StaticPoints' own check (was a ValueError here alone)
+    with pytest.raises(TypeError, match="units must be a pair of strings"):
         load_record_csv(write(tmp_path, GOOD), u="speed", y="pressure", Ts=1.0, units="rpm")
 
 

@@ -202,3 +202,81 @@ def test_an_uncertainty_column_is_named_like_the_others(tmp_path):
         load_static_csv(p, u="speed", y="pressure", uncertainty="SEM")
     with pytest.raises(ValueError, match=r"y, uncertainty all name the column 'pressure'"):
         load_static_csv(p, u="speed", y="pressure", uncertainty="pressure")
+
+
+# -- units on static points ------------------------------------------------------------------
+
+def test_static_points_carry_units_as_a_record_does():
+    import graybox as gb
+
+    plain = gb.StaticPoints([1.0, 2.0], [3.0, 4.0])
+    assert plain.units == ("", "") == gb.Record([1.0, 2.0], [3.0, 4.0]).units  # same default
+    sp = gb.StaticPoints([1.0, 2.0], [3.0, 4.0], units=["rpm", "mlc"])
+    assert sp.units == ("rpm", "mlc") and isinstance(sp.units, tuple)
+    assert "rpm" in repr(sp) and "mlc" in repr(sp) and "rpm" not in repr(plain)
+    for bad in ("rpm", ("rpm",), ("rpm", 1), None):
+        with pytest.raises(TypeError, match=r"units must be a pair of strings \(input unit, output unit\)"):
+            gb.StaticPoints([1.0, 2.0], [3.0, 4.0], units=bad)
+        with pytest.raises(TypeError, match=r"units must be a pair of strings \(input unit, output unit\)"):
+            gb.Record([1.0, 2.0], [3.0, 4.0], units=bad)  # the same check
+
+
+def test_every_static_points_made_from_others_keeps_their_units():
+    import graybox as gb
+    from graybox.diagnostics._bootstrap import BootstrapJob
+
+    sp = gb.StaticPoints([1.0, 2.0, 3.0], [3.0, 4.0, 6.0], units=("rpm", "mlc"))
+    assert sp.with_uncertainty(0.1).units == ("rpm", "mlc")
+    assert gb.StaticPoints.from_repeats([1.0, 1.0, 2.0], [3.0, 3.2, 4.0], units=("rpm", "mlc")).units == ("rpm", "mlc")
+    assert gb.transient_inputs(sp, [1.0]).units == ("rpm", "mlc")
+    rec = gb.Record(np.sin(np.arange(40.0)), np.cos(np.arange(40.0)), units=("rpm", "mlc"))
+    job = BootstrapJob(gb.Structure(["y(k-1)"]), (rec,), sp, "pe", np.array([0.5]), 1.0, None, 10, 0, 0.1)
+    assert job.data(0)[1].units == ("rpm", "mlc")
+
+
+def test_load_static_csv_carries_units(tmp_path):
+    p = write(tmp_path, STEADY)
+    assert load_static_csv(p, u="speed", y="pressure").units == ("", "")
+    assert load_static_csv(p, u="speed", y="pressure", units=("rpm", "bar")).units == ("rpm", "bar")
+    assert load_static_csv(p, u="speed", y="pressure", units=("rpm", "bar"), repeats="mean").units == ("rpm", "bar")
+    with pytest.raises(TypeError, match=r"units must be a pair of strings"):
+        load_static_csv(p, u="speed", y="pressure", units="rpm")
+
+
+def test_the_bundled_static_points_carry_their_records_units():
+    import graybox as gb
+
+    for data in (gb.load_pumping(), gb.load_buck(), gb.load_pumping_miso()):
+        assert data.static.units == data.ident.units
+
+
+def test_plots_of_static_points_label_axes_with_their_units():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import graybox as gb
+    from graybox import plots
+
+    sp = gb.StaticPoints([1.0, 2.0, 3.0], [3.0, 4.0, 6.0], units=("rpm", "mlc"))
+    ax = plots.plot_static_curve(sp).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("input ū (rpm)", "output ȳ (mlc)")
+    ax = plots.plot_static_curve(sp, xlabel="Speed (rpm)", ylabel="Pressure").axes[0]  # a unit given is not doubled
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("Speed (rpm)", "Pressure (mlc)")
+    ax = plots.plot_static_curve(gb.StaticPoints([1.0, 2.0], [3.0, 4.0])).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("input ū", "output ȳ")
+    model = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    u = np.random.default_rng(0).uniform(1, 3, 200)
+    y = np.zeros(200)
+    for k in range(1, 200):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.01 * np.sin(k)
+    rec = gb.Record(u, y)
+    band = gb.static_curve_band(gb.ls_uncertainty(gb.els(model.structure, rec).model, rec), np.linspace(1, 3, 5))
+    fig = plots.plot_static_band(band, sp)
+    assert [a.get_xlabel() for a in fig.axes] == ["input ū (rpm)"] * 2
+    assert fig.axes[0].get_ylabel() == "output ȳ (mlc)" and fig.axes[1].get_ylabel() == "static gain dȳ/dū (mlc/rpm)"
+    two = gb.StaticPoints([[1.0, 1.0], [2.0, 1.0], [1.0, 2.0], [2.0, 2.0]], [1.0, 2.0, 3.0, 4.0], units=("rpm", "mlc"))
+    ax = plots.plot_surface_slices(None, two).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("input ū₁ (rpm)", "output ȳ (mlc)")
+    fig = plots.plot_surface_contours(lambda U: U[:, 0] + U[:, 1], two)
+    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("input ū₁ (rpm)", "input ū₂ (rpm)")
+    assert fig.axes[1].get_ylabel() == "output ȳ (mlc)"  # the colour bar

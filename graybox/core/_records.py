@@ -131,10 +131,7 @@ class Record:
         if y.size == 0:  # nothing downstream (nor the repr's ranges) has a meaning for an empty run
             raise ValueError(f"{self.name}: no samples")
         object.__setattr__(self, "Ts", check_real(self.Ts, f"{self.name}: Ts (seconds)", low=0, low_open=True))
-        units = self.units
-        if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
-            raise TypeError(f"{self.name}: units must be a pair of strings (input unit, output unit), got {units!r}")
-        object.__setattr__(self, "units", tuple(units))
+        object.__setattr__(self, "units", check_units(self.units, self.name))
         m = 1 if u.ndim == 1 else u.shape[1]
         names = default_input_names(m) if self.input_names is None else check_input_names(
             self.input_names, m, f"{self.name}: input_names")
@@ -162,7 +159,7 @@ class Record:
         return self.u.reshape(len(self), self.n_inputs)
 
     def __repr__(self) -> str:
-        uu, yu = (f" {x}" if x else "" for x in self.units)
+        uu, yu = _unit_suffixes(self.units)
         if self.u.ndim == 1 and self.input_names == ("u",):
             ins = f"u in [{self.u.min():.4g}, {self.u.max():.4g}]{uu}"
         else:
@@ -209,6 +206,9 @@ class StaticPoints:
         transmitter's ±0.175 mlc); one number for every point or one per point, each > 0. When
         given, it supplies the bands that otherwise must be passed: D_SF's B (:attr:`band`) and
         :class:`~graybox.StaticBand`'s half-widths. None (default): every band must be given.
+    units : tuple of str, optional
+        Units of ``(ubar, ybar)``, for display only (as :class:`Record`'s ``units``: plots label
+        their axes with them); default ``("", "")``, no unit said.
     """
 
     ubar: np.ndarray
@@ -216,6 +216,7 @@ class StaticPoints:
     name: str = "static points"
     input_names: tuple[str, ...] | None = None
     uncertainty: np.ndarray | None = None
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
@@ -235,6 +236,7 @@ class StaticPoints:
         object.__setattr__(self, "ubar", u)
         object.__setattr__(self, "ybar", y)
         object.__setattr__(self, "input_names", names)
+        object.__setattr__(self, "units", check_units(self.units, self.name))
         if self.uncertainty is not None:
             d = _uncertainty(self.uncertainty, y.size, self.name, "point")
             d.setflags(write=False)
@@ -260,11 +262,12 @@ class StaticPoints:
 
     def with_uncertainty(self, uncertainty: object) -> "StaticPoints":
         """The same points carrying ``uncertainty`` (δ, output units; one number or one per point)."""
-        return StaticPoints(self.ubar, self.ybar, self.name, self.input_names, uncertainty)
+        return StaticPoints(self.ubar, self.ybar, self.name, self.input_names, uncertainty, self.units)
 
     @classmethod
     def from_repeats(cls, ubar: object, ybar: object, *, name: str = "static points",
-                     input_names: Sequence[str] | None = None, uncertainty: object = None) -> "StaticPoints":
+                     input_names: Sequence[str] | None = None, uncertainty: object = None,
+                     units: tuple[str, str] = ("", "")) -> "StaticPoints":
         """Static points from repeated measurements: the mean ȳ at each distinct ū.
 
         Parameters
@@ -283,6 +286,8 @@ class StaticPoints:
             the mean δ_j). One per distinct level is refused (``ValueError``): the order of the
             levels is ambiguous. To give those, set them on the result,
             ``points.with_uncertainty(δ)``, in the order of ``points.ubar`` (sorted).
+        units : tuple of str, optional
+            Units of ``(ubar, ybar)``, as for :class:`StaticPoints`.
 
         Returns
         -------
@@ -310,7 +315,7 @@ class StaticPoints:
                                  "set it on the points: points.with_uncertainty(δ), in the order of points.ubar")
             uncertainty = np.bincount(inverse, weights=_uncertainty(uncertainty, y.size, name, "measurement")) / count
         names = None if input_names is None else check_input_names(input_names, what=f"{name}: input_names")
-        return cls(uniq, mean, name, names, uncertainty)
+        return cls(uniq, mean, name, names, uncertainty, units)
 
     @property
     def n_inputs(self) -> int:
@@ -322,9 +327,22 @@ class StaticPoints:
             ins = f"ū in [{self.ubar.min():.4g}, {self.ubar.max():.4g}]"
         else:
             ins = ", ".join(f"{n} in [{c.min():.4g}, {c.max():.4g}]" for n, c in zip(self.input_names, self.ubar.T))
-        unc = "" if self.uncertainty is None else f", ±{np.max(self.uncertainty):.4g}"
-        return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}, ȳ in [{self.ybar.min():.4g}, "
-                f"{self.ybar.max():.4g}]{unc})")
+        uu, yu = _unit_suffixes(self.units)
+        unc = "" if self.uncertainty is None else f", ±{np.max(self.uncertainty):.4g}{yu}"
+        return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}{uu}, ȳ in [{self.ybar.min():.4g}, "
+                f"{self.ybar.max():.4g}]{yu}{unc})")
+
+
+def check_units(units: object, name: str) -> tuple[str, str]:
+    """``units`` as a pair (input unit, output unit) of str, or ``TypeError`` naming ``name``."""
+    if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
+        raise TypeError(f"{name}: units must be a pair of strings (input unit, output unit), got {units!r}")
+    return (units[0], units[1])
+
+
+def _unit_suffixes(units: tuple[str, str]) -> tuple[str, str]:
+    """`` unit`` after a value for each of (input, output), empty where no unit is said."""
+    return (f" {units[0]}" if units[0] else "", f" {units[1]}" if units[1] else "")
 
 
 def _uncertainty(value: object, n: int, name: str, each: str) -> np.ndarray:
@@ -481,7 +499,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

@@ -121,7 +121,7 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
 
     if isinstance(data, StaticPoints):
         ubar = np.column_stack([data.ubar.reshape(len(data.ybar), -1), np.zeros((len(data.ybar), len(new)))])
-        return StaticPoints(ubar, data.ybar, data.name, out_names, data.uncertainty)
+        return StaticPoints(ubar, data.ybar, data.name, out_names, data.uncertainty, data.units)
     if isinstance(data, Record):
         cols = [data.inputs] + [_filtered_square_change(data.input(n), -data.Ts / t)[:, None]
                                 for _, n, t in new]

@@ -34,7 +34,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..static._curves import StaticCurve
-from ..core._records import Dataset, Record, StaticPoints, check_same_period
+from ..core._records import Dataset, Record, StaticPoints, check_same_period, check_units
 from ..core._terms import check_input_names
 from ..core._validation import check_choice, check_int, check_path, check_real
 from ..reference import EQ1_COEFFICIENTS
@@ -574,8 +574,8 @@ def load_record_csv(
         thousands separator, text that is not in the encoding (UTF-8 by default), or an unknown
         ``encoding`` (or one that contradicts the file's byte-order mark).
     TypeError
-        ``path``, ``u``, ``y``, ``time``, ``Ts``, ``encoding`` or ``skiprows`` of the wrong type (a
-        column is named by a str).
+        ``path``, ``u``, ``y``, ``time``, ``Ts``, ``encoding``, ``skiprows`` or ``units`` of the wrong
+        type (a column is named by a str; units are a pair of str).
     """
     p = Path(check_path(path, "path"))
     if time is None and Ts is None:
@@ -586,8 +586,7 @@ def load_record_csv(
         raise ValueError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
     if time is not None and not isinstance(time, str):
         raise TypeError(f"time must name the time-stamp column (a str), got {time!r}")
-    if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
-        raise ValueError(f"units must be a pair of strings (input unit, output unit), got {units!r}")
+    units = check_units(units, f"{p}")
     check_real(time_rtol, "time_rtol", low=0, high=1, low_open=True, high_open=True)
     skiprows = check_int(skiprows, "skiprows", low=0)
     ucols, names = _input_columns(p, u, y, input_names)
@@ -596,7 +595,7 @@ def load_record_csv(
     lines = cols["_lines"]
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
-    return Record(_inputs(cols, ucols), cols["y"], Ts=float(Ts), name=name or p.stem, units=tuple(units), input_names=names)
+    return Record(_inputs(cols, ucols), cols["y"], Ts=float(Ts), name=name or p.stem, units=units, input_names=names)
 
 
 def _wanted(ucols: Sequence[str], y: str, **more: str | None) -> dict[str, str]:
@@ -687,6 +686,7 @@ def load_static_csv(
     uncertainty: float | Sequence[float] | str | None = None,
     encoding: str | None = None,
     skiprows: int = 0,
+    units: tuple[str, str] = ("", ""),
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
@@ -721,6 +721,9 @@ def load_static_csv(
         mark, by default).
     skiprows : int
         Lines before the column names that are not read (as in :func:`load_record_csv`; default 0).
+    units : (str, str)
+        Units of (ū, ȳ), for display (as a :class:`~graybox.Record`'s: plots label their axes with
+        them); default none said.
 
     Returns
     -------
@@ -735,12 +738,13 @@ def load_static_csv(
         a δ ≤ 0 in the ``uncertainty`` column, or two lines with the same ū (unless
         ``repeats="mean"``); the file's faults listed in :func:`load_record_csv`.
     TypeError
-        ``path``, ``u``, ``y``, ``uncertainty``, ``encoding`` or ``skiprows`` of the wrong type (a
-        column is named by a str).
+        ``path``, ``u``, ``y``, ``uncertainty``, ``encoding``, ``skiprows`` or ``units`` of the wrong
+        type (a column is named by a str; units are a pair of str).
     """
     p = Path(check_path(path, "path"))
     check_choice(repeats, "repeats", ("error", "mean"))
     skiprows = check_int(skiprows, "skiprows", low=0)
+    units = check_units(units, f"{p}")
     ucols, names = _input_columns(p, u, y, input_names)
     label = name or p.stem
     wanted = _wanted(ucols, y, uncertainty=uncertainty if isinstance(uncertainty, str) else None)
@@ -755,7 +759,8 @@ def load_static_csv(
             raise ValueError(f"{p}: line {cols['_lines'][i]}, column {wanted['uncertainty']!r}: δ = "
                              f"{uncertainty[i]:g}, but an uncertainty must be > 0 (output units)")
     if repeats == "mean":
-        return StaticPoints.from_repeats(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty)
+        return StaticPoints.from_repeats(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty,
+                                         units=units)
     seen: dict[object, int] = {}
     for v, line in zip(ub.tolist() if ub.ndim == 1 else map(tuple, ub.tolist()), cols["_lines"].tolist()):
         if v in seen:
@@ -763,7 +768,7 @@ def load_static_csv(
             raise ValueError(f"{p}: {where}: lines {seen[v]} and {line} have the same input level {level}; average "
                              "repeated measurements into one point per level (repeats=\"mean\" does it)")
         seen[v] = line
-    return StaticPoints(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty)
+    return StaticPoints(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty, units=units)
 
 
 # ---------------------------------------------------------------------------
@@ -846,7 +851,7 @@ def load_pumping() -> Dataset:
         raise ValueError(f"{d / 'dynamic.csv'}: {len(rec)} samples, need more than {N_IDENT} to split ident/valid")
     su, sy = STATIC_COLUMNS
     static = load_static_csv(d / "static.csv", u=su, y=sy, name="pumping static points",
-                             uncertainty=PUMPING_STATIC_UNCERTAINTY)
+                             uncertainty=PUMPING_STATIC_UNCERTAINTY, units=rec.units)
     eq1 = StaticCurve.polynomial(EQ1_COEFFICIENTS, domain=(750.0, 1650.0), name="eq. (1)")
     return Dataset(
         ident=rec.slice(0, N_IDENT, name="pumping ident"),
@@ -938,7 +943,7 @@ def load_buck(path: str | os.PathLike | None = None) -> Dataset:
         raise ValueError(f"{d}: {exc}") from None
     ubar = np.linspace(1.5, 3.5, 9)
     static = StaticPoints(ubar, BUCK_STATIC_CURVE(ubar), name="buck theoretical static points",
-                          uncertainty=BUCK_STATIC_UNCERTAINTY)
+                          uncertainty=BUCK_STATIC_UNCERTAINTY, units=ident.units)
     return Dataset(
         ident=ident,
         valid=valid,

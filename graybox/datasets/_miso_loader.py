@@ -66,7 +66,7 @@ def load_pumping_miso() -> Dataset:
         raise ValueError(f"{d / 'dynamic.csv'}: {len(rec)} samples, need more than {N_IDENT_MISO} to split ident/valid")
     s1, s2, sy = STATIC_COLUMNS_MISO
     static = load_static_csv(d / "static.csv", u=[s1, s2], y=sy, name="pumping_miso static points",
-                             input_names=PUMPING_MISO_INPUTS, uncertainty=PUMPING_STATIC_UNCERTAINTY)
+                             input_names=PUMPING_MISO_INPUTS, uncertainty=PUMPING_STATIC_UNCERTAINTY, units=rec.units)
     plant = TwoSpeedPumpingPlant()
     return Dataset(
         ident=rec.slice(0, N_IDENT_MISO, name="pumping_miso ident"),

@@ -539,7 +539,8 @@ def static_grid_experiment(
     u = np.repeat(sp, n_settle + n_avg, axis=0)
     run = plant.simulate(u, seed=renamed(seed, rng, "seed", "rng"))
     y = run.y.reshape(sp.shape[0], n_settle + n_avg)[:, n_settle:]
-    return StaticPoints(sp, y.mean(axis=1), name="pumping_miso static points", input_names=("u1", "u2"))
+    return StaticPoints(sp, y.mean(axis=1), name="pumping_miso static points", input_names=("u1", "u2"),
+                        units=("rpm", "mlc"))
 
 
 def generate_miso(*, seed: int = DEFAULT_SEED, plant: TwoSpeedPumpingPlant | None = None

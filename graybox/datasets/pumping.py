@@ -931,7 +931,7 @@ def static_experiment(
     u = np.repeat(sp, n_settle + n_avg)
     run = plant.simulate(u, seed=renamed(seed, rng, "seed", "rng"))
     y = run.y.reshape(sp.size, n_settle + n_avg)[:, n_settle:]
-    return StaticPoints(sp, y.mean(axis=1), name="pumping static points")
+    return StaticPoints(sp, y.mean(axis=1), name="pumping static points", units=("rpm", "mlc"))
 
 
 def generate(seed: int = DEFAULT_SEED, plant: PumpingPlant | None = None) -> tuple[PlantRun, StaticPoints]:

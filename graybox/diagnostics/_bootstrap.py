@@ -153,7 +153,7 @@ class BootstrapJob:
         sp = self.static
         if self.static_sigma is not None:
             sp = StaticPoints(sp.ubar, sp.ybar + self.static_sigma * rng.standard_normal(len(sp)), sp.name,
-                              sp.input_names, sp.uncertainty)
+                              sp.input_names, sp.uncertainty, sp.units)
         return recs, sp
 
     def _sweep(self, recs: list[Record], sp: StaticPoints) -> ParetoSet:

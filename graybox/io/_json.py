@@ -371,7 +371,7 @@ def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "StaticPoints": (StaticPoints, (("ubar", "inputs"), ("ybar", "array1"), ("name", "str"), ("input_names", "names"),
-                                    ("uncertainty", "array1_or_none"))),
+                                    ("uncertainty", "array1_or_none"), ("units", "names"))),
     "StaticCurve": (StaticCurve, (("coefficients", "array1"), ("domain", "floats_or_none"), ("name", "str"))),
     "StaticSurface": (StaticSurface, (("exponents", "exponents"), ("coefficients", "array1"), ("domain", "pairs_or_none"),
                                       ("name", "str"), ("input_names", "names"))),
@@ -492,7 +492,9 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                                                          "input_names")} | {"Ts": None},
                                      "SEMPResult": {"input_names": _DEFAULT, "Ts": None},
                                      # the covariance's factor, carried since mend36a: contractions use cov
-                                     "ParameterUncertainty": {"cov_factor": None}}
+                                     "ParameterUncertainty": {"cov_factor": None},
+                                     # units for display, carried since loaders36: none said
+                                     "StaticPoints": {"units": _DEFAULT}}
 
 #: Fields that files written by an older graybox carry and this one no longer has: read and dropped.
 #: A GrayboxSelection named the SQLite store its cells ran in; it no longer runs through a store.

@@ -36,8 +36,12 @@ def check_one_input_points(points: object, who: str) -> None:
                          "drawn against one input: use plot_surface_slices or plot_surface_contours")
 
 
-def _label(text: str, unit: str) -> str:
-    return f"{text} ({unit})" if unit else text
+def unit_label(text: str, unit: str) -> str:
+    """An axis label with its unit: ``text (unit)``, or ``text`` when no unit is said or the text
+    already names it (``"Speed (rpm)"``, ``"Speed [rpm]"``)."""
+    if not unit or f"({unit})" in text or f"[{unit}]" in text:
+        return text
+    return f"{text} ({unit})"
 
 
 
@@ -73,7 +77,8 @@ def plot_static_curve(
     ax : matplotlib Axes, optional
         Draw here; by default a new 6.4 × 4.2 in figure is made.
     xlabel, ylabel : str
-        Axis labels, with your data's units (e.g. ``"Pump speed (rpm)"``; the defaults name no unit).
+        Axis labels; the points' ``units`` are appended (``"input ū (rpm)"``) unless the label
+        names them already (``"Pump speed (rpm)"``). Points without units: the labels as given.
     n_grid : int
         Points per curve.
     margin : float
@@ -122,8 +127,9 @@ def plot_static_curve(
         ax.plot(ub, c(ub), "-", label=c.name)
     if points is not None:
         ax.plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
+    u_unit, y_unit = ("", "") if points is None else points.units
+    ax.set_xlabel(unit_label(xlabel, u_unit))
+    ax.set_ylabel(unit_label(ylabel, y_unit))
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best")
     return fig
@@ -147,7 +153,7 @@ def plot_record(
         shape (N, m): one line per input, named in a legend); the units in ``record.units`` are
         appended to the labels.
     input_label, output_label : str
-        Axis labels without units (the record's units are appended).
+        Axis labels without units (the record's units are appended unless a label names them).
     start, stop : int, optional
         Sample range to draw (default: all); the time axis keeps the record's time.
     axes : pair of Axes, optional
@@ -183,8 +189,8 @@ def plot_record(
         ax_u.legend(loc="best", fontsize="small")
     ax_y.plot(t, record.y[start:stop], "-", linewidth=0.8, label=output_label)
     u_unit, y_unit = record.units
-    ax_u.set_ylabel(_label(input_label, u_unit))
-    ax_y.set_ylabel(_label(output_label, y_unit))
+    ax_u.set_ylabel(unit_label(input_label, u_unit))
+    ax_y.set_ylabel(unit_label(output_label, y_unit))
     ax_y.set_xlabel("Time (s)")
     ax_u.set_title(record.name)
     for a in (ax_u, ax_y):

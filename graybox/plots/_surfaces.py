@@ -17,6 +17,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..core._validation import check_int, check_real, check_sequence
+from ._data import unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
@@ -56,7 +57,7 @@ def _name(s: Surface, i: int) -> str:
     return str(getattr(s, "name", None) or f"surface {i + 1}")
 
 
-def _points(points: object) -> tuple[np.ndarray, np.ndarray, str] | None:
+def _points(points: object) -> tuple[np.ndarray, np.ndarray, str, tuple[str, str]] | None:
     if points is None:
         return None
     ub = np.asarray(getattr(points, "ubar", None), dtype=float)
@@ -64,7 +65,8 @@ def _points(points: object) -> tuple[np.ndarray, np.ndarray, str] | None:
     if ub.ndim != 2 or ub.shape[1] != 2 or yb.shape != (ub.shape[0],):
         raise ValueError(f"static points must have ubar of shape (K, 2) and ybar of shape (K,), got {ub.shape} "
                          f"and {yb.shape}")
-    return ub, yb, str(getattr(points, "name", "static points"))
+    units = getattr(points, "units", ("", ""))
+    return ub, yb, str(getattr(points, "name", "static points")), (str(units[0]), str(units[1]))
 
 
 def _range(i: int, surfaces: list[Surface], pts, given: tuple[float, float] | None, margin: float,
@@ -145,7 +147,8 @@ def plot_surface_slices(
     ax : matplotlib Axes, optional
         Draw here; by default a new 6.4 × 4.2 in figure is made.
     xlabel, ylabel : str
-        Axis labels (default x: the label of input ``against``).
+        Axis labels (default x: the label of input ``against``); the points' ``units`` are
+        appended unless a label names them already.
     input_labels : (str, str)
         Labels of the two inputs (used for the axis and the legend's levels).
     n_grid : int
@@ -201,7 +204,7 @@ def plot_surface_slices(
                 f"{input_labels[held]} = {lev:g}"
             ax.plot(x, _evaluate(s, U, i), styles[i % len(styles)], color=col, label=label)
     if pts is not None:
-        ub, yb, pname = pts
+        ub, yb, pname, _ = pts
         labelled = False
         scale = float(np.max(np.abs(ub[:, held])))  # "on the level" relative to the input's size: any units
         for lev, col in zip(levels, colors):
@@ -211,8 +214,9 @@ def plot_surface_slices(
                 ax.plot(ub[on, against], yb[on], "*", linestyle="none", markersize=9, color=col,
                         label=None if labelled else pname)
                 labelled = True
-    ax.set_xlabel(xlabel if xlabel is not None else input_labels[against])
-    ax.set_ylabel(ylabel)
+    u_unit, y_unit = ("", "") if pts is None else pts[3]
+    ax.set_xlabel(unit_label(xlabel if xlabel is not None else input_labels[against], u_unit))
+    ax.set_ylabel(unit_label(ylabel, y_unit))
     ax.grid(True, alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="best", fontsize="small")
@@ -251,9 +255,9 @@ def plot_surface_contours(
     ax : matplotlib Axes, optional
         Draw here; by default a new 6.0 × 4.8 in figure is made.
     input_labels : (str, str)
-        Axis labels.
+        Axis labels (the points' input unit appended unless a label names it).
     output_label : str
-        Colour bar label.
+        Colour bar label (the points' output unit appended unless it names it).
     n_grid : int
         Grid points per input.
     margin : float
@@ -294,12 +298,13 @@ def plot_surface_contours(
     filled = ax.contourf(G1, G2, Z, levels=levels, cmap=cmap)
     ax.contour(G1, G2, Z, levels=filled.levels, colors="k", linewidths=0.5, alpha=0.5)
     if pts is not None:
-        ub, yb, pname = pts
+        ub, yb, pname, _ = pts
         ax.scatter(ub[:, 0], ub[:, 1], c=yb, cmap=cmap, norm=filled.norm, edgecolors="k", s=40, zorder=3,
                    label=pname)
         ax.legend(loc="upper left", fontsize="small")
-    fig.colorbar(filled, ax=ax, label=output_label)
-    ax.set_xlabel(input_labels[0])
-    ax.set_ylabel(input_labels[1])
+    u_unit, y_unit = ("", "") if pts is None else pts[3]
+    fig.colorbar(filled, ax=ax, label=unit_label(output_label, y_unit))
+    ax.set_xlabel(unit_label(input_labels[0], u_unit))
+    ax.set_ylabel(unit_label(input_labels[1], u_unit))
     ax.set_title(_name(s, 0))
     return fig

@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints
 from ..core._validation import check_bool
-from ._data import check_axes, check_one_input_points
+from ._data import check_axes, check_one_input_points, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._uncertainty import StaticCurveBand
 
@@ -103,7 +103,8 @@ def plot_static_band(
     axes : sequence of Axes, optional
         Draw here (one Axes, or two with ``gain``); by default a new figure is made.
     xlabel, ylabel, gain_label : str
-        Axis labels, with your data's units (the defaults name no unit).
+        Axis labels; the points' ``units`` are appended (the gain's as output unit / input unit)
+        unless a label names them already. Without points (or their units): the labels as given.
 
     Returns
     -------
@@ -127,10 +128,12 @@ def plot_static_band(
     ax = axs[0]
     ax.fill_between(band.ubar, band.ybar_low, band.ybar_high, color="C0", alpha=0.25, lw=0, label=what)
     ax.plot(band.ubar, band.ybar, "-", color="C0", label=f"{name} static curve")
+    u_unit, y_unit = ("", "") if points is None else points.units
+    xlabel = unit_label(xlabel, u_unit)
     if points is not None:
         ax.plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
     ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
+    ax.set_ylabel(unit_label(ylabel, y_unit))
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     if gain:
@@ -138,7 +141,7 @@ def plot_static_band(
         ax.fill_between(band.ubar, band.gain_low, band.gain_high, color="C1", alpha=0.25, lw=0, label=what)
         ax.plot(band.ubar, band.gain, "-", color="C1", label=f"{name} static gain")
         ax.set_xlabel(xlabel)
-        ax.set_ylabel(gain_label)
+        ax.set_ylabel(unit_label(gain_label, f"{y_unit or '1'}/{u_unit or '1'}" if u_unit or y_unit else ""))
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="best")
     return fig
