@@ -143,16 +143,14 @@ def first_hour(files: dict[str, Path], folder: Path) -> None:
     # 1. The files. The Excel export is cp1252 (the loader says so and names the encoding to pass).
     ident = gb.load_record_csv(files["ident"], u="Drehzahl [U/min]", y="Behälterdruck [Pa]", time="Zeit [s]",
                                units=units, encoding="cp1252")
-    try:  # the logger's header block is refused with the line that names the columns
+    try:  # the logger's header block is refused with the line that names the columns and skiprows=
         gb.load_record_csv(files["valid"], u="speed", y="pressure", time="time_s")
     except ValueError as err:
-        print("logger file refused:", str(err).split(": ", 1)[1][:120], "…")
-    log = pd.read_csv(files["valid"], skiprows=3)  # as the message says
-    valid = gb.Record(log["speed"].to_numpy(), log["pressure"].to_numpy(), Ts=float(np.diff(log["time_s"]).mean()),
-                      name="valid", units=units)
+        print("logger file refused:", str(err).split(": ", 1)[1][:160], "…")
+    valid = gb.load_record_csv(files["valid"], u="speed", y="pressure", time="time_s", name="valid", units=units,
+                               skiprows=3)  # as the message says
     test = gb.load_record_csv(files["test"], u="n [rpm]", y="p [Pa]", time="t [s]", units=units)
-    sem = pd.read_csv(files["static"])["sem_Pa"].to_numpy()  # δ is numbers, not a column name
-    steady = gb.load_static_csv(files["static"], u="speed_rpm", y="pressure_Pa", uncertainty=sem)
+    steady = gb.load_static_csv(files["static"], u="speed_rpm", y="pressure_Pa", uncertainty="sem_Pa", units=units)
     data = gb.Dataset(ident, valid, steady, description="a pressurised tank (synthetic)")
     print(data)
     print(f"band B = mean δ² = {steady.band:.4g} Pa²")
