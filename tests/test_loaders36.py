@@ -145,6 +145,10 @@ def test_excel_s_delimiter_hint_is_used(tmp_path):
         load_record_csv(p, u="u", y="y", time="t", delimiter=",")
     tab = write(tmp_path, "sep=\t\nu\ty\n1\t2\n3\t4\n", "tab.csv")
     np.testing.assert_array_equal(load_static_csv(tab, u="u", y="y").ybar, [2, 4])
+    # a letter is no delimiter: not Excel's hint, and the line is named as one to skip
+    odd = write(tmp_path, "sep=a\nu,y\n1,2\n3,4\n", "odd.csv")
+    with pytest.raises(ValueError, match=r"line 2 names the columns.*pass skiprows=1"):
+        load_static_csv(odd, u="u", y="y")
 
 
 @pytest.mark.parametrize("form", [str, quoted], ids=["fast", "careful"])

@@ -88,7 +88,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         raise ValueError(f"{p}: line {first}: the file is empty after the {skiprows} line(s) skipped (skiprows="
                          f"{skiprows}); expected a header line naming the columns, then one sample per line")
     end = _skip_lines(raw, start, 1)
-    hint = re.fullmatch(r"sep=([^\r\n])\r?\n?", _decode(p, raw, start, end))
+    hint = re.fullmatch(r"sep=([^\w\r\n\"])\r?\n?", _decode(p, raw, start, end))
     if hint:  # Excel's "sep=;" line: the delimiter it names, the header on the next line
         if delimiter is not None and delimiter != hint.group(1):
             raise ValueError(f"{p}: line {first} is {hint.group(0).strip(chr(13) + chr(10))!r}, Excel's delimiter hint, "
