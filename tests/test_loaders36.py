@@ -284,3 +284,17 @@ def test_plots_of_static_points_label_axes_with_their_units():
     fig = plots.plot_surface_contours(lambda U: U[:, 0] + U[:, 1], two)
     assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("input ū₁ (rpm)", "input ū₂ (rpm)")
     assert fig.axes[1].get_ylabel() == "output ȳ (mlc)"  # the colour bar
+
+
+def test_data_of_one_identification_in_other_units_are_refused():
+    # was: records in rpm and static points in rad/s (each labelled) made one Dataset without a word,
+    # the units mix-up the library's static range warning exists to catch
+    import graybox as gb
+
+    r = gb.Record(np.arange(10.0), np.arange(10.0), units=("rpm", "mlc"), name="ident")
+    with pytest.raises(ValueError, match="'ident' has input unit 'rpm' but 'static points' has 'rad/s'"):
+        gb.Dataset(r, r, gb.StaticPoints([1.0, 2.0], [3.0, 4.0], units=("rad/s", "mlc")))
+    with pytest.raises(ValueError, match="output unit 'mlc' but 'valid' has 'Pa'"):
+        gb.Dataset(r, gb.Record(np.arange(10.0), np.arange(10.0), units=("rpm", "Pa"), name="valid"))
+    # a unit left empty says nothing: accepted
+    assert gb.Dataset(r, r, gb.StaticPoints([1.0, 2.0], [3.0, 4.0], units=("", "mlc"))).static is not None

@@ -376,11 +376,16 @@ def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.nda
 
 def check_compatible(a: object, b: object) -> None:
     """``ValueError`` naming both unless ``a`` and ``b`` (records, static points) can belong to one
-    identification: the same inputs in the same order and, two records, the same sampling period
-    (:func:`check_same_period`)."""
+    identification: the same inputs in the same order, the same units where both name them and, two
+    records, the same sampling period (:func:`check_same_period`)."""
     if a.input_names != b.input_names:  # type: ignore[attr-defined]
         raise ValueError(f"{a.name!r} has inputs {a.input_names} but {b.name!r} has inputs {b.input_names}: "  # type: ignore[attr-defined]
                          "all data of one identification must have the same inputs, in the same order")
+    ua, ub = getattr(a, "units", ("", "")), getattr(b, "units", ("", ""))
+    for i, what in enumerate(("input", "output")):
+        if ua[i] and ub[i] and ua[i] != ub[i]:  # a unit left empty says nothing
+            raise ValueError(f"{a.name!r} has {what} unit {ua[i]!r} but {b.name!r} has {ub[i]!r}: all data of one "  # type: ignore[attr-defined]
+                             "identification must be in the same units (convert one of them)")
     if isinstance(a, Record) and isinstance(b, Record):
         check_same_period(a, b)
 
