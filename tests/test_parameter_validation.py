@@ -292,7 +292,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "narx_state_names": ((MODEL,), {}),
     "narx_initial_state": ((MODEL, REC), {}),
     "narx_steady_state": ((MODEL, 0.5, float(MODEL.static_curve([0.5])[0])), {}),
-    "narx_iosystem": ((MODEL, 0.1), {}),
+    "narx_iosystem": ((MODEL,), {"Ts": 0.1}),
     "select_graybox": ((gb.Candidates(1, 1, degree=2), DATA), {"sizes": [2], "sources": ("frols",), "estimator": "ls"}),
     # a grid and its store (the store fixture runs GRID once)
     "Grid": (([DATASPEC], GRID.structures, GRID.variants), {}),
@@ -431,6 +431,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     ("simulate", "bound"): (2.5,),
     ("local_model", "Ts"): (2.5,),  # seconds
     ("operating_curve", "Ts"): (2.5,),
+    ("narx_iosystem", "Ts"): (2.5,),
     ("local_model", "y0"): (2.5, -1),  # where a run starts, output units
     ("operating_curve", "y0"): (2.5, -1),  # |y| beyond which a free run has diverged
     ("Model.simulate", "bound"): (2.5,),
