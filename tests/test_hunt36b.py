@@ -46,3 +46,22 @@ def test_select_graybox_pe_fits_the_members_the_static_points_identify():
     assert sel.decision.lambda1 < 1.0
     assert np.isfinite(sel.table["JS_valid"].to_numpy(float)).all()
 
+
+# A DataFrame of ū was read by column name, but one row of it (df.iloc[k], a pandas Series labelled
+# by the inputs) was read by position: ('p', 'n') landed on ('n', 'p'), and equilibria, static_curve,
+# static_gain and local_model answered for another operating point without a word.
+def test_a_series_point_is_read_by_its_labels():
+    import pandas as pd
+
+    m = gb.Model(["1", "y(k-1)", "n(k-1)", "p(k-1)", "n(k-1)p(k-1)"], [0.5, 0.5, 0.3, 0.01, 0.001],
+                 input_names=("n", "p"), Ts=1.0)
+    row = pd.DataFrame({"p": [2e5], "n": [3000.0]}).iloc[0]
+    point = np.array([3000.0, 2e5])
+    assert m.static_curve(row) == pytest.approx(m.static_curve(point))
+    assert m.equilibria(row)[0].ubar == pytest.approx(tuple(point))
+    assert gb.local_model(m, row).dc_gain == pytest.approx(gb.local_model(m, point).dc_gain)
+    with pytest.raises(ValueError, match="Series' index labels"):
+        m.static_curve(pd.Series([3000.0, 2e5], index=["n", "q"]))
+    # a Series of samples (labels naming no input) is read by position, as before
+    m1 = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    assert m1.static_curve(pd.Series([1.0, 2.0])) == pytest.approx([2.0, 4.0])

@@ -27,6 +27,11 @@ def is_frame(x: object) -> bool:
     return type(x).__module__.split(".")[0] == "pandas" and hasattr(x, "columns") and hasattr(x, "iloc")
 
 
+def _is_series(x: object) -> bool:
+    """Whether ``x`` is a pandas Series (e.g. one row of a DataFrame: ``df.iloc[0]``), told without pandas."""
+    return type(x).__module__.split(".")[0] == "pandas" and hasattr(x, "index") and getattr(x, "ndim", 0) == 1
+
+
 def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
     """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
 
@@ -34,21 +39,25 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
     needed; columns named as none of them (e.g. pandas' default 0, 1, …) are read by position. Anything
     between would be read by position with some named column landing on another input, or a column
     dropped unseen: ``ValueError`` naming the columns. ``names`` None: the default names
-    (``u`` for one column, ``u1 … um`` for m). Anything but a DataFrame is returned as it is.
+    (``u`` for one column, ``u1 … um`` for m). A pandas Series (one point ū, a DataFrame's row
+    ``df.iloc[k]``) is read so by its index labels. Anything else is returned as it is.
     """
-    if not is_frame(x):
+    series = _is_series(x)
+    if not (series or is_frame(x)):
         return x
-    cols = list(x.columns)
+    cols = list(x.index if series else x.columns)
     labels = [str(c) for c in cols]
     expected = tuple(default_input_names(len(cols)) if names is None else names)
     hits = [c for c in labels if c in expected]
     if not hits:
         return x
     if len(labels) == len(expected) and sorted(labels) == sorted(expected):
-        return x[[cols[labels.index(n)] for n in expected]]
+        order = [labels.index(n) for n in expected]
+        return x.iloc[order] if series else x[[cols[i] for i in order]]
     extra = [c for c in labels if c not in expected]
     missing = [n for n in expected if n not in labels]
-    raise ValueError(f"{name}: the DataFrame's columns {labels} name only some of the inputs {list(expected)} "
+    what = "Series' index labels" if series else "DataFrame's columns"
+    raise ValueError(f"{name}: the {what} {labels} name only some of the inputs {list(expected)} "
                      f"(not inputs: {extra or 'none'}; inputs without a column: {missing or 'none'}; repeated: "
                      f"{sorted({c for c in labels if labels.count(c) > 1}) or 'none'}): read by position they "
                      "would land on other inputs. Name every column as an input (any order: read by name) or none "
