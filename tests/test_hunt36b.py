@@ -65,3 +65,18 @@ def test_a_series_point_is_read_by_its_labels():
     # a Series of samples (labels naming no input) is read by position, as before
     m1 = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
     assert m1.static_curve(pd.Series([1.0, 2.0])) == pytest.approx([2.0, 4.0])
+
+
+# A logger's title line that happened to contain the column names as words ("Pump speed test" above
+# t, speed, p) skipped the header-block check (a substring test on line 1), and the file was refused
+# as the header block's check was written to replace: "no column 'speed' … pass delimiter=".
+@pytest.mark.parametrize("load, text, cols", [
+    (gb.load_record_csv, "Pump speed test\nt,speed,p\n0,2900,2e5\n0.5,3000,2.1e5\n1.0,3100,2.2e5\n",
+     dict(u="speed", y="p", time="t")),
+    (gb.load_static_csv, "Steady states: u and y of the pump\nu,y\n1,2\n2,3\n", dict(u="u", y="y")),
+])
+def test_a_title_line_holding_the_column_names_as_words_is_a_header_block(tmp_path, load, text, cols):
+    path = tmp_path / "run.csv"
+    path.write_text(text)
+    with pytest.raises(ValueError, match="line 2 names the columns"):
+        load(path, **cols)

@@ -176,7 +176,7 @@ def _refuse_header_block(p: Path, head: str, names: Sequence[str], first: int = 
     as the header, its first line would be reported as a wrong delimiter or a missing column.
     """
     lines = head.splitlines()
-    if not lines or all(n in lines[0] for n in names) or _names_columns(lines[0], names):
+    if not lines or _names_columns(lines[0], names):
         return  # the header line may name them (the reader checks it cell by cell)
     for i, line in enumerate(lines[1:], start=first + 1):
         if _names_columns(line, names):
