@@ -80,3 +80,21 @@ def test_a_title_line_holding_the_column_names_as_words_is_a_header_block(tmp_pa
     path.write_text(text)
     with pytest.raises(ValueError, match="line 2 names the columns"):
         load(path, **cols)
+
+
+# Two input paths still read a DataFrame (or a row of one) by position: the ū at which an estimator
+# samples a StaticSurface (pe_pareto/se_pareto/cls ubar=, through models._coerce.static_points) and
+# narx_steady_state's ū: columns ('p', 'n') gave the surface's ȳ, or the loop's initial state, at
+# (ū_p, ū_n) swapped without a word.
+def test_surface_sampling_and_steady_state_read_inputs_by_name():
+    import pandas as pd
+    from graybox.models._coerce import static_points
+
+    surf = gb.StaticSurface([(0, 0), (1, 0), (0, 1)], [1.0, 2.0, 3.0], input_names=("n", "p"))
+    rec = gb.Record(np.c_[np.linspace(2900, 3100, 20), np.linspace(1e5, 2e5, 20)], np.linspace(0, 1, 20),
+                    input_names=("n", "p"))
+    df = pd.DataFrame({"p": [1e5, 2e5], "n": [2900.0, 3100.0]})
+    pts = static_points(surf, rec, ubar=df)
+    assert pts.ybar == pytest.approx(surf(df[["n", "p"]].to_numpy()))
+    m = gb.Model(["1", "y(k-1)", "n(k-1)", "p(k-1)"], [0.5, 0.5, 0.3, 0.01], input_names=("n", "p"), Ts=1.0)
+    assert gb.narx_steady_state(m, df.iloc[0], 1.0) == pytest.approx(gb.narx_steady_state(m, [2900.0, 1e5], 1.0))

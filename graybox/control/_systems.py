@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core._records import Record
+from ..core._records import Record, frame_inputs
 from ..core._simulation import DivergenceError
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_int, check_real, check_str
@@ -145,7 +145,8 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
     model : Model
         A polynomial NARX model.
     ubar : float or array_like, shape (m,)
-        The constant input (input units), one value per input in ``model.input_names`` order.
+        The constant input (input units), one value per input in ``model.input_names`` order (a
+        pandas Series labelled by the inputs, e.g. a DataFrame's row, is read by its labels).
     ybar : float
         The output level (output units), e.g. :attr:`graybox.LocalModel.ybar` at ū.
     noise : bool
@@ -158,7 +159,7 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
     """
     model = check_polynomial(model, "narx_steady_state")
     noise = check_bool(noise, "noise")
-    ub = np.atleast_1d(input_levels(ubar)).ravel()
+    ub = np.atleast_1d(input_levels(frame_inputs(ubar, model.input_names, "ubar"))).ravel()  # a Series by name
     if ub.size != model.n_inputs or not np.all(np.isfinite(ub)):
         raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
     yb = check_real(ybar, "ybar")

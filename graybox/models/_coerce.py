@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core._records import Dataset, Record, StaticPoints
+from ..core._records import Dataset, Record, StaticPoints, frame_inputs
 from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
 from ..core._terms import Structure, Term
 from ..core._validation import as_1d_finite
@@ -232,6 +232,9 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
     if ubar is None:
         return static.points(box_grid(static.domain, SURFACE_LEVELS))
     m = static.n_inputs
+    # a DataFrame (or one point as a Series) by its column names, as every input is read
+    first = data[0] if isinstance(data, (list, tuple)) and data else data
+    ubar = frame_inputs(ubar, static.input_names or getattr(first, "input_names", None), "ubar")
     try:
         ub = np.array(ubar, dtype=float)
     except (TypeError, ValueError):
