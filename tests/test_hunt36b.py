@@ -98,3 +98,35 @@ def test_surface_sampling_and_steady_state_read_inputs_by_name():
     assert pts.ybar == pytest.approx(surf(df[["n", "p"]].to_numpy()))
     m = gb.Model(["1", "y(k-1)", "n(k-1)", "p(k-1)"], [0.5, 0.5, 0.3, 0.01], input_names=("n", "p"), Ts=1.0)
     assert gb.narx_steady_state(m, df.iloc[0], 1.0) == pytest.approx(gb.narx_steady_state(m, [2900.0, 1e5], 1.0))
+
+
+# Results kept their mappings (a front's failures and extra, a grid run's counts, the residual tests,
+# a bootstrap's reference, ClusterBounds' bounds) as types.MappingProxyType, which cannot be pickled
+# or copied: pickle.dumps, copy.deepcopy and a process pool's return of a ParetoSet, GridRun or
+# ResidualTests raised "cannot pickle 'mappingproxy' object" (GridRun since its counts were frozen).
+def test_values_holding_mappings_pickle_and_copy():
+    import copy
+    import pickle
+
+    import graybox.experiments as gx
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(2900.0, 3100.0, 120)
+    y = np.zeros(120)
+    for k in range(1, 120):
+        y[k] = 0.6 * y[k - 1] + 1e-3 * u[k - 1]
+    rec = gb.Record(u, y + rng.normal(0, 1e-3, 120), Ts=0.5, input_names=["speed"])
+    st = gb.Structure(["y(k-1)", "speed(k-1)"])
+    front = gb.pe_pareto(st, rec, gb.StaticPoints([2900.0, 3100.0], [2900e-3 / 0.4, 3100e-3 / 0.4]),
+                         lambdas=[1.0, 0.5])
+    values = [front, gx.GridRun("s.sqlite", "g", 2, 2, 0, {"ok": 2}, "inprocess", 1.0),
+              gb.residual_tests(gb.Model(st, [0.6, 1e-3], input_names=["speed"]), rec),
+              gb.ClusterBounds({"speed": (0.0, 1.0)})]
+    for v in values:
+        for back in (pickle.loads(pickle.dumps(v)), copy.deepcopy(v)):
+            assert type(back) is type(v) and repr(back) == repr(v)
+    back = pickle.loads(pickle.dumps(front))
+    np.testing.assert_array_equal(back.extra["JSF_QR"], front.extra["JSF_QR"])
+    with pytest.raises(TypeError):
+        back.failures[0] = "changed"  # still read-only
+

@@ -14,7 +14,7 @@ import pytest
 
 import graybox as gb
 import graybox.experiments as gx
-from graybox.core._validation import FrozenFrame
+from graybox.core._validation import FrozenFrame, FrozenMap
 from graybox.experiments._spec import FrozenDict
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -51,7 +51,7 @@ def _holes(obj, path, seen, out):
     if isinstance(obj, (list, tuple)):
         for i, x in enumerate(obj):
             _holes(x, f"{path}[{i}]", seen, out)
-    elif isinstance(obj, (dict, types.MappingProxyType)):
+    elif isinstance(obj, (dict, types.MappingProxyType, FrozenMap)):
         for k, x in obj.items():
             _holes(x, f"{path}[{k!r}]", seen, out)
     elif dataclasses.is_dataclass(obj) and not isinstance(obj, type):

@@ -18,6 +18,7 @@ import sys
 import types
 import typing
 import warnings
+from collections.abc import Mapping
 from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
@@ -277,6 +278,37 @@ def frozen(a: object, dtype: type = float) -> np.ndarray:
     x = np.array(a, dtype=dtype, copy=True)
     x.setflags(write=False)
     return x
+
+
+class FrozenMap(Mapping):
+    """A read-only mapping that pickles: how every immutable value in graybox stores a mapping field.
+
+    ``types.MappingProxyType`` is read-only too but cannot be pickled (nor copied), so a ParetoSet, a
+    GridRun or ResidualTests holding one could not travel to a process pool or be ``copy.deepcopy``-ed.
+    """
+
+    __slots__ = ("_items",)
+
+    def __init__(self, items: Any = ()) -> None:
+        object.__setattr__(self, "_items", dict(items))
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"a {type(self).__name__} cannot be changed")
+
+    def __getitem__(self, key: Any) -> Any:
+        return self._items[key]
+
+    def __iter__(self):
+        return iter(self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._items!r})"
+
+    def __reduce__(self):
+        return (type(self), (self._items,))
 
 
 class FrozenFrame:

@@ -42,7 +42,6 @@ from __future__ import annotations
 import inspect
 import warnings
 from dataclasses import dataclass, field
-from types import MappingProxyType
 from typing import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
@@ -58,7 +57,7 @@ from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
+from ..core._validation import FrozenMap, check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
 from ..core._reprs import short_repr
 from ._uncertainty import UncertaintyWarning
 
@@ -256,9 +255,9 @@ class DecisionBootstrap:
         if len(self.rules) != B:
             raise ValueError(f"rules must have {B} entries, got {len(self.rules)}")
         object.__setattr__(self, "rules", tuple(self.rules))
-        object.__setattr__(self, "reference", MappingProxyType(dict(self.reference)))
-        object.__setattr__(self, "failures", MappingProxyType({int(k): str(v) for k, v in dict(self.failures).items()}))
-        object.__setattr__(self, "options", MappingProxyType(dict(self.options)))
+        object.__setattr__(self, "reference", FrozenMap(dict(self.reference)))
+        object.__setattr__(self, "failures", FrozenMap({int(k): str(v) for k, v in dict(self.failures).items()}))
+        object.__setattr__(self, "options", FrozenMap(dict(self.options)))
 
     @property
     def n_replicates(self) -> int:

@@ -79,7 +79,7 @@ from ..estimation._neural import NeuralModel
 from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
-from ..core._validation import check_bool, check_choice, check_fields, check_int, check_real, warn
+from ..core._validation import FrozenMap, check_bool, check_choice, check_fields, check_int, check_real, warn
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
@@ -184,10 +184,12 @@ class ResidualTests:
     rule: str
     model_name: str
     residuals: tuple[np.ndarray, ...]
-    undefined: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
+    undefined: Mapping[str, str] = field(default_factory=FrozenMap)
 
     def __post_init__(self) -> None:
         check_fields(self)
+        object.__setattr__(self, "tests", FrozenMap(self.tests))  # not the caller's dict
+        object.__setattr__(self, "undefined", FrozenMap(self.undefined))
 
     @property
     def passed(self) -> bool:
@@ -461,8 +463,8 @@ def residual_tests(
             outside = lags[np.abs(phi) > band]
             out[k] = CorrelationTest(k, lab, kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
                                      bool(np.all(np.abs(phi) <= limit)))
-    return ResidualTests(MappingProxyType(out), n, level, rule, getattr(model, "name", ""),
-                         tuple(_ro(e) for e in xi), MappingProxyType(undefined))
+    return ResidualTests(FrozenMap(out), n, level, rule, getattr(model, "name", ""),
+                         tuple(_ro(e) for e in xi), FrozenMap(undefined))
 
 
 def _ro(a: np.ndarray) -> np.ndarray:

@@ -9,7 +9,6 @@ same definitions as Table I.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from types import MappingProxyType
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -19,7 +18,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, StaticPoints, as_records
-from ..core._validation import check_bool, check_fields, check_int, check_real, frozen, warn
+from ..core._validation import FrozenMap, check_bool, check_fields, check_int, check_real, frozen, warn
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -136,7 +135,7 @@ class ParetoSet:
         ok[list(fails)] = False
         if not np.all(np.isfinite(th[ok])):
             raise ValueError("thetas must be finite (a failed member is listed in failures)")
-        object.__setattr__(self, "failures", MappingProxyType(fails))
+        object.__setattr__(self, "failures", FrozenMap(fails))
         object.__setattr__(self, "thetas", th)
         for nm in ("lambdas", "J1", "JS", "JSF"):
             v = frozen(getattr(self, nm))
@@ -153,7 +152,7 @@ class ParetoSet:
             if a.shape != (K,):
                 raise ValueError(f"extra[{k!r}] must have shape ({K},), got {a.shape}")
             ex[k] = a
-        object.__setattr__(self, "extra", MappingProxyType(ex))
+        object.__setattr__(self, "extra", FrozenMap(ex))
 
     # -- construction -------------------------------------------------------------------
     @classmethod

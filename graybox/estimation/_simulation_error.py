@@ -45,7 +45,6 @@ import warnings
 import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from types import MappingProxyType
 from typing import Callable, Literal, Mapping, Sequence, TypeVar
 
 import numpy as np
@@ -81,7 +80,7 @@ from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..core._terms import Structure
-from ..core._validation import (warn, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
+from ..core._validation import (FrozenMap, warn, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)
@@ -542,7 +541,7 @@ class SEFront:
         object.__setattr__(self, "thetas", frozen(self.thetas))
         object.__setattr__(self, "costs", frozen(self.costs))
         object.__setattr__(self, "nfev", frozen(np.zeros(K) if self.nfev is None else self.nfev, int))
-        object.__setattr__(self, "failures", MappingProxyType({int(k): str(v) for k, v in dict(self.failures).items()}))
+        object.__setattr__(self, "failures", FrozenMap({int(k): str(v) for k, v in dict(self.failures).items()}))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 

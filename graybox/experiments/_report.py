@@ -20,7 +20,6 @@ import io
 import os
 import re
 from dataclasses import dataclass
-from types import MappingProxyType
 from pathlib import Path
 from typing import Mapping, Sequence
 
@@ -30,7 +29,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
-from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_real, check_sequence
+from ..core._validation import FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_real, check_sequence
 from ._cell import STATUSES
 from ._store import compare_results, encode_value, load_results
 
@@ -721,7 +720,7 @@ class GridStatus:
 
     def __post_init__(self) -> None:
         check_fields(self)
-        object.__setattr__(self, "counts", MappingProxyType(dict(self.counts)))  # not the caller's dict
+        object.__setattr__(self, "counts", FrozenMap(self.counts))  # not the caller's dict
 
     def summary(self) -> str:
         """A few lines for a terminal."""
@@ -775,6 +774,6 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
     last = df["finished_at"].dropna()
     sel = attrs.get("selection")
     return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(attrs.get("grid")),
-                      n, len(df), max(0, n - len(df)), MappingProxyType(counts),
+                      n, len(df), max(0, n - len(df)), FrozenMap(counts),
                       float(wall.mean()) if wall.notna().any() else float("nan"), max(last) if len(last) else None,
                       best, len(attrs.get("specs", [])))

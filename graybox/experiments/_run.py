@@ -6,7 +6,6 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any, Callable, Mapping
 
 import numpy as np
@@ -14,7 +13,7 @@ import numpy as np
 from .. import _api as gb
 
 from ..core._progress import progress_bar
-from ..core._validation import check_bool, check_fields
+from ..core._validation import FrozenMap, check_bool, check_fields
 from ._cell import STATUSES, failed_row, run_cell
 from ._executors import make_executor
 from ._spec import Grid, SpecError, reads_uncertainty
@@ -65,7 +64,7 @@ class GridRun:
 
     def __post_init__(self) -> None:
         check_fields(self)
-        object.__setattr__(self, "counts", MappingProxyType(dict(self.counts)))  # not the caller's dict
+        object.__setattr__(self, "counts", FrozenMap(self.counts))  # not the caller's dict
 
     @property
     def reused(self) -> int:
@@ -192,7 +191,7 @@ def run_grid(
         counts = st.counts()
         spec_id = st.spec_id
     return GridRun(str(Path(store)), g.name, len(cells), ran, len(cells) - len(todo),
-                   MappingProxyType({s: counts.get(s, 0) for s in STATUSES}), ex.name, time.perf_counter() - t0,
+                   FrozenMap({s: counts.get(s, 0) for s in STATUSES}), ex.name, time.perf_counter() - t0,
                    spec_id, tuple(notes))
 
 

@@ -38,7 +38,6 @@ import inspect
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
-from types import MappingProxyType
 from typing import TYPE_CHECKING, Callable, Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
@@ -49,7 +48,7 @@ from ._surfaces import StaticSurface, box_grid
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
-from ..core._validation import check_choice, check_int, check_real, check_sequence, check_str
+from ..core._validation import FrozenMap, check_choice, check_int, check_real, check_sequence, check_str
 from ..core._reprs import short_repr
 
 if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it
@@ -1047,7 +1046,7 @@ class ClusterBounds(StaticConstraint):
             if lo is not None and hi is not None and lo > hi:
                 raise ValueError(f"cluster {k!r}: lower bound {lo} exceeds upper bound {hi}")
             clean[k] = (lo, hi)
-        object.__setattr__(self, "bounds", MappingProxyType(clean))  # read-only: the object is a value
+        object.__setattr__(self, "bounds", FrozenMap(clean))  # read-only: the object is a value
 
     def describe(self) -> str:
         parts = []
