@@ -141,7 +141,10 @@ def free_directions(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
     A = A / column_scales(A)
     if not np.all(np.isfinite(A)):
         raise ValueError("non-finite regressors: identifiability cannot be judged")
-    _, sv, Vt = np.linalg.svd(A, full_matrices=True)
+    # the SVD of the stack's triangular factor (the same singular values and right vectors): the stack's own
+    # SVD with full_matrices would form its N × N left factor, N the records' samples (290 MB at N = 6000)
+    R = np.linalg.qr(A, mode="r") if A.shape[0] > n else A
+    _, sv, Vt = np.linalg.svd(R, full_matrices=True)
     rows = max(sum(int(m) for _, m in blocks), n)
     tol = (sv[0] if sv.size else 0.0) * np.finfo(float).eps * rows
     rank = int(np.sum(sv > tol))
