@@ -157,3 +157,20 @@ def test_the_identifiability_check_does_not_grow_with_the_square_of_the_record()
         tracemalloc.stop()
     assert peak < 8 * N * N / 3
     assert free.shape == (3, 1) and abs(free[2, 0]) < 1e-12  # the free direction moves 1 and the held input only
+
+
+# A covariance whose every direction is fixed by the constraints (CLS with a curve that fixes every
+# cluster) has a factor of shape (0, n); saved, it came back from JSON as [] and the file could not
+# be loaded ("cov_factor must have shape (k, 2), got (0, 0)").
+def test_an_uncertainty_with_every_parameter_constrained_saves_and_loads(tmp_path):
+    rng = np.random.default_rng(0)
+    u = rng.uniform(2900.0, 3100.0, 200)
+    y = np.r_[0.0, 2e5 + 30.0 * u[:-1]] + rng.normal(0, 10.0, 200)
+    rec = gb.Record(u, y, Ts=0.5, input_names=["speed"])
+    curve = gb.StaticCurve([2e5, 30.0], domain=(2900.0, 3100.0))
+    fit = gb.cls(["1", "speed(k-1)"], rec, curve)
+    unc = gb.cls_uncertainty(fit.model, rec, curve)
+    assert unc.cov_factor.shape == (0, 2)
+    back = gb.load(gb.save(unc, tmp_path / "unc.json"))
+    assert back.cov_factor.shape == (0, 2)
+    np.testing.assert_array_equal(back.std, unc.std)

@@ -146,6 +146,8 @@ class ParameterUncertainty:
         object.__setattr__(self, "noise_cov", nc)
         if self.cov_factor is not None:
             F = frozen(self.cov_factor)
+            if F.size == 0:  # every θ fixed by constraints: no row (a JSON file gives back [] for it)
+                F = frozen(np.zeros((0, n)))
             if F.ndim != 2 or F.shape[1] != n:
                 raise ValueError(f"cov_factor must have shape (k, {n}), got {F.shape}")
             object.__setattr__(self, "cov_factor", F)
