@@ -174,3 +174,20 @@ def test_an_uncertainty_with_every_parameter_constrained_saves_and_loads(tmp_pat
     back = gb.load(gb.save(unc, tmp_path / "unc.json"))
     assert back.cov_factor.shape == (0, 2)
     np.testing.assert_array_equal(back.std, unc.std)
+
+
+# The two-speed rig read a DataFrame of speed references by position while its records name them
+# u1, u2 (and every other input path reads a DataFrame by name): columns ('u2', 'u1') ran the rig with
+# the pump sets' references swapped, and its record labelled set 2's reference u1.
+def test_the_two_speed_rig_reads_a_frame_of_references_by_name():
+    import pandas as pd
+    from graybox.datasets import TwoSpeedPumpingPlant
+
+    plant = TwoSpeedPumpingPlant()
+    u = np.c_[np.full(40, 1500.0), np.full(40, 900.0)]
+    swapped = pd.DataFrame({"u2": u[:, 1], "u1": u[:, 0]})
+    rec = plant.simulate(swapped, seed=0).record()
+    np.testing.assert_array_equal(rec.input("u1"), u[:, 0])
+    np.testing.assert_array_equal(rec.y, plant.simulate(u, seed=0).y)
+    surface = plant.surface()
+    assert surface(swapped.iloc[:1]) == pytest.approx(surface(u[:1]))

@@ -67,10 +67,13 @@ from typing import Sequence
 import numba as nb
 import numpy as np
 
-from ..core._records import Record, StaticPoints
+from ..core._records import Record, StaticPoints, frame_inputs
 from ..core._validation import as_1d_finite, renamed
 from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, write_csv_pair
 from ..core._reprs import short_repr
+
+#: The plant's inputs, as its records and static points name them: speed references of sets 1 and 2.
+_INPUTS = ("u1", "u2")
 
 __all__ = [
     "TwoSpeedPumpingPlant",
@@ -154,7 +157,7 @@ class TwoSpeedRun:
         name : str
             The record's name.
         """
-        return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"), input_names=("u1", "u2"))
+        return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"), input_names=_INPUTS)
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
@@ -264,9 +267,10 @@ class TwoSpeedPumpingPlant:
 
         Parameters
         ----------
-        u : array_like, shape (N, 2)
+        u : array_like or pandas.DataFrame, shape (N, 2)
             Speed references r₁, r₂ (rpm), held over each sample, each within the rig's
-            ``speed_range``.
+            ``speed_range``. A DataFrame with columns ``u1`` and ``u2`` (the rig's records' input
+            names) is read by name, in any order.
         seed : int or numpy Generator, optional
             Source of noise (an int seeds ``np.random.default_rng``); required when any noise is on.
             The draws are the bundled rig's, in its order.
@@ -283,7 +287,7 @@ class TwoSpeedPumpingPlant:
         -------
         TwoSpeedRun
         """
-        uu = np.asarray(u, dtype=float)
+        uu = np.asarray(frame_inputs(u, _INPUTS, "u"), dtype=float)  # a DataFrame by its columns u1, u2
         if uu.ndim != 2 or uu.shape[1] != 2 or uu.shape[0] == 0:
             raise ValueError(f"u must have shape (N, 2): one column per pump set, got shape {uu.shape}")
         r1 = as_1d_finite(uu[:, 0], "speed reference 1")
@@ -328,8 +332,8 @@ class PlantSurface:
     name: str = "theoretical static surface"
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
-        """p̄ at ``ubar`` of shape (K, 2) (rpm); returns shape (K,)."""
-        u = np.asarray(ubar, dtype=float)
+        """p̄ at ``ubar`` of shape (K, 2) (rpm; a DataFrame with columns ``u1``, ``u2`` read by name); returns shape (K,)."""
+        u = np.asarray(frame_inputs(ubar, _INPUTS, "ubar"), dtype=float)  # a DataFrame by its columns u1, u2
         if u.ndim == 1 and u.size == 2:
             u = u[None, :]
         if u.ndim != 2 or u.shape[1] != 2:
