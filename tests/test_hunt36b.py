@@ -191,3 +191,23 @@ def test_the_two_speed_rig_reads_a_frame_of_references_by_name():
     np.testing.assert_array_equal(rec.y, plant.simulate(u, seed=0).y)
     surface = plant.surface()
     assert surface(swapped.iloc[:1]) == pytest.approx(surface(u[:1]))
+
+
+# A record whose output is constant (a stuck sensor, or the wrong column read as y) while its input
+# moves was refused by the one identifiability rule with "give a record whose input moves": the input
+# did move; the output's terms (and the constant) are what the records leave free.
+@pytest.mark.parametrize("level", [0.0, 2e5])
+def test_a_constant_output_is_named_as_what_does_not_move(level):
+    rng = np.random.default_rng(0)
+    u = rng.uniform(2900.0, 3100.0, 300)
+    rec = gb.Record(u, np.full(300, level), Ts=0.5, input_names=["speed"])
+    st = ["1", "y(k-1)", "speed(k-1)"]
+    for fit in (lambda: gb.els(st, rec), lambda: gb.output_error(st, rec),
+                lambda: gb.pe_thetas(st, rec, gb.StaticPoints([2900.0, 3100.0], [level, level + 1.0]), lambdas=[1.0])):
+        with pytest.raises(ValueError, match="output does not move") as info:
+            fit()
+        assert "input moves" not in str(info.value)
+    # a held input is still named as such
+    held = gb.Record(np.full(300, 3000.0), np.linspace(0.0, 1.0, 300) ** 2, Ts=0.5, input_names=["speed"])
+    with pytest.raises(ValueError, match="input moves"):
+        gb.els(st, held)

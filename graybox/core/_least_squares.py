@@ -14,7 +14,7 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
-           "check_identified", "CONSTANT_RTOL", "output_spread", "output_scale", "spread_scale"]
+           "check_identified", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale", "spread_scale"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -151,6 +151,12 @@ def free_directions(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
     return Vt[rank:].T
 
 
+#: What is wrong when the free directions move no input term (the output's terms and the constant only): the
+#: records' output, not their input, is what does not move (a record whose input moves does not help).
+HELD_OUTPUT = ("the records' output does not move enough to tell these terms apart (a constant output: check that "
+               "the column read as y is the plant's output, e.g. not a stuck or disconnected sensor); give a record "
+               "whose output moves")
+
 #: What data would identify the free directions: when rows fixing every static cluster would (static
 #: points could), and when they would not (terms that differ within one cluster).
 REMEDIES = ("give a record whose input moves, or static points at more input levels (with a weight on them: λ1 < 1)",
@@ -158,7 +164,7 @@ REMEDIES = ("give a record whose input moves, or static points at more input lev
             "within one, e.g. one power of u at two lags)")
 
 
-def check_identified(blocks: Sequence[tuple[str, np.ndarray, int]], terms: Sequence[str], *,
+def check_identified(blocks: Sequence[tuple[str, np.ndarray, int]], terms: Sequence[object], *,
                      clusters: np.ndarray | None = None, what: str = "θ",
                      remedies: tuple[str, str] = REMEDIES) -> None:
     """The one identifiability rule: ``ValueError`` unless the stacked regression of ``blocks`` has full rank.
@@ -168,8 +174,9 @@ def check_identified(blocks: Sequence[tuple[str, np.ndarray, int]], terms: Seque
     blocks : sequence of (str, ndarray (k, n), int)
         What each block is (e.g. ``"the identification records"``), its rows in θ's coordinates (or a
         triangular factor of them) and how many regression rows it stands for (:func:`free_directions`).
-    terms : sequence of str
-        The n terms, to name those a free direction moves.
+    terms : sequence of Term (or str)
+        The n terms, to name those a free direction moves. Given as Terms, a free direction that moves
+        no input term is named as the output's (:data:`HELD_OUTPUT`), whatever ``remedies`` say.
     clusters : ndarray, shape (n_clusters, n), optional
         The 0/1 map from θ to the static clusters: with it the message tells whether static points
         (which fix only the clusters) could identify what is left free.
@@ -188,10 +195,13 @@ def check_identified(blocks: Sequence[tuple[str, np.ndarray, int]], terms: Seque
     if not free.shape[1]:
         return
     n = len(terms)
-    moved = [str(terms[j]) for j in range(n) if np.max(np.abs(free[j])) > 1e-8]
+    moved_at = [j for j in range(n) if np.max(np.abs(free[j])) > 1e-8]
+    moved = [str(terms[j]) for j in moved_at]
     by = " and ".join(name for name, _, _ in blocks)
     msg = (f"{what} is not identifiable from {by}: their stacked regression has rank {n - free.shape[1]} for {n} "
            f"terms (judged with every column at unit RMS), and leaves free {free.shape[1]} combination(s) of {moved}")
+    if moved_at and all(getattr(terms[j], "inputs", None) == () for j in moved_at):
+        raise ValueError(f"{msg}: {HELD_OUTPUT}")
     static_helps = True
     if clusters is not None:
         # whether rows fixing every cluster would remove the free directions (units-free: R's columns are scaled

@@ -563,7 +563,7 @@ def els(
     recs = records_of(data)
     reg = _regression(process, ns, recs)
     # the rule every estimator applies, so that ELS names the terms left free as CLS, PE and SE do
-    check_identified([("the identification records", reg.psi, reg.psi.shape[0])], [str(t) for t in process],
+    check_identified([("the identification records", reg.psi, reg.psi.shape[0])], list(process),
                      what="the ELS process θ", remedies=(_NO_STATIC_REMEDY, _NO_STATIC_REMEDY))
     theta_ls = scaled_lstsq(reg.psi, reg.y)
     xi = reg.y - reg.psi @ theta_ls

@@ -152,7 +152,7 @@ def identified_by(structure: Structure, dynamic: np.ndarray, rows: int, *, point
     if len(blocks) == 1:  # no static points weighted: say where they would be
         remedies = ("give a record whose input moves, or static points at several input levels, with a weight on "
                     "them (λ1 < 1 of se_pareto, pe_pareto; se_dsf)", REMEDIES[1])
-    check_identified(blocks, [str(t) for t in structure], clusters=clusters, what=what, remedies=remedies)
+    check_identified(blocks, list(structure), clusters=clusters, what=what, remedies=remedies)
 
 
 def static_prediction(structure: Structure, thetas: np.ndarray, points: StaticPoints) -> np.ndarray:
