@@ -211,3 +211,47 @@ def test_a_constant_output_is_named_as_what_does_not_move(level):
     held = gb.Record(np.full(300, 3000.0), np.linspace(0.0, 1.0, 300) ** 2, Ts=0.5, input_names=["speed"])
     with pytest.raises(ValueError, match="input moves"):
         gb.els(st, held)
+
+
+def _held_step(offset: float, su: float = 1.0):
+    """A record at one held input level (y = 0.8 y + 0.5 u − 0.02 u² + 1 settling from rest, plus
+    ``offset``) and static points at five levels: Ψ is rank deficient, the weighted points complete it."""
+    rng = np.random.default_rng(0)
+    th = np.array([1.0, 0.8, 0.5 / su, -0.02 / su**2])
+    u = np.full(100, 3.0 * su)
+    y = np.zeros(100)
+    y[0] = 1.0
+    for k in range(1, 100):
+        y[k] = th @ [1.0, y[k - 1], u[k - 1], u[k - 1] ** 2]
+    rec = gb.Record(u, y + rng.normal(0, 0.01, 100) + offset, Ts=1.0, input_names=["speed"])
+    ub = np.array([1.0, 2.0, 4.0, 5.0, 6.0]) * su
+    yb = (th[0] + th[2] * ub + th[3] * ub**2) / 0.2 + offset + rng.normal(0, 0.01, 5)
+    return rec, gb.StaticPoints(ub, yb, uncertainty=0.05)
+
+
+# On a record whose input is held (Ψ rank deficient, the weighted static points or eq. (22)'s
+# equalities completing it), the QP kept the dense basis and started its step at the minimum-norm
+# least squares, whose distance to the optimum along the free direction is of the size of θ (an
+# output's offset), not of the output's spread: at an offset of 1e4 OSQP stopped at its iteration
+# limit ('user_limit', reported as InfeasibleError), and Clarabel's PE members were 14 % of the spread
+# off the closed form at 1e6 (Pa near 2e5 with rpm near 3000 alike).
+@pytest.mark.parametrize("offset, su", [(1e4, 1.0), (1e6, 1.0), (2e5, 3000.0)])
+def test_held_input_qps_agree_with_the_closed_form_at_an_offset(offset, su):
+    rec, sp = _held_step(offset, su)
+    st = ["1", "y(k-1)", "speed(k-1)", "speed(k-1)^2"]
+    spread = float(np.std(rec.y))
+
+    def curves(thetas):
+        return np.array([gb.Model(st, t, input_names=["speed"]).static_curve(sp.ubar) for t in np.atleast_2d(thetas)])
+
+    lam = [0.9, 0.5, 0.01]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)  # the points span levels the record holds one of
+        closed = curves(gb.pe_thetas(st, rec, sp, lambdas=lam, solver="closed"))
+        curve = gb.StaticCurve.fit(sp, degree=2)
+        cls_closed = curves(gb.cls(st, rec, curve, reference=0.8, solver="closed").model.theta)
+        for solver in ("clarabel", "osqp"):
+            pe_qp = curves(gb.pe_thetas(st, rec, sp, lambdas=lam, solver=solver))
+            assert np.max(np.abs(pe_qp - closed)) < 1e-6 * spread
+            cls_qp = curves(gb.cls(st, rec, curve, reference=0.8, solver=solver).model.theta)
+            assert np.max(np.abs(cls_qp - cls_closed)) < 1e-6 * spread

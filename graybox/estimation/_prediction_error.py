@@ -481,27 +481,45 @@ class _Basis:
     l2: np.ndarray | None  # half the static term's
 
 
-def _basis(d: _Data, static: tuple[np.ndarray, np.ndarray] | None) -> _Basis:
+def _full_rank(R: np.ndarray) -> bool:
+    """Whether the triangular factor ``R`` is of full rank, as the QP's basis judges it."""
+    diag = np.abs(np.diag(R))
+    return bool(diag.min() > 1e-12 * diag.max())
+
+
+def _basis(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, eq: _Rows | None = None) -> _Basis:
+    """The QP's coordinates (:class:`_Basis`). ``eq``: the equality rows in z (T = I), used where Ψ is rank
+    deficient and the static rows do not complete it, to start the step where they hold."""
     n = d.s.size
-    diag = np.abs(np.diag(d.R1))
-    if diag.min() > 1e-12 * diag.max():
-        z0 = scipy.linalg.solve_triangular(d.R1, d.c1)
-        if static is None:
-            return _Basis(_tri_inv(d.R1), np.ones(n), None, z0, np.zeros(n), None)
+    full = _full_rank(d.R1)
+    if full and static is None:
+        return _Basis(_tri_inv(d.R1), np.ones(n), None, scipy.linalg.solve_triangular(d.R1, d.c1), np.zeros(n), None)
+    if static is not None:
         R2, c2 = static
         Qs, Rs = np.linalg.qr(np.vstack([d.R1, R2]))
-        W, S, Vt = np.linalg.svd(Qs[n:], full_matrices=True)
-        k = S.size
-        H2 = np.zeros(n)
-        H2[:k] = S**2
-        Q1V = Qs[:n] @ Vt.T  # orthogonal columns: their squared norms (1 − S² without its cancellation)
-        l2 = np.zeros(n)
-        l2[:k] = S * (W.T @ (R2 @ z0 - c2))[:k]
-        return _Basis(scipy.linalg.solve_triangular(Rs, Vt.T), np.einsum("ij,ij->j", Q1V, Q1V), H2, z0,
-                      np.zeros(n), l2)
+        if full or _full_rank(Rs):
+            # z0: the least-squares estimate; where Ψ alone leaves θ free (an input held) and the static rows
+            # complete it, the least squares of both terms, so that the step is of the data's size there too
+            z0 = (scipy.linalg.solve_triangular(d.R1, d.c1) if full
+                  else scipy.linalg.solve_triangular(Rs, Qs.T @ np.concatenate([d.c1, c2])))
+            W, S, Vt = np.linalg.svd(Qs[n:], full_matrices=True)
+            k = S.size
+            H2 = np.zeros(n)
+            H2[:k] = S**2
+            Q1V = Qs[:n] @ Vt.T  # orthogonal columns: their squared norms (1 − S² without its cancellation)
+            l2 = np.zeros(n)
+            l2[:k] = S * (W.T @ (R2 @ z0 - c2))[:k]
+            l1 = np.zeros(n) if full else Q1V.T @ (d.R1 @ z0 - d.c1)
+            return _Basis(scipy.linalg.solve_triangular(Rs, Vt.T), np.einsum("ij,ij->j", Q1V, Q1V), H2, z0, l1, l2)
     # rank-deficient Ψ (the constraints may still identify θ): plain normal forms
     H1, g1 = d.R1.T @ d.R1, d.R1.T @ d.c1
     z0 = np.linalg.lstsq(H1, g1, rcond=None)[0]
+    if eq is not None and eq.V.shape[0]:
+        # the least squares within the equalities: from the minimum-norm point the step along the directions
+        # Ψ leaves free is of the size of θ itself (an output's offset), not of the data's spread
+        z_p = eq.V.T @ eq.g  # V has orthonormal rows
+        Nb = scipy.linalg.null_space(eq.V)
+        z0 = z_p + Nb @ np.linalg.lstsq(d.R1 @ Nb, d.c1 - d.R1 @ z_p, rcond=None)[0]
     if static is None:
         return _Basis(np.eye(n), H1, None, z0, H1 @ z0 - g1, None)
     H2 = static[0].T @ static[0]
@@ -537,7 +555,7 @@ class _QP:
         import cvxpy as cp
 
         n = d.s.size
-        self.basis = b = _basis(d, static)
+        self.basis = b = _basis(d, static, None if _full_rank(d.R1) else _rows(cons, ctx, d.s))
         z0 = b.z0  # T only ever carries the step, whose size is the output's spread (see _Basis)
         rows = _rows(cons, ctx, d.s, b.T, at=z0)
         # y is in output units (the linear terms scale with the output, the objective with its
