@@ -157,7 +157,7 @@ class TwoSpeedRun:
         name : str
             The record's name.
         """
-        return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"), input_names=_INPUTS)
+        return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"), input_names=("u1", "u2"))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
