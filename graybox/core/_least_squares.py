@@ -153,7 +153,7 @@ def free_directions(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
 
 #: What is wrong when the free directions move no input term (the output's terms and the constant only): the
 #: records' output, not their input, is what does not move (a record whose input moves does not help).
-HELD_OUTPUT = ("the records' output does not move enough to tell these terms apart (a constant output: check that "
+HELD_OUTPUT = ("the records' output does not move enough to tell these terms apart (e.g. a constant output: check that "
                "the column read as y is the plant's output, e.g. not a stuck or disconnected sensor); give a record "
                "whose output moves")
 
