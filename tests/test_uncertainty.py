@@ -261,3 +261,12 @@ def test_static_band_figure(tmp_path):
     assert len(plot_static_band(band, gain=False).axes) == 1
     with pytest.raises(TypeError, match="StaticCurveBand"):
         plot_static_band(u)
+
+
+def test_a_static_band_of_one_input_refuses_a_grid_of_two_inputs_levels():
+    # was: an (M, 2) ubar was flattened into 2M levels of the one input, a band at points nobody asked for
+    rec = narx_records(1, 400, seed=5)[0]
+    unc = gb.ls_uncertainty(gb.els(STRUCT, rec).model, rec)
+    with pytest.raises(ValueError, match=r"one input, shape \(M,\), got shape \(2, 2\)"):
+        gb.static_curve_band(unc, [[900.0, 1.0], [1300.0, 2.0]])
+    assert gb.static_curve_band(unc, 1200.0).ubar.shape == (1,)  # one level as a number still works

@@ -933,7 +933,9 @@ def static_curve_band(
     if uncertainty.model.n_inputs > 1:
         raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
                          f"inputs {uncertainty.model.input_names} (a band around a static surface is not built yet)")
-    ub = np.atleast_1d(np.asarray(ubar, float)).ravel()
+    ub = np.atleast_1d(np.asarray(ubar, float))
+    if ub.ndim > 1:  # flattened, an (M, 2) grid of two inputs' levels was read as 2M levels of the one
+        raise ValueError(f"ubar must be levels of the model's one input, shape (M,), got shape {ub.shape}")
     if ub.size == 0 or not np.all(np.isfinite(ub)):
         raise ValueError("ubar must be a non-empty array of finite input levels")
     m = uncertainty.model
