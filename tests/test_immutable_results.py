@@ -149,3 +149,20 @@ def test_grid_counts_are_frozen_even_from_a_plain_dict():
     assert run.counts["ok"] == 2
     with pytest.raises(TypeError):
         run.counts["ok"] = 3
+
+
+def test_a_dataset_s_extra_is_a_read_only_copy():
+    # was: a plain dict inside a frozen Dataset: data.extra["seed"] = 5 changed the bundled set's facts
+    # for everything that read them later, and the caller's dict stayed tied to the Dataset
+    rec = test_io.record()
+    mine = {"seed": 1}
+    data = gb.Dataset(rec, rec, None, extra=mine)
+    mine["seed"] = 2
+    assert data.extra["seed"] == 1
+    with pytest.raises(TypeError):
+        data.extra["seed"] = 3
+    with pytest.raises(TypeError, match="extra must be a mapping"):
+        gb.Dataset(rec, rec, None, extra=[("seed", 1)])
+    import pickle  # a Dataset still travels to worker processes
+
+    assert pickle.loads(pickle.dumps(data)).extra["seed"] == 1

@@ -17,7 +17,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ._terms import check_input_names, default_input_names
-from ._validation import as_1d_finite, check_per_point, check_real, check_str, refuse_non_real, warn
+from ._validation import FrozenMap, as_1d_finite, check_per_point, check_real, check_str, refuse_non_real, warn
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -435,15 +435,16 @@ class Dataset:
         Measured steady states, if any.
     description : str
         Where the data come from, in plain words.
-    extra : dict
-        Anything else a loader wants to expose (e.g. a theoretical static curve).
+    extra : mapping
+        Anything else a loader wants to expose (e.g. a theoretical static curve); kept as a read-only
+        copy (:class:`~graybox.core._validation.FrozenMap`), as every mapping of a graybox value.
     """
 
     ident: Record
     valid: Record
     static: StaticPoints | None = None
     description: str = ""
-    extra: dict = field(default_factory=dict)
+    extra: Mapping = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for nm in ("ident", "valid"):
@@ -451,8 +452,9 @@ class Dataset:
                 raise TypeError(f"Dataset: {nm} must be a Record, got {type(getattr(self, nm)).__name__}")
         if self.static is not None and not isinstance(self.static, StaticPoints):
             raise TypeError(f"Dataset: static must be StaticPoints or None, got {type(self.static).__name__}")
-        if not isinstance(self.extra, dict):
-            raise TypeError(f"Dataset: extra must be a dict, got {type(self.extra).__name__}")
+        if not isinstance(self.extra, Mapping):
+            raise TypeError(f"Dataset: extra must be a mapping (e.g. a dict), got {type(self.extra).__name__}")
+        object.__setattr__(self, "extra", FrozenMap(self.extra))  # not the caller's dict, and not changeable
         check_compatible(self.ident, self.valid)
         if self.static is not None:
             check_compatible(self.ident, self.static)
