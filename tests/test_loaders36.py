@@ -298,3 +298,14 @@ def test_data_of_one_identification_in_other_units_are_refused():
         gb.Dataset(r, gb.Record(np.arange(10.0), np.arange(10.0), units=("rpm", "Pa"), name="valid"))
     # a unit left empty says nothing: accepted
     assert gb.Dataset(r, r, gb.StaticPoints([1.0, 2.0], [3.0, 4.0], units=("", "mlc"))).static is not None
+
+
+def test_saved_static_points_say_their_own_units_in_the_file_header(tmp_path):
+    # was: gb.save(points) wrote a header without units although the points carry them
+    import graybox as gb
+
+    pts = gb.StaticPoints([1000.0, 2000.0], [3.0, 4.0], units=("rpm", "mlc"))
+    p = gb.save(pts, tmp_path / "p.json")
+    assert gb.read_header(p)["units"] == ("rpm", "mlc")
+    assert gb.read_header(gb.save(pts, tmp_path / "q.json", units=("rad/s", "Pa")))["units"] == ("rad/s", "Pa")
+    assert gb.read_header(gb.save(gb.StaticPoints([1.0, 2.0], [3.0, 4.0]), tmp_path / "r.json"))["units"] is None

@@ -581,7 +581,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
         The value to write.
     units : (str, str) or mapping, optional
         Units of the input and output (e.g. ``("rpm", "mlc")``, or a Record's ``units``), written
-        in the header.
+        in the header; default for StaticPoints: their own ``units`` (when they name any).
 
     Returns
     -------
@@ -592,6 +592,9 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
         raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}{hint}")
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": graybox_version(),
                            "type": _TYPES[type(obj)]}
+    own = getattr(obj, "units", None) if isinstance(obj, StaticPoints) else None
+    if units is None and own is not None and any(own):
+        units = own  # the header says what the value itself carries
     u = _units_arg(units)
     if u is not None:
         doc["units"] = u
