@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from types import MappingProxyType
 from typing import Literal, Mapping, Sequence
 
 import numpy as np
@@ -48,7 +47,7 @@ from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, check_overlap, check_same_period, choosing_records,
                              same_record)
 from ..core._terms import Structure
-from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_real, check_seed, check_theta
+from ..core._validation import FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real, check_seed, check_theta
 from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
@@ -107,8 +106,8 @@ class OEResult:
         """Starts (and solvers) that gave no fit, with the reason: ``{"start (solver)": reason}``."""
         df = self.starts
         bad = df[df["status"] != "fitted"]
-        return MappingProxyType({(f"{s} ({v})" if v else str(s)): str(m)
-                                 for s, v, m in zip(bad["start"], bad["solver"], bad["message"])})
+        return FrozenMap({(f"{s} ({v})" if v else str(s)): str(m)
+                          for s, v, m in zip(bad["start"], bad["solver"], bad["message"])})
 
     def __repr__(self) -> str:
         chosen = f", J_S on {self.chosen_on}={self.JS_choose:.4g}" if self.chosen_on else ""

@@ -50,7 +50,6 @@ import re
 import secrets
 import stat
 from pathlib import Path
-from types import MappingProxyType
 from collections.abc import Mapping
 from typing import Any, Callable
 
@@ -67,6 +66,7 @@ from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
 from ..core._records import StaticPoints
+from ..core._validation import FrozenMap
 from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
 from ..static._curves import StaticCurve
@@ -797,4 +797,4 @@ def read_header(path: str | os.PathLike) -> Mapping[str, Any]:
         ``units`` is ``(u unit, y unit)`` or None when the file has none.
     """
     head, _ = _parse(_read(path), str(path))
-    return MappingProxyType(head)
+    return FrozenMap(head)
