@@ -161,6 +161,12 @@ def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the ch
             return
 
 
+def ignore_sigint() -> None:  # pragma: no cover - runs in the worker process
+    """A pool worker's initializer: SIGINT ignored, so that Ctrl-C (sent to the terminal's whole process
+    group) is the driver's to handle, without a traceback from every worker."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 @contextmanager
 def _sigint_ignored():
     """Processes started inside ignore SIGINT for good (a spawned Python keeps an ignored SIGINT ignored).

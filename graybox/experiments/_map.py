@@ -19,8 +19,8 @@ from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
 
 from ..core._validation import check_choice, check_int, warn
-from ._executors import (EXECUTORS, _environ, _thread_env, check_cluster, local_cluster, scheduler_client,
-                         worker_threads)
+from ._executors import (EXECUTORS, _environ, _thread_env, check_cluster, ignore_sigint, local_cluster,
+                         scheduler_client, worker_threads)
 
 __all__ = ["parallel_map"]
 
@@ -88,7 +88,9 @@ def parallel_map(
             stack.enter_context(_environ(_thread_env(worker_threads(n))))
             # spawned, not forked: a fork copies a parent whose numba threads are running, and the
             # child then refuses the NUMBA_NUM_THREADS set above (as ProcessPool spawns too)
-            pool = stack.enter_context(ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn")))
+            # the workers ignore SIGINT (Ctrl-C reaches the terminal's whole process group): the driver stops them
+            pool = stack.enter_context(ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn"),
+                                                           initializer=ignore_sigint))
             yield lambda fn, items: _pool_map(pool, fn, items)
             return
         from distributed import Client
@@ -110,6 +112,14 @@ def _pool_map(pool: ProcessPoolExecutor, fn: Callable, items: Iterable) -> list:
     """``pool.map``, with a dead worker explained: the usual cause is a script without a main guard."""
     try:
         return list(pool.map(fn, items))
+    except KeyboardInterrupt:
+        # Ctrl-C: the jobs left are dropped and the running ones stopped now, not run to their end (the
+        # workers ignore SIGINT); the executor has no public way to stop a running worker
+        procs = list((getattr(pool, "_processes", None) or {}).values())  # before shutdown, which forgets them
+        pool.shutdown(wait=False, cancel_futures=True)
+        for proc in procs:
+            proc.terminate()
+        raise
     except BrokenProcessPool as exc:
         raise RuntimeError(
             "a worker process died before returning its job. Workers are spawned and import the "
