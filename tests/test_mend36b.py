@@ -220,3 +220,14 @@ def test_se_pareto_failed_members_keep_their_lambda_in_the_callers_order():
     front = gb.se_pareto(STRUCT, held(3.0), points(), lambdas=[0.5, 1.0], method="gradient")
     assert set(front.failures) == {1} and front.lambdas[1] == 1.0
     assert np.all(np.isfinite(front.thetas[0])) and np.all(np.isnan(front.thetas[1]))
+
+
+def test_a_pe_member_refused_at_lambda_one_says_its_lambda_once():
+    # was: "λ1 = 1: θ at λ1 = 1 (no weight on the static points) is not identifiable …", λ1 said twice
+    u = np.full(200, 3.0)
+    st = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    y = gb.Model(st, [0.5, 0.2, 0.01, 1.0]).simulate(u, np.zeros(1)) + 0.01 * np.random.default_rng(0).standard_normal(200)
+    ub = np.linspace(1.0, 5.0, 5)
+    pe = gb.pe_pareto(st, gb.Record(u, y), gb.StaticPoints(ub, (0.2 * ub + 0.01 * ub**2 + 1) / 0.5), lambdas=[1.0, 0.5])
+    assert list(pe.failures) == [0] and pe.failures[0].count("λ1 = 1") == 1
+    assert pe.failures[0].startswith("θ at λ1 = 1 (no weight on the static points) is not identifiable")

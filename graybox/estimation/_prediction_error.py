@@ -996,7 +996,9 @@ def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: 
                           inputs=inputs, what="θ" if weighted else "θ at λ1 = 1 (no weight on the static points)")
         except ValueError as exc:
             reasons[weighted] = str(exc)
-    return {i: f"λ1 = {v:g}: {reasons[bool(v < 1.0)]}" for i, v in enumerate(lam) if bool(v < 1.0) in reasons}
+    # at λ1 = 1 the reason names its λ1 already ("θ at λ1 = 1 …")
+    return {i: (f"λ1 = {v:g}: " if v < 1.0 else "") + reasons[bool(v < 1.0)] for i, v in enumerate(lam)
+            if bool(v < 1.0) in reasons}
 
 
 def _pe_solve(structure, data, static, *, lambdas, constraints, solver, solver_options, weights, ubar, warm_start,
