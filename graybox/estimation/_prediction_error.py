@@ -1099,12 +1099,12 @@ def pe_pareto(
     threads = check_int(threads, "threads", low=1)
     if eval_static is not None and not isinstance(eval_static, StaticPoints):
         raise TypeError(f"eval_static must be StaticPoints, got {type(eval_static).__name__}")
-    if eval_static is not None and not is_dask_data(data):  # they speak of the records' inputs, as the fit's
-        _check_point_inputs(as_records(data), eval_static)
     if is_dask_data(data):
         raise ValueError("pe_pareto evaluates every member by a free run on the record, which needs it in memory; "
                          "for a DaskRecord call pe_thetas (it reduces the record on the Dask scheduler) and evaluate "
                          "the θs on a record that fits")
+    if eval_static is not None:  # they speak of the records' inputs, as the fit's
+        _check_point_inputs(as_records(data), eval_static)
     thetas, failures = _pe_solve(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
                                  solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
                                  reference=reference)
