@@ -72,6 +72,7 @@ __all__ = [
     "SOLVERS",
     "static_matrices",
     "identified_by",
+    "pe_members",
     "static_prediction",
     "qr_static_error",
     "cls",
@@ -977,9 +978,9 @@ def pe_thetas(
         message names the λ1, the free terms and what data would identify them. :func:`pe_pareto`
         keeps such a λ1 as a failed member instead.
     """
-    thetas, failures = _pe_solve(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
-                                 solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
-                                 reference=reference)
+    thetas, failures = pe_members(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
+                                  solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
+                                  reference=reference)
     if failures:
         raise ValueError("; ".join(failures.values()))
     return thetas
@@ -1001,10 +1002,12 @@ def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: 
             if bool(v < 1.0) in reasons}
 
 
-def _pe_solve(structure, data, static, *, lambdas, constraints, solver, solver_options, weights, ubar, warm_start,
-              reference) -> tuple[np.ndarray, dict[int, str]]:
+def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, solver="clarabel", solver_options=None,
+               weights="mse", ubar=None, warm_start=True, reference="ls") -> tuple[np.ndarray, dict[int, str]]:
     """:func:`pe_thetas`' θs (NaN rows for the members whose weights do not identify θ) and those members'
-    reasons, {index: reason}."""
+    reasons, {index: reason}: what :func:`pe_pareto`, ``select_graybox``'s PE rows and the SE starts keep as
+    failed members. ``ValueError`` (their reasons) when every member is such; the options are
+    :func:`pe_thetas`'."""
     solver = _check_solver(solver)
     lam = check_lambdas(PE_LAMBDAS if lambdas is None else lambdas)
     warm_start = check_bool(warm_start, "warm_start")
@@ -1012,6 +1015,8 @@ def _pe_solve(structure, data, static, *, lambdas, constraints, solver, solver_o
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
                                                             reference)
     failures = _unidentified(st, d, pts, rows, lam, recs[0].input_names)
+    if len(failures) == lam.size:
+        raise ValueError("; ".join(failures.values()))
     ok = np.array([i not in failures for i in range(lam.size)])
     w1 = lam / d.N if weights == "mse" else lam.copy()
     w2 = (1.0 - lam) / M if weights == "mse" else 1.0 - lam
@@ -1105,11 +1110,9 @@ def pe_pareto(
                          "the θs on a record that fits")
     if eval_static is not None:  # they speak of the records' inputs, as the fit's
         _check_point_inputs(as_records(data), eval_static)
-    thetas, failures = _pe_solve(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
-                                 solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
-                                 reference=reference)
-    if len(failures) == len(thetas):
-        raise ValueError("; ".join(failures.values()))
+    thetas, failures = pe_members(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
+                                  solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
+                                  reference=reference)
     st = _process_structure(structure)
     pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
     ev = pts if eval_static is None else eval_static

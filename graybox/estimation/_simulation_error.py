@@ -51,7 +51,7 @@ import numpy as np
 from scipy.linalg.lapack import dgeqrf
 from scipy.optimize import least_squares
 
-from ._prediction_error import _pe_solve, identified_by, static_matrices
+from ._prediction_error import identified_by, pe_members, static_matrices
 from ..core._simulation_kernels import (
     batch_sse,
     encode,
@@ -1037,9 +1037,8 @@ def _pe_members(problem: SEProblem, lambdas: np.ndarray) -> np.ndarray | None:
             with one_blas_thread(), warnings.catch_warnings():
                 warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
                 # a member whose weights do not identify θ (λ1 = 1, an input held constant) is a NaN row
-                th = _pe_solve(problem.structure, problem.records, problem.static, lambdas=lambdas, constraints=None,
-                               solver="closed", solver_options=None, weights="mse", ubar=None, warm_start=True,
-                               reference="ls")[0]
+                th = pe_members(problem.structure, problem.records, problem.static, lambdas=lambdas,
+                                solver="closed")[0]
         except ValueError:  # e.g. not identifiable with the static rows
             th = None
         if th is not None:

@@ -44,7 +44,7 @@ import pandas as pd
 from .. import _api as gb
 
 from ..io._json import register_type
-from ..estimation._prediction_error import _pe_solve
+from ..estimation._prediction_error import pe_members
 from ..models._coerce import static_info, static_points
 from ..selection._forward_regression import _RSS_FLOOR
 from ..selection._stopping import FewerTermsError
@@ -600,11 +600,8 @@ def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.nd
             cons = cell_constraints(specs, st, gb.Dataset(rec, rec, plan.static, extra=plan.extra))
             # as pe_pareto and the SE rows: a λ1 whose weights do not identify θ (λ1 = 1 on records with an
             # input held) is one failed member (a NaN row), not the whole row's failure
-            th, failures = _pe_solve(st, rec, plan.static, lambdas=lam, constraints=cons or None,
-                                     solver="clarabel" if cons else "closed", solver_options=None, weights="mse",
-                                     ubar=None, warm_start=True, reference="ls")
-            if len(failures) == len(th):
-                raise ValueError("; ".join(failures.values()))
+            th = pe_members(st, rec, plan.static, lambdas=lam, constraints=cons or None,
+                            solver="clarabel" if cons else "closed")[0]
             return th, lam
         gradient = est == "se-gradient"
         front = gb.se_pareto(st, rec, plan.static, lambdas=lam, progress=False,
