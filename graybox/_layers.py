@@ -31,8 +31,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
                     "_local_models", "_simulation_error", "_output_error", "_epsilon_constraint"),
      "ELS, CLS and PE (cvxpy QPs and the closed form), SE (GA and gradient) with a stability margin, "
      "output error, D_SF solved directly, Pareto sets and decision makers, the neural baseline"),
-    ("diagnostics", ("_residuals", "_uncertainty", "_bootstrap"),
-     "residual correlation tests, parameter and static-curve uncertainty, bootstrap of a decision"),
+    ("diagnostics", ("_residuals", "_uncertainty", "_simulation_band", "_bootstrap"),
+     "residual correlation tests, parameter, static-curve and free-run uncertainty, bootstrap of a decision"),
     ("control", ("_local", "_systems"),
      "local linear models at operating points and along the static curve; the bridge to python-control "
      "(LTI local models, the whole model as a discrete nonlinear system)"),

@@ -77,6 +77,8 @@ def values():
         band = gb.static_curve_band(gb.ls_uncertainty(pe.member_model(0), rec), [900.0, 1300.0], method="monte-carlo",
                                     n_samples=200)
         dsf = gb.se_dsf(STRUCT, rec, static, band=1.0, theta0=pe.thetas[1], max_iter=5)
+        run_band = gb.simulation_band(gb.ls_uncertainty(pe.member_model(0), rec), rec, method="monte-carlo",
+                                      n_samples=50)
         path = gb.semp(gb.Candidates(ny=2, nu=1, degree=2), rec, n_terms=3)
         exact = gb.frols(gb.Candidates(ny=2, nu=1, degree=2), rec, max_terms=4, search="exact")
         oe = gb.output_error(STRUCT, rec, n_starts=1, max_nfev=5, margin=0.05, choose_on=record(seed=1))
@@ -99,12 +101,12 @@ def values():
             "local model": local, "no local model": no_eq, "operating curve": curve_band,
             "exact selection": exact, "oe": oe, "chosen decision": chosen, "model": fit.model, "plain model": sel.model, "neural": nfit.model, "pareto": pe, "failed": failed,
             "selection": sel, "els": fit, "neural fit": nfit, "decision": dec, "uncertainty": unc, "band": band,
-            "dsf": dsf, "semp": path}
+            "simulation band": run_band, "dsf": dsf, "semp": path}
 
 
 TYPES = ["static points", "points with uncertainty", "points of two inputs", "curve", "curve without domain", "surface",
          "cls", "cls on a curve", "cls without static", "local model", "no local model", "operating curve", "model", "plain model", "neural", "pareto", "failed", "selection", "exact selection", "els", "neural fit",
-         "decision", "uncertainty", "band", "dsf", "semp", "oe", "chosen decision"]
+         "decision", "uncertainty", "band", "simulation band", "dsf", "semp", "oe", "chosen decision"]
 
 
 @pytest.mark.parametrize("name", TYPES)

@@ -281,6 +281,8 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "to_json": ((MODEL,), {}),
     "static_curve_band": ((gb.ls_uncertainty(LS, REC), [0.5, 1.0]), {"n_samples": 20}),
     "plot_static_band": ((gb.static_curve_band(gb.ls_uncertainty(LS, REC), [0.5, 1.0]),), {}),
+    "simulation_band": ((gb.ls_uncertainty(LS, REC), REC), {"n_samples": 20}),
+    "plot_simulation_band": ((gb.simulation_band(gb.ls_uncertainty(LS, REC), REC),), {}),
     "plot_residual_tests": ((gb.residual_tests(LS, REC),), {}),
     "DecisionRule": ((), {}),
     "Variant": (("v", "ls"), {}),
@@ -348,6 +350,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "ELSResult": ((), _fields_of(gb.els(ST, REC))),
     "ParameterUncertainty": ((), _fields_of(gb.ls_uncertainty(LS, REC))),
     "StaticCurveBand": ((), _fields_of(gb.static_curve_band(gb.ls_uncertainty(LS, REC), [0.5, 1.0]))),
+    "SimulationBand": ((), _fields_of(gb.simulation_band(gb.ls_uncertainty(LS, REC), REC))),
     "Selection": ((), _fields_of(gb.frols(gb.Candidates(1, 1, degree=2), REC, n_terms=2))),
     "ParetoSet": ((), _fields_of(FRONT)),
     "Decision": ((), _fields_of(DEC)),
@@ -371,7 +374,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
 }
 
 #: The result objects above: every field is an option (none has a default that makes it optional in use).
-RESULTS = {"ELSResult", "ParameterUncertainty", "StaticCurveBand", "Selection", "ParetoSet", "Decision",
+RESULTS = {"ELSResult", "ParameterUncertainty", "StaticCurveBand", "SimulationBand", "Selection", "ParetoSet", "Decision",
            "DecisionBootstrap", "GridRun", "LocalModel", "OperatingCurve", "CLSResult", "ResidualTests",
            "CorrelationTest", "DSFResult", "Equilibrium", "GrayboxSelection", "NeuralFit", "OEResult", "SEMPResult",
            "SurfaceClusterMap", "Cell", "GridStatus"}

@@ -25,7 +25,8 @@ line.
 Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.ParetoSet`,
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
 :class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.OEResult`, :class:`~graybox.SEMPResult`,
-:class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand`, :class:`~graybox.CLSResult`, the static
+:class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand`, :class:`~graybox.SimulationBand`,
+:class:`~graybox.CLSResult`, the static
 information (:class:`~graybox.StaticPoints`, :class:`~graybox.StaticCurve`, :class:`~graybox.StaticSurface`), the
 local models (:class:`~graybox.LocalModel`, :class:`~graybox.OperatingCurve`) and (registered by the experiment
 layer) :class:`~graybox.GrayboxSelection`. Their tables (pandas DataFrames of int64, float64, bool or
@@ -73,6 +74,7 @@ from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._prediction_error import CLSResult
 from ..control._local import LocalModel, OperatingCurve
+from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import ParameterUncertainty, StaticCurveBand
 
 __all__ = ["FORMAT_VERSION", "GrayboxFileError", "save", "load", "to_json", "from_json", "read_header"]
@@ -417,6 +419,10 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                           ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
                                           ("gain", "array1"), ("gain_low", "array1"), ("gain_high", "array1"),
                                           ("gain_std", "array1"), ("undefined", "array1"))),
+    "SimulationBand": (SimulationBand, (("model_name", "str"), ("record_name", "str"), ("method", "str"),
+                                        ("level", "float"), ("n_samples", "int"), ("diverged", "float"),
+                                        ("units", "names"), ("t", "array1"), ("y", "array1"), ("yhat", "array1"),
+                                        ("low", "array1"), ("high", "array1"), ("std", "array1"))),
     "CLSResult": (CLSResult, (("model", "Model"), ("static", "static_or_none"), ("constraints", "names"), ("solver", "str"))),
     "LocalModel": (LocalModel, (("ubar", "array1"), ("ybar", "float_or_none"), ("status", "str"), ("reason", "str"),
                                 ("a", "array1"), ("b", "array2"), ("Ts", "float"), ("input_names", "names"), ("name", "str"))),
@@ -577,7 +583,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
         The value to write.
     units : (str, str) or mapping, optional
         Units of the input and output (e.g. ``("rpm", "mlc")``, or a Record's ``units``), written
@@ -592,7 +598,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
         raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}{hint}")
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": graybox_version(),
                            "type": _TYPES[type(obj)]}
-    own = getattr(obj, "units", None) if isinstance(obj, StaticPoints) else None
+    own = getattr(obj, "units", None) if isinstance(obj, (StaticPoints, SimulationBand)) else None
     if units is None and own is not None and any(own):
         units = own  # the header says what the value itself carries
     u = _units_arg(units)
@@ -725,7 +731,7 @@ def save(
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
         The value.
     path : str or PathLike
         Where to write (conventionally ``*.json``).

@@ -13,5 +13,6 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "_pareto": ("plot_pareto",),
     "_surfaces": ("plot_surface_contours", "plot_surface_slices"),
     "_control": ("plot_local_models", "plot_operating_curve"),
-    "_trust": ("plot_decision_bootstrap", "plot_residual_tests", "plot_static_band"),
+    "_trust": ("plot_decision_bootstrap", "plot_residual_tests", "plot_simulation_band",
+               "plot_static_band"),
 })

@@ -16,9 +16,10 @@ from ..core._records import StaticPoints
 from ..core._validation import check_bool
 from ._data import check_axes, check_one_input_points, unit_label
 from ..diagnostics._residuals import ResidualTests
+from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand
 
-__all__ = ["plot_residual_tests", "plot_static_band", "plot_decision_bootstrap"]
+__all__ = ["plot_residual_tests", "plot_static_band", "plot_simulation_band", "plot_decision_bootstrap"]
 
 
 def plot_residual_tests(
@@ -144,6 +145,49 @@ def plot_static_band(
         ax.set_ylabel(unit_label(gain_label, f"{y_unit or '1'}/{u_unit or '1'}" if u_unit or y_unit else ""))
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="best")
+    return fig
+
+
+def plot_simulation_band(
+    band: SimulationBand,
+    *,
+    ax: Axes | None = None,
+    ylabel: str = "output",
+) -> Figure:
+    """The measured output, the model's free run and its confidence band (shaded) against time.
+
+    Parameters
+    ----------
+    band : SimulationBand
+        From :func:`graybox.simulation_band`.
+    ax : matplotlib Axes, optional
+        Draw here; by default a new 8 × 3.6 in figure is made.
+    ylabel : str
+        Output label without units (the record's output unit is appended).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The measurement as a black line, the free run over its shaded band (level and method in the
+        legend).
+    """
+    if not isinstance(band, SimulationBand):
+        raise TypeError(f"band must be a SimulationBand (from simulation_band), got {type(band).__name__}")
+    if ax is None:
+        fig = Figure(figsize=(8, 3.6), layout="constrained")
+        ax = fig.add_subplot(1, 1, 1)
+    else:
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
+        fig = ax.figure
+    ax.plot(band.t, band.y, "-", color="black", lw=1.0, label="measured")
+    ax.fill_between(band.t, band.low, band.high, color="C0", alpha=0.3, lw=0,
+                    label=f"{band.level:.0%} band ({band.method})")
+    ax.plot(band.t, band.yhat, "--", color="C0", lw=1.2, label=f"{band.model_name or 'model'} free run")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel(unit_label(ylabel, band.units[1]))
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
     return fig
 
 

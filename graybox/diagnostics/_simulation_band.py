@@ -1,0 +1,194 @@
+"""Confidence band of a model's free run from its parameters' covariance (MATLAB's ``simsd``).
+
+The band answers "how far could the model's simulated output be from this one, given how well the
+record determined θ?": the free run ŷ(k; θ) is a nonlinear function of θ through the output
+feedback, so the band is taken either to first order through the forward sensitivities ∂ŷ(k)/∂θ
+(the SE estimators' own Jacobian) or from free runs of θ drawn around θ̂. It is not a prediction
+interval for a new measurement: the measurement noise and the structure's own error are not in it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..core._records import Record
+from ..core._simulation import simulate_many
+from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
+from ..core._validation import check_choice, check_fields, check_int, check_seed, frozen, warn
+from ..models._coerce import as_record
+from ._uncertainty import ParameterUncertainty, UncertaintyWarning, theta_draws
+
+__all__ = ["SimulationBand", "simulation_band"]
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationBand:
+    """Confidence band of a model's free run over one record.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Time, s (sample index × the record's period).
+    y : ndarray, shape (N,)
+        The record's measured output, output units.
+    yhat : ndarray, shape (N,)
+        The estimate's free run from the record's first max-lag outputs (those samples are the
+        record's, with no spread).
+    low, high : ndarray, shape (N,)
+        The band at :attr:`level`.
+    std : ndarray, shape (N,)
+        Standard deviation of ŷ(k) (delta method, or of the Monte Carlo runs).
+    level : float
+    method : str
+        ``"delta"`` or ``"monte-carlo"``.
+    n_samples : int
+        Monte Carlo draws (0 for the delta method).
+    diverged : float
+        Fraction of the Monte Carlo draws whose free run diverged on the record (left out of the
+        band, and said by an :class:`UncertaintyWarning`); 0 for the delta method.
+    model_name, record_name : str
+    units : tuple of str
+        The record's (input, output) units.
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    yhat: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    std: np.ndarray
+    level: float
+    method: str
+    n_samples: int
+    diverged: float
+    model_name: str = ""
+    record_name: str = ""
+    units: tuple[str, str] = ("", "")
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        N = np.shape(self.t)[0]
+        for f in ("t", "y", "yhat", "low", "high", "std"):
+            a = frozen(getattr(self, f))
+            if a.shape != (N,):
+                raise ValueError(f"{f} must have shape ({N},), got {a.shape}")
+            object.__setattr__(self, f, a)
+        object.__setattr__(self, "units", tuple(str(x) for x in self.units))
+
+    @property
+    def coverage(self) -> float:
+        """Fraction of the measured samples after the initial ones that lie inside the band.
+
+        Not a test of the band (it is a band of the model's output, not of a measurement): a
+        coverage far below :attr:`level` says the record's error is mostly the noise's or the
+        structure's, not the parameters' uncertainty."""
+        k = self.std > 0
+        if not k.any():
+            return float("nan")
+        return float(np.mean((self.y[k] >= self.low[k]) & (self.y[k] <= self.high[k])))
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per sample: measured y, the free run ŷ, the band and the std, indexed by time (s)."""
+        return pd.DataFrame({"y": self.y, "yhat": self.yhat, "low": self.low, "high": self.high, "std": self.std},
+                            index=pd.Index(self.t, name="t"))
+
+    def __repr__(self) -> str:
+        return (f"SimulationBand({self.model_name or 'model'} on {self.record_name or 'record'}: {self.t.size} samples, "
+                f"{self.method}, level={self.level:g}, max ±{np.max((self.high - self.low) / 2):.4g})")
+
+
+def simulation_band(
+    uncertainty: ParameterUncertainty,
+    record: object,
+    *,
+    method: str = "delta",
+    n_samples: int = 1000,
+    seed: int = 0,
+) -> SimulationBand:
+    """Confidence band of the model's free run over a record, from its parameters' covariance.
+
+    Parameters
+    ----------
+    uncertainty : ParameterUncertainty
+        From :func:`ls_uncertainty`, :func:`cls_uncertainty`, :func:`pe_uncertainty` or
+        :func:`se_uncertainty`; its model is run.
+    record : Record or Dataset
+        Inputs (by name, any units) and the first max-lag outputs the free run starts from,
+        shape (N,); a Dataset stands for its validation record.
+    method : {"delta", "monte-carlo"}
+        ``"delta"``: first order, ŷ(k) ± t·std with std² = gₖᵀ cov gₖ, gₖ = ∂ŷ(k)/∂θ by the forward
+        sensitivity recursion (streamed in blocks: memory does not grow with the record), t the
+        parameters' Student's quantile (:attr:`ParameterUncertainty.quantile`). ``"monte-carlo"``:
+        θ drawn from the multivariate t around θ̂ with scale ``cov`` and the same degrees of
+        freedom, each run freely, the band from the runs' quantiles at each sample (honest where
+        the free run is far from linear in θ, e.g. near a stability limit).
+    n_samples : int
+        Monte Carlo draws (at least 10; checked for either method).
+    seed : int
+        Seed of the Monte Carlo draws.
+
+    Returns
+    -------
+    SimulationBand
+        Draw it with :func:`graybox.plots.plot_simulation_band`.
+
+    Raises
+    ------
+    TypeError
+        ``uncertainty`` is not a :class:`ParameterUncertainty`; ``record`` is not a Record or Dataset.
+    ValueError
+        The estimate's own free run diverges on the record (there is nothing to put a band
+        around); fewer than two Monte Carlo runs stay bounded; a record not longer than the lags.
+
+    Warns
+    -----
+    UncertaintyWarning
+        Some Monte Carlo runs diverged: the band is of the bounded ones (their fraction is
+        :attr:`SimulationBand.diverged`).
+    """
+    if not isinstance(uncertainty, ParameterUncertainty):
+        raise TypeError(f"uncertainty must be a ParameterUncertainty (from ls_uncertainty, cls_uncertainty, "
+                        f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
+    rec = as_record(record, "valid", "record")
+    check_choice(method, "method", ("delta", "monte-carlo"))
+    n_samples = check_int(n_samples, "n_samples", low=10)
+    seed = check_seed(seed)
+    m = uncertainty.model
+    st, th = m.structure, m.theta
+    L = st.max_lag
+    rec.require_length(L)
+    yhat = m.simulate(rec, on_diverge="nan")
+    if not np.all(np.isfinite(yhat)):
+        k = int(np.flatnonzero(~np.isfinite(yhat))[0])
+        raise ValueError(f"simulation_band: the estimate's free run diverges on {rec.name} at sample {k}; there is no "
+                         "run to put a band around")
+    N = len(rec)
+    if method == "delta":
+        code = encode(st)
+        U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(rec, code.inputs), L)
+        var = np.zeros(N)
+        for k0, k1, _, S in free_run_sensitivity_blocks(code, th, U, rec.y[:L], L):
+            var[k0:k1] = uncertainty.contract(S)
+        std = np.sqrt(var)
+        h = uncertainty.quantile * std  # Student's t, as the parameters' intervals: σ² is estimated
+        return SimulationBand(rec.t, rec.y, yhat, yhat - h, yhat + h, std, uncertainty.level, "delta", 0, 0.0,
+                              m.name, rec.name, rec.units)
+    rng = np.random.default_rng(seed)
+    Y = simulate_many(st, theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof), rec)
+    ok = np.all(np.isfinite(Y), axis=1)
+    diverged = 1.0 - float(ok.mean())
+    if ok.sum() < 2:
+        raise ValueError(f"simulation_band: {n_samples - int(ok.sum())} of the {n_samples} Monte Carlo runs diverged on "
+                         f"{rec.name}: the parameters' uncertainty reaches unstable models along this record; use "
+                         "method='delta' for the first-order band, or a longer identification record")
+    if diverged > 0:
+        warn(f"simulation_band: {diverged:.1%} of the Monte Carlo runs diverged on {rec.name} and are left out of the "
+             "band, which is therefore narrower than the parameters' uncertainty (SimulationBand.diverged)",
+             UncertaintyWarning)
+    a = (1 - uncertainty.level) / 2
+    low, high = np.quantile(Y[ok], [a, 1 - a], axis=0)
+    return SimulationBand(rec.t, rec.y, yhat, low, high, Y[ok].std(axis=0), uncertainty.level, "monte-carlo",
+                          n_samples, diverged, m.name, rec.name, rec.units)
