@@ -15,8 +15,9 @@ from ._lazy import attach
 
 __version__ = graybox_version()
 
-# the simulators' names stay in graybox.datasets; only its loaders come up
+# the simulators' names stay in graybox.datasets; only its loaders and the input design come up
 __getattr__, __dir__, __all__ = attach(
     __name__, {pkg: [n for n in importlib.import_module(f"graybox.{pkg}").__all__
-                     if pkg != "datasets" or n.startswith("load_")] for pkg in PUBLIC_SUBPACKAGES},
+                     if pkg != "datasets" or n.startswith("load_") or n == "design_input"]
+               for pkg in PUBLIC_SUBPACKAGES},
     base="graybox", modules=("datasets", "reference"))  # gb.datasets, gb.reference: modules themselves

@@ -282,6 +282,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "static_curve_band": ((gb.ls_uncertainty(LS, REC), [0.5, 1.0]), {"n_samples": 20}),
     "plot_static_band": ((gb.static_curve_band(gb.ls_uncertainty(LS, REC), [0.5, 1.0]),), {}),
     "simulation_band": ((gb.ls_uncertainty(LS, REC), REC), {"n_samples": 20}),
+    "design_input": (("aprbs", 50), {"low": 0.0, "high": 1.0, "hold": (2, 5)}),
     "plot_simulation_band": ((gb.simulation_band(gb.ls_uncertainty(LS, REC), REC),), {}),
     "plot_residual_tests": ((gb.residual_tests(LS, REC),), {}),
     "DecisionRule": ((), {}),
@@ -413,6 +414,9 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
                                       "evaluate")},
     # gain bounds (output units per input unit), Σ*_y and a static curve's coefficients: any finite number
     ("GainBounds", "lower"): (2.5, -1),
+    # an input range, input units: any finite numbers with low < high (design_input(low=2.5) with high 1 is refused)
+    ("design_input", "low"): (-1,),
+    ("design_input", "high"): (2.5,),
     ("GainBounds", "upper"): (2.5, -1),
     ("CurveEquality", "sigma_y"): (2.5, -1),
     ("cls", "reference"): (2.5, -1),

@@ -1,0 +1,216 @@
+"""Input design for an identification experiment (MATLAB's ``idinput``, with the nonlinear case first).
+
+A nonlinear model learns only the amplitudes and the rates its record shows: an APRBS visits the
+whole operating range at random levels held for random times; a staircase up and down shows the
+static curve (and any hysteresis) level by level; a PRBS and a multisine excite a linear model's
+band at one operating point. Every design is a pure function of its arguments and its seed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core._validation import check_choice, check_int, check_real, check_seed
+
+__all__ = ["design_input"]
+
+KINDS = ("aprbs", "staircase", "prbs", "multisine")
+
+#: Feedback taps of maximal-length linear shift registers (a primitive polynomial per order): the
+#: register x(k) = XOR of x(k − t) over the taps has period 2^order − 1.
+_PRBS_TAPS = {2: (2, 1), 3: (3, 2), 4: (4, 3), 5: (5, 3), 6: (6, 5), 7: (7, 6), 8: (8, 6, 5, 4), 9: (9, 5),
+              10: (10, 7), 11: (11, 9), 12: (12, 11, 10, 4), 13: (13, 12, 11, 8), 14: (14, 13, 12, 2),
+              15: (15, 14), 16: (16, 15, 13, 4), 17: (17, 14), 18: (18, 11), 19: (19, 18, 17, 14), 20: (20, 17)}
+
+
+def _scale(t: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Fractions t in [0, 1] as levels in [lo, hi], each end exact (lo + (hi − lo)·1 can round past hi)."""
+    t = np.asarray(t, float)
+    return np.where(t <= 0.5, lo + (hi - lo) * t, hi - (hi - lo) * (1 - t))
+
+
+def _holds(kind: str, hold: object) -> tuple[int, int]:
+    """``hold`` as (shortest, longest) samples a level is held."""
+    if hold is None:
+        raise ValueError(f"design_input(kind={kind!r}) needs hold=: the samples a level is held (an int, or a pair "
+                         "(shortest, longest) for an APRBS); choose it from the plant's settling time")
+    if isinstance(hold, (tuple, list)):
+        if kind != "aprbs" or len(hold) != 2:
+            raise ValueError(f"hold must be an int{' or a pair (shortest, longest)' if kind == 'aprbs' else ''} for "
+                             f"kind={kind!r}, got {hold!r}")
+        lo = check_int(hold[0], "hold[0] (shortest)", low=1)
+        return lo, check_int(hold[1], "hold[1] (longest)", low=lo)
+    h = check_int(hold, "hold", low=1)
+    return h, h
+
+
+def _prbs(n: int, clock: int, order: int, shift: int) -> np.ndarray:
+    """One maximal-length sequence of 0/1, each bit held ``clock`` samples, started ``shift`` bits in."""
+    period = 2**order - 1
+    taps = _PRBS_TAPS[order]
+    # s(k) = XOR of s(k − t) over the taps, from a start of ones; min(taps) bits at a time, vectorised
+    s = np.ones(period + order, dtype=np.int8)
+    step = min(taps)
+    for k in range(order, period + order, step):
+        j = min(step, period + order - k)
+        s[k:k + j] = np.bitwise_xor.reduce([s[k - t:k - t + j] for t in taps])
+    bits = s[:period]
+    bits = np.roll(bits, -shift)
+    reps = -(-n // (period * clock))
+    return np.tile(np.repeat(bits, clock), reps)[:n]
+
+
+def design_input(
+    kind: str,
+    n_samples: int,
+    *,
+    low: float,
+    high: float,
+    hold: int | tuple[int, int] | None = None,
+    n_inputs: int = 1,
+    order: int | None = None,
+    frequencies: tuple[float, float] | None = None,
+    seed: int = 0,
+) -> np.ndarray:
+    """An input signal for an identification experiment.
+
+    Parameters
+    ----------
+    kind : {"aprbs", "staircase", "prbs", "multisine"}
+        ``"aprbs"``: amplitude-modulated pseudo-random binary signal, the usual choice for a
+        nonlinear model: each hold lasts a random number of samples in ``hold`` and takes a level
+        from an even spread over [low, high] in random order, so the record visits the whole range
+        at every rate. ``"staircase"``: levels evenly spaced from ``low`` up to ``high`` and back
+        down, each held ``hold`` samples, as many levels as the record has room for: the static
+        curve level by level, and a hysteresis, if any, as a gap between the way up and the way
+        down (several inputs: a serpentine over a grid of levels, one input moving one level at a
+        time, there and back: the static surface). ``"prbs"``: a maximal-length binary sequence
+        (levels ``low`` and ``high``) whose bits last ``hold`` samples: a flat spectrum for a linear
+        model at one operating point, periodic with period (2^order − 1)·hold. ``"multisine"``: one
+        period of a sum of sines at every frequency line in ``frequencies``, with Schroeder's
+        phases (a low crest factor), scaled to span [low, high] exactly.
+    n_samples : int
+        Samples of the signal (its length N).
+    low, high : float
+        The input range, input units (no default: they are the plant's).
+    hold : int or (int, int)
+        Samples a level is held (a bit of a PRBS; for an APRBS a pair (shortest, longest)):
+        choose it from the plant's settling time (a staircase's or an APRBS's longest hold about
+        the settling time, a PRBS's bit near the fastest time constant). Refused for a multisine.
+    n_inputs : int
+        Number of input columns: each APRBS column is drawn from its own stream, a PRBS column is
+        the sequence shifted by i/n_inputs of its period, and a multisine column takes its own
+        share of the lines (at random), so those columns are nearly uncorrelated; a staircase's
+        columns walk a grid (above).
+    order : int, optional
+        PRBS register length, 2–20 (default: the shortest whose period covers ``n_samples``).
+        Refused for the other kinds.
+    frequencies : (float, float)
+        Multisine band as fractions of the Nyquist frequency, 0 < f_low < f_high <= 1 (required
+        for a multisine, refused for the other kinds).
+    seed : int
+        Seed of the APRBS draws and of the multisine's column assignment (the other kinds are
+        deterministic).
+
+    Returns
+    -------
+    ndarray, shape (N,) or (N, n_inputs)
+        The input, in the units of ``low`` and ``high``.
+
+    Raises
+    ------
+    ValueError
+        ``low >= high``; a hold longer than the record; an option the kind does not use; a band
+        with no frequency line; an unknown kind.
+    TypeError
+        A count that is not an integer, a level that is not a number.
+    """
+    kind = check_choice(kind, "kind", KINDS)
+    n = check_int(n_samples, "n_samples", low=2)
+    lo = check_real(low, "low")
+    hi = check_real(high, "high")
+    if not lo < hi:
+        raise ValueError(f"design_input needs low < high, got low={low!r}, high={high!r}")
+    m = check_int(n_inputs, "n_inputs", low=1)
+    seed = check_seed(seed)
+    if order is not None and kind != "prbs":
+        raise ValueError(f"order is the PRBS register length; kind={kind!r} does not use it")
+    if frequencies is not None and kind != "multisine":
+        raise ValueError(f"frequencies is the multisine's band; kind={kind!r} does not use it")
+    if kind == "multisine":
+        if hold is not None:
+            raise ValueError("hold does not apply to a multisine (it holds no level); give frequencies=(f_low, f_high)")
+        cols = _multisine(n, m, frequencies, seed)
+        cols = (cols - cols.min(axis=0)) / (cols.max(axis=0) - cols.min(axis=0))
+        out = _scale(cols, lo, hi)
+        return out[:, 0] if m == 1 else out
+    h0, h1 = _holds(kind, hold)
+    if h1 > n:
+        raise ValueError(f"hold of {h1} samples is longer than the record ({n} samples)")
+    if kind == "prbs":
+        if order is not None:
+            order = check_int(order, "order", low=min(_PRBS_TAPS), high=max(_PRBS_TAPS))
+        else:  # the shortest register whose period covers the record
+            order = next((o for o in _PRBS_TAPS if (2**o - 1) * h0 >= n), max(_PRBS_TAPS))
+        period = 2**order - 1
+        cols = np.column_stack([_prbs(n, h0, order, (i * period) // m) for i in range(m)])
+        out = _scale(cols, lo, hi)
+    elif kind == "staircase":
+        out = _staircase(-(-n // h0), m)
+        out = np.repeat(_scale(out, lo, hi), h0, axis=0)[:n]
+    else:  # aprbs
+        cols = []
+        for i in range(m):
+            rng = np.random.default_rng([seed, i])
+            holds = []
+            while sum(holds) < n:
+                holds.append(int(rng.integers(h0, h1 + 1)))
+            # an even spread of levels over the range, visited in random order: every part of the range is met
+            levels = _scale(rng.permutation(len(holds)) / max(len(holds) - 1, 1), lo, hi)
+            cols.append(np.repeat(levels, holds)[:n])
+        out = np.column_stack(cols)
+    return out[:, 0] if m == 1 else out
+
+
+def _staircase(k: int, m: int) -> np.ndarray:
+    """``k`` holds of a staircase over the unit cube [0, 1]^m, shape (k, m): a serpentine over an even grid
+    of levels (each move changes one input by one level) and back along the same path."""
+    # levels per input: the finest grid whose way there and back fits in the record's holds
+    L = 2
+    while 2 * (L + 1) ** m - 2 <= k:
+        L += 1
+    j = np.arange(L**m)
+    digits = np.column_stack([(j // L ** (m - 1 - i)) % L for i in range(m)])  # column 0 the slowest
+    for i in range(1, m):  # serpentine: a digit runs backwards while the slower digits' sum is odd
+        odd = digits[:, :i].sum(axis=1) % 2 == 1
+        digits[odd, i] = L - 1 - digits[odd, i]
+    path = digits / (L - 1)
+    there_and_back = np.vstack([path, path[-2:0:-1]]) if len(path) > 2 else path
+    return np.resize(there_and_back, (k, m))
+
+
+def _multisine(n: int, m: int, frequencies: object, seed: int) -> np.ndarray:
+    """Columns of one period of n samples of Schroeder-phased multisines on interleaved lines, shape (n, m)."""
+    if frequencies is None:
+        raise ValueError("design_input(kind='multisine') needs frequencies=(f_low, f_high): the band as fractions of "
+                         "the Nyquist frequency")
+    if not isinstance(frequencies, (tuple, list)) or len(frequencies) != 2:
+        raise ValueError(f"frequencies must be a pair (f_low, f_high), got {frequencies!r}")
+    f0 = check_real(frequencies[0], "frequencies[0] (f_low)", low=0, low_open=True, high=1)
+    f1 = check_real(frequencies[1], "frequencies[1] (f_high)", low=f0, low_open=True, high=1)
+    # line j has frequency j/n cycles a sample, j/(n/2) of Nyquist
+    lines = np.arange(1, n // 2 + 1)
+    lines = lines[(lines * 2 / n >= f0) & (lines * 2 / n <= f1)]
+    if lines.size < m:
+        raise ValueError(f"the band {f0:g}–{f1:g} of Nyquist holds {lines.size} frequency line(s) of a {n}-sample "
+                         f"period, fewer than the {m} input(s): widen it or lengthen the record")
+    rng = np.random.default_rng([seed, 99])
+    owner = np.resize(np.arange(m), lines.size)[rng.permutation(lines.size)] if m > 1 else np.zeros(lines.size, int)
+    k = np.arange(n)[:, None]
+    cols = []
+    for i in range(m):
+        ln = lines[owner == i]
+        K = np.arange(1, ln.size + 1)
+        phase = -np.pi * K * (K - 1) / ln.size  # Schroeder: a flat spectrum with a low crest factor
+        cols.append(np.cos(2 * np.pi * k * ln[None, :] / n + phase[None, :]).sum(axis=1))
+    return np.column_stack(cols)
