@@ -14,7 +14,8 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 __all__ = ["column_scales", "scaled_lstsq", "thread_pools", "one_blas_thread", "check_rows", "free_directions",
-           "check_identified", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale", "spread_scale"]
+           "check_identified", "rank_tolerance", "HELD_OUTPUT", "CONSTANT_RTOL", "output_spread", "output_scale",
+           "spread_scale"]
 
 _CONTROLLER: list[ThreadpoolController] = []
 
@@ -115,6 +116,18 @@ def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np
     return x / s
 
 
+def rank_tolerance(largest: float, rows: int, n: int = 0) -> float:
+    """The one rank rule's threshold: a singular value at most this is zero, units-free.
+
+    ``largest`` is the largest singular value of a regression (columns at unit RMS) standing for ``rows``
+    regression rows of ``n`` parameters; the threshold is eps · max(rows, n) · largest, as
+    ``numpy.linalg.lstsq`` (hence :func:`scaled_lstsq`) and :func:`free_directions` judge rank. The QP's
+    basis and the covariances judge singularity with it too, so that what one path calls identified no
+    other calls singular (a fixed ratio such as 1e-12 disagreed with it at every N but ~4500).
+    """
+    return float(largest) * np.finfo(float).eps * max(int(rows), int(n))
+
+
 def _mean_square_stack(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
     """The blocks stacked, each as a mean square (A / √rows)."""
     return np.vstack([np.asarray(A, float) / np.sqrt(max(int(m), 1)) for A, m in blocks])
@@ -145,8 +158,7 @@ def free_directions(blocks: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
     # SVD with full_matrices would form its N × N left factor, N the records' samples (290 MB at N = 6000)
     R = np.linalg.qr(A, mode="r") if A.shape[0] > n else A
     _, sv, Vt = np.linalg.svd(R, full_matrices=True)
-    rows = max(sum(int(m) for _, m in blocks), n)
-    tol = (sv[0] if sv.size else 0.0) * np.finfo(float).eps * rows
+    tol = rank_tolerance(sv[0] if sv.size else 0.0, sum(int(m) for _, m in blocks), n)
     rank = int(np.sum(sv > tol))
     return Vt[rank:].T
 

@@ -60,7 +60,7 @@ from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
 from ..models._coerce import as_model, records_of, static_points
 from ..models._model import Model
-from ..core._least_squares import check_rows, one_blas_thread
+from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
@@ -254,7 +254,7 @@ def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
     return Vt[r:].T, r
 
 
-def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
+def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str, rows: int) -> tuple[np.ndarray, np.ndarray]:
     """Z (ZᵀHZ)⁻¹ ZᵀMZ (ZᵀHZ)⁻¹ Zᵀ with H = AᵀA and M = GᵀG, from the factors (never forming H), and
     a square-root factor F of it (k × n, the same matrix as FᵀF).
 
@@ -262,7 +262,9 @@ def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> tuple[n
     and accurate to about eps·cond(AZ) where forming H would lose eps·cond(AZ)² (an SE Jacobian of
     a slow plant can have cond ≈ 1e9). F = R_G S⁻²(ZV)ᵀ with R_G the triangular factor of GZV keeps
     that accuracy for a contraction ‖F g‖, which the matrix itself has only relative to its largest
-    entry. ValueError when AZ is rank deficient (not identifiable).
+    entry. ValueError when AZ is rank deficient (not identifiable), judged by the one rank rule
+    (:func:`~graybox.core._least_squares.rank_tolerance`, A standing for ``rows`` regression rows): what the
+    estimators call identified has a covariance here.
     """
     n = A.shape[1]
     if Z.shape[1] == 0:
@@ -273,7 +275,7 @@ def _sandwich(Z: np.ndarray, A: np.ndarray, G: np.ndarray, what: str) -> tuple[n
     # one BLAS thread: a threaded SVD of a thin matrix mostly waits for threads on a busy machine (BENCHMARKS.md)
     with one_blas_thread():
         _, S, Vt = np.linalg.svd(AZ, full_matrices=False)
-        if S.size < Z.shape[1] or S[0] == 0 or S[-1] <= 1e-12 * S[0]:
+        if S.size < Z.shape[1] or S[0] == 0 or S[-1] <= rank_tolerance(S[0], rows, S.size):
             raise ValueError(f"{what}: the parameters are not identifiable from these data and constraints "
                              "(singular information matrix), so they have no finite covariance")
         ZV = Z @ Vt.T
@@ -288,7 +290,7 @@ def _to_theta(cov_z: tuple[np.ndarray, np.ndarray], s: np.ndarray) -> tuple[np.n
 
 
 def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float, size: float, what: str,
-                      hint: str) -> None:
+                      hint: str, rows: int) -> None:
     """θ̂ must be the optimum of the problem whose covariance is asked for.
 
     The objective is ‖r‖² + rest2 with residuals r = A z − c (A in the scaled coordinates z, rest2
@@ -296,12 +298,13 @@ def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float,
     basis of AZ's columns, is the square root of what a step could still remove from the objective:
     it must be at most 1e-6 of the whole residual norm (a units-free angle, unchanged by the output's
     offset or scale, which a gradient measured against |Aᵀy| was not), or at the round-off level of
-    the fit, 1e-11 of ``size`` (the fitted values' and targets' norms).
+    the fit, 1e-11 of ``size`` (the fitted values' and targets' norms). AZ's range is taken by the one rank
+    rule (A standing for ``rows`` regression rows).
     """
     if Z.shape[1] == 0:
         return  # the constraints fix θ: nothing left to optimise
     U, S, _ = np.linalg.svd(A @ Z, full_matrices=False)
-    g = float(np.linalg.norm(U[:, S > 1e-12 * S[0]].T @ r)) if S.size and S[0] > 0 else 0.0
+    g = float(np.linalg.norm(U[:, S > rank_tolerance(S[0], rows, S.size)].T @ r)) if S.size and S[0] > 0 else 0.0
     whole = float(np.sqrt(r @ r + rest2))
     if not np.isfinite(g) or g > 1e-6 * whole + 1e-11 * size:
         raise ValueError(f"{what}: the model's θ is not the optimum of this problem (a fraction "
@@ -428,11 +431,11 @@ def ls_uncertainty(
     dof = N - n - ne
     sigma2 = float(res @ res) / dof
     if ne == 0:
-        cov, F = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what), s)
+        cov, F = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what, N), s)
         _check_stationary(np.eye(n), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
                           "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty); an ELS "
                           "estimate needs its MA part, which select_graybox's models leave out (a free run sets the "
-                          "noise to zero): refit it with graybox.els(model.structure, data)")
+                          "noise to zero): refit it with graybox.els(model.structure, data)", N)
     else:
         cov, F = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
@@ -477,12 +480,12 @@ def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.nd
 
 def _pseudo_linear_cov(A: np.ndarray, G: np.ndarray, sigma2: float, what: str) -> tuple[np.ndarray, np.ndarray]:
     """σ² (AᵀG)⁻¹ AᵀA (GᵀA)⁻¹ = σ² K Kᵀ with K = (QᵀG)⁻¹ and A = QR (σ²(AᵀA)⁻¹ when G = A), and its
-    factor σKᵀ."""
+    factor σKᵀ; singular by the one rank rule (A's rows the regression rows)."""
     with one_blas_thread():
         Q, _ = np.linalg.qr(A)
         M = Q.T @ G
         S = np.linalg.svd(M, compute_uv=False)
-        if not np.all(np.isfinite(M)) or S[0] == 0 or S[-1] <= 1e-12 * S[0]:
+        if not np.all(np.isfinite(M)) or S[0] == 0 or S[-1] <= rank_tolerance(S[0], A.shape[0], S.size):
             raise ValueError(f"{what}: the parameters are not identifiable from these data (singular information "
                              "matrix), so they have no finite covariance")
         K = np.linalg.inv(M)
@@ -550,9 +553,10 @@ def cls_uncertainty(
     dof = d.N - (n - r)
     rss = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss)
     sigma2 = rss / dof
-    cov, F = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty"), d.s)
+    cov, F = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty", d.N), d.s)
     _check_stationary(Z, d.R1, d.R1 @ z - d.c1, d.rss, _size(d.R1 @ z, d.c1), "cls_uncertainty",
-                      "pass the CLS estimate with the data, static information and constraints it was estimated with")
+                      "pass the CLS estimate with the data, static information and constraints it was estimated with",
+                      d.N)
     return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)), cov_factor=F)
 
 
@@ -631,14 +635,14 @@ def pe_uncertainty(
     r2 = np.concatenate([np.sqrt(w1) * (d.R1 @ z - d.c1), np.sqrt(w2) * sres])
     _check_stationary(Z, A2, r2, w1 * d.rss, _size(A2 @ z, np.sqrt(w1) * d.c1, np.sqrt(w2) * pts.ybar),
                       "pe_uncertainty", f"pass the member's own λ1 (got {lam:g}) and the data, static "
-                      "points and constraints of its estimate")
+                      "points and constraints of its estimate", d.N + M)
     dof_ls = d.N - n
     sigma2 = d.rss / dof_ls  # the data's noise, from least squares on the same data
     ss2 = (check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2 if static_sigma is not None
            else float(np.mean((sres / g) ** 2)))
     B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
-    cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty"), d.s)
+    cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty", d.N + M), d.s)
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
                                 cov_factor=F)
 
@@ -729,7 +733,7 @@ def se_uncertainty(
     if rel > 1e-3:
         warn(f"se_uncertainty: θ is not a stationary point of the SE objective at λ1 = {lam:g} (relative gradient "
              f"{rel:.1e}); the intervals describe the curvature at this θ, not at an optimum", UncertaintyWarning)
-    cov, F = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty"), problem.scale)
+    cov, F = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty", J.shape[0]), problem.scale)
     return ParameterUncertainty(m, cov, level, nd - n, sigma2, f"SE λ1={lam:.4g}", np.zeros((0, n)),
                                 np.zeros((0, 0)), ss2, cov_factor=F)
 

@@ -55,7 +55,8 @@ from ..static._curves import StaticCurve
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
-from ..core._least_squares import REMEDIES, check_identified, check_rows, column_scales, output_scale, spread_scale
+from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions, output_scale,
+                                   rank_tolerance, spread_scale)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -482,23 +483,26 @@ class _Basis:
     l2: np.ndarray | None  # half the static term's
 
 
-def _full_rank(R: np.ndarray) -> bool:
-    """Whether the triangular factor ``R`` is of full rank, as the QP's basis judges it."""
-    diag = np.abs(np.diag(R))
-    return bool(diag.min() > 1e-12 * diag.max())
+def _full_rank(blocks: Sequence[tuple[np.ndarray, int]]) -> bool:
+    """Whether the stacked factors (each with the regression rows it stands for) are of full rank, judged by
+    the one identifiability rule (:func:`~graybox.core._least_squares.free_directions`), so that the basis
+    takes the triangular path exactly where :func:`identified_by` called θ identified."""
+    return not free_directions(blocks).shape[1]
 
 
-def _basis(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, eq: _Rows | None = None) -> _Basis:
+def _basis(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, eq: _Rows | None = None,
+           n_static: int = 0) -> _Basis:
     """The QP's coordinates (:class:`_Basis`). ``eq``: the equality rows in z (T = I), used where Ψ is rank
-    deficient and the static rows do not complete it, to start the step where they hold."""
+    deficient and the static rows do not complete it, to start the step where they hold; ``n_static``:
+    the static points the static rows stand for (N_SF)."""
     n = d.s.size
-    full = _full_rank(d.R1)
+    full = _full_rank([(d.R1, d.N)])
     if full and static is None:
         return _Basis(_tri_inv(d.R1), np.ones(n), None, scipy.linalg.solve_triangular(d.R1, d.c1), np.zeros(n), None)
     if static is not None:
         R2, c2 = static
         Qs, Rs = np.linalg.qr(np.vstack([d.R1, R2]))
-        if full or _full_rank(Rs):
+        if full or _full_rank([(d.R1, d.N), (R2, n_static)]):
             # z0: the least-squares estimate; where Ψ alone leaves θ free (an input held) and the static rows
             # complete it, the least squares of both terms, so that the step is of the data's size there too
             z0 = (scipy.linalg.solve_triangular(d.R1, d.c1) if full
@@ -552,11 +556,11 @@ class _QP:
     """
 
     def __init__(self, d: _Data, static: tuple[np.ndarray, np.ndarray] | None, cons: list[StaticConstraint],
-                 ctx: StaticContext, solver: str, options: Mapping | None):
+                 ctx: StaticContext, solver: str, options: Mapping | None, n_static: int = 0):
         import cvxpy as cp
 
         n = d.s.size
-        self.basis = b = _basis(d, static, None if _full_rank(d.R1) else _rows(cons, ctx, d.s))
+        self.basis = b = _basis(d, static, None if _full_rank([(d.R1, d.N)]) else _rows(cons, ctx, d.s), n_static)
         z0 = b.z0  # T only ever carries the step, whose size is the output's spread (see _Basis)
         rows = _rows(cons, ctx, d.s, b.T, at=z0)
         # y is in output units (the linear terms scale with the output, the objective with its
@@ -630,8 +634,9 @@ class _QP:
 # closed forms
 # --------------------------------------------------------------------------------------------
 def _closed_form(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, rows: _Rows,
-                 w1: np.ndarray, w2: np.ndarray) -> np.ndarray:
-    """argmin w1‖R1 z − c1‖² + w2‖R2 z − c2‖² s.t. V z = g, for K weight pairs at once.
+                 w1: np.ndarray, w2: np.ndarray, n_static: int = 0) -> np.ndarray:
+    """argmin w1‖R1 z − c1‖² + w2‖R2 z − c2‖² s.t. V z = g, for K weight pairs at once (``n_static``: the
+    static points R2 stands for).
 
     The KKT conditions are solved by the null-space method: z = z_p + N w with V z_p = g and
     V N = 0, then an unconstrained least squares in w. Without constraints this *is* eq. (11),
@@ -659,8 +664,9 @@ def _closed_form(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, rows: _
     B = np.concatenate([np.sqrt(w)[:, None, None] * (A @ Nb)[None] for A, _, w in blocks], axis=1)
     rhs = np.concatenate([np.sqrt(w)[:, None] * (c - A @ z_p)[None] for A, c, w in blocks], axis=1)
     Qb, Rb = np.linalg.qr(B)
-    diag = np.abs(np.diagonal(Rb, axis1=1, axis2=2))
-    bad = diag.min(axis=1) <= 1e-13 * diag.max(axis=1)
+    # the one rank rule (core._least_squares.rank_tolerance) on the weighted stack actually solved
+    sv = np.linalg.svd(Rb, compute_uv=False)
+    bad = sv[:, -1] <= rank_tolerance(1.0, d.N + n_static, n) * sv[:, 0]
     if bad.any():
         raise ValueError(
             f"the closed form is singular for {int(bad.sum())} weight pair(s) (first w1 = {w1[bad][0]:g}): "
@@ -1022,9 +1028,9 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
     w2 = (1.0 - lam) / M if weights == "mse" else 1.0 - lam
     Z = np.full((lam.size, d.s.size), np.nan)
     if ok.any() and solver == "closed":
-        Z[ok] = _closed_form(d, stat, rows, w1[ok], w2[ok])
+        Z[ok] = _closed_form(d, stat, rows, w1[ok], w2[ok], M)
     elif ok.any():
-        qp = _QP(d, stat, cons, ctx, solver, solver_options)
+        qp = _QP(d, stat, cons, ctx, solver, solver_options, M)
         # sweep from λ1 = 1 (least squares) towards the static end, each solve warm-started from
         # its neighbour; results are returned in the caller's order
         for i in np.argsort(-lam, kind="stable"):
