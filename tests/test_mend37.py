@@ -58,3 +58,76 @@ def test_one_rank_rule_between_the_two_former_tolerances(N, eps, identified):
             gb.cls(NEAR, rec)
         with pytest.raises(ValueError, match="not identifiable"):
             gb.ls_uncertainty(gb.Model(NEAR, [0.0, 0.0, 2.0]), rec)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# 2. wrong types in a grid spec
+# ----------------------------------------------------------------------------------------------------------
+GOOD_SPEC = """name = "g"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "s1"
+terms = ["1", "y(k-1)", "u(k-1)"]
+[[variants]]
+name = "LS"
+estimator = "ls"
+"""
+
+
+@pytest.mark.parametrize("old, new", [
+    ('name = "g"', "name = 3"),                                    # the grid's name
+    ('name = "s1"', "name = 1.5"),                                 # a structure's name
+    ('name = "LS"', "name = true"),                                # a variant's name
+    ('estimator = "ls"', 'estimator = "ls"\noptions = 3'),          # options not a table
+    ('terms = ["1", "y(k-1)", "u(k-1)"]', 'terms = "u(k-1)"'),      # terms not a list
+    ('terms = ["1", "y(k-1)", "u(k-1)"]', 'candidates = {ny = 1, nu = 1, constant = "yes"}\nn_terms = 2'),
+    ('estimator = "ls"', 'estimator = "pe"\ndecision = {rule = "dsf", band = "0.03"}'),  # band a string
+    ("[[structures]]", "seeds = 1.5\n[[structures]]"),
+])
+def test_a_wrong_type_in_a_spec_is_a_type_error_and_still_a_spec_error(old, new, tmp_path):
+    # A wrong type in a grid spec (a number for a name, a string for a table or a flag) raised SpecError, a
+    # ValueError: graybox raises TypeError for a wrong type. It is now SpecTypeError, a TypeError and a SpecError
+    # (the command line's `except SpecError` still prints it in one line, with its key and line).
+    text = GOOD_SPEC.replace(old, new, 1) if old != "[[structures]]" else new.split("\n")[0] + "\n" + GOOD_SPEC
+    assert text != GOOD_SPEC
+    with pytest.raises(TypeError) as info:
+        gb.experiments.Grid.from_toml_text(text, source="spec.toml")
+    assert isinstance(info.value, gb.experiments.SpecError)
+    assert "spec.toml, line" in str(info.value)
+    spec = tmp_path / "spec.toml"
+    spec.write_text(text)
+    from graybox._cli import main
+
+    import contextlib
+    import io
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        code = main(["grid", "run", str(spec), "--store", str(tmp_path / "s.sqlite")])
+    assert code != 0
+    lines = err.getvalue().strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("graybox grid run: ")
+    assert not (tmp_path / "s.sqlite").exists()
+
+
+@pytest.mark.parametrize("make", [
+    lambda: gb.experiments.Variant(name=7, estimator="ls"),
+    lambda: gb.experiments.StructureSpec(name=None, terms=["u(k-1)"]),
+    lambda: gb.experiments.DataSpec(name=["a"], bundled="pumping"),
+])
+def test_a_wrong_type_in_a_python_spec_is_a_type_error(make):
+    with pytest.raises(TypeError, match="name"):
+        make()
+
+
+@pytest.mark.parametrize("make", [
+    lambda: gb.experiments.Variant(name=" ", estimator="ls"),
+    lambda: gb.experiments.Variant(name="v", estimator="nope"),
+    lambda: gb.experiments.StructureSpec(name="s", terms=[]),
+])
+def test_a_wrong_value_in_a_spec_stays_a_value_error(make):
+    with pytest.raises(ValueError) as info:
+        make()
+    assert not isinstance(info.value, TypeError) and isinstance(info.value, gb.experiments.SpecError)

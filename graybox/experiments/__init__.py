@@ -30,6 +30,6 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "_select": ("BLACK_BOX_ESTIMATORS", "GRAY_BOX_ESTIMATORS", "GrayboxSelection", "SelectionWarning", "select_graybox"),
     "_selection_plot": ("plot_selection",),
     "_spec": ("BUNDLED", "CONSTRAINT_TYPES", "DECISION_RULES", "ESTIMATORS", "Cell", "DataSpec", "DecisionRule", "Grid",
-              "SpecError", "StructureSpec", "Variant"),
+              "SpecError", "SpecTypeError", "StructureSpec", "Variant"),
     "_store": ("StoreError", "compare_results", "load_results", "store_specs"),
 })

@@ -24,12 +24,14 @@ from .. import _api as gb
 
 from ..core._terms import default_input_names
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
-from ..core._validation import check_choice, check_fields, check_int, check_lambdas, check_path, check_real
+from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_path,
+                                check_real, check_str)
 from ..core._reprs import short_repr
 from ..static._constraints import check_min_denominator
 
 __all__ = [
     "SpecError",
+    "SpecTypeError",
     "DataSpec",
     "StructureSpec",
     "Variant",
@@ -100,7 +102,16 @@ class SpecError(ValueError):
 
     def within(self, *prefix: str | int) -> "SpecError":
         """The same error with ``prefix`` put in front of its path."""
-        return SpecError(self.problem, tuple(prefix) + self.path, self.source, self.line)
+        return type(self)(self.problem, tuple(prefix) + self.path, self.source, self.line)
+
+
+class SpecTypeError(SpecError, TypeError):
+    """A value of the wrong *type* in a grid specification (a number for a name, a string for a table …).
+
+    A ``TypeError``, as graybox's argument checks raise for a wrong type (:mod:`graybox.core._validation`),
+    and a :class:`SpecError`, so that ``except SpecError`` (the command line's one-line message) still
+    catches every problem of a spec, with its key and line.
+    """
 
 
 def _dotted(path: Sequence[str | int]) -> str:
@@ -111,18 +122,21 @@ def _dotted(path: Sequence[str | int]) -> str:
 
 
 def _wrap(fn, path: Sequence[str | int], *args, **kw):
-    """Call a graybox validator; turn its ValueError into a SpecError at ``path``."""
+    """Call a graybox validator; turn its ValueError into a SpecError, its TypeError into a SpecTypeError, at
+    ``path``."""
     try:
         return fn(*args, **kw)
     except SpecError:
         raise
-    except (ValueError, TypeError) as exc:
+    except TypeError as exc:
+        raise SpecTypeError(str(exc), path) from None
+    except ValueError as exc:
         raise SpecError(str(exc), path) from None
 
 
 def _check_keys(d: Mapping, allowed: Iterable[str], what: str, path: Sequence[str | int] = ()) -> None:
     if not isinstance(d, Mapping):
-        raise SpecError(f"{what} must be a table (key = value pairs), got {type(d).__name__}", path)
+        raise SpecTypeError(f"{what} must be a table (key = value pairs), got {type(d).__name__}", path)
     allowed = tuple(allowed)
     for k in d:
         if k not in allowed:
@@ -130,7 +144,8 @@ def _check_keys(d: Mapping, allowed: Iterable[str], what: str, path: Sequence[st
 
 
 def _name(v: object, path: Sequence[str | int]) -> str:
-    if not isinstance(v, str) or not v.strip():
+    _wrap(check_str, tuple(path) + ("name",), v, "name")
+    if not v.strip():
         raise SpecError(f"name must be a non-empty string, got {v!r}", tuple(path) + ("name",))
     return v
 
@@ -193,11 +208,16 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
             raise SpecError(f"{what} needs {k!r}", path + (k,))
         v = d[k]
         if k == "u" and isinstance(v, Sequence) and not isinstance(v, str):  # several input columns
-            if not v or not all(isinstance(c, str) and c for c in v):
+            for i, c in enumerate(v):
+                _wrap(check_str, path + (k, i), c, f"{k}[{i}]")
+            if not v or not all(v):
                 raise SpecError(f"u must be a column name or a non-empty list of column names, got {v!r}", path + (k,))
             out[k] = list(v)
             continue
-        if not isinstance(v, str) or not v:
+        if not isinstance(v, str):  # a wrong type (the same message as its empty value's)
+            raise SpecTypeError(f"{k} must be a non-empty string{' or a list of them' if k == 'u' else ''}, got {v!r}",
+                                path + (k,))
+        if not v:
             raise SpecError(f"{k} must be a non-empty string{' or a list of them' if k == 'u' else ''}, got {v!r}",
                             path + (k,))
         out[k] = v
@@ -208,8 +228,8 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
                                    low_open=True)
     if "time" in keys:
         t = d.get("time")
-        if t is not None and not isinstance(t, str):
-            raise SpecError(f"time must be a column name, got {t!r}", path + ("time",))
+        if t is not None:
+            _wrap(check_str, path + ("time",), t, "time (a column name)")
         Ts = d.get("Ts")
         if Ts is not None:
             Ts = _wrap(check_real, path + ("Ts",), Ts, "Ts", low=0, low_open=True)
@@ -267,7 +287,7 @@ class DataSpec:
         if self.bundled is not None:
             _wrap(check_choice, ("bundled",), self.bundled, "bundled", tuple(BUNDLED))
         if self.dataset is not None and not isinstance(self.dataset, gb.Dataset):
-            raise SpecError(f"dataset must be a graybox Dataset, got {type(self.dataset).__name__}", ("dataset",))
+            raise SpecTypeError(f"dataset must be a graybox Dataset, got {type(self.dataset).__name__}", ("dataset",))
         if files:
             for k in ("ident", "valid", "static"):
                 if getattr(self, k) is None:
@@ -423,7 +443,10 @@ class StructureSpec:
             if rule:
                 raise SpecError(f"a given structure (terms) takes no selection rule; remove {', '.join(rule)}",
                                 (next(iter(rule)),))
-            if isinstance(self.terms, str) or not isinstance(self.terms, Sequence) or not self.terms:
+            if isinstance(self.terms, str) or not isinstance(self.terms, Sequence):
+                raise SpecTypeError("terms must be a non-empty list of term strings such as \"u(k-1)y(k-2)\"",
+                                    ("terms",))
+            if not self.terms:
                 raise SpecError("terms must be a non-empty list of term strings such as \"u(k-1)y(k-2)\"", ("terms",))
             st = _wrap(gb.parse_structure, ("terms",), list(self.terms))
             if len(st.noise):
@@ -450,10 +473,9 @@ class StructureSpec:
         if cand["ne"]:
             raise SpecError("noise candidates (ne > 0) are not selected by FROLS; give ELS its MA order in the "
                             "variant's options (noise = 2)", ("candidates", "ne"))
-        if not isinstance(cand["constant"], bool):
-            raise SpecError(f"constant must be true or false, got {cand['constant']!r}", ("candidates", "constant"))
+        _wrap(check_bool, ("candidates", "constant"), cand["constant"], "constant")
         if isinstance(self.include, str) or not isinstance(self.include, Sequence):
-            raise SpecError("include must be a list of term strings", ("include",))
+            raise SpecTypeError("include must be a list of term strings", ("include",))
         inc = _wrap(gb.parse_structure, ("include",), list(self.include)) if self.include else gb.Structure(())
         kw: dict[str, Any] = {}
         if not isinstance(cand["nu"], Mapping):
@@ -584,7 +606,7 @@ def _gain_bound(v: object, path: tuple, name: str) -> float | list[float | None]
 def canonical_constraint(c: object, path: tuple = ()) -> dict:
     """The canonical dict of one constraint given as a TOML-style table ``{"type": …, …}``."""
     if not isinstance(c, Mapping):
-        raise SpecError(f"a constraint is a table such as {{type = \"band\", b = 0.175}}, got {c!r}", path)
+        raise SpecTypeError(f"a constraint is a table such as {{type = \"band\", b = 0.175}}, got {c!r}", path)
     kind = c.get("type")
     if kind not in _CONSTRAINT_TYPES_KEYS:
         raise SpecError(f"unknown constraint type {kind!r}; known: {', '.join(CONSTRAINT_TYPES)}", path + ("type",))
@@ -633,7 +655,9 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
         _wrap(build_constraint, path, out)  # the object's own checks (e.g. lower <= upper)
         return out
     bounds = c.get("bounds")
-    if not isinstance(bounds, Mapping) or not bounds:
+    if not isinstance(bounds, Mapping):
+        raise SpecTypeError("cluster bounds need bounds = {Sy = {upper = 0.999}, …}", path + ("bounds",))
+    if not bounds:
         raise SpecError("cluster bounds need bounds = {Sy = {upper = 0.999}, …}", path + ("bounds",))
     clean = {}
     for name, b in bounds.items():
@@ -644,7 +668,7 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
         elif isinstance(b, Sequence) and not isinstance(b, str) and len(b) == 2:
             lo, hi = b
         else:
-            raise SpecError(f"bounds of cluster {name!r} must be {{lower = …, upper = …}}", p)
+            raise SpecTypeError(f"bounds of cluster {name!r} must be {{lower = …, upper = …}}", p)
         clean[str(name)] = [_bound(lo, p, "lower"), _bound(hi, p, "upper")]
     out = {"type": kind, "bounds": clean}
     _wrap(build_constraint, path, out)
@@ -661,7 +685,7 @@ def constraint_from_object(obj: object, path: tuple = ()) -> list[dict]:
     if not isinstance(obj, (gb.StaticBand, gb.CurveEquality, gb.PassesThrough, gb.GainBounds, gb.ClusterBounds)):
         members = list(obj) if hasattr(obj, "__iter__") and not isinstance(obj, (str, bytes)) else None
         if members is None or (len(members) == 1 and members[0] is obj):
-            raise SpecError(f"{obj!r} cannot be part of a grid: a grid stores its constraints as data "
+            raise SpecTypeError(f"{obj!r} cannot be part of a grid: a grid stores its constraints as data "
                             "(equality, points, band, gain, clusters); a UserConstraint's function cannot be "
                             "stored or hashed", path)
         return [d for m in members for d in constraint_from_object(m, path)]
@@ -843,7 +867,7 @@ class Variant:
         # constraints
         raw = constraint_entries(self.constraints)
         if not isinstance(raw, Sequence) or isinstance(raw, str):
-            raise SpecError("constraints must be a list of tables or graybox constraint objects", ("constraints",))
+            raise SpecTypeError("constraints must be a list of tables or graybox constraint objects", ("constraints",))
         cons: list[dict] = []
         for i, c in enumerate(raw):
             cons += constraint_from_object(c, ("constraints", i))
@@ -879,13 +903,14 @@ class Variant:
                 except SpecError as e:
                     raise e.within("decision") from None
             elif not isinstance(dec, DecisionRule):
-                raise SpecError(f"decision must be a DecisionRule or a table, got {type(dec).__name__}", ("decision",))
+                raise SpecTypeError(f"decision must be a DecisionRule or a table, got {type(dec).__name__}",
+                                    ("decision",))
         object.__setattr__(self, "decision", dec)
         # options
         opts = self.options if self.options is not None else {}
         known = OPTIONS[est]
         if not isinstance(opts, Mapping):
-            raise SpecError(f"options must be a table, got {type(opts).__name__}", ("options",))
+            raise SpecTypeError(f"options must be a table, got {type(opts).__name__}", ("options",))
         clean = {}
         for k, v in opts.items():
             if k not in known:
@@ -996,11 +1021,13 @@ class Grid:
             check_path(self.base_dir, "base_dir")
         for what, cls_, items in (("data", DataSpec, self.data), ("structures", StructureSpec, self.structures),
                                   ("variants", Variant, self.variants)):
-            if isinstance(items, (str, Mapping)) or not isinstance(items, Sequence | tuple) or not items:
+            if isinstance(items, (str, Mapping)) or not isinstance(items, Sequence | tuple):
+                raise SpecTypeError(f"a grid needs a non-empty list of {what}, got {type(items).__name__}", (what,))
+            if not items:
                 raise SpecError(f"a grid needs a non-empty list of {what}", (what,))
             for i, it in enumerate(items):
                 if not isinstance(it, cls_):
-                    raise SpecError(f"{what} must hold {cls_.__name__} objects, got {type(it).__name__}", (what, i))
+                    raise SpecTypeError(f"{what} must hold {cls_.__name__} objects, got {type(it).__name__}", (what, i))
             names = [it.name for it in items]
             dup = sorted({n for n in names if names.count(n) > 1})
             if dup:
@@ -1066,7 +1093,7 @@ class Grid:
         try:
             return cls.from_dict(d, base_dir=base_dir)
         except SpecError as e:
-            raise SpecError(e.problem, e.path, source, lines.line_of(e.path)) from None
+            raise type(e)(e.problem, e.path, source, lines.line_of(e.path)) from None
 
     @classmethod
     def from_dict(cls, d: Mapping, base_dir: str | None = None) -> "Grid":
@@ -1078,7 +1105,9 @@ class Grid:
                                    ("variants", Variant, ("name", "estimator", "constraints", "lambdas", "decision",
                                                           "options"))):
             items = d.get(key)
-            if not isinstance(items, list) or not items:
+            if items is not None and not isinstance(items, list):
+                raise SpecTypeError(f"the spec needs at least one [[{key}]] table, got {items!r}", (key,))
+            if not items:
                 raise SpecError(f"the spec needs at least one [[{key}]] table", (key,))
             out = []
             for i, it in enumerate(items):
