@@ -131,3 +131,69 @@ def test_a_wrong_value_in_a_spec_stays_a_value_error(make):
     with pytest.raises(ValueError) as info:
         make()
     assert not isinstance(info.value, TypeError) and isinstance(info.value, gb.experiments.SpecError)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# 3. an integrator's continuum of equilibria
+# ----------------------------------------------------------------------------------------------------------
+#: y(k) = y(k-1) + 0.5 (u(k-1) - 2): at ū = 2 every ȳ is an equilibrium, elsewhere none is.
+INTEGRATOR = gb.Model(["y(k-1)", "u(k-1)", "1"], [1.0, 0.5, -1.0])
+#: The same with (u - 2)(0.5 + 0.1 y²) (not rational: eq. (5) of degree 2, every coefficient 0 at ū = 2).
+QUADRATIC = gb.Model(["y(k-1)", "u(k-1)", "1", "u(k-1)y(k-1)^2", "y(k-1)^2"], [1.0, 0.5, -1.0, 0.1, -0.2])
+#: Two inputs: y(k) = y(k-1) + 0.5 a(k-1) - 0.25 b(k-1); every ȳ at each (a, b) with a = b / 2.
+TWO_INPUTS = gb.Model(["y(k-1)", "a(k-1)", "b(k-1)"], [1.0, 0.5, -0.25], input_names=("a", "b"))
+
+
+@pytest.mark.parametrize("model", [INTEGRATOR, QUADRATIC])
+def test_an_integrator_at_its_balancing_input_has_a_continuum_of_equilibria(model):
+    # local_model(model, ubar=u0) said "no equilibrium" where every ȳ is one; equilibria gave [] (no word), and
+    # static_curve said "no equilibrium … no real root". Now each says it is a continuum: ȳ is not set by ū.
+    lm = gb.local_model(model, 2.0, Ts=1.0)
+    assert lm.status == "continuum of equilibria" and lm.ybar is None
+    assert "continuum" in lm.reason and "y0" in lm.reason
+    with pytest.raises(ValueError, match="continuum"):
+        lm.poles
+    # with y0 the local model is at ȳ = y0, where the model stays: an integrator (pole 1, infinite DC gain)
+    at = gb.local_model(model, 2.0, Ts=1.0, y0=3.0)
+    assert at.status == "continuum of equilibria" and at.ybar == 3.0
+    np.testing.assert_allclose(at.poles, [1.0])
+    assert not at.stable and np.isinf(at.dc_gain[0])
+    assert gb.local_model(model, 1.0, Ts=1.0).status == "no equilibrium"  # elsewhere: truly none
+    curve = gb.operating_curve(model, [1.0, 2.0, 3.0], Ts=1.0)
+    assert curve.status == ("no equilibrium", "continuum of equilibria", "no equilibrium")
+    assert np.all(np.isnan(curve.ybar))  # no made-up ȳ
+    with pytest.raises(ValueError, match="continuum"):
+        model.equilibria(2.0)
+    assert model.equilibria(1.0) == []
+    for y0 in (None, 1.0):
+        with pytest.raises(ValueError, match=r"ū = 2: a continuum of equilibria|at ū = 2 a continuum"):
+            model.static_curve([1.0, 2.0], y0=y0)
+    assert np.all(np.isnan(model.static_curve([1.0, 2.0], strict=False)))
+    from graybox.static._analysis import CONTINUUM, NO_EQUILIBRIUM, reached_equilibria
+
+    r = reached_equilibria(model.structure, model.theta[None, :], np.array([1.0, 2.0]), np.array([0.0, 0.0]))
+    assert r.status.tolist() == [[NO_EQUILIBRIUM, CONTINUUM]] and np.isnan(r.ybar).all()
+    assert "continuum" in r.explain(0)[1]
+
+
+def test_a_two_input_integrator_on_its_balancing_line():
+    lm = gb.local_model(TWO_INPUTS, [1.0, 2.0], Ts=1.0)
+    assert lm.status == "continuum of equilibria" and lm.ybar is None
+    assert gb.local_model(TWO_INPUTS, [1.0, 2.0], Ts=1.0, y0=-4.0).ybar == -4.0
+    assert gb.local_model(TWO_INPUTS, [1.0, 1.0], Ts=1.0).status == "no equilibrium"
+    with pytest.raises(ValueError, match=r"ū = \(1, 2\): a continuum"):
+        TWO_INPUTS.equilibria([1.0, 2.0])
+    # not rational (the static surface from the roots of eq. (5), no y0): it said "no real root"
+    quad = gb.Model(["y(k-1)", "a(k-1)", "b(k-1)", "a(k-1)y(k-1)^2", "b(k-1)y(k-1)^2"], [1.0, 0.5, -0.25, 0.1, -0.05],
+                    input_names=("a", "b"))
+    for model in (TWO_INPUTS, quad):
+        with pytest.raises(ValueError, match=r"\(1, 2\).{0,3} a continuum of equilibria"):
+            model.static_curve([[1.0, 2.0]])
+
+
+def test_a_stable_model_has_no_continuum_anywhere():
+    from graybox.static._analysis import continuum
+
+    m = gb.Model(["y(k-1)", "u(k-1)", "1"], [0.5, 0.5, -1.0])
+    assert not continuum(m.structure, m.theta[None, :], np.linspace(-5, 5, 11)).any()
+    assert gb.local_model(m, 2.0, Ts=1.0).status == "reached"

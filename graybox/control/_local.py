@@ -35,9 +35,10 @@ from ..core._terms import Structure
 from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, refuse_non_real, warn
 from ..models._coerce import as_model
 from ..models._model import Model
-from ..static._analysis import NO_EQUILIBRIUM_WHY, REACHED, reached_equilibria, schur_stable, several_stable
+from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, continuum, reached_equilibria, schur_stable,
+                                several_stable)
 from ..static._linearisation import characteristic_roots, local_coefficients
-from ..static._surface_analysis import reached_surface
+from ..static._surface_analysis import _folded, reached_surface
 
 __all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "jacobian_rows", "check_polynomial",
            "require_control", "local_statespace", "local_transfer_function", "system_name", "CONTROL_EXTRA",
@@ -120,7 +121,9 @@ class LocalModel:
         ``"no equilibrium"``, ``"no stable equilibrium"`` (the linearisation is then at the
         unstable equilibrium nearest y0, or with the smallest spectral radius), ``"diverged"`` or
         ``"did not settle"`` (the free run from y0 settles on none; the linearisation is at the
-        real equilibrium nearest y0).
+        real equilibrium nearest y0), ``"continuum of equilibria"`` (every ȳ is an equilibrium at ū, as
+        for an integrator at its balancing input: ū sets no ȳ; the linearisation is at ȳ = y0 when y0 is
+        given, where the model stays, and there is none without it).
     reason : str
         The status in words, naming ū (empty when reached).
     a : ndarray, shape (L_y,)
@@ -417,10 +420,25 @@ def _reached(model: Model, thetas: np.ndarray, ub: np.ndarray, y0: np.ndarray):
     return reached_equilibria(model.structure, thetas, ub[:, 0], y0)
 
 
+def _continuum_at(model: Model, u: np.ndarray) -> bool:
+    """Whether every ȳ is an equilibrium at the point u (m,) (:func:`graybox.static._analysis.continuum`)."""
+    if model.n_inputs > 1:
+        sk, th = _folded(model.structure, model.theta, u[None, :], model.input_names)
+        return bool(continuum(sk, th[0], np.ones(1))[0, 0])
+    return bool(continuum(model.structure, model.theta[None, :], u[:1])[0, 0])
+
+
 def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float | None, str, str]:
     """(ȳ, status, reason) at one point u (m,): the reached equilibrium, else the one to linearise around."""
-    eqs = model.equilibria(u if model.n_inputs > 1 else float(u[0]))
     label = f"{float(u[0]):g}" if u.size == 1 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
+    if _continuum_at(model, u):
+        # every ȳ is an equilibrium: ū sets none, the output stays where it starts; y0 is then the one to take
+        why = f"ū = {label}: {CONTINUUM_WHY}"
+        if y0 is None:
+            return None, "continuum of equilibria", why + ("; give y0 (the output level ȳ to linearise at, where the "
+                                                           "model stays) for the local model there")
+        return float(y0), "continuum of equilibria", why + f"; linearised at ȳ = y0 = {y0:.6g}"
+    eqs = model.equilibria(u if model.n_inputs > 1 else float(u[0]))
     if y0 is None:
         stable = [e for e in eqs if e.stable]
         if len(stable) == 1:
@@ -533,7 +551,8 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
         ``data`` at another period is refused), else ``data``'s.
     y0 : float, optional
         Initial output of the settling run that picks the equilibrium (output units), e.g. the
-        measured ȳ; needed when several equilibria are stable.
+        measured ȳ; needed when several equilibria are stable, and where every ȳ is an equilibrium
+        (status ``"continuum of equilibria"``) the output level to linearise at.
     data : Record, Dataset, sequence of Record or StaticPoints, optional
         The data the model was identified on: a ū outside their input range (records and static
         points) gets a :class:`~graybox.StaticRangeWarning`.

@@ -94,6 +94,8 @@ __all__ = [
     "several_stable",
     "structure_arg",
     "folded_equilibria",
+    "continuum",
+    "CONTINUUM_WHY",
     "DENOMINATOR_RTOL",
     "SETTLE_STEPS",
     "SETTLE_TAUS",
@@ -261,17 +263,38 @@ def static_coefficients(structure: Structure, thetas: np.ndarray, ubar: np.ndarr
     ndarray, shape (D + 1, P, M)
         D = max(largest power of y, 1); c_1 includes the −ȳ of eq. (5).
     """
+    return _static_terms(structure, thetas, ubar)[0]
+
+
+def _static_terms(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`static_coefficients` and, alike, the sum of the magnitudes of the terms each is the sum of."""
     cm = cluster_map(structure)
     th = np.atleast_2d(np.asarray(thetas, float))
     ub = np.asarray(ubar, float)
     sig = th @ cm.R.T
     D = max(cm.max_y_power, 1)
     coef = np.zeros((D + 1, th.shape[0], ub.size))
+    size = np.zeros_like(coef)
     with np.errstate(all="ignore"):
         for c, (p, m) in enumerate(cm.keys):
-            coef[p] += sig[:, c, None] * ub[None, :] ** m
+            term = sig[:, c, None] * ub[None, :] ** m
+            coef[p] += term
+            size[p] += np.abs(term)
     coef[1] -= 1.0
-    return coef
+    size[1] += 1.0
+    return coef, size
+
+
+def continuum(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+    """Where every ȳ is an equilibrium, shape (P, M): each coefficient of eq. (5) vanishes, to
+    :data:`DENOMINATOR_RTOL` of the terms it sums (units-free), so the static equation holds for every output.
+
+    An integrator y(k) = y(k−1) + a (u(k−1) − u0) at ū = u0 is the case: ȳ is not set by ū, the output
+    stays where it starts (for a rational structure, numerator and denominator of eq. (6) both vanish).
+    ``thetas`` (P, n_terms), ``ubar`` (M,).
+    """
+    coef, size = _static_terms(structure, thetas, ubar)
+    return np.all(np.abs(coef) <= DENOMINATOR_RTOL * size, axis=0)
 
 
 def _root_groups(c: np.ndarray) -> list[tuple[float, int, int]]:
@@ -486,13 +509,29 @@ def equilibria(structure: Structure, theta: np.ndarray, ubar: float) -> list[Equ
     -------
     list of Equilibrium
         Empty when eq. (5) has no real root (or, for a rational structure, its denominator
-        vanishes: no equilibrium or infinitely many).
+        vanishes and its numerator does not).
+
+    Raises
+    ------
+    ValueError
+        When every ȳ is an equilibrium at ``ubar`` (:func:`continuum`, e.g. an integrator at its balancing
+        input): ȳ is not set by ū there.
     """
     structure, theta = checked_model(structure, theta)
     if len(structure.inputs) > 1:
         raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its equilibria lie on "
                          "a surface; use graybox.surface_equilibria(structure, theta, ū) with ū of shape (m,)")
-    return folded_equilibria(structure, theta, check_real(ubar, "ubar (one input level)"))
+    ub = check_real(ubar, "ubar (one input level)")
+    refuse_continuum(structure, theta, ub, f"{ub:g}")
+    return folded_equilibria(structure, theta, ub)
+
+
+def refuse_continuum(structure: Structure, theta: np.ndarray, ub: float, label: str) -> None:
+    """``ValueError`` when every ȳ is an equilibrium at ``ub`` (:func:`continuum`): a list of equilibria cannot
+    hold them (``label`` names the point)."""
+    if continuum(structure, np.asarray(theta, float)[None, :], np.array([ub]))[0, 0]:
+        raise ValueError(f"ū = {label}: {CONTINUUM_WHY}; equilibria lists isolated equilibria (for the local model "
+                         "at an output level ȳ of your choice: local_model(model, ū, y0=ȳ))")
 
 
 def folded_equilibria(structure: Structure, theta: np.ndarray, ub: float) -> list[Equilibrium]:
@@ -608,10 +647,14 @@ def rational_static_curve(structure: Structure, theta: np.ndarray, ubar: np.ndar
 
 
 # -- the equilibrium reached -----------------------------------------------------------------------
-NO_EQUILIBRIUM, NONE_STABLE = 1, 2
+NO_EQUILIBRIUM, NONE_STABLE, CONTINUUM = 1, 2, 5
 #: Why a point has no equilibrium, in words: no real root of eq. (5), or (rational form) a vanishing
-#: denominator, which is no equilibrium or, where the numerator vanishes too, every output one.
+#: denominator whose numerator does not vanish (where it does too, every output is one: CONTINUUM).
 NO_EQUILIBRIUM_WHY = "no equilibrium (the static equation has no real root, or its denominator vanishes)"
+#: Why a point has every output as an equilibrium (:func:`continuum`), in words.
+CONTINUUM_WHY = ("a continuum of equilibria: the static equation holds for every output level, so ȳ is not set by ū "
+                 "(an integrator at its balancing input: the output stays where it starts, a marginally stable "
+                 "equilibrium)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -630,7 +673,8 @@ class Reached:
         0 reached; 1 no equilibrium (eq. (5) has no real root, or a rational denominator
         vanishes); 2 no locally stable equilibrium; 3 the run diverged; 4 the run did not settle
         within the step budget (an oscillation, a limit cycle, an approach slower than
-        ``SETTLE_MAX_STEPS`` / ``SETTLE_TAUS`` samples per time constant).
+        ``SETTLE_MAX_STEPS`` / ``SETTLE_TAUS`` samples per time constant); 5 a continuum of
+        equilibria (:func:`continuum`: every output is one, so ū sets no ȳ; none is asymptotically stable).
     """
 
     ubar: np.ndarray
@@ -639,7 +683,7 @@ class Reached:
     status: np.ndarray
 
     STATUS: ClassVar[tuple[str, ...]] = ("reached", "no equilibrium", "no stable equilibrium", "diverged",
-                                         "did not settle")
+                                         "did not settle", "continuum of equilibria")
 
     @property
     def ok(self) -> np.ndarray:
@@ -656,6 +700,8 @@ class Reached:
             s = int(self.status[member, j])
             if s == NO_EQUILIBRIUM:
                 why = NO_EQUILIBRIUM_WHY
+            elif s == CONTINUUM:
+                why = CONTINUUM_WHY
             elif s == NONE_STABLE:
                 why = "no stable equilibrium"
             elif s == DIVERGED:
@@ -854,6 +900,10 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
                                   roots.reshape(P * M, D)[run], stab.reshape(P * M, D)[run], L)
             yb.ravel()[run] = y_run
             status.ravel()[run] = s_run
+    # every ȳ an equilibrium: none is reached (a run stays at y0, not drawn to any), and it is said as such
+    cont = continuum(structure, th_ok, ub) & finite[:, None]
+    status[cont] = CONTINUUM
+    yb[cont] = np.nan
     status[~finite] = NO_EQUILIBRIUM
     yb[~finite] = np.nan
     return Reached(ub, y0s, yb, status)
@@ -882,17 +932,21 @@ def one_input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
     return np.atleast_1d(as_1d_finite(np.ravel(ubar), name))
 
 
-def only_stable(roots: np.ndarray, stable: np.ndarray, where: list[str]) -> tuple[np.ndarray, list[str]]:
+def only_stable(roots: np.ndarray, stable: np.ndarray, where: list[str],
+                cont: np.ndarray | None = None) -> tuple[np.ndarray, list[str]]:
     """The one locally stable equilibrium at each point, shape (M,), NaN where there is none or there
     are several; and a phrase for each such point, naming it by ``where`` (e.g. "ū = 100").
 
-    ``roots`` (M, D): every real root at each point, NaN-padded; ``stable`` (M, D) their stability.
+    ``roots`` (M, D): every real root at each point, NaN-padded; ``stable`` (M, D) their stability;
+    ``cont`` (M,): where every output is an equilibrium (:func:`continuum`), NaN too.
     """
     out = np.full(roots.shape[0], np.nan)
     problems = []
     for i in range(roots.shape[0]):
         ys = roots[i][stable[i]]
-        if ys.size == 1:
+        if cont is not None and cont[i]:
+            problems.append(f"at {where[i]} {CONTINUUM_WHY}")
+        elif ys.size == 1:
             out[i] = ys[0]
         elif ys.size:
             problems.append(several_stable(ys, where[i]))
@@ -959,7 +1013,7 @@ def static_curve(
         return res.ybar[0].copy()
     roots = real_roots(structure, th[None, :], ub)[0]  # (M, D)
     out, problems = only_stable(roots, _roots_stable(structure, th[None, :], ub, roots[None])[0],
-                                [f"ū = {u:g}" for u in ub])
+                                [f"ū = {u:g}" for u in ub], continuum(structure, th[None, :], ub)[0])
     if strict and problems:
         raise ValueError("the model has " + "; ".join(problems))
     return out

@@ -231,6 +231,7 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
     sk, th = _folded(structure, theta, ub, names)
     point = tuple(float(v) for v in ub[0])
+    _static.refuse_continuum(sk, th[0, 0], 1.0, "(" + ", ".join(f"{v:g}" for v in point) + ")")
     return [Equilibrium(point, e.ybar, e.stable, e.spectral_radius)
             for e in _static.folded_equilibria(sk, th[0, 0], 1.0)]
 
@@ -320,7 +321,8 @@ def static_surface(
     roots = _static.real_roots(sk, thf[0], np.ones(1))  # (M, 1, D)
     stab = _static._roots_stable(sk, thf[0], np.ones(1), roots)[:, 0]
     out, problems = _static.only_stable(roots[:, 0, :], stab,
-                                        ["ū = (" + ", ".join(f"{v:g}" for v in u) + ")" for u in ub])
+                                        ["ū = (" + ", ".join(f"{v:g}" for v in u) + ")" for u in ub],
+                                        _static.continuum(sk, thf[0], np.ones(1))[:, 0])
     if strict and problems:
         raise ValueError("the static surface is undefined: the model has " + "; ".join(problems))
     return out
