@@ -197,3 +197,75 @@ def test_a_stable_model_has_no_continuum_anywhere():
     m = gb.Model(["y(k-1)", "u(k-1)", "1"], [0.5, 0.5, -1.0])
     assert not continuum(m.structure, m.theta[None, :], np.linspace(-5, 5, 11)).any()
     assert gb.local_model(m, 2.0, Ts=1.0).status == "reached"
+
+
+# ----------------------------------------------------------------------------------------------------------
+# 4. grid cells that reran for a band they never read
+# ----------------------------------------------------------------------------------------------------------
+#: p(k) = 0.5 p(k-1) + 2e-5 n(k-1) + 3 (bar against rpm).
+RPM = gb.Model(["1", "y(k-1)", "n(k-1)"], [3.0, 0.5, 2e-5], input_names=("n",))
+
+
+def _rpm_data() -> gb.Dataset:
+    rng = np.random.default_rng(0)
+    recs = []
+    for part in range(2):
+        n_ = np.repeat(rng.uniform(2500.0, 3500.0, 16), 20)[:300]
+        y = RPM.simulate(n_, np.full(1, 9.0)) + 0.01 * rng.standard_normal(300)
+        recs.append(gb.Record(n_, y, 0.1, input_names=("n",), name=f"run {part}"))
+    levels = np.linspace(2600.0, 3400.0, 5)
+    ybar = RPM.static_curve(levels) + 0.02 * np.array([1.0, -1.0, 1.0, -1.0, 1.0])
+    return gb.Dataset(*recs, gb.StaticPoints(levels, ybar, input_names=("n",), uncertainty=0.05))
+
+
+def test_a_new_band_reruns_only_the_cells_that_read_it(tmp_path):
+    # A cell's key held the data set's band for every estimator, so changing only the band reran ls, els, cls,
+    # and Pareto cells whose decision has its own band or none, though their results do not read it. Now the band
+    # is in the key only where D_SF decides with it or se-dsf solves in it; the stored band column is the band of
+    # the spec the rows are read with.
+    from graybox import experiments as gx
+
+    data = _rpm_data()
+    structure = [gx.StructureSpec("quadratic", terms=["1", "y(k-1)", "n(k-1)", "n(k-1)^2"])]
+    lambdas = [1e-4, 1e-3, 1e-2, 0.1, 1.0]
+    variants = [
+        gx.Variant("LS", "ls"),
+        gx.Variant("ELS", "els", options={"noise": 1}),
+        gx.Variant("CLS band", "cls", constraints=[{"type": "band"}]),          # reads the points' δ, not the band
+        gx.Variant("PE min JSF", "pe", lambdas=lambdas, decision={"rule": "min_jsf"}),
+        gx.Variant("PE own band", "pe", lambdas=lambdas, decision={"rule": "dsf", "band": 1e-3, "fallback": "min_jsf"}),
+        gx.Variant("PE D_SF", "pe", lambdas=lambdas, decision={"rule": "dsf", "fallback": "min_jsf"}),  # reads it
+    ]
+    reads = {"PE D_SF"}
+    front = gb.pe_pareto(structure[0].terms, data, lambdas=lambdas)
+    bands = [1e-5, 1e-3]
+    choices = [gb.decide_dsf(front, band=b, fallback="min_jsf") for b in bands]
+    assert choices[0].index != choices[1].index  # the band decides PE D_SF's member
+    store = tmp_path / "s.sqlite"
+    runs, tables = [], []
+    for b in bands:
+        runs.append(gx.run_grid(gx.Grid([gx.DataSpec("plant", dataset=data, band=b)], structure, variants), store))
+        tables.append(gb.load_results(store).set_index("variant"))
+    assert runs[0].ran == len(variants)
+    assert runs[1].ran == len(reads) and runs[1].skipped == len(variants) - len(reads)
+    first, second = tables
+    assert (second["status"] == "ok").all()
+    assert (second["band"] == bands[1]).all() and (first["band"] == bands[0]).all()
+    for v in variants:
+        same = first.loc[v.name, "key"] == second.loc[v.name, "key"]
+        assert same == (v.name not in reads)
+        if same:  # reused: the very row the first run wrote
+            assert first.loc[v.name, "finished_at"] == second.loc[v.name, "finished_at"]
+            np.testing.assert_array_equal(first.loc[v.name, "theta"], second.loc[v.name, "theta"])
+    for table, choice in zip(tables, choices):
+        row = table.loc["PE D_SF"]
+        np.testing.assert_allclose(row["theta"], choice.model.theta, rtol=1e-8)
+        assert row["lambda1"] == choice.lambda1 and bool(row["in_band"]) == bool(choice.in_band)
+    every = gb.load_results(store, spec="all")  # each cell once, with the band of the first spec holding it
+    assert sorted(every["band"]) == [bands[0]] * len(variants) + [bands[1]]
+    assert every.loc[every["band"] == bands[1], "variant"].tolist() == ["PE D_SF"]
+    # the points' δ a band constraint takes is still in its key: other δ, a new cell (the band alone did not say it)
+    other = gb.Dataset(data.ident, data.valid, gb.StaticPoints(data.static.ubar, data.static.ybar, input_names=("n",),
+                                                               uncertainty=0.02))
+    run = gx.run_grid(gx.Grid([gx.DataSpec("plant", dataset=other, band=bands[1])], structure, variants[2:3]), store)
+    assert run.ran == 1

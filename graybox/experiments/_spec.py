@@ -392,6 +392,19 @@ def uncertainty_key(ds: gb.Dataset, band: float | None) -> list[float] | None:
     return [float(v) for v in d]
 
 
+def reads_band(variant_content: Mapping[str, Any]) -> bool:
+    """Whether a variant's result depends on the data set's band (a cell's ``band``): se-dsf without its own band
+    solves in it, and a Pareto estimator's D_SF decision without its own band decides with it. No other
+    estimator reads it (ls, els, neural and cls take none; a band constraint without b takes the points' δ, and
+    the Pareto sets themselves none): their cells are keyed without it, so that a new band reruns only the cells
+    it changes."""
+    est = variant_content["estimator"]
+    if est == "se-dsf":
+        return variant_content["options"].get("band") is None
+    d = variant_content.get("decision")
+    return est in PARETO_ESTIMATORS and d is not None and d["rule"] == "dsf" and d["band"] is None
+
+
 def reads_uncertainty(variant_content: Mapping[str, Any]) -> bool:
     """Whether a variant's result depends on the static points' uncertainty δ: a band constraint without
     its half-width b takes each point's δ."""
@@ -953,9 +966,10 @@ class Cell:
     index : int
         Position in the grid's cell order (data, then structure, then variant, then seed).
     key : str
-        Hash of the data's content, the band, the structure, the variant, the seed and graybox's
-        version; and of the static points' uncertainty when the variant's band constraint takes it
-        and the band does not say it (per-point δ, or a δ other than √band).
+        Hash of the data's content, the structure, the variant, the seed and graybox's version; of the
+        band when the variant reads it (:func:`reads_band`); and of the static points' uncertainty when
+        the variant's band constraint takes it and a band in the key does not say it (per-point δ, or a δ
+        other than √band).
     data, structure, variant : str
         Names.
     seed : int or None
@@ -1171,7 +1185,7 @@ class Grid:
             ds = datasets
         version = gb.__version__
         out: list[Cell] = []
-        # a key hashes the canonical JSON of {band, data, seed, structure, variant, version}; the
+        # a key hashes the canonical JSON of {band (where read), data, seed, structure, variant, version}; the
         # structure's and the variant's texts are made once, not once per cell (the same bytes)
         structures = [(s, s.content()) for s in self.structures]
         structures = [(s, canonical_json(sc), _freeze(sc)) for s, sc in structures]
@@ -1181,16 +1195,21 @@ class Grid:
         for d in self.data:
             dh = data_fingerprint(ds[d.name])
             band = d.band
-            head = '{"band":' + canonical_json(band) + ',"data":' + canonical_json(dh) + ',"seed":'
-            # the points' δ where a variant reads it and the band does not say it (keys written before unchanged)
-            unc = uncertainty_key(ds[d.name], band)
-            unc_text = "" if unc is None else ',"uncertainty":' + canonical_json(unc)
+            tail_data = '"data":' + canonical_json(dh) + ',"seed":'
+            # the band only where the variant reads it; the points' δ where it reads δ and a band in the key does
+            # not say it (keys of band-reading cells written before unchanged)
+            heads = {True: '{"band":' + canonical_json(band) + "," + tail_data, False: "{" + tail_data}
+            unc_texts = {}
+            for banded in (True, False):
+                unc = uncertainty_key(ds[d.name], band if banded else None)
+                unc_texts[banded] = "" if unc is None else ',"uncertainty":' + canonical_json(unc)
             for s, sc, frozen_s in structures:
                 for v, vc, frozen_v in variants:
-                    extra = unc_text if reads_uncertainty(frozen_v) else ""
+                    banded = reads_band(frozen_v)
+                    extra = unc_texts[banded] if reads_uncertainty(frozen_v) else ""
                     for seed in (self.seeds if v.stochastic else (None,)):
-                        text = (head + canonical_json(seed) + ',"structure":' + sc + extra + ',"variant":' + vc
-                                + tail)
+                        text = (heads[banded] + canonical_json(seed) + ',"structure":' + sc + extra + ',"variant":'
+                                + vc + tail)
                         key = hashlib.sha256(text.encode()).hexdigest()[:32]
                         out.append(Cell(len(out), key, d.name, s.name, v.name, seed, dh, band, frozen_s, frozen_v,
                                         version))

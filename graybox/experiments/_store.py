@@ -1,9 +1,9 @@
 """The result store: one SQLite file that grows with its grid (standard library :mod:`sqlite3`).
 
 Each finished cell is one row of the ``cells`` table, keyed by the hash of its content (data,
-structure, variant, seed, band, graybox version), committed in its own transaction as soon as
-the driver receives it, so a run that is killed loses only the cells in flight. Every spec run
-against the store is kept (table ``specs``: its canonical form, its data sets' content hashes,
+structure, variant, seed, graybox version, and the band where the variant reads it), committed in its
+own transaction as soon as the driver receives it, so a run that is killed loses only the cells in
+flight. Every spec run against the store is kept (table ``specs``: its canonical form, its data sets' content hashes,
 the graybox version, when it was first and last run) with the keys and names of its cells
 (table ``spec_cells``). A spec run on an existing store runs only the cells the store does not
 hold: new data sets, structures, variants, seeds or options add cells; the rest are reused.
@@ -477,12 +477,14 @@ def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dic
             cur = conn.execute(f"SELECT {cols}, s.position, s.data, s.structure, s.variant FROM spec_cells s "
                                "JOIN cells c ON c.key = s.key WHERE s.spec = ? ORDER BY s.position", (chosen["id"],))
             rows = []
+            bands = _spec_bands(chosen)
             for r in cur.fetchall():
                 row = dict(zip(COLUMNS, r))
                 row.update(zip(("cell_index", "data", "structure", "variant"), r[len(COLUMNS):]))
+                row["band"] = bands.get(row["data"], row["band"])
                 rows.append(row)
         else:
-            rows = _all_rows(conn, cols)
+            rows = _all_rows(conn, cols, {s["id"]: _spec_bands(s) for s in specs})
     except sqlite3.DatabaseError as exc:
         raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
     finally:
@@ -490,8 +492,18 @@ def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dic
     return meta, specs, rows, chosen
 
 
-def _all_rows(conn: sqlite3.Connection, cols: str) -> list[dict[str, Any]]:
-    """Every cell once, named by the first spec that holds it; names with two meanings told apart."""
+def _spec_bands(spec: Mapping[str, Any]) -> dict[str, float | None]:
+    """Each data set's band in a stored spec, by name. A cell whose variant reads no band is keyed without it
+    (:func:`graybox.experiments._spec.reads_band`) and kept once for every band: its row shows the band of the
+    spec it is read with, not the one of the spec that ran it."""
+    data = json.loads(spec["spec"]).get("data", [])
+    return {d["name"]: d.get("band") for d in data if isinstance(d, Mapping) and "name" in d}
+
+
+def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[str, float | None]]
+              ) -> list[dict[str, Any]]:
+    """Every cell once, named by the first spec that holds it (and with its band, :func:`_spec_bands`); names with
+    two meanings told apart."""
     entries = conn.execute("SELECT spec, position, key, structure, variant, structure_hash, variant_hash "
                            "FROM spec_cells ORDER BY spec, position").fetchall()
     first: dict[str, tuple] = {}
@@ -512,6 +524,7 @@ def _all_rows(conn: sqlite3.Connection, cols: str) -> list[dict[str, Any]]:
         if f is not None:
             spec, pos, s, v, sh, vh = f
             row.update(structure=label("structure", s, sh), variant=label("variant", v, vh))
+            row["band"] = bands.get(spec, {}).get(row["data"], row["band"])
             row["_order"] = (spec, pos)
         else:  # not reachable through the API: every cell is registered before it runs
             row["_order"] = (10**9, row["cell_index"])
