@@ -250,6 +250,8 @@ def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
     if A.shape[0] == 0:
         return np.eye(n), 0
     _, S, Vt = np.linalg.svd(A, full_matrices=True)
+    # the equality rows' rank as the estimator reduced them (estimation._prediction_error._reduce_eq), not the
+    # regression's (rank_tolerance): the same constraints must leave θ the same directions to move in
     r = int(np.sum(S > 1e-10 * S[0]))
     return Vt[r:].T, r
 

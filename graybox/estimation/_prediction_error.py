@@ -440,6 +440,9 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
         raise InfeasibleError(f"inconsistent equality constraints (a row reads 0 = {f[~ok][0]:g}): {names}")
     E, f = E[ok] / norms[ok, None], f[ok] / norms[ok]
     U, S, Vt = np.linalg.svd(E, full_matrices=False)
+    # not the rank rule of identifiability (core._least_squares.rank_tolerance): these are the few equality rows,
+    # each of unit norm, standing for no regression rows; rows within 1e-10 are one condition said twice (a
+    # curve's equality at nearby ū), whose round-off difference must not become a second, contradictory row
     r = int(np.sum(S > 1e-10 * S[0]))
     Ur = U[:, :r]
     resid = f - Ur @ (Ur.T @ f)
