@@ -11,6 +11,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as hs
 from matplotlib.figure import Figure
 
 import graybox as gb
@@ -183,3 +185,24 @@ def test_plot_draws_the_measurement_the_run_and_the_band(tmp_path):
     assert ax.get_ylabel() == "output (Pa)" and len(ax.get_lines()) == 2 and len(ax.collections) == 1
     with pytest.raises(TypeError, match="band must be a SimulationBand"):
         gb.plots.plot_simulation_band(b.to_frame())
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=hs.integers(0, 2**31), scale=hs.floats(1e-3, 1e4), offset=hs.floats(-1e4, 1e4))
+def test_a_model_without_output_feedback_has_the_exact_linear_band(seed, scale, offset):
+    # law: with no y term the free run is linear in θ, ŷ = Φθ, so its variance is exactly diag(Φ cov Φᵀ)
+    rng = np.random.default_rng(seed)
+    u = offset + scale * rng.uniform(0, 1, 120)
+    assume(np.ptp(u) > 0)
+    st = gb.parse_structure(["u(k-1)", "u(k-2)^2", "u(k-1)u(k-3)", "1"])
+    A = rng.standard_normal((4, 4))
+    cov = A @ A.T * 1e-4
+    unc = gb.ParameterUncertainty(gb.Model(st, rng.standard_normal(4)), cov, 0.9, 40, 1.0, "LS", np.zeros((0, 4)),
+                                  np.zeros((0, 0)))
+    rec = gb.Record(u, np.zeros(120))
+    b = gb.simulation_band(unc, rec)
+    k = np.arange(3, 120)  # by hand, not by the library's regressors
+    phi = np.column_stack([u[k - 1], u[k - 2] ** 2, u[k - 1] * u[k - 3], np.ones(k.size)])
+    ref = np.sqrt(np.einsum("ij,jk,ik->i", phi, cov, phi))
+    np.testing.assert_allclose(b.std[3:], ref, rtol=1e-9, atol=1e-12 * np.max(ref))
+    assert np.all(b.std[:3] == 0)
