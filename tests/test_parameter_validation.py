@@ -314,6 +314,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "plot_fronts": ((Lazy("results"),), {}),
     "plot_selection": ((SELECTION,), {}),
     "GrayboxSelection.model_of": ((SELECTION.table.index[0],), {"estimator": "ls"}),
+    "GrayboxSelection.uncertainty": ((DATA,), {}),
     "plot_scatter": ((Lazy("results"),), {}),
     "write_report": ((Lazy("store"), Lazy("out_dir")), {}),
     "parallel_map": ((), {"executor": "inprocess"}),

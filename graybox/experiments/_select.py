@@ -239,6 +239,68 @@ class GrayboxSelection:
         return gb.Model(structure, theta, name=f"{r['estimator']} ({row})", input_names=self.model.input_names,
                         Ts=self.model.Ts)
 
+    def uncertainty(
+        self,
+        data: gb.Dataset | gb.Record,
+        static: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None = None,
+        *,
+        constraints: Any = (),
+        level: float = 0.95,
+    ) -> gb.ParameterUncertainty:
+        """The chosen model's parameter covariance, by its estimator's own rule, on the data it was fitted on.
+
+        ``ls``: :func:`graybox.ls_uncertainty`; ``els``: the same of the ELS fit refitted with its MA
+        part (the selection keeps the process part, whose covariance needs the MA regressors);
+        ``oe``: :func:`graybox.se_uncertainty` at λ1 = 1 (output error's fit is regularised, a ridge
+        towards least squares, so it warns that θ is not the plain SE optimum: the covariance is the
+        SE objective's curvature at θ); ``pe``: :func:`graybox.pe_uncertainty` of
+        the decision (its λ1); ``se-gradient`` / ``se-ga``: :func:`graybox.se_uncertainty` of the
+        decision. Give it to :func:`graybox.simulation_band` or :func:`graybox.static_curve_band`.
+
+        Parameters
+        ----------
+        data : Dataset or Record
+            What :func:`select_graybox` was given (a Dataset's identification record, or the record
+            alone): the chosen model was fitted on it.
+        static : StaticPoints, StaticCurve or StaticSurface, optional
+            The static information the selection was given, if not the Dataset's (gray boxes only).
+        constraints : optional
+            The constraints the selection was given (PE only).
+        level : float
+            Confidence level of the intervals, in (0, 1).
+
+        Returns
+        -------
+        ParameterUncertainty
+
+        Raises
+        ------
+        ValueError
+            ``data`` is not what the chosen model was fitted on (the estimator's own check: not a
+            least-squares or ELS solution there); constraints with an estimator other than PE.
+        """
+        est = str(self.chosen["estimator"])
+        constraints = tuple(check_sequence(constraint_entries(constraints), "constraints",
+                                           "a constraint, a table of them or a sequence"))
+        if constraints and est != "pe":
+            raise ValueError(f"constraints apply to the PE estimator; the chosen row's is {est!r}")
+        if static is not None and est in _BLACK_BOX_FITS:
+            raise ValueError(f"static applies to a gray box; the chosen row's estimator is {est!r} (a black box)")
+        if est == "ls":
+            return gb.ls_uncertainty(self.model, data, level=level)
+        if est == "els":
+            fit = gb.els(self.structure, data)
+            process = np.array([th for t, th in zip(fit.model.structure, fit.model.theta) if not t.is_noise])
+            if not np.allclose(process, self.model.theta, rtol=1e-8, atol=0):
+                raise ValueError("ELS on these data does not give the chosen model's θ: give the data select_graybox "
+                                 "fitted on (its Dataset, or the record it was given alone)")
+            return gb.ls_uncertainty(fit, data, level=level)
+        if est == "oe":
+            return gb.se_uncertainty(self.model, data, lambda1=1.0, level=level)
+        if est == "pe":
+            return gb.pe_uncertainty(self.decision, data, static, constraints=list(constraints) or None, level=level)
+        return gb.se_uncertainty(self.decision, data, static, level=level)
+
     @property
     def regret(self) -> float:
         """The choice's J_S on the test record over the best J_S there among the rows compared (>= 1;
