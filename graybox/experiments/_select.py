@@ -59,7 +59,7 @@ from ..core._validation import FrozenFrame, check_choice, check_fields, check_in
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
-from ._spec import constraint_entries, constraint_from_object
+from ._spec import build_constraint, constraint_entries, constraint_from_object
 
 __all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_ESTIMATORS", "BLACK_BOX_ESTIMATORS"]
 
@@ -627,7 +627,7 @@ class _Job:
     estimator: str
     plan: _Plan
     lambdas: tuple | None
-    constraints: tuple
+    constraints: tuple  # canonical tables (constraint_from_object), checked by the driver
     filters: tuple = ()  # the caller's warning filters, as warnings.filters held them at the call
 
 
@@ -657,9 +657,8 @@ def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.nd
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         if est == "pe":
-            specs = sum((constraint_from_object(c) for c in job.constraints), [])
             # only the static points and the data set's extra matter to the constraints
-            cons = cell_constraints(specs, st, gb.Dataset(rec, rec, plan.static, extra=plan.extra))
+            cons = cell_constraints(job.constraints, st, gb.Dataset(rec, rec, plan.static, extra=plan.extra))
             # as pe_pareto and the SE rows: a λ1 whose weights do not identify θ (λ1 = 1 on records with an
             # input held) is one failed member (a NaN row), not the whole row's failure
             th = pe_members(st, rec, plan.static, lambdas=lam, constraints=cons or None,
@@ -1047,6 +1046,7 @@ def select_graybox(
         check_choice(fallback, "fallback", ("min_jsf",))
     check_choice(rule, "rule", RULES)
     plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
+    constraints = _constraint_specs(constraints, len(plan.ident.input_names))
     rows = _structures(candidates, plan.ident, sizes, sources, include, form)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
                             progress=progress)
@@ -1116,6 +1116,20 @@ def _band(band: object, sp: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface 
     if isinstance(sp, gb.StaticPoints) and sp.uncertainty is not None:
         return sp.band
     return None
+
+
+def _constraint_specs(constraints: tuple, n_inputs: int) -> tuple[dict, ...]:
+    """The constraints as a grid's tables (what the jobs carry to any executor), checked once here: an
+    object that is no constraint, or gain bounds for another number of inputs, would otherwise fail
+    every row's fit and be said only after all of them."""
+    try:
+        specs = tuple(d for c in constraints for d in constraint_from_object(c))
+        for d in specs:
+            if d["type"] == "gain":
+                build_constraint(d)._bounds(n_inputs)
+    except ValueError as exc:
+        raise ValueError(f"constraints: {exc}") from None
+    return specs
 
 
 def _estimators(estimator, band, constraints) -> list[str]:

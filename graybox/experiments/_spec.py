@@ -698,9 +698,13 @@ def constraint_from_object(obj: object, path: tuple = ()) -> list[dict]:
     if not isinstance(obj, (gb.StaticBand, gb.CurveEquality, gb.PassesThrough, gb.GainBounds, gb.ClusterBounds)):
         members = list(obj) if hasattr(obj, "__iter__") and not isinstance(obj, (str, bytes)) else None
         if members is None or (len(members) == 1 and members[0] is obj):
+            if not isinstance(obj, gb.UserConstraint):
+                raise SpecTypeError(f"{obj!r} ({type(obj).__name__}) is not a constraint: give StaticBand, "
+                                    "CurveEquality, PassesThrough, GainBounds or ClusterBounds objects, or their tables",
+                                    path)
             raise SpecTypeError(f"{obj!r} cannot be part of a grid: a grid stores its constraints as data "
-                            "(equality, points, band, gain, clusters); a UserConstraint's function cannot be "
-                            "stored or hashed", path)
+                                "(equality, points, band, gain, clusters); a UserConstraint's function cannot be "
+                                "stored or hashed", path)
         return [d for m in members for d in constraint_from_object(m, path)]
     if isinstance(obj, gb.CurveEquality):
         c = obj.curve

@@ -1,0 +1,53 @@
+"""Hunt 37c: structure selection and estimation chained as a user would on their own plant (frols,
+semp, select_graybox, output error, SE, PE, D_SF, evaluate, predict), on synthetic NARX systems of
+known structure in engineering units (rpm near 3000, Pa near 2e5), inputs not named u, short records
+and bad input. Each test names what was wrong before its fix."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _pump(N: int = 300, seed: int = 0, noise: float = 20.0):
+    """A speed (rpm, 2500–3500) to pressure (Pa, near 2e5) plant, y(k) = 1 + y(k−1) + n(k−1) + n(k−1)²
+    in those units, with its static points; noise in Pa."""
+    rng = np.random.default_rng(seed)
+
+    def run(n: int) -> gb.Record:
+        u = np.repeat(rng.uniform(2500, 3500, n // 8 + 1), 8)[:n]
+        x = (u - 3000) / 500
+        y = np.zeros(n)
+        for k in range(1, n):
+            y[k] = 0.7 * y[k - 1] + 0.3 * (x[k - 1] + 0.3 * x[k - 1] ** 2)
+        return gb.Record(u, 2e5 + 1e4 * y + noise * rng.standard_normal(n), Ts=0.1, input_names=("n",))
+
+    ubar = np.linspace(2500, 3500, 7)
+    xs = (ubar - 3000) / 500
+    points = gb.StaticPoints(ubar, 2e5 + 1e4 * (xs + 0.3 * xs ** 2), uncertainty=50.0, input_names=("n",))
+    return gb.Dataset(run(N), run(N * 2 // 3), points)
+
+
+_CAND = gb.Candidates(2, {"n": 2}, degree=2)
+
+
+# select_graybox took its constraints unchecked and converted them inside every row's fit: an object
+# that is no constraint ("x") or gain bounds for two inputs on a one-input plant made every row fail,
+# and the call said only after fitting them all "no structure has a finite free-run J_S on the
+# choosing data … every member failed: the fit on 'record' failed: …".
+@pytest.mark.parametrize("constraints, match", [
+    (["x"], r"constraints: 'x' \(str\) is not a constraint"),
+    (gb.GainBounds(lower=[0.0, 1.0]), r"constraints: .*lower has 2 entries but the structure has 1 input"),
+])
+def test_select_graybox_checks_its_constraints_before_any_fit(constraints, match, monkeypatch):
+    from graybox.experiments import _select
+
+    def no_fit(*args, **kwargs):
+        raise AssertionError("a fit ran before the constraints were checked")
+
+    monkeypatch.setattr(_select, "_run_jobs", no_fit)
+    with pytest.raises(ValueError, match=match):
+        gb.select_graybox(_CAND, _pump(), sizes=[3], constraints=constraints, progress=False)
+
