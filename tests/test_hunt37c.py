@@ -51,3 +51,19 @@ def test_select_graybox_checks_its_constraints_before_any_fit(constraints, match
     with pytest.raises(ValueError, match=match):
         gb.select_graybox(_CAND, _pump(), sizes=[3], constraints=constraints, progress=False)
 
+
+# The GA's random individuals (least squares on GAOptions.random_samples = 30 rows, the paper's seeds)
+# on a record of fewer rows failed with "cannot draw 30 samples from 20 rows": no option named, no fix.
+def test_ga_on_a_short_record_names_its_random_samples_option():
+    data = _pump(N=21)
+    st = gb.parse_structure(["1", "y(k-1)", "n(k-1)", "n(k-1)^2"])
+    # (21 samples visit few speeds: the points lie beyond them, as expected)
+    with pytest.raises(ValueError, match=r"GAOptions\.random_samples = 30 .* 20 regression rows"), \
+            pytest.warns(gb.StaticRangeWarning):
+        gb.se_pareto(st, data, lambdas=[0.5], method="ga", options=gb.GAOptions(population=8, generations=2),
+                     progress=False)
+    # at most the rows there are, the GA runs
+    with pytest.warns(gb.StaticRangeWarning):
+        front = gb.se_pareto(st, data, lambdas=[0.5], method="ga", progress=False,
+                             options=gb.GAOptions(population=8, generations=2, random_samples=20))
+    assert np.all(np.isfinite(front.thetas))

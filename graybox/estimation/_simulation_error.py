@@ -391,7 +391,9 @@ class SEProblem:
         """``count`` θ's, each least squares on ``samples`` randomly chosen rows (the paper's seeds)."""
         n = self.psi.shape[0]
         if samples > n:
-            raise ValueError(f"cannot draw {samples} samples from {n} rows")
+            raise ValueError(f"GAOptions.random_samples = {samples} (the rows of each random individual's least "
+                             f"squares) exceeds the records' {n} regression rows: give "
+                             f"options=GAOptions(random_samples=...) of at most {n}")
         A = self.psi / self.scale
         b = self.target
         out = np.empty((count, self.psi.shape[1]))
