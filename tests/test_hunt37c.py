@@ -67,3 +67,12 @@ def test_ga_on_a_short_record_names_its_random_samples_option():
         front = gb.se_pareto(st, data, lambdas=[0.5], method="ga", progress=False,
                              options=gb.GAOptions(population=8, generations=2, random_samples=20))
     assert np.all(np.isfinite(front.thetas))
+
+
+# A record too short for its folds was said to be too short "for the candidates' largest lag 3" when
+# the candidates' largest lag is 2 (the check needs lag + 2 samples per segment and printed one less).
+def test_folds_too_short_name_the_candidates_true_lag():
+    data = _pump()
+    short = data.ident.slice(0, 10)
+    with pytest.raises(ValueError, match=r"largest lag 2 \(each segment needs 4 samples\)"):
+        gb.select_graybox(_CAND, short, data.static, sizes=[2], estimator="pe", progress=False)

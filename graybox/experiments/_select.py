@@ -384,9 +384,11 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
     out = []
     for i in range(k):
         a, b = edges[i], edges[i + 1]
-        if b - a < min_len or n - (b - a) < min_len:
-            raise ValueError(f"fold {i + 1} of {k}: segments of {b - a} samples are too short for the candidates' "
-                             f"largest lag {min_len - 1}; use fewer folds or a validation record")
+        short = min(b - a, n - (b - a))
+        if short < min_len:
+            raise ValueError(f"fold {i + 1} of {k}: segments of {short} samples are too short for the candidates' "
+                             f"largest lag {min_len - 2} (each segment needs {min_len} samples); use fewer folds "
+                             "or a validation record")
         valid = record.slice(a, b, name=f"{record.name} fold {i + 1} valid")
         # the joined identification segments: the max-lag samples after the joint are a short transient
         ident = gb.Record(np.r_[record.u[:a], record.u[b:]], np.r_[record.y[:a], record.y[b:]], record.Ts,
