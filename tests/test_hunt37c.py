@@ -76,3 +76,21 @@ def test_folds_too_short_name_the_candidates_true_lag():
     short = data.ident.slice(0, 10)
     with pytest.raises(ValueError, match=r"largest lag 2 \(each segment needs 4 samples\)"):
         gb.select_graybox(_CAND, short, data.static, sizes=[2], estimator="pe", progress=False)
+
+
+# The table's JS_test was documented as "its refitted model's J_S there", but it counts the errors from
+# the candidates' largest lag on (as JS_valid, the same samples for every row), where graybox.js counts
+# from the model's own: for a chosen structure of lag 1 among candidates of lag 2, gb.js(sel.model, test)
+# was 416 Pa² and the table's JS_test 413 Pa², unexplained. The docstring now says which samples count.
+def test_js_test_counts_from_the_candidates_lag_as_documented():
+    data = _pump()
+    test = _pump(seed=7).valid
+    sel = gb.select_graybox(_CAND, data, sizes=[3], estimator="pe", test=test, progress=False)
+    model = sel.model
+    assert model.max_lag < _CAND.max_lag  # the case where the two counts differ
+    y = model.simulate(test)
+    from_candidates = np.mean((y[_CAND.max_lag:] - test.y[_CAND.max_lag:]) ** 2)
+    assert sel.chosen["JS_test"] == pytest.approx(from_candidates, rel=1e-12)
+    assert gb.js(model, test) != pytest.approx(from_candidates, rel=1e-6)
+    doc = " ".join(gb.GrayboxSelection.__doc__.split())
+    assert "``JS_test`` (its refitted model's J_S there, counted as ``JS_valid`` is: from the candidates' largest lag on" in doc

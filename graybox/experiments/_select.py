@@ -132,8 +132,10 @@ class GrayboxSelection:
         (its static error, worst fold; NaN without static points), ``in_band``, ``vs_best`` and
         ``vs_best_se`` (mean per-block log ratio of its J_S to the best row's, and its standard
         error), ``eligible`` (the rule could choose it), ``rank`` (1: the choice); with a test
-        record also ``JS_test`` (its refitted model's J_S there) and ``JSF_test`` (that model's
-        J_SF). Nothing in the test columns took part in the choice. ``reason``: why a row has no
+        record also ``JS_test`` (its refitted model's J_S there, counted as ``JS_valid`` is: from
+        the candidates' largest lag on, the same samples for every row, so it differs from
+        ``graybox.js(model, test)``, which counts from the model's own largest lag, when the row's
+        structure has shorter lags than the candidates) and ``JSF_test`` (that model's J_SF). Nothing in the test columns took part in the choice. ``reason``: why a row has no
         qualifying model (every member failed, with which fit and why, or diverged; the smallest
         J_SF reached when the band is missed); empty when it has one. ``warnings``: what its fits
         warned of (e.g. an ELS iteration that did not converge), each message once; empty when
