@@ -94,3 +94,16 @@ def test_js_test_counts_from_the_candidates_lag_as_documented():
     assert gb.js(model, test) != pytest.approx(from_candidates, rel=1e-6)
     doc = " ".join(gb.GrayboxSelection.__doc__.split())
     assert "``JS_test`` (its refitted model's J_S there, counted as ``JS_valid`` is: from the candidates' largest lag on" in doc
+
+
+# A validation record shorter than the candidates' lags + 1 was refused by the Record's own check,
+# "record: record has 2 samples, fewer than max lag + 1 = 3", naming neither the validation record nor
+# what it needs; one sample longer got "the validation record (3 samples) is shorter than the candidates'
+# lags + 2". Both now say the latter, with the samples needed.
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_a_short_validation_record_is_named_as_such(n):
+    data = _pump()
+    valid = data.valid.slice(0, n)
+    with pytest.raises(ValueError, match=rf"the validation record \({n} samples\) is shorter than the candidates' "
+                                         r"lags \+ 2 \(4\)"):
+        gb.select_graybox(_CAND, data, validation=valid, sizes=[2], estimator="pe", progress=False)

@@ -508,9 +508,9 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
             if rec is not None:
                 check_overlap(test, rec, "test", name, "a test must be data nothing was fitted or chosen on")
     if valid is not None:
-        valid.require_length(L)
-        if len(valid) <= L + 1:
-            raise ValueError(f"the validation record ({len(valid)} samples) is shorter than the candidates' lags + 2")
+        if len(valid) <= L + 1:  # in the test record's words, whatever its length (a Record's own check says "record")
+            raise ValueError(f"the validation record ({len(valid)} samples) is shorter than the candidates' lags + 2 "
+                             f"({L + 2})")
         if same_record(valid, ident):
             raise ValueError("the validation record is the identification record: choose on other data, or pass "
                              "the record alone (folds)")
