@@ -107,3 +107,16 @@ def test_a_short_validation_record_is_named_as_such(n):
     with pytest.raises(ValueError, match=rf"the validation record \({n} samples\) is shorter than the candidates' "
                                          r"lags \+ 2 \(4\)"):
         gb.select_graybox(_CAND, data, validation=valid, sizes=[2], estimator="pe", progress=False)
+
+
+# decide_min_correlation on a record of two samples after the largest lag returned a decision: any two
+# points are perfectly correlated, so every member had ρ = 1 and the pick was round-off; on one sample
+# it said "no member has a defined residual/output correlation (every free run diverged?)", a wrong
+# guess at the cause. Both are now refused as too short to correlate.
+@pytest.mark.parametrize("n", [2, 3])
+def test_min_correlation_refuses_a_record_too_short_to_correlate(n):
+    data = _pump()
+    front = gb.pe_pareto(gb.parse_structure(["1", "y(k-1)", "n(k-1)", "n(k-1)^2"]), data, lambdas=[1e-3, 0.1, 1.0])
+    with pytest.raises(ValueError, match=rf"{n - 1} sample\(s\) after the largest lag 1; a correlation needs 3"):
+        gb.decide_min_correlation(front, data.valid.slice(0, n))
+    assert gb.decide_min_correlation(front, data.valid.slice(0, 4)).index in (0, 1, 2)
