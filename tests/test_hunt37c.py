@@ -120,3 +120,18 @@ def test_min_correlation_refuses_a_record_too_short_to_correlate(n):
     with pytest.raises(ValueError, match=rf"{n - 1} sample\(s\) after the largest lag 1; a correlation needs 3"):
         gb.decide_min_correlation(front, data.valid.slice(0, n))
     assert gb.decide_min_correlation(front, data.valid.slice(0, 4)).index in (0, 1, 2)
+
+
+# output_error(choose_on=record) refused a short choosing record with "4 regression rows for 4
+# parameters: the data are too short", the fitting rule, though the choosing record is only run
+# freely to score the fits (decide_dsf(choose_on=) scores the same record); the message read as if
+# the identification data were short.
+def test_output_error_chooses_on_a_short_record_as_decide_dsf_does():
+    data = _pump()
+    st = gb.parse_structure(["1", "y(k-1)", "n(k-1)", "n(k-1)^2"])
+    short = data.valid.slice(0, 5)  # 4 error samples for 4 parameters
+    fit = gb.output_error(st, data, n_starts=1, choose_on=short, progress=False)
+    assert fit.chosen_on == short.name and np.isfinite(fit.JS)
+    # the start chosen is the one with the smallest J_S on the choosing record, as gb.js scores it
+    ok = fit.starts[fit.starts["status"] == "fitted"]
+    assert gb.js(fit.model, short) == pytest.approx(ok["JS_choose"].min(), rel=1e-9)

@@ -219,7 +219,7 @@ def output_error(
             for r in rec:
                 check_overlap(c, r, "choosing", "fitting", "choose on data the fit did not see (e.g. data.valid)",
                               prefix="choose_on: ")
-        chooser, chosen_on = SEProblem(st, crec, None), ", ".join(r.name for r in crec)
+        chooser, chosen_on = SEProblem(st, crec, None, scored_only=True), ", ".join(r.name for r in crec)
     fit = dict(n_starts=n_starts, subsample=subsample, theta0=theta0, chooser=chooser, chosen_on=chosen_on, seed=seed,
                max_nfev=max_nfev, tol=tol, solver=solver, progress=progress, name=name)
     return refit_if_slow(problem, lambda p: _oe_fit(p, rec, **fit), "the output-error fit", margin == "auto")

@@ -117,10 +117,13 @@ class SEProblem:
         Regularisation towards least squares: γ · mean_j (s_j (θ_j − θ_LS,j))² is added to the
         cost, with s_j the RMS of regressor j (so each term is a change of that term's contribution
         to ŷ, in output units, and the cost stays independent of units). 0: none.
+    scored_only : bool
+        A problem whose records only score θ's fitted elsewhere (a choosing record's J_S): no
+        more regression rows than parameters are needed.
     """
 
     def __init__(self, structure: Structure, records: Record | Sequence[Record], static: StaticPoints | None,
-                 *, margin: float | None = None, ridge: float = 0.0):
+                 *, margin: float | None = None, ridge: float = 0.0, scored_only: bool = False):
         self.records = as_records(records)
         if static is not None and not isinstance(static, StaticPoints):
             raise TypeError(f"static must be StaticPoints or None, got {type(static).__name__}")
@@ -148,7 +151,8 @@ class SEProblem:
         self.U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L)
                   for r in self.records]
         self.psi, self.target = stacked_regressors(structure, self.records)
-        check_rows(self.psi.shape[0], len(structure))  # as els, cls and pe: no error left to fit
+        if not scored_only:
+            check_rows(self.psi.shape[0], len(structure))  # as els, cls and pe: no error left to fit
         self.n_dyn = self.target.size
         self.scale = column_scales(self.psi)  # θ = z / scale keeps the optimisers well conditioned
         # the output's spread (output units): least_squares' gradient test is absolute, and the
