@@ -135,3 +135,36 @@ def test_output_error_chooses_on_a_short_record_as_decide_dsf_does():
     # the start chosen is the one with the smallest J_S on the choosing record, as gb.js scores it
     ok = fit.starts[fit.starts["status"] == "fitted"]
     assert gb.js(fit.model, short) == pytest.approx(ok["JS_choose"].min(), rel=1e-9)
+
+
+def _speed_volts(seed: int, n: int) -> gb.Record:
+    """y(k) = 0.6 y(k−1) + 0.5 a(k−1) − 0.3 b(k−2) + 0.2 a(k−1) b(k−1) + 0.1 with speed = 3000 + 500 a (rpm),
+    volts = 1e-3 (1 + b) (V), the output 2e5 + 1e4 y (Pa) measured with 100 Pa of noise."""
+    rng = np.random.default_rng(seed)
+    a = np.repeat(rng.uniform(-1, 1, n // 5 + 1), 5)[:n]
+    b = np.repeat(rng.uniform(-1, 1, n // 7 + 1), 7)[:n]
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = 0.6 * y[k - 1] + 0.5 * a[k - 1] - 0.3 * b[k - 2] + 0.2 * a[k - 1] * b[k - 1] + 0.1
+    return gb.Record(np.c_[3000 + 500 * a, 1e-3 * (1 + b)], 2e5 + 1e4 * y + 100 * rng.standard_normal(n),
+                     Ts=0.1, input_names=("speed", "volts"))
+
+
+# select_graybox grew its SEMP path only to the largest size asked for, so a size near it never had
+# SEMP's look-ahead (its pruning improves a size once larger structures were tried): with sizes=[4, 6]
+# the semp-6 row was the greedy path's 6 terms, 15 times the test J_S of the semp-6 row of the default
+# call (which holds the system's terms), and the call chose it. A size's row no longer depends on the
+# other sizes asked: the path grows at least as far as the default sizes'.
+def test_a_semp_row_does_not_depend_on_the_other_sizes_asked():
+    A, B = (g.ravel() for g in np.meshgrid(np.linspace(-1, 1, 4), np.linspace(-1, 1, 4)))
+    ybar = 2e5 + 1e4 * (0.5 * A - 0.3 * B + 0.2 * A * B + 0.1) / 0.4
+    points = gb.StaticPoints(np.c_[3000 + 500 * A, 1e-3 * (1 + B)], ybar, uncertainty=100.0,
+                             input_names=("speed", "volts"))
+    data = gb.Dataset(_speed_volts(1, 400), _speed_volts(2, 300), points)
+    test = _speed_volts(3, 300)
+    cand = gb.Candidates(1, {"speed": 2, "volts": 2}, degree=2)
+    few = gb.select_graybox(cand, data, sizes=[4, 6], estimator="pe", test=test, progress=False)
+    every = gb.select_graybox(cand, data, estimator="pe", test=test, progress=False)
+    assert few.table.loc["semp-6", "terms"] == every.table.loc["semp-6", "terms"]
+    assert {"speed(k-1)volts(k-1)", "volts(k-2)", "y(k-1)"} <= set(map(str, few.structure_of("semp-6")))
+    assert few.chosen["JS_test"] < 1.5 * 100.0 ** 2  # the noise's variance: the system's own terms

@@ -536,6 +536,10 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
     rows = len(ident) - process.max_lag  # the searches' regression rows: a structure has fewer terms
     forced = list(include)
     asked = sizes is not None
+    # the default sizes' largest: even sizes from 4 (or fewer, for small spaces or short records) to
+    # min(16, n) (larger structures were never the honest choice in BENCHMARKS.md, honest selection, and
+    # the SEMP path's cost grows quickly past them)
+    top = min(16, n_max, rows - 1)
     if asked:
         sizes = sorted({check_int(s, "sizes", low=1) for s in sizes})
         if sizes and sizes[-1] > n_max:
@@ -550,10 +554,6 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
             raise ValueError(f"sizes {sizes} are fewer than the {n_forced} included terms {forced}: every "
                              "structure holds them")
     else:
-        # derived from the candidate space: even sizes from 4 (or fewer, for small spaces or short
-        # records) to min(16, n) (larger structures were never the honest choice in BENCHMARKS.md,
-        # honest selection, and the SEMP path's cost grows quickly past them)
-        top = min(16, n_max, rows - 1)
         if top < 1:
             raise ValueError(f"the identification record ({len(ident)} samples) is too short for the candidates' "
                              f"largest lag {process.max_lag}: no structure can be fitted")
@@ -566,8 +566,11 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
         # there is no news to the caller, who chooses among the sizes on other data
         warnings.filterwarnings("ignore", r".* is smallest at the largest size looked at", RuntimeWarning)
         if "semp" in sources:
-            # grown by criterion up to the largest size: a path that stops early gives the sizes it reached
-            path = gb.semp(candidates, ident, criterion="bic", max_terms=max(sizes), include=forced).path
+            # grown by criterion at least as far as the default sizes' path, whatever sizes are asked: a path cut
+            # at the largest size asked has no look-ahead there (SEMP's pruning improves a size only once larger
+            # structures were tried), so a size's row would depend on the others asked; a path that stops early
+            # gives the sizes it reached
+            path = gb.semp(candidates, ident, criterion="bic", max_terms=max(max(sizes), top), include=forced).path
             reached["semp"] = set(path["n_terms"])
             for k in sizes:
                 same = path[path["n_terms"] == k]
@@ -936,7 +939,9 @@ def select_graybox(
     sizes : sequence of int, optional
         Structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
         (fewer for a small candidate set or an identification record of few samples). Sizes a
-        search does not reach are left out with a :class:`SelectionWarning`.
+        search does not reach are left out with a :class:`SelectionWarning`. The SEMP path grows at
+        least as far as the default sizes' (its pruning improves a size only once larger structures
+        were tried): asking for a few sizes leaves each one's row as the default call makes it.
     sources : sequence of {"semp", "frols", "swap", "exact"}
         Where the structures of each size come from: the SEMP path, the FROLS path (greedy), the
         best subset of each size by term exchanges from the greedy paths (``frols(search="swap")``,
