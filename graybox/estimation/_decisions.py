@@ -252,7 +252,8 @@ def decide_min_correlation(
     L = st.max_lag
     record.require_length(L)
     if len(record) - L < 3:  # two points are always perfectly correlated (ρ = 1 for every member), one is undefined
-        raise ValueError(f"record: {len(record) - L} sample(s) after the largest lag {L}; a correlation needs 3 or more")
+        raise ValueError(f"record: {len(record) - L} sample(s) after the largest lag {L}; a correlation needs 3 "
+                         "or more")
     y = record.y[L:]
     psi = regressor_matrix(st, record.u, record.y, start=L, input_names=record.input_names)
     K = len(pareto)

@@ -135,7 +135,8 @@ class GrayboxSelection:
         record also ``JS_test`` (its refitted model's J_S there, counted as ``JS_valid`` is: from
         the candidates' largest lag on, the same samples for every row, so it differs from
         ``graybox.js(model, test)``, which counts from the model's own largest lag, when the row's
-        structure has shorter lags than the candidates) and ``JSF_test`` (that model's J_SF). Nothing in the test columns took part in the choice. ``reason``: why a row has no
+        structure has shorter lags than the candidates) and ``JSF_test`` (that model's J_SF).
+        Nothing in the test columns took part in the choice. ``reason``: why a row has no
         qualifying model (every member failed, with which fit and why, or diverged; the smallest
         J_SF reached when the band is missed); empty when it has one. ``warnings``: what its fits
         warned of (e.g. an ELS iteration that did not converge), each message once; empty when
