@@ -706,7 +706,7 @@ def frols(
     if mode == "criterion" and K < len(forced):
         raise ValueError(f"criterion needs more rows ({N}) than the {len(forced)} included terms")
     if mode == "n_terms" and K >= N:  # said before any search, in the same words for all of them
-        raise ValueError(f"more terms ({K}) than regression rows ({N})")
+        raise ValueError(f"{K} terms need more than their {N} regression rows (no error left to fit); lower n_terms")
 
     plan = None
     n_included = len(forced)
@@ -730,7 +730,7 @@ def frols(
     # RSS from the orthogonal decomposition, floored at round-off (see _RSS_FLOOR)
     rss = np.maximum(yy - np.cumsum(g**2), _RSS_FLOOR * yy)
     if k_eval >= N:
-        raise ValueError(f"more terms ({k_eval}) than regression rows ({N})")
+        raise ValueError(f"{k_eval} terms need more than their {N} regression rows (no error left to fit)")
     curve = information_criterion(curve_name, rss, N)
     if plan is None:
         # every model looked at holds the included terms: none of fewer terms is a candidate
