@@ -244,7 +244,7 @@ def test_expect_and_unsupported_types(values, tmp_path):
         gb.load(p, expect=dict)
     with pytest.raises(ValueError, match="cannot save a dict"):
         gb.save({"a": 1}, tmp_path / "x.json")
-    with pytest.raises(ValueError, match="units"):
+    with pytest.raises(TypeError, match="units must be a pair"):
         gb.save(values["model"], tmp_path / "x.json", units="rpm")
 
 

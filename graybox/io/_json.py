@@ -66,7 +66,7 @@ from ..estimation._epsilon_constraint import DSFResult
 from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
-from ..core._records import StaticPoints
+from ..core._records import StaticPoints, check_units
 from ..core._validation import FrozenMap
 from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
@@ -567,14 +567,11 @@ def _units_arg(units: tuple[str, str] | Mapping[str, str] | None) -> dict | None
     if units is None:
         return None
     if isinstance(units, Mapping):
-        u, y = units.get("u", ""), units.get("y", "")
-    else:
-        try:
-            u, y = units
-        except (TypeError, ValueError):
-            raise ValueError(f"units must be (u unit, y unit), got {units!r}") from None
-    if not (isinstance(u, str) and isinstance(y, str)):
-        raise ValueError(f"units must be strings, got {units!r}")
+        other = sorted(map(repr, set(units) - {"u", "y"}))
+        if other:  # dropped, they would leave the header without the units meant
+            raise ValueError(f"units: unknown key(s) {', '.join(other)}; a mapping of units has the keys 'u' and 'y'")
+        units = (units.get("u", ""), units.get("y", ""))
+    u, y = check_units(units, "the file's header")  # a str is one unit, not a pair: never split into its letters
     return {"u": u, "y": y}
 
 
@@ -586,7 +583,8 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
         The value to write.
     units : (str, str) or mapping, optional
-        Units of the input and output (e.g. ``("rpm", "mlc")``, or a Record's ``units``), written
+        Units of the input and output: a pair of str (e.g. ``("rpm", "mlc")``, or a Record's ``units``) or a
+        mapping with the keys ``"u"`` and ``"y"`` (a missing one: no unit said), written
         in the header; default for StaticPoints: their own ``units`` (when they name any).
 
     Returns
@@ -736,7 +734,7 @@ def save(
     path : str or PathLike
         Where to write (conventionally ``*.json``).
     units : (str, str) or mapping, optional
-        Units of u and y for the header (e.g. ``data.ident.units``).
+        Units of u and y for the header, as :func:`to_json` takes them (e.g. ``data.ident.units``).
 
     Returns
     -------

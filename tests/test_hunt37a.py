@@ -1,0 +1,33 @@
+"""Bugs found by a bug hunt in saving and loading (graybox.io), the CSV loaders and bundled data sets,
+transient inputs and the command line, used as a control engineer would on a plant of their own (Pa
+near 2e5, rpm near 3000, volts near 1e-3, inputs not named "u", two inputs, hand-edited files): each
+test fails without its fix."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import graybox as gb
+
+#: p(k) = 0.5 p(k-1) + 20 n(k-1) + 1e7 v(k-2) + 1e5: a pressure in Pa against a speed in rpm and a voltage.
+TWO = gb.Model(["y(k-1)", "speed(k-1)", "volts(k-2)", "1"], [0.5, 20.0, 1e7, 1e5], input_names=("speed", "volts"),
+               Ts=0.1)
+
+
+@pytest.mark.parametrize("units", ["Pa", "ab", b"ab"])
+def test_units_given_as_one_text_are_refused_not_split_into_letters(units):
+    # to_json / save unpacked units="Pa" (one unit, not a pair) into u = "P" and y = "a" and wrote them in the
+    # header without a word (a three-letter unit was refused); bytes were a ValueError, not a TypeError
+    with pytest.raises(TypeError, match="units must be a pair of strings"):
+        gb.to_json(TWO, units=units)
+
+
+def test_units_as_a_mapping_name_only_u_and_y():
+    # a mapping's other keys were dropped: {"input": "rpm", "output": "Pa"} wrote empty units
+    with pytest.raises(ValueError, match=r"units.*'input'.*'u' and 'y'"):
+        gb.to_json(TWO, units={"input": "rpm", "output": "Pa"})
+    assert json.loads(gb.to_json(TWO, units={"y": "Pa"}))["units"] == {"u": "", "y": "Pa"}
+    with pytest.raises(TypeError, match="units must be a pair of strings"):
+        gb.to_json(TWO, units=("rpm", 3))
