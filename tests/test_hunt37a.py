@@ -31,3 +31,29 @@ def test_units_as_a_mapping_name_only_u_and_y():
     assert json.loads(gb.to_json(TWO, units={"y": "Pa"}))["units"] == {"u": "", "y": "Pa"}
     with pytest.raises(TypeError, match="units must be a pair of strings"):
         gb.to_json(TWO, units=("rpm", 3))
+
+
+def _record(seed=0, N=300, name="ident"):
+    rng = np.random.default_rng(seed)
+    u = np.column_stack([np.repeat(rng.uniform(2500, 3500, N // 20 + 1), 20)[:N],
+                         np.repeat(rng.uniform(1e-3, 5e-3, N // 15 + 1), 15)[:N]])
+    y = TWO.simulate(u, np.full(2, 2e5)) + 50 * rng.standard_normal(N)
+    return gb.Record(u, y, Ts=0.1, name=name, units=("rpm", "Pa"), input_names=("speed", "volts"))
+
+
+@pytest.fixture(scope="module")
+def oe():
+    return gb.output_error(TWO.structure, _record(), n_starts=1, max_nfev=5, seed=1)
+
+
+def test_an_output_error_result_without_its_starts_columns_is_refused(oe):
+    # OEResult took any table as its starts: a hand-edited file whose starts lacked a column (or one built with an
+    # empty table) loaded, and its repr and failures then failed with pandas' KeyError 'status'
+    doc = json.loads(gb.to_json(oe))
+    doc["object"]["starts"]["columns"][2] = "state"
+    with pytest.raises(gb.GrayboxFileError, match=r"starts lacks the column\(s\) \['status'\]"):
+        gb.from_json(json.dumps(doc))
+    fields = {k: getattr(oe, k) for k in ("model", "JS", "JS_choose", "chosen_on", "start", "margin", "radius", "seed")}
+    with pytest.raises(ValueError, match="starts lacks the column"):
+        gb.OEResult(starts=pd.DataFrame(), **fields)
+    assert gb.OEResult(starts=oe.starts, **fields).failures == oe.failures

@@ -100,6 +100,9 @@ class OEResult:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        missing = [c for c in START_COLUMNS if c not in self.starts.columns]
+        if missing:  # failures and repr read them (a hand-edited file, a table built by hand)
+            raise ValueError(f"starts lacks the column(s) {missing}; it has {list(self.starts.columns)}")
 
     @property
     def failures(self) -> Mapping[str, str]:
