@@ -57,3 +57,25 @@ def test_an_output_error_result_without_its_starts_columns_is_refused(oe):
     with pytest.raises(ValueError, match="starts lacks the column"):
         gb.OEResult(starts=pd.DataFrame(), **fields)
     assert gb.OEResult(starts=oe.starts, **fields).failures == oe.failures
+
+
+@pytest.mark.parametrize("field, value, why", [
+    ("input_names", ["speed"], "ubar has 2 values for 1 input"),     # was: gains of a b reshaped to one row
+    ("ubar", [3000.0], "ubar has 1 values for 2 input"),
+    ("b", [[1.0, 2.0, 3.0, 4.0]], r"b must have shape \(2, L_u\)"),  # was: one row read as two
+    ("Ts", -0.1, "Ts"),                                               # was: τ = -0.14 s
+    ("status", "weird", "status must be one of"),
+    ("a", ["nan"], "a has non-finite values"),                        # was: LinAlgError from repr
+    ("ybar", "nan", "ybar must be finite"),
+])
+def test_a_local_model_that_disagrees_with_itself_is_refused(field, value, why):
+    # LocalModel checked its fields' types only: a hand-edited file whose input names, ū and b disagree loaded and
+    # gave a gain per misread row of b, a negative Ts a negative time constant, NaN in a numpy's LinAlgError from
+    # repr, an unknown status passed as one
+    local = gb.local_model(TWO, [3000.0, 3e-3])
+    doc = json.loads(gb.to_json(local))
+    doc["object"][field] = value
+    with pytest.raises(gb.GrayboxFileError, match=f"not a valid LocalModel: .*{why}"):
+        gb.from_json(json.dumps(doc))
+    back = gb.from_json(gb.to_json(local))
+    np.testing.assert_array_equal(back.dc_gain, local.dc_gain)

@@ -31,12 +31,13 @@ from scipy.signal import lfilter
 
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
-from ..core._terms import Structure
-from ..core._validation import check_fields, check_int, check_real, check_seed, frozen, refuse_non_real, warn
+from ..core._terms import Structure, check_input_names
+from ..core._validation import (check_choice, check_fields, check_int, check_real, check_seed, frozen, refuse_non_real,
+                                warn)
 from ..models._coerce import as_model
 from ..models._model import Model
-from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, continuum, reached_equilibria, schur_stable,
-                                several_stable)
+from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, reached_equilibria,
+                                schur_stable, several_stable)
 from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import _folded, reached_surface
 
@@ -148,10 +149,30 @@ class LocalModel:
     name: str = ""
 
     def __post_init__(self) -> None:
+        # types, then what the fields say of each other (a file loads through here: graybox.io)
         check_fields(self)
-        object.__setattr__(self, "ubar", frozen(np.ravel(self.ubar)))
-        object.__setattr__(self, "a", frozen(self.a))
-        object.__setattr__(self, "b", frozen(np.reshape(self.b, (len(self.input_names), -1))))
+        m = len(check_input_names(self.input_names, what="LocalModel: input_names"))
+        ubar, a, b = np.ravel(self.ubar), np.asarray(self.a, float), np.asarray(self.b, float)
+        if ubar.size != m:
+            raise ValueError(f"ubar has {ubar.size} values for {m} input(s) {self.input_names}")
+        if a.ndim != 1:
+            raise ValueError(f"a must have shape (L_y,), got {a.shape}")
+        if b.ndim == 1 and m == 1:
+            b = b[None, :]
+        if b.ndim != 2 or b.shape[0] != m:
+            raise ValueError(f"b must have shape ({m}, L_u), one row per input, got {b.shape}")
+        for name, v in (("ubar", ubar), ("a", a), ("b", b)):
+            if not np.isfinite(v).all():
+                raise ValueError(f"{name} has non-finite values")
+        if self.ybar is not None and not np.isfinite(self.ybar):
+            raise ValueError(f"ybar must be finite or None (no equilibrium), got {self.ybar}")
+        check_choice(self.status, "status", Reached.STATUS)
+        if self.status == "reached" and self.ybar is None:
+            raise ValueError("status 'reached' needs the equilibrium ybar")
+        object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
+        object.__setattr__(self, "ubar", frozen(ubar))
+        object.__setattr__(self, "a", frozen(a))
+        object.__setattr__(self, "b", frozen(b))
 
     # -- facts --------------------------------------------------------------------------------
     @property
