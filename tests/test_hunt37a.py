@@ -79,3 +79,21 @@ def test_a_local_model_that_disagrees_with_itself_is_refused(field, value, why):
         gb.from_json(json.dumps(doc))
     back = gb.from_json(gb.to_json(local))
     np.testing.assert_array_equal(back.dc_gain, local.dc_gain)
+
+
+@pytest.mark.parametrize("field, value, why", [
+    ("ybar", [1.0], r"ybar must have shape \(2,\)"),                  # was: to_frame failed in pandas
+    ("gain", [1.0, 2.0], r"gain must have shape \(2, 2\)"),
+    ("status", ["reached"], "status has 1 entries for 2 operating points"),  # was: "1 reached" of 2
+    ("local_models", [], "0 local models for 2 operating points"),    # was: "0 points", IndexError in to_frame
+    ("ubar", [[3000.0, 3e-3], [3100.0, 1.0]], "ubar disagrees with the local models"),
+])
+def test_an_operating_curve_that_disagrees_with_itself_is_refused(field, value, why):
+    # OperatingCurve checked its fields' types only: a hand-edited file with arrays of other lengths than its points
+    # loaded, printed wrong counts, and its to_frame failed inside pandas
+    curve = gb.operating_curve(TWO, [[3000.0, 3e-3], [3100.0, 2e-3]])
+    doc = json.loads(gb.to_json(curve))
+    doc["object"][field] = value
+    with pytest.raises(gb.GrayboxFileError, match=f"not a valid OperatingCurve: .*{why}"):
+        gb.from_json(json.dumps(doc))
+    pd.testing.assert_frame_equal(gb.from_json(gb.to_json(curve)).to_frame(), curve.to_frame())

@@ -645,6 +645,26 @@ class OperatingCurve:
             v = getattr(self, f)
             if v is not None:
                 object.__setattr__(self, f, frozen(v))
+        # what the fields say of each other (a file loads through here: graybox.io)
+        M = len(self.ubar)
+        if not all(isinstance(lm, LocalModel) for lm in self.local_models):
+            raise TypeError("local_models must hold LocalModel values")
+        if len(self.local_models) != M or M == 0:
+            raise ValueError(f"{len(self.local_models)} local models for {M} operating points; one each, at least one")
+        if len(self.status) != M:
+            raise ValueError(f"status has {len(self.status)} entries for {M} operating points")
+        if tuple(self.status) != tuple(lm.status for lm in self.local_models):
+            raise ValueError(f"status {self.status} disagrees with the local models' own")
+        points = np.vstack([lm.ubar for lm in self.local_models])
+        if self.ubar.shape != ((M,) if points.shape[1] == 1 else points.shape) \
+                or not np.array_equal(self.ubar.reshape(points.shape), points):
+            raise ValueError("ubar disagrees with the local models' operating points")
+        for f in ("ybar", "time_constant", "damping", "spectral_radius", "settling_time", "gain", *self.BANDS):
+            v = getattr(self, f)
+            want = self.ubar.shape if f.startswith("gain") else (M,)
+            if v is not None and v.shape != want:
+                each = "operating point and input" if len(want) > 1 else "operating point"
+                raise ValueError(f"{f} must have shape {want}, one value per {each}, got {v.shape}")
 
     @property
     def has_band(self) -> bool:
