@@ -97,3 +97,16 @@ def test_an_operating_curve_that_disagrees_with_itself_is_refused(field, value, 
     with pytest.raises(gb.GrayboxFileError, match=f"not a valid OperatingCurve: .*{why}"):
         gb.from_json(json.dumps(doc))
     pd.testing.assert_frame_equal(gb.from_json(gb.to_json(curve)).to_frame(), curve.to_frame())
+
+
+@pytest.mark.parametrize("field, value, why", [("level", 2.0, "level"), ("level", 0.0, "level"), ("dof", 0, "dof"),
+                                               ("dof", -3, "dof")])
+def test_a_parameter_uncertainty_at_an_impossible_level_or_dof_is_refused(field, value, why):
+    # ParameterUncertainty checked cov's shape but not its level and degrees of freedom: a hand-edited file with
+    # level 2 or dof -3 loaded and gave NaN intervals (Student's t quantile outside its range) without a word
+    unc = gb.ls_uncertainty(gb.els(TWO.structure, _record(), noise=0).model, _record())
+    doc = json.loads(gb.to_json(unc))
+    doc["object"][field] = value
+    with pytest.raises(gb.GrayboxFileError, match=f"not a valid ParameterUncertainty: {why}"):
+        gb.from_json(json.dumps(doc))
+    assert np.isfinite(gb.from_json(gb.to_json(unc)).intervals).all()

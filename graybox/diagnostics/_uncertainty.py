@@ -135,6 +135,9 @@ class ParameterUncertainty:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # the intervals' t quantile needs both (a file loads through here: graybox.io)
+        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
+        check_int(self.dof, "dof (degrees of freedom)", low=1)
         n = self.model.n_params
         cov = frozen(self.cov)
         if cov.shape != (n, n):
