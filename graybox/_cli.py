@@ -95,9 +95,9 @@ the black-box models, the neural baseline and Table I re-estimated, with figures
 written to --out.
 
 Checkpoints: the simulation-error sweeps of Table I save a checkpoint after each
-lambda in --out (se_ga_l2.npz, se_gradient_l3_quick.npz, ...) and a later run in
-the same folder resumes from them, so an interrupted run loses little; the run
-says which checkpoints it resumes. Quick and full runs keep separate files. To
+lambda in --out (se_ga_l2_margin0.01_pe.npz, se_gradient_l3_margin0.01_quick.npz,
+...) and a later run in the same folder resumes from them, so an interrupted run
+loses little; the run says which checkpoints it resumes. Quick and full runs keep separate files. To
 start over, pass --fresh (or delete those .npz files, or choose another --out)."""
 
 

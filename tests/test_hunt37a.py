@@ -110,3 +110,18 @@ def test_a_parameter_uncertainty_at_an_impossible_level_or_dof_is_refused(field,
     with pytest.raises(gb.GrayboxFileError, match=f"not a valid ParameterUncertainty: {why}"):
         gb.from_json(json.dumps(doc))
     assert np.isfinite(gb.from_json(gb.to_json(unc)).intervals).all()
+
+
+def test_reproduce_help_names_the_checkpoint_files_the_run_writes(capsys, tmp_path):
+    # `graybox reproduce --help` told to delete "se_ga_l2.npz, se_gradient_l3_quick.npz", names no run writes
+    # (they carry the stability margin and the GA's starts: se_ga_l2_margin0.01_pe.npz …)
+    import re
+
+    from graybox._cli import main
+    from graybox.reproduce._table1 import checkpoint_paths
+
+    with pytest.raises(SystemExit):
+        main(["reproduce", "--help"])
+    named = set(re.findall(r"se_[\w.]+?\.npz", capsys.readouterr().out.replace("\n", " ")))
+    written = {p.name for quick in (True, False) for p in checkpoint_paths(tmp_path, quick)}
+    assert named and named <= written

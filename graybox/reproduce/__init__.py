@@ -44,7 +44,7 @@ def _writable_folder(out: Path) -> None:
 def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout, fresh: bool = False) -> None:
     """Run every section in order, printing each as it finishes.
 
-    The SE sweeps of Table I keep checkpoints under ``out`` (``se_<method>_l<degree>[_quick].npz``)
+    The SE sweeps of Table I keep checkpoints under ``out`` (``se_<method>_l<degree>_margin<margin>[_<starts>][_quick].npz``, e.g. ``se_ga_l2_margin0.01_pe.npz``)
     and resume from them: a second run in the same folder, or a run after a kill, skips the λ1
     values already done. Each checkpoint resumed is named in the output; one written by another
     graybox version is named too, and its sweep starts over (its algorithm may have changed).
