@@ -28,8 +28,9 @@ bundled = "pumping"       # or "buck" (the real buck converter, data kept outsid
 # valid = {path = "valid.csv", u = "speed", y = "pressure", time = "t"}
 # static = {path = "static.csv", u = "speed", y = "pressure", uncertainty = 0.175}  # steady states, +/- error
 # (without uncertainty give band = B, J_SF's bound in output units^2, and b to every band constraint)
-# Several inputs: u = ["speed1", "speed2"] in all three files. Static files that repeat an
-# operating point: repeats = "mean" averages the repeats into one point.
+# Several inputs: u = ["speed1", "speed2"] in all three files; input_names = ["n1", "n2"] names them
+# for the terms (n1(k-1)) when the columns' names are not identifiers, e.g. "speed [rpm]".
+# Static files that repeat an operating point: repeats = "mean" averages the repeats into one point.
 
 # --------------------------------------------------------------------------------- structures
 # Made by FROLS: a candidate space (graybox.Candidates) and a rule (n_terms, tol or criterion).

@@ -195,8 +195,8 @@ def _hash(obj: Any, n: int = 16) -> str:
 # --------------------------------------------------------------------------------------------
 # data sets
 # --------------------------------------------------------------------------------------------
-_RECORD_KEYS = ("path", "u", "y", "time", "Ts")
-_STATIC_KEYS = ("path", "u", "y", "repeats", "uncertainty")
+_RECORD_KEYS = ("path", "u", "y", "time", "Ts", "input_names")
+_STATIC_KEYS = ("path", "u", "y", "repeats", "uncertainty", "input_names")
 
 
 def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dict:
@@ -221,6 +221,13 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
             raise SpecError(f"{k} must be a non-empty string{' or a list of them' if k == 'u' else ''}, got {v!r}",
                             path + (k,))
         out[k] = v
+    if d.get("input_names") is not None:  # absent: the canonical form is as before
+        names, n = d["input_names"], len(out["u"]) if isinstance(out["u"], list) else 1
+        if isinstance(names, str) or not isinstance(names, Sequence) or len(names) != n \
+                or not all(isinstance(c, str) and c for c in names):
+            raise SpecError(f"input_names must be a list of {n} name(s), one per input column of u, got {names!r}",
+                            path + ("input_names",))
+        out["input_names"] = list(names)
     if "repeats" in keys:
         out["repeats"] = _wrap(check_choice, path + ("repeats",), d.get("repeats", "error"), "repeats", ("error", "mean"))
     if "uncertainty" in keys and d.get("uncertainty") is not None:  # absent: the canonical form is as before
@@ -251,11 +258,12 @@ class DataSpec:
         :func:`graybox.load_pumping`, :func:`graybox.load_buck` or :func:`graybox.load_pumping_miso`
         (the rig with two independent pump speeds: two inputs).
     ident, valid : mapping, optional
-        CSV records ``{"path", "u", "y", "time" or "Ts"}`` (see :func:`graybox.load_record_csv`;
-        ``u`` a column name, or a list of them for several inputs); relative paths are resolved
-        against the spec file's folder.
+        CSV records ``{"path", "u", "y", "time" or "Ts", "input_names"}`` (see
+        :func:`graybox.load_record_csv`; ``u`` a column name, or a list of them for several inputs;
+        ``input_names`` the names terms use for them, needed when the column names are not
+        identifiers, e.g. ``"speed [rpm]"``); relative paths are resolved against the spec file's folder.
     static : mapping, optional
-        CSV static points ``{"path", "u", "y", "repeats", "uncertainty"}`` (see
+        CSV static points ``{"path", "u", "y", "repeats", "uncertainty", "input_names"}`` (see
         :func:`graybox.load_static_csv`; ``repeats = "mean"`` averages repeated measurements at one
         level; ``uncertainty`` is δ, the static measurements' error in output units, which gives
         the band and the half-width of a ``{type = "band"}`` without ``b``).
@@ -347,12 +355,15 @@ class DataSpec:
 
             assert self.ident is not None and self.valid is not None and self.static is not None
             ident = gb.load_record_csv(p(self.ident), u=self.ident["u"], y=self.ident["y"], time=self.ident["time"],
-                                       Ts=self.ident["Ts"], name=f"{self.name} ident")
+                                       Ts=self.ident["Ts"], name=f"{self.name} ident",
+                                       input_names=self.ident.get("input_names"))
             valid = gb.load_record_csv(p(self.valid), u=self.valid["u"], y=self.valid["y"], time=self.valid["time"],
-                                       Ts=self.valid["Ts"], name=f"{self.name} valid")
+                                       Ts=self.valid["Ts"], name=f"{self.name} valid",
+                                       input_names=self.valid.get("input_names"))
             static = gb.load_static_csv(p(self.static), u=self.static["u"], y=self.static["y"],
                                         name=f"{self.name} static points", repeats=self.static["repeats"],
-                                        uncertainty=self.static.get("uncertainty"))
+                                        uncertainty=self.static.get("uncertainty"),
+                                        input_names=self.static.get("input_names"))
             ds = gb.Dataset(ident, valid, static, description=f"CSV files of data set {self.name!r}")
         if ds.static is None:
             raise SpecError("the data set has no static points: gray-box cells and J_SF need them", ())
