@@ -164,3 +164,31 @@ def test_a_grid_reads_csv_inputs_whose_column_names_carry_units(tmp_path):
     (tmp_path / "bad.toml").write_text(bad, encoding="utf-8")
     with pytest.raises(gb.experiments.SpecError, match=r"input_names must be a list of 2 name"):
         Grid.from_toml(tmp_path / "bad.toml")
+
+
+def test_a_grid_reads_csv_files_as_a_logger_wrote_them(tmp_path):
+    # the loaders' messages ask for skiprows= (a logger's header block), delimiter=, decimal=, encoding= or time_rtol=,
+    # but a grid spec's files refused each as an "unknown key": such files could not be used by a grid at all
+    from graybox.experiments import Grid
+
+    _csv_files(tmp_path)
+    for name in ("ident", "valid"):  # a header block, ';' and a decimal comma, Windows' encoding, stamps of 3 Hz
+        lines = (tmp_path / f"{name}.csv").read_text(encoding="utf-8").splitlines()
+        body = [";".join([f"{k / 3:.2f}", *row.split(",")[1:]]).replace(".", ",") for k, row in enumerate(lines[1:])]
+        text = "\n".join(["Logger 7 (Kessel Süd)", "channels: 3", "", lines[0].replace(",", ";"), *body]) + "\n"
+        (tmp_path / f"{name}.csv").write_bytes(text.encode("cp1252"))
+    read = 'skiprows = 3, encoding = "cp1252", delimiter = ";", decimal = ",", time_rtol = 0.05'
+    spec = ('name = "own"\n[[data]]\nname = "rig"\n'
+            + "".join(f'{k} = {{path = "{k}.csv", u = ["speed [rpm]", "volts [V]"], y = "p [Pa]", time = "t", '
+                      f'input_names = ["speed", "volts"], {read}}}\n' for k in ("ident", "valid"))
+            + 'static = {path = "static.csv", u = ["speed [rpm]", "volts [V]"], y = "p [Pa]", skiprows = 0, '
+              'input_names = ["speed", "volts"]}\nband = 100.0\n'
+            '[[structures]]\nname = "given"\nterms = ["y(k-1)", "speed(k-1)", "volts(k-2)", "1"]\n'
+            '[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    data = Grid.from_toml_text(spec, base_dir=str(tmp_path)).data[0].load(tmp_path)
+    direct = gb.load_record_csv(tmp_path / "ident.csv", ["speed [rpm]", "volts [V]"], "p [Pa]", time="t",
+                                input_names=["speed", "volts"], skiprows=3, encoding="cp1252", time_rtol=0.05)
+    np.testing.assert_array_equal(data.ident.u, direct.u)
+    assert data.ident.Ts == direct.Ts == pytest.approx(1 / 3, rel=1e-2) and len(data.valid) == len(direct)
+    with pytest.raises(gb.experiments.SpecError, match="skiprows"):
+        Grid.from_toml_text(spec.replace("skiprows = 3", "skiprows = -1"))

@@ -31,6 +31,8 @@ bundled = "pumping"       # or "buck" (the real buck converter, data kept outsid
 # Several inputs: u = ["speed1", "speed2"] in all three files; input_names = ["n1", "n2"] names them
 # for the terms (n1(k-1)) when the columns' names are not identifiers, e.g. "speed [rpm]".
 # Static files that repeat an operating point: repeats = "mean" averages the repeats into one point.
+# Files as a logger or a spreadsheet wrote them: skiprows = 3 (a header block above the column names),
+# delimiter = ";", decimal = ",", encoding = "cp1252", time_rtol = 0.01 (stamps printed with few digits).
 
 # --------------------------------------------------------------------------------- structures
 # Made by FROLS: a candidate space (graybox.Candidates) and a rule (n_terms, tol or criterion).

@@ -195,8 +195,16 @@ def _hash(obj: Any, n: int = 16) -> str:
 # --------------------------------------------------------------------------------------------
 # data sets
 # --------------------------------------------------------------------------------------------
-_RECORD_KEYS = ("path", "u", "y", "time", "Ts", "input_names")
-_STATIC_KEYS = ("path", "u", "y", "repeats", "uncertainty", "input_names")
+#: How a file is read, as the loaders take it (their messages name these options, e.g. "pass skiprows=3"): the
+#: loader checks the values; in the canonical form only when given.
+_READ_KEYS = ("delimiter", "decimal", "encoding", "skiprows")
+_RECORD_KEYS = ("path", "u", "y", "time", "Ts", "input_names", "time_rtol", *_READ_KEYS)
+_STATIC_KEYS = ("path", "u", "y", "repeats", "uncertainty", "input_names", *_READ_KEYS)
+
+
+def _read_options(entry: Mapping[str, Any]) -> dict[str, Any]:
+    """The loader's keyword options a file entry gives."""
+    return {k: entry[k] for k in ("input_names", "time_rtol", *_READ_KEYS) if k in entry}
 
 
 def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dict:
@@ -228,6 +236,16 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
             raise SpecError(f"input_names must be a list of {n} name(s), one per input column of u, got {names!r}",
                             path + ("input_names",))
         out["input_names"] = list(names)
+    for k in ("delimiter", "decimal", "encoding"):
+        if d.get(k) is not None:
+            if not isinstance(d[k], str):
+                raise SpecError(f"{k} must be a string, got {d[k]!r}", path + (k,))
+            out[k] = d[k]
+    if d.get("skiprows") is not None:
+        out["skiprows"] = _wrap(check_int, path + ("skiprows",), d["skiprows"], "skiprows", low=0)
+    if "time_rtol" in keys and d.get("time_rtol") is not None:
+        out["time_rtol"] = _wrap(check_real, path + ("time_rtol",), d["time_rtol"], "time_rtol", low=0, high=1,
+                                 low_open=True, high_open=True)
     if "repeats" in keys:
         out["repeats"] = _wrap(check_choice, path + ("repeats",), d.get("repeats", "error"), "repeats", ("error", "mean"))
     if "uncertainty" in keys and d.get("uncertainty") is not None:  # absent: the canonical form is as before
@@ -258,12 +276,14 @@ class DataSpec:
         :func:`graybox.load_pumping`, :func:`graybox.load_buck` or :func:`graybox.load_pumping_miso`
         (the rig with two independent pump speeds: two inputs).
     ident, valid : mapping, optional
-        CSV records ``{"path", "u", "y", "time" or "Ts", "input_names"}`` (see
+        CSV records ``{"path", "u", "y", "time" or "Ts"}`` and optionally ``input_names``,
+        ``time_rtol``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` (see
         :func:`graybox.load_record_csv`; ``u`` a column name, or a list of them for several inputs;
         ``input_names`` the names terms use for them, needed when the column names are not
         identifiers, e.g. ``"speed [rpm]"``); relative paths are resolved against the spec file's folder.
     static : mapping, optional
-        CSV static points ``{"path", "u", "y", "repeats", "uncertainty", "input_names"}`` (see
+        CSV static points ``{"path", "u", "y", "repeats", "uncertainty"}`` and optionally ``input_names``,
+        ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` (see
         :func:`graybox.load_static_csv`; ``repeats = "mean"`` averages repeated measurements at one
         level; ``uncertainty`` is δ, the static measurements' error in output units, which gives
         the band and the half-width of a ``{type = "band"}`` without ``b``).
@@ -355,15 +375,12 @@ class DataSpec:
 
             assert self.ident is not None and self.valid is not None and self.static is not None
             ident = gb.load_record_csv(p(self.ident), u=self.ident["u"], y=self.ident["y"], time=self.ident["time"],
-                                       Ts=self.ident["Ts"], name=f"{self.name} ident",
-                                       input_names=self.ident.get("input_names"))
+                                       Ts=self.ident["Ts"], name=f"{self.name} ident", **_read_options(self.ident))
             valid = gb.load_record_csv(p(self.valid), u=self.valid["u"], y=self.valid["y"], time=self.valid["time"],
-                                       Ts=self.valid["Ts"], name=f"{self.name} valid",
-                                       input_names=self.valid.get("input_names"))
+                                       Ts=self.valid["Ts"], name=f"{self.name} valid", **_read_options(self.valid))
             static = gb.load_static_csv(p(self.static), u=self.static["u"], y=self.static["y"],
                                         name=f"{self.name} static points", repeats=self.static["repeats"],
-                                        uncertainty=self.static.get("uncertainty"),
-                                        input_names=self.static.get("input_names"))
+                                        uncertainty=self.static.get("uncertainty"), **_read_options(self.static))
             ds = gb.Dataset(ident, valid, static, description=f"CSV files of data set {self.name!r}")
         if ds.static is None:
             raise SpecError("the data set has no static points: gray-box cells and J_SF need them", ())
