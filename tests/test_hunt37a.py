@@ -192,3 +192,19 @@ def test_a_grid_reads_csv_files_as_a_logger_wrote_them(tmp_path):
     assert data.ident.Ts == direct.Ts == pytest.approx(1 / 3, rel=1e-2) and len(data.valid) == len(direct)
     with pytest.raises(gb.experiments.SpecError, match="skiprows"):
         Grid.from_toml_text(spec.replace("skiprows = 3", "skiprows = -1"))
+
+
+@pytest.mark.parametrize("t0", [0.0, 1.7e9])  # from zero, and Unix time (seconds since 1970) as many loggers write
+def test_time_stamps_far_from_zero_give_the_period_they_print(tmp_path, t0):
+    # stamps of Unix time at 10 kHz (1700000000.000100, …, printed evenly to the microsecond) were refused as
+    # "uneven time stamps …, resample the data": float64 holds 1.7e9 to 2.4e-7 s, so each step read 1e-4 s ± 2.4e-3
+    # relative, past the tolerance; at 1 kHz they loaded with Ts = 0.000999999 s where the stamps say 0.001 s
+    for Ts, n in ((1e-4, 400), (1e-3, 250)):
+        rows = "".join(f"{t0 + k * Ts:.6f},{3000 + k % 7},{2e5 + k}\n" for k in range(n))
+        (tmp_path / "r.csv").write_text("t,speed,p\n" + rows, encoding="utf-8")
+        assert gb.load_record_csv(tmp_path / "r.csv", "speed", "p", time="t").Ts == Ts
+    # a missing sample is still one
+    gap = "".join(f"{t0 + k * 1e-4:.6f},3000,2e5\n" for k in range(400) if k != 200)
+    (tmp_path / "gap.csv").write_text("t,speed,p\n" + gap, encoding="utf-8")
+    with pytest.raises(ValueError, match="uneven time stamps"):
+        gb.load_record_csv(tmp_path / "gap.csv", "speed", "p", time="t")

@@ -520,8 +520,10 @@ def load_record_csv(
         ``2026-11-20 09:14:03.5`` are refused, and so is a column whose name states another unit,
         e.g. ``t [ms]``, ``time (min)``, ``t_ms``; leave ``time`` out and give ``Ts``). Stamps must
         increase strictly and evenly: every
-        step within ``time_rtol`` × (median step) of the median step. The sampling period is the mean
-        step, rounded to 12 significant digits. Records restart at t = 0 whatever the first stamp is.
+        step within ``time_rtol`` × (median step) of the median step (and of what float64 resolves of
+        stamps far from zero, e.g. Unix time). The sampling period is the mean step, rounded to 12
+        significant digits, or to those the stamps' float64 values resolve (about 5 for Unix time).
+        Records restart at t = 0 whatever the first stamp is.
     Ts : float, optional
         Sampling period in seconds. Required when there is no time column; when both are given
         they must agree within ``time_rtol``.
@@ -657,7 +659,10 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     # The median step is the reference, so the message points at the odd step (a gap, a jitter),
     # not at the first regular one.
     ref = float(np.median(dt))
-    off = np.abs(dt - ref) > rtol * ref
+    # float64 holds a stamp to half its spacing, so a step read from two stamps is off by up to one
+    # spacing whatever was printed (Unix time, 1.7e9 s, to 2.4e-7 s): unevenness below that is unseen
+    res = 2 * float(np.spacing(np.abs(t).max()))
+    off = np.abs(dt - ref) > rtol * ref + res
     if off.any():
         i = int(np.flatnonzero(off)[0])
         raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s from line {lines[i]} to "
@@ -669,8 +674,11 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     if Ts is not None and abs(Ts - step) > rtol * step:
         raise ValueError(f"{p}: Ts = {Ts:g} s disagrees with column {col!r}, whose mean step is {step:g} s")
     # Stamps are printed decimals, so the true step is a short decimal: drop the float noise of the
-    # division (e.g. 199.95 / 3999 = 0.049999999999999996 -> 0.05).
-    return float(f"{step:.12g}")
+    # division (e.g. 199.95 / 3999 = 0.049999999999999996 -> 0.05), and the digits the stamps' float64
+    # rounding leaves unknown (a mean step from stamps near 1.7e9 s holds about 5 digits).
+    with np.errstate(divide="ignore"):  # stamps near 1e-300 s: no digit unknown
+        digits = int(np.clip(np.floor(-np.log10(res / (t.size - 1) / step)), 1, 12))
+    return float(f"{step:.{digits}g}")
 
 
 def load_static_csv(
