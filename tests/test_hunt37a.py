@@ -208,3 +208,11 @@ def test_time_stamps_far_from_zero_give_the_period_they_print(tmp_path, t0):
     (tmp_path / "gap.csv").write_text("t,speed,p\n" + gap, encoding="utf-8")
     with pytest.raises(ValueError, match="uneven time stamps"):
         gb.load_record_csv(tmp_path / "gap.csv", "speed", "p", time="t")
+
+
+@pytest.mark.parametrize("call", [lambda: gb.save(TWO, 3), lambda: gb.load(3), lambda: gb.read_header(None)])
+def test_save_and_load_name_a_path_of_the_wrong_type(call):
+    # pathlib's "expected str, bytes or os.PathLike object, not int" named neither the argument nor the function
+    with pytest.raises(TypeError, match="path must be a file or folder name"):
+        call()
+

@@ -67,7 +67,7 @@ from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
 from ..core._records import StaticPoints, check_units
-from ..core._validation import FrozenMap
+from ..core._validation import FrozenMap, check_path
 from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
 from ..static._curves import StaticCurve
@@ -741,8 +741,8 @@ def save(
     pathlib.Path
         The path written.
     """
+    p = Path(check_path(path, "path"))
     text = to_json(obj, units=units)
-    p = Path(path)
     fd, tmp = _temporary_beside(p)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
@@ -756,7 +756,7 @@ def save(
 
 
 def _read(path: str | os.PathLike) -> str:
-    p = Path(path)
+    p = Path(check_path(path, "path"))
     try:
         return p.read_text(encoding="utf-8-sig")  # "-sig": a byte-order mark an editor added is not text
     except UnicodeDecodeError:
