@@ -216,3 +216,18 @@ def test_save_and_load_name_a_path_of_the_wrong_type(call):
     with pytest.raises(TypeError, match="path must be a file or folder name"):
         call()
 
+
+def test_reproduce_prints_to_the_standard_output_of_the_moment_it_runs(monkeypatch):
+    # run(stream=sys.stdout) bound the stream when graybox.reproduce was first imported: under redirect_stdout (a
+    # notebook's capture, a log file) the text went to the old stream, or failed on it once closed ("I/O operation on
+    # closed file", as when a test that imported the module under pytest's capture was followed by another)
+    import contextlib
+    import io
+
+    import graybox.reproduce as rp
+
+    monkeypatch.setattr(rp, "SECTIONS", (lambda quick, out: "section text",))
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rp.run(quick=True, out=None)
+    assert "section text" in buf.getvalue()

@@ -41,7 +41,7 @@ def _writable_folder(out: Path) -> None:
         raise type(exc)(f"cannot write in the folder {out}: {exc.strerror or exc}") from None
 
 
-def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout, fresh: bool = False) -> None:
+def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = None, fresh: bool = False) -> None:
     """Run every section in order, printing each as it finishes.
 
     The SE sweeps of Table I keep checkpoints under ``out`` (``se_<method>_l<degree>_margin<margin>[_<starts>][_quick].npz``, e.g. ``se_ga_l2_margin0.01_pe.npz``)
@@ -55,14 +55,17 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO = sys.stdout
         Shorter searches (10 λ for the SE fronts instead of 100).
     out : path, optional
         Folder for the figures and the SE checkpoints (created if missing).
-    stream : text file
-        Where the text goes (default: standard output).
+    stream : text file, optional
+        Where the text goes (default: the standard output at the time of the call, ``sys.stdout``).
     fresh : bool
         Delete this mode's checkpoints under ``out`` first, so every sweep starts over.
     """
     from ..core._version import graybox_version
     from ..estimation._simulation_error import checkpoint_version
     from ._table1 import checkpoint_paths
+
+    if stream is None:  # looked up now, not at import: redirect_stdout and notebooks replace it
+        stream = sys.stdout
 
     if out is not None:
         _writable_folder(Path(out))
