@@ -217,6 +217,19 @@ def test_save_and_load_name_a_path_of_the_wrong_type(call):
         call()
 
 
+def test_save_names_the_path_given_not_its_temporary_file(tmp_path):
+    # the atomic write goes through a temporary file beside the path: a missing folder was "No such file or
+    # directory: '…/x.json.63964935.tmp'", and a folder given as the path "Is a directory: '….8f15f5c5.tmp' -> '…'",
+    # names the user never gave
+    with pytest.raises(FileNotFoundError) as missing:
+        gb.save(TWO, tmp_path / "no" / "x.json")
+    with pytest.raises(IsADirectoryError) as folder:
+        gb.save(TWO, tmp_path)
+    for exc, path in ((missing, tmp_path / "no" / "x.json"), (folder, tmp_path)):
+        assert ".tmp" not in str(exc.value) and str(path) in str(exc.value)
+    assert list(tmp_path.parent.glob("*.tmp")) == []
+
+
 def test_reproduce_prints_to_the_standard_output_of_the_moment_it_runs(monkeypatch):
     # run(stream=sys.stdout) bound the stream when graybox.reproduce was first imported: under redirect_stdout (a
     # notebook's capture, a log file) the text went to the old stream, or failed on it once closed ("I/O operation on

@@ -43,6 +43,7 @@ constructor then validates shapes and meaning (e.g. θ's length against the stru
 
 from __future__ import annotations
 
+import errno
 import importlib
 import json
 import math
@@ -743,7 +744,12 @@ def save(
     """
     p = Path(check_path(path, "path"))
     text = to_json(obj, units=units)
-    fd, tmp = _temporary_beside(p)
+    if p.is_dir():
+        raise IsADirectoryError(errno.EISDIR, "a folder, not a file to save to", str(p))
+    try:
+        fd, tmp = _temporary_beside(p)
+    except OSError as exc:  # named by the path given, not by the temporary file beside it
+        raise type(exc)(exc.errno, f"cannot write in the folder {p.parent}: {exc.strerror}", str(p)) from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
