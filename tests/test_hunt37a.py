@@ -244,3 +244,13 @@ def test_reproduce_prints_to_the_standard_output_of_the_moment_it_runs(monkeypat
     with contextlib.redirect_stdout(buf):
         rp.run(quick=True, out=None)
     assert "section text" in buf.getvalue()
+
+
+@pytest.mark.parametrize("kw", [{"delimiter": 3}, {"delimiter": b","}, {"decimal": 3}, {"decimal": b"."}])
+def test_a_delimiter_or_decimal_mark_of_the_wrong_type_is_a_type_error(tmp_path, kw):
+    # delimiter=3 or decimal=b"." raised ValueError; a wrong type is a TypeError everywhere else (encoding= included)
+    (tmp_path / "r.csv").write_text("t,speed,p\n0,3000,2e5\n0.1,3100,2.1e5\n", encoding="utf-8")
+    with pytest.raises(TypeError, match=f"{next(iter(kw))} must be"):
+        gb.load_record_csv(tmp_path / "r.csv", "speed", "p", time="t", **kw)
+    with pytest.raises(TypeError, match=f"{next(iter(kw))} must be"):
+        gb.load_static_csv(tmp_path / "r.csv", "speed", "p", **kw)

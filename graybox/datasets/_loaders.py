@@ -281,8 +281,10 @@ def _dialect(p: Path, text: str, delimiter: str | None, decimal: str | None, fir
     readings, mixes delimiters, or uses a decimal comma with an unquoted comma delimiter is refused
     with what was seen and what to pass. ``first`` is the file's line number of the text's first line.
     """
-    if delimiter is not None and (not isinstance(delimiter, str) or len(delimiter) != 1
-                                  or delimiter in "\"\r\n" or delimiter.isalnum()):
+    for name, v, example in (("delimiter", delimiter, "';'"), ("decimal", decimal, "','")):
+        if v is not None and not isinstance(v, str):
+            raise TypeError(f"{p}: {name} must be a one-character str such as {example}, got {v!r}")
+    if delimiter is not None and (len(delimiter) != 1 or delimiter in "\"\r\n" or delimiter.isalnum()):
         raise ValueError(f"{p}: delimiter must be one character such as ',', ';' or '\\t', got {delimiter!r}")
     if decimal is not None and decimal not in (".", ","):
         raise ValueError(f"{p}: decimal must be '.' or ',', got {decimal!r}")
@@ -576,7 +578,7 @@ def load_record_csv(
         thousands separator, text that is not in the encoding (UTF-8 by default), or an unknown
         ``encoding`` (or one that contradicts the file's byte-order mark).
     TypeError
-        ``path``, ``u``, ``y``, ``time``, ``Ts``, ``encoding``, ``skiprows`` or ``units`` of the wrong
+        ``path``, ``u``, ``y``, ``time``, ``Ts``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
         type (a column is named by a str; units are a pair of str).
     """
     p = Path(check_path(path, "path"))
@@ -746,7 +748,7 @@ def load_static_csv(
         a δ ≤ 0 in the ``uncertainty`` column, or two lines with the same ū (unless
         ``repeats="mean"``); the file's faults listed in :func:`load_record_csv`.
     TypeError
-        ``path``, ``u``, ``y``, ``uncertainty``, ``encoding``, ``skiprows`` or ``units`` of the wrong
+        ``path``, ``u``, ``y``, ``uncertainty``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
         type (a column is named by a str; units are a pair of str).
     """
     p = Path(check_path(path, "path"))
