@@ -254,3 +254,24 @@ def test_a_delimiter_or_decimal_mark_of_the_wrong_type_is_a_type_error(tmp_path,
         gb.load_record_csv(tmp_path / "r.csv", "speed", "p", time="t", **kw)
     with pytest.raises(TypeError, match=f"{next(iter(kw))} must be"):
         gb.load_static_csv(tmp_path / "r.csv", "speed", "p", **kw)
+
+
+@pytest.mark.parametrize("ranks, count", [([2, 2, 3], 0), ([1, 1, 3], 2)])
+def test_a_graybox_selection_table_without_one_choice_is_refused(ranks, count):
+    # the table's rank 1 row is the choice (chosen, repr): a hand-edited file whose table had no row ranked 1 loaded,
+    # and its repr failed with pandas' "IndexError: single positional indexer is out-of-bounds"; with two, chosen
+    # gave the first without a word
+    rng = np.random.default_rng(3)
+    u = rng.uniform(2500, 3500, 400)
+    y = np.zeros(400)
+    for k in range(1, 400):
+        y[k] = 0.5 * y[k - 1] + 20 * u[k - 1] + 1e5 + 10 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1, units=("rpm", "Pa"))
+    data = gb.Dataset(rec.slice(0, 200, name="ident"), rec.slice(200, None, name="valid"),
+                      gb.StaticPoints([2600.0, 3400.0], [2.04e5, 2.36e5]))
+    sel = gb.select_graybox(gb.Candidates(1, 1, degree=1), data, sizes=[2, 3], estimator="ls", progress=False)
+    doc = json.loads(gb.to_json(sel))
+    table = doc["object"]["table"]
+    table["data"][table["columns"].index("rank")] = ranks[:len(table["index"])] + list(range(4, len(table["index"]) + 1))
+    with pytest.raises(gb.GrayboxFileError, match=f"{count} rows ranked 1"):
+        gb.from_json(json.dumps(doc))

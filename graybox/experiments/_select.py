@@ -176,6 +176,9 @@ class GrayboxSelection:
         missing = [c for c in self.TABLE_COLUMNS if c not in self.table.columns]
         if missing:
             raise ValueError(f"the table lacks the column(s) {missing}")
+        first = int((self.table["rank"] == 1).sum())
+        if first != 1:  # the row ranked 1 is the choice (chosen, repr)
+            raise ValueError(f"the table has {first} rows ranked 1; the choice is one row")
         if list(self.model.structure) != list(self.structure):
             raise ValueError("the model's structure is not the chosen structure")
         if not self.band > 0:
