@@ -275,3 +275,16 @@ def test_a_graybox_selection_table_without_one_choice_is_refused(ranks, count):
     table["data"][table["columns"].index("rank")] = ranks[:len(table["index"])] + list(range(4, len(table["index"]) + 1))
     with pytest.raises(gb.GrayboxFileError, match=f"{count} rows ranked 1"):
         gb.from_json(json.dumps(doc))
+
+
+def test_save_through_a_symbolic_link_writes_the_file_it_points_to(tmp_path):
+    # the atomic write replaced the path itself: saving to latest.json -> runs/a.json replaced the link with a new
+    # file and left runs/a.json, which the link (and everything else reading it) named, as it was
+    (tmp_path / "runs").mkdir()
+    target = tmp_path / "runs" / "a.json"
+    gb.save(gb.Model(["y(k-1)"], [0.5]), target)
+    link = tmp_path / "latest.json"
+    link.symlink_to(target)
+    gb.save(TWO, link)
+    assert link.is_symlink() and gb.load(target).theta.tolist() == TWO.theta.tolist()
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["a.json", "latest.json", "runs"]  # no temporary left

@@ -746,14 +746,16 @@ def save(
     text = to_json(obj, units=units)
     if p.is_dir():
         raise IsADirectoryError(errno.EISDIR, "a folder, not a file to save to", str(p))
+    # a symbolic link is written through, as open(p, "w") would: the file it names is replaced, the link kept
+    target = Path(os.path.realpath(p)) if p.is_symlink() else p
     try:
-        fd, tmp = _temporary_beside(p)
+        fd, tmp = _temporary_beside(target)
     except OSError as exc:  # named by the path given, not by the temporary file beside it
-        raise type(exc)(exc.errno, f"cannot write in the folder {p.parent}: {exc.strerror}", str(p)) from None
+        raise type(exc)(exc.errno, f"cannot write in the folder {target.parent}: {exc.strerror}", str(p)) from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
-        os.replace(tmp, p)
+        os.replace(tmp, target)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
