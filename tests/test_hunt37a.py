@@ -288,3 +288,21 @@ def test_save_through_a_symbolic_link_writes_the_file_it_points_to(tmp_path):
     gb.save(TWO, link)
     assert link.is_symlink() and gb.load(target).theta.tolist() == TWO.theta.tolist()
     assert sorted(p.name for p in tmp_path.rglob("*")) == ["a.json", "latest.json", "runs"]  # no temporary left
+
+
+@pytest.mark.parametrize("module", ["graybox.datasets.pumping", "graybox.datasets._pumping_miso"])
+def test_regenerating_the_bundled_data_refuses_bad_arguments_in_one_line(module, tmp_path, capsys):
+    # python -m graybox.datasets.pumping --seed -1 ended in numpy's "ValueError: expected non-negative integer"
+    # traceback, and an --out that names a file (or a folder that cannot be made) in a FileExistsError /
+    # FileNotFoundError traceback, after simulating the whole plant
+    import importlib
+
+    main = importlib.import_module(module).main
+    with pytest.raises(SystemExit) as exit_:
+        main(["--seed", "-1", "--out", str(tmp_path)])
+    assert exit_.value.code == 2 and "--seed" in capsys.readouterr().err
+    (tmp_path / "afile").write_text("mine")
+    assert main(["--out", str(tmp_path / "afile")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "afile" in err and "Traceback" not in err
+    assert (tmp_path / "afile").read_text() == "mine"

@@ -988,15 +988,32 @@ def regenerate_main(argv: list[str] | None, *, module: str, folder: str, write) 
     """
     ap = argparse.ArgumentParser(prog=f"python -m {module}", description=f"Regenerate the bundled data/{folder} CSVs.")
     ap.add_argument("--out", type=Path, default=None, help=f"output folder (default: <repo>/data/{folder})")
-    ap.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"seed (default {DEFAULT_SEED})")
+    ap.add_argument("--seed", type=_seed_arg, default=DEFAULT_SEED,
+                    help=f"seed, an integer >= 0 (default {DEFAULT_SEED})")
     args = ap.parse_args(argv)
     root = Path(__file__).resolve().parents[2]
     out = args.out if args.out is not None else (root / "data" / folder if (root / "pyproject.toml").is_file() else None)
     if out is None:
         ap.error("not running from a source checkout: give --out DIR")
-    dyn, sta = write(out, args.seed)
+    try:
+        out.mkdir(parents=True, exist_ok=True)  # before the simulation: an unusable --out is said at once
+        dyn, sta = write(out, args.seed)
+    except OSError as exc:  # --out a file, a folder that cannot be made, a disk full
+        print(f"{ap.prog}: cannot write in {out}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     print(f"wrote {dyn} and {sta}")
     return 0
+
+
+def _seed_arg(text: str) -> int:
+    """``--seed``: an integer >= 0 (numpy's generators take no negative seed)."""
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"a seed is an integer >= 0, got {n}")
+    return n
 
 
 def main(argv: list[str] | None = None) -> int:
