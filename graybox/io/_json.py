@@ -622,7 +622,8 @@ def _header(doc: Any, rd: _Reader) -> dict:
         # name (as graybox's lazy attributes do), so that a fresh session loads the file
         importlib.import_module(_REGISTERED_ABOVE[typ])
     if not isinstance(typ, str) or typ not in _CODECS:  # a list or an object cannot even be looked up
-        raise rd.fail("header", f"unknown type {typ!r}; graybox loads {sorted(_CODECS)}")
+        raise rd.fail("header", f"unknown type {typ!r}; graybox loads {sorted(_CODECS)}"
+                      + _newer(str(doc.get("graybox_version", ""))))
     units = doc.get("units")
     if units is not None:
         d = rd.dict(units, "units")
@@ -689,11 +690,19 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     try:
         return _decode_fields(head["type"], doc["object"], "object", _Reader(source))
     except GrayboxFileError as exc:
-        ours = graybox_version()
-        if ours != "0+unknown" and _release(head["graybox_version"]) > _release(ours):  # a field added since
-            raise GrayboxFileError(f"{exc} (the file was written by graybox {head['graybox_version']}, newer than "
-                                   f"this {ours}: upgrade graybox to load it)") from None
+        said = _newer(head["graybox_version"])  # a field added since
+        if said:
+            raise GrayboxFileError(f"{exc}{said}") from None
         raise
+
+
+def _newer(written_by: str) -> str:
+    """`` (the file was written by graybox X, newer than this Y: upgrade …)`` when ``written_by`` is a newer
+    release than this graybox (a type or a field added since, within one format version), else ``""``."""
+    ours = graybox_version()
+    if ours != "0+unknown" and _release(written_by) > _release(ours):
+        return f" (the file was written by graybox {written_by}, newer than this {ours}: upgrade graybox to load it)"
+    return ""
 
 
 def _release(version: str) -> tuple[int, ...]:
