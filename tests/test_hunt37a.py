@@ -318,6 +318,9 @@ def test_a_type_a_newer_graybox_saves_says_to_upgrade(tmp_path):
     for call in (lambda: gb.load(tmp_path / "f.json"), lambda: gb.read_header(tmp_path / "f.json")):
         with pytest.raises(gb.GrayboxFileError, match=r"unknown type 'Future'.*written by graybox 99\.0.*upgrade"):
             call()
+    header = json.loads(gb.to_json(TWO)) | {"graybox_version": "99.0", "checksum": "…"}  # a header field added since
+    with pytest.raises(gb.GrayboxFileError, match=r"unknown field\(s\) \['checksum'\].*upgrade"):
+        gb.from_json(json.dumps(header))
     doc["graybox_version"] = gb.__version__
     with pytest.raises(gb.GrayboxFileError, match="unknown type 'Future'") as exc:
         gb.from_json(json.dumps(doc))

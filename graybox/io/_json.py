@@ -632,7 +632,7 @@ def _header(doc: Any, rd: _Reader) -> dict:
     allowed = {"format", "format_version", "graybox_version", "type", "units", "object"}
     extra = sorted(set(doc) - allowed)
     if extra:
-        raise rd.fail("header", f"unknown field(s) {extra}")
+        raise rd.fail("header", f"unknown field(s) {extra}" + _newer(str(doc.get("graybox_version", ""))))
     return {"format": "graybox", "format_version": ver, "graybox_version": str(doc.get("graybox_version", "")),
             "type": typ, "units": None if units is None else (units.get("u", ""), units.get("y", ""))}
 
