@@ -164,6 +164,8 @@ def test_a_grid_reads_csv_inputs_whose_column_names_carry_units(tmp_path):
     (tmp_path / "bad.toml").write_text(bad, encoding="utf-8")
     with pytest.raises(gb.experiments.SpecError, match=r"input_names must be a list of 2 name"):
         Grid.from_toml(tmp_path / "bad.toml")
+    with pytest.raises(gb.experiments.SpecError, match=r"input_names must be a list of names"):
+        Grid.from_toml_text(spec.replace('input_names = ["speed", "volts"]}\nstatic', 'input_names = "speed"}\nstatic'))
 
 
 def test_a_grid_reads_csv_files_as_a_logger_wrote_them(tmp_path):

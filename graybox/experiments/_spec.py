@@ -25,7 +25,7 @@ from .. import _api as gb
 from ..core._terms import default_input_names
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
 from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_path,
-                                check_real, check_str)
+                                check_real, check_sequence, check_str)
 from ..core._reprs import short_repr
 from ..static._constraints import check_min_denominator
 
@@ -230,17 +230,17 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
                             path + (k,))
         out[k] = v
     if d.get("input_names") is not None:  # absent: the canonical form is as before
-        names, n = d["input_names"], len(out["u"]) if isinstance(out["u"], list) else 1
-        if isinstance(names, str) or not isinstance(names, Sequence) or len(names) != n \
-                or not all(isinstance(c, str) and c for c in names):
+        n = len(out["u"]) if isinstance(out["u"], list) else 1
+        names = _wrap(check_sequence, path + ("input_names",), d["input_names"], "input_names", "a list of names")
+        for i, c in enumerate(names):
+            _wrap(check_str, path + ("input_names", i), c, f"input_names[{i}]")
+        if len(names) != n or not all(names):
             raise SpecError(f"input_names must be a list of {n} name(s), one per input column of u, got {names!r}",
                             path + ("input_names",))
-        out["input_names"] = list(names)
+        out["input_names"] = names
     for k in ("delimiter", "decimal", "encoding"):
         if d.get(k) is not None:
-            if not isinstance(d[k], str):
-                raise SpecError(f"{k} must be a string, got {d[k]!r}", path + (k,))
-            out[k] = d[k]
+            out[k] = _wrap(check_str, path + (k,), d[k], k)
     if d.get("skiprows") is not None:
         out["skiprows"] = _wrap(check_int, path + ("skiprows",), d["skiprows"], "skiprows", low=0)
     if "time_rtol" in keys and d.get("time_rtol") is not None:
