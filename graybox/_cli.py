@@ -56,11 +56,14 @@ def _grid(args: argparse.Namespace) -> int:
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
         return 0
     except KeyboardInterrupt:
-        if args.grid_command != "run":
-            raise
-        # Ctrl-C: every cell finished so far was committed as it came
-        print(f"graybox grid run: interrupted; the cells finished so far are kept in {args.store}, and the same "
-              "command runs only the cells left", file=sys.stderr)
+        if args.grid_command == "run":  # Ctrl-C: every cell finished so far was committed as it came
+            print(f"graybox grid run: interrupted; the cells finished so far are kept in {args.store}, and the same "
+                  "command runs only the cells left", file=sys.stderr)
+        elif args.grid_command == "report":  # the files are written one by one: some may be of this run, some older
+            print(f"graybox grid report: interrupted; the files in {args.out} may be incomplete: run the same command "
+                  "again", file=sys.stderr)
+        else:  # status only reads
+            print(f"graybox grid {args.grid_command}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         raise

@@ -327,3 +327,20 @@ def test_a_type_a_newer_graybox_saves_says_to_upgrade(tmp_path):
     with pytest.raises(gb.GrayboxFileError, match="unknown type 'Future'") as exc:
         gb.from_json(json.dumps(doc))
     assert "upgrade" not in str(exc.value)
+
+
+@pytest.mark.parametrize("command", ["status", "report"])
+def test_ctrl_c_during_grid_status_or_report_ends_in_one_line(command, tmp_path, monkeypatch, capsys):
+    # Ctrl-C during `graybox grid report` (figures for minutes on a large store) or `grid status` was re-raised: a
+    # KeyboardInterrupt traceback through matplotlib or sqlite frames; grid run and reproduce said one line
+    from graybox import experiments as gx
+    from graybox._cli import main
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(gx, "write_report" if command == "report" else "grid_status", interrupted)
+    argv = ["grid", command, str(tmp_path / "r.sqlite")] + (["--out", str(tmp_path / "rep")] if command == "report" else [])
+    assert main(argv) == 130
+    err = capsys.readouterr().err
+    assert err.startswith(f"graybox grid {command}: interrupted") and err.count("\n") == 1
