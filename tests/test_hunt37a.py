@@ -344,3 +344,21 @@ def test_ctrl_c_during_grid_status_or_report_ends_in_one_line(command, tmp_path,
     assert main(argv) == 130
     err = capsys.readouterr().err
     assert err.startswith(f"graybox grid {command}: interrupted") and err.count("\n") == 1
+
+
+@pytest.fixture(scope="module")
+def selections():
+    rec = gb.Record(_record().inputs, _record().y, Ts=0.1, input_names=("speed", "volts"))
+    cand = gb.Candidates(1, {"speed": 2, "volts": 2}, degree=1)
+    return {"Selection": gb.frols(cand, rec, n_terms=3), "SEMPResult": gb.semp(cand, rec, n_terms=3)}
+
+
+@pytest.mark.parametrize("kind", ["Selection", "SEMPResult"])
+def test_a_selection_with_a_non_finite_parameter_is_refused(selections, kind):
+    # Selection and SEMPResult checked θ's length, not its values: a hand-edited file with "nan" or "inf" in θ
+    # loaded, and the value then failed when its model was asked for ("theta has non-finite values at [0]")
+    doc = json.loads(gb.to_json(selections[kind]))
+    doc["object"]["theta"][0] = "nan"
+    with pytest.raises(gb.GrayboxFileError, match=rf"not a valid {kind}: theta has non-finite values at \[0\]"):
+        gb.from_json(json.dumps(doc))
+    assert gb.from_json(gb.to_json(selections[kind])).model.theta.tolist() == selections[kind].model.theta.tolist()

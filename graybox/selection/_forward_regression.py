@@ -69,7 +69,7 @@ from ..core._gram import (
     term_factors,
 )
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import as_1d_finite, check_choice, check_fields, check_int, check_real, warn
+from ..core._validation import as_1d_finite, check_choice, check_fields, check_int, check_real, check_theta, warn
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem
 
@@ -248,6 +248,7 @@ class Selection:
                 raise ValueError(f"{name} must have shape ({size},), got {a.shape}")
             a.setflags(write=False)
             object.__setattr__(self, name, a)
+        check_theta(n, self.theta)  # finite, as the model it gives needs (a file loads through here: graybox.io)
 
     def __len__(self) -> int:
         return len(self.structure)

@@ -44,7 +44,8 @@ from ..core._records import Dataset, Record, as_records
 from ._forward_regression import CRITERIA, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
-from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_real, frozen
+from ..core._validation import (FrozenFrame, check_bool, check_choice, check_fields, check_int, check_real,
+                                check_theta, frozen)
 
 __all__ = ["semp", "SEMPResult"]
 
@@ -104,8 +105,7 @@ class SEMPResult:
         object.__setattr__(self, "input_names", names)
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
-        if len(self.theta) != len(self.structure):
-            raise ValueError(f"theta has {len(self.theta)} values but the structure has {len(self.structure)} terms")
+        check_theta(len(self.structure), self.theta)  # finite, as the model it gives needs (files load through here)
         check_choice(self.criterion, "criterion", CRITERIA)
         missing = [c for c in self.PATH_COLUMNS if c not in self.path.columns]
         if missing:
