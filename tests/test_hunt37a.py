@@ -362,3 +362,11 @@ def test_a_selection_with_a_non_finite_parameter_is_refused(selections, kind):
     with pytest.raises(gb.GrayboxFileError, match=rf"not a valid {kind}: theta has non-finite values at \[0\]"):
         gb.from_json(json.dumps(doc))
     assert gb.from_json(gb.to_json(selections[kind])).model.theta.tolist() == selections[kind].model.theta.tolist()
+
+
+def test_from_json_reads_the_text_of_a_file_an_editor_saved_with_a_byte_order_mark(tmp_path):
+    # load skips the mark a "UTF-8 with BOM" editor adds (hunt28), but from_json of the same file's text, read with
+    # open(..., encoding="utf-8"), was refused as "corrupt file (Unexpected UTF-8 BOM …)"
+    p = tmp_path / "m.json"
+    p.write_text("\ufeff" + gb.to_json(TWO), encoding="utf-8")
+    assert gb.from_json(p.read_text(encoding="utf-8")).theta.tolist() == gb.load(p).theta.tolist()

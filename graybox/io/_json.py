@@ -683,7 +683,7 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     """
     if not isinstance(text, str):
         raise TypeError(f"text must be a str, got {type(text).__name__} (decode the bytes of a file as UTF-8)")
-    head, doc = _parse(text, source)
+    head, doc = _parse(text.removeprefix("\ufeff"), source)  # an editor's byte-order mark is no text (as load)
     _expect(expect, head["type"], source)
     if "object" not in doc:
         raise GrayboxFileError(f"{source}: no \"object\" in the document")
