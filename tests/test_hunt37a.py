@@ -370,3 +370,25 @@ def test_from_json_reads_the_text_of_a_file_an_editor_saved_with_a_byte_order_ma
     p = tmp_path / "m.json"
     p.write_text("\ufeff" + gb.to_json(TWO), encoding="utf-8")
     assert gb.from_json(p.read_text(encoding="utf-8")).theta.tolist() == gb.load(p).theta.tolist()
+
+
+def test_select_graybox_missing_the_band_names_a_static_error_its_rows_reached():
+    # static points 1e5 Pa off the plant's curve: every row misses B = 2500 Pa² (its reason: the smallest J_SF
+    # reached is 1e+10), but the refusal said "no structure meets the band B = 2500: the smallest J_SF reached is
+    # 1.3e-05", the J_SF of PE members whose free run diverges on the choosing data, which the rows leave out
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(2500, 3500, 90), 10)
+    y = np.zeros(900)
+    for k in range(1, 900):
+        y[k] = 0.5 * y[k - 1] + 20 * u[k - 1] + 1e5 + 10 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1, units=("rpm", "Pa"))
+    data = gb.Dataset(rec.slice(0, 300, name="ident"), rec.slice(300, 600, name="valid"),
+                      gb.StaticPoints([2600.0, 3400.0], [2.04e5, 2.36e5]))
+    kw = dict(sizes=[2, 3], band=2500.0, estimator="pe", progress=False)
+    with pytest.raises(ValueError, match="no structure meets the band") as exc:
+        gb.select_graybox(gb.Candidates(1, 1, degree=2), data, **kw)
+    said = float(str(exc.value).split("the smallest J_SF reached is ")[1].split(" ")[0])
+    with pytest.warns(gb.experiments.SelectionWarning, match="no structure meets the band"):
+        table = gb.select_graybox(gb.Candidates(1, 1, degree=2), data, fallback="min_jsf", **kw).table
+    rows = [float(r.split("the smallest J_SF reached is ")[1]) for r in table["reason"]]
+    assert said > 2500.0 and said == pytest.approx(min(rows), rel=1e-3)

@@ -1215,8 +1215,10 @@ def _fallback(table: pd.DataFrame, results: list[dict], band: float | None, fall
         row = table.iloc[0]
         raise ValueError(f"no structure has a finite free-run J_S on the choosing data (over {len(table)} structure × "
                          f"estimator rows), e.g. {row.name} by {row['estimator']}: {row['reason']}")
-    # the smallest static error reached by any member of any structure
-    finite = [r["jsf"][np.isfinite(r["jsf"])] for r in results]
+    # the smallest static error reached by any member of any structure, among the members the rows count (a finite
+    # free-run J_S on every block of the choosing data, as _reason says it per row)
+    counted = [r["jsf"][np.isfinite(r["blocks"]).all(axis=1)] for r in results]
+    finite = [j[np.isfinite(j)] for j in counted]
     best = min((float(f.min()) for f in finite if f.size), default=np.inf)
     if fallback is None:
         raise ValueError(f"no structure meets the band B = {band:g}: the smallest J_SF reached is {best:.4g} "
