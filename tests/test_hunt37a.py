@@ -392,3 +392,24 @@ def test_select_graybox_missing_the_band_names_a_static_error_its_rows_reached()
         table = gb.select_graybox(gb.Candidates(1, 1, degree=2), data, fallback="min_jsf", **kw).table
     rows = [float(r.split("the smallest J_SF reached is ")[1]) for r in table["reason"]]
     assert said > 2500.0 and said == pytest.approx(min(rows), rel=1e-3)
+
+
+def test_a_row_whose_parameters_are_not_numbers_is_named():
+    # model_of read a row's θ text with float(): a hand-edited table with "abc" in it said only "could not convert
+    # string to float: 'abc'", naming neither the row nor the column
+    rng = np.random.default_rng(3)
+    u = rng.uniform(2500, 3500, 400)
+    y = np.zeros(400)
+    for k in range(1, 400):
+        y[k] = 0.5 * y[k - 1] + 20 * u[k - 1] + 1e5 + 10 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1, units=("rpm", "Pa"))
+    data = gb.Dataset(rec.slice(0, 200, name="ident"), rec.slice(200, None, name="valid"),
+                      gb.StaticPoints([2600.0, 3400.0], [3.04e5, 3.36e5]))
+    sel = gb.select_graybox(gb.Candidates(1, 1, degree=1), data, sizes=[2, 3], estimator="ls", progress=False)
+    doc = json.loads(gb.to_json(sel))
+    table = doc["object"]["table"]
+    row = table["index"][0]
+    table["data"][table["columns"].index("theta")][0] = "0.5 abc 1e5"
+    back = gb.from_json(json.dumps(doc))
+    with pytest.raises(ValueError, match=rf"row '{row}' \(ls\): its theta '0.5 abc 1e5' is not numbers"):
+        back.model_of(row)

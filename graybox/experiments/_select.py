@@ -241,7 +241,10 @@ class GrayboxSelection:
         text = r["theta"]
         if not isinstance(text, str) or not text:  # "" (or NaN, as a CSV reader gives it back)
             raise ValueError(f"row {row!r} ({r['estimator']}) has no model: {r['reason']}")
-        theta = np.array([float(v) for v in text.split()])
+        try:
+            theta = np.array([float(v) for v in text.split()])
+        except ValueError:  # a hand-edited table: name the row, not only the bad word
+            raise ValueError(f"row {row!r} ({r['estimator']}): its theta {text!r} is not numbers") from None
         return gb.Model(structure, theta, name=f"{r['estimator']} ({row})", input_names=self.model.input_names,
                         Ts=self.model.Ts)
 
