@@ -258,21 +258,32 @@ def test_a_delimiter_or_decimal_mark_of_the_wrong_type_is_a_type_error(tmp_path,
         gb.load_static_csv(tmp_path / "r.csv", "speed", "p", **kw)
 
 
+def _pressure(n, *, points=(3.04e5, 3.36e5)):
+    """p(k) = 0.5 p(k-1) + 20 n(k-1) + 1e5 Pa (+ 10 Pa noise) against a speed n in rpm: ident and valid of n/2
+    samples each, and two static points at 2600 and 3400 rpm (the plant's own: 3.04e5 and 3.36e5 Pa)."""
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(2500, 3500, n // 10), 10)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + 20 * u[k - 1] + 1e5 + 10 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1, units=("rpm", "Pa"))
+    return gb.Dataset(rec.slice(0, n // 2, name="ident"), rec.slice(n // 2, None, name="valid"),
+                      gb.StaticPoints([2600.0, 3400.0], list(points)))
+
+
+@pytest.fixture(scope="module")
+def chosen():
+    """A select_graybox result on :func:`_pressure`'s data (least squares, two sizes)."""
+    return gb.select_graybox(gb.Candidates(1, 1, degree=1), _pressure(400), sizes=[2, 3], estimator="ls",
+                             progress=False)
+
+
 @pytest.mark.parametrize("ranks, count", [([2, 2, 3], 0), ([1, 1, 3], 2)])
-def test_a_graybox_selection_table_without_one_choice_is_refused(ranks, count):
+def test_a_graybox_selection_table_without_one_choice_is_refused(chosen, ranks, count):
     # the table's rank 1 row is the choice (chosen, repr): a hand-edited file whose table had no row ranked 1 loaded,
     # and its repr failed with pandas' "IndexError: single positional indexer is out-of-bounds"; with two, chosen
     # gave the first without a word
-    rng = np.random.default_rng(3)
-    u = rng.uniform(2500, 3500, 400)
-    y = np.zeros(400)
-    for k in range(1, 400):
-        y[k] = 0.5 * y[k - 1] + 20 * u[k - 1] + 1e5 + 10 * rng.standard_normal()
-    rec = gb.Record(u, y, Ts=0.1, units=("rpm", "Pa"))
-    data = gb.Dataset(rec.slice(0, 200, name="ident"), rec.slice(200, None, name="valid"),
-                      gb.StaticPoints([2600.0, 3400.0], [2.04e5, 2.36e5]))
-    sel = gb.select_graybox(gb.Candidates(1, 1, degree=1), data, sizes=[2, 3], estimator="ls", progress=False)
-    doc = json.loads(gb.to_json(sel))
+    doc = json.loads(gb.to_json(chosen))
     table = doc["object"]["table"]
     table["data"][table["columns"].index("rank")] = ranks[:len(table["index"])] + list(range(4, len(table["index"]) + 1))
     with pytest.raises(gb.GrayboxFileError, match=f"{count} rows ranked 1"):
@@ -376,14 +387,7 @@ def test_select_graybox_missing_the_band_names_a_static_error_its_rows_reached()
     # static points 1e5 Pa off the plant's curve: every row misses B = 2500 Pa² (its reason: the smallest J_SF
     # reached is 1e+10), but the refusal said "no structure meets the band B = 2500: the smallest J_SF reached is
     # 1.3e-05", the J_SF of PE members whose free run diverges on the choosing data, which the rows leave out
-    rng = np.random.default_rng(3)
-    u = np.repeat(rng.uniform(2500, 3500, 90), 10)
-    y = np.zeros(900)
-    for k in range(1, 900):
-        y[k] = 0.5 * y[k - 1] + 20 * u[k - 1] + 1e5 + 10 * rng.standard_normal()
-    rec = gb.Record(u, y, Ts=0.1, units=("rpm", "Pa"))
-    data = gb.Dataset(rec.slice(0, 300, name="ident"), rec.slice(300, 600, name="valid"),
-                      gb.StaticPoints([2600.0, 3400.0], [2.04e5, 2.36e5]))
+    data = _pressure(600, points=(2.04e5, 2.36e5))  # 1e5 Pa off the plant's static curve
     kw = dict(sizes=[2, 3], band=2500.0, estimator="pe", progress=False)
     with pytest.raises(ValueError, match="no structure meets the band") as exc:
         gb.select_graybox(gb.Candidates(1, 1, degree=2), data, **kw)
@@ -394,19 +398,10 @@ def test_select_graybox_missing_the_band_names_a_static_error_its_rows_reached()
     assert said > 2500.0 and said == pytest.approx(min(rows), rel=1e-3)
 
 
-def test_a_row_whose_parameters_are_not_numbers_is_named():
+def test_a_row_whose_parameters_are_not_numbers_is_named(chosen):
     # model_of read a row's θ text with float(): a hand-edited table with "abc" in it said only "could not convert
     # string to float: 'abc'", naming neither the row nor the column
-    rng = np.random.default_rng(3)
-    u = rng.uniform(2500, 3500, 400)
-    y = np.zeros(400)
-    for k in range(1, 400):
-        y[k] = 0.5 * y[k - 1] + 20 * u[k - 1] + 1e5 + 10 * rng.standard_normal()
-    rec = gb.Record(u, y, Ts=0.1, units=("rpm", "Pa"))
-    data = gb.Dataset(rec.slice(0, 200, name="ident"), rec.slice(200, None, name="valid"),
-                      gb.StaticPoints([2600.0, 3400.0], [3.04e5, 3.36e5]))
-    sel = gb.select_graybox(gb.Candidates(1, 1, degree=1), data, sizes=[2, 3], estimator="ls", progress=False)
-    doc = json.loads(gb.to_json(sel))
+    doc = json.loads(gb.to_json(chosen))
     table = doc["object"]["table"]
     row = table["index"][0]
     table["data"][table["columns"].index("theta")][0] = "0.5 abc 1e5"
