@@ -162,6 +162,10 @@ def test_a_dataset_stands_for_its_validation_record_and_the_band_saves_bit_for_b
     assert (back.method, back.level, back.model_name) == (b.method, b.level, b.model_name)
     with pytest.raises(ValueError, match="read-only"):
         b.low[0] = 1.0
+    import dataclasses
+    for field, bad in (("level", 2.0), ("method", "bootstrap"), ("n_samples", -5), ("diverged", 1.5)):
+        with pytest.raises(ValueError, match=field):  # as a hand-edited file would give them
+            dataclasses.replace(b, **{field: bad})
     df = b.to_frame()
     assert list(df.columns) == ["y", "yhat", "low", "high", "std"] and df.index.name == "t"
 

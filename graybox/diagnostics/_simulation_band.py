@@ -17,7 +17,7 @@ import pandas as pd
 from ..core._records import Record
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
-from ..core._validation import check_choice, check_fields, check_int, check_seed, frozen, warn
+from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 from ..models._coerce import as_record
 from ._uncertainty import ParameterUncertainty, UncertaintyWarning, theta_draws
 
@@ -77,6 +77,13 @@ class SimulationBand:
                 raise ValueError(f"{f} must have shape ({N},), got {a.shape}")
             object.__setattr__(self, f, a)
         object.__setattr__(self, "units", tuple(str(x) for x in self.units))
+        # a value read from a hand-edited file is held to what the band can be
+        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
+        check_choice(self.method, "method", ("delta", "monte-carlo"))
+        check_int(self.n_samples, "n_samples", low=0)
+        check_real(self.diverged, "diverged", low=0, high=1)
+        if len(self.units) != 2:
+            raise ValueError(f"units must be (input unit, output unit), got {self.units!r}")
 
     @property
     def coverage(self) -> float:
