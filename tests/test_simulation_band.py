@@ -210,3 +210,12 @@ def test_a_model_without_output_feedback_has_the_exact_linear_band(seed, scale, 
     ref = np.sqrt(np.einsum("ij,jk,ik->i", phi, cov, phi))
     np.testing.assert_allclose(b.std[3:], ref, rtol=1e-9, atol=1e-12 * np.max(ref))
     assert np.all(b.std[:3] == 0)
+
+
+def test_a_static_curve_band_is_held_to_what_a_band_can_be():
+    # hunt37a: a StaticCurveBand took level 3, n_samples -5 and any method label (a hand-edited file loaded)
+    import dataclasses
+    band = gb.static_curve_band(_unc(_records(10)), [0.5, 1.0, 1.5])
+    for field, bad in (("level", 3.0), ("method", "guess"), ("n_samples", -5), ("undefined", np.array([0, 2.0, 0]))):
+        with pytest.raises(ValueError, match=field):
+            dataclasses.replace(band, **{field: bad})

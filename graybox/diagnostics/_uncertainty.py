@@ -795,6 +795,12 @@ class StaticCurveBand:
             if a.shape != (M,):
                 raise ValueError(f"{f} must have shape ({M},), got {a.shape}")
             object.__setattr__(self, f, a)
+        # a value read from a hand-edited file is held to what the band can be
+        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
+        check_choice(self.method, "method", ("delta", "monte-carlo"))
+        check_int(self.n_samples, "n_samples", low=0)
+        if np.any((self.undefined < 0) | (self.undefined > 1)):
+            raise ValueError("undefined must hold shares of the draws, in [0, 1]")
 
     def to_frame(self) -> pd.DataFrame:
         """One row per ū: ȳ, its band and std, the gain, its band and std (and the undefined fraction)."""
