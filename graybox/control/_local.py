@@ -617,7 +617,8 @@ class OperatingCurve:
         Monte Carlo band from the parameter covariance (None when none was given).
     undefined : ndarray, shape (M,) or None
         Fraction of draws that reach no stable equilibrium at each ū (left out of the band); NaN,
-        with NaN bands, where the model itself has no equilibrium (no draws are made there).
+        with NaN bands, where the model itself reaches none (``status`` not ``"reached"``: no
+        draws are made there).
     """
 
     local_models: tuple[LocalModel, ...]
@@ -732,7 +733,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         The model's parameter covariance (:func:`graybox.ls_uncertainty` and the others): the
         gain and time-constant bands at its level are the quantiles of ``n_samples`` draws of θ
         around θ̂ with scale ``cov`` (multivariate t with its degrees of freedom, as its intervals),
-        each at the equilibrium it reaches from the estimate's ȳ (NaN bands where there is none).
+        each at the equilibrium it reaches from the estimate's ȳ (NaN bands where the estimate
+        itself reaches none).
     n_samples : int
         Monte Carlo draws for the bands.
     seed : int
@@ -754,7 +756,9 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     gain = np.array([r[1] for r in rows])
     fields: dict[str, Any] = {}
     if uncertainty is not None:
-        fields = _band(model, uncertainty, ub, np.array([r[0] for r in rows]), Ts_, n_samples, seed, single)
+        # draws only where the estimate reaches its equilibrium: from an unstable one they run off to another
+        ybar = np.array([r[0] if lm.reached else np.nan for r, lm in zip(rows, lms)])
+        fields = _band(model, uncertainty, ub, ybar, Ts_, n_samples, seed, single)
     return OperatingCurve(lms, ub[:, 0] if single else ub, np.array([r[0] for r in rows]),
                           gain[:, 0] if single else gain, np.array([r[2] for r in rows]),
                           np.array([r[3] for r in rows]), np.array([r[4] for r in rows]),
