@@ -43,3 +43,22 @@ def test_operating_curve_band_is_nan_where_the_model_reaches_no_equilibrium():
     for band in (oc.gain_low, oc.gain_high, oc.time_constant_low, oc.time_constant_high, oc.undefined):
         assert np.isnan(band[0])
     assert oc.gain_low[1] <= oc.gain[1] <= oc.gain_high[1] and oc.undefined[1] == 0.0
+
+
+@pytest.mark.parametrize("bad", ["1", ["1", "-1"], [True, False], np.array([1 + 0j, 1])])
+@pytest.mark.parametrize("call", [
+    lambda y0: gb.Model(["y(k-1)", "y(k-1)^3", "q(k-1)"], [1.5, -0.5, 1e-3]).static_curve([0.0, 0.0], y0=y0),
+    lambda y0: gb.Model(["y(k-1)", "y(k-1)^3", "q(k-1)"], [1.5, -0.5, 1e-3]).static_gain([0.0, 0.0], y0=y0),
+    lambda y0: gb.Model(["y(k-1)", "y(k-1)^3", "a(k-1)", "b(k-1)"], [1.5, -0.5, 1e-3, 1.0]).static_curve(
+        [[0.0, 0.0], [0.0, 0.0]], y0=y0),
+    lambda y0: gb.StaticPoints([1.0, 2.0], [1.0, 2.0], uncertainty=y0),
+    lambda y0: gb.operating_curve(gb.Model(["y(k-1)", "y(k-1)^3", "q(k-1)"], [1.5, -0.5, 1e-3]), [0.0, 0.0],
+                                  y0=y0, Ts=1.0),
+])
+def test_a_per_point_value_that_is_not_numbers_is_a_type_error(call, bad):
+    # y0 (and a static point's uncertainty) were converted by numpy: the text "1" was read as ȳ = 1 and a
+    # mask [True, False] as y0 = [1, 0] (the run from 0 settles on nothing: NaN with strict=False), a
+    # complex y0 lost its imaginary part with numpy's warning;
+    # operating_curve refused a text y0 but read a list of texts
+    with pytest.raises(TypeError, match="y0|uncertainty"):
+        call(bad)

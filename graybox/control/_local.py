@@ -32,8 +32,8 @@ from scipy.signal import lfilter
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
-from ..core._validation import (check_choice, check_fields, check_int, check_real, check_seed, frozen, refuse_non_real,
-                                warn)
+from ..core._validation import (check_choice, check_fields, check_int, check_per_point, check_real, check_seed, frozen,
+                                refuse_non_real, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, reached_equilibria,
@@ -531,15 +531,7 @@ def check_Ts(Ts: float | None, data: object, model: Model) -> float:
 def _y0s(y0: object, M: int) -> list[float | None]:
     if y0 is None:
         return [None] * M
-    if isinstance(y0, (bool, np.bool_, str)):
-        raise TypeError(f"y0 must be a number or one number per operating point, got {y0!r}")
-    try:
-        a = np.atleast_1d(np.asarray(y0, float)).ravel()
-    except (TypeError, ValueError):
-        raise TypeError(f"y0 must be a number or one number per operating point, got {y0!r}") from None
-    if a.size not in (1, M) or not np.all(np.isfinite(a)):
-        raise ValueError(f"y0 must be a finite scalar or one value per operating point ({M}), got {y0!r}")
-    return [float(v) for v in np.broadcast_to(a, (M,))]
+    return [float(v) for v in check_per_point(y0, M, "y0 (one per operating point)")]
 
 
 def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float) -> LocalModel:

@@ -216,12 +216,14 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
 
 
 def check_per_point(value: object, n: int, name: str) -> np.ndarray:
-    """A scalar or one value per point, as a finite float array of shape (n,), or ``ValueError``."""
+    """A scalar or one value per point, as a finite float array of shape (n,), or ``ValueError``
+    (``TypeError`` for text, complex values or booleans, which numpy would convert)."""
+    refuse_non_real(value, name)
     try:
         a = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be a number or an array of numbers, got {type(value).__name__}") from None
-    if _is_bool(value) or a.dtype == object:
+    if _is_bool(value) or np.asarray(value).dtype == bool or a.dtype == object:
         raise TypeError(f"{name} must be a number or an array of numbers, got {value!r}")
     if a.ndim > 1 or (a.ndim == 1 and a.size not in (1, n)):
         raise ValueError(f"{name} must be a scalar or have one value per ū ({n}), got shape {a.shape}")
