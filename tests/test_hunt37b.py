@@ -62,3 +62,22 @@ def test_a_per_point_value_that_is_not_numbers_is_a_type_error(call, bad):
     # operating_curve refused a text y0 but read a list of texts
     with pytest.raises(TypeError, match="y0|uncertainty"):
         call(bad)
+
+
+def test_a_surface_fitted_with_its_inputs_in_another_order_takes_the_points_by_name():
+    # StaticSurface.fit(points, input_names=...) renamed the points' columns by position: points in
+    # (speed, valve) fitted with input_names=("valve", "speed") gave "2e5 + 10 valve + 1e7 speed" for the
+    # plane 2e5 + 10 speed + 1e7 valve, which every estimator then imposed, matched by name, without a word
+    U = np.array([[2900.0, 1e-3], [3100.0, 1e-3], [2900.0, 2e-3], [3100.0, 2e-3], [3000.0, 1.5e-3]])
+    points = gb.StaticPoints(U, 2e5 + 10.0 * U[:, 0] + 1e7 * U[:, 1], input_names=("speed", "valve"))
+    surface = gb.StaticSurface.fit(points, 1, input_names=("valve", "speed"))
+    assert surface.input_names == ("valve", "speed")
+    np.testing.assert_allclose(surface(U[:, ::-1]), points.ybar, rtol=1e-12)
+    np.testing.assert_allclose(surface.coefficient((1, 0)), 1e7, rtol=1e-9)  # valve's
+    assert surface.domain == ((1e-3, 2e-3), (2900.0, 3100.0))
+    renamed = gb.StaticSurface.fit(points, 1, input_names=("n", "v"))  # new names: the points' order
+    np.testing.assert_allclose(renamed(U), points.ybar, rtol=1e-12)
+    with pytest.raises(ValueError, match="rename some"):
+        gb.StaticSurface.fit(points, 1, input_names=("valve", "n"))
+    with pytest.raises(ValueError, match="2 distinct names"):
+        gb.StaticSurface.fit(points, 1, input_names=("valve",))

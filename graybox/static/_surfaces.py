@@ -194,7 +194,9 @@ class StaticSurface:
         exponents : sequence of exponent vectors, optional
             The monomials to fit instead of the full set of ``degree``.
         input_names : sequence of str, optional
-            Input names (default: the points', else u1 … um).
+            The surface's inputs, in the order of its exponents' entries (default: the points').
+            The points' own names in another order take the points' columns by name; new names
+            rename the points' inputs in their order.
 
         Notes
         -----
@@ -206,17 +208,29 @@ class StaticSurface:
         yb = points.ybar
         m = points.n_inputs
         ub = _as_inputs(points.ubar, m, "StaticSurface.fit")
+        names = tuple(points.input_names)
+        if input_names is not None:
+            given = tuple(str(v) for v in check_sequence(input_names, "StaticSurface.fit: input_names",
+                                                          "a sequence of names"))
+            if len(given) != m or len(set(given)) != m:
+                raise ValueError(f"StaticSurface.fit: input_names must be {m} distinct names (one per input of the "
+                                 f"points), got {given}")
+            if set(given) == set(names):  # the points' own inputs in another order: their columns by name
+                ub = ub[:, [names.index(v) for v in given]]
+            elif set(given) & set(names):
+                raise ValueError(f"StaticSurface.fit: input_names {given} rename some of the points' inputs {names} "
+                                 "and not others; give the points' names in the surface's order, or new names for all")
+            names = given
         ex = monomial_exponents(m, degree) if exponents is None else _monomial_set(exponents, "StaticSurface.fit", m)
         if len(yb) < len(ex):
             raise ValueError(f"fitting {len(ex)} monomials needs at least {len(ex)} static points, got {len(yb)}")
         box = tuple((float(ub[:, i].min()), float(ub[:, i].max())) for i in range(m))
-        held = [n for n, (lo, hi) in zip(points.input_names, box) if lo == hi]
+        held = [n for n, (lo, hi) in zip(names, box) if lo == hi]
         if held:  # before the fit, whose rank test would say less
             raise ValueError(f"StaticSurface.fit: the points do not vary every input: they hold {held} at one value "
                              "(a flat direction has no domain)")
         V = _monomials(ub, ex)
         c = scaled_lstsq(V, yb)
-        names = input_names if input_names is not None else points.input_names
         return cls(ex, c, box, name or f"fit to {points.name}", names)
 
     # -- properties ---------------------------------------------------------
