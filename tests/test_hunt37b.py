@@ -81,3 +81,21 @@ def test_a_surface_fitted_with_its_inputs_in_another_order_takes_the_points_by_n
         gb.StaticSurface.fit(points, 1, input_names=("valve", "n"))
     with pytest.raises(ValueError, match="2 distinct names"):
         gb.StaticSurface.fit(points, 1, input_names=("valve",))
+
+
+@pytest.mark.parametrize("terms, inputs, key", [
+    (["1", "y(k-1)", "speed(k-1)"], ("speed",), (2, 0)),
+    (["1", "y(k-1)", "speed(k-1)", "valve(k-1)"], ("speed", "valve"), (1, 0)),
+])
+def test_a_cluster_key_the_structure_lacks_is_named_with_the_keys_it_has(terms, inputs, key):
+    # ClusterBounds({(2, 0): ...}) on a structure without y², or a one-input key (1, 0) for two inputs
+    # (whose keys are (p, a_speed, a_valve)), failed with Python's "tuple.index(x): x not in tuple"
+    rng = np.random.default_rng(0)
+    u = rng.uniform(2900.0, 3100.0, (200, len(inputs)))
+    y = 2e5 + 0.01 * rng.standard_normal(200)
+    rec = gb.Record(u[:, 0] if len(inputs) == 1 else u, y, input_names=inputs)
+    model = gb.Model(terms, np.ones(len(terms)), input_names=inputs)
+    with pytest.raises(ValueError, match=r"no cluster with key .*Σy \(1, 0"):
+        model.cluster_map().index(key)
+    with pytest.raises(ValueError, match=r"no cluster with key"):
+        gb.cls(terms, rec, constraints=gb.ClusterBounds({key: (0.0, 0.5)}))

@@ -196,7 +196,7 @@ class ClusterMap:
     def index(self, name_or_key: str | tuple[int, int]) -> int:
         """Row of R for a cluster given by name (``"Σyu"``, or ASCII ``"Syu"``) or (p, m)."""
         if isinstance(name_or_key, tuple):
-            return self.keys.index(name_or_key)
+            return key_index(self.keys, self.names, name_or_key, "(p, m)")
         names = self.names
         # every printed name is accepted as it is; ASCII ("Syu^2", "Su2") is read as the paper's form
         name = name_or_key if name_or_key in names else ascii_cluster_name(name_or_key, single_input=True)
@@ -210,6 +210,14 @@ class ClusterMap:
         return max((p for p, _ in self.keys), default=0)
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
+
+
+def key_index(keys: tuple, names: list[str], key: tuple, form: str) -> int:
+    """Row of the cluster ``key`` among ``keys``, or ``ValueError`` naming it and the clusters there are."""
+    if key not in keys:
+        raise ValueError(f"no cluster with key {key!r} (powers {form}) in this structure; it has "
+                         + ", ".join(f"{n} {k}" for n, k in zip(names, keys)))
+    return keys.index(key)
 
 
 def cluster_map(structure: Structure) -> ClusterMap:

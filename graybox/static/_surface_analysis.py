@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from . import _analysis as _static
-from ._analysis import Equilibrium, Reached, ascii_cluster_name
+from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
 from ..core._records import frame_inputs
 from ..core._terms import Structure, Term, check_input_names, require_inputs
 from ..core._validation import check_bool, check_fields, check_per_point, renamed
@@ -111,7 +111,7 @@ class SurfaceClusterMap:
     def index(self, name_or_key: str | tuple[int, ...]) -> int:
         """Row of R for a cluster given by name (``"Σyu1"``) or key (p, a_1, …, a_m)."""
         if isinstance(name_or_key, tuple):
-            return self.keys.index(name_or_key)
+            return key_index(self.keys, self.names, name_or_key, "(p, " + ", ".join(f"a_{n}" for n in self.inputs) + ")")
         names = self.names
         # every printed name is accepted as it is; ASCII ("Syu1", "Su1^2u2") is read as the paper's form
         name = name_or_key if name_or_key in names else ascii_cluster_name(name_or_key, single_input=False)
