@@ -99,3 +99,28 @@ def test_a_cluster_key_the_structure_lacks_is_named_with_the_keys_it_has(terms, 
         model.cluster_map().index(key)
     with pytest.raises(ValueError, match=r"no cluster with key"):
         gb.cls(terms, rec, constraints=gb.ClusterBounds({key: (0.0, 0.5)}))
+
+
+def _pressure_record(rng, n=500, c=(0.5,)):
+    """Pressure (Pa, near 2e5) from a speed (rpm, near 3000) with MA equation noise 1 + Σ c_l q⁻ˡ."""
+    s = np.repeat(rng.uniform(2800.0, 3200.0, n // 10 + 1), 10)[:n]
+    e = 40.0 * rng.standard_normal(n)
+    y = np.full(n, 2.0e5)
+    for k in range(2, n):
+        y[k] = (1e4 + 0.8 * y[k - 1] + 6.0 * s[k - 1] + 2e-3 * s[k - 1] ** 2 + e[k]
+                + sum(cl * e[k - 1 - i] for i, cl in enumerate(c)))
+    return gb.Record(s, y, input_names=("speed",), units=("rpm", "Pa"), Ts=0.1)
+
+
+@pytest.mark.parametrize("ne", [1, 2])
+def test_ls_uncertainty_refuses_an_els_model_of_other_data(ne):
+    # ls_uncertainty checks that a plain LS model is the estimate on the data it is given, but took an ELS
+    # model of another record of the same plant without a word and gave it a covariance (the share of its
+    # residuals along its extended regressors was 0.1-0.16 there, ~1e-8-1e-7 on its own record)
+    rng = np.random.default_rng(3)
+    a, b = _pressure_record(rng), _pressure_record(rng)
+    terms = ["1", "y(k-1)", "speed(k-1)", "speed(k-1)^2"]
+    own = gb.els(terms, a, noise=ne).model
+    assert np.all(gb.ls_uncertainty(own, a).std > 0)
+    with pytest.raises(ValueError, match="not the optimum.*ELS estimate on these data"):
+        gb.ls_uncertainty(own, b)

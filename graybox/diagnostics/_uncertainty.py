@@ -83,6 +83,12 @@ __all__ = [
 ]
 
 
+#: ls_uncertainty takes an ELS model as the estimate on its data when the share of its one-step residuals
+#: along the extended regressors is at most this: ~1e-7 at ELS's fixed point (tol 1e-6), 1e-4 for a run
+#: stopped at its cap while its residuals still changed by 2e-3, 0.1-0.4 for the estimate of another record.
+ELS_STATIONARY_RTOL = 1e-2
+
+
 class UncertaintyWarning(UserWarning):
     """The uncertainty was computed, but at a point where its assumptions are doubtful."""
 
@@ -295,23 +301,23 @@ def _to_theta(cov_z: tuple[np.ndarray, np.ndarray], s: np.ndarray) -> tuple[np.n
 
 
 def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float, size: float, what: str,
-                      hint: str, rows: int) -> None:
+                      hint: str, rows: int, rtol: float = 1e-6) -> None:
     """θ̂ must be the optimum of the problem whose covariance is asked for.
 
     The objective is ‖r‖² + rest2 with residuals r = A z − c (A in the scaled coordinates z, rest2
     the part no parameter reaches), and θ may move along the columns of Z. ‖Uᵀr‖, U an orthonormal
     basis of AZ's columns, is the square root of what a step could still remove from the objective:
-    it must be at most 1e-6 of the whole residual norm (a units-free angle, unchanged by the output's
-    offset or scale, which a gradient measured against |Aᵀy| was not), or at the round-off level of
-    the fit, 1e-11 of ``size`` (the fitted values' and targets' norms). AZ's range is taken by the one rank
-    rule (A standing for ``rows`` regression rows).
+    it must be at most ``rtol`` (1e-6) of the whole residual norm (a units-free angle, unchanged by the
+    output's offset or scale, which a gradient measured against |Aᵀy| was not), or at the round-off level
+    of the fit, 1e-11 of ``size`` (the fitted values' and targets' norms). AZ's range is taken by the one
+    rank rule (A standing for ``rows`` regression rows).
     """
     if Z.shape[1] == 0:
         return  # the constraints fix θ: nothing left to optimise
     U, S, _ = np.linalg.svd(A @ Z, full_matrices=False)
     g = float(np.linalg.norm(U[:, S > rank_tolerance(S[0], rows, S.size)].T @ r)) if S.size and S[0] > 0 else 0.0
     whole = float(np.sqrt(r @ r + rest2))
-    if not np.isfinite(g) or g > 1e-6 * whole + 1e-11 * size:
+    if not np.isfinite(g) or g > rtol * whole + 1e-11 * size:
         raise ValueError(f"{what}: the model's θ is not the optimum of this problem (a fraction "
                          f"{g / max(whole, 1e-300):.1e} of its residual lies along the directions θ may move); {hint}")
 
@@ -401,7 +407,8 @@ def ls_uncertainty(
     ValueError
         A plain LS model that is not the least-squares estimate on ``data`` (its gradient is not
         zero; among them an ELS estimate without its MA part, as :func:`graybox.select_graybox`
-        returns it), collinear regressors, too few rows.
+        returns it), an ELS model that is not the ELS estimate on ``data`` (its residuals are not
+        orthogonal to its extended regressors), collinear regressors, too few rows.
     """
     model = as_model(model)
     level = _check_level(level)
@@ -443,6 +450,11 @@ def ls_uncertainty(
                           "noise to zero): refit it with graybox.els(model.structure, data)", N)
     else:
         cov, F = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
+        # ELS's fixed point: its residuals orthogonal to the extended regressors they build (to round-off
+        # of the iteration's tolerance; an estimate of another record is far from it)
+        _check_stationary(np.eye(n + ne), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
+                          "pass the ELS estimate on these data, with its MA part (graybox.els(model.structure, "
+                          "data))", N, rtol=ELS_STATIONARY_RTOL)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
                                 cov[n:, n:], cov_factor=F[:, :n])
 
