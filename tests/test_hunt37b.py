@@ -124,3 +124,20 @@ def test_ls_uncertainty_refuses_an_els_model_of_other_data(ne):
     assert np.all(gb.ls_uncertainty(own, a).std > 0)
     with pytest.raises(ValueError, match="not the optimum.*ELS estimate on these data"):
         gb.ls_uncertainty(own, b)
+
+
+def test_operating_curve_refuses_the_uncertainty_of_another_estimate_of_the_structure():
+    # the band checked only that the uncertainty's model had the same structure: the least-squares
+    # covariance given with the CLS model of that structure (eq. (22) fixes its static curve, so its gain
+    # has no spread) drew a gain band around the CLS gain as wide as least squares', without a word
+    rng = np.random.default_rng(4)
+    rec = _pressure_record(rng, c=())
+    terms = ["1", "y(k-1)", "speed(k-1)", "speed(k-1)^2"]
+    ls = gb.els(terms, rec, noise=0).model
+    curve = gb.StaticCurve.polynomial(np.array([1e4, 6.0, 2e-3]) / 0.2, domain=(2850.0, 3150.0))
+    gray = gb.cls(terms, rec, curve, reference=0.8).model
+    with pytest.raises(ValueError, match="whose θ differs"):
+        gb.operating_curve(gray, [2900.0, 3100.0], uncertainty=gb.ls_uncertainty(ls, rec), n_samples=50)
+    own = gb.operating_curve(gray, [2900.0, 3100.0], uncertainty=gb.cls_uncertainty(gray, rec, curve, reference=0.8),
+                             n_samples=50)
+    np.testing.assert_allclose(own.gain_high - own.gain_low, 0.0, atol=1e-9 * np.abs(own.gain).max())

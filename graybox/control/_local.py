@@ -768,6 +768,10 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
     if cov is None or not isinstance(um, Model) or um.structure != model.structure:
         raise ValueError("uncertainty must be the ParameterUncertainty of this model (same structure), e.g. "
                          "graybox.ls_uncertainty(model, data)")
+    if not np.array_equal(um.theta, model.theta):  # another estimate's covariance says nothing of this one's
+        raise ValueError(f"uncertainty is that of the model {um.name!r}, whose θ differs from this model's "
+                         f"({model.name!r}): give the ParameterUncertainty of this model (e.g. cls_uncertainty for "
+                         "a CLS model, pe_uncertainty for a PE member)")
     th = model.theta
     rng = np.random.default_rng(seed)
     thetas = theta_draws(th, cov, n, rng, dof=getattr(uncertainty, "dof", None))  # t, as the intervals
