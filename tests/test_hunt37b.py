@@ -141,3 +141,13 @@ def test_operating_curve_refuses_the_uncertainty_of_another_estimate_of_the_stru
     own = gb.operating_curve(gray, [2900.0, 3100.0], uncertainty=gb.cls_uncertainty(gray, rec, curve, reference=0.8),
                              n_samples=50)
     np.testing.assert_allclose(own.gain_high - own.gain_low, 0.0, atol=1e-9 * np.abs(own.gain).max())
+
+
+def test_bootstrap_on_records_too_short_for_a_block_says_so():
+    # with block_length left at its default, records shorter than a block's minimum 2·(L + 1) gave
+    # "block_length must be an integer >= 14, got 12", about an argument the user never passed
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(0.0, 1.0, 12), rng.uniform(0.0, 1.0, 12))
+    points = gb.StaticPoints([0.0, 0.5, 1.0], [0.0, 1.0, 2.0], uncertainty=0.1)
+    with pytest.raises(ValueError, match=r"records \(\[12\] samples\) are too short .* at least 14"):
+        gb.bootstrap_decision(["1", "y(k-6)", "u(k-1)"], rec, points, lambdas=[0.5, 1.0], n_boot=2, progress=False)

@@ -435,6 +435,10 @@ def bootstrap_decision(
     total = sum(len(r) for r in recs)
     if block_length is None:
         block_length = min(max(10 * (L + 1), total // 10), max(len(r) for r in recs))
+        if block_length < 2 * (L + 1):  # the default, not the user, would be named by the check below
+            raise ValueError(f"bootstrap_decision: the records ({[len(r) for r in recs]} samples) are too short for "
+                             f"blocks of this structure (largest lag {L}): a block needs at least {2 * (L + 1)} "
+                             "samples to leave rows to fit")
     block_length = check_int(block_length, "block_length", low=2 * (L + 1))
     if static_sigma is not None:
         static_sigma = check_real(static_sigma, "static_sigma", low=0, low_open=True)
