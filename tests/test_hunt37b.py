@@ -151,3 +151,20 @@ def test_bootstrap_on_records_too_short_for_a_block_says_so():
     points = gb.StaticPoints([0.0, 0.5, 1.0], [0.0, 1.0, 2.0], uncertainty=0.1)
     with pytest.raises(ValueError, match=r"records \(\[12\] samples\) are too short .* at least 14"):
         gb.bootstrap_decision(["1", "y(k-6)", "u(k-1)"], rec, points, lambdas=[0.5, 1.0], n_boot=2, progress=False)
+
+
+_TWO = gb.Model(["1", "y(k-1)", "speed(k-1)", "valve(k-1)"], [1e4, 0.5, 2.0, 1e6], input_names=("speed", "valve"))
+_PLANE = gb.StaticSurface.polynomial({(0, 0): 2e5, (1, 0): 10.0, (0, 1): 1e7}, input_names=("speed", "valve"))
+
+
+@pytest.mark.parametrize("bad", [[["3000", "1e-3"]], [["a", "b"]], [[3000.0 + 0j, 1e-3]], [[True, False]]])
+@pytest.mark.parametrize("call", [
+    _TWO.static_curve, _TWO.static_gain, _TWO.equilibria, _PLANE, _PLANE.gradient,
+    lambda ub: gb.static_surface(_TWO.structure, _TWO.theta, ub),
+])
+def test_points_of_two_inputs_that_are_not_numbers_are_a_type_error(call, bad):
+    # the surface paths converted ū with numpy: text "3000" was read as 3000 rpm, True as 1, a complex
+    # level lost its imaginary part, and "a" failed with numpy's "could not convert string to float: 'a'"
+    # naming no argument (the one-input paths refuse all of these as a TypeError naming ubar)
+    with pytest.raises(TypeError, match="ū|ubar"):
+        call(bad)

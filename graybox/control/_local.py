@@ -33,7 +33,7 @@ from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, 
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
 from ..core._validation import (check_choice, check_fields, check_int, check_per_point, check_real, check_seed, frozen,
-                                refuse_non_real, warn)
+                                real_array, refuse_non_real, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, reached_equilibria,
@@ -408,14 +408,7 @@ def system_name(name: str, what: str) -> str | None:
 def input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
     """``ubar`` as a float array, or a ``TypeError`` naming it for strings, complex values, None or booleans
     (numpy's own conversion names neither the argument nor the problem, and takes None for NaN)."""
-    refuse_non_real(ubar, name)
-    try:
-        raw = np.asarray(ubar)
-        if ubar is None or raw.dtype == bool:
-            raise TypeError
-        return raw.astype(float)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be input levels (numbers), got {ubar!r}") from None
+    return real_array(ubar, name, "input levels (numbers)")
 
 
 def _as_points(model: Model, ubar: object) -> np.ndarray:

@@ -177,6 +177,26 @@ def refuse_non_real(x: object, name: str) -> None:
                         "file with graybox.load_record_csv / load_static_csv")
 
 
+def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
+    """``x`` as a float array, or ``TypeError`` naming ``name`` for text, complex values, booleans, None or
+    other objects (numpy's own conversion parses text, drops an imaginary part, reads True as 1 and None
+    as NaN, and its errors name neither the argument nor the problem)."""
+    refuse_non_real(x, name)
+    try:
+        raw = np.asarray(x)
+        if x is None or raw.dtype == bool:
+            raise TypeError
+        return raw.astype(float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be {what}, got {short_value(x)}") from None
+
+
+def short_value(x: object) -> str:
+    """``repr(x)`` cut to 80 characters, for a message about a bad argument."""
+    text = repr(x)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
 def check_theta(n_terms: int, theta: object, name: str = "theta") -> np.ndarray:
     """θ as a finite float array of length ``n_terms``, shape (n_terms,), or ``ValueError``."""
     refuse_non_real(theta, name)

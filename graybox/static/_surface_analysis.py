@@ -31,7 +31,7 @@ from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
 from ..core._records import frame_inputs
 from ..core._terms import Structure, Term, check_input_names, require_inputs
-from ..core._validation import check_bool, check_fields, check_per_point, renamed
+from ..core._validation import check_bool, check_fields, check_per_point, real_array, renamed
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -186,7 +186,7 @@ def _as_points(ubar: object, names: tuple[str, ...]) -> np.ndarray:
     """ū as finite points, shape (M, m), columns in the order of the inputs ``names``; a 1-D ū of length m is
     one point; a DataFrame is read by column name as every input is (:func:`~graybox.core._records.frame_inputs`)."""
     m = len(names)
-    ub = np.asarray(frame_inputs(ubar, names, "ubar"), dtype=float)
+    ub = real_array(frame_inputs(ubar, names, "ubar"), "ubar", "points of input levels (numbers)")
     if ub.ndim == 1 and ub.size == m:
         ub = ub[None, :]
     if ub.ndim != 2 or ub.shape[1] != m:

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, frame_inputs, outside_range
-from ..core._validation import check_int, check_real, check_sequence, check_str
+from ..core._validation import check_int, check_real, check_sequence, check_str, real_array
 from ..core._reprs import short_repr
 
 __all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
@@ -46,7 +46,7 @@ def monomial_exponents(n_inputs: int, degree: int) -> tuple[tuple[int, ...], ...
 def _as_inputs(ubar: object, m: int, what: str, names: Sequence[str] | None = None) -> np.ndarray:
     """ū as a finite array of shape (K, m); a 1-D array is K points when m = 1, one point otherwise; a DataFrame
     is read by column name where its columns are the inputs ``names`` (:func:`~graybox.core._records.frame_inputs`)."""
-    u = np.asarray(frame_inputs(ubar, names, f"{what}: ū"), dtype=float)
+    u = real_array(frame_inputs(ubar, names, f"{what}: ū"), f"{what}: ū", "points of input levels (numbers)")
     if u.ndim == 1:
         u = u[:, None] if m == 1 else u[None, :]
     if u.ndim != 2 or u.shape[1] != m:
