@@ -168,3 +168,17 @@ def test_points_of_two_inputs_that_are_not_numbers_are_a_type_error(call, bad):
     # naming no argument (the one-input paths refuse all of these as a TypeError naming ubar)
     with pytest.raises(TypeError, match="ū|ubar"):
         call(bad)
+
+
+_ONE = gb.Model(["1", "y(k-1)", "speed(k-1)"], [1.0, 0.5, 2.0], input_names=("speed",))
+_LINE = gb.StaticCurve.polynomial([1.0, 2.0], domain=(0.0, 5000.0))
+
+
+@pytest.mark.parametrize("bad", ["3000", ["1", "2"], True, [True, False], [1.0 + 1j]])
+@pytest.mark.parametrize("call", [_ONE.static_curve, _ONE.static_gain, _LINE, _LINE.gain, _LINE.points,
+                                  lambda ub: gb.static_curve(_ONE.structure, _ONE.theta, ub)])
+def test_levels_of_one_input_that_are_not_numbers_are_a_type_error(call, bad):
+    # a StaticCurve read the text "3000" as ū = 3000 (H = 6001) and True as 1; Model.static_curve refused
+    # text but took True and [True, False] as the levels 1 and 0 (equilibria and local_model refuse them)
+    with pytest.raises(TypeError, match="ubar"):
+        call(bad)

@@ -63,7 +63,7 @@ from ._equilibrium_kernels import (
 )
 from ..core._terms import Structure, Term
 from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real, check_sequence,
-                                check_theta)
+                                check_theta, real_array)
 from ..core._reprs import short_repr
 from ._linearisation import characteristic_roots, derivative_map, grid_coefficients
 
@@ -937,7 +937,7 @@ def one_input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
     if len(shape) > 2 or (len(shape) == 2 and shape[1] != 1):
         raise ValueError(f"{name} must be levels of the one input (a number, shape (M,) or (M, 1)), got shape "
                          f"{shape}: a model of several inputs takes points of shape (M, m)")
-    return np.atleast_1d(as_1d_finite(np.ravel(ubar), name))
+    return np.atleast_1d(as_1d_finite(np.ravel(real_array(ubar, name, "input levels (numbers)")), name))
 
 
 def only_stable(roots: np.ndarray, stable: np.ndarray, where: list[str],

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, outside_range
-from ..core._validation import as_1d_finite, check_int, check_real, check_str
+from ..core._validation import as_1d_finite, check_int, check_real, check_str, real_array
 from ..core._reprs import short_repr
 
 __all__ = ["StaticCurve"]
@@ -91,20 +91,20 @@ class StaticCurve:
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
         """H(ū), same shape as ``ubar`` (checked against the domain)."""
-        ub = np.asarray(ubar, dtype=float)
+        ub = real_array(ubar, "ubar", "input levels (numbers)")
         self.check_domain(ub)
         return np.polynomial.polynomial.polyval(ub, self.coefficients)
 
     def gain(self, ubar: np.ndarray) -> np.ndarray:
         """dH/dū at ``ubar``."""
-        ub = np.asarray(ubar, dtype=float)
+        ub = real_array(ubar, "ubar", "input levels (numbers)")
         self.check_domain(ub)
         return np.polynomial.polynomial.polyval(ub, np.polynomial.polynomial.polyder(self.coefficients))
 
     def points(self, ubar: np.ndarray, input_name: str = "u") -> StaticPoints:
         """The curve sampled at ``ubar`` as static points of the input ``input_name`` (a curve is
         of one input, whatever the records call it: e.g. ``record.input_names[0]``)."""
-        ub = np.asarray(ubar, dtype=float)
+        ub = real_array(ubar, "ubar", "input levels (numbers)")
         return StaticPoints(ub, self(ub), name=self.name, input_names=(input_name,))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
