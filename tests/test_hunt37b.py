@@ -174,11 +174,22 @@ _ONE = gb.Model(["1", "y(k-1)", "speed(k-1)"], [1.0, 0.5, 2.0], input_names=("sp
 _LINE = gb.StaticCurve.polynomial([1.0, 2.0], domain=(0.0, 5000.0))
 
 
+def _one_band(ubar):
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.0, 1.0, 100)
+    y = np.zeros(100)
+    for k in range(1, 100):
+        y[k] = 1.0 + 0.5 * y[k - 1] + 2.0 * u[k - 1] + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y, input_names=("speed",))
+    return gb.static_curve_band(gb.ls_uncertainty(gb.els(_ONE.structure, rec, noise=0).model, rec), ubar)
+
+
 @pytest.mark.parametrize("bad", ["3000", ["1", "2"], True, [True, False], [1.0 + 1j]])
 @pytest.mark.parametrize("call", [_ONE.static_curve, _ONE.static_gain, _LINE, _LINE.gain, _LINE.points,
-                                  lambda ub: gb.static_curve(_ONE.structure, _ONE.theta, ub)])
+                                  lambda ub: gb.static_curve(_ONE.structure, _ONE.theta, ub), _one_band])
 def test_levels_of_one_input_that_are_not_numbers_are_a_type_error(call, bad):
     # a StaticCurve read the text "3000" as ū = 3000 (H = 6001) and True as 1; Model.static_curve refused
-    # text but took True and [True, False] as the levels 1 and 0 (equilibria and local_model refuse them)
+    # text but took True and [True, False] as the levels 1 and 0 (equilibria and local_model refuse them);
+    # static_curve_band drew a band at ū = 0.5 for the text "0.5" and at ū = 1 for True
     with pytest.raises(TypeError, match="ubar"):
         call(bad)

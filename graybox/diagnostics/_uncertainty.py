@@ -68,7 +68,7 @@ from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..estimation._extended_least_squares import _ma_coefficients, _ma_invertible, _ma_text, _pure_lags
 from ..static._analysis import cluster_key, reached_equilibria, static_theta_gradient
-from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
+from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, real_array, warn
 
 __all__ = [
     "ParameterUncertainty",
@@ -960,7 +960,7 @@ def static_curve_band(
     if uncertainty.model.n_inputs > 1:
         raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
                          f"inputs {uncertainty.model.input_names} (a band around a static surface is not built yet)")
-    ub = np.atleast_1d(np.asarray(ubar, float))
+    ub = np.atleast_1d(real_array(ubar, "ubar", "input levels (numbers)"))
     if ub.ndim > 1:  # flattened, an (M, 2) grid of two inputs' levels was read as 2M levels of the one
         raise ValueError(f"ubar must be levels of the model's one input, shape (M,), got shape {ub.shape}")
     if ub.size == 0 or not np.all(np.isfinite(ub)):
