@@ -767,7 +767,8 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
                          "a CLS model, pe_uncertainty for a PE member)")
     th = model.theta
     rng = np.random.default_rng(seed)
-    thetas = theta_draws(th, cov, n, rng, dof=getattr(uncertainty, "dof", None))  # t, as the intervals
+    thetas = theta_draws(th, cov, n, rng, dof=getattr(uncertainty, "dof", None),  # t, as the intervals
+                         factor=getattr(uncertainty, "cov_factor", None))
     # the draws start from the estimate's equilibrium: where it has none, none is drawn and the band is NaN
     has = np.isfinite(ybar)
     M, full = int(has.sum()), ub.shape[0]

@@ -871,13 +871,17 @@ def _gain_gradient(structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndar
 
 
 def theta_draws(theta: np.ndarray, cov: np.ndarray, n: int, rng: np.random.Generator,
-                dof: int | None = None) -> np.ndarray:
+                dof: int | None = None, factor: np.ndarray | None = None) -> np.ndarray:
     """``n`` draws θ ~ N(θ, cov) (or the multivariate t with ``dof``), shape (n, n_terms), in the units of θ.
 
-    Drawn in standardised coordinates (the correlation matrix's eigenvectors, scaled back by the
-    standard deviations): in engineering units the entries of ``cov`` span decades, and the
-    eigensolver's round-off on ``cov`` itself, of the size of its largest entry, swamps the
-    small-scale parameters, so the draws (and every band built on them) changed with the units.
+    With ``factor`` F (cov = FᵀF, :attr:`ParameterUncertainty.cov_factor`) the draws are θ + Fᵀz, z
+    standard normal: exact to the factor's accuracy. Without it they are drawn in standardised
+    coordinates (the correlation matrix's eigenvectors, scaled back by the standard deviations): in
+    engineering units the entries of ``cov`` span decades, and the eigensolver's round-off on ``cov``
+    itself, of the size of its largest entry, swamps the small-scale parameters. Even standardised, the
+    eigensolver holds the correlation matrix's small directions only to eps: at an offset (y near 2e5,
+    u near 3000) those are the directions the static curve is known along, and a Monte Carlo band drawn
+    so was 20 times too wide.
 
     Parameters
     ----------
@@ -893,12 +897,18 @@ def theta_draws(theta: np.ndarray, cov: np.ndarray, n: int, rng: np.random.Gener
         Degrees of freedom of an estimated covariance (:attr:`ParameterUncertainty.dof`): the draws
         are then multivariate t, normal draws over √(χ²_dof / dof), the spread the intervals'
         Student's t quantile stands for (normal draws are too narrow on a short record).
+    factor : ndarray, shape (k, n_terms), optional
+        F with cov = FᵀF, in the units of θ (preferred over ``cov`` when given).
     """
-    cov = (cov + cov.T) / 2
-    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
-    sd = np.where(sd > 0, sd, 1.0)
-    w, V = np.linalg.eigh(cov / np.outer(sd, sd))
-    dev = ((rng.standard_normal((n, theta.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T) * sd
+    if factor is not None:
+        F = np.asarray(factor, float)
+        dev = rng.standard_normal((n, F.shape[0])) @ F
+    else:
+        cov = (cov + cov.T) / 2
+        sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+        sd = np.where(sd > 0, sd, 1.0)
+        w, V = np.linalg.eigh(cov / np.outer(sd, sd))
+        dev = ((rng.standard_normal((n, theta.size)) * np.sqrt(np.clip(w, 0, None))) @ V.T) * sd
     if dof is not None:
         dev /= np.sqrt(rng.chisquare(dof, n) / dof)[:, None]
     return theta[None, :] + dev
@@ -978,7 +988,7 @@ def static_curve_band(
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name)
     n_samples = check_int(n_samples, "n_samples", low=10)
     rng = np.random.default_rng(check_seed(seed))
-    thetas = theta_draws(th, cov, n_samples, rng, dof=uncertainty.dof)
+    thetas = theta_draws(th, cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_equilibria(st, thetas, ub, yb).ybar
     G = _gains(st, thetas, ub, Y)
     ok = np.isfinite(Y) & np.isfinite(G)
