@@ -216,3 +216,16 @@ def test_monte_carlo_bands_at_an_output_and_input_offset_match_the_delta_band():
     np.testing.assert_allclose(mc.ybar_high - mc.ybar_low, delta.ybar_high - delta.ybar_low, rtol=0.15)
     np.testing.assert_allclose(mc.gain_high - mc.gain_low, delta.gain_high - delta.gain_low, rtol=0.15)
     np.testing.assert_allclose(oc.gain_high - oc.gain_low, delta.gain_high - delta.gain_low, rtol=0.15)
+
+
+def test_narx_initial_state_refuses_a_record_at_another_period():
+    # narx_initial_state took the lags of a record sampled every 1 s for a model identified at 0.1 s, whose
+    # system then ran at 0.1 s from them; Model.simulate, which its docstring says the run equals, refuses it
+    model = gb.Model(["1", "y(k-1)", "speed(k-2)", "valve(k-1)"], [1.0, 0.5, 2.0, 1e3], input_names=("speed", "valve"),
+                     Ts=0.1)
+    u = np.c_[np.linspace(2900.0, 3100.0, 5), np.linspace(1e-3, 2e-3, 5)]
+    slow = gb.Record(u, np.linspace(2e5, 2.1e5, 5), input_names=("speed", "valve"), Ts=1.0)
+    with pytest.raises(ValueError, match="sampled"):
+        gb.narx_initial_state(model, slow)
+    same = gb.Record(u, np.linspace(2e5, 2.1e5, 5), input_names=("speed", "valve"), Ts=0.1)
+    np.testing.assert_array_equal(gb.narx_initial_state(model, same), [2.025e5, 2950.0, 2900.0, 1.25e-3])

@@ -105,7 +105,8 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     model : Model
         A polynomial NARX model.
     record : Record
-        Measured data with the model's inputs (taken by name).
+        Measured data with the model's inputs (taken by name), sampled at the model's period (a
+        record at another one is refused, as :meth:`graybox.Model.simulate` refuses it).
     start : int, optional
         The sample the system starts at (default, and at least, the model's max lag L: the state
         holds y(start−1) … and u(start−1) …). From ``start = L`` and inputs ``u[L:]`` the
@@ -123,6 +124,7 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     noise = check_bool(noise, "noise")
     if not isinstance(record, Record):
         raise TypeError(f"record must be a Record, got {type(record).__name__}")
+    model.check_period(record)  # the system runs at the model's period: so must the lags it starts from
     lay = _layout(model.structure, model.input_names)
     L = model.max_lag
     k = L if start is None else check_int(start, "start", low=0)
