@@ -229,3 +229,34 @@ def test_narx_initial_state_refuses_a_record_at_another_period():
         gb.narx_initial_state(model, slow)
     same = gb.Record(u, np.linspace(2e5, 2.1e5, 5), input_names=("speed", "valve"), Ts=0.1)
     np.testing.assert_array_equal(gb.narx_initial_state(model, same), [2.025e5, 2950.0, 2900.0, 1.25e-3])
+
+
+def test_pe_uncertainty_default_static_sigma_counts_what_the_member_absorbs_of_the_points():
+    # The default σ_SF was the member's static misfit √mean(((QRθ − ȳ)/D)²), said to err on the safe side;
+    # at small λ1 the member meets the points with its free static coefficients, so the misfit holds
+    # almost none of their noise: with 3 points (σ_SF = 20 Pa) at λ1 = 0.01 it read σ_SF ≈ 0.36 Pa and the
+    # predicted std of ȳ(3050 rpm) was 0.38 Pa against a spread over replicates of 17 Pa (45 times
+    # optimistic). The misfit is now divided by its degrees of freedom (M at λ1 = 1).
+    rng = np.random.default_rng(1)
+    a1, b1, b2 = 0.8, 10.0, 0.004
+    c0 = 2e5 * (1 - a1) - b1 * 3000 - b2 * 3000**2
+    terms = ["1", "y(k-1)", "speed(k-1)", "speed(k-1)^2"]
+    levels = np.array([2900.0, 3000.0, 3100.0])
+    n = 300
+    ybar, std = [], []
+    for _ in range(40):
+        s = np.repeat(rng.uniform(2850.0, 3150.0, n // 5 + 1), 5)[:n]
+        y = np.full(n, 2e5)
+        for k in range(1, n):
+            y[k] = c0 + a1 * y[k - 1] + b1 * s[k - 1] + b2 * s[k - 1] ** 2 + 50.0 * rng.standard_normal()
+        rec = gb.Record(s, y, input_names=("speed",), Ts=0.1)
+        points = gb.StaticPoints(levels, (c0 + b1 * levels + b2 * levels**2) / (1 - a1) + 20.0 * rng.standard_normal(3),
+                                 input_names=("speed",))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.StaticRangeWarning)
+            member = gb.Model(terms, gb.pe_thetas(terms, rec, points, lambdas=[0.01])[0], input_names=("speed",), Ts=0.1)
+            band = gb.static_curve_band(gb.pe_uncertainty(member, rec, points, lambda1=0.01), [3050.0])
+        ybar.append(band.ybar[0])
+        std.append(band.ybar_std[0])
+    spread = np.std(ybar)
+    assert 0.6 * spread < np.mean(std) < 3.0 * spread

@@ -611,8 +611,10 @@ def pe_uncertainty(
         equalities).
     static_sigma : float, optional
         Standard deviation of the measured ȳ_i, output units (e.g. 0.175 mlc for the plant's
-        transmitter). Default: the member's own static misfit √mean(((QRθ − ȳ)/D)²), which
-        includes any systematic misfit and so errs on the safe side.
+        transmitter). Default: from the member's own static misfit, √(Σ((QRθ − ȳ)/D)² / ν) with ν
+        its degrees of freedom (M at λ1 = 1, where the points do not move θ; towards M − k as the
+        member comes to meet the points with k free static coefficients; ``ValueError`` when it
+        meets them exactly), which includes any systematic misfit and so errs on the safe side.
     level : float
         Confidence level of the intervals, in (0, 1).
 
@@ -655,13 +657,36 @@ def pe_uncertainty(
                       "points and constraints of its estimate", d.N + M)
     dof_ls = d.N - n
     sigma2 = d.rss / dof_ls  # the data's noise, from least squares on the same data
-    ss2 = (check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2 if static_sigma is not None
-           else float(np.mean((sres / g) ** 2)))
     B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
+    if static_sigma is not None:
+        ss2 = check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2
+    else:
+        ss2 = float(np.sum((sres / g) ** 2)) / _static_misfit_dof(Z, A2, QR, w2 * B, g)
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
     cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty", d.N + M), d.s)
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
                                 cov_factor=F)
+
+
+def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.ndarray, g: np.ndarray) -> float:
+    """Degrees of freedom of a PE member's static misfit: E Σ(s_i/g_i)² = ν σ_SF² for noise of variance σ_SF² in
+    the measured ȳ_i, to first order (ν = M at λ1 = 1, where the points do not move θ; towards M − k as the
+    member comes to meet the points with k free static coefficients). ``ValueError`` when ν vanishes.
+
+    The misfit s = QRz − ȳ moves with ȳ directly (∂s_i/∂ȳ_i = g_i) and through the estimate
+    (dz/dȳ = −Z (ZᵀA2ᵀA2Z)⁻¹ Zᵀ (w2 B)ᵀ): ν = ‖I − diag(1/g) QR Z (ZᵀA2ᵀA2Z)⁻¹ Zᵀ (w2 B)ᵀ‖²_F.
+    """
+    M = QR.shape[0]
+    if Z.shape[1] == 0:
+        return float(M)
+    AZ = A2 @ Z
+    T = np.eye(M) - (QR @ Z) @ np.linalg.solve(AZ.T @ AZ, (wB @ Z).T) / g[:, None]
+    nu = float(np.sum(T**2))
+    if not np.isfinite(nu) or nu <= 1e-6 * M:
+        raise ValueError(f"pe_uncertainty: the member meets its {M} static points exactly (its static function has as "
+                         "many free coefficients as there are points), so its misfit says nothing of the points' "
+                         "noise: give static_sigma (the standard deviation of the measured ȳ_i)")
+    return nu
 
 
 # --------------------------------------------------------------------------------------------
