@@ -231,12 +231,14 @@ def test_narx_initial_state_refuses_a_record_at_another_period():
     np.testing.assert_array_equal(gb.narx_initial_state(model, same), [2.025e5, 2950.0, 2900.0, 1.25e-3])
 
 
-def test_pe_uncertainty_default_static_sigma_counts_what_the_member_absorbs_of_the_points():
-    # The default σ_SF was the member's static misfit √mean(((QRθ − ȳ)/D)²), said to err on the safe side;
-    # at small λ1 the member meets the points with its free static coefficients, so the misfit holds
-    # almost none of their noise: with 3 points (σ_SF = 20 Pa) at λ1 = 0.01 it read σ_SF ≈ 0.36 Pa and the
-    # predicted std of ȳ(3050 rpm) was 0.38 Pa against a spread over replicates of 17 Pa (45 times
-    # optimistic). The misfit is now divided by its degrees of freedom (M at λ1 = 1).
+@pytest.mark.parametrize("estimator", ["pe", "se"])
+def test_the_default_static_sigma_counts_what_the_member_absorbs_of_the_points(estimator):
+    # The default σ_SF was the member's static misfit √mean(((QRθ − ȳ)/D)²) (PE) or √J_SF (SE), said to
+    # err on the safe side; at small λ1 the member meets the points with its free static coefficients, so
+    # the misfit holds almost none of their noise: with 3 points (σ_SF = 20 Pa) at λ1 = 0.01 PE read
+    # σ_SF ≈ 0.36 Pa and the predicted std of ȳ(3050 rpm) was 0.38 Pa against a spread over replicates of
+    # 17 Pa (45 times optimistic; SE 0.26 Pa against 14 Pa). The misfit is now divided by its degrees of
+    # freedom (M at λ1 = 1).
     rng = np.random.default_rng(1)
     a1, b1, b2 = 0.8, 10.0, 0.004
     c0 = 2e5 * (1 - a1) - b1 * 3000 - b2 * 3000**2
@@ -244,7 +246,7 @@ def test_pe_uncertainty_default_static_sigma_counts_what_the_member_absorbs_of_t
     levels = np.array([2900.0, 3000.0, 3100.0])
     n = 300
     ybar, std = [], []
-    for _ in range(40):
+    for _ in range(30):
         s = np.repeat(rng.uniform(2850.0, 3150.0, n // 5 + 1), 5)[:n]
         y = np.full(n, 2e5)
         for k in range(1, n):
@@ -254,8 +256,14 @@ def test_pe_uncertainty_default_static_sigma_counts_what_the_member_absorbs_of_t
                                  input_names=("speed",))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", gb.StaticRangeWarning)
-            member = gb.Model(terms, gb.pe_thetas(terms, rec, points, lambdas=[0.01])[0], input_names=("speed",), Ts=0.1)
-            band = gb.static_curve_band(gb.pe_uncertainty(member, rec, points, lambda1=0.01), [3050.0])
+            if estimator == "pe":
+                member = gb.Model(terms, gb.pe_thetas(terms, rec, points, lambdas=[0.01])[0], input_names=("speed",),
+                                  Ts=0.1)
+                unc = gb.pe_uncertainty(member, rec, points, lambda1=0.01)
+            else:
+                member = gb.se_pareto(terms, rec, points, lambdas=[0.01], method="gradient", progress=False).member_model(0)
+                unc = gb.se_uncertainty(member, rec, points, lambda1=0.01)
+        band = gb.static_curve_band(unc, [3050.0])
         ybar.append(band.ybar[0])
         std.append(band.ybar_std[0])
     spread = np.std(ybar)

@@ -715,8 +715,10 @@ def se_uncertainty(
     lambda1 : float, optional
         The member's λ1 in (0, 1] (default: the Decision's).
     static_sigma : float, optional
-        Standard deviation of the measured ȳ_i, output units; default: the member's static
-        misfit √J_SF.
+        Standard deviation of the measured ȳ_i, output units; default: from the member's static
+        misfit, √(M·J_SF / ν) with ν its degrees of freedom (M at λ1 = 1; towards M − k as the member
+        comes to meet the points with k free static coefficients; ``ValueError`` when it meets them
+        exactly).
     level : float
         Confidence level of the intervals, in (0, 1).
 
@@ -763,8 +765,20 @@ def se_uncertainty(
     sigma2 = float(np.sum((rd / w1) ** 2)) / (nd - n)
     if lam < 1:
         w2 = np.sqrt((1 - lam) / len(sp))
-        ss2 = (check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2 if static_sigma is not None
-               else float(np.mean((rs / w2) ** 2)))
+        if static_sigma is not None:
+            ss2 = check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2
+        else:
+            # the misfit's degrees of freedom: e_SF = ȳ_model − ȳ moves with ȳ directly and through θ̂, by
+            # −(I − U_s U_sᵀ) with U an orthonormal basis of J's columns and U_s its static rows
+            U, S, _ = np.linalg.svd(J, full_matrices=False)
+            Us = U[nd:, S > 1e-12 * S[0]] if S.size and S[0] > 0 else U[nd:, :0]
+            nu = float(np.sum((np.eye(len(sp)) - Us @ Us.T) ** 2))
+            if nu <= 1e-6 * len(sp):
+                raise ValueError(f"se_uncertainty: the member meets its {len(sp)} static points exactly (its static "
+                                 "function has as many free coefficients as there are points), so its misfit says "
+                                 "nothing of the points' noise: give static_sigma (the standard deviation of the "
+                                 "measured ȳ_i)")
+            ss2 = float(np.sum((rs / w2) ** 2)) / nu
     else:
         ss2 = float("nan")
     # J holds the weighted residuals' derivatives (w ∂e/∂z): H = JᵀJ, and the gradient Jᵀr = Σ_b w_b² Ĵ_bᵀe_b
