@@ -23,7 +23,8 @@ the null space of the equality constraints that hold at θ̂,
 - **PE member** (λ1): J = w1‖Ψθ − y‖² + w2‖QRθ − ȳ‖² (w1 = λ1/N, w2 = λ2/N_SF). H is its Hessian;
   M collects the dynamic noise (σ² from least squares on the same data: the noise belongs to the
   data, not to the member) and the static points' noise σ_SF² (``static_sigma``; default: the
-  member's own static misfit). The measured ȳ_i sits on both sides of the static equation
+  member's own static misfit over its degrees of freedom, M at λ1 = 1 and fewer as the member comes to
+  meet the points; SE the same). The measured ȳ_i sits on both sides of the static equation
   (eq. (12)), so its effect on θ̂ is differentiated through both.
 - **SE member** (gradient or GA solution): the Gauss–Newton Hessian JᵀJ of the stacked residuals
   [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] at θ̂ (J from the free run's sensitivity recursion, the Jacobian
