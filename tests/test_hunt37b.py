@@ -268,3 +268,21 @@ def test_the_default_static_sigma_counts_what_the_member_absorbs_of_the_points(e
         std.append(band.ybar_std[0])
     spread = np.std(ybar)
     assert 0.6 * spread < np.mean(std) < 3.0 * spread
+
+
+@pytest.mark.parametrize("noise, theta", [(["e(k-1)"], [1.5]), (["e(k-1)u(k-1)"], [3.0])])
+def test_residual_tests_refuse_residuals_that_grow_without_bound(noise, theta):
+    # an MA part 1 + 1.5q⁻¹ (a root outside the unit circle) makes the one-step residuals grow as 1.5^k:
+    # residual_tests let numpy's overflow warnings out and judged inf and NaN correlations ("failed" on
+    # all five tests), or, on a shorter record, correlations of residuals of 1e50; one_step_residuals
+    # returned them. ls_uncertainty refused that model already, with the words used now for all three.
+    rng = np.random.default_rng(0)
+    n = 3000
+    u = rng.uniform(1.0, 2.0, n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.1 * rng.standard_normal()
+    model = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], noise_structure=noise, noise_theta=theta)
+    for call in (gb.residual_tests, gb.one_step_residuals, gb.ls_uncertainty):
+        with pytest.raises(ValueError, match="not invertible|overflow"):
+            call(model, gb.Record(u, y))

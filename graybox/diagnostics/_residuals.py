@@ -79,6 +79,7 @@ from ..estimation._neural import NeuralModel
 from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
+from ..estimation._extended_least_squares import _ma_invertible, _ma_text
 from ..core._validation import FrozenMap, check_bool, check_choice, check_fields, check_int, check_real, warn
 
 #: What a model argument of the residual tests may be, in words.
@@ -260,19 +261,26 @@ def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bo
         a[0] = 1.0
         for cj, t in zip(c, ns):
             a[t.factors[0][1]] += cj
+        if not _ma_invertible(a):
+            raise ValueError(f"the model's MA part C(q) = {_ma_text(a)} is not invertible (a root on or outside the "
+                             "unit circle): its one-step residuals grow without bound, and say nothing of the model")
         return inverse_ma_filter(v[:, None], a, np.array([0, v.size]))[:, 0], L
     # products of residuals with u, y or each other: the recursion sample by sample
     N = len(rec)
     e = np.zeros(N)
     sig = record_signals(rec) | {"e": e}
-    for k in range(L, N):
-        acc = 0.0
-        for cj, t in zip(c, ns):
-            val = cj
-            for s, lag, pw in t.factors:
-                val *= sig[s][k - lag] ** pw
-            acc += val
-        e[k] = v[k - L] - acc
+    with np.errstate(over="ignore", invalid="ignore"):  # residuals that overflow are refused below, by name
+        for k in range(L, N):
+            acc = 0.0
+            for cj, t in zip(c, ns):
+                val = cj
+                for s, lag, pw in t.factors:
+                    val *= sig[s][k - lag] ** pw
+                acc += val
+            e[k] = v[k - L] - acc
+    if not np.all(np.isfinite(e)):
+        raise ValueError(f"the model's one-step residuals overflow (its MA part {', '.join(map(str, ns))} feeds them "
+                         "back without damping them): they say nothing of the model")
     return e[L:], L
 
 
@@ -301,6 +309,11 @@ def one_step_residuals(
     list of ndarray
         ξ(k) for k = L … N_r − 1 of each record, shape (N_r − L,), output units; L is the largest
         lag of the terms used (process and, with ``moving_average``, noise terms).
+
+    Raises
+    ------
+    ValueError
+        With ``moving_average``, an MA part that is not invertible (its residuals grow without bound).
     """
     model = as_model(model, kinds=(Model, NeuralModel), accepted=_ACCEPTED)
     moving_average = check_bool(moving_average, "moving_average")
@@ -382,7 +395,7 @@ def residual_tests(
         A record shorter than the model's lags plus ``max_lag`` + 2, constant residuals (within
         1e-10 of the largest |y|, round-off: a model that reproduces the data exactly has nothing
         to test), every input constant, a record sampled at another period than the model was identified
-        at, bad options.
+        at, an MA part whose residual recursion grows without bound (not invertible), bad options.
 
     Notes
     -----

@@ -67,7 +67,7 @@ from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
-from ..estimation._extended_least_squares import _ma_coefficients, _ma_invertible, _ma_text, _pure_lags
+from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
 from ..static._analysis import cluster_key, reached_equilibria, static_theta_gradient
 from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, real_array, warn
 
@@ -467,13 +467,8 @@ def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.nd
     An MA part of plain lags e(k−l) filters φ by 1/C(q); products with e follow ξ's own recursion.
     """
     lags = _pure_lags(ns)
-    if None not in lags:
-        a = _ma_coefficients(c, lags)
-        if not _ma_invertible(a):
-            raise ValueError(f"ls_uncertainty (ELS): the MA part C(q) = {_ma_text(a)} is not invertible (a root on or "
-                             "outside the unit circle): its one-step residuals grow without bound, so it is no ELS "
-                             "estimate and has no covariance")
-        return inverse_ma_filter(phi, a, np.array([0, phi.shape[0]]))  # 1/C(q) from rest
+    if None not in lags:  # invertible: the residuals' own recursion (_model_residuals) refuses it otherwise
+        return inverse_ma_filter(phi, _ma_coefficients(c, lags), np.array([0, phi.shape[0]]))  # 1/C(q) from rest
     sig = record_signals(rec) | {"e": e}
     # each noise term's derivative in one lagged e: (c_j · ∂term/∂e(k−lag) as a series over k, lag)
     parts = []
