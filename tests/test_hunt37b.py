@@ -286,3 +286,25 @@ def test_residual_tests_refuse_residuals_that_grow_without_bound(noise, theta):
     for call in (gb.residual_tests, gb.one_step_residuals, gb.ls_uncertainty):
         with pytest.raises(ValueError, match="not invertible|overflow"):
             call(model, gb.Record(u, y))
+
+
+@pytest.mark.parametrize("call", [gb.pe_uncertainty, gb.se_uncertainty])
+def test_a_member_that_meets_its_exact_static_points_takes_static_sigma_zero(call):
+    # at λ1 near 0 a member meets its static points exactly and its misfit cannot estimate σ_SF, which is
+    # then asked for; points known exactly (σ_SF = 0) were refused as "static_sigma must lie in (0, inf)"
+    rng = np.random.default_rng(1)
+    terms = ["1", "y(k-1)", "speed(k-1)", "speed(k-1)^2"]
+    s = np.repeat(rng.uniform(2850.0, 3150.0, 61), 5)[:300]
+    y = np.full(300, 2e5)
+    for k in range(1, 300):
+        y[k] = 2e4 + 0.8 * y[k - 1] + 10.0 * s[k - 1] + 1e-3 * (s[k - 1] - 3000.0) ** 2 + 50.0 * rng.standard_normal()
+    rec = gb.Record(s, y, input_names=("speed",), Ts=0.1)
+    points = gb.StaticPoints([2900.0, 3100.0], [(2e4 + 10.0 * p + 1e-3 * (p - 3000.0) ** 2) / 0.2 for p in (2900.0, 3100.0)],
+                             input_names=("speed",))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        member = gb.Model(terms, gb.pe_thetas(terms, rec, points, lambdas=[1e-4])[0], input_names=("speed",), Ts=0.1)
+        with pytest.raises(ValueError, match="meets its 2 static points exactly.*0 for exact points"):
+            call(member, rec, points, lambda1=1e-4)
+        unc = call(member, rec, points, lambda1=1e-4, static_sigma=0.0)
+    assert unc.static_sigma2 == 0.0 and np.all(np.isfinite(unc.std))

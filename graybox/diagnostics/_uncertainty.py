@@ -607,10 +607,11 @@ def pe_uncertainty(
         equalities).
     static_sigma : float, optional
         Standard deviation of the measured ȳ_i, output units (e.g. 0.175 mlc for the plant's
-        transmitter). Default: from the member's own static misfit, √(Σ((QRθ − ȳ)/D)² / ν) with ν
-        its degrees of freedom (M at λ1 = 1, where the points do not move θ; towards M − k as the
-        member comes to meet the points with k free static coefficients; ``ValueError`` when it
-        meets them exactly), which includes any systematic misfit and so errs on the safe side.
+        transmitter; 0 takes the points as exact). Default: from the member's own static misfit,
+        √(Σ((QRθ − ȳ)/D)² / ν) with ν its degrees of freedom (M at λ1 = 1, where the points do not
+        move θ; towards M − k as the member comes to meet the points with k free static
+        coefficients; ``ValueError`` when it meets them exactly), which includes any systematic
+        misfit and so errs on the safe side.
     level : float
         Confidence level of the intervals, in (0, 1).
 
@@ -655,7 +656,7 @@ def pe_uncertainty(
     sigma2 = d.rss / dof_ls  # the data's noise, from least squares on the same data
     B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
     if static_sigma is not None:
-        ss2 = check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2
+        ss2 = check_real(static_sigma, "static_sigma (0 for exact points)", low=0) ** 2
     else:
         ss2 = float(np.sum((sres / g) ** 2)) / _static_misfit_dof(Z, A2, QR, w2 * B, g)
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
@@ -681,7 +682,7 @@ def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.nda
     if not np.isfinite(nu) or nu <= 1e-6 * M:
         raise ValueError(f"pe_uncertainty: the member meets its {M} static points exactly (its static function has as "
                          "many free coefficients as there are points), so its misfit says nothing of the points' "
-                         "noise: give static_sigma (the standard deviation of the measured ȳ_i)")
+                         "noise: give static_sigma (the standard deviation of the measured ȳ_i; 0 for exact points)")
     return nu
 
 
@@ -711,10 +712,10 @@ def se_uncertainty(
     lambda1 : float, optional
         The member's λ1 in (0, 1] (default: the Decision's).
     static_sigma : float, optional
-        Standard deviation of the measured ȳ_i, output units; default: from the member's static
-        misfit, √(M·J_SF / ν) with ν its degrees of freedom (M at λ1 = 1; towards M − k as the member
-        comes to meet the points with k free static coefficients; ``ValueError`` when it meets them
-        exactly).
+        Standard deviation of the measured ȳ_i, output units (0 takes the points as exact);
+        default: from the member's static misfit, √(M·J_SF / ν) with ν its degrees of freedom (M at
+        λ1 = 1; towards M − k as the member comes to meet the points with k free static
+        coefficients; ``ValueError`` when it meets them exactly).
     level : float
         Confidence level of the intervals, in (0, 1).
 
@@ -762,7 +763,7 @@ def se_uncertainty(
     if lam < 1:
         w2 = np.sqrt((1 - lam) / len(sp))
         if static_sigma is not None:
-            ss2 = check_real(static_sigma, "static_sigma", low=0, low_open=True) ** 2
+            ss2 = check_real(static_sigma, "static_sigma (0 for exact points)", low=0) ** 2
         else:
             # the misfit's degrees of freedom: e_SF = ȳ_model − ȳ moves with ȳ directly and through θ̂, by
             # −(I − U_s U_sᵀ) with U an orthonormal basis of J's columns and U_s its static rows
@@ -773,7 +774,7 @@ def se_uncertainty(
                 raise ValueError(f"se_uncertainty: the member meets its {len(sp)} static points exactly (its static "
                                  "function has as many free coefficients as there are points), so its misfit says "
                                  "nothing of the points' noise: give static_sigma (the standard deviation of the "
-                                 "measured ȳ_i)")
+                                 "measured ȳ_i; 0 for exact points)")
             ss2 = float(np.sum((rs / w2) ** 2)) / nu
     else:
         ss2 = float("nan")
