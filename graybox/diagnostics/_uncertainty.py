@@ -511,7 +511,7 @@ def _pseudo_linear_cov(A: np.ndarray, G: np.ndarray, sigma2: float, what: str) -
 def cls_uncertainty(
     model: Model,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticCurve | StaticPoints | None = None,
+    static: StaticCurve | StaticSurface | StaticPoints | None = None,
     *,
     how: str = "auto",
     reference: Model | np.ndarray | float | str = "ls",
@@ -531,7 +531,7 @@ def cls_uncertainty(
         The CLS estimate.
     data : Record, sequence of Record, or Dataset
         Its identification data.
-    static : StaticCurve or StaticPoints, optional
+    static : StaticCurve, StaticSurface or StaticPoints, optional
         As for :func:`graybox.cls`.
     how : {"auto", "curve", "points"}
         As for :func:`graybox.cls`.
@@ -579,7 +579,7 @@ def cls_uncertainty(
 def pe_uncertainty(
     model: Model | Decision,
     data: Record | Sequence[Record] | Dataset,
-    static: StaticPoints | StaticCurve | None = None,
+    static: StaticPoints | StaticCurve | StaticSurface | None = None,
     *,
     lambda1: float | None = None,
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
@@ -598,7 +598,7 @@ def pe_uncertainty(
         brings its λ1).
     data : Record, sequence of Record, or Dataset
         Its identification data.
-    static : StaticPoints or StaticCurve, optional
+    static : StaticPoints, StaticCurve or StaticSurface, optional
         As for :func:`graybox.pe_pareto` (default: the Dataset's points).
     lambda1 : float, optional
         The member's λ1 in (0, 1] (default: the Decision's).
