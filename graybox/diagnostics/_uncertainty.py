@@ -676,8 +676,8 @@ def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.nda
     M = QR.shape[0]
     if Z.shape[1] == 0:
         return float(M)
-    AZ = A2 @ Z
-    T = np.eye(M) - (QR @ Z) @ np.linalg.solve(AZ.T @ AZ, (wB @ Z).T) / g[:, None]
+    _, S, Vt = np.linalg.svd(A2 @ Z, full_matrices=False)  # (ZᵀA2ᵀA2Z)⁻¹ = V S⁻² Vᵀ, never formed (cond²)
+    T = np.eye(M) - ((QR @ Z @ Vt.T) / S) @ ((wB @ Z @ Vt.T) / S).T / g[:, None]
     nu = float(np.sum(T**2))
     if not np.isfinite(nu) or nu <= 1e-6 * M:
         raise ValueError(f"pe_uncertainty: the member meets its {M} static points exactly (its static function has as "
