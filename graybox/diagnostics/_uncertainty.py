@@ -455,7 +455,8 @@ def ls_uncertainty(
         # of the iteration's tolerance; an estimate of another record is far from it)
         _check_stationary(np.eye(n + ne), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
                           "pass the ELS estimate on these data, with its MA part (graybox.els(model.structure, "
-                          "data))", N, rtol=ELS_STATIONARY_RTOL)
+                          "data); a run stopped at a loose tol, e.g. 0.1, is short of its fixed point too)",
+                          N, rtol=ELS_STATIONARY_RTOL)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
                                 cov[n:, n:], cov_factor=F[:, :n])
 
