@@ -308,3 +308,22 @@ def test_a_member_that_meets_its_exact_static_points_takes_static_sigma_zero(cal
             call(member, rec, points, lambda1=1e-4)
         unc = call(member, rec, points, lambda1=1e-4, static_sigma=0.0)
     assert unc.static_sigma2 == 0.0 and np.all(np.isfinite(unc.std))
+
+
+def test_a_residual_test_that_was_not_made_says_why_when_asked_for():
+    # tests["u2_xi"] of a balanced two-level input (left out: u'² is constant) and tests["u_xi"] of a
+    # two-input record (whose keys are "u_xi:speed", "u_xi:valve") were a bare KeyError: 'u2_xi'
+    rng = np.random.default_rng(0)
+    u = np.r_[2900.0, np.repeat(rng.permutation(np.r_[np.full(20, 2900.0), np.full(20, 3100.0)]), 10)]
+    n = u.size  # the residuals start at sample 1: the levels balanced from there
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + 0.01 * u[k - 1] + 0.1 * rng.standard_normal()
+    model = gb.Model(["y(k-1)", "speed(k-1)"], [0.5, 0.01], input_names=("speed",))
+    with pytest.warns(UserWarning, match="undefined"):
+        tests = gb.residual_tests(model, gb.Record(u, y, input_names=("speed",)))
+    with pytest.raises(KeyError, match="not made on these data: input 'speed' takes two levels"):
+        tests["u2_xi"]
+    with pytest.raises(KeyError, match=r"no test 'u_xi:valve'; the tests made are \['xi_xi', 'u_xi'"):
+        tests["u_xi:valve"]
+    assert tests["u_xi"].name == "u_xi"

@@ -215,7 +215,13 @@ class ResidualTests:
         return [k for k, t in self.tests.items() if not t.passed]
 
     def __getitem__(self, name: str) -> CorrelationTest:
-        return self.tests[name]
+        """The test ``name`` (a key of :attr:`tests`); ``KeyError`` saying why for one left out or unknown."""
+        if name in self.tests:
+            return self.tests[name]
+        if name in self.undefined:
+            raise KeyError(f"test {name!r} was not made on these data: {self.undefined[name]}")
+        raise KeyError(f"no test {name!r}; the tests made are {list(self.tests)}"
+                       + (f", those left out {list(self.undefined)}" if self.undefined else ""))
 
     def to_frame(self) -> pd.DataFrame:
         """One row per test: label, kind, passed, max |φ|, worst lag, lags outside the band."""
