@@ -327,3 +327,16 @@ def test_a_residual_test_that_was_not_made_says_why_when_asked_for():
     with pytest.raises(KeyError, match=r"no test 'u_xi:valve'; the tests made are \['xi_xi', 'u_xi'"):
         tests["u_xi:valve"]
     assert tests["u_xi"].name == "u_xi"
+
+
+def test_a_curve_with_a_zero_top_coefficient_is_of_the_lower_degree_as_a_surface_is():
+    # StaticCurve.degree was the number of coefficients less one: [κ, α, 0] (a line written with a zero
+    # quadratic term) was of degree 2, so the static-form check asked the structures for a Σu² cluster
+    # (and select_graybox warned that degree-1 candidates cannot carry the curve), while a surface with
+    # zero quadratic coefficients is of degree 1
+    from graybox.static._form_check import static_degree
+    line = gb.StaticCurve.polynomial([2e5, 10.0, 0.0], domain=(2900.0, 3100.0))
+    plane = gb.StaticSurface.polynomial({(0, 0): 2e5, (1, 0): 10.0, (0, 1): 1e7, (2, 0): 0.0, (1, 1): 0.0})
+    assert line.degree == plane.degree == 1
+    assert static_degree(line, band=1.0) == 1
+    assert gb.StaticCurve.polynomial([0.0]).degree == 0 and gb.StaticCurve.polynomial([1.0, 0.0, 3.0]).degree == 2

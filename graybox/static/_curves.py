@@ -76,8 +76,10 @@ class StaticCurve:
 
     @property
     def degree(self) -> int:
-        """Polynomial degree."""
-        return self.coefficients.size - 1
+        """Polynomial degree: the highest power with a nonzero coefficient (0 for a constant), as
+        :attr:`StaticSurface.degree <graybox.StaticSurface>` reads it."""
+        nz = np.flatnonzero(self.coefficients)
+        return int(nz[-1]) if nz.size else 0
 
     def check_domain(self, ubar: np.ndarray) -> None:
         """Raise ``ValueError`` if any ū lies outside the curve's domain (when it has one)."""
