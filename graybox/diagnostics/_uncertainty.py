@@ -678,6 +678,8 @@ def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.nda
     if Z.shape[1] == 0:
         return float(M)
     _, S, Vt = np.linalg.svd(A2 @ Z, full_matrices=False)  # (ZᵀA2ᵀA2Z)⁻¹ = V S⁻² Vᵀ, never formed (cond²)
+    if not (S.size and np.all(np.isfinite(S)) and S[-1] > 1e-12 * S[0]):
+        return float(M)  # not identifiable: the sandwich that follows refuses it, saying so
     T = np.eye(M) - ((QR @ Z @ Vt.T) / S) @ ((wB @ Z @ Vt.T) / S).T / g[:, None]
     nu = float(np.sum(T**2))
     if not np.isfinite(nu) or nu <= 1e-6 * M:
