@@ -340,3 +340,16 @@ def test_a_curve_with_a_zero_top_coefficient_is_of_the_lower_degree_as_a_surface
     assert line.degree == plane.degree == 1
     assert static_degree(line, band=1.0) == 1
     assert gb.StaticCurve.polynomial([0.0]).degree == 0 and gb.StaticCurve.polynomial([1.0, 0.0, 3.0]).degree == 2
+
+
+def test_clusters_whose_names_would_collide_keep_both():
+    # with inputs "pos" and "ypos" the clusters Σ_{y·pos} and Σ_{ypos} were both named "Σypos": Model.clusters()
+    # kept one of them (0.01, losing ypos's 2.0) and ClusterBounds({"Σypos": ...}) bounded whichever came first
+    model = gb.Model(["1", "y(k-1)", "ypos(k-1)", "pos(k-1)", "y(k-1)pos(k-1)"], [1.0, 0.5, 2.0, 3.0, 0.01],
+                     input_names=("pos", "ypos"))
+    assert model.clusters() == {"Σ0": 1.0, "Σypos": 2.0, "Σpos": 3.0, "Σy": 0.5, "Σy·pos": 0.01}
+    cm = model.cluster_map()
+    assert cm.keys[cm.index("Σypos")] == (0, 0, 1) and cm.keys[cm.index("Σy·pos")] == (1, 1, 0)
+    plain = gb.Model(["1", "y(k-1)", "speed(k-1)", "y(k-1)valve(k-1)"], [1.0, 0.5, 2.0, 3.0],
+                     input_names=("speed", "valve"))
+    assert list(plain.clusters()) == ["Σ0", "Σspeed", "Σy", "Σyvalve"]  # names as before where none collide

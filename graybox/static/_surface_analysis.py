@@ -72,15 +72,12 @@ def surface_cluster_key(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
     return (term.power_of("y"),) + _powers(term, inputs)
 
 
-def surface_cluster_name(p: int, powers: tuple[int, ...], inputs: tuple[str, ...]) -> str:
-    """Cluster name, e.g. ``Σ0``, ``Σyu1``, ``Σu1²u2``, ``Σy²u2``."""
-    s = "Σ"
-    if p:
-        s += "y" + (str(p).translate(_SUP) if p > 1 else "")
-    for n, a in zip(inputs, powers):
-        if a:
-            s += n + (str(a).translate(_SUP) if a > 1 else "")
-    return "Σ0" if s == "Σ" else s
+def surface_cluster_name(p: int, powers: tuple[int, ...], inputs: tuple[str, ...], sep: str = "") -> str:
+    """Cluster name, e.g. ``Σ0``, ``Σyu1``, ``Σu1²u2``, ``Σy²u2``; the factors joined by ``sep`` (``"·"``
+    where the plain names of a structure's clusters would collide: inputs "pos" and "ypos")."""
+    parts = ["y" + (str(p).translate(_SUP) if p > 1 else "")] if p else []
+    parts += [n + (str(a).translate(_SUP) if a > 1 else "") for n, a in zip(inputs, powers) if a]
+    return "Σ" + sep.join(parts) if parts else "Σ0"
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,8 +102,13 @@ class SurfaceClusterMap:
 
     @property
     def names(self) -> list[str]:
-        """Cluster names in the order of ``keys``."""
-        return [surface_cluster_name(k[0], k[1:], self.inputs) for k in self.keys]
+        """Cluster names in the order of ``keys``: the factors written one after the other (``Σyu1``), or
+        joined by ``·`` when that would give two clusters one name (inputs "pos" and "ypos": ``Σy·pos``
+        and ``Σypos``)."""
+        plain = [surface_cluster_name(k[0], k[1:], self.inputs) for k in self.keys]
+        if len(set(plain)) == len(plain):
+            return plain
+        return [surface_cluster_name(k[0], k[1:], self.inputs, "·") for k in self.keys]
 
     def index(self, name_or_key: str | tuple[int, ...]) -> int:
         """Row of R for a cluster given by name (``"Σyu1"``) or key (p, a_1, …, a_m)."""
