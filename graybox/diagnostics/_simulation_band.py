@@ -184,7 +184,8 @@ def simulation_band(
         return SimulationBand(rec.t, rec.y, yhat, yhat - h, yhat + h, std, uncertainty.level, "delta", 0, 0.0,
                               m.name, rec.name, rec.units)
     rng = np.random.default_rng(seed)
-    Y = simulate_many(st, theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof), rec)
+    Y = simulate_many(st, theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof,
+                                      factor=uncertainty.cov_factor), rec)
     ok = np.all(np.isfinite(Y), axis=1)
     diverged = 1.0 - float(ok.mean())
     if ok.sum() < 2:

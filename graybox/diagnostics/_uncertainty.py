@@ -659,14 +659,15 @@ def pe_uncertainty(
     if static_sigma is not None:
         ss2 = check_real(static_sigma, "static_sigma (0 for exact points)", low=0) ** 2
     else:
-        ss2 = float(np.sum((sres / g) ** 2)) / _static_misfit_dof(Z, A2, QR, w2 * B, g)
+        ss2 = float(np.sum((sres / g) ** 2)) / _static_misfit_dof(Z, A2, QR, w2 * B, g, d.N + M)
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
     cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty", d.N + M), d.s)
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
                                 cov_factor=F)
 
 
-def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.ndarray, g: np.ndarray) -> float:
+def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.ndarray, g: np.ndarray,
+                      rows: int) -> float:
     """Degrees of freedom of a PE member's static misfit: E Σ(s_i/g_i)² = ν σ_SF² for noise of variance σ_SF² in
     the measured ȳ_i, to first order (ν = M at λ1 = 1, where the points do not move θ; towards M − k as the
     member comes to meet the points with k free static coefficients). ``ValueError`` when ν vanishes.
@@ -678,7 +679,7 @@ def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.nda
     if Z.shape[1] == 0:
         return float(M)
     _, S, Vt = np.linalg.svd(A2 @ Z, full_matrices=False)  # (ZᵀA2ᵀA2Z)⁻¹ = V S⁻² Vᵀ, never formed (cond²)
-    if not (S.size and np.all(np.isfinite(S)) and S[-1] > 1e-12 * S[0]):
+    if not (S.size and np.all(np.isfinite(S)) and S[-1] > rank_tolerance(S[0], rows, S.size)):
         return float(M)  # not identifiable: the sandwich that follows refuses it, saying so
     T = np.eye(M) - ((QR @ Z @ Vt.T) / S) @ ((wB @ Z @ Vt.T) / S).T / g[:, None]
     nu = float(np.sum(T**2))
@@ -771,7 +772,7 @@ def se_uncertainty(
             # the misfit's degrees of freedom: e_SF = ȳ_model − ȳ moves with ȳ directly and through θ̂, by
             # −(I − U_s U_sᵀ) with U an orthonormal basis of J's columns and U_s its static rows
             U, S, _ = np.linalg.svd(J, full_matrices=False)
-            Us = U[nd:, S > 1e-12 * S[0]] if S.size and S[0] > 0 else U[nd:, :0]
+            Us = U[nd:, S > rank_tolerance(S[0], J.shape[0], S.size)] if S.size and S[0] > 0 else U[nd:, :0]
             nu = float(np.sum((np.eye(len(sp)) - Us @ Us.T) ** 2))
             if nu <= 1e-6 * len(sp):
                 raise ValueError(f"se_uncertainty: the member meets its {len(sp)} static points exactly (its static "
