@@ -36,7 +36,7 @@ import numpy as np
 from ..static._curves import StaticCurve
 from ..core._records import Dataset, Record, StaticPoints, check_same_period, check_units
 from ..core._terms import check_input_names
-from ..core._validation import check_choice, check_int, check_path, check_real
+from ..core._validation import check_bool, check_choice, check_int, check_path, check_real
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -66,13 +66,15 @@ BUCK_STATIC_CURVE = StaticCurve.polynomial([32.0, -8.0], domain=(1.0, 4.0),
 
 def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter: str | None = None,
                   decimal: str | None = None, encoding: str | None = None,
-                  skiprows: int = 0) -> dict[str, np.ndarray]:
+                  skiprows: int = 0, units_row: bool = False) -> dict[str, np.ndarray]:
     """Read the columns ``wanted`` (role -> column name) of a CSV file as finite float arrays.
 
     The encoding (:func:`_utf8`), the delimiter and the decimal mark are detected (:func:`_dialect`)
     unless given. The first ``skiprows`` lines are not read, and an Excel ``sep=X`` line where the
-    header belongs gives the delimiter (the header is the line after it). Raises ``ValueError``
-    naming the file and the line (the file's own: line 1 is its first) or column of the first problem.
+    header belongs gives the delimiter (the header is the line after it). With ``units_row`` the line
+    after the header holds each column's unit: it is read into ``"_units"`` (role -> unit text,
+    brackets dropped) and is no sample. Raises ``ValueError`` naming the file and the line (the file's
+    own: line 1 is its first) or column of the first problem.
     """
     p = Path(path)
     names = list(wanted.values())
@@ -95,6 +97,15 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                              f"but delimiter={delimiter!r} was given; omit delimiter= (the hint is used) or correct "
                              f"line {first}")
         delimiter, start, first = hint.group(1), end, first + 1
+    unit_line = None
+    if units_row:  # read, then blanked in place: the lines keep their numbers, and a blank line is no sample
+        u0 = _skip_lines(raw, start, 1)
+        u1 = _skip_lines(raw, u0, 1)
+        if u0 >= len(raw):
+            raise ValueError(f"{p}: line {first + 1}: units_row=True, but there is no line after the header")
+        unit_line = _decode(p, raw, u0, u1).rstrip("\r\n")
+        raw = raw[:u0] + (b"\r\n" if raw[u0:u1].endswith(b"\r\n") else b"\n") + raw[u1:]
+        own = False
     # The dialect and the header come from the first lines alone: a long file is decoded whole
     # only when the careful reader (or a decimal comma) needs its text.
     end = _skip_lines(raw, start, _SNIFF_LINES)
@@ -118,6 +129,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         if header.count(col) > 1:
             raise ValueError(f"{p}: column {col!r} appears {header.count(col)} times in the header")
         index[role] = header.index(col)
+    units = None if unit_line is None else _units_of_row(p, unit_line, delim, index, first + 1)
     text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
     if start == 0 or (start <= 3 and raw.startswith(codecs.BOM_UTF8)):
         fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header),
@@ -126,7 +138,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         fast = _fast_columns(p, index, raw=raw[start:], text=text, delimiter=delim, decimal=dec,
                              n_fields=len(header), reread=False, first=first)
     if fast is not None:
-        return fast
+        return fast if units is None else fast | {"_units": units}
     reader = csv.reader(io.StringIO(text(), newline=""), delimiter=delim)
     next(reader)  # the header, read above
     need = max(index.values()) + 1
@@ -143,6 +155,11 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             # a field past the header's last column shifts nothing we could trust: refuse
             raise ValueError(f"{p}: line {line} has {len(row)} fields but the header names {len(header)} "
                              f"columns{_decimal_comma_hint(row, delim)}")
+        if not lines and units is None and all(not _numeric(row[i], dec) for i in index.values()):
+            # text in every column read, right under the header: what a logger's row of units looks like
+            cells = ", ".join(repr(row[i].strip()) for i in index.values())
+            raise ValueError(f"{p}: line {line} holds text in every column read ({cells}), no sample: if it "
+                             "gives the columns' units, pass units_row=True (they become the record's units)")
         for role, i in index.items():
             values[role].append(_number(p, line, wanted[role], row[i], dec, time=role == "time"))
         lines.append(line)
@@ -150,7 +167,46 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         raise ValueError(f"{p}: line {first + 1}: no data rows after the header; expected one sample per line")
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
-    return out
+    return out if units is None else out | {"_units": units}
+
+
+def _numeric(cell: str, decimal: str) -> bool:
+    """Whether a cell reads as a number (with the file's decimal mark)."""
+    c = cell.strip()
+    try:
+        float(c.replace(",", ".") if decimal == "," else c)
+        return True
+    except ValueError:
+        return False
+
+
+def _units_of_row(p: Path, line: str, delim: str, index: dict[str, int], number: int) -> dict[str, str]:
+    """The units a logger's units row gives the columns read (role -> unit, ``[rpm]`` read as ``rpm``)."""
+    cells = next(csv.reader([line], delimiter=delim), [])
+    units = {role: cells[i].strip().strip("[]()").strip() if i < len(cells) else "" for role, i in index.items()}
+    if all(_numeric(u, ".") or _numeric(u, ",") for u in units.values() if u) and any(units.values()):
+        raise ValueError(f"{p}: line {number} holds numbers ({line.strip()!r}), a sample, not a row of units: drop "
+                         "units_row=True")
+    return units
+
+
+def _units_from_row(p: Path, units: tuple[str, str], row: dict[str, str], inputs: Sequence[str],
+                    time: str | None) -> tuple[str, str]:
+    """The (input, output) units a units row gives, checked against ``units`` given too; a time column's
+    unit must be seconds."""
+    if time is not None and row.get("time", "").lower() not in ("", "s", "sec", "secs", "second", "seconds"):
+        raise ValueError(f"{p}: the units row gives the time column the unit {row['time']!r}, but time stamps are "
+                         "read as seconds: convert the column to seconds, or leave time= out and give Ts= in seconds")
+    said = {row[r] for r in inputs if row[r]}
+    if len(said) > 1 and not units[0]:
+        raise ValueError(f"{p}: the units row gives the inputs different units ({', '.join(sorted(said))}); graybox "
+                         "holds one input unit per record: pass units=(input unit, output unit) to say which to show")
+    found = (said.pop() if len(said) == 1 else "", row["y"])
+    for k, (given, read) in enumerate(zip(units, found)):
+        if given and read and given != read:
+            raise ValueError(f"{p}: units={units!r} says the {('input', 'output')[k]} is in {given!r}, but the units "
+                             f"row says {read!r}")
+    return (units[0] or found[0], units[1] or found[1])
 
 
 def _skip_lines(raw: bytes, start: int, n: int) -> int:
@@ -502,6 +558,7 @@ def load_record_csv(
     decimal: str | None = None,
     encoding: str | None = None,
     skiprows: int = 0,
+    units_row: bool = False,
 ) -> Record:
     """A dynamic record (input, output, sampling period) from a CSV file.
 
@@ -560,6 +617,11 @@ def load_record_csv(
         Lines before the column names that are not read (default 0), e.g. a data logger's header
         block of instrument, date and channels. Messages still name the file's own lines (line 1
         is its first line, skipped or not).
+    units_row : bool
+        The line after the column names gives each column's unit (``s;rpm;Pa``, brackets allowed),
+        as data loggers write: it becomes the record's ``units`` (the inputs must share one unit
+        unless ``units=`` says which to show; a ``units=`` that contradicts it is refused; a time
+        column must be in seconds). Without it such a line is refused, naming this option.
 
     Returns
     -------
@@ -595,8 +657,12 @@ def load_record_csv(
     skiprows = check_int(skiprows, "skiprows", low=0)
     ucols, names = _input_columns(p, u, y, input_names)
     wanted = _wanted(ucols, y, time=time)
-    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows)
+    units_row = check_bool(units_row, "units_row")
+    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows,
+                         units_row=units_row)
     lines = cols["_lines"]
+    if units_row:
+        units = _units_from_row(p, units, cols["_units"], [r for r in wanted if r not in ("y", "time")], time)
     if time is not None:
         Ts = _check_time(p, time, cols["time"], lines, Ts, time_rtol)
     return Record(_inputs(cols, ucols), cols["y"], Ts=float(Ts), name=name or p.stem, units=units, input_names=names)
@@ -697,6 +763,7 @@ def load_static_csv(
     encoding: str | None = None,
     skiprows: int = 0,
     units: tuple[str, str] = ("", ""),
+    units_row: bool = False,
 ) -> StaticPoints:
     """Measured static points (ū_i, ȳ_i) from a CSV file.
 
@@ -734,6 +801,8 @@ def load_static_csv(
     units : (str, str)
         Units of (ū, ȳ), for display (as a :class:`~graybox.Record`'s: plots label their axes with
         them); default none said.
+    units_row : bool
+        The line after the column names gives each column's unit (as in :func:`load_record_csv`).
 
     Returns
     -------
@@ -758,7 +827,11 @@ def load_static_csv(
     ucols, names = _input_columns(p, u, y, input_names)
     label = name or p.stem
     wanted = _wanted(ucols, y, uncertainty=uncertainty if isinstance(uncertainty, str) else None)
-    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows)
+    units_row = check_bool(units_row, "units_row")
+    cols = _read_columns(p, wanted, delimiter=delimiter, decimal=decimal, encoding=encoding, skiprows=skiprows,
+                         units_row=units_row)
+    if units_row:
+        units = _units_from_row(p, units, cols["_units"], [r for r in wanted if r not in ("y", "uncertainty")], None)
     ub = _inputs(cols, ucols)
     where = f"column {ucols[0]!r}" if len(ucols) == 1 else f"columns {ucols}"
     if isinstance(uncertainty, str):

@@ -197,7 +197,7 @@ def _hash(obj: Any, n: int = 16) -> str:
 # --------------------------------------------------------------------------------------------
 #: How a file is read, as the loaders take it (their messages name these options, e.g. "pass skiprows=3"): the
 #: loader checks the values; in the canonical form only when given.
-_READ_KEYS = ("delimiter", "decimal", "encoding", "skiprows")
+_READ_KEYS = ("delimiter", "decimal", "encoding", "skiprows", "units_row")
 _RECORD_KEYS = ("path", "u", "y", "time", "Ts", "input_names", "time_rtol", *_READ_KEYS)
 _STATIC_KEYS = ("path", "u", "y", "repeats", "uncertainty", "input_names", *_READ_KEYS)
 
@@ -243,6 +243,8 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
             out[k] = _wrap(check_str, path + (k,), d[k], k)
     if d.get("skiprows") is not None:
         out["skiprows"] = _wrap(check_int, path + ("skiprows",), d["skiprows"], "skiprows", low=0)
+    if d.get("units_row") is not None:
+        out["units_row"] = _wrap(check_bool, path + ("units_row",), d["units_row"], "units_row")
     if "time_rtol" in keys and d.get("time_rtol") is not None:
         out["time_rtol"] = _wrap(check_real, path + ("time_rtol",), d["time_rtol"], "time_rtol", low=0, high=1,
                                  low_open=True, high_open=True)
@@ -277,13 +279,13 @@ class DataSpec:
         (the rig with two independent pump speeds: two inputs).
     ident, valid : mapping, optional
         CSV records ``{"path", "u", "y", "time" or "Ts"}`` and optionally ``input_names``,
-        ``time_rtol``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` (see
+        ``time_rtol``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows``, ``units_row`` (see
         :func:`graybox.load_record_csv`; ``u`` a column name, or a list of them for several inputs;
         ``input_names`` the names terms use for them, needed when the column names are not
         identifiers, e.g. ``"speed [rpm]"``); relative paths are resolved against the spec file's folder.
     static : mapping, optional
         CSV static points ``{"path", "u", "y", "repeats", "uncertainty"}`` and optionally ``input_names``,
-        ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` (see
+        ``delimiter``, ``decimal``, ``encoding``, ``skiprows``, ``units_row`` (see
         :func:`graybox.load_static_csv`; ``repeats = "mean"`` averages repeated measurements at one
         level; ``uncertainty`` is δ, the static measurements' error in output units, which gives
         the band and the half-width of a ``{type = "band"}`` without ``b``).

@@ -1,0 +1,83 @@
+"""A data logger's row of units under the column names (``t;speed;p`` then ``s;rpm;Pa``): read into
+the record's or the points' units with ``units_row=True``, named in the refusal without it, and
+checked against ``units=`` and against the seconds time stamps are read in."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _write(path, text: str, newline: str = "\n"):
+    path.write_bytes(text.replace("\n", newline).encode("utf-8"))
+    return path
+
+
+@pytest.mark.parametrize("newline", ["\n", "\r\n"])
+def test_a_units_row_becomes_the_records_units(tmp_path, newline):
+    f = _write(tmp_path / "run.csv", "t;speed;p\ns;rpm;Pa\n0,0;1000;2,0e5\n0,1;1010;2,01e5\n0,2;1020;2,02e5\n", newline)
+    r = gb.load_record_csv(f, "speed", "p", time="t", units_row=True)
+    assert r.units == ("rpm", "Pa") and r.Ts == 0.1
+    np.testing.assert_array_equal(r.y, [2.0e5, 2.01e5, 2.02e5])
+    np.testing.assert_array_equal(r.u, [1000, 1010, 1020])
+
+
+def test_without_the_option_the_row_is_named_and_the_option_too(tmp_path):
+    f = _write(tmp_path / "run.csv", "t,speed,p\n[s],[rpm],[Pa]\n0.0,1000,200000\n0.1,1010,201000\n")
+    with pytest.raises(ValueError, match=r"line 2 holds text in every column read .*pass units_row=True"):
+        gb.load_record_csv(f, "speed", "p", time="t")
+    assert gb.load_record_csv(f, "speed", "p", time="t", units_row=True).units == ("rpm", "Pa")  # brackets dropped
+    pts = _write(tmp_path / "steady.csv", "speed,p\nrpm,Pa\n1000,200000\n1500,250000\n")
+    with pytest.raises(ValueError, match="pass units_row=True"):
+        gb.load_static_csv(pts, "speed", "p")
+    assert gb.load_static_csv(pts, "speed", "p", units_row=True).units == ("rpm", "Pa")
+
+
+def test_later_lines_keep_the_files_own_numbers(tmp_path):
+    f = _write(tmp_path / "run.csv", "t,speed,p\ns,rpm,Pa\n0.0,1000,200000\n0.1,,201000\n")
+    with pytest.raises(ValueError, match=r"line 4, column 'speed': empty cell"):
+        gb.load_record_csv(f, "speed", "p", time="t", units_row=True)
+
+
+def test_the_units_row_is_checked(tmp_path):
+    two = _write(tmp_path / "two.csv", "t,n1,n2,p\ns,rpm,V,Pa\n0.0,1000,1,2e5\n0.1,1010,2,2.01e5\n0.2,1020,3,2.02e5\n")
+    with pytest.raises(ValueError, match=r"different units \(V, rpm\).*pass units="):
+        gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True)
+    assert gb.load_record_csv(two, ["n1", "n2"], "p", time="t", units_row=True, units=("rpm", "Pa")).units == (
+        "rpm", "Pa")
+    ms = _write(tmp_path / "ms.csv", "t,speed,p\nms,rpm,Pa\n0,1000,2e5\n100,1010,2.01e5\n")
+    with pytest.raises(ValueError, match="time column the unit 'ms', but time stamps are read as seconds"):
+        gb.load_record_csv(ms, "speed", "p", time="t", units_row=True)
+    ok = _write(tmp_path / "ok.csv", "t,speed,p\ns,rpm,Pa\n0,1000,2e5\n0.1,1010,2.01e5\n")
+    with pytest.raises(ValueError, match=r"units=.*says the input is in 'rad/s', but the units row says 'rpm'"):
+        gb.load_record_csv(ok, "speed", "p", time="t", units_row=True, units=("rad/s", "Pa"))
+    assert gb.load_record_csv(ok, "speed", "p", time="t", units_row=True, units=("rpm", "")).units == ("rpm", "Pa")
+    plain = _write(tmp_path / "plain.csv", "t,speed,p\n0,1000,2e5\n0.1,1010,2.01e5\n0.2,1020,2.02e5\n")
+    with pytest.raises(ValueError, match=r"line 2 holds numbers .* not a row of units: drop units_row=True"):
+        gb.load_record_csv(plain, "speed", "p", time="t", units_row=True)
+    with pytest.raises(TypeError, match="units_row"):
+        gb.load_record_csv(plain, "speed", "p", time="t", units_row="yes")
+    head = _write(tmp_path / "head.csv", "t,speed,p\n")
+    with pytest.raises(ValueError, match="no line after the header"):
+        gb.load_record_csv(head, "speed", "p", time="t", units_row=True)
+
+
+def test_a_grid_spec_takes_units_row(tmp_path):
+    from graybox.experiments import Grid, SpecError
+
+    for name, n in (("ident", 60), ("valid", 40)):
+        rows = "".join(f"{k * 0.1:.1f},{1000 + 10 * (k // 5 % 4)},{2e5 + 50 * (k // 5 % 4) + k % 3}\n" for k in range(n))
+        _write(tmp_path / f"{name}.csv", "t,speed,p\ns,rpm,Pa\n" + rows)
+    _write(tmp_path / "static.csv", "speed,p\nrpm,Pa\n1000,200000\n1030,200150\n")
+    spec = ('name = "own"\n[[data]]\nname = "rig"\n'
+            + "".join(f'{k} = {{path = "{k}.csv", u = "speed", y = "p", time = "t", units_row = true}}\n'
+                      for k in ("ident", "valid"))
+            + 'static = {path = "static.csv", u = "speed", y = "p", units_row = true}\nband = 100.0\n'
+            + '[[structures]]\nname = "given"\nterms = ["y(k-1)", "u(k-1)", "1"]\n'
+              '[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    data = Grid.from_toml_text(spec, base_dir=str(tmp_path)).data[0].load(tmp_path)
+    assert data.ident.units == data.valid.units == data.static.units == ("rpm", "Pa")
+    with pytest.raises(SpecError, match="units_row"):
+        Grid.from_toml_text(spec.replace("units_row = true", 'units_row = "yes"'))
