@@ -989,10 +989,20 @@ def _pull_inside(problem: SEProblem, theta: np.ndarray, lam1: float) -> tuple[np
     feasible at λ1 (inside the margin, a bounded free run, stable static equilibria), with that
     factor; None if none does. Shrinking the feedback shrinks every local model's roots."""
     fb = np.array([any(s == "y" for s, _, _ in t.factors) for t in problem.structure])
+    rest = ~fb
     for c in _PULL:
         th = np.where(fb, c * theta, theta)
-        if np.isfinite(_residuals(problem, th * problem.scale, lam1)[0]):
-            return th, c
+        tries = [th]
+        if rest.any() and fb.any():
+            # the other parameters refitted (least squares, the feedback held): shrinking the feedback alone
+            # moves every equilibrium, by an amount the output's offset sets (the constant absorbs it), so
+            # the start's quality depended on where the units put their zero
+            refit = th.copy()
+            refit[rest] = scaled_lstsq(problem.psi[:, rest], problem.target - problem.psi[:, fb] @ th[fb])
+            tries.insert(0, refit)
+        for t in tries:  # the refit first; the plain shrink where the refit is not feasible
+            if np.isfinite(_residuals(problem, t * problem.scale, lam1)[0]):
+                return t, c
     return None
 
 
