@@ -344,7 +344,7 @@ def test_arguments_are_checked():
         gb.narx_iosystem(m, Ts=-1.0)
     with pytest.raises(ValueError, match="start"):
         gb.narx_initial_state(m, gb.load_pumping().valid, start=2)
-    with pytest.raises(ValueError, match="uncertainty"):
+    with pytest.raises(TypeError, match="uncertainty must be a ParameterUncertainty"):  # a wrong type (hunt37b)
         gb.operating_curve(m, [1000.0], Ts=0.05, uncertainty=object())
 
 

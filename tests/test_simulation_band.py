@@ -223,3 +223,4 @@ def test_a_static_curve_band_is_held_to_what_a_band_can_be():
     for field, bad in (("level", 3.0), ("method", "guess"), ("n_samples", -5), ("undefined", np.array([0, 2.0, 0]))):
         with pytest.raises(ValueError, match=field):
             dataclasses.replace(band, **{field: bad})
+

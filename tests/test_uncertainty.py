@@ -270,3 +270,27 @@ def test_a_static_band_of_one_input_refuses_a_grid_of_two_inputs_levels():
     with pytest.raises(ValueError, match=r"one input, shape \(M,\), got shape \(2, 2\)"):
         gb.static_curve_band(unc, [[900.0, 1.0], [1300.0, 2.0]])
     assert gb.static_curve_band(unc, 1200.0).ubar.shape == (1,)  # one level as a number still works
+
+
+def test_covers_a_constrained_parameter_equal_to_round_off():
+    # hunt37b: CLS with the true static curve fixes a cluster; its interval has zero width, and the true
+    # value, one ulp off the estimate, read as not covered
+    rng = np.random.default_rng(7)
+    a1, b1, b2 = 0.8, 10.0, 0.004
+    c0 = 2e5 * (1 - a1) - b1 * 3000 - b2 * 3000**2
+    th0 = np.array([c0, a1, 0.0, b1, b2])
+    st = ["1", "y(k-1)", "y(k-2)", "speed(k-1)", "speed(k-1)^2"]
+    curve = gb.StaticCurve.polynomial(np.array([c0, b1, b2]) / (1 - a1), domain=(2800.0, 3200.0))
+    s = np.repeat(rng.uniform(2790, 3210, 21), 5)[:100]
+    y = np.full(100, 2e5)
+    for k in range(2, 100):
+        y[k] = c0 + a1 * y[k - 1] + b1 * s[k - 1] + b2 * s[k - 1] ** 2 + 50 * rng.standard_normal()
+    rec = gb.Record(s, y, input_names=("speed",), Ts=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        m = gb.cls(st, rec, curve, reference=a1).model
+        unc = gb.cls_uncertainty(m, rec, curve, reference=a1)
+    assert unc.std[-1] == 0 and unc.covers(th0).all()
+    far = th0.copy()
+    far[-1] *= 1 + 1e-9  # off by far more than round-off: outside the zero-width interval
+    assert not unc.covers(far)[-1]

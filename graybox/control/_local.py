@@ -754,11 +754,14 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
 def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: float, n: int, seed: int,
           single: bool) -> dict[str, Any]:
     """Monte Carlo quantiles of the gain and the time constant under θ drawn around θ̂ (multivariate t)."""
-    from ..diagnostics._uncertainty import theta_draws  # here: the estimators it loads cost a local model nothing
+    # here: the estimators it loads cost a local model nothing
+    from ..diagnostics._uncertainty import ParameterUncertainty, theta_draws
 
-    cov = getattr(uncertainty, "cov", None)
-    um = getattr(uncertainty, "model", None)
-    if cov is None or not isinstance(um, Model) or um.structure != model.structure:
+    if not isinstance(uncertainty, ParameterUncertainty):  # a wrong type, as everywhere: TypeError
+        raise TypeError(f"uncertainty must be a ParameterUncertainty (e.g. graybox.ls_uncertainty(model, data)), got "
+                        f"{type(uncertainty).__name__}")
+    cov, um = uncertainty.cov, uncertainty.model
+    if um.structure != model.structure:
         raise ValueError("uncertainty must be the ParameterUncertainty of this model (same structure), e.g. "
                          "graybox.ls_uncertainty(model, data)")
     if not np.array_equal(um.theta, model.theta):  # another estimate's covariance says nothing of this one's
@@ -767,8 +770,7 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
                          "a CLS model, pe_uncertainty for a PE member)")
     th = model.theta
     rng = np.random.default_rng(seed)
-    thetas = theta_draws(th, cov, n, rng, dof=getattr(uncertainty, "dof", None),  # t, as the intervals
-                         factor=getattr(uncertainty, "cov_factor", None))
+    thetas = theta_draws(th, cov, n, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)  # t, as the intervals
     # the draws start from the estimate's equilibrium: where it has none, none is drawn and the band is NaN
     has = np.isfinite(ybar)
     M, full = int(has.sum()), ub.shape[0]

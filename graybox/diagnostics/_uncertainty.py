@@ -205,12 +205,16 @@ class ParameterUncertainty:
             return self.cov / np.outer(s, s)
 
     def covers(self, theta: np.ndarray) -> np.ndarray:
-        """Which components of ``theta`` (shape (n_terms,)) lie in their interval, shape (n_terms,) bool."""
+        """Which components of ``theta`` (shape (n_terms,)) lie in their interval, shape (n_terms,) bool (to the
+        round-off of the estimate: a constrained parameter's interval has zero width)."""
         th = np.asarray(theta, float)
         if th.shape != self.theta.shape:
             raise ValueError(f"theta must have shape {self.theta.shape} (one value per term), got {th.shape}")
         iv = self.intervals
-        return (th >= iv[:, 0]) & (th <= iv[:, 1])
+        # a parameter the constraints fix has an interval of zero width, and a value equal to it up to the
+        # round-off of the estimate (an ulp or so) is in it, not outside
+        slack = 64 * np.finfo(float).eps * (np.abs(th) + np.abs(self.theta))
+        return (th >= iv[:, 0] - slack) & (th <= iv[:, 1] + slack)
 
     def with_level(self, level: float) -> "ParameterUncertainty":
         """The same covariance with intervals at another confidence level."""
