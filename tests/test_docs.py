@@ -61,6 +61,6 @@ def test_notebooks_are_rendered_with_their_outputs(site):
 
 
 def test_user_guide_pages_exist(site):
-    for page in ("method", "black_box", "gray_box", "selection", "trust", "several_inputs", "long_records",
+    for page in ("method", "experiment_design", "black_box", "gray_box", "selection", "trust", "several_inputs", "long_records",
                  "experiments", "control"):
         assert (site / "guide" / f"{page}.html").exists(), page
