@@ -1,0 +1,40 @@
+"""Review 37: today's features used as a control engineer would on their own plant.
+
+simulation_band, design_input, GrayboxSelection.uncertainty, the loaders' units row and the SE
+start pulled inside a stability margin, tried with units far from 1 (Pa near 2e5, rpm near 3000),
+inputs not named "u", one and two inputs, short records, MA terms and constrained estimates.
+"""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _plant(n, seed, off=2e5):
+    """y(k) = 0.6 y(k-1) + 20 (u − 3000) + 0.4 off + 2e-3 (u − 3000)² + e(k) + 0.5 e(k−1), Pa and rpm."""
+    u = gb.design_input("aprbs", n, low=2900, high=3100, hold=(5, 20), seed=seed)
+    e = 30 * np.random.default_rng(seed).standard_normal(n)
+    y = np.full(n, off)
+    for k in range(2, n):
+        y[k] = 0.6 * y[k - 1] + 20 * (u[k - 1] - 3000) + 0.4 * off + 2e-3 * (u[k - 1] - 3000) ** 2 + e[k] + 0.5 * e[k - 1]
+    return gb.Record(u, y, Ts=0.1, name=f"run{seed}", units=("rpm", "Pa"), input_names=("speed",))
+
+
+def test_a_monte_carlo_band_of_a_fully_determined_model_has_no_spread():
+    # was wrong: the Monte Carlo std was the spread of identical runs taken at 2e5 Pa, round-off of
+    # about 1e-8 Pa, so a CLS estimate whose static curve fixes every parameter (a zero covariance)
+    # got a band with std > 0 whose coverage read 0.0 where the delta method's read nan
+    rec, val = _plant(400, 1), _plant(120, 5)
+    sp = np.linspace(2900, 3100, 5)
+    pts = gb.StaticPoints(sp, (20 * (sp - 3000) + 0.4 * 2e5 + 2e-3 * (sp - 3000) ** 2) / 0.4, input_names=("speed",))
+    curve = gb.StaticCurve.fit(pts, degree=2)
+    data = gb.Dataset(rec, val, pts)
+    fit = gb.cls(["1", "y(k-1)", "speed(k-1)", "speed(k-1)^2"], data, curve)
+    unc = gb.cls_uncertainty(fit, data, curve)
+    assert np.all(unc.cov == 0)
+    band = gb.simulation_band(unc, val, method="monte-carlo", n_samples=50)
+    assert np.all(band.std == 0)
+    np.testing.assert_allclose(band.low, band.yhat, rtol=1e-12)  # the runs' own round-off (simulate_many)
+    np.testing.assert_allclose(band.high, band.yhat, rtol=1e-12)
+    assert np.isnan(band.coverage)
