@@ -38,3 +38,20 @@ def test_a_monte_carlo_band_of_a_fully_determined_model_has_no_spread():
     np.testing.assert_allclose(band.low, band.yhat, rtol=1e-12)  # the runs' own round-off (simulate_many)
     np.testing.assert_allclose(band.high, band.yhat, rtol=1e-12)
     assert np.isnan(band.coverage)
+
+
+@pytest.mark.parametrize("bad", ["ab", 0.5, {0.1, 0.5}])
+def test_design_input_refuses_frequencies_of_a_wrong_type_with_a_type_error(bad):
+    # was wrong: a string, a number or a set for the multisine's band was a ValueError ("must be a
+    # pair"), where the library's rule is a TypeError for a wrong type
+    with pytest.raises(TypeError, match="frequencies"):
+        gb.design_input("multisine", 64, low=1e-3, high=2e-3, frequencies=bad)
+
+
+def test_design_input_takes_the_band_as_an_array_pair():
+    # was wrong: np.array([f_low, f_high]), what a script computes the band as, was refused as "not a pair"
+    band = np.array([0.1, 0.5])
+    np.testing.assert_array_equal(gb.design_input("multisine", 64, low=1e-3, high=2e-3, frequencies=band),
+                                  gb.design_input("multisine", 64, low=1e-3, high=2e-3, frequencies=(0.1, 0.5)))
+    with pytest.raises(ValueError, match="pair"):
+        gb.design_input("multisine", 64, low=1e-3, high=2e-3, frequencies=np.array([0.1, 0.2, 0.5]))

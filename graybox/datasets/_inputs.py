@@ -69,7 +69,7 @@ def design_input(
     hold: int | tuple[int, int] | None = None,
     n_inputs: int = 1,
     order: int | None = None,
-    frequencies: tuple[float, float] | None = None,
+    frequencies: tuple[float, float] | np.ndarray | None = None,
     seed: int = 0,
 ) -> np.ndarray:
     """An input signal for an identification experiment.
@@ -105,7 +105,7 @@ def design_input(
     order : int, optional
         PRBS register length, 2–20 (default: the shortest whose period covers ``n_samples``).
         Refused for the other kinds.
-    frequencies : (float, float)
+    frequencies : (float, float) or ndarray, shape (2,)
         Multisine band as fractions of the Nyquist frequency, 0 < f_low < f_high <= 1 (required
         for a multisine, refused for the other kinds).
     seed : int
@@ -123,7 +123,7 @@ def design_input(
         ``low >= high``; a hold longer than the record; an option the kind does not use; a band
         with no frequency line; an unknown kind.
     TypeError
-        A count that is not an integer, a level that is not a number.
+        A count that is not an integer, a level that is not a number, a band that is not a pair.
     """
     kind = check_choice(kind, "kind", KINDS)
     n = check_int(n_samples, "n_samples", low=2)
@@ -194,7 +194,9 @@ def _multisine(n: int, m: int, frequencies: object, seed: int) -> np.ndarray:
     if frequencies is None:
         raise ValueError("design_input(kind='multisine') needs frequencies=(f_low, f_high): the band as fractions of "
                          "the Nyquist frequency")
-    if not isinstance(frequencies, (tuple, list)) or len(frequencies) != 2:
+    if not isinstance(frequencies, (tuple, list, np.ndarray)):
+        raise TypeError(f"frequencies must be a pair (f_low, f_high), got {frequencies!r} ({type(frequencies).__name__})")
+    if np.ndim(frequencies) != 1 or len(frequencies) != 2:
         raise ValueError(f"frequencies must be a pair (f_low, f_high), got {frequencies!r}")
     f0 = check_real(frequencies[0], "frequencies[0] (f_low)", low=0, low_open=True, high=1)
     f1 = check_real(frequencies[1], "frequencies[1] (f_high)", low=f0, low_open=True, high=1)
