@@ -5,6 +5,8 @@ start pulled inside a stability margin, tried with units far from 1 (Pa near 2e5
 inputs not named "u", one and two inputs, short records, MA terms and constrained estimates.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -55,3 +57,27 @@ def test_design_input_takes_the_band_as_an_array_pair():
                                   gb.design_input("multisine", 64, low=1e-3, high=2e-3, frequencies=(0.1, 0.5)))
     with pytest.raises(ValueError, match="pair"):
         gb.design_input("multisine", 64, low=1e-3, high=2e-3, frequencies=np.array([0.1, 0.2, 0.5]))
+
+
+def _select(est, data, **options):
+    black = {"band": np.inf} if est in ("ls", "els", "oe") else {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.SelectionWarning)
+        return gb.select_graybox(gb.Candidates(2, 2, degree=2, input_names=("speed",)), data, estimator=est,
+                                 sizes=[4], **black, **options)
+
+
+def test_an_output_error_choice_refuses_data_it_was_not_fitted_on():
+    # was wrong: with the oe estimator, uncertainty(other data) returned a covariance with only
+    # se_uncertainty's "not a stationary point" warning, the one the docstring says output error's
+    # ridge gives anyway (and here the right data gave no warning at all): nothing told them apart
+    rec, other = _plant(400, 1), _plant(400, 3)
+    sel = _select("oe", rec)  # a record alone: the choice on folds, the model fitted on the whole record
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        right = sel.uncertainty(rec)
+    np.testing.assert_array_equal(right.model.theta, sel.model.theta)
+    with pytest.raises(ValueError, match="output_error on these data does not give the chosen model's θ"):
+        sel.uncertainty(other)
+    with pytest.raises(ValueError, match="does not give the chosen model's θ"):
+        sel.uncertainty(gb.Dataset(other, rec))

@@ -45,7 +45,7 @@ from .. import _api as gb
 
 from ..io._json import register_type
 from ..estimation._prediction_error import pe_members
-from ..models._coerce import static_info, static_points
+from ..models._coerce import as_record, static_info, static_points
 from ..selection._forward_regression import _RSS_FLOOR
 from ..selection._stopping import FewerTermsError
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
@@ -286,7 +286,7 @@ class GrayboxSelection:
         ------
         ValueError
             ``data`` is not what the chosen model was fitted on (the estimator's own check: not a
-            least-squares or ELS solution there); constraints with an estimator other than PE.
+            least-squares or ELS solution there; output error's refit there not the chosen θ); constraints with an estimator other than PE.
         """
         est = str(self.chosen["estimator"])
         constraints = tuple(check_sequence(constraint_entries(constraints), "constraints",
@@ -305,6 +305,12 @@ class GrayboxSelection:
                                  "fitted on (its Dataset, or the record it was given alone)")
             return gb.ls_uncertainty(fit, data, level=level)
         if est == "oe":
+            # se_uncertainty's stationarity warning cannot tell other data from output error's own ridge
+            # (it may warn on the right data too): the refit can
+            if not np.allclose(_fit_oe(self.structure, as_record(data, "ident", "data")), self.model.theta,
+                               rtol=1e-8, atol=0):
+                raise ValueError("output_error on these data does not give the chosen model's θ: give the data "
+                                 "select_graybox fitted on (its Dataset, or the record it was given alone)")
             return gb.se_uncertainty(self.model, data, lambda1=1.0, level=level)
         if est == "pe":
             return gb.pe_uncertainty(self.decision, data, static, constraints=list(constraints) or None, level=level)
