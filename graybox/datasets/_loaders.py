@@ -97,13 +97,14 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                              f"but delimiter={delimiter!r} was given; omit delimiter= (the hint is used) or correct "
                              f"line {first}")
         delimiter, start, first = hint.group(1), end, first + 1
-    unit_line = None
+    unit_line, cut = None, None
     if units_row:  # read, then blanked in place: the lines keep their numbers, and a blank line is no sample
         u0 = _skip_lines(raw, start, 1)
         u1 = _skip_lines(raw, u0, 1)
         if u0 >= len(raw):
             raise ValueError(f"{p}: line {first + 1}: units_row=True, but there is no line after the header")
         unit_line = _decode(p, raw, u0, u1).rstrip("\r\n")
+        cut = raw[start:u0] + raw[u1:]  # for numpy's reader, which a blank line sends to the careful one
         raw = raw[:u0] + (b"\r\n" if raw[u0:u1].endswith(b"\r\n") else b"\n") + raw[u1:]
         own = False
     # The dialect and the header come from the first lines alone: a long file is decoded whole
@@ -131,7 +132,12 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         index[role] = header.index(col)
     units = None if unit_line is None else _units_of_row(p, unit_line, delim, index, first + 1)
     text = (lambda: head) if end >= len(raw) else functools.cache(lambda: _decode(p, raw, start, len(raw)))
-    if start == 0 or (start <= 3 and raw.startswith(codecs.BOM_UTF8)):
+    if cut is not None:  # the units row taken out: the samples' file lines are one further on
+        fast = _fast_columns(p, index, raw=cut, text=functools.cache(lambda: _decode(p, cut, 0, len(cut))),
+                             delimiter=delim, decimal=dec, n_fields=len(header), reread=False, first=first)
+        if fast is not None:
+            fast["_lines"] = fast["_lines"] + 1
+    elif start == 0 or (start <= 3 and raw.startswith(codecs.BOM_UTF8)):
         fast = _fast_columns(p, index, raw=raw, text=text, delimiter=delim, decimal=dec, n_fields=len(header),
                              reread=own)
     else:  # lines skipped: numpy reads the text from the header on, and the file's line numbers follow
