@@ -105,3 +105,13 @@ def test_a_units_row_keeps_numpys_reader_and_the_files_line_numbers(tmp_path, mo
     with pytest.raises(ValueError, match=r"from line 5 \(0.2 s\) to line 6 "):
         gb.load_record_csv(p, u="speed", y="p", time="t", units_row=True)
     assert fast[-1] is not None
+
+
+@pytest.mark.parametrize(("cell", "unit"), [("[kPa (abs)]", "kPa (abs)"), ("(m^3/h)", "m^3/h"), ("[rpm]", "rpm"),
+                                            ("kPa (abs)", "kPa (abs)"), ("Pa", "Pa")])
+def test_a_units_rows_brackets_are_taken_off_as_a_pair(tmp_path, cell, unit):
+    # was wrong: every bracket and parenthesis was stripped from both ends of a cell, so a logger's
+    # "[kPa (abs)]" became the unit 'kPa (abs' and "kPa (abs)" became 'kPa (abs'
+    p = tmp_path / "log.csv"
+    p.write_text(f"t;speed;p\n[s];[rpm];{cell}\n0.0;3000;200000.5\n0.1;3001;200001.5\n")
+    assert gb.load_record_csv(p, u="speed", y="p", time="t", units_row=True).units == ("rpm", unit)

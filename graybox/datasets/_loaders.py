@@ -189,11 +189,18 @@ def _numeric(cell: str, decimal: str) -> bool:
 def _units_of_row(p: Path, line: str, delim: str, index: dict[str, int], number: int) -> dict[str, str]:
     """The units a logger's units row gives the columns read (role -> unit, ``[rpm]`` read as ``rpm``)."""
     cells = next(csv.reader([line], delimiter=delim), [])
-    units = {role: cells[i].strip().strip("[]()").strip() if i < len(cells) else "" for role, i in index.items()}
+    units = {role: _unbracket(cells[i]) if i < len(cells) else "" for role, i in index.items()}
     if all(_numeric(u, ".") or _numeric(u, ",") for u in units.values() if u) and any(units.values()):
         raise ValueError(f"{p}: line {number} holds numbers ({line.strip()!r}), a sample, not a row of units: drop "
                          "units_row=True")
     return units
+
+
+def _unbracket(cell: str) -> str:
+    """A unit cell without its one enclosing pair of brackets or parentheses: ``[kPa (abs)]`` is ``kPa (abs)``."""
+    c = cell.strip()
+    m = re.fullmatch(r"\[([^\[\]]*)\]|\(([^()]*)\)", c)
+    return c if m is None else (m.group(1) if m.group(1) is not None else m.group(2)).strip()
 
 
 def _units_from_row(p: Path, units: tuple[str, str], row: dict[str, str], inputs: Sequence[str],
