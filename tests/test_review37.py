@@ -115,3 +115,11 @@ def test_a_units_rows_brackets_are_taken_off_as_a_pair(tmp_path, cell, unit):
     p = tmp_path / "log.csv"
     p.write_text(f"t;speed;p\n[s];[rpm];{cell}\n0.0;3000;200000.5\n0.1;3001;200001.5\n")
     assert gb.load_record_csv(p, u="speed", y="p", time="t", units_row=True).units == ("rpm", unit)
+
+
+def test_a_file_of_a_header_and_a_units_row_alone_names_the_line_after_the_units(tmp_path):
+    # was wrong: "line 2: no data rows after the header" pointed at the units row, read as units
+    p = tmp_path / "log.csv"
+    p.write_text("t;speed;p\ns;rpm;Pa\n")
+    with pytest.raises(ValueError, match="line 3: no data rows after the header's units row"):
+        gb.load_record_csv(p, u="speed", y="p", time="t", units_row=True)

@@ -170,7 +170,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
             values[role].append(_number(p, line, wanted[role], row[i], dec, time=role == "time"))
         lines.append(line)
     if not lines:
-        raise ValueError(f"{p}: line {first + 1}: no data rows after the header; expected one sample per line")
+        after = "the header" if units is None else "the header's units row"
+        raise ValueError(f"{p}: line {first + 1 + (units is not None)}: no data rows after {after}; expected one sample "
+                         "per line")
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
     return out if units is None else out | {"_units": units}
