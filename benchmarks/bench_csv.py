@@ -3,9 +3,11 @@
 A 10⁶-row file of three columns (time, input, output; ``%.17g``) written as ``,`` with ``.``,
 ``;`` with ``,`` (decimal comma) and tab with ``.``; each read by ``load_record_csv`` with the
 dialect detected (median of 3 reads after one warm-up); then ``load_pumping()`` (two files, 4010
-rows). The readers must give the same floats in every dialect (checked here too).
+rows). The readers must give the same floats in every dialect (checked here too). Last, a logger's
+file with a row of units under the header (``units_row=True``) against the same file without it:
+10⁵ rows (``--units-rows``) of time, rpm near 3000 and Pa near 2e5, ``;`` with ``.`` and with ``,``.
 
-    python benchmarks/bench_csv.py [--rows 1000000]
+    python benchmarks/bench_csv.py [--rows 1000000] [--units-rows 100000]
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from graybox.datasets import load_record_csv  # noqa: E402
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rows", type=int, default=1_000_000)
+    ap.add_argument("--units-rows", type=int, default=100_000)
     args = ap.parse_args()
     print(f"# {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, {machine()}, git {git_rev()}")
     rng = np.random.default_rng(0)
@@ -48,6 +51,25 @@ def main() -> None:
     assert all(r.u.tobytes() == first.u.tobytes() and r.y.tobytes() == first.y.tobytes() for r in got.values())
     t = timeit(gb.load_pumping, repeat=20)
     print(f"load_pumping (bundled, 2 files): {t * 1e3:.1f} ms")
+    units_row(args.units_rows)
+
+
+def units_row(n: int) -> None:
+    """A units row under the header against none: numpy's reader both times (median of 5 reads)."""
+    rng = np.random.default_rng(0)
+    table = np.column_stack([np.arange(n) * 0.01, 3000 + 100 * rng.standard_normal(n), 2e5 + 1e3 * rng.standard_normal(n)])
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "x.csv"
+        for dec in (".", ","):
+            rows = [";".join(f"{v:.17g}".replace(".", dec) for v in row) for row in table]
+            got = []
+            for units in (False, True):
+                p.write_text("\n".join(["t;speed;p"] + (["[s];[rpm];[Pa]"] if units else []) + rows) + "\n")
+                read = lambda: load_record_csv(p, u="speed", y="p", time="t", units_row=units)  # noqa: E731
+                t = timeit(read, repeat=5)
+                got.append(read())
+                print(f"decimal {dec!r}, units_row={units!s:5s}: {n} rows {t:.3f} s")
+            assert got[0].y.tobytes() == got[1].y.tobytes() and got[1].units == ("rpm", "Pa")
 
 
 if __name__ == "__main__":
