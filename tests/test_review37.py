@@ -123,3 +123,16 @@ def test_a_file_of_a_header_and_a_units_row_alone_names_the_line_after_the_units
     p.write_text("t;speed;p\ns;rpm;Pa\n")
     with pytest.raises(ValueError, match="line 3: no data rows after the header's units row"):
         gb.load_record_csv(p, u="speed", y="p", time="t", units_row=True)
+
+
+def test_a_prbs_of_several_inputs_never_repeats_a_column():
+    # was wrong: the columns are one sequence shifted by i/n_inputs of its period, and a period shorter
+    # than n_inputs gave two columns the same shift: with 4 inputs on a 20-sample record of 10-sample
+    # bits (order 2, period 3) the first two inputs were identical, collinear for any estimator
+    with pytest.raises(ValueError, match="too short for 4 different input columns"):
+        gb.design_input("prbs", 20, low=2900, high=3100, hold=10, n_inputs=4)
+    x = gb.design_input("prbs", 40, low=2900, high=3100, hold=10, n_inputs=4)  # 4 bits: a register of 3
+    assert len({col.tobytes() for col in x.T}) == 4
+    with pytest.raises(ValueError, match="order"):
+        gb.design_input("prbs", 200, low=2900, high=3100, hold=1, n_inputs=4, order=2)
+    assert gb.design_input("prbs", 200, low=2900, high=3100, hold=1, n_inputs=3, order=2).shape == (200, 3)

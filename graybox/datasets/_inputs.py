@@ -103,8 +103,9 @@ def design_input(
         share of the lines (at random), so those columns are nearly uncorrelated; a staircase's
         columns walk a grid (above).
     order : int, optional
-        PRBS register length, 2–20 (default: the shortest whose period covers ``n_samples``).
-        Refused for the other kinds.
+        PRBS register length, 2–20 (default: the shortest whose period covers ``n_samples`` and
+        holds at least ``n_inputs`` bits; one whose period is shorter than ``n_inputs`` is refused:
+        two columns would be the same). Refused for the other kinds.
     frequencies : (float, float) or ndarray, shape (2,)
         Multisine band as fractions of the Nyquist frequency, 0 < f_low < f_high <= 1 (required
         for a multisine, refused for the other kinds).
@@ -121,7 +122,8 @@ def design_input(
     ------
     ValueError
         ``low >= high``; a hold longer than the record; an option the kind does not use; a band
-        with no frequency line; an unknown kind.
+        with no frequency line; a PRBS order whose period is shorter than ``n_inputs``, or a record
+        of too few bits for ``n_inputs`` different columns; an unknown kind.
     TypeError
         A count that is not an integer, a level that is not a number, a band that is not a pair.
     """
@@ -150,10 +152,17 @@ def design_input(
     if kind == "prbs":
         if order is not None:
             order = check_int(order, "order", low=min(_PRBS_TAPS), high=max(_PRBS_TAPS))
-        else:  # the shortest register whose period covers the record
-            order = next((o for o in _PRBS_TAPS if (2**o - 1) * h0 >= n), max(_PRBS_TAPS))
+            if 2**order - 1 < m:  # the columns' shifts, i/n_inputs of the period, would repeat
+                raise ValueError(f"order={order} gives a period of {2**order - 1} bits, fewer than the {m} inputs, "
+                                 "whose columns are the sequence shifted by whole bits: some would be the same "
+                                 "column; raise order")
+        else:  # the shortest register whose period covers the record and gives each input its own shift
+            order = next((o for o in _PRBS_TAPS if (2**o - 1) * h0 >= n and 2**o - 1 >= m), max(_PRBS_TAPS))
         period = 2**order - 1
         cols = np.column_stack([_prbs(n, h0, order, (i * period) // m) for i in range(m)])
+        if len({c.tobytes() for c in cols.T}) < m:  # shifted sequences that agree over the record's few bits
+            raise ValueError(f"a record of {-(-n // h0)} PRBS bits (n_samples={n}, hold={h0}) is too short for "
+                             f"{m} different input columns: shorten hold or lengthen the record")
         out = _scale(cols, lo, hi)
     elif kind == "staircase":
         out = _staircase(-(-n // h0), m)
