@@ -136,3 +136,26 @@ def test_a_prbs_of_several_inputs_never_repeats_a_column():
     with pytest.raises(ValueError, match="order"):
         gb.design_input("prbs", 200, low=2900, high=3100, hold=1, n_inputs=4, order=2)
     assert gb.design_input("prbs", 200, low=2900, high=3100, hold=1, n_inputs=3, order=2).shape == (200, 3)
+
+
+def test_a_start_pulled_inside_the_margin_where_the_record_alone_does_not_identify_the_rest():
+    # was wrong: _pull_inside refits the non-feedback parameters on the dynamic rows alone, and where
+    # only the static points identify them (the valve held at 2e-3 V through the record, varied in
+    # the static points) its least squares raised "not identifiable", ending the whole se_pareto
+    # sweep, which without a margin fits these data
+    n = 300
+    rng = np.random.default_rng(1)
+    speed = np.repeat(rng.uniform(2500, 3500, n // 8 + 1), 8)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.7 * y[k - 1] + 0.3 * (speed[k - 1] - 3000) / 500
+    rec = gb.Record(np.column_stack([speed, np.full(n, 2e-3)]), 2e5 + 1e4 * y + 20 * rng.standard_normal(n), Ts=0.1,
+                    input_names=("n", "v"))
+    a, b = (g.ravel() for g in np.meshgrid(np.linspace(2500, 3500, 3), np.linspace(1e-3, 3e-3, 3)))
+    pts = gb.StaticPoints(np.column_stack([a, b]), 2e5 + 1e4 * ((a - 3000) / 500 + (b - 2e-3) / 3e-3),
+                          input_names=("n", "v"))
+    with pytest.warns(gb.StaticRangeWarning, match="outside the input box"):  # the valve's points, as meant
+        front = gb.se_pareto(["1", "y(k-1)", "n(k-1)", "v(k-1)"], rec, pts, lambdas=[0.5], method="gradient",
+                             margin=0.5, progress=False)
+    assert not front.failures and np.isfinite(front.JS[0])
+    assert abs(front.thetas[0][1]) <= 0.5 + 1e-9  # the feedback inside the margin (the plant's pole is 0.7)

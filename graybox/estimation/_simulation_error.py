@@ -998,8 +998,11 @@ def _pull_inside(problem: SEProblem, theta: np.ndarray, lam1: float) -> tuple[np
             # moves every equilibrium, by an amount the output's offset sets (the constant absorbs it), so
             # the start's quality depended on where the units put their zero
             refit = th.copy()
-            refit[rest] = scaled_lstsq(problem.psi[:, rest], problem.target - problem.psi[:, fb] @ th[fb])
-            tries.insert(0, refit)
+            try:
+                refit[rest] = scaled_lstsq(problem.psi[:, rest], problem.target - problem.psi[:, fb] @ th[fb])
+                tries.insert(0, refit)
+            except ValueError:  # the record alone does not identify them (the static points do): shrink only
+                pass
         for t in tries:  # the refit first; the plain shrink where the refit is not feasible
             if np.isfinite(_residuals(problem, t * problem.scale, lam1)[0]):
                 return t, c
