@@ -307,8 +307,9 @@ class GrayboxSelection:
         if est == "oe":
             # se_uncertainty's stationarity warning cannot tell other data from output error's own ridge
             # (it may warn on the right data too): the refit can
-            if not np.allclose(_fit_oe(self.structure, as_record(data, "ident", "data")), self.model.theta,
-                               rtol=1e-8, atol=0):
+            with one_blas_thread():  # as the selection's jobs fit it: the same θ to the last bit
+                refit = _fit_oe(self.structure, as_record(data, "ident", "data"))
+            if not np.allclose(refit, self.model.theta, rtol=1e-8, atol=0):
                 raise ValueError("output_error on these data does not give the chosen model's θ: give the data "
                                  "select_graybox fitted on (its Dataset, or the record it was given alone)")
             return gb.se_uncertainty(self.model, data, lambda1=1.0, level=level)
