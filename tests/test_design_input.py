@@ -27,7 +27,7 @@ def _runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
        low=hs.floats(-1e5, 1e5), width=hs.floats(1e-3, 1e5))
 def test_aprbs_holds_and_levels(n, h0, extra, seed, low, width):
     h1 = h0 + extra
-    assume(h1 <= n)
+    assume(2 * h1 <= n)  # an APRBS holds at least two levels
     x = design_input("aprbs", n, low=low, high=low + width, hold=(h0, h1), seed=seed)
     assert x.shape == (n,)
     assert x.min() >= low and x.max() <= low + width
@@ -151,3 +151,11 @@ def test_a_designed_experiment_identifies_a_known_system():
     assert set(map(str, sel.structure)) == set(truth)
     np.testing.assert_allclose([dict(zip(map(str, sel.structure), sel.model.theta))[t] for t in truth],
                                list(truth.values()), rtol=1e-6)
+
+
+def test_an_aprbs_that_one_hold_could_fill_is_refused():
+    # review37: hold=(20, 100) on 100 samples with seed 161 drew one hold of 100 samples: a constant input at `low`
+    with pytest.raises(ValueError, match=r"at least two holds.*longest hold \(100 samples\) must be at most half"):
+        design_input("aprbs", 100, low=2900.0, high=3100.0, hold=(20, 100), seed=161)
+    x = design_input("aprbs", 100, low=2900.0, high=3100.0, hold=(20, 50), seed=161)
+    assert np.unique(x).size >= 2

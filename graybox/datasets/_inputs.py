@@ -100,7 +100,9 @@ def design_input(
     n_inputs : int
         Number of input columns: each APRBS column is drawn from its own stream, a PRBS column is
         the sequence shifted by i/n_inputs of its period, and a multisine column takes its own
-        share of the lines (at random), so those columns are nearly uncorrelated; a staircase's
+        share of the lines (at random), so those columns are nearly uncorrelated over a long record
+        (a PRBS's and a multisine's over whole periods: on a record of one period or less a PRBS's
+        shifted columns may correlate, e.g. |corr| 0.67 for 3 inputs on 5 bits); a staircase's
         columns walk a grid (above).
     order : int, optional
         PRBS register length, 2–20 (default: the shortest whose period covers ``n_samples`` and
@@ -121,7 +123,7 @@ def design_input(
     Raises
     ------
     ValueError
-        ``low >= high``; a hold longer than the record; an option the kind does not use; a band
+        ``low >= high``; a hold longer than the record (an APRBS's longest, than half of it); an option the kind does not use; a band
         with no frequency line; a PRBS order whose period is shorter than ``n_inputs``, or a record
         of too few bits for ``n_inputs`` different columns; an unknown kind.
     TypeError
@@ -149,6 +151,9 @@ def design_input(
     h0, h1 = _holds(kind, hold)
     if h1 > n:
         raise ValueError(f"hold of {h1} samples is longer than the record ({n} samples)")
+    if kind == "aprbs" and 2 * h1 > n:  # one hold could fill the record: a constant input, said nowhere
+        raise ValueError(f"an APRBS needs at least two holds in the record: its longest hold ({h1} samples) must be "
+                         f"at most half the record ({n // 2} samples)")
     if kind == "prbs":
         if order is not None:
             order = check_int(order, "order", low=min(_PRBS_TAPS), high=max(_PRBS_TAPS))
