@@ -226,10 +226,10 @@ def parse_term(text: str) -> Term:
     """Parse a paper-style term such as ``"u(k-2)y(k-6)"``, ``"u1(k-1)u2(k-2)"``, ``"u(k-6)^2"`` or ``"1"``.
 
     Factors may be separated by nothing, spaces or ``*``. Raises ``ValueError`` with the
-    offending text when it cannot be read.
+    offending text when it cannot be read, ``TypeError`` when it is not text.
     """
     if not isinstance(text, str):
-        raise ValueError(f"a term must be a string, got {type(text).__name__}")
+        raise TypeError(f"a term must be a string, got {type(text).__name__}")
     s = text.strip()
     if s == "1":
         return Term(())
