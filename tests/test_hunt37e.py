@@ -42,3 +42,20 @@ def test_a_term_that_is_no_text_is_a_type_error(make):
 def test_a_spec_term_that_is_no_text_is_a_spec_type_error():
     err = _spec_type_error('terms = ["1", "y(k-1)", "u(k-1)"]', "terms = [1, 2]")
     assert "structures[0].terms" in str(err)
+
+
+@pytest.mark.parametrize("new, where", [
+    ('estimator = "pe"\nconstraints = [{type = 3}]', "constraints[0].type"),
+    ('estimator = "pe"\nconstraints = [{type = ["band"]}]', "constraints[0].type"),
+    ('estimator = "pe"\nconstraints = [{type = "equality", curve = 3}]', "constraints[0].curve"),
+    ('estimator = "pe"\nconstraints = [{type = "equality", curve = true}]', "constraints[0].curve"),
+])
+def test_a_constraint_type_or_curve_of_the_wrong_type_is_a_spec_type_error(new, where):
+    # {type = 3} was 'unknown constraint type 3' and {curve = 3} 'curve must be "fit", …', both plain SpecErrors
+    # (ValueErrors) for a value of the wrong type; a wrong value ({type = "bands"}) stays a plain SpecError.
+    err = _spec_type_error('estimator = "ls"', new)
+    assert where in str(err)
+    text = GOOD_SPEC.replace('estimator = "ls"', 'estimator = "pe"\nconstraints = [{type = "bands"}]')
+    with pytest.raises(gb.experiments.SpecError) as info:
+        gb.experiments.Grid.from_toml_text(text, source="spec.toml")
+    assert not isinstance(info.value, TypeError) and "unknown constraint type 'bands'" in str(info.value)

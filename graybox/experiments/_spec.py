@@ -651,6 +651,9 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
     if not isinstance(c, Mapping):
         raise SpecTypeError(f"a constraint is a table such as {{type = \"band\", b = 0.175}}, got {c!r}", path)
     kind = c.get("type")
+    if kind is not None and not isinstance(kind, str):
+        raise SpecTypeError(f"a constraint's type must be a string, one of {', '.join(CONSTRAINT_TYPES)}; got "
+                            f"{kind!r} ({type(kind).__name__})", path + ("type",))
     if kind not in _CONSTRAINT_TYPES_KEYS:
         raise SpecError(f"unknown constraint type {kind!r}; known: {', '.join(CONSTRAINT_TYPES)}", path + ("type",))
     _check_keys(c, _CONSTRAINT_KEYS[kind], f"a {kind!r} constraint", path)
@@ -661,8 +664,10 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
         elif isinstance(curve, Sequence) and curve:
             curve = [_wrap(check_real, path + ("curve",), v, "curve coefficient") for v in curve]
         else:
-            raise SpecError("curve must be \"fit\" (fitted to the data set's static points), \"dataset\" (the data "
-                            "set's own static curve) or a list of ascending polynomial coefficients", path + ("curve",))
+            # an empty list is a wrong value; anything but text or a list a wrong type
+            raise (SpecError if isinstance(curve, Sequence) else SpecTypeError)(
+                "curve must be \"fit\" (fitted to the data set's static points), \"dataset\" (the data set's own "
+                f"static curve) or a list of ascending polynomial coefficients, got {curve!r}", path + ("curve",))
         return {"type": kind, "curve": curve, "sigma_y": _bound(c.get("sigma_y"), path + ("sigma_y",), "sigma_y")}
     if kind == "points":
         return {"type": kind}
