@@ -59,3 +59,24 @@ def test_a_constraint_type_or_curve_of_the_wrong_type_is_a_spec_type_error(new, 
     with pytest.raises(gb.experiments.SpecError) as info:
         gb.experiments.Grid.from_toml_text(text, source="spec.toml")
     assert not isinstance(info.value, TypeError) and "unknown constraint type 'bands'" in str(info.value)
+
+
+def test_min_correlation_on_a_record_that_does_not_move_names_it():
+    # decide_min_correlation on a record held at a steady state (input and output constant: every member's free
+    # run and one-step prediction constant, no correlation defined) said 'no member has a defined residual/output
+    # correlation (every free run diverged?)', blaming free runs that had all stayed finite.
+    true = gb.Model(["1", "y(k-1)", "n(k-1)"], [1e5, 0.5, 20.0], input_names=("n",))
+    rng = np.random.default_rng(0)
+    n_ = np.repeat(rng.uniform(2500.0, 3500.0, 30), 20)[:500]
+    rec = gb.Record(n_, true.simulate(n_, np.full(1, 3.2e5)) + 5.0 * rng.standard_normal(500), 0.1,
+                    input_names=("n",))
+    levels = np.linspace(2600.0, 3400.0, 5)
+    front = gb.pe_pareto(true.structure, gb.Dataset(rec, rec, gb.StaticPoints(levels, true.static_curve(levels),
+                                                                                input_names=("n",))),
+                         lambdas=[1e-3, 0.1, 1.0])
+    steady = gb.Record(np.full(100, 3000.0), np.full(100, true.static_curve([3000.0])[0]), 0.1, input_names=("n",))
+    for output in ("free-run", "one-step"):
+        with pytest.raises(ValueError, match="does not move") as info:
+            gb.decide_min_correlation(front, steady, output=output)
+        assert "diverged" not in str(info.value)
+    assert np.isfinite(gb.decide_min_correlation(front, rec).score)  # a record that moves: decided as before

@@ -258,6 +258,7 @@ def decide_min_correlation(
     psi = regressor_matrix(st, record.u, record.y, start=L, input_names=record.input_names)
     K = len(pareto)
     rho = np.empty(K)
+    diverged = np.zeros(K, bool)
     # members in blocks of at most ~2^22 samples of output: bounded memory on long records
     step = max(1, (1 << 22) // max(1, y.size))
     for k0 in range(0, K, step):
@@ -269,8 +270,17 @@ def decide_min_correlation(
             xc = xi - xi.mean(axis=0)
             oc = Yo - Yo.mean(axis=0)
             r = np.abs(np.sum(xc * oc, axis=0)) / np.sqrt(np.sum(xc**2, axis=0) * np.sum(oc**2, axis=0))
-        rho[k0 : k0 + step] = np.where(np.isfinite(r) & np.all(np.isfinite(Yo), axis=0), r, np.inf)
+        diverged[k0 : k0 + step] = ~np.all(np.isfinite(Yo), axis=0)
+        rho[k0 : k0 + step] = np.where(np.isfinite(r) & ~diverged[k0 : k0 + step], r, np.inf)
     if not np.isfinite(rho).any():
-        raise ValueError("no member has a defined residual/output correlation (every free run diverged?)")
+        if diverged.all():
+            raise ValueError("no member has a defined residual/output correlation: every member's free run diverged "
+                             "on this record")
+        # finite runs but no correlation: the output or the residuals do not vary over the record
+        gone = f" ({int(diverged.sum())} of {K} members' free runs diverged)" if diverged.any() else ""
+        raise ValueError(f"no member has a defined residual/output correlation on this record{gone}: the members' "
+                         f"{output} output or one-step residuals are constant over it, as on a record that does not "
+                         f"move (held at a steady state; its output's spread is {float(np.ptp(y)):.3g}); give a "
+                         "record whose input moves")
     i = int(np.argmin(rho))
     return _decision(pareto, i, "min correlation", True, rho[i], f"{pareto.method} min-corr (ρ = {rho[i]:.3g})")
