@@ -80,3 +80,45 @@ def test_min_correlation_on_a_record_that_does_not_move_names_it():
             gb.decide_min_correlation(front, steady, output=output)
         assert "diverged" not in str(info.value)
     assert np.isfinite(gb.decide_min_correlation(front, rec).score)  # a record that moves: decided as before
+
+
+def _pressure_uncertainty() -> gb.ParameterUncertainty:
+    """ls_uncertainty of p(k) = 1e5 + 0.5 p(k-1) + 20 n(k-1) (Pa against rpm) on a noisy record."""
+    rng = np.random.default_rng(0)
+    true = gb.Model(["1", "y(k-1)", "n(k-1)"], [1e5, 0.5, 20.0], input_names=("n",))
+    n_ = np.repeat(rng.uniform(2500.0, 3500.0, 30), 20)[:500]
+    rec = gb.Record(n_, true.simulate(n_, np.full(1, 3.2e5)) + 50.0 * rng.standard_normal(500), 0.1,
+                    input_names=("n",))
+    return gb.ls_uncertainty(gb.cls(true.structure, rec, solver="closed").model, rec)
+
+
+def test_a_covariance_changed_without_its_factor_is_refused():
+    # Monte Carlo bands and contractions draw through cov_factor (hunt37b), intervals read cov: a covariance
+    # replaced without its factor (dataclasses.replace(unc, cov=100 * unc.cov), or a hand-edited file) gave
+    # std 10 times as large and the very same static band, without a word.
+    import dataclasses
+
+    unc = _pressure_uncertainty()
+    with pytest.raises(ValueError, match="cov_factor F is not a factor of cov"):
+        dataclasses.replace(unc, cov=100.0 * unc.cov)
+    big = dataclasses.replace(unc, cov=100.0 * unc.cov, cov_factor=None)  # a covariance of one's own: its own band
+    np.testing.assert_allclose(big.std, 10.0 * unc.std)
+    wide, narrow = (gb.static_curve_band(u, [3000.0], seed=0).to_frame().iloc[0] for u in (big, unc))
+    assert wide["ybar high"] - wide["ybar low"] > 5.0 * (narrow["ybar high"] - narrow["ybar low"])
+    assert dataclasses.replace(unc, cov=unc.cov.copy()).cov_factor is not None  # the same covariance keeps it
+
+
+@pytest.mark.parametrize("edit, what", [
+    (lambda c: np.full_like(c, np.nan), "non-finite"),
+    (lambda c: -c, "negative variances"),
+    (lambda c: c + np.triu(np.ones_like(c), 1), "is no covariance"),   # not symmetric, a correlation beyond 1
+    (lambda c: c + np.triu(np.ones_like(c), 1) + np.tril(np.ones_like(c), -1), "is no covariance"),
+])
+def test_a_covariance_that_is_none_is_refused(edit, what):
+    # ParameterUncertainty took any matrix as cov (a hand-edited file loads through it): NaN gave NaN intervals
+    # and bands, a negative one zero-width ones (std clipped to 0), a correlation beyond ±1 a band of ±1.2e5 Pa
+    # around 3.2e5 Pa, each without a word.
+    unc = _pressure_uncertainty()
+    with pytest.raises(ValueError, match=what):
+        gb.ParameterUncertainty(unc.model, edit(unc.cov), 0.95, unc.dof, unc.sigma2, "LS", np.zeros((0, 3)),
+                                np.zeros((0, 0)))

@@ -149,6 +149,7 @@ class ParameterUncertainty:
         cov = frozen(self.cov)
         if cov.shape != (n, n):
             raise ValueError(f"cov must have shape ({n}, {n}), got {cov.shape}")
+        sd = _check_cov(cov)
         object.__setattr__(self, "cov", cov)
         object.__setattr__(self, "constraints", frozen(np.reshape(self.constraints, (-1, n))))
         ne = len(self.model.noise_structure)
@@ -160,6 +161,7 @@ class ParameterUncertainty:
                 F = frozen(np.zeros((0, n)))
             if F.ndim != 2 or F.shape[1] != n:
                 raise ValueError(f"cov_factor must have shape (k, {n}), got {F.shape}")
+            _check_factor(F, cov, sd)
             object.__setattr__(self, "cov_factor", F)
 
     def contract(self, G: np.ndarray) -> np.ndarray:
@@ -255,6 +257,44 @@ class ParameterUncertainty:
 # --------------------------------------------------------------------------------------------
 # the one formula
 # --------------------------------------------------------------------------------------------
+#: How far (relative to std_i · std_j) a covariance may be from symmetric, or from its factor's FᵀF: the
+#: estimators' two agree to ~1e-15, a covariance edited by hand (or replaced without its factor) is far off.
+COV_RTOL = 1e-6
+
+
+def _check_cov(cov: np.ndarray) -> np.ndarray:
+    """``ValueError`` unless ``cov`` can be a covariance (finite, variances ≥ 0, symmetric, correlations in
+    [−1, 1], to :data:`COV_RTOL`); its standard deviations."""
+    if not np.all(np.isfinite(cov)):
+        raise ValueError(f"cov has non-finite entries at {np.argwhere(~np.isfinite(cov)).tolist()[:3]}")
+    var = np.diag(cov)
+    if np.any(var < 0):
+        raise ValueError(f"cov has negative variances at {np.flatnonzero(var < 0).tolist()}: not a covariance")
+    sd = np.sqrt(var)
+    bound = (1 + COV_RTOL) * np.outer(sd, sd)
+    bad = np.argwhere((np.abs(cov - cov.T) > COV_RTOL * np.outer(sd, sd)) | (np.abs(cov) > bound))
+    if bad.size:
+        i, j = (int(v) for v in bad[0])
+        raise ValueError(f"cov is no covariance: its entry ({i}, {j}) = {cov[i, j]:.6g} is not symmetric or exceeds "
+                         f"std_{i} · std_{j} = {sd[i] * sd[j]:.6g} (a correlation beyond ±1)")
+    return sd
+
+
+def _check_factor(F: np.ndarray, cov: np.ndarray, sd: np.ndarray) -> None:
+    """``ValueError`` unless FᵀF is ``cov`` (to :data:`COV_RTOL` of std_i · std_j): bands and contractions read the
+    factor, the intervals ``cov``, so a covariance changed without its factor would give each its own answer."""
+    if not np.all(np.isfinite(F)):
+        raise ValueError("cov_factor has non-finite entries")
+    FtF = F.T @ F
+    sc = np.maximum(sd, np.sqrt(np.diag(FtF)))
+    off = np.abs(FtF - cov) > COV_RTOL * np.outer(sc, sc)
+    if off.any():
+        i, j = (int(v) for v in np.argwhere(off)[0])
+        raise ValueError(f"cov_factor F is not a factor of cov: (FᵀF)[{i}, {j}] = {FtF[i, j]:.6g} against cov[{i}, {j}] "
+                         f"= {cov[i, j]:.6g} (a covariance changed without its factor?); give cov_factor=None with a "
+                         "covariance of your own")
+
+
 def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
     """Orthonormal basis of {z: A z = 0} (rows normalised first) and the rank of A."""
     if A.shape[0] == 0:
