@@ -122,3 +122,18 @@ def test_a_covariance_that_is_none_is_refused(edit, what):
     with pytest.raises(ValueError, match=what):
         gb.ParameterUncertainty(unc.model, edit(unc.cov), 0.95, unc.dof, unc.sigma2, "LS", np.zeros((0, 3)),
                                 np.zeros((0, 0)))
+
+
+@pytest.mark.parametrize("value", ['"a"', '"ab"', "5", "true"])
+def test_a_gain_range_that_is_no_list_is_a_spec_type_error(value):
+    # ubar_range = "a" or 5 was 'ubar_range must be [low, high]', a plain SpecError (a ValueError), and "ab" (two
+    # characters) a SpecTypeError about its letters: each is a value of the wrong type. A list of the wrong length
+    # stays a wrong value.
+    err = _spec_type_error('estimator = "ls"', f'estimator = "pe"\nconstraints = [{{type = "gain", lower = 0, '
+                                               f'ubar_range = {value}}}]')
+    assert "constraints[0].ubar_range" in str(err) and "must be a list" in str(err)
+    text = GOOD_SPEC.replace('estimator = "ls"', 'estimator = "pe"\nconstraints = [{type = "gain", lower = 0, '
+                                                 'ubar_range = [1, 2, 3]}]')
+    with pytest.raises(gb.experiments.SpecError) as info:
+        gb.experiments.Grid.from_toml_text(text, source="spec.toml")
+    assert not isinstance(info.value, TypeError)

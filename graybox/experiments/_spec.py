@@ -684,6 +684,9 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
         if lo is None and hi is None:
             raise SpecError("gain bounds need lower or upper", path)
         rng = c.get("ubar_range")
+        if rng is not None and (isinstance(rng, str) or not isinstance(rng, Sequence)):
+            raise SpecTypeError(f"ubar_range must be a list [low, high] or one [low, high] per input, got {rng!r}",
+                                path + ("ubar_range",))
         if rng is not None:
             box = isinstance(rng, Sequence) and rng and all(isinstance(r, Sequence) and not isinstance(r, str)
                                                             for r in rng)
