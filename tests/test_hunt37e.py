@@ -7,17 +7,7 @@ import pytest
 
 import graybox as gb
 
-GOOD_SPEC = """name = "g"
-[[data]]
-name = "pumping"
-bundled = "pumping"
-[[structures]]
-name = "s1"
-terms = ["1", "y(k-1)", "u(k-1)"]
-[[variants]]
-name = "LS"
-estimator = "ls"
-"""
+from test_mend37 import GOOD_SPEC  # the smallest valid grid spec (bundled pumping data, one LS variant)
 
 
 def _spec_type_error(old: str, new: str) -> gb.experiments.SpecError:
