@@ -127,3 +127,30 @@ def test_a_gain_range_that_is_no_list_is_a_spec_type_error(value):
     with pytest.raises(gb.experiments.SpecError) as info:
         gb.experiments.Grid.from_toml_text(text, source="spec.toml")
     assert not isinstance(info.value, TypeError)
+
+
+@pytest.fixture(scope="module")
+def selection_doc():
+    """The JSON document of a select_graybox result (least squares, p against n, two static points)."""
+    import json
+
+    from test_hunt37a import _pressure
+
+    sel = gb.select_graybox(gb.Candidates(1, 1, degree=1), _pressure(400), sizes=[2, 3], estimator="ls",
+                            progress=False)
+    return json.loads(gb.to_json(sel))
+
+
+@pytest.mark.parametrize("field, value, why", [("degree", -1, "degree must be None"),
+                                                ("in_band", False, "chosen row's in_band is True")])
+def test_a_graybox_selection_that_disagrees_with_itself_is_refused(selection_doc, field, value, why):
+    # A hand-edited GrayboxSelection file with degree -1, or in_band False where the chosen row's in_band is True
+    # (its repr then said 'in_band=False' of a choice its own table says is in the band), loaded without a word.
+    import copy
+    import json
+
+    doc = copy.deepcopy(selection_doc)
+    doc["object"][field] = value
+    with pytest.raises(gb.GrayboxFileError, match=why):
+        gb.from_json(json.dumps(doc))
+    assert isinstance(gb.from_json(json.dumps(selection_doc)), gb.GrayboxSelection)

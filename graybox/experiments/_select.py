@@ -184,6 +184,11 @@ class GrayboxSelection:
         if not self.band > 0:
             raise ValueError(f"band must be > 0 (inf for a black box), got {self.band!r}")
         check_choice(self.rule, "rule", RULES)
+        if self.degree is not None and self.degree < 0:
+            raise ValueError(f"degree must be None (a black box) or >= 0, got {self.degree}")
+        said = self.table.loc[self.table["rank"] == 1, "in_band"].iloc[0]
+        if bool(said) != bool(self.in_band):  # in_band is the choice's, as its row says
+            raise ValueError(f"in_band is {self.in_band} but the chosen row's in_band is {bool(said)}")
 
     @property
     def chosen(self) -> pd.Series:
