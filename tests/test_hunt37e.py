@@ -154,3 +154,27 @@ def test_a_graybox_selection_that_disagrees_with_itself_is_refused(selection_doc
     with pytest.raises(gb.GrayboxFileError, match=why):
         gb.from_json(json.dumps(doc))
     assert isinstance(gb.from_json(json.dumps(selection_doc)), gb.GrayboxSelection)
+
+
+def test_pe_uncertainty_refuses_a_member_its_constraints_make_meet_the_points_exactly():
+    # pe_uncertainty's default σ_SF is said to be refused when the member meets its static points exactly (its
+    # misfit says nothing of their noise); a member held on 3 noisy points by PassesThrough met them exactly and
+    # got σ_SF = 0 without a word (ν counted the points as free, misfit 0 / 3): the points taken as exact, as only
+    # static_sigma=0 should say.
+    rng = np.random.default_rng(0)
+    st = ["1", "y(k-1)", "n(k-1)", "n(k-1)^2"]
+    n_ = np.repeat(rng.uniform(2500.0, 3500.0, 30), 20)[:500]
+    y = np.zeros(500)
+    for k in range(1, 500):
+        y[k] = 1e5 + 0.5 * y[k - 1] + 20.0 * n_[k - 1] + 1e-3 * (n_[k - 1] - 3000.0) ** 2
+    rec = gb.Record(n_, y + 30.0 * rng.standard_normal(500), 0.1, input_names=("n",))
+    levels = np.array([2600.0, 3000.0, 3400.0])
+    ybar = 2e5 + 40.0 * levels + 20.0 * rng.standard_normal(3)
+    data = gb.Dataset(rec, rec, gb.StaticPoints(levels, ybar, input_names=("n",)))
+    for lam in (1.0, 0.1):
+        front = gb.pe_pareto(st, data, lambdas=[lam], constraints=gb.PassesThrough())
+        with pytest.raises(ValueError, match="meets its 3 static points exactly"):
+            gb.pe_uncertainty(front.member_model(0), data, lambda1=lam, constraints=gb.PassesThrough())
+        given = gb.pe_uncertainty(front.member_model(0), data, lambda1=lam, constraints=gb.PassesThrough(),
+                                  static_sigma=20.0)
+        assert given.static_sigma2 == 400.0

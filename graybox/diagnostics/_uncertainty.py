@@ -703,7 +703,10 @@ def pe_uncertainty(
     if static_sigma is not None:
         ss2 = check_real(static_sigma, "static_sigma (0 for exact points)", low=0) ** 2
     else:
-        ss2 = float(np.sum((sres / g) ** 2)) / _static_misfit_dof(Z, A2, QR, w2 * B, g, d.N + M)
+        misfit = float(np.sum((sres / g) ** 2))
+        # met exactly (to round-off of ȳ), e.g. by constraints through the points: no noise is left to estimate
+        exact = np.sqrt(misfit) <= 1e-10 * float(np.linalg.norm(pts.ybar))
+        ss2 = misfit / _checked_dof(0.0 if exact else _static_misfit_dof(Z, A2, QR, w2 * B, g, d.N + M), M)
     G = np.vstack([w1 * np.sqrt(sigma2) * d.R1, w2 * np.sqrt(ss2) * B])  # M = GᵀG
     cov, F = _to_theta(_sandwich(Z, A2, G, "pe_uncertainty", d.N + M), d.s)
     return ParameterUncertainty(m, cov, level, d.N - (n - r), sigma2, f"PE λ1={lam:.4g}", A, np.zeros((0, 0)), ss2,
@@ -714,7 +717,7 @@ def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.nda
                       rows: int) -> float:
     """Degrees of freedom of a PE member's static misfit: E Σ(s_i/g_i)² = ν σ_SF² for noise of variance σ_SF² in
     the measured ȳ_i, to first order (ν = M at λ1 = 1, where the points do not move θ; towards M − k as the
-    member comes to meet the points with k free static coefficients). ``ValueError`` when ν vanishes.
+    member comes to meet the points with k free static coefficients; :func:`_checked_dof` refuses a vanishing ν).
 
     The misfit s = QRz − ȳ moves with ȳ directly (∂s_i/∂ȳ_i = g_i) and through the estimate
     (dz/dȳ = −Z (ZᵀA2ᵀA2Z)⁻¹ Zᵀ (w2 B)ᵀ): ν = ‖I − diag(1/g) QR Z (ZᵀA2ᵀA2Z)⁻¹ Zᵀ (w2 B)ᵀ‖²_F.
@@ -726,10 +729,15 @@ def _static_misfit_dof(Z: np.ndarray, A2: np.ndarray, QR: np.ndarray, wB: np.nda
     if not (S.size and np.all(np.isfinite(S)) and S[-1] > rank_tolerance(S[0], rows, S.size)):
         return float(M)  # not identifiable: the sandwich that follows refuses it, saying so
     T = np.eye(M) - ((QR @ Z @ Vt.T) / S) @ ((wB @ Z @ Vt.T) / S).T / g[:, None]
-    nu = float(np.sum(T**2))
+    return float(np.sum(T**2))
+
+
+def _checked_dof(nu: float, M: int) -> float:
+    """``nu``, or ``ValueError`` when it vanishes: the member meets its M static points exactly."""
     if not np.isfinite(nu) or nu <= 1e-6 * M:
         raise ValueError(f"pe_uncertainty: the member meets its {M} static points exactly (its static function has as "
-                         "many free coefficients as there are points), so its misfit says nothing of the points' "
+                         "many free coefficients as there are points, or constraints hold it on them), so its misfit "
+                         "says nothing of the points' "
                          "noise: give static_sigma (the standard deviation of the measured ȳ_i; 0 for exact points)")
     return nu
 
