@@ -178,3 +178,18 @@ def test_pe_uncertainty_refuses_a_member_its_constraints_make_meet_the_points_ex
         given = gb.pe_uncertainty(front.member_model(0), data, lambda1=lam, constraints=gb.PassesThrough(),
                                   static_sigma=20.0)
         assert given.static_sigma2 == 400.0
+
+
+def test_inputs_left_with_their_default_names_say_how_to_name_them():
+    # hunt37e's note: a single CSV input column is named "u", so a grid whose terms say speed(k-1) failed every
+    # cell with "uses input 'speed', but the record's inputs are ('u',)" and no word of input_names
+    rec = gb.Record(np.arange(20.0), np.arange(20.0))
+    with pytest.raises(ValueError, match=r"default names: name them, e\.g\. Record\(\.\.\., input_names=\['speed'\]\)"):
+        gb.simulate(["y(k-1)", "speed(k-1)"], [0.5, 1.0], rec)
+    two = gb.Record(np.ones((20, 2)), np.arange(20.0))
+    with pytest.raises(ValueError, match=r"one per column in the columns' order \(the structure uses 'n', 'p'\)"):
+        gb.simulate(["y(k-1)", "p(k-1)", "n(k-1)"], [0.5, 1.0, 1.0], two)
+    named = gb.Record(np.arange(20.0), np.arange(20.0), input_names=("valve",))
+    with pytest.raises(ValueError) as e:  # named inputs: the plain message, no advice to name them
+        gb.simulate(["y(k-1)", "speed(k-1)"], [0.5, 1.0], named)
+    assert "default names" not in str(e.value)

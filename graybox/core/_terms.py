@@ -81,6 +81,7 @@ def require_inputs(used: Iterable[str], names: tuple[str, ...], among: str, pref
     """``ValueError`` unless every input a structure ``used`` is in ``names``; a missing transient input of
     an input that is there says how to add it. ``among`` joins the two in the message (e.g. "which is
     not among the inputs")."""
+    used = tuple(used)
     missing = [n for n in used if n not in names]
     if not missing:
         return
@@ -90,6 +91,13 @@ def require_inputs(used: Iterable[str], names: tuple[str, ...], among: str, pref
         tau = missing[0][len(source) + 4:].replace("p", ".").replace("m", "-")
         hint = (f" (if it is a transient input, add it with graybox.transient_inputs(record, taus=[{tau}], "
                 f"inputs=[{source!r}]))")
+    elif tuple(names) == default_input_names(len(names)):
+        # the data's inputs carry the default names: they were never named (one CSV column is "u")
+        # one input: its name is sure; several: the columns' order is the data's, which only the user knows
+        said = (f"{list(missing)}" if len(names) == 1 else
+                f"[...], one per column in the columns' order (the structure uses {', '.join(map(repr, used))})")
+        hint = (f" (the data's inputs have the default names: name them, e.g. Record(..., input_names={said}), "
+                "load_record_csv(..., input_names=[...]) or input_names = [...] in a grid spec's file entry)")
     raise ValueError(f"{prefix}the structure uses input {missing[0]!r}, {among} {names}{hint}")
 
 
