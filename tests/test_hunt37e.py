@@ -193,3 +193,16 @@ def test_inputs_left_with_their_default_names_say_how_to_name_them():
     with pytest.raises(ValueError) as e:  # named inputs: the plain message, no advice to name them
         gb.simulate(["y(k-1)", "speed(k-1)"], [0.5, 1.0], named)
     assert "default names" not in str(e.value)
+
+
+def test_a_local_model_whose_status_contradicts_its_fields_is_refused():
+    # hunt37e's note: a hand-edited file with status "no equilibrium" but a ȳ, or a status other than reached
+    # with no reason, loaded without a word
+    import dataclasses
+    m = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)"]), [1.0, 0.5])
+    none = gb.local_model(m, 1.0, Ts=0.1)  # an integrator off its balancing input: no equilibrium
+    assert none.status == "no equilibrium" and none.ybar is None
+    with pytest.raises(ValueError, match="status 'no equilibrium' has no ybar"):
+        dataclasses.replace(none, ybar=3.0)
+    with pytest.raises(ValueError, match="needs its reason"):
+        dataclasses.replace(none, reason=" ")

@@ -169,6 +169,11 @@ class LocalModel:
         check_choice(self.status, "status", Reached.STATUS)
         if self.status == "reached" and self.ybar is None:
             raise ValueError("status 'reached' needs the equilibrium ybar")
+        # what a hand-edited file could say and the statuses cannot (hunt37e's note)
+        if self.status == "no equilibrium" and self.ybar is not None:
+            raise ValueError(f"status 'no equilibrium' has no ybar, got {self.ybar}")
+        if self.status != "reached" and not self.reason.strip():
+            raise ValueError(f"status {self.status!r} needs its reason (the status in words, naming ū)")
         object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         object.__setattr__(self, "ubar", frozen(ubar))
         object.__setattr__(self, "a", frozen(a))
