@@ -90,6 +90,10 @@ __all__ = [
 ELS_STATIONARY_RTOL = 1e-2
 
 
+#: How a band (static curve, free run) is taken from a parameter covariance: to first order, or by draws.
+BAND_METHODS = ("delta", "monte-carlo")
+
+
 class UncertaintyWarning(UserWarning):
     """The uncertainty was computed, but at a point where its assumptions are doubtful."""
 
@@ -901,7 +905,7 @@ class StaticCurveBand:
             object.__setattr__(self, f, a)
         # a value read from a hand-edited file is held to what the band can be
         check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
-        check_choice(self.method, "method", ("delta", "monte-carlo"))
+        check_choice(self.method, "method", BAND_METHODS)
         check_int(self.n_samples, "n_samples", low=0)
         if np.any((self.undefined < 0) | (self.undefined > 1)):
             raise ValueError("undefined must hold shares of the draws, in [0, 1]")
@@ -1056,7 +1060,7 @@ def static_curve_band(
     if not isinstance(uncertainty, ParameterUncertainty):
         raise TypeError(f"uncertainty must be a ParameterUncertainty (from ls_uncertainty, cls_uncertainty, "
                         f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
-    check_choice(method, "method", ("delta", "monte-carlo"))
+    check_choice(method, "method", BAND_METHODS)
     n_samples = check_int(n_samples, "n_samples", low=2)  # checked for either method: a bad value is never ignored
     seed = check_seed(seed)
     if uncertainty.model.n_inputs > 1:
