@@ -44,8 +44,8 @@ def _holds(kind: str, hold: object) -> tuple[int, int]:
     return h, h
 
 
-def _prbs(n: int, clock: int, order: int, shift: int) -> np.ndarray:
-    """One maximal-length sequence of 0/1, each bit held ``clock`` samples, started ``shift`` bits in."""
+def _m_sequence(order: int) -> np.ndarray:
+    """One period of the maximal-length sequence of ``order``, 0/1, shape (2^order − 1,)."""
     period = 2**order - 1
     taps = _PRBS_TAPS[order]
     # s(k) = XOR of s(k − t) over the taps, from a start of ones; min(taps) bits at a time, vectorised
@@ -54,10 +54,13 @@ def _prbs(n: int, clock: int, order: int, shift: int) -> np.ndarray:
     for k in range(order, period + order, step):
         j = min(step, period + order - k)
         s[k:k + j] = np.bitwise_xor.reduce([s[k - t:k - t + j] for t in taps])
-    bits = s[:period]
-    bits = np.roll(bits, -shift)
-    reps = -(-n // (period * clock))
-    return np.tile(np.repeat(bits, clock), reps)[:n]
+    return s[:period]
+
+
+def _prbs(bits: np.ndarray, n: int, clock: int, shift: int) -> np.ndarray:
+    """The sequence ``bits`` started ``shift`` bits in, each bit held ``clock`` samples, repeated to ``n`` samples."""
+    reps = -(-n // (bits.size * clock))
+    return np.tile(np.repeat(np.roll(bits, -shift), clock), reps)[:n]
 
 
 def design_input(
@@ -163,8 +166,8 @@ def design_input(
                                  "column; raise order")
         else:  # the shortest register whose period covers the record and gives each input its own shift
             order = next((o for o in _PRBS_TAPS if (2**o - 1) * h0 >= n and 2**o - 1 >= m), max(_PRBS_TAPS))
-        period = 2**order - 1
-        cols = np.column_stack([_prbs(n, h0, order, (i * period) // m) for i in range(m)])
+        bits = _m_sequence(order)  # once: the columns are its shifts
+        cols = np.column_stack([_prbs(bits, n, h0, (i * bits.size) // m) for i in range(m)])
         if len({c.tobytes() for c in cols.T}) < m:  # shifted sequences that agree over the record's few bits
             raise ValueError(f"a record of {-(-n // h0)} PRBS bits (n_samples={n}, hold={h0}) is too short for "
                              f"{m} different input columns: shorten hold or lengthen the record")
