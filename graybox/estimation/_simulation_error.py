@@ -80,7 +80,7 @@ from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..core._terms import Structure
-from ..core._validation import (FrozenMap, warn, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
+from ..core._validation import (FrozenMap, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)

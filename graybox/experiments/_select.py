@@ -91,8 +91,11 @@ def _fit_ls(st: gb.Structure, rec: gb.Record) -> np.ndarray:
 
 
 def _fit_els(st: gb.Structure, rec: gb.Record) -> np.ndarray:
-    m = gb.els(st, rec).model
-    # the process part only: a free run sets the noise terms to zero
+    return _process_theta(gb.els(st, rec).model)
+
+
+def _process_theta(m: gb.Model) -> np.ndarray:
+    """θ of the process terms only: a free run sets the noise terms to zero."""
     return np.array([th for t, th in zip(m.structure, m.theta) if not t.is_noise], float)
 
 
@@ -304,23 +307,23 @@ class GrayboxSelection:
             return gb.ls_uncertainty(self.model, data, level=level)
         if est == "els":
             fit = gb.els(self.structure, data)
-            process = np.array([th for t, th in zip(fit.model.structure, fit.model.theta) if not t.is_noise])
-            if not np.allclose(process, self.model.theta, rtol=1e-8, atol=0):
-                raise ValueError("ELS on these data does not give the chosen model's θ: give the data select_graybox "
-                                 "fitted on (its Dataset, or the record it was given alone)")
+            self._refit_is_chosen(_process_theta(fit.model), "ELS")
             return gb.ls_uncertainty(fit, data, level=level)
         if est == "oe":
             # se_uncertainty's stationarity warning cannot tell other data from output error's own ridge
             # (it may warn on the right data too): the refit can
             with one_blas_thread():  # as the selection's jobs fit it: the same θ to the last bit
-                refit = _fit_oe(self.structure, as_record(data, "ident", "data"))
-            if not np.allclose(refit, self.model.theta, rtol=1e-8, atol=0):
-                raise ValueError("output_error on these data does not give the chosen model's θ: give the data "
-                                 "select_graybox fitted on (its Dataset, or the record it was given alone)")
+                self._refit_is_chosen(_fit_oe(self.structure, as_record(data, "ident", "data")), "output_error")
             return gb.se_uncertainty(self.model, data, lambda1=1.0, level=level)
         if est == "pe":
             return gb.pe_uncertainty(self.decision, data, static, constraints=list(constraints) or None, level=level)
         return gb.se_uncertainty(self.decision, data, static, level=level)
+
+    def _refit_is_chosen(self, theta: np.ndarray, estimator: str) -> None:
+        """``ValueError`` unless a refit on the data given is the chosen θ (those data are what it was fitted on)."""
+        if not np.allclose(theta, self.model.theta, rtol=1e-8, atol=0):
+            raise ValueError(f"{estimator} on these data does not give the chosen model's θ: give the data "
+                             "select_graybox fitted on (its Dataset, or the record it was given alone)")
 
     @property
     def regret(self) -> float:
