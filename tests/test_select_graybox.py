@@ -58,7 +58,8 @@ def test_selects_a_structure_in_the_band_and_reports_everything(data, tmp_path):
 
 
 def test_folds_when_there_is_one_record(data):
-    """One record: each fold refits and scores its held-out segment; the model is refitted on it all."""
+    """One record: each fold refits on the segments around it (two records: no regressor reaches across the
+    cut) and scores its held-out segment; the model is refitted on it all."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data.ident, data.static, band=1e-3, sizes=[5],
@@ -73,7 +74,7 @@ def test_folds_when_there_is_one_record(data):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         for a, b in zip(edges[:-1], edges[1:]):
-            fit = gb.Record(np.r_[data.ident.u[:a], data.ident.u[b:]], np.r_[data.ident.y[:a], data.ident.y[b:]])
+            fit = [data.ident.slice(lo, hi) for lo, hi in ((0, a), (b, n)) if hi > lo]
             th = gb.pe_thetas(st, fit, data.static, lambdas=[lam], solver="closed")[0]
             held = data.ident.slice(a, b)
             e = held.y[3:] - gb.Model(st, th).simulate(held)[3:]  # from the candidates' largest lag on
@@ -474,7 +475,7 @@ def test_a_black_box_selection_without_static_points_round_trips(data, tmp_path)
 def test_wrong_types_are_type_errors_and_one_source_may_be_a_string(data):
     with pytest.raises(TypeError, match="candidates must be a candidate set"):
         gb.select_graybox(["y(k-1)", "u(k-1)"], data, band=1e-3)
-    with pytest.raises(TypeError, match="data must be a Dataset or a Record"):
+    with pytest.raises(TypeError, match="data must be a Dataset, a Record or a list of Records"):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), 3.0, band=1e-3)
     res = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, sizes=[3], sources="frols", estimator="ls")
     assert set(res.table["source"]) == {"frols"}
@@ -642,3 +643,57 @@ def test_regret_and_optimism_are_read_off_the_test_columns(data):
     for name in ("regret", "optimism"):
         with pytest.raises(ValueError, match="without a test record"):
             getattr(bare, name)
+
+
+def test_several_identification_records_are_fitted_together_and_chosen_on_in_turn():
+    """A list of records: the searches and fits take them together, and without a validation record each
+    record is a fold (fitted on the others, scored on it); the model is refitted on them all."""
+    recs = [plant(11, n=500), plant(12, n=400), plant(13, n=600)]
+    res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), recs, sizes=[5], sources="frols", estimator="ls")
+    st = res.structure
+    assert set(TRUE) <= set(st)  # the true terms, found on the three records together
+    sse = count = 0
+    for i, held in enumerate(recs):
+        th = gb.els(st, recs[:i] + recs[i + 1:], noise=0).model.theta
+        e = held.y[3:] - gb.Model(st, th).simulate(held)[3:]  # from the candidates' largest lag on
+        sse, count = sse + e @ e, count + e.size
+    assert res.chosen["JS_valid"] == pytest.approx(sse / count, rel=1e-9)
+    np.testing.assert_allclose(res.model.theta, gb.els(st, recs, noise=0).model.theta, rtol=1e-9)
+    # with a validation record every record is fitted on, and the choice is on the validation record's blocks
+    valid = plant(14, n=600)
+    res2 = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), tuple(recs), validation=valid, sizes=[5],
+                             sources="frols", estimator="ls", test=plant(15, n=600))
+    np.testing.assert_allclose(res2.model.theta, res.model.theta, rtol=1e-9)
+    assert res2.chosen["JS_valid"] == pytest.approx(gb.mse(valid.y, res2.model.simulate(valid), start=3), rel=1e-9)
+    assert res2.chosen["JS_test"] < 3 * 0.02**2  # near the noise level on a record nothing saw
+
+
+def test_one_record_in_a_list_is_the_record(data):
+    kw = dict(sizes=[3, 5], sources="frols", estimator=["ls", "els"], validation=data.valid)
+    a = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data.ident, **kw)
+    b = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), [data.ident], **kw)
+    pd.testing.assert_frame_equal(a.table, b.table)
+
+
+def test_several_records_bad_input(data):
+    cand = gb.Candidates(3, 3, ne=0, degree=2)
+    recs = [plant(21, n=300), plant(22, n=300)]
+    with pytest.raises(ValueError, match="no records given"):
+        gb.select_graybox(cand, [], estimator="ls")
+    with pytest.raises(TypeError, match="a sequence holding a ndarray"):
+        gb.select_graybox(cand, [recs[0], np.zeros(5)], estimator="ls")
+    with pytest.raises(ValueError, match="folds=3, but the 2 identification records are the folds"):
+        gb.select_graybox(cand, recs, estimator="ls", folds=3)
+    with pytest.raises(ValueError, match="the 1st identification and 2nd identification records .* are one record given twice"):
+        gb.select_graybox(cand, [recs[0], recs[0]], estimator="ls")
+    with pytest.raises(ValueError, match=r"the 2nd identification record \('again'\) shares 150 samples with the 1st identification record"):
+        gb.select_graybox(cand, [recs[0], recs[0].slice(100, 250, name="again")], estimator="ls")
+    with pytest.raises(ValueError, match="the identification record 'short' \\(4 samples\\) is shorter than"):
+        gb.select_graybox(cand, [recs[0], recs[1].slice(0, 4, name="short")], estimator="ls")
+    with pytest.raises(ValueError, match="the test record is the 2nd identification record"):
+        gb.select_graybox(cand, recs, estimator="ls", test=recs[1])
+    with pytest.raises(ValueError, match="the validation record is the 1st identification record"):
+        gb.select_graybox(cand, recs, estimator="ls", validation=recs[0])
+    two = gb.Record(np.c_[recs[1].u, recs[1].u], recs[1].y, name="two inputs")
+    with pytest.raises(ValueError, match="input"):
+        gb.select_graybox(cand, [recs[0], two], estimator="ls")

@@ -45,14 +45,14 @@ from .. import _api as gb
 
 from ..io._json import register_type
 from ..estimation._prediction_error import pe_members
-from ..models._coerce import as_record, static_info, static_points
+from ..models._coerce import static_info, static_points
 from ..selection._forward_regression import _RSS_FLOOR
 from ..selection._stopping import FewerTermsError
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar, show_progress
-from ..core._records import (check_compatible, check_overlap, check_same_period, same_record,
+from ..core._records import (as_records, check_compatible, check_overlap, check_same_period, same_record,
                              warn_static_range)
 from ..core._terms import require_inputs
 from ..core._validation import FrozenFrame, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
@@ -86,11 +86,11 @@ SOURCES = ("semp", "frols", "swap", "exact")
 SLOW_ESTIMATORS = ("se-gradient", "se-ga", "oe")
 
 
-def _fit_ls(st: gb.Structure, rec: gb.Record) -> np.ndarray:
+def _fit_ls(st: gb.Structure, rec: gb.Record | list[gb.Record]) -> np.ndarray:
     return np.asarray(gb.els(st, rec, noise=0).model.theta, float)
 
 
-def _fit_els(st: gb.Structure, rec: gb.Record) -> np.ndarray:
+def _fit_els(st: gb.Structure, rec: gb.Record | list[gb.Record]) -> np.ndarray:
     return _process_theta(gb.els(st, rec).model)
 
 
@@ -99,13 +99,13 @@ def _process_theta(m: gb.Model) -> np.ndarray:
     return np.array([th for t, th in zip(m.structure, m.theta) if not t.is_noise], float)
 
 
-def _fit_oe(st: gb.Structure, rec: gb.Record) -> np.ndarray:
+def _fit_oe(st: gb.Structure, rec: gb.Record | list[gb.Record]) -> np.ndarray:
     # no start gave a fit: a ValueError, which _fit_or_fail makes a failed row with its reason
     return np.asarray(gb.output_error(st, rec, progress=False).model.theta, float)
 
 
 #: name -> fit(process structure, identification record) -> θ of the process terms.
-_BLACK_BOX_FITS: dict[str, Callable[[gb.Structure, gb.Record], np.ndarray]] = {"ls": _fit_ls, "els": _fit_els,
+_BLACK_BOX_FITS: dict[str, Callable[[gb.Structure, Any], np.ndarray]] = {"ls": _fit_ls, "els": _fit_els,
                                                                                "oe": _fit_oe}
 
 
@@ -258,7 +258,7 @@ class GrayboxSelection:
 
     def uncertainty(
         self,
-        data: gb.Dataset | gb.Record,
+        data: gb.Dataset | gb.Record | Sequence[gb.Record],
         static: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None = None,
         *,
         constraints: Any = (),
@@ -276,9 +276,9 @@ class GrayboxSelection:
 
         Parameters
         ----------
-        data : Dataset or Record
-            What :func:`select_graybox` was given (a Dataset's identification record, or the record
-            alone): the chosen model was fitted on it.
+        data : Dataset, Record or sequence of Record
+            What :func:`select_graybox` was given (a Dataset's identification record, the record
+            alone, or the identification records): the chosen model was fitted on it.
         static : StaticPoints, StaticCurve or StaticSurface, optional
             The static information the selection was given, if not the Dataset's (gray boxes only).
         constraints : optional
@@ -313,7 +313,8 @@ class GrayboxSelection:
             # se_uncertainty's stationarity warning cannot tell other data from output error's own ridge
             # (it may warn on the right data too): the refit can
             with one_blas_thread():  # as the selection's jobs fit it: the same θ to the last bit
-                self._refit_is_chosen(_fit_oe(self.structure, as_record(data, "ident", "data")), "output_error")
+                self._refit_is_chosen(_fit_oe(self.structure, _fit_data(tuple(as_records(data, name="data")))),
+                                      "output_error")
             return gb.se_uncertainty(self.model, data, lambda1=1.0, level=level)
         if est == "pe":
             return gb.pe_uncertainty(self.decision, data, static, constraints=list(constraints) or None, level=level)
@@ -378,8 +379,8 @@ register_type("GrayboxSelection", GrayboxSelection,
 class _Plan:
     """What every job needs: where to fit, where to choose (blocks), where to report."""
 
-    ident: gb.Record
-    splits: tuple  # ((fit record, choosing record, block edges), ...): one with a validation record, k folds
+    ident: tuple[gb.Record, ...]  # every identification record (the fits take them together)
+    splits: tuple  # ((fit records, choosing record, block edges), ...): one with a validation record, k folds
     test: gb.Record | None
     static: gb.StaticPoints | None
     band: float
@@ -402,7 +403,17 @@ def _block_edges(n: int, L: int, blocks: int) -> np.ndarray:
     return np.linspace(L, n, b + 1).astype(int)
 
 
-def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.Record]]:
+def _folds(records: tuple[gb.Record, ...], k: int | None, min_len: int) -> list[tuple[tuple[gb.Record, ...], gb.Record]]:
+    """(fit records, held-out record) per fold. One record: ``k`` contiguous folds, each fitted on the
+    segments around it, given as separate records (no regressor reaches across the cut). Several
+    records: each record is a fold, fitted on the others (``k``, when given, must be their number)."""
+    if len(records) > 1:
+        if k is not None and k != len(records):
+            raise ValueError(f"folds={k}, but the {len(records)} identification records are the folds (each chosen on, "
+                             "fitted on the others): drop folds, or pass validation=")
+        return [(records[:i] + records[i + 1:], r) for i, r in enumerate(records)]
+    record = records[0]
+    k = FOLDS if k is None else k
     n = len(record)
     edges = np.linspace(0, n, k + 1).astype(int)
     out = []
@@ -414,22 +425,22 @@ def _folds(record: gb.Record, k: int, min_len: int) -> list[tuple[gb.Record, gb.
                              f"largest lag {min_len - 2} (each segment needs {min_len} samples); use fewer folds "
                              "or a validation record")
         valid = record.slice(a, b, name=f"{record.name} fold {i + 1} valid")
-        # the joined identification segments: the max-lag samples after the joint are a short transient
-        ident = gb.Record(np.r_[record.u[:a], record.u[b:]], np.r_[record.y[:a], record.y[b:]], record.Ts,
-                          f"{record.name} fold {i + 1} ident", record.units, record.input_names)
-        out.append((ident, valid))
+        # the segments before and after, as two records (each at least the fold's length, or empty)
+        fit = tuple(record.slice(lo, hi, name=f"{record.name} fold {i + 1} ident") for lo, hi in ((0, a), (b, n))
+                    if hi > lo)
+        out.append((fit, valid))
     return out
 
 
 def _static_points(sp, process: gb.Structure, band: float | None,
-                   record: gb.Record) -> tuple[gb.StaticPoints | None, _Form | None]:
+                   records: tuple[gb.Record, ...]) -> tuple[gb.StaticPoints | None, _Form | None]:
     """Static points for the jobs and the static form the structures must carry (None: black box);
-    ``record``: the identification record (a curve's points are of its one input)."""
+    ``records``: the identification records (a curve's points are of their one input)."""
     if sp is None:
         return None, None
     if isinstance(sp, (gb.StaticCurve, gb.StaticSurface)):
         degree = sp.degree
-        sp = static_points(sp, record, takes_ubar=False)  # sampled over its domain, of the records' input
+        sp = static_points(sp, list(records), takes_ubar=False)  # sampled over its domain, of the records' input
     elif band is None:
         return sp, None  # J_SF reported, no form asked
     else:
@@ -487,19 +498,21 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     process = candidates.process
     extra: dict = {}
     if isinstance(data, gb.Dataset):
-        ident = data.ident
+        idents = (data.ident,)
         valid = validation if validation is not None else data.valid
         extra = dict(data.extra)  # e.g. the curve of an equality with curve="dataset"
-    elif isinstance(data, gb.Record):
-        ident, valid = data, validation
+    elif isinstance(data, (gb.Record, list, tuple)):
+        idents, valid = tuple(as_records(data, name="data")), validation  # checks each, and that they agree
     else:
-        raise TypeError(f"data must be a Dataset or a Record, got {type(data).__name__}")
+        raise TypeError(f"data must be a Dataset, a Record or a list of Records (several identification records), "
+                        f"got {type(data).__name__}")
+    ident = idents[0]  # what the records share (inputs, period) is read off the first
     _moot_split(folds, blocks, valid)
     if band is not None and sp is None:
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
     given = sp
-    sp, form = _static_points(sp, process, band, ident)
+    sp, form = _static_points(sp, process, band, idents)
     if sp is not None:
         try:
             check_compatible(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
@@ -510,6 +523,18 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
                                  "inputs (e.g. gb.transient_inputs(points, taus=...))") from None
             raise
     L = process.max_lag
+    if len(idents) > 1:
+        for rec in idents:
+            if len(rec) <= L + 1:  # each is fitted (and, without a validation record, chosen on) alone
+                raise ValueError(f"the identification record {rec.name!r} ({len(rec)} samples) is shorter than the "
+                                 f"candidates' lags + 2 ({L + 2})")
+        named = _named_idents(idents)
+        for a, (name_a, rec_a) in enumerate(named):
+            for name_b, rec_b in named[a + 1:]:
+                if same_record(rec_a, rec_b):
+                    raise ValueError(f"the {name_a} and {name_b} records ({rec_a.name!r}) are one record given twice")
+                check_overlap(rec_b, rec_a, name_b, name_a, "each record must be other data (its samples would count "
+                              "twice in the fits, and be chosen on while fitted on)")
     for role, rec in (("test", test), ("validation", valid)):
         if rec is None:
             continue
@@ -523,7 +548,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         if len(test) <= L + 1:
             raise ValueError(f"the test record ({len(test)} samples) is shorter than the candidates' lags + 2 "
                              f"({L + 2})")
-        for name, rec in (("identification", ident), ("validation", valid)):
+        for name, rec in [*_named_idents(idents), ("validation", valid)]:
             if rec is not None and same_record(test, rec):
                 raise ValueError(f"the test record is the {name} record: a test must be data nothing was fitted "
                                  "or chosen on")
@@ -533,29 +558,46 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         if len(valid) <= L + 1:  # in the test record's words, whatever its length (a Record's own check says "record")
             raise ValueError(f"the validation record ({len(valid)} samples) is shorter than the candidates' lags + 2 "
                              f"({L + 2})")
-        if same_record(valid, ident):
-            raise ValueError("the validation record is the identification record: choose on other data, or pass "
-                             "the record alone (folds)")
-        check_overlap(valid, ident, "validation", "identification",
-                      "choose on data the fit did not see, or pass the record alone (folds)")
-        splits = ((ident, valid, _block_edges(len(valid), L, BLOCKS if blocks is None else blocks)),)
+        for name, rec in _named_idents(idents):
+            if same_record(valid, rec):
+                raise ValueError(f"the validation record is the {name} record: choose on other data, or pass "
+                                 "the identification data alone (folds)")
+            check_overlap(valid, rec, "validation", name,
+                          "choose on data the fit did not see, or pass the identification data alone (folds)")
+        splits = ((idents, valid, _block_edges(len(valid), L, BLOCKS if blocks is None else blocks)),)
     else:
-        splits = tuple((a, b, np.array([L, len(b)])) for a, b in
-                       _folds(ident, FOLDS if folds is None else folds, L + 2))
+        splits = tuple((a, b, np.array([L, len(b)])) for a, b in _folds(idents, folds, L + 2))
     if sp is not None:
         # said here, once, after the errors: every job's fits silence it (a units mix-up must not go unsaid)
-        warn_static_range(sp.ubar, [ident], "static points" if isinstance(given, gb.StaticPoints) else
+        warn_static_range(sp.ubar, list(idents), "static points" if isinstance(given, gb.StaticPoints) else
                           f"the {type(given).__name__}'s domain")
-    return _Plan(ident, splits, test, sp, np.inf if band is None else band, L, extra), form
+    return _Plan(idents, splits, test, sp, np.inf if band is None else band, L, extra), form
+
+
+def _named_idents(idents: tuple[gb.Record, ...]) -> list[tuple[str, gb.Record]]:
+    """The identification records with the names the errors give them."""
+    if len(idents) == 1:
+        return [("identification", idents[0])]
+    return [(f"{_ordinal(i + 1)} identification", r) for i, r in enumerate(idents)]
+
+
+def _ordinal(k: int) -> str:
+    return f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
 
 
 # -- 2. structures -----------------------------------------------------------------------------
 
-def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, include, form: _Form | None) -> list[dict]:
-    """One dict per distinct structure: name, source(s), size, terms, added static-form terms."""
+def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, sources, include,
+                form: _Form | None) -> list[dict]:
+    """One dict per distinct structure: name, source(s), size, terms, added static-form terms; searched on
+    all the identification records together."""
     process = candidates.process
     n_max = len(process)
-    rows = len(ident) - process.max_lag  # the searches' regression rows: a structure has fewer terms
+    ident = _fit_data(idents)
+    samples = sum(len(r) for r in idents)
+    data, of = (("the identification record", "the identification record's") if len(idents) == 1 else
+                (f"the {len(idents)} identification records", f"the {len(idents)} identification records'"))
+    rows = sum(len(r) - process.max_lag for r in idents)  # the searches' regression rows: a structure has fewer terms
     forced = list(include)
     asked = sizes is not None
     # the default sizes' largest: even sizes from 4 (or fewer, for small spaces or short records) to
@@ -569,7 +611,7 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
         if not sizes:
             raise ValueError("sizes must name at least one size")
         if sizes[-1] >= rows:
-            raise ValueError(f"sizes {[s for s in sizes if s >= rows]} need more than the identification record's "
+            raise ValueError(f"sizes {[s for s in sizes if s >= rows]} need more than {of} "
                              f"{max(rows, 0)} samples after the candidates' largest lag {process.max_lag}")
         n_forced = len(process.positions(forced, "included term"))  # each checked, as the searches check them
         if sizes[-1] < n_forced:
@@ -577,7 +619,7 @@ def _structures(candidates: gb.Structure, ident: gb.Record, sizes, sources, incl
                              "structure holds them")
     else:
         if top < 1:
-            raise ValueError(f"the identification record ({len(ident)} samples) is too short for the candidates' "
+            raise ValueError(f"{data} ({samples} samples) {'is' if len(idents) == 1 else 'are'} too short for the candidates' "
                              f"largest lag {process.max_lag}: no structure can be fitted")
         sizes = sorted(set(range(min(4, top), top + 1, 2)) | {top})
     found: dict[tuple, list[str]] = {}
@@ -677,9 +719,15 @@ def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> np.ndarray | No
 _SE_TOL = 1e-6
 
 
-def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.ndarray]:
-    """(θ rows (P, n), λ1 (P,)); a failed member's row is NaN."""
+def _fit_data(records: tuple[gb.Record, ...]) -> gb.Record | list[gb.Record]:
+    """What the searches and estimators take: the record, or the list of several."""
+    return records[0] if len(records) == 1 else list(records)
+
+
+def _fit(job: _Job, st: gb.Structure, records: tuple[gb.Record, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """(θ rows (P, n), λ1 (P,)) fitted on ``records`` together; a failed member's row is NaN."""
     est, plan = job.estimator, job.plan
+    rec = _fit_data(records)
     if est in _BLACK_BOX_FITS:
         return _BLACK_BOX_FITS[est](st, rec)[None, :], np.array([np.nan])
     lam = _lambdas(est, job.lambdas)
@@ -687,7 +735,8 @@ def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.nd
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
         if est == "pe":
             # only the static points and the data set's extra matter to the constraints
-            cons = cell_constraints(job.constraints, st, gb.Dataset(rec, rec, plan.static, extra=plan.extra))
+            cons = cell_constraints(job.constraints, st, gb.Dataset(records[0], records[0], plan.static,
+                                                                    extra=plan.extra))
             # as pe_pareto and the SE rows: a λ1 whose weights do not identify θ (λ1 = 1 on records with an
             # input held) is one failed member (a NaN row), not the whole row's failure
             th = pe_members(st, rec, plan.static, lambdas=lam, constraints=cons or None,
@@ -701,17 +750,18 @@ def _fit(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.nd
         return th, np.asarray(front.lambdas, float)
 
 
-def _fit_or_fail(job: _Job, st: gb.Structure, rec: gb.Record) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def _fit_or_fail(job: _Job, st: gb.Structure, records: tuple[gb.Record, ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """:func:`_fit`, with a fit these data cannot make (e.g. terms collinear on a fold's two input
     levels) a failed member at every λ and its reason, not an error that ends the whole search:
     as a grid cell's, a row's failure is data."""
     try:
-        th, lam = _fit(job, st, rec)
+        th, lam = _fit(job, st, records)
         return th, lam, []
     except (ValueError, np.linalg.LinAlgError) as exc:
         lam = _lambdas(job.estimator, job.lambdas)
         lam = np.array([np.nan]) if lam is None else lam
-        return np.full((lam.size, len(st)), np.nan), lam, [f"the fit on {rec.name!r} failed: {exc}"]
+        names = ", ".join(repr(r.name) for r in records)
+        return np.full((lam.size, len(st)), np.nan), lam, [f"the fit on {names} failed: {exc}"]
 
 
 def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray) -> np.ndarray:
@@ -888,8 +938,8 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     """The chosen member as a Decision: J_S on the choosing data, J_SF of the refitted member."""
     js_choose = res["blocks"] @ res["weights"]
     if estimator in _BLACK_BOX_FITS:
-        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})", input_names=plan.ident.input_names,
-                         Ts=plan.ident.Ts)
+        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})",
+                         input_names=plan.ident[0].input_names, Ts=plan.ident[0].Ts)
         return gb.Decision(model, 0, float("nan"), float(js_choose[0]), float(res["jsf_full"][0]), "min J_S", True,
                            float(js_choose[0]))
     thetas = res["thetas"]
@@ -897,7 +947,8 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     failures = {int(k): "the fit failed at this λ" for k in np.flatnonzero(~keep)}
     th = np.where(keep[:, None], thetas, 0.0)
     scored = gb.ParetoSet(st, th, res["lambdas"], np.full(len(th), np.nan), js_choose, res["jsf_full"],
-                          f"{estimator}, J_S on the choosing data", {}, failures, plan.ident.input_names, plan.ident.Ts)
+                          f"{estimator}, J_S on the choosing data", {}, failures, plan.ident[0].input_names,
+                          plan.ident[0].Ts)
     name = f"{estimator} ({row.name})"  # as model_of names it, not after the internal front
     if in_band:
         d = gb.decide_dsf(scored, band=plan.band, fallback="min_jsf")
@@ -912,7 +963,7 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
 
 def select_graybox(
     candidates: gb.Structure,
-    data: gb.Dataset | gb.Record,
+    data: gb.Dataset | gb.Record | Sequence[gb.Record],
     static: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None = None,
     *,
     band: float | None = None,
@@ -941,9 +992,13 @@ def select_graybox(
     ----------
     candidates : Structure
         Candidate terms (noise terms are ignored), e.g. ``Candidates(6, 6, degree=2, max_y_power=1)``.
-    data : Dataset or Record
+    data : Dataset, Record or sequence of Record
         A Dataset brings the identification and validation records and the static points; a
-        Record is identification data only (the choice on ``folds`` contiguous folds of it).
+        Record is identification data only (the choice on ``folds`` contiguous folds of it, each
+        fitted on the segments around it); several Records (a list or tuple: experiments of one
+        plant, same inputs and sampling period) are identification data fitted together; without a
+        validation record each is a fold, chosen on while fitted on the others. The structure
+        searches and every fit take the records together (no regressor reaches across two).
     static : StaticPoints, StaticCurve or StaticSurface, optional
         Static information (default: the Dataset's). A curve is sampled at 10 levels over its
         domain, a surface (several inputs) on a grid of 6 levels per input over its domain box
@@ -996,8 +1051,10 @@ def select_graybox(
         default 5; fewer, with a :class:`SelectionWarning`, when the record is too short for
         them). Refused (``ValueError``) without a validation record: the choice is then on folds.
     folds : int, optional
-        Contiguous folds when there is no validation record (>= 2; default 3); each fold is one
-        block. Refused (``ValueError``) with a validation record: the choice is then on its blocks.
+        Contiguous folds of one record when there is no validation record (>= 2; default 3); each
+        fold is one block. Refused (``ValueError``) with a validation record (the choice is then on
+        its blocks), and with several identification records unless it is their number (they are
+        the folds).
     shortlist : int, optional
         Faster, less thorough: with PE, LS or ELS among the estimators, the slow ones (SE and
         output error, seconds per structure) fit only the ``shortlist`` structures those rank best
@@ -1033,7 +1090,8 @@ def select_graybox(
     ------
     ValueError
         Candidates without a term of a cluster the static form needs; records shorter than the
-        lags; a test record that is a fitting or choosing record; a band without static points;
+        lags; a test or validation record that is (or overlaps) a fitting record, or identification
+        records that overlap each other; a band without static points;
         sizes beyond the candidates; no structure meeting the band (without ``fallback``); bad
         arguments.
     """
@@ -1077,7 +1135,7 @@ def select_graybox(
         check_choice(fallback, "fallback", ("min_jsf",))
     check_choice(rule, "rule", RULES)
     plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
-    constraints = _constraint_specs(constraints, len(plan.ident.input_names))
+    constraints = _constraint_specs(constraints, len(plan.ident[0].input_names))
     rows = _structures(candidates, plan.ident, sizes, sources, include, form)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
                             progress=progress)
