@@ -684,16 +684,60 @@ def test_several_records_bad_input(data):
         gb.select_graybox(cand, [recs[0], np.zeros(5)], estimator="ls")
     with pytest.raises(ValueError, match="folds=3, but the 2 identification records are the folds"):
         gb.select_graybox(cand, recs, estimator="ls", folds=3)
-    with pytest.raises(ValueError, match="the 1st identification and 2nd identification records .* are one record given twice"):
+    with pytest.raises(ValueError, match="the 2nd identification record is the 1st identification record: each identification record must be other data"):
         gb.select_graybox(cand, [recs[0], recs[0]], estimator="ls")
     with pytest.raises(ValueError, match=r"the 2nd identification record \('again'\) shares 150 samples with the 1st identification record"):
         gb.select_graybox(cand, [recs[0], recs[0].slice(100, 250, name="again")], estimator="ls")
-    with pytest.raises(ValueError, match="the identification record 'short' \\(4 samples\\) is shorter than"):
+    with pytest.raises(ValueError, match="the 2nd identification record 'short' \\(4 samples\\) is shorter than"):
         gb.select_graybox(cand, [recs[0], recs[1].slice(0, 4, name="short")], estimator="ls")
     with pytest.raises(ValueError, match="the test record is the 2nd identification record"):
         gb.select_graybox(cand, recs, estimator="ls", test=recs[1])
     with pytest.raises(ValueError, match="the validation record is the 1st identification record"):
         gb.select_graybox(cand, recs, estimator="ls", validation=recs[0])
+    with pytest.raises(ValueError, match="the 2nd validation record is the 1st validation record"):
+        gb.select_graybox(cand, recs[0], estimator="ls", validation=[recs[1], recs[1]])
+    with pytest.raises(ValueError, match="the 2nd test record is the validation record: a test must be"):
+        gb.select_graybox(cand, recs[0], estimator="ls", validation=recs[1], test=[plant(23, n=300), recs[1]])
+    with pytest.raises(ValueError, match="the 2nd validation record 'short' \\(4 samples\\) is shorter than"):
+        gb.select_graybox(cand, recs[0], estimator="ls", validation=[recs[1], recs[1].slice(0, 4, name="short")])
+    with pytest.raises(TypeError, match="validation must be a Record or a sequence of Records"):
+        gb.select_graybox(cand, recs[0], estimator="ls", validation=gb.Dataset(recs[0], recs[1]))
     two = gb.Record(np.c_[recs[1].u, recs[1].u], recs[1].y, name="two inputs")
     with pytest.raises(ValueError, match="input"):
         gb.select_graybox(cand, [recs[0], two], estimator="ls")
+
+
+def test_several_validation_and_test_records():
+    """Each validation record is cut into blocks, every block one score; J_S test is over every test sample."""
+    ident, v1, v2 = plant(31, n=800), plant(32, n=300), plant(33, n=450)
+    t1, t2 = plant(34, n=500), plant(35, n=700)
+    cand = gb.Candidates(3, 3, ne=0, degree=2)
+    res = gb.select_graybox(cand, ident, validation=[v1, v2], test=(t1, t2), sizes=[3, 5], sources="frols",
+                            estimator="ls", blocks=3)
+    m = res.model
+    np.testing.assert_allclose(m.theta, gb.els(res.structure, ident, noise=0).model.theta, rtol=1e-9)
+
+    def sse(rec):
+        e = rec.y[3:] - m.simulate(rec)[3:]  # from the candidates' largest lag on
+        return e @ e, e.size
+
+    (a, na), (b, nb) = sse(v1), sse(v2)
+    assert res.chosen["JS_valid"] == pytest.approx((a + b) / (na + nb), rel=1e-9)
+    (a, na), (b, nb) = sse(t1), sse(t2)
+    assert res.chosen["JS_test"] == pytest.approx((a + b) / (na + nb), rel=1e-9)
+    # the rule's scores are six blocks, three of each validation record: a row's vs_best is the mean log ratio of
+    # its block J_S to the best row's over them, and vs_best_se that mean's standard error
+
+    def block_js(model):
+        out = []
+        for rec in (v1, v2):
+            e2 = (rec.y - model.simulate(rec)) ** 2
+            edges = np.linspace(3, len(rec), 4).astype(int)
+            out += [e2[a:b].mean() for a, b in zip(edges[:-1], edges[1:])]
+        return np.array(out)
+
+    best = res.table.index[res.table["vs_best"] == 0][0]
+    for row in res.table.index:
+        r = np.log(block_js(res.model_of(row)) / block_js(res.model_of(best)))
+        assert res.table.loc[row, "vs_best"] == pytest.approx(r.mean(), abs=1e-9)
+        assert res.table.loc[row, "vs_best_se"] == pytest.approx(r.std(ddof=1) / np.sqrt(6), abs=1e-9)

@@ -713,12 +713,13 @@ def _stretch_message(a: Record, b: Record, a_name: str, b_name: str, s: tuple[in
             f"samples {i}..{i + n - 1} are samples {j}..{j + n - 1} of the other")
 
 
-def choosing_records(value: object, name: str = "choose_on") -> list[Record]:
-    """Records to choose on: a Record or a non-empty list or tuple of them (a Dataset is refused: as one
-    record it would stand for its ident, the fitting data). ``TypeError`` for anything else."""
+def choosing_records(value: object, name: str = "choose_on", example: str = "data.valid") -> list[Record]:
+    """Records to choose (or test) on: a Record or a non-empty list or tuple of them (a Dataset is refused:
+    as one record it would stand for its ident, the fitting data). ``TypeError`` for anything else, its
+    message naming ``example`` as one."""
     recs = [value] if isinstance(value, Record) else list(value) if isinstance(value, (list, tuple)) else None
     if recs is None or not all(isinstance(r, Record) for r in recs):
-        raise TypeError(f"{name} must be a Record or a sequence of Records (e.g. data.valid), got {value!r}")
+        raise TypeError(f"{name} must be a Record or a sequence of Records (e.g. {example}), got {value!r}")
     if not recs:
         raise ValueError(f"{name}: at least one choosing record is needed")
     return recs

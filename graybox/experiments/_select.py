@@ -52,7 +52,7 @@ from ..static._form_check import carried_degree, static_degree, static_fit_mse, 
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar, show_progress
-from ..core._records import (as_records, check_compatible, check_overlap, check_same_period, same_record,
+from ..core._records import (as_records, check_compatible, choosing_records, check_overlap, check_same_period, same_record,
                              warn_static_range)
 from ..core._terms import require_inputs
 from ..core._validation import FrozenFrame, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
@@ -380,8 +380,10 @@ class _Plan:
     """What every job needs: where to fit, where to choose (blocks), where to report."""
 
     ident: tuple[gb.Record, ...]  # every identification record (the fits take them together)
-    splits: tuple  # ((fit records, choosing record, block edges), ...): one with a validation record, k folds
-    test: gb.Record | None
+    # ((fit records, choosing record, block edges), ...): k folds, each fitted on its records; or one per
+    # validation record, whose fit records are None: the fit on all the identification records
+    splits: tuple
+    test: tuple[gb.Record, ...] | None
     static: gb.StaticPoints | None
     band: float
     lag: int  # the candidates' largest lag: every row's errors are counted from this sample on
@@ -389,16 +391,17 @@ class _Plan:
 
     @property
     def folds(self) -> bool:
-        return len(self.splits) > 1
+        return any(fit is not None for fit, _, _ in self.splits)
 
 
-def _block_edges(n: int, L: int, blocks: int) -> np.ndarray:
+def _block_edges(n: int, L: int, blocks: int, name: str = "validation") -> np.ndarray:
     """Edges of ``blocks`` contiguous blocks of the error samples L … n − 1 of a free run, fewer
-    (with a warning) when the record is too short for blocks of at least max(2L + 2, 10) samples."""
+    (with a warning) when the record (the ``name`` record) is too short for blocks of at least
+    max(2L + 2, 10) samples."""
     min_len = max(2 * L + 2, 10)
     b = min(blocks, max(1, (n - L) // min_len))
     if b < blocks:
-        warn(f"the validation record's {n - L} error samples make {b} block(s) of at least {min_len} samples, not "
+        warn(f"the {name} record's {n - L} error samples make {b} block(s) of at least {min_len} samples, not "
              f"{blocks}" + ("; with one block the rule is 'min'" if b < 2 else ""), SelectionWarning)
     return np.linspace(L, n, b + 1).astype(int)
 
@@ -479,11 +482,11 @@ class _Form:
 BLOCKS, FOLDS = 5, 3
 
 
-def _moot_split(folds: int | None, blocks: int | None, valid: gb.Record | None) -> None:
+def _moot_split(folds: int | None, blocks: int | None, valid: tuple[gb.Record, ...] | None) -> None:
     """An explicit ``folds`` or ``blocks`` the data make moot: said, not ignored (``ValueError``)."""
     if valid is not None and folds is not None:
         raise ValueError(f"folds={folds} applies when the choice is on folds of one record, but there is a "
-                         f"validation record ({valid.name!r}): the choice is on blocks of it; drop folds "
+                         f"validation record ({valid[0].name!r}): the choice is on blocks of it; drop folds "
                          "(blocks= sets how many), or pass the identification record alone")
     if valid is None and blocks is not None:
         raise ValueError(f"blocks={blocks} cuts a validation record, but there is no validation record: the "
@@ -507,7 +510,10 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         raise TypeError(f"data must be a Dataset, a Record or a list of Records (several identification records), "
                         f"got {type(data).__name__}")
     ident = idents[0]  # what the records share (inputs, period) is read off the first
-    _moot_split(folds, blocks, valid)
+    # (a Dataset is refused: it would stand for its identification record)
+    valids = None if valid is None else tuple(choosing_records(valid, "validation"))
+    tests = None if test is None else tuple(choosing_records(test, "test", "a fresh record of the plant"))
+    _moot_split(folds, blocks, valids)
     if band is not None and sp is None:
         raise ValueError("a band needs static information: pass static= or a Dataset with static points "
                          "(without a band the search picks a black box)")
@@ -523,62 +529,54 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
                                  "inputs (e.g. gb.transient_inputs(points, taus=...))") from None
             raise
     L = process.max_lag
-    if len(idents) > 1:
-        for rec in idents:
-            if len(rec) <= L + 1:  # each is fitted (and, without a validation record, chosen on) alone
-                raise ValueError(f"the identification record {rec.name!r} ({len(rec)} samples) is shorter than the "
-                                 f"candidates' lags + 2 ({L + 2})")
-        named = _named_idents(idents)
-        for a, (name_a, rec_a) in enumerate(named):
-            for name_b, rec_b in named[a + 1:]:
-                if same_record(rec_a, rec_b):
-                    raise ValueError(f"the {name_a} and {name_b} records ({rec_a.name!r}) are one record given twice")
-                check_overlap(rec_b, rec_a, name_b, name_a, "each record must be other data (its samples would count "
-                              "twice in the fits, and be chosen on while fitted on)")
-    for role, rec in (("test", test), ("validation", valid)):
-        if rec is None:
-            continue
-        if not isinstance(rec, gb.Record):
-            raise TypeError(f"{role} must be a Record, got {type(rec).__name__}")
+    named = _named(idents, "identification") + _named(valids, "validation") + _named(tests, "test")
+    for name, rec in named:
         # said now, not after the structure search and the fits
         check_same_period(ident, rec)
         require_inputs(process.inputs, rec.input_names, "but the record's inputs are",
-                       prefix=f"the {role} record {rec.name!r}: ")
-    if test is not None:
-        if len(test) <= L + 1:
-            raise ValueError(f"the test record ({len(test)} samples) is shorter than the candidates' lags + 2 "
-                             f"({L + 2})")
-        for name, rec in [*_named_idents(idents), ("validation", valid)]:
-            if rec is not None and same_record(test, rec):
-                raise ValueError(f"the test record is the {name} record: a test must be data nothing was fitted "
-                                 "or chosen on")
-            if rec is not None:
-                check_overlap(test, rec, "test", name, "a test must be data nothing was fitted or chosen on")
-    if valid is not None:
-        if len(valid) <= L + 1:  # in the test record's words, whatever its length (a Record's own check says "record")
-            raise ValueError(f"the validation record ({len(valid)} samples) is shorter than the candidates' lags + 2 "
-                             f"({L + 2})")
-        for name, rec in _named_idents(idents):
-            if same_record(valid, rec):
-                raise ValueError(f"the validation record is the {name} record: choose on other data, or pass "
-                                 "the identification data alone (folds)")
-            check_overlap(valid, rec, "validation", name,
-                          "choose on data the fit did not see, or pass the identification data alone (folds)")
-        splits = ((idents, valid, _block_edges(len(valid), L, BLOCKS if blocks is None else blocks)),)
+                       prefix=f"the {name} record {rec.name!r}: ")
+        if len(rec) <= L + 1:  # each is fitted, chosen or scored on alone (a Record's own check says "record")
+            raise ValueError(f"the {name} record{f' {rec.name!r}' if name[0].isdigit() else ''} ({len(rec)} samples) "
+                             f"is shorter than the candidates' lags + 2 ({L + 2})")
+    for a, (name_a, rec_a) in enumerate(named):
+        for name_b, rec_b in named[a + 1:]:
+            advice = _OVERLAP_ADVICE[name_b.split()[-1], name_a.split()[-1]]
+            if same_record(rec_b, rec_a):
+                raise ValueError(f"the {name_b} record is the {name_a} record: {advice}")
+            check_overlap(rec_b, rec_a, name_b, name_a, advice)
+    if valids is not None:
+        b = BLOCKS if blocks is None else blocks
+        splits = tuple((None, v, _block_edges(len(v), L, b, name)) for name, v in _named(valids, "validation"))
     else:
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in _folds(idents, folds, L + 2))
     if sp is not None:
         # said here, once, after the errors: every job's fits silence it (a units mix-up must not go unsaid)
         warn_static_range(sp.ubar, list(idents), "static points" if isinstance(given, gb.StaticPoints) else
                           f"the {type(given).__name__}'s domain")
-    return _Plan(idents, splits, test, sp, np.inf if band is None else band, L, extra), form
+    return _Plan(idents, splits, tests, sp, np.inf if band is None else band, L, extra), form
 
 
-def _named_idents(idents: tuple[gb.Record, ...]) -> list[tuple[str, gb.Record]]:
-    """The identification records with the names the errors give them."""
-    if len(idents) == 1:
-        return [("identification", idents[0])]
-    return [(f"{_ordinal(i + 1)} identification", r) for i, r in enumerate(idents)]
+def _named(records: tuple[gb.Record, ...] | None, role: str) -> list[tuple[str, gb.Record]]:
+    """The records of one role with the names the messages give them ("validation", or "2nd validation"
+    when there are several)."""
+    if records is None:
+        return []
+    if len(records) == 1:
+        return [(role, records[0])]
+    return [(f"{_ordinal(i + 1)} {role}", r) for i, r in enumerate(records)]
+
+
+#: (later role, earlier role) -> what to do when their records overlap.
+_OVERLAP_ADVICE = {
+    ("identification", "identification"): "each identification record must be other data (its samples would count "
+                                          "twice in the fits, and be chosen on while fitted on)",
+    ("validation", "identification"): "choose on data the fit did not see, or pass the identification data alone "
+                                      "(folds)",
+    ("validation", "validation"): "each validation record must be other data (its samples would count twice in "
+                                  "the choice)",
+    **{("test", role): "a test must be data nothing was fitted or chosen on"
+       for role in ("identification", "validation", "test")},
+}
 
 
 def _ordinal(k: int) -> str:
@@ -814,7 +812,7 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     Returns ``blocks`` (P, B): J_S per block of the choosing data (with folds: one block per fold,
     members matched by λ) and ``weights`` (B,): the blocks' shares of its samples (``blocks @
     weights`` is J_S on all the choosing samples); ``jsf`` (P,): the worst J_SF over the fits; ``thetas`` (P, n) and
-    ``lambdas`` of the fit on all the identification data; ``test`` (P,): their J_S on the test record.
+    ``lambdas`` of the fit on all the identification data; ``test`` (P,): their J_S over the test records.
     """
     st = gb.parse_structure(job.terms)
     plan = job.plan
@@ -826,28 +824,32 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     # one BLAS thread: the fits make thousands of small BLAS calls (see core._least_squares.one_blas_thread)
     with warnings.catch_warnings(record=True) as caught, one_blas_thread():
         _apply_filters(job.filters)
-        failed = []
-        for rec, choose, edges in plan.splits:
-            th, lam, why = _fit_or_fail(job, st, rec)
-            failed += why
-            if not plan.folds:
-                full = (th, lam)
+        failed: list[str] = []
+
+        def fit(records):
+            th, lam, why = _fit_or_fail(job, st, records)
+            failed.extend(why)
+            jsf.append(_jsf(st, th, plan.static))
+            return th, lam
+
+        for records, choose, edges in plan.splits:
+            if records is None:  # every validation record scores the fit on all the identification records, made once
+                full = full or fit(plan.ident)
+                th = full[0]
+            else:  # a fold: its own fit
+                th = fit(records)[0]
             blocks.append(_block_mse(st, th, choose, edges))
             weights.append(np.diff(edges))
-            jsf.append(_jsf(st, th, plan.static))
-        if full is None:
-            th, lam, why = _fit_or_fail(job, st, plan.ident)
-            failed += why
-            full = (th, lam)
-            jsf.append(_jsf(st, full[0], plan.static))
+        full = full or fit(plan.ident)  # (last: jsf[-1] is its J_SF)
         w = np.concatenate(weights).astype(float)
         out = {"blocks": np.concatenate(blocks, axis=1), "weights": w / w.sum(), "jsf": np.max(np.stack(jsf), axis=0),
                "jsf_full": jsf[-1], "thetas": full[0], "lambdas": full[1], "failed": failed}
         # a member the refit on all the identification data failed has no model to give: it cannot be chosen
         out["blocks"][~np.all(np.isfinite(full[0]), axis=1)] = np.inf
-        if plan.test is not None:
-            edges = np.array([plan.lag, len(plan.test)])
-            out["test"] = _block_mse(st, full[0], plan.test, edges)[:, 0]
+        if plan.test is not None:  # J_S over every test sample (each record's from the candidates' largest lag on)
+            n = np.array([len(r) - plan.lag for r in plan.test], float)
+            mse = np.stack([_block_mse(st, full[0], r, np.array([plan.lag, len(r)]))[:, 0] for r in plan.test], axis=1)
+            out["test"] = mse @ (n / n.sum())
     out["warnings"] = warning_texts(caught)
     return out
 
@@ -1037,17 +1039,18 @@ def select_graybox(
         estimator with them is an error.
     lambdas : sequence of float, optional
         λ1 of each front (default: PE 40 in logspace(-6, 0); SE 8 in logspace(-2, 0)).
-    validation : Record, optional
-        The choosing record (default: the Dataset's validation record).
-    test : Record, optional
-        A record nothing is fitted or chosen on: the table gets ``JS_test`` and ``JSF_test``
-        columns. The choice is the same with and without it.
+    validation : Record or sequence of Record, optional
+        The choosing record (default: the Dataset's validation record), or several: each is cut
+        into ``blocks`` blocks, every block of every record one score of the rule.
+    test : Record or sequence of Record, optional
+        Records nothing is fitted or chosen on: the table gets ``JS_test`` (J_S over all their
+        samples) and ``JSF_test`` columns. The choice is the same with and without them.
     rule : {"one-se", "min"}
         How the row is chosen from the scores on the choosing data: ``"one-se"`` (default) the
         fewest parameters among the rows within one standard error of the best (per-block log
         ratio of J_S), ``"min"`` the smallest J_S.
     blocks : int, optional
-        Contiguous blocks the validation record is cut into for the standard errors (>= 2;
+        Contiguous blocks each validation record is cut into for the standard errors (>= 2;
         default 5; fewer, with a :class:`SelectionWarning`, when the record is too short for
         them). Refused (``ValueError``) without a validation record: the choice is then on folds.
     folds : int, optional
