@@ -104,9 +104,9 @@ def _fit_oe(st: gb.Structure, rec: gb.Record | list[gb.Record]) -> np.ndarray:
     return np.asarray(gb.output_error(st, rec, progress=False).model.theta, float)
 
 
-#: name -> fit(process structure, identification record) -> θ of the process terms.
+#: name -> fit(process structure, identification record or records) -> θ of the process terms.
 _BLACK_BOX_FITS: dict[str, Callable[[gb.Structure, Any], np.ndarray]] = {"ls": _fit_ls, "els": _fit_els,
-                                                                               "oe": _fit_oe}
+                                                                          "oe": _fit_oe}
 
 
 @dataclass(frozen=True, eq=False)
