@@ -44,16 +44,21 @@ def ways(data: gb.Dataset) -> dict[str, tuple]:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--cases", default="", help="comma-separated case names (default: all)")
+    ap.add_argument("--ways", default="", help="comma-separated ways (default: all; 'one record' alone runs on a "
+                    "graybox without several records, e.g. PYTHONPATH=<older checkout>, to compare its folds)")
     args = ap.parse_args()
     names = [c for c in args.cases.split(",") if c]
+    chosen_ways = [w for w in args.ways.split(",") if w]
     print(f"# bench_several_records ({datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
-          f"git {git_rev()}): {machine()}", flush=True)
+          f"git {git_rev()}, graybox from {Path(gb.__file__).parent}): {machine()}", flush=True)
     warnings.simplefilter("ignore")
     rows = []
     for name, (data, test, cand, band) in cases().items():
         if names and name not in names:
             continue
         for way, (arg, valid) in ways(data).items():
+            if chosen_ways and way not in chosen_ways:
+                continue
             t0 = time.perf_counter()
             kw = dict(test=test, executor="processes", workers=2)
             g = gb.select_graybox(cand, arg, data.static, band=band, **kw)
