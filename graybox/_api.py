@@ -15,9 +15,10 @@ from ._lazy import attach
 
 __version__ = graybox_version()
 
-# the simulators' names stay in graybox.datasets; only its loaders and the input design come up
+# the simulators' names stay in graybox.datasets; only its loaders, the input design and decimation come up
+_DATASET_NAMES = ("design_input", "decimate", "decimation_advice", "DecimationAdvice")
 __getattr__, __dir__, __all__ = attach(
     __name__, {pkg: [n for n in importlib.import_module(f"graybox.{pkg}").__all__
-                     if pkg != "datasets" or n.startswith("load_") or n == "design_input"]
+                     if pkg != "datasets" or n.startswith("load_") or n in _DATASET_NAMES]
                for pkg in PUBLIC_SUBPACKAGES},
     base="graybox", modules=("datasets", "reference"))  # gb.datasets, gb.reference: modules themselves

@@ -283,6 +283,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "plot_static_band": ((gb.static_curve_band(gb.ls_uncertainty(LS, REC), [0.5, 1.0]),), {}),
     "simulation_band": ((gb.ls_uncertainty(LS, REC), REC), {"n_samples": 20}),
     "design_input": (("aprbs", 50), {"low": 0.0, "high": 1.0, "hold": (2, 5)}),
+    "decimate": ((REC, 2), {}),
     "plot_simulation_band": ((gb.simulation_band(gb.ls_uncertainty(LS, REC), REC),), {}),
     "plot_residual_tests": ((gb.residual_tests(LS, REC),), {}),
     "DecisionRule": ((), {}),
@@ -370,6 +371,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "OEResult": ((), _fields_of(_made(gb.output_error, ST, REC, n_starts=1, max_nfev=3))),
     "SEMPResult": ((), _fields_of(_made(gb.semp, gb.Candidates(1, 1, degree=2), REC, n_terms=2))),
     "SurfaceClusterMap": ((), _fields_of(gb.surface_cluster_map(ST2))),
+    "DecimationAdvice": ((), _fields_of(gb.decimation_advice(gb.Record(np.zeros(4000), np.sin(np.arange(4000) / 30))))),
     "Cell": ((), _fields_of(GRID.cells()[0])),
     "GridStatus": ((), {f.name: Lazy("status", f.name) for f in dataclasses.fields(gx.GridStatus)}),
     "Structure": ((["y(k-1)", "u(k-1)", "1"],), {}),
@@ -379,7 +381,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
 RESULTS = {"ELSResult", "ParameterUncertainty", "StaticCurveBand", "SimulationBand", "Selection", "ParetoSet", "Decision",
            "DecisionBootstrap", "GridRun", "LocalModel", "OperatingCurve", "CLSResult", "ResidualTests",
            "CorrelationTest", "DSFResult", "Equilibrium", "GrayboxSelection", "NeuralFit", "OEResult", "SEMPResult",
-           "SurfaceClusterMap", "Cell", "GridStatus"}
+           "SurfaceClusterMap", "Cell", "GridStatus", "DecimationAdvice"}
 
 # Public callables with options that this test does not call, and why.
 NOT_EXERCISED: dict[str, str] = {}
@@ -395,6 +397,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
                                         "static_surface", "static_surface_gain")},
     ("Candidates", "constant"): (True,),
     ("semp", "prune"): (True,),
+    ("decimate", "antialias"): (True,),
     ("ParetoSet.to_frame", "params"): (True,),
     ("plot_pareto", "log"): (True,),
     ("evaluate_thetas", "one_step"): (True,),

@@ -5,6 +5,8 @@
 - :func:`load_buck` — real buck-converter measurements (bundled, MIT licence notice beside them);
 - :func:`load_record_csv`, :func:`load_static_csv` — users' own files, columns chosen by name;
 - :func:`design_input` — the input of an identification experiment (APRBS, staircase, PRBS, multisine);
+- :func:`decimation_advice`, :func:`decimate` — how far an oversampled record may be decimated for a NARX
+  model (Billings & Aguirre's rule), and decimation with an anti-alias filter on the output;
 - :mod:`graybox.datasets.pumping` — the plant simulator and the generator of the bundled files
   (``python -m graybox.datasets.pumping`` rewrites them);
 - :class:`TwoSpeedPumpingPlant` — the same rig with its two pump sets at independent speeds, a
@@ -20,6 +22,7 @@ _PUMPING_MISO_NAMES = ("TwoSpeedPumpingPlant", "TwoSpeedRun", "two_speed_referen
 # module twice (runpy warns), and `import graybox` stays light.
 __getattr__, __dir__, __all__ = attach(__name__, {
     "_inputs": ("design_input",),
+    "_decimation": ("DecimationAdvice", "decimate", "decimation_advice"),
     "_loaders": ("BUCK_STATIC_CURVE", "find_buck_dir", "load_buck", "load_pumping", "load_record_csv",
                  "load_static_csv", "pumping_data_dir"),
     "_miso_loader": ("load_pumping_miso", "pumping_miso_data_dir"),

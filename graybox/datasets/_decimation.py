@@ -1,0 +1,243 @@
+"""The sampling period of a polynomial NARX model: how far an oversampled record may be decimated, and decimation.
+
+A record sampled much faster than its dynamics makes a poor NARX record: consecutive samples nearly
+agree, y(k−1) and y(k−2) are nearly collinear, the model's poles crowd onto 1 and its terms' lags
+must reach far back. Billings & Aguirre (1995, "Effects of the sampling time on the dynamics and
+identification of nonlinear models", Int. J. Bifurcation and Chaos 5(6):1541–1556) give a rule read
+off the output alone: with τ_y and τ_y² the first minima of the autocorrelations of y − mean(y) and
+of y² − mean(y²) (the second sees the nonlinear part), and τ_m = min(τ_y, τ_y²), choose the sampling
+period so that 10 ≤ τ_m ≤ 20 in the new samples: decimate by a factor q in [τ_m / 20, τ_m / 10].
+Where an autocorrelation decays without a minimum beyond its noise (an output driven by a staircase
+of random levels), the lag at which it dies out (can no longer be told from zero) stands in for the
+minimum (see :func:`_first_minimum`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Sequence
+
+import numpy as np
+
+from ..core._records import Dataset, Record, as_records
+from ..core._validation import check_bool, check_fields, check_int
+
+__all__ = ["DecimationAdvice", "decimation_advice", "decimate"]
+
+#: The rule's span of τ_m in the decimated record's samples.
+TAU_SAMPLES = (10, 20)
+#: Half-length of the anti-alias filter in decimated samples (scipy.signal.decimate's FIR: 20q + 1 taps).
+_HALF_TAPS = 10
+
+
+@dataclass(frozen=True)
+class DecimationAdvice:
+    """How far a record may be decimated (:func:`decimation_advice`).
+
+    Attributes
+    ----------
+    q : int or None
+        The suggested factor: τ_m / 15 rounded, at least 1 (1: the record is not oversampled). None
+        when no autocorrelation minimum was found (``reason`` says why): there is nothing to advise.
+    q_range : tuple of int or None
+        The factors the rule allows, (max(1, ⌈τ_m / 20⌉), max(1, ⌊τ_m / 10⌋)).
+    tau_y, tau_y2 : int or None
+        First minima of the autocorrelations of y − mean(y) and of y² − mean(y²) below their 95 %
+        band, or where there is none the lag at which each dies out (enters the band to stay:
+        can no longer be told from zero), in samples of the record (the smallest over several records); None where there
+        is neither within a quarter of the record.
+    tau_m : int or None
+        min(tau_y, tau_y2).
+    Ts : float
+        The record's sampling period (s).
+    reason : str
+        Empty when ``q`` is given; otherwise why not.
+    """
+
+    q: int | None
+    q_range: tuple | None
+    tau_y: int | None
+    tau_y2: int | None
+    tau_m: int | None
+    Ts: float
+    reason: str = ""
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        if self.q_range is not None:
+            object.__setattr__(self, "q_range", tuple(self.q_range))  # a JSON list comes back a tuple
+        taus = [t for t in (self.tau_y, self.tau_y2) if t is not None]
+        if any(t < 1 for t in taus) or self.tau_m != (min(taus) if taus else None):
+            raise ValueError(f"DecimationAdvice: tau_m must be the smaller of tau_y and tau_y2 (lags >= 1), got "
+                             f"tau_m={self.tau_m}, tau_y={self.tau_y}, tau_y2={self.tau_y2}")
+        if not (self.Ts > 0 and np.isfinite(self.Ts)):
+            raise ValueError(f"DecimationAdvice: Ts must be a finite period > 0 (s), got {self.Ts!r}")
+        if self.q is None:
+            if self.q_range is not None or not self.reason:
+                raise ValueError("DecimationAdvice: without a q there is no q_range, and the reason says why")
+            return
+        if (self.reason or self.q_range is None or len(self.q_range) != 2
+                or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in self.q_range)
+                or not 1 <= self.q_range[0] <= self.q <= self.q_range[1]):
+            raise ValueError(f"DecimationAdvice: q={self.q} must lie in q_range, a pair 1 <= low <= high, got "
+                             f"{self.q_range!r}, and a q needs no reason")
+
+    @property
+    def Ts_new(self) -> float | None:
+        """The sampling period after decimating by ``q`` (s); None without a ``q``."""
+        return None if self.q is None else self.q * self.Ts
+
+    def __repr__(self) -> str:
+        if self.q is None:
+            return f"DecimationAdvice(q=None: {self.reason})"
+        return (f"DecimationAdvice(q={self.q} (allowed {self.q_range[0]}..{self.q_range[1]}), Ts {self.Ts:g} s -> "
+                f"{self.Ts_new:g} s; tau_y={self.tau_y}, tau_y2={self.tau_y2} samples)")
+
+
+def _first_minimum(x: np.ndarray) -> int | None:
+    """The lag τ ≥ 1 the rule reads off the sample autocorrelation r of ``x`` (centred), searched up to a
+    quarter of the record: its first local minimum below the autocorrelation's 95 % band (Bartlett's,
+    ±2·√((1 + 2 Σ_{v<τ} r(v)²) / N)) before r has died out; where it has none, the lag at which r dies
+    out (enters the band, and below 1/e, to stay there up to twice that lag, within the quarter); None
+    when neither comes (a drift, or a record too short for its slowest motion, whose band widens over
+    r itself).
+
+    A signal that oscillates (a sine: r = cos) turns deeply below the band: its first minimum is the
+    rule's. One whose autocorrelation decays to zero without turning (an output driven by a staircase
+    of random levels, a first-order plant driven by noise) has only the wiggles of the estimate
+    beyond, at any lag (they are slow in τ, and some cross the band): the decay's end is then its time
+    scale. A crossing of the band on the way down (a sine's zero) does not end it."""
+    x = x - x.mean()
+    n = x.size
+    top = n // 4
+    if top < 3 or not np.any(x):
+        return None
+    f = np.fft.rfft(x, 2 * n)  # zero-padded: the linear (not circular) correlation
+    r = np.fft.irfft(f * np.conj(f))[:top + 1]
+    r = r / r[0]
+    lags = np.arange(1, top)
+    band = 2.0 * np.sqrt((1.0 + 2.0 * np.concatenate([[0.0], np.cumsum(r[1:-2] ** 2)])) / n)  # at lags 1 … top − 1
+    inner = r[1:-1]
+    outside = lags[np.abs(inner) > band]
+    # the next lag outside the band from each lag on (top: none)
+    nxt = np.append(outside, top)[np.searchsorted(outside, lags)]
+    # inside the band (and below 1/e: a record short for a slow motion widens the band over r itself), to stay up
+    # to twice the lag, within the quarter searched
+    died = lags[(np.abs(inner) <= np.minimum(band, np.exp(-1.0))) & (nxt > 2 * lags) & (2 * lags < top)]
+    end = int(died[0]) if died.size else None
+    # r[τ] ≤ r[τ − 1] and r[τ] < r[τ + 1], below the band, before r died out
+    turns = lags[(inner <= r[:-2]) & (inner < r[2:]) & (inner < -band)]
+    if turns.size and (end is None or turns[0] < end):
+        return int(turns[0])
+    return end
+
+
+def decimation_advice(data: Record | Dataset | Sequence[Record]) -> DecimationAdvice:
+    """How far a record may be decimated for a polynomial NARX model (Billings & Aguirre's rule).
+
+    Parameters
+    ----------
+    data : Record, Dataset or sequence of Record
+        The records (a Dataset: its identification record). Only their outputs are read.
+
+    Returns
+    -------
+    DecimationAdvice
+        The factor q to pass to :func:`decimate` (1 when the record is not oversampled; None, with
+        the reason, when no minimum was found), the range the rule allows, and the minima it read.
+
+    Raises
+    ------
+    TypeError
+        ``data`` is not records.
+    ValueError
+        An output that does not move.
+    """
+    recs = as_records(data, name="data")
+    taus = []
+    for rec in recs:
+        y = rec.y
+        if np.ptp(y) == 0:
+            raise ValueError(f"record {rec.name!r}: the output does not move, so it says nothing of the sampling "
+                             "period")
+        taus.append((_first_minimum(y), _first_minimum(y * y)))
+    tau_y = min((t for t, _ in taus if t is not None), default=None)
+    tau_y2 = min((t for _, t in taus if t is not None), default=None)
+    found = [t for t in (tau_y, tau_y2) if t is not None]
+    Ts = recs[0].Ts
+    if not found:
+        return DecimationAdvice(None, None, None, None, None, Ts,
+                                "no autocorrelation minimum, and no decay to zero, within a quarter of the record: its "
+                                "slowest motion does not turn within it (a drift, or a record too short for its "
+                                "dynamics)")
+    tau_m = min(found)
+    lo, hi = TAU_SAMPLES
+    q_range = (max(1, math.ceil(tau_m / hi)), max(1, math.floor(tau_m / lo)))
+    q = min(max(q_range[0], round(tau_m / ((lo + hi) / 2))), q_range[1])
+    return DecimationAdvice(q, q_range, tau_y, tau_y2, tau_m, Ts)
+
+
+def decimate(data: Record | Dataset | Sequence[Record], q: int, *, antialias: bool = True
+             ) -> Record | Dataset | list[Record]:
+    """Keep every ``q``-th sample of a record, its output low-passed first.
+
+    Parameters
+    ----------
+    data : Record, Dataset or sequence of Record
+        What to decimate (a Dataset: both records; its static points are kept as they are).
+    q : int
+        The factor (>= 1), e.g. :func:`decimation_advice`'s ``q``. The sampling period becomes ``q * Ts``.
+    antialias : bool
+        Low-pass the output before keeping every q-th sample (default): a linear-phase FIR filter
+        (Hamming window, 20q + 1 taps, cutoff at the new Nyquist frequency, unit gain at zero
+        frequency) applied forwards without delay, the record's ends extended by odd reflection so
+        that a level or a ramp passes unchanged (an offset or a unit never changes the result but
+        by the same offset and scale). Noise above the new Nyquist frequency would otherwise fold
+        into the band the model fits. The inputs are never filtered, only subsampled: they are what
+        was applied, and a filtered input is one the plant never saw.
+
+    Returns
+    -------
+    Record, Dataset or list of Record
+        The same kind as ``data``: samples 0, q, 2q, … of each record, named "<name> / q".
+
+    Raises
+    ------
+    TypeError
+        ``data`` is not records; ``q`` not an int.
+    ValueError
+        ``q`` < 1; a record too short for the filter (more than 20q + 1 samples needed with
+        ``antialias``) or for two samples after decimation.
+    """
+    q = check_int(q, "q", low=1)
+    antialias = check_bool(antialias, "antialias")
+    if isinstance(data, Dataset):
+        ident, valid = (_decimate(r, q, antialias) for r in (data.ident, data.valid))
+        return replace(data, ident=ident, valid=valid,
+                       description=(data.description + f" (decimated by {q})").strip())
+    recs = as_records(data, name="data")
+    out = [_decimate(r, q, antialias) for r in recs]
+    return out[0] if isinstance(data, Record) else out
+
+
+def _decimate(rec: Record, q: int, antialias: bool) -> Record:
+    n = len(rec)
+    if q == 1:
+        return rec
+    if n < 2 * q:
+        raise ValueError(f"record {rec.name!r}: {n} samples make fewer than 2 after decimating by {q}")
+    y = rec.y
+    if antialias:
+        half = _HALF_TAPS * q
+        if n <= half + 1:
+            raise ValueError(f"record {rec.name!r}: {n} samples are too few for the anti-alias filter of decimation by "
+                             f"{q} (more than {half + 1} needed); decimate with antialias=False, or by less")
+        from scipy.signal import firwin  # scipy.signal is slow to import: only when a record is filtered
+
+        taps = firwin(2 * half + 1, 1.0 / q)
+        # odd reflection about each end: a level and a ramp continue as they are, so the filter leaves them be
+        ext = np.concatenate([2 * y[0] - y[half:0:-1], y, 2 * y[-1] - y[-2:-half - 2:-1]])
+        y = np.convolve(ext, taps, mode="valid")
+    u = rec.u[::q]
+    return Record(u, y[::q], rec.Ts * q, f"{rec.name} / {q}", rec.units, rec.input_names)
