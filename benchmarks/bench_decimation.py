@@ -7,7 +7,9 @@ Cases (identification, validation and test records of one plant; the test record
 - ``synthetic``: a first-order nonlinear plant in continuous time, T dy/dt = −(y + 0.2 y³) + u + 0.5 u²,
   T = 1 s, integrated by RK4 at 100 Hz under APRBS inputs (levels in [0, 2] held 0.5–3 s), white
   measurement noise σ = 0.02 on y; identification 60 000 samples, validation and test 20 000 (other
-  seeds). The test is scored against its noise-free output.
+  seeds). The test is scored against its noise-free output. Variants: the input's levels changing
+  only at multiples of 36 samples (held over every decimation window of the factors tried), and
+  with noise σ = 0.2 as well.
 - ``plant``: the bundled pumping plant (20 Hz), its identification and validation records; the test a
   fresh run of its simulator (seed + 1), scored against its true pressure (no transmitter noise).
 
@@ -40,10 +42,13 @@ def _plant_rhs(y, u):
     return -(y + 0.2 * y**3) + u + 0.5 * u**2
 
 
-def synthetic_record(n: int, seed: int, name: str) -> tuple[gb.Record, np.ndarray]:
-    """(noisy record, noise-free output) of the synthetic plant at 100 Hz."""
+def synthetic_record(n: int, seed: int, name: str, align: int = 1, noise: float = 0.02) -> tuple[gb.Record, np.ndarray]:
+    """(noisy record, noise-free output) of the synthetic plant at 100 Hz; the input's levels change only
+    at multiples of ``align`` samples (held over every decimation window of a factor dividing it)."""
     dt, T = 0.01, 1.0
-    u = gb.design_input("aprbs", n, low=0.0, high=2.0, hold=(50, 300), seed=seed)
+    m = -(-n // align)
+    u = np.repeat(gb.design_input("aprbs", m, low=0.0, high=2.0, hold=(max(1, 50 // align), 300 // align),
+                                  seed=seed), align)[:n]
     y = np.zeros(n)
     for k in range(n - 1):  # RK4 with u held over the step
         a = _plant_rhs(y[k], u[k]) / T
@@ -51,16 +56,18 @@ def synthetic_record(n: int, seed: int, name: str) -> tuple[gb.Record, np.ndarra
         c = _plant_rhs(y[k] + 0.5 * dt * b, u[k]) / T
         d = _plant_rhs(y[k] + dt * c, u[k]) / T
         y[k + 1] = y[k] + dt / 6 * (a + 2 * b + 2 * c + d)
-    noisy = y + 0.02 * np.random.default_rng([seed, 9]).standard_normal(n)
+    noisy = y + noise * np.random.default_rng([seed, 9]).standard_normal(n)
     return gb.Record(u, noisy, Ts=dt, name=name), y
 
 
 def cases() -> dict:
     out = {}
-    ident, _ = synthetic_record(60000, 1, "synthetic ident")
-    valid, _ = synthetic_record(20000, 2, "synthetic valid")
-    test, truth = synthetic_record(20000, 3, "synthetic test")
-    out["synthetic"] = (ident, valid, test, truth, gb.Candidates(2, 2, degree=3))
+    for name, align, noise in (("synthetic", 1, 0.02), ("synthetic, levels held 36 samples", 36, 0.02),
+                               ("synthetic, levels held 36 samples, noise 0.2", 36, 0.2)):
+        ident, _ = synthetic_record(60000, 1, "synthetic ident", align, noise)
+        valid, _ = synthetic_record(20000, 2, "synthetic valid", align, noise)
+        test, truth = synthetic_record(20000, 3, "synthetic test", align, noise)
+        out[name] = (ident, valid, test, truth, gb.Candidates(2, 2, degree=3))
     from graybox.datasets import pumping
 
     data = gb.load_pumping()
