@@ -7,9 +7,9 @@ Cases (identification, validation and test records of one plant; the test record
 - ``synthetic``: a first-order nonlinear plant in continuous time, T dy/dt = −(y + 0.2 y³) + u + 0.5 u²,
   T = 1 s, integrated by RK4 at 100 Hz under APRBS inputs (levels in [0, 2] held 0.5–3 s), white
   measurement noise σ = 0.02 on y; identification 60 000 samples, validation and test 20 000 (other
-  seeds). The test is scored against its noise-free output. Variants: the input's levels changing
+  seeds). The test is scored against its noise-free output. Variants: ``synthetic held 36``, the input's levels changing
   only at multiples of 36 samples (held over every decimation window of the factors tried), and
-  with noise σ = 0.2 as well.
+  ``synthetic held 36 noisy``, with noise σ = 0.2 as well.
 - ``plant``: the bundled pumping plant (20 Hz), its identification and validation records; the test a
   fresh run of its simulator (seed + 1), scored against its true pressure (no transmitter noise).
 
@@ -62,8 +62,8 @@ def synthetic_record(n: int, seed: int, name: str, align: int = 1, noise: float 
 
 def cases() -> dict:
     out = {}
-    for name, align, noise in (("synthetic", 1, 0.02), ("synthetic, levels held 36 samples", 36, 0.02),
-                               ("synthetic, levels held 36 samples, noise 0.2", 36, 0.2)):
+    for name, align, noise in (("synthetic", 1, 0.02), ("synthetic held 36", 36, 0.02),
+                               ("synthetic held 36 noisy", 36, 0.2)):
         ident, _ = synthetic_record(60000, 1, "synthetic ident", align, noise)
         valid, _ = synthetic_record(20000, 2, "synthetic valid", align, noise)
         test, truth = synthetic_record(20000, 3, "synthetic test", align, noise)
