@@ -52,8 +52,8 @@ from ..static._form_check import carried_degree, static_degree, static_fit_mse, 
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar, show_progress
-from ..core._records import (as_records, check_compatible, choosing_records, check_overlap, check_same_period, same_record,
-                             warn_static_range)
+from ..core._records import (as_records, check_compatible, choosing_records, check_overlap, check_same_period,
+                             same_record, warn_static_range)
 from ..core._terms import require_inputs
 from ..core._validation import FrozenFrame, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
@@ -406,7 +406,8 @@ def _block_edges(n: int, L: int, blocks: int, name: str = "validation") -> np.nd
     return np.linspace(L, n, b + 1).astype(int)
 
 
-def _folds(records: tuple[gb.Record, ...], k: int | None, min_len: int) -> list[tuple[tuple[gb.Record, ...], gb.Record]]:
+def _folds(records: tuple[gb.Record, ...], k: int | None,
+           min_len: int) -> list[tuple[tuple[gb.Record, ...], gb.Record]]:
     """(fit records, held-out record) per fold. One record: ``k`` contiguous folds, each fitted on the
     segments around it, given as separate records (no regressor reaches across the cut). Several
     records: each record is a fold, fitted on the others (``k``, when given, must be their number)."""
@@ -748,7 +749,8 @@ def _fit(job: _Job, st: gb.Structure, records: tuple[gb.Record, ...]) -> tuple[n
         return th, np.asarray(front.lambdas, float)
 
 
-def _fit_or_fail(job: _Job, st: gb.Structure, records: tuple[gb.Record, ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def _fit_or_fail(job: _Job, st: gb.Structure,
+                 records: tuple[gb.Record, ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """:func:`_fit`, with a fit these data cannot make (e.g. terms collinear on a fold's two input
     levels) a failed member at every λ and its reason, not an error that ends the whole search:
     as a grid cell's, a row's failure is data."""
