@@ -147,6 +147,13 @@ def decimation_advice(data: Record | Dataset | Sequence[Record]) -> DecimationAd
         The factor q to pass to :func:`decimate` (1 when the record is not oversampled; None, with
         the reason, when no minimum was found), the range the rule allows, and the minima it read.
 
+    Notes
+    -----
+    Read the rule's range as the most the record can be decimated, not as a target: on four cases
+    the black box chosen at its q had 1.06 to thousands of times the test error of the one chosen at
+    the record's own rate, and half of q was best on two (BENCHMARKS.md, "Decimation"). Choose the
+    factor on a validation record; decimation's sure gain is time.
+
     Raises
     ------
     TypeError
