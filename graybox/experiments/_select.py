@@ -430,8 +430,8 @@ def _folds(records: tuple[gb.Record, ...], k: int | None,
                              "or a validation record")
         valid = record.slice(a, b, name=f"{record.name} fold {i + 1} valid")
         # the segments before and after, as two records (each at least the fold's length, or empty)
-        fit = tuple(record.slice(lo, hi, name=f"{record.name} fold {i + 1} ident") for lo, hi in ((0, a), (b, n))
-                    if hi > lo)
+        fit = tuple(record.slice(lo, hi, name=f"{record.name} fold {i + 1} ident {part}")
+                    for lo, hi, part in ((0, a, "before"), (b, n, "after")) if hi > lo)
         out.append((fit, valid))
     return out
 
