@@ -147,7 +147,7 @@ def test_a_value_object_equals_itself_hashes_and_compares_without_raising(name):
 #: Frozen dataclasses that keep value equality (hashable fields only, and equality relied on: Term and
 #: Structure key the static analysis' lru_caches). Every other frozen dataclass of graybox is eq=False.
 VALUE_EQUALITY = {"Term", "Structure", "StopRule", "_Form", "GAOptions", "Equilibrium", "PumpingPlant",
-                  "TwoSpeedPumpingPlant", "PlantSurface"}
+                  "TwoSpeedPumpingPlant", "PlantSurface", "DecimationAdvice"}
 
 
 def _frozen_dataclasses():
@@ -193,6 +193,8 @@ def test_the_value_equality_kept_works():
         "TwoSpeedPumpingPlant": (TwoSpeedPumpingPlant(), TwoSpeedPumpingPlant(PumpingPlant(noise_std=0.5))),
         "PlantSurface": (PlantSurface(TwoSpeedPumpingPlant(), ((800.0, 1600.0), (800.0, 1600.0)), "s"),
                          PlantSurface(TwoSpeedPumpingPlant(), ((800.0, 1600.0), (800.0, 1500.0)), "s")),
+        "DecimationAdvice": (gb.decimation_advice(gb.Record(np.zeros(4000), np.sin(np.arange(4000) / 30))),
+                             gb.decimation_advice(gb.Record(np.zeros(4000), np.sin(np.arange(4000) / 60)))),
     }
     assert set(pairs) == VALUE_EQUALITY
     for name, (a, b) in pairs.items():
