@@ -319,11 +319,21 @@ class LocalModel:
         if g == 0.0:
             return float("nan")
         lags = self.a.size + self.b.shape[1] + 2
+        # a window over which the slowest mode's envelope ρ^k falls to 1e-3 of the band, then as long as the
+        # response still has not come that close at the window's end: the envelope starts at the transient's
+        # own size, which a zero near z = 1 makes thousands of times the final value
         n = lags if rho == 0.0 else lags + int(np.ceil(np.log(band * 1e-3) / np.log(rho)))
-        if n > MAX_SETTLING_SAMPLES:
-            return float("inf")
-        s = self.step(n, i)
-        out = np.flatnonzero(np.abs(s - g) > band * abs(g))
+        while True:
+            if n > MAX_SETTLING_SAMPLES:
+                return float("inf")
+            err = np.abs(self.step(n, i) - g)
+            # the tail (the error recursion's whole state, and a quarter of the window so that a slow oscillation
+            # passing zero is no settled tail); round-off of the response is no transient
+            tail = err[-max(lags, n // 4):]
+            if tail.max() <= max(1e-3 * band * abs(g), 64 * np.finfo(float).eps * (err.max() + abs(g))):
+                break
+            n *= 2
+        out = np.flatnonzero(err > band * abs(g))
         return float((out[-1] + 1) * self.Ts) if out.size else 0.0
 
     # -- python-control ------------------------------------------------------------------------

@@ -1,0 +1,44 @@
+"""Bugs found by a bug hunt from a model to its use and trust (graybox.control, graybox.diagnostics,
+graybox.io and the statics), used as a control engineer would: units scaled and offset, several
+inputs, short records, hand-edited files. Each test fails without its fix."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _settled_after(step: np.ndarray, final: float, band: float = 0.02) -> int:
+    """Samples after which a step response stays within ``band`` of ``final`` (brute force, long horizon)."""
+    out = np.flatnonzero(np.abs(step - final) > band * abs(final))
+    return int(out[-1]) + 1 if out.size else 0
+
+
+def _step(a: list[float], b: list[float], n: int) -> np.ndarray:
+    """Δy(k) of A(q⁻¹)Δy = B(q⁻¹)Δu for a unit step from k = 0, by its own recursion (not lfilter)."""
+    y = np.zeros(n)
+    for k in range(n):
+        y[k] = sum(a[l] * y[k - 1 - l] for l in range(len(a)) if k - 1 - l >= 0) \
+            + sum(b[l] for l in range(len(b)) if k - 1 - l >= 0)
+    return y
+
+
+@pytest.mark.parametrize("b2", [-0.99999, -0.9999, -0.999, -0.99])
+def test_settling_time_waits_for_a_transient_much_larger_than_the_final_value(b2):
+    # settling_time ran the step response over a window sized for a transient of the final value's size
+    # (its envelope ρ^k down to 1e-3 of the band) and took the window's end for the settling time when the
+    # response was still outside the band there: with a zero near z = 1 (a final value 1e-4 of the first
+    # sample's) it said 108 s for a response that leaves the 2 % band last at 126 s, and operating_curve too
+    Ts = 0.5
+    model = gb.Model(["y(k-1)", "u(k-1)", "u(k-2)"], [0.9, 1.0, b2], Ts=Ts)
+    lm = gb.local_model(model, 1.0)
+    want = _settled_after(_step([0.9], [1.0, b2], 3000), (1.0 + b2) / 0.1)
+    assert lm.settling_time() == pytest.approx(want * Ts)
+    assert gb.operating_curve(model, [1.0]).settling_time[0] == pytest.approx(want * Ts)
+
+
+def test_settling_time_of_a_plain_first_order_model_is_unchanged():
+    lm = gb.local_model(gb.Model(["y(k-1)", "u(k-1)"], [0.8, 0.4], Ts=0.1), 2.0)
+    assert lm.settling_time() == pytest.approx(_settled_after(_step([0.8], [0.4], 500), 2.0) * 0.1)
+    fir = gb.local_model(gb.Model(["u(k-1)", "u(k-3)"], [1.0, 2.0], Ts=0.1), 2.0)
+    assert fir.settling_time() == pytest.approx(0.3)
