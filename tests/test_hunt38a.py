@@ -42,3 +42,19 @@ def test_settling_time_of_a_plain_first_order_model_is_unchanged():
     assert lm.settling_time() == pytest.approx(_settled_after(_step([0.8], [0.4], 500), 2.0) * 0.1)
     fir = gb.local_model(gb.Model(["u(k-1)", "u(k-3)"], [1.0, 2.0], Ts=0.1), 2.0)
     assert fir.settling_time() == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize("omega, error", [
+    (None, TypeError), ("abc", TypeError), (True, TypeError), ([1.0 + 1j], TypeError),
+    ([np.nan], ValueError), ([np.inf], ValueError), ([[1.0, 2.0], [3.0, 4.0]], ValueError), ([], ValueError),
+])
+def test_frequency_response_refuses_frequencies_that_are_not_real_finite_levels(omega, error):
+    # frequency_response took ω through np.asarray(omega, float): None became NaN (a NaN response and a
+    # RuntimeWarning), True 1 rad/s, text a ValueError of numpy's about a string and a 2-D grid a 2-D
+    # response the docstring's shape (K,) does not allow
+    lm = gb.local_model(gb.Model(["y(k-1)", "u(k-1)"], [0.8, 0.4], Ts=0.1), 2.0)
+    with pytest.raises(error, match="omega"):
+        lm.frequency_response(omega)
+    g = lm.frequency_response([0.0, 1.0])
+    assert g.shape == (2,) and g[0] == pytest.approx(lm.dc_gain[0])
+    assert lm.frequency_response(1.0).shape == (1,)

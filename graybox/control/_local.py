@@ -291,7 +291,11 @@ class LocalModel:
             The input, by position or name.
         """
         self._need()
-        zi = np.exp(-1j * np.atleast_1d(np.asarray(omega, float)) * self.Ts)  # z⁻¹ on the unit circle
+        w = np.atleast_1d(real_array(omega, "omega", "angular frequencies (numbers, rad/s)"))
+        if w.ndim != 1 or w.size == 0 or not np.all(np.isfinite(w)):
+            raise ValueError(f"omega must be finite angular frequencies (rad/s) of shape (K,), K >= 1, got shape "
+                             f"{w.shape}" + ("" if np.all(np.isfinite(w)) else " with non-finite values"))
+        zi = np.exp(-1j * w * self.Ts)  # z⁻¹ on the unit circle
         b = self.b[self._input_index(input)]
         num = np.polynomial.polynomial.polyval(zi, np.concatenate([[0.0], b]))
         den = np.polynomial.polynomial.polyval(zi, np.concatenate([[1.0], -self.a]))
