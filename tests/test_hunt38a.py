@@ -58,3 +58,21 @@ def test_frequency_response_refuses_frequencies_that_are_not_real_finite_levels(
     g = lm.frequency_response([0.0, 1.0])
     assert g.shape == (2,) and g[0] == pytest.approx(lm.dc_gain[0])
     assert lm.frequency_response(1.0).shape == (1,)
+
+
+@pytest.mark.parametrize("a2", [0.25, 0.81])
+def test_the_dominant_pole_of_two_of_one_modulus_is_the_least_damped(a2):
+    # y(k) = a2 y(k-2) + u(k-1) has the poles ±√a2, as slow as each other: the dominant pole was the one the
+    # eigensolver listed first among them by imaginary part (both 0), here +√a2, so damping said 1 (a
+    # positive real pole, "tune on τ") for a response whose −√a2 mode alternates as slowly as the other decays
+    model = gb.Model(["y(k-2)", "u(k-1)"], [a2, 1.0], Ts=0.1)
+    lm = gb.local_model(model, 1.0)
+    r = np.sqrt(a2)
+    assert lm.dominant_pole == pytest.approx(-r)
+    s = complex(np.log(r), np.pi)
+    assert lm.damping == pytest.approx(-s.real / abs(s)) and lm.damping < 1
+    assert lm.time_constant == pytest.approx(-0.1 / np.log(r))
+    assert gb.operating_curve(model, [1.0]).damping[0] == pytest.approx(lm.damping)
+    # a conjugate pair keeps its member of positive angle
+    pair = gb.local_model(gb.Model(["y(k-1)", "y(k-2)", "u(k-1)"], [1.0, -0.5, 1.0], Ts=0.1), 1.0)
+    assert pair.dominant_pole.imag > 0

@@ -99,7 +99,9 @@ def _dominant(poles: np.ndarray, Ts: float) -> tuple[complex, float, float]:
         return 0j, 0.0, 1.0  # a finite impulse response: no recursion, nothing to wait for
     mods = np.abs(poles)
     cand = poles[mods >= mods.max() * (1 - 1e-12)]
-    p = complex(cand[np.argmax(cand.imag)])  # of a conjugate pair, the one with arg >= 0
+    # of poles of one modulus the least damped, whatever order the eigensolver gave them in: of a conjugate
+    # pair the one with arg > 0, of ±p (a model in y(k-2) alone) −p, whose mode alternates as slowly as +p's decays
+    p = complex(cand[np.argmax(np.angle(cand))])
     r = abs(p)
     if r >= 1.0:
         return p, float("inf"), float("nan") if r > 1.0 else 0.0
@@ -244,7 +246,8 @@ class LocalModel:
 
     @property
     def dominant_pole(self) -> complex:
-        """The pole of largest modulus (of a complex pair, the one with positive angle)."""
+        """The pole of largest modulus (of several of that modulus the least damped: of a complex pair the one
+        with positive angle, of ±p the negative one)."""
         return _dominant(self.poles, self.Ts)[0]
 
     @property
