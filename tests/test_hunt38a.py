@@ -76,3 +76,46 @@ def test_the_dominant_pole_of_two_of_one_modulus_is_the_least_damped(a2):
     # a conjugate pair keeps its member of positive angle
     pair = gb.local_model(gb.Model(["y(k-1)", "y(k-2)", "u(k-1)"], [1.0, -0.5, 1.0], Ts=0.1), 1.0)
     assert pair.dominant_pole.imag > 0
+
+
+def _els_uncertainty():
+    rng = np.random.default_rng(0)
+    N = 300
+    u = rng.uniform(0, 2, N)
+    y = np.zeros(N)
+    e = 0.01 * rng.standard_normal(N)
+    for k in range(1, N):
+        y[k] = 0.5 * y[k - 1] + 0.8 * u[k - 1] + 0.1 + e[k] + 0.4 * e[k - 1]
+    rec = gb.Record(u, y, Ts=1.0)
+    model = gb.els(["1", "y(k-1)", "u(k-1)"], rec).model
+    return gb.ls_uncertainty(model, rec)
+
+
+@pytest.mark.parametrize("field, value, why", [
+    ("constraints", [[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]], r"constraints must have shape \(r, 3\)"),  # was: two rows
+    ("constraints", [[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]], r"constraints must have shape \(r, 3\)"),  # was: rows mixed
+    ("constraints", [[1.0, "nan", 0.0]], "constraints has non-finite"),
+    ("noise_cov", [[1.0, 0.0, 0.0, 1.0]], r"noise_cov must have shape \(2, 2\)"),  # was: reshaped
+    ("noise_cov", [[1.0]], r"noise_cov must have shape \(2, 2\)"),  # was: numpy's 'cannot reshape'
+    ("noise_cov", [[-1.0, 0.0], [0.0, 1.0]], "noise_cov has negative variances"),  # was: noise_std 0
+    ("noise_cov", [["nan", 0.0], [0.0, 1.0]], "noise_cov has non-finite"),  # was: noise_std NaN
+    ("noise_cov", [[1.0, 5.0], [5.0, 1.0]], "noise_cov is no covariance"),  # a correlation of 5
+    ("sigma2", -1.0, "sigma2"),
+    ("sigma2", "nan", "sigma2"),
+    ("static_sigma2", -0.5, "static_sigma2"),
+])
+def test_a_parameter_uncertainty_whose_constraints_or_noise_covariance_cannot_be_is_refused(field, value, why):
+    # ParameterUncertainty reshaped its constraint rows to (-1, n_terms) and its MA covariance to (n_e, n_e) and
+    # checked neither: a hand-edited file with three rows of two for three terms loaded as two rows of three (the
+    # numbers moved to other terms), a flat noise_cov loaded reshaped, a wrong size failed in numpy's words, and a
+    # negative or NaN MA variance gave noise_std 0 or NaN without a word (the process cov is checked since mend36a)
+    import json
+
+    unc = _els_uncertainty()
+    doc = json.loads(gb.to_json(unc))
+    doc["object"][field] = value
+    with pytest.raises(gb.GrayboxFileError, match=f"not a valid ParameterUncertainty: .*{why}"):
+        gb.from_json(json.dumps(doc))
+    back = gb.from_json(gb.to_json(unc))
+    np.testing.assert_array_equal(back.noise_std, unc.noise_std)
+    assert back.constraints.shape == (0, 3) and np.all(np.isfinite(back.noise_std))

@@ -155,10 +155,28 @@ class ParameterUncertainty:
             raise ValueError(f"cov must have shape ({n}, {n}), got {cov.shape}")
         sd = _check_cov(cov)
         object.__setattr__(self, "cov", cov)
-        object.__setattr__(self, "constraints", frozen(np.reshape(self.constraints, (-1, n))))
+        # shapes as they are, never reshaped: a (3, 2) table read as (2, 3) moves its numbers to other terms
+        A = frozen(self.constraints)
+        if A.size == 0:  # no constraint row (a JSON file gives back [] for one)
+            A = frozen(np.zeros((0, n)))
+        if A.ndim != 2 or A.shape[1] != n:
+            raise ValueError(f"constraints must have shape (r, {n}), one row of the {n} terms per constraint, got "
+                             f"{A.shape}")
+        if not np.all(np.isfinite(A)):
+            raise ValueError("constraints has non-finite entries")
+        object.__setattr__(self, "constraints", A)
         ne = len(self.model.noise_structure)
-        nc = frozen(np.reshape(self.noise_cov, (ne, ne)) if ne else np.zeros((0, 0)))
+        nc = frozen(self.noise_cov)
+        if nc.size == 0 and ne == 0:
+            nc = frozen(np.zeros((0, 0)))
+        if nc.shape != (ne, ne):
+            raise ValueError(f"noise_cov must have shape ({ne}, {ne}), the covariance of the model's {ne} MA "
+                             f"parameter(s), got {nc.shape}")
+        _check_cov(nc, "noise_cov")
         object.__setattr__(self, "noise_cov", nc)
+        check_real(self.sigma2, "sigma2 (the noise variance)", low=0)
+        if not np.isnan(self.static_sigma2):  # NaN: no static points in the estimate
+            check_real(self.static_sigma2, "static_sigma2 (the static points' variance, or NaN)", low=0)
         if self.cov_factor is not None:
             F = frozen(self.cov_factor)
             if F.size == 0:  # every θ fixed by constraints: no row (a JSON file gives back [] for it)
@@ -266,20 +284,20 @@ class ParameterUncertainty:
 COV_RTOL = 1e-6
 
 
-def _check_cov(cov: np.ndarray) -> np.ndarray:
-    """``ValueError`` unless ``cov`` can be a covariance (finite, variances ≥ 0, symmetric, correlations in
-    [−1, 1], to :data:`COV_RTOL`); its standard deviations."""
+def _check_cov(cov: np.ndarray, name: str = "cov") -> np.ndarray:
+    """``ValueError`` unless ``cov`` (named ``name``) can be a covariance (finite, variances ≥ 0, symmetric,
+    correlations in [−1, 1], to :data:`COV_RTOL`); its standard deviations."""
     if not np.all(np.isfinite(cov)):
-        raise ValueError(f"cov has non-finite entries at {np.argwhere(~np.isfinite(cov)).tolist()[:3]}")
+        raise ValueError(f"{name} has non-finite entries at {np.argwhere(~np.isfinite(cov)).tolist()[:3]}")
     var = np.diag(cov)
     if np.any(var < 0):
-        raise ValueError(f"cov has negative variances at {np.flatnonzero(var < 0).tolist()}: not a covariance")
+        raise ValueError(f"{name} has negative variances at {np.flatnonzero(var < 0).tolist()}: not a covariance")
     sd = np.sqrt(var)
     bound = (1 + COV_RTOL) * np.outer(sd, sd)
     bad = np.argwhere((np.abs(cov - cov.T) > COV_RTOL * np.outer(sd, sd)) | (np.abs(cov) > bound))
     if bad.size:
         i, j = (int(v) for v in bad[0])
-        raise ValueError(f"cov is no covariance: its entry ({i}, {j}) = {cov[i, j]:.6g} is not symmetric or exceeds "
+        raise ValueError(f"{name} is no covariance: its entry ({i}, {j}) = {cov[i, j]:.6g} is not symmetric or exceeds "
                          f"std_{i} · std_{j} = {sd[i] * sd[j]:.6g} (a correlation beyond ±1)")
     return sd
 
