@@ -119,3 +119,25 @@ def test_a_parameter_uncertainty_whose_constraints_or_noise_covariance_cannot_be
     back = gb.from_json(gb.to_json(unc))
     np.testing.assert_array_equal(back.noise_std, unc.noise_std)
     assert back.constraints.shape == (0, 3) and np.all(np.isfinite(back.noise_std))
+
+
+@pytest.mark.parametrize("field, value", [
+    ("ybar", [2.0, "nan"]), ("gain", [1.0, "nan"]), ("time_constant", [0.5, "nan"]), ("spectral_radius", [0.1, "nan"]),
+])
+def test_an_operating_curve_whose_columns_disagree_with_its_local_models_is_refused(field, value):
+    # OperatingCurve checked its columns' shapes and its status and ū against its local models, not its
+    # figures: a hand-edited file whose gain column said 1.0 where its local model's gain is 1.6 loaded, and
+    # to_frame and plot_operating_curve showed one gain, local_models and plot_local_models another
+    import json
+
+    model = gb.Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], [0.1, 0.5, 0.8, -0.05], Ts=0.1)
+    no_eq = gb.Model(["1", "y(k-1)", "y(k-2)", "u(k-1)"], [1.0, 1.2, -0.2, 0.1], Ts=0.1)
+    curve = gb.operating_curve(model, [1.0, 2.0])
+    doc = json.loads(gb.to_json(curve))
+    doc["object"][field] = value
+    with pytest.raises(gb.GrayboxFileError, match=f"not a valid OperatingCurve: {field} disagrees with the local "
+                                                  "models' own at operating point 0"):
+        gb.from_json(json.dumps(doc))
+    for c in (curve, gb.operating_curve(no_eq, [1.0, 2.0])):  # with and without equilibria
+        back = gb.from_json(gb.to_json(c))
+        np.testing.assert_array_equal(back.gain, c.gain)

@@ -673,6 +673,17 @@ class OperatingCurve:
             if v is not None and v.shape != want:
                 each = "operating point and input" if len(want) > 1 else "operating point"
                 raise ValueError(f"{f} must have shape {want}, one value per {each}, got {v.shape}")
+        # the columns are the local models' own figures (the plots and tables read the columns, a user the models);
+        # the settling time is left out: it costs a step response per point
+        rows = [_summary(lm, settling=False) for lm in self.local_models]
+        own = {"ybar": np.array([r[0] for r in rows]), "gain": np.array([r[1] for r in rows]).reshape(self.ubar.shape),
+               "time_constant": np.array([r[2] for r in rows]), "spectral_radius": np.array([r[4] for r in rows])}
+        for f, v in own.items():
+            if not np.allclose(getattr(self, f), v, rtol=1e-9, atol=0.0, equal_nan=True):
+                i = int(np.flatnonzero(~np.isclose(getattr(self, f), v, rtol=1e-9, atol=0.0, equal_nan=True)
+                                       .reshape(M, -1).any(axis=1))[0])
+                raise ValueError(f"{f} disagrees with the local models' own at operating point {i} "
+                                 f"({getattr(self, f).reshape(M, -1)[i].tolist()} against {v.reshape(M, -1)[i].tolist()})")
 
     @property
     def has_band(self) -> bool:
@@ -708,13 +719,14 @@ class OperatingCurve:
                 + (f", band at {self.level:g}" if self.has_band else "") + ")")
 
 
-def _summary(lm: LocalModel) -> tuple[float, np.ndarray, float, float, float, float]:
-    """(ȳ, gain, τ, ζ, ρ, settling time) of one local model; NaN where it has no equilibrium."""
+def _summary(lm: LocalModel, settling: bool = True) -> tuple[float, np.ndarray, float, float, float, float]:
+    """(ȳ, gain, τ, ζ, ρ, settling time) of one local model; NaN where it has no equilibrium (and for the settling
+    time without ``settling``)."""
     m = len(lm.input_names)
     if not lm.exists:
         return np.nan, np.full(m, np.nan), np.nan, np.nan, np.nan, np.nan
     _, tau, zeta = _dominant(lm.poles, lm.Ts)
-    return float(lm.ybar), lm.dc_gain, tau, zeta, lm.spectral_radius, lm.settling_time(0)
+    return float(lm.ybar), lm.dc_gain, tau, zeta, lm.spectral_radius, lm.settling_time(0) if settling else np.nan
 
 
 def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: float | None = None,
