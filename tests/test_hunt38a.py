@@ -141,3 +141,28 @@ def test_an_operating_curve_whose_columns_disagree_with_its_local_models_is_refu
     for c in (curve, gb.operating_curve(no_eq, [1.0, 2.0])):  # with and without equilibria
         back = gb.from_json(gb.to_json(c))
         np.testing.assert_array_equal(back.gain, c.gain)
+
+
+def test_static_curve_band_takes_the_levels_of_one_input_as_every_static_path_does():
+    # static_curve_band refused a column of levels (M, 1), e.g. a one-column DataFrame df[["speed"]], that
+    # Model.static_curve, static_gain, local_model and operating_curve all take as the one input's levels:
+    # "ubar must be levels of the model's one input, shape (M,), got shape (2, 1)"
+    import pandas as pd
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 2, 200)
+    y = np.zeros(200)
+    for k in range(1, 200):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y, input_names=("speed",))
+    model = gb.els(["y(k-1)", "speed(k-1)"], rec, noise=0).model
+    unc = gb.ls_uncertainty(model, rec)
+    flat = gb.static_curve_band(unc, [0.5, 1.5])
+    for column in (np.array([[0.5], [1.5]]), pd.DataFrame({"speed": [0.5, 1.5]})):
+        band = gb.static_curve_band(unc, column)
+        np.testing.assert_array_equal(band.ybar, model.static_curve(column))
+        np.testing.assert_array_equal(band.ybar_std, flat.ybar_std)
+    with pytest.raises(ValueError, match="one input"):  # points of two inputs are still no levels of one
+        gb.static_curve_band(unc, [[0.5, 1.0], [1.5, 1.0]])
+    with pytest.raises(ValueError, match="non-empty"):
+        gb.static_curve_band(unc, [])

@@ -68,8 +68,8 @@ from ..core._regressors import record_signals, regressor_matrix, stacked_regress
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
-from ..static._analysis import cluster_key, reached_equilibria, static_theta_gradient
-from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, real_array, warn
+from ..static._analysis import cluster_key, one_input_levels, reached_equilibria, static_theta_gradient
+from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 
 __all__ = [
     "ParameterUncertainty",
@@ -1084,10 +1084,14 @@ def static_curve_band(
     if uncertainty.model.n_inputs > 1:
         raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
                          f"inputs {uncertainty.model.input_names} (a band around a static surface is not built yet)")
-    ub = np.atleast_1d(real_array(ubar, "ubar", "input levels (numbers)"))
-    if ub.ndim > 1:  # flattened, an (M, 2) grid of two inputs' levels was read as 2M levels of the one
-        raise ValueError(f"ubar must be levels of the model's one input, shape (M,), got shape {ub.shape}")
-    if ub.size == 0 or not np.all(np.isfinite(ub)):
+    # the one input's levels as every static path reads them, a column (M, 1) too; flattened, an (M, 2) grid of two
+    # inputs' levels would be read as 2M levels of the one
+    shape = np.shape(ubar)
+    if len(shape) > 2 or (len(shape) == 2 and shape[1] != 1):
+        raise ValueError(f"ubar must be levels of the model's one input, shape (M,), got shape {shape} (a column "
+                         "(M, 1) is read as those levels)")
+    ub = one_input_levels(ubar)
+    if ub.size == 0:
         raise ValueError("ubar must be a non-empty array of finite input levels")
     m = uncertainty.model
     st, th, cov = m.structure, m.theta, uncertainty.cov
