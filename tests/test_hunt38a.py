@@ -166,3 +166,24 @@ def test_static_curve_band_takes_the_levels_of_one_input_as_every_static_path_do
         gb.static_curve_band(unc, [[0.5, 1.0], [1.5, 1.0]])
     with pytest.raises(ValueError, match="non-empty"):
         gb.static_curve_band(unc, [])
+
+
+@pytest.mark.parametrize("other", ["inputs", "period"])
+def test_an_operating_curve_of_local_models_of_several_models_is_refused(other):
+    # an OperatingCurve whose local models have other inputs or another sampling period (a hand-edited file
+    # pasting one in) failed in numpy's words ("all the input array dimensions except for the concatenation
+    # axis must match exactly …") or, with its columns edited alike, loaded with τ of two periods in one curve
+    import json
+
+    model = gb.Model(["1", "y(k-1)", "u(k-1)"], [0.1, 0.5, 0.8], Ts=1.0)
+    curve = gb.operating_curve(model, [1.0, 2.0])
+    if other == "inputs":
+        pasted = gb.local_model(gb.Model(["1", "y(k-1)", "a(k-1)", "b(k-1)"], [0.1, 0.5, 0.8, 0.2], Ts=1.0), [2.0, 1.0])
+    else:
+        pasted = gb.local_model(model, 2.0, Ts=2.0)
+    doc = json.loads(gb.to_json(curve))
+    doc["object"]["local_models"][1] = json.loads(gb.to_json(pasted))["object"]
+    doc["object"]["time_constant"][1] = pasted.time_constant
+    with pytest.raises(gb.GrayboxFileError, match="not a valid OperatingCurve: the local models are not of one model: "
+                                                  "local model 1"):
+        gb.from_json(json.dumps(doc))

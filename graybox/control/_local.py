@@ -663,6 +663,13 @@ class OperatingCurve:
             raise ValueError(f"status has {len(self.status)} entries for {M} operating points")
         if tuple(self.status) != tuple(lm.status for lm in self.local_models):
             raise ValueError(f"status {self.status} disagrees with the local models' own")
+        # one model's local models: one set of inputs, one sampling period
+        first = self.local_models[0]
+        for i, lm in enumerate(self.local_models[1:], 1):
+            if lm.input_names != first.input_names or lm.Ts != first.Ts:
+                raise ValueError(f"the local models are not of one model: local model {i} has the inputs "
+                                 f"{lm.input_names} and Ts = {lm.Ts:g} s, local model 0 {first.input_names} and "
+                                 f"Ts = {first.Ts:g} s")
         points = np.vstack([lm.ubar for lm in self.local_models])
         if self.ubar.shape != ((M,) if points.shape[1] == 1 else points.shape) \
                 or not np.array_equal(self.ubar.reshape(points.shape), points):
