@@ -187,3 +187,48 @@ def test_an_operating_curve_of_local_models_of_several_models_is_refused(other):
     with pytest.raises(gb.GrayboxFileError, match="not a valid OperatingCurve: the local models are not of one model: "
                                                   "local model 1"):
         gb.from_json(json.dumps(doc))
+
+
+def _bands():
+    rng = np.random.default_rng(1)
+    N = 200
+    u = rng.uniform(0, 2, N)
+    y = np.zeros(N)
+    for k in range(1, N):
+        y[k] = 0.5 * y[k - 1] + 0.8 * u[k - 1] + 0.1 + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=1.0, units=("rpm", "mlc"))
+    unc = gb.ls_uncertainty(gb.els(["1", "y(k-1)", "u(k-1)"], rec, noise=0).model, rec)
+    return gb.static_curve_band(unc, [0.5, 1.0, 1.5]), gb.simulation_band(unc, rec)
+
+
+@pytest.mark.parametrize("kind, field, why", [
+    ("static", "ybar_std", "ybar_std must be >= 0"), ("static", "gain_std", "gain_std must be >= 0"),
+    ("static", "ybar_low", "ybar_low must not exceed ybar_high"), ("static", "gain_high", "gain_low must not exceed"),
+    ("run", "std", "std must be >= 0"), ("run", "low", "low must not exceed high"),
+])
+def test_a_band_that_cannot_be_is_refused(kind, field, why):
+    # StaticCurveBand and SimulationBand checked their shapes, level and method, not their numbers: a
+    # hand-edited file with a negative standard deviation or a low end above the high one loaded, and
+    # SimulationBand.coverage counted the samples of that "band" (none inside it)
+    import json
+
+    static, run = _bands()
+    band = static if kind == "static" else run
+    doc = json.loads(gb.to_json(band))
+    values = doc["object"][field]
+    values[1] = 1e6 if field.endswith("low") else -1e3  # a low end above the high one, or a negative std
+    doc["object"][field] = values
+    with pytest.raises(gb.GrayboxFileError, match=why):
+        gb.from_json(json.dumps(doc))
+    assert gb.from_json(gb.to_json(band)).level == band.level
+
+
+def test_a_simulation_band_takes_its_units_as_a_record_does():
+    # SimulationBand turned every unit into text: units=("rpm", 3) became ("rpm", "3") where a Record, static
+    # points and the file header refuse it
+    _, run = _bands()
+    assert run.units == ("rpm", "mlc")
+    fields = {f: getattr(run, f) for f in ("t", "y", "yhat", "low", "high", "std", "level", "method", "n_samples",
+                                           "diverged")}
+    with pytest.raises(TypeError, match=r"units must be a pair of strings \(input unit, output unit\)"):
+        gb.SimulationBand(units=("rpm", 3), **fields)

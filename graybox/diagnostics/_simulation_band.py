@@ -14,12 +14,12 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..core._records import Record
+from ..core._records import Record, check_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
 from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 from ..models._coerce import as_record
-from ._uncertainty import BAND_METHODS, ParameterUncertainty, UncertaintyWarning, theta_draws
+from ._uncertainty import BAND_METHODS, ParameterUncertainty, UncertaintyWarning, check_band_values, theta_draws
 
 __all__ = ["SimulationBand", "simulation_band"]
 
@@ -76,14 +76,13 @@ class SimulationBand:
             if a.shape != (N,):
                 raise ValueError(f"{f} must have shape ({N},), got {a.shape}")
             object.__setattr__(self, f, a)
-        object.__setattr__(self, "units", tuple(str(x) for x in self.units))
+        object.__setattr__(self, "units", check_units(self.units, "SimulationBand"))  # ("rpm", 3) is no unit
         # a value read from a hand-edited file is held to what the band can be
         check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
         check_choice(self.method, "method", BAND_METHODS)
         check_int(self.n_samples, "n_samples", low=0)
         check_real(self.diverged, "diverged", low=0, high=1)
-        if len(self.units) != 2:
-            raise ValueError(f"units must be (input unit, output unit), got {self.units!r}")
+        check_band_values(self.std, self.low, self.high, "std", "low", "high")
 
     @property
     def coverage(self) -> float:

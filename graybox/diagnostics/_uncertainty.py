@@ -81,6 +81,7 @@ __all__ = [
     "StaticCurveBand",
     "static_curve_band",
     "theta_draws",
+    "check_band_values",
 ]
 
 
@@ -927,6 +928,8 @@ class StaticCurveBand:
         check_int(self.n_samples, "n_samples", low=0)
         if np.any((self.undefined < 0) | (self.undefined > 1)):
             raise ValueError("undefined must hold shares of the draws, in [0, 1]")
+        check_band_values(self.ybar_std, self.ybar_low, self.ybar_high, "ybar_std", "ybar_low", "ybar_high")
+        check_band_values(self.gain_std, self.gain_low, self.gain_high, "gain_std", "gain_low", "gain_high")
 
     def to_frame(self) -> pd.DataFrame:
         """One row per ū: ȳ, its band and std, the gain, its band and std (and the undefined fraction)."""
@@ -938,6 +941,18 @@ class StaticCurveBand:
     def __repr__(self) -> str:
         return (f"StaticCurveBand({self.model_name or 'model'}: {self.ubar.size} levels, {self.method}, "
                 f"level={self.level:g}, max ±{np.max((self.ybar_high - self.ybar_low) / 2):.4g} in ȳ)")
+
+
+def check_band_values(std: np.ndarray, low: np.ndarray, high: np.ndarray, *names: str) -> None:
+    """``ValueError`` unless a band's standard deviations are >= 0 and its low ends at most its high ones, where they
+    are numbers (NaN: no draw there; a value read from a hand-edited file is held to what a band can be)."""
+    s, lo, hi = names
+    if np.any(std < 0):
+        raise ValueError(f"{s} must be >= 0 (standard deviations), got {float(std[std < 0][0]):g} at index "
+                         f"{int(np.flatnonzero(std < 0)[0])}")
+    if np.any(low > high):
+        i = int(np.flatnonzero(low > high)[0])
+        raise ValueError(f"{lo} must not exceed {hi}, got {low[i]:g} > {high[i]:g} at index {i}")
 
 
 def _gains(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
