@@ -232,3 +232,38 @@ def test_a_simulation_band_takes_its_units_as_a_record_does():
                                            "diverged")}
     with pytest.raises(TypeError, match=r"units must be a pair of strings \(input unit, output unit\)"):
         gb.SimulationBand(units=("rpm", 3), **fields)
+
+
+def _step_record():
+    rng = np.random.default_rng(0)
+    N = 200
+    u = np.repeat(rng.uniform(0, 2, N // 20 + 1), 20)[:N]
+    y = np.zeros(N)
+    for k in range(1, N):
+        y[k] = 0.5 * y[k - 1] + 0.8 * u[k - 1] + 0.1 + 0.01 * rng.standard_normal()
+    return gb.Record(u, y)
+
+
+@pytest.mark.parametrize("estimator, options", [("pe", {}), ("se", {"method": "gradient", "max_nfev": 5})])
+def test_bootstrap_decision_samples_a_curve_at_the_ubar_its_options_give(estimator, options):
+    # bootstrap_decision took ubar as an option of the sweep (pe_pareto and se_pareto sample a curve there) but
+    # sampled the curve itself first, over its domain, and handed the sweep points and ubar: every call failed
+    # on the original data with "ubar is for sampling a StaticCurve or StaticSurface; static points carry their
+    # own ū", about points the user never gave
+    import warnings
+
+    curve = gb.StaticCurve.polynomial([0.2, 1.6], domain=(0.0, 2.0))
+    ubar = np.array([0.2, 1.0, 1.8])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        boot = gb.bootstrap_decision(["1", "y(k-1)", "u(k-1)"], _step_record(), curve, estimator=estimator,
+                                     lambdas=[1.0, 0.1], n_boot=2, band=0.01, progress=False,
+                                     options={**options, "ubar": ubar})
+        sweep = (gb.pe_pareto if estimator == "pe" else gb.se_pareto)(
+            ["1", "y(k-1)", "u(k-1)"], _step_record(), curve, lambdas=[1.0, 0.1], ubar=ubar, **options)
+    ref = gb.decide_dsf(sweep, band=0.01)
+    assert boot.reference["lambda1"] == ref.lambda1 and boot.reference["JSF"] == pytest.approx(ref.JSF)
+    np.testing.assert_array_equal(boot.options["ubar"], ubar)
+    with pytest.raises(ValueError, match="static points carry their own"):  # points and ubar: still refused
+        gb.bootstrap_decision(["1", "y(k-1)", "u(k-1)"], _step_record(), curve.points(ubar), lambdas=[1.0, 0.1],
+                              n_boot=2, band=0.01, progress=False, options={"ubar": ubar})

@@ -367,7 +367,8 @@ def bootstrap_decision(
         Identification data (a Dataset's ``ident``, and its static points by default).
     static : StaticPoints, StaticCurve or StaticSurface, optional
         Static points (default: the Dataset's); a curve or surface is sampled over its domain as
-        every estimator samples it (sampled points carry no uncertainty: give ``band``).
+        every estimator samples it, or at the ``ubar`` of ``options`` (sampled points carry no
+        uncertainty: give ``band``).
     estimator : {"pe", "se"}
         The sweep: :func:`graybox.pe_pareto` or :func:`graybox.se_pareto`.
     lambdas : array_like, optional
@@ -427,7 +428,11 @@ def bootstrap_decision(
     estimator = check_choice(renamed(estimator if method is None else None, method, "estimator", "method"),
                              "estimator", ESTIMATORS)
     recs = records_of(data)
-    sp = static_points(static, data, needed_by="bootstrap_decision", takes_ubar=False)
+    opts = _estimator_options(estimator, options)
+    # a curve or surface is sampled here, at the sweep's own ubar when the options give one (the sweep is handed
+    # the points, which carry their ū)
+    sp = static_points(static, data, ubar=opts.get("ubar"), needed_by="bootstrap_decision",
+                       takes_ubar="ubar" in opts)
     lam = check_lambdas((PE_LAMBDAS if estimator == "pe" else SE_LAMBDAS) if lambdas is None else lambdas)
     n_boot = check_int(n_boot, "n_boot", low=1)
     seed = check_seed(seed)
@@ -446,13 +451,12 @@ def bootstrap_decision(
     band = hi if lo == 0 and (band is None or np.ndim(band) == 0) else (lo, hi)
     if fallback is not None:
         check_choice(fallback, "fallback", FALLBACKS)
-    opts = _estimator_options(estimator, options)
     if map is not None and not callable(map):
         raise TypeError(f"map must be a callable map(job, ids) (e.g. an executor's .map), got {map!r}")
     if not any(len(r) >= block_length for r in recs):
         raise ValueError(f"block_length {block_length} is longer than every record ({[len(r) for r in recs]} samples)")
     job = BootstrapJob(structure.process, tuple(recs), sp, estimator, lam, band, fallback, block_length, seed,
-                       static_sigma, opts)
+                       static_sigma, {k: v for k, v in opts.items() if k != "ubar"})
     ids = list(range(n_boot))
     reps: list[dict] = []
     bar = progress_bar(len(ids) + 1, f"bootstrap of D_SF ({estimator.upper()})", progress if map is None else False)
