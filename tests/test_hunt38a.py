@@ -267,3 +267,28 @@ def test_bootstrap_decision_samples_a_curve_at_the_ubar_its_options_give(estimat
     with pytest.raises(ValueError, match="static points carry their own"):  # points and ubar: still refused
         gb.bootstrap_decision(["1", "y(k-1)", "u(k-1)"], _step_record(), curve.points(ubar), lambdas=[1.0, 0.1],
                               n_boot=2, band=0.01, progress=False, options={"ubar": ubar})
+
+
+def test_a_decision_bootstrap_has_no_field_a_user_could_change():
+    # DecisionBootstrap kept the reference decision's θ as a list (boot.reference["theta"][0] = 99.0 changed the
+    # result) and the options as given (a list of constraints stayed the caller's list): results are immutable
+    # values all the way down, as test_immutable_results holds every savable value to
+    import sys
+    import warnings
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_immutable_results import _holes
+
+    sp = gb.StaticPoints([0.2, 1.0, 1.8], [(0.1 + 0.8 * x) / 0.5 for x in [0.2, 1.0, 1.8]], uncertainty=0.05)
+    constraints = [gb.GainBounds(lower=0.0)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        boot = gb.bootstrap_decision(["1", "y(k-1)", "u(k-1)"], _step_record(), sp, lambdas=[1.0, 0.1], n_boot=2,
+                                     progress=False, options={"weights": "mse", "constraints": constraints})
+    out = []
+    _holes(boot, "boot", set(), out)
+    assert out == []
+    constraints.append(gb.GainBounds(upper=1.0))  # the caller's list, changed afterwards
+    assert len(boot.options["constraints"]) == 1
+    assert np.isfinite(boot.reference["theta"]).all() and len(boot.reference["theta"]) == 3

@@ -255,9 +255,10 @@ class DecisionBootstrap:
         if len(self.rules) != B:
             raise ValueError(f"rules must have {B} entries, got {len(self.rules)}")
         object.__setattr__(self, "rules", tuple(self.rules))
-        object.__setattr__(self, "reference", FrozenMap(dict(self.reference)))
+        # immutable all the way down: the reference's θ (a list in the job's plain result) and the options as given
+        object.__setattr__(self, "reference", FrozenMap({k: _frozen_value(v) for k, v in dict(self.reference).items()}))
         object.__setattr__(self, "failures", FrozenMap({int(k): str(v) for k, v in dict(self.failures).items()}))
-        object.__setattr__(self, "options", FrozenMap(dict(self.options)))
+        object.__setattr__(self, "options", FrozenMap({k: _frozen_value(v) for k, v in dict(self.options).items()}))
 
     @property
     def n_replicates(self) -> int:
@@ -322,6 +323,18 @@ class DecisionBootstrap:
     def __repr__(self) -> str:
         return (f"DecisionBootstrap({self.estimator.upper()}, replicates={self.n_replicates}, failed={len(self.failures)}, "
                 f"blocks={self.n_blocks} × {self.block_length}, agreement={self.agreement:.2f})")
+
+
+def _frozen_value(v: object) -> object:
+    """A read-only copy of an option or a decision's value: arrays frozen, lists tuples, mappings FrozenMaps."""
+    if isinstance(v, np.ndarray):
+        return frozen(v, v.dtype)
+    if isinstance(v, Mapping):
+        return FrozenMap({k: _frozen_value(x) for k, x in v.items()})
+    if isinstance(v, (list, tuple)):
+        return frozen(v) if v and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v) \
+            else tuple(_frozen_value(x) for x in v)
+    return v
 
 
 def _estimator_options(estimator: str, options: Mapping | None) -> dict:
