@@ -292,3 +292,19 @@ def test_a_decision_bootstrap_has_no_field_a_user_could_change():
     constraints.append(gb.GainBounds(upper=1.0))  # the caller's list, changed afterwards
     assert len(boot.options["constraints"]) == 1
     assert np.isfinite(boot.reference["theta"]).all() and len(boot.reference["theta"]) == 3
+
+
+@pytest.mark.parametrize("tau_samples", [1.2e6, 2.5e6])
+def test_settling_time_of_a_slow_plant_sampled_fast_is_finite_below_ten_million_samples(tau_samples):
+    # settling_time said inf for every response whose window (the envelope ρ^k down to 1e-3 of the band: 10.8 τ
+    # for a first-order one) exceeded 10⁷ samples, though its docstring promises inf only beyond 10⁷ samples of
+    # settling: a heater with τ = 20 min sampled at 1 kHz (τ = 1.2·10⁶ samples) settles in 78 min, 4.7·10⁶
+    # samples, and was said never to settle. The response now runs in blocks (memory does not grow) over a
+    # window up to 4·10⁷ samples
+    rho = np.exp(-1.0 / tau_samples)
+    lm = gb.local_model(gb.Model(["y(k-1)", "u(k-1)"], [rho, 1.0 - rho], Ts=1e-3), 1.0)
+    # Δy(k) = 1 − ρ^k: outside the 2 % band while ρ^k > 0.02
+    assert lm.settling_time() == pytest.approx(np.ceil(np.log(0.02) / np.log(rho)) * 1e-3, rel=1e-6)
+    slower = gb.local_model(gb.Model(["y(k-1)", "u(k-1)"], [np.exp(-1.0 / 3e6), 1.0 - np.exp(-1.0 / 3e6)], Ts=1e-3),
+                            1.0)
+    assert slower.settling_time() == np.inf  # 1.17·10⁷ samples: beyond the limit, as documented

@@ -48,8 +48,36 @@ __all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "ja
 #: Settling band of :attr:`LocalModel.settling_time`: the step response stays within this fraction
 #: of its final value (dimensionless).
 SETTLING_BAND = 0.02
-#: Longest step response used for a settling time (samples); a slower equilibrium gets inf.
+#: Longest settling time (samples); a slower equilibrium gets inf.
 MAX_SETTLING_SAMPLES = 10_000_000
+#: Longest step response run to find it (samples, in blocks: memory does not grow with it): a response that
+#: settles near the limit is confirmed over a window about three times as long.
+SETTLING_WINDOW_SAMPLES = 4 * MAX_SETTLING_SAMPLES
+
+
+def _step_error(num: np.ndarray, den: np.ndarray, g: float, band: float, n: int, tail: int
+                ) -> tuple[int, float, float, float]:
+    """Over a unit step response of n samples (the filter num/den from rest, run in blocks): the number of
+    samples after which it stays within ``band`` of g (the last sample outside it, plus one), the largest error
+    |s − g| over the first and over the second half of the last ``tail`` samples, and over all."""
+    block = 1 << 20
+    zi = np.zeros(max(len(num), len(den)) - 1)
+    last, early, late, peak = 0, 0.0, 0.0, 0.0
+    mid = n - tail // 2
+    for k0 in range(0, n, block):
+        k1 = min(n, k0 + block)
+        s, zi = lfilter(num, den, np.ones(k1 - k0), zi=zi)
+        err = np.abs(s - g)
+        out = np.flatnonzero(err > band * abs(g))
+        if out.size:
+            last = k0 + int(out[-1]) + 1
+        peak = max(peak, float(err.max()))
+        for lo, hi, which in ((n - tail, mid, 0), (mid, n, 1)):
+            a, b = max(k0, lo), min(k1, hi)
+            if a < b:
+                v = float(err[a - k0:b - k0].max())
+                early, late = (max(early, v), late) if which == 0 else (early, max(late, v))
+    return last, early, late, peak
 
 
 def check_polynomial(model: object, what: str) -> Model:
@@ -330,18 +358,21 @@ class LocalModel:
         # response still has not come that close at the window's end: the envelope starts at the transient's
         # own size, which a zero near z = 1 makes thousands of times the final value
         n = lags if rho == 0.0 else lags + int(np.ceil(np.log(band * 1e-3) / np.log(rho)))
+        num, den = np.concatenate([[0.0], self.b[i]]), np.concatenate([[1.0], -self.a])
+        n = min(n, SETTLING_WINDOW_SAMPLES)
         while True:
-            if n > MAX_SETTLING_SAMPLES:
-                return float("inf")
-            err = np.abs(self.step(n, i) - g)
-            # the tail (the error recursion's whole state, and a quarter of the window so that a slow oscillation
-            # passing zero is no settled tail); round-off of the response is no transient
-            tail = err[-max(lags, n // 4):]
-            if tail.max() <= max(1e-3 * band * abs(g), 64 * np.finfo(float).eps * (err.max() + abs(g))):
-                break
-            n *= 2
-        out = np.flatnonzero(err > band * abs(g))
-        return float((out[-1] + 1) * self.Ts) if out.size else 0.0
+            # the tail: the error recursion's whole state, and a quarter of the window so that a slow oscillation
+            # passing zero is no settled tail; round-off of the response is no transient
+            last, early, late, peak = _step_error(num, den, g, band, n, max(lags, n // 4))
+            settled = max(early, late) <= max(1e-3 * band * abs(g), 64 * np.finfo(float).eps * (peak + abs(g)))
+            if not settled and n >= SETTLING_WINDOW_SAMPLES:
+                # the window can grow no further: settled when the tail stays in the band and still falls there
+                settled = max(early, late) <= band * abs(g) and late < early
+                if not settled:
+                    return float("inf")
+            if settled:
+                return float("inf") if last > MAX_SETTLING_SAMPLES else float(last * self.Ts)
+            n = min(2 * n, SETTLING_WINDOW_SAMPLES)
 
     # -- python-control ------------------------------------------------------------------------
     def to_statespace(self) -> Any:
