@@ -601,7 +601,7 @@ def cls_uncertainty(
         Its identification data.
     static : StaticCurve, StaticSurface or StaticPoints, optional
         As for :func:`graybox.cls`.
-    how : {"auto", "curve", "points"}
+    how : {"auto", "curve", "points", "context"}
         As for :func:`graybox.cls`.
     reference : {"ls", "els"}, Model, ndarray or float
         As for :func:`graybox.cls` (Σ*_y of eq. (22)); its own randomness is not propagated.
