@@ -308,3 +308,24 @@ def test_settling_time_of_a_slow_plant_sampled_fast_is_finite_below_ten_million_
     slower = gb.local_model(gb.Model(["y(k-1)", "u(k-1)"], [np.exp(-1.0 / 3e6), 1.0 - np.exp(-1.0 / 3e6)], Ts=1e-3),
                             1.0)
     assert slower.settling_time() == np.inf  # 1.17·10⁷ samples: beyond the limit, as documented
+
+
+@pytest.mark.parametrize("expect, error, why", [
+    ([gb.Model], TypeError, r"expect must be a graybox type \(e.g. graybox.Model\) or a tuple of them, got \[<class"),
+    ("Model", TypeError, "expect must be a graybox type .* got 'Model' \\(str\\)"),
+    ((gb.Model, "x"), TypeError, "got 'x' \\(str\\)"),
+    (3, TypeError, "got 3 \\(int\\)"),
+    (dict, ValueError, "expect must be one of graybox's saved types"),
+])
+def test_load_says_what_is_wrong_with_expect_before_reading_the_file(expect, error, why, tmp_path):
+    # expect=[gb.Model] (a list, not a tuple) failed with Python's "unhashable type: 'list'", a type's name
+    # (expect="Model") was a ValueError for a wrong type, and a bad expect was judged only after the file was
+    # read, so a missing or corrupt file hid it
+    p = gb.save(gb.Model(["y(k-1)"], [0.5]), tmp_path / "m.json")
+    with pytest.raises(error, match=why):
+        gb.load(p, expect=expect)
+    with pytest.raises(error, match=why):
+        gb.load(tmp_path / "missing.json", expect=expect)
+    with pytest.raises(error, match=why):
+        gb.from_json("not json", expect=expect)
+    assert isinstance(gb.load(p, expect=(gb.Model, gb.ParetoSet)), gb.Model)

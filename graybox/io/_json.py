@@ -648,14 +648,23 @@ def _parse(text: str, source: str) -> tuple[dict, Any]:
     return _header(doc, rd), doc
 
 
-def _expect(expect: type | tuple[type, ...] | None, typ: str, source: str) -> None:
+def _expected(expect: object) -> tuple[type, ...] | None:
+    """``expect`` as a tuple of saved types (None: any), checked before any file is read: ``TypeError`` for what is
+    not a class or a tuple of classes (a type's name, a list), ``ValueError`` for a class graybox does not save."""
     if expect is None:
-        return
+        return None
     want = expect if isinstance(expect, tuple) else (expect,)
     for w in want:
+        if not isinstance(w, type):
+            raise TypeError(f"expect must be a graybox type (e.g. graybox.Model) or a tuple of them, got {w!r} "
+                            f"({type(w).__name__})")
         if w not in _TYPES:
             raise ValueError(f"expect must be one of graybox's saved types {sorted(_CODECS)}, got {w!r}")
-    if _CODECS[typ][0] not in want:
+    return want
+
+
+def _expect(want: tuple[type, ...] | None, typ: str, source: str) -> None:
+    if want is not None and _CODECS[typ][0] not in want:
         raise GrayboxFileError(f"{source}: holds a {typ}, expected {' or '.join(w.__name__ for w in want)}")
 
 
@@ -683,8 +692,9 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     """
     if not isinstance(text, str):
         raise TypeError(f"text must be a str, got {type(text).__name__} (decode the bytes of a file as UTF-8)")
+    want = _expected(expect)
     head, doc = _parse(text.removeprefix("\ufeff"), source)  # an editor's byte-order mark is no text (as load)
-    _expect(expect, head["type"], source)
+    _expect(want, head["type"], source)
     if "object" not in doc:
         raise GrayboxFileError(f"{source}: no \"object\" in the document")
     try:
@@ -801,6 +811,7 @@ def load(path: str | os.PathLike, *, expect: type | tuple[type, ...] | None = No
     FileNotFoundError
         No such file.
     """
+    _expected(expect)  # a bad expect is said before the file is read
     return from_json(_read(path), expect=expect, source=str(path))
 
 
