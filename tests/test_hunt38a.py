@@ -329,3 +329,18 @@ def test_load_says_what_is_wrong_with_expect_before_reading_the_file(expect, err
     with pytest.raises(error, match=why):
         gb.from_json("not json", expect=expect)
     assert isinstance(gb.load(p, expect=(gb.Model, gb.ParetoSet)), gb.Model)
+
+
+@pytest.mark.parametrize("name", ["", "   "])
+def test_narx_iosystem_refuses_a_blank_name(name):
+    # narx_iosystem(model, name=model.name) with the default empty name made a system named "", and
+    # control.interconnect then failed on it with python-control's IndexError "string index out of range"
+    ct = pytest.importorskip("control")
+    model = gb.Model(["1", "y(k-1)", "u(k-1)"], [0.1, 0.5, 0.8], Ts=1.0)
+    with pytest.raises(ValueError, match="name must name the system"):
+        gb.narx_iosystem(model, name=name)
+    pi = ct.ss([[1.0]], [[1.0]], [[0.1]], [[0.1]], dt=1.0, inputs="e", outputs="u", name="pi")
+    for ok in (None, "plant"):
+        loop = ct.interconnect([gb.narx_iosystem(model, name=ok), pi, ct.summing_junction(["r", "-y"], "e", dt=1.0)],
+                               inputs="r", outputs="y")
+        assert loop.ninputs == 1
