@@ -344,3 +344,23 @@ def test_narx_iosystem_refuses_a_blank_name(name):
         loop = ct.interconnect([gb.narx_iosystem(model, name=ok), pi, ct.summing_junction(["r", "-y"], "e", dt=1.0)],
                                inputs="r", outputs="y")
         assert loop.ninputs == 1
+
+
+def test_bootstrap_decision_says_when_map_returns_no_results():
+    # a map returning anything but the jobs' results (a Dask client's map returns futures) failed with Python's
+    # "argument of type 'Future' is not iterable" from inside the summary
+    import warnings
+
+    sp = gb.StaticPoints([0.2, 1.0, 1.8], [(0.1 + 0.8 * x) / 0.5 for x in [0.2, 1.0, 1.8]], uncertainty=0.05)
+
+    class Future:  # what a Dask client's map hands back
+        pass
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(TypeError, match="map must return the jobs' results in order .* result 0 is a Future"):
+            gb.bootstrap_decision(["1", "y(k-1)", "u(k-1)"], _step_record(), sp, lambdas=[1.0, 0.1], n_boot=2,
+                                  progress=False, map=lambda job, ids: [Future() for _ in ids])
+        boot = gb.bootstrap_decision(["1", "y(k-1)", "u(k-1)"], _step_record(), sp, lambdas=[1.0, 0.1], n_boot=2,
+                                     progress=False, map=lambda job, ids: (job(i) for i in ids))
+    assert boot.n_replicates == 2

@@ -484,6 +484,11 @@ def bootstrap_decision(
             reps = list(map(job, ids))
             if len(reps) != len(ids):
                 raise ValueError(f"map returned {len(reps)} results for {len(ids)} jobs")
+            bad = next((i for i, r in enumerate(reps) if not isinstance(r, dict)), None)
+            if bad is not None:  # e.g. a Dask client's map, which returns futures, not the jobs' results
+                raise TypeError(f"map must return the jobs' results in order (each a dict, as job(i) returns it); "
+                                f"result {bad} is a {type(reps[bad]).__name__} (a Dask client's map returns futures: "
+                                "gather them, or use graybox.experiments.parallel_map)")
     finally:
         bar.close()
     n = len(structure.process)
