@@ -627,6 +627,10 @@ def scheduler_client(scheduler: str):
     except OSError as exc:
         raise ConnectionError(f"cannot reach the Dask scheduler at {scheduler} ({exc}); is it running, "
                               "and is the address right?") from None
+    except (TypeError, ValueError) as exc:  # e.g. tls:// without the cluster's security settings in Dask's config
+        raise ValueError(f"cannot connect to the Dask scheduler at {scheduler} ({exc}); a cluster that needs "
+                         "security settings (TLS) is reached through a distributed.Client made with them: pass "
+                         "client= in Python") from None
     try:
         try:
             client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
@@ -652,6 +656,32 @@ def check_cluster(client: Any, scheduler: Any) -> None:
             raise TypeError(f"scheduler must be an address string such as 'tcp://host:8786', got {scheduler!r}")
         if ":" not in scheduler:
             raise ValueError(f"scheduler must be an address such as 'tcp://host:8786', got {scheduler!r}")
+        _check_address(scheduler)
+
+
+def _check_address(scheduler: str) -> None:
+    """``ValueError`` naming ``scheduler`` when it is no address a Dask client can connect to (parsed as
+    distributed parses it, without connecting): its own message named neither the option nor the form
+    ('invalid literal for int() with base 10: ...'), and only once the store had been written."""
+    from distributed.comm import get_address_host_port, parse_address
+    from distributed.comm.registry import get_backend
+
+    form = "an address such as 'tcp://host:8786'"
+    scheme = scheduler.split("://", 1)[0].lower() if "://" in scheduler else ""
+    if scheme in ("http", "https"):  # the dashboard's URL, which the scheduler prints too
+        raise ValueError(f"scheduler {scheduler!r} is a web address, such as the Dask dashboard's (port 8787): the "
+                         f"scheduler itself listens at {form} (port 8786 by default)")
+    try:
+        kind, _ = parse_address(scheduler)
+        get_backend(kind)  # a scheme distributed does not know: ValueError naming the known ones
+        if kind not in ("tcp", "tls", "ws", "wss"):
+            return  # inproc (a cluster in this process), ucx: addresses of their own form
+        _, port = get_address_host_port(scheduler)
+    except ValueError as exc:
+        raise ValueError(f"scheduler {scheduler!r} is not a Dask scheduler's address ({exc}); give {form}, or a "
+                         "port number after the host") from None
+    if not 0 < port < 65536:
+        raise ValueError(f"scheduler {scheduler!r}: port {port} is outside 1-65535; give {form}")
 
 
 def make_executor(executor: str | None = None, *, workers: int | None = None, client: Any = None,

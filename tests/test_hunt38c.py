@@ -1,0 +1,61 @@
+"""Bug hunt 38c: a newcomer's first hour and long experiments (CLI, CSV loaders, grids, stores)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox import experiments as gx
+from graybox._cli import main
+
+
+def _tiny_files(folder: Path) -> Path:
+    """Three small CSV files and a one-cell spec reading them; returns the spec's path."""
+    rng = np.random.default_rng(3)
+    for name, n in (("ident.csv", 120), ("valid.csv", 60)):
+        u = np.repeat(rng.uniform(1.0, 2.0, n // 10), 10)
+        y = np.zeros(n)
+        for k in range(1, n):
+            y[k] = 0.5 * y[k - 1] + u[k - 1]
+        (folder / name).write_text("u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(u, y)))
+    (folder / "static.csv").write_text("u,y\n1.0,2.0\n1.5,3.0\n2.0,4.0\n")
+    spec = folder / "spec.toml"
+    spec.write_text('name = "tiny"\n[[data]]\nname = "d"\n'
+                    'ident = {path = "ident.csv", u = "u", y = "y", Ts = 1.0}\n'
+                    'valid = {path = "valid.csv", u = "u", y = "y", Ts = 1.0}\n'
+                    'static = {path = "static.csv", u = "u", y = "y", uncertainty = 0.1}\n'
+                    '[[structures]]\nname = "fo"\nterms = ["y(k-1)", "u(k-1)"]\n'
+                    '[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    return spec
+
+
+# --- a scheduler address that is no Dask scheduler's address -----------------------------------------------------
+@pytest.mark.parametrize("address, said", [
+    ("localhost:notaport", "port"),                       # was: invalid literal for int() with base 10: 'notaport'
+    ("http://127.0.0.1:8787/status", "dashboard"),        # the dashboard's URL pasted: was 'unknown address scheme'
+    ("foo://host:8786", "scheme"),
+])
+def test_a_malformed_scheduler_address_is_refused_naming_it_before_the_store_is_written(tmp_path, capsys, address,
+                                                                                          said):
+    with pytest.raises(ValueError, match="scheduler") as err:
+        with gx.parallel_map(scheduler=address):
+            pass
+    assert address in str(err.value) and said in str(err.value)
+    spec = _tiny_files(tmp_path)
+    store = tmp_path / "r.sqlite"
+    assert main(["grid", "run", str(spec), "--store", str(store), "--scheduler", address]) == 2
+    text = capsys.readouterr().err
+    assert "scheduler" in text and address in text and said in text
+    assert not store.exists()  # refused before anything was written
+
+
+def test_a_tls_scheduler_without_security_settings_is_an_error_naming_it_not_a_traceback(tmp_path, capsys):
+    # distributed raises a TypeError (no ssl_context) from Client(): the command crashed with a traceback
+    spec = _tiny_files(tmp_path)
+    assert main(["grid", "run", str(spec), "--store", str(tmp_path / "r.sqlite"), "--scheduler",
+                 "tls://127.0.0.1:1"]) == 2
+    text = capsys.readouterr().err
+    assert "tls://127.0.0.1:1" in text and "client=" in text
