@@ -59,3 +59,39 @@ def test_a_tls_scheduler_without_security_settings_is_an_error_naming_it_not_a_t
                  "tls://127.0.0.1:1"]) == 2
     text = capsys.readouterr().err
     assert "tls://127.0.0.1:1" in text and "client=" in text
+
+
+# --- names from a spec drawn as text, not as matplotlib's mathtext or hidden legend labels -------------------------
+def _named_store(tmp_path: Path) -> Path:
+    spec = _tiny_files(tmp_path)
+    text = spec.read_text().replace('name = "d"', 'name = "rig $x^$"').replace('name = "fo"', 'name = "fo $\\\\x$"')
+    text += ('[[variants]]\nname = "_base"\nestimator = "els"\n'
+             '[[variants]]\nname = "cost $5 or $10"\nestimator = "pe"\nlambdas = [0.5, 1.0]\n'
+             'decision = {rule = "dsf", fallback = "min_jsf"}\n')
+    spec.write_text(text)
+    store = tmp_path / "names.sqlite"
+    gx.run_grid(spec, store)
+    return store
+
+
+def test_grid_report_figures_show_the_names_of_the_spec_as_written(tmp_path):
+    # a structure named 'fo $\x$' crashed graybox grid report with matplotlib's 'ParseFatalException: Unknown
+    # symbol: \x'; '$5 or $10' was typeset as math, and the variant '_base' left out of every legend
+    store = _named_store(tmp_path)
+    written = gx.write_report(store, tmp_path / "report", html=True)
+    assert {"report.html", "scatter.png"} <= {p.name for p in written}
+    for fig in (gx.plot_scatter(store), gx.plot_fronts(store), gx.plot_heatmap(store)):
+        fig.canvas.draw()  # the figure renders
+        texts = set()
+        for ax in fig.axes:
+            texts |= {t.get_text() for t in ax.texts + ax.get_xticklabels() + ax.get_yticklabels()}
+            texts.add(ax.get_title())
+            if ax.get_legend() is not None:
+                texts |= {t.get_text() for t in ax.get_legend().get_texts()}
+        if fig._suptitle is not None:
+            texts.add(fig._suptitle.get_text())
+        shown = " | ".join(texts).replace("\\$", "$")  # an escaped dollar is drawn as a dollar
+        for n in ("rig $x^$", "fo $\\x$", "_base", "cost $5 or $10", "LS"):
+            assert n in shown, (n, shown)
+        legend = [t.get_text() for ax in fig.axes if ax.get_legend() is not None for t in ax.get_legend().get_texts()]
+        assert not legend or "_base" in [t.strip() for t in legend], legend

@@ -292,6 +292,14 @@ def _one_data(df: pd.DataFrame, data: str | None) -> str:
     return data
 
 
+def _shown(name: object) -> str:
+    """A data set's, structure's or variant's name as figure text, drawn as written (as the tables show it): a
+    ``$`` escaped, lest matplotlib typeset the text between two as math (or fail to draw the figure on text such
+    as ``$\\x$``), and a leading ``_`` kept off the start, where matplotlib leaves a label out of the legend."""
+    text = str(name).replace("$", r"\$")
+    return " " + text if text.startswith("_") else text
+
+
 def _finite_pos(x: np.ndarray) -> np.ndarray:
     x = np.asarray(x, float)
     return np.isfinite(x) & (x > 0)
@@ -380,9 +388,9 @@ def plot_scatter(
         for (s, v), g in sub[ok].groupby(["structure", "variant"], sort=False):
             ax.plot(g["JS_valid"], g["JSF"], marks[s], color=colors[v], ms=7, alpha=0.8, ls="none")
         for v in variants:
-            ax.plot([], [], "o", color=colors[v], label=v)
+            ax.plot([], [], "o", color=colors[v], label=_shown(v))
         for s in structures:
-            ax.plot([], [], marks[s], color="0.3", label=s, ls="none")
+            ax.plot([], [], marks[s], color="0.3", label=_shown(s), ls="none")
         b = _band_of(sub, band, d) if (band is not None or sub["band"].notna().any()) else None
         _scale(ax, "x", sub.loc[ok, "JS_valid"])
         _scale(ax, "y", sub.loc[ok, "JSF"])
@@ -390,7 +398,7 @@ def plot_scatter(
             _band_on(ax, b, label=True)
         ax.set_xlabel("J_S on the validation record")
         ax.set_ylabel("J_SF")
-        ax.set_title(f"{d}: {int(ok.sum())} of {len(sub)} cells drawn")
+        ax.set_title(f"{_shown(d)}: {int(ok.sum())} of {len(sub)} cells drawn")
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7, ncol=2, loc="best")
     return fig
@@ -469,7 +477,7 @@ def plot_fronts(
                     xs.append(np.array([r["JS_valid"]]))
                     ys.append(np.array([r["JSF"]]))
                     drawn = True
-            ax.plot([], [], "o-", color=colors[v], label=v)
+            ax.plot([], [], "o-", color=colors[v], label=_shown(v))
         _scale(ax, "x", np.concatenate(xs) if xs else [])
         _scale(ax, "y", np.concatenate(ys) if ys else [])
         if drawn:
@@ -479,14 +487,14 @@ def plot_fronts(
                     transform=ax.transAxes, ha="center", va="center", color="0.4", fontsize=8)
             ax.set_xticks([])
             ax.set_yticks([])
-        ax.set_title(s)
+        ax.set_title(_shown(s))
         ax.set_xlabel("J_S on the validation record")
         ax.set_ylabel("J_SF")
         ax.grid(True, which="major", alpha=0.3)
     for ax in axes[len(names):]:
         ax.set_visible(False)
     axes[0].legend(fontsize=7, loc="best", title="★ chosen, ◆ single model", title_fontsize=7)
-    fig.suptitle(f"{d}: fronts per structure" + (f" (shaded below the dashed line: J_SF ≤ B = {b:g})"
+    fig.suptitle(f"{_shown(d)}: fronts per structure" + (f" (shaded below the dashed line: J_SF ≤ B = {b:g})"
                                                    if b is not None else ""))
     return fig
 
@@ -529,8 +537,8 @@ def plot_heatmap(
     shown = np.where(pos if log else np.isfinite(vals), vals, np.nan)
     im = ax.imshow(np.ma.masked_invalid(shown), cmap="viridis_r" if value.startswith("J") else "viridis",
                    norm=norm, aspect="auto")
-    ax.set_xticks(range(t.shape[1]), [str(c) for c in t.columns], rotation=35, ha="right", fontsize=8)
-    ax.set_yticks(range(t.shape[0]), [str(i) for i in t.index], fontsize=8)
+    ax.set_xticks(range(t.shape[1]), [_shown(c) for c in t.columns], rotation=35, ha="right", fontsize=8)
+    ax.set_yticks(range(t.shape[0]), [_shown(i) for i in t.index], fontsize=8)
     for i in range(t.shape[0]):
         for j in range(t.shape[1]):
             v = shown[i, j]
@@ -543,7 +551,7 @@ def plot_heatmap(
     cbar = fig.colorbar(im, ax=ax, label=value)
     _ticks(cbar.ax.yaxis, log, 5)
     d = _one_data(_frame(results), data)
-    ax.set_title(f"{d}: {value} ({rule})", fontsize=9)
+    ax.set_title(f"{_shown(d)}: {value} ({rule})", fontsize=9)
     return fig
 
 
