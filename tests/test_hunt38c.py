@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import graybox as gb
@@ -95,3 +96,22 @@ def test_grid_report_figures_show_the_names_of_the_spec_as_written(tmp_path):
             assert n in shown, (n, shown)
         legend = [t.get_text() for ax in fig.axes if ax.get_legend() is not None for t in ax.get_legend().get_texts()]
         assert not legend or "_base" in [t.strip() for t in legend], legend
+
+
+# --- pandas columns of text or dates are no numbers ---------------------------------------------------------------
+@pytest.mark.parametrize("column", [
+    pd.Series(["1.5", "2.5", "3.5"]),                        # object dtype: parsed silently
+    pd.Series(["1.5", "2.5", "3.5"], dtype="string"),
+    pd.Series(pd.date_range("2026-11-26", periods=3, freq="s")),   # read as µs since 1970: u ≈ 1.8e15
+    pd.Series(pd.to_timedelta([0, 1, 2], unit="s")),
+])
+def test_a_column_of_text_or_dates_is_refused_as_a_wrong_type(column):
+    with pytest.raises(TypeError, match="must be numbers"):
+        gb.Record(column, [1.0, 2.0, 3.0], Ts=1.0)
+    with pytest.raises(TypeError, match="must be numbers"):
+        gb.Record([1.0, 2.0, 3.0], column, Ts=1.0)
+    with pytest.raises(TypeError, match="must be numbers"):
+        gb.StaticPoints(column, [1.0, 2.0, 3.0])
+    # numbers held in an object array are numbers
+    rec = gb.Record(pd.Series([1.5, 2.5, 3.5], dtype=object), [1.0, 2.0, 3.0], Ts=1.0)
+    assert rec.u.tolist() == [1.5, 2.5, 3.5]

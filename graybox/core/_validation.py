@@ -163,18 +163,24 @@ def check_seed(seed: object, name: str = "seed") -> int:
 
 
 def refuse_non_real(x: object, name: str) -> None:
-    """``TypeError`` naming ``name`` when ``x`` holds complex numbers or strings, which converting to
-    float would take silently: a complex number's real part (with at most numpy's warning), a
-    string's parse (a column read as text)."""
+    """``TypeError`` naming ``name`` when ``x`` holds complex numbers, strings or dates, which converting
+    to float would take silently: a complex number's real part (with at most numpy's warning), a
+    string's parse (a column read as text), a date's count of nanoseconds since 1970."""
     try:
-        kind = np.asarray(x).dtype.kind
+        arr = np.asarray(x)
     except (TypeError, ValueError):  # ragged or not numbers: the conversion that follows says so
         return
+    kind = arr.dtype.kind
     if kind == "c":
         raise TypeError(f"{name} must be real numbers, got complex values")
-    if kind in "US":
+    # text in an object array too: a pandas column of strings (object or "string" dtype) arrives so
+    if kind in "US" or (kind == "O" and any(isinstance(v, (str, bytes)) for v in arr.flat)):
         raise TypeError(f"{name} must be numbers, got strings; convert them first (e.g. with float), or read a "
                         "file with graybox.load_record_csv / load_static_csv")
+    if kind in "Mm":  # numpy turns them into counts of its time unit (ns or µs since 1970) without a word
+        what = "dates or clock times" if kind == "M" else "time spans"
+        raise TypeError(f"{name} must be numbers, got {what} ({arr.dtype}): a time column is no signal; a record's "
+                        "time is its sampling period Ts (seconds)")
 
 
 def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
