@@ -115,3 +115,17 @@ def test_a_column_of_text_or_dates_is_refused_as_a_wrong_type(column):
     # numbers held in an object array are numbers
     rec = gb.Record(pd.Series([1.5, 2.5, 3.5], dtype=object), [1.0, 2.0, 3.0], Ts=1.0)
     assert rec.u.tolist() == [1.5, 2.5, 3.5]
+
+
+def test_a_dataframe_of_inputs_holding_the_output_column_is_refused():
+    # Record(df, df["y"]) read the frame by position: two inputs u1 = u, u2 = y, the output fed in as an input
+    df = pd.DataFrame({"u": [1.0, 2.0, 3.0, 4.0], "y": [0.5, 1.0, 1.5, 2.0]})
+    with pytest.raises(ValueError, match="'y'.*the output") as err:
+        gb.Record(df, df["y"], Ts=1.0)
+    assert "drop(columns='y')" in str(err.value)
+    with pytest.raises(ValueError, match="the output"):
+        gb.StaticPoints(df, df["y"])
+    # a Series is a signal whose labels may be anything, 'y' among them
+    assert gb.Record(pd.Series([1.0, 2.0], index=["x", "y"]), [1.0, 2.0]).u.tolist() == [1.0, 2.0]
+    assert gb.Record(df[["u"]], df["y"], Ts=1.0).u.tolist() == [1.0, 2.0, 3.0, 4.0]
+    assert gb.Record(df.drop(columns="y"), df["y"], Ts=1.0).n_inputs == 1

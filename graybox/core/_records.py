@@ -47,6 +47,12 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
         return x
     cols = list(x.index if series else x.columns)
     labels = [str(c) for c in cols]
+    what = "Series' index labels" if series else "DataFrame's columns"
+    reserved = [] if series else [c for c in labels if c in ("y", "e", "k")]  # a Series' labels may be samples'
+    if reserved:  # read by position, the output (or the noise, the sample index) would be an input
+        raise ValueError(f"{name}: the {what} {labels} hold {reserved}, a name no input may have (y is the output, e "
+                         f"the noise, k the sample index): pass the input columns only, e.g. "
+                         f"df.drop(columns={reserved if len(reserved) > 1 else reserved[0]!r})")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
     hits = [c for c in labels if c in expected]
     if not hits:
@@ -56,7 +62,6 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
         return x.iloc[order] if series else x[[cols[i] for i in order]]
     extra = [c for c in labels if c not in expected]
     missing = [n for n in expected if n not in labels]
-    what = "Series' index labels" if series else "DataFrame's columns"
     raise ValueError(f"{name}: the {what} {labels} name only some of the inputs {list(expected)} "
                      f"(not inputs: {extra or 'none'}; inputs without a column: {missing or 'none'}; repeated: "
                      f"{sorted({c for c in labels if labels.count(c) > 1}) or 'none'}): read by position they "
