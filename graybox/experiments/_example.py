@@ -17,7 +17,7 @@ seeds = [0, 1]            # used by the stochastic estimators (se-ga, neural); t
 # ---------------------------------------------------------------------------------- data sets
 [[data]]
 name = "pumping"
-bundled = "pumping"       # or "buck" (the real buck converter, data kept outside the package)
+bundled = "pumping"       # or "buck" (the real buck converter, measured) or "pumping_miso" (two pump speeds)
 # D_SF's band B = [0, band] on J_SF (output units^2) comes from the static points' uncertainty:
 # the bundled plant's transmitter error +/-0.175 mlc gives 0.175^2 mlc^2. To choose another: band = 0.05
 

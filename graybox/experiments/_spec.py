@@ -312,7 +312,7 @@ class DataSpec:
         given = [k for k in ("bundled", "dataset") if getattr(self, k) is not None]
         files = [k for k in ("ident", "valid", "static") if getattr(self, k) is not None]
         if len(given) + bool(files) != 1:
-            raise SpecError("a data set is exactly one of: bundled = \"pumping\"/\"buck\", CSV files "
+            raise SpecError("a data set is exactly one of: bundled = \"pumping\"/\"buck\"/\"pumping_miso\", CSV files "
                             "(ident, valid, static), or dataset = a Dataset in memory")
         if self.bundled is not None:
             _wrap(check_choice, ("bundled",), self.bundled, "bundled", tuple(BUNDLED))
