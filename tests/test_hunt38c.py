@@ -129,3 +129,41 @@ def test_a_dataframe_of_inputs_holding_the_output_column_is_refused():
     assert gb.Record(pd.Series([1.0, 2.0], index=["x", "y"]), [1.0, 2.0]).u.tolist() == [1.0, 2.0]
     assert gb.Record(df[["u"]], df["y"], Ts=1.0).u.tolist() == [1.0, 2.0, 3.0, 4.0]
     assert gb.Record(df.drop(columns="y"), df["y"], Ts=1.0).n_inputs == 1
+
+
+# --- what a variant needs from every data set is refused with the spec, not as a failed cell in every row ----------
+def _spec_without_uncertainty(tmp_path: Path, variant: str, data_extra: str = "") -> Path:
+    spec = _tiny_files(tmp_path)
+    text = spec.read_text().replace(', uncertainty = 0.1}', '}').replace('[[structures]]', data_extra + '[[structures]]')
+    spec.write_text(text + variant)
+    return spec
+
+
+SE_DSF = '[[variants]]\nname = "SE dsf"\nestimator = "se-dsf"\nlambdas = [0.5, 1.0]\n'
+PE_BAND = '[[variants]]\nname = "PE band"\nestimator = "pe"\nlambdas = [0.5, 1.0]\nconstraints = [{type = "band"}]\n' \
+          'decision = {rule = "min_jsf"}\n'
+
+
+def test_a_se_dsf_variant_without_a_band_anywhere_is_a_spec_error(tmp_path, capsys):
+    # it ran, and every se-dsf cell failed with 'se-dsf needs a band' (as a D_SF decision without one was refused)
+    spec = _spec_without_uncertainty(tmp_path, SE_DSF)
+    with pytest.raises(gx.SpecError, match="se-dsf.*'d'.*band = ") as err:
+        gx.Grid.from_toml(spec)
+    assert "line 13" in str(err.value)  # the variant's table
+    store = tmp_path / "r.sqlite"
+    assert main(["grid", "run", str(spec), "--store", str(store)]) == 2
+    assert "se-dsf" in capsys.readouterr().err and not store.exists()
+    # a band given to the data set or to the variant is enough
+    gx.Grid.from_toml(_spec_without_uncertainty(tmp_path, SE_DSF, "band = 0.01\n"))
+    gx.Grid.from_toml(_spec_without_uncertainty(tmp_path, SE_DSF + "options = {band = 0.01}\n"))
+
+
+def test_a_band_constraint_without_b_on_points_without_uncertainty_is_a_spec_error(tmp_path):
+    # every such cell failed with 'StaticBand needs its half-width'; a data set's band B is no half-width
+    for extra in ("", "band = 0.01\n"):
+        with pytest.raises(gx.SpecError, match="half-width b.*'d'"):
+            gx.Grid.from_toml(_spec_without_uncertainty(tmp_path, PE_BAND, extra))
+    gx.Grid.from_toml(_spec_without_uncertainty(tmp_path, PE_BAND.replace('"band"}', '"band", b = 0.1}')))
+    spec = _tiny_files(tmp_path)  # points with their uncertainty: the constraint takes it
+    spec.write_text(spec.read_text() + PE_BAND)
+    gx.Grid.from_toml(spec)

@@ -392,6 +392,13 @@ class DataSpec:
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
+def _carries_uncertainty(d: DataSpec) -> bool:
+    """Whether a data set's static points carry their uncertainty δ (the bundled sets' do)."""
+    if d.dataset is not None:
+        return d.dataset.static is not None and d.dataset.static.uncertainty is not None
+    return d.bundled is not None or (d.static is not None and d.static.get("uncertainty") is not None)
+
+
 def data_fingerprint(ds: gb.Dataset) -> str:
     """A hash of a data set's content: records (u, y, Ts), static points, static curve, and the
     inputs' names when they are not the default ones (made structures' terms carry them)."""
@@ -1104,13 +1111,24 @@ class Grid:
                     raise SpecError(f"{kind[:-1]} {it.name!r} is identical to {seen[c]!r} (same content, same cells)",
                                     (kind, i))
                 seen[c] = it.name
+        # what a variant reads from every data set, refused here rather than as a failed cell in every row
         for i, v in enumerate(self.variants):
-            if v.decision is not None and v.decision.rule == "dsf" and v.decision.band is None:
-                nob = [d.name for d in self.data if d.band is None]
-                if nob:
-                    raise SpecError(f"variant {v.name!r} decides by D_SF with the data set's band, but data set(s) "
-                                    f"{nob} have none: give band = … to the data set or the decision",
-                                    ("variants", i, "decision"))
+            nob = [d.name for d in self.data if d.band is None]
+            if v.decision is not None and v.decision.rule == "dsf" and v.decision.band is None and nob:
+                raise SpecError(f"variant {v.name!r} decides by D_SF with the data set's band, but data set(s) "
+                                f"{nob} have none: give band = … to the data set or the decision",
+                                ("variants", i, "decision"))
+            if v.estimator == "se-dsf" and v.options.get("band") is None and nob:
+                raise SpecError(f"variant {v.name!r} (se-dsf) solves within the data set's band, but data set(s) "
+                                f"{nob} have none: give band = … to the data set or options = {{band = …}} to the "
+                                "variant", ("variants", i))
+            if reads_uncertainty(v.content()):
+                no_delta = [d.name for d in self.data if not _carries_uncertainty(d)]
+                if no_delta:
+                    raise SpecError(f"variant {v.name!r} has a band constraint without its half-width b, which the "
+                                    f"static points' uncertainty gives, but the points of data set(s) {no_delta} carry "
+                                    "none: give the constraint b = … (output units) or the static file "
+                                    "uncertainty = …", ("variants", i, "constraints"))
 
     # -- construction from TOML ------------------------------------------------------------
     @classmethod
