@@ -167,3 +167,30 @@ def test_a_band_constraint_without_b_on_points_without_uncertainty_is_a_spec_err
     spec = _tiny_files(tmp_path)  # points with their uncertainty: the constraint takes it
     spec.write_text(spec.read_text() + PE_BAND)
     gx.Grid.from_toml(spec)
+
+
+# --- a spec's static file takes its δ from a column, as load_static_csv does -------------------------------------
+def test_a_spec_static_file_reads_each_points_uncertainty_from_a_column(tmp_path):
+    # uncertainty = "delta" was refused ('uncertainty must be a real number, got 'delta''), though the spec's file
+    # entries take load_static_csv's options and its uncertainty names a column there
+    spec = _tiny_files(tmp_path)
+    (tmp_path / "static.csv").write_text("u,y,delta\n1.0,2.0,0.1\n1.5,3.0,0.2\n2.0,4.0,0.3\n")
+    text = spec.read_text().replace("uncertainty = 0.1", 'uncertainty = "delta"')
+    spec.write_text(text + PE_BAND + SE_DSF + '[[variants]]\nname = "PE dsf"\nestimator = "pe"\nlambdas = [0.5, 1.0]\n')
+    grid = gx.Grid.from_toml(spec)
+    data = grid.load_data()["d"]
+    assert data.static.uncertainty.tolist() == [0.1, 0.2, 0.3]
+    band = float(np.mean(np.array([0.1, 0.2, 0.3]) ** 2))  # the points' own band, as StaticPoints.band
+    cells = grid.cells()
+    assert np.allclose([c.band for c in cells], band)
+    run = gx.run_grid(grid, tmp_path / "r.sqlite")
+    assert run.counts["failed"] == 0
+    df = gb.load_results(tmp_path / "r.sqlite")
+    assert np.allclose(df["band"], band)
+    # the column must exist, and a name must not be empty
+    (tmp_path / "static.csv").write_text("u,y\n1.0,2.0\n1.5,3.0\n2.0,4.0\n")
+    with pytest.raises(gx.SpecError, match="delta"):
+        gx.Grid.from_toml(spec).load_data()
+    spec.write_text(text.replace('uncertainty = "delta"', 'uncertainty = ""'))
+    with pytest.raises(gx.SpecError, match="uncertainty"):
+        gx.Grid.from_toml(spec)

@@ -27,6 +27,7 @@ bundled = "pumping"       # or "buck" (the real buck converter, measured) or "pu
 # ident = {path = "ident.csv", u = "speed", y = "pressure", time = "t"}    # or Ts = 0.05 (seconds)
 # valid = {path = "valid.csv", u = "speed", y = "pressure", time = "t"}
 # static = {path = "static.csv", u = "speed", y = "pressure", uncertainty = 0.175}  # steady states, +/- error
+# (uncertainty = "delta": each point's error from the file's column delta; the band is then their mean square)
 # (without uncertainty give band = B, J_SF's bound in output units^2, and b to every band constraint)
 # Several inputs: u = ["speed1", "speed2"] in all three files; input_names = ["n1", "n2"] names them
 # for the terms (n1(k-1)) when the columns' names are not identifiers, e.g. "speed [rpm]".

@@ -16,7 +16,7 @@ from ..core._progress import progress_bar
 from ..core._validation import FrozenMap, check_bool, check_fields
 from ._cell import STATUSES, failed_row, run_cell
 from ._executors import make_executor
-from ._spec import Grid, SpecError, reads_uncertainty
+from ._spec import Grid, SpecError, reads_uncertainty, stored_spec
 from ._store import ResultStore
 
 __all__ = ["GridRun", "run_grid"]
@@ -159,8 +159,8 @@ def run_grid(
     ex = make_executor(executor, workers=workers, client=client, scheduler=scheduler, fn=run_cell)
     version = gb.__version__
     say = log or (lambda line: None)
-    with ResultStore.open(store, grid_name=g.name, fingerprint=g.fingerprint(cells), spec=g.to_dict(), cells=cells,
-                          version=version) as st:
+    with ResultStore.open(store, grid_name=g.name, fingerprint=g.fingerprint(cells), spec=stored_spec(g, datasets),
+                          cells=cells, version=version) as st:
         done = st.statuses()
         todo, seen = [], set()
         for c in cells:

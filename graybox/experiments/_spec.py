@@ -250,7 +250,12 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
                                  low_open=True, high_open=True)
     if "repeats" in keys:
         out["repeats"] = _wrap(check_choice, path + ("repeats",), d.get("repeats", "error"), "repeats", ("error", "mean"))
-    if "uncertainty" in keys and d.get("uncertainty") is not None:  # absent: the canonical form is as before
+    if "uncertainty" in keys and isinstance(d.get("uncertainty"), str):  # the column of each point's δ
+        if not d["uncertainty"].strip():
+            raise SpecError("uncertainty must be δ (a number > 0, output units) or the name of the column holding "
+                            "each point's δ, got ''", path + ("uncertainty",))
+        out["uncertainty"] = d["uncertainty"]
+    elif "uncertainty" in keys and d.get("uncertainty") is not None:  # absent: the canonical form is as before
         out["uncertainty"] = _wrap(check_real, path + ("uncertainty",), d["uncertainty"], "uncertainty", low=0,
                                    low_open=True)
     if "time" in keys:
@@ -288,12 +293,14 @@ class DataSpec:
         ``delimiter``, ``decimal``, ``encoding``, ``skiprows``, ``units_row`` (see
         :func:`graybox.load_static_csv`; ``repeats = "mean"`` averages repeated measurements at one
         level; ``uncertainty`` is δ, the static measurements' error in output units, which gives
-        the band and the half-width of a ``{type = "band"}`` without ``b``).
+        the band and the half-width of a ``{type = "band"}`` without ``b``: one number, or the name
+        of the column holding each point's δ).
     band : float, optional
         The J_SF band B = [0, band] (output units²) for D_SF decisions and the reports. Default:
-        the static points' own band, δ² (:attr:`graybox.StaticPoints.band`): for the bundled sets
+        the static points' own band, mean δ² (:attr:`graybox.StaticPoints.band`): for the bundled sets
         0.175² mlc² (pumping and pumping_miso: the same transmitter) and 0.1² V² (buck); for CSV
-        data the static file's ``uncertainty``; for a Dataset its static points' uncertainty.
+        data the static file's ``uncertainty`` (a column's δ once the file is read: the
+        attribute stays None, and :func:`band_of` gives it); for a Dataset its static points' uncertainty.
         None when there is none (then D_SF decisions need a band given).
     dataset : Dataset, optional
         A Dataset built in Python (not expressible in TOML); its content is hashed.
@@ -328,8 +335,8 @@ class DataSpec:
         band = self.band
         if band is None and self.bundled is not None:
             band = BUNDLED[self.bundled]
-        elif band is None and self.static is not None and self.static.get("uncertainty") is not None:
-            band = float(self.static["uncertainty"]) ** 2
+        elif band is None and self.static is not None and isinstance(self.static.get("uncertainty"), float):
+            band = float(self.static["uncertainty"]) ** 2  # (a column's δ give theirs once read: band_of)
         elif band is None and self.dataset is not None and self.dataset.static is not None \
                 and self.dataset.static.uncertainty is not None:
             band = self.dataset.static.band
@@ -390,6 +397,28 @@ class DataSpec:
         return gb.Dataset(ds.ident, ds.valid, ds.static, description=ds.description, extra=extra)
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
+
+
+def _column_uncertainty(d: DataSpec) -> bool:
+    """Whether a data set's static file gives each point's δ in a column (its band is known once read)."""
+    return d.static is not None and isinstance(d.static.get("uncertainty"), str)
+
+
+def band_of(d: DataSpec, ds: gb.Dataset) -> float | None:
+    """The band B of a data set, loaded as ``ds``: the spec's, or its static points' own when a column of
+    the static file gave their δ."""
+    if d.band is None and _column_uncertainty(d) and ds.static is not None and ds.static.uncertainty is not None:
+        return ds.static.band
+    return d.band
+
+
+def stored_spec(grid: "Grid", datasets: Mapping[str, gb.Dataset]) -> dict:
+    """A grid's canonical form as a store keeps it: each data set's band as its cells hold it (a static
+    file's column of δ gives it once read, :func:`band_of`), which the rows read back show."""
+    out = grid.to_dict()
+    for d, entry in zip(grid.data, out["data"]):
+        entry["band"] = band_of(d, datasets[d.name])
+    return out
 
 
 def _carries_uncertainty(d: DataSpec) -> bool:
@@ -1113,7 +1142,7 @@ class Grid:
                 seen[c] = it.name
         # what a variant reads from every data set, refused here rather than as a failed cell in every row
         for i, v in enumerate(self.variants):
-            nob = [d.name for d in self.data if d.band is None]
+            nob = [d.name for d in self.data if d.band is None and not _column_uncertainty(d)]
             if v.decision is not None and v.decision.rule == "dsf" and v.decision.band is None and nob:
                 raise SpecError(f"variant {v.name!r} decides by D_SF with the data set's band, but data set(s) "
                                 f"{nob} have none: give band = … to the data set or the decision",
@@ -1254,7 +1283,7 @@ class Grid:
         tail = ',"version":' + canonical_json(version) + "}"
         for d in self.data:
             dh = data_fingerprint(ds[d.name])
-            band = d.band
+            band = band_of(d, ds[d.name])
             tail_data = '"data":' + canonical_json(dh) + ',"seed":'
             # the band only where the variant reads it; the points' δ where it reads δ and a band in the key does
             # not say it (keys of band-reading cells written before unchanged)
