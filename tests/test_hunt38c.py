@@ -194,3 +194,18 @@ def test_a_spec_static_file_reads_each_points_uncertainty_from_a_column(tmp_path
     spec.write_text(text.replace('uncertainty = "delta"', 'uncertainty = ""'))
     with pytest.raises(gx.SpecError, match="uncertainty"):
         gx.Grid.from_toml(spec)
+
+
+def test_a_report_of_a_data_set_without_band_names_the_commands_options(tmp_path, capsys):
+    # graybox grid report said 'pass band=…', a keyword of the Python function the command has no option of
+    spec = _spec_without_uncertainty(tmp_path, "")
+    store = tmp_path / "r.sqlite"
+    assert main(["grid", "run", str(spec), "--store", str(store)]) == 0
+    capsys.readouterr()
+    assert main(["grid", "report", str(store), "--out", str(tmp_path / "rep")]) == 2
+    err = capsys.readouterr().err
+    assert "'d' has no band" in err and "--band" in err and "--rule chosen" in err
+    assert main(["grid", "report", str(store), "--out", str(tmp_path / "rep"), "--band", "0.01"]) == 0
+    assert main(["grid", "report", str(store), "--out", str(tmp_path / "rep2"), "--rule", "chosen"]) == 0
+    with pytest.raises(ValueError, match="band=B"):  # the Python words for the Python call
+        gx.leaderboard(store)

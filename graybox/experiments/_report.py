@@ -113,7 +113,9 @@ def _band_of(rows: pd.DataFrame, band: float | Mapping[str, float] | None, data:
         return float(band)
     b = rows["band"].dropna()
     if b.empty:
-        raise ValueError(f"data set {data!r} has no band in the store: pass band=…")
+        raise ValueError(f"data set {data!r} has no band in the store (its static points carry no uncertainty, and "
+                         "the spec gave it none): pass band=B, J_SF's bound in output units² (graybox grid report "
+                         "--band B), or rank each cell's own choice with rule='chosen' (--rule chosen)")
     return float(b.iloc[0])
 
 
