@@ -129,6 +129,8 @@ def test_a_dataframe_of_inputs_holding_the_output_column_is_refused():
     assert gb.Record(pd.Series([1.0, 2.0], index=["x", "y"]), [1.0, 2.0]).u.tolist() == [1.0, 2.0]
     assert gb.Record(df[["u"]], df["y"], Ts=1.0).u.tolist() == [1.0, 2.0, 3.0, 4.0]
     assert gb.Record(df.drop(columns="y"), df["y"], Ts=1.0).n_inputs == 1
+    # other columns are read by position as before, e and k among them (an error signal e as the input)
+    assert gb.Record(pd.DataFrame({"e": [1.0, 2.0]}), [0.0, 1.0]).u.tolist() == [1.0, 2.0]
 
 
 # --- what a variant needs from every data set is refused with the spec, not as a failed cell in every row ----------

@@ -48,11 +48,9 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
     cols = list(x.index if series else x.columns)
     labels = [str(c) for c in cols]
     what = "Series' index labels" if series else "DataFrame's columns"
-    reserved = [] if series else [c for c in labels if c in ("y", "e", "k")]  # a Series' labels may be samples'
-    if reserved:  # read by position, the output (or the noise, the sample index) would be an input
-        raise ValueError(f"{name}: the {what} {labels} hold {reserved}, a name no input may have (y is the output, e "
-                         f"the noise, k the sample index): pass the input columns only, e.g. "
-                         f"df.drop(columns={reserved if len(reserved) > 1 else reserved[0]!r})")
+    if not series and "y" in labels:  # read by position, the output would be an input (a Series' labels are samples')
+        raise ValueError(f"{name}: the {what} {labels} hold 'y', the output's name, which no input may have: pass "
+                         "the input columns only, e.g. df.drop(columns='y')")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
     hits = [c for c in labels if c in expected]
     if not hits:
