@@ -614,7 +614,7 @@ def frols(
         rows (never straddling two records), and respect ``include``. The stopping rule then
         compares the best subsets of each size: ``n_terms`` searches that size only, ``tol`` the
         sizes up to the first whose best subset reaches it, ``criterion`` every size up to
-        ``max_terms``, the exact search cutting each size at the RSS that would beat the other
+        ``max_terms`` (both stop at the largest size with a subset of independent terms), the exact search cutting each size at the RSS that would beat the other
         sizes' criterion. :attr:`Selection.subsets` keeps the best subset of each size looked at;
         :attr:`Selection.evaluated` is the chosen subset followed by the greedy terms after it.
         Exact search is refused (``ValueError``, naming ``"swap"``) beyond 100 usable candidates;
@@ -980,7 +980,8 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
         raise
     ks = np.array([len(S) for S in plan.subsets])
     crit = criterion_of_sizes(rule.criterion, ks, plan.rss, N)
-    i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy, can_grow=ks.max() < min(n_free + len(forced), N - 1),
+    i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy,
+                           can_grow=not plan.exhausted and ks.max() < min(n_free + len(forced), N - 1),
                            fraction="1 - ΣERR")
     how = ("exact (branch and bound, proven)" if plan.proven else
            f"exact search ran out of its {EXACT_NODES} nodes: best found, not proven") if search == "exact" else \

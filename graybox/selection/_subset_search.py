@@ -297,12 +297,16 @@ class SizePlan:
         Whether the rule's answer is proven (exact search finished within its node budget).
     nodes : int
         Branch-and-bound nodes visited.
+    exhausted : bool
+        Whether the sizes stopped short of those asked because no larger subset of independent
+        columns exists on these data (a larger ``max_terms`` would not look further).
     """
 
     subsets: tuple[tuple[int, ...], ...]
     rss: np.ndarray
     proven: bool
     nodes: int
+    exhausted: bool = False
 
 
 def _just_above(x: float) -> float:
@@ -325,8 +329,18 @@ def search_sizes(problem: SubsetProblem, sizes: list[int], forced: list[int], *,
     rss: list[float] = []
     prev: list[int] = list(forced)
     target = rule.tol * problem.yy if rule.mode == "tol" else None
+    exhausted = False
     for k in sizes:
-        S, r = swap_search(problem, k, forced, extra_starts=[prev])
+        try:
+            S, r = swap_search(problem, k, forced, extra_starts=[prev])
+        except FewerTermsError:
+            if rule.mode == "n_terms" or not subsets:
+                raise
+            # a tolerance or a criterion looks at every size up to max_terms, not at one asked for: where
+            # the candidates hold a linear dependence the sizes end with the independent subsets, as
+            # greedy's path ends with the independent terms
+            exhausted = True
+            break
         subsets.append(tuple(S))
         rss.append(r)
         prev = S
@@ -334,7 +348,7 @@ def search_sizes(problem: SubsetProblem, sizes: list[int], forced: list[int], *,
             break
     proven = True
     if not exact:
-        return SizePlan(tuple(subsets), np.array(rss), False, 0)
+        return SizePlan(tuple(subsets), np.array(rss), False, 0, exhausted)
 
     def improve(i: int, cut: float) -> None:
         nonlocal proven
@@ -369,4 +383,4 @@ def search_sizes(problem: SubsetProblem, sizes: list[int], forced: list[int], *,
             if r_all >= level:
                 continue  # no subset of this size can beat the best of the other sizes
             improve(int(i), min(rss[i], level))
-    return SizePlan(tuple(subsets), np.array(rss), proven, budget.used)
+    return SizePlan(tuple(subsets), np.array(rss), proven, budget.used, exhausted)
