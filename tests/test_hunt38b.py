@@ -64,3 +64,37 @@ def test_a_criterion_search_cut_by_a_dependence_does_not_ask_for_a_larger_max_te
         greedy = gb.frols(cand, gb.Record(u, y), criterion="aic")
         sel = gb.frols(cand, gb.Record(u, y), criterion="aic", search="swap")
     assert sel.n_terms == greedy.n_terms == len(sel.subsets[-1])
+
+
+# A record one sample longer than the candidates' largest lag (one regression row), or an input held at
+# zero so that every candidate column is zero: frols by a criterion or a tolerance failed with numpy's
+# "attempt to get argmin of an empty sequence", "index -1 is out of bounds" or "zero-size array to
+# reduction operation maximum" (search="swap"), and semp with a KeyError 'n_terms', whatever its rule.
+_SHORT = gb.Record(np.array([0.1, 0.5, -0.3]), np.array([0.0, 0.2, 0.4]))
+_HELD = gb.Record(np.zeros(50), np.random.default_rng(0).standard_normal(50))
+
+
+@pytest.mark.parametrize("rule", [{}, {"criterion": "aic"}, {"search": "swap"}, {"search": "exact"}])
+def test_frols_on_one_regression_row_says_the_record_is_too_short(rule):
+    with pytest.raises(ValueError, match=r"1 regression row"):
+        gb.frols(gb.Candidates(2, 2, degree=2), _SHORT, **rule)
+
+
+@pytest.mark.parametrize("rule", [{}, {"criterion": "aic"}, {"tol": 0.1}])
+def test_semp_on_one_sample_after_the_lags_says_the_record_is_too_short(rule):
+    with pytest.raises(ValueError, match=r"1 sample"):
+        gb.semp(gb.Candidates(2, 2, degree=2), _SHORT, **rule)
+
+
+@pytest.mark.parametrize("rule", [{}, {"tol": 0.1}, {"search": "swap"}, {"n_terms": 1}])
+def test_frols_with_every_candidate_zero_names_them(rule):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        with pytest.raises(ValueError, match=r"none of the 2 candidates is usable.*u\(k-1\) \(all-zero column\)"):
+            gb.frols(gb.parse_structure(["u(k-1)", "u(k-2)"]), _HELD, **rule)
+
+
+@pytest.mark.parametrize("rule", [{}, {"tol": 0.1}, {"n_terms": 1}])
+def test_semp_with_every_candidate_zero_names_them(rule):
+    with pytest.raises(ValueError, match=r"every candidate column is zero.*u\(k-1\)"):
+        gb.semp(gb.parse_structure(["u(k-1)", "u(k-2)"]), _HELD, **rule)

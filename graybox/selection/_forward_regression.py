@@ -688,6 +688,11 @@ def frols(
             + "; ".join(f"{t} ({why})" for t, why in skipped[:10])
             + ("; …" if len(skipped) > 10 else "")] if skipped else []
     n_usable = int(active.sum())
+    if n_usable == 0:
+        # every rule would look at no model at all: said here, not by the search's empty arrays
+        raise FewerTermsError(
+            f"none of the {n_cand} candidates is usable on these data: "
+            + "; ".join(f"{t} ({why})" for t, why in skipped[:10]) + ("; …" if len(skipped) > 10 else ""), 0)
     if n_terms is not None and n_terms > n_usable:
         if said:
             warn("; ".join(said), CandidateWarning)
@@ -702,6 +707,9 @@ def frols(
     else:
         # a default follows the data: no more terms than the rows carry (nobody asked for more: nothing said)
         K = min(n_usable, max_terms or min(_DEFAULT_MAX_TERMS, N - 1))
+    if mode == "criterion" and K < 1:  # N = 1: the default max_terms, N − 1, leaves no size to look at
+        raise ValueError(f"criterion needs more regression rows than model terms: {N} regression row after the "
+                         f"candidates' largest lag {process.max_lag} is too few for any term (a longer record, or smaller lags)")
     if mode == "criterion" and max(K, max_terms or 0) >= N:  # what was asked, even where fewer candidates are usable
         raise ValueError(f"criterion needs more rows ({N}) than model terms ({max(K, max_terms or 0)}); lower max_terms")
     if mode == "criterion" and K < len(forced):

@@ -307,6 +307,12 @@ def semp(
         raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for max_terms = {opt.limit} terms: "
                          "lower it, or leave it out (then it is what the rows carry)")
     opt = replace(opt, limit=min(opt.limit, sc.n_rows - 1))
+    if opt.limit < 1:  # a default max_terms follows the rows: one row leaves no size to look at
+        raise ValueError(f"{sc.n_rows} sample after the largest lag {opt.process.max_lag} is too few for any term "
+                         "(a model needs more samples than terms): a longer record, or smaller lags")
+    if np.all(sc.zero):
+        raise ValueError("every candidate column is zero on these data (an input held at zero?): "
+                         + ", ".join(str(t) for t in opt.process[:10]) + (", …" if len(opt.process) > 10 else ""))
     if len(opt.forced) > opt.limit:
         raise ValueError(f"{sc.n_rows} samples after the largest lag are too few for the {len(opt.forced)} "
                          "included terms")
