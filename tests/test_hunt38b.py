@@ -98,3 +98,27 @@ def test_frols_with_every_candidate_zero_names_them(rule):
 def test_semp_with_every_candidate_zero_names_them(rule):
     with pytest.raises(ValueError, match=r"every candidate column is zero.*u\(k-1\)"):
         gb.semp(gb.parse_structure(["u(k-1)", "u(k-2)"]), _HELD, **rule)
+
+
+# select_graybox floors each block's free-run MSE at round-off (1e-20 of the mean square output) so that on
+# noise-free data the exact structures tie and the rule takes the fewest terms. The floor was each block's
+# own: a validation record that starts at rest (u = y = 0 for its first block) had none there, so the
+# round-off of that block (1e-33 against 1e-34) ranked the exact structures, and the rule passed over the
+# true 6-term structure for one of 10 terms.
+def test_select_graybox_ties_exact_structures_on_a_record_that_starts_at_rest():
+    def record(n, seed, rest=0):
+        rng = np.random.default_rng(seed)
+        u = np.repeat(rng.uniform(0.5, 2, n // 10 + 1), 10)[:n]
+        u[:rest] = 0.0
+        y = np.zeros(n)
+        for k in range(2, n):
+            y[k] = 0.5 * y[k - 1] + 0.2 * y[k - 2] + 0.3 * u[k - 1] - 0.05 * u[k - 1] ** 2 + 0.02 * u[k - 2] * y[k - 1]
+        return gb.Record(u, y, Ts=0.1)
+
+    data = gb.Dataset(record(400, 0), record(500, 1, rest=100), gb.StaticPoints([0.5, 1.0], [0.0, 0.1]))
+    g = gb.select_graybox(gb.Candidates(2, 2, degree=2), data, band=np.inf, estimator=["ls"], progress=False)
+    exact = g.table[g.table["JS_valid"] < 1e-15]
+    assert len(exact) > 1
+    assert np.all(exact["eligible"])
+    assert set(str(t) for t in g.structure_of(g.chosen.name)) == {
+        "1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-2)y(k-1)"}

@@ -767,9 +767,11 @@ def _fit_or_fail(job: _Job, st: gb.Structure,
 def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray) -> np.ndarray:
     """(P, B) free-run MSE of each member on each block of ``rec`` (one free run from its first L samples).
 
-    An MSE below the round-off floor (:data:`_RSS_FLOOR` of the block's mean square output) is
+    An MSE below the round-off floor (:data:`_RSS_FLOOR` of the scored samples' mean square output) is
     that floor: on noise-free data exact structures tie there, instead of the one with the least
-    round-off (often the largest) leading the others by orders of magnitude."""
+    round-off (often the largest) leading the others by orders of magnitude. The floor is the whole
+    record's, not each block's: a block where the output rests at zero (a record that starts at rest)
+    would have none, and the round-off there would rank the exact structures."""
     P, B = thetas.shape[0], len(edges) - 1
     out = np.full((P, B), np.inf)
     ok = np.all(np.isfinite(thetas), axis=1)
@@ -780,7 +782,8 @@ def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.n
     y = simulate_batch(code, thetas[ok], record_inputs(rec, code.inputs), rec.y, max(L, 1), bounded=True)
     with np.errstate(over="ignore", invalid="ignore"):
         e2 = (y - rec.y[None, :]) ** 2
-        mse = np.stack([np.maximum(e2[:, a:b].mean(axis=1), _RSS_FLOOR * np.mean(rec.y[a:b] ** 2))
+        floor = _RSS_FLOOR * np.mean(rec.y[edges[0]:edges[-1]] ** 2)
+        mse = np.stack([np.maximum(e2[:, a:b].mean(axis=1), floor)
                         for a, b in zip(edges[:-1], edges[1:])], axis=1)
     out[ok] = np.where(np.isfinite(mse), mse, np.inf)
     return out
