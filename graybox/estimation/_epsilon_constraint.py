@@ -244,6 +244,11 @@ def _sweep_starts(problem: SEProblem, band: float, lambdas: np.ndarray,
     of reach: then they compete on J_S, see :data:`_JSF_TIE`); each as (θ, description).
     """
     front = gradient_front(problem, lambdas, progress=False, starts=_pe_starts(problem))
+    if not np.all(np.isfinite(front.thetas), axis=1).any() and not np.any(np.asarray(lambdas) == 1.0):
+        # no start below λ1 = 1 has a stable equilibrium at every static point (least squares and the PE members
+        # lack one): the λ1 = 1 fit, which the points do not constrain, may have them, and the sweep continued
+        # from it finds the members se_pareto's default sweep (λ1 = 1 first) finds
+        front = gradient_front(problem, np.r_[1.0, lambdas], progress=False, starts=_pe_starts(problem))
     cands = [(th, f"SE λ1={lam:.4g}") for th, lam in zip(front.thetas, front.lambdas)]
     ls = problem.ls_theta()
     fresh = np.array(_FRESH)
@@ -256,8 +261,10 @@ def _sweep_starts(problem: SEProblem, band: float, lambdas: np.ndarray,
         except _Failed:
             pass
     cands = [(th, name) for th, name in cands if np.all(np.isfinite(th))]
-    if not cands:
-        return []
+    if not cands:  # said by se_dsf's error (the first member's reason: the others' are alike)
+        first = min(front.failures) if front.failures else None
+        raise ValueError("every member failed" + (f" (λ1 = {front.lambdas[first]:.4g}: {front.failures[first]})"
+                                                  if first is not None else ""))
     th = np.array([c[0] for c in cands])
     js, jsf = problem.js(th), problem.jsf(th)
     inside = np.flatnonzero(np.isfinite(js) & (jsf <= band))
