@@ -154,3 +154,18 @@ def test_se_dsf_finds_starts_where_the_default_sweep_does():
         direct = gb.se_dsf(st, data)
     assert not direct.in_band and not swept.in_band
     assert direct.JSF <= swept.JSF * (1 + 1e-3)
+
+
+# A checkpoint path holding a file that is no .npz archive (a text file, a torn download, a plain .npy
+# array): numpy took it for a pickle and the error passed on its advice, "If you trust the file you can
+# load it unsafely using the allow_pickle= keyword argument or pickle.load()": a checkpoint is never a
+# pickle, and graybox never loads user files with pickle.
+@pytest.mark.parametrize("content", [b"not a zip at all", b"\x80\x04\x95 a pickle's first bytes"])
+def test_a_checkpoint_that_is_no_npz_archive_is_named_as_such(tmp_path, content):
+    path = tmp_path / "front.npz"
+    path.write_bytes(content)
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)"])
+    data = gb.Dataset(_plant(), _plant(seed=1), _plant_points())
+    with pytest.raises(ValueError, match=r"no \.npz archive") as info:
+        gb.se_pareto(st, data, lambdas=[1.0], method="gradient", checkpoint=path)
+    assert "pickle" not in str(info.value)

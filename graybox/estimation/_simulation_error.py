@@ -554,6 +554,9 @@ class SEFront:
 
 _CHECKPOINT_ARRAYS = ("thetas", "costs", "done", "failures", "nfev")
 
+#: The first bytes of a zip file, which an .npz archive is.
+_ZIP_MAGIC = b"PK\x03\x04"
+
 
 
 def checkpoint_version(path: str | os.PathLike) -> str | None:
@@ -583,9 +586,15 @@ def _load_checkpoint(path: Path, meta: dict) -> dict | None:
 
     try:
         # opened here: np.load leaves the file it opened open when a torn zip fails to read
-        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
-            stored = json.loads(str(z["meta"]))
-            raw = {k: z[k] for k in _CHECKPOINT_ARRAYS if k in z.files}
+        with open(path, "rb") as f:
+            if f.read(4) != _ZIP_MAGIC:
+                # said here: numpy takes any file that is neither .npy nor .npz for a pickle and says to load it
+                # "unsafely" with pickle, which a checkpoint never is
+                raise ValueError("it is no .npz archive (its first bytes are not a zip file's)")
+            f.seek(0)
+            with np.load(f, allow_pickle=False) as z:
+                stored = json.loads(str(z["meta"]))
+                raw = {k: z[k] for k in _CHECKPOINT_ARRAYS if k in z.files}
     # JSONDecodeError is a ValueError; TypeError: a plain .npy array, which is no context manager
     except (ValueError, TypeError, KeyError, OSError, EOFError, zipfile.BadZipFile) as exc:
         raise unreadable(exc) from None
