@@ -169,3 +169,33 @@ def test_a_checkpoint_that_is_no_npz_archive_is_named_as_such(tmp_path, content)
     with pytest.raises(ValueError, match=r"no \.npz archive") as info:
         gb.se_pareto(st, data, lambdas=[1.0], method="gradient", checkpoint=path)
     assert "pickle" not in str(info.value)
+
+
+# The gradient SE and output-error fits ran scipy's least_squares on z = θ·scale in output units. Two of its
+# tolerances are not relative: it stops at ‖dz‖ < xtol (xtol + ‖z‖), an absolute step of xtol² = 1e-16
+# wherever ‖z‖ < 1e-8, and solver="lm" takes gtol as a cosine, which was given as tol × the output's spread.
+# An output in A or m³/s (spread ~1e-12) stopped the fits early (J_S 1.6e-7 worse than in µA), one of
+# spread 1e-12 with solver="lm" failed outright ("All tolerances must be higher than machine epsilon"), and
+# one in Pa (spread ~1e6) stopped "lm" after two evaluations.
+@pytest.mark.parametrize("solver", ["trf", "dogbox", "lm"])
+@pytest.mark.parametrize("scale", [1e-12, 1e6])
+def test_output_error_fits_alike_in_any_units_of_the_output(solver, scale):
+    st = gb.parse_structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-2)y(k-1)", "u(k-2)"])
+    rec = _plant(noise=0.01)
+    scaled = gb.Record(rec.u, scale * rec.y, Ts=rec.Ts)
+    ref = gb.output_error(st, rec, n_starts=0, solver=solver, margin=None, ridge=0)
+    out = gb.output_error(st, scaled, n_starts=0, solver=solver, margin=None, ridge=0)
+    assert out.JS / scale**2 == pytest.approx(ref.JS, rel=1e-10)
+    assert list(out.starts["nfev"]) == list(ref.starts["nfev"])
+
+
+def test_the_gradient_se_front_of_an_output_in_small_units_is_the_same_front():
+    st = gb.parse_structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-2)y(k-1)", "u(k-2)"])
+    points = _plant_points()
+    ref = gb.se_pareto(st, _plant(noise=0.01), points, lambdas=[1.0, 0.3], method="gradient", margin=None)
+    rec = _plant(noise=0.01)
+    small = gb.se_pareto(st, gb.Record(rec.u, 1e-12 * rec.y, Ts=rec.Ts),
+                         gb.StaticPoints(points.ubar, 1e-12 * points.ybar), lambdas=[1.0, 0.3], method="gradient",
+                         margin=None)
+    np.testing.assert_allclose(small.JS / 1e-24, ref.JS, rtol=1e-10)
+    np.testing.assert_allclose(small.JSF / 1e-24, ref.JSF, rtol=1e-8)

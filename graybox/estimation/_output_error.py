@@ -175,8 +175,9 @@ def output_error(
     seed : int
         Seeds the perturbed starts.
     max_nfev, tol : int, float
-        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = tol``, relative;
-        ``gtol = tol`` × the output's standard deviation, so the stop does not depend on units).
+        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = gtol = tol``, on a problem
+        whose parameters and residuals are divided by the output's standard deviation, so the stop does
+        not depend on units).
     solver : {"auto", "trf", "dogbox", "lm"}
         ``least_squares`` method; ``"auto"`` fits every start with both "trf" and "dogbox".
     progress : bool, optional

@@ -959,14 +959,20 @@ def _fit(problem: SEProblem, theta0: np.ndarray, lam1: float, solver: str, max_n
     ``watch(θ)``, if given, sees every iterate (each point where a Jacobian is taken).
     """
     cp = _Compressed(problem, lam1, watch)
+    # least_squares sees a problem without units: z = θ·scale (output units) and the residuals (output units)
+    # over the output's spread. Its tolerances are not all relative: it stops at ‖dx‖ < xtol (xtol + ‖x‖), an
+    # absolute step of xtol² where ‖x‖ < xtol (an output of 1e-6 A ended the fits at their start), and its gtol
+    # bounds the gradient Jᵀf, in the units of x and f ("lm": a cosine, whatever the units)
+    ys = problem.y_scale
     try:
         with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
-            res = least_squares(cp.fun, theta0 * problem.scale, jac=cp.jac, method=solver, x_scale="jac",
-                                max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol * problem.y_scale)
+            res = least_squares(lambda x: cp.fun(x * ys) / ys, theta0 * problem.scale / ys,
+                                jac=lambda x, f=None: cp.jac(x * ys), method=solver, x_scale="jac",
+                                max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
     except _Stop as stop:
         z, cost = stop.args
         return z / problem.scale, cost, cp.nfun
-    return res.x / problem.scale, float(2 * res.cost), cp.nfun
+    return res.x * ys / problem.scale, float(2 * res.cost) * ys**2, cp.nfun
 
 
 def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
@@ -1121,8 +1127,9 @@ def gradient_front(
     progress : bool, optional
         Show a progress bar; default: only on a terminal.
     max_nfev, tol : int, float
-        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = tol``, relative;
-        ``gtol = tol`` × the output's standard deviation, so the stop does not depend on units).
+        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = gtol = tol``, on a problem
+        whose parameters and residuals are divided by the output's standard deviation, so the stop does
+        not depend on units).
     starts : sequence of ndarray
         Further starts tried wherever the fit restarts. :func:`se_pareto` passes PE solutions
         (convex, with the static points weighted in).
