@@ -199,3 +199,24 @@ def test_the_gradient_se_front_of_an_output_in_small_units_is_the_same_front():
                          margin=None)
     np.testing.assert_allclose(small.JS / 1e-24, ref.JS, rtol=1e-10)
     np.testing.assert_allclose(small.JSF / 1e-24, ref.JSF, rtol=1e-8)
+
+
+# Equality constraints (eq. (22)'s curve, points to pass through) were judged consistent when they disagreed
+# by less than 1e-8 of one output unit: for an output in A or m³/s (1e-9) two curves 0.1 output spreads apart
+# at ū = 0 were "one condition", and CLS and PE met them halfway (ȳ(0) = 0.15 between 0.1 and 0.2) instead of
+# raising InfeasibleError as they do in mA.
+@pytest.mark.parametrize("scale", [1.0, 1e-9, 1e-12])
+@pytest.mark.parametrize("fit", ["cls", "cls closed", "pe"])
+def test_contradictory_equalities_are_refused_in_any_units_of_the_output(scale, fit):
+    st = gb.parse_structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-2)"])
+    rec = _plant()
+    rec = gb.Record(rec.u, scale * rec.y, Ts=rec.Ts)
+    points = _plant_points()
+    points = gb.StaticPoints(points.ubar, scale * points.ybar)
+    cons = [gb.CurveEquality(gb.StaticCurve([c0 * scale, 0.9 * scale, -0.3 * scale], domain=(-1, 1)), sigma_y=0.7)
+            for c0 in (0.1, 0.2)]
+    with pytest.raises(gb.InfeasibleError, match="inconsistent"):
+        if fit == "pe":
+            gb.pe_pareto(st, rec, points, lambdas=[0.5], constraints=cons)
+        else:
+            gb.cls(st, rec, points, how="context", constraints=cons, solver="closed" if "closed" in fit else "clarabel")

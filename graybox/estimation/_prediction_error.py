@@ -392,10 +392,11 @@ class _Rows:
     names: tuple[str, ...]
 
 
-def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, T: np.ndarray | None = None,
+def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, y_scale: float, T: np.ndarray | None = None,
           at: np.ndarray | None = None) -> _Rows:
     """The rows in y (z = T y); with ``at`` (a z) their right-hand sides are those of the step y − T⁻¹ at,
-    each row's residual at ``at`` formed in z, where no ill-conditioned T has touched it."""
+    each row's residual at ``at`` formed in z, where no ill-conditioned T has touched it. ``y_scale``: the
+    output's spread (output units), the scale the equalities' consistency is judged on."""
     n = s.size
     T = np.eye(n) if T is None else T
     at = np.zeros(n) if at is None else at
@@ -416,7 +417,7 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, T: np
     names = tuple(c.describe() for c in cons)
     E, f, G, h = np.vstack(E), np.concatenate(f), np.vstack(G), np.concatenate(h)
     G, h = _normalise_ub(G, h, names)
-    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys))
+    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys), scale=y_scale)
     return _Rows(V, g, G, h, tuple(user), names)
 
 
@@ -429,8 +430,13 @@ def _normalise_ub(G: np.ndarray, h: np.ndarray, names: tuple[str, ...]) -> tuple
     return G / norms[:, None], h / norms
 
 
-def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int) -> tuple[np.ndarray, np.ndarray]:
-    """Independent, orthonormal equality rows V y = g, or an error if the equalities disagree."""
+def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int,
+               scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Independent, orthonormal equality rows V y = g, or an error if the equalities disagree.
+
+    The rows are of unit norm in z = θ·s, so their right-hand sides are in output units: a disagreement is
+    judged against ``scale`` (the output's spread) or the right-hand sides' size, not against one output
+    unit, which for an output in A (1e-9) took contradictory equalities for one and met them halfway."""
     n = E.shape[1]
     if E.shape[0] == 0:
         return np.zeros((0, n)), np.zeros(0)
@@ -446,7 +452,7 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
     r = int(np.sum(S > 1e-10 * S[0]))
     Ur = U[:, :r]
     resid = f - Ur @ (Ur.T @ f)
-    if np.linalg.norm(resid) > 1e-8 * max(1.0, np.linalg.norm(f)):
+    if np.linalg.norm(resid) > 1e-8 * max(scale, np.linalg.norm(f)):
         more = ""
         if E.shape[0] > r:
             more = (f" ({E.shape[0]} equality rows but only {r} independent ones: the static function of this "
@@ -563,9 +569,10 @@ class _QP:
         import cvxpy as cp
 
         n = d.s.size
-        self.basis = b = _basis(d, static, None if _full_rank([(d.R1, d.N)]) else _rows(cons, ctx, d.s), n_static)
+        self.basis = b = _basis(d, static, None if _full_rank([(d.R1, d.N)]) else _rows(cons, ctx, d.s, d.y_scale),
+                                n_static)
         z0 = b.z0  # T only ever carries the step, whose size is the output's spread (see _Basis)
-        rows = _rows(cons, ctx, d.s, b.T, at=z0)
+        rows = _rows(cons, ctx, d.s, d.y_scale, b.T, at=z0)
         # y is in output units (the linear terms scale with the output, the objective with its
         # square): the variable is the step in units of the output's spread σ, because Clarabel's
         # tolerances and starting point are absolute and its optimum moved with the output's units.
@@ -765,7 +772,7 @@ def cls(
     recs = as_gram_records(data)
     d = _dynamic(st, recs)
     cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
-    rows = _rows(cons, ctx, d.s)  # validates every constraint before any solver runs
+    rows = _rows(cons, ctx, d.s, d.y_scale)  # validates every constraint before any solver runs
     _warn_static_range(cons, ctx, curve, recs)  # after: bad input is an error, not a warning and an error
     # the records and the equality constraints must identify θ (an input held constant leaves its terms free)
     identified_by(st, d.R1 * d.s, d.N, equalities=rows.V * d.s, inputs=recs[0].input_names, what="the CLS θ")
@@ -932,7 +939,7 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls
         _check_point_inputs(recs, p)
     ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), recs[0].input_names,
                         _needed_ls_theta(cons, d))
-    rows = _rows(cons, ctx, d.s)
+    rows = _rows(cons, ctx, d.s, d.y_scale)
     _warn_static_range(cons, ctx, curve, recs)
     R2, c2, M = _static_part(d, pts)
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
