@@ -220,3 +220,25 @@ def test_contradictory_equalities_are_refused_in_any_units_of_the_output(scale, 
             gb.pe_pareto(st, rec, points, lambdas=[0.5], constraints=cons)
         else:
             gb.cls(st, rec, points, how="context", constraints=cons, solver="closed" if "closed" in fit else "clarabel")
+
+
+# Of candidates proportional on the data (u(k-1) and the constant on a record whose input is held), frols kept
+# the one listed first, also when the other was an included term: frols(include=["u(k-1)"]) failed with
+# "included term u(k-1) cannot be used on these data: proportional to 1" (semp took it). The included term
+# is now the one kept.
+@pytest.mark.parametrize("search", ["greedy", "swap", "exact"])
+@pytest.mark.parametrize("method", ["mgs", "gram"])
+def test_an_included_term_is_kept_over_a_candidate_proportional_to_it(search, method):
+    rec = _plant()
+    held = gb.Record(np.full(len(rec), 0.5), rec.y, Ts=rec.Ts)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        sel = gb.frols(gb.Candidates(2, 2, degree=2), held, include=["u(k-1)"], n_terms=3, search=search,
+                       method=method)
+    assert str(sel.structure[0]) == "u(k-1)"
+    assert ("1", "proportional to u(k-1)") in [(str(t), why) for t, why in sel.skipped]
+    with pytest.raises(ValueError, match=r"included term u\(k-1\) cannot be used on these data: proportional to 1"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.CandidateWarning)
+            gb.frols(gb.Candidates(2, 2, degree=2), held, include=["1", "u(k-1)"], n_terms=3, search=search,
+                     method=method)

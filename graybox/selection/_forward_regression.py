@@ -681,7 +681,7 @@ def frols(
 
     rule = stop_rule(n_terms, tol, criterion, curve_default="aic")
     check_choice(search, "search", SEARCHES)
-    cols = _scaled_columns(process, data, rule, max_terms, method)
+    cols = _scaled_columns(process, data, rule, max_terms, method, keep=forced)
     N, yy, active, skipped = cols.n_rows, cols.yy, cols.active, cols.skipped
     # said together with the candidates dropped during the selection: one CandidateWarning per call
     said = [f"{len(skipped)} candidate(s) skipped (the data cannot tell them from others): "
@@ -824,8 +824,11 @@ class _Columns:
 
 
 def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms: int | None,
-                    method: str) -> _Columns:
-    """Build the candidate columns (or their Gram matrix), scale them and skip the unusable ones."""
+                    method: str, keep: Sequence[int] = ()) -> _Columns:
+    """Build the candidate columns (or their Gram matrix), scale them and skip the unusable ones.
+
+    Of candidates proportional to one another the first listed is kept, or the one in ``keep`` (the
+    included terms): an included ``u(k-1)`` on a record whose input is held is kept, the constant skipped."""
     n_cand = len(process)
     lazy = is_dask_data(data)
     records = as_gram_records(data)
@@ -870,10 +873,15 @@ def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms:
         np.fill_diagonal(G, np.where(active, float(N), 0.0))
         cols.G, cols.b = G, gs.b / scales
         dups = _gram_duplicates(G, active)
+    groups: dict[int, list[int]] = {}
     for kept, dropped in dups:
-        if active[dropped]:
-            active[dropped] = False
-            skipped.append((process[dropped], f"proportional to {process[kept]}"))
+        groups.setdefault(kept, [kept]).append(dropped)
+    for kept, members in groups.items():
+        choice = next((j for j in members if j in keep), kept)
+        for j in members:
+            if j != choice and active[j]:
+                active[j] = False
+                skipped.append((process[j], f"proportional to {process[choice]}"))
     return cols
 
 
