@@ -242,3 +242,17 @@ def test_an_included_term_is_kept_over_a_candidate_proportional_to_it(search, me
             warnings.simplefilter("ignore", gb.CandidateWarning)
             gb.frols(gb.Candidates(2, 2, degree=2), held, include=["1", "u(k-1)"], n_terms=3, search=search,
                      method=method)
+
+
+# The degree of static curve select_graybox asks for (the smallest polynomial that fits the points within the
+# band) was fitted on powers of the raw ū: for levels 1e5 ± 1 (a speed in rpm far from 0, a temperature in
+# mK) the cubic's columns were collinear, its fit "undetermined", and degree 2 was asked where the points
+# at 0 ± 1 ask for 3.
+@pytest.mark.parametrize("offset", [0.0, 1e3, 1e5])
+def test_the_static_degree_asked_does_not_depend_on_the_input_s_zero(offset):
+    from graybox.static._form_check import static_degree, static_fit_mse
+
+    ub = np.linspace(-1, 1, 9)
+    points = gb.StaticPoints(ub + offset, 0.2 + 0.5 * ub + 0.3 * ub**2 - 0.4 * ub**3)
+    assert static_degree(points, band=1e-6) == 3
+    assert static_fit_mse(points, 3) < 1e-20

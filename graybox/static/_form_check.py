@@ -101,7 +101,11 @@ def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
     if len(static) < len(ex):
         return None
     # plain least squares on the monomials (no curve object: its domain would refuse one point,
-    # or points that do not vary every input)
+    # or points that do not vary every input), of each input centred and scaled: the polynomials of a
+    # degree are the same, their fit's conditioning is not (ū = 1e5 ± 1 made the cubic's columns
+    # collinear, and the degree asked depended on where the input's units put their zero)
+    if u.shape[1]:
+        u = (u - u.mean(axis=0)) / np.ptp(u, axis=0)
     V = _monomials(u, ex)
     try:
         c = scaled_lstsq(V, static.ybar)
