@@ -256,3 +256,19 @@ def test_the_static_degree_asked_does_not_depend_on_the_input_s_zero(offset):
     points = gb.StaticPoints(ub + offset, 0.2 + 0.5 * ub + 0.3 * ub**2 - 0.4 * ub**3)
     assert static_degree(points, band=1e-6) == 3
     assert static_fit_mse(points, 3) < 1e-20
+
+
+# output_error and the gradient SE sweep took any tol > 0. Below machine epsilon scipy's "lm" refuses to run,
+# so every start became a failed fit ("no start of the output-error fit gave a model: … All tolerances must
+# be higher than machine epsilon"), and "trf" ignored it with a scipy warning: now refused at the boundary,
+# naming tol.
+@pytest.mark.parametrize("call", [
+    lambda st, d: gb.output_error(st, d, tol=1e-20, n_starts=0),
+    lambda st, d: gb.output_error(st, d, tol=1e-20, solver="lm", n_starts=0),
+    lambda st, d: gb.se_pareto(st, d, lambdas=[1.0], method="gradient", tol=1e-20, solver="lm"),
+])
+def test_a_tolerance_below_machine_epsilon_is_refused_naming_tol(call):
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)"])
+    data = gb.Dataset(_plant(), _plant(seed=1), _plant_points())
+    with pytest.raises(ValueError, match=r"^tol .*machine epsilon.* got 1e-20"):
+        call(st, data)

@@ -52,7 +52,8 @@ from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
 from ._local_models import check_margin
-from ._simulation_error import _SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible, refit_if_slow
+from ._simulation_error import (_SOLVERS, SEProblem, _fit, _pull_inside, _why_infeasible, check_lsq_tol,
+                                refit_if_slow)
 
 __all__ = ["OEResult", "output_error"]
 
@@ -204,7 +205,7 @@ def output_error(
     subsample = check_real(subsample, "subsample", low=0.0, high=1.0, low_open=True)
     seed = check_seed(seed)
     max_nfev = check_int(max_nfev, "max_nfev", low=1)
-    tol = check_real(tol, "tol", low=0.0, low_open=True)
+    tol = check_lsq_tol(tol)
     check_choice(solver, "solver", _SOLVERS)
     progress = None if progress is None else check_bool(progress, "progress")
     margin = check_margin(margin)

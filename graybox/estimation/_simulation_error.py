@@ -639,6 +639,12 @@ def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarr
     os.replace(tmp, path)  # atomic: a kill during the write never leaves a torn checkpoint
 
 
+def check_lsq_tol(tol: object) -> float:
+    """``tol`` of the least_squares fits, checked: at least machine epsilon (below it "lm" refuses to run, and
+    every start was then a failed fit with scipy's message; "trf" and "dogbox" ignore it with a warning)."""
+    return check_real(tol, "tol (the fits' relative tolerance, at least machine epsilon)", low=float(np.finfo(float).eps))
+
+
 class _Failed(Exception):
     """A member's fit failed; the message is the reason kept in the result."""
 
@@ -1152,7 +1158,7 @@ def gradient_front(
     start = problem.ls_theta() if theta0 is None else check_theta(n, theta0, "theta0")
     check_choice(solver, "solver", _SOLVERS)
     max_nfev = check_int(max_nfev, "max_nfev", low=1)
-    tol = check_real(tol, "tol", low=0.0, low_open=True)
+    tol = check_lsq_tol(tol)
     extra = [check_theta(n, s_, f"starts[{k}]") for k, s_ in enumerate(starts)]
     restart_solvers = ("trf", "dogbox") if solver == "auto" else (solver,)
     follow = "trf" if solver == "auto" else solver
