@@ -272,3 +272,54 @@ def test_a_tolerance_below_machine_epsilon_is_refused_naming_tol(call):
     data = gb.Dataset(_plant(), _plant(seed=1), _plant_points())
     with pytest.raises(ValueError, match=r"^tol .*machine epsilon.* got 1e-20"):
         call(st, data)
+
+
+# Results read back from a file (gb.load) or built by hand were taken whatever their figures said: a Decision
+# whose rule is unknown or whose in_band contradicts its rule, a negative J_S or a λ1 of 5, a DSFResult in the band with J_SF = 5 above B = 1e-4, an OEResult with a negative J_S or a margin of 2. Each
+# is now refused, naming the field, as LocalModel and GrayboxSelection refuse theirs.
+@pytest.fixture(scope="module")
+def results():
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    data = gb.Dataset(_plant(), _plant(seed=1), _plant_points())
+    pe = gb.pe_pareto(st, data, lambdas=[1.0, 0.5])
+    return {"pe": pe, "dec": gb.decide_dsf(pe, band=1.0), "dsf": gb.se_dsf(st, data, band=1.0),
+            "oe": gb.output_error(st, data, n_starts=0)}
+
+
+@pytest.mark.parametrize("kind, field, value, match", [
+    ("dec", "rule", "magic", "rule"),
+    ("dec", "in_band", False, "in_band"),
+    ("dec", "index", -1, "index"),
+    ("dec", "JS", -3.0, "JS"),
+    ("dec", "lambda1", 5.0, "lambda1"),
+    ("dsf", "in_band", False, "in_band"),
+    ("dsf", "JSF", 5.0, "in_band"),
+    ("dsf", "band", -1.0, "band"),
+    ("dsf", "n_iter", -1, "n_iter"),
+    ("oe", "JS", -1.0, "JS"),
+    ("oe", "margin", 2.0, "margin"),
+    ("oe", "radius", -1.0, "radius"),
+    ("oe", "seed", -5, "seed"),
+])
+def test_a_result_that_contradicts_itself_is_refused(results, tmp_path, kind, field, value, match):
+    import dataclasses
+    import json
+
+    obj = results[kind]
+    with pytest.raises(ValueError, match=match):
+        dataclasses.replace(obj, **{field: value})
+    path = tmp_path / "r.json"
+    gb.save(obj, path)
+    doc = json.loads(path.read_text())
+    doc["object"][field] = value
+    path.write_text(json.dumps(doc))
+    with pytest.raises(gb.GrayboxFileError, match=match):
+        gb.load(path)
+
+
+def test_the_results_the_estimators_make_pass_their_checks(results):
+    import dataclasses
+
+    for obj in results.values():
+        dataclasses.replace(obj)  # rebuilt through __post_init__
+    assert results["dec"].rule == "D_SF" and results["dec"].in_band

@@ -146,6 +146,32 @@ def check_band(band: object, name: str = "band") -> tuple[float, float]:
     return 0.0, check_real(band, name, low=0, low_open=True)
 
 
+def check_mean_square(value: object, name: str) -> None:
+    """``ValueError`` when a mean square error (J_1, J_S, J_SF: output units²) held by a result is negative.
+
+    NaN (not computed) and inf (a free run that diverged, no static curve) are values such a figure takes;
+    a negative one is what no computation gives (a file edited by hand, a result built wrong).
+    """
+    a = np.asarray(value, dtype=float)
+    bad = a < 0  # NaN compares False
+    if np.any(bad):
+        raise ValueError(f"{name} is a mean square error, never negative; got {float(a[bad].ravel()[0])!r}")
+
+
+def check_weight(value: object, name: str) -> None:
+    """``ValueError`` unless each λ1 held by a result lies in (0, 1] or is NaN (a member of no weight)."""
+    a = np.asarray(value, dtype=float)
+    bad = ~np.isnan(a) & ~((a > 0) & (a <= 1))
+    if np.any(bad):
+        raise ValueError(f"{name} must lie in (0, 1] (λ2 = 1 − λ1), or be NaN; got {float(a[bad].ravel()[0])!r}")
+
+
+def check_margin_value(value: float, name: str = "margin") -> None:
+    """``ValueError`` unless a stability margin held by a result lies in [0, 1) or is NaN (none)."""
+    if not (np.isnan(value) or 0.0 <= value < 1.0):
+        raise ValueError(f"{name} must lie in [0, 1), or be NaN (no margin); got {value!r}")
+
+
 def check_choice(value: object, name: str, choices: Iterable[str]) -> str:
     """``value`` if it is one of ``choices`` (strings): ``TypeError`` for a non-string, else ``ValueError`` listing them."""
     opts = tuple(choices)

@@ -26,7 +26,7 @@ from ._pareto import ParetoSet
 from ..core._records import Record, check_period, choosing_records
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
-from ..core._validation import check_band, check_choice, check_fields
+from ..core._validation import check_band, check_choice, check_fields, check_mean_square, check_weight
 from ..static._constraints import InfeasibleError
 from ..core._records import StaticPoints
 
@@ -46,6 +46,11 @@ def resolve_band(band: object, static: StaticPoints | None, who: str) -> tuple[f
     return 0.0, static.band
 
 
+#: The rules a :class:`Decision` is made by, and whether each says its member is in the band: D_SF (eq. (14)),
+#: its explicit fallback, the minimal-correlation rule and ``select_graybox``'s black-box choice (no band).
+DECISION_RULES = {"D_SF": True, "min J_SF": False, "min correlation": True, "min J_S": True}
+
+
 @dataclass(frozen=True, eq=False)
 class Decision:
     """One member chosen from a Pareto set, and why.
@@ -61,8 +66,8 @@ class Decision:
     JS, JSF : float
         Its free-run and static errors as stored in the set (output units²).
     rule : str
-        ``"D_SF"``, ``"min J_SF"`` (D_SF's explicit fallback: no member in the band) or
-        ``"min correlation"``.
+        ``"D_SF"``, ``"min J_SF"`` (D_SF's explicit fallback: no member in the band),
+        ``"min correlation"`` or ``"min J_S"`` (``select_graybox``'s black box, chosen without a band).
     in_band : bool
         Whether J_SF lies in the band B (always False for the fallback; True for rules without a band).
     score : float
@@ -85,6 +90,17 @@ class Decision:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        check_choice(self.rule, "Decision: rule", tuple(DECISION_RULES))
+        if self.in_band != DECISION_RULES[self.rule]:
+            raise ValueError(f"Decision: in_band is {self.in_band} but rule {self.rule!r} "
+                             f"{'chooses in the band' if DECISION_RULES[self.rule] else 'is the fallback: no member in the band'}")
+        if self.index < 0:
+            raise ValueError(f"Decision: index is a member's position, >= 0; got {self.index}")
+        check_weight(self.lambda1, "Decision: lambda1")
+        for name in ("JS", "JSF"):
+            check_mean_square(getattr(self, name), f"Decision: {name}")
+        if self.score < 0:  # a mean square or a correlation's magnitude
+            raise ValueError(f"Decision: score is never negative; got {self.score!r}")
 
     def __repr__(self) -> str:
         on = f", chosen_on={self.chosen_on!r}, score={self.score:.4g}" if self.chosen_on else ""

@@ -48,7 +48,8 @@ from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _p
 from ..core._terms import Structure
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
-from ..core._validation import check_fields, check_int, check_lambdas, check_real, check_theta, warn
+from ..core._validation import (check_fields, check_int, check_lambdas, check_margin_value, check_mean_square,
+                                check_real, check_theta, warn)
 
 __all__ = ["se_dsf", "DSFResult"]
 
@@ -96,6 +97,15 @@ class DSFResult:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        check_real(self.band, "DSFResult: band", low=0, low_open=True)
+        for name in ("JS", "JSF", "start_JS", "start_JSF"):
+            check_mean_square(getattr(self, name), f"DSFResult: {name}")
+        if self.in_band != bool(self.JSF <= self.band * (1 + 1e-12)):  # as se_dsf judges it
+            raise ValueError(f"DSFResult: in_band is {self.in_band} but J_SF = {self.JSF!r} against the band "
+                             f"B = {self.band!r}")
+        if self.n_iter < 0:
+            raise ValueError(f"DSFResult: n_iter counts trial steps, >= 0; got {self.n_iter}")
+        check_margin_value(self.margin, "DSFResult: margin")
 
     @property
     def feasible(self) -> bool:

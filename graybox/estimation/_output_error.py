@@ -47,7 +47,8 @@ from ..core._progress import progress_bar
 from ..core._records import (Dataset, Record, as_records, check_overlap, check_same_period, choosing_records,
                              same_record)
 from ..core._terms import Structure
-from ..core._validation import FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real, check_seed, check_theta
+from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
+                                check_margin_value, check_mean_square, check_real, check_seed, check_theta)
 from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
@@ -101,6 +102,12 @@ class OEResult:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        for name in ("JS", "JS_choose"):
+            check_mean_square(getattr(self, name), f"OEResult: {name}")
+        check_margin_value(self.margin, "OEResult: margin")
+        if not self.radius >= 0:  # a spectral radius
+            raise ValueError(f"OEResult: radius is a spectral radius, >= 0; got {self.radius!r}")
+        check_seed(self.seed, "OEResult: seed")
         missing = [c for c in START_COLUMNS if c not in self.starts.columns]
         if missing:  # failures and repr read them (a hand-edited file, a table built by hand)
             raise ValueError(f"starts lacks the column(s) {missing}; it has {list(self.starts.columns)}")
