@@ -323,3 +323,25 @@ def test_the_results_the_estimators_make_pass_their_checks(results):
     for obj in results.values():
         dataclasses.replace(obj)  # rebuilt through __post_init__
     assert results["dec"].rule == "D_SF" and results["dec"].in_band
+
+
+@pytest.mark.parametrize("field, value", [("err", [-0.1, 0.2]), ("rss", [1.0, -2.0]), ("n_rows", 0)])
+def test_a_selection_that_contradicts_itself_is_refused(field, value):
+    import dataclasses
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        sel = gb.frols(gb.Candidates(1, 1, degree=1), _plant(), n_terms=2)
+    dataclasses.replace(sel)
+    with pytest.raises(ValueError, match=field):
+        dataclasses.replace(sel, **{field: value})
+
+
+@pytest.mark.parametrize("field, value", [("score", -1.0), ("n_rows", 0)])
+def test_a_semp_result_that_contradicts_itself_is_refused(field, value):
+    import dataclasses
+
+    res = gb.semp(gb.Candidates(1, 1, degree=1), _plant(), n_terms=2)
+    dataclasses.replace(res)
+    with pytest.raises(ValueError, match=field):
+        dataclasses.replace(res, **{field: value})

@@ -69,7 +69,8 @@ from ..core._gram import (
     term_factors,
 )
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import as_1d_finite, check_choice, check_fields, check_int, check_real, check_theta, warn
+from ..core._validation import (as_1d_finite, check_choice, check_fields, check_int, check_mean_square, check_real,
+                                check_theta, warn)
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem
 
@@ -249,6 +250,11 @@ class Selection:
             a.setflags(write=False)
             object.__setattr__(self, name, a)
         check_theta(n, self.theta)  # finite, as the model it gives needs (a file loads through here: graybox.io)
+        for name in ("err", "err_evaluated", "rss", "subset_rss"):
+            check_mean_square(getattr(self, name), f"Selection: {name} (a share or a sum of squares)")
+        if self.n_rows < 1 or self.n_candidates < 1:
+            raise ValueError(f"Selection: n_rows and n_candidates are counts, >= 1; got {self.n_rows} and "
+                             f"{self.n_candidates}")
 
     def __len__(self) -> int:
         return len(self.structure)

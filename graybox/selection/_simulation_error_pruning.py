@@ -44,8 +44,8 @@ from ..core._records import Dataset, Record, as_records
 from ._forward_regression import CRITERIA, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
-from ..core._validation import (FrozenFrame, check_bool, check_choice, check_fields, check_int, check_real,
-                                check_theta, frozen)
+from ..core._validation import (FrozenFrame, check_bool, check_choice, check_fields, check_int, check_mean_square,
+                                check_real, check_theta, frozen)
 
 __all__ = ["semp", "SEMPResult"]
 
@@ -107,6 +107,9 @@ class SEMPResult:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         check_theta(len(self.structure), self.theta)  # finite, as the model it gives needs (files load through here)
         check_choice(self.criterion, "criterion", CRITERIA)
+        check_mean_square(self.score, "SEMPResult: score (the free-run MSE)")
+        if self.n_rows < 1:
+            raise ValueError(f"SEMPResult: n_rows counts the samples scored, >= 1; got {self.n_rows}")
         missing = [c for c in self.PATH_COLUMNS if c not in self.path.columns]
         if missing:
             raise ValueError(f"the path lacks the column(s) {missing}")
