@@ -101,7 +101,7 @@ class DSFResult:
         for name in ("JS", "JSF", "start_JS", "start_JSF"):
             check_mean_square(getattr(self, name), f"DSFResult: {name}")
         if self.in_band != bool(self.JSF <= self.band * (1 + 1e-12)):  # as se_dsf judges it
-            raise ValueError(f"DSFResult: in_band is {self.in_band} but J_SF = {self.JSF!r} against the band "
+            raise ValueError(f"DSFResult: in_band is {self.in_band} but JSF = {self.JSF!r} against the band "
                              f"B = {self.band!r}")
         if self.n_iter < 0:
             raise ValueError(f"DSFResult: n_iter counts trial steps, >= 0; got {self.n_iter}")

@@ -183,9 +183,9 @@ def output_error(
     seed : int
         Seeds the perturbed starts.
     max_nfev, tol : int, float
-        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = gtol = tol``, on a problem
-        whose parameters and residuals are divided by the output's standard deviation, so the stop does
-        not depend on units).
+        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = tol``, relative, and ``gtol``
+        on the gradient over the output's standard deviation, on a problem whose parameters and residuals
+        are divided by the power of two nearest that deviation, so the stop does not depend on units).
     solver : {"auto", "trf", "dogbox", "lm"}
         ``least_squares`` method; ``"auto"`` fits every start with both "trf" and "dogbox".
     progress : bool, optional

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import warnings
 import zipfile
@@ -965,20 +966,24 @@ def _fit(problem: SEProblem, theta0: np.ndarray, lam1: float, solver: str, max_n
     ``watch(θ)``, if given, sees every iterate (each point where a Jacobian is taken).
     """
     cp = _Compressed(problem, lam1, watch)
-    # least_squares sees a problem without units: z = θ·scale (output units) and the residuals (output units)
-    # over the output's spread. Its tolerances are not all relative: it stops at ‖dx‖ < xtol (xtol + ‖x‖), an
-    # absolute step of xtol² where ‖x‖ < xtol (an output of 1e-6 A ended the fits at their start), and its gtol
-    # bounds the gradient Jᵀf, in the units of x and f ("lm": a cosine, whatever the units)
+    # least_squares sees z = θ·scale and the residuals (both in output units) over s, the power of two nearest
+    # the output's spread: its tolerances are not all relative (it stops at ‖dx‖ < xtol (xtol + ‖x‖), an absolute
+    # step of xtol² where ‖x‖ < xtol, so an output of spread 1e-12 ended the fits early, and "lm" reads gtol as
+    # a cosine, which tol × the spread is not). A power of two scales every step exactly: the fits of outputs
+    # of spread near 1 are the same to the last bit.
     ys = problem.y_scale
+    s = math.ldexp(1.0, math.frexp(ys)[1]) if ys > 0 else 1.0
+    # trf/dogbox bound the gradient Jᵀf, which the scaling divides by s; lm bounds a cosine, unit-free
+    gtol = tol if solver == "lm" else max(tol * ys / s, float(np.finfo(float).eps))
     try:
         with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
-            res = least_squares(lambda x: cp.fun(x * ys) / ys, theta0 * problem.scale / ys,
-                                jac=lambda x, f=None: cp.jac(x * ys), method=solver, x_scale="jac",
-                                max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=tol)
+            res = least_squares(lambda x: cp.fun(x * s) / s, theta0 * problem.scale / s,
+                                jac=lambda x, f=None: cp.jac(x * s), method=solver, x_scale="jac",
+                                max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=gtol)
     except _Stop as stop:
         z, cost = stop.args
         return z / problem.scale, cost, cp.nfun
-    return res.x * ys / problem.scale, float(2 * res.cost) * ys**2, cp.nfun
+    return res.x * s / problem.scale, float(2 * res.cost) * s * s, cp.nfun
 
 
 def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
@@ -1133,9 +1138,9 @@ def gradient_front(
     progress : bool, optional
         Show a progress bar; default: only on a terminal.
     max_nfev, tol : int, float
-        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = gtol = tol``, on a problem
-        whose parameters and residuals are divided by the output's standard deviation, so the stop does
-        not depend on units).
+        Per ``least_squares`` run: evaluations and tolerances (``ftol = xtol = tol``, relative, and ``gtol``
+        on the gradient over the output's standard deviation, on a problem whose parameters and residuals
+        are divided by the power of two nearest that deviation, so the stop does not depend on units).
     starts : sequence of ndarray
         Further starts tried wherever the fit restarts. :func:`se_pareto` passes PE solutions
         (convex, with the static points weighted in).
