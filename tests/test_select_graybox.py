@@ -741,3 +741,13 @@ def test_several_validation_and_test_records():
         r = np.log(block_js(res.model_of(row)) / block_js(res.model_of(best)))
         assert res.table.loc[row, "vs_best"] == pytest.approx(r.mean(), abs=1e-9)
         assert res.table.loc[row, "vs_best_se"] == pytest.approx(r.std(ddof=1) / np.sqrt(6), abs=1e-9)
+
+
+def test_candidates_that_are_all_zero_on_the_records_are_said_by_the_search():
+    # was: frols's FewerTermsError (none reached) was retried with n_terms=0, and the call said only
+    # "n_terms must be an integer >= 1, got 0" (hunt38b)
+    rec = gb.Record(np.zeros(300), np.random.default_rng(0).standard_normal(300), name="held at zero")
+    with pytest.raises(ValueError) as info:
+        gb.select_graybox(gb.Candidates(0, 2, ne=0, degree=2, constant=False), rec, sources=("frols",), estimator="ls",
+                          include=())
+    assert "n_terms must be" not in str(info.value) and "zero" in str(info.value)

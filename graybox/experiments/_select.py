@@ -643,7 +643,7 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
             try:
                 sel = gb.frols(candidates, ident, n_terms=max(sizes), include=forced)
             except FewerTermsError as e:  # fewer usable (or independent) candidates on these data: the sizes they reach
-                if e.reached is None:
+                if not e.reached:  # not known, or none at all: frols's own words say why
                     raise
                 sel = gb.frols(candidates, ident, n_terms=e.reached, include=forced)
             # its structure begins with the included terms: a size below their number would drop some
