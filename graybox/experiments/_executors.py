@@ -39,6 +39,7 @@ import numpy as np
 from .. import _api as gb
 
 from ..core._validation import check_choice, check_int
+from . import _dask_worker
 from ._cell import failed_row, run_cell
 from ._spec import Cell
 
@@ -450,6 +451,8 @@ def local_cluster(workers: int, dashboard: bool = False):
 
     The workers' scratch folders live in a temporary folder of the cluster's own, removed on exit.
     The workers ignore SIGINT, as the local pool's do: Ctrl-C is the driver's to handle.
+    Each worker cancels its heartbeat in flight when it closes (:mod:`._dask_worker`), so that the
+    end of a run, or Ctrl-C, prints no heartbeat traceback from a worker.
 
     ``dashboard``: serve Dask's dashboard on a free port when bokeh is installed (off by default:
     it costs start-up time and a port).
@@ -465,9 +468,15 @@ def local_cluster(workers: int, dashboard: bool = False):
     # the workers' scratch folders in a folder of our own, removed on exit: Dask's default
     # ("dask-scratch-space" in the temporary folder) outlives the cluster
     scratch = tempfile.mkdtemp(prefix="graybox-dask-")
+    # each worker cancels its heartbeat in flight when it closes, before it closes its connections:
+    # else that heartbeat failed and logged an ERROR with a traceback (see _dask_worker)
+    preload = dask.config.get("distributed.worker.preload", None) or []
+    preload = [preload] if isinstance(preload, str) else list(preload)
+    preload.append(_dask_worker.__name__)
     try:
         with dask.config.set({"distributed.scheduler.allowed-failures": 0, "temporary-directory": scratch,
-                              "distributed.nanny.pre-spawn-environ": environ, **_QUIET}), _sigint_ignored():
+                              "distributed.nanny.pre-spawn-environ": environ, "distributed.worker.preload": preload,
+                              **_QUIET}), _sigint_ignored():
             # ":0": any free port; None still binds 8787 and warns when another cluster holds it
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
                                    # ":0": a free port; None would still bind 8787, taken by any other cluster
