@@ -4,8 +4,8 @@ A record sampled much faster than its dynamics makes a poor NARX record: consecu
 agree, y(k−1) and y(k−2) are nearly collinear, the model's poles crowd onto 1 and its terms' lags
 must reach far back. Billings & Aguirre (1995, "Effects of the sampling time on the dynamics and
 identification of nonlinear models", Int. J. Bifurcation and Chaos 5(6):1541–1556) give a rule read
-off the output alone: with τ_y and τ_y² the first minima of the autocorrelations of y − mean(y) and
-of y² − mean(y²) (the second sees the nonlinear part), and τ_m = min(τ_y, τ_y²), choose the sampling
+off the output alone: with y' = y − mean(y), τ_y and τ_y² the first minima of the autocorrelations of y'
+and of y'² − mean(y'²) (the second sees the nonlinear part; of y² itself, an offset would leave mostly y), and τ_m = min(τ_y, τ_y²), choose the sampling
 period so that 10 ≤ τ_m ≤ 20 in the new samples: decimate by a factor q in [τ_m / 20, τ_m / 10].
 Where an autocorrelation decays without a minimum beyond its noise (an output driven by a staircase
 of random levels), the lag at which it dies out (can no longer be told from zero) stands in for the
@@ -43,7 +43,7 @@ class DecimationAdvice:
     q_range : tuple of int or None
         The factors the rule allows, (max(1, ⌈τ_m / 20⌉), max(1, ⌊τ_m / 10⌋)).
     tau_y, tau_y2 : int or None
-        First minima of the autocorrelations of y − mean(y) and of y² − mean(y²) below their 95 %
+        First minima of the autocorrelations of y' = y − mean(y) and of y'² − mean(y'²) below their 95 %
         band, or where there is none the lag at which each dies out (enters the band to stay:
         can no longer be told from zero), in samples of the record (the smallest over several records); None where there
         is neither within a quarter of the record.
@@ -122,9 +122,9 @@ def _first_minimum(x: np.ndarray) -> int | None:
     outside = lags[np.abs(inner) > band]
     # the next lag outside the band from each lag on (top: none)
     nxt = np.append(outside, top)[np.searchsorted(outside, lags)]
-    # inside the band (and below 1/e: a record short for a slow motion widens the band over r itself), to stay up
-    # to twice the lag, within the quarter searched
-    died = lags[(np.abs(inner) <= np.minimum(band, np.exp(-1.0))) & (nxt > 2 * lags) & (2 * lags < top)]
+    # inside the band, a band below 1/e (a record short for a slow motion widens the band over r itself: the
+    # centred square of a drift, a U, falls inside it), to stay up to twice the lag, within the quarter searched
+    died = lags[(np.abs(inner) <= band) & (band <= np.exp(-1.0)) & (nxt > 2 * lags) & (2 * lags < top)]
     end = int(died[0]) if died.size else None
     # r[τ] ≤ r[τ − 1] and r[τ] < r[τ + 1], below the band, before r died out
     turns = lags[(inner <= r[:-2]) & (inner < r[2:]) & (inner < -band)]
@@ -168,7 +168,8 @@ def decimation_advice(data: Record | Dataset | Sequence[Record]) -> DecimationAd
         if np.ptp(y) == 0:
             raise ValueError(f"record {rec.name!r}: the output does not move, so it says nothing of the sampling "
                              "period")
-        taus.append((_first_minimum(y), _first_minimum(y * y)))
+        yc = y - y.mean()  # the square of the centred output: of y itself an offset c makes y² ≈ c² + 2cy, read as y
+        taus.append((_first_minimum(yc), _first_minimum(yc * yc)))
     tau_y = min((t for t, _ in taus if t is not None), default=None)
     tau_y2 = min((t for _, t in taus if t is not None), default=None)
     found = [t for t in (tau_y, tau_y2) if t is not None]
@@ -214,7 +215,7 @@ def decimate(data: Record | Dataset | Sequence[Record], q: int, *, antialias: bo
     TypeError
         ``data`` is not records; ``q`` not an int.
     ValueError
-        ``q`` < 1; a record too short for the filter (more than 20q + 1 samples needed with
+        ``q`` < 1; a record too short for the filter (more than 10q + 1 samples needed with
         ``antialias``) or for two samples after decimation.
     """
     q = check_int(q, "q", low=1)
