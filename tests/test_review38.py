@@ -22,3 +22,21 @@ def test_a_centred_drift_gets_no_advice_as_the_drift_does():
     y = np.arange(2000.0) ** 1.5
     for rec in (gb.Record(np.zeros(2000), y), gb.Record(np.zeros(2000), y - y.mean())):
         assert gb.decimation_advice(rec).q is None
+
+
+def test_a_list_of_choosing_records_holding_something_else_names_that_element_not_the_whole_list():
+    """The message printed the whole list (every record's repr) and said not which element was wrong; an
+    empty list of test records was 'at least one choosing record is needed' (a test record chooses nothing)."""
+    from graybox.core._records import choosing_records
+
+    rec = gb.Record(np.zeros(50), np.arange(50.0), name="r")
+    ds = gb.Dataset(rec, rec)
+    with pytest.raises(TypeError, match=r"validation\[1\] is a Dataset") as err:
+        choosing_records([rec, ds], "validation")
+    assert repr(rec) not in str(err.value)
+    with pytest.raises(TypeError, match=r"test\[2\] is a str"):
+        choosing_records((rec, rec, "x"), "test", "a fresh record of the plant")
+    with pytest.raises(TypeError, match="validation must be a Record or a sequence of Records.*got a Dataset"):
+        choosing_records(ds, "validation")
+    with pytest.raises(ValueError, match="test: an empty list; at least one record is needed"):
+        choosing_records([], "test", "a fresh record of the plant")

@@ -721,10 +721,15 @@ def choosing_records(value: object, name: str = "choose_on", example: str = "dat
     as one record it would stand for its ident, the fitting data). ``TypeError`` for anything else, its
     message naming ``example`` as one."""
     recs = [value] if isinstance(value, Record) else list(value) if isinstance(value, (list, tuple)) else None
-    if recs is None or not all(isinstance(r, Record) for r in recs):
-        raise TypeError(f"{name} must be a Record or a sequence of Records (e.g. {example}), got {value!r}")
+    if recs is None:
+        raise TypeError(f"{name} must be a Record or a sequence of Records (e.g. {example}), got a "
+                        f"{type(value).__name__}")
+    for i, r in enumerate(recs):  # the element named, not the whole list (each record's repr is long)
+        if not isinstance(r, Record):
+            raise TypeError(f"{name} must be a Record or a sequence of Records (e.g. {example}): {name}[{i}] is a "
+                            f"{type(r).__name__}")
     if not recs:
-        raise ValueError(f"{name}: at least one choosing record is needed")
+        raise ValueError(f"{name}: an empty list; at least one record is needed")
     return recs
 
 
