@@ -48,3 +48,14 @@ def assert_csv_pair_matches(dyn, sta, committed, ncols: tuple[int, int]) -> None
         assert a.shape == b.shape and a.shape[1] == n
         np.testing.assert_array_equal(a[:, :-1], b[:, :-1])
         np.testing.assert_allclose(a[:, -1], b[:, -1], rtol=0, atol=1.01e-4)
+
+
+def edited_json(value, **fields) -> str:
+    """``value`` saved as JSON with the given fields of its object replaced: a hand-edited file."""
+    import json
+
+    from graybox import to_json
+
+    doc = json.loads(to_json(value))
+    doc["object"].update(fields)
+    return json.dumps(doc)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from conftest import edited_json
 
 
 def _settled_after(step: np.ndarray, final: float, band: float = 0.02) -> int:
@@ -112,10 +113,8 @@ def test_a_parameter_uncertainty_whose_constraints_or_noise_covariance_cannot_be
     import json
 
     unc = _els_uncertainty()
-    doc = json.loads(gb.to_json(unc))
-    doc["object"][field] = value
     with pytest.raises(gb.GrayboxFileError, match=f"not a valid ParameterUncertainty: .*{why}"):
-        gb.from_json(json.dumps(doc))
+        gb.from_json(edited_json(unc, **{field: value}))
     back = gb.from_json(gb.to_json(unc))
     np.testing.assert_array_equal(back.noise_std, unc.noise_std)
     assert back.constraints.shape == (0, 3) and np.all(np.isfinite(back.noise_std))
@@ -133,11 +132,9 @@ def test_an_operating_curve_whose_columns_disagree_with_its_local_models_is_refu
     model = gb.Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], [0.1, 0.5, 0.8, -0.05], Ts=0.1)
     no_eq = gb.Model(["1", "y(k-1)", "y(k-2)", "u(k-1)"], [1.0, 1.2, -0.2, 0.1], Ts=0.1)
     curve = gb.operating_curve(model, [1.0, 2.0])
-    doc = json.loads(gb.to_json(curve))
-    doc["object"][field] = value
     with pytest.raises(gb.GrayboxFileError, match=f"not a valid OperatingCurve: {field} disagrees with the local "
                                                   "models' own at operating point 0"):
-        gb.from_json(json.dumps(doc))
+        gb.from_json(edited_json(curve, **{field: value}))
     for c in (curve, gb.operating_curve(no_eq, [1.0, 2.0])):  # with and without equilibria
         back = gb.from_json(gb.to_json(c))
         np.testing.assert_array_equal(back.gain, c.gain)
