@@ -751,3 +751,15 @@ def test_candidates_that_are_all_zero_on_the_records_are_said_by_the_search():
         gb.select_graybox(gb.Candidates(0, 2, ne=0, degree=2, constant=False), rec, sources=("frols",), estimator="ls",
                           include=())
     assert "n_terms must be" not in str(info.value) and "zero" in str(info.value)
+
+
+def test_sources_are_named_once_as_estimators_are(data):
+    cand = gb.Candidates(3, 3, ne=0, degree=2)
+    with pytest.raises(ValueError, match="sources must name one or more distinct sources"):
+        gb.select_graybox(cand, data, estimator="ls", sources=("frols", "frols"))
+    with pytest.raises(ValueError, match="estimator must name one or more distinct estimators"):
+        gb.select_graybox(cand, data, estimator=("ls", "ls"))
+    with pytest.raises(ValueError, match="sources must name one or more distinct sources"):
+        gb.select_graybox(cand, data, estimator="ls", sources=())
+    with pytest.raises(ValueError, match="data: no records given"):
+        gb.decimation_advice([])

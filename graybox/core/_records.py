@@ -508,7 +508,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
                         f"got {type(data).__name__}")
     recs = list(data)  # type: ignore[call-overload]
     if not recs:
-        raise ValueError("no records given")
+        raise ValueError(f"{name}: no records given (an empty sequence)")
     for r in recs:
         if not isinstance(r, Record):
             raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset; got a sequence holding a "

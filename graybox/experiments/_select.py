@@ -1137,8 +1137,8 @@ def select_graybox(
         raise ValueError("workers, client and scheduler need executor='processes' or 'dask'")
     for s in sources:
         check_choice(s, "sources", SOURCES)
-    if not sources:
-        raise ValueError(f"sources must name at least one of {SOURCES}")
+    if not sources or len(set(sources)) != len(sources):  # as estimator: each named once
+        raise ValueError(f"sources must name one or more distinct sources of {SOURCES}, got {sources!r}")
     if fallback is not None:
         check_choice(fallback, "fallback", ("min_jsf",))
     check_choice(rule, "rule", RULES)
