@@ -294,3 +294,34 @@ def test_covers_a_constrained_parameter_equal_to_round_off():
     far = th0.copy()
     far[-1] *= 1 + 1e-9  # off by far more than round-off: outside the zero-width interval
     assert not unc.covers(far)[-1]
+
+
+def test_monte_carlo_static_bands_say_when_draws_reach_no_equilibrium():
+    """Draws of θ with no equilibrium are left out of a Monte Carlo band, which is then narrower than the
+    parameters' uncertainty: said with an UncertaintyWarning, as simulation_band says it of diverging runs
+    (they were counted in .undefined only)."""
+    rng = np.random.default_rng(0)
+    N = 60
+    u = rng.uniform(0, 1, N)
+    y = np.zeros(N)
+    for k in range(1, N):
+        y[k] = 0.98 * y[k - 1] + 0.1 * u[k - 1] + 0.05 * rng.standard_normal()
+    rec = gb.Record(u, y)
+    m = gb.els(gb.Structure(["y(k-1)", "u(k-1)"]), rec, noise=0).model
+    unc = gb.ls_uncertainty(m, rec)  # a pole near 1 with a wide interval: some draws have none below 1
+    with pytest.warns(gb.UncertaintyWarning, match="static_curve_band: up to .* reach no equilibrium"):
+        band = gb.static_curve_band(unc, [0.5, 1.0], method="monte-carlo", n_samples=400, seed=1)
+    assert np.all(band.undefined > 0)
+    with pytest.warns(gb.UncertaintyWarning, match="operating_curve: up to .* reach no equilibrium"):
+        oc = gb.operating_curve(m, [0.5, 1.0], uncertainty=unc, seed=1)
+    assert np.all(oc.undefined > 0)
+    # a pole far from 1: every draw has its equilibrium, and nothing is said
+    y2 = np.zeros(N)
+    for k in range(1, N):
+        y2[k] = 0.5 * y2[k - 1] + 0.1 * u[k - 1] + 0.001 * rng.standard_normal()
+    rec2 = gb.Record(u, y2)
+    m2 = gb.els(gb.Structure(["y(k-1)", "u(k-1)"]), rec2, noise=0).model
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", gb.UncertaintyWarning)
+        band2 = gb.static_curve_band(gb.ls_uncertainty(m2, rec2), [0.5, 1.0], method="monte-carlo", n_samples=400)
+    assert np.all(band2.undefined == 0)

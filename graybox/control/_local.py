@@ -791,7 +791,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         gain and time-constant bands at its level are the quantiles of ``n_samples`` draws of θ
         around θ̂ with scale ``cov`` (multivariate t with its degrees of freedom, as its intervals),
         each at the equilibrium it reaches from the estimate's ȳ (NaN bands where the estimate
-        itself reaches none).
+        itself reaches none). Draws that reach none are left out, and said with an
+        :class:`~graybox.UncertaintyWarning` (the curve's ``undefined`` counts them).
     n_samples : int
         Monte Carlo draws for the bands.
     seed : int
@@ -827,7 +828,7 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
           single: bool) -> dict[str, Any]:
     """Monte Carlo quantiles of the gain and the time constant under θ drawn around θ̂ (multivariate t)."""
     # here: the estimators it loads cost a local model nothing
-    from ..diagnostics._uncertainty import ParameterUncertainty, theta_draws
+    from ..diagnostics._uncertainty import ParameterUncertainty, theta_draws, warn_dropped_draws
 
     if not isinstance(uncertainty, ParameterUncertainty):  # a wrong type, as everywhere: TypeError
         raise TypeError(f"uncertainty must be a ParameterUncertainty (e.g. graybox.ls_uncertainty(model, data)), got "
@@ -867,6 +868,7 @@ def _band(model: Model, uncertainty: Any, ub: np.ndarray, ybar: np.ndarray, Ts: 
             glo[has], ghi[has] = np.nanquantile(gain, [q, 1 - q], axis=0)
             tlo[has], thi[has] = np.nanquantile(tau, [q, 1 - q], axis=0)
         undefined[has] = 1.0 - ok.mean(axis=0)
+        warn_dropped_draws("operating_curve", undefined)
     if single:
         glo, ghi = glo[:, 0], ghi[:, 0]
     return {"level": float(uncertainty.level), "gain_low": glo, "gain_high": ghi, "time_constant_low": tlo,

@@ -99,6 +99,19 @@ class UncertaintyWarning(UserWarning):
     """The uncertainty was computed, but at a point where its assumptions are doubtful."""
 
 
+def warn_dropped_draws(what: str, undefined: np.ndarray) -> None:
+    """Say (:class:`UncertaintyWarning`) that Monte Carlo draws reaching no equilibrium were left out of a band
+    (``undefined``: their share at each level, NaN where none was drawn), as ``simulation_band`` says it of
+    draws that diverge: the band is then narrower than the parameters' uncertainty."""
+    shares = np.asarray(undefined, float)
+    worst = float(np.nanmax(shares)) if np.isfinite(shares).any() else 0.0
+    if worst > 0:
+        where = int(np.sum(shares > 0))
+        warn(f"{what}: up to {worst:.1%} of the Monte Carlo draws reach no equilibrium (at {where} of {shares.size} "
+             "levels) and are left out of the band there, which is therefore narrower than the parameters' "
+             "uncertainty (.undefined says how many at each level)", UncertaintyWarning)
+
+
 @dataclass(frozen=True, eq=False)
 class ParameterUncertainty:
     """Covariance and confidence intervals of a model's process parameters.
@@ -1083,6 +1096,12 @@ def static_curve_band(
     StaticCurveBand
         Draw it with :func:`graybox.plots.plot_static_band`.
 
+    Warns
+    -----
+    UncertaintyWarning
+        Monte Carlo draws that reach no equilibrium at some ū were left out of the band there (its
+        ``undefined`` says how many): the band is narrower than the parameters' uncertainty.
+
     Raises
     ------
     ValueError
@@ -1133,5 +1152,6 @@ def static_curve_band(
         ylo, yhi = np.nanquantile(Yn, [a, 1 - a], axis=0)
         glo, ghi = np.nanquantile(Gn, [a, 1 - a], axis=0)
         sy, sg = np.nanstd(Yn, axis=0), np.nanstd(Gn, axis=0)
+    warn_dropped_draws("static_curve_band", undefined)
     return StaticCurveBand(ub, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo", n_samples,
                            undefined, m.name)
