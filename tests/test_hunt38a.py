@@ -110,8 +110,6 @@ def test_a_parameter_uncertainty_whose_constraints_or_noise_covariance_cannot_be
     # checked neither: a hand-edited file with three rows of two for three terms loaded as two rows of three (the
     # numbers moved to other terms), a flat noise_cov loaded reshaped, a wrong size failed in numpy's words, and a
     # negative or NaN MA variance gave noise_std 0 or NaN without a word (the process cov is checked since mend36a)
-    import json
-
     unc = _els_uncertainty()
     with pytest.raises(gb.GrayboxFileError, match=f"not a valid ParameterUncertainty: .*{why}"):
         gb.from_json(edited_json(unc, **{field: value}))
@@ -127,8 +125,6 @@ def test_an_operating_curve_whose_columns_disagree_with_its_local_models_is_refu
     # OperatingCurve checked its columns' shapes and its status and ū against its local models, not its
     # figures: a hand-edited file whose gain column said 1.0 where its local model's gain is 1.6 loaded, and
     # to_frame and plot_operating_curve showed one gain, local_models and plot_local_models another
-    import json
-
     model = gb.Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], [0.1, 0.5, 0.8, -0.05], Ts=0.1)
     no_eq = gb.Model(["1", "y(k-1)", "y(k-2)", "u(k-1)"], [1.0, 1.2, -0.2, 0.1], Ts=0.1)
     curve = gb.operating_curve(model, [1.0, 2.0])

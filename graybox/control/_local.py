@@ -33,7 +33,7 @@ from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, 
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
 from ..core._validation import (check_choice, check_fields, check_int, check_per_point, check_real, check_seed, frozen,
-                                real_array, refuse_non_real, warn)
+                                real_array, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, reached_equilibria,
