@@ -55,7 +55,7 @@ import pandas as pd
 
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record
-from ..core._terms import Structure, Term, parse_term
+from ..core._terms import Structure, Term
 from ..core._gram import (
     DaskRecord,
     as_gram_records,
