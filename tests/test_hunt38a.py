@@ -182,14 +182,17 @@ def test_an_operating_curve_of_local_models_of_several_models_is_refused(other):
         gb.from_json(json.dumps(doc))
 
 
+def _first_order(u, rng, **record):
+    """The record of y(k) = 0.5 y(k-1) + 0.8 u(k-1) + 0.1 + 0.01 e(k) driven by ``u``, e drawn from ``rng``."""
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.5 * y[k - 1] + 0.8 * u[k - 1] + 0.1 + 0.01 * rng.standard_normal()
+    return gb.Record(u, y, **record)
+
+
 def _bands():
     rng = np.random.default_rng(1)
-    N = 200
-    u = rng.uniform(0, 2, N)
-    y = np.zeros(N)
-    for k in range(1, N):
-        y[k] = 0.5 * y[k - 1] + 0.8 * u[k - 1] + 0.1 + 0.01 * rng.standard_normal()
-    rec = gb.Record(u, y, Ts=1.0, units=("rpm", "mlc"))
+    rec = _first_order(rng.uniform(0, 2, 200), rng, Ts=1.0, units=("rpm", "mlc"))
     unc = gb.ls_uncertainty(gb.els(["1", "y(k-1)", "u(k-1)"], rec, noise=0).model, rec)
     return gb.static_curve_band(unc, [0.5, 1.0, 1.5]), gb.simulation_band(unc, rec)
 
@@ -229,12 +232,7 @@ def test_a_simulation_band_takes_its_units_as_a_record_does():
 
 def _step_record():
     rng = np.random.default_rng(0)
-    N = 200
-    u = np.repeat(rng.uniform(0, 2, N // 20 + 1), 20)[:N]
-    y = np.zeros(N)
-    for k in range(1, N):
-        y[k] = 0.5 * y[k - 1] + 0.8 * u[k - 1] + 0.1 + 0.01 * rng.standard_normal()
-    return gb.Record(u, y)
+    return _first_order(np.repeat(rng.uniform(0, 2, 200 // 20 + 1), 20)[:200], rng)
 
 
 @pytest.mark.parametrize("estimator, options", [("pe", {}), ("se", {"method": "gradient", "max_nfev": 5})])
