@@ -172,6 +172,18 @@ def check_margin_value(value: float, name: str = "margin") -> None:
         raise ValueError(f"{name} must lie in [0, 1), or be NaN (no margin); got {value!r}")
 
 
+def check_band_values(std: np.ndarray, low: np.ndarray, high: np.ndarray, *names: str) -> None:
+    """``ValueError`` unless a band's standard deviations are >= 0 and its low ends at most its high ones, where they
+    are numbers (NaN: no draw there; a value read from a hand-edited file is held to what a band can be)."""
+    s, lo, hi = names
+    if np.any(std < 0):
+        raise ValueError(f"{s} must be >= 0 (standard deviations), got {float(std[std < 0][0]):g} at index "
+                         f"{int(np.flatnonzero(std < 0)[0])}")
+    if np.any(low > high):
+        i = int(np.flatnonzero(low > high)[0])
+        raise ValueError(f"{lo} must not exceed {hi}, got {low[i]:g} > {high[i]:g} at index {i}")
+
+
 def check_choice(value: object, name: str, choices: Iterable[str]) -> str:
     """``value`` if it is one of ``choices`` (strings): ``TypeError`` for a non-string, else ``ValueError`` listing them."""
     opts = tuple(choices)

@@ -69,7 +69,8 @@ from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
 from ..static._analysis import cluster_key, one_input_levels, reached_equilibria, static_theta_gradient
-from ..core._validation import check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
+from ..core._validation import (check_band_values, check_choice, check_fields, check_int, check_real, check_seed,
+                                frozen, warn)
 
 __all__ = [
     "ParameterUncertainty",
@@ -81,7 +82,6 @@ __all__ = [
     "StaticCurveBand",
     "static_curve_band",
     "theta_draws",
-    "check_band_values",
 ]
 
 
@@ -954,18 +954,6 @@ class StaticCurveBand:
     def __repr__(self) -> str:
         return (f"StaticCurveBand({self.model_name or 'model'}: {self.ubar.size} levels, {self.method}, "
                 f"level={self.level:g}, max ±{np.max((self.ybar_high - self.ybar_low) / 2):.4g} in ȳ)")
-
-
-def check_band_values(std: np.ndarray, low: np.ndarray, high: np.ndarray, *names: str) -> None:
-    """``ValueError`` unless a band's standard deviations are >= 0 and its low ends at most its high ones, where they
-    are numbers (NaN: no draw there; a value read from a hand-edited file is held to what a band can be)."""
-    s, lo, hi = names
-    if np.any(std < 0):
-        raise ValueError(f"{s} must be >= 0 (standard deviations), got {float(std[std < 0][0]):g} at index "
-                         f"{int(np.flatnonzero(std < 0)[0])}")
-    if np.any(low > high):
-        i = int(np.flatnonzero(low > high)[0])
-        raise ValueError(f"{lo} must not exceed {hi}, got {low[i]:g} > {high[i]:g} at index {i}")
 
 
 def _gains(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
