@@ -307,7 +307,7 @@ variant = st.one_of(
 
 @pytest.fixture(scope="module")
 def theta_star(rec):
-    return cls(S15, rec, EQ1).model.theta
+    return cls(S15, rec, EQ1, reference="ls").model.theta
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])

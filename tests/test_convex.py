@@ -107,7 +107,7 @@ def test_cls_static_curve_is_eq1(rec):
 def test_cls_clusters_follow_eq22(rec):
     ls = scaled_lstsq(*stacked_regressors(S15, rec))
     sy_ls = float((cluster_map(S15).R @ ls)[cluster_map(S15).index("Σy")])
-    c = cls(S15, rec, EQ1).model.clusters()
+    c = cls(S15, rec, EQ1, reference="ls").model.clusters()
     k, a, b = reference.EQ1_COEFFICIENTS
     assert abs(c["Σyu"]) < 1e-12
     assert c["Σy"] == pytest.approx(sy_ls, rel=1e-9)
@@ -150,7 +150,7 @@ def test_cls_points_on_a_representable_curve_are_consistent(rec):
 
 def test_cls_multi_record_equals_its_parts(rec):
     a, b = rec.slice(0, 1200, "a"), rec.slice(1200, None, "b")
-    m = cls(S15, [a, b], EQ1, solver="closed").model
+    m = cls(S15, [a, b], EQ1, solver="closed", reference="ls").model
     # by hand: stacked regressors of the two records, KKT with the (22) rows
     psi, y = stacked_regressors(S15, [a, b])
     s = column_scales(psi)

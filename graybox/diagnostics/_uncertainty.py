@@ -595,7 +595,7 @@ def cls_uncertainty(
     static: StaticCurve | StaticSurface | StaticPoints | None = None,
     *,
     how: str = "auto",
-    reference: Model | np.ndarray | float | str = "ls",
+    reference: Model | np.ndarray | float | str = "free",
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     level: float = 0.95,
 ) -> ParameterUncertainty:
@@ -616,7 +616,7 @@ def cls_uncertainty(
         As for :func:`graybox.cls`.
     how : {"auto", "curve", "points", "context"}
         As for :func:`graybox.cls`.
-    reference : {"ls", "els"}, Model, ndarray or float
+    reference : {"free", "ls", "els"}, Model, ndarray or float
         As for :func:`graybox.cls` (Σ*_y of eq. (22)); its own randomness is not propagated.
     constraints : constraint or iterable of constraints, optional
         As for :func:`graybox.cls` (affine ones only).
@@ -666,7 +666,7 @@ def pe_uncertainty(
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     weights: str = "mse",
     ubar: np.ndarray | None = None,
-    reference: Model | np.ndarray | float | str = "ls",
+    reference: Model | np.ndarray | float | str = "free",
     static_sigma: float | None = None,
     level: float = 0.95,
 ) -> ParameterUncertainty:

@@ -47,6 +47,7 @@ from ..static._constraints import (
     cluster_powers,
     n_static_inputs,
     sigma_y_index,
+    FREE_SIGMA_Y,
     static_cluster_map,
     static_inputs,
     static_rows,
@@ -56,7 +57,7 @@ from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
 from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions, output_scale,
-                                   rank_tolerance, spread_scale)
+                                   rank_tolerance, scaled_lstsq, spread_scale)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -354,18 +355,22 @@ def _ls_theta(d: _Data, what: str = "the least-squares θ") -> np.ndarray:
     return scipy.linalg.solve_triangular(d.R1, d.c1) / d.s
 
 
-def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str | None) -> float | None:
-    """Σ*_y of eq. (22) from ``reference``: "ls" (default), "els", a Model, a θ of this structure, a number."""
+def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str | None
+             ) -> float | str | None:
+    """Σ*_y of eq. (22) from ``reference``: "free" (estimated), "ls", "els", a Model, a θ of this structure, a
+    number."""
     cm = static_cluster_map(d.structure, records[0].input_names if records else None)
     iy = sigma_y_index(cm)
     if iy is None:
         return None
+    if isinstance(reference, str) and reference == FREE_SIGMA_Y:
+        return FREE_SIGMA_Y
     if reference is None or (isinstance(reference, str) and reference == "ls"):
         th = _ls_theta(d, "the least-squares reference for Σ*_y (reference='ls'; or give it as a number or a Model)")
     elif isinstance(reference, str) and reference == "els":
         return float(els(d.structure, records).model.clusters().get("Σy", 0.0))
     elif isinstance(reference, str):
-        raise ValueError(f"reference must be 'ls', 'els', a Model, a θ or a number, got {reference!r}")
+        raise ValueError(f"reference must be 'free', 'ls', 'els', a Model, a θ or a number, got {reference!r}")
     elif isinstance(reference, Model) or isinstance(getattr(reference, "model", None), Model):
         return float(as_model(reference, "reference").clusters().get("Σy", 0.0))
     elif np.ndim(reference) == 0:
@@ -695,7 +700,7 @@ def cls(
     static: StaticCurve | StaticSurface | StaticPoints | None = None,
     *,
     how: str = "auto",
-    reference: Model | np.ndarray | float | str = "ls",
+    reference: Model | np.ndarray | float | str = "free",
     constraints: StaticConstraint | Iterable[StaticConstraint] | None = None,
     solver: str = "clarabel",
     solver_options: Mapping | None = None,
@@ -733,11 +738,15 @@ def cls(
         least degree + 1 points. With several inputs it fits a surface on exactly the monomials
         of the structure's Σ_{u^e} clusters (:meth:`StaticSurface.fit`), so it needs at least as
         many points as there are such clusters.
-    reference : {"ls", "els"}, Model, ndarray or float
-        Where Σ*_y of eq. (22) comes from: ``"ls"`` (default) the unconstrained least-squares
-        estimate on ``data``; ``"els"`` extended least squares on ``data`` (the paper's choice:
+    reference : {"free", "ls", "els"}, Model, ndarray or float
+        Where Σ*_y of eq. (22) comes from: ``"free"`` (default) estimated with the other
+        parameters (the least-squares model among all whose static function is the curve; it does
+        not depend on where the input's zero is); ``"ls"`` the unconstrained least-squares
+        estimate's Σy on ``data``; ``"els"`` extended least squares' (the paper's choice:
         :func:`graybox.els` with its default MA(2)); a reference Model (its Σy); a θ of this
-        structure; or the value itself.
+        structure; or the value itself. A reference's Σy is its denominator's slope at ū = 0: with
+        an input far from zero (rpm, kelvin) it can leave the curve's range with no stable model
+        (refused: Σ*_y > 1) or a poor one (BENCHMARKS.md, "Where Σ*_y comes from").
     constraints : constraint or iterable of constraints, optional
         More constraints (band, gain, cluster bounds, user cvxpy constraints), combined with the
         static ones.
@@ -820,13 +829,7 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
     elif isinstance(static, StaticPoints):
         points = static
         if how == "curve":
-            degree = max((m for p, m in cm.keys if p == 0), default=0)
-            if len(points) < degree + 1:
-                raise ValueError(
-                    f"fewer static points than the constraints need: eq. (22) for this structure matches a "
-                    f"degree-{degree} curve, which needs at least {degree + 1} points; got {len(points)}"
-                )
-            curve = StaticCurve.fit(points, degree=degree)
+            curve = numerator_curve(cm, points)
     if curve is not None:
         static_cons.append(CurveEquality(curve))
     elif points is not None and how != "context":
@@ -848,6 +851,24 @@ def _check_point_inputs(recs: list[Record], points: StaticPoints | None) -> None
     r = recs[0]
     if points.n_inputs != r.n_inputs or (r.n_inputs > 1 and points.input_names != r.input_names):
         check_compatible(r, points)
+
+
+def numerator_curve(cm, points: StaticPoints) -> StaticCurve:
+    """The polynomial in ū on the powers of the Σ_{u^m} clusters (what the numerator can carry), fitted to
+    ``points`` by least squares; powers the structure lacks (Σ_u of a structure with Σ_0 and Σ_{u²} only) stay 0,
+    where a full-degree fit would ask eq. (22) for a cluster that is not there."""
+    powers = sorted({m for p, m in cm.keys if p == 0})
+    degree = max(powers, default=0)
+    if len(points) < len(powers):
+        raise ValueError(
+            f"fewer static points than the constraints need: eq. (22) for this structure matches a degree-{degree} "
+            f"curve in the powers {powers} of ū, which needs at least {len(powers)} points; got {len(points)}"
+        )
+    if len(powers) in (0, degree + 1) or len(points) == 1:  # every power (or none), or StaticCurve.fit's refusal
+        return StaticCurve.fit(points, degree=degree)
+    c = np.zeros(degree + 1)
+    c[powers] = scaled_lstsq(points.ubar[:, None] ** np.array(powers), points.ybar)
+    return StaticCurve(c, (float(points.ubar.min()), float(points.ubar.max())), f"fit to {points.name}")
 
 
 def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
@@ -887,15 +908,15 @@ def _check_reference(reference: object, n_terms: int) -> None:
     if reference is None or isinstance(reference, Model) or isinstance(getattr(reference, "model", None), Model):
         return
     if isinstance(reference, str):
-        if reference not in ("ls", "els"):
-            raise ValueError(f"reference must be 'ls', 'els', a Model, a θ or a number, got {reference!r}")
+        if reference not in (FREE_SIGMA_Y, "ls", "els"):
+            raise ValueError(f"reference must be 'free', 'ls', 'els', a Model, a θ or a number, got {reference!r}")
     elif np.ndim(reference) == 0:
         check_real(reference, "reference (Σ*_y)")
     else:
         check_theta(n_terms, reference, "reference θ")
 
 
-def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], reference) -> float | None:
+def _needed_sigma_y(cons: list[StaticConstraint], d: _Data, recs: list[Record], reference) -> float | str | None:
     """Σ*_y only when some CurveEquality will ask for it (ELS is not free)."""
     _check_reference(reference, len(d.structure))
     if any(isinstance(c, CurveEquality) and c.sigma_y is None for c in cons):
@@ -927,7 +948,7 @@ def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: 
         warn_static_range(np.concatenate(ub), recs)
 
 
-def _pe_setup(structure, data, static, constraints, weights, ubar, reference="ls"):
+def _pe_setup(structure, data, static, constraints, weights, ubar, reference="free"):
     st = _process_structure(structure)
     check_choice(weights, "weights", ("mse", "sum"))
     recs = as_gram_records(data)
@@ -965,7 +986,7 @@ def pe_thetas(
     weights: str = "mse",
     ubar: np.ndarray | None = None,
     warm_start: bool = True,
-    reference: Model | np.ndarray | float | str = "ls",
+    reference: Model | np.ndarray | float | str = "free",
 ) -> np.ndarray:
     """θ of the PE weighted sum (9) for each λ1 (λ2 = 1 − λ1), without evaluating them.
 
@@ -1019,7 +1040,7 @@ def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: 
 
 
 def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, solver="clarabel", solver_options=None,
-               weights="mse", ubar=None, warm_start=True, reference="ls") -> tuple[np.ndarray, dict[int, str]]:
+               weights="mse", ubar=None, warm_start=True, reference="free") -> tuple[np.ndarray, dict[int, str]]:
     """:func:`pe_thetas`' θs (NaN rows for the members whose weights do not identify θ) and those members'
     reasons, {index: reason}: what :func:`pe_pareto`, ``select_graybox``'s PE rows and the SE starts keep as
     failed members. ``ValueError`` (their reasons) when every member is such; the options are
@@ -1068,7 +1089,7 @@ def pe_pareto(
     eval_static: StaticPoints | None = None,
     warm_start: bool = True,
     threads: int = 1,
-    reference: Model | np.ndarray | float | str = "ls",
+    reference: Model | np.ndarray | float | str = "free",
 ) -> ParetoSet:
     """The PE bi-objective Pareto set (eq. (9)): one model per λ1, evaluated by the shared evaluator.
 
@@ -1105,8 +1126,9 @@ def pe_pareto(
         Warm-start OSQP from the neighbouring λ (the sweep runs from λ1 = 1 downwards).
     threads : int
         Threads for the batch free runs of the evaluator.
-    reference : {"ls", "els"}, Model, ndarray or float
-        Σ*_y for a :class:`~graybox.CurveEquality` among ``constraints`` (see :func:`cls`).
+    reference : {"free", "ls", "els"}, Model, ndarray or float
+        Σ*_y for a :class:`~graybox.CurveEquality` among ``constraints`` (see :func:`cls`; default
+        ``"free"``: estimated).
 
     Returns
     -------

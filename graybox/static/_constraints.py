@@ -75,6 +75,7 @@ __all__ = [
     "n_static_inputs",
     "static_inputs",
     "sigma_y_index",
+    "FREE_SIGMA_Y",
     "static_cluster_map",
 ]
 
@@ -113,6 +114,10 @@ def static_cluster_map(structure: Structure, inputs: tuple[str, ...] | None = No
     if len(structure.inputs) > 1 or (inputs is not None and len(inputs) > 1):
         return surface_cluster_map(structure, input_names=None if inputs is None else tuple(inputs))
     return cluster_map(structure)
+
+
+#: ``sigma_y`` / ``reference`` value that estimates Σ_y of eq. (22) with the other parameters
+FREE_SIGMA_Y = "free"
 
 
 def sigma_y_index(cm: ClusterMap) -> int | None:
@@ -208,9 +213,9 @@ class StaticContext:
         The problem's static points (measured steady states), if any.
     curve : StaticCurve, StaticSurface or None
         The problem's static curve (or surface, for several inputs), if any.
-    sigma_y : float or None
-        Σ*_y of the reference model (eq. (22)); used by :class:`CurveEquality` when it is not
-        given its own value.
+    sigma_y : float, "free" or None
+        Σ*_y of the reference model (eq. (22)), or ``"free"`` (Σ_y estimated); used by
+        :class:`CurveEquality` when it is not given its own value.
     inputs : tuple of str or None
         The data's input names, the order of ū's columns (None: the structure's own inputs).
     ls_theta : ndarray of shape (n_terms,) or None
@@ -222,7 +227,7 @@ class StaticContext:
     structure: Structure
     points: StaticPoints | None = None
     curve: StaticCurve | StaticSurface | None = None
-    sigma_y: float | None = None
+    sigma_y: float | str | None = None
     inputs: tuple[str, ...] | None = None
     ls_theta: np.ndarray | None = None
 
@@ -449,8 +454,11 @@ class CurveEquality(StaticConstraint):
     - ``Σ_y = Σ*_y``,
     - ``Σ_{u^m} = (1 − Σ*_y) c_m`` for every numerator cluster (c_m = 0 above the curve's degree).
 
-    Σ*_y comes from a reference model (the paper: the ELS estimate; graybox's estimators pass
-    the LS estimate unless told otherwise) or is given here.
+    Σ*_y comes from a reference model (the paper: the ELS estimate's Σ_y) or is given here; or it is
+    ``"free"``: Σ_y is estimated with the other parameters under ``Σ_{u^m} + c_m Σ_y = c_m`` (still
+    affine), the least-squares model among all whose static function is H. A reference's Σ_y is its
+    denominator's slope at ū = 0, which depends on where the input's zero is (rpm or rpm − 1000);
+    the free Σ_y does not (graybox's estimators use it unless told otherwise).
 
     Several inputs: with a :class:`~graybox.StaticSurface` H(ū) = Σ_e c_e ū_1^e_1 ⋯ ū_m^e_m the same
     identity gives ``Σ_{y u^e} = 0`` for every e ≠ 0, ``Σ_y = Σ*_y`` and
@@ -462,39 +470,47 @@ class CurveEquality(StaticConstraint):
     curve : StaticCurve or StaticSurface
         Polynomial static curve (ascending coefficients), e.g. eq. (1); or, for a structure with
         several inputs, a polynomial static surface whose inputs are the data's, in their order.
-    sigma_y : float, optional
-        Σ*_y; default: the problem's (``StaticContext.sigma_y``).
+    sigma_y : float or "free", optional
+        Σ*_y, or ``"free"`` (estimated); default: the problem's (``StaticContext.sigma_y``).
 
     Raises
     ------
     ValueError
         The structure is not rational; the curve has a power of ū that no cluster carries;
         Σ*_y = 1 (the static function would not exist); Σ*_y > 1 (no model meeting (22) has a
-        stable equilibrium).
+        stable equilibrium); a free Σ_y estimated at 1 or above (the same, found after solving).
     """
 
     curve: StaticCurve | StaticSurface
-    sigma_y: float | None = None
+    sigma_y: float | str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.curve, (StaticCurve, StaticSurface)):
             raise TypeError(f"CurveEquality needs a StaticCurve or a StaticSurface, got {type(self.curve).__name__}")
-        if self.sigma_y is not None:
+        if isinstance(self.sigma_y, str):
+            check_choice(self.sigma_y, "CurveEquality: sigma_y", (FREE_SIGMA_Y,))
+        elif self.sigma_y is not None:
             object.__setattr__(self, "sigma_y", check_real(self.sigma_y, "CurveEquality: sigma_y"))
 
     def describe(self) -> str:
-        s = "" if self.sigma_y is None else f", Σ*y = {self.sigma_y:.6g}"
+        if self.sigma_y is None:
+            s = ""
+        elif isinstance(self.sigma_y, str):
+            s = ", Σ*y estimated"
+        else:
+            s = f", Σ*y = {self.sigma_y:.6g}"
         return f"static curve equality (22) to {self.curve.name}{s}"
 
-    def resolved_sigma_y(self, ctx: StaticContext) -> float:
-        """Σ*_y used: this constraint's, else the context's; 0 when the structure has no Σy."""
+    def resolved_sigma_y(self, ctx: StaticContext) -> float | None:
+        """Σ*_y used: this constraint's, else the context's; 0 when the structure has no Σy; None when
+        Σ_y is estimated (``"free"``)."""
         cm = ctx.cluster_map
         if not _has_sigma_y(cm):
             return 0.0  # no linear-in-y cluster: the denominator is 1 − Σ_{yu^m} ū^m → 1
         s = self.sigma_y if self.sigma_y is not None else ctx.sigma_y
         if s is None:
             raise ValueError(f"{self.describe()}: Σ*_y is unknown; give sigma_y or a reference model")
-        return float(s)
+        return None if isinstance(s, str) else float(s)
 
     def affine(self, ctx: StaticContext) -> AffineRows:
         st = ctx.structure
@@ -506,69 +522,84 @@ class CurveEquality(StaticConstraint):
             )
         cm = ctx.cluster_map
         sy = self.resolved_sigma_y(ctx)
-        if denominator_vanishes(np.array(1.0 - sy), np.array(1.0 + abs(sy))):
-            raise ValueError(f"Σ*_y = {sy:.12g}: the denominator 1 − Σ*_y of eq. (22) vanishes, "
-                             "so no static function exists; use another reference model")
-        if sy > 1.0 and _has_sigma_y(cm):
-            # with Σ_yu^m = 0 the linearised recursion's coefficients sum to Σ*_y at every ū, and
-            # a stable equilibrium needs that sum below 1: every model meeting (22) would be unstable
-            raise ValueError(f"Σ*_y = {sy:.6g} > 1: every model satisfying eq. (22) would have no stable "
-                             "equilibrium (its y coefficients sum to Σ*_y); use a reference model with Σy < 1 "
-                             "(e.g. reference='els') or give sigma_y < 1")
-        if isinstance(self.curve, StaticSurface):
-            return self._surface_rows(ctx, sy)
-        if n_static_inputs(cm) != 1:
-            raise ValueError(f"{self.curve.name} is a curve in one input but the structure has "
-                             f"{n_static_inputs(cm)} inputs: give a StaticSurface (e.g. StaticSurface.fit(points))")
-        c = self.curve.coefficients
-        numer = {m for (p, m) in cm.keys if p == 0}
-        missing = [m for m, cm_ in enumerate(c) if cm_ != 0.0 and m not in numer]
-        if missing:
-            raise ValueError(
-                f"{self.curve.name} has ū^m terms with m = {missing} but the structure has no cluster "
-                f"{[cluster_name(0, m) for m in missing]}: its static function cannot equal the curve"
-            )
+        if sy is not None:
+            if denominator_vanishes(np.array(1.0 - sy), np.array(1.0 + abs(sy))):
+                raise ValueError(f"Σ*_y = {sy:.12g}: the denominator 1 − Σ*_y of eq. (22) vanishes, "
+                                 "so no static function exists; use another reference model")
+            if sy > 1.0 and _has_sigma_y(cm):
+                # with Σ_yu^m = 0 the linearised recursion's coefficients sum to Σ*_y at every ū, and
+                # a stable equilibrium needs that sum below 1: every model meeting (22) would be unstable
+                raise ValueError(f"Σ*_y = {sy:.6g} > 1: every model satisfying eq. (22) would have no stable "
+                                 "equilibrium (its y coefficients sum to Σ*_y); use a reference model with Σy < 1 "
+                                 "(e.g. reference='els'), give sigma_y < 1, or estimate it (reference='free')")
+        coefficient = self._coefficients(cm)
+        # N ≡ D·H with D = 1 − Σ_y constant: Σ_{y u^e} = 0 (e ≠ 0), and Σ_{u^e} = (1 − Σ_y) c_e, which with
+        # Σ_y free reads Σ_{u^e} + c_e Σ_y = c_e (affine in θ all the same)
+        iy = sigma_y_index(cm)
         A, b = [], []
-        for k, (p, m) in enumerate(cm.keys):
-            if p == 1 and m >= 1:
-                target = 0.0
-            elif p == 1:
-                target = sy
-            else:
-                target = (1.0 - sy) * (c[m] if m < c.size else 0.0)
-            A.append(cm.R[k])
-            b.append(target)
-        return AffineRows.make(ctx.n_terms, A, b)
-
-    def _surface_rows(self, ctx: StaticContext, sy: float) -> AffineRows:
-        """Eq. (22) on a surface: Σ_{y u^e} = 0 (e ≠ 0), Σ_y = Σ*_y, Σ_{u^e} = (1 − Σ*_y) c_e."""
-        cm = ctx.cluster_map
-        surf = self.curve
-        m = n_static_inputs(cm)
-        if surf.n_inputs != m:
-            raise ValueError(f"{surf.name} is a surface in {surf.n_inputs} input(s) but the structure has {m}: "
-                             "they must speak of the same inputs, in the same order")
-        _check_surface_inputs(surf, cm)
-        powers = [cluster_powers(k) for k in cm.keys]
-        numer = {e for p, e in powers if p == 0}
-        missing = [e for e, c in zip(surf.exponents, surf.coefficients) if c != 0.0 and e not in numer]
-        if missing:
-            raise ValueError(
-                f"{surf.name} has monomials with exponents {missing} (one power per input) that no cluster of the "
-                "structure carries (no process term with that input powers and no y): its static function cannot "
-                "equal the surface. Fit the surface on the structure's numerator monomials (CLS with how='curve')"
-            )
-        A, b = [], []
-        for k, (p, e) in enumerate(powers):
+        for k, key in enumerate(cm.keys):
+            p, e = cluster_powers(key)
+            row = np.array(cm.R[k], dtype=float)
             if p == 1 and any(e):
                 target = 0.0
             elif p == 1:
+                if sy is None:
+                    continue
                 target = sy
+            elif sy is None:
+                c_e = coefficient(e)
+                if iy is not None:
+                    row = row + c_e * cm.R[iy]
+                target = c_e
             else:
-                target = (1.0 - sy) * surf.coefficient(e)
-            A.append(cm.R[k])
+                target = (1.0 - sy) * coefficient(e)
+            A.append(row)
             b.append(target)
         return AffineRows.make(ctx.n_terms, A, b)
+
+    def _coefficients(self, cm: ClusterMap | SurfaceClusterMap) -> Callable[[tuple[int, ...]], float]:
+        """c_e of the curve or surface by its input powers e, once the structure is shown to carry every one."""
+        m = n_static_inputs(cm)
+        powers = [cluster_powers(k) for k in cm.keys]
+        numer = {e for p, e in powers if p == 0}
+        if isinstance(self.curve, StaticSurface):
+            surf = self.curve
+            if surf.n_inputs != m:
+                raise ValueError(f"{surf.name} is a surface in {surf.n_inputs} input(s) but the structure has {m}: "
+                                 "they must speak of the same inputs, in the same order")
+            _check_surface_inputs(surf, cm)
+            missing = [e for e, c in zip(surf.exponents, surf.coefficients) if c != 0.0 and e not in numer]
+            if missing:
+                raise ValueError(
+                    f"{surf.name} has monomials with exponents {missing} (one power per input) that no cluster of "
+                    "the structure carries (no process term with that input powers and no y): its static function "
+                    "cannot equal the surface. Fit the surface on the structure's numerator monomials (CLS with "
+                    "how='curve')"
+                )
+            return lambda e: float(surf.coefficient(e))
+        if m != 1:
+            raise ValueError(f"{self.curve.name} is a curve in one input but the structure has "
+                             f"{m} inputs: give a StaticSurface (e.g. StaticSurface.fit(points))")
+        c = self.curve.coefficients
+        missing = [k for k, ck in enumerate(c) if ck != 0.0 and (k,) not in numer]
+        if missing:
+            raise ValueError(
+                f"{self.curve.name} has ū^m terms with m = {missing} but the structure has no cluster "
+                f"{[cluster_name(0, k) for k in missing]}: its static function cannot equal the curve"
+            )
+        return lambda e: float(c[e[0]]) if e[0] < c.size else 0.0
+
+    def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
+        cm = ctx.cluster_map
+        if self.resolved_sigma_y(ctx) is not None:
+            return
+        sy = float((cm.R @ np.asarray(theta, float))[sigma_y_index(cm)])
+        if sy > 1.0 or denominator_vanishes(np.array(1.0 - sy), np.array(1.0 + abs(sy))):
+            # Σ_y = 1 with every Σ_{u^e} = 0 meets the rows as 0 = 0: no static function at all
+            raise ValueError(f"{self.describe()}: the estimated Σ_y = {sy:.6g} leaves the model no stable "
+                             "equilibrium (with Σ_{yu} = 0 its y coefficients sum to Σ_y, and a static function "
+                             "needs 1 − Σ_y > 0); fix Σ*_y from a reference model (reference='ls' or 'els') or "
+                             "give it as a number below 1")
 
 
 def _check_surface_inputs(surface: StaticSurface, cm: ClusterMap | SurfaceClusterMap) -> None:
