@@ -146,9 +146,10 @@ def main() -> None:
         fails=("J_S test", lambda s: int(s.isna().sum())),
         median_JS_test=("J_S test", "median"), worst_JS_test=("J_S test", "max"),
         median_JSF=("J_SF", "median")).reset_index().to_markdown(index=False, floatfmt=".4g"))
-    reasons = syn["fails"].dropna().unique() if "fails" in syn else []
-    for r in reasons:
-        print("refused:", r)
+    if "fails" in syn:
+        why = syn["fails"].dropna().str.replace(r"[-0-9.]+ > 1", "… > 1", regex=True)
+        for reason, n in why.value_counts().items():
+            print(f"refused {n}×: {reason}")
 
 
 if __name__ == "__main__":

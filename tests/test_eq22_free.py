@@ -156,3 +156,14 @@ def test_how_curve_fits_the_powers_the_numerator_has():
     np.testing.assert_allclose(curve, coef[0] + coef[1] * ub**2, rtol=1e-6)
     with pytest.raises(ValueError, match=r"powers \[0, 2\] of ū, which needs at least 2 points"):
         gb.cls(st_, gb.Record(u, y), gb.StaticPoints([1.0], [2.0]), how="curve")
+
+
+def test_a_spec_s_equality_takes_free_and_refuses_other_text():
+    from graybox.experiments._spec import SpecError, build_constraint, canonical_constraint
+
+    d = canonical_constraint({"type": "equality", "curve": [0.2, 1.0, -0.05], "sigma_y": "free"})
+    c = build_constraint(d)
+    assert isinstance(c, gb.CurveEquality) and c.sigma_y == "free"
+    assert canonical_constraint({"type": "equality", "curve": "fit", "sigma_y": 0.9})["sigma_y"] == 0.9
+    with pytest.raises(SpecError, match=r'sigma_y must be a number or "free"'):
+        canonical_constraint({"type": "equality", "curve": "fit", "sigma_y": "loose"})

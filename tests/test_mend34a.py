@@ -68,13 +68,17 @@ def test_cls_uncertainty_takes_a_qp_estimate_whose_constrained_cluster_is_round_
     vb = np.linspace(-50, 50, 7)
     pts = gb.StaticPoints(vb, (20 + vb + 4e-3 * vb**2) / (0.2 - 2e-4 * vb))
     curve = gb.StaticCurve.fit(pts, 2)
-    model = gb.cls(terms, rec, curve, solver=solver).model
-    unc = gb.cls_uncertainty(model, rec, curve)
+    model = gb.cls(terms, rec, curve, solver=solver, reference="ls").model
+    unc = gb.cls_uncertainty(model, rec, curve, reference="ls")
     # Σ_yu = 0, Σ_y = Σ*_y, Σ_0, Σ_u, Σ_u² fixed: y(k-1) and y(k-2) share the one free direction
     assert unc.constraints.shape[0] == 5 and unc.std[0] > 0 and unc.std[5] == pytest.approx(unc.std[0])
     other = gb.Model(model.structure, model.theta + np.array([0, 0, 0, 1e-6, 0, 0]))  # (22) broken by 1e-6
     with pytest.raises(ValueError, match="does not satisfy static curve equality"):
-        gb.cls_uncertainty(other, rec, curve)
+        gb.cls_uncertainty(other, rec, curve, reference="ls")
+    # Σ_y estimated (the default): Σ_yu = 0 and Σ_{u^m} + c_m Σ_y = c_m, one row fewer, the same round-off
+    free = gb.cls(terms, rec, curve, solver=solver).model
+    unc = gb.cls_uncertainty(free, rec, curve)
+    assert unc.constraints.shape[0] == 4 and unc.std[3] == 0 and np.all(np.delete(unc.std, 3) > 0)  # Σ_yu alone fixed
 
 
 # --------------------------------------------------------------------------------------------

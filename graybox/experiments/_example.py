@@ -56,7 +56,8 @@ terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]
 
 # ----------------------------------------------------------------------------------- variants
 # estimator: ls, els, cls, pe, se-ga, se-gradient, se-dsf (the D_SF model solved directly), neural
-# constraints (cls, pe): {type = "equality"} (eq. (22); curve = "fit" | "dataset" | [c0, c1, ...]),
+# constraints (cls, pe): {type = "equality"} (eq. (22); curve = "fit" | "dataset" | [c0, c1, ...];
+#   Sigma*_y estimated unless sigma_y = 0.95 or options = {reference = "els"}),
 #   {type = "points"}, {type = "band"} (half-width: the static points' uncertainty; or b = 0.2 in
 #   output units), {type = "gain", lower = 0.0},
 #   {type = "clusters", bounds = {Sy = {upper = 0.999}}}; a list imposes them together.

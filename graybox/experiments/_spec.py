@@ -27,7 +27,7 @@ from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAI
 from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_path,
                                 check_real, check_sequence, check_str)
 from ..core._reprs import short_repr
-from ..static._constraints import check_min_denominator
+from ..static._constraints import FREE_SIGMA_Y, check_min_denominator
 
 __all__ = [
     "SpecError",
@@ -704,7 +704,13 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
             raise (SpecError if isinstance(curve, Sequence) else SpecTypeError)(
                 "curve must be \"fit\" (fitted to the data set's static points), \"dataset\" (the data set's own "
                 f"static curve) or a list of ascending polynomial coefficients, got {curve!r}", path + ("curve",))
-        return {"type": kind, "curve": curve, "sigma_y": _bound(c.get("sigma_y"), path + ("sigma_y",), "sigma_y")}
+        sy = c.get("sigma_y")
+        if isinstance(sy, str) and sy != FREE_SIGMA_Y:
+            raise SpecError(f"sigma_y must be a number or \"{FREE_SIGMA_Y}\" (estimated, the default), got {sy!r}",
+                            path + ("sigma_y",))
+        if sy != FREE_SIGMA_Y:
+            sy = _bound(sy, path + ("sigma_y",), "sigma_y")
+        return {"type": kind, "curve": curve, "sigma_y": sy}
     if kind == "points":
         return {"type": kind}
     if kind == "band":
