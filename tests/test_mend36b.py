@@ -118,8 +118,10 @@ def test_cls_on_a_held_record_follows_the_same_rule():
     # reference is refused in the rule's words, saying what else to give
     rec, pts = held(3.0), points()
     with pytest.raises(ValueError, match=r"reference='ls'.*not identifiable from the identification records"):
-        gb.cls(STRUCT, rec, pts)
+        gb.cls(STRUCT, rec, pts, reference="ls")
     assert np.allclose(gb.cls(STRUCT, rec, pts, reference=TRUE[0]).model.theta, TRUE, rtol=0.02, atol=0.01)
+    # Σ_y estimated (the default) needs no reference: the curve's rows and the record identify θ together
+    assert np.allclose(gb.cls(STRUCT, rec, pts).model.theta, TRUE, rtol=0.02, atol=0.01)
 
 
 def test_terms_static_points_cannot_separate_name_a_moving_input_as_what_is_missing():
