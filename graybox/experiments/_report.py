@@ -76,17 +76,17 @@ def _short(text: object, n: int = 160) -> str:
     return t if len(t) <= n else t[: n - 1] + "…"
 
 
-def _cell_reasons(g: pd.DataFrame, brief: Sequence[str] = ()) -> list[str]:
-    """Why cells of a group are not ok: their count and first messages per status (only the count
-    for the statuses in ``brief``, whose reason is already said)."""
+def _cell_reasons(status: np.ndarray, message: np.ndarray, brief: Sequence[str] = ()) -> list[str]:
+    """Why cells of a group are not ok (their ``status`` and ``message`` arrays): their count and first
+    messages per status (only the count for the statuses in ``brief``, whose reason is already said)."""
     out = []
     for st in STATUSES[1:]:
-        bad = g[g["status"] == st]
-        if len(bad) and st in brief:
-            out.append(f"{len(bad)} {st}")
-        elif len(bad):
-            msgs = list(dict.fromkeys(_short(m) for m in bad["message"] if isinstance(m, str) and m))
-            out.append(f"{len(bad)} {st}: " + ("; ".join(msgs[:2]) if msgs else "no message stored"))
+        bad = status == st
+        if bad.any() and st in brief:
+            out.append(f"{int(bad.sum())} {st}")
+        elif bad.any():
+            msgs = list(dict.fromkeys(_short(m) for m in message[bad] if isinstance(m, str) and m))
+            out.append(f"{int(bad.sum())} {st}: " + ("; ".join(msgs[:2]) if msgs else "no message stored"))
     return out
 
 
@@ -119,16 +119,17 @@ def _band_of(rows: pd.DataFrame, band: float | Mapping[str, float] | None, data:
     return float(b.iloc[0])
 
 
-_CANDIDATE_COLUMNS = ("seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params", "chosen", "status",
-                      "failure")
+_CANDIDATE_COLUMNS = (*_KEYS, "seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params", "chosen",
+                      "status", "failure")
 
 
 def _candidates(g: pd.DataFrame) -> pd.DataFrame:
-    """Every model of a (data, structure, variant): Pareto members and single models (one frame
-    built from columns: a frame per row made the leaderboard's time)."""
+    """Every model of the cells of ``g`` (its (data, structure, variant) in the first columns): Pareto
+    members and single models (one frame built from columns, in one pass over every cell: a frame per
+    row, or per group, made the leaderboard's time)."""
     cols: dict[str, list] = {k: [] for k in _CANDIDATE_COLUMNS}
     sizes = _n_params(g).tolist()
-    for r, n_p in zip(g[["members", "lambda1", "seed", "status", "JS_ident", "JS_valid", "JSF",
+    for r, n_p in zip(g[[*_KEYS, "members", "lambda1", "seed", "status", "JS_ident", "JS_valid", "JSF",
                          "fit_valid"]].itertuples(index=False), sizes):
         m = r.members
         if isinstance(m, Mapping) and len(m.get("JSF", ())):
@@ -139,17 +140,62 @@ def _candidates(g: pd.DataFrame) -> pd.DataFrame:
                      "chosen": np.isclose(lam, r.lambda1) if pd.notna(r.lambda1) else np.zeros(K, bool),
                      "status": [r.status] * K, "failure": list(m.get("failure", [""] * K))}
         elif r.status == "ok":
+            K = 1
             parts = {"seed": [r.seed], "lambda1": [np.nan], "JS_ident": [r.JS_ident], "JS_valid": [r.JS_valid],
                      "JSF": [r.JSF], "fit_valid": [r.fit_valid], "n_params": [n_p], "chosen": [True],
                      "status": [r.status], "failure": [""]}
         else:
             continue
+        parts.update(data=[r.data] * K, structure=[r.structure] * K, variant=[r.variant] * K)
         for k, v in parts.items():
             cols[k].extend(np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
     out = pd.DataFrame(cols, columns=list(_CANDIDATE_COLUMNS))
     for k in ("lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid"):
         out[k] = out[k].astype(float)
     return out
+
+
+class _Columns:
+    """Columns of a frame as numpy arrays, and each (data, structure, variant) group's row positions: the
+    reasons of many groups read without a pandas operation per group."""
+
+    def __init__(self, frame: pd.DataFrame, names: Sequence[str]):
+        self.col = {k: frame[k].to_numpy() for k in names}
+        self.at = {k: np.asarray(v) for k, v in frame.groupby(_KEYS, sort=False).indices.items()} if len(frame) else {}
+
+    def of(self, key: tuple, name: str) -> np.ndarray:
+        return self.col[name][self.at.get(key, np.zeros(0, int))]
+
+
+def _no_model_reason(key: tuple, cells: _Columns, members: _Columns | None, b: float | None, n: int) -> str:
+    """Why no model of the (data, structure, variant) ``key`` qualified (``n`` models compared, band ``b``;
+    ``members``: every member's columns, None for the rule "chosen")."""
+    why: list[str] = []
+    if members is not None:
+        failure = members.of(key, "failure")
+        failed = failure != ""
+        failures = list(dict.fromkeys(_short(f) for f in failure[failed]))
+        jsf = members.of(key, "JSF").astype(float)[~failed]
+        inside = jsf <= b
+        if n:
+            finite = np.isfinite(jsf)
+            if inside.any():
+                why.append(f"every one of the {int(inside.sum())} model(s) with J_SF ≤ B = {b:g} diverges on the "
+                           "validation record")
+            elif finite.any():
+                i = int(np.flatnonzero(finite)[np.argmin(jsf[finite])])
+                lam1, seed = members.of(key, "lambda1")[~failed][i], members.of(key, "seed")[~failed][i]
+                lam = f", λ1 = {lam1:.3g}" if pd.notna(lam1) else ""
+                seed = f", seed {int(seed)}" if pd.notna(seed) else ""
+                why.append(f"no model has J_SF ≤ B = {b:g}: the smallest J_SF reached is {jsf[i]:.4g}"
+                           f"{lam}{seed} ({n} model(s) compared)")
+            else:
+                why.append(f"every one of the {n} model(s) has an undefined static curve (J_SF = inf)")
+        if failures:
+            why.append(f"{int(failed.sum())} member fit(s) failed: " + "; ".join(failures[:2]))
+    # an infeasible cell whose members were judged above: its own D_SF said the same
+    why += _cell_reasons(cells.of(key, "status"), cells.of(key, "message"), brief=("infeasible",) if why and n else ())
+    return "; ".join(why) or ("no cell is ok" if members is None else "no model qualified")
 
 
 def leaderboard(
@@ -185,52 +231,41 @@ def leaderboard(
     """
     band = _checked_options(rule, band)
     df = _frame(results)
+    # every group's candidates and its best, in one pass; a group with none is revisited for its reasons
+    if rule == "chosen":
+        pool = df[df["status"] == "ok"]
+        pool = pool.assign(n_params=_n_params(pool))
+        counted = pool
+    else:
+        bands = {d: _band_of(df[df["data"] == d], band, d) for d in dict.fromkeys(df["data"])}
+        allc = _candidates(df)
+        counted = allc[allc["failure"] == ""]  # a member whose fit failed is no model: not compared
+        inside = counted["JSF"].to_numpy(float) <= counted["data"].map(bands).to_numpy(float)
+        pool = counted[inside & np.isfinite(counted["JS_valid"].to_numpy(float))].assign(in_band=True)
+    # the first of each group by (J_S valid, J_SF), ties in the cells' order (a stable sort)
+    firsts = pool.sort_values(["JS_valid", "JSF"], kind="stable").drop_duplicates(_KEYS)
+    best = {(r.data, r.structure, r.variant): r for r in firsts.itertuples(index=False)}
+    n_of = counted.groupby(_KEYS, sort=False).size().to_dict()
+    groups = df.groupby(_KEYS, sort=False)
+    cells_np = _Columns(df, ("status", "message"))
+    members_np = None if rule == "chosen" else _Columns(allc, ("failure", "JSF", "lambda1", "seed"))
+    sizes_np = _Columns(df.assign(n_params=_n_params(df)), ("n_params",))
+    ok_of = (df["status"] == "ok").groupby([df[k] for k in _KEYS], sort=False).sum().to_dict()
     rows = []
-    for (d, s, v), g in df.groupby(_KEYS, sort=False):
-        base = {"data": d, "structure": s, "variant": v, "cells": len(g), "ok": int((g["status"] == "ok").sum())}
-        why: list[str] = []
-        if rule == "chosen":
-            ok = g[g["status"] == "ok"]
-            cand = ok.assign(in_band=ok["in_band"], n_params=_n_params(ok))
-            n = len(cand)
-        else:
-            b = _band_of(g, band, d)
-            allc = _candidates(g)
-            failed = allc["failure"] != ""
-            # a member whose fit failed is no model: not compared, its reason said when nothing qualifies
-            failures = list(dict.fromkeys(_short(f) for f in allc.loc[failed, "failure"]))
-            allc = allc[~failed]
-            n = len(allc)
-            jsf = allc["JSF"].astype(float)
-            inside = jsf <= b
-            cand = allc[inside & np.isfinite(allc["JS_valid"].astype(float))].assign(in_band=True)
-            if n and not len(cand):
-                finite = jsf[np.isfinite(jsf)]
-                if inside.any():
-                    why.append(f"every one of the {int(inside.sum())} model(s) with J_SF ≤ B = {b:g} diverges on the "
-                               "validation record")
-                elif len(finite):
-                    at = allc.loc[finite.idxmin()]
-                    lam = f", λ1 = {at['lambda1']:.3g}" if pd.notna(at["lambda1"]) else ""
-                    seed = f", seed {int(at['seed'])}" if pd.notna(at["seed"]) else ""
-                    why.append(f"no model has J_SF ≤ B = {b:g}: the smallest J_SF reached is {finite.min():.4g}"
-                               f"{lam}{seed} ({n} model(s) compared)")
-                else:
-                    why.append(f"every one of the {n} model(s) has an undefined static curve (J_SF = inf)")
-            if failures and not len(cand):
-                why.append(f"{int(failed.sum())} member fit(s) failed: " + "; ".join(failures[:2]))
-        if len(cand):
-            best = cand.sort_values(["JS_valid", "JSF"], kind="stable").iloc[0]
-            base.update({k: best.get(k, np.nan) for k in ("JS_valid", "JS_ident", "JSF", "fit_valid", "n_params",
-                                                         "seed", "lambda1", "in_band")})
+    for (d, s, v), cells in groups.size().items():
+        base = {"data": d, "structure": s, "variant": v, "cells": int(cells), "ok": int(ok_of[(d, s, v)])}
+        n = int(n_of.get((d, s, v), 0))
+        hit = best.get((d, s, v))
+        if hit is not None:
+            base.update({k: getattr(hit, k, np.nan) for k in ("JS_valid", "JS_ident", "JSF", "fit_valid", "n_params",
+                                                             "seed", "lambda1", "in_band")})
             base["reason"] = ""
         else:
-            sizes = _n_params(g).dropna().unique()
+            sizes = pd.unique(pd.Series(sizes_np.of((d, s, v), "n_params")).dropna())
             base.update(JS_valid=np.nan, JS_ident=np.nan, JSF=np.nan, fit_valid=np.nan,
                         n_params=sizes[0] if len(sizes) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan, in_band=False)
-            # an infeasible cell whose members were judged above: its own D_SF said the same
-            why += _cell_reasons(g, brief=("infeasible",) if why and n else ())
-            base["reason"] = "; ".join(why) or ("no cell is ok" if rule == "chosen" else "no model qualified")
+            base["reason"] = _no_model_reason((d, s, v), cells_np, members_np,
+                                              None if rule == "chosen" else bands[d], n)
         base["candidates"] = n
         rows.append(base)
     out = pd.DataFrame(rows)
