@@ -167,3 +167,12 @@ def test_a_spec_s_equality_takes_free_and_refuses_other_text():
     assert canonical_constraint({"type": "equality", "curve": "fit", "sigma_y": 0.9})["sigma_y"] == 0.9
     with pytest.raises(SpecError, match=r'sigma_y must be a number or "free"'):
         canonical_constraint({"type": "equality", "curve": "fit", "sigma_y": "loose"})
+
+
+def test_a_curve_fit_whose_powers_are_collinear_to_round_off_says_so():
+    ub = 1e6 + np.linspace(0.0, 1.0, 8)  # powers of ū ≈ 1e6 over a range of 1 agree to 16 digits
+    pts = gb.StaticPoints(ub, 1.0 + (ub - 1e6) - 0.2 * (ub - 1e6) ** 3)
+    with pytest.raises(ValueError, match=r"ū⁰ … ū\^3 .* are collinear to round-off.*express the input nearer zero"):
+        gb.StaticCurve.fit(pts, degree=3)
+    fit = gb.StaticCurve.fit(gb.StaticPoints(ub - 1e6, pts.ybar), degree=3)  # the same points nearer zero
+    np.testing.assert_allclose(fit(ub - 1e6), pts.ybar, atol=1e-9)

@@ -71,7 +71,18 @@ class StaticCurve:
         if len(points) < degree + 1:
             raise ValueError(f"fitting degree {degree} needs at least {degree + 1} static points, got {len(points)}")
         V = np.vander(points.ubar, degree + 1, increasing=True)
-        c = scaled_lstsq(V, points.ybar)
+        try:
+            c = scaled_lstsq(V, points.ybar)
+        except ValueError as err:
+            # distinct levels (StaticPoints has no duplicates) determine the polynomial, so the rank was lost to
+            # round-off: powers of ū far from zero over a narrow range agree to 16 digits (the curve, like the
+            # model's clusters Σ_{u^m}, is in powers of ū itself)
+            lo, hi = float(points.ubar.min()), float(points.ubar.max())
+            raise ValueError(
+                f"StaticCurve.fit: the powers ū⁰ … ū^{degree} of {points.name} (ū in [{lo:.12g}, {hi:.12g}]) are "
+                "collinear to round-off, as powers of an input far from zero over a narrow range are: express the "
+                "input nearer zero (e.g. minus a reference level, in the records too) or fit a lower degree"
+            ) from err
         return cls(c, (float(points.ubar.min()), float(points.ubar.max())), name or f"fit to {points.name}")
 
     @property
