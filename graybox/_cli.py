@@ -23,6 +23,19 @@ def _spec_arg(text: str) -> str | int:
     return n
 
 
+def _max_structures_arg(text: str) -> int | None:
+    """``--max-structures``: a count >= 1, or all."""
+    if text == "all":
+        return None
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of structures or 'all', got {text!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"a number of structures is >= 1, got {n}")
+    return n
+
+
 def _grid(args: argparse.Namespace) -> int:
     from . import experiments as gx
 
@@ -52,7 +65,8 @@ def _grid(args: argparse.Namespace) -> int:
             print(gx.grid_status(args.store, spec=args.spec).summary())
             return 0
         store = args.store[0] if len(args.store) == 1 else args.store
-        written = gx.write_report(store, args.out, rule=args.rule, band=args.band, spec=args.spec, html=args.html)
+        written = gx.write_report(store, args.out, rule=args.rule, band=args.band, spec=args.spec, html=args.html,
+                                  max_structures=args.max_structures)
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
         return 0
     except KeyboardInterrupt:
@@ -158,6 +172,9 @@ def _main(argv: list[str] | None) -> int:
     rep.add_argument("--spec", **which)
     rep.add_argument("--html", action="store_true",
                      help="also write report.html: one self-contained page (figures, tables, spec, reasons)")
+    rep.add_argument("--max-structures", type=_max_structures_arg, default=12, metavar="N",
+                     help="most structures a data set's figures draw, the best by rank (default 12; 'all': every "
+                          "one); the tables keep every structure")
     args = parser.parse_args(argv)
     if args.command == "reproduce":
         from .estimation._simulation_error import CheckpointError

@@ -29,7 +29,8 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
-from ..core._validation import FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_real, check_sequence
+from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
+                                check_sequence)
 from ._cell import STATUSES
 from ._store import compare_results, encode_value, load_results
 
@@ -441,6 +442,28 @@ def plot_scatter(
     return fig
 
 
+def _known_structures(structures: Sequence[str], every: Sequence[str], data: str) -> list[str]:
+    """``structures`` checked: a non-empty sequence of names of the data set's structures."""
+    names = list(check_sequence(structures, "structures", "a sequence of structure names"))
+    if not names:
+        raise ValueError("structures must name at least one structure (None: every structure)")
+    unknown = [s for s in names if s not in set(every)]
+    if unknown:
+        raise ValueError(f"structures holds {unknown}: no such structure in data set {data!r}; it has {list(every)}")
+    return names
+
+
+def _best_structures(lb: pd.DataFrame, data: str, k: int | None) -> tuple[list[str] | None, int]:
+    """The ``k`` structures of ``data`` with the best leaderboard rank (over their variants; unranked last, in
+    the grid's order), or None when it has ``k`` or fewer (every one drawn); and how many it has."""
+    sub = lb.xs(data, level="data")
+    order = list(dict.fromkeys(sub.index.get_level_values("structure")))
+    if k is None or len(order) <= k:
+        return None, len(order)
+    best = sub["rank"].groupby(level="structure", sort=False).min().reindex(order)
+    return list(best.sort_values(kind="stable", na_position="last").index[:k]), len(order)
+
+
 def plot_fronts(
     results: pd.DataFrame | str | os.PathLike,
     *,
@@ -469,18 +492,11 @@ def plot_fronts(
     matplotlib.figure.Figure
     """
     band = _checked_options(band=band, data=data)
-    if structures is not None:
-        structures = check_sequence(structures, "structures", "a sequence of structure names")
-        if not structures:
-            raise ValueError("structures must name at least one structure (None: every structure)")
     df = _frame(results)
     d = _one_data(df, data)
     sub = df[df["data"] == d]
-    names = list(dict.fromkeys(sub["structure"])) if structures is None else structures
-    unknown = [s for s in names if s not in set(sub["structure"])]
-    if unknown:
-        raise ValueError(f"structures holds {unknown}: no such structure in data set {d!r}; it has "
-                         f"{list(dict.fromkeys(sub['structure']))}")
+    every = list(dict.fromkeys(sub["structure"]))
+    names = every if structures is None else _known_structures(structures, every, d)
     variants = list(dict.fromkeys(sub["variant"]))
     colors = {v: f"C{i % 10}" for i, v in enumerate(variants)}
     ncol = min(3, len(names))
@@ -543,6 +559,7 @@ def plot_heatmap(
     value: str = "JS_valid",
     rule: str = "dsf_valid",
     band: float | Mapping[str, float] | None = None,
+    structures: Sequence[str] | None = None,
 ) -> Figure:
     """Structure × variant heat map of a leaderboard figure (log colour scale for errors that span a decade).
 
@@ -554,6 +571,8 @@ def plot_heatmap(
         The data set (required when the grid has several).
     value, rule, band
         As for :func:`heatmap_table`.
+    structures : sequence of str, optional
+        Rows to draw, in this order (default: every structure, in the grid's order).
 
     Returns
     -------
@@ -561,6 +580,8 @@ def plot_heatmap(
         Each cell annotated with its value; "—" where no model qualified.
     """
     t = heatmap_table(results, data=data, value=value, rule=rule, band=band)
+    if structures is not None:
+        t = t.loc[_known_structures(structures, list(t.index), _one_data(_frame(results), data))]
     try:
         vals = t.to_numpy(dtype=float)
     except (TypeError, ValueError):  # a text column (reason): heatmap_table shows it, a colour scale cannot
@@ -615,6 +636,7 @@ def write_report(
     band: float | Mapping[str, float] | None = None,
     spec: str | int = "latest",
     html: bool = False,
+    max_structures: int | None = 12,
 ) -> list[Path]:
     """Write a store's tables (CSV) and figures (PNG) into a folder, and optionally one HTML page.
 
@@ -637,6 +659,11 @@ def write_report(
         Which cells of the store (see :func:`graybox.load_results`).
     html : bool
         Also write ``report.html``.
+    max_structures : int or None
+        Most structures a data set's figures draw: its heat map and fronts show the best ones by
+        the leaderboard's rank (the title says how many of how many); the tables keep every one.
+        None draws every structure (a grid of 200 structures makes figures tens of thousands of
+        pixels tall).
 
     Returns
     -------
@@ -645,6 +672,8 @@ def write_report(
     """
     band = _checked_options(rule, band)
     html = check_bool(html, "html")
+    if max_structures is not None:
+        max_structures = check_int(max_structures, "max_structures", low=1)
     df = _frame(list(store) if isinstance(store, (list, tuple)) else store, spec=spec, attrs=True)
     attrs = dict(df.attrs)
     df = _frame(df)
@@ -681,8 +710,17 @@ def write_report(
     lines = _summary_lines(df, lb, rule, attrs)
     for d, slug in _slugs(list(dict.fromkeys(df["data"]))).items():
         save(o / f"heatmap_{slug}.csv", heatmap_table(df, data=d, rule=rule, band=band))
-        save(o / f"heatmap_{slug}.png", plot_heatmap(df, data=d, rule=rule, band=band))
-        save(o / f"fronts_{slug}.png", plot_fronts(df, data=d, band=band))
+        shown, total = _best_structures(lb, d, max_structures)
+        figs = (plot_heatmap(df, data=d, rule=rule, band=band, structures=shown),
+                plot_fronts(df, data=d, band=band, structures=shown))
+        if shown is not None:  # say which part of the grid a figure shows
+            part = f"the {len(shown)} best of {total} structures by rank\n(every one in leaderboard.csv)"
+            for f in figs:
+                f.suptitle("\n".join(t for t in (f.get_suptitle(), part) if t), fontsize=9)
+            lines.append(f"{d}: the figures draw the {len(shown)} best of {total} structures "
+                         f"(max_structures={max_structures}); the tables hold every one")
+        save(o / f"heatmap_{slug}.png", figs[0])
+        save(o / f"fronts_{slug}.png", figs[1])
     save(o / "scatter.png", plot_scatter(df, band=band))
     save(o / "summary.txt", "\n".join(lines) + "\n")
     if html:

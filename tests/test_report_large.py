@@ -1,0 +1,68 @@
+"""A report of a grid with many structures: its figures draw the best few, its tables every one."""
+
+import subprocess
+import sys
+
+import pytest
+
+import graybox as gb
+from graybox import experiments as gx
+from graybox.experiments import _report
+
+TERMS = ["y(k-2)", "u(k-2)", "u(k-1)^2", "u(k-1)y(k-1)", "y(k-3)"]
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    # five structures, each the plant's core terms plus one more: five ranked rows of one variant
+    structures = [gx.StructureSpec(f"s{i}", terms=["1", "y(k-1)", "u(k-1)", t]) for i, t in enumerate(TERMS)]
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], structures, [gx.Variant("LS", "ls")], name="many")
+    path = tmp_path_factory.mktemp("report") / "many.sqlite"
+    gx.run_grid(grid, path, progress=False)
+    return path
+
+
+def _ranked(store):
+    lb = gx.leaderboard(store, rule="chosen")
+    return list(lb.xs("pumping", level="data").sort_values("rank", kind="stable").index.get_level_values("structure"))
+
+
+def test_the_figures_draw_the_best_structures_by_rank_and_say_so(store, tmp_path):
+    written = gx.write_report(store, tmp_path, rule="chosen", max_structures=2)
+    best = _ranked(store)[:2]
+    summary = (tmp_path / "summary.txt").read_text()
+    assert "pumping: the figures draw the 2 best of 5 structures (max_structures=2)" in summary
+    assert len(gb.load_results(store)) == 5 and (tmp_path / "leaderboard.csv").read_text().count("\npumping,") == 5
+    assert {p.name for p in written} >= {"heatmap_pumping.png", "fronts_pumping.png"}
+    assert _report._best_structures(gx.leaderboard(store, rule="chosen"), "pumping", 2) == (best, 5)
+    fig = gx.plot_heatmap(store, rule="chosen", structures=best)
+    assert [t.get_text() for t in fig.axes[0].get_yticklabels()] == best
+    assert _report._best_structures(gx.leaderboard(store, rule="chosen"), "pumping", 5) == (None, 5)
+
+
+def test_every_structure_is_drawn_when_asked(store, tmp_path):
+    gx.write_report(store, tmp_path, rule="chosen", max_structures=None)
+    assert "best of" not in (tmp_path / "summary.txt").read_text()
+    fig = gx.plot_heatmap(store, rule="chosen")
+    assert len(fig.axes[0].get_yticklabels()) == 5
+
+
+@pytest.mark.parametrize("bad, error", [(0, ValueError), (2.5, TypeError), ("3", TypeError)])
+def test_max_structures_is_checked(store, tmp_path, bad, error):
+    with pytest.raises(error, match="max_structures"):
+        gx.write_report(store, tmp_path, max_structures=bad)
+
+
+def test_plot_heatmap_names_an_unknown_structure(store):
+    with pytest.raises(ValueError, match=r"structures holds \['s9'\]: no such structure"):
+        gx.plot_heatmap(store, rule="chosen", structures=["s0", "s9"])
+
+
+def test_the_cli_takes_max_structures(store, tmp_path):
+    run = subprocess.run([sys.executable, "-m", "graybox", "grid", "report", str(store), "--out", str(tmp_path),
+                          "--rule", "chosen", "--max-structures", "3"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "the figures draw the 3 best of 5 structures" in (tmp_path / "summary.txt").read_text()
+    bad = subprocess.run([sys.executable, "-m", "graybox", "grid", "report", str(store), "--out", str(tmp_path),
+                          "--max-structures", "0"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "a number of structures is >= 1, got 0" in bad.stderr
