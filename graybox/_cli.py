@@ -10,30 +10,25 @@ from pathlib import Path
 __all__ = ["main"]
 
 
-def _spec_arg(text: str) -> str | int:
-    """``--spec``: latest, all, or a spec number."""
-    if text in ("latest", "all"):
-        return text
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'latest', 'all' or a spec number, got {text!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"a spec number is >= 1, got {n}")
-    return n
+def _count_arg(words: dict[str, object], what: str):
+    """An argparse type: one of ``words`` (to its value) or a count >= 1 (``what`` names it in messages)."""
+    def parse(text: str):
+        if text in words:
+            return words[text]
+        try:
+            n = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {', '.join(map(repr, words))} or {what}, got {text!r}") from None
+        if n < 1:
+            raise argparse.ArgumentTypeError(f"{what} is >= 1, got {n}")
+        return n
+    return parse
 
 
-def _max_structures_arg(text: str) -> int | None:
-    """``--max-structures``: a count >= 1, or all."""
-    if text == "all":
-        return None
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of structures or 'all', got {text!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"a number of structures is >= 1, got {n}")
-    return n
+#: ``--spec``: latest, all, or a spec number
+_spec_arg = _count_arg({"latest": "latest", "all": "all"}, "a spec number")
+#: ``--max-structures``: a count, or all (None: every structure)
+_max_structures_arg = _count_arg({"all": None}, "a number of structures")
 
 
 def _grid(args: argparse.Namespace) -> int:
