@@ -228,7 +228,8 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
     refuse_non_real(x, name)
     try:
         raw = np.asarray(x)
-        if x is None or raw.dtype == bool:
+        # None inside a list too: astype(float) reads it as NaN, which callers take for a diverged run
+        if x is None or raw.dtype == bool or (raw.dtype == object and any(v is None for v in raw.flat)):
             raise TypeError
         return raw.astype(float)
     except (TypeError, ValueError):

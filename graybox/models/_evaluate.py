@@ -31,7 +31,8 @@ from ._coerce import as_model, as_record, as_structure, static_info
 from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
-from ..core._validation import as_1d_finite, check_bool, check_int, check_per_point, check_sequence, refuse_non_real, warn
+from ..core._validation import (as_1d_finite, check_bool, check_int, check_per_point, check_sequence, real_array,
+                                refuse_non_real, warn)
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -43,7 +44,8 @@ def _measured_and_model(y: object, yhat: object, start: object) -> tuple[np.ndar
     """``y[start:]`` (measured: finite) and ``yhat[start:]`` (a model's: inf/NaN where it diverged), 1-D, one length."""
     start = check_int(start, "start", low=0)
     y = as_1d_finite(y, "y")
-    yhat = np.asarray(yhat, dtype=float)
+    # the shared coercion, not numpy's: that parses text, reads True as 1 and None as NaN (a "diverged" run)
+    yhat = real_array(yhat, "yhat", "the model's output (numbers; NaN or inf where its free run diverged)")
     if yhat.shape != y.shape:
         raise ValueError(f"y and yhat must have the same length, got shapes {y.shape} and {yhat.shape}")
     return y[start:], yhat[start:]
