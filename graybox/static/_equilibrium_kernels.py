@@ -230,10 +230,12 @@ def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
                 continue
             s = _pow2_scale(c, 3)
             big = 0.0
-            sk = 1.0
             for k in range(4):
-                c[k] *= sk  # exact: s is a power of two
-                sk *= s
+                # c_k s^k by k exact multiplications (s is a power of two), not by s^k: s^3 overflows where
+                # the roots span beyond ~1e205 (a y² coefficient ~1e-212 of a unit constant) and 0 · inf
+                # made an absent cubic coefficient NaN, losing every root, the sane one too
+                for _ in range(k):
+                    c[k] *= s
                 big = max(big, abs(c[k]))
             if big == 0.0 or not np.isfinite(big):
                 continue
