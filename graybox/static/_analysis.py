@@ -498,6 +498,8 @@ def spectral_radius(a: np.ndarray) -> float:
     a = np.asarray(a, float)
     if a.size == 0 or not np.any(a):
         return 0.0
+    if not np.all(np.isfinite(a)):  # a derivative beyond the float range (an equilibrium far out): no root solver
+        return float("inf")
     # characteristic polynomial z^L - a1 z^(L-1) - ... - aL
     return float(np.max(np.abs(np.roots(np.concatenate(([1.0], -a))))))
 
