@@ -49,3 +49,67 @@ def test_an_equilibrium_whose_linearisation_overflows_is_unstable_not_a_crash():
     assert eq[0].ybar == pytest.approx(-1e170, rel=1e-9) and eq[1].ybar == pytest.approx(1.0, rel=1e-12)
     assert eq[0].spectral_radius > 1 and eq[2].spectral_radius > 1
     assert m.static_curve([0.0])[0] == pytest.approx(1.0, rel=1e-12)
+
+
+# -- laws that hold, kept as guards -----------------------------------------------------------------------
+from hypothesis import assume, given, settings, strategies as st  # noqa: E402
+
+ST = gb.Structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-2)y(k-1)"])
+TH = np.array([0.3, 0.5, 0.2, 0.4, 0.1, 0.05])
+Y_POWER = np.array([0, 1, 1, 0, 0, 1])
+U_POWER = np.array([0, 0, 0, 1, 2, 1])
+LEVELS = np.linspace(0.0, 2.0, 5)
+POINTS = np.array([0.5, 1.0, 1.5])  # inside every record's range
+
+
+def _plant(seed, n=200, noise=0.05):
+    rng = np.random.default_rng(seed)
+    levels = rng.uniform(0.0, 2.0, n // 10 + 1)
+    levels[:2] = 0.0, 2.0  # the whole range, static points included, in every record
+    u = np.repeat(levels, 10)[:n]
+    y = gb.Model(ST, TH).simulate(u, np.zeros(2)) + noise * rng.standard_normal(n)
+    return u, y
+
+
+def _estimates(data, static):
+    """The free-run θ of each estimator on ``data`` (one record or several) and ``static``."""
+    pe = gb.pe_pareto(ST, data, static, lambdas=[0.5, 0.01])
+    se = gb.se_pareto(ST, data, static, lambdas=[0.3], method="gradient")
+    return {"els": gb.els(ST, data).model.theta, "cls": gb.cls(ST, data, static, how="points").model.theta,
+            "pe": pe.thetas, "se": se.thetas, "oe": gb.output_error(ST, data, n_starts=0).model.theta}
+
+
+@settings(max_examples=3, deadline=None)
+@given(la=st.floats(-3.0, 3.0), lb=st.floats(-3.0, 3.0), seed=st.integers(0, 1000))
+def test_every_estimator_gives_the_same_model_in_other_units(la, lb, seed):
+    # u × a and y × b: θ_j of a term y^p u^q scales by b^(1-p) a^(-q), the errors by b², the static curve by b
+    # and its gain by b/a; every least-squares, QP and free-run fit scales internally, so nothing else moves
+    a, b = 10.0**la, 10.0**lb
+    u, y = _plant(seed)
+    pts = POINTS  # three points, fewer than the five clusters: CLS passes through each
+    ybar = gb.Model(ST, TH).static_curve(pts) * 1.02
+    base = _estimates(gb.Record(u, y), gb.StaticPoints(pts, ybar))
+    other = _estimates(gb.Record(a * u, b * y), gb.StaticPoints(a * pts, b * ybar))
+    back = b ** (1.0 - Y_POWER) * a ** (-U_POWER.astype(float))
+    for name in base:
+        np.testing.assert_allclose(other[name] / back, base[name], rtol=1e-6, atol=1e-9, err_msg=name)
+    m, m2 = gb.Model(ST, base["els"]), gb.Model(ST, other["els"])
+    np.testing.assert_allclose(m2.static_curve(a * LEVELS) / b, m.static_curve(LEVELS), rtol=1e-9)
+    np.testing.assert_allclose(m2.static_gain(a * LEVELS) * a / b, m.static_gain(LEVELS), rtol=1e-8)
+
+
+@settings(max_examples=3, deadline=None)
+@given(order=st.permutations([0, 1, 2]), seed=st.integers(0, 1000))
+def test_estimates_do_not_depend_on_the_order_the_records_are_listed(order, seed):
+    assume(order != [0, 1, 2])
+    recs = [gb.Record(*_plant(seed + i, n), name=f"run {i}") for i, n in enumerate((200, 120, 150))]
+    static = gb.StaticPoints(POINTS, gb.Model(ST, TH).static_curve(POINTS) * 1.02)
+    base, other = _estimates(recs, static), _estimates([recs[i] for i in order], static)
+    for name in base:
+        np.testing.assert_allclose(other[name], base[name], rtol=1e-7, atol=1e-10, err_msg=name)
+    cand = gb.Candidates(2, 2, degree=2)
+    for search in ("greedy", "exact"):
+        s1 = gb.frols(cand, recs, n_terms=5, search=search)
+        s2 = gb.frols(cand, [recs[i] for i in order], n_terms=5, search=search)
+        assert s1.structure == s2.structure
+        np.testing.assert_allclose(s2.theta, s1.theta, rtol=1e-8, atol=1e-12)
