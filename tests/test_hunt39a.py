@@ -113,3 +113,20 @@ def test_estimates_do_not_depend_on_the_order_the_records_are_listed(order, seed
         s2 = gb.frols(cand, [recs[i] for i in order], n_terms=5, search=search)
         assert s1.structure == s2.structure
         np.testing.assert_allclose(s2.theta, s1.theta, rtol=1e-8, atol=1e-12)
+
+
+# -- CLS, PE and SE covariances of a model that carries an MA part -------------------------------------------
+@pytest.mark.parametrize("which", ["se", "pe", "cls"])
+def test_a_gray_box_covariance_of_a_model_with_an_ma_part_says_so(which):
+    # an ELS model passed to se_uncertainty (say, for its free run's spread at λ1 = 1) failed inside the result's
+    # own check: "noise_cov must have shape (2, 2), the covariance of the model's 2 MA parameter(s), got (0, 0)"
+    u, y = _plant(3)
+    rec = gb.Record(u, y)
+    static = gb.StaticPoints(POINTS, gb.Model(ST, TH).static_curve(POINTS))
+    els = gb.els(ST, rec)  # MA(2)
+    call = {"se": lambda m: gb.se_uncertainty(m, rec, static, lambda1=1.0),
+            "pe": lambda m: gb.pe_uncertainty(m, rec, static, lambda1=1.0),
+            "cls": lambda m: gb.cls_uncertainty(m, rec, static, how="context")}[which]
+    for given_ in (els, els.model):
+        with pytest.raises(ValueError, match=r"MA part .*e\(k-1\).*ls_uncertainty"):
+            call(given_)

@@ -589,6 +589,18 @@ def _pseudo_linear_cov(A: np.ndarray, G: np.ndarray, sigma2: float, what: str) -
 # --------------------------------------------------------------------------------------------
 # CLS
 # --------------------------------------------------------------------------------------------
+
+def _process_model(model: object, who: str) -> Model:
+    """The model of a CLS, PE or SE covariance: those estimates have no MA part, so one that carries it (an
+    ELS estimate) is refused here, naming the way out, not deep in :class:`ParameterUncertainty`'s own check."""
+    m = as_model(model)
+    if len(m.noise_structure):
+        raise ValueError(f"{who}: the model carries an MA part ({m.noise_structure}), as an ELS estimate does; CLS, PE "
+                         "and SE estimates have none. For an ELS or least-squares estimate use ls_uncertainty; for "
+                         "its process part alone pass model.with_theta(model.theta)")
+    return m
+
+
 def cls_uncertainty(
     model: Model,
     data: Record | Sequence[Record] | Dataset,
@@ -634,7 +646,7 @@ def cls_uncertainty(
         The model does not satisfy the constraints or is not their least-squares solution (other
         data or settings than its estimate's), a non-affine constraint, not identifiable.
     """
-    model = as_model(model)
+    model = _process_model(model, "cls_uncertainty")
     level = _check_level(level)
     st = _process_structure(model)
     recs = records_of(data)
@@ -707,7 +719,7 @@ def pe_uncertainty(
     ValueError
         θ is not the PE optimum at this λ1 with these data (e.g. a wrong λ1), not identifiable.
     """
-    m = as_model(model)
+    m = _process_model(model, "pe_uncertainty")
     lam = _lambda_arg(model, lambda1, "pe_uncertainty")
     level = _check_level(level)
     with warnings.catch_warnings():
@@ -828,7 +840,7 @@ def se_uncertainty(
         θ̂ is not a stationary point of the SE objective (e.g. a GA member, or a gradient run
         stopped by its evaluation budget): the intervals then describe the curvature there.
     """
-    m = as_model(model)
+    m = _process_model(model, "se_uncertainty")
     lam = _lambda_arg(model, lambda1, "se_uncertainty")
     level = _check_level(level)
     recs = records_of(data)
