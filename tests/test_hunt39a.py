@@ -130,3 +130,24 @@ def test_a_gray_box_covariance_of_a_model_with_an_ma_part_says_so(which):
     for given_ in (els, els.model):
         with pytest.raises(ValueError, match=r"MA part .*e\(k-1\).*ls_uncertainty"):
             call(given_)
+
+
+# -- numbers given as text are refused where they enter, as Record and StaticPoints refuse them -----------
+def test_initial_outputs_lambdas_curve_coefficients_and_front_points_of_text_are_refused():
+    rec = gb.Record(np.arange(20.0) % 3, np.arange(20.0) % 5)
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    cases = [  # each was parsed as numbers and used
+        (lambda: m.simulate(np.ones(3), np.array(["1"])), "y0"),
+        (lambda: m.simulate(np.ones(3), [None]), "y0"),
+        (lambda: gb.pe_thetas(m.structure, rec, gb.StaticPoints([0.0, 1.0], [0.0, 1.0]), lambdas=["0.5"]), "lambdas"),
+        (lambda: gb.StaticCurve.polynomial(["1", "2"]), "coefficients"),
+        (lambda: gb.nondominated_mask([["1", "2"], ["3", "0"]]), "points"),
+        (lambda: gb.nondominated_mask([[1.0, None], [3.0, 0.0]]), "points"),  # was NaN: the row silently dropped
+    ]
+    for call, said in cases:
+        with pytest.raises(TypeError, match=said):
+            call()
+    # numbers pass as before
+    np.testing.assert_allclose(m.simulate(np.ones(3), [1.0]), [1.0, 1.5, 1.75])
+    assert gb.StaticCurve.polynomial([1, 2]).coefficients.tolist() == [1.0, 2.0]
+    assert gb.nondominated_mask([[1.0, 2.0], [3.0, 0.0], [4.0, 4.0]]).tolist() == [True, True, False]

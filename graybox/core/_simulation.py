@@ -16,7 +16,7 @@ from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_in
                                  simulate_one)
 from ._records import Record, as_input_array, is_frame
 from ._terms import check_input_names, default_input_names, require_inputs
-from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta, refuse_non_real
+from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta, real_array, refuse_non_real
 from ._regressors import regressor_matrix
 from ._terms import Structure, structure_of
 
@@ -119,10 +119,7 @@ def free_run_inputs(
             if L > 0:
                 raise ValueError("y0 (the first max-lag outputs) is required when u is an array")
             y0 = np.zeros(0)  # no lags: no initial outputs
-    try:
-        y0 = np.asarray(y0, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"y0 must be an array of the first max-lag outputs, got {y0!r}") from None
+    y0 = real_array(y0, "y0", "an array of the first max-lag outputs (numbers)")  # text, None, booleans: TypeError
     if y0.ndim != 1:
         raise ValueError(f"y0 must be 1-D (the first max-lag outputs), got shape {y0.shape}")
     if y0.size < L:

@@ -266,6 +266,7 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
     """
     if _is_bool(lambdas) or isinstance(lambdas, str):
         raise TypeError(f"{name} must be numbers in (0, 1], got {lambdas!r}")
+    refuse_non_real(lambdas, name)  # ["0.5"] is text, not a λ1
     try:
         lam = np.atleast_1d(np.asarray(lambdas, dtype=float))
     except (TypeError, ValueError):

@@ -18,7 +18,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, StaticPoints, as_records
-from ..core._validation import FrozenMap, check_bool, check_fields, check_int, check_real, frozen, warn
+from ..core._validation import FrozenMap, check_bool, check_fields, check_int, check_real, frozen, real_array, warn
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -42,7 +42,7 @@ def nondominated_mask(points: np.ndarray) -> np.ndarray:
     -------
     ndarray of bool, shape (K,)
     """
-    P = np.asarray(points, float)
+    P = real_array(points, "points", "objective values (numbers, members × objectives)")  # None is no NaN here
     if P.ndim != 2:
         raise ValueError(f"points must be 2-D (members × objectives), got shape {P.shape}")
     keep = ~np.isnan(P).any(axis=1)

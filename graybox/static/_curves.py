@@ -50,7 +50,7 @@ class StaticCurve:
     @classmethod
     def polynomial(cls, coefficients, domain: tuple[float, float] | None = None, name: str = "static curve") -> "StaticCurve":
         """A curve from ascending coefficients, e.g. ``StaticCurve.polynomial([κ, α, β])`` for eq. (1)."""
-        return cls(np.asarray(coefficients, float), domain, name)
+        return cls(coefficients, domain, name)  # checked there, as every curve's (text refused, not parsed)
 
     @classmethod
     def fit(cls, points: StaticPoints, degree: int = 2, name: str | None = None) -> "StaticCurve":
