@@ -151,3 +151,21 @@ def test_initial_outputs_lambdas_curve_coefficients_and_front_points_of_text_are
     np.testing.assert_allclose(m.simulate(np.ones(3), [1.0]), [1.0, 1.5, 1.75])
     assert gb.StaticCurve.polynomial([1, 2]).coefficients.tolist() == [1.0, 2.0]
     assert gb.nondominated_mask([[1.0, 2.0], [3.0, 0.0], [4.0, 4.0]]).tolist() == [True, True, False]
+
+
+# -- an operating curve of several inputs names the input its settling time steps ---------------------------
+def test_the_operating_curves_table_names_the_input_its_settling_time_steps():
+    # the settling time is of a step of the model's first input; with several inputs the table's column said only
+    # "settling time", so the same model with its inputs listed the other way round gave another number under the
+    # same name (1.0 s against 0.9 s here): names did not follow the inputs
+    st_ = gb.Structure(["1", "y(k-1)", "a(k-1)", "b(k-3)", "a(k-1)b(k-1)", "a(k-1)y(k-1)"])
+    th = [0.2, 0.5, 0.3, 0.2, 0.1, 0.05]
+    pts = np.array([[0.5, 0.5], [0.7, 1.2]])
+    for names, order in ((("a", "b"), [0, 1]), (("b", "a"), [1, 0])):
+        oc = gb.operating_curve(gb.Model(st_, th, input_names=names, Ts=0.1), pts[:, order])
+        frame = oc.to_frame()
+        assert "settling time" not in frame.columns
+        np.testing.assert_array_equal(frame[f"settling time ({names[0]} step)"].to_numpy(),
+                                      [lm.settling_time(names[0]) for lm in oc.local_models])
+    one = gb.operating_curve(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], Ts=0.1), [1.0, 2.0]).to_frame()
+    assert "settling time" in one.columns  # one input: nothing to name

@@ -643,8 +643,8 @@ class OperatingCurve:
         Operating points (input units).
     ybar, time_constant, damping, spectral_radius, settling_time : ndarray, shape (M,)
         Equilibrium (output units), dominant time constant (s), its damping, largest pole
-        modulus, 2 % settling time of a step of the first input (s); NaN where there is no
-        equilibrium (``status`` says why).
+        modulus, 2 % settling time of a step of the first input (s; :meth:`to_frame` names that input
+        when there are several); NaN where there is no equilibrium (``status`` says why).
     gain : ndarray, shape (M,) or (M, m)
         DC gain = static gain (output units per input unit).
     status : tuple of str
@@ -739,8 +739,11 @@ class OperatingCurve:
             return {label: v} if v.ndim == 1 else {f"{label} {n}": v[:, i] for i, n in enumerate(names)}
 
         cols: dict[str, Any] = {"ybar": self.ybar, **per_input("gain", self.gain)}
+        # a step of the first input: named with several inputs, or the same model with its inputs listed in
+        # another order would put another input's settling time under the same column
+        settling = "settling time" if single else f"settling time ({names[0]} step)"
         cols.update({"time constant": self.time_constant, "damping": self.damping,
-                     "spectral radius": self.spectral_radius, "settling time": self.settling_time,
+                     "spectral radius": self.spectral_radius, settling: self.settling_time,
                      "status": list(self.status)})
         if self.has_band:
             for f in self.BANDS:
