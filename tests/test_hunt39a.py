@@ -169,3 +169,41 @@ def test_the_operating_curves_table_names_the_input_its_settling_time_steps():
                                       [lm.settling_time(names[0]) for lm in oc.local_models])
     one = gb.operating_curve(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], Ts=0.1), [1.0, 2.0]).to_frame()
     assert "settling time" in one.columns  # one input: nothing to name
+
+
+ST3 = gb.Structure(["1", "y(k-1)", "a(k-1)", "b(k-2)", "c(k-1)", "a(k-1)b(k-1)", "c(k-1)y(k-1)"])
+TH3 = np.array([0.3, 0.5, 0.4, -0.3, 0.2, 0.2, 0.05])
+
+
+@settings(max_examples=3, deadline=None)
+@given(order=st.permutations([0, 1, 2]), seed=st.integers(0, 1000))
+def test_three_inputs_listed_in_any_order_give_the_same_models_their_gains_following_the_names(order, seed):
+    assume(order != [0, 1, 2])
+    names = ("a", "b", "c")
+    rng = np.random.default_rng(seed)
+    levels = rng.uniform(0.0, 1.0, (41, 3))
+    levels[0], levels[1] = 0.0, 1.0  # every input over its whole range
+    u = np.repeat(levels, 8, axis=0)[:320]
+    y = gb.Model(ST3, TH3, input_names=names).simulate(u, [0.0, 0.0]) + 0.02 * rng.standard_normal(len(u))
+    pts = np.array([[0.2, 0.5, 0.8], [0.8, 0.2, 0.5], [0.5, 0.8, 0.2], [0.5, 0.5, 0.5]])
+    ybar = gb.Model(ST3, TH3, input_names=names).static_curve(pts) * 1.01
+    perm = tuple(names[i] for i in order)
+
+    def fits(cols, inputs):
+        rec = gb.Record(u[:, cols], y, input_names=inputs)
+        static = gb.StaticPoints(pts[:, cols], ybar, input_names=inputs)
+        models = {"els": gb.els(ST3, rec).model, "pe": gb.pe_pareto(ST3, rec, static, lambdas=[0.3]).member_model(0),
+                  "se": gb.se_pareto(ST3, rec, static, lambdas=[0.3], method="gradient").member_model(0),
+                  "cls": gb.cls(ST3, rec, static, how="points").model,
+                  "exact": gb.frols(gb.Candidates(1, 1, degree=2, input_names=inputs), rec, n_terms=6,
+                                    search="exact").model}
+        return {k: (m, dict(zip(m.input_names, m.static_gain(pts[:, cols]).T))) for k, m in models.items()}
+
+    base, other = fits([0, 1, 2], names), fits(list(order), perm)
+    for k in base:
+        (m0, g0), (m1, g1) = base[k], other[k]
+        assert m1.input_names == perm and set(m0.structure) == set(m1.structure), k
+        np.testing.assert_allclose(m1.simulate(gb.Record(u[:, order], y, input_names=perm)), m0.simulate(
+            gb.Record(u, y, input_names=names)), rtol=1e-7, atol=1e-9, err_msg=k)
+        for n in names:
+            np.testing.assert_allclose(g1[n], g0[n], rtol=1e-7, atol=1e-10, err_msg=f"{k}: gain along {n}")
