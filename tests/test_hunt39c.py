@@ -41,3 +41,38 @@ def test_a_variant_named_for_its_reference_model_uses_it(path):
         if named:
             ref = {"LS": "ls", "ELS": "els"}[named.group(1)]
             assert re.search(rf"[\"']reference[\"']\s*:\s*[\"']{ref}[\"']", call), call
+
+
+def _model_results() -> list[str]:
+    """Public estimator results (``…Result``) that carry a polynomial model in ``.model``."""
+    import dataclasses
+
+    import graybox as gb
+
+    names = []
+    for name in gb.__all__:
+        obj = getattr(gb, name)
+        if isinstance(obj, type) and name.endswith("Result") and dataclasses.is_dataclass(obj):
+            if any(f.name == "model" for f in dataclasses.fields(obj)):
+                names.append(name)
+    return names
+
+
+def test_every_result_that_carries_a_model_is_named_where_a_model_or_structure_is_accepted():
+    # output_error's OEResult carries its model in .model and is taken wherever a model or a structure
+    # is meant, but the TypeError that lists what is accepted, and the README's list, left it out
+    import graybox as gb
+    from graybox.models._coerce import MODEL_ACCEPTED, STRUCTURE_ACCEPTED
+
+    results = _model_results()
+    assert "OEResult" in results and "ELSResult" in results
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    sentence = readme.split("wherever a model is meant", 1)[1].split(")", 1)[0]
+    for name in results:
+        assert name in MODEL_ACCEPTED, name
+        assert name in STRUCTURE_ACCEPTED, name
+        assert name in sentence, name
+    with pytest.raises(TypeError, match="OEResult"):
+        gb.js("not a model", gb.load_pumping().valid)
+    with pytest.raises(TypeError, match="OEResult"):
+        gb.els(3.0, gb.load_pumping())

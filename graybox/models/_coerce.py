@@ -2,7 +2,7 @@
 
 - a **structure** from a Structure, a sequence of terms, a Model, or a result that carries one
   (``.structure`` of a Selection, SEMPResult, ParetoSet or GrayboxSelection; ``.model`` of an
-  ELSResult, CLSResult, Decision, DSFResult …);
+  ELSResult, CLSResult, OEResult, Decision, DSFResult …);
 - a **model** from a Model or a result that carries one in ``.model``;
 - the **static information** from an explicit argument, else the Dataset's static points, and
   the **static points** an estimator scores: given points, or a curve or surface sampled at ``ubar``
@@ -38,11 +38,11 @@ SURFACE_LEVELS = 6
 
 #: What a structure argument may be, in words (the TypeError lists it).
 STRUCTURE_ACCEPTED = ("a Structure, a sequence of terms (str or Term), a Model, or a result that carries one "
-                      "(Selection, SEMPResult, ParetoSet, GrayboxSelection, ELSResult, CLSResult, Decision, "
+                      "(Selection, SEMPResult, ParetoSet, GrayboxSelection, ELSResult, CLSResult, OEResult, Decision, "
                       "DSFResult)")
 #: What a model argument may be, in words.
-MODEL_ACCEPTED = ("a Model or a result that carries one in .model (ELSResult, CLSResult, Decision, DSFResult, "
-                  "Selection, SEMPResult, GrayboxSelection)")
+MODEL_ACCEPTED = ("a Model or a result that carries one in .model (ELSResult, CLSResult, OEResult, Decision, "
+                  "DSFResult, Selection, SEMPResult, GrayboxSelection)")
 
 def _carried_model(obj: object, kinds: tuple[type, ...]) -> object | None:
     """``obj.model`` when it is an attribute of one of ``kinds`` (a method is not a model)."""
@@ -64,7 +64,7 @@ def as_structure(obj: object, name: str = "structure", *, with_noise: bool = Fal
     ----------
     obj : Structure, sequence of str or Term, Model, or a result
         A result is read through its ``.structure`` (Selection, SEMPResult, ParetoSet,
-        GrayboxSelection) or its ``.model`` (ELSResult, CLSResult, Decision, DSFResult).
+        GrayboxSelection) or its ``.model`` (ELSResult, CLSResult, OEResult, Decision, DSFResult).
     name : str
         The argument's name, for the error message.
     with_noise : bool
@@ -106,7 +106,7 @@ def as_model(obj: object, name: str = "model", *, kinds: tuple[type, ...] = (Mod
     Parameters
     ----------
     obj : Model or a result with a ``.model`` attribute
-        ELSResult, CLSResult, Decision, DSFResult, Selection, SEMPResult, GrayboxSelection
+        ELSResult, CLSResult, OEResult, Decision, DSFResult, Selection, SEMPResult, GrayboxSelection
         (a NeuralFit where ``kinds`` holds NeuralModel).
     name : str
         The argument's name, for the error message.
