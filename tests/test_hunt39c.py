@@ -76,3 +76,40 @@ def test_every_result_that_carries_a_model_is_named_where_a_model_or_structure_i
         gb.js("not a model", gb.load_pumping().valid)
     with pytest.raises(TypeError, match="OEResult"):
         gb.els(3.0, gb.load_pumping())
+
+
+@pytest.mark.parametrize("kind, n, hold, m", [
+    ("staircase", 10, 10, 1),    # one hold fills the record: the staircase never leaves ``low``
+    ("staircase", 20, 10, 2),    # two holds of a two-input serpentine: the first input never moves
+    ("prbs", 16, 10, 1),         # two bits of the m-sequence, both ones
+])
+def test_design_input_refuses_a_column_that_never_moves(kind, n, hold, m):
+    # The APRBS was refused when one hold could fill the record ("a constant input, said nowhere"); a
+    # staircase or a PRBS with too few holds for the record still returned a column held at one level,
+    # an experiment in which that input never moves, without a word.
+    import graybox as gb
+
+    with pytest.raises(ValueError, match="never moves"):
+        gb.design_input(kind, n, low=750.0, high=1650.0, hold=hold, n_inputs=m)
+
+
+def test_every_column_design_input_returns_moves():
+    import numpy as np
+
+    import graybox as gb
+
+    returned = 0
+    for kind in ("staircase", "prbs", "aprbs"):
+        for m in (1, 2, 3):
+            for n in range(2, 90, 5):
+                for h in range(1, n + 1, 2):
+                    hold = (h, h + 1) if kind == "aprbs" else h
+                    try:
+                        x = gb.design_input(kind, n, low=-1.0, high=3.0, hold=hold, n_inputs=m)
+                    except ValueError:
+                        continue
+                    returned += 1
+                    x = x.reshape(n, m)
+                    assert np.all(np.ptp(x, axis=0) > 0), (kind, n, hold, m)
+                    assert x.min() == -1.0 and np.all(x.max(axis=0) <= 3.0)
+    assert returned > 500

@@ -126,7 +126,8 @@ def design_input(
     Raises
     ------
     ValueError
-        ``low >= high``; a hold longer than the record (an APRBS's longest, than half of it); an option the kind does not use; a band
+        ``low >= high``; a hold longer than the record (an APRBS's longest, than half of it), or too
+        long for every input to move (a column held at one level); an option the kind does not use; a band
         with no frequency line; a PRBS order whose period is shorter than ``n_inputs``, or a record
         of too few bits for ``n_inputs`` different columns; an unknown kind.
     TypeError
@@ -186,6 +187,13 @@ def design_input(
             levels = _scale(rng.permutation(len(holds)) / max(len(holds) - 1, 1), lo, hi)
             cols.append(np.repeat(levels, holds)[:n])
         out = np.column_stack(cols)
+    # too few holds for the record (a staircase's serpentine moves its slower inputs last; a PRBS's first
+    # bits may agree): a column held at one level is an experiment in which that input never moves
+    still = [i for i in range(m) if np.ptp(out[:, i]) == 0]
+    if still:
+        which = "the input" if m == 1 else f"input column(s) {still}"
+        raise ValueError(f"{which} of this {kind} never moves: {-(-n // h0)} hold(s) of {h0} samples fit in the "
+                         f"{n}-sample record; shorten hold or lengthen the record")
     return out[:, 0] if m == 1 else out
 
 
