@@ -113,3 +113,40 @@ def test_every_column_design_input_returns_moves():
                     assert np.all(np.ptp(x, axis=0) > 0), (kind, n, hold, m)
                     assert x.min() == -1.0 and np.all(x.max(axis=0) <= 3.0)
     assert returned > 500
+
+
+_NOT_ARRAYS = [None, object(), {"u": [1.0, 2.0]}]
+
+
+@pytest.mark.parametrize("bad", _NOT_ARRAYS, ids=["None", "object", "dict"])
+@pytest.mark.parametrize("where", ["Record.u", "Record.y", "StaticPoints.ubar", "StaticPoints.ybar", "Model.theta",
+                                   "Model.simulate", "simulate", "Model.with_theta"])
+def test_an_argument_that_is_no_array_is_a_type_error(where, bad):
+    # The rule (README: "A wrong type raises TypeError"): Model.static_curve(None) was a TypeError, but
+    # Record(None, y), Model(structure, None) and model.simulate(object()) were ValueErrors ("must be 1-D,
+    # got 0-D", "must be an array of numbers, got object"): the shared conversions turned numpy's
+    # TypeError into a ValueError and took None for a NaN scalar.
+    import numpy as np
+
+    import graybox as gb
+
+    st = gb.parse_structure(["y(k-1)", "u(k-1)", "1"])
+    m = gb.Model(st, [0.5, 0.1, 0.0])
+    y = np.ones(3)
+    call = {"Record.u": lambda: gb.Record(bad, y), "Record.y": lambda: gb.Record(y, bad),
+            "StaticPoints.ubar": lambda: gb.StaticPoints(bad, [1.0, 2.0]),
+            "StaticPoints.ybar": lambda: gb.StaticPoints([1.0, 2.0], bad),
+            "Model.theta": lambda: gb.Model(st, bad), "Model.with_theta": lambda: m.with_theta(bad),
+            "Model.simulate": lambda: m.simulate(bad, y0=[0.0]),
+            "simulate": lambda: gb.simulate(st, m.theta, bad, y0=[0.0])}[where]
+    with pytest.raises(TypeError, match=r"(u|y|ubar|ybar|theta) must be"):
+        call()
+
+
+def test_a_ragged_array_stays_a_value_error_that_says_so():
+    import numpy as np
+
+    import graybox as gb
+
+    with pytest.raises(ValueError, match="rows of different lengths"):
+        gb.Record([[1.0], [1.0, 2.0]], np.ones(2))

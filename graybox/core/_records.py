@@ -17,7 +17,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ._terms import check_input_names, default_input_names
-from ._validation import FrozenMap, as_1d_finite, check_per_point, check_real, check_str, refuse_non_real, warn
+from ._validation import FrozenMap, as_1d_finite, check_per_point, check_real, check_str, float_array, refuse_non_real, warn
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -77,10 +77,7 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None) -> 
     """
     x = frame_inputs(x, names, name)
     refuse_non_real(x, name)
-    try:
-        a = np.array(x, dtype=float, copy=True)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of numbers, got {type(x).__name__}") from None
+    a = float_array(x, name)
     if a.ndim == 2 and a.shape[1] == 1:
         a = a[:, 0].copy()
     if a.ndim == 1:

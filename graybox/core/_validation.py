@@ -33,6 +33,7 @@ __all__ = [
     "check_theta",
     "check_lambdas",
     "as_1d_finite",
+    "float_array",
     "frozen",
     "warn",
     "renamed",
@@ -236,6 +237,26 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}") from None
 
 
+def float_array(x: object, name: str, what: str = "an array of numbers") -> np.ndarray:
+    """``x`` as a new float64 array: ``TypeError`` naming ``name`` for None or an object that is no array of
+    numbers (a dict, a record of another kind), ``ValueError`` for a ragged nesting of numbers.
+
+    numpy reads None as a NaN scalar and raises its own ``TypeError`` for other objects; the shared
+    conversions of records, θ and inputs all go through here so that a wrong type is one error everywhere.
+    Text, complex values and dates are for :func:`refuse_non_real` to refuse first.
+    """
+    if x is None:
+        raise TypeError(f"{name} must be {what}, got None")
+    try:
+        return np.array(x, dtype=float, copy=True)
+    except TypeError:
+        raise TypeError(f"{name} must be {what}, got {type(x).__name__}") from None
+    except ValueError:
+        ragged = isinstance(x, (list, tuple)) and len({np.ndim(v) if np.ndim(v) == 0 else np.shape(v) for v in x}) > 1
+        raise ValueError(f"{name} must be {what}, got {type(x).__name__}"
+                         + (" of rows of different lengths" if ragged else "")) from None
+
+
 def short_value(x: object) -> str:
     """``repr(x)`` cut to 80 characters, for a message about a bad argument."""
     text = repr(x)
@@ -245,10 +266,7 @@ def short_value(x: object) -> str:
 def check_theta(n_terms: int, theta: object, name: str = "theta") -> np.ndarray:
     """θ as a finite float array of length ``n_terms``, shape (n_terms,), or ``ValueError``."""
     refuse_non_real(theta, name)
-    try:
-        th = np.asarray(theta, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of numbers, got {type(theta).__name__}") from None
+    th = float_array(theta, name)
     if th.ndim != 1:
         raise ValueError(f"{name} must be 1-D, got shape {th.shape}")
     if th.size != n_terms:
@@ -325,10 +343,7 @@ def check_path(value: object, name: str) -> str | os.PathLike:
 def as_1d_finite(x: object, name: str) -> np.ndarray:
     """``x`` as a read-only 1-D float64 copy, or ``ValueError`` naming ``name`` and the problem."""
     refuse_non_real(x, name)
-    try:
-        a = np.array(x, dtype=float, copy=True)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an array of numbers, got {type(x).__name__}") from None
+    a = float_array(x, name)
     if a.ndim == 2 and 1 in a.shape:
         raise ValueError(f"{name} must be 1-D, got shape {a.shape}; pass a flat array (e.g. x.ravel())")
     if a.ndim != 1:

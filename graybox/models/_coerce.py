@@ -23,7 +23,7 @@ import numpy as np
 from ..core._records import Dataset, Record, StaticPoints, frame_inputs
 from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
 from ..core._terms import Structure, Term
-from ..core._validation import as_1d_finite
+from ..core._validation import as_1d_finite, float_array
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface, box_grid
 from ._model import Model
@@ -235,10 +235,7 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
     # a DataFrame (or one point as a Series) by its column names, as every input is read
     first = data[0] if isinstance(data, (list, tuple)) and data else data
     ubar = frame_inputs(ubar, static.input_names or getattr(first, "input_names", None), "ubar")
-    try:
-        ub = np.array(ubar, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"ubar must be an array of numbers of shape (K, {m}), got {type(ubar).__name__}") from None
+    ub = float_array(ubar, "ubar", f"an array of numbers of shape (K, {m})")
     if m == 1 and ub.ndim == 1:
         ub = ub[:, None]
     if ub.ndim != 2 or ub.shape[1] != m or ub.shape[0] == 0:
