@@ -264,7 +264,8 @@ def short_value(x: object) -> str:
 
 
 def check_theta(n_terms: int, theta: object, name: str = "theta") -> np.ndarray:
-    """θ as a finite float array of length ``n_terms``, shape (n_terms,), or ``ValueError``."""
+    """θ as a finite float array of length ``n_terms``, shape (n_terms,); ``TypeError`` for what is no array of
+    numbers, ``ValueError`` for a wrong shape or a non-finite value."""
     refuse_non_real(theta, name)
     th = float_array(theta, name)
     if th.ndim != 1:
@@ -341,7 +342,8 @@ def check_path(value: object, name: str) -> str | os.PathLike:
 
 
 def as_1d_finite(x: object, name: str) -> np.ndarray:
-    """``x`` as a read-only 1-D float64 copy, or ``ValueError`` naming ``name`` and the problem."""
+    """``x`` as a read-only 1-D float64 copy, or an error naming ``name`` and the problem (``TypeError`` for
+    what is no array of numbers, ``ValueError`` for a wrong shape or a non-finite value)."""
     refuse_non_real(x, name)
     a = float_array(x, name)
     if a.ndim == 2 and 1 in a.shape:
