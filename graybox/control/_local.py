@@ -595,7 +595,7 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
                 ) -> LocalModel:
     """The local linear model of a polynomial NARX model at the constant input ``ubar``.
 
-    The equilibrium is the one the model reaches there (:func:`graybox.static._analysis.reached_equilibria`,
+    The equilibrium is the one the model reaches there (``reached_equilibria``,
     the definition J_SF uses): from ``y0`` when given, else the only stable one. The linearisation
     around it is exact (partial derivatives read from the term structure).
 

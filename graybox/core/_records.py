@@ -182,7 +182,8 @@ class Record:
         return np.arange(len(self)) * self.Ts
 
     def slice(self, start: int | None = None, stop: int | None = None, name: str | None = None) -> "Record":
-        """Return the samples ``start:stop`` as a new record."""
+        """Return the samples ``start:stop`` as a new record named ``name`` (default: this one's name), with
+        the same ``Ts``, units and inputs."""
         return Record(self.u[start:stop], self.y[start:stop], self.Ts, name or self.name, self.units, self.input_names)
 
     def require_length(self, max_lag: int) -> None:
@@ -425,7 +426,7 @@ class Dataset:
     """A named bundle: identification and validation records plus static points.
 
     The records and the static points must have the same inputs, in the same order, and the
-    records one sampling period (:data:`PERIOD_RTOL`); ``ValueError`` otherwise.
+    records one sampling period (``PERIOD_RTOL``); ``ValueError`` otherwise.
 
     Attributes
     ----------
@@ -437,7 +438,7 @@ class Dataset:
         Where the data come from, in plain words.
     extra : mapping
         Anything else a loader wants to expose (e.g. a theoretical static curve); kept as a read-only
-        copy (:class:`~graybox.core._validation.FrozenMap`), as every mapping of a graybox value.
+        copy (``FrozenMap``), as every mapping of a graybox value.
     """
 
     ident: Record

@@ -934,7 +934,7 @@ def load_pumping() -> Dataset:
         ``description``: where the data come from (a simulated stand-in, said plainly);
         ``extra``: ``"static_curve"`` — eq. (1) as a :class:`~graybox.StaticCurve` on
         [750, 1650] rpm (the curve the plant is calibrated to), ``"plant"`` — the
-        :class:`~graybox.datasets.pumping.PumpingPlant` that generated the data, ``"seed"``, and
+        :class:`graybox.datasets.PumpingPlant` that generated the data, ``"seed"``, and
         ``"files"`` — the two CSV paths.
     """
     # imported here, not at module level, so that `python -m graybox.datasets.pumping` does not

@@ -209,7 +209,8 @@ class TwoSpeedPumpingPlant:
         return n1, n2
 
     def steady_flows(self, speed1: np.ndarray | float, speed2: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
-        """Equilibrium flow through each pump (L/s) at constant speeds (rpm); arrays of the broadcast shape.
+        """Equilibrium flow through each pump (L/s) at constant speeds ``speed1``, ``speed2`` (rpm); arrays of the
+        broadcast shape.
 
         Solved by bisection on the total flow to the last bit (the balance falls strictly with Q);
         a pump whose valve stays shut delivers 0.
@@ -228,7 +229,8 @@ class TwoSpeedPumpingPlant:
         return q1 + q2
 
     def static_pressure(self, speed1: np.ndarray | float, speed2: np.ndarray | float) -> np.ndarray:
-        """The theoretical static surface p̄(n̄₁, n̄₂) = H_t(Q̄) (mlc), noise-free; broadcast shape.
+        """The theoretical static surface p̄(n̄₁, n̄₂) = H_t(Q̄) (mlc) at speeds ``speed1``, ``speed2`` (rpm),
+        noise-free; broadcast shape.
 
         Equals eq. (1) at n̄₁ = n̄₂; see the module docs ("Static surface").
         """
@@ -248,7 +250,7 @@ class TwoSpeedPumpingPlant:
         return PlantSurface(self, tuple((float(lo), float(hi)) for lo, hi in box))
 
     def steady_state(self, speed1: float, speed2: float) -> tuple[float, float, float, float, float]:
-        """Equilibrium state (n_c1, n_1, n_c2, n_2, Q) at constant references (rpm)."""
+        """Equilibrium state (n_c1, n_1, n_c2, n_2, Q) at constant references ``speed1``, ``speed2`` (rpm)."""
         q = float(self.steady_flow(float(speed1), float(speed2)))
         return (float(speed1), float(speed1), float(speed2), float(speed2), q)
 
@@ -523,7 +525,7 @@ def static_grid_experiment(
     """The static test over (n₁, n₂): hold each pair, wait out the transients, average the pressure.
 
     As :func:`graybox.datasets.pumping.static_experiment`, one continuous run visiting ``speeds``
-    in order (default :func:`static_grid`), discarding ``settle`` seconds and averaging the next
+    in order (default ``static_grid``), discarding ``settle`` seconds and averaging the next
     ``average`` seconds of noisy measurements at each pair; ``seed`` (an int or a numpy
     Generator) is the source of noise, ``rng`` its former name (deprecated; kept for one release).
 

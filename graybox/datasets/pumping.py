@@ -275,7 +275,7 @@ class PlantRun:
             object.__setattr__(self, name, a)
 
     def record(self, name: str = "pumping") -> Record:
-        """The measured input/output pair as a :class:`~graybox.Record` (rpm, mlc)."""
+        """The measured input/output pair as a :class:`~graybox.Record` (rpm, mlc) named ``name``."""
         return Record(self.u, self.y, Ts=self.Ts, name=name, units=("rpm", "mlc"))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
@@ -704,7 +704,8 @@ class PumpingPlant:
         """Time (s) for the noise-free pressure to cover 63.2 % of its change after a reference step.
 
         The step of ``step`` rpm is applied at a settled ``speed``; the time is counted from the
-        step instant (so it includes the dead time and the drive and rotor lags).
+        step instant (so it includes the dead time and the drive and rotor lags), over a run of
+        ``horizon`` seconds after it.
         """
         n_hold = 10
         n_total = n_hold + int(round(horizon / self.Ts))

@@ -111,7 +111,7 @@ class CorrelationTest:
     Attributes
     ----------
     name : str
-        Key in :data:`TESTS` (``"xi_xi"``, ``"u_xi"``, ``"xi_xiu"``, ``"u2_xi"``, ``"u2_xi2"``); with
+        Key in ``TESTS`` (``"xi_xi"``, ``"u_xi"``, ``"xi_xiu"``, ``"u2_xi"``, ``"u2_xi2"``); with
         several inputs each input test once per input, keyed ``"u_xi:u1"`` and so on.
     label : str
         As the literature prints it, e.g. ``"φ_(u²)'ξ(τ)"``.
@@ -162,7 +162,7 @@ class ResidualTests:
     Attributes
     ----------
     tests : mapping str -> CorrelationTest
-        In the order of :data:`TESTS`.
+        In the order of ``TESTS``.
     n : int
         Residuals used (samples from the max lag on, summed over records).
     level : float

@@ -450,7 +450,7 @@ def se_dsf(
     ------
     ValueError
         θ is not identified by the records and the static points together (the one rule of
-        :func:`~graybox.estimation._prediction_error.identified_by`; the message names the free terms and
+        ``identified_by``; the message names the free terms and
         what data would identify them); records whose input is held constant are fitted when the static
         points identify θ. No start has a bounded free run and a reached equilibrium at every point.
     """

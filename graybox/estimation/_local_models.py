@@ -48,7 +48,7 @@ SLOW_FACTOR = 10.0
 
 
 class SlowModeWarning(UserWarning):
-    """A fit's local models have modes far slower than the least-squares model's (:data:`SLOW_FACTOR`).
+    """A fit's local models have modes far slower than the least-squares model's (``SLOW_FACTOR``).
 
     Such near-integrators buy identification error by following the record's slow drift and err on
     new records; ``margin="auto"`` keeps every mode within the factor.

@@ -479,7 +479,7 @@ class NeuralModel:
         return max(self.ny, self.nu)
 
     def with_name(self, name: str) -> "NeuralModel":
-        """The same network under another label."""
+        """The same network under another label, ``name``."""
         return NeuralModel(self.W1, self.b1, self.w2, self.b2, self.ny, self.nu, self.ne,
                            self.u_offset, self.u_scale, self.y_offset, self.y_scale, name, self.input_names,
                            self.Ts)
@@ -559,7 +559,7 @@ class NeuralModel:
         return out
 
     def predict_narmax(self, record: Record) -> tuple[np.ndarray, np.ndarray]:
-        """The training predictor: one step ahead with the residuals fed back (``nnnarmax2``).
+        """The training predictor over ``record``: one step ahead with the residuals fed back (``nnnarmax2``).
 
         Returns
         -------
@@ -677,7 +677,7 @@ class NeuralModel:
     def equilibria(self, ubar: float) -> list[Equilibrium]:
         """Every real equilibrium at constant input ``ubar`` (input units), sorted by ȳ, with stability.
 
-        Stability is decided by :func:`graybox.static._analysis.schur_stable` on the linearisation (the test
+        Stability is decided by ``schur_stable`` on the linearisation (the test
         every model of the package uses); the spectral radius is given for information.
         """
         ub = float(as_1d_finite([ubar], "ubar")[0])
@@ -693,7 +693,7 @@ class NeuralModel:
 
         Conventions of :func:`graybox.static_curve`. With ``y0``: the equilibrium a free run at
         constant ū, with every initial output equal to ``y0``, settles on (the package's one
-        settling routine, :func:`graybox.static._analysis.settle`, checks that it does). Without it: the
+        settling routine, ``settle``, checks that it does). Without it: the
         stable equilibrium when there is exactly one.
 
         Parameters
@@ -739,9 +739,9 @@ class NeuralModel:
         return out
 
     def static_gain(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, *, strict: bool = True) -> np.ndarray:
-        """dȳ/dū along the static curve, shape (M,), output units per input unit.
+        """dȳ/dū along the static curve at each ū of ``ubar``, shape (M,), output units per input unit.
 
-        Implicit differentiation of ȳ = g(ȳ, ū): dȳ/dū = g_ū / (1 − g_ȳ).
+        ``y0`` and ``strict`` as for :meth:`static_curve`. Implicit differentiation of ȳ = g(ȳ, ū): dȳ/dū = g_ū / (1 − g_ȳ).
         """
         ub = one_input_levels(ubar)
         yb = self.static_curve(ub, y0=y0, strict=strict)

@@ -164,7 +164,7 @@ def output_error(
     margin : float in [0, 1), "auto" or None
         Stability margin: every local linear model at up to 64 samples (u(k), y(k)) of the
         fitting records keeps its spectral radius ≤ 1 − margin (see
-        :class:`~graybox.estimation._simulation_error.SEProblem`); a start outside it is pulled in
+        ``SEProblem``); a start outside it is pulled in
         by scaling its output-feedback parameters down, and no step leaves it. ρ = 1 − margin is
         a time constant of about Ts / margin: choose it from the slowest dynamics the system may
         have, not from this record. ``"auto"`` (default): fitted without a margin, and refitted
@@ -203,7 +203,7 @@ def output_error(
     ------
     ValueError
         No start gave a fit (the reasons are listed); or the records do not identify θ (the one rule of
-        :func:`~graybox.estimation._prediction_error.identified_by`: e.g. an input held constant, whose
+        ``identified_by``: e.g. an input held constant, whose
         terms and the constant are then collinear; the message names them: give a record whose input
         moves, or static points to :func:`~graybox.se_pareto` / :func:`~graybox.se_dsf`).
     """

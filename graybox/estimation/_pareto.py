@@ -170,7 +170,9 @@ class ParetoSet:
     ) -> "ParetoSet":
         """Evaluate θs with :func:`graybox.evaluate_thetas` and build the set.
 
-        With several records J_1 and J_S are the sample-weighted means over the records (each
+        ``thetas`` (P, n_terms), one member per row, engineering units; ``lambdas`` (P,) their λ1 (None:
+        NaN); J_1 and J_S on ``data``, J_SF at ``static``; ``method`` labels the set, ``extra`` holds
+        per-member arrays (e.g. ``"radius"``), ``threads`` run the free runs. With several records J_1 and J_S are the sample-weighted means over the records (each
         counted from its own max-lag on). ``static=None`` leaves J_SF as NaN. Rows listed in
         ``failures`` (index -> reason) are kept as failed members (θ NaN, J's inf). ``structure``
         may be a Structure, a sequence of terms, a Model or a result that carries one.
@@ -235,7 +237,7 @@ class ParetoSet:
         return [self.member_model(i) for i in range(len(self)) if i not in self.failures]
 
     def model(self, i: int, name: str | None = None) -> Model:
-        """Deprecated name of :meth:`member_model` (kept for one release)."""
+        """Deprecated name of :meth:`member_model` (member ``i``, labelled ``name``; kept for one release)."""
         warn("ParetoSet.model(i) is deprecated: use ParetoSet.member_model(i) (a set has no one model)",
              DeprecationWarning)
         return self.member_model(i, name)

@@ -769,7 +769,7 @@ def cls(
         Bad input (non-rational structure with a curve, too few points, a zero denominator of the
         estimated static function at a static point, …). Static points outside the records'
         input range are welcome: a :class:`StaticRangeWarning` names them once.
-        Also when the records and the equality constraints do not identify θ (:func:`identified_by`; an
+        Also when the records and the equality constraints do not identify θ (``identified_by``; an
         input held constant leaves its terms free unless eq. (22) or the points fix them), or when
         ``reference="ls"`` and the records alone do not; the message says what is missing.
     InfeasibleError
@@ -1009,7 +1009,7 @@ def pe_thetas(
     Raises
     ------
     ValueError
-        Some λ1 whose weights do not identify θ (:func:`identified_by`): the records, with the static
+        Some λ1 whose weights do not identify θ (``identified_by``): the records, with the static
         points where λ1 < 1 and the equality constraints, must have a stacked regression of full rank.
         An input held constant leaves θ free at λ1 = 1 (the static points carry no weight there); the
         message names the λ1, the free terms and what data would identify them. :func:`pe_pareto`

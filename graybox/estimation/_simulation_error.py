@@ -1354,7 +1354,7 @@ def se_pareto(
     max_nfev, tol, solver : optional
         Gradient only: evaluations per ``least_squares`` run (default 50), its tolerances
         (1e-8) and its method (``"auto"``: "trf" and "dogbox" wherever the fit restarts, "trf" along
-        the sweep; see :func:`graybox.estimation._simulation_error.gradient_front`).
+        the sweep; see ``gradient_front``).
     starts : sequence of ndarray, "pe" or None
         Further starting points (engineering units). ``"pe"``: four PE solutions (closed form,
         λ1 = 0.1 … 1e-4 of eq. (11), leaning more and more on the static points). Gradient: tried
@@ -1366,7 +1366,7 @@ def se_pareto(
     margin : float in [0, 1), "auto" or None
         Stability margin (both methods): every member keeps the spectral radius of its local
         linear models ≤ 1 − margin, along the identification records and at the static points'
-        equilibria (see :class:`SEProblem`); a θ outside it is infeasible, as an unstable
+        equilibria (see ``SEProblem``); a θ outside it is infeasible, as an unstable
         equilibrium is. Without it a free-run fit may buy identification error with near-unit
         roots that follow the record's slow drift (BENCHMARKS.md, "Output error"). Dimensionless
         but tied to the sampling period: ρ = 1 − margin is a time constant of about Ts / margin.
@@ -1381,7 +1381,7 @@ def se_pareto(
         paper's problem; a :class:`~graybox.SlowModeWarning` then names members that slow.
     ridge : float >= 0
         Regularisation towards least squares (both methods): γ · mean_j (s_j (θ_j − θ_LS,j))² is
-        added to every member's cost, s_j the RMS of regressor j (see :class:`SEProblem`). 0
+        added to every member's cost, s_j the RMS of regressor j (see ``SEProblem``). 0
         (default): none, the paper's problem; ``extra["cost"]`` then holds the regularised cost.
     ubar : ndarray, optional
         Where to sample a StaticCurve (shape (K,)) or StaticSurface (shape (K, m)) given as
@@ -1402,10 +1402,10 @@ def se_pareto(
     ValueError
         An option of the other method is given, an unknown method, no static points, or every
         member failed (the reasons are listed); or θ is not identified by the records and the static
-        points together (the one rule of :func:`~graybox.estimation._prediction_error.identified_by`;
+        points together (the one rule of ``identified_by``;
         the message names the free terms and what data would identify them). Records whose input is
         held constant are fitted when the static points identify θ: the start is then the least
-        squares of both (:meth:`SEProblem.ls_theta`), and the λ1 = 1 member, where the points carry no
+        squares of both (``ls_theta``), and the λ1 = 1 member, where the points carry no
         weight, is a failed member saying so.
     """
     check_choice(method, "method", ("ga", "gradient"))

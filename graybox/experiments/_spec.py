@@ -108,7 +108,7 @@ class SpecError(ValueError):
 class SpecTypeError(SpecError, TypeError):
     """A value of the wrong *type* in a grid specification (a number for a name, a string for a table …).
 
-    A ``TypeError``, as graybox's argument checks raise for a wrong type (:mod:`graybox.core._validation`),
+    A ``TypeError``, as graybox's argument checks raise for a wrong type (``graybox.core._validation``),
     and a :class:`SpecError`, so that ``except SpecError`` (the command line's one-line message) still
     catches every problem of a spec, with its key and line.
     """
@@ -300,7 +300,7 @@ class DataSpec:
         the static points' own band, mean δ² (:attr:`graybox.StaticPoints.band`): for the bundled sets
         0.175² mlc² (pumping and pumping_miso: the same transmitter) and 0.1² V² (buck); for CSV
         data the static file's ``uncertainty`` (a column's δ once the file is read: the
-        attribute stays None, and :func:`band_of` gives it); for a Dataset its static points' uncertainty.
+        attribute stays None, and ``band_of`` gives it); for a Dataset its static points' uncertainty.
         None when there is none (then D_SF decisions need a band given).
     dataset : Dataset, optional
         A Dataset built in Python (not expressible in TOML); its content is hashed.
@@ -1051,7 +1051,7 @@ class Cell:
         Position in the grid's cell order (data, then structure, then variant, then seed).
     key : str
         Hash of the data's content, the structure, the variant, the seed and graybox's version; of the
-        band when the variant reads it (:func:`reads_band`); and of the static points' uncertainty when
+        band when the variant reads it (``reads_band``); and of the static points' uncertainty when
         the variant's band constraint takes it and a band in the key does not say it (per-point δ, or a δ
         other than √band).
     data, structure, variant : str
@@ -1168,7 +1168,8 @@ class Grid:
     # -- construction from TOML ------------------------------------------------------------
     @classmethod
     def from_toml(cls, path: str | Path) -> "Grid":
-        """Read a TOML spec (see ``graybox grid init`` for a commented example).
+        """Read the TOML spec at ``path`` (see ``graybox grid init`` for a commented example); its data files'
+        relative paths are resolved against its folder.
 
         Raises
         ------
@@ -1192,7 +1193,8 @@ class Grid:
 
     @classmethod
     def from_toml_text(cls, text: str, source: str = "<spec>", base_dir: str | None = None) -> "Grid":
-        """Parse a TOML spec given as text (``source`` names it in messages)."""
+        """Parse a TOML spec given as text (``source`` names it in messages; relative data paths are resolved
+        against ``base_dir``, default the working directory)."""
         try:
             d = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
@@ -1206,7 +1208,8 @@ class Grid:
 
     @classmethod
     def from_dict(cls, d: Mapping, base_dir: str | None = None) -> "Grid":
-        """Build from nested dicts shaped like the TOML spec (keys: name, seeds, data, structures, variants)."""
+        """Build from ``d``, nested dicts shaped like the TOML spec (keys: name, seeds, data, structures,
+        variants); relative data paths are resolved against ``base_dir``."""
         _check_keys(d, ("name", "seeds", "data", "structures", "variants"), "the grid spec")
         parts: dict[str, list] = {}
         for key, cls_, allowed in (("data", DataSpec, ("name", "bundled", "ident", "valid", "static", "band")),

@@ -92,7 +92,8 @@ class Model:
         return self.structure.max_lag
 
     def with_theta(self, theta: np.ndarray, *, name: str | None = None) -> "Model":
-        """The same structure with other parameters (the noise part is dropped)."""
+        """The same structure with parameters ``theta`` (shape (n_terms,), engineering units), named ``name``
+        (default: this model's name); the noise part is dropped, the inputs' names and ``Ts`` kept."""
         return Model(self.structure, theta, name=self.name if name is None else name, input_names=self.input_names,
                      Ts=self.Ts)
 
@@ -104,7 +105,7 @@ class Model:
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record, *, horizon: int = 1) -> np.ndarray:
         """Prediction ``horizon`` samples ahead over ``record`` (default one step), shape (N,); see
-        :func:`graybox.core._simulation.predict`."""
+        :func:`graybox.predict`. A ``record`` sampled at another period than ``Ts`` is refused."""
         self.check_period(record)
         return _simulation.predict(self.structure, self.theta, record, horizon=horizon)
 
@@ -121,14 +122,18 @@ class Model:
         on_diverge: Literal["raise", "nan"] = "raise",
         bound: float | None = None,
     ) -> np.ndarray:
-        """Free run, shape (N,); see :func:`graybox.core._simulation.simulate`.
+        """Free run, shape (N,), output units; see :func:`graybox.simulate`.
 
-        ``u`` is a Record (inputs taken by name) or an array of shape (N,) or (N, m) with the
-        columns in ``input_names`` order; a pandas DataFrame is read by column name where its
-        columns are the ``input_names`` (any order), by position where they name none of them,
-        and refused where they name some (``ValueError`` naming the columns). ``bound`` (output units) is the divergence bound on |y|
-        (default: 1e6 × the larger of max|y0| and the inputs' direct push on the output, in the
-        output's units whatever they are, also from rest).
+        ``u`` is a Record (inputs taken by name; sampled at ``Ts``, else refused) or an array of
+        shape (N,) or (N, m) with the columns in ``input_names`` order; a pandas DataFrame is read by
+        column name where its columns are the ``input_names`` (any order), by position where they
+        name none of them, and refused where they name some (``ValueError`` naming the columns).
+        ``y0`` holds the first ``max_lag`` outputs (default with a Record: its measured ones; needed
+        with an array). ``on_diverge``: when the output leaves the bound, ``"raise"`` (default) a
+        :class:`~graybox.DivergenceError` naming the sample, or ``"nan"`` NaN from that sample on.
+        ``bound`` (output units) is the divergence bound on |y| (default: 1e6 × the larger of
+        max|y0| and the inputs' direct push on the output, in the output's units whatever they are,
+        also from rest).
         """
         if isinstance(u, Record):
             self.check_period(u)
@@ -158,11 +163,14 @@ class Model:
         return _static.cluster_map(self.structure)
 
     def static_curve(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
-        """Steady-state output at each ū, shape (M,); see :func:`graybox.static._analysis.static_curve`.
+        """Steady-state output at each ū of ``ubar`` (input units), shape (M,); see :func:`graybox.static_curve`.
 
         With several inputs, the static surface at the points ``ubar`` of shape (M, m)
-        (:func:`graybox.static._surface_analysis.static_surface`): columns in ``input_names`` order,
-        or a pandas DataFrame whose columns are the ``input_names`` (read by name, any order).
+        (:func:`graybox.static_surface`): columns in ``input_names`` order, or a pandas DataFrame whose
+        columns are the ``input_names`` (read by name, any order). ``y0`` (output units, one for all
+        ū or one per ū): the equilibrium a free run started there settles on, as J_SF counts it
+        (default: the one stable equilibrium). ``strict=True`` (default) raises ``ValueError`` naming
+        every ū where no equilibrium is reached; ``strict=False`` gives NaN there.
         """
         if self.n_inputs > 1:
             return _static_surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,
@@ -170,13 +178,15 @@ class Model:
         return _static.static_curve(self.structure, self.theta, ubar, y0=y0, strict=strict)
 
     def equilibria(self, ubar: float | np.ndarray) -> list[_static.Equilibrium]:
-        """Every real equilibrium at ū (a float, or a point of shape (m,) with several inputs) with its stability."""
+        """Every real equilibrium at ū ``ubar`` (a float, or a point of shape (m,) with several inputs) with its
+        stability; see :func:`graybox.equilibria`."""
         if self.n_inputs > 1:
             return _static_surface.surface_equilibria(self.structure, self.theta, ubar, input_names=self.input_names)
         return _static.equilibria(self.structure, self.theta, ubar)
 
     def static_gain(self, ubar: np.ndarray, y0: float | None = None, *, strict: bool = True) -> np.ndarray:
-        """dȳ/dū along the static curve, shape (M,); with several inputs the gradient, shape (M, m).
+        """dȳ/dū along the static curve at each ū of ``ubar``, shape (M,); with several inputs the gradient,
+        shape (M, m).
 
         ``y0`` and ``strict`` as for :meth:`static_curve` (``strict=False``: NaN where no equilibrium is reached).
         """
@@ -207,7 +217,7 @@ class Model:
     def to_latex(self, digits: int = 4, terms_per_line: int | None = None) -> str:
         """The equation in LaTeX math (no ``$`` delimiters), the MA part written with ξ as in the paper.
 
-        ``terms_per_line`` breaks a long model into an ``aligned`` block (put it inside
+        Parameters printed to ``digits`` significant digits (default 4); ``terms_per_line`` breaks a long model into an ``aligned`` block (put it inside
         ``\\begin{equation}`` … ``\\end{equation}``).
         """
         digits = check_int(digits, "digits", low=1)

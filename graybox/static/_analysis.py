@@ -221,10 +221,10 @@ def key_index(keys: tuple, names: list[str], key: tuple, form: str) -> int:
 
 
 def cluster_map(structure: Structure) -> ClusterMap:
-    """Build the :class:`ClusterMap` of the process terms of ``structure`` (cached: it is immutable).
+    """Build the ``ClusterMap`` of the process terms of ``structure`` (cached: it is immutable).
 
     Single-input structures only (a structure with several inputs has a static *surface*:
-    :func:`graybox.static._surface_analysis.surface_cluster_map`); ``ValueError`` otherwise. A
+    :func:`graybox.surface_cluster_map`); ``ValueError`` otherwise. A
     sequence of terms is read as a Structure.
     """
     return _cluster_map(structure_arg(structure))
@@ -478,7 +478,7 @@ class Equilibrium:
         Output level.
     stable : bool
         True when the linearised recursion is asymptotically stable (every root strictly inside
-        the unit circle, by the Schur–Cohn test of :func:`schur_stable`).
+        the unit circle, by the Schur–Cohn test of ``schur_stable``).
     spectral_radius : float
         Largest modulus of those roots (0 for a static model), for information.
     """
@@ -524,7 +524,7 @@ def equilibria(structure: Structure, theta: np.ndarray, ubar: float) -> list[Equ
     Raises
     ------
     ValueError
-        When every ȳ is an equilibrium at ``ubar`` (:func:`continuum`, e.g. an integrator at its balancing
+        When every ȳ is an equilibrium at ``ubar`` (``continuum``, e.g. an integrator at its balancing
         input): ȳ is not set by ū there.
     """
     structure, theta = checked_model(structure, theta)
@@ -990,7 +990,7 @@ def static_curve(
     """The steady state the model reaches at each constant input ``ubar``.
 
     With ``y0`` (the evaluator passes the measured ȳ_i): the equilibrium a free run at constant
-    ū, started with every initial condition equal to ``y0``, settles on (:func:`reached_equilibria`).
+    ū, started with every initial condition equal to ``y0``, settles on (``reached_equilibria``).
     Without it: the locally stable equilibrium when there is exactly one; several need ``y0`` to
     choose. For a rational structure both are the equilibrium of eq. (6) when it is Schur-stable.
 

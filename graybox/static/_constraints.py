@@ -331,11 +331,13 @@ class StaticConstraint(ABC):
         """A short human-readable description used in error messages."""
 
     def affine(self, ctx: StaticContext) -> AffineRows | None:
-        """Affine rows in engineering units, or None when the constraint is not affine."""
+        """Affine rows in engineering units for the problem ``ctx`` (:class:`StaticContext`), or None when the
+        constraint is not affine."""
         return None
 
     def constraints(self, theta: cp.Expression, ctx: StaticContext) -> list[cp.Constraint]:
-        """cvxpy constraints on ``theta`` (an expression of shape (n_terms,), engineering units)."""
+        """cvxpy constraints on ``theta`` (an expression of shape (n_terms,), engineering units) for the
+        problem ``ctx``."""
         rows = self.affine(ctx)
         if rows is None:  # pragma: no cover - subclasses that are not affine override this
             raise NotImplementedError(f"{type(self).__name__} must implement constraints()")
@@ -347,7 +349,7 @@ class StaticConstraint(ABC):
         return out
 
     def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
-        """How far ``theta`` is from satisfying the constraint (0 when satisfied).
+        """How far ``theta`` is from satisfying the constraint on the problem ``ctx`` (0 when satisfied).
 
         For affine constraints this is :meth:`AffineRows.violation` (relative, unit-free).
         """
@@ -357,11 +359,11 @@ class StaticConstraint(ABC):
         return rows.violation(theta)
 
     def check(self, ctx: StaticContext) -> None:
-        """Validate against the problem's data (raises ``ValueError``); called before solving."""
+        """Validate against the problem's data ``ctx`` (raises ``ValueError``); called before solving."""
         self.affine(ctx)
 
     def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
-        """Checks on the estimate that the rows cannot express (raises ``ValueError``)."""
+        """Checks on the estimate ``theta`` of the problem ``ctx`` that the rows cannot express (raises ``ValueError``)."""
 
     def __iter__(self) -> Iterator["StaticConstraint"]:
         yield self
@@ -502,8 +504,8 @@ class CurveEquality(StaticConstraint):
         return f"static curve equality (22) to {self.curve.name}{s}"
 
     def resolved_sigma_y(self, ctx: StaticContext) -> float | None:
-        """Σ*_y used: this constraint's, else the context's; 0 when the structure has no Σy; None when
-        Σ_y is estimated (``"free"``)."""
+        """Σ*_y used: this constraint's, else the problem's (``ctx.sigma_y``); 0 when the structure has no Σy;
+        None when Σ_y is estimated (``"free"``)."""
         cm = ctx.cluster_map
         if not _has_sigma_y(cm):
             return 0.0  # no linear-in-y cluster: the denominator is 1 − Σ_{yu^m} ū^m → 1
@@ -745,7 +747,7 @@ class StaticBand(StaticConstraint):
     D_i >= 0, and as D_i → 0 they become vacuous (the residual bound b·D_i shrinks with the
     error it is meant to bound), which other constraints can drive a solver into. D_i is a number
     of the plant's time scale in samples (1 − a for y(k) = a y(k−1) + …: about Ts/τ), so the
-    default margin follows the least-squares estimate's own D_i (:func:`auto_min_denominator`):
+    default margin follows the least-squares estimate's own D_i (``auto_min_denominator``):
     a plant sampled ten times faster gets a margin ten times smaller.
 
     ``form="residual"`` bounds the static-equation residual ``|ȳ_i − q_iᵀRθ| <= b`` instead;
@@ -763,7 +765,7 @@ class StaticBand(StaticConstraint):
     min_denominator : float or "auto"
         Smallest D_i allowed by the exact form (a stability margin: 1 − Σ a_i >= it), in (0, 1).
         ``"auto"`` (default): 10⁻³, or a tenth of the smallest D_i of the problem's least-squares
-        estimate at the points when that is smaller (:func:`auto_min_denominator`).
+        estimate at the points when that is smaller (``auto_min_denominator``).
     """
 
     b: float | None = None
@@ -858,7 +860,7 @@ class GainBounds(StaticConstraint):
     min_denominator : float or "auto"
         D >= this (also a necessary condition for a stable equilibrium), > 0. ``"auto"``
         (default): 10⁻⁶, or a tenth of the smallest D of the problem's least-squares estimate on
-        the grid when that is smaller (:func:`auto_min_denominator`; as :class:`StaticBand`).
+        the grid when that is smaller (``auto_min_denominator``; as :class:`StaticBand`).
     """
 
     lower: float | Sequence[float | None] | None = None
@@ -935,7 +937,7 @@ class GainBounds(StaticConstraint):
         return [(lows[j if len(lows) > 1 else 0], highs[j if len(highs) > 1 else 0]) for j in range(m)]
 
     def grid(self, ctx: StaticContext) -> tuple[np.ndarray, np.ndarray]:
-        """The ū grid and the reference ȳ on it, shapes (K,) or (K, m), and (K,)."""
+        """The ū grid and the reference ȳ on it for the problem ``ctx``, shapes (K,) or (K, m), and (K,)."""
         m = n_static_inputs(ctx.cluster_map)
         if m > 1:
             return self._grid_several(ctx, m)
@@ -1157,7 +1159,7 @@ class UserConstraint(StaticConstraint):
         return self._call(theta, ctx)
 
     def violation(self, theta: np.ndarray, ctx: StaticContext) -> float:
-        """Largest cvxpy-reported violation at ``theta`` (in the constraint's own units)."""
+        """Largest cvxpy-reported violation at ``theta`` on the problem ``ctx`` (in the constraint's own units)."""
         import cvxpy as cp
 
         v = cp.Variable(ctx.n_terms)

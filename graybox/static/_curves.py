@@ -49,15 +49,16 @@ class StaticCurve:
 
     @classmethod
     def polynomial(cls, coefficients, domain: tuple[float, float] | None = None, name: str = "static curve") -> "StaticCurve":
-        """A curve from ascending coefficients, e.g. ``StaticCurve.polynomial([κ, α, β])`` for eq. (1)."""
+        """A curve from ascending coefficients, e.g. ``StaticCurve.polynomial([κ, α, β])`` for eq. (1), over
+        ``domain`` (ū_min, ū_max) in input units (None: none known), labelled ``name``."""
         return cls(coefficients, domain, name)  # checked there, as every curve's (text refused, not parsed)
 
     @classmethod
     def fit(cls, points: StaticPoints, degree: int = 2, name: str | None = None) -> "StaticCurve":
         """Least-squares polynomial of ``degree`` through static points (columns scaled internally).
 
-        The domain is the points' ū range. Needs at least ``degree + 1`` points, and two at least
-        (one level has no range). ``points`` must be of one input (several: :meth:`StaticSurface.fit`).
+        The domain is the points' ū range; ``name`` labels it (default ``"fit to <points' name>"``).
+        Needs at least ``degree + 1`` points, and two at least (one level has no range). ``points`` must be of one input (several: :meth:`StaticSurface.fit`).
         """
         if not isinstance(points, StaticPoints):
             raise TypeError(f"StaticCurve.fit: points must be StaticPoints, got {type(points).__name__}")
@@ -93,7 +94,7 @@ class StaticCurve:
         return int(nz[-1]) if nz.size else 0
 
     def check_domain(self, ubar: np.ndarray) -> None:
-        """Raise ``ValueError`` if any ū lies outside the curve's domain (when it has one)."""
+        """Raise ``ValueError`` if any ū of ``ubar`` lies outside the curve's domain (when it has one)."""
         if self.domain is None:
             return
         lo, hi = self.domain

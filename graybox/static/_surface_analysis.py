@@ -111,7 +111,7 @@ class SurfaceClusterMap:
         return [surface_cluster_name(k[0], k[1:], self.inputs, "·") for k in self.keys]
 
     def index(self, name_or_key: str | tuple[int, ...]) -> int:
-        """Row of R for a cluster given by name (``"Σyu1"``) or key (p, a_1, …, a_m)."""
+        """Row of R for the cluster ``name_or_key``: a name (``"Σyu1"``) or a key (p, a_1, …, a_m)."""
         if isinstance(name_or_key, tuple):
             return key_index(self.keys, self.names, name_or_key, "(p, " + ", ".join(f"a_{n}" for n in self.inputs) + ")")
         names = self.names
@@ -283,7 +283,7 @@ def static_surface(
 ) -> np.ndarray:
     """The steady state the model reaches at each constant input vector: the static surface ȳ(ū).
 
-    As :func:`graybox.static._analysis.static_curve` at points of input space: with ``y0``, the equilibrium
+    As :func:`graybox.static_curve` at points of input space: with ``y0``, the equilibrium
     a free run at constant ū started from y0 settles on; without it, the unique stable
     equilibrium (rational structures: the equilibrium of eq. (6) when it is stable).
 
