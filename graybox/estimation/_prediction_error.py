@@ -746,7 +746,7 @@ def cls(
         :func:`graybox.els` with its default MA(2)); a reference Model (its Σy); a θ of this
         structure; or the value itself. A reference's Σy is its denominator's slope at ū = 0: with
         an input far from zero (rpm, kelvin) it can leave the curve's range with no stable model
-        (refused: Σ*_y > 1) or a poor one (BENCHMARKS.md, "Where Σ*_y comes from").
+        (refused: Σ*_y > 1) or a poor one (BENCHMARKS.md, "Where Σ*_y of eq. (22) comes from").
     constraints : constraint or iterable of constraints, optional
         More constraints (band, gain, cluster bounds, user cvxpy constraints), combined with the
         static ones.
