@@ -251,3 +251,16 @@ def test_public_docstrings_cross_reference_public_names_only():
             if not (role != "mod" and _resolves(t, owner)) and not (role == "mod" and not any(
                 p.startswith("_") for p in t.split(".")))]
     assert not dead, dead
+
+
+@pytest.mark.parametrize("name", ["mse", "rrse", "fit_percent"])
+def test_a_start_past_the_record_leaves_no_samples_in_every_figure(name):
+    # mse said "no samples left to evaluate"; rrse and fit_percent leaked numpy's "Mean of empty slice"
+    # RuntimeWarning and then blamed the data: "RRSE undefined: the measured output is constant"
+    import numpy as np
+
+    import graybox as gb
+
+    y = np.arange(10.0)
+    with pytest.raises(ValueError, match="no samples left to evaluate"):
+        getattr(gb, name)(y, y + 0.1, start=10)

@@ -57,6 +57,8 @@ def output_spread(y: np.ndarray) -> float:
     """‖y − mean(y)‖ of a measured output (output units), 0.0 where it is constant to round-off
     (:data:`CONSTANT_RTOL`): the denominator of RRSE and fit %, undefined for a held output."""
     y = np.asarray(y, float)
+    if y.size == 0:  # no samples: no spread (and no mean of an empty slice)
+        return 0.0
     den = float(np.linalg.norm(y - y.mean()))
     return 0.0 if den <= CONSTANT_RTOL * float(np.linalg.norm(y)) else den
 

@@ -48,6 +48,8 @@ def _measured_and_model(y: object, yhat: object, start: object) -> tuple[np.ndar
     yhat = real_array(yhat, "yhat", "the model's output (numbers; NaN or inf where its free run diverged)")
     if yhat.shape != y.shape:
         raise ValueError(f"y and yhat must have the same length, got shapes {y.shape} and {yhat.shape}")
+    if start >= y.size:  # every figure alike (RRSE and fit % took the empty rest for a constant output)
+        raise ValueError(f"no samples left to evaluate: start = {start} of a record of {y.size} samples")
     return y[start:], yhat[start:]
 
 
@@ -58,8 +60,6 @@ def mse(y: np.ndarray, yhat: np.ndarray, *, start: int = 0) -> float:
     """
     y, yhat = _measured_and_model(y, yhat, start)
     e = y - yhat
-    if e.size == 0:
-        raise ValueError("no samples left to evaluate")
     if not np.all(np.isfinite(e)):
         return float("inf")
     return float(np.mean(e**2))
