@@ -17,7 +17,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ._terms import check_input_names, default_input_names
-from ._validation import FrozenMap, as_1d_finite, check_per_point, check_real, check_str, float_array, refuse_non_real, warn
+from ._validation import (FrozenMap, as_1d_finite, check_per_point, check_real, check_str, float_array, refuse_non_real,
+                          warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 

@@ -741,7 +741,8 @@ class NeuralModel:
     def static_gain(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, *, strict: bool = True) -> np.ndarray:
         """dȳ/dū along the static curve at each ū of ``ubar``, shape (M,), output units per input unit.
 
-        ``y0`` and ``strict`` as for :meth:`static_curve`. Implicit differentiation of ȳ = g(ȳ, ū): dȳ/dū = g_ū / (1 − g_ȳ).
+        ``y0`` and ``strict`` as for :meth:`static_curve`. Implicit differentiation of ȳ = g(ȳ, ū):
+        dȳ/dū = g_ū / (1 − g_ȳ).
         """
         ub = one_input_levels(ubar)
         yb = self.static_curve(ub, y0=y0, strict=strict)

@@ -172,7 +172,8 @@ class ParetoSet:
 
         ``thetas`` (P, n_terms), one member per row, engineering units; ``lambdas`` (P,) their λ1 (None:
         NaN); J_1 and J_S on ``data``, J_SF at ``static``; ``method`` labels the set, ``extra`` holds
-        per-member arrays (e.g. ``"radius"``), ``threads`` run the free runs. With several records J_1 and J_S are the sample-weighted means over the records (each
+        per-member arrays (e.g. ``"radius"``), ``threads`` run the free runs. With several records J_1
+        and J_S are the sample-weighted means over the records (each
         counted from its own max-lag on). ``static=None`` leaves J_SF as NaN. Rows listed in
         ``failures`` (index -> reason) are kept as failed members (θ NaN, J's inf). ``structure``
         may be a Structure, a sequence of terms, a Model or a result that carries one.

@@ -217,7 +217,8 @@ class Model:
     def to_latex(self, digits: int = 4, terms_per_line: int | None = None) -> str:
         """The equation in LaTeX math (no ``$`` delimiters), the MA part written with ξ as in the paper.
 
-        Parameters printed to ``digits`` significant digits (default 4); ``terms_per_line`` breaks a long model into an ``aligned`` block (put it inside
+        Parameters printed to ``digits`` significant digits (default 4); ``terms_per_line`` breaks a long
+        model into an ``aligned`` block (put it inside
         ``\\begin{equation}`` … ``\\end{equation}``).
         """
         digits = check_int(digits, "digits", low=1)

@@ -363,7 +363,8 @@ class StaticConstraint(ABC):
         self.affine(ctx)
 
     def after_solve(self, theta: np.ndarray, ctx: StaticContext) -> None:
-        """Checks on the estimate ``theta`` of the problem ``ctx`` that the rows cannot express (raises ``ValueError``)."""
+        """Checks on the estimate ``theta`` of the problem ``ctx`` that the rows cannot express (raises
+        ``ValueError``)."""
 
     def __iter__(self) -> Iterator["StaticConstraint"]:
         yield self

@@ -58,7 +58,8 @@ class StaticCurve:
         """Least-squares polynomial of ``degree`` through static points (columns scaled internally).
 
         The domain is the points' ū range; ``name`` labels it (default ``"fit to <points' name>"``).
-        Needs at least ``degree + 1`` points, and two at least (one level has no range). ``points`` must be of one input (several: :meth:`StaticSurface.fit`).
+        Needs at least ``degree + 1`` points, and two at least (one level has no range). ``points`` must
+        be of one input (several: :meth:`StaticSurface.fit`).
         """
         if not isinstance(points, StaticPoints):
             raise TypeError(f"StaticCurve.fit: points must be StaticPoints, got {type(points).__name__}")

@@ -260,7 +260,8 @@ class StaticSurface:
 
     # -- evaluation ---------------------------------------------------------
     def check_domain(self, ubar: np.ndarray) -> None:
-        """Raise ``ValueError`` if any point of ``ubar`` (shape (M, m)) lies outside the domain box (when there is one)."""
+        """Raise ``ValueError`` if any point of ``ubar`` (shape (M, m)) lies outside the domain box (when there
+        is one)."""
         if self.domain is None:
             return
         u = _as_inputs(ubar, self.n_inputs, self.name, self.input_names)
