@@ -25,7 +25,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
      "surfaces fitted to points; static constraints as affine rows"),
     ("models", ("_model", "_coerce", "_evaluate"),
      "the polynomial NARMAX model as a value; J_1, J_S, J_SF and the other figures of merit"),
-    ("selection", ("_stopping", "_subset_search", "_forward_regression", "_simulation_error_pruning"),
+    ("selection", ("_stopping", "_subset_search", "_centring", "_forward_regression", "_simulation_error_pruning"),
      "structure selection: FROLS (ERR) and SEMP (simulation error with pruning)"),
     ("estimation", ("_pareto", "_decisions", "_extended_least_squares", "_neural", "_prediction_error",
                     "_local_models", "_simulation_error", "_output_error", "_epsilon_constraint"),

@@ -46,6 +46,7 @@ from .. import _api as gb
 from ..io._json import register_type
 from ..estimation._prediction_error import pe_members
 from ..models._coerce import static_info, static_points
+from ..selection import _centring
 from ..selection._forward_regression import _RSS_FLOOR
 from ..selection._stopping import FewerTermsError
 from ..static._form_check import carried_degree, static_degree, static_fit_mse, varied_inputs, static_terms
@@ -55,7 +56,7 @@ from ..core._progress import progress_bar, show_progress
 from ..core._records import (as_records, check_compatible, choosing_records, check_overlap, check_same_period,
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
-from ..core._validation import FrozenFrame, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
+from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
@@ -587,12 +588,14 @@ def _ordinal(k: int) -> str:
 # -- 2. structures -----------------------------------------------------------------------------
 
 def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, sources, include,
-                form: _Form | None) -> list[dict]:
+                form: _Form | None, centre: bool = False) -> list[dict]:
     """One dict per distinct structure: name, source(s), size, terms, added static-form terms; searched on
-    all the identification records together."""
+    all the identification records together (``centre``: on the centred signals, each structure closed)."""
     process = candidates.process
     n_max = len(process)
     ident = _fit_data(idents)
+    if centre:
+        ident = _centring.centred_data(ident, _centring.signal_offsets(list(idents)))
     samples = sum(len(r) for r in idents)
     data, of = (("the identification record", "the identification record's") if len(idents) == 1 else
                 (f"the {len(idents)} identification records", f"the {len(idents)} identification records'"))
@@ -674,7 +677,7 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
                  SelectionWarning)
     rows, seen = [], {}
     for (src, k), terms in found.items():
-        st = gb.Structure(terms)
+        st = _centring.closure(terms).process if centre else gb.Structure(terms)
         added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
         st = st + gb.Structure(added)
         key = frozenset(st)
@@ -992,6 +995,7 @@ def select_graybox(
     client: Any = None,
     scheduler: str | None = None,
     progress: bool | None = None,
+    centre: bool = False,
 ) -> GrayboxSelection:
     """Choose a structure (and estimator, and λ member) on data it was not fitted on.
 
@@ -1074,6 +1078,13 @@ def select_graybox(
     fallback : {None, "min_jsf"}
         When no structure meets the band: None raises ``ValueError`` naming the smallest J_SF
         reached; ``"min_jsf"`` takes the structure with the smallest J_SF and says so.
+    centre : bool, optional
+        Search the structures on centred signals (default False: on the raw ones): the searches
+        run on the identification records' y and inputs minus their means, and each structure they
+        find is replaced by its hierarchical closure (every divisor of every term, the constant
+        included), which spans the same raw-signal models wherever the signals' zeros are; fits,
+        scores and the choice are then on the raw records as always. A row's ``size`` counts the
+        centred terms searched, its ``n_terms`` the closure's (and the static terms').
     executor : {"inprocess", "processes", "dask"}, optional
         Where the jobs (one per structure × estimator) run: default in the driver, or on Dask
         when ``workers``, ``client`` or ``scheduler`` is given. Worker processes are spawned and
@@ -1142,9 +1153,10 @@ def select_graybox(
     if fallback is not None:
         check_choice(fallback, "fallback", ("min_jsf",))
     check_choice(rule, "rule", RULES)
+    centre = check_bool(centre, "centre")
     plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
     constraints = _constraint_specs(constraints, len(plan.ident[0].input_names))
-    rows = _structures(candidates, plan.ident, sizes, sources, include, form)
+    rows = _structures(candidates, plan.ident, sizes, sources, include, form, centre)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
                             progress=progress)
     fast = [e for e in estimators if e not in SLOW_ESTIMATORS]

@@ -46,7 +46,7 @@ carries the noise terms in :attr:`Selection.noise`. :func:`graybox.els` accepts 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal, Sequence
 
 import numba as nb
@@ -69,9 +69,10 @@ from ..core._gram import (
     term_factors,
 )
 from ..core._regressors import check_structure_inputs, record_signals
-from ..core._validation import (as_1d_finite, check_choice, check_fields, check_int, check_mean_square, check_real,
+from ..core._validation import (as_1d_finite, check_bool, check_choice, check_fields, check_int, check_mean_square, check_real,
                                 check_theta, warn)
 from ._stopping import choose_model, stop_rule, FewerTermsError, StopRule
+from . import _centring
 from ._subset_search import search_sizes, SearchBudget, SubsetProblem
 
 __all__ = ["Selection", "frols", "CandidateWarning", "CRITERIA", "information_criterion"]
@@ -555,6 +556,7 @@ def frols(
     include: Sequence[Term | str] = (),
     method: Literal["auto", "mgs", "gram"] = "auto",
     search: Literal["greedy", "swap", "exact"] = "greedy",
+    centre: bool = False,
 ) -> Selection:
     """Select model terms by forward regression with orthogonal least squares (ERR).
 
@@ -626,6 +628,17 @@ def frols(
         Exact search is refused (``ValueError``, naming ``"swap"``) beyond 100 usable candidates;
         when it visits 200 000 nodes without finishing it returns the best subset found (at least
         as good as swap's), says so in :attr:`Selection.stop` and warns.
+    centre : bool, optional
+        Select on centred signals (default False: on the raw ones). The search runs on y and each
+        input minus their means over ``data``, and the chosen centred terms are expanded into the raw
+        monomials they imply: :attr:`Selection.structure` is their hierarchical closure (every
+        divisor of every chosen term, the constant included: more terms than were chosen), with
+        least-squares θ on the raw signals. The structure and the model's predictions are then the
+        same wherever the signals' zeros are (°C or K, gauge or absolute pressure), up to round-off.
+        ERR, RSS and the criterion curve are those of the closure on the centred signals (in the
+        closure's order: the chosen terms first); :attr:`Selection.stop` says what was chosen before
+        the closure; with ``search="swap"``/``"exact"`` :attr:`Selection.subsets` are the closures of
+        the best subsets, with their RSS on the centred signals. Not for Dask records.
 
     Returns
     -------
@@ -658,6 +671,9 @@ def frols(
     n_cand = len(process)
     if n_cand == 0:
         raise ValueError("the candidate structure has no process terms to select from")
+    if check_bool(centre, "centre"):
+        return _frols_centred(candidates, data, n_terms=n_terms, tol=tol, criterion=criterion, max_terms=max_terms,
+                              rank_tol=rank_tol, include=include, method=method, search=search)
     # each value first (a wrong type is named as such), then how they combine
     if tol is not None:
         tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
@@ -793,6 +809,26 @@ def frols(
         input_names=as_gram_records(data)[0].input_names,
         Ts=as_gram_records(data)[0].Ts,
     )
+
+
+def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
+    """frols(centre=True): select on the centred signals, close the choice under shifts, refit (see frols)."""
+    offsets = _centring.signal_offsets(data)
+    centred = _centring.centred_data(data, offsets)
+    sel = frols(candidates, centred, **options)
+    closed = _centring.closure(sel.structure).process
+    # the closure's own fit on the centred signals: its ERR, RSS and θ, the chosen terms first
+    fit = frols(closed + candidates.noise, centred, n_terms=len(closed), include=list(closed), rank_tol=options["rank_tol"],
+                method=options["method"], criterion=sel.criterion)
+    subsets, subset_rss = (), ()
+    if sel.subsets:
+        subsets = tuple(_centring.closure(S).process for S in sel.subsets)
+        subset_rss = np.array([_centring.least_squares(S, centred)[1] for S in subsets])
+    stop = (f"{sel.stop}; {len(sel.structure)} terms chosen on centred signals ({_centring.describe(offsets)}), "
+            f"closed under shifts: {len(closed)} terms")
+    return replace(fit, theta=_centring.raw_theta(closed, fit.theta, offsets), stop=stop,
+                   n_candidates=sel.n_candidates, skipped=sel.skipped, search=sel.search, subsets=subsets,
+                   subset_rss=subset_rss)
 
 
 # --------------------------------------------------------------------------------------

@@ -44,6 +44,7 @@ from ..core._records import Dataset, Record, as_records
 from ._forward_regression import CRITERIA, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
+from . import _centring
 from ..core._validation import (FrozenFrame, check_bool, check_choice, check_fields, check_int, check_mean_square,
                                 check_real, check_theta, frozen)
 
@@ -238,6 +239,7 @@ def semp(
     prune_tol: float = 0.0,
     rank_tol: float = 1e-7,
     threads: int = 1,
+    centre: bool = False,
 ) -> SEMPResult:
     """Select model terms by simulation error with pruning (SEMP, Piroddi & Spinelli 2003).
 
@@ -279,6 +281,14 @@ def semp(
         structure is collinear with it and is not tried at that step.
     threads : int
         Threads of the batched free runs.
+    centre : bool, optional
+        Search on centred signals (default False: on the raw ones): y and each input minus their
+        means over ``data``; the chosen centred terms are then expanded into the raw monomials they
+        imply, so :attr:`SEMPResult.structure` is their hierarchical closure (every divisor of every
+        chosen term, the constant included: more terms than were chosen), with least-squares θ on
+        the raw signals and :attr:`SEMPResult.score` its free run's MSE. The structure and the
+        model's free run are then the same wherever the signals' zeros are, up to round-off.
+        :attr:`SEMPResult.path` is the centred search's; :attr:`SEMPResult.stop` says what it chose.
 
     Returns
     -------
@@ -301,6 +311,9 @@ def semp(
         were left (the curve may still be falling).
     """
     opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
+    if check_bool(centre, "centre"):
+        return _semp_centred(candidates, data, n_terms=n_terms, tol=tol, criterion=criterion, max_terms=max_terms,
+                             include=include, prune=prune, prune_tol=prune_tol, rank_tol=rank_tol, threads=threads)
     sc = _Scorer(opt.process, as_records(data), opt.threads)
     # the size asked for (n_terms, an explicit max_terms) must fit the rows; the look-ahead past n_terms
     # and a default max_terms stop where the rows do (nobody asked for more: nothing said)
@@ -322,6 +335,24 @@ def semp(
     run = _Search(sc, opt)
     stop, capped = _grow(run)
     return _result(run, stop, capped)
+
+
+def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Dataset, **options) -> SEMPResult:
+    """semp(centre=True): search on the centred signals, close the choice under shifts, refit (see semp)."""
+    offsets = _centring.signal_offsets(data)
+    centred = _centring.centred_data(data, offsets)
+    res = semp(candidates, centred, **options)
+    closed = _centring.closure(res.structure).process
+    theta, _ = _centring.least_squares(closed, centred)
+    # the closure's free run on the centred signals, from the same samples and over the same rows as the search's
+    L = candidates.process.max_lag
+    recs = centred if isinstance(centred, list) else [centred]
+    model = Model(closed, theta, input_names=recs[0].input_names, Ts=recs[0].Ts)
+    err = np.concatenate([model.simulate(r, r.y[:L])[L:] - r.y[L:] for r in recs])
+    stop = (f"{res.stop}; {len(res.structure)} terms chosen on centred signals ({_centring.describe(offsets)}), "
+            f"closed under shifts: {len(closed)} terms")
+    return replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
+                   score=float(np.mean(err * err)), stop=stop)
 
 
 # --------------------------------------------------------------------------------------

@@ -1,0 +1,137 @@
+"""Selection on centred signals: the one home of ``centre=True`` (frols, semp, select_graybox).
+
+The candidate terms are monomials of the raw signals, so a greedy (or best-subset) pick depends on
+where each signal's zero is: y(k-1)u(k-1) is not (y(k-1) − c)(u(k-1) − d). With ``centre=True`` the
+search runs on the signals minus a reference (the identification records' mean of y and of each
+input), and each chosen centred term is then expanded into the raw monomials it implies. Those are
+its divisors (``(y − c)(u − d)`` needs ``yu``, ``y``, ``u`` and ``1``), so a chosen structure is
+replaced by its *hierarchical closure*: the smallest set of terms holding every divisor of every
+term. A closed set spans the same functions whatever the offsets, so the model stays a raw-signal
+NARX that every other part of the library handles, and its least-squares fit, free run and J_S do
+not depend on the offsets (up to round-off); the price is more terms than were chosen.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import replace
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..core._gram import is_dask_data
+from ..core._records import Dataset, Record, as_records
+from ..core._regressors import regressor_matrix
+from ..core._terms import Structure, Term
+
+
+def signal_offsets(data: object) -> dict[str, float]:
+    """The reference each signal is centred on: its mean over the identification records.
+
+    Parameters
+    ----------
+    data : Record, sequence of Record, or Dataset
+        Identification data (a Dataset contributes its ``ident`` record).
+
+    Returns
+    -------
+    dict
+        ``{"y": mean of y, name: mean of that input, ...}`` in engineering units, over every sample of
+        every record (pooled).
+    """
+    if is_dask_data(data):
+        raise ValueError("centre=True needs the records in memory (a DaskRecord is not centred); "
+                         "subtract the means yourself, or leave centre out")
+    records = as_records(data)
+    names = records[0].input_names
+    ys = np.concatenate([r.y for r in records])
+    us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
+    offsets = {"y": float(ys.mean())}
+    offsets.update({n: float(us[:, i].mean()) for i, n in enumerate(names)})
+    return offsets
+
+
+def _shift_record(rec: Record, offsets: Mapping[str, float]) -> Record:
+    d = np.array([offsets[n] for n in rec.input_names])
+    u = rec.u - (d[0] if rec.u.ndim == 1 else d)
+    return replace(rec, u=u, y=rec.y - offsets["y"])
+
+
+def centred_data(data: object, offsets: Mapping[str, float]) -> Record | list[Record]:
+    """The identification records with each signal minus its offset (new arrays; the data untouched)."""
+    records = as_records(data)
+    shifted = [_shift_record(r, offsets) for r in records]
+    return shifted[0] if isinstance(data, (Record, Dataset)) else shifted
+
+
+def _divisors(term: Term) -> list[Term]:
+    ranges = [range(p + 1) for _, _, p in term.factors]
+    out = []
+    for powers in itertools.product(*ranges):
+        out.append(Term(tuple((s, l, j) for (s, l, _), j in zip(term.factors, powers) if j)))
+    return out
+
+
+def closure(structure: Structure | Sequence[Term | str]) -> Structure:
+    """The hierarchical closure of a structure's process terms: every divisor of every term.
+
+    The terms given keep their order; the divisors they bring follow, smallest degree first (the
+    constant ``1`` is a divisor of every term). Noise terms are kept as they are, last.
+    """
+    st = structure if isinstance(structure, Structure) else Structure(structure)
+    process = [t for t in st if not t.is_noise]
+    seen = set(process)
+    added = sorted({d for t in process for d in _divisors(t)} - seen, key=Term.sort_key)
+    return Structure(process + added + [t for t in st if t.is_noise])
+
+
+def raw_theta(structure: Structure, theta: np.ndarray, offsets: Mapping[str, float]) -> np.ndarray:
+    """The parameters, on the raw signals, of a model fitted on the centred ones.
+
+    ``y(k) − c_y = Σ θ_j Π (x − c_x)`` expanded by the binomial theorem into the raw monomials; a
+    closed ``structure`` holds every one of them (``ValueError`` otherwise). Noise signals are not
+    shifted.
+    """
+    pos = {t: i for i, t in enumerate(structure)}
+    out = np.zeros(len(structure))
+    for t, th in zip(structure, np.asarray(theta, dtype=float)):
+        for powers in itertools.product(*[range(p + 1) for _, _, p in t.factors]):
+            coef = th
+            for (s, _, p), j in zip(t.factors, powers):
+                c = 0.0 if s == "e" else offsets[s]
+                if j < p:
+                    coef *= math.comb(p, j) * (-c) ** (p - j)
+            if coef == 0.0:
+                continue
+            d = Term(tuple((s, l, j) for (s, l, _), j in zip(t.factors, powers) if j))
+            if d not in pos:
+                raise ValueError(f"the structure is not closed under shifts: {t} needs {d}")
+            out[pos[d]] += coef
+    if offsets["y"] != 0.0:
+        if Term(()) not in pos:
+            raise ValueError("the structure is not closed under shifts: an offset of y needs the constant 1")
+        out[pos[Term(())]] += offsets["y"]
+    return out
+
+
+def least_squares(structure: Structure, records: Record | list[Record]) -> tuple[np.ndarray, float]:
+    """θ and residual sum of squares of ``structure`` fitted by least squares on ``records``.
+
+    Rows start at the structure's largest lag in each record and never straddle two records; the
+    columns are scaled to unit RMS for the solve.
+    """
+    recs = records if isinstance(records, list) else [records]
+    start = structure.max_lag
+    X = np.vstack([regressor_matrix(structure, r.u, r.y, start=start, input_names=r.input_names) for r in recs])
+    y = np.concatenate([r.y[start:] for r in recs])
+    scale = np.sqrt(np.mean(X * X, axis=0))
+    scale[scale == 0] = 1.0
+    theta = np.linalg.lstsq(X / scale, y, rcond=None)[0] / scale
+    r = y - X @ theta
+    return theta, float(r @ r)
+
+
+def describe(offsets: Mapping[str, float]) -> str:
+    """The offsets in words, for a result's ``stop``."""
+    return ", ".join(f"{s} − {c:.6g}" for s, c in offsets.items())
