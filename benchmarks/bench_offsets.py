@@ -7,7 +7,7 @@ bench_honest.py's six cases, every record and the static points shifted by offse
 y; 1e4 spreads on u; 1e4 spreads on y (search only). Per case, offset and option:
 
 - search: ``frols`` (greedy, BIC), ``frols(search="exact")`` (BIC; cases with at most 45 candidates)
-  and ``semp`` (BIC, up to 16 terms) on the identification record: the size chosen (centred terms and
+  and ``semp`` (BIC, up to 16 terms or the candidates) on the identification record: the size chosen (centred terms and
   the closure's terms), the least-squares model's free-run J_S on the validation and test records.
 - select: ``select_graybox`` black box (LS, ELS) and gray box (the case's band): the chosen row and
   its J_S on the test record (``JS_test``), one worker.
@@ -72,7 +72,7 @@ def search(names) -> list[dict]:
         for ku, ky in SEARCH_OFFSETS:
             data, test, cand, _ = _shift(case, ku, ky)
             runs = {"frols": lambda c: gb.frols(cand, data, criterion="bic", centre=c),
-                    "semp": lambda c: gb.semp(cand, data, criterion="bic", max_terms=16, centre=c)}
+                    "semp": lambda c: gb.semp(cand, data, criterion="bic", max_terms=min(16, n_cand), centre=c)}
             if n_cand <= 45:
                 runs["frols exact"] = lambda c: gb.frols(cand, data, criterion="bic", search="exact", centre=c)
             for how, fn in runs.items():
