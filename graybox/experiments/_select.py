@@ -680,6 +680,10 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
         st = _centring.closure(terms).process if centre else gb.Structure(terms)
         added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
         st = st + gb.Structure(added)
+        if centre:  # the static form's terms (u(k-1)^2 for Σ_{u^2}) bring their divisors too, or the set is not closed
+            closed = _centring.closure(st).process
+            added += [t for t in closed if t not in st]
+            st = closed
         key = frozenset(st)
         if key in seen:  # e.g. two SEMP sizes that the static terms complete to one structure
             if src not in seen[key]["source"].split(", "):
