@@ -123,6 +123,23 @@ def test_select_graybox_centred_is_invariant_under_offsets():
     assert (a.table["n_terms"] > a.table["size"]).any()  # the closures carry more terms than were searched
 
 
+def test_select_graybox_centred_gray_rows_are_invariant_under_offsets():
+    # the static form's terms (e.g. u(k-2)^2 for Σ_{u^2}) are closed too: every PE row, not only the structures
+    ub = np.linspace(-0.9, 0.9, 7)
+    yb = gb.Model(TRUE, THETA).static_curve(ub)
+    du, dy = 30 * IDENT.u.std(), 10 * IDENT.y.std()
+    data = gb.Dataset(IDENT, VALID, gb.StaticPoints(ub, yb))
+    moved = gb.Dataset(_shift(IDENT, du, dy), _shift(VALID, du, dy), gb.StaticPoints(ub + du, yb + dy))
+    kw = {"band": 0.01, "estimator": "pe", "sizes": [2, 3], "sources": ["frols"], "centre": True}
+    a, b = gb.select_graybox(CAND, data, **kw), gb.select_graybox(CAND, moved, **kw)
+    assert list(a.table.index) == list(b.table.index)
+    for row in a.table.index:
+        assert set(a.structure_of(row)) == set(b.structure_of(row))
+        assert set(a.structure_of(row)) == set(closure(a.structure_of(row)))  # closed, static terms included
+    np.testing.assert_allclose(b.table["JS_valid"], a.table["JS_valid"], rtol=1e-5)
+    np.testing.assert_allclose(b.table["JSF"], a.table["JSF"], rtol=1e-5, atol=1e-12)
+
+
 @pytest.mark.parametrize("bad", [1, "yes", None, np.array([True])])
 def test_centre_must_be_a_flag(bad):
     with pytest.raises(TypeError, match="centre must be True or False"):
