@@ -621,7 +621,7 @@ def _opt_choice(*choices: str):
 
 def _opt_reference(v: object, name: str) -> str | float:
     if isinstance(v, str):
-        return check_choice(v, name, ("ls", "els"))
+        return check_choice(v, name, (FREE_SIGMA_Y, "ls", "els"))  # "free": the estimators' default
     return check_real(v, name)
 
 
