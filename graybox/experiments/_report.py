@@ -105,14 +105,16 @@ def _checked_options(rule: str = RULES[0], band: float | Mapping[str, float] | N
     return None if band is None else check_real(band, "band", low=0, low_open=True)
 
 
-def _band_of(rows: pd.DataFrame, band: float | Mapping[str, float] | None, data: str) -> float:
+def _band_of(rows: pd.DataFrame | np.ndarray, band: float | Mapping[str, float] | None, data: str) -> float:
+    """J_SF's bound for ``rows`` of data set ``data`` (a frame, or their stored bands): ``band``'s, else the first
+    band stored on the rows."""
     if isinstance(band, Mapping):
         if data not in band:
             raise ValueError(f"band gives no value for data set {data!r}")
         return float(band[data])
     if band is not None:
         return float(band)
-    b = rows["band"].dropna()
+    b = pd.Series(rows["band"] if isinstance(rows, pd.DataFrame) else rows, dtype=float).dropna()
     if b.empty:
         raise ValueError(f"data set {data!r} has no band in the store (its static points carry no uncertainty, and "
                          "the spec gave it none): pass band=B, J_SF's bound in output units² (graybox grid report "
@@ -232,23 +234,27 @@ def leaderboard(
     """
     band = _checked_options(rule, band)
     df = _frame(results)
+    groups = df.groupby(_KEYS, sort=False)
+    cells_np = _Columns(df, ("status", "message", "band"))
     # every group's candidates and its best, in one pass; a group with none is revisited for its reasons
     if rule == "chosen":
         pool = df[df["status"] == "ok"]
         pool = pool.assign(n_params=_n_params(pool))
         counted = pool
     else:
-        bands = {d: _band_of(df[df["data"] == d], band, d) for d in dict.fromkeys(df["data"])}
+        # each group by its own cells' band: read with spec="all", a data set's cells carry the band of the
+        # spec that holds them, which two specs may give differently
+        bands = {key: _band_of(cells_np.of(key, "band"), band, key[0]) for key in groups.size().index}
         allc = _candidates(df)
         counted = allc[allc["failure"] == ""]  # a member whose fit failed is no model: not compared
-        inside = counted["JSF"].to_numpy(float) <= counted["data"].map(bands).to_numpy(float)
+        b_of = (pd.Series(list(bands.values()), index=pd.MultiIndex.from_tuples(list(bands), names=_KEYS))
+                .reindex(pd.MultiIndex.from_frame(counted[list(_KEYS)])).to_numpy(float)) if len(counted) else 0.0
+        inside = counted["JSF"].to_numpy(float) <= b_of
         pool = counted[inside & np.isfinite(counted["JS_valid"].to_numpy(float))].assign(in_band=True)
     # the first of each group by (J_S valid, J_SF), ties in the cells' order (a stable sort)
     firsts = pool.sort_values(["JS_valid", "JSF"], kind="stable").drop_duplicates(_KEYS)
     best = {(r.data, r.structure, r.variant): r for r in firsts.itertuples(index=False)}
     n_of = counted.groupby(_KEYS, sort=False).size().to_dict()
-    groups = df.groupby(_KEYS, sort=False)
-    cells_np = _Columns(df, ("status", "message"))
     members_np = None if rule == "chosen" else _Columns(allc, ("failure", "JSF", "lambda1", "seed"))
     sizes_np = _Columns(df.assign(n_params=_n_params(df)), ("n_params",))
     ok_of = (df["status"] == "ok").groupby([df[k] for k in _KEYS], sort=False).sum().to_dict()
@@ -266,7 +272,7 @@ def leaderboard(
             base.update(JS_valid=np.nan, JS_ident=np.nan, JSF=np.nan, fit_valid=np.nan,
                         n_params=sizes[0] if len(sizes) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan, in_band=False)
             base["reason"] = _no_model_reason((d, s, v), cells_np, members_np,
-                                              None if rule == "chosen" else bands[d], n)
+                                              None if rule == "chosen" else bands[(d, s, v)], n)
         base["candidates"] = n
         rows.append(base)
     out = pd.DataFrame(rows)
