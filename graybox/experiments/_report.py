@@ -114,12 +114,13 @@ def _band_of(rows: pd.DataFrame | np.ndarray, band: float | Mapping[str, float] 
         return float(band[data])
     if band is not None:
         return float(band)
-    b = pd.Series(rows["band"] if isinstance(rows, pd.DataFrame) else rows, dtype=float).dropna()
-    if b.empty:
+    b = np.asarray(rows["band"] if isinstance(rows, pd.DataFrame) else rows, dtype=float)
+    b = b[~np.isnan(b)]
+    if not b.size:
         raise ValueError(f"data set {data!r} has no band in the store (its static points carry no uncertainty, and "
                          "the spec gave it none): pass band=B, J_SF's bound in output units² (graybox grid report "
                          "--band B), or rank each cell's own choice with rule='chosen' (--rule chosen)")
-    return float(b.iloc[0])
+    return float(b[0])
 
 
 _CANDIDATE_COLUMNS = (*_KEYS, "seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params", "chosen",
