@@ -55,3 +55,19 @@ def test_leaderboard_judges_each_group_by_its_own_cells_band(tmp_path):
     for r in lb[lb["structure"].str.endswith("(spec 2)")].itertuples(index=False):
         want = two[two["structure"] == r.structure.replace(" (spec 2)", "")].loc[r.variant]
         assert r.JS_valid == want["JS_valid"] or (np.isnan(r.JS_valid) and np.isnan(want["JS_valid"]))
+
+
+def test_a_variant_s_key_says_where_sigma_y_comes_from():
+    """cls's and pe_pareto's default changed from reference='ls' to 'free' within graybox 0.2.6, and a cell's key
+    hashes the variant's content with the version: a store grown before the change held cells of an equality
+    variant without a reference option, estimated with the least-squares Σ*_y, that a run now reused as if they
+    were estimated with Σ_y free. The key now names the default it was run with (the same as an explicit
+    reference = "free"), so those cells are not reused; an explicit "ls" or a given sigma_y keep their own."""
+    eq = [{"type": "equality", "curve": "fit"}]
+    for est in ("cls", "pe"):
+        default = Variant("v", est, constraints=eq).content()
+        assert default == Variant("v", est, constraints=eq, options={"reference": "free"}).content()
+        assert default != Variant("v", est, constraints=eq, options={"reference": "ls"}).content()
+    given = [{"type": "equality", "curve": "fit", "sigma_y": 0.9}]
+    assert "reference" not in Variant("v", "cls", constraints=given).content()["options"]
+    assert "reference" not in Variant("v", "pe").content()["options"]  # no equality: no Σ*_y at all

@@ -1030,10 +1030,16 @@ class Variant:
 
     def content(self) -> dict:
         """What determines the estimate (the part a cell's key hashes)."""
+        options = dict(self.options)
+        if (self.estimator in ("cls", "pe") and "reference" not in options
+                and any(c["type"] == "equality" and c.get("sigma_y") is None for c in self.constraints)):
+            # the estimators' default Σ*_y (reference="free") said in the key: it was "ls" before, within the same
+            # graybox version, and a store's cells estimated with that default must not be reused as this one's
+            options["reference"] = FREE_SIGMA_Y
         return {"estimator": self.estimator, "constraints": _thaw(self.constraints),
                 "lambdas": None if self.lambdas is None else list(self.lambdas),
                 "decision": None if self.decision is None else self.decision.to_dict(),
-                "options": dict(self.options)}
+                "options": options}
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
