@@ -71,3 +71,33 @@ def test_a_variant_s_key_says_where_sigma_y_comes_from():
     given = [{"type": "equality", "curve": "fit", "sigma_y": 0.9}]
     assert "reference" not in Variant("v", "cls", constraints=given).content()["options"]
     assert "reference" not in Variant("v", "pe").content()["options"]  # no equality: no Σ*_y at all
+
+
+def test_pe_keeps_a_member_whose_free_sigma_y_reaches_one_as_a_failed_member():
+    """With Σ_y estimated, PE's static objective (the points' linear residual, (1 − Σ_y)(ȳ − H(ū)) under eq. (22))
+    shrinks as Σ_y → 1, so the members of small λ1 approach the degenerate Σ_y = 1. One such member refused the
+    whole sweep ('the estimated Σ_y = 1 leaves the model no stable equilibrium'): pe_pareto lost its λ1 = 0.5
+    member too. A sweep keeps a failed member with its reason and goes on."""
+    import numpy as np
+
+    import graybox as gb
+
+    true = gb.Structure(["y(k-1)", "y(k-1)u(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    theta = np.array([0.5, 0.15, 0.3, -0.05, 0.2])
+    rng = np.random.default_rng(1)
+    u = np.repeat(rng.uniform(0.0, 2.0, 21), 20)[:400]
+    rec = gb.Record(u, gb.Model(true, theta).simulate(u, np.zeros(1)) + 0.02 * rng.standard_normal(400))
+    ub = np.linspace(0.25, 1.75, 7)
+    pts = gb.StaticPoints(ub, gb.Model(true, theta).static_curve(ub) + 0.05 * rng.standard_normal(ub.size))
+    eq = gb.CurveEquality(gb.StaticCurve.fit(pts, degree=2))
+    from graybox.estimation._prediction_error import pe_members
+
+    thetas, failures = pe_members(true, rec, pts, lambdas=[1e-14, 0.5], constraints=eq, solver="closed")
+    assert list(failures) == [0] and "λ1 = 1e-14" in failures[0] and "Σ_y" in failures[0]
+    assert np.isnan(thetas[0]).all()
+    sy = gb.Model(true, thetas[1]).clusters()["Σy"]
+    assert 0.0 < sy < 1.0
+    ps = gb.pe_pareto(true, rec, pts, lambdas=[1e-14, 0.5], constraints=eq, solver="closed")
+    assert ps.to_frame()["failure"].iloc[0] != "" and ps.to_frame()["failure"].iloc[1] == ""
+    with pytest.raises(ValueError, match="Σ_y"):  # every member failed: nothing to return
+        gb.pe_thetas(true, rec, pts, lambdas=[1e-14], constraints=eq, solver="closed")

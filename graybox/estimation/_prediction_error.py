@@ -1012,8 +1012,10 @@ def pe_thetas(
         Some λ1 whose weights do not identify θ (``identified_by``): the records, with the static
         points where λ1 < 1 and the equality constraints, must have a stacked regression of full rank.
         An input held constant leaves θ free at λ1 = 1 (the static points carry no weight there); the
-        message names the λ1, the free terms and what data would identify them. :func:`pe_pareto`
-        keeps such a λ1 as a failed member instead.
+        message names the λ1, the free terms and what data would identify them. Some λ1 whose θ a
+        constraint's own check refuses (a free Σ_y of eq. (22) at 1 or above: as λ1 → 0 the points'
+        residual (1 − Σ_y)(ȳ − H(ū)) pulls Σ_y towards 1). :func:`pe_pareto` keeps such a λ1 as a
+        failed member instead.
     """
     thetas, failures = pe_members(structure, data, static, lambdas=lambdas, constraints=constraints, solver=solver,
                                   solver_options=solver_options, weights=weights, ubar=ubar, warm_start=warm_start,
@@ -1041,8 +1043,8 @@ def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: 
 
 def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, solver="clarabel", solver_options=None,
                weights="mse", ubar=None, warm_start=True, reference="free") -> tuple[np.ndarray, dict[int, str]]:
-    """:func:`pe_thetas`' θs (NaN rows for the members whose weights do not identify θ) and those members'
-    reasons, {index: reason}: what :func:`pe_pareto`, ``select_graybox``'s PE rows and the SE starts keep as
+    """:func:`pe_thetas`' θs (NaN rows for the members whose weights do not identify θ, or whose θ a constraint's
+    own check refuses, e.g. a free Σ_y of eq. (22) at 1) and those members' reasons, {index: reason}: what :func:`pe_pareto`, ``select_graybox``'s PE rows and the SE starts keep as
     failed members. ``ValueError`` (their reasons) when every member is such; the options are
     :func:`pe_thetas`'."""
     solver = _check_solver(solver)
@@ -1069,9 +1071,17 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
                 Z[i] = qp.solve(w1[i], w2[i], warm_start)
         qp.warn_inaccurate()
     thetas = Z / d.s
-    for th in thetas[ok]:
-        for c in cons:
-            c.after_solve(th, ctx)
+    # a member the constraints' own checks refuse is a failed member (a free Σ_y of eq. (22) reaches 1 as λ1 → 0,
+    # where the points' linear residual (1 − Σ_y)(ȳ − H(ū)) vanishes): the sweep goes on
+    for i in np.flatnonzero(ok):
+        try:
+            for c in cons:
+                c.after_solve(thetas[i], ctx)
+        except ValueError as exc:
+            failures[int(i)] = f"λ1 = {lam[i]:g}: {exc}"
+            thetas[i] = np.nan
+    if len(failures) == lam.size:
+        raise ValueError("; ".join(failures[i] for i in sorted(failures)))
     return thetas, failures
 
 
