@@ -1044,9 +1044,9 @@ def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: 
 def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, solver="clarabel", solver_options=None,
                weights="mse", ubar=None, warm_start=True, reference="free") -> tuple[np.ndarray, dict[int, str]]:
     """:func:`pe_thetas`' θs (NaN rows for the members whose weights do not identify θ, or whose θ a constraint's
-    own check refuses, e.g. a free Σ_y of eq. (22) at 1) and those members' reasons, {index: reason}: what :func:`pe_pareto`, ``select_graybox``'s PE rows and the SE starts keep as
-    failed members. ``ValueError`` (their reasons) when every member is such; the options are
-    :func:`pe_thetas`'."""
+    own check refuses, e.g. a free Σ_y of eq. (22) at 1) and those members' reasons, {index: reason}: what
+    :func:`pe_pareto`, ``select_graybox``'s PE rows and the SE starts keep as failed members. ``ValueError``
+    (their reasons) when every member is such; the options are :func:`pe_thetas`'."""
     solver = _check_solver(solver)
     lam = check_lambdas(PE_LAMBDAS if lambdas is None else lambdas)
     warm_start = check_bool(warm_start, "warm_start")
