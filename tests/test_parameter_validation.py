@@ -397,6 +397,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
                                         "static_surface", "static_surface_gain")},
     ("Candidates", "constant"): (True,),
     ("semp", "prune"): (True,),
+    **{(k, "centre"): (True,) for k in ("frols", "semp", "select_graybox")},  # select on centred signals
     ("decimate", "antialias"): (True,),
     ("ParetoSet.to_frame", "params"): (True,),
     ("plot_pareto", "log"): (True,),
