@@ -66,3 +66,12 @@ def test_the_cli_takes_max_structures(store, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "graybox", "grid", "report", str(store), "--out", str(tmp_path),
                           "--max-structures", "0"], capture_output=True, text=True)
     assert bad.returncode == 2 and "a number of structures is >= 1, got 0" in bad.stderr
+
+
+def test_structures_are_names_each_given_once(store):
+    with pytest.raises(TypeError, match=r"structures\[…\] must be a str, got 1"):
+        gx.plot_heatmap(store, rule="chosen", structures=["s0", 1])
+    with pytest.raises(TypeError, match=r"structures\[…\] must be a str"):
+        gx.plot_fronts(store, structures=[None])
+    with pytest.raises(ValueError, match=r"structures names \['s1'\] more than once"):
+        gx.plot_fronts(store, structures=["s1", "s0", "s1"])

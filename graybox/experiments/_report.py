@@ -30,7 +30,7 @@ from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarForm
 from matplotlib.figure import Figure
 
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
-                                check_sequence)
+                                check_sequence, check_str)
 from ._cell import STATUSES
 from ._store import compare_results, encode_value, load_results
 
@@ -454,6 +454,10 @@ def _known_structures(structures: Sequence[str], every: Sequence[str], data: str
     names = list(check_sequence(structures, "structures", "a sequence of structure names"))
     if not names:
         raise ValueError("structures must name at least one structure (None: every structure)")
+    for n in names:
+        check_str(n, "structures[…]")
+    if len(set(names)) < len(names):  # a panel or a row drawn twice says nothing more
+        raise ValueError(f"structures names {sorted({n for n in names if names.count(n) > 1})} more than once")
     unknown = [s for s in names if s not in set(every)]
     if unknown:
         raise ValueError(f"structures holds {unknown}: no such structure in data set {data!r}; it has {list(every)}")
