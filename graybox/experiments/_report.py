@@ -128,14 +128,13 @@ _CANDIDATE_COLUMNS = (*_KEYS, "seed", "lambda1", "JS_ident", "JS_valid", "JSF", 
 
 
 def _candidates(g: pd.DataFrame) -> pd.DataFrame:
-    """Every model of the cells of ``g`` (its (data, structure, variant) in the first columns): Pareto
-    members and single models (one frame built from columns, in one pass over every cell: a frame per
-    row, or per group, made the leaderboard's time)."""
+    """Every model of the cells of ``g`` (its (data, structure, variant) in the first columns; ``n_params``
+    completed by :func:`_n_params`): Pareto members and single models (one frame built from columns, in one pass
+    over every cell: a frame per row, or per group, made the leaderboard's time)."""
     cols: dict[str, list] = {k: [] for k in _CANDIDATE_COLUMNS}
-    sizes = _n_params(g).tolist()
-    for r, n_p in zip(g[[*_KEYS, "members", "lambda1", "seed", "status", "JS_ident", "JS_valid", "JSF",
-                         "fit_valid"]].itertuples(index=False), sizes):
-        m = r.members
+    for r in g[[*_KEYS, "members", "lambda1", "seed", "status", "JS_ident", "JS_valid", "JSF", "fit_valid",
+                "n_params"]].itertuples(index=False):
+        m, n_p = r.members, r.n_params
         if isinstance(m, Mapping) and len(m.get("JSF", ())):
             K = len(m["JSF"])
             lam = np.asarray(m["lambda1"], float)
@@ -235,17 +234,17 @@ def leaderboard(
     """
     band = _checked_options(rule, band)
     df = _frame(results)
-    groups = df.groupby(_KEYS, sort=False)
-    cells_np = _Columns(df, ("status", "message", "band"))
+    df = df.assign(n_params=_n_params(df))
+    sizes = df.groupby(_KEYS, sort=False).size()
+    cells_np = _Columns(df, ("status", "message", "band", "n_params"))
     # every group's candidates and its best, in one pass; a group with none is revisited for its reasons
     if rule == "chosen":
         pool = df[df["status"] == "ok"]
-        pool = pool.assign(n_params=_n_params(pool))
         counted = pool
     else:
         # each group by its own cells' band: read with spec="all", a data set's cells carry the band of the
         # spec that holds them, which two specs may give differently
-        bands = {key: _band_of(cells_np.of(key, "band"), band, key[0]) for key in groups.size().index}
+        bands = {key: _band_of(cells_np.of(key, "band"), band, key[0]) for key in sizes.index}
         allc = _candidates(df)
         counted = allc[allc["failure"] == ""]  # a member whose fit failed is no model: not compared
         b_of = (pd.Series(list(bands.values()), index=pd.MultiIndex.from_tuples(list(bands), names=_KEYS))
@@ -257,11 +256,10 @@ def leaderboard(
     best = {(r.data, r.structure, r.variant): r for r in firsts.itertuples(index=False)}
     n_of = counted.groupby(_KEYS, sort=False).size().to_dict()
     members_np = None if rule == "chosen" else _Columns(allc, ("failure", "JSF", "lambda1", "seed"))
-    sizes_np = _Columns(df.assign(n_params=_n_params(df)), ("n_params",))
-    ok_of = (df["status"] == "ok").groupby([df[k] for k in _KEYS], sort=False).sum().to_dict()
     rows = []
-    for (d, s, v), cells in groups.size().items():
-        base = {"data": d, "structure": s, "variant": v, "cells": int(cells), "ok": int(ok_of[(d, s, v)])}
+    for (d, s, v), cells in sizes.items():
+        base = {"data": d, "structure": s, "variant": v, "cells": int(cells),
+                "ok": int((cells_np.of((d, s, v), "status") == "ok").sum())}
         n = int(n_of.get((d, s, v), 0))
         hit = best.get((d, s, v))
         if hit is not None:
@@ -269,9 +267,9 @@ def leaderboard(
                                                              "seed", "lambda1", "in_band")})
             base["reason"] = ""
         else:
-            sizes = pd.unique(pd.Series(sizes_np.of((d, s, v), "n_params")).dropna())
+            n_ps = pd.unique(pd.Series(cells_np.of((d, s, v), "n_params")).dropna())
             base.update(JS_valid=np.nan, JS_ident=np.nan, JSF=np.nan, fit_valid=np.nan,
-                        n_params=sizes[0] if len(sizes) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan, in_band=False)
+                        n_params=n_ps[0] if len(n_ps) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan, in_band=False)
             base["reason"] = _no_model_reason((d, s, v), cells_np, members_np,
                                               None if rule == "chosen" else bands[(d, s, v)], n)
         base["candidates"] = n
