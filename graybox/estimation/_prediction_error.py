@@ -52,12 +52,12 @@ from ..static._constraints import (
     static_inputs,
     static_rows,
 )
-from ..static._curves import StaticCurve
+from ..static._curves import StaticCurve, fit_on_powers
 from ._extended_least_squares import els
 from ..static._surfaces import StaticSurface
 from ..static._form_check import varied_inputs
 from ..core._least_squares import (REMEDIES, check_identified, check_rows, column_scales, free_directions, output_scale,
-                                   rank_tolerance, scaled_lstsq, spread_scale)
+                                   rank_tolerance, spread_scale)
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
@@ -864,11 +864,9 @@ def numerator_curve(cm, points: StaticPoints) -> StaticCurve:
             f"fewer static points than the constraints need: eq. (22) for this structure matches a degree-{degree} "
             f"curve in the powers {powers} of ū, which needs at least {len(powers)} points; got {len(points)}"
         )
-    if len(powers) in (0, degree + 1) or len(points) == 1:  # every power (or none), or StaticCurve.fit's refusal
+    if not powers or len(points) == 1:  # no numerator cluster, or one level: StaticCurve.fit's own answer
         return StaticCurve.fit(points, degree=degree)
-    c = np.zeros(degree + 1)
-    c[powers] = scaled_lstsq(points.ubar[:, None] ** np.array(powers), points.ybar)
-    return StaticCurve(c, (float(points.ubar.min()), float(points.ubar.max())), f"fit to {points.name}")
+    return fit_on_powers(points, powers)
 
 
 def numerator_surface(cm, points: StaticPoints) -> StaticSurface:

@@ -11,7 +11,7 @@ from ..core._records import StaticPoints, outside_range
 from ..core._validation import as_1d_finite, check_int, check_real, check_str, real_array
 from ..core._reprs import short_repr
 
-__all__ = ["StaticCurve"]
+__all__ = ["StaticCurve", "fit_on_powers"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,20 +72,7 @@ class StaticCurve:
                              "needs points at two levels or more (its domain is their range)")
         if len(points) < degree + 1:
             raise ValueError(f"fitting degree {degree} needs at least {degree + 1} static points, got {len(points)}")
-        V = np.vander(points.ubar, degree + 1, increasing=True)
-        try:
-            c = scaled_lstsq(V, points.ybar)
-        except ValueError as err:
-            # distinct levels (StaticPoints has no duplicates) determine the polynomial, so the rank was lost to
-            # round-off: powers of ū far from zero over a narrow range agree to 16 digits (the curve, like the
-            # model's clusters Σ_{u^m}, is in powers of ū itself)
-            lo, hi = float(points.ubar.min()), float(points.ubar.max())
-            raise ValueError(
-                f"StaticCurve.fit: the powers ū⁰ … ū^{degree} of {points.name} (ū in [{lo:.12g}, {hi:.12g}]) are "
-                "collinear to round-off, as powers of an input far from zero over a narrow range are: express the "
-                "input nearer zero (e.g. minus a reference level, in the records too) or fit a lower degree"
-            ) from err
-        return cls(c, (float(points.ubar.min()), float(points.ubar.max())), name or f"fit to {points.name}")
+        return fit_on_powers(points, range(degree + 1), name)
 
     @property
     def degree(self) -> int:
@@ -123,3 +110,40 @@ class StaticCurve:
         return StaticPoints(ub, self(ub), name=self.name, input_names=(input_name,))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
+
+
+def fit_on_powers(points: StaticPoints, powers, name: str | None = None) -> StaticCurve:
+    """Least-squares polynomial in the given powers of ū (the others 0) through static points of one input.
+
+    Parameters
+    ----------
+    points : StaticPoints
+        At least two levels of one input, at least as many as ``powers`` (the caller checks).
+    powers : iterable of int
+        Ascending powers of ū the curve has, e.g. ``range(3)`` for a quadratic, ``[0, 2]`` for κ + β ū².
+    name : str, optional
+        The curve's label (default ``"fit to <points' name>"``).
+
+    Returns
+    -------
+    StaticCurve
+        Over the points' ū range (its domain).
+    """
+    powers = list(powers)
+    degree = max(powers, default=0)
+    V = np.vander(points.ubar, degree + 1, increasing=True)[:, powers]
+    c = np.zeros(degree + 1)
+    try:
+        c[powers] = scaled_lstsq(V, points.ybar)
+    except ValueError as err:
+        # distinct levels (StaticPoints has no duplicates) determine the polynomial, so the rank was lost to
+        # round-off: powers of ū far from zero over a narrow range agree to 16 digits (the curve, like the
+        # model's clusters Σ_{u^m}, is in powers of ū itself)
+        lo, hi = float(points.ubar.min()), float(points.ubar.max())
+        which = f"ū⁰ … ū^{degree}" if powers == list(range(degree + 1)) else f"ū^{powers}"
+        raise ValueError(
+            f"StaticCurve.fit: the powers {which} of {points.name} (ū in [{lo:.12g}, {hi:.12g}]) are collinear to "
+            "round-off, as powers of an input far from zero over a narrow range are: express the input nearer zero "
+            "(e.g. minus a reference level, in the records too) or fit a lower degree"
+        ) from err
+    return StaticCurve(c, (float(points.ubar.min()), float(points.ubar.max())), name or f"fit to {points.name}")
