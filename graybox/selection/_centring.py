@@ -22,7 +22,8 @@ import numpy as np
 
 from ..core._gram import is_dask_data
 from ..core._records import Dataset, Record, as_records
-from ..core._regressors import regressor_matrix
+from ..core._least_squares import column_scales
+from ..core._regressors import stacked_regressors
 from ..core._terms import Structure, Term
 
 
@@ -118,15 +119,11 @@ def raw_theta(structure: Structure, theta: np.ndarray, offsets: Mapping[str, flo
 def least_squares(structure: Structure, records: Record | list[Record]) -> tuple[np.ndarray, float]:
     """θ and residual sum of squares of ``structure`` fitted by least squares on ``records``.
 
-    Rows start at the structure's largest lag in each record and never straddle two records; the
-    columns are scaled to unit RMS for the solve.
+    Rows start at the structure's largest lag in each record and never straddle two records
+    (:func:`~graybox.stacked_regressors`); the columns are scaled to unit RMS for the solve.
     """
-    recs = records if isinstance(records, list) else [records]
-    start = structure.max_lag
-    X = np.vstack([regressor_matrix(structure, r.u, r.y, start=start, input_names=r.input_names) for r in recs])
-    y = np.concatenate([r.y[start:] for r in recs])
-    scale = np.sqrt(np.mean(X * X, axis=0))
-    scale[scale == 0] = 1.0
+    X, y = stacked_regressors(structure, records)
+    scale = column_scales(X)
     theta = np.linalg.lstsq(X / scale, y, rcond=None)[0] / scale
     r = y - X @ theta
     return theta, float(r @ r)
