@@ -129,6 +129,7 @@ def least_squares(structure: Structure, records: Record | list[Record]) -> tuple
     return theta, float(r @ r)
 
 
-def describe(offsets: Mapping[str, float]) -> str:
-    """The offsets in words, for a result's ``stop``."""
-    return ", ".join(f"{s} − {c:.6g}" for s, c in offsets.items())
+def stop_note(stop: str, chosen: int, closed: int, offsets: Mapping[str, float]) -> str:
+    """A centred search's ``stop``: the search's own, what it chose on which centred signals, and the closure."""
+    signals = ", ".join(f"{s} − {c:.6g}" for s, c in offsets.items())
+    return f"{stop}; {chosen} terms chosen on centred signals ({signals}), closed under shifts: {closed} terms"

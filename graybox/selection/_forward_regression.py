@@ -824,8 +824,7 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     if sel.subsets:
         subsets = tuple(_centring.closure(S).process for S in sel.subsets)
         subset_rss = np.array([_centring.least_squares(S, centred)[1] for S in subsets])
-    stop = (f"{sel.stop}; {len(sel.structure)} terms chosen on centred signals ({_centring.describe(offsets)}), "
-            f"closed under shifts: {len(closed)} terms")
+    stop = _centring.stop_note(sel.stop, len(sel.structure), len(closed), offsets)
     return replace(fit, theta=_centring.raw_theta(closed, fit.theta, offsets), stop=stop,
                    n_candidates=sel.n_candidates, skipped=sel.skipped, search=sel.search, subsets=subsets,
                    subset_rss=subset_rss)

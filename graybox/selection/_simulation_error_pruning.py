@@ -349,8 +349,7 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     recs = centred if isinstance(centred, list) else [centred]
     model = Model(closed, theta, input_names=recs[0].input_names, Ts=recs[0].Ts)
     err = np.concatenate([model.simulate(r, r.y[:L])[L:] - r.y[L:] for r in recs])
-    stop = (f"{res.stop}; {len(res.structure)} terms chosen on centred signals ({_centring.describe(offsets)}), "
-            f"closed under shifts: {len(closed)} terms")
+    stop = _centring.stop_note(res.stop, len(res.structure), len(closed), offsets)
     return replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
                    score=float(np.mean(err * err)), stop=stop)
 
