@@ -223,18 +223,19 @@ def refuse_non_real(x: object, name: str) -> None:
 
 
 def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
-    """``x`` as a float array, or ``TypeError`` naming ``name`` for text, complex values, booleans, None or
-    other objects (numpy's own conversion parses text, drops an imaginary part, reads True as 1 and None
-    as NaN, and its errors name neither the argument nor the problem)."""
+    """``x`` as a new float array: :func:`float_array` after refusing (``TypeError`` naming ``name``) text, complex
+    values, dates, booleans and None anywhere inside (numpy's own conversion parses text, drops an imaginary part,
+    reads True as 1 and None as NaN, and its errors name neither the argument nor the problem); a ragged nesting
+    of numbers is a ``ValueError`` as there."""
     refuse_non_real(x, name)
-    try:
-        raw = np.asarray(x)
-        # None inside a list too: astype(float) reads it as NaN, which callers take for a diverged run
-        if x is None or raw.dtype == bool or (raw.dtype == object and any(v is None for v in raw.flat)):
-            raise TypeError
-        return raw.astype(float)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be {what}, got {short_value(x)}") from None
+    raw = np.asarray(x, dtype=object) if isinstance(x, (list, tuple)) else x
+    # None inside a list too: a float conversion reads it as NaN, which callers take for a diverged run
+    bad = x is None or isinstance(x, (bool, np.bool_)) or getattr(raw, "dtype", None) == bool
+    if not bad and isinstance(raw, np.ndarray) and raw.dtype == object:
+        bad = any(v is None or isinstance(v, (bool, np.bool_)) for v in raw.flat)
+    if bad:
+        raise TypeError(f"{name} must be {what}, got {short_value(x)}")
+    return float_array(x, name, what)
 
 
 def float_array(x: object, name: str, what: str = "an array of numbers") -> np.ndarray:
