@@ -37,7 +37,8 @@ class GridRun:
     ran : int
         Cells run now.
     skipped : int
-        Cells the store already held (reused, not run again).
+        Cells not run now: the store held them (reused), or another run on the store made
+        them while this one waited (its notes say how many).
     counts : mapping str -> int
         The grid's cells in the store by status (ok, infeasible, diverged, failed).
     executor : str
@@ -104,8 +105,10 @@ def run_grid(
     store : path
         The SQLite store (created if missing, grown if not). A store whose data set of the same
         name holds other data, a store of a newer graybox, a damaged file or a file that is not
-        a graybox store is refused and left untouched. Another run may write into it meanwhile: a
-        cell it wrote first is kept (the run's notes say how many).
+        a graybox store is refused and left untouched. Another run may use it meanwhile (another
+        process, notebook or host): each run takes the cells it starts, and a run does not start
+        a cell another live run has taken but waits for it (and runs it itself if that run stops
+        or dies first), so no cell runs twice; the notes say how many cells the other run made.
     executor : {"inprocess", "processes", "dask"}, optional
         Default: "dask" when ``client``, ``scheduler`` or ``workers`` is given, else "inprocess".
     workers : int, optional
@@ -169,30 +172,68 @@ def run_grid(
                 todo.append(c)
             seen.add(c.key)
         notes = _notes(st, cells, done, version)
-        say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - len(todo)} reused from {store}, {len(todo)} to run")
+        elsewhere = st.claim([c.key for c in todo])  # what another run on this store has taken, it runs
+        waiting = {c.key: c for c in todo if c.key in elsewhere}
+        todo = [c for c in todo if c.key not in waiting]
+        say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - len(todo) - len(waiting)} reused from {store}, "
+            f"{len(todo)} to run" + (f", {len(waiting)} being run by another run on this store "
+                                     f"({', '.join(sorted(set(elsewhere.values())))}): this one waits for them"
+                                     if waiting else ""))
         for n in notes:
             say(f"  {n}")
-        bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo))
-        ran = taken = 0
+        bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo) - len(waiting))
+        ran = taken = by_others = 0
         try:
-            for row in ex.run(todo, by_hash, log=say):
-                if row.get("version") != version:
-                    row = failed_row(next(c for c in todo if c.key == row["key"]),
-                                     f"the worker runs graybox {row.get('version')}, the driver {version}: "
-                                     "install the same graybox on every worker")
-                taken += not st.write(row, replace=row["key"] in done)
-                ran += 1
-                bar.update(1)
+            while True:
+                for row in ex.run(todo, by_hash, log=say):
+                    if row.get("version") != version:
+                        row = failed_row(next(c for c in todo if c.key == row["key"]),
+                                         f"the worker runs graybox {row.get('version')}, the driver {version}: "
+                                         "install the same graybox on every worker")
+                    taken += not st.write(row, replace=row["key"] in done)
+                    ran += 1
+                    bar.update(1)
+                if not waiting:
+                    break
+                todo, finished = _wait_for_others(st, waiting, done, retry_failed)
+                by_others += len(finished)
+                bar.update(len(finished))
         finally:
             bar.close()
+        if by_others:
+            notes.append(f"{by_others} cell(s) were run meanwhile by another run on this store "
+                         f"({', '.join(sorted(set(elsewhere.values())))}); this one waited for them")
         if taken:
             notes.append(f"{taken} cell(s) run now were written meanwhile by another run on this store: "
                          "its rows are kept")
         counts = st.counts()
         spec_id = st.spec_id
-    return GridRun(str(Path(store)), g.name, len(cells), ran, len(cells) - len(todo),
+    return GridRun(str(Path(store)), g.name, len(cells), ran, len(cells) - ran,
                    FrozenMap({s: counts.get(s, 0) for s in STATUSES}), ex.name, time.perf_counter() - t0,
                    spec_id, tuple(notes))
+
+
+#: Seconds between two looks at the store while another run finishes cells this one waits for.
+POLL_SECONDS = 0.5
+
+
+def _wait_for_others(st: ResultStore, waiting: dict, done: Mapping[str, str], retry_failed: bool) -> tuple[list, list]:
+    """Wait until another run releases some of the ``waiting`` cells (it wrote them, stopped or died); remove
+    them from ``waiting``; return (those this run must run itself, taken; those the other run finished)."""
+    while True:
+        time.sleep(POLL_SECONDS)
+        held = st.claim(list(waiting))  # this run takes those no live run holds any more
+        free = [k for k in waiting if k not in held]
+        if free:
+            break
+    statuses = st.statuses()
+    # a row there: the other run wrote it (for a retried failed cell, a row other than the one this run saw)
+    finished = [k for k in free if k in statuses and not (retry_failed and k in done and statuses[k] == "failed")]
+    st.unclaim(finished)
+    todo = [waiting.pop(k) for k in free if k not in set(finished)]
+    for k in finished:
+        waiting.pop(k)
+    return todo, finished
 
 
 def _by_hash(cells, datasets: Mapping[str, gb.Dataset]) -> dict[str, gb.Dataset]:

@@ -20,7 +20,10 @@ import datetime
 import json
 import os
 import re
+import secrets
+import socket
 import sqlite3
+import time
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -70,6 +73,33 @@ SPEC_CELLS: dict[str, str] = {
     "structure_hash": "TEXT NOT NULL",
     "variant_hash": "TEXT NOT NULL",
 }
+
+
+#: The drivers running into the store now (table ``drivers``; a row per run, gone when it ends).
+DRIVERS: dict[str, str] = {"owner": "TEXT PRIMARY KEY", "host": "TEXT NOT NULL", "pid": "INTEGER NOT NULL",
+                           "beat": "REAL NOT NULL"}
+#: The cells a running driver has taken (table ``claims``): no other driver starts them.
+CLAIMS: dict[str, str] = {"key": "TEXT PRIMARY KEY", "owner": "TEXT NOT NULL"}
+#: Seconds without a sign of life after which a driver on another host is taken for dead (on this host
+#: the process itself is asked); a live driver's cells would then be run twice, which costs time only.
+STALE_SECONDS = 900.0
+
+
+def _alive(host: str, pid: int, beat: float, now: float) -> bool:
+    """Whether the driver that wrote a ``drivers`` row still runs."""
+    if host != socket.gethostname() or os.name != "posix":  # os.kill(pid, 0) would end a process on Windows
+        return now - beat < STALE_SECONDS
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    try:  # a killed driver its parent has not reaped yet still answers: Linux says it is a zombie
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            return f.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except (OSError, IndexError):
+        return True
 
 
 class StoreError(ValueError):
@@ -221,6 +251,7 @@ class ResultStore:
         self.spec_id = spec_id
         self.new_spec = new_spec
         self.known_data = dict(known_data)
+        self._owner: str | None = None
 
     @classmethod
     def open(cls, path: str | os.PathLike, *, grid_name: str, fingerprint: str, spec: Mapping[str, Any],
@@ -302,6 +333,53 @@ class ResultStore:
             raise
         return cls(p, conn, meta, spec_id, new, known)
 
+    def claim(self, keys: Sequence[str]) -> dict[str, str]:
+        """Take the cells of ``keys`` for this run, but those a live driver of another run has taken.
+
+        Returns those, each with its driver in words ("pid 123 on host h"). A driver that is gone
+        (killed, or silent for :data:`STALE_SECONDS` on another host) loses its cells. A cell's
+        claim ends when its row is written, and every claim when the store is closed.
+        """
+        host, pid, now = socket.gethostname(), os.getpid(), time.time()
+        self._conn.execute("BEGIN IMMEDIATE")
+        try:
+            self._conn.execute(_table("drivers", DRIVERS).replace("CREATE TABLE", "CREATE TABLE IF NOT EXISTS"))
+            self._conn.execute(_table("claims", CLAIMS).replace("CREATE TABLE", "CREATE TABLE IF NOT EXISTS"))
+            if self._owner is None:
+                self._owner = secrets.token_hex(8)
+            self._conn.execute("INSERT OR REPLACE INTO drivers VALUES (?, ?, ?, ?)", (self._owner, host, pid, now))
+            drivers = self._conn.execute("SELECT owner, host, pid, beat FROM drivers").fetchall()
+            gone = [(o,) for o, h, p, b in drivers if o != self._owner and not _alive(h, p, b, now)]
+            self._conn.executemany("DELETE FROM drivers WHERE owner = ?", gone)
+            self._conn.execute("DELETE FROM claims WHERE owner NOT IN (SELECT owner FROM drivers)")
+            self._conn.executemany("INSERT OR IGNORE INTO claims VALUES (?, ?)", [(k, self._owner) for k in keys])
+            who = {o: f"pid {p} on host {h}" for o, h, p, _ in drivers}
+            held = dict(self._conn.execute("SELECT key, owner FROM claims WHERE owner != ?", (self._owner,)))
+        except BaseException:
+            self._conn.execute("ROLLBACK")
+            raise
+        self._conn.execute("COMMIT")
+        return {k: who[held[k]] for k in keys if k in held}
+
+    def unclaim(self, keys: Sequence[str] = ()) -> None:
+        """End this run's claims on ``keys`` (none given: all of them, and the run's ``drivers`` row)."""
+        if self._owner is None:
+            return
+        self._conn.execute("BEGIN IMMEDIATE")
+        try:
+            if keys:
+                self._conn.executemany("DELETE FROM claims WHERE key = ? AND owner = ?",
+                                       [(k, self._owner) for k in keys])
+            else:
+                self._conn.execute("DELETE FROM claims WHERE owner = ?", (self._owner,))
+                self._conn.execute("DELETE FROM drivers WHERE owner = ?", (self._owner,))
+        except BaseException:
+            self._conn.execute("ROLLBACK")
+            raise
+        self._conn.execute("COMMIT")
+        if not keys:
+            self._owner = None
+
     def statuses(self) -> dict[str, str]:
         """Status of every cell the store holds, by key."""
         return dict(self._conn.execute("SELECT key, status FROM cells").fetchall())
@@ -318,6 +396,9 @@ class ResultStore:
         try:
             cur = self._conn.execute(f"{verb} INTO cells ({', '.join(COLUMNS)}) "
                                      f"VALUES ({', '.join('?' * len(COLUMNS))})", values)
+            if self._owner is not None:  # the cell is no longer taken, and this run is alive
+                self._conn.execute("DELETE FROM claims WHERE key = ? AND owner = ?", (row.get("key"), self._owner))
+                self._conn.execute("UPDATE drivers SET beat = ? WHERE owner = ?", (time.time(), self._owner))
         except BaseException:
             self._conn.execute("ROLLBACK")
             raise
@@ -335,8 +416,13 @@ class ResultStore:
             "GROUP BY status", (self.spec_id,)).fetchall())
 
     def close(self) -> None:
-        """Close the connection."""
-        self._conn.close()
+        """End this run's claims and close the connection."""
+        try:
+            self.unclaim()
+        except sqlite3.Error:  # closing must not fail on a store it can no longer write: the claims die with the run
+            pass
+        finally:
+            self._conn.close()
 
     def __enter__(self) -> "ResultStore":
         return self
