@@ -4,6 +4,7 @@ waits for the other's cells and runs them itself when that run stops or dies (a 
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -57,6 +58,16 @@ def _open(store: Path, g, cells) -> ResultStore:
                             version=gb.__version__)
 
 
+def _claiming_driver(spec: Path, store: Path) -> subprocess.Popen:
+    """Another process that opens the store, takes every cell of the spec, prints "claimed" and sleeps."""
+    code = (f"import sys, time\nfrom pathlib import Path\nsys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+            f"from test_grid_claims import _open\nfrom graybox import experiments as gx\n"
+            f"g = gx.Grid.from_toml({str(spec)!r})\nc = g.cells(g.load_data())\n"
+            f"st = _open(Path({str(store)!r}), g, c)\nassert st.claim([x.key for x in c]) == {{}}\n"
+            "print('claimed', flush=True)\ntime.sleep(120)\n")
+    return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
 def test_a_cell_one_run_holds_is_not_given_to_another_until_written_or_released(grid, tmp_path):
     _, g, data, cells = grid
     keys = [c.key for c in cells]
@@ -80,12 +91,7 @@ def test_the_cells_of_a_killed_run_are_free_even_before_it_is_reaped(grid, tmp_p
     _, g, _, cells = grid
     store = tmp_path / "s.sqlite"
     _open(store, g, cells).close()
-    code = (f"import os, signal, sys\nsys.path.insert(0, {str(Path(__file__).parent)!r})\n"
-            f"from test_grid_claims import _open\nfrom graybox import experiments as gx\n"
-            f"g = gx.Grid.from_toml({str(tmp_path / 'spec.toml')!r})\nc = g.cells(g.load_data())\n"
-            f"st = _open(__import__('pathlib').Path({str(store)!r}), g, c)\nassert st.claim([x.key for x in c]) == {{}}\n"
-            "print('claimed', flush=True)\nimport time\ntime.sleep(120)\n")
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = _claiming_driver(tmp_path / "spec.toml", store)
     st = None
     try:
         assert proc.stdout.readline().strip() == "claimed", proc.stderr.read()
@@ -147,12 +153,7 @@ def test_a_run_takes_over_the_cells_of_a_run_killed_while_it_waits(grid, tmp_pat
     spec, g, _, cells = grid
     store = tmp_path / "s.sqlite"
     _open(store, g, cells).close()
-    code = (f"import sys\nsys.path.insert(0, {str(Path(__file__).parent)!r})\n"
-            f"from test_grid_claims import _open\nfrom graybox import experiments as gx\n"
-            f"g = gx.Grid.from_toml({str(spec)!r})\nc = g.cells(g.load_data())\n"
-            f"st = _open(__import__('pathlib').Path({str(store)!r}), g, c)\nassert st.claim([x.key for x in c]) == {{}}\n"
-            "print('claimed', flush=True)\nimport time\ntime.sleep(120)\n")
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = _claiming_driver(spec, store)
     try:
         assert proc.stdout.readline().strip() == "claimed", proc.stderr.read()
         t, lines, out = _run_in_thread(spec, store)
@@ -176,7 +177,6 @@ def test_two_drivers_started_together_run_every_cell_once(grid, tmp_path):
     procs = [subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(2)]
     outs = [p.communicate(timeout=300) for p in procs]
     assert all(p.returncode == 0 for p in procs), outs
-    import re
     ran = [int(re.search(r"(\d+) run now", o).group(1)) for o, _ in outs]
     assert sum(ran) == len(cells), outs
     res = gx.load_results(store)
