@@ -181,3 +181,30 @@ def test_two_drivers_started_together_run_every_cell_once(grid, tmp_path):
     assert sum(ran) == len(cells), outs
     res = gx.load_results(store)
     assert len(res) == len(cells) and res["key"].is_unique
+
+
+def test_grid_status_names_the_runs_and_their_cells_and_forgets_a_killed_one(grid, tmp_path):
+    spec, g, data, cells = grid
+    store = tmp_path / "s.sqlite"
+    first = _open(store, g, cells)
+    try:
+        first.claim([c.key for c in cells[:3]])
+        first.write(run_cell(cells[0], data[cells[0].data]))
+        status = gx.grid_status(store)
+        me = f"pid {os.getpid()} on host {os.uname().nodename}"
+        assert dict(status.running) == {me: 2} and status.done == 1
+        assert f"being run now: 2 cell(s) by {me}" in status.summary()
+    finally:
+        first.close()
+    assert dict(gx.grid_status(store).running) == {}
+    proc = _claiming_driver(spec, store)
+    try:
+        assert proc.stdout.readline().strip() == "claimed", proc.stderr.read()
+        assert dict(gx.grid_status(store).running) == {f"pid {proc.pid} on host {os.uname().nodename}": len(cells)}
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        proc.kill()
+        proc.communicate()
+    status = gx.grid_status(store)
+    assert dict(status.running) == {} and "being run now" not in status.summary()

@@ -19,6 +19,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping, Sequence
@@ -32,7 +33,7 @@ from matplotlib.figure import Figure
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
                                 check_sequence, check_str)
 from ._cell import STATUSES
-from ._store import compare_results, encode_value, load_results
+from ._store import compare_results, encode_value, load_results, running_cells
 
 __all__ = ["RULES", "GridStatus", "grid_status", "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report"]
 
@@ -796,6 +797,8 @@ class GridStatus:
         The best model so far per data set (the leaderboard's first row).
     specs : int
         Specs the store has seen.
+    running : mapping str -> int
+        Cells being run into the store now, by run ("pid 123 on host h"; any spec's cells).
     """
 
     store: str
@@ -809,10 +812,12 @@ class GridStatus:
     last_finished: str | None
     best: pd.DataFrame = FrozenFrame()
     specs: int
+    running: Mapping[str, int] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         check_fields(self)
         object.__setattr__(self, "counts", FrozenMap(self.counts))  # not the caller's dict
+        object.__setattr__(self, "running", FrozenMap(self.running))
 
     def summary(self) -> str:
         """A few lines for a terminal."""
@@ -822,6 +827,8 @@ class GridStatus:
         lines = [f"{self.store}: {which} ({self.grid!r}): {self.done} of {self.cells} cells "
                  f"done ({st}), {self.left} left; {tpc}"
                  + (f"; last finished {self.last_finished}" if self.last_finished else "")]
+        if self.running:
+            lines.append("being run now: " + "; ".join(f"{n} cell(s) by {who}" for who, n in self.running.items()))
         if len(self.best):
             lines.append("best so far:")
             lines += ["  " + ln for ln in self.best.to_string().splitlines()]
@@ -868,4 +875,4 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
     return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(attrs.get("grid")),
                       n, len(df), max(0, n - len(df)), FrozenMap(counts),
                       float(wall.mean()) if wall.notna().any() else float("nan"), max(last) if len(last) else None,
-                      best, len(attrs.get("specs", [])))
+                      best, len(attrs.get("specs", [])), running_cells(store))

@@ -660,6 +660,24 @@ def store_specs(path: str | os.PathLike) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["id"] + cols).set_index("id")
 
 
+def running_cells(path: str | os.PathLike) -> dict[str, int]:
+    """Cells being run into the store now, by live run ("pid 123 on host h" -> cells it has taken and not
+    written yet); read-only, so callable while runs write the store. {} for a store no run uses now."""
+    p = Path(path)
+    conn = _connect(p, readonly=True)
+    try:
+        if not {"drivers", "claims"} <= {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}:
+            return {}
+        rows = conn.execute("SELECT d.host, d.pid, d.beat, COUNT(c.key) FROM drivers d JOIN claims c "
+                            "ON c.owner = d.owner GROUP BY d.owner").fetchall()
+    except sqlite3.DatabaseError as exc:
+        raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
+    finally:
+        conn.close()
+    now = time.time()
+    return {f"pid {pid} on host {host}": int(n) for host, pid, beat, n in rows if n and _alive(host, pid, beat, now)}
+
+
 def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.DataFrame:
     """The cells of a grid store as a DataFrame, one row per cell, in grid order.
 
