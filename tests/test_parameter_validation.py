@@ -280,6 +280,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "surface_cluster_map": ((ST2,), {}),
     "to_json": ((MODEL,), {}),
     "static_curve_band": ((gb.ls_uncertainty(LS, REC), [0.5, 1.0]), {"n_samples": 20}),
+    "static_surface_band": ((gb.ls_uncertainty(LS, REC), [[0.5], [1.0]]), {"n_samples": 20}),
     "plot_static_band": ((gb.static_curve_band(gb.ls_uncertainty(LS, REC), [0.5, 1.0]),), {}),
     "simulation_band": ((gb.ls_uncertainty(LS, REC), REC), {"n_samples": 20}),
     "design_input": (("aprbs", 50), {"low": 0.0, "high": 1.0, "hold": (2, 5)}),
@@ -353,6 +354,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "ELSResult": ((), _fields_of(gb.els(ST, REC))),
     "ParameterUncertainty": ((), _fields_of(gb.ls_uncertainty(LS, REC))),
     "StaticCurveBand": ((), _fields_of(gb.static_curve_band(gb.ls_uncertainty(LS, REC), [0.5, 1.0]))),
+    "StaticSurfaceBand": ((), _fields_of(gb.static_surface_band(gb.ls_uncertainty(LS, REC), [[0.5], [1.0]]))),
     "SimulationBand": ((), _fields_of(gb.simulation_band(gb.ls_uncertainty(LS, REC), REC))),
     "Selection": ((), _fields_of(gb.frols(gb.Candidates(1, 1, degree=2), REC, n_terms=2))),
     "ParetoSet": ((), _fields_of(FRONT)),
@@ -378,7 +380,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
 }
 
 #: The result objects above: every field is an option (none has a default that makes it optional in use).
-RESULTS = {"ELSResult", "ParameterUncertainty", "StaticCurveBand", "SimulationBand", "Selection", "ParetoSet", "Decision",
+RESULTS = {"ELSResult", "ParameterUncertainty", "StaticCurveBand", "StaticSurfaceBand", "SimulationBand", "Selection", "ParetoSet", "Decision",
            "DecisionBootstrap", "GridRun", "LocalModel", "OperatingCurve", "CLSResult", "ResidualTests",
            "CorrelationTest", "DSFResult", "Equilibrium", "GrayboxSelection", "NeuralFit", "OEResult", "SEMPResult",
            "SurfaceClusterMap", "Cell", "GridStatus", "DecimationAdvice"}
@@ -467,6 +469,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     ("DecisionRule", "band"): (2.5,),
     ("plot_static_band", "gain"): (True,),
     ("static_curve_band", "y0"): (2.5, -1),
+    ("static_surface_band", "y0"): (2.5, -1),
     # a file name: "x" is one
     ("se_pareto", "checkpoint"): ("x",),
     # grids, stores and reports

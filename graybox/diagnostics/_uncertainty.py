@@ -69,6 +69,8 @@ from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
 from ..static._analysis import cluster_key, one_input_levels, reached_equilibria, static_theta_gradient
+from ..static._surface_analysis import (points_of_inputs, reached_surface, static_surface, surface_powers,
+                                       surface_theta_gradient)
 from ..core._validation import (check_band_values, check_choice, check_fields, check_int, check_real, check_seed,
                                 frozen, warn)
 
@@ -81,6 +83,8 @@ __all__ = [
     "se_uncertainty",
     "StaticCurveBand",
     "static_curve_band",
+    "StaticSurfaceBand",
+    "static_surface_band",
     "theta_draws",
 ]
 
@@ -968,48 +972,162 @@ class StaticCurveBand:
                 f"level={self.level:g}, max ±{np.max((self.ybar_high - self.ybar_low) / 2):.4g} in ȳ)")
 
 
-def _gains(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
-    """dȳ/dū = −F_u/F_ȳ at equilibria, for many θ at once: thetas (P, n), ybar (P, M) → (P, M)."""
-    keys = [cluster_key(t) for t in structure]
-    ub = ubar[None, :]
-    Fu = np.zeros_like(ybar)
-    Fy = -np.ones_like(ybar)
-    for j, (p, m) in enumerate(keys):
-        th = thetas[:, j, None]
-        if m:
-            Fu = Fu + th * m * ybar**p * ub ** (m - 1)
-        if p:
-            Fy = Fy + th * p * ybar ** (p - 1) * ub**m
+@dataclass(frozen=True, eq=False)
+class StaticSurfaceBand:
+    """Confidence band of a model's static surface ȳ(ū) and its gains ∂ȳ/∂ū_i (several inputs).
+
+    Attributes
+    ----------
+    ubar : ndarray, shape (M, m)
+        Points of input space (engineering units), columns in :attr:`input_names` order.
+    input_names : tuple of str, length m
+    ybar, ybar_low, ybar_high, ybar_std : ndarray, shape (M,)
+        The estimate's static surface (the stable equilibrium it reaches), its band at :attr:`level` and
+        standard deviations (output units).
+    gain, gain_low, gain_high, gain_std : ndarray, shape (M, m)
+        The gains ∂ȳ/∂ū_i (output units per unit of input i), their band and standard deviations.
+    level : float
+    method : str
+        ``"delta"`` or ``"monte-carlo"``.
+    n_samples : int
+        Monte Carlo draws (0 for the delta method).
+    undefined : ndarray, shape (M,)
+        Fraction of draws without a stable equilibrium near the estimate's at each point (Monte Carlo;
+        0 for the delta method). Those draws are left out of the band.
+    model_name : str
+    """
+
+    ubar: np.ndarray
+    input_names: tuple[str, ...]
+    ybar: np.ndarray
+    ybar_low: np.ndarray
+    ybar_high: np.ndarray
+    ybar_std: np.ndarray
+    gain: np.ndarray
+    gain_low: np.ndarray
+    gain_high: np.ndarray
+    gain_std: np.ndarray
+    level: float
+    method: str
+    n_samples: int
+    undefined: np.ndarray
+    model_name: str = ""
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        object.__setattr__(self, "input_names", tuple(self.input_names))
+        ub = frozen(self.ubar)
+        m = len(self.input_names)
+        if ub.ndim != 2 or ub.shape[1] != m:
+            raise ValueError(f"ubar must have shape (M, {m}) (a column per input of input_names), got {ub.shape}")
+        object.__setattr__(self, "ubar", ub)
+        M = ub.shape[0]
+        for f, shape in (("ybar", (M,)), ("ybar_low", (M,)), ("ybar_high", (M,)), ("ybar_std", (M,)),
+                         ("gain", (M, m)), ("gain_low", (M, m)), ("gain_high", (M, m)), ("gain_std", (M, m)),
+                         ("undefined", (M,))):
+            a = frozen(getattr(self, f))
+            if a.shape != shape:
+                raise ValueError(f"{f} must have shape {shape}, got {a.shape}")
+            object.__setattr__(self, f, a)
+        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
+        check_choice(self.method, "method", BAND_METHODS)
+        check_int(self.n_samples, "n_samples", low=0)
+        if np.any((self.undefined < 0) | (self.undefined > 1)):
+            raise ValueError("undefined must hold shares of the draws, in [0, 1]")
+        check_band_values(self.ybar_std, self.ybar_low, self.ybar_high, "ybar_std", "ybar_low", "ybar_high")
+        check_band_values(self.gain_std, self.gain_low, self.gain_high, "gain_std", "gain_low", "gain_high")
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per point (indexed by the inputs' levels): ȳ, its band and std, each input's gain with its band
+        and std (columns ``gain <name>``, ``gain <name> low`` …) and the undefined fraction."""
+        cols: dict[str, np.ndarray] = {"ybar": self.ybar, "ybar low": self.ybar_low, "ybar high": self.ybar_high,
+                                       "ybar std": self.ybar_std}
+        for i, n in enumerate(self.input_names):
+            cols.update({f"gain {n}": self.gain[:, i], f"gain {n} low": self.gain_low[:, i],
+                         f"gain {n} high": self.gain_high[:, i], f"gain {n} std": self.gain_std[:, i]})
+        cols["undefined"] = self.undefined
+        return pd.DataFrame(cols, index=pd.MultiIndex.from_arrays(list(self.ubar.T), names=list(self.input_names)))
+
+    def __repr__(self) -> str:
+        return (f"StaticSurfaceBand({self.model_name or 'model'}: {self.ubar.shape[0]} points of "
+                f"({', '.join(self.input_names)}), {self.method}, level={self.level:g}, "
+                f"max ±{np.max((self.ybar_high - self.ybar_low) / 2):.4g} in ȳ)")
+
+
+def _exponents(structure, names: tuple[str, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Each term's power of y, shape (n,), and of each input, shape (n, m), in the static map (lags dropped):
+    ``names`` the inputs' order for a surface; None: the one input of a curve."""
+    if names is None:
+        keys = [cluster_key(t) for t in structure]
+        return np.array([k[0] for k in keys], int), np.array([[k[1]] for k in keys], int).reshape(len(keys), 1)
+    return (np.array([t.power_of("y") for t in structure], int),
+            np.array([surface_powers(t, names) for t in structure], int).reshape(len(structure), len(names)))
+
+
+def _pw(x: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """x**k with 0 where k < 0 (a derivative's missing power: 0 · ū⁻¹ would be NaN at ū = 0)."""
     with np.errstate(all="ignore"):
-        return -Fu / Fy
+        return np.where(k >= 0, x ** np.maximum(k, 0), 0.0)
+
+
+def _map_gains(Py: np.ndarray, A: np.ndarray, thetas: np.ndarray, ub: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """∂ȳ/∂ū_i = −F_ūi/F_ȳ at equilibria for many θ: thetas (P, n), ub (M, m), Y (P, M) → (P, M, m)."""
+    M, m = ub.shape
+    Fy = -np.ones_like(Y)
+    Fu = np.zeros(Y.shape + (m,))
+    for j in range(Py.size):
+        th = thetas[:, j, None]
+        g = np.prod(_pw(ub, A[j][None, :]), axis=1)[None, :]
+        if Py[j]:
+            Fy = Fy + th * Py[j] * Y ** (Py[j] - 1) * g
+        for i in np.flatnonzero(A[j]):
+            e = A[j].copy()
+            e[i] -= 1
+            Fu[..., i] += th * A[j, i] * Y ** Py[j] * np.prod(_pw(ub, e[None, :]), axis=1)[None, :]
+    with np.errstate(all="ignore"):
+        return -Fu / Fy[..., None]
+
+
+def _map_gain_gradient(Py: np.ndarray, A: np.ndarray, theta: np.ndarray, ub: np.ndarray, yb: np.ndarray,
+                       dy: np.ndarray) -> np.ndarray:
+    """∂(∂ȳ/∂ū_i)/∂θ along the static map, through ȳ(θ) too (``dy`` = ∂ȳ/∂θ, shape (M, n)): shape (M, m, n)."""
+    M, m = ub.shape
+    n = Py.size
+    Fy, Fyy = -np.ones(M), np.zeros(M)
+    dFy = np.zeros((M, n))
+    Fu, Fuy, dFu = np.zeros((M, m)), np.zeros((M, m)), np.zeros((M, m, n))
+    for j in range(n):
+        t, p = theta[j], Py[j]
+        g = np.prod(_pw(ub, A[j][None, :]), axis=1)
+        if p:
+            dFy[:, j] = p * _pw(yb, p - 1) * g
+            Fy += t * dFy[:, j]
+            if p > 1:
+                Fyy += t * p * (p - 1) * _pw(yb, p - 2) * g
+        for i in np.flatnonzero(A[j]):
+            e = A[j].copy()
+            e[i] -= 1
+            gi = np.prod(_pw(ub, e[None, :]), axis=1)
+            dFu[:, i, j] = A[j, i] * _pw(yb, p) * gi
+            Fu[:, i] += t * dFu[:, i, j]
+            if p:
+                Fuy[:, i] += t * A[j, i] * p * _pw(yb, p - 1) * gi
+    dFu_tot = dFu + Fuy[:, :, None] * dy[:, None, :]
+    dFy_tot = (dFy + Fyy[:, None] * dy)[:, None, :]
+    return -(dFu_tot * Fy[:, None, None] - Fu[:, :, None] * dFy_tot) / (Fy**2)[:, None, None]
+
+
+def _gains(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
+    """dȳ/dū = −F_u/F_ȳ at equilibria of the curve, for many θ at once: thetas (P, n), ybar (P, M) → (P, M)."""
+    Py, A = _exponents(structure)
+    return _map_gains(Py, A, np.atleast_2d(thetas), np.asarray(ubar, float).reshape(-1, 1), ybar)[..., 0]
 
 
 def _gain_gradient(structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
     """∂(dȳ/dū)/∂θ along the static curve (through ȳ(θ) too), shape (M, n)."""
-    keys = [cluster_key(t) for t in structure]
-    Fu, Fy = np.zeros_like(ybar), -np.ones_like(ybar)
-    Fuy, Fyy = np.zeros_like(ybar), np.zeros_like(ybar)
-    dFu, dFy = np.zeros((ubar.size, len(keys))), np.zeros((ubar.size, len(keys)))
-
-    def pw(x, k):
-        return x**k if k >= 0 else np.zeros_like(x)
-
-    for j, (p, m) in enumerate(keys):
-        t = theta[j]
-        if m:
-            dFu[:, j] = m * pw(ybar, p) * pw(ubar, m - 1)
-            Fu += t * dFu[:, j]
-            if p:
-                Fuy += t * m * p * pw(ybar, p - 1) * pw(ubar, m - 1)
-        if p:
-            dFy[:, j] = p * pw(ybar, p - 1) * pw(ubar, m)
-            Fy += t * dFy[:, j]
-            if p > 1:
-                Fyy += t * p * (p - 1) * pw(ybar, p - 2) * pw(ubar, m)
-    dy = static_theta_gradient(structure, theta, ubar, ybar)  # (M, n)
-    dFu_tot = dFu + Fuy[:, None] * dy
-    dFy_tot = dFy + Fyy[:, None] * dy
-    return -(dFu_tot * Fy[:, None] - Fu[:, None] * dFy_tot) / (Fy**2)[:, None]
+    Py, A = _exponents(structure)
+    dy = static_theta_gradient(structure, theta, ubar, ybar)
+    return _map_gain_gradient(Py, A, theta, np.asarray(ubar, float).reshape(-1, 1), ybar, dy)[:, 0, :]
 
 
 def theta_draws(theta: np.ndarray, cov: np.ndarray, n: int, rng: np.random.Generator,
@@ -1117,7 +1235,7 @@ def static_curve_band(
     seed = check_seed(seed)
     if uncertainty.model.n_inputs > 1:
         raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
-                         f"inputs {uncertainty.model.input_names} (a band around a static surface is not built yet)")
+                         f"inputs {uncertainty.model.input_names}: static_surface_band gives the band at points of input space")
     # the one input's levels as every static path reads them, a column (M, 1) too; flattened, an (M, 2) grid of two
     # inputs' levels would be read as 2M levels of the one
     shape = np.shape(ubar)
@@ -1155,3 +1273,94 @@ def static_curve_band(
     warn_dropped_draws("static_curve_band", undefined)
     return StaticCurveBand(ub, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo", n_samples,
                            undefined, m.name)
+
+
+def static_surface_band(
+    uncertainty: ParameterUncertainty,
+    ubar: np.ndarray | Sequence[Sequence[float]] | pd.DataFrame,
+    *,
+    method: str = "delta",
+    n_samples: int = 2000,
+    seed: int = 0,
+    y0: float | np.ndarray | None = None,
+) -> StaticSurfaceBand:
+    """Confidence band of the static surface and its gains implied by a parameter covariance (several inputs).
+
+    :func:`static_curve_band` at points of input space: the same two methods, the same draws.
+
+    Parameters
+    ----------
+    uncertainty : ParameterUncertainty
+        Of a model of several inputs (or one), from :func:`ls_uncertainty`, :func:`cls_uncertainty`,
+        :func:`pe_uncertainty` or :func:`se_uncertainty`.
+    ubar : array_like, shape (M, m), or DataFrame
+        Points of input space (engineering units), columns in the model's ``input_names`` order (a
+        DataFrame is read by column name); one point may be given as shape (m,).
+    method : {"delta", "monte-carlo"}
+        ``"delta"``: first order through the static map, ±t·std with std² = gᵀ cov g, g the gradient of ȳ(ū)
+        or of a gain ∂ȳ/∂ū_i (implicit differentiation of eq. (5)), t the quantile of the parameters' intervals.
+        ``"monte-carlo"``: θ drawn from the multivariate t around θ̂ (scale ``cov``), the stable equilibrium
+        reached from the estimate's taken for each draw, the band from the draws' quantiles.
+    n_samples : int
+        Monte Carlo draws (>= 10).
+    seed : int
+        Seed of the Monte Carlo draws.
+    y0 : float or array_like of shape (M,), optional
+        Initial output to pick the estimate's equilibrium where several are stable (output units).
+
+    Returns
+    -------
+    StaticSurfaceBand
+
+    Warns
+    -----
+    UncertaintyWarning
+        Monte Carlo draws that reach no equilibrium at some point were left out of the band there.
+
+    Raises
+    ------
+    ValueError
+        The estimate reaches no equilibrium at some point; ``ubar`` of the wrong shape or not finite.
+    TypeError
+        ``uncertainty`` is not a :class:`ParameterUncertainty`.
+    """
+    if not isinstance(uncertainty, ParameterUncertainty):
+        raise TypeError(f"uncertainty must be a ParameterUncertainty (from ls_uncertainty, cls_uncertainty, "
+                        f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
+    check_choice(method, "method", BAND_METHODS)
+    n_samples = check_int(n_samples, "n_samples", low=2)
+    seed = check_seed(seed)
+    m = uncertainty.model
+    names = tuple(m.input_names)
+    ub = points_of_inputs(ubar, names)
+    if ub.shape[0] == 0:
+        raise ValueError("ubar must hold at least one point of input levels")
+    st, th = m.structure, m.theta
+    yb = static_surface(st, th, ub, y0, input_names=names)  # ValueError naming the points it reaches nothing at
+    Py, A = _exponents(st, names)
+    gain = _map_gains(Py, A, th[None], ub, yb[None])[0]
+    if method == "delta":
+        z = uncertainty.quantile
+        dy = surface_theta_gradient(st, th, ub, yb, inputs=names)
+        Gg = _map_gain_gradient(Py, A, th, ub, yb, dy)  # (M, m, n)
+        sy = np.sqrt(uncertainty.contract(dy))
+        sg = np.sqrt(uncertainty.contract(Gg.reshape(-1, th.size))).reshape(gain.shape)
+        return StaticSurfaceBand(ub, names, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
+                                 uncertainty.level, "delta", 0, np.zeros(ub.shape[0]), m.name)
+    n_samples = check_int(n_samples, "n_samples", low=10)
+    rng = np.random.default_rng(seed)
+    thetas = theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
+    Y = reached_surface(st, thetas, ub, yb, inputs=names).ybar  # (P, M)
+    G = _map_gains(Py, A, thetas, ub, Y)  # (P, M, m)
+    ok = np.isfinite(Y) & np.isfinite(G).all(axis=2)
+    undefined = 1.0 - ok.mean(axis=0)
+    a = (1 - uncertainty.level) / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns give NaN bands
+        Yn, Gn = np.where(ok, Y, np.nan), np.where(ok[..., None], G, np.nan)
+        ylo, yhi = np.nanquantile(Yn, [a, 1 - a], axis=0)
+        glo, ghi = np.nanquantile(Gn, [a, 1 - a], axis=0)
+        sy, sg = np.nanstd(Yn, axis=0), np.nanstd(Gn, axis=0)
+    warn_dropped_draws("static_surface_band", undefined)
+    return StaticSurfaceBand(ub, names, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo",
+                             n_samples, undefined, m.name)

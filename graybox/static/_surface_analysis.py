@@ -60,7 +60,7 @@ def surface_inputs(structure: Structure, inputs: tuple[str, ...] | None = None) 
     return names
 
 
-def _powers(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
+def surface_powers(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
     return tuple(term.power_of(n) for n in inputs)
 
 
@@ -69,7 +69,7 @@ def surface_cluster_key(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
     (with one input, :func:`graybox.static._analysis.cluster_key`)."""
     if term.is_noise:
         raise ValueError(f"noise term {term} has no cluster")
-    return (term.power_of("y"),) + _powers(term, inputs)
+    return (term.power_of("y"),) + surface_powers(term, inputs)
 
 
 def surface_cluster_name(p: int, powers: tuple[int, ...], inputs: tuple[str, ...], sep: str = "") -> str:
@@ -178,13 +178,13 @@ def _skeleton(structure: Structure) -> Structure:
 def input_monomials(structure: Structure, ubar: np.ndarray, inputs: tuple[str, ...] | None = None) -> np.ndarray:
     """g_t(ū) = ū_1^a_t1 ⋯ ū_m^a_tm for every term t at every point, shape (M, n_terms)."""
     names = surface_inputs(structure, inputs)
-    ub = _as_points(ubar, names)
-    A = np.array([_powers(t, names) for t in structure], dtype=float).reshape(len(structure), len(names))
+    ub = points_of_inputs(ubar, names)
+    A = np.array([surface_powers(t, names) for t in structure], dtype=float).reshape(len(structure), len(names))
     with np.errstate(all="ignore"):
         return np.prod(ub[:, None, :] ** A[None, :, :], axis=2)
 
 
-def _as_points(ubar: object, names: tuple[str, ...]) -> np.ndarray:
+def points_of_inputs(ubar: object, names: tuple[str, ...]) -> np.ndarray:
     """ū as finite points, shape (M, m), columns in the order of the inputs ``names``; a 1-D ū of length m is
     one point; a DataFrame is read by column name as every input is (:func:`~graybox.core._records.frame_inputs`)."""
     m = len(names)
@@ -228,7 +228,7 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
     """
     structure, theta = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
-    ub = _as_points(ubar, names)
+    ub = points_of_inputs(ubar, names)
     if ub.shape[0] != 1:
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
     sk, th = _folded(structure, theta, ub, names)
@@ -260,7 +260,7 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
         ``ubar`` (M, m), ``ybar`` and ``status`` (P, M).
     """
     names = surface_inputs(structure, inputs)
-    ub = _as_points(ubar, names)
+    ub = points_of_inputs(ubar, names)
     M = ub.shape[0]
     y0s = np.broadcast_to(np.asarray(y0, float), (M,)).copy()
     sk, th = _folded(structure, thetas, ub, names)
@@ -310,7 +310,7 @@ def static_surface(
     strict = check_bool(strict, "strict")
     structure, th = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
-    ub = _as_points(ubar, names)
+    ub = points_of_inputs(ubar, names)
     if y0 is not None:
         y0 = check_per_point(y0, ub.shape[0], "y0")
     sk, thf = _folded(structure, th, ub, names)
@@ -340,7 +340,7 @@ def _fderivs(structure: Structure, theta: np.ndarray, ub: np.ndarray, yb: np.nda
             if th == 0.0:
                 continue
             p = t.power_of("y")
-            a = np.array(_powers(t, names))
+            a = np.array(surface_powers(t, names))
             g = np.prod(ub ** a[None, :], axis=1)
             if p:
                 Fy += th * p * yb ** (p - 1) * g
@@ -375,7 +375,7 @@ def static_surface_gain(
     """
     structure, th = _static.checked_model(structure, theta)
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
-    ub = _as_points(ubar, names)
+    ub = points_of_inputs(ubar, names)
     yb = static_surface(structure, th, ub, y0, strict=strict, input_names=names)
     Fy, Fu = _fderivs(structure, th, ub, yb, names)
     with np.errstate(all="ignore"):  # NaN⁰ is 1: no gain where no equilibrium is reached
@@ -389,7 +389,7 @@ def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.nda
     ``ubar`` (M, m) in ``inputs`` order (default: the structure's inputs), ``ybar`` (M,).
     """
     names = surface_inputs(structure, inputs)
-    ub = _as_points(ubar, names)
+    ub = points_of_inputs(ubar, names)
     yb = np.asarray(ybar, float)
     th = np.asarray(theta, float)
     g = input_monomials(structure, ub, names)
@@ -418,7 +418,7 @@ def surface_static_rows(cm: SurfaceClusterMap, ubar: np.ndarray, ybar: np.ndarra
     -------
     ndarray, shape (M, n_clusters)
     """
-    ub = _as_points(ubar, cm.inputs)
+    ub = points_of_inputs(ubar, cm.inputs)
     yb = np.asarray(ybar, float)[:, None]
     K = np.array(cm.keys, float).reshape(len(cm.keys), 1 + len(cm.inputs))
     p, A = K[None, :, 0], K[:, 1:]
