@@ -636,13 +636,32 @@ def test_regret_and_optimism_are_read_off_the_test_columns(data):
     test = plant(3, n=800)
     js_test = gb.mse(test.y, res.model.simulate(test), start=3)  # the chosen model on the test record
     best = min(gb.mse(test.y, res.model_of(n, r["estimator"]).simulate(test), start=3)
-               for n, r in res.table.iterrows() if r["theta"])
+               for n, r in res.table.iterrows() if r["theta"] and (r["in_band"] or not res.in_band))
     assert res.regret == pytest.approx(js_test / best, rel=1e-9) and res.regret >= 1.0
     assert res.optimism == pytest.approx(res.decision.JS / js_test, rel=1e-9)
     assert "regret=" in repr(res)
     for name in ("regret", "optimism"):
         with pytest.raises(ValueError, match="without a test record"):
             getattr(bare, name)
+
+
+def test_regret_compares_the_choice_with_the_rows_in_the_band_only(data):
+    """A row that misses the band was never a candidate of an in-band choice: its test J_S, however small,
+    is not the best the choice could have had; without a row in the band every row is compared."""
+    import dataclasses
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5],
+                                test=plant(3, n=800))
+    t = res.table
+    other = int(np.flatnonzero(t["rank"].to_numpy() != 1)[0])
+    t.iloc[other, t.columns.get_loc("JS_test")] = res.chosen["JS_test"] / 10
+    t.iloc[other, t.columns.get_loc("in_band")] = False
+    out = dataclasses.replace(res, table=t)
+    assert out.regret == res.regret  # the row out of the band does not count
+    t.iloc[other, t.columns.get_loc("in_band")] = True
+    assert dataclasses.replace(res, table=t).regret == pytest.approx(10.0)
 
 
 def test_several_identification_records_are_fitted_together_and_chosen_on_in_turn():

@@ -330,9 +330,13 @@ class GrayboxSelection:
     @property
     def regret(self) -> float:
         """The choice's J_S on the test record over the best J_S there among the rows compared (>= 1;
-        1: no row would have done better on new data; inf: the choice diverged there). Needs the call's
-        ``test=`` record; ``ValueError`` when every row's free run diverged on it."""
+        1: no row would have done better on new data; inf: the choice diverged there). The rows compared
+        are those in the band when the choice is (a row that misses the band was never a candidate), else
+        every row. Needs the call's ``test=`` record; ``ValueError`` when every such row's free run
+        diverged on it."""
         js = self._test_column()
+        if self.in_band:
+            js = np.where(self.table["in_band"].to_numpy(bool), js, np.inf)
         if not np.isfinite(js).any():
             raise ValueError("no row's model ran through the test record (every JS_test is inf: its free run "
                              "diverged there, or the row has no model): no best row to compare the choice with")
@@ -361,8 +365,10 @@ class GrayboxSelection:
         test = ""
         if "JS_test" in self.table:
             test = f", J_S test={row['JS_test']:.4g}"
-            if np.isfinite(self.table["JS_test"].to_numpy(float)).any():  # else no regret to give
+            try:
                 test += f", regret={self.regret:.3g}"
+            except ValueError:  # every row compared diverged on the test record: no regret to give
+                pass
         # a black box's band is inf, which every row meets: in_band=True there says nothing of the points
         band = "black box (band=inf)" if np.isinf(self.band) else f"in_band={self.in_band}"
         return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, rule={self.rule!r}, "
