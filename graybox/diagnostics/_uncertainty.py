@@ -945,20 +945,7 @@ class StaticCurveBand:
     def __post_init__(self) -> None:
         check_fields(self)
         M = np.shape(self.ubar)[0]
-        for f in ("ubar", "ybar", "ybar_low", "ybar_high", "ybar_std", "gain", "gain_low", "gain_high", "gain_std",
-                  "undefined"):
-            a = frozen(getattr(self, f))
-            if a.shape != (M,):
-                raise ValueError(f"{f} must have shape ({M},), got {a.shape}")
-            object.__setattr__(self, f, a)
-        # a value read from a hand-edited file is held to what the band can be
-        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
-        check_choice(self.method, "method", BAND_METHODS)
-        check_int(self.n_samples, "n_samples", low=0)
-        if np.any((self.undefined < 0) | (self.undefined > 1)):
-            raise ValueError("undefined must hold shares of the draws, in [0, 1]")
-        check_band_values(self.ybar_std, self.ybar_low, self.ybar_high, "ybar_std", "ybar_low", "ybar_high")
-        check_band_values(self.gain_std, self.gain_low, self.gain_high, "gain_std", "gain_low", "gain_high")
+        _check_static_band(self, (M,), (M,))
 
     def to_frame(self) -> pd.DataFrame:
         """One row per ū: ȳ, its band and std, the gain, its band and std (and the undefined fraction)."""
@@ -1021,21 +1008,7 @@ class StaticSurfaceBand:
         if ub.ndim != 2 or ub.shape[1] != m:
             raise ValueError(f"ubar must have shape (M, {m}) (a column per input of input_names), got {ub.shape}")
         object.__setattr__(self, "ubar", ub)
-        M = ub.shape[0]
-        for f, shape in (("ybar", (M,)), ("ybar_low", (M,)), ("ybar_high", (M,)), ("ybar_std", (M,)),
-                         ("gain", (M, m)), ("gain_low", (M, m)), ("gain_high", (M, m)), ("gain_std", (M, m)),
-                         ("undefined", (M,))):
-            a = frozen(getattr(self, f))
-            if a.shape != shape:
-                raise ValueError(f"{f} must have shape {shape}, got {a.shape}")
-            object.__setattr__(self, f, a)
-        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
-        check_choice(self.method, "method", BAND_METHODS)
-        check_int(self.n_samples, "n_samples", low=0)
-        if np.any((self.undefined < 0) | (self.undefined > 1)):
-            raise ValueError("undefined must hold shares of the draws, in [0, 1]")
-        check_band_values(self.ybar_std, self.ybar_low, self.ybar_high, "ybar_std", "ybar_low", "ybar_high")
-        check_band_values(self.gain_std, self.gain_low, self.gain_high, "gain_std", "gain_low", "gain_high")
+        _check_static_band(self, (ub.shape[0],), ub.shape)
 
     def to_frame(self) -> pd.DataFrame:
         """One row per point (indexed by the inputs' levels): ȳ, its band and std, each input's gain with its band
@@ -1052,6 +1025,39 @@ class StaticSurfaceBand:
         return (f"StaticSurfaceBand({self.model_name or 'model'}: {self.ubar.shape[0]} points of "
                 f"({', '.join(self.input_names)}), {self.method}, level={self.level:g}, "
                 f"max ±{np.max((self.ybar_high - self.ybar_low) / 2):.4g} in ȳ)")
+
+
+def _check_static_band(band, point_shape: tuple[int, ...], gain_shape: tuple[int, ...]) -> None:
+    """A static band's arrays frozen and of their shapes (ȳ's per point, the gains' per point and input), and its
+    other fields what a band can be (a value read from a hand-edited file is held to them)."""
+    for f in ("ubar", "ybar", "ybar_low", "ybar_high", "ybar_std", "gain", "gain_low", "gain_high", "gain_std",
+              "undefined"):
+        a = frozen(getattr(band, f))
+        shape = gain_shape if f.startswith("gain") or f == "ubar" else point_shape  # ū and the gains: (M[, m])
+        if a.shape != shape:
+            raise ValueError(f"{f} must have shape {shape}, got {a.shape}")
+        object.__setattr__(band, f, a)
+    check_real(band.level, "level", low=0, high=1, low_open=True, high_open=True)
+    check_choice(band.method, "method", BAND_METHODS)
+    check_int(band.n_samples, "n_samples", low=0)
+    if np.any((band.undefined < 0) | (band.undefined > 1)):
+        raise ValueError("undefined must hold shares of the draws, in [0, 1]")
+    check_band_values(band.ybar_std, band.ybar_low, band.ybar_high, "ybar_std", "ybar_low", "ybar_high")
+    check_band_values(band.gain_std, band.gain_low, band.gain_high, "gain_std", "gain_low", "gain_high")
+
+
+def _draws_band(Y: np.ndarray, G: np.ndarray, level: float) -> tuple[np.ndarray, ...]:
+    """The band of Monte Carlo draws: ȳ (P, M) and gains (P, M[, m]) → (undefined, ȳ low, high, std, gain low,
+    high, std), a draw left out at a point where its ȳ or a gain is not finite."""
+    ok = np.isfinite(Y) & np.isfinite(G).reshape(G.shape[:2] + (-1,)).all(axis=2)
+    undefined = 1.0 - ok.mean(axis=0)
+    a = (1 - level) / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns give NaN bands
+        Yn, Gn = np.where(ok, Y, np.nan), np.where(ok.reshape(ok.shape + (1,) * (G.ndim - 2)), G, np.nan)
+        ylo, yhi = np.nanquantile(Yn, [a, 1 - a], axis=0)
+        glo, ghi = np.nanquantile(Gn, [a, 1 - a], axis=0)
+        return undefined, ylo, yhi, np.nanstd(Yn, axis=0), glo, ghi, np.nanstd(Gn, axis=0)
 
 
 def _exponents(structure, names: tuple[str, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -1260,16 +1266,7 @@ def static_curve_band(
     rng = np.random.default_rng(check_seed(seed))
     thetas = theta_draws(th, cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_equilibria(st, thetas, ub, yb).ybar
-    G = _gains(st, thetas, ub, Y)
-    ok = np.isfinite(Y) & np.isfinite(G)
-    undefined = 1.0 - ok.mean(axis=0)
-    a = (1 - uncertainty.level) / 2
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns give NaN bands
-        Yn, Gn = np.where(ok, Y, np.nan), np.where(ok, G, np.nan)
-        ylo, yhi = np.nanquantile(Yn, [a, 1 - a], axis=0)
-        glo, ghi = np.nanquantile(Gn, [a, 1 - a], axis=0)
-        sy, sg = np.nanstd(Yn, axis=0), np.nanstd(Gn, axis=0)
+    undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, _gains(st, thetas, ub, Y), uncertainty.level)
     warn_dropped_draws("static_curve_band", undefined)
     return StaticCurveBand(ub, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo", n_samples,
                            undefined, m.name)
@@ -1351,16 +1348,7 @@ def static_surface_band(
     rng = np.random.default_rng(seed)
     thetas = theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_surface(st, thetas, ub, yb, inputs=names).ybar  # (P, M)
-    G = _map_gains(Py, A, thetas, ub, Y)  # (P, M, m)
-    ok = np.isfinite(Y) & np.isfinite(G).all(axis=2)
-    undefined = 1.0 - ok.mean(axis=0)
-    a = (1 - uncertainty.level) / 2
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns give NaN bands
-        Yn, Gn = np.where(ok, Y, np.nan), np.where(ok[..., None], G, np.nan)
-        ylo, yhi = np.nanquantile(Yn, [a, 1 - a], axis=0)
-        glo, ghi = np.nanquantile(Gn, [a, 1 - a], axis=0)
-        sy, sg = np.nanstd(Yn, axis=0), np.nanstd(Gn, axis=0)
+    undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, _map_gains(Py, A, thetas, ub, Y), uncertainty.level)
     warn_dropped_draws("static_surface_band", undefined)
     return StaticSurfaceBand(ub, names, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo",
                              n_samples, undefined, m.name)
