@@ -22,6 +22,7 @@ import numpy as np
 
 from ..core._records import Dataset, Record, as_records
 from ..core._validation import check_bool, check_fields, check_int
+from ..io._json import register_type
 
 __all__ = ["DecimationAdvice", "decimation_advice", "decimate"]
 
@@ -93,6 +94,12 @@ class DecimationAdvice:
             return f"DecimationAdvice(q=None: {self.reason})"
         return (f"DecimationAdvice(q={self.q} (allowed {self.q_range[0]}..{self.q_range[1]}), Ts {self.Ts:g} s -> "
                 f"{self.Ts_new:g} s; tau_y={self.tau_y}, tau_y2={self.tau_y2} samples)")
+
+
+# saved by gb.save as JSON; this layer sits above io, so it registers its own type (as the experiment layer does)
+register_type("DecimationAdvice", DecimationAdvice,
+              (("q", "int_or_none"), ("q_range", "ints_or_none"), ("tau_y", "int_or_none"), ("tau_y2", "int_or_none"),
+               ("tau_m", "int_or_none"), ("Ts", "float"), ("reason", "str")))
 
 
 def _first_minimum(x: np.ndarray) -> int | None:

@@ -77,6 +77,9 @@ from ..estimation._prediction_error import CLSResult
 from ..control._local import LocalModel, OperatingCurve
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import ParameterUncertainty, StaticCurveBand
+from ..diagnostics._residuals import CorrelationTest, ResidualTests
+from ..diagnostics._bootstrap import DecisionBootstrap
+from ..estimation._simulation_error import GAOptions
 
 __all__ = ["FORMAT_VERSION", "GrayboxFileError", "save", "load", "to_json", "from_json", "read_header"]
 
@@ -179,9 +182,9 @@ class _Reader:
 # --------------------------------------------------------------------------------------------
 # codecs: per type, its fields as (name, kind); kinds map to an encoder and a reader method
 # --------------------------------------------------------------------------------------------
-def _enc(kind: str, v: Any) -> Any:
+def _enc(kind: str, v: Any, where: str = "") -> Any:
     if kind.endswith(_OR_NONE):
-        return None if v is None else _enc(kind[:-len(_OR_NONE)], v)
+        return None if v is None else _enc(kind[:-len(_OR_NONE)], v, where)
     if kind in ("float", "array1", "array2", "inputs"):
         return _arr(v)
     if kind in ("int", "str", "bool"):
@@ -212,6 +215,20 @@ def _enc(kind: str, v: Any) -> Any:
         return [[str(t), str(why)] for t, why in v]
     if kind == "frame":
         return _enc_frame(v)
+    if kind == "ints":
+        return [int(x) for x in v]
+    if kind == "int_array1":
+        return [int(x) for x in np.asarray(v).ravel()]
+    if kind == "bool_array1":
+        return [bool(x) for x in np.asarray(v).ravel()]
+    if kind == "texts":
+        return {str(k): str(r) for k, r in dict(v).items()}
+    if kind == "band":
+        return _num(v) if np.ndim(v) == 0 else [_num(x) for x in v]
+    if kind == "correlation_tests":
+        return {str(k): _encode_fields(t) for k, t in dict(v).items()}
+    if kind == "plain_map":
+        return _enc_plain_map(v, where)
     if kind in _CODECS:
         return _encode_fields(v)
     raise AssertionError(kind)  # pragma: no cover - a codec table error
@@ -279,6 +296,24 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return tuple(out)
     if kind == "frame":
         return _dec_frame(v, where, rd)
+    if kind == "ints":
+        return tuple(rd.int(x, f"{where}[{i}]") for i, x in enumerate(rd.list(v, where)))
+    if kind == "int_array1":
+        return _read_only(np.array([rd.int(x, f"{where}[{i}]") for i, x in enumerate(rd.list(v, where))], np.int64))
+    if kind == "bool_array1":
+        return _read_only(np.array([rd.bool(x, f"{where}[{i}]") for i, x in enumerate(rd.list(v, where))], np.bool_))
+    if kind == "texts":
+        return {k: rd.str(r, f"{where}.{k}") for k, r in rd.dict(v, where).items()}
+    if kind == "band":  # one number (0, B] or a pair [low, high]
+        if not isinstance(v, list):
+            return rd.float(v, where)
+        if len(v) != 2:
+            raise rd.fail(where, f"expected a number or a pair [low, high], got {len(v)} numbers")
+        return rd.floats(v, where)
+    if kind == "correlation_tests":
+        return {k: _decode_fields("CorrelationTest", t, f"{where}.{k}", rd) for k, t in rd.dict(v, where).items()}
+    if kind == "plain_map":
+        return {k: _dec_plain(x, f"{where}.{k}", rd) for k, x in rd.dict(v, where).items()}
     if kind in _CODECS:
         return _decode_fields(kind, v, where, rd)
     raise AssertionError(kind)  # pragma: no cover
@@ -372,6 +407,111 @@ def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
     return pd.DataFrame(values, index=index, columns=cols or None)  # no columns: an empty RangeIndex, as pandas makes
 
 
+# --------------------------------------------------------------------------------------------
+# plain values (a bootstrap's options and reference decision): None, bool, int, float, str, arrays,
+# tuples, lists, mappings with text keys and the saved types, each written so that it reads back as
+# the same type (JSON's own null, true/false, integers, numbers with a point and strings for the
+# first five; a one-key object tagged with the kind for the rest)
+# --------------------------------------------------------------------------------------------
+#: Array dtypes a plain value may have, by the name the file gives them.
+_PLAIN_DTYPES = frozenset({"float64", "float32", "float16", "int64", "int32", "int16", "int8", "uint64", "uint32",
+                           "uint16", "uint8", "bool"})
+#: Tags of the plain values JSON has no literal for.
+_PLAIN_TAGS = ("float", "array", "tuple", "list", "map", "type")
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)  # loaded values are as immutable as computed ones
+    return a
+
+
+def _enc_plain_map(v: Mapping, where: str) -> dict:
+    bad = [k for k in v if not isinstance(k, str)]
+    if bad:
+        raise ValueError(f"cannot save {where}: its keys must be text, got {bad[0]!r} ({type(bad[0]).__name__})")
+    return {k: _enc_plain(x, f"{where}[{k!r}]") for k, x in v.items()}
+
+
+def _enc_plain(v: Any, where: str) -> Any:
+    if v is None or isinstance(v, (bool, str)):
+        return v
+    if isinstance(v, np.bool_):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        x = float(v)  # written with a point (1.0, 1e-05): it reads back a float, not an int
+        return x if math.isfinite(x) else {"float": _num(x)}
+    if isinstance(v, np.ndarray):
+        if v.dtype.name not in _PLAIN_DTYPES:
+            raise ValueError(f"cannot save {where}: an array of dtype {v.dtype} (a saved array holds numbers or bools)")
+        conv = bool if v.dtype.kind == "b" else int if v.dtype.kind in "iu" else _num
+        return {"array": {"dtype": v.dtype.name, "shape": list(v.shape), "data": [conv(x) for x in v.ravel()]}}
+    if isinstance(v, (tuple, list)):
+        return {type(v).__name__: [_enc_plain(x, f"{where}[{i}]") for i, x in enumerate(v)]}
+    if isinstance(v, Mapping):
+        return {"map": _enc_plain_map(v, where)}
+    if type(v) in _TYPES:
+        return {"type": {"type": _TYPES[type(v)], "object": _encode_fields(v)}}
+    what = _CANNOT.get(type(v).__name__) or ("a function, which JSON cannot carry (its code is not data)" if callable(v)
+                                            else f"a {type(v).__name__}, which graybox does not save")
+    raise ValueError(f"cannot save {where}: {what}")
+
+
+def _dec_plain(v: Any, where: str, rd: _Reader) -> Any:
+    if v is None or isinstance(v, (bool, str, float)):
+        return v
+    if isinstance(v, int):
+        return rd.int(v, where)
+    if isinstance(v, list):
+        raise rd.fail(where, "a bare list (a list or a tuple is written {\"list\": …} or {\"tuple\": …})")
+    d = rd.dict(v, where)
+    if len(d) != 1 or next(iter(d)) not in _PLAIN_TAGS:
+        raise rd.fail(where, f"expected a value or an object of one key among {list(_PLAIN_TAGS)}, got keys {sorted(d)}")
+    tag, x = next(iter(d.items()))
+    at = f"{where}.{tag}"
+    if tag == "float":
+        f = rd.float(x, at)
+        if isinstance(x, str):
+            return f
+        raise rd.fail(at, "a finite number is written as a JSON number")
+    if tag in ("tuple", "list"):
+        items = [_dec_plain(y, f"{at}[{i}]", rd) for i, y in enumerate(rd.list(x, at))]
+        return tuple(items) if tag == "tuple" else items
+    if tag == "map":
+        return {k: _dec_plain(y, f"{at}.{k}", rd) for k, y in rd.dict(x, at).items()}
+    if tag == "type":
+        t = rd.dict(x, at)
+        name = t.get("type")
+        if set(t) != {"type", "object"} or not isinstance(name, str) or name not in _CODECS:
+            raise rd.fail(at, f"expected {{\"type\": one of {sorted(_CODECS)}, \"object\": …}}")
+        return _decode_fields(name, t["object"], f"{at}.object", rd)
+    a = rd.dict(x, at)  # an array
+    if set(a) != {"dtype", "shape", "data"}:
+        raise rd.fail(at, f"an array needs ['dtype', 'shape', 'data'], got {sorted(a)}")
+    dtype = rd.str(a["dtype"], f"{at}.dtype")
+    if dtype not in _PLAIN_DTYPES:
+        raise rd.fail(f"{at}.dtype", f"unknown dtype {dtype!r} (one of {sorted(_PLAIN_DTYPES)})")
+    shape = tuple(rd.int(n, f"{at}.shape[{i}]") for i, n in enumerate(rd.list(a["shape"], f"{at}.shape")))
+    kind = np.dtype(dtype).kind
+    read = rd.bool if kind == "b" else rd.int if kind in "iu" else rd.float
+    data = [read(y, f"{at}.data[{i}]") for i, y in enumerate(rd.list(a["data"], f"{at}.data"))]
+    if any(n < 0 for n in shape) or math.prod(shape) != len(data):
+        raise rd.fail(f"{at}.shape", f"shape {list(shape)} does not hold the {len(data)} values of data")
+    try:
+        return _read_only(np.array(data, dtype=dtype).reshape(shape))
+    except OverflowError:
+        raise rd.fail(f"{at}.data", f"a value beyond the range of {dtype}") from None
+
+
+#: Why a public value that is not saved cannot be: what it holds that JSON cannot carry (by class name).
+_CANNOT = {
+    "DaskRecord": "a DaskRecord holds lazy Dask arrays (a task graph over files or a cluster, not numbers); "
+                  "save the values computed from it",
+    "UserConstraint": "a UserConstraint holds a Python function, which JSON cannot carry (its code is not data)",
+}
+
+
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
     "StaticPoints": (StaticPoints, (("ubar", "inputs"), ("ybar", "array1"), ("name", "str"), ("input_names", "names"),
                                     ("uncertainty", "array1_or_none"), ("units", "names"))),
@@ -434,6 +574,21 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                         ("time_constant_low", "array1_or_none"),
                                         ("time_constant_high", "array1_or_none"), ("undefined", "array1_or_none"),
                                         ("model_name", "str"))),
+    "CorrelationTest": (CorrelationTest, (("name", "str"), ("label", "str"), ("kind", "str"), ("lags", "int_array1"),
+                                          ("phi", "array1"), ("band", "float"), ("limit", "float"),
+                                          ("outside", "int_array1"), ("passed", "bool"))),
+    "ResidualTests": (ResidualTests, (("tests", "correlation_tests"), ("n", "int"), ("level", "float"), ("rule", "str"),
+                                      ("model_name", "str"), ("residuals", "arrays"), ("undefined", "texts"))),
+    "GAOptions": (GAOptions, (("population", "int"), ("generations", "int"), ("stall", "int_or_none"),
+                              ("crossover_prob", "float"), ("crossover_ratio", "float"), ("mutation_prob", "float"),
+                              ("mutation_scale", "float"), ("elite", "int"), ("random_samples", "int"),
+                              ("selective_pressure", "float"))),
+    "DecisionBootstrap": (DecisionBootstrap, (("structure", "structure"), ("estimator", "str"), ("lambdas", "array1"),
+                                              ("band", "band"), ("block_length", "int"), ("n_blocks", "int"),
+                                              ("seed", "int"), ("lambda1", "array1"), ("JS", "array1"),
+                                              ("JSF", "array1"), ("in_band", "bool_array1"), ("thetas", "array2"),
+                                              ("rules", "names"), ("reference", "plain_map"), ("failures", "failures"),
+                                              ("options", "plain_map"), ("static_sigma", "float_or_none"))),
 }
 
 
@@ -459,7 +614,7 @@ def register_type(name: str, cls: type, spec: tuple[tuple[str, str], ...]) -> No
 
 
 #: Saved types defined above this layer, by the module whose import registers them (:func:`register_type`).
-_REGISTERED_ABOVE = {"GrayboxSelection": "graybox.experiments._select"}
+_REGISTERED_ABOVE = {"GrayboxSelection": "graybox.experiments._select", "DecimationAdvice": "graybox.datasets._decimation"}
 
 #: A kind ending so is that kind or None (JSON null).
 _OR_NONE = "_or_none"
@@ -470,7 +625,8 @@ _STATIC = ("StaticPoints", "StaticCurve", "StaticSurface")
 #: Field kinds other than the saved types themselves.
 _KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "str", "bool", "floats", "pairs", "exponents",
                     "structure", "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame",
-                    "static", "local_models"})
+                    "static", "local_models", "ints", "int_array1", "bool_array1", "texts", "band",
+                    "correlation_tests", "plain_map"})
 _KINDS = _KINDS | {k + _OR_NONE for k in _KINDS}
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
@@ -517,7 +673,7 @@ _RENAMED: dict[str, dict[str, tuple[str, Callable[[Any], Any]]]] = {
 
 def _encode_fields(obj: Any) -> dict:
     name = _TYPES[type(obj)]
-    out = {k: _enc(kind, getattr(obj, k)) for k, kind in _CODECS[name][1]}
+    out = {k: _enc(kind, getattr(obj, k), f"{name}.{k}") for k, kind in _CODECS[name][1]}
     if name in _READABLE:
         out.update(_READABLE[name][1](obj))
     return out
@@ -594,7 +750,8 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     """
     if type(obj) not in _TYPES:
         hint = "; save its .model" if type(getattr(obj, "model", None)) in _TYPES else ""
-        raise ValueError(f"cannot save a {type(obj).__name__}; graybox saves {sorted(_CODECS)}{hint}")
+        why = f" ({_CANNOT[type(obj).__name__]})" if type(obj).__name__ in _CANNOT else ""
+        raise ValueError(f"cannot save a {type(obj).__name__}{why}; graybox saves {sorted(_CODECS)}{hint}")
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": graybox_version(),
                            "type": _TYPES[type(obj)]}
     own = getattr(obj, "units", None) if isinstance(obj, (StaticPoints, SimulationBand)) else None
