@@ -26,10 +26,18 @@ Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
 :class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.OEResult`, :class:`~graybox.SEMPResult`,
 :class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand`, :class:`~graybox.SimulationBand`,
-:class:`~graybox.CLSResult`, the static
-information (:class:`~graybox.StaticPoints`, :class:`~graybox.StaticCurve`, :class:`~graybox.StaticSurface`), the
-local models (:class:`~graybox.LocalModel`, :class:`~graybox.OperatingCurve`) and (registered by the experiment
-layer) :class:`~graybox.GrayboxSelection`. Their tables (pandas DataFrames of int64, float64, bool or
+:class:`~graybox.CLSResult`, :class:`~graybox.GAOptions`, the diagnostics (:class:`~graybox.ResidualTests` and
+its tests, :class:`~graybox.CorrelationTest`; :class:`~graybox.DecisionBootstrap`), the static
+information (:class:`~graybox.StaticPoints`, :class:`~graybox.StaticCurve`, :class:`~graybox.StaticSurface`,
+:class:`~graybox.Equilibrium`), the local models (:class:`~graybox.LocalModel`, :class:`~graybox.OperatingCurve`),
+the data (:class:`~graybox.Record`, :class:`~graybox.Dataset`, :class:`~graybox.Structure`) and, registered by
+the layers above this one, :class:`~graybox.DecimationAdvice` (datasets) and :class:`~graybox.GrayboxSelection`
+(experiments). A bootstrap's ``options`` and ``reference`` and a Dataset's ``extra`` are mappings of plain
+values: null, true/false, integers, numbers with a point and text as JSON has them, the rest as an object of
+one key (``{"float": "nan"}``, ``{"array": {"dtype", "shape", "data"}}``, ``{"tuple": […]}``, ``{"list": […]}``,
+``{"map": {…}}``, ``{"type": {"type", "object"}}`` for a saved type), so that each reads back as the type it was.
+What JSON cannot carry (a function, a plant simulator, a constraint, Dask's lazy arrays) is refused when saving,
+naming the field. Their tables (pandas DataFrames of int64, float64, bool or
 text columns with distinct text labels) are written one column per line, with the index and each
 column's kind; text loads as pandas' default text dtype. A table the format cannot carry is
 refused when saving, not converted.
@@ -67,10 +75,12 @@ from ..estimation._epsilon_constraint import DSFResult
 from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
-from ..core._records import StaticPoints, check_units
+from ..core._records import Dataset, Record, StaticPoints, check_units
 from ..core._validation import FrozenMap, check_path
 from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
+from ..static._analysis import Equilibrium
+from ..static._constraints import StaticConstraint
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._prediction_error import CLSResult
@@ -223,7 +233,7 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
         return [bool(x) for x in np.asarray(v).ravel()]
     if kind == "texts":
         return {str(k): str(r) for k, r in dict(v).items()}
-    if kind == "band":
+    if kind in ("band", "float_or_floats"):
         return _num(v) if np.ndim(v) == 0 else [_num(x) for x in v]
     if kind == "correlation_tests":
         return {str(k): _encode_fields(t) for k, t in dict(v).items()}
@@ -304,6 +314,8 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
         return _read_only(np.array([rd.bool(x, f"{where}[{i}]") for i, x in enumerate(rd.list(v, where))], np.bool_))
     if kind == "texts":
         return {k: rd.str(r, f"{where}.{k}") for k, r in rd.dict(v, where).items()}
+    if kind == "float_or_floats":  # one number, or a list of them read as a tuple
+        return rd.floats(v, where) if isinstance(v, list) else rd.float(v, where)
     if kind == "band":  # one number (0, B] or a pair [low, high]
         if not isinstance(v, list):
             return rd.float(v, where)
@@ -453,9 +465,22 @@ def _enc_plain(v: Any, where: str) -> Any:
         return {"map": _enc_plain_map(v, where)}
     if type(v) in _TYPES:
         return {"type": {"type": _TYPES[type(v)], "object": _encode_fields(v)}}
-    what = _CANNOT.get(type(v).__name__) or ("a function, which JSON cannot carry (its code is not data)" if callable(v)
-                                            else f"a {type(v).__name__}, which graybox does not save")
-    raise ValueError(f"cannot save {where}: {what}")
+    why = _why_not(v)
+    raise ValueError(f"cannot save {where}: " + (why or f"a {type(v).__name__}, which graybox does not save"))
+
+
+def _why_not(v: Any) -> str:
+    """What a value holds that JSON cannot carry, in words ("" for a value merely of a type graybox does not save)."""
+    if type(v).__name__ == "DaskRecord":  # by name: core._gram loads dask only when one is made
+        return ("a DaskRecord, whose u and y are lazy Dask arrays (a task graph over files or a cluster, not "
+                "numbers): save a Record of its computed samples, or the results fitted on it")
+    if isinstance(v, StaticConstraint):
+        return (f"a {type(v).__name__}, a static constraint: an instruction to an estimator, which may hold a Python "
+                "function (UserConstraint's fn, GainBounds' reference) that JSON cannot carry; a result fitted "
+                "under it names it (CLSResult.constraints)")
+    if callable(v) and not isinstance(v, type):
+        return f"a function ({getattr(v, '__qualname__', type(v).__name__)}), which JSON cannot carry (code is not data)"
+    return ""
 
 
 def _dec_plain(v: Any, where: str, rd: _Reader) -> Any:
@@ -502,14 +527,6 @@ def _dec_plain(v: Any, where: str, rd: _Reader) -> Any:
         return _read_only(np.array(data, dtype=dtype).reshape(shape))
     except OverflowError:
         raise rd.fail(f"{at}.data", f"a value beyond the range of {dtype}") from None
-
-
-#: Why a public value that is not saved cannot be: what it holds that JSON cannot carry (by class name).
-_CANNOT = {
-    "DaskRecord": "a DaskRecord holds lazy Dask arrays (a task graph over files or a cluster, not numbers); "
-                  "save the values computed from it",
-    "UserConstraint": "a UserConstraint holds a Python function, which JSON cannot carry (its code is not data)",
-}
 
 
 _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
@@ -589,6 +606,13 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                               ("JSF", "array1"), ("in_band", "bool_array1"), ("thetas", "array2"),
                                               ("rules", "names"), ("reference", "plain_map"), ("failures", "failures"),
                                               ("options", "plain_map"), ("static_sigma", "float_or_none"))),
+    "Equilibrium": (Equilibrium, (("ubar", "float_or_floats"), ("ybar", "float"), ("stable", "bool"),
+                                  ("spectral_radius", "float"))),
+    "Structure": (Structure, (("terms", "structure"),)),
+    "Record": (Record, (("u", "inputs"), ("y", "array1"), ("Ts", "float"), ("name", "str"), ("units", "names"),
+                        ("input_names", "names_or_none"))),
+    "Dataset": (Dataset, (("ident", "Record"), ("valid", "Record"), ("static", "StaticPoints_or_none"),
+                          ("description", "str"), ("extra", "plain_map"))),
 }
 
 
@@ -626,7 +650,7 @@ _STATIC = ("StaticPoints", "StaticCurve", "StaticSurface")
 _KINDS = frozenset({"float", "array1", "array2", "inputs", "int", "str", "bool", "floats", "pairs", "exponents",
                     "structure", "structures", "names", "arrays", "dict_arrays", "failures", "skipped", "frame",
                     "static", "local_models", "ints", "int_array1", "bool_array1", "texts", "band",
-                    "correlation_tests", "plain_map"})
+                    "correlation_tests", "plain_map", "float_or_floats"})
 _KINDS = _KINDS | {k + _OR_NONE for k in _KINDS}
 
 #: Fields written for the reader only (ignored on load), per type: their names and how to write them.
@@ -737,24 +761,33 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, GAOptions, ResidualTests, CorrelationTest, DecisionBootstrap, StaticPoints, StaticCurve, StaticSurface, Equilibrium, LocalModel, OperatingCurve, Record, Dataset, Structure, DecimationAdvice or GrayboxSelection
         The value to write.
     units : (str, str) or mapping, optional
         Units of the input and output: a pair of str (e.g. ``("rpm", "mlc")``, or a Record's ``units``) or a
         mapping with the keys ``"u"`` and ``"y"`` (a missing one: no unit said), written
-        in the header; default for StaticPoints: their own ``units`` (when they name any).
+        in the header; default for StaticPoints, a SimulationBand and a Record: their own ``units``, for a
+        Dataset its records' (when they name any).
 
     Returns
     -------
     str
+
+    Raises
+    ------
+    ValueError
+        A value of a type graybox does not save, or holding what JSON cannot carry (a function, a plant
+        simulator, …: the field is named), or a table the format cannot carry.
     """
     if type(obj) not in _TYPES:
         hint = "; save its .model" if type(getattr(obj, "model", None)) in _TYPES else ""
-        why = f" ({_CANNOT[type(obj).__name__]})" if type(obj).__name__ in _CANNOT else ""
-        raise ValueError(f"cannot save a {type(obj).__name__}{why}; graybox saves {sorted(_CODECS)}{hint}")
+        why = _why_not(obj)
+        what = why if why else f"a {type(obj).__name__}"
+        raise ValueError(f"cannot save {what}; graybox saves {sorted(_CODECS)}{hint}")
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": graybox_version(),
                            "type": _TYPES[type(obj)]}
-    own = getattr(obj, "units", None) if isinstance(obj, (StaticPoints, SimulationBand)) else None
+    own = getattr(obj, "units", None) if isinstance(obj, (StaticPoints, SimulationBand, Record)) else \
+        obj.ident.units if isinstance(obj, Dataset) else None
     if units is None and own is not None and any(own):
         units = own  # the header says what the value itself carries
     u = _units_arg(units)
@@ -906,7 +939,7 @@ def save(
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, StaticPoints, StaticCurve, StaticSurface, LocalModel, OperatingCurve or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, GAOptions, ResidualTests, CorrelationTest, DecisionBootstrap, StaticPoints, StaticCurve, StaticSurface, Equilibrium, LocalModel, OperatingCurve, Record, Dataset, Structure, DecimationAdvice or GrayboxSelection
         The value.
     path : str or PathLike
         Where to write (conventionally ``*.json``).
