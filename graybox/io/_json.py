@@ -34,7 +34,7 @@ the data (:class:`~graybox.Record`, :class:`~graybox.Dataset`, :class:`~graybox.
 the layers above this one, :class:`~graybox.DecimationAdvice` (datasets) and :class:`~graybox.GrayboxSelection`
 (experiments). A bootstrap's ``options`` and ``reference`` and a Dataset's ``extra`` are mappings of plain
 values: null, true/false, integers, numbers with a point and text as JSON has them, the rest as an object of
-one key (``{"float": "nan"}``, ``{"array": {"dtype", "shape", "data"}}``, ``{"tuple": […]}``, ``{"list": […]}``,
+one key (``{"float": "nan"}``, ``{"scalar": {"dtype", "value"}}`` for NumPy's, ``{"array": {"dtype", "shape", "data"}}``, ``{"tuple": […]}``, ``{"list": […]}``,
 ``{"map": {…}}``, ``{"type": {"type", "object"}}`` for a saved type), so that each reads back as the type it was.
 What JSON cannot carry (a function, a plant simulator, a constraint, Dask's lazy arrays) is refused when saving,
 naming the field. Their tables (pandas DataFrames of int64, float64, bool or
@@ -426,10 +426,10 @@ def _dec_frame(v: Any, where: str, rd: _Reader) -> pd.DataFrame:
 # first five; a one-key object tagged with the kind for the rest)
 # --------------------------------------------------------------------------------------------
 #: Array dtypes a plain value may have, by the name the file gives them.
-_PLAIN_DTYPES = frozenset({"float64", "float32", "float16", "int64", "int32", "int16", "int8", "uint64", "uint32",
+_PLAIN_DTYPES = frozenset({"float64", "float32", "float16", "int64", "int32", "int16", "int8", "uint32",
                            "uint16", "uint8", "bool"})
 #: Tags of the plain values JSON has no literal for.
-_PLAIN_TAGS = ("float", "array", "tuple", "list", "map", "type")
+_PLAIN_TAGS = ("float", "scalar", "array", "tuple", "list", "map", "type")
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
@@ -445,13 +445,17 @@ def _enc_plain_map(v: Mapping, where: str) -> dict:
 
 
 def _enc_plain(v: Any, where: str) -> Any:
+    if isinstance(v, np.generic):  # a NumPy scalar (np.float64(0.1), np.int64(3)) reads back as one
+        if v.dtype.name not in _PLAIN_DTYPES:
+            raise ValueError(f"cannot save {where}: a NumPy scalar of dtype {v.dtype} (a saved one holds a number or a bool)")
+        return {"scalar": {"dtype": v.dtype.name, "value": _enc_plain(v.item(), where)}}
     if v is None or isinstance(v, (bool, str)):
         return v
-    if isinstance(v, np.bool_):
-        return bool(v)
-    if isinstance(v, (int, np.integer)):
-        return int(v)
-    if isinstance(v, (float, np.floating)):
+    if isinstance(v, int):
+        if not -2**63 <= v < 2**63:  # the loader reads 64-bit integers only: refused now, not when loading
+            raise ValueError(f"cannot save {where}: the integer {v} is beyond the 64-bit range")
+        return v
+    if isinstance(v, float):
         x = float(v)  # written with a point (1.0, 1e-05): it reads back a float, not an int
         return x if math.isfinite(x) else {"float": _num(x)}
     if isinstance(v, np.ndarray):
@@ -511,6 +515,24 @@ def _dec_plain(v: Any, where: str, rd: _Reader) -> Any:
         if set(t) != {"type", "object"} or not isinstance(name, str) or name not in _CODECS:
             raise rd.fail(at, f"expected {{\"type\": one of {sorted(_CODECS)}, \"object\": …}}")
         return _decode_fields(name, t["object"], f"{at}.object", rd)
+    if tag == "scalar":
+        sc = rd.dict(x, at)
+        if set(sc) != {"dtype", "value"}:
+            raise rd.fail(at, f"a NumPy scalar needs ['dtype', 'value'], got {sorted(sc)}")
+        dtype = rd.str(sc["dtype"], f"{at}.dtype")
+        if dtype not in _PLAIN_DTYPES:
+            raise rd.fail(f"{at}.dtype", f"unknown dtype {dtype!r} (one of {sorted(_PLAIN_DTYPES)})")
+        kind = np.dtype(dtype).kind
+        read = rd.bool if kind == "b" else rd.int if kind in "iu" else rd.float
+        value = sc["value"]
+        if kind == "f" and isinstance(value, dict):  # a non-finite one, {"float": "nan"}
+            value = rd.dict(value, f"{at}.value").get("float")
+        value = read(value, f"{at}.value")
+        try:
+            with np.errstate(over="raise"):  # a hand-edited 1e300 of a float32 would otherwise become inf
+                return np.array(value, dtype=dtype)[()]
+        except (OverflowError, FloatingPointError):
+            raise rd.fail(f"{at}.value", f"a value beyond the range of {dtype}") from None
     a = rd.dict(x, at)  # an array
     if set(a) != {"dtype", "shape", "data"}:
         raise rd.fail(at, f"an array needs ['dtype', 'shape', 'data'], got {sorted(a)}")
@@ -524,8 +546,9 @@ def _dec_plain(v: Any, where: str, rd: _Reader) -> Any:
     if any(n < 0 for n in shape) or math.prod(shape) != len(data):
         raise rd.fail(f"{at}.shape", f"shape {list(shape)} does not hold the {len(data)} values of data")
     try:
-        return _read_only(np.array(data, dtype=dtype).reshape(shape))
-    except OverflowError:
+        with np.errstate(over="raise"):
+            return _read_only(np.array(data, dtype=dtype).reshape(shape))
+    except (OverflowError, FloatingPointError):
         raise rd.fail(f"{at}.data", f"a value beyond the range of {dtype}") from None
 
 
