@@ -1,5 +1,5 @@
 """gb.save / gb.load for the public values it refused: DecimationAdvice, ResidualTests and CorrelationTest,
-DecisionBootstrap (and the GAOptions its options may hold), Equilibrium, Structure, Record and Dataset.
+DecisionBootstrap (and the GAOptions its options may hold), StaticSurfaceBand, Equilibrium, Structure, Record and Dataset.
 
 Each round-trips field for field (floats bit for bit, NaN and ±inf kept, dtypes kept), a hand-edited file is
 refused with a GrayboxFileError naming the field, ``expect=`` holds, and what JSON cannot carry (a function, a
@@ -79,6 +79,9 @@ def values():
         warnings.simplefilter("ignore")
         tests = gb.residual_tests(m, valid)
         tests_undefined = gb.residual_tests(m2, rec2, rule="pointwise", max_lag=5)
+        fit2 = gb.cls(m2.structure, rec2).model  # least squares: ls_uncertainty asks for its optimum
+        surface_band = gb.static_surface_band(gb.ls_uncertainty(fit2, rec2), [[0.2, 2.0], [0.8, 2.0]],
+                                              method="monte-carlo", n_samples=50)
         boot = gb.bootstrap_decision(m.structure, rec, static, lambdas=[1.0, 0.1, 1e-3], n_boot=3,
                                      options={"solver": "closed", "weights": "sum"})
     ga = gb.GAOptions(population=10, generations=3, stall=2, mutation_scale=1e-3)
@@ -104,12 +107,12 @@ def values():
             "correlation test": tests["u_xi"], "bootstrap": boot, "bootstrap, exotic": exotic, "ga options": ga,
             "equilibrium": eq, "equilibrium of two inputs": eq2, "structure": gb.Candidates(ny=2, nu=1, degree=2),
             "record": rec, "record of two inputs": rec2, "dataset": data,
-            "dataset without static": gb.Dataset(rec2, rec2)}
+            "dataset without static": gb.Dataset(rec2, rec2), "static surface band": surface_band}
 
 
 NAMES = ["advice", "no advice", "residual tests", "residual tests, some undefined", "correlation test", "bootstrap",
          "bootstrap, exotic", "ga options", "equilibrium", "equilibrium of two inputs", "structure", "record",
-         "record of two inputs", "dataset", "dataset without static"]
+         "record of two inputs", "dataset", "dataset without static", "static surface band"]
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -132,6 +135,7 @@ def test_the_fixture_holds_what_the_round_trips_are_meant_to_cover(values):
     assert values["bootstrap"].reference["theta"].dtype == np.float64
     assert isinstance(values["equilibrium of two inputs"].ubar, tuple)
     assert values["record of two inputs"].u.ndim == 2
+    assert values["static surface band"].gain.shape == (2, 2) and values["static surface band"].n_samples == 50
 
 
 def test_the_header_carries_a_records_units(values, tmp_path):
@@ -222,6 +226,8 @@ CORRUPT = [
     ("record", ["y"], [1.0, 2.0], r"object: not a valid Record: .*same length"),
     ("dataset", ["extra", "repeats"], [1, 2], r"object\.extra\.repeats: a bare list"),
     ("dataset", ["valid", "Ts"], "0.05", r"object\.valid\.Ts: expected a number"),
+    ("static surface band", ["gain", 1], [0.1], r"object\.gain: rows of different lengths"),
+    ("static surface band", ["input_names"], ["u1"], r"object: not a valid StaticSurfaceBand: ubar must have shape"),
 ]
 
 

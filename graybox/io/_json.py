@@ -25,8 +25,8 @@ line.
 Types: :class:`~graybox.Model`, :class:`~graybox.NeuralModel`, :class:`~graybox.ParetoSet`,
 :class:`~graybox.Selection`, :class:`~graybox.ELSResult`, :class:`~graybox.NeuralFit`,
 :class:`~graybox.Decision`, :class:`~graybox.DSFResult`, :class:`~graybox.OEResult`, :class:`~graybox.SEMPResult`,
-:class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand`, :class:`~graybox.SimulationBand`,
-:class:`~graybox.CLSResult`, :class:`~graybox.GAOptions`, the diagnostics (:class:`~graybox.ResidualTests` and
+:class:`~graybox.ParameterUncertainty`, :class:`~graybox.StaticCurveBand`, :class:`~graybox.StaticSurfaceBand`,
+:class:`~graybox.SimulationBand`, :class:`~graybox.CLSResult`, :class:`~graybox.GAOptions`, the diagnostics (:class:`~graybox.ResidualTests` and
 its tests, :class:`~graybox.CorrelationTest`; :class:`~graybox.DecisionBootstrap`), the static
 information (:class:`~graybox.StaticPoints`, :class:`~graybox.StaticCurve`, :class:`~graybox.StaticSurface`,
 :class:`~graybox.Equilibrium`), the local models (:class:`~graybox.LocalModel`, :class:`~graybox.OperatingCurve`),
@@ -86,7 +86,7 @@ from ..static._surfaces import StaticSurface
 from ..estimation._prediction_error import CLSResult
 from ..control._local import LocalModel, OperatingCurve
 from ..diagnostics._simulation_band import SimulationBand
-from ..diagnostics._uncertainty import ParameterUncertainty, StaticCurveBand
+from ..diagnostics._uncertainty import ParameterUncertainty, StaticCurveBand, StaticSurfaceBand
 from ..diagnostics._residuals import CorrelationTest, ResidualTests
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..estimation._simulation_error import GAOptions
@@ -614,6 +614,11 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                         ("time_constant_low", "array1_or_none"),
                                         ("time_constant_high", "array1_or_none"), ("undefined", "array1_or_none"),
                                         ("model_name", "str"))),
+    "StaticSurfaceBand": (StaticSurfaceBand, (("ubar", "array2"), ("input_names", "names"), ("ybar", "array1"),
+                                              ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
+                                              ("gain", "array2"), ("gain_low", "array2"), ("gain_high", "array2"),
+                                              ("gain_std", "array2"), ("level", "float"), ("method", "str"),
+                                              ("n_samples", "int"), ("undefined", "array1"), ("model_name", "str"))),
     "CorrelationTest": (CorrelationTest, (("name", "str"), ("label", "str"), ("kind", "str"), ("lags", "int_array1"),
                                           ("phi", "array1"), ("band", "float"), ("limit", "float"),
                                           ("outside", "int_array1"), ("passed", "bool"))),
@@ -784,7 +789,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, GAOptions, ResidualTests, CorrelationTest, DecisionBootstrap, StaticPoints, StaticCurve, StaticSurface, Equilibrium, LocalModel, OperatingCurve, Record, Dataset, Structure, DecimationAdvice or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, StaticSurfaceBand, SimulationBand, CLSResult, GAOptions, ResidualTests, CorrelationTest, DecisionBootstrap, StaticPoints, StaticCurve, StaticSurface, Equilibrium, LocalModel, OperatingCurve, Record, Dataset, Structure, DecimationAdvice or GrayboxSelection
         The value to write.
     units : (str, str) or mapping, optional
         Units of the input and output: a pair of str (e.g. ``("rpm", "mlc")``, or a Record's ``units``) or a
@@ -962,7 +967,7 @@ def save(
 
     Parameters
     ----------
-    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, SimulationBand, CLSResult, GAOptions, ResidualTests, CorrelationTest, DecisionBootstrap, StaticPoints, StaticCurve, StaticSurface, Equilibrium, LocalModel, OperatingCurve, Record, Dataset, Structure, DecimationAdvice or GrayboxSelection
+    obj : Model, NeuralModel, ParetoSet, Selection, ELSResult, NeuralFit, Decision, DSFResult, OEResult, SEMPResult, ParameterUncertainty, StaticCurveBand, StaticSurfaceBand, SimulationBand, CLSResult, GAOptions, ResidualTests, CorrelationTest, DecisionBootstrap, StaticPoints, StaticCurve, StaticSurface, Equilibrium, LocalModel, OperatingCurve, Record, Dataset, Structure, DecimationAdvice or GrayboxSelection
         The value.
     path : str or PathLike
         Where to write (conventionally ``*.json``).
