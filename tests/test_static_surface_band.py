@@ -99,3 +99,30 @@ def test_frame_and_bad_input(miso):
     with pytest.raises(ValueError, match="gain must have shape"):
         type(band)(band.ubar, band.input_names, band.ybar, band.ybar_low, band.ybar_high, band.ybar_std,
                    band.gain[:, 0], band.gain_low, band.gain_high, band.gain_std, 0.95, "delta", 0, band.undefined)
+
+
+def test_plot_static_band_draws_a_surface_band_as_slices(miso):
+    from graybox import plots
+
+    d, unc, _ = miso
+    lo, hi = d.static.ubar.min(axis=0), d.static.ubar.max(axis=0)
+    levels = np.unique(d.static.ubar[:, 1])[:2]  # two of the points' own levels of u2: their points lie on slices
+    u1 = np.linspace(lo[0], hi[0], 7)
+    pts = np.array([[a, b] for b in levels for a in u1])
+    band = gb.static_surface_band(unc, pts)
+    fig = plots.plot_static_band(band, d.static, against="u1")
+    ax, gx = fig.axes
+    lines = [ln for ln in ax.get_lines() if ln.get_linestyle() == "-"]
+    assert len(lines) == 2 and all(len(ln.get_xdata()) == 7 for ln in lines)
+    np.testing.assert_allclose(lines[0].get_ydata(), band.ybar[:7])
+    assert [ln.get_label().split("(")[-1] for ln in lines] == [f"u2 = {v:g})" for v in levels]
+    stars = [ln for ln in ax.get_lines() if ln.get_marker() == "*"]
+    assert sum(len(ln.get_xdata()) for ln in stars) == int(np.isin(d.static.ubar[:, 1], levels).sum())
+    assert ax.get_xlabel().startswith("input u1") and gx.get_ylabel().startswith("static gain ∂ȳ/∂u1")
+    np.testing.assert_allclose([ln for ln in gx.get_lines()][0].get_ydata(), band.gain[:7, 0])
+    other = plots.plot_static_band(band, against=1, gain=False)  # against u2: 7 slices of 2 points
+    assert len([ln for ln in other.axes[0].get_lines()]) == 7
+    with pytest.raises(ValueError, match="against"):
+        plots.plot_static_band(band, against="u3")
+    with pytest.raises(ValueError, match="against"):
+        plots.plot_static_band(band, against=2)

@@ -13,11 +13,11 @@ from matplotlib.figure import Figure
 
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints
-from ..core._validation import check_bool
+from ..core._validation import check_bool, check_choice, check_int
 from ._data import check_axes, check_one_input_points, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
-from ..diagnostics._uncertainty import StaticCurveBand
+from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand
 
 __all__ = ["plot_residual_tests", "plot_static_band", "plot_simulation_band", "plot_decision_bootstrap"]
 
@@ -82,41 +82,78 @@ def plot_residual_tests(
 
 
 def plot_static_band(
-    band: StaticCurveBand,
+    band: StaticCurveBand | StaticSurfaceBand,
     points: StaticPoints | None = None,
     *,
     gain: bool = True,
+    against: int | str = 0,
     axes: Sequence[Axes] | None = None,
-    xlabel: str = "input ū",
+    xlabel: str | None = None,
     ylabel: str = "output ȳ",
-    gain_label: str = "static gain dȳ/dū",
+    gain_label: str | None = None,
 ) -> Figure:
     """The static curve with its confidence band (shaded) and the static points; the gain beside it.
 
+    A band of a static surface (:func:`graybox.static_surface_band`) is drawn as slices: ȳ against the input
+    ``against``, one line and band per level of the other inputs (its points grouped by them, as
+    :func:`graybox.plots.plot_surface_slices` draws surfaces), the gain ∂ȳ/∂ū of that input beside it.
+
     Parameters
     ----------
-    band : StaticCurveBand
-        From :func:`graybox.static_curve_band`.
+    band : StaticCurveBand or StaticSurfaceBand
+        From :func:`graybox.static_curve_band` or :func:`graybox.static_surface_band`.
     points : StaticPoints, optional
-        Measured steady states, drawn as ``*`` markers.
+        Measured steady states, drawn as ``*`` markers (of a surface: those on a slice, in its colour).
     gain : bool
         Add a second panel with the static gain and its band.
+    against : int or str
+        A surface band's input on the horizontal axis (position or name); a curve's is its one input.
     axes : sequence of Axes, optional
         Draw here (one Axes, or two with ``gain``); by default a new figure is made.
-    xlabel, ylabel, gain_label : str
-        Axis labels; the points' ``units`` are appended (the gain's as output unit / input unit)
-        unless a label names them already. Without points (or their units): the labels as given.
+    xlabel, ylabel, gain_label : str, optional
+        Axis labels (default x: "input ū", or the input's name; gain: "static gain dȳ/dū", or ∂ȳ/∂ of the
+        input); the points' ``units`` are appended (the gain's as output unit / input unit) unless a label
+        names them already. Without points (or their units): the labels as given.
 
     Returns
     -------
     matplotlib.figure.Figure
-        The curve as a line over its shaded band (with the level and method in the legend), the
-        points as asterisks; the gain panel likewise.
+        The curve (or each slice) as a line over its shaded band (with the level and method in the
+        legend), the points as asterisks; the gain panel likewise.
     """
-    if not isinstance(band, StaticCurveBand):
-        raise TypeError(f"band must be a StaticCurveBand (from static_curve_band), got {type(band).__name__}")
+    if not isinstance(band, (StaticCurveBand, StaticSurfaceBand)):
+        raise TypeError("band must be a StaticCurveBand or StaticSurfaceBand (from static_curve_band or "
+                        f"static_surface_band), got {type(band).__name__}")
     gain = check_bool(gain, "gain")
-    check_one_input_points(points, "plot_static_band")
+    surface = isinstance(band, StaticSurfaceBand)
+    if surface:
+        names = band.input_names
+        i = (names.index(check_choice(against, "against", names)) if isinstance(against, str)
+             else check_int(against, "against", low=0, high=len(names) - 1))
+        if points is not None:
+            if not isinstance(points, StaticPoints):
+                raise TypeError(f"points must be StaticPoints, got {type(points).__name__}")
+            if points.input_names != names:
+                raise ValueError(f"plot_static_band: the points' inputs {points.input_names} are not the band's "
+                                 f"{names}")
+        held = [k for k in range(len(names)) if k != i]
+        levels = np.unique(band.ubar[:, held], axis=0)
+        groups = [np.flatnonzero((band.ubar[:, held] == lev).all(axis=1)) for lev in levels]
+        groups = [g[np.argsort(band.ubar[g, i], kind="stable")] for g in groups]
+        x, gains = band.ubar[:, i], band.gain[:, i]
+        glo, ghi = band.gain_low[:, i], band.gain_high[:, i]
+        tags = [", ".join(f"{names[k]} = {v:g}" for k, v in zip(held, lev)) for lev in levels]
+        xlabel = f"input {names[i]}" if xlabel is None else xlabel
+        gain_label = f"static gain ∂ȳ/∂{names[i]}" if gain_label is None else gain_label
+    else:
+        if isinstance(against, str):  # a curve's band keeps no input name to compare with
+            raise ValueError(f"against={against!r}: a static curve's band has one input, against must be 0")
+        check_int(against, "against", low=0, high=0)
+        check_one_input_points(points, "plot_static_band")
+        groups, tags = [np.arange(band.ubar.size)], [""]
+        x, gains, glo, ghi = band.ubar, band.gain, band.gain_low, band.gain_high
+        xlabel = "input ū" if xlabel is None else xlabel
+        gain_label = "static gain dȳ/dū" if gain_label is None else gain_label
     need = 2 if gain else 1
     if axes is None:
         fig = Figure(figsize=(10.0 if gain else 6.4, 4.0), layout="constrained")
@@ -126,25 +163,34 @@ def plot_static_band(
         fig = axs[0].figure
     what = f"{band.level:.0%} band ({band.method})"
     name = band.model_name or "model"
-    ax = axs[0]
-    ax.fill_between(band.ubar, band.ybar_low, band.ybar_high, color="C0", alpha=0.25, lw=0, label=what)
-    ax.plot(band.ubar, band.ybar, "-", color="C0", label=f"{name} static curve")
     u_unit, y_unit = ("", "") if points is None else points.units
     xlabel = unit_label(xlabel, u_unit)
-    if points is not None:
-        ax.plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(unit_label(ylabel, y_unit))
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
+    for j, (g, tag) in enumerate(zip(groups, tags)):
+        color = f"C{j % 10}" if surface else "C0"
+        on = f" ({tag})" if tag else ""
+        axs[0].fill_between(x[g], band.ybar_low[g], band.ybar_high[g], color=color, alpha=0.25, lw=0,
+                            label=what if j == 0 else None)
+        axs[0].plot(x[g], band.ybar[g], "-", color=color, label=f"{name} static {'surface' if surface else 'curve'}{on}")
+        if points is not None and surface:
+            lev = band.ubar[g[0], held]
+            scale = np.abs(points.ubar[:, held]).max(initial=1.0)
+            hit = (np.abs(points.ubar[:, held] - lev) <= 1e-9 * np.maximum(np.abs(lev), scale)).all(axis=1)
+            axs[0].plot(points.ubar[hit, i], points.ybar[hit], "*", linestyle="none", markersize=9, color=color)
+        if gain:
+            gcolor = color if surface else "C1"
+            axs[1].fill_between(x[g], glo[g], ghi[g], color=gcolor, alpha=0.25, lw=0, label=what if j == 0 else None)
+            axs[1].plot(x[g], gains[g], "-", color=gcolor, label=f"{name} static gain{on}")
+    if points is not None and not surface:
+        axs[0].plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
+    axs[0].set_xlabel(xlabel)
+    axs[0].set_ylabel(unit_label(ylabel, y_unit))
+    axs[0].grid(True, alpha=0.3)
+    axs[0].legend(fontsize=8, loc="best")
     if gain:
-        ax = axs[1]
-        ax.fill_between(band.ubar, band.gain_low, band.gain_high, color="C1", alpha=0.25, lw=0, label=what)
-        ax.plot(band.ubar, band.gain, "-", color="C1", label=f"{name} static gain")
-        ax.set_xlabel(xlabel)
-        ax.set_ylabel(unit_label(gain_label, f"{y_unit or '1'}/{u_unit or '1'}" if u_unit or y_unit else ""))
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
+        axs[1].set_xlabel(xlabel)
+        axs[1].set_ylabel(unit_label(gain_label, f"{y_unit or '1'}/{u_unit or '1'}" if u_unit or y_unit else ""))
+        axs[1].grid(True, alpha=0.3)
+        axs[1].legend(fontsize=8, loc="best")
     return fig
 
 
