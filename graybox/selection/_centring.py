@@ -87,6 +87,48 @@ def closure(structure: Structure | Sequence[Term | str]) -> Structure:
     return Structure(process + added + [t for t in st if t.is_noise])
 
 
+def told_apart(structure: Structure, records: Record | list[Record],
+               rank_tol: float) -> tuple[Structure, tuple[tuple[Term, str], ...]]:
+    """The terms of a closed structure that the centred ``records`` tell apart, the set still closed.
+
+    A closure can hold a term the data cannot tell from its divisors: with a two-level input (a PRBS)
+    ``(u(k-1) − d)²`` is a combination of ``u(k-1) − d`` and ``1``, and every term of a held input is zero.
+    Taken by degree (the constant, then single signals, then products), a term whose unit-RMS column
+    leaves at most ``rank_tol`` √N outside the span of the terms kept before it is dropped, and so is
+    every multiple of a dropped term (or the set is not closed). The span of the terms before a term
+    of degree d is that of a closed set plus terms of degree d, which a shift changes only by lower
+    terms: what is dropped does not depend on the offsets.
+
+    Returns
+    -------
+    kept : Structure
+        The process terms kept, in the structure's order.
+    dropped : tuple of (Term, str)
+        Each term left out and why, in degree order.
+    """
+    process = structure.process
+    order = sorted(process, key=Term.sort_key)
+    X, _ = stacked_regressors(Structure(order), records)
+    X = X / column_scales(X)
+    bound = rank_tol * math.sqrt(X.shape[0])
+    basis = np.zeros((X.shape[0], 0))
+    dropped: dict[Term, str] = {}
+    for j, t in enumerate(order):
+        gone = next((d for d in _divisors(t) if d in dropped), None)
+        if gone is not None:
+            dropped[t] = f"a multiple of {gone}, which these data cannot tell from its divisors"
+            continue
+        r = X[:, j] - basis @ (basis.T @ X[:, j])
+        r -= basis @ (basis.T @ r)  # twice is enough (Kahan): the residual is orthogonal to round-off
+        norm = float(np.linalg.norm(r))
+        if norm <= bound:
+            dropped[t] = "a linear combination of lower terms on these (centred) data"
+        else:
+            basis = np.column_stack([basis, r / norm])
+    kept = Structure([t for t in process if t not in dropped]) if dropped else process
+    return kept, tuple(dropped.items())
+
+
 def raw_theta(structure: Structure, theta: np.ndarray, offsets: Mapping[str, float]) -> np.ndarray:
     """The parameters, on the raw signals, of a model fitted on the centred ones.
 
@@ -129,7 +171,13 @@ def least_squares(structure: Structure, records: Record | list[Record]) -> tuple
     return theta, float(r @ r)
 
 
-def stop_note(stop: str, chosen: int, closed: int, offsets: Mapping[str, float]) -> str:
-    """A centred search's ``stop``: the search's own, what it chose on which centred signals, and the closure."""
+def stop_note(stop: str, chosen: int, closed: int, offsets: Mapping[str, float],
+              dropped: Sequence[tuple[Term, str]] = ()) -> str:
+    """A centred search's ``stop``: the search's own, what it chose on which centred signals, and the closure
+    (less the terms the data cannot tell apart, :func:`told_apart`)."""
     signals = ", ".join(f"{s} − {c:.6g}" for s, c in offsets.items())
-    return f"{stop}; {chosen} terms chosen on centred signals ({signals}), closed under shifts: {closed} terms"
+    note = f"{stop}; {chosen} terms chosen on centred signals ({signals}), closed under shifts: {closed} terms"
+    if dropped:
+        note += (f", {closed - len(dropped)} without " + ", ".join(str(t) for t, _ in dropped)
+                 + " (the data cannot tell them from their divisors)")
+    return note

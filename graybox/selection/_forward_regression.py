@@ -632,7 +632,9 @@ def frols(
         Select on centred signals (default False: on the raw ones). The search runs on y and each
         input minus their means over ``data``, and the chosen centred terms are expanded into the raw
         monomials they imply: :attr:`Selection.structure` is their hierarchical closure (every
-        divisor of every chosen term, the constant included: more terms than were chosen), with
+        divisor of every chosen term, the constant included: more terms than were chosen), less any
+        term the data cannot tell from its divisors (a two-level input's u(k-1)^2, and its multiples:
+        in :attr:`Selection.skipped`, the stop text and a CandidateWarning), with
         least-squares θ on the raw signals. The structure and the model's predictions are then the
         same wherever the signals' zeros are (°C or K, gauge or absolute pressure), up to round-off.
         ERR, RSS and the criterion curve are those of the closure on the centred signals (in the
@@ -816,17 +818,23 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     offsets = _centring.signal_offsets(data)
     centred = _centring.centred_data(data, offsets)
     sel = frols(candidates, centred, **options)
-    closed = _centring.closure(sel.structure).process
+    rank_tol = options["rank_tol"]
+    full = _centring.closure(sel.structure).process
+    # less what the data cannot tell apart (a two-level input's u^2), or the fit below cannot hold every term
+    closed, dropped = _centring.told_apart(full, centred, rank_tol)
+    if dropped:
+        warn(f"{len(dropped)} term(s) of the closure left out, the data cannot tell them from their divisors: "
+             + ", ".join(str(t) for t, _ in dropped), CandidateWarning)
     # the closure's own fit on the centred signals: its ERR, RSS and θ, the chosen terms first
-    fit = frols(closed + candidates.noise, centred, n_terms=len(closed), include=list(closed), rank_tol=options["rank_tol"],
+    fit = frols(closed + candidates.noise, centred, n_terms=len(closed), include=list(closed), rank_tol=rank_tol,
                 method=options["method"], criterion=sel.criterion)
     subsets, subset_rss = (), ()
     if sel.subsets:
-        subsets = tuple(_centring.closure(S).process for S in sel.subsets)
+        subsets = tuple(_centring.told_apart(_centring.closure(S).process, centred, rank_tol)[0] for S in sel.subsets)
         subset_rss = np.array([_centring.least_squares(S, centred)[1] for S in subsets])
-    stop = _centring.stop_note(sel.stop, len(sel.structure), len(closed), offsets)
+    stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), offsets, dropped)
     return replace(fit, theta=_centring.raw_theta(closed, fit.theta, offsets), stop=stop,
-                   n_candidates=sel.n_candidates, skipped=sel.skipped, search=sel.search, subsets=subsets,
+                   n_candidates=sel.n_candidates, skipped=sel.skipped + dropped, search=sel.search, subsets=subsets,
                    subset_rss=subset_rss)
 
 

@@ -41,12 +41,12 @@ from ..core._least_squares import output_scale
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, as_records
-from ._forward_regression import CRITERIA, criterion_of_sizes
+from ._forward_regression import CRITERIA, CandidateWarning, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
 from . import _centring
 from ..core._validation import (FrozenFrame, check_bool, check_choice, check_fields, check_int, check_mean_square,
-                                check_real, check_theta, frozen)
+                                check_real, check_theta, frozen, warn)
 
 __all__ = ["semp", "SEMPResult"]
 
@@ -285,8 +285,9 @@ def semp(
         Search on centred signals (default False: on the raw ones): y and each input minus their
         means over ``data``; the chosen centred terms are then expanded into the raw monomials they
         imply, so :attr:`SEMPResult.structure` is their hierarchical closure (every divisor of every
-        chosen term, the constant included: more terms than were chosen), with least-squares θ on
-        the raw signals and :attr:`SEMPResult.score` its free run's MSE. The structure and the
+        chosen term, the constant included: more terms than were chosen), less any term the data
+        cannot tell from its divisors (a two-level input's u(k-1)^2, and its multiples: in the stop
+        text and a CandidateWarning), with least-squares θ on the raw signals and :attr:`SEMPResult.score` its free run's MSE. The structure and the
         model's free run are then the same wherever the signals' zeros are, up to round-off.
         :attr:`SEMPResult.path` is the centred search's; :attr:`SEMPResult.stop` says what it chose.
 
@@ -342,14 +343,19 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     offsets = _centring.signal_offsets(data)
     centred = _centring.centred_data(data, offsets)
     res = semp(candidates, centred, **options)
-    closed = _centring.closure(res.structure).process
+    full = _centring.closure(res.structure).process
+    # less what the data cannot tell apart (a two-level input's u^2): its θ would be a point of a null space
+    closed, dropped = _centring.told_apart(full, centred, options["rank_tol"])
+    if dropped:
+        warn(f"{len(dropped)} term(s) of the closure left out, the data cannot tell them from their divisors: "
+             + ", ".join(str(t) for t, _ in dropped), CandidateWarning)
     theta, _ = _centring.least_squares(closed, centred)
     # the closure's free run on the centred signals, from the same samples and over the same rows as the search's
     L = candidates.process.max_lag
     recs = centred if isinstance(centred, list) else [centred]
     model = Model(closed, theta, input_names=recs[0].input_names, Ts=recs[0].Ts)
     err = np.concatenate([model.simulate(r, r.y[:L])[L:] - r.y[L:] for r in recs])
-    stop = _centring.stop_note(res.stop, len(res.structure), len(closed), offsets)
+    stop = _centring.stop_note(res.stop, len(res.structure), len(full), offsets, dropped)
     return replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
                    score=float(np.mean(err * err)), stop=stop)
 
