@@ -52,3 +52,20 @@ def test_centred_selection_on_a_two_level_input_drops_what_the_data_cannot_tell(
     moved = replace(rec, u=rec.u + 300.0, y=rec.y - 50.0)
     other = _quiet(fn, CAND, moved, centre=True, **kw)
     assert set(other.structure) == set(sel.structure)
+
+
+def test_select_graybox_centred_on_a_two_level_input():
+    # every row's closure held u(k-1)^2 beside u(k-1) and 1: every fit refused it ("not identifiable"), and the
+    # call raised "no structure has a finite free-run J_S", where centre=False chooses
+    ident, valid = _two_level(12), _two_level(13)
+    kw = {"band": np.inf, "estimator": "ls", "sizes": [4, 6, 8], "sources": ["frols", "semp"], "centre": True}
+    a = gb.select_graybox(CAND, gb.Dataset(ident, valid), **kw)
+    for row in a.table.index:
+        st = a.structure_of(row)
+        assert set(closure(st)) == set(st)
+        assert _rank(st, ident) == len(st)
+    assert np.isfinite(a.table["JS_valid"]).all()
+    b = gb.select_graybox(CAND, gb.Dataset(replace(ident, u=ident.u + 300.0, y=ident.y - 50.0),
+                                           replace(valid, u=valid.u + 300.0, y=valid.y - 50.0)), **kw)
+    assert set(b.structure) == set(a.structure)
+    np.testing.assert_allclose(b.table["JS_valid"], a.table["JS_valid"], rtol=1e-6)

@@ -683,7 +683,10 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
                  SelectionWarning)
     rows, seen = [], {}
     for (src, k), terms in found.items():
-        st = _centring.closure(terms).process if centre else gb.Structure(terms)
+        st = gb.Structure(terms)
+        if centre:  # closed, less what the data cannot tell apart (a two-level input's u^2: no fit takes it);
+            # unsaid, as the searches' skipped candidates are: the row's terms show it
+            st = _centring.told_apart(_centring.closure(st).process, ident, 1e-7)[0]  # frols's and semp's rank_tol
         added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
         st = st + gb.Structure(added)
         if centre:  # the static form's terms (u(k-1)^2 for Σ_{u^2}) bring their divisors too, or the set is not closed
@@ -1092,7 +1095,7 @@ def select_graybox(
         Search the structures on centred signals (default False: on the raw ones): the searches
         run on the identification records' y and inputs minus their means, and each structure they
         find is replaced by its hierarchical closure (every divisor of every term, the constant
-        included), which spans the same raw-signal models wherever the signals' zeros are; fits,
+        included; less a term the data cannot tell from its divisors, a two-level input's u(k-1)^2), which spans the same raw-signal models wherever the signals' zeros are; fits,
         scores and the choice are then on the raw records as always. A row's ``size`` counts the
         centred terms searched, its ``n_terms`` the closure's (and the static terms').
     executor : {"inprocess", "processes", "dask"}, optional
