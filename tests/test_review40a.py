@@ -69,3 +69,13 @@ def test_select_graybox_centred_on_a_two_level_input():
                                            replace(valid, u=valid.u + 300.0, y=valid.y - 50.0)), **kw)
     assert set(b.structure) == set(a.structure)
     np.testing.assert_allclose(b.table["JS_valid"], a.table["JS_valid"], rtol=1e-6)
+
+
+def test_centred_stop_text_spells_a_negative_mean_as_a_sum():
+    # "u − -3000" was the stop text of an input whose mean is negative
+    rec = _two_level(12)
+    moved = replace(rec, u=rec.u - 3000.0, y=rec.y + 2.0)
+    for fn, kw in ((gb.frols, {"n_terms": 3}), (gb.semp, {"n_terms": 3})):
+        stop = _quiet(fn, CAND, moved, centre=True, **kw).stop
+        assert "− -" not in stop
+        assert "u + 2999.49" in stop and "y − " in stop

@@ -175,7 +175,7 @@ def stop_note(stop: str, chosen: int, closed: int, offsets: Mapping[str, float],
               dropped: Sequence[tuple[Term, str]] = ()) -> str:
     """A centred search's ``stop``: the search's own, what it chose on which centred signals, and the closure
     (less the terms the data cannot tell apart, :func:`told_apart`)."""
-    signals = ", ".join(f"{s} − {c:.6g}" for s, c in offsets.items())
+    signals = ", ".join(f"{s} − {c:.6g}" if c >= 0 else f"{s} + {-c:.6g}" for s, c in offsets.items())
     note = f"{stop}; {chosen} terms chosen on centred signals ({signals}), closed under shifts: {closed} terms"
     if dropped:
         note += (f", {closed - len(dropped)} without " + ", ".join(str(t) for t, _ in dropped)
