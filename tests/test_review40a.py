@@ -79,3 +79,39 @@ def test_centred_stop_text_spells_a_negative_mean_as_a_sum():
         stop = _quiet(fn, CAND, moved, centre=True, **kw).stop
         assert "− -" not in stop
         assert "u + 2999.49" in stop and "y − " in stop
+
+
+def _held_b(level: float, n: int = 400, seed: int = 7) -> gb.Record:
+    rng = np.random.default_rng(seed)
+    u = np.column_stack([rng.uniform(-1.0, 1.0, n), np.full(n, level)])
+    m = gb.Model(gb.Structure(["y(k-1)", "a(k-1)", "a(k-1)y(k-1)", "a(k-2)^2"]), THETA, input_names=("a", "b"))
+    y = m.simulate(u, np.zeros(2)) + 0.01 * rng.standard_normal(n)
+    return gb.Record(u, y, input_names=("a", "b"))
+
+
+CAND_AB = gb.Candidates(ny=2, nu=2, degree=2, input_names=("a", "b"))
+
+
+@pytest.mark.parametrize("level", [1.5, 2.3])
+@pytest.mark.parametrize("fn", [gb.frols, gb.semp])
+def test_centred_include_of_a_held_input_is_refused_by_name(level, fn):
+    # held at 1.5 the call said "all-zero column" (frols) or "collinear" (semp) of a column the caller never saw;
+    # held at 2.3 (centred: -8.9e-16, not 0) the included term was dropped from the result, against include=
+    with pytest.raises(ValueError, match=r"included term b\(k-1\).*input b is held"):
+        _quiet(fn, CAND_AB, _held_b(level), n_terms=4, include=["b(k-1)"], centre=True)
+
+
+def test_centred_include_of_a_term_the_data_cannot_tell_is_refused():
+    # u(k-1)^2 on a two-level input was included, then left out of the closure the result holds
+    with pytest.raises(ValueError, match=r"included term u\(k-1\)\^2"):
+        _quiet(gb.frols, CAND, _two_level(12), n_terms=3, include=["u(k-1)^2"], centre=True)
+    with pytest.raises(ValueError, match=r"included term u\(k-1\)\^2"):
+        gb.select_graybox(CAND, gb.Dataset(_two_level(12), _two_level(13)), band=np.inf, estimator="ls",
+                          sizes=[3], sources=["frols"], include=["u(k-1)^2"], centre=True)
+
+
+def test_centred_include_of_a_held_input_is_refused_by_select_graybox():
+    data = gb.Dataset(_held_b(1.5), _held_b(1.5, seed=8))
+    with pytest.raises(ValueError, match=r"included term b\(k-1\).*input b is held"):
+        gb.select_graybox(CAND_AB, data, band=np.inf, estimator="ls", sizes=[3], sources=["frols"],
+                          include=["b(k-1)"], centre=True)

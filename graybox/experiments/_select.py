@@ -601,6 +601,7 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
     n_max = len(process)
     ident = _fit_data(idents)
     if centre:
+        _centring.check_included(include, process, list(idents))
         ident = _centring.centred_data(ident, _centring.signal_offsets(list(idents)))
     samples = sum(len(r) for r in idents)
     data, of = (("the identification record", "the identification record's") if len(idents) == 1 else
@@ -686,7 +687,8 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
         st = gb.Structure(terms)
         if centre:  # closed, less what the data cannot tell apart (a two-level input's u^2: no fit takes it);
             # unsaid, as the searches' skipped candidates are: the row's terms show it
-            st = _centring.told_apart(_centring.closure(st).process, ident, 1e-7)[0]  # frols's and semp's rank_tol
+            st, gone = _centring.told_apart(_centring.closure(st).process, ident, 1e-7)  # frols's and semp's rank_tol
+            _centring.check_included(include, process, list(idents), gone)
         added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
         st = st + gb.Structure(added)
         if centre:  # the static form's terms (u(k-1)^2 for Σ_{u^2}) bring their divisors too, or the set is not closed
@@ -1092,12 +1094,13 @@ def select_graybox(
         When no structure meets the band: None raises ``ValueError`` naming the smallest J_SF
         reached; ``"min_jsf"`` takes the structure with the smallest J_SF and says so.
     centre : bool, optional
-        Search the structures on centred signals (default False: on the raw ones): the searches
-        run on the identification records' y and inputs minus their means, and each structure they
-        find is replaced by its hierarchical closure (every divisor of every term, the constant
-        included; less a term the data cannot tell from its divisors, a two-level input's u(k-1)^2), which spans the same raw-signal models wherever the signals' zeros are; fits,
-        scores and the choice are then on the raw records as always. A row's ``size`` counts the
-        centred terms searched, its ``n_terms`` the closure's (and the static terms').
+        Search the structures on centred signals (default False: on the raw ones): the searches run
+        on the identification records' y and inputs minus their means, and each structure they find
+        is replaced by its hierarchical closure (every divisor of every term, the constant included;
+        less a term the data cannot tell from its divisors, a two-level input's u(k-1)^2), which
+        spans the same raw-signal models wherever the signals' zeros are; fits, scores and the
+        choice are then on the raw records as always. A row's ``size`` counts the centred terms
+        searched, its ``n_terms`` the closure's (and the static terms').
     executor : {"inprocess", "processes", "dask"}, optional
         Where the jobs (one per structure × estimator) run: default in the driver, or on Dask
         when ``workers``, ``client`` or ``scheduler`` is given. Worker processes are spawned and

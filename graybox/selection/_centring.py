@@ -66,6 +66,31 @@ def centred_data(data: object, offsets: Mapping[str, float]) -> Record | list[Re
     return shifted[0] if isinstance(data, (Record, Dataset)) else shifted
 
 
+def check_included(include: Sequence[Term | str], process: Structure, data: object,
+                   dropped: Sequence[tuple[Term, str]] = ()) -> None:
+    """Refuse (``ValueError``) an included term that a centred search cannot keep.
+
+    A term of an input held at one level over every identification record is zero once centred (or
+    round-off of zero), and a term :func:`told_apart` leaves out is not in the structure returned:
+    either would break ``include``'s promise that every structure holds it. Call before the search
+    (``dropped`` empty) and after the closure (the terms it left out).
+    """
+    terms = [process[j] for j in process.positions(include, "included term")]
+    records = as_records(data)
+    names = records[0].input_names
+    us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
+    held = {n: float(us[0, i]) for i, n in enumerate(names) if np.all(us[:, i] == us[0, i])}
+    gone = dict(dropped)
+    for t in terms:
+        for s in (s for s, _, _ in t.factors if s in held):
+            raise ValueError(f"included term {t} cannot be fitted with centre=True: input {s} is held at {held[s]:g} "
+                             "over the identification records, so centred the term is zero there; leave it out of "
+                             "include (the constant 1 carries a held input's level), or centre out")
+        if t in gone:
+            raise ValueError(f"included term {t} cannot stay in a structure closed under shifts: it is {gone[t]}; "
+                             "leave it out of include, or centre out")
+
+
 def _divisors(term: Term) -> list[Term]:
     ranges = [range(p + 1) for _, _, p in term.factors]
     out = []

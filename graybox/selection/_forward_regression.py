@@ -634,7 +634,8 @@ def frols(
         monomials they imply: :attr:`Selection.structure` is their hierarchical closure (every
         divisor of every chosen term, the constant included: more terms than were chosen), less any
         term the data cannot tell from its divisors (a two-level input's u(k-1)^2, and its multiples:
-        in :attr:`Selection.skipped`, the stop text and a CandidateWarning), with
+        in :attr:`Selection.skipped`, the stop text and a CandidateWarning; an included such term, or
+        one of an input held at one level, is refused with a ValueError), with
         least-squares θ on the raw signals. The structure and the model's predictions are then the
         same wherever the signals' zeros are (°C or K, gauge or absolute pressure), up to round-off.
         ERR, RSS and the criterion curve are those of the closure on the centred signals (in the
@@ -817,11 +818,13 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     """frols(centre=True): select on the centred signals, close the choice under shifts, refit (see frols)."""
     offsets = _centring.signal_offsets(data)
     centred = _centring.centred_data(data, offsets)
+    _centring.check_included(options["include"], candidates.process, data)
     sel = frols(candidates, centred, **options)
     rank_tol = options["rank_tol"]
     full = _centring.closure(sel.structure).process
     # less what the data cannot tell apart (a two-level input's u^2), or the fit below cannot hold every term
     closed, dropped = _centring.told_apart(full, centred, rank_tol)
+    _centring.check_included(options["include"], candidates.process, data, dropped)
     if dropped:
         warn(f"{len(dropped)} term(s) of the closure left out, the data cannot tell them from their divisors: "
              + ", ".join(str(t) for t, _ in dropped), CandidateWarning)

@@ -287,9 +287,11 @@ def semp(
         imply, so :attr:`SEMPResult.structure` is their hierarchical closure (every divisor of every
         chosen term, the constant included: more terms than were chosen), less any term the data
         cannot tell from its divisors (a two-level input's u(k-1)^2, and its multiples: in the stop
-        text and a CandidateWarning), with least-squares θ on the raw signals and :attr:`SEMPResult.score` its free run's MSE. The structure and the
-        model's free run are then the same wherever the signals' zeros are, up to round-off.
-        :attr:`SEMPResult.path` is the centred search's; :attr:`SEMPResult.stop` says what it chose.
+        text and a CandidateWarning; an included such term, or one of an input held at one level, is
+        refused with a ValueError), with least-squares θ on the raw signals and
+        :attr:`SEMPResult.score` its free run's MSE. The structure and the model's free run are then
+        the same wherever the signals' zeros are, up to round-off. :attr:`SEMPResult.path` is the
+        centred search's; :attr:`SEMPResult.stop` says what it chose.
 
     Returns
     -------
@@ -342,10 +344,12 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     """semp(centre=True): search on the centred signals, close the choice under shifts, refit (see semp)."""
     offsets = _centring.signal_offsets(data)
     centred = _centring.centred_data(data, offsets)
+    _centring.check_included(options["include"], candidates.process, data)
     res = semp(candidates, centred, **options)
     full = _centring.closure(res.structure).process
     # less what the data cannot tell apart (a two-level input's u^2): its θ would be a point of a null space
     closed, dropped = _centring.told_apart(full, centred, options["rank_tol"])
+    _centring.check_included(options["include"], candidates.process, data, dropped)
     if dropped:
         warn(f"{len(dropped)} term(s) of the closure left out, the data cannot tell them from their divisors: "
              + ", ".join(str(t) for t, _ in dropped), CandidateWarning)
