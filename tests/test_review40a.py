@@ -115,3 +115,13 @@ def test_centred_include_of_a_held_input_is_refused_by_select_graybox():
     with pytest.raises(ValueError, match=r"included term b\(k-1\).*input b is held"):
         gb.select_graybox(CAND_AB, data, band=np.inf, estimator="ls", sizes=[3], sources=["frols"],
                           include=["b(k-1)"], centre=True)
+
+
+def test_select_graybox_centred_gray_rows_keep_what_the_static_points_tell_apart():
+    # on a two-level input the records cannot tell u(k-1)^2 from u(k-1) and 1, but static points at six levels
+    # can: a gray row keeps the whole closure (as the raw search keeps the static form's u^2), and the true
+    # structure's static curve, which the noise-free points lie on, is met
+    ub = np.linspace(0.0, 1.0, 6)
+    data = gb.Dataset(_two_level(12), _two_level(13), gb.StaticPoints(ub, gb.Model(TRUE, THETA).static_curve(ub)))
+    a = gb.select_graybox(CAND, data, band=0.01, estimator="pe", sizes=[5], sources=["frols"], centre=True)
+    assert a.table["JSF"].min() < 1e-8

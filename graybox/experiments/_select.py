@@ -685,9 +685,13 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
     rows, seen = [], {}
     for (src, k), terms in found.items():
         st = gb.Structure(terms)
-        if centre:  # closed, less what the data cannot tell apart (a two-level input's u^2: no fit takes it);
-            # unsaid, as the searches' skipped candidates are: the row's terms show it
-            st, gone = _centring.told_apart(_centring.closure(st).process, ident, 1e-7)  # frols's and semp's rank_tol
+        if centre:
+            st = _centring.closure(st).process
+        if centre and form is None:
+            # a black box: less what the records cannot tell apart (a two-level input's u^2: no fit takes it),
+            # unsaid, as the searches' skipped candidates are (the row's terms show it); a gray box keeps it, as
+            # the static form's terms: its static points tell u^2 from u and 1
+            st, gone = _centring.told_apart(st, ident, 1e-7)  # frols's and semp's rank_tol
             _centring.check_included(include, process, list(idents), gone)
         added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
         st = st + gb.Structure(added)
@@ -1097,8 +1101,8 @@ def select_graybox(
         Search the structures on centred signals (default False: on the raw ones): the searches run
         on the identification records' y and inputs minus their means, and each structure they find
         is replaced by its hierarchical closure (every divisor of every term, the constant included;
-        less a term the data cannot tell from its divisors, a two-level input's u(k-1)^2), which
-        spans the same raw-signal models wherever the signals' zeros are; fits, scores and the
+        for a black box, less a term the records cannot tell from its divisors, a two-level input's
+        u(k-1)^2), which spans the same raw-signal models wherever the signals' zeros are; fits, scores and the
         choice are then on the raw records as always. A row's ``size`` counts the centred terms
         searched, its ``n_terms`` the closure's (and the static terms').
     executor : {"inprocess", "processes", "dask"}, optional
