@@ -125,3 +125,18 @@ def test_select_graybox_centred_gray_rows_keep_what_the_static_points_tell_apart
     data = gb.Dataset(_two_level(12), _two_level(13), gb.StaticPoints(ub, gb.Model(TRUE, THETA).static_curve(ub)))
     a = gb.select_graybox(CAND, data, band=0.01, estimator="pe", sizes=[5], sources=["frols"], centre=True)
     assert a.table["JSF"].min() < 1e-8
+
+
+def test_centred_selection_does_not_call_a_term_of_its_structure_skipped():
+    # the centred search dropped 1 as a combination of its picks (u(k-1)^2 among them); the closure brought 1
+    # back, and Selection.skipped (and its printout) still said 1 was left out
+    with warnings.catch_warnings(record=True) as heard:
+        warnings.simplefilter("always")
+        sel = gb.frols(CAND, _two_level(12), criterion="bic", centre=True)
+    said = [str(w.message) for w in heard if issubclass(w.category, gb.CandidateWarning)]
+    assert len(said) == 1 and ": 1 (" not in said[0] and "; 1 (" not in said[0]  # one, as frols says it, true
+    assert gb.Term(()) in set(sel.structure)
+    assert not {t for t, _ in sel.skipped} & set(sel.structure)
+    line = next(x for x in str(sel).splitlines() if x.startswith("skipped: "))
+    named = {item.split(" (")[0] for item in line.removeprefix("skipped: ").split("; ")}
+    assert not named & {str(t) for t in sel.structure}

@@ -46,6 +46,7 @@ carries the noise terms in :attr:`Selection.noise`. :func:`graybox.els` accepts 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import Literal, Sequence
 
@@ -819,15 +820,23 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     offsets = _centring.signal_offsets(data)
     centred = _centring.centred_data(data, offsets)
     _centring.check_included(options["include"], candidates.process, data)
-    sel = frols(candidates, centred, **options)
+    # the search's CandidateWarning is said after the closure, which can bring back a term it left out
+    with warnings.catch_warnings(record=True) as heard:
+        warnings.simplefilter("always")
+        sel = frols(candidates, centred, **options)
+    for w in heard:
+        if not issubclass(w.category, CandidateWarning):
+            warn(str(w.message), w.category)
     rank_tol = options["rank_tol"]
     full = _centring.closure(sel.structure).process
     # less what the data cannot tell apart (a two-level input's u^2), or the fit below cannot hold every term
     closed, dropped = _centring.told_apart(full, centred, rank_tol)
     _centring.check_included(options["include"], candidates.process, data, dropped)
-    if dropped:
-        warn(f"{len(dropped)} term(s) of the closure left out, the data cannot tell them from their divisors: "
-             + ", ".join(str(t) for t, _ in dropped), CandidateWarning)
+    skipped = tuple((t, why) for t, why in sel.skipped if t not in set(closed)) + dropped
+    if skipped:
+        warn(f"{len(skipped)} candidate(s) left out (the centred data cannot tell them from others): "
+             + "; ".join(f"{t} ({why})" for t, why in skipped[:10]) + ("; …" if len(skipped) > 10 else ""),
+             CandidateWarning)
     # the closure's own fit on the centred signals: its ERR, RSS and θ, the chosen terms first
     fit = frols(closed + candidates.noise, centred, n_terms=len(closed), include=list(closed), rank_tol=rank_tol,
                 method=options["method"], criterion=sel.criterion)
@@ -837,7 +846,7 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
         subset_rss = np.array([_centring.least_squares(S, centred)[1] for S in subsets])
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), offsets, dropped)
     return replace(fit, theta=_centring.raw_theta(closed, fit.theta, offsets), stop=stop,
-                   n_candidates=sel.n_candidates, skipped=sel.skipped + dropped, search=sel.search, subsets=subsets,
+                   n_candidates=sel.n_candidates, skipped=skipped, search=sel.search, subsets=subsets,
                    subset_rss=subset_rss)
 
 
