@@ -403,7 +403,6 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, y_sca
     each row's residual at ``at`` formed in z, where no ill-conditioned T has touched it. ``y_scale``: the
     output's spread (output units), the scale the equalities' consistency is judged on."""
     n = s.size
-    T = np.eye(n) if T is None else T
     at = np.zeros(n) if at is None else at
     E, f, G, h, user, eq_names = [np.zeros((0, n))], [np.zeros(0)], [np.zeros((0, n))], [np.zeros(0)], [], []
     for c in cons:
@@ -413,16 +412,22 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, y_sca
             user.append(c)
             continue
         if r.n_eq:
-            E.append((r.A_eq / s) @ T)
-            f.append(r.b_eq - (r.A_eq / s) @ at)
+            E.append(r.A_eq / s)
+            f.append(r.b_eq)
             eq_names.append(c.describe())
         if r.n_ub:
-            G.append((r.A_ub / s) @ T)
+            G.append((r.A_ub / s) if T is None else (r.A_ub / s) @ T)
             h.append(r.b_ub - (r.A_ub / s) @ at)
     names = tuple(c.describe() for c in cons)
     E, f, G, h = np.vstack(E), np.concatenate(f), np.vstack(G), np.concatenate(h)
     G, h = _normalise_ub(G, h, names)
+    # which equalities are independent, and whether they agree, is decided in z, where each row is of unit norm
+    # per scaled parameter; after the ill-conditioned T a row that is independent in z could fall under the rank
+    # cut (eq. (22) with Σ_y free and u far from its zero: the constraint was dropped and the curve not met)
     V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys), scale=y_scale)
+    if T is not None and V.shape[0]:
+        U, S, Vt = np.linalg.svd(V @ T, full_matrices=False)  # the same rows, orthonormal in y, every one kept
+        V, g = Vt, (U.T @ (g - V @ at)) / S
     return _Rows(V, g, G, h, tuple(user), names)
 
 
