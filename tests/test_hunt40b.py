@@ -39,3 +39,20 @@ def test_the_qp_meets_eq22_with_a_free_sigma_y_when_u_is_far_from_its_zero(solve
     th = gb.pe_thetas(TRUE, rec, pts, lambdas=[0.5], constraints=gb.CurveEquality(curve), solver=solver)[0]
     np.testing.assert_allclose(gb.Model(TRUE, th).static_curve(pts.ubar), curve(pts.ubar), rtol=0,
                                atol=1e-6 * spread)
+
+
+@pytest.mark.parametrize("offset", [0.0, 3000.0, 1e4])
+def test_the_qp_s_free_sigma_y_estimate_is_the_constrained_optimum_its_covariance_takes(offset):
+    """Carried into the QP's basis (cond(Ψ)), eq. (22)'s rows held only to eps·cond: at u = 3000 ± 1 the QP's Σ_y was
+    2e-7 off the constrained least squares, and cls_uncertainty refused cls's own estimate as no optimum."""
+    pts = _points(offset)
+    curve = gb.StaticCurve.fit(pts, degree=2)
+    rec = _record(1, offset=offset)
+    closed = gb.cls(TRUE, rec, curve, solver="closed").model
+    model = gb.cls(TRUE, rec, curve).model
+    assert model.clusters()["Σy"] == pytest.approx(closed.clusters()["Σy"], abs=1e-8)
+    base = gb.cls_uncertainty(gb.cls(TRUE, _record(1), gb.StaticCurve.fit(_points(), degree=2)).model, _record(1),
+                              gb.StaticCurve.fit(_points(), degree=2))
+    unc = gb.cls_uncertainty(model, rec, curve)
+    # Σ_y's standard error does not depend on where u's zero is
+    assert np.sqrt(unc.cov[0, 0]) == pytest.approx(np.sqrt(base.cov[0, 0]), rel=1e-5)

@@ -431,10 +431,12 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, y_sca
     return _Rows(V, g, G, h, tuple(user), names)
 
 
-def _normalise_ub(G: np.ndarray, h: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+def _normalise_ub(G: np.ndarray, h: np.ndarray, names: tuple[str, ...], tol: float = 0.0
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of unit norm; a zero row dropped when it reads 0 <= h with h >= −``tol`` (else no θ meets it)."""
     norms = np.linalg.norm(G, axis=1)
     zero = norms <= 1e-14 * max(1.0, norms.max(initial=0.0))
-    if np.any(h[zero] < 0):  # 0 <= h with h < 0: no θ can satisfy it
+    if np.any(h[zero] < -tol):  # 0 <= h with h < 0: no θ can satisfy it
         raise InfeasibleError(f"infeasible constraints (a row reads 0 <= {h[zero].min():g}): {list(names)}")
     G, h, norms = G[~zero], h[~zero], norms[~zero]
     return G / norms[:, None], h / norms
@@ -579,17 +581,39 @@ class _QP:
         import cvxpy as cp
 
         n = d.s.size
-        self.basis = b = _basis(d, static, None if _full_rank([(d.R1, d.N)]) else _rows(cons, ctx, d.s, d.y_scale),
-                                n_static)
+        zrows = _rows(cons, ctx, d.s, d.y_scale)  # in z: the equalities reduced, the inequalities of unit norm
+        k = n - zrows.V.shape[0]
+        if zrows.V.shape[0] and k:
+            # the equalities eliminated in z, z = z_p + N w (as the closed form does), where they are as well
+            # conditioned as the constraints themselves: carried into the basis T (cond(Ψ)) they held only to
+            # about eps·cond(T) (eq. (22) with Σ_y free and u = 3000 ± 1: Σ_y 2e-7 off the constrained optimum,
+            # which cls_uncertainty then refused as no optimum)
+            self.z_p, self.N = zrows.V.T @ zrows.g, scipy.linalg.null_space(zrows.V)
+            Qr, Rr = np.linalg.qr(d.R1 @ self.N)
+            c = d.c1 - d.R1 @ self.z_p
+            cq = Qr.T @ c
+            dr = _Data(d.structure, np.ones(k), Rr, cq, d.rss + float(np.sum((c - Qr @ cq) ** 2)), d.N, d.y_scale)
+            static_r = None if static is None else (static[0] @ self.N, static[1] - static[0] @ self.z_p)
+            G, h = _normalise_ub(zrows.G @ self.N, zrows.h - zrows.G @ self.z_p, zrows.names, tol=1e-9 * d.y_scale)
+            self.basis = b = _basis(dr, static_r, None, n_static)
+            V, g = np.zeros((0, k)), np.zeros(0)
+        else:  # no equalities, or equalities that fix θ whole: the rows go to the solver (in its basis)
+            self.z_p, self.N, k = np.zeros(n), np.eye(n), n
+            self.basis = b = _basis(d, static, None if _full_rank([(d.R1, d.N)]) else zrows, n_static)
+            rows = _rows(cons, ctx, d.s, d.y_scale, b.T, at=b.z0)
+            V, g, G, h = rows.V, rows.g, zrows.G, zrows.h
+        # the inequalities in the basis, each row's slack at z0 formed where no ill-conditioned T has touched it
+        G, h = _normalise_ub(G @ b.T, h - G @ b.z0, zrows.names)
+        rows = _Rows(V, g, G, h, zrows.user, zrows.names)
         z0 = b.z0  # T only ever carries the step, whose size is the output's spread (see _Basis)
-        rows = _rows(cons, ctx, d.s, d.y_scale, b.T, at=z0)
         # y is in output units (the linear terms scale with the output, the objective with its
         # square): the variable is the step in units of the output's spread σ, because Clarabel's
         # tolerances and starting point are absolute and its optimum moved with the output's units.
         # The spread about the mean, not the RMS: an offset (2e9 ± 50) made every step ~1e-8 of σ.
         self.sigma = sig = d.y_scale
-        self.dy = cp.Variable(n, name="dy")  # y / σ
-        theta = z0 / d.s + cp.multiply(sig / d.s, b.T @ self.dy)  # engineering units, for user constraints
+        self.dy = cp.Variable(k, name="dy")  # y / σ
+        # engineering units, for user constraints
+        theta = (self.z_p + self.N @ z0) / d.s + cp.multiply(sig / d.s, (self.N @ b.T) @ self.dy)
         self.w1 = cp.Parameter(nonneg=True, name="w1")
         self.w2 = cp.Parameter(nonneg=True, name="w2")
         obj = self.w1 * (_quad(self.dy, b.H1) + 2 * (b.l1 / sig) @ self.dy)
@@ -605,7 +629,7 @@ class _QP:
         self.problem = cp.Problem(cp.Minimize(obj), cons_cp)
         # First warm start: the LS estimate (OSQP converges slowly from elsewhere when λ1 is
         # tiny); later solves start from the previous one.
-        self.dy.value = np.zeros(n)
+        self.dy.value = np.zeros(k)
         if not self.problem.is_dcp(dpp=True):
             raise ValueError("the problem is not convex (DCP/DPP): check the user constraints")
         self.solver = solver
@@ -639,7 +663,7 @@ class _QP:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
             self.inaccurate.append((float(w1), float(w2)))
-        return self.basis.z0 + self.sigma * (self.basis.T @ np.array(self.dy.value, float))
+        return self.z_p + self.N @ (self.basis.z0 + self.sigma * (self.basis.T @ np.array(self.dy.value, float)))
 
     def warn_inaccurate(self) -> None:
         """One warning for the whole sweep, naming the weights whose optimum the solver called inaccurate."""
