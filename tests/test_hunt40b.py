@@ -56,3 +56,22 @@ def test_the_qp_s_free_sigma_y_estimate_is_the_constrained_optimum_its_covarianc
     unc = gb.cls_uncertainty(model, rec, curve)
     # Σ_y's standard error does not depend on where u's zero is
     assert np.sqrt(unc.cov[0, 0]) == pytest.approx(np.sqrt(base.cov[0, 0]), rel=1e-5)
+
+
+def _oversampled(n: int = 4000) -> gb.Record:
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0, 1, n // 100 + 1), 100)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.98 * y[k - 1] + 0.02 * u[k - 1] + 0.01 * u[k - 1] ** 2
+    return gb.Record(u, y + 0.001 * rng.standard_normal(n), Ts=0.01)
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-150, 1e150])
+def test_decimation_advice_does_not_depend_on_the_output_s_unit(scale):
+    """The autocorrelations are unit-free, but y'² of an output in 1e-150 units underflowed (τ_y² lost, q 7 for 6,
+    a RuntimeWarning of 0/0) and in 1e-300 units the advice was 'no minimum'; 1e150 overflowed."""
+    rec = _oversampled()
+    base = gb.decimation_advice(rec)
+    moved = gb.decimation_advice(gb.Record(rec.u, rec.y * scale, Ts=rec.Ts))
+    assert (moved.q, moved.q_range, moved.tau_y, moved.tau_y2) == (base.q, base.q_range, base.tau_y, base.tau_y2)

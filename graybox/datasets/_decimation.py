@@ -175,7 +175,11 @@ def decimation_advice(data: Record | Dataset | Sequence[Record]) -> DecimationAd
         if np.ptp(y) == 0:
             raise ValueError(f"record {rec.name!r}: the output does not move, so it says nothing of the sampling "
                              "period")
+        # in units of its largest value, centred, and again: the autocorrelations are unit-free, but their squares
+        # and sums are not (y in 1e-150 or 1e150 units under- or overflowed y'² and lost τ_y², q moved)
+        y = y / np.abs(y).max()
         yc = y - y.mean()  # the square of the centred output: of y itself an offset c makes y² ≈ c² + 2cy, read as y
+        yc = yc / np.abs(yc).max()
         taus.append((_first_minimum(yc), _first_minimum(yc * yc)))
     tau_y = min((t for t, _ in taus if t is not None), default=None)
     tau_y2 = min((t for _, t in taus if t is not None), default=None)
