@@ -75,3 +75,15 @@ def test_decimation_advice_does_not_depend_on_the_output_s_unit(scale):
     base = gb.decimation_advice(rec)
     moved = gb.decimation_advice(gb.Record(rec.u, rec.y * scale, Ts=rec.Ts))
     assert (moved.q, moved.q_range, moved.tau_y, moved.tau_y2) == (base.q, base.q_range, base.tau_y, base.tau_y2)
+
+
+@pytest.mark.parametrize("kind, options", [("aprbs", {"hold": (5, 10)}), ("staircase", {"hold": 10}),
+                                           ("prbs", {"hold": 5}), ("multisine", {"frequencies": (0.1, 0.5)})])
+def test_design_input_over_a_range_wider_than_the_largest_float_stays_in_it(kind, options):
+    """low = −1e308, high = 1e308 are finite levels, but high − low overflows: the signal was ±inf and NaN (with
+    RuntimeWarnings), a made-up input."""
+    x = gb.design_input(kind, 100, low=-1e308, high=1e308, **options)
+    assert np.all(np.isfinite(x)) and x.min() == -1e308 and x.max() == 1e308
+    # the same levels as on a range of ordinary width, in proportion
+    y = gb.design_input(kind, 100, low=-1.0, high=1.0, **options)
+    np.testing.assert_allclose(x / 1e308, y, rtol=1e-12, atol=1e-12)

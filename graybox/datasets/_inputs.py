@@ -26,7 +26,12 @@ _PRBS_TAPS = {2: (2, 1), 3: (3, 2), 4: (4, 3), 5: (5, 3), 6: (6, 5), 7: (7, 6), 
 def _scale(t: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """Fractions t in [0, 1] as levels in [lo, hi], each end exact (lo + (hi − lo)·1 can round past hi)."""
     t = np.asarray(t, float)
-    return np.where(t <= 0.5, lo + (hi - lo) * t, hi - (hi - lo) * (1 - t))
+    half = hi / 2 - lo / 2
+    if half <= np.finfo(float).max / 2:
+        return np.where(t <= 0.5, lo + (hi - lo) * t, hi - (hi - lo) * (1 - t))
+    # a range wider than the largest float (±1e308): each end's distance as a product of the half range, which
+    # stays finite because it is at most half the range
+    return np.where(t <= 0.5, lo + half * (2 * np.minimum(t, 0.5)), hi - half * (2 * np.minimum(1 - t, 0.5)))
 
 
 def _holds(kind: str, hold: object) -> tuple[int, int]:
@@ -189,7 +194,7 @@ def design_input(
         out = np.column_stack(cols)
     # too few holds for the record (a staircase's serpentine moves its slower inputs last; a PRBS's first
     # bits may agree): a column held at one level is an experiment in which that input never moves
-    still = [i for i in range(m) if np.ptp(out[:, i]) == 0]
+    still = [i for i in range(m) if np.all(out[:, i] == out[0, i])]  # not np.ptp: it overflows on ±1e308
     if still:
         which = "the input" if m == 1 else f"input column(s) {still}"
         raise ValueError(f"{which} of this {kind} never moves: {-(-n // h0)} hold(s) of {h0} samples fit in the "
