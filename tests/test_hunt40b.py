@@ -87,3 +87,18 @@ def test_design_input_over_a_range_wider_than_the_largest_float_stays_in_it(kind
     # the same levels as on a range of ordinary width, in proportion
     y = gb.design_input(kind, 100, low=-1.0, high=1.0, **options)
     np.testing.assert_allclose(x / 1e308, y, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("offset", [3000.0, 3e4])
+def test_equalities_that_fix_theta_whole_are_met_exactly_by_the_qp(offset):
+    """Eq. (22) with a given Σ*_y fixes every parameter of this structure (five clusters, five terms); the QP's θ met
+    the rows only to eps·cond of its basis: Σ_y = 0.67540098 for Σ*_y = 0.6754 at u = 3e4 ± 1 (before the rows were
+    kept, the static function missed the curve by 0.026)."""
+    pts = _points(offset)
+    curve = gb.StaticCurve.fit(pts, degree=2)
+    rec = _record(1, offset=offset)
+    closed = gb.cls(TRUE, rec, curve, reference=0.6754, solver="closed").model
+    for solver in ("clarabel", "osqp"):
+        model = gb.cls(TRUE, rec, curve, reference=0.6754, solver=solver).model
+        assert model.clusters()["Σy"] == pytest.approx(0.6754, abs=1e-12)
+        np.testing.assert_allclose(model.theta, closed.theta, rtol=1e-12)
