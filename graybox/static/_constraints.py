@@ -539,6 +539,8 @@ class CurveEquality(StaticConstraint):
         # N ≡ D·H with D = 1 − Σ_y constant: Σ_{y u^e} = 0 (e ≠ 0), and Σ_{u^e} = (1 − Σ_y) c_e, which with
         # Σ_y free reads Σ_{u^e} + c_e Σ_y = c_e (affine in θ all the same)
         iy = sigma_y_index(cm)
+        pivot = self._pivot(cm, ctx, coefficient) if sy is None and iy is not None else None
+        pivot_row = None if pivot is None else [cluster_powers(key) for key in cm.keys].index((0, pivot))
         A, b = [], []
         for k, key in enumerate(cm.keys):
             p, e = cluster_powers(key)
@@ -549,6 +551,12 @@ class CurveEquality(StaticConstraint):
                 if sy is None:
                     continue
                 target = sy
+            elif sy is None and pivot is not None and e != pivot:
+                # c_p Σ_{u^e} = c_e Σ_{u^p}, p the pivot: the same conditions, without Σ_y. Every row of the form
+                # above leans on Σ_y with c_e, which far from the input's zero dwarfs the rest (u = 1e6 ± 1: the
+                # rows agreed to 1e-12 and one was lost to round-off, the curve missed by 7 % of its span)
+                row = coefficient(pivot) * row - coefficient(e) * np.asarray(cm.R[pivot_row], dtype=float)
+                target = 0.0
             elif sy is None:
                 c_e = coefficient(e)
                 if iy is not None:
@@ -559,6 +567,30 @@ class CurveEquality(StaticConstraint):
             A.append(row)
             b.append(target)
         return AffineRows.make(ctx.n_terms, A, b)
+
+    def _pivot(self, cm: ClusterMap | SurfaceClusterMap, ctx: StaticContext,
+               coefficient: Callable[[tuple[int, ...]], float]) -> tuple[int, ...] | None:
+        """The numerator cluster whose term of H is largest over the static region (|c_e| · max|ū|^e, from the
+        problem's points, else the curve's domain, else |c_e|): the row that keeps Σ_y, the others written
+        against it. None when there is no choice to make (fewer than two numerator clusters, or H = 0)."""
+        exps = [e for p, e in map(cluster_powers, cm.keys) if p == 0]
+        if len(exps) < 2:
+            return None
+        m = n_static_inputs(cm)
+        if ctx.points is not None:
+            size = np.max(np.abs(np.asarray(ctx.points.ubar, float).reshape(len(ctx.points), -1)), axis=0)
+        elif self.curve.domain is not None:
+            dom = self.curve.domain if isinstance(self.curve, StaticSurface) else (self.curve.domain,)
+            size = np.array([max(abs(lo), abs(hi)) for lo, hi in dom])
+        else:
+            size = np.ones(m)
+        if size.size != m:  # the points speak of other inputs: their check says so elsewhere
+            size = np.ones(m)
+        with np.errstate(divide="ignore"):  # log of a zero coefficient: -inf, never the pivot
+            weight = [float(np.log(abs(coefficient(e))) + np.dot(e, np.log(np.where(size > 0, size, 1.0))))
+                      for e in exps]
+        k = int(np.argmax(weight))
+        return exps[k] if np.isfinite(weight[k]) else None
 
     def _coefficients(self, cm: ClusterMap | SurfaceClusterMap) -> Callable[[tuple[int, ...]], float]:
         """c_e of the curve or surface by its input powers e, once the structure is shown to carry every one."""
