@@ -134,3 +134,34 @@ def test_eq22_on_a_surface_with_a_free_sigma_y_does_not_depend_on_the_inputs_zer
         surface = gb.StaticSurface.fit(gb.StaticPoints(grid + off, plant.static_curve(grid)), 2)
         runs.append(gb.cls(st_, rec, surface).model.simulate(rec))
     np.testing.assert_allclose(runs[1], runs[0], rtol=1e-8, atol=1e-8 * np.abs(runs[0]).max())
+
+
+@pytest.fixture(scope="module")
+def ls_store(tmp_path_factory):
+    from graybox import experiments as gx
+
+    terms = ["y(k-2)", "u(k-2)", "u(k-1)^2"]
+    structures = [gx.StructureSpec(f"s{i}", terms=["1", "y(k-1)", "u(k-1)", t]) for i, t in enumerate(terms)]
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], structures, [gx.Variant("LS", "ls")], name="few")
+    path = tmp_path_factory.mktemp("hunt40b") / "few.sqlite"
+    gx.run_grid(grid, path, progress=False)
+    return path
+
+
+def test_a_report_of_unranked_structures_does_not_call_the_ones_it_draws_the_best(ls_store, tmp_path):
+    """With no model in the band no structure has a rank, and max_structures drew the grid's first ones under the title
+    'the 2 best of 3 structures by rank'; with some in the band, the unranked ones it adds are said as such."""
+    from graybox import experiments as gx
+
+    gx.write_report(ls_store, tmp_path / "none", band=1e-12, max_structures=2)
+    summary = (tmp_path / "none" / "summary.txt").read_text()
+    assert "best of" not in summary
+    assert "the figures draw the first 2 of 3 structures in the grid's order (none has a qualifying model)" in summary
+    jsf = gx.leaderboard(ls_store, rule="chosen")["JSF"].to_numpy(float)
+    band = float(np.sort(jsf)[0]) * 1.0001  # one structure in the band
+    gx.write_report(ls_store, tmp_path / "one", band=band, max_structures=2)
+    assert "the figures draw the 1 ranked and the first 1 unranked of 3 structures" in (
+        tmp_path / "one" / "summary.txt").read_text()
+    gx.write_report(ls_store, tmp_path / "all", band=float(jsf.max()) * 2, max_structures=2)
+    summary = (tmp_path / "all" / "summary.txt").read_text()
+    assert "the figures draw the 2 best of 3 structures (max_structures=2)" in summary

@@ -724,11 +724,18 @@ def write_report(
         figs = (plot_heatmap(df, data=d, rule=rule, band=band, structures=shown),
                 plot_fronts(df, data=d, band=band, structures=shown))
         if shown is not None:  # say which part of the grid a figure shows
-            part = f"the {len(shown)} best of {total} structures by rank\n(every one in leaderboard.csv)"
+            sub = lb.xs(d, level="data")
+            ranked = set(sub.index.get_level_values("structure")[sub["rank"].notna().to_numpy()])
+            k = sum(s in ranked for s in shown)
+            # structures without a qualifying model have no rank: those shown are the grid's first, not its best
+            what = (f"the {len(shown)} best of {total} structures by rank" if k == len(shown) else
+                    f"the first {len(shown)} of {total} structures in the grid's order (none has a qualifying model)"
+                    if k == 0 else f"the {k} ranked and the first {len(shown) - k} unranked of {total} structures")
             for f in figs:
-                f.suptitle("\n".join(t for t in (f.get_suptitle(), part) if t), fontsize=9)
-            lines.append(f"{d}: the figures draw the {len(shown)} best of {total} structures "
-                         f"(max_structures={max_structures}); the tables hold every one")
+                f.suptitle("\n".join(t for t in (f.get_suptitle(), f"{what}\n(every one in leaderboard.csv)") if t),
+                           fontsize=9)
+            lines.append(f"{d}: the figures draw {what.replace(' by rank', '')} (max_structures={max_structures}); "
+                         "the tables hold every one")
         save(o / f"heatmap_{slug}.png", figs[0])
         save(o / f"fronts_{slug}.png", figs[1])
     save(o / "scatter.png", plot_scatter(df, band=band))
