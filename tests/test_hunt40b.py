@@ -165,3 +165,19 @@ def test_a_report_of_unranked_structures_does_not_call_the_ones_it_draws_the_bes
     gx.write_report(ls_store, tmp_path / "all", band=float(jsf.max()) * 2, max_structures=2)
     summary = (tmp_path / "all" / "summary.txt").read_text()
     assert "the figures draw the 2 best of 3 structures (max_structures=2)" in summary
+
+
+def test_a_bound_on_a_theta_the_equalities_fix_is_checked_at_that_theta():
+    """y(k-1), u(k-1), 1 under eq. (22) with Σ*_y given: the equalities fix θ, and the static gain is the curve's 2.
+    A lower gain bound of 2 + 2e-12 (met to round-off) ended in Clarabel's status 'user_limit', an InfeasibleError
+    that blamed the solver, with cvxpy's overflow RuntimeWarning; a bound of 3 is refused naming the constraints."""
+    st_ = gb.Structure(["y(k-1)", "u(k-1)", "1"])
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0, 2, 21), 20)[:400]
+    y = gb.Model(st_, np.array([0.7, 0.6, 0.1])).simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(400)
+    curve = gb.StaticCurve.polynomial([1 / 3, 2.0], domain=(0.01, 1.8))
+    for lower in (2.0, 2.0 + 2e-12):
+        model = gb.cls(st_, gb.Record(u, y), curve, reference=0.7, constraints=gb.GainBounds(lower=lower)).model
+        np.testing.assert_allclose(model.theta, [0.7, 0.6, 0.1], rtol=1e-12)
+    with pytest.raises(gb.InfeasibleError, match=r"the equalities fix θ, and it misses .*static gain in \[3, inf\]"):
+        gb.cls(st_, gb.Record(u, y), curve, reference=0.7, constraints=gb.GainBounds(lower=3.0))

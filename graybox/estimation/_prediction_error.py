@@ -581,6 +581,7 @@ class _QP:
         import cvxpy as cp
 
         n = d.s.size
+        self.fixed_only = False
         zrows = _rows(cons, ctx, d.s, d.y_scale)  # in z: the equalities reduced, the inequalities of unit norm
         k = n - zrows.V.shape[0]
         if zrows.V.shape[0] and k:
@@ -603,6 +604,16 @@ class _QP:
             # fixed whole, θ is the equalities' solution in z, exactly; the solver only says whether the other
             # constraints admit it (its own θ meets the equalities to eps·cond(T): Σ_y = 0.67540098 for 0.6754)
             self.fixed = zrows.V.T @ zrows.g if zrows.V.shape[0] == n else None
+            if self.fixed is not None and not zrows.user:
+                # nothing left to optimise, and only the inequalities to check: at the point itself, to its
+                # round-off, not by a solver searching a feasible set of one point (a bound the point misses by
+                # 1e-12 ended in Clarabel's 'user_limit' and an overflow warning from cvxpy)
+                slack = zrows.h - zrows.G @ self.fixed
+                tol = 1e-9 * max(d.y_scale, float(np.linalg.norm(self.fixed)))
+                if np.any(slack < -tol):
+                    raise InfeasibleError(f"the constraints admit no θ: the equalities fix θ, and it misses "
+                                          f"{list(zrows.names)} by {-slack.min():.3g} (output units)")
+                self.fixed_only = True
             self.basis = b = _basis(d, static, None if _full_rank([(d.R1, d.N)]) else zrows, n_static)
             rows = _rows(cons, ctx, d.s, d.y_scale, b.T, at=b.z0)
             V, g, G, h = rows.V, rows.g, zrows.G, zrows.h
@@ -646,6 +657,9 @@ class _QP:
     def solve(self, w1: float, w2: float, warm_start: bool = True) -> np.ndarray:
         """z for one weight pair (the weights are normalised to sum 1: the argmin is unchanged)."""
         import cvxpy as cp
+
+        if self.fixed_only:  # θ fixed by the equalities and the inequalities checked there
+            return self.fixed.copy()
 
         tot = float(w1) + float(w2)
         self.w1.value, self.w2.value = float(w1) / tot, float(w2) / tot
