@@ -361,13 +361,14 @@ class ResultStore:
         self._conn.execute("COMMIT")
         return {k: who[held[k]] for k in keys if k in held}
 
-    def unclaim(self, keys: Sequence[str] = ()) -> None:
-        """End this run's claims on ``keys`` (none given: all of them, and the run's ``drivers`` row)."""
-        if self._owner is None:
+    def unclaim(self, keys: Sequence[str] | None = None) -> None:
+        """End this run's claims on ``keys``; ``None``: all of them, and the run's ``drivers`` row (an empty
+        sequence ends none: the cells a run has just taken stay taken when none of the others is let go)."""
+        if self._owner is None or (keys is not None and not keys):
             return
         self._conn.execute("BEGIN IMMEDIATE")
         try:
-            if keys:
+            if keys is not None:
                 self._conn.executemany("DELETE FROM claims WHERE key = ? AND owner = ?",
                                        [(k, self._owner) for k in keys])
             else:
@@ -377,7 +378,7 @@ class ResultStore:
             self._conn.execute("ROLLBACK")
             raise
         self._conn.execute("COMMIT")
-        if not keys:
+        if keys is None:
             self._owner = None
 
     def statuses(self) -> dict[str, str]:
