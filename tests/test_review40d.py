@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -9,6 +11,7 @@ import pytest
 import graybox as gb
 from graybox import experiments as gx
 from graybox.experiments import _run
+from graybox.experiments._cell import failed_row, run_cell
 from graybox.experiments._store import ResultStore
 
 SPEC = """\
@@ -54,7 +57,7 @@ def test_a_cell_taken_over_after_its_run_let_it_go_unwritten_stays_claimed_while
         waiting = {x: cells[0], y: cells[1]}
         assert set(b.claim([x, y])) == {x, y}
         a.unclaim([x])  # the other run lets x go without writing it
-        todo, finished = _run._wait_for_others(b, waiting, {}, False)
+        todo, finished = _run._wait_for_others(b, waiting, b.marks())
         assert [t.key for t in todo] == [x] and finished == [] and list(waiting) == [y]
         assert set(c.claim([x])) == {x}  # b runs x now: no third run may start it
     finally:
@@ -73,3 +76,52 @@ def test_unclaim_of_no_keys_ends_no_claim(grid, tmp_path):
     finally:
         a.close()
         b.close()
+
+
+def test_a_cell_another_run_writes_between_this_runs_look_and_its_claim_is_not_run_again(grid, tmp_path,
+                                                                                       monkeypatch):
+    spec, g, data, cells = grid
+    store = tmp_path / "s.sqlite"
+    other = _open(store, g, cells)
+    notes = _run._notes
+
+    def notes_then_other_writes(st, cells_, done, version):  # the other run writes cell 0 and lets it go
+        assert cells[0].key not in done
+        other.claim([cells[0].key])
+        other.write(run_cell(cells[0], data[cells[0].data]))
+        return notes(st, cells_, done, version)
+
+    monkeypatch.setattr(_run, "_notes", notes_then_other_writes)
+    try:
+        run = gx.run_grid(spec, store)
+    finally:
+        other.close()
+    assert run.ran == len(cells) - 1, run.summary()
+    assert not any("its rows are kept" in n for n in run.notes), run.notes
+
+
+def test_a_failed_cell_another_run_retried_and_failed_again_is_not_retried_twice(grid, tmp_path):
+    spec, g, data, cells = grid
+    store = tmp_path / "s.sqlite"
+    other = _open(store, g, cells)
+    try:
+        other.write(failed_row(cells[0], "first failure"))
+        assert other.claim([cells[0].key]) == {}  # the other run retries it
+        lines, out = [], {}
+        t = threading.Thread(target=lambda: out.update(run=gx.run_grid(spec, store, retry_failed=True,
+                                                                       log=lines.append)))
+        t.start()
+        deadline = time.monotonic() + 60
+        while not any("waits for them" in x for x in lines):
+            assert t.is_alive() and time.monotonic() < deadline, lines
+            time.sleep(0.01)
+        time.sleep(0.05)
+        other.write(failed_row(cells[0], "failed again"), replace=True)  # retried: it fails again
+    finally:
+        other.close()
+    t.join(120)
+    assert not t.is_alive()
+    run = out["run"]
+    assert run.ran == len(cells) - 1, run.summary()
+    res = gx.load_results(store).set_index("key")
+    assert res.loc[cells[0].key, "message"] == "failed again"

@@ -164,7 +164,8 @@ def run_grid(
     say = log or (lambda line: None)
     with ResultStore.open(store, grid_name=g.name, fingerprint=g.fingerprint(cells), spec=stored_spec(g, datasets),
                           cells=cells, version=version) as st:
-        done = st.statuses()
+        marks = st.marks()
+        done = {k: status for k, (status, _) in marks.items()}
         todo, seen = [], set()
         for c in cells:
             # two data set names of one grid may hold the same data: their cells share keys, run once
@@ -174,7 +175,9 @@ def run_grid(
         notes = _notes(st, cells, done, version)
         elsewhere = st.claim([c.key for c in todo])  # what another run on this store has taken, it runs
         waiting = {c.key: c for c in todo if c.key in elsewhere}
-        todo = [c for c in todo if c.key not in waiting]
+        # another run may have written (and let go) a cell between this run's look and its claim: kept, not run again
+        written = _written_since(st, [c.key for c in todo if c.key not in waiting], marks)
+        todo = [c for c in todo if c.key not in waiting and c.key not in written]
         say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - len(todo) - len(waiting)} reused from {store}, "
             f"{len(todo)} to run" + (f", {len(waiting)} being run by another run on this store "
                                      f"({', '.join(sorted(set(elsewhere.values())))}): this one waits for them"
@@ -182,7 +185,8 @@ def run_grid(
         for n in notes:
             say(f"  {n}")
         bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo) - len(waiting))
-        ran = taken = by_others = 0
+        ran = taken = 0
+        by_others = len(written)
         try:
             while True:
                 for row in ex.run(todo, by_hash, log=say):
@@ -195,14 +199,15 @@ def run_grid(
                     bar.update(1)
                 if not waiting:
                     break
-                todo, finished = _wait_for_others(st, waiting, done, retry_failed)
+                todo, finished = _wait_for_others(st, waiting, marks)
                 by_others += len(finished)
                 bar.update(len(finished))
         finally:
             bar.close()
         if by_others:
-            notes.append(f"{by_others} cell(s) were run meanwhile by another run on this store "
-                         f"({', '.join(sorted(set(elsewhere.values())))}); this one waited for them")
+            who = f" ({', '.join(sorted(set(elsewhere.values())))})" if elsewhere else ""
+            notes.append(f"{by_others} cell(s) were run meanwhile by another run on this store{who}; "
+                         "this one did not run them again")
         if taken:
             notes.append(f"{taken} cell(s) run now were written meanwhile by another run on this store: "
                          "its rows are kept")
@@ -217,7 +222,16 @@ def run_grid(
 POLL_SECONDS = 0.5
 
 
-def _wait_for_others(st: ResultStore, waiting: dict, done: Mapping[str, str], retry_failed: bool) -> tuple[list, list]:
+def _written_since(st: ResultStore, keys: list[str], seen: Mapping[str, tuple]) -> set[str]:
+    """Those of ``keys`` (this run's claims) whose row another run wrote, or wrote over, since this run saw
+    the store as ``seen``; their claims end (this run does not run them)."""
+    now = st.marks()
+    written = {k for k in keys if now.get(k) != seen.get(k)}
+    st.unclaim(sorted(written))
+    return written
+
+
+def _wait_for_others(st: ResultStore, waiting: dict, seen: Mapping[str, tuple]) -> tuple[list, list]:
     """Wait until another run releases some of the ``waiting`` cells (it wrote them, stopped or died); remove
     them from ``waiting``; return (those this run must run itself, taken; those the other run finished)."""
     while True:
@@ -226,14 +240,12 @@ def _wait_for_others(st: ResultStore, waiting: dict, done: Mapping[str, str], re
         free = [k for k in waiting if k not in held]
         if free:
             break
-    statuses = st.statuses()
-    # a row there: the other run wrote it (for a retried failed cell, a row other than the one this run saw)
-    finished = [k for k in free if k in statuses and not (retry_failed and k in done and statuses[k] == "failed")]
-    st.unclaim(finished)
-    todo = [waiting.pop(k) for k in free if k not in set(finished)]
+    # a row other than the one this run saw (a new one, or a retried failed cell's new row): the other run's
+    finished = _written_since(st, free, seen)
+    todo = [waiting.pop(k) for k in free if k not in finished]
     for k in finished:
         waiting.pop(k)
-    return todo, finished
+    return todo, sorted(finished)
 
 
 def _by_hash(cells, datasets: Mapping[str, gb.Dataset]) -> dict[str, gb.Dataset]:

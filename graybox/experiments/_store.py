@@ -385,6 +385,11 @@ class ResultStore:
         """Status of every cell the store holds, by key."""
         return dict(self._conn.execute("SELECT key, status FROM cells").fetchall())
 
+    def marks(self) -> dict[str, tuple[str, str | None]]:
+        """Status and finishing time of every cell the store holds, by key: a row written over one
+        (a failed cell retried) changes its mark even where the status stays the same."""
+        return {k: (s, t) for k, s, t in self._conn.execute("SELECT key, status, finished_at FROM cells")}
+
     def write(self, row: Mapping[str, Any], replace: bool = False) -> bool:
         """Commit one finished cell (``replace``: overwrite a failed row of the same key).
 
