@@ -125,3 +125,36 @@ def test_a_failed_cell_another_run_retried_and_failed_again_is_not_retried_twice
     assert run.ran == len(cells) - 1, run.summary()
     res = gx.load_results(store).set_index("key")
     assert res.loc[cells[0].key, "message"] == "failed again"
+
+
+def _leave_driver(store: Path, owner: str, pid: int, beat: float, keys: list[str]) -> None:
+    """A drivers row and its claims as a run that is gone left them."""
+    import sqlite3
+    import socket
+
+    conn = sqlite3.connect(store, isolation_level=None)
+    try:
+        conn.execute("INSERT INTO drivers VALUES (?, ?, ?, ?)", (owner, socket.gethostname(), pid, beat))
+        conn.executemany("INSERT INTO claims VALUES (?, ?)", [(k, owner) for k in keys])
+    finally:
+        conn.close()
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
+def test_the_cells_of_a_dead_run_whose_pid_a_younger_process_took_are_free(grid, tmp_path):
+    import subprocess
+    import sys
+
+    _, g, _, cells = grid
+    store = tmp_path / "s.sqlite"
+    st = _open(store, g, cells)
+    proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        assert st.claim([]) == {}  # the tables
+        # the driver beat an hour ago, then died; its pid now belongs to a process started since
+        _leave_driver(store, "gone", proc.pid, time.time() - 3600, [c.key for c in cells])
+        assert st.claim([c.key for c in cells]) == {}
+    finally:
+        st.close()
+        proc.kill()
+        proc.wait()

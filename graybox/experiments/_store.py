@@ -83,6 +83,9 @@ CLAIMS: dict[str, str] = {"key": "TEXT PRIMARY KEY", "owner": "TEXT NOT NULL"}
 #: Seconds without a sign of life after which a driver on another host is taken for dead (on this host
 #: the process itself is asked); a live driver's cells would then be run twice, which costs time only.
 STALE_SECONDS = 900.0
+#: Seconds a process's start time, read from /proc (boot time to the second), may seem to lie after a beat its
+#: own driver wrote.
+_CLOCK_SLACK = 5.0
 
 
 def _alive(host: str, pid: int, beat: float, now: float) -> bool:
@@ -97,8 +100,14 @@ def _alive(host: str, pid: int, beat: float, now: float) -> bool:
         return True
     try:  # a killed driver its parent has not reaped yet still answers: Linux says it is a zombie
         with open(f"/proc/{pid}/stat", "rb") as f:
-            return f.read().rsplit(b")", 1)[1].split()[0] != b"Z"
-    except (OSError, IndexError):
+            fields = f.read().rsplit(b")", 1)[1].split()
+        if fields[0] == b"Z":
+            return False
+        # a process started after the driver's last beat is not the driver: it died and its pid was reused
+        with open("/proc/stat", "rb") as f:
+            boot = next(int(ln.split()[1]) for ln in f if ln.startswith(b"btime "))
+        return boot + int(fields[19]) / os.sysconf("SC_CLK_TCK") <= beat + _CLOCK_SLACK
+    except (OSError, IndexError, ValueError, StopIteration):
         return True
 
 
