@@ -158,3 +158,24 @@ def test_the_cells_of_a_dead_run_whose_pid_a_younger_process_took_are_free(grid,
         st.close()
         proc.kill()
         proc.wait()
+
+
+def test_claims_a_run_could_not_end_on_closing_do_not_hold_this_process_for_ever(grid, tmp_path, monkeypatch):
+    import sqlite3
+
+    _, g, _, cells = grid
+    store = tmp_path / "s.sqlite"
+    keys = [c.key for c in cells]
+    a = _open(store, g, cells)
+    assert a.claim(keys) == {}
+
+    def locked(keys=None):
+        raise sqlite3.OperationalError("database is locked")
+
+    monkeypatch.setattr(a, "unclaim", locked)
+    a.close()  # the claims stay in the file, their driver (this process) lives on
+    b = _open(store, g, cells)
+    try:
+        assert b.claim(keys) == {}  # this process knows that run is over: a notebook's next run does not wait
+    finally:
+        b.close()

@@ -88,8 +88,15 @@ STALE_SECONDS = 900.0
 _CLOCK_SLACK = 5.0
 
 
-def _alive(host: str, pid: int, beat: float, now: float) -> bool:
+#: The ``drivers`` rows of the stores this process has open: one of this process's rows that is not here belongs
+#: to a run that ended without taking its row away (closing could not write the store).
+_OPEN_OWNERS: set[str] = set()
+
+
+def _alive(owner: str, host: str, pid: int, beat: float, now: float) -> bool:
     """Whether the driver that wrote a ``drivers`` row still runs."""
+    if host == socket.gethostname() and pid == os.getpid():
+        return owner in _OPEN_OWNERS
     if host != socket.gethostname() or os.name != "posix":  # os.kill(pid, 0) would end a process on Windows
         return now - beat < STALE_SECONDS
     try:
@@ -356,9 +363,10 @@ class ResultStore:
             self._conn.execute(_table("claims", CLAIMS).replace("CREATE TABLE", "CREATE TABLE IF NOT EXISTS"))
             if self._owner is None:
                 self._owner = secrets.token_hex(8)
+                _OPEN_OWNERS.add(self._owner)
             self._conn.execute("INSERT OR REPLACE INTO drivers VALUES (?, ?, ?, ?)", (self._owner, host, pid, now))
             drivers = self._conn.execute("SELECT owner, host, pid, beat FROM drivers").fetchall()
-            gone = [(o,) for o, h, p, b in drivers if o != self._owner and not _alive(h, p, b, now)]
+            gone = [(o,) for o, h, p, b in drivers if o != self._owner and not _alive(o, h, p, b, now)]
             self._conn.executemany("DELETE FROM drivers WHERE owner = ?", gone)
             self._conn.execute("DELETE FROM claims WHERE owner NOT IN (SELECT owner FROM drivers)")
             self._conn.executemany("INSERT OR IGNORE INTO claims VALUES (?, ?)", [(k, self._owner) for k in keys])
@@ -388,6 +396,7 @@ class ResultStore:
             raise
         self._conn.execute("COMMIT")
         if keys is None:
+            _OPEN_OWNERS.discard(self._owner)
             self._owner = None
 
     def statuses(self) -> dict[str, str]:
@@ -437,6 +446,9 @@ class ResultStore:
         except sqlite3.Error:  # closing must not fail on a store it can no longer write: the claims die with the run
             pass
         finally:
+            if self._owner is not None:  # its row, left in the store, is known for a dead run's (_alive)
+                _OPEN_OWNERS.discard(self._owner)
+                self._owner = None
             self._conn.close()
 
     def __enter__(self) -> "ResultStore":
@@ -683,14 +695,15 @@ def running_cells(path: str | os.PathLike) -> dict[str, int]:
     try:
         if not {"drivers", "claims"} <= {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}:
             return {}
-        rows = conn.execute("SELECT d.host, d.pid, d.beat, COUNT(c.key) FROM drivers d JOIN claims c "
+        rows = conn.execute("SELECT d.owner, d.host, d.pid, d.beat, COUNT(c.key) FROM drivers d JOIN claims c "
                             "ON c.owner = d.owner GROUP BY d.owner").fetchall()
     except sqlite3.DatabaseError as exc:
         raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
     finally:
         conn.close()
     now = time.time()
-    return {f"pid {pid} on host {host}": int(n) for host, pid, beat, n in rows if n and _alive(host, pid, beat, now)}
+    return {f"pid {pid} on host {host}": int(n)
+            for o, host, pid, beat, n in rows if n and _alive(o, host, pid, beat, now)}
 
 
 def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.DataFrame:
