@@ -179,3 +179,18 @@ def test_claims_a_run_could_not_end_on_closing_do_not_hold_this_process_for_ever
         assert b.claim(keys) == {}  # this process knows that run is over: a notebook's next run does not wait
     finally:
         b.close()
+
+
+def test_grid_status_counts_the_cells_of_two_runs_in_one_process(grid, tmp_path):
+    import os
+    import socket
+
+    _, g, _, cells = grid
+    store = tmp_path / "s.sqlite"
+    a, b = _open(store, g, cells), _open(store, g, cells)
+    try:
+        assert a.claim([cells[0].key]) == {} and b.claim([cells[1].key]) == {}
+        assert dict(gx.grid_status(store).running) == {f"pid {os.getpid()} on host {socket.gethostname()}": 2}
+    finally:
+        a.close()
+        b.close()

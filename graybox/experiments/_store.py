@@ -702,8 +702,12 @@ def running_cells(path: str | os.PathLike) -> dict[str, int]:
     finally:
         conn.close()
     now = time.time()
-    return {f"pid {pid} on host {host}": int(n)
-            for o, host, pid, beat, n in rows if n and _alive(o, host, pid, beat, now)}
+    out: dict[str, int] = {}
+    for o, host, pid, beat, n in rows:
+        if n and _alive(o, host, pid, beat, now):  # two runs of one process (threads, a notebook): one entry
+            who = f"pid {pid} on host {host}"
+            out[who] = out.get(who, 0) + int(n)
+    return out
 
 
 def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.DataFrame:
