@@ -6,6 +6,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import graybox as gb
@@ -194,3 +195,24 @@ def test_grid_status_counts_the_cells_of_two_runs_in_one_process(grid, tmp_path)
     finally:
         a.close()
         b.close()
+
+
+def _surface_band(ubar: np.ndarray, names=("u1", "u2")):
+    """A hand-made band over points ``ubar`` (M, 2): ȳ = Σū, gains 1."""
+    M = ubar.shape[0]
+    yb, z, g = ubar.sum(axis=1), np.zeros(M), np.ones_like(ubar)
+    return gb.StaticSurfaceBand(ubar, names, yb, yb - 0.1, yb + 0.1, z + 0.05, g, g - 0.1, g + 0.1, g * 0.05, 0.95,
+                                "delta", 0, z)
+
+
+@pytest.mark.parametrize("k", [1.0, 1e-9, 1e9])
+def test_the_points_drawn_on_a_surface_slice_are_those_at_its_level_in_any_units(k):
+    from graybox import plots
+
+    u1 = np.array([1.0, 2.0, 3.0])
+    band = _surface_band(k * np.array([[a, b] for b in (1.0, 2.0) for a in u1]))
+    pts = gb.StaticPoints(k * np.array([[1.5, 1.0], [2.5, 1.0], [1.5, 2.0]]), np.array([2.5, 3.5, 3.5]),
+                          input_names=("u1", "u2"))
+    fig = plots.plot_static_band(band, pts, against="u1", gain=False)
+    stars = [len(ln.get_xdata()) for ln in fig.axes[0].get_lines() if ln.get_marker() == "*"]
+    assert stars == [2, 1]  # u2 = 1: two points, u2 = 2: one

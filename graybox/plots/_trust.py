@@ -173,7 +173,7 @@ def plot_static_band(
         axs[0].plot(x[g], band.ybar[g], "-", color=color, label=f"{name} static {'surface' if surface else 'curve'}{on}")
         if points is not None and surface:
             lev = band.ubar[g[0], held]
-            scale = np.abs(points.ubar[:, held]).max(initial=1.0)
+            scale = np.abs(points.ubar[:, held]).max(initial=0.0)  # the inputs' own size: any unit (nA or MW)
             hit = (np.abs(points.ubar[:, held] - lev) <= 1e-9 * np.maximum(np.abs(lev), scale)).all(axis=1)
             axs[0].plot(points.ubar[hit, i], points.ybar[hit], "*", linestyle="none", markersize=9, color=color)
         if gain:
