@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import graybox as gb
@@ -216,3 +217,19 @@ def test_the_points_drawn_on_a_surface_slice_are_those_at_its_level_in_any_units
     fig = plots.plot_static_band(band, pts, against="u1", gain=False)
     stars = [len(ln.get_xdata()) for ln in fig.axes[0].get_lines() if ln.get_marker() == "*"]
     assert stars == [2, 1]  # u2 = 1: two points, u2 = 2: one
+
+
+@pytest.mark.parametrize("x", [pd.Series([1.0, None], dtype=object), pd.DataFrame({"u": [1.0, None]}, dtype=object),
+                               pd.Series([True, 2.0], dtype=object), pd.array([True, False], dtype="boolean")],
+                         ids=["Series with None", "DataFrame with None", "Series with a bool", "pandas booleans"])
+def test_real_array_refuses_none_and_booleans_inside_pandas_values_too(x):
+    from graybox.core._validation import real_array
+
+    with pytest.raises(TypeError, match="x must be numbers"):
+        real_array(x, "x")
+
+
+def test_a_public_path_refuses_a_series_holding_none():
+    curve = gb.StaticCurve([0.5, 1.0])
+    with pytest.raises(TypeError, match="ubar must be"):
+        curve(pd.Series([1.0, None], dtype=object))

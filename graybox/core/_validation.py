@@ -228,10 +228,15 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
     reads True as 1 and None as NaN, and its errors name neither the argument nor the problem); a ragged nesting
     of numbers is a ``ValueError`` as there."""
     refuse_non_real(x, name)
-    raw = np.asarray(x, dtype=object) if isinstance(x, (list, tuple)) else x
-    # None inside a list too: a float conversion reads it as NaN, which callers take for a diverged run
-    bad = x is None or isinstance(x, (bool, np.bool_)) or getattr(raw, "dtype", None) == bool
-    if not bad and isinstance(raw, np.ndarray) and raw.dtype == object:
+    dtype = getattr(x, "dtype", None)  # numpy's, or pandas' (its "boolean" too: kind "b")
+    bad = x is None or isinstance(x, (bool, np.bool_)) or getattr(dtype, "kind", "") == "b"
+    if not bad and (dtype is None or dtype == object):
+        # None inside a list (or a pandas Series or DataFrame of objects) too: a float conversion reads it as NaN,
+        # which callers take for a diverged run
+        try:
+            raw = np.asarray(x, dtype=object)
+        except ValueError:  # ragged below the first level: float_array names it
+            raw = np.empty(0, dtype=object)
         bad = any(v is None or isinstance(v, (bool, np.bool_)) for v in raw.flat)
     if bad:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}")
