@@ -233,3 +233,11 @@ def test_a_public_path_refuses_a_series_holding_none():
     curve = gb.StaticCurve([0.5, 1.0])
     with pytest.raises(TypeError, match="ubar must be"):
         curve(pd.Series([1.0, None], dtype=object))
+
+
+def test_a_numpy_string_in_a_plain_value_is_saved_and_reads_back_as_one():
+    r = gb.Record([1.0, 2.0, 3.0], [0.5, 0.25, 0.125], name="short")
+    data = gb.Dataset(r, r, extra={"solver": np.str_("clarabel"), "names": [np.str_("u1"), "u2"]})
+    back = gb.from_json(gb.to_json(data)).extra
+    assert type(back["solver"]) is np.str_ and back["solver"] == "clarabel"
+    assert [type(x) for x in back["names"]] == [np.str_, str] and back["names"] == ["u1", "u2"]

@@ -34,7 +34,7 @@ the data (:class:`~graybox.Record`, :class:`~graybox.Dataset`, :class:`~graybox.
 the layers above this one, :class:`~graybox.DecimationAdvice` (datasets) and :class:`~graybox.GrayboxSelection`
 (experiments). A bootstrap's ``options`` and ``reference`` and a Dataset's ``extra`` are mappings of plain
 values: null, true/false, integers, numbers with a point and text as JSON has them, the rest as an object of
-one key (``{"float": "nan"}``, ``{"scalar": {"dtype", "value"}}`` for NumPy's, ``{"array": {"dtype", "shape", "data"}}``, ``{"tuple": […]}``, ``{"list": […]}``,
+one key (``{"float": "nan"}``, ``{"scalar": {"dtype", "value"}}`` for NumPy's (its text: dtype "str"), ``{"array": {"dtype", "shape", "data"}}``, ``{"tuple": […]}``, ``{"list": […]}``,
 ``{"map": {…}}``, ``{"type": {"type", "object"}}`` for a saved type), so that each reads back as the type it was.
 What JSON cannot carry (a function, a plant simulator, a constraint, Dask's lazy arrays) is refused when saving,
 naming the field. Their tables (pandas DataFrames of int64, float64, bool or
@@ -445,9 +445,12 @@ def _enc_plain_map(v: Mapping, where: str) -> dict:
 
 
 def _enc_plain(v: Any, where: str) -> Any:
+    if isinstance(v, np.str_):  # text from an array of labels (np.array(["a", "b"])[0]) reads back as such
+        return {"scalar": {"dtype": "str", "value": str(v)}}
     if isinstance(v, np.generic):  # a NumPy scalar (np.float64(0.1), np.int64(3)) reads back as one
         if v.dtype.name not in _PLAIN_DTYPES:
-            raise ValueError(f"cannot save {where}: a NumPy scalar of dtype {v.dtype} (a saved one holds a number or a bool)")
+            raise ValueError(f"cannot save {where}: a NumPy scalar of dtype {v.dtype} (a saved one holds a number, a "
+                             "bool or text)")
         return {"scalar": {"dtype": v.dtype.name, "value": _enc_plain(v.item(), where)}}
     if v is None or isinstance(v, (bool, str)):
         return v
@@ -520,8 +523,10 @@ def _dec_plain(v: Any, where: str, rd: _Reader) -> Any:
         if set(sc) != {"dtype", "value"}:
             raise rd.fail(at, f"a NumPy scalar needs ['dtype', 'value'], got {sorted(sc)}")
         dtype = rd.str(sc["dtype"], f"{at}.dtype")
+        if dtype == "str":
+            return np.str_(rd.str(sc["value"], f"{at}.value"))
         if dtype not in _PLAIN_DTYPES:
-            raise rd.fail(f"{at}.dtype", f"unknown dtype {dtype!r} (one of {sorted(_PLAIN_DTYPES)})")
+            raise rd.fail(f"{at}.dtype", f"unknown dtype {dtype!r} (one of {sorted(_PLAIN_DTYPES | {'str'})})")
         kind = np.dtype(dtype).kind
         read = rd.bool if kind == "b" else rd.int if kind in "iu" else rd.float
         value = sc["value"]
