@@ -241,3 +241,36 @@ def test_a_numpy_string_in_a_plain_value_is_saved_and_reads_back_as_one():
     back = gb.from_json(gb.to_json(data)).extra
     assert type(back["solver"]) is np.str_ and back["solver"] == "clarabel"
     assert [type(x) for x in back["names"]] == [np.str_, str] and back["names"] == ["u1", "u2"]
+
+
+def test_a_run_busy_with_a_long_cell_keeps_its_beat_so_another_host_does_not_take_its_cells(grid, tmp_path,
+                                                                                          monkeypatch):
+    import sqlite3
+
+    from graybox.experiments import _store
+
+    spec, _, data, _ = grid
+    store = tmp_path / "s.sqlite"
+    monkeypatch.setattr(_store, "STALE_SECONDS", 1.0)  # another host takes a run silent for 1 s for dead
+    beats = []
+
+    def beat():
+        conn = sqlite3.connect(store)
+        try:
+            return conn.execute("SELECT MAX(beat) FROM drivers").fetchone()[0]
+        finally:
+            conn.close()
+
+    class Slow:  # an executor whose cells take 2 s, the driver waiting meanwhile
+        name = "slow"
+
+        def run(self, todo, by_hash, log):
+            for c in todo:
+                beats.append(beat())
+                time.sleep(2.0)
+                beats.append(beat())
+                yield run_cell(c, data[c.data])
+
+    monkeypatch.setattr(_run, "make_executor", lambda *a, **k: Slow())
+    gx.run_grid(spec, store)
+    assert beats[1] > beats[0]  # the run beat while its cell ran (a run silent for STALE_SECONDS is taken for dead)

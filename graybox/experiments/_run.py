@@ -188,20 +188,21 @@ def run_grid(
         ran = taken = 0
         by_others = len(written)
         try:
-            while True:
-                for row in ex.run(todo, by_hash, log=say):
-                    if row.get("version") != version:
-                        row = failed_row(next(c for c in todo if c.key == row["key"]),
-                                         f"the worker runs graybox {row.get('version')}, the driver {version}: "
-                                         "install the same graybox on every worker")
-                    taken += not st.write(row, replace=row["key"] in done)
-                    ran += 1
-                    bar.update(1)
-                if not waiting:
-                    break
-                todo, finished = _wait_for_others(st, waiting, marks)
-                by_others += len(finished)
-                bar.update(len(finished))
+            with st.beating():  # alive to the other runs while a long cell writes no row
+                while True:
+                    for row in ex.run(todo, by_hash, log=say):
+                        if row.get("version") != version:
+                            row = failed_row(next(c for c in todo if c.key == row["key"]),
+                                             f"the worker runs graybox {row.get('version')}, the driver {version}: "
+                                             "install the same graybox on every worker")
+                        taken += not st.write(row, replace=row["key"] in done)
+                        ran += 1
+                        bar.update(1)
+                    if not waiting:
+                        break
+                    todo, finished = _wait_for_others(st, waiting, marks)
+                    by_others += len(finished)
+                    bar.update(len(finished))
         finally:
             bar.close()
         if by_others:

@@ -16,6 +16,7 @@ store) are read as they are, and upgraded in place when their own spec runs on t
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import json
 import os
@@ -23,6 +24,7 @@ import re
 import secrets
 import socket
 import sqlite3
+import threading
 import time
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -81,7 +83,8 @@ DRIVERS: dict[str, str] = {"owner": "TEXT PRIMARY KEY", "host": "TEXT NOT NULL",
 #: The cells a running driver has taken (table ``claims``): no other driver starts them.
 CLAIMS: dict[str, str] = {"key": "TEXT PRIMARY KEY", "owner": "TEXT NOT NULL"}
 #: Seconds without a sign of life after which a driver on another host is taken for dead (on this host
-#: the process itself is asked); a live driver's cells would then be run twice, which costs time only.
+#: the process itself is asked). A running driver beats every tenth of it (:meth:`ResultStore.beating`); one
+#: silent longer (a host suspended) has its cells run twice, which costs time only.
 STALE_SECONDS = 900.0
 #: Seconds a process's start time, read from /proc (boot time to the second), may seem to lie after a beat its
 #: own driver wrote.
@@ -398,6 +401,34 @@ class ResultStore:
         if keys is None:
             _OPEN_OWNERS.discard(self._owner)
             self._owner = None
+
+    @contextlib.contextmanager
+    def beating(self):
+        """While the block runs, write this run's beat every tenth of :data:`STALE_SECONDS` (its own connection,
+        in a thread): a driver busy with long cells writes no row for a long time, and a run on another host
+        would take it for dead and run its cells again."""
+        stop = threading.Event()
+
+        def beat() -> None:
+            conn = _connect(self.path)
+            try:
+                while not stop.wait(STALE_SECONDS / 10):
+                    owner = self._owner
+                    if owner is not None:
+                        try:
+                            conn.execute("UPDATE drivers SET beat = ? WHERE owner = ?", (time.time(), owner))
+                        except sqlite3.Error:  # a store busy past the timeout: the next beat
+                            pass
+            finally:
+                conn.close()
+
+        t = threading.Thread(target=beat, name="graybox store beat", daemon=True)
+        t.start()
+        try:
+            yield
+        finally:
+            stop.set()
+            t.join()
 
     def statuses(self) -> dict[str, str]:
         """Status of every cell the store holds, by key."""
