@@ -274,3 +274,58 @@ def test_a_run_busy_with_a_long_cell_keeps_its_beat_so_another_host_does_not_tak
     monkeypatch.setattr(_run, "make_executor", lambda *a, **k: Slow())
     gx.run_grid(spec, store)
     assert beats[1] > beats[0]  # the run beat while its cell ran (a run silent for STALE_SECONDS is taken for dead)
+
+
+def _another_run_opens_first(monkeypatch, store: Path, g, cells) -> None:
+    """Between this run's look at the file and its writing connection, another run opens the store (creates or
+    upgrades it) and closes it."""
+    from graybox.experiments import _store
+
+    orig, state = _store._connect, {"raced": False}
+
+    def racing(path, readonly=False):
+        if not readonly and not state["raced"]:
+            state["raced"] = True
+            _open(store, g, cells).close()
+        return orig(path, readonly)
+
+    monkeypatch.setattr(_store, "_connect", racing)
+
+
+def test_two_runs_creating_one_store_at_once_both_open_it(grid, tmp_path, monkeypatch):
+    _, g, _, cells = grid
+    store = tmp_path / "s.sqlite"
+    _another_run_opens_first(monkeypatch, store, g, cells)
+    st = _open(store, g, cells)  # created meanwhile by the other run: opened as it is
+    try:
+        assert (st.spec_id, st.new_spec) == (1, False)
+    finally:
+        st.close()
+    assert len(gx.store_specs(store)) == 1
+
+
+def test_two_runs_upgrading_one_first_format_store_at_once_both_open_it(grid, tmp_path, monkeypatch):
+    import json
+    import sqlite3
+
+    from graybox.experiments._cell import COLUMNS
+
+    _, g, _, cells = grid
+    store = tmp_path / "v1.sqlite"
+    con = sqlite3.connect(store)  # a store of the first format: meta and cells only
+    con.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+    con.execute(f"CREATE TABLE cells ({', '.join(f'{k} {t}' for k, t in COLUMNS.items())})")
+    meta = {"format": "graybox-grid-store", "format_version": "1", "grid_fingerprint": g.fingerprint(cells),
+            "grid_name": g.name, "grid_spec": json.dumps(g.to_dict()), "graybox_version": gb.__version__,
+            "n_cells": str(len(cells)), "created": "2026-01-01T00:00:00+00:00"}
+    con.executemany("INSERT INTO meta VALUES (?, ?)", list(meta.items()))
+    con.commit()
+    con.close()
+    _another_run_opens_first(monkeypatch, store, g, cells)
+    st = _open(store, g, cells)  # upgraded meanwhile by the other run
+    try:
+        assert st.spec_id == 1
+    finally:
+        st.close()
+    specs = gx.store_specs(store)
+    assert len(specs) == 1 and list(specs["created"]) == ["2026-01-01T00:00:00+00:00"]

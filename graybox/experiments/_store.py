@@ -337,7 +337,13 @@ class ResultStore:
                 _settings(conn)
                 meta = {"format": FORMAT, "format_version": FORMAT_VERSION, "graybox_version": version,
                         "created": _now()}
-                conn.execute("BEGIN")
+                conn.execute("BEGIN IMMEDIATE")
+                if conn.execute("SELECT 1 FROM sqlite_master").fetchone() is not None:
+                    # another run (started at once) made the file since this one looked: open it as it is, checked
+                    conn.execute("ROLLBACK")
+                    conn.close()
+                    return cls.open(p, grid_name=grid_name, fingerprint=fingerprint, spec=spec, cells=cells,
+                                    version=version)
                 conn.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
                 conn.execute(_table("cells", COLUMNS))
                 conn.executemany("INSERT INTO meta VALUES (?, ?)", list(meta.items()))
@@ -505,6 +511,9 @@ def _upgrade(conn: sqlite3.Connection, meta: Mapping[str, str], cells: Sequence[
     data): its grid becomes spec 1, in one transaction."""
     conn.execute("BEGIN IMMEDIATE")
     try:
+        if conn.execute("SELECT value FROM meta WHERE key = 'format_version'").fetchone() != ("1",):
+            conn.execute("ROLLBACK")  # another run of the same grid upgraded it since this one looked
+            return
         _create_spec_tables(conn)
         created = meta.get("created", _now())
         conn.execute(f"INSERT INTO specs ({', '.join(SPECS)}) VALUES ({', '.join('?' * len(SPECS))})",
