@@ -329,3 +329,17 @@ def test_two_runs_upgrading_one_first_format_store_at_once_both_open_it(grid, tm
         st.close()
     specs = gx.store_specs(store)
     assert len(specs) == 1 and list(specs["created"]) == ["2026-01-01T00:00:00+00:00"]
+
+
+def test_a_one_input_surface_band_is_drawn_with_its_points():
+    from graybox import plots
+
+    ub = np.linspace(0.0, 1.0, 4)[:, None]
+    band = _surface_band(np.column_stack([ub[:, 0], ub[:, 0]]))  # fields, then one input of them
+    band = gb.StaticSurfaceBand(ub, ("u",), band.ybar, band.ybar_low, band.ybar_high, band.ybar_std, band.gain[:, :1],
+                                band.gain_low[:, :1], band.gain_high[:, :1], band.gain_std[:, :1], 0.95, "delta", 0,
+                                band.undefined)
+    pts = gb.StaticPoints([0.2, 0.5], [0.4, 1.0], input_names=("u",))  # one input: ubar of shape (N,)
+    fig = plots.plot_static_band(band, pts)
+    stars = [len(ln.get_xdata()) for ln in fig.axes[0].get_lines() if ln.get_marker() == "*"]
+    assert stars == [2]

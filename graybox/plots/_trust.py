@@ -173,9 +173,10 @@ def plot_static_band(
         axs[0].plot(x[g], band.ybar[g], "-", color=color, label=f"{name} static {'surface' if surface else 'curve'}{on}")
         if points is not None and surface:
             lev = band.ubar[g[0], held]
-            scale = np.abs(points.ubar[:, held]).max(initial=0.0)  # the inputs' own size: any unit (nA or MW)
-            hit = (np.abs(points.ubar[:, held] - lev) <= 1e-9 * np.maximum(np.abs(lev), scale)).all(axis=1)
-            axs[0].plot(points.ubar[hit, i], points.ybar[hit], "*", linestyle="none", markersize=9, color=color)
+            pu = points.ubar.reshape(points.ybar.size, -1)  # one input's points hold ubar as shape (N,)
+            scale = np.abs(pu[:, held]).max(initial=0.0)  # the inputs' own size: any unit (nA or MW)
+            hit = (np.abs(pu[:, held] - lev) <= 1e-9 * np.maximum(np.abs(lev), scale)).all(axis=1)
+            axs[0].plot(pu[hit, i], points.ybar[hit], "*", linestyle="none", markersize=9, color=color)
         if gain:
             gcolor = color if surface else "C1"
             axs[1].fill_between(x[g], glo[g], ghi[g], color=gcolor, alpha=0.25, lw=0, label=what if j == 0 else None)
