@@ -69,22 +69,50 @@ def _claiming_driver(spec: Path, store: Path) -> subprocess.Popen:
 
 
 def test_a_cell_one_run_holds_is_not_given_to_another_until_written_or_released(grid, tmp_path):
+    """Two runs in two threads of one process (as two notebooks' grids would be in two processes)."""
+    from concurrent.futures import ThreadPoolExecutor
+
     _, g, data, cells = grid
     keys = [c.key for c in cells]
-    a, b = _open(tmp_path / "s.sqlite", g, cells), _open(tmp_path / "s.sqlite", g, cells)
-    try:
-        assert a.claim(keys) == {}
-        held = b.claim(keys)
-        assert set(held) == set(keys) and set(held.values()) == {f"pid {os.getpid()} on host {os.uname().nodename}"}
-        a.write(run_cell(cells[0], data[cells[0].data]))  # written: no longer held
-        assert set(b.claim(keys)) == set(keys[1:])
-        a.unclaim([keys[1]])
-        assert set(b.claim(keys)) == set(keys[2:])
-        a.close()  # every claim ends with the run
-        assert b.claim(keys) == {}
-    finally:
-        a.close()
-        b.close()
+    with ThreadPoolExecutor(1) as pool:  # run a lives in its own thread, as its connection must
+        def in_a(fn, *args):
+            return pool.submit(fn, *args).result()
+
+        a = in_a(_open, tmp_path / "s.sqlite", g, cells)
+        b = _open(tmp_path / "s.sqlite", g, cells)
+        try:
+            assert in_a(a.claim, keys) == {}
+            held = b.claim(keys)
+            assert set(held) == set(keys) and set(held.values()) == {f"pid {os.getpid()} on host {os.uname().nodename}"}
+            in_a(a.write, run_cell(cells[0], data[cells[0].data]))  # written: no longer held
+            assert set(b.claim(keys)) == set(keys[1:])
+            in_a(a.unclaim, [keys[1]])
+            in_a(a.unclaim, [])  # no keys: nothing ends
+            assert set(b.claim(keys)) == set(keys[2:])
+            in_a(a.close)  # every claim ends with the run
+            assert b.claim(keys) == {}
+        finally:
+            in_a(a.close)
+            b.close()
+
+
+def test_a_run_started_by_a_run_of_its_own_thread_does_not_wait_for_it(grid, tmp_path):
+    """A run whose log callback starts another run on the store (a run up the same thread's calls, which cannot
+    go on while the inner one waits): the inner run does not wait for it, and nothing runs twice in vain."""
+    spec, _, _, cells = grid
+    store = tmp_path / "s.sqlite"
+    inner = []
+
+    def log(line: str) -> None:
+        if "waits for them" in line:
+            raise AssertionError("the inner run waited for the outer one")
+        if not inner and "to run" in line:
+            inner.append(None)
+            inner[0] = gx.run_grid(spec, store)
+
+    outer = gx.run_grid(spec, store, log=log)
+    assert inner[0].ran == len(cells) and outer.ran == 0
+    assert any(f"{len(cells)} cell(s) were run meanwhile by another run" in n for n in outer.notes)
 
 
 def test_the_cells_of_a_killed_run_are_free_even_before_it_is_reaped(grid, tmp_path):
@@ -135,7 +163,7 @@ def test_a_run_waits_for_the_cells_another_run_holds_and_runs_those_it_releases(
     try:
         assert other.claim([c.key for c in cells]) == {}
         t, lines, out = _run_in_thread(spec, store)
-        assert any(f"{len(cells)} being run by another run" in x for x in lines)
+        assert any(f"{len(cells)} of them are being run by another run" in x for x in lines)
         for c in cells[:2]:  # the other run finishes two cells, then stops
             other.write(run_cell(c, data[c.data]))
     finally:

@@ -163,7 +163,7 @@ def run_grid(
     version = gb.__version__
     say = log or (lambda line: None)
     with ResultStore.open(store, grid_name=g.name, fingerprint=g.fingerprint(cells), spec=stored_spec(g, datasets),
-                          cells=cells, version=version) as st:
+                          cells=cells, version=version) as st, st.running():
         marks = st.marks()
         done = {k: status for k, (status, _) in marks.items()}
         todo, seen = [], set()
@@ -173,17 +173,18 @@ def run_grid(
                 todo.append(c)
             seen.add(c.key)
         notes = _notes(st, cells, done, version)
+        say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - len(todo)} reused from {store}, {len(todo)} to run")
+        for n in notes:
+            say(f"  {n}")
+        # claimed after the lines are said: a log callback that runs the grid itself finds nothing taken
         elsewhere = st.claim([c.key for c in todo])  # what another run on this store has taken, it runs
         waiting = {c.key: c for c in todo if c.key in elsewhere}
         # another run may have written (and let go) a cell between this run's look and its claim: kept, not run again
         written = _written_since(st, [c.key for c in todo if c.key not in waiting], marks)
         todo = [c for c in todo if c.key not in waiting and c.key not in written]
-        say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - len(todo) - len(waiting)} reused from {store}, "
-            f"{len(todo)} to run" + (f", {len(waiting)} being run by another run on this store "
-                                     f"({', '.join(sorted(set(elsewhere.values())))}): this one waits for them"
-                                     if waiting else ""))
-        for n in notes:
-            say(f"  {n}")
+        if waiting:
+            say(f"  {len(waiting)} of them are being run by another run on this store "
+                f"({', '.join(sorted(set(elsewhere.values())))}): this one waits for them")
         bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo) - len(waiting))
         ran = taken = 0
         by_others = len(written)

@@ -96,6 +96,16 @@ _CLOCK_SLACK = 5.0
 _OPEN_OWNERS: set[str] = set()
 
 
+#: The runs (``run_grid`` calls) this thread is inside of, innermost last: a run further up a thread's own calls
+#: (one whose log callback started another run of the store) cannot go on while an inner one waits for it.
+_RUNS_HERE = threading.local()
+
+
+def _outer_runs() -> set[str]:
+    """The ``drivers`` owners of the runs up this thread's calls."""
+    return {st._owner for st in getattr(_RUNS_HERE, "stores", ()) if st._owner is not None}
+
+
 def _alive(owner: str, host: str, pid: int, beat: float, now: float) -> bool:
     """Whether the driver that wrote a ``drivers`` row still runs."""
     if host == socket.gethostname() and pid == os.getpid():
@@ -358,6 +368,19 @@ class ResultStore:
             raise
         return cls(p, conn, meta, spec_id, new, known)
 
+    @contextlib.contextmanager
+    def running(self):
+        """While ``run_grid`` runs into this store: a run its callbacks start on the same store (in this thread)
+        does not wait for this one's cells."""
+        stores = getattr(_RUNS_HERE, "stores", None)
+        if stores is None:
+            stores = _RUNS_HERE.stores = []
+        stores.append(self)
+        try:
+            yield self
+        finally:
+            stores.remove(self)
+
     def claim(self, keys: Sequence[str]) -> dict[str, str]:
         """Take the cells of ``keys`` for this run, but those a live driver of another run has taken.
 
@@ -375,7 +398,8 @@ class ResultStore:
                 _OPEN_OWNERS.add(self._owner)
             self._conn.execute("INSERT OR REPLACE INTO drivers VALUES (?, ?, ?, ?)", (self._owner, host, pid, now))
             drivers = self._conn.execute("SELECT owner, host, pid, beat FROM drivers").fetchall()
-            gone = [(o,) for o, h, p, b in drivers if o != self._owner and not _alive(o, h, p, b, now)]
+            outer = _outer_runs()  # never waited for: they wait for this one to return
+            gone = [(o,) for o, h, p, b in drivers if o != self._owner and (o in outer or not _alive(o, h, p, b, now))]
             self._conn.executemany("DELETE FROM drivers WHERE owner = ?", gone)
             self._conn.execute("DELETE FROM claims WHERE owner NOT IN (SELECT owner FROM drivers)")
             self._conn.executemany("INSERT OR IGNORE INTO claims VALUES (?, ?)", [(k, self._owner) for k in keys])
