@@ -662,6 +662,11 @@ def test_regret_compares_the_choice_with_the_rows_in_the_band_only(data):
     assert out.regret == res.regret  # the row out of the band does not count
     t.iloc[other, t.columns.get_loc("in_band")] = True
     assert dataclasses.replace(res, table=t).regret == pytest.approx(10.0)
+    t["JS_test"] = np.where(t["in_band"] & (t["rank"] != 1), np.inf, t["JS_test"])  # the other in-band rows diverge
+    t.iloc[other, t.columns.get_loc("in_band")] = False
+    t.iloc[int(np.flatnonzero(t["rank"].to_numpy() == 1)[0]), t.columns.get_loc("JS_test")] = np.inf
+    with pytest.raises(ValueError, match="no in-band row's model ran through the test record"):
+        dataclasses.replace(res, table=t).regret
 
 
 def test_several_identification_records_are_fitted_together_and_chosen_on_in_turn():

@@ -335,10 +335,12 @@ class GrayboxSelection:
         every row. Needs the call's ``test=`` record; ``ValueError`` when every such row's free run
         diverged on it."""
         js = self._test_column()
+        rows = "row's"
         if self.in_band:
             js = np.where(self.table["in_band"].to_numpy(bool), js, np.inf)
+            rows = "in-band row's"  # the rows compared
         if not np.isfinite(js).any():
-            raise ValueError("no row's model ran through the test record (every JS_test is inf: its free run "
+            raise ValueError(f"no {rows} model ran through the test record (every such JS_test is inf: its free run "
                              "diverged there, or the row has no model): no best row to compare the choice with")
         return float(self.chosen["JS_test"] / js[np.isfinite(js)].min())
 
