@@ -194,7 +194,8 @@ def test_graybox_grid_run_says_when_another_run_wrote_its_cells_meanwhile(tmp_pa
     monkeypatch.setattr(_run, "_notes", meanwhile)
     assert main(["grid", "run", str(spec), "--store", str(store)]) == 0
     assert other[0].ran == 1
-    assert "1 cell(s) run now were written meanwhile by another run" in capsys.readouterr().out
+    # since claims (this session), the command's run does not run the cell again; its note says so, at the end
+    assert "1 cell(s) were run meanwhile by another run on this store" in capsys.readouterr().out
 
 
 def test_the_status_of_all_specs_says_all_instead_of_a_spec_zero(tmp_path):

@@ -1,5 +1,5 @@
 """``real_array`` is ``float_array`` after refusing what a float conversion would take silently: one conversion
-of numbers, one rule for each wrong input (a type: TypeError; a ragged shape: ValueError)."""
+of numbers (a ragged nesting keeps real_array's TypeError, in float_array's words)."""
 
 from __future__ import annotations
 
@@ -29,14 +29,16 @@ def test_what_a_float_conversion_would_take_silently_is_a_type_error(x):
         real_array(x, "x")
 
 
-def test_a_ragged_nesting_is_a_value_error_naming_it():
-    with pytest.raises(ValueError, match="rows of different lengths"):
+def test_a_ragged_nesting_is_a_type_error_in_float_arrays_words():
+    with pytest.raises(TypeError, match="rows of different lengths"):
         real_array([[1.0, 2.0], [3.0]], "x")
+    with pytest.raises(ValueError, match="rows of different lengths"):  # float_array: a bad shape
+        float_array([[1.0, 2.0], [3.0]], "x")
 
 
 def test_a_public_path_gives_the_same_errors():
     curve = gb.StaticCurve([0.5, 1.0])
-    with pytest.raises(ValueError, match="ubar .*rows of different lengths"):
+    with pytest.raises(TypeError, match="ubar .*rows of different lengths"):
         curve([[1.0, 2.0], [3.0]])
     with pytest.raises(TypeError, match="ubar must be"):
         curve([1.0, None])

@@ -225,8 +225,9 @@ def refuse_non_real(x: object, name: str) -> None:
 def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
     """``x`` as a new float array: :func:`float_array` after refusing (``TypeError`` naming ``name``) text, complex
     values, dates, booleans and None anywhere inside (numpy's own conversion parses text, drops an imaginary part,
-    reads True as 1 and None as NaN, and its errors name neither the argument nor the problem); a ragged nesting
-    of numbers is a ``ValueError`` as there."""
+    reads True as 1 and None as NaN, and its errors name neither the argument nor the problem). A ragged nesting is
+    a ``TypeError`` here too, with float_array's words: levels or points are no array of numbers (records and θ,
+    read by float_array itself, call it a bad shape)."""
     refuse_non_real(x, name)
     dtype = getattr(x, "dtype", None)  # numpy's, or pandas' (its "boolean" too: kind "b")
     bad = x is None or isinstance(x, (bool, np.bool_)) or getattr(dtype, "kind", "") == "b"
@@ -240,7 +241,10 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
         bad = any(v is None or isinstance(v, (bool, np.bool_)) for v in raw.flat)
     if bad:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}")
-    return float_array(x, name, what)
+    try:
+        return float_array(x, name, what)
+    except ValueError as exc:  # ragged: the paths that read levels and points have always called it a type
+        raise TypeError(str(exc)) from None
 
 
 def float_array(x: object, name: str, what: str = "an array of numbers") -> np.ndarray:
