@@ -16,37 +16,7 @@ from graybox.experiments import _run
 from graybox.experiments._cell import failed_row, run_cell
 from graybox.experiments._store import ResultStore
 
-SPEC = """\
-name = "shared"
-[[data]]
-name = "pumping"
-bundled = "pumping"
-[[structures]]
-name = "a"
-terms = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "1"]
-[[structures]]
-name = "b"
-terms = ["y(k-1)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"]
-[[variants]]
-name = "PE"
-estimator = "pe"
-lambdas = {logspace = [-3, 0, 3]}
-options = {solver = "closed"}
-"""
-
-
-@pytest.fixture
-def grid(tmp_path):
-    spec = tmp_path / "spec.toml"
-    spec.write_text(SPEC)
-    g = gx.Grid.from_toml(spec)
-    data = g.load_data()
-    return spec, g, data, g.cells(data)
-
-
-def _open(store: Path, g, cells) -> ResultStore:
-    return ResultStore.open(store, grid_name=g.name, fingerprint=g.fingerprint(cells), spec=g.to_dict(), cells=cells,
-                            version=gb.__version__)
+from test_grid_claims import _open, grid  # noqa: F401 - one claims grid (the fixture) and one opener
 
 
 def test_a_cell_taken_over_after_its_run_let_it_go_unwritten_stays_claimed_while_this_run_runs_it(grid, tmp_path):
