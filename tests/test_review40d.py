@@ -14,7 +14,6 @@ import graybox as gb
 from graybox import experiments as gx
 from graybox.experiments import _run
 from graybox.experiments._cell import failed_row, run_cell
-from graybox.experiments._store import ResultStore
 
 from test_grid_claims import _open, grid  # noqa: F401 - one claims grid (the fixture) and one opener
 
