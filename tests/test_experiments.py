@@ -667,3 +667,16 @@ def test_input_names_are_part_of_the_data_and_of_made_structures():
     # the spec checks included terms and per-input delays against the inputs they name
     gx.StructureSpec("n", candidates={"ny": 1, "nu": 2, "delay": {"n1": 1, "n2": 2}}, n_terms=4, include=["n1(k-1)"])
     gx.StructureSpec("n", candidates={"ny": 1, "nu": 2}, n_terms=4, include=["n1(k-1)"])
+
+
+def test_a_band_for_a_data_set_the_results_do_not_hold_is_refused_by_name(small_store, tmp_path):
+    # a mapping's misspelt key left the data set meant to the store's own band, without a word (hunt40b)
+    path, _ = small_store
+    held = gx.load_results(path)["data"].iloc[0]
+    good = gx.leaderboard(path, band={held: 0.031})
+    for call in (lambda b: gx.leaderboard(path, band=b), lambda b: gx.heatmap_table(path, band=b),
+                 lambda b: gx.plot_fronts(path, band=b), lambda b: gx.plot_heatmap(path, band=b),
+                 lambda b: gx.write_report(path, tmp_path / "r", band=b)):
+        with pytest.raises(ValueError, match=r"band names data sets the results do not hold: 'pumpin' \(they hold"):
+            call({held: 0.031, "pumpin": 0.031})
+    assert len(good)

@@ -106,6 +106,17 @@ def _checked_options(rule: str = RULES[0], band: float | Mapping[str, float] | N
     return None if band is None else check_real(band, "band", low=0, low_open=True)
 
 
+def _known_bands(band: float | Mapping[str, float] | None, df: pd.DataFrame) -> None:
+    """``ValueError`` when a mapping of bands names a data set the results do not hold (a typo would leave
+    the data set meant to the store's own band, without a word)."""
+    if isinstance(band, Mapping):
+        held = list(dict.fromkeys(df["data"]))
+        unknown = [k for k in band if k not in held]
+        if unknown:
+            raise ValueError(f"band names data sets the results do not hold: {', '.join(map(repr, unknown))} "
+                             f"(they hold {', '.join(map(repr, held)) or 'none'})")
+
+
 def _band_of(rows: pd.DataFrame | np.ndarray, band: float | Mapping[str, float] | None, data: str) -> float:
     """J_SF's bound for ``rows`` of data set ``data`` (a frame, or their stored bands): ``band``'s, else the first
     band stored on the rows."""
@@ -235,6 +246,7 @@ def leaderboard(
     """
     band = _checked_options(rule, band)
     df = _frame(results)
+    _known_bands(band, df)
     df = df.assign(n_params=_n_params(df))
     sizes = df.groupby(_KEYS, sort=False).size()
     cells_np = _Columns(df, ("status", "message", "band", "n_params"))
@@ -316,8 +328,10 @@ def heatmap_table(
     """
     band = _checked_options(rule, band, data, value)
     df = _frame(results)
+    _known_bands(band, df)
     d = _one_data(df, data)
-    lb = leaderboard(df[df["data"] == d], rule=rule, band=band)
+    lb = leaderboard(df[df["data"] == d], rule=rule, band={d: band[d]} if isinstance(band, Mapping) and d in band
+                     else band)
     if value not in lb.columns:
         raise ValueError(f"value must be a leaderboard column ({', '.join(lb.columns)}); got {value!r}")
     t = lb[value].reset_index().pivot(index="structure", columns="variant", values=value)
@@ -419,6 +433,7 @@ def plot_scatter(
     """
     band = _checked_options(band=band, data=data)
     df = _frame(results)
+    _known_bands(band, df)
     names = [_one_data(df, data)] if data is not None else list(dict.fromkeys(df["data"]))
     fig = Figure(figsize=(6.4 * len(names), 4.8), layout="constrained")
     axes = fig.subplots(1, len(names), squeeze=False)[0]
@@ -503,6 +518,7 @@ def plot_fronts(
     """
     band = _checked_options(band=band, data=data)
     df = _frame(results)
+    _known_bands(band, df)
     d = _one_data(df, data)
     sub = df[df["data"] == d]
     every = list(dict.fromkeys(sub["structure"]))
