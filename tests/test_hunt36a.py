@@ -79,8 +79,11 @@ def test_ctrl_c_during_grid_run_says_what_is_kept_instead_of_tracebacks(tmp_path
 
     spec, store = tmp_path / "spec.toml", tmp_path / "s.sqlite"
     spec.write_text(SLOW_SPEC)
+    # the command as a terminal starts it: SIGINT not ignored, though a test runner started in the background (a
+    # shell's `&`) hands its children an ignored SIGINT, which the driver would keep, finishing the grid
     proc = subprocess.Popen([sys.executable, "-m", "graybox", "grid", "run", str(spec), "--store", str(store), *where],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 120
         while _cells_in(store) < 1:  # the first cell (LS) is in; an SE cell runs
