@@ -642,7 +642,9 @@ def frols(
         ERR, RSS and the criterion curve are those of the closure on the centred signals (in the
         closure's order: the chosen terms first); :attr:`Selection.stop` says what was chosen before
         the closure; with ``search="swap"``/``"exact"`` :attr:`Selection.subsets` are the closures of
-        the best subsets, with their RSS on the centred signals. Not for Dask records.
+        the best subsets, with their RSS on the centred signals (two sizes may close to one structure).
+        A criterion (AIC, BIC, ...) picks the size among the centred search's, counting the terms
+        chosen, not the closure's. Not for Dask records.
 
     Returns
     -------
