@@ -169,6 +169,18 @@ def test_a_spec_s_equality_takes_free_and_refuses_other_text():
         canonical_constraint({"type": "equality", "curve": "fit", "sigma_y": "loose"})
 
 
+@pytest.mark.parametrize("sy", [1.0, 1.2])
+def test_a_given_sigma_y_at_one_or_above_is_refused_where_it_is_given(sy):
+    # it used to be taken, and each cell (or estimator) using it failed later: 1 − Σ*_y is the denominator
+    from graybox.experiments._spec import SpecError, canonical_constraint
+
+    with pytest.raises(ValueError, match=r"CurveEquality: sigma_y must be < 1 .*denominator"):
+        gb.CurveEquality(_curve(), sigma_y=sy)
+    with pytest.raises(SpecError, match=r"sigma_y must be < 1 .*denominator"):
+        canonical_constraint({"type": "equality", "curve": "fit", "sigma_y": sy})
+    assert gb.CurveEquality(_curve(), sigma_y=0.999).sigma_y == 0.999
+
+
 def test_a_curve_fit_whose_powers_are_collinear_to_round_off_says_so():
     ub = 1e6 + np.linspace(0.0, 1.0, 8)  # powers of ū ≈ 1e6 over a range of 1 agree to 16 digits
     pts = gb.StaticPoints(ub, 1.0 + (ub - 1e6) - 0.2 * (ub - 1e6) ** 3)

@@ -710,6 +710,9 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
                             path + ("sigma_y",))
         if sy != FREE_SIGMA_Y:
             sy = _bound(sy, path + ("sigma_y",), "sigma_y")
+            if sy is not None and sy >= 1.0:  # as CurveEquality: read here, not in every cell that would fail
+                raise SpecError(f"sigma_y must be < 1 (1 − Σ*_y is eq. (22)'s static denominator; at 1 or above "
+                                f"no model meeting it has a stable equilibrium), got {sy!r}", path + ("sigma_y",))
         return {"type": kind, "curve": curve, "sigma_y": sy}
     if kind == "points":
         return {"type": kind}

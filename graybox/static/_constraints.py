@@ -493,7 +493,14 @@ class CurveEquality(StaticConstraint):
         if isinstance(self.sigma_y, str):
             check_choice(self.sigma_y, "CurveEquality: sigma_y", (FREE_SIGMA_Y,))
         elif self.sigma_y is not None:
-            object.__setattr__(self, "sigma_y", check_real(self.sigma_y, "CurveEquality: sigma_y"))
+            # 1 − Σ*_y is eq. (22)'s static denominator, and Σ*_y the sum of the linearised recursion's y
+            # coefficients at every ū: at 1 no static function, above 1 no stable equilibrium (a structure
+            # without Σy ignores it, so no use of a value >= 1 is lost)
+            sy = check_real(self.sigma_y, "CurveEquality: sigma_y")
+            if sy >= 1.0:
+                raise ValueError(f"CurveEquality: sigma_y must be < 1 (1 − Σ*_y is eq. (22)'s static denominator; "
+                                 f"at 1 or above no model meeting it has a stable equilibrium), got {sy:g}")
+            object.__setattr__(self, "sigma_y", sy)
 
     def describe(self) -> str:
         if self.sigma_y is None:
