@@ -680,3 +680,23 @@ def test_a_band_for_a_data_set_the_results_do_not_hold_is_refused_by_name(small_
         with pytest.raises(ValueError, match=r"band names data sets the results do not hold: 'pumpin' \(they hold"):
             call({held: 0.031, "pumpin": 0.031})
     assert len(good)
+
+
+def test_fronts_and_scatter_draw_each_variants_own_band_where_they_differ(small_store):
+    # both shaded one band per data set (its first cell's), while the leaderboard judges each group by its
+    # own cells' band: a variant with a band of its own was drawn against another's
+    path, _ = small_store
+    df = gx.load_results(path)
+    d = df["data"].iloc[0]
+    own = df["variant"] == df["variant"].iloc[0]
+    df.loc[own, "band"] = 1e-3
+    other = float(df.loc[~own, "band"].iloc[0])
+    fig = gx.plot_scatter(df, data=d)
+    labels = fig.axes[0].get_legend_handles_labels()[1]
+    assert f"B = {1e-3:g} ({df['variant'].iloc[0]})" in labels
+    assert any(lb.startswith(f"B = {other:g} (") for lb in labels)
+    assert not [p for p in fig.axes[0].patches]  # no region is every variant's: nothing shaded
+    fronts = gx.plot_fronts(df, data=d)
+    assert "the variants' own bands" in fronts._suptitle.get_text()
+    same = gx.plot_fronts(gx.load_results(path), data=d)  # one band: shaded, as before
+    assert f"J_SF ≤ B = {other:g}" in same._suptitle.get_text()

@@ -406,6 +406,34 @@ def _band_on(ax, b: float | None, label: bool = False) -> None:
                 ha="right", va="top" if where == "above" else "bottom", fontsize=7, color="0.3")
 
 
+def _bands(sub: pd.DataFrame, band: float | Mapping[str, float] | None, data: str) -> list[tuple[float, str]]:
+    """The J_SF bounds a data set's panel shows: ``band``'s, else each distinct band its cells stored, with
+    the variants that stored it when they differ (as the leaderboard judges each group by its own cells'),
+    or none without a band."""
+    if band is not None:
+        return [(_band_of(sub, band, data), "")]
+    stored = sub.dropna(subset=["band"])
+    if not len(stored):
+        return []
+    values = list(dict.fromkeys(stored["band"].astype(float)))
+    if len(values) == 1:
+        return [(values[0], "")]
+    return [(b, ", ".join(map(_shown, dict.fromkeys(stored.loc[stored["band"] == b, "variant"])))) for b in values]
+
+
+def _bands_on(ax, bands: list[tuple[float, str]], label: bool = False) -> None:
+    """One band as :func:`_band_on` draws it; several (variants with bands of their own) as one dashed line
+    each, named by its variants in the legend, none shaded (no region is every variant's)."""
+    if len(bands) <= 1:
+        _band_on(ax, bands[0][0] if bands else None, label=label)
+        return
+    lo, hi = ax.get_ylim()
+    for i, (b, who) in enumerate(bands):
+        ax.axhline(b, color=f"0.{3 + 2 * (i % 3)}", lw=0.9, ls=("--", ":", "-.")[i % 3], zorder=1,
+                   label=f"B = {b:g} ({who})")
+    ax.set_ylim(lo, hi)
+
+
 def plot_scatter(
     results: pd.DataFrame | str | os.PathLike,
     *,
@@ -450,11 +478,10 @@ def plot_scatter(
             ax.plot([], [], "o", color=colors[v], label=_shown(v))
         for s in structures:
             ax.plot([], [], marks[s], color="0.3", label=_shown(s), ls="none")
-        b = _band_of(sub, band, d) if (band is not None or sub["band"].notna().any()) else None
         _scale(ax, "x", sub.loc[ok, "JS_valid"])
         _scale(ax, "y", sub.loc[ok, "JSF"])
         if ok.any():
-            _band_on(ax, b, label=True)
+            _bands_on(ax, _bands(sub, band, d), label=True)
         ax.set_xlabel("J_S on the validation record")
         ax.set_ylabel("J_SF")
         ax.set_title(f"{_shown(d)}: {int(ok.sum())} of {len(sub)} cells drawn")
@@ -529,7 +556,7 @@ def plot_fronts(
     nrow = -(-len(names) // ncol)
     fig = Figure(figsize=(5.2 * ncol, 4.2 * nrow), layout="constrained")
     axes = fig.subplots(nrow, ncol, squeeze=False).ravel()
-    b = _band_of(sub, band, d) if (band is not None or sub["band"].notna().any()) else None
+    bands = _bands(sub, band, d)
     for ax, s in zip(axes, names):
         drawn = False
         xs: list[np.ndarray] = []
@@ -560,7 +587,7 @@ def plot_fronts(
         _scale(ax, "x", np.concatenate(xs) if xs else [])
         _scale(ax, "y", np.concatenate(ys) if ys else [])
         if drawn:
-            _band_on(ax, b)
+            _bands_on(ax, bands)
         else:
             ax.text(0.5, 0.5, "no model with finite J_S and J_SF\n(the leaderboard's reason says why)",
                     transform=ax.transAxes, ha="center", va="center", color="0.4", fontsize=8)
@@ -573,8 +600,12 @@ def plot_fronts(
     for ax in axes[len(names):]:
         ax.set_visible(False)
     axes[0].legend(fontsize=7, loc="best", title="★ chosen, ◆ single model", title_fontsize=7)
-    fig.suptitle(f"{_shown(d)}: fronts per structure" + (f" (shaded below the dashed line: J_SF ≤ B = {b:g})"
-                                                   if b is not None else ""))
+    said = ""
+    if len(bands) == 1:
+        said = f" (shaded below the dashed line: J_SF ≤ B = {bands[0][0]:g})"
+    elif bands:
+        said = " (J_SF ≤ B: the variants' own bands, " + "; ".join(f"{b:g} for {who}" for b, who in bands) + ")"
+    fig.suptitle(f"{_shown(d)}: fronts per structure" + said)
     return fig
 
 
