@@ -452,7 +452,8 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
         A pair has reached candidate c once its last L outputs all lie within ``tol`` of c; or
         once its last L increments are all below stall_rtol · max(|y|, |y0|, floor), it lies
         within ``ntol`` of c, and Newton's method on the static equation, started at the current
-        output, lands within ``tol`` of c (a slow approach).
+        output, lands within ``ntol`` of c (a slow approach: there no other root is near, and the run and the
+        root finder may place c apart by more than ``tol``, the roundings of two foldings of its terms).
     L : int
         Number of past outputs the recursion reads (its largest output lag, >= 1).
     floor : float
@@ -601,7 +602,11 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
                     x -= F / dF
                     if abs(F / dF) <= 1e-15 * max(abs(x), floor):
                         break
-                if abs(x - goal[b]) <= tol[k, c0]:
+                # within ntol (at most a thousandth of the way to any other root) Newton has found c itself: the
+                # recursion's own static equation puts it where the candidate's root finder did, to their two
+                # roundings (far from the signals' zeros, cancelling terms of 1e6 shift a slow equilibrium by
+                # more than tol, and a run measured against tol then went on for its whole budget)
+                if abs(x - goal[b]) <= ntol[k, c0] and np.isfinite(x):
                     end = REACHED
             if end < 0 and gwin[b] > 0:
                 gdev[b] = max(gdev[b], dev[b])
