@@ -106,6 +106,11 @@ def _outer_runs() -> set[str]:
     return {st._owner for st in getattr(_RUNS_HERE, "stores", ()) if st._owner is not None}
 
 
+def _driver_name(host: str, pid: int) -> str:
+    """A run's driver in words, as claims and grid status name it."""
+    return f"pid {pid} on host {host}"
+
+
 def _alive(owner: str, host: str, pid: int, beat: float, now: float) -> bool:
     """Whether the driver that wrote a ``drivers`` row still runs."""
     if host == socket.gethostname() and pid == os.getpid():
@@ -403,7 +408,7 @@ class ResultStore:
             self._conn.executemany("DELETE FROM drivers WHERE owner = ?", gone)
             self._conn.execute("DELETE FROM claims WHERE owner NOT IN (SELECT owner FROM drivers)")
             self._conn.executemany("INSERT OR IGNORE INTO claims VALUES (?, ?)", [(k, self._owner) for k in keys])
-            who = {o: f"pid {p} on host {h}" for o, h, p, _ in drivers}
+            who = {o: _driver_name(h, p) for o, h, p, _ in drivers}
             held = dict(self._conn.execute("SELECT key, owner FROM claims WHERE owner != ?", (self._owner,)))
         except BaseException:
             self._conn.execute("ROLLBACK")
@@ -459,10 +464,6 @@ class ResultStore:
         finally:
             stop.set()
             t.join()
-
-    def statuses(self) -> dict[str, str]:
-        """Status of every cell the store holds, by key."""
-        return dict(self._conn.execute("SELECT key, status FROM cells").fetchall())
 
     def marks(self) -> dict[str, tuple[str, str | None]]:
         """Status and finishing time of every cell the store holds, by key: a row written over one
@@ -769,7 +770,7 @@ def running_cells(path: str | os.PathLike) -> dict[str, int]:
     out: dict[str, int] = {}
     for o, host, pid, beat, n in rows:
         if n and _alive(o, host, pid, beat, now):  # two runs of one process (threads, a notebook): one entry
-            who = f"pid {pid} on host {host}"
+            who = _driver_name(host, pid)
             out[who] = out.get(who, 0) + int(n)
     return out
 

@@ -36,6 +36,15 @@ def check_one_input_points(points: object, who: str) -> None:
                          "drawn against one input: use plot_surface_slices or plot_surface_contours")
 
 
+def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
+    """Which static points lie on a slice: ``held`` (N, k) their held inputs' levels, ``level`` (k,) the slice's;
+    equal to 1e-9 of the held inputs' own size (any unit: nA or MW), shape (N,)."""
+    held = np.asarray(held, float)
+    level = np.asarray(level, float)
+    scale = float(np.abs(held).max(initial=0.0))
+    return (np.abs(held - level) <= 1e-9 * np.maximum(np.abs(level), scale)).all(axis=1)
+
+
 def unit_label(text: str, unit: str) -> str:
     """An axis label with its unit: ``text (unit)``, or ``text`` when no unit is said or the text
     already names it (``"Speed (rpm)"``, ``"Speed [rpm]"``)."""

@@ -17,7 +17,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..core._validation import check_int, check_real, check_sequence
-from ._data import unit_label
+from ._data import on_level, unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
@@ -206,9 +206,8 @@ def plot_surface_slices(
     if pts is not None:
         ub, yb, pname, _ = pts
         labelled = False
-        scale = float(np.max(np.abs(ub[:, held])))  # "on the level" relative to the input's size: any units
         for lev, col in zip(levels, colors):
-            on = np.abs(ub[:, held] - lev) <= 1e-9 * max(abs(lev), scale)
+            on = on_level(ub[:, [held]], [lev])
             if on.any():
                 # one legend entry for the points (their colour already names the level)
                 ax.plot(ub[on, against], yb[on], "*", linestyle="none", markersize=9, color=col,

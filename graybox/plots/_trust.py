@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints
 from ..core._validation import check_bool, check_choice, check_int
-from ._data import check_axes, check_one_input_points, unit_label
+from ._data import check_axes, check_one_input_points, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand
@@ -174,8 +174,7 @@ def plot_static_band(
         if points is not None and surface:
             lev = band.ubar[g[0], held]
             pu = points.ubar.reshape(points.ybar.size, -1)  # one input's points hold ubar as shape (N,)
-            scale = np.abs(pu[:, held]).max(initial=0.0)  # the inputs' own size: any unit (nA or MW)
-            hit = (np.abs(pu[:, held] - lev) <= 1e-9 * np.maximum(np.abs(lev), scale)).all(axis=1)
+            hit = on_level(pu[:, held], lev)
             axs[0].plot(pu[hit, i], points.ybar[hit], "*", linestyle="none", markersize=9, color=color)
         if gain:
             gcolor = color if surface else "C1"
