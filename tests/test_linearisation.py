@@ -10,7 +10,8 @@ from graybox import Structure
 from graybox.control._local import jacobian_rows
 from graybox.estimation._local_models import LocalModels, within_at
 from graybox.static._analysis import _linear_coefficients, schur_stable, stable_mask
-from graybox.static._surface_analysis import _fderivs, _folded
+from graybox.static._linearisation import static_partials, static_powers
+from graybox.static._surface_analysis import _folded
 
 #: A rational structure (no y power above 1), one with y² terms, and one with two inputs.
 STRUCTURES = {
@@ -53,7 +54,31 @@ def test_static_estimation_and_control_read_the_same_local_model(name, data):
                           np.array([[ybar]]), 0.0)[0]) == stable
 
     # summed over the lags, a and b are the derivatives of the static equation (computed term by term)
-    Fy, Fu = _fderivs(structure, theta, ubar[None, :], np.array([ybar]), names)
+    Fy, Fu = (f[0] for f in static_partials(*static_powers(structure, names), theta[None, :], ubar[None, :],
+                                            np.array([[ybar]])))
     bscale = np.abs(b_ctrl).max(initial=0.0) + 1e-300
     np.testing.assert_allclose(a_ctrl[0].sum() - 1.0, Fy[0], rtol=1e-12, atol=1e-12 * (scale + 1.0))
     np.testing.assert_allclose(b_ctrl[0].sum(axis=1), Fu[0], rtol=1e-12, atol=1e-12 * bscale)
+
+
+@pytest.mark.parametrize("name", ["rational", "y squared"])
+@settings(deadline=None, max_examples=30)
+@given(data=st.data())
+def test_the_curve_by_clusters_and_the_surface_by_terms_give_one_static_gain(name, data):
+    """static_gain sums each cluster's coefficients first (the curve's own form), static_surface_gain reads the
+    terms one by one; one kernel under both, the same gain (and ∂ȳ/∂θ, curve against surface)."""
+    from graybox.static._analysis import static_gain, static_theta_gradient
+    from graybox.static._surface_analysis import static_surface, static_surface_gain, surface_theta_gradient
+
+    structure = STRUCTURES[name]
+    theta = np.array(data.draw(st.lists(st.floats(-0.6, 0.6), min_size=len(structure), max_size=len(structure))))
+    ubar = np.array(data.draw(st.lists(st.floats(0.1, 3.0), min_size=1, max_size=4)))
+    yb = static_surface(structure, theta, ubar[:, None], strict=False)
+    assume(np.all(np.isfinite(yb)))
+    g_curve = static_gain(structure, theta, ubar)
+    g_surface = static_surface_gain(structure, theta, ubar[:, None])[:, 0]
+    scale = np.abs(g_curve).max() + 1.0
+    np.testing.assert_allclose(g_curve, g_surface, rtol=1e-9, atol=1e-9 * scale)
+    d_curve = static_theta_gradient(structure, theta, ubar, yb)
+    d_surface = surface_theta_gradient(structure, theta, ubar[:, None], yb)
+    np.testing.assert_allclose(d_curve, d_surface, rtol=1e-12, atol=0)

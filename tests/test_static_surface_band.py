@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
-from graybox.diagnostics._uncertainty import _exponents, _map_gain_gradient
+from graybox.static._linearisation import static_gain_gradient, static_powers
 from graybox.static._surface_analysis import surface_theta_gradient
 
 MISO = ["y(k-1)", "y(k-2)", "u1(k-1)", "u2(k-1)", "u1(k-1)y(k-1)", "u1(k-1)u2(k-1)", "u2(k-1)^2", "1"]
@@ -44,8 +44,8 @@ def test_the_gain_gradient_is_the_finite_difference_of_the_gains(miso):
     m = unc.model
     th = m.theta
     yb = gb.static_surface(m.structure, th, pts, input_names=m.input_names)
-    Py, A = _exponents(m.structure, m.input_names)
-    G = _map_gain_gradient(Py, A, th, pts, yb, surface_theta_gradient(m.structure, th, pts, yb, inputs=m.input_names))
+    p, A = static_powers(m.structure, m.input_names)
+    G = static_gain_gradient(p, A, th, pts, yb, surface_theta_gradient(m.structure, th, pts, yb, inputs=m.input_names))
     for t in range(th.size):
         h = 1e-6 * max(abs(th[t]), 1e-12)
         gains = [gb.static_surface_gain(m.structure, th + s * h * np.eye(th.size)[t], pts, input_names=m.input_names)

@@ -68,9 +68,9 @@ from ..core._regressors import record_signals, regressor_matrix, stacked_regress
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
-from ..static._analysis import cluster_key, one_input_levels, reached_equilibria, static_theta_gradient
-from ..static._surface_analysis import (points_of_inputs, reached_surface, static_surface, surface_powers,
-                                       surface_theta_gradient)
+from ..static._analysis import one_input_levels, reached_equilibria
+from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
+from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface
 from ..core._validation import (check_band_values, check_choice, check_fields, check_int, check_real, check_seed,
                                 frozen, warn)
 
@@ -1060,82 +1060,6 @@ def _draws_band(Y: np.ndarray, G: np.ndarray, level: float) -> tuple[np.ndarray,
         return undefined, ylo, yhi, np.nanstd(Yn, axis=0), glo, ghi, np.nanstd(Gn, axis=0)
 
 
-def _exponents(structure, names: tuple[str, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Each term's power of y, shape (n,), and of each input, shape (n, m), in the static map (lags dropped):
-    ``names`` the inputs' order for a surface; None: the one input of a curve."""
-    if names is None:
-        keys = [cluster_key(t) for t in structure]
-        return np.array([k[0] for k in keys], int), np.array([[k[1]] for k in keys], int).reshape(len(keys), 1)
-    return (np.array([t.power_of("y") for t in structure], int),
-            np.array([surface_powers(t, names) for t in structure], int).reshape(len(structure), len(names)))
-
-
-def _pw(x: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """x**k with 0 where k < 0 (a derivative's missing power: 0 · ū⁻¹ would be NaN at ū = 0)."""
-    with np.errstate(all="ignore"):
-        return np.where(k >= 0, x ** np.maximum(k, 0), 0.0)
-
-
-def _map_gains(Py: np.ndarray, A: np.ndarray, thetas: np.ndarray, ub: np.ndarray, Y: np.ndarray) -> np.ndarray:
-    """∂ȳ/∂ū_i = −F_ūi/F_ȳ at equilibria for many θ: thetas (P, n), ub (M, m), Y (P, M) → (P, M, m)."""
-    M, m = ub.shape
-    Fy = -np.ones_like(Y)
-    Fu = np.zeros(Y.shape + (m,))
-    for j in range(Py.size):
-        th = thetas[:, j, None]
-        g = np.prod(_pw(ub, A[j][None, :]), axis=1)[None, :]
-        if Py[j]:
-            Fy = Fy + th * Py[j] * Y ** (Py[j] - 1) * g
-        for i in np.flatnonzero(A[j]):
-            e = A[j].copy()
-            e[i] -= 1
-            Fu[..., i] += th * A[j, i] * Y ** Py[j] * np.prod(_pw(ub, e[None, :]), axis=1)[None, :]
-    with np.errstate(all="ignore"):
-        return -Fu / Fy[..., None]
-
-
-def _map_gain_gradient(Py: np.ndarray, A: np.ndarray, theta: np.ndarray, ub: np.ndarray, yb: np.ndarray,
-                       dy: np.ndarray) -> np.ndarray:
-    """∂(∂ȳ/∂ū_i)/∂θ along the static map, through ȳ(θ) too (``dy`` = ∂ȳ/∂θ, shape (M, n)): shape (M, m, n)."""
-    M, m = ub.shape
-    n = Py.size
-    Fy, Fyy = -np.ones(M), np.zeros(M)
-    dFy = np.zeros((M, n))
-    Fu, Fuy, dFu = np.zeros((M, m)), np.zeros((M, m)), np.zeros((M, m, n))
-    for j in range(n):
-        t, p = theta[j], Py[j]
-        g = np.prod(_pw(ub, A[j][None, :]), axis=1)
-        if p:
-            dFy[:, j] = p * _pw(yb, p - 1) * g
-            Fy += t * dFy[:, j]
-            if p > 1:
-                Fyy += t * p * (p - 1) * _pw(yb, p - 2) * g
-        for i in np.flatnonzero(A[j]):
-            e = A[j].copy()
-            e[i] -= 1
-            gi = np.prod(_pw(ub, e[None, :]), axis=1)
-            dFu[:, i, j] = A[j, i] * _pw(yb, p) * gi
-            Fu[:, i] += t * dFu[:, i, j]
-            if p:
-                Fuy[:, i] += t * A[j, i] * p * _pw(yb, p - 1) * gi
-    dFu_tot = dFu + Fuy[:, :, None] * dy[:, None, :]
-    dFy_tot = (dFy + Fyy[:, None] * dy)[:, None, :]
-    return -(dFu_tot * Fy[:, None, None] - Fu[:, :, None] * dFy_tot) / (Fy**2)[:, None, None]
-
-
-def _gains(structure, thetas: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
-    """dȳ/dū = −F_u/F_ȳ at equilibria of the curve, for many θ at once: thetas (P, n), ybar (P, M) → (P, M)."""
-    Py, A = _exponents(structure)
-    return _map_gains(Py, A, np.atleast_2d(thetas), np.asarray(ubar, float).reshape(-1, 1), ybar)[..., 0]
-
-
-def _gain_gradient(structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
-    """∂(dȳ/dū)/∂θ along the static curve (through ȳ(θ) too), shape (M, n)."""
-    Py, A = _exponents(structure)
-    dy = static_theta_gradient(structure, theta, ubar, ybar)
-    return _map_gain_gradient(Py, A, theta, np.asarray(ubar, float).reshape(-1, 1), ybar, dy)[:, 0, :]
-
-
 def theta_draws(theta: np.ndarray, cov: np.ndarray, n: int, rng: np.random.Generator,
                 dof: int | None = None, factor: np.ndarray | None = None) -> np.ndarray:
     """``n`` draws θ ~ N(θ, cov) (or the multivariate t with ``dof``), shape (n, n_terms), in the units of θ.
@@ -1254,11 +1178,13 @@ def static_curve_band(
     m = uncertainty.model
     st, th, cov = m.structure, m.theta, uncertainty.cov
     yb = m.static_curve(ub, y0=y0)
-    gain = _gains(st, th[None], ub, yb[None])[0]
+    p, A = static_powers(st, curve=True)
+    uc = ub[:, None]
+    gain = static_gains(p, A, th[None], uc, yb[None])[0, :, 0]
     if method == "delta":
         z = uncertainty.quantile  # Student's t, as the parameters' intervals: σ² is estimated
-        Gy = static_theta_gradient(st, th, ub, yb)
-        Gg = _gain_gradient(st, th, ub, yb)
+        Gy = static_theta_gradient_of(p, A, th, uc, yb)
+        Gg = static_gain_gradient(p, A, th, uc, yb, Gy)[:, 0, :]
         sy, sg = np.sqrt(uncertainty.contract(Gy)), np.sqrt(uncertainty.contract(Gg))
         return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name)
@@ -1266,7 +1192,7 @@ def static_curve_band(
     rng = np.random.default_rng(check_seed(seed))
     thetas = theta_draws(th, cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_equilibria(st, thetas, ub, yb).ybar
-    undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, _gains(st, thetas, ub, Y), uncertainty.level)
+    undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, static_gains(p, A, thetas, uc, Y)[..., 0], uncertainty.level)
     warn_dropped_draws("static_curve_band", undefined)
     return StaticCurveBand(ub, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo", n_samples,
                            undefined, m.name)
@@ -1334,12 +1260,12 @@ def static_surface_band(
         raise ValueError("ubar must hold at least one point of input levels")
     st, th = m.structure, m.theta
     yb = static_surface(st, th, ub, y0, input_names=names)  # ValueError naming the points it reaches nothing at
-    Py, A = _exponents(st, names)
-    gain = _map_gains(Py, A, th[None], ub, yb[None])[0]
+    p, A = static_powers(st, names)
+    gain = static_gains(p, A, th[None], ub, yb[None])[0]
     if method == "delta":
         z = uncertainty.quantile
-        dy = surface_theta_gradient(st, th, ub, yb, inputs=names)
-        Gg = _map_gain_gradient(Py, A, th, ub, yb, dy)  # (M, m, n)
+        dy = static_theta_gradient_of(p, A, th, ub, yb)
+        Gg = static_gain_gradient(p, A, th, ub, yb, dy)  # (M, m, n)
         sy = np.sqrt(uncertainty.contract(dy))
         sg = np.sqrt(uncertainty.contract(Gg.reshape(-1, th.size))).reshape(gain.shape)
         return StaticSurfaceBand(ub, names, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
@@ -1348,7 +1274,7 @@ def static_surface_band(
     rng = np.random.default_rng(seed)
     thetas = theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_surface(st, thetas, ub, yb, inputs=names).ybar  # (P, M)
-    undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, _map_gains(Py, A, thetas, ub, Y), uncertainty.level)
+    undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, static_gains(p, A, thetas, ub, Y), uncertainty.level)
     warn_dropped_draws("static_surface_band", undefined)
     return StaticSurfaceBand(ub, names, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo",
                              n_samples, undefined, m.name)

@@ -65,7 +65,8 @@ from ..core._terms import Structure, Term
 from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real, check_sequence,
                                 check_theta, real_array)
 from ..core._reprs import short_repr
-from ._linearisation import characteristic_roots, derivative_map, grid_coefficients
+from ._linearisation import (characteristic_roots, derivative_map, grid_coefficients, static_gains, static_powers,
+                             static_theta_gradient_of)
 
 __all__ = [
     "cluster_key",
@@ -1061,44 +1062,23 @@ def static_gain(
     structure, theta = checked_model(structure, theta)
     ub = one_input_levels(ubar)
     yb = static_curve(structure, theta, ub, y0=y0, strict=strict)
-    cm = cluster_map(structure)
-    sigma = cm.R @ theta
-    Fu = np.zeros_like(ub)
-    Fy = -np.ones_like(ub)
-    for (p, m), s in zip(cm.keys, sigma):
-        if m:
-            Fu += s * m * yb**p * ub ** (m - 1)
-        if p:
-            Fy += s * p * yb ** (p - 1) * ub**m
+    cm = cluster_map(structure)  # the curve's own form: one coefficient Σ = Rθ per cluster (p, m)
+    keys = np.array(cm.keys, float).reshape(-1, 2)
+    gain = static_gains(keys[:, 0], keys[:, 1:], (cm.R @ theta)[None, :], ub[:, None], yb[None, :])[0, :, 0]
     # NaN⁰ is 1: where no equilibrium is reached F_ū and F_ȳ may still be finite (F_ȳ = 0 for an
     # integrator), the gain is not
-    with np.errstate(all="ignore"):
-        return np.where(np.isfinite(yb), -Fu / Fy, np.nan)
-
-
-@lru_cache(maxsize=256)
-def _term_keys(structure: Structure) -> tuple[tuple[int, int], ...]:
-    return tuple(cluster_key(t) for t in structure)
+    return np.where(np.isfinite(yb), gain, np.nan)
 
 
 def static_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray) -> np.ndarray:
-    """∂ȳ_i/∂θ_t at equilibria (ū_i, ȳ_i), by implicit differentiation of eq. (5).
+    """∂ȳ_i/∂θ_t at equilibria (ū_i, ȳ_i) of the static curve, by implicit differentiation of eq. (5).
 
-    F(ȳ, θ) = Σ_t θ_t ȳ^{p_t} ū^{m_t} − ȳ = 0 gives ∂ȳ/∂θ_t = −ȳ^{p_t} ū^{m_t} / F_ȳ. At a
-    reached equilibrium this is the gradient of the static output (the basin does not change
-    under a small step).
+    F(ȳ, θ) = Σ_t θ_t ȳ^{p_t} ū^{m_t} − ȳ = 0 gives ∂ȳ/∂θ_t = −ȳ^{p_t} ū^{m_t} / F_ȳ
+    (:func:`graybox.static._linearisation.static_theta_gradient_of`).
 
     Returns
     -------
     ndarray, shape (M, n_terms)
     """
-    ub = np.asarray(ubar, float)
-    yb = np.asarray(ybar, float)
-    keys = _term_keys(structure)
-    basis = np.stack([yb**p * ub**m for p, m in keys], axis=1)  # (M, n)
-    Fy = -np.ones_like(yb)
-    for th, (p, m) in zip(theta, keys):
-        if p:
-            Fy += th * p * yb ** (p - 1) * ub**m
-    with np.errstate(all="ignore"):
-        return -basis / Fy[:, None]
+    p, A = static_powers(structure, curve=True)
+    return static_theta_gradient_of(p, A, theta, np.asarray(ubar, float).reshape(-1, 1), ybar)

@@ -14,6 +14,12 @@ stability margin of the simulation-error fits (weights computed once per set of 
 matrix product per θ), and the control bridge (a and b, for poles and gains).
 
 The poles are the roots of z^L − a_1 z^(L−1) − … − a_L (:func:`characteristic_roots`).
+
+At an equilibrium the lags sum away: F(ȳ, ū) = Σ_t θ_t ȳ^p_t ∏_i ū_i^A_ti − ȳ = 0, whose partials
+F_ȳ = Σ_l a_l − 1 and F_ūi = Σ_l b_il give every static gain ∂ȳ/∂ū_i = −F_ūi / F_ȳ, every sensitivity
+∂ȳ/∂θ_t = −ȳ^p_t ∏ ū^A_t / F_ȳ and the gains' own θ-gradient (:func:`static_partials`,
+:func:`static_gains`, :func:`static_theta_gradient_of`, :func:`static_gain_gradient`): the static curve's
+and surface's gains, the SE fits' static Jacobian and the delta and Monte Carlo bands all read them here.
 """
 
 from __future__ import annotations
@@ -27,12 +33,35 @@ from ..core._simulation_kernels import Code, encode
 from ..core._terms import Structure
 from ._equilibrium_kernels import entry_sums
 
-__all__ = ["DerivativeMap", "derivative_map", "local_coefficients", "grid_coefficients", "characteristic_roots"]
+__all__ = ["DerivativeMap", "derivative_map", "local_coefficients", "grid_coefficients", "characteristic_roots",
+           "input_monomials_of", "static_powers", "static_partials", "static_gains", "static_theta_gradient_of", "static_gain_gradient"]
 
 
 #: Bytes of point sets (ū and their entries' input parts) a map remembers: a fit's static points take a few
 #: kB; the maps live as long as the process (derivative_map's cache), so large sets are not kept.
 _POINT_CACHE_BYTES = 1 << 18
+
+
+def _powers(x: np.ndarray, exponents: np.ndarray) -> np.ndarray:
+    """x ** e_t for each exponent, shape x.shape + (n,): one scalar power per distinct exponent (an array of
+    exponents rounds otherwise, and a single-input result stays bit for bit ``x ** e``); x⁰ = 1, NaN⁰ too."""
+    x = np.asarray(x, float)
+    e, index = np.unique(np.asarray(exponents, float), return_inverse=True)
+    with np.errstate(all="ignore"):
+        cols = [np.ones_like(x) if k == 0 else x ** k for k in e]
+    return np.stack(cols, axis=-1)[..., index.ravel()] if cols else np.ones(x.shape + (0,))
+
+
+def input_monomials_of(A: np.ndarray, ubar: np.ndarray) -> np.ndarray:
+    """∏_i ū_i^A_ti of each term t at each point, shape (M, n): ``A`` (n, m) the terms' input powers, ``ubar``
+    (M, m); the factors multiplied input by input."""
+    ub = np.asarray(ubar, float)
+    A = np.asarray(A, float)
+    out = np.ones((ub.shape[0], A.shape[0]))
+    with np.errstate(all="ignore"):
+        for i in np.flatnonzero(A.any(axis=0)):
+            out = out * _powers(ub[:, i], A[:, i])
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,16 +96,13 @@ class DerivativeMap:
         term's total input power).
         """
         ub = np.asarray(ubar, float)
+        if ub.ndim != 1:
+            return input_monomials_of(self.powers[:, 1:], ub)
+        U = np.ones((ub.shape[0], self.powers.shape[0]))
+        mu = self.powers[:, 1:].sum(axis=1)
         with np.errstate(all="ignore"):
-            U = np.ones((ub.shape[0], self.powers.shape[0]))
-            if ub.ndim == 1:
-                mu = self.powers[:, 1:].sum(axis=1)
-                for t in np.flatnonzero(mu):
-                    U[:, t] = ub ** mu[t]
-                return U
-            for t in range(U.shape[1]):
-                for i in np.flatnonzero(self.powers[t, 1:]):
-                    U[:, t] = U[:, t] * ub[:, i] ** self.powers[t, 1 + i]
+            for t in np.flatnonzero(mu):
+                U[:, t] = ub ** mu[t]
         return U
 
     def output_part(self, ybar: np.ndarray) -> np.ndarray:
@@ -260,3 +286,117 @@ def characteristic_roots(a: np.ndarray) -> np.ndarray:
     C[:, 0, :] = a
     C[:, np.arange(1, L), np.arange(L - 1)] = 1.0
     return np.linalg.eigvals(C)
+
+
+# The static map's partials. p (n,) and A (n, m) are each term's power of y and of each input with the lags
+# summed; the forms take many θ at the same points (a Monte Carlo band's draws) and skip θ_t = 0, as the
+# coefficients above do, so an overflowing power of a zero term is no NaN.
+
+def static_powers(structure: Structure, inputs: tuple[str, ...] | None = None, *,
+                  curve: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Each term's power of y, shape (n,), and of each input, shape (n, m), in the static map (read-only).
+
+    ``inputs``: the columns' order (default: the structure's inputs). ``curve=True``: one column, each
+    term's total input power, for the static curve (every input at ū).
+    """
+    powers = derivative_map(structure, None if inputs is None else tuple(inputs)).powers
+    A = powers[:, 1:]
+    return powers[:, 0], (A.sum(axis=1, keepdims=True) if curve else A)
+
+
+def _lowered(A: np.ndarray, ub: np.ndarray) -> np.ndarray:
+    """∏ ū^(A_t − e_i): each term's input part differentiated by ū_i without its factor A_ti, shape (M, n, m)
+    (0 where A_ti = 0)."""
+    out = np.zeros((ub.shape[0],) + A.shape)
+    for i in np.flatnonzero(A.any(axis=0)):
+        e = A.copy()
+        e[:, i] = np.maximum(e[:, i] - 1.0, 0.0)
+        out[:, :, i] = np.where(A[:, i] > 0, input_monomials_of(e, ub), 0.0)
+    return out
+
+
+def static_partials(p: np.ndarray, A: np.ndarray, thetas: np.ndarray, ubar: np.ndarray, Y: np.ndarray, *,
+                    with_inputs: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+    """F_ȳ and F_ū of the static map at (ū_j, Y_kj) for parameter vectors θ_k.
+
+    Parameters
+    ----------
+    p, A : ndarray, shapes (n,) and (n, m)
+        From :func:`static_powers`.
+    thetas : ndarray, shape (K, n)
+    ubar : ndarray, shape (M, m)
+        Points of input space (input units).
+    Y : ndarray, shape (K, M)
+        Output levels (output units), one row per θ.
+    with_inputs : bool
+        False skips F_ū (then None).
+
+    Returns
+    -------
+    Fy : ndarray, shape (K, M)
+        Dimensionless.
+    Fu : ndarray, shape (K, M, m) or None
+        Output units per unit of each input.
+    """
+    thetas, ub, Y = np.atleast_2d(thetas), np.asarray(ubar, float), np.atleast_2d(Y)
+    G = input_monomials_of(A, ub)
+    Fy = -np.ones(Y.shape)
+    Fu = np.zeros(Y.shape + (A.shape[1],)) if with_inputs else None
+    # summed term by term in structure order (no pairwise reordering), θ_t = 0 skipped
+    with np.errstate(all="ignore"):
+        t = np.flatnonzero(p)
+        th = thetas[:, None, t]
+        C = np.where(th != 0.0, th * p[t] * _powers(Y, p[t] - 1) * G[None, :, t], 0.0)  # (K, M, terms with y)
+        for k in range(t.size):
+            Fy = Fy + C[..., k]
+        if with_inputs:
+            t = np.flatnonzero(A.any(axis=1))
+            th = thetas[:, None, t, None]
+            C = np.where(th != 0.0, th * A[t] * _powers(Y, p[t])[..., None] * _lowered(A, ub)[None, :, t, :], 0.0)
+            for k in range(t.size):
+                Fu = Fu + C[..., k, :]
+    return Fy, Fu
+
+
+def static_gains(p: np.ndarray, A: np.ndarray, thetas: np.ndarray, ubar: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """∂ȳ/∂ū_i = −F_ūi / F_ȳ at (ū_j, Y_kj), shape (K, M, m); arguments as for :func:`static_partials`.
+
+    Output units per unit of input i; inf or NaN where F_ȳ = 0 (an integrator) or Y is not finite.
+    """
+    Fy, Fu = static_partials(p, A, thetas, ubar, Y)
+    with np.errstate(all="ignore"):
+        return -Fu / Fy[..., None]
+
+
+def static_theta_gradient_of(p: np.ndarray, A: np.ndarray, theta: np.ndarray, ubar: np.ndarray,
+                             ybar: np.ndarray) -> np.ndarray:
+    """∂ȳ_j/∂θ_t = −ȳ_j^p_t ∏ ū_j^A_t / F_ȳ at equilibria (ū_j, ȳ_j), shape (M, n).
+
+    ``theta`` (n,), ``ubar`` (M, m), ``ybar`` (M,); ``p``, ``A`` from :func:`static_powers`. At a
+    reached equilibrium this is the gradient of the static output (the basin does not change under a
+    small step).
+    """
+    yb = np.asarray(ybar, float)
+    Fy = static_partials(p, A, np.asarray(theta, float)[None, :], ubar, yb[None, :], with_inputs=False)[0][0]
+    with np.errstate(all="ignore"):
+        return -(_powers(yb, p) * input_monomials_of(A, ubar)) / Fy[:, None]
+
+
+def static_gain_gradient(p: np.ndarray, A: np.ndarray, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray,
+                         dy: np.ndarray) -> np.ndarray:
+    """∂(∂ȳ/∂ū_i)/∂θ_t along the static map, through ȳ(θ) too, shape (M, m, n).
+
+    ``theta`` (n,), ``ubar`` (M, m), ``ybar`` (M,) equilibria, ``dy`` (M, n) = ∂ȳ/∂θ there
+    (:func:`static_theta_gradient_of`); ``p``, ``A`` from :func:`static_powers`.
+    """
+    ub, yb, theta = np.asarray(ubar, float), np.asarray(ybar, float), np.asarray(theta, float)
+    G, L = input_monomials_of(A, ub), _lowered(A, ub)  # (M, n), (M, n, m)
+    with np.errstate(all="ignore"):
+        dFy = p * _powers(yb, np.maximum(p - 1, 0)) * G  # ∂F_ȳ/∂θ_t, (M, n)
+        Fyy = (p * (p - 1) * _powers(yb, np.maximum(p - 2, 0)) * G) @ theta  # ∂F_ȳ/∂ȳ, (M,)
+        dFu = np.moveaxis(A[None] * _powers(yb, p)[..., None] * L, 1, 2)  # ∂F_ū/∂θ, (M, m, n)
+        Fuy = np.einsum("t,mti->mi", theta, (A * p[:, None])[None] * _powers(yb, np.maximum(p - 1, 0))[..., None] * L)
+        Fy, Fu = dFy @ theta - 1.0, dFu @ theta
+        dFu_tot = dFu + Fuy[:, :, None] * dy[:, None, :]
+        dFy_tot = (dFy + Fyy[:, None] * dy)[:, None, :]
+        return -(dFu_tot * Fy[:, None, None] - Fu[:, :, None] * dFy_tot) / (Fy**2)[:, None, None]

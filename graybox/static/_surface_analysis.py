@@ -16,7 +16,8 @@ their stability (the Schur–Cohn test), the equilibrium a free run from y0 sett
 answered by the single-input code on that folded model: one implementation, one definition of
 "the equilibrium reached", whatever the number of inputs.
 
-The static gain is the gradient ∂ȳ/∂ū_i = −F_{ū_i} / F_ȳ (implicit differentiation), one
+The static gain is the gradient ∂ȳ/∂ū_i = −F_{ū_i} / F_ȳ (implicit differentiation, the partials read from
+:mod:`graybox.static._linearisation`), one
 entry per input.
 """
 
@@ -29,6 +30,7 @@ import numpy as np
 
 from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
+from ._linearisation import input_monomials_of, static_gains, static_powers, static_theta_gradient_of
 from ..core._records import frame_inputs
 from ..core._terms import Structure, Term, check_input_names, require_inputs
 from ..core._validation import check_bool, check_fields, check_per_point, real_array, renamed
@@ -179,9 +181,7 @@ def input_monomials(structure: Structure, ubar: np.ndarray, inputs: tuple[str, .
     """g_t(ū) = ū_1^a_t1 ⋯ ū_m^a_tm for every term t at every point, shape (M, n_terms)."""
     names = surface_inputs(structure, inputs)
     ub = points_of_inputs(ubar, names)
-    A = np.array([surface_powers(t, names) for t in structure], dtype=float).reshape(len(structure), len(names))
-    with np.errstate(all="ignore"):
-        return np.prod(ub[:, None, :] ** A[None, :, :], axis=2)
+    return input_monomials_of(static_powers(structure, names)[1], ub)
 
 
 def points_of_inputs(ubar: object, names: tuple[str, ...]) -> np.ndarray:
@@ -330,27 +330,6 @@ def static_surface(
     return out
 
 
-def _fderivs(structure: Structure, theta: np.ndarray, ub: np.ndarray, yb: np.ndarray, names: tuple[str, ...]):
-    """F_ȳ (M,) and F_ū (M, m) of F(ȳ, ū) = Σ_t θ_t ȳ^p_t Π ū_i^a_ti − ȳ at (ū_j, ȳ_j)."""
-    M, m = ub.shape
-    Fy = -np.ones(M)
-    Fu = np.zeros((M, m))
-    with np.errstate(all="ignore"):
-        for th, t in zip(theta, structure):
-            if th == 0.0:
-                continue
-            p = t.power_of("y")
-            a = np.array(surface_powers(t, names))
-            g = np.prod(ub ** a[None, :], axis=1)
-            if p:
-                Fy += th * p * yb ** (p - 1) * g
-            for i in np.flatnonzero(a):
-                ai = a.copy()
-                ai[i] -= 1
-                Fu[:, i] += th * a[i] * yb**p * np.prod(ub ** ai[None, :], axis=1)
-    return Fy, Fu
-
-
 def static_surface_gain(
     structure: Structure,
     theta: np.ndarray,
@@ -377,9 +356,9 @@ def static_surface_gain(
     names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
     ub = points_of_inputs(ubar, names)
     yb = static_surface(structure, th, ub, y0, strict=strict, input_names=names)
-    Fy, Fu = _fderivs(structure, th, ub, yb, names)
-    with np.errstate(all="ignore"):  # NaN⁰ is 1: no gain where no equilibrium is reached
-        return np.where(np.isfinite(yb)[:, None], -Fu / Fy[:, None], np.nan)
+    p, A = static_powers(structure, names)
+    gain = static_gains(p, A, th[None, :], ub, yb[None, :])[0]
+    return np.where(np.isfinite(yb)[:, None], gain, np.nan)  # NaN⁰ is 1: no gain where no equilibrium is reached
 
 
 def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray, *,
@@ -389,14 +368,8 @@ def surface_theta_gradient(structure: Structure, theta: np.ndarray, ubar: np.nda
     ``ubar`` (M, m) in ``inputs`` order (default: the structure's inputs), ``ybar`` (M,).
     """
     names = surface_inputs(structure, inputs)
-    ub = points_of_inputs(ubar, names)
-    yb = np.asarray(ybar, float)
-    th = np.asarray(theta, float)
-    g = input_monomials(structure, ub, names)
-    P = np.array([t.power_of("y") for t in structure])
-    Fy, _ = _fderivs(structure, th, ub, yb, names)
-    with np.errstate(all="ignore"):
-        return -(yb[:, None] ** P[None, :]) * g / Fy[:, None]
+    p, A = static_powers(structure, names)
+    return static_theta_gradient_of(p, A, theta, points_of_inputs(ubar, names), ybar)
 
 
 def surface_static_rows(cm: SurfaceClusterMap, ubar: np.ndarray, ybar: np.ndarray, wrt: str | None = None) -> np.ndarray:
