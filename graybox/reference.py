@@ -146,4 +146,5 @@ def paper_model(equation: int, column: str = "ELS", allow_misprinted: bool = Fal
     if (tab, column) in MISPRINTED and not allow_misprinted:
         raise ValueError(f"Table {tab}'s {column} column is misprinted (its static curve diverges); "
                          "pass allow_misprinted=True to get it anyway")
-    return Model(structure, table[column], name=f"{column} ({equation}) [paper]")
+    # the paper's parameters hold for the speed in rpm and the pressure in mlc (its eq. (1) and Figs. 2-3)
+    return Model(structure, table[column], name=f"{column} ({equation}) [paper]", units=("rpm", "mlc"))

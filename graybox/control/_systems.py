@@ -124,7 +124,7 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     noise = check_bool(noise, "noise")
     if not isinstance(record, Record):
         raise TypeError(f"record must be a Record, got {type(record).__name__}")
-    model.check_period(record)  # the system runs at the model's period: so must the lags it starts from
+    model.check_record(record)  # the system runs at the model's period and units: so must the lags it starts from
     lay = _layout(model.structure, model.input_names)
     L = model.max_lag
     k = L if start is None else check_int(start, "start", low=0)

@@ -25,7 +25,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ._records import Dataset, as_records, check_same_period
+from ._records import Dataset, as_records, check_same_period, check_same_units, check_units
 from ._regressors import input_signals
 from ._terms import Term
 from ._reprs import short_repr
@@ -87,15 +87,19 @@ class DaskRecord:
         Sampling period, seconds (> 0).
     name : str
         Label.
+    units : (str, str), optional
+        Units of (u, y), as :class:`~graybox.Record`'s: the models fitted on it carry them.
     """
 
     u: Any
     y: Any
     Ts: float = 1.0
     name: str = ""
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         check_str(self.name, "DaskRecord: name")
+        object.__setattr__(self, "units", check_units(self.units, "DaskRecord"))
         try:
             import dask.array as da
         except ImportError as exc:  # pragma: no cover - dask is optional
@@ -391,6 +395,8 @@ def as_gram_records(data: object) -> list:
         recs = [data] if isinstance(data, DaskRecord) else list(data)
         for r in recs[1:]:
             check_same_period(recs[0], r)
+            check_same_units(recs[0].units, f"{recs[0].name!r} has", r, "the records of one fit must be in the same "
+                             "units (convert one of them)")
         return recs
     if isinstance(data, Dataset):
         return [data.ident]

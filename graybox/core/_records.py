@@ -392,13 +392,28 @@ def check_compatible(a: object, b: object) -> None:
     if a.input_names != b.input_names:  # type: ignore[attr-defined]
         raise ValueError(f"{a.name!r} has inputs {a.input_names} but {b.name!r} has inputs {b.input_names}: "  # type: ignore[attr-defined]
                          "all data of one identification must have the same inputs, in the same order")
-    ua, ub = getattr(a, "units", ("", "")), getattr(b, "units", ("", ""))
-    for i, what in enumerate(("input", "output")):
-        if ua[i] and ub[i] and ua[i] != ub[i]:  # a unit left empty says nothing
-            raise ValueError(f"{a.name!r} has {what} unit {ua[i]!r} but {b.name!r} has {ub[i]!r}: all data of one "  # type: ignore[attr-defined]
-                             "identification must be in the same units (convert one of them)")
+    check_same_units(getattr(a, "units", ("", "")), f"{a.name!r} has", b,  # type: ignore[attr-defined]
+                     "all data of one identification must be in the same units (convert one of them)")
     if isinstance(a, Record) and isinstance(b, Record):
         check_same_period(a, b)
+
+
+def carried_from(record: object) -> dict:
+    """What a model (or a result handing out models) carries from the record it was fitted on: the inputs'
+    names, the sampling period and the units, as keyword arguments (``Model(st, θ, **carried_from(rec))``)."""
+    return {"input_names": record.input_names, "Ts": record.Ts,  # type: ignore[attr-defined]
+            "units": getattr(record, "units", ("", ""))}
+
+
+def check_same_units(units: tuple[str, str], what: str, other: object, advice: str) -> None:
+    """``ValueError`` when ``other``'s units (a Record's or StaticPoints') differ from ``units`` where both
+    name them (an empty unit says nothing). ``what`` names the first side, e.g. "'ident' has" or "model 'ELS'
+    was identified with"; ``advice`` ends the message."""
+    theirs = getattr(other, "units", ("", ""))
+    for i, kind in enumerate(("input", "output")):
+        if units[i] and theirs[i] and units[i] != theirs[i]:
+            raise ValueError(f"{what} {kind} unit {units[i]!r} but {other.name!r} has {theirs[i]!r}: "  # type: ignore[attr-defined]
+                             + advice)
 
 
 #: Relative difference of two sampling periods taken as one period: a period read from printed time
@@ -517,7 +532,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "carried_from", "check_same_units", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

@@ -252,7 +252,7 @@ def _model_residuals(model: Model | NeuralModel, rec: Record, moving_average: bo
             _, e = model.predict_narmax(rec)
             return e[L:].copy(), L
         return (rec.y - model.predict(rec))[L:], L
-    model.check_period(rec)  # a discrete-time model holds at the period it was identified at
+    model.check_record(rec)  # a discrete-time model holds at the period (and in the units) it was identified at
     ns = model.noise_structure if moving_average else model.noise_structure[:0]
     L = max(model.max_lag, ns.max_lag)
     rec.require_length(L)

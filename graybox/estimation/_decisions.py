@@ -23,7 +23,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import Record, check_period, choosing_records
+from ..core._records import Record, choosing_records
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
 from ..core._validation import check_band, check_choice, check_fields, check_mean_square, check_weight
@@ -138,7 +138,7 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
     """J_S of every member on choosing record(s) (sample-weighted mean; inf where a run diverges), shape (K,)."""
     recs = choosing_records(records)
     for r in recs:
-        check_period(pareto.Ts, "the Pareto set was fitted on records sampled", r)
+        pareto.check_record(r)
     th = np.where(np.isfinite(pareto.thetas), pareto.thetas, 0.0)
     L = pareto.structure.max_lag
     total = np.zeros(len(pareto))
@@ -261,7 +261,7 @@ def decide_min_correlation(
         raise TypeError(f"pareto must be a ParetoSet (from pe_pareto or se_pareto); got {type(pareto).__name__}")
     check_choice(output, "output", ("free-run", "one-step"))
     record = as_record(record, "ident", "record")
-    check_period(pareto.Ts, "the Pareto set was fitted on records sampled", record)
+    pareto.check_record(record)
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
     st = pareto.structure

@@ -42,7 +42,7 @@ from ._local_models import check_margin
 from ..models._coerce import as_structure, records_of, static_points
 from ..models._model import Model
 from ..core._least_squares import one_blas_thread
-from ..core._records import Dataset, Record, StaticPoints, warn_static_range
+from ..core._records import Dataset, Record, StaticPoints, carried_from, warn_static_range
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
                                 gradient_front, refit_if_slow)
 from ..core._terms import Structure
@@ -537,7 +537,6 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
     feasible = bool(g <= band * (1 + 1e-12))
     name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
     # the records' input order (not the structure's name order): an input array's columns as the user has them
-    model = Model(problem.structure, th, name=name, input_names=problem.records[0].input_names,
-                  Ts=problem.records[0].Ts)
+    model = Model(problem.structure, th, name=name, **carried_from(problem.records[0]))
     return DSFResult(model, f, g, band, feasible, start, f0, g0, it, message,
                      float("nan") if problem.margin is None else problem.margin)

@@ -87,7 +87,7 @@ from ..core._simulation_kernels import inverse_ma_filter
 from ..core._least_squares import check_identified, check_rows, column_scales, scaled_lstsq
 from ..models._coerce import as_structure, records_of
 from ..models._model import Model
-from ..core._records import Dataset, Record
+from ..core._records import Dataset, Record, carried_from
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
 from ..core._validation import (check_bool, check_int, check_real, check_fields, check_sequence, check_str, frozen,
@@ -475,8 +475,7 @@ def _iterate(fit: _ExtendedFit, xi: np.ndarray, theta: np.ndarray, max_iter: int
 def _result(reg: _Regression, theta: np.ndarray, c: np.ndarray, n_iter: int, conv: bool, hist: list[float],
             x: np.ndarray, theta_ls: np.ndarray, name: str, n_direct: int = 0) -> ELSResult:
     """The ELSResult: the model with its MA part and the residuals per record."""
-    m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name, input_names=reg.recs[0].input_names,
-              Ts=reg.recs[0].Ts)
+    m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name, **carried_from(reg.recs[0]))
     res = tuple(frozen(a) for a in reg.per_record(x))
     return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
 

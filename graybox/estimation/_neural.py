@@ -127,7 +127,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from ..core._records import Dataset, Record, as_records, check_period
+from ..core._records import Dataset, Record, as_records, carried_from, check_period, check_same_units, check_units
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
@@ -406,6 +406,9 @@ class NeuralModel:
     Ts : float, optional
         The sampling period (s) of the training records (:func:`neural_narx` sets it); a Record at
         another period is refused. None: unknown, not checked.
+    units : (str, str), optional
+        The units of (u, y) in the training records (:func:`neural_narx` sets them); a Record in other
+        units is refused. Empty: unknown, not checked.
     """
 
     W1: np.ndarray
@@ -422,11 +425,13 @@ class NeuralModel:
     name: str = "Neural"
     input_names: tuple[str, ...] = ("u",)
     Ts: float | None = None
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         check_str(self.name, "name")
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
+        object.__setattr__(self, "units", check_units(self.units, f"network {self.name!r}"))
         names = check_input_names(self.input_names)
         if len(names) != 1:
             raise ValueError(f"input_names: a network has one input, got {len(names)} names {names}")
@@ -482,12 +487,20 @@ class NeuralModel:
         """The same network under another label, ``name``."""
         return NeuralModel(self.W1, self.b1, self.w2, self.b2, self.ny, self.nu, self.ne,
                            self.u_offset, self.u_scale, self.y_offset, self.y_scale, name, self.input_names,
-                           self.Ts)
+                           self.Ts, self.units)
+
+    def check_record(self, record: Record) -> None:
+        """``ValueError`` when ``record`` (or static points) was sampled at another period than the network was
+        trained at, or is in other units where both name them (as :meth:`graybox.Model.check_record`)."""
+        if isinstance(record, Record):
+            check_period(self.Ts, f"network {self.name!r} was trained on records sampled", record)
+        check_same_units(self.units, f"network {self.name!r} was trained with", record,
+                         "its weights hold in those units only; convert the data")
 
     def _input(self, record: Record) -> np.ndarray:
         """The record's input the network reads, by name, shape (N,) (ValueError naming both when it lacks it, or
-        when the record is sampled at another period than the network was trained at)."""
-        check_period(self.Ts, f"network {self.name!r} was trained on records sampled", record)
+        when the record is sampled at another period or in other units than the network was trained on)."""
+        self.check_record(record)
         return record_inputs(record, self.input_names)
 
     # -- normalisation ------------------------------------------------------
@@ -1144,7 +1157,8 @@ def neural_narx(
             n_epochs += s3.epochs
     last = stages[-1]
     W1, b1, w2, b2 = _unpack(theta, hidden, n_in)
-    model = NeuralModel(W1, b1, w2, b2, ny, nu, ne, u_off, u_sc, y_off, y_sc, name, recs[0].input_names, recs[0].Ts)
+    model = NeuralModel(W1, b1, w2, b2, ny, nu, ne, u_off, u_sc, y_off, y_sc, name,
+                        **carried_from(recs[0]))
     r_pe = pe_residual(theta)
     r_sim = sim(theta, sig, False)[0]
     return NeuralFit(

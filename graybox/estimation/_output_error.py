@@ -44,7 +44,7 @@ import pandas as pd
 
 from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar
-from ..core._records import (Dataset, Record, as_records, check_overlap, check_same_period, choosing_records,
+from ..core._records import (Dataset, Record, as_records, carried_from, check_overlap, check_same_period, choosing_records,
                              same_record)
 from ..core._terms import Structure
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
@@ -336,7 +336,7 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
         raise ValueError(f"no start of the output-error fit gave a model: {reasons}. Try theta0, more starts, a "
                          "smaller margin or another structure")
     th = best["theta"]
-    model = Model(st, th, name=name, input_names=rec[0].input_names, Ts=rec[0].Ts)
+    model = Model(st, th, name=name, **carried_from(rec[0]))
     return OEResult(
         model=model,
         JS=float(problem.js(th[None])[0]),

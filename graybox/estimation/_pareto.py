@@ -17,7 +17,7 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
-from ..core._records import Dataset, Record, StaticPoints, as_records
+from ..core._records import Dataset, Record, StaticPoints, as_records, carried_from, check_period, check_same_units, check_units
 from ..core._validation import FrozenMap, check_bool, check_fields, check_int, check_real, frozen, real_array, warn
 from ..core._terms import Structure
 
@@ -105,6 +105,9 @@ class ParetoSet:
         The sampling period (s) of the records the set was fitted on (:meth:`from_thetas` takes the
         records'); its members' models carry it, and choosing records at another period are
         refused. None: unknown.
+    units : (str, str), optional
+        The units of the input(s) and the output of those records (:meth:`from_thetas` takes the records');
+        its members' models carry them, and choosing records in other units are refused. Empty: unknown.
     """
 
     structure: Structure
@@ -118,11 +121,13 @@ class ParetoSet:
     failures: Mapping[int, str] = field(default_factory=dict)
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         check_fields(self)
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
+        object.__setattr__(self, "units", check_units(self.units, "ParetoSet"))
         # checked and defaulted as a Model's (the members' models carry them)
         names = model_input_names(self.structure, self.input_names)
         object.__setattr__(self, "input_names", names)
@@ -200,8 +205,15 @@ class ParetoSet:
         jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, th, None, static)["JSF"]
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
-        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails, recs[0].input_names,
-                   recs[0].Ts)
+        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails,
+                   **carried_from(recs[0]))
+
+    def check_record(self, record: Record) -> None:
+        """``ValueError`` when ``record`` was sampled at another period than the set was fitted at, or is in
+        other units where both name them (as :meth:`graybox.Model.check_record`)."""
+        check_period(self.Ts, "the Pareto set was fitted on records sampled", record)
+        check_same_units(self.units, "the Pareto set was fitted with", record,
+                         "its members' parameters hold in those units only; convert the data")
 
     # -- access -------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -231,7 +243,8 @@ class ParetoSet:
             raise ValueError(f"member {i} of this set failed: {self.failures[i]}")
         lam = self.lambdas[i]
         label = name or (f"{self.method} λ1={lam:.3g}" if np.isfinite(lam) else f"{self.method} #{i}")
-        return Model(self.structure, self.thetas[i], name=label, input_names=self.input_names, Ts=self.Ts)
+        return Model(self.structure, self.thetas[i], name=label, input_names=self.input_names, Ts=self.Ts,
+                     units=self.units)
 
     def models(self) -> list[Model]:
         """Every member that did not fail, as a Model, in order."""
@@ -260,7 +273,7 @@ class ParetoSet:
         fails = {new: self.failures[old] for new, old in enumerate(idx.tolist()) if old in self.failures}
         return ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
                          self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
-                         self.input_names, self.Ts)
+                         self.input_names, self.Ts, self.units)
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
         """The members that no other member dominates in ``objectives`` (order kept)."""

@@ -61,7 +61,8 @@ from ..core._least_squares import (REMEDIES, check_identified, check_rows, colum
 from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import Dataset, Record, StaticPoints, as_records, check_compatible, warn_static_range
+from ..core._records import (Dataset, Record, StaticPoints, as_records, carried_from, check_compatible,
+                             warn_static_range)
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure
@@ -843,7 +844,7 @@ def cls(
     theta = z / d.s
     for c in cons:
         c.after_solve(theta, ctx)
-    model = Model(st, theta, name=name, input_names=recs[0].input_names, Ts=recs[0].Ts)  # the records' input order
+    model = Model(st, theta, name=name, **carried_from(recs[0]))  # the records' input order, period and units
     return CLSResult(model, static_info(static, data, curves=True),
                      tuple(c.describe() for c in cons), solver)
 

@@ -53,7 +53,7 @@ from ..static._form_check import carried_degree, static_degree, static_fit_mse, 
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar, show_progress
-from ..core._records import (as_records, check_compatible, choosing_records, check_overlap, check_same_period,
+from ..core._records import (as_records, carried_from, check_compatible, choosing_records, check_overlap, check_same_period,
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
 from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
@@ -255,7 +255,7 @@ class GrayboxSelection:
         except ValueError:  # a hand-edited table: name the row, not only the bad word
             raise ValueError(f"row {row!r} ({r['estimator']}): its theta {text!r} is not numbers") from None
         return gb.Model(structure, theta, name=f"{r['estimator']} ({row})", input_names=self.model.input_names,
-                        Ts=self.model.Ts)
+                        Ts=self.model.Ts, units=self.model.units)
 
     def uncertainty(
         self,
@@ -969,8 +969,7 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     """The chosen member as a Decision: J_S on the choosing data, J_SF of the refitted member."""
     js_choose = res["blocks"] @ res["weights"]
     if estimator in _BLACK_BOX_FITS:
-        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})",
-                         input_names=plan.ident[0].input_names, Ts=plan.ident[0].Ts)
+        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})", **carried_from(plan.ident[0]))
         return gb.Decision(model, 0, float("nan"), float(js_choose[0]), float(res["jsf_full"][0]), "min J_S", True,
                            float(js_choose[0]))
     thetas = res["thetas"]
@@ -978,8 +977,8 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     failures = {int(k): "the fit failed at this λ" for k in np.flatnonzero(~keep)}
     th = np.where(keep[:, None], thetas, 0.0)
     scored = gb.ParetoSet(st, th, res["lambdas"], np.full(len(th), np.nan), js_choose, res["jsf_full"],
-                          f"{estimator}, J_S on the choosing data", {}, failures, plan.ident[0].input_names,
-                          plan.ident[0].Ts)
+                          f"{estimator}, J_S on the choosing data", {}, failures,
+                          **carried_from(plan.ident[0]))
     name = f"{estimator} ({row.name})"  # as model_of names it, not after the internal front
     if in_band:
         d = gb.decide_dsf(scored, band=plan.band, fallback="min_jsf")

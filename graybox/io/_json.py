@@ -565,21 +565,21 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                       ("name", "str"), ("input_names", "names"))),
     "Model": (Model, (("name", "str"), ("structure", "structure"), ("theta", "array1"),
                       ("noise_structure", "structure"), ("noise_theta", "array1"), ("input_names", "names"),
-                      ("Ts", "float_or_none"))),
+                      ("Ts", "float_or_none"), ("units", "names"))),
     "NeuralModel": (NeuralModel, (("name", "str"), ("ny", "int"), ("nu", "int"), ("ne", "int"), ("W1", "array2"),
                                   ("b1", "array1"), ("w2", "array1"), ("b2", "float"), ("u_offset", "float"),
                                   ("u_scale", "float"), ("y_offset", "float"), ("y_scale", "float"),
-                                  ("input_names", "names"), ("Ts", "float_or_none"))),
+                                  ("input_names", "names"), ("Ts", "float_or_none"), ("units", "names"))),
     "ParetoSet": (ParetoSet, (("method", "str"), ("structure", "structure"), ("lambdas", "array1"),
                               ("thetas", "array2"), ("J1", "array1"), ("JS", "array1"), ("JSF", "array1"),
                               ("extra", "dict_arrays"), ("failures", "failures"), ("input_names", "names"),
-                              ("Ts", "float_or_none"))),
+                              ("Ts", "float_or_none"), ("units", "names"))),
     "Selection": (Selection, (("structure", "structure"), ("err", "array1"), ("theta", "array1"),
                               ("noise", "structure"), ("evaluated", "structure"), ("err_evaluated", "array1"),
                               ("rss", "array1"), ("criterion", "str"), ("criterion_curve", "array1"), ("stop", "str"),
                               ("n_rows", "int"), ("n_candidates", "int"), ("skipped", "skipped"), ("search", "str"),
                               ("subsets", "structures"), ("subset_rss", "array1"), ("input_names", "names"),
-                              ("Ts", "float_or_none"))),
+                              ("Ts", "float_or_none"), ("units", "names"))),
     "ELSResult": (ELSResult, (("model", "Model"), ("n_iter", "int"), ("converged", "bool"), ("history", "floats"),
                               ("theta_ls", "array1"), ("residuals", "arrays"), ("n_direct", "int"))),
     "NeuralFit": (NeuralFit, (("model", "NeuralModel"), ("prediction_cost", "floats"), ("simulation_cost", "floats"),
@@ -589,7 +589,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                             ("in_band", "bool"), ("score", "float"), ("model", "Model"), ("chosen_on", "str"))),
     "SEMPResult": (SEMPResult, (("structure", "structure"), ("theta", "array1"), ("score", "float"), ("path", "frame"),
                                 ("forward_scores", "frame"), ("criterion", "str"), ("stop", "str"), ("n_rows", "int"),
-                                ("input_names", "names"), ("Ts", "float_or_none"))),
+                                ("input_names", "names"), ("Ts", "float_or_none"), ("units", "names"))),
     "DSFResult": (DSFResult, (("model", "Model"), ("JS", "float"), ("JSF", "float"), ("band", "float"),
                               ("in_band", "bool"), ("start", "str"), ("start_JS", "float"), ("start_JSF", "float"),
                               ("n_iter", "int"), ("message", "str"), ("margin", "float"))),
@@ -705,12 +705,13 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      # selections saved before the fit / choose / test protocol chose by the
                                      # smallest validation J_S
                                      "GrayboxSelection": {"rule": "min"},
-                                     "Model": {"input_names": _DEFAULT, "Ts": None},
-                                     "NeuralModel": {"input_names": _DEFAULT, "Ts": None},
-                                     "ParetoSet": {"input_names": _DEFAULT, "Ts": None},
+                                     # and the units of the records fitted on, carried since 2026-11-27: none said ("", "")
+                                     "Model": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
+                                     "NeuralModel": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
+                                     "ParetoSet": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
                                      "Selection": {k: _DEFAULT for k in ("search", "subsets", "subset_rss",
-                                                                         "input_names")} | {"Ts": None},
-                                     "SEMPResult": {"input_names": _DEFAULT, "Ts": None},
+                                                                         "input_names", "units")} | {"Ts": None},
+                                     "SEMPResult": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
                                      # the covariance's factor, carried since mend36a: contractions use cov
                                      "ParameterUncertainty": {"cov_factor": None},
                                      # units for display, carried since loaders36: none said
@@ -789,6 +790,17 @@ def _units_arg(units: tuple[str, str] | Mapping[str, str] | None) -> dict | None
     return {"u": u, "y": y}
 
 
+def _own_units(obj: Any) -> tuple[str, str] | None:
+    """The units a value carries itself: its own ``units``, its ``.model``'s, or a Dataset's records'."""
+    if isinstance(obj, Dataset):
+        return obj.ident.units
+    for v in (obj, getattr(obj, "model", None)):
+        units = getattr(v, "units", None)
+        if isinstance(units, tuple) and len(units) == 2 and all(isinstance(x, str) for x in units):
+            return units
+    return None
+
+
 def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = None) -> str:
     """The JSON text of a graybox value (see the module docstring for the layout).
 
@@ -799,8 +811,8 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     units : (str, str) or mapping, optional
         Units of the input and output: a pair of str (e.g. ``("rpm", "mlc")``, or a Record's ``units``) or a
         mapping with the keys ``"u"`` and ``"y"`` (a missing one: no unit said), written
-        in the header; default for StaticPoints, a SimulationBand and a Record: their own ``units``, for a
-        Dataset its records' (when they name any).
+        in the header; default: the units the value carries (a Record's, StaticPoints', a model's or a
+        result's, a Dataset's records'), when it names any.
 
     Returns
     -------
@@ -819,8 +831,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
         raise ValueError(f"cannot save {what}; graybox saves {sorted(_CODECS)}{hint}")
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": graybox_version(),
                            "type": _TYPES[type(obj)]}
-    own = getattr(obj, "units", None) if isinstance(obj, (StaticPoints, SimulationBand, Record)) else \
-        obj.ident.units if isinstance(obj, Dataset) else None
+    own = _own_units(obj)
     if units is None and own is not None and any(own):
         units = own  # the header says what the value itself carries
     u = _units_arg(units)

@@ -121,6 +121,8 @@ def jsf(model: Model, static: StaticPoints | Dataset, y0: float | np.ndarray | N
     """
     model = as_model(model, duck="static_curve")
     static = static_info(None if isinstance(static, Dataset) else static, static, needed_by="jsf")
+    if hasattr(model, "check_record"):
+        model.check_record(static)  # points in other units than the model's are refused, not scored
     names = getattr(model, "input_names", ("u",))
     ub = static_point_inputs(static, names)
     if y0 is not None:  # checked here: a bad y0 must not pass for a model without an equilibrium

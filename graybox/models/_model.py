@@ -11,7 +11,7 @@ from ..core import _simulation
 from ..static import _analysis as _static
 from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
-from ..core._records import Record, check_period
+from ..core._records import Record, check_period, check_same_units, check_units
 from ..core._validation import check_int, check_real, check_sequence, check_str, check_theta, frozen
 from ..core._terms import Structure, check_input_names, require_inputs
 
@@ -52,6 +52,12 @@ class Model:
         another period is refused where the model meets it (``simulate``, ``predict``, and the
         scores built on them). None (default: a model written by hand, or read from a file of an
         earlier graybox): unknown, not checked. Estimators set it from their records.
+    units : (str, str), optional
+        The units of the input(s) and the output in the records the model was identified on (e.g.
+        ``("rpm", "mlc")``), as :class:`~graybox.Record` has them. Its parameters hold in those units
+        only: a Record in other units is refused where the model meets it, as one at another period
+        is. Empty (the default, a model written by hand or read from an earlier file): unknown, not
+        checked. Estimators set them from their records.
     """
 
     structure: Structure
@@ -61,9 +67,11 @@ class Model:
     name: str = ""
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         check_str(self.name, "name")
+        object.__setattr__(self, "units", check_units(self.units, f"model {self.name!r}"))
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         st = self.structure if isinstance(self.structure, Structure) else Structure(self.structure)
@@ -93,20 +101,29 @@ class Model:
 
     def with_theta(self, theta: np.ndarray, *, name: str | None = None) -> "Model":
         """The same structure with parameters ``theta`` (shape (n_terms,), engineering units), named ``name``
-        (default: this model's name); the noise part is dropped, the inputs' names and ``Ts`` kept."""
+        (default: this model's name); the noise part is dropped, the inputs' names, ``Ts`` and units kept."""
         return Model(self.structure, theta, name=self.name if name is None else name, input_names=self.input_names,
-                     Ts=self.Ts)
+                     Ts=self.Ts, units=self.units)
 
     def check_period(self, record: Record) -> None:
         """``ValueError`` when ``record`` is sampled at another period than the model was identified at
         (nothing when the model's ``Ts`` is unknown)."""
         check_period(self.Ts, f"model {self.name!r} was identified on records sampled", record)
 
+    def check_record(self, record: Record) -> None:
+        """``ValueError`` when ``record`` (or static points) cannot be met by this model: sampled at another
+        period than the model was identified at, or in other units where both name them."""
+        if isinstance(record, Record):
+            self.check_period(record)
+        check_same_units(self.units, f"model {self.name!r} was identified with", record,
+                         "its parameters hold in those units only; convert the data (or give them the model's units "
+                         "if only the label differs)")
+
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record, *, horizon: int = 1) -> np.ndarray:
         """Prediction ``horizon`` samples ahead over ``record`` (default one step), shape (N,); see
-        :func:`graybox.predict`. A ``record`` sampled at another period than ``Ts`` is refused."""
-        self.check_period(record)
+        :func:`graybox.predict`. A ``record`` sampled at another period than ``Ts``, or in other ``units``, is refused."""
+        self.check_record(record)
         return _simulation.predict(self.structure, self.theta, record, horizon=horizon)
 
     @property
@@ -124,8 +141,8 @@ class Model:
     ) -> np.ndarray:
         """Free run, shape (N,), output units; see :func:`graybox.simulate`.
 
-        ``u`` is a Record (inputs taken by name; sampled at ``Ts``, else refused) or an array of
-        shape (N,) or (N, m) with the columns in ``input_names`` order; a pandas DataFrame is read by
+        ``u`` is a Record (inputs taken by name; sampled at ``Ts`` and in the model's ``units``, else
+        refused) or an array of shape (N,) or (N, m) with the columns in ``input_names`` order; a pandas DataFrame is read by
         column name where its columns are the ``input_names`` (any order), by position where they
         name none of them, and refused where they name some (``ValueError`` naming the columns).
         ``y0`` holds the first ``max_lag`` outputs (default with a Record: its measured ones; needed
@@ -136,7 +153,7 @@ class Model:
         also from rest).
         """
         if isinstance(u, Record):
-            self.check_period(u)
+            self.check_record(u)
         if not isinstance(u, Record) and self.n_inputs > 1:
             return _simulation.simulate(self.structure, self.theta, u, y0, on_diverge=on_diverge, bound=bound,
                                         input_names=self.input_names)
@@ -232,4 +249,5 @@ class Model:
 
     def __repr__(self) -> str:
         period = "" if self.Ts is None else f", Ts={self.Ts:g} s"
-        return f"Model(name={self.name!r}, n_params={self.n_params}, max_lag={self.max_lag}{period})"
+        units = f", units={self.units}" if any(self.units) else ""
+        return f"Model(name={self.name!r}, n_params={self.n_params}, max_lag={self.max_lag}{period}{units})"

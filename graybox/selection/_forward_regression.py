@@ -55,7 +55,7 @@ import numpy as np
 import pandas as pd
 
 from ..models._model import Model, model_input_names
-from ..core._records import Dataset, Record
+from ..core._records import Dataset, Record, carried_from, check_units
 from ..core._terms import Structure, Term
 from ..core._gram import (
     DaskRecord,
@@ -232,6 +232,7 @@ class Selection:
     subset_rss: np.ndarray = field(default=())
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -240,6 +241,7 @@ class Selection:
         object.__setattr__(self, "input_names", names)
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
+        object.__setattr__(self, "units", check_units(self.units, "Selection"))
         n, k = len(self.structure), len(self.evaluated)
         if tuple(self.evaluated)[:n] != tuple(self.structure):
             raise ValueError(f"the selected terms {self.structure} must be the first {n} evaluated terms, "
@@ -274,7 +276,8 @@ class Selection:
     @property
     def model(self) -> Model:
         """The selected structure with its least-squares parameters (no MA part), named ``"LS"``."""
-        return Model(self.structure, self.theta, name="LS", input_names=self.input_names, Ts=self.Ts)
+        return Model(self.structure, self.theta, name="LS", input_names=self.input_names, Ts=self.Ts,
+                     units=self.units)
 
     def to_frame(self) -> pd.DataFrame:
         """One row per evaluated term, in order.
@@ -812,8 +815,7 @@ def frols(
         search=search,
         subsets=() if plan is None else tuple(Structure([process[j] for j in S]) for S in plan.subsets),
         subset_rss=() if plan is None else plan.rss,
-        input_names=as_gram_records(data)[0].input_names,
-        Ts=as_gram_records(data)[0].Ts,
+        **carried_from(as_gram_records(data)[0]),
     )
 
 

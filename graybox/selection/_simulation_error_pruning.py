@@ -40,7 +40,7 @@ import scipy.linalg
 from ..core._least_squares import output_scale
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
-from ..core._records import Dataset, Record, as_records
+from ..core._records import Dataset, Record, as_records, carried_from, check_units
 from ._forward_regression import CRITERIA, CandidateWarning, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
@@ -95,6 +95,7 @@ class SEMPResult:
     n_rows: int
     input_names: tuple[str, ...] | None = None
     Ts: float | None = None
+    units: tuple[str, str] = ("", "")
 
     #: Columns every path holds (a loaded file is checked against them).
     PATH_COLUMNS = ("step", "action", "term", "n_terms", "score", "criterion", "structure")
@@ -106,6 +107,7 @@ class SEMPResult:
         object.__setattr__(self, "input_names", names)
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
+        object.__setattr__(self, "units", check_units(self.units, "SEMPResult"))
         check_theta(len(self.structure), self.theta)  # finite, as the model it gives needs (files load through here)
         check_choice(self.criterion, "criterion", CRITERIA)
         check_mean_square(self.score, "SEMPResult: score (the free-run MSE)")
@@ -118,7 +120,8 @@ class SEMPResult:
     @property
     def model(self) -> Model:
         """The selected structure with its least-squares parameters, named ``"SEMP"``."""
-        return Model(self.structure, self.theta, name="SEMP", input_names=self.input_names, Ts=self.Ts)
+        return Model(self.structure, self.theta, name="SEMP", input_names=self.input_names, Ts=self.Ts,
+                     units=self.units)
 
     def __repr__(self) -> str:
         return (f"SEMPResult(n_terms={len(self.structure)}, score={self.score:.4g}, steps={len(self.path)}, "
@@ -357,7 +360,7 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     # the closure's free run on the centred signals, from the same samples and over the same rows as the search's
     L = candidates.process.max_lag
     recs = centred if isinstance(centred, list) else [centred]
-    model = Model(closed, theta, input_names=recs[0].input_names, Ts=recs[0].Ts)
+    model = Model(closed, theta, **carried_from(recs[0]))
     err = np.concatenate([model.simulate(r, r.y[:L])[L:] - r.y[L:] for r in recs])
     stop = _centring.stop_note(res.stop, len(res.structure), len(full), offsets, dropped)
     return replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
@@ -569,4 +572,4 @@ def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
     return SEMPResult(Structure([opt.process[j] for j in current]), frozen(best["_theta"][current]),
                       float(best["score"]), path.drop(columns=["_set", "_theta"]), fwd, opt.crit,
                       f"{why}: step {int(best['step'])} of the path; search: {stop}", sc.n_rows,
-                      sc.records[0].input_names, sc.records[0].Ts)
+                      **carried_from(sc.records[0]))

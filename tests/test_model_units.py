@@ -1,0 +1,129 @@
+"""A model knows the units it was identified in, and refuses data in other units: its parameters hold
+in those units only (graybox.Model.units, as Model.Ts for the sampling period)."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+UNITS = ("rpm", "mlc")
+ST = gb.Structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2"])
+
+
+def _record(seed: int = 0, n: int = 400, units: tuple[str, str] = UNITS, name: str = "") -> gb.Record:
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 1.0, n // 10), 10)
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = 0.6 * y[k - 1] + 0.2 * y[k - 2] + 0.3 * u[k - 1] + 0.05 * u[k - 2] ** 2 + 0.4
+    return gb.Record(u, y + 0.01 * rng.standard_normal(n), Ts=0.1, units=units, name=name or f"run {seed}")
+
+
+def _static(units: tuple[str, str] = UNITS) -> gb.StaticPoints:
+    return gb.StaticPoints(np.array([0.2, 0.5, 0.8]), np.array([2.3, 2.7, 3.1]), units=units)
+
+
+@pytest.fixture(scope="module")
+def data() -> gb.Dataset:
+    return gb.Dataset(_record(0), _record(1), _static())
+
+
+@pytest.fixture(scope="module")
+def models(data) -> dict:
+    cand = gb.Candidates(2, 2, degree=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return {
+            "frols": gb.frols(cand, data, n_terms=5).model,
+            "frols centred": gb.frols(cand, data, n_terms=4, centre=True).model,
+            "semp": gb.semp(cand, data, n_terms=4).model,
+            "els": gb.els(ST, data).model,
+            "cls": gb.cls(ST, data, gb.StaticCurve.fit(data.static, degree=2)).model,
+            "pe": gb.pe_pareto(ST, data, lambdas=[1.0, 0.1]).member_model(0),
+            "se": gb.se_pareto(ST, data, lambdas=[1.0, 0.5], method="gradient").member_model(1),
+            "se_dsf": gb.se_dsf(ST, data, band=1.0).model,
+            "output_error": gb.output_error(ST, data, n_starts=1).model,
+            "neural": gb.neural_narx(data.ident, ny=2, nu=2, ne=0, hidden=2, epochs=2, sim_epochs=2, seed=0).model,
+        }
+
+
+def test_every_estimator_gives_its_model_the_records_units(models, data):
+    for name, m in models.items():
+        assert m.units == UNITS, name
+        m.simulate(data.valid, on_diverge="nan")  # the same units: fine
+        unlabelled = _record(1, units=("", ""))  # a record that names no unit says nothing: not checked
+        m.simulate(unlabelled, on_diverge="nan")
+        other = _record(1, units=("rad/s", "mlc"), name="logger in rad/s")
+        with pytest.raises(ValueError, match=r"input unit 'rpm' but 'logger in rad/s' has 'rad/s'"):
+            m.simulate(other)
+        with pytest.raises(ValueError, match="input unit 'rpm'"):
+            gb.js(m, other)
+        with pytest.raises(ValueError, match="output unit 'mlc'"):
+            gb.jsf(m, _static(("rpm", "Pa")))
+
+
+def test_prediction_residual_tests_and_the_control_bridge_refuse_other_units(models):
+    m = models["els"]
+    other = _record(2, units=("rpm", "Pa"), name="pressure in Pa")
+    with pytest.raises(ValueError, match="output unit 'mlc' but 'pressure in Pa' has 'Pa'"):
+        m.predict(other)
+    with pytest.raises(ValueError, match="output unit 'mlc'"):
+        gb.residual_tests(m, other)
+    m.predict(_record(2))
+
+
+def test_a_choosing_record_in_other_units_is_refused(data):
+    front = gb.pe_pareto(ST, data, lambdas=[1.0, 0.1, 0.01])
+    assert front.units == UNITS and all(m.units == UNITS for m in front.models())
+    gb.decide_dsf(front, band=1.0, choose_on=_record(2))
+    with pytest.raises(ValueError, match="Pareto set was fitted with input unit 'rpm'"):
+        gb.decide_dsf(front, band=1.0, choose_on=_record(2, units=("1/s", "mlc")))
+
+
+def test_units_survive_saving_and_the_header_says_them(models):
+    for name in ("els", "pe", "semp", "neural"):
+        m = models[name]
+        text = gb.to_json(m)
+        assert json.loads(text)["units"] == {"u": "rpm", "y": "mlc"}, name
+        assert gb.from_json(text).units == UNITS, name
+    sel = gb.frols(gb.Candidates(2, 2, degree=2), _record(0), n_terms=5)
+    assert gb.from_json(gb.to_json(sel)).units == UNITS and gb.from_json(gb.to_json(sel)).model.units == UNITS
+    # a file written before models carried units reads as "none said"
+    doc = json.loads(gb.to_json(models["els"]))
+    del doc["object"]["units"]
+    assert gb.from_json(json.dumps(doc)).units == ("", "")
+
+
+def test_a_hand_written_model_says_nothing_and_its_units_are_checked_as_a_records():
+    m = gb.Model(ST, np.array([0.4, 0.6, 0.2, 0.3, 0.05]))
+    assert m.units == ("", "")
+    m.simulate(_record(0, units=("rad/s", "Pa")))  # nothing said, nothing checked
+    labelled = gb.Model(ST, m.theta, units=["rpm", "mlc"])
+    assert labelled.units == UNITS and labelled.with_theta(m.theta).units == UNITS
+    assert "units=('rpm', 'mlc')" in repr(labelled)
+    for bad in ("rpm", ("rpm",), ("rpm", 3)):
+        with pytest.raises(TypeError, match="units must be a pair of strings"):
+            gb.Model(ST, m.theta, units=bad)
+
+
+def test_records_in_other_units_cannot_be_fitted_together():
+    with pytest.raises(ValueError, match="input unit 'rpm' but 'b' has 'rad/s'"):
+        gb.frols(gb.Candidates(2, 2, degree=2), [_record(0, name="a"), _record(1, units=("rad/s", "mlc"), name="b")],
+                 n_terms=4)
+
+
+def test_the_papers_models_hold_in_rpm_and_mlc():
+    m = gb.reference.paper_model(15, "ELS")
+    assert m.units == UNITS
+    data = gb.load_pumping()
+    assert data.ident.units == UNITS
+    assert np.isfinite(gb.js(m, data.valid))
+    radians = gb.Record(data.valid.u * 2 * np.pi / 60, data.valid.y, Ts=data.valid.Ts, units=("rad/s", "mlc"),
+                        name="valid in rad/s")
+    with pytest.raises(ValueError, match="input unit 'rpm' but 'valid in rad/s' has 'rad/s'"):
+        m.simulate(radians)
