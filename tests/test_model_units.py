@@ -127,3 +127,20 @@ def test_the_papers_models_hold_in_rpm_and_mlc():
                         name="valid in rad/s")
     with pytest.raises(ValueError, match="input unit 'rpm' but 'valid in rad/s' has 'rad/s'"):
         m.simulate(radians)
+
+
+def test_a_choosing_or_test_record_in_other_units_is_refused_before_any_fit(data):
+    other = _record(3, units=("rad/s", "mlc"), name="test in rad/s")
+    with pytest.raises(ValueError, match="input unit 'rpm' but 'test in rad/s' has 'rad/s'"):
+        gb.select_graybox(gb.Candidates(2, 2, degree=2), data, band=1.0, test=other)
+    with pytest.raises(ValueError, match="input unit 'rpm' but 'test in rad/s' has 'rad/s'"):
+        gb.output_error(ST, data.ident, n_starts=0, choose_on=other)
+
+
+def test_the_selections_models_carry_the_units(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sel = gb.select_graybox(gb.Candidates(2, 2, degree=2), data, band=1.0, sizes=(4,))
+    assert sel.model.units == UNITS
+    row = sel.table.index[0]
+    assert sel.model_of(row, estimator=sel.table.iloc[0]["estimator"]).units == UNITS

@@ -427,6 +427,13 @@ def check_same_period(a: Record, b: Record) -> None:
     check_period(a.Ts, f"{a.name!r} is sampled", b)
 
 
+def check_alike(a: Record, b: Record) -> None:
+    """``ValueError`` naming both unless a further record ``b`` (one to choose or test on) can be read as ``a`` is:
+    the same sampling period and, where both name them, the same units (inputs are read by name)."""
+    check_same_period(a, b)
+    check_same_units(a.units, f"{a.name!r} has", b, "convert one of them: a model holds in one set of units")
+
+
 def check_period(Ts: float | None, what: str, record: Record) -> None:
     """``ValueError`` unless ``record`` is sampled every ``Ts`` seconds (to :data:`PERIOD_RTOL`; None:
     unknown, nothing to check). ``what`` names the other side, e.g. "'ident' is sampled" or "model
@@ -532,7 +539,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "carried_from", "check_same_units", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "check_same_units", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

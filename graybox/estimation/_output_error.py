@@ -44,7 +44,7 @@ import pandas as pd
 
 from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar
-from ..core._records import (Dataset, Record, as_records, carried_from, check_overlap, check_same_period, choosing_records,
+from ..core._records import (Dataset, Record, as_records, carried_from, check_alike, check_overlap, choosing_records,
                              same_record)
 from ..core._terms import Structure
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
@@ -223,7 +223,7 @@ def output_error(
     if choose_on is not None:  # checked once here, not again by a refit inside the margin
         crec = choosing_records(choose_on)
         for c in crec:
-            check_same_period(rec[0], c)
+            check_alike(rec[0], c)
         if any(same_record(c, r) for c in crec for r in rec):
             raise ValueError("choose_on: a choosing record is a fitting record; choose on data the fit did not see "
                              "(e.g. data.valid)")

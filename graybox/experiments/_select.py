@@ -53,7 +53,7 @@ from ..static._form_check import carried_degree, static_degree, static_fit_mse, 
 from ..core._simulation_kernels import encode, record_inputs, simulate_batch
 from ..core._least_squares import one_blas_thread
 from ..core._progress import progress_bar, show_progress
-from ..core._records import (as_records, carried_from, check_compatible, choosing_records, check_overlap, check_same_period,
+from ..core._records import (as_records, carried_from, check_alike, check_compatible, choosing_records, check_overlap,
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
 from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
@@ -542,7 +542,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     named = _named(idents, "identification") + _named(valids, "validation") + _named(tests, "test")
     for name, rec in named:
         # said now, not after the structure search and the fits
-        check_same_period(ident, rec)
+        check_alike(ident, rec)
         require_inputs(process.inputs, rec.input_names, "but the record's inputs are",
                        prefix=f"the {name} record {rec.name!r}: ")
         if len(rec) <= L + 1:  # each is fitted, chosen or scored on alone (a Record's own check says "record")
