@@ -42,14 +42,25 @@ __all__ = ["DerivativeMap", "derivative_map", "local_coefficients", "grid_coeffi
 _POINT_CACHE_BYTES = 1 << 18
 
 
+@lru_cache(maxsize=1024)
+def _power_plan(exponents: tuple[float, ...]) -> tuple[tuple[float, ...], np.ndarray]:
+    """The distinct exponents, in order of appearance, and each exponent's index among them."""
+    distinct = tuple(dict.fromkeys(exponents))
+    index = np.array([distinct.index(k) for k in exponents], dtype=np.intp)
+    index.setflags(write=False)
+    return distinct, index
+
+
 def _powers(x: np.ndarray, exponents: np.ndarray) -> np.ndarray:
     """x ** e_t for each exponent, shape x.shape + (n,): one scalar power per distinct exponent (an array of
     exponents rounds otherwise, and a single-input result stays bit for bit ``x ** e``); x⁰ = 1, NaN⁰ too."""
     x = np.asarray(x, float)
-    e, index = np.unique(np.asarray(exponents, float), return_inverse=True)
+    distinct, index = _power_plan(tuple(np.asarray(exponents, float).ravel().tolist()))
+    if not distinct:
+        return np.ones(x.shape + (0,))
     with np.errstate(all="ignore"):
-        cols = [np.ones_like(x) if k == 0 else x ** k for k in e]
-    return np.stack(cols, axis=-1)[..., index.ravel()] if cols else np.ones(x.shape + (0,))
+        cols = [np.ones_like(x) if k == 0 else x ** k for k in distinct]
+    return np.stack(cols, axis=-1)[..., index]
 
 
 def input_monomials_of(A: np.ndarray, ubar: np.ndarray) -> np.ndarray:
