@@ -163,7 +163,7 @@ def test_a_run_waits_for_the_cells_another_run_holds_and_runs_those_it_releases(
     try:
         assert other.claim([c.key for c in cells]) == {}
         t, lines, out = _run_in_thread(spec, store)
-        assert any(f"{len(cells)} of them are being run by another run" in x for x in lines)
+        assert any(f"{len(cells)} of the cells to run are being run by another run" in x for x in lines)
         for c in cells[:2]:  # the other run finishes two cells, then stops
             other.write(run_cell(c, data[c.data]))
     finally:

@@ -233,8 +233,9 @@ def test_a_run_busy_with_a_long_cell_keeps_its_beat_so_another_host_does_not_tak
     class Slow:  # an executor whose cells take 2 s, the driver waiting meanwhile
         name = "slow"
 
-        def run(self, todo, by_hash, log):
+        def run(self, todo, by_hash, log, take):
             for c in todo:
+                assert take([c]) == [c]  # claimed as it starts
                 beats.append(beat())
                 time.sleep(2.0)
                 beats.append(beat())

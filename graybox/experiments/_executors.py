@@ -1,7 +1,9 @@
 """Where cells run: in the driver, in local worker processes, or on a Dask distributed cluster.
 
 Every executor takes the cells and the data and yields rows *as they complete*; only the driver
-writes them to the store. Parallel executors keep workers × threads ≤ cores: each worker process
+writes them to the store. An executor starts a cell only once ``take`` has given it (the driver's
+claim on the store, so that two runs on one store share the cells): it asks for as many as it can
+start at that moment (a free worker, a Dask task), not for all of them when it begins. Parallel executors keep workers × threads ≤ cores: each worker process
 gets ``NUMBA_NUM_THREADS`` (and the BLAS thread variables) = cores // workers, and a cell itself
 runs BLAS and numba on one thread (see :func:`graybox.experiments._cell.run_cell`).
 
@@ -50,6 +52,9 @@ __all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "check_cluste
 EXECUTORS = ("inprocess", "processes", "dask")
 
 CellFn = Callable[[Cell, gb.Dataset, int], dict]
+#: Given cells an executor is about to start, those it may start (the others another run on the store holds or
+#: has written: the driver knows of them and sees to them).
+Take = Callable[[Sequence[Cell]], Sequence[Cell]]
 #: Where an executor tells what is worth telling at the start (e.g. the dashboard's address).
 Log = Callable[[str], None]
 
@@ -118,6 +123,16 @@ def _environ(values: Mapping[str, str]):
                 os.environ[k] = v
 
 
+def _take_next(pending: deque, n: int, take: Take | None) -> list[Cell]:
+    """Up to ``n`` cells from the front of ``pending`` that ``take`` gives (all of them without ``take``): fewer
+    only when ``pending`` runs out."""
+    out: list[Cell] = []
+    while pending and len(out) < n:
+        ask = [pending.popleft() for _ in range(min(n - len(out), len(pending)))]
+        out.extend(ask if take is None else take(ask))
+    return out
+
+
 class InProcess:
     """Cells one after another in the driver process (the default)."""
 
@@ -126,10 +141,13 @@ class InProcess:
     def __init__(self, fn: CellFn = run_cell):
         self.fn = fn
 
-    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None) -> Iterator[dict]:
-        """Yield each cell's row."""
-        for c in cells:
-            yield self.fn(c, datasets[c.data_hash], threads=1)
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None,
+            take: Take | None = None) -> Iterator[dict]:
+        """Yield each cell's row, each cell taken (``take``) as it is about to run."""
+        pending = deque(cells)
+        while pending:
+            for c in _take_next(pending, 1, take):
+                yield self.fn(c, datasets[c.data_hash], threads=1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -234,23 +252,33 @@ class ProcessPool:
             slot.proc.join(timeout=5)
         slot.conn.close()
 
-    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None) -> Iterator[dict]:
-        """Yield each cell's row as it completes."""
-        if not cells:  # every cell reused: no worker to start (each costs a Python start-up and graybox's imports)
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None,
+            take: Take | None = None) -> Iterator[dict]:
+        """Yield each cell's row as it completes; a cell is taken (``take``) when a worker is free for it."""
+        pending: deque[Cell] = deque(cells)  # not taken yet
+        # taken, each with the worker deaths it has seen: no worker to start when none is (every cell reused, or
+        # another run's), each costs a Python start-up and graybox's imports
+        queued: deque[tuple[Cell, int]] = deque((c, 0) for c in _take_next(pending, self.workers, take))
+        if not queued:
             return
-        pending: deque[tuple[Cell, int]] = deque((c, 0) for c in cells)
         slots: list[_Slot] = []
         graceful = True
         try:
-            slots = [self._start() for _ in range(min(self.workers, len(pending)))]
-            while pending or any(s.cell is not None for s in slots):
-                for s in slots:
-                    if s.cell is None and pending:
-                        s.cell, s.attempt = pending.popleft()
-                        h = s.cell.data_hash
-                        s.conn.send((s.cell, None if h in s.sent else datasets[h]))
-                        s.sent.add(h)
+            slots = [self._start() for _ in range(len(queued))]
+            while True:
+                free = [s for s in slots if s.cell is None]
+                if len(queued) < len(free):
+                    queued.extend((c, 0) for c in _take_next(pending, len(free) - len(queued), take))
+                for s in free:
+                    if not queued:
+                        break
+                    s.cell, s.attempt = queued.popleft()
+                    h = s.cell.data_hash
+                    s.conn.send((s.cell, None if h in s.sent else datasets[h]))
+                    s.sent.add(h)
                 busy = [s for s in slots if s.cell is not None]
+                if not busy:  # nothing in flight, none taken, none left to take
+                    break
                 ready = set(mp_wait([s.conn for s in busy] + [s.proc.sentinel for s in busy]))
                 for i, s in enumerate(slots):
                     if s.cell is None or not ({s.conn, s.proc.sentinel} & ready):
@@ -272,7 +300,7 @@ class ProcessPool:
                     self._stop(s, graceful=False)
                     slots[i] = self._start()
                     if attempt < 2:
-                        pending.appendleft((cell, attempt))
+                        queued.appendleft((cell, attempt))  # still this run's: it goes next
                     else:
                         yield failed_row(cell, f"the worker process died twice while running this cell "
                                                f"(last exit code {code}); it was retried once")
@@ -373,6 +401,13 @@ class _Batches:
         if items:
             self._flight.pop(items[0][0].key, None)
         self._back.update((c.data, c.variant) for c, _ in items)
+
+    def dropped(self, items: Sequence[tuple[Cell, int]], kept: Sequence[tuple[Cell, int]]) -> None:
+        """Of a task given by :meth:`next`, only ``kept`` goes (another run on the store holds or has written the
+        others): the task in flight, if any goes, is that much shorter."""
+        work = self._flight.pop(items[0][0].key, None) if items else None
+        if work is not None and kept:
+            self._flight[kept[0][0].key] = work * len(kept) / len(items)
 
     def requeue(self, cell: Cell, deaths: int) -> None:
         """Put back a cell whose worker died (it runs alone, next)."""
@@ -542,8 +577,10 @@ class DaskCluster:
             finally:
                 client.close()
 
-    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None) -> Iterator[dict]:
-        """Submit the cells in batches, yield each row as its batch completes."""
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None,
+            take: Take | None = None) -> Iterator[dict]:
+        """Submit the cells in batches, yield each row as its batch completes; a batch's cells are taken
+        (``take``) as it is submitted."""
         from distributed import as_completed
         from distributed.scheduler import KilledWorker
 
@@ -578,6 +615,14 @@ class DaskCluster:
                     limit = batches.slots
                 while batches and len(futures) < limit:
                     items = batches.next()
+                    if take is not None:  # a retried cell (worker deaths > 0) is this run's already
+                        given = {c.key for c in take([c for c, d in items if d == 0])}
+                        kept = [(c, d) for c, d in items if d > 0 or c.key in given]
+                        if len(kept) < len(items):
+                            batches.dropped(items, kept)
+                            items = kept
+                        if not items:
+                            continue
                     seq = next(counter)  # a retried cell gets a new key: the old one may still be known as erred
                     f = client.submit(cells_task, self.fn, plugin, [c for c, _ in items],
                                       key=f"graybox-cells-{items[0][0].key[:16]}-{seq}-{tag}", pure=False)

@@ -106,9 +106,11 @@ def run_grid(
         The SQLite store (created if missing, grown if not). A store whose data set of the same
         name holds other data, a store of a newer graybox, a damaged file or a file that is not
         a graybox store is refused and left untouched. Another run may use it meanwhile (another
-        process, notebook or host): each run takes the cells it starts, and a run does not start
-        a cell another live run has taken but waits for it (and runs it itself if that run stops
-        or dies first), so no cell runs twice; the notes say how many cells the other run made.
+        process, notebook or host), and the two share the work: each takes a cell as it is about
+        to start it (as many at a time as its executor can start), so a run started later takes
+        the cells not started yet. A run does not start a cell another live run has taken: with
+        no other cell left, it waits for it (and runs it itself if that run stops or dies first),
+        so no cell runs twice; the notes say how many cells the other run made.
     executor : {"inprocess", "processes", "dask"}, optional
         Default: "dask" when ``client``, ``scheduler`` or ``workers`` is given, else "inprocess".
     workers : int, optional
@@ -176,22 +178,15 @@ def run_grid(
         say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - len(todo)} reused from {store}, {len(todo)} to run")
         for n in notes:
             say(f"  {n}")
-        # claimed after the lines are said: a log callback that runs the grid itself finds nothing taken
-        elsewhere = st.claim([c.key for c in todo])  # what another run on this store has taken, it runs
-        waiting = {c.key: c for c in todo if c.key in elsewhere}
-        # another run may have written (and let go) a cell between this run's look and its claim: kept, not run again
-        written = _written_since(st, [c.key for c in todo if c.key not in waiting], marks)
-        todo = [c for c in todo if c.key not in waiting and c.key not in written]
-        if waiting:
-            say(f"  {len(waiting)} of them are being run by another run on this store "
-                f"({', '.join(sorted(set(elsewhere.values())))}): this one waits for them")
-        bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo) - len(waiting))
+        bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo))
+        # each cell is claimed as the executor is about to start it (a batch at a time, never all at once), so
+        # that another run on the store takes the cells this one has not started yet and the two share the grid
+        share = _Share(st, marks, bar)
         ran = taken = 0
-        by_others = len(written)
         try:
             with st.beating():  # alive to the other runs while a long cell writes no row
                 while True:
-                    for row in ex.run(todo, by_hash, log=say):
+                    for row in ex.run(todo, by_hash, log=say, take=share.take):
                         if row.get("version") != version:
                             row = failed_row(next(c for c in todo if c.key == row["key"]),
                                              f"the worker runs graybox {row.get('version')}, the driver {version}: "
@@ -199,16 +194,20 @@ def run_grid(
                         taken += not st.write(row, replace=row["key"] in done)
                         ran += 1
                         bar.update(1)
-                    if not waiting:
+                    if not share.waiting:
                         break
-                    todo, finished = _wait_for_others(st, waiting, marks)
-                    by_others += len(finished)
+                    if not share.said:
+                        share.said = True
+                        say(f"  {len(share.waiting)} of the cells to run are being run by another run on this "
+                            f"store ({', '.join(sorted(share.others))}): this one waits for them")
+                    todo, finished = _wait_for_others(st, share.waiting, marks)
+                    share.by_others += len(finished)
                     bar.update(len(finished))
         finally:
             bar.close()
-        if by_others:
-            who = f" ({', '.join(sorted(set(elsewhere.values())))})" if elsewhere else ""
-            notes.append(f"{by_others} cell(s) were run meanwhile by another run on this store{who}; "
+        if share.by_others:
+            who = f" ({', '.join(sorted(share.others))})" if share.others else ""
+            notes.append(f"{share.by_others} cell(s) were run meanwhile by another run on this store{who}; "
                          "this one did not run them again")
         if taken:
             notes.append(f"{taken} cell(s) run now were written meanwhile by another run on this store: "
@@ -224,10 +223,44 @@ def run_grid(
 POLL_SECONDS = 0.5
 
 
+class _Share:
+    """What a run takes of the cells it would run, as its executor is about to start them (:meth:`take`): those
+    another live run holds wait (:attr:`waiting`), those another run has written meanwhile are not run again
+    (:attr:`by_others`, on the progress bar at once)."""
+
+    def __init__(self, st: ResultStore, seen: Mapping[str, tuple], bar: Any):
+        self.st, self.seen, self.bar = st, seen, bar
+        self.waiting: dict[str, Any] = {}  # key -> cell another live run holds
+        self.others: set[str] = set()  # those runs, in words
+        self.by_others = 0
+        self.said = False
+
+    def take(self, cells) -> list:
+        """Of ``cells``, those this run now holds and may start (the executor's ``take``)."""
+        if not cells:
+            return []
+        # a cell written since this run looked is dropped before it is claimed: a run that starts late goes
+        # through the cells another has finished with reads only
+        before = self.st.marks([c.key for c in cells])
+        written = {c.key for c in cells if before.get(c.key) != self.seen.get(c.key)}
+        ask = [c for c in cells if c.key not in written]
+        held = self.st.claim([c.key for c in ask]) if ask else {}
+        for c in ask:
+            if c.key in held:
+                self.waiting[c.key] = c
+        self.others.update(held.values())
+        mine = [c for c in ask if c.key not in held]
+        # another run may have written (and let go) a cell between that look and this claim: kept, not run again
+        written |= _written_since(self.st, [c.key for c in mine], self.seen)
+        self.by_others += len(written)
+        self.bar.update(len(written))
+        return [c for c in mine if c.key not in written]
+
+
 def _written_since(st: ResultStore, keys: list[str], seen: Mapping[str, tuple]) -> set[str]:
     """Those of ``keys`` (this run's claims) whose row another run wrote, or wrote over, since this run saw
     the store as ``seen``; their claims end (this run does not run them)."""
-    now = st.marks()
+    now = st.marks(keys)
     written = {k for k in keys if now.get(k) != seen.get(k)}
     st.unclaim(sorted(written))
     return written

@@ -465,10 +465,18 @@ class ResultStore:
             stop.set()
             t.join()
 
-    def marks(self) -> dict[str, tuple[str, str | None]]:
-        """Status and finishing time of every cell the store holds, by key: a row written over one
-        (a failed cell retried) changes its mark even where the status stays the same."""
-        return {k: (s, t) for k, s, t in self._conn.execute("SELECT key, status, finished_at FROM cells")}
+    def marks(self, keys: Sequence[str] | None = None) -> dict[str, tuple[str, str | None]]:
+        """Status and finishing time of every cell the store holds (``keys``: of those among them), by key: a
+        row written over one (a failed cell retried) changes its mark even where the status stays the same."""
+        if keys is None:
+            return {k: (s, t) for k, s, t in self._conn.execute("SELECT key, status, finished_at FROM cells")}
+        out: dict[str, tuple[str, str | None]] = {}
+        keys = list(keys)
+        for i in range(0, len(keys), 500):  # SQLite takes at most 999 parameters in a statement (older builds)
+            part = keys[i:i + 500]
+            out.update((k, (s, t)) for k, s, t in self._conn.execute(
+                f"SELECT key, status, finished_at FROM cells WHERE key IN ({', '.join('?' * len(part))})", part))
+        return out
 
     def write(self, row: Mapping[str, Any], replace: bool = False) -> bool:
         """Commit one finished cell (``replace``: overwrite a failed row of the same key).

@@ -1,0 +1,204 @@
+"""Two runs on one store share the grid: each takes a cell as it is about to start it, so a run started a moment
+later takes the cells not started yet (before, the first run took every cell at its start and the second waited
+for all of them); a run killed mid-grid leaves the cell it held to the other (real processes, a real SIGKILL, a
+real SQLite file)."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from collections import deque
+from pathlib import Path
+
+import pytest
+
+from graybox import experiments as gx
+from graybox.experiments._cell import COLUMNS
+from graybox.experiments._executors import InProcess, ProcessPool
+
+SPEC = """\
+name = "shared"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "a"
+terms = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "1"]
+[[structures]]
+name = "b"
+terms = ["y(k-1)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"]
+[[structures]]
+name = "c"
+terms = ["y(k-1)", "u(k-1)", "y(k-1)^2", "1"]
+[[structures]]
+name = "d"
+terms = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "1"]
+[[variants]]
+name = "LS"
+estimator = "ls"
+[[variants]]
+name = "PE"
+estimator = "pe"
+lambdas = {logspace = [-3, 0, 3]}
+options = {solver = "closed"}
+"""
+
+# A driver process: its first cell waits until the other driver has started one too (so the test fails, by a
+# timeout, if the second run waits for every cell of the first), its cells take a little longer than they do, and
+# the driver given "stall" stops in its second cell (it is killed there, holding that cell).
+DRIVER = """\
+import os, sys, time
+from pathlib import Path
+from graybox import experiments as gx
+from graybox.experiments import _run
+
+spec, store, sync, role = sys.argv[1], sys.argv[2], Path(sys.argv[3]), sys.argv[4]
+real, n = _run.run_cell, [0]
+
+def cell(c, data, threads=1):
+    n[0] += 1
+    if n[0] == 1:
+        (sync / f"started-{os.getpid()}").touch()
+        deadline = time.monotonic() + 60
+        while len(list(sync.glob("started-*"))) < 2 and time.monotonic() < deadline:
+            time.sleep(0.01)
+    if role == "stall" and n[0] == 2:
+        (sync / "stalled").write_text(c.key)
+        time.sleep(600)
+    time.sleep(0.05)
+    return real(c, data, threads=threads)
+
+_run.run_cell = cell
+run = gx.run_grid(spec, store)
+print(run.ran, "run now", flush=True)
+print("\\n".join(run.notes), flush=True)
+"""
+
+
+@pytest.fixture
+def setup(tmp_path):
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC)
+    driver = tmp_path / "driver.py"
+    driver.write_text(DRIVER)
+    sync = tmp_path / "sync"
+    sync.mkdir()
+    g = gx.Grid.from_toml(spec)
+    return spec, driver, sync, g.cells(g.load_data())
+
+
+def _driver(driver: Path, spec: Path, store: Path, sync: Path, role: str = "run") -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, str(driver), str(spec), str(store), str(sync), role],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _rows(store: Path) -> dict[str, tuple]:
+    """The cells table by key, without what says where and when a cell ran."""
+    cols = [c for c in COLUMNS if c not in ("wall_time", "worker", "finished_at")]
+    conn = sqlite3.connect(store)
+    try:
+        return {r[0]: r for r in conn.execute(f"SELECT {', '.join(cols)} FROM cells")}
+    finally:
+        conn.close()
+
+
+def _workers(store: Path) -> dict[str, str | None]:
+    conn = sqlite3.connect(store)
+    try:
+        return dict(conn.execute("SELECT key, worker FROM cells"))
+    finally:
+        conn.close()
+
+
+def test_two_runs_started_together_share_the_cells_and_write_what_one_run_alone_writes(setup, tmp_path):
+    spec, driver, sync, cells = setup
+    store = tmp_path / "two.sqlite"
+    procs = [_driver(driver, spec, store, sync) for _ in range(2)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert all(p.returncode == 0 for p in procs), outs
+    ran = [int(re.search(r"(\d+) run now", o).group(1)) for o, _ in outs]
+    assert min(ran) > 0 and sum(ran) == len(cells), outs  # both ran a share, together every cell once
+    by = _workers(store)
+    assert sorted(by) == sorted(c.key for c in cells)
+    counts = {p.pid: sum(w.endswith(f":{p.pid}") for w in by.values()) for p in procs}
+    assert sorted(counts.values()) == sorted(ran), (counts, ran)  # each wrote the cells it says it ran
+    alone = tmp_path / "one.sqlite"
+    assert gx.run_grid(spec, alone).ran == len(cells)
+    assert _rows(store) == _rows(alone)  # the same rows whichever run computed a cell
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="a killed driver is told dead by /proc")
+def test_a_run_killed_mid_grid_leaves_the_cell_it_held_to_the_other_which_finishes_the_grid(setup, tmp_path):
+    spec, driver, sync, cells = setup
+    store = tmp_path / "s.sqlite"
+    killed = _driver(driver, spec, store, sync, "stall")
+    other = _driver(driver, spec, store, sync)
+    try:
+        deadline = time.monotonic() + 120
+        while not (sync / "stalled").exists():
+            assert killed.poll() is None and time.monotonic() < deadline, killed.communicate()
+            time.sleep(0.01)
+        held = (sync / "stalled").read_text()
+        assert dict(gx.grid_status(store).running).get(f"pid {killed.pid} on host {os.uname().nodename}") == 1
+        killed.send_signal(signal.SIGKILL)  # while it runs its second cell, its first written
+        out, err = other.communicate(timeout=300)
+    finally:
+        for p in (killed, other):
+            p.kill()
+            p.communicate()
+    assert other.returncode == 0, (out, err)
+    by = _workers(store)
+    assert sorted(by) == sorted(c.key for c in cells)  # every cell once
+    mine = [k for k, w in by.items() if w.endswith(f":{killed.pid}")]
+    assert len(mine) == 1 and held not in mine  # the killed run's finished cell is kept, not run again
+    assert by[held].endswith(f":{other.pid}")  # the cell it held, the other ran
+    assert int(re.search(r"(\d+) run now", out).group(1)) == len(cells) - 1
+    assert (gx.load_results(store)["status"] != "failed").all()
+    assert gx.grid_status(store).running == {}
+
+
+def _taker(cells, refuse: int):
+    """A ``take`` that refuses every ``refuse``-th cell it is asked for (another run holds it), recording the
+    batches it was asked for."""
+    asked: list[list[str]] = []
+    n = [0]
+
+    def take(batch):
+        asked.append([c.key for c in batch])
+        out = []
+        for c in batch:
+            n[0] += 1
+            if n[0] % refuse:
+                out.append(c)
+        return out
+
+    return take, asked
+
+
+@pytest.mark.parametrize("make", [lambda: InProcess(), lambda: ProcessPool(2)], ids=["in-process", "processes"])
+def test_an_executor_runs_the_cells_take_gives_asking_for_no_more_than_it_can_start(setup, make):
+    _, _, _, cells = setup
+    g = gx.Grid.from_toml(setup[0])
+    data = g.load_data()
+    by_hash = {c.data_hash: data[c.data] for c in cells}
+    ex = make()
+    take, asked = _taker(cells, refuse=3)
+    rows = list(ex.run(cells, by_hash, take=take))
+    given = [k for i, k in enumerate(k for a in asked for k in a) if (i + 1) % 3]
+    assert sorted(r["key"] for r in rows) == sorted(given) and len(given) < len(cells)
+    assert [k for a in asked for k in a] == [c.key for c in cells]  # each asked for once, in the grid's order
+    assert max(len(a) for a in asked) <= getattr(ex, "workers", 1)  # a batch at a time, not the grid at once
+
+
+def test_take_next_asks_again_for_the_cells_refused_until_it_has_enough_or_none_are_left():
+    from graybox.experiments._executors import _take_next
+
+    pending = deque(range(10))
+    got = _take_next(pending, 3, lambda b: [x for x in b if x % 2])
+    assert got == [1, 3, 5] and list(pending) == [6, 7, 8, 9]
+    assert _take_next(pending, 5, lambda b: []) == [] and not pending
