@@ -21,6 +21,8 @@ from graybox import experiments as gx
 from graybox.experiments._cell import COLUMNS
 from graybox.experiments._executors import InProcess, ProcessPool
 
+from test_grid_claims import _open
+
 SPEC = """\
 name = "shared"
 [[data]]
@@ -180,19 +182,29 @@ def _taker(cells, refuse: int):
     return take, asked
 
 
-@pytest.mark.parametrize("make", [lambda: InProcess(), lambda: ProcessPool(2)], ids=["in-process", "processes"])
-def test_an_executor_runs_the_cells_take_gives_asking_for_no_more_than_it_can_start(setup, make):
+@pytest.mark.parametrize("kind", ["in-process", "processes", "dask"])
+def test_an_executor_runs_the_cells_take_gives_asking_for_no_more_than_it_can_start(setup, kind):
     _, _, _, cells = setup
     g = gx.Grid.from_toml(setup[0])
     data = g.load_data()
     by_hash = {c.data_hash: data[c.data] for c in cells}
-    ex = make()
+    if kind == "dask":
+        pytest.importorskip("distributed")
+        from graybox.experiments._executors import DaskCluster
+
+        ex = DaskCluster(workers=1)
+    else:
+        ex = InProcess() if kind == "in-process" else ProcessPool(2)
     take, asked = _taker(cells, refuse=3)
     rows = list(ex.run(cells, by_hash, take=take))
-    given = [k for i, k in enumerate(k for a in asked for k in a) if (i + 1) % 3]
+    flat = [k for a in asked for k in a]
+    given = [k for i, k in enumerate(flat) if (i + 1) % 3]
     assert sorted(r["key"] for r in rows) == sorted(given) and len(given) < len(cells)
-    assert [k for a in asked for k in a] == [c.key for c in cells]  # each asked for once, in the grid's order
-    assert max(len(a) for a in asked) <= getattr(ex, "workers", 1)  # a batch at a time, not the grid at once
+    assert sorted(flat) == sorted(c.key for c in cells)  # each cell asked for once
+    if kind == "dask":  # longest first, a task's batch at a time
+        assert len(asked) > 1 and len(asked[0]) < len(cells)
+    else:  # in the grid's order, no more at a time than there are workers to start them
+        assert flat == [c.key for c in cells] and max(map(len, asked)) <= getattr(ex, "workers", 1)
 
 
 def test_take_next_asks_again_for_the_cells_refused_until_it_has_enough_or_none_are_left():
@@ -202,3 +214,30 @@ def test_take_next_asks_again_for_the_cells_refused_until_it_has_enough_or_none_
     got = _take_next(pending, 3, lambda b: [x for x in b if x % 2])
     assert got == [1, 3, 5] and list(pending) == [6, 7, 8, 9]
     assert _take_next(pending, 5, lambda b: []) == [] and not pending
+
+
+def test_a_new_store_appears_whole_so_a_run_started_with_its_maker_opens_it(setup, tmp_path, monkeypatch):
+    # made in place, the file was an empty file, then an SQLite file without tables, for a moment: a run started
+    # together with the one making it refused it ("an empty file, so not a graybox grid store"), half the times
+    # two drivers were started on a new store path
+    from graybox.experiments import _store
+
+    spec, _, _, cells = setup
+    g = gx.Grid.from_toml(spec)
+    store = tmp_path / "new.sqlite"
+    make, seen = _store._create_tables, []
+
+    def making(conn, version):  # midway through this run's making, another run opens the path
+        seen.append(store.exists())
+        if len(seen) == 1:
+            _open(store, g, cells).close()
+        return make(conn, version)
+
+    monkeypatch.setattr(_store, "_create_tables", making)
+    st = _open(store, g, cells)
+    try:
+        assert seen == [False, False]  # neither run's half-made store was ever at the path
+        assert (st.spec_id, st.new_spec) == (1, False)  # the other run's store, opened
+    finally:
+        st.close()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # no half-made file left

@@ -305,6 +305,8 @@ class ResultStore:
             raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
         if not exists and not p.parent.is_dir():
             raise StoreError(f"{p.parent} is a file, not a folder; give a store path inside a folder")
+        if not exists and _create_whole(p, version):  # made whole, by this run or another started with it
+            return cls.open(p, grid_name=grid_name, fingerprint=fingerprint, spec=spec, cells=cells, version=version)
         migrate = False
         known: dict[str, str] = {}
         if exists:
@@ -347,11 +349,9 @@ class ResultStore:
         try:
             if exists:
                 _settings(conn)
-            else:
+            else:  # a file system without hard links (_create_whole): made in place
                 conn.execute("PRAGMA journal_mode=WAL")
                 _settings(conn)
-                meta = {"format": FORMAT, "format_version": FORMAT_VERSION, "graybox_version": version,
-                        "created": _now()}
                 conn.execute("BEGIN IMMEDIATE")
                 if conn.execute("SELECT 1 FROM sqlite_master").fetchone() is not None:
                     # another run (started at once) made the file since this one looked: open it as it is, checked
@@ -359,10 +359,7 @@ class ResultStore:
                     conn.close()
                     return cls.open(p, grid_name=grid_name, fingerprint=fingerprint, spec=spec, cells=cells,
                                     version=version)
-                conn.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
-                conn.execute(_table("cells", COLUMNS))
-                conn.executemany("INSERT INTO meta VALUES (?, ?)", list(meta.items()))
-                _create_spec_tables(conn)
+                meta = _create_tables(conn, version)
                 conn.execute("COMMIT")
             if migrate:
                 _upgrade(conn, meta, cells)
@@ -526,6 +523,47 @@ class ResultStore:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _create_tables(conn: sqlite3.Connection, version: str) -> dict[str, str]:
+    """A new store's tables and meta (inside the caller's transaction); returns the meta."""
+    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, "graybox_version": version, "created": _now()}
+    conn.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+    conn.execute(_table("cells", COLUMNS))
+    conn.executemany("INSERT INTO meta VALUES (?, ?)", list(meta.items()))
+    _create_spec_tables(conn)
+    return meta
+
+
+def _create_whole(p: Path, version: str) -> bool:
+    """Make a new store at ``p`` under a name of its own beside it, then link it into place, so that no other run
+    ever sees it half made (made in place, a run started at the same moment found an empty file, or an SQLite file
+    without tables, and refused it). A store another run linked there first is left to be opened. False where
+    the file system has no hard links (the caller makes the store in place)."""
+    tmp = p.with_name(f".{p.name}.{secrets.token_hex(4)}.new")
+    try:
+        try:
+            conn = _connect(tmp)
+        except sqlite3.OperationalError as exc:  # e.g. a folder this user cannot write in
+            raise StoreError(f"cannot create the store {p} ({exc}); choose a --store path in a folder you can "
+                             "write in") from None
+        try:
+            conn.execute("PRAGMA journal_mode=WAL")
+            conn.execute("BEGIN IMMEDIATE")
+            _create_tables(conn, version)
+            conn.execute("COMMIT")
+        finally:
+            conn.close()  # the last connection: its log folded into the file, which is then whole
+        try:
+            os.link(tmp, p)
+        except FileExistsError:  # another run linked its store first: that one is the store
+            pass
+        except OSError:
+            return False
+        return True
+    finally:
+        for f in (tmp, Path(f"{tmp}-wal"), Path(f"{tmp}-shm")):
+            f.unlink(missing_ok=True)
 
 
 def _create_spec_tables(conn: sqlite3.Connection) -> None:
