@@ -4,11 +4,13 @@
 
 1. Bookkeeping: a grid of N cells (a GA variant over many seeds, so that keys are cheap to make), its
    store opened; one claim of every key, ``grid status`` (which reads the claims), and W rows written
-   (failed rows: no cell is run) with the claims in force against a store no run claimed (before this
-   change, every write was the latter).
+   (failed rows: no cell is run) with the claims in force against a store no run claimed (before claims,
+   every write was the latter); then what a run now does for each cell before it starts it
+   (``run_grid``'s take: its row looked for, the key claimed, looked for again), W keys one at a time.
 2. bench_grid_growth's 48-cell grid (12 structures × LS, CLS, PE, PE with a band) run by one driver
    (``graybox grid run``, in-process), then by two drivers started together on a fresh store: the cells each
-   ran (before this change: each ran all of them) and the wall time until both end.
+   ran (before claims: each ran all of them; with every cell claimed at a run's start: 0 + 48) and the wall
+   time until both end.
 """
 
 from __future__ import annotations
@@ -29,7 +31,13 @@ from bench_grid_growth import grids  # noqa: E402
 import graybox as gb  # noqa: E402
 from graybox import experiments as gx  # noqa: E402
 from graybox.experiments._cell import failed_row  # noqa: E402
+from graybox.experiments._run import _Share  # noqa: E402
 from graybox.experiments._store import ResultStore  # noqa: E402
+
+
+class _NoBar:
+    def update(self, n: int) -> None:
+        pass
 
 
 def bookkeeping(n_cells: int, writes: int, tmp: Path) -> None:
@@ -60,15 +68,24 @@ def bookkeeping(n_cells: int, writes: int, tmp: Path) -> None:
             for c in cells[:writes]:
                 st.write(failed_row(c, "bench"))
             t_write = (time.perf_counter() - t0) / writes
+            t_take = float("nan")
+            if not claim:  # the unwritten cells, taken one at a time as run_grid now takes them
+                share = _Share(st, st.marks(), _NoBar())
+                left = cells[writes:2 * writes]
+                t0 = time.perf_counter()
+                for c in left:
+                    assert share.take([c]) == [c]
+                t_take = (time.perf_counter() - t0) / len(left)
         finally:
             st.close()
-        rows[label] = (t_claim, t_status if claim else float("nan"), t_write)
-    print(f"\n{len(cells)} cells (made in {t_cells:.2f} s); {writes} rows written\n")
-    print("| store | claim every key | grid status | one row written |")
-    print("| --- | --- | --- | --- |")
-    for label, (a, b, c) in rows.items():
+        rows[label] = (t_claim, t_status if claim else float("nan"), t_write, t_take)
+    print(f"\n{len(cells)} cells (made in {t_cells:.2f} s); {writes} rows written, {writes} cells taken one by one\n")
+    print("| store | claim every key | grid status | one row written | one cell taken (run_grid's take) |")
+    print("| --- | --- | --- | --- | --- |")
+    for label, (a, b, c, d) in rows.items():
         f = (lambda x: "–" if x != x else f"{x:.3f} s")
-        print(f"| {label} | {f(a)} | {f(b)} | {c * 1e3:.2f} ms |")
+        g = (lambda x: "–" if x != x else f"{x * 1e3:.2f} ms")
+        print(f"| {label} | {f(a)} | {f(b)} | {g(c)} | {g(d)} |")
 
 
 def two_drivers(tmp: Path) -> None:

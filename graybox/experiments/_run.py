@@ -38,7 +38,7 @@ class GridRun:
         Cells run now.
     skipped : int
         Cells not run now: the store held them (reused), or another run on the store made
-        them while this one waited (its notes say how many).
+        them meanwhile (its notes say how many).
     counts : mapping str -> int
         The grid's cells in the store by status (ok, infeasible, diverged, failed).
     executor : str
