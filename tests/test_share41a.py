@@ -241,3 +241,13 @@ def test_a_new_store_appears_whole_so_a_run_started_with_its_maker_opens_it(setu
     finally:
         st.close()
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # no half-made file left
+
+
+@pytest.mark.skipif(os.name != "posix", reason="a symbolic link")
+def test_a_store_path_that_is_a_dangling_link_makes_the_store_where_it_points(setup, tmp_path):
+    spec, _, _, cells = setup
+    g = gx.Grid.from_toml(spec)
+    store, target = tmp_path / "link.sqlite", tmp_path / "target.sqlite"
+    store.symlink_to(target)
+    _open(store, g, cells).close()  # linking beside it finds the name taken, by a link to nothing: made in place
+    assert target.is_file() and len(gx.store_specs(store)) == 1

@@ -556,8 +556,8 @@ def _create_whole(p: Path, version: str) -> bool:
             conn.close()  # the last connection: its log folded into the file, which is then whole
         try:
             os.link(tmp, p)
-        except FileExistsError:  # another run linked its store first: that one is the store
-            pass
+        except FileExistsError:  # another run linked its store first, that one is the store; or a dangling link
+            return p.exists()
         except OSError:
             return False
         return True
