@@ -3,9 +3,10 @@
 Every executor takes the cells and the data and yields rows *as they complete*; only the driver
 writes them to the store. An executor starts a cell only once ``take`` has given it (the driver's
 claim on the store, so that two runs on one store share the cells): it asks for as many as it can
-start at that moment (a free worker, a Dask task), not for all of them when it begins. Parallel executors keep workers × threads ≤ cores: each worker process
-gets ``NUMBA_NUM_THREADS`` (and the BLAS thread variables) = cores // workers, and a cell itself
-runs BLAS and numba on one thread (see :func:`graybox.experiments._cell.run_cell`).
+start at that moment (a free worker, a Dask task), not for all of them when it begins. Parallel
+executors keep workers × threads ≤ cores: each worker process gets ``NUMBA_NUM_THREADS`` (and the
+BLAS thread variables) = cores // workers, and a cell itself runs BLAS and numba on one thread
+(see :func:`graybox.experiments._cell.run_cell`).
 
 A worker process that dies while running a cell (killed, out of memory, a crash in compiled
 code) gets that cell retried once on a fresh worker; if it dies again the cell is a failed row
