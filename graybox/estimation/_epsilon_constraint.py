@@ -119,7 +119,9 @@ class DSFResult:
 
 
 class _GN:
-    """J_S, J_SF and their Gauss–Newton Gram matrices in scaled coordinates z = s ⊙ θ."""
+    """J_S, J_SF and their Gauss–Newton Gram matrices in the SE problem's coordinates z (:meth:`SEProblem.to_z`:
+    z = s ⊙ θ, or centred ones for a structure closed under shifts, where the damped steps are then the same
+    whatever the units' zeros)."""
 
     def __init__(self, problem: SEProblem):
         self.p = problem
@@ -127,18 +129,19 @@ class _GN:
 
     def parts(self, z: np.ndarray, jac: bool):
         p = self.p
-        ed, es, Jd, Js = p.residuals(z / p.scale, jacobian=jac)
+        th = p.from_z(z)
+        ed, es, Jd, Js = p.residuals(th, jacobian=jac)
         r1 = ed / np.sqrt(p.n_dyn)
         r2 = es / np.sqrt(self.M)
         f = float(r1 @ r1) if np.all(np.isfinite(r1)) else np.inf
         g = float(r2 @ r2) if np.all(np.isfinite(r2)) else np.inf
         if p.margin is not None and np.isfinite(f) and np.isfinite(g) \
-                and not p.within_margin(z / p.scale, (es + p.static.ybar)[None])[0]:
+                and not p.within_margin(th, (es + p.static.ybar)[None])[0]:
             return np.inf, np.inf, None  # outside the stability margin: a wall, as a diverging run is
         if not jac or not (np.isfinite(f) and np.isfinite(g)):
             return f, g, None
-        J1 = Jd / (np.sqrt(p.n_dyn) * p.scale)
-        J2 = Js / (np.sqrt(self.M) * p.scale)
+        J1 = p.jac_z(Jd, np.sqrt(p.n_dyn))
+        J2 = p.jac_z(Js, np.sqrt(self.M))
         if not (np.all(np.isfinite(J1)) and np.all(np.isfinite(J2))):
             return f, g, None
         return f, g, (J1.T @ J1, J1.T @ r1, J2.T @ J2, J2.T @ r2)
@@ -317,7 +320,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
     """The constrained Gauss–Newton iteration from θ0: (θ, J_S, J_SF, J_S0, J_SF0, steps, message), or None
     when θ0 has an unbounded free run or reaches no equilibrium at some static point."""
     problem = gn.p
-    z = th0 * problem.scale
+    z = problem.to_z(th0)
     f, g, G = gn.parts(z, True)
     if not (np.isfinite(f) and np.isfinite(g)):
         return None
@@ -381,7 +384,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                 if nu > 1e12:
                     message = "converged: no step along which the model improves (step size vanished)"
                     break
-    return z / problem.scale, f, g, f0, g0, it, message
+    return problem.from_z(z), f, g, f0, g0, it, message
 
 
 def se_dsf(

@@ -267,13 +267,11 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
     if theta0 is not None:
         cands.append(("theta0", check_theta(n, theta0, "theta0")))
     rng = np.random.default_rng(seed)
-    psi, target = problem.psi / problem.scale, problem.target
-    rows_n = psi.shape[0]
+    rows_n = problem.psi.shape[0]
     size = max(n + 1, int(round(subsample * rows_n)))
     for k in range(n_starts):
         pick = rng.choice(rows_n, size=min(size, rows_n), replace=False)
-        z = np.linalg.lstsq(psi[pick], target[pick], rcond=None)[0]
-        cands.append((f"subsample #{k + 1}", z / problem.scale))
+        cands.append((f"subsample #{k + 1}", problem.from_z(problem.z_lstsq(pick))))
 
     best: dict = {"score": np.inf}
 

@@ -76,6 +76,8 @@ from ..core._records import (
     warn_static_range,
 )
 from ..core._regressors import stacked_regressors
+from ..core._gram import is_dask_data
+from ..selection._centring import centred_data, is_closed, shift_map, signal_offsets
 from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
@@ -161,8 +163,9 @@ class SEProblem:
         self.y_scale = output_scale(self.target)
         self._memo: dict = {}  # least squares and PE solutions, shared with with_margin's copies
         self._static_memo: tuple[bytes, np.ndarray] | None = None
+        self._centre_basis()
         self.ridge = check_real(ridge, "ridge", low=0.0)
-        self.ridge_ref = self.ls_theta() * self.scale if self.ridge > 0 else None
+        self.ridge_ref = self.to_z(self.ls_theta()) if self.ridge > 0 else None
         self.local = LocalModels(structure, *record_points(structure, self.records)) if self.margin is not None \
             else None
         # the static points' ū as the local models read them: on a surface, columns in the kernel's input order
@@ -170,6 +173,65 @@ class SEProblem:
         if static is not None and self.surface_inputs is not None:
             mu = static.ubar[:, [static.input_names.index(n) for n in c.inputs]]
             self.margin_ubar = mu[:, 0] if mu.shape[1] == 1 else mu
+
+    # -- the optimisers' coordinates ----------------------------------------------------
+    def _centre_basis(self) -> None:
+        """The coordinates z the optimisers move in (:meth:`to_z`, :meth:`from_z`).
+
+        By default z = θ ⊙ s, s the RMS of each raw regressor. For a structure closed under shifts (every
+        divisor of every term present, as ``centre=True`` returns) whose records identify θ, z is instead
+        the parameters of the same model on the signals minus their means over the records, times the RMS
+        of each centred regressor: θ = A (z / s_c) + t (:func:`~graybox.selection._centring.shift_map`).
+        An offset of y or of an input leaves the centred signals, hence the whole problem in z (starts,
+        steps, trust regions, tolerances, the ridge, the GA's mutations), as it was, and a unit's scale
+        is taken up by s_c: the fit is the same model whatever the units' zeros and scales. The raw
+        coordinates are not: a trust-region step, a ridge or a mutation of the raw constant or u(k−1)
+        means something else when u moves by 1e4, and the fits differed by up to 35 % in J_S.
+        """
+        self.z_map = self.z_inv = self.z_shift = self.offsets = None
+        self.z_psi, self.z_target = self.psi / self.scale, self.target
+        if is_dask_data(self.records) or not is_closed(self.structure) or not self.records_identify():
+            return
+        off = signal_offsets(self.records)
+        A, t = shift_map(self.structure, off)
+        Ainv = shift_map(self.structure, {k: -v for k, v in off.items()})[0]
+        psi_c, target_c = stacked_regressors(self.structure, centred_data(self.records, off))
+        s_c = column_scales(psi_c)
+        self.offsets, self.z_shift = off, t
+        self.z_map = A / s_c  # θ = z_map @ z + z_shift
+        self.z_inv = s_c[:, None] * Ainv  # z = z_inv @ (θ − z_shift)
+        self.z_psi, self.z_target = psi_c / s_c, target_c  # ψ θ − y = z_psi z − z_target, without cancellation
+
+    def to_z(self, thetas: np.ndarray) -> np.ndarray:
+        """The optimisers' coordinates of θ (shape (n,) or (P, n)): see :meth:`_centre_basis`."""
+        th = np.asarray(thetas, float)
+        if self.z_map is None:
+            return th * self.scale
+        return (th - self.z_shift) @ self.z_inv.T
+
+    def from_z(self, z: np.ndarray) -> np.ndarray:
+        """θ (engineering units) of the optimisers' coordinates z, shape (n,) or (P, n)."""
+        z = np.asarray(z, float)
+        if self.z_map is None:
+            return z / self.scale
+        return z @ self.z_map.T + self.z_shift
+
+    def jac_z(self, J: np.ndarray, w: float | np.floating) -> np.ndarray:
+        """``J`` (rows of ∂r/∂θ) as ∂r/∂z, divided by ``w``."""
+        if self.z_map is None:
+            return J / (w * self.scale)
+        return (J @ self.z_map) / w
+
+    def z_lstsq(self, rows: np.ndarray | None = None, cols: np.ndarray | None = None,
+                fixed: np.ndarray | None = None) -> np.ndarray:
+        """Least squares of the regression in z on ``rows`` (all: None), solving for the ``cols`` of z (all: None)
+        with the others held at ``fixed`` (z coordinates); returns those coordinates."""
+        A = self.z_psi if rows is None else self.z_psi[rows]
+        b = self.z_target if rows is None else self.z_target[rows]
+        if cols is not None:
+            b = b - A[:, ~cols] @ fixed[~cols]
+            A = A[:, cols]
+        return np.linalg.lstsq(A, b, rcond=None)[0]
 
     def with_margin(self, margin: float | None) -> SEProblem:
         """The same problem (structure, records, static points, ridge) with another margin; what does not
@@ -312,7 +374,7 @@ class SEProblem:
                 jsf = np.mean((yb - self.static.ybar) ** 2, axis=1)
             c = c + (1.0 - lam1) * np.where(np.isfinite(jsf), jsf, np.inf)
         if self.ridge > 0:
-            c = c + self.ridge * np.mean((np.atleast_2d(thetas) * self.scale - self.ridge_ref) ** 2, axis=1)
+            c = c + self.ridge * np.mean((self.to_z(np.atleast_2d(thetas)) - self.ridge_ref) ** 2, axis=1)
         c = np.where(np.isfinite(c), c, np.inf)
         if self.margin is not None:
             fin = np.isfinite(c)
@@ -382,7 +444,9 @@ class SEProblem:
         records' regression and the static rows Q R θ = ȳ of eq. (12), each as a mean square (PE's closed
         form at λ1 = 1/2); neither: ``ValueError`` saying what is missing."""
         if "ls" not in self._memo:
-            if self.records_identify():
+            if self.records_identify() and self.z_map is not None:
+                self._memo["ls"] = self.from_z(scaled_lstsq(self.z_psi, self.z_target))
+            elif self.records_identify():
                 self._memo["ls"] = scaled_lstsq(self.psi, self.target)
             else:
                 self.check_identified()
@@ -399,13 +463,10 @@ class SEProblem:
             raise ValueError(f"GAOptions.random_samples = {samples} (the rows of each random individual's least "
                              f"squares) exceeds the records' {n} regression rows: give "
                              f"options=GAOptions(random_samples=...) of at most {n}")
-        A = self.psi / self.scale
-        b = self.target
         out = np.empty((count, self.psi.shape[1]))
         for i in range(count):
             rows = rng.choice(n, size=samples, replace=False)
-            z = np.linalg.lstsq(A[rows], b[rows], rcond=None)[0]
-            out[i] = z / self.scale
+            out[i] = self.from_z(self.z_lstsq(rows))
         return out
 
 
@@ -482,9 +543,17 @@ def _ranking_fitness(cost: np.ndarray, sp: float) -> np.ndarray:
 
 def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, rng: np.random.Generator,
             threads: int) -> tuple[np.ndarray, float, int]:
-    """One GA run for one λ1; returns (best θ, its cost, generations run)."""
-    pop = init
-    cost = problem.cost(pop, lam1, threads)
+    """One GA run for one λ1; returns (best θ, its cost, generations run).
+
+    The genes are θ, or for a structure closed under shifts the centred coordinates z
+    (:meth:`SEProblem.to_z`): the crossover is linear, but a mutation of 5 % of a raw gene is not the same
+    change of the model at another offset of u or y, and the runs chose other models there."""
+    zs = problem.z_map is not None
+    pop = problem.to_z(init) if zs else init
+
+    def cost_of(pop):
+        return problem.cost(problem.from_z(pop) if zs else pop, lam1, threads)
+    cost = cost_of(pop)
     best_hist = [np.min(cost)]
     n = opts.population
     g = 0
@@ -507,14 +576,14 @@ def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, 
         mut = rng.random(kids.shape) < opts.mutation_prob
         kids = kids + mut * rng.standard_normal(kids.shape) * opts.mutation_scale * np.abs(kids)
         pop = np.vstack([elite, kids])
-        cost = problem.cost(pop, lam1, threads)
+        cost = cost_of(pop)
         best_hist.append(np.min(cost))
         if opts.stall and g > opts.stall:
             old = best_hist[-opts.stall - 1]
             if old - best_hist[-1] <= 1e-9 * abs(old):
                 break
     i = int(np.argmin(cost))
-    return pop[i].copy(), float(cost[i]), g
+    return (problem.from_z(pop[i]) if zs else pop[i].copy()), float(cost[i]), g
 
 
 # -- results and checkpoints ----------------------------------------------------------------
@@ -816,8 +885,9 @@ _BLOCK = 4096
 
 
 def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
-    """Stacked residuals [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] at z = θ·scale; all inf once a run diverges."""
-    th = z / problem.scale
+    """Stacked residuals [√(λ1/N) e_sim, √(λ2/N_SF) e_SF] at z (θ = problem.from_z(z)); all inf once a run
+    diverges."""
+    th = problem.from_z(z)
     L = problem.L
     M = len(problem.static) if lam1 < 1.0 else 0
     n_ridge = th.size if problem.ridge > 0 else 0
@@ -854,11 +924,11 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     nor its SVD is ever formed: the cost is linear in N and the memory independent of it,
     with the conditioning of QR (normal equations JᵀJ would square it).
     """
-    th = z / problem.scale
+    th = problem.from_z(z)
     n = th.size
     L = problem.L
     w1 = np.sqrt(lam1 / problem.n_dyn)
-    colw = w1 / problem.scale
+    colw = w1 / problem.scale if problem.z_map is None else w1 * problem.z_map
     T = np.zeros((0, n + 1))
     for rec, U in zip(problem.records, problem.U):
         for k0, k1, yh, S in free_run_sensitivity_blocks(problem.code, th, U, rec.y[:L], L, _BLOCK):
@@ -867,7 +937,10 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
             # column-major, as LAPACK takes it: factored in place, with no copy of the block
             work = np.empty((m + b, n + 1), order="F")
             work[:m] = T
-            np.multiply(S, colw, out=work[m:, :n])
+            if problem.z_map is None:
+                np.multiply(S, colw, out=work[m:, :n])
+            else:  # ∂ŷ/∂z = ∂ŷ/∂θ · ∂θ/∂z
+                np.matmul(S, colw, out=work[m:, :n])
             np.subtract(yh[k0:k1], rec.y[k0:k1], out=work[m:, n])
             work[m:, n] *= w1
             if not np.all(np.isfinite(work)):
@@ -877,7 +950,7 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
         sp = problem.static
         w2 = np.sqrt((1.0 - lam1) / len(sp))
         yb = problem.static_outputs(th)[0]
-        rows = np.column_stack([w2 * problem.static_theta_gradient(th, yb) / problem.scale,
+        rows = np.column_stack([problem.jac_z(w2 * problem.static_theta_gradient(th, yb), 1.0),
                                 w2 * (yb - sp.ybar)])
         if not np.all(np.isfinite(rows)):
             return np.full((n + 1, n + 1), np.nan)
@@ -929,7 +1002,7 @@ class _Compressed:
 
     def jac(self, z: np.ndarray, f: np.ndarray | None = None) -> np.ndarray:
         if self.watch is not None:
-            self.watch(z / self.problem.scale)
+            self.watch(self.problem.from_z(z))
         T = _r_factor(self.problem, z, self.lam1)
         if not np.all(np.isfinite(T)):
             # bounded run, overflowing sensitivities (a run on the edge of instability): stop here
@@ -977,13 +1050,13 @@ def _fit(problem: SEProblem, theta0: np.ndarray, lam1: float, solver: str, max_n
     gtol = tol if solver == "lm" else max(tol * ys / s, float(np.finfo(float).eps))
     try:
         with np.errstate(over="ignore", invalid="ignore"):  # inf residuals mark rejected steps
-            res = least_squares(lambda x: cp.fun(x * s) / s, theta0 * problem.scale / s,
+            res = least_squares(lambda x: cp.fun(x * s) / s, problem.to_z(theta0) / s,
                                 jac=lambda x, f=None: cp.jac(x * s), method=solver, x_scale="jac",
                                 max_nfev=max_nfev, ftol=tol, xtol=tol, gtol=gtol)
     except _Stop as stop:
         z, cost = stop.args
-        return z / problem.scale, cost, cp.nfun
-    return res.x * s / problem.scale, float(2 * res.cost) * s * s, cp.nfun
+        return problem.from_z(z), cost, cp.nfun
+    return problem.from_z(res.x * s), float(2 * res.cost) * s * s, cp.nfun
 
 
 def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
@@ -1016,7 +1089,21 @@ def _pull_inside(problem: SEProblem, theta: np.ndarray, lam1: float) -> tuple[np
     factor; None if none does. Shrinking the feedback shrinks every local model's roots."""
     fb = np.array([any(s == "y" for s, _, _ in t.factors) for t in problem.structure])
     rest = ~fb
+    z0 = None if problem.z_map is None else problem.to_z(theta)
     for c in _PULL:
+        if z0 is not None:
+            # closed under shifts: the feedback shrunk and the rest refitted in the centred coordinates, so that
+            # the start (the plain shrink too) is the same model wherever the units put their zeros
+            z = np.where(fb, c * z0, z0)
+            tries = [problem.from_z(z)]
+            if rest.any() and fb.any():
+                zr = z.copy()
+                zr[rest] = problem.z_lstsq(cols=rest, fixed=z)
+                tries.insert(0, problem.from_z(zr))
+            for t in tries:
+                if np.isfinite(_residuals(problem, problem.to_z(t), lam1)[0]):
+                    return t, c
+            continue
         th = np.where(fb, c * theta, theta)
         tries = [th]
         if rest.any() and fb.any():
@@ -1030,7 +1117,7 @@ def _pull_inside(problem: SEProblem, theta: np.ndarray, lam1: float) -> tuple[np
             except ValueError:  # the record alone does not identify them (the static points do): shrink only
                 pass
         for t in tries:  # the refit first; the plain shrink where the refit is not feasible
-            if np.isfinite(_residuals(problem, t * problem.scale, lam1)[0]):
+            if np.isfinite(_residuals(problem, problem.to_z(t), lam1)[0]):
                 return t, c
     return None
 
@@ -1047,7 +1134,7 @@ def _multistart(problem: SEProblem, lam1: float, cands: list[tuple[str, np.ndarr
             continue
         tried.append(th0)
         nfev += 1
-        if not np.isfinite(_residuals(problem, th0 * problem.scale, lam1)[0]):
+        if not np.isfinite(_residuals(problem, problem.to_z(th0), lam1)[0]):
             pulled = None
             if problem.margin is not None and np.isfinite(problem.js(th0[None])[0]) \
                     and not problem.within_margin(th0)[0]:
@@ -1181,7 +1268,7 @@ def gradient_front(
         before = _nearest(thetas, i, "before", 2)
         if before:
             th0 = thetas[before[0]]
-            if np.isfinite(_residuals(problem, th0 * problem.scale, lam1)[0]):
+            if np.isfinite(_residuals(problem, problem.to_z(th0), lam1)[0]):
                 th, c, k = _fit(problem, th0, lam1, follow, max_nfev, tol)
                 return th, c, k + 1
         return _multistart(problem, lam1, candidates(i, thetas, before), restart_solvers, max_nfev, tol)

@@ -154,12 +154,14 @@ def told_apart(structure: Structure, records: Record | list[Record],
     return kept, tuple(dropped.items())
 
 
-def raw_theta(structure: Structure, theta: np.ndarray, offsets: Mapping[str, float]) -> np.ndarray:
+def raw_theta(structure: Structure, theta: np.ndarray, offsets: Mapping[str, float], *,
+              level: bool = True) -> np.ndarray:
     """The parameters, on the raw signals, of a model fitted on the centred ones.
 
     ``y(k) − c_y = Σ θ_j Π (x − c_x)`` expanded by the binomial theorem into the raw monomials; a
     closed ``structure`` holds every one of them (``ValueError`` otherwise). Noise signals are not
     shifted.
+    ``level=False``: without the output's offset ``c_y`` added to the constant (the map's linear part).
     """
     pos = {t: i for i, t in enumerate(structure)}
     out = np.zeros(len(structure))
@@ -176,11 +178,32 @@ def raw_theta(structure: Structure, theta: np.ndarray, offsets: Mapping[str, flo
             if d not in pos:
                 raise ValueError(f"the structure is not closed under shifts: {t} needs {d}")
             out[pos[d]] += coef
-    if offsets["y"] != 0.0:
+    if level and offsets["y"] != 0.0:
         if Term(()) not in pos:
             raise ValueError("the structure is not closed under shifts: an offset of y needs the constant 1")
         out[pos[Term(())]] += offsets["y"]
     return out
+
+
+def is_closed(structure: Structure) -> bool:
+    """Whether the process terms hold every divisor of every term (the constant ``1`` included): a set whose
+    functions are the same wherever the signals' zeros are (:func:`closure`)."""
+    process = [t for t in structure if not t.is_noise]
+    have = set(process)
+    return bool(process) and all(d in have for t in process for d in _divisors(t))
+
+
+def shift_map(structure: Structure, offsets: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """``(A, t)`` with ``raw_theta(structure, θ_c, offsets) = A @ θ_c + t`` for every θ_c: the affine map from
+    the parameters on the centred signals to those on the raw ones (``t`` carries the output's offset into the
+    constant). ``structure`` must be closed (:func:`is_closed`; ``ValueError`` otherwise); its inverse is the map
+    of the negated offsets."""
+    if not is_closed(structure):
+        raise ValueError(f"the structure is not closed under shifts: {structure}")
+    n = len(structure)
+    t = raw_theta(structure, np.zeros(n), offsets)
+    A = np.column_stack([raw_theta(structure, e, offsets, level=False) for e in np.eye(n)])
+    return A, t
 
 
 def least_squares(structure: Structure, records: Record | list[Record]) -> tuple[np.ndarray, float]:
