@@ -310,7 +310,8 @@ def test_monte_carlo_static_bands_say_when_draws_reach_no_equilibrium():
     m = gb.els(gb.Structure(["y(k-1)", "u(k-1)"]), rec, noise=0).model
     unc = gb.ls_uncertainty(m, rec)  # a pole near 1 with a wide interval: some draws have none below 1
     with pytest.warns(gb.UncertaintyWarning, match="static_curve_band: up to .* reach no equilibrium"):
-        band = gb.static_curve_band(unc, [0.5, 1.0], method="monte-carlo", n_samples=400, seed=1)
+        # about 0.3 % of the draws reach a pole above 1: 2000 draws hold some whatever basis they are drawn in
+        band = gb.static_curve_band(unc, [0.5, 1.0], method="monte-carlo", n_samples=2000, seed=1)
     assert np.all(band.undefined > 0)
     with pytest.warns(gb.UncertaintyWarning, match="operating_curve: up to .* reach no equilibrium"):
         oc = gb.operating_curve(m, [0.5, 1.0], uncertainty=unc, seed=1)

@@ -118,3 +118,45 @@ def test_shift_map_is_raw_theta_and_its_inverse_is_the_negated_offsets():
     np.testing.assert_allclose(Ainv @ (A @ th + t) + tinv, th, atol=1e-12)
     with pytest.raises(ValueError, match="not closed"):
         shift_map(TRUE, off)
+
+
+# -- 2. Monte Carlo draws -----------------------------------------------------------------------------------
+
+def _ls(data: gb.Dataset) -> gb.ParameterUncertainty:
+    return gb.ls_uncertainty(gb.els(CLOSED, data.ident, noise=0).model, data.ident)
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(transforms)
+def test_monte_carlo_band_draws_the_same_models_at_every_offset_and_unit(tr):
+    su, du, sy, dy = tr
+    assume((su, sy) != (1.0, 1.0) or abs(du) + abs(dy) > 1.0)
+    ou, oy = du * su * DATA.ident.u.std(), dy * sy * DATA.ident.y.std()
+    moved = _moved(DATA, su, ou, sy, oy)
+    a = gb.simulation_band(_ls(DATA), DATA.valid, method="monte-carlo", n_samples=50, seed=3)
+    b = gb.simulation_band(_ls(moved), moved.valid, method="monte-carlo", n_samples=50, seed=3)
+    # the quantiles of the same 50 runs, mapped back: one seed draws the same models
+    tol = 1e-7 * DATA.valid.y.std()
+    np.testing.assert_allclose((b.low - oy) / sy, a.low, rtol=0, atol=tol)
+    np.testing.assert_allclose((b.high - oy) / sy, a.high, rtol=0, atol=tol)
+    np.testing.assert_allclose(b.std / sy, a.std, rtol=0, atol=tol)
+
+
+def test_scaled_units_draw_the_same_models_for_an_open_structure():
+    # a unit's scale maps any structure's parameters linearly (diagonally): the draws follow it too
+    st_ = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "u(k-2)^2"])
+    a_unc = gb.ls_uncertainty(gb.els(st_, DATA.ident, noise=0).model, DATA.ident)
+    moved = _moved(DATA, 1000.0, 0.0, 0.3, 0.0)
+    b_unc = gb.ls_uncertainty(gb.els(st_, moved.ident, noise=0).model, moved.ident)
+    a = gb.simulation_band(a_unc, DATA.valid, method="monte-carlo", n_samples=40, seed=1)
+    b = gb.simulation_band(b_unc, moved.valid, method="monte-carlo", n_samples=40, seed=1)
+    np.testing.assert_allclose(b.low / 0.3, a.low, rtol=0, atol=1e-9 * DATA.valid.y.std())
+    np.testing.assert_allclose(b.high / 0.3, a.high, rtol=0, atol=1e-9 * DATA.valid.y.std())
+
+
+def test_static_curve_band_monte_carlo_follows_the_offsets():
+    moved = _moved(DATA, 1.0, 50.0, 1.0, -20.0)
+    a = gb.static_curve_band(_ls(DATA), UB, method="monte-carlo", n_samples=200, seed=2)
+    b = gb.static_curve_band(_ls(moved), UB + 50.0, method="monte-carlo", n_samples=200, seed=2)
+    np.testing.assert_allclose(b.ybar_low + 20.0, a.ybar_low, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(b.ybar_high + 20.0, a.ybar_high, rtol=0, atol=1e-7)

@@ -144,7 +144,9 @@ class ParameterUncertainty:
     static_sigma2 : float
         Variance of the static points' ȳ used (PE and SE), output units²; NaN otherwise.
     cov_factor : ndarray, shape (k, n_terms), optional
-        F with ``cov`` = FᵀF, in the units of θ, as the estimators' scaled coordinates give it.
+        F with ``cov`` = FᵀF, in the units of θ, as the estimators' scaled coordinates give it, stored as
+        its triangular factor in the terms' order by degree (the same draws of the same models at every
+        offset and unit of the signals: :func:`_canonical_factor`; k is then at most n_terms).
         Contractions gᵀ cov g (bands, cluster variances) are taken as ‖F g‖²: ``cov`` itself holds
         its small directions only to eps × its largest entry, which lost 1 % of a static band's
         std at an input offset of 1e4 ± 10 (cond of the scaled regressors 3e7). None (a covariance
@@ -202,7 +204,7 @@ class ParameterUncertainty:
             if F.ndim != 2 or F.shape[1] != n:
                 raise ValueError(f"cov_factor must have shape (k, {n}), got {F.shape}")
             _check_factor(F, cov, sd)
-            object.__setattr__(self, "cov_factor", F)
+            object.__setattr__(self, "cov_factor", frozen(_canonical_factor(F, self.model.structure)))
 
     def contract(self, G: np.ndarray) -> np.ndarray:
         """The variances gᵀ cov g of the linear functions g of θ in the rows of ``G`` (shape (M, n_terms)),
@@ -333,6 +335,31 @@ def _check_factor(F: np.ndarray, cov: np.ndarray, sd: np.ndarray) -> None:
         raise ValueError(f"cov_factor F is not a factor of cov: (FᵀF)[{i}, {j}] = {FtF[i, j]:.6g} against cov[{i}, {j}] "
                          f"= {cov[i, j]:.6g} (a covariance changed without its factor?); give cov_factor=None with a "
                          "covariance of your own")
+
+
+def _canonical_factor(F: np.ndarray, structure) -> np.ndarray:
+    """The one factor R of cov = FᵀF that Monte Carlo draws θ̂ + zR take, whoever computed F.
+
+    Each estimator's F comes from its own coordinates, so one seed drew other models when u or y moved
+    by an offset or changed unit. Units map θ' = Aθ + t: A diagonal for a unit's scale, and for an offset
+    of a structure closed under shifts (:func:`~graybox.selection._centring.shift_map`) A mixes a term only
+    into its divisors. With the terms ordered by degree, highest first, every such A is lower triangular
+    with a positive diagonal, and so is the step from one Cholesky factor to the other: R, upper triangular
+    in that order with a nonnegative diagonal (QR of F, never forming cov: F's accuracy is kept), moves to
+    R Aᵀ, and θ̂' + zRAᵀ is the same model as θ̂ + zR. Idempotent to the bit (a triangular F is its own R).
+    """
+    k, n = F.shape
+    if k == 0 or n == 0:
+        return F
+    order = sorted(range(n), key=lambda j: -structure[j].degree)  # stable: ties keep the structure's order
+    P = F[:, order]
+    if k <= n and np.array_equal(P, np.triu(P)) and np.all(np.diag(P) >= 0):
+        return F  # canonical already (a file read back): kept to the bit
+    R = np.linalg.qr(P, mode="r")
+    sign = np.where(np.diag(R) < 0, -1.0, 1.0)
+    out = np.empty_like(R)
+    out[:, order] = R * sign[:, None] + 0.0  # + 0.0: no negative zeros below the diagonal
+    return out
 
 
 def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
