@@ -21,7 +21,8 @@ follow the record's slow drift (what the SE front does on the bundled plant; BEN
   (:mod:`._local_models`); a start outside it is pulled in by shrinking its output feedback;
 - ``ridge``: regularisation towards least squares, γ · mean_j (s_j (θ_j − θ_LS,j))² added to J_S
   (s_j the RMS of regressor j: each term counts the change of its contribution to ŷ, in output
-  units, so γ is dimensionless and the cost independent of units). The drift-following fits
+  units, so γ is dimensionless and the cost independent of units; for a structure closed under shifts
+  θ_j and s_j are those of the centred signals, so it does not depend on offsets either). The drift-following fits
   move θ far along directions the one-step fit pins down, and even a small γ keeps the fit in
   the least-squares basin. The default γ = 1 is the one setting that was never worse than least
   squares on the records nothing was fitted on (three structures of the plant, the buck
@@ -174,7 +175,8 @@ def output_error(
     ridge : float >= 0
         Regularisation towards least squares (dimensionless γ): γ · mean_j (s_j (θ_j − θ_LS,j))²
         is added to J_S, s_j the RMS of regressor j (each term: the change of that term's
-        contribution to ŷ, output units). Default 1 (see the module docstring for why); 0: pure
+        contribution to ŷ, output units; for a structure closed under shifts, of the centred signals'
+        terms, the same at every offset). Default 1 (see the module docstring for why); 0: pure
         output error, min J_S alone.
     choose_on : Record or sequence of Record, optional
         A choosing record, not used for fitting: the iterate (over every start, solver and step)

@@ -119,7 +119,9 @@ class SEProblem:
     ridge : float >= 0
         Regularisation towards least squares: γ · mean_j (s_j (θ_j − θ_LS,j))² is added to the
         cost, with s_j the RMS of regressor j (so each term is a change of that term's contribution
-        to ŷ, in output units, and the cost stays independent of units). 0: none.
+        to ŷ, in output units, and the cost stays independent of units). For a structure closed under
+        shifts θ_j and s_j are those of the centred signals (:meth:`_centre_basis`), so the ridge is also
+        the same wherever the units' zeros are. 0: none.
     scored_only : bool
         A problem whose records only score θ's fitted elsewhere (a choosing record's J_S): no
         more regression rows than parameters are needed.
@@ -1468,7 +1470,8 @@ def se_pareto(
         paper's problem; a :class:`~graybox.SlowModeWarning` then names members that slow.
     ridge : float >= 0
         Regularisation towards least squares (both methods): γ · mean_j (s_j (θ_j − θ_LS,j))² is
-        added to every member's cost, s_j the RMS of regressor j (see ``SEProblem``). 0
+        added to every member's cost, s_j the RMS of regressor j (of the centred one for a structure
+        closed under shifts: see ``SEProblem``). 0
         (default): none, the paper's problem; ``extra["cost"]`` then holds the regularised cost.
     ubar : ndarray, optional
         Where to sample a StaticCurve (shape (K,)) or StaticSurface (shape (K, m)) given as
