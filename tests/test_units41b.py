@@ -109,6 +109,20 @@ def test_output_error_ridge_is_invariant_at_a_far_offset():
     _same_run(_run_back(fit.model, moved, 1.0, 500.0), _run_back(base.model, DATA, 1.0, 0.0), 1e-6)
 
 
+def test_select_graybox_centred_free_run_rows_do_not_depend_on_offsets():
+    # centre=True closes every structure, so its SE and output-error rows are closed-structure fits: their
+    # scores moved by 7.5e-5 (gray, gradient SE) and 3.4e-2 (black, output error) at these offsets
+    cand = gb.Candidates(ny=2, nu=2, degree=2)
+    moved = _moved(DATA, 1.0, 30 * DATA.ident.u.std(), 1.0, 10 * DATA.ident.y.std())
+    kw = {"sizes": [2, 3], "sources": ["frols"], "centre": True}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # slow-mode and range notes: the same at both offsets
+        for extra in ({"estimator": ["se-gradient", "oe"]}, {"estimator": ["oe"], "band": np.inf}):
+            a, b = gb.select_graybox(cand, DATA, **kw, **extra), gb.select_graybox(cand, moved, **kw, **extra)
+            assert list(a.table.index) == list(b.table.index) and a.chosen.name == b.chosen.name
+            np.testing.assert_allclose(b.table["JS_valid"], a.table["JS_valid"], rtol=1e-9)
+
+
 def test_shift_map_is_raw_theta_and_its_inverse_is_the_negated_offsets():
     rng = np.random.default_rng(0)
     off = {"y": 3.0, "u": -7.0}
