@@ -202,7 +202,8 @@ class SEProblem:
         self.offsets, self.z_shift = off, t
         self.z_map = A / s_c  # θ = z_map @ z + z_shift
         self.z_inv = s_c[:, None] * Ainv  # z = z_inv @ (θ − z_shift)
-        self.z_psi, self.z_target = psi_c / s_c, target_c  # ψ θ − y = z_psi z − z_target, without cancellation
+        psi_c /= s_c  # in place: one more N × n array, not two
+        self.z_psi, self.z_target = psi_c, target_c  # ψ θ − y = z_psi z − z_target, without cancellation
 
     def to_z(self, thetas: np.ndarray) -> np.ndarray:
         """The optimisers' coordinates of θ (shape (n,) or (P, n)): see :meth:`_centre_basis`."""
