@@ -146,7 +146,7 @@ class ParameterUncertainty:
     cov_factor : ndarray, shape (k, n_terms), optional
         F with ``cov`` = FᵀF, in the units of θ, as the estimators' scaled coordinates give it, stored as
         its triangular factor in the terms' order by degree (the same draws of the same models at every
-        offset and unit of the signals: :func:`_canonical_factor`; k is then at most n_terms).
+        offset and unit of the signals, where those map θ linearly; k is then at most n_terms).
         Contractions gᵀ cov g (bands, cluster variances) are taken as ‖F g‖²: ``cov`` itself holds
         its small directions only to eps × its largest entry, which lost 1 % of a static band's
         std at an input offset of 1e4 ± 10 (cond of the scaled regressors 3e7). None (a covariance
