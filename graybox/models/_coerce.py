@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core._records import Dataset, Record, StaticPoints, frame_inputs
+from ..core._records import Dataset, Record, StaticPoints, check_same_units, frame_inputs
 from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
 from ..core._terms import Structure, Term
 from ..core._validation import as_1d_finite, float_array
@@ -169,10 +169,24 @@ def static_info(static: object, data: object, *, needed_by: str | None = None, n
     if static is not None and not isinstance(static, kinds):
         what = "StaticPoints, a StaticCurve, a StaticSurface or None" if curves else "StaticPoints or None"
         raise TypeError(f"{name} must be {what}; got {type(static).__name__}")
+    if isinstance(static, StaticPoints):  # given beside the records (a Dataset's own points are checked by it)
+        for r in _records_in(data):
+            check_same_units(r.units, f"{r.name!r} has", static, "the records and the static points of one "
+                             "identification must be in the same units (convert one of them)")
     out = static if static is not None else (data.static if isinstance(data, Dataset) else None)
     if out is None and needed_by is not None:
         raise ValueError(f"{needed_by} needs static points: pass {name}= or a Dataset with static points")
     return out
+
+
+def _records_in(data: object) -> list:
+    """The records (Record, DaskRecord) an entry's ``data`` holds, for checking given static points against them:
+    coerced nothing, refused nothing (the entry coerces its data itself)."""
+    if isinstance(data, Dataset):
+        return [r for r in (data.ident, data.valid) if r is not None]
+    items = data if isinstance(data, (list, tuple)) else [data]
+    return [r for r in items if not isinstance(r, StaticPoints) and isinstance(getattr(r, "units", None), tuple)
+            and hasattr(r, "name")]
 
 
 def static_points(static: object, data: object, *, ubar: object = None, needed_by: str | None = None,
