@@ -524,6 +524,7 @@ def ls_uncertainty(
     """
     model = as_model(model)
     level = _check_level(level)
+    _check_meets(model, data)
     recs = records_of(data)
     st, ns = model.structure, model.noise_structure
     n, ne = len(st), len(ns)
@@ -621,6 +622,17 @@ def _pseudo_linear_cov(A: np.ndarray, G: np.ndarray, sigma2: float, what: str) -
 # CLS
 # --------------------------------------------------------------------------------------------
 
+def _check_meets(model: Model, data: object, static: object = None) -> None:
+    """``ValueError`` when ``data`` (its records, and the static points given or a Dataset's) are sampled at
+    another period than the model was identified at or are in other units (:meth:`Model.check_record`): a
+    covariance of θ judged on data θ does not hold for is no uncertainty of the model."""
+    for r in records_of(data):
+        model.check_record(r)
+    sp = static if static is not None else data.static if isinstance(data, Dataset) else None
+    if isinstance(sp, StaticPoints):
+        model.check_record(sp)
+
+
 def _process_model(model: object, who: str) -> Model:
     """The model of a CLS, PE or SE covariance: those estimates have no MA part, so one that carries it (an
     ELS estimate) is refused here, naming the way out, not deep in :class:`ParameterUncertainty`'s own check."""
@@ -679,6 +691,7 @@ def cls_uncertainty(
     """
     model = _process_model(model, "cls_uncertainty")
     level = _check_level(level)
+    _check_meets(model, data, static)
     st = _process_structure(model)
     recs = records_of(data)
     d = _dynamic(st, recs)
@@ -753,6 +766,7 @@ def pe_uncertainty(
     m = _process_model(model, "pe_uncertainty")
     lam = _lambda_arg(model, lambda1, "pe_uncertainty")
     level = _check_level(level)
+    _check_meets(m, data, static)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", StaticRangeWarning)  # the estimator has said it
         st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(m, data, static, constraints, weights, ubar, reference)
@@ -874,6 +888,7 @@ def se_uncertainty(
     m = _process_model(model, "se_uncertainty")
     lam = _lambda_arg(model, lambda1, "se_uncertainty")
     level = _check_level(level)
+    _check_meets(m, data, static)
     recs = records_of(data)
     sp = static_points(static, data, needed_by=None if lam == 1 else "se_uncertainty", takes_ubar=False)
     if sp is None:  # λ1 = 1 ignores the static points; SEProblem still wants some, of the records' inputs
