@@ -29,7 +29,7 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 from scipy.signal import lfilter
 
-from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, frame_inputs, outside_range,
+from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
 from ..core._validation import (check_choice, check_fields, check_int, check_per_point, check_real, check_seed, frozen,
@@ -539,6 +539,11 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
         recs, static = [], data
     else:
         recs, static = as_records(data), None
+    # the range is read in the data's units: data in others than the model's say nothing of its range (the
+    # period is checked by check_Ts, and only when the model's own is taken)
+    for r in [*recs, *([] if static is None else [static])]:
+        check_same_units(model.units, f"model {model.name!r} was identified with", r,
+                         "its parameters hold in those units only; convert the data")
     # each input by name, in the model's order (the data's columns may be in another, and a record
     # may hold inputs the model does not use, one input included)
     names = model.input_names
