@@ -51,7 +51,7 @@ class SimulationBand:
         band, and said by an :class:`UncertaintyWarning`); 0 for the delta method.
     model_name, record_name : str
     units : tuple of str
-        The record's (input, output) units.
+        The (input, output) units: the record's, the model's where the record names none.
     """
 
     t: np.ndarray
@@ -166,7 +166,9 @@ def simulation_band(
     st, th = m.structure, m.theta
     L = st.max_lag
     rec.require_length(L)
-    yhat = m.simulate(rec, on_diverge="nan")
+    yhat = m.simulate(rec, on_diverge="nan")  # refuses a record at another period or in other units
+    # the band is in the model's units where the record names none (where it names one, they agree)
+    units = (rec.units[0] or m.units[0], rec.units[1] or m.units[1])
     if not np.all(np.isfinite(yhat)):
         k = int(np.flatnonzero(~np.isfinite(yhat))[0])
         raise ValueError(f"simulation_band: the estimate's free run diverges on {rec.name} at sample {k}; there is no "
@@ -181,7 +183,7 @@ def simulation_band(
         std = np.sqrt(var)
         h = uncertainty.quantile * std  # Student's t, as the parameters' intervals: σ² is estimated
         return SimulationBand(rec.t, rec.y, yhat, yhat - h, yhat + h, std, uncertainty.level, "delta", 0, 0.0,
-                              m.name, rec.name, rec.units)
+                              m.name, rec.name, units)
     rng = np.random.default_rng(seed)
     Y = simulate_many(st, theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof,
                                       factor=uncertainty.cov_factor), rec)
@@ -200,4 +202,4 @@ def simulation_band(
     # spread about the estimate's run: runs that agree give exactly 0, not the round-off of a mean at 2e5 Pa
     std = (Y[ok] - yhat).std(axis=0)
     return SimulationBand(rec.t, rec.y, yhat, low, high, std, uncertainty.level, "monte-carlo",
-                          n_samples, diverged, m.name, rec.name, rec.units)
+                          n_samples, diverged, m.name, rec.name, units)
