@@ -345,9 +345,9 @@ def static_partials(p: np.ndarray, A: np.ndarray, thetas: np.ndarray, ubar: np.n
     Returns
     -------
     Fy : ndarray, shape (K, M)
-        Dimensionless.
+        Dimensionless; NaN where Y is not finite (no equilibrium there).
     Fu : ndarray, shape (K, M, m) or None
-        Output units per unit of each input.
+        Output units per unit of each input; NaN where Y is not finite.
     """
     thetas, ub, Y = np.atleast_2d(thetas), np.asarray(ubar, float), np.atleast_2d(Y)
     G = input_monomials_of(A, ub)
@@ -366,6 +366,10 @@ def static_partials(p: np.ndarray, A: np.ndarray, thetas: np.ndarray, ubar: np.n
             C = np.where(th != 0.0, th * A[t] * _powers(Y, p[t])[..., None] * _lowered(A, ub)[None, :, t, :], 0.0)
             for k in range(t.size):
                 Fu = Fu + C[..., k, :]
+    bad = ~np.isfinite(Y)
+    if bad.any():  # NaN⁰ = 1: a term without y, or linear in it, leaves a partial finite where no equilibrium is
+        Fy = np.where(bad, np.nan, Fy)
+        Fu = None if Fu is None else np.where(bad[..., None], np.nan, Fu)
     return Fy, Fu
 
 
@@ -385,7 +389,7 @@ def static_theta_gradient_of(p: np.ndarray, A: np.ndarray, theta: np.ndarray, ub
 
     ``theta`` (n,), ``ubar`` (M, m), ``ybar`` (M,); ``p``, ``A`` from :func:`static_powers`. At a
     reached equilibrium this is the gradient of the static output (the basin does not change under a
-    small step).
+    small step). NaN where ȳ is not finite (no equilibrium there).
     """
     yb = np.asarray(ybar, float)
     Fy = static_partials(p, A, np.asarray(theta, float)[None, :], ubar, yb[None, :], with_inputs=False)[0][0]
@@ -398,7 +402,7 @@ def static_gain_gradient(p: np.ndarray, A: np.ndarray, theta: np.ndarray, ubar: 
     """∂(∂ȳ/∂ū_i)/∂θ_t along the static map, through ȳ(θ) too, shape (M, m, n).
 
     ``theta`` (n,), ``ubar`` (M, m), ``ybar`` (M,) equilibria, ``dy`` (M, n) = ∂ȳ/∂θ there
-    (:func:`static_theta_gradient_of`); ``p``, ``A`` from :func:`static_powers`.
+    (:func:`static_theta_gradient_of`); ``p``, ``A`` from :func:`static_powers`. NaN where ȳ is not finite.
     """
     ub, yb, theta = np.asarray(ubar, float), np.asarray(ybar, float), np.asarray(theta, float)
     G, L = input_monomials_of(A, ub), _lowered(A, ub)  # (M, n), (M, n, m)
@@ -410,4 +414,6 @@ def static_gain_gradient(p: np.ndarray, A: np.ndarray, theta: np.ndarray, ubar: 
         Fy, Fu = dFy @ theta - 1.0, dFu @ theta
         dFu_tot = dFu + Fuy[:, :, None] * dy[:, None, :]
         dFy_tot = (dFy + Fyy[:, None] * dy)[:, None, :]
-        return -(dFu_tot * Fy[:, None, None] - Fu[:, :, None] * dFy_tot) / (Fy**2)[:, None, None]
+        out = -(dFu_tot * Fy[:, None, None] - Fu[:, :, None] * dFy_tot) / (Fy**2)[:, None, None]
+    # no equilibrium, no gradient (NaN⁰ = 1 leaves the partials of terms without y finite)
+    return np.where(np.isfinite(yb)[:, None, None], out, np.nan)
