@@ -175,3 +175,18 @@ def test_partials_are_the_local_models_lag_sums_and_the_maps_derivatives():
         fu = [(_F(th, p, A, yb[j], ub[j] + h * e) - _F(th, p, A, yb[j], ub[j] - h * e)) / (2 * h) for e in np.eye(2)]
         np.testing.assert_allclose(Fy[0, j], fy, rtol=1e-7)
         np.testing.assert_allclose(Fu[0, j], fu, rtol=1e-6, atol=1e-8)
+
+
+# -- 6. records of one fit where only some name the units: the model said none --------------------------------
+
+def test_a_model_carries_the_units_any_of_its_records_or_static_points_name(data):
+    r0, r1 = _record(0, units=("", "")), _record(1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert gb.els(ST, [r0, r1]).model.units == UNITS
+        assert gb.frols(gb.Candidates(2, 2, degree=2), [r0, r1], n_terms=4).model.units == UNITS
+        assert gb.pe_pareto(ST, [r0, r0.slice(0, 300, "part")], static=_static(), lambdas=[0.5]).units == UNITS
+        assert gb.cls(ST, r0, _static()).model.units == UNITS
+        assert gb.output_error(ST, [r0, r1], n_starts=1).model.units == UNITS
+    with pytest.raises(ValueError, match="input unit 'rpm' but .* has 'rad/s'"):
+        gb.output_error(ST, [r0, r1], n_starts=1, choose_on=_record(2, units=OTHER))
