@@ -398,11 +398,23 @@ def check_compatible(a: object, b: object) -> None:
         check_same_period(a, b)
 
 
-def carried_from(record: object) -> dict:
-    """What a model (or a result handing out models) carries from the record it was fitted on: the inputs'
-    names, the sampling period and the units, as keyword arguments (``Model(st, θ, **carried_from(rec))``)."""
-    return {"input_names": record.input_names, "Ts": record.Ts,  # type: ignore[attr-defined]
-            "units": getattr(record, "units", ("", ""))}
+def said_units(records: object, static: object = None) -> tuple[str, str]:
+    """The units a fit's records (a Record, a DaskRecord or a sequence of them) and static points say together:
+    per slot the first named, as one record may name a unit the others leave empty (where two name one they agree:
+    :func:`check_compatible`)."""
+    said = [getattr(r, "units", ("", "")) for r in (records if isinstance(records, (list, tuple)) else [records])]
+    said += [static.units] if isinstance(static, StaticPoints) else []
+    return (next((u[0] for u in said if u[0]), ""), next((u[1] for u in said if u[1]), ""))
+
+
+def carried_from(records: object, static: object = None) -> dict:
+    """What a model (or a result handing out models) carries from the records it was fitted on (a Record, a
+    DaskRecord or a sequence of them; ``static``: the static points fitted too, if any): the inputs' names and the
+    sampling period (the first record's: all share them) and the units any of them name (:func:`said_units`), as
+    keyword arguments (``Model(st, θ, **carried_from(recs))``)."""
+    first = records[0] if isinstance(records, (list, tuple)) else records
+    return {"input_names": first.input_names, "Ts": first.Ts,  # type: ignore[attr-defined]
+            "units": said_units(records, static)}
 
 
 def check_same_units(units: tuple[str, str], what: str, other: object, advice: str) -> None:
@@ -427,11 +439,14 @@ def check_same_period(a: Record, b: Record) -> None:
     check_period(a.Ts, f"{a.name!r} is sampled", b)
 
 
-def check_alike(a: Record, b: Record) -> None:
-    """``ValueError`` naming both unless a further record ``b`` (one to choose or test on) can be read as ``a`` is:
-    the same sampling period and, where both name them, the same units (inputs are read by name)."""
-    check_same_period(a, b)
-    check_same_units(a.units, f"{a.name!r} has", b, "convert one of them: a model holds in one set of units")
+def check_alike(a: Record | Sequence[Record], b: Record) -> None:
+    """``ValueError`` naming both unless a further record ``b`` (one to choose or test on) can be read as the fitting
+    record(s) ``a`` are: the same sampling period and, where both name them, the same units (those any of ``a``
+    names: :func:`said_units`; inputs are read by name)."""
+    recs = list(a) if isinstance(a, (list, tuple)) else [a]
+    check_same_period(recs[0], b)
+    for r in recs:  # the first that names a unit b contradicts is the one named
+        check_same_units(r.units, f"{r.name!r} has", b, "convert one of them: a model holds in one set of units")
 
 
 def check_period(Ts: float | None, what: str, record: Record) -> None:
@@ -539,7 +554,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "check_same_units", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_same_units", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

@@ -540,6 +540,6 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
     feasible = bool(g <= band * (1 + 1e-12))
     name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
     # the records' input order (not the structure's name order): an input array's columns as the user has them
-    model = Model(problem.structure, th, name=name, **carried_from(problem.records[0]))
+    model = Model(problem.structure, th, name=name, **carried_from(problem.records, problem.static))
     return DSFResult(model, f, g, band, feasible, start, f0, g0, it, message,
                      float("nan") if problem.margin is None else problem.margin)

@@ -475,7 +475,7 @@ def _iterate(fit: _ExtendedFit, xi: np.ndarray, theta: np.ndarray, max_iter: int
 def _result(reg: _Regression, theta: np.ndarray, c: np.ndarray, n_iter: int, conv: bool, hist: list[float],
             x: np.ndarray, theta_ls: np.ndarray, name: str, n_direct: int = 0) -> ELSResult:
     """The ELSResult: the model with its MA part and the residuals per record."""
-    m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name, **carried_from(reg.recs[0]))
+    m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name, **carried_from(reg.recs))
     res = tuple(frozen(a) for a in reg.per_record(x))
     return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
 

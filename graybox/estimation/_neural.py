@@ -1158,7 +1158,7 @@ def neural_narx(
     last = stages[-1]
     W1, b1, w2, b2 = _unpack(theta, hidden, n_in)
     model = NeuralModel(W1, b1, w2, b2, ny, nu, ne, u_off, u_sc, y_off, y_sc, name,
-                        **carried_from(recs[0]))
+                        **carried_from(recs))
     r_pe = pe_residual(theta)
     r_sim = sim(theta, sig, False)[0]
     return NeuralFit(

@@ -225,7 +225,7 @@ def output_error(
     if choose_on is not None:  # checked once here, not again by a refit inside the margin
         crec = choosing_records(choose_on)
         for c in crec:
-            check_alike(rec[0], c)
+            check_alike(rec, c)
         if any(same_record(c, r) for c in crec for r in rec):
             raise ValueError("choose_on: a choosing record is a fitting record; choose on data the fit did not see "
                              "(e.g. data.valid)")
@@ -336,7 +336,7 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
         raise ValueError(f"no start of the output-error fit gave a model: {reasons}. Try theta0, more starts, a "
                          "smaller margin or another structure")
     th = best["theta"]
-    model = Model(st, th, name=name, **carried_from(rec[0]))
+    model = Model(st, th, name=name, **carried_from(rec))
     return OEResult(
         model=model,
         JS=float(problem.js(th[None])[0]),

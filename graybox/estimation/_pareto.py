@@ -206,7 +206,7 @@ class ParetoSet:
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
         return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails,
-                   **carried_from(recs[0]))
+                   **carried_from(recs, static))
 
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` was sampled at another period than the set was fitted at, or is in

@@ -844,8 +844,9 @@ def cls(
     theta = z / d.s
     for c in cons:
         c.after_solve(theta, ctx)
-    model = Model(st, theta, name=name, **carried_from(recs[0]))  # the records' input order, period and units
-    return CLSResult(model, static_info(static, data, curves=True),
+    info = static_info(static, data, curves=True)
+    model = Model(st, theta, name=name, **carried_from(recs, info))  # the records' input order, period and units
+    return CLSResult(model, info,
                      tuple(c.describe() for c in cons), solver)
 
 

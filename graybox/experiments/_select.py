@@ -542,7 +542,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     named = _named(idents, "identification") + _named(valids, "validation") + _named(tests, "test")
     for name, rec in named:
         # said now, not after the structure search and the fits
-        check_alike(ident, rec)
+        check_alike(list(idents), rec)
         require_inputs(process.inputs, rec.input_names, "but the record's inputs are",
                        prefix=f"the {name} record {rec.name!r}: ")
         if len(rec) <= L + 1:  # each is fitted, chosen or scored on alone (a Record's own check says "record")
@@ -969,7 +969,7 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     """The chosen member as a Decision: J_S on the choosing data, J_SF of the refitted member."""
     js_choose = res["blocks"] @ res["weights"]
     if estimator in _BLACK_BOX_FITS:
-        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})", **carried_from(plan.ident[0]))
+        model = gb.Model(st, res["thetas"][0], name=f"{estimator} ({row.name})", **carried_from(list(plan.ident), plan.static))
         return gb.Decision(model, 0, float("nan"), float(js_choose[0]), float(res["jsf_full"][0]), "min J_S", True,
                            float(js_choose[0]))
     thetas = res["thetas"]
@@ -978,7 +978,7 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
     th = np.where(keep[:, None], thetas, 0.0)
     scored = gb.ParetoSet(st, th, res["lambdas"], np.full(len(th), np.nan), js_choose, res["jsf_full"],
                           f"{estimator}, J_S on the choosing data", {}, failures,
-                          **carried_from(plan.ident[0]))
+                          **carried_from(list(plan.ident), plan.static))
     name = f"{estimator} ({row.name})"  # as model_of names it, not after the internal front
     if in_band:
         d = gb.decide_dsf(scored, band=plan.band, fallback="min_jsf")

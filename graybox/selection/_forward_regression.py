@@ -815,7 +815,7 @@ def frols(
         search=search,
         subsets=() if plan is None else tuple(Structure([process[j] for j in S]) for S in plan.subsets),
         subset_rss=() if plan is None else plan.rss,
-        **carried_from(as_gram_records(data)[0]),
+        **carried_from(as_gram_records(data)),
     )
 
 

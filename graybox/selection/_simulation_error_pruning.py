@@ -360,7 +360,7 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     # the closure's free run on the centred signals, from the same samples and over the same rows as the search's
     L = candidates.process.max_lag
     recs = centred if isinstance(centred, list) else [centred]
-    model = Model(closed, theta, **carried_from(recs[0]))
+    model = Model(closed, theta, **carried_from(recs))
     err = np.concatenate([model.simulate(r, r.y[:L])[L:] - r.y[L:] for r in recs])
     stop = _centring.stop_note(res.stop, len(res.structure), len(full), offsets, dropped)
     return replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
@@ -572,4 +572,4 @@ def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
     return SEMPResult(Structure([opt.process[j] for j in current]), frozen(best["_theta"][current]),
                       float(best["score"]), path.drop(columns=["_set", "_theta"]), fwd, opt.crit,
                       f"{why}: step {int(best['step'])} of the path; search: {stop}", sc.n_rows,
-                      **carried_from(sc.records[0]))
+                      **carried_from(sc.records))
