@@ -190,3 +190,14 @@ def test_a_model_carries_the_units_any_of_its_records_or_static_points_name(data
         assert gb.output_error(ST, [r0, r1], n_starts=1).model.units == UNITS
     with pytest.raises(ValueError, match="input unit 'rpm' but .* has 'rad/s'"):
         gb.output_error(ST, [r0, r1], n_starts=1, choose_on=_record(2, units=OTHER))
+
+
+# -- 7. a Pareto set's check_record took no static points (AttributeError), as a Model's does ---------------
+
+def test_a_pareto_sets_check_record_takes_static_points_as_a_models_does(data):
+    ps = gb.pe_pareto(ST, data, lambdas=[0.5])
+    ps.check_record(_static())
+    ps.check_record(_static(("", "")))
+    with pytest.raises(ValueError, match="input unit 'rpm' but 'points in rad/s' has 'rad/s'"):
+        ps.check_record(_static(OTHER))
+    ps.member_model(0).check_record(_static())  # as the member's model
