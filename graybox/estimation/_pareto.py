@@ -209,9 +209,10 @@ class ParetoSet:
                    **carried_from(recs, static))
 
     def check_record(self, record: Record) -> None:
-        """``ValueError`` when ``record`` was sampled at another period than the set was fitted at, or is in
-        other units where both name them (as :meth:`graybox.Model.check_record`)."""
-        check_period(self.Ts, "the Pareto set was fitted on records sampled", record)
+        """``ValueError`` when ``record`` (or static points) was sampled at another period than the set was fitted
+        at, or is in other units where both name them (as :meth:`graybox.Model.check_record`)."""
+        if isinstance(record, Record):  # static points have no period
+            check_period(self.Ts, "the Pareto set was fitted on records sampled", record)
         check_same_units(self.units, "the Pareto set was fitted with", record,
                          "its members' parameters hold in those units only; convert the data")
 
