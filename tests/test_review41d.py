@@ -201,3 +201,22 @@ def test_a_pareto_sets_check_record_takes_static_points_as_a_models_does(data):
     with pytest.raises(ValueError, match="input unit 'rpm' but 'points in rad/s' has 'rad/s'"):
         ps.check_record(_static(OTHER))
     ps.member_model(0).check_record(_static())  # as the member's model
+
+
+# -- 8. the control bridge's local models lost the model's units (their gains are in them) --------------------
+
+def test_local_models_and_operating_curves_keep_the_models_units(fits, tmp_path):
+    m = fits["cls"].model
+    lm = gb.local_model(m, 0.5)
+    assert lm.units == UNITS
+    oc = gb.operating_curve(m, [0.3, 0.5])
+    assert oc.units == UNITS and all(x.units == UNITS for x in oc.local_models)
+    for v in (lm, oc):
+        path = gb.save(v, tmp_path / f"{type(v).__name__}.json")
+        assert gb.read_header(path)["units"] == UNITS
+        assert gb.load(path).units == UNITS
+    assert gb.local_model(gb.Model(ST, m.theta), 0.5, Ts=0.1).units == ("", "")  # a model that says none
+    with pytest.raises(ValueError, match="not of one model"):
+        gb.OperatingCurve(**{f: getattr(oc, f) for f in oc.__dataclass_fields__}
+                          | {"local_models": (oc.local_models[0],
+                                             gb.local_model(gb.Model(ST, m.theta, Ts=m.Ts, units=OTHER), 0.5))})
