@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -217,6 +218,6 @@ def test_local_models_and_operating_curves_keep_the_models_units(fits, tmp_path)
         assert gb.load(path).units == UNITS
     assert gb.local_model(gb.Model(ST, m.theta), 0.5, Ts=0.1).units == ("", "")  # a model that says none
     with pytest.raises(ValueError, match="not of one model"):
-        gb.OperatingCurve(**{f: getattr(oc, f) for f in oc.__dataclass_fields__}
+        gb.OperatingCurve(**{f.name: getattr(oc, f.name) for f in dataclasses.fields(oc)}
                           | {"local_models": (oc.local_models[0],
                                              gb.local_model(gb.Model(ST, m.theta, Ts=m.Ts, units=OTHER), 0.5))})

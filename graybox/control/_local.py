@@ -29,7 +29,7 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 from scipy.signal import lfilter
 
-from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, frame_inputs, outside_range,
+from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, check_units, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
 from ..core._validation import (check_choice, check_fields, check_int, check_per_point, check_real, check_seed, frozen,
@@ -166,6 +166,9 @@ class LocalModel:
     input_names : tuple of str
     name : str
         Label (the model's name).
+    units : (str, str)
+        The model's units of (u, y) (:attr:`graybox.Model.units`): ``b`` and the gains hold in them. Empty:
+        not said.
     """
 
     ubar: np.ndarray
@@ -177,10 +180,12 @@ class LocalModel:
     Ts: float
     input_names: tuple[str, ...]
     name: str = ""
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         # types, then what the fields say of each other (a file loads through here: graybox.io)
         check_fields(self)
+        object.__setattr__(self, "units", check_units(self.units, "LocalModel"))
         m = len(check_input_names(self.input_names, what="LocalModel: input_names"))
         ubar, a, b = np.ravel(self.ubar), np.asarray(self.a, float), np.asarray(self.b, float)
         if ubar.size != m:
@@ -592,7 +597,7 @@ def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float) -> Loca
     else:
         a2, b3 = jacobian_rows(model.structure, model.input_names, model.theta[None, :], np.array([ybar]), u[None, :])
         a, b = a2[0], b3[0]
-    return LocalModel(u, ybar, status, reason, a, b, Ts, model.input_names, model.name)
+    return LocalModel(u, ybar, status, reason, a, b, Ts, model.input_names, model.name, model.units)
 
 
 def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts: float | None = None,
@@ -683,6 +688,11 @@ class OperatingCurve:
 
     BANDS: ClassVar[tuple[str, ...]] = ("gain_low", "gain_high", "time_constant_low", "time_constant_high", "undefined")
 
+    @property
+    def units(self) -> tuple[str, str]:
+        """The model's units of (u, y), as its local models carry them (empty: not said)."""
+        return self.local_models[0].units
+
     def __post_init__(self) -> None:
         check_fields(self)
         for f in ("ubar", "ybar", "gain", "time_constant", "damping", "spectral_radius", "settling_time", *self.BANDS):
@@ -699,13 +709,13 @@ class OperatingCurve:
             raise ValueError(f"status has {len(self.status)} entries for {M} operating points")
         if tuple(self.status) != tuple(lm.status for lm in self.local_models):
             raise ValueError(f"status {self.status} disagrees with the local models' own")
-        # one model's local models: one set of inputs, one sampling period
+        # one model's local models: one set of inputs, one sampling period, one set of units
         first = self.local_models[0]
         for i, lm in enumerate(self.local_models[1:], 1):
-            if lm.input_names != first.input_names or lm.Ts != first.Ts:
+            if lm.input_names != first.input_names or lm.Ts != first.Ts or lm.units != first.units:
                 raise ValueError(f"the local models are not of one model: local model {i} has the inputs "
-                                 f"{lm.input_names} and Ts = {lm.Ts:g} s, local model 0 {first.input_names} and "
-                                 f"Ts = {first.Ts:g} s")
+                                 f"{lm.input_names}, Ts = {lm.Ts:g} s and units {lm.units}, local model 0 "
+                                 f"{first.input_names}, Ts = {first.Ts:g} s and units {first.units}")
         points = np.vstack([lm.ubar for lm in self.local_models])
         if self.ubar.shape != ((M,) if points.shape[1] == 1 else points.shape) \
                 or not np.array_equal(self.ubar.reshape(points.shape), points):

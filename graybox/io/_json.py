@@ -611,7 +611,8 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                         ("low", "array1"), ("high", "array1"), ("std", "array1"))),
     "CLSResult": (CLSResult, (("model", "Model"), ("static", "static_or_none"), ("constraints", "names"), ("solver", "str"))),
     "LocalModel": (LocalModel, (("ubar", "array1"), ("ybar", "float_or_none"), ("status", "str"), ("reason", "str"),
-                                ("a", "array1"), ("b", "array2"), ("Ts", "float"), ("input_names", "names"), ("name", "str"))),
+                                ("a", "array1"), ("b", "array2"), ("Ts", "float"), ("input_names", "names"), ("name", "str"),
+                                ("units", "names"))),
     "OperatingCurve": (OperatingCurve, (("local_models", "local_models"), ("ubar", "inputs"), ("ybar", "array1"),
                                         ("gain", "inputs"), ("time_constant", "array1"), ("damping", "array1"),
                                         ("spectral_radius", "array1"), ("settling_time", "array1"), ("status", "names"),
@@ -712,6 +713,7 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      "Selection": {k: _DEFAULT for k in ("search", "subsets", "subset_rss",
                                                                          "input_names", "units")} | {"Ts": None},
                                      "SEMPResult": {"input_names": _DEFAULT, "Ts": None, "units": _DEFAULT},
+                                     "LocalModel": {"units": _DEFAULT},
                                      # the covariance's factor, carried since mend36a: contractions use cov
                                      "ParameterUncertainty": {"cov_factor": None},
                                      # units for display, carried since loaders36: none said
@@ -794,6 +796,8 @@ def _own_units(obj: Any) -> tuple[str, str] | None:
     """The units a value carries itself: its own ``units``, its ``.model``'s, or a Dataset's records'."""
     if isinstance(obj, Dataset):
         return obj.ident.units
+    if isinstance(obj, OperatingCurve):
+        return obj.units
     for v in (obj, getattr(obj, "model", None)):
         units = getattr(v, "units", None)
         if isinstance(units, tuple) and len(units) == 2 and all(isinstance(x, str) for x in units):
