@@ -221,3 +221,16 @@ def test_local_models_and_operating_curves_keep_the_models_units(fits, tmp_path)
         gb.OperatingCurve(**{f.name: getattr(oc, f.name) for f in dataclasses.fields(oc)}
                           | {"local_models": (oc.local_models[0],
                                              gb.local_model(gb.Model(ST, m.theta, Ts=m.Ts, units=OTHER), 0.5))})
+
+
+# -- 9. units were held to the first record only: one that names none let two others disagree ---------------
+
+def test_records_that_disagree_are_refused_when_the_first_names_no_unit(data):
+    r0, r1, r2 = _record(0, units=("", "")), _record(1), _record(2, units=OTHER)
+    with pytest.raises(ValueError, match="'run 1 rpm' has input unit 'rpm' but 'run 2 rad/s' has 'rad/s'"):
+        gb.els(ST, [r0, r1, r2])
+    with pytest.raises(ValueError, match="input unit 'rpm' but 'run 2 rad/s' has 'rad/s'"):
+        gb.frols(gb.Candidates(2, 2, degree=2), [r0, r1, r2], n_terms=4)
+    with pytest.raises(ValueError, match="input unit 'rpm' but 'points in rad/s' has 'rad/s'"):
+        gb.Dataset(r0, r1, _static(OTHER))
+    gb.Dataset(r0, r1, _static(("", "mlc")))  # what is named agrees
