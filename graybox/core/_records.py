@@ -385,6 +385,10 @@ def static_point_inputs(static: StaticPoints, inputs: tuple[str, ...]) -> np.nda
     return static.ubar[:, [static.input_names.index(n) for n in inputs]]
 
 
+#: How a units disagreement within one identification's data ends its message.
+_SAME_UNITS = "all data of one identification must be in the same units (convert one of them)"
+
+
 def check_compatible(a: object, b: object) -> None:
     """``ValueError`` naming both unless ``a`` and ``b`` (records, static points) can belong to one
     identification: the same inputs in the same order, the same units where both name them and, two
@@ -392,10 +396,22 @@ def check_compatible(a: object, b: object) -> None:
     if a.input_names != b.input_names:  # type: ignore[attr-defined]
         raise ValueError(f"{a.name!r} has inputs {a.input_names} but {b.name!r} has inputs {b.input_names}: "  # type: ignore[attr-defined]
                          "all data of one identification must have the same inputs, in the same order")
-    check_same_units(getattr(a, "units", ("", "")), f"{a.name!r} has", b,  # type: ignore[attr-defined]
-                     "all data of one identification must be in the same units (convert one of them)")
+    check_same_units(getattr(a, "units", ("", "")), f"{a.name!r} has", b, _SAME_UNITS)  # type: ignore[attr-defined]
     if isinstance(a, Record) and isinstance(b, Record):
         check_same_period(a, b)
+
+
+def check_units_agree(items: Sequence[object], advice: str) -> None:
+    """``ValueError`` naming both when two of ``items`` (records, static points) name different units for the input
+    or the output: each is held to the first that names one, not to the first item only (an empty unit says
+    nothing, so holding all to a first that names none would let the others disagree). ``advice`` ends the
+    message."""
+    for i, kind in enumerate(("input", "output")):
+        named = [x for x in items if getattr(x, "units", ("", ""))[i]]
+        for x in named[1:]:
+            if x.units[i] != named[0].units[i]:  # type: ignore[attr-defined]
+                raise ValueError(f"{named[0].name!r} has {kind} unit {named[0].units[i]!r} but {x.name!r} has "  # type: ignore[attr-defined]
+                                 f"{x.units[i]!r}: " + advice)  # type: ignore[attr-defined]
 
 
 def said_units(records: object, static: object = None) -> tuple[str, str]:
@@ -497,6 +513,7 @@ class Dataset:
         check_compatible(self.ident, self.valid)
         if self.static is not None:
             check_compatible(self.ident, self.static)
+        check_units_agree([self.ident, self.valid, self.static], _SAME_UNITS)
 
     @property
     def input_names(self) -> tuple[str, ...]:
@@ -551,10 +568,11 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
                             f"{type(r).__name__}")
     for r in recs[1:]:
         check_compatible(recs[0], r)
+    check_units_agree(recs, _SAME_UNITS)
     return recs
 
 
-__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_same_units", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 
