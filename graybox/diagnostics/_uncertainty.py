@@ -63,6 +63,7 @@ from ..models._coerce import as_model, records_of, static_points
 from ..models._model import Model
 from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
 from ..core._simulation_kernels import inverse_ma_filter
+from ..core._terms import check_input_names
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
@@ -1044,7 +1045,8 @@ class StaticSurfaceBand:
 
     def __post_init__(self) -> None:
         check_fields(self)
-        object.__setattr__(self, "input_names", tuple(self.input_names))
+        # a name given twice would merge two inputs' gain columns in to_frame
+        object.__setattr__(self, "input_names", check_input_names(self.input_names, what="input_names"))
         ub = frozen(self.ubar)
         m = len(self.input_names)
         if ub.ndim != 2 or ub.shape[1] != m:
