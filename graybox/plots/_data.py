@@ -38,10 +38,11 @@ def check_one_input_points(points: object, who: str) -> None:
 
 def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
     """Which static points lie on a slice: ``held`` (N, k) their held inputs' levels, ``level`` (k,) the slice's;
-    equal to 1e-9 of the held inputs' own size (any unit: nA or MW), shape (N,)."""
+    equal to 1e-9 of each held input's own size (any unit: nA or MW, one input's unit apart from another's),
+    shape (N,)."""
     held = np.asarray(held, float)
     level = np.asarray(level, float)
-    scale = float(np.abs(held).max(initial=0.0))
+    scale = np.abs(held).max(axis=0, initial=0.0)  # per input: one in MW must not set the tolerance of one in nA
     return (np.abs(held - level) <= 1e-9 * np.maximum(np.abs(level), scale)).all(axis=1)
 
 
