@@ -57,3 +57,30 @@ def test_plot_static_band_puts_points_on_their_slice_whatever_each_input_unit():
     assert len(stars) == 4 and [len(s.get_xdata()) for s in stars] == [2, 2, 2, 2]
     for s in stars:  # each slice's points are the two at its levels of u2 and u3, in the band's order
         assert len({float(v) for v in s.get_ydata() // 2}) == 1
+
+
+TRUE = gb.Structure(["y(k-1)", "y(k-1)u(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+THETA = np.array([0.5, 0.15, 0.3, -0.05, 0.2])
+UB = np.linspace(0.25, 1.75, 7)
+
+
+def _rational(u_offset: float = 0.0, y_scale: float = 1.0, y_offset: float = 0.0, n: int = 400):
+    rng = np.random.default_rng(1)
+    u = np.repeat(rng.uniform(0.0, 2.0, n // 20 + 1), 20)[:n]
+    y = gb.Model(TRUE, THETA).simulate(u, np.zeros(1)) + 0.02 * rng.standard_normal(n)
+    pts = gb.StaticPoints(UB + u_offset, y_scale * gb.Model(TRUE, THETA).static_curve(UB) + y_offset)
+    return gb.Record(u + u_offset, y * y_scale + y_offset), gb.StaticCurve.fit(pts, degree=2)
+
+
+@pytest.mark.parametrize("bound", [(0.0, None), (None, 0.0)])
+def test_a_bound_the_curve_equality_meets_exactly_is_kept_at_an_output_offset(bound):
+    # eq. (22) sets Σyu = 0; a bound on it the equalities leave constant was judged against 1e-9 of the output's
+    # spread while its slack carried the round-off of z_p's size: an output of 2e9 ± 50 with u = 1000 ± 1 read
+    # 0 <= -1.1e-07 and cls raised InfeasibleError
+    rec, curve = _rational(1e3, 100.0, 2e9)
+    m = gb.cls(TRUE, rec, curve, constraints=[gb.ClusterBounds({"Σyu": bound})]).model
+    free = gb.cls(TRUE, rec, curve).model
+    np.testing.assert_allclose(m.static_curve(UB + 1e3), curve(UB + 1e3), rtol=1e-9)
+    np.testing.assert_allclose(m.theta, free.theta, rtol=1e-6, atol=1e-9)
+    with pytest.raises(gb.InfeasibleError, match="Σyu"):  # one it misses is still refused
+        gb.cls(TRUE, rec, curve, constraints=[gb.ClusterBounds({"Σyu": (1e-6, None)})])

@@ -596,7 +596,10 @@ class _QP:
             cq = Qr.T @ c
             dr = _Data(d.structure, np.ones(k), Rr, cq, d.rss + float(np.sum((c - Qr @ cq) ** 2)), d.N, d.y_scale)
             static_r = None if static is None else (static[0] @ self.N, static[1] - static[0] @ self.z_p)
-            G, h = _normalise_ub(zrows.G @ self.N, zrows.h - zrows.G @ self.z_p, zrows.names, tol=1e-9 * d.y_scale)
+            # a row the equalities leave constant is its slack at z_p, formed to the round-off of z_p's size (an
+            # output offset 2e9 ± 50: Σyu <= 0 beside eq. (22)'s Σyu = 0 read 0 <= -1.1e-7 and was refused)
+            tol = 1e-9 * max(d.y_scale, float(np.linalg.norm(self.z_p)))
+            G, h = _normalise_ub(zrows.G @ self.N, zrows.h - zrows.G @ self.z_p, zrows.names, tol=tol)
             self.basis = b = _basis(dr, static_r, None, n_static)
             V, g = np.zeros((0, k)), np.zeros(0)
             self.fixed = None
