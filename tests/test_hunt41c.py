@@ -84,3 +84,26 @@ def test_a_bound_the_curve_equality_meets_exactly_is_kept_at_an_output_offset(bo
     np.testing.assert_allclose(m.theta, free.theta, rtol=1e-6, atol=1e-9)
     with pytest.raises(gb.InfeasibleError, match="Σyu"):  # one it misses is still refused
         gb.cls(TRUE, rec, curve, constraints=[gb.ClusterBounds({"Σyu": (1e-6, None)})])
+
+
+def test_a_surface_band_whose_gain_band_is_crossed_is_refused_naming_the_entry(surface_band, tmp_path):
+    # check_band_values indexed the (M, m) gains with a flat index: IndexError 'index 2 is out of bounds' from a
+    # hand-edited file (and from the constructor) instead of the ValueError naming the entry
+    b = surface_band
+    low = b.gain_low.copy()
+    low[1, 0] = b.gain_high[1, 0] + 1.0
+    with pytest.raises(ValueError, match=r"gain_low must not exceed gain_high, .* at index \(1, 0\)"):
+        type(b)(b.ubar, b.input_names, b.ybar, b.ybar_low, b.ybar_high, b.ybar_std, b.gain, low, b.gain_high,
+                b.gain_std, b.level, b.method, b.n_samples, b.undefined)
+    std = b.gain_std.copy()
+    std[1, 1] = -1.0
+    with pytest.raises(ValueError, match=r"gain_std must be >= 0 .* at index \(1, 1\)"):
+        type(b)(b.ubar, b.input_names, b.ybar, b.ybar_low, b.ybar_high, b.ybar_std, b.gain, b.gain_low,
+                b.gain_high, std, b.level, b.method, b.n_samples, b.undefined)
+    p = tmp_path / "band.json"
+    gb.save(b, p)
+    j = json.loads(p.read_text())
+    j["object"]["gain_low"][1][0] = 1e308
+    p.write_text(json.dumps(j))
+    with pytest.raises(gb.GrayboxFileError, match="gain_low must not exceed gain_high"):
+        gb.load(p)

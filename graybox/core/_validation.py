@@ -177,12 +177,21 @@ def check_band_values(std: np.ndarray, low: np.ndarray, high: np.ndarray, *names
     """``ValueError`` unless a band's standard deviations are >= 0 and its low ends at most its high ones, where they
     are numbers (NaN: no draw there; a value read from a hand-edited file is held to what a band can be)."""
     s, lo, hi = names
+
+    def first(bad: np.ndarray) -> tuple[int, ...]:
+        # the index of the first offending entry in the array's own shape (a surface band's gains are (M, m): a
+        # flat index into them raised IndexError instead of this message)
+        return tuple(int(k) for k in np.argwhere(bad)[0])
+
+    def said(i: tuple[int, ...]) -> str:
+        return str(i[0]) if len(i) == 1 else str(i)
+
     if np.any(std < 0):
-        raise ValueError(f"{s} must be >= 0 (standard deviations), got {float(std[std < 0][0]):g} at index "
-                         f"{int(np.flatnonzero(std < 0)[0])}")
+        i = first(std < 0)
+        raise ValueError(f"{s} must be >= 0 (standard deviations), got {float(std[i]):g} at index {said(i)}")
     if np.any(low > high):
-        i = int(np.flatnonzero(low > high)[0])
-        raise ValueError(f"{lo} must not exceed {hi}, got {low[i]:g} > {high[i]:g} at index {i}")
+        i = first(low > high)
+        raise ValueError(f"{lo} must not exceed {hi}, got {low[i]:g} > {high[i]:g} at index {said(i)}")
 
 
 def check_choice(value: object, name: str, choices: Iterable[str]) -> str:
