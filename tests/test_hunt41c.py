@@ -107,3 +107,17 @@ def test_a_surface_band_whose_gain_band_is_crossed_is_refused_naming_the_entry(s
     p.write_text(json.dumps(j))
     with pytest.raises(gb.GrayboxFileError, match="gain_low must not exceed gain_high"):
         gb.load(p)
+
+
+def test_a_hand_edited_cov_factor_that_overflows_is_refused_without_a_warning(tmp_path):
+    # FᵀF of a factor entry of 1e308 overflowed with numpy's RuntimeWarning before the file was refused
+    d = gb.load_pumping()
+    st = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "u(k-1)^2", "1"]
+    unc = gb.ls_uncertainty(gb.els(st, d.ident, noise=0).model, d.ident)
+    p = tmp_path / "unc.json"
+    gb.save(unc, p)
+    j = json.loads(p.read_text())
+    j["object"]["cov_factor"][0][0] = 1e308
+    p.write_text(json.dumps(j))
+    with pytest.raises(gb.GrayboxFileError, match="cov_factor F is not a factor of cov"):
+        gb.load(p)

@@ -328,9 +328,11 @@ def _check_factor(F: np.ndarray, cov: np.ndarray, sd: np.ndarray) -> None:
     factor, the intervals ``cov``, so a covariance changed without its factor would give each its own answer."""
     if not np.all(np.isfinite(F)):
         raise ValueError("cov_factor has non-finite entries")
-    FtF = F.T @ F
-    sc = np.maximum(sd, np.sqrt(np.diag(FtF)))
-    off = np.abs(FtF - cov) > COV_RTOL * np.outer(sc, sc)
+    with np.errstate(over="ignore", invalid="ignore"):
+        FtF = F.T @ F
+        sc = np.maximum(sd, np.sqrt(np.diag(FtF)))
+        # a factor whose FᵀF overflows is no factor of a finite cov (its tolerance, inf too, let it pass)
+        off = ~np.isfinite(FtF) | ~(np.abs(FtF - cov) <= COV_RTOL * np.outer(sc, sc))
     if off.any():
         i, j = (int(v) for v in np.argwhere(off)[0])
         raise ValueError(f"cov_factor F is not a factor of cov: (FᵀF)[{i}, {j}] = {FtF[i, j]:.6g} against cov[{i}, {j}] "
