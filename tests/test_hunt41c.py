@@ -121,3 +121,24 @@ def test_a_hand_edited_cov_factor_that_overflows_is_refused_without_a_warning(tm
     p.write_text(json.dumps(j))
     with pytest.raises(gb.GrayboxFileError, match="cov_factor F is not a factor of cov"):
         gb.load(p)
+
+
+def test_plot_static_band_draws_a_curve_band_in_the_order_of_its_levels():
+    # a curve band of levels given unsorted was drawn in their given order (a line back and forth, the band filled
+    # between crossing segments), where a surface band's slices are sorted
+    from graybox import plots
+
+    d = gb.load_pumping()
+    st = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "u(k-1)^2", "1"]
+    unc = gb.ls_uncertainty(gb.els(st, d.ident, noise=0).model, d.ident)
+    levels = np.array([1600.0, 800.0, 1200.0, 1000.0])
+    band = gb.static_curve_band(unc, levels)
+    fig = plots.plot_static_band(band)
+    for ax in fig.axes:
+        line = [ln for ln in ax.get_lines() if ln.get_linestyle() == "-"][0]
+        np.testing.assert_array_equal(line.get_xdata(), np.sort(levels))
+    order = np.argsort(levels)
+    np.testing.assert_array_equal(fig.axes[0].get_lines()[0].get_ydata(), band.ybar[order])
+    np.testing.assert_array_equal(fig.axes[1].get_lines()[0].get_ydata(), band.gain[order])
+    shade = fig.axes[0].collections[0].get_paths()[0].vertices[:, 0]  # the fill's outline, in x
+    assert np.all(np.diff(shade[1:len(levels) + 1]) >= 0)

@@ -150,7 +150,9 @@ def plot_static_band(
             raise ValueError(f"against={against!r}: a static curve's band has one input, against must be 0")
         check_int(against, "against", low=0, high=0)
         check_one_input_points(points, "plot_static_band")
-        groups, tags = [np.arange(band.ubar.size)], [""]
+        # in ū's order, as a slice's levels are: levels given unsorted (the static points' measured order) drew the
+        # line back and forth and the band as a fill between crossing segments
+        groups, tags = [np.argsort(band.ubar, kind="stable")], [""]
         x, gains, glo, ghi = band.ubar, band.gain, band.gain_low, band.gain_high
         xlabel = "input ū" if xlabel is None else xlabel
         gain_label = "static gain dȳ/dū" if gain_label is None else gain_label
