@@ -142,3 +142,53 @@ def test_plot_static_band_draws_a_curve_band_in_the_order_of_its_levels():
     np.testing.assert_array_equal(fig.axes[1].get_lines()[0].get_ydata(), band.gain[order])
     shade = fig.axes[0].collections[0].get_paths()[0].vertices[:, 0]  # the fill's outline, in x
     assert np.all(np.diff(shade[1:len(levels) + 1]) >= 0)
+
+
+@pytest.fixture(scope="module")
+def selection():
+    import warnings
+
+    true, theta = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"]), np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+
+    def plant(seed, n=1200):
+        rng = np.random.default_rng(seed)
+        u = np.repeat(rng.uniform(0.0, 3.0, n // 25 + 1), 25)[:n]
+        y = gb.Model(true, theta).simulate(u, np.zeros(2)) + 0.02 * rng.standard_normal(n)
+        return gb.Record(u, y, name=f"r{seed}")
+
+    ub = np.linspace(0.2, 2.8, 7)
+    data = gb.Dataset(plant(1), plant(2), gb.StaticPoints(ub, gb.Model(true, theta).static_curve(ub)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), data, band=1e-3, sizes=[3, 5], test=plant(3))
+
+
+def test_a_selection_table_with_a_negative_mean_square_is_refused(selection, tmp_path):
+    # a hand-edited JS_test of -1 loaded, and regret was then -0.0004 (a J_S is a mean square)
+    p = tmp_path / "sel.json"
+    gb.save(selection, p)
+    j = json.loads(p.read_text())
+    t = j["object"]["table"]
+    col = t["columns"].index("JS_test")
+    t["data"][col][1] = -1.0
+    p.write_text(json.dumps(j))
+    with pytest.raises(gb.GrayboxFileError, match="JS_test must be >= 0"):
+        gb.load(p)
+
+
+def test_regret_and_optimism_where_a_test_record_is_met_exactly(selection):
+    # a J_S test of 0 (a noise-free test record met exactly) divided by zero: RuntimeWarning, and inf or NaN
+    import dataclasses
+
+    t = selection.table.copy()
+    chosen = np.flatnonzero(t["rank"].to_numpy() == 1)[0]
+    other = np.flatnonzero((t["rank"].to_numpy() != 1) & t["in_band"].to_numpy(bool))[0]  # a row regret compares
+    js = t["JS_test"].to_numpy(float).copy()
+    js[other] = 0.0
+    t["JS_test"] = js
+    assert dataclasses.replace(selection, table=t).regret == np.inf
+    js[chosen] = 0.0
+    t["JS_test"] = js
+    s = dataclasses.replace(selection, table=t)
+    assert s.regret == 1.0 and s.optimism == np.inf
+    assert "regret=1" in repr(s)

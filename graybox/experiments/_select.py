@@ -190,6 +190,14 @@ class GrayboxSelection:
         check_choice(self.rule, "rule", RULES)
         if self.degree is not None and self.degree < 0:
             raise ValueError(f"degree must be None (a black box) or >= 0, got {self.degree}")
+        # the figures are mean squares (NaN: no model; inf: a diverged run): a negative one, which no run gives and a
+        # hand-edited file can, made regret and optimism negative
+        for c in ("JS_valid", "JSF", "JS_test", "JSF_test"):
+            if c in self.table.columns:
+                v = pd.to_numeric(self.table[c], errors="coerce").to_numpy(float)
+                if np.any(v < 0):
+                    raise ValueError(f"the table's {c} must be >= 0 (a mean square; NaN or inf where a row has none), "
+                                     f"got {v[v < 0][0]:g} in row {self.table.index[int(np.flatnonzero(v < 0)[0])]!r}")
         said = self.table.loc[self.table["rank"] == 1, "in_band"].iloc[0]
         if bool(said) != bool(self.in_band):  # in_band is the choice's, as its row says
             raise ValueError(f"in_band is {self.in_band} but the chosen row's in_band is {bool(said)}")
@@ -342,14 +350,20 @@ class GrayboxSelection:
         if not np.isfinite(js).any():
             raise ValueError(f"no {rows} model ran through the test record (every such JS_test is inf: its free run "
                              "diverged there, or the row has no model): no best row to compare the choice with")
-        return float(self.chosen["JS_test"] / js[np.isfinite(js)].min())
+        best, mine = float(js[np.isfinite(js)].min()), float(self.chosen["JS_test"])
+        if best == 0.0:  # a row met a noise-free test record exactly: the choice did as well (1) or it did not (inf)
+            return 1.0 if mine == 0.0 else float("inf")
+        return mine / best
 
     @property
     def optimism(self) -> float:
         """The choice's J_S on the choosing data over its J_S on the test record (below 1: the choosing data
         flattered it, as the smallest of many scores on one record tends to). Needs the call's ``test=`` record."""
         self._test_column()
-        return float(self.chosen["JS_valid"] / self.chosen["JS_test"])
+        valid, test = float(self.chosen["JS_valid"]), float(self.chosen["JS_test"])
+        if test == 0.0:  # a noise-free test record met exactly
+            return 1.0 if valid == 0.0 else float("inf")
+        return valid / test
 
     def _test_column(self) -> np.ndarray:
         if "JS_test" not in self.table.columns:
