@@ -192,3 +192,25 @@ def test_regret_and_optimism_where_a_test_record_is_met_exactly(selection):
     s = dataclasses.replace(selection, table=t)
     assert s.regret == 1.0 and s.optimism == np.inf
     assert "regret=1" in repr(s)
+
+
+def test_slices_of_an_offset_input_are_told_apart_in_the_legend():
+    # levels 10000.01 and 10000.02 of the held input were both labelled 'u2 = 10000' (%g's six digits): in a unit
+    # with an offset, the slices' legend could not say which line is which; at 0.01 and 0.02 it could
+    from graybox import plots
+
+    rng = np.random.default_rng(0)
+    st, names = ["y(k-1)", "u1(k-1)", "u2(k-1)", "1"], ("u1", "u2")
+    U = np.column_stack([np.repeat(rng.uniform(0, 1, 30), 20), 1e4 + np.repeat(rng.uniform(0, 0.05, 30), 20)])
+    y = gb.Model(st, [0.5, 0.2, 3.0, -3e4], input_names=names).simulate(U, np.zeros(1))
+    rec = gb.Record(U, y + 1e-3 * rng.standard_normal(y.size), Ts=1.0, input_names=names)
+    unc = gb.ls_uncertainty(gb.els(st, rec, noise=0).model, rec)
+    pts = np.array([[a, b] for b in (1e4 + 0.01, 1e4 + 0.02) for a in (0.2, 0.5, 0.8)])
+    band = gb.static_surface_band(unc, pts)
+    ax = plots.plot_static_band(band, against="u1", gain=False).axes[0]
+    labels = [ln.get_label() for ln in ax.get_lines() if ln.get_linestyle() == "-"]
+    assert len(labels) == 2 and labels[0] != labels[1]
+    assert labels[0].endswith("(u2 = 10000.01)") and labels[1].endswith("(u2 = 10000.02)")
+    fig = plots.plot_surface_slices(lambda u: u[:, 0] + u[:, 1], against=0, at=[1e4 + 0.01, 1e4 + 0.02],
+                                    urange=(0.0, 1.0), input_labels=("u1", "u2"))
+    assert [ln.get_label() for ln in fig.axes[0].get_lines()] == ["u2 = 10000.01", "u2 = 10000.02"]

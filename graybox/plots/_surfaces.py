@@ -17,7 +17,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..core._validation import check_int, check_real, check_sequence
-from ._data import on_level, unit_label
+from ._data import level_texts, on_level, unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
@@ -195,13 +195,14 @@ def plot_surface_slices(
     colors = [f"C{k % 10}" for k in range(levels.size)]
     styles = ["-", "--", ":", "-."]
     x = np.linspace(lo, hi, n_grid)
+    texts = level_texts(levels)
     for i, s in enumerate(surfaces):
-        for lev, col in zip(levels, colors):
+        for lev, text, col in zip(levels, texts, colors):
             U = np.empty((n_grid, 2))
             U[:, against] = x
             U[:, held] = lev
-            label = f"{_name(s, i)}, {input_labels[held]} = {lev:g}" if len(surfaces) > 1 else \
-                f"{input_labels[held]} = {lev:g}"
+            label = f"{_name(s, i)}, {input_labels[held]} = {text}" if len(surfaces) > 1 else \
+                f"{input_labels[held]} = {text}"
             ax.plot(x, _evaluate(s, U, i), styles[i % len(styles)], color=col, label=label)
     if pts is not None:
         ub, yb, pname, _ = pts

@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints
 from ..core._validation import check_bool, check_choice, check_int
-from ._data import check_axes, check_one_input_points, on_level, unit_label
+from ._data import check_axes, check_one_input_points, level_texts, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand
@@ -142,7 +142,8 @@ def plot_static_band(
         groups = [g[np.argsort(band.ubar[g, i], kind="stable")] for g in groups]
         x, gains = band.ubar[:, i], band.gain[:, i]
         glo, ghi = band.gain_low[:, i], band.gain_high[:, i]
-        tags = [", ".join(f"{names[k]} = {v:g}" for k, v in zip(held, lev)) for lev in levels]
+        texts = [level_texts(levels[:, c]) for c in range(len(held))]  # per held input, digits to tell levels apart
+        tags = [", ".join(f"{names[k]} = {texts[c][r]}" for c, k in enumerate(held)) for r in range(len(levels))]
         xlabel = f"input {names[i]}" if xlabel is None else xlabel
         gain_label = f"static gain ∂ȳ/∂{names[i]}" if gain_label is None else gain_label
     else:
