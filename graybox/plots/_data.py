@@ -53,7 +53,7 @@ def level_texts(levels: np.ndarray) -> list[str]:
     distinct = np.unique(v).size
     for digits in range(6, 18):
         texts = [f"{x:.{digits}g}" for x in v]
-        if len(set(texts)) == distinct:
+        if len(set(texts)) >= distinct:  # (-0.0 and 0.0 are one level, printed apart)
             return texts
     return [repr(float(x)) for x in v]
 
