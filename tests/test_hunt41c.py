@@ -214,3 +214,18 @@ def test_slices_of_an_offset_input_are_told_apart_in_the_legend():
     fig = plots.plot_surface_slices(lambda u: u[:, 0] + u[:, 1], against=0, at=[1e4 + 0.01, 1e4 + 0.02],
                                     urange=(0.0, 1.0), input_labels=("u1", "u2"))
     assert [ln.get_label() for ln in fig.axes[0].get_lines()] == ["u2 = 10000.01", "u2 = 10000.02"]
+
+
+def test_a_band_with_a_point_no_draw_reached_says_its_width_over_the_others():
+    # a Monte Carlo band has NaN ends where no draw reached an equilibrium; one such point made the repr 'max ±nan'
+    ub, g = np.array([[0.0, 1.0], [1.0, 1.0]]), np.ones((2, 2))
+    low, std = np.array([np.nan, 0.5]), np.array([np.nan, 0.5])
+    b = gb.StaticSurfaceBand(ub, ("u1", "u2"), np.array([1.0, 1.0]), low, low + 1.0, std, g, g * np.nan,
+                             g * np.nan, g * np.nan, 0.95, "monte-carlo", 100, np.array([1.0, 0.0]))
+    assert "max ±0.5 in ȳ" in repr(b)
+    c = gb.StaticCurveBand(ub[:, 0], b.ybar, low, low + 1.0, std, g[:, 0], g[:, 0], g[:, 0], g[:, 0] * 0, 0.95,
+                           "monte-carlo", 100, np.array([1.0, 0.0]))
+    assert "max ±0.5 in ȳ" in repr(c)
+    none = gb.StaticCurveBand(ub[:, 0], b.ybar, low * np.nan, low * np.nan, std, g[:, 0], g[:, 0], g[:, 0],
+                              g[:, 0] * 0, 0.95, "monte-carlo", 100, np.ones(2))
+    assert "no band" in repr(none)

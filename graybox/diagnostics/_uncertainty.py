@@ -1001,7 +1001,7 @@ class StaticCurveBand:
 
     def __repr__(self) -> str:
         return (f"StaticCurveBand({self.model_name or 'model'}: {self.ubar.size} levels, {self.method}, "
-                f"level={self.level:g}, max ±{np.max((self.ybar_high - self.ybar_low) / 2):.4g} in ȳ)")
+                f"level={self.level:g}, {_widest(self)})")
 
 
 @dataclass(frozen=True, eq=False)
@@ -1070,7 +1070,15 @@ class StaticSurfaceBand:
     def __repr__(self) -> str:
         return (f"StaticSurfaceBand({self.model_name or 'model'}: {self.ubar.shape[0]} points of "
                 f"({', '.join(self.input_names)}), {self.method}, level={self.level:g}, "
-                f"max ±{np.max((self.ybar_high - self.ybar_low) / 2):.4g} in ȳ)")
+                f"{_widest(self)})")
+
+
+def _widest(band) -> str:
+    """A static band's widest half-width in words, over the points that have a band (a Monte Carlo band has none,
+    NaN, where no draw reached an equilibrium: one such point made the whole repr 'max ±nan')."""
+    w = (band.ybar_high - band.ybar_low) / 2
+    w = w[np.isfinite(w)]
+    return f"max ±{w.max():.4g} in ȳ" if w.size else "no band (no draw reached an equilibrium)"
 
 
 def _check_static_band(band, point_shape: tuple[int, ...], gain_shape: tuple[int, ...]) -> None:
