@@ -229,3 +229,12 @@ def test_a_band_with_a_point_no_draw_reached_says_its_width_over_the_others():
     none = gb.StaticCurveBand(ub[:, 0], b.ybar, low * np.nan, low * np.nan, std, g[:, 0], g[:, 0], g[:, 0],
                               g[:, 0] * 0, 0.95, "monte-carlo", 100, np.ones(2))
     assert "no band" in repr(none)
+
+
+def test_a_point_off_the_curve_beside_eq22_with_a_free_sigma_y_is_said_to_conflict():
+    # the constraints admit only Σ_y = 1 (numerator and denominator both zero); the error told the user to fix Σ*_y
+    # from a reference model, not that a point to pass through lies off the curve
+    rec, curve = _rational()
+    off_curve = gb.StaticPoints([1.0], [float(curve(np.array([1.0]))[0]) + 0.1])
+    with pytest.raises(ValueError, match="off the curve"):
+        gb.cls(TRUE, rec, curve, constraints=[gb.PassesThrough(off_curve)])

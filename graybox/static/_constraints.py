@@ -641,7 +641,9 @@ class CurveEquality(StaticConstraint):
             raise ValueError(f"{self.describe()}: the estimated Σ_y = {sy:.6g} leaves the model no stable "
                              "equilibrium (with Σ_{yu} = 0 its y coefficients sum to Σ_y, and a static function "
                              "needs 1 − Σ_y > 0); fix Σ*_y from a reference model (reference='ls' or 'els') or "
-                             "give it as a number below 1")
+                             "give it as a number below 1. With other constraints beside it, they may admit no model "
+                             "that meets the curve with 1 − Σ_y > 0 (a point to pass through off the curve meets it "
+                             "only where the static function vanishes: Σ_y = 1)")
 
 
 def _check_surface_inputs(surface: StaticSurface, cm: ClusterMap | SurfaceClusterMap) -> None:
