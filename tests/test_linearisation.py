@@ -82,3 +82,19 @@ def test_the_curve_by_clusters_and_the_surface_by_terms_give_one_static_gain(nam
     d_curve = static_theta_gradient(structure, theta, ubar, yb)
     d_surface = surface_theta_gradient(structure, theta, ubar[:, None], yb)
     np.testing.assert_allclose(d_curve, d_surface, rtol=1e-12, atol=0)
+
+
+def test_a_zero_term_that_overflows_leaves_the_gain_gradient_finite():
+    """The sums of the gains' θ-gradient skip θ_t = 0 as the partials do: a zero term whose power of ū overflows
+    (ū ≈ 1e110, u³) must not turn the whole gradient into NaN; its own column is then the overflow it is."""
+    from graybox.static._linearisation import static_gain_gradient, static_theta_gradient_of
+
+    structure = Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^3"])
+    theta = np.array([0.5, 0.5, 0.2, 0.0])
+    ub = np.array([[1e110]])
+    p, A = static_powers(structure, ("u",))
+    yb = (theta[0] + theta[2] * ub[:, 0]) / (1 - theta[1])
+    dy = static_theta_gradient_of(p, A, theta, ub, yb)
+    G = static_gain_gradient(p, A, theta, ub, yb, dy)
+    assert np.all(np.isfinite(G[..., :3]))
+    np.testing.assert_allclose(G[0, 0, 2], 1 / (1 - theta[1]), rtol=1e-12)  # ∂(gain)/∂θ_u = 1/(1 − θ_y)

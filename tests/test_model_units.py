@@ -144,3 +144,19 @@ def test_the_selections_models_carry_the_units(data):
     assert sel.model.units == UNITS
     row = sel.table.index[0]
     assert sel.model_of(row, estimator=sel.table.iloc[0]["estimator"]).units == UNITS
+
+
+def test_static_bands_carry_the_models_units_and_refuse_points_in_others(data):
+    fit = gb.cls(ST, data, gb.StaticCurve.fit(data.static, degree=2))
+    unc = gb.cls_uncertainty(fit, data)
+    band = gb.static_curve_band(unc, [0.2, 0.5, 0.8])
+    assert band.units == UNITS
+    back = gb.from_json(gb.to_json(band))
+    assert back.units == UNITS and json.loads(gb.to_json(band))["units"] == {"u": "rpm", "y": "mlc"}
+    fig = gb.plots.plot_static_band(band, data.static)
+    assert "rpm" in fig.axes[0].get_xlabel() and "mlc" in fig.axes[0].get_ylabel()
+    with pytest.raises(ValueError, match="the band is in input unit 'rpm' but"):
+        gb.plots.plot_static_band(band, _static(("rad/s", "mlc")))
+    doc = json.loads(gb.to_json(band))
+    del doc["object"]["units"]  # a band saved before bands carried units: none said
+    assert gb.from_json(json.dumps(doc)).units == ("", "")

@@ -64,7 +64,7 @@ from ..models._model import Model
 from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._terms import check_input_names
-from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units
 from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
@@ -970,6 +970,8 @@ class StaticCurveBand:
         Fraction of draws without a stable equilibrium near the estimate's at each ū (Monte
         Carlo; 0 for the delta method). Those draws are left out of the band.
     model_name : str
+    units : (str, str)
+        The model's units (input, output), as it was identified in: the band's ū, ȳ and gains are in them.
     """
 
     ubar: np.ndarray
@@ -986,9 +988,11 @@ class StaticCurveBand:
     n_samples: int
     undefined: np.ndarray
     model_name: str = ""
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         check_fields(self)
+        object.__setattr__(self, "units", check_units(self.units, "StaticCurveBand"))
         M = np.shape(self.ubar)[0]
         _check_static_band(self, (M,), (M,))
 
@@ -1027,6 +1031,8 @@ class StaticSurfaceBand:
         Fraction of draws without a stable equilibrium near the estimate's at each point (Monte Carlo;
         0 for the delta method). Those draws are left out of the band.
     model_name : str
+    units : (str, str)
+        The model's units (input, output), as it was identified in: the band's ū, ȳ and gains are in them.
     """
 
     ubar: np.ndarray
@@ -1044,9 +1050,11 @@ class StaticSurfaceBand:
     n_samples: int
     undefined: np.ndarray
     model_name: str = ""
+    units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
         check_fields(self)
+        object.__setattr__(self, "units", check_units(self.units, "StaticSurfaceBand"))
         # a name given twice would merge two inputs' gain columns in to_frame
         object.__setattr__(self, "input_names", check_input_names(self.input_names, what="input_names"))
         ub = frozen(self.ubar)
@@ -1241,7 +1249,7 @@ def static_curve_band(
         Gg = static_gain_gradient(p, A, th, uc, yb, Gy)[:, 0, :]
         sy, sg = np.sqrt(uncertainty.contract(Gy)), np.sqrt(uncertainty.contract(Gg))
         return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
-                               uncertainty.level, "delta", 0, np.zeros(ub.size), m.name)
+                               uncertainty.level, "delta", 0, np.zeros(ub.size), m.name, m.units)
     n_samples = check_int(n_samples, "n_samples", low=10)
     rng = np.random.default_rng(check_seed(seed))
     thetas = theta_draws(th, cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
@@ -1249,7 +1257,7 @@ def static_curve_band(
     undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, static_gains(p, A, thetas, uc, Y)[..., 0], uncertainty.level)
     warn_dropped_draws("static_curve_band", undefined)
     return StaticCurveBand(ub, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo", n_samples,
-                           undefined, m.name)
+                           undefined, m.name, m.units)
 
 
 def static_surface_band(
@@ -1323,7 +1331,7 @@ def static_surface_band(
         sy = np.sqrt(uncertainty.contract(dy))
         sg = np.sqrt(uncertainty.contract(Gg.reshape(-1, th.size))).reshape(gain.shape)
         return StaticSurfaceBand(ub, names, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
-                                 uncertainty.level, "delta", 0, np.zeros(ub.shape[0]), m.name)
+                                 uncertainty.level, "delta", 0, np.zeros(ub.shape[0]), m.name, m.units)
     n_samples = check_int(n_samples, "n_samples", low=10)
     rng = np.random.default_rng(seed)
     thetas = theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
@@ -1331,4 +1339,4 @@ def static_surface_band(
     undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, static_gains(p, A, thetas, ub, Y), uncertainty.level)
     warn_dropped_draws("static_surface_band", undefined)
     return StaticSurfaceBand(ub, names, yb, ylo, yhi, sy, gain, glo, ghi, sg, uncertainty.level, "monte-carlo",
-                             n_samples, undefined, m.name)
+                             n_samples, undefined, m.name, m.units)

@@ -604,7 +604,7 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                           ("n_samples", "int"), ("ubar", "array1"), ("ybar", "array1"),
                                           ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
                                           ("gain", "array1"), ("gain_low", "array1"), ("gain_high", "array1"),
-                                          ("gain_std", "array1"), ("undefined", "array1"))),
+                                          ("gain_std", "array1"), ("undefined", "array1"), ("units", "names"))),
     "SimulationBand": (SimulationBand, (("model_name", "str"), ("record_name", "str"), ("method", "str"),
                                         ("level", "float"), ("n_samples", "int"), ("diverged", "float"),
                                         ("units", "names"), ("t", "array1"), ("y", "array1"), ("yhat", "array1"),
@@ -624,7 +624,8 @@ _CODECS: dict[str, tuple[type, tuple[tuple[str, str], ...]]] = {
                                               ("ybar_low", "array1"), ("ybar_high", "array1"), ("ybar_std", "array1"),
                                               ("gain", "array2"), ("gain_low", "array2"), ("gain_high", "array2"),
                                               ("gain_std", "array2"), ("level", "float"), ("method", "str"),
-                                              ("n_samples", "int"), ("undefined", "array1"), ("model_name", "str"))),
+                                              ("n_samples", "int"), ("undefined", "array1"), ("model_name", "str"),
+                                              ("units", "names"))),
     "CorrelationTest": (CorrelationTest, (("name", "str"), ("label", "str"), ("kind", "str"), ("lags", "int_array1"),
                                           ("phi", "array1"), ("band", "float"), ("limit", "float"),
                                           ("outside", "int_array1"), ("passed", "bool"))),
@@ -717,7 +718,8 @@ _ADDED: dict[str, dict[str, Any]] = {"ELSResult": {"n_direct": 0}, "Decision": {
                                      # the covariance's factor, carried since mend36a: contractions use cov
                                      "ParameterUncertainty": {"cov_factor": None},
                                      # units for display, carried since loaders36: none said
-                                     "StaticPoints": {"units": _DEFAULT}}
+                                     "StaticPoints": {"units": _DEFAULT},
+                                     "StaticCurveBand": {"units": _DEFAULT}, "StaticSurfaceBand": {"units": _DEFAULT}}
 
 #: Fields that files written by an older graybox carry and this one no longer has: read and dropped.
 #: A GrayboxSelection named the SQLite store its cells ran in; it no longer runs through a store.

@@ -12,7 +12,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..diagnostics._bootstrap import DecisionBootstrap
-from ..core._records import StaticPoints
+from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
 from ._data import check_axes, check_one_input_points, level_texts, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
@@ -112,8 +112,9 @@ def plot_static_band(
         Draw here (one Axes, or two with ``gain``); by default a new figure is made.
     xlabel, ylabel, gain_label : str, optional
         Axis labels (default x: "input ū", or the input's name; gain: "static gain dȳ/dū", or ∂ȳ/∂ of the
-        input); the points' ``units`` are appended (the gain's as output unit / input unit) unless a label
-        names them already. Without points (or their units): the labels as given.
+        input); the band's ``units`` (its model's; else the points') are appended (the gain's as output unit /
+        input unit) unless a label names them already. Without units: the labels as given. Points in other
+        units than the band's are refused (``ValueError``).
 
     Returns
     -------
@@ -166,7 +167,10 @@ def plot_static_band(
         fig = axs[0].figure
     what = f"{band.level:.0%} band ({band.method})"
     name = band.model_name or "model"
-    u_unit, y_unit = ("", "") if points is None else points.units
+    if points is not None:  # drawn over the band, points in other units would sit at the wrong ū and ȳ
+        check_same_units(band.units, "plot_static_band: the band is in", points, "convert the points")
+    # the band's units (its model's), the points' where the band names none
+    u_unit, y_unit = (band.units[k] or ("" if points is None else points.units[k]) for k in (0, 1))
     xlabel = unit_label(xlabel, u_unit)
     for j, (g, tag) in enumerate(zip(groups, tags)):
         color = f"C{j % 10}" if surface else "C0"

@@ -408,10 +408,15 @@ def static_gain_gradient(p: np.ndarray, A: np.ndarray, theta: np.ndarray, ubar: 
     G, L = input_monomials_of(A, ub), _lowered(A, ub)  # (M, n), (M, n, m)
     with np.errstate(all="ignore"):
         dFy = p * _powers(yb, np.maximum(p - 1, 0)) * G  # ∂F_ȳ/∂θ_t, (M, n)
-        Fyy = (p * (p - 1) * _powers(yb, np.maximum(p - 2, 0)) * G) @ theta  # ∂F_ȳ/∂ȳ, (M,)
         dFu = np.moveaxis(A[None] * _powers(yb, p)[..., None] * L, 1, 2)  # ∂F_ū/∂θ, (M, m, n)
-        Fuy = np.einsum("t,mti->mi", theta, (A * p[:, None])[None] * _powers(yb, np.maximum(p - 1, 0))[..., None] * L)
-        Fy, Fu = dFy @ theta - 1.0, dFu @ theta
+        # the sums over the terms skip θ_t = 0, as the forms above do (an overflowing zero term is no NaN); the
+        # derivatives by each θ_t keep every term
+        live = theta != 0.0
+        th, pl = theta[live], p[live]
+        Fyy = (pl * (pl - 1) * _powers(yb, np.maximum(pl - 2, 0)) * G[:, live]) @ th  # ∂F_ȳ/∂ȳ, (M,)
+        Fuy = np.einsum("t,mti->mi", th, (A[live] * pl[:, None])[None] * _powers(yb, np.maximum(pl - 1, 0))[..., None]
+                        * L[:, live])
+        Fy, Fu = dFy[:, live] @ th - 1.0, dFu[:, :, live] @ th
         dFu_tot = dFu + Fuy[:, :, None] * dy[:, None, :]
         dFy_tot = (dFy + Fyy[:, None] * dy)[:, None, :]
         out = -(dFu_tot * Fy[:, None, None] - Fu[:, :, None] * dFy_tot) / (Fy**2)[:, None, None]
