@@ -21,34 +21,10 @@ from graybox import experiments as gx
 from graybox.experiments._cell import COLUMNS
 from graybox.experiments._executors import InProcess, ProcessPool
 
-from test_grid_claims import _open
+from test_grid_claims import SPEC as CLAIMS_SPEC, _open
 
-SPEC = """\
-name = "shared"
-[[data]]
-name = "pumping"
-bundled = "pumping"
-[[structures]]
-name = "a"
-terms = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "1"]
-[[structures]]
-name = "b"
-terms = ["y(k-1)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"]
-[[structures]]
-name = "c"
-terms = ["y(k-1)", "u(k-1)", "y(k-1)^2", "1"]
-[[structures]]
-name = "d"
-terms = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "1"]
-[[variants]]
-name = "LS"
-estimator = "ls"
-[[variants]]
-name = "PE"
-estimator = "pe"
-lambdas = {logspace = [-3, 0, 3]}
-options = {solver = "closed"}
-"""
+# test_grid_claims' grid (four structures, PE with three λ1) with a least-squares variant beside it
+SPEC = CLAIMS_SPEC.replace("[[variants]]", '[[variants]]\nname = "LS"\nestimator = "ls"\n[[variants]]', 1)
 
 # A driver process: its first cell waits until the other driver has started one too (so the test fails, by a
 # timeout, if the second run waits for every cell of the first), its cells take a little longer than they do, and
