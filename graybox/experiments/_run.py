@@ -200,6 +200,8 @@ def run_grid(
                         share.said = True
                         say(f"  {len(share.waiting)} of the cells to run are being run by another run on this "
                             f"store ({', '.join(sorted(share.others))}): this one waits for them")
+                    # those released go back to the executor, which takes them as it starts them (another run
+                    # may take some first)
                     todo, finished = _wait_for_others(st, share.waiting, marks)
                     share.by_others += len(finished)
                     bar.update(len(finished))
@@ -268,19 +270,21 @@ def _written_since(st: ResultStore, keys: list[str], seen: Mapping[str, tuple]) 
 
 def _wait_for_others(st: ResultStore, waiting: dict, seen: Mapping[str, tuple]) -> tuple[list, list]:
     """Wait until another run releases some of the ``waiting`` cells (it wrote them, stopped or died); remove
-    them from ``waiting``; return (those this run must run itself, taken; those the other run finished)."""
+    them from ``waiting``; return (those left to run, not taken yet: the executor takes each as it starts it;
+    those another run finished)."""
     while True:
         time.sleep(POLL_SECONDS)
-        held = st.claim(list(waiting))  # this run takes those no live run holds any more
-        free = [k for k in waiting if k not in held]
-        if free:
+        held = st.held(list(waiting))  # taken only as each starts: a run taking them all here held cells it had
+        free = [k for k in waiting if k not in held]  # not started, which grid status said it ran and a third
+        if free:  # run could not share
             break
     # a row other than the one this run saw (a new one, or a retried failed cell's new row): the other run's
-    finished = _written_since(st, free, seen)
+    now = st.marks(free)
+    finished = sorted(k for k in free if now.get(k) != seen.get(k))
     todo = [waiting.pop(k) for k in free if k not in finished]
     for k in finished:
         waiting.pop(k)
-    return todo, sorted(finished)
+    return todo, finished
 
 
 def _by_hash(cells, datasets: Mapping[str, gb.Dataset]) -> dict[str, gb.Dataset]:

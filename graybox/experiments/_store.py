@@ -390,6 +390,15 @@ class ResultStore:
         (killed, or silent for :data:`STALE_SECONDS` on another host) loses its cells. A cell's
         claim ends when its row is written, and every claim when the store is closed.
         """
+        return self._claims(keys, take=True)
+
+    def held(self, keys: Sequence[str]) -> dict[str, str]:
+        """Those of ``keys`` a live driver of another run holds, each with its driver in words, as :meth:`claim`
+        says them, but taking none: a run that waits for them looks without holding what it does not start yet
+        (a dead driver's claims end here too)."""
+        return self._claims(keys, take=False)
+
+    def _claims(self, keys: Sequence[str], take: bool) -> dict[str, str]:
         host, pid, now = socket.gethostname(), os.getpid(), time.time()
         self._conn.execute("BEGIN IMMEDIATE")
         try:
@@ -404,7 +413,8 @@ class ResultStore:
             gone = [(o,) for o, h, p, b in drivers if o != self._owner and (o in outer or not _alive(o, h, p, b, now))]
             self._conn.executemany("DELETE FROM drivers WHERE owner = ?", gone)
             self._conn.execute("DELETE FROM claims WHERE owner NOT IN (SELECT owner FROM drivers)")
-            self._conn.executemany("INSERT OR IGNORE INTO claims VALUES (?, ?)", [(k, self._owner) for k in keys])
+            if take:
+                self._conn.executemany("INSERT OR IGNORE INTO claims VALUES (?, ?)", [(k, self._owner) for k in keys])
             who = {o: _driver_name(h, p) for o, h, p, _ in drivers}
             held = dict(self._conn.execute("SELECT key, owner FROM claims WHERE owner != ?", (self._owner,)))
         except BaseException:
