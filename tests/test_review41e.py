@@ -3,8 +3,15 @@ and where a new store is made."""
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import sys
 import threading
 import time
+from pathlib import Path
+
+import pytest
 
 from graybox import experiments as gx
 from graybox.experiments import _run, _store
@@ -50,3 +57,40 @@ def test_a_run_taking_over_a_stopped_runs_cells_holds_only_the_one_it_runs(grid,
     assert out["run"].ran == len(cells) and len(held) == len(cells)
     assert held == [1] * len(cells)  # while it runs a cell, it holds that one only
     assert gx.grid_status(store).running == {}
+
+
+@pytest.mark.skipif(os.name != "posix", reason="a real SIGKILL")
+def test_the_half_made_store_of_a_run_killed_while_making_it_is_swept_by_a_later_run(grid, tmp_path):  # noqa: F811
+    # a new store is made under a name of its own beside its path and linked into place; a run killed meanwhile
+    # left that file (and its -wal and -shm) in the store's folder for ever
+    spec, g, _, cells = grid
+    store = tmp_path / "s.sqlite"
+    code = ("import sys, time\nfrom pathlib import Path\nfrom graybox.experiments import _store\n"
+            f"sys.path.insert(0, {str(Path(__file__).parent)!r})\nfrom test_grid_claims import _open\n"
+            "from graybox import experiments as gx\nreal = _store._create_tables\n"
+            "def making(conn, version):\n    print('making', flush=True)\n    time.sleep(120)\n"
+            "_store._create_tables = making\n"
+            f"g = gx.Grid.from_toml({str(spec)!r})\n_open(Path({str(store)!r}), g, g.cells(g.load_data()))\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "making", proc.stderr.read()
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        proc.kill()
+        proc.communicate()
+    left = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".s.sqlite."))
+    assert left and all(n.split(".new")[0] == left[0].split(".new")[0] for n in left)
+    young = tmp_path / ".s.sqlite.0123abcd.new"  # another run making the store right now: not its to sweep
+    young.write_bytes(b"")
+    old = time.time() - 2 * getattr(_store, "LEFTOVER_SECONDS", 600)
+    for n in left:
+        os.utime(tmp_path / n, (old, old))
+    _open(store, g, cells).close()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == [young.name]
+    young.unlink()
+    os.utime(store, (old, old))  # a file of another name is never swept, however old
+    (tmp_path / ".s.sqlite.keep").write_bytes(b"")
+    os.utime(tmp_path / ".s.sqlite.keep", (old, old))
+    _open(store, g, cells).close()
+    assert store.is_file() and (tmp_path / ".s.sqlite.keep").is_file()
