@@ -305,6 +305,7 @@ class ResultStore:
             raise StoreError(f"{p.parent} does not exist; create the folder for the store first")
         if not exists and not p.parent.is_dir():
             raise StoreError(f"{p.parent} is a file, not a folder; give a store path inside a folder")
+        _sweep_leftovers(p)
         if not exists and _create_whole(p, version):  # made whole, by this run or another started with it
             return cls.open(p, grid_name=grid_name, fingerprint=fingerprint, spec=spec, cells=cells, version=version)
         migrate = False
@@ -543,6 +544,26 @@ def _create_tables(conn: sqlite3.Connection, version: str) -> dict[str, str]:
     conn.executemany("INSERT INTO meta VALUES (?, ?)", list(meta.items()))
     _create_spec_tables(conn)
     return meta
+
+
+#: Seconds after which a half-made store beside a store's path (:func:`_create_whole`'s file, its maker killed) is
+#: swept by the next run opening that path. Making one takes milliseconds; one swept from under a live maker costs
+#: nothing wrong either: its link then fails and it makes the store in place.
+LEFTOVER_SECONDS = 600.0
+
+
+def _sweep_leftovers(p: Path) -> None:
+    """Remove the half-made stores (and their -wal, -shm) a run killed while making the store at ``p`` left."""
+    name = re.compile(rf"\.{re.escape(p.name)}\.[0-9a-f]{{8}}\.new(-wal|-shm)?")
+    now = time.time()
+    try:
+        for f in p.parent.iterdir():
+            if name.fullmatch(f.name):
+                with contextlib.suppress(OSError):  # gone meanwhile, or a folder this user cannot write in
+                    if now - f.stat().st_mtime > LEFTOVER_SECONDS:
+                        f.unlink()
+    except OSError:
+        pass
 
 
 def _create_whole(p: Path, version: str) -> bool:
