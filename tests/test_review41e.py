@@ -94,3 +94,30 @@ def test_the_half_made_store_of_a_run_killed_while_making_it_is_swept_by_a_later
     os.utime(tmp_path / ".s.sqlite.keep", (old, old))
     _open(store, g, cells).close()
     assert store.is_file() and (tmp_path / ".s.sqlite.keep").is_file()
+
+
+def test_without_hard_links_a_run_opening_the_store_another_makes_in_place_waits_for_it(grid, tmp_path):  # noqa: F811
+    # where the file system has no hard links the store is made in place: a run opening the path meanwhile found
+    # an SQLite file without tables (or an empty file) and refused it as "not a graybox grid store"
+    spec, g, _, cells = grid
+    store = tmp_path / "s.sqlite"
+    code = ("import errno, os, sys, time\nfrom pathlib import Path\nfrom graybox.experiments import _store\n"
+            f"sys.path.insert(0, {str(Path(__file__).parent)!r})\nfrom test_grid_claims import _open\n"
+            "from graybox import experiments as gx\n"
+            "def nolink(a, b):\n    raise OSError(errno.EPERM, 'no hard links here')\nos.link = nolink\n"
+            f"store = Path({str(store)!r})\nreal = _store._create_tables\n"
+            "def making(conn, version):\n    if store.exists():  # in place\n"
+            "        print('making', flush=True)\n        time.sleep(1.0)\n    return real(conn, version)\n"
+            "_store._create_tables = making\n"
+            f"g = gx.Grid.from_toml({str(spec)!r})\n_open(store, g, g.cells(g.load_data())).close()\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "making", proc.stderr.read()
+        st = _open(store, g, cells)  # while the other process makes it
+        st.close()
+        out, err = proc.communicate(timeout=60)
+        assert proc.returncode == 0, err
+    finally:
+        proc.kill()
+        proc.communicate()
+    assert len(gx.store_specs(store)) == 1
