@@ -170,6 +170,29 @@ def _check_file(path: Path) -> None:
                          "Choose another --store path")
 
 
+def _wait_for_maker(path: Path) -> None:
+    """An empty file, or an SQLite file without tables, at a store's path may be a store another run is making in
+    place (a file system without hard links, :meth:`ResultStore.open`): wait for that run's first transaction
+    to end (its lock), so that the file is checked once made. Nothing is written; a file nobody is making is
+    checked (and refused) as it is."""
+    try:
+        if path.stat().st_size:
+            ro = _connect(path, readonly=True)
+            try:
+                if ro.execute("SELECT 1 FROM sqlite_master").fetchone() is not None:
+                    return
+            finally:
+                ro.close()
+        conn = _connect(path)
+        try:
+            conn.execute("BEGIN IMMEDIATE")  # waits (up to the timeout) for a maker's transaction
+            conn.execute("ROLLBACK")
+        finally:
+            conn.close()
+    except (OSError, sqlite3.Error):  # not SQLite, damaged, locked past the timeout, not writable: the checks say
+        pass
+
+
 def _read_meta(conn: sqlite3.Connection, path: Path) -> dict[str, str]:
     """Check integrity, format and tables (read-only statements only) and return the meta table."""
     try:
@@ -313,6 +336,7 @@ class ResultStore:
         if exists:
             if p.is_dir():
                 raise StoreError(f"{p} is a folder; give a file path for the store")
+            _wait_for_maker(p)
             _check_file(p)
             # checked through a read-only connection: closing it folds no log left by a killed writer
             ro = _connect(p, readonly=True)
@@ -351,8 +375,8 @@ class ResultStore:
             if exists:
                 _settings(conn)
             else:  # a file system without hard links (_create_whole): made in place
-                conn.execute("PRAGMA journal_mode=WAL")
-                _settings(conn)
+                # the tables in the file's first transaction, WAL after: until it commits, the file stays empty and
+                # its lock held, which a run opening the path meanwhile waits for (_wait_for_maker)
                 conn.execute("BEGIN IMMEDIATE")
                 if conn.execute("SELECT 1 FROM sqlite_master").fetchone() is not None:
                     # another run (started at once) made the file since this one looked: open it as it is, checked
@@ -362,6 +386,8 @@ class ResultStore:
                                     version=version)
                 meta = _create_tables(conn, version)
                 conn.execute("COMMIT")
+                conn.execute("PRAGMA journal_mode=WAL")
+                _settings(conn)
             if migrate:
                 _upgrade(conn, meta, cells)
                 meta["format_version"] = FORMAT_VERSION
