@@ -118,7 +118,8 @@ def test_a_run_killed_mid_grid_leaves_the_cell_it_held_to_the_other_which_finish
     other = _driver(driver, spec, store, sync)
     try:
         deadline = time.monotonic() + 120
-        while not (sync / "stalled").exists():
+        # the driver's write_text makes the file, then writes the key: an empty read came before the key
+        while not ((sync / "stalled").exists() and (sync / "stalled").read_text()):
             assert killed.poll() is None and time.monotonic() < deadline, killed.communicate()
             time.sleep(0.01)
         held = (sync / "stalled").read_text()
