@@ -254,6 +254,16 @@ def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:
     return sqlite3.connect(str(path), timeout=30.0, isolation_level=None)  # explicit transactions
 
 
+def _connect_to_write(path: Path, store: Path, verb: str) -> sqlite3.Connection:
+    """A writing connection to ``path`` for the store at ``store``, or a StoreError saying what to do (``verb``:
+    "open" or "create")."""
+    try:
+        return _connect(path)
+    except sqlite3.OperationalError as exc:  # e.g. a folder this user cannot write in
+        raise StoreError(f"cannot {verb} the store {store} ({exc}); choose a --store path in a folder you can "
+                         "write in") from None
+
+
 def _table(name: str, cols: Mapping[str, str], extra: str = "") -> str:
     return f"CREATE TABLE {name} ({', '.join(f'{k} {t}' for k, t in cols.items())}{extra})"
 
@@ -366,11 +376,7 @@ class ResultStore:
                 raise StoreError(f"{p} is damaged ({exc}); nothing was written to it; {_DAMAGED}") from None
             finally:
                 ro.close()
-        try:
-            conn = _connect(p)
-        except sqlite3.OperationalError as exc:  # e.g. a folder this user cannot write in
-            raise StoreError(f"cannot open the store {p} ({exc}); choose a --store path in a folder you can write "
-                             "in") from None
+        conn = _connect_to_write(p, p, "open")
         try:
             if exists:
                 _settings(conn)
@@ -599,11 +605,7 @@ def _create_whole(p: Path, version: str) -> bool:
     the file system has no hard links (the caller makes the store in place)."""
     tmp = p.with_name(f".{p.name}.{secrets.token_hex(4)}.new")
     try:
-        try:
-            conn = _connect(tmp)
-        except sqlite3.OperationalError as exc:  # e.g. a folder this user cannot write in
-            raise StoreError(f"cannot create the store {p} ({exc}); choose a --store path in a folder you can "
-                             "write in") from None
+        conn = _connect_to_write(tmp, p, "create")
         try:
             conn.execute("PRAGMA journal_mode=WAL")
             conn.execute("BEGIN IMMEDIATE")
