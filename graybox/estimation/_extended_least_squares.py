@@ -87,6 +87,7 @@ from ..core._simulation_kernels import inverse_ma_filter
 from ..core._least_squares import check_identified, check_rows, column_scales, scaled_lstsq
 from ..models._coerce import as_structure, records_of
 from ..models._model import Model
+from ..selection._centring import centred_data, is_closed, raw_theta, signal_offsets
 from ..core._records import Dataset, Record, carried_from
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
@@ -473,8 +474,12 @@ def _iterate(fit: _ExtendedFit, xi: np.ndarray, theta: np.ndarray, max_iter: int
 
 
 def _result(reg: _Regression, theta: np.ndarray, c: np.ndarray, n_iter: int, conv: bool, hist: list[float],
-            x: np.ndarray, theta_ls: np.ndarray, name: str, n_direct: int = 0) -> ELSResult:
-    """The ELSResult: the model with its MA part and the residuals per record."""
+            x: np.ndarray, theta_ls: np.ndarray, name: str, n_direct: int = 0,
+            offsets: dict | None = None) -> ELSResult:
+    """The ELSResult: the model with its MA part and the residuals per record (``offsets``: the signals' centres
+    the fit ran on, its θ mapped back to the raw signals; the residuals are the same on both)."""
+    if offsets is not None:
+        theta, theta_ls = (raw_theta(reg.process, th, offsets) for th in (theta, theta_ls))
     m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name, **carried_from(reg.recs))
     res = tuple(frozen(a) for a in reg.per_record(x))
     return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
@@ -560,16 +565,25 @@ def els(
     relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)
     direct = check_bool(direct, "direct")
     recs = records_of(data)
+    # A structure closed under shifts with a plain-lag MA part is fitted on the centred signals and mapped back
+    # (as the SE fits are): the same model, and the same convergence, at any offset of u and y. On the raw ones,
+    # terms near 1e8 at 1e4 spreads put round-off into the residual change the stopping rule reads, and the
+    # iteration ran to max_iter where at offset 0 it converged in 22.
     reg = _regression(process, ns, recs)
-    # the rule every estimator applies, so that ELS names the terms left free as CLS, PE and SE do
+    # the rule every estimator applies (on the raw signals), so that ELS names the terms left free as CLS, PE and
+    # SE do
     check_identified([("the identification records", reg.psi, reg.psi.shape[0])], list(process),
                      what="the ELS process θ", remedies=(_NO_STATIC_REMEDY, _NO_STATIC_REMEDY))
+    offsets = (signal_offsets(recs) if is_closed(process) and all(l is not None for l in _pure_lags(ns))
+               else None)
+    if offsets is not None:
+        reg = _regression(process, ns, centred_data(recs, offsets))
     theta_ls = scaled_lstsq(reg.psi, reg.y)
     xi = reg.y - reg.psi @ theta_ls
     # No MA part, or a model that explains the data to round-off: then the MA regressors
     # would be round-off columns, so the MA part is zero by definition.
     if len(ns) == 0 or np.sqrt(np.mean(xi**2)) <= 1e-12 * np.sqrt(np.mean(reg.y**2)):
-        return _result(reg, theta_ls, np.zeros(len(ns)), 0, True, [], xi, theta_ls, name)
+        return _result(reg, theta_ls, np.zeros(len(ns)), 0, True, [], xi, theta_ls, name, offsets=offsets)
 
     fit = _ExtendedFit(reg)
     lags = _pure_lags(ns)
@@ -578,4 +592,4 @@ def els(
     if not converged:
         _warn_not_converged(max_iter, hist, tol, relaxation, c, lags, fallback)
     n_direct = fallback.n_direct if fallback is not None else 0
-    return _result(reg, theta, c, len(hist), converged, hist, xi, theta_ls, name, n_direct)
+    return _result(reg, theta, c, len(hist), converged, hist, xi, theta_ls, name, n_direct, offsets)
