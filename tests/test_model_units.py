@@ -160,3 +160,13 @@ def test_static_bands_carry_the_models_units_and_refuse_points_in_others(data):
     doc = json.loads(gb.to_json(band))
     del doc["object"]["units"]  # a band saved before bands carried units: none said
     assert gb.from_json(json.dumps(doc)).units == ("", "")
+
+
+def test_a_dataset_speaks_in_the_units_any_of_its_parts_names():
+    # an identification record loaded without units beside a validation record that names them: the fits that
+    # read the ident only (ELS, frols) gave models that named none, and took data in any units
+    data = gb.Dataset(_record(0, units=("", "")), _record(1), None)
+    assert data.units == UNITS
+    assert gb.els(ST, data).model.units == UNITS
+    assert gb.frols(gb.Candidates(2, 2, degree=2), data, n_terms=4).model.units == UNITS
+    assert data.ident.units == ("", "")  # the Dataset's own records are left as given

@@ -11,7 +11,7 @@ single-input path is exactly what it was.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -525,6 +525,12 @@ class Dataset:
         """Sampling period in seconds."""
         return self.ident.Ts
 
+    @property
+    def units(self) -> tuple[str, str]:
+        """The units (input, output) its records and static points name (per slot the first named; where two
+        name one they agree)."""
+        return said_units([self.ident, self.valid], self.static)
+
     def __repr__(self) -> str:
         st = "static=None" if self.static is None else f"static={self.static!r}"
         return f"Dataset(ident={self.ident!r},\n        valid={self.valid!r},\n        {st})"
@@ -553,7 +559,10 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
         No records, or records whose inputs or sampling periods differ.
     """
     if isinstance(data, Dataset):
-        return [getattr(data, part)]
+        # one identification: its record speaks in the units any part of it names (an ident loaded without units
+        # beside a validation file that names them gives models that know them)
+        rec, units = getattr(data, part), data.units
+        return [rec if rec.units == units else replace(rec, units=units)]
     if isinstance(data, Record):
         return [data]
     if isinstance(data, (str, bytes, Mapping)) or not hasattr(data, "__iter__"):
