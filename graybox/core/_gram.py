@@ -25,7 +25,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ._records import as_records, check_alike, check_units, check_units_agree
+from ._records import as_records, check_same_period, check_units, check_units_agree
 from ._regressors import input_signals
 from ._terms import Term
 from ._reprs import short_repr
@@ -394,7 +394,7 @@ def as_gram_records(data: object) -> list:
     if is_dask_data(data):
         recs = [data] if isinstance(data, DaskRecord) else list(data)
         for r in recs[1:]:
-            check_alike(recs[0], r)
+            check_same_period(recs[0], r)
         check_units_agree(recs, "the records of one fit must be in the same units (convert one of them)")
         return recs
     return as_records(data)  # a Dataset: its ident, in the units the Dataset names

@@ -465,6 +465,16 @@ def check_alike(a: Record | Sequence[Record], b: Record) -> None:
         check_same_units(r.units, f"{r.name!r} has", b, "convert one of them: a model holds in one set of units")
 
 
+def check_fitted_on(Ts: float | None, units: tuple[str, str], who: str, data: object, advice: str) -> None:
+    """``ValueError`` when ``data`` (a Record, or static points) cannot be met by what was fitted at period ``Ts``
+    in ``units``: a Record at another period, or data in other units where both name them. ``who`` says what was
+    fitted and how, e.g. "model 'ELS' was identified" (the message goes on "on records sampled …" or "with …");
+    ``advice`` ends a units message."""
+    if isinstance(data, Record):  # static points have no period
+        check_period(Ts, f"{who} on records sampled", data)
+    check_same_units(units, f"{who} with", data, advice)
+
+
 def check_period(Ts: float | None, what: str, record: Record) -> None:
     """``ValueError`` unless ``record`` is sampled every ``Ts`` seconds (to :data:`PERIOD_RTOL`; None:
     unknown, nothing to check). ``what`` names the other side, e.g. "'ident' is sampled" or "model
@@ -581,7 +591,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

@@ -127,7 +127,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from ..core._records import Dataset, Record, as_records, carried_from, check_period, check_same_units, check_units
+from ..core._records import Dataset, Record, as_records, carried_from, check_fitted_on, check_units
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
@@ -492,10 +492,8 @@ class NeuralModel:
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the network was
         trained at, or is in other units where both name them (as :meth:`graybox.Model.check_record`)."""
-        if isinstance(record, Record):
-            check_period(self.Ts, f"network {self.name!r} was trained on records sampled", record)
-        check_same_units(self.units, f"network {self.name!r} was trained with", record,
-                         "its weights hold in those units only; convert the data")
+        check_fitted_on(self.Ts, self.units, f"network {self.name!r} was trained", record,
+                        "its weights hold in those units only; convert the data")
 
     def _input(self, record: Record) -> np.ndarray:
         """The record's input the network reads, by name, shape (N,) (ValueError naming both when it lacks it, or

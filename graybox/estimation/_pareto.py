@@ -17,7 +17,7 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
-from ..core._records import Dataset, Record, StaticPoints, as_records, carried_from, check_period, check_same_units, check_units
+from ..core._records import Dataset, Record, StaticPoints, as_records, carried_from, check_fitted_on, check_units
 from ..core._validation import FrozenMap, check_bool, check_fields, check_int, check_real, frozen, real_array, warn
 from ..core._terms import Structure
 
@@ -211,10 +211,8 @@ class ParetoSet:
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the set was fitted
         at, or is in other units where both name them (as :meth:`graybox.Model.check_record`)."""
-        if isinstance(record, Record):  # static points have no period
-            check_period(self.Ts, "the Pareto set was fitted on records sampled", record)
-        check_same_units(self.units, "the Pareto set was fitted with", record,
-                         "its members' parameters hold in those units only; convert the data")
+        check_fitted_on(self.Ts, self.units, "the Pareto set was fitted", record,
+                        "its members' parameters hold in those units only; convert the data")
 
     # -- access -------------------------------------------------------------------------
     def __len__(self) -> int:

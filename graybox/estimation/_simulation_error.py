@@ -165,7 +165,7 @@ class SEProblem:
         self.y_scale = output_scale(self.target)
         self._memo: dict = {}  # least squares and PE solutions, shared with with_margin's copies
         self._static_memo: tuple[bytes, np.ndarray] | None = None
-        self._centre_basis()
+        self._centre_basis(scored_only)
         self.ridge = check_real(ridge, "ridge", low=0.0)
         self.ridge_ref = self.to_z(self.ls_theta()) if self.ridge > 0 else None
         self.local = LocalModels(structure, *record_points(structure, self.records)) if self.margin is not None \
@@ -177,7 +177,7 @@ class SEProblem:
             self.margin_ubar = mu[:, 0] if mu.shape[1] == 1 else mu
 
     # -- the optimisers' coordinates ----------------------------------------------------
-    def _centre_basis(self) -> None:
+    def _centre_basis(self, scored_only: bool = False) -> None:
         """The coordinates z the optimisers move in (:meth:`to_z`, :meth:`from_z`).
 
         By default z = θ ⊙ s, s the RMS of each raw regressor. For a structure closed under shifts (every
@@ -192,7 +192,8 @@ class SEProblem:
         """
         self.z_map = self.z_inv = self.z_shift = self.offsets = None
         self.z_psi, self.z_target = self.psi / self.scale, self.target
-        if is_dask_data(self.records) or not is_closed(self.structure) or not self.records_identify():
+        # a problem that only scores θ's fitted elsewhere (a choosing record) never moves in z: no centred basis
+        if scored_only or is_dask_data(self.records) or not is_closed(self.structure) or not self.records_identify():
             return
         off = signal_offsets(self.records)
         A, t = shift_map(self.structure, off)

@@ -11,7 +11,7 @@ from ..core import _simulation
 from ..static import _analysis as _static
 from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
-from ..core._records import Record, check_period, check_same_units, check_units
+from ..core._records import Record, check_fitted_on, check_period, check_units
 from ..core._validation import check_int, check_real, check_sequence, check_str, check_theta, frozen
 from ..core._terms import Structure, check_input_names, require_inputs
 
@@ -113,11 +113,9 @@ class Model:
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) cannot be met by this model: sampled at another
         period than the model was identified at, or in other units where both name them."""
-        if isinstance(record, Record):
-            self.check_period(record)
-        check_same_units(self.units, f"model {self.name!r} was identified with", record,
-                         "its parameters hold in those units only; convert the data (or give them the model's units "
-                         "if only the label differs)")
+        check_fitted_on(self.Ts, self.units, f"model {self.name!r} was identified", record,
+                        "its parameters hold in those units only; convert the data (or give them the model's units "
+                        "if only the label differs)")
 
     # -- dynamics -----------------------------------------------------------
     def predict(self, record: Record, *, horizon: int = 1) -> np.ndarray:
