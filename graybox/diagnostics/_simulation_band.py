@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..core._records import check_units
+from ..core._records import check_units, said_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
 from ..core._validation import check_band_values, check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
@@ -168,7 +168,7 @@ def simulation_band(
     rec.require_length(L)
     yhat = m.simulate(rec, on_diverge="nan")  # refuses a record at another period or in other units
     # the band is in the model's units where the record names none (where it names one, they agree)
-    units = (rec.units[0] or m.units[0], rec.units[1] or m.units[1])
+    units = said_units([rec, m])
     if not np.all(np.isfinite(yhat)):
         k = int(np.flatnonzero(~np.isfinite(yhat))[0])
         raise ValueError(f"simulation_band: the estimate's free run diverges on {rec.name} at sample {k}; there is no "

@@ -243,8 +243,7 @@ class _Share:
             return []
         # a cell written since this run looked is dropped before it is claimed: a run that starts late goes
         # through the cells another has finished with reads only
-        before = self.st.marks([c.key for c in cells])
-        written = {c.key for c in cells if before.get(c.key) != self.seen.get(c.key)}
+        written = _changed_since(self.st, [c.key for c in cells], self.seen)
         ask = [c for c in cells if c.key not in written]
         held = self.st.claim([c.key for c in ask]) if ask else {}
         for c in ask:
@@ -259,11 +258,15 @@ class _Share:
         return [c for c in mine if c.key not in written]
 
 
-def _written_since(st: ResultStore, keys: list[str], seen: Mapping[str, tuple]) -> set[str]:
-    """Those of ``keys`` (this run's claims) whose row another run wrote, or wrote over, since this run saw
-    the store as ``seen``; their claims end (this run does not run them)."""
+def _changed_since(st: ResultStore, keys: list[str], seen: Mapping[str, tuple]) -> set[str]:
+    """Those of ``keys`` whose row another run wrote, or wrote over, since this run saw the store as ``seen``."""
     now = st.marks(keys)
-    written = {k for k in keys if now.get(k) != seen.get(k)}
+    return {k for k in keys if now.get(k) != seen.get(k)}
+
+
+def _written_since(st: ResultStore, keys: list[str], seen: Mapping[str, tuple]) -> set[str]:
+    """:func:`_changed_since` of this run's claims ``keys``; their claims end (this run does not run them)."""
+    written = _changed_since(st, keys, seen)
     st.unclaim(sorted(written))
     return written
 
@@ -279,12 +282,11 @@ def _wait_for_others(st: ResultStore, waiting: dict, seen: Mapping[str, tuple]) 
         if free:  # run could not share
             break
     # a row other than the one this run saw (a new one, or a retried failed cell's new row): the other run's
-    now = st.marks(free)
-    finished = sorted(k for k in free if now.get(k) != seen.get(k))
+    finished = _changed_since(st, free, seen)
     todo = [waiting.pop(k) for k in free if k not in finished]
     for k in finished:
         waiting.pop(k)
-    return todo, finished
+    return todo, sorted(finished)
 
 
 def _by_hash(cells, datasets: Mapping[str, gb.Dataset]) -> dict[str, gb.Dataset]:
