@@ -59,18 +59,24 @@ def test_a_run_taking_over_a_stopped_runs_cells_holds_only_the_one_it_runs(grid,
     assert gx.grid_status(store).running == {}
 
 
+def _maker(spec, store, patch: str) -> str:
+    """A driver process's code that opens ``store`` for the grid ``spec`` (and closes it) with the store's table
+    making replaced by ``patch``'s ``making(conn, version)`` (``real`` is the original; ``store`` its path)."""
+    return ("import errno, os, sys, time\nfrom pathlib import Path\nfrom graybox.experiments import _store\n"
+            f"sys.path.insert(0, {str(Path(__file__).parent)!r})\nfrom test_grid_claims import _open\n"
+            "from graybox import experiments as gx\n"
+            f"store = Path({str(store)!r})\nreal = _store._create_tables\n" + patch
+            + "_store._create_tables = making\n"
+            f"g = gx.Grid.from_toml({str(spec)!r})\n_open(store, g, g.cells(g.load_data())).close()\n")
+
+
 @pytest.mark.skipif(os.name != "posix", reason="a real SIGKILL")
 def test_the_half_made_store_of_a_run_killed_while_making_it_is_swept_by_a_later_run(grid, tmp_path):  # noqa: F811
     # a new store is made under a name of its own beside its path and linked into place; a run killed meanwhile
     # left that file (and its -wal and -shm) in the store's folder for ever
     spec, g, _, cells = grid
     store = tmp_path / "s.sqlite"
-    code = ("import sys, time\nfrom pathlib import Path\nfrom graybox.experiments import _store\n"
-            f"sys.path.insert(0, {str(Path(__file__).parent)!r})\nfrom test_grid_claims import _open\n"
-            "from graybox import experiments as gx\nreal = _store._create_tables\n"
-            "def making(conn, version):\n    print('making', flush=True)\n    time.sleep(120)\n"
-            "_store._create_tables = making\n"
-            f"g = gx.Grid.from_toml({str(spec)!r})\n_open(Path({str(store)!r}), g, g.cells(g.load_data()))\n")
+    code = _maker(spec, store, "def making(conn, version):\n    print('making', flush=True)\n    time.sleep(120)\n")
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert proc.stdout.readline().strip() == "making", proc.stderr.read()
@@ -101,15 +107,11 @@ def test_without_hard_links_a_run_opening_the_store_another_makes_in_place_waits
     # an SQLite file without tables (or an empty file) and refused it as "not a graybox grid store"
     spec, g, _, cells = grid
     store = tmp_path / "s.sqlite"
-    code = ("import errno, os, sys, time\nfrom pathlib import Path\nfrom graybox.experiments import _store\n"
-            f"sys.path.insert(0, {str(Path(__file__).parent)!r})\nfrom test_grid_claims import _open\n"
-            "from graybox import experiments as gx\n"
-            "def nolink(a, b):\n    raise OSError(errno.EPERM, 'no hard links here')\nos.link = nolink\n"
-            f"store = Path({str(store)!r})\nreal = _store._create_tables\n"
-            "def making(conn, version):\n    if store.exists():  # in place\n"
-            "        print('making', flush=True)\n        time.sleep(1.0)\n    return real(conn, version)\n"
-            "_store._create_tables = making\n"
-            f"g = gx.Grid.from_toml({str(spec)!r})\n_open(store, g, g.cells(g.load_data())).close()\n")
+    code = _maker(spec, store, "def nolink(a, b):\n    raise OSError(errno.EPERM, 'no hard links here')\n"
+                               "os.link = nolink\n"
+                               "def making(conn, version):\n    if store.exists():  # in place\n"
+                               "        print('making', flush=True)\n        time.sleep(1.0)\n"
+                               "    return real(conn, version)\n")
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert proc.stdout.readline().strip() == "making", proc.stderr.read()
