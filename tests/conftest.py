@@ -59,3 +59,67 @@ def edited_json(value, **fields) -> str:
     doc = json.loads(to_json(value))
     doc["object"].update(fields)
     return json.dumps(doc)
+
+
+# --- the documentation site, built beside the rest of the suite -----------------------------------
+# The Sphinx build (tests/test_docs.py) runs every notebook in its own kernel: about a minute of one core, while
+# the suite leaves the second core mostly idle. It is started in its own process as the suite begins, and the
+# docs tests run last and wait for it.
+DOCS_TESTS = "test_docs.py"
+_SITE_BUILD = pytest.StashKey[dict]()
+
+
+def start_site_build() -> dict:
+    """Start ``python -m sphinx -W --keep-going -q -b html docs <tmp>/html`` in its own session (its notebook
+    kernels are its children); its output goes to files, so a full pipe never stalls it."""
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    tmp = Path(tempfile.mkdtemp(prefix="graybox-docs-"))
+    with open(tmp / "stdout", "w") as out, open(tmp / "stderr", "w") as err:
+        proc = subprocess.Popen([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
+                                 str(root / "docs"), str(tmp / "html")], stdout=out, stderr=err, cwd=root,
+                                stdin=subprocess.DEVNULL, start_new_session=True)
+    return {"proc": proc, "tmp": tmp}
+
+
+def finish_site_build(build: dict) -> tuple[int, str, "object"]:
+    """Wait for a build :func:`start_site_build` started: (return code, its stderr, the html folder)."""
+    rc = build["proc"].wait()
+    return rc, (build["tmp"] / "stderr").read_text(encoding="utf-8", errors="replace"), build["tmp"] / "html"
+
+
+@pytest.hookimpl(trylast=True)  # after -k and -m have deselected
+def pytest_collection_modifyitems(session, config, items):
+    docs = [item for item in items if item.path.name == DOCS_TESTS]
+    if not docs or config.option.collectonly:
+        return
+    items[:] = [item for item in items if item.path.name != DOCS_TESTS] + docs
+    config.stash[_SITE_BUILD] = start_site_build()
+
+
+def site_build(config) -> dict:
+    """The build started with the suite, or one started now (the docs tests run on their own)."""
+    if _SITE_BUILD not in config.stash:
+        config.stash[_SITE_BUILD] = start_site_build()
+    return config.stash[_SITE_BUILD]
+
+
+def pytest_unconfigure(config):
+    build = config.stash.get(_SITE_BUILD, None)
+    if build is None:
+        return
+    import os
+    import shutil
+    import signal
+
+    if build["proc"].poll() is None:  # the suite stopped before the docs tests waited for it
+        try:
+            os.killpg(build["proc"].pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        build["proc"].wait()
+    shutil.rmtree(build["tmp"], ignore_errors=True)

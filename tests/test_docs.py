@@ -9,23 +9,21 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from conftest import finish_site_build, site_build
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
-def site(tmp_path_factory):
-    out = tmp_path_factory.mktemp("html")
-    proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
-                           str(ROOT / "docs"), str(out)], capture_output=True, text=True, cwd=ROOT)
-    problems = [line for line in proc.stderr.splitlines()
+def site(request):
+    # started as the suite began (tests/conftest.py), in its own process beside the other tests
+    rc, stderr, out = finish_site_build(site_build(request.config))
+    problems = [line for line in stderr.splitlines()
                 if ("WARNING:" in line or "ERROR:" in line) and not line.startswith(KERNEL_TEARDOWN)]
-    assert proc.returncode == 0 and not problems, "\n".join(problems) or proc.stderr[-3000:]
+    assert rc == 0 and not problems, "\n".join(problems) or stderr[-3000:]
     return out
 
 
