@@ -58,13 +58,17 @@ def fits(st, data, band):
     return out, time.perf_counter() - t
 
 
+def transformed(data):
+    """Each of TRANSFORMS (u scale, u offset, y scale, y offset) with the data it makes."""
+    for tr in TRANSFORMS:
+        yield tr, shift(data, *tr)
+
+
 def bands(cases) -> None:
     for name, data, st, _ in cases:
         print(f"== Monte Carlo simulation_band, {name}", flush=True)
         base = None
-        for tr in TRANSFORMS:
-            su, ou, sy, oy = tr
-            d = shift(data, *tr)
+        for (su, ou, sy, oy), d in transformed(data):
             unc = gb.ls_uncertainty(gb.els(st, d.ident, noise=0).model, d.ident)
             times = []
             for _ in range(5):
@@ -93,9 +97,7 @@ def main() -> None:
     for name, data, st, band in cases:
         print(f"== {name}: {len(st)} terms {st}", flush=True)
         base = None
-        for tr in TRANSFORMS:
-            su, ou, sy, oy = tr
-            d = shift(data, *tr)
+        for (su, ou, sy, oy), d in transformed(data):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 models, secs = fits(st, d, band * sy * sy)
