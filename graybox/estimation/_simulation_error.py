@@ -181,19 +181,23 @@ class SEProblem:
         """The coordinates z the optimisers move in (:meth:`to_z`, :meth:`from_z`).
 
         By default z = θ ⊙ s, s the RMS of each raw regressor. For a structure closed under shifts (every
-        divisor of every term present, as ``centre=True`` returns) whose records identify θ, z is instead
+        divisor of every term present, as ``centre=True`` returns) whose inputs all move over the records, z is instead
         the parameters of the same model on the signals minus their means over the records, times the RMS
         of each centred regressor: θ = A (z / s_c) + t (:func:`~graybox.selection._centring.shift_map`).
         An offset of y or of an input leaves the centred signals, hence the whole problem in z (starts,
         steps, trust regions, tolerances, the ridge, the GA's mutations), as it was, and a unit's scale
         is taken up by s_c: the fit is the same model whatever the units' zeros and scales. The raw
         coordinates are not: a trust-region step, a ridge or a mutation of the raw constant or u(k−1)
-        means something else when u moves by 1e4, and the fits differed by up to 35 % in J_S.
+        means something else when u moves by 1e4, and the fits differed by up to 35 % in J_S. Records that
+        identify θ only with the static points (a two-level input's u(k−1)², which they cannot tell from
+        u(k−1) and 1) are centred too: the GA's random least-squares seeds are then the minimum-norm solutions
+        in z, the same model at every offset. An input held over the records is not: its centred terms are
+        round-off of zero, whose RMS would scale z by nothing the units set.
         """
         self.z_map = self.z_inv = self.z_shift = self.offsets = None
         self.z_psi, self.z_target = self.psi / self.scale, self.target
         # a problem that only scores θ's fitted elsewhere (a choosing record) never moves in z: no centred basis
-        if scored_only or is_dask_data(self.records) or not is_closed(self.structure) or not self.records_identify():
+        if scored_only or is_dask_data(self.records) or not is_closed(self.structure) or self._held_input():
             return
         off = signal_offsets(self.records)
         A, t = shift_map(self.structure, off)
@@ -205,6 +209,13 @@ class SEProblem:
         self.z_inv = s_c[:, None] * Ainv  # z = z_inv @ (θ − z_shift)
         psi_c /= s_c  # in place: one more N × n array, not two
         self.z_psi, self.z_target = psi_c, target_c  # ψ θ − y = z_psi z − z_target, without cancellation
+
+    def _held_input(self) -> bool:
+        """Whether an input of the structure holds one value over every record."""
+        if not self.code.inputs:
+            return False
+        us = np.concatenate([record_inputs(r, self.code.inputs).reshape(len(r.y), -1) for r in self.records])
+        return bool(np.any(np.all(us == us[:1], axis=0)))
 
     def to_z(self, thetas: np.ndarray) -> np.ndarray:
         """The optimisers' coordinates of θ (shape (n,) or (P, n)): see :meth:`_centre_basis`."""
@@ -1094,13 +1105,15 @@ def _pull_inside(problem: SEProblem, theta: np.ndarray, lam1: float) -> tuple[np
     fb = np.array([any(s == "y" for s, _, _ in t.factors) for t in problem.structure])
     rest = ~fb
     z0 = None if problem.z_map is None else problem.to_z(theta)
+    # the refit needs the records to identify the other terms (else the static points do: shrink only)
+    self_identified = problem.records_identify()
     for c in _PULL:
         if z0 is not None:
             # closed under shifts: the feedback shrunk and the rest refitted in the centred coordinates, so that
             # the start (the plain shrink too) is the same model wherever the units put their zeros
             z = np.where(fb, c * z0, z0)
             tries = [problem.from_z(z)]
-            if rest.any() and fb.any():
+            if rest.any() and fb.any() and self_identified:
                 zr = z.copy()
                 zr[rest] = problem.z_lstsq(cols=rest, fixed=z)
                 tries.insert(0, problem.from_z(zr))
