@@ -46,3 +46,29 @@ def test_ga_of_a_closed_structure_the_records_alone_do_not_identify_is_the_same_
     d0, d1 = _two_level(1.0, 0.0, 1.0, 0.0), _two_level(*tr)
     a, b = _back(ga(d0), d0, 1.0, 0.0), _back(ga(d1), d1, tr[2], tr[3])
     assert np.max(np.abs(a - b)) <= 1e-7 * d0.valid.y.std()
+
+
+def test_monte_carlo_draws_of_a_constrained_closed_fit_are_the_same_at_any_offset():
+    """CLS with static points pins θ of u(k-1)y(k-1) (the static curve's equality constraints), so the top-degree
+    column of the covariance factor is zero: its QR had R[0, 0] = 0 and kept the estimator's first row as it
+    came, so one seed drew other models at another offset (the band's upper edge 1.4 % of y's spread apart at
+    u + 3 and y − 2 spreads)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_units41b import CLOSED, DATA, _moved
+
+    def band(data):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # static-range notes, the same at every offset
+            u = gb.cls_uncertainty(gb.cls(CLOSED, data).model, data)
+        return gb.simulation_band(u, data.valid, method="monte-carlo", n_samples=100, seed=1)
+
+    base = band(DATA)
+    s = DATA.valid.y.std()
+    for du, dy in ((3.0, -2.0), (100.0, 0.0), (0.0, 100.0)):
+        ou, oy = du * DATA.ident.u.std(), dy * DATA.ident.y.std()
+        moved = band(_moved(DATA, 1.0, ou, 1.0, oy))
+        assert np.max(np.abs(moved.high - oy - base.high)) <= 1e-6 * s
+        assert np.max(np.abs(moved.low - oy - base.low)) <= 1e-6 * s

@@ -205,7 +205,7 @@ class ParameterUncertainty:
             if F.ndim != 2 or F.shape[1] != n:
                 raise ValueError(f"cov_factor must have shape (k, {n}), got {F.shape}")
             _check_factor(F, cov, sd)
-            object.__setattr__(self, "cov_factor", frozen(_canonical_factor(F, self.model.structure)))
+            object.__setattr__(self, "cov_factor", frozen(_canonical_factor(F, self.model.structure, A)))
 
     def contract(self, G: np.ndarray) -> np.ndarray:
         """The variances gᵀ cov g of the linear functions g of θ in the rows of ``G`` (shape (M, n_terms)),
@@ -340,7 +340,7 @@ def _check_factor(F: np.ndarray, cov: np.ndarray, sd: np.ndarray) -> None:
                          "covariance of your own")
 
 
-def _canonical_factor(F: np.ndarray, structure) -> np.ndarray:
+def _canonical_factor(F: np.ndarray, structure, constraints: np.ndarray | None = None) -> np.ndarray:
     """The one factor R of cov = FᵀF that Monte Carlo draws θ̂ + zR take, whoever computed F.
 
     Each estimator's F comes from its own coordinates, so one seed drew other models when u or y moved
@@ -350,18 +350,82 @@ def _canonical_factor(F: np.ndarray, structure) -> np.ndarray:
     with a positive diagonal, and so is the step from one Cholesky factor to the other: R, upper triangular
     in that order with a nonnegative diagonal (QR of F, never forming cov: F's accuracy is kept), moves to
     R Aᵀ, and θ̂' + zRAᵀ is the same model as θ̂ + zR. Idempotent to the bit (a triangular F is its own R).
+
+    Where equality ``constraints`` (rows r × n) leave k < n directions and pin a combination of the first k
+    terms in that order (CLS on static points pins u(k−1)y(k−1) of a closed structure), F's leading columns
+    are dependent, the plain QR has a zero on its diagonal and keeps the estimator's rows as they came. R is
+    then the echelon factor: row i starts at the i-th column not spanned by those before it (read off the
+    constraints, exactly: :func:`_free_pivots`), there positive, zero (to round-off) before it; R Aᵀ is again one.
     """
     k, n = F.shape
     if k == 0 or n == 0:
         return F
     order = sorted(range(n), key=lambda j: -structure[j].degree)  # stable: ties keep the structure's order
     P = F[:, order]
+    piv = None if constraints is None or k >= n else _free_pivots(constraints[:, order], k)
+    if piv is not None and piv != list(range(k)):
+        return _echelon_factor(P, piv, order)
     if k <= n and np.array_equal(P, np.triu(P)) and np.all(np.diag(P) >= 0):
         return F  # canonical already (a file read back): kept to the bit
     R = np.linalg.qr(P, mode="r")
     sign = np.where(np.diag(R) < 0, -1.0, 1.0)
     out = np.empty_like(R)
     out[:, order] = R * sign[:, None] + 0.0  # + 0.0: no negative zeros below the diagonal
+    return out
+
+
+def _free_pivots(C: np.ndarray, k: int) -> list[int] | None:
+    """The columns at which an echelon basis of {v: C v = 0} starts its rows (ascending), or None where that
+    space is not k-dimensional. Column j is not one exactly where C's column j adds to the rank of the
+    columns right of it (the orthogonal complement's echelon from the right): decided on C, whose pinned
+    directions are exact, where F holds them only as round-off of zero. Each column is judged relative to
+    its own norm (units scale columns), with rows normalised and the rank rule of :func:`_null_space`."""
+    norms = np.linalg.norm(C, axis=1)
+    C = C[norms > 0] / norms[norms > 0, None]
+    n = C.shape[1]
+    basis = np.zeros((C.shape[0], 0))
+    pinned = []
+    for j in range(n - 1, -1, -1):
+        c = C[:, j]
+        nc = float(np.linalg.norm(c))
+        if nc == 0.0:
+            continue
+        r = c - basis @ (basis.T @ c)
+        r -= basis @ (basis.T @ r)  # twice is enough (Kahan)
+        nr = float(np.linalg.norm(r))
+        if nr > 1e-10 * nc:
+            pinned.append(j)
+            basis = np.column_stack([basis, r / nr])
+    free = [j for j in range(n) if j not in pinned]
+    return free if len(free) == k else None
+
+
+def _echelon_factor(P: np.ndarray, piv: list[int], order: list[int]) -> np.ndarray:
+    """The echelon factor of PᵀP (P: a k × n factor with its columns in ``order``) whose row i starts at column
+    ``piv[i]``, positive there (Householder reflections column by column), returned in the structure's order."""
+    R = np.array(P, float)
+    k = R.shape[0]
+    if all(np.all(R[i + 1:, p] == 0) and R[i, p] > 0 for i, p in enumerate(piv)):
+        out = np.empty_like(R)
+        out[:, order] = R
+        return out  # echelon already (a file read back): kept to the bit
+    for i, p in enumerate(piv):
+        x = R[i:, p].copy()
+        nx = float(np.linalg.norm(x))
+        if nx == 0.0:
+            continue
+        v = x
+        # x onto +‖x‖ e1 without cancellation in x0 − ‖x‖
+        v[0] = -float(x[1:] @ x[1:]) / (x[0] + nx) if x[0] > 0 else x[0] - nx
+        vv = float(v @ v)
+        if vv > 0:
+            R[i:] -= np.outer(v, (2.0 / vv) * (v @ R[i:]))
+        R[i, p] = nx
+        R[i + 1:, p] = 0.0
+    # left of each row's start: round-off of zero, kept (the pinned directions' variances are that round-off, and
+    # FᵀF must stay the covariance there too)
+    out = np.empty((k, R.shape[1]))
+    out[:, order] = R + 0.0
     return out
 
 
