@@ -72,3 +72,22 @@ def test_monte_carlo_draws_of_a_constrained_closed_fit_are_the_same_at_any_offse
         moved = band(_moved(DATA, 1.0, ou, 1.0, oy))
         assert np.max(np.abs(moved.high - oy - base.high)) <= 1e-6 * s
         assert np.max(np.abs(moved.low - oy - base.low)) <= 1e-6 * s
+
+
+def test_the_ridges_target_is_the_centred_least_squares_itself_at_a_far_offset():
+    """The ridge's target in z was the least squares mapped to raw θ and back: at u and y + 1e4 spreads the
+    round trip through raw parameters near 1e8 left it 3.5e-10 from the offset-free one, 700 times the
+    direct solution's round-off."""
+    import sys
+    from pathlib import Path
+
+    from graybox.estimation._simulation_error import SEProblem
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_units41b import CLOSED, DATA, _moved
+
+    r0 = DATA.ident
+    base = SEProblem(CLOSED, r0, None, ridge=1.0).ridge_ref
+    far = _moved(DATA, 1.0, 1e4 * r0.u.std(), 1.0, 1e4 * r0.y.std()).ident
+    np.testing.assert_allclose(SEProblem(CLOSED, far, None, ridge=1.0).ridge_ref, base,
+                               rtol=0, atol=1e-11 * np.max(np.abs(base)))
