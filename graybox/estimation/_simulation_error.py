@@ -181,8 +181,8 @@ class SEProblem:
         """The coordinates z the optimisers move in (:meth:`to_z`, :meth:`from_z`).
 
         By default z = θ ⊙ s, s the RMS of each raw regressor. For a structure closed under shifts (every
-        divisor of every term present, as ``centre=True`` returns) whose inputs all move over the records, z is instead
-        the parameters of the same model on the signals minus their means over the records, times the RMS
+        divisor of every term present, as ``centre=True`` returns) whose inputs all move over the records, z is
+        instead the parameters of the same model on the signals minus their means over the records, times the RMS
         of each centred regressor: θ = A (z / s_c) + t (:func:`~graybox.selection._centring.shift_map`).
         An offset of y or of an input leaves the centred signals, hence the whole problem in z (starts,
         steps, trust regions, tolerances, the ridge, the GA's mutations), as it was, and a unit's scale
@@ -1116,14 +1116,14 @@ def _pull_inside(problem: SEProblem, theta: np.ndarray, lam1: float) -> tuple[np
     rest = ~fb
     z0 = None if problem.z_map is None else problem.to_z(theta)
     # the refit needs the records to identify the other terms (else the static points do: shrink only)
-    self_identified = problem.records_identify()
+    refit_identified = problem.records_identify()
     for c in _PULL:
         if z0 is not None:
             # closed under shifts: the feedback shrunk and the rest refitted in the centred coordinates, so that
             # the start (the plain shrink too) is the same model wherever the units put their zeros
             z = np.where(fb, c * z0, z0)
             tries = [problem.from_z(z)]
-            if rest.any() and fb.any() and self_identified:
+            if rest.any() and fb.any() and refit_identified:
                 zr = z.copy()
                 zr[rest] = problem.z_lstsq(cols=rest, fixed=z)
                 tries.insert(0, problem.from_z(zr))
