@@ -17,6 +17,11 @@ worker held: the local pool gives a worker one cell at a time; on Dask the drive
 that kills its worker dies alone the second time.
 The ``LocalCluster`` graybox starts reports a worker's death at once (``allowed-failures`` 0); a
 cluster the user brings first retries as its own ``distributed.scheduler.allowed-failures`` says.
+
+Inside ``with executor.session():`` an executor keeps what it started (the local pool's workers, the Dask
+client and its ``LocalCluster``) from one :meth:`run` to the next while it is alive, and stops it when the
+session ends: a run that waits for another run's cells and then takes some over starts nothing again (a
+``LocalCluster`` start is seconds; BENCHMARKS.md, grids).
 """
 
 from __future__ import annotations
@@ -32,7 +37,7 @@ import threading
 import time
 import uuid
 from collections import deque
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, ExitStack, contextmanager, nullcontext
 from dataclasses import dataclass, field
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable, Iterator, Mapping, Sequence
@@ -47,7 +52,7 @@ from ._cell import failed_row, run_cell
 from ._spec import Cell
 
 __all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "check_cluster", "local_cluster", "make_executor",
-           "scheduler_client", "worker_threads"]
+           "scheduler_client", "session", "worker_threads"]
 
 #: Executor names accepted by :func:`graybox.experiments.run_grid`.
 EXECUTORS = ("inprocess", "processes", "dask")
@@ -122,6 +127,13 @@ def _environ(values: Mapping[str, str]):
                 os.environ.pop(k, None)
             else:
                 os.environ[k] = v
+
+
+def session(executor: Any) -> AbstractContextManager:
+    """The executor's session (see the module's docstring); one that starts nothing to keep (the in-process
+    one) has none."""
+    opened = getattr(executor, "session", None)
+    return opened() if opened is not None else nullcontext(executor)
 
 
 def _take_next(pending: deque, n: int, take: Take | None) -> list[Cell]:
@@ -230,6 +242,29 @@ class ProcessPool:
         self.fn = fn
         self.name = f"{self.workers} local processes ({self.threads} thread(s) each)"
         self._ctx = mp.get_context("spawn")
+        self._kept: list[_Slot] | None = None  # in a session: the idle workers of the last run
+
+    @contextmanager
+    def session(self):
+        """The workers a run started are kept for the next run (those still alive), and stopped at the end."""
+        self._kept = []
+        try:
+            yield self
+        finally:
+            kept, self._kept = self._kept, None
+            for s in kept:
+                self._stop(s, graceful=s.proc.is_alive())
+
+    def _reused(self) -> list[_Slot]:
+        """The live workers kept from the session's last run (none outside a session); dead ones stopped."""
+        kept, self._kept = self._kept, ([] if self._kept is not None else None)
+        live = []
+        for s in kept or ():
+            if s.proc.is_alive():
+                live.append(s)
+            else:
+                self._stop(s, graceful=False)
+        return live
 
     def _start(self) -> _Slot:
         parent, child = self._ctx.Pipe()
@@ -265,7 +300,8 @@ class ProcessPool:
         slots: list[_Slot] = []
         graceful = True
         try:
-            slots = [self._start() for _ in range(len(queued))]
+            slots = self._reused()
+            slots += [self._start() for _ in range(len(queued) - len(slots))]
             while True:
                 free = [s for s in slots if s.cell is None]
                 if len(queued) < len(free):
@@ -314,7 +350,10 @@ class ProcessPool:
                     if s.proc.is_alive():
                         s.proc.terminate()
             for s in slots:
-                self._stop(s, graceful=graceful and s.proc.is_alive())
+                if graceful and self._kept is not None and s.cell is None and s.proc.is_alive():
+                    self._kept.append(s)  # idle and alive: the session's next run uses it
+                else:
+                    self._stop(s, graceful=graceful and s.proc.is_alive())
 
 
 def _size(cell: Cell) -> int:
@@ -557,6 +596,32 @@ class DaskCluster:
             self.name = f"Dask scheduler at {scheduler}"
         else:
             self.name = "Dask client"
+        self._stack: ExitStack | None = None  # in a session: what closes the kept client (and its cluster)
+        self._kept: Any = None
+
+    @contextmanager
+    def session(self):
+        """The client a run opened (and the ``LocalCluster`` it started) is kept for the next run while it is
+        running, and closed at the end."""
+        self._stack = ExitStack()
+        try:
+            yield self
+        finally:
+            stack, self._stack, self._kept = self._stack, None, None
+            stack.close()
+
+    @contextmanager
+    def _using(self, dashboard: bool = False):
+        """(client, whether it is new): the session's kept client while it runs, else one opened now (kept
+        when in a session, closed on exit when not)."""
+        if self._stack is None:
+            with self._client(dashboard) as client:
+                yield client, True
+            return
+        new = self._kept is None or getattr(self._kept, "status", None) != "running"
+        if new:  # a dead one is closed with the session
+            self._kept = self._stack.enter_context(self._client(dashboard))
+        yield self._kept, new
 
     @contextmanager
     def _client(self, dashboard: bool = False):
@@ -589,8 +654,8 @@ class DaskCluster:
 
         if not cells:
             return
-        with self._client(dashboard=log is not None) as client:
-            if log is not None:
+        with self._using(dashboard=log is not None) as (client, new):
+            if log is not None and new:
                 link = getattr(client, "dashboard_link", None) if _has_dashboard(client) else None
                 log(f"Dask dashboard: {link}" if link else
                     "Dask dashboard: none (it needs the bokeh package: pip install bokeh); "

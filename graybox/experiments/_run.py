@@ -15,7 +15,7 @@ from .. import _api as gb
 from ..core._progress import progress_bar
 from ..core._validation import FrozenMap, check_bool, check_fields
 from ._cell import STATUSES, failed_row, run_cell
-from ._executors import make_executor
+from ._executors import make_executor, session
 from ._spec import Grid, SpecError, reads_uncertainty, stored_spec
 from ._store import ResultStore
 
@@ -184,7 +184,9 @@ def run_grid(
         share = _Share(st, marks, bar)
         ran = taken = 0
         try:
-            with st.beating():  # alive to the other runs while a long cell writes no row
+            # alive to the other runs while a long cell writes no row; the executor keeps its workers (or cluster)
+            # for the cells it takes over after a wait
+            with st.beating(), session(ex):
                 while True:
                     for row in ex.run(todo, by_hash, log=say, take=share.take):
                         if row.get("version") != version:
