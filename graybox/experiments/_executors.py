@@ -499,6 +499,22 @@ class _Batches:
         return out
 
 
+def _next_taken(batches: _Batches, take: Take | None) -> list[tuple[Cell, int]]:
+    """The next task's cells (:meth:`_Batches.next`) that ``take`` gives (a retried cell, worker deaths > 0, is
+    this run's already); ``[]`` when no batch is left."""
+    while batches:
+        items = batches.next()
+        if take is not None:
+            given = {c.key for c in take([c for c, d in items if d == 0])}
+            kept = [(c, d) for c, d in items if d > 0 or c.key in given]
+            if len(kept) < len(items):
+                batches.dropped(items, kept)
+                items = kept
+        if items:
+            return items
+    return []
+
+
 # --------------------------------------------------------------------------------------------
 # Dask distributed
 # --------------------------------------------------------------------------------------------
@@ -646,7 +662,8 @@ class DaskCluster:
     def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None,
             take: Take | None = None) -> Iterator[dict]:
         """Submit the cells in batches, yield each row as its batch completes; a batch's cells are taken
-        (``take``) as it is submitted."""
+        (``take``) as it is submitted, and graybox's ``LocalCluster`` starts only once the first batch is taken
+        (while another run holds every cell left, none starts)."""
         from distributed import as_completed
         from distributed.scheduler import KilledWorker
 
@@ -654,6 +671,13 @@ class DaskCluster:
 
         if not cells:
             return
+        first: list = []  # the first task's cells, taken before a LocalCluster is started for them
+        batches = None
+        if self.workers is not None:  # its slots known before it starts: none started while every cell left is
+            batches = _Batches(cells, IN_FLIGHT * self.workers)  # another run's (this one then only waits)
+            first = _next_taken(batches, take)
+            if not first:
+                return
         with self._using(dashboard=log is not None) as (client, new):
             if log is not None and new:
                 link = getattr(client, "dashboard_link", None) if _has_dashboard(client) else None
@@ -665,7 +689,8 @@ class DaskCluster:
             tag = uuid.uuid4().hex[:8]
             futures: dict = {}
             counter = itertools.count()
-            batches = _Batches(cells, IN_FLIGHT * max(1, sum(client.nthreads().values())))
+            if batches is None:
+                batches = _Batches(cells, IN_FLIGHT * max(1, sum(client.nthreads().values())))
             asked = [time.monotonic()]
 
             def submit() -> None:
@@ -679,16 +704,11 @@ class DaskCluster:
                         batches.slots = IN_FLIGHT * max(1, sum(client.nthreads().values()))
                         asked[0] = time.monotonic()
                     limit = batches.slots
-                while batches and len(futures) < limit:
-                    items = batches.next()
-                    if take is not None:  # a retried cell (worker deaths > 0) is this run's already
-                        given = {c.key for c in take([c for c, d in items if d == 0])}
-                        kept = [(c, d) for c, d in items if d > 0 or c.key in given]
-                        if len(kept) < len(items):
-                            batches.dropped(items, kept)
-                            items = kept
-                        if not items:
-                            continue
+                while len(futures) < limit:
+                    items = first.copy() if first else _next_taken(batches, take)
+                    first.clear()
+                    if not items:
+                        break
                     seq = next(counter)  # a retried cell gets a new key: the old one may still be known as erred
                     f = client.submit(cells_task, self.fn, plugin, [c for c, _ in items],
                                       key=f"graybox-cells-{items[0][0].key[:16]}-{seq}-{tag}", pure=False)
