@@ -135,3 +135,18 @@ def test_an_empty_file_nobody_is_making_is_still_refused_untouched(grid, tmp_pat
     with pytest.raises(gx.StoreError, match="an empty file"):
         _open(store, g, cells)
     assert store.stat().st_size == 0
+
+
+def test_the_making_lock_a_killed_maker_left_is_swept_when_old(grid, tmp_path):  # noqa: F811
+    from graybox.experiments import _store
+
+    _, g, _, cells = grid
+    store = tmp_path / "s.sqlite"
+    lock = tmp_path / ".s.sqlite.making"
+    lock.write_bytes(b"")  # a maker killed a moment ago, or making the store right now: not swept
+    _open(store, g, cells).close()
+    assert lock.is_file()
+    old = time.time() - 2 * _store.LEFTOVER_SECONDS
+    os.utime(lock, (old, old))
+    _open(store, g, cells).close()
+    assert not lock.exists() and len(gx.store_specs(store)) == 1

@@ -27,6 +27,11 @@ import sqlite3
 import threading
 import time
 from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # Windows, whose file systems have hard links: no store is made in place there
+    fcntl = None  # type: ignore[assignment]
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -170,6 +175,53 @@ def _check_file(path: Path) -> None:
                          "Choose another --store path")
 
 
+#: Seconds a run waits for the lock beside a store another run makes in place (as long as SQLite's own lock wait).
+MAKING_TIMEOUT = 30.0
+
+
+def _making_path(p: Path) -> Path:
+    """The lock beside a store ``p`` that a run making it in place holds (:func:`_making`)."""
+    return p.with_name(f".{p.name}.making")
+
+
+def _flock(fd: int, kind: int, timeout: float) -> bool:
+    """Lock ``fd`` (``fcntl.LOCK_EX`` or ``LOCK_SH``), waiting up to ``timeout`` seconds; False where it cannot."""
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            fcntl.flock(fd, kind | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.005)
+        except OSError:  # a file system without such locks: SQLite's own lock wait is all there is
+            return False
+
+
+@contextlib.contextmanager
+def _making(p: Path):
+    """While a run makes the store ``p`` in place: ``.NAME.making`` beside it, locked from before the store's file
+    exists until its first transaction ends (removed then). A file appears at its connect, empty and unlocked
+    for a statement until its ``BEGIN IMMEDIATE``; a run finding it empty then waited for no lock and refused
+    it. flock (not SQLite's POSIX locks) so that two threads of one process wait for each other too."""
+    lock = _making_path(p)
+    fd = None
+    if fcntl is not None:
+        with contextlib.suppress(OSError):  # a folder this user cannot write in: the connect says so
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        if fd is not None and _flock(fd, fcntl.LOCK_EX, MAKING_TIMEOUT):
+            with contextlib.suppress(OSError):
+                os.utime(fd)  # a killed maker's old file, taken again: not to be swept as a leftover meanwhile
+        yield
+    finally:
+        if fd is not None:
+            with contextlib.suppress(OSError):
+                lock.unlink()  # before its lock ends: a run opening it still finds the store whole
+            os.close(fd)
+
+
 def _wait_for_maker(path: Path) -> None:
     """An empty file, or an SQLite file without tables, at a store's path may be a store another run is making in
     place (a file system without hard links, :meth:`ResultStore.open`): wait for that run's first transaction
@@ -183,6 +235,16 @@ def _wait_for_maker(path: Path) -> None:
                     return
             finally:
                 ro.close()
+        if fcntl is not None:  # a maker holds its lock from before the file exists (_making)
+            try:
+                fd = os.open(_making_path(path), os.O_RDONLY)
+            except OSError:  # none: nobody is making it, or its maker is done
+                pass
+            else:
+                try:
+                    _flock(fd, fcntl.LOCK_SH, MAKING_TIMEOUT)
+                finally:
+                    os.close(fd)
         conn = _connect(path)
         try:
             conn.execute("BEGIN IMMEDIATE")  # waits (up to the timeout) for a maker's transaction
@@ -376,24 +438,33 @@ class ResultStore:
                 raise StoreError(f"{p} is damaged ({exc}); nothing was written to it; {_DAMAGED}") from None
             finally:
                 ro.close()
-        conn = _connect_to_write(p, p, "open")
+        made_before = exists
+        # made in place (a file system without hard links, _create_whole), the file appears at the connect and is
+        # locked a statement later: the maker's lock beside it (_making) is held from before the file exists
+        with contextlib.nullcontext() if exists else _making(p):
+            conn = _connect_to_write(p, p, "open")
+            try:
+                if exists:
+                    _settings(conn)
+                else:
+                    # the tables in the file's first transaction, WAL after: until it commits, the file stays empty
+                    # and its lock held, which a run opening the path meanwhile waits for (_wait_for_maker)
+                    conn.execute("BEGIN IMMEDIATE")
+                    made_before = conn.execute("SELECT 1 FROM sqlite_master").fetchone() is not None
+                    if made_before:  # by another run (started at once) since this one looked
+                        conn.execute("ROLLBACK")
+                        conn.close()
+                    else:
+                        meta = _create_tables(conn, version)
+                        conn.execute("COMMIT")
+                        conn.execute("PRAGMA journal_mode=WAL")
+                        _settings(conn)
+            except BaseException:
+                conn.close()
+                raise
+        if not exists and made_before:  # the other run's store: opened as it is, checked
+            return cls.open(p, grid_name=grid_name, fingerprint=fingerprint, spec=spec, cells=cells, version=version)
         try:
-            if exists:
-                _settings(conn)
-            else:  # a file system without hard links (_create_whole): made in place
-                # the tables in the file's first transaction, WAL after: until it commits, the file stays empty and
-                # its lock held, which a run opening the path meanwhile waits for (_wait_for_maker)
-                conn.execute("BEGIN IMMEDIATE")
-                if conn.execute("SELECT 1 FROM sqlite_master").fetchone() is not None:
-                    # another run (started at once) made the file since this one looked: open it as it is, checked
-                    conn.execute("ROLLBACK")
-                    conn.close()
-                    return cls.open(p, grid_name=grid_name, fingerprint=fingerprint, spec=spec, cells=cells,
-                                    version=version)
-                meta = _create_tables(conn, version)
-                conn.execute("COMMIT")
-                conn.execute("PRAGMA journal_mode=WAL")
-                _settings(conn)
             if migrate:
                 _upgrade(conn, meta, cells)
                 meta["format_version"] = FORMAT_VERSION
@@ -585,8 +656,9 @@ LEFTOVER_SECONDS = 600.0
 
 
 def _sweep_leftovers(p: Path) -> None:
-    """Remove the half-made stores (and their -wal, -shm) a run killed while making the store at ``p`` left."""
-    name = re.compile(rf"\.{re.escape(p.name)}\.[0-9a-f]{{8}}\.new(-wal|-shm)?")
+    """Remove the half-made stores (and their -wal, -shm), and the making lock (:func:`_making`), that a run killed
+    while making the store at ``p`` left."""
+    name = re.compile(rf"\.{re.escape(p.name)}\.([0-9a-f]{{8}}\.new(-wal|-shm)?|making)")
     now = time.time()
     try:
         for f in p.parent.iterdir():
