@@ -164,7 +164,7 @@ class SEProblem:
         # gradient of these residuals is in output units, so its tolerance is scaled by this
         self.y_scale = output_scale(self.target)
         self._memo: dict = {}  # least squares and PE solutions, shared with with_margin's copies
-        self._static_memo: tuple[bytes, np.ndarray] | None = None
+        self._static_memo: tuple[bytes, np.ndarray, bool] | None = None  # (θ, ȳ, every point evaluated)
         self._centre_basis(scored_only)
         self.ridge = check_real(ridge, "ridge", low=0.0)
         self.ridge_ref = self.ls_z() if self.ridge > 0 else None
@@ -341,10 +341,13 @@ class SEProblem:
         js = sse / self.n_dyn
         return np.where(np.isfinite(js), js, np.inf)
 
-    def static_outputs(self, thetas: np.ndarray) -> np.ndarray:
+    def static_outputs(self, thetas: np.ndarray, *, scored: bool = False) -> np.ndarray:
         """The equilibrium each row reaches from each measured ȳ_i (NaN where none), shape (P, M).
 
         :func:`graybox.static._analysis.reached_equilibria` with y0 = ȳ_i: the definition of J_SF.
+        ``scored``: only J_SF and the residuals it is made of are asked, which are infinite once one point
+        is not reached: a row's runs stop there (``until_failure``), so where a row misses a point its
+        other points may be NaN too; a row that reaches every point is exactly as without.
         """
         if self.static is None:
             raise ValueError("this problem has no static points")
@@ -353,16 +356,20 @@ class SEProblem:
         # evaluated: the last single θ's equilibria are kept (read-only), not solved again
         key = thetas.tobytes() if thetas.shape[0] == 1 else None
         memo = self._static_memo
-        if key is not None and memo is not None and memo[0] == key:
+        if key is not None and memo is not None and memo[0] == key and (scored or memo[2]):
             return memo[1]
+        complete = True
         if self.surface_inputs is not None:
             yb = reached_surface(self.structure, thetas, self.static.ubar, self.static.ybar,
                                  inputs=self.surface_inputs).ybar
         else:
-            yb = reached_equilibria(self.structure, thetas, self.static.ubar, self.static.ybar).ybar
+            yb = reached_equilibria(self.structure, thetas, self.static.ubar, self.static.ybar,
+                                    until_failure=scored).ybar
+            # a scored row with a point missed may have points left unevaluated: not the full answer
+            complete = not scored or bool(np.all(np.isfinite(yb)))
         if key is not None:
             yb.flags.writeable = False
-            self._static_memo = (key, yb)
+            self._static_memo = (key, yb, complete)
         return yb
 
     def static_theta_gradient(self, theta: np.ndarray, ybar: np.ndarray) -> np.ndarray:
@@ -373,7 +380,7 @@ class SEProblem:
 
     def jsf(self, thetas: np.ndarray) -> np.ndarray:
         """J_SF of each row (the equilibrium reached from the measured ȳ; inf where none), shape (P,)."""
-        yb = self.static_outputs(thetas)
+        yb = self.static_outputs(thetas, scored=True)
         with np.errstate(all="ignore"):
             v = np.mean((yb - self.static.ybar) ** 2, axis=1)
         return np.where(np.isfinite(v), v, np.inf)
@@ -384,7 +391,7 @@ class SEProblem:
         c = lam1 * js
         yb = None
         if lam1 < 1.0:
-            yb = self.static_outputs(thetas)
+            yb = self.static_outputs(thetas, scored=True)
             with np.errstate(all="ignore"):
                 jsf = np.mean((yb - self.static.ybar) ** 2, axis=1)
             c = c + (1.0 - lam1) * np.where(np.isfinite(jsf), jsf, np.inf)
@@ -929,7 +936,7 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     if M:
         # an unstable equilibrium gives NaN here, hence inf residuals: the solver treats the
         # region as infeasible and shrinks its step, so the front never trades J_SF for stability
-        yb = problem.static_outputs(th)[0]
+        yb = problem.static_outputs(th, scored=True)[0]
         r[a:a + M] = np.sqrt((1.0 - lam1) / M) * (yb - problem.static.ybar)
     if n_ridge:
         r[a + M:] = np.sqrt(problem.ridge / n_ridge) * (z - problem.ridge_ref)
@@ -974,7 +981,7 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     if lam1 < 1.0:
         sp = problem.static
         w2 = np.sqrt((1.0 - lam1) / len(sp))
-        yb = problem.static_outputs(th)[0]
+        yb = problem.static_outputs(th, scored=True)[0]
         rows = np.column_stack([problem.jac_z(w2 * problem.static_theta_gradient(th, yb), 1.0),
                                 w2 * (yb - sp.ybar)])
         if not np.all(np.isfinite(rows)):

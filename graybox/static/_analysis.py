@@ -55,6 +55,7 @@ from ._equilibrium_kernels import (
     NOT_SETTLED,
     POLY,
     REACHED,
+    SKIPPED,
     candidate_linearisations,
     real_roots_upto_cubic,
     schur_stable_rows,
@@ -685,7 +686,8 @@ class Reached:
         vanishes); 2 no locally stable equilibrium; 3 the run diverged; 4 the run did not settle
         within the step budget (an oscillation, a limit cycle, an approach slower than
         ``SETTLE_MAX_STEPS`` / ``SETTLE_TAUS`` samples per time constant); 5 a continuum of
-        equilibria (:func:`continuum`: every output is one, so ū sets no ȳ; none is asymptotically stable).
+        equilibria (:func:`continuum`: every output is one, so ū sets no ȳ; none is asymptotically stable);
+        6 not evaluated (asked with ``until_failure``: another point of the member is not reached).
     """
 
     ubar: np.ndarray
@@ -694,7 +696,7 @@ class Reached:
     status: np.ndarray
 
     STATUS: ClassVar[tuple[str, ...]] = ("reached", "no equilibrium", "no stable equilibrium", "diverged",
-                                         "did not settle", "continuum of equilibria")
+                                         "did not settle", "continuum of equilibria", "not evaluated")
 
     @property
     def ok(self) -> np.ndarray:
@@ -717,6 +719,8 @@ class Reached:
                 why = "no stable equilibrium"
             elif s == DIVERGED:
                 why = f"the free run from y0 = {y0:g} diverged"
+            elif s == SKIPPED:
+                why = "not evaluated (another point is not reached)"
             else:
                 why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within "
                        f"{SETTLE_STEPS} steps, nor within {SETTLE_TAUS} time constants of the slowest (one over "
@@ -728,7 +732,8 @@ class Reached:
 
 
 def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.ndarray, stable: np.ndarray,
-           L: int, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+           L: int, floor: float = 0.0, *, members: np.ndarray | None = None,
+           failed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The one "run until settled" routine: free runs at constant input, checked to have settled.
 
     Each pair k is run from the constant initial output ``y0[k]`` until its last L outputs lie
@@ -760,13 +765,21 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
         Largest output lag of the recursion.
     floor : float
         Smallest output scale of the tolerances (0 for engineering units; 1 in normalised units).
+    members : ndarray of int, shape (K,), optional
+        Each pair's member. Given, a member's pairs are followed only until one of them is not reached:
+        the others then end, or are not started, as 6 (not evaluated), for a caller to whom a member
+        with one point not reached has failed whatever its others reach (J_SF). A member none of whose
+        pairs fails gets exactly the runs and results it gets without ``members``.
+    failed : ndarray of bool, shape (number of members,), optional
+        Members that have failed already (at a point with no stable equilibrium, which is not run);
+        with ``members``; updated in place.
 
     Returns
     -------
     ybar : ndarray, shape (K,)
         The equilibrium reached (NaN where none).
     status : ndarray of int8, shape (K,)
-        As in :class:`Reached`: 0, 2 (no stable equilibrium), 3 or 4.
+        As in :class:`Reached`: 0, 2 (no stable equilibrium), 3, 4 or (with ``members``) 6.
     """
     y0a = np.ascontiguousarray(y0, dtype=float)
     cand, ncand, tol, ntol = settle_candidates(np.ascontiguousarray(roots, dtype=float),
@@ -775,32 +788,49 @@ def settle(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, roots: np.
     run = ncand > 0
     ybar = np.full(y0a.shape, np.nan)
     status = np.full(y0a.shape, NONE_STABLE, dtype=np.int8)
+    groups = None
+    if members is not None:
+        groups = np.ascontiguousarray(members, dtype=np.int64)
+        if failed is None:
+            failed = np.zeros(int(groups.max(initial=-1)) + 1, dtype=np.bool_)
+        failed[groups[~run]] = True  # a pair with no stable equilibrium is not reached
     if run.any():
         sel = slice(None) if run.all() else run  # every pair runs: views, no copies
         ip = np.ascontiguousarray(ip, dtype=np.int64)
         L = max(int(L), 1)
+        grp = () if groups is None else (np.ascontiguousarray(groups[sel]), failed, False)
         with np.errstate(all="ignore"):
             ybar[sel], status[sel], last, left = settle_runs(
                 int(kind), ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0a[sel]),
                 np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
                 np.ascontiguousarray(ntol[sel]), L, float(floor), SETTLE_STEPS, _ONE_BUDGET, _NO_HISTORY, STALL_RTOL,
-                _NO_RATES)
+                _NO_RATES, *grp)
         if left:
-            _settle_longer(int(kind), ip, fp, y0a, cand, ncand, tol, ntol, L, float(floor), run, ybar, status, last)
+            _settle_longer(int(kind), ip, fp, y0a, cand, ncand, tol, ntol, L, float(floor), run, ybar, status, last,
+                           groups, failed)
     return ybar, status
 
 
 def _settle_longer(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, cand: np.ndarray, ncand: np.ndarray,
                    tol: np.ndarray, ntol: np.ndarray, L: int, floor: float, run: np.ndarray, ybar: np.ndarray,
-                   status: np.ndarray, last: np.ndarray) -> None:
+                   status: np.ndarray, last: np.ndarray, groups: np.ndarray | None = None,
+                   failed: np.ndarray | None = None) -> None:
     """Let the runs :func:`settle`'s first pass left unsettled go on for the budget their slowest candidate
     needs (:func:`settle_budget`), from where they are (``last``: the first pass's, indexed as the pairs
     it ran); one whose candidate is too slow to judge within SETTLE_MAX_STEPS stays not settled.
     These runs also end on the geometric test (an approach at the candidate's own rate; see
-    :func:`graybox.static._equilibrium_kernels.settle_runs`). ``ybar`` and ``status`` are updated in place."""
+    :func:`graybox.static._equilibrium_kernels.settle_runs`). ``ybar`` and ``status`` are updated in place;
+    with ``groups`` (each pair's member) the members in ``failed`` are not run on, as in :func:`settle`."""
     again = np.flatnonzero(status == NOT_SETTLED)
     budget, lograte = settle_budget(kind, ip, fp[again], cand[again], ncand[again], L)
     longer = (budget > SETTLE_STEPS) & (budget <= SETTLE_MAX_STEPS)
+    grp = ()
+    if groups is not None:
+        failed[groups[again[~longer]]] = True  # not settled, and not run on: not reached
+        skip = longer & failed[groups[again]]
+        status[again[skip]] = SKIPPED
+        longer &= ~skip
+        grp = (np.ascontiguousarray(groups[again[longer]]), failed, True)
     if not longer.any():
         return
     sel = again[longer]
@@ -810,7 +840,7 @@ def _settle_longer(kind: int, ip: np.ndarray, fp: np.ndarray, y0: np.ndarray, ca
             kind, ip, np.ascontiguousarray(fp[sel], dtype=float), np.ascontiguousarray(y0[sel]),
             np.ascontiguousarray(cand[sel]), ncand[sel], np.ascontiguousarray(tol[sel]),
             np.ascontiguousarray(ntol[sel]), L, floor, 0, budget[longer] - SETTLE_STEPS, hist, STALL_RTOL,
-            np.ascontiguousarray(lograte[longer]))
+            np.ascontiguousarray(lograte[longer]), *grp)
 
 
 #: No per-pair budgets, no earlier runs to go on from: the first pass of :func:`settle`.
@@ -856,7 +886,8 @@ def _fold_map(structure: Structure) -> tuple[np.ndarray, np.ndarray, int]:
     return ip, onehot, int(code.ylag.max(initial=0))
 
 
-def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray) -> Reached:
+def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray, *,
+                       until_failure: bool = False) -> Reached:
     """The equilibrium each member reaches at each point from the constant initial output ``y0``.
 
     The definition behind J_SF (see the module docstring): at (ū_j, y0_j) the equilibrium a free
@@ -874,6 +905,11 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
     y0 : float or ndarray, shape (M,) or (P, M)
         Initial output of each point's run (output units), usually the measured ȳ_i; or one
         per member and point.
+    until_failure : bool
+        Only whether a member reaches every point, and where, is asked (J_SF: infinite once one point
+        is not reached): a member's settling runs stop once one of its points is not reached (no stable
+        equilibrium; a run diverged or did not settle), the points not run to their end then status 6
+        (not evaluated, NaN). A member that reaches every point gets exactly the result it gets without.
 
     Returns
     -------
@@ -899,7 +935,13 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
         has_root = np.any(np.isfinite(roots), axis=-1)
         status = np.where(has_root, NONE_STABLE, NO_EQUILIBRIUM).astype(np.int8)
         yb = np.full((P, M), np.nan)
-        run = np.flatnonzero((np.any(stab, axis=-1) & finite[:, None]).ravel())
+        runs = np.any(stab, axis=-1) & finite[:, None]
+        failed = None
+        if until_failure:
+            failed = ~runs.all(axis=1)  # a point with no stable equilibrium is reached by no run
+            status[runs & failed[:, None]] = SKIPPED
+            runs &= ~failed[:, None]
+        run = np.flatnonzero(runs.ravel())
         if run.size:
             ip, onehot, L = _fold_map(structure)
             mu = encode(structure).mu
@@ -908,14 +950,15 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
             fp = (W.reshape(P * M, -1)[run]) @ onehot
             D = roots.shape[-1]
             y_run, s_run = settle(POLY, ip, fp, np.broadcast_to(y0s, (P, M)).ravel()[run],
-                                  roots.reshape(P * M, D)[run], stab.reshape(P * M, D)[run], L)
+                                  roots.reshape(P * M, D)[run], stab.reshape(P * M, D)[run], L,
+                                  members=None if failed is None else run // M, failed=failed)
             yb.ravel()[run] = y_run
             status.ravel()[run] = s_run
     # every ȳ an equilibrium: none is reached (a run stays at y0, not drawn to any), and it is said as such.
     # Looked for only where nothing was reached: there the y-coefficient 1 − Σ_y… vanishes, so the local
     # pole is 1 and no equilibrium is stable, let alone reached (most calls reach every point, and the
     # check cost a tenth of select_graybox's time)
-    todo = (status != REACHED) & finite[:, None]
+    todo = (status != REACHED) & (status != SKIPPED) & finite[:, None]
     if todo.any():
         cont = continuum(structure, th_ok, ub) & todo
         status[cont] = CONTINUUM

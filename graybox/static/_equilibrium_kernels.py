@@ -27,13 +27,15 @@ import numpy as np
 __all__ = [
     "schur_stable_rows", "entry_sums", "real_roots_upto_cubic", "settle_candidates", "settle_runs",
     "candidate_linearisations",
-    "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED",
+    "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED", "SKIPPED",
 ]
 
 #: Kinds of recursion understood by :func:`settle_runs`.
 POLY, NET = 0, 1
 #: Outcomes of :func:`settle_runs` (codes shared with :class:`graybox.static._analysis.Reached`).
 REACHED, DIVERGED, NOT_SETTLED = 0, 3, 4
+#: A pair not followed to its end: another pair of its group ended not reached (``group`` of :func:`settle_runs`).
+SKIPPED = 6
 
 
 # -- the stability test ------------------------------------------------------------------------
@@ -433,7 +435,8 @@ def settle_candidates(roots, stable, y0, floor, rtol):  # pragma: no cover - com
 
 
 @nb.njit(cache=True, nogil=True)
-def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, budgets, hist, stall_rtol, lograte):  # pragma: no cover - compiled
+def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, budgets, hist, stall_rtol, lograte,
+                group=None, dead=None, final=False):  # pragma: no cover - compiled
     """Run each pair's recursion at constant input from y0 until it settles; classify the end.
 
     Parameters
@@ -476,6 +479,16 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
         recursion's), which a run heading elsewhere, cycling or stalling does not show. A slow
         mode near −1 (an oscillation about c that dies out over 10⁵ samples) ends no other way
         short of its decay to ``tol``.
+    group : ndarray of int64, shape (K,), optional
+        Each pair's group (a member: its points). Given, a group counts as failed once one of its pairs
+        ends :data:`DIVERGED`, or :data:`NOT_SETTLED` when ``final`` (a last pass); its other pairs then
+        end, or are not started, as :data:`SKIPPED` (NaN): a caller that only asks whether every point
+        of a member is reached (J_SF is infinite as soon as one is not) pays no run whose end cannot
+        change that answer. The pairs of groups that never fail run exactly as without groups.
+    dead : ndarray of bool, shape (number of groups,), optional
+        Which groups have failed (read and updated in place; required with ``group``).
+    final : bool
+        Whether a pair ending :data:`NOT_SETTLED` fails its group (no later pass goes on with it).
 
     Returns
     -------
@@ -484,7 +497,7 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
     status : ndarray of int8, shape (K,)
         :data:`REACHED`, :data:`DIVERGED` (the output left 10⁶ times the pair's scale or is not
         finite) or :data:`NOT_SETTLED` (neither within the budget: an oscillation, a limit
-        cycle, a run too slow).
+        cycle, a run too slow); with ``group``, also :data:`SKIPPED`.
     last : ndarray, shape (K, L)
         The last L outputs (oldest first) of each pair left not settled (``hist`` of a call that
         goes on with it); undefined for the others.
@@ -531,6 +544,9 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
             while pair[b] < 0 and nxt < K:
                 k = nxt
                 nxt += 1
+                if group is not None and dead[group[k]]:
+                    status[k] = SKIPPED
+                    continue
                 yk0 = y0[k]
                 ycur = hist[k, L - 1] if resume else yk0  # a resumed run is measured from where it is
                 ref = max(abs(yk0), floor)
@@ -588,7 +604,9 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
             y = ring[((t - 1) & mask) * B + b]
             c0 = target[b]
             end = -1
-            if not (abs(y) <= bound[b]) or not (dev[b] < np.inf):
+            if group is not None and dead[group[k]]:
+                end = SKIPPED
+            elif not (abs(y) <= bound[b]) or not (dev[b] < np.inf):
                 end = DIVERGED
             elif dev[b] <= tol[k, c0]:
                 end = REACHED
@@ -627,6 +645,8 @@ def settle_runs(kind, ip, fp, y0, cand, ncand, tol, ntol, L, floor, max_steps, b
                 end = NOT_SETTLED
             if end >= 0:
                 status[k] = end
+                if group is not None and (end == DIVERGED or (end == NOT_SETTLED and final)):
+                    dead[group[k]] = True
                 if end == NOT_SETTLED:
                     left += 1
                     for i in range(L):
