@@ -66,3 +66,51 @@ def test_se_problem_scored_outputs_do_not_stand_in_for_the_full_ones():
     full = reached_equilibria(CUBIC, th, pts.ubar, pts.ybar).ybar
     np.testing.assert_array_equal(prob.static_outputs(th), full)
     assert np.isfinite(prob.static_outputs(th)[0, 0])
+
+
+
+
+@st.composite
+def surface_members_and_points(draw):
+    P = draw(st.integers(1, 4))
+    thetas = np.array([[draw(st.floats(0.2, 0.9)), draw(st.floats(-0.3, 0.3)), draw(st.floats(-1.0, 1.0)),
+                        draw(st.floats(-1.0, 1.0))] for _ in range(P)])
+    M = draw(st.integers(1, 5))
+    ubar = np.array([[draw(st.floats(-2.0, 2.0)), draw(st.floats(-2.0, 2.0))] for _ in range(M)])
+    y0 = np.array(draw(st.lists(st.floats(-3.0, 3.0), min_size=M, max_size=M)))
+    return thetas, ubar, y0
+
+
+@given(surface_members_and_points())
+@settings(max_examples=60, deadline=None)
+def test_property_until_failure_on_a_static_surface_answers_jsf_as_the_full_analysis(case):
+    from graybox import Structure
+    from graybox.static._surface_analysis import reached_surface
+
+    thetas, ubar, y0 = case
+    structure = Structure(["y(k-1)", "y(k-1)^2", "u1(k-1)", "u2(k-1)"])
+    full = reached_surface(structure, thetas, ubar, y0)
+    part = reached_surface(structure, thetas, ubar, y0, until_failure=True)
+    every = full.ok.all(axis=1)
+    np.testing.assert_array_equal(part.ok.all(axis=1), every)
+    np.testing.assert_array_equal(part.ybar[every], full.ybar[every])
+    ran = part.status != SKIPPED
+    np.testing.assert_array_equal(part.status[ran], full.status[ran])
+    np.testing.assert_array_equal(part.ybar[ran], full.ybar[ran])
+    assert not (part.status == SKIPPED)[every].any()
+
+
+def test_a_surface_member_missing_one_point_leaves_its_other_points_unrun_and_not_the_other_members():
+    from graybox import Structure
+    from graybox.static._surface_analysis import reached_surface
+
+    structure = Structure(["y(k-1)", "y(k-1)^2", "u1(k-1)", "u2(k-1)"])
+    # equilibria: b ȳ² − (1 − a) ȳ + c u1 + d u2 = 0; member 0 has none at u1 = 3 (discriminant < 0)
+    thetas = np.array([[0.5, 0.2, 1.0, 0.0], [0.5, 0.0, 1.0, 0.0]])
+    ubar = np.array([[0.0, 0.0], [3.0, 0.0], [-0.1, 0.0]])
+    y0 = np.zeros(3)
+    full = reached_surface(structure, thetas, ubar, y0)
+    part = reached_surface(structure, thetas, ubar, y0, until_failure=True)
+    assert not full.ok[0, 1] and full.ok[0, 0] and full.ok[1].all()
+    assert part.status[0, 0] == SKIPPED and part.status[0, 2] == SKIPPED and part.status[0, 1] == full.status[0, 1]
+    np.testing.assert_array_equal(part.ybar[1], full.ybar[1])

@@ -358,15 +358,14 @@ class SEProblem:
         memo = self._static_memo
         if key is not None and memo is not None and memo[0] == key and (scored or memo[2]):
             return memo[1]
-        complete = True
         if self.surface_inputs is not None:
             yb = reached_surface(self.structure, thetas, self.static.ubar, self.static.ybar,
-                                 inputs=self.surface_inputs).ybar
+                                 inputs=self.surface_inputs, until_failure=scored).ybar
         else:
             yb = reached_equilibria(self.structure, thetas, self.static.ubar, self.static.ybar,
                                     until_failure=scored).ybar
-            # a scored row with a point missed may have points left unevaluated: not the full answer
-            complete = not scored or bool(np.all(np.isfinite(yb)))
+        # a scored row with a point missed may have points left unevaluated: not the full answer
+        complete = not scored or bool(np.all(np.isfinite(yb)))
         if key is not None:
             yb.flags.writeable = False
             self._static_memo = (key, yb, complete)

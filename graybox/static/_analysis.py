@@ -887,7 +887,7 @@ def _fold_map(structure: Structure) -> tuple[np.ndarray, np.ndarray, int]:
 
 
 def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray, *,
-                       until_failure: bool = False) -> Reached:
+                       until_failure: bool = False, members: np.ndarray | None = None) -> Reached:
     """The equilibrium each member reaches at each point from the constant initial output ``y0``.
 
     The definition behind J_SF (see the module docstring): at (ū_j, y0_j) the equilibrium a free
@@ -910,6 +910,10 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
         is not reached): a member's settling runs stop once one of its points is not reached (no stable
         equilibrium; a run diverged or did not settle), the points not run to their end then status 6
         (not evaluated, NaN). A member that reaches every point gets exactly the result it gets without.
+    members : ndarray of int, shape (P,), optional
+        With ``until_failure``: the member each row belongs to, where one member spans several rows (the
+        static surface's folded members, one row per member and point); rows of one member fail together.
+        By default each row is its own member.
 
     Returns
     -------
@@ -936,11 +940,13 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
         status = np.where(has_root, NONE_STABLE, NO_EQUILIBRIUM).astype(np.int8)
         yb = np.full((P, M), np.nan)
         runs = np.any(stab, axis=-1) & finite[:, None]
-        failed = None
+        failed = owner = None
         if until_failure:
-            failed = ~runs.all(axis=1)  # a point with no stable equilibrium is reached by no run
-            status[runs & failed[:, None]] = SKIPPED
-            runs &= ~failed[:, None]
+            owner = np.arange(P) if members is None else np.asarray(members, dtype=np.int64).ravel()
+            failed = np.zeros(int(owner.max(initial=-1)) + 1, dtype=np.bool_)
+            failed[owner[~runs.all(axis=1)]] = True  # a point with no stable equilibrium is reached by no run
+            status[runs & failed[owner][:, None]] = SKIPPED
+            runs &= ~failed[owner][:, None]
         run = np.flatnonzero(runs.ravel())
         if run.size:
             ip, onehot, L = _fold_map(structure)
@@ -951,7 +957,7 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
             D = roots.shape[-1]
             y_run, s_run = settle(POLY, ip, fp, np.broadcast_to(y0s, (P, M)).ravel()[run],
                                   roots.reshape(P * M, D)[run], stab.reshape(P * M, D)[run], L,
-                                  members=None if failed is None else run // M, failed=failed)
+                                  members=None if failed is None else owner[run // M], failed=failed)
             yb.ravel()[run] = y_run
             status.ravel()[run] = s_run
     # every ȳ an equilibrium: none is reached (a run stays at y0, not drawn to any), and it is said as such.

@@ -239,7 +239,7 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
 
 
 def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, y0: np.ndarray, *,
-                    inputs: tuple[str, ...] | None = None) -> Reached:
+                    inputs: tuple[str, ...] | None = None, until_failure: bool = False) -> Reached:
     """The equilibrium each member reaches at each point ū_j from the constant initial output y0_j.
 
     The definition of :func:`graybox.static._analysis.reached_equilibria`, at points of input space.
@@ -253,6 +253,9 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
     y0 : float or ndarray, shape (M,)
         Initial output of each point's run (output units).
     inputs : tuple of str, optional
+    until_failure : bool
+        As in :func:`~graybox.static._analysis.reached_equilibria`: a member's runs stop once one of its
+        points is not reached (J_SF's question); a member that reaches every point gets the same result.
 
     Returns
     -------
@@ -267,7 +270,8 @@ def reached_surface(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, 
     P, T = th.shape[0], th.shape[2]
     # every (member, point) pair is one member of the folded model at ū' = 1, in one call
     y0p = np.broadcast_to(y0s[None, :], (P, M)).reshape(P * M, 1)
-    r = _static.reached_equilibria(sk, th.reshape(P * M, T), np.ones(1), y0p)
+    r = _static.reached_equilibria(sk, th.reshape(P * M, T), np.ones(1), y0p, until_failure=until_failure,
+                                   members=np.repeat(np.arange(P), M))
     return Reached(ub, y0s, r.ybar.reshape(P, M), r.status.reshape(P, M))
 
 
