@@ -199,6 +199,14 @@ class LocalModel:
         for name, v in (("ubar", ubar), ("a", a), ("b", b)):
             if not np.isfinite(v).all():
                 raise ValueError(f"{name} has non-finite values")
+        # the gains Σ_l b_il / (1 − Σ_l a_l) are the model's figures: coefficients whose sums or gain overflow (a
+        # hand-edited file) are no local model; an integrator's 1 − Σa = 0 is its infinite gain, not an overflow
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            den, sb = 1.0 - a.sum(), b.sum(axis=1)
+            gain = sb / den
+        if not np.isfinite(den) or not np.isfinite(sb).all() or (den != 0 and not np.isfinite(gain).all()):
+            raise ValueError(f"a and b overflow: 1 − Σa = {den:g}, Σb = {sb.tolist()} and the DC gain Σb / (1 − Σa) "
+                             "must be finite (an integrator's 1 − Σa = 0 excepted)")
         if self.ybar is not None and not np.isfinite(self.ybar):
             raise ValueError(f"ybar must be finite or None (no equilibrium), got {self.ybar}")
         check_choice(self.status, "status", Reached.STATUS)

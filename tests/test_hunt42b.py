@@ -1,0 +1,51 @@
+"""hunt42b: bugs found in graybox.control (local models, operating curves), the CSV loaders and hand-edited saved
+files of local models, operating curves and bands; each test failed before its fix."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.control import local_model, operating_curve
+
+
+def _edited_file(value, path, edit):
+    """``value`` saved at ``path``, then its JSON object changed by ``edit`` (a hand edit); the path."""
+    gb.save(value, path)
+    j = json.loads(path.read_text())
+    edit(j["object"])
+    path.write_text(json.dumps(j))
+    return path
+
+
+ST = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "u(k-1)^2", "1"]
+
+
+@pytest.fixture(scope="module")
+def pumping_unc():
+    d = gb.load_pumping()
+    return gb.ls_uncertainty(gb.els(ST, d.ident, noise=0).model, d.ident), d
+
+
+@pytest.mark.parametrize("b", [[0.0, 1e308], [1e308, 1e308]])
+def test_a_local_model_whose_figures_overflow_is_refused_on_loading(pumping_unc, tmp_path, b):
+    # b = 1e308 in a hand-edited file loaded, and its gain then overflowed with numpy's RuntimeWarning (an inf gain
+    # of a stable model); b = [1e308, 1e308] overflowed in the sum
+    lm = local_model(pumping_unc[0].model, 1000.0)
+    p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("b", [b]))
+    with pytest.raises(gb.GrayboxFileError, match="overflow"):
+        gb.load(p)
+
+
+def test_an_integrators_local_model_still_loads_with_its_infinite_gain(tmp_path):
+    # the check above refuses overflow, not the 1 − Σa = 0 of an integrator, whose gain is inf by definition
+    lm = type(local_model(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]), 1.0, Ts=1.0))(
+        np.array([0.0]), 1.0, "continuum of equilibria", "ū = 0: every ȳ", np.array([1.0]), np.array([[1.0]]), 1.0,
+        ("u",))
+    gb.save(lm, tmp_path / "int.json")
+    back = gb.load(tmp_path / "int.json")
+    with np.errstate(divide="ignore"):
+        assert np.isinf(back.dc_gain[0])
