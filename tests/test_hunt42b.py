@@ -49,3 +49,41 @@ def test_an_integrators_local_model_still_loads_with_its_infinite_gain(tmp_path)
     back = gb.load(tmp_path / "int.json")
     with np.errstate(divide="ignore"):
         assert np.isinf(back.dc_gain[0])
+
+
+def _band_of(kind, unc, d, method):
+    if kind == "curve":
+        return gb.static_curve_band(unc, np.array([800.0, 1200.0, 1600.0]), method=method, n_samples=50)
+    return gb.simulation_band(unc, d.valid.slice(0, 200) if hasattr(d.valid, "slice") else d.valid, method=method,
+                              n_samples=50)
+
+
+@pytest.mark.parametrize("kind", ["curve", "simulation"])
+@pytest.mark.parametrize("method, edit", [("delta", {"n_samples": 500}), ("monte-carlo", {"n_samples": 0}),
+                                          ("monte-carlo", {"n_samples": 3}), ("delta", {"method": "monte-carlo"}),
+                                          ("monte-carlo", {"method": "delta"})])
+def test_a_band_whose_method_and_draws_disagree_is_refused_on_loading(pumping_unc, tmp_path, kind, method, edit):
+    # a delta band saying it drew 500 models, or a Monte Carlo band of 0 draws, loaded as it was written
+    unc, d = pumping_unc
+    band = _band_of(kind, unc, d, method)
+    p = _edited_file(band, tmp_path / "band.json", lambda o: o.update(edit))
+    with pytest.raises(gb.GrayboxFileError, match="n_samples"):
+        gb.load(p)
+    gb.save(band, tmp_path / "ok.json")  # the band as made loads
+    assert gb.load(tmp_path / "ok.json").method == method
+
+
+@pytest.mark.parametrize("kind, share", [("curve", "undefined"), ("simulation", "diverged")])
+def test_a_delta_band_with_dropped_draws_is_refused_on_loading(pumping_unc, tmp_path, kind, share):
+    # the delta method draws nothing, so none is left out; a Monte Carlo share is a count of its draws
+    unc, d = pumping_unc
+    delta = _band_of(kind, unc, d, "delta")
+    value = [0.5] * 3 if kind == "curve" else 0.5
+    p = _edited_file(delta, tmp_path / "band.json", lambda o: o.update({share: value}))
+    with pytest.raises(gb.GrayboxFileError, match=share):
+        gb.load(p)
+    mc = _band_of(kind, unc, d, "monte-carlo")  # 50 draws: a share of 0.013 is no count of them
+    value = [0.013] * 3 if kind == "curve" else 0.013
+    p = _edited_file(mc, tmp_path / "mc.json", lambda o: o.update({share: value}))
+    with pytest.raises(gb.GrayboxFileError, match=share):
+        gb.load(p)

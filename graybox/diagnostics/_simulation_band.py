@@ -19,7 +19,7 @@ from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
 from ..core._validation import check_band_values, check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 from ..models._coerce import as_record
-from ._uncertainty import BAND_METHODS, ParameterUncertainty, UncertaintyWarning, theta_draws
+from ._uncertainty import BAND_METHODS, MIN_DRAWS, ParameterUncertainty, UncertaintyWarning, check_band_draws, theta_draws
 
 __all__ = ["SimulationBand", "simulation_band"]
 
@@ -79,9 +79,8 @@ class SimulationBand:
         object.__setattr__(self, "units", check_units(self.units, "SimulationBand"))  # ("rpm", 3) is no unit
         # a value read from a hand-edited file is held to what the band can be
         check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
-        check_choice(self.method, "method", BAND_METHODS)
-        check_int(self.n_samples, "n_samples", low=0)
         check_real(self.diverged, "diverged", low=0, high=1)
+        check_band_draws(self.method, self.n_samples, self.diverged, "diverged")
         check_band_values(self.std, self.low, self.high, "std", "low", "high")
 
     @property
@@ -160,7 +159,7 @@ def simulation_band(
                         f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
     rec = as_record(record, "valid", "record")
     check_choice(method, "method", BAND_METHODS)
-    n_samples = check_int(n_samples, "n_samples", low=10)
+    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)
     seed = check_seed(seed)
     m = uncertainty.model
     st, th = m.structure, m.theta

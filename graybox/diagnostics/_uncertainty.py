@@ -98,6 +98,31 @@ ELS_STATIONARY_RTOL = 1e-2
 
 #: How a band (static curve, free run) is taken from a parameter covariance: to first order, or by draws.
 BAND_METHODS = ("delta", "monte-carlo")
+#: Fewest Monte Carlo draws a band is taken from.
+MIN_DRAWS = 10
+
+
+def check_band_draws(method: str, n_samples: int, share: np.ndarray | float, share_name: str) -> None:
+    """A band's method, its number of draws and the share of them left out, checked against each other (a band
+    made here meets them; a hand-edited file is held to them): the delta method draws nothing (n_samples 0, none
+    left out), a Monte Carlo band at least :data:`MIN_DRAWS`, and leaves out a whole number of them."""
+    check_choice(method, "method", BAND_METHODS)
+    n = check_int(n_samples, "n_samples", low=0)
+    s = np.asarray(share, float)
+    if np.any(~np.isfinite(s) | (s < 0) | (s > 1)):
+        raise ValueError(f"{share_name} must hold shares of the draws, in [0, 1]")
+    if method == "delta":
+        if n != 0:
+            raise ValueError(f"n_samples must be 0 for the delta method (it draws nothing), got {n}")
+        if np.any(s != 0):
+            raise ValueError(f"{share_name} must be 0 for the delta method (it draws nothing, so leaves none out)")
+        return
+    if n < MIN_DRAWS:
+        raise ValueError(f"n_samples must be >= {MIN_DRAWS} for the Monte Carlo method, got {n}")
+    counts = s * n
+    if np.any(np.abs(counts - np.round(counts)) > 1e-9 * n):
+        raise ValueError(f"{share_name} must be shares of the n_samples = {n} draws (whole numbers of them), got "
+                         f"{s[np.abs(counts - np.round(counts)) > 1e-9 * n].ravel()[:3].tolist()}")
 
 
 class UncertaintyWarning(UserWarning):
@@ -1164,10 +1189,7 @@ def _check_static_band(band, point_shape: tuple[int, ...], gain_shape: tuple[int
             raise ValueError(f"{f} must have shape {shape}, got {a.shape}")
         object.__setattr__(band, f, a)
     check_real(band.level, "level", low=0, high=1, low_open=True, high_open=True)
-    check_choice(band.method, "method", BAND_METHODS)
-    check_int(band.n_samples, "n_samples", low=0)
-    if np.any((band.undefined < 0) | (band.undefined > 1)):
-        raise ValueError("undefined must hold shares of the draws, in [0, 1]")
+    check_band_draws(band.method, band.n_samples, band.undefined, "undefined")
     check_band_values(band.ybar_std, band.ybar_low, band.ybar_high, "ybar_std", "ybar_low", "ybar_high")
     check_band_values(band.gain_std, band.gain_low, band.gain_high, "gain_std", "gain_low", "gain_high")
 
@@ -1314,7 +1336,7 @@ def static_curve_band(
         sy, sg = np.sqrt(uncertainty.contract(Gy)), np.sqrt(uncertainty.contract(Gg))
         return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name, m.units)
-    n_samples = check_int(n_samples, "n_samples", low=10)
+    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)
     rng = np.random.default_rng(check_seed(seed))
     thetas = theta_draws(th, cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_equilibria(st, thetas, ub, yb).ybar
@@ -1396,7 +1418,7 @@ def static_surface_band(
         sg = np.sqrt(uncertainty.contract(Gg.reshape(-1, th.size))).reshape(gain.shape)
         return StaticSurfaceBand(ub, names, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                  uncertainty.level, "delta", 0, np.zeros(ub.shape[0]), m.name, m.units)
-    n_samples = check_int(n_samples, "n_samples", low=10)
+    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)
     rng = np.random.default_rng(seed)
     thetas = theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_surface(st, thetas, ub, yb, inputs=names).ybar  # (P, M)
