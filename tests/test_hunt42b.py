@@ -87,3 +87,36 @@ def test_a_delta_band_with_dropped_draws_is_refused_on_loading(pumping_unc, tmp_
     p = _edited_file(mc, tmp_path / "mc.json", lambda o: o.update({share: value}))
     with pytest.raises(gb.GrayboxFileError, match=share):
         gb.load(p)
+
+
+@pytest.fixture(scope="module")
+def curve_with_band(pumping_unc):
+    unc, _ = pumping_unc
+    return operating_curve(unc.model, [800.0, 1200.0, 1600.0], uncertainty=unc, n_samples=50)
+
+
+def _at(key, i, v):
+    return lambda o: o[key].__setitem__(i, v)
+
+
+@pytest.mark.parametrize("edit, match", [
+    (_at("damping", 0, 0.1), "damping disagrees"),
+    (_at("settling_time", 1, -3.0), "settling_time"),
+    (_at("gain_low", 0, 10.0), "gain_low must not exceed gain_high"),
+    (_at("time_constant_low", 2, 50.0), "time_constant_low must not exceed time_constant_high"),
+    (_at("time_constant_low", 0, -5.0), "time_constant_low"),
+    (_at("undefined", 0, 7.0), "undefined"),
+    (lambda o: o.__setitem__("level", 5.0), "level"),
+    (lambda o: o.__setitem__("gain_high", None), "bands"),
+    (lambda o: [o.__setitem__(k, None) for k in ("gain_low", "gain_high", "time_constant_low", "time_constant_high",
+                                                  "undefined")], "level"),
+])
+def test_a_hand_edited_operating_curve_is_held_to_what_a_curve_can_be(curve_with_band, tmp_path, edit, match):
+    # each loaded as written: crossed bands, a level of 5, an undefined share of 7, a damping the local models
+    # contradict, a negative settling time, and half a band (to_frame then raised AttributeError on None)
+    p = _edited_file(curve_with_band, tmp_path / "oc.json", edit)
+    with pytest.raises(gb.GrayboxFileError, match=match):
+        gb.load(p)
+    gb.save(curve_with_band, tmp_path / "ok.json")
+    back = gb.load(tmp_path / "ok.json")
+    assert back.has_band and np.array_equal(back.gain_low, curve_with_band.gain_low)

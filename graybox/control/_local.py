@@ -32,8 +32,8 @@ from scipy.signal import lfilter
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, check_units, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
-from ..core._validation import (check_choice, check_fields, check_int, check_per_point, check_real, check_seed, frozen,
-                                real_array, warn)
+from ..core._validation import (check_band_values, check_choice, check_fields, check_int, check_per_point, check_real,
+                                check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, reached_equilibria,
@@ -735,16 +735,49 @@ class OperatingCurve:
                 each = "operating point and input" if len(want) > 1 else "operating point"
                 raise ValueError(f"{f} must have shape {want}, one value per {each}, got {v.shape}")
         # the columns are the local models' own figures (the plots and tables read the columns, a user the models);
-        # the settling time is left out: it costs a step response per point
+        # the settling time is not recomputed (it costs a step response per point), only held to what it can be
         rows = [_summary(lm, settling=False) for lm in self.local_models]
         own = {"ybar": np.array([r[0] for r in rows]), "gain": np.array([r[1] for r in rows]).reshape(self.ubar.shape),
-               "time_constant": np.array([r[2] for r in rows]), "spectral_radius": np.array([r[4] for r in rows])}
+               "time_constant": np.array([r[2] for r in rows]), "damping": np.array([r[3] for r in rows]),
+               "spectral_radius": np.array([r[4] for r in rows])}
         for f, v in own.items():
             if not np.allclose(getattr(self, f), v, rtol=1e-9, atol=0.0, equal_nan=True):
                 i = int(np.flatnonzero(~np.isclose(getattr(self, f), v, rtol=1e-9, atol=0.0, equal_nan=True)
                                        .reshape(M, -1).any(axis=1))[0])
                 raise ValueError(f"{f} disagrees with the local models' own at operating point {i} "
                                  f"({getattr(self, f).reshape(M, -1)[i].tolist()} against {v.reshape(M, -1)[i].tolist()})")
+        exists = np.array([lm.exists for lm in self.local_models])
+        st = self.settling_time
+        if np.any(st < 0) or np.any(~np.isnan(st[~exists])):
+            i = int(np.flatnonzero((st < 0) | (~exists & ~np.isnan(st)))[0])
+            raise ValueError(f"settling_time must be >= 0 seconds (inf: never), NaN where there is no equilibrium; got "
+                             f"{st[i]:g} at operating point {i}")
+        self._check_bands()
+
+    def _check_bands(self) -> None:
+        """The Monte Carlo bands as :func:`operating_curve` makes them (a file loads through here): all or none, at a
+        level in (0, 1) (NaN without), low ends at most high ones, τ >= 0, undefined shares in [0, 1] (NaN where the
+        model itself reaches no equilibrium)."""
+        given = [f for f in self.BANDS if getattr(self, f) is not None]
+        if not given:
+            if not np.isnan(self.level):
+                raise ValueError(f"level must be NaN without bands (it is the bands' confidence level), got {self.level}")
+            return
+        if len(given) != len(self.BANDS):
+            raise ValueError(f"the bands are all given or none: {', '.join(given)} given, "
+                             f"{', '.join(f for f in self.BANDS if f not in given)} not")
+        check_real(self.level, "level (of the bands)", low=0, high=1, low_open=True, high_open=True)
+        for lo, hi in (("gain_low", "gain_high"), ("time_constant_low", "time_constant_high")):
+            a, b = getattr(self, lo), getattr(self, hi)
+            check_band_values(np.zeros(a.shape), a, b, "", lo, hi)
+        tlo = self.time_constant_low
+        if np.any(tlo < 0):
+            raise ValueError(f"time_constant_low must be >= 0 seconds, got {tlo[tlo < 0][0]:g}")
+        u = self.undefined
+        reached = np.array([lm.reached for lm in self.local_models])
+        if np.any((u < 0) | (u > 1)) or np.any(np.isnan(u[reached])):
+            raise ValueError("undefined must hold shares of the draws, in [0, 1] (NaN only where the model reaches no "
+                             f"equilibrium), got {u.tolist()}")
 
     @property
     def has_band(self) -> bool:
