@@ -120,3 +120,14 @@ def test_a_hand_edited_operating_curve_is_held_to_what_a_curve_can_be(curve_with
     gb.save(curve_with_band, tmp_path / "ok.json")
     back = gb.load(tmp_path / "ok.json")
     assert back.has_band and np.array_equal(back.gain_low, curve_with_band.gain_low)
+
+
+def test_a_surface_fit_names_the_input_with_too_few_levels_for_its_power():
+    # a degree-2 surface on a 2 × 3 grid of (u1, u2): u1² is not identifiable from two levels of u1, and the fit said
+    # only 'regressor matrix has rank 5 < 6 columns', naming neither the input nor the power
+    P = np.array([[a, b] for a in (0.5, 1.5) for b in (0.5, 1.0, 1.5)])
+    pts = gb.StaticPoints(P, P.sum(axis=1) + P[:, 1] ** 2, input_names=("u1", "u2"))
+    with pytest.raises(ValueError, match=r"u1.* 2 levels.*power 2"):
+        gb.StaticSurface.fit(pts, degree=2)
+    s = gb.StaticSurface.fit(pts, exponents=[(0, 0), (1, 0), (0, 1), (0, 2), (1, 1)])  # u2² from its 3 levels
+    np.testing.assert_allclose(s(P), pts.ybar, atol=1e-9)

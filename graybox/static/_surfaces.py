@@ -229,6 +229,14 @@ class StaticSurface:
         if held:  # before the fit, whose rank test would say less
             raise ValueError(f"StaticSurface.fit: the points do not vary every input: they hold {held} at one value "
                              "(a flat direction has no domain)")
+        # a power p of an input needs p + 1 levels of it (a 2 × 3 grid fits no u1²): said by name, before the fit,
+        # whose rank test would name neither the input nor the power
+        for i, n in enumerate(names):
+            levels, top = np.unique(ub[:, i]).size, max(e[i] for e in ex)
+            if top >= levels:
+                raise ValueError(f"StaticSurface.fit: the points hold input {n!r} at {levels} levels, too few for its "
+                                 f"power {top} (a power p needs p + 1 levels): give points at more levels of {n!r}, a "
+                                 "lower degree, or the monomials to fit as exponents=")
         V = _monomials(ub, ex)
         c = scaled_lstsq(V, yb)
         return cls(ex, c, box, name or f"fit to {points.name}", names)
