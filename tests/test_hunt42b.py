@@ -131,3 +131,15 @@ def test_a_surface_fit_names_the_input_with_too_few_levels_for_its_power():
         gb.StaticSurface.fit(pts, degree=2)
     s = gb.StaticSurface.fit(pts, exponents=[(0, 0), (1, 0), (0, 1), (0, 2), (1, 1)])  # u2² from its 3 levels
     np.testing.assert_allclose(s(P), pts.ybar, atol=1e-9)
+
+
+@pytest.mark.parametrize("header, asked, meant", [("t [s];power [%];temperature [°C]", "power", "power [%]"),
+                                                   ("t;P (kW);T", "p", "P (kW)"),
+                                                   ("t;power;temperature", "power [%]", "power")])
+def test_a_missing_column_names_the_column_with_its_unit_in_brackets(tmp_path, header, asked, meant):
+    # a logger's header 'power [%]' asked for as 'power': the message listed the columns but suggested none (the
+    # close-match ratio of 'power' to 'power [%]' is below difflib's cutoff for short names)
+    p = tmp_path / "run.csv"
+    p.write_text(header + "\n" + "\n".join(f"{k};{k % 3};{k}" for k in range(6)) + "\n")
+    with pytest.raises(ValueError, match=rf"Did you mean .*{__import__('re').escape(repr(meant))}"):
+        gb.load_record_csv(p, u=asked, y=header.split(";")[2], Ts=1.0)

@@ -549,9 +549,16 @@ def _fast_columns(p: Path, index: dict[str, int], *, raw: bytes, text: Callable[
     return out
 
 
+def _bare(name: str) -> str:
+    """A column name without a trailing unit in brackets or parentheses, lower case: ``'P (kW)'`` is ``'p'``."""
+    return re.sub(r"\s*(\[[^\[\]]*\]|\([^()]*\))\s*$", "", name.strip()).lower()
+
+
 def _missing_column_message(path: Path, role: str, col: str, header: Sequence[str], delimiter: str = ",") -> str:
     close = difflib.get_close_matches(col, header, n=3, cutoff=0.5)
-    close += [h for h in header if h.lower() == col.lower() and h not in close]
+    # the same name but for case or a unit in brackets ('u' for 'u [%]', 'p' for 'P (kW)'): difflib's ratio
+    # misses a short name beside its unit
+    close += [h for h in header if _bare(h) == _bare(col) and h not in close]
     hint = f" Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
     if len(header) == 1:
         hint += f" The header was read as one column, split at {_name(delimiter)}: pass delimiter= if the file uses another."
