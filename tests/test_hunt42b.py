@@ -143,3 +143,13 @@ def test_a_missing_column_names_the_column_with_its_unit_in_brackets(tmp_path, h
     p.write_text(header + "\n" + "\n".join(f"{k};{k % 3};{k}" for k in range(6)) + "\n")
     with pytest.raises(ValueError, match=rf"Did you mean .*{__import__('re').escape(repr(meant))}"):
         gb.load_record_csv(p, u=asked, y=header.split(";")[2], Ts=1.0)
+
+
+def test_narx_iosystem_without_a_period_asks_for_what_it_takes():
+    # the message said 'pass Ts= or data= (records)', and narx_iosystem takes no data=: passing it was a TypeError
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    with pytest.raises(ValueError, match="Ts") as info:
+        gb.narx_iosystem(m)
+    assert "data=" not in str(info.value)
+    with pytest.raises(ValueError, match="data="):  # local_model does take it
+        local_model(m, 1.0)

@@ -573,9 +573,10 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
              "the local models there are extrapolations of the model", StaticRangeWarning)
 
 
-def check_Ts(Ts: float | None, data: object, model: Model) -> float:
+def check_Ts(Ts: float | None, data: object, model: Model, takes_data: bool = True) -> float:
     """The sampling period of a model's linear or nonlinear systems: ``Ts``, else the one the model was identified
-    at (``data`` at another period is refused: its coefficients hold at its own), else ``data``'s."""
+    at (``data`` at another period is refused: its coefficients hold at its own), else ``data``'s. ``takes_data``:
+    whether the caller has a ``data=`` to suggest."""
     if Ts is None:
         # records (a Dataset's, or a sequence of them, which share one period); static points have none
         recs = None if data is None or isinstance(data, StaticPoints) else as_records(data)
@@ -585,8 +586,8 @@ def check_Ts(Ts: float | None, data: object, model: Model) -> float:
             return float(model.Ts)
         if recs is not None:
             return float(recs[0].Ts)
-        raise ValueError("Ts (the sampling period, s) is needed: pass Ts= or data= (records), or use a "
-                         "model an estimator made (it knows the period it was identified at)")
+        raise ValueError("Ts (the sampling period, s) is needed: pass Ts=" + (" or data= (records)" if takes_data else "")
+                         + ", or use a model an estimator made (it knows the period it was identified at)")
     # given, it is the user's word: a record made without Ts= has the default period 1 s, and its
     # model's local models are then asked for at the real one
     return check_real(Ts, "Ts", low=0, low_open=True)

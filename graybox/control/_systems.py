@@ -212,7 +212,7 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
         if not name.strip():  # python-control takes "" as a name, and control.interconnect then fails on it
             raise ValueError("name must name the system (a non-empty text), or be None for the default from the "
                              f"model's name; got {name!r}")
-    Ts = check_Ts(Ts, None, model)
+    Ts = check_Ts(Ts, None, model, takes_data=False)
     c = _noise_coefficients(model) if noise else np.zeros(0)
     ct = require_control()
     lay = _layout(model.structure, model.input_names)
