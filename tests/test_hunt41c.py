@@ -219,8 +219,9 @@ def test_a_band_with_a_point_no_draw_reached_says_its_width_over_the_others():
     # a Monte Carlo band has NaN ends where no draw reached an equilibrium; one such point made the repr 'max ±nan'
     ub, g = np.array([[0.0, 1.0], [1.0, 1.0]]), np.ones((2, 2))
     low, std = np.array([np.nan, 0.5]), np.array([np.nan, 0.5])
-    b = gb.StaticSurfaceBand(ub, ("u1", "u2"), np.array([1.0, 1.0]), low, low + 1.0, std, g, g * np.nan,
-                             g * np.nan, g * np.nan, 0.95, "monte-carlo", 100, np.array([1.0, 0.0]))
+    nan_at_0 = g * np.array([[np.nan], [1.0]])  # the gains' band is NaN where the ȳ band is: no draw kept there
+    b = gb.StaticSurfaceBand(ub, ("u1", "u2"), np.array([1.0, 1.0]), low, low + 1.0, std, g, nan_at_0,
+                             nan_at_0, nan_at_0 * 0, 0.95, "monte-carlo", 100, np.array([1.0, 0.0]))
     assert "max ±0.5 in ȳ" in repr(b)
     c = gb.StaticCurveBand(ub[:, 0], b.ybar, low, low + 1.0, std, g[:, 0], g[:, 0], g[:, 0], g[:, 0] * 0, 0.95,
                            "monte-carlo", 100, np.array([1.0, 0.0]))

@@ -153,3 +153,41 @@ def test_narx_iosystem_without_a_period_asks_for_what_it_takes():
     assert "data=" not in str(info.value)
     with pytest.raises(ValueError, match="data="):  # local_model does take it
         local_model(m, 1.0)
+
+
+@pytest.mark.parametrize("field, i, value", [("ubar", 0, "nan"), ("ybar", 0, "nan"), ("gain", 1, "inf"),
+                                             ("ybar_low", 0, "nan"), ("ybar_std", 0, "inf"), ("gain_high", 2, "nan")])
+def test_a_static_band_with_a_non_finite_value_is_refused_on_loading(pumping_unc, tmp_path, field, i, value):
+    # NaN and inf in a hand-edited file loaded as written (a delta band has every value; a Monte Carlo band NaN only
+    # where no draw reached an equilibrium)
+    unc, _ = pumping_unc
+    band = gb.static_curve_band(unc, np.array([800.0, 1200.0, 1600.0]))
+    p = _edited_file(band, tmp_path / "band.json", _at(field, i, value))
+    with pytest.raises(gb.GrayboxFileError, match=field):
+        gb.load(p)
+
+
+def test_a_monte_carlo_static_band_keeps_nan_only_where_no_draw_reached(pumping_unc, tmp_path):
+    unc, _ = pumping_unc
+    band = gb.static_curve_band(unc, np.array([800.0, 1200.0, 1600.0]), method="monte-carlo", n_samples=20)
+    nan_everywhere = lambda o: [o[f].__setitem__(1, "nan") for f in ("ybar_low", "ybar_high", "ybar_std", "gain_low",
+                                                                       "gain_high", "gain_std")]
+    p = _edited_file(band, tmp_path / "band.json", nan_everywhere)
+    with pytest.raises(gb.GrayboxFileError, match="ybar_low"):
+        gb.load(p)
+    p = _edited_file(band, tmp_path / "band.json", lambda o: (nan_everywhere(o), o["undefined"].__setitem__(1, 1.0)))
+    assert np.isnan(gb.load(p).ybar_low[1])  # no draw reached an equilibrium there: no band, as made
+
+
+@pytest.mark.parametrize("edit, match", [
+    (_at("t", 1, 0.0), "t must increase"), (_at("t", 1, "nan"), "t must increase"), (_at("yhat", 5, "nan"), "yhat"),
+    (_at("low", 5, "nan"), "low"), (_at("std", 5, "inf"), "std"), (_at("y", 3, "inf"), "y"),
+    (lambda o: [o.__setitem__(f, []) for f in ("t", "y", "yhat", "low", "high", "std")], "sample"),
+])
+def test_a_hand_edited_simulation_band_is_held_to_what_a_band_can_be(pumping_unc, tmp_path, edit, match):
+    # each loaded as written (an empty one then made repr raise 'zero-size array to reduction operation')
+    unc, d = pumping_unc
+    band = gb.simulation_band(unc, d.valid)
+    p = _edited_file(band, tmp_path / "band.json", edit)
+    with pytest.raises(gb.GrayboxFileError, match=match):
+        gb.load(p)

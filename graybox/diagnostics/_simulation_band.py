@@ -19,7 +19,8 @@ from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
 from ..core._validation import check_band_values, check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
 from ..models._coerce import as_record
-from ._uncertainty import BAND_METHODS, MIN_DRAWS, ParameterUncertainty, UncertaintyWarning, check_band_draws, theta_draws
+from ._uncertainty import (BAND_METHODS, MIN_DRAWS, ParameterUncertainty, UncertaintyWarning, check_band_draws,
+                           check_band_finite, theta_draws)
 
 __all__ = ["SimulationBand", "simulation_band"]
 
@@ -81,6 +82,13 @@ class SimulationBand:
         check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
         check_real(self.diverged, "diverged", low=0, high=1)
         check_band_draws(self.method, self.n_samples, self.diverged, "diverged")
+        # the samples' times, the record, the estimate's run (refused where it diverges) and the band of at least
+        # two bounded runs: all numbers, at one sample or more
+        if N == 0:
+            raise ValueError("a simulation band needs at least one sample, got none")
+        if not (np.all(np.isfinite(self.t)) and np.all(np.diff(self.t) > 0)):
+            raise ValueError("t must increase strictly through finite times (s), one per sample")
+        check_band_finite(self, ("y", "yhat", "low", "high", "std"))
         check_band_values(self.std, self.low, self.high, "std", "low", "high")
 
     @property

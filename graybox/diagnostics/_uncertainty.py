@@ -102,6 +102,20 @@ BAND_METHODS = ("delta", "monte-carlo")
 MIN_DRAWS = 10
 
 
+def check_band_finite(band: object, fields: Sequence[str], none_drawn: np.ndarray | None = None) -> None:
+    """A band's ``fields`` finite numbers, NaN allowed only at the points of ``none_drawn`` (shape (M,), along the
+    fields' first axis: where no Monte Carlo draw was kept, there is no band); a hand-edited file is held to it."""
+    for f in fields:
+        v = getattr(band, f)
+        bad = ~np.isfinite(v)
+        if none_drawn is not None:
+            bad &= ~(np.isnan(v) & none_drawn.reshape((-1,) + (1,) * (v.ndim - 1)))
+        if bad.any():
+            i = tuple(int(k) for k in np.argwhere(bad)[0])
+            where = "" if none_drawn is None else " (NaN only where no draw was kept)"
+            raise ValueError(f"{f} must hold finite numbers{where}, got {v[i]} at index {i[0] if len(i) == 1 else i}")
+
+
 def check_band_draws(method: str, n_samples: int, share: np.ndarray | float, share_name: str) -> None:
     """A band's method, its number of draws and the share of them left out, checked against each other (a band
     made here meets them; a hand-edited file is held to them): the delta method draws nothing (n_samples 0, none
@@ -1190,6 +1204,9 @@ def _check_static_band(band, point_shape: tuple[int, ...], gain_shape: tuple[int
         object.__setattr__(band, f, a)
     check_real(band.level, "level", low=0, high=1, low_open=True, high_open=True)
     check_band_draws(band.method, band.n_samples, band.undefined, "undefined")
+    check_band_finite(band, ("ubar", "ybar", "gain"))  # the estimate's own curve: it reaches its equilibria
+    check_band_finite(band, ("ybar_low", "ybar_high", "ybar_std", "gain_low", "gain_high", "gain_std"),
+                      band.undefined == 1)
     check_band_values(band.ybar_std, band.ybar_low, band.ybar_high, "ybar_std", "ybar_low", "ybar_high")
     check_band_values(band.gain_std, band.gain_low, band.gain_high, "gain_std", "gain_low", "gain_high")
 
