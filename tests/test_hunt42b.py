@@ -191,3 +191,14 @@ def test_a_hand_edited_simulation_band_is_held_to_what_a_band_can_be(pumping_unc
     p = _edited_file(band, tmp_path / "band.json", edit)
     with pytest.raises(gb.GrayboxFileError, match=match):
         gb.load(p)
+
+
+@pytest.mark.parametrize("a", [[1.0], [1.5, -0.2], [0.0, 1.2]])
+def test_a_reached_local_model_with_poles_on_or_outside_the_unit_circle_is_refused(pumping_unc, tmp_path, a):
+    # 'reached' is a stable equilibrium; a hand-edited a = [1.0] loaded as reached with an infinite gain and τ
+    lm = local_model(pumping_unc[0].model, 1000.0)
+    p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("a", a))
+    with pytest.raises(gb.GrayboxFileError, match="reached"):
+        gb.load(p)
+    p = _edited_file(lm, tmp_path / "lm2.json", lambda o: o.update(a=a, status="no stable equilibrium", reason="edited"))
+    assert not gb.load(p).stable  # the same coefficients under a status that says so load

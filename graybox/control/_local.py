@@ -212,6 +212,9 @@ class LocalModel:
         check_choice(self.status, "status", Reached.STATUS)
         if self.status == "reached" and self.ybar is None:
             raise ValueError("status 'reached' needs the equilibrium ybar")
+        if self.status == "reached" and a.size and not schur_stable(a):  # reached: a stable equilibrium
+            raise ValueError(f"status 'reached' is a stable equilibrium, but a = {a.tolist()} has poles on or outside "
+                             "the unit circle")
         # what a hand-edited file could say and the statuses cannot (hunt37e's note)
         if self.status == "no equilibrium" and self.ybar is not None:
             raise ValueError(f"status 'no equilibrium' has no ybar, got {self.ybar}")
