@@ -202,3 +202,11 @@ def test_a_reached_local_model_with_poles_on_or_outside_the_unit_circle_is_refus
         gb.load(p)
     p = _edited_file(lm, tmp_path / "lm2.json", lambda o: o.update(a=a, status="no stable equilibrium", reason="edited"))
     assert not gb.load(p).stable  # the same coefficients under a status that says so load
+
+
+def test_a_local_model_with_no_stable_equilibrium_and_stable_poles_is_refused(pumping_unc, tmp_path):
+    # the converse: 'no stable equilibrium' over the estimate's stable coefficients loaded as written
+    lm = local_model(pumping_unc[0].model, 1000.0)
+    p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.update(status="no stable equilibrium", reason="edited"))
+    with pytest.raises(gb.GrayboxFileError, match="no stable equilibrium"):
+        gb.load(p)

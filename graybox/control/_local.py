@@ -212,9 +212,13 @@ class LocalModel:
         check_choice(self.status, "status", Reached.STATUS)
         if self.status == "reached" and self.ybar is None:
             raise ValueError("status 'reached' needs the equilibrium ybar")
-        if self.status == "reached" and a.size and not schur_stable(a):  # reached: a stable equilibrium
-            raise ValueError(f"status 'reached' is a stable equilibrium, but a = {a.tolist()} has poles on or outside "
-                             "the unit circle")
+        if self.ybar is not None and self.status in ("reached", "no stable equilibrium"):
+            # the one says the equilibrium is stable, the other that none is: the poles must agree
+            stable = bool(schur_stable(a)) if a.size else True
+            if stable != (self.status == "reached"):
+                said = "a stable equilibrium" if self.status == "reached" else "an unstable equilibrium"
+                poles = "every pole inside the unit circle" if stable else "poles on or outside the unit circle"
+                raise ValueError(f"status {self.status!r} linearises at {said}, but a = {a.tolist()} has {poles}")
         # what a hand-edited file could say and the statuses cannot (hunt37e's note)
         if self.status == "no equilibrium" and self.ybar is not None:
             raise ValueError(f"status 'no equilibrium' has no ybar, got {self.ybar}")
