@@ -210,3 +210,42 @@ def test_a_local_model_with_no_stable_equilibrium_and_stable_poles_is_refused(pu
     p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.update(status="no stable equilibrium", reason="edited"))
     with pytest.raises(gb.GrayboxFileError, match="no stable equilibrium"):
         gb.load(p)
+
+
+def _plant_loop(controller=lambda k, y: 1000.0, n=3, **kw):
+    from graybox.datasets import PumpingPlant
+
+    return PumpingPlant().closed_loop(controller, n, **({"u0": 1000.0, "noise": False, "process_noise": False} | kw))
+
+
+@pytest.mark.parametrize("n, error", [(True, TypeError), ("3", TypeError), (2.5, TypeError), (0, ValueError)])
+def test_closed_loop_checks_n_samples(n, error):
+    # True ran one sample, '3' was a ValueError
+    with pytest.raises(error, match="n_samples"):
+        _plant_loop(n=n)
+
+
+@pytest.mark.parametrize("option", ["noise", "process_noise"])
+def test_the_plant_refuses_a_noise_switch_that_is_no_bool(option):
+    # noise='no' (truthy) asked for a seed, as if noise had been switched on
+    from graybox.datasets import PumpingPlant
+
+    with pytest.raises(TypeError, match=option):
+        _plant_loop(**{option: "no"})
+    with pytest.raises(TypeError, match=option):
+        PumpingPlant().simulate(np.full(5, 1000.0), **({"noise": False, "process_noise": False} | {option: "no"}))
+
+
+@pytest.mark.parametrize("out, error", [("a", TypeError), (None, TypeError), ([1000.0, 1100.0], ValueError)])
+def test_closed_loop_names_the_controller_and_sample_of_a_bad_reference(out, error):
+    # a string or None gave float()'s own message, naming neither the controller nor the sample
+    with pytest.raises(error, match="controller.*sample 0"):
+        _plant_loop(lambda k, y: out)
+
+
+def test_closed_loop_takes_a_controller_returning_a_one_element_array():
+    # a python-control controller's output is an array of one value: float() refused it (numpy 2) without naming it
+    a = _plant_loop(lambda k, y: np.array([[1000.0 + k]]))
+    b = _plant_loop(lambda k, y: 1000.0 + k)
+    np.testing.assert_array_equal(a.u, b.u)
+    np.testing.assert_array_equal(a.y, b.y)

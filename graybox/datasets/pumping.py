@@ -199,7 +199,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints
-from ..core._validation import as_1d_finite, renamed
+from ..core._validation import as_1d_finite, check_bool, check_int, real_array, renamed
 from ..reference import EQ1_COEFFICIENTS
 from ..core._reprs import short_repr
 
@@ -230,6 +230,16 @@ STATIC_SPEEDS = tuple(float(s) for s in range(750, 1651, 100))
 DEFAULT_SEED = 2011
 #: Transmitter noise std (mlc): the ±0.175 mlc error read as a 95 % band of Gaussian noise.
 NOISE_STD = 0.175 / 1.96
+
+
+def _reference(out: object, k: int) -> float:
+    """A controller's reference at sample k as a float: a number, or an array of one (a python-control system's
+    output); anything else is an error naming the controller and the sample."""
+    what = f"the controller's reference at sample {k}"
+    v = real_array(out, what, "a number (rpm)")
+    if v.size != 1:
+        raise ValueError(f"{what} must be one number (rpm), got {v.size} values of shape {v.shape}")
+    return float(v.ravel()[0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -483,6 +493,8 @@ class PumpingPlant:
         Returns ``eps_w, eps_s, eps_a`` (unit normals for the process noise, surge and air),
         ``v`` (the transmitter noise, mlc) and ``(phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain)``.
         """
+        # a switch that is no bool ('no' is truthy) would draw noise the caller meant off
+        noise, process_noise = check_bool(noise, "noise"), check_bool(process_noise, "process_noise")
         slow = self.surge_intensity > 0 or self.air_loss_per_rpm > 0
         need_rng = (noise and self.noise_std > 0) or (process_noise and (self.process_noise_std > 0 or slow))
         if need_rng and rng is None:
@@ -614,9 +626,7 @@ class PumpingPlant:
         PlantRun
             ``u`` the references the controller set, ``y`` the pressures it read.
         """
-        N = int(n_samples)
-        if N != n_samples or N < 1:
-            raise ValueError(f"n_samples must be a positive integer, got {n_samples!r}")
+        N = check_int(n_samples, "n_samples", low=1)
         if not callable(controller):
             raise TypeError(f"controller must be callable as controller(k, y) -> u, got {type(controller).__name__}")
         prev = float(as_1d_finite([u0], "u0")[0])
@@ -632,7 +642,7 @@ class PumpingPlant:
         for k in range(N):
             p_k = _pressure(q, consts)
             y_k = p_k + v[k]
-            u_k = float(controller(k, float(y_k)))
+            u_k = _reference(controller(k, float(y_k)), k)
             if not math.isfinite(u_k):
                 raise ValueError(f"the controller returned {u_k!r} at sample {k}")
             self._check_reference(np.array([u_k]), f"the controller's reference at sample {k}")
