@@ -249,3 +249,15 @@ def test_closed_loop_takes_a_controller_returning_a_one_element_array():
     b = _plant_loop(lambda k, y: 1000.0 + k)
     np.testing.assert_array_equal(a.u, b.u)
     np.testing.assert_array_equal(a.y, b.y)
+
+
+def test_an_uncertainty_column_in_another_unit_than_the_output_is_refused(tmp_path):
+    # the units row said δ in mbar beside ȳ in bar; δ = 0.1 was read as 0.1 bar, a band 1000 times too wide
+    p = tmp_path / "steady.csv"
+    p.write_text("u;y;d\nrpm;bar;mbar\n1;2;0,1\n2;3;0,1\n")
+    with pytest.raises(ValueError, match=r"'d'.*mbar.*bar"):
+        gb.load_static_csv(p, u="u", y="y", units_row=True, uncertainty="d")
+    p.write_text("u;y;d\nrpm;bar;[bar]\n1;2;0,1\n2;3;0,1\n")  # the output's unit, or none said, is read
+    assert gb.load_static_csv(p, u="u", y="y", units_row=True, uncertainty="d").uncertainty.tolist() == [0.1, 0.1]
+    p.write_text("u;y;d\nrpm;bar;\n1;2;0,1\n2;3;0,1\n")
+    assert gb.load_static_csv(p, u="u", y="y", units_row=True, uncertainty="d").units == ("rpm", "bar")

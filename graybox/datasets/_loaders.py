@@ -854,6 +854,11 @@ def load_static_csv(
                          units_row=units_row)
     if units_row:
         units = _units_from_row(p, units, cols["_units"], [r for r in wanted if r not in ("y", "uncertainty")], None)
+        said = cols["_units"].get("uncertainty", "")
+        if said and units[1] and said != units[1]:  # δ is read in the output's units: another would scale it
+            raise ValueError(f"{p}: the units row gives the uncertainty column {wanted['uncertainty']!r} the unit "
+                             f"{said!r}, but δ is read in the output's unit {units[1]!r}: convert the column to "
+                             f"{units[1]!r}")
     ub = _inputs(cols, ucols)
     where = f"column {ucols[0]!r}" if len(ucols) == 1 else f"columns {ucols}"
     if isinstance(uncertainty, str):
