@@ -261,3 +261,18 @@ def test_an_uncertainty_column_in_another_unit_than_the_output_is_refused(tmp_pa
     assert gb.load_static_csv(p, u="u", y="y", units_row=True, uncertainty="d").uncertainty.tolist() == [0.1, 0.1]
     p.write_text("u;y;d\nrpm;bar;\n1;2;0,1\n2;3;0,1\n")
     assert gb.load_static_csv(p, u="u", y="y", units_row=True, uncertainty="d").units == ("rpm", "bar")
+
+
+def test_local_zeros_are_the_transfer_functions_zeros_away_from_the_origin():
+    # the docstring said 'roots of Σ_l b_il z^(L_u − l)', which for u2 (lags to 2, L_u = 3 from u1) has a root at 0
+    # that zeros() leaves out and python-control's transfer function shows
+    ct = pytest.importorskip("control")
+    m = gb.Model(["y(k-1)", "y(k-2)", "u1(k-3)", "u2(k-1)", "u1(k-1)u2(k-2)", "1"], [0.5, 0.2, 1.0, -0.5, 0.01, 0.3],
+                 Ts=0.2, input_names=("u1", "u2"))
+    lm = local_model(m, [2.0, 3.0])
+    tf = lm.to_transfer_function()
+    for i in range(2):
+        z = tf[0, i].zeros()
+        want = np.sort_complex(z[np.abs(z) > 1e-12])
+        np.testing.assert_allclose(np.sort_complex(lm.zeros(i)), want, atol=1e-12)
+    assert "other than 0" in type(lm).zeros.__doc__

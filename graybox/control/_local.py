@@ -263,7 +263,11 @@ class LocalModel:
         return float(np.abs(p).max()) if p.size else 0.0
 
     def zeros(self, input: int | str = 0) -> np.ndarray:
-        """Finite zeros of B_i: roots of Σ_l b_il z^(L_u − l), complex (input ``input``, by position or name).
+        """Zeros of B_i away from z = 0: roots of Σ_l b_il z^(L_u − l) other than 0, complex (input ``input``).
+
+        A zero at z = 0 is a delay, as the poles at 0 of a common order are (:meth:`to_transfer_function` carries both,
+        so its ``zeros()`` can list some at 0 beside these): an input whose lags end before L_u, the largest input
+        lag over the inputs, would show them only because another input reaches further back.
 
         Parameters
         ----------
