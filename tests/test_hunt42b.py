@@ -276,3 +276,13 @@ def test_local_zeros_are_the_transfer_functions_zeros_away_from_the_origin():
         want = np.sort_complex(z[np.abs(z) > 1e-12])
         np.testing.assert_allclose(np.sort_complex(lm.zeros(i)), want, atol=1e-12)
     assert "other than 0" in type(lm).zeros.__doc__
+
+
+def test_a_local_model_whose_time_constant_overflows_is_refused_on_loading(pumping_unc, tmp_path):
+    # Ts = 1e308 s in a hand-edited file loaded, and τ = −Ts / ln ρ then overflowed with numpy's RuntimeWarning
+    lm = local_model(pumping_unc[0].model, 1000.0)
+    p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("Ts", 1e308))
+    with pytest.raises(gb.GrayboxFileError, match="time constant"):
+        gb.load(p)
+    p = _edited_file(lm, tmp_path / "lm2.json", lambda o: o.__setitem__("Ts", 1e300))  # large, but its τ is a number
+    assert np.isfinite(gb.load(p).time_constant)

@@ -225,6 +225,13 @@ class LocalModel:
         if self.status != "reached" and not self.reason.strip():
             raise ValueError(f"status {self.status!r} needs its reason (the status in words, naming ū)")
         object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
+        if self.ybar is not None and a.size:  # τ = −Ts / ln ρ is a figure too: a period that overflows it is none
+            poles = characteristic_roots(a[None, :])[0]
+            with np.errstate(over="ignore", divide="ignore"):
+                _, tau, _ = _dominant(poles, self.Ts)
+            rho = float(np.abs(poles).max())
+            if rho < 1.0 and not np.isfinite(tau):
+                raise ValueError(f"Ts = {self.Ts:g} s makes the time constant −Ts / ln ρ (ρ = {rho:.6g}) overflow")
         object.__setattr__(self, "ubar", frozen(ubar))
         object.__setattr__(self, "a", frozen(a))
         object.__setattr__(self, "b", frozen(b))
