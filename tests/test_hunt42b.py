@@ -286,3 +286,11 @@ def test_a_local_model_whose_time_constant_overflows_is_refused_on_loading(pumpi
         gb.load(p)
     p = _edited_file(lm, tmp_path / "lm2.json", lambda o: o.__setitem__("Ts", 1e300))  # large, but its τ is a number
     assert np.isfinite(gb.load(p).time_constant)
+
+
+@pytest.mark.parametrize("field", ["gain_low", "gain_high", "time_constant_low", "time_constant_high"])
+def test_an_operating_curve_band_is_nan_only_where_no_draw_was_kept(curve_with_band, tmp_path, field):
+    # a band of NaN at points the estimate reaches, with every draw kept (undefined 0), loaded as written
+    p = _edited_file(curve_with_band, tmp_path / "oc.json", lambda o: o.__setitem__(field, ["nan"] * 3))
+    with pytest.raises(gb.GrayboxFileError, match=field):
+        gb.load(p)

@@ -797,6 +797,12 @@ class OperatingCurve:
         if np.any((u < 0) | (u > 1)) or np.any(np.isnan(u[reached])):
             raise ValueError("undefined must hold shares of the draws, in [0, 1] (NaN only where the model reaches no "
                              f"equilibrium), got {u.tolist()}")
+        # here: the estimators diagnostics loads cost a curve without bands nothing
+        from ..diagnostics._uncertainty import check_band_finite
+
+        # numbers wherever a draw was kept: NaN where the model reaches no equilibrium (no draws) or none was kept
+        check_band_finite(self, ("gain_low", "gain_high", "time_constant_low", "time_constant_high"),
+                          np.isnan(u) | (u == 1))
 
     @property
     def has_band(self) -> bool:
