@@ -6,6 +6,7 @@ end (not "not evaluated") has the full answer's status and ȳ. So J_SF is the sa
 """
 
 import numpy as np
+import pytest
 from hypothesis import given, settings, strategies as st
 
 from graybox import Record, StaticPoints
@@ -114,3 +115,20 @@ def test_a_surface_member_missing_one_point_leaves_its_other_points_unrun_and_no
     assert not full.ok[0, 1] and full.ok[0, 0] and full.ok[1].all()
     assert part.status[0, 0] == SKIPPED and part.status[0, 2] == SKIPPED and part.status[0, 1] == full.status[0, 1]
     np.testing.assert_array_equal(part.ybar[1], full.ybar[1])
+
+
+def test_a_local_model_is_never_not_evaluated(tmp_path):
+    # "not evaluated" is a status of J_SF's partial analysis only; a local model evaluates its one point, so a
+    # file that says it is refused (Reached.STATUS gained it, and LocalModel checked its status against all of them)
+    import json
+
+    import graybox as gb
+    from graybox.control import local_model
+
+    lm = local_model(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]), 1.0, Ts=1.0)
+    gb.save(lm, tmp_path / "lm.json")
+    doc = json.loads((tmp_path / "lm.json").read_text())
+    doc["object"].update(status="not evaluated", ybar=None, reason="ū = 1: not evaluated")
+    (tmp_path / "lm.json").write_text(json.dumps(doc))
+    with pytest.raises(gb.GrayboxFileError, match="status must be one of"):
+        gb.load(tmp_path / "lm.json")

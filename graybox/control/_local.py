@@ -209,7 +209,7 @@ class LocalModel:
                              "must be finite (an integrator's 1 − Σa = 0 excepted)")
         if self.ybar is not None and not np.isfinite(self.ybar):
             raise ValueError(f"ybar must be finite or None (no equilibrium), got {self.ybar}")
-        check_choice(self.status, "status", Reached.STATUS)
+        check_choice(self.status, "status", Reached.FULL_STATUS)  # a local model evaluates its point
         if self.status == "reached" and self.ybar is None:
             raise ValueError("status 'reached' needs the equilibrium ybar")
         if self.ybar is not None and self.status in ("reached", "no stable equilibrium"):

@@ -697,6 +697,8 @@ class Reached:
 
     STATUS: ClassVar[tuple[str, ...]] = ("reached", "no equilibrium", "no stable equilibrium", "diverged",
                                          "did not settle", "continuum of equilibria", "not evaluated")
+    #: The statuses an analysis asked without ``until_failure`` gives (every point evaluated).
+    FULL_STATUS: ClassVar[tuple[str, ...]] = STATUS[:-1]
 
     @property
     def ok(self) -> np.ndarray:
