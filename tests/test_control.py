@@ -407,3 +407,24 @@ def test_an_integrator_has_no_local_model_and_the_reason_names_the_vanishing_den
     assert not lm.exists and lm.status == "continuum of equilibria"
     with pytest.raises(ValueError, match="no local model: .*continuum of equilibria"):
         lm.poles
+
+
+def test_local_model_refuses_frequencies_above_nyquist_and_says_which_inputs_it_has(tmp_path):
+    # above π/Ts e^{jωTs} comes round again: the "response" there was an alias, given without a word; step(input=1)
+    # of a one-input model said only "input must be an integer <= 0"
+    lm = gb.local_model(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]), 1.0, Ts=0.1)
+    nyq = np.pi / 0.1
+    assert lm.frequency_response(np.logspace(0, np.log10(nyq), 7)).shape == (7,)  # up to Nyquist, rounding included
+    np.testing.assert_allclose(lm.frequency_response([-1.0]), np.conj(lm.frequency_response([1.0])))
+    with pytest.raises(ValueError, match="Nyquist frequency π/Ts = 31.4159 rad/s"):
+        lm.frequency_response([1.0, 2 * nyq])
+    with pytest.raises(ValueError, match=r"input 1 is out of range: the local model has 1 input\(s\), 0 \(u\)"):
+        lm.step(10, input=1)
+    # a reached local model has no reason: a hand-edited one with a reason is refused
+    gb.save(lm, tmp_path / "lm.json")
+    import json
+    doc = json.loads((tmp_path / "lm.json").read_text())
+    doc["object"]["reason"] = "ū = 1: did not settle"
+    (tmp_path / "lm.json").write_text(json.dumps(doc))
+    with pytest.raises(gb.GrayboxFileError, match="status 'reached' has no reason"):
+        gb.load(tmp_path / "lm.json")

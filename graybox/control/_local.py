@@ -224,6 +224,9 @@ class LocalModel:
             raise ValueError(f"status 'no equilibrium' has no ybar, got {self.ybar}")
         if self.status != "reached" and not self.reason.strip():
             raise ValueError(f"status {self.status!r} needs its reason (the status in words, naming ū)")
+        if self.status == "reached" and self.reason.strip():
+            raise ValueError(f"status 'reached' has no reason (it is empty when the equilibrium is reached), got "
+                             f"{self.reason!r}")
         object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         if self.ybar is not None and a.size:  # τ = −Ts / ln ρ is a figure too: a period that overflows it is none
             poles = characteristic_roots(a[None, :])[0]
@@ -293,7 +296,10 @@ class LocalModel:
             if input not in self.input_names:
                 raise ValueError(f"no input named {input!r}; the inputs are {self.input_names}")
             return self.input_names.index(input)
-        i = check_int(input, "input", low=0, high=len(self.input_names) - 1)
+        i = check_int(input, "input")
+        if not 0 <= i < len(self.input_names):
+            raise ValueError(f"input {i} is out of range: the local model has {len(self.input_names)} input(s), "
+                             f"{', '.join(f'{k} ({n})' for k, n in enumerate(self.input_names))}")
         return i
 
     @property
@@ -357,6 +363,10 @@ class LocalModel:
         if w.ndim != 1 or w.size == 0 or not np.all(np.isfinite(w)):
             raise ValueError(f"omega must be finite angular frequencies (rad/s) of shape (K,), K >= 1, got shape "
                              f"{w.shape}" + ("" if np.all(np.isfinite(w)) else " with non-finite values"))
+        nyquist = np.pi / self.Ts
+        if np.abs(w).max() > nyquist * (1 + 1e-9):  # above it e^{jωTs} comes round again: an alias, not a response
+            raise ValueError(f"omega must be at most the Nyquist frequency π/Ts = {nyquist:.6g} rad/s (Ts = "
+                             f"{self.Ts:g} s), got {np.abs(w).max():.6g} rad/s")
         zi = np.exp(-1j * w * self.Ts)  # z⁻¹ on the unit circle
         b = self.b[self._input_index(input)]
         num = np.polynomial.polynomial.polyval(zi, np.concatenate([[0.0], b]))
