@@ -50,6 +50,19 @@ def assert_csv_pair_matches(dyn, sta, committed, ncols: tuple[int, int]) -> None
         np.testing.assert_allclose(a[:, -1], b[:, -1], rtol=0, atol=1.01e-4)
 
 
+def edited_file(value, path, edit):
+    """``value`` saved at ``path``, then its JSON object changed by ``edit`` (a hand edit); the path."""
+    import json
+
+    from graybox import save
+
+    save(value, path)
+    j = json.loads(path.read_text())
+    edit(j["object"])
+    path.write_text(json.dumps(j))
+    return path
+
+
 def edited_json(value, **fields) -> str:
     """``value`` saved as JSON with the given fields of its object replaced: a hand-edited file."""
     import json

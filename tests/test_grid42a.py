@@ -4,11 +4,7 @@ seen by a run opening its path at the first moment (real SQLite files, real proc
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
-import threading
 import time
-from pathlib import Path
 
 import pytest
 
@@ -16,36 +12,7 @@ from graybox import experiments as gx
 from graybox.experiments import _executors
 
 from test_grid_claims import _open, grid  # noqa: F401  (a fixture)
-from test_review41e import _maker
-
-
-def _shared_run(spec, store, g, cells, held, *, executor, workers, at_wait=None):
-    """Run the grid while another run (this process, its own connection) holds the cells ``held``; that run stops
-    once the grid's run says it waits for them (``at_wait()`` called first). The grid's run, its log lines."""
-    other = _open(store, g, cells)
-    assert other.claim([c.key for c in held]) == {}
-    lines, out = [], {}
-
-    def target():
-        try:
-            out["run"] = gx.run_grid(spec, store, executor=executor, workers=workers, log=lines.append)
-        except BaseException as exc:  # pragma: no cover - reported below
-            out["error"] = exc
-
-    t = threading.Thread(target=target)
-    t.start()
-    try:
-        deadline = time.monotonic() + 120
-        while not any("waits for them" in x for x in lines):
-            assert t.is_alive() and time.monotonic() < deadline, (lines, out)
-            time.sleep(0.01)
-        if at_wait is not None:
-            at_wait()
-    finally:
-        other.close()  # it stops without running them: the waiting run takes them over
-    t.join(180)
-    assert not t.is_alive() and "error" not in out, out
-    return out["run"], lines
+from test_review41e import open_while_made, shared_run
 
 
 def test_a_process_run_taking_over_another_runs_cells_keeps_its_workers(grid, tmp_path, monkeypatch):  # noqa: F811
@@ -60,7 +27,7 @@ def test_a_process_run_taking_over_another_runs_cells_keeps_its_workers(grid, tm
         return slot
 
     monkeypatch.setattr(_executors.ProcessPool, "_start", start)
-    run, _ = _shared_run(spec, tmp_path / "s.sqlite", g, cells, cells[len(cells) // 2:], executor="processes",
+    run, _ = shared_run(spec, tmp_path / "s.sqlite", g, cells, cells[len(cells) // 2:], executor="processes",
                          workers=1)
     assert run.ran == len(cells) == sum(run.counts.values())
     assert len(starts) == 1  # one worker, started once, ran its cells and those it took over
@@ -82,7 +49,7 @@ def test_a_dask_run_taking_over_another_runs_cells_keeps_its_cluster(grid, tmp_p
     # a LocalCluster start is seconds: a run started a second one for the cells it took over after waiting
     spec, g, _, cells = grid
     started = _counted_clusters(monkeypatch)
-    run, _ = _shared_run(spec, tmp_path / "s.sqlite", g, cells, cells[len(cells) // 2:], executor="dask", workers=1)
+    run, _ = shared_run(spec, tmp_path / "s.sqlite", g, cells, cells[len(cells) // 2:], executor="dask", workers=1)
     assert run.ran == len(cells) == sum(run.counts.values())
     assert started == [1]
 
@@ -93,7 +60,7 @@ def test_a_dask_run_starts_no_cluster_while_another_run_holds_every_cell_left(gr
     spec, g, _, cells = grid
     started = _counted_clusters(monkeypatch)
     while_waiting = []
-    run, lines = _shared_run(spec, tmp_path / "s.sqlite", g, cells, cells, executor="dask", workers=1,
+    run, lines = shared_run(spec, tmp_path / "s.sqlite", g, cells, cells, executor="dask", workers=1,
                              at_wait=lambda: while_waiting.append(list(started)))
     assert while_waiting == [[]]  # none while it only waited
     assert started == [1] and run.ran == len(cells)  # one for the cells it took over
@@ -105,25 +72,16 @@ def test_without_hard_links_a_run_opening_the_path_as_the_maker_creates_the_file
     # later: a run opening the path between the two found an empty file nobody held and refused it
     spec, g, _, cells = grid
     store = tmp_path / "s.sqlite"
-    code = _maker(spec, store, "def nolink(a, b):\n    raise OSError(errno.EPERM, 'no hard links here')\n"
-                               "os.link = nolink\nmaking = real\n"
-                               "connect = _store._connect_to_write\n"
-                               "def paused(path, p, verb):\n    conn = connect(path, p, verb)\n"
-                               "    if Path(path) == store and store.stat().st_size == 0:  # the file just created\n"
-                               "        print('created', flush=True)\n        time.sleep(1.0)\n"
-                               "    return conn\n"
-                               "_store._connect_to_write = paused\n")
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout.readline().strip() == "created", proc.stderr.read()
+
+    def meanwhile():
         assert store.exists() and store.stat().st_size == 0  # the window: an empty file at the path
-        st = _open(store, g, cells)  # while the other process is in it
-        st.close()
-        out, err = proc.communicate(timeout=60)
-        assert proc.returncode == 0, err
-    finally:
-        proc.kill()
-        proc.communicate()
+
+    open_while_made(spec, store, g, cells, "making = real\nconnect = _store._connect_to_write\n"
+                                           "def paused(path, p, verb):\n    conn = connect(path, p, verb)\n"
+                                           "    if Path(path) == store and store.stat().st_size == 0:  # just created\n"
+                                           "        print('created', flush=True)\n        time.sleep(1.0)\n"
+                                           "    return conn\n"
+                                           "_store._connect_to_write = paused\n", "created", meanwhile)
     assert len(gx.store_specs(store)) == 1
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # nothing left beside it
 

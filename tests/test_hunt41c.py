@@ -9,14 +9,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
-
-def _edited_file(value, path, edit):
-    """``value`` saved at ``path``, then its JSON object changed by ``edit`` (a hand edit); the path."""
-    gb.save(value, path)
-    j = json.loads(path.read_text())
-    edit(j["object"])
-    path.write_text(json.dumps(j))
-    return path
+from conftest import edited_file
 
 
 MISO = ["y(k-1)", "y(k-2)", "u1(k-1)", "u2(k-1)", "u1(k-1)y(k-1)", "u1(k-1)u2(k-1)", "u2(k-1)^2", "1"]
@@ -109,7 +102,7 @@ def test_a_surface_band_whose_gain_band_is_crossed_is_refused_naming_the_entry(s
     with pytest.raises(ValueError, match=r"gain_std must be >= 0 .* at index \(1, 1\)"):
         type(b)(b.ubar, b.input_names, b.ybar, b.ybar_low, b.ybar_high, b.ybar_std, b.gain, b.gain_low,
                 b.gain_high, std, b.level, b.method, b.n_samples, b.undefined)
-    p = _edited_file(b, tmp_path / "band.json", lambda o: o["gain_low"][1].__setitem__(0, 1e308))
+    p = edited_file(b, tmp_path / "band.json", lambda o: o["gain_low"][1].__setitem__(0, 1e308))
     with pytest.raises(gb.GrayboxFileError, match="gain_low must not exceed gain_high"):
         gb.load(p)
 
@@ -119,7 +112,7 @@ def test_a_hand_edited_cov_factor_that_overflows_is_refused_without_a_warning(tm
     d = gb.load_pumping()
     st = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "u(k-1)^2", "1"]
     unc = gb.ls_uncertainty(gb.els(st, d.ident, noise=0).model, d.ident)
-    p = _edited_file(unc, tmp_path / "unc.json", lambda o: o["cov_factor"][0].__setitem__(0, 1e308))
+    p = edited_file(unc, tmp_path / "unc.json", lambda o: o["cov_factor"][0].__setitem__(0, 1e308))
     with pytest.raises(gb.GrayboxFileError, match="cov_factor F is not a factor of cov"):
         gb.load(p)
 
@@ -170,7 +163,7 @@ def test_a_selection_table_with_a_negative_mean_square_is_refused(selection, tmp
         t = o["table"]
         t["data"][t["columns"].index("JS_test")][1] = -1.0
 
-    p = _edited_file(selection, tmp_path / "sel.json", edit)
+    p = edited_file(selection, tmp_path / "sel.json", edit)
     with pytest.raises(gb.GrayboxFileError, match="JS_test must be >= 0"):
         gb.load(p)
 

@@ -3,22 +3,15 @@ files of local models, operating curves and bands; each test failed before its f
 
 from __future__ import annotations
 
-import json
 
 import numpy as np
 import pytest
 
 import graybox as gb
+from conftest import edited_file
 from graybox.control import local_model, operating_curve
 
 
-def _edited_file(value, path, edit):
-    """``value`` saved at ``path``, then its JSON object changed by ``edit`` (a hand edit); the path."""
-    gb.save(value, path)
-    j = json.loads(path.read_text())
-    edit(j["object"])
-    path.write_text(json.dumps(j))
-    return path
 
 
 ST = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "u(k-1)^2", "1"]
@@ -35,7 +28,7 @@ def test_a_local_model_whose_figures_overflow_is_refused_on_loading(pumping_unc,
     # b = 1e308 in a hand-edited file loaded, and its gain then overflowed with numpy's RuntimeWarning (an inf gain
     # of a stable model); b = [1e308, 1e308] overflowed in the sum
     lm = local_model(pumping_unc[0].model, 1000.0)
-    p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("b", [b]))
+    p = edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("b", [b]))
     with pytest.raises(gb.GrayboxFileError, match="overflow"):
         gb.load(p)
 
@@ -66,7 +59,7 @@ def test_a_band_whose_method_and_draws_disagree_is_refused_on_loading(pumping_un
     # a delta band saying it drew 500 models, or a Monte Carlo band of 0 draws, loaded as it was written
     unc, d = pumping_unc
     band = _band_of(kind, unc, d, method)
-    p = _edited_file(band, tmp_path / "band.json", lambda o: o.update(edit))
+    p = edited_file(band, tmp_path / "band.json", lambda o: o.update(edit))
     with pytest.raises(gb.GrayboxFileError, match="n_samples"):
         gb.load(p)
     gb.save(band, tmp_path / "ok.json")  # the band as made loads
@@ -79,12 +72,12 @@ def test_a_delta_band_with_dropped_draws_is_refused_on_loading(pumping_unc, tmp_
     unc, d = pumping_unc
     delta = _band_of(kind, unc, d, "delta")
     value = [0.5] * 3 if kind == "curve" else 0.5
-    p = _edited_file(delta, tmp_path / "band.json", lambda o: o.update({share: value}))
+    p = edited_file(delta, tmp_path / "band.json", lambda o: o.update({share: value}))
     with pytest.raises(gb.GrayboxFileError, match=share):
         gb.load(p)
     mc = _band_of(kind, unc, d, "monte-carlo")  # 50 draws: a share of 0.013 is no count of them
     value = [0.013] * 3 if kind == "curve" else 0.013
-    p = _edited_file(mc, tmp_path / "mc.json", lambda o: o.update({share: value}))
+    p = edited_file(mc, tmp_path / "mc.json", lambda o: o.update({share: value}))
     with pytest.raises(gb.GrayboxFileError, match=share):
         gb.load(p)
 
@@ -114,7 +107,7 @@ def _at(key, i, v):
 def test_a_hand_edited_operating_curve_is_held_to_what_a_curve_can_be(curve_with_band, tmp_path, edit, match):
     # each loaded as written: crossed bands, a level of 5, an undefined share of 7, a damping the local models
     # contradict, a negative settling time, and half a band (to_frame then raised AttributeError on None)
-    p = _edited_file(curve_with_band, tmp_path / "oc.json", edit)
+    p = edited_file(curve_with_band, tmp_path / "oc.json", edit)
     with pytest.raises(gb.GrayboxFileError, match=match):
         gb.load(p)
     gb.save(curve_with_band, tmp_path / "ok.json")
@@ -162,7 +155,7 @@ def test_a_static_band_with_a_non_finite_value_is_refused_on_loading(pumping_unc
     # where no draw reached an equilibrium)
     unc, _ = pumping_unc
     band = gb.static_curve_band(unc, np.array([800.0, 1200.0, 1600.0]))
-    p = _edited_file(band, tmp_path / "band.json", _at(field, i, value))
+    p = edited_file(band, tmp_path / "band.json", _at(field, i, value))
     with pytest.raises(gb.GrayboxFileError, match=field):
         gb.load(p)
 
@@ -172,10 +165,10 @@ def test_a_monte_carlo_static_band_keeps_nan_only_where_no_draw_reached(pumping_
     band = gb.static_curve_band(unc, np.array([800.0, 1200.0, 1600.0]), method="monte-carlo", n_samples=20)
     nan_everywhere = lambda o: [o[f].__setitem__(1, "nan") for f in ("ybar_low", "ybar_high", "ybar_std", "gain_low",
                                                                        "gain_high", "gain_std")]
-    p = _edited_file(band, tmp_path / "band.json", nan_everywhere)
+    p = edited_file(band, tmp_path / "band.json", nan_everywhere)
     with pytest.raises(gb.GrayboxFileError, match="ybar_low"):
         gb.load(p)
-    p = _edited_file(band, tmp_path / "band.json", lambda o: (nan_everywhere(o), o["undefined"].__setitem__(1, 1.0)))
+    p = edited_file(band, tmp_path / "band.json", lambda o: (nan_everywhere(o), o["undefined"].__setitem__(1, 1.0)))
     assert np.isnan(gb.load(p).ybar_low[1])  # no draw reached an equilibrium there: no band, as made
 
 
@@ -188,7 +181,7 @@ def test_a_hand_edited_simulation_band_is_held_to_what_a_band_can_be(pumping_unc
     # each loaded as written (an empty one then made repr raise 'zero-size array to reduction operation')
     unc, d = pumping_unc
     band = gb.simulation_band(unc, d.valid)
-    p = _edited_file(band, tmp_path / "band.json", edit)
+    p = edited_file(band, tmp_path / "band.json", edit)
     with pytest.raises(gb.GrayboxFileError, match=match):
         gb.load(p)
 
@@ -197,17 +190,17 @@ def test_a_hand_edited_simulation_band_is_held_to_what_a_band_can_be(pumping_unc
 def test_a_reached_local_model_with_poles_on_or_outside_the_unit_circle_is_refused(pumping_unc, tmp_path, a):
     # 'reached' is a stable equilibrium; a hand-edited a = [1.0] loaded as reached with an infinite gain and τ
     lm = local_model(pumping_unc[0].model, 1000.0)
-    p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("a", a))
+    p = edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("a", a))
     with pytest.raises(gb.GrayboxFileError, match="reached"):
         gb.load(p)
-    p = _edited_file(lm, tmp_path / "lm2.json", lambda o: o.update(a=a, status="no stable equilibrium", reason="edited"))
+    p = edited_file(lm, tmp_path / "lm2.json", lambda o: o.update(a=a, status="no stable equilibrium", reason="edited"))
     assert not gb.load(p).stable  # the same coefficients under a status that says so load
 
 
 def test_a_local_model_with_no_stable_equilibrium_and_stable_poles_is_refused(pumping_unc, tmp_path):
     # the converse: 'no stable equilibrium' over the estimate's stable coefficients loaded as written
     lm = local_model(pumping_unc[0].model, 1000.0)
-    p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.update(status="no stable equilibrium", reason="edited"))
+    p = edited_file(lm, tmp_path / "lm.json", lambda o: o.update(status="no stable equilibrium", reason="edited"))
     with pytest.raises(gb.GrayboxFileError, match="no stable equilibrium"):
         gb.load(p)
 
@@ -281,16 +274,16 @@ def test_local_zeros_are_the_transfer_functions_zeros_away_from_the_origin():
 def test_a_local_model_whose_time_constant_overflows_is_refused_on_loading(pumping_unc, tmp_path):
     # Ts = 1e308 s in a hand-edited file loaded, and τ = −Ts / ln ρ then overflowed with numpy's RuntimeWarning
     lm = local_model(pumping_unc[0].model, 1000.0)
-    p = _edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("Ts", 1e308))
+    p = edited_file(lm, tmp_path / "lm.json", lambda o: o.__setitem__("Ts", 1e308))
     with pytest.raises(gb.GrayboxFileError, match="time constant"):
         gb.load(p)
-    p = _edited_file(lm, tmp_path / "lm2.json", lambda o: o.__setitem__("Ts", 1e300))  # large, but its τ is a number
+    p = edited_file(lm, tmp_path / "lm2.json", lambda o: o.__setitem__("Ts", 1e300))  # large, but its τ is a number
     assert np.isfinite(gb.load(p).time_constant)
 
 
 @pytest.mark.parametrize("field", ["gain_low", "gain_high", "time_constant_low", "time_constant_high"])
 def test_an_operating_curve_band_is_nan_only_where_no_draw_was_kept(curve_with_band, tmp_path, field):
     # a band of NaN at points the estimate reaches, with every draw kept (undefined 0), loaded as written
-    p = _edited_file(curve_with_band, tmp_path / "oc.json", lambda o: o.__setitem__(field, ["nan"] * 3))
+    p = edited_file(curve_with_band, tmp_path / "oc.json", lambda o: o.__setitem__(field, ["nan"] * 3))
     with pytest.raises(gb.GrayboxFileError, match=field):
         gb.load(p)

@@ -20,14 +20,42 @@ from graybox.experiments._store import running_cells
 from test_grid_claims import _open, grid  # noqa: F401  (a fixture)
 
 
+def shared_run(spec, store, g, cells, held, at_wait=None, **options):
+    """Run the grid while another run (this process, its own connection) holds the cells ``held``; that run stops
+    once the grid's run (``run_grid``'s ``options``) says it waits for them (``at_wait()`` called first). The
+    grid's run, its log lines."""
+    other = _open(store, g, cells)
+    assert other.claim([c.key for c in held]) == {}
+    lines, out = [], {}
+
+    def target():
+        try:
+            out["run"] = gx.run_grid(spec, store, log=lines.append, **options)
+        except BaseException as exc:  # pragma: no cover - reported below
+            out["error"] = exc
+
+    t = threading.Thread(target=target)
+    t.start()
+    try:
+        deadline = time.monotonic() + 120
+        while not any("waits for them" in x for x in lines):
+            assert t.is_alive() and time.monotonic() < deadline, (lines, out)
+            time.sleep(0.01)
+        if at_wait is not None:
+            at_wait()
+    finally:
+        other.close()  # it stops without running them: the waiting run takes them over
+    t.join(180)
+    assert not t.is_alive() and "error" not in out, out
+    return out["run"], lines
+
+
 def test_a_run_taking_over_a_stopped_runs_cells_holds_only_the_one_it_runs(grid, tmp_path, monkeypatch):  # noqa: F811
     # a run left with cells another run held (a Dask run's batches, here every cell) waits; when that run stops,
     # the waiting run claimed every one of them at once and ran them one at a time: grid status said it ran all
     # of them, and a third run started meanwhile waited for them instead of sharing them
     spec, g, _, cells = grid
     store = tmp_path / "s.sqlite"
-    other = _open(store, g, cells)
-    assert other.claim([c.key for c in cells]) == {}
     held, real = [], _run.run_cell
 
     def cell(c, data, threads=1):
@@ -35,26 +63,8 @@ def test_a_run_taking_over_a_stopped_runs_cells_holds_only_the_one_it_runs(grid,
         return real(c, data, threads=threads)
 
     monkeypatch.setattr(_run, "run_cell", cell)
-    lines, out = [], {}
-
-    def target():
-        try:
-            out["run"] = gx.run_grid(spec, store, log=lines.append)
-        except BaseException as exc:  # pragma: no cover - reported below
-            out["error"] = exc
-
-    t = threading.Thread(target=target)
-    t.start()
-    try:
-        deadline = time.monotonic() + 60
-        while not any("waits for them" in x for x in lines):
-            assert t.is_alive() and time.monotonic() < deadline, (lines, out)
-            time.sleep(0.01)
-    finally:
-        other.close()  # it stops without running any: the waiting run takes them over
-    t.join(120)
-    assert not t.is_alive() and "error" not in out, out
-    assert out["run"].ran == len(cells) and len(held) == len(cells)
+    run, _ = shared_run(spec, store, g, cells, cells)
+    assert run.ran == len(cells) and len(held) == len(cells)
     assert held == [1] * len(cells)  # while it runs a cell, it holds that one only
     assert gx.grid_status(store).running == {}
 
@@ -68,6 +78,24 @@ def _maker(spec, store, patch: str) -> str:
             f"store = Path({str(store)!r})\nreal = _store._create_tables\n" + patch
             + "_store._create_tables = making\n"
             f"g = gx.Grid.from_toml({str(spec)!r})\n_open(store, g, g.cells(g.load_data())).close()\n")
+
+
+def open_while_made(spec, store, g, cells, patch: str, said: str, meanwhile=None) -> None:
+    """A maker process (``_maker(spec, store, patch)``) started; once it prints ``said`` (and ``meanwhile()``, if
+    given, has checked the path), this process opens the store and closes it; the maker must then end well."""
+    code = _maker(spec, store, "def nolink(a, b):\n    raise OSError(errno.EPERM, 'no hard links here')\n"
+                               "os.link = nolink\n" + patch)
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == said, proc.stderr.read()
+        if meanwhile is not None:
+            meanwhile()
+        _open(store, g, cells).close()  # while the other process is in it
+        out, err = proc.communicate(timeout=60)
+        assert proc.returncode == 0, err
+    finally:
+        proc.kill()
+        proc.communicate()
 
 
 @pytest.mark.skipif(os.name != "posix", reason="a real SIGKILL")
@@ -107,19 +135,7 @@ def test_without_hard_links_a_run_opening_the_store_another_makes_in_place_waits
     # an SQLite file without tables (or an empty file) and refused it as "not a graybox grid store"
     spec, g, _, cells = grid
     store = tmp_path / "s.sqlite"
-    code = _maker(spec, store, "def nolink(a, b):\n    raise OSError(errno.EPERM, 'no hard links here')\n"
-                               "os.link = nolink\n"
-                               "def making(conn, version):\n    if store.exists():  # in place\n"
-                               "        print('making', flush=True)\n        time.sleep(1.0)\n"
-                               "    return real(conn, version)\n")
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        assert proc.stdout.readline().strip() == "making", proc.stderr.read()
-        st = _open(store, g, cells)  # while the other process makes it
-        st.close()
-        out, err = proc.communicate(timeout=60)
-        assert proc.returncode == 0, err
-    finally:
-        proc.kill()
-        proc.communicate()
+    open_while_made(spec, store, g, cells, "def making(conn, version):\n    if store.exists():  # in place\n"
+                                           "        print('making', flush=True)\n        time.sleep(1.0)\n"
+                                           "    return real(conn, version)\n", "making")
     assert len(gx.store_specs(store)) == 1

@@ -14,7 +14,7 @@ import pytest
 from graybox import experiments as gx
 from graybox.experiments import _executors
 
-from test_grid42a import _shared_run
+from test_review41e import shared_run
 from test_grid_claims import grid  # noqa: F401  (a fixture)
 
 
@@ -54,7 +54,7 @@ def test_a_kept_pool_worker_that_dies_while_the_run_waits_is_replaced(grid, tmp_
                 before.add(p.pid)
                 os.kill(p.pid, signal.SIGKILL)
 
-    run, _ = _shared_run(spec, tmp_path / "s.sqlite", g, cells, cells[len(cells) // 2:], executor="processes",
+    run, _ = shared_run(spec, tmp_path / "s.sqlite", g, cells, cells[len(cells) // 2:], executor="processes",
                          workers=2, at_wait=kill_workers)
     assert before  # there were kept workers to kill
     assert run.ran == len(cells) and run.counts["failed"] == 0
