@@ -464,3 +464,20 @@ def test_a_file_that_is_not_utf8_names_the_line(tmp_path):
     p.write_bytes("a,b\n1,2\n3,4 \xb0C\n".encode("latin-1"))
     with pytest.raises(ValueError, match=r"latin.csv: line 3 is not UTF-8 text.*save the file as UTF-8"):
         load_static_csv(p, u="a", y="b")
+
+
+def test_a_period_given_beside_the_stamps_is_the_records_period(tmp_path):
+    # two runs of one logger at 20 Hz whose stamps jitter: with Ts=0.05 given, each record took its stamps' mean
+    # step (0.0500004 s, 0.04999975 s), not the period the user said (checked against the stamps all the same)
+    rng = np.random.default_rng(3)
+    periods = []
+    for i in range(2):
+        t = 0.05 * np.arange(400) + rng.uniform(-2e-5, 2e-5, 400)
+        lines = "t,u,y\n" + "".join(f"{a:.6f},{b:.3f},{c:.3f}\n" for a, b, c in
+                                      zip(t, rng.uniform(0, 1, 400), rng.uniform(0, 1, 400)))
+        path = write(tmp_path, lines, f"run{i}.csv")
+        assert load_record_csv(path, "u", "y", time="t").Ts != 0.05  # the stamps' own mean step
+        periods.append(load_record_csv(path, "u", "y", time="t", Ts=0.05).Ts)
+        with pytest.raises(ValueError, match="disagrees with column 't'"):
+            load_record_csv(path, "u", "y", time="t", Ts=0.06)
+    assert periods == [0.05, 0.05]

@@ -607,7 +607,7 @@ def load_record_csv(
         Records restart at t = 0 whatever the first stamp is.
     Ts : float, optional
         Sampling period in seconds. Required when there is no time column; when both are given
-        they must agree within ``time_rtol``.
+        they must agree within ``time_rtol``, and the record's period is ``Ts``.
     name : str, optional
         Record name (default: the file name without extension).
     units : (str, str)
@@ -761,8 +761,10 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
                          "constant period first, or, if the stamps are only rounded (printed with few digits), "
                          "pass a larger time_rtol=")
     step = (t[-1] - t[0]) / (t.size - 1)
-    if Ts is not None and abs(Ts - step) > rtol * step:
-        raise ValueError(f"{p}: Ts = {Ts:g} s disagrees with column {col!r}, whose mean step is {step:g} s")
+    if Ts is not None:  # the user's word, checked against the stamps
+        if abs(Ts - step) > rtol * step:
+            raise ValueError(f"{p}: Ts = {Ts:g} s disagrees with column {col!r}, whose mean step is {step:g} s")
+        return float(Ts)
     # Stamps are printed decimals, so the true step is a short decimal: drop the float noise of the
     # division (e.g. 199.95 / 3999 = 0.049999999999999996 -> 0.05), and the digits the stamps' float64
     # rounding leaves unknown (a mean step from stamps near 1.7e9 s holds about 5 digits).
