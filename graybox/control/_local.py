@@ -32,8 +32,8 @@ from scipy.signal import lfilter
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, check_units, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
-from ..core._validation import (check_band_values, check_choice, check_fields, check_int, check_per_point, check_real,
-                                check_seed, frozen, real_array, warn)
+from ..core._validation import (check_band_finite, check_band_values, check_choice, check_fields, check_int,
+                                check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
 from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, reached_equilibria,
@@ -807,9 +807,6 @@ class OperatingCurve:
         if np.any((u < 0) | (u > 1)) or np.any(np.isnan(u[reached])):
             raise ValueError("undefined must hold shares of the draws, in [0, 1] (NaN only where the model reaches no "
                              f"equilibrium), got {u.tolist()}")
-        # here: the estimators diagnostics loads cost a curve without bands nothing
-        from ..diagnostics._uncertainty import check_band_finite
-
         # numbers wherever a draw was kept: NaN where the model reaches no equilibrium (no draws) or none was kept
         check_band_finite(self, ("gain_low", "gain_high", "time_constant_low", "time_constant_high"),
                           np.isnan(u) | (u == 1))

@@ -173,25 +173,37 @@ def check_margin_value(value: float, name: str = "margin") -> None:
         raise ValueError(f"{name} must lie in [0, 1), or be NaN (no margin); got {value!r}")
 
 
+def _first_bad(bad: np.ndarray) -> tuple[tuple[int, ...], str]:
+    """The index of the first True entry of ``bad`` in the array's own shape (a surface band's gains are (M, m): a
+    flat index into them raised IndexError instead of the message), and that index in words."""
+    i = tuple(int(k) for k in np.argwhere(bad)[0])
+    return i, str(i[0]) if len(i) == 1 else str(i)
+
+
 def check_band_values(std: np.ndarray, low: np.ndarray, high: np.ndarray, *names: str) -> None:
     """``ValueError`` unless a band's standard deviations are >= 0 and its low ends at most its high ones, where they
     are numbers (NaN: no draw there; a value read from a hand-edited file is held to what a band can be)."""
     s, lo, hi = names
-
-    def first(bad: np.ndarray) -> tuple[int, ...]:
-        # the index of the first offending entry in the array's own shape (a surface band's gains are (M, m): a
-        # flat index into them raised IndexError instead of this message)
-        return tuple(int(k) for k in np.argwhere(bad)[0])
-
-    def said(i: tuple[int, ...]) -> str:
-        return str(i[0]) if len(i) == 1 else str(i)
-
     if np.any(std < 0):
-        i = first(std < 0)
-        raise ValueError(f"{s} must be >= 0 (standard deviations), got {float(std[i]):g} at index {said(i)}")
+        i, said = _first_bad(std < 0)
+        raise ValueError(f"{s} must be >= 0 (standard deviations), got {float(std[i]):g} at index {said}")
     if np.any(low > high):
-        i = first(low > high)
-        raise ValueError(f"{lo} must not exceed {hi}, got {low[i]:g} > {high[i]:g} at index {said(i)}")
+        i, said = _first_bad(low > high)
+        raise ValueError(f"{lo} must not exceed {hi}, got {low[i]:g} > {high[i]:g} at index {said}")
+
+
+def check_band_finite(band: object, fields: Sequence[str], none_drawn: np.ndarray | None = None) -> None:
+    """A band's ``fields`` finite numbers, NaN allowed only at the points of ``none_drawn`` (shape (M,), along the
+    fields' first axis: where no Monte Carlo draw was kept, there is no band); a hand-edited file is held to it."""
+    for f in fields:
+        v = getattr(band, f)
+        bad = ~np.isfinite(v)
+        if none_drawn is not None:
+            bad &= ~(np.isnan(v) & none_drawn.reshape((-1,) + (1,) * (v.ndim - 1)))
+        if bad.any():
+            i, said = _first_bad(bad)
+            where = "" if none_drawn is None else " (NaN only where no draw was kept)"
+            raise ValueError(f"{f} must hold finite numbers{where}, got {v[i]} at index {said}")
 
 
 def check_choice(value: object, name: str, choices: Iterable[str]) -> str:

@@ -17,10 +17,11 @@ import pandas as pd
 from ..core._records import check_units, said_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
-from ..core._validation import check_band_values, check_choice, check_fields, check_int, check_real, check_seed, frozen, warn
+from ..core._validation import (check_band_finite, check_band_values, check_choice, check_fields, check_int,
+                                check_real, check_seed, frozen, warn)
 from ..models._coerce import as_record
 from ._uncertainty import (BAND_METHODS, MIN_DRAWS, ParameterUncertainty, UncertaintyWarning, check_band_draws,
-                           check_band_finite, theta_draws)
+                           theta_draws)
 
 __all__ = ["SimulationBand", "simulation_band"]
 

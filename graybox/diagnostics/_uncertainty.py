@@ -72,8 +72,8 @@ from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
 from ..static._analysis import one_input_levels, reached_equilibria
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
 from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface
-from ..core._validation import (check_band_values, check_choice, check_fields, check_int, check_real, check_seed,
-                                frozen, warn)
+from ..core._validation import (check_band_finite, check_band_values, check_choice, check_fields, check_int,
+                                check_real, check_seed, frozen, warn)
 
 __all__ = [
     "ParameterUncertainty",
@@ -100,20 +100,6 @@ ELS_STATIONARY_RTOL = 1e-2
 BAND_METHODS = ("delta", "monte-carlo")
 #: Fewest Monte Carlo draws a band is taken from.
 MIN_DRAWS = 10
-
-
-def check_band_finite(band: object, fields: Sequence[str], none_drawn: np.ndarray | None = None) -> None:
-    """A band's ``fields`` finite numbers, NaN allowed only at the points of ``none_drawn`` (shape (M,), along the
-    fields' first axis: where no Monte Carlo draw was kept, there is no band); a hand-edited file is held to it."""
-    for f in fields:
-        v = getattr(band, f)
-        bad = ~np.isfinite(v)
-        if none_drawn is not None:
-            bad &= ~(np.isnan(v) & none_drawn.reshape((-1,) + (1,) * (v.ndim - 1)))
-        if bad.any():
-            i = tuple(int(k) for k in np.argwhere(bad)[0])
-            where = "" if none_drawn is None else " (NaN only where no draw was kept)"
-            raise ValueError(f"{f} must hold finite numbers{where}, got {v[i]} at index {i[0] if len(i) == 1 else i}")
 
 
 def check_band_draws(method: str, n_samples: int, share: np.ndarray | float, share_name: str) -> None:
