@@ -110,6 +110,14 @@ _BLACK_BOX_FITS: dict[str, Callable[[gb.Structure, Any], np.ndarray]] = {"ls": _
                                                                           "oe": _fit_oe}
 
 
+def _score_ratio(a: float, b: float) -> float:
+    """a / b of two mean squares, where b = 0 (a noise-free test record met exactly) gives 1 if a is 0 too (as
+    good), else inf."""
+    if b == 0.0:
+        return 1.0 if a == 0.0 else float("inf")
+    return a / b
+
+
 @dataclass(frozen=True, eq=False)
 class GrayboxSelection:
     """The result of :func:`select_graybox`.
@@ -350,20 +358,14 @@ class GrayboxSelection:
         if not np.isfinite(js).any():
             raise ValueError(f"no {rows} model ran through the test record (every such JS_test is inf: its free run "
                              "diverged there, or the row has no model): no best row to compare the choice with")
-        best, mine = float(js[np.isfinite(js)].min()), float(self.chosen["JS_test"])
-        if best == 0.0:  # a row met a noise-free test record exactly: the choice did as well (1) or it did not (inf)
-            return 1.0 if mine == 0.0 else float("inf")
-        return mine / best
+        return _score_ratio(float(self.chosen["JS_test"]), float(js[np.isfinite(js)].min()))
 
     @property
     def optimism(self) -> float:
         """The choice's J_S on the choosing data over its J_S on the test record (below 1: the choosing data
         flattered it, as the smallest of many scores on one record tends to). Needs the call's ``test=`` record."""
         self._test_column()
-        valid, test = float(self.chosen["JS_valid"]), float(self.chosen["JS_test"])
-        if test == 0.0:  # a noise-free test record met exactly
-            return 1.0 if valid == 0.0 else float("inf")
-        return valid / test
+        return _score_ratio(float(self.chosen["JS_valid"]), float(self.chosen["JS_test"]))
 
     def _test_column(self) -> np.ndarray:
         if "JS_test" not in self.table.columns:
