@@ -42,6 +42,11 @@ from dataclasses import dataclass, field
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
+try:
+    import fcntl
+except ImportError:  # not POSIX: no locks, a left scratch folder stays
+    fcntl = None  # type: ignore[assignment]
+
 import numpy as np
 
 from .. import _api as gb
@@ -540,7 +545,8 @@ def local_cluster(workers: int, dashboard: bool = False):
     is mapped and unmapped afresh, which made graybox's cells about 1.5–2 times slower on a
     worker than in the driver (BENCHMARKS.md, grids).
 
-    The workers' scratch folders live in a temporary folder of the cluster's own, removed on exit.
+    The workers' scratch folders live in a temporary folder of the cluster's own, removed on exit (and,
+    if the driver was killed before it could, by the next cluster started on the machine).
     The workers ignore SIGINT, as the local pool's do: Ctrl-C is the driver's to handle.
     Each worker cancels its heartbeat in flight when it closes (:mod:`._dask_worker`), so that the
     end of a run, or Ctrl-C, prints no heartbeat traceback from a worker.
@@ -558,7 +564,7 @@ def local_cluster(workers: int, dashboard: bool = False):
     inherited = os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
     # the workers' scratch folders in a folder of our own, removed on exit: Dask's default
     # ("dask-scratch-space" in the temporary folder) outlives the cluster
-    scratch = tempfile.mkdtemp(prefix="graybox-dask-")
+    scratch, owner = _scratch_folder()
     # each worker cancels its heartbeat in flight when it closes, before it closes its connections:
     # else that heartbeat failed and logged an ERROR with a traceback (see _dask_worker)
     preload = dask.config.get("distributed.worker.preload", None) or []
@@ -580,8 +586,66 @@ def local_cluster(workers: int, dashboard: bool = False):
             cluster.close()
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+        os.close(owner)
         if inherited is not None:
             os.environ["MALLOC_TRIM_THRESHOLD_"] = inherited
+
+
+#: The prefix of a LocalCluster's scratch folder in the temporary folder (:func:`_scratch_folder`).
+SCRATCH_PREFIX = "graybox-dask-"
+#: The lock a live driver holds in its scratch folder (released by the kernel however it ends).
+SCRATCH_OWNER = ".owner"
+
+
+def _scratch_folder() -> tuple[str, int]:
+    """A new scratch folder for a ``LocalCluster``'s workers and the descriptor of the lock held on it.
+
+    A driver SIGKILLed (or crashed) never reaches its ``rmtree``: the next one removes the folders
+    whose lock no live process holds (:func:`_sweep_scratch`). The lock file is locked under another
+    name and then renamed into place, so a sweeper never sees an owner file that is not yet held.
+    """
+    _sweep_scratch(tempfile.gettempdir())
+    path = tempfile.mkdtemp(prefix=SCRATCH_PREFIX)
+    fd = os.open(os.path.join(path, ".owner-new"), os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        if fcntl is not None:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # a new file: nobody else can hold it
+            os.rename(os.path.join(path, ".owner-new"), os.path.join(path, SCRATCH_OWNER))
+    except OSError:  # a file system without locks: the folder is still removed on a normal exit
+        pass
+    return path, fd
+
+
+def _sweep_scratch(base: str) -> list[str]:
+    """Remove the scratch folders in ``base`` left by drivers that are gone; return their paths.
+
+    A folder is left only by its owner's death: its owner file exists and can be locked. Folders
+    without one (an owner between ``mkdtemp`` and its rename, or a file system without locks), and
+    anything the sweep cannot read or lock, are left alone.
+    """
+    removed: list[str] = []
+    if fcntl is None:
+        return removed
+    try:
+        entries = [e for e in os.scandir(base) if e.name.startswith(SCRATCH_PREFIX) and e.is_dir(follow_symlinks=False)]
+    except OSError:
+        return removed
+    for e in entries:
+        try:
+            fd = os.open(os.path.join(e.path, SCRATCH_OWNER), os.O_RDWR)
+        except OSError:  # no owner file (not ours, or not yet), or not ours to open
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # held: its driver is alive
+            os.close(fd)
+            continue
+        try:
+            shutil.rmtree(e.path, ignore_errors=True)
+            removed.append(e.path)
+        finally:
+            os.close(fd)
+    return removed
 
 
 class DaskCluster:
