@@ -536,6 +536,9 @@ def test_cli_refuses_zero_workers_and_names_an_unreachable_scheduler(tmp_path, c
     for flag in ("--workers", "--processes"):  # 0 used to mean "in-process" without a word
         assert main(["grid", "run", str(spec), "--store", "z.sqlite", flag, "0"]) == 2
         assert f"{flag} must be an integer >= 1, got 0" in capsys.readouterr().err
+    # a cell time limit only where a cell can be stopped: the message names the flag to add
+    assert main(["grid", "run", str(spec), "--store", "z.sqlite", "--cell-time-limit", "60"]) == 2
+    assert "cell_time_limit needs executor='processes' (graybox grid run --processes N)" in capsys.readouterr().err
     assert not (tmp_path / "z.sqlite").exists()
     monkeypatch.setattr(_executors, "CONNECT_TIMEOUT", "1s")
     assert main(["grid", "run", str(spec), "--store", "s.sqlite", "--scheduler", "tcp://127.0.0.1:1"]) == 2

@@ -430,3 +430,38 @@ def test_a_dask_localcluster_grows_a_store_made_in_process(reference_store, refe
     df = gx.load_results(store)
     assert len(df) == 10 and (df[df["variant"] == "ELS"]["worker"] != df["worker"].iloc[0]).all()
     assert_same_rows(df[df["variant"] != "ELS"], reference)
+
+
+def _hang_on_ls(marker_dir: str, cell, data, threads):
+    """Run a cell, except: variant "LS" writes its pid and sleeps for ten minutes (a cell that hangs)."""
+    if cell.variant == "LS":
+        (Path(marker_dir) / f"{cell.key}.{os.getpid()}").touch()
+        time.sleep(600)
+    return run_cell(cell, data, threads=threads)
+
+
+def test_a_cell_past_the_time_limit_is_stopped_and_failed_and_the_others_run(tmp_path, reference):
+    # was: a cell that hung (no row, its worker alive) held its worker, and the run, for ever
+    cells, data = _death_cells(("LS", "CLS", "PE"))
+    # the limit counts from the cell's start in its worker, not the worker's start-up (imports: seconds)
+    pool = ProcessPool(2, partial(_hang_on_ls, str(tmp_path)), time_limit=5.0)
+    rows = {r["variant"]: r for r in pool.run(cells, data)}
+    assert set(rows) == {"LS", "CLS", "PE"}
+    assert rows["LS"]["status"] == "failed" and "cell time limit of 5 s" in rows["LS"]["message"]
+    ref = reference.set_index("key")
+    for v in ("CLS", "PE"):
+        assert rows[v]["status"] == "ok" and rows[v]["JS_valid"] == ref.loc[rows[v]["key"], "JS_valid"]
+    (marker,) = tmp_path.glob("*.*")  # started once, not retried
+    pid = int(marker.suffix[1:])
+    with pytest.raises(ProcessLookupError):  # its worker was killed, not left sleeping
+        os.kill(pid, 0)
+
+
+def test_a_cell_time_limit_is_refused_where_a_cell_cannot_be_stopped(tmp_path):
+    for how in ({}, {"executor": "dask", "workers": 1}, {"executor": "inprocess"}):
+        with pytest.raises(ValueError, match="cell_time_limit needs executor='processes'"):
+            gx.run_grid(tiny_grid(), tmp_path / "s.sqlite", cell_time_limit=5, **how)
+    for bad, err in ((0, ValueError), (float("inf"), ValueError), ("5", TypeError)):
+        with pytest.raises(err, match="cell_time_limit"):
+            gx.run_grid(tiny_grid(), tmp_path / "s.sqlite", executor="processes", cell_time_limit=bad)
+    assert not (tmp_path / "s.sqlite").exists()  # refused before the store is made

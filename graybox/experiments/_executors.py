@@ -51,7 +51,7 @@ import numpy as np
 
 from .. import _api as gb
 
-from ..core._validation import check_choice, check_int
+from ..core._validation import check_choice, check_int, check_real
 from . import _dask_worker
 from ._cell import failed_row, run_cell
 from ._spec import Cell
@@ -175,8 +175,14 @@ def _exit_on_sigterm(signum, frame) -> None:  # pragma: no cover - runs in the c
     raise SystemExit(0)
 
 
+#: What a pool worker sends when it starts a cell (before its row): the cell's time limit counts from it, not
+#: from the worker's own start-up.
+STARTED = "started"
+
+
 def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the child process
-    """A worker process: receive (cell, data or None), run it, send the row; stop on None, EOF or SIGTERM."""
+    """A worker process: receive (cell, data or None), say it started, run it, send the row; stop on None, EOF or
+    SIGTERM."""
     # stopped mid-cell (the driver interrupted), exit through Python's clean-up: a killed worker leaves
     # numba's named semaphore behind, for the resource tracker to warn of
     signal.signal(signal.SIGTERM, _exit_on_sigterm)
@@ -191,6 +197,10 @@ def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the ch
         cell, data = msg
         if data is not None:
             cache[cell.data_hash] = data
+        try:
+            conn.send(STARTED)
+        except (BrokenPipeError, OSError):
+            return
         row = fn(cell, cache[cell.data_hash], threads=1)
         try:
             conn.send(row)
@@ -228,6 +238,7 @@ class _Slot:
     sent: set = field(default_factory=set)
     cell: Cell | None = None
     attempt: int = 0
+    started: float | None = None  # time.monotonic() when the worker said it started ``cell``
 
 
 class ProcessPool:
@@ -239,12 +250,16 @@ class ProcessPool:
         Number of worker processes.
     fn : callable
         What a worker runs for a cell (default: :func:`run_cell`).
+    time_limit : float, optional
+        Seconds a cell may run: past them its worker is killed and the cell is a failed row saying so
+        (not retried). None: no limit.
     """
 
-    def __init__(self, workers: int, fn: CellFn = run_cell):
+    def __init__(self, workers: int, fn: CellFn = run_cell, time_limit: float | None = None):
         self.workers = int(workers)
         self.threads = worker_threads(self.workers)
         self.fn = fn
+        self.time_limit = time_limit
         self.name = f"{self.workers} local processes ({self.threads} thread(s) each)"
         self._ctx = mp.get_context("spawn")
         self._kept: list[_Slot] | None = None  # in a session: the idle workers of the last run
@@ -293,6 +308,19 @@ class ProcessPool:
             slot.proc.join(timeout=5)
         slot.conn.close()
 
+    def _wait(self, busy: Sequence[_Slot]) -> float | None:
+        """How long to wait for a row at most (seconds): until the first busy cell's time limit, if any."""
+        started = [s.started for s in busy if s.started is not None]
+        if self.time_limit is None or not started:
+            return None
+        return max(0.0, min(started) + self.time_limit - time.monotonic())
+
+    def _overdue(self, slot: _Slot) -> bool:
+        """Whether the slot's cell has run past the time limit without a row come back (a row sent just in time
+        is not lost: it is read on the next wait)."""
+        return (self.time_limit is not None and slot.started is not None
+                and time.monotonic() - slot.started >= self.time_limit and not slot.conn.poll())
+
     def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset], log: Log | None = None,
             take: Take | None = None) -> Iterator[dict]:
         """Yield each cell's row as it completes; a cell is taken (``take``) when a worker is free for it."""
@@ -318,10 +346,11 @@ class ProcessPool:
                     h = s.cell.data_hash
                     s.conn.send((s.cell, None if h in s.sent else datasets[h]))
                     s.sent.add(h)
+                    s.started = None
                 busy = [s for s in slots if s.cell is not None]
                 if not busy:  # nothing in flight, none taken, none left to take
                     break
-                ready = set(mp_wait([s.conn for s in busy] + [s.proc.sentinel for s in busy]))
+                ready = set(mp_wait([s.conn for s in busy] + [s.proc.sentinel for s in busy], self._wait(busy)))
                 for i, s in enumerate(slots):
                     if s.cell is None or not ({s.conn, s.proc.sentinel} & ready):
                         continue
@@ -331,6 +360,9 @@ class ProcessPool:
                             row = s.conn.recv()
                     except (EOFError, OSError):
                         row = None
+                    if isinstance(row, str) and row == STARTED:
+                        s.started = time.monotonic()
+                        continue
                     if row is not None:
                         s.cell = None
                         yield row
@@ -346,6 +378,16 @@ class ProcessPool:
                     else:
                         yield failed_row(cell, f"the worker process died twice while running this cell "
                                                f"(last exit code {code}); it was retried once")
+                for i, s in enumerate(slots):  # past the time limit and still without a row: stopped, not retried
+                    if s.cell is None or not self._overdue(s):
+                        continue
+                    cell = s.cell
+                    s.proc.kill()
+                    self._stop(s, graceful=False)
+                    slots[i] = self._start()
+                    yield failed_row(cell, f"stopped after the cell time limit of {self.time_limit:g} s (its worker "
+                                           "was killed); run it again with a larger cell_time_limit and "
+                                           "retry_failed (graybox grid run --cell-time-limit S --retry-failed)")
         except BaseException:  # interrupted (Ctrl-C, the caller stopped): the cells in flight are not waited for
             graceful = False
             raise
@@ -889,7 +931,7 @@ def _check_address(scheduler: str) -> None:
 
 
 def make_executor(executor: str | None = None, *, workers: int | None = None, client: Any = None,
-                  scheduler: str | None = None, fn: CellFn = run_cell):
+                  scheduler: str | None = None, fn: CellFn = run_cell, cell_time_limit: float | None = None):
     """The executor for :func:`graybox.experiments.run_grid`'s arguments (see there)."""
     if executor is None:
         executor = "dask" if (client is not None or scheduler is not None or workers is not None) else "inprocess"
@@ -897,6 +939,12 @@ def make_executor(executor: str | None = None, *, workers: int | None = None, cl
     if workers is not None:
         workers = check_int(workers, "workers", low=1)
     check_cluster(client, scheduler)
+    if cell_time_limit is not None:
+        cell_time_limit = check_real(cell_time_limit, "cell_time_limit", low=0, low_open=True)
+        if executor != "processes":
+            # numba's compiled loops cannot be interrupted in a thread, and a Dask task's start is not known
+            raise ValueError(f"cell_time_limit needs executor='processes' (graybox grid run --processes N): a cell "
+                             f"on the {executor!r} executor cannot be stopped on time")
     if executor == "inprocess":
         if any(v is not None for v in (workers, client, scheduler)):
             raise ValueError("the in-process executor takes no workers, client or scheduler")
@@ -904,5 +952,5 @@ def make_executor(executor: str | None = None, *, workers: int | None = None, cl
     if executor == "processes":
         if client is not None or scheduler is not None:
             raise ValueError("the local process executor takes workers only (a client or scheduler means Dask)")
-        return ProcessPool(workers or os.cpu_count() or 1, fn)
+        return ProcessPool(workers or os.cpu_count() or 1, fn, time_limit=cell_time_limit)
     return DaskCluster(client=client, scheduler=scheduler, workers=workers, fn=fn)

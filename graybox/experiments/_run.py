@@ -89,6 +89,7 @@ def run_grid(
     client: Any = None,
     scheduler: str | None = None,
     retry_failed: bool = False,
+    cell_time_limit: float | None = None,
     progress: bool | None = None,
     log: Callable[[str], None] | None = None,
 ) -> GridRun:
@@ -122,6 +123,10 @@ def run_grid(
         Run on the Dask scheduler at this address.
     retry_failed : bool
         Run the cells whose stored status is "failed" again (their rows are replaced).
+    cell_time_limit : float, optional
+        Seconds (wall time) a cell may run, with ``executor="processes"`` only: past them its worker
+        process is killed and the cell is stored as failed, saying so (not retried in the run;
+        ``retry_failed`` with a larger limit runs it again). None (default): no limit.
     progress : bool, optional
         Progress bar (cells done, ETA); default: on a terminal only.
     log : callable, optional
@@ -157,11 +162,12 @@ def run_grid(
         check_bool(progress, "progress")
     if log is not None and not callable(log):
         raise TypeError(f"log must be a callable taking a line of text, got {log!r}")
+    ex = make_executor(executor, workers=workers, client=client, scheduler=scheduler, fn=run_cell,
+                       cell_time_limit=cell_time_limit)
     g = grid if isinstance(grid, Grid) else Grid.from_toml(grid)
     datasets = g.load_data()
     cells = g.cells(datasets)
     by_hash = _by_hash(cells, datasets)
-    ex = make_executor(executor, workers=workers, client=client, scheduler=scheduler, fn=run_cell)
     version = gb.__version__
     say = log or (lambda line: None)
     with ResultStore.open(store, grid_name=g.name, fingerprint=g.fingerprint(cells), spec=stored_spec(g, datasets),
