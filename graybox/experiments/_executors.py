@@ -382,11 +382,11 @@ class ProcessPool:
                     if s.cell is None or not self._overdue(s):
                         continue
                     cell = s.cell
-                    s.proc.kill()
+                    s.proc.terminate()  # a clean exit if it returns to Python within _stop's wait, else SIGKILL
                     self._stop(s, graceful=False)
                     slots[i] = self._start()
                     yield failed_row(cell, f"stopped after the cell time limit of {self.time_limit:g} s (its worker "
-                                           "was killed); run it again with a larger cell_time_limit and "
+                                           "was stopped); run it again with a larger cell_time_limit and "
                                            "retry_failed (graybox grid run --cell-time-limit S --retry-failed)")
         except BaseException:  # interrupted (Ctrl-C, the caller stopped): the cells in flight are not waited for
             graceful = False
