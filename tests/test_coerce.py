@@ -272,17 +272,14 @@ def test_results_carry_their_model_as_an_attribute(results):
     for kind in MODEL_CARRIERS[1:]:
         assert isinstance(results[kind].model, gb.Model), kind
     front = results["ParetoSet"]
-    assert isinstance(front.member_model(0), gb.Model) and not isinstance(getattr(front, "model"), gb.Model)
-    with pytest.warns(DeprecationWarning, match="member_model"):
-        old = front.model(1)
-    np.testing.assert_array_equal(old.theta, front.member_model(1).theta)
+    assert isinstance(front.member_model(0), gb.Model)
+    assert not hasattr(front, "model")  # a set has no one model (model(i), deprecated in 0.1.0, is gone)
 
 
 def test_met_the_band_is_in_band_everywhere_and_old_files_load(results):
     dsf = results["DSFResult"]
     assert isinstance(dsf.in_band, bool)
-    with pytest.warns(DeprecationWarning, match="in_band"):
-        assert dsf.feasible == dsf.in_band
+    assert not hasattr(dsf, "feasible")  # its former name (deprecated in 0.1.0) is gone
     doc = json.loads(gb.to_json(dsf))
     doc["object"]["feasible"] = doc["object"].pop("in_band")  # a file written before the rename
     back = gb.from_json(json.dumps(doc))
@@ -327,22 +324,21 @@ def test_cluster_bounds_by_every_printed_name(data):
         assert fit.clusters()[name] == pytest.approx(value, abs=1e-9 * max(1.0, abs(value))), name
 
 
-# -- one keyword per concept: input_names=, seed= (the former names warn for one release) ----------
+# -- one keyword per concept: input_names=, seed=, estimator= (the former names, deprecated in 0.1.0, are gone) --
 
 def test_input_names_is_the_one_input_names_keyword():
     st = gb.Structure(["1", "y(k-1)", "u1(k-1)", "u2(k-1)^2"])
     new = gb.Candidates(1, 1, degree=1, input_names=("u1", "u2"))
     assert {n for t in new for n in t.inputs} == {"u1", "u2"}
-    with pytest.warns(DeprecationWarning, match="input_names="):
-        old = gb.Candidates(1, 1, degree=1, inputs=("u1", "u2"))
-    assert list(old) == list(new)
-    with pytest.raises(TypeError, match="former name"):
-        gb.Candidates(1, 1, input_names=("u1", "u2"), inputs=("u1", "u2"))
     th = np.array([0.2, 0.5, 0.3, 0.1])
     pts = np.array([[1.0, 2.0]])
-    with pytest.warns(DeprecationWarning, match="input_names="):
-        a = gb.static_surface(st, th, pts, inputs=("u1", "u2"))
-    np.testing.assert_array_equal(a, gb.static_surface(st, th, pts, input_names=("u1", "u2")))
+    for call in (lambda: gb.Candidates(1, 1, degree=1, inputs=("u1", "u2")),
+                 lambda: gb.static_surface(st, th, pts, inputs=("u1", "u2")),
+                 lambda: gb.static_surface_gain(st, th, pts, inputs=("u1", "u2")),
+                 lambda: gb.surface_equilibria(st, th, pts[0], inputs=("u1", "u2")),
+                 lambda: gb.surface_cluster_map(st, inputs=("u1", "u2"))):
+        with pytest.raises(TypeError, match="inputs"):
+            call()
     assert gb.surface_cluster_map(st, input_names=("u2", "u1")).inputs == ("u2", "u1")
 
 
@@ -351,29 +347,26 @@ def test_seed_is_the_one_random_source_keyword():
 
     plant = PumpingPlant()
     u = speed_reference(n_samples=1600, n_ident=800, seed=0)[:300]
-    with pytest.warns(DeprecationWarning, match="seed="):
-        old = plant.simulate(u, rng=3)
-    np.testing.assert_array_equal(old.y, plant.simulate(u, seed=3).y)
+    with pytest.raises(TypeError, match="rng"):
+        plant.simulate(u, rng=3)
+    np.testing.assert_array_equal(plant.simulate(u, seed=3).y, plant.simulate(u, 3).y)
 
 
 def test_method_names_an_algorithm_and_estimator_an_estimator(data):
     kw = dict(lambdas=[0.1, 1.0], n_boot=1, band=BAND, fallback="min_jsf", options={"solver": "closed"})
     new = gb.bootstrap_decision(TRUE, data, estimator="pe", **kw)
-    with pytest.warns(DeprecationWarning, match="estimator="):
-        old = gb.bootstrap_decision(TRUE, data, method="pe", **kw)
-    assert new.estimator == old.estimator == "pe"
-    np.testing.assert_array_equal(new.thetas, old.thetas)
-    with pytest.warns(DeprecationWarning, match="estimator"):
-        assert new.method == "pe"
+    assert new.estimator == "pe" and not hasattr(new, "method")
+    with pytest.raises(TypeError, match="method"):
+        gb.bootstrap_decision(TRUE, data, method="pe", **kw)
 
 
 def test_parallel_map_speaks_run_grids_words(data):
     double = abs  # picklable, deterministic
     with gb.experiments.parallel_map(executor="inprocess") as pmap:
         assert pmap(double, [-1, 2, -3]) == [1, 2, 3]
-    with pytest.warns(DeprecationWarning, match="executor='processes'"):
-        with gb.experiments.parallel_map(workers=1, processes=True) as pmap:
-            assert pmap(double, [-4, 5]) == [4, 5]
+    with pytest.raises(TypeError, match="processes"):
+        with gb.experiments.parallel_map(workers=1, processes=True):
+            pass
     with pytest.raises(ValueError, match="executor"):
         with gb.experiments.parallel_map(executor="threads"):
             pass

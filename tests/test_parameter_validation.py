@@ -349,7 +349,6 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "ParetoSet.from_thetas": ((ST, FRONT.thetas, FRONT.lambdas, DATA, SP), {}),
     "UserConstraint": ((lambda theta: [],), {}),
     "Term": ((), {"factors": (("u", 1, 2), ("y", 1, 1))}),
-    "ParetoSet.model": ((0,), {}),  # member_model's deprecated name: it warns, then is member_model
     # result objects, rebuilt from the fields of one the library made
     "ELSResult": ((), _fields_of(gb.els(ST, REC))),
     "ParameterUncertainty": ((), _fields_of(gb.ls_uncertainty(LS, REC))),
@@ -547,12 +546,6 @@ def _callables():
 PUBLIC = _callables()
 
 
-#: Deprecated keyword aliases (one name per concept), kept one release: they warn and pass the value on.
-DEPRECATED: dict[str, set[str]] = {"bootstrap_decision": {"method"},
-                                   **{k: {"inputs"} for k in ("Candidates", "static_surface", "static_surface_gain",
-                                                              "surface_cluster_map", "surface_equilibria")}}
-
-
 def _options(fn, label: str = "") -> list[str]:
     if label in RESULTS:
         return [f.name for f in dataclasses.fields(fn) if f.init]
@@ -561,7 +554,7 @@ def _options(fn, label: str = "") -> list[str]:
     except (TypeError, ValueError):
         return []
     return [p.name for p in sig.parameters.values()
-            if p.name != "self" and p.name not in DEPRECATED.get(label, ()) and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+            if p.name != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
             and (p.default is not p.empty or p.kind == p.KEYWORD_ONLY)]
 
 

@@ -479,8 +479,7 @@ def test_wrong_types_are_type_errors_and_one_source_may_be_a_string(data):
         gb.select_graybox(gb.Candidates(3, 3, ne=0, degree=2), 3.0, band=1e-3)
     res = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, sizes=[3], sources="frols", estimator="ls")
     assert set(res.table["source"]) == {"frols"}
-    with pytest.warns(DeprecationWarning, match="in_band"):
-        assert res.fallback is (not res.in_band)
+    assert not hasattr(res, "fallback")  # not in_band's former, inverted name (deprecated in 0.1.0): gone
 
 
 def test_worker_processes_run_without_deprecated_options(data):

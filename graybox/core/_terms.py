@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
-from ._validation import check_bool, check_int, check_real, check_sequence, renamed
+from ._validation import check_bool, check_int, check_real, check_sequence
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
            "default_input_names", "require_inputs", "transient_name", "transient_source"]
@@ -430,7 +430,6 @@ def Candidates(
     constant: bool = True,
     max_y_power: int | None = None,
     input_names: Sequence[str] | None = None,
-    inputs: Sequence[str] | None = None,
 ) -> Structure:
     """Every monomial of degree <= ``degree`` in y(k-1..ny), each input's lags (and e(k-1..ne)).
 
@@ -459,8 +458,6 @@ def Candidates(
         Input names (default: the keys of ``nu`` when it is a mapping, else ``("u",)``, the
         single input). Names are identifiers other than y, e, k; a name given twice is an error.
         (The keyword of :class:`Record`, :class:`Model` and the loaders.)
-    inputs : sequence of str, optional
-        Former name of ``input_names`` (deprecated; kept for one release).
 
     Returns
     -------
@@ -473,7 +470,6 @@ def Candidates(
     >>> Candidates(1, {"u1": 1, "u2": 2}, delay={"u2": 2}, degree=1)
     Structure(['1', 'u1(k-1)', 'u2(k-2)', 'y(k-1)'])
     """
-    input_names = renamed(input_names, inputs, "input_names", "inputs")
     if input_names is None:
         names = tuple(nu) if isinstance(nu, Mapping) else ("u",)
     else:

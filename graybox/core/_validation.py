@@ -36,7 +36,6 @@ __all__ = [
     "float_array",
     "frozen",
     "warn",
-    "renamed",
     "check_per_point",
     "check_sequence",
     "check_path",
@@ -471,19 +470,6 @@ def warn(message: str, category: type[Warning]) -> None:
         frame = frame.f_back
         level += 1
     warnings.warn(message, category, stacklevel=level)
-
-
-def renamed(value: object, old_value: object, new: str, old: str) -> object:
-    """The value of keyword ``new``, or of its former name ``old`` (kept one release, with a DeprecationWarning).
-
-    ``None`` means "not given"; both given is a ``TypeError``.
-    """
-    if old_value is None:
-        return value
-    if value is not None:
-        raise TypeError(f"{old}= is the former name of {new}=: give {new}= only")
-    warn(f"{old}= is deprecated (one name per concept): use {new}=", DeprecationWarning)
-    return old_value
 
 
 # -- the fields of a result object ---------------------------------------------------------------

@@ -68,7 +68,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
-from ..core._validation import as_1d_finite, renamed
+from ..core._validation import as_1d_finite
 from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, write_csv_pair
 from ..core._reprs import short_repr
 
@@ -263,7 +263,6 @@ class TwoSpeedPumpingPlant:
         noise: bool = True,
         process_noise: bool = True,
         x0: tuple[float, float, float, float, float] | None = None,
-        rng: np.random.Generator | int | None = None,
     ) -> TwoSpeedRun:
         """Simulate the rig for two sampled speed references.
 
@@ -282,8 +281,6 @@ class TwoSpeedPumpingPlant:
             Add the process disturbances w, s and a; False gives the noise-free physics.
         x0 : (n_c1, n_1, n_c2, n_2, Q), optional
             Initial state; default the equilibrium at ``u[0]``.
-        rng : numpy Generator or int, optional
-            Former name of ``seed`` (deprecated; kept for one release).
 
         Returns
         -------
@@ -299,7 +296,7 @@ class TwoSpeedPumpingPlant:
         rig._check_reference(r2, "speed reference 2")
         N = r1.size
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = rig._disturbances(
-            N, renamed(seed, rng, "seed", "rng"), noise=noise, process_noise=process_noise)
+            N, seed, noise=noise, process_noise=process_noise)
         if x0 is None:
             state = self.steady_state(r1[0], r2[0])
         else:
@@ -520,14 +517,13 @@ def static_grid_experiment(
     seed: int | np.random.Generator | None = None,
     settle: float = 180.0,
     average: float = 6.0,
-    rng: np.random.Generator | int | None = None,
 ) -> StaticPoints:
     """The static test over (n₁, n₂): hold each pair, wait out the transients, average the pressure.
 
     As :func:`graybox.datasets.pumping.static_experiment`, one continuous run visiting ``speeds``
     in order (default ``static_grid``), discarding ``settle`` seconds and averaging the next
     ``average`` seconds of noisy measurements at each pair; ``seed`` (an int or a numpy
-    Generator) is the source of noise, ``rng`` its former name (deprecated; kept for one release).
+    Generator) is the source of noise.
 
     Returns
     -------
@@ -543,7 +539,7 @@ def static_grid_experiment(
     if n_avg < 1 or n_settle < 0:
         raise ValueError(f"average must cover at least one sample and settle must be >= 0, got {average}, {settle} s")
     u = np.repeat(sp, n_settle + n_avg, axis=0)
-    run = plant.simulate(u, seed=renamed(seed, rng, "seed", "rng"))
+    run = plant.simulate(u, seed=seed)
     y = run.y.reshape(sp.shape[0], n_settle + n_avg)[:, n_settle:]
     return StaticPoints(sp, y.mean(axis=1), name="pumping_miso static points", input_names=("u1", "u2"),
                         units=("rpm", "mlc"))

@@ -199,7 +199,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints
-from ..core._validation import as_1d_finite, check_bool, check_int, real_array, renamed
+from ..core._validation import as_1d_finite, check_bool, check_int, real_array
 from ..reference import EQ1_COEFFICIENTS
 from ..core._reprs import short_repr
 
@@ -524,8 +524,6 @@ class PumpingPlant:
         noise: bool = True,
         process_noise: bool = True,
         x0: tuple[float, float, float] | None = None,
-        *,
-        rng: np.random.Generator | int | None = None,
     ) -> PlantRun:
         """Simulate the rig for a sampled speed reference.
 
@@ -535,8 +533,6 @@ class PumpingPlant:
             Speed reference (rpm), held constant over each sample.
         seed : int or numpy Generator, optional
             Source of noise (an int seeds ``np.random.default_rng``). Required when any noise is on.
-        rng : numpy Generator or int, optional
-            Former name of ``seed`` (deprecated; kept for one release).
         noise : bool
             Add transmitter noise (std ``noise_std``) to the measured pressure.
         process_noise : bool
@@ -549,7 +545,6 @@ class PumpingPlant:
         -------
         PlantRun
         """
-        seed = renamed(seed, rng, "seed", "rng")
         u = as_1d_finite(u, "speed reference")
         self._check_reference(u)
         N = u.size
@@ -908,7 +903,6 @@ def static_experiment(
     seed: int | np.random.Generator | None = None,
     settle: float = 180.0,
     average: float = 6.0,
-    rng: np.random.Generator | int | None = None,
 ) -> StaticPoints:
     """The paper's static test: hold each speed, wait for transients to die out, average the pressure.
 
@@ -926,8 +920,7 @@ def static_experiment(
     recorded"); the dynamic record, whose levels last 4–9 s, never lets the slow disturbances
     die out, which is why its black-box models miss the static curve. A shorter ``settle`` is
     fine when the speed does not change (nothing excites them). ``seed`` (an int or a numpy
-    Generator) is the source of noise, as for :meth:`PumpingPlant.simulate`; ``rng`` is its
-    former name (deprecated; kept for one release).
+    Generator) is the source of noise, as for :meth:`PumpingPlant.simulate`.
 
     Returns
     -------
@@ -940,7 +933,7 @@ def static_experiment(
     if n_avg < 1:
         raise ValueError(f"average must cover at least one sample, got {average} s")
     u = np.repeat(sp, n_settle + n_avg)
-    run = plant.simulate(u, seed=renamed(seed, rng, "seed", "rng"))
+    run = plant.simulate(u, seed=seed)
     y = run.y.reshape(sp.size, n_settle + n_avg)[:, n_settle:]
     return StaticPoints(sp, y.mean(axis=1), name="pumping static points", units=("rpm", "mlc"))
 

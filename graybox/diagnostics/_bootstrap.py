@@ -57,7 +57,7 @@ from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
-from ..core._validation import FrozenMap, check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, renamed, warn
+from ..core._validation import FrozenMap, check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, warn
 from ..core._reprs import short_repr
 from ._uncertainty import UncertaintyWarning
 
@@ -313,13 +313,6 @@ class DecisionBootstrap:
                              "rule": self.rules, "failure": [self.failures.get(i, "") for i in range(self.n_replicates)]},
                             index=pd.RangeIndex(self.n_replicates, name="replicate"))
 
-    @property
-    def method(self) -> str:
-        """Deprecated name of :attr:`estimator` (kept for one release)."""
-        warn("DecisionBootstrap.method is deprecated: use .estimator (method= names an algorithm elsewhere)",
-             DeprecationWarning)
-        return self.estimator
-
     def __repr__(self) -> str:
         return (f"DecisionBootstrap({self.estimator.upper()}, replicates={self.n_replicates}, failed={len(self.failures)}, "
                 f"blocks={self.n_blocks} × {self.block_length}, agreement={self.agreement:.2f})")
@@ -368,7 +361,6 @@ def bootstrap_decision(
     options: Mapping | None = None,
     map: Callable[[Callable[[int], dict], Iterable[int]], Iterable[dict]] | None = None,
     progress: bool | None = None,
-    method: str | None = None,
 ) -> DecisionBootstrap:
     """Block bootstrap of the identification data: rerun the PE or SE sweep and D_SF per replicate.
 
@@ -411,9 +403,6 @@ def bootstrap_decision(
         executor's ``.map`` or a Dask wrapper to run elsewhere (see the module docstring).
     progress : bool, optional
         Progress bar (default: on a terminal only; in-process runs).
-    method : {"pe", "se"}, optional
-        Former name of ``estimator`` (deprecated; kept for one release: ``method=`` names an
-        algorithm everywhere else, e.g. SE's ``"ga"`` or ``"gradient"``).
 
     Returns
     -------
@@ -438,8 +427,7 @@ def bootstrap_decision(
         in ``failures``).
     """
     structure = as_structure(structure)
-    estimator = check_choice(renamed(estimator if method is None else None, method, "estimator", "method"),
-                             "estimator", ESTIMATORS)
+    estimator = check_choice(estimator, "estimator", ESTIMATORS)
     recs = records_of(data)
     opts = _estimator_options(estimator, options)
     # a curve or surface is sampled here, at the sweep's own ubar when the options give one (the sweep is handed

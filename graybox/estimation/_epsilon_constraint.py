@@ -107,12 +107,6 @@ class DSFResult:
             raise ValueError(f"DSFResult: n_iter counts trial steps, >= 0; got {self.n_iter}")
         check_margin_value(self.margin, "DSFResult: margin")
 
-    @property
-    def feasible(self) -> bool:
-        """Deprecated name of :attr:`in_band` (kept for one release)."""
-        warn("DSFResult.feasible is deprecated: use DSFResult.in_band (the name Decision uses)", DeprecationWarning)
-        return self.in_band
-
     def __repr__(self) -> str:
         return (f"DSFResult(J_S={self.JS:.4g}, J_SF={self.JSF:.4g}, band={self.band:g}, in_band={self.in_band}, "
                 f"start={self.start!r}, n_iter={self.n_iter})")

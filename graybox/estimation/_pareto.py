@@ -18,7 +18,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, StaticPoints, as_records, carried_from, check_fitted_on, check_units
-from ..core._validation import FrozenMap, check_bool, check_fields, check_int, check_real, frozen, real_array, warn
+from ..core._validation import FrozenMap, check_bool, check_fields, check_int, check_real, frozen, real_array
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -248,12 +248,6 @@ class ParetoSet:
     def models(self) -> list[Model]:
         """Every member that did not fail, as a Model, in order."""
         return [self.member_model(i) for i in range(len(self)) if i not in self.failures]
-
-    def model(self, i: int, name: str | None = None) -> Model:
-        """Deprecated name of :meth:`member_model` (member ``i``, labelled ``name``; kept for one release)."""
-        warn("ParetoSet.model(i) is deprecated: use ParetoSet.member_model(i) (a set has no one model)",
-             DeprecationWarning)
-        return self.member_model(i, name)
 
     def subset(self, index: np.ndarray | Sequence[int]) -> "ParetoSet":
         """The members at ``index`` (a boolean mask or integer indices), in that order."""

@@ -18,7 +18,7 @@ from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
 
-from ..core._validation import check_choice, check_int, warn
+from ..core._validation import check_choice, check_int
 from ._executors import (EXECUTORS, _environ, _thread_env, check_cluster, ignore_sigint, local_cluster,
                          scheduler_client, worker_threads)
 
@@ -32,7 +32,6 @@ def parallel_map(
     workers: int | None = None,
     client: Any = None,
     scheduler: str | None = None,
-    processes: bool | None = None,
 ) -> Iterator[Callable[[Callable, Iterable], list]]:
     """A ``map(fn, items)`` that runs the jobs in parallel and returns their results in order.
 
@@ -53,8 +52,6 @@ def parallel_map(
         "dask": run on this client's cluster (left open).
     scheduler : str, optional
         "dask": run on the Dask scheduler at this address.
-    processes : bool, optional
-        Former spelling of ``executor="processes"`` (deprecated; kept for one release).
 
     Yields
     ------
@@ -62,13 +59,6 @@ def parallel_map(
         ``map(fn, items) -> list`` of results in the order of ``items``; ``fn`` and the items must
         be picklable.
     """
-    if processes is not None:
-        warn("parallel_map(processes=...) is deprecated: use executor='processes', as run_grid does",
-             DeprecationWarning)
-        if processes:
-            if executor not in (None, "processes"):
-                raise ValueError(f"processes=True contradicts executor={executor!r}")
-            executor = "processes"
     executor = check_choice("dask" if executor is None else executor, "executor", EXECUTORS)
     if workers is not None:
         workers = check_int(workers, "workers", low=1)

@@ -372,12 +372,6 @@ class GrayboxSelection:
             raise ValueError("this selection was made without a test record: pass test= to select_graybox")
         return self.table["JS_test"].to_numpy(float)
 
-    @property
-    def fallback(self) -> bool:
-        """Deprecated (one name per concept): ``not in_band``, the name :class:`Decision` uses."""
-        warn("GrayboxSelection.fallback is deprecated: use GrayboxSelection.in_band (its negation)", DeprecationWarning)
-        return not self.in_band
-
     def __repr__(self) -> str:
         row = self.chosen
         test = ""

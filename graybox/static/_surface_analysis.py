@@ -33,7 +33,7 @@ from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
 from ._linearisation import input_monomials_of, static_gains, static_powers, static_theta_gradient_of
 from ..core._records import frame_inputs
 from ..core._terms import Structure, Term, check_input_names, require_inputs
-from ..core._validation import check_bool, check_fields, check_per_point, real_array, renamed
+from ..core._validation import check_bool, check_fields, check_per_point, real_array
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -137,8 +137,7 @@ def _surface_cluster_map(structure: Structure, inputs: tuple[str, ...]) -> Surfa
     return SurfaceClusterMap(inputs, *_static.cluster_membership(keys))
 
 
-def surface_cluster_map(structure: Structure, *, input_names: tuple[str, ...] | None = None,
-                        inputs: tuple[str, ...] | None = None) -> SurfaceClusterMap:
+def surface_cluster_map(structure: Structure, *, input_names: tuple[str, ...] | None = None) -> SurfaceClusterMap:
     """The clusters per output power and input powers of ``structure`` (cached).
 
     Parameters
@@ -147,14 +146,12 @@ def surface_cluster_map(structure: Structure, *, input_names: tuple[str, ...] | 
         Process terms.
     input_names : tuple of str, optional
         The inputs in the order of the key powers (default: the structure's inputs).
-    inputs : tuple of str, optional
-        Former name of ``input_names`` (deprecated; kept for one release).
 
     Returns
     -------
     SurfaceClusterMap
     """
-    names = renamed(input_names, inputs, "input_names", "inputs")
+    names = input_names
     structure = _static.structure_arg(structure)
     return _surface_cluster_map(structure, surface_inputs(structure, names))
 
@@ -206,8 +203,7 @@ def _folded(structure: Structure, thetas: np.ndarray, ub: np.ndarray, inputs: tu
 
 
 def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray, *,
-                       input_names: tuple[str, ...] | None = None,
-                       inputs: tuple[str, ...] | None = None) -> list[Equilibrium]:
+                       input_names: tuple[str, ...] | None = None) -> list[Equilibrium]:
     """Every real equilibrium at the constant input vector ``ubar``, sorted by ȳ, with its local stability.
 
     Parameters
@@ -218,8 +214,6 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
         One point of input space (engineering units), columns in ``input_names`` order.
     input_names : tuple of str, optional
         Input order (default: the structure's inputs).
-    inputs : tuple of str, optional
-        Former name of ``input_names`` (deprecated; kept for one release).
 
     Returns
     -------
@@ -227,7 +221,7 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
         ``ubar`` of each is the tuple (ū_1, …, ū_m).
     """
     structure, theta = _static.checked_model(structure, theta)
-    names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
+    names = surface_inputs(structure, input_names)
     ub = points_of_inputs(ubar, names)
     if ub.shape[0] != 1:
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
@@ -283,7 +277,6 @@ def static_surface(
     *,
     strict: bool = True,
     input_names: tuple[str, ...] | None = None,
-    inputs: tuple[str, ...] | None = None,
 ) -> np.ndarray:
     """The steady state the model reaches at each constant input vector: the static surface ȳ(ū).
 
@@ -303,8 +296,6 @@ def static_surface(
         Raise ``ValueError`` naming every ū where no equilibrium is reached (else NaN there).
     input_names : tuple of str, optional
         Input order (default: the structure's inputs).
-    inputs : tuple of str, optional
-        Former name of ``input_names`` (deprecated; kept for one release).
 
     Returns
     -------
@@ -313,7 +304,7 @@ def static_surface(
     """
     strict = check_bool(strict, "strict")
     structure, th = _static.checked_model(structure, theta)
-    names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
+    names = surface_inputs(structure, input_names)
     ub = points_of_inputs(ubar, names)
     if y0 is not None:
         y0 = check_per_point(y0, ub.shape[0], "y0")
@@ -342,7 +333,6 @@ def static_surface_gain(
     *,
     strict: bool = True,
     input_names: tuple[str, ...] | None = None,
-    inputs: tuple[str, ...] | None = None,
 ) -> np.ndarray:
     """The static gain as a gradient: ∂ȳ/∂ū_i along the static surface, by implicit differentiation.
 
@@ -357,7 +347,7 @@ def static_surface_gain(
         Entry (j, i) in output units per unit of input i.
     """
     structure, th = _static.checked_model(structure, theta)
-    names = surface_inputs(structure, renamed(input_names, inputs, "input_names", "inputs"))
+    names = surface_inputs(structure, input_names)
     ub = points_of_inputs(ubar, names)
     yb = static_surface(structure, th, ub, y0, strict=strict, input_names=names)
     p, A = static_powers(structure, names)
