@@ -43,7 +43,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...], str], ...] = (
     ("_api", (), "every public name below this line, as one namespace"),
     ("plots", ("_data", "_models", "_pareto", "_surfaces", "_trust", "_control"), "figures (matplotlib, no pyplot)"),
     ("experiments", ("_example", "_spec", "_cell", "_store", "_dask_worker", "_dask", "_executors", "_map", "_run", "_html",
-                     "_report", "_select", "_selection_plot"),
+                     "_report", "_select_checkpoint", "_select", "_selection_plot"),
      "grids of data × structures × variants × seeds on Dask or in-process, the SQLite store, reports, "
      "and ``select_graybox``"),
     ("reproduce", ("_paper_models", "_black_box", "_neural", "_table1"), "the paper's sections, Table I and figures"),

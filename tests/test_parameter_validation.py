@@ -471,6 +471,7 @@ ACCEPTED: dict[tuple[str, str], tuple] = {
     ("static_surface_band", "y0"): (2.5, -1),
     # a file name: "x" is one
     ("se_pareto", "checkpoint"): ("x",),
+    ("select_graybox", "checkpoint"): ("x",),
     # grids, stores and reports
     ("run_grid", "progress"): (True,),
     ("run_grid", "retry_failed"): (True,),

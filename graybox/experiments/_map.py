@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
@@ -56,8 +56,9 @@ def parallel_map(
     Yields
     ------
     callable
-        ``map(fn, items) -> list`` of results in the order of ``items``; ``fn`` and the items must
-        be picklable.
+        ``map(fn, items, each=None) -> list`` of results in the order of ``items``; ``fn`` and the
+        items must be picklable. ``each(i, result)``, if given, is called in this process as each
+        job finishes (in any order; ``i`` its position in ``items``): e.g. to keep finished work.
     """
     executor = check_choice("dask" if executor is None else executor, "executor", EXECUTORS)
     if workers is not None:
@@ -71,7 +72,7 @@ def parallel_map(
         raise ValueError("executor='dask' needs exactly one of workers, client or scheduler")
     with ExitStack() as stack:
         if executor == "inprocess":
-            yield lambda fn, items: [fn(x) for x in items]
+            yield _in_turn
             return
         if executor == "processes":
             n = (os.cpu_count() or 1) if workers is None else workers
@@ -81,7 +82,7 @@ def parallel_map(
             # the workers ignore SIGINT (Ctrl-C reaches the terminal's whole process group): the driver stops them
             pool = stack.enter_context(ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn"),
                                                            initializer=ignore_sigint))
-            yield lambda fn, items: _pool_map(pool, fn, items)
+            yield lambda fn, items, each=None: _pool_map(pool, fn, items, each)
             return
         from distributed import Client
 
@@ -92,15 +93,45 @@ def parallel_map(
                 cluster = stack.enter_context(local_cluster(workers))
                 client = stack.enter_context(Client(cluster))
 
-        def dmap(fn: Callable, items: Iterable) -> list:
-            return client.gather(client.map(fn, list(items), pure=False))
+        def dmap(fn: Callable, items: Iterable, each: Each | None = None) -> list:
+            futures = client.map(fn, list(items), pure=False)
+            if each is None:
+                return client.gather(futures)
+            from distributed import as_completed
+
+            where = {f.key: i for i, f in enumerate(futures)}
+            out: list = [None] * len(futures)
+            for f, r in as_completed(futures, with_results=True):  # raises a job's error, as gather does
+                out[where[f.key]] = r
+                each(where[f.key], r)
+            return out
 
         yield dmap
 
 
-def _pool_map(pool: ProcessPoolExecutor, fn: Callable, items: Iterable) -> list:
+#: ``each(i, result)``: told of each finished job.
+Each = Callable[[int, Any], None]
+
+
+def _in_turn(fn: Callable, items: Iterable, each: Each | None = None) -> list:
+    """The jobs run here, in turn."""
+    out = []
+    for i, x in enumerate(items):
+        out.append(fn(x))
+        if each is not None:
+            each(i, out[-1])
+    return out
+
+
+def _pool_map(pool: ProcessPoolExecutor, fn: Callable, items: Iterable, each: Each | None = None) -> list:
     """``pool.map``, with a dead worker explained: the usual cause is a script without a main guard."""
     try:
+        if each is not None:
+            futures = [pool.submit(fn, x) for x in items]
+            where = {f: i for i, f in enumerate(futures)}
+            for f in as_completed(futures):
+                each(where[f], f.result())
+            return [f.result() for f in futures]
         return list(pool.map(fn, items))
     except KeyboardInterrupt:
         # Ctrl-C: the jobs left are dropped and the running ones stopped now, not run to their end (the

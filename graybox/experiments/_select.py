@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import os
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
@@ -60,6 +61,7 @@ from ..core._validation import FrozenFrame, check_bool, check_choice, check_fiel
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
+from ._select_checkpoint import SelectionCheckpoint, checkpoint_of, row_key
 from ._spec import build_constraint, constraint_entries, constraint_from_object
 
 __all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_ESTIMATORS", "BLACK_BOX_ESTIMATORS"]
@@ -893,16 +895,30 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     return out
 
 
-def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progress) -> list[dict]:
-    if not jobs:
-        return []
+def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progress,
+              checkpoint: SelectionCheckpoint | None = None) -> list[dict]:
+    """Every job's scores, in order: those the checkpoint holds read from it, the others run (and kept in it as
+    each finishes)."""
+    out: list = [None] * len(jobs)
+    keys = [None] * len(jobs)
+    if checkpoint is not None:
+        keys = [row_key(j) for j in jobs]
+        out = [checkpoint.get(k) for k in keys]
+    todo = [i for i, r in enumerate(out) if r is None]
+    if not todo:
+        return out
+
+    def finished(i: int, r: dict) -> None:
+        out[i] = r
+        if checkpoint is not None:
+            checkpoint.put(keys[i], r)
+
     if executor is None:
         executor = "inprocess" if workers is None and client is None and scheduler is None else "dask"
     if executor == "inprocess":  # (executor, workers, client and scheduler checked by select_graybox)
-        bar = progress_bar(len(jobs), "select_graybox", progress)
-        out = []
-        for j in jobs:
-            out.append(_score_job(j))
+        bar = progress_bar(len(jobs), "select_graybox", progress, initial=len(jobs) - len(todo))
+        for i in todo:
+            finished(i, _score_job(jobs[i]))
             bar.update()
         bar.close()
         return out
@@ -912,13 +928,9 @@ def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progres
     elif not any(v is not None for v in kw.values()):
         kw["workers"] = 2
     # the slow fronts first, largest structures first: the workers finish together
-    order = sorted(range(len(jobs)), key=lambda i: (jobs[i].estimator not in SLOW_ESTIMATORS,
-                                                     -jobs[i].terms.count(" + ")))
+    order = sorted(todo, key=lambda i: (jobs[i].estimator not in SLOW_ESTIMATORS, -jobs[i].terms.count(" + ")))
     with parallel_map(**kw) as pmap:
-        done = pmap(_score_job, [jobs[i] for i in order])
-    out: list = [None] * len(jobs)
-    for i, r in zip(order, done):
-        out[i] = r
+        pmap(_score_job, [jobs[i] for i in order], each=lambda k, r: finished(order[k], r))
     return out
 
 
@@ -1026,6 +1038,7 @@ def select_graybox(
     scheduler: str | None = None,
     progress: bool | None = None,
     centre: bool = False,
+    checkpoint: str | os.PathLike | None = None,
 ) -> GrayboxSelection:
     """Choose a structure (and estimator, and λ member) on data it was not fitted on.
 
@@ -1129,12 +1142,20 @@ def select_graybox(
         Run on the Dask scheduler at this address.
     progress : bool, optional
         A progress bar over the jobs (default: on a terminal, in the driver only).
+    checkpoint : path, optional
+        An ``.npz`` file that keeps each structure × estimator row's scores as it finishes (its
+        folder must exist): a run killed and called again with it refits only the rows it did not
+        finish, and gives the table an uninterrupted run gives. A row is reused only when its
+        terms, estimator, options, data and splits and graybox's version are the same (a hash of
+        them is its key), so one file may serve calls that differ: what changed is fitted. The
+        structure search is made again (seconds). Read without pickle; a file that is no such
+        checkpoint is refused (``ValueError``) before anything runs.
 
     Returns
     -------
     GrayboxSelection
         The chosen structure and model, and the table of everything compared. Nothing is
-        written to disk.
+        written to disk but the checkpoint, when one is given.
 
     Raises
     ------
@@ -1185,11 +1206,12 @@ def select_graybox(
         check_choice(fallback, "fallback", ("min_jsf",))
     check_choice(rule, "rule", RULES)
     centre = check_bool(centre, "centre")
+    ck = checkpoint_of(checkpoint)  # read and checked before the search
     plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
     constraints = _constraint_specs(constraints, len(plan.ident[0].input_names))
     rows = _structures(candidates, plan.ident, sizes, sources, include, form, centre)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
-                            progress=progress)
+                            progress=progress, checkpoint=ck)
     fast = [e for e in estimators if e not in SLOW_ESTIMATORS]
     filters = tuple(warnings.filters)
     jobs = [_Job(r["structure"], r["terms"], e, plan, lam, constraints, filters) for r in rows for e in fast]

@@ -1,0 +1,135 @@
+"""``select_graybox``'s checkpoint: each structure × estimator row's scores kept as it finishes.
+
+A selection over many structures and slow estimators (SE fronts) runs for minutes or hours; with
+``checkpoint=`` a killed run resumes without refitting the rows it finished. A row is kept under a key
+hashing everything that decides its scores: the row's terms, estimator, λ1 and constraints, the plan (every record's samples, Ts, names and units, the folds and blocks,
+the test records, the static points and band, the largest lag, the data set's extra values) and
+graybox's version. Not the caller's warning filters: a script and a notebook (or a test run) filter
+differently, and a row keeps the warnings of the run that fitted it. A row whose key the file does not hold is fitted; a file written for other data,
+options or another version is therefore not wrong, only not reused. The file is an ``.npz`` of numeric
+and text arrays, read without pickle, and replaced atomically after each row, so a kill never tears it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import re
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from .. import _api as gb
+from ..estimation._simulation_error import CheckpointError, checkpoint_path
+
+__all__ = ["SelectionCheckpoint", "checkpoint_of", "row_key"]
+
+#: What a row's result holds: arrays, optional arrays and lists of text.
+_ARRAYS = ("blocks", "weights", "jsf", "jsf_full", "thetas", "lambdas")
+_OPTIONAL = ("test",)
+_TEXTS = ("failed", "warnings")
+_KEY = re.compile(r"^[0-9a-f]{32}$")
+
+
+def _feed(h: Any, obj: Any) -> None:
+    """Hash ``obj``'s content into ``h``: arrays by dtype, shape and bytes, values field by field."""
+    if obj is None or isinstance(obj, (bool, int, float, str)):
+        h.update(f"{type(obj).__name__}:{obj!r};".encode())
+    elif isinstance(obj, np.ndarray):
+        a = np.ascontiguousarray(obj)
+        h.update(f"array:{a.dtype.str}:{a.shape};".encode())
+        h.update(a.tobytes() if a.dtype != object else repr(a.tolist()).encode())
+    elif isinstance(obj, np.generic):
+        _feed(h, obj.item())
+    elif isinstance(obj, Mapping):
+        h.update(f"map:{len(obj)};".encode())
+        for k in sorted(obj, key=repr):
+            _feed(h, k)
+            _feed(h, obj[k])
+    elif isinstance(obj, (tuple, list)):
+        h.update(f"seq:{len(obj)};".encode())
+        for v in obj:
+            _feed(h, v)
+    elif dataclasses.is_dataclass(obj):
+        h.update(f"value:{type(obj).__qualname__};".encode())
+        for f in dataclasses.fields(obj):
+            h.update(f.name.encode())
+            _feed(h, getattr(obj, f.name))
+    elif isinstance(obj, gb.Structure):
+        _feed(h, [str(t) for t in obj])
+    else:  # nothing a fit reads (e.g. a bundled data set's simulator in its extra values): its kind only
+        h.update(f"other:{type(obj).__module__}.{type(obj).__qualname__};".encode())
+
+
+def row_key(job: Any) -> str:
+    """The key of a row's scores: a hash of the job (terms, estimator, λ1, constraints and the plan's data and
+    splits) and graybox's version."""
+    h = hashlib.sha256()
+    _feed(h, gb.__version__)
+    _feed(h, (job.terms, job.estimator, job.lambdas))
+    h.update(json.dumps(job.constraints, sort_keys=True, default=repr).encode())
+    _feed(h, job.plan)
+    return h.hexdigest()[:32]
+
+
+class SelectionCheckpoint:
+    """The rows a checkpoint file holds, and the file rewritten as rows finish.
+
+    Parameters
+    ----------
+    path : path
+        The ``.npz`` file (created at the first finished row; its folder must exist).
+    """
+
+    def __init__(self, path: str | os.PathLike):
+        self.path = checkpoint_path(path)
+        self.rows: dict[str, dict[str, Any]] = self._read() if self.path.exists() else {}
+
+    def _read(self) -> dict[str, dict[str, Any]]:
+        try:
+            with np.load(self.path, allow_pickle=False) as z:
+                arrays = {k: z[k] for k in z.files}
+        except Exception as exc:  # not an npz, torn, or holding objects (which would need pickle)
+            raise CheckpointError(f"checkpoint {self.path} is not a readable select_graybox checkpoint ({exc}); "
+                                  "delete it or choose another checkpoint path") from None
+        if str(arrays.pop("kind", "")) != "select_graybox":
+            raise CheckpointError(f"checkpoint {self.path} is not a select_graybox checkpoint; delete it or choose "
+                                  "another checkpoint path")
+        rows: dict[str, dict[str, Any]] = {}
+        for name, value in arrays.items():
+            key, _, field = name.partition("/")
+            if not _KEY.match(key) or field not in _ARRAYS + _OPTIONAL + _TEXTS:
+                raise CheckpointError(f"checkpoint {self.path} is corrupt (an entry {name!r}); delete it or choose "
+                                      "another checkpoint path")
+            rows.setdefault(key, {})[field] = [str(s) for s in value] if field in _TEXTS else value
+        for key, row in rows.items():
+            if any(f not in row for f in _ARRAYS + _TEXTS):
+                raise CheckpointError(f"checkpoint {self.path} is corrupt (a row without all its scores); delete it or "
+                                      "choose another checkpoint path")
+        return rows
+
+    def get(self, key: str) -> dict[str, Any] | None:
+        """The scores kept under ``key`` (a copy), or None."""
+        row = self.rows.get(key)
+        return None if row is None else {k: (list(v) if k in _TEXTS else v.copy()) for k, v in row.items()}
+
+    def put(self, key: str, row: Mapping[str, Any]) -> None:
+        """Keep a finished row's scores and rewrite the file (atomically: a kill leaves the old one or the new)."""
+        self.rows[key] = {k: (list(row[k]) if k in _TEXTS else np.asarray(row[k]))
+                          for k in _ARRAYS + _TEXTS + tuple(k for k in _OPTIONAL if k in row)}
+        out: dict[str, np.ndarray] = {"kind": np.array("select_graybox")}
+        for k, r in self.rows.items():
+            for field, v in r.items():
+                out[f"{k}/{field}"] = np.array(v, dtype=str) if field in _TEXTS else v
+        tmp = self.path.with_name(self.path.name + ".tmp.npz")
+        np.savez(tmp, **out)
+        os.replace(tmp, self.path)
+
+
+def checkpoint_of(checkpoint: str | os.PathLike | None) -> SelectionCheckpoint | None:
+    """The checkpoint ``select_graybox`` was given (read and checked now, before any search), or None."""
+    return None if checkpoint is None else SelectionCheckpoint(checkpoint)
+
