@@ -1149,7 +1149,9 @@ def select_graybox(
         terms, estimator, options, data and splits and graybox's version are the same (a hash of
         them is its key), so one file may serve calls that differ: what changed is fitted. The
         structure search is made again (seconds). Read without pickle; a file that is no such
-        checkpoint is refused (``ValueError``) before anything runs.
+        checkpoint is refused (``ValueError``) before anything runs. One call at a time per file:
+        two running at once each rewrite it with their own rows (the file stays whole; the rows of
+        the one that wrote first are fitted again next time).
 
     Returns
     -------
