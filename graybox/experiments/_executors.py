@@ -251,8 +251,8 @@ class ProcessPool:
     fn : callable
         What a worker runs for a cell (default: :func:`run_cell`).
     time_limit : float, optional
-        Seconds a cell may run: past them its worker is killed and the cell is a failed row saying so
-        (not retried). None: no limit.
+        Seconds a cell may run (from its start in the worker): past them its worker is stopped (SIGTERM,
+        then SIGKILL) and the cell is a failed row saying so (not retried). None: no limit.
     """
 
     def __init__(self, workers: int, fn: CellFn = run_cell, time_limit: float | None = None):
