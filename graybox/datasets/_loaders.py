@@ -7,7 +7,8 @@ in any form Python's ``float`` reads. Files as spreadsheets export them are read
 (``,`` ``;`` or tab) and the decimal mark (``.`` or ``,``) are detected from the header and the
 first lines (``delimiter=`` and ``decimal=`` override). The text is UTF-8 (a byte-order mark
 skipped), UTF-16 or UTF-32 when a byte-order mark says so (Excel's "Unicode text"), or what
-``encoding=`` names (e.g. ``"cp1252"``, Excel's "CSV" on Windows). A file that allows two readings
+``encoding=`` names (e.g. ``"cp1252"``, Excel's "CSV" on Windows); a binary file (an Excel workbook,
+a compressed CSV) is refused as what it is. A file that allows two readings
 is refused with what was seen, among them numbers that may hold a thousands separator (``1,234``
 with no other decimal in sight); thousands separators themselves are never read. Columns are
 picked by name, so a file may hold other columns too. Every problem found is a ``ValueError`` naming the file and the line
@@ -280,6 +281,35 @@ def _decode(p: Path, raw: bytes, start: int, end: int) -> str:
                          "Windows in Western Europe and the Americas)") from None
 
 
+_AS_ARRAYS = "and pass its columns as arrays to graybox.Record(u, y, Ts=...) / graybox.StaticPoints(ubar, ybar)"
+_SAVE_AS_CSV = ("save it from the spreadsheet as CSV (UTF-8), or read it with pandas.read_excel " + _AS_ARRAYS)
+#: Signatures (first bytes) of binary files users hand a CSV reader, with what they are and what to do:
+#: their bytes would otherwise be judged as text and sent to an encoding that reads garbage. Each is
+#: specific enough that no CSV header starts with it (bzip2's block or end-of-stream mark follows "BZh9").
+_PARQUET = "a Parquet file"
+_BINARY_SIGNATURES = tuple((re.compile(magic, re.DOTALL), what, advice) for magic, what, advice in (
+    (re.escape(b"PK\x03\x04"), "a zip archive (an Excel .xlsx or OpenDocument .ods workbook, or a zipped file)",
+     _SAVE_AS_CSV + "; a zipped CSV: unzip it first"),
+    (re.escape(bytes.fromhex("d0cf11e0a1b11ae1")), "a legacy Excel (.xls) workbook or another OLE2 document",
+     _SAVE_AS_CSV),
+    (re.escape(b"\x1f\x8b"), "gzip-compressed (what pandas writes for to_csv('x.csv.gz'))",
+     "decompress it first (gunzip), or read it with pandas.read_csv " + _AS_ARRAYS),
+    (rb"BZh[1-9](?:1AY&SY|\x17rE8P\x90)", "bzip2-compressed",
+     "decompress it first (bunzip2), or read it with pandas.read_csv " + _AS_ARRAYS),
+    (re.escape(b"\xfd7zXZ\x00"), "xz-compressed",
+     "decompress it first (unxz), or read it with pandas.read_csv " + _AS_ARRAYS),
+    (re.escape(b"\x28\xb5\x2f\xfd"), "zstd-compressed",
+     "decompress it first (unzstd), or read it with pandas.read_csv " + _AS_ARRAYS),
+    (re.escape(b"\x93NUMPY"), "a NumPy .npy file", "read it with numpy.load " + _AS_ARRAYS),
+    (re.escape(b"PAR1"), _PARQUET, "read it with pandas.read_parquet " + _AS_ARRAYS),
+    (re.escape(b"\x89HDF\r\n\x1a\n"), "an HDF5 file (or a MATLAB v7.3 .mat file)",
+     "read it with h5py or pandas.read_hdf " + _AS_ARRAYS),
+    (re.escape(b"MATLAB 5.0 MAT-file"), "a MATLAB .mat file", "read it with scipy.io.loadmat " + _AS_ARRAYS),
+    (re.escape(b"SQLite format 3\x00"), "an SQLite database (a grid's store?)",
+     "read a grid's store with graybox.load_results; for your own tables, read them with pandas.read_sql "
+     + _AS_ARRAYS),
+))
+
 # Byte-order marks, UTF-32's first: its little-endian mark starts with UTF-16's.
 _BOMS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8"),
          (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))
@@ -291,7 +321,12 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
 
     Without ``encoding`` a byte-order mark decides (UTF-8, UTF-16 or UTF-32), else UTF-8, checked
     lazily by :func:`_decode`. Text in another encoding is decoded here and written again as UTF-8.
+    A file that starts with the signature of a binary format (a workbook, a compressed file) is
+    refused as that format, whatever ``encoding`` says: no text encoding reads it.
     """
+    for magic, what, advice in _BINARY_SIGNATURES:
+        if magic.match(raw) and (what != _PARQUET or raw.endswith(b"PAR1")):  # a text header may start "PAR1,"
+            raise ValueError(f"{p}: the file is {what}, not CSV text; {advice}")
     if encoding is not None:
         if not isinstance(encoding, str):
             raise TypeError(f"encoding must name a text encoding (a str) such as 'cp1252', got {encoding!r}")
@@ -659,8 +694,9 @@ def load_record_csv(
         with the stamps, or neither ``time`` nor ``Ts`` given; an empty file, a header without
         rows, mixed delimiters, a decimal comma with an unquoted comma delimiter, a delimiter or
         decimal mark that the first lines leave ambiguous (pass ``delimiter=`` / ``decimal=``), a
-        thousands separator, text that is not in the encoding (UTF-8 by default), or an unknown
-        ``encoding`` (or one that contradicts the file's byte-order mark).
+        thousands separator, text that is not in the encoding (UTF-8 by default), an unknown
+        ``encoding`` (or one that contradicts the file's byte-order mark), or a binary file (an
+        Excel workbook, a compressed CSV, NumPy or Parquet), named as what it is.
     TypeError
         ``path``, ``u``, ``y``, ``time``, ``Ts``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
         type (a column is named by a str; units are a pair of str).

@@ -1,0 +1,57 @@
+"""Hunt 43c: a newcomer's first hour, from a fresh virtual environment (the README, the guide, own
+CSV files, DataFrames and arrays, and the command line)."""
+
+from __future__ import annotations
+
+import bz2
+import gzip
+import io
+import lzma
+import zipfile
+
+import numpy as np
+import pytest
+
+from graybox.datasets import load_record_csv, load_static_csv
+
+CSV = "t,u,y\n" + "".join(f"{0.1 * k:.1f},{k % 3}.5,{k}.25\n" for k in range(20))
+
+
+def _xlsx() -> bytes:
+    # a workbook as Excel writes it: a zip archive of XML parts
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("[Content_Types].xml", "<Types/>")
+        z.writestr("xl/worksheets/sheet1.xml", "<worksheet/>")
+    return buf.getvalue()
+
+
+# Files that are no CSV text: a workbook, a compressed CSV (pandas writes one for to_csv("x.csv.gz")),
+# a legacy Excel file (OLE2), numpy and Parquet files.
+@pytest.mark.parametrize("suffix, data, what", [
+    (".xlsx", _xlsx(), "zip archive"),
+    (".csv.gz", gzip.compress(CSV.encode()), "gzip"),
+    (".csv.bz2", bz2.compress(CSV.encode()), "bzip2"),
+    (".csv.xz", lzma.compress(CSV.encode()), "xz"),
+    (".xls", bytes.fromhex("d0cf11e0a1b11ae1") + bytes(600), "legacy Excel"),
+    (".npy", b"\x93NUMPY\x01\x00v\x00{'descr': '<f8'}" + bytes(64), "NumPy"),
+    (".parquet", b"PAR1" + bytes(range(1, 200)) + b"PAR1", "Parquet"),
+])
+def test_a_binary_file_is_named_as_what_it_is_not_as_utf16_or_cp1252_text(tmp_path, suffix, data, what):
+    # was: "the file holds NUL bytes ... UTF-16 without a byte-order mark? Pass encoding='utf-16-le'"
+    # (or "not UTF-8 text ... encoding='cp1252'"), sending the user to an encoding that reads garbage
+    p = tmp_path / f"run1{suffix}"
+    p.write_bytes(data)
+    for load in (lambda **kw: load_record_csv(p, u="u", y="y", time="t", **kw),
+                 lambda **kw: load_static_csv(p, u="u", y="y", **kw)):
+        for kw in ({}, {"encoding": "utf-16-le"}, {"encoding": "cp1252"}):
+            with pytest.raises(ValueError, match=rf"run1{suffix.replace('.', '[.]')}: .*{what}.*not CSV text") as exc:
+                load(**kw)
+            assert "UTF-16 without" not in str(exc.value)
+
+
+@pytest.mark.parametrize("header", ["PAR1,u,y", "BZh9,u,y", "PK,u,y", "MATLAB,u,y"])
+def test_a_text_header_that_starts_like_a_signature_is_still_read(tmp_path, header):
+    p = tmp_path / "odd.csv"
+    p.write_text(header + "\n1,2,3\n2,4,5\n", encoding="utf-8")
+    np.testing.assert_array_equal(load_static_csv(p, u="u", y="y").ybar, [3.0, 5.0])
