@@ -55,3 +55,26 @@ def test_a_text_header_that_starts_like_a_signature_is_still_read(tmp_path, head
     p = tmp_path / "odd.csv"
     p.write_text(header + "\n1,2,3\n2,4,5\n", encoding="utf-8")
     np.testing.assert_array_equal(load_static_csv(p, u="u", y="y").ybar, [3.0, 5.0])
+
+
+@pytest.mark.parametrize("text, hint", [
+    ("u(k-1)**2", r"powers are written \^2"),
+    ("u(k+1)", r"lags only"),
+    ("const", r"'1' for the constant"),
+    ("2*u(k-1)", r"without coefficients"),
+    ("u(k-1)+y(k-1)", r"one term per string"),
+    ("u[k-1]", r"name\(k-lag\)"),
+])
+def test_a_term_that_cannot_be_parsed_says_how_terms_are_written(text, hint):
+    # was: "cannot parse term 'const' at position 0: 'const'", which names no way to write it
+    from graybox import parse_term
+    with pytest.raises(ValueError, match=rf"cannot parse term .*{hint}"):
+        parse_term(text)
+
+
+@pytest.mark.parametrize("text, hint", [("u(k-1)^2.0", "whole number"), ("u(k-1)^-1", "whole number"),
+                                        ("-u(k-1)", "without coefficients or signs")])
+def test_a_bad_power_or_a_sign_is_named(text, hint):
+    from graybox import parse_term
+    with pytest.raises(ValueError, match=rf"cannot parse term .*{hint}"):
+        parse_term(text)

@@ -230,6 +230,25 @@ class Term:
         return (self.degree, [(_rank(s), l, -p) for s, l, p in self.factors])
 
 
+def _syntax_hint(s: str, pos: int) -> str:
+    """What a term that does not parse got wrong, and how terms are written."""
+    rest = s[pos:]
+    if rest.startswith("*") and "**" in s:
+        why = "powers are written ^2, not **2"
+    elif re.search(r"\(\s*k\s*\+", s):
+        why = "a term holds past samples, lags only: u(k-1), never u(k+1)"
+    elif re.search(r"\^\s*(?:[-+.]|\d+\s*\.)", s):
+        why = "a power is a whole number >= 1, e.g. ^2"
+    elif re.match(r"[+-]\s*\S", rest) and pos > 0:
+        why = "give one term per string (a list of terms), not a sum"
+    elif re.match(r"(?:[+-]|[+-]?\d*\.?\d+\s*\*?)\s*[a-zA-Z]", s):
+        why = "terms are written without coefficients or signs (the estimators fit them)"
+    else:
+        why = "each factor is name(k-lag), with an optional ^power"
+    return (f"; {why}. A term is a product of factors name(k-lag)^power, e.g. 'u(k-2)y(k-6)', 'u(k-1)^2', "
+            "'u1(k-1)u2(k-2)', or '1' for the constant")
+
+
 def parse_term(text: str) -> Term:
     """Parse a paper-style term such as ``"u(k-2)y(k-6)"``, ``"u1(k-1)u2(k-2)"``, ``"u(k-6)^2"`` or ``"1"``.
 
@@ -248,7 +267,7 @@ def parse_term(text: str) -> Term:
     while pos < len(s):
         m = _FACTOR_RE.match(s, pos)
         if m is None or m.end() == pos:
-            raise ValueError(f"cannot parse term {text!r} at position {pos}: {s[pos:]!r}")
+            raise ValueError(f"cannot parse term {text!r} at position {pos}: {s[pos:]!r}{_syntax_hint(s, pos)}")
         sig, lag, power = m.group(1), int(m.group(2) or 0), int(m.group(3) or 1)
         try:
             _check_signal(sig)
