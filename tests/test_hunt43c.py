@@ -78,3 +78,32 @@ def test_a_bad_power_or_a_sign_is_named(text, hint):
     from graybox import parse_term
     with pytest.raises(ValueError, match=rf"cannot parse term .*{hint}"):
         parse_term(text)
+
+
+def _heater_model():
+    import graybox as gb
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(30, 60, 20), 25)
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.8 * y[k - 1] + 0.5 * u[k - 1] + 0.01 * rng.standard_normal()
+    return gb.els(["y(k-1)", "u(k-1)"], gb.Record(u, y, Ts=0.5, units=("%", "°C"))).model
+
+
+def test_a_file_header_never_contradicts_the_units_the_saved_value_carries(tmp_path):
+    # was: gb.save(model_in_percent_and_celsius, path, units=("rpm", "mlc")) wrote a header saying rpm and mlc
+    # over a model whose own units (kept in the object, checked where it meets data) are % and °C
+    import graybox as gb
+    model = _heater_model()
+    with pytest.raises(ValueError, match=r"units=\('rpm', 'mlc'\).*carries \('%', '°C'\)"):
+        gb.save(model, tmp_path / "m.json", units=("rpm", "mlc"))
+    assert not (tmp_path / "m.json").exists()
+    with pytest.raises(ValueError, match=r"units=\{'y': 'K'\}.*carries \('%', '°C'\)"):
+        gb.to_json(model, units={"y": "K"})
+    # the same units, or a part of them, are the value's own: the header says all of them
+    for units in (("%", "°C"), {"u": "%"}, ("", "°C"), None):
+        p = gb.save(model, tmp_path / "ok.json", units=units)
+        assert gb.read_header(p)["units"] == ("%", "°C")
+    # a value without units of its own takes the header's
+    bare = gb.Model(model.structure, model.theta)
+    assert gb.read_header(gb.save(bare, tmp_path / "b.json", units=("rpm", "mlc")))["units"] == ("rpm", "mlc")

@@ -141,7 +141,9 @@ def test_the_fixture_holds_what_the_round_trips_are_meant_to_cover(values):
 def test_the_header_carries_a_records_units(values, tmp_path):
     assert gb.read_header(gb.save(values["record"], tmp_path / "r.json"))["units"] == ("rpm", "mlc")
     assert gb.read_header(gb.save(values["dataset"], tmp_path / "d.json"))["units"] == ("rpm", "mlc")
-    assert gb.read_header(gb.save(values["record"], tmp_path / "r2.json", units=("%", "bar")))["units"] == ("%", "bar")
+    # units= that contradict the record's own would make the header lie about the numbers (hunt 43c): refused
+    with pytest.raises(ValueError, match="contradicts the units the Record carries"):
+        gb.save(values["record"], tmp_path / "r2.json", units=("%", "bar"))
 
 
 def test_plain_values_keep_their_type(values):

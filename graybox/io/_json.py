@@ -818,7 +818,8 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
         Units of the input and output: a pair of str (e.g. ``("rpm", "mlc")``, or a Record's ``units``) or a
         mapping with the keys ``"u"`` and ``"y"`` (a missing one: no unit said), written
         in the header; default: the units the value carries (a Record's, StaticPoints', a model's or a
-        result's, a Dataset's records'), when it names any.
+        result's, a Dataset's records'), when it names any. Given for a value that carries units of
+        its own, they must agree with those (they may name fewer: the value's fill the rest).
 
     Returns
     -------
@@ -828,7 +829,8 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     ------
     ValueError
         A value of a type graybox does not save, or holding what JSON cannot carry (a function, a plant
-        simulator, …: the field is named), or a table the format cannot carry.
+        simulator, …: the field is named), or a table the format cannot carry; ``units`` that contradict
+        the value's own.
     """
     if type(obj) not in _TYPES:
         hint = "; save its .model" if type(getattr(obj, "model", None)) in _TYPES else ""
@@ -838,9 +840,15 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     doc: dict[str, Any] = {"format": "graybox", "format_version": FORMAT_VERSION, "graybox_version": graybox_version(),
                            "type": _TYPES[type(obj)]}
     own = _own_units(obj)
-    if units is None and own is not None and any(own):
-        units = own  # the header says what the value itself carries
+    given = units
     u = _units_arg(units)
+    if own is not None and any(own):  # the header says what the value itself carries, never another unit
+        said = ("", "") if u is None else (u["u"], u["y"])
+        if any(a and b and a != b for a, b in zip(said, own)):
+            raise ValueError(f"units={given!r} contradicts the units the {type(obj).__name__} carries {own!r} (those "
+                             "its numbers hold in); omit units= (the header then says the value's own), or convert "
+                             "the data and refit in the units meant")
+        u = {"u": said[0] or own[0], "y": said[1] or own[1]}
     if u is not None:
         doc["units"] = u
     doc["object"] = _encode_fields(obj)
