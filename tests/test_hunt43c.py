@@ -107,3 +107,30 @@ def test_a_file_header_never_contradicts_the_units_the_saved_value_carries(tmp_p
     # a value without units of its own takes the header's
     bare = gb.Model(model.structure, model.theta)
     assert gb.read_header(gb.save(bare, tmp_path / "b.json", units=("rpm", "mlc")))["units"] == ("rpm", "mlc")
+
+
+def _short_record(n: int):
+    import graybox as gb
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 1, 400)
+    y = np.zeros(400)
+    for k in range(2, 400):
+        y[k] = 0.6 * y[k - 1] + 0.2 * y[k - 2] + 0.5 * u[k - 1] + 0.3 * u[k - 1] ** 2 + 0.1 + 0.01 * rng.standard_normal()
+    return gb.Record(u[:n], y[:n], Ts=1.0)
+
+
+@pytest.mark.parametrize("search", ["greedy", "swap"])
+def test_a_criterion_cut_short_by_the_records_rows_warns(search):
+    # was: on 40 samples FROLS with BIC returned 36 terms for 37 rows (an interpolation, the true model has 5)
+    # without a word, while on 60 samples the same cut by max_terms = 50 warned
+    import graybox as gb
+    cand = gb.Candidates(3, 3, degree=3)
+    with pytest.warns(RuntimeWarning, match=r"bic is smallest at the largest size the data allow \(36 terms: 37 "
+                                             r"regression rows\).*longer record"):
+        sel = gb.frols(cand, _short_record(40), search=search)
+    assert len(sel.structure) == 36
+    # a criterion that turns within the rows says nothing
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(gb.frols(cand, _short_record(300), search=search).structure) < 20

@@ -571,7 +571,8 @@ def frols(
       the tolerance is not reached);
     * ``criterion``: the size with the global minimum of the criterion over sizes
       1 … ``max_terms`` (a warning if the minimum is at ``max_terms``: the curve was still
-      falling). This is the default, with ``"bic"``, when neither ``n_terms`` nor ``tol`` is
+      falling; or at the most terms a short record's rows allow, rows − 1: an interpolation of
+      the record, not a choice). This is the default, with ``"bic"``, when neither ``n_terms`` nor ``tol`` is
       given.
 
     With ``n_terms`` or ``tol``, ``criterion`` (default ``"aic"``) only names the curve stored
@@ -777,7 +778,8 @@ def frols(
         n0 = max(n_included, 1) - 1
         i, stop = choose_model(rule, np.arange(1, k_eval + 1)[n0:], curve[n0:], (rss / yy)[n0:],
                                can_grow=k_eval < min(n_usable - n_dependent, N - 1),
-                               fraction="1 - ΣERR")
+                               fraction="1 - ΣERR",
+                               rows_cap=N if k_eval == N - 1 < n_usable - n_dependent else None)
         n_sel = n0 + i + 1
     else:
         n_sel, stop = n_plan, plan.stop
@@ -1063,7 +1065,8 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
     crit = criterion_of_sizes(rule.criterion, ks, plan.rss, N)
     i, stop = choose_model(rule, ks, crit, plan.rss / cols.yy,
                            can_grow=not plan.exhausted and ks.max() < min(n_free + len(forced), N - 1),
-                           fraction="1 - ΣERR")
+                           fraction="1 - ΣERR",
+                           rows_cap=N if not plan.exhausted and ks.max() == N - 1 < n_free + len(forced) else None)
     how = ("exact (branch and bound, proven)" if plan.proven else
            f"exact search ran out of its {EXACT_NODES} nodes: best found, not proven") if search == "exact" else \
         "swap (local optimum under single exchanges)"

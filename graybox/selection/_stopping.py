@@ -76,6 +76,7 @@ def choose_model(
     *,
     can_grow: bool,
     fraction: str,
+    rows_cap: int | None = None,
 ) -> tuple[int, str]:
     """Index of the model the rule picks among those looked at, and why, in words.
 
@@ -99,6 +100,10 @@ def choose_model(
         rule cut short by the largest size worth a warning.
     fraction : str
         How the unexplained fraction is written in messages (e.g. ``"1 - ΣERR"``).
+    rows_cap : int, optional
+        The regression rows, when they alone kept larger models from being looked at (the largest
+        size is rows − 1 and candidates were left): a criterion smallest there has only met the
+        record's end, an interpolation rather than a choice, and gets a warning saying so.
 
     Returns
     -------
@@ -109,7 +114,8 @@ def choose_model(
     -----
     RuntimeWarning
         When the tolerance is not reached by any model (the last one is returned), or the
-        criterion is smallest at the largest size looked at while candidates were left.
+        criterion is smallest at the largest size looked at while candidates were left (or at the
+        largest the record's rows allow, ``rows_cap``).
     """
     sizes = np.asarray(sizes, dtype=int)
     crit = np.asarray(crit, dtype=float)
@@ -136,4 +142,8 @@ def choose_model(
     if sizes[i] == largest and can_grow:
         warn(f"{rule.criterion} is smallest at the largest size looked at ({largest} terms): the curve may still be "
              "falling; raise max_terms", RuntimeWarning)
+    elif sizes[i] == largest and rows_cap is not None:
+        warn(f"{rule.criterion} is smallest at the largest size the data allow ({largest} terms: {rows_cap} regression "
+             "rows): the model interpolates the record rather than being chosen by the criterion; use a longer "
+             "record, fewer candidates, or give n_terms", RuntimeWarning)
     return i, f"{rule.criterion} minimum at {sizes[i]} of {largest} sizes"
