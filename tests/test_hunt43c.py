@@ -134,3 +134,23 @@ def test_a_criterion_cut_short_by_the_records_rows_warns(search):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert len(gb.frols(cand, _short_record(300), search=search).structure) < 20
+
+
+def test_a_dataframe_of_inputs_that_holds_the_output_column_is_refused():
+    # was: gb.Record(df, df["temperature"]) took every column of the file, the output among them, as inputs
+    # (u1 = time, u2 = power, u3 = temperature): a model of y from y itself, in silence
+    import pandas as pd
+
+    import graybox as gb
+    n = 50
+    df = pd.DataFrame({"time": 0.5 * np.arange(n), "power": np.linspace(30, 60, n), "temperature": np.linspace(80, 120, n)})
+    with pytest.raises(ValueError, match=r"hold 'temperature', the output's column.*df\[\['time', 'power'\]\]"):
+        gb.Record(df, df["temperature"], Ts=0.5)
+    levels = df.iloc[::10]
+    for make in (gb.StaticPoints, gb.StaticPoints.from_repeats):
+        with pytest.raises(ValueError, match="hold 'temperature', the output's column"):
+            make(levels[["power", "temperature"]], levels["temperature"])
+    with pytest.raises(ValueError, match="'temperature' is both the input and the output"):
+        gb.Record(df["temperature"], df["temperature"], Ts=0.5)
+    rec = gb.Record(df[["power"]], df["temperature"], Ts=0.5)
+    np.testing.assert_array_equal(rec.u, df["power"].to_numpy())

@@ -33,7 +33,13 @@ def _is_series(x: object) -> bool:
     return type(x).__module__.split(".")[0] == "pandas" and hasattr(x, "index") and getattr(x, "ndim", 0) == 1
 
 
-def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
+def output_label(y: object) -> str | None:
+    """The label of an output given as a pandas Series (``df["p"]``), else None: the column no input may be."""
+    label = getattr(y, "name", None) if _is_series(y) else None
+    return label if isinstance(label, str) and label else None
+
+
+def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: str | None = None) -> object:
     """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
 
     Columns named exactly as the inputs (every name once, no other column) are read by name, reordered as
@@ -41,17 +47,26 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
     between would be read by position with some named column landing on another input, or a column
     dropped unseen: ``ValueError`` naming the columns. ``names`` None: the default names
     (``u`` for one column, ``u1 … um`` for m). A pandas Series (one point ū, a DataFrame's row
-    ``df.iloc[k]``) is read so by its index labels. Anything else is returned as it is.
+    ``df.iloc[k]``) is read so by its index labels. Anything else is returned as it is. ``output``:
+    the output's column label (its Series' name), which no column of inputs may be, nor an input
+    Series' name.
     """
     series = _is_series(x)
     if not (series or is_frame(x)):
         return x
+    if series and output is not None and getattr(x, "name", None) == output:
+        raise ValueError(f"{name}: {output!r} is both the input and the output; pass the input column as u")
     cols = list(x.index if series else x.columns)
     labels = [str(c) for c in cols]
     what = "Series' index labels" if series else "DataFrame's columns"
-    if not series and "y" in labels:  # read by position, the output would be an input (a Series' labels are samples')
-        raise ValueError(f"{name}: the {what} {labels} hold 'y', the output's name, which no input may have: pass "
-                         "the input columns only, e.g. df.drop(columns='y')")
+    # read by position, the output would be an input (a Series' labels are samples')
+    for out in ("y", *([output] if output not in (None, "y") else [])):
+        if not series and out in labels:
+            whose = "the output's name, which no input may have" if out == "y" else "the output's column"
+            rest = [c for c in labels if c != out]
+            raise ValueError(f"{name}: the {what} {labels} hold {out!r}, {whose}: pass the input columns only, e.g. "
+                             f"df.drop(columns={out!r}) or df[{rest!r}] (a time column is no input: give its step "
+                             "as Ts=)")
     expected = tuple(default_input_names(len(cols)) if names is None else names)
     hits = [c for c in labels if c in expected]
     if not hits:
@@ -68,15 +83,15 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str) -> object:
                      "(read by position)")
 
 
-def as_input_array(x: object, name: str, names: Sequence[str] | None = None) -> np.ndarray:
+def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: str | None = None) -> np.ndarray:
     """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several.
 
     The one coercion of inputs (records, static points, free runs, static surfaces): a pandas DataFrame
     is read by column name where its columns are the inputs ``names`` (default ``u`` / ``u1 … um``), in
     any order, by position where they name none of them, and refused where they name some
-    (:func:`frame_inputs`).
+    (:func:`frame_inputs`; ``output``, the output's column label, never an input).
     """
-    x = frame_inputs(x, names, name)
+    x = frame_inputs(x, names, name, output)
     refuse_non_real(x, name)
     a = float_array(x, name)
     if a.ndim == 2 and a.shape[1] == 1:
@@ -111,7 +126,8 @@ class Record:
         stored 1-D (an (N, 1) array is flattened), several as a C-contiguous (N, m) array. A
         DataFrame whose columns are the ``input_names`` (default ``u`` / ``u1 … um``) is read by
         name, in any column order; one whose columns name none of them, by position; one whose
-        columns name some of them is refused (``ValueError`` naming the columns).
+        columns name some of them is refused (``ValueError`` naming the columns), as is one that
+        holds the output's column (``y`` a Series of that name: ``Record(df, df["p"])``).
     y : array_like, shape (N,)
         Output samples (engineering units, e.g. mlc).
     Ts : float, optional
@@ -134,7 +150,7 @@ class Record:
 
     def __post_init__(self) -> None:
         check_str(self.name, "Record: name")  # a label every message and file carries
-        u = as_input_array(self.u, f"{self.name}: u", self.input_names)
+        u = as_input_array(self.u, f"{self.name}: u", self.input_names, output=output_label(self.y))
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: u and y must have the same length, got {u.shape[0]} and {y.size}")
@@ -231,7 +247,7 @@ class StaticPoints:
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
-        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names)
+        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=output_label(self.ybar))
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
@@ -307,7 +323,7 @@ class StaticPoints:
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
         check_str(name, "StaticPoints: name")
-        u = as_input_array(ubar, f"{name}: ubar", input_names)
+        u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_label(ybar))
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
