@@ -154,3 +154,20 @@ def test_a_dataframe_of_inputs_that_holds_the_output_column_is_refused():
         gb.Record(df["temperature"], df["temperature"], Ts=0.5)
     rec = gb.Record(df[["power"]], df["temperature"], Ts=0.5)
     np.testing.assert_array_equal(rec.u, df["power"].to_numpy())
+
+
+def test_the_control_bridge_tells_how_to_pick_a_model_of_a_pareto_set():
+    # was: "local_model needs a polynomial NARX Model, got ParetoSet." where every other function a model is
+    # meant names how to choose one of the set
+    import graybox as gb
+    rng = np.random.default_rng(1)
+    u = np.repeat(rng.uniform(0, 1, 40), 10)
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.7 * y[k - 1] + 0.5 * u[k - 1] + 0.2 * u[k - 1] ** 2 + 0.1 + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1)
+    pts = gb.StaticPoints([0.0, 0.5, 1.0], [1 / 3 * 1.0, (0.25 + 0.05 + 0.1) / 0.3, 0.8 / 0.3])
+    front = gb.pe_pareto(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], rec, pts, lambdas=[0.5, 1.0])
+    for call in (lambda: gb.local_model(front, 0.5), lambda: gb.operating_curve(front, [0.2, 0.5])):
+        with pytest.raises(TypeError, match=r"got ParetoSet; a ParetoSet holds many models: choose one.*member_model"):
+            call()

@@ -84,13 +84,15 @@ def check_polynomial(model: object, what: str) -> Model:
     """``model`` if it is a polynomial :class:`Model`; a clear ``TypeError`` otherwise (a neural model included)."""
     try:  # a Model, or a result that carries one (ELSResult, CLSResult, Decision, …): the one coercion
         return as_model(model, "model")  # type: ignore[return-value]
-    except TypeError:
-        pass
+    except TypeError as exc:
+        said = str(exc)
     carried = getattr(model, "model", None)
     kind = type(carried if carried is not None and not callable(carried) else model).__name__
     hint = (" A NeuralModel's equilibria and their stability are given by its equilibria() method; its local "
             "linear model is not built here." if kind == "NeuralModel" else "")
-    raise TypeError(f"{what} needs a polynomial NARX Model, got {kind}.{hint}")
+    # a set of models (a ParetoSet) is told how to pick one, as everywhere else a model is meant
+    many = said[said.index("; a "):] if "holds many models" in said else ""
+    raise TypeError(f"{what} needs a polynomial NARX Model, got {kind}{many}.{hint}")
 
 
 # -- exact partial derivatives from the term structure (graybox.static._linearisation) -----------
