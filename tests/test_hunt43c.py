@@ -171,3 +171,21 @@ def test_the_control_bridge_tells_how_to_pick_a_model_of_a_pareto_set():
     for call in (lambda: gb.local_model(front, 0.5), lambda: gb.operating_curve(front, [0.2, 0.5])):
         with pytest.raises(TypeError, match=r"got ParetoSet; a ParetoSet holds many models: choose one.*member_model"):
             call()
+
+
+@pytest.mark.parametrize("text, skiprows, fix", [
+    ("Logger X\nt;u;y\ns;%;C\n0;1,5;2\n0,1;2,5;3\n", 0, "skiprows=1"),              # a block not skipped
+    ("Logger X\nDate 2026\n\nt;u;y\ns;%;C\n0;1,5;2\n0,1;2,5;3\n", 2, "skiprows=3"),  # skipped one line short
+])
+def test_a_header_block_is_named_with_units_row_as_without(tmp_path, text, skiprows, fix):
+    # was: with units_row=True the line that names the columns was taken for the units row and blanked before the
+    # block was looked for: "no column 'u' ... pass delimiter=" or "line 3 is blank", not the skiprows= to pass
+    p = tmp_path / "logger.csv"
+    p.write_text(text, encoding="utf-8")
+    for load in (lambda: load_record_csv(p, u="u", y="y", time="t", units_row=True, skiprows=skiprows),
+                 lambda: load_static_csv(p, u="u", y="y", units_row=True, skiprows=skiprows)):
+        with pytest.raises(ValueError, match=rf"names the columns .*pass {fix}"):
+            load()
+    n = int(fix.split("=")[1])
+    rec = load_record_csv(p, u="u", y="y", time="t", units_row=True, skiprows=n)
+    assert rec.units == ("%", "C") and rec.y.tolist() == [2.0, 3.0]

@@ -98,6 +98,15 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
                              f"but delimiter={delimiter!r} was given; omit delimiter= (the hint is used) or correct "
                              f"line {first}")
         delimiter, start, first = hint.group(1), end, first + 1
+    # The dialect and the header come from the first lines alone: a long file is decoded whole
+    # only when the careful reader (or a decimal comma) needs its text. A header block not skipped (or
+    # skipped too far) is told from the lines as the file holds them: the units row blanked below may be
+    # the very line that names the columns.
+    end = _skip_lines(raw, start, _SNIFF_LINES)
+    head = _decode(p, raw, start, end)
+    _refuse_header_block(p, head, names, first)
+    if skiprows:
+        _refuse_skipped_header(p, _decode(p, raw, skipped_from, start), head, names, skiprows)
     unit_line, cut = None, None
     if units_row:  # read, then blanked in place: the lines keep their numbers, and a blank line is no sample
         u0 = _skip_lines(raw, start, 1)
@@ -108,13 +117,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         cut = raw[start:u0] + raw[u1:]  # for numpy's reader, which a blank line sends to the careful one
         raw = raw[:u0] + (b"\r\n" if raw[u0:u1].endswith(b"\r\n") else b"\n") + raw[u1:]
         own = False
-    # The dialect and the header come from the first lines alone: a long file is decoded whole
-    # only when the careful reader (or a decimal comma) needs its text.
-    end = _skip_lines(raw, start, _SNIFF_LINES)
-    head = _decode(p, raw, start, end)
-    _refuse_header_block(p, head, names, first)
-    if skiprows:
-        _refuse_skipped_header(p, _decode(p, raw, skipped_from, start), head, names, skiprows)
+    if units_row:  # the first lines again, the units row blanked
+        end = _skip_lines(raw, start, _SNIFF_LINES)
+        head = _decode(p, raw, start, end)
     delim, dec = _dialect(p, head, delimiter, decimal, first)
     header = next(csv.reader(io.StringIO(head, newline=""), delimiter=delim), None)
     if header is None:
