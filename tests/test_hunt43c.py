@@ -189,3 +189,27 @@ def test_a_header_block_is_named_with_units_row_as_without(tmp_path, text, skipr
     n = int(fix.split("=")[1])
     rec = load_record_csv(p, u="u", y="y", time="t", units_row=True, skiprows=n)
     assert rec.units == ("%", "C") and rec.y.tolist() == [2.0, 3.0]
+
+
+def test_a_surface_the_structure_cannot_carry_names_the_calls_that_fit_one_it_can():
+    # was: "... Fit the surface on the structure's numerator monomials (CLS with how='curve')", naming neither
+    # what to pass with how='curve' nor the exponents a fitted surface may have
+    import graybox as gb
+    rng = np.random.default_rng(0)
+    n = 600
+    a = np.repeat(rng.permutation(np.linspace(10, 20, 15)), 40)[:n]  # levels that reach the points' range
+    b = np.repeat(rng.permutation(np.linspace(1, 3, 11)), 55)[:n]
+    y = np.full(n, 50.0)
+    for k in range(1, n):
+        y[k] = 0.8 * y[k - 1] + 0.4 * a[k - 1] + b[k - 1] + 0.05 * a[k - 1] * b[k - 1] + rng.normal(0, 0.05)
+    rec = gb.Record(np.column_stack([a, b]), y, Ts=0.1, input_names=("n", "q"))
+    grid = [(p, q) for p in (10.0, 15.0, 20.0) for q in (1.0, 2.0, 3.0)]
+    pts = gb.StaticPoints(grid, [(0.4 * p + q + 0.05 * p * q) / 0.2 for p, q in grid], input_names=("n", "q"))
+    st = ["1", "y(k-1)", "n(k-1)q(k-1)", "n(k-1)", "q(k-1)"]
+    with pytest.raises(ValueError, match=r"cls\(structure, data, points, how='curve'\).*StaticSurface.fit\(points, "
+                                         r"exponents=\[\(0, 0\), \(0, 1\), \(1, 0\), \(1, 1\)\]\)"):
+        gb.cls(st, rec, gb.StaticSurface.fit(pts, 2))
+    # both ways out the message names work
+    for static in (gb.StaticSurface.fit(pts, exponents=[(0, 0), (0, 1), (1, 0), (1, 1)]), pts):
+        model = gb.cls(st, rec, static, how="curve" if static is pts else "auto").model
+        np.testing.assert_allclose(model.static_curve(grid), pts.ybar, rtol=1e-6)

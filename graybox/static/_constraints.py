@@ -615,8 +615,9 @@ class CurveEquality(StaticConstraint):
                 raise ValueError(
                     f"{surf.name} has monomials with exponents {missing} (one power per input) that no cluster of "
                     "the structure carries (no process term with that input powers and no y): its static function "
-                    "cannot equal the surface. Fit the surface on the structure's numerator monomials (CLS with "
-                    "how='curve')"
+                    "cannot equal the surface. Fit the surface on the structure's numerator monomials: pass the "
+                    "static points themselves, cls(structure, data, points, how='curve'), or fit it with "
+                    f"StaticSurface.fit(points, exponents={sorted(numer)!r})"
                 )
             return lambda e: float(surf.coefficient(e))
         if m != 1:
