@@ -213,3 +213,16 @@ def test_a_surface_the_structure_cannot_carry_names_the_calls_that_fit_one_it_ca
     for static in (gb.StaticSurface.fit(pts, exponents=[(0, 0), (0, 1), (1, 0), (1, 1)]), pts):
         model = gb.cls(st, rec, static, how="curve" if static is pts else "auto").model
         np.testing.assert_allclose(model.static_curve(grid), pts.ybar, rtol=1e-6)
+
+
+def test_an_input_named_as_the_output_but_another_signal_is_read():
+    # two frames may name different signals alike (an upstream and a downstream 'level'): only the output's own
+    # column is refused
+    import pandas as pd
+
+    import graybox as gb
+    inputs = pd.DataFrame({"level": np.linspace(0, 1, 30), "flow": np.linspace(2, 3, 30)})
+    out = pd.Series(np.linspace(5, 6, 30) ** 2, name="level")
+    rec = gb.Record(inputs, out, Ts=1.0)
+    np.testing.assert_array_equal(rec.u[:, 0], inputs["level"].to_numpy())
+    assert gb.Record(inputs["level"], out).n_inputs == 1

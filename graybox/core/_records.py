@@ -33,13 +33,21 @@ def _is_series(x: object) -> bool:
     return type(x).__module__.split(".")[0] == "pandas" and hasattr(x, "index") and getattr(x, "ndim", 0) == 1
 
 
-def output_label(y: object) -> str | None:
-    """The label of an output given as a pandas Series (``df["p"]``), else None: the column no input may be."""
+def output_series(y: object) -> object | None:
+    """``y`` when it is a pandas Series with a name (``df["p"]``), else None: its column is no input."""
     label = getattr(y, "name", None) if _is_series(y) else None
-    return label if isinstance(label, str) and label else None
+    return y if isinstance(label, str) and label else None
 
 
-def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: str | None = None) -> object:
+def _same_samples(a: object, b: object) -> bool:
+    """Whether two signals hold the same samples (the output's column passed again as an input)."""
+    try:
+        return np.array_equal(np.asarray(a, dtype=float), np.asarray(b, dtype=float), equal_nan=True)
+    except (TypeError, ValueError):
+        return False
+
+
+def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None) -> object:
     """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
 
     Columns named exactly as the inputs (every name once, no other column) are read by name, reordered as
@@ -48,20 +56,22 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: str 
     dropped unseen: ``ValueError`` naming the columns. ``names`` None: the default names
     (``u`` for one column, ``u1 … um`` for m). A pandas Series (one point ū, a DataFrame's row
     ``df.iloc[k]``) is read so by its index labels. Anything else is returned as it is. ``output``:
-    the output's column label (its Series' name), which no column of inputs may be, nor an input
-    Series' name.
+    the output as a named Series (:func:`output_series`), whose column (its name, its samples) no
+    input may be: neither a column of ``x`` nor ``x`` itself.
     """
     series = _is_series(x)
     if not (series or is_frame(x)):
         return x
-    if series and output is not None and getattr(x, "name", None) == output:
-        raise ValueError(f"{name}: {output!r} is both the input and the output; pass the input column as u")
+    label = None if output is None else output.name  # type: ignore[attr-defined]
+    if series and label is not None and getattr(x, "name", None) == label and _same_samples(x, output):
+        raise ValueError(f"{name}: {label!r} is both the input and the output; pass the input column as u")
     cols = list(x.index if series else x.columns)
     labels = [str(c) for c in cols]
     what = "Series' index labels" if series else "DataFrame's columns"
-    # read by position, the output would be an input (a Series' labels are samples')
-    for out in ("y", *([output] if output not in (None, "y") else [])):
-        if not series and out in labels:
+    # read by position, the output would be an input (a Series' labels are samples'); a column named as the
+    # output's Series but holding other samples (another frame's signal of that name) is an input like any
+    for out in ("y", *([label] if label not in (None, "y") else [])):
+        if not series and out in labels and (out == "y" or _same_samples(x[cols[labels.index(out)]], output)):
             whose = "the output's name, which no input may have" if out == "y" else "the output's column"
             rest = [c for c in labels if c != out]
             raise ValueError(f"{name}: the {what} {labels} hold {out!r}, {whose}: pass the input columns only, e.g. "
@@ -83,13 +93,13 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: str 
                      "(read by position)")
 
 
-def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: str | None = None) -> np.ndarray:
+def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: object = None) -> np.ndarray:
     """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several.
 
     The one coercion of inputs (records, static points, free runs, static surfaces): a pandas DataFrame
     is read by column name where its columns are the inputs ``names`` (default ``u`` / ``u1 … um``), in
     any order, by position where they name none of them, and refused where they name some
-    (:func:`frame_inputs`; ``output``, the output's column label, never an input).
+    (:func:`frame_inputs`; ``output``, the output as a named Series, never an input).
     """
     x = frame_inputs(x, names, name, output)
     refuse_non_real(x, name)
@@ -150,7 +160,7 @@ class Record:
 
     def __post_init__(self) -> None:
         check_str(self.name, "Record: name")  # a label every message and file carries
-        u = as_input_array(self.u, f"{self.name}: u", self.input_names, output=output_label(self.y))
+        u = as_input_array(self.u, f"{self.name}: u", self.input_names, output=output_series(self.y))
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: u and y must have the same length, got {u.shape[0]} and {y.size}")
@@ -247,7 +257,7 @@ class StaticPoints:
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
-        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=output_label(self.ybar))
+        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=output_series(self.ybar))
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
@@ -323,7 +333,7 @@ class StaticPoints:
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
         check_str(name, "StaticPoints: name")
-        u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_label(ybar))
+        u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar))
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
