@@ -226,3 +226,24 @@ def test_an_input_named_as_the_output_but_another_signal_is_read():
     rec = gb.Record(inputs, out, Ts=1.0)
     np.testing.assert_array_equal(rec.u[:, 0], inputs["level"].to_numpy())
     assert gb.Record(inputs["level"], out).n_inputs == 1
+
+
+def test_data_given_as_a_path_a_dataframe_or_arrays_is_told_how_to_make_a_record(tmp_path):
+    # was: gb.frols(cand, df) said "got a sequence holding a str" (a DataFrame iterates over its column names)
+    # and gb.frols(cand, (u, y)) "got a sequence holding a ndarray", naming neither what was given nor the fix
+    import pandas as pd
+
+    import graybox as gb
+    df = pd.DataFrame({"power": np.linspace(30, 60, 40), "temperature": np.linspace(80, 120, 40)})
+    cand = gb.Candidates(1, 1, degree=1)
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 0.5])
+    for data, hint in [(df, r"got DataFrame; make one of its columns: graybox.Record\(df\['input column'\]"),
+                       ("run1.csv", r"got str; read the file first: graybox.load_record_csv"),
+                       (tmp_path / "run1.csv", r"got PosixPath; read the file first|got WindowsPath; read the file"),
+                       ((df.power.to_numpy(), df.temperature.to_numpy()), r"make one of the input and output samples"),
+                       (df.to_numpy(), r"got ndarray; make one of the input and output samples"),
+                       ({"u": df.power.to_numpy(), "y": df.temperature.to_numpy()}, r"got dict; make one of its signals")]:
+        for call in (lambda: gb.frols(cand, data, n_terms=1), lambda: gb.els(["y(k-1)", "u(k-1)"], data),
+                     lambda: gb.js(model, data)):
+            with pytest.raises(TypeError, match=hint):
+                call()

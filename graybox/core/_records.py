@@ -11,6 +11,7 @@ single-input path is exactly what it was.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field, replace
 from typing import Mapping, Sequence
 
@@ -575,6 +576,21 @@ class Dataset:
 __all__.append("Dataset")
 
 
+def record_hint(data: object) -> str:
+    """How to make a Record of what was given where one is meant (a path, a DataFrame, arrays), else ``""``."""
+    if isinstance(data, (str, os.PathLike)):
+        return ("; read the file first: graybox.load_record_csv(path, u='input column', y='output column', "
+                "time='time column') (or Ts=seconds)")
+    if is_frame(data):
+        return "; make one of its columns: graybox.Record(df['input column'], df['output column'], Ts=seconds)"
+    if isinstance(data, Mapping):
+        return "; make one of its signals: graybox.Record(d['u'], d['y'], Ts=seconds)"
+    if isinstance(data, np.ndarray) or (isinstance(data, (tuple, list)) and data and not any(
+            isinstance(r, Record) for r in data)):
+        return "; make one of the input and output samples: graybox.Record(u, y, Ts=seconds)"
+    return ""
+
+
 def as_records(data: object, part: str = "ident", name: str = "data") -> list[Record]:
     """The records an entry works on, as a non-empty list.
 
@@ -601,23 +617,24 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
         return [rec if rec.units == units else replace(rec, units=units)]
     if isinstance(data, Record):
         return [data]
-    if isinstance(data, (str, bytes, Mapping)) or not hasattr(data, "__iter__"):
+    # a DataFrame or an array iterates over what are no records (column names, rows): said as what it is
+    if isinstance(data, (str, bytes, Mapping, os.PathLike, np.ndarray)) or is_frame(data) or not hasattr(data, "__iter__"):
         raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset (whose {part} record is used); "
-                        f"got {type(data).__name__}")
+                        f"got {type(data).__name__}{record_hint(data)}")
     recs = list(data)  # type: ignore[call-overload]
     if not recs:
         raise ValueError(f"{name}: no records given (an empty sequence)")
     for r in recs:
         if not isinstance(r, Record):
             raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset; got a sequence holding a "
-                            f"{type(r).__name__}")
+                            f"{type(r).__name__}{record_hint(recs)}")
     for r in recs[1:]:
         check_compatible(recs[0], r)
     check_units_agree(recs, _SAME_UNITS)
     return recs
 
 
-__all__ += ["check_units", "as_records", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "as_records", "record_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

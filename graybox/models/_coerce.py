@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core._records import Dataset, Record, StaticPoints, check_same_units, frame_inputs
+from ..core._records import Dataset, Record, StaticPoints, check_same_units, frame_inputs, record_hint
 from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
 from ..core._terms import Structure, Term
 from ..core._validation import as_1d_finite, float_array
@@ -271,4 +271,5 @@ def as_record(data: object, part: str, name: str = "data") -> Record:
         return data
     if isinstance(data, Dataset):
         return getattr(data, part)
-    raise TypeError(f"{name} must be a Record or a Dataset (whose {part} record is used); got {type(data).__name__}")
+    raise TypeError(f"{name} must be a Record or a Dataset (whose {part} record is used); got {type(data).__name__}"
+                    f"{record_hint(data)}")
