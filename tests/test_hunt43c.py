@@ -247,3 +247,27 @@ def test_data_given_as_a_path_a_dataframe_or_arrays_is_told_how_to_make_a_record
                      lambda: gb.js(model, data)):
             with pytest.raises(TypeError, match=hint):
                 call()
+
+
+def test_static_points_given_as_a_path_a_dataframe_arrays_or_a_function_are_told_how_to_make_them():
+    # was: "static must be StaticPoints, a StaticCurve, a StaticSurface or None; got tuple", naming no way to make them
+    import pandas as pd
+
+    import graybox as gb
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.uniform(0, 1, 30), 10)
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.7 * y[k - 1] + 0.5 * u[k - 1] + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1)
+    levels = pd.DataFrame({"u": [0.2, 0.5, 0.8], "y": [0.33, 0.83, 1.33]})
+    st = ["y(k-1)", "u(k-1)"]
+    for static, hint in [("steady.csv", r"got str; read the file first: graybox.load_static_csv"),
+                         (levels, r"got DataFrame; make them of its columns: graybox.StaticPoints\(df\['input"),
+                         ((levels.u.to_numpy(), levels.y.to_numpy()), r"got tuple; make them of the levels"),
+                         (lambda v: v / 0.3, r"got function; a function is sampled first")]:
+        from graybox.estimation._simulation_error import SEProblem
+        for call in (lambda: gb.pe_pareto(st, rec, static), lambda: gb.cls(st, rec, static),
+                     lambda: gb.Dataset(rec, rec, static), lambda: SEProblem(gb.Structure(st), rec, static)):
+            with pytest.raises(TypeError, match=hint):
+                call()

@@ -541,9 +541,11 @@ class Dataset:
     def __post_init__(self) -> None:
         for nm in ("ident", "valid"):
             if not isinstance(getattr(self, nm), Record):
-                raise TypeError(f"Dataset: {nm} must be a Record, got {type(getattr(self, nm)).__name__}")
+                raise TypeError(f"Dataset: {nm} must be a Record, got {type(getattr(self, nm)).__name__}"
+                                f"{record_hint(getattr(self, nm))}")
         if self.static is not None and not isinstance(self.static, StaticPoints):
-            raise TypeError(f"Dataset: static must be StaticPoints or None, got {type(self.static).__name__}")
+            raise TypeError(f"Dataset: static must be StaticPoints or None, got {type(self.static).__name__}"
+                            f"{static_hint(self.static)}")
         if not isinstance(self.extra, Mapping):
             raise TypeError(f"Dataset: extra must be a mapping (e.g. a dict), got {type(self.extra).__name__}")
         object.__setattr__(self, "extra", FrozenMap(self.extra))  # not the caller's dict, and not changeable
@@ -591,6 +593,20 @@ def record_hint(data: object) -> str:
     return ""
 
 
+def static_hint(static: object) -> str:
+    """How to make StaticPoints of what was given where they are meant (a path, a DataFrame, arrays, a function)."""
+    if isinstance(static, (str, os.PathLike)):
+        return "; read the file first: graybox.load_static_csv(path, u='input column', y='output column')"
+    if is_frame(static):
+        return "; make them of its columns: graybox.StaticPoints(df['input column'], df['output column'])"
+    if isinstance(static, (np.ndarray, tuple, list)):
+        return "; make them of the levels and the settled outputs: graybox.StaticPoints(ubar, ybar)"
+    if callable(static):
+        return ("; a function is sampled first: graybox.StaticPoints(ubar, f(ubar)), or given as a polynomial: "
+                "graybox.StaticCurve.polynomial([c0, c1, ...])")
+    return ""
+
+
 def as_records(data: object, part: str = "ident", name: str = "data") -> list[Record]:
     """The records an entry works on, as a non-empty list.
 
@@ -634,7 +650,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["check_units", "as_records", "record_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "as_records", "record_hint", "static_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

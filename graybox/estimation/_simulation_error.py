@@ -73,6 +73,7 @@ from ..core._records import (
     StaticRangeWarning,
     as_records,
     check_compatible,
+    static_hint,
     warn_static_range,
 )
 from ..core._regressors import stacked_regressors
@@ -131,7 +132,7 @@ class SEProblem:
                  *, margin: float | None = None, ridge: float = 0.0, scored_only: bool = False):
         self.records = as_records(records)
         if static is not None and not isinstance(static, StaticPoints):
-            raise TypeError(f"static must be StaticPoints or None, got {type(static).__name__}")
+            raise TypeError(f"static must be StaticPoints or None, got {type(static).__name__}{static_hint(static)}")
         structure = structure if isinstance(structure, Structure) else Structure(structure)
         if any(t.is_noise for t in structure):
             structure = structure.process

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core._records import Dataset, Record, StaticPoints, check_same_units, frame_inputs, record_hint
+from ..core._records import Dataset, Record, StaticPoints, check_same_units, frame_inputs, record_hint, static_hint
 from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
 from ..core._terms import Structure, Term
 from ..core._validation import as_1d_finite, float_array
@@ -168,7 +168,7 @@ def static_info(static: object, data: object, *, needed_by: str | None = None, n
     kinds: tuple[type, ...] = (StaticPoints, StaticCurve, StaticSurface) if curves else (StaticPoints,)
     if static is not None and not isinstance(static, kinds):
         what = "StaticPoints, a StaticCurve, a StaticSurface or None" if curves else "StaticPoints or None"
-        raise TypeError(f"{name} must be {what}; got {type(static).__name__}")
+        raise TypeError(f"{name} must be {what}; got {type(static).__name__}{static_hint(static)}")
     if isinstance(static, StaticPoints):  # given beside the records (a Dataset's own points are checked by it)
         for r in _records_in(data):
             check_same_units(r.units, f"{r.name!r} has", static, "the records and the static points of one "
