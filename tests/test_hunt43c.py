@@ -271,3 +271,13 @@ def test_static_points_given_as_a_path_a_dataframe_arrays_or_a_function_are_told
                      lambda: gb.Dataset(rec, rec, static), lambda: SEProblem(gb.Structure(st), rec, static)):
             with pytest.raises(TypeError, match=hint):
                 call()
+
+
+@pytest.mark.parametrize("name, why", [("ümdrehung", "not an ASCII letter"), ("Ω", "not an ASCII letter"),
+                                       ("_a", "not an ASCII letter"), ("speed [rpm]", "not an ASCII letter"),
+                                       ("e", "the name of the output, the noise or the time index")])
+def test_an_input_name_refused_says_what_names_may_be(name, why):
+    # was: "input name 'ümdrehung' is not a valid identifier", which it is, in Python
+    import graybox as gb
+    with pytest.raises(ValueError, match=rf"input name .* \(it .*{why}"):
+        gb.Record(np.ones((5, 2)), np.ones(5), input_names=(name, "q"))

@@ -123,7 +123,10 @@ def check_input_names(names: object, m: int | None = None, what: str = "input_na
         if not isinstance(n, str):
             raise TypeError(f"{what}: an input name must be a string, got {n!r}")
         if not _NAME_RE.match(n) or n in _RESERVED:
-            raise ValueError(f"{what}: input name {n!r} is not a valid identifier other than y, e, k")
+            why = (f"is {n!r}, the name of the output, the noise or the time index" if n in _RESERVED else
+                   "is not an ASCII letter followed by ASCII letters, digits or _")
+            raise ValueError(f"{what}: input name {n!r} is not a valid identifier other than y, e, k (it {why}; "
+                             "terms print the inputs by name, e.g. n1(k-1))")
     dup = sorted({n for n in out if out.count(n) > 1})
     if dup:
         raise ValueError(f"{what}: input {dup[0]!r} is named twice in {out}")
