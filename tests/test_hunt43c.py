@@ -281,3 +281,17 @@ def test_an_input_name_refused_says_what_names_may_be(name, why):
     import graybox as gb
     with pytest.raises(ValueError, match=rf"input name .* \(it .*{why}"):
         gb.Record(np.ones((5, 2)), np.ones(5), input_names=(name, "q"))
+
+
+def test_a_saved_dataset_says_the_units_any_of_its_parts_names(tmp_path):
+    # was: the header took the ident record's units alone: ident read without units beside a validation file and
+    # static points that name them gave a file that said none
+    import graybox as gb
+    rng = np.random.default_rng(0)
+    ident = gb.Record(rng.uniform(size=20), rng.uniform(size=20), Ts=0.5)
+    valid = gb.Record(rng.uniform(size=20), rng.uniform(size=20), Ts=0.5, units=("%", "°C"))
+    data = gb.Dataset(ident, valid, gb.StaticPoints([0.2, 0.8], [1.0, 2.0], units=("%", "°C")))
+    assert data.units == ("%", "°C")
+    assert gb.read_header(gb.save(data, tmp_path / "d.json"))["units"] == ("%", "°C")
+    with pytest.raises(ValueError, match="contradicts the units the Dataset carries"):
+        gb.save(data, tmp_path / "e.json", units=("rpm", "°C"))

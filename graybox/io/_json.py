@@ -795,9 +795,10 @@ def _units_arg(units: tuple[str, str] | Mapping[str, str] | None) -> dict | None
 
 
 def _own_units(obj: Any) -> tuple[str, str] | None:
-    """The units a value carries itself: its own ``units``, its ``.model``'s, or a Dataset's records'."""
+    """The units a value carries itself: its own ``units``, its ``.model``'s, or a Dataset's (those any of its
+    records and static points name)."""
     if isinstance(obj, Dataset):
-        return obj.ident.units
+        return obj.units
     if isinstance(obj, OperatingCurve):
         return obj.units
     for v in (obj, getattr(obj, "model", None)):
