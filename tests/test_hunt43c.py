@@ -295,3 +295,16 @@ def test_a_saved_dataset_says_the_units_any_of_its_parts_names(tmp_path):
     assert gb.read_header(gb.save(data, tmp_path / "d.json"))["units"] == ("%", "°C")
     with pytest.raises(ValueError, match="contradicts the units the Dataset carries"):
         gb.save(data, tmp_path / "e.json", units=("rpm", "°C"))
+
+
+def test_the_readmes_free_run_figure_says_its_unit_once():
+    # was: plots.plot_free_run(valid, models, ylabel="Temperature (°C)"), the README's own call, labelled the axis
+    # "Temperature (°C) (°C)"; plot_static_curve already left a label that names its unit as it is
+    import graybox as gb
+    from graybox import plots
+    rec = gb.Record(np.linspace(30, 60, 20), np.linspace(80, 120, 20), Ts=0.5, units=("%", "°C"))
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0])
+    for given, shown in [("Temperature (°C)", "Temperature (°C)"), ("Temperature [°C]", "Temperature [°C]"),
+                         ("Temperature", "Temperature (°C)")]:
+        fig = plots.plot_free_run(rec, {"m": model}, ylabel=given)
+        assert fig.axes[0].get_ylabel() == shown

@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from ..models._coerce import as_model, as_record
 from ..models._model import Model
 from ..core._records import Dataset, Record
+from ._data import unit_label
 
 __all__ = ["plot_free_run"]
 
@@ -34,7 +35,8 @@ def plot_free_run(
     ax : matplotlib Axes, optional
         Draw here; by default a new 8 × 3.6 in figure is made.
     ylabel : str
-        Output label without units (``record.units[1]`` is appended).
+        Output label (``record.units[1]`` is appended unless the label names it, as in
+        ``"Temperature (°C)"``).
 
     Returns
     -------
@@ -63,7 +65,7 @@ def plot_free_run(
         ax.plot(t, y, "--", lw=1.0, label=name + (" (diverged)" if diverged else ""))
     unit = record.units[1]
     ax.set_xlabel("time (s)")
-    ax.set_ylabel(f"{ylabel} ({unit})" if unit else ylabel)
+    ax.set_ylabel(unit_label(ylabel, unit))  # "Temperature (°C)" as given, not "Temperature (°C) (°C)"
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
     return fig
