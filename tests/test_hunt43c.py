@@ -308,3 +308,21 @@ def test_the_readmes_free_run_figure_says_its_unit_once():
                          ("Temperature", "Temperature (°C)")]:
         fig = plots.plot_free_run(rec, {"m": model}, ylabel=given)
         assert fig.axes[0].get_ylabel() == shown
+
+
+@pytest.mark.parametrize("sep, decimal", [(",", "."), (";", ","), ("\t", ",")])
+def test_a_file_without_its_header_line_is_named_so(tmp_path, sep, decimal):
+    # was: "no column 'u' ... The columns are ['0.0', '0.5', '0.0']" (the first sample read as names) or, with
+    # decimal commas, "the delimiter is ambiguous ... pass delimiter=", which no delimiter= cures
+    import pandas as pd
+    df = pd.DataFrame({"t": np.arange(20) * 0.1, "u": np.arange(20.0) % 3 + 0.5, "y": np.arange(20.0) * 1.5})
+    p = tmp_path / "bare.csv"
+    df.to_csv(p, index=False, header=False, sep=sep, decimal=decimal)
+    for load in (lambda: load_record_csv(p, u="u", y="y", time="t"), lambda: load_static_csv(p, u="u", y="y")):
+        with pytest.raises(ValueError, match=r"bare.csv: line 1 holds numbers .*not the column names: the file has no "
+                                             r"header line"):
+            load()
+    # numbers that are the column names asked for are a header like any
+    q = tmp_path / "numbered.csv"
+    q.write_text("1,2,3\n0.5,1.5,2.5\n1.5,2.5,3.5\n", encoding="utf-8")
+    np.testing.assert_array_equal(load_static_csv(q, u="1", y="3").ybar, [2.5, 3.5])

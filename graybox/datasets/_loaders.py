@@ -107,6 +107,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     _refuse_header_block(p, head, names, first)
     if skiprows:
         _refuse_skipped_header(p, _decode(p, raw, skipped_from, start), head, names, skiprows)
+    _refuse_headerless(p, head, names, first)
     unit_line, cut = None, None
     if units_row:  # read, then blanked in place: the lines keep their numbers, and a blank line is no sample
         u0 = _skip_lines(raw, start, 1)
@@ -260,6 +261,21 @@ def _refuse_header_block(p: Path, head: str, names: Sequence[str], first: int = 
             raise ValueError(f"{p}: line {i} names the columns ({line!r}), but the header was read from line {first}: "
                              f"the file has {i - 1} line(s) before the column names (a data logger's header "
                              f"block?); pass skiprows={i - 1}")
+
+
+def _refuse_headerless(p: Path, head: str, names: Sequence[str], first: int) -> None:
+    """A ``ValueError`` when the header line (file line ``first``) holds numbers alone and none of the
+    columns asked for: a file written without its line of column names (``to_csv(header=False)``, a
+    logger's bare export), whose first sample would be read as names or the delimiter judged from it."""
+    line = head.splitlines()[0] if head.strip() else ""
+    cells = [c.strip().strip('"').strip() for c in re.split(r"[,;\t]", line)]
+    if not any(cells) or set(names) & set(cells):
+        return
+    if all(_numeric(c, ".") or _INTEGER.match(c) for c in cells if c):
+        raise ValueError(f"{p}: line {first} holds numbers ({line.strip()!r}), not the column names: the file has no "
+                         "header line. Add a first line naming the columns (e.g. t;power;temperature), or write the "
+                         "file with its header (pandas: to_csv(path, index=False), header=True by default); if these "
+                         "numbers are the column names, ask for the columns by them")
 
 
 def _refuse_skipped_header(p: Path, skipped: str, head: str, names: Sequence[str], skiprows: int) -> None:
