@@ -326,3 +326,16 @@ def test_a_file_without_its_header_line_is_named_so(tmp_path, sep, decimal):
     q = tmp_path / "numbered.csv"
     q.write_text("1,2,3\n0.5,1.5,2.5\n1.5,2.5,3.5\n", encoding="utf-8")
     np.testing.assert_array_equal(load_static_csv(q, u="1", y="3").ybar, [2.5, 3.5])
+
+
+def test_without_python_control_the_message_names_an_install_that_works_from_a_clone(monkeypatch):
+    # was: "pip install graybox[control]": unquoted (zsh globs the brackets) and, for the README's editable
+    # install from a clone, a different package from the index
+    import sys
+
+    import graybox as gb
+    monkeypatch.setitem(sys.modules, "control", None)
+    lm = gb.local_model(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0]), 1.0, Ts=0.1)
+    with pytest.raises(ImportError, match=r"from a clone pip install -e '\.\[control\]', or the package itself: pip "
+                                          r"install control"):
+        lm.to_statespace()

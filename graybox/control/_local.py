@@ -449,7 +449,10 @@ class LocalModel:
 
 # -- python-control ------------------------------------------------------------------------------
 #: How to install the optional dependency.
-CONTROL_EXTRA = "pip install graybox[control]"
+#: How to get python-control: the package itself, or graybox's extra (quoted: zsh reads bare brackets as a glob;
+#: from a clone, the editable install the README uses)
+CONTROL_EXTRA = ("pip install graybox[control] (quoted in zsh: 'graybox[control]'), from a clone pip install -e "
+                 "'.[control]', or the package itself: pip install control")
 
 
 def require_control() -> Any:
