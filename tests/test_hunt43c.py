@@ -339,3 +339,16 @@ def test_without_python_control_the_message_names_an_install_that_works_from_a_c
     with pytest.raises(ImportError, match=r"from a clone pip install -e '\.\[control\]', or the package itself: pip "
                                           r"install control"):
         lm.to_statespace()
+
+
+def test_a_record_listed_newest_first_is_named_so(tmp_path):
+    # was: "time does not increase from line 2 (1.9 s) to line 3 (1.8 s)", which does not say the whole file is reversed
+    p = tmp_path / "reversed.csv"
+    p.write_text("t;u;y\n" + "".join(f"{0.1 * k:.1f};{k % 3};{k}\n" for k in range(19, -1, -1)), encoding="utf-8")
+    with pytest.raises(ValueError, match=r"time does not increase from line 2 \(1.9 s\) to line 3 \(1.8 s\): the stamps "
+                                         r"decrease throughout, so the file lists the samples newest first"):
+        load_record_csv(p, u="u", y="y", time="t")
+    q = tmp_path / "glitch.csv"
+    q.write_text("t;u;y\n0;1;1\n0,2;1;1\n0,1;1;1\n0,3;1;1\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"does not increase from line 3 \(0.2 s\) to line 4 \(0.1 s\)$"):
+        load_record_csv(q, u="u", y="y", time="t")

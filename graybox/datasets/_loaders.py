@@ -801,8 +801,11 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     bad = np.flatnonzero(dt <= 0)
     if bad.size:
         i = int(bad[0])
+        # a file listing the samples newest first (some loggers and exports do) decreases throughout
+        order = (": the stamps decrease throughout, so the file lists the samples newest first; sort its rows by "
+                 "time, oldest first (e.g. pandas: df.sort_values(time column))") if (dt < 0).all() else ""
         raise ValueError(f"{p}: column {col!r}: time does not increase from line {lines[i]} ({t[i]:g} s) "
-                         f"to line {lines[i + 1]} ({t[i + 1]:g} s)")
+                         f"to line {lines[i + 1]} ({t[i + 1]:g} s){order}")
     # The median step is the reference, so the message points at the odd step (a gap, a jitter),
     # not at the first regular one.
     ref = float(np.median(dt))
