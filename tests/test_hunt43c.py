@@ -352,3 +352,19 @@ def test_a_record_listed_newest_first_is_named_so(tmp_path):
     q.write_text("t;u;y\n0;1;1\n0,2;1;1\n0,1;1;1\n0,3;1;1\n", encoding="utf-8")
     with pytest.raises(ValueError, match=r"does not increase from line 3 \(0.2 s\) to line 4 \(0.1 s\)$"):
         load_record_csv(q, u="u", y="y", time="t")
+
+
+def test_a_gap_of_missing_samples_is_named_as_one(tmp_path):
+    # was: "uneven time stamps: step 0.3 s ... off by 2.0e+00 relative ... pass a larger time_rtol=", advice that
+    # cannot help (time_rtol < 1) for a logger that dropped two samples
+    p = tmp_path / "gap.csv"
+    stamps = [0.1 * k for k in range(20) if k not in (7, 8)]
+    p.write_text("t;u;y\n" + "".join(f"{t:.1f};1;{i}\n" for i, t in enumerate(stamps)), encoding="utf-8")
+    with pytest.raises(ValueError, match=r"uneven time stamps: step 0.3 s from line 8 to line 9 is 3 times the usual "
+                                         r"\(median\) step 0.1 s, a gap of 2 missing sample\(s\) \(no time_rtol reads "
+                                         r"it\); cut the file"):
+        load_record_csv(p, u="u", y="y", time="t")
+    q = tmp_path / "jitter.csv"
+    q.write_text("t;u;y\n0;1;1\n0.1;1;1\n0.2;1;1\n0.315;1;1\n0.4;1;1\n", encoding="utf-8")
+    with pytest.raises(ValueError, match="uneven time stamps: step 0.115 s"):
+        load_record_csv(q, u="u", y="y", time="t")

@@ -815,6 +815,12 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     off = np.abs(dt - ref) > rtol * ref + res
     if off.any():
         i = int(np.flatnonzero(off)[0])
+        n = round(dt[i] / ref)
+        if n >= 2 and abs(dt[i] - n * ref) <= max(rtol, 0.1) * ref:  # a whole number of periods: samples lost
+            raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s from line {lines[i]} to "
+                             f"line {lines[i + 1]} is {n} times the usual (median) step {ref:g} s, a gap of {n - 1} "
+                             "missing sample(s) (no time_rtol reads it); cut the file into two records at the gap "
+                             "(several records of one plant go to the estimators as a list), or fill the gap first")
         raise ValueError(f"{p}: column {col!r}: uneven time stamps: step {dt[i]:g} s from line {lines[i]} to "
                          f"line {lines[i + 1]}, but the usual (median) step is {ref:g} s (off by "
                          f"{abs(dt[i] - ref) / ref:.1e} relative, tolerance {rtol:g}); resample the data to a "
