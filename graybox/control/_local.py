@@ -91,7 +91,7 @@ def check_polynomial(model: object, what: str) -> Model:
     hint = (" A NeuralModel's equilibria and their stability are given by its equilibria() method; its local "
             "linear model is not built here." if kind == "NeuralModel" else "")
     # a set of models (a ParetoSet) is told how to pick one, as everywhere else a model is meant
-    many = said[said.index("; a "):] if "holds many models" in said else ""
+    many = said[said.rfind("; a ", 0, said.index("holds many models")):] if "holds many models" in said else ""
     raise TypeError(f"{what} needs a polynomial NARX Model, got {kind}{many}.{hint}")
 
 
