@@ -368,3 +368,20 @@ def test_a_gap_of_missing_samples_is_named_as_one(tmp_path):
     q.write_text("t;u;y\n0;1;1\n0.1;1;1\n0.2;1;1\n0.315;1;1\n0.4;1;1\n", encoding="utf-8")
     with pytest.raises(ValueError, match="uneven time stamps: step 0.115 s"):
         load_record_csv(q, u="u", y="y", time="t")
+
+
+def test_a_file_with_cr_line_ends_reads_its_units_row_and_skips_its_block(tmp_path):
+    # was: with lines ended by CR alone (Excel's "CSV (Macintosh)") the file read, but units_row=True said
+    # "no line after the header" and skiprows=1, the very fix the header-block message named, said "the file is
+    # empty after the 1 line(s) skipped"
+    body = "".join(f"{0.1 * k:.1f};{1.5 + k % 3};{2.25 * k}\r".replace(".", ",") for k in range(30))
+    p = tmp_path / "mac.csv"
+    p.write_bytes(("Logger X\rt;u;y\rs;%;C\r" + body).encode("utf-8"))
+    with pytest.raises(ValueError, match="line 2 names the columns .*pass skiprows=1"):
+        load_record_csv(p, u="u", y="y", time="t", units_row=True)
+    rec = load_record_csv(p, u="u", y="y", time="t", units_row=True, skiprows=1)
+    assert rec.units == ("%", "C") and len(rec) == 30 and rec.y[1] == 2.25 and rec.Ts == 0.1
+    q = tmp_path / "bad.csv"
+    q.write_bytes(("Logger X\rt;u;y\rs;%;C\r" + body.replace("2,25", "x", 1)).encode("utf-8"))
+    with pytest.raises(ValueError, match=r"line 5, column 'y': 'x' is not a number"):
+        load_record_csv(q, u="u", y="y", time="t", units_row=True, skiprows=1)

@@ -84,6 +84,10 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         roles = [r for r, n in wanted.items() if n in dup]
         raise ValueError(f"{p}: {', '.join(roles)} all name the column {sorted(dup)[0]!r}; each must be a different column")
     raw, start, own = _utf8(p, p.read_bytes(), encoding)
+    if b"\r" in raw and b"\n" not in raw:
+        # lines ended by CR alone (Excel's "CSV (Macintosh)", old Mac exports): the lines skipped, the units row
+        # and the header block are found by line feeds, so the file is read with them; its lines keep their numbers
+        raw, own = raw.replace(b"\r", b"\n"), False
     first = skiprows + 1  # the file's line number of the header
     skipped_from = start
     start = _skip_lines(raw, start, skiprows)
