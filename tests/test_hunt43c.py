@@ -385,3 +385,16 @@ def test_a_file_with_cr_line_ends_reads_its_units_row_and_skips_its_block(tmp_pa
     q.write_bytes(("Logger X\rt;u;y\rs;%;C\r" + body.replace("2,25", "x", 1)).encode("utf-8"))
     with pytest.raises(ValueError, match=r"line 5, column 'y': 'x' is not a number"):
         load_record_csv(q, u="u", y="y", time="t", units_row=True, skiprows=1)
+
+
+def test_a_list_of_datasets_where_records_are_meant_is_told_to_pass_their_records():
+    # was: "got a sequence holding a Dataset; make one of the input and output samples: graybox.Record(u, y, ...)"
+    import graybox as gb
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(size=40), rng.uniform(size=40), Ts=0.5)
+    d = gb.Dataset(rec, rec.slice(0, 30))
+    with pytest.raises(TypeError, match=r"holding a Dataset; several experiments are a list of their records, e\.g\. "
+                                        r"\[d\.ident for d in datasets\]"):
+        gb.els(["y(k-1)", "u(k-1)"], [d, d])
+    with pytest.raises(TypeError, match=r"holding a str; read the file first: graybox.load_record_csv"):
+        gb.els(["y(k-1)", "u(k-1)"], [rec, "run2.csv"])

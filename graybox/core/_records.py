@@ -587,8 +587,11 @@ def record_hint(data: object) -> str:
         return "; make one of its columns: graybox.Record(df['input column'], df['output column'], Ts=seconds)"
     if isinstance(data, Mapping):
         return "; make one of its signals: graybox.Record(d['u'], d['y'], Ts=seconds)"
-    if isinstance(data, np.ndarray) or (isinstance(data, (tuple, list)) and data and not any(
-            isinstance(r, Record) for r in data)):
+    if isinstance(data, (tuple, list)) and any(isinstance(r, Dataset) for r in data):
+        return ("; several experiments are a list of their records, e.g. [d.ident for d in datasets] "
+                "(select_graybox takes the Datasets themselves)")
+    if isinstance(data, np.ndarray) or (isinstance(data, (tuple, list)) and data and all(
+            isinstance(r, (np.ndarray, list, tuple, int, float, np.number)) or _is_series(r) for r in data)):
         return "; make one of the input and output samples: graybox.Record(u, y, Ts=seconds)"
     return ""
 
@@ -642,8 +645,9 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
         raise ValueError(f"{name}: no records given (an empty sequence)")
     for r in recs:
         if not isinstance(r, Record):
+            own = isinstance(r, (str, os.PathLike)) or is_frame(r)  # a file or a frame: its own way to a Record
             raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset; got a sequence holding a "
-                            f"{type(r).__name__}{record_hint(recs)}")
+                            f"{type(r).__name__}{record_hint(r if own else recs)}")
     for r in recs[1:]:
         check_compatible(recs[0], r)
     check_units_agree(recs, _SAME_UNITS)
