@@ -398,3 +398,19 @@ def test_a_list_of_datasets_where_records_are_meant_is_told_to_pass_their_record
         gb.els(["y(k-1)", "u(k-1)"], [d, d])
     with pytest.raises(TypeError, match=r"holding a str; read the file first: graybox.load_record_csv"):
         gb.els(["y(k-1)", "u(k-1)"], [rec, "run2.csv"])
+
+
+def test_terms_and_data_that_name_the_input_apart_are_told_how_to_name_it_alike(tmp_path):
+    # was: "the terms use input 'u', but the record's inputs are ('power',)", no way out named: the record was
+    # loaded with input_names=['power'] and the candidates made with the default name u
+    import graybox as gb
+    p = tmp_path / "run.csv"
+    p.write_text("t;power;temp\n" + "".join(f"{0.5 * k};{30 + k % 7};{100 + k % 5}\n" for k in range(60)),
+                 encoding="utf-8")
+    rec = gb.load_record_csv(p, u="power", y="temp", time="t", input_names=["power"])
+    for call in (lambda: gb.frols(gb.Candidates(2, 2, degree=2), rec, n_terms=3),
+                 lambda: gb.els(["y(k-1)", "u(k-1)"], rec)):
+        with pytest.raises(ValueError, match=r"name the inputs alike, in the terms \(Candidates\(\.\.\., "
+                                             r"input_names=\['power'\]\), u\(k-1\) written power\(k-1\)\)"):
+            call()
+    assert len(gb.frols(gb.Candidates(2, 2, degree=2, input_names=["power"]), rec, n_terms=3).structure) == 3
