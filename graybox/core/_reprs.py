@@ -13,10 +13,54 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["short_repr", "summary"]
+__all__ = ["level_texts", "point_texts", "short_repr", "summary"]
 
 #: A field's text longer than this is summarised.
 WIDTH = 48
+
+
+def level_texts(levels: np.ndarray) -> list[str]:
+    """Levels of one input as text: ``%g``, with as many more digits as tell apart levels it would print alike
+    (10000.01 and 10000.02 are both '10000' to six digits: an offset input's points or slices read as one).
+
+    Parameters
+    ----------
+    levels : array_like
+        The levels (any shape; read flat).
+
+    Returns
+    -------
+    list of str
+        One text per level, in order.
+    """
+    v = np.asarray(levels, float).ravel()
+    distinct = np.unique(v).size
+    for digits in range(6, 18):
+        texts = [f"{x:.{digits}g}" for x in v]
+        if len(set(texts)) >= distinct:  # (-0.0 and 0.0 are one level, printed apart)
+            return texts
+    return [repr(float(x)) for x in v]
+
+
+def point_texts(ubar: np.ndarray) -> list[str]:
+    """Input points as text, each told apart from the others (:func:`level_texts` per input): ``"1000.5"`` for a
+    point of one input, ``"(1, 10000.01)"`` for a row ū = (ū_1, …, ū_m).
+
+    Parameters
+    ----------
+    ubar : array_like, shape (M,) or (M, m)
+        The points.
+
+    Returns
+    -------
+    list of str
+        One text per point, in order.
+    """
+    ub = np.asarray(ubar, float)
+    if ub.ndim <= 1:
+        return level_texts(ub)
+    cols = [level_texts(ub[:, c]) for c in range(ub.shape[1])]
+    return ["(" + ", ".join(col[i] for col in cols) + ")" for i in range(ub.shape[0])]
 
 
 def summary(value: object, width: int = WIDTH) -> str:

@@ -135,7 +135,7 @@ from ..core._simulation_kernels import record_inputs
 from ..core._terms import check_input_names
 from ..static._analysis import (NET, Equilibrium, Reached, one_input_levels, only_stable, schur_stable, settle,
                                 spectral_radius)
-from ..core._reprs import short_repr
+from ..core._reprs import point_texts, short_repr
 
 __all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
 
@@ -744,7 +744,7 @@ class NeuralModel:
                 raise ValueError("the network reaches no equilibrium at " + "; ".join(res.explain(0)))
             return out
         # the polynomial model's rule and phrases (every ū named, equilibria to 6 significant digits)
-        out, problems = only_stable(self._y(roots), stable, [f"ū = {u_:g}" for u_ in ub])
+        out, problems = only_stable(self._y(roots), stable, [f"ū = {u_}" for u_ in point_texts(ub)])
         if strict and problems:
             raise ValueError("the network has " + "; ".join(problems))
         return out

@@ -88,7 +88,7 @@ from ..core._validation import (FrozenMap, check_choice, check_int, check_lambda
                                 check_path, check_theta, frozen, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)
-from ..core._reprs import short_repr
+from ..core._reprs import point_texts, short_repr
 from ..core._version import graybox_version
 
 __all__ = ["SEProblem", "GAOptions", "SEFront", "ga_front", "gradient_front", "se_pareto", "SE_LAMBDAS", "refit_if_slow"]
@@ -1100,12 +1100,11 @@ def _why_infeasible(problem: SEProblem, theta: np.ndarray, lam1: float) -> str:
             return f"a local model's spectral radius {problem.radius(theta):.6g} exceeds 1 − margin = {1 - problem.margin:g}"
         return "cost not finite"
     yb = problem.static_outputs(theta[None])[0]
-    bad = problem.static.ubar[~np.isfinite(yb)]
-    if bad.shape[0]:
-        def point(u):  # a point of a surface is a row (ū_1, …, ū_m)
-            return f"{u:g}" if np.ndim(u) == 0 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
-        return f"equilibrium unstable or undefined at ū = {', '.join(point(u) for u in bad[:3])}" + \
-            (f" (and {bad.shape[0] - 3} more)" if bad.shape[0] > 3 else "")
+    bad = np.flatnonzero(~np.isfinite(yb))
+    if bad.size:
+        points = point_texts(problem.static.ubar)  # each point told apart from the others
+        return f"equilibrium unstable or undefined at ū = {', '.join(points[j] for j in bad[:3])}" + \
+            (f" (and {bad.size - 3} more)" if bad.size > 3 else "")
     if problem.margin is not None and not problem.within_margin(theta, yb[None])[0]:
         return f"outside the stability margin (a local model's spectral radius exceeds 1 − margin = {1 - problem.margin:g})"
     return "cost not finite"

@@ -46,18 +46,6 @@ def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
     return (np.abs(held - level) <= 1e-9 * np.maximum(np.abs(level), scale)).all(axis=1)
 
 
-def level_texts(levels: np.ndarray) -> list[str]:
-    """The levels of one held input as legend text: ``%g``, with as many more digits as tell apart levels it would
-    print alike (10000.01 and 10000.02 are both '10000' to six digits: an offset input's slices had one label)."""
-    v = np.asarray(levels, float).ravel()
-    distinct = np.unique(v).size
-    for digits in range(6, 18):
-        texts = [f"{x:.{digits}g}" for x in v]
-        if len(set(texts)) >= distinct:  # (-0.0 and 0.0 are one level, printed apart)
-            return texts
-    return [repr(float(x)) for x in v]
-
-
 def unit_label(text: str, unit: str) -> str:
     """An axis label with its unit: ``text (unit)``, or ``text`` when no unit is said or the text
     already names it (``"Speed (rpm)"``, ``"Speed [rpm]"``)."""

@@ -17,7 +17,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..core._validation import check_int, check_real, check_sequence
-from ._data import level_texts, on_level, unit_label
+from ..core._reprs import level_texts
+from ._data import on_level, unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 

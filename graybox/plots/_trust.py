@@ -14,7 +14,8 @@ from matplotlib.figure import Figure
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
-from ._data import check_axes, check_one_input_points, level_texts, on_level, unit_label
+from ..core._reprs import level_texts
+from ._data import check_axes, check_one_input_points, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand

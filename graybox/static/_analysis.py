@@ -65,7 +65,7 @@ from ._equilibrium_kernels import (
 from ..core._terms import Structure, Term
 from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real, check_sequence,
                                 check_theta, real_array)
-from ..core._reprs import short_repr
+from ..core._reprs import point_texts, short_repr
 from ._linearisation import (characteristic_roots, derivative_map, grid_coefficients, static_gains, static_powers,
                              static_theta_gradient_of)
 
@@ -708,10 +708,9 @@ class Reached:
     def explain(self, member: int = 0) -> list[str]:
         """One phrase per point member ``member`` does not reach, naming ū and the reason."""
         out = []
+        points = point_texts(self.ubar)  # each point told apart from the others (10000.01 and 10000.02)
         for j in np.flatnonzero(self.status[member] != REACHED):
             y0 = float(self.y0[j])
-            # a point of a static surface is a row ū = (ū_1, …, ū_m)
-            u = float(self.ubar[j]) if self.ubar.ndim == 1 else "(" + ", ".join(f"{v:g}" for v in self.ubar[j]) + ")"
             s = int(self.status[member, j])
             if s == NO_EQUILIBRIUM:
                 why = NO_EQUILIBRIUM_WHY
@@ -727,7 +726,7 @@ class Reached:
                 why = (f"the free run from y0 = {y0:g} did not settle on a stable equilibrium within "
                        f"{SETTLE_STEPS} steps, nor within {SETTLE_TAUS} time constants of the slowest (one over "
                        f"{SETTLE_MAX_STEPS // SETTLE_TAUS} samples is not run)")
-            out.append(f"ū = {u:g}: {why}" if isinstance(u, float) else f"ū = {u}: {why}")
+            out.append(f"ū = {points[j]}: {why}")
         return out
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
@@ -1080,7 +1079,7 @@ def static_curve(
         return res.ybar[0].copy()
     roots = real_roots(structure, th[None, :], ub)[0]  # (M, D)
     out, problems = only_stable(roots, _roots_stable(structure, th[None, :], ub, roots[None])[0],
-                                [f"ū = {u:g}" for u in ub], continuum(structure, th[None, :], ub)[0])
+                                [f"ū = {u}" for u in point_texts(ub)], continuum(structure, th[None, :], ub)[0])
     if strict and problems:
         raise ValueError("the model has " + "; ".join(problems))
     return out
