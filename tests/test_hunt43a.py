@@ -4,6 +4,7 @@ import re
 import warnings
 
 import numpy as np
+import pandas.testing as pd_testing
 import pytest
 
 import graybox as gb
@@ -48,3 +49,44 @@ def test_reached_explain_names_surface_points_apart():
         assert gb.jsf(model, pts) == np.inf
     named = _named_points(str(rec[0].message))
     assert len(named) == 2 and len(set(named)) == 2, named
+
+
+# -- grids of two data sets, one without a band of its own ------------------------------------------
+from graybox import experiments as gx  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def two_data(tmp_path_factory):
+    """The bundled plant (its points carry a band) and the same records whose points carry none."""
+    d = gb.load_pumping()
+    bare = gb.Dataset(d.ident, d.valid, gb.StaticPoints(d.static.ubar, d.static.ybar))
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping"), gx.DataSpec("bare", dataset=bare)],
+                   [gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)", "y(k-1)u(k-1)", "1"]),
+                    gx.StructureSpec("so", terms=["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "1"])],
+                   [gx.Variant("LS", "ls"),
+                    gx.Variant("PE", "pe", lambdas=[1e-3, 1e-2, 1e-1, 1.0], decision=gx.DecisionRule("min_jsf"),
+                               options={"solver": "closed"})], name="two")
+    path = tmp_path_factory.mktemp("two") / "two.sqlite"
+    gx.run_grid(grid, path, progress=False)
+    return path, d.static.band
+
+
+def test_a_band_mapping_leaves_the_data_sets_it_does_not_name_to_their_stored_band(two_data):
+    """leaderboard's band: 'default: each data set's band as stored'. A mapping giving the band of the data set that
+    stores none raised 'band gives no value for data set pumping', though pumping stores its own: a store of such
+    data sets could not be ranked by D_SF at all without restating every stored band."""
+    path, b = two_data
+    df = gb.load_results(path)
+    lb = gx.leaderboard(path, band={"bare": 0.05})
+    alone = gx.leaderboard(df[df["data"] == "pumping"])  # by pumping's stored band
+    of = lb.index.get_level_values("data")
+    pd_testing.assert_frame_equal(lb[of == "pumping"], alone)
+    assert (lb.loc[of == "pumping", "JSF"].dropna() <= b).all() and lb.loc[of == "pumping", "JSF"].notna().any()
+    pd_testing.assert_frame_equal(lb[of == "bare"], gx.leaderboard(df[df["data"] == "bare"], band=0.05))
+    t = gx.heatmap_table(path, data="pumping", band={"bare": 0.05})
+    pd_testing.assert_frame_equal(t, gx.heatmap_table(df[df["data"] == "pumping"]))
+    # the figures draw pumping's stored band, the one named 'bare''s
+    scatter = gx.plot_scatter(path, band={"bare": 0.05})
+    for ax, want in zip(scatter.axes, (b, 0.05)):
+        assert any(np.allclose(ln.get_ydata(), want) for ln in ax.lines if len(ln.get_ydata()) == 2)
+    assert f"B = {b:g}" in gx.plot_fronts(path, data="pumping", band={"bare": 0.05}).get_suptitle()

@@ -117,21 +117,26 @@ def _known_bands(band: float | Mapping[str, float] | None, df: pd.DataFrame) -> 
                              f"(they hold {', '.join(map(repr, held)) or 'none'})")
 
 
+def _given_band(band: float | Mapping[str, float] | None, data: str) -> float | None:
+    """The band given for data set ``data``: one number for all, a mapping's entry, or None (a mapping that does not
+    name it leaves it, as no band given does, to the band its cells stored)."""
+    if isinstance(band, Mapping):
+        return float(band[data]) if data in band else None
+    return None if band is None else float(band)
+
+
 def _band_of(rows: pd.DataFrame | np.ndarray, band: float | Mapping[str, float] | None, data: str) -> float:
     """J_SF's bound for ``rows`` of data set ``data`` (a frame, or their stored bands): ``band``'s, else the first
     band stored on the rows."""
-    if isinstance(band, Mapping):
-        if data not in band:
-            raise ValueError(f"band gives no value for data set {data!r}")
-        return float(band[data])
-    if band is not None:
-        return float(band)
+    given = _given_band(band, data)
+    if given is not None:
+        return given
     b = np.asarray(rows["band"] if isinstance(rows, pd.DataFrame) else rows, dtype=float)
     b = b[~np.isnan(b)]
     if not b.size:
         raise ValueError(f"data set {data!r} has no band in the store (its static points carry no uncertainty, and "
                          "the spec gave it none): pass band=B, J_SF's bound in output units² (graybox grid report "
-                         "--band B), or rank each cell's own choice with rule='chosen' (--rule chosen)")
+                         f"--band B), or band={{{data!r}: B}} to leave the other data sets to their own, or rank each cell's own choice with rule='chosen' (--rule chosen)")
     return float(b[0])
 
 
@@ -231,7 +236,7 @@ def leaderboard(
         cell's own choice.
     band : float or mapping data -> float, optional
         The J_SF band B = [0, band] (output units²) for ``"dsf_valid"``; default: each data
-        set's band as stored.
+        set's band as stored (also for the data sets a mapping does not name).
 
     Returns
     -------
@@ -330,8 +335,7 @@ def heatmap_table(
     df = _frame(results)
     _known_bands(band, df)
     d = _one_data(df, data)
-    lb = leaderboard(df[df["data"] == d], rule=rule, band={d: band[d]} if isinstance(band, Mapping) and d in band
-                     else band)
+    lb = leaderboard(df[df["data"] == d], rule=rule, band=_given_band(band, d))
     if value not in lb.columns:
         raise ValueError(f"value must be a leaderboard column ({', '.join(lb.columns)}); got {value!r}")
     t = lb[value].reset_index().pivot(index="structure", columns="variant", values=value)
@@ -410,8 +414,9 @@ def _bands(sub: pd.DataFrame, band: float | Mapping[str, float] | None, data: st
     """The J_SF bounds a data set's panel shows: ``band``'s, else each distinct band its cells stored, with
     the variants that stored it when they differ (as the leaderboard judges each group by its own cells'),
     or none without a band."""
-    if band is not None:
-        return [(_band_of(sub, band, data), "")]
+    given = _given_band(band, data)
+    if given is not None:
+        return [(given, "")]
     stored = sub.dropna(subset=["band"])
     if not len(stored):
         return []
