@@ -90,3 +90,19 @@ def test_a_band_mapping_leaves_the_data_sets_it_does_not_name_to_their_stored_ba
     for ax, want in zip(scatter.axes, (b, 0.05)):
         assert any(np.allclose(ln.get_ydata(), want) for ln in ax.lines if len(ln.get_ydata()) == 2)
     assert f"B = {b:g}" in gx.plot_fronts(path, data="pumping", band={"bare": 0.05}).get_suptitle()
+
+
+def test_grid_status_ranks_each_data_set_by_its_own_rule_and_says_which(two_data):
+    """One data set without a band made grid status rank every data set by each cell's own choice: pumping's 'best so
+    far' was least squares with J_SF 0.74, 24 times outside the band its own report ranks by, and nothing said so."""
+    path, b = two_data
+    df = gb.load_results(path)
+    st = gx.grid_status(path)
+    best = st.best
+    want = gx.leaderboard(df[df["data"] == "pumping"]).iloc[0]
+    assert best.loc["pumping", "JS_valid"] == want["JS_valid"] and best.loc["pumping", "JSF"] <= b
+    chosen = gx.leaderboard(df[df["data"] == "bare"], rule="chosen").iloc[0]
+    assert best.loc["bare", "JS_valid"] == chosen["JS_valid"]
+    assert list(best["rule"]) == ["dsf_valid", "chosen"]
+    text = st.summary()
+    assert "dsf_valid" in text and "chosen" in text

@@ -853,7 +853,8 @@ class GridStatus:
     last_finished : str or None
         When the last cell finished (UTC, ISO 8601).
     best : pandas.DataFrame
-        The best model so far per data set (the leaderboard's first row).
+        The best model so far per data set (the leaderboard's first row), with the ``rule`` it was
+        ranked by: ``"dsf_valid"``, or ``"chosen"`` for a data set without a band.
     specs : int
         Specs the store has seen.
     running : mapping str -> int
@@ -922,13 +923,19 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
     n = int(attrs.get("n_cells", len(df)))
     wall = df["wall_time"].astype(float)
     best = pd.DataFrame()
-    if len(df):
+    tops = []
+    for d, sub in df.groupby("data", sort=False):
+        # each data set by D_SF in its band, as its report ranks it; one without a band by each cell's own choice
+        # (the others keep theirs), and the row says which
+        rule = "dsf_valid"
         try:
-            lb = leaderboard(df)
-        except ValueError:  # a data set without a band: each cell's own choice
-            lb = leaderboard(df, rule="chosen")
-        top = lb.dropna(subset=["JS_valid"]).reset_index().groupby("data", sort=False).head(1)
-        best = top.set_index("data")[["structure", "variant", "JS_valid", "JSF", "n_params"]]
+            lb = leaderboard(sub)
+        except ValueError:
+            rule = "chosen"
+            lb = leaderboard(sub, rule=rule)
+        tops.append(lb.dropna(subset=["JS_valid"]).reset_index().head(1).assign(rule=rule))
+    if tops:
+        best = pd.concat(tops).set_index("data")[["structure", "variant", "JS_valid", "JSF", "n_params", "rule"]]
     last = df["finished_at"].dropna()
     sel = attrs.get("selection")
     return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(attrs.get("grid")),
