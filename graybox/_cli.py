@@ -31,6 +31,30 @@ _spec_arg = _count_arg({"latest": "latest", "all": "all"}, "a spec number")
 _max_structures_arg = _count_arg({"all": None}, "a number of structures")
 
 
+def _band_arg(text: str) -> tuple[str | None, float]:
+    """``--band``: ``B`` (every data set) or ``NAME=B`` (that data set; a name may hold '=': the last one splits)."""
+    name, eq, value = text.rpartition("=")
+    try:
+        return (name if eq else None), float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected B or NAME=B (a number), got {text!r}") from None
+
+
+def _bands(given: list[tuple[str | None, float]] | None) -> float | dict[str, float] | None:
+    """The ``--band`` options as write_report's band: None, one number, or data set name -> B."""
+    if not given:
+        return None
+    if any(name is None for name, _ in given):
+        if len(given) > 1:
+            raise ValueError("--band: give one number for every data set (--band B) or one per data set "
+                             "(--band NAME=B, repeated), not both nor two numbers")
+        return given[0][1]
+    names = [name for name, _ in given]
+    if len(set(names)) < len(names):
+        raise ValueError(f"--band names {sorted({n for n in names if names.count(n) > 1})} more than once")
+    return dict(given)
+
+
 def _grid(args: argparse.Namespace) -> int:
     from . import experiments as gx
 
@@ -60,7 +84,7 @@ def _grid(args: argparse.Namespace) -> int:
             print(gx.grid_status(args.store, spec=args.spec).summary())
             return 0
         store = args.store[0] if len(args.store) == 1 else args.store
-        written = gx.write_report(store, args.out, rule=args.rule, band=args.band, spec=args.spec, html=args.html,
+        written = gx.write_report(store, args.out, rule=args.rule, band=_bands(args.band), spec=args.spec, html=args.html,
                                   max_structures=args.max_structures)
         print(f"wrote {len(written)} files to {args.out}: {', '.join(p.name for p in written)}")
         return 0
@@ -165,7 +189,9 @@ def _main(argv: list[str] | None) -> int:
     rep.add_argument("--out", type=Path, required=True, help="folder for the tables (CSV) and figures (PNG)")
     rep.add_argument("--rule", default="dsf_valid", choices=("dsf_valid", "chosen"),
                      help="ranking: D_SF on the validation record over all members (default), or each cell's choice")
-    rep.add_argument("--band", type=float, help="J_SF band for the ranking (default: each data set's, as stored)")
+    rep.add_argument("--band", type=_band_arg, action="append", metavar="B | NAME=B",
+                     help="J_SF band for the ranking: B for every data set, or NAME=B for data set NAME (repeat for "
+                          "others; those not named keep theirs); default: each data set's, as stored")
     rep.add_argument("--spec", **which)
     rep.add_argument("--html", action="store_true",
                      help="also write report.html: one self-contained page (figures, tables, spec, reasons)")

@@ -4,6 +4,7 @@ import re
 import warnings
 
 import numpy as np
+import pandas as pd
 import pandas.testing as pd_testing
 import pytest
 
@@ -106,3 +107,28 @@ def test_grid_status_ranks_each_data_set_by_its_own_rule_and_says_which(two_data
     assert list(best["rule"]) == ["dsf_valid", "chosen"]
     text = st.summary()
     assert "dsf_valid" in text and "chosen" in text
+
+
+def test_grid_report_takes_a_band_per_data_set(two_data, tmp_path, capsys):
+    """graybox grid report of a store whose one data set has no band could only be made with --band B for every data
+    set (pumping's stored band overridden by the other's number, in the other's units) or --rule chosen: --band
+    NAME=B (repeatable) gives the data sets their own, the others keep theirs."""
+    from graybox._cli import main
+
+    path, b = two_data
+    assert main(["grid", "report", str(path), "--out", str(tmp_path / "r"), "--band", "bare=0.05"]) == 0
+    lb = pd.read_csv(tmp_path / "r" / "leaderboard.csv", index_col=[0, 1, 2])
+    want = gx.leaderboard(path, band={"bare": 0.05})
+    np.testing.assert_allclose(lb["JS_valid"].to_numpy(float), want["JS_valid"].to_numpy(float))
+    assert main(["grid", "report", str(path), "--out", str(tmp_path / "s"), "--band", "0.05"]) == 0  # one for all
+    lb = pd.read_csv(tmp_path / "s" / "leaderboard.csv", index_col=[0, 1, 2])
+    np.testing.assert_allclose(lb["JS_valid"].to_numpy(float),
+                               gx.leaderboard(path, band=0.05)["JS_valid"].to_numpy(float))
+    capsys.readouterr()
+    with pytest.raises(SystemExit):  # argparse: not a number
+        main(["grid", "report", str(path), "--out", str(tmp_path / "t"), "--band", "bare=x"])
+    assert "bare=x" in capsys.readouterr().err
+    for bad, said in ((["--band", "0.05", "--band", "bare=0.05"], "one number for every data set"),
+                      (["--band", "nope=0.05"], "'nope'")):
+        assert main(["grid", "report", str(path), "--out", str(tmp_path / "t"), *bad]) == 2
+        assert said in capsys.readouterr().err

@@ -19,6 +19,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import shlex
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
@@ -136,7 +137,8 @@ def _band_of(rows: pd.DataFrame | np.ndarray, band: float | Mapping[str, float] 
     if not b.size:
         raise ValueError(f"data set {data!r} has no band in the store (its static points carry no uncertainty, and "
                          "the spec gave it none): pass band=B, J_SF's bound in output units² (graybox grid report "
-                         f"--band B), or band={{{data!r}: B}} to leave the other data sets to their own, or rank each cell's own choice with rule='chosen' (--rule chosen)")
+                         f"--band B), or band={{{data!r}: B}} (--band {shlex.quote(data + '=B')}) to leave the other data sets "
+                         "to their own, or rank each cell's own choice with rule='chosen' (--rule chosen)")
     return float(b[0])
 
 
