@@ -132,3 +132,22 @@ def test_grid_report_takes_a_band_per_data_set(two_data, tmp_path, capsys):
                       (["--band", "nope=0.05"], "'nope'")):
         assert main(["grid", "report", str(path), "--out", str(tmp_path / "t"), *bad]) == 2
         assert said in capsys.readouterr().err
+
+
+def test_a_report_rewritten_in_its_folder_leaves_no_file_of_the_last_one(two_data, tmp_path):
+    """A report written again into its folder overwrote the files it wrote and kept the others: the figures of a data
+    set the new report does not hold, and a report.html (of the old leaderboard) when the new one was written without
+    html, sat beside the new tables as if they were of them. A file the reports did not write stays."""
+    path, _ = two_data
+    one = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], [gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)"])],
+                  [gx.Variant("LS", "ls")], name="one")
+    small = tmp_path / "one.sqlite"
+    gx.run_grid(one, small, progress=False)
+    out = tmp_path / "report"
+    first = gx.write_report(path, out, band={"bare": 0.05}, html=True)
+    assert (out / "heatmap_bare.png") in first and (out / "report.html") in first
+    (out / "notes.txt").write_text("mine")
+    second = gx.write_report(small, out)
+    held = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
+    assert held == sorted([p.name for p in second] + ["notes.txt"])
+    assert (out / "notes.txt").read_text() == "mine"

@@ -732,7 +732,9 @@ def write_report(
     Returns
     -------
     list of Path
-        The files written.
+        The files written. A report written again into its folder removes the files the last one wrote
+        that it does not (listed in the folder's ``.graybox-report``): every report file there is of the
+        new report; other files stay.
     """
     band = _checked_options(rule, band)
     html = check_bool(html, "html")
@@ -798,7 +800,29 @@ def write_report(
         from ._html import report_page
 
         save(o / "report.html", report_page(df, lb, rule=rule, summary=lines, figures=pngs, attrs=attrs))
+    _replace_manifest(o, written)
     return written
+
+
+#: The file in a report's folder that lists the files the report wrote (one name a line).
+_MANIFEST = ".graybox-report"
+
+
+def _replace_manifest(folder: Path, written: Sequence[Path]) -> None:
+    """Remove the files the folder's last report wrote that this one did not (a data set's figures it no longer
+    holds, a report.html of an older leaderboard), so that every report file there is of this report; then list
+    this report's. Only names the manifest lists are removed: files the reports did not write stay."""
+    manifest = folder / _MANIFEST
+    names = [p.name for p in written]
+    try:
+        before = manifest.read_text(encoding="utf-8").splitlines()
+    except (FileNotFoundError, UnicodeDecodeError):
+        before = []
+    for name in before:
+        # a plain file name of this folder (a hand-edited line naming another folder's file is not followed)
+        if name and name not in names and Path(name).name == name and name not in (".", ".."):
+            (folder / name).unlink(missing_ok=True)
+    manifest.write_text("".join(f"{n}\n" for n in names), encoding="utf-8")
 
 
 def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping | None = None) -> list[str]:
