@@ -151,3 +151,21 @@ def test_a_report_rewritten_in_its_folder_leaves_no_file_of_the_last_one(two_dat
     held = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     assert held == sorted([p.name for p in second] + ["notes.txt"])
     assert (out / "notes.txt").read_text() == "mine"
+
+
+@pytest.mark.parametrize("spread", [1.0, 100.0])  # a linear and a log colour scale
+def test_the_heat_map_says_inf_where_a_model_s_figure_is_inf_and_a_dash_only_where_there_is_no_model(two_data,
+                                                                                                    spread):
+    """rule='chosen' ranks an ok cell whose model reaches no equilibrium at a static point (J_SF = inf): its heat map
+    of J_SF drew '—', the mark the docstring keeps for 'no model qualified', as for a failed cell."""
+    path, _ = two_data
+    df = gb.load_results(path)
+    df = df[df["data"] == "pumping"].copy()
+    ls = df["variant"] == "LS"
+    df.loc[ls & (df["structure"] == "fo"), "JSF"] = np.inf
+    df.loc[ls & (df["structure"] == "so"), "JSF"] *= spread
+    t = gx.heatmap_table(df, value="JSF", rule="chosen")
+    assert t.loc["fo", "LS"] == np.inf
+    fig = gx.plot_heatmap(df, value="JSF", rule="chosen")
+    texts = [x.get_text() for x in fig.axes[0].texts]
+    assert "inf" in texts and "—" not in texts

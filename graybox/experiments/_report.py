@@ -641,7 +641,9 @@ def plot_heatmap(
     Returns
     -------
     matplotlib.figure.Figure
-        Each cell annotated with its value; "—" where no model qualified.
+        Each cell annotated with its value; "—" where no model qualified. A value the colour
+        scale cannot show (inf, e.g. J_SF of a model that reaches no equilibrium at a point; 0 on
+        a log scale) is written on an uncoloured cell.
     """
     t = heatmap_table(results, data=data, value=value, rule=rule, band=band)
     if structures is not None:
@@ -664,8 +666,9 @@ def plot_heatmap(
     for i in range(t.shape[0]):
         for j in range(t.shape[1]):
             v = shown[i, j]
-            if not np.isfinite(v):
-                ax.text(j, i, "—", ha="center", va="center", fontsize=7, color="k")
+            if not np.isfinite(v):  # no model ("—"), or a figure the colours cannot show (inf; 0 on a log scale)
+                ax.text(j, i, "—" if np.isnan(vals[i, j]) else f"{vals[i, j]:.3g}", ha="center", va="center",
+                        fontsize=7, color="k")
                 continue
             r, g, b_ = np.asarray(im.to_rgba(np.array([v])), float).reshape(-1)[:3]  # one value: vmin = vmax
             light = 0.299 * r + 0.587 * g + 0.114 * b_ > 0.5  # dark text on light colours
