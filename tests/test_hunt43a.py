@@ -169,3 +169,17 @@ def test_the_heat_map_says_inf_where_a_model_s_figure_is_inf_and_a_dash_only_whe
     fig = gx.plot_heatmap(df, value="JSF", rule="chosen")
     texts = [x.get_text() for x in fig.axes[0].texts]
     assert "inf" in texts and "—" not in texts
+
+
+def test_plot_selection_says_when_no_row_met_the_band_and_the_smallest_j_sf_chose():
+    """With no row in the band, fallback='min_jsf' chose the smallest J_SF; the figure said "rule 'min': 0 of 2 rows
+    drawn" and 'chosen: semp-5 by pe', as if the J_S rule had chosen, and nowhere that no row met the band."""
+    data = gb.load_pumping()
+    with pytest.warns(gx.SelectionWarning):
+        sel = gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2, max_y_power=1), data, band=1e-6,
+                                fallback="min_jsf", estimator=["pe"])
+    assert not sel.in_band
+    fig = gx.plot_selection(sel)
+    said = " ".join([fig.get_suptitle()] + [ax.get_title() for ax in fig.axes])
+    assert "no row meets the band B = 1e-06" in said and "smallest J_SF" in said
+    assert f"{sel.chosen['JSF']:.4g}" in said

@@ -34,7 +34,9 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
        units²). Nothing in it took part in the choice; it shows what the choice cost against
        the best row on new data (the regret).
 
-    One marker per estimator; the chosen row is ringed in red on every panel.
+    One marker per estimator; the chosen row is ringed in red on every panel. When no row meets
+    the band and ``fallback="min_jsf"`` chose the smallest J_SF, the titles say so (the rule
+    panel is then empty: no row qualified).
 
     Parameters
     ----------
@@ -84,7 +86,8 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
             _points(ax, est, elig, ok, n, y, mark, color, (y - np.exp(vs - err), np.exp(vs + err) - y))
             ax.axhline(1.0, color="0.45", lw=0.8, ls="--", zorder=1)
             ax.set_ylabel("J_S on the choosing data / the best row's")
-            ax.set_title(f"rule {selection.rule!r}: {int(ok.sum())} of {len(t)} rows drawn", fontsize=9)
+            ax.set_title(f"rule {selection.rule!r}: {int(ok.sum())} of {len(t)} rows drawn" if selection.in_band else
+                         f"no row meets the band B = {selection.band:g}: no J_S rule chose", fontsize=9)
             _ring(ax, chosen["n_terms"], np.exp(chosen["vs_best"]) if "vs_best" in t.columns else np.nan)
         elif panel == "static":
             jsf = t["JSF"].to_numpy(float)
@@ -92,7 +95,8 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
             values = jsf[ok]
             _points(ax, est, elig, ok, n, jsf, mark, color)
             ax.set_ylabel("J_SF of the row's member (output units²)")
-            ax.set_title(f"static error: {int(ok.sum())} of {len(t)} rows drawn", fontsize=9)
+            ax.set_title(f"static error: {int(ok.sum())} of {len(t)} rows drawn"
+                         + ("" if selection.in_band else "; the choice: the smallest J_SF"), fontsize=9)
             _ring(ax, chosen["n_terms"], chosen["JSF"])
         else:
             js = t["JS_test"].to_numpy(float)
@@ -114,8 +118,11 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
         ax.grid(True, which="major", alpha=0.3)
         if ax.get_legend_handles_labels()[0]:  # a panel with no row drawn has nothing to name
             ax.legend(fontsize=7, loc="best")
-    fig.suptitle(str(title) if title is not None else
-                 f"chosen: {chosen.name} by {chosen['estimator']} ({int(chosen['n_terms'])} terms)", fontsize=10)
+    said = f"chosen: {chosen.name} by {chosen['estimator']} ({int(chosen['n_terms'])} terms)"
+    if not selection.in_band:  # fallback "min_jsf": the J_S rule had no row to choose from
+        said += (f", the smallest J_SF reached, {chosen['JSF']:.4g}: no row meets the band B = {selection.band:g} "
+                 "(fallback 'min_jsf')")
+    fig.suptitle(str(title) if title is not None else said, fontsize=10)
     return fig
 
 
