@@ -183,3 +183,22 @@ def test_plot_selection_says_when_no_row_met_the_band_and_the_smallest_j_sf_chos
     said = " ".join([fig.get_suptitle()] + [ax.get_title() for ax in fig.axes])
     assert "no row meets the band B = 1e-06" in said and "smallest J_SF" in said
     assert f"{sel.chosen['JSF']:.4g}" in said
+
+
+def test_gain_bounds_name_their_range_apart_at_any_offset():
+    """GainBounds over ū in [10000.01, 10000.03] described itself as 'over ū in [10000, 10000]', and the range beyond
+    the points said 'the ū range [10000, 10000] extends beyond the static points [10000, 10000]'."""
+    g = gb.GainBounds(lower=0.0, ubar_range=(1e4 + 0.01, 1e4 + 0.03))
+    assert "[10000.01, 10000.03]" in g.describe()
+    two = gb.GainBounds(lower=[0.0, 0.0], ubar_range=[(1e4 + 0.01, 1e4 + 0.03), (1.0, 2.0)])
+    assert "[10000.01, 10000.03] × [1, 2]" in two.describe()
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    rng = np.random.default_rng(0)
+    u = 1e4 + np.repeat(rng.uniform(0.0, 0.05, 40), 10)
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.5 * y[k - 1] + 0.1 * (u[k - 1] - 1e4)
+    pts = gb.StaticPoints(1e4 + np.array([0.02, 0.03, 0.04]), [0.04, 0.06, 0.08])
+    with pytest.raises(ValueError) as exc:
+        gb.pe_pareto(st, gb.Record(u, y), pts, lambdas=[0.5], constraints=g)
+    assert "the ū range [10000.01, 10000.03] extends beyond the static points [10000.02, 10000.04]" in str(exc.value)

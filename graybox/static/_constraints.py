@@ -49,7 +49,7 @@ from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanish
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure
 from ..core._validation import FrozenMap, check_choice, check_int, check_real, check_sequence, check_str
-from ..core._reprs import short_repr
+from ..core._reprs import level_texts, short_repr
 
 if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it
     import cvxpy as cp
@@ -966,9 +966,9 @@ class GainBounds(StaticConstraint):
         if rng is None:
             where = ""
         elif np.ndim(rng[0]) == 0:
-            where = f" over ū in [{rng[0]:g}, {rng[1]:g}]"
+            where = " over ū in [{}, {}]".format(*level_texts(rng))  # ends told apart (10000.01, 10000.03)
         else:
-            where = " over ū in " + " × ".join(f"[{lo:g}, {hi:g}]" for lo, hi in rng)
+            where = " over ū in " + " × ".join("[{}, {}]".format(*level_texts(r)) for r in rng)
         return f"static gain in {bounds}{where}"
 
     def _bounds(self, m: int) -> list[tuple[float | None, float | None]]:
@@ -1004,8 +1004,9 @@ class GainBounds(StaticConstraint):
             order = np.argsort(ctx.points.ubar)
             pu, py = ctx.points.ubar[order], ctx.points.ybar[order]
             if ub.min() < pu[0] - 1e-9 * abs(pu[0]) or ub.max() > pu[-1] + 1e-9 * abs(pu[-1]):
-                raise ValueError(f"{self.describe()}: the ū range [{ub.min():g}, {ub.max():g}] extends beyond the "
-                                 f"static points [{pu[0]:g}, {pu[-1]:g}] used as reference")
+                ends = level_texts([ub.min(), ub.max(), pu[0], pu[-1]])  # told apart at any offset
+                raise ValueError(f"{self.describe()}: the ū range [{ends[0]}, {ends[1]}] extends beyond the "
+                                 f"static points [{ends[2]}, {ends[3]}] used as reference")
             yb = np.interp(ub, pu, py)
         else:
             yb = np.asarray(ref(ub), float)  # a StaticCurve refuses ū outside its domain
