@@ -202,3 +202,20 @@ def test_gain_bounds_name_their_range_apart_at_any_offset():
     with pytest.raises(ValueError) as exc:
         gb.pe_pareto(st, gb.Record(u, y), pts, lambdas=[0.5], constraints=g)
     assert "the ū range [10000.01, 10000.03] extends beyond the static points [10000.02, 10000.04]" in str(exc.value)
+
+
+def test_local_model_plots_name_operating_points_apart_at_any_offset():
+    """plot_local_models labelled local models at ū = 10000.01 and 10000.02 both 'ū = 10000', and
+    plot_operating_curve's 'not reached at ū = …' named the points the same way."""
+    from graybox import plots
+
+    st = gb.parse_structure(["y(k-1)", "u(k-1)", "1"])
+    model = gb.Model(st, np.array([0.5, 0.1, -1000.0]), Ts=0.1)
+    lms = [gb.local_model(model, 1e4 + d) for d in (0.01, 0.02)]
+    fig = plots.plot_local_models(lms)
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels == ["ū = 10000.01", "ū = 10000.02"]
+    growing = gb.Model(gb.parse_structure(["y(k-1)", "y(k-1)u(k-1)", "u(k-1)"]), np.array([0.5, 0.0001, 0.1]), Ts=0.1)
+    curve = gb.operating_curve(growing, 1e4 + np.array([0.01, 0.02, 0.03]))  # Σy + Σyu ū > 1: none stable
+    fig = plots.plot_operating_curve(curve)
+    assert fig.axes[0].get_title() == "not reached at ū = 10000.01, 10000.02, 10000.03"

@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..control._local import LocalModel, OperatingCurve
+from ..core._reprs import level_texts, point_texts
 from ..core._validation import as_1d_finite, check_int, check_real, check_sequence
 
 __all__ = ["plot_local_models", "plot_operating_curve"]
@@ -23,8 +24,10 @@ def _models(models: OperatingCurve | Sequence[LocalModel]) -> list[LocalModel]:
     return lms
 
 
-def _label(lm: LocalModel) -> str:
-    return "ū = " + (f"{lm.ubar[0]:g}" if lm.ubar.size == 1 else "(" + ", ".join(f"{v:g}" for v in lm.ubar) + ")")
+def _points(lms: Sequence[LocalModel]) -> list[str]:
+    """Each local model's operating point as text, told apart from the others' (10000.01 and 10000.02)."""
+    ub = np.array([np.asarray(m.ubar, float).ravel() for m in lms])
+    return point_texts(ub[:, 0] if ub.shape[1] == 1 else ub)
 
 
 def plot_local_models(
@@ -58,6 +61,7 @@ def plot_local_models(
         duration = check_real(duration, "duration", low=0, low_open=True)  # seconds
     n_frequencies = check_int(n_frequencies, "n_frequencies", low=2)
     lms = _models(models)
+    at = dict(zip(map(id, lms), _points(lms)))
     shown = [m for m in lms if m.exists]
     missing = [m for m in lms if not m.exists]
     if not shown:
@@ -72,7 +76,7 @@ def plot_local_models(
         # each model on its own sampling: its samples in time, its frequencies up to its Nyquist π/Ts
         n = max(int(np.ceil(T / m.Ts - 1e-9)) + 1, 2)
         w = np.logspace(np.log10(np.pi / m.Ts) - 3, np.log10(np.pi / m.Ts), n_frequencies)
-        tag = _label(m) + ("" if m.reached else f" ({m.status})")
+        tag = f"ū = {at[id(m)]}" + ("" if m.reached else f" ({m.status})")
         line, = ax_s.plot(np.arange(n) * m.Ts, m.step(n, input), lw=1.2, label=tag)
         G = m.frequency_response(w, input)
         ax_m.loglog(w, np.abs(G), color=line.get_color(), lw=1.0)
@@ -84,7 +88,7 @@ def plot_local_models(
     ax_p.set_ylabel("phase (°)")
     ax_p.set_xlabel("ω (rad/s)")
     if missing:
-        fig.suptitle("no equilibrium at " + ", ".join(_label(m)[4:] for m in missing), fontsize=9)
+        fig.suptitle("no equilibrium at ū = " + ", ".join(at[id(m)] for m in missing), fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -141,7 +145,7 @@ def plot_operating_curve(
     if reference is not None:
         axes[1].plot(*reference, "s", ms=5, color="black", label=reference_label)
     axes[2].set_ylim(0.0, 1.05)  # ζ of a stable pole lies in [0, 1]
-    bad = [f"{v:g}" for v, s in zip(u, curve.status) if s != "reached"]
+    bad = [t for t, s in zip(level_texts(u), curve.status) if s != "reached"]  # told apart at any offset
     if bad:
         axes[0].set_title("not reached at ū = " + ", ".join(bad), fontsize=9)
     axes[1].legend(fontsize=8, loc="best")
