@@ -219,3 +219,23 @@ def test_local_model_plots_name_operating_points_apart_at_any_offset():
     curve = gb.operating_curve(growing, 1e4 + np.array([0.01, 0.02, 0.03]))  # Σy + Σyu ū > 1: none stable
     fig = plots.plot_operating_curve(curve)
     assert fig.axes[0].get_title() == "not reached at ū = 10000.01, 10000.02, 10000.03"
+
+
+@pytest.mark.parametrize("content", [b"", b"garbage", None])
+def test_grid_status_and_report_of_a_file_that_is_no_store_say_what_to_give(tmp_path, capsys, content):
+    """graybox grid status / report of a file that is no store said '…; nothing was written to it. Choose another
+    --store path': a reader's command has no --store option and writes nothing to the store."""
+    import sqlite3
+
+    from graybox._cli import main
+
+    p = tmp_path / "x.sqlite"
+    if content is None:  # an SQLite database of something else
+        sqlite3.connect(p).execute("CREATE TABLE t (a)").connection.close()
+    else:
+        p.write_bytes(content)
+    for argv in (["grid", "status", str(p)], ["grid", "report", str(p), "--out", str(tmp_path / "r")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "not a graybox grid store" in err and "--store" not in err and "written" not in err
+        assert "give the path of a grid store" in err

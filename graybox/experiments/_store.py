@@ -162,7 +162,13 @@ def _newer(a: str | None, b: str | None) -> bool:
     return ra is not None and rb is not None and ra > rb
 
 
-def _check_file(path: Path) -> None:
+def _not_a_store(reading: bool) -> str:
+    """The tail of a refusal: a run says it wrote nothing and where to run instead; a reader (load_results,
+    graybox grid status / report, which take the store's path, not --store) what to give."""
+    return "give the path of a grid store" if reading else "nothing was written to it. Choose another --store path"
+
+
+def _check_file(path: Path, reading: bool = False) -> None:
     """Refuse, without writing, a file that is not an SQLite database."""
     try:
         with open(path, "rb") as f:
@@ -171,8 +177,7 @@ def _check_file(path: Path) -> None:
         raise StoreError(f"{path}: cannot read the store: {exc}") from None
     if head != _SQLITE_MAGIC:
         what = "an empty file" if not head else "not an SQLite database"
-        raise StoreError(f"{path} is {what}, so not a graybox grid store; nothing was written to it. "
-                         "Choose another --store path")
+        raise StoreError(f"{path} is {what}, so not a graybox grid store; {_not_a_store(reading)}")
 
 
 #: Seconds a run waits for the lock beside a store another run makes in place (as long as SQLite's own lock wait).
@@ -255,38 +260,40 @@ def _wait_for_maker(path: Path) -> None:
         pass
 
 
-def _read_meta(conn: sqlite3.Connection, path: Path) -> dict[str, str]:
-    """Check integrity, format and tables (read-only statements only) and return the meta table."""
+def _read_meta(conn: sqlite3.Connection, path: Path, reading: bool = False) -> dict[str, str]:
+    """Check integrity, format and tables (read-only statements only) and return the meta table (``reading``: for a
+    reader, whose refusals say what to give rather than that nothing was written)."""
+    written = "" if reading else "nothing was written to it; "
+    damaged = "restore it from a copy" if reading else _DAMAGED
     try:
         ok = conn.execute("PRAGMA quick_check").fetchone()
         if ok is None or ok[0] != "ok":
             raise StoreError(f"{path} is damaged (SQLite integrity check: {ok[0] if ok else 'no answer'}); "
-                             f"nothing was written to it; {_DAMAGED}")
+                             f"{written}{damaged}")
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
         if not {"meta", "cells"} <= tables:
             raise StoreError(f"{path} is an SQLite database but not a graybox grid store (tables: "
-                             f"{sorted(tables) or 'none'}); nothing was written to it. Choose another --store path")
+                             f"{sorted(tables) or 'none'}); {_not_a_store(reading)}")
         meta = dict(conn.execute("SELECT key, value FROM meta").fetchall())
         cols = [r[1] for r in conn.execute("PRAGMA table_info(cells)")]
     except sqlite3.DatabaseError as exc:
-        raise StoreError(f"{path} is damaged or not a graybox grid store ({exc}); nothing was written to it; "
-                         f"{_DAMAGED}") from None
+        raise StoreError(f"{path} is damaged or not a graybox grid store ({exc}); {written}{damaged}") from None
     if meta.get("format") != FORMAT:
-        raise StoreError(f"{path} is an SQLite database but not a graybox grid store (no format mark); nothing "
-                         "was written to it. Choose another --store path")
+        raise StoreError(f"{path} is an SQLite database but not a graybox grid store (no format mark); "
+                         f"{_not_a_store(reading)}")
     fv = meta.get("format_version")
     if fv not in READS:
         if _newer(fv, FORMAT_VERSION):
             raise StoreError(f"{path} was written by a newer graybox (store format {fv}, graybox "
                              f"{meta.get('graybox_version')}); this graybox reads formats {', '.join(READS)}. "
-                             "Upgrade graybox to read or grow it; nothing was written to it")
+                             "Upgrade graybox to read or grow it" + ("" if reading else "; nothing was written to it"))
         raise StoreError(f"{path} is a graybox store of unknown format {fv!r}; this graybox reads formats "
-                         f"{', '.join(READS)}; nothing was written to it")
+                         f"{', '.join(READS)}" + ("" if reading else "; nothing was written to it"))
     if cols != list(COLUMNS):
         raise StoreError(f"{path}: the cells table has columns {cols}, expected {list(COLUMNS)}: damaged or "
-                         f"written by another graybox; {_DAMAGED}")
+                         f"written by another graybox; {damaged}")
     if fv != "1" and not {"specs", "spec_cells"} <= tables:
-        raise StoreError(f"{path} is damaged: a store of format {fv} without its specs tables; {_DAMAGED}")
+        raise StoreError(f"{path} is damaged: a store of format {fv} without its specs tables; {damaged}")
     return meta
 
 
@@ -785,10 +792,10 @@ def _open_readonly(path: str | os.PathLike) -> tuple[Path, sqlite3.Connection, d
     p = Path(path)
     if not p.is_file():
         raise StoreError(f"{p}: no such store" + (" (a folder)" if p.is_dir() else ""))
-    _check_file(p)
+    _check_file(p, reading=True)
     conn = _connect(p, readonly=True)  # closing it folds no log left by a killed writer into the file
     try:
-        return p, conn, _read_meta(conn, p)
+        return p, conn, _read_meta(conn, p, reading=True)
     except BaseException:
         conn.close()
         raise
