@@ -239,3 +239,28 @@ def test_grid_status_and_report_of_a_file_that_is_no_store_say_what_to_give(tmp_
         err = capsys.readouterr().err
         assert "not a graybox grid store" in err and "--store" not in err and "written" not in err
         assert "give the path of a grid store" in err
+
+
+def test_the_report_says_why_member_fits_failed_in_a_ranked_group_too(tmp_path):
+    """A PE cell whose member at λ1 = 1 failed (an input held in the identification record: θ not identifiable
+    without the static points) was ranked on its two other members; summary.txt and report.html said nothing of the
+    third, nor why the leaderboard compared 2 candidates of 3 (the reason was kept only for unranked groups)."""
+    d = gb.load_pumping()
+    rng = np.random.default_rng(0)
+    u = np.full(600, 1200.0)
+    y = np.zeros(600)
+    for k in range(1, 600):
+        y[k] = 0.6 * y[k - 1] + 0.0005 * u[k - 1] + 1e-7 * u[k - 1] ** 2
+    held = gb.Record(u, y + 0.01 * rng.standard_normal(600), Ts=d.ident.Ts, units=d.ident.units, name="held")
+    grid = gx.Grid([gx.DataSpec("held", dataset=gb.Dataset(held, d.valid, d.static))],
+                   [gx.StructureSpec("s", terms=["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])],
+                   [gx.Variant("PE", "pe", lambdas=[0.1, 0.5, 1.0], options={"solver": "closed"})], name="held")
+    store = tmp_path / "held.sqlite"
+    gx.run_grid(grid, store, progress=False)
+    lb = gx.leaderboard(store)
+    assert lb["rank"].iloc[0] == 1 and lb["candidates"].iloc[0] == 2
+    gx.write_report(store, tmp_path / "r", html=True)
+    summary = (tmp_path / "r" / "summary.txt").read_text()
+    line = next(ln for ln in summary.splitlines() if "member fit(s) failed" in ln)
+    assert "s / PE" in line and "1 of 3" in line and "λ1 = 1" in line and "not identifiable" in line
+    assert "not identifiable" in (tmp_path / "r" / "report.html").read_text()

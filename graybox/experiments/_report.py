@@ -31,6 +31,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
+from ..core._reprs import level_texts
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
                                 check_sequence, check_str)
 from ._cell import STATUSES
@@ -848,6 +849,14 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
         if len(empty):
             lines.append(f"{d}: {len(empty)} of {len(part)} (structure, variant) with no qualifying model, and why")
             lines += [f"  {s} / {v}: {r}" for (s, v), r in empty["reason"].items()]
+        # a ranked group's failed members are not compared: say which and why (an unranked group's reason says it)
+        ranked = set(part.index[part["reason"] == ""])
+        failed = [_failed_members(r) for r in df[df["data"] == d].itertuples(index=False)
+                  if (r.structure, r.variant) in ranked]
+        failed = [f for f in failed if f]
+        if failed:
+            lines.append(f"{d}: member fits that failed in ranked (structure, variant), not compared")
+            lines += failed
     bad = df[df["status"] != "ok"]
     if len(bad):
         lines.append(f"\ncells not ok ({len(bad)}), with their messages")
@@ -856,6 +865,21 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
             lines.append(f"  [{r['status']}] {r['data']} / {r['structure']} / {r['variant']}{seed}: "
                          f"{r['message'] if isinstance(r['message'], str) and r['message'] else 'no message stored'}")
     return lines
+
+
+def _failed_members(r) -> str:
+    """A line for a cell (a row of the results) whose Pareto members failed in part: how many, at which λ1 and why;
+    empty when none failed."""
+    m = r.members
+    failure = list(m.get("failure", ())) if isinstance(m, Mapping) else []
+    bad = [i for i, f in enumerate(failure) if f]
+    if not bad:
+        return ""
+    lam = level_texts(np.asarray(m["lambda1"], float))
+    seed = f" seed {int(r.seed)}" if pd.notna(r.seed) else ""
+    why = "; ".join(list(dict.fromkeys(_short(failure[i]) for i in bad))[:2])
+    return (f"  {r.structure} / {r.variant}{seed}: {len(bad)} of {len(failure)} member fit(s) failed "
+            f"(λ1 = {', '.join(lam[i] for i in bad)}): {why}")
 
 
 @dataclass(frozen=True, eq=False)
