@@ -264,3 +264,26 @@ def test_the_report_says_why_member_fits_failed_in_a_ranked_group_too(tmp_path):
     line = next(ln for ln in summary.splitlines() if "member fit(s) failed" in ln)
     assert "s / PE" in line and "1 of 3" in line and "λ1 = 1" in line and "not identifiable" in line
     assert "not identifiable" in (tmp_path / "r" / "report.html").read_text()
+
+
+def test_grid_status_says_why_cells_are_not_ok(tmp_path, capsys):
+    """graybox grid status counted '2 failed, 1 infeasible' and said nothing of why: a grid failing cell after cell (a
+    structure spec the data cannot give) was seen only in the report written after it ended."""
+    from graybox._cli import main
+
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")],
+                   [gx.StructureSpec("toomany", candidates={"ny": 1, "nu": 1, "degree": 1}, n_terms=5),
+                    gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)", "y(k-1)u(k-1)", "1"])],
+                   [gx.Variant("LS", "ls"), gx.Variant("PE tight", "pe", lambdas=[1e-3, 1.0],
+                                                      decision=gx.DecisionRule("dsf", band=1e-9),
+                                                      options={"solver": "closed"})], name="fail")
+    store = tmp_path / "fail.sqlite"
+    gx.run_grid(grid, store, progress=False)
+    st = gx.grid_status(store)
+    assert dict(st.counts)["failed"] == 2 and dict(st.counts)["infeasible"] == 1
+    assert set(st.reasons) == {"failed", "infeasible"}
+    assert "n_terms = 5 is more than the 3 process candidates" in st.reasons["failed"]
+    assert "B = [0, 1e-09]" in st.reasons["infeasible"]
+    assert main(["grid", "status", str(store)]) == 0
+    out = capsys.readouterr().out
+    assert "n_terms = 5 is more than" in out and "B = [0, 1e-09]" in out

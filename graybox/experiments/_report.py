@@ -912,6 +912,9 @@ class GridStatus:
         Specs the store has seen.
     running : mapping str -> int
         Cells being run into the store now, by run ("pid 123 on host h"; any spec's cells).
+    reasons : mapping str -> str
+        Why cells are not ok: per status (failed, infeasible, diverged) the message of the one that
+        finished last, shortened.
     """
 
     store: str
@@ -926,11 +929,13 @@ class GridStatus:
     best: pd.DataFrame = FrozenFrame()
     specs: int
     running: Mapping[str, int] = dataclasses.field(default_factory=dict)
+    reasons: Mapping[str, str] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         check_fields(self)
         object.__setattr__(self, "counts", FrozenMap(self.counts))  # not the caller's dict
         object.__setattr__(self, "running", FrozenMap(self.running))
+        object.__setattr__(self, "reasons", FrozenMap(self.reasons))
 
     def summary(self) -> str:
         """A few lines for a terminal."""
@@ -942,6 +947,9 @@ class GridStatus:
                  + (f"; last finished {self.last_finished}" if self.last_finished else "")]
         if self.running:
             lines.append("being run now: " + "; ".join(f"{n} cell(s) by {who}" for who, n in self.running.items()))
+        if self.reasons:
+            lines.append("why cells are not ok (the last of each status):")
+            lines += [f"  {st}: {why}" for st, why in self.reasons.items()]
         if len(self.best):
             lines.append("best so far:")
             lines += ["  " + ln for ln in self.best.to_string().splitlines()]
@@ -990,8 +998,14 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
     if tops:
         best = pd.concat(tops).set_index("data")[["structure", "variant", "JS_valid", "JSF", "n_params", "rule"]]
     last = df["finished_at"].dropna()
+    reasons = {}
+    for st in STATUSES[1:]:  # the cell of each status that finished last: a run going wrong says so now
+        bad = df[df["status"] == st]
+        if len(bad):
+            msg = bad.sort_values("finished_at", kind="stable", na_position="first")["message"].iloc[-1]
+            reasons[st] = _short(msg) if isinstance(msg, str) and msg else "no message stored"
     sel = attrs.get("selection")
     return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(attrs.get("grid")),
                       n, len(df), max(0, n - len(df)), FrozenMap(counts),
                       float(wall.mean()) if wall.notna().any() else float("nan"), max(last) if len(last) else None,
-                      best, len(attrs.get("specs", [])), running_cells(store))
+                      best, len(attrs.get("specs", [])), running_cells(store), reasons)
