@@ -287,3 +287,19 @@ def test_grid_status_says_why_cells_are_not_ok(tmp_path, capsys):
     assert main(["grid", "status", str(store)]) == 0
     out = capsys.readouterr().out
     assert "n_terms = 5 is more than" in out and "B = [0, 1e-09]" in out
+
+
+def test_a_near_miss_of_the_band_is_said_with_the_digits_that_show_it(two_data):
+    """A model just outside the band was said 'no model has J_SF ≤ B = 0.0306: the smallest J_SF reached is 0.0306'
+    (4 significant digits), a reason that contradicts itself; a miss by a clear margin keeps its 4 digits."""
+    path, _ = two_data
+    df = gb.load_results(path)
+    df = df[df["data"] == "pumping"].copy()
+    ls = df["variant"] == "LS"
+    df.loc[ls & (df["structure"] == "fo"), "JSF"] = 0.0306 * (1 + 1e-6)
+    df.loc[ls & (df["structure"] == "so"), "JSF"] = 0.04321234
+    lb = gx.leaderboard(df, band=0.0306)
+    reason = {s: r for (_, s, v), r in lb["reason"].items() if v == "LS"}
+    said = float(reason["fo"].split("the smallest J_SF reached is ")[1].split(" ")[0])
+    assert said > 0.0306 and "B = 0.0306:" in reason["fo"]
+    assert "the smallest J_SF reached is 0.04321 " in reason["so"]

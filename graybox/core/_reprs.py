@@ -13,7 +13,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["level_texts", "point_texts", "short_repr", "summary"]
+__all__ = ["beside", "level_texts", "point_texts", "short_repr", "summary"]
 
 #: A field's text longer than this is summarised.
 WIDTH = 48
@@ -40,6 +40,32 @@ def level_texts(levels: np.ndarray) -> list[str]:
         if len(set(texts)) >= distinct:  # (-0.0 and 0.0 are one level, printed apart)
             return texts
     return [repr(float(x)) for x in v]
+
+
+def beside(value: float, ref: float, digits: int = 4) -> str:
+    """``value`` as text to ``digits`` significant digits, or as many more as keep it on its side of ``ref`` as ``%g``
+    prints ``ref`` (a J_SF just outside a band B = 0.0306 reads 0.03060003, not 0.0306: 'no model has J_SF ≤ B =
+    0.0306: the smallest reached is 0.0306' contradicts itself).
+
+    Parameters
+    ----------
+    value, ref : float
+        The value said, and the bound it is said beside (printed with ``%g``).
+    digits : int
+        Significant digits when they suffice.
+
+    Returns
+    -------
+    str
+    """
+    value, ref = float(value), float(ref)
+    shown = float(f"{ref:g}")
+    side = np.sign(value - ref)
+    for d in range(digits, 18):
+        text = f"{value:.{d}g}"
+        if not np.isfinite(value) or np.sign(float(text) - shown) == side:
+            return text
+    return repr(value)
 
 
 def point_texts(ubar: np.ndarray) -> list[str]:

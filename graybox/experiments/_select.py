@@ -57,6 +57,7 @@ from ..core._progress import progress_bar, show_progress
 from ..core._records import (as_records, carried_from, check_alike, check_compatible, choosing_records, check_overlap,
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
+from ..core._reprs import beside
 from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
@@ -1236,7 +1237,7 @@ def select_graybox(
         pos, used = _fallback(table, results, band, fallback), "min"
         used_fallback = True
         warn(f"no structure meets the band B = {band:g}: fallback 'min_jsf' chose {table.index[pos]} "
-             f"({table.iloc[pos]['estimator']}), the smallest J_SF reached, {table.iloc[pos]['JSF']:.4g}",
+             f"({table.iloc[pos]['estimator']}), the smallest J_SF reached, {beside(table.iloc[pos]['JSF'], band)}",
              SelectionWarning)
     order = [pos] + [i for i in np.lexsort((table["JS_valid"].to_numpy(float), ~table["in_band"].to_numpy()))
                      if i != pos]
@@ -1357,7 +1358,7 @@ def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> 
     if band is not None and not in_band:
         jsf = res["jsf"][finite]
         best = float(jsf[np.isfinite(jsf)].min()) if np.isfinite(jsf).any() else np.inf
-        return f"no member meets the band B = {band:g}: the smallest J_SF reached is {best:.4g}"
+        return f"no member meets the band B = {band:g}: the smallest J_SF reached is {beside(best, band)}"
     return ""
 
 
@@ -1372,7 +1373,7 @@ def _fallback(table: pd.DataFrame, results: list[dict], band: float | None, fall
     finite = [j[np.isfinite(j)] for j in counted]
     best = min((float(f.min()) for f in finite if f.size), default=np.inf)
     if fallback is None:
-        raise ValueError(f"no structure meets the band B = {band:g}: the smallest J_SF reached is {best:.4g} "
+        raise ValueError(f"no structure meets the band B = {band:g}: the smallest J_SF reached is {beside(best, band)} "
                          f"(over {len(table)} structure × estimator rows); widen the band, change the candidates, "
                          "or pass fallback='min_jsf'")
     jsf = table["JSF"].to_numpy(float)
