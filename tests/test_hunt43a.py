@@ -171,14 +171,21 @@ def test_the_heat_map_says_inf_where_a_model_s_figure_is_inf_and_a_dash_only_whe
     assert "inf" in texts and "—" not in texts
 
 
-def test_plot_selection_says_when_no_row_met_the_band_and_the_smallest_j_sf_chose():
-    """With no row in the band, fallback='min_jsf' chose the smallest J_SF; the figure said "rule 'min': 0 of 2 rows
-    drawn" and 'chosen: semp-5 by pe', as if the J_S rule had chosen, and nowhere that no row met the band."""
+@pytest.fixture(scope="module")
+def fallback_selection():
+    """A selection where no row meets the band and fallback='min_jsf' chose the smallest J_SF."""
     data = gb.load_pumping()
     with pytest.warns(gx.SelectionWarning):
         sel = gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2, max_y_power=1), data, band=1e-6,
                                 fallback="min_jsf", estimator=["pe"])
     assert not sel.in_band
+    return sel
+
+
+def test_plot_selection_says_when_no_row_met_the_band_and_the_smallest_j_sf_chose(fallback_selection):
+    """With no row in the band, fallback='min_jsf' chose the smallest J_SF; the figure said "rule 'min': 0 of 2 rows
+    drawn" and 'chosen: semp-5 by pe', as if the J_S rule had chosen, and nowhere that no row met the band."""
+    sel = fallback_selection
     fig = gx.plot_selection(sel)
     said = " ".join([fig.get_suptitle()] + [ax.get_title() for ax in fig.axes])
     assert "no row meets the band B = 1e-06" in said and "smallest J_SF" in said
@@ -303,3 +310,10 @@ def test_a_near_miss_of_the_band_is_said_with_the_digits_that_show_it(two_data):
     said = float(reason["fo"].split("the smallest J_SF reached is ")[1].split(" ")[0])
     assert said > 0.0306 and "B = 0.0306:" in reason["fo"]
     assert "the smallest J_SF reached is 0.04321 " in reason["so"]
+
+
+def test_a_fallback_selection_s_repr_says_the_smallest_j_sf_chose(fallback_selection):
+    """repr said "rule='min', J_S valid=50.24, in_band=False": the J_S rule's name for a choice the smallest J_SF made."""
+    text = repr(fallback_selection)
+    assert "chosen by the smallest J_SF" in text and "no row meets the band B = 1e-06" in text
+    assert "rule=" not in text

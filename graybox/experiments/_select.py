@@ -171,7 +171,7 @@ class GrayboxSelection:
         ``JSF``); its repr then says "black box" instead.
     rule : str
         The rule that chose (``"one-se"`` or ``"min"``; ``"min"`` also when one block only could
-        be cut).
+        be cut, and when no row meets the band: ``in_band`` False, the smallest J_SF chose).
     """
 
     structure: gb.Structure
@@ -386,7 +386,10 @@ class GrayboxSelection:
                 pass
         # a black box's band is inf, which every row meets: in_band=True there says nothing of the points
         band = "black box (band=inf)" if np.isinf(self.band) else f"in_band={self.in_band}"
-        return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, rule={self.rule!r}, "
+        # no row in the band: the smallest J_SF chose (fallback "min_jsf"), not the J_S rule
+        rule = (f"rule={self.rule!r}" if self.in_band else
+                f"chosen by the smallest J_SF, {beside(row['JSF'], self.band)} (no row meets the band B = {self.band:g})")
+        return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, {rule}, "
                 f"J_S valid={row['JS_valid']:.4g}{test}, {band})")
 
 
