@@ -317,3 +317,41 @@ def test_a_fallback_selection_s_repr_says_the_smallest_j_sf_chose(fallback_selec
     text = repr(fallback_selection)
     assert "chosen by the smallest J_SF" in text and "no row meets the band B = 1e-06" in text
     assert "rule=" not in text
+
+
+def _many(two_data, n_structures: int = 1, n_variants: int = 1) -> pd.DataFrame:
+    """The pumping cells of the two-data store copied under more structure and variant names."""
+    df = gb.load_results(two_data[0])
+    df = df[df["data"] == "pumping"]
+    parts = []
+    for i in range(n_structures):
+        for j in range(n_variants):
+            p = df.copy()
+            p["structure"] = p["structure"] + f"-{i}"
+            p["variant"] = p["variant"] + f"-{j}"
+            parts.append(p)
+    return pd.concat(parts, ignore_index=True)
+
+
+def test_the_scatter_of_a_grid_of_many_structures_keeps_a_legend_that_fits(two_data):
+    """write_report's max_structures kept the heat map and fronts readable, not the scatter: a grid of 60 × 2
+    structures listed all 120 in its legend (12 markers reused ten times over), which covered the points and ran off
+    the figure after 38 of them."""
+    big = _many(two_data, n_structures=60)
+    fig = gx.plot_scatter(big)
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert len(texts) <= 4 and any("120 structures" in t for t in texts + [fig.axes[0].get_title()])
+    few = gx.plot_scatter(_many(two_data, n_structures=2))  # few structures: one marker each, named
+    assert len(few.axes[0].get_legend().get_texts()) == 2 + 4 + 1  # variants, structures, the band
+
+
+def test_report_figures_give_every_variant_its_own_colour(two_data):
+    """The variants' colours cycled through ten: in a grid of 12 variants the 1st and the 11th were drawn alike in the
+    scatter and the fronts, and a reader could not tell their points apart."""
+    from matplotlib.colors import to_hex
+
+    big = _many(two_data, n_variants=6)  # 12 variants
+    for fig in (gx.plot_scatter(big), gx.plot_fronts(big)):
+        handles, labels = fig.axes[0].get_legend_handles_labels()
+        colours = {lab: to_hex(h.get_color()) for h, lab in zip(handles, labels) if lab in set(big["variant"])}
+        assert len(colours) == 12 and len(set(colours.values())) == 12

@@ -365,6 +365,18 @@ def _shown(name: object) -> str:
     return " " + text if text.startswith("_") else text
 
 
+def _colours(names: Sequence[str]) -> dict[str, object]:
+    """A distinct colour per name: matplotlib's ten (C0 … C9) while they suffice, then tab20's twenty, then as many
+    spread over a colour map (cycling the ten drew a grid's 1st and 11th variants alike)."""
+    n = len(names)
+    if n <= 10:
+        return {v: f"C{i}" for i, v in enumerate(names)}
+    from matplotlib import colormaps
+
+    cmap = colormaps["tab20" if n <= 20 else "turbo"]
+    return {v: cmap(i if n <= 20 else i / (n - 1)) for i, v in enumerate(names)}
+
+
 def _finite_pos(x: np.ndarray) -> np.ndarray:
     x = np.asarray(x, float)
     return np.isfinite(x) & (x > 0)
@@ -450,8 +462,9 @@ def plot_scatter(
 ) -> Figure:
     """J_S on the validation record against J_SF of every cell's chosen model, band drawn.
 
-    One panel per data set (or only ``data``); colour = variant, marker = structure; an axis is
-    logarithmic where its values span a decade or more (tick labels never overlap).
+    One panel per data set (or only ``data``); colour = variant, marker = structure (one marker
+    for all when a data set has more structures than there are markers, 12: its legend then counts
+    them); an axis is logarithmic where its values span a decade or more (tick labels never overlap).
     Cells without a finite chosen model (infeasible, diverged, failed) are counted in the title.
 
     Parameters
@@ -477,15 +490,21 @@ def plot_scatter(
         sub = df[df["data"] == d]
         variants = list(dict.fromkeys(sub["variant"]))
         structures = list(dict.fromkeys(sub["structure"]))
-        colors = {v: f"C{i % 10}" for i, v in enumerate(variants)}
-        marks = {s: _MARKERS[i % len(_MARKERS)] for i, s in enumerate(structures)}
+        colors = _colours(variants)
+        # a marker per structure while the markers tell them apart; beyond, one for all (a legend of every structure
+        # of a large grid covers the points and runs off the figure): leaderboard.csv names them
+        apart = len(structures) <= len(_MARKERS)
+        marks = {s: _MARKERS[i] if apart else "o" for i, s in enumerate(structures)}
         ok = _finite_pos(sub["JS_valid"]) & _finite_pos(sub["JSF"])
         for (s, v), g in sub[ok].groupby(["structure", "variant"], sort=False):
             ax.plot(g["JS_valid"], g["JSF"], marks[s], color=colors[v], ms=7, alpha=0.8, ls="none")
         for v in variants:
             ax.plot([], [], "o", color=colors[v], label=_shown(v))
-        for s in structures:
-            ax.plot([], [], marks[s], color="0.3", label=_shown(s), ls="none")
+        if apart:
+            for s in structures:
+                ax.plot([], [], marks[s], color="0.3", label=_shown(s), ls="none")
+        else:
+            ax.plot([], [], "o", color="0.3", ls="none", label=f"{len(structures)} structures (one marker)")
         _scale(ax, "x", sub.loc[ok, "JS_valid"])
         _scale(ax, "y", sub.loc[ok, "JSF"])
         if ok.any():
@@ -559,7 +578,7 @@ def plot_fronts(
     every = list(dict.fromkeys(sub["structure"]))
     names = every if structures is None else _known_structures(structures, every, d)
     variants = list(dict.fromkeys(sub["variant"]))
-    colors = {v: f"C{i % 10}" for i, v in enumerate(variants)}
+    colors = _colours(variants)
     ncol = min(3, len(names))
     nrow = -(-len(names) // ncol)
     fig = Figure(figsize=(5.2 * ncol, 4.2 * nrow), layout="constrained")
