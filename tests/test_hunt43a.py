@@ -355,3 +355,22 @@ def test_report_figures_give_every_variant_its_own_colour(two_data):
         handles, labels = fig.axes[0].get_legend_handles_labels()
         colours = {lab: to_hex(h.get_color()) for h, lab in zip(handles, labels) if lab in set(big["variant"])}
         assert len(colours) == 12 and len(set(colours.values())) == 12
+
+
+def test_grid_status_names_the_data_sets_with_no_qualifying_model_yet(two_data, tmp_path, capsys):
+    """With one data set's models all outside its band, grid status listed the other's best and said nothing of the
+    first, as if the grid held one data set ('no model qualifies yet' was said only when no data set had one)."""
+    from graybox._cli import main
+
+    d = gb.load_pumping()
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping"),
+                    gx.DataSpec("tight", dataset=gb.Dataset(d.ident, d.valid, d.static), band=1e-9)],
+                   [gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)", "y(k-1)u(k-1)", "1"])],
+                   [gx.Variant("PE", "pe", lambdas=[1e-3, 1.0], decision=gx.DecisionRule("min_jsf"),
+                               options={"solver": "closed"})], name="tight")
+    store = tmp_path / "tight.sqlite"
+    gx.run_grid(grid, store, progress=False)
+    st = gx.grid_status(store)
+    assert list(st.best.index) == ["pumping"] and st.waiting == ("tight",)
+    assert main(["grid", "status", str(store)]) == 0
+    assert "no model qualifies yet for data set 'tight'" in capsys.readouterr().out

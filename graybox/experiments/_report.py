@@ -934,6 +934,8 @@ class GridStatus:
     reasons : mapping str -> str
         Why cells are not ok: per status (failed, infeasible, diverged) the message of the one that
         finished last, shortened.
+    waiting : tuple of str
+        Data sets with finished cells but no qualifying model yet (absent from ``best``).
     """
 
     store: str
@@ -949,9 +951,11 @@ class GridStatus:
     specs: int
     running: Mapping[str, int] = dataclasses.field(default_factory=dict)
     reasons: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    waiting: tuple = ()
 
     def __post_init__(self) -> None:
         check_fields(self)
+        object.__setattr__(self, "waiting", tuple(check_str(d, "waiting[…]") for d in self.waiting))
         object.__setattr__(self, "counts", FrozenMap(self.counts))  # not the caller's dict
         object.__setattr__(self, "running", FrozenMap(self.running))
         object.__setattr__(self, "reasons", FrozenMap(self.reasons))
@@ -972,6 +976,9 @@ class GridStatus:
         if len(self.best):
             lines.append("best so far:")
             lines += ["  " + ln for ln in self.best.to_string().splitlines()]
+            if self.waiting:
+                lines.append(f"no model qualifies yet for data set {', '.join(map(repr, self.waiting))} "
+                             "(graybox grid report says why)")
         elif self.done:
             lines.append("best so far: no model qualifies yet (graybox grid report says why)")
         else:
@@ -1003,7 +1010,8 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
     n = int(attrs.get("n_cells", len(df)))
     wall = df["wall_time"].astype(float)
     best = pd.DataFrame()
-    tops = []
+    tops: list[pd.DataFrame] = []
+    waiting: list[str] = []
     for d, sub in df.groupby("data", sort=False):
         # each data set by D_SF in its band, as its report ranks it; one without a band by each cell's own choice
         # (the others keep theirs), and the row says which
@@ -1013,7 +1021,11 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
         except ValueError:
             rule = "chosen"
             lb = leaderboard(sub, rule=rule)
-        tops.append(lb.dropna(subset=["JS_valid"]).reset_index().head(1).assign(rule=rule))
+        top = lb.dropna(subset=["JS_valid"]).reset_index().head(1).assign(rule=rule)
+        if len(top):
+            tops.append(top)
+        else:
+            waiting.append(str(d))
     if tops:
         best = pd.concat(tops).set_index("data")[["structure", "variant", "JS_valid", "JSF", "n_params", "rule"]]
     last = df["finished_at"].dropna()
@@ -1027,4 +1039,4 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
     return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(attrs.get("grid")),
                       n, len(df), max(0, n - len(df)), FrozenMap(counts),
                       float(wall.mean()) if wall.notna().any() else float("nan"), max(last) if len(last) else None,
-                      best, len(attrs.get("specs", [])), running_cells(store), reasons)
+                      best, len(attrs.get("specs", [])), running_cells(store), reasons, tuple(waiting))
