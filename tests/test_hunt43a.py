@@ -374,3 +374,23 @@ def test_grid_status_names_the_data_sets_with_no_qualifying_model_yet(two_data, 
     assert list(st.best.index) == ["pumping"] and st.waiting == ("tight",)
     assert main(["grid", "status", str(store)]) == 0
     assert "no model qualifies yet for data set 'tight'" in capsys.readouterr().out
+
+
+def test_plot_selection_titles_stay_inside_the_figure(fallback_selection):
+    """The test panel's title ('test record (not used to choose): the choice is 1.04× the best row it compared') ran
+    52 px past the figure's right edge and was cut; the fallback's suptitle likewise."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from graybox.datasets import pumping
+
+    test = pumping.generate(seed=5)[0].record("test")
+    data = gb.load_pumping()
+    sel = gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2, max_y_power=1), data, test=test, estimator=["pe"])
+    for s in (sel, fallback_selection):
+        fig = gx.plot_selection(s)
+        FigureCanvasAgg(fig)
+        fig.canvas.draw()
+        r = fig.canvas.get_renderer()
+        for text in [ax.title for ax in fig.axes] + [fig._suptitle]:
+            box = text.get_window_extent(r)
+            assert box.x0 >= fig.bbox.x0 - 1 and box.x1 <= fig.bbox.x1 + 1, text.get_text()

@@ -109,7 +109,7 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
                 said = f"the choice is {selection.regret:.3g}× the best row it compared"
             except ValueError:
                 said = "every row's free run diverged there"
-            ax.set_title(f"test record (not used to choose): {said}", fontsize=9)
+            ax.set_title(f"test record (not used to choose):\n{said}", fontsize=9)  # one line ran off the figure
             _ring(ax, chosen["n_terms"], chosen["JS_test"])
         _scale(ax, "y", values)
         if panel == "static" and np.isfinite(selection.band):
@@ -121,9 +121,8 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
             ax.legend(fontsize=7, loc="best")
     said = f"chosen: {chosen.name} by {chosen['estimator']} ({int(chosen['n_terms'])} terms)"
     if not selection.in_band:  # fallback "min_jsf": the J_S rule had no row to choose from
-        said += (f", the smallest J_SF reached, {beside(chosen['JSF'], selection.band)}: no row meets the band "
-                 f"B = {selection.band:g} "
-                 "(fallback 'min_jsf')")
+        said += (f",\nthe smallest J_SF reached, {beside(chosen['JSF'], selection.band)}: no row meets the band "
+                 f"B = {selection.band:g} (fallback 'min_jsf')")
     fig.suptitle(str(title) if title is not None else said, fontsize=10)
     return fig
 
