@@ -394,3 +394,27 @@ def test_plot_selection_titles_stay_inside_the_figure(fallback_selection):
         for text in [ax.title for ax in fig.axes] + [fig._suptitle]:
             box = text.get_window_extent(r)
             assert box.x0 >= fig.bbox.x0 - 1 and box.x1 <= fig.bbox.x1 + 1, text.get_text()
+
+
+def _outside(fig) -> list[str]:
+    """The titles of ``fig`` that reach past its left or right edge."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    texts = [ax.title for ax in fig.axes if ax.get_visible()] + ([fig._suptitle] if fig._suptitle else [])
+    return [t.get_text() for t in texts if t.get_text() and (t.get_window_extent(r).x0 < fig.bbox.x0 - 1 or
+                                                              t.get_window_extent(r).x1 > fig.bbox.x1 + 1)]
+
+
+def test_the_fronts_title_of_a_grid_of_one_structure_stays_inside_the_figure(two_data, tmp_path):
+    """A one-structure grid's fronts (one panel, 5.2 in wide) titled 'pumping: fronts per structure (shaded below the
+    dashed line: J_SF ≤ B = 0.030625)' across 680 px of a 520 px figure: both ends were cut. Likewise with the
+    variants' own bands, and in write_report with the note of the structures drawn."""
+    df = gb.load_results(two_data[0])
+    one = df[(df["data"] == "pumping") & (df["structure"] == "fo")]
+    assert _outside(gx.plot_fronts(one)) == []
+    two_bands = one.assign(band=np.where(one["variant"] == "LS", 0.03, 0.05))
+    assert _outside(gx.plot_fronts(two_bands)) == []
+    assert _outside(gx.plot_heatmap(one)) == []

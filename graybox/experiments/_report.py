@@ -20,6 +20,7 @@ import io
 import os
 import re
 import shlex
+import textwrap
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
@@ -365,6 +366,13 @@ def _shown(name: object) -> str:
     return " " + text if text.startswith("_") else text
 
 
+def _wrapped(text: str, fig: Figure, fontsize: float) -> str:
+    """``text`` broken into lines that fit the figure's width at ``fontsize`` points (a title longer than its
+    figure is cut at both edges: a one-panel figure is 5.2 in wide)."""
+    chars = max(20, int(fig.get_figwidth() * 72 / (0.6 * fontsize)))  # a character is at most ~0.6 em wide
+    return "\n".join(textwrap.fill(line, chars, break_long_words=False) or line for line in text.split("\n"))
+
+
 def _colours(names: Sequence[str]) -> dict[str, object]:
     """A distinct colour per name: matplotlib's ten (C0 … C9) while they suffice, then tab20's twenty, then as many
     spread over a colour map (cycling the ten drew a grid's 1st and 11th variants alike)."""
@@ -632,7 +640,7 @@ def plot_fronts(
         said = f" (shaded below the dashed line: J_SF ≤ B = {bands[0][0]:g})"
     elif bands:
         said = " (J_SF ≤ B: the variants' own bands, " + "; ".join(f"{b:g} for {who}" for b, who in bands) + ")"
-    fig.suptitle(f"{_shown(d)}: fronts per structure" + said)
+    fig.suptitle(_wrapped(f"{_shown(d)}: fronts per structure" + said, fig, 12), fontsize=12)
     return fig
 
 
@@ -696,7 +704,7 @@ def plot_heatmap(
     cbar = fig.colorbar(im, ax=ax, label=value)
     _ticks(cbar.ax.yaxis, log, 5)
     d = _one_data(_frame(results), data)
-    ax.set_title(f"{_shown(d)}: {value} ({rule})", fontsize=9)
+    ax.set_title(_wrapped(f"{_shown(d)}: {value} ({rule})", fig, 9), fontsize=9)
     return fig
 
 
@@ -811,8 +819,8 @@ def write_report(
                     f"the first {len(shown)} of {total} structures in the grid's order (none has a qualifying model)"
                     if k == 0 else f"the {k} ranked and the first {len(shown) - k} unranked of {total} structures")
             for f in figs:
-                f.suptitle("\n".join(t for t in (f.get_suptitle(), f"{what}\n(every one in leaderboard.csv)") if t),
-                           fontsize=9)
+                f.suptitle(_wrapped("\n".join(t for t in (f.get_suptitle(), f"{what}\n(every one in leaderboard.csv)")
+                                              if t), f, 9), fontsize=9)
             lines.append(f"{d}: the figures draw {what.replace(' by rank', '')} (max_structures={max_structures}); "
                          "the tables hold every one")
         save(o / f"heatmap_{slug}.png", figs[0])
