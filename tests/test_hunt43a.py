@@ -418,3 +418,18 @@ def test_the_fronts_title_of_a_grid_of_one_structure_stays_inside_the_figure(two
     two_bands = one.assign(band=np.where(one["variant"] == "LS", 0.03, 0.05))
     assert _outside(gx.plot_fronts(two_bands)) == []
     assert _outside(gx.plot_heatmap(one)) == []
+
+
+def test_plot_pareto_says_why_a_point_is_not_drawn():
+    """The true model of a simulation study meets noise-free static points exactly (J_SF = 0): on log axes plot_pareto
+    left it out with the legend 'true (not drawn: J = inf)', a reason it does not have."""
+    from graybox import plots
+
+    data = gb.load_pumping()
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    pe = gb.pe_pareto(st, data, lambdas=[0.1, 1.0])
+    fig = plots.plot_pareto(pe, {"true": (0.5, 0.0), "gone": (np.inf, 0.1)})
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "true (not drawn: J_SF = 0 on a log axis)" in labels and "gone (not drawn: J_S = inf)" in labels
+    fig = plots.plot_pareto(pe, {"true": (0.5, 0.0)}, log=False)  # linear axes draw it
+    assert "true" in [t.get_text() for t in fig.axes[0].get_legend().get_texts()]

@@ -169,7 +169,7 @@ def test_plot_pareto(pset):
     assert "1 not drawn" in fig2.axes[0].get_legend().get_texts()[0].get_text()
     # a single model with an infinite J_SF: no marker, and the legend says why
     fig3 = plot_pareto(pset, {"ELS (17)": (0.8, np.inf)})
-    assert any("ELS (17) (not drawn: J = inf)" == t.get_text() for t in fig3.axes[0].get_legend().get_texts())
+    assert any("ELS (17) (not drawn: J_SF = inf)" == t.get_text() for t in fig3.axes[0].get_legend().get_texts())
     with pytest.raises(TypeError, match="ParetoSet"):
         plot_pareto({"x": [1, 2]})
     with pytest.raises(ValueError, match="J_S, J_SF"):

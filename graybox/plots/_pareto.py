@@ -48,6 +48,19 @@ def _points_of(points) -> dict[str, tuple[float, float]]:
     return out
 
 
+def _why_not_drawn(js: float, jsf: float, log: bool) -> str:
+    """Why a point (J_S, J_SF) is not drawn: an infinite or undefined J, or one at or below 0 on a log axis."""
+    why = []
+    for name, v in (("J_S", js), ("J_SF", jsf)):
+        if np.isnan(v):
+            why.append(f"{name} undefined")
+        elif np.isinf(v):
+            why.append(f"{name} = {v:g}")
+        elif log and v <= 0:
+            why.append(f"{name} = {v:g} on a log axis")
+    return ", ".join(why)
+
+
 def plot_pareto(
     fronts: ParetoSet | Mapping[str, ParetoSet],
     points: Mapping[str, tuple[float, float]] | pd.DataFrame | None = None,
@@ -65,8 +78,8 @@ def plot_pareto(
     ----------
     fronts : ParetoSet or mapping name -> ParetoSet
         Sets to draw; every member is a small marker, the non-dominated ones (in J_S, J_SF)
-        are joined by a line. Members with an infinite J are left out (and counted in the
-        legend).
+        are joined by a line. Members that failed or have an infinite J (or, on log axes, one at
+        or below 0) are left out, counted in the legend with the reason.
     points : mapping name -> (J_S, J_SF), or DataFrame, optional
         Single models such as ELS and CLS, drawn as large markers with their names; a table
         from :func:`graybox.evaluate` works too (its ``JS_ident`` and ``JSF``).
@@ -110,8 +123,10 @@ def plot_pareto(
         if log:
             ok &= (js > 0) & (jsf > 0)
         label = name or ps.method or "Pareto set"
-        if (~ok).any():
-            label += f" ({int((~ok).sum())} not drawn: J = inf)"
+        if (~ok).any():  # failed members (J = inf), diverged ones, or J <= 0 on log axes: each reason counted
+            whys = ["failed" if i in ps.failures else _why_not_drawn(js[i], jsf[i], log) for i in np.flatnonzero(~ok)]
+            label += f" ({int((~ok).sum())} not drawn: " + "; ".join(
+                f"{whys.count(w)} {w}" if len(set(whys)) > 1 else w for w in dict.fromkeys(whys)) + ")"
         mk = _MARKERS[i % len(_MARKERS)]
         line = ax.plot(js[ok], jsf[ok], mk, ms=4, alpha=0.45, label=label)[0]
         if ok.any():
@@ -121,7 +136,8 @@ def plot_pareto(
     for j, (name, (js, jsf)) in enumerate(pts.items()):
         drawable = np.isfinite(js) and np.isfinite(jsf) and (not log or (js > 0 and jsf > 0))
         if not drawable:  # say so in the legend rather than leave an entry without a marker
-            ax.plot([], [], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k", label=f"{name} (not drawn: J = inf)")
+            ax.plot([], [], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k",
+                    label=f"{name} (not drawn: {_why_not_drawn(js, jsf, log)})")
             continue
         ax.plot([js], [jsf], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k", label=name, zorder=5)
         ax.annotate(name, (js, jsf), textcoords="offset points", xytext=(6, 6), fontsize=9)
