@@ -433,3 +433,16 @@ def test_plot_pareto_says_why_a_point_is_not_drawn():
     assert "true (not drawn: J_SF = 0 on a log axis)" in labels and "gone (not drawn: J_S = inf)" in labels
     fig = plots.plot_pareto(pe, {"true": (0.5, 0.0)}, log=False)  # linear axes draw it
     assert "true" in [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+
+
+def test_the_heat_map_of_a_grid_with_no_qualifying_model_draws_no_colour_scale(tmp_path):
+    """Every cell failed: the heat map had only dashes and a colour bar from -0.1 to 0.1 for J_S, a scale of values
+    nothing has (a mean square is never negative)."""
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")],
+                   [gx.StructureSpec("toomany", candidates={"ny": 1, "nu": 1, "degree": 1}, n_terms=5)],
+                   [gx.Variant("LS", "ls")], name="allfail")
+    store = tmp_path / "af.sqlite"
+    gx.run_grid(grid, store, progress=False)
+    fig = gx.plot_heatmap(store)
+    assert len(fig.axes) == 1 and [t.get_text() for t in fig.axes[0].texts] == ["—"]
+    assert "no model qualified" in fig.axes[0].get_title()

@@ -701,10 +701,15 @@ def plot_heatmap(
             r, g, b_ = np.asarray(im.to_rgba(np.array([v])), float).reshape(-1)[:3]  # one value: vmin = vmax
             light = 0.299 * r + 0.587 * g + 0.114 * b_ > 0.5  # dark text on light colours
             ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7, color="k" if light else "w")
-    cbar = fig.colorbar(im, ax=ax, label=value)
-    _ticks(cbar.ax.yaxis, log, 5)
     d = _one_data(_frame(results), data)
-    ax.set_title(_wrapped(f"{_shown(d)}: {value} ({rule})", fig, 9), fontsize=9)
+    title = f"{_shown(d)}: {value} ({rule})"
+    if np.isfinite(shown).any():
+        cbar = fig.colorbar(im, ax=ax, label=value)
+        _ticks(cbar.ax.yaxis, log, 5)
+    else:  # nothing to colour: a scale would show values no cell has (matplotlib's default ±0.1)
+        title += (": no model qualified (the leaderboard's reason says why)" if np.isnan(vals).all() else
+                  ": no value a colour scale can show")
+    ax.set_title(_wrapped(title, fig, 9), fontsize=9)
     return fig
 
 
