@@ -446,3 +446,6 @@ def test_the_heat_map_of_a_grid_with_no_qualifying_model_draws_no_colour_scale(t
     fig = gx.plot_heatmap(store)
     assert len(fig.axes) == 1 and [t.get_text() for t in fig.axes[0].texts] == ["—"]
     assert "no model qualified" in fig.axes[0].get_title()
+    # the scatter likewise drew empty axes from -0.05 to 0.05 of J_S and J_SF
+    ax = gx.plot_scatter(store).axes[0]
+    assert len(ax.get_xticks()) == 0 and len(ax.get_yticks()) == 0 and ax.texts

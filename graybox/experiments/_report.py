@@ -517,6 +517,11 @@ def plot_scatter(
         _scale(ax, "y", sub.loc[ok, "JSF"])
         if ok.any():
             _bands_on(ax, _bands(sub, band, d), label=True)
+        else:  # empty axes would show a scale of J values no cell has (matplotlib's ±0.05)
+            ax.text(0.5, 0.5, "no cell with a finite chosen model\n(the leaderboard's reason says why)",
+                    transform=ax.transAxes, ha="center", va="center", color="0.4", fontsize=8)
+            ax.set_xticks([])
+            ax.set_yticks([])
         ax.set_xlabel("J_S on the validation record")
         ax.set_ylabel("J_SF")
         ax.set_title(f"{_shown(d)}: {int(ok.sum())} of {len(sub)} cells drawn")
