@@ -190,6 +190,7 @@ def test_plot_selection_says_when_no_row_met_the_band_and_the_smallest_j_sf_chos
     said = " ".join([fig.get_suptitle()] + [ax.get_title() for ax in fig.axes])
     assert "no row meets the band B = 1e-06" in said and "smallest J_SF" in said
     assert f"{sel.chosen['JSF']:.4g}" in said
+    assert len(fig.axes[0].get_yticks()) == 0 and fig.axes[0].texts  # the empty rule panel: no scale of nothing
 
 
 def test_gain_bounds_name_their_range_apart_at_any_offset():

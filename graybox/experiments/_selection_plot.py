@@ -112,6 +112,10 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
             ax.set_title(f"test record (not used to choose):\n{said}", fontsize=9)  # one line ran off the figure
             _ring(ax, chosen["n_terms"], chosen["JS_test"])
         _scale(ax, "y", values)
+        if not values.size:  # empty axes would show a scale (matplotlib's 0 to 1) of values no row has
+            ax.text(0.5, 0.5, "no row to draw", transform=ax.transAxes, ha="center", va="center", color="0.4",
+                    fontsize=8)
+            ax.set_yticks([])
         if panel == "static" and np.isfinite(selection.band):
             _band_on(ax, selection.band, label=True)
         ax.set_xlabel("terms")
