@@ -450,3 +450,14 @@ def test_the_heat_map_of_a_grid_with_no_qualifying_model_draws_no_colour_scale(t
     # the scatter likewise drew empty axes from -0.05 to 0.05 of J_S and J_SF
     ax = gx.plot_scatter(store).axes[0]
     assert len(ax.get_xticks()) == 0 and len(ax.get_yticks()) == 0 and ax.texts
+
+
+def test_plot_free_run_names_the_output_unit_once():
+    """The README's own call, plot_free_run(valid, models, ylabel="Temperature (°C)") on a record in °C, labelled the
+    axis 'Temperature (°C) (°C)': plot_free_run appended the unit without the check the other plots make."""
+    from graybox import plots
+
+    data = gb.load_pumping()
+    m = gb.els(gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]), data).model
+    assert plots.plot_free_run(data.valid, m, ylabel="Pressure (mlc)").axes[0].get_ylabel() == "Pressure (mlc)"
+    assert plots.plot_free_run(data.valid, m, ylabel="Pressure").axes[0].get_ylabel() == "Pressure (mlc)"
