@@ -106,7 +106,7 @@ def test_grid_status_ranks_each_data_set_by_its_own_rule_and_says_which(two_data
     assert best.loc["bare", "JS_valid"] == chosen["JS_valid"]
     assert list(best["rule"]) == ["dsf_valid", "chosen"]
     text = st.summary()
-    assert "dsf_valid" in text and "chosen" in text
+    assert "dsf_valid" in text and "rule chosen: each cell's own choice, for a data set without a band" in text
 
 
 def test_grid_report_takes_a_band_per_data_set(two_data, tmp_path, capsys):

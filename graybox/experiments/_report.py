@@ -994,6 +994,9 @@ class GridStatus:
         if len(self.best):
             lines.append("best so far:")
             lines += ["  " + ln for ln in self.best.to_string().splitlines()]
+            if "rule" in self.best.columns and (self.best["rule"] == "chosen").any():
+                lines.append("  (rule chosen: each cell's own choice, for a data set without a band; dsf_valid: D_SF "
+                             "on the validation record within the data set's band)")
             if self.waiting:
                 lines.append(f"no model qualifies yet for data set {', '.join(map(repr, self.waiting))} "
                              "(graybox grid report says why)")
