@@ -461,3 +461,16 @@ def test_plot_free_run_names_the_output_unit_once():
     m = gb.els(gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]), data).model
     assert plots.plot_free_run(data.valid, m, ylabel="Pressure (mlc)").axes[0].get_ylabel() == "Pressure (mlc)"
     assert plots.plot_free_run(data.valid, m, ylabel="Pressure").axes[0].get_ylabel() == "Pressure (mlc)"
+
+
+def test_the_heat_map_tells_a_pair_never_run_from_one_with_no_qualifying_model(two_data):
+    """Read with spec='all' (or two stores compared), a structure and a variant of different specs were never run
+    together: the heat map drew their cell '—', the mark of 'no model qualified', as for a run that failed."""
+    df = gb.load_results(two_data[0])
+    df = df[(df["data"] == "pumping") & ~((df["structure"] == "so") & (df["variant"] == "PE"))]
+    fig = gx.plot_heatmap(df)
+    t = gx.heatmap_table(df)
+    texts = {(round(x.get_position()[1]), round(x.get_position()[0])): x.get_text() for x in fig.axes[0].texts}
+    rows, cols = list(t.index), list(t.columns)
+    assert texts[(rows.index("so"), cols.index("PE"))] == "not run"
+    assert texts[(rows.index("so"), cols.index("LS"))] == "—"  # run: no model in the band

@@ -333,7 +333,9 @@ def heatmap_table(
     Returns
     -------
     pandas.DataFrame
-        Index: structures, columns: variants (grid order); NaN where no model qualified.
+        Index: structures, columns: variants (grid order); NaN where no model qualified (or the
+        structure and the variant never ran together: specs read with ``spec="all"``, stores
+        compared).
     """
     band = _checked_options(rule, band, data, value)
     df = _frame(results)
@@ -674,7 +676,9 @@ def plot_heatmap(
     Returns
     -------
     matplotlib.figure.Figure
-        Each cell annotated with its value; "—" where no model qualified. A value the colour
+        Each cell annotated with its value; "—" where no model qualified, "not run" for a
+        structure and a variant that never ran together (specs read with ``spec="all"``, or
+        stores compared, that do not share them). A value the colour
         scale cannot show (inf, e.g. J_SF of a model that reaches no equilibrium at a point; 0 on
         a log scale) is written on an uncoloured cell.
     """
@@ -686,6 +690,10 @@ def plot_heatmap(
     except (TypeError, ValueError):  # a text column (reason): heatmap_table shows it, a colour scale cannot
         raise ValueError(f"value must be a numeric leaderboard column to colour, got {value!r} (text); "
                          "heatmap_table gives it as a table") from None
+    sub = _frame(results)
+    d = _one_data(sub, data)
+    sub = sub[sub["data"] == d]
+    run = set(zip(sub["structure"], sub["variant"]))  # pairs of two specs (or stores) may never have run together
     fig = Figure(figsize=(1.2 + 1.1 * t.shape[1], 1.4 + 0.5 * t.shape[0]), layout="constrained")
     ax = fig.add_subplot()
     pos = np.isfinite(vals) & (vals > 0)
@@ -700,13 +708,13 @@ def plot_heatmap(
         for j in range(t.shape[1]):
             v = shown[i, j]
             if not np.isfinite(v):  # no model ("—"), or a figure the colours cannot show (inf; 0 on a log scale)
-                ax.text(j, i, "—" if np.isnan(vals[i, j]) else f"{vals[i, j]:.3g}", ha="center", va="center",
-                        fontsize=7, color="k")
+                said = ("—" if (t.index[i], t.columns[j]) in run else "not run") if np.isnan(vals[i, j]) else \
+                    f"{vals[i, j]:.3g}"
+                ax.text(j, i, said, ha="center", va="center", fontsize=7, color="k" if said != "not run" else "0.5")
                 continue
             r, g, b_ = np.asarray(im.to_rgba(np.array([v])), float).reshape(-1)[:3]  # one value: vmin = vmax
             light = 0.299 * r + 0.587 * g + 0.114 * b_ > 0.5  # dark text on light colours
             ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7, color="k" if light else "w")
-    d = _one_data(_frame(results), data)
     title = f"{_shown(d)}: {value} ({rule})"
     if np.isfinite(shown).any():
         cbar = fig.colorbar(im, ax=ax, label=value)
