@@ -474,3 +474,17 @@ def test_the_heat_map_tells_a_pair_never_run_from_one_with_no_qualifying_model(t
     rows, cols = list(t.index), list(t.columns)
     assert texts[(rows.index("so"), cols.index("PE"))] == "not run"
     assert texts[(rows.index("so"), cols.index("LS"))] == "—"  # run: no model in the band
+
+
+def test_the_summary_says_which_band_ranked_each_data_set(two_data, tmp_path):
+    """summary.txt (and report.html) said 'ranking rule: dsf_valid' and '<data>: best by J_S on the validation
+    record', never within which band: a report made with --band, or of a data set whose band the spec gave, ranked by
+    a B the reader could find only in the reasons of rows that missed it."""
+    path, b = two_data
+    gx.write_report(path, tmp_path / "r", band={"bare": 0.05}, html=True)
+    text = (tmp_path / "r" / "summary.txt").read_text()
+    assert f"pumping: best by J_S on the validation record among the models with J_SF ≤ B = {b:g}" in text
+    assert "bare: best by J_S on the validation record among the models with J_SF ≤ B = 0.05" in text
+    gx.write_report(path, tmp_path / "c", rule="chosen")
+    assert "bare: best by J_S on the validation record (each cell's own choice)" in \
+        (tmp_path / "c" / "summary.txt").read_text()

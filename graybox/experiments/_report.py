@@ -822,7 +822,7 @@ def write_report(
     save(o / "cells.csv", flat.set_index("key"))
     lb = leaderboard(df, rule=rule, band=band)
     save(o / "leaderboard.csv", lb)
-    lines = _summary_lines(df, lb, rule, attrs)
+    lines = _summary_lines(df, lb, rule, attrs, band)
     for d, slug in _slugs(list(dict.fromkeys(df["data"]))).items():
         save(o / f"heatmap_{slug}.csv", heatmap_table(df, data=d, rule=rule, band=band))
         shown, total = _best_structures(lb, d, max_structures)
@@ -874,9 +874,10 @@ def _replace_manifest(folder: Path, written: Sequence[Path]) -> None:
     manifest.write_text("".join(f"{n}\n" for n in names), encoding="utf-8")
 
 
-def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping | None = None) -> list[str]:
-    """summary.txt: counts, the best five per data set, and every reason (``attrs``: the store's,
-    default ``df.attrs``)."""
+def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping | None = None,
+                   band: float | Mapping[str, float] | None = None) -> list[str]:
+    """summary.txt: counts, the best five per data set (and within which band), and every reason (``attrs``: the
+    store's, default ``df.attrs``; ``band``: as given to the report)."""
     attrs = df.attrs if attrs is None else attrs
     counts = df["status"].value_counts()
     fp = attrs.get("fingerprint")
@@ -887,7 +888,14 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
     for d in dict.fromkeys(df["data"]):
         part = lb.loc[d]
         sub = part.dropna(subset=["JS_valid"]).head(5)
-        lines.append(f"\n{d}: best by J_S on the validation record")
+        if rule == "chosen":
+            within = " (each cell's own choice)"
+        else:  # the band that ranked it: given, or stored (the variants' own where their cells stored several)
+            bs = _bands(df[df["data"] == d], band, d)
+            within = (f" among the models with J_SF ≤ B = {bs[0][0]:g}" if len(bs) == 1 else
+                      " among the models with J_SF ≤ B, the variants' own: " +
+                      "; ".join(f"{b:g} for {who}" for b, who in bs) if bs else "")
+        lines.append(f"\n{d}: best by J_S on the validation record{within}")
         lines.append(sub[["JS_valid", "JSF", "fit_valid", "n_params"]].to_string() if len(sub) else
                      "  (no model qualified: the reasons follow)")
         empty = part[part["reason"] != ""]
