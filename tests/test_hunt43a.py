@@ -452,17 +452,6 @@ def test_the_heat_map_of_a_grid_with_no_qualifying_model_draws_no_colour_scale(t
     assert len(ax.get_xticks()) == 0 and len(ax.get_yticks()) == 0 and ax.texts
 
 
-def test_plot_free_run_names_the_output_unit_once():
-    """The README's own call, plot_free_run(valid, models, ylabel="Temperature (°C)") on a record in °C, labelled the
-    axis 'Temperature (°C) (°C)': plot_free_run appended the unit without the check the other plots make."""
-    from graybox import plots
-
-    data = gb.load_pumping()
-    m = gb.els(gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]), data).model
-    assert plots.plot_free_run(data.valid, m, ylabel="Pressure (mlc)").axes[0].get_ylabel() == "Pressure (mlc)"
-    assert plots.plot_free_run(data.valid, m, ylabel="Pressure").axes[0].get_ylabel() == "Pressure (mlc)"
-
-
 def test_the_heat_map_tells_a_pair_never_run_from_one_with_no_qualifying_model(two_data):
     """Read with spec='all' (or two stores compared), a structure and a variant of different specs were never run
     together: the heat map drew their cell '—', the mark of 'no model qualified', as for a run that failed."""

@@ -80,13 +80,19 @@ def test_a_bad_power_or_a_sign_is_named(text, hint):
         parse_term(text)
 
 
-def _heater_model():
-    import graybox as gb
-    rng = np.random.default_rng(0)
-    u = np.repeat(rng.uniform(30, 60, 20), 25)
+def _first_order(seed: int, low: float, high: float, a: float, levels: int, hold: int) -> tuple[np.ndarray, np.ndarray]:
+    """``levels`` levels in [low, high], each held ``hold`` samples, through y(k) = a y(k-1) + 0.5 u(k-1) + noise."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(low, high, levels), hold)
     y = np.zeros(u.size)
     for k in range(1, u.size):
-        y[k] = 0.8 * y[k - 1] + 0.5 * u[k - 1] + 0.01 * rng.standard_normal()
+        y[k] = a * y[k - 1] + 0.5 * u[k - 1] + 0.01 * rng.standard_normal()
+    return u, y
+
+
+def _heater_model():
+    import graybox as gb
+    u, y = _first_order(0, 30, 60, 0.8, levels=20, hold=25)
     return gb.els(["y(k-1)", "u(k-1)"], gb.Record(u, y, Ts=0.5, units=("%", "°C"))).model
 
 
@@ -254,11 +260,7 @@ def test_static_points_given_as_a_path_a_dataframe_arrays_or_a_function_are_told
     import pandas as pd
 
     import graybox as gb
-    rng = np.random.default_rng(2)
-    u = np.repeat(rng.uniform(0, 1, 30), 10)
-    y = np.zeros(u.size)
-    for k in range(1, u.size):
-        y[k] = 0.7 * y[k - 1] + 0.5 * u[k - 1] + 0.01 * rng.standard_normal()
+    u, y = _first_order(2, 0, 1, 0.7, levels=30, hold=10)
     rec = gb.Record(u, y, Ts=0.1)
     levels = pd.DataFrame({"u": [0.2, 0.5, 0.8], "y": [0.33, 0.83, 1.33]})
     st = ["y(k-1)", "u(k-1)"]
