@@ -111,12 +111,14 @@ class SubsetProblem:
         self.floor = RSS_FLOOR * self.yy
         self.evaluations = 0
 
-    def _run(self, idx: list[int] | np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _run(self, idx: list[int] | np.ndarray, p: int, dep_tol: float | None = None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         idx = np.asarray(idx, dtype=np.int64)
         nested = np.empty(p)
         border = np.empty(idx.size - p)
         energy = np.empty(idx.size - p)
-        _eliminate(self.G, self.b, self.yy, idx, p, self.dep_tol, nested, border, energy)
+        _eliminate(self.G, self.b, self.yy, idx, p, self.dep_tol if dep_tol is None else dep_tol,
+                   nested, border, energy)
         self.evaluations += 1
         return np.maximum(nested, self.floor), np.maximum(border, self.floor), energy
 
@@ -127,6 +129,17 @@ class SubsetProblem:
     def nested(self, order: list[int]) -> np.ndarray:
         """RSS of each prefix of ``order``."""
         return self._run(order, len(order))[0]
+
+    def bounds(self, order: list[int]) -> np.ndarray:
+        """A lower bound on the RSS of every subset of each prefix of ``order``: the RSS of its span.
+
+        Unlike :meth:`nested`, a column is dropped only when no energy is left of it: one nearly a
+        combination of the others in the prefix (at ``dep_tol``) may be independent in a smaller
+        subset, whose RSS it lowers (noise-free data with an input offset: the true terms among
+        the pool of all candidates), so dropping it would raise the bound above that subset's RSS
+        and cut it. A bound from round-off pivots errs low (a later cut), never high.
+        """
+        return self._run(order, len(order), dep_tol=0.0)[0]
 
     def added(self, S: list[int], cands: np.ndarray) -> np.ndarray:
         """RSS of S ∪ {c} for every c in ``cands`` (inf where the columns are dependent)."""
@@ -265,7 +278,7 @@ def exact_search(problem: SubsetProblem, k: int, forced: list[int], incumbent: l
                 best[0], best[1] = F + [pool[j]], float(r[j])
             return
         # RSS of F with the pool's tails free[j:], j = m-1 … i (one elimination, pool reversed)
-        nested = problem.nested(F + pool[::-1])[len(F):]
+        nested = problem.bounds(F + pool[::-1])[len(F):]
         bound = nested[::-1]  # bound[j - i] = RSS(F ∪ free[j:])
         for j in range(i, m - need + 1):
             if bound[j - i] >= best[1]:
@@ -372,7 +385,7 @@ def search_sizes(problem: SubsetProblem, sizes: list[int], forced: list[int], *,
                 del subsets[i + 1:], rss[i + 1:]
                 break
     else:
-        r_all = problem.rss(list(problem.usable))
+        r_all = float(problem.bounds(list(problem.usable))[-1])
         ks = np.array([len(s) for s in subsets])
         pen = criterion(ks, np.full(ks.size, float(n_rows)))  # the penalty: N ln(N/N) = 0
         order = np.argsort(criterion(ks, np.array(rss)), kind="stable")
