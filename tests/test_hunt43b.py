@@ -19,11 +19,11 @@ THETA = np.array([1.1, -0.3, 0.5, -0.2, -0.02, 0.05, 0.3])
 CAND = Candidates(ny=2, nu=2, degree=2)
 
 
-def noise_free(offset: float, seed: int = 1, n: int = 400, hold=(3, 15)) -> Record:
+def noise_free(offset: float, seed: int = 1, n: int = 400, hold=(3, 15), y_offset: float = 0.0) -> Record:
     u = gb.design_input("aprbs", n, low=0.0, high=2.0, hold=hold, seed=seed)
     y = Model(TRUE, THETA).simulate(u, np.zeros(2))
-    # the same plant with its input read off another zero: θ in the new coordinates, same terms
-    return Record(u + offset, y)
+    # the same plant with its signals read off other zeros: θ in the new coordinates, same terms
+    return Record(u + offset, y + y_offset)
 
 
 def scaled_rss(structure: Structure, rec: Record, start: int) -> float:
@@ -41,9 +41,9 @@ def quiet(rec: Record, **kw):
 
 
 def searchable(structure: Structure, rec: Record) -> bool:
-    """Whether the Gram form the subset search runs on tells the structure's columns apart."""
+    """Whether frols tells the structure's columns apart (none a combination of the others at rank_tol)."""
     try:
-        quiet(rec, n_terms=len(structure), include=list(structure), method="gram")
+        quiet(rec, n_terms=len(structure), include=list(structure))
     except ValueError:
         return False
     return True
@@ -69,16 +69,42 @@ def test_exact_search_is_not_cut_by_a_pool_column_dependent_only_among_all_candi
 
 
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 10_000), log_offset=st.floats(0.0, 2.3), k=st.integers(4, 7), short=st.integers(2, 12))
-def test_exact_subset_beats_swap_greedy_and_the_true_one_at_an_offset(seed, log_offset, k, short):
+@given(seed=st.integers(0, 10_000), log_offset=st.floats(0.0, 3.0), log_y_offset=st.floats(0.0, 6.0),
+       k=st.integers(4, 7), short=st.integers(2, 12))
+def test_exact_subset_beats_swap_greedy_and_the_true_one_at_an_offset(seed, log_offset, log_y_offset, k, short):
     """Exact's subset has an RSS no larger than swap's, greedy's and the true structure's (the true one
-    when the search can tell its columns apart: not a combination of one another on the Gram form)."""
-    rec = noise_free(10.0**log_offset, seed=seed, n=200, hold=(short, short + 10))
+    when frols can tell its columns apart: none a combination of the others at rank_tol)."""
+    rec = noise_free(10.0**log_offset - 1.0, seed=seed, n=200, hold=(short, short + 10),
+                     y_offset=10.0**log_y_offset - 1.0)
     yy = float(rec.y[2:] @ rec.y[2:])
     sel = quiet(rec, n_terms=k, search="exact")
     assume("proven" in sel.stop)
-    r = [scaled_rss(quiet(rec, n_terms=k, search=s).structure, rec, 2)
-         for s in ("exact", "swap", "greedy")]
-    assert r[0] <= r[1] * (1 + 1e-9) + 1e-12 * yy and r[0] <= r[2] * (1 + 1e-9) + 1e-12 * yy
+    r = [scaled_rss(quiet(rec, n_terms=k, search=s).structure, rec, 2) for s in ("exact", "swap", "greedy")]
+    assert r[0] <= r[1] * (1 + 1e-9) + 1e-18 * yy and r[0] <= r[2] * (1 + 1e-9) + 1e-18 * yy
     if k == 7 and searchable(TRUE, rec):
-        assert r[0] <= scaled_rss(TRUE, rec, 2) + 1e-12 * yy
+        assert r[0] <= scaled_rss(TRUE, rec, 2) + 1e-18 * yy
+
+
+@pytest.mark.parametrize("u_offset, y_offset", [(1e3, 0.0), (0.0, 1e4), (0.0, 1e5), (0.0, 1e6)])
+def test_subset_searches_keep_their_accuracy_at_offsets(u_offset, y_offset):
+    # was: the searches fitted subsets through the Gram matrix of the candidates, which squares their
+    # conditioning, and treated RSS below 1e-13 yᵀy as tied. u in [1000, 1002]: exact missed the true
+    # terms (RSS 0.02, theirs 1e-18); y about 1e5 (a pressure in Pa): every lagged-y column is the
+    # constant to 1e-10 of its energy, and exact's 'proven best' 7 terms had RSS 0.36 where greedy's
+    # had 7.5e-10; about 1e6: 'no subset of 7 independent terms on these data', greedy's 7 fitting to
+    # round-off. The searches now fit on the triangular factor of [S, y] (QR's accuracy) and the floor
+    # is greedy's (1e-20 yᵀy).
+    rec = noise_free(u_offset, y_offset=y_offset)
+    yy = float(rec.y[2:] @ rec.y[2:])
+    greedy = scaled_rss(quiet(rec, n_terms=7).structure, rec, 2)
+    for search in ("swap", "exact"):
+        sel = quiet(rec, n_terms=7, search=search)
+        r = scaled_rss(sel.structure, rec, 2)
+        assert r <= greedy * (1 + 1e-9) + 1e-18 * yy
+        if search == "exact":
+            assert "proven" in sel.stop
+            if searchable(TRUE, rec):
+                assert r <= scaled_rss(TRUE, rec, 2) + 1e-18 * yy
+    if y_offset <= 1e4:  # the true terms are told apart (above 1e4 they tie with others at round-off)
+        exact = quiet(rec, n_terms=7, search="exact")
+        assert set(exact.structure) == set(TRUE)

@@ -620,8 +620,9 @@ def frols(
         time by ERR, never undone. ``"swap"``: from the greedy path and from greedy paths started
         at the next-best first picks, exchange one term for another while the residual sum of
         squares falls (deterministic; a local optimum). ``"exact"``: the subset of least RSS of
-        each size, by branch and bound on the Gram matrix of the unit-RMS candidates, started
-        from the swap result. Under slowly varying inputs (staircases, where ``u(k-1) ≈ u(k-2)``)
+        each size, by branch and bound, started from the swap result. Both fit subsets on the
+        triangular factor of the unit-RMS candidates beside y (QR's accuracy: far offsets on u or y
+        do not blur them). Under slowly varying inputs (staircases, where ``u(k-1) ≈ u(k-2)``)
         greedy and swap can both settle on lag-shifted look-alikes of the true terms; exact cannot.
         All three work on the same scaled columns (results do not depend on units) and the same
         rows (never straddling two records), and respect ``include``. The stopping rule then
@@ -883,12 +884,6 @@ class _Columns:
     b: np.ndarray | None = None
     engine: object = None
 
-    def gram(self) -> tuple[np.ndarray, np.ndarray]:
-        """(SᵀS, Sᵀy) of the unit-RMS columns (computed from W for MGS, before it is orthogonalised)."""
-        if self.method == "gram":
-            return self.G, self.b
-        return self.W.T @ self.W, self.W.T @ self.y
-
 
 def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms: int | None,
                     method: str, keep: Sequence[int] = ()) -> _Columns:
@@ -991,11 +986,11 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
                 why = next((w for t, w in skipped if t == process[j]), "skipped")
                 if n_included is None or k < n_included:
                     raise ValueError(f"included term {process[j]} cannot be used on these data: {why}")
-                # the Gram form the search runs on squares the conditioning: on noise-free data,
-                # where the fit is exact with fewer terms, it may not see a dependence QR sees
+                # the search and this pass judge dependence by different factorisations: on noise-free
+                # data, where the fit is exact with fewer terms, a column at the threshold can pass one
                 raise ValueError(f"the best subset of {len(forced)} terms the {search} search found holds "
-                                 f"{process[j]}: {why} on these data, which the Gram form the search runs on "
-                                 "could not tell (noise-free data?); ask for fewer terms, or search='greedy'")
+                                 f"{process[j]}: {why} on these data, at the edge of what the search could tell "
+                                 "(noise-free data?); ask for fewer terms, or search='greedy'")
         else:
             with np.errstate(divide="ignore", invalid="ignore"):
                 score = np.where(active, num * num / nrm, -1.0)
@@ -1047,8 +1042,13 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
             f"exact search is refused for {n_free} usable candidates (at most {EXACT_MAX_CANDIDATES}: the branch "
             "and bound may grow as their number of subsets); use search='swap', or fewer candidates"
         )
-    G, b = cols.gram()
-    problem = SubsetProblem(G, b, cols.yy, cols.active, max(rank_tol**2, _GRAM_DEPENDENT))
+    # the triangular factor of [S, y] (TSQR over the rows, as the chosen terms' accurate fit): subset
+    # fits on it keep QR's accuracy where a Gram matrix squares the conditioning (an offset on y)
+    R, _ = r_factor(list(process.terms), cols.data, cols.start)
+    R[:, :-1] /= cols.scales
+    # a column is dependent at the forward pass's threshold, which runs on this subset next
+    problem = SubsetProblem(R, cols.yy, cols.active, rank_tol**2 if cols.method == "mgs"
+                            else max(rank_tol**2, _GRAM_DEPENDENT))
     N = cols.n_rows
     lo = max(1, len(forced)) if rule.mode != "n_terms" else rule.n_terms
     sizes = list(range(lo, K + 1))

@@ -3,8 +3,11 @@
 Forward selection never undoes a pick. Under slowly varying inputs (staircases) ``u(k-1)`` and
 ``u(k-2)`` agree on most samples, ERR ranks a lag-shifted look-alike first, and the true
 structure, whose one-step error may be hundreds of times smaller, is never reached. Two searches
-look further, both on the Gram matrix G = SᵀS, b = Sᵀy, yᵀy of the unit-RMS candidate columns S
-(so nothing depends on units, and multi-record data arrive already summed over records):
+look further, both on the upper-triangular factor R of [S, y] = QR, S the unit-RMS candidate
+columns (so nothing depends on units, and multi-record data arrive already reduced over records):
+the fit of any subset of columns of S is the fit of the same columns of R, reduced by Householder
+reflections, with QR's accuracy (a Gram matrix SᵀS would square the conditioning, which an offset
+of 1e5 on y, or 1e3 on u, takes past what double precision holds):
 
 * **swap**: from several starts (the greedy path, and greedy paths whose first free pick is each
   of the next-best first picks), repeatedly make the best exchange of one term of the subset for
@@ -14,12 +17,12 @@ look further, both on the Gram matrix G = SᵀS, b = Sᵀy, yᵀy of the unit-RM
   simplest form). A node fixes some terms and leaves a pool of later candidates; the RSS of the
   fixed terms and the whole pool together is a lower bound on every subset below the node (adding
   columns never raises RSS), and a node whose bound is not below the best subset found so far is
-  cut. One factorisation of the node's Gram matrix, with the pool in reverse order, gives the
+  cut. One reduction of the node's columns, with the pool in reverse order, gives the
   bounds of all its children at once (the RSS after each prefix). The search starts from the swap
   result, so it only ever improves on it, and it proves the answer optimal when it finishes.
 
-RSS values come from the Gram matrix, so they carry its squared conditioning: RSS below
-``floor · yᵀy`` are treated as equal (see :data:`RSS_FLOOR`).
+RSS below ``floor · yᵀy`` are round-off and treated as equal (see :data:`RSS_FLOOR`; greedy
+FROLS's floor).
 """
 
 from __future__ import annotations
@@ -34,17 +37,23 @@ from ._stopping import FewerTermsError, StopRule
 
 __all__ = ["SubsetProblem", "SearchBudget", "SizePlan", "swap_search", "exact_search", "search_sizes", "RSS_FLOOR"]
 
-#: RSS below this fraction of yᵀy is round-off of the Gram form: such subsets tie.
-RSS_FLOOR = 1e-13
+#: RSS below this fraction of yᵀy is round-off (QR's, as greedy FROLS's floor): such subsets tie.
+RSS_FLOOR = 1e-20
 
 
 @nb.njit(cache=True, nogil=True)
-def _eliminate(G, b, yy, idx, p, dep_tol, nested, border, energy):  # pragma: no cover - compiled
-    """Symmetric elimination on the Gram matrix of the columns ``idx`` bordered by y.
+def _reduce(R, own, tail, idx, p, dep_tol, nested, border, energy):  # pragma: no cover - compiled
+    """Householder reduction of the columns ``idx`` of the triangular factor R of [S, y].
 
-    The first ``p`` columns of ``idx`` are eliminated in order; ``nested[t]`` is the RSS of the
-    first t + 1 of them. For every later column c, ``border[c - p]`` is the RSS of the p columns
-    together with c. A column whose remaining energy is at most ``dep_tol`` of its own is a linear
+    R (n+1 × n+1, upper triangular, last column y) is the factor of the unit-RMS candidate columns
+    S beside y: a least-squares fit of columns of S is the same fit of those columns of R, whose
+    orthogonal reduction keeps QR's accuracy (a Gram matrix would square their conditioning: an
+    offset of 1e5 on y makes every lagged-y column the constant to 1e-10 of its energy). ``own``
+    holds the columns' squared norms, ``tail[r]`` y's energy in rows ≥ r (outside columns < r).
+
+    The first ``p`` columns of ``idx`` are reduced in order; ``nested[t]`` is the RSS of the first
+    t + 1 of them. For every later column c, ``border[c - p]`` is the RSS of the p columns together
+    with c. A column whose remaining energy is at most ``dep_tol`` of its own is a linear
     combination of those before it and adds nothing: ``nested`` (the RSS of their span, a bound)
     goes on, but ``border`` is inf where c is one, or the p columns hold one (a subset is of
     independent columns: on noise-free data a dependent column ties with the true terms at the
@@ -52,48 +61,73 @@ def _eliminate(G, b, yy, idx, p, dep_tol, nested, border, energy):  # pragma: no
     energy as a fraction of its own.
     """
     m = idx.size
-    A = np.empty((m + 1, m + 1))
-    for r in range(m):
-        for c in range(m):
-            A[r, c] = G[idx[r], idx[c]]
-        A[r, m] = b[idx[r]]
-        A[m, r] = b[idx[r]]
-    A[m, m] = yy
+    n = R.shape[0] - 1
+    h = 0
+    for c in range(m):
+        h = max(h, idx[c] + 1)  # rows below every column here hold y alone
+    # B[c] is column c of the reduced matrix (columns contiguous: the loops run down them); B[m] is y
+    B = np.empty((m + 1, h))
+    for c in range(m):
+        for r in range(h):
+            B[c, r] = R[r, idx[c]]
+    for r in range(h):
+        B[m, r] = R[r, n]
+    rest = tail[h]
+    row = 0
     dependent = False
     for t in range(p):
-        d = A[t, t]
-        if d <= dep_tol * G[idx[t], idx[t]]:
-            nested[t] = A[m, m]
+        x = B[t]
+        s = 0.0
+        for r in range(row, h):
+            s += x[r] * x[r]
+        if s <= dep_tol * own[idx[t]]:
             dependent = True
-            continue
-        for r in range(t + 1, m + 1):
-            f = A[t, r] / d
-            if f == 0.0:
-                continue
-            for c in range(r, m + 1):
-                A[r, c] -= f * A[t, c]
-        for r in range(t + 1, m + 1):
-            for c in range(t + 1, r):
-                A[r, c] = A[c, r]
-        nested[t] = A[m, m]
+        else:
+            alpha = -np.sqrt(s) if x[row] >= 0.0 else np.sqrt(s)
+            x[row] -= alpha  # the reflector v = x − α e1, stored in place; vᵀv = 2(s − α x0)
+            vv = 2.0 * (s - alpha * (x[row] + alpha))
+            for c in range(t + 1, m + 1):
+                z = B[c]
+                d = 0.0
+                for r in range(row, h):
+                    d += x[r] * z[r]
+                f = 2.0 * d / vv
+                for r in range(row, h):
+                    z[r] -= f * x[r]
+            row += 1
+        e = rest
+        for r in range(row, h):
+            e += B[m, r] * B[m, r]
+        nested[t] = e
+    yv = B[m]
     for c in range(p, m):
-        d = A[c, c]
-        energy[c - p] = d / G[idx[c], idx[c]]
-        if dependent or d <= dep_tol * G[idx[c], idx[c]]:
+        z = B[c]
+        d = 0.0
+        dy = 0.0
+        for r in range(row, h):
+            d += z[r] * z[r]
+            dy += z[r] * yv[r]
+        energy[c - p] = d / own[idx[c]]
+        if dependent or d <= dep_tol * own[idx[c]]:
             border[c - p] = np.inf
         else:
-            border[c - p] = A[m, m] - A[c, m] * A[c, m] / d
+            # the residual itself, not |y|² − dy²/d: no cancellation where c explains nearly all of it
+            f = dy / d
+            e = rest
+            for r in range(row, h):
+                w = yv[r] - f * z[r]
+                e += w * w
+            border[c - p] = e
 
 
 class SubsetProblem:
-    """RSS of subsets of unit-RMS candidate columns, from their Gram matrix.
+    """RSS of subsets of unit-RMS candidate columns, from the triangular factor of [S, y].
 
     Parameters
     ----------
-    G : ndarray, shape (n, n)
-        Gram matrix of the scaled candidate columns (diagonal N for usable ones).
-    b : ndarray, shape (n,)
-        Their inner products with the output.
+    R : ndarray, shape (n+1, n+1)
+        Upper-triangular factor of [S, y] = QR, S the scaled candidate columns (unit RMS for usable
+        ones), y the output (fewer rows, from fewer regression rows than columns, are padded with zeros).
     yy : float
         yᵀy.
     usable : ndarray of bool, shape (n,)
@@ -102,9 +136,12 @@ class SubsetProblem:
         Relative remaining energy below which a column counts as a combination of others.
     """
 
-    def __init__(self, G: np.ndarray, b: np.ndarray, yy: float, usable: np.ndarray, dep_tol: float) -> None:
-        self.G = np.ascontiguousarray(G, dtype=float)
-        self.b = np.ascontiguousarray(b, dtype=float)
+    def __init__(self, R: np.ndarray, yy: float, usable: np.ndarray, dep_tol: float) -> None:
+        n1 = R.shape[1]
+        self.R = np.zeros((n1, n1))
+        self.R[: min(R.shape[0], n1)] = R[:n1]
+        self.own = np.einsum("ij,ij->j", self.R, self.R)[:-1].copy()
+        self.tail = np.append(np.cumsum((self.R[::-1, -1] ** 2))[::-1], 0.0)
         self.yy = float(yy)
         self.usable = np.flatnonzero(usable)
         self.dep_tol = float(dep_tol)
@@ -117,14 +154,10 @@ class SubsetProblem:
         nested = np.empty(p)
         border = np.empty(idx.size - p)
         energy = np.empty(idx.size - p)
-        _eliminate(self.G, self.b, self.yy, idx, p, self.dep_tol if dep_tol is None else dep_tol,
-                   nested, border, energy)
+        _reduce(self.R, self.own, self.tail, idx, p, self.dep_tol if dep_tol is None else dep_tol,
+                nested, border, energy)
         self.evaluations += 1
         return np.maximum(nested, self.floor), np.maximum(border, self.floor), energy
-
-    def rss(self, S: list[int]) -> float:
-        """RSS of the least-squares fit on the columns S (yᵀy for the empty set)."""
-        return float(self._run(S, len(S))[0][-1]) if S else self.yy
 
     def nested(self, order: list[int]) -> np.ndarray:
         """RSS of each prefix of ``order``."""
@@ -140,6 +173,10 @@ class SubsetProblem:
         and cut it. A bound from round-off pivots errs low (a later cut), never high.
         """
         return self._run(order, len(order), dep_tol=0.0)[0]
+
+    def rss(self, S: list[int]) -> float:
+        """RSS of the least-squares fit on the columns S (yᵀy for the empty set)."""
+        return float(self._run(S, len(S))[0][-1]) if S else self.yy
 
     def added(self, S: list[int], cands: np.ndarray) -> np.ndarray:
         """RSS of S ∪ {c} for every c in ``cands`` (inf where the columns are dependent)."""
@@ -229,7 +266,9 @@ def swap_search(problem: SubsetProblem, k: int, forced: list[int], extra_starts:
             continue
         tried.add(frozenset(s))
         S, r = _swap(problem, s, f)
-        if best is None or r < best[1]:
+        # a later start must gain more than round-off: of tied subsets (two spans that are one on these
+        # data, a two-level input's u² = 3u − 2) the first start's, the greedy path's, stays
+        if best is None or r < best[1] * (1.0 - 1e-12):
             best = (S, r)
     if best is None:
         raise FewerTermsError(f"no subset of {k} independent terms on these data")
@@ -367,7 +406,7 @@ def search_sizes(problem: SubsetProblem, sizes: list[int], forced: list[int], *,
         nonlocal proven
         S, r, ok = exact_search(problem, len(subsets[i]), forced, list(subsets[i]), cut, budget)
         proven &= ok
-        if r < rss[i]:
+        if r < rss[i] * (1.0 - 1e-12):  # more than round-off, as a swap must gain
             subsets[i], rss[i] = tuple(S), r
 
     if rule.mode == "n_terms":
