@@ -108,3 +108,20 @@ def test_subset_searches_keep_their_accuracy_at_offsets(u_offset, y_offset):
     if y_offset <= 1e4:  # the true terms are told apart (above 1e4 they tie with others at round-off)
         exact = quiet(rec, n_terms=7, search="exact")
         assert set(exact.structure) == set(TRUE)
+
+
+def test_a_surface_on_points_whose_inputs_move_together_is_refused_naming_the_points():
+    # was: two inputs stepped together (u2 = 1.5 u1 at every static point) cannot tell u1, u2 and 1
+    # apart; cls(structure, record, points) and StaticSurface.fit said only 'least squares: regressor
+    # matrix has rank 2 < 3 columns (collinear or constant terms: ...from these data)', as if the
+    # dynamic record were at fault
+    S = Structure(["y(k-1)", "u1(k-1)", "u2(k-1)", "1"])
+    m = Model(S, np.array([0.7, 0.5, 0.3, 0.1]), input_names=("u1", "u2"))
+    u1 = gb.design_input("aprbs", 300, low=0.0, high=2.0, hold=(3, 15), seed=1)
+    U = np.column_stack([u1, gb.design_input("aprbs", 300, low=0.0, high=3.0, hold=(3, 15), seed=2)])
+    rec = Record(U, m.simulate(U, np.zeros(1)), input_names=("u1", "u2"))
+    ub = np.column_stack([np.linspace(0, 2, 5), np.linspace(0, 3, 5)])
+    pts = gb.StaticPoints(ub, m.static_curve(ub), input_names=("u1", "u2"))
+    for call in (lambda: gb.StaticSurface.fit(pts, degree=1), lambda: gb.cls(S, rec, pts)):
+        with pytest.raises(ValueError, match=r"the 5 static points do not tell the monomials 1, u1, u2 apart"):
+            call()

@@ -238,7 +238,16 @@ class StaticSurface:
                                  f"power {top} (a power p needs p + 1 levels): give points at more levels of {n!r}, a "
                                  "lower degree, or the monomials to fit as exponents=")
         V = _monomials(ub, ex)
-        c = scaled_lstsq(V, yb)
+        try:
+            c = scaled_lstsq(V, yb)
+        except ValueError as err:
+            # every input at enough levels, yet the points lie on a curve of the inputs (two inputs
+            # stepped together): said of the points, not as a regression's rank that reads as the records'
+            monos = ", ".join("*".join(n if v == 1 else f"{n}^{v}" for n, v in zip(names, e) if v) or "1" for e in ex)
+            raise ValueError(f"StaticSurface.fit: the {len(yb)} static points do not tell the monomials "
+                             f"{monos} apart ({str(err).split(' (')[0].removeprefix('least squares: ')}): the inputs "
+                             "move together over them; give points that vary the inputs independently (a grid), or "
+                             "fewer monomials as exponents=") from None
         return cls(ex, c, box, name or f"fit to {points.name}", names)
 
     # -- properties ---------------------------------------------------------
