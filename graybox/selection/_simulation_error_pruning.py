@@ -18,9 +18,10 @@ pruning"): start from the included terms (default none); then repeat
 until the stopping rule holds. All candidates of one step are scored at once by the compiled
 population kernel: every candidate model is a member of a population of the full candidate
 structure, with zeros for the terms it does not hold, so one batched free run per record scores
-a whole step. The least-squares fits of all candidates of a step come from one Cholesky factor
-of the current structure's scaled Gram matrix (a rank-one border per candidate), so a step costs
-one batched free run plus O(n_candidates · n_terms²).
+a whole step. The least-squares fits of all candidates of a step come from one QR factorisation
+of the current structure's columns of the triangular factor of [scaled candidates, y] (a border
+per candidate, with QR's accuracy: no Gram matrix, whose squared conditioning an offset of the
+signals makes felt), so a step costs one batched free run plus O(n_candidates²) per term.
 
 Free runs start from each record's first L measured samples, L the largest lag among the
 candidates, and every score counts samples L … N−1 of every record, so all structures are judged
@@ -158,8 +159,14 @@ class _Scorer:
         self.zero = s == 0.0
         self.s = np.where(self.zero, 1.0, s)
         ps = psi / self.s
-        self.G = ps.T @ ps
-        self.b = ps.T @ y
+        # the triangular factor of [S, y] (S the unit-RMS candidates): every fit below is a fit of its
+        # columns, reduced by QR, with QR's accuracy; a Gram matrix SᵀS squares the conditioning (u in
+        # [1000, 1002] put noise-free θ 3 % off, y about 1e6 made the true terms 'collinear')
+        n1 = ps.shape[1] + 1
+        Rf = np.linalg.qr(np.column_stack([ps, y]), mode="r")
+        self.R = np.zeros((n1, n1))
+        self.R[: Rf.shape[0]] = Rf[:n1]
+        self.own = np.einsum("ij,ij->j", self.R[:, :-1], self.R[:, :-1])  # ‖s_j‖²: N, or 0 for a zero column
         # the tolerance's scale: var(y), or for a constant output its mean square (not 1 output unit²)
         self.yvar = output_scale(y) ** 2
         # free-run errors below this are round-off, not signal: such structures tie (noise-free data)
@@ -171,34 +178,37 @@ class _Scorer:
         th = np.zeros(len(self.process))
         if not S:
             return th
-        try:
-            c = scipy.linalg.cho_factor(self.G[np.ix_(S, S)], lower=False)
-        except np.linalg.LinAlgError:
-            return None
-        d = np.abs(np.diag(c[0]))
+        Q, R = np.linalg.qr(self.R[:, S])
+        d = np.abs(np.diag(R))
         if d.min() <= 1e-7 * d.max():
             return None
-        th[S] = scipy.linalg.cho_solve(c, self.b[S]) / self.s[S]
+        th[S] = scipy.linalg.solve_triangular(R, Q.T @ self.R[:, -1]) / self.s[S]
         return th
 
     def bordered(self, S: list[int], cands: np.ndarray, rank_tol: float) -> np.ndarray:
         """θ rows (engineering units) of S ∪ {c} for every c in ``cands``; NaN rows where c is collinear."""
         n = len(self.process)
         out = np.zeros((cands.size, n))
-        Gcc = self.G[cands, cands]
+        Gcc = self.own[cands]
         if not S:
             ok = (Gcc > 0) & ~self.zero[cands]
+            bc = self.R[:, cands].T @ self.R[:, -1]
             with np.errstate(divide="ignore", invalid="ignore"):
-                out[np.arange(cands.size), cands] = np.where(ok, self.b[cands] / Gcc, np.nan) / self.s[cands]
+                out[np.arange(cands.size), cands] = np.where(ok, bc / Gcc, np.nan) / self.s[cands]
             out[~ok] = np.nan
             return out
-        R = scipy.linalg.cholesky(self.G[np.ix_(S, S)], lower=False)
-        V = scipy.linalg.solve_triangular(R, self.G[np.ix_(S, cands)], trans="T")  # (k, C)
-        w = scipy.linalg.solve_triangular(R, self.b[S], trans="T")  # (k,)
-        d = Gcc - np.sum(V * V, axis=0)  # Schur complement: what c adds beyond S
+        # Q of the columns S; in its coordinates the candidates' and y's parts in S's span (V, w) and
+        # beyond it (what c adds beyond S, and y's residual), each formed by rotation, not by subtraction
+        k = len(S)
+        Q, RS = np.linalg.qr(self.R[:, S], mode="complete")
+        R = RS[:k]
+        T = Q.T @ self.R[:, cands]
+        ty = Q.T @ self.R[:, -1]
+        V, w = T[:k], ty[:k]  # (k, C), (k,)
+        d = np.sum(T[k:] ** 2, axis=0)
         ok = (d > rank_tol**2 * Gcc) & ~self.zero[cands]
         dd = np.where(ok, d, 1.0)
-        zc = (self.b[cands] - V.T @ w) / dd
+        zc = (T[k:].T @ ty[k:]) / dd
         ZS = scipy.linalg.solve_triangular(R, w[:, None] - V * zc[None, :])  # (k, C)
         out[:, S] = (ZS / self.s[S, None]).T
         out[np.arange(cands.size), cands] = zc / self.s[cands]
