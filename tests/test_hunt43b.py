@@ -139,3 +139,19 @@ def test_semp_fits_its_structures_to_least_squares_accuracy_at_offsets(u_offset,
     assert set(sel.structure) == set(TRUE)
     th = dict(zip(sel.structure, sel.theta))
     np.testing.assert_allclose([th[t] for t in ref.structure], ref.theta, rtol=1e-8)
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), log_su=st.floats(-6, 6), log_sy=st.floats(-6, 6), log_noise=st.floats(-3, -1))
+def test_chosen_terms_do_not_move_with_the_units_of_u_and_y(seed, log_su, log_sy, log_noise):
+    """The same record in other units (u·su, y·sy): every search and SEMP choose the same terms."""
+    rec = noise_free(0.0, seed=seed, n=250)
+    noise = 10.0**log_noise * np.std(rec.y) * np.random.default_rng(seed).standard_normal(len(rec.y))
+    base = Record(rec.u, rec.y + noise)
+    other = Record(rec.u * 10.0**log_su, (rec.y + noise) * 10.0**log_sy)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a criterion at its largest size: said alike in both units
+        for search in ("greedy", "swap", "exact"):
+            a, b = (quiet(r, search=search, max_terms=10) for r in (base, other))
+            assert set(a.structure) == set(b.structure)
+        assert set(gb.semp(CAND, base, max_terms=10).structure) == set(gb.semp(CAND, other, max_terms=10).structure)
