@@ -155,3 +155,26 @@ def test_chosen_terms_do_not_move_with_the_units_of_u_and_y(seed, log_su, log_sy
             a, b = (quiet(r, search=search, max_terms=10) for r in (base, other))
             assert set(a.structure) == set(b.structure)
         assert set(gb.semp(CAND, base, max_terms=10).structure) == set(gb.semp(CAND, other, max_terms=10).structure)
+
+
+@pytest.mark.parametrize("search", ["swap", "exact"])
+def test_a_searched_subset_is_fitted_in_an_order_that_keeps_it_independent(search):
+    # was: three noise-free records, u about 50 and y about 1e5: the swap and exact searches' best 7
+    # terms (y(k-1) included) were each independent of those before them in the order the search
+    # built them, but put in ERR order u(k-1) came last with 7e-15 of its energy left (below
+    # rank_tol² = 1e-14), and the call failed with 'the best subset of 7 terms the swap search found
+    # holds u(k-1): linear combination of the selected terms', though greedy gives 7 terms
+    recs = [noise_free(50.0, seed=21 + i, n=n, y_offset=1e5) for i, n in enumerate((190, 137, 146))]
+    greedy = quiet(recs, n_terms=7, include=["y(k-1)"])
+    sel = quiet(recs, n_terms=7, include=["y(k-1)"], search=search)
+    assert len(sel.structure) == 7 and str(sel.structure[0]) == "y(k-1)" and np.all(np.isfinite(sel.theta))
+    psi, y = stacked_regressors(sel.structure, recs, start=2)
+    yy = float(y @ y)
+    assert float(np.sum((y - psi @ sel.theta) ** 2)) <= one_rss(greedy.structure, recs) * (1 + 1e-6) + 1e-18 * yy
+
+
+def one_rss(structure: Structure, recs) -> float:
+    psi, y = stacked_regressors(structure, recs, start=2)
+    s = np.sqrt(np.mean(psi**2, axis=0))
+    theta = np.linalg.lstsq(psi / s, y, rcond=None)[0]
+    return float(np.sum((y - psi / s @ theta) ** 2))

@@ -209,7 +209,13 @@ class SubsetProblem:
         rest = list(S[fixed:])
         while rest:
             r = self.added(out, np.array(rest))
-            out.append(rest.pop(int(np.argmin(r))))
+            j = int(np.argmin(r))
+            if not np.isfinite(r[j]):
+                # dependence at dep_tol depends on the order: in ERR order a term would follow terms it is
+                # a combination of, where the order the search built S in (each term independent of
+                # those before it: a forward pass, an exchange, a branch) is not; keep that one
+                return list(S)
+            out.append(rest.pop(j))
         return out
 
 
