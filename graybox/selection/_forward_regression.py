@@ -1042,10 +1042,17 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
             f"exact search is refused for {n_free} usable candidates (at most {EXACT_MAX_CANDIDATES}: the branch "
             "and bound may grow as their number of subsets); use search='swap', or fewer candidates"
         )
-    # the triangular factor of [S, y] (TSQR over the rows, as the chosen terms' accurate fit): subset
-    # fits on it keep QR's accuracy where a Gram matrix squares the conditioning (an offset on y)
-    R, _ = r_factor(list(process.terms), cols.data, cols.start)
-    R[:, :-1] /= cols.scales
+    # the triangular factor of [S, y]: subset fits on it keep QR's accuracy where a Gram matrix squares
+    # the conditioning (an offset on y). In memory (MGS, before its pass) one QR of the scaled columns;
+    # else TSQR over the rows, as the chosen terms' accurate fit
+    if cols.method == "mgs":
+        A = np.empty((cols.n_rows, len(process) + 1), order="F")
+        A[:, :-1], A[:, -1] = cols.W, cols.y
+        R = np.linalg.qr(A, mode="r")
+        del A
+    else:
+        R, _ = r_factor(list(process.terms), cols.data, cols.start)
+        R[:, :-1] /= cols.scales
     # a column is dependent at the forward pass's threshold, which runs on this subset next
     problem = SubsetProblem(R, cols.yy, cols.active, rank_tol**2 if cols.method == "mgs"
                             else max(rank_tol**2, _GRAM_DEPENDENT))
