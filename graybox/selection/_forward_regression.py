@@ -1043,12 +1043,14 @@ def _search_subsets(cols: _Columns, forced: list[int], K: int, rule: StopRule, s
             "and bound may grow as their number of subsets); use search='swap', or fewer candidates"
         )
     # the triangular factor of [S, y]: subset fits on it keep QR's accuracy where a Gram matrix squares
-    # the conditioning (an offset on y). In memory (MGS, before its pass) one QR of the scaled columns;
-    # else TSQR over the rows, as the chosen terms' accurate fit
-    if cols.method == "mgs":
+    # the conditioning (an offset on y). From the scaled columns MGS holds (before its pass) by one QR
+    # while a copy of them is small; else TSQR over chunks of rows (memory independent of N)
+    if cols.method == "mgs" and 8 * cols.n_rows * (len(process) + 1) <= _AUTO_GRAM_BYTES:
+        from scipy.linalg import qr
+
         A = np.empty((cols.n_rows, len(process) + 1), order="F")
         A[:, :-1], A[:, -1] = cols.W, cols.y
-        R = np.linalg.qr(A, mode="r")
+        R = qr(A, mode="r", overwrite_a=True, check_finite=False)[0]
         del A
     else:
         R, _ = r_factor(list(process.terms), cols.data, cols.start)
