@@ -158,12 +158,16 @@ class _Scorer:
         s = np.sqrt(np.mean(psi**2, axis=0))
         self.zero = s == 0.0
         self.s = np.where(self.zero, 1.0, s)
-        ps = psi / self.s
         # the triangular factor of [S, y] (S the unit-RMS candidates): every fit below is a fit of its
         # columns, reduced by QR, with QR's accuracy; a Gram matrix SᵀS squares the conditioning (u in
         # [1000, 1002] put noise-free θ 3 % off, y about 1e6 made the true terms 'collinear')
-        n1 = ps.shape[1] + 1
-        Rf = np.linalg.qr(np.column_stack([ps, y]), mode="r")
+        n1 = psi.shape[1] + 1
+        A = np.empty((y.size, n1), order="F")
+        np.divide(psi, self.s, out=A[:, :-1])
+        A[:, -1] = y
+        del psi
+        Rf = scipy.linalg.qr(A, mode="r", overwrite_a=True, check_finite=False)[0]
+        del A
         self.R = np.zeros((n1, n1))
         self.R[: Rf.shape[0]] = Rf[:n1]
         self.own = np.einsum("ij,ij->j", self.R[:, :-1], self.R[:, :-1])  # ‖s_j‖²: N, or 0 for a zero column
