@@ -1,6 +1,5 @@
 """hunt43b: the search and the estimators at numerical extremes (offsets, scales, noise-free data)."""
 
-import itertools
 import warnings
 
 import numpy as np
