@@ -159,14 +159,10 @@ class SubsetProblem:
         self.evaluations += 1
         return np.maximum(nested, self.floor), np.maximum(border, self.floor), energy
 
-    def nested(self, order: list[int]) -> np.ndarray:
-        """RSS of each prefix of ``order``."""
-        return self._run(order, len(order))[0]
-
     def bounds(self, order: list[int]) -> np.ndarray:
         """A lower bound on the RSS of every subset of each prefix of ``order``: the RSS of its span.
 
-        Unlike :meth:`nested`, a column is dropped only when no energy is left of it: one nearly a
+        Unlike a subset's RSS, a column is dropped only when no energy is left of it: one nearly a
         combination of the others in the prefix (at ``dep_tol``) may be independent in a smaller
         subset, whose RSS it lowers (noise-free data with an input offset: the true terms among
         the pool of all candidates), so dropping it would raise the bound above that subset's RSS
