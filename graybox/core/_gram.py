@@ -25,7 +25,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ._records import as_records, check_same_period, check_units, check_units_agree
+from ._records import as_records, check_same_period, check_units, check_units_agree, require_lengths
 from ._regressors import input_signals
 from ._terms import Term
 from ._reprs import short_repr
@@ -344,8 +344,7 @@ def _reduce(factors: Sequence[tuple], data: object, start: int, form: str) -> tu
     records, in memory or on Dask, pairwise; and the number of rows."""
     if is_dask_data(data):
         recs = [data] if isinstance(data, DaskRecord) else list(data)
-        for r in recs:
-            r.require_length(start)
+        require_lengths(recs, start)
         M = _dask_reduce(factors, recs, start, form)
     else:
         recs = as_records(data)

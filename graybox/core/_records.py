@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field, replace
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -371,6 +371,16 @@ class StaticPoints:
                 f"{self.ybar.max():.4g}]{yu}{unc})")
 
 
+def require_lengths(records: Sequence[Any], max_lag: int) -> None:
+    """Raise ``ValueError`` unless every record has more than ``max_lag`` samples; of several, a short one is named
+    by its position too (records made or loaded without a name are all called "record")."""
+    for i, r in enumerate(records):
+        if len(records) > 1 and len(r) < max_lag + 1:
+            raise ValueError(f"record {i + 1} of {len(records)} ({r.name!r}) has {len(r)} samples, fewer than max lag "
+                             f"+ 1 = {max_lag + 1}")
+        r.require_length(max_lag)
+
+
 def check_units(units: object, name: str) -> tuple[str, str]:
     """``units`` as a pair (input unit, output unit) of str, or ``TypeError`` naming ``name``."""
     if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
@@ -654,7 +664,7 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     return recs
 
 
-__all__ += ["check_units", "as_records", "record_hint", "static_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
+__all__ += ["check_units", "require_lengths", "as_records", "record_hint", "static_hint", "as_input_array", "frame_inputs", "is_frame", "check_compatible", "check_alike", "carried_from", "said_units", "check_units_agree", "check_same_units", "check_fitted_on", "check_period", "check_same_period", "static_point_inputs",
             "PERIOD_RTOL"]
 
 

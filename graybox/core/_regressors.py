@@ -11,7 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ._records import Record, as_records
+from ._records import Record, as_records, require_lengths
 from ._terms import Structure, check_input_names
 from ._validation import as_1d_finite, check_int, check_sequence
 
@@ -38,8 +38,8 @@ def check_structure_inputs(structure: Structure, records: Sequence[Record]) -> N
 
     Too short: not more samples than the structure's largest lag (e.g. an input delay beyond the record).
     """
+    require_lengths(records, structure.max_lag)
     for r in records:
-        r.require_length(structure.max_lag)
         missing = [n for n in structure.inputs if n not in r.input_names]
         if missing:
             raise ValueError(f"{r.name}: the terms use input {missing[0]!r}, but the record's inputs are "
@@ -157,8 +157,8 @@ def stacked_regressors(
         if len(residuals) != len(recs):
             raise ValueError(f"residuals has {len(residuals)} series for {len(recs)} record(s): give one per record")
     blocks, targets = [], []
+    require_lengths(recs, s)
     for i, r in enumerate(recs):
-        r.require_length(s)
         e = None if residuals is None else residuals[i]
         blocks.append(regressor_matrix(structure, r.u, r.y, e=e, start=s, input_names=r.input_names))
         targets.append(r.y[s:])

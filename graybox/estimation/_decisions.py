@@ -23,7 +23,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import Record, choosing_records
+from ..core._records import Record, choosing_records, require_lengths
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
 from ..core._validation import check_band, check_choice, check_fields, check_mean_square, check_weight
@@ -143,8 +143,8 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
     L = pareto.structure.max_lag
     total = np.zeros(len(pareto))
     count = 0
+    require_lengths(recs, L)
     for r in recs:
-        r.require_length(L)
         w = len(r) - L
         with np.errstate(invalid="ignore", over="ignore"):
             total += w * evaluate_thetas(pareto.structure, th, r, None, one_step=False)["JS"]

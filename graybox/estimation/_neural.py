@@ -127,7 +127,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
-from ..core._records import Dataset, Record, as_records, carried_from, check_fitted_on, check_units
+from ..core._records import Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
@@ -1082,8 +1082,7 @@ def neural_narx(
     seed = check_seed(seed)
     name = check_str(name, "name")
     L = max(ny, nu)
-    for r in recs:
-        r.require_length(L)
+    require_lengths(recs, L)
     train, held = _split_holdout(recs, holdout, L)
     n_in = ny + nu + ne
     P = hidden * (n_in + 2) + 1

@@ -55,7 +55,7 @@ import numpy as np
 import pandas as pd
 
 from ..models._model import Model, model_input_names
-from ..core._records import Dataset, Record, carried_from, check_units
+from ..core._records import Dataset, Record, carried_from, check_units, require_lengths
 from ..core._terms import Structure, Term
 from ..core._gram import (
     DaskRecord,
@@ -346,8 +346,8 @@ def _candidate_matrix(terms: Sequence[Term], records: list[Record], start: int) 
     target = np.empty(rows)
     step = chunk_rows(len(terms))
     r0 = 0
+    require_lengths(records, start)
     for rec in records:
-        rec.require_length(start)
         n = len(rec)
         sig = record_signals(rec)
         for k0 in range(start, n, step):
@@ -896,8 +896,7 @@ def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms:
     records = as_gram_records(data)
     check_structure_inputs(process, records)
     start = process.max_lag
-    for rec in records:
-        rec.require_length(start)
+    require_lengths(records, start)
     N = sum(len(r) - start for r in records)
     K_max = (n_cand if rule.mode == "tol" and max_terms is None
              else min(n_cand, rule.n_terms or max_terms or _DEFAULT_MAX_TERMS))

@@ -41,7 +41,7 @@ import scipy.linalg
 from ..core._least_squares import output_scale
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
-from ..core._records import Dataset, Record, as_records, carried_from, check_units
+from ..core._records import Dataset, Record, as_records, carried_from, check_units, require_lengths
 from ._forward_regression import CRITERIA, CandidateWarning, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
 from ..core._terms import Structure, Term
@@ -140,8 +140,8 @@ class _Scorer:
         self.threads = threads
         blocks, targets = [], []
         self.U = []
+        require_lengths(records, L)
         for r in records:
-            r.require_length(L)
             U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(r, code.inputs), L)
             self.U.append(U)
             blocks.append(_psi(code, U, r.y, L))

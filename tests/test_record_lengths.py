@@ -1,0 +1,33 @@
+"""A record too short for the lags, among several, is named by its position (records made or loaded without a
+name are all called "record")."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _record(n: int, seed: int = 0) -> gb.Record:
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0, 1, n // 5 + 1), 5)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.7 * y[k - 1] + 0.5 * u[k - 1] + 0.01 * rng.standard_normal()
+    return gb.Record(u, y, Ts=0.1)
+
+
+@pytest.mark.parametrize("call", [
+    lambda recs: gb.frols(gb.Candidates(2, 2, degree=2), recs, n_terms=3),
+    lambda recs: gb.semp(gb.Candidates(2, 2, degree=2), recs, max_terms=3),
+    lambda recs: gb.els(["y(k-1)", "u(k-1)"], recs),
+    lambda recs: gb.cls(["1", "y(k-2)", "u(k-1)"], recs),
+])
+def test_a_short_record_among_several_is_named_by_its_position(call):
+    # was: "record: record has 2 samples, fewer than max lag + 1 = 3", of three records all named "record"
+    recs = [_record(300), _record(200, seed=1), _record(2, seed=2)]
+    with pytest.raises(ValueError, match=r"record 3 of 3 \('record'\) has 2 samples, fewer than max lag \+ 1 = 3"):
+        call(recs)
+    with pytest.raises(ValueError, match=r"^record: record has 2 samples"):  # alone, as before
+        call(recs[2])
