@@ -13,7 +13,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["beside", "level_texts", "point_texts", "short_repr", "summary"]
+__all__ = ["beside", "bound_text", "level_texts", "point_texts", "short_repr", "summary"]
 
 #: A field's text longer than this is summarised.
 WIDTH = 48
@@ -42,15 +42,22 @@ def level_texts(levels: np.ndarray) -> list[str]:
     return [repr(float(x)) for x in v]
 
 
+def bound_text(x: float) -> str:
+    """A bound as text: ``%g`` when that reads back as the same number (0.031, 2), else its shortest exact text
+    (a band of 0.03059995 is not "0.0306", which would put a J_SF of 0.0305999503 inside it)."""
+    text = f"{float(x):g}"
+    return text if float(text) == float(x) else repr(float(x))
+
+
 def beside(value: float, ref: float, digits: int = 4) -> str:
-    """``value`` as text to ``digits`` significant digits, or as many more as keep it on its side of ``ref`` as ``%g``
-    prints ``ref`` (a J_SF just outside a band B = 0.0306 reads 0.03060003, not 0.0306: 'no model has J_SF ≤ B =
+    """``value`` as text to ``digits`` significant digits, or as many more as keep it on its side of ``ref`` as
+    :func:`bound_text` prints it (a J_SF just outside a band B = 0.0306 reads 0.03060003, not 0.0306: 'no model has J_SF ≤ B =
     0.0306: the smallest reached is 0.0306' contradicts itself).
 
     Parameters
     ----------
     value, ref : float
-        The value said, and the bound it is said beside (printed with ``%g``).
+        The value said, and the bound it is said beside (printed with :func:`bound_text`).
     digits : int
         Significant digits when they suffice.
 
@@ -59,7 +66,7 @@ def beside(value: float, ref: float, digits: int = 4) -> str:
     str
     """
     value, ref = float(value), float(ref)
-    shown = float(f"{ref:g}")
+    shown = float(bound_text(ref))
     side = np.sign(value - ref)
     for d in range(digits, 18):
         text = f"{value:.{d}g}"

@@ -24,6 +24,7 @@ from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
 from ..core._records import Record, choosing_records, require_lengths
+from ..core._reprs import beside, bound_text
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
 from ..core._validation import check_band, check_choice, check_fields, check_mean_square, check_weight
@@ -209,20 +210,21 @@ def decide_dsf(
         return _decision(pareto, i, "D_SF", True, js[i], f"{pareto.method} D_SF{where}", chosen_on)
     else:
         finite = jsf[np.isfinite(jsf)]
-        best = f"{finite.min():.4g}" if finite.size else "inf for every member"
+        # with the digits that keep it outside B as B is printed (0.03060003, not "0.0306" beside B = [0, 0.0306])
+        best = (beside(finite.min(), hi if finite.min() > hi else lo) if finite.size else "inf for every member")
         n_in = int(((jsf >= lo) & (jsf <= hi)).sum())
         if fallback is None and n_in:  # in the band, but no free run to score: a wider band would not help
             on = chosen_on or "the identification data"
             raise InfeasibleError(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
-                f"B = [{lo:g}, {hi:g}] with a finite J_S: the {n_in} member{'s' if n_in > 1 else ''} with J_SF in B "
+                f"B = [{bound_text(lo)}, {bound_text(hi)}] with a finite J_S: the {n_in} member{'s' if n_in > 1 else ''} with J_SF in B "
                 f"{'all diverge' if n_in > 1 else 'diverges'} on {on} (free run). Extend the λ sweep, fit with a "
                 "stability margin, or pass fallback='min_jsf' to take the member with the smallest J_SF"
             )
         if fallback is None:
             raise InfeasibleError(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
-                f"B = [{lo:g}, {hi:g}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
+                f"B = [{bound_text(lo)}, {bound_text(hi)}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
                 "the λ sweep, or pass fallback='min_jsf' to take the member with the smallest J_SF"
             )
         # on choosing records, as D_SF would have chosen: a member whose free run diverges there is none

@@ -42,6 +42,7 @@ from ._local_models import check_margin
 from ..models._coerce import as_structure, records_of, static_points
 from ..models._model import Model
 from ..core._least_squares import one_blas_thread
+from ..core._reprs import beside, bound_text
 from ..core._records import Dataset, Record, StaticPoints, carried_from, warn_static_range
 from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _pe_starts, _pull_inside,
                                 gradient_front, refit_if_slow)
@@ -472,8 +473,8 @@ def se_dsf(
     solve = dict(band=band, theta0=theta0, lambdas=lambdas, max_iter=max_iter, tol=tol, pe_lambdas=pe_lambdas)
     result = refit_if_slow(problem, lambda p: _solve(p, **solve), "se_dsf's model", margin == "auto")
     if not result.in_band:  # said of the model returned only (margin="auto" may have solved twice)
-        warn(f"se_dsf: the band B = {band:g} is infeasible for this structure from the start {result.start}: the "
-             f"smallest J_SF reached is {result.JSF:.4g} (J_S {result.JS:.4g}); widen the band or change the structure",
+        warn(f"se_dsf: the band B = {bound_text(band)} is infeasible for this structure from the start {result.start}: the "
+             f"smallest J_SF reached is {beside(result.JSF, band)} (J_S {result.JS:.4g}); widen the band or change the structure",
              RuntimeWarning)
     return result
 

@@ -32,7 +32,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
-from ..core._reprs import beside, level_texts
+from ..core._reprs import beside, bound_text, level_texts
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
                                 check_sequence, check_str)
 from ._cell import STATUSES
@@ -211,7 +211,7 @@ def _no_model_reason(key: tuple, cells: _Columns, members: _Columns | None, b: f
                 lam1, seed = members.of(key, "lambda1")[~failed][i], members.of(key, "seed")[~failed][i]
                 lam = f", λ1 = {lam1:.3g}" if pd.notna(lam1) else ""
                 seed = f", seed {int(seed)}" if pd.notna(seed) else ""
-                why.append(f"no model has J_SF ≤ B = {b:g}: the smallest J_SF reached is {beside(jsf[i], b)}"
+                why.append(f"no model has J_SF ≤ B = {bound_text(b)}: the smallest J_SF reached is {beside(jsf[i], b)}"
                            f"{lam}{seed} ({n} model(s) compared)")
             else:
                 why.append(f"every one of the {n} model(s) has an undefined static curve (J_SF = inf)")

@@ -57,7 +57,7 @@ from ..core._progress import progress_bar, show_progress
 from ..core._records import (as_records, carried_from, check_alike, check_compatible, choosing_records, check_overlap,
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
-from ..core._reprs import beside
+from ..core._reprs import beside, bound_text
 from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
@@ -388,7 +388,7 @@ class GrayboxSelection:
         band = "black box (band=inf)" if np.isinf(self.band) else f"in_band={self.in_band}"
         # no row in the band: the smallest J_SF chose (fallback "min_jsf"), not the J_S rule
         rule = (f"rule={self.rule!r}" if self.in_band else
-                f"chosen by the smallest J_SF, {beside(row['JSF'], self.band)} (no row meets the band B = {self.band:g})")
+                f"chosen by the smallest J_SF, {beside(row['JSF'], self.band)} (no row meets the band B = {bound_text(self.band)})")
         return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, {rule}, "
                 f"J_S valid={row['JS_valid']:.4g}{test}, {band})")
 
@@ -1239,7 +1239,7 @@ def select_graybox(
     else:
         pos, used = _fallback(table, results, band, fallback), "min"
         used_fallback = True
-        warn(f"no structure meets the band B = {band:g}: fallback 'min_jsf' chose {table.index[pos]} "
+        warn(f"no structure meets the band B = {bound_text(band)}: fallback 'min_jsf' chose {table.index[pos]} "
              f"({table.iloc[pos]['estimator']}), the smallest J_SF reached, {beside(table.iloc[pos]['JSF'], band)}",
              SelectionWarning)
     order = [pos] + [i for i in np.lexsort((table["JS_valid"].to_numpy(float), ~table["in_band"].to_numpy()))
@@ -1361,7 +1361,7 @@ def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> 
     if band is not None and not in_band:
         jsf = res["jsf"][finite]
         best = float(jsf[np.isfinite(jsf)].min()) if np.isfinite(jsf).any() else np.inf
-        return f"no member meets the band B = {band:g}: the smallest J_SF reached is {beside(best, band)}"
+        return f"no member meets the band B = {bound_text(band)}: the smallest J_SF reached is {beside(best, band)}"
     return ""
 
 
@@ -1376,7 +1376,7 @@ def _fallback(table: pd.DataFrame, results: list[dict], band: float | None, fall
     finite = [j[np.isfinite(j)] for j in counted]
     best = min((float(f.min()) for f in finite if f.size), default=np.inf)
     if fallback is None:
-        raise ValueError(f"no structure meets the band B = {band:g}: the smallest J_SF reached is {beside(best, band)} "
+        raise ValueError(f"no structure meets the band B = {bound_text(band)}: the smallest J_SF reached is {beside(best, band)} "
                          f"(over {len(table)} structure × estimator rows); widen the band, change the candidates, "
                          "or pass fallback='min_jsf'")
     jsf = table["JSF"].to_numpy(float)
