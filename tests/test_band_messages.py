@@ -23,3 +23,16 @@ def test_decide_dsf_says_the_smallest_jsf_outside_the_band_it_missed(band, rel):
         gb.decide_dsf(front, band=band)
     shown_band, shown_best = re.search(r"B = \[0, ([^\]]+)\].*the smallest J_SF is ([0-9.e+-]+)\.", str(err.value)).groups()
     assert float(shown_best) > float(shown_band)
+
+
+def test_slices_of_a_static_surface_past_ten_are_drawn_in_colours_told_apart():
+    # was: plot_surface_slices (and plot_static_band's slices) coloured slice k with C{k % 10}: the 1st and 11th alike
+    from matplotlib.colors import to_rgba
+
+    from graybox.plots import plot_surface_slices
+
+    surface = gb.StaticSurface.polynomial({(0, 0): 1.0, (1, 0): 2.0, (0, 1): 0.5})
+    for n in (3, 12, 25):
+        fig = plot_surface_slices(surface, at=np.linspace(0.0, 1.0, n), urange=(0.0, 1.0), n_grid=5)
+        colours = [to_rgba(line.get_color()) for line in fig.axes[0].lines]
+        assert len(colours) == n and len(set(colours)) == n

@@ -32,6 +32,7 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarFormatter
 from matplotlib.figure import Figure
 
+from ..plots._data import distinct_colours
 from ..core._reprs import beside, bound_text, level_texts
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
                                 check_sequence, check_str)
@@ -376,15 +377,8 @@ def _wrapped(text: str, fig: Figure, fontsize: float) -> str:
 
 
 def _colours(names: Sequence[str]) -> dict[str, object]:
-    """A distinct colour per name: matplotlib's ten (C0 … C9) while they suffice, then tab20's twenty, then as many
-    spread over a colour map (cycling the ten drew a grid's 1st and 11th variants alike)."""
-    n = len(names)
-    if n <= 10:
-        return {v: f"C{i}" for i, v in enumerate(names)}
-    from matplotlib import colormaps
-
-    cmap = colormaps["tab20" if n <= 20 else "turbo"]
-    return {v: cmap(i if n <= 20 else i / (n - 1)) for i, v in enumerate(names)}
+    """A distinct colour per name (:func:`graybox.plots._data.distinct_colours`)."""
+    return dict(zip(names, distinct_colours(len(names))))
 
 
 def _finite_pos(x: np.ndarray) -> np.ndarray:

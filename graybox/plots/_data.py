@@ -20,6 +20,17 @@ from ..core._validation import check_int, check_real, check_sequence
 __all__ = ["plot_static_curve", "plot_record"]
 
 
+def distinct_colours(n: int) -> list:
+    """``n`` colours told apart: matplotlib's ten (C0 … C9) while they suffice, then tab20's twenty, then as many
+    spread over a colour map (cycling the ten drew the 1st and 11th of a figure's lines alike)."""
+    if n <= 10:
+        return [f"C{i}" for i in range(n)]
+    from matplotlib import colormaps
+
+    cmap = colormaps["tab20" if n <= 20 else "turbo"]
+    return [cmap(i if n <= 20 else i / (n - 1)) for i in range(n)]
+
+
 #: What to pass instead of the objects most often given where static points belong.
 _POINTS_HINT = {"Dataset": " (pass data.static)", "StaticCurve": " (pass a curve as curve=)"}
 

@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 
 from ..core._validation import check_int, check_real, check_sequence
 from ..core._reprs import level_texts
-from ._data import on_level, unit_label
+from ._data import distinct_colours, on_level, unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
@@ -193,7 +193,7 @@ def plot_surface_slices(
         if not isinstance(ax, Axes):
             raise TypeError(f"ax must be a matplotlib Axes, got {type(ax).__name__}")
         fig = ax.figure
-    colors = [f"C{k % 10}" for k in range(levels.size)]
+    colors = distinct_colours(levels.size)
     styles = ["-", "--", ":", "-."]
     x = np.linspace(lo, hi, n_grid)
     texts = level_texts(levels)

@@ -15,7 +15,7 @@ from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
 from ..core._reprs import level_texts
-from ._data import check_axes, check_one_input_points, on_level, unit_label
+from ._data import check_axes, check_one_input_points, distinct_colours, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand
@@ -173,8 +173,9 @@ def plot_static_band(
     # the band's units (its model's), the points' where the band names none
     u_unit, y_unit = (band.units[k] or ("" if points is None else points.units[k]) for k in (0, 1))
     xlabel = unit_label(xlabel, u_unit)
+    colours = distinct_colours(len(groups))
     for j, (g, tag) in enumerate(zip(groups, tags)):
-        color = f"C{j % 10}" if surface else "C0"
+        color = colours[j] if surface else "C0"
         on = f" ({tag})" if tag else ""
         axs[0].fill_between(x[g], band.ybar_low[g], band.ybar_high[g], color=color, alpha=0.25, lw=0,
                             label=what if j == 0 else None)
