@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor, as_completed, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
@@ -126,13 +126,32 @@ def _in_turn(fn: Callable, items: Iterable, each: Each | None = None) -> list:
 def _pool_map(pool: ProcessPoolExecutor, fn: Callable, items: Iterable, each: Each | None = None) -> list:
     """``pool.map``, with a dead worker explained: the usual cause is a script without a main guard."""
     try:
-        if each is not None:
-            futures = [pool.submit(fn, x) for x in items]
-            where = {f: i for i, f in enumerate(futures)}
+        futures = [pool.submit(fn, x) for x in items]
+        where = {f: i for i, f in enumerate(futures)}
+        told: set = set()
+        in_each = False
+        try:
             for f in as_completed(futures):
-                each(where[f], f.result())
-            return [f.result() for f in futures]
-        return list(pool.map(fn, items))
+                r = f.result()  # a job's error ends the map ...
+                if each is not None:
+                    told.add(f)
+                    in_each = True
+                    each(where[f], r)
+                    in_each = False
+        except Exception:
+            # ... without running the jobs still queued: leaving the pool waits for every queued job (its
+            # shutdown runs them), whose results would be thrown away. The running ones cannot be stopped
+            # cleanly: they are waited for and, when a job's error (not each's own) ended the map, told of, so
+            # that the work done is kept (select_graybox's checkpoint)
+            for f in futures:
+                f.cancel()
+            wait(futures)
+            if each is not None and not in_each:
+                for f in futures:
+                    if f not in told and not f.cancelled() and f.exception() is None:
+                        each(where[f], f.result())
+            raise
+        return [f.result() for f in futures]
     except KeyboardInterrupt:
         # Ctrl-C: the jobs left are dropped and the running ones stopped now, not run to their end (the
         # workers ignore SIGINT); the executor has no public way to stop a running worker
