@@ -8,6 +8,12 @@ import subprocess
 import sys
 import textwrap
 
+import numpy as np
+import pandas as pd
+import pytest
+
+import graybox as gb
+from graybox.experiments import _select
 
 _FAILING_MAP = textwrap.dedent('''
     import os, sys, time
@@ -54,3 +60,25 @@ def test_a_job_that_raises_under_processes_ends_the_map_without_running_the_queu
     seen = [int(v) for v in lines[-1].removeprefix("seen:").split()]
     assert len(ran) < 11  # the jobs not started were dropped
     assert seen == ran  # every job that ran to its end was told of (a checkpoint keeps it)
+
+
+@pytest.fixture(scope="module")
+def data():
+    return gb.load_pumping()
+
+
+def test_a_selection_called_again_with_another_band_refits_no_row(tmp_path, data, monkeypatch):
+    # the band decides the choice among the rows, not a row's scores (its fits, J_S blocks and J_SF): a checkpoint
+    # keyed each row by the band too, so a selection called again with another B refitted every row
+    cand, kw = gb.Candidates(ny=2, nu=2, degree=2), dict(sizes=[3, 4], estimator="pe", progress=False)
+    path = tmp_path / "sel.npz"
+    gb.select_graybox(cand, data, band=0.05, checkpoint=path, **kw)
+    calls: list = []
+    score = _select._score_job
+    monkeypatch.setattr(_select, "_score_job", lambda job: (calls.append(job), score(job))[1])
+    again = gb.select_graybox(cand, data, band=0.02, checkpoint=path, **kw)
+    assert calls == []
+    fresh = gb.select_graybox(cand, data, band=0.02, **kw)
+    assert len(calls) == len(fresh.table)
+    pd.testing.assert_frame_equal(again.table, fresh.table)
+    assert again.band == fresh.band == 0.02

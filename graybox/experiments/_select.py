@@ -62,7 +62,7 @@ from ..core._validation import FrozenFrame, check_bool, check_choice, check_fiel
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
-from ._select_checkpoint import SelectionCheckpoint, checkpoint_of, row_key
+from ._select_checkpoint import SelectionCheckpoint, checkpoint_of, plan_digest, row_key
 from ._spec import build_constraint, constraint_entries, constraint_from_object
 
 __all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_ESTIMATORS", "BLACK_BOX_ESTIMATORS"]
@@ -906,7 +906,9 @@ def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progres
     out: list = [None] * len(jobs)
     keys = [None] * len(jobs)
     if checkpoint is not None:
-        keys = [row_key(j) for j in jobs]
+        # each plan hashed once (the jobs share the call's; its records may be long)
+        digests = {id(p): plan_digest(p) for p in {id(j.plan): j.plan for j in jobs}.values()}
+        keys = [row_key(j, digests[id(j.plan)]) for j in jobs]
         out = [checkpoint.get(k) for k in keys]
     todo = [i for i, r in enumerate(out) if r is None]
     if not todo:
@@ -1151,7 +1153,8 @@ def select_graybox(
         folder must exist): a run killed and called again with it refits only the rows it did not
         finish, and gives the table an uninterrupted run gives. A row is reused only when its
         terms, estimator, options, data and splits and graybox's version are the same (a hash of
-        them is its key), so one file may serve calls that differ: what changed is fitted. The
+        them is its key), so one file may serve calls that differ: what changed is fitted (the
+        band chooses among the rows and changes none: another B refits nothing). The
         structure search is made again (seconds). Read without pickle; a file that is no such
         checkpoint is refused (``ValueError``) before anything runs. One call at a time per file:
         two running at once each rewrite it with their own rows (the file stays whole; the rows of

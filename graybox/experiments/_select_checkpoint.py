@@ -3,8 +3,8 @@
 A selection over many structures and slow estimators (SE fronts) runs for minutes or hours; with
 ``checkpoint=`` a killed run resumes without refitting the rows it finished. A row is kept under a key
 hashing everything that decides its scores: the row's terms, estimator, λ1 and constraints, the plan (every record's samples, Ts, names and units, the folds and blocks,
-the test records, the static points and band, the largest lag, the data set's extra values) and
-graybox's version. Not the caller's warning filters: a script and a notebook (or a test run) filter
+the test records, the static points, the largest lag, the data set's extra values) and
+graybox's version; not the band, which chooses among the rows and changes none. Not the caller's warning filters: a script and a notebook (or a test run) filter
 differently, and a row keeps the warnings of the run that fitted it. A row whose key the file does not hold is fitted; a file written for other data,
 options or another version is therefore not wrong, only not reused. The file is an ``.npz`` of numeric
 and text arrays, read without pickle, and replaced atomically after each row, so a kill never tears it.
@@ -25,7 +25,7 @@ import numpy as np
 from .. import _api as gb
 from ..estimation._simulation_error import CheckpointError, checkpoint_path
 
-__all__ = ["SelectionCheckpoint", "checkpoint_of", "row_key"]
+__all__ = ["SelectionCheckpoint", "checkpoint_of", "plan_digest", "row_key"]
 
 #: What a row's result holds: arrays, optional arrays and lists of text.
 _ARRAYS = ("blocks", "weights", "jsf", "jsf_full", "thetas", "lambdas")
@@ -64,14 +64,23 @@ def _feed(h: Any, obj: Any) -> None:
         h.update(f"other:{type(obj).__module__}.{type(obj).__qualname__};".encode())
 
 
-def row_key(job: Any) -> str:
+def plan_digest(plan: Any) -> bytes:
+    """A hash of what the plan gives a row's scores: its records, splits, test records, static points, largest lag
+    and extra values. Not the band, which decides the choice among the rows, not their scores: a selection
+    called again with another B reuses every row. Made once per call (the records may be long)."""
+    h = hashlib.sha256()
+    _feed(h, dataclasses.replace(plan, band=None))
+    return h.digest()
+
+
+def row_key(job: Any, plan: bytes | None = None) -> str:
     """The key of a row's scores: a hash of the job (terms, estimator, λ1, constraints and the plan's data and
-    splits) and graybox's version."""
+    splits, ``plan`` its :func:`plan_digest` when made already) and graybox's version."""
     h = hashlib.sha256()
     _feed(h, gb.__version__)
     _feed(h, (job.terms, job.estimator, job.lambdas))
     h.update(json.dumps(job.constraints, sort_keys=True, default=repr).encode())
-    _feed(h, job.plan)
+    h.update(plan_digest(job.plan) if plan is None else plan)
     return h.hexdigest()[:32]
 
 
