@@ -82,3 +82,22 @@ def test_a_selection_called_again_with_another_band_refits_no_row(tmp_path, data
     assert len(calls) == len(fresh.table)
     pd.testing.assert_frame_equal(again.table, fresh.table)
     assert again.band == fresh.band == 0.02
+
+
+def _tiny_grid():
+    from graybox import experiments as gx
+
+    return gx.Grid(name="tiny", data=[gx.DataSpec("pumping", bundled="pumping")],
+                   structures=[gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"])],
+                   variants=[gx.Variant("LS", "ls"), gx.Variant("CLS", "cls", constraints=[{"type": "equality"}])])
+
+
+def test_a_long_cell_time_limit_runs_the_grid(tmp_path):
+    # a limit of 30 days (a bound meant never to be reached) made the driver wait on its workers with a timeout
+    # poll() cannot take (more than 2^31 ms): OverflowError once a cell had started, the whole run stopped
+    from graybox import experiments as gx
+
+    gx.run_grid(_tiny_grid(), tmp_path / "s.sqlite", executor="processes", workers=1,
+                      cell_time_limit=30 * 86400.0)
+    df = gx.load_results(tmp_path / "s.sqlite")
+    assert len(df) == 2 and (df["status"] == "ok").all(), df[["status", "message"]]

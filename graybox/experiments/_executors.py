@@ -309,11 +309,12 @@ class ProcessPool:
         slot.conn.close()
 
     def _wait(self, busy: Sequence[_Slot]) -> float | None:
-        """How long to wait for a row at most (seconds): until the first busy cell's time limit, if any."""
+        """How long to wait for a row at most (seconds): until the first busy cell's time limit, if any, and an
+        hour at most (the loop waits again): a wait of more than 2^31 ms is an OverflowError in poll()."""
         started = [s.started for s in busy if s.started is not None]
         if self.time_limit is None or not started:
             return None
-        return max(0.0, min(started) + self.time_limit - time.monotonic())
+        return min(3600.0, max(0.0, min(started) + self.time_limit - time.monotonic()))
 
     def _overdue(self, slot: _Slot) -> bool:
         """Whether the slot's cell has run past the time limit without a row come back (a row sent just in time
