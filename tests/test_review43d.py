@@ -101,3 +101,39 @@ def test_a_long_cell_time_limit_runs_the_grid(tmp_path):
                       cell_time_limit=30 * 86400.0)
     df = gx.load_results(tmp_path / "s.sqlite")
     assert len(df) == 2 and (df["status"] == "ok").all(), df[["status", "message"]]
+
+
+def _blas_threads() -> int:
+    from graybox.core._least_squares import thread_pools
+
+    return max(p.num_threads for p in thread_pools().select(user_api="blas").lib_controllers)
+
+
+@pytest.mark.parametrize("how", ["swap", "exact", "semp"])
+def test_the_subset_searches_and_semp_factor_on_one_blas_thread(how, monkeypatch):
+    # the searches' and semp's factor of [S, y] (one QR of N × 92 on the plant's ny = nu = 6, degree 2) and semp's
+    # per-step QRs ran on every BLAS thread: on the loaded 2-core machine the QR took 160 ms for 9 ms on one
+    # thread, frols(search='swap') 0.27 s for 0.065 s and semp(n_terms=10) 7.2 s for 3.4 s (select_graybox's
+    # structure search runs them in the driver, outside the jobs' one BLAS thread)
+    import scipy.linalg
+
+    from graybox.core._least_squares import thread_pools
+
+    seen: list[int] = []
+    qr = scipy.linalg.qr
+    monkeypatch.setattr(scipy.linalg, "qr", lambda *a, **k: (seen.append(_blas_threads()), qr(*a, **k))[1])
+    nqr = np.linalg.qr
+    monkeypatch.setattr(np.linalg, "qr", lambda *a, **k: (seen.append(_blas_threads()), nqr(*a, **k))[1])
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-1, 1, 400)
+    y = np.convolve(u, [0.0, 0.5, 0.3], mode="full")[:400] + 0.05 * rng.standard_normal(400)
+    cand = gb.Candidates(2, 2, degree=2)
+    with thread_pools().limit(limits=2, user_api="blas"):
+        assume_two = _blas_threads()
+        if how == "semp":
+            gb.semp(cand, gb.Record(u, y), n_terms=3)
+        else:
+            gb.frols(cand, gb.Record(u, y), n_terms=3, search=how)
+    if assume_two < 2:
+        pytest.skip("this BLAS runs on one thread only")
+    assert seen and max(seen) == 1, seen
