@@ -120,6 +120,134 @@ def _reduce(R, own, tail, idx, p, dep_tol, nested, border, energy):  # pragma: n
             border[c - p] = e
 
 
+@nb.njit(cache=True, nogil=True)
+def _leaves(R, own, tail, fixed, pool, bound, cutoff, dep_tol, floor, nodes_left):  # pragma: no cover - compiled
+    """The last two levels of the branch and bound below the fixed columns ``fixed``, as :func:`_reduce` makes
+    them one leaf at a time, to the last bit: for j = 0, 1, …, while ``bound[j]`` is below the best RSS so far
+    (``cutoff`` at first), the child fixed + [pool[j]] takes the best of the columns pool[j+1:].
+
+    ``fixed``'s reflections are made once for all children (a leaf made them again each time: most of the
+    exact search's time), each child's on top of them; every sum runs over the rows a leaf of its own would
+    (up to its columns' largest index), so the RSS are :func:`_reduce`'s. Returns (child position j, column,
+    RSS, leaves visited, out of nodes); j = -1 when no leaf beat the cutoff. Each leaf is one node: past
+    ``nodes_left`` the search stops with the best found before.
+    """
+    p = fixed.size
+    M = pool.size
+    n = R.shape[0] - 1
+    # rows a child's leaf reduces: up to the largest index of fixed, pool[j] and pool[j+1:]
+    hf = 0
+    for c in range(p):
+        hf = max(hf, fixed[c] + 1)
+    hs = np.empty(M + 1, np.int64)  # hs[j]: largest index + 1 of pool[j:]
+    hs[M] = 0
+    for j in range(M - 1, -1, -1):
+        hs[j] = max(hs[j + 1], pool[j] + 1)
+    h = max(hf, hs[0])
+    B = np.empty((p + M + 1, h))
+    for c in range(p):
+        for r in range(h):
+            B[c, r] = R[r, fixed[c]]
+    for c in range(M):
+        for r in range(h):
+            B[p + c, r] = R[r, pool[c]]
+    for r in range(h):
+        B[p + M, r] = R[r, n]
+    row = 0
+    dependent = False
+    for t in range(p):
+        x = B[t]
+        s = 0.0
+        for r in range(row, h):
+            s += x[r] * x[r]
+        if s <= dep_tol * own[fixed[t]]:
+            dependent = True
+        else:
+            alpha = -np.sqrt(s) if x[row] >= 0.0 else np.sqrt(s)
+            x[row] -= alpha
+            vv = 2.0 * (s - alpha * (x[row] + alpha))
+            for c in range(t + 1, p + M + 1):
+                z = B[c]
+                d = 0.0
+                for r in range(row, h):
+                    d += x[r] * z[r]
+                f = 2.0 * d / vv
+                for r in range(row, h):
+                    z[r] -= f * x[r]
+            row += 1
+    best_j, best_c, best = -1, -1, cutoff
+    used = 0
+    if dependent:  # every leaf's border is inf: none beats the cutoff, but each is visited
+        for j in range(M - 1):
+            if bound[j] >= best:
+                break
+            used += 1
+            if used > nodes_left:
+                return best_j, best_c, best, used, True
+        return best_j, best_c, best, used, False
+    yv = np.empty(h)
+    zc = np.empty(h)
+    for j in range(M - 1):
+        if bound[j] >= best:
+            break  # the pools only shrink from here on
+        used += 1
+        if used > nodes_left:
+            return best_j, best_c, best, used, True
+        hc = max(hf, max(pool[j] + 1, hs[j + 1]))
+        rest = tail[hc]
+        x = B[p + j]
+        s = 0.0
+        for r in range(row, hc):
+            s += x[r] * x[r]
+        if s <= dep_tol * own[pool[j]]:
+            continue  # the child holds a dependent column: every border inf
+        # the child's reflector, in a copy (the next children need column j as fixed's reflections left it)
+        v = np.empty(hc)
+        for r in range(row, hc):
+            v[r] = x[r]
+        alpha = -np.sqrt(s) if v[row] >= 0.0 else np.sqrt(s)
+        v[row] -= alpha
+        vv = 2.0 * (s - alpha * (v[row] + alpha))
+        y0 = B[p + M]
+        d = 0.0
+        for r in range(row, hc):
+            d += v[r] * y0[r]
+        f = 2.0 * d / vv
+        for r in range(row, hc):
+            yv[r] = y0[r] - f * v[r]
+        r1 = row + 1
+        lbest = np.inf
+        lc = -1
+        for c in range(j + 1, M):
+            z0 = B[p + c]
+            d = 0.0
+            for r in range(row, hc):
+                d += v[r] * z0[r]
+            f = 2.0 * d / vv
+            for r in range(row, hc):
+                zc[r] = z0[r] - f * v[r]
+            dz = 0.0
+            dy = 0.0
+            for r in range(r1, hc):
+                dz += zc[r] * zc[r]
+                dy += zc[r] * yv[r]
+            if dz <= dep_tol * own[pool[c]]:
+                e = np.inf
+            else:
+                g = dy / dz
+                e = rest
+                for r in range(r1, hc):
+                    w = yv[r] - g * zc[r]
+                    e += w * w
+            e = max(e, floor)
+            if e < lbest:
+                lbest = e
+                lc = c
+        if lbest < best:
+            best_j, best_c, best = j, lc, lbest
+    return best_j, best_c, best, used, False
+
+
 class SubsetProblem:
     """RSS of subsets of unit-RMS candidate columns, from the triangular factor of [S, y].
 
@@ -158,6 +286,14 @@ class SubsetProblem:
                 nested, border, energy)
         self.evaluations += 1
         return np.maximum(nested, self.floor), np.maximum(border, self.floor), energy
+
+    def leaves(self, F: list[int], pool: list[int], bound: np.ndarray, cutoff: float, nodes_left: int
+               ) -> tuple[int, int, float, int, bool]:
+        """The last two levels of the branch and bound below F (see :func:`_leaves`)."""
+        out = _leaves(self.R, self.own, self.tail, np.asarray(F, dtype=np.int64), np.asarray(pool, dtype=np.int64),
+                      np.asarray(bound, dtype=float), float(cutoff), self.dep_tol, self.floor, int(nodes_left))
+        self.evaluations += out[3]
+        return out
 
     def bounds(self, order: list[int]) -> np.ndarray:
         """A lower bound on the RSS of every subset of each prefix of ``order``: the RSS of its span.
@@ -321,6 +457,14 @@ def exact_search(problem: SubsetProblem, k: int, forced: list[int], incumbent: l
         # RSS of F with the pool's tails free[j:], j = m-1 … i (one elimination, pool reversed)
         nested = problem.bounds(F + pool[::-1])[len(F):]
         bound = nested[::-1]  # bound[j - i] = RSS(F ∪ free[j:])
+        if need == 2:  # the children are leaves: made together, F's reflections once (the same RSS, node for node)
+            j, c, r, used, out = problem.leaves(F, pool, bound, best[1], budget.nodes - budget.used)
+            budget.used += used
+            if j >= 0:
+                best[0], best[1] = F + [pool[j], pool[c]], float(r)
+            if out:
+                raise _OutOfNodes
+            return
         for j in range(i, m - need + 1):
             if bound[j - i] >= best[1]:
                 break  # the pools only shrink from here on: no later child can do better
