@@ -42,6 +42,31 @@ RSS_FLOOR = 1e-20
 
 
 @nb.njit(cache=True, nogil=True)
+def _reflect(B, t, row, h, ncols, tol):  # pragma: no cover - compiled
+    """One Householder step of a reduction: column ``t`` of B (rows ``row`` … h − 1) reflected onto e_row and the
+    reflection applied to columns t + 1 … ncols − 1, in place. False, and nothing touched, when the column's
+    remaining energy is at most ``tol`` (it is a combination of the columns before it)."""
+    x = B[t]
+    s = 0.0
+    for r in range(row, h):
+        s += x[r] * x[r]
+    if s <= tol:
+        return False
+    alpha = -np.sqrt(s) if x[row] >= 0.0 else np.sqrt(s)
+    x[row] -= alpha  # the reflector v = x − α e1, stored in place; vᵀv = 2(s − α x0)
+    vv = 2.0 * (s - alpha * (x[row] + alpha))
+    for c in range(t + 1, ncols):
+        z = B[c]
+        d = 0.0
+        for r in range(row, h):
+            d += x[r] * z[r]
+        f = 2.0 * d / vv
+        for r in range(row, h):
+            z[r] -= f * x[r]
+    return True
+
+
+@nb.njit(cache=True, nogil=True)
 def _reduce(R, own, tail, idx, p, dep_tol, nested, border, energy):  # pragma: no cover - compiled
     """Householder reduction of the columns ``idx`` of the triangular factor R of [S, y].
 
@@ -76,25 +101,10 @@ def _reduce(R, own, tail, idx, p, dep_tol, nested, border, energy):  # pragma: n
     row = 0
     dependent = False
     for t in range(p):
-        x = B[t]
-        s = 0.0
-        for r in range(row, h):
-            s += x[r] * x[r]
-        if s <= dep_tol * own[idx[t]]:
-            dependent = True
-        else:
-            alpha = -np.sqrt(s) if x[row] >= 0.0 else np.sqrt(s)
-            x[row] -= alpha  # the reflector v = x − α e1, stored in place; vᵀv = 2(s − α x0)
-            vv = 2.0 * (s - alpha * (x[row] + alpha))
-            for c in range(t + 1, m + 1):
-                z = B[c]
-                d = 0.0
-                for r in range(row, h):
-                    d += x[r] * z[r]
-                f = 2.0 * d / vv
-                for r in range(row, h):
-                    z[r] -= f * x[r]
+        if _reflect(B, t, row, h, m + 1, dep_tol * own[idx[t]]):
             row += 1
+        else:
+            dependent = True
         e = rest
         for r in range(row, h):
             e += B[m, r] * B[m, r]
@@ -156,25 +166,10 @@ def _leaves(R, own, tail, fixed, pool, bound, cutoff, dep_tol, floor, nodes_left
     row = 0
     dependent = False
     for t in range(p):
-        x = B[t]
-        s = 0.0
-        for r in range(row, h):
-            s += x[r] * x[r]
-        if s <= dep_tol * own[fixed[t]]:
-            dependent = True
-        else:
-            alpha = -np.sqrt(s) if x[row] >= 0.0 else np.sqrt(s)
-            x[row] -= alpha
-            vv = 2.0 * (s - alpha * (x[row] + alpha))
-            for c in range(t + 1, p + M + 1):
-                z = B[c]
-                d = 0.0
-                for r in range(row, h):
-                    d += x[r] * z[r]
-                f = 2.0 * d / vv
-                for r in range(row, h):
-                    z[r] -= f * x[r]
+        if _reflect(B, t, row, h, p + M + 1, dep_tol * own[fixed[t]]):
             row += 1
+        else:
+            dependent = True
     best_j, best_c, best = -1, -1, cutoff
     used = 0
     if dependent:  # every leaf's border is inf: none beats the cutoff, but each is visited
