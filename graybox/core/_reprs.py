@@ -51,8 +51,8 @@ def bound_text(x: float) -> str:
 
 def beside(value: float, ref: float, digits: int = 4) -> str:
     """``value`` as text to ``digits`` significant digits, or as many more as keep it on its side of ``ref`` as
-    :func:`bound_text` prints it (a J_SF just outside a band B = 0.0306 reads 0.03060003, not 0.0306: 'no model has J_SF ≤ B =
-    0.0306: the smallest reached is 0.0306' contradicts itself).
+    :func:`bound_text` prints it (a J_SF just outside a band B = 0.0306 reads 0.03060003, not 0.0306: 'no model
+    has J_SF ≤ B = 0.0306: the smallest reached is 0.0306' contradicts itself).
 
     Parameters
     ----------

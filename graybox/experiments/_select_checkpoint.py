@@ -2,12 +2,14 @@
 
 A selection over many structures and slow estimators (SE fronts) runs for minutes or hours; with
 ``checkpoint=`` a killed run resumes without refitting the rows it finished. A row is kept under a key
-hashing everything that decides its scores: the row's terms, estimator, λ1 and constraints, the plan (every record's samples, Ts, names and units, the folds and blocks,
-the test records, the static points, the largest lag, the data set's extra values) and
-graybox's version; not the band, which chooses among the rows and changes none. Not the caller's warning filters: a script and a notebook (or a test run) filter
-differently, and a row keeps the warnings of the run that fitted it. A row whose key the file does not hold is fitted; a file written for other data,
-options or another version is therefore not wrong, only not reused. The file is an ``.npz`` of numeric
-and text arrays, read without pickle, and replaced atomically after each row, so a kill never tears it.
+hashing everything that decides its scores: the row's terms, estimator, λ1 and constraints, the plan
+(every record's samples, Ts, names and units, the folds and blocks, the test records, the static
+points, the largest lag, the data set's extra values) and graybox's version. Not the band, which
+chooses among the rows and changes none of them; not the caller's warning filters: a script and a
+notebook (or a test run) filter differently, and a row keeps the warnings of the run that fitted it.
+A row whose key the file does not hold is fitted: a file written for other data, options or another
+version is not wrong, only not reused. The file is an ``.npz`` of numeric and text arrays, read
+without pickle, and replaced atomically after each row, so a kill never tears it.
 """
 
 from __future__ import annotations

@@ -62,7 +62,8 @@ def _reflect(B, t, row, h, ncols, tol):  # pragma: no cover - compiled
 
 @nb.njit(cache=True, nogil=True, inline="always")  # inlined: a call per column cost 30 % of the search
 def _apply(v, vv, src, out, row, h):  # pragma: no cover - compiled
-    """``out`` = the reflection (I − 2 v vᵀ / vv) of ``src`` over rows ``row`` … h − 1 (``out`` may be ``src``)."""
+    """``out`` = the reflection (I − 2 v vᵀ / vv) of ``src`` over rows ``row`` … h − 1 (``out`` may be
+    ``src``)."""
     d = 0.0
     for r in range(row, h):
         d += v[r] * src[r]
