@@ -105,13 +105,73 @@ def finish_site_build(build: dict) -> tuple[int, str, "object"]:
     return rc, (build["tmp"] / "stderr").read_text(encoding="utf-8", errors="replace"), build["tmp"] / "html"
 
 
+# --- the two largest tests, run beside the rest of the suite -----------------------------------------
+# The README's and the selection guide's select_graybox calls on the bundled plant (20-27 s each, one core) run in a
+# pytest of their own, started as the suite begins; the suite's items of them run last and take its verdict.
+BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.md]",
+          "test_readme_api.py::test_selection_example_runs")
+_BESIDE_ENV = "GRAYBOX_TESTS_BESIDE"  # set in that pytest: it runs them itself
+_BESIDE_RUN = pytest.StashKey[dict]()
+
+
+def start_beside(items) -> dict:
+    """Start ``python -m pytest`` of ``items`` in its own session, its verdicts in a JUnit XML file."""
+    import os
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    tmp = Path(tempfile.mkdtemp(prefix="graybox-beside-"))
+    with open(tmp / "output", "w") as out:
+        proc = subprocess.Popen([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                                 f"--junitxml={tmp / 'verdicts.xml'}", *(item.nodeid for item in items)],
+                                stdout=out, stderr=subprocess.STDOUT, cwd=items[0].config.rootpath,
+                                stdin=subprocess.DEVNULL, start_new_session=True,
+                                env=dict(os.environ, **{_BESIDE_ENV: "1"}))
+    return {"proc": proc, "tmp": tmp}
+
+
+def _verdict_of(item, run: dict) -> None:
+    """The suite's item of a test run beside it: wait for that pytest, and pass, fail or skip as the test did there."""
+    import xml.etree.ElementTree as ET
+
+    rc = run["proc"].wait()
+    output = (run["tmp"] / "output").read_text(encoding="utf-8", errors="replace")
+    try:
+        cases = ET.parse(run["tmp"] / "verdicts.xml").getroot().iter("testcase")
+    except (OSError, ET.ParseError):
+        cases = iter(())
+    for case in cases:
+        if case.get("name") == item.name and (case.get("classname") or "").endswith(item.path.stem):
+            for child in case:
+                if child.tag in ("failure", "error"):
+                    pytest.fail(f"{item.nodeid} failed in the pytest beside the suite:\n{child.text}", pytrace=False)
+                if child.tag == "skipped":
+                    pytest.skip(child.get("message") or "skipped beside the suite")
+            return
+    pytest.fail(f"the pytest beside the suite (rc {rc}) did not run {item.nodeid}:\n{output[-4000:]}", pytrace=False)
+
+
 @pytest.hookimpl(trylast=True)  # after -k and -m have deselected
 def pytest_collection_modifyitems(session, config, items):
-    docs = [item for item in items if item.path.name == DOCS_TESTS]
-    if not docs or config.option.collectonly:
+    import os
+
+    if config.option.collectonly:
         return
-    items[:] = [item for item in items if item.path.name != DOCS_TESTS] + docs
-    config.stash[_SITE_BUILD] = start_site_build()
+    beside = [] if os.environ.get(_BESIDE_ENV) else [
+        item for item in items if f"{item.path.name}::{item.name}" in BESIDE]
+    if beside:
+        run = config.stash[_BESIDE_RUN] = start_beside(beside)
+        for item in beside:
+            item.runtest = (lambda it: lambda: _verdict_of(it, run))(item)
+    docs = [item for item in items if item.path.name == DOCS_TESTS]
+    last = beside + docs
+    if not last:
+        return
+    items[:] = [item for item in items if item not in last] + last
+    if docs:
+        config.stash[_SITE_BUILD] = start_site_build()
 
 
 def site_build(config) -> dict:
@@ -122,17 +182,18 @@ def site_build(config) -> dict:
 
 
 def pytest_unconfigure(config):
-    build = config.stash.get(_SITE_BUILD, None)
-    if build is None:
-        return
     import os
     import shutil
     import signal
 
-    if build["proc"].poll() is None:  # the suite stopped before the docs tests waited for it
-        try:
-            os.killpg(build["proc"].pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-        build["proc"].wait()
-    shutil.rmtree(build["tmp"], ignore_errors=True)
+    for key in (_SITE_BUILD, _BESIDE_RUN):
+        started = config.stash.get(key, None)
+        if started is None:
+            continue
+        if started["proc"].poll() is None:  # the suite stopped before its tests waited for it
+            try:
+                os.killpg(started["proc"].pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            started["proc"].wait()
+        shutil.rmtree(started["tmp"], ignore_errors=True)
