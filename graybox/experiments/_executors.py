@@ -37,15 +37,10 @@ import threading
 import time
 import uuid
 from collections import deque
-from contextlib import AbstractContextManager, ExitStack, contextmanager, nullcontext
+from contextlib import AbstractContextManager, ExitStack, contextmanager, nullcontext, suppress
 from dataclasses import dataclass, field
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable, Iterator, Mapping, Sequence
-
-try:
-    import fcntl
-except ImportError:  # not POSIX: no locks, a left scratch folder stays
-    fcntl = None  # type: ignore[assignment]
 
 import numpy as np
 
@@ -54,6 +49,7 @@ from .. import _api as gb
 from ..core._validation import check_choice, check_int, check_real
 from . import _dask_worker
 from ._cell import failed_row, run_cell
+from ._store import lock_fd
 from ._spec import Cell
 
 __all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "check_cluster", "local_cluster", "make_executor",
@@ -650,12 +646,10 @@ def _scratch_folder() -> tuple[str, int]:
     _sweep_scratch(tempfile.gettempdir())
     path = tempfile.mkdtemp(prefix=SCRATCH_PREFIX)
     fd = os.open(os.path.join(path, ".owner-new"), os.O_RDWR | os.O_CREAT, 0o600)
-    try:
-        if fcntl is not None:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # a new file: nobody else can hold it
+    # a new file: nobody else can hold it; without locks the folder is still removed on a normal exit
+    if lock_fd(fd, 0.0):
+        with suppress(OSError):
             os.rename(os.path.join(path, ".owner-new"), os.path.join(path, SCRATCH_OWNER))
-    except OSError:  # a file system without locks: the folder is still removed on a normal exit
-        pass
     return path, fd
 
 
@@ -667,8 +661,6 @@ def _sweep_scratch(base: str) -> list[str]:
     anything the sweep cannot read or lock, are left alone.
     """
     removed: list[str] = []
-    if fcntl is None:
-        return removed
     try:
         entries = [e for e in os.scandir(base) if e.name.startswith(SCRATCH_PREFIX) and e.is_dir(follow_symlinks=False)]
     except OSError:
@@ -678,9 +670,7 @@ def _sweep_scratch(base: str) -> list[str]:
             fd = os.open(os.path.join(e.path, SCRATCH_OWNER), os.O_RDWR)
         except OSError:  # no owner file (not ours, or not yet), or not ours to open
             continue
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:  # held: its driver is alive
+        if not lock_fd(fd, 0.0):  # held: its driver is alive (or no locks here: nothing can be told)
             os.close(fd)
             continue
         try:

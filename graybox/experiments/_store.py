@@ -189,8 +189,12 @@ def _making_path(p: Path) -> Path:
     return p.with_name(f".{p.name}.making")
 
 
-def _flock(fd: int, kind: int, timeout: float) -> bool:
-    """Lock ``fd`` (``fcntl.LOCK_EX`` or ``LOCK_SH``), waiting up to ``timeout`` seconds; False where it cannot."""
+def lock_fd(fd: int, timeout: float, shared: bool = False) -> bool:
+    """flock ``fd`` (exclusive, or ``shared``), waiting up to ``timeout`` seconds (0: one try); False where it cannot
+    (held past the timeout, a file system without such locks, a platform without flock)."""
+    if fcntl is None:
+        return False
+    kind = fcntl.LOCK_SH if shared else fcntl.LOCK_EX
     deadline = time.monotonic() + timeout
     while True:
         try:
@@ -216,7 +220,7 @@ def _making(p: Path):
         with contextlib.suppress(OSError):  # a folder this user cannot write in: the connect says so
             fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     try:
-        if fd is not None and _flock(fd, fcntl.LOCK_EX, MAKING_TIMEOUT):
+        if fd is not None and lock_fd(fd, MAKING_TIMEOUT):
             with contextlib.suppress(OSError):
                 os.utime(fd)  # a killed maker's old file, taken again: not to be swept as a leftover meanwhile
         yield
@@ -247,7 +251,7 @@ def _wait_for_maker(path: Path) -> None:
                 pass
             else:
                 try:
-                    _flock(fd, fcntl.LOCK_SH, MAKING_TIMEOUT)
+                    lock_fd(fd, MAKING_TIMEOUT, shared=True)
                 finally:
                     os.close(fd)
         conn = _connect(path)
