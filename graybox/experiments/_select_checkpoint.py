@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import json
 import os
 import re
 from collections.abc import Mapping
@@ -26,6 +25,7 @@ import numpy as np
 
 from .. import _api as gb
 from ..estimation._simulation_error import CheckpointError, checkpoint_path
+from ._spec import canonical_json
 
 __all__ = ["SelectionCheckpoint", "checkpoint_of", "plan_digest", "row_key"]
 
@@ -81,7 +81,7 @@ def row_key(job: Any, plan: bytes | None = None) -> str:
     h = hashlib.sha256()
     _feed(h, gb.__version__)
     _feed(h, (job.terms, job.estimator, job.lambdas))
-    h.update(json.dumps(job.constraints, sort_keys=True, default=repr).encode())
+    h.update(canonical_json(job.constraints).encode())  # the canonical tables, as a grid cell's key holds them
     h.update(plan_digest(job.plan) if plan is None else plan)
     return h.hexdigest()[:32]
 
