@@ -36,3 +36,14 @@ def test_slices_of_a_static_surface_past_ten_are_drawn_in_colours_told_apart():
         fig = plot_surface_slices(surface, at=np.linspace(0.0, 1.0, n), urange=(0.0, 1.0), n_grid=5)
         colours = [to_rgba(line.get_color()) for line in fig.axes[0].lines]
         assert len(colours) == n and len(set(colours)) == n
+
+
+def test_members_failing_for_one_reason_are_told_once():
+    # was: pe_pareto with a constraint every member's check refused raised its message 40 times over, one per λ1
+    # ('λ1 = 1e-06: static function passes …; λ1 = 1.4251e-06: static function passes …; …'), 20,000 characters
+    data = gb.load_pumping()
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    with pytest.raises(ValueError, match=r"^λ1 = 1e-06, 1\.4251e-06, 2\.03092e-06, … \(40 members\): static function "
+                                         r"passes through") as err:
+        gb.pe_pareto(st, data, constraints=[gb.PassesThrough()], lambdas=np.logspace(-6, 0, 40))
+    assert str(err.value).count("static function passes through") == 1

@@ -1107,7 +1107,7 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
                                                             reference)
     failures = _unidentified(st, d, pts, rows, lam, recs[0].input_names)
     if len(failures) == lam.size:
-        raise ValueError("; ".join(failures.values()))
+        raise ValueError(_every_member_failed(failures, lam))
     ok = np.array([i not in failures for i in range(lam.size)])
     w1 = lam / d.N if weights == "mse" else lam.copy()
     w2 = (1.0 - lam) / M if weights == "mse" else 1.0 - lam
@@ -1133,8 +1133,26 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
             failures[int(i)] = f"λ1 = {lam[i]:g}: {exc}"
             thetas[i] = np.nan
     if len(failures) == lam.size:
-        raise ValueError("; ".join(failures[i] for i in sorted(failures)))
+        raise ValueError(_every_member_failed(failures, lam))
     return thetas, failures
+
+
+def _every_member_failed(failures: dict[int, str], lam: np.ndarray) -> str:
+    """Every member's reason, each told once: the members failing for the same reason are named together by their
+    λ1 (40 members refused by one constraint check read as 40 copies of its message)."""
+    groups: dict[str, list[int]] = {}
+    for i in sorted(failures):
+        prefix = f"λ1 = {lam[i]:g}: "
+        reason = failures[i][len(prefix):] if failures[i].startswith(prefix) else failures[i]
+        groups.setdefault(reason, []).append(i)
+    said = []
+    for reason, members in groups.items():
+        if len(members) == 1:
+            said.append(failures[members[0]])
+        else:
+            said.append(f"λ1 = {', '.join(f'{lam[i]:g}' for i in members[:3])}{', …' if len(members) > 3 else ''} "
+                        f"({len(members)} members): {reason}")
+    return "; ".join(said)
 
 
 def pe_pareto(
