@@ -31,7 +31,7 @@ from ._terms import Term
 from ._reprs import short_repr
 from ._validation import check_real, check_str
 
-__all__ = ["DaskRecord", "GramSums", "gram_sums", "r_factor", "available_memory", "require_memory", "is_dask_data"]
+__all__ = ["DaskRecord", "GramSums", "gram_sums", "r_factor", "triangular_factor", "available_memory", "require_memory", "is_dask_data"]
 
 # Entries of one chunk of the candidate matrix (16 MiB of float64): large enough that the
 # chunk's AᵀA runs at BLAS-3 speed, small enough to stay in a few MiB of cache-friendly memory.
@@ -339,6 +339,27 @@ def r_factor(terms: Sequence[Term], data: object, start: int) -> tuple[np.ndarra
     return R, N
 
 
+def triangular_factor(columns: np.ndarray, y: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
+    """R of [S, y] = Q R by one Householder QR (Q never formed), S = ``columns`` / ``scale``: the factor
+    :func:`r_factor` gives by TSQR, for columns in memory, shape (n+1, n+1) (rows past N are zero).
+
+    [S, y] is written once into a Fortran-ordered array that the QR overwrites: the peak is the columns and
+    that one copy (no scaled copy beside them)."""
+    from scipy.linalg import qr
+
+    n1 = columns.shape[1] + 1
+    A = np.empty((y.size, n1), order="F")
+    if scale is None:
+        A[:, :-1] = columns
+    else:
+        np.divide(columns, scale, out=A[:, :-1])
+    A[:, -1] = y
+    Rf = qr(A, mode="r", overwrite_a=True, check_finite=False)[0]
+    R = np.zeros((n1, n1))
+    R[: min(Rf.shape[0], n1)] = Rf[:n1]
+    return R
+
+
 def _reduce(factors: Sequence[tuple], data: object, start: int, form: str) -> tuple[np.ndarray, int]:
     """[Ψ, y]'s Gram matrix summed (``form="gram"``) or its R factor by TSQR (``"qr"``) over the
     records, in memory or on Dask, pairwise; and the number of rows."""
@@ -349,8 +370,8 @@ def _reduce(factors: Sequence[tuple], data: object, start: int, form: str) -> tu
     else:
         recs = as_records(data)
         acc = _Pairwise(np.add if form == "gram" else _r_combine)
+        require_lengths(recs, start)
         for r in recs:
-            r.require_length(start)
             acc.add(_block_reduce(factors, r.u, r.y, start, form, r.input_names))
         M = acc.total()
     return M, int(sum(len(r) - start for r in recs))

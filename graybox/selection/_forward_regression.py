@@ -68,6 +68,7 @@ from ..core._gram import (
     r_factor,
     require_memory,
     term_factors,
+    triangular_factor,
 )
 from ..core._least_squares import one_blas_thread
 from ..core._regressors import check_structure_inputs, record_signals
@@ -1054,12 +1055,7 @@ def _search_subsets_on(cols: _Columns, forced: list[int], K: int, rule: StopRule
     # the conditioning (an offset on y). From the scaled columns MGS holds (before its pass) by one QR
     # while a copy of them is small; else TSQR over chunks of rows (memory independent of N)
     if cols.method == "mgs" and 8 * cols.n_rows * (len(process) + 1) <= _AUTO_GRAM_BYTES:
-        from scipy.linalg import qr
-
-        A = np.empty((cols.n_rows, len(process) + 1), order="F")
-        A[:, :-1], A[:, -1] = cols.W, cols.y
-        R = qr(A, mode="r", overwrite_a=True, check_finite=False)[0]
-        del A
+        R = triangular_factor(cols.W, cols.y)
     else:
         R, _ = r_factor(list(process.terms), cols.data, cols.start)
         R[:, :-1] /= cols.scales

@@ -38,6 +38,7 @@ import numpy as np
 import pandas as pd
 import scipy.linalg
 
+from ..core._gram import triangular_factor
 from ..core._least_squares import one_blas_thread, output_scale
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
@@ -161,15 +162,8 @@ class _Scorer:
         # the triangular factor of [S, y] (S the unit-RMS candidates): every fit below is a fit of its
         # columns, reduced by QR, with QR's accuracy; a Gram matrix SᵀS squares the conditioning (u in
         # [1000, 1002] put noise-free θ 3 % off, y about 1e6 made the true terms 'collinear')
-        n1 = psi.shape[1] + 1
-        A = np.empty((y.size, n1), order="F")
-        np.divide(psi, self.s, out=A[:, :-1])
-        A[:, -1] = y
+        self.R = triangular_factor(psi, y, self.s)
         del psi
-        Rf = scipy.linalg.qr(A, mode="r", overwrite_a=True, check_finite=False)[0]
-        del A
-        self.R = np.zeros((n1, n1))
-        self.R[: Rf.shape[0]] = Rf[:n1]
         self.own = np.einsum("ij,ij->j", self.R[:, :-1], self.R[:, :-1])  # ‖s_j‖²: N, or 0 for a zero column
         # the tolerance's scale: var(y), or for a constant output its mean square (not 1 output unit²)
         self.yvar = output_scale(y) ** 2
