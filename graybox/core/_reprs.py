@@ -42,11 +42,19 @@ def level_texts(levels: np.ndarray) -> list[str]:
     return [repr(float(x)) for x in v]
 
 
-def bound_text(x: float) -> str:
-    """A bound as text: ``%g`` when that reads back as the same number (0.031, 2), else its shortest exact text
-    (a band of 0.03059995 is not "0.0306", which would put a J_SF of 0.0305999503 inside it)."""
-    text = f"{float(x):g}"
-    return text if float(text) == float(x) else repr(float(x))
+def bound_text(x: float, value: float | None = None) -> str:
+    """A bound as text: ``%g``, or as many more digits as keep ``value`` (said beside it) on its side of the printed
+    bound (a band of 0.03059995 printed "0.0306" would put a J_SF of 0.0305999503 inside it; a band 0.175² is
+    0.030625, not 0.030624999999999996)."""
+    x = float(x)
+    if value is None or not np.isfinite(value) or not np.isfinite(x):
+        return f"{x:g}"
+    side = np.sign(float(value) - x)
+    for d in range(6, 18):
+        text = f"{x:.{d}g}"
+        if np.sign(float(value) - float(text)) == side:
+            return text
+    return repr(x)
 
 
 def beside(value: float, ref: float, digits: int = 4) -> str:
@@ -57,7 +65,7 @@ def beside(value: float, ref: float, digits: int = 4) -> str:
     Parameters
     ----------
     value, ref : float
-        The value said, and the bound it is said beside (printed with :func:`bound_text`).
+        The value said, and the bound it is said beside (printed with ``bound_text(ref, value)``).
     digits : int
         Significant digits when they suffice.
 
@@ -66,7 +74,7 @@ def beside(value: float, ref: float, digits: int = 4) -> str:
     str
     """
     value, ref = float(value), float(ref)
-    shown = float(bound_text(ref))
+    shown = float(bound_text(ref, value))
     side = np.sign(value - ref)
     for d in range(digits, 18):
         text = f"{value:.{d}g}"

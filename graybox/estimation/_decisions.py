@@ -211,20 +211,21 @@ def decide_dsf(
     else:
         finite = jsf[np.isfinite(jsf)]
         # with the digits that keep it outside B as B is printed (0.03060003, not "0.0306" beside B = [0, 0.0306])
-        best = (beside(finite.min(), hi if finite.min() > hi else lo) if finite.size else "inf for every member")
+        least = float(finite.min()) if finite.size else None
+        best = "inf for every member" if least is None else beside(least, hi if least > hi else lo)
         n_in = int(((jsf >= lo) & (jsf <= hi)).sum())
         if fallback is None and n_in:  # in the band, but no free run to score: a wider band would not help
             on = chosen_on or "the identification data"
             raise InfeasibleError(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
-                f"B = [{bound_text(lo)}, {bound_text(hi)}] with a finite J_S: the {n_in} member{'s' if n_in > 1 else ''} with J_SF in B "
+                f"B = [{bound_text(lo, least)}, {bound_text(hi, least)}] with a finite J_S: the {n_in} member{'s' if n_in > 1 else ''} with J_SF in B "
                 f"{'all diverge' if n_in > 1 else 'diverges'} on {on} (free run). Extend the λ sweep, fit with a "
                 "stability margin, or pass fallback='min_jsf' to take the member with the smallest J_SF"
             )
         if fallback is None:
             raise InfeasibleError(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
-                f"B = [{bound_text(lo)}, {bound_text(hi)}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
+                f"B = [{bound_text(lo, least)}, {bound_text(hi, least)}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
                 "the λ sweep, or pass fallback='min_jsf' to take the member with the smallest J_SF"
             )
         # on choosing records, as D_SF would have chosen: a member whose free run diverges there is none

@@ -473,7 +473,7 @@ def se_dsf(
     solve = dict(band=band, theta0=theta0, lambdas=lambdas, max_iter=max_iter, tol=tol, pe_lambdas=pe_lambdas)
     result = refit_if_slow(problem, lambda p: _solve(p, **solve), "se_dsf's model", margin == "auto")
     if not result.in_band:  # said of the model returned only (margin="auto" may have solved twice)
-        warn(f"se_dsf: the band B = {bound_text(band)} is infeasible for this structure from the start {result.start}: the "
+        warn(f"se_dsf: the band B = {bound_text(band, result.JSF)} is infeasible for this structure from the start {result.start}: the "
              f"smallest J_SF reached is {beside(result.JSF, band)} (J_S {result.JS:.4g}); widen the band or change the structure",
              RuntimeWarning)
     return result

@@ -212,7 +212,7 @@ def _no_model_reason(key: tuple, cells: _Columns, members: _Columns | None, b: f
                 lam1, seed = members.of(key, "lambda1")[~failed][i], members.of(key, "seed")[~failed][i]
                 lam = f", λ1 = {lam1:.3g}" if pd.notna(lam1) else ""
                 seed = f", seed {int(seed)}" if pd.notna(seed) else ""
-                why.append(f"no model has J_SF ≤ B = {bound_text(b)}: the smallest J_SF reached is {beside(jsf[i], b)}"
+                why.append(f"no model has J_SF ≤ B = {bound_text(b, jsf[i])}: the smallest J_SF reached is {beside(jsf[i], b)}"
                            f"{lam}{seed} ({n} model(s) compared)")
             else:
                 why.append(f"every one of the {n} model(s) has an undefined static curve (J_SF = inf)")
@@ -886,9 +886,9 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
             within = " (each cell's own choice)"
         else:  # the band that ranked it: given, or stored (the variants' own where their cells stored several)
             bs = _bands(df[df["data"] == d], band, d)
-            within = (f" among the models with J_SF ≤ B = {bound_text(bs[0][0])}" if len(bs) == 1 else
+            within = (f" among the models with J_SF ≤ B = {bs[0][0]:g}" if len(bs) == 1 else
                       " among the models with J_SF ≤ B, the variants' own: " +
-                      "; ".join(f"{bound_text(b)} for {who}" for b, who in bs) if bs else "")
+                      "; ".join(f"{b:g} for {who}" for b, who in bs) if bs else "")
         lines.append(f"\n{d}: best by J_S on the validation record{within}")
         lines.append(sub[["JS_valid", "JSF", "fit_valid", "n_params"]].to_string() if len(sub) else
                      "  (no model qualified: the reasons follow)")

@@ -388,7 +388,7 @@ class GrayboxSelection:
         band = "black box (band=inf)" if np.isinf(self.band) else f"in_band={self.in_band}"
         # no row in the band: the smallest J_SF chose (fallback "min_jsf"), not the J_S rule
         rule = (f"rule={self.rule!r}" if self.in_band else
-                f"chosen by the smallest J_SF, {beside(row['JSF'], self.band)} (no row meets the band B = {bound_text(self.band)})")
+                f"chosen by the smallest J_SF, {beside(row['JSF'], self.band)} (no row meets the band B = {bound_text(self.band, row['JSF'])})")
         return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, {rule}, "
                 f"J_S valid={row['JS_valid']:.4g}{test}, {band})")
 
@@ -489,7 +489,7 @@ def _static_points(sp, process: gb.Structure, band: float | None,
                  f"candidates with terms in {', '.join(varied)} up to power {degree} (a lag of at least 1 for each)")
         warn(f"the static information asks for a degree-{degree} curve, the candidates carry degree {top} at most: "
              f"the structures get the clusters of degree {top}" +
-             (f" (a degree-{top} polynomial fits the points with MSE {fit:.4g}, band B = {bound_text(band)})"
+             (f" (a degree-{top} polynomial fits the points with MSE {fit:.4g}, band B = {band:g})"
               if fit is not None else "") +
              f"; {carry} would carry it, and the band judges these structures (a rational one can still meet "
              "it: the table's JSF says)", SelectionWarning)
@@ -1242,7 +1242,7 @@ def select_graybox(
     else:
         pos, used = _fallback(table, results, band, fallback), "min"
         used_fallback = True
-        warn(f"no structure meets the band B = {bound_text(band)}: fallback 'min_jsf' chose {table.index[pos]} "
+        warn(f"no structure meets the band B = {bound_text(band, table.iloc[pos]['JSF'])}: fallback 'min_jsf' chose {table.index[pos]} "
              f"({table.iloc[pos]['estimator']}), the smallest J_SF reached, {beside(table.iloc[pos]['JSF'], band)}",
              SelectionWarning)
     order = [pos] + [i for i in np.lexsort((table["JS_valid"].to_numpy(float), ~table["in_band"].to_numpy()))
@@ -1364,7 +1364,7 @@ def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> 
     if band is not None and not in_band:
         jsf = res["jsf"][finite]
         best = float(jsf[np.isfinite(jsf)].min()) if np.isfinite(jsf).any() else np.inf
-        return f"no member meets the band B = {bound_text(band)}: the smallest J_SF reached is {beside(best, band)}"
+        return f"no member meets the band B = {bound_text(band, best)}: the smallest J_SF reached is {beside(best, band)}"
     return ""
 
 
@@ -1379,7 +1379,7 @@ def _fallback(table: pd.DataFrame, results: list[dict], band: float | None, fall
     finite = [j[np.isfinite(j)] for j in counted]
     best = min((float(f.min()) for f in finite if f.size), default=np.inf)
     if fallback is None:
-        raise ValueError(f"no structure meets the band B = {bound_text(band)}: the smallest J_SF reached is {beside(best, band)} "
+        raise ValueError(f"no structure meets the band B = {bound_text(band, best)}: the smallest J_SF reached is {beside(best, band)} "
                          f"(over {len(table)} structure × estimator rows); widen the band, change the candidates, "
                          "or pass fallback='min_jsf'")
     jsf = table["JSF"].to_numpy(float)

@@ -126,7 +126,7 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
     said = f"chosen: {chosen.name} by {chosen['estimator']} ({int(chosen['n_terms'])} terms)"
     if not selection.in_band:  # fallback "min_jsf": the J_S rule had no row to choose from
         said += (f",\nthe smallest J_SF reached, {beside(chosen['JSF'], selection.band)}: no row meets the band "
-                 f"B = {bound_text(selection.band)} (fallback 'min_jsf')")
+                 f"B = {bound_text(selection.band, chosen['JSF'])} (fallback 'min_jsf')")
     fig.suptitle(str(title) if title is not None else said, fontsize=10)
     return fig
 
