@@ -9,6 +9,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -123,3 +124,47 @@ def test_parallel_map_tells_of_each_finished_job_on_dask():
     with gb.experiments.parallel_map(executor="inprocess") as pmap:
         seen.clear()
         assert pmap(abs, [-4], each=lambda i, r: seen.__setitem__(i, r)) == [4] and seen == {0: 4}
+
+
+# -- a member whose fit failed: said in the table, kept in the checkpoint ----------------------------
+
+def _two_level_dataset() -> gb.Dataset:
+    """Identification input at two levels only: u² is a combination of u and 1 there, so the λ1 = 1 member (no
+    weight on the static points, which span seven levels) cannot identify a structure holding both."""
+    rng = np.random.default_rng(0)
+
+    def plant(u):
+        y = np.zeros_like(u)
+        for k in range(1, len(u)):
+            y[k] = 0.5 * y[k - 1] + 0.4 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.2
+        return y + 0.01 * rng.standard_normal(len(u))
+
+    u1, u2 = np.repeat(rng.choice([1.0, 2.0], 40), 10), np.repeat(rng.uniform(0.0, 3.0, 40), 10)
+    ub = np.linspace(0.0, 3.0, 7)
+    return gb.Dataset(gb.Record(u1, plant(u1), name="ident"), gb.Record(u2, plant(u2), name="valid"),
+                      gb.StaticPoints(ub, (0.2 + 0.4 * ub + 0.1 * ub**2) / 0.5))
+
+
+def _pe_selection(ds, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gb.select_graybox(gb.Candidates(1, 1, ne=0, degree=2), ds, band=1e-2, sizes=[3], estimator="pe",
+                                 sources=("frols",), include=("1", "u(k-1)^2"), **kw)
+
+
+def test_a_member_whose_fit_failed_is_said_with_its_reason_and_kept_so(tmp_path):
+    ds = _two_level_dataset()
+    path = tmp_path / "sel.npz"
+    first = _pe_selection(ds, checkpoint=path)
+    said = first.table["failed_members"].iloc[0]
+    # was: the member was dropped (a NaN row) and nothing in the result said which or why
+    assert said.startswith("1 of ") and "(λ1 = 1)" in said and "not identifiable" in said and "'ident'" in said
+    assert first.decision.lambda1 < 1.0
+    again = _pe_selection(ds, checkpoint=path)  # every row from the file: the reason with it
+    pd.testing.assert_frame_equal(again.table, first.table)
+    with np.load(path) as z:  # a file an earlier 0.3.0 wrote: no member reasons kept
+        old = {k: z[k] for k in z.files if not k.endswith("/member_failed")}
+    np.savez(path, **old)
+    from_old = _pe_selection(ds, checkpoint=path)
+    assert from_old.table["failed_members"].iloc[0] == said.split(": ", 1)[0] + ": the fit failed at this λ"
+    assert from_old.decision.lambda1 == first.decision.lambda1

@@ -155,7 +155,9 @@ class GrayboxSelection:
         qualifying model (every member failed, with which fit and why, or diverged; the smallest
         J_SF reached when the band is missed); empty when it has one. ``warnings``: what its fits
         warned of (e.g. an ELS iteration that did not converge), each message once; empty when
-        nothing. The call then says once, with a :class:`SelectionWarning`, how many rows warned
+        nothing. ``failed_members``: the members of the row's front whose fit on the identification
+        data (or on a fold) failed, e.g. λ1 = 1 where the records alone do not identify θ, their λ1
+        and why; they cannot be chosen; empty when none. The call then says once, with a :class:`SelectionWarning`, how many rows warned
         and whether the chosen one did. ``terms``: the row's structure, its terms joined by
         ``" + "`` (:meth:`structure_of` reads it back); ``theta``: the parameters of its member
         (the model the test columns score), exact decimal text, empty for a row without a model
@@ -763,12 +765,14 @@ def _fit_data(records: tuple[gb.Record, ...]) -> gb.Record | list[gb.Record]:
     return records[0] if len(records) == 1 else list(records)
 
 
-def _fit(job: _Job, st: gb.Structure, records: tuple[gb.Record, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """(θ rows (P, n), λ1 (P,)) fitted on ``records`` together; a failed member's row is NaN."""
+def _fit(job: _Job, st: gb.Structure,
+         records: tuple[gb.Record, ...]) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+    """(θ rows (P, n), λ1 (P,), {member: why it failed}) fitted on ``records`` together; a failed member's row is
+    NaN."""
     est, plan = job.estimator, job.plan
     rec = _fit_data(records)
     if est in _BLACK_BOX_FITS:
-        return _BLACK_BOX_FITS[est](st, rec)[None, :], np.array([np.nan])
+        return _BLACK_BOX_FITS[est](st, rec)[None, :], np.array([np.nan]), {}
     lam = _lambdas(est, job.lambdas)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)
@@ -778,30 +782,31 @@ def _fit(job: _Job, st: gb.Structure, records: tuple[gb.Record, ...]) -> tuple[n
                                                                     extra=plan.extra))
             # as pe_pareto and the SE rows: a λ1 whose weights do not identify θ (λ1 = 1 on records with an
             # input held) is one failed member (a NaN row), not the whole row's failure
-            th = pe_members(st, rec, plan.static, lambdas=lam, constraints=cons or None,
-                            solver="clarabel" if cons else "closed")[0]
-            return th, lam
+            th, why = pe_members(st, rec, plan.static, lambdas=lam, constraints=cons or None,
+                                 solver="clarabel" if cons else "closed")
+            return th, lam, why
         gradient = est == "se-gradient"
         front = gb.se_pareto(st, rec, plan.static, lambdas=lam, progress=False,
                              method="gradient" if gradient else "ga", **({"tol": _SE_TOL} if gradient else {}))
         th = np.array(front.thetas, float)
         th[list(front.failures)] = np.nan
-        return th, np.asarray(front.lambdas, float)
+        return th, np.asarray(front.lambdas, float), dict(front.failures)
 
 
 def _fit_or_fail(job: _Job, st: gb.Structure,
-                 records: tuple[gb.Record, ...]) -> tuple[np.ndarray, np.ndarray, list[str]]:
+                 records: tuple[gb.Record, ...]) -> tuple[np.ndarray, np.ndarray, list[str], dict[int, str]]:
     """:func:`_fit`, with a fit these data cannot make (e.g. terms collinear on a fold's two input
     levels) a failed member at every λ and its reason, not an error that ends the whole search:
-    as a grid cell's, a row's failure is data."""
+    as a grid cell's, a row's failure is data. Returns θ, λ1, the row's failure (a list of one reason, or
+    empty) and the failed members' reasons {member: why}, each naming the records fitted."""
+    names = ", ".join(repr(r.name) for r in records)
     try:
-        th, lam = _fit(job, st, records)
-        return th, lam, []
+        th, lam, why = _fit(job, st, records)
+        return th, lam, [], {i: f"the fit on {names} failed: {r}" for i, r in why.items()}
     except (ValueError, np.linalg.LinAlgError) as exc:
         lam = _lambdas(job.estimator, job.lambdas)
         lam = np.array([np.nan]) if lam is None else lam
-        names = ", ".join(repr(r.name) for r in records)
-        return np.full((lam.size, len(st)), np.nan), lam, [f"the fit on {names} failed: {exc}"]
+        return np.full((lam.size, len(st)), np.nan), lam, [f"the fit on {names} failed: {exc}"], {}
 
 
 def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray) -> np.ndarray:
@@ -870,10 +875,13 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
     with warnings.catch_warnings(record=True) as caught, one_blas_thread():
         _apply_filters(job.filters)
         failed: list[str] = []
+        member_failed: dict[int, str] = {}  # a member's first failure, over the folds' fits and the full one
 
         def fit(records):
-            th, lam, why = _fit_or_fail(job, st, records)
+            th, lam, why, members = _fit_or_fail(job, st, records)
             failed.extend(why)
+            for i, reason in members.items():
+                member_failed.setdefault(i, reason)
             jsf.append(_jsf(st, th, plan.static))
             return th, lam
 
@@ -888,7 +896,8 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
         full = full or fit(plan.ident)  # (last: jsf[-1] is its J_SF)
         w = np.concatenate(weights).astype(float)
         out = {"blocks": np.concatenate(blocks, axis=1), "weights": w / w.sum(), "jsf": np.max(np.stack(jsf), axis=0),
-               "jsf_full": jsf[-1], "thetas": full[0], "lambdas": full[1], "failed": failed}
+               "jsf_full": jsf[-1], "thetas": full[0], "lambdas": full[1], "failed": failed,
+               "member_failed": [member_failed.get(i, "") for i in range(len(full[0]))]}
         # a member the refit on all the identification data failed has no model to give: it cannot be chosen
         out["blocks"][~np.all(np.isfinite(full[0]), axis=1)] = np.inf
         if plan.test is not None:  # J_S over every test sample (each record's from the candidates' largest lag on)
@@ -1002,7 +1011,7 @@ def _decision(row: pd.Series, res: dict, i: int, st: gb.Structure, plan: _Plan, 
                            float(js_choose[0]))
     thetas = res["thetas"]
     keep = np.all(np.isfinite(thetas), axis=1)
-    failures = {int(k): "the fit failed at this λ" for k in np.flatnonzero(~keep)}
+    failures = {int(k): _member_failure(res, k) for k in np.flatnonzero(~keep)}
     th = np.where(keep[:, None], thetas, 0.0)
     scored = gb.ParetoSet(st, th, res["lambdas"], np.full(len(th), np.nan), js_choose, res["jsf_full"],
                           f"{estimator}, J_S on the choosing data", {}, failures,
@@ -1338,6 +1347,7 @@ def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.
                    JS_valid=js, JSF=float(res["jsf"][i]) if i >= 0 else no_jsf, in_band=bool(in_band and np.isfinite(js)))
         row["reason"] = _reason(res, i, in_band, js, plan.band)
         row["warnings"] = "; ".join(res["warnings"])
+        row["failed_members"] = _failed_members(res)
         th = res["thetas"][i] if i >= 0 else np.full(1, np.nan)
         # exact decimal text (repr round-trips a float): a table saved to JSON or CSV keeps every row's model
         row["theta"] = " ".join(repr(float(v)) for v in th) if np.all(np.isfinite(th)) else ""
@@ -1349,6 +1359,23 @@ def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.
     return table, members, scores
 
 
+def _member_failure(res: dict, k: int) -> str:
+    """Why member ``k``'s fit failed, as its fit said (rows a checkpoint kept before the reasons were kept have none)."""
+    return (res.get("member_failed") or [""] * (k + 1))[k] or "the fit failed at this λ"
+
+
+def _failed_members(res: dict) -> str:
+    """Which of a row's λ1 members have no fit (on all the identification data, or on a fold) and why, each
+    distinct reason once (empty when none; a row whose fit failed whole says so in its ``reason``)."""
+    said_failed = np.array([bool(r) for r in res.get("member_failed", ())] or [False] * len(res["thetas"]))
+    bad = np.flatnonzero(~np.all(np.isfinite(res["thetas"]), axis=1) | said_failed)
+    if not bad.size or res["failed"]:
+        return ""
+    lam = np.asarray(res["lambdas"], float)
+    said = "; ".join(dict.fromkeys(_member_failure(res, k) for k in bad))
+    return f"{bad.size} of {lam.size} (λ1 = {', '.join(f'{v:g}' for v in lam[bad])}): {said}"
+
+
 def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> str:
     """Why a row has no qualifying model (empty when it has one): every member failed or diverged,
     or the band was missed, with the smallest J_SF its members reached."""
@@ -1356,9 +1383,12 @@ def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> 
     if not finite.any():
         if res["failed"]:
             return "every member failed: " + "; ".join(res["failed"])
-        bad = int(np.sum(~np.all(np.isfinite(res["thetas"]), axis=1)))
-        return (f"every member failed or diverged on the choosing data ({bad} of {len(finite)} fits failed, "
-                f"the others' free runs diverged)")
+        bad = np.flatnonzero(~np.all(np.isfinite(res["thetas"]), axis=1))
+        said = "; ".join(dict.fromkeys(_member_failure(res, k) for k in bad))  # each distinct reason once
+        if bad.size == len(finite):
+            return f"every member's fit failed: {said}"
+        return (f"every member failed or diverged on the choosing data ({bad.size} of {len(finite)} fits failed"
+                + (f": {said}" if bad.size else "") + "; the others' free runs diverged)")
     if i < 0 or not np.isfinite(js):
         return "no member has a finite free-run J_S on every block of the choosing data"
     if band is not None and not in_band:

@@ -33,6 +33,7 @@ __all__ = ["SelectionCheckpoint", "checkpoint_of", "plan_digest", "row_key"]
 _ARRAYS = ("blocks", "weights", "jsf", "jsf_full", "thetas", "lambdas")
 _OPTIONAL = ("test",)
 _TEXTS = ("failed", "warnings")
+_OPTIONAL_TEXTS = ("member_failed",)  # not in rows a checkpoint of 0.3.0 kept
 _KEY = re.compile(r"^[0-9a-f]{32}$")
 
 
@@ -112,10 +113,10 @@ class SelectionCheckpoint:
         rows: dict[str, dict[str, Any]] = {}
         for name, value in arrays.items():
             key, _, field = name.partition("/")
-            if not _KEY.match(key) or field not in _ARRAYS + _OPTIONAL + _TEXTS:
+            if not _KEY.match(key) or field not in _ARRAYS + _OPTIONAL + _TEXTS + _OPTIONAL_TEXTS:
                 raise CheckpointError(f"checkpoint {self.path} is corrupt (an entry {name!r}); delete it or choose "
                                       "another checkpoint path")
-            rows.setdefault(key, {})[field] = [str(s) for s in value] if field in _TEXTS else value
+            rows.setdefault(key, {})[field] = [str(s) for s in value] if field in _TEXTS + _OPTIONAL_TEXTS else value
         for key, row in rows.items():
             if any(f not in row for f in _ARRAYS + _TEXTS):
                 raise CheckpointError(f"checkpoint {self.path} is corrupt (a row without all its scores); delete it or "
@@ -125,16 +126,18 @@ class SelectionCheckpoint:
     def get(self, key: str) -> dict[str, Any] | None:
         """The scores kept under ``key`` (a copy), or None."""
         row = self.rows.get(key)
-        return None if row is None else {k: (list(v) if k in _TEXTS else v.copy()) for k, v in row.items()}
+        return None if row is None else {k: (list(v) if k in _TEXTS + _OPTIONAL_TEXTS else v.copy())
+                                         for k, v in row.items()}
 
     def put(self, key: str, row: Mapping[str, Any]) -> None:
         """Keep a finished row's scores and rewrite the file (atomically: a kill leaves the old one or the new)."""
-        self.rows[key] = {k: (list(row[k]) if k in _TEXTS else np.asarray(row[k]))
-                          for k in _ARRAYS + _TEXTS + tuple(k for k in _OPTIONAL if k in row)}
+        texts = _TEXTS + _OPTIONAL_TEXTS
+        self.rows[key] = {k: (list(row[k]) if k in texts else np.asarray(row[k]))
+                          for k in _ARRAYS + _TEXTS + tuple(k for k in _OPTIONAL + _OPTIONAL_TEXTS if k in row)}
         out: dict[str, np.ndarray] = {"kind": np.array("select_graybox")}
         for k, r in self.rows.items():
             for field, v in r.items():
-                out[f"{k}/{field}"] = np.array(v, dtype=str) if field in _TEXTS else v
+                out[f"{k}/{field}"] = np.array(v, dtype=str) if field in texts else v
         tmp = self.path.with_name(self.path.name + ".tmp.npz")
         np.savez(tmp, **out)
         os.replace(tmp, self.path)
