@@ -105,13 +105,22 @@ def finish_site_build(build: dict) -> tuple[int, str, "object"]:
     return rc, (build["tmp"] / "stderr").read_text(encoding="utf-8", errors="replace"), build["tmp"] / "html"
 
 
-# --- the two largest tests, run beside the rest of the suite -----------------------------------------
-# The README's and the selection guide's select_graybox calls on the bundled plant (20-27 s each, one core) run in a
-# pytest of their own, started as the suite begins; the suite's items of them run last and take its verdict.
+# --- tests run beside the rest of the suite ---------------------------------------------------------------------
+# The suite runs on one core while the second idles once the site build ends; these tests (the README's and the
+# selection guide's select_graybox calls on the bundled plant, 20-27 s each, and the files whose tests start worker
+# processes, Dask clusters or notebook kernels) run in a pytest of their own, started as the suite begins; the
+# suite's items of them run last and take its verdicts. An entry is a file, or a file's test.
 BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.md]",
-          "test_readme_api.py::test_selection_example_runs")
+          "test_readme_api.py::test_selection_example_runs",
+          "test_grid_executors.py", "test_select_checkpoint.py", "test_notebooks.py", "test_parallel_map_errors.py",
+          "test_bootstrap.py")
 _BESIDE_ENV = "GRAYBOX_TESTS_BESIDE"  # set in that pytest: it runs them itself
 _BESIDE_RUN = pytest.StashKey[dict]()
+
+
+def runs_beside(item) -> bool:
+    """Whether ``item`` is one of :data:`BESIDE`'s tests."""
+    return item.path.name in BESIDE or f"{item.path.name}::{item.name}" in BESIDE
 
 
 def start_beside(items) -> dict:
@@ -123,9 +132,11 @@ def start_beside(items) -> dict:
     from pathlib import Path
 
     tmp = Path(tempfile.mkdtemp(prefix="graybox-beside-"))
+    # its own base folder for tmp_path: two sessions cleaning the same pytest-of-<user> folder collide
     with open(tmp / "output", "w") as out:
         proc = subprocess.Popen([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                                 f"--junitxml={tmp / 'verdicts.xml'}", *(item.nodeid for item in items)],
+                                 f"--basetemp={tmp / 'basetemp'}", f"--junitxml={tmp / 'verdicts.xml'}",
+                                 *(item.nodeid for item in items)],
                                 stdout=out, stderr=subprocess.STDOUT, cwd=items[0].config.rootpath,
                                 stdin=subprocess.DEVNULL, start_new_session=True,
                                 env=dict(os.environ, **{_BESIDE_ENV: "1"}))
@@ -143,7 +154,7 @@ def _verdict_of(item, run: dict) -> None:
     except (OSError, ET.ParseError):
         cases = iter(())
     for case in cases:
-        if case.get("name") == item.name and (case.get("classname") or "").endswith(item.path.stem):
+        if case.get("name") == item.name and item.path.stem in (case.get("classname") or "").split("."):
             for child in case:
                 if child.tag in ("failure", "error"):
                     pytest.fail(f"{item.nodeid} failed in the pytest beside the suite:\n{child.text}", pytrace=False)
@@ -159,8 +170,7 @@ def pytest_collection_modifyitems(session, config, items):
 
     if config.option.collectonly:
         return
-    beside = [] if os.environ.get(_BESIDE_ENV) else [
-        item for item in items if f"{item.path.name}::{item.name}" in BESIDE]
+    beside = [] if os.environ.get(_BESIDE_ENV) else [item for item in items if runs_beside(item)]
     if beside:
         run = config.stash[_BESIDE_RUN] = start_beside(beside)
         for item in beside:
