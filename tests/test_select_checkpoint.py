@@ -168,3 +168,31 @@ def test_a_member_whose_fit_failed_is_said_with_its_reason_and_kept_so(tmp_path)
     from_old = _pe_selection(ds, checkpoint=path)
     assert from_old.table["failed_members"].iloc[0] == said.split(": ", 1)[0] + ": the fit failed at this λ"
     assert from_old.decision.lambda1 == first.decision.lambda1
+
+
+def _slow_or_failing(x: int) -> int:
+    import time
+
+    if x == 0:
+        time.sleep(0.1)
+        raise RuntimeError("job 0 fails")
+    time.sleep(1.0 if x == 2 else 0.0)
+    return x
+
+
+def test_a_job_error_on_dask_still_tells_of_the_jobs_that_finished_before_it():
+    # was: the first error ended the loop over finished jobs, and a job that had finished but was not yet yielded
+    # was never told of: a select_graybox(checkpoint=) row lost on Dask (local processes kept it). Here the first
+    # job's `each` takes 3 s; meanwhile job 0 fails (0.1 s) and then job 2 finishes (1 s)
+    import time
+
+    seen: dict = {}
+
+    def each(i, r):
+        seen[i] = r
+        time.sleep(3.0 if len(seen) == 1 else 0.0)
+
+    with gb.experiments.parallel_map(workers=2) as pmap:
+        with pytest.raises(RuntimeError, match="job 0 fails"):
+            pmap(_slow_or_failing, [1, 0, 2], each=each)
+    assert seen == {0: 1, 2: 2}

@@ -101,9 +101,25 @@ def parallel_map(
 
             where = {f.key: i for i, f in enumerate(futures)}
             out: list = [None] * len(futures)
-            for f, r in as_completed(futures, with_results=True):  # raises a job's error, as gather does
-                out[where[f.key]] = r
-                each(where[f.key], r)
+            told: set = set()
+            in_each = False
+            try:
+                for f, r in as_completed(futures, with_results=True):  # raises a job's error, as gather does
+                    out[where[f.key]] = r
+                    told.add(f.key)
+                    in_each = True
+                    each(where[f.key], r)
+                    in_each = False
+            except Exception:
+                # as on local processes: the jobs not finished are dropped, and those that finished before the
+                # error was seen (their results already on the workers) are told of, so that the work done is
+                # kept (select_graybox's checkpoint); not after an error of each's own
+                client.cancel([f for f in futures if f.status != "finished"])
+                if not in_each:
+                    for f in futures:
+                        if f.key not in told and f.status == "finished":
+                            each(where[f.key], f.result())
+                raise
             return out
 
         yield dmap
