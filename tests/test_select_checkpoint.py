@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import subprocess
@@ -196,3 +197,18 @@ def test_a_job_error_on_dask_still_tells_of_the_jobs_that_finished_before_it():
         with pytest.raises(RuntimeError, match="job 0 fails"):
             pmap(_slow_or_failing, [1, 0, 2], each=each)
     assert seen == {0: 1, 2: 2}
+
+
+def test_the_choice_and_its_decision_say_the_units_of_their_squared_errors():
+    # was: "J_S valid=1.158, J_SF=0.01611" with no unit; J_S and J_SF are in the output's units squared
+    from graybox.core._reprs import squared_unit
+
+    ds = _two_level_dataset()
+    rec = dataclasses.replace(ds.ident, units=("V", "m/s"))
+    ds = gb.Dataset(rec, dataclasses.replace(ds.valid, units=("V", "m/s")),
+                    dataclasses.replace(ds.static, units=("V", "m/s")))
+    sel = _pe_selection(ds)
+    assert f"J_S valid={sel.chosen['JS_valid']:.4g} (m/s)²" in repr(sel)
+    assert f"J_SF={sel.decision.JSF:.4g} (m/s)²" in repr(sel.decision)
+    assert squared_unit("mlc") == " mlc²" and squared_unit("") == ""
+    assert "²" not in repr(_pe_selection(_two_level_dataset()))  # records without units: no unit said

@@ -57,6 +57,14 @@ def bound_text(x: float, value: float | None = None) -> str:
     return repr(x)
 
 
+def squared_unit(unit: str | None) -> str:
+    """The unit of a squared error in ``unit`` as a suffix (" mlc²", " (m/s)²"), or "" for a record without one."""
+    unit = str(unit or "").strip()
+    if not unit:
+        return ""
+    return f" ({unit})²" if any(c in unit for c in " /*·^()") else f" {unit}²"
+
+
 def beside(value: float, ref: float, digits: int = 4) -> str:
     """``value`` as text to ``digits`` significant digits, or as many more as keep it on its side of ``ref`` as
     :func:`bound_text` prints it (a J_SF just outside a band B = 0.0306 reads 0.03060003, not 0.0306: 'no model
