@@ -212,3 +212,23 @@ def test_the_choice_and_its_decision_say_the_units_of_their_squared_errors():
     assert f"J_SF={sel.decision.JSF:.4g} (m/s)²" in repr(sel.decision)
     assert squared_unit("mlc") == " mlc²" and squared_unit("") == ""
     assert "²" not in repr(_pe_selection(_two_level_dataset()))  # records without units: no unit said
+
+
+def test_a_test_record_added_or_changed_refits_no_row(tmp_path, data, monkeypatch):
+    # was: the test records were part of every row's key, so a selection called again to report on a new test
+    # record refitted every row (hours for SE rows), though a test record never changes a fit or a choice
+    kw = dict(sizes=[3, 4], estimator="pe", progress=False)
+    path = tmp_path / "sel.npz"
+    first, second = data.valid.slice(400, 600), data.valid.slice(500, 800)
+    data = gb.Dataset(data.ident, data.valid.slice(0, 400), data.static)
+    gb.select_graybox(CAND, data, checkpoint=path, **kw)  # no test record
+    calls = _counting(monkeypatch)
+    for test in (first, second, first):
+        kept = gb.select_graybox(CAND, data, checkpoint=path, test=test, **kw)
+        assert calls == []  # test scores remade from the kept θ: no fit
+        monkeypatch.undo()
+        fresh = gb.select_graybox(CAND, data, test=test, **kw)
+        calls = _counting(monkeypatch)
+        pd.testing.assert_frame_equal(kept.table, fresh.table)
+    plain = gb.select_graybox(CAND, data, checkpoint=path, **kw)
+    assert calls == [] and "JS_test" not in plain.table

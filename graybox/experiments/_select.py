@@ -62,7 +62,7 @@ from ..core._validation import FrozenFrame, check_bool, check_choice, check_fiel
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
-from ._select_checkpoint import SelectionCheckpoint, checkpoint_of, plan_digest, row_key
+from ._select_checkpoint import SelectionCheckpoint, checkpoint_of, plan_digest, row_key, test_digest
 from ._spec import build_constraint, constraint_entries, constraint_from_object
 
 __all__ = ["select_graybox", "GrayboxSelection", "SelectionWarning", "GRAY_BOX_ESTIMATORS", "BLACK_BOX_ESTIMATORS"]
@@ -902,12 +902,31 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
                "member_failed": [member_failed.get(i, "") for i in range(len(full[0]))]}
         # a member the refit on all the identification data failed has no model to give: it cannot be chosen
         out["blocks"][~np.all(np.isfinite(full[0]), axis=1)] = np.inf
-        if plan.test is not None:  # J_S over every test sample (each record's from the candidates' largest lag on)
-            n = np.array([len(r) - plan.lag for r in plan.test], float)
-            mse = np.stack([_block_mse(st, full[0], r, np.array([plan.lag, len(r)]))[:, 0] for r in plan.test], axis=1)
-            out["test"] = mse @ (n / n.sum())
+        if plan.test is not None:
+            out["test"] = _test_scores(st, full[0], plan)
     out["warnings"] = warning_texts(caught)
     return out
+
+
+def _test_scores(st: gb.Structure, thetas: np.ndarray, plan: _Plan) -> np.ndarray:
+    """(P,) each member's J_S over every test sample (each test record's from the candidates' largest lag on)."""
+    n = np.array([len(r) - plan.lag for r in plan.test], float)
+    mse = np.stack([_block_mse(st, thetas, r, np.array([plan.lag, len(r)]))[:, 0] for r in plan.test], axis=1)
+    return mse @ (n / n.sum())
+
+
+def _rescore_test(job: _Job, row: dict, key: str | None) -> bool:
+    """Make a row read from a checkpoint score the call's test records (``key`` their :func:`test_digest`, None for
+    none): its test scores dropped, kept, or remade from its members' θ when they scored other records. Whether the
+    row changed."""
+    if key is None:  # (the file keeps them for a later call)
+        row.pop("test", None)
+        return False
+    if row.get("test_key") == [key] and "test" in row:
+        return False
+    row["test"] = _test_scores(gb.parse_structure(job.terms), row["thetas"], job.plan)
+    row["test_key"] = [key]
+    return True
 
 
 def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progress,
@@ -916,11 +935,21 @@ def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progres
     each finishes)."""
     out: list = [None] * len(jobs)
     keys = [None] * len(jobs)
+    tests: dict[int, str] = {}
     if checkpoint is not None:
         # each plan hashed once (the jobs share the call's; its records may be long)
-        digests = {id(p): plan_digest(p) for p in {id(j.plan): j.plan for j in jobs}.values()}
+        plans = {id(j.plan): j.plan for j in jobs}
+        digests = {i: plan_digest(p) for i, p in plans.items()}
+        tests = {i: test_digest(p) for i, p in plans.items() if p.test is not None}
         keys = [row_key(j, digests[id(j.plan)]) for j in jobs]
         out = [checkpoint.get(k) for k in keys]
+        rescored = False
+        for i, r in enumerate(out):  # a kept row's fits serve any test record: its test scores are remade if another
+            if r is not None and _rescore_test(jobs[i], r, tests.get(id(jobs[i].plan))):
+                checkpoint.put(keys[i], r, write=False)
+                rescored = True
+        if rescored:
+            checkpoint.write()
     todo = [i for i, r in enumerate(out) if r is None]
     if not todo:
         return out
@@ -928,6 +957,8 @@ def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progres
     def finished(i: int, r: dict) -> None:
         out[i] = r
         if checkpoint is not None:
+            if id(jobs[i].plan) in tests:
+                r["test_key"] = [tests[id(jobs[i].plan)]]
             checkpoint.put(keys[i], r)
 
     if executor is None:
@@ -1165,7 +1196,8 @@ def select_graybox(
         finish, and gives the table an uninterrupted run gives. A row is reused only when its
         terms, estimator, options, data and splits and graybox's version are the same (a hash of
         them is its key), so one file may serve calls that differ: what changed is fitted (the
-        band chooses among the rows and changes none: another B refits nothing). The
+        band chooses among the rows and changes none: another B refits nothing; nor does another
+        ``test=``, whose scores are remade from the kept rows' θ). The
         structure search is made again (seconds). Read without pickle; a file that is no such
         checkpoint is refused (``ValueError``) before anything runs. One call at a time per file:
         two running at once each rewrite it with their own rows (the file stays whole; the rows of

@@ -3,9 +3,11 @@
 A selection over many structures and slow estimators (SE fronts) runs for minutes or hours; with
 ``checkpoint=`` a killed run resumes without refitting the rows it finished. A row is kept under a key
 hashing everything that decides its scores: the row's terms, estimator, λ1 and constraints, the plan
-(every record's samples, Ts, names and units, the folds and blocks, the test records, the static
-points, the largest lag, the data set's extra values) and graybox's version. Not the band, which
-chooses among the rows and changes none of them; not the caller's warning filters: a script and a
+(every record's samples, Ts, names and units, the folds and blocks, the static points, the largest
+lag, the data set's extra values) and graybox's version. Not the band, which chooses among the rows
+and changes none of them; not the test records, which only report (a row's test scores are kept with
+a hash of the records they score, and remade from its members' θ, no fit, for others); not the
+caller's warning filters: a script and a
 notebook (or a test run) filter differently, and a row keeps the warnings of the run that fitted it.
 A row whose key the file does not hold is fitted: a file written for other data, options or another
 version is not wrong, only not reused. The file is an ``.npz`` of numeric and text arrays, read
@@ -27,13 +29,14 @@ from .. import _api as gb
 from ..estimation._simulation_error import CheckpointError, checkpoint_path
 from ._spec import canonical_json
 
-__all__ = ["SelectionCheckpoint", "checkpoint_of", "plan_digest", "row_key"]
+__all__ = ["SelectionCheckpoint", "checkpoint_of", "plan_digest", "row_key", "test_digest"]
 
 #: What a row's result holds: arrays, optional arrays and lists of text.
 _ARRAYS = ("blocks", "weights", "jsf", "jsf_full", "thetas", "lambdas")
 _OPTIONAL = ("test",)
 _TEXTS = ("failed", "warnings")
-_OPTIONAL_TEXTS = ("member_failed",)  # not in rows a checkpoint of 0.3.0 kept
+# not in rows a checkpoint of 0.3.0 kept; test_key only in rows with test scores (a hash of the records they score)
+_OPTIONAL_TEXTS = ("member_failed", "test_key")
 _KEY = re.compile(r"^[0-9a-f]{32}$")
 
 
@@ -68,12 +71,22 @@ def _feed(h: Any, obj: Any) -> None:
 
 
 def plan_digest(plan: Any) -> bytes:
-    """A hash of what the plan gives a row's scores: its records, splits, test records, static points, largest lag
-    and extra values. Not the band, which decides the choice among the rows, not their scores: a selection
-    called again with another B reuses every row. Made once per call (the records may be long)."""
+    """A hash of what the plan gives a row's fits and choosing scores: its records, splits, static points, largest
+    lag and extra values. Not the band, which decides the choice among the rows, not their scores: a selection
+    called again with another B reuses every row; not the test records, which only report: a row's test scores
+    are kept with :func:`test_digest` and remade from its θ for other test records. Made once per call (the records
+    may be long)."""
     h = hashlib.sha256()
-    _feed(h, dataclasses.replace(plan, band=None))
+    _feed(h, dataclasses.replace(plan, band=None, test=None))
     return h.digest()
+
+
+def test_digest(plan: Any) -> str:
+    """A hash of the plan's test records and largest lag (from which the test samples count): which records a kept
+    row's test scores are of."""
+    h = hashlib.sha256()
+    _feed(h, (plan.test, plan.lag))
+    return h.hexdigest()[:32]
 
 
 def row_key(job: Any, plan: bytes | None = None) -> str:
@@ -129,11 +142,18 @@ class SelectionCheckpoint:
         return None if row is None else {k: (list(v) if k in _TEXTS + _OPTIONAL_TEXTS else v.copy())
                                          for k, v in row.items()}
 
-    def put(self, key: str, row: Mapping[str, Any]) -> None:
-        """Keep a finished row's scores and rewrite the file (atomically: a kill leaves the old one or the new)."""
+    def put(self, key: str, row: Mapping[str, Any], write: bool = True) -> None:
+        """Keep a finished row's scores and rewrite the file (atomically: a kill leaves the old one or the new);
+        with ``write=False`` only here, until the next :meth:`write`."""
         texts = _TEXTS + _OPTIONAL_TEXTS
         self.rows[key] = {k: (list(row[k]) if k in texts else np.asarray(row[k]))
                           for k in _ARRAYS + _TEXTS + tuple(k for k in _OPTIONAL + _OPTIONAL_TEXTS if k in row)}
+        if write:
+            self.write()
+
+    def write(self) -> None:
+        """Rewrite the file with every row kept (atomically)."""
+        texts = _TEXTS + _OPTIONAL_TEXTS
         out: dict[str, np.ndarray] = {"kind": np.array("select_graybox")}
         for k, r in self.rows.items():
             for field, v in r.items():
