@@ -127,6 +127,7 @@ import numba as nb
 import numpy as np
 from scipy.optimize import brentq
 
+from ..core._least_squares import output_spread
 from ..core._records import Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields)
@@ -1095,9 +1096,10 @@ def neural_narx(
     y = np.concatenate([r.y for r in train])
     u_off, u_sc = float(u.mean()), float(u.std())
     y_off, y_sc = float(y.mean()), float(y.std())
-    if not u_sc > 0:
+    # constant to round-off, not std > 0: the mean of a held 1000.1 is not 1000.1, and its std (2e-13) is no scale
+    if output_spread(u) == 0:
         raise ValueError("the input is constant over the training data: nothing to identify (and no scale to normalise with)")
-    if not y_sc > 0:
+    if output_spread(y) == 0:
         raise ValueError("the output is constant over the training data: nothing to identify (and no scale to normalise with)")
     sig = _Signals.of(train, L, u_off, u_sc, y_off, y_sc)
     hsig = _Signals.of(held, L, u_off, u_sc, y_off, y_sc) if held else None
