@@ -244,8 +244,9 @@ def _decimate(rec: Record, q: int, antialias: bool) -> Record:
     n = len(rec)
     if q == 1:
         return rec
-    if n < 2 * q:
-        raise ValueError(f"record {rec.name!r}: {n} samples make fewer than 2 after decimating by {q}")
+    if n <= q:  # samples 0, q, 2q, …: a second one needs q + 1 samples
+        raise ValueError(f"record {rec.name!r}: {n} samples make fewer than 2 after decimating by {q} (more than {q} "
+                         "needed)")
     y = rec.y
     if antialias:
         half = _HALF_TAPS * q
