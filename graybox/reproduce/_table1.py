@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -10,14 +11,12 @@ import pandas as pd
 from ..estimation._prediction_error import cls as cls_fit, pe_pareto
 from ..static._curves import StaticCurve
 from ..estimation._decisions import decide_dsf
-from ..estimation._extended_least_squares import els
 from ..models._evaluate import evaluate
 from ..estimation._simulation_error import GAOptions, se_pareto
-from ..selection._forward_regression import frols
-from ..core._terms import Candidates
 from ..datasets import load_pumping
 from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
 from ..reference import TABLE_I
+from ._black_box import PAPER_BLACK_BOX, black_box_models
 
 __all__ = ["section_table1", "se_against_els", "PAPER_BAND"]
 
@@ -111,10 +110,10 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
                      + _save(plot_record(data.ident, input_label="Pump speed reference", output_label="Pressure"), out,
                              "fig3_ident_record.png"))
     models: dict = {}
-    for degree, n_terms, eq in ((2, 17, "15"), (3, 23, "17")):
-        cand = Candidates(6, 6, ne=2, degree=degree, max_y_power=1 if degree == 2 else None)
-        sel = frols(cand, data.ident, n_terms=n_terms, include=["1"])
-        m_els = els(sel, data.ident, name=f"ELS ({eq})").model
+    for size, eq in zip(PAPER_BLACK_BOX, ("15", "17")):
+        degree = size[0]
+        # the black-box section's model: one selection of (15) and of (17) in the whole output
+        m_els = replace(black_box_models(data.ident, sizes=[size])[f"ELS ℓ={degree}"][1], name=f"ELS ({eq})")
         models[f"ELS ({eq})"] = m_els
         st = m_els.structure
         lines.append(f"-- ℓ = {degree}: {st}")
