@@ -65,3 +65,27 @@ def test_black_box_section_models_are_table_one_els_15_and_17() -> None:
             assert list(models[f"ELS ℓ={degree}"][1].structure) == list(sel.structure)
     terms = [str(t) for t in models["ELS ℓ=2"][1].structure]
     assert "1" in terms and max(_y_power(t) for t in terms) == 1  # eq. (15)'s rational form
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_speed_reference_stays_on_multiples_of_10_inside_its_range(seed: int) -> None:
+    # a low of 755 rpm gave a first level of 750 (int(low) // 10 · 10) and a high of 1646 forced ends of 1650:
+    # outside [low, high], which the docstring promises, and levels off the 10 rpm grid where clipped to 755
+    from graybox.datasets import speed_reference
+
+    u = speed_reference(seed=seed, low=755.0, high=1646.0)
+    assert u.min() >= 755.0 and u.max() <= 1646.0
+    np.testing.assert_array_equal(u % 10, 0.0)
+    for part in (u[:3200], u[3200:]):  # each part visits both ends (within 30 rpm)
+        assert part.min() <= 755.0 + 30 and part.max() >= 1646.0 - 30
+
+
+def test_speed_reference_refuses_a_range_its_steps_do_not_fit() -> None:
+    # a 60 rpm range failed inside numpy ("high - low < 0"), and low > high was not refused
+    from graybox.datasets import speed_reference
+
+    for low, high in ((800.0, 860.0), (1000.0, 800.0)):
+        with pytest.raises(ValueError, match="must span at least 80 rpm"):
+            speed_reference(seed=0, low=low, high=high)
+    with pytest.raises(ValueError, match="high"):
+        speed_reference(seed=0, low=750.0, high=float("nan"))

@@ -199,7 +199,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints
-from ..core._validation import as_1d_finite, check_bool, check_int, real_array
+from ..core._validation import as_1d_finite, check_bool, check_int, check_real, real_array
 from ..reference import EQ1_COEFFICIENTS
 from ..core._reprs import short_repr
 
@@ -848,6 +848,11 @@ def _integrate(u, eps_w, eps_s, eps_a, phi, w_gain, w0, s_phi, s_gain, a_phi, a_
 # The experiment: input design, static test, files
 # ---------------------------------------------------------------------------
 
+#: The narrowest speed range a staircase reference is designed over (rpm): its smallest steps (40 rpm) must fit
+#: both ways from its middle.
+_MIN_SPAN = 80.0
+
+
 def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed: int = DEFAULT_SEED,
                     low: float = 750.0, high: float = 1650.0) -> np.ndarray:
     """A staircase speed reference (rpm) like the paper's Fig. 3, shape (n_samples,).
@@ -868,18 +873,26 @@ def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed:
 
 
 def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.ndarray:
+    """One part of a speed reference: holds of 80–180 samples at whole multiples of 10 rpm in [low, high]."""
+    low, high = check_real(low, "low (rpm)"), check_real(high, "high (rpm)")
+    # the levels are the multiples of 10 rpm inside [low, high] (a low of 755 rpm gave levels of 750 and a high of
+    # 1646 rpm levels of 1650, and clipping to 755 levels off the grid): the steps move between lo10 and hi10
+    lo10, hi10 = math.ceil(low / 10) * 10.0, math.floor(high / 10) * 10.0
+    if not hi10 - lo10 >= _MIN_SPAN:
+        raise ValueError(f"the speed range [{low:g}, {high:g}] rpm must span at least {_MIN_SPAN:g} rpm between whole "
+                         "multiples of 10 rpm: the steps are 40–900 rpm")
     holds: list[int] = []
     while sum(holds) < n:
         holds.append(int(rng.integers(80, 181)))  # 4–9 s at Ts = 0.05 s
     if len(holds) < 4:
         raise ValueError(f"a part of {n} samples is too short for a staircase; need at least 4 holds")
     sizes = ((40.0, 150.0), (150.0, 400.0), (400.0, 900.0))  # small, medium, large (rpm)
-    levels = [float(rng.integers(int(low) // 10, int(high) // 10 + 1) * 10)]
+    levels = [float(rng.integers(int(lo10) // 10, int(hi10) // 10 + 1) * 10)]
     for _ in holds[1:]:
         cur = levels[-1]
         lo_s, hi_s = sizes[int(rng.choice(3, p=[0.4, 0.35, 0.25]))]
         size = rng.uniform(lo_s, hi_s)
-        up_room, down_room = high - cur, cur - low
+        up_room, down_room = hi10 - cur, cur - lo10
         go_up = rng.random() < 0.5
         if size > (up_room if go_up else down_room):
             go_up = not go_up  # no room this way: step the other way
@@ -888,11 +901,11 @@ def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.
             go_up = up_room >= down_room
             size = rng.uniform(40.0, max(up_room, down_room))
         nxt = cur + size if go_up else cur - size
-        levels.append(float(np.clip(round(nxt / 10) * 10, low, high)))
+        levels.append(float(np.clip(round(nxt / 10) * 10, lo10, hi10)))
     # Force both ends of the range into this part, at two distinct holds away from the first.
     i_lo, i_hi = rng.choice(np.arange(1, len(holds)), size=2, replace=False)
-    levels[i_lo] = float(round(rng.uniform(low, low + 30) / 10) * 10)
-    levels[i_hi] = float(round(rng.uniform(high - 30, high) / 10) * 10)
+    levels[i_lo] = float(np.clip(round(rng.uniform(low, low + 30) / 10) * 10, lo10, hi10))
+    levels[i_hi] = float(np.clip(round(rng.uniform(high - 30, high) / 10) * 10, lo10, hi10))
     return np.repeat(levels, holds)[:n]
 
 
