@@ -89,3 +89,30 @@ def test_speed_reference_refuses_a_range_its_steps_do_not_fit() -> None:
             speed_reference(seed=0, low=low, high=high)
     with pytest.raises(ValueError, match="high"):
         speed_reference(seed=0, low=750.0, high=float("nan"))
+
+
+def test_aprbs_of_a_long_record_is_drawn_in_linear_time_and_the_same_as_before(monkeypatch) -> None:
+    # the holds were drawn while sum(holds) < n: the sum of a growing list at each draw, quadratic in the number
+    # of holds (10⁶ samples with hold=(1, 3): tens of minutes). Now one running total, the same draws
+    import builtins
+
+    from graybox.datasets import _inputs
+
+    visited = []
+
+    def counting_sum(values, *args):
+        values = list(values)
+        visited.append(len(values))
+        return builtins.sum(values, *args)
+
+    monkeypatch.setattr(_inputs, "sum", counting_sum, raising=False)  # the module's name lookups find it first
+    n = 3000
+    u = gb.design_input("aprbs", n, low=0.0, high=1.0, hold=(1, 3), seed=4)
+    assert builtins.sum(visited) <= 10 * n
+    # the design the seed always gave: holds drawn one by one from default_rng([seed, 0]), then the levels
+    rng = np.random.default_rng([4, 0])
+    holds: list[int] = []
+    while builtins.sum(holds) < n:
+        holds.append(int(rng.integers(1, 4)))
+    levels = rng.permutation(len(holds)) / (len(holds) - 1)
+    np.testing.assert_allclose(u, np.repeat(levels, holds)[:n], rtol=0, atol=1e-15)

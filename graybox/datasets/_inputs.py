@@ -185,9 +185,10 @@ def design_input(
         cols = []
         for i in range(m):
             rng = np.random.default_rng([seed, i])
-            holds = []
-            while sum(holds) < n:
+            holds, total = [], 0
+            while total < n:  # a running total: summing the list at each draw was quadratic in the holds
                 holds.append(int(rng.integers(h0, h1 + 1)))
+                total += holds[-1]
             # an even spread of levels over the range, visited in random order: every part of the range is met
             levels = _scale(rng.permutation(len(holds)) / max(len(holds) - 1, 1), lo, hi)
             cols.append(np.repeat(levels, holds)[:n])
