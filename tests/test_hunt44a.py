@@ -116,3 +116,14 @@ def test_aprbs_of_a_long_record_is_drawn_in_linear_time_and_the_same_as_before(m
         holds.append(int(rng.integers(1, 4)))
     levels = rng.permutation(len(holds)) / (len(holds) - 1)
     np.testing.assert_allclose(u, np.repeat(levels, holds)[:n], rtol=0, atol=1e-15)
+
+
+def test_aprbs_takes_its_hold_pair_as_an_array_too() -> None:
+    # hold=np.array([5, 10]) (holds computed from a settling time) was refused as "hold must be an integer"
+    # although a pair is what an APRBS takes; frequencies= already took an array
+    a = gb.design_input("aprbs", 400, low=0.0, high=1.0, hold=np.array([5, 10]), seed=2)
+    np.testing.assert_array_equal(a, gb.design_input("aprbs", 400, low=0.0, high=1.0, hold=(5, 10), seed=2))
+    with pytest.raises(ValueError, match="pair"):
+        gb.design_input("aprbs", 400, low=0.0, high=1.0, hold=np.array([5, 10, 20]))
+    with pytest.raises(ValueError, match="hold must be an int for kind='staircase'"):
+        gb.design_input("staircase", 400, low=0.0, high=1.0, hold=np.array([5, 10]))

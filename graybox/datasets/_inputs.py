@@ -39,6 +39,8 @@ def _holds(kind: str, hold: object) -> tuple[int, int]:
     if hold is None:
         raise ValueError(f"design_input(kind={kind!r}) needs hold=: the samples a level is held (an int, or a pair "
                          "(shortest, longest) for an APRBS); choose it from the plant's settling time")
+    if isinstance(hold, np.ndarray) and hold.ndim == 1:  # a pair computed with numpy, e.g. from a settling time
+        hold = tuple(hold.tolist())
     if isinstance(hold, (tuple, list)):
         if kind != "aprbs" or len(hold) != 2:
             raise ValueError(f"hold must be an int{' or a pair (shortest, longest)' if kind == 'aprbs' else ''} for "
