@@ -127,3 +127,17 @@ def test_aprbs_takes_its_hold_pair_as_an_array_too() -> None:
         gb.design_input("aprbs", 400, low=0.0, high=1.0, hold=np.array([5, 10, 20]))
     with pytest.raises(ValueError, match="hold must be an int for kind='staircase'"):
         gb.design_input("staircase", 400, low=0.0, high=1.0, hold=np.array([5, 10]))
+
+
+def test_reproduce_run_refuses_flags_that_are_not_bools_before_deleting_anything(tmp_path, monkeypatch) -> None:
+    # run(fresh="no") read "no" as true and deleted the checkpoints of hours of sweeps; quick="False" ran quick
+    import graybox.reproduce as rp
+    from graybox.reproduce._table1 import checkpoint_paths
+
+    monkeypatch.setattr(rp, "SECTIONS", ())  # nothing to compute: only the arguments and the checkpoints
+    ck = checkpoint_paths(tmp_path, True)[0]
+    ck.write_bytes(b"a checkpoint")
+    for kwargs in ({"fresh": "no"}, {"quick": "False"}, {"fresh": 1}):
+        with pytest.raises(TypeError, match="must be True or False"):
+            rp.run(out=tmp_path, **{"quick": True, **kwargs})
+        assert ck.read_bytes() == b"a checkpoint"

@@ -60,10 +60,13 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
     fresh : bool
         Delete this mode's checkpoints under ``out`` first, so every sweep starts over.
     """
+    from ..core._validation import check_bool
     from ..core._version import graybox_version
     from ..estimation._simulation_error import checkpoint_version
     from ._table1 import checkpoint_paths
 
+    # flags checked first: "no" is truthy, and fresh deletes checkpoints of hours of sweeps
+    quick, fresh = check_bool(quick, "quick"), check_bool(fresh, "fresh")
     if stream is None:  # looked up now, not at import: redirect_stdout and notebooks replace it
         stream = sys.stdout
 
