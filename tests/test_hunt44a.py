@@ -141,3 +141,19 @@ def test_reproduce_run_refuses_flags_that_are_not_bools_before_deleting_anything
         with pytest.raises(TypeError, match="must be True or False"):
             rp.run(out=tmp_path, **{"quick": True, **kwargs})
         assert ck.read_bytes() == b"a checkpoint"
+
+
+def test_static_point_std_validates_its_arguments() -> None:
+    # n_samples=0 ended in ZeroDivisionError, a speed of 100 rpm (outside the calibrated 500–1800) gave a number
+    from graybox.datasets import PumpingPlant
+
+    plant = PumpingPlant()
+    assert plant.static_point_std(1000.0, 120) > 0
+    with pytest.raises(ValueError, match="n_samples must be an integer >= 1"):
+        plant.static_point_std(1000.0, 0)
+    with pytest.raises(TypeError, match="n_samples"):
+        plant.static_point_std(1000.0, 2.5)
+    with pytest.raises(ValueError, match="within 500–1800 rpm"):
+        plant.static_point_std(100.0, 120)
+    with pytest.raises(ValueError, match="speed"):
+        plant.static_point_std(float("nan"), 120)

@@ -736,7 +736,9 @@ class PumpingPlant:
         and :func:`static_experiment` waits them out (their effect on a settled mean is under
         0.001 mlc, against about 0.03 mlc from the two terms above).
         """
-        n = float(speed)
+        n = float(as_1d_finite([speed], "speed")[0])
+        self._check_reference(np.array([n]), "speed")
+        n_samples = check_int(n_samples, "n_samples", low=1)
         q = float(self.steady_flow(n))
         dq = 1e-4 * q
         ht_slope = (self.turbine_head(q + dq) - self.turbine_head(q - dq)) / (2 * dq)
