@@ -157,3 +157,19 @@ def test_static_point_std_validates_its_arguments() -> None:
         plant.static_point_std(100.0, 120)
     with pytest.raises(ValueError, match="speed"):
         plant.static_point_std(float("nan"), 120)
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"settle": -1.0}, ValueError, "settle"),            # averaged the last 20 samples of a 5 s hold, silently
+    ({"settle": float("nan")}, ValueError, "settle"),    # "cannot convert float NaN to integer"
+    ({"average": float("inf")}, ValueError, "average"),  # OverflowError
+    ({"average": 0.01}, ValueError, "at least one sample"),
+    ({"settle": "180"}, TypeError, "settle"),            # "unsupported operand type(s) for /"
+])
+def test_static_experiments_validate_settle_and_average(kwargs, error, match) -> None:
+    from graybox.datasets import PumpingPlant, TwoSpeedPumpingPlant, static_experiment, static_grid_experiment
+
+    with pytest.raises(error, match=match):
+        static_experiment(PumpingPlant(), speeds=[800.0, 900.0], seed=0, **kwargs)
+    with pytest.raises(error, match=match):
+        static_grid_experiment(TwoSpeedPumpingPlant(), speeds=[[1200.0, 1300.0]], seed=0, **kwargs)

@@ -69,7 +69,7 @@ import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
 from ..core._validation import as_1d_finite
-from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, write_csv_pair
+from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, static_samples, write_csv_pair
 from ..core._reprs import short_repr
 
 #: The plant's inputs, as its records and static points name them: speed references of sets 1 and 2.
@@ -534,10 +534,7 @@ def static_grid_experiment(
     sp = static_grid() if speeds is None else np.asarray(speeds, dtype=float)
     if sp.ndim != 2 or sp.shape[1] != 2 or sp.shape[0] == 0:
         raise ValueError(f"speeds must have shape (K, 2), got {sp.shape}")
-    n_settle = int(round(settle / plant.Ts))
-    n_avg = int(round(average / plant.Ts))
-    if n_avg < 1 or n_settle < 0:
-        raise ValueError(f"average must cover at least one sample and settle must be >= 0, got {average}, {settle} s")
+    n_settle, n_avg = static_samples(plant.Ts, settle, average)
     u = np.repeat(sp, n_settle + n_avg, axis=0)
     run = plant.simulate(u, seed=seed)
     y = run.y.reshape(sp.shape[0], n_settle + n_avg)[:, n_settle:]

@@ -943,14 +943,22 @@ def static_experiment(
         ū = ``speeds`` (rpm), ȳ = mean measured pressure (mlc).
     """
     sp = as_1d_finite(speeds, "speeds")
-    n_settle = int(round(settle / plant.Ts))
-    n_avg = int(round(average / plant.Ts))
-    if n_avg < 1:
-        raise ValueError(f"average must cover at least one sample, got {average} s")
+    n_settle, n_avg = static_samples(plant.Ts, settle, average)
     u = np.repeat(sp, n_settle + n_avg)
     run = plant.simulate(u, seed=seed)
     y = run.y.reshape(sp.size, n_settle + n_avg)[:, n_settle:]
     return StaticPoints(sp, y.mean(axis=1), name="pumping static points", units=("rpm", "mlc"))
+
+
+def static_samples(Ts: float, settle: object, average: object) -> tuple[int, int]:
+    """A static test's samples per level: (discarded while settling, averaged), from ``settle`` >= 0 and
+    ``average`` seconds (finite numbers; the average covers at least one sample of ``Ts``)."""
+    settle = check_real(settle, "settle (s)", low=0)
+    average = check_real(average, "average (s)", low=0, low_open=True)
+    n_avg = int(round(average / Ts))
+    if n_avg < 1:
+        raise ValueError(f"average must cover at least one sample of {Ts:g} s, got {average:g} s")
+    return int(round(settle / Ts)), n_avg
 
 
 def generate(seed: int = DEFAULT_SEED, plant: PumpingPlant | None = None) -> tuple[PlantRun, StaticPoints]:
