@@ -159,7 +159,8 @@ def _main(argv: list[str] | None) -> int:
                         description=_REPRODUCE, formatter_class=argparse.RawDescriptionHelpFormatter)
     rp.add_argument("--quick", action="store_true", help="short searches (minutes, not hours)")
     rp.add_argument("--out", type=Path, default=Path("reproduce-out"),
-                    help="folder for figures, tables and checkpoints (default: reproduce-out)")
+                    help="folder for the figures (PNG) and the checkpoints; the tables are printed (default: "
+                         "reproduce-out)")
     rp.add_argument("--fresh", action="store_true",
                     help="delete this mode's checkpoints in --out first and start every sweep over")
     gp = sub.add_parser("grid", help="grids of structures × constraint variants × estimators, kept in SQLite",

@@ -193,3 +193,14 @@ def test_multisine_columns_keep_schroeders_low_crest_factor(m: int, seed: int) -
     for c in x.T:
         assert np.max(np.abs(c - c.mean())) / np.std(c) < 2.0
         assert c.min() == -1.0 and c.max() == 1.0
+
+
+def test_reproduce_help_names_what_the_out_folder_receives(capsys) -> None:
+    # --out was "folder for figures, tables and checkpoints", but the tables are printed, never written there
+    from graybox._cli import main
+
+    with pytest.raises(SystemExit):
+        main(["reproduce", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "figures, tables and checkpoints" not in text
+    assert "folder for the figures (PNG) and the checkpoints" in text and "tables are printed" in text
