@@ -204,3 +204,18 @@ def test_reproduce_help_names_what_the_out_folder_receives(capsys) -> None:
     text = " ".join(capsys.readouterr().out.split())
     assert "figures, tables and checkpoints" not in text
     assert "folder for the figures (PNG) and the checkpoints" in text and "tables are printed" in text
+
+
+@pytest.mark.parametrize("name, value, error", [
+    ("noise_std", float("nan"), ValueError),           # every measured pressure NaN
+    ("process_noise_std", float("nan"), ValueError),   # NaN > 0 is false: the process noise silently off
+    ("surge_intensity", float("inf"), ValueError),     # NaN pressures
+    ("air_loss_per_rpm", float("nan"), ValueError),    # pressures near 0 mlc at 1000 rpm, silently
+    ("noise_std", "0.1", TypeError),                   # "'<' not supported between 'str' and 'int'"
+    ("noise_std", -0.1, ValueError),
+])
+def test_pumping_plant_refuses_noise_levels_that_are_not_finite_numbers(name, value, error) -> None:
+    from graybox.datasets import PumpingPlant
+
+    with pytest.raises(error, match=f"PumpingPlant: {name}"):
+        PumpingPlant(**{name: value})

@@ -384,10 +384,10 @@ class PumpingPlant:
         if not (0 <= self.dead_time < self.Ts and abs(m - round(m)) < 1e-9):
             raise ValueError(f"PumpingPlant: dead_time must be a multiple of Ts/substeps = {dt:g} s in "
                              f"[0, Ts), got {self.dead_time!r}")
-        if self.noise_std < 0 or self.process_noise_std < 0:
-            raise ValueError("PumpingPlant: noise standard deviations must be >= 0")
-        if self.surge_intensity < 0 or self.air_loss_per_rpm < 0:
-            raise ValueError("PumpingPlant: surge_intensity and air_loss_per_rpm must be >= 0")
+        # finite and >= 0: a NaN passed "< 0" and switched the process noise off (NaN > 0 is false) or made every
+        # pressure NaN, silently
+        for name in ("noise_std", "process_noise_std", "surge_intensity", "air_loss_per_rpm"):
+            check_real(getattr(self, name), f"PumpingPlant: {name}", low=0)
         for name in ("surge_time", "air_vent_time"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
