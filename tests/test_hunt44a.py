@@ -219,3 +219,23 @@ def test_pumping_plant_refuses_noise_levels_that_are_not_finite_numbers(name, va
 
     with pytest.raises(error, match=f"PumpingPlant: {name}"):
         PumpingPlant(**{name: value})
+
+
+@pytest.mark.parametrize("su, sy", [(1e200, 1.0), (1.0, 1e-200), (1e-300, 1e150)])
+def test_neural_network_is_the_same_in_huge_or_tiny_units(su: float, sy: float) -> None:
+    # u near 1e200 overflowed u.std() (inf: every normalised input 0, a network blind to its input, trained silently);
+    # y near 1e-200 underflowed it (the output called constant), and the held-out cost (y_scale²) underflowed to 0
+    rng = np.random.default_rng(0)
+    n = 400
+    u = np.repeat(rng.uniform(200.0, 800.0, n // 20 + 1), 20)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.8 * y[k - 1] + 0.001 * u[k - 1] + 1e-6 * u[k - 1] ** 2 + 0.01 * rng.standard_normal()
+    kw = dict(ny=2, nu=2, ne=1, hidden=3, epochs=5, sim_epochs=10, holdout=0.25)
+    fit = neural_narx(gb.Record(u, y), **kw)
+    scaled = neural_narx(gb.Record(u * su, y * sy), **kw)
+    assert scaled.best_step == fit.best_step
+    if sy**2 > 0:  # in output units² (1e-400 is no float: there only the choice it made can be compared)
+        np.testing.assert_allclose(np.array(scaled.holdout_cost) / sy**2, fit.holdout_cost, rtol=1e-9)
+    free = fit.model.simulate(gb.Record(u, y))
+    np.testing.assert_allclose(scaled.model.simulate(gb.Record(u * su, y * sy)) / sy, free, rtol=1e-9, atol=1e-12)

@@ -971,6 +971,19 @@ def _run_stage(residual, jacobian, x0: np.ndarray, *, max_epochs: int, decay: fl
     return _Stage(x, epochs, cost, held, None, stopped)
 
 
+def _level_and_scale(x: np.ndarray, what: str) -> tuple[float, float]:
+    """Mean and standard deviation of a training signal (its units), for the normalisation; ``ValueError`` when it is
+    constant to round-off (not std > 0: the mean of a held 1000.1 is not 1000.1, and its std, 2e-13, is no scale).
+    Computed in units of max|x|: the squares of values near 1e200 overflowed (std inf: a network blind to its
+    input), those of values near 1e-200 underflowed (std 0)."""
+    top = float(np.max(np.abs(x)))
+    z = x / top if top > 0 else x
+    if top == 0 or output_spread(z) == 0:
+        raise ValueError(f"the {what} is constant over the training data: nothing to identify (and no scale to "
+                         "normalise with)")
+    return float(z.mean()) * top, float(z.std()) * top
+
+
 def _split_holdout(recs: list[Record], holdout: float, L: int) -> tuple[list[Record], list[Record]]:
     """Each record's last ``holdout`` fraction held out (contiguous), the rest for training."""
     if holdout == 0.0:
@@ -1094,13 +1107,8 @@ def neural_narx(
                          "to estimate; use more data or a smaller network")
     u = np.concatenate([r.u for r in train])
     y = np.concatenate([r.y for r in train])
-    u_off, u_sc = float(u.mean()), float(u.std())
-    y_off, y_sc = float(y.mean()), float(y.std())
-    # constant to round-off, not std > 0: the mean of a held 1000.1 is not 1000.1, and its std (2e-13) is no scale
-    if output_spread(u) == 0:
-        raise ValueError("the input is constant over the training data: nothing to identify (and no scale to normalise with)")
-    if output_spread(y) == 0:
-        raise ValueError("the output is constant over the training data: nothing to identify (and no scale to normalise with)")
+    u_off, u_sc = _level_and_scale(u, "input")
+    y_off, y_sc = _level_and_scale(y, "output")
     sig = _Signals.of(train, L, u_off, u_sc, y_off, y_sc)
     hsig = _Signals.of(held, L, u_off, u_sc, y_off, y_sc) if held else None
     det = _deterministic(hidden, ny, nu, ne)
@@ -1126,10 +1134,10 @@ def neural_narx(
         ys, psi = _sim_kernel(W1, b1, w2, b2, s.un, s.yn, s.seg, ny, nu, want_jac)
         return (ys - s.yn)[s.rows], psi
 
-    def heldout(theta: np.ndarray) -> float:
+    def heldout(theta: np.ndarray) -> float:  # normalised: in output units² it under- or overflows in tiny or huge units
         assert hsig is not None
         r = sim(theta, hsig, False)[0]
-        return _sumsq(r) / r.size * y_sc ** 2
+        return _sumsq(r) / r.size
 
     theta = np.random.default_rng(seed).uniform(-0.5, 0.5, P)  # Norgaard's initialisation: rand − 0.5
     last_pe = sim_epochs == 0
@@ -1164,7 +1172,7 @@ def neural_narx(
         model=model,
         prediction_cost=tuple(s1.cost),
         simulation_cost=tuple(stages[1].cost) if sim_epochs else (),
-        holdout_cost=tuple(last.holdout),
+        holdout_cost=tuple(c * y_sc ** 2 for c in last.holdout),
         best_step=last.best,
         epochs=n_epochs,
         stopped=last.stopped,
