@@ -239,3 +239,14 @@ def test_neural_network_is_the_same_in_huge_or_tiny_units(su: float, sy: float) 
         np.testing.assert_allclose(np.array(scaled.holdout_cost) / sy**2, fit.holdout_cost, rtol=1e-9)
     free = fit.model.simulate(gb.Record(u, y))
     np.testing.assert_allclose(scaled.model.simulate(gb.Record(u * su, y * sy)) / sy, free, rtol=1e-9, atol=1e-12)
+
+
+def test_reproduce_run_refuses_a_stream_that_cannot_be_written_before_any_section(monkeypatch) -> None:
+    # stream="out.txt" failed after the first section with "'str' object has no attribute 'write'"
+    import graybox.reproduce as rp
+
+    ran = []
+    monkeypatch.setattr(rp, "SECTIONS", (lambda quick, out: ran.append(1) or "text",))
+    with pytest.raises(TypeError, match="stream must be a text file"):
+        rp.run(stream="out.txt")
+    assert ran == []

@@ -69,6 +69,9 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
     quick, fresh = check_bool(quick, "quick"), check_bool(fresh, "fresh")
     if stream is None:  # looked up now, not at import: redirect_stdout and notebooks replace it
         stream = sys.stdout
+    elif not callable(getattr(stream, "write", None)):  # said now, not after the first section's minutes
+        raise TypeError(f"stream must be a text file (with a write method), e.g. sys.stdout or open(path, 'w'), got "
+                        f"{stream!r} ({type(stream).__name__})")
 
     if out is not None:
         _writable_folder(Path(out))
