@@ -250,3 +250,19 @@ def test_reproduce_run_refuses_a_stream_that_cannot_be_written_before_any_sectio
     with pytest.raises(TypeError, match="stream must be a text file"):
         rp.run(stream="out.txt")
     assert ran == []
+
+
+@pytest.mark.parametrize("kwargs, error", [
+    ({"n_ident": 3200.5}, TypeError),        # "slice indices must be integers"
+    ({"n_samples": "4000"}, TypeError),      # "'<' not supported between 'int' and 'str'"
+    ({"seed": -1}, ValueError),              # numpy's "expected non-negative integer"
+    ({"n_ident": 0}, ValueError),
+    ({"low": "750"}, TypeError),
+])
+def test_speed_references_check_their_counts_seed_and_range(kwargs, error) -> None:
+    from graybox.datasets import speed_reference, two_speed_reference
+
+    name = next(iter(kwargs))
+    for design in (speed_reference, two_speed_reference):
+        with pytest.raises(error, match=name):
+            design(**kwargs)

@@ -68,8 +68,9 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
-from ..core._validation import as_1d_finite
-from .pumping import DEFAULT_SEED, PumpingPlant, _staircase, regenerate_main, static_samples, write_csv_pair
+from ..core._validation import as_1d_finite, check_real
+from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, reference_lengths, regenerate_main, static_samples,
+                      write_csv_pair)
 from ..core._reprs import short_repr
 
 #: The plant's inputs, as its records and static points name them: speed references of sets 1 and 2.
@@ -484,9 +485,9 @@ def two_speed_reference(*, n_samples: int = N_SAMPLES_MISO, n_ident: int = N_IDE
     part ``n_ident:``), from its own random stream (``[seed, 11]`` and ``[seed, 12]``), so the two
     references change at unrelated instants and to unrelated levels.
     """
-    if not (0 < n_ident < n_samples):
-        raise ValueError(f"need 0 < n_ident < n_samples, got {n_ident} and {n_samples}")
-    if not (0 < low < high):
+    n_samples, n_ident, seed = reference_lengths(n_samples, n_ident, seed)
+    low, high = check_real(low, "low (rpm)", low=0, low_open=True), check_real(high, "high (rpm)")
+    if not low < high:
         raise ValueError(f"need 0 < low < high, got {low} and {high}")
     cols = []
     for i in (1, 2):

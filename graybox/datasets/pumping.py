@@ -201,7 +201,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints
-from ..core._validation import as_1d_finite, check_bool, check_int, check_real, real_array
+from ..core._validation import as_1d_finite, check_bool, check_int, check_real, check_seed, real_array
 from ..reference import EQ1_COEFFICIENTS
 from ..core._reprs import short_repr
 
@@ -869,11 +869,19 @@ def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed:
     both ends of the range (one hold is forced to within 30 rpm of ``low``, another of ``high``),
     so both exercise the whole operating range.
     """
-    if not (0 < n_ident < n_samples):
-        raise ValueError(f"need 0 < n_ident < n_samples, got {n_ident} and {n_samples}")
+    n_samples, n_ident, seed = reference_lengths(n_samples, n_ident, seed)
     rng = np.random.default_rng([seed, 1])
     parts = [_staircase(n_ident, rng, low, high), _staircase(n_samples - n_ident, rng, low, high)]
     return np.concatenate(parts)
+
+
+def reference_lengths(n_samples: object, n_ident: object, seed: object) -> tuple[int, int, int]:
+    """A reference's (n_samples, n_ident, seed) checked: counts with 0 < n_ident < n_samples, a seed >= 0."""
+    n_samples = check_int(n_samples, "n_samples", low=2)
+    n_ident = check_int(n_ident, "n_ident", low=1)
+    if not n_ident < n_samples:
+        raise ValueError(f"need 0 < n_ident < n_samples, got {n_ident} and {n_samples}")
+    return n_samples, n_ident, check_seed(seed)
 
 
 def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.ndarray:
