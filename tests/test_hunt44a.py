@@ -266,3 +266,17 @@ def test_speed_references_check_their_counts_seed_and_range(kwargs, error) -> No
     for design in (speed_reference, two_speed_reference):
         with pytest.raises(error, match=name):
             design(**kwargs)
+
+
+@pytest.mark.parametrize("domain, error", [
+    (((1650.0, 1150.0), (1150.0, 1650.0)), ValueError),       # a reversed box, kept as given
+    (((float("nan"), 1650.0), (1150.0, 1650.0)), ValueError),  # NaN kept
+    (((1150.0, 1650.0),), ValueError),                       # one input's range for a two-input surface
+    (((100.0, 1650.0), (1150.0, 1650.0)), ValueError),        # beyond the rig's speed_range: p̄ refuses it later
+    ((1150.0, 1650.0), TypeError),                           # "cannot unpack non-iterable float object"
+])
+def test_plant_surface_domain_is_a_box_of_the_rigs_speeds(domain, error) -> None:
+    from graybox.datasets import TwoSpeedPumpingPlant
+
+    with pytest.raises(error, match="domain"):
+        TwoSpeedPumpingPlant().surface(domain=domain)

@@ -247,8 +247,26 @@ class TwoSpeedPumpingPlant:
         domain : ((float, float), (float, float)), optional
             Box of (n̄₁, n̄₂) the surface is drawn over; default ``OPERATING_RANGE`` for both.
         """
-        box = (OPERATING_RANGE, OPERATING_RANGE) if domain is None else domain
+        box = (OPERATING_RANGE, OPERATING_RANGE) if domain is None else self._check_domain(domain)
         return PlantSurface(self, tuple((float(lo), float(hi)) for lo, hi in box))
+
+    def _check_domain(self, domain: object) -> tuple[tuple[float, float], tuple[float, float]]:
+        """``domain`` as two (low, high) speed ranges inside the rig's ``speed_range`` (rpm), low < high."""
+        form = "domain must be ((low1, high1), (low2, high2)) in rpm"
+        if not isinstance(domain, (tuple, list, np.ndarray)) or not all(
+                isinstance(p, (tuple, list, np.ndarray)) for p in domain):
+            raise TypeError(f"{form}, got {domain!r}")
+        if len(domain) != 2 or any(len(p) != 2 for p in domain):
+            raise ValueError(f"{form} (one range per pump set), got {domain!r}")
+        lo_rig, hi_rig = self.rig.speed_range
+        out = []
+        for i, (lo, hi) in enumerate(domain, start=1):
+            lo = check_real(lo, f"domain[{i - 1}][0] (low{i}, rpm)", low=lo_rig)
+            hi = check_real(hi, f"domain[{i - 1}][1] (high{i}, rpm)", high=hi_rig)
+            if not lo < hi:
+                raise ValueError(f"{form} with low < high, got {domain!r}")
+            out.append((lo, hi))
+        return tuple(out)  # type: ignore[return-value]
 
     def steady_state(self, speed1: float, speed2: float) -> tuple[float, float, float, float, float]:
         """Equilibrium state (n_c1, n_1, n_c2, n_2, Q) at constant references ``speed1``, ``speed2`` (rpm)."""
