@@ -280,3 +280,12 @@ def test_plant_surface_domain_is_a_box_of_the_rigs_speeds(domain, error) -> None
 
     with pytest.raises(error, match="domain"):
         TwoSpeedPumpingPlant().surface(domain=domain)
+
+
+@pytest.mark.parametrize("rel_step", [0.0, float("nan"), -1e-5])
+def test_linearize_refuses_a_step_that_is_no_positive_number(rel_step: float) -> None:
+    # 0 divided by zero (NaN matrices with a RuntimeWarning), NaN gave NaN matrices silently
+    from graybox.datasets import PumpingPlant
+
+    with pytest.raises(ValueError, match="rel_step"):
+        PumpingPlant().linearize(1000.0, rel_step=rel_step)

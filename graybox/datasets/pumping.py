@@ -677,6 +677,7 @@ class PumpingPlant:
         """
         s = float(as_1d_finite([speed], "speed")[0])
         self._check_reference(np.array([s]), "speed")
+        rel_step = check_real(rel_step, "rel_step", low=0, low_open=True)
         S, delay, dt, consts = self._kernel_constants
         x_bar = np.array([*self.steady_state(s), s])
 
