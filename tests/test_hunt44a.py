@@ -289,3 +289,17 @@ def test_linearize_refuses_a_step_that_is_no_positive_number(rel_step: float) ->
 
     with pytest.raises(ValueError, match="rel_step"):
         PumpingPlant().linearize(1000.0, rel_step=rel_step)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"step": 0.0}, "step"),          # 0/0: NaN with a RuntimeWarning
+    ({"step": float("nan")}, "step"),
+    ({"horizon": 0.0}, "horizon"),    # IndexError
+    ({"horizon": -1.0}, "horizon"),   # "negative dimensions are not allowed"
+    ({"horizon": float("inf")}, "horizon"),  # OverflowError
+])
+def test_step_time_constant_refuses_a_step_or_horizon_it_cannot_measure(kwargs, match) -> None:
+    from graybox.datasets import PumpingPlant
+
+    with pytest.raises(ValueError, match=match):
+        PumpingPlant().step_time_constant(1000.0, **kwargs)

@@ -715,8 +715,12 @@ class PumpingPlant:
         step instant (so it includes the dead time and the drive and rotor lags), over a run of
         ``horizon`` seconds after it.
         """
+        step = check_real(step, "step (rpm)")
+        if step == 0:
+            raise ValueError("step (rpm) must not be 0: a time constant is read off the response to a step")
+        horizon = check_real(horizon, "horizon (s)", low=0, low_open=True)
         n_hold = 10
-        n_total = n_hold + int(round(horizon / self.Ts))
+        n_total = n_hold + max(1, int(round(horizon / self.Ts)))
         u = np.r_[np.full(n_hold, float(speed)), np.full(n_total - n_hold, float(speed) + step)]
         y = self.simulate(u, noise=False, process_noise=False).pressure
         frac = (y[n_hold:] - y[n_hold - 1]) / (y[-1] - y[n_hold - 1])
