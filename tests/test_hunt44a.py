@@ -303,3 +303,17 @@ def test_step_time_constant_refuses_a_step_or_horizon_it_cannot_measure(kwargs, 
 
     with pytest.raises(ValueError, match=match):
         PumpingPlant().step_time_constant(1000.0, **kwargs)
+
+
+def test_static_tests_refuse_an_empty_list_of_speeds() -> None:
+    # static_experiment(speeds=[]) ended in an IndexError, static_grid(speeds1=[]) in numpy's "need at least one array
+    # to concatenate", and static_grid(speeds2=[]) returned an empty grid
+    from graybox.datasets import PumpingPlant, static_experiment
+    from graybox.datasets._pumping_miso import static_grid
+
+    with pytest.raises(ValueError, match="speeds: no speed"):
+        static_experiment(PumpingPlant(), speeds=[], seed=0)
+    with pytest.raises(ValueError, match="speeds1: no speed"):
+        static_grid(speeds1=[])
+    with pytest.raises(ValueError, match="speeds2: no speed"):
+        static_grid(speeds1=[1200.0], speeds2=[])

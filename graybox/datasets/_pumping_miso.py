@@ -70,7 +70,7 @@ import numpy as np
 from ..core._records import Record, StaticPoints, frame_inputs
 from ..core._validation import as_1d_finite, check_real
 from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, reference_lengths, regenerate_main, static_samples,
-                      write_csv_pair)
+                      static_speeds, write_csv_pair)
 from ..core._reprs import short_repr
 
 #: The plant's inputs, as its records and static points name them: speed references of sets 1 and 2.
@@ -523,8 +523,8 @@ def static_grid(*, speeds1: Sequence[float] = STATIC_SPEEDS_MISO,
     levels) alternately up and down (a serpentine), so each move changes one reference by one
     grid step.
     """
-    s1 = as_1d_finite(speeds1, "speeds1")
-    s2 = s1 if speeds2 is None else as_1d_finite(speeds2, "speeds2")
+    s1 = static_speeds(speeds1, "speeds1")
+    s2 = s1 if speeds2 is None else static_speeds(speeds2, "speeds2")
     rows = [np.column_stack([np.full(s2.size, a), s2 if i % 2 == 0 else s2[::-1]]) for i, a in enumerate(s1)]
     return np.vstack(rows)
 

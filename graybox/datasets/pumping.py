@@ -957,12 +957,20 @@ def static_experiment(
     StaticPoints
         ū = ``speeds`` (rpm), ȳ = mean measured pressure (mlc).
     """
-    sp = as_1d_finite(speeds, "speeds")
+    sp = static_speeds(speeds, "speeds")
     n_settle, n_avg = static_samples(plant.Ts, settle, average)
     u = np.repeat(sp, n_settle + n_avg)
     run = plant.simulate(u, seed=seed)
     y = run.y.reshape(sp.size, n_settle + n_avg)[:, n_settle:]
     return StaticPoints(sp, y.mean(axis=1), name="pumping static points", units=("rpm", "mlc"))
+
+
+def static_speeds(speeds: object, name: str) -> np.ndarray:
+    """The levels of a static test (rpm), shape (M,): finite, at least one."""
+    sp = as_1d_finite(speeds, name)
+    if sp.size == 0:
+        raise ValueError(f"{name}: no speed given; a static test needs at least one level (rpm)")
+    return sp
 
 
 def static_samples(Ts: float, settle: object, average: object) -> tuple[int, int]:
