@@ -1172,7 +1172,7 @@ def neural_narx(
         model=model,
         prediction_cost=tuple(s1.cost),
         simulation_cost=tuple(stages[1].cost) if sim_epochs else (),
-        holdout_cost=tuple(c * y_sc ** 2 for c in last.holdout),
+        holdout_cost=tuple(c * y_sc * y_sc for c in last.holdout),  # not y_sc ** 2: a float power raises on overflow
         best_step=last.best,
         epochs=n_epochs,
         stopped=last.stopped,
