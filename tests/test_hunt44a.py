@@ -317,3 +317,14 @@ def test_static_tests_refuse_an_empty_list_of_speeds() -> None:
         static_grid(speeds1=[])
     with pytest.raises(ValueError, match="speeds2: no speed"):
         static_grid(speeds1=[1200.0], speeds2=[])
+
+
+def test_static_grid_experiment_names_a_bad_speed_pair_in_its_own_terms() -> None:
+    # a NaN pair was said as "speed reference 2 has 3720 non-finite value(s) … first at index 0" (the run's samples),
+    # a string pair failed in numpy's float conversion
+    from graybox.datasets import TwoSpeedPumpingPlant, static_grid_experiment
+
+    with pytest.raises(ValueError, match=r"speeds.*row 1"):
+        static_grid_experiment(TwoSpeedPumpingPlant(), speeds=[[1200.0, 1300.0], [1200.0, float("nan")]], seed=0)
+    with pytest.raises(TypeError, match="speeds"):
+        static_grid_experiment(TwoSpeedPumpingPlant(), speeds=[["1200", "1300"]], seed=0)

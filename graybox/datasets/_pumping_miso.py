@@ -68,7 +68,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
-from ..core._validation import as_1d_finite, check_real
+from ..core._validation import as_1d_finite, check_real, real_array
 from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, reference_lengths, regenerate_main, static_samples,
                       static_speeds, write_csv_pair)
 from ..core._reprs import short_repr
@@ -550,9 +550,12 @@ def static_grid_experiment(
         ū = the speed pairs (rpm), shape (K, 2), inputs named ``u1``, ``u2``; ȳ = mean measured
         pressure (mlc), shape (K,).
     """
-    sp = static_grid() if speeds is None else np.asarray(speeds, dtype=float)
+    sp = static_grid() if speeds is None else real_array(speeds, "speeds", "speed pairs (rpm)")
     if sp.ndim != 2 or sp.shape[1] != 2 or sp.shape[0] == 0:
         raise ValueError(f"speeds must have shape (K, 2), got {sp.shape}")
+    bad = np.flatnonzero(~np.all(np.isfinite(sp), axis=1))
+    if bad.size:  # said of the pairs given, not of the run's samples they become
+        raise ValueError(f"speeds must be finite (rpm): row {bad[0]} is {sp[bad[0]].tolist()}")
     n_settle, n_avg = static_samples(plant.Ts, settle, average)
     u = np.repeat(sp, n_settle + n_avg, axis=0)
     run = plant.simulate(u, seed=seed)
