@@ -4,7 +4,10 @@ A *surface* here is anything that maps constant inputs of shape (K, 2) to output
 a :class:`~graybox.StaticSurface`, a model's static surface wrapped in a function, or a plant's
 theoretical one (``lambda U: plant.static_pressure(U[:, 0], U[:, 1])``). Its ``name`` attribute,
 when it has one, labels it; a ``domain`` attribute (one (low, high) per input) sets the default
-ranges.
+ranges. A surface that names its inputs (``input_names``, as a StaticSurface does) is called with
+its columns taken by name from the plot's inputs (the points', else the first named surface's), so
+points in another column order draw the same surface on swapped axes; a surface of other inputs is
+refused.
 """
 
 from __future__ import annotations
@@ -58,6 +61,37 @@ def _name(s: Surface, i: int) -> str:
     return str(getattr(s, "name", None) or f"surface {i + 1}")
 
 
+def _surface_inputs(s: Surface) -> tuple[str, ...] | None:
+    """The names a surface gives its two columns (a StaticSurface's ``input_names``), or None (a bare function)."""
+    names = getattr(s, "input_names", None)
+    if isinstance(names, (tuple, list)) and len(names) == 2 and all(isinstance(n, str) for n in names):
+        return tuple(names)
+    return None
+
+
+def _plot_inputs(surfaces: list[Surface], points: object) -> tuple[str, ...] | None:
+    """The inputs the plot's columns are, by name: the points' (the data's order), else the first named surface's."""
+    names = getattr(points, "input_names", None)
+    if not (isinstance(names, (tuple, list)) and len(names) == 2):
+        names = next((n for n in map(_surface_inputs, surfaces) if n is not None), None)
+    for i, s in enumerate(surfaces):
+        _columns(s, i, names)  # a surface of other inputs is refused before any range is read off it
+    return None if names is None else tuple(names)
+
+
+def _columns(s: Surface, i: int, names: tuple[str, ...] | None) -> list[int] | None:
+    """Which of the plot's columns feed the surface's, in its order (None: as they are). A surface is called
+    with its own inputs in its own order, so points in another column order draw the same picture with the axes
+    swapped; a surface of other inputs than the points' is refused, naming both."""
+    own = _surface_inputs(s)
+    if own is None or names is None or own == names:
+        return None
+    if set(own) != set(names):
+        raise ValueError(f"{_name(s, i)} is a surface in the inputs {own} but the plot's inputs are {names}: "
+                         "draw a surface with the static points of its own inputs")
+    return [names.index(n) for n in own]
+
+
 def _points(points: object) -> tuple[np.ndarray, np.ndarray, str, tuple[str, str]] | None:
     if points is None:
         return None
@@ -70,8 +104,18 @@ def _points(points: object) -> tuple[np.ndarray, np.ndarray, str, tuple[str, str
     return ub, yb, str(getattr(points, "name", "static points")), (str(units[0]), str(units[1]))
 
 
+def _domain(s: Surface, i: int, names: tuple[str, ...] | None) -> tuple[float, float] | None:
+    """The surface's (low, high) for the plot's input ``i`` (its own column of that name), or None."""
+    dom = getattr(s, "domain", None)
+    if dom is None:
+        return None
+    own = _surface_inputs(s)
+    j = i if own is None or names is None else own.index(names[i])
+    return float(dom[j][0]), float(dom[j][1])
+
+
 def _range(i: int, surfaces: list[Surface], pts, given: tuple[float, float] | None, margin: float,
-           name: str = "urange") -> tuple[float, float]:
+           name: str = "urange", names: tuple[str, ...] | None = None) -> tuple[float, float]:
     if given is not None:
         lo, hi = _pair(given, name)
     elif pts is not None:
@@ -79,15 +123,14 @@ def _range(i: int, surfaces: list[Surface], pts, given: tuple[float, float] | No
         pad = margin * (hi - lo)
         lo, hi = lo - pad, hi + pad
         for s in surfaces:  # never draw a surface beyond its own domain
-            dom = getattr(s, "domain", None)
+            dom = _domain(s, i, names)
             if dom is not None:
-                lo, hi = max(lo, float(dom[i][0])), min(hi, float(dom[i][1]))
+                lo, hi = max(lo, dom[0]), min(hi, dom[1])
     else:
-        doms = [getattr(s, "domain", None) for s in surfaces]
-        doms = [d for d in doms if d is not None]
+        doms = [d for d in (_domain(s, i, names) for s in surfaces) if d is not None]
         if not doms:
             raise ValueError(f"no range for input {i + 1}: give static points, a surface with a domain, or the range")
-        lo, hi = max(float(d[i][0]) for d in doms), min(float(d[i][1]) for d in doms)
+        lo, hi = max(d[0] for d in doms), min(d[1] for d in doms)
     if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
         raise ValueError(f"empty range for input {i + 1}: ({lo:g}, {hi:g})")
     return lo, hi
@@ -104,8 +147,9 @@ def _levels(levels: object) -> int | np.ndarray:
     return out
 
 
-def _evaluate(s: Surface, U: np.ndarray, i: int) -> np.ndarray:
-    y = np.asarray(s(U), dtype=float).reshape(-1)
+def _evaluate(s: Surface, U: np.ndarray, i: int, names: tuple[str, ...] | None = None) -> np.ndarray:
+    cols = _columns(s, i, names)
+    y = np.asarray(s(U if cols is None else U[:, cols]), dtype=float).reshape(-1)
     if y.shape != (U.shape[0],):
         raise ValueError(f"{_name(s, i)} returned shape {y.shape} for {U.shape[0]} points; expected ({U.shape[0]},)")
     return y
@@ -171,11 +215,12 @@ def plot_surface_slices(
     margin = check_real(margin, "margin", low=0)
     input_labels = _input_labels(input_labels)
     held = 1 - against
+    names = _plot_inputs(surfaces, points)
     if at is None:
         if pts is not None:
             levels = np.unique(pts[0][:, held])
         else:
-            levels = np.linspace(*_range(held, surfaces, None, None, 0.0), 5)
+            levels = np.linspace(*_range(held, surfaces, None, None, 0.0, names=names), 5)
     else:
         if isinstance(at, (bool, np.bool_, str)):
             raise TypeError(f"at must be levels of the held input (numbers), got {at!r}")
@@ -185,7 +230,7 @@ def plot_surface_slices(
             raise TypeError(f"at must be levels of the held input (numbers), got {at!r}") from None
         if levels.size == 0 or not np.all(np.isfinite(levels)):
             raise ValueError("at must hold at least one finite level")
-    lo, hi = _range(against, surfaces, pts, urange, margin)
+    lo, hi = _range(against, surfaces, pts, urange, margin, names=names)
     if ax is None:
         fig = Figure(figsize=(6.4, 4.2), layout="constrained")
         ax = fig.add_subplot()
@@ -204,7 +249,7 @@ def plot_surface_slices(
             U[:, held] = lev
             label = f"{_name(s, i)}, {input_labels[held]} = {text}" if len(surfaces) > 1 else \
                 f"{input_labels[held]} = {text}"
-            ax.plot(x, _evaluate(s, U, i), styles[i % len(styles)], color=col, label=label)
+            ax.plot(x, _evaluate(s, U, i, names), styles[i % len(styles)], color=col, label=label)
     if pts is not None:
         ub, yb, pname, _ = pts
         labelled = False
@@ -284,11 +329,12 @@ def plot_surface_contours(
         ranges = check_sequence(ranges, "ranges", "two (low, high) pairs")
         if len(ranges) != 2:
             raise ValueError(f"ranges must be two (low, high) pairs, got {ranges!r}")
-    r1 = _range(0, surfaces, pts, None if ranges is None else ranges[0], margin, "ranges[0]")
-    r2 = _range(1, surfaces, pts, None if ranges is None else ranges[1], margin, "ranges[1]")
+    names = _plot_inputs(surfaces, points)
+    r1 = _range(0, surfaces, pts, None if ranges is None else ranges[0], margin, "ranges[0]", names)
+    r2 = _range(1, surfaces, pts, None if ranges is None else ranges[1], margin, "ranges[1]", names)
     g1, g2 = np.linspace(*r1, n_grid), np.linspace(*r2, n_grid)
     G1, G2 = np.meshgrid(g1, g2)
-    Z = _evaluate(s, np.column_stack([G1.ravel(), G2.ravel()]), 0).reshape(G1.shape)
+    Z = _evaluate(s, np.column_stack([G1.ravel(), G2.ravel()]), 0, names).reshape(G1.shape)
     if ax is None:
         fig = Figure(figsize=(6.0, 4.8), layout="constrained")
         ax = fig.add_subplot()

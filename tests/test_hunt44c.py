@@ -1,0 +1,52 @@
+"""Bug hunt 44c: several inputs and transient-input channels end to end."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox import plots
+
+
+def _grid(order=(0, 1), names=("speed", "valve")):
+    """Static points of a surface in (speed rpm, valve %), columns in ``order``."""
+    A, B = np.meshgrid(np.linspace(500.0, 1500.0, 4), np.linspace(10.0, 90.0, 4))
+    A, B = A.ravel(), B.ravel()
+    ybar = 0.002 * A - 0.01 * B + 1e-5 * A * B
+    U = np.c_[A, B][:, list(order)]
+    return gb.StaticPoints(U, ybar, input_names=tuple(names[i] for i in order), uncertainty=0.01)
+
+
+# --- plots of surfaces: a surface and points that name their inputs in different orders --------------------------
+def test_surface_contours_match_a_surface_to_points_by_input_name():
+    pts = _grid()
+    swapped = _grid(order=(1, 0))  # the same points, columns (valve, speed)
+    surf = gb.StaticSurface.fit(pts, 2)  # in (speed, valve)
+    fig = plots.plot_surface_contours(surf, swapped, n_grid=9)
+    ax = fig.axes[0]
+    # the axes are the points' inputs (valve across, speed up), and the map is the surface read by name there
+    assert ax.get_xlim()[0] == pytest.approx(10.0) and ax.get_ylim()[1] == pytest.approx(1500.0)
+    same = plots.plot_surface_contours(surf, pts, n_grid=9).axes[0]
+    # the same surface over the same box: the same contour levels (a surface read with its columns swapped
+    # would span other values, or leave its domain)
+    assert np.allclose(ax.collections[0].levels, same.collections[0].levels)
+
+
+def test_surface_slices_match_a_surface_to_points_by_input_name():
+    pts = _grid()
+    swapped = _grid(order=(1, 0))
+    surf = gb.StaticSurface.fit(pts, 2)
+    fig = plots.plot_surface_slices(surf, swapped, against=1, n_grid=5)  # ȳ against speed, valve held
+    ax = fig.axes[0]
+    line = ax.get_lines()[0]  # the surface at the first held level of valve (10 %)
+    x = np.asarray(line.get_xdata())
+    assert np.allclose(line.get_ydata(), surf(np.c_[x, np.full_like(x, 10.0)]))
+
+
+def test_surface_plots_refuse_a_surface_of_other_inputs():
+    pts = _grid()
+    other = gb.StaticSurface.fit(_grid(names=("n1", "n2")), 2)
+    for draw in (plots.plot_surface_slices, plots.plot_surface_contours):
+        with pytest.raises(ValueError, match="inputs"):
+            draw(other, pts)
