@@ -50,3 +50,38 @@ def test_surface_plots_refuse_a_surface_of_other_inputs():
     for draw in (plots.plot_surface_slices, plots.plot_surface_contours):
         with pytest.raises(ValueError, match="inputs"):
             draw(other, pts)
+
+
+# --- select_graybox: a surface beside records of more inputs, or of its inputs in another order -------------------
+def _rig(n, seed, order=(0, 1)):
+    rng = np.random.default_rng(seed)
+    a = np.repeat(rng.uniform(-1, 1, n // 20 + 1), 20)[:n]
+    b = np.repeat(rng.uniform(-1, 1, n // 30 + 1), 30)[:n]
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = 0.6 * y[k - 1] + 0.5 * a[k - 1] - 0.3 * b[k - 2] + 0.2 * a[k - 1] * b[k - 1] + 0.1
+    U = np.c_[1000 + 500 * a, 50 + 40 * b][:, list(order)]
+    return gb.Record(U, y, Ts=0.1, input_names=tuple(("speed", "valve")[i] for i in order))
+
+
+def test_select_graybox_says_how_a_surface_meets_records_with_transient_inputs():
+    data = gb.transient_inputs(gb.Dataset(_rig(300, 0), _rig(200, 1), _grid()), taus=[3])
+    surface = gb.StaticSurface.fit(_grid(), 1)  # in (speed, valve), the records' first two inputs
+    cand = gb.Candidates(1, {"speed": 1, "valve": 1, "speed_tau3": 1, "valve_tau3": 1}, degree=1)
+    with pytest.raises(ValueError) as info:
+        gb.select_graybox(cand, data, surface, band=1e-3, progress=False)
+    said = str(info.value)
+    assert "first input" not in said and "('speed', 'valve')" in said and ".points(ubar)" in said
+    assert ".points(ubar, name)" not in said
+    # the way it gives: the surface's points, given the transient channels
+    pts = gb.transient_inputs(surface.points(_grid().ubar), taus=[3])
+    assert pts.input_names == data.input_names
+
+
+def test_select_graybox_says_a_surface_of_the_records_inputs_in_another_order_is_to_be_reordered():
+    surface = gb.StaticSurface.fit(_grid(order=(1, 0)), 1)  # (valve, speed)
+    cand = gb.Candidates(1, {"speed": 1, "valve": 1}, degree=1)
+    with pytest.raises(ValueError) as info:
+        gb.select_graybox(cand, gb.Dataset(_rig(300, 0), _rig(200, 1), _grid()), surface, band=1e-3, progress=False)
+    said = str(info.value)
+    assert "first input" not in said and "transient" not in said and "order" in said

@@ -501,6 +501,25 @@ def _static_points(sp, process: gb.Structure, band: float | None,
     return sp, _Form(degree, varied)
 
 
+def _static_way(given: object, names: tuple[str, ...]) -> str:
+    """How a curve or surface whose sampled points do not speak of the records' inputs (``names``) can: a curve is of
+    the records' first input, a surface of its own inputs; "" for anything else."""
+    if isinstance(given, gb.StaticSurface):
+        own = tuple(given.input_names)
+        if set(own) == set(names):
+            return (f"a StaticSurface in the inputs {own} beside records in {names}: fit it on points in the records' "
+                    "order (the same inputs, reordered)")
+        if not set(own) <= set(names):
+            return ""
+        return (f"a StaticSurface speaks of its inputs {own} only: sample it into static points (its .points(ubar)) "
+                "and give those the records' other inputs (e.g. gb.transient_inputs(points, taus=...))")
+    if isinstance(given, gb.StaticCurve):
+        return ("a StaticCurve speaks of the records' first input only: sample it into static points (its "
+                ".points(ubar, name)) and give those the records' other inputs (e.g. gb.transient_inputs(points, "
+                "taus=...))")
+    return ""
+
+
 @dataclass(frozen=True)
 class _Form:
     """The static form the structures are completed to: its degree, in the inputs the static information varies."""
@@ -553,10 +572,9 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         try:
             check_compatible(ident, sp)  # e.g. a curve in u for records with transient inputs: said here, once
         except ValueError as exc:
-            if isinstance(given, (gb.StaticCurve, gb.StaticSurface)):
-                raise ValueError(f"{exc}; a {type(given).__name__} speaks of the records' first input only: sample it "
-                                 "into static points (its .points(ubar, name)) and give those the records' other "
-                                 "inputs (e.g. gb.transient_inputs(points, taus=...))") from None
+            way = _static_way(given, ident.input_names)
+            if way:
+                raise ValueError(f"{exc}; {way}") from None
             raise
     L = process.max_lag
     named = _named(idents, "identification") + _named(valids, "validation") + _named(tests, "test")
