@@ -85,3 +85,28 @@ def test_select_graybox_says_a_surface_of_the_records_inputs_in_another_order_is
         gb.select_graybox(cand, gb.Dataset(_rig(300, 0), _rig(200, 1), _grid()), surface, band=1e-3, progress=False)
     said = str(info.value)
     assert "first input" not in said and "transient" not in said and "order" in said
+
+
+# --- plot_operating_curve: a model of several inputs whose operating points vary one -------------------------------
+def _transient_model():
+    """A one-input plant's model with a transient input u_tau3 (zero at every operating point)."""
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u_tau3(k-1)"])
+    return gb.Model(st, np.array([0.1, 0.6, 0.002, 1e-6, -0.5]), input_names=("u", "u_tau3"), Ts=0.5)
+
+
+def test_plot_operating_curve_draws_a_curve_over_the_one_input_it_varies():
+    model = _transient_model()
+    speeds = np.linspace(800.0, 1600.0, 5)
+    curve = gb.operating_curve(model, np.c_[speeds, np.zeros(5)])  # u_tau3 rests at 0: its static level
+    fig = plots.plot_operating_curve(curve)
+    gain_line = fig.axes[0].get_lines()[0]
+    np.testing.assert_array_equal(gain_line.get_xdata(), speeds)
+    np.testing.assert_allclose(gain_line.get_ydata(), curve.gain[:, 0])  # ∂ȳ/∂u, the input on the axis
+    assert "u" in fig.axes[2].get_xlabel()
+
+
+def test_plot_operating_curve_refuses_points_that_vary_several_inputs_naming_them():
+    model = _transient_model()
+    curve = gb.operating_curve(model, [[800.0, 0.0], [1200.0, 1.0]])
+    with pytest.raises(ValueError, match=r"'u', 'u_tau3'"):
+        plots.plot_operating_curve(curve)

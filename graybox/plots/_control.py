@@ -100,7 +100,11 @@ def plot_operating_curve(
     reference_label: str = "plant",
     xlabel: str = "ū",
 ) -> Figure:
-    """The local gain, dominant time constant and damping against the operating input (one input).
+    """The local gain, dominant time constant and damping against the operating input.
+
+    A model of several inputs is drawn against the one input its operating points vary (the others held,
+    e.g. a transient input at its static level 0), with the gain ∂ȳ/∂ū of that input; points that vary
+    several inputs are refused (plot slices of :meth:`OperatingCurve.to_frame` instead).
 
     Parameters
     ----------
@@ -111,7 +115,7 @@ def plot_operating_curve(
     reference_label : str
         Its legend label.
     xlabel : str
-        The input's label (with units).
+        The input's label (with units); default ``ū``, with several inputs ``ū (name)``.
 
     Returns
     -------
@@ -120,8 +124,21 @@ def plot_operating_curve(
     """
     if not isinstance(curve, OperatingCurve):
         raise TypeError(f"curve must be an OperatingCurve, got {type(curve).__name__}")
-    if curve.ubar.ndim != 1:
-        raise ValueError("plot_operating_curve draws one input; for several, plot slices of the curve's to_frame()")
+    u, gain, gain_low, gain_high = curve.ubar, curve.gain, curve.gain_low, curve.gain_high
+    if u.ndim != 1:
+        # several inputs (e.g. a transient input's z̄ = 0 beside u): drawn against the one the points vary
+        names = curve.local_models[0].input_names
+        varied = [j for j in range(u.shape[1]) if np.ptp(u[:, j]) > 0]
+        if len(varied) != 1:
+            said = ", ".join(repr(names[j]) for j in varied) or "none"
+            raise ValueError(f"plot_operating_curve draws against one input, but the operating points vary {said} "
+                             f"of the inputs {names}: hold all but one (a transient input at 0), or plot slices of "
+                             "the curve's to_frame()")
+        j = varied[0]
+        u, gain = u[:, j], gain[:, j]
+        gain_low, gain_high = (None, None) if gain_low is None else (gain_low[:, j], gain_high[:, j])
+        if xlabel == "ū":
+            xlabel = f"ū ({names[j]})"
     if reference is not None:
         pair = check_sequence(reference, "reference", "a pair (ubar, time_constant)")
         if len(pair) != 2:
@@ -130,11 +147,10 @@ def plot_operating_curve(
                      as_1d_finite(pair[1], "reference[1] (time constant)"))
         if reference[0].size != reference[1].size:
             raise ValueError(f"reference holds {reference[0].size} ū and {reference[1].size} time constants")
-    u = curve.ubar
     fig = Figure(figsize=(7, 7))
     axes = [fig.add_subplot(3, 1, i + 1) for i in range(3)]
     name = curve.model_name or "model"
-    for ax, y, lo, hi, lab in ((axes[0], curve.gain, curve.gain_low, curve.gain_high, "gain"),
+    for ax, y, lo, hi, lab in ((axes[0], gain, gain_low, gain_high, "gain"),
                                (axes[1], curve.time_constant, curve.time_constant_low, curve.time_constant_high,
                                 "time constant (s)"),
                                (axes[2], curve.damping, None, None, "damping ζ")):
