@@ -11,7 +11,7 @@ from graybox import plots
 
 def _grid(order=(0, 1), names=("speed", "valve")):
     """Static points of a surface in (speed rpm, valve %), columns in ``order``."""
-    A, B = np.meshgrid(np.linspace(500.0, 1500.0, 4), np.linspace(10.0, 90.0, 4))
+    A, B = np.meshgrid(np.linspace(600.0, 1400.0, 4), np.linspace(20.0, 80.0, 4))
     A, B = A.ravel(), B.ravel()
     ybar = 0.002 * A - 0.01 * B + 1e-5 * A * B
     U = np.c_[A, B][:, list(order)]
@@ -26,7 +26,7 @@ def test_surface_contours_match_a_surface_to_points_by_input_name():
     fig = plots.plot_surface_contours(surf, swapped, n_grid=9)
     ax = fig.axes[0]
     # the axes are the points' inputs (valve across, speed up), and the map is the surface read by name there
-    assert ax.get_xlim()[0] == pytest.approx(10.0) and ax.get_ylim()[1] == pytest.approx(1500.0)
+    assert ax.get_xlim()[0] == pytest.approx(20.0) and ax.get_ylim()[1] == pytest.approx(1400.0)
     same = plots.plot_surface_contours(surf, pts, n_grid=9).axes[0]
     # the same surface over the same box: the same contour levels (a surface read with its columns swapped
     # would span other values, or leave its domain)
@@ -39,9 +39,9 @@ def test_surface_slices_match_a_surface_to_points_by_input_name():
     surf = gb.StaticSurface.fit(pts, 2)
     fig = plots.plot_surface_slices(surf, swapped, against=1, n_grid=5)  # ȳ against speed, valve held
     ax = fig.axes[0]
-    line = ax.get_lines()[0]  # the surface at the first held level of valve (10 %)
+    line = ax.get_lines()[0]  # the surface at the first held level of valve (20 %)
     x = np.asarray(line.get_xdata())
-    assert np.allclose(line.get_ydata(), surf(np.c_[x, np.full_like(x, 10.0)]))
+    assert np.allclose(line.get_ydata(), surf(np.c_[x, np.full_like(x, 20.0)]))
 
 
 def test_surface_plots_refuse_a_surface_of_other_inputs():
@@ -110,3 +110,28 @@ def test_plot_operating_curve_refuses_points_that_vary_several_inputs_naming_the
     curve = gb.operating_curve(model, [[800.0, 0.0], [1200.0, 1.0]])
     with pytest.raises(ValueError, match=r"'u', 'u_tau3'"):
         plots.plot_operating_curve(curve)
+
+
+# --- a cluster named by its factors, whatever order the data list the inputs in ----------------------------------
+ST_MISO = gb.parse_structure(["1", "y(k-1)", "speed(k-1)", "valve(k-2)", "speed(k-1)valve(k-1)", "y(k-1)speed(k-1)"])
+
+
+@pytest.mark.parametrize("name", ["Σspeedvalve", "Σvalvespeed", "Sspeedvalve", "Σspeed·valve", "Σvalve·speed"])
+def test_cluster_bounds_name_a_cluster_by_its_factors_in_any_order(name):
+    thetas = []
+    for order in ((0, 1), (1, 0)):
+        pe = gb.pe_pareto(ST_MISO, _rig(300, 0, order), _grid(order), lambdas=[0.5],
+                          constraints=gb.ClusterBounds({name: (None, 1e-6)}))
+        thetas.append(pe.thetas[0])
+        cl = pe.member_model(0).clusters()
+        assert cl["Σspeedvalve" if order == (0, 1) else "Σvalvespeed"] <= 1e-6 * (1 + 1e-6)
+    np.testing.assert_allclose(thetas[0], thetas[1], rtol=1e-6, atol=1e-12)  # the terms are the same, by name
+
+
+def test_a_cluster_name_that_fits_no_cluster_is_still_refused_naming_them():
+    from graybox.static._surface_analysis import surface_cluster_map
+    cm = surface_cluster_map(ST_MISO, input_names=("speed", "valve"))
+    with pytest.raises(ValueError, match="no cluster 'Σspeedvalvey'"):
+        cm.index("Σspeedvalvey")
+    with pytest.raises(ValueError, match="no cluster"):
+        cm.index("Σspeedspeed")

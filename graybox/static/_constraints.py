@@ -1102,7 +1102,9 @@ class ClusterBounds(StaticConstraint):
     ----------
     bounds : mapping name -> (lower, upper)
         Cluster name (``"Σy"``, ``"Σyu"``, ``"Σu²"``, or ASCII ``"Sy"``, ``"Su^2"``) or key
-        (p, m); either bound may be None; equal bounds fix the cluster's value.
+        (p, m); either bound may be None; equal bounds fix the cluster's value. With several
+        inputs a name's factors may come in any order (``"Σspeedvalve"`` or ``"Σvalve·speed"``),
+        so the bounds hold whatever order the data list their inputs in.
     """
 
     bounds: Mapping[str | tuple[int, int], tuple[float | None, float | None]] = field(default_factory=dict)

@@ -23,6 +23,8 @@ entry per input.
 
 from __future__ import annotations
 
+import itertools
+
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -74,12 +76,26 @@ def surface_cluster_key(term: Term, inputs: tuple[str, ...]) -> tuple[int, ...]:
     return (term.power_of("y"),) + surface_powers(term, inputs)
 
 
+def _cluster_factors(p: int, powers: tuple[int, ...], inputs: tuple[str, ...]) -> list[str]:
+    """The factors of a cluster's name, ``["y", "u1²", "u2"]`` (none for Σ0)."""
+    parts = ["y" + (str(p).translate(_SUP) if p > 1 else "")] if p else []
+    return parts + [n + (str(a).translate(_SUP) if a > 1 else "") for n, a in zip(inputs, powers) if a]
+
+
 def surface_cluster_name(p: int, powers: tuple[int, ...], inputs: tuple[str, ...], sep: str = "") -> str:
     """Cluster name, e.g. ``Σ0``, ``Σyu1``, ``Σu1²u2``, ``Σy²u2``; the factors joined by ``sep`` (``"·"``
     where the plain names of a structure's clusters would collide: inputs "pos" and "ypos")."""
-    parts = ["y" + (str(p).translate(_SUP) if p > 1 else "")] if p else []
-    parts += [n + (str(a).translate(_SUP) if a > 1 else "") for n, a in zip(inputs, powers) if a]
+    parts = _cluster_factors(p, powers, inputs)
     return "Σ" + sep.join(parts) if parts else "Σ0"
+
+
+def _spellings(p: int, powers: tuple[int, ...], inputs: tuple[str, ...]) -> set[str]:
+    """Every name that writes the cluster's factors in some order, one after the other or joined by ``·``: the
+    same cluster whatever order the data list their inputs in (``Σspeedvalve`` is ``Σvalvespeed``)."""
+    parts = _cluster_factors(p, powers, inputs)
+    if not parts:
+        return {"Σ0"}
+    return {"Σ" + sep.join(perm) for perm in itertools.permutations(parts) for sep in ("", "·")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,9 +135,16 @@ class SurfaceClusterMap:
         names = self.names
         # every printed name is accepted as it is; ASCII ("Syu1", "Su1^2u2") is read as the paper's form
         name = name_or_key if name_or_key in names else ascii_cluster_name(name_or_key, single_input=False)
-        if name not in names:
+        if name in names:
+            return names.index(name)
+        # its factors in another order (the inputs listed in another order print them so), or joined by ·
+        found = [i for i, k in enumerate(self.keys) if name in _spellings(k[0], k[1:], self.inputs)]
+        if len(found) > 1:
+            raise ValueError(f"cluster name {name!r} fits the clusters {[names[i] for i in found]}: name one of them "
+                             "with its factors joined by · (e.g. Σy·u1)")
+        if not found:
             raise ValueError(f"no cluster {name!r} in this structure; it has {names}")
-        return names.index(name)
+        return found[0]
 
     @property
     def max_y_power(self) -> int:
