@@ -135,3 +135,34 @@ def test_a_cluster_name_that_fits_no_cluster_is_still_refused_naming_them():
         cm.index("Σspeedvalvey")
     with pytest.raises(ValueError, match="no cluster"):
         cm.index("Σspeedspeed")
+
+
+# --- GainBounds: one bound for every input leaves a transient input (no static level) free ------------------------
+def _transient_rig():
+    """A rig whose speed changes cost output for a while (a transient effect of negative sign), as the bundled
+    plant's air loss does, with its transient channel and static points at z̄ = 0."""
+    rng = np.random.default_rng(4)
+    n = 1200
+    a = np.repeat(rng.uniform(-1, 1, n // 25 + 1), 25)[:n]
+    u = 1000 + 400 * a
+    rec = gb.transient_inputs(gb.Record(u, np.zeros(n), Ts=0.1), taus=[1.0])
+    z = rec.input("u_tau1")
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.7 * y[k - 1] + 0.003 * u[k - 1] - 1e-5 * z[k - 1] + 0.01 * rng.standard_normal()
+    ub = np.linspace(700.0, 1300.0, 5)
+    pts = gb.transient_inputs(gb.StaticPoints(ub, 0.01 * ub, uncertainty=0.02), taus=[1.0])
+    return gb.Record(rec.u, y, Ts=0.1, input_names=rec.input_names), pts
+
+
+def test_one_gain_bound_for_every_input_leaves_a_transient_input_free():
+    rec, pts = _transient_rig()
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u_tau1(k-1)"])
+    free = gb.pe_pareto(st, rec, pts, lambdas=[0.5]).thetas[0]
+    assert free[3] < 0  # the transient effect lowers the output
+    monotone = gb.pe_pareto(st, rec, pts, lambdas=[0.5], constraints=gb.GainBounds(lower=0.0)).thetas[0]
+    # a monotone static curve in u (met already) does not ban the transient effect's sign: same fit
+    np.testing.assert_allclose(monotone, free, rtol=1e-6)
+    # a bound given for the transient input itself still holds
+    held = gb.pe_pareto(st, rec, pts, lambdas=[0.5], constraints=gb.GainBounds(lower=[0.0, 0.0])).thetas[0]
+    assert held[3] >= -1e-12

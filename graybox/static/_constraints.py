@@ -47,7 +47,7 @@ from ..core._records import StaticPoints
 from ._surfaces import StaticSurface, box_grid
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
-from ..core._terms import Structure
+from ..core._terms import Structure, transient_source
 from ..core._validation import FrozenMap, check_choice, check_int, check_real, check_sequence, check_str
 from ..core._reprs import level_texts, short_repr
 
@@ -877,7 +877,9 @@ class GainBounds(StaticConstraint):
 
     Several inputs: the gain is the gradient, ``∂ȳ/∂ū_j = G_j/D`` with
     ``G_j = Σ_c Σ_c m_j ȳ^p Π_k ū_k^(m_k − δ_jk)``, and the bounds hold per input (``lower`` and
-    ``upper`` may be one number for every input or one entry per input, None for no bound). The
+    ``upper`` may be one number for every input or one entry per input, None for no bound; one
+    number leaves the transient inputs of :func:`~graybox.transient_inputs` free, whose z̄ is 0 at
+    every steady state, so that a monotone static curve does not fix a transient effect's sign). The
     bounds are imposed on the grid of ``n`` levels per input over the box ``ubar_range`` (one
     (low, high) per input) with ȳ from a reference surface (a :class:`~graybox.StaticSurface` or
     any function of ū of shape (K, m)); without a reference surface they are imposed at the
@@ -971,13 +973,18 @@ class GainBounds(StaticConstraint):
             where = " over ū in " + " × ".join("[{}, {}]".format(*level_texts(r)) for r in rng)
         return f"static gain in {bounds}{where}"
 
-    def _bounds(self, m: int) -> list[tuple[float | None, float | None]]:
-        """(lower, upper) per input, checked against the structure's input count ``m``."""
+    def _bounds(self, m: int, inputs: tuple[str, ...] = ()) -> list[tuple[float | None, float | None]]:
+        """(lower, upper) per input, checked against the structure's input count ``m``. One bound for every input
+        leaves the transient inputs among ``inputs`` (the inputs' names) free: their z̄ is 0 at every steady state,
+        so a gain along them is no static gain (a monotone curve must not fix the sign of a transient effect);
+        a bound given per input holds where it is given."""
         lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
         for nm, v in (("lower", lows), ("upper", highs)):
             if len(v) > 1 and len(v) != m:
                 raise ValueError(f"{self.describe()}: {nm} has {len(v)} entries but the structure has {m} input(s)")
-        return [(lows[j if len(lows) > 1 else 0], highs[j if len(highs) > 1 else 0]) for j in range(m)]
+        transient = [len(inputs) == m and transient_source(inputs[j], inputs) is not None for j in range(m)]
+        return [(None if len(lows) == 1 and transient[j] else lows[j if len(lows) > 1 else 0],
+                 None if len(highs) == 1 and transient[j] else highs[j if len(highs) > 1 else 0]) for j in range(m)]
 
     def grid(self, ctx: StaticContext) -> tuple[np.ndarray, np.ndarray]:
         """The ū grid and the reference ȳ on it for the problem ``ctx``, shapes (K,) or (K, m), and (K,)."""
@@ -1054,7 +1061,7 @@ class GainBounds(StaticConstraint):
     def affine(self, ctx: StaticContext) -> AffineRows:
         cm = ctx.cluster_map
         m = n_static_inputs(cm)
-        bounds = self._bounds(m)
+        bounds = self._bounds(m, cm.inputs if isinstance(cm, SurfaceClusterMap) else ())
         ub, yb = self.grid(ctx)
         one, dR = _denominator_rows(cm, ub, yb)
         rows, rhs = [], []
