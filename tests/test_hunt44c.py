@@ -166,3 +166,13 @@ def test_one_gain_bound_for_every_input_leaves_a_transient_input_free():
     # a bound given for the transient input itself still holds
     held = gb.pe_pareto(st, rec, pts, lambdas=[0.5], constraints=gb.GainBounds(lower=[0.0, 0.0])).thetas[0]
     assert held[3] >= -1e-12
+
+
+def test_a_gain_bounds_box_holds_a_flat_range_at_one_level():
+    # GainBounds(ubar_range=[(600, 1400), (20, 80), (0, 0), (0, 0)]) over two inputs and their transient channels
+    # (z̄ = 0) made 25⁴ = 390 625 grid points, every one repeated 625 times (29 s for one PE member); three inputs
+    # would have made 25⁶
+    from graybox.static._surfaces import box_grid
+    grid = box_grid([(600.0, 1400.0), (20.0, 80.0), (0.0, 0.0), (0.0, 0.0)], 25)
+    assert grid.shape == (625, 4)
+    assert len(np.unique(grid, axis=0)) == 625 and np.all(grid[:, 2:] == 0.0)

@@ -23,8 +23,10 @@ __all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
 
 def box_grid(box: Sequence[tuple[float, float]], levels: int) -> np.ndarray:
     """Every combination of ``levels`` evenly spaced levels per input over ``box`` (one (low,
-    high) per input), shape (levels^m, m), the first input varying slowest."""
-    axes = [np.linspace(lo, hi, levels) for lo, hi in box]
+    high) per input), shape (K, m), the first input varying slowest; an input whose range is one
+    level (low = high, e.g. a transient input at its static level 0) takes that one level, not
+    ``levels`` copies of it (K = levels^(inputs that vary))."""
+    axes = [np.linspace(lo, hi, levels if hi > lo else 1) for lo, hi in box]
     return np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
 
 
