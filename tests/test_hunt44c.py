@@ -176,3 +176,15 @@ def test_a_gain_bounds_box_holds_a_flat_range_at_one_level():
     grid = box_grid([(600.0, 1400.0), (20.0, 80.0), (0.0, 0.0), (0.0, 0.0)], 25)
     assert grid.shape == (625, 4)
     assert len(np.unique(grid, axis=0)) == 625 and np.all(grid[:, 2:] == 0.0)
+
+
+def test_a_non_finite_input_sample_is_said_of_its_input_by_name():
+    # "first at sample 2, input 1" for a NaN in the second column: u2 to whoever counts inputs from 1, as every
+    # default name does (u1, u2), u1 to whoever reads the name
+    u = np.c_[np.ones(5), [1.0, 2.0, np.nan, 4.0, 5.0]]
+    with pytest.raises(ValueError, match=r"sample 2, input 'u2'"):
+        gb.Record(u, np.arange(5.0))
+    with pytest.raises(ValueError, match=r"sample 2, input 'valve'"):
+        gb.Record(u, np.arange(5.0), input_names=("speed", "valve"))
+    with pytest.raises(ValueError, match=r"point 1, input 'b'"):
+        gb.StaticPoints(np.c_[[1.0, 2.0, 3.0], [1.0, np.nan, 3.0]], np.arange(3.0), input_names=("a", "b"))

@@ -94,13 +94,15 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
                      "(read by position)")
 
 
-def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: object = None) -> np.ndarray:
+def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: object = None,
+                   row: str = "sample") -> np.ndarray:
     """Input samples as a read-only float64 copy: shape (N,) for one input, C-contiguous (N, m) for several.
 
     The one coercion of inputs (records, static points, free runs, static surfaces): a pandas DataFrame
     is read by column name where its columns are the inputs ``names`` (default ``u`` / ``u1 … um``), in
     any order, by position where they name none of them, and refused where they name some
-    (:func:`frame_inputs`; ``output``, the output as a named Series, never an input).
+    (:func:`frame_inputs`; ``output``, the output as a named Series, never an input). A non-finite value is
+    said by its ``row`` (``"sample"``, ``"point"``; counted from 0) and its input's name.
     """
     x = frame_inputs(x, names, name, output)
     refuse_non_real(x, name)
@@ -118,7 +120,10 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     bad = ~np.isfinite(a)
     if bad.any():
         r, c = np.argwhere(bad)[0]
-        raise ValueError(f"{name} has {int(bad.sum())} non-finite value(s) (NaN or inf), first at sample {r}, input {c}")
+        # by name: "input 1" read as u1 by whoever counts inputs from 1 (as the default names do) was u2
+        said = names if names is not None and len(names) == a.shape[1] else default_input_names(a.shape[1])
+        raise ValueError(f"{name} has {int(bad.sum())} non-finite value(s) (NaN or inf), first at {row} {r}, input "
+                         f"{said[c]!r}")
     a = np.ascontiguousarray(a)
     a.setflags(write=False)
     return a
@@ -258,7 +263,8 @@ class StaticPoints:
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticPoints: name")
-        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=output_series(self.ybar))
+        u = as_input_array(self.ubar, f"{self.name}: ubar", self.input_names, output=output_series(self.ybar),
+                           row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{self.name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
@@ -334,7 +340,7 @@ class StaticPoints:
             there. (Their spread is the static uncertainty that D_SF's band B stands for.)
         """
         check_str(name, "StaticPoints: name")
-        u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar))
+        u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
             raise ValueError(f"{name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
