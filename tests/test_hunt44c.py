@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import graybox as gb
@@ -188,3 +189,14 @@ def test_a_non_finite_input_sample_is_said_of_its_input_by_name():
         gb.Record(u, np.arange(5.0), input_names=("speed", "valve"))
     with pytest.raises(ValueError, match=r"point 1, input 'b'"):
         gb.StaticPoints(np.c_[[1.0, 2.0, 3.0], [1.0, np.nan, 3.0]], np.arange(3.0), input_names=("a", "b"))
+
+
+def test_a_missing_value_in_a_nullable_input_column_is_said_as_one():
+    # pandas' nullable columns (Int64, Float64) hold pd.NA: a Series said "non-finite value at index 2", a
+    # DataFrame of several inputs "u must be an array of numbers, got DataFrame" (a TypeError, for a bad value)
+    frame = pd.DataFrame({"speed": pd.array([1000, 1100, None, 1200, 1300], dtype="Int64"),
+                          "valve": pd.array([10.0, 20.0, 30.0, 40.0, 50.0], dtype="Float64")})
+    with pytest.raises(ValueError, match=r"non-finite value.*sample 2, input 'speed'"):
+        gb.Record(frame, np.arange(5.0), input_names=("speed", "valve"))
+    rec = gb.Record(frame.fillna(1150), np.arange(5.0), input_names=("speed", "valve"))
+    np.testing.assert_array_equal(rec.input("speed"), [1000.0, 1100.0, 1150.0, 1200.0, 1300.0])

@@ -277,6 +277,13 @@ def float_array(x: object, name: str, what: str = "an array of numbers") -> np.n
     """
     if x is None:
         raise TypeError(f"{name} must be {what}, got None")
+    if type(x).__module__.startswith("pandas") and hasattr(x, "to_numpy"):
+        # pandas' nullable columns (Int64, Float64) hold pd.NA, which numpy cannot make a float: read as NaN,
+        # that the finite checks name it (a Series did, a DataFrame of them was "no array of numbers")
+        try:
+            return np.array(x.to_numpy(dtype=float, na_value=np.nan), dtype=float, copy=True)
+        except (TypeError, ValueError):
+            pass  # text, dates …: said below as for any other object
     try:
         return np.array(x, dtype=float, copy=True)
     except TypeError:
