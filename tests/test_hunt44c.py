@@ -200,3 +200,18 @@ def test_a_missing_value_in_a_nullable_input_column_is_said_as_one():
         gb.Record(frame, np.arange(5.0), input_names=("speed", "valve"))
     rec = gb.Record(frame.fillna(1150), np.arange(5.0), input_names=("speed", "valve"))
     np.testing.assert_array_equal(rec.input("speed"), [1000.0, 1100.0, 1150.0, 1200.0, 1300.0])
+
+
+def test_plot_static_curve_draws_points_of_one_input_and_its_transient_channel():
+    # the bundled plant's points after transient_inputs: (ū, z̄ = 0); refused as "several inputs" before
+    pts = gb.transient_inputs(gb.StaticPoints(np.linspace(700.0, 1300.0, 5), np.arange(5.0), units=("rpm", "mlc")),
+                              taus=[30])
+    curve = gb.StaticCurve.fit(gb.StaticPoints(np.linspace(700.0, 1300.0, 5), np.arange(5.0)), 1)
+    fig = plots.plot_static_curve(pts, curve)
+    ax = fig.axes[0]
+    marks = ax.get_lines()[-1]
+    np.testing.assert_array_equal(marks.get_xdata(), np.linspace(700.0, 1300.0, 5))
+    assert "u" in ax.get_xlabel() and "rpm" in ax.get_xlabel()
+    two = _grid()  # two inputs that both vary: still a surface's
+    with pytest.raises(ValueError, match="plot_surface_slices"):
+        plots.plot_static_curve(two)

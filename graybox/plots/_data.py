@@ -47,6 +47,23 @@ def check_one_input_points(points: object, who: str) -> None:
                          "drawn against one input: use plot_surface_slices or plot_surface_contours")
 
 
+def one_input_levels(points: StaticPoints | None, who: str) -> tuple[np.ndarray | None, str | None]:
+    """The points' ū as a 1-D array: of their one input, or of the one input they vary when they hold the others (a
+    transient input's z̄ = 0 beside ū), with that input's name (None for points of one input); ``ValueError`` for
+    points that vary several (a surface's)."""
+    if points is None:
+        return None, None
+    if not isinstance(points, StaticPoints) or points.n_inputs == 1:
+        check_one_input_points(points, who)  # raises for what is no static points
+        return points.ubar, None
+    ub = np.asarray(points.ubar, float)
+    varied = [j for j in range(ub.shape[1]) if np.ptp(ub[:, j]) > 0]
+    if len(varied) != 1:
+        check_one_input_points(points, who)  # raises, naming the inputs
+    j = varied[0]
+    return ub[:, j], points.input_names[j]
+
+
 def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
     """Which static points lie on a slice: ``held`` (N, k) their held inputs' levels, ``level`` (k,) the slice's;
     equal to 1e-9 of each held input's own size (any unit: nA or MW, one input's unit apart from another's),
@@ -119,9 +136,12 @@ def plot_static_curve(
         ``points`` that are not :class:`~graybox.StaticPoints` (a Dataset's are ``data.static``), a
         ``curve`` that is not a :class:`~graybox.StaticCurve` (or a sequence of them).
     ValueError
-        Points of several inputs (draw them with :func:`plot_surface_slices`).
+        Points that vary several inputs (draw them with :func:`plot_surface_slices`); points that
+        hold all inputs but one (a transient input's z̄ = 0 beside ū) are drawn against that one.
     """
-    check_one_input_points(points, "plot_static_curve")
+    levels, varied = one_input_levels(points, "plot_static_curve")
+    if varied is not None and xlabel == "input ū":
+        xlabel = f"input {varied}"
     curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else None)
     if curves is None:
         given = list(curve) if isinstance(curve, Sequence) and not isinstance(curve, str) else [curve]
@@ -139,7 +159,7 @@ def plot_static_curve(
         if c.domain is not None:
             lo, hi = c.domain
         elif points is not None:
-            lo, hi = float(points.ubar.min()), float(points.ubar.max())
+            lo, hi = float(levels.min()), float(levels.max())
             pad = margin * (hi - lo)
             lo, hi = lo - pad, hi + pad
         else:
@@ -147,7 +167,7 @@ def plot_static_curve(
         ub = np.linspace(lo, hi, n_grid)
         ax.plot(ub, c(ub), "-", label=c.name)
     if points is not None:
-        ax.plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
+        ax.plot(levels, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
     u_unit, y_unit = ("", "") if points is None else points.units
     ax.set_xlabel(unit_label(xlabel, u_unit))
     ax.set_ylabel(unit_label(ylabel, y_unit))
