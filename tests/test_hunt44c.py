@@ -215,3 +215,15 @@ def test_plot_static_curve_draws_points_of_one_input_and_its_transient_channel()
     two = _grid()  # two inputs that both vary: still a surface's
     with pytest.raises(ValueError, match="plot_surface_slices"):
         plots.plot_static_curve(two)
+
+
+def test_a_data_sets_surface_is_told_from_another_of_the_same_coefficients():
+    # a grid cell's key holds the data set's fingerprint: two surfaces with the same coefficients on other monomials
+    # hashed alike, so a store gave the first surface's CLS cells for the second (curve = "dataset")
+    from graybox.experiments._spec import data_fingerprint
+    rec, box = _rig(100, 0), ((600.0, 1400.0), (20.0, 80.0))
+    a = gb.StaticSurface([(0, 0), (1, 0), (0, 1)], [-0.5, 1e-3, -5e-3], domain=box, input_names=("speed", "valve"))
+    b = gb.StaticSurface([(0, 0), (0, 1), (1, 0)], [-0.5, 1e-3, -5e-3], domain=box, input_names=("speed", "valve"))
+    assert not np.allclose(a(_grid().ubar), b(_grid().ubar))
+    prints = {data_fingerprint(gb.Dataset(rec, rec, _grid(), extra={"static_curve": s})) for s in (a, b)}
+    assert len(prints) == 2

@@ -429,8 +429,8 @@ def _carries_uncertainty(d: DataSpec) -> bool:
 
 
 def data_fingerprint(ds: gb.Dataset) -> str:
-    """A hash of a data set's content: records (u, y, Ts), static points, static curve, and the
-    inputs' names when they are not the default ones (made structures' terms carry them)."""
+    """A hash of a data set's content: records (u, y, Ts), static points, static curve (a surface's monomials and
+    inputs too), and the inputs' names when they are not the default ones (made structures' terms carry them)."""
     h = hashlib.sha256()
     names = ds.input_names
     if tuple(names) != tuple(default_input_names(len(names))):  # default names hash as before
@@ -446,6 +446,8 @@ def data_fingerprint(ds: gb.Dataset) -> str:
     if curve is not None:
         h.update(np.ascontiguousarray(curve.coefficients, dtype="<f8").tobytes())
         h.update(repr(curve.domain).encode())
+        if isinstance(curve, gb.StaticSurface):  # its coefficients say nothing without their monomials and inputs
+            h.update(repr((tuple(curve.exponents), tuple(curve.input_names))).encode())
     return h.hexdigest()[:16]
 
 
