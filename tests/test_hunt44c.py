@@ -227,3 +227,22 @@ def test_a_data_sets_surface_is_told_from_another_of_the_same_coefficients():
     assert not np.allclose(a(_grid().ubar), b(_grid().ubar))
     prints = {data_fingerprint(gb.Dataset(rec, rec, _grid(), extra={"static_curve": s})) for s in (a, b)}
     assert len(prints) == 2
+
+
+def test_operating_points_of_a_model_with_transient_inputs_take_them_at_zero():
+    # a one-input plant's model with a transient input: ū given as levels of u, as for a one-input model, has
+    # z̄ = 0 (its level at every steady state); [800, 1200] was the one point (u = 800, z̄ = 1200), silently
+    model = _transient_model()  # inputs (u, u_tau3)
+    levels = np.array([800.0, 1200.0])
+    full = np.c_[levels, np.zeros(2)]
+    np.testing.assert_array_equal(gb.operating_curve(model, levels).ubar, full)
+    np.testing.assert_allclose(model.static_gain(levels), model.static_gain(full))
+    np.testing.assert_allclose(model.static_curve(levels), model.static_curve(full))
+    assert gb.local_model(model, 1200.0).ybar == gb.local_model(model, [1200.0, 0.0]).ybar
+    assert model.equilibria(1200.0)[0].ubar == (1200.0, 0.0)
+    # a full point stays one point; several inputs beside their channels: points of those inputs
+    assert len(gb.operating_curve(model, [1200.0, 0.0]).ubar) == 1
+    st = gb.parse_structure(["1", "y(k-1)", "a(k-1)", "b(k-1)", "a_tau3(k-1)"])
+    two = gb.Model(st, np.array([0.1, 0.5, 1.0, 2.0, -0.1]), input_names=("a", "b", "a_tau3"), Ts=1.0)
+    np.testing.assert_allclose(two.static_curve([[1.0, 2.0], [0.5, 1.0]]),
+                               two.static_curve([[1.0, 2.0, 0.0], [0.5, 1.0, 0.0]]))

@@ -32,6 +32,7 @@ from scipy.signal import lfilter
 from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, check_units, frame_inputs, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
+from ..core._transient import steady_levels
 from ..core._validation import (check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
@@ -510,10 +511,11 @@ def input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
     return real_array(ubar, name, "input levels (numbers)")
 
 
-def _as_points(model: Model, ubar: object) -> np.ndarray:
-    """ū as points of shape (M, m) in the model's input order."""
+def _as_points(model: Model, ubar: object, one_point: bool = False) -> np.ndarray:
+    """ū as points of shape (M, m) in the model's input order (``one_point``: the caller takes one)."""
     m = model.n_inputs
     ub = input_levels(frame_inputs(ubar, model.input_names, "ubar"))  # a DataFrame: by column name
+    ub = steady_levels(ub, model.input_names, one_point=one_point)  # transient inputs left out: z̄ = 0
     if m == 1:
         ub = np.atleast_1d(ub).reshape(-1, 1) if ub.ndim <= 1 else ub
     elif ub.ndim == 1 and ub.size == m:
@@ -656,7 +658,8 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
     model : Model
         A polynomial NARX model (a ``NeuralModel`` gets a ``TypeError``).
     ubar : float or array_like, shape (m,)
-        The operating input (input units); one value per input, in ``model.input_names`` order.
+        The operating input (input units); one value per input, in ``model.input_names`` order
+        (transient inputs left out are 0, their level at every steady state).
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
         ``data`` at another period is refused), else ``data``'s.
@@ -675,7 +678,7 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
         properties raise ``ValueError`` saying so.
     """
     model = check_polynomial(model, "local_model")
-    ub = _as_points(model, ubar)
+    ub = _as_points(model, ubar, one_point=True)
     if ub.shape[0] != 1:
         raise ValueError(f"ubar: local_model takes one operating point, got {ub.shape[0]} (use operating_curve)")
     Ts_ = check_Ts(Ts, data, model)
@@ -874,7 +877,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     model : Model
         A polynomial NARX model.
     ubar : array_like, shape (M,) or (M, m)
-        Operating inputs (input units).
+        Operating inputs (input units); transient inputs left out are 0, their level at every
+        steady state (levels of shape (M,) for a one-input plant's model with them).
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
         ``data`` at another period is refused), else ``data``'s.

@@ -29,7 +29,7 @@ from ._records import Dataset, Record, StaticPoints
 from ._terms import transient_name, transient_source
 from ._validation import check_real, check_sequence
 
-__all__ = ["transient_inputs"]
+__all__ = ["transient_inputs", "steady_levels"]
 
 _Data = TypeVar("_Data", Record, Dataset, StaticPoints)
 
@@ -134,3 +134,35 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
                    transient_inputs(data.valid, tau_list, inputs=chosen),
                    None if data.static is None else transient_inputs(data.static, tau_list, inputs=chosen),
                    data.description, extra)
+
+
+def steady_levels(ub: np.ndarray, names: Sequence[str], *, one_point: bool = False) -> np.ndarray:
+    """Operating points ū of a model whose inputs ``names`` include transient inputs, with their z̄ = 0 filled in.
+
+    A transient input is 0 at every steady state, so ū given for the other inputs alone is completed with zero
+    columns, shape (M, m): with one other input, a scalar or levels of shape (M,) (as for a model of one input;
+    a 1-D ū of length m whose transient entries are all 0 stays one point, as before); with k others, one point
+    of shape (k,) or points (M, k). ``one_point``: the caller takes one point, so a 1-D ū of length m is that
+    point whatever its transient entries. Anything else, and ū of a model without transient inputs, is returned
+    as it is (the caller's shape checks say what is wrong).
+    """
+    names = tuple(names)
+    base = [j for j, n in enumerate(names) if transient_source(n, names) is None]
+    m, k = len(names), len(base)
+    if k in (0, m):
+        return ub
+    z = [j for j in range(m) if j not in base]
+    if ub.ndim == 1 and ub.size == m and (one_point or k > 1 or np.all(ub[z] == 0)):
+        return ub  # one point of every input
+    if k == 1 and ub.ndim <= 1:
+        # levels of the one input: [1000, 1200] was the point (1000, z̄ = 1200), where the run never rests
+        levels = ub.reshape(-1, 1)
+    elif ub.ndim == 2 and ub.shape[1] == k:
+        levels = ub
+    elif ub.ndim == 1 and ub.size == k:
+        levels = ub[None, :]
+    else:
+        return ub
+    full = np.zeros((levels.shape[0], m))
+    full[:, base] = levels
+    return full

@@ -35,6 +35,7 @@ from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
 from ._linearisation import input_monomials_of, static_gains, static_powers, static_theta_gradient_of
 from ..core._records import frame_inputs
 from ..core._terms import Structure, Term, check_input_names, require_inputs
+from ..core._transient import steady_levels
 from ..core._validation import check_bool, check_fields, check_per_point, real_array
 from ..core._reprs import short_repr
 
@@ -204,11 +205,13 @@ def input_monomials(structure: Structure, ubar: np.ndarray, inputs: tuple[str, .
     return input_monomials_of(static_powers(structure, names)[1], ub)
 
 
-def points_of_inputs(ubar: object, names: tuple[str, ...]) -> np.ndarray:
+def points_of_inputs(ubar: object, names: tuple[str, ...], *, one_point: bool = False) -> np.ndarray:
     """ū as finite points, shape (M, m), columns in the order of the inputs ``names``; a 1-D ū of length m is
-    one point; a DataFrame is read by column name as every input is (:func:`~graybox.core._records.frame_inputs`)."""
+    one point; a DataFrame is read by column name as every input is (:func:`~graybox.core._records.frame_inputs`);
+    transient inputs left out are 0, their level at every steady state (:func:`~graybox.core._transient.steady_levels`)."""
     m = len(names)
     ub = real_array(frame_inputs(ubar, names, "ubar"), "ubar", "points of input levels (numbers)")
+    ub = steady_levels(ub, names, one_point=one_point)  # a transient input's z̄ = 0 where ū gives the others only
     if ub.ndim == 1 and ub.size == m:
         ub = ub[None, :]
     if ub.ndim != 2 or ub.shape[1] != m:
@@ -245,7 +248,7 @@ def surface_equilibria(structure: Structure, theta: np.ndarray, ubar: np.ndarray
     """
     structure, theta = _static.checked_model(structure, theta)
     names = surface_inputs(structure, input_names)
-    ub = points_of_inputs(ubar, names)
+    ub = points_of_inputs(ubar, names, one_point=True)
     if ub.shape[0] != 1:
         raise ValueError(f"ubar must be one point of shape ({len(names)},), got shape {np.shape(ubar)}")
     sk, th = _folded(structure, theta, ub, names)
