@@ -246,3 +246,19 @@ def test_operating_points_of_a_model_with_transient_inputs_take_them_at_zero():
     two = gb.Model(st, np.array([0.1, 0.5, 1.0, 2.0, -0.1]), input_names=("a", "b", "a_tau3"), Ts=1.0)
     np.testing.assert_allclose(two.static_curve([[1.0, 2.0], [0.5, 1.0]]),
                                two.static_curve([[1.0, 2.0, 0.0], [0.5, 1.0, 0.0]]))
+
+
+def test_decimating_transient_inputs_gives_the_channels_of_the_decimated_record():
+    # z(k) = ρ z(k−1) + (1 − ρ)(u(k) − u(k−1))² depends on Ts: the fast record's z kept every q-th sample was about
+    # half the z that transient_inputs gives the decimated record (or any new record at that rate) a model meets
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.uniform(800, 1600, 40), 50)
+    rec = gb.Record(u, np.sin(np.arange(u.size) / 30.0), Ts=0.1, units=("rpm", "mlc"))
+    fast = gb.transient_inputs(rec, taus=[3, 2.5])
+    slow = gb.decimate(fast, 4)
+    again = gb.transient_inputs(gb.decimate(rec, 4), taus=[3, 2.5])
+    assert slow.input_names == again.input_names
+    np.testing.assert_allclose(slow.u, again.u, rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(slow.y, again.y)
+    data = gb.transient_inputs(gb.Dataset(rec, rec.slice(0, 1000, name="v"), None), taus=[3])
+    np.testing.assert_allclose(gb.decimate(data, 4).ident.u, gb.transient_inputs(gb.decimate(rec, 4), taus=[3]).u)

@@ -29,7 +29,7 @@ from ._records import Dataset, Record, StaticPoints
 from ._terms import transient_name, transient_source
 from ._validation import check_real, check_sequence
 
-__all__ = ["transient_inputs", "steady_levels"]
+__all__ = ["transient_inputs", "steady_levels", "recomputed_transients"]
 
 _Data = TypeVar("_Data", Record, Dataset, StaticPoints)
 
@@ -166,3 +166,37 @@ def steady_levels(ub: np.ndarray, names: Sequence[str], *, one_point: bool = Fal
     full = np.zeros((levels.shape[0], m))
     full[:, base] = levels
     return full
+
+
+def recomputed_transients(u: np.ndarray, names: Sequence[str], Ts: float,
+                          taus: Mapping[str, tuple[str, float]] | None = None) -> np.ndarray:
+    """The inputs ``u`` (shape (N,) or (N, m)) with every transient input among ``names`` computed afresh from its
+    input at the period ``Ts`` (s): what :func:`transient_inputs` gives a record of these samples. ``taus``: name →
+    (input, τ) (a Dataset's ``extra["transient_inputs"]``), else τ is read from the name (6 digits). A record
+    decimated keeps every q-th sample of its inputs, but z is no such sample: its (1 − ρ) and ρ are of Ts."""
+    names = tuple(names)
+    if u.ndim == 1:
+        return u
+    out = None
+    for j, n in enumerate(names):
+        source = transient_source(n, names)
+        if source is None:
+            continue
+        given = None if taus is None else taus.get(n)
+        tau = float(given[1]) if given is not None and given[0] == source else _tau_of(n, source)
+        if tau is None:
+            continue
+        if out is None:
+            out = np.array(u, dtype=float)
+        out[:, j] = _filtered_square_change(out[:, names.index(source)], -Ts / tau)
+    return u if out is None else out
+
+
+def _tau_of(name: str, source: str) -> float | None:
+    """τ (s) written in a transient input's name by :func:`transient_name` (``u_tau2p5`` → 2.5), or None."""
+    tag = name[len(source) + 4:].replace("p", ".").replace("m", "-")
+    try:
+        tau = float(tag)
+    except ValueError:
+        return None
+    return tau if np.isfinite(tau) and tau > 0 else None

@@ -16,11 +16,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from ..core._records import Dataset, Record, as_records
+from ..core._transient import recomputed_transients
 from ..core._validation import check_bool, check_fields, check_int
 from ..io._json import register_type
 
@@ -214,7 +215,9 @@ def decimate(data: Record | Dataset | Sequence[Record], q: int, *, antialias: bo
         that a level or a ramp passes unchanged (an offset or a unit never changes the result but
         by the same offset and scale). Noise above the new Nyquist frequency would otherwise fold
         into the band the model fits. The inputs are never filtered, only subsampled: they are what
-        was applied, and a filtered input is one the plant never saw.
+        was applied, and a filtered input is one the plant never saw. Transient inputs
+        (:func:`graybox.transient_inputs`) are no samples of the plant but filters of an input at the
+        sampling period: they are computed afresh at the new period, as for a record sampled there.
 
     Returns
     -------
@@ -232,7 +235,9 @@ def decimate(data: Record | Dataset | Sequence[Record], q: int, *, antialias: bo
     q = check_int(q, "q", low=1)
     antialias = check_bool(antialias, "antialias")
     if isinstance(data, Dataset):
-        ident, valid = (_decimate(r, q, antialias) for r in (data.ident, data.valid))
+        taus = data.extra.get("transient_inputs")
+        ident, valid = (_decimate(r, q, antialias, taus if isinstance(taus, Mapping) else None)
+                        for r in (data.ident, data.valid))
         return replace(data, ident=ident, valid=valid,
                        description=(data.description + f" (decimated by {q})").strip())
     recs = as_records(data, name="data")
@@ -240,7 +245,7 @@ def decimate(data: Record | Dataset | Sequence[Record], q: int, *, antialias: bo
     return out[0] if isinstance(data, Record) else out
 
 
-def _decimate(rec: Record, q: int, antialias: bool) -> Record:
+def _decimate(rec: Record, q: int, antialias: bool, taus: Mapping | None = None) -> Record:
     n = len(rec)
     if q == 1:
         return rec
@@ -259,5 +264,6 @@ def _decimate(rec: Record, q: int, antialias: bool) -> Record:
         # odd reflection about each end: a level and a ramp continue as they are, so the filter leaves them be
         ext = np.concatenate([2 * y[0] - y[half:0:-1], y, 2 * y[-1] - y[-2:-half - 2:-1]])
         y = np.convolve(ext, taps, mode="valid")
-    u = rec.u[::q]
+    # a transient input is no sample of the plant but a filter of its input at the period: computed afresh
+    u = recomputed_transients(rec.u[::q], rec.input_names, rec.Ts * q, taus)
     return Record(u, y[::q], rec.Ts * q, f"{rec.name} / {q}", rec.units, rec.input_names)
