@@ -240,6 +240,7 @@ def test_operating_points_of_a_model_with_transient_inputs_take_them_at_zero():
     np.testing.assert_allclose(model.static_curve(levels), model.static_curve(full))
     assert gb.local_model(model, 1200.0).ybar == gb.local_model(model, [1200.0, 0.0]).ybar
     assert model.equilibria(1200.0)[0].ubar == (1200.0, 0.0)
+    np.testing.assert_array_equal(gb.narx_steady_state(model, 1200.0, 5.0), gb.narx_steady_state(model, [1200.0, 0.0], 5.0))
     # a full point stays one point; several inputs beside their channels: points of those inputs
     assert len(gb.operating_curve(model, [1200.0, 0.0]).ubar) == 1
     st = gb.parse_structure(["1", "y(k-1)", "a(k-1)", "b(k-1)", "a_tau3(k-1)"])

@@ -29,6 +29,7 @@ import numpy as np
 from ..core._records import Record, frame_inputs
 from ..core._simulation import DivergenceError
 from ..core._terms import Structure
+from ..core._transient import steady_levels
 from ..core._validation import check_bool, check_int, check_real, check_str
 from ..models._model import Model
 from ._local import check_Ts, check_polynomial, input_levels, require_control, system_name
@@ -148,7 +149,8 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
         A polynomial NARX model.
     ubar : float or array_like, shape (m,)
         The constant input (input units), one value per input in ``model.input_names`` order (a
-        pandas Series labelled by the inputs, e.g. a DataFrame's row, is read by its labels).
+        pandas Series labelled by the inputs, e.g. a DataFrame's row, is read by its labels;
+        transient inputs left out are 0, their level at every steady state).
     ybar : float
         The output level (output units), e.g. :attr:`graybox.LocalModel.ybar` at ū.
     noise : bool
@@ -161,7 +163,8 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
     """
     model = check_polynomial(model, "narx_steady_state")
     noise = check_bool(noise, "noise")
-    ub = np.atleast_1d(input_levels(frame_inputs(ubar, model.input_names, "ubar"))).ravel()  # a Series by name
+    ub = input_levels(frame_inputs(ubar, model.input_names, "ubar"))  # a Series by name
+    ub = np.atleast_1d(steady_levels(ub, model.input_names, one_point=True)).ravel()  # transient inputs: z̄ = 0
     if ub.size != model.n_inputs or not np.all(np.isfinite(ub)):
         raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")
     yb = check_real(ybar, "ybar")
