@@ -90,3 +90,50 @@ def test_a_file_run_beside_the_suite_reports_each_outcome_as_run_alone_and_sets_
         "test_pass": "passed", "test_fail": "failure", "test_fixture_error": "error", "test_skip": "pytest.skip",
         "test_xfail": "pytest.xfail", "test_xpass_strict": "failure", "test_xpass": "passed"}
     assert log.read_text().split() == ["beside"]
+
+
+# -- select_graybox's failed members --------------------------------------------------------------------------------
+
+def _records_and_points():
+    """Two records of one plant (the first's input at two levels only: λ1 = 1 cannot identify θ on it alone) and
+    static points at seven levels."""
+    rng = np.random.default_rng(0)
+
+    def plant(u):
+        y = np.zeros_like(u)
+        for k in range(1, len(u)):
+            y[k] = 0.5 * y[k - 1] + 0.4 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.2
+        return y + 0.01 * rng.standard_normal(len(u))
+
+    u1, u2 = np.repeat(rng.choice([1.0, 2.0], 40), 10), np.repeat(rng.uniform(0.0, 3.0, 40), 10)
+    ub = np.linspace(0.0, 3.0, 7)
+    return ([gb.Record(u1, plant(u1), name="A"), gb.Record(u2, plant(u2), name="B")],
+            gb.StaticPoints(ub, (0.2 + 0.4 * ub + 0.1 * ub**2) / 0.5))
+
+
+def _select(records, points, **kw):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gb.select_graybox(gb.Candidates(1, 1, ne=0, degree=2), records, points, band=1e-2, sizes=[3],
+                                 sources=("frols",), include=("1", "u(k-1)^2"), progress=False, **kw)
+
+
+def test_a_member_failing_only_on_a_fold_is_not_said_to_have_diverged():
+    # was: a row's reason counted only the members whose fit on all the identification data failed, so a member whose
+    # fold fit failed (its full fit fine, its fold's J_S infinite) was one whose "free run diverged", beside a
+    # failed_members column saying its fit failed
+    from graybox.experiments._select import _failed_members, _reason
+
+    why = "the fit on 'A' failed: θ at λ1 = 1 (no weight on the static points) is not identifiable"
+    res = {"blocks": np.array([[np.inf, 1.0], [np.inf, 2.0]]), "weights": np.array([0.5, 0.5]),
+           "jsf": np.array([0.1, 0.2]), "jsf_full": np.array([0.1, 0.2]), "thetas": np.ones((2, 4)),
+           "lambdas": np.array([1e-3, 1.0]), "failed": [], "member_failed": ["", why], "warnings": []}
+    reason = _reason(res, -1, False, np.inf, 1e-2)
+    assert "1 of 2 fits failed" in reason and why in reason
+    res["member_failed"] = [why.replace("λ1 = 1", "λ1 = 0.001"), why]
+    reason = _reason(res, -1, False, np.inf, 1e-2)
+    assert reason.startswith("every member's fit failed") and "diverged" not in reason
+    assert _failed_members(res).startswith("2 of 2")
+

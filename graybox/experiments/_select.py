@@ -1416,11 +1416,17 @@ def _member_failure(res: dict, k: int) -> str:
     return (res.get("member_failed") or [""] * (k + 1))[k] or "the fit failed at this λ"
 
 
+def _failed_member_indices(res: dict) -> np.ndarray:
+    """The members with no fit: on all the identification data (a NaN θ row) or on a fold (a reason kept, the full
+    fit's θ finite)."""
+    said_failed = np.array([bool(r) for r in res.get("member_failed", ())] or [False] * len(res["thetas"]))
+    return np.flatnonzero(~np.all(np.isfinite(res["thetas"]), axis=1) | said_failed)
+
+
 def _failed_members(res: dict) -> str:
     """Which of a row's λ1 members have no fit (on all the identification data, or on a fold) and why, each
     distinct reason once (empty when none; a row whose fit failed whole says so in its ``reason``)."""
-    said_failed = np.array([bool(r) for r in res.get("member_failed", ())] or [False] * len(res["thetas"]))
-    bad = np.flatnonzero(~np.all(np.isfinite(res["thetas"]), axis=1) | said_failed)
+    bad = _failed_member_indices(res)
     if not bad.size or res["failed"]:
         return ""
     lam = np.asarray(res["lambdas"], float)
@@ -1435,7 +1441,7 @@ def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> 
     if not finite.any():
         if res["failed"]:
             return "every member failed: " + "; ".join(res["failed"])
-        bad = np.flatnonzero(~np.all(np.isfinite(res["thetas"]), axis=1))
+        bad = _failed_member_indices(res)  # a member failing on a fold only did not diverge
         said = "; ".join(dict.fromkeys(_member_failure(res, k) for k in bad))  # each distinct reason once
         if bad.size == len(finite):
             return f"every member's fit failed: {said}"
