@@ -137,3 +137,26 @@ def test_a_member_failing_only_on_a_fold_is_not_said_to_have_diverged():
     assert reason.startswith("every member's fit failed") and "diverged" not in reason
     assert _failed_members(res).startswith("2 of 2")
 
+
+def test_members_failing_for_one_reason_say_it_once(monkeypatch):
+    # was: pe_members names a member refused by a constraint check by its λ1 ("λ1 = 0.01: <the check>"), so the
+    # column said the same check once per member, each time with another λ1
+    from graybox.experiments import _select as sel
+
+    records, points = _records_and_points()
+    real = sel.pe_members
+
+    def refusing(st, rec, static, *, lambdas, **kw):
+        th, why = real(st, rec, static, lambdas=lambdas, **kw)
+        th = th.copy()
+        for i in (0, 1):
+            th[i] = np.nan
+            why[i] = f"λ1 = {lambdas[i]:g}: the check refused it"
+        return th, why
+
+    monkeypatch.setattr(sel, "pe_members", refusing)
+    lam = [1e-4, 1e-3, 1e-2, 0.5]
+    said = _select(records[1:], points, estimator="pe", lambdas=lam, validation=records[0]).table[
+        "failed_members"].iloc[0]
+    assert said.count("the check refused it") == 1
+    assert said.startswith("2 of 4 (λ1 = 0.0001, 0.001)")

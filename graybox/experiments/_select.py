@@ -822,7 +822,10 @@ def _fit_or_fail(job: _Job, st: gb.Structure,
     names = ", ".join(repr(r.name) for r in records)
     try:
         th, lam, why = _fit(job, st, records)
-        return th, lam, [], {i: f"the fit on {names} failed: {r}" for i, r in why.items()}
+        # pe_members names a member by its λ1 ("λ1 = 0.01: <a constraint's check>"), which the table says beside
+        # the reason: without it, members refused for one reason share it, said once
+        return th, lam, [], {i: f"the fit on {names} failed: {r.removeprefix(f'λ1 = {lam[i]:g}: ')}"
+                             for i, r in why.items()}
     except (ValueError, np.linalg.LinAlgError) as exc:
         lam = _lambdas(job.estimator, job.lambdas)
         lam = np.array([np.nan]) if lam is None else lam
@@ -1430,8 +1433,16 @@ def _failed_members(res: dict) -> str:
     if not bad.size or res["failed"]:
         return ""
     lam = np.asarray(res["lambdas"], float)
-    said = "; ".join(dict.fromkeys(_member_failure(res, k) for k in bad))
-    return f"{bad.size} of {lam.size} (λ1 = {', '.join(f'{v:g}' for v in lam[bad])}): {said}"
+    groups: dict[str, list[int]] = {}  # reason -> its members
+    for k in bad:
+        groups.setdefault(_member_failure(res, k), []).append(int(k))
+
+    def lambdas(members: list[int]) -> str:
+        return "λ1 = " + ", ".join(f"{v:g}" for v in lam[members])
+
+    said = (next(iter(groups)) if len(groups) == 1 else
+            "; ".join(f"{lambdas(members)}: {reason}" for reason, members in groups.items()))
+    return f"{bad.size} of {lam.size} ({lambdas(list(bad))}): {said}"
 
 
 def _reason(res: dict, i: int, in_band: bool, js: float, band: float | None) -> str:
