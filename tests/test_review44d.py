@@ -160,3 +160,34 @@ def test_members_failing_for_one_reason_say_it_once(monkeypatch):
         "failed_members"].iloc[0]
     assert said.count("the check refused it") == 1
     assert said.startswith("2 of 4 (λ1 = 0.0001, 0.001)")
+
+
+# -- parallel_map on Dask ------------------------------------------------------------------------------------------
+
+def _sleeps(x: float) -> float:
+    import time
+
+    time.sleep(x)
+    return x
+
+
+@pytest.mark.parametrize("each", [None, lambda i, r: None], ids=["gather", "each"])
+def test_ctrl_c_or_an_error_on_a_client_s_cluster_cancels_the_jobs_left(each):
+    # was: only a job's error (with each=) cancelled the jobs left; Ctrl-C, or an error while gathering, left them
+    # running on the caller's cluster for as long as the traceback held their futures (a notebook keeps it)
+    import _thread
+    import threading
+
+    from distributed import Client
+
+    from graybox.experiments._executors import local_cluster
+
+    with local_cluster(1) as cluster, Client(cluster) as client:
+        with gb.experiments.parallel_map(client=client) as pmap:
+            client.wait_for_workers(1)
+            timer = threading.Timer(1.0, _thread.interrupt_main)
+            timer.start()
+            with pytest.raises(KeyboardInterrupt):
+                pmap(_sleeps, [3.0] * 4, each=each)
+            timer.join()
+        assert not any(f.status == "pending" for f in client.futures.values())

@@ -95,32 +95,34 @@ def parallel_map(
 
         def dmap(fn: Callable, items: Iterable, each: Each | None = None) -> list:
             futures = client.map(fn, list(items), pure=False)
-            if each is None:
-                return client.gather(futures)
-            from distributed import as_completed
-
-            where = {f.key: i for i, f in enumerate(futures)}
-            out: list = [None] * len(futures)
             told: set = set()
             in_each = False
             try:
+                if each is None:
+                    return client.gather(futures)
+                from distributed import as_completed
+
+                where = {f.key: i for i, f in enumerate(futures)}
+                out: list = [None] * len(futures)
                 for f, r in as_completed(futures, with_results=True):  # raises a job's error, as gather does
                     out[where[f.key]] = r
                     told.add(f.key)
                     in_each = True
                     each(where[f.key], r)
                     in_each = False
-            except Exception:
-                # as on local processes: the jobs not finished are dropped, and those that finished before the
-                # error was seen (their results already on the workers) are told of, so that the work done is
-                # kept (select_graybox's checkpoint); not after an error of each's own
+                return out
+            except BaseException as exc:
+                # the jobs not finished are dropped, on a caller's cluster too (it is left open, and a traceback
+                # kept, as a notebook keeps it, would keep them running): after a job's error, Ctrl-C or an
+                # error of each's own. After a job's error, as on local processes, those that finished before it
+                # was seen (their results already on the workers) are told of, so that the work done is kept
+                # (select_graybox's checkpoint)
                 client.cancel([f for f in futures if f.status != "finished"])
-                if not in_each:
+                if each is not None and not in_each and isinstance(exc, Exception):
                     for f in futures:
                         if f.key not in told and f.status == "finished":
                             each(where[f.key], f.result())
                 raise
-            return out
 
         yield dmap
 
