@@ -171,31 +171,41 @@ def test_a_member_whose_fit_failed_is_said_with_its_reason_and_kept_so(tmp_path)
     assert from_old.decision.lambda1 == first.decision.lambda1
 
 
-def _slow_or_failing(x: int) -> int:
+def _slow_or_failing(job: tuple) -> int:
+    """Job 1 returns at once; jobs 0 and 2 wait until the first result was told of (``told`` exists, so that the
+    order does not hang on which worker started first), then 0 fails and 2 returns half a second later."""
+    import pathlib
     import time
 
+    x, told = job
+    if x == 1:
+        return x
+    while not pathlib.Path(told).exists():
+        time.sleep(0.01)
     if x == 0:
-        time.sleep(0.1)
         raise RuntimeError("job 0 fails")
-    time.sleep(1.0 if x == 2 else 0.0)
+    time.sleep(0.5)
     return x
 
 
-def test_a_job_error_on_dask_still_tells_of_the_jobs_that_finished_before_it():
+def test_a_job_error_on_dask_still_tells_of_the_jobs_that_finished_before_it(tmp_path):
     # was: the first error ended the loop over finished jobs, and a job that had finished but was not yet yielded
     # was never told of: a select_graybox(checkpoint=) row lost on Dask (local processes kept it). Here the first
-    # job's `each` takes 3 s; meanwhile job 0 fails (0.1 s) and then job 2 finishes (1 s)
+    # job's `each` takes 3 s; meanwhile job 0 fails and then job 2 finishes
     import time
 
+    told = tmp_path / "told"
     seen: dict = {}
 
     def each(i, r):
         seen[i] = r
-        time.sleep(3.0 if len(seen) == 1 else 0.0)
+        if len(seen) == 1:
+            told.touch()
+            time.sleep(3.0)
 
     with gb.experiments.parallel_map(workers=2) as pmap:
         with pytest.raises(RuntimeError, match="job 0 fails"):
-            pmap(_slow_or_failing, [1, 0, 2], each=each)
+            pmap(_slow_or_failing, [(1, str(told)), (0, str(told)), (2, str(told))], each=each)
     assert seen == {0: 1, 2: 2}
 
 
