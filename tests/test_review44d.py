@@ -191,3 +191,16 @@ def test_ctrl_c_or_an_error_on_a_client_s_cluster_cancels_the_jobs_left(each):
                 pmap(_sleeps, [3.0] * 4, each=each)
             timer.join()
         assert not any(f.status == "pending" for f in client.futures.values())
+
+
+# -- units of squared errors ---------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("unit, said", [("mlc", " mlc²"), ("µm", " µm²"), ("m²", " (m²)²"), ("m3", " (m3)²"),
+                                        ("kg.m", " (kg.m)²"), ("m/s", " (m/s)²"), ("°C", " °C²"), ("%", " %²"), ("", ""),
+                                        ("  ", "")])
+def test_a_squared_unit_is_bracketed_unless_it_is_one_word(unit, said):
+    # was: only a unit with one of " /*·^()" was bracketed: a model in m² said its J_S in "m²²", one in m3 in "m3²"
+    # (m to the 32nd) and one in kg.m in "kg.m²"
+    from graybox.core._reprs import squared_unit
+
+    assert squared_unit(unit) == said

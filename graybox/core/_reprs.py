@@ -62,7 +62,9 @@ def squared_unit(unit: str | None) -> str:
     unit = str(unit or "").strip()
     if not unit:
         return ""
-    return f" ({unit})²" if any(c in unit for c in " /*·^()") else f" {unit}²"
+    # one word of letters (° and % too) takes the square as it is; any other (a digit or superscript, an operator,
+    # a space) is bracketed: "m²" squared is not "m²²", "m3" not "m3²"
+    return f" {unit}²" if all(c.isalpha() or c in "°%" for c in unit) else f" ({unit})²"
 
 
 def beside(value: float, ref: float, digits: int = 4) -> str:
