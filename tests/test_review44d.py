@@ -70,7 +70,7 @@ def _outcomes(xml: Path) -> dict[str, str]:
     for case in ET.parse(xml).getroot().iter("testcase"):
         kinds = [c.get("type") if c.tag == "skipped" else c.tag for c in case if c.tag in ("failure", "error",
                                                                                            "skipped")]
-        out[case.get("name")] = kinds[0] if kinds else "passed"
+        out[case.get("name")] = " ".join(kinds) if kinds else "passed"
     return out
 
 
@@ -90,6 +90,24 @@ def test_a_file_run_beside_the_suite_reports_each_outcome_as_run_alone_and_sets_
         "test_pass": "passed", "test_fail": "failure", "test_fixture_error": "error", "test_skip": "pytest.skip",
         "test_xfail": "pytest.xfail", "test_xpass_strict": "failure", "test_xpass": "passed"}
     assert log.read_text().split() == ["beside"]
+
+
+def test_a_test_the_pytest_beside_did_not_run_is_one_error(tmp_path):
+    # a test only the suite collects (the pytest beside it has no verdict for it): one error, at its setup, not a
+    # second at its teardown
+    shutil.copy(TESTS / "conftest.py", tmp_path / "conftest.py")
+    (tmp_path / "test_notebooks.py").write_text(textwrap.dedent("""
+        import os
+
+        if not os.environ.get("GRAYBOX_TESTS_BESIDE"):
+            def test_only_in_the_suite():
+                pass
+    """))
+    env = {k: v for k, v in os.environ.items() if k != "GRAYBOX_TESTS_BESIDE"}
+    subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", f"--basetemp={tmp_path / 'bt'}",
+                    f"--junitxml={tmp_path / 'suite.xml'}", "test_notebooks.py"],
+                   cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=300)
+    assert _outcomes(tmp_path / "suite.xml") == {"test_only_in_the_suite": "error"}
 
 
 # -- select_graybox's failed members --------------------------------------------------------------------------------
