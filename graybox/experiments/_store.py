@@ -321,10 +321,34 @@ def _settings(conn: sqlite3.Connection) -> None:
     conn.execute(f"PRAGMA wal_autocheckpoint={WAL_PAGES}")
 
 
+def _cannot_open(exc: sqlite3.Error) -> bool:
+    """Whether SQLite could not open a file it needs (the database, or the log or its index beside it)."""
+    return getattr(exc, "sqlite_errorcode", 0) & 0xFF == sqlite3.SQLITE_CANTOPEN
+
+
 def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:
-    if readonly:
-        return sqlite3.connect(path.resolve().as_uri() + "?mode=ro", uri=True, timeout=30.0, isolation_level=None)
-    return sqlite3.connect(str(path), timeout=30.0, isolation_level=None)  # explicit transactions
+    if not readonly:
+        return sqlite3.connect(str(path), timeout=30.0, isolation_level=None)  # explicit transactions
+    uri = path.resolve().as_uri()
+    conn = sqlite3.connect(uri + "?mode=ro", uri=True, timeout=30.0, isolation_level=None)
+    try:
+        conn.execute("SELECT 1 FROM sqlite_master LIMIT 1")
+    except sqlite3.OperationalError as exc:
+        # a store in a folder this process cannot write in (an archive, a colleague's results): a WAL store is read
+        # through an index (-shm) made beside it, which cannot be made there. With no log beside it (no run has it
+        # open, every write is in the file) nothing can change it meanwhile: read as it is, without the index
+        wal = Path(f"{path}-wal")
+        if not _cannot_open(exc) or Path(f"{path}-shm").exists():
+            return conn  # what the caller's first statement says
+        conn.close()
+        if wal.exists() and wal.stat().st_size:
+            raise StoreError(f"{path} cannot be read where it is: its folder is read-only to this process and its log "
+                             f"{wal.name} holds writes not yet in the store; copy the store and {wal.name} together "
+                             "into a folder you can write in and read the copy") from None
+        return sqlite3.connect(uri + "?mode=ro&immutable=1", uri=True, timeout=30.0, isolation_level=None)
+    except sqlite3.Error:  # not SQLite, damaged: the caller's checks say so
+        pass
+    return conn
 
 
 def _connect_to_write(path: Path, store: Path, verb: str) -> sqlite3.Connection:

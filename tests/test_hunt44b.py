@@ -1,0 +1,96 @@
+"""hunt44b: files and runs that outlive one call: the grid's store, select_graybox's checkpoint, the CLI on them.
+
+Read-only files and folders are made as a user meets them: by their mode for a user, by the immutable attribute
+(``chattr +i``) for root, whom modes do not stop; where neither can be had the test is skipped.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import sqlite3
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from graybox import experiments as gx
+from graybox._cli import main
+
+ONE = gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "1"])
+LS = gx.Variant("LS", "ls")
+
+
+def grid(structures=(ONE,), variants=(LS,), name="g") -> gx.Grid:
+    return gx.Grid([gx.DataSpec("pumping", bundled="pumping")], list(structures), list(variants), name=name)
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory) -> Path:
+    """One finished cell; tests use copies."""
+    p = tmp_path_factory.mktemp("base") / "base.sqlite"
+    gx.run_grid(grid(), p)
+    return p
+
+
+def copy_of(src: Path, folder: Path, name: str = "s.sqlite") -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    dst = folder / name
+    shutil.copyfile(src, dst)  # the file alone: the run closed it, its log folded in
+    return dst
+
+
+@contextlib.contextmanager
+def read_only(path: Path):
+    """``path`` (a file or a folder) read-only for this process while the block runs."""
+    if os.geteuid() != 0:
+        mode = path.stat().st_mode
+        path.chmod(0o555 if path.is_dir() else 0o444)
+        try:
+            yield
+        finally:
+            path.chmod(mode)
+        return
+    chattr = shutil.which("chattr")
+    if chattr is None or subprocess.run([chattr, "+i", str(path)], capture_output=True).returncode != 0:
+        pytest.skip("no way to make a file read-only for root here (chattr +i)")
+    try:
+        yield
+    finally:
+        subprocess.run([chattr, "-i", str(path)], check=True)
+
+
+def test_a_store_in_a_read_only_folder_is_read_not_called_damaged(store, tmp_path, capsys):
+    # a colleague's results folder, an archive: reading a store there said "damaged … restore it from a copy"
+    # (SQLite could not make the WAL index beside it)
+    folder = tmp_path / "archive"
+    p = copy_of(store, folder)
+    expected = gx.load_results(store)
+    with read_only(folder):
+        df = gx.load_results(p)
+        assert list(df["key"]) == list(expected["key"])
+        assert list(df["JS_valid"]) == list(expected["JS_valid"])
+        assert len(gx.store_specs(p)) == 1
+        assert gx.grid_status(p).done == 1
+        assert main(["grid", "status", str(p)]) == 0
+        assert "1 of 1 cells done" in capsys.readouterr().out
+        assert main(["grid", "report", str(p), "--out", str(tmp_path / "rep")]) == 0
+    assert (tmp_path / "rep" / "leaderboard.csv").exists()
+
+
+def test_a_store_whose_log_holds_writes_in_a_read_only_folder_is_refused_naming_the_log(store, tmp_path):
+    # read without its log, such a store would lose the cells written last: refused, saying what to copy
+    folder = tmp_path / "archive"
+    p = copy_of(store, folder)
+    conn = sqlite3.connect(p, isolation_level=None)
+    conn.execute("PRAGMA wal_autocheckpoint=0")
+    conn.execute("UPDATE specs SET name = 'renamed'")
+    shutil.copyfile(f"{p}-wal", tmp_path / "log")
+    conn.close()  # folds the log into the file and removes it: the log is put back as a killed run leaves it
+    shutil.copyfile(tmp_path / "log", f"{p}-wal")
+    os.remove(tmp_path / "log")
+    for f in folder.glob("*-shm"):
+        f.unlink()
+    with read_only(folder), pytest.raises(gx.StoreError, match=r"s\.sqlite-wal.*copy the store and s\.sqlite-wal"):
+        gx.load_results(p)
