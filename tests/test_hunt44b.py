@@ -94,3 +94,27 @@ def test_a_store_whose_log_holds_writes_in_a_read_only_folder_is_refused_naming_
         f.unlink()
     with read_only(folder), pytest.raises(gx.StoreError, match=r"s\.sqlite-wal.*copy the store and s\.sqlite-wal"):
         gx.load_results(p)
+
+
+@pytest.mark.parametrize("what", ["file", "folder"])
+def test_running_into_a_read_only_store_is_refused_naming_it_and_the_fix(store, tmp_path, capsys, what):
+    # a read-only file raised sqlite3's bare "attempt to write a readonly database" (a traceback from the command),
+    # a read-only folder its "unable to open database file"
+    folder = tmp_path / "archive"
+    p = copy_of(store, folder)
+    before = p.read_bytes()
+    two = grid(variants=(LS, gx.Variant("LS2", "els", options={"noise": 0})))
+    with read_only(p if what == "file" else folder):
+        with pytest.raises(gx.StoreError, match=rf"{p.name}.*read-only.*nothing was written.*--store"):
+            gx.run_grid(two, p)
+        assert main(["grid", "run", str(_spec(tmp_path)), "--store", str(p)]) == 2
+    assert p.read_bytes() == before
+    err = capsys.readouterr().err
+    assert str(p) in err and "read-only" in err
+
+
+def _spec(tmp_path: Path) -> Path:
+    p = tmp_path / "spec.toml"
+    p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'
+                 'terms = ["y(k-1)", "u(k-1)", "1"]\n[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    return p

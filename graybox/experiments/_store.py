@@ -361,6 +361,16 @@ def _connect_to_write(path: Path, store: Path, verb: str) -> sqlite3.Connection:
                          "write in") from None
 
 
+def _refuse_unwritable(exc: BaseException, store: Path) -> None:
+    """A StoreError for SQLite's refusal to write a store whose file or folder is read-only (its own words name
+    neither the file nor what to do); nothing else."""
+    code = getattr(exc, "sqlite_errorcode", 0) & 0xFF
+    if isinstance(exc, sqlite3.OperationalError) and code in (sqlite3.SQLITE_READONLY, sqlite3.SQLITE_CANTOPEN):
+        raise StoreError(f"cannot write the store {store} ({exc}): the file or its folder is read-only to this "
+                         "process; nothing was written to it. Make them writable, or choose a --store path in a "
+                         "folder you can write in (a copy of the store there keeps its cells)") from None
+
+
 def _table(name: str, cols: Mapping[str, str], extra: str = "") -> str:
     return f"CREATE TABLE {name} ({', '.join(f'{k} {t}' for k, t in cols.items())}{extra})"
 
@@ -494,8 +504,9 @@ class ResultStore:
                         conn.execute("COMMIT")
                         conn.execute("PRAGMA journal_mode=WAL")
                         _settings(conn)
-            except BaseException:
+            except BaseException as exc:
                 conn.close()
+                _refuse_unwritable(exc, p)
                 raise
         if not exists and made_before:  # the other run's store: opened as it is, checked
             return cls.open(p, grid_name=grid_name, fingerprint=fingerprint, spec=spec, cells=cells, version=version)
@@ -504,8 +515,9 @@ class ResultStore:
                 _upgrade(conn, meta, cells)
                 meta["format_version"] = FORMAT_VERSION
             spec_id, new = _register(conn, grid_name, fingerprint, spec, cells, version)
-        except BaseException:
+        except BaseException as exc:
             conn.close()
+            _refuse_unwritable(exc, p)
             raise
         return cls(p, conn, meta, spec_id, new, known)
 
