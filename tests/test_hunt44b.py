@@ -113,6 +113,16 @@ def test_running_into_a_read_only_store_is_refused_naming_it_and_the_fix(store, 
     assert str(p) in err and "read-only" in err
 
 
+def test_a_new_store_in_a_read_only_folder_is_refused_naming_it(tmp_path):
+    # the half-made store's clean-up, refused by a read-only file system, hid the refusal behind an OSError
+    # naming a hidden temporary file
+    folder = tmp_path / "archive"
+    folder.mkdir()
+    with read_only(folder), pytest.raises(gx.StoreError, match=r"new\.sqlite.*folder you can write in"):
+        gx.run_grid(grid(), folder / "new.sqlite")
+    assert list(folder.iterdir()) == []
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

@@ -741,7 +741,8 @@ def _create_whole(p: Path, version: str) -> bool:
         return True
     finally:
         for f in (tmp, Path(f"{tmp}-wal"), Path(f"{tmp}-shm")):
-            f.unlink(missing_ok=True)
+            with contextlib.suppress(OSError):  # a read-only file system refuses even to unlink what is not there
+                f.unlink(missing_ok=True)
 
 
 def _create_spec_tables(conn: sqlite3.Connection) -> None:
