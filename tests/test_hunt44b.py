@@ -123,6 +123,27 @@ def test_a_new_store_in_a_read_only_folder_is_refused_naming_it(tmp_path):
     assert list(folder.iterdir()) == []
 
 
+def test_a_checkpoint_in_a_read_only_folder_is_refused_before_any_fit(tmp_path, monkeypatch):
+    # select_graybox fitted its first row (seconds to hours), then failed on an OSError naming the checkpoint's
+    # temporary file; a folder that does not exist was refused before, a folder it cannot write in was not
+    import graybox as gb
+    from graybox.experiments import _select
+
+    def fitted(job):
+        raise AssertionError("a row was fitted before the checkpoint was refused")
+
+    monkeypatch.setattr(_select, "_score_job", fitted)
+    folder = tmp_path / "archive"
+    folder.mkdir()
+    with read_only(folder):
+        with pytest.raises(ValueError, match=r"checkpoint: .*archive.*cannot be written.*another path"):
+            gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2), gb.load_pumping(), sizes=[2], estimator=["pe"],
+                              progress=False, checkpoint=folder / "sel.npz")
+        with pytest.raises(ValueError, match=r"checkpoint: .*archive.*cannot be written"):
+            gb.se_pareto(gb.Structure(["y(k-1)", "u(k-1)", "1"]), gb.load_pumping(), method="gradient",
+                         lambdas=[0.5], progress=False, checkpoint=folder / "se.npz")
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

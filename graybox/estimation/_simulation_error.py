@@ -42,6 +42,7 @@ import hashlib
 import json
 import math
 import os
+import tempfile
 import warnings
 import zipfile
 from dataclasses import asdict, dataclass, field
@@ -1393,13 +1394,20 @@ def refit_if_slow(problem: SEProblem, fit: Callable[[SEProblem], _R], what: str,
 
 def checkpoint_path(checkpoint: object) -> Path:
     """``checkpoint`` as a Path, checked before any fit: ``TypeError`` for what is no path, ``ValueError``
-    for an empty name or a folder that does not exist (the first write would fail only after a member)."""
+    for an empty name, a folder that does not exist or one this process cannot write in (the first write would
+    fail only after a member: the file is written beside itself and moved into place)."""
     checkpoint = check_path(checkpoint, "checkpoint")
     if not os.fspath(checkpoint):
         raise ValueError("checkpoint: an empty file name; give a file path such as 'front.npz'")
     path = Path(checkpoint)
     if not path.parent.is_dir():
         raise ValueError(f"checkpoint: the folder {path.parent} does not exist; create it or choose another path")
+    try:  # a file made and gone at once: what the write will do (modes, read-only mounts, ACLs all say)
+        with tempfile.TemporaryFile(dir=path.parent):
+            pass
+    except OSError as exc:
+        raise ValueError(f"checkpoint: the folder {path.parent} cannot be written in ({exc.strerror or exc}); make "
+                         "it writable or choose another path") from None
     return path
 
 
