@@ -144,6 +144,36 @@ def test_a_checkpoint_in_a_read_only_folder_is_refused_before_any_fit(tmp_path, 
                          lambdas=[0.5], progress=False, checkpoint=folder / "se.npz")
 
 
+WRITER = """
+import sys
+import numpy as np
+from graybox.experiments._select_checkpoint import SelectionCheckpoint
+ck = SelectionCheckpoint(sys.argv[1])
+row = {"blocks": np.zeros(3), "weights": np.ones(3), "jsf": np.zeros(2), "jsf_full": np.zeros(2),
+       "thetas": np.zeros((2, 5000)), "lambdas": np.ones(2), "failed": ["", ""], "warnings": []}
+for i in range(400):
+    ck.put(f"{sys.argv[2]}{i:031x}", row)
+    ck.rows.pop(next(iter(ck.rows)))  # a few rows: each rewrite short, many rewrites
+"""
+
+
+def test_two_selections_writing_one_checkpoint_both_finish_and_leave_it_whole(tmp_path):
+    # the docstring's promise ("two running at once each rewrite it with their own rows, the file stays whole"):
+    # both wrote the same temporary file, so one moved the other's (half written) into place and the other's
+    # move then failed: FileNotFoundError, that selection ended after fitting its row
+    import sys
+
+    from graybox.experiments._select_checkpoint import SelectionCheckpoint
+
+    path = tmp_path / "sel.npz"
+    procs = [subprocess.Popen([sys.executable, "-c", WRITER, str(path), tag], stderr=subprocess.PIPE, text=True)
+             for tag in "ab"]
+    errs = [p.communicate(timeout=300)[1] for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], errs
+    assert 1 <= len(SelectionCheckpoint(path).rows) <= 2  # the last rewrite, read whole
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["sel.npz"]
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

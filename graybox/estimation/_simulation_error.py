@@ -38,16 +38,18 @@ re-evaluated by the shared evaluator, which uses the same definition.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
 import os
+import secrets
 import tempfile
 import warnings
 import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable, Literal, Mapping, Sequence, TypeVar
+from typing import Any, Callable, Literal, Mapping, Sequence, TypeVar
 
 import numpy as np
 from scipy.linalg.lapack import dgeqrf
@@ -734,12 +736,26 @@ def _load_checkpoint(path: Path, meta: dict) -> dict | None:
     return out
 
 
+def save_npz(path: Path, **arrays: Any) -> None:
+    """Write ``arrays`` to the ``.npz`` file ``path`` atomically: a kill during the write never leaves a torn file.
+    Written under a name of this write's own beside it, then moved into place: under one shared name, two
+    writers of one file (two calls at once) each moved the other's half-written file into place, and the second
+    move found nothing to move."""
+    tmp = path.with_name(f"{path.name}.{secrets.token_hex(4)}.tmp")
+    try:
+        with open(tmp, "xb") as f:  # the mode a new file of np.savez's would have
+            np.savez(f, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
 def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarray, done: int,
                      failures: dict, nfev: np.ndarray) -> None:
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(tmp, meta=json.dumps(meta), thetas=thetas, costs=costs, done=done,
+    save_npz(path, meta=json.dumps(meta), thetas=thetas, costs=costs, done=done,
              failures=json.dumps({str(k): v for k, v in failures.items()}), nfev=nfev)
-    os.replace(tmp, path)  # atomic: a kill during the write never leaves a torn checkpoint
 
 
 def check_lsq_tol(tol: object) -> float:

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from .. import _api as gb
-from ..estimation._simulation_error import CheckpointError, checkpoint_path
+from ..estimation._simulation_error import CheckpointError, checkpoint_path, save_npz
 from ._spec import canonical_json
 
 __all__ = ["SelectionCheckpoint", "checkpoint_of", "plan_digest", "row_key", "test_digest"]
@@ -158,9 +158,7 @@ class SelectionCheckpoint:
         for k, r in self.rows.items():
             for field, v in r.items():
                 out[f"{k}/{field}"] = np.array(v, dtype=str) if field in texts else v
-        tmp = self.path.with_name(self.path.name + ".tmp.npz")
-        np.savez(tmp, **out)
-        os.replace(tmp, self.path)
+        save_npz(self.path, **out)
 
 
 def checkpoint_of(checkpoint: str | os.PathLike | None) -> SelectionCheckpoint | None:
