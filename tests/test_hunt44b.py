@@ -174,6 +174,28 @@ def test_two_selections_writing_one_checkpoint_both_finish_and_leave_it_whole(tm
     assert sorted(f.name for f in tmp_path.iterdir()) == ["sel.npz"]
 
 
+def test_a_file_whose_header_contradicts_its_values_units_is_refused(tmp_path):
+    # save refuses to write a header naming other units than the value's own; a file edited so (the header's units
+    # "corrected" by hand) loaded a Model in rpm while read_header told the reader rad/s
+    import json
+
+    import graybox as gb
+
+    d = gb.load_pumping()
+    m = gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), d.ident).model
+    assert m.units == ("rpm", "mlc")
+    path = tmp_path / "m.json"
+    gb.save(m, path)
+    doc = json.loads(path.read_text())
+    doc["units"] = {"u": "rad/s", "y": "mlc"}
+    path.write_text(json.dumps(doc))
+    with pytest.raises(gb.GrayboxFileError, match=r"m\.json.*'rad/s'.*'rpm'"):
+        gb.load(path)
+    doc["units"] = {"u": "rpm"}  # naming fewer, as save(units=) may: the value's fill the rest
+    path.write_text(json.dumps(doc))
+    assert gb.load(path).units == ("rpm", "mlc")
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

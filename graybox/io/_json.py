@@ -947,12 +947,20 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     if "object" not in doc:
         raise GrayboxFileError(f"{source}: no \"object\" in the document")
     try:
-        return _decode_fields(head["type"], doc["object"], "object", _Reader(source))
+        obj = _decode_fields(head["type"], doc["object"], "object", _Reader(source))
     except GrayboxFileError as exc:
         said = _newer(head["graybox_version"])  # a field added since
         if said:
             raise GrayboxFileError(f"{exc}{said}") from None
         raise
+    # the header says the units the value's numbers hold in (to_json never writes other ones): a file whose header
+    # was edited to other units would tell read_header's reader one unit and load a value in another
+    own, said = _own_units(obj), head["units"]
+    if own is not None and said is not None and any(a and b and a != b for a, b in zip(said, own)):
+        raise GrayboxFileError(f"{source}: header: units {said} contradict the units the {head['type']} holds its "
+                               f"numbers in, {own}; the file was edited: set the header's units to the value's (or "
+                               "remove them), or convert the data and refit in the units meant")
+    return obj
 
 
 def _newer(written_by: str) -> str:
