@@ -196,6 +196,27 @@ def test_a_file_whose_header_contradicts_its_values_units_is_refused(tmp_path):
     assert gb.load(path).units == ("rpm", "mlc")
 
 
+def test_a_new_band_on_a_store_of_the_same_cells_is_the_band_its_results_are_read_with(store, tmp_path, capsys):
+    # the band of a data set changed in the spec, no variant reading it: the same cells, so the same fingerprint,
+    # and the store kept the spec of the first run; load_results, grid status and grid report went on ranking by
+    # the old band, the new one silently ignored
+    p = copy_of(store, tmp_path)
+
+    def g(band):
+        return gx.Grid([gx.DataSpec("pumping", bundled="pumping", band=band)], [ONE], [LS], name="g")
+
+    first = gx.run_grid(g(1e-6), p)
+    assert set(gx.load_results(p)["band"]) == {1e-6}
+    res = gx.run_grid(g(5.0), p)
+    assert res.ran == 0 and res.spec != first.spec  # a spec of its own: the store keeps every spec it has seen
+    assert any("band" in n for n in res.notes)
+    assert set(gx.load_results(p)["band"]) == {5.0}
+    assert set(gx.load_results(p, spec=first.spec)["band"]) == {1e-6}
+    assert gx.run_grid(g(1e-6), p).spec == first.spec  # and the old band is the old spec again
+    assert set(gx.load_results(p)["band"]) == {1e-6}
+    assert len(gx.store_specs(p)) == 3  # the fixture's (the bundled band), 1e-6, 5.0
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

@@ -13,6 +13,7 @@ import numpy as np
 from .. import _api as gb
 
 from ..core._progress import progress_bar
+from ..core._reprs import bound_text
 from ..core._validation import FrozenMap, check_bool, check_fields
 from ._cell import STATUSES, failed_row, run_cell
 from ._executors import make_executor, session
@@ -316,11 +317,18 @@ def _by_hash(cells, datasets: Mapping[str, gb.Dataset]) -> dict[str, gb.Dataset]
     return out
 
 
+def _band(b: float | None) -> str:
+    return "none" if b is None else bound_text(b)
+
+
 def _notes(st: ResultStore, cells, done: Mapping[str, str], version: str) -> list[str]:
     """What the store made of the grid, in words."""
     out = []
     if st.new_spec and st.spec_id > 1:
         out.append(f"a new spec for this store (spec {st.spec_id}): only the cells it does not hold run")
+    for name, (was, now) in (st.band_changes if st.new_spec else {}).items():
+        out.append(f"data set {name!r}: band {_band(now)} in this spec, {_band(was)} in the store's spec of the same "
+                   "cells: its results are read, and ranked, with this spec's")
     hashes = {c.data: c.data_hash for c in cells}
     for name, h in hashes.items():
         if st.known_data and name not in st.known_data:

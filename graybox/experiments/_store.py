@@ -415,6 +415,8 @@ class ResultStore:
         Whether the spec was new to the store (False: the same grid run again, e.g. to resume).
     known_data : dict
         Data set names the store held before, by content hash.
+    band_changes : dict
+        Data set name -> (its band in the store's spec of the same cells, this spec's), where they differ.
     """
 
     def __init__(self, path: Path, conn: sqlite3.Connection, meta: Mapping[str, str], spec_id: int, new_spec: bool,
@@ -425,6 +427,7 @@ class ResultStore:
         self.spec_id = spec_id
         self.new_spec = new_spec
         self.known_data = dict(known_data)
+        self.band_changes: dict[str, tuple[float | None, float | None]] = {}
         self._owner: str | None = None
 
     @classmethod
@@ -514,12 +517,14 @@ class ResultStore:
             if migrate:
                 _upgrade(conn, meta, cells)
                 meta["format_version"] = FORMAT_VERSION
-            spec_id, new = _register(conn, grid_name, fingerprint, spec, cells, version)
+            spec_id, new, changed = _register(conn, grid_name, fingerprint, spec, cells, version)
         except BaseException as exc:
             conn.close()
             _refuse_unwritable(exc, p)
             raise
-        return cls(p, conn, meta, spec_id, new, known)
+        st = cls(p, conn, meta, spec_id, new, known)
+        st.band_changes = changed
+        return st
 
     @contextlib.contextmanager
     def running(self):
@@ -781,11 +786,21 @@ def _upgrade(conn: sqlite3.Connection, meta: Mapping[str, str], cells: Sequence[
 
 
 def _register(conn: sqlite3.Connection, grid_name: str, fingerprint: str, spec: Mapping[str, Any],
-              cells: Sequence[Cell], version: str) -> tuple[int, bool]:
-    """(spec id, new): the spec's row and its cells, written before any of them runs."""
+              cells: Sequence[Cell], version: str) -> tuple[int, bool, dict[str, tuple[float | None, float | None]]]:
+    """(spec id, new, bands changed: data set name -> (band of the spec of the same cells, this one's)): the spec's row and its cells, written before any of them runs.
+
+    The same cells under the same names with other bands (no variant reading them: the cells' keys do not say them)
+    are another spec: the rows read back, and the reports rank, with the band of the spec they are read with."""
     conn.execute("BEGIN IMMEDIATE")
     try:
-        row = conn.execute("SELECT id FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
+        row = conn.execute("SELECT id, spec FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
+        bands = _spec_bands({"spec": json.dumps(spec)})
+        changed: dict[str, tuple[float | None, float | None]] = {}
+        if row is not None and _spec_bands({"spec": row[1]}) != bands:
+            old = _spec_bands({"spec": row[1]})
+            changed = {k: (old.get(k), b) for k, b in bands.items() if old.get(k) != b}
+            fingerprint = _hash({"grid": fingerprint, "bands": bands})
+            row = conn.execute("SELECT id, spec FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
         now = _now()
         if row is not None:
             spec_id, new = int(row[0]), False
@@ -803,7 +818,7 @@ def _register(conn: sqlite3.Connection, grid_name: str, fingerprint: str, spec: 
         conn.execute("ROLLBACK")
         raise
     conn.execute("COMMIT")
-    return spec_id, new
+    return spec_id, new, changed
 
 
 def _plain(v: Any) -> Any:
