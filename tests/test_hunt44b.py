@@ -217,6 +217,37 @@ def test_a_new_band_on_a_store_of_the_same_cells_is_the_band_its_results_are_rea
     assert len(gx.store_specs(p)) == 3  # the fixture's (the bundled band), 1e-6, 5.0
 
 
+def test_two_runs_at_once_cannot_give_one_data_set_name_two_meanings(store, tmp_path, monkeypatch):
+    # each run checked the store's data set names before taking its write lock: a run started meanwhile (two
+    # terminals, a job array) registering the same name for other data slipped between that check and the
+    # registration, and the store held the name with two meanings, mixed in load_results(spec="all") and
+    # refused to the second spec for ever after
+    import graybox as gb
+    from graybox.experiments import _store
+
+    p = copy_of(store, tmp_path)
+    d = gb.load_pumping()
+    other = gb.Dataset(d.ident, d.valid, gb.StaticPoints(d.static.ubar, d.static.ybar + 0.01))
+    mine = gx.Grid([gx.DataSpec("plant", dataset=other)], [ONE], [LS], name="mine")
+    theirs = gx.Grid([gx.DataSpec("plant", bundled="pumping")], [ONE], [LS], name="theirs")
+    real = _store._connect_to_write
+    state = {"other run": False}
+
+    def meanwhile(path, at, verb):  # the other run registers while this one is between its check and its lock
+        if not state["other run"]:
+            state["other run"] = True
+            gx.run_grid(theirs, p)
+        return real(path, at, verb)
+
+    monkeypatch.setattr(_store, "_connect_to_write", meanwhile)
+    with pytest.raises(gx.StoreError, match=r"data set 'plant'.*other data.*Nothing was written"):
+        gx.run_grid(mine, p)
+    assert state["other run"]
+    assert list(gx.store_specs(p)["name"]) == ["g", "theirs"]
+    hashes = {h for d in gx.store_specs(p)["data"] for n, h in d.items() if n == "plant"}
+    assert len(hashes) == 1
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

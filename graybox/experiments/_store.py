@@ -517,7 +517,7 @@ class ResultStore:
             if migrate:
                 _upgrade(conn, meta, cells)
                 meta["format_version"] = FORMAT_VERSION
-            spec_id, new, changed = _register(conn, grid_name, fingerprint, spec, cells, version)
+            spec_id, new, changed = _register(conn, p, grid_name, fingerprint, spec, cells, version)
         except BaseException as exc:
             conn.close()
             _refuse_unwritable(exc, p)
@@ -785,7 +785,7 @@ def _upgrade(conn: sqlite3.Connection, meta: Mapping[str, str], cells: Sequence[
     conn.execute("COMMIT")
 
 
-def _register(conn: sqlite3.Connection, grid_name: str, fingerprint: str, spec: Mapping[str, Any],
+def _register(conn: sqlite3.Connection, p: Path, grid_name: str, fingerprint: str, spec: Mapping[str, Any],
               cells: Sequence[Cell], version: str) -> tuple[int, bool, dict[str, tuple[float | None, float | None]]]:
     """(spec id, new, bands changed: data set name -> (band of the spec of the same cells, this one's)): the spec's row and its cells, written before any of them runs.
 
@@ -793,6 +793,9 @@ def _register(conn: sqlite3.Connection, grid_name: str, fingerprint: str, spec: 
     are another spec: the rows read back, and the reports rank, with the band of the spec they are read with."""
     conn.execute("BEGIN IMMEDIATE")
     try:
+        # checked again under the write lock: a run started meanwhile may have given a data set name of this spec
+        # other data since this one looked (the first look, read-only, refuses without waiting for any lock)
+        _check_growth(p, _specs(conn, {"format_version": FORMAT_VERSION}), cells, version)
         row = conn.execute("SELECT id, spec FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
         bands = _spec_bands({"spec": json.dumps(spec)})
         changed: dict[str, tuple[float | None, float | None]] = {}
