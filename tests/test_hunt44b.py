@@ -248,6 +248,24 @@ def test_two_runs_at_once_cannot_give_one_data_set_name_two_meanings(store, tmp_
     assert len(hashes) == 1
 
 
+@pytest.mark.parametrize("sql", [
+    "UPDATE cells SET theta = 'garbage'", "UPDATE cells SET members = '[1, 2]'", "UPDATE cells SET terms = '5'",
+    "UPDATE cells SET JS_valid = 'abc'", "UPDATE cells SET warnings = '{'", "UPDATE specs SET spec = '{bad'",
+    "UPDATE specs SET data = '[1]'"])
+def test_a_store_damaged_inside_its_rows_is_refused_naming_it(store, tmp_path, capsys, sql):
+    # a text SQLite's integrity check cannot judge (a cell's JSON, a spec's) raised json's "Expecting value: line 1
+    # column 1 (char 0)", naming no file, or an AttributeError / TypeError traceback from graybox grid status
+    p = copy_of(store, tmp_path)
+    conn = sqlite3.connect(p)
+    conn.execute(sql)
+    conn.commit()
+    conn.close()
+    with pytest.raises(gx.StoreError, match=rf"{p.name}.*damaged.*restore it from a copy"):
+        gx.load_results(p)
+    assert main(["grid", "status", str(p)]) == 2
+    assert str(p) in capsys.readouterr().err
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

@@ -301,15 +301,39 @@ def _read_meta(conn: sqlite3.Connection, path: Path, reading: bool = False) -> d
     return meta
 
 
-def _specs(conn: sqlite3.Connection, meta: Mapping[str, str]) -> list[dict[str, Any]]:
-    """The store's specs, oldest first (a first-format store: the one grid its meta names)."""
+def _damaged(p: Path, what: str, reading: bool) -> StoreError:
+    """A store whose text SQLite's integrity check cannot judge (a spec's or a cell's JSON) does not read back."""
+    return StoreError(f"{p} is damaged: {what}; " + ("restore it from a copy" if reading else
+                                                     f"nothing was written to it; {_DAMAGED}"))
+
+
+def _json_of(text: Any, p: Path, what: str, kind: type, reading: bool = True) -> Any:
+    """The JSON ``text`` of a store's column, decoded and of ``kind``, or a StoreError naming ``what`` it is."""
+    try:
+        v = json.loads(text)
+    except (TypeError, ValueError) as exc:
+        raise _damaged(p, f"{what} is not JSON ({exc})", reading) from None
+    if not isinstance(v, kind):
+        raise _damaged(p, f"{what} is {type(v).__name__}, not {kind.__name__}", reading)
+    return v
+
+
+def _specs(conn: sqlite3.Connection, meta: Mapping[str, str], p: Path, reading: bool = True) -> list[dict[str, Any]]:
+    """The store's specs, oldest first (a first-format store: the one grid its meta names); their JSON checked."""
     if meta.get("format_version") == "1":
         created = meta.get("created", "")
-        return [{"id": 1, "name": meta.get("grid_name", "grid"), "fingerprint": meta.get("grid_fingerprint", ""),
-                 "spec": meta.get("grid_spec", "{}"), "data": "{}", "graybox_version": meta.get("graybox_version", ""),
-                 "created": created, "last_run": created, "n_cells": int(meta.get("n_cells", 0))}]
-    cur = conn.execute(f"SELECT {', '.join(SPECS)} FROM specs ORDER BY id")
-    return [dict(zip(SPECS, r)) for r in cur.fetchall()]
+        specs = [{"id": 1, "name": meta.get("grid_name", "grid"), "fingerprint": meta.get("grid_fingerprint", ""),
+                  "spec": meta.get("grid_spec", "{}"), "data": "{}", "graybox_version": meta.get("graybox_version", ""),
+                  "created": created, "last_run": created, "n_cells": int(meta.get("n_cells", 0))}]
+    else:
+        cur = conn.execute(f"SELECT {', '.join(SPECS)} FROM specs ORDER BY id")
+        specs = [dict(zip(SPECS, r)) for r in cur.fetchall()]
+    for s in specs:
+        _json_of(s["spec"], p, f"spec {s['id']}'s canonical form", dict, reading)
+        data = _json_of(s["data"], p, f"spec {s['id']}'s data set hashes", dict, reading)
+        if not all(isinstance(v, str) for v in data.values()):
+            raise _damaged(p, f"spec {s['id']}'s data set hashes are not text", reading)
+    return specs
 
 
 def _settings(conn: sqlite3.Connection) -> None:
@@ -477,7 +501,7 @@ class ResultStore:
                             "--store path; nothing was written to it")
                     migrate = True
                 else:
-                    specs = _specs(ro, meta)
+                    specs = _specs(ro, meta, p, reading=False)
                     _check_growth(p, specs, cells, version)
                     for s in specs:
                         for name, h in json.loads(s["data"]).items():
@@ -795,7 +819,7 @@ def _register(conn: sqlite3.Connection, p: Path, grid_name: str, fingerprint: st
     try:
         # checked again under the write lock: a run started meanwhile may have given a data set name of this spec
         # other data since this one looked (the first look, read-only, refuses without waiting for any lock)
-        _check_growth(p, _specs(conn, {"format_version": FORMAT_VERSION}), cells, version)
+        _check_growth(p, _specs(conn, {"format_version": FORMAT_VERSION}, p, reading=False), cells, version)
         row = conn.execute("SELECT id, spec FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
         bands = _spec_bands({"spec": json.dumps(spec)})
         changed: dict[str, tuple[float | None, float | None]] = {}
@@ -840,10 +864,13 @@ def encode_value(k: str, v: Any) -> Any:
     return v
 
 
-def _decode_members(text: str | None) -> dict[str, np.ndarray] | None:
-    if text is None:
-        return None
-    d = json.loads(text)
+#: The columns of figures, read as float.
+_FLOAT_COLUMNS = ("lambda1", "band", "J1_ident", "JS_ident", "fit_ident", "J1_valid", "JS_valid", "fit_valid", "JSF",
+                  "static_miss", "wall_time")
+
+
+def _decode_members(d: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """A cell's members (decoded JSON) as arrays of floats and the list of failures."""
     return {k: (np.array(v, dtype=float) if k != "failure" else list(v)) for k, v in d.items()}
 
 
@@ -889,7 +916,7 @@ def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dic
     p, conn, meta = _open_readonly(path)
     cols = ", ".join(f"c.{k}" for k in COLUMNS)
     try:
-        specs = _specs(conn, meta)
+        specs = _specs(conn, meta, p)
         chosen = _pick(specs, spec, p)
         if meta["format_version"] == "1":
             cur = conn.execute(f"SELECT {cols} FROM cells c ORDER BY c.cell_index")
@@ -980,7 +1007,7 @@ def store_specs(path: str | os.PathLike) -> pd.DataFrame:
     """
     p, conn, meta = _open_readonly(path)
     try:
-        specs = _specs(conn, meta)
+        specs = _specs(conn, meta, p)
         if meta["format_version"] == "1":
             held = {1: conn.execute("SELECT COUNT(*) FROM cells").fetchone()[0]}
         else:
@@ -1057,18 +1084,26 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
         No such spec in the store.
     """
     meta, specs, rows, chosen = read_store(path, spec)
+    p = Path(path)
     for r in rows:
-        r["terms"] = None if r["terms"] is None else tuple(json.loads(r["terms"]))
-        r["theta"] = None if r["theta"] is None else np.array(json.loads(r["theta"]), dtype=float)
-        r["warnings"] = () if r["warnings"] is None else tuple(json.loads(r["warnings"]))
-        r["members"] = _decode_members(r["members"])
-        r["in_band"] = None if r["in_band"] is None else bool(r["in_band"])
-        r["seed"] = None if r["seed"] is None else int(r["seed"])
+        cell = f"the cell {r['data']!r} / {r['structure']!r} / {r['variant']!r}"
+        r["terms"] = None if r["terms"] is None else tuple(_json_of(r["terms"], p, f"{cell}'s terms", list))
+        r["theta"] = None if r["theta"] is None else _json_of(r["theta"], p, f"{cell}'s theta", list)
+        r["warnings"] = () if r["warnings"] is None else tuple(_json_of(r["warnings"], p, f"{cell}'s warnings", list))
+        members = None if r["members"] is None else _json_of(r["members"], p, f"{cell}'s members", dict)
+        try:  # numbers where numbers are stored (SQLite keeps whatever a column is given)
+            r["theta"] = None if r["theta"] is None else np.array(r["theta"], dtype=float)
+            r["members"] = None if members is None else _decode_members(members)
+            r["in_band"] = None if r["in_band"] is None else bool(r["in_band"])
+            r["seed"] = None if r["seed"] is None else int(r["seed"])
+            for c in _FLOAT_COLUMNS:
+                r[c] = None if r[c] is None else float(r[c])
+        except (TypeError, ValueError) as exc:
+            raise _damaged(p, f"{cell} holds a value that is not what its column holds ({exc})", True) from None
     df = pd.DataFrame(rows, columns=list(COLUMNS))
     front = ["data", "structure", "variant", "seed", "estimator", "status", "message"]
     df = df[front + [c for c in df.columns if c not in front]]
-    for c in ("lambda1", "band", "J1_ident", "JS_ident", "fit_ident", "J1_valid", "JS_valid", "fit_valid", "JSF",
-              "static_miss", "wall_time"):
+    for c in _FLOAT_COLUMNS:
         df[c] = df[c].astype(float)
     for c, dtype in (("seed", "Int64"), ("n_params", "Int64"), ("in_band", "boolean")):
         df[c] = pd.array([r[c] for r in rows], dtype=dtype)
