@@ -266,6 +266,24 @@ def test_a_store_damaged_inside_its_rows_is_refused_naming_it(store, tmp_path, c
     assert str(p) in capsys.readouterr().err
 
 
+def test_a_checkpoint_path_naming_another_file_is_refused_without_talk_of_pickle(store, tmp_path):
+    # select_graybox(checkpoint=) given the grid store (or a spec, a model file) by mistake said numpy's "This file
+    # contains pickled (object) data. If you trust the file you can load it unsafely using allow_pickle= or
+    # pickle.load()": neither true nor advice to give (se_pareto's checkpoint says what the file is instead)
+    import graybox as gb
+
+    p = copy_of(store, tmp_path, "results.sqlite")
+    before = p.read_bytes()
+    for given in (p, tmp_path / "spec.toml"):
+        if given.suffix == ".toml":
+            given.write_text("name = 'g'\n")
+        with pytest.raises(ValueError, match=r"results\.sqlite|spec\.toml") as exc:
+            gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2), gb.load_pumping(), sizes=[2], estimator=["pe"],
+                              progress=False, checkpoint=given)
+        assert "pickle" not in str(exc.value) and "no .npz archive" in str(exc.value)
+    assert p.read_bytes() == before
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

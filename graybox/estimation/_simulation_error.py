@@ -683,6 +683,24 @@ class CheckpointError(ValueError):
 _CHECKPOINT_IDENTITY = ("problem", "method", "lambdas", "seed")
 
 
+#: What reading a file that is no whole .npz archive raises (:func:`read_npz`).
+NPZ_ERRORS = (ValueError, TypeError, KeyError, OSError, EOFError, zipfile.BadZipFile)
+
+
+def read_npz(path: Path) -> dict[str, np.ndarray]:
+    """Every array of the ``.npz`` archive ``path``, read without pickle; one of :data:`NPZ_ERRORS` saying why a
+    file is none."""
+    # opened here: np.load leaves the file it opened open when a torn zip fails to read
+    with open(path, "rb") as f:
+        if f.read(4) != _ZIP_MAGIC:
+            # said here: numpy takes any file that is neither .npy nor .npz for a pickle and says to load it
+            # "unsafely" with pickle, which a checkpoint never is (a grid store, a spec, a model given by mistake)
+            raise ValueError("it is no .npz archive (its first bytes are not a zip file's)")
+        f.seek(0)
+        with np.load(f, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+
+
 def _load_checkpoint(path: Path, meta: dict) -> dict | None:
     """The state a checkpoint holds, or None (with a warning) when another graybox version wrote it."""
     def unreadable(exc: Exception) -> ValueError:
@@ -690,18 +708,10 @@ def _load_checkpoint(path: Path, meta: dict) -> dict | None:
                                "another checkpoint path")
 
     try:
-        # opened here: np.load leaves the file it opened open when a torn zip fails to read
-        with open(path, "rb") as f:
-            if f.read(4) != _ZIP_MAGIC:
-                # said here: numpy takes any file that is neither .npy nor .npz for a pickle and says to load it
-                # "unsafely" with pickle, which a checkpoint never is
-                raise ValueError("it is no .npz archive (its first bytes are not a zip file's)")
-            f.seek(0)
-            with np.load(f, allow_pickle=False) as z:
-                stored = json.loads(str(z["meta"]))
-                raw = {k: z[k] for k in _CHECKPOINT_ARRAYS if k in z.files}
-    # JSONDecodeError is a ValueError; TypeError: a plain .npy array, which is no context manager
-    except (ValueError, TypeError, KeyError, OSError, EOFError, zipfile.BadZipFile) as exc:
+        arrays = read_npz(path)
+        stored = json.loads(str(arrays["meta"]))
+        raw = {k: arrays[k] for k in _CHECKPOINT_ARRAYS if k in arrays}
+    except NPZ_ERRORS as exc:  # JSONDecodeError is a ValueError
         raise unreadable(exc) from None
     if not isinstance(stored, dict):
         raise unreadable(TypeError(f"its metadata is a {type(stored).__name__}, not a mapping"))

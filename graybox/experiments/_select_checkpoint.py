@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from .. import _api as gb
-from ..estimation._simulation_error import CheckpointError, checkpoint_path, save_npz
+from ..estimation._simulation_error import NPZ_ERRORS, CheckpointError, checkpoint_path, read_npz, save_npz
 from ._spec import canonical_json
 
 __all__ = ["SelectionCheckpoint", "checkpoint_of", "plan_digest", "row_key", "test_digest"]
@@ -115,9 +115,8 @@ class SelectionCheckpoint:
 
     def _read(self) -> dict[str, dict[str, Any]]:
         try:
-            with np.load(self.path, allow_pickle=False) as z:
-                arrays = {k: z[k] for k in z.files}
-        except Exception as exc:  # not an npz, torn, or holding objects (which would need pickle)
+            arrays = read_npz(self.path)
+        except NPZ_ERRORS as exc:  # not an npz, torn, or holding objects (which would need pickle)
             raise CheckpointError(f"checkpoint {self.path} is not a readable select_graybox checkpoint ({exc}); "
                                   "delete it or choose another checkpoint path") from None
         if str(arrays.pop("kind", "")) != "select_graybox":
