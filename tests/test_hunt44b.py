@@ -284,6 +284,34 @@ def test_a_checkpoint_path_naming_another_file_is_refused_without_talk_of_pickle
     assert p.read_bytes() == before
 
 
+def test_a_store_another_program_keeps_locked_is_refused_naming_it_not_a_traceback(store, tmp_path, capsys,
+                                                                                    monkeypatch):
+    # an SQLite browser with unsaved changes, a stuck process: after SQLite's wait graybox grid run ended in a
+    # traceback of sqlite3's bare "database is locked", at the start of a run or in the middle of one
+    from graybox.experiments import _store
+
+    monkeypatch.setattr(_store, "LOCK_TIMEOUT", 0.3)
+    p = copy_of(store, tmp_path)
+    other = sqlite3.connect(p, isolation_level=None)
+    other.execute("BEGIN IMMEDIATE")
+    other.execute("UPDATE meta SET value = value")
+    two = grid(variants=(LS, gx.Variant("LS2", "els", options={"noise": 0})))
+    with pytest.raises(gx.StoreError, match=rf"{p.name}.*locked by another program.*nothing was written"):
+        gx.run_grid(two, p)
+    other.execute("ROLLBACK")
+
+    def lock_now(line):  # the run has registered its spec: the lock comes as its cells start
+        if not other.in_transaction:
+            other.execute("BEGIN IMMEDIATE")
+            other.execute("UPDATE meta SET value = value")
+
+    with pytest.raises(gx.StoreError, match=rf"{p.name}.*locked by another program.*cells finished so far are kept"):
+        gx.run_grid(two, p, log=lock_now)
+    other.execute("ROLLBACK")
+    other.close()
+    assert gx.run_grid(two, p).ran == 1  # the lock gone, the run ends what the last one left
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

@@ -345,6 +345,25 @@ def _settings(conn: sqlite3.Connection) -> None:
     conn.execute(f"PRAGMA wal_autocheckpoint={WAL_PAGES}")
 
 
+#: Seconds a statement waits for another connection's write lock on a store (SQLite's busy timeout).
+LOCK_TIMEOUT = 30.0
+
+
+def _begin(conn: sqlite3.Connection, p: Path, running: bool = False) -> None:
+    """``BEGIN IMMEDIATE`` on the store ``p``, or a StoreError when another program keeps its write lock past
+    :data:`LOCK_TIMEOUT` (``running``: a run that has committed cells already, which it keeps)."""
+    try:
+        conn.execute("BEGIN IMMEDIATE")
+    except sqlite3.OperationalError as exc:
+        if getattr(exc, "sqlite_errorcode", 0) & 0xFF not in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED):
+            raise
+        kept = ("the cells finished so far are kept, and the same command runs only the cells left" if running
+                else "nothing was written to it")
+        raise StoreError(f"{p} has been locked by another program for {LOCK_TIMEOUT:g} s ({exc}: a connection "
+                         f"holding a write transaction, e.g. an SQLite browser with unsaved changes); {kept}. "
+                         "Close that connection, then run again") from None
+
+
 def _cannot_open(exc: sqlite3.Error) -> bool:
     """Whether SQLite could not open a file it needs (the database, or the log or its index beside it)."""
     return getattr(exc, "sqlite_errorcode", 0) & 0xFF == sqlite3.SQLITE_CANTOPEN
@@ -352,9 +371,9 @@ def _cannot_open(exc: sqlite3.Error) -> bool:
 
 def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:
     if not readonly:
-        return sqlite3.connect(str(path), timeout=30.0, isolation_level=None)  # explicit transactions
+        return sqlite3.connect(str(path), timeout=LOCK_TIMEOUT, isolation_level=None)  # explicit transactions
     uri = path.resolve().as_uri()
-    conn = sqlite3.connect(uri + "?mode=ro", uri=True, timeout=30.0, isolation_level=None)
+    conn = sqlite3.connect(uri + "?mode=ro", uri=True, timeout=LOCK_TIMEOUT, isolation_level=None)
     try:
         conn.execute("SELECT 1 FROM sqlite_master LIMIT 1")
     except sqlite3.OperationalError as exc:
@@ -369,7 +388,7 @@ def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:
             raise StoreError(f"{path} cannot be read where it is: its folder is read-only to this process and its log "
                              f"{wal.name} holds writes not yet in the store; copy the store and {wal.name} together "
                              "into a folder you can write in and read the copy") from None
-        return sqlite3.connect(uri + "?mode=ro&immutable=1", uri=True, timeout=30.0, isolation_level=None)
+        return sqlite3.connect(uri + "?mode=ro&immutable=1", uri=True, timeout=LOCK_TIMEOUT, isolation_level=None)
     except sqlite3.Error:  # not SQLite, damaged: the caller's checks say so
         pass
     return conn
@@ -580,7 +599,7 @@ class ResultStore:
 
     def _claims(self, keys: Sequence[str], take: bool) -> dict[str, str]:
         host, pid, now = socket.gethostname(), os.getpid(), time.time()
-        self._conn.execute("BEGIN IMMEDIATE")
+        _begin(self._conn, self.path, running=True)
         try:
             self._conn.execute(_table("drivers", DRIVERS).replace("CREATE TABLE", "CREATE TABLE IF NOT EXISTS"))
             self._conn.execute(_table("claims", CLAIMS).replace("CREATE TABLE", "CREATE TABLE IF NOT EXISTS"))
@@ -608,7 +627,7 @@ class ResultStore:
         sequence ends none: the cells a run has just taken stay taken when none of the others is let go)."""
         if self._owner is None or (keys is not None and not keys):
             return
-        self._conn.execute("BEGIN IMMEDIATE")
+        _begin(self._conn, self.path, running=True)
         try:
             if keys is not None:
                 self._conn.executemany("DELETE FROM claims WHERE key = ? AND owner = ?",
@@ -673,7 +692,7 @@ class ResultStore:
         """
         values = [encode_value(k, row.get(k)) for k in COLUMNS]
         verb = "INSERT OR REPLACE" if replace else "INSERT OR IGNORE"
-        self._conn.execute("BEGIN IMMEDIATE")
+        _begin(self._conn, self.path, running=True)
         try:
             cur = self._conn.execute(f"{verb} INTO cells ({', '.join(COLUMNS)}) "
                                      f"VALUES ({', '.join('?' * len(COLUMNS))})", values)
@@ -700,7 +719,7 @@ class ResultStore:
         """End this run's claims and close the connection."""
         try:
             self.unclaim()
-        except sqlite3.Error:  # closing must not fail on a store it can no longer write: the claims die with the run
+        except (sqlite3.Error, StoreError):  # closing must not fail on a store it cannot write: the claims die with the run
             pass
         finally:
             if self._owner is not None:  # its row, left in the store, is known for a dead run's (_alive)
@@ -815,7 +834,7 @@ def _register(conn: sqlite3.Connection, p: Path, grid_name: str, fingerprint: st
 
     The same cells under the same names with other bands (no variant reading them: the cells' keys do not say them)
     are another spec: the rows read back, and the reports rank, with the band of the spec they are read with."""
-    conn.execute("BEGIN IMMEDIATE")
+    _begin(conn, p)
     try:
         # checked again under the write lock: a run started meanwhile may have given a data set name of this spec
         # other data since this one looked (the first look, read-only, refuses without waiting for any lock)
