@@ -312,6 +312,26 @@ def test_a_store_another_program_keeps_locked_is_refused_naming_it_not_a_traceba
     assert gx.run_grid(two, p).ran == 1  # the lock gone, the run ends what the last one left
 
 
+def test_status_of_all_specs_counts_the_cells_left(store, tmp_path, capsys):
+    # with --spec all the cells were counted as those the store holds: "1 of 1 cells done, 0 left" of a store whose
+    # second spec had not run its new cell (a run killed, or still running)
+    import graybox as gb
+    from graybox.experiments._spec import stored_spec
+    from graybox.experiments._store import ResultStore
+
+    p = copy_of(store, tmp_path)
+    g = grid(variants=(LS, gx.Variant("LS2", "els", options={"noise": 0})))
+    ds = g.load_data()
+    cells = g.cells(ds)
+    ResultStore.open(p, grid_name=g.name, fingerprint=g.fingerprint(cells), spec=stored_spec(g, ds), cells=cells,
+                     version=gb.__version__).close()  # registered, as a run does before its first cell
+    st = gx.grid_status(p, spec="all")
+    assert (st.cells, st.done, st.left) == (2, 1, 1)
+    assert gx.load_results(p, spec="all").attrs["n_cells"] == 2
+    assert main(["grid", "status", str(p), "--spec", "all"]) == 0
+    assert "1 of 2 cells done" in capsys.readouterr().out
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

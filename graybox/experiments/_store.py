@@ -924,8 +924,9 @@ def _pick(specs: list[dict[str, Any]], spec: str | int, p: Path) -> dict[str, An
 
 
 def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dict[str, str], list[dict[str, Any]],
-                                                                                list[dict[str, Any]], dict | None]:
-    """(meta, specs, rows, the chosen spec record or None for "all") of a store, read-only.
+                                                                                list[dict[str, Any]], dict | None, int]:
+    """(meta, specs, rows, the chosen spec record or None for "all", the cells of the choice: the spec's, or every
+    cell a spec of the store holds, run or not) of a store, read-only.
 
     Rows of one spec carry that spec's names and grid positions (``cell_index``); rows of all
     specs carry the names of the first spec that ran each cell, a name that means different
@@ -937,9 +938,11 @@ def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dic
     try:
         specs = _specs(conn, meta, p)
         chosen = _pick(specs, spec, p)
+        n = int(chosen["n_cells"]) if chosen is not None else None
         if meta["format_version"] == "1":
             cur = conn.execute(f"SELECT {cols} FROM cells c ORDER BY c.cell_index")
             rows = [dict(zip(COLUMNS, r)) for r in cur.fetchall()]
+            n = int(specs[0]["n_cells"])
         elif chosen is not None:
             cur = conn.execute(f"SELECT {cols}, s.position, s.data, s.structure, s.variant FROM spec_cells s "
                                "JOIN cells c ON c.key = s.key WHERE s.spec = ? ORDER BY s.position", (chosen["id"],))
@@ -952,11 +955,13 @@ def read_store(path: str | os.PathLike, spec: str | int = "latest") -> tuple[dic
                 rows.append(row)
         else:
             rows = _all_rows(conn, cols, {s["id"]: _spec_bands(s) for s in specs})
+            # the cells the specs hold, run or not: a spec's cells not run yet are left, not absent
+            n = conn.execute("SELECT COUNT(*) FROM (SELECT DISTINCT key FROM spec_cells)").fetchone()[0]
     except sqlite3.DatabaseError as exc:
         raise StoreError(f"{p} is damaged ({exc}); {_DAMAGED}") from None
     finally:
         conn.close()
-    return meta, specs, rows, chosen
+    return meta, specs, rows, chosen, max(int(n), len(rows))
 
 
 def _spec_bands(spec: Mapping[str, Any]) -> dict[str, float | None]:
@@ -1102,7 +1107,7 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
     ValueError
         No such spec in the store.
     """
-    meta, specs, rows, chosen = read_store(path, spec)
+    meta, specs, rows, chosen, n_cells = read_store(path, spec)
     p = Path(path)
     for r in rows:
         cell = f"the cell {r['data']!r} / {r['structure']!r} / {r['variant']!r}"
@@ -1138,7 +1143,7 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
                 hashes.setdefault(k, h)
         df.attrs.update(grid=" + ".join(dict.fromkeys(i["name"] for i in infos)), fingerprint=None,
                         spec={str(i["id"]): i["spec"] for i in infos},
-                        version=", ".join(dict.fromkeys(i["version"] for i in infos)), n_cells=len(df),
+                        version=", ".join(dict.fromkeys(i["version"] for i in infos)), n_cells=n_cells,
                         data_hashes=hashes)
     df.attrs.update(specs=infos, store=str(path), selection=spec if chosen is None else int(chosen["id"]))
     return df
