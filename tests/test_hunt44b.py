@@ -332,6 +332,25 @@ def test_status_of_all_specs_counts_the_cells_left(store, tmp_path, capsys):
     assert "1 of 2 cells done" in capsys.readouterr().out
 
 
+def test_a_checkpoint_path_that_is_a_folder_is_refused_as_one(tmp_path):
+    # checkpoint="out" (the folder meant to hold it) said "is not a readable … checkpoint ([Errno 21] Is a
+    # directory); delete it or choose another checkpoint path": delete the folder?
+    import graybox as gb
+
+    folder = tmp_path / "out"
+    folder.mkdir()
+    (folder / "keep.txt").write_text("results")
+    calls = (lambda: gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2), gb.load_pumping(), sizes=[2],
+                                       estimator=["pe"], progress=False, checkpoint=folder),
+             lambda: gb.se_pareto(gb.Structure(["y(k-1)", "u(k-1)", "1"]), gb.load_pumping(), method="gradient",
+                                  lambdas=[0.5], progress=False, checkpoint=folder))
+    for call in calls:
+        with pytest.raises(ValueError, match=r"checkpoint: .*out is a folder.*file path") as exc:
+            call()
+        assert "delete" not in str(exc.value)
+    assert (folder / "keep.txt").read_text() == "results"
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

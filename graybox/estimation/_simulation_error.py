@@ -1419,13 +1419,15 @@ def refit_if_slow(problem: SEProblem, fit: Callable[[SEProblem], _R], what: str,
 
 
 def checkpoint_path(checkpoint: object) -> Path:
-    """``checkpoint`` as a Path, checked before any fit: ``TypeError`` for what is no path, ``ValueError``
-    for an empty name, a folder that does not exist or one this process cannot write in (the first write would
-    fail only after a member: the file is written beside itself and moved into place)."""
+    """``checkpoint`` as a Path, checked before any fit: ``TypeError`` for what is no path, ``ValueError`` for an
+    empty name, a folder given as the file, a folder that does not exist or one this process cannot write in (the
+    first write would fail only after a member: the file is written beside itself and moved into place)."""
     checkpoint = check_path(checkpoint, "checkpoint")
     if not os.fspath(checkpoint):
         raise ValueError("checkpoint: an empty file name; give a file path such as 'front.npz'")
     path = Path(checkpoint)
+    if path.is_dir():  # the folder meant to hold it: never to be called unreadable, nor deleted
+        raise ValueError(f"checkpoint: {path} is a folder; give a file path, such as {path / 'checkpoint.npz'}")
     if not path.parent.is_dir():
         raise ValueError(f"checkpoint: the folder {path.parent} does not exist; create it or choose another path")
     try:  # a file made and gone at once: what the write will do (modes, read-only mounts, ACLs all say)
