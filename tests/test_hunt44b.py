@@ -351,6 +351,22 @@ def test_a_checkpoint_path_that_is_a_folder_is_refused_as_one(tmp_path):
     assert (folder / "keep.txt").read_text() == "results"
 
 
+def test_a_file_edited_to_hold_a_field_twice_is_refused_naming_it(tmp_path):
+    # a theta line copied to be changed and the old one left: JSON reads the last and the file loaded silently
+    # with whichever came last
+    import graybox as gb
+
+    d = gb.load_pumping()
+    m = gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), d.ident).model
+    path = tmp_path / "m.json"
+    gb.save(m, path)
+    text = path.read_text()
+    line = next(ln for ln in text.splitlines() if ln.strip().startswith('"theta"'))
+    path.write_text(text.replace(line, line.replace("[", "[2.0, ", 1) + "\n" + line))
+    with pytest.raises(gb.GrayboxFileError, match=r"m\.json.*'theta'.*twice"):
+        gb.load(path)
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

@@ -886,10 +886,27 @@ def _header(doc: Any, rd: _Reader) -> dict:
             "type": typ, "units": None if units is None else (units.get("u", ""), units.get("y", ""))}
 
 
+class _Twice(ValueError):
+    """A JSON object naming one key twice."""
+
+
+def _once(pairs: list[tuple[str, Any]]) -> dict:
+    """A JSON object whose keys are all different: JSON would keep the last of a key given twice (a line of a
+    hand-edited file copied to be changed, the old one left), and the file load as whichever came last."""
+    out = dict(pairs)
+    if len(out) < len(pairs):
+        seen: set[str] = set()
+        twice = next(k for k, _ in pairs if k in seen or seen.add(k))
+        raise _Twice(f"the field {twice!r} is given twice in one object; keep one of them")
+    return out
+
+
 def _parse(text: str, source: str) -> tuple[dict, Any]:
     rd = _Reader(source)
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, object_pairs_hook=_once)
+    except _Twice as exc:
+        raise rd.fail("JSON", str(exc)) from None
     except json.JSONDecodeError as exc:
         raise rd.fail("JSON", f"corrupt file ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
     except (ValueError, RecursionError) as exc:  # e.g. an integer of more digits than Python converts
