@@ -381,7 +381,7 @@ def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:
         # through an index (-shm) made beside it, which cannot be made there. With no log beside it (no run has it
         # open, every write is in the file) nothing can change it meanwhile: read as it is, without the index
         wal = Path(f"{path}-wal")
-        if not _cannot_open(exc) or Path(f"{path}-shm").exists():
+        if not _cannot_open(exc):
             return conn  # what the caller's first statement says
         conn.close()
         if wal.exists() and wal.stat().st_size:
