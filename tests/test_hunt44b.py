@@ -13,6 +13,7 @@ import sqlite3
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from graybox import experiments as gx
@@ -368,6 +369,25 @@ def test_a_file_edited_to_hold_a_field_twice_is_refused_naming_it(tmp_path):
     path.write_text(text.replace(line, line.replace("[", "[2.0, ", 1) + "\n" + line))
     with pytest.raises(gb.GrayboxFileError, match=r"m\.json.*'theta'.*twice"):
         gb.load(path)
+
+
+def test_one_functions_checkpoint_given_to_the_other_is_named_not_offered_for_deletion(tmp_path):
+    # se_pareto's checkpoint (a sweep of hours) given to select_graybox, or the other way round, was "not a
+    # select_graybox checkpoint; delete it or …" / "not a readable SE checkpoint ('meta'); delete it or …"
+    import graybox as gb
+    from graybox.estimation._simulation_error import save_npz
+    from graybox.experiments._select_checkpoint import SelectionCheckpoint
+
+    se, sel = tmp_path / "se.npz", tmp_path / "sel.npz"
+    save_npz(se, meta="{}", thetas=np.zeros((1, 3)))  # an SE sweep's arrays (its meta JSON text first)
+    save_npz(sel, kind=np.array("select_graybox"))
+    with pytest.raises(ValueError, match=r"se\.npz is se_pareto's checkpoint.*choose another") as exc:
+        SelectionCheckpoint(se)
+    assert "delete" not in str(exc.value)
+    with pytest.raises(ValueError, match=r"sel\.npz is select_graybox's checkpoint.*choose another") as exc:
+        gb.se_pareto(gb.Structure(["y(k-1)", "u(k-1)", "1"]), gb.load_pumping(), method="gradient", lambdas=[0.5],
+                     progress=False, checkpoint=sel)
+    assert "delete" not in str(exc.value)
 
 
 def _spec(tmp_path: Path) -> Path:

@@ -709,6 +709,13 @@ def _load_checkpoint(path: Path, meta: dict) -> dict | None:
 
     try:
         arrays = read_npz(path)
+    except NPZ_ERRORS as exc:
+        raise unreadable(exc) from None
+    if "meta" not in arrays and str(arrays.get("kind", "")) == "select_graybox":
+        # another function's file, perhaps hours of work: not offered for deletion
+        raise CheckpointError(f"checkpoint {path} is select_graybox's checkpoint, not an SE sweep's; choose another "
+                              "checkpoint path")
+    try:
         stored = json.loads(str(arrays["meta"]))
         raw = {k: arrays[k] for k in _CHECKPOINT_ARRAYS if k in arrays}
     except NPZ_ERRORS as exc:  # JSONDecodeError is a ValueError

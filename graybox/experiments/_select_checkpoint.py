@@ -119,6 +119,9 @@ class SelectionCheckpoint:
         except NPZ_ERRORS as exc:  # not an npz, torn, or holding objects (which would need pickle)
             raise CheckpointError(f"checkpoint {self.path} is not a readable select_graybox checkpoint ({exc}); "
                                   "delete it or choose another checkpoint path") from None
+        if "kind" not in arrays and "meta" in arrays:  # another function's file, perhaps hours of work: not offered
+            raise CheckpointError(f"checkpoint {self.path} is se_pareto's checkpoint (an SE sweep), not "
+                                  "select_graybox's; choose another checkpoint path")
         if str(arrays.pop("kind", "")) != "select_graybox":
             raise CheckpointError(f"checkpoint {self.path} is not a select_graybox checkpoint; delete it or choose "
                                   "another checkpoint path")
