@@ -390,6 +390,21 @@ def test_one_functions_checkpoint_given_to_the_other_is_named_not_offered_for_de
     assert "delete" not in str(exc.value)
 
 
+def test_report_files_of_data_sets_named_apart_only_by_case_stay_apart_on_any_file_system(tmp_path):
+    # "Plant" and "plant" wrote heatmap_Plant.png and heatmap_plant.png: one file on macOS's and Windows' file
+    # systems, which do not tell case apart, so one data set's figures and table overwrote the other's
+    import graybox as gb
+
+    d = gb.load_pumping()
+    other = gb.Dataset(d.ident, d.valid, gb.StaticPoints(d.static.ubar, d.static.ybar + 0.01))
+    g = gx.Grid([gx.DataSpec("Plant", bundled="pumping"), gx.DataSpec("plant", dataset=other, band=0.1)], [ONE],
+                [LS], name="g")
+    p = tmp_path / "s.sqlite"
+    gx.run_grid(g, p)
+    names = [f.name for f in gx.write_report(p, tmp_path / "rep")]
+    assert len({n.lower() for n in names}) == len(names)
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

@@ -722,16 +722,19 @@ def plot_heatmap(
 
 def _slugs(names: Sequence[str]) -> dict[str, str]:
     """A distinct file-name part per data set name (ASCII letters, digits, ``._-``): names that differ only in
-    other characters ("plant A" and "plant_A", or two names in another script) get ``_2``, ``_3`` … in order,
-    lest one data set's files overwrite another's."""
+    other characters ("plant A" and "plant_A", or two names in another script) or only in case ("Plant" and
+    "plant": one file where the file system does not tell case apart, as macOS's and Windows' do not) get ``_2``,
+    ``_3`` … in order, lest one data set's files overwrite another's."""
     out: dict[str, str] = {}
+    taken: set[str] = set()
     for name in names:
         base = re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "data"
         slug, i = base, 1
-        while slug in out.values():
+        while slug.lower() in taken:
             i += 1
             slug = f"{base}_{i}"
         out[name] = slug
+        taken.add(slug.lower())
     return out
 
 
