@@ -405,6 +405,22 @@ def test_report_files_of_data_sets_named_apart_only_by_case_stay_apart_on_any_fi
     assert len({n.lower() for n in names}) == len(names)
 
 
+def test_a_checkpoint_behind_a_symbolic_link_is_written_through_it(tmp_path):
+    # checkpoint="latest.npz", a link to runs/a.npz: the first row replaced the link by a file of its own, and
+    # runs/a.npz kept the rows it had (graybox's JSON files are written through a link, as open(p, "w") would)
+    from graybox.experiments._select_checkpoint import SelectionCheckpoint
+
+    (tmp_path / "runs").mkdir()
+    link = tmp_path / "latest.npz"
+    link.symlink_to(tmp_path / "runs" / "a.npz")
+    ck = SelectionCheckpoint(link)
+    row = {"blocks": np.zeros(3), "weights": np.ones(3), "jsf": np.zeros(2), "jsf_full": np.zeros(2),
+           "thetas": np.zeros((2, 3)), "lambdas": np.ones(2), "failed": ["", ""], "warnings": []}
+    ck.put("0" * 32, row)
+    assert link.is_symlink()
+    assert list(SelectionCheckpoint(tmp_path / "runs" / "a.npz").rows) == ["0" * 32]
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

@@ -757,12 +757,14 @@ def save_npz(path: Path, **arrays: Any) -> None:
     """Write ``arrays`` to the ``.npz`` file ``path`` atomically: a kill during the write never leaves a torn file.
     Written under a name of this write's own beside it, then moved into place: under one shared name, two
     writers of one file (two calls at once) each moved the other's half-written file into place, and the second
-    move found nothing to move."""
-    tmp = path.with_name(f"{path.name}.{secrets.token_hex(4)}.tmp")
+    move found nothing to move. A symbolic link is written through, as ``open(path, "w")`` would (and graybox's JSON
+    files are): the file it names is replaced, the link kept."""
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    tmp = target.with_name(f"{target.name}.{secrets.token_hex(4)}.tmp")
     try:
         with open(tmp, "xb") as f:  # the mode a new file of np.savez's would have
             np.savez(f, **arrays)
-        os.replace(tmp, path)
+        os.replace(tmp, target)
     except BaseException:
         with contextlib.suppress(OSError):
             tmp.unlink()
