@@ -120,8 +120,8 @@ class SelectionCheckpoint:
             raise CheckpointError(f"checkpoint {self.path} is not a readable select_graybox checkpoint ({exc}); "
                                   "delete it or choose another checkpoint path") from None
         if "kind" not in arrays and "meta" in arrays:  # another function's file, perhaps hours of work: not offered
-            raise CheckpointError(f"checkpoint {self.path} is se_pareto's checkpoint (an SE sweep), not "
-                                  "select_graybox's; choose another checkpoint path")
+            raise CheckpointError(f"checkpoint {self.path} is se_pareto's checkpoint (an SE sweep), and is not a "
+                                  "select_graybox checkpoint; choose another checkpoint path")
         if str(arrays.pop("kind", "")) != "select_graybox":
             raise CheckpointError(f"checkpoint {self.path} is not a select_graybox checkpoint; delete it or choose "
                                   "another checkpoint path")
