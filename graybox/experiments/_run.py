@@ -49,8 +49,9 @@ class GridRun:
     spec : int
         The grid's number among the specs the store has seen (1 = the first).
     notes : tuple of str
-        What the store made of the grid: a spec new to the store, new data sets, cells of an
-        older graybox that could not be reused.
+        What the store made of the grid: a spec new to the store, new data sets, a data set's
+        band other than in the store's spec of the same cells, cells of an older graybox that
+        could not be reused.
     """
 
     store: str
