@@ -558,7 +558,7 @@ class ResultStore:
             return cls.open(p, grid_name=grid_name, fingerprint=fingerprint, spec=spec, cells=cells, version=version)
         try:
             if migrate:
-                _upgrade(conn, meta, cells)
+                _upgrade(conn, p, meta, cells)
                 meta["format_version"] = FORMAT_VERSION
             spec_id, new, changed = _register(conn, p, grid_name, fingerprint, spec, cells, version)
         except BaseException as exc:
@@ -804,10 +804,10 @@ def _spec_cell_rows(spec_id: int, cells: Sequence[Cell]) -> list[tuple]:
              _hash(c.variant_spec)) for i, c in enumerate(cells)]
 
 
-def _upgrade(conn: sqlite3.Connection, meta: Mapping[str, str], cells: Sequence[Cell]) -> None:
+def _upgrade(conn: sqlite3.Connection, p: Path, meta: Mapping[str, str], cells: Sequence[Cell]) -> None:
     """A first-format store run again by its own grid (same fingerprint, so the same cells and
     data): its grid becomes spec 1, in one transaction."""
-    conn.execute("BEGIN IMMEDIATE")
+    _begin(conn, p)
     try:
         if conn.execute("SELECT value FROM meta WHERE key = 'format_version'").fetchone() != ("1",):
             conn.execute("ROLLBACK")  # another run of the same grid upgraded it since this one looked
