@@ -421,6 +421,37 @@ def test_a_checkpoint_behind_a_symbolic_link_is_written_through_it(tmp_path):
     assert list(SelectionCheckpoint(tmp_path / "runs" / "a.npz").rows) == ["0" * 32]
 
 
+def test_a_checkpoint_write_killed_leaves_no_file_for_ever(tmp_path):
+    # each rewrite goes through a file of its own beside the checkpoint: one a killed call left is swept by the next
+    # call on the checkpoint (a live process's is left to it; on another host, one old is taken for a killed one's)
+    import sys
+    import time
+
+    from graybox.estimation._simulation_error import checkpoint_path, save_npz
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        path = tmp_path / "sel.npz"
+        dead, alive, old, other = (tmp_path / f"sel.npz.{gone.pid}-0badc0de.tmp",
+                                   tmp_path / f"sel.npz.{live.pid}-1badc0de.tmp",
+                                   tmp_path / f"sel.npz.{live.pid}-2badc0de.tmp", tmp_path / "notes.1-0badc0de.tmp")
+        for f in (dead, alive, old, other):
+            f.write_bytes(b"half")
+        an_hour_ago = time.time() - 3600
+        for f in (old, other):
+            os.utime(f, (an_hour_ago, an_hour_ago))
+        checkpoint_path(path)
+        assert not dead.exists() and not old.exists() and alive.exists() and other.exists()
+        alive.unlink()
+        save_npz(path, x=np.zeros(2))  # and a write: nothing beside the file but what is not its
+        assert sorted(f.name for f in tmp_path.iterdir()) == ["notes.1-0badc0de.tmp", "sel.npz"]
+    finally:
+        live.kill()
+        live.wait()
+
+
 def _spec(tmp_path: Path) -> Path:
     p = tmp_path / "spec.toml"
     p.write_text('name = "g"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "first-order"\n'

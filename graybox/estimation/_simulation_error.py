@@ -43,8 +43,10 @@ import hashlib
 import json
 import math
 import os
+import re
 import secrets
 import tempfile
+import time
 import warnings
 import zipfile
 from dataclasses import asdict, dataclass, field
@@ -760,7 +762,7 @@ def save_npz(path: Path, **arrays: Any) -> None:
     move found nothing to move. A symbolic link is written through, as ``open(path, "w")`` would (and graybox's JSON
     files are): the file it names is replaced, the link kept."""
     target = Path(os.path.realpath(path)) if path.is_symlink() else path
-    tmp = target.with_name(f"{target.name}.{secrets.token_hex(4)}.tmp")
+    tmp = target.with_name(f"{target.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
     try:
         with open(tmp, "xb") as f:  # the mode a new file of np.savez's would have
             np.savez(f, **arrays)
@@ -769,6 +771,7 @@ def save_npz(path: Path, **arrays: Any) -> None:
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise
+    _sweep_leftovers(target)
 
 
 def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarray, done: int,
@@ -1445,7 +1448,40 @@ def checkpoint_path(checkpoint: object) -> Path:
     except OSError as exc:
         raise ValueError(f"checkpoint: the folder {path.parent} cannot be written in ({exc.strerror or exc}); make "
                          "it writable or choose another path") from None
+    _sweep_leftovers(Path(os.path.realpath(path)))
     return path
+
+
+#: Seconds after which a file a checkpoint's write left beside it (its writer killed) is swept; a write takes less.
+LEFTOVER_SECONDS = 600.0
+
+
+def _sweep_leftovers(path: Path) -> None:
+    """Remove the files :func:`save_npz` writes beside ``path`` that a killed write left (each write has a name of
+    its own, which no later write replaces): those of a process of this host that is gone, and any once old (a
+    process of another host sharing the folder)."""
+    name = re.compile(rf"{re.escape(path.name)}\.(\d+)-[0-9a-f]{{8}}\.tmp")
+    now = time.time()
+    with contextlib.suppress(OSError):
+        for f in path.parent.iterdir():
+            m = name.fullmatch(f.name)
+            if m:
+                with contextlib.suppress(OSError):  # gone meanwhile
+                    if not _pid_alive(int(m.group(1))) or now - f.stat().st_mtime > LEFTOVER_SECONDS:
+                        f.unlink()
+
+
+def _pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this host may still run (True where that cannot be asked: it may)."""
+    if pid == os.getpid() or os.name != "posix":  # os.kill(pid, 0) would end a process on Windows
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):  # another user's process; a number no pid is
+        return True
+    return True
 
 
 def _sibling(path: str | os.PathLike, tag: str) -> Path:
