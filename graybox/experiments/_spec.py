@@ -793,7 +793,20 @@ def constraint_from_object(obj: object, path: tuple = ()) -> list[dict]:
         return [d for m in members for d in constraint_from_object(m, path)]
     if isinstance(obj, gb.CurveEquality):
         c = obj.curve
-        return [canonical_constraint({"type": "equality", "curve": [float(v) for v in c.coefficients],
+        if isinstance(c, gb.StaticSurface):
+            # a table's curve is ascending coefficients of one input; a surface's are by exponent (1 + 3ū² is
+            # [1, 3] at exponents 0 and 2, which as a curve read 1 + 3ū)
+            if c.n_inputs != 1:
+                raise SpecError(f"{obj.describe()}: a grid's equality takes a curve of one input as its coefficients; "
+                                f"{c.name} is a surface in {c.n_inputs} inputs, which a table cannot hold: use "
+                                "curve = \"fit\" (the surface fitted to the data set's static points) or \"dataset\"",
+                                path)
+            coef = np.zeros(max(e[0] for e in c.exponents) + 1)
+            for e, v in zip(c.exponents, c.coefficients):
+                coef[e[0]] += float(v)
+        else:
+            coef = c.coefficients
+        return [canonical_constraint({"type": "equality", "curve": [float(v) for v in coef],
                                       "sigma_y": obj.sigma_y}, path)]
     if getattr(obj, "points", None) is not None:
         raise SpecError(f"{obj.describe()}: in a grid, constraints use the data set's static points; "
