@@ -26,3 +26,43 @@ def test_grid_equality_of_a_surface_of_several_inputs_is_refused_by_name():
     surf = gb.StaticSurface.fit(pts, degree=1)
     with pytest.raises(SpecError, match="surface"):
         constraint_from_object(gb.CurveEquality(surf))
+
+
+# --------------------------------------------------------------------------------------------
+# shared synthetic plant: y(k) = 0.6 y(k-1) + 0.1 y(k-2) + 0.2 u(k-1) + 0.1 u(k-1)² + 0.05 + e(k)
+# --------------------------------------------------------------------------------------------
+S = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "1"]
+
+
+def _plant(n=400, noise=0.05, seed=0, u_scale=1.0, u_offset=0.0, y_scale=1.0, y_offset=0.0):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.5, 2.0, n // 20 + 1), 20)[:n]
+    y = np.zeros(n)
+    e = noise * rng.standard_normal(n)
+    for k in range(2, n):
+        y[k] = 0.6 * y[k - 1] + 0.1 * y[k - 2] + 0.2 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.05 + e[k]
+    ub = np.linspace(0.6, 1.8, 6)
+    yb = (0.2 * ub + 0.1 * ub**2 + 0.05) / 0.3
+    rec = gb.Record(u * u_scale + u_offset, y * y_scale + y_offset, Ts=1.0)
+    pts = gb.StaticPoints(ub * u_scale + u_offset, yb * y_scale + y_offset)
+    return gb.Dataset(rec, rec, pts)
+
+
+@pytest.mark.parametrize("solver", ["clarabel", "closed"])
+def test_contradictory_cluster_equalities_are_not_blamed_on_static_points(solver):
+    # Σy = 0.9 and Σy = 0.5: the message said "generic static points over-determine" the static function
+    # and advised fewer points, where no point is imposed at all
+    d = _plant()
+    cons = gb.ClusterBounds({"Σy": (0.9, 0.9)}) & gb.ClusterBounds({"Σy": (0.5, 0.5)})
+    with pytest.raises(gb.InfeasibleError) as info:
+        gb.pe_pareto(S, d, constraints=cons, lambdas=[0.5], solver=solver)
+    msg = str(info.value)
+    assert "Σy <= 0.9" in msg and "Σy <= 0.5" in msg
+    assert "static points" not in msg
+
+
+def test_too_many_points_to_pass_through_still_says_so():
+    d = _plant()
+    pts = gb.StaticPoints(d.static.ubar, d.static.ybar + 0.01 * np.array([1, -1, 1, -1, 1, -1]))  # off any one curve
+    with pytest.raises(gb.InfeasibleError, match="over-determine"):
+        gb.cls(["u(k-1)", "u(k-1)^2", "1"], d.ident, constraints=gb.PassesThrough(pts), how="context")

@@ -425,7 +425,9 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, y_sca
     # which equalities are independent, and whether they agree, is decided in z, where each row is of unit norm
     # per scaled parameter; after the ill-conditioned T a row that is independent in z could fall under the rank
     # cut (eq. (22) with Σ_y free and u far from its zero: the constraint was dropped and the curve not met)
-    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys), scale=y_scale)
+    # the hint that points over-determine the static function only where points are imposed
+    points = any(isinstance(c, PassesThrough) for c in cons)
+    V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys) if points else None, scale=y_scale)
     if T is not None and V.shape[0]:
         U, S, Vt = np.linalg.svd(V @ T, full_matrices=False)  # the same rows, orthonormal in y, every one kept
         V, g = Vt, (U.T @ (g - V @ at)) / S
@@ -443,13 +445,15 @@ def _normalise_ub(G: np.ndarray, h: np.ndarray, names: tuple[str, ...], tol: flo
     return G / norms[:, None], h / norms
 
 
-def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int,
+def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int | None,
                scale: float) -> tuple[np.ndarray, np.ndarray]:
     """Independent, orthonormal equality rows V y = g, or an error if the equalities disagree.
 
     The rows are of unit norm in z = θ·s, so their right-hand sides are in output units: a disagreement is
     judged against ``scale`` (the output's spread) or the right-hand sides' size, not against one output
-    unit, which for an output in A (1e-9) took contradictory equalities for one and met them halfway."""
+    unit, which for an output in A (1e-9) took contradictory equalities for one and met them halfway.
+    ``cluster_count``: the structure's cluster coefficients where static points are imposed (then the
+    message says that they over-determine it), else None."""
     n = E.shape[1]
     if E.shape[0] == 0:
         return np.zeros((0, n)), np.zeros(0)
@@ -467,7 +471,10 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
     resid = f - Ur @ (Ur.T @ f)
     if np.linalg.norm(resid) > 1e-8 * max(scale, np.linalg.norm(f)):
         more = ""
-        if E.shape[0] > r:
+        if E.shape[0] > r and cluster_count is None:
+            more = (f" ({E.shape[0]} equality rows but only {r} independent ones: some fix the same combination of "
+                    "the parameters at different values)")
+        elif E.shape[0] > r:
             more = (f" ({E.shape[0]} equality rows but only {r} independent ones: the static function of this "
                     f"structure has {cluster_count} cluster coefficients, so generic static points over-determine "
                     "it; use fewer points, StaticCurve.fit + CurveEquality, a StaticBand or the PE problem)")
