@@ -66,3 +66,11 @@ def test_too_many_points_to_pass_through_still_says_so():
     pts = gb.StaticPoints(d.static.ubar, d.static.ybar + 0.01 * np.array([1, -1, 1, -1, 1, -1]))  # off any one curve
     with pytest.raises(gb.InfeasibleError, match="over-determine"):
         gb.cls(["u(k-1)", "u(k-1)^2", "1"], d.ident, constraints=gb.PassesThrough(pts), how="context")
+
+
+@pytest.mark.parametrize("bad", [3, 2.5, "th <= 1"])
+def test_user_constraint_returning_no_constraints_is_named(bad):
+    # a number returned by the function failed in list(): "'int' object is not iterable", naming nothing
+    d = _plant()
+    with pytest.raises(ValueError, match="mine: the function must return cvxpy constraints, got (int|float|str)"):
+        gb.cls(S, d.ident, constraints=gb.UserConstraint(lambda th: bad, name="mine"), how="context")

@@ -1200,7 +1200,12 @@ class UserConstraint(StaticConstraint):
         except (TypeError, ValueError):
             n_args = 1
         res = self.fn(theta, ctx) if n_args >= 2 else self.fn(theta)
-        out = [res] if isinstance(res, cp.constraints.constraint.Constraint) else list(res or [])
+        if res is None:
+            out = []
+        elif isinstance(res, (cp.constraints.constraint.Constraint, str)) or not hasattr(res, "__iter__"):
+            out = [res]  # one constraint, or a value that is none (a number, a text): refused below by name
+        else:
+            out = list(res)
         for c in out:
             if not isinstance(c, cp.constraints.constraint.Constraint):
                 raise ValueError(f"{self.name}: the function must return cvxpy constraints, got {type(c).__name__}")
