@@ -74,3 +74,37 @@ def test_user_constraint_returning_no_constraints_is_named(bad):
     d = _plant()
     with pytest.raises(ValueError, match="mine: the function must return cvxpy constraints, got (int|float|str)"):
         gb.cls(S, d.ident, constraints=gb.UserConstraint(lambda th: bad, name="mine"), how="context")
+
+
+# --------------------------------------------------------------------------------------------
+# the active set of a CLS / PE covariance, in any units
+# --------------------------------------------------------------------------------------------
+def _band_width(fn, constraint, **units):
+    d = _plant(**units)
+    ys, yo = units.get("y_scale", 1.0), units.get("y_offset", 0.0)
+    us, uo = units.get("u_scale", 1.0), units.get("u_offset", 0.0)
+    pts = gb.StaticPoints(d.static.ubar, d.static.ybar + ys * 0.05 * np.array([1, -1, 1, -1, 1, -1]))
+    c = constraint(ys)
+    if fn == "cls":
+        fit = gb.cls(S, d.ident, pts, constraints=c, how="context")
+        unc = gb.cls_uncertainty(fit, d.ident, pts, constraints=c, how="context")
+    else:
+        front = gb.pe_pareto(S, d.ident, pts, constraints=c, lambdas=[0.5])
+        unc = gb.pe_uncertainty(front.member_model(0), d.ident, pts, lambda1=0.5, constraints=c)
+    frame = gb.static_curve_band(unc, np.array([0.7, 1.2, 1.7]) * us + uo).to_frame()
+    return (frame["ybar high"].to_numpy() - frame["ybar low"].to_numpy()) / ys
+
+
+@pytest.mark.parametrize("fn", ["cls", "pe"])
+@pytest.mark.parametrize("units", [dict(u_offset=1e4), dict(y_offset=1e4)])
+def test_band_constraint_covariance_does_not_depend_on_offsets(fn, units):
+    # an inequality counted as active within 1e-6 ‖θ ⊙ s‖, which grows with the offsets: at u = 1e4 ± 1 every row of
+    # a band 0.06 wide was active (the static band collapsed to the constrained model's), at y = 1e4 ± 1 six of them
+    band = lambda ys: gb.StaticBand(b=0.06 * ys)  # noqa: E731
+    np.testing.assert_allclose(_band_width(fn, band, **units), _band_width(fn, band), rtol=1e-4)
+
+
+@pytest.mark.parametrize("fn", ["cls", "pe"])
+def test_cluster_bound_covariance_does_not_depend_on_the_output_offset(fn):
+    bound = lambda ys: gb.ClusterBounds({"Σy": (None, 0.65)})  # noqa: E731
+    np.testing.assert_allclose(_band_width(fn, bound, y_offset=1e4), _band_width(fn, bound), rtol=1e-4)

@@ -52,6 +52,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 import pandas as pd
+import scipy.linalg
 from scipy import stats
 
 from ..static._constraints import StaticConstraint, static_cluster_map, static_rows
@@ -544,17 +545,39 @@ def _lambda_arg(model: object, lambda1: float | None, what: str) -> float:
     return check_real(lambda1, "lambda1", low=0, high=1, low_open=True)
 
 
-def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndarray, what: str) -> np.ndarray:
+def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndarray, what: str,
+                fit: np.ndarray, rows: int, scale: float) -> np.ndarray:
     """Equality rows and the inequality rows active at θ (engineering units); user constraints refused.
 
-    A row holds (or is active) when θ lies within 1e-6 ‖z‖ of its hyperplane in the estimators'
-    scaled coordinates z = s ⊙ θ (each z_j in output units: the solver's own measure): a residual
-    measured against |A||θ| alone was its own scale for a cluster of one term set to 0 (eq. (22)'s
-    Σ_yu), which a QP leaves at round-off, not at 0.
+    An equality holds when θ lies within 1e-6 ‖z‖ of its hyperplane in the estimators' scaled
+    coordinates z = s ⊙ θ (each z_j in output units): a residual measured against |A||θ| alone was
+    its own scale for a cluster of one term set to 0 (eq. (22)'s Σ_yu), which a QP leaves at
+    round-off, not at 0.
+
+    An inequality is active when the fit need change by at most 1e-6 of ``scale`` (the output's
+    spread) to reach its hyperplane: the distance in the metric ‖``fit`` Δz‖ (``fit``: the problem's
+    stacked factors, standing for ``rows`` regression rows), which is the solvers' own (their step is
+    in units of the spread, in the basis that whitens these factors). Unlike a Euclidean distance in z,
+    it does not move with the units or offsets of u and y: against 1e-6 ‖z‖, with u = 1e4 ± 1
+    (‖z‖ = 3e7) every row of a band 0.06 wide counted as active, and the covariance was that of a
+    model held on all of them. Where the factors leave θ free (not identifiable without the
+    constraints) the Euclidean rule is kept.
     """
     n = theta.size
     z = theta * s
     tol = 1e-6 * max(float(np.linalg.norm(z)), 1e-300)
+    Rf = np.linalg.qr(np.asarray(fit, float), mode="r")
+    sv = np.linalg.svd(Rf, compute_uv=False)
+    whiten = Rf if sv.size == n and sv[0] > 0 and sv[-1] > rank_tolerance(sv[0], rows, n) else None
+
+    def gap(A: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """How far the fit is from each inequality's hyperplane (output units), or the Euclidean distance in z."""
+        if whiten is None:
+            return off(A, r)
+        # min ‖Rf Δz‖ subject to a·Δz = r is |r| / ‖Rf⁻ᵀ a‖
+        W = scipy.linalg.solve_triangular(whiten, (A / s).T, trans="T")
+        nrm = np.linalg.norm(W, axis=0)
+        return r / np.where(nrm > 0, nrm, 1.0)
 
     def off(A: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Distance of z from each row's hyperplane (signed like ``r``, output units)."""
@@ -573,7 +596,7 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
                                  "constraints, data and reference (Σ*_y)?")
             rows.append(np.asarray(r.A_eq))
         if r.n_ub:
-            active = off(r.A_ub, r.b_ub - r.A_ub @ theta) <= tol
+            active = gap(r.A_ub, r.b_ub - r.A_ub @ theta) <= (1e-6 * scale if whiten is not None else tol)
             rows.append(np.asarray(r.A_ub)[active])
     return np.vstack(rows)
 
@@ -788,7 +811,7 @@ def cls_uncertainty(
     recs = records_of(data)
     d = _dynamic(st, recs)
     cons, ctx, _ = _cls_setup(st, recs, d, data, static, how, reference, constraints)
-    A = _equalities(cons, ctx, model.theta, d.s, "cls_uncertainty")
+    A = _equalities(cons, ctx, model.theta, d.s, "cls_uncertainty", d.R1, d.N, d.y_scale)
     n = len(st)
     Z, r = _null_space(A / d.s, n)
     z = model.theta * d.s
@@ -864,12 +887,13 @@ def pe_uncertainty(
         st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(m, data, static, constraints, weights, ubar, reference)
     n = len(st)
     theta = m.theta
-    A = _equalities(cons, ctx, theta, d.s, "pe_uncertainty")
+    cm = static_cluster_map(st, recs[0].input_names)  # a surface's clusters for several inputs
+    QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R / d.s  # (M, n) in z
+    # the estimator's QP works in the basis that whitens the dynamic and static factors stacked
+    A = _equalities(cons, ctx, theta, d.s, "pe_uncertainty", np.vstack([d.R1, QR]), d.N + M, d.y_scale)
     Z, r = _null_space(A / d.s, n)
     w1 = lam / d.N if weights == "mse" else lam
     w2 = (1 - lam) / M if weights == "mse" else 1 - lam
-    cm = static_cluster_map(st, recs[0].input_names)  # a surface's clusters for several inputs
-    QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R / d.s  # (M, n) in z
     dQR = static_rows(cm, pts.ubar, pts.ybar, wrt="y") @ cm.R / d.s
     z = theta * d.s
     sres = QR @ z - pts.ybar  # affine static residual s_i
