@@ -108,3 +108,10 @@ def test_band_constraint_covariance_does_not_depend_on_offsets(fn, units):
 def test_cluster_bound_covariance_does_not_depend_on_the_output_offset(fn):
     bound = lambda ys: gb.ClusterBounds({"Σy": (None, 0.65)})  # noqa: E731
     np.testing.assert_allclose(_band_width(fn, bound, y_offset=1e4), _band_width(fn, bound), rtol=1e-4)
+
+
+def test_a_grid_table_given_to_an_estimator_is_named_as_a_table():
+    # a table such as a grid spec holds was iterated as its keys: "got str"
+    d = _plant()
+    with pytest.raises(TypeError, match="dict"):
+        gb.cls(S, d.ident, constraints={"type": "band", "b": 0.1})

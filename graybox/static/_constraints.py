@@ -386,6 +386,9 @@ def as_constraint_list(constraints: StaticConstraint | Iterable[StaticConstraint
         return list(constraints)
     if isinstance(constraints, str) or not hasattr(constraints, "__iter__"):
         raise TypeError(f"constraints must be a constraint, a sequence of them or None, got {constraints!r}")
+    if isinstance(constraints, Mapping):  # iterated, a table would be its keys ("got str")
+        raise TypeError(f"constraints must be graybox constraint objects, got a dict {dict(constraints)!r}: tables such "
+                        "as {'type': 'band', …} are a grid spec's form; here give the object (gb.StaticBand(b=…), …)")
     out: list[StaticConstraint] = []
     for c in constraints:
         if not isinstance(c, StaticConstraint):
