@@ -115,3 +115,22 @@ def test_a_grid_table_given_to_an_estimator_is_named_as_a_table():
     d = _plant()
     with pytest.raises(TypeError, match="dict"):
         gb.cls(S, d.ident, constraints={"type": "band", "b": 0.1})
+
+
+def test_selection_uncertainty_takes_the_tables_the_selection_took():
+    # select_graybox takes constraint tables and .uncertainty says it takes "a constraint, a table of them or a
+    # sequence", but handed the tables on to pe_uncertainty, which refused them
+    import warnings
+
+    d, other = _plant(n=300), _plant(n=300, seed=7)
+    pts = gb.StaticPoints(d.static.ubar, d.static.ybar + 0.05 * np.array([1, -1, 1, -1, 1, -1]), uncertainty=0.05)
+    data = gb.Dataset(d.ident, other.ident, pts)
+    table = {"type": "band", "b": 0.08}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the selection's notes on these small data are not what is tested
+        sel = gb.select_graybox(gb.Candidates(ny=2, nu=1, degree=2, max_y_power=1), data, estimator="pe",
+                                constraints=[table], lambdas=[0.3, 0.9], sizes=[4, 5], sources=("frols",),
+                                progress=False)
+    by_object = sel.uncertainty(data, constraints=gb.StaticBand(b=0.08))
+    for given in ([table], table):
+        np.testing.assert_array_equal(sel.uncertainty(data, constraints=given).cov, by_object.cov)

@@ -37,7 +37,7 @@ import functools
 import os
 import warnings
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -339,8 +339,22 @@ class GrayboxSelection:
                                       "output_error")
             return gb.se_uncertainty(self.model, data, lambda1=1.0, level=level)
         if est == "pe":
-            return gb.pe_uncertainty(self.decision, data, static, constraints=list(constraints) or None, level=level)
+            return gb.pe_uncertainty(self.decision, data, static, constraints=self._constraint_objects(
+                constraints, data, static) or None, level=level)
         return gb.se_uncertainty(self.decision, data, static, level=level)
+
+    def _constraint_objects(self, constraints: tuple, data: object, static: object) -> list:
+        """The constraints as objects, tables built as the selection's fits built them (an equality's curve
+        fitted to the static points, or the data set's own), objects as they are."""
+        if not any(isinstance(c, Mapping) for c in constraints):
+            return list(constraints)
+        recs = as_records(data, name="data")
+        pts = static if isinstance(static, gb.StaticPoints) else None
+        if static is None and isinstance(data, gb.Dataset):
+            pts = data.static
+        extra = data.extra if isinstance(data, gb.Dataset) else {}
+        specs = _constraint_specs(constraints, len(recs[0].input_names))
+        return cell_constraints(specs, self.structure, gb.Dataset(recs[0], recs[0], pts, extra=extra))
 
     def _refit_is_chosen(self, theta: np.ndarray, estimator: str) -> None:
         """``ValueError`` unless a refit on the data given is the chosen θ (those data are what it was fitted on)."""
