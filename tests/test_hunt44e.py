@@ -134,3 +134,26 @@ def test_selection_uncertainty_takes_the_tables_the_selection_took():
     by_object = sel.uncertainty(data, constraints=gb.StaticBand(b=0.08))
     for given in ([table], table):
         np.testing.assert_array_equal(sel.uncertainty(data, constraints=given).cov, by_object.cov)
+
+
+# --------------------------------------------------------------------------------------------
+# solver options: an option error is not an infeasible constraint set
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("solver", ["clarabel", "osqp"])
+def test_an_unknown_solver_option_is_a_value_error_naming_it(solver):
+    # osqp's refusal came back as InfeasibleError ("solver osqp failed (Unrecognized settings ['foo'])"), which a
+    # sweep reads as constraints that admit no θ; clarabel's as its own TypeError
+    d = _plant()
+    with pytest.raises(ValueError, match="foo") as info:
+        gb.pe_pareto(S, d, constraints=gb.StaticBand(b=0.5), lambdas=[0.5], solver=solver,
+                     solver_options={"foo": 1})
+    assert not isinstance(info.value, gb.InfeasibleError)
+    assert "solver_options" in str(info.value)
+
+
+def test_a_solver_option_value_the_solver_refuses_is_a_value_error_naming_the_options():
+    # max_iter = -2: OverflowError from clarabel's binding
+    d = _plant()
+    with pytest.raises(ValueError, match="solver_options") as info:
+        gb.cls(S, d, constraints=gb.StaticBand(b=0.5), how="context", solver_options={"max_iter": -2})
+    assert not isinstance(info.value, gb.InfeasibleError)

@@ -662,6 +662,7 @@ class _QP:
         self.names = rows.names
         self.options = dict(_SOLVER_DEFAULTS[solver])
         self.options.update(options or {})
+        self.user_options = dict(options or {})
         #: (w1, w2) of the solves the solver called inaccurate: said once per estimate (warn_inaccurate)
         self.inaccurate: list[tuple[float, float]] = []
 
@@ -682,6 +683,12 @@ class _QP:
             self.problem.solve(solver=self.solver.upper(), warm_start=warm, **self.options)
         except cp.error.SolverError as exc:
             raise InfeasibleError(f"solver {self.solver} failed ({exc}) with constraints {list(self.names)}") from exc
+        except (TypeError, ValueError, OverflowError) as exc:
+            if not self.user_options:
+                raise
+            # a value the solver's binding refuses (max_iter = -2: an OverflowError), not the constraints
+            raise ValueError(f"solver {self.solver} refused solver_options {self.user_options!r}: "
+                             f"{type(exc).__name__}: {exc}") from exc
         st = self.problem.status
         if st in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
             raise InfeasibleError(
@@ -1025,12 +1032,42 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="fr
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
 
 
+def _solver_settings(solver: str) -> set[str] | None:
+    """The option names ``solver_options`` may give ``solver``: its own settings and cvxpy's solve keywords; None
+    where this version of the solver does not list them (the solver then says what it refuses)."""
+    import inspect
+
+    import cvxpy as cp
+
+    try:
+        if solver == "clarabel":
+            import clarabel
+
+            names = {a for a in dir(clarabel.DefaultSettings()) if not a.startswith("_")}
+        else:
+            import osqp
+
+            names = {a for a in dir(osqp.ext_builtin.OSQPSettings()) if not a.startswith("_")}
+    except Exception:  # noqa: BLE001 - another release's layout: leave the check to the solver
+        return None
+    cvx = set(inspect.signature(cp.Problem._solve).parameters) - {"self", "solver", "kwargs"}
+    return names | cvx | {"use_quad_obj"}
+
+
 def _check_solver_options(options: object, solver: str) -> None:
     if options is not None and not isinstance(options, Mapping):
         raise TypeError(f"solver_options must be a mapping of the solver's keyword options, got {options!r}")
     if options and solver == "closed":  # not dropped unseen
         raise ValueError(f"solver_options apply to the cvxpy solvers ('clarabel', 'osqp'), not to solver='closed'; "
                          f"got {dict(options)!r}")
+    if options:
+        # an option the solver does not know failed inside the solve: as clarabel's TypeError, or as osqp's
+        # SolverError, which was said as constraints that admit no θ
+        known = _solver_settings(solver)
+        unknown = [k for k in options if known is not None and k not in known]
+        if unknown:
+            raise ValueError(f"solver_options: {unknown} are not settings of {solver} (its settings include "
+                             f"{sorted(k for k in known if k in _SOLVER_DEFAULTS[solver]) or sorted(known)[:8]}, …)")
 
 
 def pe_thetas(
