@@ -157,3 +157,16 @@ def test_a_solver_option_value_the_solver_refuses_is_a_value_error_naming_the_op
     with pytest.raises(ValueError, match="solver_options") as info:
         gb.cls(S, d, constraints=gb.StaticBand(b=0.5), how="context", solver_options={"max_iter": -2})
     assert not isinstance(info.value, gb.InfeasibleError)
+
+
+def test_a_cone_constraint_with_osqp_is_refused_as_the_solver_choice_not_as_infeasible():
+    # a second-order-cone UserConstraint with solver="osqp" (QPs only) came back as InfeasibleError "solver osqp
+    # failed (The solver OSQP cannot solve this problem.)", as if the constraints admitted no θ
+    import cvxpy as cp
+
+    d = _plant()
+    uc = gb.UserConstraint(lambda th: [cp.norm(th[:2]) <= 0.7], name="norm of the y terms")
+    with pytest.raises(ValueError, match="norm of the y terms.*clarabel") as info:
+        gb.cls(S, d.ident, constraints=uc, solver="osqp")
+    assert not isinstance(info.value, gb.InfeasibleError)
+    assert np.all(np.isfinite(gb.cls(S, d.ident, constraints=uc).model.theta))  # clarabel takes cones

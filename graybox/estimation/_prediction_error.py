@@ -658,6 +658,11 @@ class _QP:
         self.dy.value = np.zeros(k)
         if not self.problem.is_dcp(dpp=True):
             raise ValueError("the problem is not convex (DCP/DPP): check the user constraints")
+        if solver == "osqp" and not self.problem.is_qp():
+            # OSQP takes linear constraints only; cvxpy's refusal came back as a solver failure, said as constraints
+            # that admit no θ
+            raise ValueError(f"solver='osqp' solves quadratic programs (linear constraints) only, and "
+                             f"{[c.describe() for c in rows.user]} are not linear in θ: use solver='clarabel'")
         self.solver = solver
         self.names = rows.names
         self.options = dict(_SOLVER_DEFAULTS[solver])
