@@ -170,3 +170,20 @@ def test_a_cone_constraint_with_osqp_is_refused_as_the_solver_choice_not_as_infe
         gb.cls(S, d.ident, constraints=uc, solver="osqp")
     assert not isinstance(info.value, gb.InfeasibleError)
     assert np.all(np.isfinite(gb.cls(S, d.ident, constraints=uc).model.theta))  # clarabel takes cones
+
+
+@pytest.mark.parametrize("fn", ["cls", "pe"])
+@pytest.mark.parametrize("make", [lambda: gb.StaticBand(b=0.06), lambda: gb.ClusterBounds({"Σy": (None, 0.5)}),
+                                  lambda: gb.GainBounds(upper=0.5)])
+def test_a_covariance_is_refused_for_a_model_that_breaks_the_inequalities_given(fn, make):
+    # a model estimated without the constraints, whose θ breaks them, was accepted: the broken rows counted as
+    # active equalities, and the covariance was that of another problem, said as the model's
+    d = _plant()
+    pts = gb.StaticPoints(d.static.ubar, d.static.ybar + 0.05 * np.array([1, -1, 1, -1, 1, -1]))
+    c = make()
+    with pytest.raises(ValueError, match="does not satisfy"):
+        if fn == "cls":
+            gb.cls_uncertainty(gb.cls(S, d.ident, pts, how="context"), d.ident, pts, constraints=c, how="context")
+        else:
+            member = gb.pe_pareto(S, d.ident, pts, lambdas=[0.5]).member_model(0)
+            gb.pe_uncertainty(member, d.ident, pts, lambda1=0.5, constraints=c)

@@ -596,8 +596,13 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
                                  "constraints, data and reference (Σ*_y)?")
             rows.append(np.asarray(r.A_eq))
         if r.n_ub:
-            active = gap(r.A_ub, r.b_ub - r.A_ub @ theta) <= (1e-6 * scale if whiten is not None else tol)
-            rows.append(np.asarray(r.A_ub)[active])
+            slack = gap(r.A_ub, r.b_ub - r.A_ub @ theta)
+            near = 1e-6 * scale if whiten is not None else tol
+            if np.any(slack < -near):
+                # a broken row would count as active below: the covariance of another problem, said as the model's
+                raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
+                                 "constraints, data and static points?")
+            rows.append(np.asarray(r.A_ub)[slack <= near])
     return np.vstack(rows)
 
 
