@@ -187,3 +187,11 @@ def test_a_covariance_is_refused_for_a_model_that_breaks_the_inequalities_given(
         else:
             member = gb.pe_pareto(S, d.ident, pts, lambdas=[0.5]).member_model(0)
             gb.pe_uncertainty(member, d.ident, pts, lambda1=0.5, constraints=c)
+
+
+def test_gain_bounds_beyond_their_reference_curve_name_the_constraint():
+    # the curve's own refusal ("ū = [...] outside the domain [0.6, 1.8] of fit to static points") named no constraint
+    d = _plant()
+    curve = gb.StaticCurve.fit(d.static, degree=2)
+    with pytest.raises(ValueError, match=r"static gain in \[0, inf\] over ū in \[0, 3\].*outside the domain"):
+        gb.cls(S, d, constraints=gb.GainBounds(lower=0, ubar_range=(0.0, 3.0), reference=curve))

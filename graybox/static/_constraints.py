@@ -1019,7 +1019,10 @@ class GainBounds(StaticConstraint):
                                  f"static points [{ends[2]}, {ends[3]}] used as reference")
             yb = np.interp(ub, pu, py)
         else:
-            yb = np.asarray(ref(ub), float)  # a StaticCurve refuses ū outside its domain
+            try:
+                yb = np.asarray(ref(ub), float)  # a StaticCurve refuses ū outside its domain
+            except ValueError as exc:  # said with the constraint that asked, as every other problem of its grid
+                raise ValueError(f"{self.describe()}: {exc}") from exc
             if yb.shape != ub.shape or not np.all(np.isfinite(yb)):
                 raise ValueError(f"{self.describe()}: the reference must map ū of shape {ub.shape} to finite ȳ")
         return ub, yb
@@ -1055,7 +1058,10 @@ class GainBounds(StaticConstraint):
             else:
                 raise ValueError(f"{self.describe()}: give ubar_range (no surface domain or static points to take it from)")
         U = box_grid(rng, int(self.n))
-        yb = np.asarray(ref(U), float).reshape(-1)
+        try:
+            yb = np.asarray(ref(U), float).reshape(-1)
+        except ValueError as exc:  # a surface's refusal of ū outside its domain, said with the constraint
+            raise ValueError(f"{self.describe()}: {exc}") from exc
         if yb.shape != (U.shape[0],) or not np.all(np.isfinite(yb)):
             raise ValueError(f"{self.describe()}: the reference must map ū of shape {U.shape} to finite ȳ of shape "
                              f"({U.shape[0]},)")
