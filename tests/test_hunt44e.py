@@ -195,3 +195,21 @@ def test_gain_bounds_beyond_their_reference_curve_name_the_constraint():
     curve = gb.StaticCurve.fit(d.static, degree=2)
     with pytest.raises(ValueError, match=r"static gain in \[0, inf\] over ū in \[0, 3\].*outside the domain"):
         gb.cls(S, d, constraints=gb.GainBounds(lower=0, ubar_range=(0.0, 3.0), reference=curve))
+
+
+@pytest.mark.parametrize("fn", ["cls", "pe"])
+@pytest.mark.parametrize("kind", ["none", "band"])
+def test_covariance_of_an_input_far_from_its_zero(fn, kind):
+    # u = −50 ± 0.0015 with a u² term: the terms cancel (‖θ ⊙ s‖ = 6e8 for outputs of order 1), and the estimate,
+    # right to its round-off, was refused as "not the optimum" (2e-6 of its residual along the free directions);
+    # with the band its active row, 2.4e-6 of the spread off its hyperplane, was taken as inactive
+    make = {"none": lambda ys: None, "band": lambda ys: gb.StaticBand(b=0.06 * ys)}[kind]
+    far = _band_width(fn, make, u_scale=1e-3, u_offset=-50.0)
+    np.testing.assert_allclose(far, _band_width(fn, make), rtol=1e-3)
+
+
+def test_a_member_passed_with_another_lambda_is_still_refused_far_from_the_inputs_zero():
+    d = _plant(u_scale=1e-3, u_offset=-50.0)
+    member = gb.pe_pareto(S, d.ident, d.static, lambdas=[0.5]).member_model(0)
+    with pytest.raises(ValueError, match="not the optimum"):
+        gb.pe_uncertainty(member, d.ident, d.static, lambda1=0.3)

@@ -506,7 +506,7 @@ def _to_theta(cov_z: tuple[np.ndarray, np.ndarray], s: np.ndarray) -> tuple[np.n
 
 
 def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float, size: float, what: str,
-                      hint: str, rows: int, rtol: float = 1e-6) -> None:
+                      hint: str, rows: int, rtol: float = 1e-6, z: np.ndarray | None = None) -> None:
     """θ̂ must be the optimum of the problem whose covariance is asked for.
 
     The objective is ‖r‖² + rest2 with residuals r = A z − c (A in the scaled coordinates z, rest2
@@ -515,14 +515,18 @@ def _check_stationary(Z: np.ndarray, A: np.ndarray, r: np.ndarray, rest2: float,
     it must be at most ``rtol`` (1e-6) of the whole residual norm (a units-free angle, unchanged by the
     output's offset or scale, which a gradient measured against |Aᵀy| was not), or at the round-off level
     of the fit, 1e-11 of ``size`` (the fitted values' and targets' norms). AZ's range is taken by the one
-    rank rule (A standing for ``rows`` regression rows).
+    rank rule (A standing for ``rows`` regression rows). With ``z`` (the estimate in A's coordinates) the
+    round-off of forming A z, ‖A‖ ‖z‖ eps, is allowed too: where the terms cancel (u = −50 ± 0.0015 with a u² term,
+    ‖z‖ = 6e8 for fitted values of order 1) an estimate accurate to its last digits left 2e-6 of its residual
+    along the free directions and was refused as no optimum.
     """
     if Z.shape[1] == 0:
         return  # the constraints fix θ: nothing left to optimise
     U, S, _ = np.linalg.svd(A @ Z, full_matrices=False)
     g = float(np.linalg.norm(U[:, S > rank_tolerance(S[0], rows, S.size)].T @ r)) if S.size and S[0] > 0 else 0.0
     whole = float(np.sqrt(r @ r + rest2))
-    if not np.isfinite(g) or g > rtol * whole + 1e-11 * size:
+    cancel = 0.0 if z is None else 1e-15 * float(np.linalg.norm(A, 2) * np.linalg.norm(z))
+    if not np.isfinite(g) or g > rtol * whole + 1e-11 * size + cancel:
         raise ValueError(f"{what}: the model's θ is not the optimum of this problem (a fraction "
                          f"{g / max(whole, 1e-300):.1e} of its residual lies along the directions θ may move); {hint}")
 
@@ -555,7 +559,7 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
     round-off, not at 0.
 
     An inequality is active when the fit need change by at most 1e-6 of ``scale`` (the output's
-    spread) to reach its hyperplane: the distance in the metric ‖``fit`` Δz‖ (``fit``: the problem's
+    spread), or by the round-off of z, to reach its hyperplane: the distance in the metric ‖``fit`` Δz‖ (``fit``: the problem's
     stacked factors, standing for ``rows`` regression rows), which is the solvers' own (their step is
     in units of the spread, in the basis that whitens these factors). Unlike a Euclidean distance in z,
     it does not move with the units or offsets of u and y: against 1e-6 ‖z‖, with u = 1e4 ± 1
@@ -597,7 +601,9 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
             rows.append(np.asarray(r.A_eq))
         if r.n_ub:
             slack = gap(r.A_ub, r.b_ub - r.A_ub @ theta)
-            near = 1e-6 * scale if whiten is not None else tol
+            # within 1e-6 of the spread, or of the round-off of z itself in this metric (‖Rf‖ ‖z‖ eps: u = −50 ± 0.0015
+            # with a u² term, cond 8e10, left an active band row 2.4e-6 of the spread off its hyperplane)
+            near = 1e-6 * scale + 1e-15 * float(np.linalg.norm(whiten, 2) * np.linalg.norm(z)) if whiten is not None else tol
             if np.any(slack < -near):
                 # a broken row would count as active below: the covariance of another problem, said as the model's
                 raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
@@ -826,7 +832,7 @@ def cls_uncertainty(
     cov, F = _to_theta(_sandwich(Z, d.R1, np.sqrt(sigma2) * d.R1, "cls_uncertainty", d.N), d.s)
     _check_stationary(Z, d.R1, d.R1 @ z - d.c1, d.rss, _size(d.R1 @ z, d.c1), "cls_uncertainty",
                       "pass the CLS estimate with the data, static information and constraints it was estimated with",
-                      d.N)
+                      d.N, z=z)
     return ParameterUncertainty(model, cov, level, dof, sigma2, "CLS", A, np.zeros((0, 0)), cov_factor=F)
 
 
@@ -910,7 +916,7 @@ def pe_uncertainty(
     r2 = np.concatenate([np.sqrt(w1) * (d.R1 @ z - d.c1), np.sqrt(w2) * sres])
     _check_stationary(Z, A2, r2, w1 * d.rss, _size(A2 @ z, np.sqrt(w1) * d.c1, np.sqrt(w2) * pts.ybar),
                       "pe_uncertainty", f"pass the member's own λ1 (got {lam:g}) and the data, static "
-                      "points and constraints of its estimate", d.N + M)
+                      "points and constraints of its estimate", d.N + M, z=z)
     dof_ls = d.N - n
     sigma2 = d.rss / dof_ls  # the data's noise, from least squares on the same data
     B = sres[:, None] * dQR + g[:, None] * QR  # ∂(gradient of the static term)/∂ȳ_i, row i
