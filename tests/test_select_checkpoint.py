@@ -242,3 +242,10 @@ def test_a_test_record_added_or_changed_refits_no_row(tmp_path, data, monkeypatc
         pd.testing.assert_frame_equal(kept.table, fresh.table)
     plain = gb.select_graybox(CAND, data, checkpoint=path, **kw)
     assert calls == [] and "JS_test" not in plain.table
+
+
+def test_a_squared_error_that_is_no_number_says_no_unit():
+    # was: a black box's decision without static points said "J_SF=nan mlc²"
+    m = gb.Model(gb.parse_structure(["y(k-1)", "1"]), [0.5, 1.0], units=("rpm", "mlc"))
+    text = repr(gb.Decision(m, 0, float("nan"), 1.2, float("nan"), "min J_S", True, 1.2))
+    assert "J_S=1.2 mlc²" in text and "J_SF=nan," in text

@@ -67,6 +67,12 @@ def squared_unit(unit: str | None) -> str:
     return f" {unit}²" if all(c.isalpha() or c in "°%" for c in unit) else f" ({unit})²"
 
 
+def squared_text(value: float, unit: str | None, digits: int = 4) -> str:
+    """A squared error as text with its unit (``squared_unit``): "1.158 mlc²"; NaN and inf without one."""
+    value = float(value)
+    return f"{value:.{digits}g}" + (squared_unit(unit) if np.isfinite(value) else "")
+
+
 def beside(value: float, ref: float, digits: int = 4) -> str:
     """``value`` as text to ``digits`` significant digits, or as many more as keep it on its side of ``ref`` as
     :func:`bound_text` prints it (a J_SF just outside a band B = 0.0306 reads 0.03060003, not 0.0306: 'no model

@@ -24,7 +24,7 @@ from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
 from ..core._records import Record, choosing_records, require_lengths
-from ..core._reprs import beside, bound_text, squared_unit
+from ..core._reprs import beside, bound_text, squared_text
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
 from ..core._validation import check_band, check_choice, check_fields, check_mean_square, check_weight
@@ -104,11 +104,11 @@ class Decision:
             raise ValueError(f"Decision: score is never negative; got {self.score!r}")
 
     def __repr__(self) -> str:
-        sq = squared_unit(self.model.units[1])  # J_S and J_SF are in output units²; ρ has none
-        on = (f", chosen_on={self.chosen_on!r}, score={self.score:.4g}"
-              f"{'' if self.rule == 'min correlation' else sq}" if self.chosen_on else "")
-        return (f"Decision(rule={self.rule!r}, index={self.index}, λ1={self.lambda1:.4g}, J_S={self.JS:.4g}{sq}, "
-                f"J_SF={self.JSF:.4g}{sq}, in_band={self.in_band}{on})")
+        unit = self.model.units[1]  # J_S and J_SF are in output units²; ρ has none
+        score = f"{self.score:.4g}" if self.rule == "min correlation" else squared_text(self.score, unit)
+        on = f", chosen_on={self.chosen_on!r}, score={score}" if self.chosen_on else ""
+        return (f"Decision(rule={self.rule!r}, index={self.index}, λ1={self.lambda1:.4g}, "
+                f"J_S={squared_text(self.JS, unit)}, J_SF={squared_text(self.JSF, unit)}, in_band={self.in_band}{on})")
 
 
 def _decision(pareto: ParetoSet, i: int, rule: str, in_band: bool, score: float, label: str,

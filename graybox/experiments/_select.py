@@ -57,7 +57,7 @@ from ..core._progress import progress_bar, show_progress
 from ..core._records import (as_records, carried_from, check_alike, check_compatible, choosing_records, check_overlap,
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
-from ..core._reprs import beside, bound_text, squared_unit
+from ..core._reprs import beside, bound_text, squared_text, squared_unit
 from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
@@ -393,10 +393,11 @@ class GrayboxSelection:
 
     def __repr__(self) -> str:
         row = self.chosen
-        sq = squared_unit(self.model.units[1])  # the table's J_S, J_SF and B are in output units²
+        unit = self.model.units[1]  # the table's J_S, J_SF and B are in output units²
+        sq = squared_unit(unit)
         test = ""
         if "JS_test" in self.table:
-            test = f", J_S test={row['JS_test']:.4g}{sq}"
+            test = f", J_S test={squared_text(row['JS_test'], unit)}"
             try:
                 test += f", regret={self.regret:.3g}"
             except ValueError:  # every row compared diverged on the test record: no regret to give
@@ -408,7 +409,7 @@ class GrayboxSelection:
                 f"chosen by the smallest J_SF, {beside(row['JSF'], self.band)}{sq} (no row meets the band "
                 f"B = {bound_text(self.band, row['JSF'])}{sq})")
         return (f"GrayboxSelection(n_terms={len(self.structure)}, rows compared={len(self.table)}, {rule}, "
-                f"J_S valid={row['JS_valid']:.4g}{sq}{test}, {band})")
+                f"J_S valid={squared_text(row['JS_valid'], unit)}{test}, {band})")
 
 
 register_type("GrayboxSelection", GrayboxSelection,
