@@ -453,3 +453,16 @@ def test_single_input_equilibria_point_to_the_surface_function():
         gb.equilibria(st, np.array([0.5, 0.1, 0.2, 0.0]), np.array([1.0, 2.0]))
     eqs = surface_equilibria(st, np.array([0.5, 0.1, 0.2, 0.0]), np.array([1.0, 2.0]))
     assert len(eqs) == 1 and eqs[0].ybar == pytest.approx((0.1 + 0.4) / 0.5)
+
+
+def test_unnamed_candidates_for_data_of_named_inputs_are_told_how_to_name_them():
+    # was: "the terms use input 'u', but the record's inputs are ('speed', 'valve')" and no way out said, where one
+    # input's data got the advice to name the inputs alike
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.standard_normal((300, 2)), rng.standard_normal(300), input_names=("speed", "valve"))
+    for call in (lambda: gb.frols(gb.Candidates(2, 2), rec, n_terms=3),
+                 lambda: gb.select_graybox(gb.Candidates(2, 2), rec, estimator="ls")):
+        with pytest.raises(ValueError, match=r"Candidates\(\.\.\., input_names=\['speed', 'valve'\]\)"):
+            call()
+    named = gb.frols(gb.Candidates(2, 2, input_names=["speed", "valve"]), rec, n_terms=3)
+    assert set(named.model.structure.inputs) <= {"speed", "valve"}

@@ -93,3 +93,10 @@ def test_short_repr_summarises_what_is_long_and_keeps_what_is_short():
 @pytest.mark.parametrize("value", [1, -2.5, "a", (1, 2), None, True])
 def test_short_values_print_as_themselves(value):
     assert summary(value) == (f"{value:.6g}" if isinstance(value, float) else repr(value))
+
+
+def test_a_squared_error_that_is_no_number_says_no_unit():
+    # was: a black box's decision without static points said "J_SF=nan mlc²"
+    m = gb.Model(gb.parse_structure(["y(k-1)", "1"]), [0.5, 1.0], units=("rpm", "mlc"))
+    text = repr(gb.Decision(m, 0, float("nan"), 1.2, float("nan"), "min J_S", True, 1.2))
+    assert "J_S=1.2 mlc²" in text and "J_SF=nan," in text

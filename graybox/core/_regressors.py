@@ -12,7 +12,7 @@ from typing import Sequence
 import numpy as np
 
 from ._records import Record, as_records, require_lengths
-from ._terms import Structure, check_input_names
+from ._terms import Structure, check_input_names, rename_hint
 from ._validation import as_1d_finite, check_int, check_sequence
 
 __all__ = ["record_signals", "check_structure_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
@@ -43,17 +43,7 @@ def check_structure_inputs(structure: Structure, records: Sequence[Record]) -> N
         missing = [n for n in structure.inputs if n not in r.input_names]
         if missing:
             raise ValueError(f"{r.name}: the terms use input {missing[0]!r}, but the record's inputs are "
-                             f"{r.input_names}{_rename_hint(structure.inputs, r.input_names)}")
-
-
-def _rename_hint(used: Sequence[str], have: Sequence[str]) -> str:
-    """How to make terms and data name their inputs alike (e.g. candidates made with the default ``u`` for a
-    record whose input is named after its column)."""
-    if len(used) != len(have):
-        return ""
-    return (f": name the inputs alike, in the terms (Candidates(..., input_names={list(have)!r}), "
-            f"{used[0]}(k-1) written {have[0]}(k-1)) or in the data (Record(..., input_names={list(used)!r}), "
-            "the loaders' input_names=)")
+                             f"{r.input_names}{rename_hint(structure.inputs, r.input_names)}")
 
 
 def input_signals(u: np.ndarray, input_names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
@@ -119,7 +109,7 @@ def regressor_matrix(
                 have = tuple(k for k in signals if k not in ("y", "e"))
                 used = structure.inputs
                 raise ValueError(f"term {term} needs {what} {sig!r}, which the data do not have (inputs: {have})"
-                                 f"{_rename_hint(used, have) if what == 'input' else ''}")
+                                 f"{rename_hint(used, have) if what == 'input' else ''}")
             x = signals[sig][s - lag : n - lag]
             col *= x if power == 1 else x**power
         psi[:, j] = col

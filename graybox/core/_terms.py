@@ -98,7 +98,23 @@ def require_inputs(used: Iterable[str], names: tuple[str, ...], among: str, pref
                 f"[...], one per column in the columns' order (the structure uses {', '.join(map(repr, used))})")
         hint = (f" (the data's inputs have the default names: name them, e.g. Record(..., input_names={said}), "
                 "load_record_csv(..., input_names=[...]) or input_names = [...] in a grid spec's file entry)")
-    raise ValueError(f"{prefix}the structure uses input {missing[0]!r}, {among} {names}{hint}")
+    raise ValueError(f"{prefix}the structure uses input {missing[0]!r}, {among} {names}{hint or rename_hint(used, names)}")
+
+
+def rename_hint(used: Sequence[str], have: Sequence[str]) -> str:
+    """How to make terms and data name their inputs alike (e.g. candidates made with the default ``u`` for a
+    record whose input is named after its column)."""
+    if len(used) != len(have):
+        defaults = {"u", *(f"u{i}" for i in range(1, len(have) + 1))}
+        if set(used) <= defaults and not set(have) & defaults:
+            # candidates made without naming their inputs (the default "u") for data whose inputs are named
+            return (f": candidates made without input names are for one input 'u'; make them for the data's "
+                    f"{len(have)} input(s), e.g. Candidates(..., input_names={list(have)!r}) (an int nu is every "
+                    "input's largest lag)")
+        return ""
+    return (f": name the inputs alike, in the terms (Candidates(..., input_names={list(have)!r}), "
+            f"{used[0]}(k-1) written {have[0]}(k-1)) or in the data (Record(..., input_names={list(used)!r}), "
+            "the loaders' input_names=)")
 
 
 def transient_source(name: str, names: Iterable[str]) -> str | None:
