@@ -703,3 +703,12 @@ def test_fronts_and_scatter_draw_each_variants_own_band_where_they_differ(small_
     assert "the variants' own bands" in fronts._suptitle.get_text()
     same = gx.plot_fronts(gx.load_results(path), data=d)  # one band: shaded, as before
     assert f"J_SF ≤ B = {other:g}" in same._suptitle.get_text()
+
+
+@pytest.mark.parametrize("key", [3, "3", "y"])
+def test_a_cluster_bound_that_names_no_cluster_is_refused_with_the_spec(key):
+    # was: a key that is no cluster name (a TOML table turns 3 into "3") passed the spec and failed each cell once
+    # a structure read it
+    with pytest.raises(gx.SpecError, match="cluster bounds name their clusters"):
+        gx.Variant("bounded", "cls", constraints=[{"type": "clusters", "bounds": {key: [None, 0.99]}}])
+    gx.Variant("bounded", "cls", constraints=[{"type": "clusters", "bounds": {"Sy": [None, 0.99]}}])

@@ -760,6 +760,8 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
     clean = {}
     for name, b in bounds.items():
         p = path + ("bounds", name)
+        if not str(name).strip().startswith(("Σ", "S")):  # a key (3, a TOML "3") only fails once a structure reads it
+            raise SpecError(f"cluster bounds name their clusters (\"Sy\", \"Su^2\", \"Σy·speed\", …), got {name!r}", p)
         if isinstance(b, Mapping):
             _check_keys(b, ("lower", "upper"), f"the bounds of cluster {name!r}", p)
             lo, hi = b.get("lower"), b.get("upper")
