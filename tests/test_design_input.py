@@ -159,3 +159,27 @@ def test_an_aprbs_that_one_hold_could_fill_is_refused():
         design_input("aprbs", 100, low=2900.0, high=3100.0, hold=(20, 100), seed=161)
     x = design_input("aprbs", 100, low=2900.0, high=3100.0, hold=(20, 50), seed=161)
     assert np.unique(x).size >= 2
+
+
+@pytest.mark.parametrize("kind, kw", [("aprbs", {"hold": (20, 60)}), ("staircase", {"hold": 50}),
+                                      ("prbs", {"hold": 4}), ("multisine", {"frequencies": (0.01, 0.2)})])
+def test_each_input_takes_its_own_range(kind, kw):
+    # was: one low and high for every input, so a speed in rpm and a valve in % could not be designed together
+    u = gb.design_input(kind, 4000, low=[750.0, 20.0], high=[1650.0, 80.0], n_inputs=2, **kw)
+    np.testing.assert_array_equal(u.min(axis=0), [750.0, 20.0])
+    np.testing.assert_array_equal(u.max(axis=0), [1650.0, 80.0])
+    same = gb.design_input(kind, 4000, low=750.0, high=1650.0, n_inputs=2, **kw)
+    np.testing.assert_array_equal(gb.design_input(kind, 4000, low=[750.0] * 2, high=[1650.0] * 2, n_inputs=2, **kw),
+                                  same)  # one number for every input is the same design
+    # each column is the one-range design's column mapped onto its own range
+    frac = (same - 750.0) / 900.0
+    np.testing.assert_allclose(u, np.array([750.0, 20.0]) + frac * np.array([900.0, 60.0]), rtol=0, atol=1e-9)
+
+
+def test_ranges_given_per_input_are_checked_per_input():
+    with pytest.raises(ValueError, match=r"low must be one number, or one per input \(2\)"):
+        gb.design_input("aprbs", 400, low=[1.0, 2.0, 3.0], high=5.0, hold=(5, 10), n_inputs=2)
+    with pytest.raises(ValueError, match="low < high for input 1, got low=6.0, high=5.0"):
+        gb.design_input("aprbs", 400, low=[1.0, 6.0], high=5.0, hold=(5, 10), n_inputs=2)
+    with pytest.raises(TypeError, match=r"high\[1\] must be a real number"):
+        gb.design_input("aprbs", 400, low=1.0, high=[5.0, "x"], hold=(5, 10), n_inputs=2)

@@ -8,6 +8,8 @@ band at one operating point. Every design is a pure function of its arguments an
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..core._validation import check_choice, check_int, check_real, check_seed
@@ -23,11 +25,12 @@ _PRBS_TAPS = {2: (2, 1), 3: (3, 2), 4: (4, 3), 5: (5, 3), 6: (6, 5), 7: (7, 6), 
               15: (15, 14), 16: (16, 15, 13, 4), 17: (17, 14), 18: (18, 11), 19: (19, 18, 17, 14), 20: (20, 17)}
 
 
-def _scale(t: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Fractions t in [0, 1] as levels in [lo, hi], each end exact (lo + (hi − lo)·1 can round past hi)."""
+def _scale(t: np.ndarray, lo: float | np.ndarray, hi: float | np.ndarray) -> np.ndarray:
+    """Fractions t in [0, 1] as levels in [lo, hi], each end exact (lo + (hi − lo)·1 can round past hi); ``lo`` and
+    ``hi`` may be one per column of ``t``."""
     t = np.asarray(t, float)
     half = hi / 2 - lo / 2
-    if half <= np.finfo(float).max / 2:
+    if np.all(half <= np.finfo(float).max / 2):
         return np.where(t <= 0.5, lo + (hi - lo) * t, hi - (hi - lo) * (1 - t))
     # a range wider than the largest float (±1e308): each end's distance as a product of the half range, which
     # stays finite because it is at most half the range
@@ -74,8 +77,8 @@ def design_input(
     kind: str,
     n_samples: int,
     *,
-    low: float,
-    high: float,
+    low: float | Sequence[float],
+    high: float | Sequence[float],
     hold: int | tuple[int, int] | None = None,
     n_inputs: int = 1,
     order: int | None = None,
@@ -101,8 +104,10 @@ def design_input(
         phases (a low crest factor), scaled to span [low, high] exactly.
     n_samples : int
         Samples of the signal (its length N).
-    low, high : float
-        The input range, input units (no default: they are the plant's).
+    low, high : float or sequence of float
+        The input range, input units (no default: they are the plant's); one number for every input,
+        or one per input (``low=[750.0, 20.0], high=[1650.0, 80.0]`` for a speed in rpm and a valve
+        in %).
     hold : int or (int, int)
         Samples a level is held (a bit of a PRBS; for an APRBS a pair (shortest, longest)):
         choose it from the plant's settling time (a staircase's or an APRBS's longest hold about
@@ -128,7 +133,7 @@ def design_input(
     Returns
     -------
     ndarray, shape (N,) or (N, n_inputs)
-        The input, in the units of ``low`` and ``high``.
+        The input, column i in the units of ``low`` and ``high`` (their i-th, when one per input).
 
     Raises
     ------
@@ -142,11 +147,8 @@ def design_input(
     """
     kind = check_choice(kind, "kind", KINDS)
     n = check_int(n_samples, "n_samples", low=2)
-    lo = check_real(low, "low")
-    hi = check_real(high, "high")
-    if not lo < hi:
-        raise ValueError(f"design_input needs low < high, got low={low!r}, high={high!r}")
     m = check_int(n_inputs, "n_inputs", low=1)
+    lo, hi = _ranges(low, high, m)
     seed = check_seed(seed)
     if order is not None and kind != "prbs":
         raise ValueError(f"order is the PRBS register length; kind={kind!r} does not use it")
@@ -192,7 +194,7 @@ def design_input(
                 holds.append(int(rng.integers(h0, h1 + 1)))
                 total += holds[-1]
             # an even spread of levels over the range, visited in random order: every part of the range is met
-            levels = _scale(rng.permutation(len(holds)) / max(len(holds) - 1, 1), lo, hi)
+            levels = _scale(rng.permutation(len(holds)) / max(len(holds) - 1, 1), lo[i], hi[i])
             cols.append(np.repeat(levels, holds)[:n])
         out = np.column_stack(cols)
     # too few holds for the record (a staircase's serpentine moves its slower inputs last; a PRBS's first
@@ -203,6 +205,25 @@ def design_input(
         raise ValueError(f"{which} of this {kind} never moves: {-(-n // h0)} hold(s) of {h0} samples fit in the "
                          f"{n}-sample record; shorten hold or lengthen the record")
     return out[:, 0] if m == 1 else out
+
+
+def _ranges(low: object, high: object, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) as arrays of one bound per input, shape (m,), each pair checked low < high."""
+    out = []
+    for what, v in (("low", low), ("high", high)):
+        if isinstance(v, (list, tuple, np.ndarray)):
+            if np.ndim(v) != 1 or len(v) != m:
+                raise ValueError(f"{what} must be one number, or one per input ({m}), got {v!r}")
+            out.append(np.array([check_real(x, f"{what}[{i}]") for i, x in enumerate(v)]))
+        else:
+            out.append(np.full(m, check_real(v, what)))
+    lo, hi = out
+    bad = np.flatnonzero(~(lo < hi))
+    if bad.size:
+        i = int(bad[0])
+        where = f" for input {i}" if m > 1 else ""
+        raise ValueError(f"design_input needs low < high{where}, got low={float(lo[i])!r}, high={float(hi[i])!r}")
+    return lo, hi
 
 
 def _staircase(k: int, m: int) -> np.ndarray:
