@@ -327,7 +327,8 @@ def _lowered(A: np.ndarray, ub: np.ndarray) -> np.ndarray:
 
 
 def static_partials(p: np.ndarray, A: np.ndarray, thetas: np.ndarray, ubar: np.ndarray, Y: np.ndarray, *,
-                    with_inputs: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+                    with_inputs: bool = True, _monomials: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray | None]:
     """F_ȳ and F_ū of the static map at (ū_j, Y_kj) for parameter vectors θ_k.
 
     Parameters
@@ -350,7 +351,8 @@ def static_partials(p: np.ndarray, A: np.ndarray, thetas: np.ndarray, ubar: np.n
         Output units per unit of each input; NaN where Y is not finite.
     """
     thetas, ub, Y = np.atleast_2d(thetas), np.asarray(ubar, float), np.atleast_2d(Y)
-    G = input_monomials_of(A, ub)
+    # _monomials: input_monomials_of(A, ubar), when the caller has it (a caller that needs it too)
+    G = input_monomials_of(A, ub) if _monomials is None else _monomials
     Fy = -np.ones(Y.shape)
     Fu = np.zeros(Y.shape + (A.shape[1],)) if with_inputs else None
     # summed term by term in structure order (no pairwise reordering), θ_t = 0 skipped
@@ -392,9 +394,12 @@ def static_theta_gradient_of(p: np.ndarray, A: np.ndarray, theta: np.ndarray, ub
     small step). NaN where ȳ is not finite (no equilibrium there).
     """
     yb = np.asarray(ybar, float)
-    Fy = static_partials(p, A, np.asarray(theta, float)[None, :], ubar, yb[None, :], with_inputs=False)[0][0]
+    # the input monomials once for F_ȳ and the numerator: the SE fits' static Jacobian asks this at every step
+    G = input_monomials_of(A, ubar)
+    Fy = static_partials(p, A, np.asarray(theta, float)[None, :], ubar, yb[None, :], with_inputs=False,
+                         _monomials=G)[0][0]
     with np.errstate(all="ignore"):
-        return -(_powers(yb, p) * input_monomials_of(A, ubar)) / Fy[:, None]
+        return -(_powers(yb, p) * G) / Fy[:, None]
 
 
 def static_gain_gradient(p: np.ndarray, A: np.ndarray, theta: np.ndarray, ubar: np.ndarray, ybar: np.ndarray,
