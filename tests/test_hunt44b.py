@@ -427,16 +427,18 @@ def test_a_checkpoint_write_killed_leaves_no_file_for_ever(tmp_path):
     import sys
     import time
 
-    from graybox.estimation._simulation_error import checkpoint_path, save_npz
+    from graybox.estimation._simulation_error import checkpoint_path, save_npz, writer_tag
 
+    host = writer_tag().rsplit("-", 1)[0]  # a write's file names its host and its process
     gone = subprocess.Popen([sys.executable, "-c", "pass"])
     gone.wait()
     live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     try:
         path = tmp_path / "sel.npz"
-        dead, alive, old, other = (tmp_path / f"sel.npz.{gone.pid}-0badc0de.tmp",
-                                   tmp_path / f"sel.npz.{live.pid}-1badc0de.tmp",
-                                   tmp_path / f"sel.npz.{live.pid}-2badc0de.tmp", tmp_path / "notes.1-0badc0de.tmp")
+        dead, alive, old, other = (tmp_path / f"sel.npz.{host}-{gone.pid}-0badc0de.tmp",
+                                   tmp_path / f"sel.npz.{host}-{live.pid}-1badc0de.tmp",
+                                   tmp_path / f"sel.npz.{host}-{live.pid}-2badc0de.tmp",
+                                   tmp_path / "notes.1-0badc0de.tmp")
         for f in (dead, alive, old, other):
             f.write_bytes(b"half")
         an_hour_ago = time.time() - 3600

@@ -45,6 +45,7 @@ import math
 import os
 import re
 import secrets
+import socket
 import tempfile
 import time
 import warnings
@@ -762,7 +763,7 @@ def save_npz(path: Path, **arrays: Any) -> None:
     move found nothing to move. A symbolic link is written through, as ``open(path, "w")`` would (and graybox's JSON
     files are): the file it names is replaced, the link kept."""
     target = Path(os.path.realpath(path)) if path.is_symlink() else path
-    tmp = target.with_name(f"{target.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
+    tmp = target.with_name(f"{target.name}.{writer_tag()}-{secrets.token_hex(4)}.tmp")
     try:
         with open(tmp, "xb") as f:  # the mode a new file of np.savez's would have
             np.savez(f, **arrays)
@@ -1456,18 +1457,26 @@ def checkpoint_path(checkpoint: object) -> Path:
 LEFTOVER_SECONDS = 600.0
 
 
+def writer_tag() -> str:
+    """``host-pid`` of this process, as a write's file beside a checkpoint is named: a folder may be shared by
+    several hosts (NFS), where a pid says nothing of another host's processes."""
+    return f"{re.sub(r'[^A-Za-z0-9_.]', '_', socket.gethostname()) or '_'}-{os.getpid()}"
+
+
 def _sweep_leftovers(path: Path) -> None:
     """Remove the files :func:`save_npz` writes beside ``path`` that a killed write left (each write has a name of
     its own, which no later write replaces): those of a process of this host that is gone, and any once old (a
-    process of another host sharing the folder)."""
-    name = re.compile(rf"{re.escape(path.name)}\.(\d+)-[0-9a-f]{{8}}\.tmp")
+    process of another host sharing the folder, whose liveness cannot be asked from here)."""
+    name = re.compile(rf"{re.escape(path.name)}\.(?:([^-]+)-)?(\d+)-[0-9a-f]{{8}}\.tmp")
+    host = writer_tag().rsplit("-", 1)[0]
     now = time.time()
     with contextlib.suppress(OSError):
         for f in path.parent.iterdir():
             m = name.fullmatch(f.name)
             if m:
                 with contextlib.suppress(OSError):  # gone meanwhile
-                    if not _pid_alive(int(m.group(1))) or now - f.stat().st_mtime > LEFTOVER_SECONDS:
+                    gone = m.group(1) == host and not _pid_alive(int(m.group(2)))
+                    if gone or now - f.stat().st_mtime > LEFTOVER_SECONDS:
                         f.unlink()
 
 
