@@ -35,3 +35,30 @@ def test_a_checkpoint_write_of_another_host_is_not_swept_while_fresh(tmp_path):
         os.utime(f, (an_hour_ago, an_hour_ago))
     checkpoint_path(path)  # once old, any host's is a killed writer's
     assert sorted(f.name for f in tmp_path.iterdir()) == ["sel.npz"]
+
+
+def _rig(n, seed):
+    rng = np.random.default_rng(seed)
+    a = np.repeat(rng.uniform(-1, 1, n // 20 + 1), 20)[:n]
+    b = np.repeat(rng.uniform(-1, 1, n // 30 + 1), 30)[:n]
+    y = 0.5 * a + 0.2 * a * b + 0.1 * b
+    return gb.Record(np.c_[1000 + 500 * a, 50 + 40 * b], y, Ts=0.1, input_names=("speed", "valve"))
+
+
+def test_a_surface_fitted_in_the_records_order_keeps_the_fingerprint_stores_hold():
+    # data_fingerprint (part of every cell's key and of the store's data set hashes) began hashing a surface's
+    # monomials and inputs: a store run before on a data set with a StaticSurface (extra['static_curve'], the
+    # surface a fit gives) then refused that same data set ('reads other data than the data set in the store')
+    from types import SimpleNamespace
+
+    from graybox.experiments._spec import data_fingerprint
+    rec, box = _rig(100, 0), ((500.0, 1500.0), (10.0, 90.0))
+    surf = gb.StaticSurface(((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)), [0.1, 1e-3, -5e-3, 1e-7, 2e-6, 3e-5], domain=box, input_names=("speed", "valve"))
+    before = SimpleNamespace(coefficients=surf.coefficients, domain=surf.domain)  # what the hash read before
+    prints = [data_fingerprint(gb.Dataset(rec, rec, extra={"static_curve": s})) for s in (surf, before)]
+    assert prints[0] == prints[1]
+    # and surfaces a hash of coefficients alone cannot tell apart are still told apart
+    for other in (gb.StaticSurface(tuple(reversed(surf.exponents)), surf.coefficients, domain=box,
+                                   input_names=("speed", "valve")),  # the coefficients on other monomials
+                  gb.StaticSurface(surf.exponents, surf.coefficients, domain=box, input_names=("valve", "speed"))):
+        assert data_fingerprint(gb.Dataset(rec, rec, extra={"static_curve": other})) != prints[0]

@@ -28,6 +28,7 @@ from ..core._validation import (check_bool, check_choice, check_fields, check_in
                                 check_real, check_sequence, check_str)
 from ..core._reprs import short_repr
 from ..static._constraints import FREE_SIGMA_Y, check_min_denominator
+from ..static._surfaces import monomial_exponents
 
 __all__ = [
     "SpecError",
@@ -446,9 +447,18 @@ def data_fingerprint(ds: gb.Dataset) -> str:
     if curve is not None:
         h.update(np.ascontiguousarray(curve.coefficients, dtype="<f8").tobytes())
         h.update(repr(curve.domain).encode())
-        if isinstance(curve, gb.StaticSurface):  # its coefficients say nothing without their monomials and inputs
+        if isinstance(curve, gb.StaticSurface) and not _plain_surface(curve, names):
+            # its coefficients say nothing without their monomials and inputs; the surface a fit in the records'
+            # order gives (every monomial up to its degree, in order) hashes as before, so stores keep their keys
             h.update(repr((tuple(curve.exponents), tuple(curve.input_names))).encode())
     return h.hexdigest()[:16]
+
+
+def _plain_surface(surface: gb.StaticSurface, names: Sequence[str]) -> bool:
+    """Whether ``surface`` is in the inputs ``names``, in that order, on every monomial up to its degree in
+    :func:`~graybox.static._surfaces.monomial_exponents` order: the one such surface of its coefficients."""
+    return (tuple(surface.input_names) == tuple(names)
+            and tuple(surface.exponents) == monomial_exponents(surface.n_inputs, surface.degree))
 
 
 def uncertainty_key(ds: gb.Dataset, band: float | None) -> list[float] | None:
