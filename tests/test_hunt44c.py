@@ -233,8 +233,8 @@ def test_operating_points_of_a_model_with_transient_inputs_take_them_at_zero():
     # a one-input plant's model with a transient input: ū given as levels of u, as for a one-input model, has
     # z̄ = 0 (its level at every steady state); [800, 1200] was the one point (u = 800, z̄ = 1200), silently
     model = _transient_model()  # inputs (u, u_tau3)
-    levels = np.array([800.0, 1200.0])
-    full = np.c_[levels, np.zeros(2)]
+    levels = np.array([800.0, 1000.0, 1200.0])  # two values (m of them) are refused: levels or a point (review44f)
+    full = np.c_[levels, np.zeros(3)]
     np.testing.assert_array_equal(gb.operating_curve(model, levels).ubar, full)
     np.testing.assert_allclose(model.static_gain(levels), model.static_gain(full))
     np.testing.assert_allclose(model.static_curve(levels), model.static_curve(full))
@@ -242,7 +242,7 @@ def test_operating_points_of_a_model_with_transient_inputs_take_them_at_zero():
     assert model.equilibria(1200.0)[0].ubar == (1200.0, 0.0)
     np.testing.assert_array_equal(gb.narx_steady_state(model, 1200.0, 5.0), gb.narx_steady_state(model, [1200.0, 0.0], 5.0))
     # a full point stays one point; several inputs beside their channels: points of those inputs
-    assert len(gb.operating_curve(model, [1200.0, 0.0]).ubar) == 1
+    assert len(gb.operating_curve(model, [[1200.0, 0.0]]).ubar) == 1
     st = gb.parse_structure(["1", "y(k-1)", "a(k-1)", "b(k-1)", "a_tau3(k-1)"])
     two = gb.Model(st, np.array([0.1, 0.5, 1.0, 2.0, -0.1]), input_names=("a", "b", "a_tau3"), Ts=1.0)
     np.testing.assert_allclose(two.static_curve([[1.0, 2.0], [0.5, 1.0]]),

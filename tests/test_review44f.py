@@ -62,3 +62,27 @@ def test_a_surface_fitted_in_the_records_order_keeps_the_fingerprint_stores_hold
                                    input_names=("speed", "valve")),  # the coefficients on other monomials
                   gb.StaticSurface(surf.exponents, surf.coefficients, domain=box, input_names=("valve", "speed"))):
         assert data_fingerprint(gb.Dataset(rec, rec, extra={"static_curve": other})) != prints[0]
+
+
+def _transient_model():
+    """A one-input plant's model with a transient input u_tau3 (zero at every operating point)."""
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u_tau3(k-1)"])
+    return gb.Model(st, np.array([0.1, 0.6, 0.002, 1e-6, -0.5]), input_names=("u", "u_tau3"), Ts=0.5)
+
+
+def test_two_values_for_a_one_input_plants_model_with_a_transient_input_are_not_read_by_their_values():
+    # steady_levels read a 1-D ū of length m as one point when its transient entries are 0 and as levels of u
+    # otherwise: levels [1200, 0] gave one value (the point (1200, z̄ = 0)) where [1200, 100] gave two, and a
+    # full point [1200, 5] (z̄ = 5), one point before, silently became two levels
+    model = _transient_model()
+    for ub in ([1200.0, 0.0], [1200.0, 5.0], np.array([0.0, 1200.0])):
+        with pytest.raises(ValueError, match=r"ubar.*'u', 'u_tau3'.*shape \(M, 1\).*shape \(1, 2\)"):
+            model.static_curve(ub)
+        with pytest.raises(ValueError, match="ubar"):
+            gb.operating_curve(model, ub)
+    # said apart by their shape, each is read as meant
+    levels = np.array([[1200.0], [0.0]])
+    np.testing.assert_allclose(model.static_curve(levels), model.static_curve([[1200.0, 0.0], [0.0, 0.0]]))
+    assert model.static_curve([[1200.0, 0.0]]).shape == (1,)
+    assert len(gb.operating_curve(model, [800.0, 1000.0, 1200.0]).ubar) == 3  # levels of another count
+    assert gb.local_model(model, [1200.0, 0.0]).ybar == gb.local_model(model, 1200.0).ybar  # one point taken

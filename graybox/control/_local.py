@@ -878,7 +878,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         A polynomial NARX model.
     ubar : array_like, shape (M,) or (M, m)
         Operating inputs (input units); transient inputs left out are 0, their level at every
-        steady state (levels of shape (M,) for a one-input plant's model with them).
+        steady state (levels of shape (M, 1), or (M,) for M ≠ m, for a one-input plant's model with
+        them: m values could be one point as well, and are refused).
     Ts : float, optional
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
         ``data`` at another period is refused), else ``data``'s.

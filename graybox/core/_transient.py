@@ -140,20 +140,24 @@ def steady_levels(ub: np.ndarray, names: Sequence[str], *, one_point: bool = Fal
     """Operating points ū of a model whose inputs ``names`` include transient inputs, with their z̄ = 0 filled in.
 
     A transient input is 0 at every steady state, so ū given for the other inputs alone is completed with zero
-    columns, shape (M, m): with one other input, a scalar or levels of shape (M,) (as for a model of one input;
-    a 1-D ū of length m whose transient entries are all 0 stays one point, as before); with k others, one point
-    of shape (k,) or points (M, k). ``one_point``: the caller takes one point, so a 1-D ū of length m is that
-    point whatever its transient entries. Anything else, and ū of a model without transient inputs, is returned
-    as it is (the caller's shape checks say what is wrong).
+    columns, shape (M, m): with one other input, a scalar or levels of shape (M,) (as for a model of one input)
+    or (M, 1); with k others, one point of shape (k,) or points (M, k). A 1-D ū of length m is one point of every
+    input where ``one_point`` (the caller takes one) or k > 1; with one other input it could be m levels as well
+    as one point, and is refused (ValueError) rather than read by its values. Anything else, and ū of a model
+    without transient inputs, is returned as it is (the caller's shape checks say what is wrong).
     """
     names = tuple(names)
     base = [j for j, n in enumerate(names) if transient_source(n, names) is None]
     m, k = len(names), len(base)
     if k in (0, m):
         return ub
-    z = [j for j in range(m) if j not in base]
-    if ub.ndim == 1 and ub.size == m and (one_point or k > 1 or np.all(ub[z] == 0)):
-        return ub  # one point of every input
+    if ub.ndim == 1 and ub.size == m:
+        if one_point or k > 1:
+            return ub  # one point of every input
+        raise ValueError(
+            f"ubar: {m} values for a model of inputs {names}, whose {m - 1} transient input(s) rest at 0: give "
+            f"levels of {names[base[0]]!r} as a column, shape (M, 1), or points of every input, shape (1, {m}) "
+            "for one")
     if k == 1 and ub.ndim <= 1:
         # levels of the one input: [1000, 1200] was the point (1000, z̄ = 1200), where the run never rests
         levels = ub.reshape(-1, 1)

@@ -184,7 +184,8 @@ class Model:
         (:func:`graybox.static_surface`): columns in ``input_names`` order, or a pandas DataFrame whose
         columns are the ``input_names`` (read by name, any order); transient inputs
         (:func:`graybox.transient_inputs`) left out are 0, their level at every steady state, so a
-        one-input plant's model with them takes levels of shape (M,). ``y0`` (output units, one for all
+        one-input plant's model with them takes levels of shape (M, 1), or (M,) for M ≠ m (m values
+        could be one point as well, and are refused). ``y0`` (output units, one for all
         ū or one per ū): the equilibrium a free run started there settles on, as J_SF counts it
         (default: the one stable equilibrium). ``strict=True`` (default) raises ``ValueError`` naming
         every ū where no equilibrium is reached; ``strict=False`` gives NaN there.
