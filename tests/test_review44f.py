@@ -86,3 +86,32 @@ def test_two_values_for_a_one_input_plants_model_with_a_transient_input_are_not_
     assert model.static_curve([[1200.0, 0.0]]).shape == (1,)
     assert len(gb.operating_curve(model, [800.0, 1000.0, 1200.0]).ubar) == 3  # levels of another count
     assert gb.local_model(model, [1200.0, 0.0]).ybar == gb.local_model(model, 1200.0).ybar  # one point taken
+
+
+@pytest.mark.parametrize("fn", ["cls", "pe"])
+@pytest.mark.parametrize("units", [dict(), dict(u_offset=1e4), dict(u_scale=1e3, y_offset=-1e4)])
+def test_an_equality_the_model_breaks_is_refused_in_any_units(fn, units):
+    # hunt44e judged an inequality's activity in the solvers' metric (not against 1e-6 ‖θ ⊙ s‖, which grows with
+    # the offsets) but left the equalities' check on the old rule: at u = 1e4 ± 1 a model missing the point it is
+    # said to pass through by 0.3 (of outputs of order 1) was accepted, its covariance that of another problem
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from test_hunt44e import S, _plant
+
+    d = _plant(**units)
+    ys, yo = units.get("y_scale", 1.0), units.get("y_offset", 0.0)
+    pts = gb.StaticPoints(d.static.ubar, d.static.ybar + ys * 0.05 * np.array([1, -1, 1, -1, 1, -1]))
+    one = gb.PassesThrough(gb.StaticPoints(d.static.ubar[2:3], d.static.ybar[2:3] + 0.3 * ys))
+    with pytest.raises(ValueError, match="does not satisfy static function passes through 1 static points"):
+        if fn == "cls":
+            gb.cls_uncertainty(gb.cls(S, d.ident, pts, how="context"), d.ident, pts, constraints=one, how="context")
+        else:
+            member = gb.pe_pareto(S, d.ident, pts, lambdas=[0.5]).member_model(0)
+            gb.pe_uncertainty(member, d.ident, pts, lambda1=0.5, constraints=one)
+    # the model estimated with it is taken, in these units too
+    if fn == "cls":
+        fit = gb.cls(S, d.ident, pts, constraints=one, how="context")
+        unc = gb.cls_uncertainty(fit, d.ident, pts, constraints=one, how="context")
+    else:
+        member = gb.pe_pareto(S, d.ident, pts, constraints=one, lambdas=[0.5]).member_model(0)
+        unc = gb.pe_uncertainty(member, d.ident, pts, lambda1=0.5, constraints=one)
+    assert np.all(np.isfinite(unc.cov))

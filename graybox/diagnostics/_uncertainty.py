@@ -553,19 +553,17 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
                 fit: np.ndarray, rows: int, scale: float) -> np.ndarray:
     """Equality rows and the inequality rows active at θ (engineering units); user constraints refused.
 
-    An equality holds when θ lies within 1e-6 ‖z‖ of its hyperplane in the estimators' scaled
-    coordinates z = s ⊙ θ (each z_j in output units): a residual measured against |A||θ| alone was
-    its own scale for a cluster of one term set to 0 (eq. (22)'s Σ_yu), which a QP leaves at
-    round-off, not at 0.
-
-    An inequality is active when the fit need change by at most 1e-6 of ``scale`` (the output's
+    A row is measured in the estimators' scaled coordinates z = s ⊙ θ (each z_j in output units): a
+    residual measured against |A||θ| alone was its own scale for a cluster of one term set to 0 (eq.
+    (22)'s Σ_yu), which a QP leaves at round-off, not at 0. An equality holds, and an inequality is
+    active, when the fit need change by at most 1e-6 of ``scale`` (the output's
     spread), or by the round-off of z, to reach its hyperplane: the distance in the metric ‖``fit`` Δz‖ (``fit``: the problem's
     stacked factors, standing for ``rows`` regression rows), which is the solvers' own (their step is
     in units of the spread, in the basis that whitens these factors). Unlike a Euclidean distance in z,
     it does not move with the units or offsets of u and y: against 1e-6 ‖z‖, with u = 1e4 ± 1
     (‖z‖ = 3e7) every row of a band 0.06 wide counted as active, and the covariance was that of a
     model held on all of them. Where the factors leave θ free (not identifiable without the
-    constraints) the Euclidean rule is kept.
+    constraints) the Euclidean rule is kept: within 1e-6 ‖z‖ of each hyperplane.
     """
     n = theta.size
     z = theta * s
@@ -588,6 +586,11 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
         nrm = np.linalg.norm(A / s, axis=1)
         return r / np.where(nrm > 0, nrm, 1.0)
 
+    # a row holds (or is active) within 1e-6 of the spread, or of the round-off of z itself in this metric
+    # (‖Rf‖ ‖z‖ eps: u = −50 ± 0.0015 with a u² term, cond 8e10, left an active band row 2.4e-6 of the spread off
+    # its hyperplane); equalities and inequalities alike (against 1e-6 ‖z‖, at u = 1e4 ± 1 an equality the model
+    # missed by 0.3 of outputs of order 1 held)
+    near = 1e-6 * scale + 1e-15 * float(np.linalg.norm(whiten, 2) * np.linalg.norm(z)) if whiten is not None else tol
     rows = [np.zeros((0, n))]
     for c in cons:
         r = c.affine(ctx)
@@ -595,15 +598,12 @@ def _equalities(cons: list[StaticConstraint], ctx, theta: np.ndarray, s: np.ndar
             raise ValueError(f"{what}: {c.describe()} is not affine in θ; the covariance is defined for affine "
                              "constraints (equalities, bands, gain and cluster bounds) only")
         if r.n_eq:
-            if np.any(np.abs(off(r.A_eq, r.A_eq @ theta - r.b_eq)) > tol):
+            if np.any(np.abs(gap(r.A_eq, r.A_eq @ theta - r.b_eq)) > near):
                 raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
                                  "constraints, data and reference (Σ*_y)?")
             rows.append(np.asarray(r.A_eq))
         if r.n_ub:
             slack = gap(r.A_ub, r.b_ub - r.A_ub @ theta)
-            # within 1e-6 of the spread, or of the round-off of z itself in this metric (‖Rf‖ ‖z‖ eps: u = −50 ± 0.0015
-            # with a u² term, cond 8e10, left an active band row 2.4e-6 of the spread off its hyperplane)
-            near = 1e-6 * scale + 1e-15 * float(np.linalg.norm(whiten, 2) * np.linalg.norm(z)) if whiten is not None else tol
             if np.any(slack < -near):
                 # a broken row would count as active below: the covariance of another problem, said as the model's
                 raise ValueError(f"{what}: the model does not satisfy {c.describe()}; was it estimated with these "
