@@ -115,3 +115,22 @@ def test_an_equality_the_model_breaks_is_refused_in_any_units(fn, units):
         member = gb.pe_pareto(S, d.ident, pts, constraints=one, lambdas=[0.5]).member_model(0)
         unc = gb.pe_uncertainty(member, d.ident, pts, lambda1=0.5, constraints=one)
     assert np.all(np.isfinite(unc.cov))
+
+
+def test_a_checkpoint_behind_a_link_is_checked_where_its_file_is_written(tmp_path):
+    # save_npz writes through a symbolic link (its file beside the file the link names), but checkpoint_path checked
+    # the link's folder: a link in a writable folder to a file in a read-only one passed, and the first write failed
+    # after the first fit (what checkpoint_path refuses before any fit for a plain path)
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from test_hunt44b import read_only
+
+    from graybox.estimation._simulation_error import checkpoint_path
+
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "runs" / "a.npz").write_bytes(b"")
+    link = tmp_path / "latest.npz"
+    link.symlink_to(tmp_path / "runs" / "a.npz")
+    with read_only(tmp_path / "runs"):
+        with pytest.raises(ValueError, match=r"checkpoint: the folder .*runs cannot be written in"):
+            checkpoint_path(link)
+    assert checkpoint_path(link) == link

@@ -47,7 +47,6 @@ import re
 import secrets
 import socket
 import tempfile
-import time
 import warnings
 import zipfile
 from dataclasses import asdict, dataclass, field
@@ -767,12 +766,13 @@ def save_npz(path: Path, **arrays: Any) -> None:
     try:
         with open(tmp, "xb") as f:  # the mode a new file of np.savez's would have
             np.savez(f, **arrays)
+        now = os.stat(tmp).st_mtime  # the folder's clock (a file server's), as its files' times are
         os.replace(tmp, target)
     except BaseException:
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise
-    _sweep_leftovers(target)
+    _sweep_leftovers(target, now)
 
 
 def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarray, done: int,
@@ -1441,15 +1441,17 @@ def checkpoint_path(checkpoint: object) -> Path:
     path = Path(checkpoint)
     if path.is_dir():  # the folder meant to hold it: never to be called unreadable, nor deleted
         raise ValueError(f"checkpoint: {path} is a folder; give a file path, such as {path / 'checkpoint.npz'}")
-    if not path.parent.is_dir():
-        raise ValueError(f"checkpoint: the folder {path.parent} does not exist; create it or choose another path")
+    # the folder the writes go to: a symbolic link is written through (save_npz), beside the file it names
+    real = Path(os.path.realpath(path)) if path.is_symlink() else path
+    if not real.parent.is_dir():
+        raise ValueError(f"checkpoint: the folder {real.parent} does not exist; create it or choose another path")
     try:  # a file made and gone at once: what the write will do (modes, read-only mounts, ACLs all say)
-        with tempfile.TemporaryFile(dir=path.parent):
-            pass
+        with tempfile.TemporaryFile(dir=real.parent) as f:
+            now = os.fstat(f.fileno()).st_mtime  # the folder's clock (a file server's), as its files' times are
     except OSError as exc:
-        raise ValueError(f"checkpoint: the folder {path.parent} cannot be written in ({exc.strerror or exc}); make "
+        raise ValueError(f"checkpoint: the folder {real.parent} cannot be written in ({exc.strerror or exc}); make "
                          "it writable or choose another path") from None
-    _sweep_leftovers(Path(os.path.realpath(path)))
+    _sweep_leftovers(Path(os.path.realpath(path)), now)
     return path
 
 
@@ -1463,13 +1465,13 @@ def writer_tag() -> str:
     return f"{re.sub(r'[^A-Za-z0-9_.]', '_', socket.gethostname()) or '_'}-{os.getpid()}"
 
 
-def _sweep_leftovers(path: Path) -> None:
+def _sweep_leftovers(path: Path, now: float) -> None:
     """Remove the files :func:`save_npz` writes beside ``path`` that a killed write left (each write has a name of
     its own, which no later write replaces): those of a process of this host that is gone, and any once old (a
-    process of another host sharing the folder, whose liveness cannot be asked from here)."""
+    process of another host sharing the folder, whose liveness cannot be asked from here). ``now``: the time of a
+    file just written in that folder, not this host's clock, which may be ahead of a file server's by minutes."""
     name = re.compile(rf"{re.escape(path.name)}\.(?:([^-]+)-)?(\d+)-[0-9a-f]{{8}}\.tmp")
     host = writer_tag().rsplit("-", 1)[0]
-    now = time.time()
     with contextlib.suppress(OSError):
         for f in path.parent.iterdir():
             m = name.fullmatch(f.name)
