@@ -134,3 +134,25 @@ def test_a_checkpoint_behind_a_link_is_checked_where_its_file_is_written(tmp_pat
         with pytest.raises(ValueError, match=r"checkpoint: the folder .*runs cannot be written in"):
             checkpoint_path(link)
     assert checkpoint_path(link) == link
+
+
+@pytest.mark.skipif(not __import__("os").path.exists("/proc/self/stat"), reason="zombies are told by /proc")
+def test_a_killed_checkpoint_writer_not_yet_reaped_is_gone(tmp_path):
+    # the checkpoint's sweep asked os.kill(pid, 0) alone, which a killed process its parent has not reaped (a
+    # zombie) still answers: its write's file stayed for LEFTOVER_SECONDS; the store's run check, a copy of the same
+    # question, already told a zombie from a live process
+    from graybox.estimation._simulation_error import checkpoint_path, writer_tag
+
+    zombie = subprocess.Popen([sys.executable, "-c", "pass"])
+    try:
+        for _ in range(200):  # until it has exited (not reaped: no wait)
+            with open(f"/proc/{zombie.pid}/stat", "rb") as f:
+                if f.read().rsplit(b")", 1)[1].split()[0] == b"Z":
+                    break
+            time.sleep(0.05)
+        left = tmp_path / f"sel.npz.{writer_tag().rsplit('-', 1)[0]}-{zombie.pid}-0badc0de.tmp"
+        left.write_bytes(b"half")
+        checkpoint_path(tmp_path / "sel.npz")
+        assert not left.exists()
+    finally:
+        zombie.wait()

@@ -88,6 +88,7 @@ from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
+from ..core._processes import pid_alive
 from ..core._terms import Structure
 from ..core._validation import (FrozenMap, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
@@ -1477,22 +1478,9 @@ def _sweep_leftovers(path: Path, now: float) -> None:
             m = name.fullmatch(f.name)
             if m:
                 with contextlib.suppress(OSError):  # gone meanwhile
-                    gone = m.group(1) == host and not _pid_alive(int(m.group(2)))
+                    gone = m.group(1) == host and not pid_alive(int(m.group(2)))
                     if gone or now - f.stat().st_mtime > LEFTOVER_SECONDS:
                         f.unlink()
-
-
-def _pid_alive(pid: int) -> bool:
-    """Whether process ``pid`` of this host may still run (True where that cannot be asked: it may)."""
-    if pid == os.getpid() or os.name != "posix":  # os.kill(pid, 0) would end a process on Windows
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError):  # another user's process; a number no pid is
-        return True
-    return True
 
 
 def _sibling(path: str | os.PathLike, tag: str) -> Path:

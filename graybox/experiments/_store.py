@@ -37,6 +37,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from ..core._processes import pid_alive, pid_started
 from ..core._validation import check_sequence
 from ._cell import COLUMNS, JSON_COLUMNS
 from ._spec import Cell, _hash
@@ -122,23 +123,11 @@ def _alive(owner: str, host: str, pid: int, beat: float, now: float) -> bool:
         return owner in _OPEN_OWNERS
     if host != socket.gethostname() or os.name != "posix":  # os.kill(pid, 0) would end a process on Windows
         return now - beat < STALE_SECONDS
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+    if not pid_alive(pid):  # no such process, or a killed driver its parent has not reaped yet (a zombie)
         return False
-    except PermissionError:  # another user's process
-        return True
-    try:  # a killed driver its parent has not reaped yet still answers: Linux says it is a zombie
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            fields = f.read().rsplit(b")", 1)[1].split()
-        if fields[0] == b"Z":
-            return False
-        # a process started after the driver's last beat is not the driver: it died and its pid was reused
-        with open("/proc/stat", "rb") as f:
-            boot = next(int(ln.split()[1]) for ln in f if ln.startswith(b"btime "))
-        return boot + int(fields[19]) / os.sysconf("SC_CLK_TCK") <= beat + _CLOCK_SLACK
-    except (OSError, IndexError, ValueError, StopIteration):
-        return True
+    # a process started after the driver's last beat is not the driver: it died and its pid was reused
+    started = pid_started(pid)
+    return started is None or started <= beat + _CLOCK_SLACK
 
 
 class StoreError(ValueError):
