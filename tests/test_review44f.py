@@ -156,3 +156,26 @@ def test_a_killed_checkpoint_writer_not_yet_reaped_is_gone(tmp_path):
         assert not left.exists()
     finally:
         zombie.wait()
+
+
+def test_selection_uncertainty_builds_an_equality_table_with_a_static_curve_as_the_selection_did():
+    # .uncertainty built tables into constraints with the static points given or the data set's, but a StaticCurve
+    # given as static= (which select_graybox samples into points) left none: TypeError "object of type 'NoneType'
+    # has no len()" naming nothing, for the table select_graybox had taken with that very curve
+    import warnings
+
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from test_hunt44e import _plant
+
+    d, other = _plant(n=300), _plant(n=300, seed=7)
+    curve = gb.StaticCurve.fit(d.static, degree=2)
+    table = {"type": "equality", "curve": "fit"}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the selection's notes on these small data are not what is tested
+        sel = gb.select_graybox(gb.Candidates(ny=2, nu=1, degree=2, max_y_power=1), d.ident, static=curve,
+                                validation=other.ident, band=0.1, estimator="pe", constraints=[table], lambdas=[0.3, 0.9],
+                                sizes=[4, 5], sources=("frols",), progress=False)
+        # the table is built on the curve's points as the selection built it: the member then meets them exactly,
+        # which pe_uncertainty says by name (a static_sigma is needed), no longer a TypeError naming nothing
+        with pytest.raises(ValueError, match="meets its 10 static points exactly.*static_sigma"):
+            sel.uncertainty(d.ident, static=curve, constraints=[table])

@@ -350,6 +350,8 @@ class GrayboxSelection:
             return list(constraints)
         recs = as_records(data, name="data")
         pts = static if isinstance(static, gb.StaticPoints) else None
+        if isinstance(static, (gb.StaticCurve, gb.StaticSurface)):
+            pts = static_points(static, list(recs), takes_ubar=False)  # sampled as select_graybox samples it
         if static is None and isinstance(data, gb.Dataset):
             pts = data.static
         extra = data.extra if isinstance(data, gb.Dataset) else {}
