@@ -179,3 +179,16 @@ def test_selection_uncertainty_builds_an_equality_table_with_a_static_curve_as_t
         # which pe_uncertainty says by name (a static_sigma is needed), no longer a TypeError naming nothing
         with pytest.raises(ValueError, match="meets its 10 static points exactly.*static_sigma"):
             sel.uncertainty(d.ident, static=curve, constraints=[table])
+
+
+def test_a_labelled_point_of_every_input_is_one_point_with_transient_inputs():
+    # a pandas Series labelled by the inputs (a DataFrame's row) is one point ū wherever inputs are read, yet for a
+    # one-input plant's model with a transient input steady_levels read its values: (u = 1200, z̄ = 5) became the
+    # two levels 1200 and 5 (review44f now refuses bare values there: a labelled point says what it is)
+    import pandas as pd
+
+    model = _transient_model()
+    for z in (0.0, 5.0):
+        row = pd.DataFrame([[z, 1200.0]], columns=["u_tau3", "u"]).iloc[0]  # labels in another order
+        np.testing.assert_allclose(model.static_curve(row), model.static_curve([[1200.0, z]]))
+        np.testing.assert_array_equal(gb.operating_curve(model, row).ubar, [[1200.0, z]])

@@ -29,7 +29,7 @@ from typing import Any, ClassVar, Sequence
 import numpy as np
 from scipy.signal import lfilter
 
-from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, check_units, frame_inputs, outside_range,
+from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, as_records, check_same_units, check_units, frame_inputs, labelled_point, outside_range,
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
 from ..core._transient import steady_levels
@@ -515,6 +515,7 @@ def _as_points(model: Model, ubar: object, one_point: bool = False) -> np.ndarra
     """ū as points of shape (M, m) in the model's input order (``one_point``: the caller takes one)."""
     m = model.n_inputs
     ub = input_levels(frame_inputs(ubar, model.input_names, "ubar"))  # a DataFrame: by column name
+    one_point = one_point or labelled_point(ubar, model.input_names)  # a Series labelled by the inputs: one ū
     ub = steady_levels(ub, model.input_names, one_point=one_point)  # transient inputs left out: z̄ = 0
     if m == 1:
         ub = np.atleast_1d(ub).reshape(-1, 1) if ub.ndim <= 1 else ub

@@ -34,6 +34,12 @@ def _is_series(x: object) -> bool:
     return type(x).__module__.split(".")[0] == "pandas" and hasattr(x, "index") and getattr(x, "ndim", 0) == 1
 
 
+def labelled_point(x: object, names: Sequence[str]) -> bool:
+    """Whether ``x`` is a pandas Series whose index labels are the inputs ``names`` (a DataFrame's row): one
+    point ū by what it says, never levels of one input, whatever its values."""
+    return _is_series(x) and sorted(str(c) for c in x.index) == sorted(names)  # type: ignore[attr-defined]
+
+
 def output_series(y: object) -> object | None:
     """``y`` when it is a pandas Series with a name (``df["p"]``), else None: its column is no input."""
     label = getattr(y, "name", None) if _is_series(y) else None

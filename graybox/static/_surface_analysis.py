@@ -33,7 +33,7 @@ import numpy as np
 from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
 from ._linearisation import input_monomials_of, static_gains, static_powers, static_theta_gradient_of
-from ..core._records import frame_inputs
+from ..core._records import frame_inputs, labelled_point
 from ..core._terms import Structure, Term, check_input_names, require_inputs
 from ..core._transient import steady_levels
 from ..core._validation import check_bool, check_fields, check_per_point, real_array
@@ -211,6 +211,7 @@ def points_of_inputs(ubar: object, names: tuple[str, ...], *, one_point: bool = 
     transient inputs left out are 0, their level at every steady state (:func:`~graybox.core._transient.steady_levels`)."""
     m = len(names)
     ub = real_array(frame_inputs(ubar, names, "ubar"), "ubar", "points of input levels (numbers)")
+    one_point = one_point or labelled_point(ubar, names)  # a Series labelled by the inputs: one ū
     ub = steady_levels(ub, names, one_point=one_point)  # a transient input's z̄ = 0 where ū gives the others only
     if ub.ndim == 1 and ub.size == m:
         ub = ub[None, :]
