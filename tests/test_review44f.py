@@ -192,3 +192,16 @@ def test_a_labelled_point_of_every_input_is_one_point_with_transient_inputs():
         row = pd.DataFrame([[z, 1200.0]], columns=["u_tau3", "u"]).iloc[0]  # labels in another order
         np.testing.assert_allclose(model.static_curve(row), model.static_curve([[1200.0, z]]))
         np.testing.assert_array_equal(gb.operating_curve(model, row).ubar, [[1200.0, z]])
+
+
+def test_solver_options_are_checked_where_cvxpy_lists_no_solve_keywords(monkeypatch):
+    # the option names are read from the solver's settings and cvxpy's private Problem._solve: only the solver's
+    # were read under a guard, so a cvxpy whose _solve is gone or another kind broke every call with options
+    # (AttributeError) instead of leaving the check to the solver, as the docstring says
+    import cvxpy as cp
+
+    from graybox.estimation._prediction_error import _solver_settings
+
+    assert "max_iter" in _solver_settings("clarabel")
+    monkeypatch.delattr(cp.Problem, "_solve")
+    assert _solver_settings("clarabel") is None and _solver_settings("osqp") is None

@@ -1053,9 +1053,10 @@ def _solver_settings(solver: str) -> set[str] | None:
             import osqp
 
             names = {a for a in dir(osqp.ext_builtin.OSQPSettings()) if not a.startswith("_")}
+        # cvxpy's own solve keywords, read off a private method: guarded as the solver's settings are
+        cvx = set(inspect.signature(cp.Problem._solve).parameters) - {"self", "solver", "kwargs"}
     except Exception:  # noqa: BLE001 - another release's layout: leave the check to the solver
         return None
-    cvx = set(inspect.signature(cp.Problem._solve).parameters) - {"self", "solver", "kwargs"}
     return names | cvx | {"use_quad_obj"}
 
 
