@@ -34,6 +34,26 @@ def paper_record(rng):
     return Record(u, y, Ts=0.05, name="sim15")
 
 
+def two_level_records(names: tuple[str, str] = ("ident", "valid")):
+    """Two records of y(k) = 0.5 y(k-1) + 0.4 u(k-1) + 0.1 u(k-1)² + 0.2 (+ noise 0.01), the first's input at two
+    levels only (u² a combination of u and 1 there: λ1 = 1, no weight on the static points, cannot identify a
+    structure holding both), the second's over [0, 3]; and static points from the true curve at seven levels."""
+    from graybox import StaticPoints
+
+    rng = np.random.default_rng(0)
+
+    def plant(u):
+        y = np.zeros_like(u)
+        for k in range(1, len(u)):
+            y[k] = 0.5 * y[k - 1] + 0.4 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.2
+        return y + 0.01 * rng.standard_normal(len(u))
+
+    u1, u2 = np.repeat(rng.choice([1.0, 2.0], 40), 10), np.repeat(rng.uniform(0.0, 3.0, 40), 10)
+    ub = np.linspace(0.0, 3.0, 7)
+    return (Record(u1, plant(u1), name=names[0]), Record(u2, plant(u2), name=names[1]),
+            StaticPoints(ub, (0.2 + 0.4 * ub + 0.1 * ub**2) / 0.5))
+
+
 def assert_csv_pair_matches(dyn, sta, committed, ncols: tuple[int, int]) -> None:
     """Regenerated bundled CSVs equal the committed ones: same header and rows, every column but the
     last (pressure) exactly, the pressure to one unit of its 4th decimal (a last-ulp difference on

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from conftest import two_level_records
 
 TESTS = Path(__file__).resolve().parent
 
@@ -115,18 +116,8 @@ def test_a_test_the_pytest_beside_did_not_run_is_one_error(tmp_path):
 def _records_and_points():
     """Two records of one plant (the first's input at two levels only: λ1 = 1 cannot identify θ on it alone) and
     static points at seven levels."""
-    rng = np.random.default_rng(0)
-
-    def plant(u):
-        y = np.zeros_like(u)
-        for k in range(1, len(u)):
-            y[k] = 0.5 * y[k - 1] + 0.4 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.2
-        return y + 0.01 * rng.standard_normal(len(u))
-
-    u1, u2 = np.repeat(rng.choice([1.0, 2.0], 40), 10), np.repeat(rng.uniform(0.0, 3.0, 40), 10)
-    ub = np.linspace(0.0, 3.0, 7)
-    return ([gb.Record(u1, plant(u1), name="A"), gb.Record(u2, plant(u2), name="B")],
-            gb.StaticPoints(ub, (0.2 + 0.4 * ub + 0.1 * ub**2) / 0.5))
+    a, b, points = two_level_records(("A", "B"))
+    return [a, b], points
 
 
 def _select(records, points, **kw):

@@ -19,6 +19,8 @@ import pytest
 import graybox as gb
 from graybox.experiments import _select
 
+from conftest import two_level_records
+
 CAND = gb.Candidates(ny=2, nu=2, degree=2)
 KW = dict(sizes=[3, 4, 5], estimator=["pe", "se-gradient"], progress=False)
 
@@ -130,20 +132,7 @@ def test_parallel_map_tells_of_each_finished_job_on_dask():
 # -- a member whose fit failed: said in the table, kept in the checkpoint ----------------------------
 
 def _two_level_dataset() -> gb.Dataset:
-    """Identification input at two levels only: u² is a combination of u and 1 there, so the λ1 = 1 member (no
-    weight on the static points, which span seven levels) cannot identify a structure holding both."""
-    rng = np.random.default_rng(0)
-
-    def plant(u):
-        y = np.zeros_like(u)
-        for k in range(1, len(u)):
-            y[k] = 0.5 * y[k - 1] + 0.4 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.2
-        return y + 0.01 * rng.standard_normal(len(u))
-
-    u1, u2 = np.repeat(rng.choice([1.0, 2.0], 40), 10), np.repeat(rng.uniform(0.0, 3.0, 40), 10)
-    ub = np.linspace(0.0, 3.0, 7)
-    return gb.Dataset(gb.Record(u1, plant(u1), name="ident"), gb.Record(u2, plant(u2), name="valid"),
-                      gb.StaticPoints(ub, (0.2 + 0.4 * ub + 0.1 * ub**2) / 0.5))
+    return gb.Dataset(*two_level_records())
 
 
 def _pe_selection(ds, **kw):

@@ -975,8 +975,9 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     own, said = _own_units(obj), head["units"]
     if own is not None and said is not None and any(a and b and a != b for a, b in zip(said, own)):
         raise GrayboxFileError(f"{source}: header: units {said} contradict the units the {head['type']} holds its "
-                               f"numbers in, {own}; the file was edited: set the header's units to the value's (or "
-                               "remove them), or convert the data and refit in the units meant")
+                               f"numbers in, {own} (a hand edit, or a file saved with units= by a graybox that did not check "
+                               "them): set the header's units to the value's (or remove them), or convert the data and "
+                               "refit in the units meant")
     return obj
 
 
