@@ -179,6 +179,15 @@ def test_selection_uncertainty_builds_an_equality_table_with_a_static_curve_as_t
         # which pe_uncertainty says by name (a static_sigma is needed), no longer a TypeError naming nothing
         with pytest.raises(ValueError, match="meets its 10 static points exactly.*static_sigma"):
             sel.uncertainty(d.ident, static=curve, constraints=[table])
+        # which it now takes, as pe_uncertainty does (it had no way to pass one)
+        unc = sel.uncertainty(d.ident, static=curve, constraints=[table], static_sigma=0.05)
+        direct = gb.pe_uncertainty(sel.decision, d.ident, curve, static_sigma=0.05,
+                                   constraints=sel._constraint_objects((table,), d.ident, curve))
+        np.testing.assert_allclose(unc.cov, direct.cov, rtol=1e-12, atol=0)
+        assert unc.static_sigma2 == pytest.approx(0.05**2)
+    with pytest.raises(ValueError, match="static_sigma applies to a gray box"):
+        gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=1), d.ident, validation=other.ident, estimator="ls",
+                          sizes=[2], sources=("frols",), progress=False).uncertainty(d.ident, static_sigma=0.05)
 
 
 def test_a_labelled_point_of_every_input_is_one_point_with_transient_inputs():

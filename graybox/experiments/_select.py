@@ -284,6 +284,7 @@ class GrayboxSelection:
         static: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface | None = None,
         *,
         constraints: Any = (),
+        static_sigma: float | None = None,
         level: float = 0.95,
     ) -> gb.ParameterUncertainty:
         """The chosen model's parameter covariance, by its estimator's own rule, on the data it was fitted on.
@@ -305,6 +306,11 @@ class GrayboxSelection:
             The static information the selection was given, if not the Dataset's (gray boxes only).
         constraints : optional
             The constraints the selection was given (PE only).
+        static_sigma : float, optional
+            Standard deviation of the measured ȳ_i, output units (gray boxes only; 0 takes the points
+            as exact): as :func:`graybox.pe_uncertainty` and :func:`graybox.se_uncertainty` take it.
+            Default: from the member's own static misfit, which a member that meets the points
+            exactly does not have (``ValueError`` then: give it).
         level : float
             Confidence level of the intervals, in (0, 1).
 
@@ -325,6 +331,8 @@ class GrayboxSelection:
             raise ValueError(f"constraints apply to the PE estimator; the chosen row's is {est!r}")
         if static is not None and est in _BLACK_BOX_FITS:
             raise ValueError(f"static applies to a gray box; the chosen row's estimator is {est!r} (a black box)")
+        if static_sigma is not None and est in _BLACK_BOX_FITS:
+            raise ValueError(f"static_sigma applies to a gray box; the chosen row's estimator is {est!r} (a black box)")
         if est == "ls":
             return gb.ls_uncertainty(self.model, data, level=level)
         if est == "els":
@@ -340,8 +348,8 @@ class GrayboxSelection:
             return gb.se_uncertainty(self.model, data, lambda1=1.0, level=level)
         if est == "pe":
             return gb.pe_uncertainty(self.decision, data, static, constraints=self._constraint_objects(
-                constraints, data, static) or None, level=level)
-        return gb.se_uncertainty(self.decision, data, static, level=level)
+                constraints, data, static) or None, static_sigma=static_sigma, level=level)
+        return gb.se_uncertainty(self.decision, data, static, static_sigma=static_sigma, level=level)
 
     def _constraint_objects(self, constraints: tuple, data: object, static: object) -> list:
         """The constraints as objects, tables built as the selection's fits built them (an equality's curve
