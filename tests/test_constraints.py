@@ -360,3 +360,15 @@ def test_cls_with_only_a_band_takes_a_datasets_static_points(rec):
     np.testing.assert_allclose(both.model.theta, cls(S15, rec, PTS, constraints=StaticBand(0.5)).model.theta)
     with pytest.raises(ValueError, match="static points"):
         cls(S15, rec, None, constraints=StaticBand(0.5)).model  # a bare record has none
+
+
+def test_cluster_bound_keys_take_every_form_cluster_powers_takes_and_only_integer_powers():
+    # was: (1, (1, 0)), a form cluster_powers reads, was looked up as it was and refused by a surface's map; and
+    # (1.5, 0) was read as the cluster (1, 0)
+    assert dict(ClusterBounds({(1, (1, 0)): (None, 0.5)}).bounds) == {(1, 1, 0): (None, 0.5)}
+    assert dict(ClusterBounds({(1, 0): (None, 0.5), "Su^2": (0.0, None)}).bounds) == {(1, 0): (None, 0.5),
+                                                                                      "Su^2": (0.0, None)}
+    for bad, error in (((1.5, 0), TypeError), ((True, 0), TypeError), ((1,), TypeError), (3, TypeError),
+                       ((1, -1), ValueError)):
+        with pytest.raises(error, match="cluster"):
+            ClusterBounds({bad: (0.0, 1.0)})

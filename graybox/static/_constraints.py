@@ -1118,7 +1118,7 @@ class ClusterBounds(StaticConstraint):
     ----------
     bounds : mapping name -> (lower, upper)
         Cluster name (``"Σy"``, ``"Σyu"``, ``"Σu²"``, or ASCII ``"Sy"``, ``"Su^2"``) or key
-        (p, m); either bound may be None; equal bounds fix the cluster's value. With several
+        (p, m), with several inputs (p, m_1, …, m_m) or (p, (m_1, …, m_m)); either bound may be None; equal bounds fix the cluster's value. With several
         inputs a name's factors may come in any order (``"Σspeedvalve"`` or ``"Σvalve·speed"``),
         so the bounds hold whatever order the data list their inputs in.
     """
@@ -1140,7 +1140,7 @@ class ClusterBounds(StaticConstraint):
                 raise ValueError(f"cluster {k!r}: give a lower or an upper bound")
             if lo is not None and hi is not None and lo > hi:
                 raise ValueError(f"cluster {k!r}: lower bound {lo} exceeds upper bound {hi}")
-            clean[k] = (lo, hi)
+            clean[_cluster_bound_key(k)] = (lo, hi)
         object.__setattr__(self, "bounds", FrozenMap(clean))  # read-only: the object is a value
 
     def describe(self) -> str:
@@ -1172,6 +1172,23 @@ class ClusterBounds(StaticConstraint):
 # --------------------------------------------------------------------------------------------
 # anything a user writes in cvxpy
 # --------------------------------------------------------------------------------------------
+def _cluster_bound_key(k: object) -> str | tuple[int, ...]:
+    """A cluster bound's key: a name as it is, a key in :func:`cluster_powers`' forms as the flat (p, m_1, …, m_m)
+    the cluster maps index ((1, (1, 0)) is (1, 1, 0))."""
+    if isinstance(k, str):
+        return k
+    if not isinstance(k, tuple) or len(k) < 2:
+        raise TypeError(f"a cluster bound's key is a name (\"Σy\", \"Su^2\") or a key (p, m) / (p, m_1, …, m_m), "
+                        f"got {k!r} ({type(k).__name__})")
+    flat = [k[0], *(k[1] if len(k) == 2 and isinstance(k[1], tuple) else k[1:])]
+    if not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in flat):
+        raise TypeError(f"a cluster key holds integer powers (p, m) or (p, m_1, …, m_m), got {k!r}")
+    p, powers = cluster_powers(k)
+    if p < 0 or min(powers, default=0) < 0:
+        raise ValueError(f"a cluster key's powers are >= 0, got {k!r}")
+    return (p, *powers)
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class UserConstraint(StaticConstraint):
     """Any convex constraint(s) written in cvxpy on θ (engineering units).
