@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import warnings
 
 import numpy as np
@@ -349,3 +351,49 @@ def test_pe_on_two_inputs_does_not_depend_on_units(ds):
             for ta, tb in zip(a, b):
                 np.testing.assert_allclose(rational_surface(ST, tb, U * ku), ky * rational_surface(ST, ta, U),
                                            rtol=1e-6)
+
+
+def test_gain_bounds_by_input_name_hold_the_input_named_whatever_the_order(ds):
+    # positional bounds move to another input when the data list their inputs in another order; bounds by name
+    # stay with their input (hunt44c's note)
+    by_position = gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(lower=[None, 0.0]))
+    by_name = gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(lower={"u2": 0.0}))
+    np.testing.assert_allclose(by_name, by_position, rtol=1e-9, atol=1e-12)
+    assert np.all(rational_gradient(ST, by_name[0], ds.static.ubar)[:, 1] > -1e-6)
+    both = gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(lower={"u1": 0.0, "u2": 0.0}))
+    np.testing.assert_allclose(both, gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(lower=0.0)),
+                               rtol=1e-9, atol=1e-12)
+    assert "lower {u2: 0}, upper none by input" in gb.GainBounds(lower={"u2": 0.0}).describe()
+
+    def swapped(r):
+        return dataclasses.replace(r, u=r.u[:, ::-1], input_names=r.input_names[::-1])
+
+    other = gb.Dataset(swapped(ds.ident), swapped(ds.valid),
+                       gb.StaticPoints(ds.static.ubar[:, ::-1], ds.static.ybar, input_names=("u2", "u1")))
+    np.testing.assert_allclose(gb.pe_thetas(ST, other, lambdas=[0.5], constraints=gb.GainBounds(lower={"u2": 0.0})),
+                               by_name, rtol=1e-7, atol=1e-10)
+    with pytest.raises(ValueError, match="no input named 'valve'"):
+        gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(lower={"valve": 0.0}))
+    with pytest.raises(ValueError, match="exceeds upper bound 1.0 of input 'u2'"):
+        gb.GainBounds(lower={"u2": 2.0}, upper=1.0)
+    with pytest.raises(TypeError, match="take input names"):
+        gb.GainBounds(lower={1: 0.0})
+    with pytest.raises(ValueError, match="needs a lower or an upper bound"):
+        gb.GainBounds(lower={"u1": None})
+
+
+def test_gain_bounds_by_input_name_in_a_grid_spec_and_a_selection(ds):
+    from graybox import experiments as gx
+
+    v = gx.Variant("PE gain", "pe", lambdas=[1e-4, 1.0], constraints=gb.GainBounds(lower={"u2": 0.0}))
+    grid = gx.Grid(name="m", data=[gx.DataSpec("rig", bundled="pumping_miso")],
+                   structures=[gx.StructureSpec("S", terms=TERMS)], variants=[v])
+    spec = grid.to_dict()
+    assert spec["variants"][0]["constraints"][0]["lower"] == {"u2": 0.0}
+    assert gx.Grid.from_dict(spec).to_dict() == spec
+    with pytest.raises(gx.SpecError, match="lower by input name needs at least one input's bound"):
+        gx.Variant("x", "pe", constraints=[{"type": "gain", "lower": {}}])
+    # a name the data do not have is said before any row is fitted
+    with pytest.raises(ValueError, match="constraints: .*no input named 'valve'"):
+        gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=1, input_names=["u1", "u2"]), ds, band=1.0,
+                          constraints=gb.GainBounds(lower={"valve": 0.0}), progress=False)

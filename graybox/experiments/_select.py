@@ -363,7 +363,7 @@ class GrayboxSelection:
         if static is None and isinstance(data, gb.Dataset):
             pts = data.static
         extra = data.extra if isinstance(data, gb.Dataset) else {}
-        specs = _constraint_specs(constraints, len(recs[0].input_names))
+        specs = _constraint_specs(constraints, recs[0].input_names)
         return cell_constraints(specs, self.structure, gb.Dataset(recs[0], recs[0], pts, extra=extra))
 
     def _refit_is_chosen(self, theta: np.ndarray, estimator: str) -> None:
@@ -1306,7 +1306,7 @@ def select_graybox(
     centre = check_bool(centre, "centre")
     ck = checkpoint_of(checkpoint)  # read and checked before the search
     plan, form = _inputs(candidates, data, sp, validation, test, band, folds, blocks)
-    constraints = _constraint_specs(constraints, len(plan.ident[0].input_names))
+    constraints = _constraint_specs(constraints, plan.ident[0].input_names)
     rows = _structures(candidates, plan.ident, sizes, sources, include, form, centre)
     run = functools.partial(_run_jobs, executor=executor, workers=workers, client=client, scheduler=scheduler,
                             progress=progress, checkpoint=ck)
@@ -1378,7 +1378,7 @@ def _band(band: object, sp: gb.StaticPoints | gb.StaticCurve | gb.StaticSurface 
     return None
 
 
-def _constraint_specs(constraints: tuple, n_inputs: int) -> tuple[dict, ...]:
+def _constraint_specs(constraints: tuple, input_names: tuple[str, ...]) -> tuple[dict, ...]:
     """The constraints as a grid's tables (what the jobs carry to any executor), checked once here: an
     object that is no constraint, or gain bounds for another number of inputs, would otherwise fail
     every row's fit and be said only after all of them."""
@@ -1386,7 +1386,7 @@ def _constraint_specs(constraints: tuple, n_inputs: int) -> tuple[dict, ...]:
         specs = tuple(d for c in constraints for d in constraint_from_object(c))
         for d in specs:
             if d["type"] == "gain":
-                build_constraint(d)._bounds(n_inputs)
+                build_constraint(d)._bounds(len(input_names), tuple(input_names))
     except ValueError as exc:
         raise ValueError(f"constraints: {exc}") from None
     return specs

@@ -685,8 +685,13 @@ def _bound(v: object, path: tuple, name: str) -> float | None:
     return None if v is None else _wrap(check_real, path, v, name)
 
 
-def _gain_bound(v: object, path: tuple, name: str) -> float | list[float | None] | None:
-    """A gain bound: a number (every input), or one number or None per input (several inputs)."""
+def _gain_bound(v: object, path: tuple, name: str) -> float | list[float | None] | dict[str, float | None] | None:
+    """A gain bound: a number (every input), one number or None per input (several inputs), or a table of them by
+    input name ({speed = 0.0})."""
+    if isinstance(v, Mapping):
+        if not v:
+            raise SpecError(f"{name} by input name needs at least one input's bound, got an empty table", path)
+        return {str(k): _bound(x, path + (k,), name) for k, x in v.items()}
     if isinstance(v, Sequence) and not isinstance(v, str):
         if not v:
             raise SpecError(f"{name} must be a number or one entry per input, got an empty list", path)
@@ -832,7 +837,9 @@ def constraint_from_object(obj: object, path: tuple = ()) -> list[dict]:
         if obj.reference is not None:
             raise SpecError(f"{obj.describe()}: a grid's gain bounds take the data set's reference (its static "
                             "points); a reference function cannot be stored", path)
-        def plain(v):  # tuples (per input, a box) as lists
+        def plain(v):  # tuples (per input, a box) as lists, bounds by input name as a table
+            if isinstance(v, Mapping):
+                return {k: plain(x) for k, x in v.items()}
             return [plain(x) for x in v] if isinstance(v, (list, tuple)) else v
         return [canonical_constraint({"type": "gain", "lower": plain(obj.lower), "upper": plain(obj.upper),
                                       "ubar_range": plain(obj.ubar_range) if obj.ubar_range else None,

@@ -896,8 +896,10 @@ class GainBounds(StaticConstraint):
 
     Parameters
     ----------
-    lower, upper : float or sequence of (float or None), optional
-        Gain bounds, output units per input unit (at least one); per input for several inputs.
+    lower, upper : float, sequence of (float or None), or mapping input name -> float or None, optional
+        Gain bounds, output units per input unit (at least one); per input for several inputs, in
+        the data's input order, or by input name (``lower={"speed": 0.0}``: held whatever order the
+        data list their inputs in; an input not named has no bound on that side).
     ubar_range : (float, float), or one (low, high) per input, optional
         ū interval (box); default: the reference's domain, else the static points' range.
     n : int
@@ -911,26 +913,33 @@ class GainBounds(StaticConstraint):
         the grid when that is smaller (``auto_min_denominator``; as :class:`StaticBand`).
     """
 
-    lower: float | Sequence[float | None] | None = None
-    upper: float | Sequence[float | None] | None = None
+    lower: float | Sequence[float | None] | Mapping[str, float | None] | None = None
+    upper: float | Sequence[float | None] | Mapping[str, float | None] | None = None
     ubar_range: tuple | None = None
     n: int = 25
     reference: StaticCurve | StaticSurface | Callable[[np.ndarray], np.ndarray] | None = None
     min_denominator: float | str = "auto"
 
     def __post_init__(self) -> None:
-        lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
-        if all(v is None for v in lows) and all(v is None for v in highs):
-            raise ValueError("GainBounds needs a lower or an upper bound")
-        if len(lows) > 1 and len(highs) > 1 and len(lows) != len(highs):
-            raise ValueError(f"lower and upper give bounds for {len(lows)} and {len(highs)} inputs; give as many")
-        k = max(len(lows), len(highs))
-        for j in range(k):
-            lo = lows[j if len(lows) > 1 else 0]
-            hi = highs[j if len(highs) > 1 else 0]
-            if lo is not None and hi is not None and lo > hi:
-                which = "" if k == 1 else f" of input {j + 1}"
-                raise ValueError(f"lower gain bound {lo} exceeds upper bound {hi}{which}")
+        for name in ("lower", "upper"):  # bounds by input name: read-only (the object is a value)
+            v = getattr(self, name)
+            if isinstance(v, Mapping):
+                object.__setattr__(self, name, FrozenMap(_named_bounds(v, name)))
+        if isinstance(self.lower, Mapping) or isinstance(self.upper, Mapping):
+            self._check_named()
+        else:
+            lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
+            if all(v is None for v in lows) and all(v is None for v in highs):
+                raise ValueError("GainBounds needs a lower or an upper bound")
+            if len(lows) > 1 and len(highs) > 1 and len(lows) != len(highs):
+                raise ValueError(f"lower and upper give bounds for {len(lows)} and {len(highs)} inputs; give as many")
+            k = max(len(lows), len(highs))
+            for j in range(k):
+                lo = lows[j if len(lows) > 1 else 0]
+                hi = highs[j if len(highs) > 1 else 0]
+                if lo is not None and hi is not None and lo > hi:
+                    which = "" if k == 1 else f" of input {j + 1}"
+                    raise ValueError(f"lower gain bound {lo} exceeds upper bound {hi}{which}")
         object.__setattr__(self, "n", check_int(self.n, "GainBounds: n", low=1))
         ref = self.reference
         if ref is not None and not (isinstance(ref, (StaticCurve, StaticSurface)) or callable(ref)):
@@ -960,6 +969,13 @@ class GainBounds(StaticConstraint):
     def describe(self) -> str:
         def one(v):
             return "none" if v is None else f"{v:g}"
+        if isinstance(self.lower, Mapping) or isinstance(self.upper, Mapping):
+            def side(v):
+                if isinstance(v, Mapping):
+                    return "{" + ", ".join(f"{k}: {one(x)}" for k, x in v.items()) + "}"
+                return "none" if v is None else ("(" + ", ".join(map(one, _per_input(v, ""))) + ")")
+            bounds = f"lower {side(self.lower)}, upper {side(self.upper)} by input"
+            return f"static gain in {bounds}{self._where()}"
         lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
         if len(lows) == 1 and len(highs) == 1:
             lo = "-inf" if lows[0] is None else f"{lows[0]:g}"
@@ -967,20 +983,39 @@ class GainBounds(StaticConstraint):
             bounds = f"[{lo}, {hi}]"
         else:
             bounds = f"lower ({', '.join(map(one, lows))}), upper ({', '.join(map(one, highs))}) per input"
+        return f"static gain in {bounds}{self._where()}"
+
+    def _where(self) -> str:
         rng = self.ubar_range
         if rng is None:
-            where = ""
-        elif np.ndim(rng[0]) == 0:
-            where = " over ū in [{}, {}]".format(*level_texts(rng))  # ends told apart (10000.01, 10000.03)
-        else:
-            where = " over ū in " + " × ".join("[{}, {}]".format(*level_texts(r)) for r in rng)
-        return f"static gain in {bounds}{where}"
+            return ""
+        if np.ndim(rng[0]) == 0:
+            return " over ū in [{}, {}]".format(*level_texts(rng))  # ends told apart (10000.01, 10000.03)
+        return " over ū in " + " × ".join("[{}, {}]".format(*level_texts(r)) for r in rng)
+
+    def _check_named(self) -> None:
+        """Bounds by input name (either side, the other a number, None or per input): a bound somewhere, and lower
+        <= upper for every input named on both sides (a number on one side is every input's)."""
+        lows, highs = self.lower, self.upper
+        if all(v is None for v in (lows.values() if isinstance(lows, Mapping) else _per_input(lows, "lower"))) and \
+                all(v is None for v in (highs.values() if isinstance(highs, Mapping) else _per_input(highs, "upper"))):
+            raise ValueError("GainBounds needs a lower or an upper bound")
+        for a, b, swap in ((lows, highs, False), (highs, lows, True)):
+            if not isinstance(a, Mapping):
+                continue
+            for name, x in a.items():
+                other = b.get(name) if isinstance(b, Mapping) else (b if b is None or np.ndim(b) == 0 else None)
+                lo, hi = (other, x) if swap else (x, other)
+                if lo is not None and hi is not None and lo > hi:
+                    raise ValueError(f"lower gain bound {lo} exceeds upper bound {hi} of input {name!r}")
 
     def _bounds(self, m: int, inputs: tuple[str, ...] = ()) -> list[tuple[float | None, float | None]]:
         """(lower, upper) per input, checked against the structure's input count ``m``. One bound for every input
         leaves the transient inputs among ``inputs`` (the inputs' names) free: their z̄ is 0 at every steady state,
         so a gain along them is no static gain (a monotone curve must not fix the sign of a transient effect);
         a bound given per input holds where it is given."""
+        if isinstance(self.lower, Mapping) or isinstance(self.upper, Mapping):
+            return self._named_per_input(m, inputs)
         lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
         for nm, v in (("lower", lows), ("upper", highs)):
             if len(v) > 1 and len(v) != m:
@@ -988,6 +1023,30 @@ class GainBounds(StaticConstraint):
         transient = [len(inputs) == m and transient_source(inputs[j], inputs) is not None for j in range(m)]
         return [(None if len(lows) == 1 and transient[j] else lows[j if len(lows) > 1 else 0],
                  None if len(highs) == 1 and transient[j] else highs[j if len(highs) > 1 else 0]) for j in range(m)]
+
+    def _named_per_input(self, m: int, inputs: tuple[str, ...]) -> list[tuple[float | None, float | None]]:
+        """(lower, upper) per input where a side gives bounds by input name: a name's bound where named, none for an
+        input not named; a number on the other side is every input's but a transient one's (as :meth:`_bounds`)."""
+        if len(inputs) != m:
+            raise ValueError(f"{self.describe()}: bounds by input name need the data's input names")
+        named = [n for side in (self.lower, self.upper) if isinstance(side, Mapping) for n in side]
+        unknown = [n for n in dict.fromkeys(named) if n not in inputs]
+        if unknown:
+            raise ValueError(f"{self.describe()}: no input named {', '.join(map(repr, unknown))}; the inputs are "
+                             f"{inputs}")
+
+        def side(v: object, name: str) -> list[float | None]:
+            if isinstance(v, Mapping):
+                return [v.get(n) for n in inputs]
+            vals = _per_input(v, name)
+            if len(vals) > 1:
+                if len(vals) != m:
+                    raise ValueError(f"{self.describe()}: {name} has {len(vals)} entries but the structure has {m} "
+                                     "input(s)")
+                return vals
+            return [None if transient_source(n, inputs) is not None else vals[0] for n in inputs]
+
+        return list(zip(side(self.lower, "lower"), side(self.upper, "upper")))
 
     def grid(self, ctx: StaticContext) -> tuple[np.ndarray, np.ndarray]:
         """The ū grid and the reference ȳ on it for the problem ``ctx``, shapes (K,) or (K, m), and (K,)."""
@@ -1070,7 +1129,8 @@ class GainBounds(StaticConstraint):
     def affine(self, ctx: StaticContext) -> AffineRows:
         cm = ctx.cluster_map
         m = n_static_inputs(cm)
-        bounds = self._bounds(m, cm.inputs if isinstance(cm, SurfaceClusterMap) else ())
+        names = cm.inputs if isinstance(cm, SurfaceClusterMap) else (ctx.inputs or ctx.structure.inputs or ("u",))
+        bounds = self._bounds(m, tuple(names))
         ub, yb = self.grid(ctx)
         one, dR = _denominator_rows(cm, ub, yb)
         rows, rhs = [], []
@@ -1088,6 +1148,18 @@ class GainBounds(StaticConstraint):
                 rows.append(G + upper * dR)
                 rhs.append(upper * one)
         return AffineRows.make(ctx.n_terms, A_ub=np.vstack(rows), b_ub=np.concatenate(rhs))
+
+
+def _named_bounds(v: Mapping, name: str) -> dict[str, float | None]:
+    """Gain bounds by input name: names are text, bounds numbers or None, at least one name."""
+    if not v:
+        raise ValueError(f"{name} gain bounds by input name: give at least one input's bound")
+    out: dict[str, float | None] = {}
+    for k, x in v.items():
+        if not isinstance(k, str):
+            raise TypeError(f"{name} gain bounds by input name take input names, got {k!r} ({type(k).__name__})")
+        out[k] = None if x is None else check_real(x, f"{name} gain bound of input {k!r} (a number, or None)")
+    return out
 
 
 def _per_input(v: object, name: str) -> list[float | None]:
