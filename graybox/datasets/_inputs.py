@@ -211,10 +211,12 @@ def _ranges(low: object, high: object, m: int) -> tuple[np.ndarray, np.ndarray]:
     """(low, high) as arrays of one bound per input, shape (m,), each pair checked low < high."""
     out = []
     for what, v in (("low", low), ("high", high)):
-        if isinstance(v, (list, tuple, np.ndarray)):
+        # any array-like of one dimension is one bound per input (a list, a range, a Series of df.min()); a 0-d
+        # array is one number, as check_real reads it
+        if not isinstance(v, (str, bytes)) and np.ndim(v) > 0:
             if np.ndim(v) != 1 or len(v) != m:
                 raise ValueError(f"{what} must be one number, or one per input ({m}), got {v!r}")
-            out.append(np.array([check_real(x, f"{what}[{i}]") for i, x in enumerate(v)]))
+            out.append(np.array([check_real(x, f"{what}[{i}]") for i, x in enumerate(np.asarray(v, dtype=object))]))
         else:
             out.append(np.full(m, check_real(v, what)))
     lo, hi = out

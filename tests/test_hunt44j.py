@@ -1,0 +1,49 @@
+"""hunt44j: laws of the last sessions' code (design_input's ranges, cluster keys, JSON, fingerprints)."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+import graybox as gb
+
+FAST = settings(max_examples=25, deadline=None)
+
+
+# ---------------------------------------------------------------------------------------------
+# design_input: per-input ranges
+# ---------------------------------------------------------------------------------------------
+@FAST
+@given(kind=st.sampled_from(["aprbs", "staircase", "prbs", "multisine"]), m=st.integers(1, 3),
+       lows=st.lists(st.floats(-1e6, 1e6), min_size=3, max_size=3),
+       widths=st.lists(st.floats(1e-3, 1e6), min_size=3, max_size=3))
+def test_design_input_columns_in_their_own_range(kind, m, lows, widths):
+    lo = np.array(lows[:m])
+    hi = lo + np.array(widths[:m])
+    assume(np.all(lo < hi))
+    opts = {"frequencies": (0.05, 0.5)} if kind == "multisine" else {"hold": (5, 20) if kind == "aprbs" else 5}
+    u = gb.design_input(kind, 400, low=list(lo), high=list(hi), n_inputs=m, **opts).reshape(400, m)
+    assert np.all(u >= lo) and np.all(u <= hi)
+    # one number for every input is the same design as the number repeated
+    same = gb.design_input(kind, 400, low=float(lo[0]), high=float(hi[0]), n_inputs=m, **opts)
+    again = gb.design_input(kind, 400, low=[float(lo[0])] * m, high=[float(hi[0])] * m, n_inputs=m, **opts)
+    np.testing.assert_array_equal(same, again)
+
+
+def test_design_input_takes_bounds_as_numpy_and_pandas_give_them():
+    """A 0-d array is one number (check_real takes it), and per-input bounds read off a table (a Series of
+    df.min(), a range) are one per input: both were refused, the first as 'must be one number'."""
+    ref = gb.design_input("aprbs", 300, low=0.0, high=1.0, hold=(5, 20))
+    np.testing.assert_array_equal(gb.design_input("aprbs", 300, low=np.array(0.0), high=np.array(1.0),
+                                                  hold=(5, 20)), ref)
+    df = pd.DataFrame({"speed": [750.0, 1650.0], "valve": [20.0, 80.0]})
+    ref2 = gb.design_input("aprbs", 300, low=[750.0, 20.0], high=[1650.0, 80.0], hold=(5, 20), n_inputs=2)
+    np.testing.assert_array_equal(gb.design_input("aprbs", 300, low=df.min(), high=df.max(), hold=(5, 20),
+                                                  n_inputs=2), ref2)
+    np.testing.assert_array_equal(gb.design_input("aprbs", 300, low=range(2), high=[5, 5], hold=(5, 20),
+                                                  n_inputs=2),
+                                  gb.design_input("aprbs", 300, low=[0, 1], high=[5, 5], hold=(5, 20), n_inputs=2))
+    with pytest.raises(TypeError, match="low"):
+        gb.design_input("aprbs", 300, low="0", high=1.0, hold=(5, 20))
