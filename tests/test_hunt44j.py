@@ -47,3 +47,23 @@ def test_design_input_takes_bounds_as_numpy_and_pandas_give_them():
                                   gb.design_input("aprbs", 300, low=[0, 1], high=[5, 5], hold=(5, 20), n_inputs=2))
     with pytest.raises(TypeError, match="low"):
         gb.design_input("aprbs", 300, low="0", high=1.0, hold=(5, 20))
+
+
+# ---------------------------------------------------------------------------------------------
+# ClusterBounds: a key in every form
+# ---------------------------------------------------------------------------------------------
+@FAST
+@given(p=st.integers(0, 3), powers=st.lists(st.integers(0, 3), min_size=1, max_size=3),
+       lo=st.floats(-10, 0), hi=st.floats(0, 10))
+def test_cluster_bounds_key_forms_agree(p, powers, lo, hi):
+    flat = gb.ClusterBounds({(p, *powers): (lo, hi)})
+    nested = gb.ClusterBounds({(p, tuple(powers)): (lo, hi)})
+    numpy = gb.ClusterBounds({(np.int64(p), *map(np.int64, powers)): (lo, hi)})
+    assert dict(flat.bounds) == dict(nested.bounds) == dict(numpy.bounds)
+
+
+def test_cluster_bounds_refuses_two_forms_of_one_key():
+    """(1, (1, 0)) and (1, 1, 0) are one cluster: the dict kept the last one's bounds, the first's lower bound
+    silently dropped."""
+    with pytest.raises(ValueError, match=r"\(1, 1, 0\)"):
+        gb.ClusterBounds({(1, (1, 0)): (0.0, 1.0), (1, 1, 0): (None, 0.5)})

@@ -1212,7 +1212,10 @@ class ClusterBounds(StaticConstraint):
                 raise ValueError(f"cluster {k!r}: give a lower or an upper bound")
             if lo is not None and hi is not None and lo > hi:
                 raise ValueError(f"cluster {k!r}: lower bound {lo} exceeds upper bound {hi}")
-            clean[_cluster_bound_key(k)] = (lo, hi)
+            key = _cluster_bound_key(k)
+            if key in clean:  # (1, (1, 0)) and (1, 1, 0): one cluster, and a dict would keep the last one's bounds
+                raise ValueError(f"cluster {k!r} is given twice (as {key!r} in another form): give its bounds once")
+            clean[key] = (lo, hi)
         object.__setattr__(self, "bounds", FrozenMap(clean))  # read-only: the object is a value
 
     def describe(self) -> str:
