@@ -514,7 +514,7 @@ def input_levels(ubar: object, name: str = "ubar") -> np.ndarray:
 def _as_points(model: Model, ubar: object, one_point: bool = False) -> np.ndarray:
     """ū as points of shape (M, m) in the model's input order (``one_point``: the caller takes one)."""
     m = model.n_inputs
-    ub = input_levels(frame_inputs(ubar, model.input_names, "ubar"))  # a DataFrame: by column name
+    ub = input_levels(frame_inputs(ubar, model.input_names, "ubar", steady=True))  # by column name
     one_point = one_point or labelled_point(ubar, model.input_names)  # a Series labelled by the inputs: one ū
     ub = steady_levels(ub, model.input_names, one_point=one_point)  # transient inputs left out: z̄ = 0
     if m == 1:

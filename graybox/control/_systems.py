@@ -163,7 +163,7 @@ def narx_steady_state(model: Model, ubar: float | np.ndarray, ybar: float, *, no
     """
     model = check_polynomial(model, "narx_steady_state")
     noise = check_bool(noise, "noise")
-    ub = input_levels(frame_inputs(ubar, model.input_names, "ubar"))  # a Series by name
+    ub = input_levels(frame_inputs(ubar, model.input_names, "ubar", steady=True))  # a Series by name
     ub = np.atleast_1d(steady_levels(ub, model.input_names, one_point=True)).ravel()  # transient inputs: z̄ = 0
     if ub.size != model.n_inputs or not np.all(np.isfinite(ub)):
         raise ValueError(f"ubar must be {model.n_inputs} finite value(s) {model.input_names}, got {ubar!r}")

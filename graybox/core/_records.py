@@ -17,7 +17,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ._terms import check_input_names, default_input_names
+from ._terms import check_input_names, default_input_names, transient_source
 from ._validation import (FrozenMap, as_1d_finite, check_per_point, check_real, check_str, float_array, refuse_non_real,
                           warn)
 
@@ -54,7 +54,8 @@ def _same_samples(a: object, b: object) -> bool:
         return False
 
 
-def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None) -> object:
+def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: object = None, *,
+                 steady: bool = False) -> object:
     """A DataFrame of inputs with its columns in the order of ``names`` (the one rule for every input).
 
     Columns named exactly as the inputs (every name once, no other column) are read by name, reordered as
@@ -64,7 +65,9 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     (``u`` for one column, ``u1 … um`` for m). A pandas Series (one point ū, a DataFrame's row
     ``df.iloc[k]``) is read so by its index labels. Anything else is returned as it is. ``output``:
     the output as a named Series (:func:`output_series`), whose column (its name, its samples) no
-    input may be: neither a column of ``x`` nor ``x`` itself.
+    input may be: neither a column of ``x`` nor ``x`` itself. ``steady``: ``x`` is steady-state levels, where the
+    transient inputs among ``names`` rest at 0 and may be left out (:func:`~graybox.core._transient.steady_levels`
+    fills them in): columns naming every other input are read by name too, in their order.
     """
     series = _is_series(x)
     if not (series or is_frame(x)):
@@ -90,6 +93,10 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
         return x
     if len(labels) == len(expected) and sorted(labels) == sorted(expected):
         order = [labels.index(n) for n in expected]
+        return x.iloc[order] if series else x[[cols[i] for i in order]]
+    others = [n for n in expected if transient_source(n, expected) is None]
+    if steady and len(others) < len(expected) and len(labels) == len(others) and sorted(labels) == sorted(others):
+        order = [labels.index(n) for n in others]
         return x.iloc[order] if series else x[[cols[i] for i in order]]
     extra = [c for c in labels if c not in expected]
     missing = [n for n in expected if n not in labels]

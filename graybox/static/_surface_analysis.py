@@ -210,7 +210,7 @@ def points_of_inputs(ubar: object, names: tuple[str, ...], *, one_point: bool = 
     one point; a DataFrame is read by column name as every input is (:func:`~graybox.core._records.frame_inputs`);
     transient inputs left out are 0, their level at every steady state (:func:`~graybox.core._transient.steady_levels`)."""
     m = len(names)
-    ub = real_array(frame_inputs(ubar, names, "ubar"), "ubar", "points of input levels (numbers)")
+    ub = real_array(frame_inputs(ubar, names, "ubar", steady=True), "ubar", "points of input levels (numbers)")
     one_point = one_point or labelled_point(ubar, names)  # a Series labelled by the inputs: one ū
     ub = steady_levels(ub, names, one_point=one_point)  # a transient input's z̄ = 0 where ū gives the others only
     if ub.ndim == 1 and ub.size == m:
