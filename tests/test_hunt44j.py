@@ -102,3 +102,42 @@ def test_transient_model_takes_a_frame_of_its_other_inputs(transient_model):
     np.testing.assert_array_equal(gb.narx_steady_state(m, row, 1.0), gb.narx_steady_state(m, 2.0, 1.0))
     with pytest.raises(ValueError, match="only some of the inputs"):  # a column that is no input is still refused
         m.static_curve(pd.DataFrame({"u": levels, "v": levels}))
+
+
+# ---------------------------------------------------------------------------------------------
+# the PE closed form over a sweep: a singular weight pair is one failed member, not the whole sweep
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.filterwarnings("ignore::graybox.StaticRangeWarning")
+def test_closed_form_fails_only_the_members_it_cannot_solve():
+    """u offset by 1e6 (levels 1e6 + [0, 3]) with a u² term: the closed form judged the λ1 = 0.01 pair singular and
+    raised for the whole sweep, so λ1 = 0.1 and 0.5, which it solves alone, were lost with it (select_graybox's PE
+    row: 'every member failed'). Each pair is judged on its own: the others keep their θ, the singular one is a
+    failed member with its reason."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from conftest import two_level_records
+
+    from graybox.estimation._prediction_error import pe_members
+
+    r1, r2, sp = two_level_records()
+    b = 1e6
+    ds = gb.Dataset(gb.Record(r1.u + b, r1.y, name="ident"), gb.Record(r2.u + b, r2.y, name="valid"),
+                    gb.StaticPoints(sp.ubar + b, sp.ybar))
+    S = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    lams = [0.01, 0.1, 0.5]
+    alone = {}
+    for lam in lams:
+        try:
+            alone[lam] = pe_members(S, ds, lambdas=[lam], solver="closed")[0][0]
+        except ValueError:
+            alone[lam] = None
+    assert any(v is not None for v in alone.values())  # some member is solved alone
+    thetas, failures = pe_members(S, ds, lambdas=lams, solver="closed")
+    for i, lam in enumerate(lams):
+        if alone[lam] is None:
+            assert i in failures and np.all(np.isnan(thetas[i]))
+        else:
+            assert i not in failures
+            np.testing.assert_allclose(thetas[i], alone[lam], rtol=1e-9)

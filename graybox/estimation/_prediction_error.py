@@ -734,7 +734,8 @@ def _closed_form(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, rows: _
 
     Returns
     -------
-    ndarray, shape (K, n): z for each pair.
+    ndarray, shape (K, n): z for each pair; a NaN row for a pair whose weighted stack is singular (each pair is
+    judged on its own: in a sweep one such pair is one failed member, the others solved as they are alone).
     """
     if rows.G.shape[0] or rows.user:
         raise ValueError("the closed form handles equality constraints only; use solver='clarabel' or 'osqp' "
@@ -754,13 +755,16 @@ def _closed_form(d: _Data, static: tuple[np.ndarray, np.ndarray] | None, rows: _
     # the one rank rule (core._least_squares.rank_tolerance) on the weighted stack actually solved
     sv = np.linalg.svd(Rb, compute_uv=False)
     bad = sv[:, -1] <= rank_tolerance(1.0, d.N + n_static, n) * sv[:, 0]
-    if bad.any():
-        raise ValueError(
-            f"the closed form is singular for {int(bad.sum())} weight pair(s) (first w1 = {w1[bad][0]:g}): "
-            "θ is not identifiable from these data and constraints"
-        )
-    wv = np.linalg.solve(Rb, np.einsum("kij,ki->kj", Qb, rhs)[..., None])[..., 0]
-    return z_p[None, :] + wv @ Nb.T
+    out = np.full((len(w1), n), np.nan)
+    good = ~bad
+    if good.any():
+        wv = np.linalg.solve(Rb[good], np.einsum("kij,ki->kj", Qb[good], rhs[good])[..., None])[..., 0]
+        out[good] = z_p[None, :] + wv @ Nb.T
+    return out
+
+
+#: Why the closed form gives a weight pair no θ (a NaN row of :func:`_closed_form`).
+_SINGULAR = "the closed form is singular at these weights: θ is not identifiable from these data and constraints"
 
 
 # --------------------------------------------------------------------------------------------
@@ -859,6 +863,8 @@ def cls(
     identified_by(st, d.R1 * d.s, d.N, equalities=rows.V * d.s, inputs=recs[0].input_names, what="the CLS θ")
     if solver == "closed":
         z = _closed_form(d, None, rows, np.ones(1), np.zeros(1))[0]
+        if not np.all(np.isfinite(z)):
+            raise ValueError(_SINGULAR)
     else:
         qp = _QP(d, None, cons, ctx, solver, solver_options)
         z = qp.solve(1.0, 0.0)
@@ -1164,6 +1170,8 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
     Z = np.full((lam.size, d.s.size), np.nan)
     if ok.any() and solver == "closed":
         Z[ok] = _closed_form(d, stat, rows, w1[ok], w2[ok], M)
+        for i in np.flatnonzero(ok & ~np.all(np.isfinite(Z), axis=1)):  # a singular pair: one failed member
+            failures[int(i)] = f"λ1 = {lam[i]:g}: {_SINGULAR}"
     elif ok.any():
         qp = _QP(d, stat, cons, ctx, solver, solver_options, M)
         # sweep from λ1 = 1 (least squares) towards the static end, each solve warm-started from
@@ -1176,6 +1184,8 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
     # a member the constraints' own checks refuse is a failed member (a free Σ_y of eq. (22) reaches 1 as λ1 → 0,
     # where the points' linear residual (1 − Σ_y)(ȳ − H(ū)) vanishes): the sweep goes on
     for i in np.flatnonzero(ok):
+        if int(i) in failures:  # the closed form's singular pair: no θ to check
+            continue
         try:
             for c in cons:
                 c.after_solve(thetas[i], ctx)
