@@ -141,3 +141,18 @@ def test_closed_form_fails_only_the_members_it_cannot_solve():
         else:
             assert i not in failures
             np.testing.assert_allclose(thetas[i], alone[lam], rtol=1e-9)
+
+
+def test_transient_model_of_two_inputs_takes_a_frame_of_its_other_inputs_in_any_order():
+    rng = np.random.default_rng(3)
+    u = np.column_stack([np.repeat(rng.uniform(1.0, 3.0, 60), 10), np.repeat(rng.uniform(0.0, 1.0, 40), 15)])
+    y = np.zeros(len(u))
+    for k in range(1, len(u)):
+        y[k] = 0.6 * y[k - 1] + 0.3 * u[k - 1, 0] + 0.05 * u[k - 1, 0] ** 2 + 0.2 * u[k - 1, 1]
+    data = gb.transient_inputs(gb.Record(u, y, input_names=("p", "q")), [4.0], inputs=["p"])
+    m = gb.els(gb.parse_structure(["1", "y(k-1)", "p(k-1)", "p(k-1)^2", "q(k-1)", "p_tau4(k-1)"]), data).model
+    pts = np.array([[1.5, 0.2], [2.5, 0.8]])
+    frame = pd.DataFrame({"q": pts[:, 1], "p": pts[:, 0]})  # the other inputs, in another order
+    np.testing.assert_array_equal(m.static_curve(frame), m.static_curve(pts))
+    np.testing.assert_array_equal(gb.operating_curve(m, frame).ybar, gb.operating_curve(m, pts).ybar)
+    assert [e.ybar for e in m.equilibria(frame.iloc[0])] == [e.ybar for e in m.equilibria(pts[0])]
