@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 import graybox as gb
@@ -156,3 +156,32 @@ def test_transient_model_of_two_inputs_takes_a_frame_of_its_other_inputs_in_any_
     np.testing.assert_array_equal(m.static_curve(frame), m.static_curve(pts))
     np.testing.assert_array_equal(gb.operating_curve(m, frame).ybar, gb.operating_curve(m, pts).ybar)
     assert [e.ybar for e in m.equilibria(frame.iloc[0])] == [e.ybar for e in m.equilibria(pts[0])]
+
+
+# ---------------------------------------------------------------------------------------------
+# squared_unit
+# ---------------------------------------------------------------------------------------------
+@FAST
+@given(unit=st.text(st.sampled_from("ms/()²3 kg·°%µ"), min_size=1, max_size=8))
+@example(unit="(m/s)")
+@example(unit="(m)(s)")
+def test_a_squared_unit_is_the_unit_squared_once(unit):
+    from graybox.core._reprs import squared_unit
+
+    said = squared_unit(unit)
+    u = unit.strip()
+    assume(u)
+    # one word takes ² as it is; anything else is in one pair of brackets, never two ("((m/s))²")
+    assert said in (f" {u}²", f" ({u})²")
+    if u.startswith("(") and u.endswith(")") and _one_group(u):
+        assert said == f" {u}²"
+
+
+def _one_group(u: str) -> bool:
+    """Whether the brackets of ``u`` open at its start and close only at its end."""
+    depth = 0
+    for i, c in enumerate(u):
+        depth += (c == "(") - (c == ")")
+        if depth < 0 or (depth == 0 and i < len(u) - 1):
+            return False
+    return depth == 0

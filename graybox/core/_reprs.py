@@ -64,7 +64,19 @@ def squared_unit(unit: str | None) -> str:
         return ""
     # one word of letters (° and % too) takes the square as it is; any other (a digit or superscript, an operator,
     # a space) is bracketed: "m²" squared is not "m²²", "m3" not "m3²"
-    return f" {unit}²" if all(c.isalpha() or c in "°%" for c in unit) else f" ({unit})²"
+    if all(c.isalpha() or c in "°%" for c in unit) or _bracketed(unit):  # "(m/s)" is "(m/s)²", not "((m/s))²"
+        return f" {unit}²"
+    return f" ({unit})²"
+
+
+def _bracketed(text: str) -> bool:
+    """Whether ``text`` is one bracketed group: "(m/s)", not "(m)(s)" nor "(m)/s"."""
+    depth = 0
+    for i, c in enumerate(text):
+        depth += (c == "(") - (c == ")")
+        if depth < 0 or (depth == 0 and i < len(text) - 1):
+            return False
+    return depth == 0 and text.startswith("(")
 
 
 def squared_text(value: float, unit: str | None, digits: int = 4) -> str:
