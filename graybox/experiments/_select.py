@@ -157,8 +157,8 @@ class GrayboxSelection:
         warned of (e.g. an ELS iteration that did not converge), each message once; empty when
         nothing. ``failed_members``: the members of the row's front whose fit on the identification
         data (or on a fold) failed, e.g. λ1 = 1 where the records alone do not identify θ, their λ1
-        and why; they cannot be chosen; empty when none. The call then says once, with a :class:`SelectionWarning`, how many rows warned
-        and whether the chosen one did. ``terms``: the row's structure, its terms joined by
+        and why; they cannot be chosen; empty when none. The call then says once, with a
+        :class:`SelectionWarning`, how many rows warned and whether the chosen one did. ``terms``: the row's structure, its terms joined by
         ``" + "`` (:meth:`structure_of` reads it back); ``theta``: the parameters of its member
         (the model the test columns score), exact decimal text, empty for a row without a model
         (:meth:`model_of` reads it back).

@@ -37,6 +37,7 @@ _OPTIONAL = ("test",)
 _TEXTS = ("failed", "warnings")
 # not in rows a checkpoint of 0.3.0 kept; test_key only in rows with test scores (a hash of the records they score)
 _OPTIONAL_TEXTS = ("member_failed", "test_key")
+_ALL_TEXTS = _TEXTS + _OPTIONAL_TEXTS
 _KEY = re.compile(r"^[0-9a-f]{32}$")
 
 
@@ -128,10 +129,10 @@ class SelectionCheckpoint:
         rows: dict[str, dict[str, Any]] = {}
         for name, value in arrays.items():
             key, _, field = name.partition("/")
-            if not _KEY.match(key) or field not in _ARRAYS + _OPTIONAL + _TEXTS + _OPTIONAL_TEXTS:
+            if not _KEY.match(key) or field not in _ARRAYS + _OPTIONAL + _ALL_TEXTS:
                 raise CheckpointError(f"checkpoint {self.path} is corrupt (an entry {name!r}); delete it or choose "
                                       "another checkpoint path")
-            rows.setdefault(key, {})[field] = [str(s) for s in value] if field in _TEXTS + _OPTIONAL_TEXTS else value
+            rows.setdefault(key, {})[field] = [str(s) for s in value] if field in _ALL_TEXTS else value
         for key, row in rows.items():
             if any(f not in row for f in _ARRAYS + _TEXTS):
                 raise CheckpointError(f"checkpoint {self.path} is corrupt (a row without all its scores); delete it or "
@@ -141,25 +142,23 @@ class SelectionCheckpoint:
     def get(self, key: str) -> dict[str, Any] | None:
         """The scores kept under ``key`` (a copy), or None."""
         row = self.rows.get(key)
-        return None if row is None else {k: (list(v) if k in _TEXTS + _OPTIONAL_TEXTS else v.copy())
+        return None if row is None else {k: (list(v) if k in _ALL_TEXTS else v.copy())
                                          for k, v in row.items()}
 
     def put(self, key: str, row: Mapping[str, Any], write: bool = True) -> None:
         """Keep a finished row's scores and rewrite the file (atomically: a kill leaves the old one or the new);
         with ``write=False`` only here, until the next :meth:`write`."""
-        texts = _TEXTS + _OPTIONAL_TEXTS
-        self.rows[key] = {k: (list(row[k]) if k in texts else np.asarray(row[k]))
+        self.rows[key] = {k: (list(row[k]) if k in _ALL_TEXTS else np.asarray(row[k]))
                           for k in _ARRAYS + _TEXTS + tuple(k for k in _OPTIONAL + _OPTIONAL_TEXTS if k in row)}
         if write:
             self.write()
 
     def write(self) -> None:
         """Rewrite the file with every row kept (atomically)."""
-        texts = _TEXTS + _OPTIONAL_TEXTS
         out: dict[str, np.ndarray] = {"kind": np.array("select_graybox")}
         for k, r in self.rows.items():
             for field, v in r.items():
-                out[f"{k}/{field}"] = np.array(v, dtype=str) if field in texts else v
+                out[f"{k}/{field}"] = np.array(v, dtype=str) if field in _ALL_TEXTS else v
         save_npz(self.path, **out)
 
 

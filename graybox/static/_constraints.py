@@ -925,12 +925,14 @@ class GainBounds(StaticConstraint):
             v = getattr(self, name)
             if isinstance(v, Mapping):
                 object.__setattr__(self, name, FrozenMap(_named_bounds(v, name)))
+        sides = [list(v.values()) if isinstance(v, Mapping) else _per_input(v, name)
+                 for name, v in (("lower", self.lower), ("upper", self.upper))]
+        if all(v is None for side in sides for v in side):
+            raise ValueError("GainBounds needs a lower or an upper bound")
         if isinstance(self.lower, Mapping) or isinstance(self.upper, Mapping):
             self._check_named()
         else:
-            lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
-            if all(v is None for v in lows) and all(v is None for v in highs):
-                raise ValueError("GainBounds needs a lower or an upper bound")
+            lows, highs = sides
             if len(lows) > 1 and len(highs) > 1 and len(lows) != len(highs):
                 raise ValueError(f"lower and upper give bounds for {len(lows)} and {len(highs)} inputs; give as many")
             k = max(len(lows), len(highs))
@@ -994,12 +996,9 @@ class GainBounds(StaticConstraint):
         return " over ū in " + " × ".join("[{}, {}]".format(*level_texts(r)) for r in rng)
 
     def _check_named(self) -> None:
-        """Bounds by input name (either side, the other a number, None or per input): a bound somewhere, and lower
-        <= upper for every input named on both sides (a number on one side is every input's)."""
+        """Bounds by input name (either side, the other a number, None or per input): lower <= upper for every input
+        named on both sides (a number on one side is every input's)."""
         lows, highs = self.lower, self.upper
-        if all(v is None for v in (lows.values() if isinstance(lows, Mapping) else _per_input(lows, "lower"))) and \
-                all(v is None for v in (highs.values() if isinstance(highs, Mapping) else _per_input(highs, "upper"))):
-            raise ValueError("GainBounds needs a lower or an upper bound")
         for a, b, swap in ((lows, highs, False), (highs, lows, True)):
             if not isinstance(a, Mapping):
                 continue
@@ -1013,27 +1012,16 @@ class GainBounds(StaticConstraint):
         """(lower, upper) per input, checked against the structure's input count ``m``. One bound for every input
         leaves the transient inputs among ``inputs`` (the inputs' names) free: their z̄ is 0 at every steady state,
         so a gain along them is no static gain (a monotone curve must not fix the sign of a transient effect);
-        a bound given per input holds where it is given."""
-        if isinstance(self.lower, Mapping) or isinstance(self.upper, Mapping):
-            return self._named_per_input(m, inputs)
-        lows, highs = _per_input(self.lower, "lower"), _per_input(self.upper, "upper")
-        for nm, v in (("lower", lows), ("upper", highs)):
-            if len(v) > 1 and len(v) != m:
-                raise ValueError(f"{self.describe()}: {nm} has {len(v)} entries but the structure has {m} input(s)")
-        transient = [len(inputs) == m and transient_source(inputs[j], inputs) is not None for j in range(m)]
-        return [(None if len(lows) == 1 and transient[j] else lows[j if len(lows) > 1 else 0],
-                 None if len(highs) == 1 and transient[j] else highs[j if len(highs) > 1 else 0]) for j in range(m)]
-
-    def _named_per_input(self, m: int, inputs: tuple[str, ...]) -> list[tuple[float | None, float | None]]:
-        """(lower, upper) per input where a side gives bounds by input name: a name's bound where named, none for an
-        input not named; a number on the other side is every input's but a transient one's (as :meth:`_bounds`)."""
-        if len(inputs) != m:
-            raise ValueError(f"{self.describe()}: bounds by input name need the data's input names")
+        a bound given per input holds where it is given. Bounds by input name hold where named (``inputs`` must then be the data's names); an input not named has
+        none on that side."""
         named = [n for side in (self.lower, self.upper) if isinstance(side, Mapping) for n in side]
+        if named and len(inputs) != m:
+            raise ValueError(f"{self.describe()}: bounds by input name need the data's input names")
         unknown = [n for n in dict.fromkeys(named) if n not in inputs]
         if unknown:
             raise ValueError(f"{self.describe()}: no input named {', '.join(map(repr, unknown))}; the inputs are "
                              f"{inputs}")
+        transient = [len(inputs) == m and transient_source(inputs[j], inputs) is not None for j in range(m)]
 
         def side(v: object, name: str) -> list[float | None]:
             if isinstance(v, Mapping):
@@ -1044,7 +1032,7 @@ class GainBounds(StaticConstraint):
                     raise ValueError(f"{self.describe()}: {name} has {len(vals)} entries but the structure has {m} "
                                      "input(s)")
                 return vals
-            return [None if transient_source(n, inputs) is not None else vals[0] for n in inputs]
+            return [None if transient[j] else vals[0] for j in range(m)]
 
         return list(zip(side(self.lower, "lower"), side(self.upper, "upper")))
 
@@ -1190,8 +1178,8 @@ class ClusterBounds(StaticConstraint):
     ----------
     bounds : mapping name -> (lower, upper)
         Cluster name (``"Σy"``, ``"Σyu"``, ``"Σu²"``, or ASCII ``"Sy"``, ``"Su^2"``) or key
-        (p, m), with several inputs (p, m_1, …, m_m) or (p, (m_1, …, m_m)); either bound may be None; equal bounds fix the cluster's value. With several
-        inputs a name's factors may come in any order (``"Σspeedvalve"`` or ``"Σvalve·speed"``),
+        (p, m), with several inputs (p, m_1, …, m_m) or (p, (m_1, …, m_m)); either bound may be
+        None; equal bounds fix the cluster's value. With several inputs a name's factors may come in any order (``"Σspeedvalve"`` or ``"Σvalve·speed"``),
         so the bounds hold whatever order the data list their inputs in.
     """
 
@@ -1244,9 +1232,6 @@ class ClusterBounds(StaticConstraint):
         return AffineRows.make(n, Ae or None, be or None, Au or None, bu or None)
 
 
-# --------------------------------------------------------------------------------------------
-# anything a user writes in cvxpy
-# --------------------------------------------------------------------------------------------
 def _cluster_bound_key(k: object) -> str | tuple[int, ...]:
     """A cluster bound's key: a name as it is, a key in :func:`cluster_powers`' forms as the flat (p, m_1, …, m_m)
     the cluster maps index ((1, (1, 0)) is (1, 1, 0))."""
@@ -1264,6 +1249,9 @@ def _cluster_bound_key(k: object) -> str | tuple[int, ...]:
     return (p, *powers)
 
 
+# --------------------------------------------------------------------------------------------
+# anything a user writes in cvxpy
+# --------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False, repr=False)
 class UserConstraint(StaticConstraint):
     """Any convex constraint(s) written in cvxpy on θ (engineering units).
