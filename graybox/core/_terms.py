@@ -88,7 +88,7 @@ def require_inputs(used: Iterable[str], names: tuple[str, ...], among: str, pref
     hint = ""
     source = transient_source(missing[0], names)
     if source is not None:
-        tau = missing[0][len(source) + 4:].replace("p", ".").replace("m", "-")
+        tau = transient_tau_text(missing[0], source)
         hint = (f" (if it is a transient input, add it with graybox.transient_inputs(record, taus=[{tau}], "
                 f"inputs=[{source!r}]))")
     elif tuple(names) == default_input_names(len(names)):
@@ -115,6 +115,12 @@ def rename_hint(used: Sequence[str], have: Sequence[str]) -> str:
     return (f": name the inputs alike, in the terms (Candidates(..., input_names={list(have)!r}), "
             f"{used[0]}(k-1) written {have[0]}(k-1)) or in the data (Record(..., input_names={list(used)!r}), "
             "the loaders' input_names=)")
+
+
+def transient_tau_text(name: str, source: str) -> str:
+    """τ as :func:`transient_name` wrote it in the name of ``source``'s transient input, read back ("2.5" of
+    ``u_tau2p5``; not checked to be a number)."""
+    return name[len(source) + len("_tau"):].replace("p", ".").replace("m", "-")
 
 
 def transient_source(name: str, names: Iterable[str]) -> str | None:

@@ -26,7 +26,7 @@ from typing import Mapping, Sequence, TypeVar
 import numpy as np
 
 from ._records import Dataset, Record, StaticPoints
-from ._terms import transient_name, transient_source
+from ._terms import transient_name, transient_source, transient_tau_text
 from ._validation import check_real, check_sequence
 
 __all__ = ["transient_inputs", "steady_levels", "recomputed_transients"]
@@ -198,9 +198,8 @@ def recomputed_transients(u: np.ndarray, names: Sequence[str], Ts: float,
 
 def _tau_of(name: str, source: str) -> float | None:
     """τ (s) written in a transient input's name by :func:`transient_name` (``u_tau2p5`` → 2.5), or None."""
-    tag = name[len(source) + 4:].replace("p", ".").replace("m", "-")
     try:
-        tau = float(tag)
+        tau = float(transient_tau_text(name, source))
     except ValueError:
         return None
     return tau if np.isfinite(tau) and tau > 0 else None
