@@ -482,6 +482,12 @@ class PumpingPlant:
         return (s, s, float(self.steady_flow(s)))
 
     # -- dynamics -----------------------------------------------------------
+    def _one_speed(self, value: object, what: str) -> float:
+        """One speed (rpm): a finite number inside the calibrated range, or the reference check's error."""
+        s = float(as_1d_finite([value], what)[0])
+        self._check_reference(np.array([s]), what)
+        return s
+
     def _check_reference(self, u: np.ndarray, what: str = "speed reference") -> None:
         lo, hi = self.speed_range
         bad = np.flatnonzero((u < lo) | (u > hi))
@@ -626,8 +632,7 @@ class PumpingPlant:
         N = check_int(n_samples, "n_samples", low=1)
         if not callable(controller):
             raise TypeError(f"controller must be callable as controller(k, y) -> u, got {type(controller).__name__}")
-        prev = float(as_1d_finite([u0], "u0")[0])
-        self._check_reference(np.array([prev]), "u0")
+        prev = self._one_speed(u0, "u0")
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
             N, seed, noise=noise, process_noise=process_noise)
         nc, n, q = self.steady_state(prev) if x0 is None else (float(x) for x in x0)
@@ -675,8 +680,7 @@ class PumpingPlant:
         C : ndarray, shape (1, 4)
             mlc per unit of each state.
         """
-        s = float(as_1d_finite([speed], "speed")[0])
-        self._check_reference(np.array([s]), "speed")
+        s = self._one_speed(speed, "speed")
         rel_step = check_real(rel_step, "rel_step", low=0, low_open=True)
         S, delay, dt, consts = self._kernel_constants
         x_bar = np.array([*self.steady_state(s), s])
@@ -743,8 +747,7 @@ class PumpingPlant:
         and :func:`static_experiment` waits them out (their effect on a settled mean is under
         0.001 mlc, against about 0.03 mlc from the two terms above).
         """
-        n = float(as_1d_finite([speed], "speed")[0])
-        self._check_reference(np.array([n]), "speed")
+        n = self._one_speed(speed, "speed")
         n_samples = check_int(n_samples, "n_samples", low=1)
         q = float(self.steady_flow(n))
         dq = 1e-4 * q
