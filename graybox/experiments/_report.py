@@ -342,11 +342,11 @@ def heatmap_table(
     df = _frame(results)
     _known_bands(band, df)
     d = _one_data(df, data)
-    lb = leaderboard(df[df["data"] == d], rule=rule, band=_given_band(band, d))
+    sub = df[df["data"] == d]
+    lb = leaderboard(sub, rule=rule, band=_given_band(band, d))
     if value not in lb.columns:
         raise ValueError(f"value must be a leaderboard column ({', '.join(lb.columns)}); got {value!r}")
     t = lb[value].reset_index().pivot(index="structure", columns="variant", values=value)
-    sub = df[df["data"] == d]
     return t.reindex(index=list(dict.fromkeys(sub["structure"])), columns=list(dict.fromkeys(sub["variant"])))
 
 
@@ -676,17 +676,18 @@ def plot_heatmap(
         scale cannot show (inf, e.g. J_SF of a model that reaches no equilibrium at a point; 0 on
         a log scale) is written on an uncoloured cell.
     """
-    t = heatmap_table(results, data=data, value=value, rule=rule, band=band)
+    _checked_options(rule, band, data, value)  # said before a store is read, as heatmap_table says it
+    df = _frame(results)  # a store read once: the table, the structures and the pairs run all come from it
+    t = heatmap_table(df, data=data, value=value, rule=rule, band=band)
+    d = _one_data(df, data)
     if structures is not None:
-        t = t.loc[_known_structures(structures, list(t.index), _one_data(_frame(results), data))]
+        t = t.loc[_known_structures(structures, list(t.index), d)]
     try:
         vals = t.to_numpy(dtype=float)
     except (TypeError, ValueError):  # a text column (reason): heatmap_table shows it, a colour scale cannot
         raise ValueError(f"value must be a numeric leaderboard column to colour, got {value!r} (text); "
                          "heatmap_table gives it as a table") from None
-    sub = _frame(results)
-    d = _one_data(sub, data)
-    sub = sub[sub["data"] == d]
+    sub = df[df["data"] == d]
     run = set(zip(sub["structure"], sub["variant"]))  # pairs of two specs (or stores) may never have run together
     fig = Figure(figsize=(1.2 + 1.1 * t.shape[1], 1.4 + 0.5 * t.shape[0]), layout="constrained")
     ax = fig.add_subplot()
