@@ -885,11 +885,12 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
              f"ranking rule: {rule}"]
     for d in dict.fromkeys(df["data"]):
         part = lb.loc[d]
+        rows = df[df["data"] == d]
         sub = part.dropna(subset=["JS_valid"]).head(5)
         if rule == "chosen":
             within = " (each cell's own choice)"
         else:  # the band that ranked it: given, or stored (the variants' own where their cells stored several)
-            bs = _bands(df[df["data"] == d], band, d)
+            bs = _bands(rows, band, d)
             within = (f" among the models with J_SF ≤ B = {bs[0][0]:g}" if len(bs) == 1 else
                       " among the models with J_SF ≤ B, the variants' own: " +
                       "; ".join(f"{b:g} for {who}" for b, who in bs) if bs else "")
@@ -902,7 +903,7 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
             lines += [f"  {s} / {v}: {r}" for (s, v), r in empty["reason"].items()]
         # a ranked group's failed members are not compared: say which and why (an unranked group's reason says it)
         ranked = set(part.index[part["reason"] == ""])
-        failed = [_failed_members(r) for r in df[df["data"] == d].itertuples(index=False)
+        failed = [_failed_members(r) for r in rows.itertuples(index=False)
                   if (r.structure, r.variant) in ranked]
         failed = [f for f in failed if f]
         if failed:
