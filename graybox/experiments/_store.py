@@ -831,8 +831,8 @@ def _register(conn: sqlite3.Connection, p: Path, grid_name: str, fingerprint: st
         row = conn.execute("SELECT id, spec FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
         bands = _spec_bands({"spec": json.dumps(spec)})
         changed: dict[str, tuple[float | None, float | None]] = {}
-        if row is not None and _spec_bands({"spec": row[1]}) != bands:
-            old = _spec_bands({"spec": row[1]})
+        old = None if row is None else _spec_bands({"spec": row[1]})
+        if old is not None and old != bands:
             changed = {k: (old.get(k), b) for k, b in bands.items() if old.get(k) != b}
             fingerprint = _hash({"grid": fingerprint, "bands": bands})
             row = conn.execute("SELECT id, spec FROM specs WHERE fingerprint = ?", (fingerprint,)).fetchone()
