@@ -33,10 +33,12 @@ def pid_started(pid: int) -> float | None:
     """When process ``pid`` of this host started (s since the epoch, this host's clock), or None where that cannot
     be read: a process started after its claim's last sign of life is another one, the pid reused."""
     fields = _stat_fields(pid)
+    if fields is None:  # no such process, or no /proc: the boot time would say nothing
+        return None
     try:
         with open("/proc/stat", "rb") as f:
             boot = next(int(ln.split()[1]) for ln in f if ln.startswith(b"btime "))
-        return None if fields is None else boot + int(fields[19]) / os.sysconf("SC_CLK_TCK")
+        return boot + int(fields[19]) / os.sysconf("SC_CLK_TCK")
     except (OSError, IndexError, ValueError, StopIteration):
         return None
 
