@@ -60,7 +60,7 @@ import re
 import secrets
 import stat
 from pathlib import Path
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, Callable
 
 import numpy as np
@@ -794,6 +794,12 @@ def _units_arg(units: tuple[str, str] | Mapping[str, str] | None) -> dict | None
     return {"u": u, "y": y}
 
 
+def _contradicts(said: Sequence[str], own: Sequence[str]) -> bool:
+    """Whether units ``said`` (input, output) name another unit than a value's ``own`` where both name one (an
+    empty unit says nothing)."""
+    return any(a and b and a != b for a, b in zip(said, own))
+
+
 def _own_units(obj: Any) -> tuple[str, str] | None:
     """The units a value carries itself: its own ``units``, its ``.model``'s, or a Dataset's (those any of its
     records and static points name)."""
@@ -845,7 +851,7 @@ def to_json(obj: Any, *, units: tuple[str, str] | Mapping[str, str] | None = Non
     u = _units_arg(units)
     if own is not None and any(own):  # the header says what the value itself carries, never another unit
         said = ("", "") if u is None else (u["u"], u["y"])
-        if any(a and b and a != b for a, b in zip(said, own)):
+        if _contradicts(said, own):
             raise ValueError(f"units={given!r} contradicts the units the {type(obj).__name__} carries {own!r} (those "
                              "its numbers hold in); omit units= (the header then says the value's own), or convert "
                              "the data and refit in the units meant")
@@ -973,7 +979,7 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
     # the header says the units the value's numbers hold in (to_json never writes other ones): a file whose header
     # was edited to other units would tell read_header's reader one unit and load a value in another
     own, said = _own_units(obj), head["units"]
-    if own is not None and said is not None and any(a and b and a != b for a, b in zip(said, own)):
+    if own is not None and said is not None and _contradicts(said, own):
         raise GrayboxFileError(f"{source}: header: units {said} contradict the units the {head['type']} holds its "
                                f"numbers in, {own} (a hand edit, or a file saved with units= by a graybox that did not check "
                                "them): set the header's units to the value's (or remove them), or convert the data and "
