@@ -948,6 +948,13 @@ def _scaled_columns(process: Structure, data: object, rule: StopRule, max_terms:
     return cols
 
 
+def _dependent_threshold(cols: _Columns, rank_tol: float) -> float:
+    """The remaining energy, as a fraction of a column's own, at or below which a column is a combination of those
+    chosen: ``rank_tol``² on MGS's columns, never below :data:`_GRAM_DEPENDENT` on the Gram form's. One threshold
+    for the forward pass and the subset search, which hands its subset to that pass."""
+    return rank_tol**2 if cols.method == "mgs" else max(rank_tol**2, _GRAM_DEPENDENT)
+
+
 def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule: StopRule | None,
              rank_tol: float, *, n_included: int | None = None, search: str = "greedy") -> tuple[list[int], int]:
     """Forward selection of up to K terms (``forced`` first, in order), orthogonalising as it goes.
@@ -962,7 +969,7 @@ def _forward(cols: _Columns, process: Structure, forced: list[int], K: int, rule
     engine: _MGS | _GramOLS = (_MGS(cols.W, cols.y, K) if cols.method == "mgs"
                                else _GramOLS(cols.G, cols.b, yy, K))
     nrm0 = float(cols.n_rows)  # unit-RMS columns: ‖s_j‖² = N
-    dependent_thr = rank_tol**2 if cols.method == "mgs" else max(rank_tol**2, _GRAM_DEPENDENT)
+    dependent_thr = _dependent_threshold(cols, rank_tol)
     chosen: list[int] = []
     n_dependent = 0
     for k in range(K):
@@ -1060,8 +1067,7 @@ def _search_subsets_on(cols: _Columns, forced: list[int], K: int, rule: StopRule
         R, _ = r_factor(list(process.terms), cols.data, cols.start)
         R[:, :-1] /= cols.scales
     # a column is dependent at the forward pass's threshold, which runs on this subset next
-    problem = SubsetProblem(R, cols.yy, cols.active, rank_tol**2 if cols.method == "mgs"
-                            else max(rank_tol**2, _GRAM_DEPENDENT))
+    problem = SubsetProblem(R, cols.yy, cols.active, _dependent_threshold(cols, rank_tol))
     N = cols.n_rows
     lo = max(1, len(forced)) if rule.mode != "n_terms" else rule.n_terms
     sizes = list(range(lo, K + 1))
