@@ -452,14 +452,15 @@ class ResultStore:
     """
 
     def __init__(self, path: Path, conn: sqlite3.Connection, meta: Mapping[str, str], spec_id: int, new_spec: bool,
-                 known_data: Mapping[str, str]):
+                 known_data: Mapping[str, str],
+                 band_changes: Mapping[str, tuple[float | None, float | None]] | None = None):
         self.path = path
         self._conn = conn
         self.meta = dict(meta)
         self.spec_id = spec_id
         self.new_spec = new_spec
         self.known_data = dict(known_data)
-        self.band_changes: dict[str, tuple[float | None, float | None]] = {}
+        self.band_changes = dict(band_changes or {})
         self._owner: str | None = None
 
     @classmethod
@@ -554,9 +555,7 @@ class ResultStore:
             conn.close()
             _refuse_unwritable(exc, p)
             raise
-        st = cls(p, conn, meta, spec_id, new, known)
-        st.band_changes = changed
-        return st
+        return cls(p, conn, meta, spec_id, new, known, changed)
 
     @contextlib.contextmanager
     def running(self):
