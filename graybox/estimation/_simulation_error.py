@@ -1452,7 +1452,7 @@ def checkpoint_path(checkpoint: object) -> Path:
     except OSError as exc:
         raise ValueError(f"checkpoint: the folder {real.parent} cannot be written in ({exc.strerror or exc}); make "
                          "it writable or choose another path") from None
-    _sweep_leftovers(Path(os.path.realpath(path)), now)
+    _sweep_leftovers(real, now)  # the file save_npz writes and sweeps beside
     return path
 
 
