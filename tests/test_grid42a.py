@@ -96,7 +96,7 @@ def test_an_empty_file_nobody_is_making_is_still_refused_untouched(grid, tmp_pat
 
 
 def test_the_making_lock_a_killed_maker_left_is_swept_when_old(grid, tmp_path):  # noqa: F811
-    from graybox.experiments import _store
+    from graybox.core import _files
 
     _, g, _, cells = grid
     store = tmp_path / "s.sqlite"
@@ -104,7 +104,7 @@ def test_the_making_lock_a_killed_maker_left_is_swept_when_old(grid, tmp_path): 
     lock.write_bytes(b"")  # a maker killed a moment ago, or making the store right now: not swept
     _open(store, g, cells).close()
     assert lock.is_file()
-    old = time.time() - 2 * _store.LEFTOVER_SECONDS
+    old = time.time() - 2 * _files.LEFTOVER_SECONDS
     os.utime(lock, (old, old))
     _open(store, g, cells).close()
     assert not lock.exists() and len(gx.store_specs(store)) == 1

@@ -427,7 +427,8 @@ def test_a_checkpoint_write_killed_leaves_no_file_for_ever(tmp_path):
     import sys
     import time
 
-    from graybox.estimation._simulation_error import checkpoint_path, save_npz, writer_tag
+    from graybox.core._files import writer_tag
+    from graybox.estimation._simulation_error import checkpoint_path, save_npz
 
     host = writer_tag().rsplit("-", 1)[0]  # a write's file names its host and its process
     gone = subprocess.Popen([sys.executable, "-c", "pass"])

@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from graybox import experiments as gx
-from graybox.experiments import _run, _store
+from graybox.core import _files
+from graybox.experiments import _run
 from graybox.experiments._store import running_cells
 
 from test_grid_claims import _open, grid  # noqa: F401  (a fixture)
@@ -117,7 +118,7 @@ def test_the_half_made_store_of_a_run_killed_while_making_it_is_swept_by_a_later
     assert left and all(n.split(".new")[0] == left[0].split(".new")[0] for n in left)
     young = tmp_path / ".s.sqlite.0123abcd.new"  # another run making the store right now: not its to sweep
     young.write_bytes(b"")
-    old = time.time() - 2 * getattr(_store, "LEFTOVER_SECONDS", 600)
+    old = time.time() - 2 * _files.LEFTOVER_SECONDS
     for n in left:
         os.utime(tmp_path / n, (old, old))
     _open(store, g, cells).close()

@@ -15,7 +15,8 @@ import graybox as gb
 def test_a_checkpoint_write_of_another_host_is_not_swept_while_fresh(tmp_path):
     # a checkpoint in a folder two hosts share (NFS): a write's file named by its pid alone was swept as a killed
     # writer's whenever that pid is no process of *this* host, so the other host's os.replace found nothing
-    from graybox.estimation._simulation_error import checkpoint_path, save_npz, writer_tag
+    from graybox.core._files import writer_tag
+    from graybox.estimation._simulation_error import checkpoint_path, save_npz
 
     gone = subprocess.Popen([sys.executable, "-c", "pass"])
     gone.wait()
@@ -141,7 +142,8 @@ def test_a_killed_checkpoint_writer_not_yet_reaped_is_gone(tmp_path):
     # the checkpoint's sweep asked os.kill(pid, 0) alone, which a killed process its parent has not reaped (a
     # zombie) still answers: its write's file stayed for LEFTOVER_SECONDS; the store's run check, a copy of the same
     # question, already told a zombie from a live process
-    from graybox.estimation._simulation_error import checkpoint_path, writer_tag
+    from graybox.core._files import writer_tag
+    from graybox.estimation._simulation_error import checkpoint_path
 
     zombie = subprocess.Popen([sys.executable, "-c", "pass"])
     try:

@@ -38,15 +38,10 @@ re-evaluated by the shared evaluator, which uses the same definition.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import math
 import os
-import re
-import secrets
-import socket
-import tempfile
 import warnings
 import zipfile
 from dataclasses import asdict, dataclass, field
@@ -88,7 +83,7 @@ from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
-from ..core._processes import pid_alive
+from ..core._files import folder_now, sweep_written_beside, write_atomically
 from ..core._terms import Structure
 from ..core._validation import (FrozenMap, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
@@ -757,23 +752,10 @@ def _load_checkpoint(path: Path, meta: dict) -> dict | None:
 
 
 def save_npz(path: Path, **arrays: Any) -> None:
-    """Write ``arrays`` to the ``.npz`` file ``path`` atomically: a kill during the write never leaves a torn file.
-    Written under a name of this write's own beside it, then moved into place: under one shared name, two
-    writers of one file (two calls at once) each moved the other's half-written file into place, and the second
-    move found nothing to move. A symbolic link is written through, as ``open(path, "w")`` would (and graybox's JSON
-    files are): the file it names is replaced, the link kept."""
-    target = Path(os.path.realpath(path)) if path.is_symlink() else path
-    tmp = target.with_name(f"{target.name}.{writer_tag()}-{secrets.token_hex(4)}.tmp")
-    try:
-        with open(tmp, "xb") as f:  # the mode a new file of np.savez's would have
-            np.savez(f, **arrays)
-        now = os.stat(tmp).st_mtime  # the folder's clock (a file server's), as its files' times are
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
-    _sweep_leftovers(target, now)
+    """Write ``arrays`` to the ``.npz`` file ``path`` atomically (:func:`~graybox.core._files.write_atomically`): a
+    kill during the write never leaves a torn file, two writers at once never move each other's half-written file, a
+    symbolic link is written through."""
+    write_atomically(path, lambda f: np.savez(f, **arrays))
 
 
 def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarray, done: int,
@@ -1447,40 +1429,12 @@ def checkpoint_path(checkpoint: object) -> Path:
     if not real.parent.is_dir():
         raise ValueError(f"checkpoint: the folder {real.parent} does not exist; create it or choose another path")
     try:  # a file made and gone at once: what the write will do (modes, read-only mounts, ACLs all say)
-        with tempfile.TemporaryFile(dir=real.parent) as f:
-            now = os.fstat(f.fileno()).st_mtime  # the folder's clock (a file server's), as its files' times are
+        now = folder_now(real.parent)
     except OSError as exc:
         raise ValueError(f"checkpoint: the folder {real.parent} cannot be written in ({exc.strerror or exc}); make "
                          "it writable or choose another path") from None
-    _sweep_leftovers(real, now)  # the file save_npz writes and sweeps beside
+    sweep_written_beside(real, now)  # the file save_npz writes and sweeps beside
     return path
-
-
-#: Seconds after which a file a checkpoint's write left beside it (its writer killed) is swept; a write takes less.
-LEFTOVER_SECONDS = 600.0
-
-
-def writer_tag() -> str:
-    """``host-pid`` of this process, as a write's file beside a checkpoint is named: a folder may be shared by
-    several hosts (NFS), where a pid says nothing of another host's processes."""
-    return f"{re.sub(r'[^A-Za-z0-9_.]', '_', socket.gethostname()) or '_'}-{os.getpid()}"
-
-
-def _sweep_leftovers(path: Path, now: float) -> None:
-    """Remove the files :func:`save_npz` writes beside ``path`` that a killed write left (each write has a name of
-    its own, which no later write replaces): those of a process of this host that is gone, and any once old (a
-    process of another host sharing the folder, whose liveness cannot be asked from here). ``now``: the time of a
-    file just written in that folder, not this host's clock, which may be ahead of a file server's by minutes."""
-    name = re.compile(rf"{re.escape(path.name)}\.(?:([^-]+)-)?(\d+)-[0-9a-f]{{8}}\.tmp")
-    host = writer_tag().rsplit("-", 1)[0]
-    with contextlib.suppress(OSError):
-        for f in path.parent.iterdir():
-            m = name.fullmatch(f.name)
-            if m:
-                with contextlib.suppress(OSError):  # gone meanwhile
-                    gone = m.group(1) == host and not pid_alive(int(m.group(2)))
-                    if gone or now - f.stat().st_mtime > LEFTOVER_SECONDS:
-                        f.unlink()
 
 
 def _sibling(path: str | os.PathLike, tag: str) -> Path:

@@ -46,10 +46,10 @@ import numpy as np
 
 from .. import _api as gb
 
+from ..core._files import lock_fd
 from ..core._validation import check_choice, check_int, check_real
 from . import _dask_worker
 from ._cell import failed_row, run_cell
-from ._store import lock_fd
 from ._spec import Cell
 
 __all__ = ["EXECUTORS", "InProcess", "ProcessPool", "DaskCluster", "check_cluster", "local_cluster", "make_executor",

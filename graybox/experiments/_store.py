@@ -27,16 +27,12 @@ import sqlite3
 import threading
 import time
 from pathlib import Path
-
-try:
-    import fcntl
-except ImportError:  # Windows, whose file systems have hard links: no store is made in place there
-    fcntl = None  # type: ignore[assignment]
 from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
+from ..core._files import CAN_FLOCK, folder_now, lock_fd, sweep_leftovers
 from ..core._processes import pid_alive, pid_started
 from ..core._validation import check_sequence
 from ._cell import COLUMNS, JSON_COLUMNS
@@ -178,25 +174,6 @@ def _making_path(p: Path) -> Path:
     return p.with_name(f".{p.name}.making")
 
 
-def lock_fd(fd: int, timeout: float, shared: bool = False) -> bool:
-    """flock ``fd`` (exclusive, or ``shared``), waiting up to ``timeout`` seconds (0: one try); False where it cannot
-    (held past the timeout, a file system without such locks, a platform without flock)."""
-    if fcntl is None:
-        return False
-    kind = fcntl.LOCK_SH if shared else fcntl.LOCK_EX
-    deadline = time.monotonic() + timeout
-    while True:
-        try:
-            fcntl.flock(fd, kind | fcntl.LOCK_NB)
-            return True
-        except BlockingIOError:
-            if time.monotonic() > deadline:
-                return False
-            time.sleep(0.005)
-        except OSError:  # a file system without such locks: SQLite's own lock wait is all there is
-            return False
-
-
 @contextlib.contextmanager
 def _making(p: Path):
     """While a run makes the store ``p`` in place: ``.NAME.making`` beside it, locked from before the store's file
@@ -205,7 +182,7 @@ def _making(p: Path):
     it. flock (not SQLite's POSIX locks) so that two threads of one process wait for each other too."""
     lock = _making_path(p)
     fd = None
-    if fcntl is not None:
+    if CAN_FLOCK:
         with contextlib.suppress(OSError):  # a folder this user cannot write in: the connect says so
             fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     try:
@@ -233,7 +210,7 @@ def _wait_for_maker(path: Path) -> None:
                     return
             finally:
                 ro.close()
-        if fcntl is not None:  # a maker holds its lock from before the file exists (_making)
+        if CAN_FLOCK:  # a maker holds its lock from before the file exists (_making)
             try:
                 fd = os.open(_making_path(path), os.O_RDONLY)
             except OSError:  # none: nobody is making it, or its maker is done
@@ -732,25 +709,14 @@ def _create_tables(conn: sqlite3.Connection, version: str) -> dict[str, str]:
     return meta
 
 
-#: Seconds after which a half-made store beside a store's path (:func:`_create_whole`'s file, its maker killed) is
-#: swept by the next run opening that path. Making one takes milliseconds; one swept from under a live maker costs
-#: nothing wrong either: its link then fails and it makes the store in place.
-LEFTOVER_SECONDS = 600.0
-
-
 def _sweep_leftovers(p: Path) -> None:
     """Remove the half-made stores (and their -wal, -shm), and the making lock (:func:`_making`), that a run killed
-    while making the store at ``p`` left."""
-    name = re.compile(rf"\.{re.escape(p.name)}\.([0-9a-f]{{8}}\.new(-wal|-shm)?|making)")
-    now = time.time()
+    while making the store at ``p`` left: those older than ``core._files.LEFTOVER_SECONDS`` on the folder's clock."""
     try:
-        for f in p.parent.iterdir():
-            if name.fullmatch(f.name):
-                with contextlib.suppress(OSError):  # gone meanwhile, or a folder this user cannot write in
-                    if now - f.stat().st_mtime > LEFTOVER_SECONDS:
-                        f.unlink()
-    except OSError:
-        pass
+        now = folder_now(p.parent)
+    except OSError:  # a folder this user cannot write in: nothing in it can be removed either
+        return
+    sweep_leftovers(p.parent, re.compile(rf"\.{re.escape(p.name)}\.([0-9a-f]{{8}}\.new(-wal|-shm)?|making)"), now)
 
 
 def _create_whole(p: Path, version: str) -> bool:

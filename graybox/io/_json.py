@@ -57,8 +57,6 @@ import json
 import math
 import os
 import re
-import secrets
-import stat
 from pathlib import Path
 from collections.abc import Mapping, Sequence
 from typing import Any, Callable
@@ -76,6 +74,7 @@ from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
 from ..core._records import Dataset, Record, StaticPoints, check_units
+from ..core._files import write_atomically
 from ..core._validation import FrozenMap, check_path
 from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
@@ -1002,24 +1001,6 @@ def _release(version: str) -> tuple[int, ...]:
     return tuple(int(x) for x in m.group(0).split(".")) if m else ()
 
 
-def _temporary_beside(p: Path) -> tuple[int, str]:
-    """A new file next to ``p`` with the mode ``open(p, "w")`` would leave: ``p``'s own when it exists,
-    else 0666 less the umask (``mkstemp`` makes every file private, 0600)."""
-    try:
-        mode = stat.S_IMODE(os.stat(p).st_mode)
-    except OSError:
-        mode = None
-    while True:
-        tmp = str(p.with_name(f"{p.name}.{secrets.token_hex(4)}.tmp"))
-        try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
-        except FileExistsError:  # pragma: no cover - a name drawn twice
-            continue
-        if mode is not None:
-            os.chmod(fd, mode)
-        return fd, tmp
-
-
 def save(
     obj: Any,
     path: str | os.PathLike,
@@ -1046,20 +1027,7 @@ def save(
     text = to_json(obj, units=units)
     if p.is_dir():
         raise IsADirectoryError(errno.EISDIR, "a folder, not a file to save to", str(p))
-    # a symbolic link is written through, as open(p, "w") would: the file it names is replaced, the link kept
-    target = Path(os.path.realpath(p)) if p.is_symlink() else p
-    try:
-        fd, tmp = _temporary_beside(target)
-    except OSError as exc:  # named by the path given, not by the temporary file beside it
-        raise type(exc)(exc.errno, f"cannot write in the folder {target.parent}: {exc.strerror}", str(p)) from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, target)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_atomically(p, lambda f: f.write(text.encode("utf-8")))  # through a symbolic link, keeping the file's mode
     return p
 
 

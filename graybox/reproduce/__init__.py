@@ -10,11 +10,11 @@ package; the estimators never import it.
 from __future__ import annotations
 
 import sys
-import tempfile
 import warnings
 from pathlib import Path
 from typing import Callable, TextIO
 
+from ..core._files import folder_now
 from ._black_box import PAPER_BLACK_BOX, black_box_models, section_black_box
 from ._neural import PAPER_NEURAL_ROW, section_neural
 from ._paper_models import section_reference_models
@@ -35,8 +35,7 @@ def _writable_folder(out: Path) -> None:
         raise NotADirectoryError(f"{out} is a file, not a folder for the figures and checkpoints")
     try:
         out.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=out):
-            pass
+        folder_now(out)  # a file made and gone there: what the figures and checkpoints will do
     except OSError as exc:
         raise type(exc)(f"cannot write in the folder {out}: {exc.strerror or exc}") from None
 

@@ -1,0 +1,163 @@
+"""Files written whole or not at all, the leftovers of killed writers, and advisory locks.
+
+One home for what every file graybox writes beside a user's folder needs: a value's JSON file, an SE sweep's and a
+selection's checkpoint, a grid's store. A file is written under a name of its own beside its target and moved into
+place (a kill never leaves a torn file); a killed write leaves that file behind, and the next write or open sweeps
+it. Ages are judged on the folder's clock (a file server's, read from a file just made there), never this host's,
+which may be ahead of it by minutes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import secrets
+import socket
+import stat
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import IO
+
+from ._processes import pid_alive
+
+try:  # pragma: no cover - every POSIX system has it
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None  # type: ignore[assignment]
+
+#: Whether this platform has flock (:func:`lock_fd` then may lock; without it, it always answers False).
+CAN_FLOCK = fcntl is not None
+
+__all__ = ["CAN_FLOCK", "LEFTOVER_SECONDS", "folder_now", "lock_fd", "sweep_leftovers", "sweep_written_beside", "write_atomically",
+           "writer_tag"]
+
+#: Seconds after which a file a killed writer left (its own name beside a target) is swept even when its writer's
+#: liveness cannot be asked (another host's process); a write takes far less.
+LEFTOVER_SECONDS = 600.0
+
+
+def writer_tag() -> str:
+    """``host-pid`` of this process, as a write's file beside its target is named: a folder may be shared by
+    several hosts (NFS), where a pid says nothing of another host's processes."""
+    return f"{re.sub(r'[^A-Za-z0-9_.]', '_', socket.gethostname()) or '_'}-{os.getpid()}"
+
+
+def folder_now(folder: str | os.PathLike) -> float:
+    """The folder's clock: the modification time of a file made and removed in it at once (s since the epoch).
+
+    Raises the ``OSError`` of that file when the folder cannot be written in (its mode, a read-only mount, an ACL
+    all say so here, before any work whose first write would fail)."""
+    with tempfile.TemporaryFile(dir=folder) as f:
+        return os.fstat(f.fileno()).st_mtime
+
+
+def sweep_leftovers(folder: Path, name: re.Pattern[str], now: float, max_age: float = LEFTOVER_SECONDS) -> list[Path]:
+    """Remove the files in ``folder`` whose name ``name`` matches whole and that a killed writer left.
+
+    A file is a leftover when it is older than ``max_age`` seconds on the folder's clock ``now`` (see
+    :func:`folder_now`), or, when the pattern has groups ``host`` and ``pid`` and they name a process of this host,
+    at once when that process is gone. Files gone meanwhile, or that this user cannot remove, are left.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    groups = name.groupindex
+    host = writer_tag().rsplit("-", 1)[0]
+    removed = []
+    with contextlib.suppress(OSError):  # a folder gone or unreadable: nothing to sweep
+        for f in folder.iterdir():
+            m = name.fullmatch(f.name)
+            if not m:
+                continue
+            with contextlib.suppress(OSError):  # gone meanwhile, or not ours to remove
+                gone = ("pid" in groups and "host" in groups and m.group("host") == host
+                        and not pid_alive(int(m.group("pid"))))
+                if gone or now - f.stat().st_mtime > max_age:
+                    f.unlink()
+                    removed.append(f)
+    return removed
+
+
+def _written_beside(target: Path) -> re.Pattern[str]:
+    """The names :func:`write_atomically` gives its files beside ``target`` (with the writer's host and pid)."""
+    return re.compile(rf"{re.escape(target.name)}\.(?:(?P<host>[^-]+)-)?(?P<pid>\d+)-[0-9a-f]{{8}}\.tmp")
+
+
+def _new_file_beside(target: Path) -> tuple[int, Path]:
+    """A new file of this write's own next to ``target``, with the mode ``open(target, "w")`` would leave:
+    ``target``'s own when it exists, else 0666 less the umask (``mkstemp`` would make every file private, 0600)."""
+    try:
+        mode = stat.S_IMODE(os.stat(target).st_mode)
+    except OSError:
+        mode = None
+    while True:
+        tmp = target.with_name(f"{target.name}.{writer_tag()}-{secrets.token_hex(4)}.tmp")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
+        except FileExistsError:  # pragma: no cover - a name drawn twice
+            continue
+        if mode is not None:
+            os.chmod(fd, mode)
+        return fd, tmp
+
+
+def write_atomically(path: str | os.PathLike, write: Callable[[IO[bytes]], object]) -> None:
+    """Write the file ``path`` by ``write(f)`` on a binary file, whole or not at all.
+
+    The bytes go to a file of this write's own beside the target (named by host, pid and a random tag: two writers
+    of one file at once never move each other's half-written file), which then replaces the target. A symbolic link
+    is written through, as ``open(path, "w")`` would: the file it names is replaced, the link kept. An existing
+    file's mode is kept. After the move, the files killed writes left beside the target are swept
+    (:func:`sweep_leftovers`).
+
+    Raises
+    ------
+    OSError
+        Of the same kind, naming the folder and ``path`` (not the file beside it) when the folder cannot be written
+        in; any error of ``write`` itself, after removing the file beside the target.
+    """
+    path = Path(path)
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    try:
+        fd, tmp = _new_file_beside(target)
+    except OSError as exc:
+        raise type(exc)(exc.errno, f"cannot write in the folder {target.parent}: {exc.strerror}", str(path)) from None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+        now = os.stat(tmp).st_mtime  # the folder's clock (a file server's), as its files' times are
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+    sweep_leftovers(target.parent, _written_beside(target), now)
+
+
+def sweep_written_beside(target: Path, now: float) -> list[Path]:
+    """Sweep the files killed :func:`write_atomically` calls left beside ``target`` (``now``: the folder's clock)."""
+    return sweep_leftovers(target.parent, _written_beside(target), now)
+
+
+def lock_fd(fd: int, timeout: float, shared: bool = False) -> bool:
+    """flock ``fd`` (exclusive, or ``shared``), waiting up to ``timeout`` seconds (0: one try); False where it cannot
+    (held past the timeout, a file system without such locks, a platform without flock)."""
+    if fcntl is None:
+        return False
+    kind = fcntl.LOCK_SH if shared else fcntl.LOCK_EX
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            fcntl.flock(fd, kind | fcntl.LOCK_NB)
+            return True
+        except BlockingIOError:
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.005)
+        except OSError:  # a file system without such locks: the caller's own wait is all there is
+            return False

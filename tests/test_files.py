@@ -1,0 +1,123 @@
+"""One atomic write, one leftover sweeper, one lock (graybox.core._files) under every file graybox writes."""
+
+from __future__ import annotations
+
+import os
+import stat
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.core import _files
+from graybox.estimation._simulation_error import read_npz, save_npz
+
+
+def _gone_pid() -> int:
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
+def test_a_json_save_sweeps_what_a_killed_save_left(tmp_path):
+    # a killed JSON save's file beside the target stayed for ever: its name had no writer, so nothing could sweep it
+    target = tmp_path / "model.json"
+    host = _files.writer_tag().rsplit("-", 1)[0]
+    left = tmp_path / f"model.json.{host}-{_gone_pid()}-0badc0de.tmp"
+    left.write_text("half a model")
+    gb.save(gb.Record(u=np.arange(5.0), y=np.arange(5.0)), target)
+    assert not left.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.json"]
+
+
+def test_a_live_writers_file_is_left(tmp_path):
+    target = tmp_path / "model.json"
+    live = tmp_path / f"model.json.{_files.writer_tag()}-1badc0de.tmp"  # this very process: alive
+    live.write_text("being written")
+    gb.save(gb.Record(u=np.arange(5.0), y=np.arange(5.0)), target)
+    assert live.exists()
+
+
+def test_a_checkpoint_keeps_its_files_mode(tmp_path):
+    # save_npz made every rewrite 0666 less the umask: a checkpoint made private (0600) by its user was opened again
+    path = tmp_path / "front.npz"
+    save_npz(path, x=np.zeros(2))
+    os.chmod(path, 0o600)
+    save_npz(path, x=np.ones(2))
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    assert np.array_equal(read_npz(path)["x"], np.ones(2))
+
+
+def test_a_json_file_keeps_its_mode_and_a_link(tmp_path):
+    real = tmp_path / "real.json"
+    link = tmp_path / "link.json"
+    gb.save(gb.Record(u=np.arange(5.0), y=np.arange(5.0)), real)
+    os.chmod(real, 0o640)
+    link.symlink_to(real)
+    gb.save(gb.Record(u=np.arange(6.0), y=np.arange(6.0)), link)
+    assert link.is_symlink() and stat.S_IMODE(real.stat().st_mode) == 0o640
+    assert gb.load(real).y.size == 6
+
+
+def test_a_failed_write_leaves_the_old_file_and_nothing_beside(tmp_path):
+    path = tmp_path / "a.bin"
+    path.write_bytes(b"old")
+
+    def boom(f):
+        f.write(b"half")
+        raise RuntimeError("killed")
+
+    with pytest.raises(RuntimeError, match="killed"):
+        _files.write_atomically(path, boom)
+    assert path.read_bytes() == b"old"
+    assert [p.name for p in tmp_path.iterdir()] == ["a.bin"]
+
+
+def test_an_unwritable_folder_is_named(tmp_path):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    os.chmod(folder, 0o500)
+    try:
+        if os.access(folder, os.W_OK):  # root writes anywhere
+            pytest.skip("this user can write in a read-only folder")
+        with pytest.raises(PermissionError, match="cannot write in the folder"):
+            _files.write_atomically(folder / "x.bin", lambda f: f.write(b"x"))
+    finally:
+        os.chmod(folder, 0o700)
+
+
+def test_a_stores_leftovers_are_aged_on_the_folders_clock(tmp_path, monkeypatch):
+    # the store's sweep read this host's clock: a host whose clock ran ahead of the file server's by more than the
+    # leftover age deleted a live maker's lock and half-made store
+    from graybox.experiments import _store
+
+    store = tmp_path / "grid.sqlite"
+    making = tmp_path / ".grid.sqlite.making"
+    making.write_text("")
+    real = time.time
+    monkeypatch.setattr(time, "time", lambda: real() + 10 * _files.LEFTOVER_SECONDS)
+    _store._sweep_leftovers(store)
+    assert making.exists()
+    monkeypatch.undo()
+    old = time.time() - 2 * _files.LEFTOVER_SECONDS
+    os.utime(making, (old, old))
+    _store._sweep_leftovers(store)
+    assert not making.exists()
+
+
+def test_a_lock_held_elsewhere_is_not_taken(tmp_path):
+    if not _files.CAN_FLOCK:
+        pytest.skip("no flock here")
+    path = tmp_path / "lock"
+    a = os.open(path, os.O_RDWR | os.O_CREAT)
+    b = os.open(path, os.O_RDWR)
+    try:
+        assert _files.lock_fd(a, 0.0)
+        assert not _files.lock_fd(b, 0.0)  # flock is per open file: a second open of the file waits for the first
+        assert not _files.lock_fd(b, 0.0, shared=True)
+    finally:
+        os.close(a)
+        os.close(b)
