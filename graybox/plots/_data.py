@@ -47,7 +47,7 @@ def check_one_input_points(points: object, who: str) -> None:
                          "drawn against one input: use plot_surface_slices or plot_surface_contours")
 
 
-def one_input_levels(points: StaticPoints | None, who: str) -> tuple[np.ndarray | None, str | None]:
+def varied_input_levels(points: StaticPoints | None, who: str) -> tuple[np.ndarray | None, str | None]:
     """The points' ū as a 1-D array: of their one input, or of the one input they vary when they hold the others (a
     transient input's z̄ = 0 beside ū), with that input's name (None for points of one input); ``ValueError`` for
     points that vary several (a surface's)."""
@@ -139,7 +139,7 @@ def plot_static_curve(
         Points that vary several inputs (draw them with :func:`plot_surface_slices`); points that
         hold all inputs but one (a transient input's z̄ = 0 beside ū) are drawn against that one.
     """
-    levels, varied = one_input_levels(points, "plot_static_curve")
+    levels, varied = varied_input_levels(points, "plot_static_curve")
     if varied is not None and xlabel == "input ū":
         xlabel = f"input {varied}"
     curves = [] if curve is None else ([curve] if isinstance(curve, StaticCurve) else None)
