@@ -232,3 +232,33 @@ def test_the_choice_and_its_decision_say_the_units_of_their_squared_errors():
     assert f"J_SF={sel.decision.JSF:.4g} (m/s)²" in repr(sel.decision)
     assert squared_unit("mlc") == " mlc²" and squared_unit("") == ""
     assert "²" not in repr(_pe_selection(_two_level_dataset()))  # records without units: no unit said
+
+
+def test_a_newer_graybox_row_is_kept_unread_and_written_back(tmp_path, data, monkeypatch):
+    # a row with a field this graybox does not know (a newer graybox's, sharing the file) made the whole file
+    # "corrupt": the rows of this version were refused with it
+    from graybox.core._files import write_atomically
+    from graybox.experiments._select_checkpoint import SelectionCheckpoint
+
+    path = tmp_path / "sel.npz"
+    kw = dict(sizes=[3], estimator=["pe"], progress=False)
+    first = gb.select_graybox(CAND, data, checkpoint=path, **kw)
+    with np.load(path, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    newer = "f" * 32
+    arrays[f"{newer}/thetas"] = np.zeros((1, 3))
+    arrays[f"{newer}/a_newer_score"] = np.array([1.5])
+    write_atomically(path, lambda f: np.savez(f, **arrays))
+    calls = _counting(monkeypatch)
+    again = gb.select_graybox(CAND, data, checkpoint=path, **kw)
+    assert calls == []  # every row of this version reused
+    assert again.table.equals(first.table)
+    ck = SelectionCheckpoint(path)
+    assert set(ck.foreign) == {newer} and newer not in ck.rows
+    ck.write()
+    with np.load(path, allow_pickle=False) as z:
+        assert float(z[f"{newer}/a_newer_score"][0]) == 1.5
+    arrays[f"{'0' * 32}/Not A Field"] = np.zeros(1)  # a name no graybox writes: corrupt, as before
+    write_atomically(path, lambda f: np.savez(f, **arrays))
+    with pytest.raises(ValueError, match="corrupt"):
+        SelectionCheckpoint(path)

@@ -10,7 +10,8 @@ a hash of the records they score, and remade from its members' θ, no fit, for o
 caller's warning filters: a script and a
 notebook (or a test run) filter differently, and a row keeps the warnings of the run that fitted it.
 A row whose key the file does not hold is fitted: a file written for other data, options or another
-version is not wrong, only not reused. The file is an ``.npz`` of numeric and text arrays, read
+version is not wrong, only not reused; a row with fields this graybox does not know (a newer one's, sharing the
+file) is written back as it was read. The file is an ``.npz`` of numeric and text arrays, read
 without pickle, and replaced atomically after each row, so a kill never tears it.
 """
 
@@ -39,6 +40,7 @@ _TEXTS = ("failed", "warnings")
 _OPTIONAL_TEXTS = ("member_failed", "test_key")
 _ALL_TEXTS = _TEXTS + _OPTIONAL_TEXTS
 _KEY = re.compile(r"^[0-9a-f]{32}$")
+_FIELD = re.compile(r"^[a-z][a-z0-9_]*$")  # a field's name, known to this graybox or of a newer one
 
 
 def _feed(h: Any, obj: Any) -> None:
@@ -112,6 +114,8 @@ class SelectionCheckpoint:
 
     def __init__(self, path: str | os.PathLike):
         self.path = checkpoint_path(path)
+        #: Rows of another graybox (fields this one does not know): never offered, written back as they were read.
+        self.foreign: dict[str, dict[str, np.ndarray]] = {}
         self.rows: dict[str, dict[str, Any]] = self._read() if self.path.exists() else {}
 
     def _read(self) -> dict[str, dict[str, Any]]:
@@ -129,15 +133,23 @@ class SelectionCheckpoint:
         rows: dict[str, dict[str, Any]] = {}
         for name, value in arrays.items():
             key, _, field = name.partition("/")
-            if not _KEY.match(key) or field not in _ARRAYS + _OPTIONAL + _ALL_TEXTS:
+            if not _KEY.match(key) or not _FIELD.match(field):
                 raise CheckpointError(f"checkpoint {self.path} is corrupt (an entry {name!r}); delete it or choose "
                                       "another checkpoint path")
-            rows.setdefault(key, {})[field] = [str(s) for s in value] if field in _ALL_TEXTS else value
+            rows.setdefault(key, {})[field] = value
         for key, row in rows.items():
-            if any(f not in row for f in _ARRAYS + _TEXTS):
+            if not set(row) <= set(_ARRAYS + _OPTIONAL + _ALL_TEXTS):
+                # a field this graybox does not know: a row of a newer graybox sharing the file (its key hashes its
+                # version, so it is never one of this version's rows), kept as it is and written back unread
+                self.foreign[key] = row
+            elif any(f not in row for f in _ARRAYS + _TEXTS):
                 raise CheckpointError(f"checkpoint {self.path} is corrupt (a row without all its scores); delete it or "
                                       "choose another checkpoint path")
-        return rows
+            else:
+                for field in _ALL_TEXTS:
+                    if field in row:
+                        row[field] = [str(s) for s in row[field]]
+        return {k: r for k, r in rows.items() if k not in self.foreign}
 
     def get(self, key: str) -> dict[str, Any] | None:
         """The scores kept under ``key`` (a copy), or None."""
@@ -156,6 +168,9 @@ class SelectionCheckpoint:
     def write(self) -> None:
         """Rewrite the file with every row kept (atomically)."""
         out: dict[str, np.ndarray] = {"kind": np.array("select_graybox")}
+        for k, r in self.foreign.items():
+            for field, v in r.items():
+                out[f"{k}/{field}"] = v
         for k, r in self.rows.items():
             for field, v in r.items():
                 out[f"{k}/{field}"] = np.array(v, dtype=str) if field in _ALL_TEXTS else v
