@@ -397,3 +397,52 @@ def test_gain_bounds_by_input_name_in_a_grid_spec_and_a_selection(ds):
     with pytest.raises(ValueError, match="constraints: .*no input named 'valve'"):
         gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=1, input_names=["u1", "u2"]), ds, band=1.0,
                           constraints=gb.GainBounds(lower={"valve": 0.0}), progress=False)
+
+
+def test_gain_ranges_by_input_name_hold_the_input_named_whatever_the_order(ds):
+    # ubar_range was positional only: data listing their inputs in another order moved a range to another input
+    box = ((1150.0, 1650.0), (1150.0, 1400.0))
+    named = gb.GainBounds(upper={"u2": 0.0}, ubar_range={"u2": (1150.0, 1400.0)})
+    by_position = gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(upper=[None, 0.0], ubar_range=box))
+    by_name = gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=named)
+    np.testing.assert_allclose(by_name, by_position, rtol=1e-9, atol=1e-12)
+    whole = gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(upper={"u2": 0.0}))
+    assert np.max(np.abs(whole - by_name)) > 1e-6  # the range matters here (points outside it are not held)
+    assert "over u2 in [1150, 1400]" in named.describe()
+
+    def swapped(r):
+        return dataclasses.replace(r, u=r.u[:, ::-1], input_names=r.input_names[::-1])
+
+    other = gb.Dataset(swapped(ds.ident), swapped(ds.valid),
+                       gb.StaticPoints(ds.static.ubar[:, ::-1], ds.static.ybar, input_names=("u2", "u1")))
+    np.testing.assert_allclose(gb.pe_thetas(ST, other, lambdas=[0.5], constraints=named), by_name,
+                               rtol=1e-7, atol=1e-10)
+    # on a reference surface's grid: an input not named keeps the surface's domain
+    surf = StaticSurface.fit(ds.static, degree=2)
+    ref = dict(upper={"u2": 0.0}, reference=surf, n=5)
+    np.testing.assert_allclose(
+        gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(ubar_range={"u2": (1150.0, 1400.0)}, **ref)),
+        gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(ubar_range=(surf.domain[0], (1150.0, 1400.0)),
+                                                                      **ref)), rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="no input named 'valve'"):
+        gb.pe_thetas(ST, ds, lambdas=[0.5], constraints=gb.GainBounds(lower=0.0, ubar_range={"valve": (0, 1)}))
+    with pytest.raises(ValueError, match="of input 'u2' must be \\(low, high\\) with low <= high"):
+        gb.GainBounds(lower=0.0, ubar_range={"u2": (2.0, 1.0)})
+    with pytest.raises(TypeError, match="takes input names"):
+        gb.GainBounds(lower=0.0, ubar_range={2: (0.0, 1.0)})
+    with pytest.raises(ValueError, match="give at least one input"):
+        gb.GainBounds(lower=0.0, ubar_range={})
+
+
+def test_gain_ranges_by_input_name_in_a_grid_spec(ds):
+    from graybox import experiments as gx
+
+    v = gx.Variant("PE gain", "pe", lambdas=[1e-4, 1.0],
+                   constraints=gb.GainBounds(lower={"u2": 0.0}, ubar_range={"u2": (1150.0, 1400.0)}))
+    grid = gx.Grid(name="m", data=[gx.DataSpec("rig", bundled="pumping_miso")],
+                   structures=[gx.StructureSpec("S", terms=TERMS)], variants=[v])
+    spec = grid.to_dict()
+    assert spec["variants"][0]["constraints"][0]["ubar_range"] == {"u2": [1150.0, 1400.0]}
+    assert gx.Grid.from_dict(spec).to_dict() == spec
+    with pytest.raises(gx.SpecError, match="ubar_range of input 'u2' must be \\[low, high\\]"):
+        gx.Variant("x", "pe", constraints=[{"type": "gain", "lower": 0.0, "ubar_range": {"u2": [1.0]}}])

@@ -746,10 +746,16 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
         if lo is None and hi is None:
             raise SpecError("gain bounds need lower or upper", path)
         rng = c.get("ubar_range")
-        if rng is not None and (isinstance(rng, str) or not isinstance(rng, Sequence)):
-            raise SpecTypeError(f"ubar_range must be a list [low, high] or one [low, high] per input, got {rng!r}",
+        if isinstance(rng, Mapping):  # by input name: a table of [low, high]
+            for k, r in rng.items():
+                if isinstance(r, str) or not isinstance(r, Sequence) or len(r) != 2:
+                    raise SpecError(f"ubar_range of input {k!r} must be [low, high], got {r!r}", path + ("ubar_range", k))
+            rng = {k: [_wrap(check_real, path + ("ubar_range", k), v, "ubar_range") for v in r] for k, r in rng.items()}
+        elif rng is not None and (isinstance(rng, str) or not isinstance(rng, Sequence)):
+            raise SpecTypeError(f"ubar_range must be a list [low, high], one [low, high] per input or a table of "
+                                f"[low, high] by input name, got {rng!r}",
                                 path + ("ubar_range",))
-        if rng is not None:
+        if rng is not None and not isinstance(rng, Mapping):
             box = isinstance(rng, Sequence) and rng and all(isinstance(r, Sequence) and not isinstance(r, str)
                                                             for r in rng)
             if box:  # several inputs: one [low, high] per input
@@ -881,7 +887,9 @@ def build_constraint(d: Mapping, *, curve: gb.StaticCurve | None = None) -> Any:
         return gb.StaticBand(d["b"], form=d["form"], min_denominator=d["min_denominator"])
     if kind == "gain":
         rng = d["ubar_range"]
-        if rng is not None:
+        if isinstance(rng, Mapping):
+            rng = {k: tuple(r) for k, r in rng.items()}
+        elif rng is not None:
             rng = tuple(tuple(r) for r in rng) if np.ndim(rng) == 2 else tuple(rng)
         lo, hi = (tuple(v) if isinstance(v, Sequence) else v for v in (d["lower"], d["upper"]))
         return gb.GainBounds(lo, hi, ubar_range=rng, n=d["n"], min_denominator=d["min_denominator"])

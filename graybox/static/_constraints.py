@@ -900,8 +900,10 @@ class GainBounds(StaticConstraint):
         Gain bounds, output units per input unit (at least one); per input for several inputs, in
         the data's input order, or by input name (``lower={"speed": 0.0}``: held whatever order the
         data list their inputs in; an input not named has no bound on that side).
-    ubar_range : (float, float), or one (low, high) per input, optional
-        ū interval (box); default: the reference's domain, else the static points' range.
+    ubar_range : (float, float), one (low, high) per input, or mapping input name -> (low, high), optional
+        ū interval (box), input units; default: the reference's domain, else the static points' range. By input
+        name (``ubar_range={"speed": (800, 1500)}``), a range holds for that input whatever order the data list
+        their inputs in, and an input not named keeps its default range.
     n : int
         Number of equally spaced ū in the interval (per input) where the bounds are imposed.
     reference : StaticCurve, StaticSurface or callable ū ↦ ȳ, optional
@@ -915,7 +917,7 @@ class GainBounds(StaticConstraint):
 
     lower: float | Sequence[float | None] | Mapping[str, float | None] | None = None
     upper: float | Sequence[float | None] | Mapping[str, float | None] | None = None
-    ubar_range: tuple | None = None
+    ubar_range: tuple | Mapping[str, tuple[float, float]] | None = None
     n: int = 25
     reference: StaticCurve | StaticSurface | Callable[[np.ndarray], np.ndarray] | None = None
     min_denominator: float | str = "auto"
@@ -947,7 +949,9 @@ class GainBounds(StaticConstraint):
         if ref is not None and not (isinstance(ref, (StaticCurve, StaticSurface)) or callable(ref)):
             raise TypeError(f"GainBounds: reference must be a StaticCurve, a StaticSurface or a callable ū ↦ ȳ, "
                             f"got {ref!r} ({type(ref).__name__})")
-        if self.ubar_range is not None:
+        if isinstance(self.ubar_range, Mapping):
+            object.__setattr__(self, "ubar_range", FrozenMap(_named_ranges(self.ubar_range)))
+        elif self.ubar_range is not None:
             rng = check_sequence(self.ubar_range, "GainBounds: ubar_range", "(low, high) or one (low, high) per input")
             if len(rng) == 2 and all(np.ndim(v) == 0 for v in rng):
                 lo, hi = (check_real(v, f"GainBounds: ubar_range[{i}]") for i, v in enumerate(rng))
@@ -991,6 +995,8 @@ class GainBounds(StaticConstraint):
         rng = self.ubar_range
         if rng is None:
             return ""
+        if isinstance(rng, Mapping):
+            return " over " + " × ".join("{} in [{}, {}]".format(k, *level_texts(r)) for k, r in rng.items())
         if np.ndim(rng[0]) == 0:
             return " over ū in [{}, {}]".format(*level_texts(rng))  # ends told apart (10000.01, 10000.03)
         return " over ū in " + " × ".join("[{}, {}]".format(*level_texts(r)) for r in rng)
@@ -1043,6 +1049,8 @@ class GainBounds(StaticConstraint):
             return self._grid_several(ctx, m)
         ref = self.reference if self.reference is not None else ctx.curve
         rng = self.ubar_range
+        if isinstance(rng, Mapping):  # by name: the one input's range, else its default (below)
+            rng = self._named_box(_input_names(ctx), 1, None)[0]
         if rng is not None and np.ndim(rng[0]) != 0:
             if len(rng) != 1:
                 raise ValueError(f"{self.describe()}: ubar_range has {len(rng)} ranges but the structure has one input")
@@ -1082,13 +1090,18 @@ class GainBounds(StaticConstraint):
         if isinstance(ref, StaticSurface):
             _check_surface_inputs(ref, ctx.cluster_map)
         rng = self.ubar_range
-        if rng is not None and (np.ndim(rng[0]) == 0 or len(rng) != m):
+        named = isinstance(rng, Mapping)
+        if named:  # by name: each named input's range, the others' their default (below)
+            rng = None
+        elif rng is not None and (np.ndim(rng[0]) == 0 or len(rng) != m):
             raise ValueError(f"{self.describe()}: ubar_range must give one (low, high) per input ({m})")
         if ref is None:
             if ctx.points is None:
                 raise ValueError(f"{self.describe()} needs a reference ȳ(ū): a static surface or static points")
             U = static_inputs(ctx.points.ubar, m, self.describe())
             yb = np.asarray(ctx.points.ybar, float)
+            if named:
+                rng = self._named_box(_input_names(ctx), m, [(-np.inf, np.inf)] * m)
             if rng is not None:
                 inside = np.all([(U[:, j] >= lo) & (U[:, j] <= hi) for j, (lo, hi) in enumerate(rng)], axis=0)
                 if not inside.any():
@@ -1102,8 +1115,10 @@ class GainBounds(StaticConstraint):
             elif ctx.points is not None:
                 U = static_inputs(ctx.points.ubar, m, self.describe())
                 rng = tuple((float(U[:, j].min()), float(U[:, j].max())) for j in range(m))
-            else:
+            elif not named:
                 raise ValueError(f"{self.describe()}: give ubar_range (no surface domain or static points to take it from)")
+        if named:
+            rng = self._named_box(_input_names(ctx), m, rng)
         U = box_grid(rng, int(self.n))
         try:
             yb = np.asarray(ref(U), float).reshape(-1)
@@ -1114,11 +1129,35 @@ class GainBounds(StaticConstraint):
                              f"({U.shape[0]},)")
         return U, yb
 
+    def _named_box(self, inputs: tuple[str, ...], m: int, default: Sequence[tuple[float, float]] | None
+                   ) -> list[tuple[float, float]]:
+        """The box of ``ubar_range`` by input name over ``inputs`` (the data's input names, ``m`` of them): a named
+        input's range, the others' from ``default`` (one (low, high) per input; None when there is none to take)."""
+        ranges = self.ubar_range
+        if len(inputs) != m:
+            raise ValueError(f"{self.describe()}: ranges by input name need the data's input names")
+        unknown = [k for k in ranges if k not in inputs]
+        if unknown:
+            raise ValueError(f"{self.describe()}: no input named {', '.join(map(repr, unknown))}; the inputs are "
+                             f"{inputs}")
+        box = []
+        for j, name in enumerate(inputs):
+            if name in ranges:
+                box.append(ranges[name])
+            elif default is None:
+                box.append(None)
+            else:
+                box.append(default[j])
+        if any(r is None for r in box):
+            missing = [n for n, r in zip(inputs, box) if r is None]
+            raise ValueError(f"{self.describe()}: no range for {', '.join(map(repr, missing))} (no curve domain or "
+                             "static points to take it from); name it in ubar_range")
+        return box
+
     def affine(self, ctx: StaticContext) -> AffineRows:
         cm = ctx.cluster_map
         m = n_static_inputs(cm)
-        names = cm.inputs if isinstance(cm, SurfaceClusterMap) else (ctx.inputs or ctx.structure.inputs or ("u",))
-        bounds = self._bounds(m, tuple(names))
+        bounds = self._bounds(m, _input_names(ctx))
         ub, yb = self.grid(ctx)
         one, dR = _denominator_rows(cm, ub, yb)
         rows, rhs = [], []
@@ -1136,6 +1175,30 @@ class GainBounds(StaticConstraint):
                 rows.append(G + upper * dR)
                 rhs.append(upper * one)
         return AffineRows.make(ctx.n_terms, A_ub=np.vstack(rows), b_ub=np.concatenate(rhs))
+
+
+def _input_names(ctx: StaticContext) -> tuple[str, ...]:
+    """The names of a problem's static inputs, in its order (a surface's own, else the data's or structure's)."""
+    cm = ctx.cluster_map
+    return tuple(cm.inputs if isinstance(cm, SurfaceClusterMap) else (ctx.inputs or ctx.structure.inputs or ("u",)))
+
+
+def _named_ranges(v: Mapping) -> dict[str, tuple[float, float]]:
+    """ū ranges by input name: names are text, each range (low, high) finite with low <= high, at least one."""
+    if not v:
+        raise ValueError("GainBounds: ubar_range by input name: give at least one input's (low, high)")
+    out: dict[str, tuple[float, float]] = {}
+    for k, pair in v.items():
+        if not isinstance(k, str):
+            raise TypeError(f"GainBounds: ubar_range by input name takes input names, got {k!r} ({type(k).__name__})")
+        pair = check_sequence(pair, f"GainBounds: ubar_range of input {k!r}", "(low, high)")
+        if len(pair) != 2:
+            raise ValueError(f"GainBounds: ubar_range of input {k!r} must be (low, high), got {pair!r}")
+        lo, hi = (check_real(x, f"GainBounds: ubar_range of input {k!r}") for x in pair)
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+            raise ValueError(f"GainBounds: ubar_range of input {k!r} must be (low, high) with low <= high, got {pair!r}")
+        out[k] = (lo, hi)
+    return out
 
 
 def _named_bounds(v: Mapping, name: str) -> dict[str, float | None]:
