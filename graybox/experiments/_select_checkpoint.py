@@ -114,7 +114,8 @@ class SelectionCheckpoint:
 
     def __init__(self, path: str | os.PathLike):
         self.path = checkpoint_path(path)
-        #: Rows of another graybox (fields this one does not know): never offered, written back as they were read.
+        #: Rows of another graybox (fields this one does not know): never offered, written back as they were read
+        #: (unless this graybox fits a row of the same key: :meth:`put`).
         self.foreign: dict[str, dict[str, np.ndarray]] = {}
         self.rows: dict[str, dict[str, Any]] = self._read() if self.path.exists() else {}
 
@@ -162,6 +163,9 @@ class SelectionCheckpoint:
         with ``write=False`` only here, until the next :meth:`write`."""
         self.rows[key] = {k: (list(row[k]) if k in _ALL_TEXTS else np.asarray(row[k]))
                           for k in _ARRAYS + _TEXTS + tuple(k for k in _OPTIONAL + _OPTIONAL_TEXTS if k in row)}
+        # a row under this key with fields this graybox does not know (a graybox of the same version string, e.g. a
+        # development checkout) is replaced whole: kept, its fields merged into this row made it unknown again
+        self.foreign.pop(key, None)
         if write:
             self.write()
 
