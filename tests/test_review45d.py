@@ -40,3 +40,18 @@ def test_a_row_of_this_version_with_a_field_it_does_not_know_is_refitted_once_an
     again = gb.select_graybox(cand, data, **kw)
     assert len(calls) == 2 * n  # reused from then on
     assert again.table.equals(first.table)
+
+
+def test_select_graybox_says_a_range_of_an_unknown_input_before_any_row(monkeypatch):
+    # GainBounds(ubar_range={"valve": …}) on data of u1, u2: the up-front check read only the bounds' names, so every
+    # row was fitted and failed, and the run said so only after all of them ("no structure has a finite …")
+    from graybox.experiments import _select
+
+    calls: list = []
+    score = _select._score_job
+    monkeypatch.setattr(_select, "_score_job", lambda job: (calls.append(job), score(job))[1])
+    with pytest.raises(ValueError, match=r"^constraints: .*no input named 'valve'"):
+        gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=1, input_names=["u1", "u2"]), gb.load_pumping_miso(),
+                          band=1.0, constraints=gb.GainBounds(lower=0.0, ubar_range={"valve": (0.0, 1.0)}),
+                          progress=False)
+    assert calls == []

@@ -1019,10 +1019,13 @@ class GainBounds(StaticConstraint):
         leaves the transient inputs among ``inputs`` (the inputs' names) free: their z̄ is 0 at every steady state,
         so a gain along them is no static gain (a monotone curve must not fix the sign of a transient effect);
         a bound given per input holds where it is given. Bounds by input name hold where named (``inputs`` must then be the data's names); an input not named has
-        none on that side."""
+        none on that side. The names of ``ubar_range`` by input name are checked here too (a caller checking a
+        constraint against its data before any fit, as ``select_graybox`` does, checks them all)."""
         named = [n for side in (self.lower, self.upper) if isinstance(side, Mapping) for n in side]
+        if isinstance(self.ubar_range, Mapping):
+            named += list(self.ubar_range)
         if named and len(inputs) != m:
-            raise ValueError(f"{self.describe()}: bounds by input name need the data's input names")
+            raise ValueError(f"{self.describe()}: bounds or ranges by input name need the data's input names")
         unknown = [n for n in dict.fromkeys(named) if n not in inputs]
         if unknown:
             raise ValueError(f"{self.describe()}: no input named {', '.join(map(repr, unknown))}; the inputs are "
