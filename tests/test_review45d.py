@@ -55,3 +55,18 @@ def test_select_graybox_says_a_range_of_an_unknown_input_before_any_row(monkeypa
                           band=1.0, constraints=gb.GainBounds(lower=0.0, ubar_range={"valve": (0.0, 1.0)}),
                           progress=False)
     assert calls == []
+
+
+@pytest.mark.parametrize("r, kind", [(5, TypeError), ("ab", TypeError), ([1.0], ValueError)])
+def test_a_grid_specs_range_by_name_of_the_wrong_type_is_a_type_error(r, kind):
+    # {"u2": 5} in a spec was a SpecError (a ValueError), where GainBounds(ubar_range={"u2": 5}) and a spec's
+    # ubar_range = 5 are TypeErrors: a wrong type is a TypeError, a wrong value (a list of one) a ValueError
+    from graybox import experiments as gx
+
+    with pytest.raises(kind, match="ubar_range of input 'u2' must be") as got:
+        gx.Variant("x", "pe", constraints=[{"type": "gain", "lower": 0.0, "ubar_range": {"u2": r}}])
+    assert isinstance(got.value, gx.SpecError)
+    if kind is ValueError:
+        assert not isinstance(got.value, TypeError)
+    with pytest.raises(kind):
+        gb.GainBounds(lower=0.0, ubar_range={"u2": r})

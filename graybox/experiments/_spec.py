@@ -748,8 +748,9 @@ def canonical_constraint(c: object, path: tuple = ()) -> dict:
         rng = c.get("ubar_range")
         if isinstance(rng, Mapping):  # by input name: a table of [low, high]
             for k, r in rng.items():
-                if isinstance(r, str) or not isinstance(r, Sequence) or len(r) != 2:
-                    raise SpecError(f"ubar_range of input {k!r} must be [low, high], got {r!r}", path + ("ubar_range", k))
+                if isinstance(r, str) or not isinstance(r, Sequence) or len(r) != 2:  # no list: a wrong type
+                    raise (SpecError if isinstance(r, Sequence) and not isinstance(r, str) else SpecTypeError)(
+                        f"ubar_range of input {k!r} must be [low, high], got {r!r}", path + ("ubar_range", k))
             rng = {k: [_wrap(check_real, path + ("ubar_range", k), v, "ubar_range") for v in r] for k, r in rng.items()}
         elif rng is not None and (isinstance(rng, str) or not isinstance(rng, Sequence)):
             raise SpecTypeError(f"ubar_range must be a list [low, high], one [low, high] per input or a table of "
