@@ -70,3 +70,60 @@ def test_a_grid_specs_range_by_name_of_the_wrong_type_is_a_type_error(r, kind):
         assert not isinstance(got.value, TypeError)
     with pytest.raises(kind):
         gb.GainBounds(lower=0.0, ubar_range={"u2": r})
+
+
+def _no_chmod_by_fd(monkeypatch):
+    """os.chmod as Windows' Python before 3.13 has it: no file descriptors (a TypeError for one)."""
+    import os
+
+    real = os.chmod
+
+    def chmod(path, mode, *a, **kw):
+        if isinstance(path, int):
+            raise TypeError(f"chmod: path should be string, bytes or os.PathLike, not {type(path).__name__}")
+        return real(path, mode, *a, **kw)
+
+    monkeypatch.setattr(os, "chmod", chmod)
+    monkeypatch.setattr(os, "supports_fd", {f for f in os.supports_fd if f is not real})
+
+
+def test_a_checkpoints_rewrite_where_chmod_takes_no_file_descriptor(tmp_path, monkeypatch):
+    # core._files gave every checkpoint rewrite the old file's mode by os.chmod(fd, …), which Windows' Python before
+    # 3.13 refuses (a TypeError): every SE sweep's or selection's second checkpoint write failed there, its file
+    # beside the checkpoint left behind
+    import os
+    import stat
+
+    from graybox.estimation._simulation_error import read_npz, save_npz
+
+    path = tmp_path / "front.npz"
+    save_npz(path, x=np.zeros(2))
+    os.chmod(path, 0o600)
+    _no_chmod_by_fd(monkeypatch)
+    save_npz(path, x=np.ones(2))
+    monkeypatch.undo()
+    assert np.array_equal(read_npz(path)["x"], np.ones(2))
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    assert [p.name for p in tmp_path.iterdir()] == ["front.npz"]
+
+
+def test_a_file_system_refusing_modes_still_takes_a_save_never_wider_than_the_file_was(tmp_path, monkeypatch):
+    # a mount that refuses chmod (EPERM: some FUSE and CIFS mounts), where open(path, "w") writes: a JSON save
+    # failed as "cannot write in the folder", leaving its file beside the target (and its descriptor open)
+    import errno
+    import os
+    import stat
+
+    path = tmp_path / "model.json"
+    gb.save(gb.Record(u=np.arange(5.0), y=np.arange(5.0)), path)
+    os.chmod(path, 0o600)
+
+    def refuse(*a, **kw):
+        raise PermissionError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(os, "chmod", refuse)
+    gb.save(gb.Record(u=np.arange(6.0), y=np.arange(6.0)), path)
+    monkeypatch.undo()
+    assert gb.load(path).y.size == 6
+    assert stat.S_IMODE(path.stat().st_mode) & 0o077 == 0  # a private file stays private
+    assert [p.name for p in tmp_path.iterdir()] == ["model.json"]

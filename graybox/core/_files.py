@@ -90,19 +90,25 @@ def _written_beside(target: Path) -> re.Pattern[str]:
 
 def _new_file_beside(target: Path) -> tuple[int, Path]:
     """A new file of this write's own next to ``target``, with the mode ``open(target, "w")`` would leave:
-    ``target``'s own when it exists, else 0666 less the umask (``mkstemp`` would make every file private, 0600)."""
+    ``target``'s own when it exists, else 0666 less the umask (``mkstemp`` would make every file private, 0600).
+
+    The file is made no wider than ``target`` (its mode less the umask, the owner's write kept), then given
+    ``target``'s mode exactly where the file system takes modes: a mount refusing chmod (some FUSE and CIFS ones)
+    takes the write as ``open(target, "w")`` would, and never makes a private file readable by others."""
     try:
         mode = stat.S_IMODE(os.stat(target).st_mode)
     except OSError:
         mode = None
     while True:
         tmp = target.with_name(f"{target.name}.{writer_tag()}-{secrets.token_hex(4)}.tmp")
-        try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
+        try:  # the umask applies
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666 if mode is None else (mode & 0o666) | 0o200)
         except FileExistsError:  # pragma: no cover - a name drawn twice
             continue
         if mode is not None:
-            os.chmod(fd, mode)
+            # by descriptor where chmod takes one (Windows' Python before 3.13 does not: a TypeError), else by name
+            with contextlib.suppress(OSError):
+                os.chmod(fd if os.chmod in os.supports_fd else tmp, mode)
         return fd, tmp
 
 
