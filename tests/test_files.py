@@ -121,3 +121,17 @@ def test_a_lock_held_elsewhere_is_not_taken(tmp_path):
     finally:
         os.close(a)
         os.close(b)
+
+
+def test_an_older_json_saves_leftover_is_swept_once_old(tmp_path):
+    # graybox 0.3.0's JSON saves named their file beside the target without a writer: never swept
+    target = tmp_path / "model.json"
+    left = tmp_path / "model.json.0badc0de.tmp"
+    left.write_text("half a model")
+    record = gb.Record(u=np.arange(5.0), y=np.arange(5.0))
+    gb.save(record, target)
+    assert left.exists()  # young: perhaps a live writer's
+    old = time.time() - 2 * _files.LEFTOVER_SECONDS
+    os.utime(left, (old, old))
+    gb.save(record, target)
+    assert not left.exists()

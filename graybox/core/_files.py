@@ -76,7 +76,7 @@ def sweep_leftovers(folder: Path, name: re.Pattern[str], now: float, max_age: fl
                 continue
             with contextlib.suppress(OSError):  # gone meanwhile, or not ours to remove
                 gone = ("pid" in groups and "host" in groups and m.group("host") == host
-                        and not pid_alive(int(m.group("pid"))))
+                        and m.group("pid") is not None and not pid_alive(int(m.group("pid"))))
                 if gone or now - f.stat().st_mtime > max_age:
                     f.unlink()
                     removed.append(f)
@@ -85,7 +85,8 @@ def sweep_leftovers(folder: Path, name: re.Pattern[str], now: float, max_age: fl
 
 def _written_beside(target: Path) -> re.Pattern[str]:
     """The names :func:`write_atomically` gives its files beside ``target`` (with the writer's host and pid)."""
-    return re.compile(rf"{re.escape(target.name)}\.(?:(?P<host>[^-]+)-)?(?P<pid>\d+)-[0-9a-f]{{8}}\.tmp")
+    # without host (graybox 0.3.0's checkpoints) or without host and pid (its JSON saves): swept by age only
+    return re.compile(rf"{re.escape(target.name)}\.(?:(?:(?P<host>[^-]+)-)?(?P<pid>\d+)-)?[0-9a-f]{{8}}\.tmp")
 
 
 def _new_file_beside(target: Path) -> tuple[int, Path]:
