@@ -3,7 +3,8 @@
 A gray-box model must be able to *represent* the static information before any estimator can
 impose it. At a constant input the clusters Σ_{u^m} (terms in u only) make the numerator of the
 static function and Σ_y its denominator (eq. (6)); a rational structure reproduces a polynomial
-curve of degree d exactly (eq. (22)) only when it has every cluster Σ_{u^0} … Σ_{u^d} and Σ_y.
+curve of degree d exactly (eq. (22)) only when it has every cluster Σ_{u^0} … Σ_{u^d} and Σ_y (candidates
+without output terms, an NFIR structure, have no denominator: Σ_{u^0} … Σ_{u^d} carry the curve).
 Notebooks 02 and 04 added "the simplest term per missing cluster" by hand; this module does it:
 
 - :func:`static_degree` — the degree of the curve the static information asks for: a
@@ -130,7 +131,8 @@ def static_terms(structure: Structure, candidates: Structure, degree: int,
         Where the missing terms are taken from.
     degree : int
         Degree d of the static curve: clusters Σ_{u^0} … Σ_{u^d} and Σ_y are needed (several
-        inputs: every Σ_{u1^a1 ⋯ um^am} with a1 + … + am ≤ d, and Σ_y).
+        inputs: every Σ_{u1^a1 ⋯ um^am} with a1 + … + am ≤ d, and Σ_y); Σ_y only when the candidates or
+        the structure hold output terms (without, the static function is its numerator alone).
     inputs : tuple of str, optional
         The inputs the form is a polynomial in (default: every input of the candidates and the
         structure); the others are held by the static information (:func:`varied_inputs`), and
@@ -172,7 +174,10 @@ def _complete(structure: Structure, candidates: Structure, degree: int,
     m = len(inputs)
     pos = [i for i, n in enumerate(inputs) if varied is None or n in varied]
     need = [(0,) + e for e in _embedded(monomial_exponents(len(pos), degree) if pos else ((),), pos, m)]
-    need += [(1,) + (0,) * m]
+    # Σy is the static function's denominator: a structure with output terms needs it; one of candidates without
+    # any (NFIR) has the numerator alone (Σy = 0), which carries the curve
+    if any(t.power_of("y") for t in (*candidates, *structure) if not t.is_noise):
+        need += [(1,) + (0,) * m]
     have = {surface_cluster_key(t, inputs) for t in structure if not t.is_noise}
     out, missing = [], []
     for key in need:
@@ -200,7 +205,7 @@ def _embedded(exponents, pos: list[int], m: int) -> list[tuple[int, ...]]:
 def carried_degree(candidates: Structure, degree: int, inputs: tuple[str, ...] | None = None) -> int | None:
     """The largest degree d <= ``degree`` whose static form (clusters Σ_{u^0} … Σ_{u^d}, Σ_y; every
     monomial of total degree <= d with several inputs) the candidates can complete; None when they
-    cannot complete even degree 0 (no constant, or no output term).
+    cannot complete even degree 0 (no constant, or output terms but no Σ_y term).
 
     Parameters
     ----------
