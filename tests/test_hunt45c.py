@@ -45,3 +45,52 @@ def test_select_graybox_chooses_a_gray_box_among_nfir_structures():
     assert not any(t.power_of("y") for t in sel.structure)
     # the chosen static curve meets the points within the band
     assert gb.jsf(sel.model, data.static) <= sel.band
+
+
+# --- semp at the largest size a short record allows ----------------------------------------------------------------
+def _short_random(n, seed):
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(0.0, 2.0, n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.8 * y[k - 1] + 0.5 * u[k - 1] + 0.1 * u[k - 1] ** 2 + 0.3
+    return gb.Record(u, y + 0.05 * rng.standard_normal(n))
+
+
+def test_semp_warns_when_its_criterion_is_smallest_where_the_records_rows_end():
+    # 10 samples, lags 2: 8 regression rows, so the default max_terms is 7 of 15 candidates. BIC smallest at 7
+    # terms has met the record's end (the model interpolates it), which frols says in these words; semp chose
+    # it silently
+    cand = gb.Candidates(ny=2, nu=2, degree=2)
+    rec = _short_random(10, 2)
+    with pytest.warns(RuntimeWarning, match="largest size the data allow"):
+        f = gb.frols(cand, rec, criterion="bic")
+    assert len(f.structure) == 7
+    with pytest.warns(RuntimeWarning, match="largest size the data allow") as said:
+        s = gb.semp(cand, rec)
+    assert len(s.structure) == 7 == s.path["n_terms"].max()
+    assert "8 regression rows" in str(said[0].message)
+
+
+def test_semp_says_nothing_of_the_rows_when_its_minimum_lies_below_them():
+    cand = gb.Candidates(ny=2, nu=2, degree=2)
+    rec = _plant(120, 1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        s = gb.semp(cand, rec)
+    assert len(s.structure) < s.path["n_terms"].max()
+
+
+def test_select_graybox_keeps_the_rows_cap_warning_of_its_own_path_to_itself():
+    # select_graybox grows the SEMP path to the sizes it compares on other data: that the criterion is smallest
+    # at the largest size (candidates' or rows') is no news to its caller
+    # two records of 9 samples: 14 regression rows, so the path stops at 13 terms of 15 candidates
+    recs = [_short_random(9, 4), _short_random(9, 14)]
+    with pytest.warns(RuntimeWarning, match="largest size the data allow"):
+        gb.semp(gb.Candidates(ny=2, nu=2, degree=2), recs, max_terms=13)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        warnings.simplefilter("ignore", gb.experiments.SelectionWarning)
+        sel = gb.select_graybox(gb.Candidates(ny=2, nu=2, degree=2), recs, validation=_short_random(60, 5),
+                                estimator="ls", sources=["semp"])
+    assert len(sel.table)

@@ -700,9 +700,10 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
     reached: dict[str, set] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.CandidateWarning)
-        # the path is grown to the largest size asked for on purpose; that its criterion may still fall
-        # there is no news to the caller, who chooses among the sizes on other data
-        warnings.filterwarnings("ignore", r".* is smallest at the largest size looked at", RuntimeWarning)
+        # the path is grown to the largest size asked for (or the rows allow) on purpose; that its criterion may
+        # still fall there is no news to the caller, who chooses among the sizes on other data
+        warnings.filterwarnings("ignore", r".* is smallest at the largest size (looked at|the data allow)",
+                                RuntimeWarning)
         if "semp" in sources:
             # grown by criterion at least as far as the default sizes' path, whatever sizes are asked: a path cut
             # at the largest size asked has no look-ahead there (SEMP's pruning improves a size only once larger

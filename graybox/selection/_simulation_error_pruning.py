@@ -322,7 +322,8 @@ def semp(
     RuntimeWarning
         As :func:`graybox.frols` (the same stopping rule): when ``tol`` is not reached within
         ``max_terms`` terms, or the criterion is smallest at ``max_terms`` terms while candidates
-        were left (the curve may still be falling).
+        were left (the curve may still be falling), or at the largest size the record's rows allow
+        (samples after the largest lag − 1: the structure interpolates the record).
     """
     opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
     if check_bool(centre, "centre"):
@@ -573,9 +574,14 @@ def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
     # the same rule as frols: the size asked for, the smallest model within the tolerance, or the
     # criterion's minimum (warning when the size limit cut the curve or the search short)
     scored = path[path["n_terms"] > 0] if (path["n_terms"] > 0).any() else path
+    # the rows alone kept larger structures from being looked at (candidates were left): a criterion smallest
+    # there has met the record's end, which frols says in the same words
+    largest = int(scored["n_terms"].max())
+    rows_cap = sc.n_rows if largest == sc.n_rows - 1 < int(np.sum(~sc.zero)) else None
     i, why = choose_model(stop_rule(opt.n_terms, opt.tol, opt.criterion, curve_default="bic"),
                           scored["n_terms"].to_numpy(), scored["criterion"].to_numpy(),
-                          scored["score"].to_numpy() / sc.yvar, can_grow=capped, fraction="free-run MSE / var(y)")
+                          scored["score"].to_numpy() / sc.yvar, can_grow=capped, fraction="free-run MSE / var(y)",
+                          rows_cap=rows_cap)
     best = scored.iloc[i]
     current = list(best["_set"])
     fwd = pd.DataFrame(np.array(run.fwd) if run.fwd else np.zeros((0, len(run.names))), columns=run.names)
