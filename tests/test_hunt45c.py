@@ -94,3 +94,19 @@ def test_select_graybox_keeps_the_rows_cap_warning_of_its_own_path_to_itself():
         sel = gb.select_graybox(gb.Candidates(ny=2, nu=2, degree=2), recs, validation=_short_random(60, 5),
                                 estimator="ls", sources=["semp"])
     assert len(sel.table)
+
+
+# --- a centred search of an output that never moves --------------------------------------------------------------
+@pytest.mark.parametrize("level", [4.5, 7.3, 1e4 + 0.1])
+def test_a_centred_search_of_a_constant_output_is_refused_saying_so_whatever_its_level(level):
+    # centred on its mean, a constant output is zero: at 4.5 (whose mean is exact in floating point) the searches
+    # said "the output is identically zero", untrue of y = 4.5; at 7.3 (mean off by round-off) they ranked
+    # structures on that round-off, and select_graybox chose a 4-term model of a constant
+    cand = gb.Candidates(ny=2, nu=2, degree=2)
+    rec = gb.Record(np.random.default_rng(0).uniform(0.0, 2.0, 100), np.full(100, level))
+    calls = [lambda: gb.frols(cand, rec, centre=True, criterion="bic"), lambda: gb.semp(cand, rec, centre=True),
+             lambda: gb.select_graybox(cand, rec, centre=True, estimator="ls")]
+    for call in calls:
+        with pytest.raises(ValueError, match=r"the output is constant \(y = ") as err:
+            call()
+        assert "identically zero" not in str(err.value) and "centre" in str(err.value)

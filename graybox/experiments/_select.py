@@ -667,7 +667,7 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
     ident = _fit_data(idents)
     if centre:
         _centring.check_included(include, process, list(idents))
-        ident = _centring.centred_data(ident, _centring.signal_offsets(list(idents)))
+        ident = _centring.centred_data(ident, _centring.search_offsets(list(idents)))
     samples = sum(len(r) for r in idents)
     data, of = (("the identification record", "the identification record's") if len(idents) == 1 else
                 (f"the {len(idents)} identification records", f"the {len(idents)} identification records'"))

@@ -53,6 +53,19 @@ def signal_offsets(data: object) -> dict[str, float]:
     return offsets
 
 
+def search_offsets(data: object) -> dict[str, float]:
+    """:func:`signal_offsets` for a structure search on the centred signals; ``ValueError`` when the output is
+    constant over the records: centred it is zero (or its mean's round-off, where the mean is inexact), which
+    no search can rank structures on."""
+    offsets = signal_offsets(data)
+    ys = np.concatenate([r.y for r in as_records(data)])
+    if ys.size and np.ptp(ys) == 0.0:
+        raise ValueError(f"the output is constant (y = {ys[0]:.6g} at every sample of the identification data): "
+                         "centred on its mean it is zero, and a structure search has nothing to rank there; its "
+                         "model is the constant alone (which frols and semp choose with centre left out)")
+    return offsets
+
+
 def _shift_record(rec: Record, offsets: Mapping[str, float]) -> Record:
     d = np.array([offsets[n] for n in rec.input_names])
     u = rec.u - (d[0] if rec.u.ndim == 1 else d)

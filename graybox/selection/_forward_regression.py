@@ -661,7 +661,7 @@ def frols(
     ------
     ValueError
         Conflicting or out-of-range arguments; no process candidates; an output that is
-        identically zero; more terms asked than independent candidates on these data; a selected
+        identically zero (with ``centre=True``, constant); more terms asked than independent candidates on these data; a selected
         term that the accurate factor of the chosen columns finds dependent on those before it
         (noise-free data, where the Gram form's ranking cannot tell).
     MemoryError
@@ -826,7 +826,7 @@ def frols(
 
 def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     """frols(centre=True): select on the centred signals, close the choice under shifts, refit (see frols)."""
-    offsets = _centring.signal_offsets(data)
+    offsets = _centring.search_offsets(data)
     centred = _centring.centred_data(data, offsets)
     _centring.check_included(options["include"], candidates.process, data)
     # the search's CandidateWarning is said after the closure, which can bring back a term it left out

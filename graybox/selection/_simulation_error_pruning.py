@@ -314,8 +314,8 @@ def semp(
     ------
     ValueError
         Conflicting or out-of-range arguments, no process candidates, records shorter than the
-        candidates' largest lag, an output that is identically zero, or no candidate that can be
-        added (all collinear or diverging).
+        candidates' largest lag, an output that is identically zero (with ``centre=True``, constant),
+        or no candidate that can be added (all collinear or diverging).
 
     Warns
     -----
@@ -357,7 +357,7 @@ def semp(
 
 def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Dataset, **options) -> SEMPResult:
     """semp(centre=True): search on the centred signals, close the choice under shifts, refit (see semp)."""
-    offsets = _centring.signal_offsets(data)
+    offsets = _centring.search_offsets(data)
     centred = _centring.centred_data(data, offsets)
     _centring.check_included(options["include"], candidates.process, data)
     res = semp(candidates, centred, **options)
