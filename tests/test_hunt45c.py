@@ -110,3 +110,33 @@ def test_a_centred_search_of_a_constant_output_is_refused_saying_so_whatever_its
         with pytest.raises(ValueError, match=r"the output is constant \(y = ") as err:
             call()
         assert "identically zero" not in str(err.value) and "centre" in str(err.value)
+
+
+# --- a centred search with an input held over the identification record ------------------------------------------
+def _rig(n, seed, hold=8):
+    """y(k) = 1.1 y(k-1) − 0.3 y(k-2) + 0.4 s(k-1) + 0.2 v(k-2) + 0.05 s(k-1) v(k-2) + 0.3 under staircases in s, v."""
+    rng = np.random.default_rng(seed)
+    s = np.repeat(rng.uniform(0.0, 2.0, n // hold + 1), hold)[:n]
+    v = np.repeat(rng.uniform(0.0, 3.0, n // (hold + 3) + 1), hold + 3)[:n]
+    y = np.zeros(n)
+    y[:2] = (0.4 * s[0] + 0.2 * v[0] + 0.05 * s[0] * v[0] + 0.3) / 0.2
+    for k in range(2, n):
+        y[k] = 1.1 * y[k - 1] - 0.3 * y[k - 2] + 0.4 * s[k - 1] + 0.2 * v[k - 2] + 0.05 * s[k - 1] * v[k - 2] + 0.3
+    return s, y + 0.02 * np.std(y) * np.random.default_rng(seed + 7).standard_normal(n)
+
+
+def test_a_centred_search_is_the_same_whatever_level_an_input_is_held_at():
+    # one record, only the held valve's recorded level differs: its terms are constants, which centred are zero at
+    # 1.5 (whose mean is exact in floating point) and a column of round-off at 7.3 or 1e4 + 0.3. semp took those
+    # for candidates (15 sizes instead of 14) and chose 'speed(k-2) + 1' there, a 6-term structure at 1.5
+    cand = gb.Candidates(ny=2, nu=2, degree=2, input_names=("speed", "valve"))
+    s, y = _rig(200, 1)
+    found = []
+    for level in (1.5, 7.3, 1e4 + 0.3):
+        rec = gb.Record(np.c_[s, np.full(200, level)], y, input_names=("speed", "valve"))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.CandidateWarning)  # the valve's terms, which the record cannot tell
+            found.append((frozenset(map(str, gb.semp(cand, rec, centre=True).structure)),
+                          frozenset(map(str, gb.frols(cand, rec, centre=True, criterion="bic").structure))))
+    assert found[0] == found[1] == found[2]
+    assert len(found[0][0]) > 2

@@ -39,7 +39,7 @@ def signal_offsets(data: object) -> dict[str, float]:
     -------
     dict
         ``{"y": mean of y, name: mean of that input, ...}`` in engineering units, over every sample of
-        every record (pooled).
+        every record (pooled); a signal held at one level, that level (centred, exactly zero).
     """
     if is_dask_data(data):
         raise ValueError("centre=True needs the records in memory (a DaskRecord is not centred); "
@@ -48,9 +48,16 @@ def signal_offsets(data: object) -> dict[str, float]:
     names = records[0].input_names
     ys = np.concatenate([r.y for r in records])
     us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
-    offsets = {"y": float(ys.mean())}
-    offsets.update({n: float(us[:, i].mean()) for i, n in enumerate(names)})
+    offsets = {"y": _centre_of(ys)}
+    offsets.update({n: _centre_of(us[:, i]) for i, n in enumerate(names)})
     return offsets
+
+
+def _centre_of(x: np.ndarray) -> float:
+    """The mean of a signal; for one held at a single level, that level: centred it is then exactly zero, where
+    the mean's round-off (7.3 held: 7.3 − mean ≈ 1e-15) left columns of round-off that the searches took for
+    candidates, so that what they chose depended on the level the input was held at."""
+    return float(x[0]) if x.size and np.ptp(x) == 0.0 else float(x.mean())
 
 
 def search_offsets(data: object) -> dict[str, float]:
