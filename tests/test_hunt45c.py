@@ -140,3 +140,15 @@ def test_a_centred_search_is_the_same_whatever_level_an_input_is_held_at():
                           frozenset(map(str, gb.frols(cand, rec, centre=True, criterion="bic").structure))))
     assert found[0] == found[1] == found[2]
     assert len(found[0][0]) > 2
+
+
+# --- the default include and candidates without the constant ----------------------------------------------------
+def test_select_graybox_says_its_default_include_is_what_candidates_without_a_constant_lack():
+    # include was not given: the refusal read "included term 1 is not among the process candidates"
+    cand = gb.Candidates(ny=2, nu=2, degree=2, constant=False)
+    data = gb.Dataset(_plant(150, 1), _plant(120, 2))
+    with pytest.raises(ValueError, match=r"include defaults to the constant.*constant=False.*include=\(\)"):
+        gb.select_graybox(cand, data, estimator="ls")
+    # what it advises runs: a black box without the constant
+    sel = gb.select_graybox(cand, data, estimator="ls", include=(), sizes=[4])
+    assert "1" not in map(str, sel.structure)

@@ -552,6 +552,9 @@ class _Form:
     inputs: tuple[str, ...]
 
 
+#: The terms every structure holds unless ``include`` says otherwise: the constant.
+_INCLUDE = ("1",)
+
 #: Blocks of the validation record and folds of a record alone, when not given.
 BLOCKS, FOLDS = 5, 3
 
@@ -1125,7 +1128,7 @@ def select_graybox(
     blocks: int | None = None,
     folds: int | None = None,
     shortlist: int | None = None,
-    include: Sequence[str] = ("1",),
+    include: Sequence[str] = _INCLUDE,
     fallback: str | None = None,
     executor: str | None = None,
     workers: int | None = None,
@@ -1212,7 +1215,8 @@ def select_graybox(
         does not predict SE's: BENCHMARKS.md, honest selection). Refused (``ValueError``) unless the
         estimators hold a fast and a slow one.
     include : sequence of str
-        Terms in every structure (default the constant, which eq. (22)-style static fits need).
+        Terms in every structure (default the constant, which eq. (22)-style static fits need;
+        candidates without the constant need ``include=()``).
     fallback : {None, "min_jsf"}
         When no structure meets the band: None raises ``ValueError`` naming the smallest J_SF
         reached; ``"min_jsf"`` takes the structure with the smallest J_SF and says so.
@@ -1279,6 +1283,10 @@ def select_graybox(
     sources = (sources,) if isinstance(sources, str) else check_sequence(sources, "sources")
     if sizes is not None:
         sizes = [check_int(s, "sizes", low=1) for s in check_sequence(sizes, "sizes")]
+    if include is _INCLUDE and isinstance(candidates, gb.Structure) and gb.Term(()) not in candidates.process:
+        # not the caller's word: say which default the candidates refuse, and how to do without it
+        raise ValueError("include defaults to the constant '1', which the candidates lack (Candidates(..., "
+                         "constant=False)): pass include=() to search without it, or candidates with the constant")
     include = check_sequence(include, "include")
     lam = None if lambdas is None else tuple(float(x) for x in check_lambdas(lambdas))
     folds, blocks = (None if v is None else check_int(v, k, low=2) for v, k in ((folds, "folds"), (blocks, "blocks")))
