@@ -152,3 +152,14 @@ def test_select_graybox_says_its_default_include_is_what_candidates_without_a_co
     # what it advises runs: a black box without the constant
     sel = gb.select_graybox(cand, data, estimator="ls", include=(), sizes=[4])
     assert "1" not in map(str, sel.structure)
+
+
+# --- a validation record too short for one block of the minimum length -----------------------------------------
+def test_the_fewer_blocks_warning_does_not_claim_a_block_longer_than_the_record():
+    # 9 samples, lags 2: 7 error samples, said to "make 1 block(s) of at least 10 samples"
+    with pytest.warns(gb.experiments.SelectionWarning, match="blocks") as said:
+        gb.select_graybox(gb.Candidates(ny=2, nu=2, degree=2), _plant(150, 1), validation=_plant(9, 2),
+                          estimator="ls", sizes=[4])
+    text = " ".join(str(w.message) for w in said if "block" in str(w.message))
+    assert "at least 10 samples" not in text or "too few" in text
+    assert "7 error samples" in text and "one block" in text

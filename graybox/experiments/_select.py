@@ -455,8 +455,12 @@ def _block_edges(n: int, L: int, blocks: int, name: str = "validation") -> np.nd
     min_len = max(2 * L + 2, 10)
     b = min(blocks, max(1, (n - L) // min_len))
     if b < blocks:
-        warn(f"the {name} record's {n - L} error samples make {b} block(s) of at least {min_len} samples, not "
-             f"{blocks}" + ("; with one block the rule is 'min'" if b < 2 else ""), SelectionWarning)
+        if n - L < min_len:  # not even one block of that length: the record is one (shorter) block
+            said = (f"are too few for blocks of at least {min_len} samples: they make one block, not {blocks}")
+        else:
+            said = f"make {b} block(s) of at least {min_len} samples, not {blocks}"
+        warn(f"the {name} record's {n - L} error samples {said}" + ("; with one block the rule is 'min'" if b < 2
+                                                                     else ""), SelectionWarning)
     return np.linspace(L, n, b + 1).astype(int)
 
 
