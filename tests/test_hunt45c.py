@@ -163,3 +163,49 @@ def test_the_fewer_blocks_warning_does_not_claim_a_block_longer_than_the_record(
     text = " ".join(str(w.message) for w in said if "block" in str(w.message))
     assert "at least 10 samples" not in text or "too few" in text
     assert "7 error samples" in text and "one block" in text
+
+
+# --- static points on a grid with an input at two levels ----------------------------------------------------------
+def _curved_in_speed(s, v):
+    return 0.4 * s + 0.3 * s ** 2 + 0.2 * v + 0.3
+
+
+def test_points_at_two_levels_of_one_input_still_ask_the_curvature_of_the_other():
+    # a static test at 4 speeds × 2 valve positions, curved in speed: the full quadratic surface needs valve²,
+    # which two valve levels cannot determine, so the degree stopped at 1 (MSE 0.43, band 0.0025), silently, and
+    # the structures were not completed with Σspeed². The monomials the points determine (each input's power
+    # below its number of levels) fit it at degree 2
+    from graybox.static._form_check import static_degree, static_fit_mse
+    g = np.array([(a, b) for a in (0.0, 0.6, 1.3, 2.0) for b in (0.5, 2.5)])
+    pts = gb.StaticPoints(g, _curved_in_speed(g[:, 0], g[:, 1]) / 0.2, input_names=("speed", "valve"),
+                          uncertainty=np.full(len(g), 0.05))
+    assert static_fit_mse(pts, 1) > pts.band
+    assert static_fit_mse(pts, 2) < 1e-20  # s², sv determined; v² is not asked of two levels
+    assert static_degree(pts, band=pts.band) == 2
+    # a full grid determines the full surface as before
+    full = np.array([(a, b) for a in (0.0, 1.0, 2.0) for b in (0.5, 1.5, 2.5)])
+    grid = gb.StaticPoints(full, _curved_in_speed(full[:, 0], full[:, 1]), input_names=("speed", "valve"))
+    assert static_degree(grid, band=1e-6) == 2
+
+
+def test_select_graybox_completes_the_structures_with_the_curvature_two_valve_levels_leave_determined():
+    rng = np.random.default_rng(1)
+
+    def run(n, name):
+        s = np.repeat(rng.uniform(0, 2, n // 8 + 1), 8)[:n]
+        v = np.repeat(rng.uniform(0, 3, n // 11 + 1), 11)[:n]
+        y = np.zeros(n)
+        y[0] = _curved_in_speed(s[0], v[0]) / 0.2
+        for k in range(1, n):
+            y[k] = 0.8 * y[k - 1] + _curved_in_speed(s[k - 1], v[k - 1])
+        return gb.Record(np.c_[s, v], y + 0.02 * np.std(y) * rng.standard_normal(n), input_names=("speed", "valve"),
+                         name=name)
+
+    g = np.array([(a, b) for a in (0.1, 0.6, 1.3, 1.9) for b in (0.5, 2.5)])
+    pts = gb.StaticPoints(g, _curved_in_speed(g[:, 0], g[:, 1]) / 0.2, input_names=("speed", "valve"),
+                          uncertainty=np.full(len(g), 0.05))
+    sel = gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2, input_names=("speed", "valve")),
+                            gb.Dataset(run(250, "ident"), run(200, "valid"), pts), estimator="pe", sizes=[3, 4])
+    assert sel.degree == 2 and sel.in_band
+    for row in sel.table.index.unique():  # every structure carries Σspeed²
+        assert "speed(k-1)^2" in map(str, sel.structure_of(row))

@@ -89,7 +89,10 @@ def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
     """Mean squared error (output units²) of the least-squares polynomial of ``degree`` through the
     points (a surface of that total degree with several inputs); None when the points cannot
     determine it (fewer points than coefficients, or points that leave a direction unvaried, as
-    when two inputs always move together). One point is fitted exactly by a constant."""
+    when two inputs always move together). One point is fitted exactly by a constant. With several
+    inputs, an input at k levels enters with powers below k only (its higher powers are a combination
+    of those at these points): 4 speeds × 2 valve positions determine a surface of degree 2 in
+    1, s, v, s², sv, not v²."""
     u = np.asarray(static.ubar, float).reshape(len(static), static.n_inputs)
     # a held input is a constant: the constant monomial carries it
     u = u[:, [static.input_names.index(n) for n in varied_inputs(static)]]
@@ -98,7 +101,10 @@ def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
         if degree > 0:
             return None  # no input varies: only degree 0 is determined
     else:
-        ex = monomial_exponents(u.shape[1], degree)
+        levels = [len(np.unique(col)) for col in u.T]
+        ex = tuple(e for e in monomial_exponents(u.shape[1], degree) if all(p < k for p, k in zip(e, levels)))
+        if not any(sum(e) == degree for e in ex):
+            return None  # nothing of this degree is determined: it is the degree below's fit
     if len(static) < len(ex):
         return None
     # plain least squares on the monomials (no curve object: its domain would refuse one point,
