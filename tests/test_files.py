@@ -135,3 +135,14 @@ def test_an_older_json_saves_leftover_is_swept_once_old(tmp_path):
     os.utime(left, (old, old))
     gb.save(record, target)
     assert not left.exists()
+
+
+@pytest.mark.parametrize("name", ["front.json", "sel.SQLITE", "x.csv"])
+def test_a_checkpoint_named_as_another_format_is_refused(tmp_path, name):
+    # checkpoint="x.json" wrote an .npz under that name, silently (hunt45c's note)
+    from graybox.estimation._simulation_error import checkpoint_path
+
+    with pytest.raises(ValueError, match=r"a checkpoint is an \.npz file.*such as"):
+        checkpoint_path(tmp_path / name)
+    assert checkpoint_path(tmp_path / "front.npz").name == "front.npz"
+    assert checkpoint_path(tmp_path / "front").name == "front"

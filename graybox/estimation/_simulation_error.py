@@ -1414,14 +1414,23 @@ def refit_if_slow(problem: SEProblem, fit: Callable[[SEProblem], _R], what: str,
     return result
 
 
+#: File name endings of graybox's other files and common formats, which a checkpoint (an ``.npz``) is not.
+_OTHER_FORMATS = {".json": "JSON file", ".csv": "CSV file", ".toml": "TOML file", ".sqlite": "SQLite store",
+                  ".db": "database", ".npy": "single NumPy array", ".pkl": "pickle", ".pickle": "pickle"}
+
+
 def checkpoint_path(checkpoint: object) -> Path:
     """``checkpoint`` as a Path, checked before any fit: ``TypeError`` for what is no path, ``ValueError`` for an
-    empty name, a folder given as the file, a folder that does not exist or one this process cannot write in (the
+    empty name, a name ending as another format does (``.json``, ``.sqlite``, …), a folder given as the file, a folder that does not exist or one this process cannot write in (the
     first write would fail only after a member: the file is written beside itself and moved into place)."""
     checkpoint = check_path(checkpoint, "checkpoint")
     if not os.fspath(checkpoint):
         raise ValueError("checkpoint: an empty file name; give a file path such as 'front.npz'")
     path = Path(checkpoint)
+    if path.suffix.lower() in _OTHER_FORMATS:  # a name promising another format, which the file would not be
+        raise ValueError(f"checkpoint: {path} names a {_OTHER_FORMATS[path.suffix.lower()]}, but a checkpoint is an "
+                         f".npz file (NumPy arrays, read without pickle); give a name such as "
+                         f"{path.with_suffix('.npz').name}")
     if path.is_dir():  # the folder meant to hold it: never to be called unreadable, nor deleted
         raise ValueError(f"checkpoint: {path} is a folder; give a file path, such as {path / 'checkpoint.npz'}")
     # the folder the writes go to: a symbolic link is written through (save_npz), beside the file it names
