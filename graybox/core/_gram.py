@@ -367,6 +367,10 @@ def _reduce(factors: Sequence[tuple], data: object, start: int, form: str) -> tu
         recs = [data] if isinstance(data, DaskRecord) else list(data)
         require_lengths(recs, start)
         M = _dask_reduce(factors, recs, start, form)
+        if not np.all(np.isfinite(M)):
+            # a Dask record's samples are first read here: a NaN among them is the data's, said as a Record says it,
+            # not an overflow of the candidates (a second pass, on this error's path only)
+            _refuse_non_finite_samples(recs)
     else:
         recs = as_records(data)
         acc = _Pairwise(np.add if form == "gram" else _r_combine)
@@ -375,6 +379,26 @@ def _reduce(factors: Sequence[tuple], data: object, start: int, form: str) -> tu
             acc.add(_block_reduce(factors, r.u, r.y, start, form, r.input_names))
         M = acc.total()
     return M, int(sum(len(r) - start for r in recs))
+
+
+def _refuse_non_finite_samples(recs: list[DaskRecord]) -> None:
+    """``ValueError`` naming the first non-finite sample of u or y of the first Dask record that has one, as
+    :class:`~graybox.Record` refuses it at construction (a DaskRecord's samples are not read then)."""
+    import dask
+    import dask.array as da
+
+    counts = []
+    for r in recs:
+        for a in (r.u, r.y):
+            bad = ~da.isfinite(a)
+            counts += [bad.sum(), da.argmax(bad)]
+    found = dask.compute(*counts)
+    for i, r in enumerate(recs):
+        for j, nm in enumerate(("u", "y")):
+            n, first = (int(v) for v in found[4 * i + 2 * j: 4 * i + 2 * j + 2])
+            if n:
+                raise ValueError(f"{r.name or f'DaskRecord {i}'}: {nm} has {n} non-finite value(s) (NaN or inf), "
+                                 f"first at index {first}")
 
 
 def _dask_reduce(factors: Sequence[tuple], recs: list[DaskRecord], start: int, form: str) -> np.ndarray:

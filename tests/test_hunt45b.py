@@ -1,0 +1,43 @@
+"""hunt45b: trusting a model (residual tests, covariances, bands, bootstrap) and the long-record path."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+STRUCTURE = ["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]
+
+
+def plant(N: int = 600, seed: int = 0, noise: float = 0.05) -> gb.Record:
+    """y(k) = 0.6 y(k−1) + 0.5 u(k−1) − 0.2 u(k−1)² + 0.3 + e(k), a staircase input in [0.5, 1.5]."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.5, 1.5, N // 10 + 1), 10)[:N]
+    y = np.zeros(N)
+    for k in range(1, N):
+        y[k] = 0.6 * y[k - 1] + 0.5 * u[k - 1] - 0.2 * u[k - 1] ** 2 + 0.3 + noise * rng.standard_normal()
+    return gb.Record(u, y)
+
+
+# --------------------------------------------------------------------------------------------
+# a DaskRecord's samples are read only when it is reduced: a NaN there is the data's, not an overflow
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("signal", ["u", "y"])
+@pytest.mark.parametrize("fit", ["frols", "frols-gram", "cls", "pe_thetas"])
+def test_a_dask_record_with_a_nan_sample_is_refused_naming_the_sample(signal, fit):
+    da = pytest.importorskip("dask.array")
+    rec = plant(N=2000)
+    u, y = rec.u.copy(), rec.y.copy()
+    (u if signal == "u" else y)[1234] = np.nan
+    dr = gb.DaskRecord(da.from_array(u, chunks=500), da.from_array(y, chunks=500), name="long")
+    points = gb.StaticPoints([0.5, 1.0, 1.5], [1.0, 2.0, 3.0])
+    run = {"frols": lambda: gb.frols(gb.Candidates(ny=2, nu=2, degree=2), dr, n_terms=3),
+           "frols-gram": lambda: gb.frols(gb.Candidates(ny=2, nu=2, degree=2), dr, n_terms=3, method="gram"),
+           "cls": lambda: gb.cls(STRUCTURE, dr, points),
+           "pe_thetas": lambda: gb.pe_thetas(STRUCTURE, dr, points, lambdas=[0.5])}[fit]
+    with pytest.raises(ValueError, match=rf"long.*{signal} has 1 non-finite value.*index 1234") as info:
+        run()
+    assert "overflow" not in str(info.value)
