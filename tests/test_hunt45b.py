@@ -41,3 +41,26 @@ def test_a_dask_record_with_a_nan_sample_is_refused_naming_the_sample(signal, fi
     with pytest.raises(ValueError, match=rf"long.*{signal} has 1 non-finite value.*index 1234") as info:
         run()
     assert "overflow" not in str(info.value)
+
+
+# --------------------------------------------------------------------------------------------
+# noise-free data: a member that fits exactly is the optimum, whatever direction its round-off points in
+# --------------------------------------------------------------------------------------------
+def _static_of_plant(ubar: np.ndarray) -> np.ndarray:
+    return (0.5 * ubar - 0.2 * ubar**2 + 0.3) / 0.4
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e4])
+@pytest.mark.parametrize("lam", [0.5, 1.0])
+def test_se_uncertainty_of_an_exact_fit_on_noise_free_data_says_no_stationarity_warning(offset, lam):
+    rec = plant(noise=0.0)
+    rec = gb.Record(rec.u, rec.y + offset)
+    ub = np.linspace(0.5, 1.5, 6)
+    points = gb.StaticPoints(ub, _static_of_plant(ub) + offset)
+    member = gb.se_pareto(STRUCTURE, rec, points, lambdas=[lam], method="gradient").member_model(0)
+    true = np.array([0.3 + 0.4 * offset, 0.6, 0.5, -0.2])  # the structure's order: 1, y(k-1), u(k-1), u(k-1)^2
+    np.testing.assert_allclose(member.theta, true, rtol=1e-9, atol=1e-9)  # the exact optimum
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", gb.UncertaintyWarning)
+        unc = gb.se_uncertainty(member, rec, points, lambda1=lam, static_sigma=0.0)
+    assert np.all(unc.std <= 1e-9 * (1 + np.abs(true)))

@@ -1059,8 +1059,12 @@ def se_uncertainty(
     # has covariance Σ_b w_b⁴ σ_b² Ĵ_bᵀĴ_b = Σ_b w_b² σ_b² J_bᵀJ_b
     G = w1 * np.sqrt(sigma2) * Jd if lam == 1 else np.vstack([w1 * np.sqrt(sigma2) * Jd, w2 * np.sqrt(ss2) * Js])
     g = np.linalg.norm(J.T @ r)
-    rel = g / max(float(np.linalg.norm(J, 2) * np.linalg.norm(r)), 1e-300)
-    if rel > 1e-3:
+    nJ = float(np.linalg.norm(J, 2))
+    rel = g / max(nJ * float(np.linalg.norm(r)), 1e-300)
+    # residuals at the round-off of the fit (1e-11 of the weighted targets, as _check_stationary allows) point
+    # anywhere: a member that fits noise-free data exactly is the optimum, whatever its relative gradient
+    floor = 1e-11 * nJ * _size(w1_ * problem.target, *([w2_ * sp.ybar] if lam < 1 else []))
+    if rel > 1e-3 and g > floor:
         warn(f"se_uncertainty: θ is not a stationary point of the SE objective at λ1 = {lam:g} (relative gradient "
              f"{rel:.1e}); the intervals describe the curvature at this θ, not at an optimum", UncertaintyWarning)
     cov, F = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty", J.shape[0]), problem.scale)
