@@ -64,3 +64,30 @@ def test_se_uncertainty_of_an_exact_fit_on_noise_free_data_says_no_stationarity_
         warnings.simplefilter("error", gb.UncertaintyWarning)
         unc = gb.se_uncertainty(member, rec, points, lambda1=lam, static_sigma=0.0)
     assert np.all(unc.std <= 1e-9 * (1 + np.abs(true)))
+
+
+# --------------------------------------------------------------------------------------------
+# the chunked reduction names an input the records lack, as the in-memory regressors do (not KeyError)
+# --------------------------------------------------------------------------------------------
+SPEED = ["1", "y(k-1)", "speed(k-1)"]
+
+
+@pytest.mark.parametrize("fit", ["cls", "pe_thetas"])
+def test_a_dask_record_without_the_terms_input_is_refused_naming_it(fit):
+    da = pytest.importorskip("dask.array")
+    rec = plant(N=1000)
+    dr = gb.DaskRecord(da.from_array(rec.u, chunks=300), da.from_array(rec.y, chunks=300), name="long")
+    points = gb.StaticPoints([0.5, 1.0, 1.5], [1.0, 2.0, 3.0])
+    run = {"cls": lambda: gb.cls(SPEED, dr, points),
+           "pe_thetas": lambda: gb.pe_thetas(SPEED, dr, points, lambdas=[0.5])}[fit]
+    with pytest.raises(ValueError, match=r"long.*input 'speed'.*inputs are \('u',\)"):
+        run()
+
+
+def test_r_factor_of_records_in_memory_names_the_missing_input():
+    from graybox.core._gram import gram_sums, r_factor
+
+    terms = gb.Structure(SPEED).terms
+    for reduce in (r_factor, gram_sums):
+        with pytest.raises(ValueError, match=r"input 'speed'.*inputs are \('u',\)"):
+            reduce(terms, plant(N=300), 1)

@@ -26,7 +26,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ._records import as_records, check_same_period, check_units, check_units_agree, require_lengths
-from ._regressors import input_signals
+from ._regressors import check_record_inputs, input_signals
 from ._terms import Term
 from ._reprs import short_repr
 from ._validation import check_real, check_str
@@ -363,9 +363,12 @@ def triangular_factor(columns: np.ndarray, y: np.ndarray, scale: np.ndarray | No
 def _reduce(factors: Sequence[tuple], data: object, start: int, form: str) -> tuple[np.ndarray, int]:
     """[Ψ, y]'s Gram matrix summed (``form="gram"``) or its R factor by TSQR (``"qr"``) over the
     records, in memory or on Dask, pairwise; and the number of rows."""
+    # the inputs the terms use, by name: a record without one is refused naming it, before any block is read
+    inputs = list(dict.fromkeys(s for f in factors for s, _ in f if s != "y"))
     if is_dask_data(data):
         recs = [data] if isinstance(data, DaskRecord) else list(data)
         require_lengths(recs, start)
+        check_record_inputs(inputs, recs)
         M = _dask_reduce(factors, recs, start, form)
         if not np.all(np.isfinite(M)):
             # a Dask record's samples are first read here: a NaN among them is the data's, said as a Record says it,
@@ -375,6 +378,7 @@ def _reduce(factors: Sequence[tuple], data: object, start: int, form: str) -> tu
         recs = as_records(data)
         acc = _Pairwise(np.add if form == "gram" else _r_combine)
         require_lengths(recs, start)
+        check_record_inputs(inputs, recs)
         for r in recs:
             acc.add(_block_reduce(factors, r.u, r.y, start, form, r.input_names))
         M = acc.total()

@@ -15,7 +15,7 @@ from ._records import Record, as_records, require_lengths
 from ._terms import Structure, check_input_names, rename_hint
 from ._validation import as_1d_finite, check_int, check_sequence
 
-__all__ = ["record_signals", "check_structure_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
+__all__ = ["record_signals", "check_structure_inputs", "check_record_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
 
 
 def record_signals(record: Record) -> dict[str, np.ndarray]:
@@ -39,11 +39,17 @@ def check_structure_inputs(structure: Structure, records: Sequence[Record]) -> N
     Too short: not more samples than the structure's largest lag (e.g. an input delay beyond the record).
     """
     require_lengths(records, structure.max_lag)
+    check_record_inputs(structure.inputs, records)
+
+
+def check_record_inputs(inputs: Sequence[str], records: Sequence) -> None:
+    """``ValueError`` naming an input of ``inputs`` (the ones the terms use) that a record (a Record or a DaskRecord,
+    anything with ``name`` and ``input_names``) lacks, with how to name them alike."""
     for r in records:
-        missing = [n for n in structure.inputs if n not in r.input_names]
+        missing = [n for n in inputs if n not in r.input_names]
         if missing:
             raise ValueError(f"{r.name}: the terms use input {missing[0]!r}, but the record's inputs are "
-                             f"{r.input_names}{rename_hint(structure.inputs, r.input_names)}")
+                             f"{r.input_names}{rename_hint(tuple(inputs), r.input_names)}")
 
 
 def input_signals(u: np.ndarray, input_names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
