@@ -91,3 +91,18 @@ def test_r_factor_of_records_in_memory_names_the_missing_input():
     for reduce in (r_factor, gram_sums):
         with pytest.raises(ValueError, match=r"input 'speed'.*inputs are \('u',\)"):
             reduce(terms, plant(N=300), 1)
+
+
+# --------------------------------------------------------------------------------------------
+# regressors that overflow on the data are refused by name, not as "non-finite derivatives"
+# --------------------------------------------------------------------------------------------
+def test_ls_uncertainty_names_the_regressor_that_overflows_on_the_data():
+    rec = plant()
+    huge = gb.Record(rec.u * 1e160, rec.y)  # legal samples; u(k-1)^2 is 1e320
+    theta = [0.3, 0.6, 0.5e-160, -0.2e-320]
+    ls = gb.Model(gb.Structure(STRUCTURE), theta)
+    els = gb.Model(gb.Structure(STRUCTURE), theta, gb.Structure(["e(k-1)"]), [0.3])
+    for model in (ls, els):
+        with pytest.raises(ValueError, match=r"ls_uncertainty.*: regressors overflow.* \(e\.g\. u\(k-1\)\^2\)") as info:
+            gb.ls_uncertainty(model, huge)
+        assert "derivatives" not in str(info.value)

@@ -655,18 +655,22 @@ def ls_uncertainty(
     st, ns = model.structure, model.noise_structure
     n, ne = len(st), len(ns)
     if ne == 0:
-        psi, y = stacked_regressors(st, recs)
+        with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming the terms
+            psi, y = stacked_regressors(st, recs)
         what = "ls_uncertainty"
+        _refuse_overflow(psi, st, what)
         phi, theta_all = psi, model.theta
     else:
         L = max(st.max_lag, ns.max_lag)
         blocks, grads, targets = [], [], []
         for r in recs:
+            with np.errstate(over="ignore", invalid="ignore"):
+                proc = regressor_matrix(st, r.u, r.y, start=L, input_names=r.input_names)
+            _refuse_overflow(proc, st, "ls_uncertainty (ELS)")
             xi, _ = _model_residuals(model, r, True)
             e = np.zeros(len(r))
             e[L:] = xi
-            block = np.hstack([regressor_matrix(st, r.u, r.y, start=L, input_names=r.input_names),
-                               regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)])
+            block = np.hstack([proc, regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)])
             blocks.append(block)
             grads.append(_residual_gradient(ns, model.noise_theta, block, r, e, L))
             targets.append(r.y[L:])
@@ -697,6 +701,16 @@ def ls_uncertainty(
                           N, rtol=ELS_STATIONARY_RTOL)
     return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
                                 cov[n:, n:], cov_factor=F[:, :n])
+
+
+def _refuse_overflow(psi: np.ndarray, structure, what: str) -> None:
+    """``ValueError`` naming the terms whose regressors overflow to non-finite values on the data (a high power of
+    a large u or y), before any covariance is formed from them."""
+    bad = np.flatnonzero(~np.all(np.isfinite(psi), axis=0))
+    if bad.size:
+        raise ValueError(f"{what}: regressors overflow to non-finite values on these data (e.g. "
+                         f"{', '.join(str(structure[j]) for j in bad[:5])}): a high power of u or y beyond the floating "
+                         "point range; rescale the signals (other units) and re-estimate")
 
 
 def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.ndarray, L: int) -> np.ndarray:
