@@ -106,3 +106,21 @@ def test_ls_uncertainty_names_the_regressor_that_overflows_on_the_data():
         with pytest.raises(ValueError, match=r"ls_uncertainty.*: regressors overflow.* \(e\.g\. u\(k-1\)\^2\)") as info:
             gb.ls_uncertainty(model, huge)
         assert "derivatives" not in str(info.value)
+
+
+# --------------------------------------------------------------------------------------------
+# long records: the Monte Carlo band's n_samples × N runs are refused before allocation when they would not fit
+# --------------------------------------------------------------------------------------------
+def test_monte_carlo_simulation_band_that_would_not_fit_is_refused_naming_the_bytes(monkeypatch):
+    import graybox.core._gram as gram
+
+    rec = plant()
+    unc = gb.ls_uncertainty(gb.els(STRUCTURE, rec, noise=0), rec)
+    runs = 8 * 1000 * len(rec)  # the default 1000 draws' free runs, float64
+    monkeypatch.setattr(gram, "available_memory", lambda: runs)  # room for the runs once, not for the band's copies
+    with pytest.raises(MemoryError, match=r"simulation_band.*1000 Monte Carlo.*600 samples.*needs .* bytes.*method='delta'"):
+        gb.simulation_band(unc, rec, method="monte-carlo")
+    # the delta band streams its sensitivities: memory independent of the draws, it still runs
+    assert gb.simulation_band(unc, rec).std.shape == (len(rec),)
+    monkeypatch.setattr(gram, "available_memory", lambda: 100 * runs)
+    assert gb.simulation_band(unc, rec, method="monte-carlo", n_samples=10).n_samples == 10

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..core._gram import require_memory
 from ..core._records import check_units, said_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
@@ -156,6 +157,9 @@ def simulation_band(
     ValueError
         The estimate's own free run diverges on the record (there is nothing to put a band
         around); fewer than two Monte Carlo runs stay bounded; a record not longer than the lags.
+    MemoryError
+        The Monte Carlo runs (about 3 × 8 × ``n_samples`` × N bytes) would not fit in the memory available,
+        naming the bytes; nothing is allocated.
 
     Warns
     -----
@@ -192,6 +196,10 @@ def simulation_band(
         h = uncertainty.quantile * std  # Student's t, as the parameters' intervals: σ² is estimated
         return SimulationBand(rec.t, rec.y, yhat, yhat - h, yhat + h, std, uncertainty.level, "delta", 0, 0.0,
                               m.name, rec.name, units)
+    # the runs (n_samples × N), the bounded ones' copy and the quantiles' and spread's working copies: refused
+    # before allocation where they would not fit (a long record's band by draws), as the long-record paths refuse
+    require_memory(3 * 8 * n_samples * N, f"simulation_band's {n_samples} Monte Carlo free runs of {N} samples",
+                   hint="use fewer n_samples, or method='delta' (streamed: its memory does not grow with the draws)")
     rng = np.random.default_rng(seed)
     Y = simulate_many(st, theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof,
                                       factor=uncertainty.cov_factor), rec)
