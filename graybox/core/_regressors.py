@@ -15,7 +15,7 @@ from ._records import Record, as_records, require_lengths
 from ._terms import Structure, check_input_names, rename_hint
 from ._validation import as_1d_finite, check_int, check_sequence
 
-__all__ = ["record_signals", "check_structure_inputs", "check_record_inputs", "input_signals", "regressor_matrix", "stacked_regressors"]
+__all__ = ["record_signals", "check_structure_inputs", "check_record_inputs", "refuse_non_finite_columns", "input_signals", "regressor_matrix", "stacked_regressors"]
 
 
 def record_signals(record: Record) -> dict[str, np.ndarray]:
@@ -50,6 +50,17 @@ def check_record_inputs(inputs: Sequence[str], records: Sequence) -> None:
         if missing:
             raise ValueError(f"{r.name}: the terms use input {missing[0]!r}, but the record's inputs are "
                              f"{r.input_names}{rename_hint(tuple(inputs), r.input_names)}")
+
+
+def refuse_non_finite_columns(columns: np.ndarray, terms: Sequence, what: str = "") -> None:
+    """``ValueError`` naming the terms whose columns (regressors, shape (N, n)) hold non-finite values: on finite
+    data, an overflow of a high power of a large u or y. Build the columns under ``np.errstate(over="ignore",
+    invalid="ignore")``: this names the terms where numpy's RuntimeWarning would not."""
+    bad = np.flatnonzero(~np.all(np.isfinite(columns), axis=0))
+    if bad.size:
+        raise ValueError(f"{what}regressors overflow to non-finite values on these data (e.g. "
+                         f"{', '.join(str(terms[j]) for j in bad[:5])}): a high power of u or y beyond the floating "
+                         "point range; rescale the signals (other units) and estimate again")
 
 
 def input_signals(u: np.ndarray, input_names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:

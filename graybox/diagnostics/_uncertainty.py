@@ -66,7 +66,7 @@ from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
 from ..core._simulation_kernels import inverse_ma_filter
 from ..core._terms import check_input_names
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units
-from ..core._regressors import record_signals, regressor_matrix, stacked_regressors
+from ..core._regressors import record_signals, refuse_non_finite_columns, regressor_matrix
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
@@ -655,18 +655,14 @@ def ls_uncertainty(
     st, ns = model.structure, model.noise_structure
     n, ne = len(st), len(ns)
     if ne == 0:
-        with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming the terms
-            psi, y = stacked_regressors(st, recs)
-        what = "ls_uncertainty"
-        _refuse_overflow(psi, st, what)
-        phi, theta_all = psi, model.theta
+        return _ls_uncertainty(model, recs, level)
     else:
         L = max(st.max_lag, ns.max_lag)
         blocks, grads, targets = [], [], []
         for r in recs:
             with np.errstate(over="ignore", invalid="ignore"):
                 proc = regressor_matrix(st, r.u, r.y, start=L, input_names=r.input_names)
-            _refuse_overflow(proc, st, "ls_uncertainty (ELS)")
+            refuse_non_finite_columns(proc, st, "ls_uncertainty (ELS): ")
             xi, _ = _model_residuals(model, r, True)
             e = np.zeros(len(r))
             e[L:] = xi
@@ -685,32 +681,36 @@ def ls_uncertainty(
     res = y - phi @ theta_all
     dof = N - n - ne
     sigma2 = float(res @ res) / dof
-    if ne == 0:
-        cov, F = _to_theta(_sandwich(np.eye(n + ne), A, np.sqrt(sigma2) * A, what, N), s)
-        _check_stationary(np.eye(n), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
-                          "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty); an ELS "
-                          "estimate needs its MA part, which select_graybox's models leave out (a free run sets the "
-                          "noise to zero): refit it with graybox.els(model.structure, data)", N)
-    else:
-        cov, F = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
-        # ELS's fixed point: its residuals orthogonal to the extended regressors they build (to round-off
-        # of the iteration's tolerance; an estimate of another record is far from it)
-        _check_stationary(np.eye(n + ne), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
-                          "pass the ELS estimate on these data, with its MA part (graybox.els(model.structure, "
-                          "data); a run stopped at a loose tol, e.g. 0.1, is short of its fixed point too)",
-                          N, rtol=ELS_STATIONARY_RTOL)
-    return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS" if ne else "LS", np.zeros((0, n)),
-                                cov[n:, n:], cov_factor=F[:, :n])
+    cov, F = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
+    # ELS's fixed point: its residuals orthogonal to the extended regressors they build (to round-off
+    # of the iteration's tolerance; an estimate of another record is far from it)
+    _check_stationary(np.eye(n + ne), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
+                      "pass the ELS estimate on these data, with its MA part (graybox.els(model.structure, "
+                      "data); a run stopped at a loose tol, e.g. 0.1, is short of its fixed point too)",
+                      N, rtol=ELS_STATIONARY_RTOL)
+    return ParameterUncertainty(model, cov[:n, :n], level, dof, sigma2, "ELS", np.zeros((0, n)), cov[n:, n:],
+                                cov_factor=F[:, :n])
 
 
-def _refuse_overflow(psi: np.ndarray, structure, what: str) -> None:
-    """``ValueError`` naming the terms whose regressors overflow to non-finite values on the data (a high power of
-    a large u or y), before any covariance is formed from them."""
-    bad = np.flatnonzero(~np.all(np.isfinite(psi), axis=0))
-    if bad.size:
-        raise ValueError(f"{what}: regressors overflow to non-finite values on these data (e.g. "
-                         f"{', '.join(str(structure[j]) for j in bad[:5])}): a high power of u or y beyond the floating "
-                         "point range; rescale the signals (other units) and re-estimate")
+def _ls_uncertainty(model: Model, recs: list[Record], level: float) -> ParameterUncertainty:
+    """σ²(ΨᵀΨ)⁻¹ of a least-squares estimate from the triangular factor of [Ψ/s, y] (as CLS's and PE's: reduced chunk
+    by chunk where Ψ would not fit in memory), never from Ψ itself: its SVDs held a dozen copies of Ψ, where the
+    estimate held four."""
+    st = _process_structure(model)
+    n = len(st)
+    what = "ls_uncertainty"
+    d = _dynamic(st, recs)
+    check_rows(d.N, n, f"{what}: ")
+    z = model.theta * d.s
+    dof = d.N - n
+    sigma2 = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss) / dof
+    cov, F = _to_theta(_sandwich(np.eye(n), d.R1, np.sqrt(sigma2) * d.R1, what, d.N), d.s)
+    _check_stationary(np.eye(n), d.R1, d.R1 @ z - d.c1, d.rss, _size(d.R1 @ z, d.c1), what,
+                      "pass the least-squares estimate on these data (or use cls_/pe_/se_uncertainty); an ELS "
+                      "estimate needs its MA part, which select_graybox's models leave out (a free run sets the "
+                      "noise to zero): refit it with graybox.els(model.structure, data)", d.N, z=z)
+    return ParameterUncertainty(model, cov, level, dof, sigma2, "LS", np.zeros((0, n)), np.zeros((0, 0)),
+                                cov_factor=F)
 
 
 def _residual_gradient(ns, c: np.ndarray, phi: np.ndarray, rec: Record, e: np.ndarray, L: int) -> np.ndarray:

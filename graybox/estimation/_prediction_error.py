@@ -64,7 +64,7 @@ from ._pareto import ParetoSet
 from ..core._records import (Dataset, Record, StaticPoints, as_records, carried_from, check_compatible,
                              warn_static_range)
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
-from ..core._regressors import stacked_regressors
+from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
 from ..core._validation import check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta, warn
 
@@ -295,11 +295,11 @@ def _dynamic(structure: Structure, records: list) -> _Data:
     if 8 * 4 * rows * (len(structure) + 1) > available_memory():
         # Ψ, its scaled copy, [Ψ/s, y] and the CholeskyQR2 Q would not fit: reduce chunk by chunk
         return _dynamic_chunked(structure, records)
-    psi, y = stacked_regressors(structure, records)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming the terms
+        psi, y = stacked_regressors(structure, records)
     n = len(structure)
     check_rows(psi.shape[0], n)
-    if not (np.all(np.isfinite(psi)) and np.all(np.isfinite(y))):
-        raise ValueError("non-finite regressors (overflow of a high power of u or y?)")
+    refuse_non_finite_columns(psi, structure)  # y is a Record's: finite
     s = column_scales(psi)
     # R-factor of [Ψ/s, y]: its top-left block is Ψ's triangular factor, its last column Q1ᵀy and
     # its corner the LS residual norm; Q itself is never formed.
