@@ -156,3 +156,19 @@ def test_ls_uncertainty_of_records_that_would_not_fit_is_reduced_in_chunks(monke
     chunked = gb.ls_uncertainty(model, rec)
     np.testing.assert_allclose(chunked.std, dense.std, rtol=1e-6)
     assert chunked.dof == dense.dof and chunked.sigma2 == pytest.approx(dense.sigma2, rel=1e-9)
+
+
+# --------------------------------------------------------------------------------------------
+# bootstrap_decision: a record shorter than a block is in the reference decision but in no replicate: said
+# --------------------------------------------------------------------------------------------
+def test_bootstrap_says_which_records_no_block_can_come_from():
+    long_, short = plant(N=1000), gb.Record(plant(N=150, seed=4).u, plant(N=150, seed=4).y, name="short run")
+    points = gb.StaticPoints([0.5, 1.0, 1.5], [1.0, 1.9, 2.4])
+    with pytest.warns(gb.UncertaintyWarning, match=r"shorter than block_length = 200.*short run \(150 samples\)"):
+        bd = gb.bootstrap_decision(STRUCTURE, [long_, short], points, block_length=200, band=1.0,
+                                   lambdas=[0.5, 1.0], n_boot=2)
+    assert bd.n_replicates == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", gb.UncertaintyWarning)  # every record long enough: nothing to say
+        gb.bootstrap_decision(STRUCTURE, [long_, short], points, block_length=100, band=1.0, lambdas=[0.5, 1.0],
+                              n_boot=2)

@@ -12,7 +12,8 @@ The blocks of a replicate are *separate records*, not glued together: graybox's 
 runs never straddle two records, so a replicate has no artificial jumps at the seams, and each
 block's free run starts from its own first measured samples (as every record's does). Blocks are
 drawn from every record of the data (every start position equally likely) until the replicate has
-about as many samples as the original.
+about as many samples as the original; a record shorter than a block holds no block, and is said
+(an :class:`~graybox.UncertaintyWarning`) to be in the reference decision only.
 
 The static points are kept as measured, or, with ``static_sigma``, perturbed by Gaussian noise of
 that standard deviation in each replicate (a parametric bootstrap of the transmitter's error).
@@ -424,7 +425,8 @@ def bootstrap_decision(
     -----
     UncertaintyWarning
         Some replicates failed: they are counted and the first one's reason is named (all reasons
-        in ``failures``).
+        in ``failures``). Some records are shorter than ``block_length``: no replicate draws from them
+        (they are named).
     """
     structure = as_structure(structure)
     estimator = check_choice(estimator, "estimator", ESTIMATORS)
@@ -456,6 +458,11 @@ def bootstrap_decision(
         raise TypeError(f"map must be a callable map(job, ids) (e.g. an executor's .map), got {map!r}")
     if not any(len(r) >= block_length for r in recs):
         raise ValueError(f"block_length {block_length} is longer than every record ({[len(r) for r in recs]} samples)")
+    short = [f"{r.name or 'record'} ({len(r)} samples)" for r in recs if len(r) < block_length]
+    if short:  # no block lies inside them: the replicates are drawn from the other records alone
+        warn(f"bootstrap_decision: {len(short)} record(s) shorter than block_length = {block_length} are in the "
+             f"reference decision but in no replicate (no block fits inside them): {', '.join(short)}; give a "
+             "shorter block_length to draw from them too", UncertaintyWarning)
     job = BootstrapJob(structure.process, tuple(recs), sp, estimator, lam, band, fallback, block_length, seed,
                        static_sigma, {k: v for k, v in opts.items() if k != "ubar"})
     ids = list(range(n_boot))
