@@ -172,3 +172,16 @@ def test_bootstrap_says_which_records_no_block_can_come_from():
         warnings.simplefilter("error", gb.UncertaintyWarning)  # every record long enough: nothing to say
         gb.bootstrap_decision(STRUCTURE, [long_, short], points, block_length=100, band=1.0, lambdas=[0.5, 1.0],
                               n_boot=2)
+
+
+# --------------------------------------------------------------------------------------------
+# pe_uncertainty on exact static points says so among the reasons, and takes static_sigma=0 for them
+# --------------------------------------------------------------------------------------------
+def test_pe_uncertainty_on_noise_free_points_names_them_among_the_reasons():
+    rec = plant(noise=0.0)
+    ub = np.linspace(0.5, 1.5, 6)
+    points = gb.StaticPoints(ub, _static_of_plant(ub))  # 6 exact points, 3 static coefficients, no constraint
+    member = gb.pe_pareto(STRUCTURE, rec, points, lambdas=[0.5]).member_model(0)
+    with pytest.raises(ValueError, match=r"meets its 6 static points exactly .*noise-free.*give static_sigma"):
+        gb.pe_uncertainty(member, rec, points, lambda1=0.5)
+    assert gb.pe_uncertainty(member, rec, points, lambda1=0.5, static_sigma=0.0).static_sigma2 == 0.0

@@ -970,8 +970,8 @@ def _checked_dof(nu: float, M: int) -> float:
     """``nu``, or ``ValueError`` when it vanishes: the member meets its M static points exactly."""
     if not np.isfinite(nu) or nu <= 1e-6 * M:
         raise ValueError(f"pe_uncertainty: the member meets its {M} static points exactly (its static function has as "
-                         "many free coefficients as there are points, or constraints hold it on them), so its misfit "
-                         "says nothing of the points' "
+                         "many free coefficients as there are points, constraints hold it on them, or the points are "
+                         "noise-free), so its misfit says nothing of the points' "
                          "noise: give static_sigma (the standard deviation of the measured ȳ_i; 0 for exact points)")
     return nu
 
