@@ -185,3 +185,20 @@ def test_pe_uncertainty_on_noise_free_points_names_them_among_the_reasons():
     with pytest.raises(ValueError, match=r"meets its 6 static points exactly .*noise-free.*give static_sigma"):
         gb.pe_uncertainty(member, rec, points, lambda1=0.5)
     assert gb.pe_uncertainty(member, rec, points, lambda1=0.5, static_sigma=0.0).static_sigma2 == 0.0
+
+
+def test_els_uncertainty_holds_few_copies_of_the_extended_regressors():
+    import tracemalloc
+
+    rec = plant(N=100_000)
+    short = rec.slice(0, 3000)
+    gb.ls_uncertainty(gb.els(STRUCTURE, short, noise=2), short)  # imports and compiled kernels out of the count
+    fit = gb.els(STRUCTURE, rec, noise=2)
+    phi_bytes = 8 * (len(STRUCTURE) + 2) * len(rec)  # [Ψ, Ψ_e]
+    tracemalloc.start()
+    try:
+        gb.ls_uncertainty(fit, rec)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= 6 * phi_bytes, f"ls_uncertainty (ELS) peaked at {peak / phi_bytes:.1f} × [Ψ, Ψ_e]"

@@ -656,32 +656,40 @@ def ls_uncertainty(
     n, ne = len(st), len(ns)
     if ne == 0:
         return _ls_uncertainty(model, recs, level)
-    else:
-        L = max(st.max_lag, ns.max_lag)
-        blocks, grads, targets = [], [], []
-        for r in recs:
-            with np.errstate(over="ignore", invalid="ignore"):
-                proc = regressor_matrix(st, r.u, r.y, start=L, input_names=r.input_names)
-            refuse_non_finite_columns(proc, st, "ls_uncertainty (ELS): ")
-            xi, _ = _model_residuals(model, r, True)
-            e = np.zeros(len(r))
-            e[L:] = xi
-            block = np.hstack([proc, regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)])
-            blocks.append(block)
-            grads.append(_residual_gradient(ns, model.noise_theta, block, r, e, L))
-            targets.append(r.y[L:])
-        phi, y = np.vstack(blocks), np.concatenate(targets)
-        what = "ls_uncertainty (ELS)"
-        theta_all = np.concatenate([model.theta, model.noise_theta])
-    N = phi.shape[0]
+    what = "ls_uncertainty (ELS)"
+    L = max(st.max_lag, ns.max_lag)
+    blocks, grads, targets = [], [], []
+    for r in recs:
+        with np.errstate(over="ignore", invalid="ignore"):
+            proc = regressor_matrix(st, r.u, r.y, start=L, input_names=r.input_names)
+        refuse_non_finite_columns(proc, st, f"{what}: ")
+        xi, _ = _model_residuals(model, r, True)
+        e = np.zeros(len(r))
+        e[L:] = xi
+        block = np.hstack([proc, regressor_matrix(ns, r.u, r.y, e=e, start=L, input_names=r.input_names)])
+        del proc
+        blocks.append(block)
+        grads.append(_residual_gradient(ns, model.noise_theta, block, r, e, L))
+        targets.append(r.y[L:])
+    # one N × (n + ne) array each for the regressors and the residuals' gradient, scaled in place: a long record's
+    # ELS covariance held eight of them (stacked copies, scaled copies), twice what the estimate held
+    A = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
+    del blocks
+    G = grads[0] if len(grads) == 1 else np.vstack(grads)
+    del grads
+    y = np.concatenate(targets)
+    theta_all = np.concatenate([model.theta, model.noise_theta])
+    N = A.shape[0]
     check_rows(N, n + ne, f"{what}: ")
-    s = np.sqrt(np.mean(phi**2, axis=0))
+    s = np.sqrt(np.einsum("ij,ij->j", A, A) / N)
     s = np.where(s > 0, s, 1.0)
-    A = phi / s
-    res = y - phi @ theta_all
+    res = y - A @ theta_all
+    A /= s
+    G /= s
     dof = N - n - ne
     sigma2 = float(res @ res) / dof
-    cov, F = _to_theta(_pseudo_linear_cov(A, np.vstack(grads) / s, sigma2, what), s)
+    cov, F = _to_theta(_pseudo_linear_cov(A, G, sigma2, what), s)
+    del G
     # ELS's fixed point: its residuals orthogonal to the extended regressors they build (to round-off
     # of the iteration's tolerance; an estimate of another record is far from it)
     _check_stationary(np.eye(n + ne), A, -res, 0.0, _size(A @ (theta_all * s), y), what,
