@@ -15,7 +15,8 @@ from ._records import Record, as_records, require_lengths
 from ._terms import Structure, check_input_names, rename_hint
 from ._validation import as_1d_finite, check_int, check_sequence
 
-__all__ = ["record_signals", "check_structure_inputs", "check_record_inputs", "refuse_non_finite_columns", "input_signals", "regressor_matrix", "stacked_regressors"]
+__all__ = ["record_signals", "check_structure_inputs", "check_record_inputs", "refuse_non_finite_columns",
+           "input_signals", "regressor_matrix", "stacked_regressors"]
 
 
 def record_signals(record: Record) -> dict[str, np.ndarray]:
