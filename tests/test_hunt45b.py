@@ -202,3 +202,24 @@ def test_els_uncertainty_holds_few_copies_of_the_extended_regressors():
     finally:
         tracemalloc.stop()
     assert peak <= 6 * phi_bytes, f"ls_uncertainty (ELS) peaked at {peak / phi_bytes:.1f} × [Ψ, Ψ_e]"
+
+
+def test_se_uncertainty_streams_the_free_run_jacobian():
+    import tracemalloc
+
+    rec = plant(N=50_000)
+    ub = np.linspace(0.5, 1.5, 6)
+    points = gb.StaticPoints(ub, _static_of_plant(ub) + 0.01 * np.random.default_rng(1).standard_normal(6))
+    short = rec.slice(0, 3000)
+    warm = gb.se_pareto(STRUCTURE, short, points, lambdas=[0.5], method="gradient").member_model(0)
+    gb.se_uncertainty(warm, short, points, lambda1=0.5)  # imports and compiled kernels out of the count
+    member = gb.se_pareto(STRUCTURE, rec, points, lambdas=[0.5], method="gradient").member_model(0)
+    jac_bytes = 8 * len(STRUCTURE) * len(rec)  # the free run's N × n Jacobian
+    tracemalloc.start()
+    try:
+        unc = gb.se_uncertainty(member, rec, points, lambda1=0.5)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= 8 * jac_bytes, f"se_uncertainty peaked at {peak / jac_bytes:.1f} × the Jacobian"
+    assert np.all(unc.std > 0) and np.isfinite(unc.static_sigma2)

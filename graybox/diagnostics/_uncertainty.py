@@ -63,7 +63,7 @@ from ..estimation._decisions import Decision
 from ..models._coerce import as_model, records_of, static_points
 from ..models._model import Model
 from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
-from ..core._simulation_kernels import inverse_ma_filter
+from ..core._simulation_kernels import free_run_sensitivity_blocks, inverse_ma_filter
 from ..core._terms import check_input_names
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units
 from ..core._regressors import record_signals, refuse_non_finite_columns, regressor_matrix
@@ -1044,33 +1044,41 @@ def se_uncertainty(
         names = recs[0].input_names
         sp = StaticPoints(np.zeros((1, len(names))) if len(names) > 1 else [0.0], [0.0], input_names=names)
     problem = SEProblem(m.structure, recs, sp)
-    n = len(m.structure)
+    n, nd, M = len(m.structure), problem.n_dyn, len(sp)
+    th = m.theta
+    # the weighted problem of eq. (13) in the solver's scaled coordinates z = θ · scale
+    w1, w2 = np.sqrt(lam / nd), np.sqrt((1 - lam) / M)
     with np.errstate(all="ignore"):
-        ed, es, Jd_, Js_ = problem.residuals(m.theta)
-        w1_, w2_ = np.sqrt(lam / problem.n_dyn), np.sqrt((1 - lam) / len(sp))
-        # the weighted problem of eq. (13) in the solver's scaled coordinates z = θ · scale
-        r = np.concatenate([w1_ * ed] + ([w2_ * es] if lam < 1 else []))
-        J = np.vstack([w1_ * Jd_ / problem.scale] + ([w2_ * Js_ / problem.scale] if lam < 1 else []))
-    if not np.all(np.isfinite(r)) or not np.all(np.isfinite(J)):
+        # the free run's rows as the triangular factor T of [w1 ∂ŷ/∂z, w1 (ŷ − y)], streamed block by block as the
+        # gradient sweep takes it: the N × n Jacobian is never held (its copies and SVDs held a dozen of them)
+        T = _free_run_factor(problem, th, w1)
+        if lam < 1:
+            yb = problem.static_outputs(th)[0]
+            rs = w2 * (yb - sp.ybar)
+            Js = w2 * problem.static_theta_gradient(th, yb) / problem.scale
+        else:
+            rs, Js = np.zeros(0), np.zeros((0, n))
+    if not (np.all(np.isfinite(T)) and np.all(np.isfinite(rs)) and np.all(np.isfinite(Js))):
         raise ValueError("se_uncertainty: the member's free run diverges or its static curve is undefined (no stable "
                          "equilibrium) at a static point; it has no local covariance")
-    nd = problem.n_dyn
-    Jd, Js = J[:nd], J[nd:]
-    rd, rs = r[:nd], r[nd:]
-    w1 = np.sqrt(lam / nd)
-    sigma2 = float(np.sum((rd / w1) ** 2)) / (nd - n)
+    Rd, qd = T[:n, :n], T[:n, n]  # RdᵀRd = JdᵀJd; qd = Qᵀ(w1 e_sim), the rest of whose norm is T[n, n]
+    rd2 = float(qd @ qd + T[n, n] ** 2)  # ‖w1 e_sim‖²
+    J = np.vstack([Rd, Js])  # JᵀJ of the weighted residuals' Jacobian (free-run rows, then static ones)
+    rows = nd + Js.shape[0]
+    sigma2 = rd2 / w1**2 / (nd - n)
     if lam < 1:
-        w2 = np.sqrt((1 - lam) / len(sp))
         if static_sigma is not None:
             ss2 = check_real(static_sigma, "static_sigma (0 for exact points)", low=0) ** 2
         else:
             # the misfit's degrees of freedom: e_SF = ȳ_model − ȳ moves with ȳ directly and through θ̂, by
-            # −(I − U_s U_sᵀ) with U an orthonormal basis of J's columns and U_s its static rows
-            U, S, _ = np.linalg.svd(J, full_matrices=False)
-            Us = U[nd:, S > rank_tolerance(S[0], J.shape[0], S.size)] if S.size and S[0] > 0 else U[nd:, :0]
-            nu = float(np.sum((np.eye(len(sp)) - Us @ Us.T) ** 2))
-            if nu <= 1e-6 * len(sp):
-                raise ValueError(f"se_uncertainty: the member meets its {len(sp)} static points exactly (its static "
+            # −(I − U_s U_sᵀ) with U an orthonormal basis of the Jacobian's columns and U_s its static rows
+            # (U = J V S⁻¹: its static rows are Js V S⁻¹)
+            _, S, Vt = np.linalg.svd(J, full_matrices=False)
+            keep = S > rank_tolerance(S[0], rows, S.size) if S.size and S[0] > 0 else np.zeros(S.size, bool)
+            Us = (Js @ Vt[keep].T) / S[keep]
+            nu = float(np.sum((np.eye(M) - Us @ Us.T) ** 2))
+            if nu <= 1e-6 * M:
+                raise ValueError(f"se_uncertainty: the member meets its {M} static points exactly (its static "
                                  "function has as many free coefficients as there are points), so its misfit says "
                                  "nothing of the points' noise: give static_sigma (the standard deviation of the "
                                  "measured ȳ_i; 0 for exact points)")
@@ -1079,19 +1087,41 @@ def se_uncertainty(
         ss2 = float("nan")
     # J holds the weighted residuals' derivatives (w ∂e/∂z): H = JᵀJ, and the gradient Jᵀr = Σ_b w_b² Ĵ_bᵀe_b
     # has covariance Σ_b w_b⁴ σ_b² Ĵ_bᵀĴ_b = Σ_b w_b² σ_b² J_bᵀJ_b
-    G = w1 * np.sqrt(sigma2) * Jd if lam == 1 else np.vstack([w1 * np.sqrt(sigma2) * Jd, w2 * np.sqrt(ss2) * Js])
-    g = np.linalg.norm(J.T @ r)
+    G = w1 * np.sqrt(sigma2) * Rd if lam == 1 else np.vstack([w1 * np.sqrt(sigma2) * Rd, w2 * np.sqrt(ss2) * Js])
+    g = np.linalg.norm(Rd.T @ qd + Js.T @ rs)  # ‖Jᵀr‖
     nJ = float(np.linalg.norm(J, 2))
-    rel = g / max(nJ * float(np.linalg.norm(r)), 1e-300)
+    rel = g / max(nJ * np.sqrt(rd2 + float(rs @ rs)), 1e-300)
     # residuals at the round-off of the fit (1e-11 of the weighted targets, as _check_stationary allows) point
     # anywhere: a member that fits noise-free data exactly is the optimum, whatever its relative gradient
-    floor = 1e-11 * nJ * _size(w1_ * problem.target, *([w2_ * sp.ybar] if lam < 1 else []))
+    floor = 1e-11 * nJ * _size(w1 * problem.target, *([w2 * sp.ybar] if lam < 1 else []))
     if rel > 1e-3 and g > floor:
         warn(f"se_uncertainty: θ is not a stationary point of the SE objective at λ1 = {lam:g} (relative gradient "
              f"{rel:.1e}); the intervals describe the curvature at this θ, not at an optimum", UncertaintyWarning)
-    cov, F = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty", J.shape[0]), problem.scale)
+    cov, F = _to_theta(_sandwich(np.eye(n), J, G, "se_uncertainty", rows), problem.scale)
     return ParameterUncertainty(m, cov, level, nd - n, sigma2, f"SE λ1={lam:.4g}", np.zeros((0, n)),
                                 np.zeros((0, 0)), ss2, cov_factor=F)
+
+
+def _free_run_factor(problem: SEProblem, theta: np.ndarray, w1: float) -> np.ndarray:
+    """The triangular factor T, shape (n + 1, n + 1), of [w1 ∂ŷ/∂z, w1 (ŷ − y)] over every record's free run
+    (z = θ · scale; TᵀT is that matrix's Gram matrix), by TSQR over blocks of the streamed sensitivities: memory
+    independent of the records' length. NaN where the run or its sensitivities are not finite."""
+    n, L = theta.size, problem.L
+    colw = w1 / problem.scale
+    T = np.zeros((0, n + 1))
+    for rec, U in zip(problem.records, problem.U):
+        for k0, k1, yh, S in free_run_sensitivity_blocks(problem.code, theta, U, rec.y[:L], L):
+            work = np.empty((T.shape[0] + k1 - k0, n + 1))
+            work[: T.shape[0]] = T
+            np.multiply(S, colw, out=work[T.shape[0]:, :n])
+            np.subtract(yh[k0:k1], rec.y[k0:k1], out=work[T.shape[0]:, n])
+            work[T.shape[0]:, n] *= w1
+            if not np.all(np.isfinite(work)):
+                return np.full((n + 1, n + 1), np.nan)
+            T = np.linalg.qr(work, mode="r")
+    if T.shape[0] < n + 1:
+        T = np.vstack([T, np.zeros((n + 1 - T.shape[0], n + 1))])
+    return T
 
 
 # --------------------------------------------------------------------------------------------
