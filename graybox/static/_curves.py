@@ -34,7 +34,8 @@ class StaticCurve:
 
     def __post_init__(self) -> None:
         check_str(self.name, "StaticCurve: name")
-        c = np.array(as_1d_finite(self.coefficients, f"{self.name}: coefficients"))
+        what = f"{self.name}: coefficients"  # booleans refused too (True is no coefficient 1)
+        c = np.array(as_1d_finite(real_array(self.coefficients, what, "numbers in ascending powers"), what))
         if c.size == 0:
             raise ValueError(f"{self.name}: a polynomial needs at least one coefficient")
         c.setflags(write=False)

@@ -15,7 +15,8 @@ import numpy as np
 
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, frame_inputs, outside_range
-from ..core._validation import check_int, check_real, check_sequence, check_str, real_array
+from ..core._terms import check_input_names
+from ..core._validation import as_1d_finite, check_int, check_real, check_sequence, check_str, real_array
 from ..core._reprs import short_repr
 
 __all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
@@ -113,11 +114,11 @@ class StaticSurface:
         check_str(self.name, "StaticSurface: name")
         ex = _monomial_set(self.exponents, self.name)
         m = len(ex[0])
-        c = np.array(self.coefficients, dtype=float).reshape(-1)
+        # text and booleans refused, not parsed; a column (K, 1) refused, not flattened: as a StaticCurve's
+        what = f"{self.name}: coefficients"
+        c = np.array(as_1d_finite(real_array(self.coefficients, what, "numbers, one per monomial"), what))
         if c.size != len(ex):
             raise ValueError(f"{self.name}: {c.size} coefficients for {len(ex)} monomials")
-        if not np.all(np.isfinite(c)):
-            raise ValueError(f"{self.name}: non-finite coefficients")
         c.setflags(write=False)
         object.__setattr__(self, "exponents", ex)
         object.__setattr__(self, "coefficients", c)
@@ -139,10 +140,11 @@ class StaticSurface:
         if self.input_names is None:
             names = ("u",) if m == 1 else tuple(f"u{i + 1}" for i in range(m))
         else:
-            names = tuple(str(s) for s in check_sequence(self.input_names, "input_names", "a sequence of names"))
+            names = tuple(check_sequence(self.input_names, "input_names", "a sequence of names"))
         if len(names) != m or len(set(names)) != m:
             raise ValueError(f"{self.name}: input_names must be {m} distinct names, got {names}")
-        object.__setattr__(self, "input_names", names)
+        # the names a model's inputs can have (a surface meets a model's inputs by name): 1 is no name "1"
+        object.__setattr__(self, "input_names", check_input_names(names, what=f"{self.name}: input_names"))
 
     # -- construction -------------------------------------------------------
     @classmethod
@@ -170,7 +172,7 @@ class StaticSurface:
         if not coefficients:
             raise ValueError(f"{name}: give at least one monomial")
         ex = _exponent_vectors(list(coefficients), "coefficients' keys")
-        return cls(ex, np.array([float(v) for v in coefficients.values()]), domain, name, input_names)
+        return cls(ex, list(coefficients.values()), domain, name, input_names)  # checked there (text refused)
 
     @classmethod
     def fit(
@@ -212,11 +214,11 @@ class StaticSurface:
         ub = _as_inputs(points.ubar, m, "StaticSurface.fit")
         names = tuple(points.input_names)
         if input_names is not None:
-            given = tuple(str(v) for v in check_sequence(input_names, "StaticSurface.fit: input_names",
-                                                          "a sequence of names"))
+            given = tuple(check_sequence(input_names, "StaticSurface.fit: input_names", "a sequence of names"))
             if len(given) != m or len(set(given)) != m:
                 raise ValueError(f"StaticSurface.fit: input_names must be {m} distinct names (one per input of the "
                                  f"points), got {given}")
+            given = check_input_names(given, what="StaticSurface.fit: input_names")
             if set(given) == set(names):  # the points' own inputs in another order: their columns by name
                 ub = ub[:, [names.index(v) for v in given]]
             elif set(given) & set(names):
@@ -265,7 +267,8 @@ class StaticSurface:
 
     def coefficient(self, exponent: Sequence[int]) -> float:
         """c_e of the monomial with exponent vector ``exponent`` (0 when the surface has none)."""
-        e = tuple(int(v) for v in exponent)
+        # integer powers only: int(1.7) read another monomial's coefficient
+        e = tuple(check_int(v, "exponent", low=0) for v in check_sequence(exponent, "exponent", "an exponent vector"))
         if len(e) != self.n_inputs:
             raise ValueError(f"{self.name}: exponent {e} needs {self.n_inputs} entries")
         try:

@@ -1,0 +1,48 @@
+"""Bug hunt 45a: the model as a value and a file (simulation, statics, JSON)."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+# -- StaticSurface validates its fields as StaticCurve does ------------------------------------------------
+def test_surface_refuses_text_and_booleans_as_coefficients():
+    # StaticCurve refuses text (never parses it); the surface parsed "1.0" and read True as 1
+    with pytest.raises(TypeError, match="coefficients"):
+        gb.StaticSurface(((0, 0), (1, 0)), ["1.0", "2"])
+    with pytest.raises(TypeError, match="coefficients"):
+        gb.StaticSurface.polynomial({(0, 0): "1.5", (1, 0): 2.0})
+    with pytest.raises(TypeError, match="coefficients"):
+        gb.StaticSurface(((0, 0), (1, 0)), [True, 2.0])
+
+
+def test_surface_refuses_a_column_of_coefficients():
+    # shape (2, 1) was flattened silently; StaticCurve says the coefficients must be 1-D
+    with pytest.raises(ValueError, match="1-D"):
+        gb.StaticSurface(((0, 0), (1, 0)), [[1.0], [2.0]])
+
+
+def test_surface_input_names_are_input_names():
+    # numbers became the names "1", "2", which no model's input can be: refused as every input name is
+    with pytest.raises(TypeError, match="input name"):
+        gb.StaticSurface(((0, 0), (1, 0)), [1.0, 2.0], input_names=(1, 2))
+    with pytest.raises(ValueError, match="input name"):
+        gb.StaticSurface(((0, 0), (1, 0)), [1.0, 2.0], input_names=("a b", "c"))
+    with pytest.raises(ValueError, match="input name"):
+        gb.StaticSurface.fit(gb.StaticPoints(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), [1.0, 2.0, 3.0],
+                                             input_names=("a", "b")), 1, input_names=("y", "c"))
+
+
+def test_surface_coefficient_takes_integer_powers_only():
+    s = gb.StaticSurface(((0, 0), (1, 0), (1, 1)), [1.0, 2.0, 0.5], input_names=("a", "b"))
+    assert s.coefficient((1, 1)) == 0.5
+    with pytest.raises(TypeError):
+        s.coefficient((1.7, 0))  # was read as (1, 0): the coefficient of another monomial
+    with pytest.raises(TypeError):
+        s.coefficient((True, 0))
+
+
+def test_curve_refuses_booleans_as_coefficients():
+    with pytest.raises(TypeError, match="coefficients"):
+        gb.StaticCurve([True, 2.0])
