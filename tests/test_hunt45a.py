@@ -46,3 +46,22 @@ def test_surface_coefficient_takes_integer_powers_only():
 def test_curve_refuses_booleans_as_coefficients():
     with pytest.raises(TypeError, match="coefficients"):
         gb.StaticCurve([True, 2.0])
+
+
+# -- an Equilibrium (a file edited by hand) is a finite point with a modulus ------------------------------
+@pytest.mark.parametrize("field, value", [("ybar", "nan"), ("ybar", "inf"), ("ubar", "nan"), ("ubar", ["nan", 1.0]),
+                                          ("ubar", []), ("spectral_radius", -1.0), ("spectral_radius", "nan")])
+def test_equilibrium_file_with_a_point_at_nan_is_refused(field, value):
+    import json
+
+    doc = json.loads(gb.to_json(gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]).equilibria(1.0)[0]))
+    doc["object"][field] = value
+    with pytest.raises(gb.GrayboxFileError, match=field):
+        gb.from_json(json.dumps(doc))
+
+
+def test_equilibria_still_load_and_compare():
+    m = gb.Model(["y(k-1)", "y(k-1)^2", "u(k-1)"], [0.5, 0.1, 1.0])
+    for e in m.equilibria(0.3):
+        assert gb.from_json(gb.to_json(e)) == e
+    assert not np.isfinite(gb.Equilibrium(1.0, 2.0, False, float("inf")).spectral_radius)

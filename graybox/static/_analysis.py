@@ -492,6 +492,16 @@ class Equilibrium:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # what a hand-edited file could say and no model's equilibria are: a point at NaN, a level beyond the
+        # floats (equilibria keeps the finite roots only), a negative or undefined modulus
+        points = self.ubar if isinstance(self.ubar, tuple) else (self.ubar,)
+        if not points:
+            raise ValueError("Equilibrium: ubar needs one input level per input, got ()")
+        for i, v in enumerate(points):
+            check_real(v, "Equilibrium: ubar" + (f"[{i}]" if isinstance(self.ubar, tuple) else ""))
+        check_real(self.ybar, "Equilibrium: ybar")
+        if not self.spectral_radius >= 0.0:  # inf is said of a linearisation beyond the float range
+            raise ValueError(f"Equilibrium: spectral_radius must be >= 0 (a modulus), got {self.spectral_radius!r}")
 
 
 def spectral_radius(a: np.ndarray) -> float:
