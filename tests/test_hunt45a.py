@@ -65,3 +65,15 @@ def test_equilibria_still_load_and_compare():
     for e in m.equilibria(0.3):
         assert gb.from_json(gb.to_json(e)) == e
     assert not np.isfinite(gb.Equilibrium(1.0, 2.0, False, float("inf")).spectral_radius)
+
+
+# -- a NumPy bool, which the values take for True or False, is saved as one ------------------------------
+def test_values_holding_numpy_bools_are_saved():
+    # Equilibrium(…, stable=rho < 1) or a Decision's in_band from an array comparison: the constructors take
+    # np.bool_ (check_fields), but save failed with "Object of type bool is not JSON serializable", naming nothing
+    e = gb.Equilibrium(1.0, 2.0, np.float64(0.5) < 1.0, 0.5)
+    back = gb.from_json(gb.to_json(e))
+    assert back.stable is True and back == gb.Equilibrium(1.0, 2.0, True, 0.5)
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    d = gb.Decision(m, 0, 0.5, 1.0, 0.1, "D_SF", np.array([0.1])[0] <= 0.2, 1.0)
+    assert gb.from_json(gb.to_json(d)).in_band is True

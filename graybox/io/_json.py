@@ -197,7 +197,8 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
     if kind in ("float", "array1", "array2", "inputs"):
         return _arr(v)
     if kind in ("int", "str", "bool"):
-        return v if kind != "int" else int(v)
+        # a NumPy bool (rho < 1, a comparison of arrays), which the classes take for True or False, is no JSON
+        return int(v) if kind == "int" else bool(v) if kind == "bool" else v
     if kind == "floats":
         return [_num(x) for x in v]
     if kind == "pairs":
