@@ -77,3 +77,12 @@ def test_values_holding_numpy_bools_are_saved():
     m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
     d = gb.Decision(m, 0, 0.5, 1.0, 0.1, "D_SF", np.array([0.1])[0] <= 0.2, 1.0)
     assert gb.from_json(gb.to_json(d)).in_band is True
+
+
+# -- a number beyond the float range is said of its argument ----------------------------------------------
+def test_numbers_beyond_the_float_range_are_named():
+    # int(10**400) reached numpy's conversion, whose OverflowError ("int too large to convert to float") named nothing
+    with pytest.raises(ValueError, match="theta"):
+        gb.Model(["y(k-1)"], [10**400])
+    with pytest.raises(ValueError, match="y"):
+        gb.Record(np.ones(3), [1.0, 2.0, 10**400])

@@ -288,6 +288,8 @@ def float_array(x: object, name: str, what: str = "an array of numbers") -> np.n
         return np.array(x, dtype=float, copy=True)
     except TypeError:
         raise TypeError(f"{name} must be {what}, got {type(x).__name__}") from None
+    except OverflowError:  # an integer beyond the float range (10**400): numpy's message names nothing
+        raise ValueError(f"{name} holds a number beyond the float range (about 1.8e308)") from None
     except ValueError:
         ragged = isinstance(x, (list, tuple)) and len({np.ndim(v) if np.ndim(v) == 0 else np.shape(v) for v in x}) > 1
         raise ValueError(f"{name} must be {what}, got {type(x).__name__}"
