@@ -79,7 +79,30 @@ def test_values_holding_numpy_bools_are_saved():
     assert gb.from_json(gb.to_json(d)).in_band is True
 
 
-# -- a number beyond the float range is said of its argument ----------------------------------------------
+# -- θ is numbers: a bool is no parameter, None no NaN, and an integer beyond the floats is said so ------------
+@pytest.mark.parametrize("theta", [[True, 1.0], [0.5, np.True_], np.array([True, False])])
+def test_theta_refuses_booleans(theta):
+    # True was read as the parameter 1.0 (real_array refuses it everywhere else numbers are read)
+    with pytest.raises(TypeError, match="theta"):
+        gb.Model(["y(k-1)", "u(k-1)"], theta)
+    with pytest.raises(TypeError, match="theta"):
+        gb.simulate(["y(k-1)", "u(k-1)"], theta, np.ones(5), [0.0])
+
+
+def test_theta_refuses_none_as_a_type():
+    # None was read as NaN and refused as "non-finite values at [0]", a ValueError for a wrong type
+    with pytest.raises(TypeError, match="theta"):
+        gb.Model(["y(k-1)", "u(k-1)"], [None, 1.0])
+
+
+def test_many_thetas_refuse_booleans():
+    rec = gb.Record(np.ones(20), np.ones(20))
+    with pytest.raises(TypeError, match="thetas"):
+        gb.evaluate_thetas(["y(k-1)", "u(k-1)"], [[True, 0.5]], rec)
+    with pytest.raises(TypeError, match="thetas"):
+        gb.simulate_many(["y(k-1)", "u(k-1)"], np.array([[True, False]]), rec)
+
+
 def test_numbers_beyond_the_float_range_are_named():
     # int(10**400) reached numpy's conversion, whose OverflowError ("int too large to convert to float") named nothing
     with pytest.raises(ValueError, match="theta"):

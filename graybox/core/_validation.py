@@ -249,6 +249,16 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
     a ``TypeError`` here too, with float_array's words: levels or points are no array of numbers (records and θ,
     read by float_array itself, call it a bad shape)."""
     refuse_non_real(x, name)
+    refuse_flags(x, name, what)
+    try:
+        return float_array(x, name, what)
+    except ValueError as exc:  # ragged: the paths that read levels and points have always called it a type
+        raise TypeError(str(exc)) from None
+
+
+def refuse_flags(x: object, name: str, what: str = "numbers") -> None:
+    """``TypeError`` naming ``name`` when ``x`` is or holds a boolean or None, which a float conversion reads as 1
+    and NaN (a parameter of 1, a diverged run): the check :func:`real_array` and θ (:func:`check_theta`) share."""
     dtype = getattr(x, "dtype", None)  # numpy's, or pandas' (its "boolean" too: kind "b")
     bad = x is None or isinstance(x, (bool, np.bool_)) or getattr(dtype, "kind", "") == "b"
     if not bad and (dtype is None or dtype == object):
@@ -261,10 +271,6 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
         bad = any(v is None or isinstance(v, (bool, np.bool_)) for v in raw.flat)
     if bad:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}")
-    try:
-        return float_array(x, name, what)
-    except ValueError as exc:  # ragged: the paths that read levels and points have always called it a type
-        raise TypeError(str(exc)) from None
 
 
 def float_array(x: object, name: str, what: str = "an array of numbers") -> np.ndarray:
@@ -306,6 +312,7 @@ def check_theta(n_terms: int, theta: object, name: str = "theta") -> np.ndarray:
     """θ as a finite float array of length ``n_terms``, shape (n_terms,); ``TypeError`` for what is no array of
     numbers, ``ValueError`` for a wrong shape or a non-finite value."""
     refuse_non_real(theta, name)
+    refuse_flags(theta, name, "parameters (numbers)")  # True is no parameter 1, None no NaN
     th = float_array(theta, name)
     if th.ndim != 1:
         raise ValueError(f"{name} must be 1-D, got shape {th.shape}")

@@ -32,7 +32,7 @@ from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
 from ..core._validation import (as_1d_finite, check_bool, check_int, check_per_point, check_sequence, real_array,
-                                refuse_non_real, warn)
+                                refuse_flags, refuse_non_real, warn)
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -285,6 +285,7 @@ def evaluate_thetas(
     one_step = check_bool(one_step, "one_step")
     threads = check_int(threads, "threads", low=1)
     refuse_non_real(thetas, "thetas")
+    refuse_flags(thetas, "thetas", "parameter vectors (numbers)")  # True is no parameter 1
     try:
         th = np.atleast_2d(np.asarray(thetas, dtype=float))
     except (TypeError, ValueError):
