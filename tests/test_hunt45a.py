@@ -109,3 +109,17 @@ def test_numbers_beyond_the_float_range_are_named():
         gb.Model(["y(k-1)"], [10**400])
     with pytest.raises(ValueError, match="y"):
         gb.Record(np.ones(3), [1.0, 2.0, 10**400])
+
+
+# -- text that is no UTF-8 (a file name's undecodable bytes, as os.listdir gives them) is saved ----------------
+def test_a_name_from_an_undecodable_file_name_is_saved(tmp_path):
+    # os.listdir reads a Latin-1 file name 'run\xe9.csv' as 'run\udce9.csv' (surrogateescape); the record it loads is
+    # named so, and save failed with "'utf-8' codec can't encode character '\udce9'", naming nothing
+    name = "run\udce9"
+    r = gb.Record(np.arange(5.0), np.ones(5), name=name, units=("°C", "\udcb0C"))
+    text = gb.to_json(r)
+    text.encode("utf-8")  # a text any file takes
+    path = gb.save(r, tmp_path / "r.json")
+    back = gb.load(path)
+    assert back.name == name and back.units == r.units
+    assert gb.from_json(text).name == name

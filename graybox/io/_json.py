@@ -767,19 +767,30 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
 # --------------------------------------------------------------------------------------------
 # the document
 # --------------------------------------------------------------------------------------------
+#: A lone UTF-16 surrogate: what os.listdir and os.fsdecode make of a file name's bytes that are no UTF-8
+#: ('run\xe9.csv' is 'run\udce9.csv'), and what no UTF-8 file can hold.
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def _text(v: Any) -> str:
+    """``v`` as JSON, readable (non-ASCII text as it is) but a lone surrogate as its escape ``\\udce9``, which
+    JSON reads back as the same character: the text is UTF-8 whatever a name held."""
+    return _SURROGATE.sub(lambda m: f"\\u{ord(m.group()):04x}", json.dumps(v, ensure_ascii=False, allow_nan=False))
+
+
 def _dump(v: Any, level: int = 0) -> str:
     """JSON with objects indented and vectors on one line (matrices: a row per line)."""
     pad, inner = "  " * level, "  " * (level + 1)
     if isinstance(v, dict):
         if not v:
             return "{}"
-        items = [f"{inner}{json.dumps(k, ensure_ascii=False)}: {_dump(x, level + 1)}" for k, x in v.items()]
+        items = [f"{inner}{_text(k)}: {_dump(x, level + 1)}" for k, x in v.items()]
         return "{\n" + ",\n".join(items) + "\n" + pad + "}"
     if isinstance(v, list):
         if all(not isinstance(x, (dict, list)) for x in v):
-            return json.dumps(v, ensure_ascii=False, allow_nan=False)
+            return _text(v)
         return "[\n" + ",\n".join(inner + _dump(x, level + 1) for x in v) + "\n" + pad + "]"
-    return json.dumps(v, ensure_ascii=False, allow_nan=False)
+    return _text(v)
 
 
 def _units_arg(units: tuple[str, str] | Mapping[str, str] | None) -> dict | None:
