@@ -123,3 +123,19 @@ def test_a_name_from_an_undecodable_file_name_is_saved(tmp_path):
     back = gb.load(path)
     assert back.name == name and back.units == r.units
     assert gb.from_json(text).name == name
+
+
+# -- a DataFrame whose columns name the structure's inputs is judged by those names, whatever its width ---------
+def test_a_frame_with_the_input_and_another_column_is_said_so():
+    import pandas as pd
+
+    m = gb.Model(["y(k-1)", "speed(k-1)"], [0.5, 1.0])
+    df = pd.DataFrame({"speed": np.ones(5), "valve": np.zeros(5)})
+    # it said "u's 2 columns are the inputs ('u1', 'u2')" and asked to name columns that were named
+    with pytest.raises(ValueError, match=r"name only some of the inputs \['speed'\].*not inputs: \['valve'\]"):
+        m.simulate(df, [0.0])
+    with pytest.raises(ValueError, match="name only some"):
+        gb.simulate(m.structure, m.theta, df, [0.0])
+    # the input's own column alone, and unnamed columns, read as before
+    assert np.array_equal(m.simulate(df[["speed"]], [0.0]), m.simulate(np.ones(5), [0.0]))
+    assert np.array_equal(m.simulate(pd.DataFrame({0: np.ones(5)}), [0.0]), m.simulate(np.ones(5), [0.0]))

@@ -153,9 +153,9 @@ def simulate(
     u : ndarray or pandas.DataFrame, shape (N,) or (N, m), or Record
         Input(s). With a Record, ``y0`` defaults to its first ``max_lag`` outputs and the
         inputs are taken by name. A DataFrame whose columns are the inputs (``input_names``, else
-        the structure's inputs when it has as many as the frame has columns, else ``u1 … um``) is
-        read by name in any column order; one whose columns name none of them, by position; one
-        whose columns name some of them is refused (``ValueError`` naming the columns).
+        the structure's inputs when a column names one of them, else ``u1 … um``) is read by name
+        in any column order; one whose columns name none of them, by position; one whose columns
+        name some of them is refused (``ValueError`` naming the columns).
     y0 : ndarray, shape (>= max_lag,), optional
         Initial outputs y(0) … y(L-1); only the first L = max_lag are used.
     on_diverge : {"raise", "nan"}
@@ -184,8 +184,10 @@ def simulate(
         _, y0, b = free_run_inputs(u, y0, L, bound)
         uu = record_inputs(u, code.inputs)
     else:
-        if input_names is None and is_frame(u) and len(structure.inputs) == u.shape[1]:
-            input_names = structure.inputs  # a DataFrame's columns are read by the structure's names
+        if input_names is None and is_frame(u) and any(str(c) in structure.inputs for c in u.columns):
+            # a DataFrame naming the structure's inputs is read by those names (refused, naming its columns, where it
+            # names some and not others): by position its named columns were said to be u1 … um
+            input_names = structure.inputs
         uu, y0, b = free_run_inputs(u, y0, L, bound, names=input_names)
         code, uu = _inputs_for(structure, uu, input_names)
     y = simulate_one(code, th, uu, y0, L, b)
