@@ -139,3 +139,12 @@ def test_a_frame_with_the_input_and_another_column_is_said_so():
     # the input's own column alone, and unnamed columns, read as before
     assert np.array_equal(m.simulate(df[["speed"]], [0.0]), m.simulate(np.ones(5), [0.0]))
     assert np.array_equal(m.simulate(pd.DataFrame({0: np.ones(5)}), [0.0]), m.simulate(np.ones(5), [0.0]))
+
+
+def test_predict_bounds_each_run_by_its_own_start():
+    # predict's docstring said the bound came from y(0 … L−1): a run starting from a measured 1e9 after a start at
+    # 1e-3 (bound 1e3) would then be NaN; each run's bound is its own start's, as the kernel does
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    r = gb.Record(np.zeros(6), [1e-3, 1e-3, 1e9, 1e9, 5e8, 1e9])
+    p = m.predict(r, horizon=2)
+    assert np.isfinite(p).all() and p[4] == 0.25 * 1e9

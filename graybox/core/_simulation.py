@@ -52,8 +52,8 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     ndarray, shape (N,)
         ŷ in the output's units; the first ``max_lag`` samples are the measured ones. From
         horizon 2 on, NaN where the run behind a prediction leaves :func:`simulate`'s default
-        bound (from y(0 … L−1) and the record's inputs); one step ahead is never NaN for finite
-        data.
+        bound (from the measured outputs that run starts from and the record's inputs); one step
+        ahead is never NaN for finite data.
     """
     if not isinstance(record, Record):
         raise TypeError(f"record must be a Record, got {type(record).__name__}")
@@ -67,7 +67,8 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
         yhat[L:] = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
         return yhat
     code = encode(structure, record.input_names)
-    # simulate's bound, from the first max_lag samples: a horizon of the record's length is its free run
+    # simulate's bound, each run's from the measured outputs it starts from: a horizon of the record's length is
+    # the free run from the first max_lag samples
     return predict_ahead(code, th, record_inputs(record, code.inputs), record.y, L, min(horizon, len(record)),
                          None)
 
