@@ -148,3 +148,34 @@ def test_predict_bounds_each_run_by_its_own_start():
     r = gb.Record(np.zeros(6), [1e-3, 1e-3, 1e9, 1e9, 5e8, 1e9])
     p = m.predict(r, horizon=2)
     assert np.isfinite(p).all() and p[4] == 0.25 * 1e9
+
+
+# -- a curve over many levels where none is reached: a message that names the first few, and how many more ----
+@pytest.mark.parametrize("structure, theta, low", [
+    (["y(k-1)", "y(k-1)^2", "u(k-1)"], [0.5, 0.1, 1.0], 1.0),       # no real root above ū = 0.625
+    (["y(k-1)", "u(k-1)y(k-1)", "u(k-1)"], [0.5, 1.0, 1.0], 0.6),   # rational, unstable above ū = 0.5
+])
+def test_static_curve_error_over_many_levels_stays_short(structure, theta, low):
+    # 20000 levels made a message of 1.4 MB (every ū named), which a notebook prints whole
+    m = gb.Model(structure, theta)
+    ub = np.linspace(low, 2.0, 20000)
+    for f in (m.static_curve, m.static_gain):
+        with pytest.raises(ValueError) as err:
+            f(ub)
+        text = str(err.value)
+        assert len(text) < 5000
+        assert "ū = 2" not in text and "19980 more" in text and "20000" in text
+    with pytest.raises(ValueError) as err:  # a few levels are still named one by one
+        m.static_curve(ub[:3])
+    assert all(f"ū = {u:g}" in str(err.value) for u in ub[:3])
+
+
+def test_static_surface_error_over_many_points_stays_short():
+    m = gb.Model(["y(k-1)", "y(k-1)^2", "a(k-1)", "b(k-1)"], [0.5, 0.1, 1.0, 1.0])
+    pts = np.column_stack([np.linspace(1.0, 2.0, 5000), np.ones(5000)])
+    with pytest.raises(ValueError) as err:
+        m.static_curve(pts)
+    assert len(str(err.value)) < 5000 and "4980 more" in str(err.value)
+    with pytest.raises(ValueError) as err:
+        m.static_curve(pts, y0=0.0)
+    assert len(str(err.value)) < 5000 and "4980 more" in str(err.value)

@@ -134,8 +134,8 @@ from ..core._validation import (as_1d_finite, check_bool, check_choice, check_in
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..core._simulation_kernels import record_inputs
 from ..core._terms import check_input_names
-from ..static._analysis import (NET, Equilibrium, Reached, one_input_levels, only_stable, schur_stable, settle,
-                                spectral_radius)
+from ..static._analysis import (NET, Equilibrium, Reached, one_input_levels, only_stable, point_phrases, schur_stable,
+                                settle, spectral_radius)
 from ..core._reprs import point_texts, short_repr
 
 __all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
@@ -742,12 +742,12 @@ class NeuralModel:
             out = np.where(status == 0, self._y(yn), np.nan)
             if strict and np.any(status != 0):
                 res = Reached(ub, np.asarray(y0s, float), out[None, :], status[None, :])
-                raise ValueError("the network reaches no equilibrium at " + "; ".join(res.explain(0)))
+                raise ValueError("the network reaches no equilibrium at " + point_phrases(res.explain(0)))
             return out
-        # the polynomial model's rule and phrases (every ū named, equilibria to 6 significant digits)
+        # the polynomial model's rule and phrases (each ū named, equilibria to 6 significant digits)
         out, problems = only_stable(self._y(roots), stable, [f"ū = {u_}" for u_ in point_texts(ub)])
         if strict and problems:
-            raise ValueError("the network has " + "; ".join(problems))
+            raise ValueError("the network has " + point_phrases(problems))
         return out
 
     def static_gain(self, ubar: np.ndarray, y0: float | np.ndarray | None = None, *, strict: bool = True) -> np.ndarray:

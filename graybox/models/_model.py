@@ -188,7 +188,8 @@ class Model:
         could be one point as well, and are refused). ``y0`` (output units, one for all
         ū or one per ū): the equilibrium a free run started there settles on, as J_SF counts it
         (default: the one stable equilibrium). ``strict=True`` (default) raises ``ValueError`` naming
-        every ū where no equilibrium is reached; ``strict=False`` gives NaN there.
+        each ū where no equilibrium is reached (the first 20, and how many more); ``strict=False`` gives NaN
+        there.
         """
         if self.n_inputs > 1:
             return _static_surface.static_surface(self.structure, self.theta, ubar, y0=y0, strict=strict,

@@ -98,6 +98,7 @@ __all__ = [
     "folded_equilibria",
     "continuum",
     "CONTINUUM_WHY",
+    "point_phrases",
     "DENOMINATOR_RTOL",
     "SETTLE_STEPS",
     "SETTLE_TAUS",
@@ -985,8 +986,22 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
     return Reached(ub, y0s, yb, status)
 
 
+#: The most points a static analysis' error names one by one: a curve over 10⁴ levels where none is reached
+#: made a message of megabytes, which a notebook prints whole.
+NAMED_POINTS = 20
+
+
+def point_phrases(phrases: list[str]) -> str:
+    """The phrases of the points not reached (one per point, naming ū and why) joined by "; ": the first
+    :data:`NAMED_POINTS`, then how many more (every message that names points says them so)."""
+    if len(phrases) <= NAMED_POINTS:
+        return "; ".join(phrases)
+    return "; ".join(phrases[:NAMED_POINTS]) + (f"; … and {len(phrases) - NAMED_POINTS} more ū ({len(phrases)} in all; "
+                                                "strict=False gives NaN there)")
+
+
 def _describe_failures(res: Reached, what: str = "model") -> str:
-    return f"the {what} reaches no equilibrium at " + "; ".join(res.explain(0))
+    return f"the {what} reaches no equilibrium at " + point_phrases(res.explain(0))
 
 
 def checked_model(structure: object, theta: object) -> tuple[Structure, np.ndarray]:
@@ -1066,7 +1081,7 @@ def static_curve(
     strict : bool
         When True (default) a ū where no equilibrium is reached (none is stable, the run
         diverges or does not settle; or several are stable and ``y0`` is not given) raises
-        ``ValueError`` naming every such ū and why; when False its value is NaN.
+        ``ValueError`` naming each such ū and why (the first 20, and how many more); when False its value is NaN.
 
     Returns
     -------
@@ -1091,7 +1106,7 @@ def static_curve(
     out, problems = only_stable(roots, _roots_stable(structure, th[None, :], ub, roots[None])[0],
                                 [f"ū = {u}" for u in point_texts(ub)], continuum(structure, th[None, :], ub)[0])
     if strict and problems:
-        raise ValueError("the model has " + "; ".join(problems))
+        raise ValueError("the model has " + point_phrases(problems))
     return out
 
 

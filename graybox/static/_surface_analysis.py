@@ -320,7 +320,8 @@ def static_surface(
     y0 : float or array_like of shape (M,), optional
         Initial output (output units).
     strict : bool
-        Raise ``ValueError`` naming every ū where no equilibrium is reached (else NaN there).
+        Raise ``ValueError`` naming each ū where no equilibrium is reached (the first 20, and how many more; else
+        NaN there).
     input_names : tuple of str, optional
         Input order (default: the structure's inputs).
 
@@ -339,7 +340,7 @@ def static_surface(
     if y0 is not None or _static.is_rational(sk):
         res = reached_surface(structure, th[None, :], ub, 0.0 if y0 is None else y0, inputs=names)
         if strict and not res.ok.all():
-            raise ValueError("the model reaches no equilibrium at " + "; ".join(res.explain(0)))
+            raise ValueError("the model reaches no equilibrium at " + _static.point_phrases(res.explain(0)))
         return res.ybar[0].copy()
     # every point is a member of the folded model at ū' = 1: its roots and their stability in one call
     roots = _static.real_roots(sk, thf[0], np.ones(1))  # (M, 1, D)
@@ -348,7 +349,7 @@ def static_surface(
                                         ["ū = (" + ", ".join(f"{v:g}" for v in u) + ")" for u in ub],
                                         _static.continuum(sk, thf[0], np.ones(1))[:, 0])
     if strict and problems:
-        raise ValueError("the static surface is undefined: the model has " + "; ".join(problems))
+        raise ValueError("the static surface is undefined: the model has " + _static.point_phrases(problems))
     return out
 
 
