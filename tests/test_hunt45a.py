@@ -179,3 +179,26 @@ def test_static_surface_error_over_many_points_stays_short():
     with pytest.raises(ValueError) as err:
         m.static_curve(pts, y0=0.0)
     assert len(str(err.value)) < 5000 and "4980 more" in str(err.value)
+
+
+def test_messages_listing_many_levels_stay_short():
+    import warnings
+
+    c = gb.StaticCurve([1.0, 2.0], domain=(0.0, 1.0))
+    with pytest.raises(ValueError, match=r"\(50000 in all\)") as err:
+        c(np.linspace(0.0, 2.0, 100000))  # 50000 levels beyond the domain: the message was 1 MB
+    assert len(str(err.value)) < 2000
+    with pytest.raises(ValueError, match=r"ū = \[2\.0\] outside"):  # a few are listed as before
+        c([0.5, 2.0])
+    s = gb.StaticSurface(((0, 0), (1, 0)), [1.0, 2.0], domain=((0.0, 1.0), (0.0, 1.0)))
+    with pytest.raises(ValueError, match=r"in all\)") as err:
+        s(np.column_stack([np.linspace(0.0, 2.0, 100000), np.zeros(100000)]))
+    assert len(str(err.value)) < 2000
+    with pytest.raises(ValueError, match=r"\(5000 in all\)"):
+        gb.StaticPoints(np.r_[np.arange(5000.0), np.arange(5000.0)], np.zeros(10000))
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], Ts=1.0)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        gb.operating_curve(m, np.linspace(0.0, 20.0, 5000), data=gb.Record(np.linspace(0, 1, 100), np.zeros(100)))
+    said = [str(w.message) for w in seen if issubclass(w.category, gb.StaticRangeWarning)]
+    assert len(said) == 1 and len(said[0]) < 2000 and "in all)" in said[0]

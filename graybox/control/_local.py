@@ -33,6 +33,7 @@ from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, 
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
 from ..core._transient import steady_levels
+from ..core._reprs import listed
 from ..core._validation import (check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
@@ -605,7 +606,7 @@ def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
     if out.size:
         box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo, hi))
         pts = rounded_levels(out[:, 0] if out.shape[1] == 1 else out)
-        warn(f"operating points ū = {pts} lie outside the input range {box} of the records and static points: "
+        warn(f"operating points ū = {listed(pts)} lie outside the input range {box} of the records and static points: "
              "the local models there are extrapolations of the model", StaticRangeWarning)
 
 

@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from ._reprs import listed
 from ._terms import check_input_names, default_input_names, transient_source
 from ._validation import (FrozenMap, as_1d_finite, check_per_point, check_real, check_str, float_array, refuse_non_real,
                           warn)
@@ -285,7 +286,7 @@ class StaticPoints:
             raise ValueError(f"{self.name}: no static points")
         uniq, counts = np.unique(u, return_counts=True, axis=0)
         if (counts > 1).any():
-            raise ValueError(f"{self.name}: duplicated ubar value(s) {uniq[counts > 1].tolist()}; for repeated "
+            raise ValueError(f"{self.name}: duplicated ubar value(s) {listed(uniq[counts > 1].tolist())}; for repeated "
                              "measurements at one level use StaticPoints.from_repeats, which averages them")
         m = 1 if u.ndim == 1 else u.shape[1]
         names = default_input_names(m) if self.input_names is None else check_input_names(

@@ -13,10 +13,23 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["beside", "bound_text", "level_texts", "point_texts", "short_repr", "summary"]
+__all__ = ["beside", "bound_text", "level_texts", "listed", "point_texts", "short_repr", "summary", "LISTED"]
 
 #: A field's text longer than this is summarised.
 WIDTH = 48
+
+#: The most values, points or phrases a message lists one by one, then says how many in all: 10⁴ levels outside a
+#: range or without an equilibrium made messages of megabytes, which a notebook prints whole.
+LISTED = 20
+
+
+def listed(values: object) -> str:
+    """Values (levels, points) for a message, as a list: all of them up to :data:`LISTED`, else the first ones
+    and how many in all (``[0.5, 0.6, …] (50000 in all)``)."""
+    items = list(values)  # type: ignore[call-overload]
+    if len(items) <= LISTED:
+        return str(items)
+    return "[" + ", ".join(map(str, items[:LISTED])) + f", …] ({len(items)} in all)"
 
 
 def level_texts(levels: np.ndarray) -> list[str]:

@@ -65,7 +65,7 @@ from ._equilibrium_kernels import (
 from ..core._terms import Structure, Term
 from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real, check_sequence,
                                 check_theta, real_array)
-from ..core._reprs import point_texts, short_repr
+from ..core._reprs import LISTED, point_texts, short_repr
 from ._linearisation import (characteristic_roots, derivative_map, grid_coefficients, static_gains, static_powers,
                              static_theta_gradient_of)
 
@@ -986,18 +986,14 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
     return Reached(ub, y0s, yb, status)
 
 
-#: The most points a static analysis' error names one by one: a curve over 10⁴ levels where none is reached
-#: made a message of megabytes, which a notebook prints whole.
-NAMED_POINTS = 20
-
-
 def point_phrases(phrases: list[str]) -> str:
     """The phrases of the points not reached (one per point, naming ū and why) joined by "; ": the first
-    :data:`NAMED_POINTS`, then how many more (every message that names points says them so)."""
-    if len(phrases) <= NAMED_POINTS:
+    :data:`~graybox.core._reprs.LISTED`, then how many more (a curve over 10⁴ levels where none is reached made a
+    message of megabytes)."""
+    if len(phrases) <= LISTED:
         return "; ".join(phrases)
-    return "; ".join(phrases[:NAMED_POINTS]) + (f"; … and {len(phrases) - NAMED_POINTS} more ū ({len(phrases)} in all; "
-                                                "strict=False gives NaN there)")
+    return "; ".join(phrases[:LISTED]) + (f"; … and {len(phrases) - LISTED} more ū ({len(phrases)} in all; "
+                                          "strict=False gives NaN there)")
 
 
 def _describe_failures(res: Reached, what: str = "model") -> str:

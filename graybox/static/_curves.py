@@ -9,7 +9,7 @@ import numpy as np
 from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, outside_range
 from ..core._validation import as_1d_finite, check_int, check_real, check_str, real_array
-from ..core._reprs import short_repr
+from ..core._reprs import listed, short_repr
 
 __all__ = ["StaticCurve", "fit_on_powers"]
 
@@ -90,7 +90,7 @@ class StaticCurve:
         ub = np.atleast_1d(ubar)
         out = ub[outside_range(ub, lo, hi)]
         if out.size:
-            raise ValueError(f"ū = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")
+            raise ValueError(f"ū = {listed(out.tolist())} outside the domain [{lo:g}, {hi:g}] of {self.name}")
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
         """H(ū), same shape as ``ubar`` (checked against the domain)."""

@@ -17,7 +17,7 @@ from ..core._least_squares import scaled_lstsq
 from ..core._records import StaticPoints, frame_inputs, outside_range
 from ..core._terms import check_input_names
 from ..core._validation import as_1d_finite, check_int, check_real, check_sequence, check_str, real_array
-from ..core._reprs import short_repr
+from ..core._reprs import listed, short_repr
 
 __all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
 
@@ -291,7 +291,8 @@ class StaticSurface:
             col = u[:, i]
             out = col[outside_range(col, lo, hi)]
             if out.size:
-                raise ValueError(f"{self.input_names[i]} = {out.tolist()} outside the domain [{lo:g}, {hi:g}] of {self.name}")
+                raise ValueError(f"{self.input_names[i]} = {listed(out.tolist())} outside the domain [{lo:g}, {hi:g}] of "
+                                 f"{self.name}")
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
         """H(ū) at points ``ubar`` of shape (K, m) (or (m,) for one point); returns shape (K,)."""
