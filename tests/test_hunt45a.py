@@ -202,3 +202,14 @@ def test_messages_listing_many_levels_stay_short():
         gb.operating_curve(m, np.linspace(0.0, 20.0, 5000), data=gb.Record(np.linspace(0, 1, 100), np.zeros(100)))
     said = [str(w.message) for w in seen if issubclass(w.category, gb.StaticRangeWarning)]
     assert len(said) == 1 and len(said[0]) < 2000 and "in all)" in said[0]
+
+
+def test_one_step_scores_say_how_to_add_a_missing_transient_input():
+    # js and predict(horizon=2) said "add it with graybox.transient_inputs(...)"; j1, predict and the estimators,
+    # which read the regressors, named the missing input only
+    rec = gb.Record(np.r_[np.zeros(10), np.ones(10)], np.ones(20), Ts=0.5)
+    m = gb.Model(["y(k-1)", "u(k-1)", "u_tau2(k-1)"], [0.5, 1.0, 3.0], input_names=("u", "u_tau2"), Ts=0.5)
+    hint = r"needs input 'u_tau2'.*graybox\.transient_inputs\(record, taus=\[2\], inputs=\['u'\]\)"
+    for call in (lambda: m.predict(rec), lambda: gb.j1(m, rec), lambda: gb.els(m.structure, rec)):
+        with pytest.raises(ValueError, match=hint):
+            call()

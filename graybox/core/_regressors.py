@@ -12,7 +12,7 @@ from typing import Sequence
 import numpy as np
 
 from ._records import Record, as_records, require_lengths
-from ._terms import Structure, check_input_names, rename_hint
+from ._terms import Structure, check_input_names, missing_input_hint
 from ._validation import as_1d_finite, check_int, check_sequence
 
 __all__ = ["record_signals", "check_structure_inputs", "check_record_inputs", "refuse_non_finite_columns",
@@ -45,12 +45,12 @@ def check_structure_inputs(structure: Structure, records: Sequence[Record]) -> N
 
 def check_record_inputs(inputs: Sequence[str], records: Sequence) -> None:
     """``ValueError`` naming an input of ``inputs`` (the ones the terms use) that a record (a Record or a DaskRecord,
-    anything with ``name`` and ``input_names``) lacks, with how to name them alike."""
+    anything with ``name`` and ``input_names``) lacks, with how to give them it (:func:`missing_input_hint`)."""
     for r in records:
         missing = [n for n in inputs if n not in r.input_names]
         if missing:
             raise ValueError(f"{r.name}: the terms use input {missing[0]!r}, but the record's inputs are "
-                             f"{r.input_names}{rename_hint(tuple(inputs), r.input_names)}")
+                             f"{r.input_names}{missing_input_hint(tuple(inputs), r.input_names)}")
 
 
 def refuse_non_finite_columns(columns: np.ndarray, terms: Sequence, what: str = "") -> None:
@@ -127,7 +127,7 @@ def regressor_matrix(
                 have = tuple(k for k in signals if k not in ("y", "e"))
                 used = structure.inputs
                 raise ValueError(f"term {term} needs {what} {sig!r}, which the data do not have (inputs: {have})"
-                                 f"{rename_hint(used, have) if what == 'input' else ''}")
+                                 f"{missing_input_hint(used, have) if what == 'input' else ''}")
             x = signals[sig][s - lag : n - lag]
             col *= x if power == 1 else x**power
         psi[:, j] = col

@@ -85,20 +85,31 @@ def require_inputs(used: Iterable[str], names: tuple[str, ...], among: str, pref
     missing = [n for n in used if n not in names]
     if not missing:
         return
-    hint = ""
+    raise ValueError(f"{prefix}the structure uses input {missing[0]!r}, {among} {names}{missing_input_hint(used, names)}")
+
+
+def missing_input_hint(used: Sequence[str], names: Sequence[str]) -> str:
+    """How to give the data the inputs a structure ``used`` lacks among ``names``: a transient input of an input
+    that is there, added with transient_inputs; inputs left with their default names, named; else terms and
+    data named alike (:func:`rename_hint`). Every message of a missing input says it (:func:`require_inputs`, the
+    regressors')."""
+    used, names = tuple(used), tuple(names)
+    missing = [n for n in used if n not in names]
+    if not missing:
+        return ""
     source = transient_source(missing[0], names)
     if source is not None:
         tau = transient_tau_text(missing[0], source)
-        hint = (f" (if it is a transient input, add it with graybox.transient_inputs(record, taus=[{tau}], "
+        return (f" (if it is a transient input, add it with graybox.transient_inputs(record, taus=[{tau}], "
                 f"inputs=[{source!r}]))")
-    elif tuple(names) == default_input_names(len(names)):
+    if names == default_input_names(len(names)):
         # the data's inputs carry the default names: they were never named (one CSV column is "u")
         # one input: its name is sure; several: the columns' order is the data's, which only the user knows
         said = (f"{list(missing)}" if len(names) == 1 else
                 f"[...], one per column in the columns' order (the structure uses {', '.join(map(repr, used))})")
-        hint = (f" (the data's inputs have the default names: name them, e.g. Record(..., input_names={said}), "
+        return (f" (the data's inputs have the default names: name them, e.g. Record(..., input_names={said}), "
                 "load_record_csv(..., input_names=[...]) or input_names = [...] in a grid spec's file entry)")
-    raise ValueError(f"{prefix}the structure uses input {missing[0]!r}, {among} {names}{hint or rename_hint(used, names)}")
+    return rename_hint(used, names)
 
 
 def rename_hint(used: Sequence[str], have: Sequence[str]) -> str:
