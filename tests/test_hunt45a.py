@@ -213,3 +213,15 @@ def test_one_step_scores_say_how_to_add_a_missing_transient_input():
     for call in (lambda: m.predict(rec), lambda: gb.j1(m, rec), lambda: gb.els(m.structure, rec)):
         with pytest.raises(ValueError, match=hint):
             call()
+
+
+def test_loading_a_result_as_a_model_says_where_its_model_is(tmp_path):
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    d = gb.Decision(m, 0, 0.5, 1.0, 0.1, "D_SF", True, 1.0)
+    path = gb.save(d, tmp_path / "d.json")
+    with pytest.raises(gb.GrayboxFileError, match=r"holds a Decision, expected Model \(a Decision carries a Model: "
+                                                  r"load it without expect= and take its \.model\)"):
+        gb.load(path, expect=gb.Model)
+    with pytest.raises(gb.GrayboxFileError, match=r"expected StaticCurve$"):  # no model asked for: no hint
+        gb.load(path, expect=gb.StaticCurve)
+    assert gb.load(path).model.theta.tolist() == [0.5, 1.0]

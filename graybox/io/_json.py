@@ -948,7 +948,11 @@ def _expected(expect: object) -> tuple[type, ...] | None:
 
 def _expect(want: tuple[type, ...] | None, typ: str, source: str) -> None:
     if want is not None and _CODECS[typ][0] not in want:
-        raise GrayboxFileError(f"{source}: holds a {typ}, expected {' or '.join(w.__name__ for w in want)}")
+        # a result that carries the model asked for (an ELSResult's, a Decision's): how to have it, as save says
+        carried = [kind for name, kind in _CODECS[typ][1] if name == "model"]
+        hint = (f" (a {typ} carries a {carried[0]}: load it without expect= and take its .model)"
+                if carried and _CODECS[carried[0]][0] in want else "")
+        raise GrayboxFileError(f"{source}: holds a {typ}, expected {' or '.join(w.__name__ for w in want)}{hint}")
 
 
 def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, source: str = "<json>") -> Any:
