@@ -225,3 +225,13 @@ def test_loading_a_result_as_a_model_says_where_its_model_is(tmp_path):
     with pytest.raises(gb.GrayboxFileError, match=r"expected StaticCurve$"):  # no model asked for: no hint
         gb.load(path, expect=gb.StaticCurve)
     assert gb.load(path).model.theta.tolist() == [0.5, 1.0]
+
+
+def test_a_frame_with_the_default_names_still_feeds_a_structure_using_some_of_them():
+    import pandas as pd
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(size=(10, 2))
+    df = pd.DataFrame({"u1": u[:, 0], "u2": u[:, 1]})
+    st, th = ["y(k-1)", "u2(k-1)"], [0.5, 1.0]
+    assert np.array_equal(gb.simulate(st, th, df, [0.0]), gb.simulate(st, th, u, [0.0]))
