@@ -235,3 +235,10 @@ def test_a_frame_with_the_default_names_still_feeds_a_structure_using_some_of_th
     df = pd.DataFrame({"u1": u[:, 0], "u2": u[:, 1]})
     st, th = ["y(k-1)", "u2(k-1)"], [0.5, 1.0]
     assert np.array_equal(gb.simulate(st, th, df, [0.0]), gb.simulate(st, th, u, [0.0]))
+
+
+def test_levels_beyond_the_float_range_are_a_value_error():
+    # real_array, which calls a ragged nesting a type error, took the overflow for one too
+    m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    with pytest.raises(ValueError, match="beyond the float range"):
+        m.static_curve([10**400])

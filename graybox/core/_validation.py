@@ -252,6 +252,8 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
     refuse_flags(x, name, what)
     try:
         return float_array(x, name, what)
+    except _BeyondFloats:  # a value, not a type
+        raise
     except ValueError as exc:  # ragged: the paths that read levels and points have always called it a type
         raise TypeError(str(exc)) from None
 
@@ -271,6 +273,10 @@ def refuse_flags(x: object, name: str, what: str = "numbers") -> None:
         bad = any(v is None or isinstance(v, (bool, np.bool_)) for v in raw.flat)
     if bad:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}")
+
+
+class _BeyondFloats(ValueError):
+    """A number beyond the float range (a value error, which :func:`real_array` does not take for a ragged shape)."""
 
 
 def float_array(x: object, name: str, what: str = "an array of numbers") -> np.ndarray:
@@ -295,7 +301,7 @@ def float_array(x: object, name: str, what: str = "an array of numbers") -> np.n
     except TypeError:
         raise TypeError(f"{name} must be {what}, got {type(x).__name__}") from None
     except OverflowError:  # an integer beyond the float range (10**400): numpy's message names nothing
-        raise ValueError(f"{name} holds a number beyond the float range (about 1.8e308)") from None
+        raise _BeyondFloats(f"{name} holds a number beyond the float range (about 1.8e308)") from None
     except ValueError:
         ragged = isinstance(x, (list, tuple)) and len({np.ndim(v) if np.ndim(v) == 0 else np.shape(v) for v in x}) > 1
         raise ValueError(f"{name} must be {what}, got {type(x).__name__}"
