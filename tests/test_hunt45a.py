@@ -242,3 +242,16 @@ def test_levels_beyond_the_float_range_are_a_value_error():
     m = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
     with pytest.raises(ValueError, match="beyond the float range"):
         m.static_curve([10**400])
+
+
+def test_a_model_takes_its_structure_from_what_carries_one():
+    # README: wherever a structure is meant a Model or a result that carries one will do; Model(selection, θ)
+    # failed with "'Selection' object is not iterable", Model(None, θ) likewise, naming nothing
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(size=100), rng.uniform(size=100))
+    sel = gb.frols(gb.Candidates(1, 1), rec, n_terms=2)
+    m = gb.Model(sel, [0.5, 1.0])
+    assert m.structure == sel.structure
+    assert gb.Model(m, [0.1, 0.2]).structure == sel.structure
+    with pytest.raises(TypeError, match="structure must be a Structure, a sequence of terms or a model"):
+        gb.Model(None, [0.5])

@@ -13,7 +13,7 @@ from ..static import _surface_analysis as _static_surface
 from ..core._equation_text import latex_equation
 from ..core._records import Record, check_fitted_on, check_period, check_units
 from ..core._validation import check_int, check_real, check_sequence, check_str, check_theta, frozen
-from ..core._terms import Structure, check_input_names, require_inputs
+from ..core._terms import Structure, check_input_names, require_inputs, structure_of
 
 __all__ = ["Model", "model_input_names"]
 
@@ -33,8 +33,8 @@ class Model:
 
     Parameters
     ----------
-    structure : Structure or sequence of str
-        Process (NARX) terms, in parameter order.
+    structure : Structure, sequence of str, or a result that carries one
+        Process (NARX) terms, in parameter order (a Selection, a Model … gives its ``.structure``).
     theta : array_like, shape (n_terms,)
         Process parameters, engineering units.
     noise_structure : Structure, optional
@@ -74,7 +74,8 @@ class Model:
         object.__setattr__(self, "units", check_units(self.units, f"model {self.name!r}"))
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
-        st = self.structure if isinstance(self.structure, Structure) else Structure(self.structure)
+        # a Structure, terms, or what carries one (a Selection, another Model), as wherever a structure is meant
+        st = structure_of(self.structure)
         if any(t.is_noise for t in st):
             raise ValueError("noise terms belong in noise_structure, not in the process structure")
         ns = self.noise_structure
