@@ -255,3 +255,20 @@ def test_a_model_takes_its_structure_from_what_carries_one():
     assert gb.Model(m, [0.1, 0.2]).structure == sel.structure
     with pytest.raises(TypeError, match="structure must be a Structure, a sequence of terms or a model"):
         gb.Model(None, [0.5])
+
+
+def test_the_static_functions_take_a_structure_from_what_carries_one():
+    # README: wherever a structure is meant a Model or a result that carries one will do; simulate, predict and
+    # evaluate_thetas took them, static_curve, static_gain, equilibria and the cluster maps refused them
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(size=100), rng.uniform(size=100))
+    sel = gb.frols(gb.Candidates(1, 1), rec, n_terms=2)
+    m = sel.model
+    for carrier in (sel, m):
+        assert gb.static_curve(carrier, m.theta, [0.5])[0] == m.static_curve([0.5])[0]
+        assert gb.static_gain(carrier, m.theta, [0.5])[0] == m.static_gain([0.5])[0]
+        assert gb.equilibria(carrier, m.theta, 0.5) == m.equilibria(0.5)
+        assert gb.cluster_map(carrier).names == m.cluster_map().names
+        assert gb.surface_cluster_map(carrier).names == gb.surface_cluster_map(m.structure).names
+    with pytest.raises(TypeError, match="structure must be a Structure or a sequence of terms"):
+        gb.static_curve(None, m.theta, [0.5])

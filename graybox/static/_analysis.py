@@ -234,10 +234,15 @@ def cluster_map(structure: Structure) -> ClusterMap:
 
 
 def structure_arg(structure: object) -> Structure:
-    """A public static function's ``structure``: a Structure, or a sequence of terms read as one."""
+    """A public static function's ``structure``: a Structure, a sequence of terms read as one, or what carries one
+    (a Model, a Selection, any result: its ``.structure``, as simulate and predict read it)."""
     if isinstance(structure, Structure):
         return structure
-    return Structure(check_sequence(structure, "structure", "a Structure or a sequence of terms"))
+    carried = getattr(structure, "structure", None)
+    if isinstance(carried, Structure):
+        return carried
+    return Structure(check_sequence(structure, "structure", "a Structure or a sequence of terms, or a model or a "
+                                                             "result that carries one"))
 
 
 @lru_cache(maxsize=256)
