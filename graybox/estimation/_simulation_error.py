@@ -1429,7 +1429,7 @@ def checkpoint_path(checkpoint: object) -> Path:
     path = Path(checkpoint)
     if path.suffix.lower() in _OTHER_FORMATS:  # a name promising another format, which the file would not be
         raise ValueError(f"checkpoint: {path} names a {_OTHER_FORMATS[path.suffix.lower()]}, but a checkpoint is an "
-                         f".npz file (NumPy arrays, read without pickle); give a name such as "
+                         f".npz file; give a name such as "
                          f"{path.with_suffix('.npz').name}")
     if path.is_dir():  # the folder meant to hold it: never to be called unreadable, nor deleted
         raise ValueError(f"checkpoint: {path} is a folder; give a file path, such as {path / 'checkpoint.npz'}")
