@@ -6,7 +6,7 @@ for the spread of that score. Its phases (one function each below):
 
 1. **inputs** (:func:`_inputs`) — the records and their jobs: *fit* on the identification record,
    *choose* on the validation record (cut into contiguous blocks) or, with one record only, on k
-   contiguous folds of it (refitting per fold), and *report* on an optional test record that no
+   contiguous folds of it (searching and refitting per fold), and *report* on an optional test record that no
    step of the choice reads;
 2. **structures** (:func:`_structures`) — for each size, the best structure of that size on the
    SEMP path (:func:`graybox.semp`) and the FROLS structure of that size (and, with ``sources``,
@@ -703,6 +703,34 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
             raise ValueError(f"{data} ({samples} samples) {'is' if len(idents) == 1 else 'are'} too short for the candidates' "
                              f"largest lag {process.max_lag}: no structure can be fitted")
         sizes = sorted(set(range(min(4, top), top + 1, 2)) | {top})
+    found, reached = _searched(candidates, ident, sizes, sources, forced, top)
+    if not found:
+        raise ValueError(f"no search reached any of the sizes {sizes} (reached: "
+                         f"{ {s: sorted(r) for s, r in reached.items()} })")
+    if asked:
+        missed = {s: [k for k in sizes if k not in r] for s, r in reached.items()}
+        missed = {s: m for s, m in missed.items() if m}
+        if missed:
+            warn("sizes no search reached are left out: " + "; ".join(f"{s}: {m}" for s, m in missed.items()),
+                 SelectionWarning)
+    rows, seen = [], {}
+    for (src, k), terms in found.items():
+        st, added = _completed(terms, candidates, idents, ident, include, form, centre)
+        key = frozenset(st)
+        if key in seen:  # e.g. two SEMP sizes that the static terms complete to one structure
+            if src not in seen[key]["source"].split(", "):
+                seen[key]["source"] += f", {src}"
+            continue
+        seen[key] = {"structure": f"{src}-{k}", "source": src, "size": k, "n_terms": len(st),
+                     "added": ", ".join(map(str, added)), "terms": str(st)}
+        rows.append(seen[key])
+    return rows
+
+
+def _searched(candidates: gb.Structure, ident, sizes: list[int], sources, forced: list, top: int
+              ) -> tuple[dict[tuple[str, int], list[str]], dict[str, set]]:
+    """The searches' structures on ``ident`` (the fit data, centred already when asked): {(source, size): terms},
+    and the sizes each source reached."""
     found: dict[tuple, list[str]] = {}
     reached: dict[str, set] = {}
     with warnings.catch_warnings():
@@ -746,41 +774,68 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
                     break
                 reached[src].add(k)
                 found[(src, k)] = [str(t) for t in sel.structure]
-    if not found:
-        raise ValueError(f"no search reached any of the sizes {sizes} (reached: "
-                         f"{ {s: sorted(r) for s, r in reached.items()} })")
-    if asked:
-        missed = {s: [k for k in sizes if k not in r] for s, r in reached.items()}
-        missed = {s: m for s, m in missed.items() if m}
-        if missed:
-            warn("sizes no search reached are left out: " + "; ".join(f"{s}: {m}" for s, m in missed.items()),
-                 SelectionWarning)
-    rows, seen = [], {}
-    for (src, k), terms in found.items():
-        st = gb.Structure(terms)
-        if centre:
-            st = _centring.closure(st).process
-        if centre and form is None:
-            # a black box: less what the records cannot tell apart (a two-level input's u^2: no fit takes it),
-            # unsaid, as the searches' skipped candidates are (the row's terms show it); a gray box keeps it, as
-            # the static form's terms: its static points tell u^2 from u and 1
-            st, gone = _centring.told_apart(st, ident, 1e-7)  # frols's and semp's rank_tol
-            _centring.check_included(include, process, list(idents), gone)
-        added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
-        st = st + gb.Structure(added)
-        if centre:  # the static form's terms (u(k-1)^2 for Σ_{u^2}) bring their divisors too, or the set is not closed
-            closed = _centring.closure(st).process
-            added += [t for t in closed if t not in st]
-            st = closed
-        key = frozenset(st)
-        if key in seen:  # e.g. two SEMP sizes that the static terms complete to one structure
-            if src not in seen[key]["source"].split(", "):
-                seen[key]["source"] += f", {src}"
-            continue
-        seen[key] = {"structure": f"{src}-{k}", "source": src, "size": k, "n_terms": len(st),
-                     "added": ", ".join(map(str, added)), "terms": str(st)}
-        rows.append(seen[key])
-    return rows
+    return found, reached
+
+
+def _completed(terms: list[str], candidates: gb.Structure, idents: tuple[gb.Record, ...], ident, include,
+               form: _Form | None, centre: bool) -> tuple[gb.Structure, list]:
+    """A search's structure as a row fits it: closed (``centre``), less what the records cannot tell apart (a
+    centred black box), completed with the static form's terms (a gray box); and those added terms."""
+    process = candidates.process
+    st = gb.Structure(terms)
+    if centre:
+        st = _centring.closure(st).process
+    if centre and form is None:
+        # a black box: less what the records cannot tell apart (a two-level input's u^2: no fit takes it),
+        # unsaid, as the searches' skipped candidates are (the row's terms show it); a gray box keeps it, as
+        # the static form's terms: its static points tell u^2 from u and 1
+        st, gone = _centring.told_apart(st, ident, 1e-7)  # frols's and semp's rank_tol
+        _centring.check_included(include, process, list(idents), gone)
+    added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
+    st = st + gb.Structure(added)
+    if centre:  # the static form's terms (u(k-1)^2 for Σ_{u^2}) bring their divisors too, or the set is not closed
+        closed = _centring.closure(st).process
+        added += [t for t in closed if t not in st]
+        st = closed
+    return st, added
+
+
+def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, sources, include,
+                     form: _Form | None, centre: bool) -> list[tuple[str, ...]]:
+    """Per row, its structure searched again on each fold's fit records alone (the held-out fold unseen: a search
+    on all the identification data would choose the terms with it): one terms text per split, that of the row's
+    source at its size (or the size nearest it the fold's search reached), ``""`` where that fold's search reached
+    no structure of the row's source (the row then fails on that fold)."""
+    process = candidates.process
+    sizes = sorted({r["size"] for r in rows})
+    forced = list(include)
+    per_fold = []
+    for fit, _, _ in plan.splits:
+        got: dict[tuple[str, int], str] = {}
+        if fit is not None:
+            n_rows = sum(len(r) - process.max_lag for r in fit)
+            ident = _fit_data(fit)
+            with warnings.catch_warnings():
+                # the search on all the identification data said what there is to say of the sizes and candidates
+                warnings.simplefilter("ignore")
+                try:
+                    if centre:
+                        ident = _centring.centred_data(ident, _centring.search_offsets(list(fit)))
+                    found, _ = _searched(candidates, ident, [k for k in sizes if k < n_rows], sources, forced,
+                                         min(16, len(process), n_rows - 1))
+                    for key, terms in found.items():
+                        got[key] = str(_completed(terms, candidates, fit, ident, include, form, centre)[0])
+                except (ValueError, FewerTermsError, np.linalg.LinAlgError):  # this fold's records support none
+                    pass
+        per_fold.append(got)
+    out = []
+    for r in rows:
+        srcs, size = r["source"].split(", "), r["size"]
+        # the row's source at its size on the fold, else at the size nearest it that the fold's search reached (a
+        # SEMP path on other records passes through other sizes)
+        out.append(tuple(f[min(near, key=lambda key: (abs(key[1] - size), key[1]))] if near else ""
+                         for f in per_fold for near in [[key for key in f if key[0] in srcs]]))
+    return out
 
 
 # -- 3. scoring --------------------------------------------------------------------------------
@@ -794,6 +849,9 @@ class _Job:
     lambdas: tuple | None
     constraints: tuple  # canonical tables (constraint_from_object), checked by the driver
     filters: tuple = ()  # the caller's warning filters, as warnings.filters held them at the call
+    # choosing on folds: the row's structure searched on each split's fit records (one terms text per split, "" where
+    # that fold's search reached none); None: every split fits ``terms``
+    fold_terms: tuple[str, ...] | None = None
 
 
 def _lambdas(estimator: str, lambdas: Sequence[float] | None) -> np.ndarray | None:
@@ -933,7 +991,7 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
         failed: list[str] = []
         member_failed: dict[int, str] = {}  # a member's first failure, over the folds' fits and the full one
 
-        def fit(records):
+        def fit(records, st=st):
             th, lam, why, members = _fit_or_fail(job, st, records)
             failed.extend(why)
             for i, reason in members.items():
@@ -941,13 +999,20 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
             jsf.append(_jsf(st, th, plan.static))
             return th, lam
 
-        for records, choose, edges in plan.splits:
+        for j, (records, choose, edges) in enumerate(plan.splits):
+            fold_st = st
             if records is None:  # every validation record scores the fit on all the identification records, made once
                 full = full or fit(plan.ident)
                 th = full[0]
-            else:  # a fold: its own fit
-                th = fit(records)[0]
-            blocks.append(_block_mse(st, th, choose, edges))
+            elif job.fold_terms is not None and not job.fold_terms[j]:  # this fold's search reached no such structure
+                failed.append(f"the structure search on {', '.join(repr(r.name) for r in records)} found no "
+                              f"structure of this row's source")
+                lam = _lambdas(job.estimator, job.lambdas)
+                th = np.full((1 if lam is None else lam.size, len(st)), np.nan)
+            else:  # a fold: its own fit (of the structure its own search chose, when searched per fold)
+                fold_st = st if job.fold_terms is None else gb.parse_structure(job.fold_terms[j])
+                th = fit(records, fold_st)[0]
+            blocks.append(_block_mse(fold_st, th, choose, edges))
             weights.append(np.diff(edges))
         full = full or fit(plan.ident)  # (last: jsf[-1] is its J_SF)
         w = np.concatenate(weights).astype(float)
@@ -1154,7 +1219,11 @@ def select_graybox(
         fitted on the segments around it); several Records (a list or tuple: experiments of one
         plant, same inputs and sampling period) are identification data fitted together; without a
         validation record each is a fold, chosen on while fitted on the others. The structure
-        searches and every fit take the records together (no regressor reaches across two).
+        searches and every fit take the records together (no regressor reaches across two). On
+        folds, each fold's structures are searched again on its fit records alone (the held-out
+        fold unseen), a row being a source and size; when in every row such a structure has no
+        finite free run on its held-out fold, the structures of all the data are fitted per fold
+        instead, with a ``SelectionWarning`` (optimistic).
     static : StaticPoints, StaticCurve or StaticSurface, optional
         Static information (default: the Dataset's). A curve is sampled at 10 levels over its
         domain, a surface (several inputs) on a grid of 6 levels per input over its domain box
@@ -1325,18 +1394,35 @@ def select_graybox(
                             progress=progress, checkpoint=ck)
     fast = [e for e in estimators if e not in SLOW_ESTIMATORS]
     filters = tuple(warnings.filters)
-    jobs = [_Job(r["structure"], r["terms"], e, plan, lam, constraints, filters) for r in rows for e in fast]
-    results = run(jobs)
-    slow_rows = rows
-    if fast and shortlist is not None and len(rows) > shortlist:
-        # the slow fronts only for the structures the fast ones rank best (in band first)
-        first, _, _ = _table(rows, jobs, results, plan)
-        order = first.assign(_js=np.where(first["in_band"], first["JS_valid"], np.inf)).groupby(level=0)["_js"].min()
-        keep = set(order.sort_values(kind="stable").index[:shortlist])
-        slow_rows = [r for r in rows if r["structure"] in keep]
-    more = [_Job(r["structure"], r["terms"], e, plan, lam, constraints, filters) for r in slow_rows for e in estimators
-            if e in SLOW_ESTIMATORS]
-    jobs, results = jobs + more, results + run(more)
+    # on folds, each fold's structures are searched on its fit records alone (the held-out fold unseen)
+    fold_terms = dict(zip((r["structure"] for r in rows), _fold_structures(rows, candidates, plan, sources, include,
+                                                                           form, centre))) if plan.folds else {}
+
+    def make_job(r: dict, e: str, per_fold: Mapping[str, tuple[str, ...]]) -> _Job:
+        return _Job(r["structure"], r["terms"], e, plan, lam, constraints, filters, per_fold.get(r["structure"]))
+
+    def score(per_fold: Mapping[str, tuple[str, ...]]) -> tuple[list[_Job], list[dict]]:
+        jobs = [make_job(r, e, per_fold) for r in rows for e in fast]
+        results = run(jobs)
+        slow_rows = rows
+        if fast and shortlist is not None and len(rows) > shortlist:
+            # the slow fronts only for the structures the fast ones rank best (in band first)
+            first, _, _ = _table(rows, jobs, results, plan)
+            order = first.assign(_js=np.where(first["in_band"], first["JS_valid"], np.inf)).groupby(level=0)["_js"].min()
+            keep = set(order.sort_values(kind="stable").index[:shortlist])
+            slow_rows = [r for r in rows if r["structure"] in keep]
+        more = [make_job(r, e, per_fold) for r in slow_rows for e in estimators if e in SLOW_ESTIMATORS]
+        return jobs + more, results + run(more)
+
+    jobs, results = score(fold_terms)
+    if fold_terms and not np.isfinite(_table(rows, jobs, results, plan)[0]["JS_valid"].to_numpy(float)).any():
+        # the structures searched per fold never ran on their held-out folds: said, and chosen as before the
+        # per-fold search (optimistic: the held-out folds then shaped the structures)
+        warn("select_graybox: in every row, the structure searched on a fold's fit records has no finite free run "
+             "on its held-out fold; the choice is made on the structures searched on all the identification "
+             "data, fitted per fold (optimistic: those searches saw the held-out folds); a validation record "
+             "(a Dataset) gives an honest choice", SelectionWarning)
+        jobs, results = score({})
     table, members, scores = _table(rows, jobs, results, plan)
     if table["in_band"].any():
         pos, used = _choose(table, scores, rule)

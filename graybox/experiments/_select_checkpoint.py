@@ -97,7 +97,9 @@ def row_key(job: Any, plan: bytes | None = None) -> str:
     splits, ``plan`` its :func:`plan_digest` when made already) and graybox's version."""
     h = hashlib.sha256()
     _feed(h, gb.__version__)
-    _feed(h, (job.terms, job.estimator, job.lambdas))
+    # the folds' own structures when searched per fold (a row fitted on the full structure per fold is another row)
+    _feed(h, (job.terms, job.estimator, job.lambdas) if job.fold_terms is None else
+          (job.terms, job.estimator, job.lambdas, job.fold_terms))
     h.update(canonical_json(job.constraints).encode())  # the canonical tables, as a grid cell's key holds them
     h.update(plan_digest(job.plan) if plan is None else plan)
     return h.hexdigest()[:32]
