@@ -186,10 +186,10 @@ def simulate(
         uu = record_inputs(u, code.inputs)
     else:
         cols = [str(c) for c in u.columns] if input_names is None and is_frame(u) else []
-        if cols and cols != list(default_input_names(len(cols))) and any(c in structure.inputs for c in cols):
+        if cols and sorted(cols) != sorted(default_input_names(len(cols))) and any(c in structure.inputs for c in cols):
             # a DataFrame naming the structure's inputs is read by those names (refused, naming its columns, where it
             # names some and not others): by position its named columns were said to be u1 … um. Columns with the
-            # default names are read by them, as before (a structure in u2 alone reads the frame's u2)
+            # default names (any order) are read by them, as before (a structure in u2 alone reads the frame's u2)
             input_names = structure.inputs
         uu, y0, b = free_run_inputs(u, y0, L, bound, names=input_names)
         code, uu = _inputs_for(structure, uu, input_names)
