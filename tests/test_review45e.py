@@ -19,3 +19,24 @@ def test_a_frame_of_the_default_names_in_another_order_still_feeds_a_structure_u
     st1 = ["y(k-1)", "u1(k-1)"]
     assert np.array_equal(gb.simulate(st1, th, pd.DataFrame({"u2": u[:, 1], "u1": u[:, 0]}), [0.0]),
                           gb.simulate(st1, th, u, [0.0]))
+
+
+# -- static_fit_mse: an input's levels are told apart by the rank rule, not by exact equality ------------------------
+def _curved_in_speed(s, v):
+    return 0.4 * s + 0.3 * s ** 2 + 0.2 * v + 0.3
+
+
+@pytest.mark.parametrize("low", [0.1 * 3, 0.3 * (1 + 2e-15)])
+def test_two_valve_levels_apart_by_round_off_in_some_rows_are_still_two_levels(low):
+    # bf53a00 counted an input's levels with np.unique: a grid whose valve is 0.3 in some rows and 0.1 * 3 (or 0.3
+    # to the last digits) in others has 3 or 4 'levels', so valve² was asked of them, the fit was rank deficient and
+    # the degree stopped at 1 (MSE 0.43 against a band of 0.0025), as before bf53a00
+    from graybox.static._form_check import static_degree, static_fit_mse
+    g = np.array([(a, low if i % 2 else 0.3) for i, a in enumerate((0.0, 0.6, 1.3, 2.0))]
+                 + [(a, 2.5) for a in (0.0, 0.6, 1.3, 2.0)])
+    assert len(np.unique(g[:, 1])) > 2
+    pts = gb.StaticPoints(g, _curved_in_speed(g[:, 0], g[:, 1]) / 0.2, input_names=("speed", "valve"),
+                          uncertainty=np.full(len(g), 0.05))
+    mse = static_fit_mse(pts, 2)
+    assert mse is not None and mse < 1e-20
+    assert static_degree(pts, band=pts.band) == 2

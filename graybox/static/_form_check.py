@@ -29,7 +29,7 @@ from ._curves import StaticCurve
 from ..core._records import StaticPoints
 from ._analysis import cluster_name
 from ._surface_analysis import surface_cluster_key, surface_cluster_name
-from ..core._least_squares import scaled_lstsq
+from ..core._least_squares import free_directions, scaled_lstsq
 from ._surfaces import StaticSurface, _monomials, monomial_exponents
 from ..core._terms import Structure, Term
 from ..core._validation import check_int, check_real
@@ -101,24 +101,33 @@ def static_fit_mse(static: StaticPoints, degree: int) -> float | None:
         if degree > 0:
             return None  # no input varies: only degree 0 is determined
     else:
-        levels = [len(np.unique(col)) for col in u.T]
+        # each input centred and scaled: the polynomials of a degree are the same, their fit's conditioning is not
+        # (ū = 1e5 ± 1 made the cubic's columns collinear, and the degree asked depended on where the input's units
+        # put their zero)
+        u = (u - u.mean(axis=0)) / np.ptp(u, axis=0)
+        levels = [_levels(col, degree) for col in u.T]
         ex = tuple(e for e in monomial_exponents(u.shape[1], degree) if all(p < k for p, k in zip(e, levels)))
         if not any(sum(e) == degree for e in ex):
             return None  # nothing of this degree is determined: it is the degree below's fit
     if len(static) < len(ex):
         return None
     # plain least squares on the monomials (no curve object: its domain would refuse one point,
-    # or points that do not vary every input), of each input centred and scaled: the polynomials of a
-    # degree are the same, their fit's conditioning is not (ū = 1e5 ± 1 made the cubic's columns
-    # collinear, and the degree asked depended on where the input's units put their zero)
-    if u.shape[1]:
-        u = (u - u.mean(axis=0)) / np.ptp(u, axis=0)
+    # or points that do not vary every input)
     V = _monomials(u, ex)
     try:
         c = scaled_lstsq(V, static.ybar)
     except ValueError:  # rank deficient: the points do not pin the polynomial down (e.g. one input held)
         return None
     return float(np.mean((V @ c - static.ybar) ** 2))
+
+
+def _levels(x: np.ndarray, degree: int) -> int:
+    """How many of one input's powers x⁰ … x^degree the points determine: its number of levels (at most
+    degree + 1), judged by the one rank rule, so that levels apart by round-off (0.3 and 0.1 * 3) are one level,
+    as they are to the fit (np.unique took them for two, asked a power they cannot determine, and the fit,
+    rank deficient, stopped the degree)."""
+    V = x[:, None] ** np.arange(degree + 1)
+    return V.shape[1] - free_directions([(V, len(x))]).shape[1]
 
 
 def _simplicity(term: Term) -> tuple[int, int, int]:
