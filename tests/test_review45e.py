@@ -40,3 +40,18 @@ def test_two_valve_levels_apart_by_round_off_in_some_rows_are_still_two_levels(l
     mse = static_fit_mse(pts, 2)
     assert mse is not None and mse < 1e-20
     assert static_degree(pts, band=pts.band) == 2
+
+
+# -- check_real: an integer beyond the float range is a ValueError naming the argument, as float_array's -------------
+@pytest.mark.parametrize("call", [
+    lambda big: gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], Ts=big),
+    lambda big: gb.Equilibrium(big, 1.0, True, 0.5),
+    lambda big: gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0]).simulate(np.ones(5), [0.0], bound=big),
+])
+@pytest.mark.parametrize("digits", [400, 5000])  # 10**5000 has no repr (Python's 4300-digit limit)
+def test_a_scalar_beyond_the_float_range_is_a_value_error_naming_it(call, digits):
+    # 02b9655 turned numpy's OverflowError ('int too large to convert to float', naming nothing) into a ValueError
+    # in float_array, the arrays' conversion; check_real, every scalar option's (Ts, bound, an equilibrium's
+    # level), still let it through bare
+    with pytest.raises(ValueError, match=r"(Ts|ubar|bound).*beyond the float range"):
+        call(10**digits)

@@ -112,11 +112,15 @@ def check_real(
     ``low_open`` / ``high_open`` exclude the end points (``low=0, low_open=True``: positive).
     ``TypeError`` for a bool, a string or anything else that is not a real number (``"0.1"`` is
     refused: a number read from a file is converted where it is read); ``ValueError`` for
-    ``nan``, ``inf`` or a number outside the interval.
+    ``nan``, ``inf``, an integer beyond the float range or a number outside the interval.
     """
     if not _is_number(value):
         raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
-    v = float(value)  # type: ignore[arg-type]
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except OverflowError:  # an integer beyond the float range (10**400), as float_array says it (no repr: 10**5000
+        # has none within Python's digit limit)
+        raise _BeyondFloats(f"{name} must be a finite number, got one beyond the float range (about 1.8e308)") from None
     if not np.isfinite(v):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
     lo_bad = low is not None and (v <= low if low_open else v < low)
