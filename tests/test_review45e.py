@@ -55,3 +55,34 @@ def test_a_scalar_beyond_the_float_range_is_a_value_error_naming_it(call, digits
     # level), still let it through bare
     with pytest.raises(ValueError, match=r"(Ts|ubar|bound).*beyond the float range"):
         call(10**digits)
+
+
+# -- a centred search: a signal held at one level whose records say the level apart by round-off --------------------
+def test_a_centred_search_takes_a_level_said_apart_by_round_off_for_one_level():
+    import sys
+    import warnings
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_hunt45c import _rig
+
+    # fbb827b centred a held input on its level only where every sample is bit-for-bit that level: the valve held at
+    # 7.3 in one record and at 73 * 0.1 (7.300000000000001, a converted unit) in the other was centred on its mean, a
+    # column of round-off that semp took for candidates (valve(k-1), speed(k-1)valve(k-1): 11 terms where both records
+    # at 7.3 gave 10)
+    cand = gb.Candidates(ny=2, nu=2, degree=2, input_names=("speed", "valve"))
+    (s1, y1), (s2, y2) = _rig(200, 1), _rig(200, 2)
+    found = []
+    for second in (7.3, 73 * 0.1):
+        recs = [gb.Record(np.c_[s1, np.full(200, 7.3)], y1, input_names=("speed", "valve"), name="a"),
+                gb.Record(np.c_[s2, np.full(200, second)], y2, input_names=("speed", "valve"), name="b")]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.CandidateWarning)  # the valve's terms, which the records cannot tell
+            found.append((frozenset(map(str, gb.semp(cand, recs, centre=True).structure)),
+                          frozenset(map(str, gb.frols(cand, recs, centre=True, criterion="bic").structure))))
+    assert found[0] == found[1]
+    assert not any("valve" in t for t in found[1][0] | found[1][1])
+    # an output said apart by round-off is as constant as one said alike (eaf0046's refusal)
+    rec = gb.Record(np.arange(40.0) % 3, np.r_[np.full(20, 7.3), np.full(20, 73 * 0.1)])
+    with pytest.raises(ValueError, match=r"the output is constant"):
+        gb.frols(gb.Candidates(ny=1, nu=1, degree=1), rec, centre=True, n_terms=2)

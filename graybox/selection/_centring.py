@@ -22,7 +22,7 @@ import numpy as np
 
 from ..core._gram import is_dask_data
 from ..core._records import Dataset, Record, as_records
-from ..core._least_squares import column_scales
+from ..core._least_squares import column_scales, rank_tolerance
 from ..core._regressors import stacked_regressors
 from ..core._terms import Structure, Term
 
@@ -54,10 +54,19 @@ def signal_offsets(data: object) -> dict[str, float]:
 
 
 def _centre_of(x: np.ndarray) -> float:
-    """The mean of a signal; for one held at a single level, that level: centred it is then exactly zero, where
-    the mean's round-off (7.3 held: 7.3 − mean ≈ 1e-15) left columns of round-off that the searches took for
-    candidates, so that what they chose depended on the level the input was held at."""
-    return float(x[0]) if x.size and np.ptp(x) == 0.0 else float(x.mean())
+    """The mean of a signal; for one held at a single level (:func:`_held`), that level: centred it is then exactly
+    zero (:func:`centred_data`), where the mean's round-off (7.3 held: 7.3 − mean ≈ 1e-15) left columns of
+    round-off that the searches took for candidates, so that what they chose depended on the level the input was
+    held at."""
+    return float(x[0]) if _held(x) else float(x.mean())
+
+
+def _held(x: np.ndarray) -> bool:
+    """Whether a signal (pooled over the records) is held at one level: its spread is within the round-off of its
+    level by the one rank rule (the uncentred regression cannot tell it from the constant), so that a level said
+    apart by round-off (7.3 in one record, 73 * 0.1 = 7.300000000000001 in another, a converted unit) is one
+    level, as bit-for-bit equal samples are."""
+    return bool(x.size) and float(np.ptp(x)) <= rank_tolerance(float(np.max(np.abs(x))), x.size)
 
 
 def search_offsets(data: object) -> dict[str, float]:
@@ -66,23 +75,36 @@ def search_offsets(data: object) -> dict[str, float]:
     no search can rank structures on."""
     offsets = signal_offsets(data)
     ys = np.concatenate([r.y for r in as_records(data)])
-    if ys.size and np.ptp(ys) == 0.0:
+    if _held(ys):
         raise ValueError(f"the output is constant (y = {ys[0]:.6g} at every sample of the identification data): "
                          "centred on its mean it is zero, and a structure search has nothing to rank there; its "
                          "model is the constant alone (which frols and semp choose with centre left out)")
     return offsets
 
 
-def _shift_record(rec: Record, offsets: Mapping[str, float]) -> Record:
+def _shift_record(rec: Record, offsets: Mapping[str, float], held: frozenset = frozenset()) -> Record:
     d = np.array([offsets[n] for n in rec.input_names])
     u = rec.u - (d[0] if rec.u.ndim == 1 else d)
-    return replace(rec, u=u, y=rec.y - offsets["y"])
+    y = rec.y - offsets["y"]
+    # a held signal is exactly zero once centred, not the round-off of a level said apart by it
+    if held:
+        u = u.reshape(len(y), -1)
+        u[:, [i for i, n in enumerate(rec.input_names) if n in held]] = 0.0
+        u = u.reshape(rec.u.shape)
+        if "y" in held:
+            y[:] = 0.0
+    return replace(rec, u=u, y=y)
 
 
 def centred_data(data: object, offsets: Mapping[str, float]) -> Record | list[Record]:
-    """The identification records with each signal minus its offset (new arrays; the data untouched)."""
+    """The identification records with each signal minus its offset (new arrays; the data untouched); a signal
+    held at one level over the records (:func:`_held`) exactly zero."""
     records = as_records(data)
-    shifted = [_shift_record(r, offsets) for r in records]
+    names = records[0].input_names
+    us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
+    held = frozenset([n for i, n in enumerate(names) if _held(us[:, i])]
+                     + (["y"] if _held(np.concatenate([r.y for r in records])) else []))
+    shifted = [_shift_record(r, offsets, held) for r in records]
     return shifted[0] if isinstance(data, (Record, Dataset)) else shifted
 
 
@@ -99,7 +121,7 @@ def check_included(include: Sequence[Term | str], process: Structure, data: obje
     records = as_records(data)
     names = records[0].input_names
     us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
-    held = {n: float(us[0, i]) for i, n in enumerate(names) if np.all(us[:, i] == us[0, i])}
+    held = {n: float(us[0, i]) for i, n in enumerate(names) if _held(us[:, i])}  # as centred_data zeroes them
     gone = dict(dropped)
     for t in terms:
         for s in (s for s, _, _ in t.factors if s in held):
