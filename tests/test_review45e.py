@@ -86,3 +86,16 @@ def test_a_centred_search_takes_a_level_said_apart_by_round_off_for_one_level():
     rec = gb.Record(np.arange(40.0) % 3, np.r_[np.full(20, 7.3), np.full(20, 73 * 0.1)])
     with pytest.raises(ValueError, match=r"the output is constant"):
         gb.frols(gb.Candidates(ny=1, nu=1, degree=1), rec, centre=True, n_terms=2)
+
+
+# -- a frame holding every input and a column more is told to pass the inputs' columns ------------------------------
+def test_a_frame_with_a_column_more_than_the_inputs_is_told_to_pass_the_inputs_columns():
+    import pandas as pd
+
+    # d3e7317 refuses df[['speed', 'valve']] for a model in speed alone, with frame_inputs' advice for a frame naming
+    # some inputs: 'Name every column as an input ... or none (read by position)', which renaming valve (no input
+    # of the model) cannot follow; what reads it is the inputs' columns alone
+    m = gb.Model(["y(k-1)", "speed(k-1)"], [0.5, 1.0])
+    df = pd.DataFrame({"speed": np.ones(5), "valve": np.zeros(5)})
+    with pytest.raises(ValueError, match=r"not inputs: \['valve'\].*df\[\['speed'\]\]"):
+        m.simulate(df, [0.0])

@@ -101,11 +101,14 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
         return x.iloc[order] if series else x[[cols[i] for i in order]]
     extra = [c for c in labels if c not in expected]
     missing = [n for n in expected if n not in labels]
+    repeated = sorted({c for c in labels if labels.count(c) > 1})
+    # every input has its column, and columns more: those are no input to rename, but to leave out
+    fix = (f"Pass the inputs' columns alone, e.g. {'point' if series else 'df'}[{list(expected)!r}]"
+           if extra and not missing and not repeated else
+           "Name every column as an input (any order: read by name) or none (read by position)")
     raise ValueError(f"{name}: the {what} {labels} name only some of the inputs {list(expected)} "
                      f"(not inputs: {extra or 'none'}; inputs without a column: {missing or 'none'}; repeated: "
-                     f"{sorted({c for c in labels if labels.count(c) > 1}) or 'none'}): read by position they "
-                     "would land on other inputs. Name every column as an input (any order: read by name) or none "
-                     "(read by position)")
+                     f"{repeated or 'none'}): read by position they would land on other inputs. {fix}")
 
 
 def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, output: object = None,
