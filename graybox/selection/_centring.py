@@ -76,7 +76,8 @@ def search_offsets(data: object) -> dict[str, float]:
     offsets = signal_offsets(data)
     ys = np.concatenate([r.y for r in as_records(data)])
     if _held(ys):
-        raise ValueError(f"the output is constant (y = {ys[0]:.6g} at every sample of the identification data): "
+        said = "" if np.ptp(ys) == 0.0 else f" to its round-off (spread {np.ptp(ys):.1e})"
+        raise ValueError(f"the output is constant (y = {ys[0]:.6g} at every sample of the identification data{said}): "
                          "centred on its mean it is zero, and a structure search has nothing to rank there; its "
                          "model is the constant alone (which frols and semp choose with centre left out)")
     return offsets
