@@ -99,3 +99,19 @@ def test_a_frame_with_a_column_more_than_the_inputs_is_told_to_pass_the_inputs_c
     df = pd.DataFrame({"speed": np.ones(5), "valve": np.zeros(5)})
     with pytest.raises(ValueError, match=r"not inputs: \['valve'\].*df\[\['speed'\]\]"):
         m.simulate(df, [0.0])
+
+
+# -- thetas and per-point values beyond the float range: the ValueError float_array says, not numpy's -----------------
+@pytest.mark.parametrize("call", [
+    lambda rec: gb.simulate_many(["y(k-1)", "u(k-1)"], [[0.5, 10**400]], rec),
+    lambda rec: gb.evaluate_thetas(["y(k-1)", "u(k-1)"], [[0.5, 10**400]], rec),
+    lambda rec: gb.StaticPoints([0.1, 0.2], [1.0, 2.0], uncertainty=[1.0, 10**400]),
+], ids=["simulate_many", "evaluate_thetas", "uncertainty"])
+def test_thetas_and_per_point_values_beyond_the_float_range_are_a_value_error_naming_them(call):
+    # 02b9655 said an integer beyond the float range as a ValueError in float_array; simulate_many's and
+    # evaluate_thetas' thetas and check_per_point (static points' uncertainty) converted with np.asarray and
+    # raised numpy's bare OverflowError ('int too large to convert to float')
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(size=50), rng.uniform(size=50))
+    with pytest.raises(ValueError, match=r"(thetas|uncertainty).*beyond the float range"):
+        call(rec)

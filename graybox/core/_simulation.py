@@ -16,8 +16,7 @@ from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_in
                                  simulate_one)
 from ._records import Record, as_input_array, is_frame
 from ._terms import check_input_names, default_input_names, require_inputs
-from ._validation import (as_1d_finite, check_choice, check_int, check_real, check_theta, real_array, refuse_flags,
-                          refuse_non_real)
+from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta, real_array
 from ._regressors import regressor_matrix
 from ._terms import Structure, structure_of
 
@@ -230,12 +229,8 @@ def simulate_many(
     structure = structure_of(structure)
     if not isinstance(record, Record):
         raise TypeError(f"record must be a Record, got {type(record).__name__}")
-    refuse_non_real(thetas, "thetas")
-    refuse_flags(thetas, "thetas", "parameter vectors (numbers)")  # True is no parameter 1
-    try:
-        th = np.asarray(thetas, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"thetas must be an array of numbers, shape (P, n_terms), got {type(thetas).__name__}") from None
+    # the one conversion of numbers (text, booleans, None: TypeError; beyond the float range: ValueError)
+    th = real_array(thetas, "thetas", "parameter vectors (numbers), shape (P, n_terms)")
     if th.ndim != 2 or th.shape[1] != len(structure):
         raise ValueError(f"thetas must have shape (P, {len(structure)}), got {th.shape}")
     L = structure.max_lag

@@ -361,7 +361,9 @@ def check_per_point(value: object, n: int, name: str) -> np.ndarray:
     (``TypeError`` for text, complex values or booleans, which numpy would convert)."""
     refuse_non_real(value, name)
     try:
-        a = np.asarray(value, dtype=float)
+        a = float_array(value, name, "a number or an array of numbers")
+    except _BeyondFloats:  # a value, said naming it
+        raise
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be a number or an array of numbers, got {type(value).__name__}") from None
     if _is_bool(value) or np.asarray(value).dtype == bool or a.dtype == object:

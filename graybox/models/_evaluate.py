@@ -32,7 +32,7 @@ from ..core._regressors import regressor_matrix
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
 from ..core._validation import (as_1d_finite, check_bool, check_int, check_per_point, check_sequence, real_array,
-                                refuse_flags, refuse_non_real, warn)
+                                warn)
 from ..static._analysis import reached_equilibria
 from ..static._surface_analysis import reached_surface
 from ..core._terms import Structure
@@ -284,12 +284,8 @@ def evaluate_thetas(
     record = None if record is None else as_record(record, "valid", "record")
     one_step = check_bool(one_step, "one_step")
     threads = check_int(threads, "threads", low=1)
-    refuse_non_real(thetas, "thetas")
-    refuse_flags(thetas, "thetas", "parameter vectors (numbers)")  # True is no parameter 1
-    try:
-        th = np.atleast_2d(np.asarray(thetas, dtype=float))
-    except (TypeError, ValueError):
-        raise TypeError(f"thetas must be an array of numbers, got {type(thetas).__name__}") from None
+    # the one conversion of numbers (text, booleans, None: TypeError; beyond the float range: ValueError)
+    th = np.atleast_2d(real_array(thetas, "thetas", "parameter vectors (numbers)"))
     if th.ndim != 2 or th.shape[1] != len(structure):
         raise ValueError(f"thetas must have shape (P, {len(structure)}) (one parameter vector per row, one value per "
                          f"term) or ({len(structure)},), got shape {np.shape(thetas)}")
