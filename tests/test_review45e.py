@@ -115,3 +115,27 @@ def test_thetas_and_per_point_values_beyond_the_float_range_are_a_value_error_na
     rec = gb.Record(rng.uniform(size=50), rng.uniform(size=50))
     with pytest.raises(ValueError, match=r"(thetas|uncertainty).*beyond the float range"):
         call(rec)
+
+
+# -- Model(carrier, θ) keeps the carrier's input names ----------------------------------------------------------------
+def test_a_model_made_from_what_carries_a_structure_keeps_its_input_names():
+    import pandas as pd
+
+    # 4529674 took the structure from a Selection or a Model and left their input names: Model(sel, θ) of a selection
+    # on (speed, valve) data, speed alone chosen, had inputs ('speed',) where sel.model has ('speed', 'valve'), so
+    # the frame of the data's inputs that sel.model simulates was refused by it
+    rng = np.random.default_rng(0)
+    u = rng.uniform(size=(200, 2))
+    y = np.zeros(200)
+    for k in range(1, 200):
+        y[k] = 0.5 * y[k - 1] + u[k - 1, 0]
+    rec = gb.Record(u, y, input_names=("speed", "valve"))
+    sel = gb.frols(gb.Candidates(1, 1, degree=1, input_names=("speed", "valve")), rec, n_terms=2)
+    assert sel.structure.inputs == ("speed",)
+    df = pd.DataFrame(u, columns=["speed", "valve"])
+    for carrier in (sel, sel.model):
+        m = gb.Model(carrier, sel.model.theta)
+        assert m.input_names == ("speed", "valve")
+        assert np.array_equal(m.simulate(df, y[:1]), sel.model.simulate(df, y[:1]))
+    # input_names given still rule
+    assert gb.Model(sel, sel.model.theta, input_names=("speed",)).input_names == ("speed",)

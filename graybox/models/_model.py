@@ -34,7 +34,8 @@ class Model:
     Parameters
     ----------
     structure : Structure, sequence of str, or a result that carries one
-        Process (NARX) terms, in parameter order (a Selection, a Model … gives its ``.structure``).
+        Process (NARX) terms, in parameter order (a Selection, a Model … gives its ``.structure``, and its
+        ``input_names`` where ``input_names`` is not given).
     theta : array_like, shape (n_terms,)
         Process parameters, engineering units.
     noise_structure : Structure, optional
@@ -75,7 +76,8 @@ class Model:
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         # a Structure, terms, or what carries one (a Selection, another Model), as wherever a structure is meant
-        st = structure_of(self.structure)
+        given = self.structure
+        st = structure_of(given)
         if any(t.is_noise for t in st):
             raise ValueError("noise terms belong in noise_structure, not in the process structure")
         ns = self.noise_structure
@@ -87,7 +89,13 @@ class Model:
         object.__setattr__(self, "noise_structure", ns)
         object.__setattr__(self, "theta", frozen(check_theta(len(st), self.theta)))
         object.__setattr__(self, "noise_theta", frozen(check_theta(len(ns), self.noise_theta, "noise_theta")))
-        object.__setattr__(self, "input_names", model_input_names(st, self.input_names))
+        names = self.input_names
+        if names is None and not isinstance(given, Structure):
+            # what carries the structure carries the inputs it was found on (a Selection's, a Model's): Model(sel, θ)
+            # reads the data's frames as sel.model does, not by the structure's inputs alone
+            carried = getattr(given, "input_names", None)
+            names = carried if isinstance(carried, tuple) and getattr(given, "structure", None) is st else None
+        object.__setattr__(self, "input_names", model_input_names(st, names))
 
     # -- basic facts --------------------------------------------------------
     @property
