@@ -139,3 +139,20 @@ def test_a_model_made_from_what_carries_a_structure_keeps_its_input_names():
         assert np.array_equal(m.simulate(df, y[:1]), sel.model.simulate(df, y[:1]))
     # input_names given still rule
     assert gb.Model(sel, sel.model.theta, input_names=("speed",)).input_names == ("speed",)
+
+
+# -- the public regressor functions take a structure from what carries one, as the static ones now do -----------------
+def test_the_regressor_functions_take_terms_or_what_carries_a_structure():
+    # d611268 made the static functions read a Model's or a Selection's .structure; gb.regressor_matrix and
+    # gb.stacked_regressors still failed on them, and on a list of terms, with "'Selection' object has no attribute
+    # 'max_lag'" or "object of type 'Model' has no len()", naming nothing
+    rng = np.random.default_rng(0)
+    rec = gb.Record(rng.uniform(size=100), rng.uniform(size=100))
+    sel = gb.frols(gb.Candidates(1, 1), rec, n_terms=2)
+    want = gb.regressor_matrix(sel.structure, rec.u, rec.y)
+    for carrier in (sel, sel.model, [str(t) for t in sel.structure]):
+        assert np.array_equal(gb.regressor_matrix(carrier, rec.u, rec.y), want)
+        psi, _ = gb.stacked_regressors(carrier, [rec])
+        assert np.array_equal(psi, want)
+    with pytest.raises(TypeError, match="structure must be"):
+        gb.regressor_matrix(None, rec.u, rec.y)

@@ -12,7 +12,7 @@ from typing import Sequence
 import numpy as np
 
 from ._records import Record, as_records, require_lengths
-from ._terms import Structure, check_input_names, missing_input_hint
+from ._terms import Structure, check_input_names, missing_input_hint, structure_of
 from ._validation import as_1d_finite, check_int, check_sequence
 
 __all__ = ["record_signals", "check_structure_inputs", "check_record_inputs", "refuse_non_finite_columns",
@@ -87,8 +87,8 @@ def regressor_matrix(
 
     Parameters
     ----------
-    structure : Structure
-        The terms, in column order.
+    structure : Structure, sequence of str, or a model
+        The terms, in column order (a Model, a Selection … gives its ``.structure``).
     u : ndarray, shape (N,) or (N, m)
         Input samples, one column per input (assumed validated, e.g. from a :class:`Record`).
     y : ndarray, shape (N,)
@@ -105,6 +105,7 @@ def regressor_matrix(
     ndarray, shape (N - start, len(structure))
         Ψ, float64, C-contiguous.
     """
+    structure = structure_of(structure)  # terms, or what carries a structure (a Model, a Selection)
     n = y.shape[0]
     s = structure.max_lag if start is None else check_int(start, "start", low=0)
     if s < structure.max_lag:
@@ -145,7 +146,8 @@ def stacked_regressors(
 
     Parameters
     ----------
-    structure : Structure
+    structure : Structure, sequence of str, or a model
+        The terms, in column order (a Model, a Selection … gives its ``.structure``).
     records : Record or sequence of Record
     start : int, optional
         First sample of each record (default: the structure's max lag).
@@ -158,6 +160,7 @@ def stacked_regressors(
     target : ndarray, shape (sum(N_r - start),)
         The measured ``y(k)`` matching each row.
     """
+    structure = structure_of(structure)  # terms, or what carries a structure (a Model, a Selection)
     recs = as_records(records)
     s = structure.max_lag if start is None else check_int(start, "start", low=0)
     if residuals is not None:
