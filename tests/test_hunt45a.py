@@ -270,5 +270,5 @@ def test_the_static_functions_take_a_structure_from_what_carries_one():
         assert gb.equilibria(carrier, m.theta, 0.5) == m.equilibria(0.5)
         assert gb.cluster_map(carrier).names == m.cluster_map().names
         assert gb.surface_cluster_map(carrier).names == gb.surface_cluster_map(m.structure).names
-    with pytest.raises(TypeError, match="structure must be a Structure or a sequence of terms"):
+    with pytest.raises(TypeError, match="structure must be a Structure, a sequence of terms or a model"):
         gb.static_curve(None, m.theta, [0.5])

@@ -62,8 +62,8 @@ from ._equilibrium_kernels import (
     settle_candidates,
     settle_runs,
 )
-from ..core._terms import Structure, Term
-from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real, check_sequence,
+from ..core._terms import Structure, Term, structure_of
+from ..core._validation import (as_1d_finite, check_bool, check_fields, check_per_point, check_real,
                                 check_theta, real_array)
 from ..core._reprs import LISTED, point_texts, short_repr
 from ._linearisation import (characteristic_roots, derivative_map, grid_coefficients, static_gains, static_powers,
@@ -94,7 +94,6 @@ __all__ = [
     "static_theta_gradient",
     "checked_model",
     "several_stable",
-    "structure_arg",
     "folded_equilibria",
     "continuum",
     "CONTINUUM_WHY",
@@ -230,19 +229,7 @@ def cluster_map(structure: Structure) -> ClusterMap:
     :func:`graybox.surface_cluster_map`); ``ValueError`` otherwise. A
     sequence of terms is read as a Structure.
     """
-    return _cluster_map(structure_arg(structure))
-
-
-def structure_arg(structure: object) -> Structure:
-    """A public static function's ``structure``: a Structure, a sequence of terms read as one, or what carries one
-    (a Model, a Selection, any result: its ``.structure``, as simulate and predict read it)."""
-    if isinstance(structure, Structure):
-        return structure
-    carried = getattr(structure, "structure", None)
-    if isinstance(carried, Structure):
-        return carried
-    return Structure(check_sequence(structure, "structure", "a Structure or a sequence of terms, or a model or a "
-                                                             "result that carries one"))
+    return _cluster_map(structure_of(structure))
 
 
 @lru_cache(maxsize=256)
@@ -1008,7 +995,7 @@ def _describe_failures(res: Reached, what: str = "model") -> str:
 def checked_model(structure: object, theta: object) -> tuple[Structure, np.ndarray]:
     """The arguments of a public static function: a Structure (a sequence of terms is read as one) and θ
     of its length, finite (``TypeError``/``ValueError`` naming the problem)."""
-    structure = structure_arg(structure)
+    structure = structure_of(structure)
     return structure, check_theta(len(structure), theta)
 
 

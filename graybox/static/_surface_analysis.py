@@ -34,7 +34,7 @@ from . import _analysis as _static
 from ._analysis import Equilibrium, Reached, ascii_cluster_name, key_index
 from ._linearisation import input_monomials_of, static_gains, static_powers, static_theta_gradient_of
 from ..core._records import frame_inputs, labelled_point
-from ..core._terms import Structure, Term, check_input_names, require_inputs
+from ..core._terms import Structure, Term, check_input_names, require_inputs, structure_of
 from ..core._transient import steady_levels
 from ..core._validation import check_bool, check_fields, check_per_point, real_array
 from ..core._reprs import short_repr
@@ -176,7 +176,7 @@ def surface_cluster_map(structure: Structure, *, input_names: tuple[str, ...] | 
     SurfaceClusterMap
     """
     names = input_names
-    structure = _static.structure_arg(structure)
+    structure = structure_of(structure)
     return _surface_cluster_map(structure, surface_inputs(structure, names))
 
 
