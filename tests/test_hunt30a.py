@@ -219,7 +219,7 @@ def test_the_cluster_maps_read_a_structure_given_as_its_terms():
     # "unhashable type: 'list'" and "'list' object has no attribute 'inputs'" came out of the caches
     assert gb.cluster_map(["y(k-1)", "u(k-1)", "u(k-2)"]).names == ["Σu", "Σy"]
     assert gb.surface_cluster_map(["y(k-1)", "a(k-1)", "b(k-1)"]).names == ["Σb", "Σa", "Σy"]
-    with pytest.raises(TypeError, match="structure must be a Structure or a sequence of terms"):
+    with pytest.raises(TypeError, match="structure must be a Structure, a sequence of terms or a model"):
         gb.cluster_map(3)
 
 
