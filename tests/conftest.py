@@ -34,6 +34,20 @@ def paper_record(rng):
     return Record(u, y, Ts=0.05, name="sim15")
 
 
+def traced_peak(call) -> int:
+    """The peak of memory traced while ``call()`` runs (bytes; numpy's arrays are traced), after a collection."""
+    import gc
+    import tracemalloc
+
+    gc.collect()
+    tracemalloc.start()
+    try:
+        call()
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
 def two_level_records(names: tuple[str, str] = ("ident", "valid")):
     """Two records of y(k) = 0.5 y(k-1) + 0.4 u(k-1) + 0.1 u(k-1)² + 0.2 (+ noise 0.01), the first's input at two
     levels only (u² a combination of u and 1 there: λ1 = 1, no weight on the static points, cannot identify a

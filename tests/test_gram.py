@@ -18,6 +18,7 @@ import graybox.core._gram as gram
 from graybox import Candidates, Model, Record, Structure, stacked_regressors
 from graybox.selection._forward_regression import CandidateWarning, frols
 
+from conftest import traced_peak
 from test_selection import BIN_TERMS, narx_record, rpm_record
 
 
@@ -155,27 +156,17 @@ def test_auto_picks_mgs_for_short_and_gram_for_long_records():
 # ---------------------------------------------------------------- memory
 
 
-def _peak(fn) -> int:
-    gc.collect()
-    tracemalloc.start()
-    try:
-        fn()
-        return tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-
-
 def test_gram_memory_does_not_grow_with_the_record(monkeypatch):
     monkeypatch.setattr(gram, "_CHUNK_ENTRIES", 1 << 16)  # 720-row chunks for 91 candidates
     cand = Candidates(6, 6, ne=0, degree=2)
     recs = {n: narx_record(9, n=n, noise=0.05) for n in (20_000, 40_000)}
     warm = frols(cand, recs[20_000], n_terms=10, method="gram")
-    peaks = {n: _peak(lambda r=r: frols(cand, r, n_terms=10, method="gram")) for n, r in recs.items()}
+    peaks = {n: traced_peak(lambda r=r: frols(cand, r, n_terms=10, method="gram")) for n, r in recs.items()}
     matrix_40k = 8 * (40_000 - 6) * len(cand)
     assert peaks[40_000] < 1.2 * peaks[20_000]  # twice the samples, the same peak
     assert peaks[40_000] < matrix_40k / 4  # far below the candidate matrix it never builds
     # while MGS holds the matrix: its peak doubles with the record
-    mgs = {n: _peak(lambda r=r: frols(cand, r, n_terms=10, method="mgs")) for n, r in recs.items()}
+    mgs = {n: traced_peak(lambda r=r: frols(cand, r, n_terms=10, method="mgs")) for n, r in recs.items()}
     assert mgs[40_000] > 1.8 * mgs[20_000] and mgs[40_000] > matrix_40k
     assert warm.n_rows == 20_000 - 6
 

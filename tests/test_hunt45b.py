@@ -9,7 +9,10 @@ import pytest
 
 import graybox as gb
 
+from conftest import traced_peak
+
 STRUCTURE = ["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]
+
 
 
 def plant(N: int = 600, seed: int = 0, noise: float = 0.05) -> gb.Record:
@@ -130,19 +133,12 @@ def test_monte_carlo_simulation_band_that_would_not_fit_is_refused_naming_the_by
 # long records: ls_uncertainty holds no more copies of Ψ than the estimate did, and reduces in chunks where Ψ won't fit
 # --------------------------------------------------------------------------------------------
 def test_ls_uncertainty_needs_no_more_memory_than_the_least_squares_fit():
-    import tracemalloc
-
     rec = plant(N=200_000)
     short = rec.slice(0, 2000)
     gb.ls_uncertainty(gb.els(STRUCTURE, short, noise=0), short)  # imports and compiled kernels out of the count
     model = gb.els(STRUCTURE, rec, noise=0)
     psi_bytes = 8 * len(STRUCTURE) * len(rec)
-    tracemalloc.start()
-    try:
-        gb.ls_uncertainty(model, rec)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    peak = traced_peak(lambda: gb.ls_uncertainty(model, rec))
     assert peak <= 5 * psi_bytes, f"ls_uncertainty peaked at {peak / psi_bytes:.1f} × Ψ"
 
 
@@ -188,25 +184,16 @@ def test_pe_uncertainty_on_noise_free_points_names_them_among_the_reasons():
 
 
 def test_els_uncertainty_holds_few_copies_of_the_extended_regressors():
-    import tracemalloc
-
     rec = plant(N=100_000)
     short = rec.slice(0, 3000)
     gb.ls_uncertainty(gb.els(STRUCTURE, short, noise=2), short)  # imports and compiled kernels out of the count
     fit = gb.els(STRUCTURE, rec, noise=2)
     phi_bytes = 8 * (len(STRUCTURE) + 2) * len(rec)  # [Ψ, Ψ_e]
-    tracemalloc.start()
-    try:
-        gb.ls_uncertainty(fit, rec)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    peak = traced_peak(lambda: gb.ls_uncertainty(fit, rec))
     assert peak <= 6 * phi_bytes, f"ls_uncertainty (ELS) peaked at {peak / phi_bytes:.1f} × [Ψ, Ψ_e]"
 
 
 def test_se_uncertainty_streams_the_free_run_jacobian():
-    import tracemalloc
-
     rec = plant(N=50_000)
     ub = np.linspace(0.5, 1.5, 6)
     points = gb.StaticPoints(ub, _static_of_plant(ub) + 0.01 * np.random.default_rng(1).standard_normal(6))
@@ -215,11 +202,8 @@ def test_se_uncertainty_streams_the_free_run_jacobian():
     gb.se_uncertainty(warm, short, points, lambda1=0.5)  # imports and compiled kernels out of the count
     member = gb.se_pareto(STRUCTURE, rec, points, lambdas=[0.5], method="gradient").member_model(0)
     jac_bytes = 8 * len(STRUCTURE) * len(rec)  # the free run's N × n Jacobian
-    tracemalloc.start()
-    try:
-        unc = gb.se_uncertainty(member, rec, points, lambda1=0.5)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    got = []
+    peak = traced_peak(lambda: got.append(gb.se_uncertainty(member, rec, points, lambda1=0.5)))
+    unc = got[0]
     assert peak <= 8 * jac_bytes, f"se_uncertainty peaked at {peak / jac_bytes:.1f} × the Jacobian"
     assert np.all(unc.std > 0) and np.isfinite(unc.static_sigma2)
