@@ -99,7 +99,9 @@ class SimulationBand:
 
         Not a test of the band (it is a band of the model's output, not of a measurement): a
         coverage far below :attr:`level` says the record's error is mostly the noise's or the
-        structure's, not the parameters' uncertainty."""
+        structure's, not the parameters' uncertainty. Counted over the samples where the band has
+        a width (std > 0; the initial samples have none); NaN where it has none at all (every
+        parameter fixed, e.g. by constraints): a band of zero width covers nothing to speak of."""
         k = self.std > 0
         if not k.any():
             return float("nan")
