@@ -143,3 +143,15 @@ def test_a_checkpoint_named_as_another_format_is_refused(tmp_path, name):
         checkpoint_path(tmp_path / name)
     assert checkpoint_path(tmp_path / "front.npz").name == "front.npz"
     assert checkpoint_path(tmp_path / "front").name == "front"
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-32", "utf-8-sig"])
+def test_a_json_file_an_editor_saved_with_a_byte_order_mark_loads(tmp_path, encoding):
+    # a file re-saved as "Unicode" (UTF-16 with its mark) was refused as "not UTF-8 text", where the CSV loaders
+    # read it by its mark (hunt45a's note): one reading of byte-order marks, core._files.bom_encoding
+    record = gb.Record(u=np.arange(5.0), y=np.arange(5.0) ** 2, name="café")
+    path = tmp_path / "r.json"
+    gb.save(record, path)
+    path.write_bytes(path.read_text(encoding="utf-8").encode(encoding))
+    back = gb.load(path)
+    assert back.name == "café" and np.array_equal(back.y, record.y)

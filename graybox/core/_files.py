@@ -9,6 +9,7 @@ which may be ahead of it by minutes.
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import os
 import re
@@ -31,8 +32,18 @@ except ImportError:  # pragma: no cover - Windows
 #: Whether this platform has flock (:func:`lock_fd` then may lock; without it, it always answers False).
 CAN_FLOCK = fcntl is not None
 
-__all__ = ["CAN_FLOCK", "LEFTOVER_SECONDS", "folder_now", "lock_fd", "sweep_leftovers", "sweep_written_beside", "write_atomically",
+__all__ = ["BOMS", "CAN_FLOCK", "LEFTOVER_SECONDS", "bom_encoding", "folder_now", "lock_fd", "sweep_leftovers", "sweep_written_beside", "write_atomically",
            "writer_tag"]
+
+#: Byte-order marks and the encodings they say, UTF-32's first: its little-endian mark starts with UTF-16's.
+BOMS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8"),
+        (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))
+
+
+def bom_encoding(raw: bytes) -> str | None:
+    """The encoding a file's byte-order mark says (``"utf-8"``, ``"utf-16"``, ``"utf-32"``), or None without one."""
+    return next((e for bom, e in BOMS if raw.startswith(bom)), None)
+
 
 #: Seconds after which a file a killed writer left (its own name beside a target) is swept even when its writer's
 #: liveness cannot be asked (another host's process); a write takes far less.

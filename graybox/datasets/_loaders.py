@@ -35,6 +35,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..static._curves import StaticCurve
+from ..core._files import bom_encoding
 from ..core._records import Dataset, Record, StaticPoints, check_same_period, check_units
 from ..core._terms import check_input_names
 from ..core._validation import check_bool, check_choice, check_int, check_path, check_real
@@ -335,11 +336,6 @@ _BINARY_SIGNATURES = tuple((re.compile(magic, re.DOTALL), what, advice) for magi
      + _AS_ARRAYS),
 ))
 
-# Byte-order marks, UTF-32's first: its little-endian mark starts with UTF-16's.
-_BOMS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8"),
-         (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))
-
-
 def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
     """The file's bytes as UTF-8, where its text starts in them (after a UTF-8 byte-order mark), and
     whether they are the file's own bytes (numpy's reader may then read the file itself).
@@ -361,12 +357,12 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
         except LookupError:
             raise ValueError(f"{p}: encoding {encoding!r} is not a text encoding Python knows (e.g. 'utf-8', "
                              "'utf-16', 'cp1252')") from None
-        marked = next((e for bom, e in _BOMS if raw.startswith(bom)), None)
+        marked = bom_encoding(raw)
         if marked is not None and not enc.startswith(marked):  # the mark's bytes would be read as text
             raise ValueError(f"{p}: the file starts with a {marked.upper()} byte-order mark, but encoding="
                              f"{encoding!r} was given; omit encoding= (the mark decides) or pass encoding={marked!r}")
     else:
-        enc = next((e for bom, e in _BOMS if raw.startswith(bom)), "utf-8")
+        enc = bom_encoding(raw) or "utf-8"
     if enc == "utf-8":
         if encoding is None and b"\x00" in raw[:4096]:
             raise ValueError(f"{p}: the file holds NUL bytes, so it is not UTF-8 text: UTF-16 without a byte-order "

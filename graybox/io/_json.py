@@ -74,7 +74,7 @@ from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
 from ..core._records import Dataset, Record, StaticPoints, check_units
-from ..core._files import write_atomically
+from ..core._files import bom_encoding, write_atomically
 from ..core._validation import FrozenMap, check_path
 from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
@@ -1049,8 +1049,12 @@ def save(
 
 def _read(path: str | os.PathLike) -> str:
     p = Path(check_path(path, "path"))
+    raw = p.read_bytes()
+    # a byte-order mark an editor added says the encoding (UTF-16 from "Unicode" saves) and is not text
+    enc = bom_encoding(raw) or "utf-8"
+    enc = "utf-8-sig" if enc == "utf-8" else enc
     try:
-        return p.read_text(encoding="utf-8-sig")  # "-sig": a byte-order mark an editor added is not text
+        return raw.decode(enc)
     except UnicodeDecodeError:
         raise GrayboxFileError(f"{p}: not a graybox file (not UTF-8 text)") from None
 
