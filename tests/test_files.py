@@ -155,3 +155,10 @@ def test_a_json_file_an_editor_saved_with_a_byte_order_mark_loads(tmp_path, enco
     path.write_bytes(path.read_text(encoding="utf-8").encode(encoding))
     back = gb.load(path)
     assert back.name == "café" and np.array_equal(back.y, record.y)
+
+
+def test_units_with_surrounding_blanks_are_the_units(tmp_path):
+    # (' rpm ', 'mlc') was another unit than 'rpm': a record so named was refused beside a model in rpm (hunt45a)
+    a = gb.Record(u=np.arange(5.0), y=np.arange(5.0), units=(" rpm ", "mlc "))
+    b = gb.Record(u=np.arange(5.0), y=np.arange(5.0), units=("rpm", "mlc"))
+    assert a.units == b.units == ("rpm", "mlc")

@@ -405,10 +405,12 @@ def require_lengths(records: Sequence[Any], max_lag: int) -> None:
 
 
 def check_units(units: object, name: str) -> tuple[str, str]:
-    """``units`` as a pair (input unit, output unit) of str, or ``TypeError`` naming ``name``."""
+    """``units`` as a pair (input unit, output unit) of str, stripped of surrounding blanks (a CSV header's
+    ``" rpm "`` is the unit ``"rpm"``: units are compared, and blanks would make two of one unit), or ``TypeError``
+    naming ``name``."""
     if not (isinstance(units, (tuple, list)) and len(units) == 2 and all(isinstance(x, str) for x in units)):
         raise TypeError(f"{name}: units must be a pair of strings (input unit, output unit), got {units!r}")
-    return (units[0], units[1])
+    return (units[0].strip(), units[1].strip())
 
 
 def _unit_suffixes(units: tuple[str, str]) -> tuple[str, str]:
