@@ -59,7 +59,7 @@ from ..static._surfaces import StaticSurface
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
 from ..core._validation import FrozenMap, check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, warn
-from ..core._reprs import short_repr
+from ..core._reprs import listed, short_repr
 from ._uncertainty import UncertaintyWarning
 
 __all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
@@ -461,7 +461,7 @@ def bootstrap_decision(
     short = [f"{r.name or 'record'} ({len(r)} samples)" for r in recs if len(r) < block_length]
     if short:  # no block lies inside them: the replicates are drawn from the other records alone
         warn(f"bootstrap_decision: {len(short)} record(s) shorter than block_length = {block_length} are in the "
-             f"reference decision but in no replicate (no block fits inside them): {', '.join(short)}; give a "
+             f"reference decision but in no replicate (no block fits inside them): {listed(short)}; give a "
              "shorter block_length to draw from them too", UncertaintyWarning)
     job = BootstrapJob(structure.process, tuple(recs), sp, estimator, lam, band, fallback, block_length, seed,
                        static_sigma, {k: v for k, v in opts.items() if k != "ubar"})
