@@ -162,3 +162,4 @@ def test_units_with_surrounding_blanks_are_the_units(tmp_path):
     a = gb.Record(u=np.arange(5.0), y=np.arange(5.0), units=(" rpm ", "mlc "))
     b = gb.Record(u=np.arange(5.0), y=np.arange(5.0), units=("rpm", "mlc"))
     assert a.units == b.units == ("rpm", "mlc")
+

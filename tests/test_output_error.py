@@ -340,3 +340,23 @@ def test_a_fit_that_ends_diverging_is_not_reported_fitted():
     res = gb.output_error(st, rec, theta0=bad, n_starts=0, max_nfev=1, ridge=0.0, margin=None)
     row = res.starts[res.starts["start"].str.startswith("theta0")]
     assert set(row["status"]) <= {"failed", "infeasible"} and row["message"].str.contains("diverges").all()
+
+
+def test_output_errors_starts_table_reports_the_theta_each_start_offers():
+    # with choose_on, a row's JS was its last iterate's and its JS_choose the best watched iterate's: two models in
+    # one row, and the winning row's JS differed from the result's (hunt45c's note)
+    rng = np.random.default_rng(3)
+    n = 600
+    u = np.repeat(rng.uniform(0.5, 2.0, n // 5), 5)
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = 0.5 * y[k - 1] + 0.2 * y[k - 2] + 0.3 * u[k - 1] + 0.1 * u[k - 2] ** 2
+    y += 0.05 * rng.standard_normal(n) + np.cumsum(0.01 * rng.standard_normal(n))  # a slow disturbance
+    fit_rec, choose = gb.Record(u[:400], y[:400], name="fit"), gb.Record(u[400:], y[400:], name="choose")
+    st = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"]
+    res = gb.output_error(st, fit_rec, n_starts=3, choose_on=choose, progress=False)
+    fitted = res.starts[res.starts["status"] == "fitted"]
+    win = fitted[fitted["JS_choose"] == fitted["JS_choose"].min()].iloc[0]
+    assert win["JS_choose"] == pytest.approx(res.JS_choose, rel=1e-12)
+    assert win["JS"] == pytest.approx(res.JS, rel=1e-9)
+    assert win["JS"] == pytest.approx(gb.js(res.model, fit_rec), rel=1e-9)

@@ -82,7 +82,8 @@ class OEResult:
     starts : pandas.DataFrame
         One row per start and solver: ``start``, ``solver``, ``status`` (``"fitted"``,
         ``"infeasible"`` or ``"failed"``), ``message`` (why, in words), ``JS_start``, ``JS`` and
-        ``JS_choose`` (output units²; NaN where not reached) and ``nfev`` (free runs spent).
+        ``JS_choose`` (output units²; NaN where not reached; with choosing records both of the θ the
+        start offers, its iterate with the smallest J_S on them) and ``nfev`` (free runs spent).
     margin : float
         The stability margin (NaN: none).
     radius : float
@@ -324,7 +325,9 @@ def _oe_fit(problem: SEProblem, rec: list[Record], *, n_starts, subsample, theta
                     else:
                         jc = float(chooser.js(th[None], bounded=True)[0])  # as gb.js: inf where the run diverges
                         offer(th, jc, f"{label} ({sv})")
-                        jc = min(jc, watched["score"])
+                        if watched["score"] < jc:  # an earlier iterate chose better: the row's θ is that one
+                            jc = watched["score"]
+                            js = float(problem.js(watched["theta"][None], bounded=True)[0])
                         row(label, sv, "fitted", "" if np.isfinite(jc) else "its free run diverges on the choosing "
                             "record(s)", js0, js, jc, nfev=k)
     finally:
