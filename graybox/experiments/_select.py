@@ -1415,14 +1415,20 @@ def select_graybox(
         return jobs + more, results + run(more)
 
     jobs, results = score(fold_terms)
-    if fold_terms and not np.isfinite(_table(rows, jobs, results, plan)[0]["JS_valid"].to_numpy(float)).any():
+
+    def runs(jobs: list[_Job], results: list[dict]) -> bool:
+        return bool(np.isfinite(_table(rows, jobs, results, plan)[0]["JS_valid"].to_numpy(float)).any())
+
+    again = score({}) if fold_terms and not runs(jobs, results) else None
+    # only when those run: else no choice is made on them, and the rows' reasons stay those of the honest search
+    if again is not None and runs(*again):
         # the structures searched per fold never ran on their held-out folds: said, and chosen as before the
         # per-fold search (optimistic: the held-out folds then shaped the structures)
         warn("select_graybox: in every row, the structure searched on a fold's fit records has no finite free run "
              "on its held-out fold; the choice is made on the structures searched on all the identification "
              "data, fitted per fold (optimistic: those searches saw the held-out folds); a validation record "
              "(a Dataset) gives an honest choice", SelectionWarning)
-        jobs, results = score({})
+        jobs, results = again
     table, members, scores = _table(rows, jobs, results, plan)
     if table["in_band"].any():
         pos, used = _choose(table, scores, rule)

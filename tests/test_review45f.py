@@ -1,0 +1,36 @@
+"""review45f: select_graybox's fallback from the structures searched per fold to those of all the data."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.experiments import _select
+
+CAND = gb.Candidates(ny=2, nu=2, degree=2)
+
+
+def record(n: int, seed: int) -> gb.Record:
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.5, 2.0, n // 4 + 1), 4)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.6 * y[k - 1] + 0.3 * u[k - 1] + 0.05 * u[k - 1] ** 2 + 0.1
+    return gb.Record(u, y + 0.1 * np.std(y) * rng.standard_normal(n), name=f"run {seed}")
+
+
+def test_no_fallback_warning_when_the_structures_of_all_the_data_never_run_either(monkeypatch):
+    # was: when no row ran on its held-out folds, the structures of all the data were fitted per fold again and the
+    # call warned that "the choice is made on" them (optimistic) even when they never ran either: no choice was made,
+    # the error that says so came after a warning that claimed one (and, with warnings as errors, never came)
+    block_mse = _select._block_mse
+    monkeypatch.setattr(_select, "_block_mse", lambda *a: np.full_like(block_mse(*a), np.inf))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(ValueError, match="no structure has a finite free-run J_S on the choosing data"):
+            gb.select_graybox(CAND, record(240, 1), sizes=[3, 5], sources=["frols"], folds=3, estimator="ls")
+    assert not [w for w in caught if "no finite free run on its held-out fold" in str(w.message)]
+
