@@ -34,3 +34,21 @@ def test_no_fallback_warning_when_the_structures_of_all_the_data_never_run_eithe
             gb.select_graybox(CAND, record(240, 1), sizes=[3, 5], sources=["frols"], folds=3, estimator="ls")
     assert not [w for w in caught if "no finite free run on its held-out fold" in str(w.message)]
 
+
+
+def test_a_fold_whose_semp_path_stops_early_takes_the_largest_size_it_reached(monkeypatch):
+    # was: the fold's search was read at the rows' sizes only, so a row of 12 terms on a fold whose SEMP path stopped
+    # at 9 took the path's 8 terms (the nearest of the rows' sizes), not its 9: not "the nearest size the fold's
+    # search reached"
+    path = [str(t) for t in CAND.process][:9]  # a path of sizes 1 … 9 (each size the first k candidates)
+
+    def searched(candidates, ident, sizes, sources, forced, top):
+        found = {(s, k): path[:k] for s in sources if s == "semp" for k in sizes if k <= len(path)}
+        return found, {"semp": {k for s, k in found}}
+
+    monkeypatch.setattr(_select, "_searched", searched)
+    plan = _select._Plan(ident=(record(240, 1),), splits=(((record(100, 2),), None, None),), test=None, static=None,
+                         band=None, lag=2)
+    rows = [{"source": "semp", "size": k, "terms": ""} for k in (4, 8, 12)]
+    got = _select._fold_structures(rows, CAND, plan, ["semp"], ["1"], None, False)
+    assert [len(t[0].split(" + ")) for t in got] == [4, 8, 9]

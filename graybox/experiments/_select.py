@@ -821,8 +821,16 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
                 try:
                     if centre:
                         ident = _centring.centred_data(ident, _centring.search_offsets(list(fit)))
-                    found, _ = _searched(candidates, ident, [k for k in sizes if k < n_rows], sources, forced,
-                                         min(16, len(process), n_rows - 1))
+                    top = min(16, len(process), n_rows - 1)
+                    # SEMP's path and FROLS's order hold every size up to the largest at no extra cost: all of them,
+                    # so that a row's nearest size is the nearest the fold's search reached, not the nearest of the
+                    # rows' sizes; swap and exact search each size apart, at the rows' sizes only
+                    path_sources = [s for s in sources if s in ("semp", "frols")]
+                    found = _searched(candidates, ident, list(range(1, min(max(sizes), n_rows - 1) + 1)),
+                                      path_sources, forced, top)[0] if path_sources else {}
+                    if len(path_sources) < len(sources):
+                        found |= _searched(candidates, ident, [k for k in sizes if k < n_rows],
+                                           [s for s in sources if s not in path_sources], forced, top)[0]
                     for key, terms in found.items():
                         got[key] = str(_completed(terms, candidates, fit, ident, include, form, centre)[0])
                 except (ValueError, FewerTermsError, np.linalg.LinAlgError):  # this fold's records support none
