@@ -141,9 +141,11 @@ class GrayboxSelection:
         exact; several when they give one structure), ``size`` (terms before the static terms),
         ``n_terms``, ``added`` (static-form terms),
         ``estimator``, ``lambda1`` (of the member chosen, NaN for a black box), ``JS_valid``
-        (its J_S on the choosing data: the validation record, or all the folds' held-out samples;
-        every row's errors counted from the candidates' largest lag on, the same samples for all; an
-        error below round-off, 1e-20 of the mean square output, counts as that floor), ``JSF``
+        (its J_S on the choosing data: the validation record, or all the folds' held-out samples,
+        each fold's by the structure of the row's source and size that the fold's own search found,
+        fitted on its fit records, where ``terms`` and ``n_terms`` are those of the search on all the
+        identification data; every row's errors counted from the candidates' largest lag on, the
+        same samples for all; an error below round-off, 1e-20 of the mean square output, counts as that floor), ``JSF``
         (its static error, worst fold; NaN without static points), ``in_band``, ``vs_best`` and
         ``vs_best_se`` (mean per-block log ratio of its J_S to the best row's, and its standard
         error), ``eligible`` (the rule could choose it), ``rank`` (1: the choice); with a test
