@@ -1233,7 +1233,7 @@ def select_graybox(
         folds, each fold's structures are searched again on its fit records alone (the held-out
         fold unseen), a row being a source and size; when in every row such a structure has no
         finite free run on its held-out fold, the structures of all the data are fitted per fold
-        instead, with a ``SelectionWarning`` (optimistic).
+        instead, with a ``SelectionWarning`` (optimistic), when one of them runs.
     static : StaticPoints, StaticCurve or StaticSurface, optional
         Static information (default: the Dataset's). A curve is sampled at 10 levels over its
         domain, a surface (several inputs) on a grid of 6 levels per input over its domain box
