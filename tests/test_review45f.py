@@ -52,3 +52,46 @@ def test_a_fold_whose_semp_path_stops_early_takes_the_largest_size_it_reached(mo
     rows = [{"source": "semp", "size": k, "terms": ""} for k in (4, 8, 12)]
     got = _select._fold_structures(rows, CAND, plan, ["semp"], ["1"], None, False)
     assert [len(t[0].split(" + ")) for t in got] == [4, 8, 9]
+
+
+def test_a_row_two_sources_share_at_other_sizes_takes_on_a_fold_the_other_sources_own_size(monkeypatch):
+    # a gray box's row "semp-4" that FROLS's 3 terms also give (completed with Σu², u(k-1)^2): on a fold whose SEMP
+    # path skips 4, the row is FROLS's 3 terms there, its own member; was: FROLS's 4 terms (the row's size, which no
+    # member of the row had from FROLS)
+    n = 240
+    full = {("semp", 4): ["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], ("frols", 3): ["1", "y(k-1)", "u(k-1)"]}
+    order = ["1", "y(k-1)", "u(k-1)", "y(k-2)", "u(k-2)", "u(k-2)^2"]
+
+    def searched(candidates, ident, sizes, sources, forced, top):
+        if isinstance(ident, gb.Record) and len(ident) == n:  # all the identification data
+            found = {key: t for key, t in full.items() if key[0] in sources and key[1] in sizes}
+        else:  # a fold: SEMP's path passes 3 and 5, FROLS's order is `order`
+            found = {("semp", k): order[:k] for k in (3, 5) if "semp" in sources and k in sizes}
+            found |= {("frols", k): order[:k] for k in sizes if "frols" in sources and k <= len(order)}
+        return found, {s: {k for src, k in found if src == s} for s in sources}
+
+    monkeypatch.setattr(_select, "_searched", searched)
+    seen: list = []
+    real = _select._fold_structures
+    monkeypatch.setattr(_select, "_fold_structures", lambda rows, *a: seen.append((rows, real(rows, *a))) or seen[-1][1])
+    ub = np.linspace(0.5, 2.0, 6)
+    static = gb.StaticPoints(ub, (0.3 * ub + 0.05 * ub**2 + 0.1) / 0.4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        gb.select_graybox(CAND, record(n, 1), static, band=1e-6, sizes=[3, 4], folds=3, estimator="pe",
+                          fallback="min_jsf")
+    (rows, out), = seen
+    (row, terms), = [(r, t) for r, t in zip(rows, out) if r["structure"] == "semp-4"]
+    assert row["source"] == "semp, frols", rows
+    for t in terms:
+        assert set(t.split(" + ")) == {"1", "y(k-1)", "u(k-1)", "u(k-1)^2"}
+
+
+def test_a_row_two_sources_share_takes_its_first_source_where_the_fold_reached_both_sizes(monkeypatch):
+    paths = {("semp", 4): ["1", "y(k-1)", "u(k-1)", "u(k-2)"], ("frols", 3): ["1", "y(k-1)", "u(k-2)"]}
+    monkeypatch.setattr(_select, "_searched", lambda *a, **k: (paths, {"semp": {4}, "frols": {3}}))
+    plan = _select._Plan(ident=(record(240, 1),), splits=(((record(100, 2),), None, None),), test=None, static=None,
+                         band=None, lag=2)
+    rows = [{"source": "semp, frols", "size": 4, "terms": "", "_members": [("semp", 4), ("frols", 3)]}]
+    (got,), = _select._fold_structures(rows, CAND, plan, ["semp", "frols"], ["1"], None, False)
+    assert len(got.split(" + ")) == 4

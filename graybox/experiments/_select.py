@@ -722,9 +722,10 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
         if key in seen:  # e.g. two SEMP sizes that the static terms complete to one structure
             if src not in seen[key]["source"].split(", "):
                 seen[key]["source"] += f", {src}"
+                seen[key]["_members"].append((src, k))  # each source's own size (frols-3 + Σu² = semp-4), for the folds
             continue
         seen[key] = {"structure": f"{src}-{k}", "source": src, "size": k, "n_terms": len(st),
-                     "added": ", ".join(map(str, added)), "terms": str(st)}
+                     "added": ", ".join(map(str, added)), "terms": str(st), "_members": [(src, k)]}
         rows.append(seen[key])
     return rows
 
@@ -840,11 +841,13 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
         per_fold.append(got)
     out = []
     for r in rows:
-        srcs, size = r["source"].split(", "), r["size"]
-        # the row's source at its size on the fold, else at the size nearest it that the fold's search reached (a
-        # SEMP path on other records passes through other sizes)
-        out.append(tuple(f[min(near, key=lambda key: (abs(key[1] - size), key[1]))] if near else ""
-                         for f in per_fold for near in [[key for key in f if key[0] in srcs]]))
+        # each source of the row at its own size (a row two sources share may be two sizes: frols-3 and semp-4 that
+        # the static terms complete alike), the row's first source first; else the size nearest a source's own that
+        # the fold's search reached (a SEMP path on other records passes through other sizes; the smaller on a tie)
+        own = dict(r.get("_members") or [(s, r["size"]) for s in r["source"].split(", ")])
+        rank = {s: i for i, s in enumerate(own)}
+        out.append(tuple(f[min(near, key=lambda key: (abs(key[1] - own[key[0]]), rank[key[0]], key[1]))] if near
+                         else "" for f in per_fold for near in [[key for key in f if key[0] in own]]))
     return out
 
 
@@ -1537,7 +1540,7 @@ def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.
         blk = res["blocks"][i] if i >= 0 else np.full(res["blocks"].shape[1], np.inf)
         scores.append(blk)
         js = float(blk @ res["weights"])
-        row = dict(by_name[job.name], estimator=job.estimator,
+        row = dict({k: v for k, v in by_name[job.name].items() if not k.startswith("_")}, estimator=job.estimator,
                    lambda1=float(res["lambdas"][i]) if i >= 0 else np.nan,
                    JS_valid=js, JSF=float(res["jsf"][i]) if i >= 0 else no_jsf, in_band=bool(in_band and np.isfinite(js)))
         row["reason"] = _reason(res, i, in_band, js, plan.band)
