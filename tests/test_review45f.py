@@ -95,3 +95,21 @@ def test_a_row_two_sources_share_takes_its_first_source_where_the_fold_reached_b
     rows = [{"source": "semp, frols", "size": 4, "terms": "", "_members": [("semp", 4), ("frols", 3)]}]
     (got,), = _select._fold_structures(rows, CAND, plan, ["semp", "frols"], ["1"], None, False)
     assert len(got.split(" + ")) == 4
+
+
+def test_a_fold_searches_swap_at_the_size_of_a_shared_rows_swap_member(monkeypatch):
+    # a row "semp-6" that swap's 5 terms also give: where the fold's SEMP path has no 6, the row is swap's 5 terms
+    # there; was: swap searched at the rows' sizes only (6), its 5 never looked at
+    terms = [str(t) for t in CAND.process]
+
+    def searched(candidates, ident, sizes, sources, forced, top):
+        found = {("semp", k): terms[:k] for k in (3, 9) if "semp" in sources and k in sizes}
+        found |= {("swap", k): terms[-k:] for k in sizes if "swap" in sources}
+        return found, {}
+
+    monkeypatch.setattr(_select, "_searched", searched)
+    plan = _select._Plan(ident=(record(240, 1),), splits=(((record(100, 2),), None, None),), test=None, static=None,
+                         band=None, lag=2)
+    rows = [{"source": "semp, swap", "size": 6, "terms": "", "_members": [("semp", 6), ("swap", 5)]}]
+    (got,), = _select._fold_structures(rows, CAND, plan, ["semp", "swap"], ["1"], None, False)
+    assert set(got.split(" + ")) == set(terms[-5:])

@@ -810,7 +810,8 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
     source at its size (or the size nearest it the fold's search reached), ``""`` where that fold's search reached
     no structure of the row's source (the row then fails on that fold)."""
     process = candidates.process
-    sizes = sorted({r["size"] for r in rows})
+    # every member's size (a row two sources share: each at its own), for swap and exact, which search each size apart
+    sizes = sorted({k for r in rows for _, k in (r.get("_members") or [(None, r["size"])])})
     forced = list(include)
     per_fold = []
     for fit, _, _ in plan.splits:
