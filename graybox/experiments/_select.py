@@ -807,8 +807,9 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
                      form: _Form | None, centre: bool) -> list[tuple[str, ...]]:
     """Per row, its structure searched again on each fold's fit records alone (the held-out fold unseen: a search
     on all the identification data would choose the terms with it): one terms text per split, that of the row's
-    source at its size (or the size nearest it the fold's search reached), ``""`` where that fold's search reached
-    no structure of the row's source (the row then fails on that fold)."""
+    source at its size (each of its sources at its own size when several share the row; or the size nearest it the
+    fold's search reached), ``""`` where that fold's search reached no structure of the row's sources (the row then
+    fails on that fold)."""
     process = candidates.process
     # every member's size (a row two sources share: each at its own), for swap and exact, which search each size apart
     sizes = sorted({k for r in rows for _, k in (r.get("_members") or [(None, r["size"])])})
