@@ -829,7 +829,7 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
                     top = min(16, len(process), n_rows - 1)
                     # SEMP's path and FROLS's order hold every size up to the largest at no extra cost: all of them,
                     # so that a row's nearest size is the nearest the fold's search reached, not the nearest of the
-                    # rows' sizes; swap and exact search each size apart, at the rows' sizes only
+                    # rows' sizes; swap and exact search each size apart, at the rows' members' sizes only
                     path_sources = [s for s in sources if s in ("semp", "frols")]
                     found = _searched(candidates, ident, list(range(1, min(max(sizes), n_rows - 1) + 1)),
                                       path_sources, forced, top)[0] if path_sources else {}
