@@ -1307,12 +1307,19 @@ class Grid:
                 raise e.within("data", i) from None
             except (OSError, ValueError) as exc:
                 raise SpecError(f"data set {d.name!r} cannot be loaded: {exc}", ("data", i)) from None
+            names = tuple(ds.input_names)
             for j, v in enumerate(self.variants):
-                for c in v.constraints:
+                for k, c in enumerate(v.constraints):
                     if c["type"] == "equality" and c["curve"] == "dataset" and "static_curve" not in ds.extra:
                         raise SpecError(f"variant {v.name!r} imposes the data set's own static curve, but data set "
                                         f"{d.name!r} has none; use curve = \"fit\" or coefficients",
                                         ("variants", j, "constraints"))
+                    if c["type"] == "gain":  # as select_graybox: a name or count the data lack fails every cell
+                        try:
+                            build_constraint(c)._bounds(len(names), names)
+                        except ValueError as exc:
+                            raise SpecError(f"variant {v.name!r} on data set {d.name!r}: {exc}",
+                                            ("variants", j, "constraints", k)) from None
             out[d.name] = ds
         return out
 
