@@ -46,3 +46,47 @@ def test_gain_bounds_by_the_data_sets_input_names_still_run(tmp_path):
     res = gx.run_grid(g, tmp_path / "r.sqlite")
     df = gb.load_results(tmp_path / "r.sqlite")
     assert "failed" not in set(df["status"]), res.summary()  # (the band and the gain together may be infeasible)
+
+
+_PUMPING = '''name = "p"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first-order"
+terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]
+[[variants]]
+name = "PE band"
+estimator = "pe"
+lambdas = {logspace = [-3, 0, 4]}
+constraints = [{type = "band"}]
+'''
+
+
+def test_a_report_says_the_units_of_its_mean_squares(tmp_path):
+    # the summary, the heat map and the fronts gave J_S, J_SF and B as bare numbers: a newcomer could not tell an
+    # mlc² from a V² (nor that fit_valid is in %), though the bundled plant's records carry their units
+    gx.run_grid(gx.Grid.from_toml_text(_PUMPING), tmp_path / "r.sqlite")
+    unit = gb.load_pumping().valid.units[1] + "²"
+    written = {p.name: p for p in gx.write_report(tmp_path / "r.sqlite", tmp_path / "rep")}
+    text = written["summary.txt"].read_text(encoding="utf-8")
+    assert f"B = {0.175 ** 2:g} {unit}" in text
+    assert f"both in {unit}; fit_valid in %" in text
+    df = gb.load_results(tmp_path / "r.sqlite")
+    ax = gx.plot_fronts(df, data="pumping").axes[0]
+    assert ax.get_xlabel() == f"J_S on the validation record ({unit})" and ax.get_ylabel() == f"J_SF ({unit})"
+    fig = gx.plot_heatmap(df, data="pumping")
+    assert any(a.get_ylabel() == f"JS_valid ({unit})" for a in fig.axes)  # the colour bar's
+    assert gx.plot_scatter(df).axes[0].get_ylabel() == f"J_SF ({unit})"
+
+
+def test_data_without_units_keep_bare_labels(tmp_path):
+    ds = gb.load_pumping()
+    bare = gb.Dataset(*(r.__class__(r.u, r.y, r.Ts, r.name) for r in (ds.ident, ds.valid)), ds.static)
+    g = gx.Grid.from_toml_text(_PUMPING)
+    g = gx.Grid(name="p", data=[gx.DataSpec("pumping", dataset=bare)], structures=g.structures, variants=g.variants)
+    gx.run_grid(g, tmp_path / "r.sqlite")
+    df = gb.load_results(tmp_path / "r.sqlite")
+    assert gx.plot_fronts(df, data="pumping").axes[0].get_ylabel() == "J_SF"
+    written = {p.name: p for p in gx.write_report(tmp_path / "r.sqlite", tmp_path / "rep")}
+    assert "²" not in written["summary.txt"].read_text(encoding="utf-8")

@@ -63,8 +63,29 @@ def _frame(results: pd.DataFrame | str | os.PathLike | Sequence, spec: str | int
     if attrs or not df.attrs:
         return df
     bare = df.copy(deep=False)
-    bare.attrs = {}
+    units = _y_units(df.attrs)
+    bare.attrs = {"y_units": units} if units else {}  # a few names: the figures' and the summary's units
     return bare
+
+
+def _y_units(attrs: Mapping) -> dict[str, str]:
+    """Each data set's output unit, by name, from the specs of the results' ``attrs`` (empty when the specs
+    stored none: data without units, or a store written before the specs kept them)."""
+    if "y_units" in attrs:
+        return dict(attrs["y_units"])
+    out: dict[str, str] = {}
+    for info in attrs.get("specs", ()):
+        spec = info.get("spec") if isinstance(info, Mapping) else None
+        for d in (spec.get("data", ()) if isinstance(spec, Mapping) else ()):
+            if isinstance(d, Mapping) and isinstance(d.get("y_unit"), str) and d["y_unit"]:
+                out.setdefault(str(d.get("name")), d["y_unit"])
+    return out
+
+
+def _sq(df: pd.DataFrame, data: str) -> str:
+    """`` (unit²)`` of data set ``data``'s output (J_S, J_SF and B are mean squares of it), or empty."""
+    unit = df.attrs.get("y_units", {}).get(data, "")
+    return f" ({unit}²)" if unit else ""
 
 
 def _n_params(df: pd.DataFrame) -> pd.Series:
@@ -518,8 +539,8 @@ def plot_scatter(
                     transform=ax.transAxes, ha="center", va="center", color="0.4", fontsize=8)
             ax.set_xticks([])
             ax.set_yticks([])
-        ax.set_xlabel("J_S on the validation record")
-        ax.set_ylabel("J_SF")
+        ax.set_xlabel(f"J_S on the validation record{_sq(df, d)}")
+        ax.set_ylabel(f"J_SF{_sq(df, d)}")
         ax.set_title(f"{_shown(d)}: {int(ok.sum())} of {len(sub)} cells drawn")
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=7, ncol=2, loc="best")
@@ -630,15 +651,16 @@ def plot_fronts(
             ax.set_xticks([])
             ax.set_yticks([])
         ax.set_title(_shown(s))
-        ax.set_xlabel("J_S on the validation record")
-        ax.set_ylabel("J_SF")
+        ax.set_xlabel(f"J_S on the validation record{_sq(df, d)}")
+        ax.set_ylabel(f"J_SF{_sq(df, d)}")
         ax.grid(True, which="major", alpha=0.3)
     for ax in axes[len(names):]:
         ax.set_visible(False)
     axes[0].legend(fontsize=7, loc="best", title="★ chosen, ◆ single model", title_fontsize=7)
     said = ""
     if len(bands) == 1:
-        said = f" (shaded below the dashed line: J_SF ≤ B = {bands[0][0]:g})"
+        unit = df.attrs.get("y_units", {}).get(d, "")
+        said = f" (shaded below the dashed line: J_SF ≤ B = {bands[0][0]:g}{f' {unit}²' if unit else ''})"
     elif bands:
         said = " (J_SF ≤ B: the variants' own bands, " + "; ".join(f"{b:g} for {who}" for b, who in bands) + ")"
     fig.suptitle(_wrapped(f"{_shown(d)}: fronts per structure" + said, fig, 12), fontsize=12)
@@ -712,7 +734,8 @@ def plot_heatmap(
             ax.text(j, i, f"{v:.3g}", ha="center", va="center", fontsize=7, color="k" if light else "w")
     title = f"{_shown(d)}: {value} ({rule})"
     if np.isfinite(shown).any():
-        cbar = fig.colorbar(im, ax=ax, label=value)
+        unit = _sq(df, d) if value in ("JS_valid", "JS_ident", "JSF") else " (%)" if value == "fit_valid" else ""
+        cbar = fig.colorbar(im, ax=ax, label=value + unit)
         _ticks(cbar.ax.yaxis, log, 5)
     else:  # nothing to colour: a scale would show values no cell has (matplotlib's default ±0.1)
         title += (": no model qualified (the leaderboard's reason says why)" if np.isnan(vals).all() else
@@ -883,18 +906,23 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
              f"{attrs.get('version')}): {len(df)} of {attrs.get('n_cells', len(df))} cells in the store; "
              + ", ".join(f"{int(counts.get(s, 0))} {s}" for s in STATUSES),
              f"ranking rule: {rule}"]
+    units = _y_units(attrs) or _y_units(df.attrs)
     for d in dict.fromkeys(df["data"]):
         part = lb.loc[d]
         rows = df[df["data"] == d]
         sub = part.dropna(subset=["JS_valid"]).head(5)
+        unit = f"{units[d]}²" if units.get(d) else ""
         if rule == "chosen":
             within = " (each cell's own choice)"
         else:  # the band that ranked it: given, or stored (the variants' own where their cells stored several)
             bs = _bands(rows, band, d)
-            within = (f" among the models with J_SF ≤ B = {bs[0][0]:g}" if len(bs) == 1 else
+            within = (f" among the models with J_SF ≤ B = {bs[0][0]:g}{unit and ' ' + unit}" if len(bs) == 1 else
                       " among the models with J_SF ≤ B, the variants' own: " +
                       "; ".join(f"{b:g} for {who}" for b, who in bs) if bs else "")
         lines.append(f"\n{d}: best by J_S on the validation record{within}")
+        if unit and len(sub):  # what the columns are, in which units
+            lines.append(f"  (JS_valid: J_S on the validation record, JSF: J_SF on the static points, both in {unit}; "
+                         "fit_valid in %)")
         lines.append(sub[["JS_valid", "JSF", "fit_valid", "n_params"]].to_string() if len(sub) else
                      "  (no model qualified: the reasons follow)")
         empty = part[part["reason"] != ""]

@@ -415,10 +415,14 @@ def band_of(d: DataSpec, ds: gb.Dataset) -> float | None:
 
 def stored_spec(grid: "Grid", datasets: Mapping[str, gb.Dataset]) -> dict:
     """A grid's canonical form as a store keeps it: each data set's band as its cells hold it (a static
-    file's column of δ gives it once read, :func:`band_of`), which the rows read back show."""
+    file's column of δ gives it once read, :func:`band_of`), which the rows read back show, and its output's
+    unit (``y_unit``, when the data carry one) for the reports."""
     out = grid.to_dict()
     for d, entry in zip(grid.data, out["data"]):
         entry["band"] = band_of(d, datasets[d.name])
+        unit = datasets[d.name].valid.units[1]
+        if unit:  # the reports say J_S, J_SF and B in it (squared); none said: the specs stored before read as before
+            entry["y_unit"] = unit
     return out
 
 
