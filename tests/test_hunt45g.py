@@ -90,3 +90,14 @@ def test_data_without_units_keep_bare_labels(tmp_path):
     assert gx.plot_fronts(df, data="pumping").axes[0].get_ylabel() == "J_SF"
     written = {p.name: p for p in gx.write_report(tmp_path / "r.sqlite", tmp_path / "rep")}
     assert "²" not in written["summary.txt"].read_text(encoding="utf-8")
+
+
+def test_a_file_option_written_in_the_data_table_says_where_it_belongs():
+    # "unknown key 'input_names' in a [[data]] table; known keys: name, bundled, …" left the user to guess that the
+    # example's input_names (and delimiter, Ts, …) go in each file's table
+    text = _MISO.replace('bundled = "pumping_miso"', 'input_names = ["n1", "n2"]\n'
+                         'ident = {path = "i.csv", u = ["a", "b"], y = "p", Ts = 0.05}').replace(
+        ', GAIN', '')
+    with pytest.raises(gx.SpecError, match=r"input_names.*each CSV file.*ident = \{") as err:
+        gx.Grid.from_toml_text(text, source="spec.toml")
+    assert err.value.path == ("data", 0, "input_names") and err.value.line == 4

@@ -29,8 +29,8 @@ bundled = "pumping"       # or "buck" (the real buck converter, measured) or "pu
 # static = {path = "static.csv", u = "speed", y = "pressure", uncertainty = 0.175}  # steady states, +/- error
 # (uncertainty = "delta": each point's error from the file's column delta; the band is then their mean square)
 # (without uncertainty give band = B, J_SF's bound in output units^2, and b to every band constraint)
-# Several inputs: u = ["speed1", "speed2"] in all three files; input_names = ["n1", "n2"] names them
-# for the terms (n1(k-1)) when the columns' names are not identifiers, e.g. "speed [rpm]".
+# Several inputs: u = ["speed1", "speed2"] in all three files; input_names = ["n1", "n2"] (in each file's
+# table too) names them for the terms (n1(k-1)) when the columns' names are not identifiers, e.g. "speed [rpm]".
 # Static files that repeat an operating point: repeats = "mean" averages the repeats into one point.
 # Files as a logger or a spreadsheet wrote them: skiprows = 3 (a header block above the column names),
 # delimiter = ";", decimal = ",", encoding = "cp1252", time_rtol = 0.01 (stamps printed with few digits).

@@ -1279,6 +1279,13 @@ class Grid:
                 raise SpecError(f"the spec needs at least one [[{key}]] table", (key,))
             out = []
             for i, it in enumerate(items):
+                if key == "data" and isinstance(it, Mapping):  # a file's option written beside the files
+                    misplaced = [k for k in it if k not in allowed and k in (*_RECORD_KEYS, *_STATIC_KEYS)]
+                    if misplaced:
+                        k = misplaced[0]
+                        raise SpecError(f"{k!r} is an option of each CSV file, not of the [[data]] table: give it in "
+                                        f"the file tables it concerns, e.g. ident = {{path = …, u = …, y = …, {k} = …}} "
+                                        "(and likewise valid and static)", (key, i, k))
                 _check_keys(it, allowed, f"a [[{key}]] table", (key, i))
                 if "name" not in it:
                     raise SpecError(f"every [[{key}]] table needs a name", (key, i))
