@@ -68,8 +68,9 @@ def test_a_report_says_the_units_of_its_mean_squares(tmp_path):
     # mlc² from a V² (nor that fit_valid is in %), though the bundled plant's records carry their units
     gx.run_grid(gx.Grid.from_toml_text(_PUMPING), tmp_path / "r.sqlite")
     unit = gb.load_pumping().valid.units[1] + "²"
-    written = {p.name: p for p in gx.write_report(tmp_path / "r.sqlite", tmp_path / "rep")}
+    written = {p.name: p for p in gx.write_report(tmp_path / "r.sqlite", tmp_path / "rep", html=True)}
     text = written["summary.txt"].read_text(encoding="utf-8")
+    assert f"unit squared: pumping: {unit}; fit_valid in %" in written["report.html"].read_text("utf-8")
     assert f"B = {0.175 ** 2:g} {unit}" in text
     assert f"both in {unit}; fit_valid in %" in text
     df = gb.load_results(tmp_path / "r.sqlite")

@@ -15,6 +15,7 @@ from typing import Mapping, Sequence
 import pandas as pd
 
 from ._cell import STATUSES
+from ._store import output_units
 
 __all__ = ["report_page"]
 
@@ -104,6 +105,12 @@ def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Seque
     parts.append("<h2 id=\"leaderboard\">Leaderboard</h2><p>The best model of every (data, structure, variant), "
                  "ranked within each data set by J_S on the validation record; a row without figures says why in "
                  "<em>reason</em>.</p>")
+    units = output_units(attrs) or output_units(df.attrs)
+    if units:  # what the figures are in
+        parts.append("<p>" + _e("JS_valid and JS_ident (J_S, the free-run simulation's mean squared error on the "
+                                "validation and identification records) and JSF (J_SF, the mean squared static error "
+                                "on the static points) are in the output's unit squared: "
+                                + "; ".join(f"{d}: {u}²" for d, u in units.items()) + "; fit_valid in %.") + "</p>")
     parts.append(_table(lb, text_cols=("data", "structure", "variant", "reason"), why="reason"))
     parts.append("<h2 id=\"figures\">Figures</h2>")
     for name, png in figures.items():

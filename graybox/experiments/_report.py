@@ -37,7 +37,7 @@ from ..core._reprs import beside, bound_text, level_texts
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
                                 check_sequence, check_str)
 from ._cell import STATUSES
-from ._store import compare_results, encode_value, load_results, running_cells
+from ._store import compare_results, encode_value, load_results, output_units, running_cells
 
 __all__ = ["RULES", "GridStatus", "grid_status", "leaderboard", "heatmap_table", "plot_scatter", "plot_fronts", "plot_heatmap", "write_report"]
 
@@ -63,23 +63,9 @@ def _frame(results: pd.DataFrame | str | os.PathLike | Sequence, spec: str | int
     if attrs or not df.attrs:
         return df
     bare = df.copy(deep=False)
-    units = _y_units(df.attrs)
+    units = output_units(df.attrs)
     bare.attrs = {"y_units": units} if units else {}  # a few names: the figures' and the summary's units
     return bare
-
-
-def _y_units(attrs: Mapping) -> dict[str, str]:
-    """Each data set's output unit, by name, from the specs of the results' ``attrs`` (empty when the specs
-    stored none: data without units, or a store written before the specs kept them)."""
-    if "y_units" in attrs:
-        return dict(attrs["y_units"])
-    out: dict[str, str] = {}
-    for info in attrs.get("specs", ()):
-        spec = info.get("spec") if isinstance(info, Mapping) else None
-        for d in (spec.get("data", ()) if isinstance(spec, Mapping) else ()):
-            if isinstance(d, Mapping) and isinstance(d.get("y_unit"), str) and d["y_unit"]:
-                out.setdefault(str(d.get("name")), d["y_unit"])
-    return out
 
 
 def _sq(df: pd.DataFrame, data: str) -> str:
@@ -906,7 +892,7 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
              f"{attrs.get('version')}): {len(df)} of {attrs.get('n_cells', len(df))} cells in the store; "
              + ", ".join(f"{int(counts.get(s, 0))} {s}" for s in STATUSES),
              f"ranking rule: {rule}"]
-    units = _y_units(attrs) or _y_units(df.attrs)
+    units = output_units(attrs) or output_units(df.attrs)
     for d in dict.fromkeys(df["data"]):
         part = lb.loc[d]
         rows = df[df["data"] == d]

@@ -961,6 +961,20 @@ def _all_rows(conn: sqlite3.Connection, cols: str, bands: Mapping[int, Mapping[s
     return rows
 
 
+def output_units(attrs: Mapping) -> dict[str, str]:
+    """Each data set's output unit, by name, from the specs of the results' ``attrs`` (empty when the specs
+    stored none: data without units, or a store written before the specs kept them)."""
+    if "y_units" in attrs:
+        return dict(attrs["y_units"])
+    out: dict[str, str] = {}
+    for info in attrs.get("specs", ()):
+        spec = info.get("spec") if isinstance(info, Mapping) else None
+        for d in (spec.get("data", ()) if isinstance(spec, Mapping) else ()):
+            if isinstance(d, Mapping) and isinstance(d.get("y_unit"), str) and d["y_unit"]:
+                out.setdefault(str(d.get("name")), d["y_unit"])
+    return out
+
+
 def _spec_info(s: Mapping[str, Any]) -> dict[str, Any]:
     return {"id": s["id"], "name": s["name"], "created": s["created"], "last_run": s["last_run"],
             "version": s["graybox_version"], "n_cells": s["n_cells"], "fingerprint": s["fingerprint"],
