@@ -28,6 +28,7 @@ constraints = [{type = "band"}, GAIN]
     ('{type = "gain", upper = {speed1 = 0.01}}', "speed1"),                        # a column's name, not the input's
     ('{type = "gain", lower = 0.0, ubar_range = {n3 = [1200, 1600]}}', "n3"),     # a range of an input not held
     ('{type = "gain", lower = [0.0, 0.0, 0.0]}', "3 entries"),                     # three bounds, two inputs
+    ('{type = "gain", lower = 0.0, ubar_range = [[1200, 1600], [1200, 1600], [0, 1]]}', "3 ranges"),
 ])
 def test_gain_bounds_naming_inputs_the_data_lacks_are_refused_before_any_cell_runs(tmp_path, gain, said):
     # the grid took them and every cell of the variant failed, one by one, with a ValueError that named no key of the

@@ -1328,6 +1328,11 @@ class Grid:
                     if c["type"] == "gain":  # as select_graybox: a name or count the data lack fails every cell
                         try:
                             build_constraint(c)._bounds(len(names), names)
+                            rng = c["ubar_range"]
+                            if rng is not None and not isinstance(rng, Mapping) and np.ndim(rng) == 2 \
+                                    and len(rng) != len(names):  # one (low, high) per input
+                                raise ValueError(f"ubar_range has {len(rng)} ranges, one per input, but the data set "
+                                                 f"has {len(names)} input(s) {names}")
                         except ValueError as exc:
                             raise SpecError(f"variant {v.name!r} on data set {d.name!r}: {exc}",
                                             ("variants", j, "constraints", k)) from None
