@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import graybox as gb
@@ -103,3 +104,16 @@ def test_a_file_option_written_in_the_data_table_says_where_it_belongs():
     with pytest.raises(gx.SpecError, match=r"input_names.*each CSV file.*ident = \{") as err:
         gx.Grid.from_toml_text(text, source="spec.toml")
     assert err.value.path == ("data", 0, "input_names") and err.value.line == 4
+
+
+def test_a_least_squares_cell_on_a_held_input_does_not_call_itself_els():
+    # a grid's "ls" cell (els with noise=0) on a record whose input is held failed with "the ELS process θ is not
+    # identifiable … (ELS takes no static points …)": the variant the user wrote is least squares
+    u = np.full(200, 3.0)
+    y = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), [0.5, 0.2, 1.0]).simulate(u, np.zeros(1))
+    rec = gb.Record(u, y + 0.01 * np.random.default_rng(0).standard_normal(200))
+    with pytest.raises(ValueError, match=r"^the least-squares θ .*not identifiable") as err:
+        gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), rec, noise=0)
+    assert "ELS process" not in str(err.value) and "least squares takes no static points" in str(err.value)
+    with pytest.raises(ValueError, match=r"^the ELS process θ .*ELS takes no static points"):
+        gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), rec, noise=1)

@@ -494,7 +494,7 @@ def _warn_not_converged(max_iter: int, hist: list[float], tol: float, relaxation
 
 
 #: What identifies terms the records leave free, for an estimator that takes no static points.
-_NO_STATIC_REMEDY = ("give a record whose input moves (ELS takes no static points: cls, pe_pareto or se_pareto fit the "
+_NO_STATIC_REMEDY = ("give a record whose input moves ({who} takes no static points: cls, pe_pareto or se_pareto fit the "
                      "records together with static points at several input levels)")
 
 
@@ -572,8 +572,12 @@ def els(
     reg = _regression(process, ns, recs)
     # the rule every estimator applies (on the raw signals), so that ELS names the terms left free as CLS, PE and
     # SE do
+    # without noise terms (noise=0) this is plain least squares, and says so (a grid's "ls" cell is this call)
+    what, who = ("the ELS process θ", "ELS") if len(ns) else ("the least-squares θ (ELS with no noise terms)",
+                                                              "least squares")
+    remedy = _NO_STATIC_REMEDY.format(who=who)
     check_identified([("the identification records", reg.psi, reg.psi.shape[0])], list(process),
-                     what="the ELS process θ", remedies=(_NO_STATIC_REMEDY, _NO_STATIC_REMEDY))
+                     what=what, remedies=(remedy, remedy))
     offsets = (signal_offsets(recs) if is_closed(process) and all(l is not None for l in _pure_lags(ns))
                else None)
     if offsets is not None:
