@@ -117,3 +117,15 @@ def test_a_least_squares_cell_on_a_held_input_does_not_call_itself_els():
     assert "ELS process" not in str(err.value) and "least squares takes no static points" in str(err.value)
     with pytest.raises(ValueError, match=r"^the ELS process θ .*ELS takes no static points"):
         gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), rec, noise=1)
+
+
+def test_two_stores_side_by_side_say_each_band_in_its_unit(tmp_path):
+    gx.run_grid(gx.Grid.from_toml_text(_PUMPING), tmp_path / "a.sqlite")
+    gx.run_grid(gx.Grid.from_toml_text(_PUMPING.replace('bundled = "pumping"', 'bundled = "pumping"\nband = 0.05')),
+                tmp_path / "b.sqlite")
+    unit = gb.load_pumping().valid.units[1] + "²"
+    written = {p.name: p for p in gx.write_report([tmp_path / "a.sqlite", tmp_path / "b.sqlite"], tmp_path / "rep")}
+    text = written["summary.txt"].read_text(encoding="utf-8")
+    assert f"{0.175 ** 2:g} {unit} for a: PE band; 0.05 {unit} for b: PE band" in text
+    fig = gx.plot_fronts(gx.compare_results([tmp_path / "a.sqlite", tmp_path / "b.sqlite"]), data="pumping")
+    assert f"0.05 {unit} for b: PE band" in fig.get_suptitle().replace("\n", " ")

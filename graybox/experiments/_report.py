@@ -644,11 +644,12 @@ def plot_fronts(
         ax.set_visible(False)
     axes[0].legend(fontsize=7, loc="best", title="★ chosen, ◆ single model", title_fontsize=7)
     said = ""
+    unit = df.attrs.get("y_units", {}).get(d, "")
+    unit = f" {unit}²" if unit else ""
     if len(bands) == 1:
-        unit = df.attrs.get("y_units", {}).get(d, "")
-        said = f" (shaded below the dashed line: J_SF ≤ B = {bands[0][0]:g}{f' {unit}²' if unit else ''})"
+        said = f" (shaded below the dashed line: J_SF ≤ B = {bands[0][0]:g}{unit})"
     elif bands:
-        said = " (J_SF ≤ B: the variants' own bands, " + "; ".join(f"{b:g} for {who}" for b, who in bands) + ")"
+        said = " (J_SF ≤ B: the variants' own bands, " + "; ".join(f"{b:g}{unit} for {who}" for b, who in bands) + ")"
     fig.suptitle(_wrapped(f"{_shown(d)}: fronts per structure" + said, fig, 12), fontsize=12)
     return fig
 
@@ -904,7 +905,7 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
             bs = _bands(rows, band, d)
             within = (f" among the models with J_SF ≤ B = {bs[0][0]:g}{unit and ' ' + unit}" if len(bs) == 1 else
                       " among the models with J_SF ≤ B, the variants' own: " +
-                      "; ".join(f"{b:g} for {who}" for b, who in bs) if bs else "")
+                      "; ".join(f"{b:g}{unit and ' ' + unit} for {who}" for b, who in bs) if bs else "")
         lines.append(f"\n{d}: best by J_S on the validation record{within}")
         if unit and len(sub):  # what the columns are, in which units
             lines.append(f"  (JS_valid: J_S on the validation record, JSF: J_SF on the static points, both in {unit}; "
