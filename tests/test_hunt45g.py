@@ -129,3 +129,19 @@ def test_two_stores_side_by_side_say_each_band_in_its_unit(tmp_path):
     assert f"{0.175 ** 2:g} {unit} for a: PE band; 0.05 {unit} for b: PE band" in text
     fig = gx.plot_fronts(gx.compare_results([tmp_path / "a.sqlite", tmp_path / "b.sqlite"]), data="pumping")
     assert f"0.05 {unit} for b: PE band" in fig.get_suptitle().replace("\n", " ")
+
+
+def test_a_seed_the_store_cannot_hold_is_refused_by_the_spec(tmp_path):
+    # seeds = [2**64] passed the spec and the run ended in a traceback: "OverflowError: Python int too large to
+    # convert to SQLite INTEGER" as it registered the cells
+    text = _PUMPING.replace('name = "p"', 'name = "p"\nseeds = [18446744073709551616]').replace(
+        'estimator = "pe"\nlambdas = {logspace = [-3, 0, 4]}\nconstraints = [{type = "band"}]',
+        'estimator = "se-ga"\nlambdas = [0.5]\noptions = {population = 10, generations = 2}')
+    with pytest.raises(gx.SpecError, match=r"seed") as err:
+        gx.Grid.from_toml_text(text, source="spec.toml")
+    assert err.value.path == ("seeds", 0) and err.value.line == 2
+    top = _PUMPING.replace('name = "p"', f'name = "p"\nseeds = [{2 ** 63 - 1}]').replace(
+        'estimator = "pe"\nlambdas = {logspace = [-3, 0, 4]}\nconstraints = [{type = "band"}]',
+        'estimator = "se-ga"\nlambdas = [0.5]\noptions = {population = 10, generations = 2}')
+    gx.run_grid(gx.Grid.from_toml_text(top), tmp_path / "r.sqlite")
+    assert list(gb.load_results(tmp_path / "r.sqlite")["seed"]) == [2 ** 63 - 1]

@@ -1190,7 +1190,8 @@ class Grid:
             object.__setattr__(self, what, tuple(items))
         if isinstance(self.seeds, (numbers.Number, np.generic)):  # one seed, or a wrong scalar checked below
             object.__setattr__(self, "seeds", (self.seeds,))
-        seeds = [_wrap(check_int, ("seeds", i), s, "seed", low=0) for i, s in enumerate(self.seeds)]
+        # below 2**63: the store keeps a seed as an SQLite INTEGER (a larger one failed the run with an OverflowError)
+        seeds = [_wrap(check_int, ("seeds", i), s, "seed", low=0, high=2 ** 63 - 1) for i, s in enumerate(self.seeds)]
         if not seeds or len(set(seeds)) != len(seeds):
             raise SpecError("seeds must be a non-empty list of distinct integers >= 0", ("seeds",))
         object.__setattr__(self, "seeds", tuple(seeds))
