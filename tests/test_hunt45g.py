@@ -145,3 +145,11 @@ def test_a_seed_the_store_cannot_hold_is_refused_by_the_spec(tmp_path):
         'estimator = "se-ga"\nlambdas = [0.5]\noptions = {population = 10, generations = 2}')
     gx.run_grid(gx.Grid.from_toml_text(top), tmp_path / "r.sqlite")
     assert list(gb.load_results(tmp_path / "r.sqlite")["seed"]) == [2 ** 63 - 1]
+
+
+def test_a_seed_given_as_an_option_points_to_the_grids_seeds():
+    text = _PUMPING.replace('lambdas = {logspace = [-3, 0, 4]}\nconstraints = [{type = "band"}]',
+                            'lambdas = {logspace = [-3, 0, 4]}\nconstraints = [{type = "band"}]\noptions = {seed = 3}')
+    with pytest.raises(gx.SpecError, match=r"unknown option 'seed'.*seeds = \[0, 1, …\] at the top of the spec") as err:
+        gx.Grid.from_toml_text(text, source="spec.toml")
+    assert err.value.path == ("variants", 0, "options", "seed")

@@ -1061,8 +1061,11 @@ class Variant:
         clean = {}
         for k, v in opts.items():
             if k not in known:
-                raise SpecError(f"unknown option {k!r} for estimator {est!r}; known: {', '.join(known) or '(none)'}",
-                                ("options", k))
+                # a grid gives the stochastic estimators their seeds itself (one cell per seed)
+                hint = ("; the grid's seeds = [0, 1, …] at the top of the spec give a stochastic estimator its seeds, "
+                        "one cell each" if k in ("seed", "seeds") else "")
+                raise SpecError(f"unknown option {k!r} for estimator {est!r}; known: {', '.join(known) or '(none)'}"
+                                + hint, ("options", k))
             clean[k] = _wrap(known[k], ("options", k), v, k)
         if "reference" in clean and "equality" not in kinds:
             raise SpecError("reference (where Σ*_y of eq. (22) comes from) needs an equality constraint",
