@@ -1469,7 +1469,8 @@ def select_graybox(
               else "not the chosen row's"), SelectionWarning)
     failed = [r["failed"][0] for r in results if r["failed"]]
     if failed:
-        warn(f"select_graybox: the fits of {len(failed)} of {len(results)} structure × estimator rows failed and "
+        what = "fits" if not plan.folds else "fits (or, on a fold, structure searches)"
+        warn(f"select_graybox: the {what} of {len(failed)} of {len(results)} structure × estimator rows failed and "
              f"those rows were left out of the choice (table['reason'] says why), e.g. {failed[0]}", SelectionWarning)
     job, res, i = jobs[pos], results[pos], members[pos]
     structure = gb.parse_structure(job.terms)
