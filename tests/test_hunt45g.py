@@ -153,3 +153,15 @@ def test_a_seed_given_as_an_option_points_to_the_grids_seeds():
     with pytest.raises(gx.SpecError, match=r"unknown option 'seed'.*seeds = \[0, 1, …\] at the top of the spec") as err:
         gx.Grid.from_toml_text(text, source="spec.toml")
     assert err.value.path == ("variants", 0, "options", "seed")
+
+
+def test_grid_status_says_the_unit_of_its_best_rows(tmp_path):
+    # graybox grid status printed the best rows as a raw pandas table (an empty 'data' header line) with J_S and J_SF
+    # as bare numbers (hunt45g's note)
+    g = gx.Grid.from_toml_text(_PUMPING, source="spec.toml")
+    gx.run_grid(g, tmp_path / "r.sqlite")
+    text = gx.grid_status(tmp_path / "r.sqlite").summary()
+    lines = text.splitlines()
+    head = lines[lines.index("best so far:") + 1]
+    assert head.split()[:2] == ["data", "structure"]
+    assert "in mlc² for pumping" in text

@@ -33,7 +33,7 @@ from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter, ScalarForm
 from matplotlib.figure import Figure
 
 from ..plots._data import distinct_colours
-from ..core._reprs import beside, bound_text, level_texts
+from ..core._reprs import beside, bound_text, level_texts, squared_unit
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
                                 check_sequence, check_str)
 from ._cell import STATUSES
@@ -984,6 +984,8 @@ class GridStatus:
         finished last, shortened.
     waiting : tuple of str
         Data sets with finished cells but no qualifying model yet (absent from ``best``).
+    units : mapping str -> str
+        Each data set's output unit, by name, where its spec stored one (J_S and J_SF are in its square).
     """
 
     store: str
@@ -1000,9 +1002,11 @@ class GridStatus:
     running: Mapping[str, int] = dataclasses.field(default_factory=dict)
     reasons: Mapping[str, str] = dataclasses.field(default_factory=dict)
     waiting: tuple = ()
+    units: Mapping[str, str] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         check_fields(self)
+        object.__setattr__(self, "units", FrozenMap(self.units))
         object.__setattr__(self, "waiting", tuple(check_str(d, "waiting[…]") for d in self.waiting))
         object.__setattr__(self, "counts", FrozenMap(self.counts))  # not the caller's dict
         object.__setattr__(self, "running", FrozenMap(self.running))
@@ -1023,7 +1027,11 @@ class GridStatus:
             lines += [f"  {st}: {why}" for st, why in self.reasons.items()]
         if len(self.best):
             lines.append("best so far:")
-            lines += ["  " + ln for ln in self.best.to_string().splitlines()]
+            lines += ["  " + ln for ln in self.best.reset_index().to_string(index=False).splitlines()]
+            told = {d: squared_unit(self.units.get(d)).strip() for d in self.best.index}
+            if any(told.values()):
+                lines.append("  (JS_valid: J_S on the validation record, JSF: J_SF on the static points; in " +
+                             ", ".join(f"{u} for {d}" for d, u in told.items() if u) + ")")
             if "rule" in self.best.columns and (self.best["rule"] == "chosen").any():
                 lines.append("  (rule chosen: each cell's own choice, for a data set without a band; dsf_valid: D_SF "
                              "on the validation record within the data set's band)")
@@ -1090,4 +1098,5 @@ def grid_status(store: str | os.PathLike, *, spec: str | int = "latest") -> Grid
     return GridStatus(str(store), int(sel) if isinstance(sel, (int, np.integer)) else 0, str(attrs.get("grid")),
                       n, len(df), max(0, n - len(df)), FrozenMap(counts),
                       float(wall.mean()) if wall.notna().any() else float("nan"), max(last) if len(last) else None,
-                      best, len(attrs.get("specs", [])), running_cells(store), reasons, tuple(waiting))
+                      best, len(attrs.get("specs", [])), running_cells(store), reasons, tuple(waiting),
+                      output_units(attrs))
