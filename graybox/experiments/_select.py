@@ -933,9 +933,14 @@ def _fit_or_fail(job: _Job, st: gb.Structure,
         return th, lam, [], {i: f"the fit on {names} failed: {r.removeprefix(f'λ1 = {lam[i]:g}: ')}"
                              for i, r in why.items()}
     except (ValueError, np.linalg.LinAlgError) as exc:
-        lam = _lambdas(job.estimator, job.lambdas)
-        lam = np.array([np.nan]) if lam is None else lam
-        return np.full((lam.size, len(st)), np.nan), lam, [f"the fit on {names} failed: {exc}"], {}
+        return *_no_fit(job, st), [f"the fit on {names} failed: {exc}"], {}
+
+
+def _no_fit(job: _Job, st: gb.Structure) -> tuple[np.ndarray, np.ndarray]:
+    """(θ rows, λ1) of a row with no fit: a NaN row per member its estimator would fit (one for a black box)."""
+    lam = _lambdas(job.estimator, job.lambdas)
+    lam = np.array([np.nan]) if lam is None else lam
+    return np.full((lam.size, len(st)), np.nan), lam
 
 
 def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.ndarray) -> np.ndarray:
@@ -1022,8 +1027,7 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
             elif job.fold_terms is not None and not job.fold_terms[j]:  # this fold's search reached no such structure
                 failed.append(f"the structure search on {', '.join(repr(r.name) for r in records)} found no "
                               f"structure of this row's source")
-                lam = _lambdas(job.estimator, job.lambdas)
-                th = np.full((1 if lam is None else lam.size, len(st)), np.nan)
+                th = _no_fit(job, st)[0]
             else:  # a fold: its own fit (of the structure its own search chose, when searched per fold)
                 fold_st = st if job.fold_terms is None else gb.parse_structure(job.fold_terms[j])
                 th = fit(records, fold_st)[0]
@@ -1430,21 +1434,19 @@ def select_graybox(
         return jobs + more, results + run(more)
 
     jobs, results = score(fold_terms)
-
-    def runs(jobs: list[_Job], results: list[dict]) -> bool:
-        return bool(np.isfinite(_table(rows, jobs, results, plan)[0]["JS_valid"].to_numpy(float)).any())
-
-    again = score({}) if fold_terms and not runs(jobs, results) else None
-    # only when those run: else no choice is made on them, and the rows' reasons stay those of the honest search
-    if again is not None and runs(*again):
-        # the structures searched per fold never ran on their held-out folds: said, and chosen as before the
-        # per-fold search (optimistic: the held-out folds then shaped the structures)
-        warn("select_graybox: in every row, the structure searched on a fold's fit records has no finite free run "
-             "on its held-out fold; the choice is made on the structures searched on all the identification "
-             "data, fitted per fold (optimistic: those searches saw the held-out folds); a validation record "
-             "(a Dataset) gives an honest choice", SelectionWarning)
-        jobs, results = again
     table, members, scores = _table(rows, jobs, results, plan)
+    if fold_terms and not np.isfinite(table["JS_valid"].to_numpy(float)).any():
+        again = score({})
+        tabled = _table(rows, *again, plan)
+        # only when those run: else no choice is made on them, and the rows' reasons stay those of the honest search
+        if np.isfinite(tabled[0]["JS_valid"].to_numpy(float)).any():
+            # the structures searched per fold never ran on their held-out folds: said, and chosen as before the
+            # per-fold search (optimistic: the held-out folds then shaped the structures)
+            warn("select_graybox: in every row, the structure searched on a fold's fit records has no finite free "
+                 "run on its held-out fold; the choice is made on the structures searched on all the "
+                 "identification data, fitted per fold (optimistic: those searches saw the held-out folds); a "
+                 "validation record (a Dataset) gives an honest choice", SelectionWarning)
+            (jobs, results), (table, members, scores) = again, tabled
     if table["in_band"].any():
         pos, used = _choose(table, scores, rule)
         used_fallback = False
