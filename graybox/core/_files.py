@@ -32,8 +32,8 @@ except ImportError:  # pragma: no cover - Windows
 #: Whether this platform has flock (:func:`lock_fd` then may lock; without it, it always answers False).
 CAN_FLOCK = fcntl is not None
 
-__all__ = ["BOMS", "CAN_FLOCK", "LEFTOVER_SECONDS", "bom_encoding", "folder_now", "lock_fd", "sweep_leftovers", "sweep_written_beside", "write_atomically",
-           "writer_tag"]
+__all__ = ["BOMS", "CAN_FLOCK", "LEFTOVER_SECONDS", "bom_encoding", "folder_now", "lock_fd", "sweep_leftovers",
+           "sweep_written_beside", "write_atomically", "written_path", "writer_tag"]
 
 #: Byte-order marks and the encodings they say, UTF-32's first: its little-endian mark starts with UTF-16's.
 BOMS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF8, "utf-8"),
@@ -124,6 +124,12 @@ def _new_file_beside(target: Path) -> tuple[int, Path]:
         return fd, tmp
 
 
+def written_path(path: Path) -> Path:
+    """The file a write to ``path`` replaces: the file a symbolic link names (written through, as ``open(path, "w")``
+    would, the link kept), else ``path`` itself; beside it go the write's own file and its sweep."""
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
 def write_atomically(path: str | os.PathLike, write: Callable[[IO[bytes]], object]) -> None:
     """Write the file ``path`` by ``write(f)`` on a binary file, whole or not at all.
 
@@ -140,7 +146,7 @@ def write_atomically(path: str | os.PathLike, write: Callable[[IO[bytes]], objec
         in; any error of ``write`` itself, after removing the file beside the target.
     """
     path = Path(path)
-    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    target = written_path(path)
     try:
         fd, tmp = _new_file_beside(target)
     except OSError as exc:

@@ -83,7 +83,7 @@ from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
-from ..core._files import folder_now, sweep_written_beside, write_atomically
+from ..core._files import folder_now, sweep_written_beside, write_atomically, written_path
 from ..core._terms import Structure
 from ..core._validation import (FrozenMap, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
@@ -1434,7 +1434,7 @@ def checkpoint_path(checkpoint: object) -> Path:
     if path.is_dir():  # the folder meant to hold it: never to be called unreadable, nor deleted
         raise ValueError(f"checkpoint: {path} is a folder; give a file path, such as {path / 'checkpoint.npz'}")
     # the folder the writes go to: a symbolic link is written through (save_npz), beside the file it names
-    real = Path(os.path.realpath(path)) if path.is_symlink() else path
+    real = written_path(path)
     if not real.parent.is_dir():
         raise ValueError(f"checkpoint: the folder {real.parent} does not exist; create it or choose another path")
     try:  # a file made and gone at once: what the write will do (modes, read-only mounts, ACLs all say)
