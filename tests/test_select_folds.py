@@ -120,3 +120,42 @@ def test_the_closing_warning_says_a_folds_search_failed_not_a_fit(monkeypatch):
     monkeypatch.setattr(_select, "_fold_structures", none_on_the_first_fold)
     with pytest.warns(gb.SelectionWarning, match=r"the fits \(or, on a fold, structure searches\) of \d+ of"):
         gb.select_graybox(CAND, record(240, 1), sizes=[3, 5], sources=["frols"], folds=3, estimator="ls")
+
+
+def test_the_table_says_which_structure_each_fold_scored(monkeypatch, tmp_path):
+    # JS_valid on folds scores each fold's own search's structure, not the row's ``terms``: the table says which
+    jobs = _jobs(monkeypatch)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.SelectionWarning)
+        res = gb.select_graybox(CAND, record(240, 1), sizes=[3, 5], sources=["frols"], folds=3, estimator="ls")
+    by_row = {job.name: job.fold_terms for job in jobs}
+    for name, text in res.table["fold_terms"].items():
+        folds = text.split(" | ")
+        assert len(folds) == 3
+        assert [set(f.split(" + ")) for f in folds] == [set(t.split(" + ")) for t in by_row[name]]
+    assert (res.table["fold_terms"] != res.table["terms"] + " | " + res.table["terms"] + " | "
+            + res.table["terms"]).any()  # some fold scored other terms than the row's
+    path = tmp_path / "sel.json"
+    gb.save(res, path)
+    assert gb.load(path).table["fold_terms"].tolist() == res.table["fold_terms"].tolist()
+
+
+def test_no_fold_structures_column_without_a_per_fold_search(monkeypatch):
+    data = gb.Dataset(record(200, 1), record(200, 2))
+    assert "fold_terms" not in gb.select_graybox(CAND, data, sizes=[3, 5], sources=["frols"], estimator="ls").table
+    monkeypatch.setattr(_select, "_fold_structures", lambda rows, candidates, plan, *a: [("",) * 3 for _ in rows])
+    with pytest.warns(gb.SelectionWarning, match="optimistic"):
+        fell = gb.select_graybox(CAND, record(240, 1), sizes=[3, 5], sources=["frols"], folds=3, estimator="ls")
+    assert "fold_terms" not in fell.table  # the fallback scored the rows' own terms on every fold
+
+
+def test_a_fold_with_no_structure_is_said_in_the_column(monkeypatch):
+    real = _select._fold_structures
+    monkeypatch.setattr(_select, "_fold_structures",
+                        lambda rows, *a: [t if r["size"] == 3 else ("",) + t[1:] for r, t in zip(rows, real(rows, *a))])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.SelectionWarning)
+        res = gb.select_graybox(CAND, record(240, 1), sizes=[3, 5], sources=["frols"], folds=3, estimator="ls")
+    big = res.table[res.table["size"] == 5]["fold_terms"]
+    assert len(big) and big.str.startswith("(none) | ").all()
+    assert not res.table[res.table["size"] == 3]["fold_terms"].str.contains("(none)", regex=False).any()

@@ -163,7 +163,10 @@ class GrayboxSelection:
         :class:`SelectionWarning`, how many rows warned and whether the chosen one did. ``terms``: the row's structure, its terms joined by
         ``" + "`` (:meth:`structure_of` reads it back); ``theta``: the parameters of its member
         (the model the test columns score), exact decimal text, empty for a row without a model
-        (:meth:`model_of` reads it back).
+        (:meth:`model_of` reads it back). On folds also ``fold_terms``: the structure each fold's search
+        found and ``JS_valid`` scored on that fold, one terms text per fold in the folds' order, joined by
+        ``" | "`` (``"(none)"`` where that fold's search reached none of the row's source); absent when the
+        choice fell back to the structures of all the data.
     degree : int or None
         Degree of the static curve the static information asks for (None for a black box).
     band : float
@@ -1554,6 +1557,8 @@ def _table(rows, jobs, results, plan) -> tuple[pd.DataFrame, list[int], list[np.
         th = res["thetas"][i] if i >= 0 else np.full(1, np.nan)
         # exact decimal text (repr round-trips a float): a table saved to JSON or CSV keeps every row's model
         row["theta"] = " ".join(repr(float(v)) for v in th) if np.all(np.isfinite(th)) else ""
+        if job.fold_terms is not None:  # the structures JS_valid scored: each fold's own search's, not ``terms``
+            row["fold_terms"] = " | ".join(t or "(none)" for t in job.fold_terms)
         if plan.test is not None:
             row["JS_test"] = float(res["test"][i]) if i >= 0 else np.inf
             row["JSF_test"] = float(res["jsf_full"][i]) if i >= 0 else no_jsf
