@@ -159,3 +159,25 @@ def test_a_fold_with_no_structure_is_said_in_the_column(monkeypatch):
     big = res.table[res.table["size"] == 5]["fold_terms"]
     assert len(big) and big.str.startswith("(none) | ").all()
     assert not res.table[res.table["size"] == 3]["fold_terms"].str.contains("(none)", regex=False).any()
+
+
+def test_a_fold_structure_that_cannot_be_completed_fails_its_row_alone_saying_why(monkeypatch):
+    # was: one structure whose completion (the static form's terms, an included term the fold's records cannot tell
+    # apart) raised on a fold dropped every structure of that fold, each row failing "found no structure"
+    real = _select._completed
+    full = record(240, 1)
+
+    def refuse_five_on_folds(terms, candidates, idents, *a):
+        if len(terms) == 5 and sum(len(r) for r in idents) < len(full):
+            raise ValueError("the fold's records cannot tell the included term apart")
+        return real(terms, candidates, idents, *a)
+
+    monkeypatch.setattr(_select, "_completed", refuse_five_on_folds)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.SelectionWarning)
+        res = gb.select_graybox(CAND, full, sizes=[3, 5], sources=["frols"], folds=3, estimator="ls")
+    small, big = res.table[res.table["size"] == 3], res.table[res.table["size"] == 5]
+    assert len(small) and np.isfinite(small["JS_valid"]).all()  # the fold's other structures ran
+    assert len(big) and np.isinf(big["JS_valid"]).all()
+    assert big["reason"].str.contains("cannot tell the included term apart").all()
+    assert big["fold_terms"].str.contains("cannot tell the included term apart").all()

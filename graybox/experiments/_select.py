@@ -165,7 +165,8 @@ class GrayboxSelection:
         (the model the test columns score), exact decimal text, empty for a row without a model
         (:meth:`model_of` reads it back). On folds also ``fold_terms``: the structure each fold's search
         found and ``JS_valid`` scored on that fold, one terms text per fold in the folds' order, joined by
-        ``" | "`` (``"(none)"`` where that fold's search reached none of the row's source); absent when the
+        ``" | "`` (``"(none)"`` where that fold's search reached none of the row's source, why in parentheses
+        where the structure it reached cannot be completed on the fold's records); absent when the
         choice fell back to the structures of all the data.
     degree : int or None
         Degree of the static curve the static information asks for (None for a black box).
@@ -811,8 +812,8 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
     """Per row, its structure searched again on each fold's fit records alone (the held-out fold unseen: a search
     on all the identification data would choose the terms with it): one terms text per split, that of the row's
     source at its size (each of its sources at its own size when several share the row; or the size nearest it the
-    fold's search reached), ``""`` where that fold's search reached no structure of the row's sources (the row then
-    fails on that fold)."""
+    fold's search reached), ``""`` where that fold's search reached no structure of the row's sources, ``"(why)"``
+    where the structure it reached cannot be completed on the fold's records (the row then fails on that fold)."""
     process = candidates.process
     # every member's size (a row two sources share: each at its own), for swap and exact, which search each size apart
     sizes = sorted({k for r in rows for _, k in (r.get("_members") or [(None, r["size"])])})
@@ -839,10 +840,15 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
                     if len(path_sources) < len(sources):
                         found |= _searched(candidates, ident, [k for k in sizes if k < n_rows],
                                            [s for s in sources if s not in path_sources], forced, top)[0]
-                    for key, terms in found.items():
-                        got[key] = str(_completed(terms, candidates, fit, ident, include, form, centre)[0])
                 except (ValueError, FewerTermsError, np.linalg.LinAlgError):  # this fold's records support none
-                    pass
+                    found = {}
+                for key, terms in found.items():
+                    # a structure the fold's records cannot complete (an included term they cannot tell apart) fails
+                    # its own row on this fold, saying why; not the fold's other structures, nor taken at another size
+                    try:
+                        got[key] = str(_completed(terms, candidates, fit, ident, include, form, centre)[0])
+                    except (ValueError, FewerTermsError, np.linalg.LinAlgError) as exc:
+                        got[key] = f"({exc})"
         per_fold.append(got)
     out = []
     for r in rows:
@@ -868,7 +874,7 @@ class _Job:
     constraints: tuple  # canonical tables (constraint_from_object), checked by the driver
     filters: tuple = ()  # the caller's warning filters, as warnings.filters held them at the call
     # choosing on folds: the row's structure searched on each split's fit records (one terms text per split, "" where
-    # that fold's search reached none); None: every split fits ``terms``
+    # that fold's search reached none, "(why)" where it cannot be completed there); None: every split fits ``terms``
     fold_terms: tuple[str, ...] | None = None
 
 
@@ -1027,9 +1033,11 @@ def _score_job(job: _Job) -> dict[str, np.ndarray]:
             if records is None:  # every validation record scores the fit on all the identification records, made once
                 full = full or fit(plan.ident)
                 th = full[0]
-            elif job.fold_terms is not None and not job.fold_terms[j]:  # this fold's search reached no such structure
-                failed.append(f"the structure search on {', '.join(repr(r.name) for r in records)} found no "
-                              f"structure of this row's source")
+            elif job.fold_terms is not None and job.fold_terms[j][:1] in ("", "("):  # no such structure on this fold
+                on = ', '.join(repr(r.name) for r in records)
+                failed.append(f"the structure search on {on} found no structure of this row's source"
+                              if not job.fold_terms[j] else
+                              f"the structure found on {on} cannot be completed there: {job.fold_terms[j][1:-1]}")
                 th = _no_fit(job, st)[0]
             else:  # a fold: its own fit (of the structure its own search chose, when searched per fold)
                 fold_st = st if job.fold_terms is None else gb.parse_structure(job.fold_terms[j])
