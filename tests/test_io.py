@@ -171,7 +171,11 @@ def test_model_floats_round_trip_bit_for_bit(theta):
 @given(values=st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=1, max_size=8))
 def test_non_finite_values_round_trip(values):
     K = len(values)
-    ps = gb.ParetoSet(gb.Structure(["y(k-1)"]), np.ones((K, 1)), values, np.zeros(K), np.array(values), np.zeros(K))
+    v = np.array(values)
+    # any float goes through extra; lambdas and J_S take the values a set may hold (λ1 in (0, 1] or NaN; J >= 0)
+    lam = np.where((v > 0) & (v <= 1) | np.isnan(v), v, np.nan)
+    ps = gb.ParetoSet(gb.Structure(["y(k-1)"]), np.ones((K, 1)), lam, np.zeros(K), np.abs(v), np.zeros(K),
+                      extra={"values": v})
     back = gb.from_json(gb.to_json(ps))
     same(ps, back)
 

@@ -18,7 +18,8 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, StaticPoints, as_records, carried_from, check_fitted_on, check_units
-from ..core._validation import FrozenMap, check_bool, check_fields, check_int, check_real, frozen, real_array
+from ..core._validation import (FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
+                                check_weight, frozen, real_array)
 from ..core._terms import Structure
 
 __all__ = ["ParetoSet", "nondominated_mask", "OBJECTIVES"]
@@ -83,7 +84,7 @@ class ParetoSet:
     thetas : ndarray, shape (K, n_terms)
         Parameters, engineering units.
     lambdas : ndarray, shape (K,)
-        λ1 of each member (λ2 = 1 − λ1); NaN when a member came from no weight. The estimators
+        λ1 of each member, in (0, 1] (λ2 = 1 − λ1); NaN when a member came from no weight. The estimators
         (:func:`~graybox.pe_pareto`, :func:`~graybox.se_pareto`) keep the caller's order of their
         ``lambdas``, whatever order their sweeps run in.
     J1, JS, JSF : ndarray, shape (K,)
@@ -146,6 +147,11 @@ class ParetoSet:
             v = frozen(getattr(self, nm))
             if v.shape != (K,):
                 raise ValueError(f"{nm} must have shape ({K},), got {v.shape}")
+            # what no estimate gives (a file edited by hand, a set built wrong) is refused, not ranked by D_SF
+            if nm == "lambdas":
+                check_weight(v, "ParetoSet: lambdas")
+            else:
+                check_mean_square(v, f"ParetoSet: {nm}")
             if nm != "lambdas" and fails:
                 v = np.array(v)
                 v[~ok] = np.inf
