@@ -29,3 +29,38 @@ def test_pareto_set_refuses_a_negative_mean_square(field):
 def test_pareto_set_keeps_nan_weights_and_inf_errors():
     p = _set((np.nan, 1.0), JS=(np.inf, 0.0), JSF=(np.nan, 0.0))
     assert np.isnan(p.lambdas[0]) and p.JS[0] == np.inf
+
+
+@pytest.fixture(scope="module")
+def pumping():
+    return gb.load_pumping()
+
+
+@pytest.fixture(scope="module")
+def small_front(pumping):
+    st = gb.parse_structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "u(k-2)y(k-1)"])
+    return gb.se_pareto(st, pumping, lambdas=[1.0, 0.3], method="gradient")
+
+
+def _in_units(record, units, Ts=None, factor=1.0):
+    return gb.Record(record.u * factor, record.y, Ts=record.Ts if Ts is None else Ts, units=units, name="other")
+
+
+@pytest.mark.parametrize("carrier", ["set", "model", "decision"])
+def test_evaluate_thetas_refuses_data_in_other_units_than_the_front(pumping, small_front, carrier):
+    obj = {"set": small_front, "model": small_front.member_model(0),
+           "decision": gb.decide_dsf(small_front, band=10.0)}[carrier]
+    rad = _in_units(pumping.valid, ("rad/s", "mlc"), factor=2 * np.pi / 60)
+    with pytest.raises(ValueError, match="rad/s"):
+        gb.evaluate_thetas(obj, small_front.thetas, rad)
+    fast = _in_units(pumping.valid, ("rpm", "mlc"), Ts=0.01)
+    with pytest.raises(ValueError, match="sampled"):
+        gb.evaluate_thetas(obj, small_front.thetas, fast)
+    s = pumping.static
+    pts = gb.StaticPoints(s.ubar * 2 * np.pi / 60, s.ybar, units=("rad/s", "mlc"))
+    with pytest.raises(ValueError, match="rad/s"):
+        gb.evaluate_thetas(obj, small_front.thetas, None, pts)
+    # the data it was fitted on are scored as before, and a bare structure checks nothing
+    ok = gb.evaluate_thetas(obj, small_front.thetas, pumping)
+    assert np.allclose(ok["JS"], gb.evaluate_thetas(small_front.structure, small_front.thetas, pumping)["JS"])
+    assert np.all(np.isfinite(gb.evaluate_thetas(small_front.structure, small_front.thetas, rad)["JS"]))

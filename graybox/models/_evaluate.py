@@ -254,7 +254,9 @@ def evaluate_thetas(
     Parameters
     ----------
     structure : Structure, sequence of str, Model, or a result that carries one
-        Process terms shared by every member (a ParetoSet, Selection, ELSResult … gives its own).
+        Process terms shared by every member (a ParetoSet, Selection, ELSResult … gives its own). A Model, a
+        ParetoSet or a result that carries a model also gives the sampling period and units its θ hold in: a
+        record at another period, or data in other units, are refused (as :func:`js` and :func:`jsf` refuse them).
     thetas : ndarray, shape (P, n_terms) or (n_terms,)
         Parameter vectors, engineering units, one per row.
     record : Record or Dataset, optional
@@ -276,12 +278,20 @@ def evaluate_thetas(
     Raises
     ------
     ValueError
-        ``thetas`` of the wrong shape, or with a row that is not finite (the rows are named).
+        ``thetas`` of the wrong shape, or with a row that is not finite (the rows are named); data the model or
+        set given as ``structure`` was not fitted at (another period, other units).
     """
 
+    # a Model, a ParetoSet or a result carrying a model knows the period and units its θ hold in: data at another
+    # period or in other units are refused, as js and jsf refuse them, not scored with parameters that do not hold
+    fitted = structure if callable(getattr(structure, "check_record", None)) else getattr(structure, "model", None)
     structure = as_structure(structure)
     static = static_info(static, record)
     record = None if record is None else as_record(record, "valid", "record")
+    if callable(getattr(fitted, "check_record", None)):
+        for d in (record, static):
+            if d is not None:
+                fitted.check_record(d)
     one_step = check_bool(one_step, "one_step")
     threads = check_int(threads, "threads", low=1)
     # the one conversion of numbers (text, booleans, None: TypeError; beyond the float range: ValueError)
