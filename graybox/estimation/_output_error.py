@@ -76,7 +76,8 @@ class OEResult:
     JS_choose : float
         Its free-run MSE on the choosing record(s); NaN when none was given.
     chosen_on : str
-        The choosing records' names (``""``: chosen on the fitting records, by the smallest J_S).
+        The choosing records' names (``""``: chosen on the fitting records, by the smallest cost: J_S
+        plus the ridge term).
     start : str
         The start of the winning fit (e.g. ``"least squares (trf)"``, ``"subsample #3 (dogbox)"``).
     starts : pandas.DataFrame
@@ -182,7 +183,7 @@ def output_error(
     choose_on : Record or sequence of Record, optional
         A choosing record, not used for fitting: the iterate (over every start, solver and step)
         with the smallest J_S on it is returned (early stopping). None: the fit with the smallest
-        J_S on the fitting data.
+        cost on the fitting data, the one it minimises (J_S, plus the ridge term when ``ridge`` > 0).
     seed : int
         Seeds the perturbed starts.
     max_nfev, tol : int, float
