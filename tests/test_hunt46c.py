@@ -64,3 +64,41 @@ def test_evaluate_thetas_refuses_data_in_other_units_than_the_front(pumping, sma
     ok = gb.evaluate_thetas(obj, small_front.thetas, pumping)
     assert np.allclose(ok["JS"], gb.evaluate_thetas(small_front.structure, small_front.thetas, pumping)["JS"])
     assert np.all(np.isfinite(gb.evaluate_thetas(small_front.structure, small_front.thetas, rad)["JS"]))
+
+
+_ST = ["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "u(k-2)y(k-1)"]
+_GA = dict(lambdas=[1.0, 0.3], method="ga", options=gb.GAOptions(population=10, generations=2))
+
+
+@pytest.fixture(scope="module")
+def checkpoint_arrays(pumping, tmp_path_factory):
+    path = tmp_path_factory.mktemp("ck") / "front.npz"
+    gb.se_pareto(_ST, pumping, checkpoint=path, **_GA)
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
+
+
+@pytest.mark.parametrize("change", [
+    {"costs": np.array([np.nan, np.nan])},          # a NaN cost taken for a fitted member's
+    {"costs": np.array([0.5])},                     # one cost broadcast over both members
+    {"nfev": np.array([3])},                        # one count broadcast over both members
+    {"done": np.array(1.5)},                        # truncated to 1 member done
+    {"thetas": None},                               # a fitted member's θ not finite
+    {"thetas": np.array(["a", "b"])},               # text: a broadcasting error, not a corrupt file
+    {"costs": np.array([-1.0, 2.0])},
+])
+def test_a_corrupt_se_checkpoint_is_refused_naming_the_file(pumping, checkpoint_arrays, tmp_path, change):
+    arrays = dict(checkpoint_arrays)
+    for k, v in change.items():
+        arrays[k] = np.full_like(arrays["thetas"], np.inf) if v is None else v
+    path = tmp_path / "front.npz"
+    np.savez(path, **arrays)
+    with pytest.raises(gb.estimation._simulation_error.CheckpointError, match="corrupt"):
+        gb.se_pareto(_ST, pumping, checkpoint=path, **_GA)
+
+
+def test_a_whole_se_checkpoint_still_resumes(pumping, checkpoint_arrays, tmp_path):
+    path = tmp_path / "front.npz"
+    np.savez(path, **checkpoint_arrays)
+    again = gb.se_pareto(_ST, pumping, checkpoint=path, **_GA)
+    assert np.array_equal(again.extra["cost"], checkpoint_arrays["costs"])

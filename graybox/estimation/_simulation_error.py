@@ -699,8 +699,9 @@ def read_npz(path: Path) -> dict[str, np.ndarray]:
             return {k: z[k] for k in z.files}
 
 
-def _load_checkpoint(path: Path, meta: dict) -> dict | None:
-    """The state a checkpoint holds, or None (with a warning) when another graybox version wrote it."""
+def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None) -> dict | None:
+    """The state a checkpoint of a sweep of ``n_terms`` parameters (None: as many as it holds) holds, or None (with
+    a warning) when another graybox version wrote it."""
     def unreadable(exc: Exception) -> ValueError:
         return CheckpointError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose "
                                "another checkpoint path")
@@ -741,13 +742,33 @@ def _load_checkpoint(path: Path, meta: dict) -> dict | None:
         raise CheckpointError(f"checkpoint {path} was written by an older graybox (it does not record failed "
                               "members); delete it or choose another checkpoint path")
     try:
-        out = {"thetas": raw["thetas"], "costs": raw["costs"], "done": int(raw["done"]), "nfev": raw["nfev"],
+        out = {"thetas": raw["thetas"], "costs": raw["costs"], "done": raw["done"], "nfev": raw["nfev"],
                "failures": {int(k): str(v) for k, v in json.loads(str(raw["failures"])).items()}}
     except (ValueError, TypeError) as exc:
         raise unreadable(exc) from None
     K = len(meta["lambdas"])
-    if out["thetas"].shape[0] != K or not 0 <= out["done"] <= K or any(not 0 <= k < out["done"] for k in out["failures"]):
-        raise CheckpointError(f"checkpoint {path} is corrupt (inconsistent sizes); delete it or choose another path")
+
+    def corrupt(what: str) -> CheckpointError:
+        return CheckpointError(f"checkpoint {path} is corrupt ({what}); delete it or choose another path")
+
+    # every array as the sweep writes it: a short or mistyped one would be broadcast into the members, a NaN
+    # cost or a non-finite θ taken for a fitted member's
+    th, costs, done, nfev = out["thetas"], out["costs"], out["done"], out["nfev"]
+    n_terms = th.shape[-1] if n_terms is None and th.ndim else n_terms
+    if done.shape != () or done.dtype.kind not in "iu":
+        raise corrupt(f"its count of members done is {done!r}, not an integer")
+    done = out["done"] = int(done)
+    if th.dtype.kind != "f" or th.ndim != 2 or th.shape != (K, n_terms) or costs.dtype.kind != "f" \
+            or costs.shape != (K,) or nfev.dtype.kind not in "iu" or nfev.shape != (K,):
+        raise corrupt(f"arrays of shapes thetas {th.shape}, costs {costs.shape}, nfev {nfev.shape} for "
+                      f"{K} members of {n_terms} terms, or of the wrong kind")
+    if not 0 <= done <= K or any(not 0 <= k < done for k in out["failures"]):
+        raise corrupt("inconsistent sizes")
+    fitted = np.ones(done, bool)
+    fitted[list(out["failures"])] = False
+    if not (np.all(np.isfinite(th[:done][fitted])) and np.all(np.isfinite(costs[:done][fitted]))
+            and np.all(costs[:done][fitted] >= 0) and np.all(nfev[:done] >= 0)):
+        raise corrupt("a fitted member's θ or cost is not finite, or a cost or count is negative")
     return out
 
 
@@ -795,7 +816,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     meta = {"problem": problem.fingerprint(), "method": method, "lambdas": lam.tolist(), "seed": seed,
             "settings": settings, "graybox": graybox_version()}
     path = None if checkpoint is None else checkpoint_path(checkpoint)
-    ck = _load_checkpoint(path, meta) if path is not None and path.exists() else None
+    ck = _load_checkpoint(path, meta, n) if path is not None and path.exists() else None
     if ck is not None:
         done = ck["done"]
         thetas[:done], costs[:done], nfev[:done] = ck["thetas"][:done], ck["costs"][:done], ck["nfev"][:done]
