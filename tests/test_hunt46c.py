@@ -102,3 +102,35 @@ def test_a_whole_se_checkpoint_still_resumes(pumping, checkpoint_arrays, tmp_pat
     np.savez(path, **checkpoint_arrays)
     again = gb.se_pareto(_ST, pumping, checkpoint=path, **_GA)
     assert np.array_equal(again.extra["cost"], checkpoint_arrays["costs"])
+
+
+def _moved(data, y_offset=0.0, u_offset=0.0):
+    rec = lambda r: gb.Record(r.u + u_offset, r.y + y_offset, Ts=r.Ts, name=r.name)
+    s = data.static
+    return gb.Dataset(rec(data.ident), rec(data.valid), gb.StaticPoints(s.ubar + u_offset, s.ybar + y_offset,
+                                                                       uncertainty=s.uncertainty))
+
+
+@pytest.mark.parametrize("y_offset", [1e4, -1e4])
+def test_the_ga_front_of_a_closed_structure_does_not_depend_on_the_outputs_zero(pumping, y_offset):
+    # the GA's individuals whose free runs left the default bound (10⁶ times the run's own size) got an infinite cost
+    # on y in mlc but a finite one on y + 1e4 (a bound 500 times wider): other individuals were ranked and bred, and
+    # the front differed (J_SF up to 15 times); the free runs are now made on the centred signals
+    kw = dict(lambdas=[1.0, 0.5, 0.1, 0.01], method="ga", options=gb.GAOptions(population=30, generations=10), seed=1)
+    ref = gb.se_pareto(_ST, pumping, **kw)
+    moved = gb.se_pareto(_ST, _moved(pumping, y_offset=y_offset), **kw)
+    np.testing.assert_allclose(moved.JS, ref.JS, rtol=1e-6)
+    np.testing.assert_allclose(moved.JSF, ref.JSF, rtol=1e-6)
+
+
+def test_the_se_problem_judges_divergence_alike_at_every_offset(pumping):
+    from graybox.estimation._simulation_error import SEProblem
+
+    P0 = SEProblem(_ST, [pumping.ident], pumping.static)
+    P1 = SEProblem(_ST, [_moved(pumping, y_offset=1e4).ident], _moved(pumping, y_offset=1e4).static)
+    pop0 = P0.random_ls(np.random.default_rng(0), 200, 30)
+    pop1 = P1.from_z(P0.to_z(pop0))  # the same models at the other offset
+    c0, c1 = P0.cost(pop0, 1.0), P1.cost(pop1, 1.0)
+    assert not np.all(np.isfinite(c0))  # some individuals diverge: the case at stake
+    np.testing.assert_array_equal(np.isfinite(c0), np.isfinite(c1))
+    np.testing.assert_allclose(c1[np.isfinite(c1)], c0[np.isfinite(c0)], rtol=1e-6)

@@ -198,14 +198,27 @@ class SEProblem:
         """
         self.z_map = self.z_inv = self.z_shift = self.offsets = None
         self.z_psi, self.z_target = self.psi / self.scale, self.target
+        # the records the optimisers' free runs are made on, their input products, and the divisor of z that gives
+        # the parameters of those runs (None: θ, on the records as given)
+        self.run_records, self.run_U, self.run_scale = self.records, self.U, None
         # a problem that only scores θ's fitted elsewhere (a choosing record) never moves in z: no centred basis
         if scored_only or is_dask_data(self.records) or not is_closed(self.structure) or self._held_input():
             return
         off = signal_offsets(self.records)
         A, t = shift_map(self.structure, off)
         Ainv = shift_map(self.structure, {k: -v for k, v in off.items()})[0]
-        psi_c, target_c = stacked_regressors(self.structure, centred_data(self.records, off))
+        centred = centred_data(self.records, off)
+        psi_c, target_c = stacked_regressors(self.structure, centred)
         s_c = column_scales(psi_c)
+        # the free runs too are made on the centred signals, with the centred parameters z / s_c: the same run less
+        # the output's offset, so that whether a candidate diverges (the default bound, 10⁶ times the run's own size)
+        # does not depend on where the output's zero is. On the raw signals a run that left a 2e7 bound around
+        # y ≈ 20 stayed inside the 1e10 one of y + 1e4: the GA then ranked other individuals and its fronts at
+        # another offset differed (J_SF up to 15 times)
+        c = self.code
+        self.run_records, self.run_scale = centred, s_c
+        self.run_U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L)
+                      for r in centred]
         self.offsets, self.z_shift = off, t
         self.z_map = A / s_c  # θ = z_map @ z + z_shift
         self.z_inv = s_c[:, None] * Ainv  # z = z_inv @ (θ − z_shift)
@@ -232,6 +245,13 @@ class SEProblem:
         if self.z_map is None:
             return z / self.scale
         return z @ self.z_map.T + self.z_shift
+
+    def run_theta(self, thetas: np.ndarray, z: np.ndarray | None = None) -> np.ndarray:
+        """The parameters of the optimisers' free runs on :attr:`run_records`: θ, or for a centred problem the
+        centred parameters z / s_c (from ``z`` when given: no round trip through raw θ)."""
+        if self.run_scale is None:
+            return np.asarray(thetas, float)
+        return (self.to_z(thetas) if z is None else np.asarray(z, float)) / self.run_scale
 
     def jac_z(self, J: np.ndarray, w: float | np.floating) -> np.ndarray:
         """``J`` (rows of ∂r/∂θ) as ∂r/∂z, divided by ``w``."""
@@ -332,14 +352,17 @@ class SEProblem:
         return not np.isfinite(self.js(np.asarray(theta, float)[None, :])[0])
 
     # -- objectives -------------------------------------------------------------------
-    def js(self, thetas: np.ndarray, threads: int = 1, *, bounded: bool = True) -> np.ndarray:
+    def js(self, thetas: np.ndarray, threads: int = 1, *, bounded: bool = True, z: np.ndarray | None = None
+           ) -> np.ndarray:
         """J_S of each row of ``thetas``, shape (P,): inf where a free run leaves :func:`graybox.simulate`'s
         default bound (J_S as :func:`graybox.js` and the fronts report it, and as the optimisers' costs
         take it: a slowly diverging run, y(k) = 1.01 y(k−1) + … over 3000 samples, has a huge finite sum
         of squares that would still beat an infinite cost). ``bounded=False``: inf only where a run
-        overflows."""
-        sse = sum(batch_sse(self.code, thetas, record_inputs(r, self.code.inputs), r.y, self.L, threads, U,
-                            bounded=bounded) for r, U in zip(self.records, self.U))
+        overflows. ``z``: the rows' optimiser coordinates, when the caller has them. The runs are made on
+        :attr:`run_records` (the centred signals of a centred problem: the same errors)."""
+        th = np.atleast_2d(self.run_theta(thetas, z))
+        sse = sum(batch_sse(self.code, th, record_inputs(r, self.code.inputs), r.y, self.L, threads, U,
+                            bounded=bounded) for r, U in zip(self.run_records, self.run_U))
         js = sse / self.n_dyn
         return np.where(np.isfinite(js), js, np.inf)
 
@@ -386,9 +409,10 @@ class SEProblem:
             v = np.mean((yb - self.static.ybar) ** 2, axis=1)
         return np.where(np.isfinite(v), v, np.inf)
 
-    def cost(self, thetas: np.ndarray, lam1: float, threads: int = 1) -> np.ndarray:
-        """λ1 J_S + λ2 J_SF with λ2 = 1 − λ1, shape (P,); inf for a diverging member."""
-        js = self.js(thetas, threads)
+    def cost(self, thetas: np.ndarray, lam1: float, threads: int = 1, *, z: np.ndarray | None = None) -> np.ndarray:
+        """λ1 J_S + λ2 J_SF with λ2 = 1 − λ1, shape (P,); inf for a diverging member. ``z``: the rows'
+        optimiser coordinates, when the caller has them."""
+        js = self.js(thetas, threads, z=z)
         c = lam1 * js
         yb = None
         if lam1 < 1.0:
@@ -397,7 +421,8 @@ class SEProblem:
                 jsf = np.mean((yb - self.static.ybar) ** 2, axis=1)
             c = c + (1.0 - lam1) * np.where(np.isfinite(jsf), jsf, np.inf)
         if self.ridge > 0:
-            c = c + self.ridge * np.mean((self.to_z(np.atleast_2d(thetas)) - self.ridge_ref) ** 2, axis=1)
+            zz = self.to_z(np.atleast_2d(thetas)) if z is None else np.atleast_2d(z)
+            c = c + self.ridge * np.mean((zz - self.ridge_ref) ** 2, axis=1)
         c = np.where(np.isfinite(c), c, np.inf)
         if self.margin is not None:
             fin = np.isfinite(c)
@@ -585,7 +610,7 @@ def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, 
     pop = problem.to_z(init) if zs else init
 
     def cost_of(pop):
-        return problem.cost(problem.from_z(pop) if zs else pop, lam1, threads)
+        return problem.cost(problem.from_z(pop), lam1, threads, z=pop) if zs else problem.cost(pop, lam1, threads)
     cost = cost_of(pop)
     best_hist = [np.min(cost)]
     n = opts.population
@@ -969,9 +994,10 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     n_ridge = th.size if problem.ridge > 0 else 0
     r = np.empty(problem.n_dyn + M + n_ridge)
     a = 0
-    for rec in problem.records:
+    th_run = problem.run_theta(th, z)
+    for rec in problem.run_records:  # the centred signals of a centred problem: the same errors (SEProblem.js)
         # simulate's default bound: a run that leaves it is NaN from there, so its residuals are inf (as its J_S)
-        y = simulate_one(problem.code, th, record_inputs(rec, problem.code.inputs), rec.y[:L], L, None)
+        y = simulate_one(problem.code, th_run, record_inputs(rec, problem.code.inputs), rec.y[:L], L, None)
         b = a + y.size - L
         np.subtract(y[L:], rec.y[L:], out=r[a:b])  # written in place: long records make no copies
         a = b
@@ -1004,19 +1030,18 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     n = th.size
     L = problem.L
     w1 = np.sqrt(lam1 / problem.n_dyn)
-    colw = w1 / problem.scale if problem.z_map is None else w1 * problem.z_map
+    # the runs' parameters are θ = z / scale, or on the centred records z / s_c: ∂ŷ/∂z is S over that divisor
+    colw = w1 / (problem.scale if problem.run_scale is None else problem.run_scale)
+    th_run = problem.run_theta(th, z)
     T = np.zeros((0, n + 1))
-    for rec, U in zip(problem.records, problem.U):
-        for k0, k1, yh, S in free_run_sensitivity_blocks(problem.code, th, U, rec.y[:L], L, _BLOCK):
+    for rec, U in zip(problem.run_records, problem.run_U):
+        for k0, k1, yh, S in free_run_sensitivity_blocks(problem.code, th_run, U, rec.y[:L], L, _BLOCK):
             m = T.shape[0]
             b = k1 - k0
             # column-major, as LAPACK takes it: factored in place, with no copy of the block
             work = np.empty((m + b, n + 1), order="F")
             work[:m] = T
-            if problem.z_map is None:
-                np.multiply(S, colw, out=work[m:, :n])
-            else:  # ∂ŷ/∂z = ∂ŷ/∂θ · ∂θ/∂z
-                np.matmul(S, colw, out=work[m:, :n])
+            np.multiply(S, colw, out=work[m:, :n])
             np.subtract(yh[k0:k1], rec.y[k0:k1], out=work[m:, n])
             work[m:, n] *= w1
             if not np.all(np.isfinite(work)):
