@@ -134,3 +134,9 @@ def test_the_se_problem_judges_divergence_alike_at_every_offset(pumping):
     assert not np.all(np.isfinite(c0))  # some individuals diverge: the case at stake
     np.testing.assert_array_equal(np.isfinite(c0), np.isfinite(c1))
     np.testing.assert_allclose(c1[np.isfinite(c1)], c0[np.isfinite(c0)], rtol=1e-6)
+
+
+def test_evaluate_of_no_model_says_so(pumping):
+    # a bare KeyError: 'n_params' from building the empty table
+    with pytest.raises(ValueError, match="empty"):
+        gb.evaluate({}, pumping)

@@ -206,6 +206,8 @@ def evaluate(
                         f"{type(data).__name__}; score a single record with graybox.j1 and graybox.js")
     if not isinstance(models, Mapping):
         raise TypeError(f"models must be a mapping name -> model; got {type(models).__name__}")
+    if not models:  # said here: the table of no model failed building its n_params column with a bare KeyError
+        raise ValueError("models: an empty mapping; give at least one model to score (name -> model)")
     sp = static_info(static, data)
     horizons = sorted({check_int(k, "horizons", low=1) for k in check_sequence(horizons, "horizons", "a sequence of int")})
     rows = {}
