@@ -140,3 +140,10 @@ def test_evaluate_of_no_model_says_so(pumping):
     # a bare KeyError: 'n_params' from building the empty table
     with pytest.raises(ValueError, match="empty"):
         gb.evaluate({}, pumping)
+
+
+def test_an_empty_ubar_is_named(pumping):
+    # said 'fit to pumping static points: no static points', of the curve's source and not of the argument
+    curve = gb.StaticCurve.fit(pumping.static, degree=2)
+    with pytest.raises(ValueError, match="ubar is empty"):
+        gb.se_pareto(_ST, pumping.ident, curve, lambdas=[1.0, 0.3], method="gradient", ubar=[])

@@ -239,6 +239,8 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
     if not surface:
         ub = (np.linspace(static.domain[0], static.domain[1], CURVE_LEVELS) if ubar is None
               else as_1d_finite(ubar, "ubar"))
+        if not ub.size:  # said of ubar: the sampled points' own refusal named the curve's source, not the argument
+            raise ValueError(f"ubar is empty: give the input levels where to sample the {kind} (shape (K,), K >= 1)")
         # a curve is of one input, whatever the records (a Record, a Dataset, a sequence) call it
         first = data[0] if isinstance(data, (list, tuple)) and data else data
         names = getattr(first, "input_names", None) or ("u",)
