@@ -147,3 +147,17 @@ def test_an_empty_ubar_is_named(pumping):
     curve = gb.StaticCurve.fit(pumping.static, degree=2)
     with pytest.raises(ValueError, match="ubar is empty"):
         gb.se_pareto(_ST, pumping.ident, curve, lambdas=[1.0, 0.3], method="gradient", ubar=[])
+
+
+def test_bootstrap_refuses_a_parallel_map_not_entered(pumping):
+    # README: parallel_map(workers=2) 'as a map (e.g. for bootstrap_decision(..., map=pmap))'; given without `with`,
+    # the bootstrap ran the sweep on the original data and then failed with 'ContextDecorator.__call__() takes 2
+    # positional arguments but 3 were given'
+    pmap = gb.experiments.parallel_map(executor="inprocess")
+    with pytest.raises(TypeError, match="with graybox.experiments.parallel_map"):
+        gb.bootstrap_decision(_ST, pumping, estimator="pe", lambdas=[1.0, 0.1], n_boot=2, map=pmap,
+                              options={"solver": "closed"}, fallback="min_jsf")
+    with gb.experiments.parallel_map(executor="inprocess") as entered:  # the map it makes is taken
+        boot = gb.bootstrap_decision(_ST, pumping, estimator="pe", lambdas=[1.0, 0.1], n_boot=2, map=entered,
+                                     options={"solver": "closed"}, fallback="min_jsf")
+    assert len(boot.frequencies()) >= 1

@@ -456,6 +456,12 @@ def bootstrap_decision(
         check_choice(fallback, "fallback", FALLBACKS)
     if map is not None and not callable(map):
         raise TypeError(f"map must be a callable map(job, ids) (e.g. an executor's .map), got {map!r}")
+    if hasattr(map, "__enter__") and hasattr(map, "__exit__") and not hasattr(map, "__self__"):
+        # parallel_map(...) not entered: callable as a decorator, it failed only after the sweep on the original
+        # data, with "ContextDecorator.__call__() takes 2 positional arguments but 3 were given"
+        raise TypeError(f"map is a context manager ({type(map).__name__}), not the map it makes: run the bootstrap "
+                        "inside it, e.g. `with graybox.experiments.parallel_map(workers=2) as pmap: "
+                        "bootstrap_decision(..., map=pmap)`")
     if not any(len(r) >= block_length for r in recs):
         raise ValueError(f"block_length {block_length} is longer than every record ({[len(r) for r in recs]} samples)")
     short = [f"{r.name or 'record'} ({len(r)} samples)" for r in recs if len(r) < block_length]
