@@ -161,3 +161,21 @@ def test_bootstrap_refuses_a_parallel_map_not_entered(pumping):
         boot = gb.bootstrap_decision(_ST, pumping, estimator="pe", lambdas=[1.0, 0.1], n_boot=2, map=entered,
                                      options={"solver": "closed"}, fallback="min_jsf")
     assert len(boot.frequencies()) >= 1
+
+
+@pytest.mark.parametrize("stall", [1, 3])
+def test_the_ga_stops_after_stall_generations_without_improvement(stall):
+    # GAOptions: 'stops ... when the best cost has not improved by a relative 1e-9 for stall generations'; it ran
+    # stall + 1 (the first window, from the initial population, was never looked at)
+    from graybox.estimation._simulation_error import _ga_run
+
+    class Flat:  # every individual costs the same: no generation ever improves
+        z_map = None
+
+        def cost(self, pop, lam1, threads=1):
+            return np.ones(len(pop))
+
+    init = np.random.default_rng(0).standard_normal((10, 3))
+    _, _, g = _ga_run(Flat(), 1.0, init, gb.GAOptions(population=10, generations=20, stall=stall),
+                      np.random.default_rng(1), 1)
+    assert g == stall

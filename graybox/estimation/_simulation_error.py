@@ -636,7 +636,7 @@ def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, 
         pop = np.vstack([elite, kids])
         cost = cost_of(pop)
         best_hist.append(np.min(cost))
-        if opts.stall and g > opts.stall:
+        if opts.stall and g >= opts.stall:  # best_hist[0] is the initial population's: g >= stall has stall steps
             old = best_hist[-opts.stall - 1]
             if old - best_hist[-1] <= 1e-9 * abs(old):
                 break
