@@ -179,3 +179,24 @@ def test_the_ga_stops_after_stall_generations_without_improvement(stall):
     _, _, g = _ga_run(Flat(), 1.0, init, gb.GAOptions(population=10, generations=20, stall=stall),
                       np.random.default_rng(1), 1)
     assert g == stall
+
+
+def test_a_checkpoint_of_inputs_named_in_another_order_is_not_resumed(tmp_path):
+    # the same arrays with the inputs' names swapped (a file's columns mislabelled, then put right) had the same
+    # fingerprint: the corrected call resumed the mislabelled sweep's members, silently
+    data = gb.load_pumping_miso()
+    st = ["1", "y(k-1)", "y(k-2)", "u1(k-2)", "u2(k-2)", "u1(k-2)^2", "u1(k-2)u2(k-2)", "u2(k-2)^2", "u1(k-2)y(k-1)"]
+    kw = dict(lambdas=[1.0, 0.1], method="ga", margin=None, options=gb.GAOptions(population=10, generations=2),
+              theta0=None)
+    swapped = lambda r: gb.Record(r.u, r.y, Ts=r.Ts, input_names=("u2", "u1"), units=r.units, name=r.name)
+    s = data.static
+    wrong = gb.Dataset(swapped(data.ident), swapped(data.valid),
+                       gb.StaticPoints(s.ubar, s.ybar, uncertainty=s.uncertainty, input_names=("u2", "u1"),
+                                       units=s.units))
+    ck = tmp_path / "front.npz"
+    gb.se_pareto(st, wrong, checkpoint=ck, **kw)
+    with pytest.raises(ValueError, match="another problem"):
+        gb.se_pareto(st, data, checkpoint=ck, **kw)
+    again = tmp_path / "again.npz"  # the default names' checkpoint resumes as before
+    first = gb.se_pareto(st, data, checkpoint=again, **kw)
+    assert np.array_equal(gb.se_pareto(st, data, checkpoint=again, **kw).thetas, first.thetas)

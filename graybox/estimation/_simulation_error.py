@@ -284,6 +284,12 @@ class SEProblem:
         static = [] if self.static is None else [self.static.ubar, self.static.ybar]
         for a in [x for r in self.records for x in (r.u, r.y)] + static:
             h.update(np.ascontiguousarray(a).tobytes())
+        # which column is which input: the same arrays with the inputs named in another order are another problem
+        # (a file's columns mislabelled, then the names put right, resumed the mislabelled sweep's members). Said
+        # only for names other than the default u1 … um, so that the checkpoints of such records stay valid
+        for names in [r.input_names for r in self.records] + ([] if self.static is None else [self.static.input_names]):
+            if len(names) > 1 and tuple(names) != tuple(f"u{i + 1}" for i in range(len(names))):
+                h.update(f"inputs={list(names)}".encode())
         if self.margin is not None:  # a checkpoint without a margin stays valid
             h.update(f"margin={self.margin!r}".encode())
         if self.ridge > 0:
