@@ -200,3 +200,11 @@ def test_a_checkpoint_of_inputs_named_in_another_order_is_not_resumed(tmp_path):
     again = tmp_path / "again.npz"  # the default names' checkpoint resumes as before
     first = gb.se_pareto(st, data, checkpoint=again, **kw)
     assert np.array_equal(gb.se_pareto(st, data, checkpoint=again, **kw).thetas, first.thetas)
+
+
+def test_a_failed_ga_member_says_its_individuals_lay_outside_the_margin(pumping):
+    # said 'every free run diverged' of individuals whose free runs were bounded but outside the stability margin
+    with pytest.raises(ValueError, match="outside the stability margin") as err:
+        gb.se_pareto(_ST, pumping, lambdas=[1.0, 0.3], method="ga", margin=0.3, theta0=None,
+                     options=gb.GAOptions(population=10, generations=2))
+    assert "every free run diverged" not in str(err.value)

@@ -976,15 +976,36 @@ def ga_front(
             init = np.vstack([np.array(given), init])
         th, c, g = _ga_run(problem, lam1, init, options, rng, threads)
         if not np.isfinite(c):
-            raise _Failed(f"no individual of the GA run at λ1 = {lam1:g} had a finite cost after {g} generation(s): "
-                          "every free run diverged" + ("" if lam1 == 1.0 else " or had an unstable or undefined "
-                                                       "equilibrium at some static point"))
+            raise _Failed(f"no individual of the GA run at λ1 = {lam1:g} had a finite cost after {g} generation(s); "
+                          f"of its {len(init)} initial individuals {_population_faults(problem, init, lam1)}")
         return th, c, options.population * (g + 1)
 
     settings = dict(asdict(options), theta0=None if first is None else [float(v) for v in first])
     if extra.shape[0]:  # only when given: checkpoints of the paper's GA stay valid
         settings["starts"] = extra.tolist()
     return _sweep(problem, lam, "ga", settings, seed, checkpoint, progress, step)
+
+
+def _population_faults(problem: SEProblem, pop: np.ndarray, lam1: float) -> str:
+    """Why the individuals ``pop`` (P, n) have no finite cost at λ1, counted by reason, in words. (Every reason
+    was once said as 'every free run diverged', also of runs that stayed bounded outside the stability margin.)"""
+    div = ~np.isfinite(problem.js(pop))
+    parts = [f"{int(div.sum())} diverged (free run)"] if div.any() else []
+    rest = ~div
+    yb = None
+    if lam1 < 1.0 and rest.any():
+        yb = problem.static_outputs(pop[rest], scored=True)
+        undefined = ~np.all(np.isfinite(yb), axis=1)
+        if undefined.any():
+            parts.append(f"{int(undefined.sum())} had an unstable or undefined equilibrium at some static point")
+        rest[np.flatnonzero(rest)[undefined]] = False
+        yb = yb[~undefined]
+    if problem.margin is not None and rest.any():
+        out = ~problem.within_margin(pop[rest], yb)
+        if out.any():
+            parts.append(f"{int(out.sum())} lay outside the stability margin (a local model's spectral radius above "
+                         f"1 − margin = {1 - problem.margin:g})")
+    return ", ".join(parts) if parts else "none had a finite cost"
 
 
 #: Samples per block of the streamed QR of the Jacobian (the block stays in cache).
