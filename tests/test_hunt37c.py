@@ -168,3 +168,10 @@ def test_a_semp_row_does_not_depend_on_the_other_sizes_asked():
     assert few.table.loc["semp-6", "terms"] == every.table.loc["semp-6", "terms"]
     assert {"speed(k-1)volts(k-1)", "volts(k-2)", "y(k-1)"} <= set(map(str, few.structure_of("semp-6")))
     assert few.chosen["JS_test"] < 1.5 * 100.0 ** 2  # the noise's variance: the system's own terms
+
+
+def test_ga_random_individuals_need_at_least_one_sample():
+    # was accepted: a least squares on no rows made every random individual the zero model
+    with pytest.raises(ValueError, match="random_samples"):
+        gb.GAOptions(random_samples=0)
+    assert gb.GAOptions(random_samples=1).random_samples == 1

@@ -556,7 +556,8 @@ class GAOptions:
     elite : int
         Best individuals copied unchanged into the next generation.
     random_samples : int
-        Samples of the identification record in each random individual's least squares (30).
+        Samples of the identification record in each random individual's least squares (30; at least 1:
+        on none, every random individual would be the zero model).
     selective_pressure : float
         Linear ranking pressure in [1, 2] for the fitness that stochastic universal sampling uses.
     """
@@ -585,7 +586,7 @@ class GAOptions:
         put("crossover_ratio", check_real(self.crossover_ratio, "GAOptions: crossover_ratio", low=0))
         put("mutation_scale", check_real(self.mutation_scale, "GAOptions: mutation_scale", low=0))
         put("elite", check_int(self.elite, "GAOptions: elite", low=0, high=self.population - 1))
-        put("random_samples", check_int(self.random_samples, "GAOptions: random_samples", low=0))
+        put("random_samples", check_int(self.random_samples, "GAOptions: random_samples", low=1))
         put("selective_pressure", check_real(self.selective_pressure, "GAOptions: selective_pressure", low=1, high=2))
 
 
