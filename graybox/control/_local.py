@@ -125,10 +125,20 @@ def jacobian_rows(structure: Structure, inputs: tuple[str, ...], thetas: np.ndar
     return local_coefficients(structure, tuple(inputs), thetas, ybar, ubar)  # type: ignore[return-value]
 
 
-def _dominant(poles: np.ndarray, Ts: float) -> tuple[complex, float, float]:
-    """(dominant pole, its time constant (s), its damping) of one set of poles."""
+def _unit_pole(a: np.ndarray) -> bool:
+    """Whether z = 1 is a pole of z^L − a_1 z^(L−1) − … − a_L to rounding: 1 − Σ a_l vanishes to the rounding
+    error of the sum. So at a fold of the static curve (a double root of eq. (5), where 1 − Σ a_l = −∂F/∂ȳ = 0),
+    whatever rounding made of the a_l: Σ a_l = 1 − 2⁻⁵² passes the Schur–Cohn test, and is no stable equilibrium."""
+    return bool(a.size) and abs(1.0 - a.sum()) <= 4 * (a.size + 1) * np.finfo(float).eps * (1.0 + np.abs(a).sum())
+
+
+def _dominant(poles: np.ndarray, Ts: float, unit: bool = False) -> tuple[complex, float, float]:
+    """(dominant pole, its time constant (s), its damping) of one set of poles (``unit``: one is z = 1 to rounding,
+    :func:`_unit_pole`; the slowest mode then never decays)."""
     if poles.size == 0 or not np.any(poles):
         return 0j, 0.0, 1.0  # a finite impulse response: no recursion, nothing to wait for
+    if unit and np.abs(poles).max() <= 1.0:
+        return 1 + 0j, float("inf"), 0.0
     mods = np.abs(poles)
     cand = poles[mods >= mods.max() * (1 - 1e-12)]
     # of poles of one modulus the least damped, whatever order the eigensolver gave them in: of a conjugate
@@ -218,7 +228,7 @@ class LocalModel:
             raise ValueError("status 'reached' needs the equilibrium ybar")
         if self.ybar is not None and self.status in ("reached", "no stable equilibrium"):
             # the one says the equilibrium is stable, the other that none is: the poles must agree
-            stable = bool(schur_stable(a)) if a.size else True
+            stable = (bool(schur_stable(a)) and not _unit_pole(a)) if a.size else True
             if stable != (self.status == "reached"):
                 said = "a stable equilibrium" if self.status == "reached" else "an unstable equilibrium"
                 poles = "every pole inside the unit circle" if stable else "poles on or outside the unit circle"
@@ -268,13 +278,14 @@ class LocalModel:
     def stable(self) -> bool:
         """Every pole strictly inside the unit circle (the package's Schur–Cohn test)."""
         self._need()
-        return bool(schur_stable(self.a)) if self.a.size else True
+        return (bool(schur_stable(self.a)) and not _unit_pole(self.a)) if self.a.size else True
 
     @property
     def spectral_radius(self) -> float:
         """Largest pole modulus (0 without output lags)."""
         p = self.poles
-        return float(np.abs(p).max()) if p.size else 0.0
+        rho = float(np.abs(p).max()) if p.size else 0.0
+        return max(rho, 1.0) if _unit_pole(self.a) else rho  # z = 1 to rounding: a fold's pole
 
     def zeros(self, input: int | str = 0) -> np.ndarray:
         """Zeros of B_i away from z = 0: roots of Σ_l b_il z^(L_u − l) other than 0, complex (input ``input``).
@@ -310,14 +321,14 @@ class LocalModel:
     def dc_gain(self) -> np.ndarray:
         """Σ_l b_il / (1 − Σ_l a_l), shape (m,): output units per unit of each input (= the static gain)."""
         self._need()
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return self.b.sum(axis=1) / (1.0 - self.a.sum())
+        with np.errstate(divide="ignore", invalid="ignore"):  # a pole at z = 1 to rounding: the gain is infinite
+            return self.b.sum(axis=1) / (0.0 if _unit_pole(self.a) else 1.0 - self.a.sum())
 
     @property
     def dominant_pole(self) -> complex:
         """The pole of largest modulus (of several of that modulus the least damped: of a complex pair the one
         with positive angle, of ±p the negative one)."""
-        return _dominant(self.poles, self.Ts)[0]
+        return _dominant(self.poles, self.Ts, _unit_pole(self.a))[0]
 
     @property
     def time_constant(self) -> float:
@@ -329,13 +340,13 @@ class LocalModel:
         model can carry a pole near −1 with a zero beside it, a τ longer than the time its step
         takes to settle. Read :meth:`settling_time` and :meth:`step` before tuning on it.
         """
-        return _dominant(self.poles, self.Ts)[1]
+        return _dominant(self.poles, self.Ts, _unit_pole(self.a))[1]
 
     @property
     def damping(self) -> float:
         """ζ of the dominant pole's continuous equivalent s = ln(p)/Ts (1 for a positive real pole,
         below 1 for a complex or negative one; 0 on the unit circle, NaN outside it)."""
-        return _dominant(self.poles, self.Ts)[2]
+        return _dominant(self.poles, self.Ts, _unit_pole(self.a))[2]
 
     def step(self, n_samples: int, input: int | str = 0) -> np.ndarray:
         """Response Δy(k), k = 0 … n−1, to a unit step of input ``input`` applied from k = 0, shape (n,).
@@ -394,7 +405,7 @@ class LocalModel:
         i = self._input_index(input)
         g = float(self.dc_gain[i])
         rho = self.spectral_radius
-        if rho >= 1.0 or not np.isfinite(g):
+        if rho >= 1.0 or not np.isfinite(g) or _unit_pole(self.a):
             return float("inf")
         if g == 0.0:
             return float("nan")
@@ -864,7 +875,7 @@ def _summary(lm: LocalModel, settling: bool = True) -> tuple[float, np.ndarray, 
     m = len(lm.input_names)
     if not lm.exists:
         return np.nan, np.full(m, np.nan), np.nan, np.nan, np.nan, np.nan
-    _, tau, zeta = _dominant(lm.poles, lm.Ts)
+    _, tau, zeta = _dominant(lm.poles, lm.Ts, _unit_pole(lm.a))
     return float(lm.ybar), lm.dc_gain, tau, zeta, lm.spectral_radius, lm.settling_time(0) if settling else np.nan
 
 

@@ -393,10 +393,57 @@ def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np
     ndarray, shape (P, M, D)
         Real roots in ascending order, NaN-padded (D = max(largest power of y, 1)).
     """
+    return _roots_and_folds(structure, thetas, ubar)[0]
+
+
+def _roots_and_folds(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`real_roots`, and which of them are multiple roots (folds of the static curve), shape (P, M, D) each."""
     coef = static_coefficients(structure, thetas, ubar)
-    if coef.shape[0] <= 4:
-        return real_roots_upto_cubic(coef)
-    return _real_roots_companion(coef)
+    roots = real_roots_upto_cubic(coef) if coef.shape[0] <= 4 else _real_roots_companion(coef)
+    return _merge_multiple(coef, roots)
+
+
+def _merge_multiple(coef: np.ndarray, roots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One root for each multiple root of eq. (5), and where each is one (a fold: ∂F/∂ȳ = 0, so Σ a_l = 1).
+
+    A double root comes out of a solver as two equal roots, or as two a rounding error apart (of
+    relative size √eps, a companion matrix's). Adjacent roots x1 < x2 are one when the polynomial at
+    their midpoint is zero to its rounding error (2 (D + 1) eps Σ |c_p| |x|^p, Horner's bound): the
+    coefficients cannot tell them apart from a double root (two distinct roots δ apart leave
+    F''δ²/8 there). Units-free: both sides scale alike. ``coef`` (D + 1, P, M), ``roots`` (P, M, D) sorted,
+    NaN-padded.
+    """
+    D = roots.shape[-1]
+    fold = np.zeros(roots.shape, dtype=bool)
+    if D < 2 or not np.any(np.isfinite(roots[..., 1])):
+        return roots, fold
+    c = np.moveaxis(coef, 0, -1)[..., None, :]  # (P, M, 1, D + 1)
+    x1, x2 = roots[..., :-1], roots[..., 1:]
+    with np.errstate(all="ignore"):
+        mid = 0.5 * x1 + 0.5 * x2
+        # each term c_p mid^p scaled by one power of two (exact) so that the largest is near 1: roots near 1e200
+        # have terms beyond the float range, whose inf − inf would say nothing
+        xm, xe = np.frexp(np.where(np.isfinite(mid), mid, 0.0))
+        cm, ce = np.frexp(c)
+        p = np.arange(coef.shape[0])
+        ex = np.where(c != 0, ce + p * xe[..., None], np.iinfo(np.int32).min)
+        terms = np.ldexp(cm, ex - ex.max(axis=-1, keepdims=True)) * xm[..., None] ** p
+        f = np.sum(terms, axis=-1)
+        size = np.sum(np.abs(terms), axis=-1)
+        same = (x1 == x2) | (np.abs(f) <= 2 * (D + 1) * np.finfo(float).eps * size)
+    same &= np.isfinite(x1) & np.isfinite(x2)
+    if not same.any():
+        return roots, fold
+    out = roots.copy()
+    out[..., :-1] = np.where(same, mid, out[..., :-1])  # a double root split by rounding lies between its halves
+    drop = np.zeros(roots.shape, dtype=bool)
+    drop[..., 1:] = same  # the upper of each merged pair goes; a triple root keeps its lowest
+    fold[..., :-1] |= same
+    fold[..., 1:] |= same
+    fold &= ~drop
+    out[drop] = np.nan
+    order = np.argsort(out, axis=-1, kind="stable")  # NaN last
+    return np.take_along_axis(out, order, -1), np.take_along_axis(fold, order, -1)
 
 
 def _linear_coefficients(structure: Structure, theta: np.ndarray, ybar: float, ubar: float) -> np.ndarray:
@@ -459,6 +506,13 @@ def _roots_stable(structure: Structure, thetas: np.ndarray, ubar: np.ndarray, ro
     """:func:`stable_mask` of every root: roots (P, M, D) → (P, M, D), in one call."""
     P, M, D = roots.shape
     return stable_mask(structure, thetas, np.repeat(ubar, D), roots.reshape(P, M * D)).reshape(P, M, D)
+
+
+def roots_and_stability(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`real_roots` (P, M, D) and their stability (P, M, D). A multiple root (a fold) is not stable: there
+    Σ a_l = 1, a pole at z = 1, whatever rounding makes of Σ a_l."""
+    roots, fold = _roots_and_folds(structure, thetas, ubar)
+    return roots, _roots_stable(structure, thetas, ubar, roots) & ~fold
 
 
 @dataclass(frozen=True)
@@ -554,14 +608,17 @@ def folded_equilibria(structure: Structure, theta: np.ndarray, ub: float) -> lis
     th = np.asarray(theta, float)[None, :]
     if is_rational(structure):
         yb = _rational_roots(structure, th, np.array([ub]))[0]
+        fold = np.zeros(yb.shape, dtype=bool)  # eq. (6) is linear in ȳ: one simple root
     else:
-        yb = real_roots(structure, th, np.array([ub]))[0, 0]
-    yb = yb[np.isfinite(yb)]
+        yb, fold = (v[0, 0] for v in _roots_and_folds(structure, th, np.array([ub])))
+    keep = np.isfinite(yb)
+    yb, fold = yb[keep], fold[keep]
     if yb.size == 0:
         return []
-    stable = stable_mask(structure, th, np.full(yb.size, ub), yb[None, :])[0]
-    return [Equilibrium(ub, float(y), bool(s), spectral_radius(_linear_coefficients(structure, th[0], float(y), ub)))
-            for y, s in zip(yb, stable)]
+    stable = stable_mask(structure, th, np.full(yb.size, ub), yb[None, :])[0] & ~fold
+    # a fold's pole is at z = 1 (Σ a_l = 1): its modulus at least 1 whatever rounding made of it
+    rho = [spectral_radius(_linear_coefficients(structure, th[0], float(y), ub)) for y in yb]
+    return [Equilibrium(ub, float(y), bool(s), max(r, 1.0) if f else r) for y, s, r, f in zip(yb, stable, rho, fold)]
 
 
 # -- rational structures: eq. (6) --------------------------------------------------------------------
@@ -938,8 +995,7 @@ def reached_equilibria(structure: Structure, thetas: np.ndarray, ubar: np.ndarra
         status = np.where(np.isfinite(yb), np.where(stable, REACHED, NONE_STABLE), NO_EQUILIBRIUM).astype(np.int8)
         yb = np.where(stable, yb, np.nan)
     else:
-        roots = real_roots(structure, th_ok, ub)  # (P, M, D)
-        stab = _roots_stable(structure, th_ok, ub, roots)
+        roots, stab = roots_and_stability(structure, th_ok, ub)  # (P, M, D) each
         has_root = np.any(np.isfinite(roots), axis=-1)
         status = np.where(has_root, NONE_STABLE, NO_EQUILIBRIUM).astype(np.int8)
         yb = np.full((P, M), np.nan)
@@ -1090,8 +1146,8 @@ def static_curve(
         if strict and not res.ok.all():
             raise ValueError(_describe_failures(res))
         return res.ybar[0].copy()
-    roots = real_roots(structure, th[None, :], ub)[0]  # (M, D)
-    out, problems = only_stable(roots, _roots_stable(structure, th[None, :], ub, roots[None])[0],
+    roots, stab = (v[0] for v in roots_and_stability(structure, th[None, :], ub))  # (M, D) each
+    out, problems = only_stable(roots, stab,
                                 [f"ū = {u}" for u in point_texts(ub)], continuum(structure, th[None, :], ub)[0])
     if strict and problems:
         raise ValueError("the model has " + point_phrases(problems))

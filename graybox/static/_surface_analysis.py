@@ -343,8 +343,8 @@ def static_surface(
             raise ValueError("the model reaches no equilibrium at " + _static.point_phrases(res.explain(0)))
         return res.ybar[0].copy()
     # every point is a member of the folded model at ū' = 1: its roots and their stability in one call
-    roots = _static.real_roots(sk, thf[0], np.ones(1))  # (M, 1, D)
-    stab = _static._roots_stable(sk, thf[0], np.ones(1), roots)[:, 0]
+    roots, stab = _static.roots_and_stability(sk, thf[0], np.ones(1))  # (M, 1, D) each
+    stab = stab[:, 0]
     out, problems = _static.only_stable(roots[:, 0, :], stab,
                                         ["ū = (" + ", ".join(f"{v:g}" for v in u) + ")" for u in ub],
                                         _static.continuum(sk, thf[0], np.ones(1))[:, 0])

@@ -1,0 +1,69 @@
+"""hunt46a: from model to controller — local models, equilibria and the python-control bridge."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox import Model
+
+
+def quartic_fold(scale: float) -> Model:
+    """ȳ = F(ȳ) + ū with F(ȳ) − ȳ + 1 = scale (ȳ − 1)² (ȳ² + 1): a double root (a fold) at ū = 1, ȳ = 1."""
+    c = np.array([1.0, -2.0, 2.0, -2.0, 1.0]) * scale  # ascending
+    return Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "y(k-1)^4", "u(k-1)"], [c[1] + 1, c[2], c[3], c[4], c[0]],
+                 name="quartic fold")
+
+
+#: ȳ = 0.5 ȳ + 0.25 ȳ² + ū: a double root at the exact fold ū = 0.25, ȳ = 1 (closed-form quadratic path).
+QUADRATIC_FOLD = Model(["y(k-1)", "y(k-1)^2", "u(k-1)"], [0.5, 0.25, 1.0], name="quadratic fold")
+
+
+#: The same fold with y in units 100 times smaller: at ū = 2500 the double root is ȳ = 100.
+SCALED_FOLD = Model(["y(k-1)", "y(k-1)^2", "u(k-1)"], [0.5, 0.25e-2, 1.0], name="scaled fold")
+
+
+@pytest.mark.parametrize("model,ubar,ybar", [(QUADRATIC_FOLD, 0.25, 1.0), (SCALED_FOLD, 25.0, 100.0),
+                                             (quartic_fold(1.0), 1.0, 1.0), (quartic_fold(0.1), 1.0, 1.0),
+                                             (quartic_fold(1 / 3), 1.0, 1.0), (quartic_fold(0.01), 1.0, 1.0)])
+def test_a_double_root_at_a_fold_is_one_equilibrium_and_not_stable(model, ubar, ybar):
+    eqs = model.equilibria(ubar)
+    assert len(eqs) == 1, eqs
+    e = eqs[0]
+    assert e.ybar == pytest.approx(ybar, rel=1e-6)
+    # at a double root of the static equation Σ a_l = 1: a pole at z = 1, not asymptotically stable
+    assert not e.stable
+    assert e.spectral_radius >= 1.0
+
+
+def test_a_fold_is_not_two_stable_equilibria_for_the_static_curve_and_the_local_model():
+    m = quartic_fold(1 / 3)
+    with pytest.raises(ValueError, match="no stable equilibrium"):
+        m.static_curve([1.0])
+    lm = gb.local_model(m, 1.0, Ts=1.0)
+    assert lm.status == "no stable equilibrium" and lm.ybar == pytest.approx(1.0)
+
+
+def test_two_close_but_distinct_equilibria_below_a_fold_stay_two():
+    eqs = QUADRATIC_FOLD.equilibria(0.2499999)
+    assert len(eqs) == 2 and eqs[0].stable and not eqs[1].stable
+
+
+def test_a_double_root_beside_simple_ones_is_listed_once():
+    c = np.polynomial.polynomial.polyfromroots([1.0, 1.0, 2.0, -3.0]) * 0.05
+    m = Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "y(k-1)^4", "u(k-1)"], [c[1] + 1, c[2], c[3], c[4], c[0]])
+    ys = [e.ybar for e in m.equilibria(1.0)]
+    np.testing.assert_allclose(ys, [-3.0, 1.0, 2.0], rtol=1e-7)
+    c = np.polynomial.polynomial.polyfromroots([1.0, 1.0, -2.0]) * 0.25
+    m = Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "u(k-1)"], [c[1] + 1, c[2], c[3], c[0]])
+    ys = [e.ybar for e in m.equilibria(1.0)]
+    np.testing.assert_allclose(ys, [-2.0, 1.0], rtol=1e-12)
+
+
+def test_the_local_model_at_a_fold_has_its_pole_at_one_whatever_rounding_made_of_it():
+    lm = gb.local_model(quartic_fold(1 / 3), 1.0, Ts=0.5)  # Σ a_l = 1 − 2⁻⁵² here
+    assert not lm.stable and lm.spectral_radius >= 1.0
+    assert lm.time_constant == np.inf and np.isinf(lm.dc_gain[0]) and lm.settling_time() == np.inf
+    curve = gb.operating_curve(quartic_fold(1 / 3), [0.5, 1.0], Ts=0.5)
+    assert curve.status[1] == "no stable equilibrium" and curve.time_constant[1] == np.inf
