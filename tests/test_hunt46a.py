@@ -67,3 +67,27 @@ def test_the_local_model_at_a_fold_has_its_pole_at_one_whatever_rounding_made_of
     assert lm.time_constant == np.inf and np.isinf(lm.dc_gain[0]) and lm.settling_time() == np.inf
     curve = gb.operating_curve(quartic_fold(1 / 3), [0.5, 1.0], Ts=0.5)
     assert curve.status[1] == "no stable equilibrium" and curve.time_constant[1] == np.inf
+
+
+def _narmax_record(n: int = 80):
+    """A NARMAX model whose MA part reaches further back (e(k−3)) than its process terms (lag 1), and a record of it."""
+    m = Model(["1", "y(k-1)", "u(k-1)", "y(k-1)u(k-1)"], [0.1, 0.6, 0.3, 0.02], noise_structure=["e(k-1)", "e(k-3)"],
+              noise_theta=[0.4, -0.2], Ts=1.0, name="narmax")
+    rng = np.random.default_rng(1)
+    u, e, y = rng.uniform(0, 1, n), 0.05 * rng.standard_normal(n), np.zeros(n)
+    for k in range(3, n):
+        y[k] = 0.1 + 0.6 * y[k - 1] + 0.3 * u[k - 1] + 0.02 * y[k - 1] * u[k - 1] + 0.4 * e[k - 1] - 0.2 * e[k - 3] + e[k]
+    return m, gb.Record(u, y, Ts=1.0)
+
+
+@pytest.mark.parametrize("start", [None, 3, 10, 70])
+def test_the_system_fed_the_one_step_residuals_reproduces_the_record_when_the_ma_part_reaches_furthest(start):
+    ct = pytest.importorskip("control")
+    m, rec = _narmax_record()
+    xi = gb.one_step_residuals(m, rec)[0]  # ξ(k), k = 3 … N−1 (0 before 3)
+    L = len(rec) - xi.size
+    x0 = gb.narx_initial_state(m, rec, start=start, noise=True)
+    k0 = L if start is None else start
+    sysm = gb.narx_iosystem(m, noise=True)
+    r = ct.input_output_response(sysm, np.arange(len(rec) - k0), np.vstack([rec.u[k0:], xi[k0 - L:]]), x0)
+    np.testing.assert_allclose(r.outputs[0], rec.y[k0:], rtol=0, atol=1e-12)

@@ -109,12 +109,15 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
         Measured data with the model's inputs (taken by name), sampled at the model's period (a
         record at another one is refused, as :meth:`graybox.Model.simulate` refuses it).
     start : int, optional
-        The sample the system starts at (default, and at least, the model's max lag L: the state
-        holds y(start−1) … and u(start−1) …). From ``start = L`` and inputs ``u[L:]`` the
-        system's free run is ``model.simulate(record)[L:]``.
+        The sample the system starts at (at least the model's max lag L: the state holds
+        y(start−1) … and u(start−1) …; default L, and with ``noise`` the first sample of the
+        one-step residuals, the largest lag of the process and noise terms). From ``start = L`` and
+        inputs ``u[L:]`` the system's free run is ``model.simulate(record)[L:]``.
     noise : bool
-        As for :func:`narx_iosystem`: the noise lags are then appended, as zeros (the residuals
-        before the start are taken as 0, as one-step residuals are before sample L).
+        As for :func:`narx_iosystem`: the noise lags e(start−1) … are then appended, the model's
+        one-step residuals on the record (:func:`graybox.one_step_residuals`; 0 before their first
+        sample, as there), so that the system fed the residuals from ``start`` on reproduces
+        ``record.y[start:]``.
 
     Returns
     -------
@@ -128,15 +131,24 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     model.check_record(record)  # the system runs at the model's period and units: so must the lags it starts from
     lay = _layout(model.structure, model.input_names)
     L = model.max_lag
-    k = L if start is None else check_int(start, "start", low=0)
+    ne = _noise_coefficients(model).size if noise else 0
+    # the residuals' first sample: ξ = 0 before it (the MA recursion's start); the system fed them starts there
+    Le = max(L, model.noise_structure.max_lag) if noise else L
+    k = min(Le, len(record)) if start is None else check_int(start, "start", low=0)
     if k < L or k > len(record):
         raise ValueError(f"start must lie in [{L}, {len(record)}] (the model's max lag to the record's length), got {start!r}")
     parts = [record.y[k - lay.Ly: k][::-1] if lay.Ly else np.zeros(0)]
     for n, Lu in zip(model.input_names, lay.Lu):
         if Lu:
             parts.append(record.input(n)[k - Lu: k][::-1])
-    if noise:
-        parts.append(np.zeros(_noise_coefficients(model).size))
+    if ne:
+        e = np.zeros(ne)
+        if k > Le:  # e(k−1) … e(k−n_e): the one-step residuals there, zeros before Le
+            from ..diagnostics._residuals import one_step_residuals  # here: only a start past Le needs it
+
+            xi = np.concatenate([np.zeros(Le), one_step_residuals(model, record)[0]])
+            e = np.array([xi[k - l] if k - l >= 0 else 0.0 for l in range(1, ne + 1)])
+        parts.append(e)
     return np.concatenate(parts).astype(float)
 
 
