@@ -61,6 +61,25 @@ def test_a_double_root_beside_simple_ones_is_listed_once():
     np.testing.assert_allclose(ys, [-2.0, 1.0], rtol=1e-12)
 
 
+
+def _with_static_roots(roots: list[float], scale: float) -> Model:
+    """ȳ = F(ȳ) + ū whose static equation at ū = 1 is scale · ∏ (ȳ − r) = 0."""
+    c = np.polynomial.polynomial.polyfromroots(roots) * scale
+    terms = ["y(k-1)"] + [f"y(k-1)^{p}" for p in range(2, len(c))] + ["u(k-1)"]
+    return Model(terms, [c[1] + 1, *c[2:], c[0]])
+
+
+@pytest.mark.parametrize("roots,scale", [([1.0, 1.0, 1.0, -1.0], -0.1), ([2.0] * 5, -0.1), ([1.0, 1.0, 1.0], -0.1)])
+def test_a_triple_root_is_not_stable_even_where_the_solver_left_it_alone(roots, scale):
+    # Σ a_l = 1 at any multiple root; the companion matrix splits a triple root into one real root and a complex
+    # pair, so no two real roots are left to merge, and rounding put Σ a_l just below 1: 'stable'
+    eqs = _with_static_roots(roots, scale).equilibria(1.0)
+    at = [e for e in eqs if abs(e.ybar - roots[0]) < 1e-2]
+    assert len(at) == 1 and not at[0].stable and at[0].spectral_radius >= 1.0
+    # the simple root beside it keeps its own verdict (−1 here: F' = 0.8, a pole at 1.8)
+    assert all(not e.stable for e in eqs if abs(e.ybar + 1.0) < 1e-9)
+
+
 def test_the_local_model_at_a_fold_has_its_pole_at_one_whatever_rounding_made_of_it():
     lm = gb.local_model(quartic_fold(1 / 3), 1.0, Ts=0.5)  # Σ a_l = 1 − 2⁻⁵² here
     assert not lm.stable and lm.spectral_radius >= 1.0
