@@ -57,6 +57,7 @@ from ._equilibrium_kernels import (
     REACHED,
     SKIPPED,
     candidate_linearisations,
+    merge_multiple_roots,
     real_roots_upto_cubic,
     schur_stable_rows,
     settle_candidates,
@@ -400,64 +401,9 @@ def _roots_and_folds(structure: Structure, thetas: np.ndarray, ubar: np.ndarray)
     """:func:`real_roots`, and which of them are multiple roots (folds of the static curve), shape (P, M, D) each."""
     coef = static_coefficients(structure, thetas, ubar)
     roots = real_roots_upto_cubic(coef) if coef.shape[0] <= 4 else _real_roots_companion(coef)
-    return _merge_multiple(coef, roots)
-
-
-def _scaled_terms(c: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """The terms c_p x^p of Σ_p c_p x^p, all scaled by one power of two (exact) so that the largest is near 1.
-
-    ``c`` (..., 1, D + 1) ascending, ``x`` (..., K): shape (..., K, D + 1). Roots near 1e200 have terms beyond the
-    float range, whose inf − inf would say nothing; scaled, each is exact to its last bit.
-    """
-    with np.errstate(all="ignore"):
-        xm, xe = np.frexp(np.where(np.isfinite(x), x, 0.0))
-        cm, ce = np.frexp(c)
-        p = np.arange(c.shape[-1])
-        ex = np.where(c != 0, ce + p * xe[..., None], np.iinfo(np.int32).min)
-        return np.ldexp(cm, ex - ex.max(axis=-1, keepdims=True)) * xm[..., None] ** p
-
-
-def _merge_multiple(coef: np.ndarray, roots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One root for each multiple root of eq. (5), and where each is one (a fold: ∂F/∂ȳ = 0, so Σ a_l = 1).
-
-    A double root comes out of a solver as two equal roots, or as two a rounding error apart (of
-    relative size √eps, a companion matrix's). Adjacent roots x1 < x2 are one when the polynomial at
-    their midpoint is zero to its rounding error (η = 2 (D + 1) eps Σ |c_p| |x|^p, Horner's bound): the
-    coefficients cannot tell them apart from a double root (two distinct roots δ apart leave
-    F''δ²/8 there). A root is multiple when F'(x)² <= 4 (D + 1) eps Σ |c_p| |x|^p |F''(x)|, the same
-    bound read at the root (a root of multiplicity m, split by rounding into parts δ apart, has F' ~ F^(m) δ^(m−1),
-    F'' ~ F^(m) δ^(m−2) and η ~ F^(m) δ^m): so also a triple root whose companions a solver made complex.
-    Units-free: both sides scale alike. ``coef`` (D + 1, P, M), ``roots`` (P, M, D) sorted, NaN-padded.
-    """
-    D = roots.shape[-1]
-    if D < 2 or not np.any(np.isfinite(roots)):
+    if roots.shape[-1] < 2:  # a linear equation: one simple root
         return roots, np.zeros(roots.shape, dtype=bool)
-    c = np.moveaxis(coef, 0, -1)[..., None, :]  # (P, M, 1, D + 1)
-    eps = np.finfo(float).eps
-    out = roots
-    x1, x2 = roots[..., :-1], roots[..., 1:]
-    with np.errstate(all="ignore"):
-        mid = 0.5 * x1 + 0.5 * x2
-        terms = _scaled_terms(c, mid)
-        same = (x1 == x2) | (np.abs(terms.sum(axis=-1)) <= 2 * (D + 1) * eps * np.abs(terms).sum(axis=-1))
-    same &= np.isfinite(x1) & np.isfinite(x2)
-    if same.any():
-        out = roots.copy()
-        out[..., :-1] = np.where(same, mid, out[..., :-1])  # a double root split by rounding lies between its halves
-        drop = np.zeros(roots.shape, dtype=bool)
-        drop[..., 1:] = same  # the upper of each merged pair goes; a triple root keeps its lowest
-        out[drop] = np.nan
-        out = np.sort(out, axis=-1)  # NaN last
-    # every root left: multiple when F' vanishes to the rounding F'' allows (x F' and x² F'' from the scaled terms;
-    # at x = 0, where those vanish, when c_1 = F'(0) is 0)
-    p = np.arange(coef.shape[0])
-    with np.errstate(all="ignore"):
-        terms = _scaled_terms(c, out)
-        d1 = (terms * p).sum(axis=-1)
-        d2 = (terms * (p * (p - 1))).sum(axis=-1)
-        fold = d1 * d1 <= 4 * (D + 1) * eps * np.abs(terms).sum(axis=-1) * np.abs(d2)
-    fold = np.where(out == 0.0, coef[1][..., None] == 0.0, fold) & np.isfinite(out)
-    return out, fold
+    return merge_multiple_roots(np.ascontiguousarray(coef), np.ascontiguousarray(roots))
 
 
 def _linear_coefficients(structure: Structure, theta: np.ndarray, ybar: float, ubar: float) -> np.ndarray:

@@ -11,6 +11,8 @@
   (member, point) pair, with the variable scaled by a power of two so that the extreme
   coefficients are balanced (the decisions do not depend on the units of y), then Kahan's cubic
   solver (one real root by a monotone Newton iteration, deflation, a stable quadratic formula).
+- :func:`merge_multiple_roots` — one root for each multiple root (a fold of the static curve) and which
+  roots are multiple, from the polynomial's rounding error at and between them.
 - :func:`settle_runs` — the one "run until settled" routine: a free run at constant input from a
   constant initial output, stopped and classified (reached a given stable equilibrium / diverged /
   did not settle within the step budget). Two recursions share it: a polynomial model with its
@@ -21,11 +23,13 @@ Nothing here validates input: :mod:`graybox.static._analysis` and :mod:`graybox.
 
 from __future__ import annotations
 
+import math
+
 import numba as nb
 import numpy as np
 
 __all__ = [
-    "schur_stable_rows", "entry_sums", "real_roots_upto_cubic", "settle_candidates", "settle_runs",
+    "schur_stable_rows", "entry_sums", "real_roots_upto_cubic", "merge_multiple_roots", "settle_candidates", "settle_runs",
     "candidate_linearisations",
     "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED", "SKIPPED",
 ]
@@ -266,6 +270,119 @@ def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
             for k in range(min(n, W)):
                 out[i, j, k] = r[k]
     return out
+
+
+@nb.njit(cache=True, nogil=True)
+def _scaled_terms(c, x, t):  # pragma: no cover - compiled
+    """t[p] = c[p] x^p, all scaled by one power of two (exact) where one leaves the float range (roots near 1e200:
+    inf − inf would say nothing; an underflow would drop a term); only ratios of sums of them are used."""
+    n = c.shape[0]
+    ok = True
+    pw = 1.0
+    for p in range(n):
+        t[p] = c[p] * pw
+        if not np.isfinite(t[p]) or (t[p] == 0.0 and c[p] != 0.0 and x != 0.0):
+            ok = False
+        pw *= x
+    if ok:
+        return
+    xm, xe = math.frexp(x)
+    emax = -(1 << 62)
+    for p in range(n):
+        if c[p] != 0.0:
+            emax = max(emax, math.frexp(c[p])[1] + p * xe)
+    pw = 1.0
+    for p in range(n):
+        if c[p] == 0.0:
+            t[p] = 0.0
+        else:
+            cm, ce = math.frexp(c[p])
+            t[p] = math.ldexp(cm, max(ce + p * xe - emax, -1100)) * pw
+        pw *= xm
+
+
+@nb.njit(cache=True, nogil=True)
+def merge_multiple_roots(coef, roots):  # pragma: no cover - compiled
+    """One root for each multiple root of Σ_p coef[p] y^p, and which roots are multiple (a fold: F'(ȳ) = 0).
+
+    A double root comes out of a solver as two equal roots, or as two a rounding error apart (of
+    relative size √eps, a companion matrix's). Adjacent roots x1 < x2 are one when the polynomial at
+    their midpoint is zero to its rounding error (η = 2 (D + 1) eps Σ |c_p| |x|^p, Horner's bound): the
+    coefficients cannot tell them apart from a double root (two distinct roots δ apart leave F''δ²/8
+    there); the midpoint stands for both. A root is multiple when F'(x)² <= 4 (D + 1) eps Σ |c_p| |x|^p
+    |F''(x)|, the same bound read at the root (a root of multiplicity m split by rounding into parts δ apart
+    has F' ~ F^(m) δ^(m−1), F'' ~ F^(m) δ^(m−2), η ~ F^(m) δ^m): so also a triple root whose companions a
+    solver made complex. Units-free: both sides scale alike.
+
+    Parameters
+    ----------
+    coef : ndarray, shape (D + 1, P, M)
+        Ascending coefficients.
+    roots : ndarray, shape (P, M, D)
+        Real roots, ascending, NaN-padded.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        The roots with each multiple one once (ascending, NaN-padded), shape (P, M, D), and whether each is
+        multiple, bool, same shape.
+    """
+    n = coef.shape[0]
+    P, M, D = roots.shape
+    out = roots.copy()
+    fold = np.zeros(roots.shape, dtype=np.bool_)
+    c = np.empty(n)
+    t = np.empty(n)
+    eps = np.finfo(np.float64).eps
+    for i in range(P):
+        for j in range(M):
+            m = 0
+            while m < D and np.isfinite(out[i, j, m]):
+                m += 1
+            if m == 0:
+                continue
+            for p in range(n):
+                c[p] = coef[p, i, j]
+            k = 0
+            while k < m - 1:
+                x1 = out[i, j, k]
+                x2 = out[i, j, k + 1]
+                mid = 0.5 * x1 + 0.5 * x2
+                same = x1 == x2
+                if not same:
+                    _scaled_terms(c, mid, t)
+                    f = 0.0
+                    s = 0.0
+                    for p in range(n):
+                        f += t[p]
+                        s += abs(t[p])
+                    same = abs(f) <= 2 * n * eps * s
+                if same:  # the pair is one root: the midpoint; the rest move down (and may merge with it in turn)
+                    out[i, j, k] = mid
+                    for q in range(k + 1, m - 1):
+                        out[i, j, q] = out[i, j, q + 1]
+                    out[i, j, m - 1] = np.nan
+                    m -= 1
+                else:
+                    k += 1
+            for k in range(m):
+                x = out[i, j, k]
+                if x == 0.0:  # x F' and x² F'' vanish there: F'(0) = c_1
+                    fold[i, j, k] = c[1] == 0.0
+                    continue
+                _scaled_terms(c, x, t)
+                s = 0.0
+                for p in range(n):
+                    s += abs(t[p])
+                if s == 0.0:
+                    continue
+                d1 = 0.0
+                d2 = 0.0
+                for p in range(n):  # x F'(x) and x² F''(x), over the terms' size (no overflow)
+                    d1 += p * (t[p] / s)
+                    d2 += p * (p - 1) * (t[p] / s)
+                fold[i, j, k] = d1 * d1 <= 4 * n * eps * abs(d2)
+    return out, fold
 
 
 # -- running until settled ---------------------------------------------------------------------------
