@@ -9,7 +9,9 @@ whose coefficients are the *cluster coefficients* Σ = R θ (R is a 0/1 matrix).
 y to a power above 1 the solution is the rational function of eq. (6). Every real root is an
 equilibrium; its local stability follows from the linearised recursion y(k) = Σ_i a_i y(k-i),
 a_i = ∂f/∂y(k-i) at (ȳ, ū), decided by one test, the compiled Schur–Cohn recursion
-(:func:`stable_mask`, :func:`schur_stable`).
+(:func:`stable_mask`, :func:`schur_stable`). A multiple root (a fold of the static curve, where
+∂F/∂ȳ = Σ a_i − 1 = 0: a pole at z = 1) is one equilibrium, and not stable, whatever rounding made of it
+(:func:`~graybox.static._equilibrium_kernels.merge_multiple_roots`).
 
 The equilibrium a model reaches
 -------------------------------
