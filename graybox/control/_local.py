@@ -276,7 +276,8 @@ class LocalModel:
 
     @property
     def stable(self) -> bool:
-        """Every pole strictly inside the unit circle (the package's Schur–Cohn test)."""
+        """Every pole strictly inside the unit circle (the package's Schur–Cohn test; a pole at z = 1 to rounding, as
+        at a fold of the static curve, is not inside)."""
         self._need()
         return (bool(schur_stable(self.a)) and not _unit_pole(self.a)) if self.a.size else True
 
