@@ -110,3 +110,24 @@ def test_the_system_fed_the_one_step_residuals_reproduces_the_record_when_the_ma
     sysm = gb.narx_iosystem(m, noise=True)
     r = ct.input_output_response(sysm, np.arange(len(rec) - k0), np.vstack([rec.u[k0:], xi[k0 - L:]]), x0)
     np.testing.assert_allclose(r.outputs[0], rec.y[k0:], rtol=0, atol=1e-12)
+
+
+#: y⁺ = y + 0.2 (u + y − y³): two stable equilibria (±1 at ū = 0) for |ū| < 2 / (3√3), one outside.
+BISTABLE = Model(["y(k-1)", "y(k-1)^3", "u(k-1)"], [1.2, -0.2, 0.2], Ts=1.0, name="bistable")
+
+
+def test_an_operating_curve_through_a_bistable_range_marks_those_points_and_goes_on():
+    # a sweep: a point where ū sets no one equilibrium is that point's status, not the whole curve's ValueError
+    oc = gb.operating_curve(BISTABLE, [-1.0, 0.0, 1.0])
+    assert oc.status == ("reached", "several stable equilibria", "reached")
+    assert np.isnan(oc.ybar[1]) and np.isnan(oc.gain[1]) and np.isfinite(oc.ybar[[0, 2]]).all()
+    lm = oc.local_models[1]
+    assert not lm.exists and "2 stable equilibria" in lm.reason and "y0" in lm.reason
+    with pytest.raises(ValueError, match="no local model: .*2 stable equilibria"):
+        lm.dc_gain
+    assert oc.to_frame()["status"].tolist() == list(oc.status)
+    # one point: local_model still says so and asks for y0, as documented
+    with pytest.raises(ValueError, match=r"2 stable equilibria at ū = 0 \(\[-1, 1\]\); pass y0"):
+        gb.local_model(BISTABLE, 0.0)
+    # with y0 every point has its equilibrium, as before
+    assert gb.operating_curve(BISTABLE, [-1.0, 0.0, 1.0], y0=0.5).status == ("reached",) * 3

@@ -47,6 +47,11 @@ __all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "ja
            "require_control", "local_statespace", "local_transfer_function", "system_name", "CONTROL_EXTRA",
            "input_levels"]
 
+#: The status of a point where the model has several stable equilibria and no ``y0`` picks one: ū sets no ȳ there.
+SEVERAL_STABLE = "several stable equilibria"
+#: Every status a local model can have: the statuses of the equilibrium reached, and that one.
+LOCAL_STATUS = (*Reached.FULL_STATUS, SEVERAL_STABLE)
+
 #: Settling band of :attr:`LocalModel.settling_time`: the step response stays within this fraction
 #: of its final value (dimensionless).
 SETTLING_BAND = 0.02
@@ -168,7 +173,9 @@ class LocalModel:
         ``"did not settle"`` (the free run from y0 settles on none; the linearisation is at the
         real equilibrium nearest y0), ``"continuum of equilibria"`` (every ȳ is an equilibrium at ū, as
         for an integrator at its balancing input: ū sets no ȳ; the linearisation is at ȳ = y0 when y0 is
-        given, where the model stays, and there is none without it).
+        given, where the model stays, and there is none without it), ``"several stable equilibria"`` (no ``y0``
+        picks one of them: no linearisation; :func:`operating_curve` marks such a point and goes on,
+        :func:`local_model` raises).
     reason : str
         The status in words, naming ū (empty when reached).
     a : ndarray, shape (L_y,)
@@ -223,7 +230,7 @@ class LocalModel:
                              "must be finite (an integrator's 1 − Σa = 0 excepted)")
         if self.ybar is not None and not np.isfinite(self.ybar):
             raise ValueError(f"ybar must be finite or None (no equilibrium), got {self.ybar}")
-        check_choice(self.status, "status", Reached.FULL_STATUS)  # a local model evaluates its point
+        check_choice(self.status, "status", LOCAL_STATUS)  # a local model evaluates its point
         if self.status == "reached" and self.ybar is None:
             raise ValueError("status 'reached' needs the equilibrium ybar")
         if self.ybar is not None and self.status in ("reached", "no stable equilibrium"):
@@ -234,8 +241,8 @@ class LocalModel:
                 poles = "every pole inside the unit circle" if stable else "poles on or outside the unit circle"
                 raise ValueError(f"status {self.status!r} linearises at {said}, but a = {a.tolist()} has {poles}")
         # what a hand-edited file could say and the statuses cannot (hunt37e's note)
-        if self.status == "no equilibrium" and self.ybar is not None:
-            raise ValueError(f"status 'no equilibrium' has no ybar, got {self.ybar}")
+        if self.status in ("no equilibrium", SEVERAL_STABLE) and self.ybar is not None:
+            raise ValueError(f"status {self.status!r} has no ybar, got {self.ybar}")
         if self.status != "reached" and not self.reason.strip():
             raise ValueError(f"status {self.status!r} needs its reason (the status in words, naming ū)")
         if self.status == "reached" and self.reason.strip():
@@ -572,8 +579,9 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float |
         stable = [e for e in eqs if e.stable]
         if len(stable) == 1:
             return stable[0].ybar, "reached", ""
-        if len(stable) > 1:
-            raise ValueError("the model has " + several_stable(np.array([e.ybar for e in stable]), f"ū = {label}"))
+        if len(stable) > 1:  # ū sets no one ȳ: the point's status (local_model raises it; a curve goes on)
+            return None, SEVERAL_STABLE, "the model has " + several_stable(np.array([e.ybar for e in stable]),
+                                                                            f"ū = {label}")
         if not eqs:
             return None, "no equilibrium", f"ū = {label}: {NO_EQUILIBRIUM_WHY}"
         e = min(eqs, key=lambda e: e.spectral_radius)
@@ -697,7 +705,10 @@ def local_model(model: Model, ubar: float | Sequence[float] | np.ndarray, *, Ts:
         raise ValueError(f"ubar: local_model takes one operating point, got {ub.shape[0]} (use operating_curve)")
     Ts_ = check_Ts(Ts, data, model)
     _range_warning(model, ub, data)
-    return _linearise(model, ub[0], _y0s(y0, 1)[0], Ts_)
+    lm = _linearise(model, ub[0], _y0s(y0, 1)[0], Ts_)
+    if lm.status == SEVERAL_STABLE:  # one point asked for: y0 is what it needs
+        raise ValueError(lm.reason)
+    return lm
 
 
 @dataclass(frozen=True, eq=False)
@@ -898,7 +909,9 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at;
         ``data`` at another period is refused), else ``data``'s.
     y0 : float or array_like of shape (M,), optional
-        Initial output of each point's settling run (see :func:`local_model`).
+        Initial output of each point's settling run (see :func:`local_model`). Without it a point
+        where the model has several stable equilibria gets the status ``"several stable equilibria"``
+        (no local model there; its reason names them), and the curve goes on.
     data : Record, Dataset, sequence of Record or StaticPoints, optional
         The identification data: ū outside their range gets a :class:`~graybox.StaticRangeWarning`.
     uncertainty : ParameterUncertainty, optional
