@@ -131,3 +131,16 @@ def test_an_operating_curve_through_a_bistable_range_marks_those_points_and_goes
         gb.local_model(BISTABLE, 0.0)
     # with y0 every point has its equilibrium, as before
     assert gb.operating_curve(BISTABLE, [-1.0, 0.0, 1.0], y0=0.5).status == ("reached",) * 3
+
+
+@pytest.mark.parametrize("roots,scale", [([1.0, 1.0, 1.0, -1.0], -0.1), ([2.0] * 5, -0.1)])
+def test_the_local_model_at_a_triple_root_is_that_of_a_pole_at_one(roots, scale):
+    # the root is found to eps^(1/3) only, so its a_l sum to 1 − 3e-11: Schur–Cohn 'stable', while the static
+    # analysis says (rightly) that no equilibrium is: the LocalModel refused its own status, local_model crashed
+    m = _with_static_roots(roots, scale)
+    for y0 in (None, roots[0]):
+        lm = gb.local_model(m, 1.0, Ts=1.0, y0=y0)
+        assert lm.exists and lm.ybar == pytest.approx(roots[0], rel=1e-3) and not lm.reached
+        assert not lm.stable and lm.time_constant == np.inf and lm.spectral_radius >= 1.0
+        assert lm.a.sum() == pytest.approx(1.0, abs=1e-15)
+    assert gb.operating_curve(m, [1.0], Ts=1.0).status == ("no stable equilibrium",)

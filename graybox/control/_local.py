@@ -564,38 +564,39 @@ def _continuum_at(model: Model, u: np.ndarray) -> bool:
     return bool(continuum(model.structure, model.theta[None, :], u[:1])[0, 0])
 
 
-def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float | None, str, str]:
-    """(ȳ, status, reason) at one point u (m,): the reached equilibrium, else the one to linearise around."""
+def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float | None, str, str, bool]:
+    """(ȳ, status, reason, unstable) at one point u (m,): the reached equilibrium, else the one to linearise around;
+    ``unstable``: the static analysis says that equilibrium is not stable."""
     label = f"{float(u[0]):g}" if u.size == 1 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
     if _continuum_at(model, u):
         # every ȳ is an equilibrium: ū sets none, the output stays where it starts; y0 is then the one to take
         why = f"ū = {label}: {CONTINUUM_WHY}"
         if y0 is None:
             return None, "continuum of equilibria", why + ("; give y0 (the output level ȳ to linearise at, where the "
-                                                           "model stays) for the local model there")
-        return float(y0), "continuum of equilibria", why + f"; linearised at ȳ = y0 = {y0:.6g}"
+                                                           "model stays) for the local model there"), False
+        return float(y0), "continuum of equilibria", why + f"; linearised at ȳ = y0 = {y0:.6g}", False
     eqs = model.equilibria(u if model.n_inputs > 1 else float(u[0]))
     if y0 is None:
         stable = [e for e in eqs if e.stable]
         if len(stable) == 1:
-            return stable[0].ybar, "reached", ""
+            return stable[0].ybar, "reached", "", False
         if len(stable) > 1:  # ū sets no one ȳ: the point's status (local_model raises it; a curve goes on)
             return None, SEVERAL_STABLE, "the model has " + several_stable(np.array([e.ybar for e in stable]),
-                                                                            f"ū = {label}")
+                                                                            f"ū = {label}"), False
         if not eqs:
-            return None, "no equilibrium", f"ū = {label}: {NO_EQUILIBRIUM_WHY}"
+            return None, "no equilibrium", f"ū = {label}: {NO_EQUILIBRIUM_WHY}", False
         e = min(eqs, key=lambda e: e.spectral_radius)
         return e.ybar, "no stable equilibrium", (f"ū = {label}: no stable equilibrium; linearised at the unstable "
-                                                 f"ȳ = {e.ybar:.6g} (spectral radius {e.spectral_radius:.4g})")
+                                                 f"ȳ = {e.ybar:.6g} (spectral radius {e.spectral_radius:.4g})"), True
     r = _reached(model, model.theta[None, :], u[None, :], np.array([y0]))
     if r.ok[0, 0]:
-        return float(r.ybar[0, 0]), "reached", ""
+        return float(r.ybar[0, 0]), "reached", "", False
     status = r.STATUS[int(r.status[0, 0])]
     reason = r.explain(0)[0]
     if not eqs:
-        return None, status, reason
+        return None, status, reason, False
     e = min(eqs, key=lambda e: abs(e.ybar - y0))
-    return e.ybar, status, reason + f"; linearised at the equilibrium ȳ = {e.ybar:.6g} nearest y0"
+    return e.ybar, status, reason + f"; linearised at the equilibrium ȳ = {e.ybar:.6g} nearest y0", not e.stable
 
 
 def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
@@ -657,12 +658,18 @@ def _y0s(y0: object, M: int) -> list[float | None]:
 
 
 def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float) -> LocalModel:
-    ybar, status, reason = _equilibrium(model, u, y0)
+    ybar, status, reason, unstable = _equilibrium(model, u, y0)
     if ybar is None:
         a, b = np.zeros(0), np.zeros((model.n_inputs, 0))
     else:
         a2, b3 = jacobian_rows(model.structure, model.input_names, model.theta[None, :], np.array([ybar]), u[None, :])
         a, b = a2[0], b3[0]
+        if unstable and a.size and schur_stable(a):
+            # the static analysis found a multiple root (a fold, an inflection): there Σ a_l = 1 exactly, but the
+            # root is known only to eps^(1/m) and its a_l sum to 1 − 3e-11 (a triple root): the linearisation at the
+            # root itself has its pole at z = 1
+            a = a.copy()
+            a[0] += 1.0 - a.sum()
     return LocalModel(u, ybar, status, reason, a, b, Ts, model.input_names, model.name, model.units)
 
 
