@@ -117,7 +117,7 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
         As for :func:`narx_iosystem`: the noise lags e(start−1) … are then appended, the model's
         one-step residuals on the record (:func:`graybox.one_step_residuals`; 0 before their first
         sample, as there), so that the system fed the residuals from ``start`` on reproduces
-        ``record.y[start:]``.
+        ``record.y[start:]`` (from any start at or after the residuals' first sample).
 
     Returns
     -------
