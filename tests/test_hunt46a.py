@@ -144,3 +144,13 @@ def test_the_local_model_at_a_triple_root_is_that_of_a_pole_at_one(roots, scale)
         assert not lm.stable and lm.time_constant == np.inf and lm.spectral_radius >= 1.0
         assert lm.a.sum() == pytest.approx(1.0, abs=1e-15)
     assert gb.operating_curve(m, [1.0], Ts=1.0).status == ("no stable equilibrium",)
+
+
+def test_a_record_shorter_than_the_state_is_named_as_such():
+    # the message was "start must lie in [3, 2]", an empty interval, whatever start was given
+    m = Model(["y(k-1)", "u(k-3)"], [0.5, 1.0], Ts=1.0)
+    short = gb.Record(np.ones(2), np.ones(2), Ts=1.0, name="short")
+    for start in (None, 2):
+        with pytest.raises(ValueError, match="short: the record has 2 samples, fewer than the 3 .*max lag"):
+            gb.narx_initial_state(m, short, start=start)
+    assert gb.narx_initial_state(m, gb.Record(np.arange(3.0), np.ones(3), Ts=1.0)).tolist() == [1.0, 2.0, 1.0, 0.0]

@@ -131,6 +131,9 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     model.check_record(record)  # the system runs at the model's period and units: so must the lags it starts from
     lay = _layout(model.structure, model.input_names)
     L = model.max_lag
+    if len(record) < L:  # no start has its lags in the record
+        raise ValueError(f"{record.name}: the record has {len(record)} samples, fewer than the {L} the state holds (the "
+                         "model's max lag)")
     ne = _noise_coefficients(model).size if noise else 0
     # the residuals' first sample: ξ = 0 before it (the MA recursion's start); the system fed them starts there
     Le = max(L, model.noise_structure.max_lag) if noise else L
