@@ -154,3 +154,22 @@ def test_a_record_shorter_than_the_state_is_named_as_such():
         with pytest.raises(ValueError, match="short: the record has 2 samples, fewer than the 3 .*max lag"):
             gb.narx_initial_state(m, short, start=start)
     assert gb.narx_initial_state(m, gb.Record(np.arange(3.0), np.ones(3), Ts=1.0)).tolist() == [1.0, 2.0, 1.0, 0.0]
+
+
+def _y_in_units(model: Model, s: float) -> Model:
+    """The same model with y in units s times smaller (y' = s y): θ of a term in y^p (and u) times s^(1−p)."""
+    return Model(model.structure, [th * s ** (1 - t.power_of("y")) for th, t in zip(model.theta, model.structure)])
+
+
+@pytest.mark.parametrize("roots,scale", [([1.1, -0.1, 1.1], -0.1), ([1.1, -0.1, 1.1], 0.03), ([0.7, 0.7], 0.3)])
+def test_a_double_root_is_one_fold_in_any_units_of_y(roots, scale):
+    # rounding leaves a double root as two close real roots or as a complex pair with a tiny imaginary part; the
+    # closed-form quadratic dropped the pair (no equilibrium there) and kept the reals (a fold), so the fold came
+    # and went with the units of y (as ȳ = 1.1 did here in °C against K-sized or 7x units)
+    m = _with_static_roots(roots, scale)
+    seen = []
+    for s in (1.0, 7.0, 1000.0, 1e-3, 3.0):
+        eqs = _y_in_units(m, s).equilibria(1.0)
+        seen.append([(round(e.ybar / s, 6), e.stable) for e in eqs])
+    assert all(v == seen[0] for v in seen), seen
+    assert (roots[0], False) in seen[0]  # the double root, a fold: not stable

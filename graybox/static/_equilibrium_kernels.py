@@ -191,7 +191,12 @@ def _real_roots3(A, B, C, D, r):  # pragma: no cover - compiled
         return n
     disc = b1 * b1 - 4.0 * a * c2
     if disc < 0.0:
-        return n
+        # within its own rounding error (a few eps of the terms it is the difference of) a negative discriminant is
+        # a double root that rounding pushed into the complex plane, as often as it splits one into two reals: it is
+        # the double root (merge_multiple_roots reads it as such), in any units
+        if -disc > 8.0 * 2.220446049250313e-16 * (b1 * b1 + 4.0 * abs(a * c2)):
+            return n
+        disc = 0.0
     qq = -0.5 * (b1 + (np.sqrt(disc) if b1 >= 0.0 else -np.sqrt(disc)))
     if qq == 0.0:  # b1 = 0 and a c2 = 0: a double root at 0
         r[n] = 0.0
