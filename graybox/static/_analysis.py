@@ -383,7 +383,8 @@ def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np
 
     Degree ≤ 3 (every quadratic and cubic structure): closed forms, compiled
     (:func:`graybox.static._equilibrium_kernels.real_roots_upto_cubic`). Degree >= 4: companion-matrix
-    eigenvalues. Both balance the variable first, so the result does not depend on units.
+    eigenvalues. Both balance the variable first, so the result does not depend on units. A multiple
+    root (a fold; to rounding: :func:`graybox.static._equilibrium_kernels.merge_multiple_roots`) is listed once.
 
     Parameters
     ----------
