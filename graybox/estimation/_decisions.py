@@ -154,7 +154,15 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
         count += w
     out = total / count
     out[list(pareto.failures)] = np.inf
-    return np.where(np.isfinite(out), out, np.inf)
+    out = np.where(np.isfinite(out), out, np.inf)
+    # the set's own J_S is on the records it was fitted on: where every member scores the choosing records as that
+    # (to round-off, J_S above none), they are those records, and the choice would be the plain D_SF said to be
+    # honest. Records the fit did not see give every member the same J_S by no chance.
+    both = np.isfinite(out) & np.isfinite(pareto.JS) & (pareto.JS > 0)
+    if both.any() and np.allclose(out[both], pareto.JS[both], rtol=1e-6, atol=0.0):
+        raise ValueError(f"choose_on: every member's J_S on {', '.join(repr(r.name) for r in recs)} is the set's own "
+                         "J_S, on the records it was fitted on: choose on data the fit did not see (e.g. data.valid)")
+    return out
 
 
 def decide_dsf(
@@ -184,7 +192,8 @@ def decide_dsf(
         Choosing record(s), not the identification data the set was fitted on: the J_S that is
         minimised over the band is the members' free-run MSE there (``.score``; ``.JS`` stays the
         set's own). None (default): the paper's rule, on the set's J_S. Report the chosen model on
-        a third record: its J_S on the choosing record is optimistic.
+        a third record: its J_S on the choosing record is optimistic. Records on which every member
+        scores the set's own J_S (to 1e-6) are the fitting records: ``ValueError``.
 
     Returns
     -------
