@@ -19,8 +19,8 @@ import numpy as np
 
 from ._reprs import listed
 from ._terms import check_input_names, default_input_names, transient_source
-from ._validation import (FrozenMap, as_1d_finite, check_per_point, check_real, check_str, float_array, refuse_non_real,
-                          warn)
+from ._validation import (as_1d_finite, check_per_point, check_real, check_str, float_array, frozen_value,
+                          refuse_non_real, warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
 
@@ -564,7 +564,8 @@ class Dataset:
         Where the data come from, in plain words.
     extra : mapping
         Anything else a loader wants to expose (e.g. a theoretical static curve); kept as a read-only
-        copy (``FrozenMap``), as every mapping of a graybox value.
+        copy all the way down (``FrozenMap``; nested lists ``FrozenList``, arrays read-only copies), as every
+        mapping of a graybox value; ``ValueError`` for one nested deeper than 100 levels or holding itself.
     """
 
     ident: Record
@@ -583,7 +584,8 @@ class Dataset:
                             f"{static_hint(self.static)}")
         if not isinstance(self.extra, Mapping):
             raise TypeError(f"Dataset: extra must be a mapping (e.g. a dict), got {type(self.extra).__name__}")
-        object.__setattr__(self, "extra", FrozenMap(self.extra))  # not the caller's dict, and not changeable
+        # not the caller's dict, nor its nested lists, dicts and arrays, and not changeable
+        object.__setattr__(self, "extra", frozen_value(self.extra, "Dataset: extra"))
         check_compatible(self.ident, self.valid)
         if self.static is not None:
             check_compatible(self.ident, self.static)

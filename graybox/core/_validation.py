@@ -35,6 +35,8 @@ __all__ = [
     "as_1d_finite",
     "float_array",
     "frozen",
+    "frozen_value",
+    "FrozenList",
     "warn",
     "check_per_point",
     "check_sequence",
@@ -452,6 +454,67 @@ class FrozenMap(Mapping):
 
     def __reduce__(self):
         return (type(self), (self._items,))
+
+
+#: Deepest nesting of plain values (lists in lists …) a graybox value keeps and a file carries: far beyond any
+#: real use, and far within Python's recursion limit, which a deeper value (or one that holds itself) would hit.
+MAX_NESTING = 100
+
+
+class FrozenList(list):
+    """A read-only list: how an immutable graybox value keeps a list it was given (a Dataset's ``extra``).
+
+    A list still to its reader (equal to the list given, ``isinstance(x, list)``), it refuses every change;
+    it pickles and copies as itself (a list's own pickling would rebuild it by appending).
+    """
+
+    __slots__ = ()
+
+    def _refuse(self, *args: Any, **kwargs: Any) -> Any:
+        raise TypeError(f"a {type(self).__name__} cannot be changed (it is part of an immutable value)")
+
+    append = extend = insert = remove = pop = clear = sort = reverse = _refuse
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
+
+    def __reduce__(self):
+        return (type(self), (list(self),))
+
+    def __reduce_ex__(self, protocol: Any):
+        return self.__reduce__()
+
+    def __copy__(self) -> "FrozenList":
+        return self
+
+    def __deepcopy__(self, memo: dict) -> "FrozenList":
+        import copy
+
+        return type(self)(copy.deepcopy(list(self), memo))
+
+
+def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = frozenset()) -> object:
+    """A read-only copy of a plain value a caller gave (``name`` says which, for the message): arrays frozen
+    (their dtype kept), lists :class:`FrozenList`, tuples and sets their frozen items, mappings
+    :class:`FrozenMap`, all the way down; anything else (a number, a str, a graybox value, a function) as it is.
+
+    ``ValueError`` naming ``name`` for a value nested deeper than :data:`MAX_NESTING` levels or one that holds itself.
+    """
+    if isinstance(v, np.ndarray):
+        return v if not v.flags.writeable and v.flags.owndata else frozen(v, v.dtype)
+    if not isinstance(v, (list, tuple, set, frozenset, Mapping)):
+        return v
+    if id(v) in _open:
+        raise ValueError(f"{name} holds itself (a list or mapping inside itself has no copy and no file)")
+    if _depth >= MAX_NESTING:
+        raise ValueError(f"{name} is nested deeper than {MAX_NESTING} levels (lists or mappings inside each other)")
+    inner = _open | {id(v)}
+    if isinstance(v, Mapping):
+        return FrozenMap({k: frozen_value(x, f"{name}[{k!r}]", _depth + 1, inner) for k, x in v.items()})
+    items = [frozen_value(x, f"{name}[{i}]", _depth + 1, inner) for i, x in enumerate(v)]
+    if isinstance(v, list):
+        return FrozenList(items)
+    if isinstance(v, (set, frozenset)):
+        return frozenset(items)
+    return tuple(items) if type(v) is tuple else v  # a named tuple keeps its type (and is immutable itself)
 
 
 class FrozenFrame:

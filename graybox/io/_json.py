@@ -75,7 +75,7 @@ from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
 from ..core._records import Dataset, Record, StaticPoints, check_units
 from ..core._files import bom_encoding, write_atomically
-from ..core._validation import FrozenMap, check_path
+from ..core._validation import MAX_NESTING, FrozenMap, check_path
 from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
 from ..static._analysis import Equilibrium
@@ -437,14 +437,17 @@ def _read_only(a: np.ndarray) -> np.ndarray:
     return a
 
 
-def _enc_plain_map(v: Mapping, where: str) -> dict:
+def _enc_plain_map(v: Mapping, where: str, depth: int = 0) -> dict:
     bad = [k for k in v if not isinstance(k, str)]
     if bad:
         raise ValueError(f"cannot save {where}: its keys must be text, got {bad[0]!r} ({type(bad[0]).__name__})")
-    return {k: _enc_plain(x, f"{where}[{k!r}]") for k, x in v.items()}
+    return {k: _enc_plain(x, f"{where}[{k!r}]", depth + 1) for k, x in v.items()}
 
 
-def _enc_plain(v: Any, where: str) -> Any:
+def _enc_plain(v: Any, where: str, depth: int = 0) -> Any:
+    if depth > MAX_NESTING:  # deeper, or a list that holds itself, ended in a bare RecursionError
+        raise ValueError(f"cannot save {where}: nested deeper than {MAX_NESTING} levels (lists or mappings inside "
+                         "each other, or one that holds itself)")
     if isinstance(v, np.str_):  # text from an array of labels (np.array(["a", "b"])[0]) reads back as such
         return {"scalar": {"dtype": "str", "value": str(v)}}
     if isinstance(v, np.generic):  # a NumPy scalar (np.float64(0.1), np.int64(3)) reads back as one
@@ -466,10 +469,11 @@ def _enc_plain(v: Any, where: str) -> Any:
             raise ValueError(f"cannot save {where}: an array of dtype {v.dtype} (a saved array holds numbers or bools)")
         conv = bool if v.dtype.kind == "b" else int if v.dtype.kind in "iu" else _num
         return {"array": {"dtype": v.dtype.name, "shape": list(v.shape), "data": [conv(x) for x in v.ravel()]}}
-    if isinstance(v, (tuple, list)):
-        return {type(v).__name__: [_enc_plain(x, f"{where}[{i}]") for i, x in enumerate(v)]}
+    if isinstance(v, (tuple, list)):  # a FrozenList (a Dataset's extra keeps lists so) is a list
+        return {"tuple" if isinstance(v, tuple) else "list": [_enc_plain(x, f"{where}[{i}]", depth + 1)
+                                                              for i, x in enumerate(v)]}
     if isinstance(v, Mapping):
-        return {"map": _enc_plain_map(v, where)}
+        return {"map": _enc_plain_map(v, where, depth)}
     if type(v) in _TYPES:
         return {"type": {"type": _TYPES[type(v)], "object": _encode_fields(v)}}
     why = _why_not(v)
@@ -490,7 +494,9 @@ def _why_not(v: Any) -> str:
     return ""
 
 
-def _dec_plain(v: Any, where: str, rd: _Reader) -> Any:
+def _dec_plain(v: Any, where: str, rd: _Reader, depth: int = 0) -> Any:
+    if depth > MAX_NESTING:  # what to_json refuses to write (deeper ran out of Python's recursion)
+        raise rd.fail(where, f"plain values nested deeper than {MAX_NESTING} levels")
     if v is None or isinstance(v, (bool, str, float)):
         return v
     if isinstance(v, int):
@@ -508,10 +514,10 @@ def _dec_plain(v: Any, where: str, rd: _Reader) -> Any:
             return f
         raise rd.fail(at, "a finite number is written as a JSON number")
     if tag in ("tuple", "list"):
-        items = [_dec_plain(y, f"{at}[{i}]", rd) for i, y in enumerate(rd.list(x, at))]
+        items = [_dec_plain(y, f"{at}[{i}]", rd, depth + 1) for i, y in enumerate(rd.list(x, at))]
         return tuple(items) if tag == "tuple" else items
     if tag == "map":
-        return {k: _dec_plain(y, f"{at}.{k}", rd) for k, y in rd.dict(x, at).items()}
+        return {k: _dec_plain(y, f"{at}.{k}", rd, depth + 1) for k, y in rd.dict(x, at).items()}
     if tag == "type":
         t = rd.dict(x, at)
         name = t.get("type")
