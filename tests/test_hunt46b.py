@@ -83,3 +83,19 @@ def test_from_json_refuses_a_hand_nested_plain_value_as_a_corrupt_file():
         deep = '{"list": [' + deep + "]}"
     with pytest.raises(gb.GrayboxFileError, match="nested deeper"):
         gb.from_json(text.replace('"a": 1.0', '"a": ' + deep))
+
+
+# -- sizes that end in a MemoryError are refused up front, naming the option -------------------------------
+def test_gain_bounds_refuses_an_absurd_number_of_levels():
+    # was: any n; GainBounds(lower=0, n=10**9) ended in a MemoryError inside the estimator
+    with pytest.raises(ValueError, match="n must be an integer <="):
+        gb.GainBounds(lower=0.0, n=10**9)
+    assert gb.GainBounds(lower=0.0, n=1000).n == 1000
+
+
+def test_a_grid_of_levels_beyond_a_million_points_names_the_option():
+    from graybox.static._surfaces import box_grid
+
+    with pytest.raises(ValueError, match="GainBounds: n.*1000\\^3"):
+        box_grid([(0.0, 1.0)] * 3, 1000, "GainBounds: n")
+    assert box_grid([(0.0, 1.0), (2.0, 2.0)], 1000).shape == (1000, 2)  # an input held at one level is one level

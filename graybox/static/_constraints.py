@@ -868,6 +868,10 @@ class StaticBand(StaticConstraint):
 # --------------------------------------------------------------------------------------------
 # static-gain bounds over a ū range
 # --------------------------------------------------------------------------------------------
+#: Most levels per input of GainBounds' grid: far denser than any static test measures.
+MAX_GAIN_LEVELS = 10**5
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class GainBounds(StaticConstraint):
     """Bounds on the static gain dȳ/dū over a ū range (e.g. ``lower=0``: a monotone curve).
@@ -905,7 +909,8 @@ class GainBounds(StaticConstraint):
         name (``ubar_range={"speed": (800, 1500)}``), a range holds for that input whatever order the data list
         their inputs in, and an input not named keeps its default range.
     n : int
-        Number of equally spaced ū in the interval (per input) where the bounds are imposed.
+        Number of equally spaced ū in the interval (per input) where the bounds are imposed, 1 to 10⁵ (and
+        at most 10⁶ points over every input that varies: ``ValueError`` when the problem's grid would exceed it).
     reference : StaticCurve, StaticSurface or callable ū ↦ ȳ, optional
         Default: the problem's static curve (or surface), else the problem's static points
         (interpolated linearly for one input, used as they are for several).
@@ -944,7 +949,8 @@ class GainBounds(StaticConstraint):
                 if lo is not None and hi is not None and lo > hi:
                     which = "" if k == 1 else f" of input {j + 1}"
                     raise ValueError(f"lower gain bound {lo} exceeds upper bound {hi}{which}")
-        object.__setattr__(self, "n", check_int(self.n, "GainBounds: n", low=1))
+        # each level a row of the QP per input: beyond this the grid alone ran out of memory (n=10**9: MemoryError)
+        object.__setattr__(self, "n", check_int(self.n, "GainBounds: n", low=1, high=MAX_GAIN_LEVELS))
         ref = self.reference
         if ref is not None and not (isinstance(ref, (StaticCurve, StaticSurface)) or callable(ref)):
             raise TypeError(f"GainBounds: reference must be a StaticCurve, a StaticSurface or a callable ū ↦ ȳ, "
@@ -1122,7 +1128,7 @@ class GainBounds(StaticConstraint):
                 raise ValueError(f"{self.describe()}: give ubar_range (no surface domain or static points to take it from)")
         if named:
             rng = self._named_box(_input_names(ctx), m, rng)
-        U = box_grid(rng, int(self.n))
+        U = box_grid(rng, int(self.n), f"{self.describe()}: n")
         try:
             yb = np.asarray(ref(U), float).reshape(-1)
         except ValueError as exc:  # a surface's refusal of ū outside its domain, said with the constraint
