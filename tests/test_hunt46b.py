@@ -99,3 +99,41 @@ def test_a_grid_of_levels_beyond_a_million_points_names_the_option():
     with pytest.raises(ValueError, match="GainBounds: n.*1000\\^3"):
         box_grid([(0.0, 1.0)] * 3, 1000, "GainBounds: n")
     assert box_grid([(0.0, 1.0), (2.0, 2.0)], 1000).shape == (1000, 2)  # an input held at one level is one level
+
+
+def test_candidates_refuses_an_absurd_lag_or_degree_up_front():
+    # was: Candidates(ny=10**9, nu=1) ended in a MemoryError; a degree of 10**9 never finished
+    for kwargs in ({"ny": 10**9, "nu": 1}, {"ny": 1, "nu": 10**9}, {"ny": 2, "nu": 2, "ne": 10**9},
+                   {"ny": 10**9, "nu": 10**9, "degree": 10**9}, {"ny": 100, "nu": 100, "degree": 3}):
+        with pytest.raises(ValueError, match="candidate terms, more than"):
+            gb.Candidates(**kwargs)
+
+
+def test_candidates_builds_only_the_output_powers_it_keeps():
+    # max_y_power=1 of ny=400 at degree 3 enumerated all 10^7 products of y before dropping them
+    s = gb.Candidates(ny=400, nu=1, degree=3, max_y_power=1)
+    assert max(t.power_of("y") for t in s.terms) == 1 and len(s) == 1 + 401 + 401 + 1 + 400
+    assert len(gb.Candidates(ny=3, nu=0, degree=10**9, max_y_power=1)) == 4
+    assert len(gb.Candidates(ny=10**9, nu=2, degree=2, max_y_power=0)) == 1 + 2 + 3
+    assert len(gb.Candidates(ny=10**9, nu=10**9, degree=0)) == 1  # the constant alone (was: killed, out of memory)
+
+
+@pytest.mark.parametrize("kwargs", [{"ny": 3, "nu": 2, "degree": 3}, {"ny": 2, "nu": 3, "degree": 3, "max_y_power": 1},
+                                    {"ny": 2, "nu": {"a": 2, "b": 3}, "degree": 2, "delay": {"b": 2}, "ne": 2},
+                                    {"ny": 0, "nu": 3, "degree": 2, "constant": False},
+                                    {"ny": 2, "nu": 1, "degree": 4, "max_y_power": 2}])
+def test_candidates_count_agrees_with_every_monomial_by_brute_force(kwargs):
+    import itertools
+
+    s = gb.Candidates(**kwargs)
+    nu = kwargs["nu"] if isinstance(kwargs["nu"], dict) else {"u": kwargs["nu"]}
+    delay = kwargs.get("delay", {})
+    var = [("y", i) for i in range(1, kwargs["ny"] + 1)] + [(n, j) for n, m in nu.items()
+                                                           for j in range(delay.get(n, 1), m + 1)]
+    want = {gb.Term(tuple((v, l, 1) for v, l in c)) for d in range(kwargs["degree"] + 1)
+            for c in itertools.combinations_with_replacement(var, d)}
+    want = {t for t in want if t.power_of("y") <= kwargs.get("max_y_power", 99)
+            and (kwargs.get("constant", True) or not t.is_constant)}
+    assert set(s.process.terms) == want and len(s.process) == len(want)
+    assert list(s.process.terms) == sorted(s.process.terms, key=gb.Term.sort_key)
+    assert len(s.noise) == kwargs.get("ne", 0)

@@ -15,6 +15,7 @@ factor order back, and ``parse_term(str(t)) == t`` for every term.
 from __future__ import annotations
 
 import itertools
+import math
 import re
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -541,20 +542,65 @@ def Candidates(
         if nus[n] and delays[n] > nus[n]:
             label = "" if names == ("u",) else f" of input {n!r}"
             raise ValueError(f"delay{label} ({delays[n]}) must not exceed nu{label} ({nus[n]})")
-    variables = [("y", i) for i in range(1, ny + 1)]
-    for n in names:
-        if nus[n]:
-            variables += [(n, j) for j in range(delays[n], nus[n] + 1)]
-    terms: list[Term] = [Term(())] if constant else []
-    for d in range(1, degree + 1):
-        for combo in itertools.combinations_with_replacement(variables, d):
-            terms.append(Term(tuple((s, l, 1) for s, l in combo)))
     if max_y_power is not None:
         max_y_power = check_int(max_y_power, "max_y_power", low=0)
-        terms = [t for t in terms if t.power_of("y") <= max_y_power]
+    n_u = sum(nus[n] - delays[n] + 1 for n in names if nus[n])
+    count = _candidate_count(ny, n_u, degree, max_y_power) - (not constant) + ne
+    if count > MAX_CANDIDATES:  # ny=10**9 ended in a MemoryError, ny=50 at degree 3 took minutes to build
+        nu_said = dict(nus) if len(names) > 1 else nus[names[0]]
+        raise ValueError(f"Candidates: ny={ny}, nu={nu_said}, ne={ne}, degree={degree} make "
+                         f"{'more than ' if count > 10 * MAX_CANDIDATES else ''}{min(count, 10 * MAX_CANDIDATES):,} "
+                         f"candidate terms, more than {MAX_CANDIDATES:,} (each a column of the regressor matrix); "
+                         "take smaller lags or a lower degree")
+    top_y = degree if max_y_power is None else min(max_y_power, degree)
+    y_vars = [("y", i) for i in range(1, ny + 1)] if top_y else []  # none is used at max_y_power=0 (ny may be huge)
+    u_vars = [(n, j) for n in names if nus[n] for j in range(delays[n], nus[n] + 1)] if degree else []
+    terms: list[Term] = [Term(())] if constant else []
+    # without inputs a term holds y alone, of degree top_y at most (Candidates(1, 0, degree=10**9) has ny + 1 terms)
+    for d in range(1, (degree if u_vars else top_y if y_vars else 0) + 1):
+        # the output's part and the inputs' apart: only the powers of y kept are ever built (max_y_power=1 of
+        # ny=1000 at degree 3 built all 10^8 products of y before dropping them)
+        for k in range(min(d, top_y) + 1):
+            for y_combo in itertools.combinations_with_replacement(y_vars, k):
+                for u_combo in itertools.combinations_with_replacement(u_vars, d - k):
+                    terms.append(Term(tuple((s, l, 1) for s, l in y_combo + u_combo)))
     terms.sort(key=Term.sort_key)
     terms += [Term((("e", l, 1),)) for l in range(1, ne + 1)]
     return Structure(terms)
+
+
+#: Most process candidates a Candidates call builds: each is a column of an N-row regressor matrix (a million at
+#: N = 1000 is 8 GB), and building them alone takes minutes.
+MAX_CANDIDATES = 10**6
+
+
+def _comb_capped(n: int, k: int) -> int:
+    """``math.comb(n, k)``, or a number above 10 × MAX_CANDIDATES once it is that large (comb(2·10⁹, 10⁹) has
+    hundreds of millions of digits)."""
+    k = min(k, n - k)
+    if k < 0:
+        return 0
+    r = 1
+    for i in range(1, k + 1):  # comb(n - k + i, i): growing in i, at least doubling while i <= k <= n / 2
+        r = r * (n - k + i) // i
+        if r > 10 * MAX_CANDIDATES:
+            return r
+    return r
+
+
+def _candidate_count(ny: int, n_u: int, degree: int, max_y_power: int | None) -> int:
+    """How many process terms (constant included) of degree <= ``degree`` in ``ny`` output and ``n_u`` input
+    variables, with at most ``max_y_power`` in the output, without building them; past 10 × MAX_CANDIDATES the
+    count stops growing (the answer is then only "too many")."""
+    if max_y_power is None or max_y_power >= degree:
+        return _comb_capped(ny + n_u + degree, degree)
+    total = 0
+    for k in range(min(max_y_power, degree) + 1):  # k: the terms' power of y
+        y_part = 1 if k == 0 else _comb_capped(ny + k - 1, k)
+        total += y_part * _comb_capped(n_u + degree - k, degree - k)
+        if total > 10 * MAX_CANDIDATES or (ny == 0 and k == 0):  # without y, every power of it above 0 is none
+            break
+    return total
 
 
 def _per_input(value, names: tuple[str, ...], what: str, default: int | None) -> dict[str, int]:
