@@ -137,3 +137,56 @@ def test_candidates_count_agrees_with_every_monomial_by_brute_force(kwargs):
     assert set(s.process.terms) == want and len(s.process) == len(want)
     assert list(s.process.terms) == sorted(s.process.terms, key=gb.Term.sort_key)
     assert len(s.noise) == kwargs.get("ne", 0)
+
+
+# -- one coercion of a structure: every function that takes one takes the same kinds ------------------------
+@pytest.fixture(scope="module")
+def fitted():
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(1.0, 2.0, 40), 10)
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.6 * y[k - 1] + 0.5 * u[k - 1] + 0.1 * u[k - 1] ** 2
+    rec = gb.Record(u, y + 1e-3 * rng.standard_normal(u.size), name="r")
+    cand = gb.Candidates(1, 1, degree=2)
+    res = gb.els(gb.frols(cand, rec, n_terms=3), rec)
+    return rec, cand, res
+
+
+def test_the_low_level_functions_take_a_result_that_carries_a_model(fitted):
+    # was: simulate, predict, static_curve, equilibria, the cluster maps … refused an ELSResult or a Decision
+    # ("structure must be a Structure, a sequence of terms or a model, got ELSResult") while the estimators took it
+    rec, _, res = fitted
+    m = res.model
+    th = m.theta
+    np.testing.assert_array_equal(gb.simulate(res, th, rec), gb.simulate(m.structure, th, rec))
+    np.testing.assert_array_equal(gb.predict(res, th, rec), gb.predict(m.structure, th, rec))
+    np.testing.assert_array_equal(gb.static_curve(res, th, [1.5]), m.static_curve([1.5]))
+    assert gb.equilibria(res, th, 1.5) == m.equilibria(1.5)
+    assert gb.cluster_map(res).names == m.cluster_map().names
+    np.testing.assert_array_equal(gb.regressor_matrix(res, rec.u, rec.y), gb.regressor_matrix(m.structure, rec.u, rec.y))
+    assert gb.Model(res, th).structure == m.structure
+
+
+def test_frols_and_semp_take_their_candidates_as_every_structure_argument_is_taken(fitted):
+    # was: "candidates must be a Structure (e.g. Candidates(...)), got list" for a list of terms
+    rec, cand, _ = fitted
+    terms = [str(t) for t in cand]
+    assert gb.frols(terms, rec, n_terms=3).structure == gb.frols(cand, rec, n_terms=3).structure
+    assert gb.semp(terms, rec, n_terms=2).structure == gb.semp(cand, rec, n_terms=2).structure
+    with pytest.raises(TypeError, match="candidates must be a Structure, a sequence of terms.*parse_structure"):
+        gb.frols(" + ".join(terms), rec, n_terms=3)
+    with pytest.raises(TypeError, match="candidates must be a Structure, a sequence of terms.*OEResult"):
+        gb.semp(3, rec, n_terms=2)
+
+
+def test_the_estimators_take_any_sequence_of_terms_as_the_rest_do(fitted):
+    # was: els and the other estimators refused a NumPy array of term strings (what a DataFrame column gives) and a
+    # generator, which simulate and static_curve took
+    rec, _, res = fitted
+    terms = [str(t) for t in res.model.structure]
+    want = gb.els(terms, rec).model.theta
+    np.testing.assert_array_equal(gb.els(np.array(terms), rec).model.theta, want)
+    np.testing.assert_array_equal(gb.els((t for t in terms), rec).model.theta, want)
+    with pytest.raises(TypeError, match=r"structure: a term must be a string"):
+        gb.els([1, 2], rec)

@@ -451,17 +451,36 @@ class Structure:
                 f"[{', '.join(names[:3])}, …, {', '.join(names[-2:])}])")
 
 
+#: What a structure argument may be, in words: every TypeError about one lists it (the estimators' coercion,
+#: graybox.models._coerce.as_structure, and structure_of below say the same).
+STRUCTURE_ACCEPTED = ("a Structure, a sequence of terms or a model: a sequence of terms (str or Term), a Model, or a "
+                      "result that carries one (Selection, SEMPResult, ParetoSet, GrayboxSelection, ELSResult, "
+                      "CLSResult, OEResult, Decision, DSFResult)")
+
+
 def structure_of(obj: object, name: str = "structure") -> Structure:
     """``obj`` as a Structure: a Structure, a sequence of terms (Terms or strings), or anything that
-    carries one in ``.structure`` (a Model, a result); ``TypeError`` naming ``name`` otherwise."""
+    carries one in ``.structure`` (a Model, a Selection, a ParetoSet …) or whose ``.model`` does (an ELSResult, a
+    Decision …); ``TypeError`` naming ``name`` and listing these otherwise (a lone string: naming parse_structure)."""
     if isinstance(obj, Structure):
         return obj
     carried = getattr(obj, "structure", None)
     if isinstance(carried, Structure):
         return carried
+    # a result with a .model (ELSResult, CLSResult, OEResult, Decision …): the README promises them wherever a
+    # structure is meant, and the estimators took them while simulate, static_curve and the rest refused them
+    carried = getattr(getattr(obj, "model", None), "structure", None)
+    if isinstance(carried, Structure):
+        return carried
+    if isinstance(obj, str):  # iterated, it would be read character by character
+        raise TypeError(f"{name} must be {STRUCTURE_ACCEPTED}; got the string {obj!r:.80}: pass a list of terms, or "
+                        "parse a '+'-joined string with parse_structure")
     if isinstance(obj, (bytes, Mapping)) or not isinstance(obj, Iterable):
-        raise TypeError(f"{name} must be a Structure, a sequence of terms or a model, got {type(obj).__name__}")
-    return Structure(obj)  # a lone string is refused there, naming parse_structure
+        raise TypeError(f"{name} must be {STRUCTURE_ACCEPTED}; got {type(obj).__name__}")
+    try:
+        return Structure(obj)
+    except TypeError as exc:  # an item that is no term (a number, None): said with the argument's name
+        raise TypeError(f"{name}: {exc}") from None
 
 
 def parse_structure(text: str | Sequence[str]) -> Structure:

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..core._records import Dataset, Record, StaticPoints, check_same_units, frame_inputs, record_hint, static_hint
 from ..core._records import as_records as records_of  # records: coerced in core, which its own regressors need
-from ..core._terms import Structure, Term
+from ..core._terms import STRUCTURE_ACCEPTED, Structure, structure_of
 from ..core._validation import as_1d_finite, float_array
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface, box_grid
@@ -36,10 +36,6 @@ CURVE_LEVELS = 10
 #: Levels per input a StaticSurface is sampled at over its domain box (a grid) when no ū is given.
 SURFACE_LEVELS = 6
 
-#: What a structure argument may be, in words (the TypeError lists it).
-STRUCTURE_ACCEPTED = ("a Structure, a sequence of terms (str or Term), a Model, or a result that carries one "
-                      "(Selection, SEMPResult, ParetoSet, GrayboxSelection, ELSResult, CLSResult, OEResult, Decision, "
-                      "DSFResult)")
 #: What a model argument may be, in words.
 MODEL_ACCEPTED = ("a Model or a result that carries one in .model (ELSResult, CLSResult, OEResult, Decision, "
                   "DSFResult, Selection, SEMPResult, GrayboxSelection)")
@@ -94,9 +90,7 @@ def as_structure(obj: object, name: str = "structure", *, with_noise: bool = Fal
         if with_noise and len(model.noise_structure):
             return Structure(tuple(model.structure) + tuple(model.noise_structure))
         return model.structure
-    if isinstance(obj, (list, tuple)) and all(isinstance(t, (str, Term)) for t in obj):
-        return Structure(obj)
-    raise TypeError(f"{name} must be {STRUCTURE_ACCEPTED}; got {type(obj).__name__}")
+    return structure_of(obj, name)  # a sequence of terms, else the one TypeError that lists what is accepted
 
 
 def as_model(obj: object, name: str = "model", *, kinds: tuple[type, ...] = (Model,),

@@ -56,7 +56,7 @@ import pandas as pd
 
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, carried_from, check_units, require_lengths
-from ..core._terms import Structure, Term
+from ..core._terms import Structure, Term, structure_of
 from ..core._gram import (
     DaskRecord,
     as_gram_records,
@@ -678,8 +678,8 @@ def frols(
         at the edge of the range; when an exact search ran out of nodes.
     """
     # ---- validate arguments at the boundary ----
-    if not isinstance(candidates, Structure):
-        raise TypeError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+    # a candidate set is a structure: taken as every structure argument is (a list of terms, a result …)
+    candidates = structure_of(candidates, "candidates")
     process, noise = candidates.process, candidates.noise
     n_cand = len(process)
     if n_cand == 0:

@@ -45,7 +45,7 @@ from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, as_records, carried_from, check_units, require_lengths
 from ._forward_regression import CRITERIA, CandidateWarning, criterion_of_sizes
 from ._stopping import choose_model, stop_rule
-from ..core._terms import Structure, Term
+from ..core._terms import Structure, Term, structure_of
 from . import _centring
 from ..core._validation import (FrozenFrame, check_bool, check_choice, check_fields, check_int, check_mean_square,
                                 check_real, check_theta, frozen, warn)
@@ -325,6 +325,7 @@ def semp(
         were left (the curve may still be falling), or at the largest size the record's rows allow
         (samples after the largest lag − 1: the structure interpolates the record).
     """
+    candidates = structure_of(candidates, "candidates")  # a list of terms, a result … (as every structure argument)
     opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
     if check_bool(centre, "centre"):
         return _semp_centred(candidates, data, n_terms=n_terms, tol=tol, criterion=criterion, max_terms=max_terms,
@@ -405,8 +406,7 @@ def _options(candidates: Structure, n_terms: int | None, tol: float | None, crit
              max_terms: int | None, include: Sequence[Term | str], prune: bool, prune_tol: float, rank_tol: float,
              threads: int) -> _Options:
     """The arguments of :func:`semp` checked (TypeError / ValueError naming the argument), and its plan."""
-    if not isinstance(candidates, Structure):
-        raise TypeError(f"candidates must be a Structure (e.g. Candidates(...)), got {type(candidates).__name__}")
+    candidates = structure_of(candidates, "candidates")
     process = candidates.process
     nc = len(process)
     if nc == 0:
