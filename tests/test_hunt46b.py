@@ -190,3 +190,19 @@ def test_the_estimators_take_any_sequence_of_terms_as_the_rest_do(fitted):
     np.testing.assert_array_equal(gb.els((t for t in terms), rec).model.theta, want)
     with pytest.raises(TypeError, match=r"structure: a term must be a string"):
         gb.els([1, 2], rec)
+
+
+def test_els_refuses_an_ma_order_beyond_the_records_before_building_its_terms(fitted):
+    # was: els(..., noise=10**12) built 10^12 noise terms before the record's length was read (never finished)
+    rec, _, res = fitted
+    with pytest.raises(ValueError, match=r"noise: ne = 1000000000000 .*longest record has \(400\)"):
+        gb.els(res, rec, noise=10**12)
+    with pytest.raises(ValueError, match=r"noise: ne = 400"):
+        gb.els(res, rec, noise=400)
+    assert len(gb.els(res, rec, noise=3).model.noise_structure) == 3
+
+
+def test_els_names_noise_for_a_number_among_its_terms(fitted):
+    rec, _, res = fitted
+    with pytest.raises(TypeError, match="noise: a term must be a string"):
+        gb.els(res, rec, noise=[1, 2])

@@ -313,12 +313,13 @@ def _noise_structure(noise: object) -> Structure:
     items = check_sequence(noise, "noise", "an integer ne >= 0, a Structure or a sequence of noise terms")
     try:
         return Structure(items)
-    except ValueError as exc:
-        raise ValueError(f"noise: {exc}") from None
+    except (TypeError, ValueError) as exc:  # a number among the terms, too: said with the argument's name
+        raise type(exc)(f"noise: {exc}") from None
 
 
-def _resolve(structure, noise) -> tuple[Structure, Structure]:
-    """Split the arguments of :func:`els` into (process, noise) structures."""
+def _resolve(structure, noise, data: object = None) -> tuple[Structure, Structure]:
+    """Split the arguments of :func:`els` into (process, noise) structures (an MA order ``noise`` checked against
+    ``data``'s longest record before its terms are built)."""
     st = as_structure(structure, with_noise=True)  # a Selection's or a Model's noise terms come along
     process, carried = st.process, st.noise
     if len(process) == 0:
@@ -326,7 +327,15 @@ def _resolve(structure, noise) -> tuple[Structure, Structure]:
     if noise is None:
         ns = carried if len(carried) else noise_terms(DEFAULT_NE)
     elif isinstance(noise, (int, np.integer)) and not isinstance(noise, bool):
-        ns = noise_terms(check_int(noise, "noise: ne", low=0))
+        ne = check_int(noise, "noise: ne", low=0)
+        if data is not None and ne:
+            # a lag as long as the longest record fits no regression row; noise=10**12 built 10^12 terms before
+            # the records said so (it never finished)
+            longest = max(len(r) for r in records_of(data))
+            if ne >= longest:
+                raise ValueError(f"noise: ne = {ne} lags the residuals by as many samples as the longest record "
+                                 f"has ({longest}) or more: no regression row is left; take a smaller ne")
+        ns = noise_terms(ne)
     else:
         ns = noise if isinstance(noise, Structure) else _noise_structure(noise)
         not_noise = [str(t) for t in ns if not t.is_noise]
@@ -558,7 +567,7 @@ def els(
     ELSConvergenceWarning
         When ``max_iter`` iterations pass without meeting the stopping rule.
     """
-    process, ns = _resolve(structure, noise)
+    process, ns = _resolve(structure, noise, data)
     name = check_str(name, "name")
     max_iter = check_int(max_iter, "max_iter", low=1)
     tol = check_real(tol, "tol", low=0, low_open=True)
