@@ -206,3 +206,22 @@ def test_els_names_noise_for_a_number_among_its_terms(fitted):
     rec, _, res = fitted
     with pytest.raises(TypeError, match="noise: a term must be a string"):
         gb.els(res, rec, noise=[1, 2])
+
+
+# -- design_input: a staircase of many inputs ----------------------------------------------------------------
+def test_a_staircase_of_many_inputs_says_which_never_move_instead_of_running_out_of_memory():
+    # was: n_inputs=30 built the whole 2^30-point grid (MemoryError: 8 GiB) before taking the record's 100 holds
+    with pytest.raises(ValueError, match="never moves"):
+        gb.design_input("staircase", 1000, n_inputs=30, low=0.0, high=1.0, hold=10)
+    with pytest.raises(ValueError, match="never moves"):
+        gb.design_input("staircase", 1000, n_inputs=80, low=0.0, high=1.0, hold=10)
+
+
+@pytest.mark.parametrize("n, m, hold", [(1000, 3, 10), (300, 2, 5), (2000, 4, 5), (60, 1, 3), (4000, 6, 20)])
+def test_a_staircase_that_fits_is_the_same_walk_as_before(n, m, hold):
+    # the serpentine over the whole grid, there and back: every move changes one input by one level
+    u = gb.design_input("staircase", n, n_inputs=m, low=0.0, high=1.0, hold=hold)
+    holds = u[::hold] if m > 1 else u[::hold, None]
+    steps = np.abs(np.diff(holds, axis=0))
+    assert np.all((steps > 0).sum(axis=1) <= 1)
+    assert holds.min() == 0.0 and holds.max() == 1.0

@@ -235,12 +235,18 @@ def _staircase(k: int, m: int) -> np.ndarray:
     L = 2
     while 2 * (L + 1) ** m - 2 <= k:
         L += 1
-    j = np.arange(L**m)
-    digits = np.column_stack([(j // L ** (m - 1 - i)) % L for i in range(m)])  # column 0 the slowest
+    # a grid of more points than holds is walked part of the way only: its first k points (2^30 of them for 30
+    # inputs ran out of memory), each digit 0 where its place value exceeds every index (none past int64)
+    j = np.arange(min(L**m, k))
+    top = int(j[-1]) if j.size else 0
+    digits = np.column_stack([(j // L ** (m - 1 - i)) % L if L ** (m - 1 - i) <= top else np.zeros(j.size, int)
+                              for i in range(m)])  # column 0 the slowest
     for i in range(1, m):  # serpentine: a digit runs backwards while the slower digits' sum is odd
         odd = digits[:, :i].sum(axis=1) % 2 == 1
         digits[odd, i] = L - 1 - digits[odd, i]
     path = digits / (L - 1)
+    if len(path) < L**m:
+        return path
     there_and_back = np.vstack([path, path[-2:0:-1]]) if len(path) > 2 else path
     return np.resize(there_and_back, (k, m))
 
