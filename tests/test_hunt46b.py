@@ -225,3 +225,29 @@ def test_a_staircase_that_fits_is_the_same_walk_as_before(n, m, hold):
     steps = np.abs(np.diff(holds, axis=0))
     assert np.all((steps > 0).sum(axis=1) <= 1)
     assert holds.min() == 0.0 and holds.max() == 1.0
+
+
+# -- a structure pickled to another process ------------------------------------------------------------------
+def test_a_structure_pickled_to_another_process_hashes_as_an_equal_one_there():
+    # was: the cached hash travelled with the pickle; str hashes differ per process (PYTHONHASHSEED), so in a
+    # worker the structure equalled a fresh one but missed every set and dict keyed by it
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = str(Path(gb.__file__).parents[1])
+    env = {**os.environ, "PYTHONPATH": root + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    make = ("import pickle, sys, graybox as gb; s = gb.Structure(['y(k-1)', 'u(k-1)', 'u(k-1)y(k-1)']); hash(s); "
+            "m = gb.Model(s, [0.5, 1.0, 0.1]); hash(m.structure); sys.stdout.buffer.write(pickle.dumps((s, m)))")
+    blob = subprocess.run([sys.executable, "-c", make], capture_output=True, check=True,
+                          env={**env, "PYTHONHASHSEED": "1"}).stdout
+    read = ("import pickle, sys, graybox as gb; s, m = pickle.loads(sys.stdin.buffer.read()); "
+            "t = gb.Structure(['y(k-1)', 'u(k-1)', 'u(k-1)y(k-1)']); "
+            "print(s == t, hash(s) == hash(t), s in {t}, m.structure in {t})")
+    out = subprocess.run([sys.executable, "-c", read], input=blob, capture_output=True, check=True,
+                         env={**env, "PYTHONHASHSEED": "2"}).stdout.decode().split()
+    assert out == ["True"] * 4
+    s = gb.Structure(["y(k-1)"])
+    hash(s)
+    assert copy.deepcopy(s) == s and hash(copy.deepcopy(s)) == hash(s) and pickle.loads(pickle.dumps(s)) in {s}

@@ -357,6 +357,14 @@ class Structure:
             object.__setattr__(self, "_hash", h)
         return h
 
+    def __getstate__(self) -> dict:
+        # without the cached hash: a str's hash differs from one process to the next (PYTHONHASHSEED), so a
+        # structure sent to a worker (executor="processes") carried a hash no equal structure there has, and
+        # missed every set, dict and compiled-code cache keyed by an equal one
+        state = dict(self.__dict__)
+        state.pop("_hash", None)
+        return state
+
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Structure) and (self is other or self.terms == other.terms)
 
