@@ -251,3 +251,18 @@ def test_a_structure_pickled_to_another_process_hashes_as_an_equal_one_there():
     s = gb.Structure(["y(k-1)"])
     hash(s)
     assert copy.deepcopy(s) == s and hash(copy.deepcopy(s)) == hash(s) and pickle.loads(pickle.dumps(s)) in {s}
+
+
+# -- constructors name the field of a wrong type ---------------------------------------------------------------
+@pytest.mark.parametrize("bounds", [0.5, [("Σy", (0, 1))], None, "Σy", True])
+def test_cluster_bounds_of_a_wrong_type_is_a_type_error_naming_bounds(bounds):
+    # was: "'float' object is not iterable", "dictionary update sequence element #0 …" (a ValueError for a str)
+    with pytest.raises(TypeError, match="ClusterBounds: bounds must be a mapping"):
+        gb.ClusterBounds(bounds)
+    with pytest.raises(ValueError, match="at least one cluster"):
+        gb.ClusterBounds({})
+
+
+def test_model_names_noise_structure_for_a_number_among_its_terms():
+    with pytest.raises(TypeError, match="noise_structure: a term must be a string"):
+        gb.Model(["y(k-1)"], [0.5], noise_structure=[1, 2])

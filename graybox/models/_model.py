@@ -82,7 +82,11 @@ class Model:
             raise ValueError("noise terms belong in noise_structure, not in the process structure")
         ns = self.noise_structure
         if not isinstance(ns, Structure):
-            ns = Structure(check_sequence(ns, "noise_structure", "a Structure or a sequence of noise terms"))
+            items = check_sequence(ns, "noise_structure", "a Structure or a sequence of noise terms")
+            try:
+                ns = Structure(items)
+            except (TypeError, ValueError) as exc:  # a number among the terms: said with the field's name
+                raise type(exc)(f"noise_structure: {exc}") from None
         if not all(t.is_noise for t in ns):
             raise ValueError(f"noise_structure must hold noise terms e(k-l) only; got {ns}")
         object.__setattr__(self, "structure", st)

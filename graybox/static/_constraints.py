@@ -48,7 +48,7 @@ from ._surfaces import StaticSurface, box_grid
 from ._analysis import ClusterMap, cluster_map, cluster_name, denominator_vanishes, is_rational, vanishing_denominator
 from ._surface_analysis import SurfaceClusterMap, surface_cluster_map, surface_static_rows
 from ..core._terms import Structure, transient_source
-from ..core._validation import FrozenMap, check_choice, check_int, check_real, check_sequence, check_str
+from ..core._validation import FrozenMap, check_choice, check_int, check_real, check_sequence, check_str, short_value
 from ..core._reprs import level_texts, short_repr
 
 if TYPE_CHECKING:  # cvxpy takes seconds to import: loaded where a user constraint needs it
@@ -1258,6 +1258,9 @@ class ClusterBounds(StaticConstraint):
     bounds: Mapping[str | tuple[int, int], tuple[float | None, float | None]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        if not isinstance(self.bounds, Mapping):  # a number, a list, None: Python's own "not iterable" named nothing
+            raise TypeError(f"ClusterBounds: bounds must be a mapping cluster name -> (lower, upper), e.g. "
+                            f"{{'Σy': (None, 0.999)}}, got {short_value(self.bounds)} ({type(self.bounds).__name__})")
         if not self.bounds:
             raise ValueError("ClusterBounds needs at least one cluster")
         clean = {}
