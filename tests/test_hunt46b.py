@@ -266,3 +266,14 @@ def test_cluster_bounds_of_a_wrong_type_is_a_type_error_naming_bounds(bounds):
 def test_model_names_noise_structure_for_a_number_among_its_terms():
     with pytest.raises(TypeError, match="noise_structure: a term must be a string"):
         gb.Model(["y(k-1)"], [0.5], noise_structure=[1, 2])
+
+
+def test_gain_bounds_per_input_are_a_copy_not_the_caller_s_list():
+    # was: GainBounds kept the caller's list (or array), so changing it afterwards changed the constraint
+    lows, highs = [0.0, None], np.array([5.0, 6.0])
+    g = gb.GainBounds(lower=lows, upper=highs)
+    lows[0], highs[0] = -100.0, -50.0
+    assert g.lower == (0.0, None) and g.upper == (5.0, 6.0)
+    assert g._bounds(2) == [(0.0, 5.0), (None, 6.0)]
+    assert gb.GainBounds(lower=np.float32(0.5)).lower == 0.5
+    assert gb.GainBounds(lower=[0.0])._bounds(2) == [(0.0, None), (0.0, None)]  # one entry: every input

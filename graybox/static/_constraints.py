@@ -932,6 +932,10 @@ class GainBounds(StaticConstraint):
             v = getattr(self, name)
             if isinstance(v, Mapping):
                 object.__setattr__(self, name, FrozenMap(_named_bounds(v, name)))
+            elif v is not None and np.ndim(v) > 0:  # per input: a tuple of its checked bounds, not the caller's
+                object.__setattr__(self, name, tuple(_per_input(v, name)))  # list (which changed the constraint)
+            elif v is not None:
+                object.__setattr__(self, name, check_real(v, f"{name} (a gain bound, or None)"))
         sides = [list(v.values()) if isinstance(v, Mapping) else _per_input(v, name)
                  for name, v in (("lower", self.lower), ("upper", self.upper))]
         if all(v is None for side in sides for v in side):
