@@ -277,3 +277,42 @@ def test_gain_bounds_per_input_are_a_copy_not_the_caller_s_list():
     assert g._bounds(2) == [(0.0, 5.0), (None, 6.0)]
     assert gb.GainBounds(lower=np.float32(0.5)).lower == 0.5
     assert gb.GainBounds(lower=[0.0])._bounds(2) == [(0.0, None), (0.0, None)]  # one entry: every input
+
+
+# -- the guide's calls match the signatures ----------------------------------------------------------------------
+def _split_args(text):
+    parts, depth, cur = [], 0, ""
+    for ch in text:
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        if ch == "," and depth == 0:
+            parts.append(cur.strip())
+            cur = ""
+        else:
+            cur += ch
+    return [p for p in parts + [cur.strip()] if p]
+
+
+def test_the_calls_the_guide_and_readme_write_in_prose_fit_the_signatures():
+    # was: black_box.md said `Candidates(ny, nu, ne, degree, ...)`, but ne and degree are keyword-only
+    import inspect
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).parents[1]
+    bad = []
+    for path in sorted((root / "docs" / "guide").glob("*.md")) + [root / "README.md"]:
+        for m in re.finditer(r"`(?:gb\.)?([A-Za-z_]\w*)\(([^`]*)\)`", path.read_text(encoding="utf-8")):
+            f = getattr(gb, m.group(1), None)
+            if not inspect.isfunction(f):
+                continue
+            params = inspect.signature(f).parameters.values()
+            parts = _split_args(m.group(2))
+            pos = [a for a in parts if not re.match(r"^\w+\s*=", a) and a not in ("...", "…") and not a.startswith("*")]
+            kws = [a.split("=")[0].strip() for a in parts if re.match(r"^\w+\s*=", a)]
+            n_pos = sum(p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params)
+            if len(pos) > n_pos or any(k not in {p.name for p in params} for k in kws):
+                bad.append(f"{path.name}: {m.group(0)}")
+    assert not bad, bad
