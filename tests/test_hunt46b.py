@@ -316,3 +316,17 @@ def test_the_calls_the_guide_and_readme_write_in_prose_fit_the_signatures():
             if len(pos) > n_pos or any(k not in {p.name for p in params} for k in kws):
                 bad.append(f"{path.name}: {m.group(0)}")
     assert not bad, bad
+
+
+# -- a Dataset where one record is meant and the call cannot tell which --------------------------------------
+def test_the_free_run_and_prediction_entries_tell_a_dataset_which_record_to_pass(fitted):
+    # was: "record must be a Record, got Dataset" and "u must be an array of numbers, got Dataset", no word of
+    # data.ident or data.valid (the plots said it; README: a Dataset stands for a record where the call means one)
+    rec, _, res = fitted
+    m = res.model
+    data = gb.Dataset(rec, rec)
+    for call in (lambda: gb.predict(m.structure, m.theta, data), lambda: gb.simulate_many(m.structure, m.theta[None], data),
+                 lambda: gb.simulate(m.structure, m.theta, data), lambda: m.simulate(data), lambda: m.predict(data),
+                 lambda: gb.narx_initial_state(m, data)):
+        with pytest.raises(TypeError, match=r"got Dataset; pass one of its records: data.ident or data.valid"):
+            call()

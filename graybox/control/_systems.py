@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core._records import Record, frame_inputs
+from ..core._records import Record, frame_inputs, require_record
 from ..core._simulation import DivergenceError
 from ..core._terms import Structure
 from ..core._transient import steady_levels
@@ -126,8 +126,7 @@ def narx_initial_state(model: Model, record: Record, *, start: int | None = None
     """
     model = check_polynomial(model, "narx_initial_state")
     noise = check_bool(noise, "noise")
-    if not isinstance(record, Record):
-        raise TypeError(f"record must be a Record, got {type(record).__name__}")
+    require_record(record)  # a Dataset: told to pass data.ident or data.valid
     model.check_record(record)  # the system runs at the model's period and units: so must the lags it starts from
     lay = _layout(model.structure, model.input_names)
     L = model.max_lag

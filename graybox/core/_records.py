@@ -617,6 +617,8 @@ __all__.append("Dataset")
 
 def record_hint(data: object) -> str:
     """How to make a Record of what was given where one is meant (a path, a DataFrame, arrays), else ``""``."""
+    if isinstance(data, Dataset):  # where one record is meant and the call cannot tell which
+        return "; pass one of its records: data.ident or data.valid"
     if isinstance(data, (str, os.PathLike)):
         return ("; read the file first: graybox.load_record_csv(path, u='input column', y='output column', "
                 "time='time column') (or Ts=seconds)")
@@ -631,6 +633,14 @@ def record_hint(data: object) -> str:
             isinstance(r, (np.ndarray, list, tuple, int, float, np.number)) or _is_series(r) for r in data)):
         return "; make one of the input and output samples: graybox.Record(u, y, Ts=seconds)"
     return ""
+
+
+def require_record(record: object, name: str = "record") -> Record:
+    """``record`` if it is a Record, else ``TypeError`` naming ``name`` and how to make one (a Dataset: which of its
+    records to pass)."""
+    if not isinstance(record, Record):
+        raise TypeError(f"{name} must be a Record, got {type(record).__name__}{record_hint(record)}")
+    return record
 
 
 def static_hint(static: object) -> str:

@@ -14,7 +14,7 @@ import numpy as np
 
 from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_inputs, scaled_bound, simulate_batch,
                                  simulate_one)
-from ._records import Record, as_input_array, is_frame
+from ._records import Dataset, Record, as_input_array, is_frame, record_hint, require_record
 from ._terms import check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta, real_array
 from ._regressors import regressor_matrix
@@ -54,8 +54,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
         bound (from the measured outputs that run starts from and the record's inputs); one step
         ahead is never NaN for finite data.
     """
-    if not isinstance(record, Record):
-        raise TypeError(f"record must be a Record, got {type(record).__name__}")
+    require_record(record)  # a Dataset: told to pass data.ident or data.valid
     structure = structure_of(structure)
     th = check_theta(len(structure), theta)
     horizon = check_int(horizon, "horizon", low=1)
@@ -115,6 +114,8 @@ def free_run_inputs(
             y0 = u.y[:L]
         u = u.u
     else:
+        if isinstance(u, Dataset):  # "u must be an array of numbers" said nothing of which record to pass
+            raise TypeError(f"u must be a Record or an array of inputs, got Dataset{record_hint(u)}")
         u = as_input_array(u, "u", names)
         if y0 is None:
             if L > 0:
@@ -227,8 +228,7 @@ def simulate_many(
     """
     threads = check_int(threads, "threads", low=1)
     structure = structure_of(structure)
-    if not isinstance(record, Record):
-        raise TypeError(f"record must be a Record, got {type(record).__name__}")
+    require_record(record)  # a Dataset: told to pass data.ident or data.valid
     # the one conversion of numbers (text, booleans, None: TypeError; beyond the float range: ValueError)
     th = real_array(thetas, "thetas", "parameter vectors (numbers), shape (P, n_terms)")
     if th.ndim != 2 or th.shape[1] != len(structure):

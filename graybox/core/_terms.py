@@ -15,7 +15,6 @@ factor order back, and ``parse_term(str(t)) == t`` for every term.
 from __future__ import annotations
 
 import itertools
-import math
 import re
 from dataclasses import dataclass
 from functools import cached_property, lru_cache

@@ -128,7 +128,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..core._least_squares import output_spread
-from ..core._records import Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths
+from ..core._records import (Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths,
+                             require_record)
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
@@ -538,8 +539,7 @@ class NeuralModel:
         horizon : int >= 1, keyword-only
             Samples ahead (default 1).
         """
-        if not isinstance(record, Record):
-            raise TypeError(f"record must be a Record, got {type(record).__name__}")
+        require_record(record)  # a Dataset: told to pass data.ident or data.valid
         horizon = check_int(horizon, "horizon", low=1)
         L = self.max_lag
         record.require_length(L)
@@ -580,8 +580,7 @@ class NeuralModel:
         e : ndarray, shape (N,)
             Residuals y − ŷ in output units (0 on the first ``max_lag`` samples).
         """
-        if not isinstance(record, Record):
-            raise TypeError(f"record must be a Record, got {type(record).__name__}")
+        require_record(record)  # a Dataset: told to pass data.ident or data.valid
         record.require_length(self.max_lag)
         un, yn = self._un(self._input(record)), self._yn(record.y)
         seg = np.array([0, len(record)], dtype=np.int64)
