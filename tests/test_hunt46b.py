@@ -330,3 +330,22 @@ def test_the_free_run_and_prediction_entries_tell_a_dataset_which_record_to_pass
                  lambda: gb.narx_initial_state(m, data)):
         with pytest.raises(TypeError, match=r"got Dataset; pass one of its records: data.ident or data.valid"):
             call()
+
+
+# -- regressor_matrix checks the signals it is given -------------------------------------------------------------
+def test_regressor_matrix_takes_lists_and_refuses_bad_signals_naming_them(fitted):
+    # was: lists or None were an AttributeError ("'list' object has no attribute 'shape'"), a u shorter than y
+    # numpy's broadcast error, a NaN in u a silent NaN column
+    rec, _, res = fitted
+    want = gb.regressor_matrix(res, rec.u, rec.y)
+    np.testing.assert_array_equal(gb.regressor_matrix(res, list(rec.u), list(rec.y)), want)
+    with pytest.raises(TypeError, match="^u must be"):
+        gb.regressor_matrix(res, None, rec.y)
+    with pytest.raises(TypeError, match="^y must be"):
+        gb.regressor_matrix(res, rec.u, "x")
+    with pytest.raises(ValueError, match="u has 10 samples but y has 400"):
+        gb.regressor_matrix(res, rec.u[:10], rec.y)
+    u = np.array(rec.u)
+    u[7] = np.nan
+    with pytest.raises(ValueError, match="u"):
+        gb.regressor_matrix(res, u, rec.y)

@@ -11,7 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ._records import Record, as_records, require_lengths
+from ._records import Record, as_input_array, as_records, require_lengths
 from ._terms import Structure, check_input_names, missing_input_hint, structure_of
 from ._validation import as_1d_finite, check_int, check_sequence
 
@@ -90,9 +90,9 @@ def regressor_matrix(
     structure : Structure, sequence of str, or a model
         The terms, in column order (a Model, a Selection … gives its ``.structure``).
     u : ndarray, shape (N,) or (N, m)
-        Input samples, one column per input (assumed validated, e.g. from a :class:`Record`).
+        Input samples, one column per input (a list or a DataFrame too, converted as a :class:`Record`'s).
     y : ndarray, shape (N,)
-        Output samples.
+        Output samples, finite.
     e : ndarray, shape (N,), optional
         Residuals for noise terms ``e(k-l)``; required when the structure has any.
     start : int, optional
@@ -106,13 +106,22 @@ def regressor_matrix(
         Ψ, float64, C-contiguous.
     """
     structure = structure_of(structure)  # terms, or what carries a structure (a Model, a Selection)
+    names = None if input_names is None else check_input_names(input_names)
+    # a public entry: lists, text or None were an AttributeError ('list' object has no attribute 'shape'), a u
+    # shorter than y numpy's broadcast error, NaN a silent NaN column. A Record's arrays pass the checks as they are
+    if not (isinstance(y, np.ndarray) and y.dtype == np.float64 and y.ndim == 1 and np.isfinite(y).all()):
+        y = as_1d_finite(y, "y")
+    if not (isinstance(u, np.ndarray) and u.dtype == np.float64 and u.ndim in (1, 2) and np.isfinite(u).all()):
+        u = as_input_array(u, "u", names)
     n = y.shape[0]
+    if u.shape[0] != n:
+        raise ValueError(f"u has {u.shape[0]} samples but y has {n}: one input sample per output sample")
     s = structure.max_lag if start is None else check_int(start, "start", low=0)
     if s < structure.max_lag:
         raise ValueError(f"start ({s}) is smaller than the structure's max lag ({structure.max_lag})")
     if n < s + 1:
         raise ValueError(f"record has {n} samples, fewer than max lag + 1 = {s + 1}")
-    signals = input_signals(u, None if input_names is None else check_input_names(input_names))
+    signals = input_signals(u, names)
     signals["y"] = y
     if e is not None:
         signals["e"] = as_1d_finite(e, "e")
