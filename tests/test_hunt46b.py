@@ -349,3 +349,16 @@ def test_regressor_matrix_takes_lists_and_refuses_bad_signals_naming_them(fitted
     u[7] = np.nan
     with pytest.raises(ValueError, match="u"):
         gb.regressor_matrix(res, u, rec.y)
+
+
+def test_parse_structure_refuses_what_is_neither_text_nor_a_sequence_naming_it():
+    # was: "'NoneType' object is not iterable"; a dict had its keys parsed as terms
+    for bad in (None, 3, {"y(k-1)": 1}):
+        with pytest.raises(TypeError, match="text must be a '\\+'-joined string"):
+            gb.parse_structure(bad)
+    assert gb.parse_structure(("y(k-1)", "u(k-1)")) == gb.parse_structure("y(k-1) + u(k-1)")
+
+
+def test_stacked_regressors_names_its_records_argument(fitted):
+    with pytest.raises(TypeError, match="^records must be a Record"):
+        gb.stacked_regressors(fitted[2], 3.0)

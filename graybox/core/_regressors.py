@@ -170,7 +170,7 @@ def stacked_regressors(
         The measured ``y(k)`` matching each row.
     """
     structure = structure_of(structure)  # terms, or what carries a structure (a Model, a Selection)
-    recs = as_records(records)
+    recs = as_records(records, name="records")  # the argument's own name in the message
     s = structure.max_lag if start is None else check_int(start, "start", low=0)
     if residuals is not None:
         residuals = check_sequence(residuals, "residuals", "a sequence of residual series, one per record")

@@ -498,7 +498,10 @@ def parse_structure(text: str | Sequence[str]) -> Structure:
     text : str or sequence of str
         Terms joined by ``+``, or one string per term.
     """
-    parts = text.split("+") if isinstance(text, str) else list(text)
+    if isinstance(text, str):
+        parts = text.split("+")
+    else:  # a number, None or a mapping was "'int' object is not iterable" or parsed a dict's keys
+        parts = check_sequence(text, "text", "a '+'-joined string of terms or a sequence of term strings")
     return Structure(parse_term(p) for p in parts)
 
 
