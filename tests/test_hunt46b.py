@@ -362,3 +362,17 @@ def test_parse_structure_refuses_what_is_neither_text_nor_a_sequence_naming_it()
 def test_stacked_regressors_names_its_records_argument(fitted):
     with pytest.raises(TypeError, match="^records must be a Record"):
         gb.stacked_regressors(fitted[2], 3.0)
+
+
+# -- records given as a generator ------------------------------------------------------------------------------
+def test_records_given_as_a_generator_are_refused_alike_by_every_entry(fitted):
+    # was: frols, pe_pareto, local_model(data=) said "data: no records given (an empty sequence)" of two records
+    # given as a generator (read once, then read again), while els and semp took it
+    rec, cand, res = fitted
+    other = gb.Record(rec.u[::-1].copy(), rec.y[::-1].copy(), name="other")
+    for call in (lambda d: gb.frols(cand, d, n_terms=2), lambda d: gb.semp(cand, d, n_terms=2),
+                 lambda d: gb.els(res, d, noise=2), lambda d: gb.pe_pareto(res, d, lambdas=[1.0]),
+                 lambda d: gb.local_model(res.model, 1.5, data=d)):
+        with pytest.raises(TypeError, match="which can be read only once: pass a list"):
+            call(r for r in (rec, other))
+    assert len(gb.els(res, [rec, other], noise=2).model.noise_structure) == 2

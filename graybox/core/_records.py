@@ -687,6 +687,11 @@ def as_records(data: object, part: str = "ident", name: str = "data") -> list[Re
     if isinstance(data, (str, bytes, Mapping, os.PathLike, np.ndarray)) or is_frame(data) or not hasattr(data, "__iter__"):
         raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset (whose {part} record is used); "
                         f"got {type(data).__name__}{record_hint(data)}")
+    if iter(data) is data:  # type: ignore[call-overload]
+        # a generator or an iterator is read once, and entries read their records more than once: frols or pe_pareto
+        # then found it empty ("no records given") while els took it
+        raise TypeError(f"{name} must be a Record, a sequence of Records or a Dataset; got a {type(data).__name__}, "
+                        "which can be read only once: pass a list of its records (list(...))")
     recs = list(data)  # type: ignore[call-overload]
     if not recs:
         raise ValueError(f"{name}: no records given (an empty sequence)")
