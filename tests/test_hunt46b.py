@@ -181,15 +181,19 @@ def test_frols_and_semp_take_their_candidates_as_every_structure_argument_is_tak
 
 
 def test_the_estimators_take_any_sequence_of_terms_as_the_rest_do(fitted):
-    # was: els and the other estimators refused a NumPy array of term strings (what a DataFrame column gives) and a
-    # generator, which simulate and static_curve took
+    # was: els and the other estimators refused a NumPy array of term strings (what a DataFrame column gives), which
+    # simulate and static_curve took; a generator of terms was taken by simulate and refused by els
     rec, _, res = fitted
     terms = [str(t) for t in res.model.structure]
     want = gb.els(terms, rec).model.theta
     np.testing.assert_array_equal(gb.els(np.array(terms), rec).model.theta, want)
-    np.testing.assert_array_equal(gb.els((t for t in terms), rec).model.theta, want)
     with pytest.raises(TypeError, match=r"structure: a term must be a string"):
         gb.els([1, 2], rec)
+    # read once, a generator is refused alike (pe_pareto, which reads its structure twice, said "no terms")
+    for call in (lambda s: gb.els(s, rec), lambda s: gb.pe_pareto(s, rec, lambdas=[1.0]),
+                 lambda s: gb.simulate(s, res.model.theta, rec)):
+        with pytest.raises(TypeError, match="which can be read only once: pass a list of its terms"):
+            call(t for t in terms)
 
 
 def test_els_refuses_an_ma_order_beyond_the_records_before_building_its_terms(fitted):

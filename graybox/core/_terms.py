@@ -484,6 +484,9 @@ def structure_of(obj: object, name: str = "structure") -> Structure:
                         "parse a '+'-joined string with parse_structure")
     if isinstance(obj, (bytes, Mapping)) or not isinstance(obj, Iterable):
         raise TypeError(f"{name} must be {STRUCTURE_ACCEPTED}; got {type(obj).__name__}")
+    if iter(obj) is obj:  # read once, and an entry may read its structure twice (pe_pareto then found no terms)
+        raise TypeError(f"{name} must be {STRUCTURE_ACCEPTED}; got a {type(obj).__name__}, which can be read only "
+                        "once: pass a list of its terms (list(...))")
     try:
         return Structure(obj)
     except TypeError as exc:  # an item that is no term (a number, None): said with the argument's name
