@@ -316,8 +316,10 @@ def test_argument_checks():
         frols(cand, rec, tol="0.1")
     with pytest.raises(ValueError, match="max_terms"):
         frols(cand, rec, n_terms=2, max_terms=3)
+    # a candidate set is taken as every structure argument is (a list of terms too); what carries none is refused
+    assert frols([str(t) for t in cand], rec, n_terms=2).structure == frols(cand, rec, n_terms=2).structure
     with pytest.raises(TypeError, match="Structure"):
-        frols(["y(k-1)"], rec, n_terms=1)
+        frols(3.0, rec, n_terms=1)
     with pytest.raises(ValueError, match="no process terms"):
         frols(Structure(["e(k-1)"]), rec, n_terms=1)
     # a Dataset stands for its identification record, as for every estimator

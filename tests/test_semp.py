@@ -86,8 +86,8 @@ def test_several_records_never_straddle():
 def test_bad_input():
     rec = staircase_record(TRUE, THETA, 0, n=200)
     cand = Candidates(3, 3, ne=0, degree=2)
-    with pytest.raises(TypeError, match="Structure"):
-        gb.semp(["y(k-1)"], rec)
+    with pytest.raises(TypeError, match="Structure"):  # a list of terms is a candidate set (test_hunt46b); 3.0 none
+        gb.semp(3.0, rec)
     with pytest.raises(ValueError, match="either n_terms or tol"):
         gb.semp(cand, rec, n_terms=2, tol=0.1)
     with pytest.raises(ValueError, match="n_terms"):
