@@ -132,9 +132,9 @@ def test_a_frame_with_the_input_and_another_column_is_said_so():
     m = gb.Model(["y(k-1)", "speed(k-1)"], [0.5, 1.0])
     df = pd.DataFrame({"speed": np.ones(5), "valve": np.zeros(5)})
     # it said "u's 2 columns are the inputs ('u1', 'u2')" and asked to name columns that were named
-    with pytest.raises(ValueError, match=r"name only some of the inputs \['speed'\].*not inputs: \['valve'\]"):
+    with pytest.raises(ValueError, match=r"name every input \['speed'\] and more columns.*not inputs: \['valve'\]"):
         m.simulate(df, [0.0])
-    with pytest.raises(ValueError, match="name only some"):
+    with pytest.raises(ValueError, match="and more columns"):
         gb.simulate(m.structure, m.theta, df, [0.0])
     # the input's own column alone, and unnamed columns, read as before
     assert np.array_equal(m.simulate(df[["speed"]], [0.0]), m.simulate(np.ones(5), [0.0]))

@@ -173,7 +173,7 @@ def test_record_reads_a_dataframe_by_its_column_names():
 def test_a_dataframe_naming_some_inputs_is_refused_naming_its_columns(columns):
     # was: read by position: "p" landed on the input "n" (or a column was taken as an input unseen)
     df = _frame().iloc[:, [0, 1, 1][:len(columns)]].set_axis(columns, axis=1)
-    with pytest.raises(ValueError, match=r"columns \[.*\] name only some of the inputs \['n', 'p'\]"):
+    with pytest.raises(ValueError, match=r"columns \[.*\] (name only some of the inputs|name every input) \['n', 'p'\]"):
         gb.Record(df, np.zeros(len(df)), input_names=("n", "p"))
 
 
@@ -233,3 +233,12 @@ def test_a_pe_member_refused_at_lambda_one_says_its_lambda_once():
     pe = gb.pe_pareto(st, gb.Record(u, y), gb.StaticPoints(ub, (0.2 * ub + 0.01 * ub**2 + 1) / 0.5), lambdas=[1.0, 0.5])
     assert list(pe.failures) == [0] and pe.failures[0].count("λ1 = 1") == 1
     assert pe.failures[0].startswith("θ at λ1 = 1 (no weight on the static points) is not identifiable")
+
+
+def test_a_dataframe_naming_every_input_and_more_says_the_extra_columns_are_the_fault():
+    # was: "name only some of the inputs" for a frame that names every input, beside a time column
+    df = _frame().iloc[:, [0, 1, 1]].set_axis(["n", "p", "time"], axis=1)
+    with pytest.raises(ValueError, match=r"name every input \['n', 'p'\] and more columns \(not inputs: \['time'\]"):
+        gb.Record(df, np.zeros(len(df)), input_names=("n", "p"))
+    with pytest.raises(ValueError, match=r"name only some of the inputs \['n', 'p'\]"):
+        gb.Record(df.set_axis(["p", "q", "time"], axis=1), np.zeros(len(df)), input_names=("n", "p"))

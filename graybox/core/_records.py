@@ -106,7 +106,10 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
     fix = (f"Pass the inputs' columns alone, e.g. {'point' if series else 'df'}[{list(expected)!r}]"
            if extra and not missing and not repeated else
            "Name every column as an input (any order: read by name) or none (read by position)")
-    raise ValueError(f"{name}: the {what} {labels} name only some of the inputs {list(expected)} "
+    # every input named and columns more is no "some of the inputs": the extra columns are the fault
+    said = (f"name every input {list(expected)} and more columns" if not missing and not repeated else
+            f"name only some of the inputs {list(expected)}")
+    raise ValueError(f"{name}: the {what} {labels} {said} "
                      f"(not inputs: {extra or 'none'}; inputs without a column: {missing or 'none'}; repeated: "
                      f"{repeated or 'none'}): read by position they would land on other inputs. {fix}")
 
