@@ -42,6 +42,7 @@ from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reac
                                 schur_stable, several_stable)
 from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import _folded, reached_surface
+from ..static._equilibrium_kernels import unit_pole
 
 __all__ = ["LocalModel", "OperatingCurve", "local_model", "operating_curve", "jacobian_rows", "check_polynomial",
            "require_control", "local_statespace", "local_transfer_function", "system_name", "CONTROL_EXTRA",
@@ -131,10 +132,10 @@ def jacobian_rows(structure: Structure, inputs: tuple[str, ...], thetas: np.ndar
 
 
 def _unit_pole(a: np.ndarray) -> bool:
-    """Whether z = 1 is a pole of z^L − a_1 z^(L−1) − … − a_L to rounding: 1 − Σ a_l vanishes to the rounding
-    error of the sum. So at a fold of the static curve (a double root of eq. (5), where 1 − Σ a_l = −∂F/∂ȳ = 0),
-    whatever rounding made of the a_l: Σ a_l = 1 − 2⁻⁵² passes the Schur–Cohn test, and is no stable equilibrium."""
-    return bool(a.size) and abs(1.0 - a.sum()) <= 4 * (a.size + 1) * np.finfo(float).eps * (1.0 + np.abs(a).sum())
+    """Whether z = 1 is a pole of z^L − a_1 z^(L−1) − … − a_L to rounding (a fold's: 1 − Σ a_l = −∂F/∂ȳ = 0): the
+    rule the one stability test applies (:func:`graybox.static._equilibrium_kernels.unit_pole`), so that the local
+    model and the static analysis never disagree on a stable equilibrium."""
+    return bool(unit_pole(np.ascontiguousarray(a, dtype=float)))
 
 
 def _dominant(poles: np.ndarray, Ts: float, unit: bool = False) -> tuple[complex, float, float]:
@@ -235,7 +236,7 @@ class LocalModel:
             raise ValueError("status 'reached' needs the equilibrium ybar")
         if self.ybar is not None and self.status in ("reached", "no stable equilibrium"):
             # the one says the equilibrium is stable, the other that none is: the poles must agree
-            stable = (bool(schur_stable(a)) and not _unit_pole(a)) if a.size else True
+            stable = bool(schur_stable(a)) if a.size else True
             if stable != (self.status == "reached"):
                 said = "a stable equilibrium" if self.status == "reached" else "an unstable equilibrium"
                 poles = "every pole inside the unit circle" if stable else "poles on or outside the unit circle"
@@ -286,7 +287,7 @@ class LocalModel:
         """Every pole strictly inside the unit circle (the package's Schur–Cohn test; a pole at z = 1 to rounding, as
         at a fold of the static curve, is not inside)."""
         self._need()
-        return (bool(schur_stable(self.a)) and not _unit_pole(self.a)) if self.a.size else True
+        return bool(schur_stable(self.a)) if self.a.size else True
 
     @property
     def spectral_radius(self) -> float:

@@ -62,6 +62,7 @@ from ._equilibrium_kernels import (
     merge_multiple_roots,
     real_roots_upto_cubic,
     schur_stable_rows,
+    unit_pole,
     settle_candidates,
     settle_runs,
 )
@@ -579,9 +580,11 @@ def folded_equilibria(structure: Structure, theta: np.ndarray, ub: float) -> lis
     if yb.size == 0:
         return []
     stable = stable_mask(structure, th, np.full(yb.size, ub), yb[None, :])[0] & ~fold
-    # a fold's pole is at z = 1 (Σ a_l = 1): its modulus at least 1 whatever rounding made of it
-    rho = [spectral_radius(_linear_coefficients(structure, th[0], float(y), ub)) for y in yb]
-    return [Equilibrium(ub, float(y), bool(s), max(r, 1.0) if f else r) for y, s, r, f in zip(yb, stable, rho, fold)]
+    # a fold's pole is at z = 1 (Σ a_l = 1): its modulus at least 1 whatever rounding made of it; so where the a_l
+    # sum to 1 to rounding (unit_pole, the stability test's rule)
+    a = [_linear_coefficients(structure, th[0], float(y), ub) for y in yb]
+    return [Equilibrium(ub, float(y), bool(s), max(spectral_radius(al), 1.0) if f or unit_pole(al) else spectral_radius(al))
+            for y, s, al, f in zip(yb, stable, a, fold)]
 
 
 # -- rational structures: eq. (6) --------------------------------------------------------------------

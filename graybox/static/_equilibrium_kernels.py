@@ -29,7 +29,7 @@ import numba as nb
 import numpy as np
 
 __all__ = [
-    "schur_stable_rows", "entry_sums", "real_roots_upto_cubic", "merge_multiple_roots", "settle_candidates", "settle_runs",
+    "schur_stable_rows", "unit_pole", "entry_sums", "real_roots_upto_cubic", "merge_multiple_roots", "settle_candidates", "settle_runs",
     "candidate_linearisations",
     "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED", "SKIPPED",
 ]
@@ -67,10 +67,25 @@ def _schur_cohn(c, n, nxt):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
+def unit_pole(a):  # pragma: no cover - compiled
+    """Is z = 1 a root of z^L − a_1 z^(L−1) − … − a_L to rounding: 1 − Σ a_l within the sum's rounding error,
+    4 (L + 1) eps (1 + Σ |a_l|)? So at a fold of the static curve (1 − Σ a_l = −∂F/∂ȳ = 0), whatever rounding made of
+    the a_l (Σ a_l = 1 − 2⁻⁵² passes the step-down recursion). ``a`` shape (L,); False for L = 0."""
+    L = a.shape[0]
+    s = 0.0
+    m = 0.0
+    for i in range(L):
+        s += a[i]
+        m += abs(a[i])
+    return L > 0 and abs(1.0 - s) <= 4.0 * (L + 1) * 2.220446049250313e-16 * (1.0 + m)
+
+
+@nb.njit(cache=True, nogil=True)
 def schur_stable_rows(a):  # pragma: no cover - compiled
     """(K,) mask: is y(k) = Σ_l a[r, l-1] y(k-l) asymptotically stable, row by row?
 
-    ``a`` has shape (K, L): the coefficients a_1 … a_L of a linearised recursion.
+    ``a`` has shape (K, L): the coefficients a_1 … a_L of a linearised recursion. A pole at z = 1 to rounding
+    (:func:`unit_pole`) is not inside: the one test says so, for the static analysis and the local models alike.
     """
     K, L = a.shape
     out = np.zeros(K, dtype=np.bool_)
@@ -80,7 +95,7 @@ def schur_stable_rows(a):  # pragma: no cover - compiled
         c[0] = 1.0
         for i in range(L):
             c[i + 1] = -a[r, i]
-        out[r] = _schur_cohn(c, L, nxt)
+        out[r] = _schur_cohn(c, L, nxt) and not unit_pole(a[r])
     return out
 
 
