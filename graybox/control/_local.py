@@ -38,8 +38,8 @@ from ..core._validation import (check_band_finite, check_band_values, check_choi
                                 check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
-from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, reached_equilibria,
-                                schur_stable, several_stable)
+from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, multiple_root,
+                                reached_equilibria, schur_stable, several_stable)
 from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import _folded, reached_surface
 from ..static._equilibrium_kernels import unit_pole
@@ -565,9 +565,17 @@ def _continuum_at(model: Model, u: np.ndarray) -> bool:
     return bool(continuum(model.structure, model.theta[None, :], u[:1])[0, 0])
 
 
+def _fold_at(model: Model, u: np.ndarray, ybar: float) -> bool:
+    """Is ȳ a multiple root of the static equation at the point u (m,) (a fold: Σ a_l = 1 there)?"""
+    if model.n_inputs > 1:  # the surface's equilibria are those of the folded model at ū' = 1
+        sk, th = _folded(model.structure, model.theta, u[None, :], model.input_names)
+        return multiple_root(sk, th[0, 0], 1.0, ybar)
+    return multiple_root(model.structure, model.theta, float(u[0]), ybar)
+
+
 def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float | None, str, str, bool]:
-    """(ȳ, status, reason, unstable) at one point u (m,): the reached equilibrium, else the one to linearise around;
-    ``unstable``: the static analysis says that equilibrium is not stable."""
+    """(ȳ, status, reason, fold) at one point u (m,): the reached equilibrium, else the one to linearise around;
+    ``fold``: that equilibrium is a multiple root of the static equation (its pole is at z = 1)."""
     label = f"{float(u[0]):g}" if u.size == 1 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
     if _continuum_at(model, u):
         # every ȳ is an equilibrium: ū sets none, the output stays where it starts; y0 is then the one to take
@@ -588,7 +596,8 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float |
             return None, "no equilibrium", f"ū = {label}: {NO_EQUILIBRIUM_WHY}", False
         e = min(eqs, key=lambda e: e.spectral_radius)
         return e.ybar, "no stable equilibrium", (f"ū = {label}: no stable equilibrium; linearised at the unstable "
-                                                 f"ȳ = {e.ybar:.6g} (spectral radius {e.spectral_radius:.4g})"), True
+                                                 f"ȳ = {e.ybar:.6g} (spectral radius {e.spectral_radius:.4g})"), \
+            _fold_at(model, u, e.ybar)
     r = _reached(model, model.theta[None, :], u[None, :], np.array([y0]))
     if r.ok[0, 0]:
         return float(r.ybar[0, 0]), "reached", "", False
@@ -597,7 +606,8 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float |
     if not eqs:
         return None, status, reason, False
     e = min(eqs, key=lambda e: abs(e.ybar - y0))
-    return e.ybar, status, reason + f"; linearised at the equilibrium ȳ = {e.ybar:.6g} nearest y0", not e.stable
+    return (e.ybar, status, reason + f"; linearised at the equilibrium ȳ = {e.ybar:.6g} nearest y0",
+            not e.stable and _fold_at(model, u, e.ybar))
 
 
 def _range_warning(model: Model, ub: np.ndarray, data: object) -> None:
@@ -659,16 +669,16 @@ def _y0s(y0: object, M: int) -> list[float | None]:
 
 
 def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float) -> LocalModel:
-    ybar, status, reason, unstable = _equilibrium(model, u, y0)
+    ybar, status, reason, fold = _equilibrium(model, u, y0)
     if ybar is None:
         a, b = np.zeros(0), np.zeros((model.n_inputs, 0))
     else:
         a2, b3 = jacobian_rows(model.structure, model.input_names, model.theta[None, :], np.array([ybar]), u[None, :])
         a, b = a2[0], b3[0]
-        if unstable and a.size and schur_stable(a):
-            # the static analysis found a multiple root (a fold, an inflection): there Σ a_l = 1 exactly, but the
-            # root is known only to eps^(1/m) and its a_l sum to 1 − 3e-11 (a triple root): the linearisation at the
-            # root itself has its pole at z = 1
+        if fold and a.size:
+            # a multiple root (a fold, an inflection): there Σ a_l = 1 exactly, but the root is known only to
+            # eps^(1/m) and its a_l sum to 1 ± 4e-10 (a triple root), either side of 1 as rounding went: the
+            # linearisation at the root itself has its pole at z = 1
             a = a.copy()
             a[0] += 1.0 - a.sum()
     return LocalModel(u, ybar, status, reason, a, b, Ts, model.input_names, model.name, model.units)

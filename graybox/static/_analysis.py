@@ -99,6 +99,7 @@ __all__ = [
     "checked_model",
     "several_stable",
     "folded_equilibria",
+    "multiple_root",
     "continuum",
     "CONTINUUM_WHY",
     "point_phrases",
@@ -565,6 +566,20 @@ def refuse_continuum(structure: Structure, theta: np.ndarray, ub: float, label: 
     if continuum(structure, np.asarray(theta, float)[None, :], np.array([ub]))[0, 0]:
         raise ValueError(f"ū = {label}: {CONTINUUM_WHY}; equilibria lists isolated equilibria (for the local model "
                          "at an output level ȳ of your choice: local_model(model, ū, y0=ȳ))")
+
+
+def multiple_root(structure: Structure, theta: np.ndarray, ub: float, ybar: float) -> bool:
+    """Is ``ybar`` a multiple root of eq. (5) at ``ub`` (a fold: ∂F/∂ȳ = 0, so Σ a_l = 1 there), by the test
+    :func:`real_roots` applies to its roots (:func:`~graybox.static._equilibrium_kernels.merge_multiple_roots`)?
+    A rational structure's eq. (6) is linear in ȳ: never. ``theta`` (n_terms,), ``ub`` and ``ybar`` scalars."""
+    if is_rational(structure) or not np.isfinite(ybar):
+        return False
+    coef = static_coefficients(structure, np.asarray(theta, float)[None, :], np.array([float(ub)]))
+    roots = np.full((1, 1, coef.shape[0] - 1), np.nan)
+    if roots.shape[-1] < 2:  # a linear equation: one simple root
+        return False
+    roots[0, 0, 0] = ybar
+    return bool(merge_multiple_roots(np.ascontiguousarray(coef), roots)[1][0, 0, 0])
 
 
 def folded_equilibria(structure: Structure, theta: np.ndarray, ub: float) -> list[Equilibrium]:
