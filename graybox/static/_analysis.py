@@ -422,7 +422,9 @@ def schur_stable(a: np.ndarray) -> np.ndarray:
     """Is the linear recursion y(k) = Σ_l a_l y(k-l) asymptotically stable? The one stability test.
 
     The Schur–Cohn step-down recursion on z^L − a_1 z^(L−1) − … − a_L (every root strictly inside
-    the unit circle), compiled. :func:`stable_mask` applies the same test to the linearisation
+    the unit circle), compiled; a root at z = 1 to rounding (1 − Σ a_l within the sum's rounding
+    error, as at a fold of the static curve: :func:`~graybox.static._equilibrium_kernels.unit_pole`)
+    is not inside. :func:`stable_mask` applies the same test to the linearisation
     of a polynomial model at its equilibria; the neural model uses this entry point.
 
     Parameters
