@@ -156,9 +156,9 @@ class SEProblem:
         self.static = static
         self.L = structure.max_lag
         self.code = c = encode(structure)
-        # input products are fixed across the whole sweep: computed once per record
-        self.U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L)
-                  for r in self.records]
+        # input products are fixed across the whole sweep: computed once per record (those of the records as given
+        # only when read, :attr:`U`, where the free runs are made on the centred records)
+        self._U: list[np.ndarray] | None = None
         self.psi, self.target = stacked_regressors(structure, self.records)
         if not scored_only:
             check_rows(self.psi.shape[0], len(structure))  # as els, cls and pe: no error left to fit
@@ -202,9 +202,10 @@ class SEProblem:
         self.z_psi, self.z_target = self.psi / self.scale, self.target
         # the records the optimisers' free runs are made on, their input products, and the divisor of z that gives
         # the parameters of those runs (None: θ, on the records as given)
-        self.run_records, self.run_U, self.run_scale = self.records, self.U, None
+        self.run_records, self.run_scale = self.records, None
         # a problem that only scores θ's fitted elsewhere (a choosing record) never moves in z: no centred basis
         if scored_only or is_dask_data(self.records) or not is_closed(self.structure) or self._held_input():
+            self.run_U = self.U
             return
         off = signal_offsets(self.records)
         A, t = shift_map(self.structure, off)
@@ -226,6 +227,18 @@ class SEProblem:
         self.z_inv = s_c[:, None] * Ainv  # z = z_inv @ (θ − z_shift)
         psi_c /= s_c  # in place: one more N × n array, not two
         self.z_psi, self.z_target = psi_c, target_c  # ψ θ − y = z_psi z − z_target, without cancellation
+
+    @property
+    def U(self) -> list[np.ndarray]:
+        """The input products of each record as given (:func:`~graybox.core._simulation_kernels.input_products`),
+        made once when first read. A centred problem's optimisers run on :attr:`run_U` and never read these (only
+        :meth:`residuals` does, for se_dsf and the covariances): holding both was a second N × n array through
+        every sweep (+31 MB at N = 200000, n = 20)."""
+        if self._U is None:
+            c = self.code
+            self._U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L)
+                       for r in self.records]
+        return self._U
 
     def _held_input(self) -> bool:
         """Whether an input of the structure holds one value over every record."""
