@@ -369,18 +369,23 @@ class SEProblem:
 
     def diverges(self, theta: np.ndarray) -> bool:
         """Whether θ's free run on some record leaves :func:`graybox.simulate`'s default bound
-        (10⁶ × the run's own scale): :meth:`js` is inf there."""
+        (10⁶ × the run's own scale; for a centred problem, of the run on the centred signals, :meth:`js`):
+        :meth:`js` is inf there."""
         return not np.isfinite(self.js(np.asarray(theta, float)[None, :])[0])
 
     # -- objectives -------------------------------------------------------------------
     def js(self, thetas: np.ndarray, threads: int = 1, *, bounded: bool = True, z: np.ndarray | None = None
            ) -> np.ndarray:
         """J_S of each row of ``thetas``, shape (P,): inf where a free run leaves :func:`graybox.simulate`'s
-        default bound (J_S as :func:`graybox.js` and the fronts report it, and as the optimisers' costs
-        take it: a slowly diverging run, y(k) = 1.01 y(k−1) + … over 3000 samples, has a huge finite sum
-        of squares that would still beat an infinite cost). ``bounded=False``: inf only where a run
-        overflows. ``z``: the rows' optimiser coordinates, when the caller has them. The runs are made on
-        :attr:`run_records` (the centred signals of a centred problem: the same errors)."""
+        default bound (as the optimisers' costs take it: a slowly diverging run, y(k) = 1.01 y(k−1) + … over
+        3000 samples, has a huge finite sum of squares that would still beat an infinite cost). ``bounded=False``:
+        inf only where a run overflows. ``z``: the rows' optimiser coordinates, when the caller has them.
+
+        The runs are made on :attr:`run_records`: for a centred problem the centred signals, with the same errors
+        (a finite J_S is :func:`graybox.js`'s to round-off), but judged against the bound of the centred run (10⁶
+        × its own scale), which does not move with the output's zero. :func:`graybox.js` of the model on the
+        record as given judges against the raw run's, whose scale holds the signals' levels: far from zero it is
+        wider, and a θ inf here can have a finite :func:`graybox.js` there."""
         th = np.atleast_2d(self.run_theta(thetas, z))
         sse = sum(batch_sse(self.code, th, record_inputs(r, self.code.inputs), r.y, self.L, threads, U,
                             bounded=bounded) for r, U in zip(self.run_records, self.run_U))
