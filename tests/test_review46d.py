@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import itertools
+import json
 import tracemalloc
 
 import numpy as np
+import pytest
 
 import graybox as gb
 from graybox.estimation._simulation_error import SEProblem
@@ -43,3 +45,48 @@ def test_a_centred_se_problem_holds_the_raw_input_products_only_when_asked():
     th = P.ls_theta()
     e = P.residuals(th, jacobian=False)[0]
     np.testing.assert_allclose(np.mean(e ** 2), P.js(th[None])[0], rtol=1e-9)
+
+
+def _fingerprint_before_4567ec5(problem: SEProblem) -> str:
+    """SEProblem.fingerprint as graybox wrote it before 4567ec5 (no margin, no ridge): the structure and the arrays."""
+    import hashlib
+
+    h = hashlib.sha256()
+    h.update(str(problem.structure).encode())
+    for a in [x for r in problem.records for x in (r.u, r.y)] + [problem.static.ubar, problem.static.ybar]:
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()[:16]
+
+
+def test_a_checkpoint_of_named_inputs_written_before_the_names_were_recorded(tmp_path):
+    # 4567ec5 hashed the inputs' names (other than u1 … um) into the problem's fingerprint: a checkpoint of such
+    # records written before was refused as 'written for another problem (differs in: problem)', also by another
+    # graybox version, whose checkpoints the docstring says are started over with a warning
+    from graybox.estimation._simulation_error import CheckpointError
+
+    miso = gb.load_pumping_miso()
+    names = ("speed", "valve")
+    ren = lambda r: gb.Record(r.u, r.y, Ts=r.Ts, input_names=names, units=r.units, name=r.name)
+    s = miso.static
+    data = gb.Dataset(ren(miso.ident), ren(miso.valid),
+                      gb.StaticPoints(s.ubar, s.ybar, uncertainty=s.uncertainty, input_names=names, units=s.units))
+    st = ["1", "y(k-1)", "y(k-2)", "speed(k-2)", "valve(k-2)", "speed(k-2)^2", "speed(k-2)valve(k-2)", "valve(k-2)^2",
+          "speed(k-2)y(k-1)"]
+    kw = dict(lambdas=[1.0, 0.1], method="ga", margin=None, options=gb.GAOptions(population=10, generations=2),
+              theta0=None)
+    ck = tmp_path / "front.npz"
+    fresh = gb.se_pareto(st, data, checkpoint=ck, **kw)
+    with np.load(ck, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays["meta"]))
+    meta["problem"] = _fingerprint_before_4567ec5(SEProblem(st, [data.ident], data.static))
+    meta.pop("inputs", None)
+    np.savez(ck, **{**arrays, "meta": json.dumps(meta)})
+    # by this version: which column is which input it cannot tell (a mislabelled sweep's), and says so
+    with pytest.raises(CheckpointError, match="inputs"):
+        gb.se_pareto(st, data, checkpoint=ck, **kw)
+    # by another version: started over with a warning, as any checkpoint of another version
+    np.savez(ck, **{**arrays, "meta": json.dumps({**meta, "graybox": "0.2.7"})})
+    with pytest.warns(UserWarning, match="starts over"):
+        again = gb.se_pareto(st, data, checkpoint=ck, **kw)
+    np.testing.assert_array_equal(again.thetas, fresh.thetas)

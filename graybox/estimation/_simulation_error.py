@@ -299,12 +299,7 @@ class SEProblem:
         static = [] if self.static is None else [self.static.ubar, self.static.ybar]
         for a in [x for r in self.records for x in (r.u, r.y)] + static:
             h.update(np.ascontiguousarray(a).tobytes())
-        # which column is which input: the same arrays with the inputs named in another order are another problem
-        # (a file's columns mislabelled, then the names put right, resumed the mislabelled sweep's members). Said
-        # only for names other than the default u1 … um, so that the checkpoints of such records stay valid
-        for names in [r.input_names for r in self.records] + ([] if self.static is None else [self.static.input_names]):
-            if len(names) > 1 and tuple(names) != tuple(f"u{i + 1}" for i in range(len(names))):
-                h.update(f"inputs={list(names)}".encode())
+        # which column is which input is :meth:`input_names`', beside it in a checkpoint
         if self.margin is not None:  # a checkpoint without a margin stays valid
             h.update(f"margin={self.margin!r}".encode())
         if self.ridge > 0:
@@ -312,6 +307,20 @@ class SEProblem:
         return h.hexdigest()[:16]
 
     # -- the stability margin ----------------------------------------------------------
+    def input_names(self) -> list[list[str]] | None:
+        """Which column is which input, for checkpoints: the input names of each record and of the static points,
+        or None where every one is the default u1 … um (or one input, named by the structure).
+
+        The same arrays with the inputs named in another order are another problem (a file's columns mislabelled,
+        then the names put right, resumed the mislabelled sweep's members). Kept beside :meth:`fingerprint`, not in
+        it: a checkpoint written before they were recorded is then refused by this version naming them, and started
+        over by another version as any checkpoint of another version is; the default names' checkpoints stay valid.
+        """
+        every = [r.input_names for r in self.records] + ([] if self.static is None else [self.static.input_names])
+        if all(len(n) < 2 or tuple(n) == tuple(f"u{i + 1}" for i in range(len(n))) for n in every):
+            return None
+        return [list(n) for n in every]
+
     def within_margin(self, thetas: np.ndarray, static_outputs: np.ndarray | None = None) -> np.ndarray:
         """Does each row keep every local model's spectral radius ≤ 1 − margin? Shape (P,).
 
@@ -867,6 +876,8 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     done = 0
     meta = {"problem": problem.fingerprint(), "method": method, "lambdas": lam.tolist(), "seed": seed,
             "settings": settings, "graybox": graybox_version()}
+    if problem.input_names() is not None:  # only when said: the default names' checkpoints stay valid
+        meta["inputs"] = problem.input_names()
     path = None if checkpoint is None else checkpoint_path(checkpoint)
     ck = _load_checkpoint(path, meta, n) if path is not None and path.exists() else None
     if ck is not None:
