@@ -90,3 +90,22 @@ def test_a_checkpoint_of_named_inputs_written_before_the_names_were_recorded(tmp
     with pytest.warns(UserWarning, match="starts over"):
         again = gb.se_pareto(st, data, checkpoint=ck, **kw)
     np.testing.assert_array_equal(again.thetas, fresh.thetas)
+
+
+def test_the_ga_does_not_stop_for_a_stall_when_its_first_finite_cost_is_an_improvement():
+    # GAOptions(stall=k) stops 'when the best cost has not improved by a relative 1e-9 for k generations'; a run whose
+    # initial population had no finite cost stopped at generation k whatever it found since: inf − c ≤ 1e-9 · inf
+    from graybox.estimation._simulation_error import _ga_run
+
+    class Improving:  # no finite cost at first, then a better best at every generation
+        z_map = None
+        calls = 0
+
+        def cost(self, pop, lam1, threads=1):
+            self.calls += 1
+            return np.full(len(pop), np.inf if self.calls == 1 else 10.0 / self.calls)
+
+    init = np.random.default_rng(0).standard_normal((10, 3))
+    _, c, g = _ga_run(Improving(), 1.0, init, gb.GAOptions(population=10, generations=8, stall=2),
+                      np.random.default_rng(1), 1)
+    assert g == 8 and np.isfinite(c)

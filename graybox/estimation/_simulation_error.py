@@ -674,7 +674,8 @@ def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, 
         best_hist.append(np.min(cost))
         if opts.stall and g >= opts.stall:  # best_hist[0] is the initial population's: g >= stall has stall steps
             old = best_hist[-opts.stall - 1]
-            if old - best_hist[-1] <= 1e-9 * abs(old):
+            # from no finite cost (inf) to one is an improvement: inf − c ≤ 1e-9 · inf said it was none
+            if np.isfinite(old) and old - best_hist[-1] <= 1e-9 * abs(old):
                 break
     i = int(np.argmin(cost))
     return (problem.from_z(pop[i]) if zs else pop[i].copy()), float(cost[i]), g
