@@ -27,15 +27,15 @@ a progress bar, write a checkpoint after each λ (failed members included) and r
 checkpoint written for another problem is refused, one written by another graybox version (whose
 algorithm may differ) is started over with a warning naming both versions.
 
-Inside the optimisers J_S is computed by the fused batch kernel (same definition as
-:func:`graybox.js`; for a structure closed under shifts, on the centred signals with the centred
-parameters, the same errors, so that whether a candidate diverges does not depend on the output's
-zero) and J_SF by the package's one static definition
-(:func:`graybox.static._analysis.reached_equilibria`): at each static point the equilibrium a free run at
-constant ū_i from the measured ȳ_i settles on; where it settles on none the cost is infinite — a
-model does not settle on an unstable equilibrium, nor on a stable one whose basin does not hold
-ȳ_i, so matching the static points there would be a false gain. The reported front is
-re-evaluated by the shared evaluator, which uses the same definition.
+Inside the optimisers J_S is computed by the fused batch kernel (same definition as :func:`graybox.js`;
+for a structure closed under shifts whose inputs all move over the records, on the centred signals with
+the centred parameters, the same errors, so that whether a candidate diverges does not depend on the
+output's zero: :meth:`SEProblem.js`) and J_SF by the package's one static definition
+(:func:`graybox.static._analysis.reached_equilibria`): at each static point the equilibrium a free run
+at constant ū_i from the measured ȳ_i settles on; where it settles on none the cost is infinite — a
+model does not settle on an unstable equilibrium, nor on a stable one whose basin does not hold ȳ_i, so
+matching the static points there would be a false gain. The reported front is re-evaluated by the shared
+evaluator, which uses the same definition.
 """
 
 from __future__ import annotations
