@@ -80,7 +80,7 @@ from ..core._records import (
 )
 from ..core._regressors import stacked_regressors
 from ..core._gram import is_dask_data
-from ..selection._centring import centred_data, is_closed, shift_map, signal_offsets
+from ..selection._centring import centred_data, is_closed, is_held, shift_map, signal_offsets
 from ..static._analysis import reached_equilibria, static_theta_gradient
 from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
@@ -241,11 +241,12 @@ class SEProblem:
         return self._U
 
     def _held_input(self) -> bool:
-        """Whether an input of the structure holds one value over every record."""
+        """Whether an input of the structure holds one value over every record (to round-off: the centring's one
+        rule, :func:`~graybox.selection._centring.is_held`)."""
         if not self.code.inputs:
             return False
         us = np.concatenate([record_inputs(r, self.code.inputs).reshape(len(r.y), -1) for r in self.records])
-        return bool(np.any(np.all(us == us[:1], axis=0)))
+        return any(is_held(us[:, i]) for i in range(us.shape[1]))
 
     def to_z(self, thetas: np.ndarray) -> np.ndarray:
         """The optimisers' coordinates of θ (shape (n,) or (P, n)): see :meth:`_centre_basis`."""

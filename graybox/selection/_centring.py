@@ -58,10 +58,10 @@ def _centre_of(x: np.ndarray) -> float:
     zero (:func:`centred_data`), where the mean's round-off (7.3 held: 7.3 − mean ≈ 1e-15) left columns of
     round-off that the searches took for candidates, so that what they chose depended on the level the input was
     held at."""
-    return float(x[0]) if _held(x) else float(x.mean())
+    return float(x[0]) if is_held(x) else float(x.mean())
 
 
-def _held(x: np.ndarray) -> bool:
+def is_held(x: np.ndarray) -> bool:
     """Whether a signal (pooled over the records) is held at one level: its spread is within the round-off of its
     level by the one rank rule (the uncentred regression cannot tell it from the constant), so that a level said
     apart by round-off (7.3 in one record, 73 * 0.1 = 7.300000000000001 in another, a converted unit) is one
@@ -75,7 +75,7 @@ def search_offsets(data: object) -> dict[str, float]:
     no search can rank structures on."""
     offsets = signal_offsets(data)
     ys = np.concatenate([r.y for r in as_records(data)])
-    if _held(ys):
+    if is_held(ys):
         said = "" if np.ptp(ys) == 0.0 else f" to its round-off (spread {np.ptp(ys):.1e})"
         raise ValueError(f"the output is constant (y = {ys[0]:.6g} at every sample of the identification data{said}): "
                          "centred on its mean it is zero, and a structure search has nothing to rank there; its "
@@ -103,8 +103,8 @@ def centred_data(data: object, offsets: Mapping[str, float]) -> Record | list[Re
     records = as_records(data)
     names = records[0].input_names
     us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
-    held = frozenset([n for i, n in enumerate(names) if _held(us[:, i])]
-                     + (["y"] if _held(np.concatenate([r.y for r in records])) else []))
+    held = frozenset([n for i, n in enumerate(names) if is_held(us[:, i])]
+                     + (["y"] if is_held(np.concatenate([r.y for r in records])) else []))
     shifted = [_shift_record(r, offsets, held) for r in records]
     return shifted[0] if isinstance(data, (Record, Dataset)) else shifted
 
@@ -122,7 +122,7 @@ def check_included(include: Sequence[Term | str], process: Structure, data: obje
     records = as_records(data)
     names = records[0].input_names
     us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
-    held = {n: float(us[0, i]) for i, n in enumerate(names) if _held(us[:, i])}  # as centred_data zeroes them
+    held = {n: float(us[0, i]) for i, n in enumerate(names) if is_held(us[:, i])}  # as centred_data zeroes them
     gone = dict(dropped)
     for t in terms:
         for s in (s for s, _, _ in t.factors if s in held):
