@@ -672,8 +672,10 @@ OPTIONS: dict[str, dict[str, Any]] = {
                     "solver": _opt_choice("trf", "dogbox", "lm"), "margin": _opt_margin},
     "se-dsf": {"band": _opt_real(0, low_open=True), "max_iter": _opt_int(1), "tol": _opt_real(0, low_open=True),
                "margin": _opt_margin},
+    # neural_narx's training options (its seed is the grid's, its name the cell's)
     "neural": {"ny": _opt_int(0), "nu": _opt_int(1), "ne": _opt_int(0), "hidden": _opt_int(1), "epochs": _opt_int(1),
-               "weight_decay": _opt_real(0), "lam0": _opt_real(0, low_open=True)},
+               "sim_epochs": _opt_int(0), "weight_decay": _opt_real(0), "holdout": _opt_real(0, 0.5, high_open=True),
+               "patience": _opt_int(1)},
 }
 
 _CONSTRAINT_KEYS = {
@@ -997,8 +999,10 @@ class Variant:
     options : mapping, optional
         Keyword options of the estimator (e.g. ``{"solver": "closed"}`` for pe,
         ``{"max_nfev": 20}`` for se-gradient, GAOptions fields for se-ga, ``band``, ``max_iter``
-        and ``tol`` for se-dsf). The three SE estimators take ``margin``: ``"auto"`` (default, as
-        :func:`graybox.se_pareto`), ``"none"`` (the paper's problem, no margin) or a number in [0, 1).
+        and ``tol`` for se-dsf, :func:`graybox.neural_narx`'s ``ny``, ``nu``, ``ne``, ``hidden``, ``epochs``,
+        ``sim_epochs``, ``weight_decay``, ``holdout`` and ``patience`` for neural). The three SE estimators take
+        ``margin``: ``"auto"`` (default, as :func:`graybox.se_pareto`), ``"none"`` (the paper's problem, no margin) or
+        a number in [0, 1).
     """
 
     name: str
@@ -1067,6 +1071,8 @@ class Variant:
                 raise SpecError(f"unknown option {k!r} for estimator {est!r}; known: {', '.join(known) or '(none)'}"
                                 + hint, ("options", k))
             clean[k] = _wrap(known[k], ("options", k), v, k)
+        if "patience" in clean and not clean.get("holdout"):  # said here, not by each cell's failure
+            raise SpecError("patience applies to early stopping only: give holdout > 0 with it", ("options", "patience"))
         if "reference" in clean and "equality" not in kinds:
             raise SpecError("reference (where Σ*_y of eq. (22) comes from) needs an equality constraint",
                             ("options", "reference"))

@@ -1,0 +1,54 @@
+"""hunt46g: the neural NARMAX baseline and the experiment's planning (design_input, decimation)."""
+
+from __future__ import annotations
+
+import inspect
+import math
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox import Record
+from graybox import experiments as gx
+from graybox.experiments._cell import _estimate
+from graybox.experiments._spec import OPTIONS, SpecError
+
+
+def small_record(seed: int = 0, n: int = 400) -> Record:
+    """A first-order nonlinear plant, u in the hundreds (as tests/test_neural.py's)."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(200.0, 800.0, n // 20 + 1), 20)[:n]
+    y = np.zeros(n)
+    y[0] = 5.0
+    for k in range(1, n):
+        y[k] = 0.6 * y[k - 1] + 4.0 * math.tanh((u[k - 1] - 500.0) / 200.0) + 2.0 + 0.05 * rng.standard_normal()
+    return Record(u, y, Ts=0.1, name=f"small{seed}")
+
+
+# -- a grid's neural options are neural_narx's ------------------------------------------------------------------
+
+def test_every_neural_option_a_grid_accepts_is_one_neural_narx_takes():
+    """The spec accepted options={"lam0": ...}, which neural_narx has no parameter for: every such cell failed
+    with a TypeError at run time after the spec had been checked; sim_epochs, holdout and patience were refused."""
+    takes = set(inspect.signature(gb.neural_narx).parameters)
+    assert set(OPTIONS["neural"]) <= takes
+    with pytest.raises(SpecError, match="lam0"):
+        gx.Variant("NN", "neural", options={"lam0": 0.5})
+    v = gx.Variant("NN", "neural", options={"sim_epochs": 0, "holdout": 0.25, "patience": 2})
+    assert dict(v.options) == {"sim_epochs": 0, "holdout": 0.25, "patience": 2}
+    with pytest.raises(SpecError, match="holdout"):
+        gx.Variant("NN", "neural", options={"holdout": 0.5})
+    with pytest.raises(SpecError, match="patience"):  # early stopping needs its held-out part
+        gx.Variant("NN", "neural", options={"patience": 2})
+
+
+def test_a_grid_cell_trains_the_network_with_its_options():
+    rec = small_record()
+    data = gb.Dataset(rec, small_record(1))
+    v = gx.Variant("NN", "neural", options={"hidden": 2, "ne": 0, "epochs": 3, "sim_epochs": 0})
+    cell = type("Cell", (), {"variant_spec": v.content(), "variant": "NN", "structure": "s", "seed": 1})()
+    st = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)"])
+    model = _estimate(cell, st, data)[0]
+    want = gb.neural_narx(rec, ny=2, nu=1, ne=0, hidden=2, epochs=3, sim_epochs=0, seed=1).model
+    assert np.array_equal(model.W1, want.W1) and model.b2 == want.b2
