@@ -52,3 +52,27 @@ def test_a_grid_cell_trains_the_network_with_its_options():
     model = _estimate(cell, st, data)[0]
     want = gb.neural_narx(rec, ny=2, nu=1, ne=0, hidden=2, epochs=3, sim_epochs=0, seed=1).model
     assert np.array_equal(model.W1, want.W1) and model.b2 == want.b2
+
+
+# -- a NeuralModel's weights are numbers ------------------------------------------------------------------------
+
+def _net(**kw):
+    args = dict(W1=np.full((2, 2), 0.1), b1=[0.0, 0.1], w2=[1.0, -0.5], b2=0.2, ny=1, nu=1)
+    return gb.NeuralModel(**{**args, **kw})
+
+
+@pytest.mark.parametrize("field,value", [("W1", np.full((2, 2), 0.1 + 1j)), ("W1", [["0.1", "0.2"], ["1", "2"]]),
+                                         ("b1", [True, False]), ("w2", [None, 1.0]), ("b2", "0.2"), ("b2", True),
+                                         ("b2", None)])
+def test_a_network_refuses_weights_that_are_not_real_numbers(field, value):
+    """Complex weights lost their imaginary part (a ComplexWarning), text was parsed, booleans read as 1 and 0, and
+    None as NaN ("has non-finite values"): each a TypeError naming the field, as every graybox value's numbers."""
+    with pytest.raises(TypeError, match=field):
+        _net(**{field: value})
+
+
+def test_a_network_names_a_bias_that_is_no_number():
+    with pytest.raises(TypeError, match="b2"):  # was numpy's "only 0-dimensional arrays can be converted"
+        _net(b2=np.array([0.1, 0.2]))
+    net = _net(b2=np.float32(0.25), W1=np.ones((2, 2), dtype=np.float32))  # numbers of any real dtype
+    assert net.b2 == 0.25 and net.W1.dtype == np.float64

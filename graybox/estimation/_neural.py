@@ -131,7 +131,7 @@ from ..core._least_squares import output_spread
 from ..core._records import (Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths,
                              require_record)
 from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
-                                check_seed, check_str, frozen, check_fields)
+                                check_seed, check_str, frozen, check_fields, real_array)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..core._simulation_kernels import record_inputs
 from ..core._terms import check_input_names
@@ -152,7 +152,8 @@ _RESIDUAL_EPOCHS = 20
 
 
 def _frozen(a: np.ndarray, name: str, shape: tuple[int, ...]) -> np.ndarray:
-    a = frozen(a)
+    # the shared coercion: numpy's would parse text, drop an imaginary part and read True as 1 and None as NaN
+    a = frozen(real_array(a, name))
     if a.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
     if not np.all(np.isfinite(a)):
@@ -441,7 +442,7 @@ class NeuralModel:
         ny = check_int(self.ny, "ny", low=0)
         nu = check_int(self.nu, "nu", low=1)
         ne = check_int(self.ne, "ne", low=0)
-        b1 = np.asarray(self.b1, dtype=float)
+        b1 = real_array(self.b1, "b1")
         if b1.ndim != 1 or b1.size == 0:
             raise ValueError(f"b1 must be 1-D with one bias per hidden node, got shape {b1.shape}")
         H = b1.size
@@ -451,10 +452,7 @@ class NeuralModel:
         object.__setattr__(self, "W1", _frozen(self.W1, "W1", (H, ny + nu + ne)))
         object.__setattr__(self, "b1", _frozen(b1, "b1", (H,)))
         object.__setattr__(self, "w2", _frozen(self.w2, "w2", (H,)))
-        b2 = float(self.b2)
-        if not np.isfinite(b2):
-            raise ValueError(f"b2 must be finite, got {self.b2!r}")
-        object.__setattr__(self, "b2", b2)
+        object.__setattr__(self, "b2", check_real(self.b2, "b2"))
         for off in ("u_offset", "y_offset"):  # any level in the signal's units
             object.__setattr__(self, off, check_real(getattr(self, off), off))
         object.__setattr__(self, "u_scale", check_real(self.u_scale, "u_scale", low=0, low_open=True))
