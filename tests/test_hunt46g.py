@@ -76,3 +76,16 @@ def test_a_network_names_a_bias_that_is_no_number():
         _net(b2=np.array([0.1, 0.2]))
     net = _net(b2=np.float32(0.25), W1=np.ones((2, 2), dtype=np.float32))  # numbers of any real dtype
     assert net.b2 == 0.25 and net.W1.dtype == np.float64
+
+
+@pytest.mark.parametrize("ubar,error", [(True, TypeError), ([300.0], TypeError), (np.array([300.0, 500.0]), TypeError),
+                                        ("300", TypeError), (np.nan, ValueError)])
+def test_a_network_takes_one_input_level_for_its_equilibria_as_a_model_does(ubar, error):
+    """net.equilibria(True) gave the equilibria at ū = 1 and net.equilibria([300.0]) said "ubar must be 1-D, got shape
+    (1, 1)"; a polynomial Model refuses both as no single input level."""
+    poly = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 0.01])
+    with pytest.raises(error, match="ubar"):
+        poly.equilibria(ubar)
+    with pytest.raises(error, match="ubar"):
+        _net().equilibria(ubar)
+    assert _net().equilibria(np.float32(300.0))[0].ubar == poly.equilibria(300)[0].ubar == 300.0

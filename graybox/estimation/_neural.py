@@ -130,7 +130,7 @@ from scipy.optimize import brentq
 from ..core._least_squares import output_spread
 from ..core._records import (Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths,
                              require_record)
-from ..core._validation import (as_1d_finite, check_bool, check_choice, check_int, check_per_point, check_real,
+from ..core._validation import (check_bool, check_choice, check_int, check_per_point, check_real,
                                 check_seed, check_str, frozen, check_fields, real_array)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..core._simulation_kernels import record_inputs
@@ -689,7 +689,7 @@ class NeuralModel:
         Stability is decided by ``schur_stable`` on the linearisation (the test
         every model of the package uses); the spectral radius is given for information.
         """
-        ub = float(as_1d_finite([ubar], "ubar")[0])
+        ub = check_real(ubar, "ubar (one input level)")  # as Model.equilibria: a bool or a list is no level
         return [Equilibrium(ub, float(self._y(yb)), s, rho) for yb, s, rho in self._equilibria_n(self._un(ub))]
 
     def _settle_params(self, un: float) -> np.ndarray:
