@@ -173,7 +173,7 @@ def decimation_advice(data: Record | Dataset | Sequence[Record]) -> DecimationAd
     taus = []
     for rec in recs:
         y = rec.y
-        if np.ptp(y) == 0:
+        if np.all(y == y[0]):  # not np.ptp: it overflows on ±1e308
             raise ValueError(f"record {rec.name!r}: the output does not move, so it says nothing of the sampling "
                              "period")
         # in units of its largest value, centred, and again: the autocorrelations are unit-free, but their squares
@@ -261,9 +261,13 @@ def _decimate(rec: Record, q: int, antialias: bool, taus: Mapping | None = None)
         from scipy.signal import firwin  # scipy.signal is slow to import: only when a record is filtered
 
         taps = firwin(2 * half + 1, 1.0 / q)
+        # in units of max|y|, a power of two (the same bits in any other units): 2·y[0] − y overflowed near 1e308
+        top = float(np.max(np.abs(y)))
+        scale = 2.0 ** np.floor(np.log2(top)) if top > 0 else 1.0
+        y = y / scale
         # odd reflection about each end: a level and a ramp continue as they are, so the filter leaves them be
         ext = np.concatenate([2 * y[0] - y[half:0:-1], y, 2 * y[-1] - y[-2:-half - 2:-1]])
-        y = np.convolve(ext, taps, mode="valid")
+        y = np.convolve(ext, taps, mode="valid") * scale
     # a transient input is no sample of the plant but a filter of its input at the period: computed afresh
     u = recomputed_transients(rec.u[::q], rec.input_names, rec.Ts * q, taus)
     return Record(u, y[::q], rec.Ts * q, f"{rec.name} / {q}", rec.units, rec.input_names)
