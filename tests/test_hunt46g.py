@@ -122,3 +122,35 @@ def test_decimating_in_units_of_max_y_leaves_ordinary_units_bit_for_bit():
     y = rec.y
     ext = np.concatenate([2 * y[0] - y[half:0:-1], y, 2 * y[-1] - y[-2:-half - 2:-1]])
     assert np.array_equal(gb.decimate(rec, 3).y, np.convolve(ext, firwin(2 * half + 1, 1 / 3), mode="valid")[::3])
+
+
+# -- a NeuralFit says what a training can say -------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def early_stopped():
+    return gb.neural_narx(small_record(), ny=2, nu=2, ne=1, hidden=3, epochs=3, sim_epochs=3, holdout=0.2, seed=0)
+
+
+@pytest.mark.parametrize("field,value,match", [("epochs", -1, "epochs"), ("best_step", 99, "best_step"),
+                                               ("best_step", None, "best_step"), ("stopped", "xyz", "stopped"),
+                                               ("rmse_train", -1.0, "rmse_train"), ("rmse_sim", float("nan"), "rmse_sim"),
+                                               ("prediction_cost", [], "prediction_cost"),
+                                               ("holdout_cost", [1.0, -2.0], "holdout_cost"),
+                                               ("seconds", -0.5, "seconds")])
+def test_a_neural_fit_file_that_no_training_could_write_is_refused(early_stopped, field, value, match):
+    """A NeuralFit file edited to say epochs = -1, a best step past its held-out costs (or none beside them), an
+    unknown reason to stop, a negative RMSE or cost loaded without a word (as OEResult and Decision refuse theirs)."""
+    import json
+
+    doc = json.loads(gb.to_json(early_stopped))
+    doc["object"][field] = value
+    with pytest.raises(gb.GrayboxFileError, match=match):
+        gb.from_json(json.dumps(doc))
+
+
+def test_a_neural_fit_reads_back_as_written(early_stopped):
+    back = gb.from_json(gb.to_json(early_stopped))
+    assert back.best_step == early_stopped.best_step is not None
+    assert back.holdout_cost == early_stopped.holdout_cost and back.stopped == early_stopped.stopped
+    plain = gb.neural_narx(small_record(), ny=2, nu=2, ne=0, hidden=2, epochs=2, sim_epochs=0)
+    assert gb.from_json(gb.to_json(plain)).best_step is None

@@ -131,7 +131,7 @@ from ..core._least_squares import output_spread
 from ..core._records import (Dataset, Record, as_records, carried_from, check_fitted_on, check_units, require_lengths,
                              require_record)
 from ..core._validation import (check_bool, check_choice, check_int, check_per_point, check_real,
-                                check_seed, check_str, frozen, check_fields, real_array)
+                                check_seed, check_str, frozen, check_fields, real_array, short_value)
 from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..core._simulation_kernels import record_inputs
 from ..core._terms import check_input_names
@@ -840,6 +840,29 @@ class NeuralFit:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # what a training can report (a file edited by hand, a result built wrong is refused, as OEResult's)
+        check_int(self.epochs, "NeuralFit: epochs", low=0)
+        check_choice(self.stopped, "NeuralFit: stopped", STOP_REASONS)
+        if not self.prediction_cost:
+            raise ValueError("NeuralFit: prediction_cost holds at least stage 1's cost at the initial weights")
+        for name in ("prediction_cost", "simulation_cost", "holdout_cost", "rmse_train", "rmse_sim"):
+            v = np.asarray(getattr(self, name), dtype=float)
+            if np.any(np.isnan(v)) or np.any(v < 0):  # inf: a figure beyond the float range in huge output units
+                raise ValueError(f"NeuralFit: {name} holds sums or means of squares, never negative or NaN; got "
+                                 f"{short_value(getattr(self, name))}")
+        if self.holdout_cost:
+            if self.best_step is None or not 0 <= self.best_step < len(self.holdout_cost):
+                raise ValueError(f"NeuralFit: best_step indexes holdout_cost ({len(self.holdout_cost)} values); got "
+                                 f"{self.best_step!r}")
+        elif self.best_step is not None or self.stopped == "patience":
+            raise ValueError(f"NeuralFit: without holdout_cost there is no early stopping (best_step None, stopped "
+                             f"not 'patience'); got best_step={self.best_step!r}, stopped={self.stopped!r}")
+        if not (self.seconds >= 0 and np.isfinite(self.seconds)):
+            raise ValueError(f"NeuralFit: seconds is a training time, finite and >= 0; got {self.seconds!r}")
+
+
+#: Why a training stage ended (NeuralFit.stopped).
+STOP_REASONS = ("epochs", "converged", "patience", "unstable")
 
 
 def _unpack(theta: np.ndarray, H: int, n_in: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
