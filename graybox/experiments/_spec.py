@@ -1072,7 +1072,8 @@ class Variant:
                                 + hint, ("options", k))
             clean[k] = _wrap(known[k], ("options", k), v, k)
         if "patience" in clean and not clean.get("holdout"):  # said here, not by each cell's failure
-            raise SpecError("patience applies to early stopping only: give holdout > 0 with it", ("options", "patience"))
+            raise SpecError("patience applies to early stopping only: give holdout > 0 with it",
+                            ("options", "patience"))
         if "reference" in clean and "equality" not in kinds:
             raise SpecError("reference (where Σ*_y of eq. (22) comes from) needs an equality constraint",
                             ("options", "reference"))
