@@ -59,9 +59,10 @@ decay of Norgaard's toolbox) over the weights it trains:
 
 One epoch is one trial step (JᵀJ + (λ + D) I) h = −Jᵀr − Dθ (Norgaard's ``marq``): the step is
 kept when the cost falls, λ (from 1) is halved when the actual reduction exceeds 3/4 of the
-predicted one and doubled below 1/4. The normal equations and their Cholesky solve are numba
-loops in a fixed order, with no BLAS call, so the BLAS thread count cannot change a result; a
-seed (initial weights uniform in [−0.5, 0.5], Norgaard's choice, from
+predicted one and doubled below 1/4; a stage has converged when the decrease a step predicts is the
+cost's rounding (10⁻¹⁴ of it: whether such a step is kept would depend on the units). The normal
+equations and their Cholesky solve are numba loops in a fixed order, with no BLAS call, so the
+BLAS thread count cannot change a result; a seed (initial weights uniform in [−0.5, 0.5], Norgaard's choice, from
 ``numpy.random.default_rng(seed)``) gives the same network on every machine with the same numpy.
 ``scipy.optimize.least_squares`` with the same Jacobians was slower and reached higher costs
 (BENCHMARKS.md, "Neural NARMAX training").
@@ -812,10 +813,10 @@ class NeuralFit:
     epochs : int
         Levenberg–Marquardt trial steps (Norgaard's epochs) over all stages.
     stopped : str
-        Why the last stage ended: "epochs" (its budget), "converged" (a vanishing gradient, or
-        a damping so large that no step lowers the cost), "patience" (early stopping:
-        ``patience`` accepted steps without a lower held-out cost) or "unstable" (the
-        sensitivity recursion overflowed; the weights reached before are kept).
+        Why the last stage ended: "epochs" (its budget), "converged" (a vanishing gradient, a
+        step that predicts a decrease within the cost's rounding, or a damping so large that no step
+        lowers the cost), "patience" (early stopping: ``patience`` accepted steps without a lower
+        held-out cost) or "unstable" (the sensitivity recursion overflowed; the weights reached before are kept).
     rmse_train : float
         Root mean square one-step residual of the NARMAX predictor on the training rows, output units.
     rmse_sim : float
@@ -920,6 +921,8 @@ def _sumsq(r: np.ndarray) -> float:
 
 #: Levenberg–Marquardt damping: Norgaard's start, and the λ beyond which no step can lower the cost.
 _LAMBDA0, _LAMBDA_MAX = 1.0, 1e12
+#: A predicted decrease below this fraction of the cost is rounding (a few ulps of V): the stage has converged.
+_ROUNDING = 1e-14
 
 
 def _run_stage(residual, jacobian, x0: np.ndarray, *, max_epochs: int, decay: float,
@@ -929,8 +932,9 @@ def _run_stage(residual, jacobian, x0: np.ndarray, *, max_epochs: int, decay: fl
     ``residual(x)`` gives r, shape (rows,); ``jacobian(x)`` gives dr/dx, shape (rows, x.size). One
     epoch is one trial step (JᵀJ + (λ + decay) I) h = −Jᵀr − decay·x; the step is kept when the
     cost falls, and λ is halved when the actual reduction exceeds 3/4 of the predicted one and
-    doubled below 1/4. ``heldout(x)`` (optional) is the held-out cost, taken at the start and
-    after each kept step: the stage then returns the point where it was lowest and stops after
+    doubled below 1/4; a step whose predicted decrease is within ``_ROUNDING`` of the cost ends the
+    stage (converged) without counting as an epoch. ``heldout(x)`` (optional) is the held-out cost,
+    taken at the start and after each kept step: the stage then returns the point where it was lowest and stops after
     ``patience`` kept steps without a new lowest.
     """
     x = np.array(x0, dtype=float)
@@ -958,15 +962,20 @@ def _run_stage(residual, jacobian, x0: np.ndarray, *, max_epochs: int, decay: fl
             if np.sqrt(_sumsq(G)) <= 1e-12 * (1.0 + np.sqrt(2.0 * V)):
                 stopped = "converged"
                 break
-        epochs += 1
         h = _damped_solve(R, G, lam + decay)
+        predicted = 0.5 * (float(np.sum(h * G)) + lam * _sumsq(h))  # decrease of the quadratic model
+        if predicted <= _ROUNDING * V:
+            # no step can lower V by more than its rounding: converged. Trial steps on would be kept or refused by
+            # the rounding alone, which differs with the signals' units (their count, epochs, did)
+            stopped = "converged"
+            break
+        epochs += 1
         if not np.all(np.isfinite(h)):  # R + (λ + D) I lost positive definiteness to rounding
             lam *= 2.0
             continue
         x_new = x + h
         r_new = residual(x_new)
         V_new = 0.5 * _sumsq(r_new) + 0.5 * decay * _sumsq(x_new)
-        predicted = 0.5 * (float(np.sum(h * G)) + lam * _sumsq(h))  # decrease of the quadratic model
         actual = V - V_new
         if actual > 0.75 * predicted:
             lam /= 2.0
