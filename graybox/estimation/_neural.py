@@ -112,8 +112,8 @@ y(k) = Σ_i a_i y(k-i), a_i = ∂f/∂y(k-i), decided by the package's one stabi
 Schur–Cohn recursion, :func:`graybox.static._analysis.schur_stable`). A stable equilibrium always has
 ∂g/∂ȳ < 1, i.e. F = g − ȳ crosses zero downwards, so a tangent (double) root — which the grid can
 miss — is never a stable one. Two distinct roots closer together than the grid spacing (2·10⁻³
-normalised output units, i.e. 2·10⁻³ standard deviations of the training output, or finer) can
-still be missed. The static output at a static point is, as for every model of the package, the
+normalised output units, i.e. 2·10⁻³ standard deviations of the training output, or finer; coarser
+for an output range Σ|w2| beyond 200, where the scan stops at 200 001 points) can still be missed. The static output at a static point is, as for every model of the package, the
 equilibrium a free run at constant ū from y0 settles on (:func:`graybox.static._analysis.settle`, the one
 checked settling routine; tolerances in normalised units).
 """
@@ -534,7 +534,7 @@ class NeuralModel:
         Parameters
         ----------
         record : Record
-            Measured data (input and output units), at least ``max_lag`` samples.
+            Measured data (input and output units), more than ``max_lag`` samples (``ValueError`` otherwise).
         horizon : int >= 1, keyword-only
             Samples ahead (default 1).
         """
