@@ -175,3 +175,23 @@ def test_the_training_takes_the_same_steps_in_any_units(options):
         course = {(f.epochs, f.stopped, len(f.prediction_cost), len(f.simulation_cost)) for f in runs}
         assert len(course) == 1, course
         np.testing.assert_allclose(runs[1].model.W1, runs[0].model.W1, rtol=1e-7, atol=1e-9)
+
+
+# -- design_input reads a pair as it reads a range --------------------------------------------------------------
+
+def test_a_multisine_band_and_an_aprbs_hold_may_be_any_pair_of_numbers():
+    """frequencies=pd.Series([0.1, 0.5]) was refused with "frequencies must be a pair (f_low, f_high)" (and hold= a
+    Series or range with "hold must be an integer"), though low= and high= take a Series of df.min()."""
+    import pandas as pd
+
+    want = gb.design_input("multisine", 400, low=0.0, high=1.0, frequencies=(0.1, 0.5))
+    assert np.array_equal(gb.design_input("multisine", 400, low=0.0, high=1.0,
+                                          frequencies=pd.Series([0.1, 0.5])), want)
+    want = gb.design_input("aprbs", 400, low=0.0, high=1.0, hold=(5, 20), seed=2)
+    for pair in (pd.Series([5, 20]), range(5, 21, 15)):
+        assert np.array_equal(gb.design_input("aprbs", 400, low=0.0, high=1.0, hold=pair, seed=2), want)
+    for bad in ("ab", {"a": 1}, {0.1, 0.5}, 0.5):
+        with pytest.raises(TypeError, match="frequencies"):
+            gb.design_input("multisine", 400, low=0.0, high=1.0, frequencies=bad)
+    with pytest.raises(ValueError, match="frequencies"):
+        gb.design_input("multisine", 400, low=0.0, high=1.0, frequencies=[0.1, 0.2, 0.3])

@@ -8,7 +8,7 @@ band at one operating point. Every design is a pure function of its arguments an
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -37,13 +37,27 @@ def _scale(t: np.ndarray, lo: float | np.ndarray, hi: float | np.ndarray) -> np.
     return np.where(t <= 0.5, lo + half * (2 * np.minimum(t, 0.5)), hi - half * (2 * np.minimum(1 - t, 0.5)))
 
 
+def _sequence(value: object) -> list | None:
+    """``value`` as a list when it is a 1-D array-like (a tuple, a list, an array, a range, a pandas Series: read by
+    position, not by its index), else None (a number, text, a mapping, a set …)."""
+    if isinstance(value, (str, bytes, Mapping, set, frozenset)):
+        return None
+    try:
+        if np.ndim(value) != 1:
+            return None
+        return list(np.asarray(value, dtype=object).tolist())
+    except (TypeError, ValueError):  # ragged
+        return None
+
+
 def _holds(kind: str, hold: object) -> tuple[int, int]:
     """``hold`` as (shortest, longest) samples a level is held."""
     if hold is None:
         raise ValueError(f"design_input(kind={kind!r}) needs hold=: the samples a level is held (an int, or a pair "
                          "(shortest, longest) for an APRBS); choose it from the plant's settling time")
-    if isinstance(hold, np.ndarray) and hold.ndim == 1:  # a pair computed with numpy, e.g. from a settling time
-        hold = tuple(hold.tolist())
+    pair = _sequence(hold)  # a pair computed with numpy or pandas, e.g. from a settling time
+    if pair is not None:
+        hold = tuple(pair)
     if isinstance(hold, (tuple, list)):
         if kind != "aprbs" or len(hold) != 2:
             raise ValueError(f"hold must be an int{' or a pair (shortest, longest)' if kind == 'aprbs' else ''} for "
@@ -109,7 +123,7 @@ def design_input(
         or one per input (``low=[750.0, 20.0], high=[1650.0, 80.0]`` for a speed in rpm and a valve
         in %).
     hold : int or (int, int)
-        Samples a level is held (a bit of a PRBS; for an APRBS a pair (shortest, longest)):
+        Samples a level is held (a bit of a PRBS; for an APRBS a pair (shortest, longest), any 1-D array-like):
         choose it from the plant's settling time (a staircase's or an APRBS's longest hold about
         the settling time, a PRBS's bit near the fastest time constant). Refused for a multisine.
     n_inputs : int
@@ -123,7 +137,7 @@ def design_input(
         PRBS register length, 2–20 (default: the shortest whose period covers ``n_samples`` and
         holds at least ``n_inputs`` bits; one whose period is shorter than ``n_inputs`` is refused:
         two columns would be the same). Refused for the other kinds.
-    frequencies : (float, float) or ndarray, shape (2,)
+    frequencies : (float, float) or array_like, shape (2,)
         Multisine band as fractions of the Nyquist frequency, 0 < f_low < f_high <= 1 (required
         for a multisine, refused for the other kinds).
     seed : int
@@ -256,10 +270,14 @@ def _multisine(n: int, m: int, frequencies: object, seed: int) -> np.ndarray:
     if frequencies is None:
         raise ValueError("design_input(kind='multisine') needs frequencies=(f_low, f_high): the band as fractions of "
                          "the Nyquist frequency")
-    if not isinstance(frequencies, (tuple, list, np.ndarray)):
+    band = _sequence(frequencies)  # any 1-D pair, as low= and high= take any 1-D bounds
+    if band is None:
+        if isinstance(frequencies, (tuple, list, np.ndarray)):  # nested: a pair of the wrong shape
+            raise ValueError(f"frequencies must be a pair (f_low, f_high), got {frequencies!r}")
         raise TypeError(f"frequencies must be a pair (f_low, f_high), got {frequencies!r} ({type(frequencies).__name__})")
-    if np.ndim(frequencies) != 1 or len(frequencies) != 2:
+    if len(band) != 2:
         raise ValueError(f"frequencies must be a pair (f_low, f_high), got {frequencies!r}")
+    frequencies = band
     f0 = check_real(frequencies[0], "frequencies[0] (f_low)", low=0, low_open=True, high=1)
     f1 = check_real(frequencies[1], "frequencies[1] (f_high)", low=f0, low_open=True, high=1)
     # line j has frequency j/n cycles a sample, j/(n/2) of Nyquist
