@@ -337,6 +337,9 @@ class Structure:
         if isinstance(terms, str):  # iterated, it would be read character by character
             raise TypeError(f"a structure is a sequence of terms, got the string {terms!r}: pass a list of terms, "
                             "or parse a '+'-joined string with parse_structure")
+        if isinstance(terms, (set, frozenset)):  # its order, θ's, would change with PYTHONHASHSEED
+            raise TypeError(f"a structure is an ordered sequence of terms (the order of θ), got a "
+                            f"{type(terms).__name__}, which has no order: pass a list of the terms in θ's order")
         ts = tuple(t if isinstance(t, Term) else parse_term(t) for t in terms)
         seen: set[Term] = set()
         for t in ts:
