@@ -567,8 +567,9 @@ class Dataset:
         Where the data come from, in plain words.
     extra : mapping
         Anything else a loader wants to expose (e.g. a theoretical static curve); kept as a read-only
-        copy all the way down (``FrozenMap``; nested lists ``FrozenList``, arrays read-only copies), as every
-        mapping of a graybox value; ``ValueError`` for one nested deeper than 100 levels or holding itself.
+        copy all the way down (``FrozenMap``; nested lists ``FrozenList``, named tuples their type, arrays
+        read-only copies; a value held twice frozen once and still shared), as every mapping of a graybox
+        value; ``ValueError`` for one nested deeper than 100 levels or holding itself.
     """
 
     ident: Record

@@ -491,10 +491,13 @@ class FrozenList(list):
         return type(self)(copy.deepcopy(list(self), memo))
 
 
-def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = frozenset()) -> object:
+def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = frozenset(),
+                 _done: dict | None = None) -> object:
     """A read-only copy of a plain value a caller gave (``name`` says which, for the message): arrays frozen
-    (their dtype kept), lists :class:`FrozenList`, tuples and sets their frozen items, mappings
-    :class:`FrozenMap`, all the way down; anything else (a number, a str, a graybox value, a function) as it is.
+    (their dtype kept), lists :class:`FrozenList`, tuples (named ones keep their type) and sets their frozen items,
+    mappings :class:`FrozenMap`, all the way down; anything else (a number, a str, a graybox value, a function) as
+    it is. A value held in several places is frozen once and stays shared (as ``copy.deepcopy`` keeps it): the
+    cost is linear in the distinct values, not in the paths to them.
 
     ``ValueError`` naming ``name`` for a value nested deeper than :data:`MAX_NESTING` levels or one that holds itself.
     """
@@ -502,19 +505,29 @@ def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = froze
         return v if not v.flags.writeable and v.flags.owndata else frozen(v, v.dtype)
     if not isinstance(v, (list, tuple, set, frozenset, Mapping)):
         return v
+    done = {} if _done is None else _done
+    if id(v) in done:  # frozen already, by another path to it (the value is alive: it is held by the one given)
+        return done[id(v)]
     if id(v) in _open:
         raise ValueError(f"{name} holds itself (a list or mapping inside itself has no copy and no file)")
     if _depth >= MAX_NESTING:
         raise ValueError(f"{name} is nested deeper than {MAX_NESTING} levels (lists or mappings inside each other)")
     inner = _open | {id(v)}
+    out: object
     if isinstance(v, Mapping):
-        return FrozenMap({k: frozen_value(x, f"{name}[{k!r}]", _depth + 1, inner) for k, x in v.items()})
-    items = [frozen_value(x, f"{name}[{i}]", _depth + 1, inner) for i, x in enumerate(v)]
-    if isinstance(v, list):
-        return FrozenList(items)
-    if isinstance(v, (set, frozenset)):
-        return frozenset(items)
-    return tuple(items) if type(v) is tuple else v  # a named tuple keeps its type (and is immutable itself)
+        out = FrozenMap({k: frozen_value(x, f"{name}[{k!r}]", _depth + 1, inner, done) for k, x in v.items()})
+    else:
+        items = [frozen_value(x, f"{name}[{i}]", _depth + 1, inner, done) for i, x in enumerate(v)]
+        if isinstance(v, list):
+            out = FrozenList(items)
+        elif isinstance(v, (set, frozenset)):
+            out = frozenset(items)
+        elif hasattr(type(v), "_make") and hasattr(type(v), "_fields"):  # a named tuple: its type, its items frozen
+            out = type(v)._make(items)
+        else:
+            out = tuple(items) if type(v) is tuple else v  # another tuple type: kept as given (immutable itself)
+    done[id(v)] = out
+    return out
 
 
 class FrozenFrame:
