@@ -591,7 +591,8 @@ def Candidates(
     y_vars = [("y", i) for i in range(1, ny + 1)] if top_y else []  # none is used at max_y_power=0 (ny may be huge)
     u_vars = [(n, j) for n in names if nus[n] for j in range(delays[n], nus[n] + 1)] if degree else []
     terms: list[Term] = [Term(())] if constant else []
-    # without inputs a term holds y alone, of degree top_y at most (Candidates(1, 0, degree=10**9) has ny + 1 terms)
+    # without inputs a term holds y alone, of degree top_y at most (Candidates(ny, 0, degree=10**9, max_y_power=1):
+    # ny + 1 terms)
     for d in range(1, (degree if u_vars else top_y if y_vars else 0) + 1):
         # the output's part and the inputs' apart: only the powers of y kept are ever built (max_y_power=1 of
         # ny=1000 at degree 3 built all 10^8 products of y before dropping them)
