@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import collections
+import warnings
 
 import numpy as np
 import pytest
@@ -70,3 +71,26 @@ def test_a_value_held_twice_but_not_inside_itself_is_no_cycle():
     loop.append(loop)
     with pytest.raises(ValueError, match="holds itself"):
         frozen_value({"a": loop}, "extra")
+
+
+# -- a surface sampled over its domain: the grid's cap names what the caller can change --------------------
+def test_a_surface_of_many_inputs_sampled_without_ubar_says_to_give_ubar():
+    # was: "levels: 6 levels per input over 8 varying inputs make a grid …; take fewer levels", of an option pe_pareto
+    # does not have (the default sampling of a surface without ubar); the fix is to give ubar
+    m = 8
+    surf = gb.StaticSurface(tuple(tuple(int(i == j) for i in range(m)) for j in range(m)), np.ones(m),
+                            domain=tuple((0.0, 1.0) for _ in range(m)))
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.0, 1.0, (80, m))
+    y = np.zeros(len(u))
+    for k in range(1, len(u)):
+        y[k] = 0.5 * y[k - 1] + u[k - 1].sum() + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y)
+    st = gb.parse_structure(" + ".join(["y(k-1)"] + [f"u{i + 1}(k-1)" for i in range(m)]))
+    with pytest.raises(ValueError, match="give ubar") as info:
+        gb.pe_pareto(st, rec, surf, lambdas=[1.0])
+    assert "take fewer levels" not in str(info.value)
+    # the points asked for by ubar are taken
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)  # (the records' box is not the surface's concern here)
+        assert len(gb.pe_pareto(st, rec, surf, lambdas=[1.0], ubar=u[10:15])) == 1

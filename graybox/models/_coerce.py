@@ -240,7 +240,9 @@ def static_points(static: object, data: object, *, ubar: object = None, needed_b
         names = getattr(first, "input_names", None) or ("u",)
         return static.points(ub, names[0])
     if ubar is None:
-        return static.points(box_grid(static.domain, SURFACE_LEVELS))
+        # SURFACE_LEVELS is no option of the caller's: past the grid's cap, ubar is what they can give
+        return static.points(box_grid(static.domain, SURFACE_LEVELS, f"static: the {kind} sampled over its domain",
+                                      "give ubar, the input levels where to sample it"))
     m = static.n_inputs
     # a DataFrame (or one point as a Series) by its column names, as every input is read
     first = data[0] if isinstance(data, (list, tuple)) and data else data

@@ -27,17 +27,19 @@ __all__ = ["StaticSurface", "monomial_exponents", "box_grid"]
 MAX_GRID_POINTS = 10**6
 
 
-def box_grid(box: Sequence[tuple[float, float]], levels: int, what: str = "levels") -> np.ndarray:
+def box_grid(box: Sequence[tuple[float, float]], levels: int, what: str = "levels",
+             fix: str = "take fewer levels") -> np.ndarray:
     """Every combination of ``levels`` evenly spaced levels per input over ``box`` (one (low,
     high) per input), shape (K, m), the first input varying slowest; an input whose range is one
     level (low = high, e.g. a transient input at its static level 0) takes that one level, not
     ``levels`` copies of it (K = levels^(inputs that vary)).
 
-    ``ValueError`` naming ``what`` (the option that set ``levels``) when K exceeds :data:`MAX_GRID_POINTS`."""
+    ``ValueError`` naming ``what`` (the option that set ``levels``) and saying ``fix`` (what the caller can change)
+    when K exceeds :data:`MAX_GRID_POINTS`."""
     varying = sum(hi > lo for lo, hi in box)
     if levels ** varying > MAX_GRID_POINTS:
         raise ValueError(f"{what}: {levels} levels per input over {varying} varying inputs make a grid of "
-                         f"{levels}^{varying} points, more than {MAX_GRID_POINTS:,}; take fewer levels")
+                         f"{levels}^{varying} points, more than {MAX_GRID_POINTS:,}; {fix}")
     axes = [np.linspace(lo, hi, levels if hi > lo else 1) for lo, hi in box]
     return np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
 
