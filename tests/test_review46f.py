@@ -94,3 +94,13 @@ def test_a_surface_of_many_inputs_sampled_without_ubar_says_to_give_ubar():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gb.StaticRangeWarning)  # (the records' box is not the surface's concern here)
         assert len(gb.pe_pareto(st, rec, surf, lambdas=[1.0], ubar=u[10:15])) == 1
+
+
+def test_changing_a_list_in_extra_says_how_to_get_one_to_change():
+    # a user's ds.extra["k"].append(...) was told the list cannot be changed, not how to get one that can
+    data = gb.Dataset(_REC, _REC, extra={"levels": [1.0, 2.0]})
+    with pytest.raises(TypeError, match=r"cannot be changed .*: change a copy, list\(x\)"):
+        data.extra["levels"].append(3.0)
+    mine = list(data.extra["levels"])  # the copy it names
+    mine.append(3.0)
+    assert mine == [1.0, 2.0, 3.0] and list(data.extra["levels"]) == [1.0, 2.0]

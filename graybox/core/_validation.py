@@ -471,7 +471,8 @@ class FrozenList(list):
     __slots__ = ()
 
     def _refuse(self, *args: Any, **kwargs: Any) -> Any:
-        raise TypeError(f"a {type(self).__name__} cannot be changed (it is part of an immutable value)")
+        raise TypeError(f"a {type(self).__name__} cannot be changed (it is part of an immutable value): change a copy, "
+                        "list(x)")
 
     append = extend = insert = remove = pop = clear = sort = reverse = _refuse
     __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
