@@ -104,3 +104,12 @@ def test_changing_a_list_in_extra_says_how_to_get_one_to_change():
     mine = list(data.extra["levels"])  # the copy it names
     mine.append(3.0)
     assert mine == [1.0, 2.0, 3.0] and list(data.extra["levels"]) == [1.0, 2.0]
+
+
+def test_a_set_of_noise_terms_is_refused_too():
+    # noise terms went through check_sequence (a list of the set's items, in no stated order) before Structure
+    st = gb.parse_structure("y(k-1) + u(k-1)")
+    with pytest.raises(TypeError, match="noise_structure: .*no order"):
+        gb.Model(st, [0.5, 0.2], noise_structure={"e(k-1)", "e(k-2)"}, noise_theta=[0.1, 0.2])
+    with pytest.raises(TypeError, match="noise: .*no order"):
+        gb.els(st, _REC, noise=frozenset({"e(k-1)", "e(k-2)"}))

@@ -82,7 +82,9 @@ class Model:
             raise ValueError("noise terms belong in noise_structure, not in the process structure")
         ns = self.noise_structure
         if not isinstance(ns, Structure):
-            items = check_sequence(ns, "noise_structure", "a Structure or a sequence of noise terms")
+            # a set kept as given: Structure refuses it (no order, and the order is noise_theta's)
+            items = ns if isinstance(ns, (set, frozenset)) else check_sequence(
+                ns, "noise_structure", "a Structure or a sequence of noise terms")
             try:
                 ns = Structure(items)
             except (TypeError, ValueError) as exc:  # a number among the terms: said with the field's name
