@@ -242,3 +242,9 @@ def test_a_dataframe_naming_every_input_and_more_says_the_extra_columns_are_the_
         gb.Record(df, np.zeros(len(df)), input_names=("n", "p"))
     with pytest.raises(ValueError, match=r"name only some of the inputs \['n', 'p'\]"):
         gb.Record(df.set_axis(["p", "q", "time"], axis=1), np.zeros(len(df)), input_names=("n", "p"))
+
+
+def test_a_dataframe_naming_an_input_twice_says_so():
+    df = _frame().iloc[:, [0, 1, 1]].set_axis(["n", "p", "p"], axis=1)
+    with pytest.raises(ValueError, match=r"name every input \['n', 'p'\], some more than once .*repeated: \['p'\]"):
+        gb.Record(df, np.zeros(len(df)), input_names=("n", "p"))

@@ -107,8 +107,9 @@ def frame_inputs(x: object, names: Sequence[str] | None, name: str, output: obje
            if extra and not missing and not repeated else
            "Name every column as an input (any order: read by name) or none (read by position)")
     # every input named and columns more is no "some of the inputs": the extra columns are the fault
-    said = (f"name every input {list(expected)} and more columns" if not missing and not repeated else
-            f"name only some of the inputs {list(expected)}")
+    said = (f"name only some of the inputs {list(expected)}" if missing else
+            f"name every input {list(expected)}, some more than once" if repeated else
+            f"name every input {list(expected)} and more columns")
     raise ValueError(f"{name}: the {what} {labels} {said} "
                      f"(not inputs: {extra or 'none'}; inputs without a column: {missing or 'none'}; repeated: "
                      f"{repeated or 'none'}): read by position they would land on other inputs. {fix}")
