@@ -506,19 +506,33 @@ def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = froze
         return v if not v.flags.writeable and v.flags.owndata else frozen(v, v.dtype)
     if not isinstance(v, (list, tuple, set, frozenset, Mapping)):
         return v
-    done = {} if _done is None else _done
-    if id(v) in done:  # frozen already, by another path to it (the value is alive: it is held by the one given)
-        return done[id(v)]
+    # id → (the value, its frozen copy, its height in nested containers); the value is kept so that its id is not
+    # reused by another while the walk runs (a mapping may make its values when asked, temporaries)
+    done: dict = {} if _done is None else _done
+    if id(v) in done:  # frozen already, by another path to it
+        _, out, height = done[id(v)]
+        if _depth + height > MAX_NESTING:  # met here, deeper than where it was frozen
+            raise ValueError(f"{name} is nested deeper than {MAX_NESTING} levels (lists or mappings inside each other)")
+        return out
     if id(v) in _open:
         raise ValueError(f"{name} holds itself (a list or mapping inside itself has no copy and no file)")
     if _depth >= MAX_NESTING:
         raise ValueError(f"{name} is nested deeper than {MAX_NESTING} levels (lists or mappings inside each other)")
     inner = _open | {id(v)}
+    below = 0  # the height of the deepest container inside
+
+    def freeze(x: object, where: str) -> object:
+        nonlocal below
+        fx = frozen_value(x, where, _depth + 1, inner, done)
+        if id(x) in done:
+            below = max(below, done[id(x)][2])
+        return fx
+
     out: object
     if isinstance(v, Mapping):
-        out = FrozenMap({k: frozen_value(x, f"{name}[{k!r}]", _depth + 1, inner, done) for k, x in v.items()})
+        out = FrozenMap({k: freeze(x, f"{name}[{k!r}]") for k, x in v.items()})
     else:
-        items = [frozen_value(x, f"{name}[{i}]", _depth + 1, inner, done) for i, x in enumerate(v)]
+        items = [freeze(x, f"{name}[{i}]") for i, x in enumerate(v)]
         if isinstance(v, list):
             out = FrozenList(items)
         elif isinstance(v, (set, frozenset)):
@@ -527,7 +541,7 @@ def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = froze
             out = type(v)._make(items)
         else:
             out = tuple(items) if type(v) is tuple else v  # another tuple type: kept as given (immutable itself)
-    done[id(v)] = out
+    done[id(v)] = (v, out, below + 1)
     return out
 
 

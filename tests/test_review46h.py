@@ -1,0 +1,53 @@
+"""Review of the neural stop rule, decimation in units of max|y|, the neural grid options, the weight and file checks,
+design_input's pairs, frozen_value's memo and the refusal of sets as structures (review46h)."""
+from collections.abc import Mapping
+
+import pytest
+
+from graybox.core._validation import MAX_NESTING, frozen_value
+
+
+class _LazyMapping(Mapping):
+    """A mapping that makes each value when asked (as a lazy loader's may): the lists are temporaries."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+
+    def __getitem__(self, k):
+        return [k, k]
+
+    def __iter__(self):
+        return iter(range(self.n))
+
+    def __len__(self) -> int:
+        return self.n
+
+
+def test_frozen_value_of_temporaries_is_each_its_own():
+    # the memo was keyed by id alone: a value made for one key and dropped left its id to the next one's, which
+    # was then given the first one's copy ({2: [0, 0]})
+    out = frozen_value(_LazyMapping(6), "extra")
+    assert {k: list(v) for k, v in out.items()} == {k: [k, k] for k in range(6)}
+
+
+def _wrap(x, n):
+    for _ in range(n):
+        x = [x]
+    return x
+
+
+@pytest.mark.parametrize("first", ["shallow", "deep"])
+def test_frozen_value_depth_of_a_shared_value_whichever_path_comes_first(first):
+    # a value of MAX_NESTING - 1 levels met at depth 1 and again 50 levels down is nested deeper than MAX_NESTING
+    # (to_json refuses to write it): refused whichever path is walked first, not only when the deep one is
+    shared = _wrap(0, MAX_NESTING - 1)
+    items = [("a", shared), ("b", _wrap(shared, 50))]
+    value = dict(items if first == "shallow" else items[::-1])
+    with pytest.raises(ValueError, match="nested deeper"):
+        frozen_value(value, "extra")
+
+
+def test_frozen_value_shared_value_within_the_limit_stays_shared():
+    shared = _wrap(0, MAX_NESTING - 3)
+    out = frozen_value({"a": shared, "b": [shared]}, "extra")
+    assert out["b"][0] is out["a"]
