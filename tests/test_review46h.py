@@ -51,3 +51,34 @@ def test_frozen_value_shared_value_within_the_limit_stays_shared():
     shared = _wrap(0, MAX_NESTING - 3)
     out = frozen_value({"a": shared, "b": [shared]}, "extra")
     assert out["b"][0] is out["a"]
+
+
+# -- input names given as a set -----------------------------------------------------------------------------------
+
+def _two_inputs():
+    import numpy as np
+    return np.c_[np.arange(10.0), np.full(10, 3.0)], np.arange(10.0)
+
+
+@pytest.mark.parametrize("make", ["record", "candidates", "model", "simulate"])
+def test_input_names_given_as_a_set_are_refused(make):
+    # a set's order is its hash order: which column was named 'speed' and which 'valve' changed with PYTHONHASHSEED
+    import graybox as gb
+    names = {"speed", "valve"}
+    u, y = _two_inputs()
+    with pytest.raises(TypeError, match="no order"):
+        if make == "record":
+            gb.Record(u, y, Ts=1.0, input_names=names)
+        elif make == "candidates":
+            gb.Candidates(1, [1, 2], degree=1, input_names=frozenset(names))
+        elif make == "model":
+            gb.Model(gb.Structure(["speed(k-1)", "valve(k-1)"]), [0.1, 0.2], input_names=names)
+        else:
+            gb.simulate(gb.Structure(["speed(k-1)", "valve(k-1)", "y(k-1)"]), [0.1, 0.2, 0.5], u, y, input_names=names)
+
+
+def test_input_names_in_any_ordered_sequence_still_taken():
+    import graybox as gb
+    u, y = _two_inputs()
+    for names in (["speed", "valve"], ("speed", "valve"), {"speed": 0, "valve": 1}.keys()):
+        assert gb.Record(u, y, Ts=1.0, input_names=names).input_names == ("speed", "valve")

@@ -149,6 +149,9 @@ def check_input_names(names: object, m: int | None = None, what: str = "input_na
     """Validated input names: identifiers, not y/e/k, none given twice (and ``m`` of them when given)."""
     if isinstance(names, str) or not hasattr(names, "__iter__"):
         raise TypeError(f"{what} must be a sequence of names (strings), got {names!r}")
+    if isinstance(names, (set, frozenset)):  # its order, the columns', would change with PYTHONHASHSEED
+        raise TypeError(f"{what} must be an ordered sequence of names (one per input column, in order), got a "
+                        f"{type(names).__name__}, which has no order: pass a list of the names in the columns' order")
     out = tuple(names)  # type: ignore[arg-type]
     if not out:
         raise ValueError(f"{what}: at least one input name is needed")
