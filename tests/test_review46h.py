@@ -82,3 +82,41 @@ def test_input_names_in_any_ordered_sequence_still_taken():
     u, y = _two_inputs()
     for names in (["speed", "valve"], ("speed", "valve"), {"speed": 0, "valve": 1}.keys()):
         assert gb.Record(u, y, Ts=1.0, input_names=names).input_names == ("speed", "valve")
+
+
+# -- included terms given as a set ---------------------------------------------------------------------------------
+
+def _plant():
+    import numpy as np
+    import graybox as gb
+    rng = np.random.default_rng(0)
+    n = 200
+    u = rng.uniform(-1, 1, n)
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = 0.5 * y[k - 1] - 0.2 * y[k - 2] + u[k - 1] + 0.3 * u[k - 1] ** 2 + 0.01 * rng.standard_normal()
+    return gb.Candidates(2, 2, degree=2), gb.Record(u, y, Ts=1.0)
+
+
+@pytest.mark.parametrize("search", ["frols", "semp"])
+def test_included_terms_given_as_a_set_are_refused(search):
+    # the included terms lead the structure chosen in the order given: a set's order, so the structure's (θ's)
+    # order changed with PYTHONHASHSEED (u(k-2) + y(k-2) + u(k-1)^2 + … or u(k-1)^2 + u(k-2) + …)
+    import graybox as gb
+    cands, rec = _plant()
+    with pytest.raises(TypeError, match="no order"):
+        getattr(gb, search)(cands, rec, n_terms=4, include={"u(k-2)", "y(k-2)"})
+
+
+def test_included_terms_in_a_list_lead_in_the_order_given():
+    import graybox as gb
+    cands, rec = _plant()
+    fit = gb.frols(cands, rec, n_terms=4, include=["y(k-2)", "u(k-2)"])
+    assert [str(t) for t in fit.model.structure.terms[:2]] == ["y(k-2)", "u(k-2)"]
+
+
+def test_select_graybox_refuses_included_terms_given_as_a_set():
+    import graybox.experiments as gx
+    cands, rec = _plant()
+    with pytest.raises(TypeError, match="no order"):
+        gx.select_graybox(cands, rec, estimator="ls", include={"1", "y(k-1)"})

@@ -400,6 +400,9 @@ class Structure:
         out: list[int] = []
         if isinstance(terms, (str, Term)) or not hasattr(terms, "__iter__"):
             raise TypeError(f"{what}s must be a sequence of terms (Terms or strings), got {terms!r}")
+        if isinstance(terms, (set, frozenset)):  # the order given is read (an included term leads θ in it)
+            raise TypeError(f"{what}s must be an ordered sequence of terms, got a {type(terms).__name__}, which has "
+                            "no order (it would change with PYTHONHASHSEED): pass a list")
         for t in terms:
             if not isinstance(t, (Term, str)):
                 raise TypeError(f"{what}: a term must be a Term or a string, got {t!r}")
