@@ -120,3 +120,13 @@ def test_select_graybox_refuses_included_terms_given_as_a_set():
     cands, rec = _plant()
     with pytest.raises(TypeError, match="no order"):
         gx.select_graybox(cands, rec, estimator="ls", include={"1", "y(k-1)"})
+
+
+def test_frozen_value_keeps_an_array_held_twice_shared():
+    # the docstring's promise (a value held twice frozen once and still shared, as deepcopy keeps it) held for
+    # lists and mappings, not arrays: each path got its own copy (twice the memory of a large shared array)
+    import numpy as np
+    arr = np.arange(5.0)
+    out = frozen_value({"x": arr, "y": [arr]}, "extra")
+    assert out["x"] is out["y"][0] and not out["x"].flags.writeable
+    assert np.array_equal(out["x"], arr) and out["x"] is not arr

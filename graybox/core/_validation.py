@@ -502,13 +502,15 @@ def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = froze
 
     ``ValueError`` naming ``name`` for a value nested deeper than :data:`MAX_NESTING` levels or one that holds itself.
     """
-    if isinstance(v, np.ndarray):
-        return v if not v.flags.writeable and v.flags.owndata else frozen(v, v.dtype)
-    if not isinstance(v, (list, tuple, set, frozenset, Mapping)):
+    if not isinstance(v, (np.ndarray, list, tuple, set, frozenset, Mapping)):
         return v
     # id → (the value, its frozen copy, its height in nested containers); the value is kept so that its id is not
     # reused by another while the walk runs (a mapping may make its values when asked, temporaries)
     done: dict = {} if _done is None else _done
+    if isinstance(v, np.ndarray):  # an array held twice frozen once too (one copy, still shared)
+        if id(v) not in done:
+            done[id(v)] = (v, v if not v.flags.writeable and v.flags.owndata else frozen(v, v.dtype), 0)
+        return done[id(v)][1]
     if id(v) in done:  # frozen already, by another path to it
         _, out, height = done[id(v)]
         if _depth + height > MAX_NESTING:  # met here, deeper than where it was frozen
