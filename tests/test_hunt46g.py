@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import inspect
-import math
 
 import numpy as np
 import pytest
@@ -13,17 +12,7 @@ from graybox import Record
 from graybox import experiments as gx
 from graybox.experiments._cell import _estimate
 from graybox.experiments._spec import OPTIONS, SpecError
-
-
-def small_record(seed: int = 0, n: int = 400) -> Record:
-    """A first-order nonlinear plant, u in the hundreds (as tests/test_neural.py's)."""
-    rng = np.random.default_rng(seed)
-    u = np.repeat(rng.uniform(200.0, 800.0, n // 20 + 1), 20)[:n]
-    y = np.zeros(n)
-    y[0] = 5.0
-    for k in range(1, n):
-        y[k] = 0.6 * y[k - 1] + 4.0 * math.tanh((u[k - 1] - 500.0) / 200.0) + 2.0 + 0.05 * rng.standard_normal()
-    return Record(u, y, Ts=0.1, name=f"small{seed}")
+from test_neural import small_record  # the small network tests' plant, u in the hundreds
 
 
 # -- a grid's neural options are neural_narx's ------------------------------------------------------------------
