@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
-from ._validation import check_bool, check_int, check_real, check_sequence
+from ._validation import check_bool, check_int, check_ordered, check_real, check_sequence
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
            "default_input_names", "require_inputs", "transient_name", "transient_source"]
@@ -149,9 +149,7 @@ def check_input_names(names: object, m: int | None = None, what: str = "input_na
     """Validated input names: identifiers, not y/e/k, none given twice (and ``m`` of them when given)."""
     if isinstance(names, str) or not hasattr(names, "__iter__"):
         raise TypeError(f"{what} must be a sequence of names (strings), got {names!r}")
-    if isinstance(names, (set, frozenset)):  # its order, the columns', would change with PYTHONHASHSEED
-        raise TypeError(f"{what} must be an ordered sequence of names (one per input column, in order), got a "
-                        f"{type(names).__name__}, which has no order: pass a list of the names in the columns' order")
+    check_ordered(names, what, "names (one per input column, in order)")
     out = tuple(names)  # type: ignore[arg-type]
     if not out:
         raise ValueError(f"{what}: at least one input name is needed")
@@ -340,9 +338,7 @@ class Structure:
         if isinstance(terms, str):  # iterated, it would be read character by character
             raise TypeError(f"a structure is a sequence of terms, got the string {terms!r}: pass a list of terms, "
                             "or parse a '+'-joined string with parse_structure")
-        if isinstance(terms, (set, frozenset)):  # its order, θ's, would change with PYTHONHASHSEED
-            raise TypeError(f"a structure is an ordered sequence of terms (the order of θ), got a "
-                            f"{type(terms).__name__}, which has no order: pass a list of the terms in θ's order")
+        check_ordered(terms, "a structure", "terms (the order of θ)")
         ts = tuple(t if isinstance(t, Term) else parse_term(t) for t in terms)
         seen: set[Term] = set()
         for t in ts:
@@ -400,9 +396,7 @@ class Structure:
         out: list[int] = []
         if isinstance(terms, (str, Term)) or not hasattr(terms, "__iter__"):
             raise TypeError(f"{what}s must be a sequence of terms (Terms or strings), got {terms!r}")
-        if isinstance(terms, (set, frozenset)):  # the order given is read (an included term leads θ in it)
-            raise TypeError(f"{what}s must be an ordered sequence of terms, got a {type(terms).__name__}, which has "
-                            "no order (it would change with PYTHONHASHSEED): pass a list")
+        check_ordered(terms, f"{what}s", "terms (an included term leads θ in the order given)")
         for t in terms:
             if not isinstance(t, (Term, str)):
                 raise TypeError(f"{what}: a term must be a Term or a string, got {t!r}")

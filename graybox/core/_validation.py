@@ -378,15 +378,26 @@ def check_per_point(value: object, n: int, name: str) -> np.ndarray:
     return out
 
 
-def check_sequence(value: object, name: str, what: str = "a sequence") -> list:
+def check_ordered(value: object, name: str, what: str) -> None:
+    """``TypeError`` naming ``name`` for a set or frozenset where the order of ``what`` is read: a set's order
+    changes with PYTHONHASHSEED from one process to the next."""
+    if isinstance(value, (set, frozenset)):
+        raise TypeError(f"{name}: an ordered sequence of {what} is needed, got a {type(value).__name__}, which has "
+                        "no order (it would change with PYTHONHASHSEED): pass a list")
+
+
+def check_sequence(value: object, name: str, what: str = "a sequence", *, ordered: str | None = None) -> list:
     """``value`` as a list of its items, or ``TypeError`` for a number, a bool, a string or a mapping.
 
     For options that take several things (terms, start vectors, labels): a lone scalar or a
     string would otherwise be iterated, or fail inside NumPy, without naming the option.
+    ``ordered``: what the items are, where their order is read (a set is then refused, :func:`check_ordered`).
     """
     if (_is_bool(value) or _is_number(value) or isinstance(value, (str, bytes, dict))
             or not isinstance(value, Iterable)):
         raise TypeError(f"{name} must be {what}, got {value!r} ({type(value).__name__})")
+    if ordered is not None:
+        check_ordered(value, name, ordered)
     return list(value)  # type: ignore[call-overload]
 
 

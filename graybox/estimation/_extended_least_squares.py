@@ -310,9 +310,8 @@ def noise_terms(ne: int) -> Structure:
 
 def _noise_structure(noise: object) -> Structure:
     """Explicit noise terms given as a sequence, parsed with errors that name ``noise``."""
-    # a set kept as given: Structure refuses it (no order, and the order is the noise θ's)
-    items = noise if isinstance(noise, (set, frozenset)) else check_sequence(
-        noise, "noise", "an integer ne >= 0, a Structure or a sequence of noise terms")
+    items = check_sequence(noise, "noise", "an integer ne >= 0, a Structure or a sequence of noise terms",
+                           ordered="noise terms (the order of their θ)")
     try:
         return Structure(items)
     except (TypeError, ValueError) as exc:  # a number among the terms, too: said with the argument's name

@@ -1390,10 +1390,7 @@ def select_graybox(
         # not the caller's word: say which default the candidates refuse, and how to do without it
         raise ValueError("include defaults to the constant '1', which the candidates lack (Candidates(..., "
                          "constant=False)): pass include=() to search without it, or candidates with the constant")
-    if isinstance(include, (set, frozenset)):  # a list in hash order would reach the searches: refused as they do
-        raise TypeError(f"include must be an ordered sequence of terms, got a {type(include).__name__}, which has no "
-                        "order (it would change with PYTHONHASHSEED): pass a list")
-    include = check_sequence(include, "include")
+    include = check_sequence(include, "include", ordered="terms (as the searches read them)")
     lam = None if lambdas is None else tuple(float(x) for x in check_lambdas(lambdas))
     folds, blocks = (None if v is None else check_int(v, k, low=2) for v, k in ((folds, "folds"), (blocks, "blocks")))
     if shortlist is not None:

@@ -82,9 +82,8 @@ class Model:
             raise ValueError("noise terms belong in noise_structure, not in the process structure")
         ns = self.noise_structure
         if not isinstance(ns, Structure):
-            # a set kept as given: Structure refuses it (no order, and the order is noise_theta's)
-            items = ns if isinstance(ns, (set, frozenset)) else check_sequence(
-                ns, "noise_structure", "a Structure or a sequence of noise terms")
+            items = check_sequence(ns, "noise_structure", "a Structure or a sequence of noise terms",
+                                   ordered="noise terms (the order of noise_theta)")
             try:
                 ns = Structure(items)
             except (TypeError, ValueError) as exc:  # a number among the terms: said with the field's name
