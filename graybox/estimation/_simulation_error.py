@@ -86,7 +86,7 @@ from ..static._surface_analysis import reached_surface, surface_theta_gradient
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..core._files import folder_now, sweep_written_beside, write_atomically, written_path
-from ..core._terms import Structure
+from ..core._terms import Structure, default_input_names
 from ..core._validation import (FrozenMap, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
@@ -218,10 +218,8 @@ class SEProblem:
         # does not depend on where the output's zero is. On the raw signals a run that left a 2e7 bound around
         # y ≈ 20 stayed inside the 1e10 one of y + 1e4: the GA then ranked other individuals and its fronts at
         # another offset differed (J_SF up to 15 times)
-        c = self.code
         self.run_records, self.run_scale = centred, s_c
-        self.run_U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L)
-                      for r in centred]
+        self.run_U = self._products(centred)
         self.offsets, self.z_shift = off, t
         self.z_map = A / s_c  # θ = z_map @ z + z_shift
         self.z_inv = s_c[:, None] * Ainv  # z = z_inv @ (θ − z_shift)
@@ -235,10 +233,13 @@ class SEProblem:
         :meth:`residuals` does, for se_dsf and the covariances): holding both was a second N × n array through
         every sweep (+31 MB at N = 200000, n = 20)."""
         if self._U is None:
-            c = self.code
-            self._U = [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L)
-                       for r in self.records]
+            self._U = self._products(self.records)
         return self._U
+
+    def _products(self, records: Sequence[Record]) -> list[np.ndarray]:
+        """Each record's input products for the structure's kernels (fixed across a sweep)."""
+        c = self.code
+        return [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L) for r in records]
 
     def _held_input(self) -> bool:
         """Whether an input of the structure holds one value over every record (to round-off: the centring's one
@@ -318,7 +319,7 @@ class SEProblem:
         over by another version as any checkpoint of another version is; the default names' checkpoints stay valid.
         """
         every = [r.input_names for r in self.records] + ([] if self.static is None else [self.static.input_names])
-        if all(len(n) < 2 or tuple(n) == tuple(f"u{i + 1}" for i in range(len(n))) for n in every):
+        if all(len(n) < 2 or tuple(n) == default_input_names(len(n)) for n in every):
             return None
         return [list(n) for n in every]
 
