@@ -465,3 +465,49 @@ def test_a_cell_time_limit_is_refused_where_a_cell_cannot_be_stopped(tmp_path):
         with pytest.raises(err, match="cell_time_limit"):
             gx.run_grid(tiny_grid(), tmp_path / "s.sqlite", executor="processes", cell_time_limit=bad)
     assert not (tmp_path / "s.sqlite").exists()  # refused before the store is made
+
+
+def _sleep_then_run(seconds: float, cell, data, threads):
+    time.sleep(seconds)
+    return run_cell(cell, data, threads=threads)
+
+
+def test_a_dask_run_whose_cluster_has_no_worker_left_ends_with_the_reason(tmp_path):
+    """Every worker gone and none restarted (here the cluster scaled to 0 mid-run): the tasks would wait
+    for ever; the run ends after ``worker_timeout`` seconds with a ConnectionError saying so."""
+    import threading
+
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                           silence_logs=logging.ERROR)
+    with cluster, Client(cluster) as client:
+        cells, data = _death_cells(("LS", "CLS", "PE"))
+        ex = DaskCluster(client=client, fn=partial(_sleep_then_run, 60.0), worker_timeout=2)
+        out: dict = {}
+
+        def drive():
+            try:
+                out["rows"] = list(ex.run(cells, data))
+            except Exception as exc:  # noqa: BLE001 - what the run ended with is the test's object
+                out["error"] = exc
+
+        t = threading.Thread(target=drive, daemon=True)
+        t.start()
+        time.sleep(1.5)
+        t0 = time.monotonic()
+        cluster.scale(0)
+        t.join(timeout=45)
+        assert not t.is_alive(), "the run still waits on a cluster without workers"
+        assert time.monotonic() - t0 >= 2
+    assert "rows" not in out
+    assert isinstance(out["error"], ConnectionError)
+    assert "no worker for 2 s" in str(out["error"]) and "run the grid again" in str(out["error"])
+
+
+def test_the_dask_worker_timeout_is_checked():
+    with pytest.raises(ValueError, match="worker_timeout"):
+        DaskCluster(workers=1, worker_timeout=0)
+    with pytest.raises(TypeError, match="worker_timeout"):
+        DaskCluster(workers=1, worker_timeout="60")
+    assert DaskCluster(workers=1, worker_timeout=None).worker_timeout is None

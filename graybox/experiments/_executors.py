@@ -100,7 +100,9 @@ MAX_BATCH = 64
 IN_FLIGHT = 2
 #: How long the driver tries to reach a Dask scheduler given by its address.
 CONNECT_TIMEOUT = "30s"
-#: How long the driver waits for the first worker of a Dask scheduler given by its address (seconds).
+#: How long the driver waits for the first worker of a Dask scheduler given by its address, and how long a
+#: Dask run goes on once its cluster has no worker left (seconds): tasks sent to a cluster without workers
+#: wait for ever.
 WORKER_TIMEOUT = 60
 
 
@@ -694,14 +696,20 @@ class DaskCluster:
         Start a ``LocalCluster`` of this many worker processes (one thread each) for the run.
     fn : callable
         What a worker runs for a cell.
+    worker_timeout : float or None
+        Seconds a run goes on once the cluster has no worker left (all of them gone, none restarted): then it
+        ends with a ``ConnectionError``, the rows it finished kept (the store's run resumes them). ``None``
+        waits for ever (e.g. for an adaptive cluster whose workers wait in a batch queue).
     """
 
     def __init__(self, client: Any = None, scheduler: str | None = None, workers: int | None = None,
-                 fn: CellFn = run_cell):
+                 fn: CellFn = run_cell, worker_timeout: float | None = WORKER_TIMEOUT):
         given = [k for k, v in (("client", client), ("scheduler", scheduler), ("workers", workers)) if v is not None]
         if len(given) != 1:
             raise ValueError(f"the Dask executor needs exactly one of client, scheduler or workers; got {given or 'none'}")
         self.client, self.scheduler, self.workers, self.fn = client, scheduler, workers, fn
+        self.worker_timeout = (None if worker_timeout is None else
+                               check_real(worker_timeout, "worker_timeout", low=0, low_open=True))
         if workers is not None:
             self.workers = int(workers)
             self.name = f"Dask LocalCluster of {self.workers} worker processes"
@@ -791,6 +799,8 @@ class DaskCluster:
             asked = [time.monotonic()]
 
             def submit() -> None:
+                if watch.lost:
+                    return
                 if batches.retry or any(d for items in futures.values() for _, d in items):
                     # while cells whose worker died are retried, at most one task per live worker
                     # process: a task beside or behind the one that kills its worker would be
@@ -814,6 +824,7 @@ class DaskCluster:
 
             # results are gathered in the background as tasks finish (no round trip per task here)
             pending = as_completed([], with_results=True, raise_errors=False)
+            watch = _WorkerWatch(client, self.worker_timeout, pending)
             submit()
             try:
                 for f, result in pending:
@@ -843,13 +854,58 @@ class DaskCluster:
                     f.release()
                     submit()
                     yield from rows
+                if watch.lost:
+                    raise ConnectionError(
+                        f"the {self.name} has had no worker for {watch.limit:g} s (all gone, none restarted): "
+                        f"{len(futures)} task(s) in flight and the cells not yet started were not run; the rows "
+                        "finished are kept: run the grid again once the cluster has workers")
             finally:
+                watch.close()
                 for f in futures:
                     f.cancel()
                 try:
                     client.unregister_worker_plugin(plugin)
                 except Exception:  # the cluster may be going away; the plugin goes with it
                     pass
+
+
+class _WorkerWatch:
+    """Ends a Dask run whose cluster has had no worker for ``limit`` seconds: a thread asks the scheduler
+    once a second, and then empties ``pending`` (the ``as_completed`` the run waits on, which then stops) and
+    sets :attr:`lost`; it keeps emptying it until :meth:`close` (a task added meanwhile is not waited for)."""
+
+    def __init__(self, client: Any, limit: float | None, pending: Any):
+        self.client, self.limit, self.pending = client, limit, pending
+        self.lost = False
+        self._stop = threading.Event()
+        self._thread = None
+        if limit is not None:
+            self._thread = threading.Thread(target=self._watch, name="graybox Dask worker watch", daemon=True)
+            self._thread.start()
+
+    def _workers(self) -> int:
+        try:
+            return len(self.client.nthreads())
+        except Exception:  # a scheduler that cannot be asked runs nothing either
+            return 0
+
+    def _watch(self) -> None:
+        since = None
+        while not self._stop.wait(min(1.0, self.limit / 4)):
+            if self.lost:
+                self.pending.clear()
+            elif self._workers():
+                since = None
+            elif since is None:
+                since = time.monotonic()
+            elif time.monotonic() - since >= self.limit:
+                self.lost = True
+                self.pending.clear()
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
 
 
 @contextmanager

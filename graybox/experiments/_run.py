@@ -146,6 +146,9 @@ def run_grid(
         The spec is invalid or its data cannot be loaded.
     StoreError
         The store cannot be used, or gives one of the spec's data set names other data.
+    ConnectionError
+        A Dask scheduler cannot be reached or has no worker, or the cluster has had no worker for 60 s
+        mid-run (all gone, none restarted): the rows finished are kept, and running again resumes.
 
     Notes
     -----
