@@ -1,3 +1,5 @@
+import time
+
 import numpy as np
 import pytest
 from hypothesis import settings
@@ -149,8 +151,11 @@ BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.
           "test_grid_executors.py", "test_select_checkpoint.py", "test_notebooks.py", "test_parallel_map_errors.py",
           "test_bootstrap.py", "test_review44d.py", "test_grid42a.py", "test_gram.py", "test_hunt36a.py",
           "test_review40d.py")
-_BESIDE_ENV = "GRAYBOX_TESTS_BESIDE"  # set in that pytest: it runs them itself
+_BESIDE_ENV = "GRAYBOX_TESTS_BESIDE"  # set in that pytest (to the suite's process id): it runs them itself
 _BESIDE_RUN = pytest.StashKey[dict]()
+#: Seconds the suite waits for the pytest beside it from its start (CI allows 600 for the whole suite): past
+#: them it is killed and its tests fail with its output, rather than the suite waiting on a hung test for ever.
+BESIDE_LIMIT = 540
 
 
 def runs_beside(item) -> bool:
@@ -174,8 +179,43 @@ def start_beside(items) -> dict:
                                  *(item.nodeid for item in items)],
                                 stdout=out, stderr=subprocess.STDOUT, cwd=items[0].config.rootpath,
                                 stdin=subprocess.DEVNULL, start_new_session=True,
-                                env=dict(os.environ, **{_BESIDE_ENV: "1"}))
-    return {"proc": proc, "tmp": tmp}
+                                env=dict(os.environ, **{_BESIDE_ENV: str(os.getpid())}))
+    return {"proc": proc, "tmp": tmp, "deadline": time.monotonic() + BESIDE_LIMIT}
+
+
+def _kill_group(proc) -> None:
+    """SIGKILL ``proc``'s process group (it runs in a session of its own: its workers and kernels go too)."""
+    import os
+    import signal
+
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    proc.wait()
+
+
+def _end_with_the_suite(suite: int) -> None:
+    """In the pytest beside the suite: kill its own process group once the suite's process ``suite`` is gone
+    (killed, say), so that no orphaned test keeps the machine busy."""
+    import os
+    import signal
+    import threading
+
+    def watch() -> None:
+        while os.getppid() == suite:
+            time.sleep(2)
+        os.killpg(os.getpgid(0), signal.SIGKILL)
+
+    threading.Thread(target=watch, name="end with the suite", daemon=True).start()
+
+
+def pytest_configure(config):
+    import os
+
+    suite = os.environ.get(_BESIDE_ENV, "")
+    if suite.isdigit():
+        _end_with_the_suite(int(suite))
 
 
 def _case_of(item, run: dict, required: bool = True):
@@ -183,7 +223,15 @@ def _case_of(item, run: dict, required: bool = True):
     it is ``required``, else None)."""
     import xml.etree.ElementTree as ET
 
-    rc = run["proc"].wait()
+    import subprocess
+
+    if "rc" not in run:
+        try:
+            run["rc"] = run["proc"].wait(timeout=max(0.0, run["deadline"] - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            _kill_group(run["proc"])
+            run["rc"] = f"killed: it ran past conftest.BESIDE_LIMIT, {BESIDE_LIMIT} s"
+    rc = run["rc"]
     if "cases" not in run:  # (parsed once for all its items)
         try:
             run["cases"] = list(ET.parse(run["tmp"] / "verdicts.xml").getroot().iter("testcase"))
@@ -249,18 +297,12 @@ def site_build(config) -> dict:
 
 
 def pytest_unconfigure(config):
-    import os
     import shutil
-    import signal
 
     for key in (_SITE_BUILD, _BESIDE_RUN):
         started = config.stash.get(key, None)
         if started is None:
             continue
         if started["proc"].poll() is None:  # the suite stopped before its tests waited for it
-            try:
-                os.killpg(started["proc"].pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-            started["proc"].wait()
+            _kill_group(started["proc"])
         shutil.rmtree(started["tmp"], ignore_errors=True)
