@@ -213,7 +213,7 @@ def transient(names) -> None:
             # the transient inputs alone or times an input, never times y or squared: the model's
             # y-dynamics (its poles) stay those of its other terms whatever the transients do
             new = set(aug.input_names) - set(data.input_names)
-            keep = [t for t in c if not new & set(t.inputs)
+            keep = [t for t in c if not new & set(t.input_names)
                     or (t.power_of("y") == 0 and sum(t.power_of(n) for n in new) == 1)]
             variants[f"transient {grid}, z alone or times u"] = (aug, gb.Structure(keep), ts)
         t0 = time.perf_counter()
@@ -227,7 +227,7 @@ def transient(names) -> None:
             js = {box: [_test_js(r.model, t) for t in ts] for box, r in res.items()}
             for box, r in res.items():
                 ch = r.chosen
-                z = sorted({n for t in r.structure for n in t.inputs} - set(data.input_names))
+                z = sorted({n for t in r.structure for n in t.input_names} - set(data.input_names))
                 rows.append({"case": name, "candidates": label, "box": box, "n_terms": len(r.structure),
                              "estimator": ch["estimator"], "transient inputs used": ", ".join(z) or "none",
                              "JS_valid": ch["JS_valid"], "JS_test": ch["JS_test"],

@@ -329,7 +329,7 @@ def test_cluster_bounds_by_every_printed_name(data):
 def test_input_names_is_the_one_input_names_keyword():
     st = gb.Structure(["1", "y(k-1)", "u1(k-1)", "u2(k-1)^2"])
     new = gb.Candidates(1, 1, degree=1, input_names=("u1", "u2"))
-    assert {n for t in new for n in t.inputs} == {"u1", "u2"}
+    assert {n for t in new for n in t.input_names} == {"u1", "u2"}
     th = np.array([0.2, 0.5, 0.3, 0.1])
     pts = np.array([[1.0, 2.0]])
     for call in (lambda: gb.Candidates(1, 1, degree=1, inputs=("u1", "u2")),
@@ -339,7 +339,7 @@ def test_input_names_is_the_one_input_names_keyword():
                  lambda: gb.surface_cluster_map(st, inputs=("u1", "u2"))):
         with pytest.raises(TypeError, match="inputs"):
             call()
-    assert gb.surface_cluster_map(st, input_names=("u2", "u1")).inputs == ("u2", "u1")
+    assert gb.surface_cluster_map(st, input_names=("u2", "u1")).input_names == ("u2", "u1")
 
 
 def test_seed_is_the_one_random_source_keyword():

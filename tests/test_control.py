@@ -192,7 +192,7 @@ def test_nonlinear_system_free_run_equals_simulate_two_inputs():
     names = data.input_names
     sel = gb.frols(gb.Candidates(3, 3, input_names=names, degree=2, max_y_power=1), data, n_terms=10, include=["1"])
     model = gb.els(sel, data).model
-    assert set(model.structure.inputs) == set(names)
+    assert set(model.structure.input_names) == set(names)
     rec = data.valid
     L = model.max_lag
     sysm = gb.narx_iosystem(model, Ts=rec.Ts)

@@ -666,7 +666,7 @@ def test_input_names_are_part_of_the_data_and_of_made_structures():
     spec = gx.StructureSpec("m", candidates={"ny": 1, "nu": 1, "degree": 2}, n_terms=5, include=["1"])
     st_plain = make_structure(spec.content(), plain, data_fingerprint(plain))
     st_named = make_structure(spec.content(), renamed, data_fingerprint(renamed))
-    assert set(st_plain.inputs) == {"u1", "u2"} and set(st_named.inputs) == {"a", "b"}
+    assert set(st_plain.input_names) == {"u1", "u2"} and set(st_named.input_names) == {"a", "b"}
     # the spec checks included terms and per-input delays against the inputs they name
     gx.StructureSpec("n", candidates={"ny": 1, "nu": 2, "delay": {"n1": 1, "n2": 2}}, n_terms=4, include=["n1(k-1)"])
     gx.StructureSpec("n", candidates={"ny": 1, "nu": 2}, n_terms=4, include=["n1(k-1)"])

@@ -77,7 +77,7 @@ def test_select_graybox_says_at_once_when_a_choosing_or_test_record_lacks_a_cand
     # the data set but not to the test record) failed only after the structure search and the fits
     # (minutes with SE fronts), from inside a job; with a test record it failed or not by the chance
     # of which structures the search found
-    data = gb.transient_inputs(gb.Dataset(record(0, 400), record(1, 300)), taus=(1.0,), inputs=["speed"])
+    data = gb.transient_inputs(gb.Dataset(record(0, 400), record(1, 300)), taus=(1.0,), input_names=["speed"])
     cand = gb.Candidates(2, {"valve": 2, "speed": 2, "speed_tau1": 1}, degree=2, input_names=data.input_names,
                          max_y_power=1)
     import graybox._api as api
@@ -163,7 +163,7 @@ def test_a_test_record_with_its_columns_in_another_order_is_still_the_fitting_re
         gb.select_graybox(CAND, gb.Dataset(ident, valid), test=part, sizes=[6])
     with pytest.raises(ValueError, match="a choosing record is a fitting record"):
         gb.output_error(TRUE, ident, choose_on=swapped, n_starts=0)
-    extended = gb.transient_inputs(ident, taus=(1.0,), inputs=["speed"])
+    extended = gb.transient_inputs(ident, taus=(1.0,), input_names=["speed"])
     with pytest.raises(ValueError, match="a choosing record is a fitting record"):
         gb.output_error(TRUE, ident, choose_on=extended, n_starts=0)
     # new data in another column order is new data

@@ -28,7 +28,7 @@ STRUCTURES = {
 @given(data=st.data())
 def test_static_estimation_and_control_read_the_same_local_model(name, data):
     structure = STRUCTURES[name]
-    names = structure.inputs
+    names = structure.input_names
     theta = np.array(data.draw(st.lists(st.floats(-0.8, 0.8), min_size=len(structure), max_size=len(structure))))
     ubar = np.array(data.draw(st.lists(st.floats(-3.0, 3.0), min_size=len(names), max_size=len(names))))
     ybar = data.draw(st.floats(-4.0, 4.0))

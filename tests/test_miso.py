@@ -22,10 +22,10 @@ def test_miso_terms_print_and_parse(text):
 
 def test_miso_term_order_and_powers():
     t = parse_term("y(k-1)u2(k-1)^2")
-    assert str(t) == "u2(k-1)^2y(k-1)" and t.inputs == ("u2",) and t.input_power == 2 and t.power_of("y") == 1
+    assert str(t) == "u2(k-1)^2y(k-1)" and t.input_names == ("u2",) and t.input_power == 2 and t.power_of("y") == 1
     assert parse_term("u2(k-2)u1(k-1)") == parse_term("u1(k-1)u2(k-2)")
     s = Structure(["u2(k-1)", "y(k-1)", "u1(k-2)y(k-1)", "1"])
-    assert s.inputs == ("u1", "u2") and s.input_lag("u2") == 1 and s.input_lag("u1") == 2
+    assert s.input_names == ("u1", "u2") and s.input_lag("u2") == 1 and s.input_lag("u1") == 2
 
 
 def test_candidates_per_input_lags_and_delays():
@@ -33,7 +33,7 @@ def test_candidates_per_input_lags_and_delays():
     assert [str(t) for t in c] == ["1", "u1(k-1)", "u1(k-2)", "u2(k-3)", "u2(k-4)", "y(k-1)"]
     c2 = Candidates(2, 2, input_names=["u1", "u2"], degree=2)
     # 1 + 6 linear + 21 quadratic in 6 variables
-    assert len(c2) == 28 and set(c2.inputs) == {"u1", "u2"}
+    assert len(c2) == 28 and set(c2.input_names) == {"u1", "u2"}
     assert Candidates(6, 6, ne=2, degree=2) == Candidates(6, {"u": 6}, ne=2, degree=2)
 
 
@@ -161,8 +161,8 @@ def test_miso_kernels_match_a_plain_loop():
     for i in range(3):
         assert np.allclose(many[i], gb.simulate(_ST2, thetas[i], rec), rtol=1e-12, atol=1e-12)
     code = encode(_ST2)
-    assert code.inputs == ("u1", "u2")
-    sse = batch_sse(code, thetas, record_inputs(swapped, code.inputs), rec.y, 2)
+    assert code.input_names == ("u1", "u2")
+    sse = batch_sse(code, thetas, record_inputs(swapped, code.input_names), rec.y, 2)
     assert np.allclose(sse, ((many[:, 2:] - rec.y[2:]) ** 2).sum(axis=1), rtol=1e-10)
     y, S = free_run_sensitivity(code, _TH2, rec.u, rec.y[:2], 2)
     h = 1e-6
@@ -291,7 +291,7 @@ def test_surface_clusters_per_input_power():
     # terms: y(k-1), u1(k-1), u2(k-2), u1(k-1)u2(k-1), u2(k-1)^2y(k-2), u1(k-2)y(k-1), 1
     assert cl == {"Σ0": 0.1, "Σu1": 0.3, "Σu2": -0.2, "Σu1u2": 0.1, "Σy": 0.5, "Σyu1": 0.05, "Σyu2²": -0.05}
     cm = surface_cluster_map(_ST2)
-    assert cm.keys[cm.index("Σyu2²")] == (1, 0, 2) and cm.inputs == ("u1", "u2")
+    assert cm.keys[cm.index("Σyu2²")] == (1, 0, 2) and cm.input_names == ("u1", "u2")
     # the static equation at a point, written from the clusters, holds at every equilibrium
     for u1, u2 in ((0.5, 0.2), (-1.0, 1.5)):
         for e in m.equilibria([u1, u2]):
@@ -363,7 +363,7 @@ def test_two_input_pipeline_frols_els_evaluate():
     rec = Record(u, y, input_names=("n1", "n2"))
     sel = gb.frols(Candidates(2, 2, input_names=["n1", "n2"], degree=2, ne=1), rec)
     m = gb.els(sel, rec).model
-    assert m.input_names == ("n1", "n2") and set(m.structure.inputs) == {"n1", "n2"}
+    assert m.input_names == ("n1", "n2") and set(m.structure.input_names) == {"n1", "n2"}
     assert m.noise_theta[0] == pytest.approx(0.3, abs=0.1)
     ds = Dataset(rec, rec, StaticPoints([[0, 0], [0.5, 0.5]], [0.4, 0.5], input_names=("n1", "n2")))
     tab = gb.evaluate({"els": m}, ds)
@@ -465,4 +465,4 @@ def test_unnamed_candidates_for_data_of_named_inputs_are_told_how_to_name_them()
         with pytest.raises(ValueError, match=r"Candidates\(\.\.\., input_names=\['speed', 'valve'\]\)"):
             call()
     named = gb.frols(gb.Candidates(2, 2, input_names=["speed", "valve"]), rec, n_terms=3)
-    assert set(named.model.structure.inputs) <= {"speed", "valve"}
+    assert set(named.model.structure.input_names) <= {"speed", "valve"}

@@ -131,7 +131,7 @@ def test_a_model_made_from_what_carries_a_structure_keeps_its_input_names():
         y[k] = 0.5 * y[k - 1] + u[k - 1, 0]
     rec = gb.Record(u, y, input_names=("speed", "valve"))
     sel = gb.frols(gb.Candidates(1, 1, degree=1, input_names=("speed", "valve")), rec, n_terms=2)
-    assert sel.structure.inputs == ("speed",)
+    assert sel.structure.input_names == ("speed",)
     df = pd.DataFrame(u, columns=["speed", "valve"])
     for carrier in (sel, sel.model):
         m = gb.Model(carrier, sel.model.theta)

@@ -126,9 +126,9 @@ def test_selection_finds_a_known_transient_effect_that_meets_the_band_and_holds_
     (dict(taus=[2.0, 2.0000001]), ValueError, "same name"),
     (dict(taus=2.0), TypeError, "taus must be a sequence"),
     (dict(taus=[True]), TypeError, "real number"),
-    (dict(taus=[1.0], inputs=["v"]), ValueError, "no input named 'v'"),
-    (dict(taus=[1.0], inputs=[3]), TypeError, "must name inputs"),
-    (dict(taus=[1.0], inputs=[]), ValueError, "at least one input"),
+    (dict(taus=[1.0], input_names=["v"]), ValueError, "no input named 'v'"),
+    (dict(taus=[1.0], input_names=[3]), TypeError, "must name inputs"),
+    (dict(taus=[1.0], input_names=[]), ValueError, "at least one input"),
 ])
 def test_bad_options_are_named(kw, err, msg):
     with pytest.raises(err, match=msg):
@@ -140,7 +140,7 @@ def test_bad_data_and_twice_added():
         gb.transient_inputs(np.arange(5.0), taus=[1.0])
     once = gb.transient_inputs(gb.Record(np.arange(5.0), np.zeros(5)), taus=[1.0])
     with pytest.raises(ValueError, match="added twice"):
-        gb.transient_inputs(once, taus=[1.0], inputs=["u"])
+        gb.transient_inputs(once, taus=[1.0], input_names=["u"])
     # a model that uses the channel refuses a record without it, by name
     st_ = gb.parse_structure("y(k-1) + u_tau1(k-1)")
     with pytest.raises(ValueError, match=r"u_tau1.*transient_inputs\(record, taus=\[1\], inputs=\['u'\]\)"):
@@ -214,3 +214,23 @@ def test_select_graybox_says_when_the_static_information_lacks_the_channels():
     cand = gb.Candidates(2, {"u": 2, "u_tau10": 1}, degree=2, input_names=data.input_names)
     with pytest.raises(ValueError, match=r"has inputs \('u', 'u_tau10'\) but .* has inputs \('u',\)"):
         gb.select_graybox(cand, data.ident, curve, validation=data.valid, band=0.031)
+
+
+def test_the_old_names_of_input_names_still_work_and_say_the_new_one():
+    """Structure.inputs, Term.inputs, SurfaceClusterMap.inputs and transient_inputs(inputs=) were renamed
+    input_names (the name every other value uses); the old spellings warn and give the same."""
+    st = gb.parse_structure(["y(k-1)", "u2(k-1)y(k-1)", "u1(k-2)"])
+    with pytest.warns(DeprecationWarning, match=r"Structure.inputs is now Structure.input_names"):
+        assert st.inputs == st.input_names == ("u1", "u2")
+    with pytest.warns(DeprecationWarning, match=r"Term.inputs is now Term.input_names"):
+        assert st.terms[1].inputs == ("u2",)
+    cm = gb.surface_cluster_map(st)
+    with pytest.warns(DeprecationWarning, match=r"SurfaceClusterMap.inputs is now"):
+        assert cm.inputs == cm.input_names == ("u1", "u2")
+    rec = gb.Record(np.arange(12.0).reshape(6, 2), np.zeros(6), input_names=("a", "b"))
+    with pytest.warns(DeprecationWarning, match=r"transient_inputs\(inputs=\) is now transient_inputs\(input_names=\)"):
+        old = gb.transient_inputs(rec, taus=[1.0], inputs=["b"])
+    new = gb.transient_inputs(rec, taus=[1.0], input_names=["b"])
+    assert old.input_names == new.input_names and np.array_equal(old.u, new.u)
+    with pytest.raises(TypeError, match="give input_names= only"):
+        gb.transient_inputs(rec, taus=[1.0], input_names=["b"], inputs=["b"])

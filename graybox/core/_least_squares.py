@@ -214,7 +214,7 @@ def check_identified(blocks: Sequence[tuple[str, np.ndarray, int]], terms: Seque
     by = " and ".join(name for name, _, _ in blocks)
     msg = (f"{what} is not identifiable from {by}: their stacked regression has rank {n - free.shape[1]} for {n} "
            f"terms (judged with every column at unit RMS), and leaves free {free.shape[1]} combination(s) of {moved}")
-    if moved_at and all(getattr(terms[j], "inputs", None) == () for j in moved_at):
+    if moved_at and all(getattr(terms[j], "input_names", None) == () for j in moved_at):
         raise ValueError(f"{msg}: {HELD_OUTPUT}")
     static_helps = True
     if clusters is not None:

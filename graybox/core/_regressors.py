@@ -40,7 +40,7 @@ def check_structure_inputs(structure: Structure, records: Sequence[Record]) -> N
     Too short: not more samples than the structure's largest lag (e.g. an input delay beyond the record).
     """
     require_lengths(records, structure.max_lag)
-    check_record_inputs(structure.inputs, records)
+    check_record_inputs(structure.input_names, records)
 
 
 def check_record_inputs(inputs: Sequence[str], records: Sequence) -> None:
@@ -135,7 +135,7 @@ def regressor_matrix(
             if sig not in signals:
                 what = "input" if sig not in ("y", "e") else "signal"
                 have = tuple(k for k in signals if k not in ("y", "e"))
-                used = structure.inputs
+                used = structure.input_names
                 raise ValueError(f"term {term} needs {what} {sig!r}, which the data do not have (inputs: {have})"
                                  f"{missing_input_hint(used, have) if what == 'input' else ''}")
             x = signals[sig][s - lag : n - lag]

@@ -67,7 +67,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     code = encode(structure, record.input_names)
     # simulate's bound, each run's from the measured outputs it starts from: a horizon of the record's length is
     # the free run from the first max_lag samples
-    return predict_ahead(code, th, record_inputs(record, code.inputs), record.y, L, min(horizon, len(record)),
+    return predict_ahead(code, th, record_inputs(record, code.input_names), record.y, L, min(horizon, len(record)),
                          None)
 
 
@@ -183,14 +183,14 @@ def simulate(
     if isinstance(u, Record):  # validated already: no copy
         code = encode(structure)
         _, y0, b = free_run_inputs(u, y0, L, bound)
-        uu = record_inputs(u, code.inputs)
+        uu = record_inputs(u, code.input_names)
     else:
         cols = [str(c) for c in u.columns] if input_names is None and is_frame(u) else []
-        if cols and sorted(cols) != sorted(default_input_names(len(cols))) and any(c in structure.inputs for c in cols):
+        if cols and sorted(cols) != sorted(default_input_names(len(cols))) and any(c in structure.input_names for c in cols):
             # a DataFrame naming the structure's inputs is read by those names (refused, naming its columns, where it
             # names some and not others): by position its named columns were said to be u1 … um. Columns with the
             # default names (any order) are read by them, as before (a structure in u2 alone reads the frame's u2)
-            input_names = structure.inputs
+            input_names = structure.input_names
         uu, y0, b = free_run_inputs(u, y0, L, bound, names=input_names)
         code, uu = _inputs_for(structure, uu, input_names)
     y = simulate_one(code, th, uu, y0, L, b)
@@ -236,7 +236,7 @@ def simulate_many(
     L = structure.max_lag
     record.require_length(L)
     code = encode(structure)
-    return simulate_batch(code, th, record_inputs(record, code.inputs), record.y[:L], L, threads, bounded=True)
+    return simulate_batch(code, th, record_inputs(record, code.input_names), record.y[:L], L, threads, bounded=True)
 
 
 def _inputs_for(structure: Structure, u: np.ndarray, input_names: object):
@@ -246,10 +246,10 @@ def _inputs_for(structure: Structure, u: np.ndarray, input_names: object):
     names = default_input_names(m) if input_names is None else check_input_names(input_names, m, "input_names")
     if m == 1:
         # one column feeds the structure's one input whatever its name, unless named otherwise
-        if len(structure.inputs) > 1 or (input_names is not None and structure.inputs
-                                         and structure.inputs[0] != names[0]):
+        if len(structure.input_names) > 1 or (input_names is not None and structure.input_names
+                                         and structure.input_names[0] != names[0]):
             raise ValueError(f"u has one input column ({names[0]!r}) but the structure uses the inputs "
-                             f"{structure.inputs}; pass u of shape (N, m) and its input_names")
+                             f"{structure.input_names}; pass u of shape (N, m) and its input_names")
         return encode(structure), a
-    require_inputs(structure.inputs, names, f"but u's {m} columns are the inputs")
+    require_inputs(structure.input_names, names, f"but u's {m} columns are the inputs")
     return encode(structure, names), a

@@ -64,7 +64,7 @@ class Code(NamedTuple):
     gylag: np.ndarray
     mu: np.ndarray
     usig: np.ndarray
-    inputs: tuple[str, ...]
+    input_names: tuple[str, ...]
 
 
 def encode(structure: Structure, inputs: tuple[str, ...] | None = None) -> Code:
@@ -79,14 +79,14 @@ def encode(structure: Structure, inputs: tuple[str, ...] | None = None) -> Code:
         reads no input by name). Must contain every input the structure uses.
     """
     if inputs is None:
-        inputs = structure.inputs
+        inputs = structure.input_names
     return _encode(structure, tuple(inputs))
 
 
 @lru_cache(maxsize=512)
 def _encode(structure: Structure, inputs: tuple[str, ...]) -> Code:
     sig = {"y": 0} | {n: 1 + i for i, n in enumerate(inputs)}
-    require_inputs(structure.inputs, tuple(inputs), "which is not among the inputs")
+    require_inputs(structure.input_names, tuple(inputs), "which is not among the inputs")
     fptr = [0]
     fsig: list[int] = []
     flag: list[int] = []
@@ -147,14 +147,14 @@ def kernel_inputs(code: Code, u: np.ndarray) -> np.ndarray:
     """The inputs as the kernels read them: shape (m, N), one contiguous row per input.
 
     ``u`` is (N,) for a single input (a view, no copy) or (N, m) with the columns in
-    ``code.inputs`` order; ``ValueError`` when the column count differs.
+    ``code.input_names`` order; ``ValueError`` when the column count differs.
     """
     if u.ndim == 1:
-        if len(code.inputs) > 1:
-            raise ValueError(f"u has one input column but the structure's inputs are {code.inputs}")
+        if len(code.input_names) > 1:
+            raise ValueError(f"u has one input column but the structure's inputs are {code.input_names}")
         return u.reshape(1, u.shape[0])
-    if u.ndim != 2 or u.shape[1] != len(code.inputs):
-        raise ValueError(f"u has shape {u.shape}, expected (N, {len(code.inputs)}) for the inputs {code.inputs}")
+    if u.ndim != 2 or u.shape[1] != len(code.input_names):
+        raise ValueError(f"u has shape {u.shape}, expected (N, {len(code.input_names)}) for the inputs {code.input_names}")
     return np.ascontiguousarray(u.T, dtype=np.float64)
 
 
@@ -337,7 +337,7 @@ def simulate_one(code: Code, theta: np.ndarray, u: np.ndarray, y0: np.ndarray, s
                  bound: float | None) -> np.ndarray:
     """Free run of one model; ``y0`` gives samples ``0 … start-1``; returns y, shape (N,).
 
-    ``u`` is (N,) or (N, m) in ``code.inputs`` order. The run stops at the first sample whose
+    ``u`` is (N,) or (N, m) in ``code.input_names`` order. The run stops at the first sample whose
     magnitude exceeds ``bound`` (or is not finite); that sample and all later ones are NaN.
     ``bound=None``: the default, :data:`BOUND_FACTOR` × the run's own scale at each sample.
     """
@@ -565,7 +565,7 @@ def simulate_batch(
         :func:`encode` of the structure.
     thetas : ndarray, shape (P, n_terms)
     u : ndarray, shape (N,) or (N, m)
-        Input(s), columns in ``code.inputs`` order.
+        Input(s), columns in ``code.input_names`` order.
     y0 : ndarray, shape (start,)
         Initial outputs shared by the population.
     start : int
@@ -681,7 +681,7 @@ def batch_sse(
     code : Code
     thetas : ndarray, shape (P, n_terms)
     u : ndarray, shape (N,) or (N, m)
-        Input(s), columns in ``code.inputs`` order.
+        Input(s), columns in ``code.input_names`` order.
     y : ndarray, shape (N,)
         Measured output.
     start : int

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Iterable, Iterator, Mapping, Sequence
 
+from ._renamed import RenamedAttribute
 from ._validation import check_bool, check_int, check_ordered, check_real, check_sequence
 
 __all__ = ["Term", "Structure", "Candidates", "parse_term", "parse_structure", "SIGNALS", "check_input_names",
@@ -231,13 +232,15 @@ class Term:
         return sum(p for s, _, p in self.factors if s == signal)
 
     @property
-    def inputs(self) -> tuple[str, ...]:
+    def input_names(self) -> tuple[str, ...]:
         """The input signals of the term, in printing order (empty for y-only terms)."""
         out: list[str] = []
         for s, _, _ in self.factors:
             if s not in ("y", "e") and s not in out:
                 out.append(s)
         return tuple(out)
+
+    inputs = RenamedAttribute("input_names")
 
     @property
     def input_power(self) -> int:
@@ -422,10 +425,12 @@ class Structure:
         return max((t.max_lag for t in self.terms), default=0)
 
     @cached_property
-    def inputs(self) -> tuple[str, ...]:
+    def input_names(self) -> tuple[str, ...]:
         """Every input signal the terms use, in natural name order (``()`` when none does)."""
-        names = {n for t in self.terms for n in t.inputs}
+        names = {n for t in self.terms for n in t.input_names}
         return tuple(sorted(names, key=_rank))
+
+    inputs = RenamedAttribute("input_names")
 
     def input_lag(self, name: str) -> int:
         """Largest lag of input ``name`` over the terms (0 when no term uses it)."""

@@ -26,6 +26,7 @@ from typing import Mapping, Sequence, TypeVar
 import numpy as np
 
 from ._records import Dataset, Record, StaticPoints
+from ._renamed import renamed_keyword
 from ._terms import transient_name, transient_source, transient_tau_text
 from ._validation import check_real, check_sequence
 
@@ -44,10 +45,11 @@ def _filtered_square_change(u: np.ndarray, log_rho: float) -> np.ndarray:
     return lfilter([-np.expm1(log_rho)], [1.0, -np.exp(log_rho)], du2)
 
 
-def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str] | None = None) -> _Data:
+def transient_inputs(data: _Data, taus: Sequence[float], *, input_names: Sequence[str] | None = None,
+                     inputs: Sequence[str] | None = None) -> _Data:
     """Add transient inputs (low-pass filtered squared input changes) to a record, a data set or static points.
 
-    For each input named in ``inputs`` and each ``τ`` in ``taus`` a new input channel
+    For each input named in ``input_names`` and each ``τ`` in ``taus`` a new input channel
     ``z(k) = ρ z(k−1) + (1 − ρ) (u(k) − u(k−1))²`` with ``ρ = exp(−Ts/τ)`` and ``z(0) = 0`` is
     appended, named ``{input}_tau{τ}`` (:func:`transient_name`). It is zero while the input
     rests, so the static points get ``z̄ = 0`` and a model's static curve at the measured ū is
@@ -65,9 +67,11 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
     taus : sequence of float
         Time constants τ in seconds (> 0, finite, distinct), e.g. ``(10, 30, 100)`` when effects
         that settle over tens of seconds are suspected.
-    inputs : sequence of str, optional
+    input_names : sequence of str, optional
         The inputs to take changes of (default: every input of ``data`` but the transient inputs
         it already has, named as :func:`transient_name` names them).
+    inputs : sequence of str, optional
+        The old name of ``input_names`` (``DeprecationWarning``).
 
     Returns
     -------
@@ -100,17 +104,18 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
         raise ValueError("taus is empty: give at least one time constant (seconds)")
     if len(set(tau_list)) != len(tau_list):
         raise ValueError(f"taus has repeated values: {tau_list}")
+    inputs = renamed_keyword("transient_inputs", "inputs", "input_names", inputs, input_names)
     names = data.input_names
     # by default every input but the transient inputs already there (no transient of a transient)
     chosen = ([n for n in names if transient_source(n, names) is None] if inputs is None
-              else check_sequence(inputs, "inputs", "a sequence of input names"))
+              else check_sequence(inputs, "input_names", "a sequence of input names"))
     for n in chosen:
         if not isinstance(n, str):
-            raise TypeError(f"inputs must name inputs (str), got {n!r} ({type(n).__name__})")
+            raise TypeError(f"input_names must name inputs (str), got {n!r} ({type(n).__name__})")
         if n not in names:
-            raise ValueError(f"inputs: no input named {n!r}; the data's inputs are {names}")
+            raise ValueError(f"input_names: no input named {n!r}; the data's inputs are {names}")
     if len(set(chosen)) != len(chosen) or not chosen:
-        raise ValueError(f"inputs must name at least one input, each once, got {chosen}")
+        raise ValueError(f"input_names must name at least one input, each once, got {chosen}")
     new = [(transient_name(n, t), n, t) for n in chosen for t in tau_list]
     if len({nm for nm, _, _ in new}) != len(new):
         raise ValueError(f"taus {tau_list} give channels of the same name (τ is named to 6 significant digits)")
@@ -130,9 +135,9 @@ def transient_inputs(data: _Data, taus: Sequence[float], *, inputs: Sequence[str
     before = extra.get("transient_inputs")
     extra["transient_inputs"] = {**(dict(before) if isinstance(before, Mapping) else {}),
                                  **{nm: (n, t) for nm, n, t in new}}
-    return Dataset(transient_inputs(data.ident, tau_list, inputs=chosen),
-                   transient_inputs(data.valid, tau_list, inputs=chosen),
-                   None if data.static is None else transient_inputs(data.static, tau_list, inputs=chosen),
+    return Dataset(transient_inputs(data.ident, tau_list, input_names=chosen),
+                   transient_inputs(data.valid, tau_list, input_names=chosen),
+                   None if data.static is None else transient_inputs(data.static, tau_list, input_names=chosen),
                    data.description, extra)
 
 

@@ -190,7 +190,7 @@ def simulation_band(
     N = len(rec)
     if method == "delta":
         code = encode(st)
-        U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(rec, code.inputs), L)
+        U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(rec, code.input_names), L)
         var = np.zeros(N)
         for k0, k1, _, S in free_run_sensitivity_blocks(code, th, U, rec.y[:L], L):
             var[k0:k1] = uncertainty.contract(S)

@@ -82,7 +82,7 @@ def record_points(structure: Structure, records: Sequence[Record], count: int = 
     Returns
     -------
     ubar : ndarray, shape (P,) or (P, m)
-        The input(s) at those samples, columns in the order of ``encode(structure).inputs``.
+        The input(s) at those samples, columns in the order of ``encode(structure).input_names``.
     ybar : ndarray, shape (P,)
     """
     code = encode(structure)
@@ -91,7 +91,7 @@ def record_points(structure: Structure, records: Sequence[Record], count: int = 
     stride = max(1, -(-total // count))
     us, ys = [], []
     for r in records:
-        u = record_inputs(r, code.inputs)
+        u = record_inputs(r, code.input_names)
         us.append(u[L::stride])
         ys.append(r.y[L::stride])
     return np.concatenate(us), np.concatenate(ys)
@@ -105,7 +105,7 @@ class LocalModels:
     structure : Structure
         Process terms.
     ubar : ndarray, shape (P,) or (P, m)
-        Input level(s) of each point (columns in the order of ``encode(structure).inputs``).
+        Input level(s) of each point (columns in the order of ``encode(structure).input_names``).
     ybar : ndarray, shape (P,)
         Output level of each point.
     """

@@ -152,7 +152,7 @@ class SEProblem:
                                                                        and static.input_names != r0.input_names)):
             check_compatible(r0, static)
         # several inputs: the static part lives on the surface ȳ(ū_1, …, ū_m), columns in the records' order
-        self.surface_inputs = r0.input_names if (r0.n_inputs > 1 or len(structure.inputs) > 1) else None
+        self.surface_inputs = r0.input_names if (r0.n_inputs > 1 or len(structure.input_names) > 1) else None
         self.static = static
         self.L = structure.max_lag
         self.code = c = encode(structure)
@@ -177,7 +177,7 @@ class SEProblem:
         # the static points' ū as the local models read them: on a surface, columns in the kernel's input order
         self.margin_ubar = None if static is None else static.ubar
         if static is not None and self.surface_inputs is not None:
-            mu = static.ubar[:, [static.input_names.index(n) for n in c.inputs]]
+            mu = static.ubar[:, [static.input_names.index(n) for n in c.input_names]]
             self.margin_ubar = mu[:, 0] if mu.shape[1] == 1 else mu
 
     # -- the optimisers' coordinates ----------------------------------------------------
@@ -239,14 +239,14 @@ class SEProblem:
     def _products(self, records: Sequence[Record]) -> list[np.ndarray]:
         """Each record's input products for the structure's kernels (fixed across a sweep)."""
         c = self.code
-        return [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.inputs), self.L) for r in records]
+        return [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.input_names), self.L) for r in records]
 
     def _held_input(self) -> bool:
         """Whether an input of the structure holds one value over every record (to round-off: the centring's one
         rule, :func:`~graybox.selection._centring.is_held`)."""
-        if not self.code.inputs:
+        if not self.code.input_names:
             return False
-        us = np.concatenate([record_inputs(r, self.code.inputs).reshape(len(r.y), -1) for r in self.records])
+        us = np.concatenate([record_inputs(r, self.code.input_names).reshape(len(r.y), -1) for r in self.records])
         return any(is_held(us[:, i]) for i in range(us.shape[1]))
 
     def to_z(self, thetas: np.ndarray) -> np.ndarray:
@@ -398,7 +398,7 @@ class SEProblem:
         record as given judges against the raw run's, whose scale holds the signals' levels: far from zero it is
         wider, and a θ inf here can have a finite :func:`graybox.js` there."""
         th = np.atleast_2d(self.run_theta(thetas, z))
-        sse = sum(batch_sse(self.code, th, record_inputs(r, self.code.inputs), r.y, self.L, threads, U,
+        sse = sum(batch_sse(self.code, th, record_inputs(r, self.code.input_names), r.y, self.L, threads, U,
                             bounded=bounded) for r, U in zip(self.run_records, self.run_U))
         js = sse / self.n_dyn
         return np.where(np.isfinite(js), js, np.inf)
@@ -484,10 +484,10 @@ class SEProblem:
         e, J = [], []
         for rec, U in zip(self.records, self.U):
             if jacobian:
-                y, S = free_run_sensitivity(self.code, th, record_inputs(rec, self.code.inputs), rec.y[:L], L, U)
+                y, S = free_run_sensitivity(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, U)
                 J.append(S[L:])
             else:
-                y = simulate_one(self.code, th, record_inputs(rec, self.code.inputs), rec.y[:L], L, 1e300)
+                y = simulate_one(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, 1e300)
             e.append(y[L:] - rec.y[L:])
         yb = self.static_outputs(th)[0]
         e_static = yb - self.static.ybar
@@ -1059,7 +1059,7 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     th_run = problem.run_theta(th, z)
     for rec in problem.run_records:  # the centred signals of a centred problem: the same errors (SEProblem.js)
         # simulate's default bound: a run that leaves it is NaN from there, so its residuals are inf (as its J_S)
-        y = simulate_one(problem.code, th_run, record_inputs(rec, problem.code.inputs), rec.y[:L], L, None)
+        y = simulate_one(problem.code, th_run, record_inputs(rec, problem.code.input_names), rec.y[:L], L, None)
         b = a + y.size - L
         np.subtract(y[L:], rec.y[L:], out=r[a:b])  # written in place: long records make no copies
         a = b

@@ -163,7 +163,7 @@ def _estimate(cell: Cell, st: gb.Structure, data: gb.Dataset):
         return gb.els(st, data.ident, name=name, **opts).model, None, {}
     if est == "neural":
         # the network sees the structure's lags: of y, and the largest of any input (1 with none)
-        kw = {"ny": st.input_lag("y"), "nu": max((st.input_lag(n) for n in st.inputs), default=1), **opts}
+        kw = {"ny": st.input_lag("y"), "nu": max((st.input_lag(n) for n in st.input_names), default=1), **opts}
         return gb.neural_narx(data.ident, seed=cell.seed or 0, name=name, **kw).model, None, {}
     cons = cell_constraints(v["constraints"], st, data)
     if est == "cls":

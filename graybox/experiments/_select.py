@@ -559,7 +559,7 @@ def _static_way(given: object, names: tuple[str, ...]) -> str:
 class _Form:
     """The static form the structures are completed to: its degree, in the inputs the static information varies."""
     degree: int
-    inputs: tuple[str, ...]
+    input_names: tuple[str, ...]
 
 
 #: The terms every structure holds unless ``include`` says otherwise: the constant.
@@ -619,7 +619,7 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
     for name, rec in named:
         # said now, not after the structure search and the fits
         check_alike(list(idents), rec)
-        require_inputs(process.inputs, rec.input_names, "but the record's inputs are",
+        require_inputs(process.input_names, rec.input_names, "but the record's inputs are",
                        prefix=f"the {name} record {rec.name!r}: ")
         if len(rec) <= L + 1:  # each is fitted, chosen or scored on alone (a Record's own check says "record")
             raise ValueError(f"the {name} record{f' {rec.name!r}' if name[0].isdigit() else ''} ({len(rec)} samples) "
@@ -798,7 +798,7 @@ def _completed(terms: list[str], candidates: gb.Structure, idents: tuple[gb.Reco
         # the static form's terms: its static points tell u^2 from u and 1
         st, gone = _centring.told_apart(st, ident, 1e-7)  # frols's and semp's rank_tol
         _centring.check_included(include, process, list(idents), gone)
-    added = static_terms(st, process, form.degree, form.inputs) if form is not None else []
+    added = static_terms(st, process, form.degree, form.input_names) if form is not None else []
     st = st + gb.Structure(added)
     if centre:  # the static form's terms (u(k-1)^2 for Σ_{u^2}) bring their divisors too, or the set is not closed
         closed = _centring.closure(st).process
@@ -967,7 +967,7 @@ def _block_mse(st: gb.Structure, thetas: np.ndarray, rec: gb.Record, edges: np.n
         return out
     code = encode(st)
     L = st.max_lag
-    y = simulate_batch(code, thetas[ok], record_inputs(rec, code.inputs), rec.y, max(L, 1), bounded=True)
+    y = simulate_batch(code, thetas[ok], record_inputs(rec, code.input_names), rec.y, max(L, 1), bounded=True)
     with np.errstate(over="ignore", invalid="ignore"):
         e2 = (y - rec.y[None, :]) ** 2
         floor = _RSS_FLOOR * np.mean(rec.y[edges[0]:edges[-1]] ** 2)

@@ -576,7 +576,7 @@ class StructureSpec:
         if not isinstance(cand["nu"], Mapping):
             # one lag count for every input of the data set, whose names the spec does not know: check
             # against the inputs the delays or the included terms name (the cell uses the data set's)
-            named = list(cand["delay"]) if isinstance(cand["delay"], Mapping) else list(inc.inputs)
+            named = list(cand["delay"]) if isinstance(cand["delay"], Mapping) else list(inc.input_names)
             if named:
                 kw["input_names"] = tuple(named)
         space = _wrap(lambda: gb.Candidates(**cand, **kw), ("candidates",))

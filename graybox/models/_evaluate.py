@@ -324,10 +324,10 @@ def evaluate_thetas(
         # the compiled kernel sums squared free-run errors as it simulates: no P × N output
         with np.errstate(over="ignore", invalid="ignore"):
             code = encode(structure)
-            js_ = batch_sse(code, th, record_inputs(record, code.inputs), record.y, L, threads, bounded=True) / n_rows
+            js_ = batch_sse(code, th, record_inputs(record, code.input_names), record.y, L, threads, bounded=True) / n_rows
         out["JS"] = np.where(np.isfinite(js_), js_, np.inf)
     if static is not None:
-        if static.n_inputs > 1 or len(structure.inputs) > 1:  # a static surface: ū's columns by name
+        if static.n_inputs > 1 or len(structure.input_names) > 1:  # a static surface: ū's columns by name
             names = record.input_names if record is not None else static.input_names
             ub = static_point_inputs(static, names)
             yb = reached_surface(structure, th, ub, static.ybar, inputs=names).ybar

@@ -22,8 +22,8 @@ def model_input_names(structure: Structure, input_names: object = None) -> tuple
     """The input names of a model of ``structure``: ``input_names`` checked (every input the
     structure uses among them), or by default the structure's inputs sorted by name (``("u",)``
     for an output-only structure). Results that hand out models (fronts, selections) use it too."""
-    names = (structure.inputs or ("u",)) if input_names is None else check_input_names(input_names)
-    require_inputs(structure.inputs, names, "which is not among input_names")
+    names = (structure.input_names or ("u",)) if input_names is None else check_input_names(input_names)
+    require_inputs(structure.input_names, names, "which is not among input_names")
     return names
 
 

@@ -143,7 +143,7 @@ class _Scorer:
         self.U = []
         require_lengths(records, L)
         for r in records:
-            U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(r, code.inputs), L)
+            U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(r, code.input_names), L)
             self.U.append(U)
             blocks.append(_psi(code, U, r.y, L))
             targets.append(r.y[L:])
@@ -220,7 +220,7 @@ class _Scorer:
         out = np.full(th.shape[0], np.inf)
         if good.any():
             # bounded as gb.js is: a candidate whose free run diverges slowly scores inf, not 1e27
-            sse = sum(batch_sse(self.code, th[good], record_inputs(r, self.code.inputs), r.y, self.L, self.threads,
+            sse = sum(batch_sse(self.code, th[good], record_inputs(r, self.code.input_names), r.y, self.L, self.threads,
                                 U, bounded=True)
                       for r, U in zip(self.records, self.U))
             mse = np.maximum(sse / self.n_rows, self.floor)

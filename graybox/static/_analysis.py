@@ -239,8 +239,8 @@ def cluster_map(structure: Structure) -> ClusterMap:
 
 @lru_cache(maxsize=256)
 def _cluster_map(structure: Structure) -> ClusterMap:
-    if len(structure.inputs) > 1:
-        raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its static function "
+    if len(structure.input_names) > 1:
+        raise ValueError(f"the structure has {len(structure.input_names)} inputs {structure.input_names}: its static function "
                          "is a surface (use the surface functions, e.g. Model.static_curve with ū of shape (M, m))")
     return ClusterMap(*cluster_membership([cluster_key(t) for t in structure]))
 
@@ -554,8 +554,8 @@ def equilibria(structure: Structure, theta: np.ndarray, ubar: float) -> list[Equ
         input): ȳ is not set by ū there.
     """
     structure, theta = checked_model(structure, theta)
-    if len(structure.inputs) > 1:
-        raise ValueError(f"the structure has {len(structure.inputs)} inputs {structure.inputs}: its equilibria lie on "
+    if len(structure.input_names) > 1:
+        raise ValueError(f"the structure has {len(structure.input_names)} inputs {structure.input_names}: its equilibria lie on "
                          "a surface; use graybox.surface_equilibria(structure, theta, ū) with ū of shape (m,)")
     ub = check_real(ubar, "ubar (one input level)")
     refuse_continuum(structure, theta, ub, f"{ub:g}")

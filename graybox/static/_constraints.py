@@ -101,7 +101,7 @@ def cluster_powers(key: tuple) -> tuple[int, tuple[int, ...]]:
 def n_static_inputs(cm: ClusterMap | SurfaceClusterMap) -> int:
     """Number of inputs the clusters of ``cm`` speak of (1 for a SISO structure)."""
     if isinstance(cm, SurfaceClusterMap):
-        return len(cm.inputs)
+        return len(cm.input_names)
     return max((len(cluster_powers(k)[1]) for k in cm.keys), default=1)
 
 
@@ -111,7 +111,7 @@ def static_cluster_map(structure: Structure, inputs: tuple[str, ...] | None = No
     ``inputs`` are the data's input names (the order of ū's columns); a structure that uses fewer
     inputs than the data still gets one power per data input.
     """
-    if len(structure.inputs) > 1 or (inputs is not None and len(inputs) > 1):
+    if len(structure.input_names) > 1 or (inputs is not None and len(inputs) > 1):
         return surface_cluster_map(structure, input_names=None if inputs is None else tuple(inputs))
     return cluster_map(structure)
 
@@ -195,7 +195,7 @@ def static_rows(cm: ClusterMap, ubar: np.ndarray, ybar: np.ndarray, wrt: str | N
                          f"got {input!r}")
     if not isinstance(cm, SurfaceClusterMap):
         raise ValueError("several inputs need the structure's surface cluster map (static_cluster_map)")
-    return surface_static_rows(cm, U, ybar, cm.inputs[int(input)] if wrt == "u" else wrt)
+    return surface_static_rows(cm, U, ybar, cm.input_names[int(input)] if wrt == "u" else wrt)
 
 
 # --------------------------------------------------------------------------------------------
@@ -654,9 +654,9 @@ def _check_surface_inputs(surface: StaticSurface, cm: ClusterMap | SurfaceCluste
     """A surface's monomials are read by position in the data's inputs: with several, its input names must
     be theirs, in their order (as for static points), or a permuted surface would be imposed silently. A
     surface of one input is of that input, whatever it calls it (as a curve)."""
-    if isinstance(cm, SurfaceClusterMap) and surface.input_names != cm.inputs:
+    if isinstance(cm, SurfaceClusterMap) and surface.input_names != cm.input_names:
         raise ValueError(f"{surface.name} is a surface in the inputs {surface.input_names} but the data's inputs are "
-                         f"{cm.inputs}: all data of one identification must have the same inputs, in the same order "
+                         f"{cm.input_names}: all data of one identification must have the same inputs, in the same order "
                          "(write the surface with input_names in the data's order)")
 
 
@@ -1193,7 +1193,7 @@ class GainBounds(StaticConstraint):
 def _input_names(ctx: StaticContext) -> tuple[str, ...]:
     """The names of a problem's static inputs, in its order (a surface's own, else the data's or structure's)."""
     cm = ctx.cluster_map
-    return tuple(cm.inputs if isinstance(cm, SurfaceClusterMap) else (ctx.inputs or ctx.structure.inputs or ("u",)))
+    return tuple(cm.input_names if isinstance(cm, SurfaceClusterMap) else (ctx.inputs or ctx.structure.input_names or ("u",)))
 
 
 def _named_ranges(v: Mapping) -> dict[str, tuple[float, float]]:

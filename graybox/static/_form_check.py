@@ -183,7 +183,7 @@ def _complete(structure: Structure, candidates: Structure, degree: int,
               varied: tuple[str, ...] | None = None) -> tuple[list[Term], list[tuple], tuple]:
     """(terms to add, cluster keys no candidate holds, input names) for a degree-``degree`` form in the
     ``varied`` inputs (default: all)."""
-    inputs = tuple(dict.fromkeys(candidates.inputs + structure.inputs)) or ("u",)
+    inputs = tuple(dict.fromkeys(candidates.input_names + structure.input_names)) or ("u",)
     # an input the static information varies but no candidate has: its clusters are asked, and missing
     inputs += tuple(n for n in (varied or ()) if n not in inputs)
     m = len(inputs)

@@ -103,7 +103,7 @@ class DerivativeMap:
     def input_part(self, ubar: np.ndarray) -> np.ndarray:
         """∏_i ū_i^P_i of each term, shape (K, n_terms).
 
-        ``ubar`` (K, m): columns in ``code.inputs`` order; (K,): every input at ū (ū^μ, μ the
+        ``ubar`` (K, m): columns in ``code.input_names`` order; (K,): every input at ū (ū^μ, μ the
         term's total input power).
         """
         ub = np.asarray(ubar, float)
@@ -204,10 +204,10 @@ class DerivativeMap:
 def derivative_map(structure: Structure, inputs: tuple[str, ...] | None = None) -> DerivativeMap:
     """The :class:`DerivativeMap` of ``structure`` with the inputs in the order ``inputs`` (cached).
 
-    ``inputs`` defaults to ``encode(structure).inputs``; it must hold every input the structure uses.
+    ``inputs`` defaults to ``encode(structure).input_names``; it must hold every input the structure uses.
     """
     code = encode(structure, inputs)
-    names = code.inputs
+    names = code.input_names
     T = len(structure)
     Ly = int(code.ylag.max(initial=0))
     Lu = max((structure.input_lag(n) for n in names), default=0)
@@ -237,7 +237,7 @@ def local_coefficients(structure: Structure, inputs: tuple[str, ...] | None, the
     structure : Structure
         Process terms.
     inputs : tuple of str or None
-        The inputs, in the column order of ``ubar`` (None: ``encode(structure).inputs``).
+        The inputs, in the column order of ``ubar`` (None: ``encode(structure).input_names``).
     thetas : ndarray, shape (K, n_terms)
         One parameter vector per steady state.
     ybar : ndarray, shape (K,)
@@ -275,7 +275,7 @@ def grid_coefficients(structure: Structure, thetas: np.ndarray, ubar: np.ndarray
         Process terms.
     thetas : ndarray, shape (P, n_terms)
     ubar : ndarray, shape (M,) or (M, m)
-        Input levels (M,): every input at ū_j; (M, m): columns in ``encode(structure).inputs`` order.
+        Input levels (M,): every input at ū_j; (M, m): columns in ``encode(structure).input_names`` order.
     ybar : ndarray, shape (P, M)
         Output levels (a non-finite one gives non-finite or meaningless coefficients: mask it).
     """

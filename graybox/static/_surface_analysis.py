@@ -37,6 +37,7 @@ from ..core._records import frame_inputs, labelled_point
 from ..core._terms import Structure, Term, check_input_names, require_inputs, structure_of
 from ..core._transient import steady_levels
 from ..core._validation import check_bool, check_fields, check_per_point, real_array
+from ..core._renamed import RenamedAttribute
 from ..core._reprs import short_repr
 
 __all__ = [
@@ -59,9 +60,9 @@ _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 def surface_inputs(structure: Structure, inputs: tuple[str, ...] | None = None) -> tuple[str, ...]:
     """The input order of ū's columns: ``inputs`` (validated against the structure) or the structure's own."""
     if inputs is None:
-        return structure.inputs or ("u",)
+        return structure.input_names or ("u",)
     names = check_input_names(inputs, what="input_names")
-    require_inputs(structure.inputs, names, "which is not among the inputs")
+    require_inputs(structure.input_names, names, "which is not among the inputs")
     return names
 
 
@@ -105,16 +106,17 @@ class SurfaceClusterMap:
 
     Attributes
     ----------
-    inputs : tuple of str
+    input_names : tuple of str
         The inputs, in the order of the powers in each key.
     keys : tuple of (p, a_1, …, a_m)
         Output power and input powers of each cluster, sorted.
     R : ndarray, shape (n_clusters, n_terms)
     """
 
-    inputs: tuple[str, ...]
+    input_names: tuple[str, ...]
     keys: tuple[tuple[int, ...], ...]
     R: np.ndarray
+    inputs = RenamedAttribute("input_names")
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -124,22 +126,22 @@ class SurfaceClusterMap:
         """Cluster names in the order of ``keys``: the factors written one after the other (``Σyu1``), or
         joined by ``·`` when that would give two clusters one name (inputs "pos" and "ypos": ``Σy·pos``
         and ``Σypos``)."""
-        plain = [surface_cluster_name(k[0], k[1:], self.inputs) for k in self.keys]
+        plain = [surface_cluster_name(k[0], k[1:], self.input_names) for k in self.keys]
         if len(set(plain)) == len(plain):
             return plain
-        return [surface_cluster_name(k[0], k[1:], self.inputs, "·") for k in self.keys]
+        return [surface_cluster_name(k[0], k[1:], self.input_names, "·") for k in self.keys]
 
     def index(self, name_or_key: str | tuple[int, ...]) -> int:
         """Row of R for the cluster ``name_or_key``: a name (``"Σyu1"``) or a key (p, a_1, …, a_m)."""
         if isinstance(name_or_key, tuple):
-            return key_index(self.keys, self.names, name_or_key, "(p, " + ", ".join(f"a_{n}" for n in self.inputs) + ")")
+            return key_index(self.keys, self.names, name_or_key, "(p, " + ", ".join(f"a_{n}" for n in self.input_names) + ")")
         names = self.names
         # every printed name is accepted as it is; ASCII ("Syu1", "Su1^2u2") is read as the paper's form
         name = name_or_key if name_or_key in names else ascii_cluster_name(name_or_key, single_input=False)
         if name in names:
             return names.index(name)
         # its factors in another order (the inputs listed in another order print them so), or joined by ·
-        found = [i for i, k in enumerate(self.keys) if name in _spellings(k[0], k[1:], self.inputs)]
+        found = [i for i, k in enumerate(self.keys) if name in _spellings(k[0], k[1:], self.input_names)]
         if len(found) > 1:
             raise ValueError(f"cluster name {name!r} fits the clusters {[names[i] for i in found]}: name one of them "
                              "with its factors joined by · (e.g. Σy·u1)")
@@ -402,7 +404,7 @@ def surface_static_rows(cm: SurfaceClusterMap, ubar: np.ndarray, ybar: np.ndarra
     cm : SurfaceClusterMap
         Cluster keys (p, a_1, …, a_m) and their inputs.
     ubar : ndarray, shape (M, m)
-        Points of input space, columns in ``cm.inputs`` order.
+        Points of input space, columns in ``cm.input_names`` order.
     ybar : ndarray, shape (M,)
         Output levels (the measured or reference ȳ).
     wrt : None, "y" or an input name
@@ -413,9 +415,9 @@ def surface_static_rows(cm: SurfaceClusterMap, ubar: np.ndarray, ybar: np.ndarra
     -------
     ndarray, shape (M, n_clusters)
     """
-    ub = points_of_inputs(ubar, cm.inputs)
+    ub = points_of_inputs(ubar, cm.input_names)
     yb = np.asarray(ybar, float)[:, None]
-    K = np.array(cm.keys, float).reshape(len(cm.keys), 1 + len(cm.inputs))
+    K = np.array(cm.keys, float).reshape(len(cm.keys), 1 + len(cm.input_names))
     p, A = K[None, :, 0], K[:, 1:]
     with np.errstate(all="ignore"):
         g = np.prod(ub[:, None, :] ** A[None, :, :], axis=2)  # (M, C); 0**0 == 1: a missing factor
@@ -423,9 +425,9 @@ def surface_static_rows(cm: SurfaceClusterMap, ubar: np.ndarray, ybar: np.ndarra
             return yb**p * g
         if wrt == "y":
             return np.where(p > 0, p * yb ** np.maximum(p - 1, 0) * g, 0.0)
-        if wrt not in cm.inputs:
-            raise ValueError(f"wrt must be None, 'y' or one of the inputs {cm.inputs}, got {wrt!r}")
-        i = cm.inputs.index(wrt)
+        if wrt not in cm.input_names:
+            raise ValueError(f"wrt must be None, 'y' or one of the inputs {cm.input_names}, got {wrt!r}")
+        i = cm.input_names.index(wrt)
         Ad = A.copy()
         Ad[:, i] = np.maximum(Ad[:, i] - 1, 0)
         gd = np.prod(ub[:, None, :] ** Ad[None, :, :], axis=2)
