@@ -126,6 +126,7 @@ def design_input(
         Samples a level is held (a bit of a PRBS; for an APRBS a pair (shortest, longest), any 1-D array-like):
         choose it from the plant's settling time (a staircase's or an APRBS's longest hold about
         the settling time, a PRBS's bit near the fastest time constant). Refused for a multisine.
+        The record's last hold is cut where the record ends, so it may be shorter.
     n_inputs : int
         Number of input columns: each APRBS column is drawn from its own stream, a PRBS column is
         the sequence shifted by i/n_inputs of its period, and a multisine column takes every
