@@ -149,7 +149,7 @@ def test_transient_model_of_two_inputs_takes_a_frame_of_its_other_inputs_in_any_
     y = np.zeros(len(u))
     for k in range(1, len(u)):
         y[k] = 0.6 * y[k - 1] + 0.3 * u[k - 1, 0] + 0.05 * u[k - 1, 0] ** 2 + 0.2 * u[k - 1, 1]
-    data = gb.transient_inputs(gb.Record(u, y, input_names=("p", "q")), [4.0], inputs=["p"])
+    data = gb.transient_inputs(gb.Record(u, y, input_names=("p", "q")), [4.0], input_names=["p"])
     m = gb.els(gb.parse_structure(["1", "y(k-1)", "p(k-1)", "p(k-1)^2", "q(k-1)", "p_tau4(k-1)"]), data).model
     pts = np.array([[1.5, 0.2], [2.5, 0.8]])
     frame = pd.DataFrame({"q": pts[:, 1], "p": pts[:, 0]})  # the other inputs, in another order

@@ -209,7 +209,7 @@ def test_one_step_scores_say_how_to_add_a_missing_transient_input():
     # which read the regressors, named the missing input only
     rec = gb.Record(np.r_[np.zeros(10), np.ones(10)], np.ones(20), Ts=0.5)
     m = gb.Model(["y(k-1)", "u(k-1)", "u_tau2(k-1)"], [0.5, 1.0, 3.0], input_names=("u", "u_tau2"), Ts=0.5)
-    hint = r"needs input 'u_tau2'.*graybox\.transient_inputs\(record, taus=\[2\], inputs=\['u'\]\)"
+    hint = r"needs input 'u_tau2'.*graybox\.transient_inputs\(record, taus=\[2\], input_names=\['u'\]\)"
     for call in (lambda: m.predict(rec), lambda: gb.j1(m, rec), lambda: gb.els(m.structure, rec)):
         with pytest.raises(ValueError, match=hint):
             call()

@@ -143,9 +143,9 @@ def test_bad_data_and_twice_added():
         gb.transient_inputs(once, taus=[1.0], input_names=["u"])
     # a model that uses the channel refuses a record without it, by name
     st_ = gb.parse_structure("y(k-1) + u_tau1(k-1)")
-    with pytest.raises(ValueError, match=r"u_tau1.*transient_inputs\(record, taus=\[1\], inputs=\['u'\]\)"):
+    with pytest.raises(ValueError, match=r"u_tau1.*transient_inputs\(record, taus=\[1\], input_names=\['u'\]\)"):
         gb.Model(st_, np.array([0.5, 0.1])).simulate(gb.Record(np.arange(5.0), np.zeros(5)))
-    with pytest.raises(ValueError, match=r"transient_inputs\(record, taus=\[2.5\], inputs=\['u'\]\)"):
+    with pytest.raises(ValueError, match=r"transient_inputs\(record, taus=\[2.5\], input_names=\['u'\]\)"):
         gb.simulate(gb.parse_structure("y(k-1) + u(k-1) + u_tau2p5(k-1)"), np.array([0.5, 0.2, 0.1]),
                     np.c_[np.arange(5.0), np.ones(5)], np.zeros(1), input_names=("u", "v"))
 

@@ -102,7 +102,7 @@ def missing_input_hint(used: Sequence[str], names: Sequence[str]) -> str:
     if source is not None:
         tau = transient_tau_text(missing[0], source)
         return (f" (if it is a transient input, add it with graybox.transient_inputs(record, taus=[{tau}], "
-                f"inputs=[{source!r}]))")
+                f"input_names=[{source!r}]))")
     if names == default_input_names(len(names)):
         # the data's inputs carry the default names: they were never named (one CSV column is "u")
         # one input: its name is sure; several: the columns' order is the data's, which only the user knows
