@@ -214,7 +214,7 @@ CALLS: dict[str, tuple[tuple, dict]] = {
     "Record": ((_u[:20], _y[:20]), {}),
     "StaticPoints": ((_ub, SP.ybar), {}),
     "StaticPoints.from_repeats": ((_ub, SP.ybar), {}),
-    "transient_inputs": ((DATA,), {"taus": [2.0, 5.0], "inputs": ["u"]}),
+    "transient_inputs": ((DATA,), {"taus": [2.0, 5.0], "input_names": ["u"]}),
     "transient_name": (("u", 2.5), {}),
     "StaticCurve.fit": ((SP,), {}),
     "StaticCurve.polynomial": (([1.0, 2.0],), {}),

@@ -29,6 +29,9 @@ class RenamedAttribute:
         _say(f"{type(obj).__name__}.{self.old}", f"{type(obj).__name__}.{self.new}", 2)
         return getattr(obj, self.new)
 
+    def __set__(self, obj: Any, value: Any) -> None:  # read-only (and so a data descriptor, not a method's)
+        raise AttributeError(f"{type(obj).__name__}.{self.old} is read-only (and now named {self.new})")
+
 
 def renamed_keyword(function: str, old: str, new: str, old_value: Any, new_value: Any) -> Any:
     """The value of keyword ``new`` of ``function`` when it may also be given by its old name ``old`` (warned);
