@@ -785,6 +785,8 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None) -> dict
         raise unreadable(exc) from None
     if not isinstance(stored, dict):
         raise unreadable(TypeError(f"its metadata is a {type(stored).__name__}, not a mapping"))
+    if meta.get("method") == "gradient":  # it draws nothing: its seed is no part of the problem
+        stored, meta = ({k: v for k, v in d.items() if k != "seed"} for d in (stored, meta))
     other = sorted(k for k in _CHECKPOINT_IDENTITY if stored.get(k) != meta.get(k))
     if other:  # another problem's file, whichever version wrote it: never overwritten
         raise CheckpointError(f"checkpoint {path} was written for another problem (differs in: {', '.join(other)}); "
@@ -1382,7 +1384,7 @@ def gradient_front(
     theta0 : ndarray, optional
         A start of the first run (default: least squares on all samples).
     seed : int
-        Recorded in checkpoints (the method draws no random numbers).
+        Unused: the method draws no random numbers (a checkpoint of another seed resumes).
     checkpoint : path, optional
         Written after each λ; an existing one for the same problem and settings resumes the sweep
         (one written by another graybox version is started over, with a warning).

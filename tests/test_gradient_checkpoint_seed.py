@@ -1,0 +1,35 @@
+"""The gradient SE sweep draws no random numbers: its checkpoint resumes whatever seed the call gives."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import graybox as gb
+from graybox.estimation._simulation_error import CheckpointError
+
+
+def _problem():
+    rng = np.random.default_rng(3)
+    u = rng.uniform(1.0, 3.0, 200)
+    y = np.zeros(200)
+    for k in range(1, 200):
+        y[k] = 0.6 * y[k - 1] + 0.3 * u[k - 1] - 0.05 * u[k - 1] ** 2 + 0.01 * rng.standard_normal()
+    static = gb.StaticPoints([1.0, 2.0, 3.0], [0.625, 1.0, 1.125])
+    return ["y(k-1)", "u(k-1)", "u(k-1)^2"], gb.Record(u, y), static
+
+
+def test_a_gradient_checkpoint_resumes_under_another_seed_and_a_ga_one_does_not(tmp_path):
+    terms, rec, static = _problem()
+    ck = tmp_path / "front.npz"
+    first = gb.se_pareto(terms, rec, static, lambdas=[0.1, 1.0], method="gradient", seed=0, checkpoint=ck)
+    again = gb.se_pareto(terms, rec, static, lambdas=[0.1, 1.0], method="gradient", seed=7, checkpoint=ck)
+    assert np.array_equal(first.thetas, again.thetas)  # (before: "written for another problem (differs in: seed)")
+    ga = tmp_path / "ga.npz"
+    opts = gb.GAOptions(population=20, generations=2)
+    gb.se_pareto(terms, rec, static, lambdas=[1.0], method="ga", options=opts, seed=0, checkpoint=ga)
+    try:
+        gb.se_pareto(terms, rec, static, lambdas=[1.0], method="ga", options=opts, seed=1, checkpoint=ga)
+    except CheckpointError as exc:
+        assert "seed" in str(exc)
+    else:
+        raise AssertionError("a GA checkpoint of seed 0 was resumed by seed 1")
