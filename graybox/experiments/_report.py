@@ -803,6 +803,9 @@ def write_report(
     if df.empty:  # a run stopped before its first cell finished: no table or figure has anything to show
         raise ValueError(f"{store}: no finished cell to report (spec {spec!r}); graybox grid status shows the "
                          "store's progress")
+    # ranked before any file is written: a band refused (a data set it names the results lack, one without a band)
+    # leaves the folder of an earlier report as it was, not a new cells.csv beside the old leaderboard and figures
+    lb = leaderboard(df, rule=rule, band=band)
     o = Path(out)
     if o.exists() and not o.is_dir():
         raise NotADirectoryError(f"{o} is a file, not a folder for the report")
@@ -828,7 +831,6 @@ def write_report(
         flat[col] = [encode_value(col, v) for v in flat[col]]
     flat["warnings"] = ["; ".join(w) for w in flat["warnings"]]
     save(o / "cells.csv", flat.set_index("key"))
-    lb = leaderboard(df, rule=rule, band=band)
     save(o / "leaderboard.csv", lb)
     lines = _summary_lines(df, lb, rule, attrs, band)
     for d, slug in _slugs(list(dict.fromkeys(df["data"]))).items():
