@@ -42,3 +42,24 @@ def test_a_refused_band_leaves_the_reports_folder_as_it_was(store, tmp_path, ban
     with pytest.raises(ValueError, match=said):
         gx.write_report(store, tmp_path / "new", band=band)
     assert not (tmp_path / "new").exists()
+
+
+def _first_order(units=("rpm", "mlc")) -> gb.Model:
+    s = gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    return gb.Model(s, np.array([0.9, 2e-4, 1e-8, 0.1]), name="m", Ts=0.05, units=units)
+
+
+def test_an_operating_curve_of_unsorted_points_is_drawn_in_their_order_along_u():
+    # ū given out of order ([1500, 1300, 1700, 1400]) drew the gain and time constant back and forth across the
+    # panel, a zigzag of crossing segments, though the curve is one function of ū (plot_static_band sorts its levels)
+    from graybox.plots import plot_operating_curve
+
+    m = _first_order()
+    ub = [1500.0, 1300.0, 1700.0, 1400.0]
+    fig = plot_operating_curve(gb.operating_curve(m, ub))
+    ref = plot_operating_curve(gb.operating_curve(m, sorted(ub)))
+    for ax, ax_ref in zip(fig.axes, ref.axes):
+        x, y = ax.lines[0].get_data()
+        assert np.all(np.diff(x) > 0)
+        np.testing.assert_allclose(y, ax_ref.lines[0].get_data()[1])
+

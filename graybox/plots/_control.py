@@ -150,13 +150,15 @@ def plot_operating_curve(
     fig = Figure(figsize=(7, 7))
     axes = [fig.add_subplot(3, 1, i + 1) for i in range(3)]
     name = curve.model_name or "model"
+    # in ū's order: points given unsorted drew each line (and band) back and forth across the panel
+    o = np.argsort(u, kind="stable")
     for ax, y, lo, hi, lab in ((axes[0], gain, gain_low, gain_high, "gain"),
                                (axes[1], curve.time_constant, curve.time_constant_low, curve.time_constant_high,
                                 "time constant (s)"),
                                (axes[2], curve.damping, None, None, "damping ζ")):
-        ax.plot(u, y, "-o", ms=3, lw=1.2, label=name)
+        ax.plot(u[o], y[o], "-o", ms=3, lw=1.2, label=name)
         if lo is not None:
-            ax.fill_between(u, lo, hi, alpha=0.25, label=f"{curve.level:.0%} band")
+            ax.fill_between(u[o], lo[o], hi[o], alpha=0.25, label=f"{curve.level:.0%} band")
         ax.set_ylabel(lab)
     if reference is not None:
         axes[1].plot(*reference, "s", ms=5, color="black", label=reference_label)
