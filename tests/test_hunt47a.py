@@ -63,3 +63,17 @@ def test_an_operating_curve_of_unsorted_points_is_drawn_in_their_order_along_u()
         assert np.all(np.diff(x) > 0)
         np.testing.assert_allclose(y, ax_ref.lines[0].get_data()[1])
 
+
+def test_the_operating_curve_figures_say_their_units():
+    # the curve carries its model's units (rpm, mlc) but the gain's axis said "gain", ū's "ū", the step response
+    # "Δy per unit step" and the Bode magnitude "|G|", all bare: a gain of 0.03 in mlc/rpm or in Pa/(rad/s)?
+    from graybox.plots import plot_local_models, plot_operating_curve
+
+    oc = gb.operating_curve(_first_order(), [1300.0, 1500.0])
+    fig = plot_operating_curve(oc)
+    assert fig.axes[0].get_ylabel() == "gain (mlc/rpm)" and fig.axes[2].get_xlabel() == "ū (rpm)"
+    labels = [a.get_ylabel() for a in plot_local_models(oc).axes]
+    assert labels[0] == "Δy per unit step (mlc/rpm)" and labels[1] == "|G| (mlc/rpm)"
+    bare = gb.operating_curve(_first_order(("", "")), [1300.0, 1500.0])
+    assert plot_operating_curve(bare).axes[0].get_ylabel() == "gain"
+    assert [a.get_ylabel() for a in plot_local_models(bare).axes][:2] == ["Δy per unit step", "|G|"]

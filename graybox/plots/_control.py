@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from ..control._local import LocalModel, OperatingCurve
 from ..core._reprs import level_texts, point_texts
 from ..core._validation import as_1d_finite, check_int, check_real, check_sequence
+from ._data import unit_label
 
 __all__ = ["plot_local_models", "plot_operating_curve"]
 
@@ -28,6 +29,12 @@ def _points(lms: Sequence[LocalModel]) -> list[str]:
     """Each local model's operating point as text, told apart from the others' (10000.01 and 10000.02)."""
     ub = np.array([np.asarray(m.ubar, float).ravel() for m in lms])
     return point_texts(ub[:, 0] if ub.shape[1] == 1 else ub)
+
+
+def _per_input(units: tuple[str, str]) -> str:
+    """The unit of a gain, output unit per input unit (``"mlc/rpm"``), or empty when neither is said."""
+    u, y = units
+    return f"{y or '1'}/{u or '1'}" if u or y else ""
 
 
 def plot_local_models(
@@ -55,7 +62,8 @@ def plot_local_models(
     -------
     matplotlib.figure.Figure
         Left: Δy per unit step of the input against time; right: magnitude (output units per
-        input unit) and phase (degrees) against frequency (rad/s).
+        input unit) and phase (degrees) against frequency (rad/s). The models' units, when they
+        say them, label both (e.g. ``|G| (mlc/rpm)``).
     """
     if duration is not None:
         duration = check_real(duration, "duration", low=0, low_open=True)  # seconds
@@ -81,10 +89,13 @@ def plot_local_models(
         G = m.frequency_response(w, input)
         ax_m.loglog(w, np.abs(G), color=line.get_color(), lw=1.0)
         ax_p.semilogx(w, np.degrees(np.unwrap(np.angle(G))), color=line.get_color(), lw=1.0)
+    # the models' units (output per input) where they all say the same ones
+    units = {m.units for m in shown}
+    per = _per_input(units.pop()) if len(units) == 1 else ""
     ax_s.set_xlabel("time (s)")
-    ax_s.set_ylabel("Δy per unit step")
+    ax_s.set_ylabel(unit_label("Δy per unit step", per))
     ax_s.legend(fontsize=8, loc="best")
-    ax_m.set_ylabel("|G|")
+    ax_m.set_ylabel(unit_label("|G|", per))
     ax_p.set_ylabel("phase (°)")
     ax_p.set_xlabel("ω (rad/s)")
     if missing:
@@ -115,12 +126,14 @@ def plot_operating_curve(
     reference_label : str
         Its legend label.
     xlabel : str
-        The input's label (with units); default ``ū``, with several inputs ``ū (name)``.
+        The input's label; default ``ū``, with several inputs ``ū (name)``. The curve's input unit
+        (its model's ``units``) is appended unless the label names it already.
 
     Returns
     -------
     matplotlib.figure.Figure
-        Three stacked panels sharing ū: gain, time constant (s), damping.
+        Three stacked panels sharing ū, in ū's order: gain (output unit per input unit, named
+        when the model's units are), time constant (s), damping.
     """
     if not isinstance(curve, OperatingCurve):
         raise TypeError(f"curve must be an OperatingCurve, got {type(curve).__name__}")
@@ -159,7 +172,7 @@ def plot_operating_curve(
         ax.plot(u[o], y[o], "-o", ms=3, lw=1.2, label=name)
         if lo is not None:
             ax.fill_between(u[o], lo[o], hi[o], alpha=0.25, label=f"{curve.level:.0%} band")
-        ax.set_ylabel(lab)
+        ax.set_ylabel(unit_label(lab, _per_input(curve.units)) if lab == "gain" else lab)
     if reference is not None:
         axes[1].plot(*reference, "s", ms=5, color="black", label=reference_label)
     axes[2].set_ylim(0.0, 1.05)  # ζ of a stable pole lies in [0, 1]
@@ -167,6 +180,6 @@ def plot_operating_curve(
     if bad:
         axes[0].set_title("not reached at ū = " + ", ".join(bad), fontsize=9)
     axes[1].legend(fontsize=8, loc="best")
-    axes[2].set_xlabel(xlabel)
+    axes[2].set_xlabel(unit_label(xlabel, curve.units[0]))
     fig.tight_layout()
     return fig
