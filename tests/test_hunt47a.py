@@ -77,3 +77,28 @@ def test_the_operating_curve_figures_say_their_units():
     bare = gb.operating_curve(_first_order(("", "")), [1300.0, 1500.0])
     assert plot_operating_curve(bare).axes[0].get_ylabel() == "gain"
     assert [a.get_ylabel() for a in plot_local_models(bare).axes][:2] == ["Δy per unit step", "|G|"]
+
+
+def test_plot_selection_says_the_unit_of_its_mean_squares():
+    # the static and test panels read "(output units²)" though the selection's model carries its data's units, and
+    # plot_selection takes no label to say them
+    import warnings
+
+    true = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
+    theta = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+
+    def record(seed, n=400):
+        rng = np.random.default_rng(seed)
+        u = np.repeat(rng.uniform(0.0, 3.0, n // 25 + 1), 25)[:n]
+        y = gb.Model(true, theta).simulate(u, np.zeros(2)) + 0.02 * rng.standard_normal(n)
+        return gb.Record(u, y, units=("V", "Pa"))
+
+    ub = np.linspace(0.0, 3.0, 7)
+    data = gb.Dataset(record(1), record(2), gb.StaticPoints(ub, gb.Model(true, theta).static_curve(ub),
+                                                            units=("V", "Pa")))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sel = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, band=1e-3, sizes=[3], test=record(3),
+                                estimator=("pe",))
+    labels = [a.get_ylabel() for a in gx.plot_selection(sel).axes]
+    assert labels[1:] == ["J_SF of the row's member (Pa²)", "J_S on the test record (Pa²)"]

@@ -12,7 +12,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from ..core._reprs import beside, bound_text
+from ..core._reprs import beside, bound_text, squared_unit
 from ..core._validation import check_sequence
 from ._report import _MARKERS, _band_on, _finite_pos, _scale
 from ._select import GrayboxSelection
@@ -77,6 +77,7 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
     est = t["estimator"].to_numpy()
     elig = t["eligible"].to_numpy(bool) if "eligible" in t.columns else np.zeros(len(t), bool)
     has_model = np.isfinite(t["JS_valid"].to_numpy(float))
+    sq = squared_unit(selection.model.units[1]).strip() or "output units²"  # J_S and J_SF: the model's output unit²
     for ax, panel in zip(axs, panels):
         if panel == "rule":
             vs = t["vs_best"].to_numpy(float) if "vs_best" in t.columns else np.full(len(t), np.nan)
@@ -95,7 +96,7 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
             ok = _finite_pos(jsf)
             values = jsf[ok]
             _points(ax, est, elig, ok, n, jsf, mark, color)
-            ax.set_ylabel("J_SF of the row's member (output units²)")
+            ax.set_ylabel(f"J_SF of the row's member ({sq})")
             ax.set_title(f"static error: {int(ok.sum())} of {len(t)} rows drawn"
                          + ("" if selection.in_band else "; the choice: the smallest J_SF"), fontsize=9)
             _ring(ax, chosen["n_terms"], chosen["JSF"])
@@ -104,7 +105,7 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
             ok = _finite_pos(js)
             values = js[ok]
             _points(ax, est, elig, ok, n, js, mark, color)
-            ax.set_ylabel("J_S on the test record (output units²)")
+            ax.set_ylabel(f"J_S on the test record ({sq})")
             try:
                 said = f"the choice is {selection.regret:.3g}× the best row it compared"
             except ValueError:
