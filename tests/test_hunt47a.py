@@ -102,3 +102,32 @@ def test_plot_selection_says_the_unit_of_its_mean_squares():
                                 estimator=("pe",))
     labels = [a.get_ylabel() for a in gx.plot_selection(sel).axes]
     assert labels[1:] == ["J_SF of the row's member (Pa²)", "J_S on the test record (Pa²)"]
+
+
+@pytest.fixture(scope="module")
+def empty_store(tmp_path_factory):
+    """A store whose run stopped before its first cell finished."""
+    path = tmp_path_factory.mktemp("empty") / "e.sqlite"
+
+    def interrupt(line):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        gx.run_grid(gx.Grid.from_toml_text(_PUMPING), path, log=interrupt)
+    return path
+
+
+_LEADERBOARD_COLUMNS = ["rank", "JS_valid", "JS_ident", "JSF", "fit_valid", "n_params", "seed", "lambda1", "in_band",
+                        "candidates", "cells", "ok", "reason"]
+
+
+@pytest.mark.parametrize("rule", ["dsf_valid", "chosen"])
+def test_the_leaderboard_of_a_store_without_finished_cells_keeps_its_columns(store, empty_store, rule):
+    # it was a frame without index or columns (shape (0, 0)): lb["rank"], lb.loc["pumping"] raised a bare KeyError in
+    # code that reads a leaderboard while a grid is starting
+    lb = gx.leaderboard(empty_store, rule=rule)
+    full = gx.leaderboard(store, rule=rule)
+    assert lb.empty and list(lb.columns) == list(full.columns) == _LEADERBOARD_COLUMNS
+    assert list(lb.index.names) == list(full.index.names) == ["data", "structure", "variant"]
+    assert lb["rank"].dtype == full["rank"].dtype and lb["reason"].tolist() == []
+

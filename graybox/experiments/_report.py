@@ -259,7 +259,8 @@ def leaderboard(
         models were compared), ``cells`` and ``ok`` (cells of the group, cells with status ok),
         ``reason`` (empty for a ranked row). A group with no qualifying model keeps a row with NaN
         figures (rank NaN) and says why in ``reason``: the smallest J_SF reached when no model
-        is in the band, and the messages of its infeasible, diverged or failed cells.
+        is in the band, and the messages of its infeasible, diverged or failed cells. Results without a
+        finished cell give no row, with the same index and columns.
     """
     band = _checked_options(rule, band)
     df = _frame(results)
@@ -305,8 +306,12 @@ def leaderboard(
         base["candidates"] = n
         rows.append(base)
     out = pd.DataFrame(rows)
-    if out.empty:
-        return out
+    if out.empty:  # no finished cell yet: no row, but the index and columns a leaderboard has
+        out = pd.DataFrame({**{k: pd.Series(dtype=str) for k in (*_KEYS, "reason")},
+                            **{k: pd.Series(dtype=int) for k in ("cells", "ok", "candidates")},
+                            **{k: pd.Series(dtype=float) for k in ("JS_valid", "JS_ident", "JSF", "fit_valid",
+                                                                   "n_params", "seed", "lambda1")},
+                            "in_band": pd.Series(dtype=bool)})
     for c in ("JS_valid", "JS_ident", "JSF", "fit_valid", "lambda1"):
         out[c] = out[c].astype(float)
     out["n_params"] = pd.array(out["n_params"], dtype="Int64")
