@@ -131,3 +131,10 @@ def test_the_leaderboard_of_a_store_without_finished_cells_keeps_its_columns(sto
     assert list(lb.index.names) == list(full.index.names) == ["data", "structure", "variant"]
     assert lb["rank"].dtype == full["rank"].dtype and lb["reason"].tolist() == []
 
+
+@pytest.mark.parametrize("draw", [gx.plot_scatter, gx.plot_fronts, gx.plot_heatmap, gx.heatmap_table])
+def test_the_figures_of_a_store_without_finished_cells_say_so(empty_store, draw):
+    # plot_scatter failed in matplotlib ("Number of columns must be a positive integer, not 0"), the others asked to
+    # "choose one with data=…" among 0 data sets
+    with pytest.raises(ValueError, match="no finished cell"):
+        draw(empty_store)

@@ -362,8 +362,18 @@ def heatmap_table(
     return t.reindex(index=list(dict.fromkeys(sub["structure"])), columns=list(dict.fromkeys(sub["variant"])))
 
 
-def _one_data(df: pd.DataFrame, data: str | None) -> str:
+def _held_data(df: pd.DataFrame) -> list[str]:
+    """The data sets of the results, in their order; ``ValueError`` when they hold no cell (a run stopped before
+    its first cell finished: there is nothing to draw, and matplotlib's message for it named no cause)."""
     names = list(dict.fromkeys(df["data"]))
+    if not names:
+        raise ValueError("the results hold no finished cell to draw or tabulate (graybox grid status shows a "
+                         "store's progress)")
+    return names
+
+
+def _one_data(df: pd.DataFrame, data: str | None) -> str:
+    names = _held_data(df)
     if data is None:
         if len(names) != 1:
             raise ValueError(f"the results hold {len(names)} data sets {names}: choose one with data=…")
@@ -499,7 +509,7 @@ def plot_scatter(
     band = _checked_options(band=band, data=data)
     df = _frame(results)
     _known_bands(band, df)
-    names = [_one_data(df, data)] if data is not None else list(dict.fromkeys(df["data"]))
+    names = [_one_data(df, data)] if data is not None else _held_data(df)
     fig = Figure(figsize=(6.4 * len(names), 4.8), layout="constrained")
     axes = fig.subplots(1, len(names), squeeze=False)[0]
     for ax, d in zip(axes, names):
