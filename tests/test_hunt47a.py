@@ -138,3 +138,22 @@ def test_the_figures_of_a_store_without_finished_cells_say_so(empty_store, draw)
     # "choose one with data=…" among 0 data sets
     with pytest.raises(ValueError, match="no finished cell"):
         draw(empty_store)
+
+
+def test_a_heat_map_of_a_figure_a_qualifying_model_lacks_does_not_say_no_model_qualified(store):
+    # a heat map of lambda1 (or seed) over least-squares cells, every one ranked, was titled "no model qualified (the
+    # leaderboard's reason says why)" and drew "—" (no model) in every cell, while the leaderboard's reasons are empty
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        lb = gx.leaderboard(store, rule="chosen")
+        assert lb["rank"].notna().all() and (lb["reason"] == "").all()
+        fig = gx.plot_heatmap(store, value="lambda1", rule="chosen")
+    ax = fig.axes[0]
+    assert "no model qualified" not in " ".join(ax.get_title().split())  # (the title is wrapped)
+    assert [t.get_text() for t in ax.texts] == ["n/a"]
+    # a group without a qualifying model keeps its dash and the title its reason
+    fig = gx.plot_heatmap(store, value="lambda1", band=1e-9)
+    assert [t.get_text() for t in fig.axes[0].texts] == ["—"]
+    assert "no model qualified" in " ".join(fig.axes[0].get_title().split())

@@ -351,15 +351,22 @@ def heatmap_table(
         compared).
     """
     band = _checked_options(rule, band, data, value)
-    df = _frame(results)
+    return _heatmap_tables(_frame(results), data, value, rule, band)[0]
+
+
+def _heatmap_tables(df: pd.DataFrame, data: str | None, value: str, rule: str,
+                    band: float | Mapping[str, float] | None) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """:func:`heatmap_table`'s table, and beside it which of its cells have a qualifying model (True/False)."""
     _known_bands(band, df)
     d = _one_data(df, data)
     sub = df[df["data"] == d]
     lb = leaderboard(sub, rule=rule, band=_given_band(band, d))
     if value not in lb.columns:
         raise ValueError(f"value must be a leaderboard column ({', '.join(lb.columns)}); got {value!r}")
+    order = {"index": list(dict.fromkeys(sub["structure"])), "columns": list(dict.fromkeys(sub["variant"]))}
     t = lb[value].reset_index().pivot(index="structure", columns="variant", values=value)
-    return t.reindex(index=list(dict.fromkeys(sub["structure"])), columns=list(dict.fromkeys(sub["variant"])))
+    ranked = lb["rank"].notna().reset_index().pivot(index="structure", columns="variant", values="rank")
+    return t.reindex(**order), ranked.reindex(**order).fillna(False).astype(bool)
 
 
 def _held_data(df: pd.DataFrame) -> list[str]:
@@ -694,18 +701,20 @@ def plot_heatmap(
     Returns
     -------
     matplotlib.figure.Figure
-        Each cell annotated with its value; "—" where no model qualified, "not run" for a
+        Each cell annotated with its value; "—" where no model qualified, "n/a" where one did but
+        has no such value (``lambda1`` of a one-model estimator), "not run" for a
         structure and a variant that never ran together (specs read with ``spec="all"``, or
         stores compared, that do not share them). A value the colour
         scale cannot show (inf, e.g. J_SF of a model that reaches no equilibrium at a point; 0 on
         a log scale) is written on an uncoloured cell.
     """
-    _checked_options(rule, band, data, value)  # said before a store is read, as heatmap_table says it
+    band = _checked_options(rule, band, data, value)  # said before a store is read, as heatmap_table says it
     df = _frame(results)  # a store read once: the table, the structures and the pairs run all come from it
-    t = heatmap_table(df, data=data, value=value, rule=rule, band=band)
+    t, ranked = _heatmap_tables(df, data, value, rule, band)
     d = _one_data(df, data)
     if structures is not None:
         t = t.loc[_known_structures(structures, list(t.index), d)]
+        ranked = ranked.loc[t.index]
     try:
         vals = t.to_numpy(dtype=float)
     except (TypeError, ValueError):  # a text column (reason): heatmap_table shows it, a colour scale cannot
@@ -727,8 +736,9 @@ def plot_heatmap(
         for j in range(t.shape[1]):
             v = shown[i, j]
             if not np.isfinite(v):  # no model ("—"), or a figure the colours cannot show (inf; 0 on a log scale)
-                said = ("—" if (t.index[i], t.columns[j]) in run else "not run") if np.isnan(vals[i, j]) else \
-                    f"{vals[i, j]:.3g}"
+                # a qualifying model without this figure (λ1 of a one-model estimator) is no "no model"
+                missing = "n/a" if ranked.iat[i, j] else "—" if (t.index[i], t.columns[j]) in run else "not run"
+                said = missing if np.isnan(vals[i, j]) else f"{vals[i, j]:.3g}"
                 ax.text(j, i, said, ha="center", va="center", fontsize=7, color="k" if said != "not run" else "0.5")
                 continue
             r, g, b_ = np.asarray(im.to_rgba(np.array([v])), float).reshape(-1)[:3]  # one value: vmin = vmax
@@ -740,7 +750,7 @@ def plot_heatmap(
         cbar = fig.colorbar(im, ax=ax, label=value + unit)
         _ticks(cbar.ax.yaxis, log, 5)
     else:  # nothing to colour: a scale would show values no cell has (matplotlib's default ±0.1)
-        title += (": no model qualified (the leaderboard's reason says why)" if np.isnan(vals).all() else
+        title += (": no model qualified (the leaderboard's reason says why)" if not ranked.to_numpy().any() else
                   ": no value a colour scale can show")
     ax.set_title(_wrapped(title, fig, 9), fontsize=9)
     return fig
