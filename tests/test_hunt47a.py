@@ -157,3 +157,18 @@ def test_a_heat_map_of_a_figure_a_qualifying_model_lacks_does_not_say_no_model_q
     fig = gx.plot_heatmap(store, value="lambda1", band=1e-9)
     assert [t.get_text() for t in fig.axes[0].texts] == ["—"]
     assert "no model qualified" in " ".join(fig.axes[0].get_title().split())
+
+
+@pytest.mark.parametrize("contours", [False, True])
+def test_surface_input_labels_of_any_value_are_drawn_with_their_unit(contours):
+    # input_labels are "any values, shown with str()", but with points in units (rpm, mlc) a label such as 1 raised
+    # TypeError: argument of type 'int' is not iterable (the unit was looked for inside the label)
+    from graybox.plots import plot_surface_contours, plot_surface_slices
+
+    points = gb.load_pumping_miso().static
+    if contours:
+        fig = plot_surface_contours(lambda U: 0.01 * U[:, 0], points, input_labels=(1, 2))
+        assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("1 (rpm)", "2 (rpm)")
+    else:
+        fig = plot_surface_slices(None, points, input_labels=(1, 2))
+        assert fig.axes[0].get_xlabel() == "1 (rpm)"

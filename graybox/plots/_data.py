@@ -76,7 +76,9 @@ def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
 
 def unit_label(text: str, unit: str) -> str:
     """An axis label with its unit: ``text (unit)``, or ``text`` when no unit is said or the text
-    already names it (``"Speed (rpm)"``, ``"Speed [rpm]"``)."""
+    already names it (``"Speed (rpm)"``, ``"Speed [rpm]"``). A label that is no text is shown as ``str(text)``
+    (as matplotlib shows any label; a surface's ``input_labels`` may be any values)."""
+    text = str(text)
     if not unit or f"({unit})" in text or f"[{unit}]" in text:
         return text
     return f"{text} ({unit})"
