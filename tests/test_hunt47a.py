@@ -172,3 +172,12 @@ def test_surface_input_labels_of_any_value_are_drawn_with_their_unit(contours):
     else:
         fig = plot_surface_slices(None, points, input_labels=(1, 2))
         assert fig.axes[0].get_xlabel() == "1 (rpm)"
+
+
+def test_plot_free_run_refuses_an_empty_mapping_of_models():
+    # {} drew the measurement alone, without a word: a dictionary of results filtered down to nothing went unnoticed
+    # (plot_pareto refuses "nothing to plot" the same way)
+    from graybox.plots import plot_free_run
+
+    with pytest.raises(ValueError, match="models"):
+        plot_free_run(gb.load_pumping(), {})

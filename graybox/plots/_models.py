@@ -46,6 +46,8 @@ def plot_free_run(
     """
     record = as_record(record, "valid", "record")
     if isinstance(models, Mapping):
+        if not models:
+            raise ValueError("models is an empty mapping: give at least one model to draw against the record")
         ms = {name: as_model(m, f"models[{name!r}]", duck="simulate") for name, m in models.items()}
     else:
         m = as_model(models, "models", duck="simulate")
