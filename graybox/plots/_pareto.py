@@ -15,6 +15,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..core._reprs import squared_unit
 from ..core._validation import check_bool, check_real, check_sequence
 from ..estimation._pareto import ParetoSet, nondominated_mask
 
@@ -68,8 +69,8 @@ def plot_pareto(
     band: float | None = None,
     ax: Axes | None = None,
     log: bool = True,
-    xlabel: str = "J_S (output units²)",
-    ylabel: str = "J_SF (output units²)",
+    xlabel: str | None = None,
+    ylabel: str | None = None,
     title: str | None = None,
 ) -> Figure:
     """J_SF against J_S of Pareto sets and single models (Figs. 5 and 7).
@@ -90,8 +91,9 @@ def plot_pareto(
         Draw here; by default a new 6.4 × 4.6 in figure is made.
     log : bool
         Logarithmic axes (the errors span decades).
-    xlabel, ylabel : str
-        Axis labels, with your data's units (e.g. ``"J_S (mlc²)"``; the defaults name no unit).
+    xlabel, ylabel : str, optional
+        Axis labels; default ``"J_S (mlc²)"`` and ``"J_SF (mlc²)"`` in the output unit the fronts
+        carry (their ``units``), ``"(output units²)"`` when they carry none or differ.
     title : str, optional
 
     Returns
@@ -108,6 +110,11 @@ def plot_pareto(
     if band is not None:
         band = check_real(band, "band", low=0, low_open=True)
     pts = _points_of(points)
+    # J_S and J_SF are in the output unit squared: the fronts' own where they all name the same one
+    named = {ps.units[1] for ps in sets.values()}
+    sq = (squared_unit(named.pop()).strip() if len(named) == 1 else "") or "output units²"
+    xlabel = f"J_S ({sq})" if xlabel is None else xlabel
+    ylabel = f"J_SF ({sq})" if ylabel is None else ylabel
     if not sets and not pts:
         raise ValueError("nothing to plot: give at least one front or one point")
     if ax is None:
