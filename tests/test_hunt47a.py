@@ -204,3 +204,23 @@ def test_plot_pareto_labels_its_axes_with_the_fronts_units():
     assert ax.get_xlabel() == "J_S (output units²)"  # two units: none of them names the axis
     ax = plot_pareto(front(("rpm", "mlc")), xlabel="J_S", ylabel="J_SF").axes[0]
     assert (ax.get_xlabel(), ax.get_ylabel()) == ("J_S", "J_SF")
+
+
+def test_plot_free_run_into_a_given_axes_leaves_the_figures_layout_alone():
+    # it called tight_layout on the caller's figure: a constrained-layout figure of several panels was switched to
+    # the tight layout, with "UserWarning: The figure layout has changed to tight"
+    import warnings
+
+    from matplotlib.figure import Figure
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    from graybox.plots import plot_free_run
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    m = gb.Model(s, np.array([0.9, 2e-4, 1e-8, 0.1]), name="m", Ts=0.05, units=("rpm", "mlc"))
+    fig = Figure(layout="constrained")
+    axs = fig.subplots(1, 2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert plot_free_run(gb.load_pumping(), m, ax=axs[0]) is fig
+    assert isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)

@@ -52,8 +52,8 @@ def plot_free_run(
     else:
         m = as_model(models, "models", duck="simulate")
         ms = {m.name or "model": m}
-    if ax is None:
-        fig = Figure(figsize=(8, 3.6))
+    if ax is None:  # laid out as it is drawn (a caller's figure keeps its own layout: no tight_layout on it)
+        fig = Figure(figsize=(8, 3.6), layout="constrained")
         ax = fig.add_subplot(1, 1, 1)
     else:
         if not isinstance(ax, Axes):
@@ -69,5 +69,4 @@ def plot_free_run(
     ax.set_xlabel("time (s)")
     ax.set_ylabel(unit_label(ylabel, unit))  # "Temperature (°C)" as given, not "Temperature (°C) (°C)"
     ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
     return fig
