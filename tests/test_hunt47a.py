@@ -224,3 +224,13 @@ def test_plot_free_run_into_a_given_axes_leaves_the_figures_layout_alone():
         warnings.simplefilter("error")
         assert plot_free_run(gb.load_pumping(), m, ax=axs[0]) is fig
     assert isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
+
+
+@pytest.mark.parametrize("column", ["band", "message", "n_params", "terms", "lambda1", "seed", "JS_ident",
+                                    "fit_valid"])
+@pytest.mark.parametrize("draw", [gx.leaderboard, gx.plot_scatter, gx.plot_fronts, gx.plot_heatmap])
+def test_a_results_frame_without_a_column_the_report_reads_is_named(store, column, draw):
+    # the frame was checked for seven columns, and one without band, message, n_params, … raised a bare KeyError
+    df = gb.load_results(store).drop(columns=column)
+    with pytest.raises(ValueError, match=f"graybox.load_results.*{column}"):
+        draw(df)

@@ -47,12 +47,17 @@ _KEYS = ["data", "structure", "variant"]
 _MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">", "h", "p")
 
 
+#: The columns of :func:`graybox.load_results` the reports read.
+_RESULT_COLUMNS = (*_KEYS, "seed", "status", "message", "terms", "n_params", "lambda1", "band", "JS_ident", "JS_valid",
+                   "fit_valid", "JSF", "members")
+
+
 def _frame(results: pd.DataFrame | str | os.PathLike | Sequence, spec: str | int = "latest",
            attrs: bool = False) -> pd.DataFrame:
     """The results as a frame; without its ``attrs`` unless asked (pandas deep-copies them on every
     operation, and a store's specs made that the larger part of a leaderboard's time)."""
     if isinstance(results, pd.DataFrame):
-        missing = {"data", "structure", "variant", "status", "JS_valid", "JSF", "members"} - set(results.columns)
+        missing = set(_RESULT_COLUMNS) - set(results.columns)
         if missing:
             raise ValueError(f"results must come from graybox.load_results; missing columns {sorted(missing)}")
         df = results
