@@ -234,3 +234,19 @@ def test_a_results_frame_without_a_column_the_report_reads_is_named(store, colum
     df = gb.load_results(store).drop(columns=column)
     with pytest.raises(ValueError, match=f"graybox.load_results.*{column}"):
         draw(df)
+
+
+def test_the_fronts_title_says_the_band_is_shaded_only_when_a_panel_shades_it(store):
+    # every panel's points above B (the band "below every point"), or no panel with a model, and the title still read
+    # "shaded below the dashed line: J_SF ≤ B = …" over panels with no shade and no dashed line
+    def title(fig):
+        return " ".join(fig.get_suptitle().split())
+
+    far = gx.plot_fronts(store, band=1e-9)  # least squares' J_SF is far above
+    assert "shaded" not in title(far) and "J_SF ≤ B = 1e-09" in title(far)
+    assert not far.axes[0].patches  # nothing shaded indeed
+    near = gx.plot_fronts(store, band=1e6)  # above every point: no shading either
+    assert "shaded" not in title(near)
+    jsf = float(gb.load_results(store)["JSF"].iloc[0])
+    inside = gx.plot_fronts(store, band=jsf * 1.001)  # B between the point and the panel's top: shaded
+    assert "shaded below the dashed line" in title(inside) and inside.axes[0].patches

@@ -447,20 +447,22 @@ def _scale(ax, which: str, values) -> None:
     _ticks(ax.xaxis if which == "x" else ax.yaxis, log, 4 if which == "x" else 6)
 
 
-def _band_on(ax, b: float | None, label: bool = False) -> None:
+def _band_on(ax, b: float | None, label: bool = False) -> bool:
     """Shade J_SF ≤ B where B is inside the panel; say where B is when it is not (a panel that
-    is all band, or none of it, tells nothing by its colour)."""
+    is all band, or none of it, tells nothing by its colour). Whether it shaded."""
     if b is None:
-        return
+        return False
     lo, hi = ax.get_ylim()
     if lo < b < hi:
         ax.axhspan(lo, b, color="0.9", zorder=0, label=f"J_SF ≤ B = {b:g}" if label else None)
         ax.axhline(b, color="0.45", lw=0.8, ls="--", zorder=1)
         ax.set_ylim(lo, hi)
+        return True
     else:
         where = "above" if b >= hi else "below"
         ax.text(0.99, 0.99 if where == "above" else 0.01, f"B = {b:g}: {where} every point", transform=ax.transAxes,
                 ha="right", va="top" if where == "above" else "bottom", fontsize=7, color="0.3")
+        return False
 
 
 def _bands(sub: pd.DataFrame, band: float | Mapping[str, float] | None, data: str) -> list[tuple[float, str]]:
@@ -479,17 +481,17 @@ def _bands(sub: pd.DataFrame, band: float | Mapping[str, float] | None, data: st
     return [(b, ", ".join(map(_shown, dict.fromkeys(stored.loc[stored["band"] == b, "variant"])))) for b in values]
 
 
-def _bands_on(ax, bands: list[tuple[float, str]], label: bool = False) -> None:
+def _bands_on(ax, bands: list[tuple[float, str]], label: bool = False) -> bool:
     """One band as :func:`_band_on` draws it; several (variants with bands of their own) as one dashed line
-    each, named by its variants in the legend, none shaded (no region is every variant's)."""
+    each, named by its variants in the legend, none shaded (no region is every variant's). Whether it shaded."""
     if len(bands) <= 1:
-        _band_on(ax, bands[0][0] if bands else None, label=label)
-        return
+        return _band_on(ax, bands[0][0] if bands else None, label=label)
     lo, hi = ax.get_ylim()
     for i, (b, who) in enumerate(bands):
         ax.axhline(b, color=f"0.{3 + 2 * (i % 3)}", lw=0.9, ls=("--", ":", "-.")[i % 3], zorder=1,
                    label=f"B = {b:g} ({who})")
     ax.set_ylim(lo, hi)
+    return False
 
 
 def plot_scatter(
@@ -627,6 +629,7 @@ def plot_fronts(
     fig = Figure(figsize=(5.2 * ncol, 4.2 * nrow), layout="constrained")
     axes = fig.subplots(nrow, ncol, squeeze=False).ravel()
     bands = _bands(sub, band, d)
+    shaded = False  # whether a panel shades the band (B inside its J_SF range)
     for ax, s in zip(axes, names):
         drawn = False
         xs: list[np.ndarray] = []
@@ -657,7 +660,7 @@ def plot_fronts(
         _scale(ax, "x", np.concatenate(xs) if xs else [])
         _scale(ax, "y", np.concatenate(ys) if ys else [])
         if drawn:
-            _bands_on(ax, bands)
+            shaded = _bands_on(ax, bands) or shaded
         else:
             ax.text(0.5, 0.5, "no model with finite J_S and J_SF\n(the leaderboard's reason says why)",
                     transform=ax.transAxes, ha="center", va="center", color="0.4", fontsize=8)
@@ -673,8 +676,8 @@ def plot_fronts(
     said = ""
     unit = df.attrs.get("y_units", {}).get(d, "")
     unit = f" {unit}²" if unit else ""
-    if len(bands) == 1:
-        said = f" (shaded below the dashed line: J_SF ≤ B = {bands[0][0]:g}{unit})"
+    if len(bands) == 1:  # the shade named only where a panel draws it (else each panel says where B lies)
+        said = f" ({'shaded below the dashed line: ' if shaded else ''}J_SF ≤ B = {bands[0][0]:g}{unit})"
     elif bands:
         said = " (J_SF ≤ B: the variants' own bands, " + "; ".join(f"{b:g}{unit} for {who}" for b, who in bands) + ")"
     fig.suptitle(_wrapped(f"{_shown(d)}: fronts per structure" + said, fig, 12), fontsize=12)
