@@ -250,3 +250,11 @@ def test_the_fronts_title_says_the_band_is_shaded_only_when_a_panel_shades_it(st
     jsf = float(gb.load_results(store)["JSF"].iloc[0])
     inside = gx.plot_fronts(store, band=jsf * 1.001)  # B between the point and the panel's top: shaded
     assert "shaded below the dashed line" in title(inside) and inside.axes[0].patches
+
+
+def test_the_html_page_shows_a_missing_value_of_a_text_column_as_missing(store, tmp_path):
+    # ranked by each cell's choice, a least-squares row's in_band is missing (no band decided it): the page's table
+    # wrote it as the text "<NA>" (or "nan"), where its numeric columns write a dash
+    written = {p.name: p for p in gx.write_report(store, tmp_path / "rep", rule="chosen", html=True)}
+    page = written["report.html"].read_text(encoding="utf-8")
+    assert "&lt;NA&gt;" not in page and ">nan<" not in page and ">None<" not in page

@@ -35,8 +35,18 @@ def _e(x: object) -> str:
     return html.escape("" if x is None else str(x))
 
 
+def _missing(v: object) -> bool:
+    """Whether a table's value is missing (None, NaN, pandas' NA), not a value to write."""
+    return v is None or (not isinstance(v, str) and pd.api.types.is_scalar(v) and bool(pd.isna(v)))
+
+
+def _text(v: object) -> str:
+    """A text cell: the value escaped, a missing one as a dash (not "nan" nor "<NA>")."""
+    return "—" if _missing(v) else _e(v)
+
+
 def _num(v: object) -> str:
-    if v is None or pd.isna(v):
+    if _missing(v):
         return "—"  # a missing figure: the row's reason says why
     if isinstance(v, float):
         return f"{v:.4g}"
@@ -52,7 +62,7 @@ def _table(df: pd.DataFrame, *, index: bool = True, text_cols: Sequence[str] = (
     body = []
     for _, r in d.iterrows():
         cls = ' class="why"' if why is not None and isinstance(r.get(why), str) and r.get(why) else ""
-        cells = "".join(f'<td class="t">{_e(r[c])}</td>' if t else f"<td>{_num(r[c])}</td>"
+        cells = "".join(f'<td class="t">{_text(r[c])}</td>' if t else f"<td>{_num(r[c])}</td>"
                         for c, t in zip(d.columns, text))
         body.append(f"<tr{cls}>{cells}</tr>")
     return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
