@@ -258,3 +258,22 @@ def test_the_html_page_shows_a_missing_value_of_a_text_column_as_missing(store, 
     written = {p.name: p for p in gx.write_report(store, tmp_path / "rep", rule="chosen", html=True)}
     page = written["report.html"].read_text(encoding="utf-8")
     assert "&lt;NA&gt;" not in page and ">nan<" not in page and ">None<" not in page
+
+
+def test_plot_residual_tests_into_given_axes_keeps_a_title_given():
+    # with axes given, title= was dropped without a word (the figure's title is set only for a figure it makes);
+    # without title the caller's figure keeps its own
+    from matplotlib.figure import Figure
+
+    from graybox.plots import plot_residual_tests
+
+    ds = gb.load_pumping()
+    m = gb.els(gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]), ds).model
+    rt = gb.residual_tests(m, ds)
+    fig = Figure()
+    plot_residual_tests(rt, axes=list(fig.subplots(len(rt.tests), 1)), title="my model")
+    assert fig.get_suptitle() == "my model"
+    fig = Figure()
+    fig.suptitle("theirs")
+    plot_residual_tests(rt, axes=list(fig.subplots(len(rt.tests), 1)))
+    assert fig.get_suptitle() == "theirs"

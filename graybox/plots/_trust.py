@@ -38,7 +38,8 @@ def plot_residual_tests(
     axes : sequence of 5 Axes, optional
         Draw here; by default a new figure with one row per test (7 × 9 in for one input's five) is made.
     title : str, optional
-        Figure title (default: the model's name and the verdict).
+        Figure title, also on the figure of ``axes`` (default: the model's name and the verdict, on a
+        figure it makes).
 
     Returns
     -------
@@ -75,9 +76,11 @@ def plot_residual_tests(
         ax.grid(True, alpha=0.3)
     axs[-1].set_xlabel("lag τ (samples)")
     axs[0].legend(fontsize=7, loc="upper right")
-    if axes is None:
+    if title is not None:  # asked for: on the caller's figure too
+        fig.suptitle(title, fontsize=10)
+    elif axes is None:  # the default title on a figure of its own only
         verdict = "all tests passed" if tests.passed else f"{len(tests.failed)} test(s) failed"
-        fig.suptitle(title or f"{tests.model_name or 'model'}: residual correlation tests, N = {tests.n} ({verdict})",
+        fig.suptitle(f"{tests.model_name or 'model'}: residual correlation tests, N = {tests.n} ({verdict})",
                      fontsize=10)
     return fig
 
