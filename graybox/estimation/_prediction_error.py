@@ -62,7 +62,7 @@ from ..models._coerce import as_model, as_structure, static_info, static_points
 from ..models._model import Model
 from ._pareto import ParetoSet
 from ..core._records import (Dataset, Record, StaticPoints, as_records, carried_from, check_compatible,
-                             warn_static_range)
+                             check_same_units, warn_static_range)
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
@@ -924,12 +924,16 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
 
 
 def _check_point_inputs(recs: list[Record], points: StaticPoints | None) -> None:
-    """Static points must speak of the records' inputs: same count; same names when there are several."""
+    """Static points must speak of the records' inputs: same count; same names when there are several; the same
+    units where both name them (a constraint's own points and ``eval_static`` as ``static=``'s)."""
     if points is None or not recs:
         return
     r = recs[0]
     if points.n_inputs != r.n_inputs or (r.n_inputs > 1 and points.input_names != r.input_names):
         check_compatible(r, points)
+    for rec in recs:
+        check_same_units(getattr(rec, "units", ("", "")), f"{rec.name!r} has", points, "the records and the static "
+                         "points of one identification must be in the same units (convert one of them)")
 
 
 def numerator_curve(cm, points: StaticPoints) -> StaticCurve:

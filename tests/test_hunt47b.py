@@ -1,0 +1,48 @@
+"""Bug hunt 47b: constrained estimation (CLS and PE QPs, the closed form, static constraints, Pareto sets and decisions)."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+_S = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "y(k-1)u(k-1)", "1"])
+_THETA = np.array([0.7, 0.2, 0.01, 0.0, 0.1])
+_PLANT = gb.Model(_S, _THETA)
+
+
+def _record(n: int = 400, seed: int = 0, units: tuple[str, str] = ("", "")) -> gb.Record:
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 3.0, n // 20 + 1), 20)[:n]
+    y = _PLANT.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(n)
+    return gb.Record(u, y, name="ident", units=units)
+
+
+def _points(units: tuple[str, str] = ("", "")) -> gb.StaticPoints:
+    ub = np.linspace(0.2, 2.8, 6)
+    return gb.StaticPoints(ub, _PLANT.static_curve(ub) + 0.05, units=units)
+
+
+# -- static points given to a constraint or as eval_static: in the records' units ----------------------------
+_RPM = ("rpm", "mlc")
+_OTHER = ("rad/s", "Pa")
+
+
+@pytest.mark.parametrize("call", [
+    lambda r, p: gb.cls(_S, r, None, constraints=gb.StaticBand(b=0.1, points=p)),
+    lambda r, p: gb.cls(_S, r, None, constraints=gb.PassesThrough(p)),
+    lambda r, p: gb.cls(_S, r, _points(_RPM), how="context", constraints=gb.StaticBand(b=0.1, points=p)),
+    lambda r, p: gb.pe_pareto(_S, r, _points(_RPM), lambdas=[0.5], constraints=gb.StaticBand(b=0.1, points=p)),
+    lambda r, p: gb.pe_thetas(_S, r, _points(_RPM), lambdas=[0.5], constraints=gb.PassesThrough(p)),
+    lambda r, p: gb.pe_pareto(_S, r, _points(_RPM), lambdas=[0.5], eval_static=p),
+], ids=["cls band", "cls passes", "cls context band", "pe band", "pe_thetas passes", "pe eval_static"])
+def test_static_points_of_a_constraint_or_eval_static_in_other_units_than_the_records_are_refused(call):
+    # was: only static= was held to the records' units; a constraint's own points (or eval_static) in Pa beside
+    # records in mlc were imposed (or scored) as if they were in mlc, silently
+    with pytest.raises(ValueError, match="same units"):
+        call(_record(units=_RPM), _points(_OTHER))
+    call(_record(units=_RPM), _points(("", "")))  # points that name no unit say nothing against the records
