@@ -46,3 +46,12 @@ def test_static_points_of_a_constraint_or_eval_static_in_other_units_than_the_re
     with pytest.raises(ValueError, match="same units"):
         call(_record(units=_RPM), _points(_OTHER))
     call(_record(units=_RPM), _points(("", "")))  # points that name no unit say nothing against the records
+
+
+# -- nondominated_mask without objectives -------------------------------------------------------------------
+@pytest.mark.parametrize("points", [np.zeros((3, 0)), np.zeros((0, 0)), [[]]])
+def test_nondominated_mask_of_points_without_objectives_is_a_value_error_naming_them(points):
+    # was: numpy's lexsort TypeError "need sequence of keys with len > 0", naming neither points nor objectives
+    with pytest.raises(ValueError, match="at least one objective"):
+        gb.nondominated_mask(points)
+    assert gb.nondominated_mask(np.zeros((0, 2))).shape == (0,)  # no members, two objectives: nothing to keep

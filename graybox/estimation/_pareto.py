@@ -46,6 +46,8 @@ def nondominated_mask(points: np.ndarray) -> np.ndarray:
     P = real_array(points, "points", "objective values (numbers, members × objectives)")  # None is no NaN here
     if P.ndim != 2:
         raise ValueError(f"points must be 2-D (members × objectives), got shape {P.shape}")
+    if P.shape[1] == 0:  # was numpy's lexsort TypeError ("need sequence of keys"), naming nothing
+        raise ValueError(f"points must hold at least one objective (a column), got shape {P.shape}")
     keep = ~np.isnan(P).any(axis=1)
     # Visit in lexicographic order so strong members knock out many others early; a dominated
     # member is skipped safely because whatever it dominates its dominator dominates too.
