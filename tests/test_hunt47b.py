@@ -55,3 +55,38 @@ def test_nondominated_mask_of_points_without_objectives_is_a_value_error_naming_
     with pytest.raises(ValueError, match="at least one objective"):
         gb.nondominated_mask(points)
     assert gb.nondominated_mask(np.zeros((0, 2))).shape == (0,)  # no members, two objectives: nothing to keep
+
+
+# -- a decision on a set with nothing to choose says why -----------------------------------------------------
+def _front(failed: bool, static: bool = True) -> gb.ParetoSet:
+    rec, pts = _record(), _points()
+    K = 3
+    thetas = np.tile(_THETA, (K, 1))
+    fails = {k: f"λ1 = {k}: no start was feasible" for k in range(K)} if failed else {}
+    return gb.ParetoSet.from_thetas(_S, thetas, [0.1, 0.5, 1.0], rec, pts if static else None, "test", failures=fails)
+
+
+@pytest.mark.parametrize("decide", [
+    lambda f: gb.decide_dsf(f, band=1.0),
+    lambda f: gb.decide_dsf(f, band=1.0, fallback="min_jsf"),
+    lambda f: gb.decide_dsf(f, band=1.0, choose_on=_record(seed=3)),
+    lambda f: gb.decide_min_correlation(f, _record()),
+], ids=["dsf", "dsf fallback", "dsf choose_on", "min correlation"])
+def test_a_set_whose_members_all_failed_is_said_so_with_a_reason_by_every_decision_rule(decide):
+    # was: "the smallest J_SF is inf for every member. Widen the band …", "every member has an undefined static
+    # curve (J_SF = inf)", "every member's free run diverged on this record": each a wrong reason
+    with pytest.raises(ValueError, match="every member .* failed.*no start was feasible") as info:
+        decide(_front(failed=True))
+    assert "Widen" not in str(info.value) and "diverged" not in str(info.value)
+
+
+@pytest.mark.parametrize("fallback", [None, "min_jsf"])
+def test_decide_dsf_on_a_set_evaluated_without_static_points_says_that_j_sf_was_not_computed(fallback):
+    # was: "the smallest J_SF is inf for every member. Widen the band" (or "undefined static curve (J_SF = inf)"),
+    # for a J_SF that is NaN: never computed, which no band and no fallback change
+    front = _front(failed=False, static=False)
+    assert np.all(np.isnan(front.JSF))
+    with pytest.raises(ValueError, match="has a J_SF .*without static points"):
+        gb.decide_dsf(front, band=1.0, fallback=fallback)
+    assert gb.decide_min_correlation(front, _record()).rule == "min correlation"  # ρ needs no J_SF
+    assert gb.decide_dsf(_front(failed=False), band=1.0).rule == "D_SF"

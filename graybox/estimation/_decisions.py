@@ -116,11 +116,30 @@ def _decision(pareto: ParetoSet, i: int, rule: str, in_band: bool, score: float,
     return Decision(pareto.member_model(i, name=label), int(i), float(pareto.lambdas[i]), float(pareto.JS[i]),
                     float(pareto.JSF[i]), rule, in_band, float(score), chosen_on)
 
+def check_choosable(pareto: ParetoSet, what: str, needs_jsf: bool = True) -> None:
+    """A clear error naming ``what`` when a set has nothing a rule could choose: every member failed
+    (``InfeasibleError`` with the first reason; their J's are inf, which read as "diverged" or "undefined static
+    curve"), or, where the rule ranks J_SF (``needs_jsf``), no member's J_SF was computed (NaN: the set was
+    evaluated without static points, and no band or fallback can help)."""
+    K = len(pareto)
+    if K and len(pareto.failures) == K:
+        first = min(pareto.failures)
+        raise InfeasibleError(f"{what}: every member of the Pareto set ({K} members, method {pareto.method!r}) "
+                              f"failed, so there is no model to choose (member {first}: {pareto.failures[first]})")
+    ok = np.ones(K, bool)
+    ok[list(pareto.failures)] = False
+    if needs_jsf and ok.any() and np.all(np.isnan(pareto.JSF[ok])):
+        raise ValueError(f"{what}: no member of the Pareto set ({K} members, method {pareto.method!r}) has a J_SF (NaN: "
+                         "the set was evaluated without static points); evaluate it at static points "
+                         "(ParetoSet.from_thetas(..., static=points))")
+
+
 def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF", js: np.ndarray | None = None,
                   on: str = "") -> int:
     """The member with the smallest J_SF (ties: the smaller J_S, then the lower index);
     ``InfeasibleError`` naming ``what`` when every member's static curve is undefined. ``js``: J_S
     on choosing records (``on`` names them), whose free runs must then stay finite there too."""
+    check_choosable(pareto, what)
     jsf = pareto.JSF
     js = pareto.JS if js is None else js
     ok = np.flatnonzero(np.isfinite(jsf))
@@ -208,6 +227,7 @@ def decide_dsf(
         raise ValueError("the Pareto set is empty")
     if fallback is not None:
         check_choice(fallback, "fallback", FALLBACKS)
+    check_choosable(pareto, "decide_dsf")
     js, jsf = pareto.JS, pareto.JSF
     chosen_on = ""
     if choose_on is not None:
@@ -278,6 +298,7 @@ def decide_min_correlation(
     pareto.check_record(record)
     if len(pareto) == 0:
         raise ValueError("the Pareto set is empty")
+    check_choosable(pareto, "decide_min_correlation", needs_jsf=False)
     st = pareto.structure
     L = st.max_lag
     record.require_length(L)
