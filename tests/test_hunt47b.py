@@ -90,3 +90,32 @@ def test_decide_dsf_on_a_set_evaluated_without_static_points_says_that_j_sf_was_
         gb.decide_dsf(front, band=1.0, fallback=fallback)
     assert gb.decide_min_correlation(front, _record()).rule == "min correlation"  # ρ needs no J_SF
     assert gb.decide_dsf(_front(failed=False), band=1.0).rule == "D_SF"
+
+
+# -- PassesThrough: a model returned passes through its points -----------------------------------------------
+def _six_points(dy: float = 0.0, wiggle: float = 1e-4) -> gb.StaticPoints:
+    ub = np.linspace(0.2, 2.8, 6)  # as many points as clusters and more: only the degenerate Σy = 1 meets them all
+    return gb.StaticPoints(ub, _PLANT.static_curve(ub) + 0.05 + wiggle * np.array([1, -1, 1, -1, 1, -1]) + dy)
+
+
+def _shifted(rec: gb.Record, dy: float) -> gb.Record:
+    return replace(rec, y=rec.y + dy)
+
+
+def test_passing_through_more_points_than_clusters_is_refused_whatever_the_output_s_zero():
+    # was: refused at y (the degenerate Σy = 1), but at y + 1e4 the model with Σy = 1 − 2.5e-9 was returned as passing
+    # through the points, its static function 3e-3 off them (the rows D·(ȳ − ȳ_model) met to round-off)
+    for dy in (0.0, 1e4):
+        with pytest.raises(ValueError, match="static function"):
+            gb.cls(_S, _shifted(_record(), dy), _six_points(dy), how="points")
+
+
+@pytest.mark.parametrize("dy", [0.0, 1e3, 1e4, 2e5])
+def test_a_cls_model_through_points_meets_each_to_a_millionth_of_their_spread(dy):
+    ub = np.array([0.4, 1.5, 2.6])  # fewer points than clusters: a model passes through them
+    pts = gb.StaticPoints(ub, _PLANT.static_curve(ub) + 0.05 + dy)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model = gb.cls(_S, _shifted(_record(), dy), pts, how="points").model
+    miss = np.abs(model.static_curve(ub) - pts.ybar)
+    assert miss.max() <= 1e-6 * np.ptp(pts.ybar)

@@ -736,7 +736,8 @@ class PassesThrough(StaticConstraint):
     """The static equation holds at given points: ``ȳ_i = q_iᵀ R θ`` for every i.
 
     For a rational structure this is ``ȳ_model(ū_i) = ȳ_i`` wherever the static function exists
-    (checked after solving). For higher y powers it makes ȳ_i *an* equilibrium at ū_i, not
+    (checked after solving: the static function must exist at every point and meet it to
+    :data:`PASS_RTOL` of the points' spread, else ``ValueError``). For higher y powers it makes ȳ_i *an* equilibrium at ū_i, not
     necessarily the stable one the model settles on.
 
     Parameters
@@ -773,6 +774,39 @@ class PassesThrough(StaticConstraint):
                     "degenerate Σy = 1, other clusters 0 (no static function at all): use fewer points than "
                     "clusters, StaticCurve.fit + CurveEquality, a StaticBand or the PE problem")
         _check_static_exists(ctx, theta, pts.ubar, self.describe(), hint)
+        if not is_rational(ctx.structure):
+            return
+        # the rows hold as D_i (ȳ_i − ȳ_model(ū_i)) = 0: met to the solver's round-off, a small D_i leaves the static
+        # function itself far off the point (outputs at 1e4 ± 2.5 and as many points as clusters: Σy = 1 − 2.5e-9,
+        # every point missed by 3e-3 and the near-integrator returned as passing through them)
+        values, den = _rational_static_values(ctx, theta, pts.ubar)
+        miss = np.abs(values - pts.ybar)
+        yb = np.asarray(pts.ybar, float)
+        spread = float(np.ptp(yb)) if yb.size > 1 and np.ptp(yb) > 0 else float(np.max(np.abs(yb)))
+        # relative to the points' spread, with the round-off of the levels themselves (an output at 2e9 ± 50)
+        tol = PASS_RTOL * spread + 1e3 * np.finfo(float).eps * float(np.max(np.abs(yb)))
+        if np.max(miss) > tol:
+            i = int(np.argmax(miss))
+            raise ValueError(
+                f"{self.describe()}: the estimated model's static function misses the point at ū = "
+                f"{np.asarray(pts.ubar)[i].tolist()} by {miss[i]:.3g} (output units; the points span {spread:.3g}): the "
+                "equalities were met as D(ū)·(ȳ − ȳ_model(ū)) = 0 only to round-off, with its denominator "
+                f"D = 1 − Σy − Σyu ū − … = {den[i]:.3g} there{hint or '; use fewer points or a StaticBand'}")
+
+
+#: Largest miss of a point by a :class:`PassesThrough` model's static function, relative to the points' spread.
+PASS_RTOL = 1e-6
+
+
+def _rational_static_values(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A rational structure's static function N(ū)/D(ū) at ``ubar`` (one or several inputs) and its denominator D(ū),
+    shapes (M,)."""
+    cm = ctx.cluster_map
+    sig = cm.R @ np.asarray(theta, float)
+    mono = static_rows(cm, ubar, np.ones(np.shape(ubar)[0]))  # ū^e of each cluster, its ȳ^p taken as 1
+    p = np.array([cluster_powers(k)[0] for k in cm.keys])
+    den = 1.0 - mono[:, p == 1] @ sig[p == 1]
+    return (mono[:, p == 0] @ sig[p == 0]) / den, den
 
 
 # --------------------------------------------------------------------------------------------
