@@ -119,3 +119,35 @@ def test_a_cls_model_through_points_meets_each_to_a_millionth_of_their_spread(dy
         model = gb.cls(_S, _shifted(_record(), dy), pts, how="points").model
     miss = np.abs(model.static_curve(ub) - pts.ybar)
     assert miss.max() <= 1e-6 * np.ptp(pts.ybar)
+
+
+# -- PassesThrough with a y power above 1: no integrator returned as passing through every point --------------
+_SQ = gb.Structure(["y(k-1)", "y(k-1)^2", "u(k-1)", "1"])
+_QUAD = gb.Model(_SQ, [0.5, 0.05, 0.3, 0.1])
+
+
+def _quad_record() -> gb.Record:
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.uniform(0.0, 2.0, 30), 20)
+    return gb.Record(u, _QUAD.simulate(u, [0.0]) + 0.01 * rng.standard_normal(u.size), name="quad")
+
+
+@pytest.mark.parametrize("how", ["auto", "points"])
+def test_cls_through_more_points_than_clusters_of_a_non_rational_structure_is_refused(how):
+    # was: cls's default (how="auto" takes points for a structure with y²) returned θ = [1, 0, 0, 0], y(k) = y(k−1),
+    # whose static equation ȳ = ȳ "passes through" any points; the rational structures' check did not apply
+    ub = np.linspace(0.2, 1.8, 6)
+    pts = gb.StaticPoints(ub, _QUAD.static_curve(ub) + 0.02 + 1e-3 * np.array([1, -1, 1, -1, 1, -1]))
+    with pytest.raises(ValueError, match="no isolated equilibrium"):
+        gb.cls(_SQ, _quad_record(), pts, how=how)
+
+
+def test_cls_through_fewer_points_than_clusters_of_a_non_rational_structure_makes_them_equilibria():
+    ub = np.array([0.5, 1.5])
+    pts = gb.StaticPoints(ub, _QUAD.static_curve(ub) + 0.02)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model = gb.cls(_SQ, _quad_record(), pts).model
+    a, b, c, d = model.theta  # ȳ = a ȳ + b ȳ² + c ū + d at each point, with ∂/∂ȳ of the rest away from 1
+    np.testing.assert_allclose(a * pts.ybar + b * pts.ybar**2 + c * ub + d, pts.ybar, rtol=1e-9)
+    assert np.all(np.abs(1 - a - 2 * b * pts.ybar) > 1e-3)

@@ -775,6 +775,7 @@ class PassesThrough(StaticConstraint):
                     "clusters, StaticCurve.fit + CurveEquality, a StaticBand or the PE problem")
         _check_static_exists(ctx, theta, pts.ubar, self.describe(), hint)
         if not is_rational(ctx.structure):
+            _check_isolated(ctx, theta, pts, self.describe(), hint)
             return
         # the rows hold as D_i (ȳ_i − ȳ_model(ū_i)) = 0: met to the solver's round-off, a small D_i leaves the static
         # function itself far off the point (outputs at 1e4 ± 2.5 and as many points as clusters: Σy = 1 − 2.5e-9,
@@ -792,6 +793,23 @@ class PassesThrough(StaticConstraint):
                 f"{np.asarray(pts.ubar)[i].tolist()} by {miss[i]:.3g} (output units; the points span {spread:.3g}): the "
                 "equalities were met as D(ū)·(ȳ − ȳ_model(ū)) = 0 only to round-off, with its denominator "
                 f"D = 1 − Σy − Σyu ū − … = {den[i]:.3g} there{hint or '; use fewer points or a StaticBand'}")
+
+
+def _check_isolated(ctx: StaticContext, theta: np.ndarray, pts: StaticPoints, what: str, hint: str) -> None:
+    """Refuse an estimate of a structure with y powers above 1 whose static equation holds at a point with a vanishing
+    derivative in ȳ, D_i = 1 − ∂(q_iᵀRθ)/∂ȳ (the rational structures' denominator): there ȳ_i is no isolated
+    equilibrium, and at D ≡ 0 (Σy = 1, every other cluster 0: y(k) = y(k−1)) every level is one."""
+    one, dR = _denominator_rows(ctx.cluster_map, pts.ubar, pts.ybar)
+    sig = ctx.cluster_map.R @ np.asarray(theta, float)
+    den = one - dR @ np.asarray(theta, float)
+    size = 1.0 + np.abs(static_rows(ctx.cluster_map, pts.ubar, pts.ybar, wrt="y") * sig[None, :]).sum(axis=1)
+    bad = denominator_vanishes(den, size)
+    if bad.any():
+        ub = np.asarray(pts.ubar, float)
+        raise ValueError(
+            f"{what}: the estimated model's static equation holds at ū = {ub[bad].tolist()} with a vanishing "
+            "derivative in ȳ (1 − ∂(Σ_c Σ_c ȳ^p ū^m)/∂ȳ = 0), so the point is no isolated equilibrium (at Σy = 1 with "
+            f"every other cluster 0 every level is one){hint or '; move the point or constrain the y clusters'}")
 
 
 #: Largest miss of a point by a :class:`PassesThrough` model's static function, relative to the points' spread.
