@@ -151,3 +151,22 @@ def test_cls_through_fewer_points_than_clusters_of_a_non_rational_structure_make
     a, b, c, d = model.theta  # ȳ = a ȳ + b ȳ² + c ū + d at each point, with ∂/∂ȳ of the rest away from 1
     np.testing.assert_allclose(a * pts.ybar + b * pts.ybar**2 + c * ub + d, pts.ybar, rtol=1e-9)
     assert np.all(np.abs(1 - a - 2 * b * pts.ybar) > 1e-3)
+
+
+# -- reference="els" with a DaskRecord: said of the reference ------------------------------------------------
+@pytest.mark.parametrize("call", [
+    lambda dr, curve: gb.cls(_S, dr, curve, reference="els"),
+    lambda dr, curve: gb.pe_thetas(_S, dr, _points(), lambdas=[0.5], constraints=gb.CurveEquality(curve),
+                                   reference="els"),
+], ids=["cls", "pe_thetas"])
+def test_reference_els_with_a_dask_record_names_the_reference_and_what_to_give(call):
+    # was: els's TypeError "data must be a Record, a sequence of Records or a Dataset; got a sequence holding a
+    # DaskRecord", for data cls and pe_thetas take, naming neither the reference nor what would do
+    da = pytest.importorskip("dask.array")
+    rec = _record(n=1000)
+    dr = gb.DaskRecord(da.from_array(rec.u, chunks=300), da.from_array(rec.y, chunks=300), Ts=rec.Ts, name="dask")
+    curve = gb.StaticCurve.fit(_points(), degree=2)
+    with pytest.raises(ValueError, match="reference='els'.*in memory"):
+        call(dr, curve)
+    free = gb.cls(_S, dr, curve).model.theta  # the default reference takes a DaskRecord
+    np.testing.assert_allclose(free, gb.cls(_S, rec, curve).model.theta, rtol=1e-9, atol=1e-12)

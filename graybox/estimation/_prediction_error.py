@@ -369,6 +369,10 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
     if reference is None or (isinstance(reference, str) and reference == "ls"):
         th = _ls_theta(d, "the least-squares reference for Σ*_y (reference='ls'; or give it as a number or a Model)")
     elif isinstance(reference, str) and reference == "els":
+        if is_dask_data(records):  # said of the reference, not as els's refusal of "data" the caller gave rightly
+            raise ValueError("reference='els' fits extended least squares on the records, which needs them in memory; "
+                             "for a DaskRecord give reference='free' (the default), 'ls', a Model (e.g. an ELS fit on "
+                             "a record that fits) or the value of Σ*_y")
         return float(els(d.structure, records).model.clusters().get("Σy", 0.0))
     elif isinstance(reference, str):
         raise ValueError(f"reference must be 'free', 'ls', 'els', a Model, a θ or a number, got {reference!r}")
