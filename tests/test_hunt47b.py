@@ -170,3 +170,24 @@ def test_reference_els_with_a_dask_record_names_the_reference_and_what_to_give(c
         call(dr, curve)
     free = gb.cls(_S, dr, curve).model.theta  # the default reference takes a DaskRecord
     np.testing.assert_allclose(free, gb.cls(_S, rec, curve).model.theta, rtol=1e-9, atol=1e-12)
+
+
+# -- se_dsf: a run inside the band but at its aim does not stop short of the band's edge ---------------------
+_S4 = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+# where a run from the coarse sweep's λ1 = 0.3728 member landed (J_S 1.4129e-3, J_SF 1.899e-4 for a band of 2e-4):
+# stationary for the aim a 5 % margin inside the band, not for the band
+_STUCK = np.array([0.7017069337121737, 0.20147956730461658, 0.00900881859673418, 0.10919957774053114])
+
+
+@pytest.mark.parametrize("a, c", [(1.0, 1.0), (1.0, 10.0), (1000.0, 100.0)])
+def test_se_dsf_from_a_start_just_inside_its_aim_reaches_the_band_s_edge_in_any_units(a, c):
+    # was: every step refused, the run stopped with "no step along which the model improves" at J_S 1.4129e-3 in
+    # rpm and mlc, or in u × 10, but went on to 1.3868e-3 in u × 100 and y × 1000, where a 1-ulp gain was accepted
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.0, 3.0, 21), 20)[:400]
+    y = _PLANT.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(400)
+    rec = gb.Record(u * c, y * a, name="ident")
+    ub = np.linspace(0.2, 2.8, 6)
+    pts = gb.StaticPoints(ub * c, (_PLANT.static_curve(ub) + 0.05) * a)
+    res = gb.se_dsf(_S4, rec, pts, band=2e-4 * a**2, theta0=_STUCK * np.array([1.0, a / c, a / c**2, a]), margin=None)
+    assert res.in_band and res.JS / a**2 < 1.3870e-3 and res.JSF / a**2 > 1.999e-4

@@ -376,7 +376,13 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                 margin = min(2.0 * margin, _MARGIN_CAP)  # the model was right about J_S: only the band was missed
             else:
                 nu *= 4.0
-                if nu > 1e12:
+                if nu > 1e12 and feasible and margin > _MARGIN_FLOOR:
+                    # no step improves while the aim is still a margin inside the band: the point is stationary for
+                    # that aim (J_SF just under it, the linearised constraint leaves no room), not for the band. Aim
+                    # at the band's edge before stopping (a run stopped here 2 % above the band's best J_S, or went on
+                    # when a 1-ulp gain happened to be accepted: the result depended on the output's units)
+                    margin, nu = _MARGIN_FLOOR, 1e-3
+                elif nu > 1e12:
                     message = "converged: no step along which the model improves (step size vanished)"
                     break
     return problem.from_z(z), f, g, f0, g0, it, message
