@@ -191,3 +191,13 @@ def test_se_dsf_from_a_start_just_inside_its_aim_reaches_the_band_s_edge_in_any_
     pts = gb.StaticPoints(ub * c, (_PLANT.static_curve(ub) + 0.05) * a)
     res = gb.se_dsf(_S4, rec, pts, band=2e-4 * a**2, theta0=_STUCK * np.array([1.0, a / c, a / c**2, a]), margin=None)
     assert res.in_band and res.JS / a**2 < 1.3870e-3 and res.JSF / a**2 > 1.999e-4
+
+
+# -- cls(how="points" | "curve") with nothing to impose ------------------------------------------------------
+@pytest.mark.parametrize("how", ["points", "curve"])
+def test_cls_asked_to_impose_static_information_it_does_not_have_says_so(how):
+    # was: the unconstrained least-squares model, returned as the CLS estimate with constraints () and no word
+    with pytest.raises(ValueError, match=f"how='{how}'.*no static information"):
+        gb.cls(_S, _record(), None, how=how)
+    assert gb.cls(_S, _record(), None).constraints == ()  # how="auto" without static information: least squares
+    assert gb.cls(_S, gb.Dataset(_record(), _record(seed=1), _points()), how=how).constraints  # a Dataset's points

@@ -892,6 +892,10 @@ def _cls_setup(st: Structure, recs: list[Record], d: _Data, data, static, how: s
     curve: StaticCurve | StaticSurface | None = None
     check_choice(how, "how", HOW)
     static = static_info(static, data, curves=True)  # the Dataset's points unless static is given, as PE and SE
+    if static is None and how in ("points", "curve"):  # was: the plain least-squares model, nothing imposed, unsaid
+        what = "the static points" if how == "points" else "the static curve eq. (22) matches (or points to fit it to)"
+        raise ValueError(f"how={how!r} imposes {what}, but there is no static information: pass static= "
+                         "(StaticPoints, a StaticCurve or a StaticSurface) or a Dataset with static points")
     _check_point_inputs(recs, static if isinstance(static, StaticPoints) else None)
     if how == "context":
         if isinstance(static, (StaticCurve, StaticSurface)):
