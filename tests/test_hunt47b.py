@@ -201,3 +201,15 @@ def test_cls_asked_to_impose_static_information_it_does_not_have_says_so(how):
         gb.cls(_S, _record(), None, how=how)
     assert gb.cls(_S, _record(), None).constraints == ()  # how="auto" without static information: least squares
     assert gb.cls(_S, gb.Dataset(_record(), _record(seed=1), _points()), how=how).constraints  # a Dataset's points
+
+
+# -- a solver option value the solver refuses is said of the options -----------------------------------------
+@pytest.mark.parametrize("options", [{"eps_abs": -1.0}, {"eps_rel": -1.0}, {"max_iter": 0}])
+def test_an_osqp_option_value_it_refuses_is_not_reported_as_infeasible_constraints(options, capfd):
+    # was: InfeasibleError "solver osqp failed (2) with constraints [...]": a bad tolerance read as constraints
+    # that admit no θ
+    with pytest.raises(ValueError, match="solver_options") as info:
+        gb.cls(_S, _record(), _points(), how="context", constraints=gb.StaticBand(b=0.02), solver="osqp",
+               solver_options=options)
+    assert not isinstance(info.value, gb.InfeasibleError)
+    capfd.readouterr()  # OSQP's own lines on the console

@@ -691,6 +691,12 @@ class _QP:
         try:
             self.problem.solve(solver=self.solver.upper(), warm_start=warm, **self.options)
         except cp.error.SolverError as exc:
+            if self.user_options:
+                # a value the solver refuses at its setup (OSQP's eps_abs = -1: "failed (2)"), said of the options, not
+                # as constraints that admit no θ
+                raise ValueError(f"solver {self.solver} failed ({exc}) with solver_options {self.user_options!r}: check "
+                                 "their values (tolerances > 0, iteration limits >= 1; the solver may have printed "
+                                 "which it refuses), or leave them out for graybox's defaults") from exc
             raise InfeasibleError(f"solver {self.solver} failed ({exc}) with constraints {list(self.names)}") from exc
         except (TypeError, ValueError, OverflowError) as exc:
             if not self.user_options:
