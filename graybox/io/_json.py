@@ -289,7 +289,7 @@ def _dec(kind: str, v: Any, where: str, rd: _Reader) -> Any:
     if kind == "failures":
         out = {}
         for k, r in rd.dict(v, where).items():
-            if not k.lstrip("-").isdigit():
+            if not re.fullmatch(r"-?[0-9]+", k):  # str.isdigit takes '²', and lstrip('-') '--1': int() refuses both
                 raise rd.fail(f"{where}.{k}", "a member index must be an integer")
             out[int(k)] = rd.str(r, f"{where}.{k}")
         return out
