@@ -22,3 +22,31 @@ def test_failure_index_not_an_integer_is_a_file_error(key):
     # int()'s bare "invalid literal for int()", naming neither the file nor the field
     with pytest.raises(gb.GrayboxFileError, match=r"<json>: object\.failures\..*integer"):
         gb.from_json(_pareto_json({key: "x"}))
+
+
+def _masked() -> np.ma.MaskedArray:
+    # what netCDF4 hands back for a variable with fill values, and np.genfromtxt(usemask=True) for empty cells:
+    # the masked entries' data are the fill value (9.97e36) or anything else, never a sample
+    return np.ma.masked_array([1.0, 2.0, 9.969209968386869e36, 4.0, 5.0], mask=[0, 0, 1, 0, 0])
+
+
+@pytest.mark.parametrize("where", ["u", "y"])
+def test_record_refuses_masked_samples(where):
+    good = np.arange(5.0)
+    kw = {"u": good, "y": good} | {where: _masked()}
+    with pytest.raises(ValueError, match=rf"record: {where} .*masked.*index 2"):
+        gb.Record(kw["u"], kw["y"])
+
+
+def test_static_points_refuse_masked_levels_and_a_mask_of_nothing_is_the_data():
+    with pytest.raises(ValueError, match=r"ybar .*masked.*index 2"):
+        gb.StaticPoints([1.0, 2.0, 3.0, 4.0, 5.0], _masked())
+    unmasked = np.ma.masked_array([1.0, 2.0, 3.0], mask=False)
+    rec = gb.Record(unmasked, unmasked)
+    assert np.array_equal(rec.u, [1.0, 2.0, 3.0]) and np.array_equal(rec.y, [1.0, 2.0, 3.0])
+
+
+def test_static_curve_levels_masked_are_a_value_error():
+    model = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    with pytest.raises(ValueError, match=r"ubar .*masked"):
+        model.static_curve(_masked())

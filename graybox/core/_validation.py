@@ -258,7 +258,7 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
     refuse_flags(x, name, what)
     try:
         return float_array(x, name, what)
-    except _BeyondFloats:  # a value, not a type
+    except (_BeyondFloats, _Masked):  # a value, not a type
         raise
     except ValueError as exc:  # ragged: the paths that read levels and points have always called it a type
         raise TypeError(str(exc)) from None
@@ -285,9 +285,14 @@ class _BeyondFloats(ValueError):
     """A number beyond the float range (a value error, which :func:`real_array` does not take for a ragged shape)."""
 
 
+class _Masked(ValueError):
+    """Masked (missing) entries of a NumPy masked array (a value error, as :class:`_BeyondFloats`)."""
+
+
 def float_array(x: object, name: str, what: str = "an array of numbers") -> np.ndarray:
     """``x`` as a new float64 array: ``TypeError`` naming ``name`` for None or an object that is no array of
-    numbers (a dict, a record of another kind), ``ValueError`` for a ragged nesting of numbers.
+    numbers (a dict, a record of another kind), ``ValueError`` for a ragged nesting of numbers or a masked array
+    with masked (missing) entries.
 
     numpy reads None as a NaN scalar and raises its own ``TypeError`` for other objects; the shared
     conversions of records, θ and inputs all go through here so that a wrong type is one error everywhere.
@@ -295,6 +300,13 @@ def float_array(x: object, name: str, what: str = "an array of numbers") -> np.n
     """
     if x is None:
         raise TypeError(f"{name} must be {what}, got None")
+    if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():
+        # numpy's conversion keeps a masked entry's data (netCDF4's fill value 9.97e36, genfromtxt's stand-in for
+        # an empty cell) and drops the mask that says it is missing
+        bad = np.argwhere(np.ma.getmaskarray(x))
+        at = int(bad[0][0]) if x.ndim == 1 else tuple(int(i) for i in bad[0])
+        raise _Masked(f"{name} has {len(bad)} masked (missing) value(s), first at index {at}: a masked entry is "
+                         "no sample; cut the data where they are, or fill them first (x.filled(value))")
     if type(x).__module__.startswith("pandas") and hasattr(x, "to_numpy"):
         # pandas' nullable columns (Int64, Float64) hold pd.NA, which numpy cannot make a float: read as NaN,
         # that the finite checks name it (a Series did, a DataFrame of them was "no array of numbers")
