@@ -50,3 +50,18 @@ def test_static_curve_levels_masked_are_a_value_error():
     model = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
     with pytest.raises(ValueError, match=r"ubar .*masked"):
         model.static_curve(_masked())
+
+
+@pytest.mark.parametrize("description", [None, 3, b"bytes"])
+def test_dataset_description_must_be_text(description):
+    # accepted as it was, it made a Dataset whose file save wrote (null, 3) and load then refused
+    # ("object.description: expected a string"), or that to_json could not write at all (bytes)
+    rec = gb.Record(np.arange(10.0), np.arange(10.0), Ts=0.1)
+    with pytest.raises(TypeError, match="Dataset: description must be a str"):
+        gb.Dataset(rec, rec, description=description)
+
+
+def test_a_saved_dataset_loads():
+    rec = gb.Record(np.arange(10.0), np.arange(10.0), Ts=0.1)
+    data = gb.Dataset(rec, rec, description="bench run 3")
+    assert gb.from_json(gb.to_json(data)).description == "bench run 3"

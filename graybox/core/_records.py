@@ -587,6 +587,7 @@ class Dataset:
         if self.static is not None and not isinstance(self.static, StaticPoints):
             raise TypeError(f"Dataset: static must be StaticPoints or None, got {type(self.static).__name__}"
                             f"{static_hint(self.static)}")
+        check_str(self.description, "Dataset: description")  # text a file carries: None or 3 saved, then refused
         if not isinstance(self.extra, Mapping):
             raise TypeError(f"Dataset: extra must be a mapping (e.g. a dict), got {type(self.extra).__name__}")
         # not the caller's dict, nor its nested lists, dicts and arrays, and not changeable
