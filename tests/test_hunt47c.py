@@ -65,3 +65,15 @@ def test_a_saved_dataset_loads():
     rec = gb.Record(np.arange(10.0), np.arange(10.0), Ts=0.1)
     data = gb.Dataset(rec, rec, description="bench run 3")
     assert gb.from_json(gb.to_json(data)).description == "bench run 3"
+
+
+@pytest.mark.parametrize("loader", ["load_record_csv", "load_static_csv"])
+@pytest.mark.parametrize("columns", [{"a", "b"}, frozenset({"a", "b"})])
+def test_csv_loaders_refuse_a_set_of_input_columns(tmp_path, loader, columns):
+    # a set's order changes with PYTHONHASHSEED: the same call read the inputs as (a, b) in one process and
+    # (b, a) in the next, so that a model identified in one ran on swapped inputs in the other
+    path = tmp_path / "miso.csv"
+    path.write_text("t,a,b,y\n0,1,2,3\n1,2,3,4\n", encoding="utf-8")
+    kw = {"time": "t"} if loader == "load_record_csv" else {}
+    with pytest.raises(TypeError, match=r"u: an ordered sequence of .*got a (frozen)?set.*pass a list"):
+        getattr(gb, loader)(path, u=columns, y="y", **kw)

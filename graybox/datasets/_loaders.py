@@ -38,7 +38,7 @@ from ..static._curves import StaticCurve
 from ..core._files import bom_encoding
 from ..core._records import Dataset, Record, StaticPoints, check_same_period, check_units
 from ..core._terms import check_input_names
-from ..core._validation import check_bool, check_choice, check_int, check_path, check_real
+from ..core._validation import check_bool, check_choice, check_int, check_ordered, check_path, check_real
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -763,6 +763,7 @@ def _input_columns(p: Path, u: object, y: object, input_names: object) -> tuple[
     """The input column names and the input names of a loader's ``u`` argument (its ``y`` checked too)."""
     if not isinstance(y, str):
         raise TypeError(f"{p}: y must name the output column (a str), got {y!r}")
+    check_ordered(u, f"{p}: u", "input column names (the inputs' order)")  # a set's changes from run to run
     if isinstance(u, str):
         ucols = [u]
     elif hasattr(u, "__iter__") and hasattr(u, "__len__") and all(isinstance(c, str) for c in u):  # type: ignore[attr-defined]
