@@ -137,8 +137,29 @@ loses little; the run says which checkpoints it resumes. Quick and full runs kee
 start over, pass --fresh (or delete those .npz files, or choose another --out)."""
 
 
+def _escape_what_streams_cannot_encode() -> None:
+    """Let stdout and stderr write a character their encoding lacks as its escape (``\\u0233``), not raise.
+
+    The command prints ȳ, ū, ρ, λ1, ×: a stream in a narrow code page (Windows gives a redirected command its
+    locale's, cp1252: ``graybox reproduce --quick > table.txt``) raised UnicodeEncodeError at the first of them,
+    a traceback after the first section's work. UTF streams (any terminal today, a notebook) are left as they are.
+    """
+    import codecs
+    import contextlib
+
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            utf = codecs.lookup(getattr(stream, "encoding", None) or "utf-8").name.startswith("utf")
+        except LookupError:
+            utf = False
+        if not utf and callable(getattr(stream, "reconfigure", None)):
+            with contextlib.suppress(Exception):  # a stream that takes no errors= is left as it is
+                stream.reconfigure(errors="backslashreplace")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``graybox`` command; returns the exit status."""
+    _escape_what_streams_cannot_encode()
     try:
         return _main(argv)
     except BrokenPipeError:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import io
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -77,3 +79,35 @@ def test_csv_loaders_refuse_a_set_of_input_columns(tmp_path, loader, columns):
     kw = {"time": "t"} if loader == "load_record_csv" else {}
     with pytest.raises(TypeError, match=r"u: an ordered sequence of .*got a (frozen)?set.*pass a list"):
         getattr(gb, loader)(path, u=columns, y="y", **kw)
+
+
+def _narrow_stdout(monkeypatch, encoding: str) -> io.TextIOWrapper:
+    # what Windows gives a redirected command (graybox reproduce --quick > table.txt): the locale's code page
+    stream = io.TextIOWrapper(io.BytesIO(), encoding=encoding, newline="")
+    monkeypatch.setattr(sys, "stdout", stream)
+    return stream
+
+
+def test_reproduce_to_a_narrow_code_page_does_not_crash(monkeypatch, tmp_path):
+    # the first section prints ȳ, ρ, ū and λ1, which cp1252 lacks: the command died with a UnicodeEncodeError
+    # traceback on its first section (the README's first command, its output redirected on Windows)
+    import graybox.reproduce as rp
+    from graybox._cli import main
+
+    monkeypatch.setattr(rp, "run", lambda **kw: print("ȳ = 51.2 (stable, ρ = 0.62) at ū = 1000, λ1 = 0.1"))
+    stream = _narrow_stdout(monkeypatch, "cp1252")
+    assert main(["reproduce", "--quick", "--out", str(tmp_path)]) == 0
+    stream.flush()
+    text = stream.buffer.getvalue().decode("cp1252")
+    assert "51.2" in text and "\\u0233" in text and "\\u03c1" in text
+
+
+def test_help_to_an_ascii_stream_does_not_crash(monkeypatch):
+    from graybox._cli import main
+
+    stream = _narrow_stdout(monkeypatch, "ascii")
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    stream.flush()
+    assert "usage: graybox" in stream.buffer.getvalue().decode("ascii")
