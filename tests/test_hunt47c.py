@@ -111,3 +111,11 @@ def test_help_to_an_ascii_stream_does_not_crash(monkeypatch):
     assert exc.value.code == 0
     stream.flush()
     assert "usage: graybox" in stream.buffer.getvalue().decode("ascii")
+
+
+def test_closed_loop_without_a_seed_names_closed_loop():
+    # the message said "simulate: pass seed ...", a method the caller had not called
+    from graybox.datasets import PumpingPlant
+
+    with pytest.raises(ValueError, match=r"^closed_loop: pass seed"):
+        PumpingPlant().closed_loop(lambda k, y: 1000.0, 10, u0=1000.0)

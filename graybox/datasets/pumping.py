@@ -495,8 +495,9 @@ class PumpingPlant:
             raise ValueError(f"{what} must stay within {lo:g}–{hi:g} rpm (the calibrated range); "
                              f"sample {bad[0]} is {u[bad[0]]:g} rpm")
 
-    def _disturbances(self, N: int, rng, *, noise: bool, process_noise: bool):
-        """The noise sequences and disturbance constants of a run of N samples (one- and two-speed rigs).
+    def _disturbances(self, N: int, rng, *, noise: bool, process_noise: bool, who: str = "simulate"):
+        """The noise sequences and disturbance constants of a run of N samples (one- and two-speed rigs; ``who``:
+        the method run, which a message names).
 
         Returns ``eps_w, eps_s, eps_a`` (unit normals for the process noise, surge and air),
         ``v`` (the transmitter noise, mlc) and ``(phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain)``.
@@ -506,7 +507,7 @@ class PumpingPlant:
         slow = self.surge_intensity > 0 or self.air_loss_per_rpm > 0
         need_rng = (noise and self.noise_std > 0) or (process_noise and (self.process_noise_std > 0 or slow))
         if need_rng and rng is None:
-            raise ValueError("simulate: pass seed (an int or a numpy Generator) or switch the noise off; "
+            raise ValueError(f"{who}: pass seed (an int or a numpy Generator) or switch the noise off; "
                              "the plant never draws unseeded noise")
         gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
         # Draw all four noise sequences up front, always in this order, so a seed fixes the run
@@ -634,7 +635,7 @@ class PumpingPlant:
             raise TypeError(f"controller must be callable as controller(k, y) -> u, got {type(controller).__name__}")
         prev = self._one_speed(u0, "u0")
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
-            N, seed, noise=noise, process_noise=process_noise)
+            N, seed, noise=noise, process_noise=process_noise, who="closed_loop")
         nc, n, q = self.steady_state(prev) if x0 is None else (float(x) for x in x0)
         if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
             raise ValueError(f"x0 must be finite with a flow >= 0 L/s, got {x0!r}")
