@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 import sys
 
 import numpy as np
@@ -119,3 +120,21 @@ def test_closed_loop_without_a_seed_names_closed_loop():
 
     with pytest.raises(ValueError, match=r"^closed_loop: pass seed"):
         PumpingPlant().closed_loop(lambda k, y: 1000.0, 10, u0=1000.0)
+
+
+@pytest.mark.parametrize("page", ["docs/guide/control.md", "README.md"])
+def test_documented_closed_loop_call_names_what_it_needs(page):
+    # the guide's closed_loop(controller, n_samples) failed as written: u0 is required, and a seed with the noise on
+    import inspect
+    from pathlib import Path
+
+    from graybox.datasets import PumpingPlant
+
+    text = (Path(__file__).resolve().parent.parent / page).read_text(encoding="utf-8")
+    calls = re.findall(r"closed_loop\(([^)`]*)\)", text)
+    assert calls
+    required = [n for n, p in inspect.signature(PumpingPlant.closed_loop).parameters.items()
+                if p.kind is p.KEYWORD_ONLY and p.default is p.empty]
+    for args in calls:
+        for name in [*required, "seed"]:
+            assert f"{name}=" in args, (page, args, name)
