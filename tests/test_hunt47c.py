@@ -138,3 +138,21 @@ def test_documented_closed_loop_call_names_what_it_needs(page):
     for args in calls:
         for name in [*required, "seed"]:
             assert f"{name}=" in args, (page, args, name)
+
+
+def _nested_datasets(depth: int) -> str:
+    rec = json.dumps(json.loads(gb.to_json(gb.Record(np.arange(5.0), np.arange(5.0), Ts=0.1)))["object"])
+    head = f'"ident": {rec}, "valid": {rec}, "static": null, "description": ""'
+    extra = '{"k": 1}'
+    for _ in range(depth):  # written as text: json.dumps itself recurses
+        extra = f'{{"k": {{"type": {{"type": "Dataset", "object": {{{head}, "extra": {extra}}}}}}}}}'
+    return f'{{"format": "graybox", "format_version": 1, "type": "Dataset", "object": {{{head}, "extra": {extra}}}}}'
+
+
+
+def test_a_file_nesting_datasets_deeply_is_a_file_error():
+    # a Dataset's extra holding a Dataset holding ... (crafted or corrupt): each saved type began the nesting count
+    # anew, so that a file json.loads read ended in a bare RecursionError instead of the loader's GrayboxFileError
+    assert gb.from_json(_nested_datasets(5)).extra["k"].extra["k"].description == ""
+    with pytest.raises(gb.GrayboxFileError, match="nested|recursion"):
+        gb.from_json(_nested_datasets(220))  # within what json.loads reads

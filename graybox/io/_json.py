@@ -992,6 +992,9 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
         raise GrayboxFileError(f"{source}: no \"object\" in the document")
     try:
         obj = _decode_fields(head["type"], doc["object"], "object", _Reader(source))
+    except RecursionError:  # saved values inside plain values inside saved values …: each type counts its own nesting
+        raise GrayboxFileError(f"{source}: object: values nested too deeply (a Dataset's extra or a bootstrap's options "
+                               "holding saved values that hold more, beyond what Python's recursion reads)") from None
     except GrayboxFileError as exc:
         said = _newer(head["graybox_version"])  # a field added since
         if said:
