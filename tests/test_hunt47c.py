@@ -156,3 +156,9 @@ def test_a_file_nesting_datasets_deeply_is_a_file_error():
     assert gb.from_json(_nested_datasets(5)).extra["k"].extra["k"].description == ""
     with pytest.raises(gb.GrayboxFileError, match="nested|recursion"):
         gb.from_json(_nested_datasets(220))  # within what json.loads reads
+
+
+def test_masked_uncertainty_is_a_value_error_naming_the_mask():
+    # said "uncertainty must be a number or an array of numbers, got MaskedArray", a TypeError, for numbers
+    with pytest.raises(ValueError, match=r"uncertainty has 1 masked .*index 1"):
+        gb.StaticPoints([1.0, 2.0, 3.0], [1.0, 2.0, 3.0], uncertainty=np.ma.masked_array([0.1, 0.2, 0.3], [0, 1, 0]))

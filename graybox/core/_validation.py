@@ -258,7 +258,7 @@ def real_array(x: object, name: str, what: str = "numbers") -> np.ndarray:
     refuse_flags(x, name, what)
     try:
         return float_array(x, name, what)
-    except (_BeyondFloats, _Masked):  # a value, not a type
+    except _BadValue:  # a value, not a type
         raise
     except ValueError as exc:  # ragged: the paths that read levels and points have always called it a type
         raise TypeError(str(exc)) from None
@@ -281,12 +281,17 @@ def refuse_flags(x: object, name: str, what: str = "numbers") -> None:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}")
 
 
-class _BeyondFloats(ValueError):
-    """A number beyond the float range (a value error, which :func:`real_array` does not take for a ragged shape)."""
+class _BadValue(ValueError):
+    """A value refused by :func:`float_array` as such, which :func:`real_array` and :func:`check_per_point` do not
+    take for a ragged shape (a type error there)."""
 
 
-class _Masked(ValueError):
-    """Masked (missing) entries of a NumPy masked array (a value error, as :class:`_BeyondFloats`)."""
+class _BeyondFloats(_BadValue):
+    """A number beyond the float range."""
+
+
+class _Masked(_BadValue):
+    """Masked (missing) entries of a NumPy masked array."""
 
 
 def float_array(x: object, name: str, what: str = "an array of numbers") -> np.ndarray:
@@ -376,7 +381,7 @@ def check_per_point(value: object, n: int, name: str) -> np.ndarray:
     refuse_non_real(value, name)
     try:
         a = float_array(value, name, "a number or an array of numbers")
-    except _BeyondFloats:  # a value, said naming it
+    except _BadValue:  # a value, said naming it
         raise
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be a number or an array of numbers, got {type(value).__name__}") from None
