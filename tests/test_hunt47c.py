@@ -162,3 +162,19 @@ def test_masked_uncertainty_is_a_value_error_naming_the_mask():
     # said "uncertainty must be a number or an array of numbers, got MaskedArray", a TypeError, for numbers
     with pytest.raises(ValueError, match=r"uncertainty has 1 masked .*index 1"):
         gb.StaticPoints([1.0, 2.0, 3.0], [1.0, 2.0, 3.0], uncertainty=np.ma.masked_array([0.1, 0.2, 0.3], [0, 1, 0]))
+
+
+@pytest.mark.parametrize("where", [gb.Record, gb.StaticPoints, gb.load_record_csv, gb.load_static_csv])
+def test_units_are_not_documented_as_display_only(where):
+    # "Units of (u, y), for display only", while a model refuses a record in other units and a Dataset data that
+    # mix them: a newcomer labelling rad/s data "rpm" to match a plot was told the label changed nothing
+    section = re.search(r"\n    units : [^\n]*\n((?:        [^\n]*\n)+)", where.__doc__).group(1)
+    assert "display only" not in section and "for display" not in section and "checked" in section, section
+
+
+def test_units_are_checked_as_documented():
+    data = gb.load_pumping()
+    model = gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), data).model
+    other = gb.Record(data.valid.u * 2 * np.pi / 60, data.valid.y, Ts=data.valid.Ts, units=("rad/s", "mlc"))
+    with pytest.raises(ValueError, match="input unit 'rpm' but 'record' has 'rad/s'"):
+        gb.js(model, other)

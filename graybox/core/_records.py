@@ -172,7 +172,9 @@ class Record:
     name : str, optional
         A label used in messages and tables.
     units : tuple of str, optional
-        Units of ``(u, y)``, for display only.
+        Units of ``(u, y)``, e.g. ``("rpm", "mlc")``: shown in reprs and on plots, and checked: the data of one
+        identification must name the same ones, and a model fitted on them refuses a record or static points
+        that name others (``""``, the default, names none and is never refused).
     input_names : sequence of str, optional
         The inputs' names as terms use them (default ``("u",)`` for one input, ``u1 … um``
         for several); identifiers other than y, e, k, none given twice.
@@ -271,8 +273,8 @@ class StaticPoints:
         given, it supplies the bands that otherwise must be passed: D_SF's B (:attr:`band`) and
         :class:`~graybox.StaticBand`'s half-widths. None (default): every band must be given.
     units : tuple of str, optional
-        Units of ``(ubar, ybar)``, for display only (as :class:`Record`'s ``units``: plots label
-        their axes with them); default ``("", "")``, no unit said.
+        Units of ``(ubar, ybar)``, as :class:`Record`'s ``units``: shown (plots label their axes with
+        them) and checked against the records' and a model's; default ``("", "")``, no unit said.
     """
 
     ubar: np.ndarray

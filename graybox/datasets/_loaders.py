@@ -667,7 +667,8 @@ def load_record_csv(
     name : str, optional
         Record name (default: the file name without extension).
     units : (str, str)
-        Units of (u, y), for display.
+        Units of (u, y), as a :class:`~graybox.Record`'s: shown, and checked against the other data's
+        and a model's (default none said).
     time_rtol : float
         Relative tolerance on the time steps (default 1e-3: stamps printed with few digits pass,
         a logger's jitter or a missing sample does not).
@@ -890,8 +891,8 @@ def load_static_csv(
     skiprows : int
         Lines before the column names that are not read (as in :func:`load_record_csv`; default 0).
     units : (str, str)
-        Units of (ū, ȳ), for display (as a :class:`~graybox.Record`'s: plots label their axes with
-        them); default none said.
+        Units of (ū, ȳ), as a :class:`~graybox.Record`'s: shown (plots label their axes with them) and
+        checked against the records' and a model's; default none said.
     units_row : bool
         The line after the column names gives each column's unit (as in :func:`load_record_csv`).
 
