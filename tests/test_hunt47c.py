@@ -178,3 +178,30 @@ def test_units_are_checked_as_documented():
     other = gb.Record(data.valid.u * 2 * np.pi / 60, data.valid.y, Ts=data.valid.Ts, units=("rad/s", "mlc"))
     with pytest.raises(ValueError, match="input unit 'rpm' but 'record' has 'rad/s'"):
         gb.js(model, other)
+
+
+_LOGGED = "t,u,y\n" + "".join(f"{k * 0.5:.1f},{k % 7},{k % 5}\n" for k in range(40))
+
+
+@pytest.mark.parametrize("data, line", [
+    (_LOGGED.encode() + bytes(512), 42),  # a logger's preallocated file, or one cut off as it was written
+    (_LOGGED.encode().replace(b"\n3.0,6,1\n", b"\n3.0,\x006,1\n"), 8),  # a stray NUL in a cell
+    ((_LOGGED * 3).encode() + bytes(5000), 124),  # past the first 4096 bytes
+])
+def test_stray_nul_bytes_are_named_by_line_not_taken_for_utf16(tmp_path, data, line):
+    # was "the file holds NUL bytes, so it is not UTF-8 text: UTF-16 without a byte-order mark? Pass
+    # encoding='utf-16-le'", which reads this UTF-8 text as garbage, or (past 4096 bytes) "line 42 has 1 field(s)"
+    p = tmp_path / "logger.csv"
+    p.write_bytes(data)
+    with pytest.raises(ValueError, match=rf"logger.csv: line {line} holds NUL bytes") as exc:
+        gb.load_record_csv(p, u="u", y="y", time="t")
+    assert "utf-16" not in str(exc.value).lower()
+
+
+@pytest.mark.parametrize("codec", ["utf-16-le", "utf-16-be"])
+def test_utf16_without_a_mark_is_told_its_byte_order(tmp_path, codec):
+    p = tmp_path / "bomless.csv"
+    p.write_bytes(_LOGGED.encode(codec))
+    with pytest.raises(ValueError, match=rf"the file holds NUL bytes.*encoding='{codec}'"):
+        gb.load_record_csv(p, u="u", y="y", time="t")
+    assert len(gb.load_record_csv(p, u="u", y="y", time="t", encoding=codec)) == 40

@@ -364,9 +364,18 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
     else:
         enc = bom_encoding(raw) or "utf-8"
     if enc == "utf-8":
-        if encoding is None and b"\x00" in raw[:4096]:
-            raise ValueError(f"{p}: the file holds NUL bytes, so it is not UTF-8 text: UTF-16 without a byte-order "
-                             "mark? Pass encoding='utf-16-le' (or the encoding it was saved in)")
+        nul = raw.find(b"\x00")
+        if nul >= 0:
+            order = _utf16_order(raw[:4096]) if encoding is None else None
+            if order is not None:
+                raise ValueError(f"{p}: the file holds NUL bytes, so it is not UTF-8 text: UTF-16 without a byte-order "
+                                 f"mark? Pass encoding='utf-16-{order}' (or the encoding it was saved in)")
+            # no UTF-16 (a NUL between every character) but NULs in UTF-8 text, which no CSV holds: a logger's
+            # preallocated file, or one cut off as it was written, padded with zeros
+            line = raw.count(b"\n", 0, nul) + 1
+            raise ValueError(f"{p}: line {line} holds NUL bytes (0x00), which are no CSV text: a data logger's file "
+                             "padded with zeros, or one cut off as it was written? Delete them (or cut the file "
+                             f"before line {line})")
         return raw, (3 if raw.startswith(codecs.BOM_UTF8) else 0), True
     try:
         text = raw.decode(enc)
@@ -375,6 +384,19 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
         raise ValueError(f"{p}: line {line} is not {enc} text (bytes {raw[exc.start:exc.end].hex(' ')}); pass "
                          "the encoding it was saved in as encoding=") from None
     return text.removeprefix("\ufeff").encode("utf-8"), 0, False
+
+
+def _utf16_order(head: bytes) -> str | None:
+    """``"le"`` or ``"be"`` when ``head`` reads as UTF-16 text without its byte-order mark (a NUL byte beside
+    nearly every character, as CSV's ASCII letters and digits have in UTF-16), else None."""
+    even, odd = head[0::2], head[1::2]
+    if len(odd) < 2:
+        return None
+    if odd.count(0) >= 0.8 * len(odd) and even.count(0) < 0.2 * len(even):
+        return "le"
+    if even.count(0) >= 0.8 * len(even) and odd.count(0) < 0.2 * len(odd):
+        return "be"
+    return None
 
 
 #: Delimiters tried when none is given, and how many lines the detection reads.
