@@ -238,7 +238,16 @@ def _enc(kind: str, v: Any, where: str = "") -> Any:
     if kind == "correlation_tests":
         return {str(k): _encode_fields(t) for k, t in dict(v).items()}
     if kind == "plain_map":
-        return _enc_plain_map(v, where)
+        try:
+            return _enc_plain_map(v, where)
+        except ValueError as exc:
+            if where != "Dataset.extra":
+                raise
+            # a bundled set's simulator or theoretical surface: what to save instead, every entry JSON cannot carry
+            bad = tuple(k for k, x in v.items() if not isinstance(k, str) or not _plain(x, f"{where}[{k!r}]"))
+            raise ValueError(f"{exc}. The records and points save without {'it' if len(bad) == 1 else 'them'}: "
+                             f"dataclasses.replace(data, extra={{k: v for k, v in data.extra.items() if k not in "
+                             f"{bad!r}}})") from None
     if kind in _CODECS:
         return _encode_fields(v)
     raise AssertionError(kind)  # pragma: no cover - a codec table error
@@ -478,6 +487,15 @@ def _enc_plain(v: Any, where: str, depth: int = 0) -> Any:
         return {"type": {"type": _TYPES[type(v)], "object": _encode_fields(v)}}
     why = _why_not(v)
     raise ValueError(f"cannot save {where}: " + (why or f"a {type(v).__name__}, which graybox does not save"))
+
+
+def _plain(v: Any, where: str) -> bool:
+    """Whether ``v`` is a plain value :func:`_enc_plain` writes."""
+    try:
+        _enc_plain(v, where)
+        return True
+    except ValueError:
+        return False
 
 
 def _why_not(v: Any) -> str:
