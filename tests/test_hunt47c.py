@@ -219,3 +219,17 @@ def test_saving_the_bundled_dataset_says_how_to_save_it_without_its_simulator(tm
     kept = eval(fix, {"dataclasses": dataclasses, "data": data})  # the fix as the message writes it
     loaded = gb.load(gb.save(kept, tmp_path / "pumping.json"))
     assert np.array_equal(loaded.ident.y, data.ident.y) and "plant" not in loaded.extra
+
+
+@pytest.mark.parametrize("make", [
+    lambda u, y: gb.Record(u, y),
+    lambda u, y: gb.StaticPoints(u, y),
+    lambda u, y: gb.StaticPoints.from_repeats(u, y),
+])
+def test_inputs_stacked_as_rows_are_told_to_be_columns(make):
+    # np.array([u1, u2]) stacks the inputs as rows: "u and y must have the same length, got 2 and 50" named a
+    # length, not the orientation, nor the transpose that fixes it
+    u1, u2, y = np.arange(50.0), np.arange(50.0) ** 2, np.arange(50.0)
+    with pytest.raises(ValueError, match=r"shape \(2, 50\), one row per input: .*shape \(50, 2\).*\.T"):
+        make(np.array([u1, u2]), y)
+    assert make(np.array([u1, u2]).T, y).n_inputs == 2

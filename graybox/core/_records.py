@@ -150,6 +150,16 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
     return a
 
 
+def _lengths(name: str, u_name: str, y_name: str, u: np.ndarray, y: np.ndarray) -> str:
+    """The message for inputs and an output of different lengths; inputs stacked as rows (``np.array([u1, u2])``,
+    shape (m, N)) are said so, with the fix."""
+    msg = f"{name}: {u_name} and {y_name} must have the same length, got {u.shape[0]} and {y.size}"
+    if u.ndim == 2 and u.shape[1] == y.size:
+        msg += (f"; {u_name} has shape {u.shape}, one row per input: give one column per input, shape "
+                f"({y.size}, {u.shape[0]}) (its transpose {u_name}.T, or np.column_stack of the inputs)")
+    return msg
+
+
 # eq=False here and on every value holding arrays: == on arrays has no single truth value, so these
 # compare by identity and hash, as Model and the results do
 @dataclass(frozen=True, eq=False)
@@ -192,7 +202,7 @@ class Record:
         u = as_input_array(self.u, f"{self.name}: u", self.input_names, output=output_series(self.y))
         y = as_1d_finite(self.y, f"{self.name}: y")
         if u.shape[0] != y.shape[0]:
-            raise ValueError(f"{self.name}: u and y must have the same length, got {u.shape[0]} and {y.size}")
+            raise ValueError(_lengths(self.name, "u", "y", u, y))
         if y.size == 0:  # nothing downstream (nor the repr's ranges) has a meaning for an empty run
             raise ValueError(f"{self.name}: no samples")
         object.__setattr__(self, "Ts", check_real(self.Ts, f"{self.name}: Ts (seconds)", low=0, low_open=True))
@@ -290,7 +300,7 @@ class StaticPoints:
                            row="point")
         y = as_1d_finite(self.ybar, f"{self.name}: ybar")
         if u.shape[0] != y.shape[0]:
-            raise ValueError(f"{self.name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
+            raise ValueError(_lengths(self.name, "ubar", "ybar", u, y))
         if u.shape[0] == 0:
             raise ValueError(f"{self.name}: no static points")
         uniq, counts = np.unique(u, return_counts=True, axis=0)
@@ -366,7 +376,7 @@ class StaticPoints:
         u = as_input_array(ubar, f"{name}: ubar", input_names, output=output_series(ybar), row="point")
         y = as_1d_finite(ybar, f"{name}: ybar")
         if u.shape[0] != y.shape[0]:
-            raise ValueError(f"{name}: ubar and ybar must have the same length, got {u.shape[0]} and {y.size}")
+            raise ValueError(_lengths(name, "ubar", "ybar", u, y))
         if u.shape[0] == 0:
             raise ValueError(f"{name}: no static points")
         uniq, inverse = np.unique(u, return_inverse=True, axis=0)
