@@ -233,3 +233,18 @@ def test_inputs_stacked_as_rows_are_told_to_be_columns(make):
     with pytest.raises(ValueError, match=r"shape \(2, 50\), one row per input: .*shape \(50, 2\).*\.T"):
         make(np.array([u1, u2]), y)
     assert make(np.array([u1, u2]).T, y).n_inputs == 2
+
+
+@pytest.mark.parametrize("text, said", [
+    ("t,u,y\n0,1,2\n1,2,3\n", r"not a graybox file: no JSON text \(it starts 't,u,y.*load_record_csv"),
+    ("", "the file is empty"),
+    ("  \n", "the file is empty"),
+    ('{"format": "graybox",, }', r"corrupt file \(Expecting property name"),
+])
+def test_load_of_what_is_no_json_says_what_it_is(tmp_path, text, said):
+    # gb.load("run1.csv") (load reads "my data", a newcomer guesses) and an empty file were both a "corrupt file
+    # (Expecting value at line 1, column 1)": a CSV is no corrupt JSON, and the reader it needs went unnamed
+    p = tmp_path / "run1.csv"
+    p.write_text(text, encoding="utf-8")
+    with pytest.raises(gb.GrayboxFileError, match=said):
+        gb.load(p)

@@ -949,6 +949,13 @@ def _parse(text: str, source: str) -> tuple[dict, Any]:
     except _Twice as exc:
         raise rd.fail("JSON", str(exc)) from None
     except json.JSONDecodeError as exc:
+        body = text.lstrip()
+        if not body:
+            raise rd.fail("JSON", "the file is empty (graybox.load reads the JSON files graybox.save writes)") from None
+        if exc.pos == len(text) - len(body):  # no JSON at all: a CSV of samples, a notebook's text … given to load
+            raise rd.fail("JSON", f"not a graybox file: no JSON text (it starts {body[:30]!r}); graybox.load reads the "
+                          "JSON files graybox.save writes; a CSV file of samples is read by graybox.load_record_csv "
+                          "or graybox.load_static_csv") from None
         raise rd.fail("JSON", f"corrupt file ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
     except (ValueError, RecursionError) as exc:  # e.g. an integer of more digits than Python converts
         raise rd.fail("JSON", f"corrupt file ({exc})") from None
