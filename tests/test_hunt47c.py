@@ -248,3 +248,12 @@ def test_load_of_what_is_no_json_says_what_it_is(tmp_path, text, said):
     p.write_text(text, encoding="utf-8")
     with pytest.raises(gb.GrayboxFileError, match=said):
         gb.load(p)
+
+
+@pytest.mark.parametrize("loader", ["load_record_csv", "load_static_csv"])
+def test_a_csv_loader_given_a_saved_graybox_file_names_gb_load(tmp_path, loader):
+    # was "no column 'u' ... The header was read as one column, split at ',': pass delimiter= ... ['{']"
+    rec = gb.Record(np.arange(5.0), np.arange(5.0), Ts=0.1)
+    path = gb.save(rec, tmp_path / "run1.json")
+    with pytest.raises(ValueError, match=r"run1.json: the file is a graybox JSON file \(a Record.*graybox.load"):
+        getattr(gb, loader)(path, u="u", y="y", **({"Ts": 0.1} if loader == "load_record_csv" else {}))

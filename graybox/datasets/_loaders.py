@@ -109,6 +109,10 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     # the very line that names the columns.
     end = _skip_lines(raw, start, _SNIFF_LINES)
     head = _decode(p, raw, start, end)
+    saved = re.match(r'\s*\{\s*"format"\s*:\s*"graybox".*?"type"\s*:\s*"(\w+)"', head, re.DOTALL)
+    if saved:  # what graybox.save wrote (a Record, a Dataset …): its first line "{" read as one column named "{"
+        raise ValueError(f"{p}: the file is a graybox JSON file (a {saved.group(1)}, written by graybox.save), not CSV "
+                         "text; read it with graybox.load(path)")
     _refuse_header_block(p, head, names, first)
     if skiprows:
         _refuse_skipped_header(p, _decode(p, raw, skipped_from, start), head, names, skiprows)
