@@ -257,3 +257,14 @@ def test_a_csv_loader_given_a_saved_graybox_file_names_gb_load(tmp_path, loader)
     path = gb.save(rec, tmp_path / "run1.json")
     with pytest.raises(ValueError, match=r"run1.json: the file is a graybox JSON file \(a Record.*graybox.load"):
         getattr(gb, loader)(path, u="u", y="y", **({"Ts": 0.1} if loader == "load_record_csv" else {}))
+
+
+def test_a_header_np_savetxt_wrote_names_its_comment_mark(tmp_path):
+    # np.savetxt(..., header="t,u,y") writes "# t,u,y": was "no column 't' ... Did you mean '# t'?", not the cause
+    path = tmp_path / "run1.csv"
+    t = np.arange(5) * 0.1
+    np.savetxt(path, np.c_[t, np.sin(t), np.cos(t)], delimiter=",", header="t,u,y")
+    with pytest.raises(ValueError, match=r"starts with '#'.*np.savetxt.*comments=''"):
+        gb.load_record_csv(path, u="u", y="y", time="t")
+    np.savetxt(path, np.c_[t, np.sin(t), np.cos(t)], delimiter=",", header="t,u,y", comments="")
+    assert gb.load_record_csv(path, u="u", y="y", time="t").Ts == 0.1

@@ -642,6 +642,12 @@ def _missing_column_message(path: Path, role: str, col: str, header: Sequence[st
     # misses a short name beside its unit
     close += [h for h in header if _bare(h) == _bare(col) and h not in close]
     hint = f" Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+    if header and header[0].startswith("#") and header[0].lstrip("#").strip() == col:
+        # np.savetxt(..., header="t,u,y") writes "# t,u,y": its comments="# " marks the header line as a comment
+        return (f"{path}: no column {col!r} (asked for as {role}): the header line starts with '#', so its first "
+                f"column reads {header[0]!r}, as np.savetxt writes a header (comments='# '); write the file with "
+                "np.savetxt(..., header=..., comments='') or delete the '#'. The columns are "
+                f"{list(header)}.")
     if len(header) == 1:
         hint += f" The header was read as one column, split at {_name(delimiter)}: pass delimiter= if the file uses another."
     return f"{path}: no column {col!r} (asked for as {role}).{hint} The columns are {list(header)}."
