@@ -268,3 +268,14 @@ def test_a_header_np_savetxt_wrote_names_its_comment_mark(tmp_path):
         gb.load_record_csv(path, u="u", y="y", time="t")
     np.savetxt(path, np.c_[t, np.sin(t), np.cos(t)], delimiter=",", header="t,u,y", comments="")
     assert gb.load_record_csv(path, u="u", y="y", time="t").Ts == 0.1
+
+
+@pytest.mark.parametrize("make", [lambda u, y: gb.Record(u, y), lambda u, y: gb.StaticPoints(u, y)])
+def test_an_output_given_as_a_one_column_frame_is_told_to_be_its_column(make):
+    # df[["p"]] (two pairs of brackets) was told "pass a flat array (e.g. x.ravel())": a DataFrame has no ravel
+    import pandas as pd
+
+    df = pd.DataFrame({"u": np.arange(5.0), "p": np.arange(5.0) ** 2})
+    with pytest.raises(ValueError, match=r"DataFrame of one column.*df\['p'\] \(one pair of brackets\)"):
+        make(df["u"], df[["p"]])
+    assert len(make(df["u"], df["p"])) == 5

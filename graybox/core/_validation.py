@@ -435,6 +435,11 @@ def as_1d_finite(x: object, name: str) -> np.ndarray:
     refuse_non_real(x, name)
     a = float_array(x, name)
     if a.ndim == 2 and 1 in a.shape:
+        cols = getattr(x, "columns", None) if type(x).__module__.startswith("pandas") else None
+        columns = [] if cols is None else list(cols)
+        if len(columns) == 1:  # df[["p"]]: a DataFrame has no ravel()
+            raise ValueError(f"{name} must be 1-D, got a DataFrame of one column, shape {a.shape}; pass the column "
+                             f"itself, a Series: df[{columns[0]!r}] (one pair of brackets)")
         raise ValueError(f"{name} must be 1-D, got shape {a.shape}; pass a flat array (e.g. x.ravel())")
     if a.ndim != 1:
         raise ValueError(f"{name} must be 1-D, got {a.ndim}-D with shape {a.shape}")
