@@ -279,3 +279,14 @@ def test_an_output_given_as_a_one_column_frame_is_told_to_be_its_column(make):
     with pytest.raises(ValueError, match=r"DataFrame of one column.*df\['p'\] \(one pair of brackets\)"):
         make(df["u"], df[["p"]])
     assert len(make(df["u"], df["p"])) == 5
+
+
+@pytest.mark.parametrize("as_", [lambda t: t, lambda t: t.to_numpy(), lambda t: list(t)])
+def test_a_time_column_given_as_ts_is_told_to_give_its_step(as_):
+    # was "Ts (seconds) must be a real number, got 0    0.0\n1    0.1\n..." (the whole column), no word of the fix
+    import pandas as pd
+
+    df = pd.DataFrame({"t": np.arange(5.0) * 0.1, "u": np.arange(5.0), "y": np.arange(5.0) ** 2})
+    with pytest.raises(TypeError, match=r"Ts is the sampling period, one number of seconds, got 5 values.*np\.diff"):
+        gb.Record(df["u"], df["y"], Ts=as_(df["t"]))
+    assert gb.Record(df["u"], df["y"], Ts=np.array(0.1)).Ts == 0.1  # a 0-d array is one number

@@ -205,6 +205,11 @@ class Record:
             raise ValueError(_lengths(self.name, "u", "y", u, y))
         if y.size == 0:  # nothing downstream (nor the repr's ranges) has a meaning for an empty run
             raise ValueError(f"{self.name}: no samples")
+        if not isinstance(self.Ts, (str, bytes)) and np.ndim(self.Ts) > 0:  # the record's time column, passed as Ts
+            raise TypeError(f"{self.name}: Ts is the sampling period, one number of seconds, got {np.size(self.Ts)} "
+                            f"values ({type(self.Ts).__name__}): a time column? Pass its step, e.g. "
+                            "Ts=float(np.median(np.diff(t))), or read the file with graybox.load_record_csv(path, "
+                            "u=..., y=..., time='t')")
         object.__setattr__(self, "Ts", check_real(self.Ts, f"{self.name}: Ts (seconds)", low=0, low_open=True))
         object.__setattr__(self, "units", check_units(self.units, self.name))
         m = 1 if u.ndim == 1 else u.shape[1]
