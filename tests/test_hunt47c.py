@@ -290,3 +290,16 @@ def test_a_time_column_given_as_ts_is_told_to_give_its_step(as_):
     with pytest.raises(TypeError, match=r"Ts is the sampling period, one number of seconds, got 5 values.*np\.diff"):
         gb.Record(df["u"], df["y"], Ts=as_(df["t"]))
     assert gb.Record(df["u"], df["y"], Ts=np.array(0.1)).Ts == 0.1  # a 0-d array is one number
+
+
+@pytest.mark.parametrize("call", [
+    lambda: gb.load_record_csv("", u="u", y="y", Ts=1.0),
+    lambda: gb.load_static_csv("", u="u", y="y"),
+    lambda: gb.load(""),
+    lambda: gb.read_header(""),
+    lambda: gb.save(gb.Structure(["y(k-1)"]), ""),
+])
+def test_an_empty_file_name_is_said_so(call):
+    # Path("") is the current folder: "[Errno 21] Is a directory: '.'", a folder the caller never named
+    with pytest.raises(ValueError, match="path is empty"):
+        call()

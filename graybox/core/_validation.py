@@ -418,14 +418,17 @@ def check_sequence(value: object, name: str, what: str = "a sequence", *, ordere
     return list(value)  # type: ignore[call-overload]
 
 
-def check_path(value: object, name: str) -> str | os.PathLike:
+def check_path(value: object, name: str, *, file: bool = False) -> str | os.PathLike:
     """``value`` if it is a file or folder name (``str`` or path-like), or ``TypeError`` naming ``name``.
 
-    Python's own message for ``Path(2.5)`` names neither the option nor what it wanted.
+    Python's own message for ``Path(2.5)`` names neither the option nor what it wanted. ``file``: a file's name,
+    where an empty one is a ``ValueError`` (``Path("")`` is the current folder: "Is a directory: '.'").
     """
     if not isinstance(value, (str, os.PathLike)):
         raise TypeError(f"{name} must be a file or folder name (str or path-like), got {value!r} "
                         f"({type(value).__name__})")
+    if file and not os.fspath(value):
+        raise ValueError(f"{name} is empty: give the file's name")
     return value
 
 

@@ -755,7 +755,7 @@ def load_record_csv(
         ``path``, ``u``, ``y``, ``time``, ``Ts``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
         type (a column is named by a str; units are a pair of str).
     """
-    p = Path(check_path(path, "path"))
+    p = Path(check_path(path, "path", file=True))
     if time is None and Ts is None:
         raise ValueError(f"{p}: give the time-stamp column (time=...) or the sampling period (Ts=... seconds)")
     if Ts is not None and (isinstance(Ts, bool) or not isinstance(Ts, (int, float, np.integer, np.floating))):
@@ -944,7 +944,7 @@ def load_static_csv(
         ``path``, ``u``, ``y``, ``uncertainty``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
         type (a column is named by a str; units are a pair of str).
     """
-    p = Path(check_path(path, "path"))
+    p = Path(check_path(path, "path", file=True))
     check_choice(repeats, "repeats", ("error", "mean"))
     skiprows = check_int(skiprows, "skiprows", low=0)
     units = check_units(units, f"{p}")

@@ -1073,7 +1073,7 @@ def save(
     pathlib.Path
         The path written.
     """
-    p = Path(check_path(path, "path"))
+    p = Path(check_path(path, "path", file=True))
     text = to_json(obj, units=units)
     if p.is_dir():
         raise IsADirectoryError(errno.EISDIR, "a folder, not a file to save to", str(p))
@@ -1082,7 +1082,7 @@ def save(
 
 
 def _read(path: str | os.PathLike) -> str:
-    p = Path(check_path(path, "path"))
+    p = Path(check_path(path, "path", file=True))
     raw = p.read_bytes()
     # a byte-order mark an editor added says the encoding (UTF-16 from "Unicode" saves) and is not text
     enc = bom_encoding(raw) or "utf-8"
