@@ -303,3 +303,20 @@ def test_an_empty_file_name_is_said_so(call):
     # Path("") is the current folder: "[Errno 21] Is a directory: '.'", a folder the caller never named
     with pytest.raises(ValueError, match="path is empty"):
         call()
+
+
+def test_save_does_not_replace_a_read_only_file(tmp_path, monkeypatch):
+    # open(path, "w") refuses a file made read-only (chmod a-w); save moved its own file over it all the same, so a
+    # model kept read-only on purpose was silently replaced. Root may write anything: the test asks os.access as a
+    # user without write permission would be answered.
+    import os
+    import stat
+
+    path = gb.save(gb.Structure(["y(k-1)"]), tmp_path / "final.json")
+    path.chmod(stat.S_IRUSR | stat.S_IRGRP | stat.S_IROTH)
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode, *a, **k: False if (os.fspath(p) == os.fspath(path)
+                                                                         and mode & os.W_OK) else real(p, mode, *a, **k))
+    with pytest.raises(PermissionError, match="read-only"):
+        gb.save(gb.Structure(["y(k-2)"]), path)
+    assert str(gb.load(path)) == str(gb.Structure(["y(k-1)"]))

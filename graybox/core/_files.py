@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import codecs
 import contextlib
+import errno
 import os
 import re
 import secrets
@@ -143,10 +144,15 @@ def write_atomically(path: str | os.PathLike, write: Callable[[IO[bytes]], objec
     ------
     OSError
         Of the same kind, naming the folder and ``path`` (not the file beside it) when the folder cannot be written
-        in; any error of ``write`` itself, after removing the file beside the target.
+        in; ``PermissionError`` for a file that exists and may not be written (read-only), as ``open(path, "w")``;
+        any error of ``write`` itself, after removing the file beside the target.
     """
     path = Path(path)
     target = written_path(path)
+    if target.is_file() and not os.access(target, os.W_OK):
+        # open(path, "w") refuses a file its owner made read-only; the move below would replace it all the same
+        raise PermissionError(errno.EACCES, "the file is read-only (its mode forbids writing): make it writable "
+                              "(chmod u+w) or write to another name", str(path))
     try:
         fd, tmp = _new_file_beside(target)
     except OSError as exc:
