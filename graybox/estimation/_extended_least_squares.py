@@ -138,6 +138,9 @@ class ELSResult:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # read-only copies: what the caller's arrays become afterwards never changes the result
+        object.__setattr__(self, "theta_ls", frozen(self.theta_ls))
+        object.__setattr__(self, "residuals", tuple(frozen(r) for r in self.residuals))
 
     def __repr__(self) -> str:
         return (f"ELSResult(model={self.model.name!r}, n_params={self.model.n_params}, n_iter={self.n_iter}, "

@@ -110,7 +110,8 @@ class SEMPResult:
         if self.Ts is not None:
             object.__setattr__(self, "Ts", check_real(self.Ts, "Ts (seconds)", low=0, low_open=True))
         object.__setattr__(self, "units", check_units(self.units, "SEMPResult"))
-        check_theta(len(self.structure), self.theta)  # finite, as the model it gives needs (files load through here)
+        # finite, as the model it gives needs (files load through here); a read-only copy, as a Selection keeps
+        object.__setattr__(self, "theta", frozen(check_theta(len(self.structure), self.theta)))
         check_choice(self.criterion, "criterion", CRITERIA)
         check_mean_square(self.score, "SEMPResult: score (the free-run MSE)")
         if self.n_rows < 1:
