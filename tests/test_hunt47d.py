@@ -44,3 +44,17 @@ def test_an_els_result_made_from_arrays_keeps_its_own_read_only_copies():
     for a in (made.theta_ls, made.residuals[0]):
         with pytest.raises(ValueError):
             a[0] = 1.0
+
+
+@pytest.mark.parametrize("search", ["greedy", "swap", "exact"])
+def test_a_tolerance_on_a_short_record_looks_at_the_sizes_its_rows_carry(search):
+    # 6 regression rows of noise: no model of fewer than 6 terms reaches 1e-12; a tolerance then stops at the
+    # largest size the rows carry (rows - 1) with the warning that it was not reached, as semp and a criterion do.
+    # It was a ValueError about 6 terms on 6 rows (greedy) or about the criterion AIC nobody asked for (swap, exact)
+    rng = np.random.default_rng(1)
+    rec = gb.Record(u=rng.standard_normal(8), y=rng.standard_normal(8))
+    with pytest.warns(RuntimeWarning, match="tolerance 1e-12 not reached"):
+        sel = gb.frols(SPACE, rec, tol=1e-12, search=search)
+    assert sel.n_terms <= sel.n_rows - 1 == 5
+    with pytest.raises(ValueError, match="max_terms"):
+        gb.frols(SPACE, rec, tol=1e-12, search=search, max_terms=6)

@@ -598,9 +598,9 @@ def frols(
     criterion : {"aic", "bic", "fpe"}, optional
         Information criterion (see :func:`information_criterion`).
     max_terms : int, optional
-        Largest model size looked at for ``tol`` (default: all candidates) and ``criterion``
-        (default: min(50, candidates, regression rows − 1), what the record carries; a larger
-        explicit one is an error naming it). Not allowed with ``n_terms``.
+        Largest model size looked at for ``tol`` (default: min(candidates, regression rows − 1))
+        and ``criterion`` (default: min(50, candidates, regression rows − 1)): what the record
+        carries; a larger explicit one is an error naming it. Not allowed with ``n_terms``.
     rank_tol : float, optional
         A candidate whose orthogonalised norm is below ``rank_tol`` times its original norm
         is treated as a linear combination of the selected terms and dropped.
@@ -738,17 +738,19 @@ def frols(
     if mode == "n_terms":
         K = n_terms
     elif mode == "tol":
-        K = min(n_usable, max_terms or n_usable)
+        # a default follows the data, as for a criterion (and semp): a model of as many terms as rows interpolates
+        # them, which the tolerance then met; it stops at rows − 1 and says the tolerance was not reached
+        K = min(n_usable, max_terms or N - 1)
     else:
         # a default follows the data: no more terms than the rows carry (nobody asked for more: nothing said)
         K = min(n_usable, max_terms or min(_DEFAULT_MAX_TERMS, N - 1))
-    if mode == "criterion" and K < 1:  # N = 1: the default max_terms, N − 1, leaves no size to look at
-        raise ValueError(f"criterion needs more regression rows than model terms: {N} regression row after the "
+    if mode != "n_terms" and K < 1:  # N = 1: the default max_terms, N − 1, leaves no size to look at
+        raise ValueError(f"{mode} needs more regression rows than model terms: {N} regression row after the "
                          f"candidates' largest lag {process.max_lag} is too few for any term (a longer record, or smaller lags)")
-    if mode == "criterion" and max(K, max_terms or 0) >= N:  # what was asked, even where fewer candidates are usable
-        raise ValueError(f"criterion needs more rows ({N}) than model terms ({max(K, max_terms or 0)}); lower max_terms")
-    if mode == "criterion" and K < len(forced):
-        raise ValueError(f"criterion needs more rows ({N}) than the {len(forced)} included terms")
+    if mode != "n_terms" and max(K, max_terms or 0) >= N:  # what was asked, even where fewer candidates are usable
+        raise ValueError(f"{mode} needs more rows ({N}) than model terms ({max(K, max_terms or 0)}); lower max_terms")
+    if mode != "n_terms" and K < len(forced):
+        raise ValueError(f"{mode} needs more rows ({N}) than the {len(forced)} included terms")
     if mode == "n_terms" and K >= N:  # said before any search, in the same words for all of them
         raise ValueError(f"{K} terms need more than their {N} regression rows (no error left to fit); lower n_terms")
 
