@@ -207,8 +207,9 @@ class Selection:
         empty for greedy search, whose size-k model is ``evaluated[:k]``. :attr:`structure` is one
         of them.
     subset_rss : ndarray, shape (len(subsets),)
-        Their residual sums of squares on the selection rows (output units²), from the Gram matrix
-        of the scaled candidates: values below 1e-13 yᵀy are that floor (round-off, not signal).
+        Their residual sums of squares on the selection rows (output units²), from the triangular
+        factor of the scaled candidates beside y: values below 1e-20 yᵀy are that floor (round-off,
+        not signal).
     input_names : tuple of str, optional
         The model's inputs, in the column order of an input array (default: as
         :class:`~graybox.Model`'s; :func:`frols` takes the records').
