@@ -72,3 +72,25 @@ def test_the_subset_rss_floor_is_the_one_the_selection_docstring_states():
     yy = float(y[2:] @ y[2:])
     assert sel.subset_rss[0] / yy == pytest.approx(1e-20)
     assert "1e-20 yᵀy" in gb.Selection.__doc__
+
+
+def _short_offset_record(n: int) -> gb.Record:
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal(n) + 5.0
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] * u[k - 2] + 0.1 * rng.standard_normal()
+    return gb.Record(u=u, y=y)
+
+
+@pytest.mark.parametrize("select", [gb.frols, gb.semp])
+def test_a_centred_choice_whose_closure_fills_the_rows_is_refused_in_one_clear_message(select):
+    # 8 samples, 6 regression rows: the terms a criterion chooses on the centred signals close under shifts to
+    # 6 terms. semp returned that model, interpolating the record (which els then refused as too short); frols
+    # said '6 terms need more than their 6 regression rows; lower n_terms', an n_terms nobody gave
+    rec = _short_offset_record(8)
+    with pytest.warns(RuntimeWarning), pytest.raises(ValueError, match="close under shifts to 6 terms") as info:
+        select(SPACE, rec, centre=True, criterion="bic")
+    assert "n_terms" not in str(info.value).split(";")[0]
+    # a closure the rows carry is fitted as before
+    assert len(select(SPACE, _short_offset_record(20), centre=True, n_terms=3).structure) < 18

@@ -197,6 +197,21 @@ def told_apart(structure: Structure, records: Record | list[Record],
     return kept, tuple(dropped.items())
 
 
+def check_closure_rows(closed: Structure, records: Record | list[Record], chosen: int) -> None:
+    """Refuse (``ValueError``) a closure with as many terms as its regression rows, or more.
+
+    A closure holds more terms than were chosen, so on a short record the terms a search chose on the centred
+    signals (a criterion smallest at the most terms the rows allow) can close to a structure whose least-squares
+    fit interpolates the record: no error is left to fit, which every estimator refuses (``check_rows``).
+    """
+    rows = sum(len(r) - closed.max_lag for r in as_records(records))
+    if len(closed) >= rows:
+        raise ValueError(f"the {chosen} terms chosen on the centred signals close under shifts to {len(closed)} terms, "
+                         f"which need more than their {rows} regression rows (their fit would interpolate the record, "
+                         "no error left to fit); use a longer record, fewer candidates (smaller lags or degree), a "
+                         "smaller n_terms or max_terms, or centre out")
+
+
 def raw_theta(structure: Structure, theta: np.ndarray, offsets: Mapping[str, float], *,
               level: bool = True) -> np.ndarray:
     """The parameters, on the raw signals, of a model fitted on the centred ones.

@@ -662,7 +662,8 @@ def frols(
     ------
     ValueError
         Conflicting or out-of-range arguments; no process candidates; an output that is
-        identically zero (with ``centre=True``, constant); more terms asked than independent candidates on these data; a selected
+        identically zero (with ``centre=True``, constant; or a closure of as many terms as
+        regression rows, whose fit would interpolate the record); more terms asked than independent candidates on these data; a selected
         term that the accurate factor of the chosen columns finds dependent on those before it
         (noise-free data, where the Gram form's ranking cannot tell).
     MemoryError
@@ -844,6 +845,7 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     # less what the data cannot tell apart (a two-level input's u^2), or the fit below cannot hold every term
     closed, dropped = _centring.told_apart(full, centred, rank_tol)
     _centring.check_included(options["include"], candidates.process, data, dropped)
+    _centring.check_closure_rows(closed, centred, len(sel.structure))
     skipped = tuple((t, why) for t, why in sel.skipped if t not in set(closed)) + dropped
     if skipped:
         warn(f"{len(skipped)} candidate(s) left out (the centred data cannot tell them from others): "

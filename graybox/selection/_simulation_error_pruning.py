@@ -315,7 +315,8 @@ def semp(
     ------
     ValueError
         Conflicting or out-of-range arguments, no process candidates, records shorter than the
-        candidates' largest lag, an output that is identically zero (with ``centre=True``, constant),
+        candidates' largest lag, an output that is identically zero (with ``centre=True``, constant; or
+        a closure of as many terms as regression rows, whose fit would interpolate the record),
         or no candidate that can be added (all collinear or diverging).
 
     Warns
@@ -367,6 +368,7 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     # less what the data cannot tell apart (a two-level input's u^2): its θ would be a point of a null space
     closed, dropped = _centring.told_apart(full, centred, options["rank_tol"])
     _centring.check_included(options["include"], candidates.process, data, dropped)
+    _centring.check_closure_rows(closed, centred, len(res.structure))
     if dropped:
         warn(f"{len(dropped)} term(s) of the closure left out, the data cannot tell them from their divisors: "
              + ", ".join(str(t) for t, _ in dropped), CandidateWarning)
