@@ -94,3 +94,45 @@ def test_a_centred_choice_whose_closure_fills_the_rows_is_refused_in_one_clear_m
     assert "n_terms" not in str(info.value).split(";")[0]
     # a closure the rows carry is fitted as before
     assert len(select(SPACE, _short_offset_record(20), centre=True, n_terms=3).structure) < 18
+
+
+def _lagged_offset_record() -> gb.Record:
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1.0, 1.0, 60) + 3.0
+    y = np.zeros(60)
+    for k in range(3, 60):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.3 * u[k - 3] * u[k - 1] + 0.05 * rng.standard_normal()
+    return gb.Record(u=u, y=y)
+
+
+def _rss_from(structure, rec: gb.Record, start: int) -> tuple[np.ndarray, float]:
+    X, t = gb.stacked_regressors(structure, rec, start=start)
+    theta = np.linalg.lstsq(X, t, rcond=None)[0]
+    r = t - X @ theta
+    return theta, float(r @ r)
+
+
+def test_a_centred_frols_fits_and_scores_on_the_rows_the_candidates_give():
+    # the candidates' largest lag is 3: the search's rows are samples 3 … 59. The closures were refitted, and
+    # the subsets' RSS taken, from each closure's own largest lag: n_rows 59 for a closure of lag 1 (the docstring
+    # says the rows start at the candidates' largest lag), and subset_rss of the small subsets on 59 rows, the
+    # larger ones on 57, where they are compared size by size
+    rec, space = _lagged_offset_record(), gb.Candidates(ny=3, nu=3, degree=2)
+    with pytest.warns(RuntimeWarning, match="bic is smallest at the largest size"):
+        sel = gb.frols(space, rec, centre=True, search="swap", criterion="bic", max_terms=6)
+    assert any(S.max_lag < 3 for S in sel.subsets)
+    for S, rss in zip(sel.subsets, sel.subset_rss):
+        assert rss == pytest.approx(_rss_from(S, rec, 3)[1], rel=1e-7)  # a closed structure's RSS is the raw one's
+    small = gb.frols(space, rec, centre=True, n_terms=2)
+    assert small.structure.max_lag < 3 and small.n_rows == 57
+    theta, rss = _rss_from(small.structure, rec, 3)
+    assert small.rss[-1] == pytest.approx(rss, rel=1e-7)
+    np.testing.assert_allclose(small.theta, theta, rtol=1e-7, atol=1e-9)
+
+
+def test_a_centred_semp_fits_its_closure_on_the_rows_it_scores():
+    rec, space = _lagged_offset_record(), gb.Candidates(ny=3, nu=3, degree=2)
+    res = gb.semp(space, rec, centre=True, n_terms=2)
+    assert res.structure.max_lag < 3
+    # as semp fits every structure it scores, on samples 3 … 59 (it fitted the closure on 1 … 59)
+    np.testing.assert_allclose(res.theta, _rss_from(res.structure, rec, 3)[0], rtol=1e-7, atol=1e-9)

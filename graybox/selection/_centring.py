@@ -197,14 +197,25 @@ def told_apart(structure: Structure, records: Record | list[Record],
     return kept, tuple(dropped.items())
 
 
-def check_closure_rows(closed: Structure, records: Record | list[Record], chosen: int) -> None:
-    """Refuse (``ValueError``) a closure with as many terms as its regression rows, or more.
+def from_sample(records: Record | list[Record], skip: int) -> Record | list[Record]:
+    """The records without their first ``skip`` samples (new records): a structure whose largest lag is
+    ``L − skip`` has its regression rows there at the samples L, L + 1, … of the records given, the search's rows
+    when L is the candidates' largest lag."""
+    if skip <= 0:
+        return records
+    out = [replace(r, u=r.u[skip:], y=r.y[skip:]) for r in as_records(records)]
+    return out[0] if isinstance(records, Record) else out
+
+
+def check_closure_rows(closed: Structure, records: Record | list[Record], chosen: int, start: int) -> None:
+    """Refuse (``ValueError``) a closure with as many terms as its regression rows (from sample ``start`` of each
+    record, the search's), or more.
 
     A closure holds more terms than were chosen, so on a short record the terms a search chose on the centred
     signals (a criterion smallest at the most terms the rows allow) can close to a structure whose least-squares
     fit interpolates the record: no error is left to fit, which every estimator refuses (``check_rows``).
     """
-    rows = sum(len(r) - closed.max_lag for r in as_records(records))
+    rows = sum(len(r) - start for r in as_records(records))
     if len(closed) >= rows:
         raise ValueError(f"the {chosen} terms chosen on the centred signals close under shifts to {len(closed)} terms, "
                          f"which need more than their {rows} regression rows (their fit would interpolate the record, "
@@ -264,13 +275,14 @@ def shift_map(structure: Structure, offsets: Mapping[str, float]) -> tuple[np.nd
     return A, t
 
 
-def least_squares(structure: Structure, records: Record | list[Record]) -> tuple[np.ndarray, float]:
+def least_squares(structure: Structure, records: Record | list[Record], start: int) -> tuple[np.ndarray, float]:
     """θ and residual sum of squares of ``structure`` fitted by least squares on ``records``.
 
-    Rows start at the structure's largest lag in each record and never straddle two records
-    (:func:`~graybox.stacked_regressors`); the columns are scaled to unit RMS for the solve.
+    Rows start at sample ``start`` of each record (the search's: the candidates' largest lag, at least the
+    structure's) and never straddle two records (:func:`~graybox.stacked_regressors`); the columns are scaled to
+    unit RMS for the solve.
     """
-    X, y = stacked_regressors(structure, records)
+    X, y = stacked_regressors(structure, records, start=start)
     scale = column_scales(X)
     theta = np.linalg.lstsq(X / scale, y, rcond=None)[0] / scale
     r = y - X @ theta

@@ -845,19 +845,21 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     # less what the data cannot tell apart (a two-level input's u^2), or the fit below cannot hold every term
     closed, dropped = _centring.told_apart(full, centred, rank_tol)
     _centring.check_included(options["include"], candidates.process, data, dropped)
-    _centring.check_closure_rows(closed, centred, len(sel.structure))
+    L = candidates.process.max_lag
+    _centring.check_closure_rows(closed, centred, len(sel.structure), L)
     skipped = tuple((t, why) for t, why in sel.skipped if t not in set(closed)) + dropped
     if skipped:
         warn(f"{len(skipped)} candidate(s) left out (the centred data cannot tell them from others): "
              + "; ".join(f"{t} ({why})" for t, why in skipped[:10]) + ("; …" if len(skipped) > 10 else ""),
              CandidateWarning)
-    # the closure's own fit on the centred signals: its ERR, RSS and θ, the chosen terms first
-    fit = frols(closed + candidates.noise, centred, n_terms=len(closed), include=list(closed), rank_tol=rank_tol,
-                method=options["method"], criterion=sel.criterion)
+    # the closure's own fit on the centred signals: its ERR, RSS and θ, the chosen terms first, on the search's rows
+    # (from the candidates' largest lag L: the records from sample L − the closure's largest lag on)
+    fit = frols(closed + candidates.noise, _centring.from_sample(centred, L - closed.max_lag), n_terms=len(closed),
+                include=list(closed), rank_tol=rank_tol, method=options["method"], criterion=sel.criterion)
     subsets, subset_rss = (), ()
     if sel.subsets:
         subsets = tuple(_centring.told_apart(_centring.closure(S).process, centred, rank_tol)[0] for S in sel.subsets)
-        subset_rss = np.array([_centring.least_squares(S, centred)[1] for S in subsets])
+        subset_rss = np.array([_centring.least_squares(S, centred, L)[1] for S in subsets])
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), offsets, dropped)
     return replace(fit, theta=_centring.raw_theta(closed, fit.theta, offsets), stop=stop,
                    n_candidates=sel.n_candidates, skipped=skipped, search=sel.search, subsets=subsets,

@@ -368,13 +368,13 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     # less what the data cannot tell apart (a two-level input's u^2): its θ would be a point of a null space
     closed, dropped = _centring.told_apart(full, centred, options["rank_tol"])
     _centring.check_included(options["include"], candidates.process, data, dropped)
-    _centring.check_closure_rows(closed, centred, len(res.structure))
+    L = candidates.process.max_lag
+    _centring.check_closure_rows(closed, centred, len(res.structure), L)
     if dropped:
         warn(f"{len(dropped)} term(s) of the closure left out, the data cannot tell them from their divisors: "
              + ", ".join(str(t) for t, _ in dropped), CandidateWarning)
-    theta, _ = _centring.least_squares(closed, centred)
-    # the closure's free run on the centred signals, from the same samples and over the same rows as the search's
-    L = candidates.process.max_lag
+    # fitted, and its free run scored, on the centred signals over the same rows as the search's (from L on)
+    theta, _ = _centring.least_squares(closed, centred, L)
     recs = centred if isinstance(centred, list) else [centred]
     model = Model(closed, theta, **carried_from(recs))
     err = np.concatenate([model.simulate(r, r.y[:L])[L:] - r.y[L:] for r in recs])
