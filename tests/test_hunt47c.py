@@ -320,3 +320,14 @@ def test_save_does_not_replace_a_read_only_file(tmp_path, monkeypatch):
     with pytest.raises(PermissionError, match="read-only"):
         gb.save(gb.Structure(["y(k-2)"]), path)
     assert str(gb.load(path)) == str(gb.Structure(["y(k-1)"]))
+
+
+def test_load_expecting_a_record_of_a_dataset_file_says_take_ident_or_valid(tmp_path):
+    # a Decision's file said how to take its .model; a Dataset's said only "holds a Dataset, expected Record"
+    rec = gb.Record(np.arange(5.0), np.arange(5.0), Ts=0.1)
+    path = gb.save(gb.Dataset(rec, rec), tmp_path / "data.json")
+    with pytest.raises(gb.GrayboxFileError, match=r"holds a Dataset, expected Record \(a Dataset carries a Record: "
+                                                  r"load it without expect= and take its \.ident or \.valid\)"):
+        gb.load(path, expect=gb.Record)
+    with pytest.raises(gb.GrayboxFileError, match=r"take its \.static\)"):
+        gb.load(path, expect=gb.StaticPoints)

@@ -979,10 +979,11 @@ def _expected(expect: object) -> tuple[type, ...] | None:
 
 def _expect(want: tuple[type, ...] | None, typ: str, source: str) -> None:
     if want is not None and _CODECS[typ][0] not in want:
-        # a result that carries the model asked for (an ELSResult's, a Decision's): how to have it, as save says
-        carried = [kind for name, kind in _CODECS[typ][1] if name == "model"]
-        hint = (f" (a {typ} carries a {carried[0]}: load it without expect= and take its .model)"
-                if carried and _CODECS[carried[0]][0] in want else "")
+        # a value that carries one asked for (an ELSResult's model, a Dataset's records): how to have it
+        carried = [(name, kind.removesuffix(_OR_NONE)) for name, kind in _CODECS[typ][1]]
+        carried = [(name, kind) for name, kind in carried if kind in _CODECS and _CODECS[kind][0] in want]
+        hint = (f" (a {typ} carries a {carried[0][1]}: load it without expect= and take its "
+                f"{' or '.join('.' + name for name, _ in carried)})" if carried else "")
         raise GrayboxFileError(f"{source}: holds a {typ}, expected {' or '.join(w.__name__ for w in want)}{hint}")
 
 
