@@ -331,3 +331,19 @@ def test_load_expecting_a_record_of_a_dataset_file_says_take_ident_or_valid(tmp_
         gb.load(path, expect=gb.Record)
     with pytest.raises(gb.GrayboxFileError, match=r"take its \.static\)"):
         gb.load(path, expect=gb.StaticPoints)
+
+
+def test_a_dynamic_record_given_to_load_static_csv_is_said_so():
+    # the bundled dynamic file read as static points was told to average its repeated levels (repeats="mean"),
+    # which makes "static points" of whole holds, transients included
+    from graybox.datasets import pumping_data_dir
+
+    with pytest.raises(ValueError, match=r"lines have the input level .*looks like a dynamic record.*load_record_csv"):
+        gb.load_static_csv(pumping_data_dir() / "dynamic.csv", u="speed_ref_rpm", y="pressure_mlc")
+
+
+def test_a_few_repeated_static_measurements_still_point_to_repeats_mean(tmp_path):
+    p = tmp_path / "steady.csv"
+    p.write_text("u,y\n1000,5.1\n1000,5.3\n1100,6.0\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"lines 2 and 3 have the same input level 1000.*repeats=\"mean\""):
+        gb.load_static_csv(p, u="u", y="y")

@@ -873,6 +873,10 @@ def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float |
     return float(f"{step:.{digits}g}")
 
 
+#: Lines at one input level from which a static file is taken for a dynamic record given to load_static_csv.
+_HELD_SAMPLES = 20
+
+
 def load_static_csv(
     path: str | os.PathLike,
     u: str | Sequence[str],
@@ -977,6 +981,12 @@ def load_static_csv(
     for v, line in zip(ub.tolist() if ub.ndim == 1 else map(tuple, ub.tolist()), cols["_lines"].tolist()):
         if v in seen:
             level = f"{v:g}" if ub.ndim == 1 else str(v)
+            times = int(np.sum(ub == v) if ub.ndim == 1 else np.sum(np.all(ub == np.array(v), axis=1)))
+            if times >= _HELD_SAMPLES:  # a level held over many lines: samples of a run, whose mean is no steady state
+                raise ValueError(f"{p}: {where}: {times} lines have the input level {level} (lines {seen[v]}, {line}, "
+                                 "…): the file looks like a dynamic record (an input held while the output moves), "
+                                 "not static points; read it with graybox.load_record_csv, and take each static "
+                                 "point from a hold's settled end (averaging the whole hold mixes in its transient)")
             raise ValueError(f"{p}: {where}: lines {seen[v]} and {line} have the same input level {level}; average "
                              "repeated measurements into one point per level (repeats=\"mean\" does it)")
         seen[v] = line
