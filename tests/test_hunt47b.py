@@ -213,3 +213,20 @@ def test_an_osqp_option_value_it_refuses_is_not_reported_as_infeasible_constrain
                solver_options=options)
     assert not isinstance(info.value, gb.InfeasibleError)
     capfd.readouterr()  # OSQP's own lines on the console
+
+
+# -- cls(how="curve"): as many points as the numerator's clusters, as the docstring now says -------------------
+def test_cls_curve_needs_as_many_points_as_numerator_clusters_as_its_docstring_says():
+    # was: the docstring said "at least degree + 1 points"; the curve is fitted on the powers the Σ_{u^m} clusters
+    # carry, so Σ0 and Σu² take two points (a degree-2 curve through them), and one point is refused naming two
+    st = gb.Structure(["y(k-1)", "u(k-1)^2", "1"])
+    plant = gb.Model(st, [0.6, 0.05, 0.2])
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0.0, 3.0, 21), 20)
+    rec = gb.Record(u, plant.simulate(u, [0.0]) + 0.01 * rng.standard_normal(u.size))
+    two = gb.StaticPoints([1.0, 2.0], plant.static_curve([1.0, 2.0]))
+    model = gb.cls(st, rec, two, how="curve").model
+    np.testing.assert_allclose(model.static_curve(two.ubar), two.ybar, atol=1e-12)
+    with pytest.raises(ValueError, match="at least 2 points"):
+        gb.cls(st, rec, gb.StaticPoints([1.0], plant.static_curve([1.0])), how="curve")
+    assert "degree + 1" not in gb.cls.__doc__ and "as many points as there are such clusters" in gb.cls.__doc__

@@ -820,8 +820,8 @@ def cls(
         when there are fewer points than the structure has clusters, else (the points cannot all
         be passed through, save degenerately) as ``"curve"`` for a rational structure.
         ``"curve"`` with StaticPoints fits the polynomial the structure's numerator can carry
-        (degree = highest ū power of the Σ_{u^m} clusters) and imposes eq. (22); it needs at
-        least degree + 1 points. With several inputs it fits a surface on exactly the monomials
+        (on the powers of ū of its Σ_{u^m} clusters, the others 0) and imposes eq. (22); it needs
+        as many points as there are such clusters, at two levels or more. With several inputs it fits a surface on exactly the monomials
         of the structure's Σ_{u^e} clusters (:meth:`StaticSurface.fit`), so it needs at least as
         many points as there are such clusters.
     reference : {"free", "ls", "els"}, Model, ndarray or float
