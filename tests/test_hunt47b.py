@@ -230,3 +230,19 @@ def test_cls_curve_needs_as_many_points_as_numerator_clusters_as_its_docstring_s
     with pytest.raises(ValueError, match="at least 2 points"):
         gb.cls(st, rec, gb.StaticPoints([1.0], plant.static_curve([1.0])), how="curve")
     assert "degree + 1" not in gb.cls.__doc__ and "as many points as there are such clusters" in gb.cls.__doc__
+
+
+# -- GainBounds along a one-input surface: its domain is the default range, as a curve's ----------------------
+@pytest.mark.parametrize("reference", [None, "surface"])
+def test_gain_bounds_take_a_one_input_surface_s_domain_as_a_curve_s(reference):
+    # was: "give ubar_range (no curve domain or static points to take it from)" for a surface with a domain, which
+    # cls takes as the curve of the one input (eq. (22))
+    pts = _points()
+    surf = gb.StaticSurface.fit(pts, degree=2)
+    curve = gb.StaticCurve.fit(pts, degree=2)
+    ref = surf if reference else None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        by_surface = gb.cls(_S, _record(), surf, constraints=gb.GainBounds(lower=0.0, reference=ref)).model.theta
+        by_curve = gb.cls(_S, _record(), curve, constraints=gb.GainBounds(lower=0.0, reference=curve if ref else None))
+    np.testing.assert_allclose(by_surface, by_curve.model.theta, rtol=1e-9, atol=1e-12)

@@ -1123,6 +1123,8 @@ class GainBounds(StaticConstraint):
         if rng is None:
             if isinstance(ref, StaticCurve) and ref.domain is not None:
                 rng = ref.domain
+            elif isinstance(ref, StaticSurface) and ref.domain is not None:  # a surface of the one input, as a curve
+                rng = ref.domain[0]
             elif ctx.points is not None:
                 rng = (float(ctx.points.ubar.min()), float(ctx.points.ubar.max()))
             else:
