@@ -737,7 +737,7 @@ class PassesThrough(StaticConstraint):
 
     For a rational structure this is ``ȳ_model(ū_i) = ȳ_i`` wherever the static function exists
     (checked after solving: the static function must exist at every point and meet it to
-    :data:`PASS_RTOL` of the points' spread, else ``ValueError``). For higher y powers it makes ȳ_i *an* equilibrium at ū_i, not
+    1e-6 of the points' spread, else ``ValueError``). For higher y powers it makes ȳ_i *an* equilibrium at ū_i, not
     necessarily the stable one the model settles on.
 
     Parameters
