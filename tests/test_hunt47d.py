@@ -136,3 +136,21 @@ def test_a_centred_semp_fits_its_closure_on_the_rows_it_scores():
     assert res.structure.max_lag < 3
     # as semp fits every structure it scores, on samples 3 … 59 (it fitted the closure on 1 … 59)
     np.testing.assert_allclose(res.theta, _rss_from(res.structure, rec, 3)[0], rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("select", [gb.frols, gb.semp])
+def test_a_centred_closure_is_told_apart_on_the_rows_the_search_and_the_fit_use(select):
+    # a two-level input but for its first sample: u(k-1)^2 is a combination of u(k-1) and 1 on every row the
+    # search (candidates' largest lag 3) and the fit use, and independent of them only at sample 1, which the
+    # closure was judged on. semp returned u(k-1)^2 + u(k-1) + 1 with a u² coefficient fitted to that one sample;
+    # frols said 'only 2 independent terms ... n_terms = 3 asked' (2 were asked). Both now refuse the included
+    # term in the words of a term the closure cannot keep
+    rng = np.random.default_rng(0)
+    u = np.where(rng.standard_normal(80) > 0, 1.0, -1.0)
+    u[0] = 0.5
+    y = np.zeros(80)
+    for k in range(1, 80):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.05 * rng.standard_normal()
+    rec = gb.Record(u=u, y=y + 10.0)
+    with pytest.raises(ValueError, match=r"included term u\(k-1\)\^2 cannot stay in a structure closed under shifts"):
+        select(gb.Candidates(ny=1, nu=3, degree=2), rec, centre=True, n_terms=2, include=["u(k-1)^2"])

@@ -155,8 +155,8 @@ def closure(structure: Structure | Sequence[Term | str]) -> Structure:
     return Structure(process + added + [t for t in st if t.is_noise])
 
 
-def told_apart(structure: Structure, records: Record | list[Record],
-               rank_tol: float) -> tuple[Structure, tuple[tuple[Term, str], ...]]:
+def told_apart(structure: Structure, records: Record | list[Record], rank_tol: float,
+               start: int | None = None) -> tuple[Structure, tuple[tuple[Term, str], ...]]:
     """The terms of a closed structure that the centred ``records`` tell apart, the set still closed.
 
     A closure can hold a term the data cannot tell from its divisors: with a two-level input (a PRBS)
@@ -165,7 +165,8 @@ def told_apart(structure: Structure, records: Record | list[Record],
     leaves at most ``rank_tol`` √N outside the span of the terms kept before it is dropped, and so is
     every multiple of a dropped term (or the set is not closed). The span of the terms before a term
     of degree d is that of a closed set plus terms of degree d, which a shift changes only by lower
-    terms: what is dropped does not depend on the offsets.
+    terms: what is dropped does not depend on the offsets. It is judged on the rows from sample ``start`` of
+    each record (default: the structure's largest lag), those the closure is then fitted on.
 
     Returns
     -------
@@ -176,7 +177,7 @@ def told_apart(structure: Structure, records: Record | list[Record],
     """
     process = structure.process
     order = sorted(process, key=Term.sort_key)
-    X, _ = stacked_regressors(Structure(order), records)
+    X, _ = stacked_regressors(Structure(order), records, start=start)
     X = X / column_scales(X)
     bound = rank_tol * math.sqrt(X.shape[0])
     basis = np.zeros((X.shape[0], 0))

@@ -843,9 +843,9 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     rank_tol = options["rank_tol"]
     full = _centring.closure(sel.structure).process
     # less what the data cannot tell apart (a two-level input's u^2), or the fit below cannot hold every term
-    closed, dropped = _centring.told_apart(full, centred, rank_tol)
+    L = candidates.process.max_lag  # the search's rows, from which the closure is judged and fitted
+    closed, dropped = _centring.told_apart(full, centred, rank_tol, L)
     _centring.check_included(options["include"], candidates.process, data, dropped)
-    L = candidates.process.max_lag
     _centring.check_closure_rows(closed, centred, len(sel.structure), L)
     skipped = tuple((t, why) for t, why in sel.skipped if t not in set(closed)) + dropped
     if skipped:
@@ -858,7 +858,8 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
                 include=list(closed), rank_tol=rank_tol, method=options["method"], criterion=sel.criterion)
     subsets, subset_rss = (), ()
     if sel.subsets:
-        subsets = tuple(_centring.told_apart(_centring.closure(S).process, centred, rank_tol)[0] for S in sel.subsets)
+        subsets = tuple(_centring.told_apart(_centring.closure(S).process, centred, rank_tol, L)[0]
+                        for S in sel.subsets)
         subset_rss = np.array([_centring.least_squares(S, centred, L)[1] for S in subsets])
     stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), offsets, dropped)
     return replace(fit, theta=_centring.raw_theta(closed, fit.theta, offsets), stop=stop,

@@ -366,9 +366,9 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     res = semp(candidates, centred, **options)
     full = _centring.closure(res.structure).process
     # less what the data cannot tell apart (a two-level input's u^2): its θ would be a point of a null space
-    closed, dropped = _centring.told_apart(full, centred, options["rank_tol"])
+    L = candidates.process.max_lag  # the search's rows, from which the closure is judged and fitted
+    closed, dropped = _centring.told_apart(full, centred, options["rank_tol"], L)
     _centring.check_included(options["include"], candidates.process, data, dropped)
-    L = candidates.process.max_lag
     _centring.check_closure_rows(closed, centred, len(res.structure), L)
     if dropped:
         warn(f"{len(dropped)} term(s) of the closure left out, the data cannot tell them from their divisors: "
