@@ -154,3 +154,11 @@ def test_a_centred_closure_is_told_apart_on_the_rows_the_search_and_the_fit_use(
     rec = gb.Record(u=u, y=y + 10.0)
     with pytest.raises(ValueError, match=r"included term u\(k-1\)\^2 cannot stay in a structure closed under shifts"):
         select(gb.Candidates(ny=1, nu=3, degree=2), rec, centre=True, n_terms=2, include=["u(k-1)^2"])
+
+
+def test_semp_names_an_included_term_whose_column_is_zero_as_frols_does():
+    # u held at zero: its terms are zero columns. semp said the one included term was 'collinear'
+    rng = np.random.default_rng(0)
+    rec = gb.Record(u=np.zeros(50), y=rng.standard_normal(50))
+    with pytest.raises(ValueError, match=r"included term u\(k-1\) cannot be used on these data: all-zero column"):
+        gb.semp(gb.Candidates(1, 1), rec, n_terms=2, include=["u(k-1)"])

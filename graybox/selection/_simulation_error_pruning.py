@@ -450,6 +450,9 @@ class _Search:
         self.sc, self.opt = sc, opt
         self.names = [str(t) for t in opt.process]
         self.current = list(opt.forced)
+        zero = [self.names[j] for j in opt.forced if sc.zero[j]]
+        if zero:  # in frols's words: one zero column is not 'collinear'
+            raise ValueError(f"included term {zero[0]} cannot be used on these data: all-zero column")
         th = sc.fit(self.current)
         if th is None:
             raise ValueError(f"the included terms {[self.names[j] for j in opt.forced]} are collinear on these data")
