@@ -162,3 +162,20 @@ def test_semp_names_an_included_term_whose_column_is_zero_as_frols_does():
     rec = gb.Record(u=np.zeros(50), y=rng.standard_normal(50))
     with pytest.raises(ValueError, match=r"included term u\(k-1\) cannot be used on these data: all-zero column"):
         gb.semp(gb.Candidates(1, 1), rec, n_terms=2, include=["u(k-1)"])
+
+
+def test_a_centred_semp_scores_a_closure_whose_free_run_diverges_inf_and_says_so():
+    # 17 samples of noise, two binary inputs: the 7 terms chosen on the centred signals run (score 0.35), their
+    # closure refitted by least squares does not. semp raised the simulator's DivergenceError ('the model is
+    # unstable along this input'), naming no structure; a diverging free run scores inf, as semp's module says
+    rng = np.random.default_rng(229)
+    n = int(rng.integers(3, 30))
+    rng.integers(1, 3), rng.integers(0, 4)
+    u = np.where(rng.standard_normal((n, 2)) > 0, 1.0, -1.0)
+    y = rng.standard_normal(n) * (0 if rng.random() < 0.05 else 1) + (1e4 if rng.random() < 0.2 else 0)
+    rec = gb.Record(u=u, y=y, input_names=("u1", "u2"))
+    space = gb.Candidates(2, 1, degree=2, input_names=("u1", "u2"))
+    with pytest.warns(RuntimeWarning) as heard:
+        res = gb.semp(space, rec, centre=True, tol=0.0108)
+    assert res.score == np.inf
+    assert any("diverges" in str(w.message) and "closure" in str(w.message) for w in heard)

@@ -301,8 +301,9 @@ def semp(
         cannot tell from its divisors (a two-level input's u(k-1)^2, and its multiples: in the stop
         text and a CandidateWarning; an included such term, or one of an input held at one level, is
         refused with a ValueError), with least-squares θ on the raw signals and
-        :attr:`SEMPResult.score` its free run's MSE. The structure and the model's free run are then
-        the same wherever the signals' zeros are, up to round-off. :attr:`SEMPResult.path` is the
+        :attr:`SEMPResult.score` its free run's MSE (inf, with a RuntimeWarning, when that run
+        diverges). The structure and the model's free run are then the same wherever the signals'
+        zeros are, up to round-off. :attr:`SEMPResult.path` is the
         centred search's; :attr:`SEMPResult.stop` says what it chose.
 
     Returns
@@ -377,10 +378,16 @@ def _semp_centred(candidates: Structure, data: Record | Sequence[Record] | Datas
     theta, _ = _centring.least_squares(closed, centred, L)
     recs = centred if isinstance(centred, list) else [centred]
     model = Model(closed, theta, **carried_from(recs))
-    err = np.concatenate([model.simulate(r, r.y[:L])[L:] - r.y[L:] for r in recs])
+    err = np.concatenate([model.simulate(r, r.y[:L], on_diverge="nan")[L:] - r.y[L:] for r in recs])
+    # a free run that diverges scores inf, as in the search (the closure's extra terms can make it unstable)
+    score = float(np.mean(err * err)) if np.all(np.isfinite(err)) else math.inf
+    if not math.isfinite(score):
+        warn(f"the closure of the {len(res.structure)} terms chosen on the centred signals ({len(closed)} terms, "
+             "fitted by least squares) diverges in free run on the identification records: its score is inf; take "
+             "fewer terms, or centre out", RuntimeWarning)
     stop = _centring.stop_note(res.stop, len(res.structure), len(full), offsets, dropped)
     return replace(res, structure=closed, theta=frozen(_centring.raw_theta(closed, theta, offsets)),
-                   score=float(np.mean(err * err)), stop=stop)
+                   score=score, stop=stop)
 
 
 # --------------------------------------------------------------------------------------
