@@ -179,3 +179,13 @@ def test_a_centred_semp_scores_a_closure_whose_free_run_diverges_inf_and_says_so
         res = gb.semp(space, rec, centre=True, tol=0.0108)
     assert res.score == np.inf
     assert any("diverges" in str(w.message) and "closure" in str(w.message) for w in heard)
+
+
+def test_semp_with_n_terms_looks_past_that_size_as_its_docstring_now_says():
+    # the docstring said the search stops when the structure holds n_terms terms; it goes on to 2·n_terms + 4
+    # (here 10) and returns the best structure of n_terms terms met on the path
+    res = gb.semp(SPACE, _plant(), n_terms=3)
+    path = res.path
+    assert path["n_terms"].max() == 10 and len(res.structure) == 3
+    assert res.score == path.loc[path["n_terms"] == 3, "score"].min()
+    assert "up to 2·n_terms + 4 terms" in " ".join(gb.semp.__doc__.split())

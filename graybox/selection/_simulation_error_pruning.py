@@ -257,7 +257,9 @@ def semp(
 
     Exactly one stopping rule applies:
 
-    * ``n_terms``: stop when the structure (after pruning) holds ``n_terms`` terms;
+    * ``n_terms``: the structure of that size with the smallest free-run error met on the path; the
+      search looks past it, up to 2·n_terms + 4 terms (a term found later can make earlier ones
+      redundant, and pruning brings the size back down);
     * ``tol``: stop at the first structure whose free-run error is at most ``tol`` of the output's
       variance (``MSE_free-run / var(y) <= tol``, a unit-free 1 − R² of the free run; for a constant
       output, its mean square instead of var(y));
