@@ -277,3 +277,18 @@ def test_plot_residual_tests_into_given_axes_keeps_a_title_given():
     fig.suptitle("theirs")
     plot_residual_tests(rt, axes=list(fig.subplots(len(rt.tests), 1)))
     assert fig.get_suptitle() == "theirs"
+
+
+@pytest.mark.parametrize("log", [True, False])
+def test_plot_pareto_shows_a_band_below_every_member(log):
+    # the band B = [0, 0.01] under members with J_SF from 1 to 3 was shaded outside the panel's y range: the legend
+    # named a shade the figure did not show
+    from graybox.plots import plot_pareto
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)", "1"])
+    ps = gb.ParetoSet(s, np.array([[0.9, 0.01, 0.1]] * 3), np.array([0.01, 0.1, 1.0]), np.ones(3),
+                      np.array([1.0, 2.0, 3.0]), np.array([3.0, 2.0, 1.0]), method="PE")
+    ax = plot_pareto(ps, band=0.01, log=log).axes[0]
+    lo, hi = ax.get_ylim()
+    assert lo < 0.01 and hi >= 3.0  # the band's top and every member inside the panel
+    assert [p.get_label() for p in ax.patches] == ["B = [0, 0.01]"]
