@@ -292,3 +292,20 @@ def test_plot_pareto_shows_a_band_below_every_member(log):
     lo, hi = ax.get_ylim()
     assert lo < 0.01 and hi >= 3.0  # the band's top and every member inside the panel
     assert [p.get_label() for p in ax.patches] == ["B = [0, 0.01]"]
+
+
+def test_plot_decision_bootstrap_shows_a_band_below_every_replicate():
+    # a band [0, B] below every replicate's J_SF was shaded below the panel's y range: the legend named a shade the
+    # figure did not show (a band [B_lo, B_hi] was brought in already)
+    import dataclasses
+    import warnings
+
+    from graybox.plots import plot_decision_bootstrap
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        boot = gb.bootstrap_decision(gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]),
+                                     gb.load_pumping(), n_boot=4, lambdas=np.logspace(-3, 0, 4))
+    low = float(np.nanmin(boot.JSF[boot.ok])) / 100
+    ax = plot_decision_bootstrap(dataclasses.replace(boot, band=low)).axes[1]
+    assert ax.get_ylim()[0] < low
