@@ -353,7 +353,8 @@ def heatmap_table(
     pandas.DataFrame
         Index: structures, columns: variants (grid order); NaN where no model qualified (or the
         structure and the variant never ran together: specs read with ``spec="all"``, stores
-        compared).
+        compared), and where the model that qualified has no such value (``lambda1`` of a
+        one-model estimator, ``seed`` of a deterministic one: the leaderboard's ``rank`` tells).
     """
     band = _checked_options(rule, band, data, value)
     return _heatmap_tables(_frame(results), data, value, rule, band)[0]
