@@ -309,3 +309,23 @@ def test_plot_decision_bootstrap_shows_a_band_below_every_replicate():
     low = float(np.nanmin(boot.JSF[boot.ok])) / 100
     ax = plot_decision_bootstrap(dataclasses.replace(boot, band=low)).axes[1]
     assert ax.get_ylim()[0] < low
+
+
+def test_a_gain_per_compound_input_unit_is_bracketed():
+    # a gain in Pa per rad/s was labelled "Pa/rad/s", which reads Pa·s/rad: the input unit is now bracketed
+    import warnings
+
+    from graybox.plots import plot_operating_curve, plot_static_band
+
+    oc = gb.operating_curve(_first_order(("rad/s", "Pa")), [1300.0, 1500.0])
+    assert plot_operating_curve(oc).axes[0].get_ylabel() == "gain (Pa/(rad/s))"
+    s = gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(1.0, 3.0, 40), 20)
+    y = gb.Model(s, np.array([0.8, 0.3, 0.05, 0.1])).simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(u.size)
+    rec = gb.Record(u, y, Ts=0.1, units=("rad/s", "Pa"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = gb.els(s, gb.Dataset(rec, rec)).model
+        band = gb.static_curve_band(gb.ls_uncertainty(model, rec), np.linspace(1.0, 3.0, 5))
+    assert plot_static_band(band).axes[1].get_ylabel() == "static gain dȳ/dū (Pa/(rad/s))"

@@ -82,6 +82,18 @@ def squared_unit(unit: str | None) -> str:
     return f" ({unit})²"
 
 
+def per_unit(unit: str | None, per: str | None) -> str:
+    """The unit of ``unit`` per ``per`` (a gain: output unit per input unit) as text, "mlc/rpm", with a compound
+    ``per`` bracketed ("Pa/(rad/s)", not "Pa/rad/s", which reads Pa·s/rad) and a missing side as 1; "" when
+    neither is said."""
+    unit, per = str(unit or "").strip(), str(per or "").strip()
+    if not unit and not per:
+        return ""
+    if any(c in "/*·^" or c.isspace() for c in per) and not _bracketed(per):
+        per = f"({per})"
+    return f"{unit or '1'}/{per or '1'}"
+
+
 def _bracketed(text: str) -> bool:
     """Whether ``text`` is one bracketed group: "(m/s)", not "(m)(s)" nor "(m)/s"."""
     depth = 0

@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..control._local import LocalModel, OperatingCurve
-from ..core._reprs import level_texts, point_texts
+from ..core._reprs import level_texts, per_unit, point_texts
 from ..core._validation import as_1d_finite, check_int, check_real, check_sequence
 from ._data import unit_label
 
@@ -33,8 +33,7 @@ def _points(lms: Sequence[LocalModel]) -> list[str]:
 
 def _per_input(units: tuple[str, str]) -> str:
     """The unit of a gain, output unit per input unit (``"mlc/rpm"``), or empty when neither is said."""
-    u, y = units
-    return f"{y or '1'}/{u or '1'}" if u or y else ""
+    return per_unit(units[1], units[0])
 
 
 def plot_local_models(

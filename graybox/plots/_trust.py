@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
-from ..core._reprs import level_texts
+from ..core._reprs import level_texts, per_unit
 from ._data import check_axes, check_one_input_points, distinct_colours, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
@@ -200,7 +200,7 @@ def plot_static_band(
     axs[0].legend(fontsize=8, loc="best")
     if gain:
         axs[1].set_xlabel(xlabel)
-        axs[1].set_ylabel(unit_label(gain_label, f"{y_unit or '1'}/{u_unit or '1'}" if u_unit or y_unit else ""))
+        axs[1].set_ylabel(unit_label(gain_label, per_unit(y_unit, u_unit)))
         axs[1].grid(True, alpha=0.3)
         axs[1].legend(fontsize=8, loc="best")
     return fig
