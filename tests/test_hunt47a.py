@@ -79,11 +79,15 @@ def test_the_operating_curve_figures_say_their_units():
     assert [a.get_ylabel() for a in plot_local_models(bare).axes][:2] == ["Δy per unit step", "|G|"]
 
 
-def test_plot_selection_says_the_unit_of_its_mean_squares():
-    # the static and test panels read "(output units²)" though the selection's model carries its data's units, and
-    # plot_selection takes no label to say them
+_SELECTION: list = []
+
+
+def _small_selection():
+    """A gray-box selection on data in (V, Pa), with a test record (made once)."""
     import warnings
 
+    if _SELECTION:
+        return _SELECTION[0]
     true = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
     theta = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
 
@@ -98,8 +102,15 @@ def test_plot_selection_says_the_unit_of_its_mean_squares():
                                                             units=("V", "Pa")))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        sel = gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, band=1e-3, sizes=[3], test=record(3),
-                                estimator=("pe",))
+        _SELECTION.append(gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, band=1e-3, sizes=[3],
+                                            test=record(3), estimator=("pe",)))
+    return _SELECTION[0]
+
+
+def test_plot_selection_says_the_unit_of_its_mean_squares():
+    # the static and test panels read "(output units²)" though the selection's model carries its data's units, and
+    # plot_selection takes no label to say them
+    sel = _small_selection()
     labels = [a.get_ylabel() for a in gx.plot_selection(sel).axes]
     assert labels[1:] == ["J_SF of the row's member (Pa²)", "J_S on the test record (Pa²)"]
 
@@ -329,3 +340,14 @@ def test_a_gain_per_compound_input_unit_is_bracketed():
         model = gb.els(s, gb.Dataset(rec, rec)).model
         band = gb.static_curve_band(gb.ls_uncertainty(model, rec), np.linspace(1.0, 3.0, 5))
     assert plot_static_band(band).axes[1].get_ylabel() == "static gain dȳ/dū (Pa/(rad/s))"
+
+
+def test_plot_selection_refuses_axes_that_are_not_axes_as_a_type_error():
+    # axes=[1, 2] (the right count, the wrong type) raised ValueError "axes must hold 2 matplotlib Axes …, got 2
+    # items": a wrong type is a TypeError, and the message counted what it had not checked
+    sel = _small_selection()
+    n = len(gx.plot_selection(sel).axes)
+    with pytest.raises(TypeError, match="matplotlib Axes.*int"):
+        gx.plot_selection(sel, axes=list(range(n)))
+    with pytest.raises(ValueError, match=f"axes must hold {n}"):
+        gx.plot_selection(sel, axes=list(range(n + 1)))

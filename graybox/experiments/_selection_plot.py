@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from ..core._reprs import beside, bound_text, squared_unit
-from ..core._validation import check_sequence
+from ..plots._data import check_axes
 from ._report import _MARKERS, _band_on, _finite_pos, _scale
 from ._select import GrayboxSelection
 
@@ -65,9 +65,8 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
         fig = Figure(figsize=(4.6 * len(panels), 4.2), layout="constrained")
         axs = list(fig.subplots(1, len(panels), squeeze=False)[0])
     else:
-        axs = check_sequence(axes, "axes", f"a sequence of {len(panels)} matplotlib Axes")
-        if len(axs) != len(panels) or not all(isinstance(a, Axes) for a in axs):
-            raise ValueError(f"axes must hold {len(panels)} matplotlib Axes (panels {panels}), got {len(axs)} items")
+        # the count a ValueError, an item that is no Axes a TypeError (as every plot's axes are checked)
+        axs = check_axes(axes, len(panels), "plot_selection", f" (panels {panels})")
         fig = axs[0].figure
     chosen = selection.chosen
     estimators = list(dict.fromkeys(t["estimator"]))
