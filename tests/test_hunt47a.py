@@ -351,3 +351,26 @@ def test_plot_selection_refuses_axes_that_are_not_axes_as_a_type_error():
         gx.plot_selection(sel, axes=list(range(n)))
     with pytest.raises(ValueError, match=f"axes must hold {n}"):
         gx.plot_selection(sel, axes=list(range(n + 1)))
+
+
+def test_a_compound_output_unit_is_bracketed_when_squared_in_reports(tmp_path):
+    # an output in m/s (or a flow in m3/h) was squared as "m/s²" (an acceleration) in the summary, the HTML page, the
+    # heat map's colour bar, the fronts' and the scatter's axes (the grid status already wrote "(m/s)²")
+    ds = gb.load_pumping()
+    recs = [gb.Record(r.u, r.y, r.Ts, r.name, units=("rpm", "m/s")) for r in (ds.ident, ds.valid)]
+    st = ds.static
+    static = gb.StaticPoints(st.ubar, st.ybar, st.name, uncertainty=st.uncertainty, units=("rpm", "m/s"))
+    g = gx.Grid.from_toml_text(_PUMPING)
+    g = gx.Grid(name="p", data=[gx.DataSpec("pumping", dataset=gb.Dataset(*recs, static))], structures=g.structures,
+                variants=g.variants)
+    gx.run_grid(g, tmp_path / "r.sqlite")
+    written = {p.name: p for p in gx.write_report(tmp_path / "r.sqlite", tmp_path / "rep", html=True)}
+    for name in ("summary.txt", "report.html"):
+        text = written[name].read_text(encoding="utf-8")
+        assert "(m/s)²" in text and "m/s²" not in text.replace("(m/s)²", ""), name
+    df = gb.load_results(tmp_path / "r.sqlite")
+    labels = [a.get_ylabel() for a in gx.plot_heatmap(df, rule="chosen").axes] + [gx.plot_fronts(df).axes[0].get_ylabel(),
+                                                                   gx.plot_scatter(df).axes[0].get_xlabel()]
+    assert "JS_valid ((m/s)²)" in labels and labels[-2:] == ["J_SF ((m/s)²)", "J_S on the validation record ((m/s)²)"]
+    title = " ".join(gx.plot_fronts(df, band=1e9).get_suptitle().split())
+    assert "(m/s)²" in title and "m/s²" not in title.replace("(m/s)²", "")

@@ -14,6 +14,7 @@ from typing import Mapping, Sequence
 
 import pandas as pd
 
+from ..core._reprs import squared_unit
 from ._cell import STATUSES
 from ._store import output_units
 
@@ -120,7 +121,7 @@ def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Seque
         parts.append("<p>" + _e("JS_valid and JS_ident (J_S, the free-run simulation's mean squared error on the "
                                 "validation and identification records) and JSF (J_SF, the mean squared static error "
                                 "on the static points) are in the output's unit squared: "
-                                + "; ".join(f"{d}: {u}²" for d, u in units.items()) + "; fit_valid in %.") + "</p>")
+                                + "; ".join(f"{d}:{squared_unit(u)}" for d, u in units.items()) + "; fit_valid in %.") + "</p>")
     parts.append(_table(lb, text_cols=("data", "structure", "variant", "reason"), why="reason"))
     parts.append("<h2 id=\"figures\">Figures</h2>")
     for name, png in figures.items():

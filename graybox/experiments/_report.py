@@ -76,7 +76,8 @@ def _frame(results: pd.DataFrame | str | os.PathLike | Sequence, spec: str | int
 def _sq(df: pd.DataFrame, data: str) -> str:
     """`` (unit²)`` of data set ``data``'s output (J_S, J_SF and B are mean squares of it), or empty."""
     unit = df.attrs.get("y_units", {}).get(data, "")
-    return f" ({unit}²)" if unit else ""
+    sq = squared_unit(unit).strip()  # "(m/s)²", not "m/s²" (an acceleration)
+    return f" ({sq})" if sq else ""
 
 
 def _n_params(df: pd.DataFrame) -> pd.Series:
@@ -676,7 +677,7 @@ def plot_fronts(
     axes[0].legend(fontsize=7, loc="best", title="★ chosen, ◆ single model", title_fontsize=7)
     said = ""
     unit = df.attrs.get("y_units", {}).get(d, "")
-    unit = f" {unit}²" if unit else ""
+    unit = squared_unit(unit)
     if len(bands) == 1:  # the shade named only where a panel draws it (else each panel says where B lies)
         said = f" ({'shaded below the dashed line: ' if shaded else ''}J_SF ≤ B = {bands[0][0]:g}{unit})"
     elif bands:
@@ -934,7 +935,7 @@ def _summary_lines(df: pd.DataFrame, lb: pd.DataFrame, rule: str, attrs: Mapping
         part = lb.loc[d]
         rows = df[df["data"] == d]
         sub = part.dropna(subset=["JS_valid"]).head(5)
-        unit = f"{units[d]}²" if units.get(d) else ""
+        unit = squared_unit(units.get(d)).strip()
         if rule == "chosen":
             within = " (each cell's own choice)"
         else:  # the band that ranked it: given, or stored (the variants' own where their cells stored several)
