@@ -374,3 +374,15 @@ def test_a_compound_output_unit_is_bracketed_when_squared_in_reports(tmp_path):
     assert "JS_valid ((m/s)²)" in labels and labels[-2:] == ["J_SF ((m/s)²)", "J_S on the validation record ((m/s)²)"]
     title = " ".join(gx.plot_fronts(df, band=1e9).get_suptitle().split())
     assert "(m/s)²" in title and "m/s²" not in title.replace("(m/s)²", "")
+
+
+def test_a_store_given_twice_is_not_compared_with_itself(store, tmp_path):
+    # "graybox grid report a.sqlite ./a.sqlite" (a typo for two stores) wrote a report of '1:r vs 2:r': every row twice,
+    # ranked against itself, without a word
+    import os
+
+    with pytest.raises(ValueError, match="same store"):
+        gx.compare_results([store, store])
+    os.symlink(store, tmp_path / "again.sqlite")
+    with pytest.raises(ValueError, match="same store"):
+        gx.leaderboard([store, tmp_path / "again.sqlite"])

@@ -1131,7 +1131,8 @@ def compare_results(
     Parameters
     ----------
     stores : sequence of path
-        Two or more grid stores run on the same data.
+        Two or more grid stores run on the same data (two paths of one store, e.g. through a
+        link, are refused with ``ValueError``: it would be compared with itself).
     labels : sequence of str, optional
         One label per store (default: the file names without their suffix).
     spec : "latest", "all" or int
@@ -1153,6 +1154,12 @@ def compare_results(
     paths = [Path(s) for s in stores]
     if len(paths) < 2:
         raise ValueError(f"compare_results needs two or more stores, got {len(paths)}")
+    seen_at: dict[Path, Path] = {}
+    for p in paths:  # a store named twice (a typo, a link) would be compared with itself, every row twice
+        at = p.resolve()
+        if at in seen_at:
+            raise ValueError(f"{seen_at[at]} and {p} are the same store: compare two or more different stores")
+        seen_at[at] = p
     if labels is None:
         labels = [p.stem for p in paths]
         if len(set(labels)) < len(labels):
