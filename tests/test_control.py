@@ -428,3 +428,17 @@ def test_local_model_refuses_frequencies_above_nyquist_and_says_which_inputs_it_
     (tmp_path / "lm.json").write_text(json.dumps(doc))
     with pytest.raises(gb.GrayboxFileError, match="status 'reached' has no reason"):
         gb.load(tmp_path / "lm.json")
+
+
+def test_local_models_of_a_pole_near_one_are_drawn_over_a_bounded_number_of_samples():
+    """τ ≈ 5e5 s at Ts = 0.05 s asked six τ of samples by default (6e7: out of memory); the default is now cut at
+    MAX_STEP_SAMPLES samples, and a duration asking for absurdly many is refused by name."""
+    from graybox import plots
+    from graybox.plots._control import MAX_STEP_SAMPLES
+
+    m = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)", "1"]), np.array([1 - 1e-7, 1e-7, 0.0]), Ts=0.05)
+    fig = plots.plot_local_models(gb.operating_curve(m, [1.0, 2.0]))
+    xs = [line.get_xdata() for line in fig.axes[0].get_lines()]
+    assert xs and all(len(x) == MAX_STEP_SAMPLES for x in xs)
+    with pytest.raises(ValueError, match="duration"):
+        plots.plot_local_models(gb.operating_curve(m, [1.0]), duration=1e9)

@@ -36,6 +36,10 @@ def _per_input(units: tuple[str, str]) -> str:
     return per_unit(units[1], units[0])
 
 
+#: Most samples of a local model's step response drawn by default (a figure shows a few thousand points).
+MAX_STEP_SAMPLES = 100_000
+
+
 def plot_local_models(
     models: OperatingCurve | Sequence[LocalModel],
     *,
@@ -52,7 +56,9 @@ def plot_local_models(
     input : int or str
         The input stepped (by position or name).
     duration : float, optional
-        Length of the step responses (s); default six times the largest finite time constant.
+        Length of the step responses (s); default six times the largest finite time constant, cut at
+        100 000 samples of a model (a pole near 1 would otherwise ask for millions). Given, it may ask
+        for at most 10⁷ samples of a model (``ValueError`` beyond).
     n_frequencies : int
         Frequencies of the Bode diagram, log-spaced up to each model's Nyquist frequency π/Ts
         (each model is drawn on its own sampling period).
@@ -82,6 +88,11 @@ def plot_local_models(
     for m in shown:
         # each model on its own sampling: its samples in time, its frequencies up to its Nyquist π/Ts
         n = max(int(np.ceil(T / m.Ts - 1e-9)) + 1, 2)
+        if duration is None:
+            n = min(n, MAX_STEP_SAMPLES)
+        elif n > 100 * MAX_STEP_SAMPLES:
+            raise ValueError(f"duration={duration:g} s is {n} samples of a model sampled every {m.Ts:g} s: at most "
+                             f"{100 * MAX_STEP_SAMPLES} are drawn; give a shorter duration")
         w = np.logspace(np.log10(np.pi / m.Ts) - 3, np.log10(np.pi / m.Ts), n_frequencies)
         tag = f"ū = {at[id(m)]}" + ("" if m.reached else f" ({m.status})")
         line, = ax_s.plot(np.arange(n) * m.Ts, m.step(n, input), lw=1.2, label=tag)
