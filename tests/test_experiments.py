@@ -712,3 +712,14 @@ def test_a_cluster_bound_that_names_no_cluster_is_refused_with_the_spec(key):
     with pytest.raises(gx.SpecError, match="cluster bounds name their clusters"):
         gx.Variant("bounded", "cls", constraints=[{"type": "clusters", "bounds": {key: [None, 0.99]}}])
     gx.Variant("bounded", "cls", constraints=[{"type": "clusters", "bounds": {"Sy": [None, 0.99]}}])
+
+
+@pytest.mark.parametrize("call, arg, said", [
+    ("leaderboard", 42, "results must be a frame"), ("grid_status", None, "store must be a file"),
+    ("load_results", 3.5, "store must be a file"), ("write_report", 7, "results must be a frame"),
+])
+def test_a_store_that_is_no_path_is_refused_naming_the_argument(call, arg, said, tmp_path):
+    # was Python's own "expected str, bytes or os.PathLike object, not int", naming no argument
+    fn = getattr(gx, call)
+    with pytest.raises(TypeError, match=said):
+        fn(arg, tmp_path / "out") if call == "write_report" else fn(arg)

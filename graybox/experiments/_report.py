@@ -63,8 +63,11 @@ def _frame(results: pd.DataFrame | str | os.PathLike | Sequence, spec: str | int
         df = results
     elif isinstance(results, (list, tuple)):
         df = compare_results(results, spec=spec)
-    else:
+    elif isinstance(results, (str, os.PathLike)):
         df = load_results(results, spec=spec)
+    else:
+        raise TypeError(f"results must be a frame from graybox.load_results, a store's path or a list of paths, got "
+                        f"{results!r} ({type(results).__name__})")
     if attrs or not df.attrs:
         return df
     bare = df.copy(deep=False)

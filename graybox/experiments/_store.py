@@ -34,7 +34,7 @@ import pandas as pd
 
 from ..core._files import CAN_FLOCK, folder_now, lock_fd, sweep_leftovers
 from ..core._processes import pid_alive, pid_started
-from ..core._validation import check_sequence
+from ..core._validation import check_path, check_sequence
 from ._cell import COLUMNS, JSON_COLUMNS
 from ._spec import Cell, _hash
 
@@ -848,7 +848,7 @@ def _decode_members(d: Mapping[str, Any]) -> dict[str, np.ndarray]:
 
 
 def _open_readonly(path: str | os.PathLike) -> tuple[Path, sqlite3.Connection, dict[str, str]]:
-    p = Path(path)
+    p = Path(check_path(path, "store", file=True))
     if not p.is_file():
         raise StoreError(f"{p}: no such store" + (" (a folder)" if p.is_dir() else ""))
     _check_file(p, reading=True)
