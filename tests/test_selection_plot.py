@@ -96,3 +96,14 @@ def test_bad_arguments_are_named(selections):
         plot_selection(gray, axes=fig.subplots(1, 2))
     axs = Figure().subplots(1, 3)
     assert plot_selection(gray, axes=list(axs)) is axs[0].figure
+
+
+def test_drawn_into_the_caller_s_axes_the_figure_keeps_its_own_title_unless_one_is_given(selections):
+    gray, _ = selections
+    fig = Figure()
+    fig.suptitle("my dashboard")
+    plot_selection(gray, axes=list(fig.subplots(1, 3)))
+    assert fig.get_suptitle() == "my dashboard"  # was replaced by "chosen: …"
+    plot_selection(gray, axes=list(Figure().subplots(1, 3)), title="mine")
+    own = plot_selection(gray)
+    assert own.get_suptitle().startswith("chosen: ")

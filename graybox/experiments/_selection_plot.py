@@ -47,7 +47,8 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
         Draw here, one Axes per panel (2, or 3 with a test record); by default a new figure with
         the panels side by side is made.
     title : str, optional
-        Figure title (default: the chosen row, its estimator and the rule).
+        Figure title (default: the chosen row, its estimator and the rule; with ``axes`` given, the
+        figure's own title is left as it is unless ``title`` is given).
 
     Returns
     -------
@@ -127,7 +128,8 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
     if not selection.in_band:  # fallback "min_jsf": the J_S rule had no row to choose from
         said += (f",\nthe smallest J_SF reached, {beside(chosen['JSF'], selection.band)}: no row meets the band "
                  f"B = {bound_text(selection.band, chosen['JSF'])} (fallback 'min_jsf')")
-    fig.suptitle(str(title) if title is not None else said, fontsize=10)
+    if title is not None or axes is None:  # drawn into the caller's axes: their figure keeps its own title
+        fig.suptitle(str(title) if title is not None else said, fontsize=10)
     return fig
 
 
