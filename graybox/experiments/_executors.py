@@ -698,8 +698,9 @@ class DaskCluster:
         What a worker runs for a cell.
     worker_timeout : float or None
         Seconds a run goes on once the cluster has no worker left (all of them gone, none restarted): then it
-        ends with a ``ConnectionError``, the rows it finished kept (the store's run resumes them). ``None``
-        waits for ever (e.g. for an adaptive cluster whose workers wait in a batch queue).
+        ends with a ``ConnectionError``, the rows it finished kept (the store's run resumes them). A cluster
+        that has had no worker yet in the run (an adaptive one whose first workers wait in a batch queue) is
+        waited for. ``None`` waits for ever.
     """
 
     def __init__(self, client: Any = None, scheduler: str | None = None, workers: int | None = None,
@@ -784,6 +785,7 @@ class DaskCluster:
             if not first:
                 return
         with self._using(dashboard=log is not None) as (client, new):
+            started_with = _worker_count(client)  # asked first: its workers may go while the data are sent
             if log is not None and new:
                 link = getattr(client, "dashboard_link", None) if _has_dashboard(client) else None
                 log(f"Dask dashboard: {link}" if link else
@@ -824,7 +826,7 @@ class DaskCluster:
 
             # results are gathered in the background as tasks finish (no round trip per task here)
             pending = as_completed([], with_results=True, raise_errors=False)
-            watch = _WorkerWatch(client, self.worker_timeout, pending)
+            watch = _WorkerWatch(client, self.worker_timeout, pending, seen=started_with > 0)
             submit()
             try:
                 for f, result in pending:
@@ -869,33 +871,39 @@ class DaskCluster:
                     pass
 
 
+def _worker_count(client: Any) -> int:
+    """The workers of ``client``'s cluster (0 when its scheduler cannot be asked: it runs nothing either)."""
+    try:
+        return len(client.nthreads())
+    except Exception:
+        return 0
+
+
 class _WorkerWatch:
-    """Ends a Dask run whose cluster has had no worker for ``limit`` seconds: a thread asks the scheduler
+    """Ends a Dask run whose cluster has had no worker for ``limit`` seconds, once it has had one in the run (a
+    cluster still starting its first, from a batch queue say, is waited for): a thread asks the scheduler
     once a second, and then empties ``pending`` (the ``as_completed`` the run waits on, which then stops) and
     sets :attr:`lost`; it keeps emptying it until :meth:`close` (a task added meanwhile is not waited for)."""
 
-    def __init__(self, client: Any, limit: float | None, pending: Any):
+    def __init__(self, client: Any, limit: float | None, pending: Any, seen: bool = False):
         self.client, self.limit, self.pending = client, limit, pending
         self.lost = False
+        self.seen = seen  # whether the run's cluster has had a worker (else it is waited for: none *left* yet)
         self._stop = threading.Event()
         self._thread = None
         if limit is not None:
             self._thread = threading.Thread(target=self._watch, name="graybox Dask worker watch", daemon=True)
             self._thread.start()
 
-    def _workers(self) -> int:
-        try:
-            return len(self.client.nthreads())
-        except Exception:  # a scheduler that cannot be asked runs nothing either
-            return 0
-
     def _watch(self) -> None:
         since = None
         while not self._stop.wait(min(1.0, self.limit / 4)):
             if self.lost:
                 self.pending.clear()
-            elif self._workers():
-                since = None
+            elif _worker_count(self.client):
+                since, self.seen = None, True
+            elif not self.seen:  # a cluster with no worker yet (an adaptive one starting them): waited for
+                continue
             elif since is None:
                 since = time.monotonic()
             elif time.monotonic() - since >= self.limit:

@@ -148,7 +148,8 @@ def run_grid(
         The store cannot be used, or gives one of the spec's data set names other data.
     ConnectionError
         A Dask scheduler cannot be reached or has no worker, or the cluster has had no worker for 60 s
-        mid-run (all gone, none restarted): the rows finished are kept, and running again resumes.
+        mid-run (all gone, none restarted): the rows finished are kept, and running again resumes. (A
+        ``client`` whose cluster has no worker yet, an adaptive one starting them, is waited for.)
 
     Notes
     -----
