@@ -1,8 +1,11 @@
 """Review 47e: regressions found in the changes merged this session."""
 
 import logging
+import os
+import subprocess
+import sys
 import threading
-import time
+from pathlib import Path
 
 from test_grid_executors import _death_cells
 
@@ -26,3 +29,29 @@ def test_a_client_whose_cluster_has_no_worker_yet_is_waited_for_not_ended():
         finally:
             late.join()
     assert [r["status"] for r in rows] == ["ok"]
+
+
+def test_a_renamed_attribute_on_the_api_pages_says_it_is_the_old_name_of_the_new(tmp_path):
+    """The API pages document every member with a docstring: Structure.inputs, Term.inputs and
+    SurfaceClusterMap.inputs were shown as '``inputs = RenamedAttribute("input_names")``', of type 'A class
+    attribute ``old`` that reads attribute ``new`` and warns' (RenamedAttribute's own docstring, inherited)."""
+    import inspect
+
+    import graybox as gb
+
+    for cls in (gb.Structure, gb.Term, gb.SurfaceClusterMap):
+        doc = inspect.getdoc(inspect.getattr_static(cls, "inputs"))
+        assert "input_names" in doc and "0.5" in doc and "RenamedAttribute" not in doc, doc
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text('extensions = ["sphinx.ext.autodoc", "sphinx.ext.napoleon"]\n'
+                                 'napoleon_google_docstring = False\nnapoleon_use_ivar = True\n'
+                                 'autodoc_default_options = {"members": True}\nsuppress_warnings = ["ref.python"]\n')
+    (src / "index.rst").write_text("API\n===\n\n.. autoclass:: graybox.core.Structure\n")
+    # in a process of its own, as tests/test_docs.py builds (Sphinx's own deprecation warnings are not ours)
+    subprocess.run([sys.executable, "-m", "sphinx", "-q", "-b", "text", str(src), str(tmp_path / "out")],
+                   check=True, capture_output=True, cwd=tmp_path, timeout=300,
+                   env=dict(os.environ, PYTHONPATH=str(Path(gb.__file__).resolve().parents[1])))  # this graybox
+    page = (tmp_path / "out" / "index.txt").read_text(encoding="utf-8")
+    entry = page[page.index("\n   inputs\n"):][:400]
+    assert "input_names" in entry and "Type:" not in entry and "RenamedAttribute" not in entry, entry

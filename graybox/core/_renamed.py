@@ -19,6 +19,9 @@ class RenamedAttribute:
     def __init__(self, new: str):
         self.new = new
         self.old = ""
+        # what the API pages and help() show for the old name (else this class's docstring, of its mechanics);
+        # no colon: the docs read "type: text" from an attribute's first line
+        self.__doc__ = f"The old name of ``{new}``, deprecated (reading it warns) and removed in graybox 0.5."
 
     def __set_name__(self, owner: type, name: str) -> None:
         self.old = name
