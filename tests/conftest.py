@@ -214,7 +214,9 @@ def pytest_configure(config):
     import os
 
     suite = os.environ.get(_BESIDE_ENV, "")
-    if suite.isdigit():
+    # only as start_beside starts it: a child of that suite, leading a process group of its own (the variable set by
+    # hand, or inherited, would have it kill a group that is its caller's too)
+    if suite.isdigit() and os.getppid() == int(suite) and os.getpgid(0) == os.getpid():
         _end_with_the_suite(int(suite))
 
 

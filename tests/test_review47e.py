@@ -2,6 +2,7 @@
 
 import logging
 import os
+import shutil
 import subprocess
 import sys
 import threading
@@ -55,3 +56,16 @@ def test_a_renamed_attribute_on_the_api_pages_says_it_is_the_old_name_of_the_new
     page = (tmp_path / "out" / "index.txt").read_text(encoding="utf-8")
     entry = page[page.index("\n   inputs\n"):][:400]
     assert "input_names" in entry and "Type:" not in entry and "RenamedAttribute" not in entry, entry
+
+
+def test_a_pytest_told_it_runs_beside_a_suite_that_is_not_its_parent_does_not_kill_its_process_group(tmp_path):
+    """GRAYBOX_TESTS_BESIDE set by hand (to 1, its value before 748b0e3, to run the beside tests in one pytest): the
+    pytest took the process 1 for the suite, found it was not its parent, and SIGKILLed its own process group at
+    once, a group that is the caller's too when it runs without job control (a CI step's shell, a pipe)."""
+    shutil.copy(Path(__file__).resolve().parent / "conftest.py", tmp_path / "conftest.py")
+    (tmp_path / "test_slow.py").write_text("import time\n\n\ndef test_slow():\n    time.sleep(3)\n")
+    env = dict(os.environ, GRAYBOX_TESTS_BESIDE="1")
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", f"--basetemp={tmp_path / 'bt'}",
+                           "test_slow.py"], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300,
+                          start_new_session=True)  # its own group: with the fault, only it is killed
+    assert done.returncode == 0 and "1 passed" in done.stdout, (done.returncode, done.stdout[-2000:])
