@@ -69,3 +69,24 @@ def test_a_pytest_told_it_runs_beside_a_suite_that_is_not_its_parent_does_not_ki
                            "test_slow.py"], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300,
                           start_new_session=True)  # its own group: with the fault, only it is killed
     assert done.returncode == 0 and "1 passed" in done.stdout, (done.returncode, done.stdout[-2000:])
+
+
+def test_a_dask_run_whose_first_submission_fails_leaves_no_worker_watch_running():
+    """The first tasks were submitted before the try whose finally closes the worker watch: a run whose first
+    submission raised (the store refusing the claim of its first cells, a client gone) left the watch thread
+    asking the scheduler once a second for the rest of the process (and the grid-data plugin registered)."""
+    import pytest
+    from distributed import Client, LocalCluster
+
+    from graybox.experiments._executors import DaskCluster
+
+    def take(cells):
+        raise OSError("the store's disk is full")
+
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                           silence_logs=logging.ERROR)
+    with cluster, Client(cluster) as client:
+        cells, data = _death_cells(("LS",))
+        with pytest.raises(OSError, match="disk is full"):
+            list(DaskCluster(client=client).run(cells, data, take=take))
+        assert not [t for t in threading.enumerate() if t.name == "graybox Dask worker watch"]

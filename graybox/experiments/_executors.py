@@ -827,8 +827,8 @@ class DaskCluster:
             # results are gathered in the background as tasks finish (no round trip per task here)
             pending = as_completed([], with_results=True, raise_errors=False)
             watch = _WorkerWatch(client, self.worker_timeout, pending, seen=started_with > 0)
-            submit()
             try:
+                submit()  # in the try: a first submission that raises closes the watch too
                 for f, result in pending:
                     items = futures.pop(f)
                     batches.returned(items)
