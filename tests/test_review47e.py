@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 from test_grid_executors import _death_cells
@@ -90,3 +91,45 @@ def test_a_dask_run_whose_first_submission_fails_leaves_no_worker_watch_running(
         with pytest.raises(OSError, match="disk is full"):
             list(DaskCluster(client=client).run(cells, data, take=take))
         assert not [t for t in threading.enumerate() if t.name == "graybox Dask worker watch"]
+
+
+def test_a_lost_cluster_ends_the_run_even_when_its_watch_empties_what_the_run_was_taking(monkeypatch):
+    """The watch emptied the run's as_completed from its own thread (clear()); as_completed's next() looks at its
+    queue, then takes from it (a blocking get): a clear() between the two, as a finished task's row is being taken
+    when the watch gives up, left the run waiting for ever on an empty queue, the very hang the watch is for. Here
+    the run's thread is held between the look and the take (as a busy machine may) while the cluster loses its
+    worker."""
+    import distributed
+    from distributed import Client, LocalCluster
+
+    from graybox.experiments._executors import DaskCluster
+
+    held = threading.Event()
+
+    class Slow(distributed.as_completed):
+        def _get_and_raise(self):
+            if not held.is_set():  # the first finished task: its worker goes, the watch gives up meanwhile
+                held.set()
+                time.sleep(4.0)
+            return super()._get_and_raise()
+
+    monkeypatch.setattr(distributed, "as_completed", Slow)
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                           silence_logs=logging.ERROR)
+    with cluster, Client(cluster) as client:
+        cells, data = _death_cells(("LS", "CLS", "PE"))
+        out: dict = {}
+
+        def drive():
+            try:
+                out["rows"] = list(DaskCluster(client=client, worker_timeout=1).run(cells, data))
+            except Exception as exc:  # noqa: BLE001 - what the run ended with is the test's object
+                out["error"] = exc
+
+        t = threading.Thread(target=drive, daemon=True)
+        t.start()
+        assert held.wait(60)
+        cluster.scale(0)
+        t.join(timeout=30)
+        assert not t.is_alive(), "the run waits for ever on the as_completed its watch emptied"
+    assert isinstance(out.get("error"), ConnectionError), out

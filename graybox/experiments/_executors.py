@@ -882,8 +882,9 @@ def _worker_count(client: Any) -> int:
 class _WorkerWatch:
     """Ends a Dask run whose cluster has had no worker for ``limit`` seconds, once it has had one in the run (a
     cluster still starting its first, from a batch queue say, is waited for): a thread asks the scheduler
-    once a second, and then empties ``pending`` (the ``as_completed`` the run waits on, which then stops) and
-    sets :attr:`lost`; it keeps emptying it until :meth:`close` (a task added meanwhile is not waited for)."""
+    once a second, and then sets :attr:`lost` and has ``pending`` (the ``as_completed`` the run waits on) forget its
+    tasks in flight, so that it stops once the rows it holds are taken; it keeps doing so until :meth:`close` (a
+    task added meanwhile is not waited for)."""
 
     def __init__(self, client: Any, limit: float | None, pending: Any, seen: bool = False):
         self.client, self.limit, self.pending = client, limit, pending
@@ -899,7 +900,7 @@ class _WorkerWatch:
         since = None
         while not self._stop.wait(min(1.0, self.limit / 4)):
             if self.lost:
-                self.pending.clear()
+                self._forget()
             elif _worker_count(self.client):
                 since, self.seen = None, True
             elif not self.seen:  # a cluster with no worker yet (an adaptive one starting them): waited for
@@ -908,7 +909,14 @@ class _WorkerWatch:
                 since = time.monotonic()
             elif time.monotonic() - since >= self.limit:
                 self.lost = True
-                self.pending.clear()
+                self._forget()
+
+    def _forget(self) -> None:
+        """Stop waiting for the tasks in flight: ``pending`` forgets them and, once the rows it holds are taken,
+        stops. Its queue of finished ones is left to the run's thread (``as_completed.clear()`` empties it, and a
+        run then between looking at it and taking from it would wait for ever on it emptied)."""
+        with self.pending.lock:
+            self.pending.futures.clear()
 
     def close(self) -> None:
         self._stop.set()
