@@ -75,7 +75,8 @@ def _grid(args: argparse.Namespace) -> int:
 
             res = gx.run_grid(args.spec, args.store, executor="processes" if processes else None,
                               workers=args.processes if processes else args.workers, scheduler=args.scheduler,
-                              retry_failed=args.retry_failed, cell_time_limit=args.cell_time_limit, log=log)
+                              retry_failed=args.retry_failed, cell_time_limit=args.cell_time_limit,
+                              **({} if args.worker_timeout is None else {"worker_timeout": args.worker_timeout}), log=log)
             head, *notes = res.summary().splitlines()
             # the notes said at the start are not repeated; those of the end (cells another run wrote meanwhile) are
             print("\n".join([head, *(n for n in notes if n.strip() not in said)]))
@@ -199,6 +200,9 @@ def _main(argv: list[str] | None) -> int:
     run.add_argument("--retry-failed", action="store_true", help="run the failed cells again")
     run.add_argument("--cell-time-limit", type=float, metavar="S",
                      help="with --processes: a cell running longer than S seconds is stopped and stored as failed")
+    run.add_argument("--worker-timeout", type=float, metavar="S",
+                     help="with Dask: end the run (its finished cells kept) once the cluster has had no worker for S "
+                          "seconds (default 60)")
     which = {"type": _spec_arg, "default": "latest",
              "help": "which cells: of the spec run last (latest, default), all the store holds, or spec number N"}
     stat = gsub.add_parser("status", help="a store's progress, also while a run writes it: cells done, failed, left, "

@@ -522,3 +522,16 @@ def test_the_dask_worker_timeout_is_checked():
     with pytest.raises(TypeError, match="worker_timeout"):
         DaskCluster(workers=1, worker_timeout="60")
     assert DaskCluster(workers=1, worker_timeout=None).worker_timeout is None
+
+
+def test_run_grid_passes_worker_timeout_to_dask_and_refuses_it_elsewhere(tmp_path):
+    from graybox.experiments._executors import make_executor
+
+    assert make_executor("dask", workers=1, worker_timeout=None).worker_timeout is None
+    assert make_executor("dask", workers=1, worker_timeout=5).worker_timeout == 5.0
+    assert make_executor("dask", workers=1).worker_timeout == 60
+    with pytest.raises(ValueError, match="worker_timeout is for a Dask cluster"):
+        gx.run_grid(tiny_grid(), tmp_path / "s.sqlite", executor="processes", worker_timeout=10)
+    with pytest.raises(TypeError, match="worker_timeout"):
+        gx.run_grid(tiny_grid(), tmp_path / "s.sqlite", worker_timeout="10")
+    assert not (tmp_path / "s.sqlite").exists()

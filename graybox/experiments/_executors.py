@@ -994,7 +994,8 @@ def _check_address(scheduler: str) -> None:
 
 
 def make_executor(executor: str | None = None, *, workers: int | None = None, client: Any = None,
-                  scheduler: str | None = None, fn: CellFn = run_cell, cell_time_limit: float | None = None):
+                  scheduler: str | None = None, fn: CellFn = run_cell, cell_time_limit: float | None = None,
+                  worker_timeout: float | None = WORKER_TIMEOUT):
     """The executor for :func:`graybox.experiments.run_grid`'s arguments (see there)."""
     if executor is None:
         executor = "dask" if (client is not None or scheduler is not None or workers is not None) else "inprocess"
@@ -1008,6 +1009,10 @@ def make_executor(executor: str | None = None, *, workers: int | None = None, cl
             # numba's compiled loops cannot be interrupted in a thread, and a Dask task's start is not known
             raise ValueError(f"cell_time_limit needs executor='processes' (graybox grid run --processes N): a cell "
                              f"on the {executor!r} executor cannot be stopped on time")
+    if worker_timeout is not None:
+        worker_timeout = check_real(worker_timeout, "worker_timeout (seconds)", low=0, low_open=True)
+    if worker_timeout != WORKER_TIMEOUT and executor != "dask":
+        raise ValueError(f"worker_timeout is for a Dask cluster's workers; the {executor!r} executor has none to lose")
     if executor == "inprocess":
         if any(v is not None for v in (workers, client, scheduler)):
             raise ValueError("the in-process executor takes no workers, client or scheduler")
@@ -1016,4 +1021,4 @@ def make_executor(executor: str | None = None, *, workers: int | None = None, cl
         if client is not None or scheduler is not None:
             raise ValueError("the local process executor takes workers only (a client or scheduler means Dask)")
         return ProcessPool(workers or os.cpu_count() or 1, fn, time_limit=cell_time_limit)
-    return DaskCluster(client=client, scheduler=scheduler, workers=workers, fn=fn)
+    return DaskCluster(client=client, scheduler=scheduler, workers=workers, fn=fn, worker_timeout=worker_timeout)

@@ -16,7 +16,7 @@ from ..core._progress import progress_bar
 from ..core._reprs import bound_text
 from ..core._validation import FrozenMap, check_bool, check_fields
 from ._cell import STATUSES, failed_row, run_cell
-from ._executors import make_executor, session
+from ._executors import WORKER_TIMEOUT, make_executor, session
 from ._spec import Grid, SpecError, reads_uncertainty, stored_spec
 from ._store import ResultStore
 
@@ -92,6 +92,7 @@ def run_grid(
     scheduler: str | None = None,
     retry_failed: bool = False,
     cell_time_limit: float | None = None,
+    worker_timeout: float | None = WORKER_TIMEOUT,
     progress: bool | None = None,
     log: Callable[[str], None] | None = None,
 ) -> GridRun:
@@ -129,6 +130,11 @@ def run_grid(
         Seconds (wall time) a cell may run, with ``executor="processes"`` only: past them its worker
         process is killed and the cell is stored as failed, saying so (not retried in the run;
         ``retry_failed`` with a larger limit runs it again). None (default): no limit.
+    worker_timeout : float or None
+        With Dask: seconds a run goes on once its cluster, having had workers, has none left (all
+        gone, none restarted): then it ends with a ``ConnectionError``, the rows finished kept (running
+        again resumes). None waits for ever (a cluster whose workers may all be requeued in a batch
+        system). A cluster with no worker yet at the start is always waited for. Default 60.
     progress : bool, optional
         Progress bar (cells done, ETA); default: on a terminal only.
     log : callable, optional
@@ -169,7 +175,7 @@ def run_grid(
     if log is not None and not callable(log):
         raise TypeError(f"log must be a callable taking a line of text, got {log!r}")
     ex = make_executor(executor, workers=workers, client=client, scheduler=scheduler, fn=run_cell,
-                       cell_time_limit=cell_time_limit)
+                       cell_time_limit=cell_time_limit, worker_timeout=worker_timeout)
     g = grid if isinstance(grid, Grid) else Grid.from_toml(grid)
     datasets = g.load_data()
     cells = g.cells(datasets)
