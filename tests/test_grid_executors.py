@@ -535,3 +535,60 @@ def test_run_grid_passes_worker_timeout_to_dask_and_refuses_it_elsewhere(tmp_pat
     with pytest.raises(TypeError, match="worker_timeout"):
         gx.run_grid(tiny_grid(), tmp_path / "s.sqlite", worker_timeout="10")
     assert not (tmp_path / "s.sqlite").exists()
+
+
+def _say_started_then_sleep(marker: str, cell, data, threads):
+    Path(marker).touch()
+    time.sleep(30)
+    return run_cell(cell, data, threads=threads)
+
+
+def test_a_dask_run_whose_scheduler_is_killed_ends_with_a_connection_error_that_says_what_to_do(tmp_path):
+    """The scheduler SIGKILLed mid-run: the client's own error (a connect timing out, CommClosedError) became a
+    ConnectionError saying the rows finished are kept and to run again."""
+    import socket
+    import threading
+    from contextlib import suppress
+
+    import dask
+    from distributed import Client
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    # the cell function lives in this file: the scheduler and the worker unpickle it
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).parent), *sys.path]))
+    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                               "--port", str(port), "--dashboard-address", ":0"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True, env=env)]
+    try:
+        with dask.config.set({"distributed.comm.timeouts.connect": "3s"}):
+            client = Client(address, timeout="8s")  # also how long it tries to reconnect once the scheduler is gone
+            procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads",
+                                           "1", "--nworkers", "1"], stdout=subprocess.DEVNULL,
+                                          stderr=subprocess.DEVNULL, start_new_session=True,
+                                          env=env))
+            client.wait_for_workers(1, timeout=60)
+            marker = tmp_path / "started"
+            cells, data = _death_cells(("LS", "CLS", "PE"))
+            ex = DaskCluster(client=client, fn=partial(_say_started_then_sleep, str(marker)), worker_timeout=None)
+
+            def kill_the_scheduler_once_a_cell_runs():
+                while not marker.exists():
+                    time.sleep(0.2)
+                os.killpg(procs[0].pid, signal.SIGKILL)
+
+            threading.Thread(target=kill_the_scheduler_once_a_cell_runs, daemon=True).start()
+            with pytest.raises(ConnectionError, match="rows finished are kept: run the grid again"):
+                rows = list(ex.run(cells, data))
+                raise AssertionError(f"the run ended without an error: {rows}")
+    finally:
+        for p in procs:
+            try:
+                os.killpg(p.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            p.wait()
+        with suppress(Exception):
+            client.close(timeout=2)

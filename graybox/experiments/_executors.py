@@ -861,6 +861,12 @@ class DaskCluster:
                         f"the {self.name} has had no worker for {watch.limit:g} s (all gone, none restarted): "
                         f"{len(futures)} task(s) in flight and the cells not yet started were not run; the rows "
                         "finished are kept: run the grid again once the cluster has workers")
+            except OSError as exc:
+                if watch.lost:  # (said above)
+                    raise
+                # the client's own errors once its scheduler is gone (CommClosedError, a connect that times out)
+                raise ConnectionError(f"lost the {self.name} ({type(exc).__name__}: {exc}); the rows finished are "
+                                      "kept: run the grid again once it answers") from exc
             finally:
                 watch.close()
                 for f in futures:
