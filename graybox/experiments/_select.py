@@ -795,8 +795,10 @@ def _completed(terms: list[str], candidates: gb.Structure, idents: tuple[gb.Reco
     if centre and form is None:
         # a black box: less what the records cannot tell apart (a two-level input's u^2: no fit takes it),
         # unsaid, as the searches' skipped candidates are (the row's terms show it); a gray box keeps it, as
-        # the static form's terms: its static points tell u^2 from u and 1
-        st, gone = _centring.told_apart(st, ident, 1e-7)  # frols's and semp's rank_tol
+        # the static form's terms: its static points tell u^2 from u and 1. Judged on the rows the search chose the
+        # terms on (from the candidates' largest lag), as frols and semp judge it: a term told apart only by the
+        # samples before them (an input's first sample off its two levels) would have a θ fitted to those samples
+        st, gone = _centring.told_apart(st, ident, 1e-7, process.max_lag)  # frols's and semp's rank_tol
         _centring.check_included(include, process, list(idents), gone)
     added = static_terms(st, process, form.degree, form.input_names) if form is not None else []
     st = st + gb.Structure(added)

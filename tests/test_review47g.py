@@ -1,0 +1,46 @@
+"""review47g: the bug hunts 47b (constrained estimation) and 47d (structure search) reviewed."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _two_level_but_first(n=80, seed=0):
+    # a two-level input but for its first sample: u(k-j)^2 is a combination of u(k-j) and 1 on every row from the
+    # candidates' largest lag 3, and independent of them only through u[0]
+    rng = np.random.default_rng(seed)
+    u = np.where(rng.standard_normal(n) > 0, 1.0, -1.0)
+    u[0] = 0.5
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.05 * rng.standard_normal()
+    val = gb.Record(u=np.where(rng.standard_normal(n) > 0, 1.0, -1.0), y=y[::-1] + 10.0, name="val")
+    return gb.Record(u=u, y=y + 10.0, name="ident"), val
+
+
+def test_select_graybox_centred_refuses_an_included_term_its_searches_rows_cannot_tell_apart():
+    # frols/semp(centre=True) refuse it (hunt47d, 53e2e64); select_graybox judged the closure on the structure's own
+    # rows (from lag 1, holding u[0]) and kept u(k-1)^2, its coefficient fitted to that one sample
+    rec, val = _two_level_but_first()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ValueError, match=r"included term u\(k-1\)\^2 cannot stay in a structure closed under"):
+            gb.select_graybox(gb.Candidates(ny=1, nu=3, degree=2), rec, validation=val, centre=True,
+                              include=["1", "u(k-1)^2"], sizes=[2, 3], progress=False)
+
+
+def test_select_graybox_centred_black_box_leaves_out_what_the_searches_rows_cannot_tell_apart():
+    # the search (rows from lag 3) chose u(k-2)^2 with the constant and y(k-1); its closure adds u(k-2), and on the
+    # search's rows u(k-2)^2 is a combination of u(k-2) and 1: the docstring's 'less a term the records cannot tell
+    # from its divisors, a two-level input's u(k-1)^2'. It was kept (judged from lag 2, where u[0] shows)
+    rec, val = _two_level_but_first()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sel = gb.select_graybox(gb.Candidates(ny=1, nu=3, degree=2), rec, validation=val, centre=True,
+                                sizes=[2, 3], progress=False)
+    terms = set(sel.table["terms"])
+    assert terms and not any("^2" in t for t in terms), terms
+
