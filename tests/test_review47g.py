@@ -44,3 +44,28 @@ def test_select_graybox_centred_black_box_leaves_out_what_the_searches_rows_cann
     terms = set(sel.table["terms"])
     assert terms and not any("^2" in t for t in terms), terms
 
+
+# -- PassesThrough's miss check (hunt47b, 7057ede) at points whose outputs are all zero ------------------------------
+_S = gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "y(k-1)u(k-1)", "1"])
+_PLANT = gb.Model(_S, np.array([0.7, 0.2, 0.01, 0.0, 0.1]))
+
+
+def _record(n=400, seed=0):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 3.0, n // 20 + 1), 20)[:n]
+    return gb.Record(u, _PLANT.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(n), name="ident")
+
+
+@pytest.mark.parametrize("ub, yb", [([1.0], [0.0]), ([0.0, 1.0], [0.0, 0.0])], ids=["one", "two"])
+def test_passes_through_points_at_zero_output_takes_a_model_meeting_them_to_round_off(ub, yb):
+    # was: the tolerance was 1e-6 of the points' spread, or of their largest |ȳ| when they share one level: 0 for
+    # points at ȳ = 0, so a model meeting them to 8e-16 was refused ('misses the point at ū = 1.0 by 8.16e-16 (output
+    # units; the points span 0)'); 8d0b03b returned it
+    pts = gb.StaticPoints(np.array(ub), np.array(yb))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        model = gb.cls(_S, _record(), None, constraints=gb.PassesThrough(pts)).model
+    a, b1, b2, c, d = model.theta
+    u = np.array(ub)
+    np.testing.assert_allclose(b1 * u + b2 * u**2 + d, 0.0, atol=1e-12)  # N(ū) = 0: the static function's zero
+    assert np.all(np.abs(1 - a - c * u) > 1e-3)

@@ -737,7 +737,7 @@ class PassesThrough(StaticConstraint):
 
     For a rational structure this is ``ȳ_model(ū_i) = ȳ_i`` wherever the static function exists
     (checked after solving: the static function must exist at every point and meet it to
-    1e-6 of the points' spread, else ``ValueError``). For higher y powers it makes ȳ_i *an* equilibrium at ū_i, not
+    1e-6 of the points' spread, or to round-off at points all at ȳ = 0, else ``ValueError``). For higher y powers it makes ȳ_i *an* equilibrium at ū_i, not
     necessarily the stable one the model settles on.
 
     Parameters
@@ -780,12 +780,13 @@ class PassesThrough(StaticConstraint):
         # the rows hold as D_i (ȳ_i − ȳ_model(ū_i)) = 0: met to the solver's round-off, a small D_i leaves the static
         # function itself far off the point (outputs at 1e4 ± 2.5 and as many points as clusters: Σy = 1 − 2.5e-9,
         # every point missed by 3e-3 and the near-integrator returned as passing through them)
-        values, den = _rational_static_values(ctx, theta, pts.ubar)
+        values, den, size = _rational_static_values(ctx, theta, pts.ubar)
         miss = np.abs(values - pts.ybar)
         yb = np.asarray(pts.ybar, float)
         spread = float(np.ptp(yb)) if yb.size > 1 and np.ptp(yb) > 0 else float(np.max(np.abs(yb)))
-        # relative to the points' spread, with the round-off of the levels themselves (an output at 2e9 ± 50)
-        tol = PASS_RTOL * spread + 1e3 * np.finfo(float).eps * float(np.max(np.abs(yb)))
+        # relative to the points' spread, with the round-off of the levels themselves (an output at 2e9 ± 50) and of
+        # N(ū)/D(ū) summed from its terms (points all at ȳ = 0 have no spread nor level: N = 0 is met to round-off)
+        tol = PASS_RTOL * spread + 1e3 * np.finfo(float).eps * (float(np.max(np.abs(yb))) + float(np.max(size)))
         if np.max(miss) > tol:
             i = int(np.argmax(miss))
             raise ValueError(
@@ -816,15 +817,18 @@ def _check_isolated(ctx: StaticContext, theta: np.ndarray, pts: StaticPoints, wh
 PASS_RTOL = 1e-6
 
 
-def _rational_static_values(ctx: StaticContext, theta: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A rational structure's static function N(ū)/D(ū) at ``ubar`` (one or several inputs) and its denominator D(ū),
-    shapes (M,)."""
+def _rational_static_values(ctx: StaticContext, theta: np.ndarray,
+                            ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A rational structure's static function N(ū)/D(ū) at ``ubar`` (one or several inputs), its denominator D(ū) and
+    the size of N's terms over |D| (Σ_j |N's term j| / |D|, the scale of N/D's round-off), shapes (M,)."""
     cm = ctx.cluster_map
     sig = cm.R @ np.asarray(theta, float)
     mono = static_rows(cm, ubar, np.ones(np.shape(ubar)[0]))  # ū^e of each cluster, its ȳ^p taken as 1
     p = np.array([cluster_powers(k)[0] for k in cm.keys])
     den = 1.0 - mono[:, p == 1] @ sig[p == 1]
-    return (mono[:, p == 0] @ sig[p == 0]) / den, den
+    with np.errstate(divide="ignore", invalid="ignore"):
+        size = (np.abs(mono[:, p == 0]) @ np.abs(sig[p == 0])) / np.abs(den)
+    return (mono[:, p == 0] @ sig[p == 0]) / den, den, size
 
 
 # --------------------------------------------------------------------------------------------
