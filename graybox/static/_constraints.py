@@ -737,8 +737,9 @@ class PassesThrough(StaticConstraint):
 
     For a rational structure this is ``ȳ_model(ū_i) = ȳ_i`` wherever the static function exists
     (checked after solving: the static function must exist at every point and meet it to
-    1e-6 of the points' spread, or to round-off at points all at ȳ = 0, else ``ValueError``). For higher y powers it makes ȳ_i *an* equilibrium at ū_i, not
-    necessarily the stable one the model settles on.
+    1e-6 of the points' spread, or to round-off at points all at ȳ = 0, else ``ValueError``). For higher y powers it
+    makes ȳ_i *an* equilibrium at ū_i (an isolated one, met to the same tolerance), not necessarily the stable one the
+    model settles on.
 
     Parameters
     ----------
@@ -774,14 +775,18 @@ class PassesThrough(StaticConstraint):
                     "degenerate Σy = 1, other clusters 0 (no static function at all): use fewer points than "
                     "clusters, StaticCurve.fit + CurveEquality, a StaticBand or the PE problem")
         _check_static_exists(ctx, theta, pts.ubar, self.describe(), hint)
-        if not is_rational(ctx.structure):
+        if is_rational(ctx.structure):
+            # the rows hold as D_i (ȳ_i − ȳ_model(ū_i)) = 0: met to the solver's round-off, a small D_i leaves the
+            # static function itself far off the point (outputs at 1e4 ± 2.5 and as many points as clusters:
+            # Σy = 1 − 2.5e-9, every point missed by 3e-3 and the near-integrator returned as passing through them)
+            values, den, size = _rational_static_values(ctx, theta, pts.ubar)
+            miss = np.abs(values - pts.ybar)
+        else:
             _check_isolated(ctx, theta, pts, self.describe(), hint)
-            return
-        # the rows hold as D_i (ȳ_i − ȳ_model(ū_i)) = 0: met to the solver's round-off, a small D_i leaves the static
-        # function itself far off the point (outputs at 1e4 ± 2.5 and as many points as clusters: Σy = 1 − 2.5e-9,
-        # every point missed by 3e-3 and the near-integrator returned as passing through them)
-        values, den, size = _rational_static_values(ctx, theta, pts.ubar)
-        miss = np.abs(values - pts.ybar)
+            # the static equation's residual at each point over its derivative in ȳ (D_i, not vanishing): how far the
+            # equilibrium near ȳ_i is from it (more points than clusters at an output of 1e4: the rank cut dropped
+            # rows, and the equations were missed by 5e-4 with no word)
+            miss, den, size = _equation_misses(ctx, theta, pts)
         yb = np.asarray(pts.ybar, float)
         spread = float(np.ptp(yb)) if yb.size > 1 and np.ptp(yb) > 0 else float(np.max(np.abs(yb)))
         # relative to the points' spread, with the round-off of the levels themselves (an output at 2e9 ± 50) and of
@@ -790,10 +795,26 @@ class PassesThrough(StaticConstraint):
         if np.max(miss) > tol:
             i = int(np.argmax(miss))
             raise ValueError(
-                f"{self.describe()}: the estimated model's static function misses the point at ū = "
+                f"{self.describe()}: the estimated model's static "
+                f"{'function' if is_rational(ctx.structure) else 'equation (its equilibrium near ȳ)'} misses the point at ū = "
                 f"{np.asarray(pts.ubar)[i].tolist()} by {miss[i]:.3g} (output units; the points span {spread:.3g}): the "
-                "equalities were met as D(ū)·(ȳ − ȳ_model(ū)) = 0 only to round-off, with its denominator "
-                f"D = 1 − Σy − Σyu ū − … = {den[i]:.3g} there{hint or '; use fewer points or a StaticBand'}")
+                "equalities were met as D(ū)·(ȳ − ȳ_model(ū)) = 0 only to round-off, or not at all, with "
+                f"D = 1 − ∂(Σ_c Σ_c ȳ^p ū^m)/∂ȳ = {den[i]:.3g} there{hint or '; use fewer points or a StaticBand'}")
+
+
+def _equation_misses(ctx: StaticContext, theta: np.ndarray, pts: StaticPoints) -> tuple[np.ndarray, np.ndarray,
+                                                                                          np.ndarray]:
+    """At each point, the static equation's residual |q_iᵀRθ − ȳ_i| over |D_i| (its derivative in ȳ, D_i = 1 −
+    ∂(q_iᵀRθ)/∂ȳ): about how far the equilibrium near ȳ_i is from it; D_i; and the size of the equation's terms
+    over |D_i| (the scale of that miss's round-off). Shapes (M,)."""
+    cm = ctx.cluster_map
+    sig = cm.R @ np.asarray(theta, float)
+    one, dR = _denominator_rows(cm, pts.ubar, pts.ybar)
+    den = one - dR @ np.asarray(theta, float)
+    terms = static_rows(cm, pts.ubar, pts.ybar) * sig[None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return (np.abs(terms.sum(axis=1) - np.asarray(pts.ybar, float)) / np.abs(den), den,
+                np.abs(terms).sum(axis=1) / np.abs(den))
 
 
 def _check_isolated(ctx: StaticContext, theta: np.ndarray, pts: StaticPoints, what: str, hint: str) -> None:
