@@ -158,8 +158,8 @@ def plot_pareto(
     if band is not None:
         band = check_real(band, "band", low=0, low_open=True)
         lo, hi = ax.get_ylim()
-        # a band below every member is brought into the panel (shaded outside it, the legend named a shade not shown)
-        lo = min(lo, band / 3) if log else min(lo, 0.0)
+        if band <= lo:  # a band below every member is brought into the panel (else the legend names no shade seen)
+            lo = band / 3 if log else 0.0
         ax.axhspan(lo if log else 0.0, band, color="0.85", zorder=0, label=f"B = [0, {band:g}]")
         ax.set_ylim(lo, max(hi, band))
     ax.set_xlabel(xlabel)

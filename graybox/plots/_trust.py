@@ -311,8 +311,8 @@ def plot_decision_bootstrap(
         ylo, yhi = band_hi / 100, band_hi * 10
     if band_lo > 0:  # a log axis has no 0: a band from 0 is shaded from the bottom
         ylo = min(ylo, band_lo)
-    else:  # a band below every replicate brought into the panel (the legend would name a shade not shown)
-        ylo = min(ylo, band_hi / 3)
+    elif band_hi <= ylo:  # a band below every replicate brought into the panel (else the legend names no shade seen)
+        ylo = band_hi / 3
     ax_r.axhspan(band_lo if band_lo > 0 else ylo, band_hi, color="0.85", zorder=0,
                  label=f"B = [{band_lo:g}, {band_hi:g}]")
     ax_r.set_ylim(ylo, max(yhi, band_hi))
