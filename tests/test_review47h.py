@@ -51,3 +51,40 @@ def test_plot_decision_bootstrap_keeps_its_range_for_a_band_among_the_replicates
     assert lo == pytest.approx(bare[0])
     low = float(np.min(jsf)) / 100  # below every replicate: still brought in
     assert plot_decision_bootstrap(dataclasses.replace(boot, band=low)).axes[1].get_ylim()[0] < low
+
+
+def _refused_write(tmp_path, monkeypatch, *, owner_writes: bool, other_user: bool) -> str:
+    # tests run as root, which may write anything: os.access is answered as for a user without write permission,
+    # and os.geteuid as for another user than the file's owner where asked
+    import os
+    import stat
+
+    path = gb.save(gb.Structure(["y(k-1)"]), tmp_path / "m.json")
+    path.chmod(stat.S_IRUSR | stat.S_IRGRP | stat.S_IROTH | (stat.S_IWUSR if owner_writes else 0))
+    real_access, owner = os.access, os.stat(path).st_uid
+    monkeypatch.setattr(os, "access", lambda p, mode, *a, **k: False if (os.fspath(p) == os.fspath(path)
+                                                                         and mode & os.W_OK) else real_access(p, mode))
+    if other_user:
+        monkeypatch.setattr(os, "geteuid", lambda: owner + 1)
+    with pytest.raises(PermissionError) as exc:
+        gb.save(gb.Structure(["y(k-2)"]), path)
+    assert str(gb.load(path)) == str(gb.Structure(["y(k-1)"]))
+    return str(exc.value)
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "geteuid"), reason="POSIX owners")
+def test_a_file_of_another_user_is_not_called_read_only(tmp_path, monkeypatch):
+    # f2d9c69 said of every file it may not write "the file is read-only (its mode forbids writing): make it writable
+    # (chmod u+w)": of a colleague's file (mode 0644, theirs) that is false, and chmod u+w fails for the caller
+    said = _refused_write(tmp_path, monkeypatch, owner_writes=True, other_user=True)
+    assert "another user" in said and "chmod" not in said
+    monkeypatch.undo()
+    said = _refused_write(tmp_path, monkeypatch, owner_writes=False, other_user=False)  # the caller's own, 0444
+    assert "read-only" in said and "chmod u+w" in said
+
+
+def test_a_writable_mode_refused_is_not_called_read_only(tmp_path, monkeypatch):
+    # the caller's own file, mode 0644, that os.access still refuses (a read-only mount, an ACL, an immutable flag):
+    # "its mode forbids writing" and chmod u+w were both wrong
+    said = _refused_write(tmp_path, monkeypatch, owner_writes=True, other_user=False)
+    assert "its mode forbids" not in said and "chmod" not in said

@@ -131,6 +131,19 @@ def written_path(path: Path) -> Path:
     return Path(os.path.realpath(path)) if path.is_symlink() else path
 
 
+def _not_writable(target: Path) -> str:
+    """Why a file that exists may not be written, with the fix: another user's, read-only by its mode, or neither
+    (a read-only mount, an ACL, an immutable flag)."""
+    st = os.stat(target)
+    if hasattr(os, "geteuid") and os.geteuid() not in (0, st.st_uid):  # root writes anyone's: not the cause
+        return (f"the file belongs to another user (uid {st.st_uid}) and may not be written by this one: write to "
+                "another name, or have its owner make it writable")
+    if not st.st_mode & stat.S_IWUSR:
+        return "the file is read-only (its mode forbids writing): make it writable (chmod u+w) or write to another name"
+    return ("the file may not be written (a read-only file system, an access list or an immutable flag?): write to "
+            "another name")
+
+
 def write_atomically(path: str | os.PathLike, write: Callable[[IO[bytes]], object]) -> None:
     """Write the file ``path`` by ``write(f)`` on a binary file, whole or not at all.
 
@@ -151,8 +164,7 @@ def write_atomically(path: str | os.PathLike, write: Callable[[IO[bytes]], objec
     target = written_path(path)
     if target.is_file() and not os.access(target, os.W_OK):
         # open(path, "w") refuses a file its owner made read-only; the move below would replace it all the same
-        raise PermissionError(errno.EACCES, "the file is read-only (its mode forbids writing): make it writable "
-                              "(chmod u+w) or write to another name", str(path))
+        raise PermissionError(errno.EACCES, _not_writable(target), str(path))
     try:
         fd, tmp = _new_file_beside(target)
     except OSError as exc:
