@@ -88,3 +88,16 @@ def test_a_writable_mode_refused_is_not_called_read_only(tmp_path, monkeypatch):
     # "its mode forbids writing" and chmod u+w were both wrong
     said = _refused_write(tmp_path, monkeypatch, owner_writes=True, other_user=False)
     assert "its mode forbids" not in said and "chmod" not in said
+
+
+@pytest.mark.parametrize("order", ["le", "be"])
+def test_utf16_without_a_mark_read_as_utf8_is_said_utf16(tmp_path, order):
+    # 9aaa5cf guessed UTF-16 only without encoding=: with encoding='utf-8' given, a UTF-16 file without its
+    # byte-order mark was "line 1 holds NUL bytes ... a data logger's file padded with zeros ... cut the file before
+    # line 1", advice for another file
+    t = np.arange(30) * 0.1
+    text = "t,u,y\n" + "".join(f"{a:.1f},{np.sin(a):.6f},{np.cos(a):.6f}\n" for a in t)
+    path = tmp_path / "run.csv"
+    path.write_bytes(text.encode(f"utf-16-{order}"))
+    with pytest.raises(ValueError, match=f"UTF-16 .*encoding='utf-16-{order}'"):
+        gb.load_record_csv(path, time="t", u="u", y="y", encoding="utf-8")

@@ -370,7 +370,7 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
     if enc == "utf-8":
         nul = raw.find(b"\x00")
         if nul >= 0:
-            order = _utf16_order(raw[:4096]) if encoding is None else None
+            order = _utf16_order(raw[:4096])  # encoding='utf-8' given too: the bytes are UTF-16 all the same
             if order is not None:
                 raise ValueError(f"{p}: the file holds NUL bytes, so it is not UTF-8 text: UTF-16 without a byte-order "
                                  f"mark? Pass encoding='utf-16-{order}' (or the encoding it was saved in)")
