@@ -329,6 +329,8 @@ def test_load_expecting_a_record_of_a_dataset_file_says_take_ident_or_valid(tmp_
     with pytest.raises(gb.GrayboxFileError, match=r"holds a Dataset, expected Record \(a Dataset carries a Record: "
                                                   r"load it without expect= and take its \.ident or \.valid\)"):
         gb.load(path, expect=gb.Record)
+    # (a Dataset with static points: one without has .static None, and is not said to carry them, review47h)
+    path = gb.save(gb.Dataset(rec, rec, gb.StaticPoints([1.0, 2.0], [1.0, 2.0])), tmp_path / "data_static.json")
     with pytest.raises(gb.GrayboxFileError, match=r"take its \.static\)"):
         gb.load(path, expect=gb.StaticPoints)
 

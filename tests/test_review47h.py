@@ -101,3 +101,17 @@ def test_utf16_without_a_mark_read_as_utf8_is_said_utf16(tmp_path, order):
     path.write_bytes(text.encode(f"utf-16-{order}"))
     with pytest.raises(ValueError, match=f"UTF-16 .*encoding='utf-16-{order}'"):
         gb.load_record_csv(path, time="t", u="u", y="y", encoding="utf-8")
+
+
+def test_a_dataset_without_static_points_is_not_said_to_carry_them(tmp_path):
+    # 64cb215's hint for load(path, expect=StaticPoints) of a saved Dataset was "a Dataset carries a StaticPoints:
+    # ... take its .static" also for a Dataset without static points, whose .static is None
+    rec = gb.Record(np.arange(10.0), np.arange(10.0), Ts=0.1)
+    path = gb.save(gb.Dataset(rec, rec), tmp_path / "d.json")
+    with pytest.raises(gb.GrayboxFileError) as exc:
+        gb.load(path, expect=gb.StaticPoints)
+    assert "holds a Dataset, expected StaticPoints" in str(exc.value) and ".static" not in str(exc.value)
+    sp = gb.StaticPoints([1.0, 2.0, 3.0], [1.0, 2.0, 3.0])
+    path = gb.save(gb.Dataset(rec, rec, sp), tmp_path / "s.json")
+    with pytest.raises(gb.GrayboxFileError, match=r"take its \.static"):
+        gb.load(path, expect=gb.StaticPoints)

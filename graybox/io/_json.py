@@ -977,10 +977,12 @@ def _expected(expect: object) -> tuple[type, ...] | None:
     return want
 
 
-def _expect(want: tuple[type, ...] | None, typ: str, source: str) -> None:
+def _expect(want: tuple[type, ...] | None, typ: str, source: str, obj: object = None) -> None:
     if want is not None and _CODECS[typ][0] not in want:
-        # a value that carries one asked for (an ELSResult's model, a Dataset's records): how to have it
-        carried = [(name, kind.removesuffix(_OR_NONE)) for name, kind in _CODECS[typ][1]]
+        # a value that carries one asked for (an ELSResult's model, a Dataset's records): how to have it; a field
+        # that may be None is named only where the file's object holds one (a Dataset without static points: no)
+        carried = [(name, kind.removesuffix(_OR_NONE)) for name, kind in _CODECS[typ][1]
+                   if not (kind.endswith(_OR_NONE) and isinstance(obj, dict) and obj.get(name) is None)]
         carried = [(name, kind) for name, kind in carried if kind in _CODECS and _CODECS[kind][0] in want]
         hint = (f" (a {typ} carries a {carried[0][1]}: load it without expect= and take its "
                 f"{' or '.join('.' + name for name, _ in carried)})" if carried else "")
@@ -1013,7 +1015,7 @@ def from_json(text: str, *, expect: type | tuple[type, ...] | None = None, sourc
         raise TypeError(f"text must be a str, got {type(text).__name__} (decode the bytes of a file as UTF-8)")
     want = _expected(expect)
     head, doc = _parse(text.removeprefix("\ufeff"), source)  # an editor's byte-order mark is no text (as load)
-    _expect(want, head["type"], source)
+    _expect(want, head["type"], source, doc.get("object"))
     if "object" not in doc:
         raise GrayboxFileError(f"{source}: no \"object\" in the document")
     try:
