@@ -115,3 +115,17 @@ def test_a_dataset_without_static_points_is_not_said_to_carry_them(tmp_path):
     path = gb.save(gb.Dataset(rec, rec, sp), tmp_path / "s.json")
     with pytest.raises(gb.GrayboxFileError, match=r"take its \.static"):
         gb.load(path, expect=gb.StaticPoints)
+
+
+def test_many_repeated_static_measurements_keep_the_repeats_advice(tmp_path):
+    # 2cc141b told a file with 20 or more lines at one level only that it "looks like a dynamic record" and to read it
+    # with load_record_csv: a static test logging 25 settled readings per level was steered away from repeats="mean",
+    # which reads it
+    rng = np.random.default_rng(1)
+    levels = np.repeat([800.0, 1000.0, 1200.0], 25)
+    lines = "".join(f"{u:g},{1e-4 * u ** 2 + rng.normal(0, 0.01):.5f}\n" for u in levels)
+    path = tmp_path / "static.csv"
+    path.write_text("u,y\n" + lines, encoding="utf-8")
+    with pytest.raises(ValueError, match=r"dynamic record.*repeats=\"mean\""):
+        gb.load_static_csv(path, u="u", y="y")
+    assert gb.load_static_csv(path, u="u", y="y", repeats="mean").ubar.tolist() == [800.0, 1000.0, 1200.0]

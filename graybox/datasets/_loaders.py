@@ -986,7 +986,8 @@ def load_static_csv(
                 raise ValueError(f"{p}: {where}: {times} lines have the input level {level} (lines {seen[v]}, {line}, "
                                  "…): the file looks like a dynamic record (an input held while the output moves), "
                                  "not static points; read it with graybox.load_record_csv, and take each static "
-                                 "point from a hold's settled end (averaging the whole hold mixes in its transient)")
+                                 "point from a hold's settled end (averaging the whole hold mixes in its transient); "
+                                 "if they are repeated readings of a steady state, repeats=\"mean\" averages them")
             raise ValueError(f"{p}: {where}: lines {seen[v]} and {line} have the same input level {level}; average "
                              "repeated measurements into one point per level (repeats=\"mean\" does it)")
         seen[v] = line
