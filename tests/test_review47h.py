@@ -129,3 +129,13 @@ def test_many_repeated_static_measurements_keep_the_repeats_advice(tmp_path):
     with pytest.raises(ValueError, match=r"dynamic record.*repeats=\"mean\""):
         gb.load_static_csv(path, u="u", y="y")
     assert gb.load_static_csv(path, u="u", y="y", repeats="mean").ubar.tolist() == [800.0, 1000.0, 1200.0]
+
+
+@pytest.mark.parametrize("Ts", [np.array([0.05]), np.array([[0.05]]), [0.05]])
+def test_a_one_element_ts_is_not_called_a_time_column(Ts):
+    # 1985832 said of any Ts with a dimension "got 1 values (ndarray): a time column? Pass its step, e.g.
+    # Ts=float(np.median(np.diff(t)))": scipy.io.loadmat gives a saved scalar as array([[0.05]]), whose diff is empty
+    # (the median of nothing is NaN); one value in an array is taken out with float(Ts)
+    with pytest.raises(TypeError, match=r"Ts .*one value.*float\(Ts\)") as exc:
+        gb.Record(np.arange(10.0), np.arange(10.0), Ts=Ts)
+    assert "time column" not in str(exc.value)

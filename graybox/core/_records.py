@@ -205,6 +205,10 @@ class Record:
             raise ValueError(_lengths(self.name, "u", "y", u, y))
         if y.size == 0:  # nothing downstream (nor the repr's ranges) has a meaning for an empty run
             raise ValueError(f"{self.name}: no samples")
+        if not isinstance(self.Ts, (str, bytes)) and np.ndim(self.Ts) > 0 and np.size(self.Ts) == 1:
+            # one value in an array (scipy.io.loadmat's array([[0.05]]) for a saved scalar): no time column
+            raise TypeError(f"{self.name}: Ts is the sampling period, one number of seconds, got one value inside "
+                            f"a {type(self.Ts).__name__} of shape {np.shape(self.Ts)}: pass float(Ts)")
         if not isinstance(self.Ts, (str, bytes)) and np.ndim(self.Ts) > 0:  # the record's time column, passed as Ts
             raise TypeError(f"{self.name}: Ts is the sampling period, one number of seconds, got {np.size(self.Ts)} "
                             f"values ({type(self.Ts).__name__}): a time column? Pass its step, e.g. "
