@@ -139,3 +139,24 @@ def test_a_one_element_ts_is_not_called_a_time_column(Ts):
     with pytest.raises(TypeError, match=r"Ts .*one value.*float\(Ts\)") as exc:
         gb.Record(np.arange(10.0), np.arange(10.0), Ts=Ts)
     assert "time column" not in str(exc.value)
+
+
+@pytest.mark.parametrize("eol", ["\n", "\r\n"])
+def test_a_file_padded_with_zeros_after_whole_lines_reads_its_lines(tmp_path, eol):
+    # 9aaa5cf refused every NUL byte, "a data logger's file padded with zeros ... Delete them": a logger's preallocated
+    # file whose written part ends with a whole line holds all its samples, and the zeros after it no text to read.
+    # A file cut off inside a line (a torn last sample before the zeros) is still refused.
+    t = np.arange(300) * 0.1
+    text = "t,u,y" + eol + "".join(f"{a:.1f},{np.sin(a):.6f},{np.cos(a):.6f}{eol}" for a in t)
+    plain, padded, torn = tmp_path / "plain.csv", tmp_path / "padded.csv", tmp_path / "torn.csv"
+    plain.write_bytes(text.encode())
+    padded.write_bytes(text.encode() + b"\x00" * 8192)
+    torn.write_bytes(text.encode()[:-7] + b"\x00" * 8192)
+    ref = gb.load_record_csv(plain, time="t", u="u", y="y")
+    rec = gb.load_record_csv(padded, time="t", u="u", y="y")
+    assert rec.Ts == ref.Ts and np.array_equal(rec.u, ref.u) and np.array_equal(rec.y, ref.y)
+    with pytest.raises(ValueError, match="NUL bytes"):
+        gb.load_record_csv(torn, time="t", u="u", y="y")
+    static = tmp_path / "static.csv"
+    static.write_bytes(b"u,y\n800,1.1\n1000,1.6\n1200,2.3\n" + b"\x00" * 100)
+    assert gb.load_static_csv(static, u="u", y="y").ubar.tolist() == [800.0, 1000.0, 1200.0]

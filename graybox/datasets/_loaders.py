@@ -374,8 +374,11 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
             if order is not None:
                 raise ValueError(f"{p}: the file holds NUL bytes, so it is not UTF-8 text: UTF-16 without a byte-order "
                                  f"mark? Pass encoding='utf-16-{order}' (or the encoding it was saved in)")
-            # no UTF-16 (a NUL between every character) but NULs in UTF-8 text, which no CSV holds: a logger's
-            # preallocated file, or one cut off as it was written, padded with zeros
+            if nul > 0 and raw[nul - 1:nul] == b"\n" and not raw[nul:].strip(b"\x00"):
+                # zeros after whole lines only: a logger's preallocated file, its written lines the samples
+                return raw[:nul], (3 if raw.startswith(codecs.BOM_UTF8) else 0), False
+            # no UTF-16 (a NUL between every character) but NULs in UTF-8 text, which no CSV holds: one cut off as it
+            # was written (inside a line), padded with zeros, or a stray NUL in a cell
             line = raw.count(b"\n", 0, nul) + 1
             raise ValueError(f"{p}: line {line} holds NUL bytes (0x00), which are no CSV text: a data logger's file "
                              "padded with zeros, or one cut off as it was written? Delete them (or cut the file "
