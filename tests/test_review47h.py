@@ -160,3 +160,21 @@ def test_a_file_padded_with_zeros_after_whole_lines_reads_its_lines(tmp_path, eo
     static = tmp_path / "static.csv"
     static.write_bytes(b"u,y\n800,1.1\n1000,1.6\n1200,2.3\n" + b"\x00" * 100)
     assert gb.load_static_csv(static, u="u", y="y").ubar.tolist() == [800.0, 1000.0, 1200.0]
+
+
+@pytest.mark.parametrize("text", [
+    "1.0e+00,2.0e+00,3.0e+00\n4.0e+00,5.0e+00,6.0e+00\n",  # np.savetxt's default: no header, a number first
+    '"t","u","y"\n0,1,2\n1,1,3\n',  # R's write.csv: the header's names quoted
+    "-1,2\n3,4\n",
+])
+def test_load_of_a_csv_that_starts_like_a_json_value_is_not_a_corrupt_file(tmp_path, text):
+    # cd87d7d named a CSV given to load only when JSON could read nothing of it: a file starting with a number or a
+    # quoted name is read by json as a value followed by "Extra data", and was still 'JSON: corrupt file (Extra data
+    # at line 1, column 25)'. A graybox file is a JSON object: a text not starting with '{' is none.
+    path = tmp_path / "run.csv"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(gb.GrayboxFileError, match="not a graybox file.*load_record_csv"):
+        gb.load(path)
+    path.write_text('{"format": "graybox", "format_version": 1,\n', encoding="utf-8")  # a torn graybox file
+    with pytest.raises(gb.GrayboxFileError, match="corrupt file"):
+        gb.load(path)

@@ -952,7 +952,8 @@ def _parse(text: str, source: str) -> tuple[dict, Any]:
         body = text.lstrip()
         if not body:
             raise rd.fail("JSON", "the file is empty (graybox.load reads the JSON files graybox.save writes)") from None
-        if exc.pos == len(text) - len(body):  # no JSON at all: a CSV of samples, a notebook's text … given to load
+        if not body.startswith("{"):  # no JSON object, as every graybox file is: a CSV of samples (its first number
+            # or quoted name read by json as a value, then "Extra data"), a notebook's text … given to load
             raise rd.fail("JSON", f"not a graybox file: no JSON text (it starts {body[:30]!r}); graybox.load reads the "
                           "JSON files graybox.save writes; a CSV file of samples is read by graybox.load_record_csv "
                           "or graybox.load_static_csv") from None
