@@ -28,6 +28,7 @@ sweep compiles once and re-solves (OSQP warm-started from the neighbouring λ).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
@@ -689,7 +690,11 @@ class _QP:
         # method gains nothing from a warm start anyway.
         warm = warm_start and self.solver == "osqp"
         try:
-            self.problem.solve(solver=self.solver.upper(), warm_start=warm, **self.options)
+            with warnings.catch_warnings():
+                # cvxpy's "Solution may be inaccurate": graybox says it itself, once per sweep (warn_inaccurate), or
+                # refuses a solve stopped at its iteration limit below
+                warnings.filterwarnings("ignore", message="Solution may be inaccurate", category=UserWarning)
+                self.problem.solve(solver=self.solver.upper(), warm_start=warm, **self.options)
         except cp.error.SolverError as exc:
             if self.user_options:
                 # a value the solver refuses at its setup (OSQP's eps_abs = -1: "failed (2)"), said of the options, not
@@ -710,6 +715,16 @@ class _QP:
                 f"the constraints admit no θ: solver {self.solver} reports status {st!r} for "
                 f"{list(self.names) or ['(none)']}"
             )
+        if st == cp.USER_LIMIT:
+            # a feasible problem the solver did not finish, not constraints that admit no θ
+            limit = self.options.get("max_iter")
+            raise ValueError(f"solver {self.solver} stopped at its iteration or time limit (status {st!r}, max_iter = "
+                             f"{limit}) before it converged, with constraints {list(self.names)}: raise it with "
+                             f"solver_options={{'max_iter': ...}}, or use solver='clarabel'"
+                             if self.solver == "osqp" else
+                             f"solver {self.solver} stopped at its iteration or time limit (status {st!r}, max_iter = "
+                             f"{limit}) before it converged, with constraints {list(self.names)}: raise it with "
+                             f"solver_options={{'max_iter': ...}}")
         if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.dy.value is None:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
@@ -1084,6 +1099,17 @@ def _solver_settings(solver: str) -> set[str] | None:
     return names | cvx | {"use_quad_obj"}
 
 
+#: cvxpy solve keywords that solver_options may not give, and why
+_CVXPY_TAKEN: dict[str, str] = {
+    "warm_start": "graybox sets warm_start itself (pe_thetas and pe_pareto take warm_start=... as their own argument)",
+    "solver": "give the solver as solver='clarabel' or 'osqp'",
+    "gp": "the problem is a convex QP, not a geometric program",
+    "qcp": "the problem is a convex QP, not a quasiconvex program",
+    "nlp": "the problem is a convex QP, not a nonlinear program",
+    "requires_grad": "graybox does not differentiate through the solve",
+}
+
+
 def _check_solver_options(options: object, solver: str) -> None:
     if options is not None and not isinstance(options, Mapping):
         raise TypeError(f"solver_options must be a mapping of the solver's keyword options, got {options!r}")
@@ -1091,6 +1117,11 @@ def _check_solver_options(options: object, solver: str) -> None:
         raise ValueError(f"solver_options apply to the cvxpy solvers ('clarabel', 'osqp'), not to solver='closed'; "
                          f"got {dict(options)!r}")
     if options:
+        # cvxpy's solve keywords that graybox sets itself or that make it another problem (warm_start came back as
+        # "got multiple values for keyword argument", gp as cvxpy's DGPError)
+        taken = [k for k in options if k in _CVXPY_TAKEN]
+        if taken:
+            raise ValueError(f"solver_options: {taken} cannot be given: " + "; ".join(_CVXPY_TAKEN[k] for k in taken))
         # an option the solver does not know failed inside the solve: as clarabel's TypeError, or as osqp's
         # SolverError, which was said as constraints that admit no θ
         known = _solver_settings(solver)

@@ -1,0 +1,36 @@
+"""mend47f: bugs other helpers found and left; each test fails without its fix."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox import Record, StaticPoints, Structure
+from graybox.static._constraints import GainBounds, InfeasibleError
+
+S3 = Structure(["y(k-1)", "u(k-1)", "1"])
+
+
+def _rec3() -> Record:
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0, 3, 20), 20)
+    y = np.zeros(400)
+    for k in range(1, 400):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.2
+    return Record(u=u, y=y + 0.01 * rng.standard_normal(400))
+
+
+PTS3 = StaticPoints(np.linspace(0.2, 2.8, 4), (0.3 * np.linspace(0.2, 2.8, 4) + 0.2) / 0.5)
+
+
+@pytest.mark.parametrize("opts", [{"warm_start": True}, {"gp": True}, {"requires_grad": True}, {"nlp": True}])
+def test_solver_options_that_graybox_sets_or_that_change_the_problem_are_refused(opts):
+    with pytest.raises(ValueError, match=f"solver_options: \\['{next(iter(opts))}'\\] cannot be given"):
+        gb.cls(S3, _rec3(), PTS3, solver_options=opts)
+
+
+def test_an_iteration_limit_is_not_said_as_infeasible_constraints():
+    s4 = Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "1"])
+    gain = GainBounds(lower=5, upper=5, ubar_range=(0.5, 2.5))
+    with pytest.raises(ValueError, match="stopped at its iteration or time limit") as err:
+        gb.cls(s4, _rec3(), PTS3, how="points", constraints=[gain], solver="osqp", solver_options={"max_iter": 5})
+    assert not isinstance(err.value, InfeasibleError) and "max_iter" in str(err.value)
