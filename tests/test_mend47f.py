@@ -34,3 +34,13 @@ def test_an_iteration_limit_is_not_said_as_infeasible_constraints():
     with pytest.raises(ValueError, match="stopped at its iteration or time limit") as err:
         gb.cls(s4, _rec3(), PTS3, how="points", constraints=[gain], solver="osqp", solver_options={"max_iter": 5})
     assert not isinstance(err.value, InfeasibleError) and "max_iter" in str(err.value)
+
+
+@pytest.mark.parametrize("fit", ["cls", "pe_thetas"])
+def test_reference_none_is_refused_not_taken_for_ls(fit):
+    curve = gb.StaticCurve.polynomial([0.4, 0.6], domain=(0.2, 2.8))
+    with pytest.raises(TypeError, match="reference must be 'free'.*got None"):
+        if fit == "cls":
+            gb.cls(S3, _rec3(), curve, reference=None)
+        else:
+            gb.pe_thetas(S3, _rec3(), PTS3, lambdas=[0.5], reference=None)

@@ -357,7 +357,7 @@ def _ls_theta(d: _Data, what: str = "the least-squares θ") -> np.ndarray:
     return scipy.linalg.solve_triangular(d.R1, d.c1) / d.s
 
 
-def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str | None
+def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str
              ) -> float | str | None:
     """Σ*_y of eq. (22) from ``reference``: "free" (estimated), "ls", "els", a Model, a θ of this structure, a
     number."""
@@ -367,7 +367,7 @@ def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | fl
         return None
     if isinstance(reference, str) and reference == FREE_SIGMA_Y:
         return FREE_SIGMA_Y
-    if reference is None or (isinstance(reference, str) and reference == "ls"):
+    if isinstance(reference, str) and reference == "ls":
         th = _ls_theta(d, "the least-squares reference for Σ*_y (reference='ls'; or give it as a number or a Model)")
     elif isinstance(reference, str) and reference == "els":
         if is_dask_data(records):  # said of the reference, not as els's refusal of "data" the caller gave rightly
@@ -1015,7 +1015,11 @@ def numerator_surface(cm, points: StaticPoints) -> StaticSurface:
 # --------------------------------------------------------------------------------------------
 def _check_reference(reference: object, n_terms: int) -> None:
     """``reference`` is one of the forms :func:`_sigma_y` reads, checked even where no constraint needs it."""
-    if reference is None or isinstance(reference, Model) or isinstance(getattr(reference, "model", None), Model):
+    if reference is None:
+        # once silently the least-squares reference ('ls'), where the default is 'free' and the docstrings name no None
+        raise TypeError("reference must be 'free' (the default: Σ_y estimated), 'ls', 'els', a Model, a θ or a "
+                        "number, got None")
+    if isinstance(reference, Model) or isinstance(getattr(reference, "model", None), Model):
         return
     if isinstance(reference, str):
         if reference not in (FREE_SIGMA_Y, "ls", "els"):
