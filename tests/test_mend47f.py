@@ -44,3 +44,39 @@ def test_reference_none_is_refused_not_taken_for_ls(fit):
             gb.cls(S3, _rec3(), curve, reference=None)
         else:
             gb.pe_thetas(S3, _rec3(), PTS3, lambdas=[0.5], reference=None)
+
+
+def test_lambdas_with_none_name_the_none_not_nan():
+    with pytest.raises(TypeError, match=r"got None \(at position 1\)"):
+        gb.pe_thetas(S3, _rec3(), PTS3, lambdas=[0.5, None])
+
+
+def _rec_ba() -> Record:
+    rng = np.random.default_rng(1)
+    a, b = (np.repeat(rng.uniform(0, 2, 20), 20) for _ in range(2))
+    y = np.zeros(400)
+    for k in range(1, 400):
+        y[k] = 0.5 * y[k - 1] + 0.3 * a[k - 1] + 0.2
+    return Record(u=np.column_stack([b, a]), y=y + 0.01 * rng.standard_normal(400), input_names=("b", "a"))
+
+
+def test_a_cluster_key_not_there_names_the_powers_order_by_input():
+    from graybox.static._constraints import ClusterBounds
+
+    s = Structure(["y(k-1)", "a(k-1)", "b(k-1)", "1", "a(k-1)b(k-1)"])
+    with pytest.raises(ValueError, match=r"\(p, m_b, m_a\), the inputs in the order 'b', 'a'") as err:
+        gb.cls(s, _rec_ba(), constraints=[ClusterBounds({(0, 2, 0): (0, 1)})])
+    assert "a_b" not in str(err.value)
+
+
+@pytest.mark.parametrize("gain", [GainBounds(lower=0.5), GainBounds(lower=[0.1, 0.5]), GainBounds(upper={"b": -1.0})])
+def test_a_gain_bound_on_an_input_the_structure_does_not_use_says_so(gain):
+    ub = np.column_stack([np.linspace(0.5, 1.5, 4), np.linspace(0.2, 1.8, 4)])
+    pts = StaticPoints(ub, (0.3 * ub[:, 1] + 0.2) / 0.5, input_names=("b", "a"))
+    s1 = Structure(["y(k-1)", "a(k-1)", "1"])
+    with pytest.raises(InfeasibleError, match="the structure does not use input 'b'"):
+        gb.cls(s1, _rec_ba(), pts, constraints=[gain])
+    # a bound that 0 meets, or on the input it uses, is no error
+    gb.cls(s1, _rec_ba(), pts, constraints=[GainBounds(lower=0.0)])
+    gb.cls(s1, _rec_ba(), pts, constraints=[GainBounds(lower={"a": 0.5})])
+

@@ -361,6 +361,10 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
     if _is_bool(lambdas) or isinstance(lambdas, str):
         raise TypeError(f"{name} must be numbers in (0, 1], got {lambdas!r}")
     refuse_non_real(lambdas, name)  # ["0.5"] is text, not a λ1
+    if lambdas is None or (isinstance(lambdas, (list, tuple)) and any(v is None for v in lambdas)):
+        # None became NaN in the float array: [0.5, None] was told "got [nan]"
+        where = "" if lambdas is None else f" (at position {[v is None for v in lambdas].index(True)})"
+        raise TypeError(f"{name} must be numbers in (0, 1], got None{where}")
     try:
         lam = np.atleast_1d(np.asarray(lambdas, dtype=float))
     except (TypeError, ValueError):

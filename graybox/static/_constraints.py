@@ -1260,6 +1260,15 @@ class GainBounds(StaticConstraint):
             if lower is None and upper is None:
                 continue
             G = static_rows(cm, ub, yb, wrt="u", input=j if m > 1 else None) @ cm.R
+            if not np.any(G) and ((lower is not None and lower > 0) or (upper is not None and upper < 0)):
+                # the gain along this input is 0 for every θ: the solver's bare "infeasible" named no reason
+                name = _input_names(ctx)[j] if len(_input_names(ctx)) == m else f"{j + 1}"
+                why = ("the structure does not use input" if name not in (ctx.structure.input_names or ())
+                       else "the structure's static function does not depend on input")
+                raise InfeasibleError(f"{self.describe()}: {why} {name!r}, so its static gain along it is 0 for "
+                                      f"every θ, outside [{'-inf' if lower is None else f'{lower:g}'}, "
+                                      f"{'inf' if upper is None else f'{upper:g}'}]: bound only the inputs it uses "
+                                      "(by input name, lower={'name': ...}) or add terms in that input")
             if lower is not None:  # G − l D >= 0  ⇔  −G − l dR θ <= −l
                 rows.append(-G - lower * dR)
                 rhs.append(-lower * one)
@@ -1333,7 +1342,8 @@ class ClusterBounds(StaticConstraint):
     ----------
     bounds : mapping name -> (lower, upper)
         Cluster name (``"Σy"``, ``"Σyu"``, ``"Σu²"``, or ASCII ``"Sy"``, ``"Su^2"``) or key
-        (p, m), with several inputs (p, m_1, …, m_m) or (p, (m_1, …, m_m)); either bound may be
+        (p, m), with several inputs (p, m_1, …, m_m) or (p, (m_1, …, m_m)), the powers in the data's input
+        order; either bound may be
         None; equal bounds fix the cluster's value. With several inputs a name's factors may come in any order (``"Σspeedvalve"`` or ``"Σvalve·speed"``),
         so the bounds hold whatever order the data list their inputs in.
     """

@@ -134,7 +134,11 @@ class SurfaceClusterMap:
     def index(self, name_or_key: str | tuple[int, ...]) -> int:
         """Row of R for the cluster ``name_or_key``: a name (``"Σyu1"``) or a key (p, a_1, …, a_m)."""
         if isinstance(name_or_key, tuple):
-            return key_index(self.keys, self.names, name_or_key, "(p, " + ", ".join(f"a_{n}" for n in self.input_names) + ")")
+            # m_<input> in the order the powers are read (the data's input order), named: a key written in another
+            # order was told "(p, a_b, a_a)", which read as inputs named a_b and a_a
+            return key_index(self.keys, self.names, name_or_key,
+                             "(p, " + ", ".join(f"m_{n}" for n in self.input_names) + "), the inputs in the order "
+                             + ", ".join(map(repr, self.input_names)) + "; or give the cluster by name")
         names = self.names
         # every printed name is accepted as it is; ASCII ("Syu1", "Su1^2u2") is read as the paper's form
         name = name_or_key if name_or_key in names else ascii_cluster_name(name_or_key, single_input=False)
