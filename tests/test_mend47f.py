@@ -80,3 +80,11 @@ def test_a_gain_bound_on_an_input_the_structure_does_not_use_says_so(gain):
     gb.cls(s1, _rec_ba(), pts, constraints=[GainBounds(lower=0.0)])
     gb.cls(s1, _rec_ba(), pts, constraints=[GainBounds(lower={"a": 0.5})])
 
+
+def test_an_absurd_lag_is_a_value_error_in_the_static_and_local_analyses_not_a_memory_error():
+    m = gb.Model(Structure(["y(k-1)", "u(k-99999999999)", "1"]), np.array([0.5, 0.3, 0.2]))
+    m = gb.from_json(gb.to_json(m))  # a model file, hand-edited, loads
+    for analysis in (lambda: m.static_curve([1.0, 2.0]), lambda: m.equilibria(1.0),
+                     lambda: gb.local_model(m, 1.0, Ts=1.0)):
+        with pytest.raises(ValueError, match=r"u\(k-99999999999\) has a lag of 99999999999 samples"):
+            analysis()

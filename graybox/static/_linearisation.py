@@ -200,6 +200,11 @@ class DerivativeMap:
         return b
 
 
+#: Largest lag (samples) the static and local analyses take: they hold per-lag arrays and the output's L×L
+#: companion matrix at each steady state. A hand-edited y(k-99999999999) asked numpy for TiB (MemoryError).
+MAX_ANALYSIS_LAG = 10_000
+
+
 @lru_cache(maxsize=256)
 def derivative_map(structure: Structure, inputs: tuple[str, ...] | None = None) -> DerivativeMap:
     """The :class:`DerivativeMap` of ``structure`` with the inputs in the order ``inputs`` (cached).
@@ -211,6 +216,11 @@ def derivative_map(structure: Structure, inputs: tuple[str, ...] | None = None) 
     T = len(structure)
     Ly = int(code.ylag.max(initial=0))
     Lu = max((structure.input_lag(n) for n in names), default=0)
+    if max(Ly, Lu) > MAX_ANALYSIS_LAG:
+        worst = max(structure, key=lambda t: t.max_lag)
+        raise ValueError(f"term {worst} has a lag of {worst.max_lag} samples: the static and local analyses (static "
+                         f"curves, equilibria, local models) take lags up to {MAX_ANALYSIS_LAG} (they hold per-lag "
+                         "arrays and an L×L companion matrix per steady state); is the lag a typing error?")
     G = np.zeros((T, Ly))
     H = np.zeros((len(names), T, Lu))
     powers = np.zeros((T, 1 + len(names)))
