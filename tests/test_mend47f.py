@@ -88,3 +88,15 @@ def test_an_absurd_lag_is_a_value_error_in_the_static_and_local_analyses_not_a_m
                      lambda: gb.local_model(m, 1.0, Ts=1.0)):
         with pytest.raises(ValueError, match=r"u\(k-99999999999\) has a lag of 99999999999 samples"):
             analysis()
+
+
+def test_a_units_row_giving_the_uncertainty_a_unit_and_the_output_none_is_refused(tmp_path):
+    path = tmp_path / "static.csv"
+    path.write_text("speed,pressure,sem\nrpm,,mbar\n1000,1.5,0.1\n2000,2.0,0.1\n", encoding="utf-8")
+    with pytest.raises(ValueError, match="gives the uncertainty column 'sem' the unit 'mbar' but the output"):
+        gb.load_static_csv(path, u="speed", y="pressure", uncertainty="sem", units_row=True)
+    # said for both, or for neither δ nor y, it loads
+    path.write_text("speed,pressure,sem\nrpm,mbar,mbar\n1000,1.5,0.1\n2000,2.0,0.1\n", encoding="utf-8")
+    assert gb.load_static_csv(path, u="speed", y="pressure", uncertainty="sem", units_row=True).units == ("rpm", "mbar")
+    path.write_text("speed,pressure,sem\nrpm,,\n1000,1.5,0.1\n2000,2.0,0.1\n", encoding="utf-8")
+    assert gb.load_static_csv(path, u="speed", y="pressure", uncertainty="sem", units_row=True).units == ("rpm", "")

@@ -933,7 +933,9 @@ def load_static_csv(
         Units of (ū, ȳ), as a :class:`~graybox.Record`'s: shown (plots label their axes with them) and
         checked against the records' and a model's; default none said.
     units_row : bool
-        The line after the column names gives each column's unit (as in :func:`load_record_csv`).
+        The line after the column names gives each column's unit (as in :func:`load_record_csv`); an
+        ``uncertainty`` column's unit, if given, must be the output's (``ValueError`` otherwise, and when the
+        output has none).
 
     Returns
     -------
@@ -968,6 +970,11 @@ def load_static_csv(
             raise ValueError(f"{p}: the units row gives the uncertainty column {wanted['uncertainty']!r} the unit "
                              f"{said!r}, but δ is read in the output's unit {units[1]!r}: convert the column to "
                              f"{units[1]!r}")
+        if said and not units[1]:  # the output said unitless while δ, read in the output's unit, has one: was dropped
+            raise ValueError(f"{p}: the units row gives the uncertainty column {wanted['uncertainty']!r} the unit "
+                             f"{said!r} but the output column {wanted['y']!r} none, and δ is read in the output's "
+                             f"unit: give the output's unit in the units row (or units=(..., {said!r})), or leave "
+                             "the uncertainty's blank")
     ub = _inputs(cols, ucols)
     where = f"column {ucols[0]!r}" if len(ucols) == 1 else f"columns {ucols}"
     if isinstance(uncertainty, str):
