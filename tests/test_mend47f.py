@@ -100,3 +100,21 @@ def test_a_units_row_giving_the_uncertainty_a_unit_and_the_output_none_is_refuse
     assert gb.load_static_csv(path, u="speed", y="pressure", uncertainty="sem", units_row=True).units == ("rpm", "mbar")
     path.write_text("speed,pressure,sem\nrpm,,\n1000,1.5,0.1\n2000,2.0,0.1\n", encoding="utf-8")
     assert gb.load_static_csv(path, u="speed", y="pressure", uncertainty="sem", units_row=True).units == ("rpm", "")
+
+
+def test_a_savetxt_header_split_at_spaces_names_the_lone_hash_and_the_fix(tmp_path):
+    t = np.arange(10.0)
+    path = tmp_path / "rec.txt"
+    np.savetxt(path, np.column_stack([t, np.sin(t), np.cos(t)]), header="t u y")
+    with pytest.raises(ValueError, match=r"first cell is a lone '#'.*comments=''"):
+        gb.load_record_csv(path, u="u", y="y", time="t", delimiter=" ")
+    with pytest.raises(ValueError, match=r"comments=''.*delimiter=' '"):
+        gb.load_record_csv(path, u="u", y="y", time="t")
+    np.savetxt(path, np.column_stack([t, np.sin(t), np.cos(t)]), header="t u y", comments="")
+    assert len(gb.load_record_csv(path, u="u", y="y", time="t", delimiter=" ").y) == 10
+
+
+def test_a_column_named_hash_with_its_data_is_read(tmp_path):
+    path = tmp_path / "rec.csv"
+    path.write_text("#,t,u,y\n" + "".join(f"{k},{k}.0,{k % 3}.0,{k % 2}.0\n" for k in range(10)), encoding="utf-8")
+    assert len(gb.load_record_csv(path, u="u", y="y", time="t").y) == 10

@@ -139,6 +139,13 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if not any(header):
         raise ValueError(f"{p}: line {first} is blank; expected a header line naming the columns, then one sample "
                          "per line")
+    if header[0] == "#" and len(header) > 1 and _first_row_width(head, delim) == len(header) - 1:
+        # np.savetxt(..., header="t u y") writes "# t u y": split at the spaces, the '#' is a column of its own and
+        # every name sits one field right of its data ("line 2 has 3 field(s), but column 'y' is field 4")
+        raise ValueError(f"{p}: line {first}: the header's first cell is a lone '#', the comment marker np.savetxt "
+                         f"writes before a header (comments='# '), so every column name sits one field right of its "
+                         f"data; write the file with np.savetxt(..., header=..., comments='') or delete the '# '. The "
+                         f"header reads {header}.")
     index: dict[str, int] = {}
     for role, col in wanted.items():
         if col not in header:
@@ -639,18 +646,27 @@ def _bare(name: str) -> str:
     return re.sub(r"\s*(\[[^\[\]]*\]|\([^()]*\))\s*$", "", name.strip()).lower()
 
 
+def _first_row_width(head: str, delimiter: str) -> int | None:
+    """The number of fields of the first non-blank line after the header in ``head`` (None: there is none)."""
+    rows = csv.reader(io.StringIO(head, newline=""), delimiter=delimiter)
+    next(rows, None)
+    return next((len(r) for r in rows if r and any(c.strip() for c in r)), None)
+
+
 def _missing_column_message(path: Path, role: str, col: str, header: Sequence[str], delimiter: str = ",") -> str:
     close = difflib.get_close_matches(col, header, n=3, cutoff=0.5)
     # the same name but for case or a unit in brackets ('u' for 'u [%]', 'p' for 'P (kW)'): difflib's ratio
     # misses a short name beside its unit
     close += [h for h in header if _bare(h) == _bare(col) and h not in close]
     hint = f" Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
-    if header and header[0].startswith("#") and header[0].lstrip("#").strip() == col:
+    if header and header[0].startswith("#") and (header[0].lstrip("#").strip() == col
+                                                 or (len(header) == 1 and col in header[0].lstrip("#").split())):
         # np.savetxt(..., header="t,u,y") writes "# t,u,y": its comments="# " marks the header line as a comment
         return (f"{path}: no column {col!r} (asked for as {role}): the header line starts with '#', so its first "
                 f"column reads {header[0]!r}, as np.savetxt writes a header (comments='# '); write the file with "
-                "np.savetxt(..., header=..., comments='') or delete the '#'. The columns are "
-                f"{list(header)}.")
+                "np.savetxt(..., header=..., comments='') or delete the '#'"
+                + (f"; the header was read as one column, split at {_name(delimiter)}: pass delimiter=' ' for "
+                   "np.savetxt's spaces" if len(header) == 1 else "") + f". The columns are {list(header)}.")
     if len(header) == 1:
         hint += f" The header was read as one column, split at {_name(delimiter)}: pass delimiter= if the file uses another."
     return f"{path}: no column {col!r} (asked for as {role}).{hint} The columns are {list(header)}."
