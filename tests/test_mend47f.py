@@ -118,3 +118,21 @@ def test_a_column_named_hash_with_its_data_is_read(tmp_path):
     path = tmp_path / "rec.csv"
     path.write_text("#,t,u,y\n" + "".join(f"{k},{k}.0,{k % 3}.0,{k % 2}.0\n" for k in range(10)), encoding="utf-8")
     assert len(gb.load_record_csv(path, u="u", y="y", time="t").y) == 10
+
+
+def test_passes_through_at_far_offsets_keeps_every_independent_point():
+    # six points on a closed cubic structure's static curve (+ 0.05), u spread 3: at u + 3e3, y + 2e5 the rank of
+    # the equality rows was decided in raw coordinates, a genuine row fell under the cut and the fit missed a point
+    s = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)^3", "1", "y(k-1)u(k-1)"])
+    plant = gb.Model(s, np.array([0.5, 0.3, 0.1, 0.01, 0.2, -0.05]))
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0, 3, 30), 20)
+    y = plant.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(600)
+    ub = np.linspace(0.0, 3.0, 6)
+    yb = np.asarray(plant.static_curve(ub), float) + 0.05
+    fits = {}
+    for du, dy in [(0.0, 0.0), (3e3, 2e5)]:
+        fit = gb.cls(s, Record(u=u + du, y=y + dy), StaticPoints(ub + du, yb + dy), how="points").model
+        fits[du] = np.asarray(fit.static_curve(ub + du), float) - dy
+    np.testing.assert_allclose(fits[3e3], fits[0.0], atol=1e-3)
+    np.testing.assert_allclose(fits[0.0], yb, atol=1e-6)
