@@ -136,3 +136,16 @@ def test_passes_through_at_far_offsets_keeps_every_independent_point():
         fits[du] = np.asarray(fit.static_curve(ub + du), float) - dy
     np.testing.assert_allclose(fits[3e3], fits[0.0], atol=1e-3)
     np.testing.assert_allclose(fits[0.0], yb, atol=1e-6)
+
+
+@pytest.mark.parametrize("dy", [0.0, 2e5, 2e9])
+def test_inconsistent_points_are_inconsistent_wherever_the_output_zero_is(dy):
+    # at y + 2e9 the consistency of the equalities was judged against 1e-8 of ‖ȳ‖ (45 output units): five points
+    # 0.1 off one line were taken as consistent, met halfway, and refused only later as a point missed "to round-off"
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0, 3, 20), 20)
+    y = 0.3 * np.concatenate([[0.0], u[:-1]]) + 0.2 + 0.01 * rng.standard_normal(400)
+    ub = np.linspace(0.2, 2.8, 5)
+    yb = 0.3 * ub + 0.2 + np.array([0.0, 0.1, -0.1, 0.05, 0.0])
+    with pytest.raises(InfeasibleError, match="equality constraints are inconsistent"):
+        gb.cls(Structure(["u(k-1)", "1"]), Record(u=u, y=y + dy), StaticPoints(ub, yb + dy), how="points")

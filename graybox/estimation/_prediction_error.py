@@ -67,7 +67,7 @@ from ..core._records import (Dataset, Record, StaticPoints, as_records, carried_
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
-from ..selection._centring import is_closed, shift_map
+from ..selection._centring import _centre_of, is_closed, shift_map
 from ..core._validation import check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta, warn
 
 if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
@@ -436,7 +436,7 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, y_sca
     # the hint that points over-determine the static function only where points are imposed
     points = any(isinstance(c, PassesThrough) for c in cons)
     V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys) if points else None, scale=y_scale,
-                      rank_rows=_centred_eq_rows(eq_cons, ctx))
+                      centred=_centred_eq_rows(eq_cons, ctx))
     if T is not None and V.shape[0]:
         U, S, Vt = np.linalg.svd(V @ T, full_matrices=False)  # the same rows, orthonormal in y, every one kept
         V, g = Vt, (U.T @ (g - V @ at)) / S
@@ -454,14 +454,16 @@ def _normalise_ub(G: np.ndarray, h: np.ndarray, names: tuple[str, ...], tol: flo
     return G / norms[:, None], h / norms
 
 
-def _centred_eq_rows(eq_cons: list[tuple[StaticConstraint, AffineRows]], ctx: StaticContext) -> np.ndarray | None:
+def _centred_eq_rows(eq_cons: list[tuple[StaticConstraint, AffineRows]], ctx: StaticContext
+                     ) -> tuple[np.ndarray, np.ndarray] | None:
     """The equality rows of ``eq_cons`` in the parameters of the signals centred on the static points' means, for a
     structure closed under shifts with static points imposed (else None): the rows :func:`_reduce_eq` decides the rank
     on. A closed structure's parameters on centred and raw signals are one invertible linear map apart
     (:func:`~graybox.selection._centring.shift_map`), so the rank is the same, but in raw coordinates it depended on the
     signals' zero: at u + 3e3 (spread 3) and y + 2e9 an independent point's row fell under the 1e-10 cut, and the
     estimate missed the point. A PassesThrough's rows are formed from its centred points (no cancellation); other rows
-    are mapped."""
+    are mapped. Returned with their right-hand sides (the output's offset taken out), on which the equalities'
+    consistency is judged."""
     pts = [c.points if c.points is not None else ctx.points for c, _ in eq_cons if isinstance(c, PassesThrough)]
     if not pts or pts[0] is None or not is_closed(ctx.structure):
         return None
@@ -470,25 +472,31 @@ def _centred_eq_rows(eq_cons: list[tuple[StaticConstraint, AffineRows]], ctx: St
     names = (tuple(cm.input_names) if hasattr(cm, "input_names") else
              tuple(ctx.inputs or ctx.structure.input_names or ("u",)))
     ub0 = static_inputs(pts[0].ubar, m).reshape(-1, m)
-    cu, cy = ub0.mean(axis=0), float(np.mean(pts[0].ybar))
+    # a level held at every point is its own centre (exactly zero centred, not its mean's round-off, which the
+    # column scaling below would have made a direction of its own)
+    cu = np.array([_centre_of(ub0[:, j]) for j in range(m)])
+    cy = _centre_of(np.asarray(pts[0].ybar, float))
     offsets = {"y": cy} | {nm: float(cu[j]) for j, nm in enumerate(names)}
     try:
-        A = shift_map(ctx.structure, offsets)[0]
+        A, t = shift_map(ctx.structure, offsets)
     except (ValueError, KeyError):  # a structure whose inputs are named otherwise: the raw rows decide
         return None
-    rows = []
+    rows, rhs = [], []
     for c, r in eq_cons:
         if isinstance(c, PassesThrough):
             p = c.points if c.points is not None else ctx.points
             ub = static_inputs(p.ubar, m).reshape(-1, m) - cu
-            rows.append(static_rows(cm, ub[:, 0] if m == 1 else ub, np.asarray(p.ybar, float) - cy) @ cm.R)
+            yc = np.asarray(p.ybar, float) - cy
+            rows.append(static_rows(cm, ub[:, 0] if m == 1 else ub, yc) @ cm.R)
+            rhs.append(yc)
         else:
             rows.append(r.A_eq @ A)
-    return np.vstack(rows)
+            rhs.append(r.b_eq - r.A_eq @ t)
+    return np.vstack(rows), np.concatenate(rhs)
 
 
 def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int | None,
-               scale: float, rank_rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+               scale: float, centred: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Independent, orthonormal equality rows V y = g, or an error if the equalities disagree.
 
     The rows are of unit norm in z = θ·s, so their right-hand sides are in output units: a disagreement is
@@ -509,16 +517,24 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
     # each of unit norm, standing for no regression rows; rows within 1e-10 are one condition said twice (a
     # curve's equality at nearby ū), whose round-off difference must not become a second, contradictory row
     r = int(np.sum(S > 1e-10 * S[0]))
-    if rank_rows is not None:  # the same rows in centred coordinates (_centred_eq_rows): the rank decided there
-        C = rank_rows[ok]
-        cn = np.linalg.norm(C, axis=0)
-        C = C / np.where(cn > 0, cn, 1.0)
-        rn = np.linalg.norm(C, axis=1)
-        Sc = np.linalg.svd(C / np.where(rn > 0, rn, 1.0)[:, None], compute_uv=False)
-        r = int(np.sum(Sc > 1e-10 * Sc[0])) if Sc.size and Sc[0] > 0 else r
     Ur = U[:, :r]
     resid = f - Ur @ (Ur.T @ f)
-    if np.linalg.norm(resid) > 1e-8 * max(scale, np.linalg.norm(f)):
+    judged = f
+    if centred is not None:
+        # the same rows and right-hand sides in centred coordinates (_centred_eq_rows): the rank decided there, and
+        # the consistency, judged against the right-hand sides without the output's offset (at y + 2e9, 1e-8 of
+        # ‖f‖ was 45 output units, and inconsistent points 0.1 apart were met halfway)
+        C, fc = centred[0][ok], centred[1][ok]
+        cn = np.linalg.norm(C, axis=0)
+        C = C / np.where(cn > 0, cn, 1.0)
+        rn = np.where(np.linalg.norm(C, axis=1) > 0, np.linalg.norm(C, axis=1), 1.0)
+        C, fc = C / rn[:, None], fc / rn
+        Uc, Sc, _ = np.linalg.svd(C, full_matrices=False)
+        if Sc.size and Sc[0] > 0:
+            r = int(np.sum(Sc > 1e-10 * Sc[0]))
+            Ur, Uk = U[:, :r], Uc[:, :r]
+            resid, judged = fc - Uk @ (Uk.T @ fc), fc
+    if np.linalg.norm(resid) > 1e-8 * max(scale, np.linalg.norm(judged)):
         more = ""
         if E.shape[0] > r and cluster_count is None:
             more = (f" ({E.shape[0]} equality rows but only {r} independent ones: some fix the same combination of "
