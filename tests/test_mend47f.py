@@ -149,3 +149,22 @@ def test_inconsistent_points_are_inconsistent_wherever_the_output_zero_is(dy):
     yb = 0.3 * ub + 0.2 + np.array([0.0, 0.1, -0.1, 0.05, 0.0])
     with pytest.raises(InfeasibleError, match="equality constraints are inconsistent"):
         gb.cls(Structure(["u(k-1)", "1"]), Record(u=u, y=y + dy), StaticPoints(ub, yb + dy), how="points")
+
+
+def test_cls_uncertainty_at_far_offsets_takes_the_estimators_rank():
+    # the estimate of the far-offset test above was refused by cls_uncertainty as "not the optimum of this problem":
+    # its null space kept the raw 1e-10 cut, which left free a direction the estimator had pinned
+    s = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)^3", "1", "y(k-1)u(k-1)"])
+    plant = gb.Model(s, np.array([0.5, 0.3, 0.1, 0.01, 0.2, -0.05]))
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0, 3, 30), 20)
+    y = plant.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(600)
+    ub = np.linspace(0.0, 3.0, 6)
+    yb = np.asarray(plant.static_curve(ub), float) + 0.05
+    sd = {}
+    for du, dy in [(0.0, 0.0), (3e3, 2e5)]:
+        rec, pts = Record(u=u + du, y=y + dy), StaticPoints(ub + du, yb + dy)
+        fit = gb.cls(s, rec, pts, how="points")
+        sd[du] = np.sqrt(np.diag(gb.cls_uncertainty(fit.model, rec, pts, how="points").cov))
+    # the top-degree terms' parameters do not move with the signals' zeros, nor do their standard deviations
+    np.testing.assert_allclose(sd[3e3][[3, 5]], sd[0.0][[3, 5]], rtol=1e-3)

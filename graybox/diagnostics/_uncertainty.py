@@ -56,7 +56,7 @@ import scipy.linalg
 from scipy import stats
 
 from ..static._constraints import StaticConstraint, static_cluster_map, static_rows
-from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure
+from ..estimation._prediction_error import _cls_setup, _dynamic, _pe_setup, _process_structure, centred_eq_rank
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._decisions import Decision
@@ -455,8 +455,17 @@ def _echelon_factor(P: np.ndarray, piv: list[int], order: list[int]) -> np.ndarr
     return out
 
 
-def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
-    """Orthonormal basis of {z: A z = 0} (rows normalised first) and the rank of A."""
+def _equality_rank(cons: list[StaticConstraint], ctx, A: np.ndarray) -> int | None:
+    """The estimator's rank of the equality rows where ``A`` holds them alone (no active inequality), else None: at
+    u + 3e3, y + 2e5 the raw 1e-10 cut left a direction the estimator had pinned, and the CLS estimate was refused
+    as "not the optimum of this problem"."""
+    n_eq = sum(r.n_eq for c in cons if (r := c.affine(ctx)) is not None)
+    return centred_eq_rank(cons, ctx) if A.shape[0] == n_eq else None
+
+
+def _null_space(A: np.ndarray, n: int, rank: int | None = None) -> tuple[np.ndarray, int]:
+    """Orthonormal basis of {z: A z = 0} (rows normalised first) and the rank of A; ``rank``: the rank the estimator
+    decided for these rows (:func:`~graybox.estimation._prediction_error.centred_eq_rank`), else the 1e-10 cut."""
     if A.shape[0] == 0:
         return np.eye(n), 0
     norms = np.linalg.norm(A, axis=1)
@@ -466,7 +475,7 @@ def _null_space(A: np.ndarray, n: int) -> tuple[np.ndarray, int]:
     _, S, Vt = np.linalg.svd(A, full_matrices=True)
     # the equality rows' rank as the estimator reduced them (estimation._prediction_error._reduce_eq), not the
     # regression's (rank_tolerance): the same constraints must leave θ the same directions to move in
-    r = int(np.sum(S > 1e-10 * S[0]))
+    r = int(np.sum(S > 1e-10 * S[0])) if rank is None else min(rank, S.size)
     return Vt[r:].T, r
 
 
@@ -846,7 +855,7 @@ def cls_uncertainty(
     cons, ctx, _ = _cls_setup(st, recs, d, data, static, how, reference, constraints)
     A = _equalities(cons, ctx, model.theta, d.s, "cls_uncertainty", d.R1, d.N, d.y_scale)
     n = len(st)
-    Z, r = _null_space(A / d.s, n)
+    Z, r = _null_space(A / d.s, n, _equality_rank(cons, ctx, A))
     z = model.theta * d.s
     dof = d.N - (n - r)
     rss = float(np.sum((d.R1 @ z - d.c1) ** 2) + d.rss)
@@ -924,7 +933,7 @@ def pe_uncertainty(
     QR = static_rows(cm, pts.ubar, pts.ybar) @ cm.R / d.s  # (M, n) in z
     # the estimator's QP works in the basis that whitens the dynamic and static factors stacked
     A = _equalities(cons, ctx, theta, d.s, "pe_uncertainty", np.vstack([d.R1, QR]), d.N + M, d.y_scale)
-    Z, r = _null_space(A / d.s, n)
+    Z, r = _null_space(A / d.s, n, _equality_rank(cons, ctx, A))
     w1 = lam / d.N if weights == "mse" else lam
     w2 = (1 - lam) / M if weights == "mse" else 1 - lam
     dQR = static_rows(cm, pts.ubar, pts.ybar, wrt="y") @ cm.R / d.s

@@ -495,6 +495,27 @@ def _centred_eq_rows(eq_cons: list[tuple[StaticConstraint, AffineRows]], ctx: St
     return np.vstack(rows), np.concatenate(rhs)
 
 
+def _equilibrated(C: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centred equality rows with columns, then rows, of unit norm (zero ones kept), and their right-hand sides."""
+    cn = np.linalg.norm(C, axis=0)
+    C = C / np.where(cn > 0, cn, 1.0)
+    rn = np.linalg.norm(C, axis=1)
+    rn = np.where(rn > 0, rn, 1.0)
+    return C / rn[:, None], f / rn
+
+
+def centred_eq_rank(cons: list[StaticConstraint], ctx: StaticContext) -> int | None:
+    """The rank of the equality rows of ``cons`` as :func:`_reduce_eq` decides it for the estimators (on centred rows,
+    :func:`_centred_eq_rows`), or None where it decides it on the raw rows (then the 1e-10 cut there)."""
+    eq = [(c, r) for c in cons if (r := c.affine(ctx)) is not None and r.n_eq]
+    centred = _centred_eq_rows(eq, ctx) if eq else None
+    if centred is None:
+        return None
+    C = centred[0][np.linalg.norm(centred[0], axis=1) > 0]
+    Sc = np.linalg.svd(_equilibrated(C, np.zeros(C.shape[0]))[0], compute_uv=False)
+    return int(np.sum(Sc > 1e-10 * Sc[0])) if Sc.size and Sc[0] > 0 else None
+
+
 def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int | None,
                scale: float, centred: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Independent, orthonormal equality rows V y = g, or an error if the equalities disagree.
@@ -524,11 +545,7 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
         # the same rows and right-hand sides in centred coordinates (_centred_eq_rows): the rank decided there, and
         # the consistency, judged against the right-hand sides without the output's offset (at y + 2e9, 1e-8 of
         # ‖f‖ was 45 output units, and inconsistent points 0.1 apart were met halfway)
-        C, fc = centred[0][ok], centred[1][ok]
-        cn = np.linalg.norm(C, axis=0)
-        C = C / np.where(cn > 0, cn, 1.0)
-        rn = np.where(np.linalg.norm(C, axis=1) > 0, np.linalg.norm(C, axis=1), 1.0)
-        C, fc = C / rn[:, None], fc / rn
+        C, fc = _equilibrated(centred[0][ok], centred[1][ok])
         Uc, Sc, _ = np.linalg.svd(C, full_matrices=False)
         if Sc.size and Sc[0] > 0:
             r = int(np.sum(Sc > 1e-10 * Sc[0]))
