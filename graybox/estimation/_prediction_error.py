@@ -455,7 +455,7 @@ def _normalise_ub(G: np.ndarray, h: np.ndarray, names: tuple[str, ...], tol: flo
 
 
 def _centred_eq_rows(eq_cons: list[tuple[StaticConstraint, AffineRows]], ctx: StaticContext
-                     ) -> tuple[np.ndarray, np.ndarray] | None:
+                     ) -> tuple[np.ndarray, np.ndarray, float] | None:
     """The equality rows of ``eq_cons`` in the parameters of the signals centred on the static points' means, for a
     structure closed under shifts with static points imposed (else None): the rows :func:`_reduce_eq` decides the rank
     on. A closed structure's parameters on centred and raw signals are one invertible linear map apart
@@ -463,7 +463,8 @@ def _centred_eq_rows(eq_cons: list[tuple[StaticConstraint, AffineRows]], ctx: St
     signals' zero: at u + 3e3 (spread 3) and y + 2e9 an independent point's row fell under the 1e-10 cut, and the
     estimate missed the point. A PassesThrough's rows are formed from its centred points (no cancellation); other rows
     are mapped. Returned with their right-hand sides (the output's offset taken out), on which the equalities'
-    consistency is judged."""
+    consistency is judged, and the rank cut (1e-10, or the points' round-off relative to their centred spread where
+    that is larger)."""
     pts = [c.points if c.points is not None else ctx.points for c, _ in eq_cons if isinstance(c, PassesThrough)]
     if not pts or pts[0] is None or not is_closed(ctx.structure):
         return None
@@ -492,7 +493,13 @@ def _centred_eq_rows(eq_cons: list[tuple[StaticConstraint, AffineRows]], ctx: St
         else:
             rows.append(r.A_eq @ A)
             rhs.append(r.b_eq - r.A_eq @ t)
-    return np.vstack(rows), np.concatenate(rhs)
+    # the points' round-off relative to their centred spread (ū and ȳ stored at their offsets: at y + 2e9, 2.4e-7
+    # of a spread of 2.6): a centred row independent by less than that is round-off, not a condition of its own
+    raw = np.column_stack([ub0, np.asarray(pts[0].ybar, float)])
+    spread = np.max(np.abs(raw - np.append(cu, cy)), axis=0)
+    held = spread == 0
+    level = float(np.max(np.where(held, 0.0, np.max(np.abs(raw), axis=0) / np.where(held, 1.0, spread))))
+    return np.vstack(rows), np.concatenate(rhs), max(1e-10, 10 * np.finfo(float).eps * level)
 
 
 def _equilibrated(C: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -513,11 +520,11 @@ def centred_eq_rank(cons: list[StaticConstraint], ctx: StaticContext) -> int | N
         return None
     C = centred[0][np.linalg.norm(centred[0], axis=1) > 0]
     Sc = np.linalg.svd(_equilibrated(C, np.zeros(C.shape[0]))[0], compute_uv=False)
-    return int(np.sum(Sc > 1e-10 * Sc[0])) if Sc.size and Sc[0] > 0 else None
+    return int(np.sum(Sc > centred[2] * Sc[0])) if Sc.size and Sc[0] > 0 else None
 
 
 def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int | None,
-               scale: float, centred: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+               scale: float, centred: tuple[np.ndarray, np.ndarray, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Independent, orthonormal equality rows V y = g, or an error if the equalities disagree.
 
     The rows are of unit norm in z = θ·s, so their right-hand sides are in output units: a disagreement is
@@ -548,7 +555,7 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
         C, fc = _equilibrated(centred[0][ok], centred[1][ok])
         Uc, Sc, _ = np.linalg.svd(C, full_matrices=False)
         if Sc.size and Sc[0] > 0:
-            r = int(np.sum(Sc > 1e-10 * Sc[0]))
+            r = int(np.sum(Sc > centred[2] * Sc[0]))
             Ur, Uk = U[:, :r], Uc[:, :r]
             resid, judged = fc - Uk @ (Uk.T @ fc), fc
     if np.linalg.norm(resid) > 1e-8 * max(scale, np.linalg.norm(judged)):
