@@ -31,3 +31,14 @@ def test_points_whose_last_condition_is_below_their_round_off_give_no_silent_wro
         return
     np.testing.assert_allclose(fit.theta[[3, 5]], ref[[3, 5]], rtol=0.1)
 
+
+def test_a_long_dead_time_of_a_finely_sampled_plant_is_analysed():
+    # u(k-15000) (15 s at 1 kHz): its lags take per-lag arrays only, and 8d0b03b analysed it in half a second; the
+    # limit of 10 000 samples meant for the output's companion matrix refused it
+    m = gb.Model(Structure(["y(k-1)", "u(k-15000)", "1"]), np.array([0.5, 0.3, 0.2]))
+    np.testing.assert_allclose(m.static_curve([1.0, 2.0]), [1.0, 1.6])
+    assert m.equilibria(1.0)[0].stable
+    np.testing.assert_allclose(np.ravel(gb.local_model(m, 1.0, Ts=0.001).dc_gain), [0.6])
+    for bad in (Structure(["y(k-1)", "u(k-99999999999)", "1"]), Structure(["y(k-20000)", "u(k-1)", "1"])):
+        with pytest.raises(ValueError, match=r"has a lag of (99999999999|20000) samples"):
+            gb.Model(bad, np.array([0.5, 0.3, 0.2])).static_curve([1.0])

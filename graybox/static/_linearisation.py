@@ -200,9 +200,12 @@ class DerivativeMap:
         return b
 
 
-#: Largest lag (samples) the static and local analyses take: they hold per-lag arrays and the output's L×L
-#: companion matrix at each steady state. A hand-edited y(k-99999999999) asked numpy for TiB (MemoryError).
+#: Largest output lag (samples) the static and local analyses take: they hold the output's L×L companion matrix at
+#: each steady state. A hand-edited y(k-99999999999) asked numpy for TiB (MemoryError).
 MAX_ANALYSIS_LAG = 10_000
+#: Largest input lag: an input's lags take per-lag arrays only (a term's row of that length), so a finely sampled
+#: plant's long dead time (u(k-15000): 15 s at 1 kHz) is analysed; u(k-99999999999) is not.
+MAX_ANALYSIS_INPUT_LAG = 10_000_000
 
 
 @lru_cache(maxsize=256)
@@ -216,11 +219,14 @@ def derivative_map(structure: Structure, inputs: tuple[str, ...] | None = None) 
     T = len(structure)
     Ly = int(code.ylag.max(initial=0))
     Lu = max((structure.input_lag(n) for n in names), default=0)
-    if max(Ly, Lu) > MAX_ANALYSIS_LAG:
-        worst = max(structure, key=lambda t: t.max_lag)
-        raise ValueError(f"term {worst} has a lag of {worst.max_lag} samples: the static and local analyses (static "
-                         f"curves, equilibria, local models) take lags up to {MAX_ANALYSIS_LAG} (they hold per-lag "
-                         "arrays and an L×L companion matrix per steady state); is the lag a typing error?")
+    if Ly > MAX_ANALYSIS_LAG or Lu > MAX_ANALYSIS_INPUT_LAG:
+        out = Ly > MAX_ANALYSIS_LAG
+        worst = max(structure, key=lambda t: max((l for sg, l, _ in t.factors if (sg == "y") == out), default=0))
+        lag = Ly if out else Lu
+        raise ValueError(f"term {worst} has a lag of {lag} samples: the static and local analyses (static curves, "
+                         f"equilibria, local models) take output lags up to {MAX_ANALYSIS_LAG} (they hold an L×L "
+                         f"companion matrix per steady state) and input lags up to {MAX_ANALYSIS_INPUT_LAG}; is the "
+                         "lag a typing error?")
     G = np.zeros((T, Ly))
     H = np.zeros((len(names), T, Lu))
     powers = np.zeros((T, 1 + len(names)))
