@@ -42,3 +42,21 @@ def test_a_long_dead_time_of_a_finely_sampled_plant_is_analysed():
     for bad in (Structure(["y(k-1)", "u(k-99999999999)", "1"]), Structure(["y(k-20000)", "u(k-1)", "1"])):
         with pytest.raises(ValueError, match=r"has a lag of (99999999999|20000) samples"):
             gb.Model(bad, np.array([0.5, 0.3, 0.2])).static_curve([1.0])
+
+
+def test_a_solve_stopped_by_its_time_limit_names_the_time_limit():
+    # ec32ebd's message for a solve stopped at a limit named only max_iter: clarabel stopped by the caller's
+    # time_limit said "max_iter = 400" (its default) and asked to raise max_iter
+    from graybox.static._constraints import GainBounds
+
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(0, 2, 20), 20)
+    y = np.zeros(400)
+    for k in range(1, 400):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.2
+    rec, pts = Record(u=u, y=y + 0.01 * rng.standard_normal(400)), StaticPoints([0.5, 1.5], [0.7, 1.3])
+    s = Structure(["y(k-1)", "u(k-1)", "1"])
+    with pytest.raises(ValueError, match=r"time_limit = 1e-09.*a larger time_limit"):
+        gb.cls(s, rec, pts, solver="clarabel", constraints=[GainBounds(upper=0.3)], solver_options={"time_limit": 1e-9})
+    with pytest.raises(ValueError, match=r"max_iter = 3\) before it converged.*\{'max_iter': \.\.\.\}, or use solver"):
+        gb.cls(s, rec, pts, solver="osqp", constraints=[GainBounds(upper=0.3)], solver_options={"max_iter": 3})

@@ -802,13 +802,15 @@ class _QP:
         if st == cp.USER_LIMIT:
             # a feasible problem the solver did not finish, not constraints that admit no θ
             limit = self.options.get("max_iter")
-            raise ValueError(f"solver {self.solver} stopped at its iteration or time limit (status {st!r}, max_iter = "
-                             f"{limit}) before it converged, with constraints {list(self.names)}: raise it with "
-                             f"solver_options={{'max_iter': ...}}, or use solver='clarabel'"
-                             if self.solver == "osqp" else
-                             f"solver {self.solver} stopped at its iteration or time limit (status {st!r}, max_iter = "
-                             f"{limit}) before it converged, with constraints {list(self.names)}: raise it with "
-                             f"solver_options={{'max_iter': ...}}")
+            # a time limit the caller set is named as the limit reached (clarabel's time_limit said "max_iter = 400",
+            # the default, and asked to raise max_iter)
+            timed = "time_limit" in self.user_options
+            what = (f"time_limit = {self.user_options['time_limit']}, max_iter = {limit}" if timed else
+                    f"max_iter = {limit}")
+            raise_ = "{'max_iter': ...} or a larger time_limit" if timed else "{'max_iter': ...}"
+            raise ValueError(f"solver {self.solver} stopped at its iteration or time limit (status {st!r}, {what}) "
+                             f"before it converged, with constraints {list(self.names)}: raise it with "
+                             f"solver_options={raise_}" + (", or use solver='clarabel'" if self.solver == "osqp" else ""))
         if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.dy.value is None:
             raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
         if st == cp.OPTIMAL_INACCURATE:
