@@ -60,3 +60,12 @@ def test_a_solve_stopped_by_its_time_limit_names_the_time_limit():
         gb.cls(s, rec, pts, solver="clarabel", constraints=[GainBounds(upper=0.3)], solver_options={"time_limit": 1e-9})
     with pytest.raises(ValueError, match=r"max_iter = 3\) before it converged.*\{'max_iter': \.\.\.\}, or use solver"):
         gb.cls(s, rec, pts, solver="osqp", constraints=[GainBounds(upper=0.3)], solver_options={"max_iter": 3})
+
+
+def test_a_none_among_lambdas_in_an_object_array_is_named():
+    # c787960 named a None in a list or tuple of lambdas; np.array([0.5, None], dtype=object) still said "got [nan]"
+    from graybox.core._validation import check_lambdas
+
+    with pytest.raises(TypeError, match=r"got None \(at position 1\)"):
+        check_lambdas(np.array([0.5, None], dtype=object))
+    np.testing.assert_allclose(check_lambdas(np.array([0.5, 1.0], dtype=object)), [0.5, 1.0])

@@ -361,9 +361,11 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
     if _is_bool(lambdas) or isinstance(lambdas, str):
         raise TypeError(f"{name} must be numbers in (0, 1], got {lambdas!r}")
     refuse_non_real(lambdas, name)  # ["0.5"] is text, not a λ1
-    if lambdas is None or (isinstance(lambdas, (list, tuple)) and any(v is None for v in lambdas)):
-        # None became NaN in the float array: [0.5, None] was told "got [nan]"
-        where = "" if lambdas is None else f" (at position {[v is None for v in lambdas].index(True)})"
+    items = (list(lambdas) if isinstance(lambdas, (list, tuple)) else
+             lambdas.ravel().tolist() if isinstance(lambdas, np.ndarray) and lambdas.dtype == object else [])
+    if lambdas is None or any(v is None for v in items):
+        # None became NaN in the float array: [0.5, None] (or its object array) was told "got [nan]"
+        where = "" if lambdas is None else f" (at position {[v is None for v in items].index(True)})"
         raise TypeError(f"{name} must be numbers in (0, 1], got None{where}")
     try:
         lam = np.atleast_1d(np.asarray(lambdas, dtype=float))
