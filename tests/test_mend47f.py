@@ -120,9 +120,8 @@ def test_a_column_named_hash_with_its_data_is_read(tmp_path):
     assert len(gb.load_record_csv(path, u="u", y="y", time="t").y) == 10
 
 
-def test_passes_through_at_far_offsets_keeps_every_independent_point():
-    # six points on a closed cubic structure's static curve (+ 0.05), u spread 3: at u + 3e3, y + 2e5 the rank of
-    # the equality rows was decided in raw coordinates, a genuine row fell under the cut and the fit missed a point
+def cubic_case():
+    """A closed cubic structure's record (600 samples, u spread 3) and six points on its static curve + 0.05."""
     s = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)^3", "1", "y(k-1)u(k-1)"])
     plant = gb.Model(s, np.array([0.5, 0.3, 0.1, 0.01, 0.2, -0.05]))
     rng = np.random.default_rng(0)
@@ -130,6 +129,13 @@ def test_passes_through_at_far_offsets_keeps_every_independent_point():
     y = plant.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(600)
     ub = np.linspace(0.0, 3.0, 6)
     yb = np.asarray(plant.static_curve(ub), float) + 0.05
+    return s, u, y, ub, yb
+
+
+def test_passes_through_at_far_offsets_keeps_every_independent_point():
+    # six points on a closed cubic structure's static curve (+ 0.05), u spread 3: at u + 3e3, y + 2e5 the rank of
+    # the equality rows was decided in raw coordinates, a genuine row fell under the cut and the fit missed a point
+    s, u, y, ub, yb = cubic_case()
     fits = {}
     for du, dy in [(0.0, 0.0), (3e3, 2e5)]:
         fit = gb.cls(s, Record(u=u + du, y=y + dy), StaticPoints(ub + du, yb + dy), how="points").model
@@ -154,13 +160,7 @@ def test_inconsistent_points_are_inconsistent_wherever_the_output_zero_is(dy):
 def test_cls_uncertainty_at_far_offsets_takes_the_estimators_rank():
     # the estimate of the far-offset test above was refused by cls_uncertainty as "not the optimum of this problem":
     # its null space kept the raw 1e-10 cut, which left free a direction the estimator had pinned
-    s = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)^3", "1", "y(k-1)u(k-1)"])
-    plant = gb.Model(s, np.array([0.5, 0.3, 0.1, 0.01, 0.2, -0.05]))
-    rng = np.random.default_rng(0)
-    u = np.repeat(rng.uniform(0, 3, 30), 20)
-    y = plant.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(600)
-    ub = np.linspace(0.0, 3.0, 6)
-    yb = np.asarray(plant.static_curve(ub), float) + 0.05
+    s, u, y, ub, yb = cubic_case()
     sd = {}
     for du, dy in [(0.0, 0.0), (3e3, 2e5)]:
         rec, pts = Record(u=u + du, y=y + dy), StaticPoints(ub + du, yb + dy)

@@ -5,17 +5,11 @@ import pytest
 
 import graybox as gb
 from graybox import Record, StaticPoints, Structure
+from test_mend47f import cubic_case
 
 
 def _case():
-    s = Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)^3", "1", "y(k-1)u(k-1)"])
-    plant = gb.Model(s, np.array([0.5, 0.3, 0.1, 0.01, 0.2, -0.05]))
-    rng = np.random.default_rng(0)
-    u = np.repeat(rng.uniform(0, 3, 30), 20)
-    y = plant.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(600)
-    ub = np.linspace(0.0, 3.0, 6)
-    yb = np.asarray(plant.static_curve(ub), float) + 0.05
-    return s, u, y, ub, yb
+    return cubic_case()
 
 
 def test_points_whose_last_condition_is_below_their_round_off_give_no_silent_wrong_model():
