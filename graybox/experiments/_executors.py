@@ -904,7 +904,7 @@ class _WorkerWatch:
 
     def _watch(self) -> None:
         since = None
-        while not self._stop.wait(min(1.0, self.limit / 4)):
+        while not self._stop.wait(min(1.0, max(0.05, self.limit / 4))):  # at most 20 questions a second
             if self.lost:
                 self._forget()
             elif _worker_count(self.client):
