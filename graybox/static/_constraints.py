@@ -782,11 +782,12 @@ class PassesThrough(StaticConstraint):
             values, den, size = _rational_static_values(ctx, theta, pts.ubar)
             miss = np.abs(values - pts.ybar)
         else:
-            _check_isolated(ctx, theta, pts, self.describe(), hint)
+            sig, den = _equation_slopes(ctx, theta, pts)
+            _check_isolated(ctx, sig, den, pts, self.describe(), hint)
             # the static equation's residual at each point over its derivative in ȳ (D_i, not vanishing): how far the
             # equilibrium near ȳ_i is from it (more points than clusters at an output of 1e4: the rank cut dropped
             # rows, and the equations were missed by 5e-4 with no word)
-            miss, den, size = _equation_misses(ctx, theta, pts)
+            miss, size = _equation_misses(ctx, sig, den, pts)
         yb = np.asarray(pts.ybar, float)
         spread = float(np.ptp(yb)) if yb.size > 1 and np.ptp(yb) > 0 else float(np.max(np.abs(yb)))
         # relative to the points' spread, with the round-off of the levels themselves (an output at 2e9 ± 50) and of
@@ -802,28 +803,30 @@ class PassesThrough(StaticConstraint):
                 f"D = 1 − ∂(Σ_c Σ_c ȳ^p ū^m)/∂ȳ = {den[i]:.3g} there{hint or '; use fewer points or a StaticBand'}")
 
 
-def _equation_misses(ctx: StaticContext, theta: np.ndarray, pts: StaticPoints) -> tuple[np.ndarray, np.ndarray,
-                                                                                          np.ndarray]:
-    """At each point, the static equation's residual |q_iᵀRθ − ȳ_i| over |D_i| (its derivative in ȳ, D_i = 1 −
-    ∂(q_iᵀRθ)/∂ȳ): about how far the equilibrium near ȳ_i is from it; D_i; and the size of the equation's terms
-    over |D_i| (the scale of that miss's round-off). Shapes (M,)."""
-    cm = ctx.cluster_map
-    sig = cm.R @ np.asarray(theta, float)
-    one, dR = _denominator_rows(cm, pts.ubar, pts.ybar)
-    den = one - dR @ np.asarray(theta, float)
-    terms = static_rows(cm, pts.ubar, pts.ybar) * sig[None, :]
+def _equation_slopes(ctx: StaticContext, theta: np.ndarray, pts: StaticPoints) -> tuple[np.ndarray, np.ndarray]:
+    """The cluster values Σ = Rθ, and at each point the static equation's derivative in ȳ, D_i = 1 − ∂(q_iᵀRθ)/∂ȳ
+    (the rational structures' denominator), shape (M,)."""
+    theta = np.asarray(theta, float)
+    one, dR = _denominator_rows(ctx.cluster_map, pts.ubar, pts.ybar)
+    return ctx.cluster_map.R @ theta, one - dR @ theta
+
+
+def _equation_misses(ctx: StaticContext, sig: np.ndarray, den: np.ndarray,
+                     pts: StaticPoints) -> tuple[np.ndarray, np.ndarray]:
+    """At each point, the static equation's residual |q_iᵀRθ − ȳ_i| over |D_i| (``sig``, ``den``:
+    :func:`_equation_slopes`): about how far the equilibrium near ȳ_i is from it; and the size of the equation's
+    terms over |D_i| (the scale of that miss's round-off). Shapes (M,)."""
+    terms = static_rows(ctx.cluster_map, pts.ubar, pts.ybar) * sig[None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
-        return (np.abs(terms.sum(axis=1) - np.asarray(pts.ybar, float)) / np.abs(den), den,
+        return (np.abs(terms.sum(axis=1) - np.asarray(pts.ybar, float)) / np.abs(den),
                 np.abs(terms).sum(axis=1) / np.abs(den))
 
 
-def _check_isolated(ctx: StaticContext, theta: np.ndarray, pts: StaticPoints, what: str, hint: str) -> None:
+def _check_isolated(ctx: StaticContext, sig: np.ndarray, den: np.ndarray, pts: StaticPoints, what: str,
+                    hint: str) -> None:
     """Refuse an estimate of a structure with y powers above 1 whose static equation holds at a point with a vanishing
-    derivative in ȳ, D_i = 1 − ∂(q_iᵀRθ)/∂ȳ (the rational structures' denominator): there ȳ_i is no isolated
-    equilibrium, and at D ≡ 0 (Σy = 1, every other cluster 0: y(k) = y(k−1)) every level is one."""
-    one, dR = _denominator_rows(ctx.cluster_map, pts.ubar, pts.ybar)
-    sig = ctx.cluster_map.R @ np.asarray(theta, float)
-    den = one - dR @ np.asarray(theta, float)
+    derivative in ȳ (``den``, D_i of :func:`_equation_slopes`): there ȳ_i is no isolated equilibrium, and at D ≡ 0
+    (Σy = 1, every other cluster 0: y(k) = y(k−1)) every level is one."""
     size = 1.0 + np.abs(static_rows(ctx.cluster_map, pts.ubar, pts.ybar, wrt="y") * sig[None, :]).sum(axis=1)
     bad = denominator_vanishes(den, size)
     if bad.any():
