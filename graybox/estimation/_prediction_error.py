@@ -519,8 +519,16 @@ def centred_eq_rank(cons: list[StaticConstraint], ctx: StaticContext) -> int | N
     if centred is None:
         return None
     C = centred[0][np.linalg.norm(centred[0], axis=1) > 0]
-    Sc = np.linalg.svd(_equilibrated(C, np.zeros(C.shape[0]))[0], compute_uv=False)
-    return int(np.sum(Sc > centred[2] * Sc[0])) if Sc.size and Sc[0] > 0 else None
+    return _centred_rank(C, np.zeros(C.shape[0]), centred[2])[1]
+
+
+def _centred_rank(C: np.ndarray, f: np.ndarray, cut: float) -> tuple[np.ndarray, int | None, np.ndarray]:
+    """Centred equality rows ``C`` equilibrated (:func:`_equilibrated`): their left singular vectors, their rank at
+    ``cut`` relative to the largest singular value (None when every row is 0) and the right-hand sides ``f``
+    equilibrated alike."""
+    C, fc = _equilibrated(C, f)
+    Uc, Sc, _ = np.linalg.svd(C, full_matrices=False)
+    return Uc, (int(np.sum(Sc > cut * Sc[0])) if Sc.size and Sc[0] > 0 else None), fc
 
 
 def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: int | None,
@@ -552,10 +560,9 @@ def _reduce_eq(E: np.ndarray, f: np.ndarray, names: list[str], cluster_count: in
         # the same rows and right-hand sides in centred coordinates (_centred_eq_rows): the rank decided there, and
         # the consistency, judged against the right-hand sides without the output's offset (at y + 2e9, 1e-8 of
         # ‖f‖ was 45 output units, and inconsistent points 0.1 apart were met halfway)
-        C, fc = _equilibrated(centred[0][ok], centred[1][ok])
-        Uc, Sc, _ = np.linalg.svd(C, full_matrices=False)
-        if Sc.size and Sc[0] > 0:
-            r = int(np.sum(Sc > centred[2] * Sc[0]))
+        Uc, rc, fc = _centred_rank(centred[0][ok], centred[1][ok], centred[2])
+        if rc is not None:
+            r = rc
             Ur, Uk = U[:, :r], Uc[:, :r]
             resid, judged = fc - Uk @ (Uk.T @ fc), fc
     if np.linalg.norm(resid) > 1e-8 * max(scale, np.linalg.norm(judged)):
