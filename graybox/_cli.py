@@ -199,7 +199,8 @@ def _main(argv: list[str] | None) -> int:
     where.add_argument("--processes", type=int, help="run in N local worker processes (no Dask)")
     run.add_argument("--retry-failed", action="store_true", help="run the failed cells again")
     run.add_argument("--cell-time-limit", type=float, metavar="S",
-                     help="with --processes: a cell running longer than S seconds is stopped and stored as failed")
+                     help="with --processes, --workers or --scheduler: a cell running longer than S seconds is "
+                          "stopped and stored as failed")
     run.add_argument("--worker-timeout", type=float, metavar="S",
                      help="with Dask: end the run (its finished cells kept) once the cluster has had no worker for S "
                           "seconds (default 60)")

@@ -468,9 +468,77 @@ def test_a_cell_past_the_time_limit_is_stopped_and_failed_and_the_others_run(tmp
         os.kill(pid, 0)
 
 
+def test_a_cell_past_the_time_limit_on_dask_is_stopped_and_failed_and_the_others_run(tmp_path, reference):
+    # was: refused on Dask ("a Dask task's start is not known"), and a hung cell hung its task and the run
+    cells, data = _death_cells(("LS", "CLS", "PE"))
+    with DaskCluster(workers=1, fn=partial(_hang_on_ls, str(tmp_path)), time_limit=5.0).session() as ex:
+        rows = {r["variant"]: r for r in ex.run(cells, data)}
+    assert set(rows) == {"LS", "CLS", "PE"}
+    assert rows["LS"]["status"] == "failed" and "cell time limit of 5 s" in rows["LS"]["message"]
+    ref = reference.set_index("key")
+    for v in ("CLS", "PE"):
+        assert rows[v]["status"] == "ok" and rows[v]["JS_valid"] == ref.loc[rows[v]["key"], "JS_valid"]
+    (marker,) = tmp_path.glob("*.*")  # started once, in a child of the Dask worker, not retried
+    pid = int(marker.suffix[1:])
+    with pytest.raises(ProcessLookupError):  # that child was killed, not left sleeping
+        os.kill(pid, 0)
+
+
+_ORPHAN_SCRIPT = """
+import os, sys, time
+from pathlib import Path
+from graybox.experiments._executors import ProcessPool
+
+
+def sleep_in_cell(cell, data, threads):
+    Path(sys.argv[1], str(os.getpid())).touch()
+    time.sleep(600)
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, sys.argv[2])
+    from test_grid_executors import _death_cells
+    cells, data = _death_cells(("LS",))
+    list(ProcessPool(1, sleep_in_cell).run(cells, data))
+"""
+
+
+def test_a_pool_worker_whose_driver_is_killed_exits_rather_than_run_its_cell_for_nobody(tmp_path):
+    # was: a worker went on with its cell (a hung one for ever) once its driver, or the Dask worker that started
+    # it under a cell time limit, was SIGKILLed
+    script = tmp_path / "driver.py"
+    script.write_text(_ORPHAN_SCRIPT)
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    driver = subprocess.Popen([sys.executable, str(script), str(marks), str(Path(__file__).parent)],
+                              stdin=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not list(marks.iterdir()) and time.monotonic() < deadline and driver.poll() is None:
+            time.sleep(0.2)
+        (mark,) = marks.iterdir()
+        worker = int(mark.name)
+        driver.send_signal(signal.SIGKILL)
+        driver.wait()
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            try:
+                os.kill(worker, 0)
+            except ProcessLookupError:
+                break
+            time.sleep(0.2)
+        else:
+            os.kill(worker, signal.SIGKILL)
+            pytest.fail("the pool's worker outlived its killed driver by 30 s")
+    finally:
+        if driver.poll() is None:
+            driver.kill()
+            driver.wait()
+
+
 def test_a_cell_time_limit_is_refused_where_a_cell_cannot_be_stopped(tmp_path):
-    for how in ({}, {"executor": "dask", "workers": 1}, {"executor": "inprocess"}):
-        with pytest.raises(ValueError, match="cell_time_limit needs executor='processes'"):
+    for how in ({}, {"executor": "inprocess"}):
+        with pytest.raises(ValueError, match="cell_time_limit needs worker processes"):
             gx.run_grid(tiny_grid(), tmp_path / "s.sqlite", cell_time_limit=5, **how)
     for bad, err in ((0, ValueError), (float("inf"), ValueError), ("5", TypeError)):
         with pytest.raises(err, match="cell_time_limit"):

@@ -50,7 +50,11 @@ class CellRows:
         return 64 + self.ROW_BYTES * len(self.rows)
 
 
-def cells_task(fn: Callable[[Cell, gb.Dataset, int], dict], plugin: str, cells: list[Cell]) -> CellRows:
-    """Run ``fn`` on a batch of cells, one after another; their rows in order."""
+def cells_task(fn: Callable[[Cell, gb.Dataset, int], dict], plugin: str, cells: list[Cell],
+               runner: Callable[[list[Cell], Mapping[str, gb.Dataset]], list[dict]] | None = None) -> CellRows:
+    """Run ``fn`` on a batch of cells, one after another; their rows in order. ``runner``, when given, runs the
+    batch instead (the cells and the data sets by hash), e.g. in a child process under a cell time limit."""
     store = get_worker().plugins[plugin].datasets
+    if runner is not None:
+        return CellRows(list(runner(cells, store)))
     return CellRows([fn(c, store[c.data_hash], threads=1) for c in cells])

@@ -39,6 +39,7 @@ import uuid
 from collections import deque
 from contextlib import AbstractContextManager, ExitStack, contextmanager, nullcontext, suppress
 from dataclasses import dataclass, field
+from functools import partial
 from multiprocessing.connection import wait as mp_wait
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
@@ -178,12 +179,22 @@ def _exit_on_sigterm(signum, frame) -> None:  # pragma: no cover - runs in the c
 STARTED = "started"
 
 
+def _exit_when_orphaned(parent: int) -> None:  # pragma: no cover - runs in the child process
+    """Exit at once when the process that started this one is gone (SIGKILLed, say: a Dask worker the nanny
+    replaces), rather than running a cell, perhaps a hung one, for nobody."""
+    while os.getppid() == parent:
+        time.sleep(1.0)
+    os._exit(1)
+
+
 def _worker_main(conn, fn: CellFn) -> None:  # pragma: no cover - runs in the child process
-    """A worker process: receive (cell, data or None), say it started, run it, send the row; stop on None, EOF or
-    SIGTERM."""
+    """A worker process: receive (cell, data or None), say it started, run it, send the row; stop on None, EOF,
+    SIGTERM or the death of the process that started it."""
     # stopped mid-cell (the driver interrupted), exit through Python's clean-up: a killed worker leaves
     # numba's named semaphore behind, for the resource tracker to warn of
     signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    threading.Thread(target=_exit_when_orphaned, args=(os.getppid(),), daemon=True,
+                     name="graybox worker's parent watch").start()
     cache: dict[str, gb.Dataset] = {}
     while True:
         try:
@@ -229,6 +240,25 @@ def _sigint_ignored():
         signal.signal(signal.SIGINT, old)
 
 
+_DAEMON_LOCK = threading.Lock()
+
+
+@contextmanager
+def _children_allowed():
+    """Let a daemonic process (a Dask worker under its nanny) start processes meanwhile: multiprocessing refuses
+    them there, for they would be left behind when it is ended; the pool's workers exit once it is gone."""
+    me = mp.current_process()
+    if not me.daemon:
+        yield
+        return
+    with _DAEMON_LOCK:
+        me.daemon = False
+        try:
+            yield
+        finally:
+            me.daemon = True
+
+
 @dataclass
 class _Slot:
     proc: Any
@@ -251,11 +281,14 @@ class ProcessPool:
     time_limit : float, optional
         Seconds a cell may run (from its start in the worker): past them its worker is stopped (SIGTERM,
         then SIGKILL) and the cell is a failed row saying so (not retried). None: no limit.
+    threads : int, optional
+        Threads each worker may use; default: the machine's cores shared among the workers.
     """
 
-    def __init__(self, workers: int, fn: CellFn = run_cell, time_limit: float | None = None):
+    def __init__(self, workers: int, fn: CellFn = run_cell, time_limit: float | None = None,
+                 threads: int | None = None):
         self.workers = int(workers)
-        self.threads = worker_threads(self.workers)
+        self.threads = threads or worker_threads(self.workers)
         self.fn = fn
         self.time_limit = time_limit
         self.name = f"{self.workers} local processes ({self.threads} thread(s) each)"
@@ -288,7 +321,7 @@ class ProcessPool:
         parent, child = self._ctx.Pipe()
         proc = self._ctx.Process(target=_worker_main, args=(child, self.fn), daemon=True,
                                  name="graybox-grid-worker")
-        with _environ(_thread_env(self.threads)), _sigint_ignored():
+        with _environ(_thread_env(self.threads)), _sigint_ignored(), _children_allowed():
             proc.start()
         child.close()
         return _Slot(proc, parent)
@@ -701,16 +734,24 @@ class DaskCluster:
         ends with a ``ConnectionError``, the rows it finished kept (the store's run resumes them). A cluster
         that has had no worker yet in the run (an adaptive one whose first workers wait in a batch queue) is
         waited for. ``None`` waits for ever.
+    time_limit : float, optional
+        Seconds a cell may run: each task then runs its cells in a child process of its worker, one after
+        another, and a cell past the limit has that process stopped and is a failed row saying so (not
+        retried), as :class:`ProcessPool` does (a second or two more per task: the child's start-up).
+        None: cells run in the worker itself, without a limit.
     """
 
     def __init__(self, client: Any = None, scheduler: str | None = None, workers: int | None = None,
-                 fn: CellFn = run_cell, worker_timeout: float | None = WORKER_TIMEOUT):
+                 fn: CellFn = run_cell, worker_timeout: float | None = WORKER_TIMEOUT,
+                 time_limit: float | None = None):
         given = [k for k, v in (("client", client), ("scheduler", scheduler), ("workers", workers)) if v is not None]
         if len(given) != 1:
             raise ValueError(f"the Dask executor needs exactly one of client, scheduler or workers; got {given or 'none'}")
         self.client, self.scheduler, self.workers, self.fn = client, scheduler, workers, fn
         self.worker_timeout = (None if worker_timeout is None else
                                check_real(worker_timeout, "worker_timeout", low=0, low_open=True))
+        self.time_limit = (None if time_limit is None else
+                           check_real(time_limit, "cell_time_limit", low=0, low_open=True))
         if workers is not None:
             self.workers = int(workers)
             self.name = f"Dask LocalCluster of {self.workers} worker processes"
@@ -794,6 +835,7 @@ class DaskCluster:
             plugin = f"graybox-grid-data-{uuid.uuid4().hex[:8]}"
             client.register_plugin(GridData({h: datasets[h] for h in {c.data_hash for c in cells}}), name=plugin)
             tag = uuid.uuid4().hex[:8]
+            runner = None if self.time_limit is None else partial(_cells_in_a_child, self.fn, self.time_limit)
             futures: dict = {}
             counter = itertools.count()
             if batches is None:
@@ -819,7 +861,7 @@ class DaskCluster:
                     if not items:
                         break
                     seq = next(counter)  # a retried cell gets a new key: the old one may still be known as erred
-                    f = client.submit(cells_task, self.fn, plugin, [c for c, _ in items],
+                    f = client.submit(cells_task, self.fn, plugin, [c for c, _ in items], runner,
                                       key=f"graybox-cells-{items[0][0].key[:16]}-{seq}-{tag}", pure=False)
                     futures[f] = items
                     pending.add(f)
@@ -875,6 +917,14 @@ class DaskCluster:
                     client.unregister_worker_plugin(plugin)
                 except Exception:  # the cluster may be going away; the plugin goes with it
                     pass
+
+
+def _cells_in_a_child(fn: CellFn, time_limit: float, cells: Sequence[Cell],
+                      datasets: Mapping[str, gb.Dataset]) -> list[dict]:
+    """On a Dask worker: ``cells`` one after another in a child process, each stopped past ``time_limit`` s
+    (a failed row saying so); their rows in the cells' order."""
+    rows = {r["key"]: r for r in ProcessPool(1, fn, time_limit=time_limit, threads=1).run(cells, datasets)}
+    return [rows[c.key] for c in cells]
 
 
 def _worker_count(client: Any) -> int:
@@ -1011,10 +1061,11 @@ def make_executor(executor: str | None = None, *, workers: int | None = None, cl
     check_cluster(client, scheduler)
     if cell_time_limit is not None:
         cell_time_limit = check_real(cell_time_limit, "cell_time_limit", low=0, low_open=True)
-        if executor != "processes":
-            # numba's compiled loops cannot be interrupted in a thread, and a Dask task's start is not known
-            raise ValueError(f"cell_time_limit needs executor='processes' (graybox grid run --processes N): a cell "
-                             f"on the {executor!r} executor cannot be stopped on time")
+        if executor == "inprocess":
+            # numba's compiled loops cannot be interrupted in a thread: a cell is stopped by ending its process
+            raise ValueError("cell_time_limit needs worker processes (executor='processes' or 'dask'; graybox grid "
+                             "run --processes N, --workers N or --scheduler ADDRESS): a cell run in the driver "
+                             "cannot be stopped on time")
     if worker_timeout is not None:
         worker_timeout = check_real(worker_timeout, "worker_timeout (seconds)", low=0, low_open=True)
     if worker_timeout != WORKER_TIMEOUT and executor != "dask":
@@ -1027,4 +1078,5 @@ def make_executor(executor: str | None = None, *, workers: int | None = None, cl
         if client is not None or scheduler is not None:
             raise ValueError("the local process executor takes workers only (a client or scheduler means Dask)")
         return ProcessPool(workers or os.cpu_count() or 1, fn, time_limit=cell_time_limit)
-    return DaskCluster(client=client, scheduler=scheduler, workers=workers, fn=fn, worker_timeout=worker_timeout)
+    return DaskCluster(client=client, scheduler=scheduler, workers=workers, fn=fn, worker_timeout=worker_timeout,
+                       time_limit=cell_time_limit)
