@@ -195,8 +195,10 @@ class SEProblem:
         means something else when u moves by 1e4, and the fits differed by up to 35 % in J_S. Records that
         identify θ only with the static points (a two-level input's u(k−1)², which they cannot tell from
         u(k−1) and 1) are centred too: the GA's random least-squares seeds are then the minimum-norm solutions
-        in z, the same model at every offset. An input held over the records is not: its centred terms are
-        round-off of zero, whose RMS would scale z by nothing the units set.
+        in z, the same model at every offset. An input held over the records is left at its level (offset 0): its
+        centred terms would be round-off of zero, whose RMS would scale z by nothing the units set; its terms are
+        then constants only the static points tell apart, while y and the inputs that move are centred (the GA's
+        fronts at y + 50 moved by 0.5 % of y's spread when a held input kept the whole problem raw).
         """
         self.z_map = self.z_inv = self.z_shift = self.offsets = None
         self.z_psi, self.z_target = self.psi / self.scale, self.target
@@ -204,13 +206,14 @@ class SEProblem:
         # the parameters of those runs (None: θ, on the records as given)
         self.run_records, self.run_scale = self.records, None
         # a problem that only scores θ's fitted elsewhere (a choosing record) never moves in z: no centred basis
-        if scored_only or is_dask_data(self.records) or not is_closed(self.structure) or self._held_input():
+        if scored_only or is_dask_data(self.records) or not is_closed(self.structure):
             self.run_U = self.U
             return
-        off = signal_offsets(self.records)
+        held = self._held_inputs()
+        off = {k: (0.0 if k in held else v) for k, v in signal_offsets(self.records).items()}
         A, t = shift_map(self.structure, off)
         Ainv = shift_map(self.structure, {k: -v for k, v in off.items()})[0]
-        centred = centred_data(self.records, off)
+        centred = centred_data(self.records, off, keep=held)
         psi_c, target_c = stacked_regressors(self.structure, centred)
         s_c = column_scales(psi_c)
         # the free runs too are made on the centred signals, with the centred parameters z / s_c: the same run less
@@ -241,13 +244,14 @@ class SEProblem:
         c = self.code
         return [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.input_names), self.L) for r in records]
 
-    def _held_input(self) -> bool:
-        """Whether an input of the structure holds one value over every record (to round-off: the centring's one
+    def _held_inputs(self) -> frozenset:
+        """The inputs of the structure that hold one value over every record (to round-off: the centring's one
         rule, :func:`~graybox.selection._centring.is_held`)."""
-        if not self.code.input_names:
-            return False
-        us = np.concatenate([record_inputs(r, self.code.input_names).reshape(len(r.y), -1) for r in self.records])
-        return any(is_held(us[:, i]) for i in range(us.shape[1]))
+        names = self.code.input_names
+        if not names:
+            return frozenset()
+        us = np.concatenate([record_inputs(r, names).reshape(len(r.y), -1) for r in self.records])
+        return frozenset(n for i, n in enumerate(names) if is_held(us[:, i]))
 
     def to_z(self, thetas: np.ndarray) -> np.ndarray:
         """The optimisers' coordinates of θ (shape (n,) or (P, n)): see :meth:`_centre_basis`."""

@@ -97,14 +97,15 @@ def _shift_record(rec: Record, offsets: Mapping[str, float], held: frozenset = f
     return replace(rec, u=u, y=y)
 
 
-def centred_data(data: object, offsets: Mapping[str, float]) -> Record | list[Record]:
+def centred_data(data: object, offsets: Mapping[str, float], keep: frozenset = frozenset()) -> Record | list[Record]:
     """The identification records with each signal minus its offset (new arrays; the data untouched); a signal
-    held at one level over the records (:func:`_held`) exactly zero."""
+    held at one level over the records (:func:`is_held`) exactly zero, but those named in ``keep`` (each then
+    minus its offset only, e.g. 0: left at its level)."""
     records = as_records(data)
     names = records[0].input_names
     us = np.concatenate([r.u.reshape(len(r.y), -1) for r in records])
     held = frozenset([n for i, n in enumerate(names) if is_held(us[:, i])]
-                     + (["y"] if is_held(np.concatenate([r.y for r in records])) else []))
+                     + (["y"] if is_held(np.concatenate([r.y for r in records])) else [])) - keep
     shifted = [_shift_record(r, offsets, held) for r in records]
     return shifted[0] if isinstance(data, (Record, Dataset)) else shifted
 
