@@ -80,7 +80,7 @@ from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
-from ..core._validation import FrozenMap, check_bool, check_choice, check_fields, check_int, check_real, warn
+from ..core._validation import FrozenMap, check_bool, check_choice, check_fields, check_int, check_real, frozen, warn
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
@@ -144,6 +144,24 @@ class CorrelationTest:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # read-only, and held to what residual_tests makes (one built by hand or read from an edited file too)
+        lags, phi, outside = (frozen(self.lags, np.int64), frozen(self.phi), frozen(self.outside, np.int64))
+        check_choice(self.kind, "kind", ("linear", "nonlinear"))
+        if lags.ndim != 1 or lags.size == 0 or phi.shape != lags.shape:
+            raise ValueError(f"lags and phi must be 1-D, one φ per lag, got shapes {lags.shape} and {phi.shape}")
+        if not np.all(np.isfinite(phi) & (np.abs(phi) <= 1 + 1e-12)):
+            raise ValueError("phi must hold correlations, finite and in [-1, 1]")
+        check_real(self.band, "band", low=0, low_open=True)
+        check_real(self.limit, "limit", low=0, low_open=True)
+        if outside.ndim != 1 or not np.array_equal(outside, lags[np.abs(phi) > self.band]):
+            raise ValueError(f"outside must list the lags where |phi| > band ({lags[np.abs(phi) > self.band].tolist()}), "
+                             f"got {outside.tolist()}")
+        if self.passed != bool(np.all(np.abs(phi) <= self.limit)):
+            raise ValueError(f"passed is {self.passed} but {'every' if not self.passed else 'not every'} |phi| is "
+                             f"within limit = {self.limit:g}")
+        object.__setattr__(self, "lags", lags)
+        object.__setattr__(self, "phi", phi)
+        object.__setattr__(self, "outside", outside)
 
     @property
     def worst_lag(self) -> int:
@@ -189,8 +207,16 @@ class ResidualTests:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        check_int(self.n, "n", low=1)
+        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
+        check_choice(self.rule, "rule", RULES)
+        for k, t in self.tests.items():
+            if not isinstance(t, CorrelationTest) or t.name != k or k.split(":")[0] not in TESTS:
+                raise ValueError(f"tests[{k!r}] must be the CorrelationTest named {k!r}, one of {list(TESTS)} "
+                                 "(with ':input' for one input's test of several)")
         object.__setattr__(self, "tests", FrozenMap(self.tests))  # not the caller's dict
         object.__setattr__(self, "undefined", FrozenMap(self.undefined))
+        object.__setattr__(self, "residuals", tuple(frozen(e) for e in self.residuals))
 
     @property
     def passed(self) -> bool:

@@ -1,0 +1,71 @@
+"""Bug hunt 48a: diagnostics (residual tests, parameter uncertainty and its bands, the bootstrap of a decision)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _ct(**kw):
+    a = dict(name="u_xi", label="φ_uξ(τ)", kind="linear", lags=np.arange(-2, 3), phi=np.array([0.01, -0.02, 0.0, 0.03, 0.0]),
+             band=0.1, limit=0.2, outside=np.array([], int), passed=True)
+    a.update(kw)
+    return gb.CorrelationTest(**a)
+
+
+def test_a_correlation_test_built_by_hand_is_read_only():
+    # residual_tests froze the arrays it passed, but the class did not: one built (or loaded) otherwise could be edited
+    t = _ct(lags=[-2, -1, 0, 1, 2], phi=[0.01, -0.02, 0.0, 0.03, 0.0], outside=[])
+    for f in ("lags", "phi", "outside"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(t, f)[...] = 0
+    rt = gb.ResidualTests({"u_xi": t}, 5, 0.95, "pointwise", "m", (np.zeros(5),))
+    with pytest.raises(ValueError, match="read-only"):
+        rt.residuals[0][0] = 1.0
+
+
+@pytest.mark.parametrize("kw, said", [
+    (dict(phi=np.zeros(4)), "phi"),                       # one φ per lag
+    (dict(phi=np.array([0.5, 0, 0, 0, 0])), "outside"),   # |φ| > band at τ = −2, not listed
+    (dict(phi=np.array([0.5, 0, 0, 0, 0]), outside=np.array([-2])), "passed"),  # |φ| > limit yet passed
+    (dict(passed=False), "passed"),                       # every |φ| within the limit yet failed
+    (dict(band=-1.0), "band"),
+    (dict(limit=float("nan")), "limit"),
+    (dict(phi=np.array([2.0, 0, 0, 0, 0]), outside=np.array([-2]), passed=False), "phi"),  # a correlation is in [−1, 1]
+    (dict(kind="quadratic"), "kind"),
+])
+def test_a_correlation_test_that_contradicts_itself_is_refused(kw, said):
+    with pytest.raises(ValueError, match=said):
+        _ct(**kw)
+
+
+@pytest.mark.parametrize("kw, said", [(dict(level=2.0), "level"), (dict(level=0.0), "level"),
+                                      (dict(rule="x"), "rule"), (dict(n=-3), "n"),
+                                      (dict(tests={"u_xi:u": _ct()}), "u_xi")])
+def test_residual_tests_that_contradict_themselves_are_refused(kw, said):
+    a = dict(tests={"u_xi": _ct()}, n=5, level=0.95, rule="pointwise", model_name="m", residuals=(np.zeros(5),))
+    a.update(kw)
+    with pytest.raises(ValueError, match=said):
+        gb.ResidualTests(**a)
+
+
+def test_a_hand_edited_residual_tests_file_is_refused(tmp_path):
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 300)
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.05 * rng.standard_normal()
+    rec = gb.Record(u, y)
+    m = gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), rec, noise=0).model
+    path = tmp_path / "r.json"
+    gb.save(gb.residual_tests(m, rec), path)
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    body = json.dumps(doc)
+    assert gb.load(path).passed in (True, False)
+    path.write_text(body.replace('"level": 0.95', '"level": 95'), encoding="utf-8")  # a percentage for a level
+    with pytest.raises(gb.GrayboxFileError, match="level"):
+        gb.load(path)
