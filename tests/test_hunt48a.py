@@ -69,3 +69,37 @@ def test_a_hand_edited_residual_tests_file_is_refused(tmp_path):
     path.write_text(body.replace('"level": 0.95', '"level": 95'), encoding="utf-8")  # a percentage for a level
     with pytest.raises(gb.GrayboxFileError, match="level"):
         gb.load(path)
+
+
+def _boot(**kw):
+    a = dict(structure=gb.Structure(["y(k-1)", "u(k-1)"]), estimator="pe", lambdas=np.array([0.1, 1.0]), band=0.05,
+             block_length=20, n_blocks=5, seed=0, lambda1=np.array([0.1, np.nan]), JS=np.array([1.0, np.nan]),
+             JSF=np.array([0.01, np.nan]), in_band=np.array([True, False]), thetas=np.array([[0.5, 1.0], [np.nan] * 2]),
+             rules=("D_SF", ""), reference={"lambda1": 0.1}, failures={1: "ValueError: no member"})
+    a.update(kw)
+    return gb.DecisionBootstrap(**a)
+
+
+def test_a_consistent_decision_bootstrap_is_taken():
+    b = _boot()
+    assert b.agreement == 1.0 and list(b.failures) == [1]
+
+
+@pytest.mark.parametrize("kw, said", [
+    (dict(estimator="x"), "estimator"),
+    (dict(seed=-1), "seed"),
+    (dict(block_length=-5), "block_length"),
+    (dict(n_blocks=0), "n_blocks"),
+    (dict(band=-1.0), "band"),
+    (dict(static_sigma=-1.0), "static_sigma"),
+    (dict(lambda1=np.array([0.5, np.nan])), "lambda1"),          # a λ1 the sweep never had
+    (dict(JS=np.array([-1.0, np.nan])), "JS"),
+    (dict(rules=("x", "")), "rule"),
+    (dict(failures={5: "x"}), "failures"),                        # no replicate 5 of 2
+    (dict(failures={}), "failures"),                              # replicate 1 has no decision and no reason
+    (dict(in_band=np.array([False, False])), "in_band"),          # D_SF's choice is in the band
+])
+def test_a_decision_bootstrap_that_contradicts_itself_is_refused(kw, said):
+    # DecisionBootstrap took any of these (from a hand-edited file too: graybox.load built it as it was)
+    with pytest.raises(ValueError, match=said):
+        _boot(**kw)

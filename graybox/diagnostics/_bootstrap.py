@@ -58,7 +58,8 @@ from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
-from ..core._validation import FrozenMap, check_choice, check_fields, check_int, check_lambdas, check_real, check_seed, frozen, warn
+from ..core._validation import (FrozenMap, check_band, check_choice, check_fields, check_int, check_lambdas,
+                                check_mean_square, check_real, check_seed, frozen, warn)
 from ..core._reprs import listed, short_repr
 from ._uncertainty import UncertaintyWarning
 
@@ -259,6 +260,39 @@ class DecisionBootstrap:
         # immutable all the way down: the reference's θ (a list in the job's plain result) and the options as given
         object.__setattr__(self, "reference", FrozenMap({k: _frozen_value(v) for k, v in dict(self.reference).items()}))
         object.__setattr__(self, "failures", FrozenMap({int(k): str(v) for k, v in dict(self.failures).items()}))
+        self._check_values()
+
+    def _check_values(self) -> None:
+        """What :func:`bootstrap_decision` makes, held to a bootstrap built by hand or read from an edited file: the
+        settings in range, each replicate a decision by D_SF or its fallback at one of the sweep's λ1, or a failure
+        with its reason."""
+        check_choice(self.estimator, "estimator", ESTIMATORS)
+        check_seed(self.seed)
+        check_int(self.block_length, "block_length", low=1)
+        check_int(self.n_blocks, "n_blocks", low=1)
+        check_band(self.band, "band")
+        if self.static_sigma is not None:
+            check_real(self.static_sigma, "static_sigma", low=0, low_open=True)
+        B = self.lambda1.size
+        failed = np.zeros(B, bool)
+        for i in self.failures:
+            if not 0 <= i < B:
+                raise ValueError(f"failures: no replicate {i} of {B}")
+            failed[i] = True
+        if not np.array_equal(failed, np.isnan(self.lambda1)):
+            raise ValueError("failures must name exactly the replicates without a decision (lambda1 NaN)")
+        if not np.all(np.isin(self.lambda1[~failed], self.lambdas)):
+            raise ValueError(f"lambda1: each replicate's choice is one of the sweep's lambdas, got "
+                             f"{sorted(set(self.lambda1[~failed]) - set(self.lambdas))[:3]}")
+        check_mean_square(self.JS, "JS")
+        check_mean_square(self.JSF, "JSF")
+        for i, (rule, inb) in enumerate(zip(self.rules, self.in_band)):
+            want = ("",) if failed[i] else ("D_SF", "min J_SF")
+            if rule not in want:
+                raise ValueError(f"rules[{i}] must be one of {want} for {'a failed' if failed[i] else 'a'} replicate, "
+                                 f"got {rule!r}")
+            if bool(inb) != (rule == "D_SF"):
+                raise ValueError(f"in_band[{i}] is {bool(inb)} but replicate {i}'s rule is {rule or 'none (failed)'!r}")
         object.__setattr__(self, "options", FrozenMap({k: _frozen_value(v) for k, v in dict(self.options).items()}))
 
     @property
