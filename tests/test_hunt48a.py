@@ -103,3 +103,29 @@ def test_a_decision_bootstrap_that_contradicts_itself_is_refused(kw, said):
     # DecisionBootstrap took any of these (from a hand-edited file too: graybox.load built it as it was)
     with pytest.raises(ValueError, match=said):
         _boot(**kw)
+
+
+@pytest.fixture(scope="module")
+def one_input_uncertainty():
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-1, 1, 400)
+    y = np.zeros(400)
+    for k in range(1, 400):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.2 * u[k - 1] ** 2 + 0.05 * rng.standard_normal()
+    rec = gb.Record(u, y)
+    m = gb.els(gb.Structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]), rec, noise=0).model
+    return gb.ls_uncertainty(m, rec)
+
+
+@pytest.mark.parametrize("band", ["curve", "surface"])
+@pytest.mark.parametrize("n", [2, 5, 9])
+def test_static_bands_refuse_too_few_draws_for_either_method(one_input_uncertainty, band, n):
+    # simulation_band refused n_samples < 10 for either method ("checked for either method"); the static bands
+    # said the same ("a bad value is never ignored", surface: ">= 10") yet took 2 … 9 with the delta method
+    fn = gb.static_curve_band if band == "curve" else gb.static_surface_band
+    ub = [-0.5, 0.0, 0.5] if band == "curve" else [[-0.5], [0.0], [0.5]]
+    with pytest.raises(ValueError, match="n_samples"):
+        fn(one_input_uncertainty, ub, n_samples=n)
+    with pytest.raises(ValueError, match="n_samples"):
+        gb.simulation_band(one_input_uncertainty, gb.Record(np.zeros(20), np.zeros(20)), n_samples=n)
+    fn(one_input_uncertainty, ub, n_samples=10)

@@ -1383,7 +1383,7 @@ def static_curve_band(
         draw, the band from the draws' quantiles (honest where the map is curved, e.g. near a
         vanishing denominator).
     n_samples : int
-        Monte Carlo draws.
+        Monte Carlo draws (at least 10; checked for either method).
     seed : int
         Seed of the Monte Carlo draws.
     y0 : float or array_like, optional
@@ -1412,7 +1412,7 @@ def static_curve_band(
         raise TypeError(f"uncertainty must be a ParameterUncertainty (from ls_uncertainty, cls_uncertainty, "
                         f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
     check_choice(method, "method", BAND_METHODS)
-    n_samples = check_int(n_samples, "n_samples", low=2)  # checked for either method: a bad value is never ignored
+    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)  # checked for either method: a bad value is never ignored
     seed = check_seed(seed)
     if uncertainty.model.n_inputs > 1:
         raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
@@ -1439,8 +1439,7 @@ def static_curve_band(
         sy, sg = np.sqrt(uncertainty.contract(Gy)), np.sqrt(uncertainty.contract(Gg))
         return StaticCurveBand(ub, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                uncertainty.level, "delta", 0, np.zeros(ub.size), m.name, m.units)
-    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)
-    rng = np.random.default_rng(check_seed(seed))
+    rng = np.random.default_rng(seed)
     thetas = theta_draws(th, cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_equilibria(st, thetas, ub, yb).ybar
     undefined, ylo, yhi, sy, glo, ghi, sg = _draws_band(Y, static_gains(p, A, thetas, uc, Y)[..., 0], uncertainty.level)
@@ -1476,7 +1475,7 @@ def static_surface_band(
         ``"monte-carlo"``: θ drawn from the multivariate t around θ̂ (scale ``cov``), the stable equilibrium
         reached from the estimate's taken for each draw, the band from the draws' quantiles.
     n_samples : int
-        Monte Carlo draws (>= 10).
+        Monte Carlo draws (at least 10; checked for either method).
     seed : int
         Seed of the Monte Carlo draws.
     y0 : float or array_like of shape (M,), optional
@@ -1502,7 +1501,7 @@ def static_surface_band(
         raise TypeError(f"uncertainty must be a ParameterUncertainty (from ls_uncertainty, cls_uncertainty, "
                         f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
     check_choice(method, "method", BAND_METHODS)
-    n_samples = check_int(n_samples, "n_samples", low=2)
+    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)  # for either method, as static_curve_band
     seed = check_seed(seed)
     m = uncertainty.model
     names = tuple(m.input_names)
@@ -1521,7 +1520,6 @@ def static_surface_band(
         sg = np.sqrt(uncertainty.contract(Gg.reshape(-1, th.size))).reshape(gain.shape)
         return StaticSurfaceBand(ub, names, yb, yb - z * sy, yb + z * sy, sy, gain, gain - z * sg, gain + z * sg, sg,
                                  uncertainty.level, "delta", 0, np.zeros(ub.shape[0]), m.name, m.units)
-    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)
     rng = np.random.default_rng(seed)
     thetas = theta_draws(th, uncertainty.cov, n_samples, rng, dof=uncertainty.dof, factor=uncertainty.cov_factor)
     Y = reached_surface(st, thetas, ub, yb, inputs=names).ybar  # (P, M)
