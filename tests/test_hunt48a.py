@@ -129,3 +129,24 @@ def test_static_bands_refuse_too_few_draws_for_either_method(one_input_uncertain
     with pytest.raises(ValueError, match="n_samples"):
         gb.simulation_band(one_input_uncertainty, gb.Record(np.zeros(20), np.zeros(20)), n_samples=n)
     fn(one_input_uncertainty, ub, n_samples=10)
+
+
+@pytest.mark.parametrize("two_inputs", [False, True])
+def test_residuals_of_one_magnitude_leave_the_squared_residual_test_out_not_failed(two_inputs):
+    # residuals ±c (a two-level quantisation of the output): ξ² is constant, φ_(u²)'ξ² is 0/0. It was kept as a
+    # NaN verdict that failed the model ("FAIL (max |φ| = nan)"), where the tests these data cannot make are left out
+    rng = np.random.default_rng(0)
+    N = 300
+    u = rng.uniform(-1, 1, (N, 2)) if two_inputs else rng.uniform(-1, 1, N)
+    s = rng.choice([-0.5, 0.5], N)
+    u1 = u[:, 0] if two_inputs else u
+    y = np.r_[0.0, u1[:-1]] + s
+    names = ("u", "v") if two_inputs else ("u",)
+    m = gb.Model(gb.Structure(["u(k-1)"]), [1.0])
+    with pytest.warns(UserWarning, match="u2_xi2"):
+        r = gb.residual_tests(m, gb.Record(u, y, input_names=names))
+    keys = ["u2_xi2:u", "u2_xi2:v"] if two_inputs else ["u2_xi2"]
+    assert sorted(r.undefined) == keys and all("ξ²" in r.undefined[k] for k in keys)
+    for t in r.tests.values():
+        assert np.all(np.isfinite(t.phi))
+    assert r.passed  # white ±0.5 residuals, independent of the input: nothing the tests can see

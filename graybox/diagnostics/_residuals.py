@@ -193,8 +193,9 @@ class ResidualTests:
         ξ per record, shape (N_r − L,) (samples L … N_r − 1).
     undefined : mapping str -> str
         The tests these data cannot make, keyed as ``tests`` would be, with why: an input held
-        constant (its four input tests), or one taking two levels equally often (u'² constant: its
-        two u² tests). They are not in ``tests`` and take no part in :attr:`passed`.
+        constant (its four input tests), one taking two levels equally often (u'² constant: its
+        two u² tests), or residuals of one magnitude ±c (ξ² constant: φ_(u²)'ξ²). They are not in
+        ``tests`` and take no part in :attr:`passed`.
     """
 
     tests: Mapping[str, CorrelationTest]
@@ -470,6 +471,13 @@ def residual_tests(
             for key in U2_TESTS:
                 undefined[key + tag] = (f"input {nm!r} takes two levels equally often: u'² is constant (for any "
                                         "two-level input these tests repeat φ_uξ)")
+    # residuals of one magnitude (±c, an output quantised to two levels about the model): ξ² is constant and
+    # φ_(u²)'ξ² is 0/0 (to round-off), for every input
+    xi2 = allxi**2
+    if np.ptp(xi2) <= 1e-9 * np.max(xi2):
+        for nm in names:
+            undefined.setdefault("u2_xi2" + ("" if len(names) == 1 else f":{nm}"),
+                                 "the residuals have one magnitude (ξ = ±c): ξ² is constant")
     if len(undefined) == len(INPUT_TESTS) * len(names):
         raise ValueError(("the input is constant" if len(names) == 1 else "every input is constant")
                          + ": the input correlation tests are undefined")
