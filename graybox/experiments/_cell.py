@@ -279,11 +279,12 @@ def run_cell(cell: Cell, data: gb.Dataset, *, threads: int = 1) -> dict[str, Any
             warnings.simplefilter("always")
             st = make_structure(cell.structure_spec, data, cell.data_hash)
             row["terms"] = [str(t) for t in st]
+            if cell.variant_spec["estimator"] != "neural":  # one rule: N_p is known once the terms are,
+                row["n_params"] = len(st)                    # whatever becomes of the fit (a network's: once fitted)
             model, pareto, fields = _estimate(cell, st, data)
             row.update(fields)
             if pareto is not None:
                 row["members"] = _members(pareto, data)
-                row["n_params"] = len(pareto.structure)  # every member's, kept when no member qualifies
                 i, rule, in_band = _decide(cell, pareto, data)
                 model = pareto.member_model(i, name=f"{cell.variant} / {cell.structure}")
                 row.update(lambda1=float(pareto.lambdas[i]), rule=rule, in_band=int(in_band))

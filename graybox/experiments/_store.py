@@ -1057,7 +1057,8 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
         estimators), ``estimator``, ``status`` (ok, infeasible, diverged, failed), ``message`` (why a
         cell is not ok);
         the chosen model's ``terms`` (tuple of str), ``theta`` (ndarray, engineering units; None
-        for neural models), ``n_params`` (N_p), ``lambda1``, ``rule`` and ``in_band`` of the
+        for neural models), ``n_params`` (N_p: the structure's number of terms once it is made, whatever
+        the cell's status; a network's parameters once it is fitted), ``lambda1``, ``rule`` and ``in_band`` of the
         decision, ``band`` (the data set's J_SF band); the shared evaluator's figures on both
         records ``J1_ident``, ``JS_ident``, ``fit_ident``, ``J1_valid``, ``JS_valid``,
         ``fit_valid`` (MSE in output units², fit in %), ``JSF`` and ``static_miss`` (largest
