@@ -28,3 +28,19 @@ def test_n_params_is_stored_by_one_rule_whatever_the_status(tmp_path):
         assert r["terms"] is not None
         assert not pd.isna(r["n_params"]), (v, r["status"])
         assert int(r["n_params"]) == len(r["terms"]) == 4, (v, r["status"], r["n_params"])
+
+
+def test_two_names_of_the_same_data_count_every_cell_of_the_grid(tmp_path):
+    # two data set names of the same records share the cells that read no band: they ran once, and a
+    # fresh store said '4 cells, 1 reused, 3 run now; 3 ok' (nothing was reused; grid status said 4 ok)
+    g = gx.Grid([gx.DataSpec("a", bundled="pumping"), gx.DataSpec("b", bundled="pumping", band=0.05)], [FIRST],
+                [gx.Variant("LS", "ls"), gx.Variant("PE", "pe", lambdas=[0.1, 1.0], options={"solver": "closed"})],
+                name="twins")
+    lines: list[str] = []
+    run = gx.run_grid(g, tmp_path / "s.sqlite", log=lines.append)
+    assert (run.cells, run.ran, run.skipped) == (4, 4, 0)
+    assert dict(run.counts) == {"ok": 4, "infeasible": 0, "diverged": 0, "failed": 0}
+    assert "4 cells, 0 reused" in lines[0] and "4 to run" in lines[0]
+    assert gx.grid_status(tmp_path / "s.sqlite").counts["ok"] == 4
+    again = gx.run_grid(g, tmp_path / "s.sqlite")
+    assert (again.ran, again.skipped) == (0, 4) and again.counts["ok"] == 4

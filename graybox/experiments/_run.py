@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -189,19 +190,22 @@ def run_grid(
         marks = st.marks()
         done = {k: status for k, (status, _) in marks.items()}
         todo, seen = [], set()
+        # two data set names of one grid may hold the same data: their cells share keys, run once and count for each
+        mult = Counter(c.key for c in cells)
         for c in cells:
             # two data set names of one grid may hold the same data: their cells share keys, run once
             if c.key not in seen and (c.key not in done or (retry_failed and done[c.key] == "failed")):
                 todo.append(c)
             seen.add(c.key)
         notes = _notes(st, cells, done, version)
-        say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - len(todo)} reused from {store}, {len(todo)} to run")
+        n_todo = sum(mult[c.key] for c in todo)
+        say(f"grid {g.name!r}: {len(cells)} cells, {len(cells) - n_todo} reused from {store}, {n_todo} to run")
         for n in notes:
             say(f"  {n}")
-        bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - len(todo))
+        bar = progress_bar(len(cells), f"grid {g.name}", progress, initial=len(cells) - n_todo)
         # each cell is claimed as the executor is about to start it (a batch at a time, never all at once), so
         # that another run on the store takes the cells this one has not started yet and the two share the grid
-        share = _Share(st, marks, bar)
+        share = _Share(st, marks, bar, mult)
         ran = taken = 0
         try:
             # alive to the other runs while a long cell writes no row; the executor keeps its workers (or cluster)
@@ -214,8 +218,8 @@ def run_grid(
                                              f"the worker runs graybox {row.get('version')}, the driver {version}: "
                                              "install the same graybox on every worker")
                         taken += not st.write(row, replace=row["key"] in done)
-                        ran += 1
-                        bar.update(1)
+                        ran += mult[row["key"]]
+                        bar.update(mult[row["key"]])
                     if not share.waiting:
                         break
                     if not share.said:
@@ -225,8 +229,9 @@ def run_grid(
                     # those released go back to the executor, which takes them as it starts them (another run
                     # may take some first)
                     todo, finished = _wait_for_others(st, share.waiting, marks)
-                    share.by_others += len(finished)
-                    bar.update(len(finished))
+                    n_finished = sum(mult[k] for k in finished)
+                    share.by_others += n_finished
+                    bar.update(n_finished)
         finally:
             bar.close()
         if share.by_others:
@@ -252,8 +257,8 @@ class _Share:
     another live run holds wait (:attr:`waiting`), those another run has written meanwhile are not run again
     (:attr:`by_others`, on the progress bar at once)."""
 
-    def __init__(self, st: ResultStore, seen: Mapping[str, tuple], bar: Any):
-        self.st, self.seen, self.bar = st, seen, bar
+    def __init__(self, st: ResultStore, seen: Mapping[str, tuple], bar: Any, mult: Mapping[str, int]):
+        self.st, self.seen, self.bar, self.mult = st, seen, bar, mult  # mult: the grid's cells of each key
         self.waiting: dict[str, Any] = {}  # key -> cell another live run holds
         self.others: set[str] = set()  # those runs, in words
         self.by_others = 0
@@ -275,8 +280,9 @@ class _Share:
         mine = [c for c in ask if c.key not in held]
         # another run may have written (and let go) a cell between that look and this claim: kept, not run again
         written |= _written_since(self.st, [c.key for c in mine], self.seen)
-        self.by_others += len(written)
-        self.bar.update(len(written))
+        n = sum(self.mult[k] for k in written)
+        self.by_others += n
+        self.bar.update(n)
         return [c for c in mine if c.key not in written]
 
 

@@ -675,10 +675,10 @@ class ResultStore:
         return {v for (v,) in self._conn.execute("SELECT DISTINCT version FROM cells")}
 
     def counts(self) -> dict[str, int]:
-        """The registered spec's cells by status."""
+        """The registered spec's cells by status (a cell two data set names of the same data share counts for each)."""
         return dict(self._conn.execute(
-            "SELECT status, COUNT(*) FROM cells WHERE key IN (SELECT key FROM spec_cells WHERE spec = ?) "
-            "GROUP BY status", (self.spec_id,)).fetchall())
+            "SELECT c.status, COUNT(*) FROM spec_cells s JOIN cells c ON c.key = s.key WHERE s.spec = ? "
+            "GROUP BY c.status", (self.spec_id,)).fetchall())
 
     def close(self) -> None:
         """End this run's claims and close the connection."""
