@@ -44,3 +44,18 @@ def test_two_names_of_the_same_data_count_every_cell_of_the_grid(tmp_path):
     assert gx.grid_status(tmp_path / "s.sqlite").counts["ok"] == 4
     again = gx.run_grid(g, tmp_path / "s.sqlite")
     assert (again.ran, again.skipped) == (0, 4) and again.counts["ok"] == 4
+
+
+def test_a_structure_with_n_terms_and_max_terms_is_refused_by_the_spec():
+    # accepted by the spec, then every cell of the structure failed 'max_terms applies to tol and criterion
+    # stopping; with n_terms leave it out' (frols' own refusal), data set after data set
+    with pytest.raises(gx.SpecError, match="max_terms") as e:
+        gx.StructureSpec("s", candidates={"ny": 1, "nu": 1, "degree": 1}, n_terms=3, max_terms=5)
+    assert e.value.path == ("max_terms",)
+    text = '[[structures]]\nname = "s"\ncandidates = {ny = 1, nu = 1}\nn_terms = 2\nmax_terms = 4\n'
+    spec = ('name = "g"\n[[data]]\nname = "p"\nbundled = "pumping"\n' + text
+            + '[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    with pytest.raises(gx.SpecError, match=r"line 9: structures\[0\]\.max_terms"):
+        gx.Grid.from_toml_text(spec)
+    # with tol or a criterion it stays FROLS' cap
+    assert gx.StructureSpec("s", candidates={"ny": 1, "nu": 1}, criterion="bic", max_terms=4).max_terms == 4

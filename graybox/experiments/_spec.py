@@ -596,6 +596,8 @@ class StructureSpec:
             object.__setattr__(self, "max_terms", _wrap(check_int, ("max_terms",), self.max_terms, "max_terms", low=1))
         if self.n_terms is not None and self.tol is not None:
             raise SpecError("give n_terms or tol, not both", ("tol",))
+        if self.n_terms is not None and self.max_terms is not None:  # FROLS refuses it: said here, not by each cell
+            raise SpecError("max_terms caps tol and criterion stopping; with n_terms leave it out", ("max_terms",))
         missing = [str(t) for t in inc if t not in space]
         if missing:
             raise SpecError(f"included terms {missing} are not among the candidates", ("include",))
