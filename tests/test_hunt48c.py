@@ -59,3 +59,33 @@ def test_a_structure_with_n_terms_and_max_terms_is_refused_by_the_spec():
         gx.Grid.from_toml_text(spec)
     # with tol or a criterion it stays FROLS' cap
     assert gx.StructureSpec("s", candidates={"ny": 1, "nu": 1}, criterion="bic", max_terms=4).max_terms == 4
+
+
+@pytest.fixture(scope="module")
+def small_store(tmp_path_factory):
+    path = tmp_path_factory.mktemp("small") / "s.sqlite"
+    g = gx.Grid([gx.DataSpec("p", bundled="pumping")], [FIRST], [gx.Variant("LS", "ls")], name="small")
+    gx.run_grid(g, path)
+    return path
+
+
+def _copy_with(src, tmp_path, sql: str):
+    import shutil
+    import sqlite3
+
+    dst = tmp_path / "c.sqlite"
+    shutil.copy(src, dst)
+    conn = sqlite3.connect(dst)
+    conn.execute(sql)
+    conn.commit()
+    conn.close()
+    return dst
+
+
+def test_a_stored_n_params_that_is_no_integer_is_said_damaged(small_store, tmp_path):
+    # a bare ValueError: invalid literal for int() with base 10: np.str_('abc'), from building the frame
+    p = _copy_with(small_store, tmp_path, "UPDATE cells SET n_params = 'abc'")
+    for read in (gx.load_results, gx.grid_status):
+        with pytest.raises(gx.StoreError, match="damaged.*'p' / 'first-order' / 'LS'"):
+            read(p)
+

@@ -1089,6 +1089,7 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
             r["members"] = None if members is None else _decode_members(members)
             r["in_band"] = None if r["in_band"] is None else bool(r["in_band"])
             r["seed"] = None if r["seed"] is None else int(r["seed"])
+            r["n_params"] = None if r["n_params"] is None else int(r["n_params"])
             for c in _FLOAT_COLUMNS:
                 r[c] = None if r[c] is None else float(r[c])
         except (TypeError, ValueError) as exc:
