@@ -89,3 +89,14 @@ def test_a_stored_n_params_that_is_no_integer_is_said_damaged(small_store, tmp_p
         with pytest.raises(gx.StoreError, match="damaged.*'p' / 'first-order' / 'LS'"):
             read(p)
 
+
+def test_a_store_that_holds_no_spec_is_refused_in_words(small_store, tmp_path):
+    # a store made whole whose run stopped before it registered its spec: load_results said
+    # 'max() arg is an empty sequence' (spec='latest') or 'has no spec 1; its specs are ' (spec=1)
+    p = _copy_with(small_store, tmp_path, "DELETE FROM specs")
+    for kw in ({}, {"spec": 1}, {"spec": "latest"}):
+        with pytest.raises(gx.StoreError, match="holds no spec"):
+            gx.load_results(p, **kw)
+        with pytest.raises(gx.StoreError, match="holds no spec"):
+            gx.grid_status(p, **kw)
+    assert len(gx.store_specs(p)) == 0

@@ -865,11 +865,15 @@ def _pick(specs: list[dict[str, Any]], spec: str | int, p: Path) -> dict[str, An
     if isinstance(spec, str):
         if spec == "all":
             return None
-        if spec == "latest":
-            return max(specs, key=lambda s: (s["last_run"], s["id"]))
-        raise ValueError(f"spec must be 'latest', 'all' or a spec number, got {spec!r}")
-    if isinstance(spec, bool) or not isinstance(spec, (int, np.integer)):
+        if spec != "latest":
+            raise ValueError(f"spec must be 'latest', 'all' or a spec number, got {spec!r}")
+    elif isinstance(spec, bool) or not isinstance(spec, (int, np.integer)):
         raise TypeError(f"spec must be 'latest', 'all' or a spec number (int), got {type(spec).__name__}")
+    if not specs:  # made whole, but the run that made it stopped before registering its spec
+        raise StoreError(f"{p} is a grid store that holds no spec yet (the run that made it stopped before it "
+                         "registered its grid): run a spec on it")
+    if isinstance(spec, str):  # "latest"
+        return max(specs, key=lambda s: (s["last_run"], s["id"]))
     for s in specs:
         if s["id"] == int(spec):
             return s
