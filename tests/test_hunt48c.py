@@ -100,3 +100,12 @@ def test_a_store_that_holds_no_spec_is_refused_in_words(small_store, tmp_path):
         with pytest.raises(gx.StoreError, match="holds no spec"):
             gx.grid_status(p, **kw)
     assert len(gx.store_specs(p)) == 0
+
+
+def test_a_stored_status_that_is_none_of_the_statuses_is_said_damaged(small_store, tmp_path):
+    # 'weird' was read as it was: grid status said '1 of 1 cells done (0 ok, 0 infeasible, 0 diverged,
+    # 0 failed)', counting a cell under no status, and the leaderboard said 'no cell is ok'
+    p = _copy_with(small_store, tmp_path, "UPDATE cells SET status = 'weird'")
+    for read in (gx.load_results, gx.grid_status):
+        with pytest.raises(gx.StoreError, match="damaged.*status 'weird'"):
+            read(p)

@@ -35,7 +35,7 @@ import pandas as pd
 from ..core._files import CAN_FLOCK, folder_now, lock_fd, sweep_leftovers
 from ..core._processes import pid_alive, pid_started
 from ..core._validation import check_path, check_sequence
-from ._cell import COLUMNS, JSON_COLUMNS
+from ._cell import COLUMNS, JSON_COLUMNS, STATUSES
 from ._spec import Cell, _hash
 
 __all__ = ["StoreError", "ResultStore", "load_results", "compare_results", "store_specs", "FORMAT",
@@ -1084,6 +1084,8 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
     p = Path(path)
     for r in rows:
         cell = f"the cell {r['data']!r} / {r['structure']!r} / {r['variant']!r}"
+        if r["status"] not in STATUSES:  # what every count and reason of the reports is made of
+            raise _damaged(p, f"{cell} has status {r['status']!r}, none of {', '.join(STATUSES)}", True)
         r["terms"] = None if r["terms"] is None else tuple(_json_of(r["terms"], p, f"{cell}'s terms", list))
         r["theta"] = None if r["theta"] is None else _json_of(r["theta"], p, f"{cell}'s theta", list)
         r["warnings"] = () if r["warnings"] is None else tuple(_json_of(r["warnings"], p, f"{cell}'s warnings", list))
