@@ -93,16 +93,25 @@ class StaticCurve:
             raise ValueError(f"ū = {listed(out.tolist())} outside the domain [{lo:g}, {hi:g}] of {self.name}")
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
-        """H(ū), same shape as ``ubar`` (checked against the domain)."""
-        ub = real_array(ubar, "ubar", "input levels (numbers)")
-        self.check_domain(ub)
+        """H(ū), same shape as ``ubar`` (finite, checked against the domain)."""
+        ub = self._levels(ubar)
         return np.polynomial.polynomial.polyval(ub, self.coefficients)
 
     def gain(self, ubar: np.ndarray) -> np.ndarray:
-        """dH/dū at ``ubar``."""
-        ub = real_array(ubar, "ubar", "input levels (numbers)")
-        self.check_domain(ub)
+        """dH/dū at ``ubar`` (finite, checked against the domain)."""
+        ub = self._levels(ubar)
         return np.polynomial.polynomial.polyval(ub, np.polynomial.polynomial.polyder(self.coefficients))
+
+    def _levels(self, ubar: object) -> np.ndarray:
+        """``ubar`` as input levels: numbers (``TypeError``), finite and within the domain (``ValueError``): NaN
+        lies in no range, so it passed the domain's check and came back as a NaN "value" of the curve."""
+        ub = real_array(ubar, "ubar", "input levels (numbers)")
+        bad = ~np.isfinite(ub)
+        if bad.any():
+            raise ValueError(f"{self.name}: ubar has {int(bad.sum())} non-finite value(s) (NaN or inf), first at "
+                             f"index {np.argwhere(bad)[0].tolist() if ub.ndim > 1 else int(np.flatnonzero(bad)[0])}")
+        self.check_domain(ub)
+        return ub
 
     def points(self, ubar: np.ndarray, input_name: str = "u") -> StaticPoints:
         """The curve sampled at ``ubar`` as static points of the input ``input_name`` (a curve is
