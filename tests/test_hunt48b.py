@@ -19,3 +19,30 @@ def test_static_curve_refuses_non_finite_levels(domain, bad):
             f(bad)
     assert c([1.0, 2.0]).tolist() == [6.0, 17.0]
     assert c.gain(2.0) == 14.0
+
+
+def _documented_parameters(f):
+    """The names a numpydoc ``Parameters`` section lists (``a : type`` or ``a, b``)."""
+    import inspect
+    import re
+
+    doc = inspect.getdoc(f) or ""
+    m = re.search(r"^Parameters\n-+\n(.*?)(?:\n\n[A-Z][a-z]+\n-+|\Z)", doc, re.S | re.M)
+    names = []
+    for line in (m.group(1).splitlines() if m else []):
+        if line.strip() and not line.startswith(" "):
+            names += [n.strip() for n in line.split(" : ")[0].split(",") if n.strip()]
+    return names
+
+
+@pytest.mark.parametrize("f", [gb.static_curve, gb.static_gain, gb.static_surface, gb.static_surface_gain,
+                               gb.equilibria, gb.surface_equilibria, gb.simulate, gb.predict, gb.simulate_many,
+                               gb.evaluate, gb.evaluate_thetas, gb.jsf, gb.j1, gb.js, gb.surface_cluster_map],
+                         ids=lambda f: f.__name__)
+def test_documented_parameters_are_parameters(f):
+    # static_surface_gain's docstring listed a parameter ``inputs`` it does not take (TypeError when passed)
+    import inspect
+
+    names = _documented_parameters(f)
+    assert names, f"{f.__name__} documents no parameters"
+    assert set(names) <= set(inspect.signature(f).parameters), names

@@ -372,7 +372,7 @@ def static_surface_gain(
 
     Parameters
     ----------
-    structure, theta, ubar, y0, strict, input_names, inputs
+    structure, theta, ubar, y0, strict, input_names
         As for :func:`static_surface`.
 
     Returns
