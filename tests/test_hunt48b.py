@@ -46,3 +46,14 @@ def test_documented_parameters_are_parameters(f):
     names = _documented_parameters(f)
     assert names, f"{f.__name__} documents no parameters"
     assert set(names) <= set(inspect.signature(f).parameters), names
+
+
+def test_model_simulate_default_bound_is_the_one_its_docstring_gives():
+    # Model.simulate's docstring gave the default bound as 1e6 × max(max|y0|, the inputs' push): 1e6 here. The run
+    # y(k) = 2 y(k-1) - 1e-9 y(k-1)² from y0 = 1 settles at its stable equilibrium 1e9 and is (rightly) no divergence:
+    # the bound also counts the size at which the output feedback matters (1e9), as graybox.simulate says
+    m = gb.Model(["y(k-1)", "y(k-1)^2", "u(k-1)"], [2.0, -1e-9, 0.0])
+    y = m.simulate(np.zeros(200), [1.0])
+    assert np.isfinite(y).all() and y[-1] == pytest.approx(1e9)
+    assert np.abs(y).max() > 1e6 * 1.0  # beyond what the docstring's rule allowed
+    assert "feedback" in " ".join(gb.Model.simulate.__doc__.split())

@@ -160,9 +160,9 @@ class Model:
         ``y0`` holds the first ``max_lag`` outputs (default with a Record: its measured ones; needed
         with an array). ``on_diverge``: when the output leaves the bound, ``"raise"`` (default) a
         :class:`~graybox.DivergenceError` naming the sample, or ``"nan"`` NaN from that sample on.
-        ``bound`` (output units) is the divergence bound on |y| (default: 1e6 × the larger of
-        max|y0| and the inputs' direct push on the output, in the output's units whatever they are,
-        also from rest).
+        ``bound`` (output units) is the divergence bound on |y| (default: 1e6 × the largest of
+        max|y0|, the inputs' direct push on the output so far and the size at which the model's
+        nonlinear output feedback matters, in the output's units whatever they are, also from rest).
         """
         if isinstance(u, Record):
             self.check_record(u)
