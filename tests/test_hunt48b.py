@@ -57,3 +57,18 @@ def test_model_simulate_default_bound_is_the_one_its_docstring_gives():
     assert np.isfinite(y).all() and y[-1] == pytest.approx(1e9)
     assert np.abs(y).max() > 1e6 * 1.0  # beyond what the docstring's rule allowed
     assert "feedback" in " ".join(gb.Model.simulate.__doc__.split())
+
+
+def test_surface_cluster_map_made_by_hand_is_immutable_and_checked():
+    # SurfaceClusterMap kept the R it was given, writable (cm.R[0, 0] = 5 changed the map), and of any shape
+    # (one key, a 3 × 3 R); surface_cluster_map's own R is read-only
+    R = np.eye(2)
+    cm = gb.SurfaceClusterMap(("u1", "u2"), ((0, 1, 0), (1, 0, 0)), R)
+    with pytest.raises(ValueError):
+        cm.R[0, 0] = 5.0
+    R[0, 0] = 7.0  # the caller's array is not the map's
+    assert cm.R[0, 0] == 1.0
+    with pytest.raises(ValueError, match="one row per cluster"):
+        gb.SurfaceClusterMap(("u1", "u2"), ((0, 1, 0),), np.eye(3))
+    built = gb.surface_cluster_map(gb.parse_structure(["y(k-1)", "u1(k-1)", "u2(k-1)"]))
+    assert not built.R.flags.writeable and built.R.shape == (3, 3)

@@ -36,7 +36,7 @@ from ._linearisation import input_monomials_of, static_gains, static_powers, sta
 from ..core._records import frame_inputs, labelled_point
 from ..core._terms import Structure, Term, check_input_names, require_inputs, structure_of
 from ..core._transient import steady_levels
-from ..core._validation import check_bool, check_fields, check_per_point, real_array
+from ..core._validation import check_bool, check_fields, check_per_point, frozen, real_array
 from ..core._renamed import RenamedAttribute
 from ..core._reprs import short_repr
 
@@ -120,6 +120,12 @@ class SurfaceClusterMap:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # a map made by hand is as immutable as surface_cluster_map's: R read-only, one row per cluster
+        R = frozen(self.R)
+        if R.ndim != 2 or R.shape[0] != len(self.keys):
+            raise ValueError(f"SurfaceClusterMap: R must have one row per cluster key ({len(self.keys)}), got shape "
+                             f"{R.shape}")
+        object.__setattr__(self, "R", R)
 
     @property
     def names(self) -> list[str]:
