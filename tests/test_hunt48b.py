@@ -72,3 +72,14 @@ def test_surface_cluster_map_made_by_hand_is_immutable_and_checked():
         gb.SurfaceClusterMap(("u1", "u2"), ((0, 1, 0),), np.eye(3))
     built = gb.surface_cluster_map(gb.parse_structure(["y(k-1)", "u1(k-1)", "u2(k-1)"]))
     assert not built.R.flags.writeable and built.R.shape == (3, 3)
+
+
+def test_static_curve_points_take_a_column_or_one_level():
+    # StaticCurve.points of a column of levels (M, 1) said "ybar must be 1-D, got shape (2, 1)", of a ybar the caller
+    # never gave, and of one level "ubar must be 1-D ... got 0-D"; Model.static_curve and StaticSurface take both
+    c = gb.StaticCurve.polynomial([1.0, 2.0, 3.0])
+    p = c.points([[1.0], [2.0]])
+    assert p.ubar.tolist() == [1.0, 2.0] and p.ybar.tolist() == [6.0, 17.0]
+    assert c.points(1.0).ybar.tolist() == [6.0]
+    with pytest.raises(ValueError, match=r"ubar must be levels of the one input.*\(1, 2\)"):
+        c.points([[1.0, 2.0]])

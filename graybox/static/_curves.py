@@ -115,8 +115,15 @@ class StaticCurve:
 
     def points(self, ubar: np.ndarray, input_name: str = "u") -> StaticPoints:
         """The curve sampled at ``ubar`` as static points of the input ``input_name`` (a curve is
-        of one input, whatever the records call it: e.g. ``record.input_names[0]``)."""
+        of one input, whatever the records call it: e.g. ``record.input_names[0]``). ``ubar``: a level, or
+        levels of shape (M,) or (M, 1), as :meth:`graybox.Model.static_curve` takes them."""
         ub = real_array(ubar, "ubar", "input levels (numbers)")
+        if ub.ndim == 2 and ub.shape[1] == 1:  # a column: its levels (it was said as "ybar must be 1-D")
+            ub = ub[:, 0]
+        ub = np.atleast_1d(ub)
+        if ub.ndim != 1:
+            raise ValueError(f"{self.name}: ubar must be levels of the one input (a number, shape (M,) or (M, 1)), "
+                             f"got shape {np.shape(ubar)}")
         return StaticPoints(ub, self(ub), name=self.name, input_names=(input_name,))
 
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
