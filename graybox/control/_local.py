@@ -34,7 +34,7 @@ from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, 
 from ..core._terms import Structure, check_input_names
 from ..core._transient import steady_levels
 from ..core._reprs import listed
-from ..core._validation import (check_band_finite, check_band_values, check_choice, check_fields, check_int,
+from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
@@ -368,7 +368,7 @@ class LocalModel:
             The input stepped, by position or name.
         """
         self._need()
-        n = check_int(n_samples, "n_samples", low=1)
+        n = check_count(n_samples, "n_samples", low=1)
         b = np.concatenate([[0.0], self.b[self._input_index(input)]])
         return lfilter(b, np.concatenate([[1.0], -self.a]), np.ones(n))
 
@@ -950,7 +950,7 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
         Draw it with :func:`graybox.plots.plot_operating_curve`.
     """
     model = check_polynomial(model, "operating_curve")
-    n_samples, seed = check_int(n_samples, "n_samples", low=10), check_seed(seed)
+    n_samples, seed = check_count(n_samples, "n_samples", low=10), check_seed(seed)
     ub = _as_points(model, ubar)
     Ts_ = check_Ts(Ts, data, model)
     _range_warning(model, ub, data)

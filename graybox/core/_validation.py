@@ -26,6 +26,7 @@ import numpy as np
 __all__ = [
     "check_bool",
     "check_int",
+    "check_count",
     "check_real",
     "check_band",
     "check_choice",
@@ -97,6 +98,42 @@ def check_int(value: object, name: str, *, low: int | None = None, high: int | N
         raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
     if high is not None and v > high:
         raise ValueError(f"{name} must be an integer <= {high}, got {value!r}")
+    return v
+
+
+def _memory_bytes() -> int:
+    """This machine's memory, physical and swap (bytes): more than any one array graybox makes can ever take."""
+    total = 0
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        with open("/proc/meminfo") as f:  # Linux: the swap, which an allocation may also use
+            for line in f:
+                if line.startswith("SwapTotal:"):
+                    total += int(line.split()[1]) * 1024
+    except (AttributeError, ValueError, OSError):
+        pass
+    return total if total > 0 else 2**50  # unknown: 1 PiB, beyond any machine's
+
+
+def _bytes_text(n: float) -> str:
+    for unit in ("bytes", "kB", "MB", "GB", "TB", "PB"):
+        if n < 1000 or unit == "PB":
+            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.3g} {unit}"
+        n /= 1000
+    return f"{n:.3g} EB"  # pragma: no cover
+
+
+def check_count(value: object, name: str, *, low: int | None = None, high: int | None = None,
+                item_bytes: float = 8) -> int:
+    """``value`` as an ``int`` in [low, high], as :func:`check_int`, that sizes something allocated in proportion:
+    ``ValueError`` naming ``name`` for a count whose memory (``item_bytes`` per unit: 8 for one float) is more
+    than this machine has, physical and swap, which could never be allocated (numpy's ``MemoryError`` named
+    nothing, after the other checks and any work before the allocation)."""
+    v = check_int(value, name, low=low, high=high)
+    need, have = float(v) * float(item_bytes), _memory_bytes()
+    if need > have:
+        raise ValueError(f"{name}={v} is too large: it would need at least {_bytes_text(need)} of memory, more than "
+                         f"this machine has ({_bytes_text(have)})")
     return v
 
 

@@ -12,7 +12,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ..core._validation import check_choice, check_int, check_real, check_seed
+from ..core._validation import check_count, check_choice, check_int, check_real, check_seed
 
 __all__ = ["design_input"]
 
@@ -162,7 +162,8 @@ def design_input(
     """
     kind = check_choice(kind, "kind", KINDS)
     n = check_int(n_samples, "n_samples", low=2)
-    m = check_int(n_inputs, "n_inputs", low=1)
+    m = check_count(n_inputs, "n_inputs", low=1)
+    n = check_count(n, "n_samples", item_bytes=8 * m)  # the signal, N × n_inputs floats
     lo, hi = _ranges(low, high, m)
     seed = check_seed(seed)
     if order is not None and kind != "prbs":

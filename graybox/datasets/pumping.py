@@ -201,7 +201,7 @@ import numba as nb
 import numpy as np
 
 from ..core._records import Record, StaticPoints
-from ..core._validation import as_1d_finite, check_bool, check_int, check_real, check_seed, real_array
+from ..core._validation import as_1d_finite, check_bool, check_count, check_int, check_real, check_seed, real_array
 from ..reference import EQ1_COEFFICIENTS
 from ..core._reprs import short_repr
 
@@ -630,7 +630,7 @@ class PumpingPlant:
         PlantRun
             ``u`` the references the controller set, ``y`` the pressures it read.
         """
-        N = check_int(n_samples, "n_samples", low=1)
+        N = check_count(n_samples, "n_samples", low=1)
         if not callable(controller):
             raise TypeError(f"controller must be callable as controller(k, y) -> u, got {type(controller).__name__}")
         prev = self._one_speed(u0, "u0")
@@ -749,7 +749,7 @@ class PumpingPlant:
         0.001 mlc, against about 0.03 mlc from the two terms above).
         """
         n = self._one_speed(speed, "speed")
-        n_samples = check_int(n_samples, "n_samples", low=1)
+        n_samples = check_count(n_samples, "n_samples", low=1)
         q = float(self.steady_flow(n))
         dq = 1e-4 * q
         ht_slope = (self.turbine_head(q + dq) - self.turbine_head(q - dq)) / (2 * dq)
@@ -886,7 +886,7 @@ def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed:
 
 def reference_lengths(n_samples: object, n_ident: object, seed: object) -> tuple[int, int, int]:
     """A reference's (n_samples, n_ident, seed) checked: counts with 0 < n_ident < n_samples, a seed >= 0."""
-    n_samples = check_int(n_samples, "n_samples", low=2)
+    n_samples = check_count(n_samples, "n_samples", low=2)
     n_ident = check_int(n_ident, "n_ident", low=1)
     if not n_ident < n_samples:
         raise ValueError(f"need 0 < n_ident < n_samples, got {n_ident} and {n_samples}")

@@ -58,8 +58,8 @@ from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
-from ..core._validation import (FrozenMap, check_band, check_choice, check_fields, check_int, check_lambdas,
-                                check_mean_square, check_real, check_seed, frozen, warn)
+from ..core._validation import (FrozenMap, check_band, check_choice, check_count, check_fields, check_int,
+                                check_lambdas, check_mean_square, check_real, check_seed, frozen, warn)
 from ..core._reprs import listed, short_repr
 from ._uncertainty import UncertaintyWarning
 
@@ -471,7 +471,7 @@ def bootstrap_decision(
     sp = static_points(static, data, ubar=opts.get("ubar"), needed_by="bootstrap_decision",
                        takes_ubar="ubar" in opts)
     lam = check_lambdas((PE_LAMBDAS if estimator == "pe" else SE_LAMBDAS) if lambdas is None else lambdas)
-    n_boot = check_int(n_boot, "n_boot", low=1)
+    n_boot = check_count(n_boot, "n_boot", low=1)
     seed = check_seed(seed)
     L = structure.process.max_lag
     total = sum(len(r) for r in recs)

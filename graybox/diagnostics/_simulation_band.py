@@ -18,7 +18,7 @@ from ..core._gram import require_memory
 from ..core._records import check_units, said_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
-from ..core._validation import (check_band_finite, check_band_values, check_choice, check_fields, check_int,
+from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_real, check_seed, frozen, warn)
 from ..models._coerce import as_record
 from ._uncertainty import (BAND_METHODS, MIN_DRAWS, ParameterUncertainty, UncertaintyWarning, check_band_draws,
@@ -174,7 +174,7 @@ def simulation_band(
                         f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
     rec = as_record(record, "valid", "record")
     check_choice(method, "method", BAND_METHODS)
-    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)
+    n_samples = check_count(n_samples, "n_samples", low=MIN_DRAWS)
     seed = check_seed(seed)
     m = uncertainty.model
     st, th = m.structure, m.theta

@@ -73,7 +73,7 @@ from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
 from ..static._analysis import one_input_levels, reached_equilibria
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
 from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface
-from ..core._validation import (check_band_finite, check_band_values, check_choice, check_fields, check_int,
+from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_real, check_seed, frozen, warn)
 
 __all__ = [
@@ -1412,7 +1412,7 @@ def static_curve_band(
         raise TypeError(f"uncertainty must be a ParameterUncertainty (from ls_uncertainty, cls_uncertainty, "
                         f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
     check_choice(method, "method", BAND_METHODS)
-    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)  # checked for either method: a bad value is never ignored
+    n_samples = check_count(n_samples, "n_samples", low=MIN_DRAWS)  # checked for either method: a bad value is never ignored
     seed = check_seed(seed)
     if uncertainty.model.n_inputs > 1:
         raise ValueError(f"static_curve_band is defined for one input; the model has {uncertainty.model.n_inputs} "
@@ -1501,7 +1501,7 @@ def static_surface_band(
         raise TypeError(f"uncertainty must be a ParameterUncertainty (from ls_uncertainty, cls_uncertainty, "
                         f"pe_uncertainty or se_uncertainty), got {type(uncertainty).__name__}")
     check_choice(method, "method", BAND_METHODS)
-    n_samples = check_int(n_samples, "n_samples", low=MIN_DRAWS)  # for either method, as static_curve_band
+    n_samples = check_count(n_samples, "n_samples", low=MIN_DRAWS)  # for either method, as static_curve_band
     seed = check_seed(seed)
     m = uncertainty.model
     names = tuple(m.input_names)

@@ -87,7 +87,7 @@ from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
 from ..core._files import folder_now, sweep_written_beside, write_atomically, written_path
 from ..core._terms import Structure, default_input_names
-from ..core._validation import (FrozenMap, check_choice, check_int, check_lambdas, check_real, check_seed, check_sequence,
+from ..core._validation import (FrozenMap, check_choice, check_count, check_int, check_lambdas, check_real, check_seed, check_sequence,
                                 check_path, check_theta, frozen, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)
@@ -610,7 +610,7 @@ class GAOptions:
         def put(name: str, v: object) -> None:
             object.__setattr__(self, name, v)
 
-        put("population", check_int(self.population, "GAOptions: population", low=4))
+        put("population", check_count(self.population, "GAOptions: population", low=4))
         put("generations", check_int(self.generations, "GAOptions: generations", low=1))
         if self.stall is not None:
             put("stall", check_int(self.stall, "GAOptions: stall", low=1))
@@ -619,7 +619,7 @@ class GAOptions:
         put("crossover_ratio", check_real(self.crossover_ratio, "GAOptions: crossover_ratio", low=0))
         put("mutation_scale", check_real(self.mutation_scale, "GAOptions: mutation_scale", low=0))
         put("elite", check_int(self.elite, "GAOptions: elite", low=0, high=self.population - 1))
-        put("random_samples", check_int(self.random_samples, "GAOptions: random_samples", low=1))
+        put("random_samples", check_count(self.random_samples, "GAOptions: random_samples", low=1))
         put("selective_pressure", check_real(self.selective_pressure, "GAOptions: selective_pressure", low=1, high=2))
 
 

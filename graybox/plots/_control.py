@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 
 from ..control._local import LocalModel, OperatingCurve
 from ..core._reprs import level_texts, per_unit, point_texts
-from ..core._validation import as_1d_finite, check_int, check_real, check_sequence
+from ..core._validation import as_1d_finite, check_count, check_int, check_real, check_sequence
 from ._data import unit_label
 
 __all__ = ["plot_local_models", "plot_operating_curve"]
@@ -72,7 +72,7 @@ def plot_local_models(
     """
     if duration is not None:
         duration = check_real(duration, "duration", low=0, low_open=True)  # seconds
-    n_frequencies = check_int(n_frequencies, "n_frequencies", low=2)
+    n_frequencies = check_count(n_frequencies, "n_frequencies", low=2)
     lms = _models(models)
     at = dict(zip(map(id, lms), _points(lms)))
     shown = [m for m in lms if m.exists]

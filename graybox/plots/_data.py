@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 
 from ..static._curves import StaticCurve
 from ..core._records import Dataset, Record, StaticPoints
-from ..core._validation import check_int, check_real, check_sequence
+from ..core._validation import check_count, check_int, check_real, check_sequence
 
 __all__ = ["plot_static_curve", "plot_record"]
 
@@ -154,7 +154,7 @@ def plot_static_curve(
         curves = given
     if points is None and not curves:
         raise ValueError("plot_static_curve: give static points, a curve, or both")
-    n_grid = check_int(n_grid, "n_grid", low=2)
+    n_grid = check_count(n_grid, "n_grid", low=2)
     margin = check_real(margin, "margin", low=0)
     fig, ax = _figure(ax, (6.4, 4.2))
     for c in curves:

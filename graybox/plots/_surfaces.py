@@ -19,7 +19,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..core._validation import check_int, check_real, check_sequence
+from ..core._validation import check_count, check_int, check_real, check_sequence
 from ..core._reprs import level_texts
 from ._data import distinct_colours, on_level, unit_label
 
@@ -212,6 +212,7 @@ def plot_surface_slices(
         raise ValueError("plot_surface_slices: give a surface, static points, or both")
     against = check_int(against, "against (the input on the horizontal axis)", low=0, high=1)
     n_grid = check_int(n_grid, "n_grid", low=2)
+    check_count(n_grid, "n_grid", item_bytes=8 * n_grid)  # a grid of n_grid² points
     margin = check_real(margin, "margin", low=0)
     input_labels = _input_labels(input_labels)
     held = 1 - against
@@ -322,6 +323,7 @@ def plot_surface_contours(
     s = surfaces[0]
     pts = _points(points)
     n_grid = check_int(n_grid, "n_grid", low=2)
+    check_count(n_grid, "n_grid", item_bytes=8 * n_grid)  # a grid of n_grid² points
     margin = check_real(margin, "margin", low=0)
     input_labels = _input_labels(input_labels)
     levels = _levels(levels)

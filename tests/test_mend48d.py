@@ -1,0 +1,56 @@
+"""mend48d: sizes beyond any memory, frozen values, in_band, choose_on, masked arrays, duck models, SEMP's budget."""
+
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings, strategies as st
+
+import graybox as gb
+from graybox.core._validation import check_count
+
+STRUCT = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"])
+TRUE = gb.Model(STRUCT, [0.6, 0.2, 2e-3, 1e-3, -5e-7, 0.3])
+
+
+@pytest.fixture(scope="module")
+def data():
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(750, 1650, 61), 10)[:600]
+    y = TRUE.simulate(u, np.full(2, TRUE.static_curve([u[0]])[0])) + 0.05 * rng.standard_normal(600)
+    ub = np.linspace(750, 1650, 8)
+    static = gb.StaticPoints(ub, TRUE.static_curve(ub) + 0.05 * rng.standard_normal(8))
+    return gb.Dataset(gb.Record(u, y, name="ident"), gb.Record(u, y, name="valid"), static)
+
+
+# 1. counts that size an allocation: refused by name when no machine could hold them (numpy's MemoryError named none)
+
+@pytest.mark.parametrize("make, name", [
+    (lambda: gb.GAOptions(population=10**12), "population"),
+    (lambda: gb.GAOptions(random_samples=10**13), "random_samples"),
+    (lambda: gb.design_input("aprbs", 10**13, low=0.0, high=1.0, hold=(2, 5)), "n_samples"),
+    (lambda: gb.design_input("prbs", 10**6, low=0.0, high=1.0, hold=2, n_inputs=10**12), "n_inputs"),
+])
+def test_counts_beyond_memory_are_refused_by_name(make, name):
+    with pytest.raises(ValueError, match=f"{name}=10+ is too large"):
+        make()
+
+
+def test_n_boot_beyond_memory_is_refused_by_name(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        with pytest.raises(ValueError, match="n_boot=10+ is too large"):
+            gb.bootstrap_decision(STRUCT, data, estimator="pe", lambdas=np.logspace(-4, 0, 4), n_boot=10**12,
+                                  band=0.05, options={"solver": "closed"}, fallback="min_jsf")
+
+
+@settings(max_examples=50, deadline=None)
+@given(n=st.integers(1, 10**16), item=st.integers(1, 10**4))
+def test_check_count_refuses_exactly_what_exceeds_memory(n, item):
+    from graybox.core._validation import _memory_bytes
+
+    if n * item > _memory_bytes():
+        with pytest.raises(ValueError, match="c=.* is too large"):
+            check_count(n, "c", item_bytes=item)
+    else:
+        assert check_count(n, "c", item_bytes=item) == n
