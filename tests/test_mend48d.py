@@ -54,3 +54,42 @@ def test_check_count_refuses_exactly_what_exceeds_memory(n, item):
             check_count(n, "c", item_bytes=item)
     else:
         assert check_count(n, "c", item_bytes=item) == n
+
+
+# 2. frozen_value: a read-only owning array and a DataFrame were kept as the caller's own; one home for freezing
+
+def test_a_read_only_owning_array_in_extra_is_copied():
+    a = np.arange(3.0)
+    a.setflags(write=False)  # read-only, but it owns its data: its owner may make it writeable again
+    r = gb.Record(np.arange(20.0), np.arange(20.0))
+    d = gb.Dataset(r, r, extra={"a": a})
+    a.setflags(write=True)
+    a[0] = 99.0
+    assert d.extra["a"][0] == 0.0 and not d.extra["a"].flags.writeable
+
+
+def test_a_dataframe_in_extra_is_the_datasets_own():
+    import pandas as pd
+
+    df = pd.DataFrame({"a": [1.0, 2.0]})
+    r = gb.Record(np.arange(20.0), np.arange(20.0))
+    d = gb.Dataset(r, r, extra={"df": df})
+    df.loc[0, "a"] = 42.0  # the caller's frame, changed afterwards
+    got = d.extra["df"]
+    got.loc[1, "a"] = -1.0  # what a reader got, changed
+    got["new"] = 0.0
+    again = d.extra["df"]
+    assert list(again["a"]) == [1.0, 2.0] and list(again.columns) == ["a"]
+
+
+def test_the_bootstrap_freezes_with_the_one_frozen_value():
+    import graybox.diagnostics._bootstrap as bs
+
+    assert not hasattr(bs, "_frozen_value")
+    from graybox.core._validation import frozen_value
+
+    a = np.arange(3.0)
+    a.setflags(write=False)
+    out = frozen_value({"theta": [1, 2.5], "a": a, "c": ["x", 1]}, "options", numbers_as_arrays=True)
+    assert out["theta"].dtype == np.float64 and not out["theta"].flags.writeable
+    assert out["a"] is not a and list(out["c"]) == ["x", 1]

@@ -504,6 +504,11 @@ def frozen(a: object, dtype: type = float) -> np.ndarray:
     return x
 
 
+def _is_pandas(x: object) -> bool:
+    """A pandas DataFrame or Series (told without importing pandas: `import graybox` stays light)."""
+    return type(x).__module__.startswith("pandas") and type(x).__name__ in ("DataFrame", "Series")
+
+
 class FrozenMap(Mapping):
     """A read-only mapping that pickles: how every immutable value in graybox stores a mapping field.
 
@@ -520,7 +525,9 @@ class FrozenMap(Mapping):
         raise AttributeError(f"a {type(self).__name__} cannot be changed")
 
     def __getitem__(self, key: Any) -> Any:
-        return self._items[key]
+        x = self._items[key]
+        # a pandas table cannot be made read-only (a new column, .loc …): each read is a fresh copy, as FrozenFrame's
+        return x.copy(deep=True) if _is_pandas(x) else x
 
     def __iter__(self):
         return iter(self._items)
@@ -572,23 +579,31 @@ class FrozenList(list):
 
 
 def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = frozenset(),
-                 _done: dict | None = None) -> object:
+                 _done: dict | None = None, *, numbers_as_arrays: bool = False) -> object:
     """A read-only copy of a plain value a caller gave (``name`` says which, for the message): arrays frozen
     (their dtype kept), lists :class:`FrozenList`, tuples (named ones keep their type) and sets their frozen items,
     mappings :class:`FrozenMap`, all the way down; anything else (a number, a str, a graybox value, a function) as
-    it is. A value held in several places is frozen once and stays shared (as ``copy.deepcopy`` keeps it): the
-    cost is linear in the distinct values, not in the paths to them.
+    it is. Every array is copied, a read-only one too (its owner could make it writeable again); a pandas
+    DataFrame or Series is copied, and a :class:`FrozenMap` holding one gives each reader a fresh copy (a table
+    cannot be made read-only). ``numbers_as_arrays`` (a bootstrap's options and decision): a list or plain tuple
+    of numbers (no bools) becomes a read-only float array (its θ), any other list a tuple. A value held in several places is frozen once and stays shared (as
+    ``copy.deepcopy`` keeps it): the cost is linear in the distinct values, not in the paths to them.
 
     ``ValueError`` naming ``name`` for a value nested deeper than :data:`MAX_NESTING` levels or one that holds itself.
     """
+    if _is_pandas(v):
+        return v.copy(deep=True)  # type: ignore[attr-defined]
     if not isinstance(v, (np.ndarray, list, tuple, set, frozenset, Mapping)):
         return v
+    if (numbers_as_arrays and (isinstance(v, list) or type(v) is tuple) and v
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
+        return frozen(v)
     # id → (the value, its frozen copy, its height in nested containers); the value is kept so that its id is not
     # reused by another while the walk runs (a mapping may make its values when asked, temporaries)
     done: dict = {} if _done is None else _done
     if isinstance(v, np.ndarray):  # an array held twice frozen once too (one copy, still shared)
         if id(v) not in done:
-            done[id(v)] = (v, v if not v.flags.writeable and v.flags.owndata else frozen(v, v.dtype), 0)
+            done[id(v)] = (v, frozen(v, v.dtype), 0)  # a read-only array too: its owner can make it writeable
         return done[id(v)][1]
     if id(v) in done:  # frozen already, by another path to it
         _, out, height = done[id(v)]
@@ -604,7 +619,7 @@ def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = froze
 
     def freeze(x: object, where: str) -> object:
         nonlocal below
-        fx = frozen_value(x, where, _depth + 1, inner, done)
+        fx = frozen_value(x, where, _depth + 1, inner, done, numbers_as_arrays=numbers_as_arrays)
         if id(x) in done:
             below = max(below, done[id(x)][2])
         return fx
@@ -615,7 +630,7 @@ def frozen_value(v: object, name: str, _depth: int = 0, _open: frozenset = froze
     else:
         items = [freeze(x, f"{name}[{i}]") for i, x in enumerate(v)]
         if isinstance(v, list):
-            out = FrozenList(items)
+            out = tuple(items) if numbers_as_arrays else FrozenList(items)
         elif isinstance(v, (set, frozenset)):
             out = frozenset(items)
         elif hasattr(type(v), "_make") and hasattr(type(v), "_fields"):  # a named tuple: its type, its items frozen

@@ -59,7 +59,7 @@ from ..static._surfaces import StaticSurface
 from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
 from ..core._validation import (FrozenMap, check_band, check_choice, check_count, check_fields, check_int,
-                                check_lambdas, check_mean_square, check_real, check_seed, frozen, warn)
+                                check_lambdas, check_mean_square, check_real, check_seed, frozen, frozen_value, warn)
 from ..core._reprs import listed, short_repr
 from ._uncertainty import UncertaintyWarning
 
@@ -258,8 +258,9 @@ class DecisionBootstrap:
             raise ValueError(f"rules must have {B} entries, got {len(self.rules)}")
         object.__setattr__(self, "rules", tuple(self.rules))
         # immutable all the way down: the reference's θ (a list in the job's plain result) and the options as given
-        object.__setattr__(self, "reference", FrozenMap({k: _frozen_value(v) for k, v in dict(self.reference).items()}))
+        object.__setattr__(self, "reference", frozen_value(dict(self.reference), "reference", numbers_as_arrays=True))
         object.__setattr__(self, "failures", FrozenMap({int(k): str(v) for k, v in dict(self.failures).items()}))
+        object.__setattr__(self, "options", frozen_value(dict(self.options), "options", numbers_as_arrays=True))
         self._check_values()
 
     def _check_values(self) -> None:
@@ -293,7 +294,6 @@ class DecisionBootstrap:
                                  f"got {rule!r}")
             if bool(inb) != (rule == "D_SF"):
                 raise ValueError(f"in_band[{i}] is {bool(inb)} but replicate {i}'s rule is {rule or 'none (failed)'!r}")
-        object.__setattr__(self, "options", FrozenMap({k: _frozen_value(v) for k, v in dict(self.options).items()}))
 
     @property
     def n_replicates(self) -> int:
@@ -351,18 +351,6 @@ class DecisionBootstrap:
     def __repr__(self) -> str:
         return (f"DecisionBootstrap({self.estimator.upper()}, replicates={self.n_replicates}, failed={len(self.failures)}, "
                 f"blocks={self.n_blocks} × {self.block_length}, agreement={self.agreement:.2f})")
-
-
-def _frozen_value(v: object) -> object:
-    """A read-only copy of an option or a decision's value: arrays frozen, lists tuples, mappings FrozenMaps."""
-    if isinstance(v, np.ndarray):
-        return frozen(v, v.dtype)
-    if isinstance(v, Mapping):
-        return FrozenMap({k: _frozen_value(x) for k, x in v.items()})
-    if isinstance(v, (list, tuple)):
-        return frozen(v) if v and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v) \
-            else tuple(_frozen_value(x) for x in v)
-    return v
 
 
 def _estimator_options(estimator: str, options: Mapping | None) -> dict:
