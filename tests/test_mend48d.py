@@ -93,3 +93,46 @@ def test_the_bootstrap_freezes_with_the_one_frozen_value():
     out = frozen_value({"theta": [1, 2.5], "a": a, "c": ["x", 1]}, "options", numbers_as_arrays=True)
     assert out["theta"].dtype == np.float64 and not out["theta"].flags.writeable
     assert out["a"] is not a and list(out["c"]) == ["x", 1]
+
+
+# 3. a leaderboard's in_band: True/False where a band decided, <NA> where none did (no NaN, no False for unknown)
+
+@pytest.fixture(scope="module")
+def ls_pe_results(tmp_path_factory):
+    import graybox.experiments as gx
+
+    text = '''name = "p"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first-order"
+terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]
+[[variants]]
+name = "LS"
+estimator = "ls"
+[[variants]]
+name = "PE"
+estimator = "pe"
+'''
+    path = tmp_path_factory.mktemp("store") / "r.sqlite"
+    gx.run_grid(gx.Grid.from_toml_text(text), path)
+    return gx.load_results(path)
+
+
+def test_in_band_under_chosen_is_unknown_without_a_band_decision(ls_pe_results):
+    import pandas as pd
+
+    import graybox.experiments as gx
+
+    lb = gx.leaderboard(ls_pe_results, rule="chosen")
+    assert lb["in_band"].dtype == pd.BooleanDtype()
+    got = dict(zip(lb.index.get_level_values("variant"), lb["in_band"]))
+    assert got["PE"] is True or got["PE"] == True  # noqa: E712 (a nullable boolean's True)
+    assert got["LS"] is pd.NA  # least squares decided no band
+    failed = ls_pe_results.copy()
+    failed["status"], failed["message"] = "failed", "boom"
+    lb = gx.leaderboard(failed, rule="chosen")  # no finished model: not known, as a model without a band
+    assert lb["in_band"].isna().all() and lb["in_band"].dtype == pd.BooleanDtype()
+    lb = gx.leaderboard(ls_pe_results)  # "dsf_valid": the band decides every row
+    assert lb["in_band"].dtype == pd.BooleanDtype() and not lb["in_band"].isna().any()

@@ -264,7 +264,9 @@ def leaderboard(
     pandas.DataFrame
         Index (data, structure, variant); columns ``rank`` (1 = best within the data set, by
         J_S valid), ``JS_valid``, ``JS_ident``, ``JSF``, ``fit_valid``, ``n_params``, ``seed``,
-        ``lambda1`` (of the member, NaN for single models), ``in_band``, ``candidates`` (how many
+        ``lambda1`` (of the member, NaN for single models), ``in_band`` (nullable boolean: True or False as
+        the band decided, <NA> where none did: under ``"chosen"`` a model whose cell decided no band, such as
+        least squares, and a group with no finished model), ``candidates`` (how many
         models were compared), ``cells`` and ``ok`` (cells of the group, cells with status ok),
         ``reason`` (empty for a ranked row). A group with no qualifying model keeps a row with NaN
         figures (rank NaN) and says why in ``reason``: the smallest J_SF reached when no model
@@ -309,7 +311,8 @@ def leaderboard(
         else:
             n_ps = pd.unique(pd.Series(cells_np.of((d, s, v), "n_params")).dropna())
             base.update(JS_valid=np.nan, JS_ident=np.nan, JSF=np.nan, fit_valid=np.nan,
-                        n_params=n_ps[0] if len(n_ps) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan, in_band=False)
+                        n_params=n_ps[0] if len(n_ps) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan,
+                        in_band=pd.NA if rule == "chosen" else False)  # "chosen": no model, no band known
             base["reason"] = _no_model_reason((d, s, v), cells_np, members_np,
                                               None if rule == "chosen" else bands[(d, s, v)], n)
         base["candidates"] = n
@@ -320,9 +323,10 @@ def leaderboard(
                             **{k: pd.Series(dtype=int) for k in ("cells", "ok", "candidates")},
                             **{k: pd.Series(dtype=float) for k in ("JS_valid", "JS_ident", "JSF", "fit_valid",
                                                                    "n_params", "seed", "lambda1")},
-                            "in_band": pd.Series(dtype=bool)})
+                            "in_band": pd.Series(dtype="boolean")})
     for c in ("JS_valid", "JS_ident", "JSF", "fit_valid", "lambda1"):
         out[c] = out[c].astype(float)
+    out["in_band"] = pd.array(out["in_band"], dtype="boolean")  # True, False or <NA> (not known): never NaN
     out["n_params"] = pd.array(out["n_params"], dtype="Int64")
     out["seed"] = pd.array(out["seed"], dtype="Int64")
     out["rank"] = out.groupby("data")["JS_valid"].rank(method="min")
