@@ -17,6 +17,7 @@ import numpy as np
 from .models._model import Model
 from .core._records import StaticPoints
 from .core._terms import Structure
+from .core._validation import real_array
 
 __all__ = [
     "STRUCTURE_15",
@@ -38,13 +39,13 @@ EQ1_COEFFICIENTS = (-1.3312, 1.4933e-3, 7.2652e-6)
 def eq1(u: np.ndarray) -> np.ndarray:
     """The plant's measured static curve, eq. (1), in mlc for u in rpm."""
     k, a, b = EQ1_COEFFICIENTS
-    u = np.asarray(u, dtype=float)
+    u = real_array(u, "u")  # a masked entry is no speed (its fill value is no sample)
     return b * u**2 + a * u + k
 
 
 def eq1_points(ubar: np.ndarray | None = None) -> StaticPoints:
     """Eq. (1) sampled at ū = 750, 850, …, 1650 rpm (or at ``ubar``)."""
-    ub = np.arange(750.0, 1651.0, 100.0) if ubar is None else np.asarray(ubar, float)
+    ub = np.arange(750.0, 1651.0, 100.0) if ubar is None else real_array(ubar, "ubar")
     return StaticPoints(ub, eq1(ub), name="eq. (1)")
 
 

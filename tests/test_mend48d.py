@@ -136,3 +136,24 @@ def test_in_band_under_chosen_is_unknown_without_a_band_decision(ls_pe_results):
     assert lb["in_band"].isna().all() and lb["in_band"].dtype == pd.BooleanDtype()
     lb = gx.leaderboard(ls_pe_results)  # "dsf_valid": the band decides every row
     assert lb["in_band"].dtype == pd.BooleanDtype() and not lb["in_band"].isna().any()
+
+
+# 5. masked arrays read by np.asarray lost their mask: the fill values were taken for samples
+
+def _masked(shape, at, fill):
+    data = np.full(shape, 1000.0)
+    data[at] = fill
+    mask = np.zeros(shape, bool)
+    mask[at] = True
+    return np.ma.masked_array(data, mask=mask)
+
+
+@pytest.mark.parametrize("call", [
+    lambda: __import__("graybox.reference", fromlist=["eq1"]).eq1(_masked(3, 2, 1e20)),
+    lambda: __import__("graybox.reference", fromlist=["eq1_points"]).eq1_points(_masked(3, 2, 1e20)),
+    lambda: gb.datasets.TwoSpeedPumpingPlant().simulate(_masked((20, 2), (5, 1), 1200.0), noise=False,
+                                                         process_noise=False),
+])
+def test_a_masked_entry_is_refused_not_read_as_its_fill_value(call):
+    with pytest.raises(ValueError, match="masked"):
+        call()

@@ -305,7 +305,7 @@ class TwoSpeedPumpingPlant:
         -------
         TwoSpeedRun
         """
-        uu = np.asarray(frame_inputs(u, _INPUTS, "u"), dtype=float)  # a DataFrame by its columns u1, u2
+        uu = real_array(frame_inputs(u, _INPUTS, "u"), "u")  # a DataFrame by its columns u1, u2; no masked entry
         if uu.ndim != 2 or uu.shape[1] != 2 or uu.shape[0] == 0:
             raise ValueError(f"u must have shape (N, 2): one column per pump set, got shape {uu.shape}")
         r1 = as_1d_finite(uu[:, 0], "speed reference 1")
