@@ -157,3 +157,37 @@ def _masked(shape, at, fill):
 def test_a_masked_entry_is_refused_not_read_as_its_fill_value(call):
     with pytest.raises(ValueError, match="masked"):
         call()
+
+
+# 6. duck-typed models: a look-alike with .simulate but not the rest ended in a bare AttributeError
+
+class _OnlySimulates:
+    def simulate(self, record, on_diverge="nan"):
+        return np.zeros(len(record))
+
+
+class _OnlyPredicts:
+    def predict(self, record, horizon=1):
+        return np.zeros(len(record))
+
+
+@pytest.mark.parametrize("call, missing", [
+    (lambda r: gb.js(_OnlySimulates(), r), "max_lag"),
+    (lambda r: gb.j1(_OnlyPredicts(), r), "max_lag"),
+    (lambda r: gb.evaluate({"fake": _OnlySimulates()}, gb.Dataset(r, r)), "predict"),
+])
+def test_a_look_alike_model_is_a_type_error_naming_what_it_lacks(call, missing):
+    r = gb.Record(np.linspace(0.0, 1.0, 30), np.linspace(0.0, 1.0, 30))
+    with pytest.raises(TypeError, match=rf"has \.(simulate|predict)\(\) but no .*\.{missing}"):
+        call(r)
+
+
+def test_a_model_and_a_result_still_pass_the_duck_check():
+    from graybox.models._coerce import as_model
+
+    assert as_model(TRUE, duck=("simulate", "max_lag")) is TRUE
+
+    class Carrier:
+        model = TRUE
+
+    assert as_model(Carrier(), duck=("simulate", "max_lag")) is TRUE

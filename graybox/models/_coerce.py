@@ -53,6 +53,15 @@ def _set_hint(obj: object) -> str:
     return ""
 
 
+def _duck_model(obj: object, name: str, needs: tuple[str, ...], accepted: str) -> object:
+    """``obj``, which has the method ``needs[0]``, when it has every other name in ``needs`` too, else a ``TypeError``."""
+    missing = [n for n in needs[1:] if not hasattr(obj, n)]
+    if missing:
+        raise TypeError(f"{name} must be {accepted}; got a {type(obj).__name__} that has .{needs[0]}() but no "
+                        f"{', '.join('.' + n for n in missing)}, which a model used here needs")
+    return obj
+
+
 def as_structure(obj: object, name: str = "structure", *, with_noise: bool = False) -> Structure:
     """The structure ``obj`` means.
 
@@ -94,7 +103,7 @@ def as_structure(obj: object, name: str = "structure", *, with_noise: bool = Fal
 
 
 def as_model(obj: object, name: str = "model", *, kinds: tuple[type, ...] = (Model,),
-             duck: str | None = None, accepted: str = MODEL_ACCEPTED) -> object:
+             duck: str | tuple[str, ...] | None = None, accepted: str = MODEL_ACCEPTED) -> object:
     """The model ``obj`` means: ``obj`` itself when it is one of ``kinds``, else its ``.model``.
 
     Parameters
@@ -106,9 +115,12 @@ def as_model(obj: object, name: str = "model", *, kinds: tuple[type, ...] = (Mod
         The argument's name, for the error message.
     kinds : tuple of type
         The model classes the entry works with (default: the polynomial Model).
-    duck : str, optional
-        A method name: any object with it counts as a model too (e.g. ``"static_curve"`` lets a
-        NeuralModel, which lives above this layer, through where only that method is used).
+    duck : str or tuple of str, optional
+        A method name, then the other attributes the entry reads: any object with that method counts
+        as a model too (e.g. ``"static_curve"`` lets a NeuralModel, which lives above this layer,
+        through where only that method is used); one that has the method but lacks another of the
+        names is a look-alike, refused with a ``TypeError`` naming what it lacks (not a bare
+        ``AttributeError`` when the entry reads it).
     accepted : str
         What is accepted, in words, for the error message.
 
@@ -122,11 +134,16 @@ def as_model(obj: object, name: str = "model", *, kinds: tuple[type, ...] = (Mod
         ``obj`` neither is nor carries such a model; the message lists what is accepted (and
         how to pick one model of a Pareto set).
     """
-    if isinstance(obj, kinds) or (duck is not None and callable(getattr(obj, duck, None))):
+    needs = (duck,) if isinstance(duck, str) else tuple(duck or ())
+    if isinstance(obj, kinds):
         return obj
+    if needs and callable(getattr(obj, needs[0], None)):
+        return _duck_model(obj, name, needs, accepted)
     m = getattr(obj, "model", None)
-    if isinstance(m, kinds) or (duck is not None and callable(getattr(m, duck, None))):
+    if isinstance(m, kinds):
         return m
+    if needs and callable(getattr(m, needs[0], None)):
+        return _duck_model(m, f"{name}.model", needs, accepted)
     raise TypeError(f"{name} must be {accepted}; got {type(obj).__name__}{_set_hint(obj)}")
 
 

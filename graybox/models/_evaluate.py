@@ -76,7 +76,7 @@ def j1(model: Model, record: Record | Dataset) -> float:
         Measured data; a Dataset stands for its validation record (a model is judged on data it
         was not fitted on).
     """
-    model = as_model(model, duck="predict")
+    model = as_model(model, duck=("predict", "max_lag"))
     record = as_record(record, "valid", "record")
     return mse(record.y, model.predict(record), start=model.max_lag)
 
@@ -91,7 +91,7 @@ def js(model: Model, record: Record | Dataset) -> float:
     record : Record or Dataset
         Measured data; a Dataset stands for its validation record.
     """
-    model = as_model(model, duck="simulate")
+    model = as_model(model, duck=("simulate", "max_lag"))
     record = as_record(record, "valid", "record")
     return mse(record.y, model.simulate(record, on_diverge="nan"), start=model.max_lag)
 
@@ -130,7 +130,7 @@ def jsf(model: Model, static: StaticPoints | Dataset, y0: float | np.ndarray | N
     try:
         yb = model.static_curve(ub, y0=static.ybar if y0 is None else y0, strict=True)
     except (ValueError, DivergenceError) as exc:
-        warn(f"J_SF of {model.name or 'model'} is infinite: {exc}", RuntimeWarning)
+        warn(f"J_SF of {getattr(model, 'name', '') or 'model'} is infinite: {exc}", RuntimeWarning)
         return float("inf")
     return mse(static.ybar, yb)
 
@@ -213,7 +213,8 @@ def evaluate(
     rows = {}
     undefined_fit = []  # models whose fit % is undefined: the validation output is constant after their lags
     for name, m in models.items():
-        m = as_model(m, f"models[{name!r}]", duck="simulate")
+        m = as_model(m, f"models[{name!r}]", duck=("simulate", "predict", "max_lag", "n_params")
+                     + (("static_curve",) if sp is not None else ()))
         sim_v = m.simulate(data.valid, on_diverge="nan")
         fit = fit_or_nan(data.valid.y, sim_v, m.max_lag)
         if np.isnan(fit):

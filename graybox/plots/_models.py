@@ -50,7 +50,7 @@ def plot_free_run(
             raise ValueError("models is an empty mapping: give at least one model to draw against the record")
         ms = {name: as_model(m, f"models[{name!r}]", duck="simulate") for name, m in models.items()}
     else:
-        m = as_model(models, "models", duck="simulate")
+        m = as_model(models, "models", duck=("simulate", "name"))
         ms = {m.name or "model": m}
     if ax is None:  # laid out as it is drawn (a caller's figure keeps its own layout: no tight_layout on it)
         fig = Figure(figsize=(8, 3.6), layout="constrained")
