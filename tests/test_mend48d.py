@@ -191,3 +191,45 @@ def test_a_model_and_a_result_still_pass_the_duck_check():
         model = TRUE
 
     assert as_model(Carrier(), duck=("simulate", "max_lag")) is TRUE
+
+
+# 7. SEMP's pruning budget: said only in result.stop; warned now, as frols warns at its caps
+
+def _semp_data():
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(0.5, 2.0, 40), 5)
+    m = gb.Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], [0.2, 0.6, 0.3, 0.05])
+    return gb.Record(u, m.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(u.size), name="ident")
+
+
+CANDIDATES = ["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "u(k-1)y(k-1)", "y(k-1)^2"]
+
+
+def test_semp_warns_when_pruning_stops_for_its_budget(monkeypatch):
+    import graybox.selection._simulation_error_pruning as sp
+
+    monkeypatch.setattr(sp, "_prune_budget", lambda limit: 1)  # the budget spent at the first addition
+    with pytest.warns(RuntimeWarning, match="pruning stopped after 1 additions"):
+        res = gb.semp(CANDIDATES, _semp_data(), n_terms=4)  # the structure of 4 terms: grown without pruning
+    assert "pruning stopped after 1 additions" in res.stop
+
+
+def test_semp_within_its_budget_says_nothing_of_it():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        res = gb.semp(CANDIDATES, _semp_data(), n_terms=4)
+    assert "pruning stopped" not in res.stop
+
+
+def test_semp_says_nothing_when_the_budget_ran_out_after_the_structure_chosen():
+    # a criterion search runs on to max_terms: on noise-free data its budget runs out long after BIC's choice,
+    # which pruning shaped as asked (warning there would be a false alarm on a default call)
+    true = gb.Structure(["y(k-1)", "y(k-2)", "u(k-2)", "u(k-1)y(k-1)", "u(k-2)^2", "1"])
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1.0, 1.0, 101), 10)[:1000]
+    rec = gb.Record(u, gb.Model(true, [0.5, 0.3, 0.4, -0.2, 0.15, 0.1]).simulate(u, np.zeros(2)), name="stair")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        warnings.simplefilter("ignore", gb.CandidateWarning)
+        res = gb.semp(gb.Candidates(3, 3, ne=0, degree=2), rec)
+    assert "pruning stopped" in res.stop and set(res.structure) == set(true)

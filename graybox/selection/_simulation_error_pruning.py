@@ -328,7 +328,9 @@ def semp(
         As :func:`graybox.frols` (the same stopping rule): when ``tol`` is not reached within
         ``max_terms`` terms, or the criterion is smallest at ``max_terms`` terms while candidates
         were left (the curve may still be falling), or at the largest size the record's rows allow
-        (samples after the largest lag − 1: the structure interpolates the record).
+        (samples after the largest lag − 1: the structure interpolates the record). When pruning
+        stopped for its budget (6·max_terms + 10 additions; the later steps only add terms) before the
+        step that gave the structure chosen.
     """
     candidates = structure_of(candidates, "candidates")  # a list of terms, a result … (as every structure argument)
     opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
@@ -470,6 +472,8 @@ class _Search:
         self.score = (float(sc.scores(th)[0]) if self.current
                       else float(np.mean(np.concatenate([r.y[sc.L:] for r in sc.records]) ** 2)))
         self.rows: list[dict] = []  # the path: one row per accepted step
+        self.unpruned_from: int | None = None  # the first step after which pruning stopped for its budget
+        self.prune_budget = 0
         self.fwd: list[np.ndarray] = []  # every candidate's score at each forward step
         if opt.forced:
             self.log("include", ", ".join(self.names[j] for j in opt.forced))
@@ -497,10 +501,7 @@ def _grow(run: _Search) -> tuple[str, bool]:
     Returns why the search stopped, and whether the size limit cut it short while candidates were left.
     """
     opt, sc = run.opt, run.sc
-    # Pruning on noisy data can keep the size from growing (a removal that does not hurt is taken):
-    # after this many additions the search stops pruning and only adds, so every size up to the
-    # limit is reached.
-    budget = 6 * opt.limit + 10
+    budget = _prune_budget(opt.limit)
     n_add = 0
     while True:
         cands = np.array([j for j in range(len(opt.process)) if j not in run.current and not sc.zero[j]], dtype=int)
@@ -514,9 +515,17 @@ def _grow(run: _Search) -> tuple[str, bool]:
         n_add += 1
         if opt.prune and n_add <= budget:
             _prune(run, added)
+        elif opt.prune and run.unpruned_from is None:  # the first step pruning did not follow: said by _result
+            run.unpruned_from, run.prune_budget = len(run.rows) - 1, budget
     if opt.prune and n_add > budget:
         stop += f" (pruning stopped after {budget} additions)"
     return stop, capped
+
+
+def _prune_budget(limit: int) -> int:
+    """Additions after which the search stops pruning and only adds: pruning on noisy data can keep the size
+    from growing (a removal that does not hurt is taken), so every size up to the limit is still reached."""
+    return 6 * limit + 10
 
 
 def _stop_reason(run: _Search, cands: np.ndarray) -> tuple[str, bool]:
@@ -598,6 +607,13 @@ def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
                           scored["score"].to_numpy() / sc.yvar, can_grow=capped, fraction="free-run MSE / var(y)",
                           rows_cap=rows_cap)
     best = scored.iloc[i]
+    if run.unpruned_from is not None and int(best["step"]) >= run.unpruned_from:
+        # said as frols says its caps: the structure chosen was grown by steps that only added terms, not the
+        # pruned search the caller asked for (one chosen earlier on the path was pruned as asked: nothing said)
+        warn(f"semp: pruning stopped after {run.prune_budget} additions (its budget, 6·max_terms + 10), at step "
+             f"{run.unpruned_from} of the path; the structure chosen (step {int(best['step'])}) was grown after it "
+             "by steps that only added terms, so it may hold terms pruning would have removed (a smaller max_terms "
+             "keeps the search within the budget)", RuntimeWarning)
     current = list(best["_set"])
     fwd = pd.DataFrame(np.array(run.fwd) if run.fwd else np.zeros((0, len(run.names))), columns=run.names)
     fwd.index.name = "forward step"
