@@ -233,3 +233,25 @@ def test_semp_says_nothing_when_the_budget_ran_out_after_the_structure_chosen():
         warnings.simplefilter("ignore", gb.CandidateWarning)
         res = gb.semp(gb.Candidates(3, 3, ne=0, degree=2), rec)
     assert "pruning stopped" in res.stop and set(res.structure) == set(true)
+
+
+# 4. decide_dsf(choose_on=) refused the fitting data only when every member's J_S there was the set's own: one of
+# several fitting records, or a slice of one, passed
+
+def test_choose_on_refuses_one_of_several_fitting_records_and_a_slice_of_one():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_choose_on_fitting import ST, _data
+
+    a, b = _data(0), _data(1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        two = gb.pe_pareto(ST, [a.ident, b.ident], static=a.static, lambdas=np.logspace(-3, 0, 6))
+        one = gb.pe_pareto(ST, a, lambdas=np.logspace(-3, 0, 6))
+    piece = gb.Record(a.ident.u[:200].copy(), a.ident.y[:200].copy(), name="a piece")  # same samples, new object
+    for front, rec in ((two, b.ident), (two, piece), (one, piece), (one.subset([0, 2, 4]), piece)):
+        with pytest.raises(ValueError, match="choose_on.*fitting record"):
+            gb.decide_dsf(front, band=1.0, choose_on=rec)
+    assert gb.decide_dsf(two, band=1.0, choose_on=a.valid).chosen_on == "valid"  # data the fit did not see

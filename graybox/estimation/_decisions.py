@@ -23,7 +23,7 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import Record, choosing_records, require_lengths
+from ..core._records import Record, check_overlap, choosing_records, require_lengths, same_record
 from ..core._reprs import beside, bound_text, squared_text
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
@@ -161,6 +161,14 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
     recs = choosing_records(records)
     for r in recs:
         pareto.check_record(r)
+    # the records the set was fitted on, when it keeps them: one of several, a copy or a slice of one is refused by
+    # its samples (the J_S check below sees only the set's mean over all of them)
+    advice = "choose on data the fit did not see (e.g. data.valid)"
+    for c in recs:
+        for f in getattr(pareto, "_fitted_on", ()):
+            if same_record(c, f):
+                raise ValueError(f"choose_on: the choosing record {c.name!r} is a fitting record ({f.name!r}): {advice}")
+            check_overlap(c, f, "choosing", "fitting", advice, prefix="choose_on: ")
     th = np.where(np.isfinite(pareto.thetas), pareto.thetas, 0.0)
     L = pareto.structure.max_lag
     total = np.zeros(len(pareto))
@@ -212,7 +220,9 @@ def decide_dsf(
         minimised over the band is the members' free-run MSE there (``.score``; ``.JS`` stays the
         set's own). None (default): the paper's rule, on the set's J_S. Report the chosen model on
         a third record: its J_S on the choosing record is optimistic. Records on which every member
-        scores the set's own J_S (to 1e-6) are the fitting records: ``ValueError``.
+        scores the set's own J_S (to 1e-6) are the fitting records: ``ValueError``; so is, for a set
+        fitted in this session (``pe_pareto``, ``se_pareto``, ``from_thetas``; not one loaded from a
+        file), a record with the samples of one of its fitting records, or a slice of one.
 
     Returns
     -------

@@ -213,8 +213,15 @@ class ParetoSet:
         jsf = np.full(K, np.nan) if static is None else evaluate_thetas(structure, th, None, static)["JSF"]
         lam = np.full(K, np.nan) if lambdas is None else np.asarray(lambdas, float)
         th[bad] = np.nan
-        return cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails,
-                   **carried_from(recs, static))
+        out = cls(structure, th, lam, j1 / total, js / total, jsf, method, extra or {}, fails,
+                  **carried_from(recs, static))
+        out._keep_fitted_on(recs)
+        return out
+
+    def _keep_fitted_on(self, records: Sequence[Record]) -> None:
+        """Keep the records the set was fitted on (no field: not compared, saved or shown), that
+        :func:`graybox.decide_dsf` refuses them, a piece of one or one of several as choosing records."""
+        object.__setattr__(self, "_fitted_on", tuple(records))
 
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the set was fitted
@@ -272,9 +279,11 @@ class ParetoSet:
             raise ValueError(f"member index {bad[0]} out of range for a set of {K}")
         idx = idx % max(K, 1)  # a failed member named from the end, or twice, keeps its failure
         fails = {new: self.failures[old] for new, old in enumerate(idx.tolist()) if old in self.failures}
-        return ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
-                         self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
-                         self.input_names, self.Ts, self.units)
+        out = ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
+                        self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
+                        self.input_names, self.Ts, self.units)
+        out._keep_fitted_on(getattr(self, "_fitted_on", ()))
+        return out
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":
         """The members that no other member dominates in ``objectives`` (order kept)."""
