@@ -26,9 +26,17 @@ class GridData(WorkerPlugin):
 
     def __init__(self, datasets: Mapping[str, gb.Dataset]):
         self.datasets = dict(datasets)
+        #: What the run's tasks keep on this worker from one task to the next (a task's runner's, e.g. the child
+        #: process that runs cells under a time limit): each value's ``close()`` is called when the run ends.
+        self.kept: dict = {}
 
     def setup(self, worker) -> None:  # noqa: D102 - WorkerPlugin interface
         pass
+
+    def teardown(self, worker) -> None:  # noqa: D102 - WorkerPlugin interface: the run is over (or the worker)
+        kept, self.kept = self.kept, {}
+        for v in kept.values():
+            v.close()
 
 
 class CellRows:
@@ -51,10 +59,11 @@ class CellRows:
 
 
 def cells_task(fn: Callable[[Cell, gb.Dataset, int], dict], plugin: str, cells: list[Cell],
-               runner: Callable[[list[Cell], Mapping[str, gb.Dataset]], list[dict]] | None = None) -> CellRows:
+               runner: Callable[[list[Cell], Mapping[str, gb.Dataset], dict], list[dict]] | None = None) -> CellRows:
     """Run ``fn`` on a batch of cells, one after another; their rows in order. ``runner``, when given, runs the
-    batch instead (the cells and the data sets by hash), e.g. in a child process under a cell time limit."""
-    store = get_worker().plugins[plugin].datasets
+    batch instead (the cells, the data sets by hash and what it keeps on the worker for the run's next task,
+    :attr:`GridData.kept`), e.g. in a child process under a cell time limit."""
+    data = get_worker().plugins[plugin]
     if runner is not None:
-        return CellRows(list(runner(cells, store)))
-    return CellRows([fn(c, store[c.data_hash], threads=1) for c in cells])
+        return CellRows(list(runner(cells, data.datasets, data.kept)))
+    return CellRows([fn(c, data.datasets[c.data_hash], threads=1) for c in cells])

@@ -735,9 +735,10 @@ class DaskCluster:
         that has had no worker yet in the run (an adaptive one whose first workers wait in a batch queue) is
         waited for. ``None`` waits for ever.
     time_limit : float, optional
-        Seconds a cell may run: each task then runs its cells in a child process of its worker, one after
-        another, and a cell past the limit has that process stopped and is a failed row saying so (not
-        retried), as :class:`ProcessPool` does (a second or two more per task: the child's start-up).
+        Seconds a cell may run: each task then runs its cells in a child process of its worker (one per worker
+        thread, kept for the run's next tasks and closed at its end), one after another, and a cell past the
+        limit has that process stopped (and replaced) and is a failed row saying so (not retried), as
+        :class:`ProcessPool` does (a second or two more per worker thread: the child's start-up).
         None: cells run in the worker itself, without a limit.
     """
 
@@ -919,11 +920,28 @@ class DaskCluster:
                     pass
 
 
-def _cells_in_a_child(fn: CellFn, time_limit: float, cells: Sequence[Cell],
-                      datasets: Mapping[str, gb.Dataset]) -> list[dict]:
+class _KeptPool:
+    """A one-process :class:`ProcessPool` in a session, kept on a Dask worker for the run's next task (its child
+    and the data sets it was sent reused: starting one per task cost 2 s a task); closed at the run's end."""
+
+    def __init__(self, fn: CellFn, time_limit: float):
+        self.pool = ProcessPool(1, fn, time_limit=time_limit, threads=1)
+        self._stack = ExitStack()
+        self._stack.enter_context(self.pool.session())
+
+    def close(self) -> None:
+        self._stack.close()
+
+
+def _cells_in_a_child(fn: CellFn, time_limit: float, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset],
+                      kept: dict) -> list[dict]:
     """On a Dask worker: ``cells`` one after another in a child process, each stopped past ``time_limit`` s
-    (a failed row saying so); their rows in the cells' order."""
-    rows = {r["key"]: r for r in ProcessPool(1, fn, time_limit=time_limit, threads=1).run(cells, datasets)}
+    (a failed row saying so); their rows in the cells' order. The child is kept in ``kept`` (the run's, on this
+    worker) for the next task of the same worker thread."""
+    key = ("cells in a child", threading.get_ident())
+    if key not in kept:
+        kept[key] = _KeptPool(fn, time_limit)
+    rows = {r["key"]: r for r in kept[key].pool.run(cells, datasets)}
     return [rows[c.key] for c in cells]
 
 

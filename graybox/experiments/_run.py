@@ -131,8 +131,8 @@ def run_grid(
         Seconds (wall time) a cell may run, with worker processes (``executor="processes"`` or Dask; a
         cell in the driver cannot be stopped): past them the process running it is killed and the cell is
         stored as failed, saying so (not retried in the run; ``retry_failed`` with a larger limit runs it
-        again). On Dask each task then runs its cells in a child process of its worker (a second or two
-        more per task). None (default): no limit.
+        again). On Dask the cells then run in a child process of each worker thread, kept for the run (a
+        second or two more per worker for its start-up). None (default): no limit.
     worker_timeout : float or None
         With Dask: seconds a run goes on once its cluster, having had workers, has none left (all
         gone, none restarted): then it ends with a ``ConnectionError``, the rows finished kept (running
