@@ -1,0 +1,41 @@
+"""review48f: the diagnostics' validation (e2e8206, e444035), residuals of one magnitude (2dc0b09) and the grid
+commits of hunt48c, held to what graybox itself makes and saved."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def test_a_residual_tests_file_with_a_0_over_0_test_from_the_previous_graybox_still_loads(tmp_path):
+    # graybox before 2dc0b09 kept φ_(u²)'ξ² of residuals ±c as NaN at every lag (0/0), 'FAIL (max |φ| = nan)'; the
+    # new CorrelationTest check 'phi must hold correlations, finite' refused every such file graybox had written
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 300)
+    y = np.r_[0.0, u[:-1]] + rng.choice([-0.5, 0.5], 300)
+    with pytest.warns(UserWarning, match="u2_xi2"):
+        r = gb.residual_tests(gb.Model(gb.Structure(["u(k-1)"]), [1.0]), gb.Record(u, y))
+    path = tmp_path / "r.json"
+    gb.save(r, path)
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    # as the previous graybox wrote it: the test made, NaN ('nan') at each lag, failed, nothing undefined
+    t = dict(doc["object"]["tests"]["xi_xi"])
+    lags = list(range(-20, 21))
+    t.update(name="u2_xi2", label="φ_(u²)'ξ²(τ)", kind="nonlinear", lags=lags, phi=["nan"] * len(lags),
+             outside=[], passed=False)
+    doc["object"]["tests"]["u2_xi2"] = t
+    doc["object"]["undefined"] = {}
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    old = gb.load(path)
+    assert not old.passed and old.failed == ["u2_xi2"]
+    assert np.all(np.isnan(old["u2_xi2"].phi))
+    # a φ partly NaN, or NaN yet passed, is no file graybox wrote
+    with pytest.raises(ValueError, match="phi"):
+        gb.CorrelationTest("u_xi", "φ_uξ(τ)", "linear", np.arange(2), np.array([np.nan, 0.1]), 0.2, 0.3,
+                           np.array([], int), False)
+
