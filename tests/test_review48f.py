@@ -39,3 +39,16 @@ def test_a_residual_tests_file_with_a_0_over_0_test_from_the_previous_graybox_st
         gb.CorrelationTest("u_xi", "φ_uξ(τ)", "linear", np.arange(2), np.array([np.nan, 0.1]), 0.2, 0.3,
                            np.array([], int), False)
 
+
+def test_residuals_proportional_to_a_balanced_two_level_input_leave_phi_xi_xiu_out_not_crash():
+    # ξ = c·u' with u' = ±1 (a balanced two-level input the model misses at lag 0): ξ·u' is constant and
+    # φ_ξ(ξu) 0/0; residual_tests itself raised 'phi must hold correlations, finite and in [-1, 1]'
+    rng = np.random.default_rng(1)
+    u = np.r_[1.0, rng.permutation(np.repeat([1.0, -1.0], 100))]
+    y = np.r_[0.0, u[:-1]] + 0.5 * u
+    with pytest.warns(UserWarning, match="xi_xiu"):
+        r = gb.residual_tests(gb.Model(gb.Structure(["u(k-1)"]), [1.0]), gb.Record(u, y))
+    assert "xi_xiu" in r.undefined and "xi_xiu" not in r.tests
+    assert all(np.all(np.isfinite(t.phi)) for t in r.tests.values())
+    assert not r.passed and "u_xi" in r.failed  # ξ is the input: φ_uξ(0) = 1
+

@@ -198,8 +198,9 @@ class ResidualTests:
     undefined : mapping str -> str
         The tests these data cannot make, keyed as ``tests`` would be, with why: an input held
         constant (its four input tests), one taking two levels equally often (u'² constant: its
-        two u² tests), or residuals of one magnitude ±c (ξ² constant: φ_(u²)'ξ²). They are not in
-        ``tests`` and take no part in :attr:`passed`.
+        two u² tests), residuals of one magnitude ±c (ξ² constant: φ_(u²)'ξ²), or residuals c·u'
+        of such an input (ξu' constant: its φ_ξ(ξu)). They are not in ``tests`` and take no part
+        in :attr:`passed`.
     """
 
     tests: Mapping[str, CorrelationTest]
@@ -482,6 +483,13 @@ def residual_tests(
         for nm in names:
             undefined.setdefault("u2_xi2" + ("" if len(names) == 1 else f":{nm}"),
                                  "the residuals have one magnitude (ξ = ±c): ξ² is constant")
+    # residuals c·u' of a two-level input taken equally often (u' = ±1): ξu' is constant and φ_ξ(ξu) 0/0
+    for j, nm in enumerate(names):
+        key = "xi_xiu" + ("" if len(names) == 1 else f":{nm}")
+        if key not in undefined:
+            uj = (allu[:, j] - np.mean(allu[:, j])) / np.std(allu[:, j])
+            if _flat(allxi * uj, ymax * float(np.max(np.abs(uj)))):
+                undefined[key] = f"the residuals are c·u' of input {nm!r} (u' = ±1): ξu' is constant"
     if len(undefined) == len(INPUT_TESTS) * len(names):
         raise ValueError(("the input is constant" if len(names) == 1 else "every input is constant")
                          + ": the input correlation tests are undefined")
@@ -522,6 +530,12 @@ def residual_tests(
                                      bool(np.all(np.abs(phi) <= limit)))
     return ResidualTests(FrozenMap(out), n, level, rule, getattr(model, "name", ""),
                          tuple(_ro(e) for e in xi), FrozenMap(undefined))
+
+
+def _flat(x: np.ndarray, scale: float) -> bool:
+    """x is constant to round-off: of itself, or of the output (residuals carry round-off of y's size, 1e-10 of
+    it as for constant residuals, whatever their own size)."""
+    return bool(np.ptp(x) <= max(1e-9 * float(np.max(np.abs(x))), 1e-10 * scale))
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
