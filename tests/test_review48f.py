@@ -52,3 +52,15 @@ def test_residuals_proportional_to_a_balanced_two_level_input_leave_phi_xi_xiu_o
     assert all(np.all(np.isfinite(t.phi)) for t in r.tests.values())
     assert not r.passed and "u_xi" in r.failed  # ξ is the input: φ_uξ(0) = 1
 
+
+@pytest.mark.parametrize("A, c", [(1.0, 1e-7), (1e-3, 1e-10), (1e3, 1e-4)])
+def test_residuals_of_one_magnitude_are_judged_against_the_round_off_of_the_output(A, c):
+    # ξ = ±c with y spanning A ≫ c: ξ carries round-off of y's size, so ξ² varies by ~eps·A/c of itself, which the
+    # check 'ptp(ξ²) <= 1e-9 max ξ²' missed at A/c = 1e7: φ_(u²)'ξ² was made of round-off and failed the model
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 400)
+    y = A * np.r_[0.0, u[:-1]] + c * rng.choice([-1.0, 1.0], 400)
+    with pytest.warns(UserWarning, match="u2_xi2"):
+        r = gb.residual_tests(gb.Model(gb.Structure(["u(k-1)"]), [A]), gb.Record(u, y))
+    assert list(r.undefined) == ["u2_xi2"]
+    assert r.passed

@@ -478,8 +478,7 @@ def residual_tests(
                                         "two-level input these tests repeat φ_uξ)")
     # residuals of one magnitude (±c, an output quantised to two levels about the model): ξ² is constant and
     # φ_(u²)'ξ² is 0/0 (to round-off), for every input
-    xi2 = allxi**2
-    if np.ptp(xi2) <= 1e-9 * np.max(xi2):
+    if _flat(np.abs(allxi), ymax):
         for nm in names:
             undefined.setdefault("u2_xi2" + ("" if len(names) == 1 else f":{nm}"),
                                  "the residuals have one magnitude (ξ = ±c): ξ² is constant")
