@@ -378,7 +378,7 @@ def _xcorr(a: list[np.ndarray], b: list[np.ndarray], lags: np.ndarray) -> np.nda
     mb = np.mean(np.concatenate(b))
     a = [x - ma for x in a]
     b = [x - mb for x in b]
-    den = np.sqrt(sum(float(x @ x) for x in a) * sum(float(x @ x) for x in b))
+    den = np.sqrt(sum(float(x @ x) for x in a)) * np.sqrt(sum(float(x @ x) for x in b))
     num = np.zeros(lags.size)
     for x, y in zip(a, b):
         n = x.size
@@ -498,6 +498,10 @@ def residual_tests(
     z = stats.norm.ppf(0.5 + level / 2)
     band = float(z / np.sqrt(n))
     out = {}
+    # φ is the same for ξ in any units: in units of its largest magnitude, its squares and products neither
+    # underflow nor overflow (y in units of 1e-100 made Σξ²·Σξ² 0, φ_ξξ NaN)
+    xmax = float(np.max(np.abs(allxi)))
+    xs = [e / xmax for e in xi]
     # with several inputs every input test is made for each input (keys "u_xi:u1", …)
     per_input = [(None, 0)] if len(names) == 1 else [(nm, j) for j, nm in enumerate(names)]
     for key, (label, kind, side) in TESTS.items():
@@ -514,15 +518,15 @@ def residual_tests(
             col = allu[:, j]
             uc = [(u[:, j] - np.mean(col)) / np.std(col) for u in us]
             if key == "xi_xi":
-                phi = _xcorr(xi, xi, lags)
+                phi = _xcorr(xs, xs, lags)
             elif key == "u_xi":
-                phi = _xcorr(uc, xi, lags)
+                phi = _xcorr(uc, xs, lags)
             elif key == "xi_xiu":
-                phi = _xcorr([e * u for e, u in zip(xi, uc)], xi, lags + 1)
+                phi = _xcorr([e * u for e, u in zip(xs, uc)], xs, lags + 1)
             elif key == "u2_xi":
-                phi = _xcorr([u**2 for u in uc], xi, lags)
+                phi = _xcorr([u**2 for u in uc], xs, lags)
             else:
-                phi = _xcorr([u**2 for u in uc], [e**2 for e in xi], lags)
+                phi = _xcorr([u**2 for u in uc], [e**2 for e in xs], lags)
             lab = label if nm is None else label.replace("u", nm)
             outside = lags[np.abs(phi) > band]
             out[k] = CorrelationTest(k, lab, kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
