@@ -82,3 +82,25 @@ def test_the_correlations_do_not_depend_on_the_output_units(scale):
     for k, t in ref.tests.items():
         np.testing.assert_allclose(r[k].phi, t.phi, rtol=1e-6, atol=1e-9, err_msg=k)
         assert r[k].passed == t.passed
+
+
+def test_cells_taken_by_another_run_count_every_grid_cell_of_their_row(tmp_path, monkeypatch):
+    # 9700d10 counts a row two data set names share for both in ran, skipped and the progress bar, but the note on
+    # rows another run wrote meanwhile still counted rows: '2 cells … 2 run now' beside '1 cell(s) run now were
+    # written meanwhile by another run'
+    from graybox import experiments as gx
+    from graybox.experiments._store import ResultStore
+
+    write = ResultStore.write
+
+    def written_by_another(self, row, replace=False):  # the row lands, as if another run had written it first
+        write(self, row, replace)
+        return False
+
+    monkeypatch.setattr(ResultStore, "write", written_by_another)
+    g = gx.Grid([gx.DataSpec("a", bundled="pumping"), gx.DataSpec("b", bundled="pumping", band=0.05)],
+                [gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "1"])], [gx.Variant("LS", "ls")],
+                name="twins")
+    run = gx.run_grid(g, tmp_path / "s.sqlite")
+    assert (run.cells, run.ran) == (2, 2)
+    assert any(n.startswith("2 cell(s) run now were written meanwhile") for n in run.notes), run.notes

@@ -217,7 +217,7 @@ def run_grid(
                             row = failed_row(next(c for c in todo if c.key == row["key"]),
                                              f"the worker runs graybox {row.get('version')}, the driver {version}: "
                                              "install the same graybox on every worker")
-                        taken += not st.write(row, replace=row["key"] in done)
+                        taken += mult[row["key"]] * (not st.write(row, replace=row["key"] in done))
                         ran += mult[row["key"]]
                         bar.update(mult[row["key"]])
                     if not share.waiting:
