@@ -153,7 +153,7 @@ import sys
 import numpy as np
 from graybox.experiments._select_checkpoint import SelectionCheckpoint
 ck = SelectionCheckpoint(sys.argv[1])
-row = {"blocks": np.zeros(3), "weights": np.ones(3), "jsf": np.zeros(2), "jsf_full": np.zeros(2),
+row = {"blocks": np.zeros((2, 3)), "weights": np.ones(3), "jsf": np.zeros(2), "jsf_full": np.zeros(2),
        "thetas": np.zeros((2, 5000)), "lambdas": np.ones(2), "failed": ["", ""], "warnings": []}
 for i in range(400):
     ck.put(f"{sys.argv[2]}{i:031x}", row)
@@ -415,7 +415,7 @@ def test_a_checkpoint_behind_a_symbolic_link_is_written_through_it(tmp_path):
     link = tmp_path / "latest.npz"
     link.symlink_to(tmp_path / "runs" / "a.npz")
     ck = SelectionCheckpoint(link)
-    row = {"blocks": np.zeros(3), "weights": np.ones(3), "jsf": np.zeros(2), "jsf_full": np.zeros(2),
+    row = {"blocks": np.zeros((2, 3)), "weights": np.ones(3), "jsf": np.zeros(2), "jsf_full": np.zeros(2),
            "thetas": np.zeros((2, 3)), "lambdas": np.ones(2), "failed": ["", ""], "warnings": []}
     ck.put("0" * 32, row)
     assert link.is_symlink()

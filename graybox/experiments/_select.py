@@ -1080,6 +1080,13 @@ def _rescore_test(job: _Job, row: dict, key: str | None) -> bool:
     return True
 
 
+def _row_shape(job: _Job) -> tuple[int, int, int]:
+    """(members, blocks, parameters) of the scores :func:`_score_job` gives ``job``."""
+    lam = _lambdas(job.estimator, job.lambdas)
+    return (1 if lam is None else lam.size, sum(len(edges) - 1 for _, _, edges in job.plan.splits),
+            len(gb.parse_structure(job.terms)))
+
+
 def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progress,
               checkpoint: SelectionCheckpoint | None = None) -> list[dict]:
     """Every job's scores, in order: those the checkpoint holds read from it, the others run (and kept in it as
@@ -1093,7 +1100,7 @@ def _run_jobs(jobs: list[_Job], *, executor, workers, client, scheduler, progres
         digests = {i: plan_digest(p) for i, p in plans.items()}
         tests = {i: test_digest(p) for i, p in plans.items() if p.test is not None}
         keys = [row_key(j, digests[id(j.plan)]) for j in jobs]
-        out = [checkpoint.get(k) for k in keys]
+        out = [checkpoint.get(k, _row_shape(j)) for k, j in zip(keys, jobs)]
         rescored = False
         for i, r in enumerate(out):  # a kept row's fits serve any test record: its test scores are remade if another
             if r is not None and _rescore_test(jobs[i], r, tests.get(id(jobs[i].plan))):

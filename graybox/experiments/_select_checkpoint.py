@@ -149,16 +149,27 @@ class SelectionCheckpoint:
                 raise CheckpointError(f"checkpoint {self.path} is corrupt (a row without all its scores); delete it or "
                                       "choose another checkpoint path")
             else:
+                why = _row_problem(row)
+                if why:  # read as it was, a broken row failed after the search with a bare IndexError, or scored
+                    raise CheckpointError(f"checkpoint {self.path} is corrupt (a row's {why}); delete it or choose "
+                                          "another checkpoint path")
                 for field in _ALL_TEXTS:
                     if field in row:
                         row[field] = [str(s) for s in row[field]]
         return {k: r for k, r in rows.items() if k not in self.foreign}
 
-    def get(self, key: str) -> dict[str, Any] | None:
-        """The scores kept under ``key`` (a copy), or None."""
+    def get(self, key: str, shape: tuple[int, int, int] | None = None) -> dict[str, Any] | None:
+        """The scores kept under ``key`` (a copy), or None; ``shape``: the (members, blocks, parameters) the row's
+        job makes (``CheckpointError`` when the row kept there has others: the file was edited)."""
         row = self.rows.get(key)
-        return None if row is None else {k: (list(v) if k in _ALL_TEXTS else v.copy())
-                                         for k, v in row.items()}
+        if row is None:
+            return None
+        if shape is not None and (row["blocks"].shape[0], row["blocks"].shape[1], row["thetas"].shape[1]) != shape:
+            raise CheckpointError(f"checkpoint {self.path} is corrupt (a row of {row['blocks'].shape[0]} member(s), "
+                                  f"{row['blocks'].shape[1]} block(s) and {row['thetas'].shape[1]} parameter(s) where "
+                                  f"its job makes {shape[0]}, {shape[1]} and {shape[2]}); delete it or choose another "
+                                  "checkpoint path")
+        return {k: (list(v) if k in _ALL_TEXTS else v.copy()) for k, v in row.items()}
 
     def put(self, key: str, row: Mapping[str, Any], write: bool = True) -> None:
         """Keep a finished row's scores and rewrite the file (atomically: a kill leaves the old one or the new);
@@ -181,6 +192,40 @@ class SelectionCheckpoint:
             for field, v in r.items():
                 out[f"{k}/{field}"] = np.array(v, dtype=str) if field in _ALL_TEXTS else v
         save_npz(self.path, **out)
+
+
+def _row_problem(row: Mapping[str, np.ndarray]) -> str:
+    """What is wrong with a row read from a file (empty when nothing): its arrays as a fit writes them, P members'
+    scores on B blocks (``blocks`` (P, B) of mean squares, ``weights`` (B,) positive, ``jsf``, ``jsf_full``,
+    ``lambdas`` and ``test`` (P,), ``thetas`` (P, n)), its texts one-dimensional."""
+    arrays = {f: row[f] for f in _ARRAYS + _OPTIONAL if f in row}
+    for f, v in arrays.items():
+        if v.dtype.kind not in "fi":
+            return f"{f} is not numbers ({v.dtype})"
+    blocks, thetas = arrays["blocks"], arrays["thetas"]
+    if blocks.ndim != 2 or 0 in blocks.shape:
+        return f"blocks has shape {blocks.shape}, not (members, blocks)"
+    P, B = blocks.shape
+    want = {"weights": (B,), "jsf": (P,), "jsf_full": (P,), "lambdas": (P,), "test": (P,)}
+    for f, shape in want.items():
+        if f in arrays and arrays[f].shape != shape:
+            return f"{f} has shape {arrays[f].shape} beside blocks of shape {blocks.shape}"
+    if thetas.ndim != 2 or thetas.shape[0] != P or thetas.shape[1] == 0:
+        return f"thetas has shape {thetas.shape} beside blocks of shape {blocks.shape}"
+    for f in _ALL_TEXTS:
+        if f in row and np.ndim(row[f]) != 1:
+            return f"{f} is not a list of texts"
+    if "member_failed" in row and len(row["member_failed"]) != P:
+        return f"member_failed has {len(row['member_failed'])} entries for {P} members"
+    with np.errstate(invalid="ignore"):
+        # mean squares: >= 0 or inf (a diverged run; NaN only for J_SF without static points)
+        for f in ("blocks", "test", "jsf", "jsf_full"):
+            v = arrays.get(f)
+            if v is not None and (np.any(v < 0) or (f in ("blocks", "test") and np.isnan(v).any())):
+                return f"{f} holds {'negative' if np.any(v < 0) else 'NaN'} mean squares"
+    if not (np.all(np.isfinite(arrays["weights"])) and np.all(arrays["weights"] > 0)):
+        return "weights are not positive numbers"
+    return ""
 
 
 def checkpoint_of(checkpoint: str | os.PathLike | None) -> SelectionCheckpoint | None:

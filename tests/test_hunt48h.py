@@ -1,0 +1,55 @@
+"""hunt48h: select_graybox's honest selection protocol (checkpoints, the rule, the test record)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+CAND = gb.Candidates(2, 2, ne=0, degree=2)
+TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
+THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+
+
+def plant(seed, n=400, noise=0.02):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 3.0, n // 25 + 1), 25)[:n]
+    y = gb.Model(TRUE, THETA).simulate(u, np.zeros(2)) + noise * rng.standard_normal(n)
+    return gb.Record(u, y, name=f"r{seed}")
+
+
+def _select(**kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.SelectionWarning)
+        return gb.select_graybox(CAND, plant(1), validation=plant(2), estimator="ls", sizes=[3], progress=False, **kw)
+
+
+@pytest.mark.parametrize("edit", ["blocks columns", "blocks 1-d", "weights text", "thetas columns", "blocks nan",
+                                  "lambdas empty", "jsf empty", "blocks negative"])
+def test_a_checkpoint_row_of_the_wrong_shape_or_values_is_refused_as_corrupt(tmp_path, edit):
+    """A row whose arrays a hand edit or a bad copy broke (shapes that do not agree, text for numbers, NaN or negative
+    mean squares) was read as it was: a bare IndexError or a matmul ValueError after the search, or a table built on it
+    (NaN scores: a row without a model; θ of fewer terms than the structure's)."""
+    path = tmp_path / "sel.npz"
+    _select(checkpoint=path)
+    with np.load(path, allow_pickle=False) as z:
+        arrays = dict(z)
+    keys = sorted({k.split("/")[0] for k in arrays if "/" in k})
+    for k in keys:
+        field, new = {
+            "blocks columns": ("blocks", arrays[f"{k}/blocks"][:, :2]),
+            "blocks 1-d": ("blocks", arrays[f"{k}/blocks"].ravel()),
+            "weights text": ("weights", np.array(["a"] * arrays[f"{k}/weights"].size)),
+            "thetas columns": ("thetas", arrays[f"{k}/thetas"][:, :1]),
+            "blocks nan": ("blocks", arrays[f"{k}/blocks"] * np.nan),
+            "lambdas empty": ("lambdas", np.array([])),
+            "jsf empty": ("jsf", np.array([])),
+            "blocks negative": ("blocks", -arrays[f"{k}/blocks"]),
+        }[edit]
+        arrays[f"{k}/{field}"] = new
+    np.savez(path, **arrays)
+    with pytest.raises(ValueError, match="corrupt"):
+        _select(checkpoint=path)
