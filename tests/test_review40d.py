@@ -32,7 +32,7 @@ def test_a_cell_taken_over_after_its_run_let_it_go_unwritten_stays_claimed_while
         todo, finished = _run._wait_for_others(b, waiting, seen)
         assert [t.key for t in todo] == [x] and finished == [] and list(waiting) == [y]
         # b's executor takes x as it starts it (not all the waited-for cells at once, review41e)
-        share = _run._Share(b, seen, type("Bar", (), {"update": lambda self, n: None})())
+        share = _run._Share(b, seen, type("Bar", (), {"update": lambda self, n: None})(), {x: 1, y: 1})
         assert [t.key for t in share.take(todo)] == [x] and not share.waiting
         assert set(c.claim([x])) == {x}  # b runs x now: no third run may start it
     finally:
