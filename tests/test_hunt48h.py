@@ -53,3 +53,16 @@ def test_a_checkpoint_row_of_the_wrong_shape_or_values_is_refused_as_corrupt(tmp
     np.savez(path, **arrays)
     with pytest.raises(ValueError, match="corrupt"):
         _select(checkpoint=path)
+
+
+def test_a_fold_whose_search_stops_short_of_the_rows_sizes_is_said():
+    # was: a fold fitted on one record of lags + 2 samples (2 regression rows) searched, reached the constant
+    # alone, and every row was scored there with it (J_S the same to 1e-5 for 4 to 15 terms), without a word
+    cand = gb.Candidates(2, 2, ne=0, degree=2)
+    with pytest.warns(gb.SelectionWarning, match=r"fold's fitting records are too short.*\['v4'\] \(2 regression "
+                                                 r"rows\): its search reached at most 1 terms"):
+        gb.select_graybox(cand, [plant(1), plant(2).slice(0, 4, name="v4")], estimator="ls", progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", gb.SelectionWarning)  # folds of whole records reach every size: no word
+        sel = gb.select_graybox(cand, [plant(1), plant(2), plant(3)], estimator="ls", progress=False)
+    assert np.isfinite(sel.table["JS_valid"].to_numpy(float)).all()

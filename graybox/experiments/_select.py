@@ -57,7 +57,7 @@ from ..core._progress import progress_bar, show_progress
 from ..core._records import (as_records, carried_from, check_alike, check_compatible, choosing_records, check_overlap,
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
-from ..core._reprs import beside, bound_text, squared_text, squared_unit
+from ..core._reprs import beside, bound_text, listed, squared_text, squared_unit
 from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
@@ -821,6 +821,7 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
     sizes = sorted({k for r in rows for _, k in (r.get("_members") or [(None, r["size"])])})
     forced = list(include)
     per_fold = []
+    short: list[str] = []  # folds whose search stopped short of the rows' sizes: said, not scored silently
     for fit, _, _ in plan.splits:
         got: dict[tuple[str, int], str] = {}
         if fit is not None:
@@ -851,7 +852,17 @@ def _fold_structures(rows: list[dict], candidates: gb.Structure, plan: _Plan, so
                         got[key] = str(_completed(terms, candidates, fit, ident, include, form, centre)[0])
                     except (ValueError, FewerTermsError, np.linalg.LinAlgError) as exc:
                         got[key] = f"({exc})"
+            if n_rows <= max(sizes):  # too few rows to fit the largest rows' structures: the search stops short
+                top_size = max((k for _, k in got), default=0)
+                short.append(f"fitted on {listed([r.name for r in fit])} ({n_rows} regression rows): "
+                             + (f"its search reached at most {top_size} terms" if top_size else "its search reached "
+                                "no structure"))
         per_fold.append(got)
+    if short:
+        warn(f"a fold's fitting records are too short for the rows' sizes (up to {max(sizes)} terms): "
+             + "; ".join(short) + ". Its rows are scored there with the nearest structure its search reached (or fail "
+             "on it): their J_S there says little of their own size. Give each fold more fitting data (fewer folds, "
+             "longer records) or choose on a validation record", SelectionWarning)
     out = []
     for r in rows:
         # each source of the row at its own size (a row two sources share may be two sizes: frols-3 and semp-4 that
