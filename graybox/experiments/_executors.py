@@ -240,23 +240,25 @@ def _sigint_ignored():
         signal.signal(signal.SIGINT, old)
 
 
-_DAEMON_LOCK = threading.Lock()
+#: Held while a pool worker is started: the environment (its thread variables) and the daemon flag it is started
+#: with are the process's, and the threads of a Dask worker start theirs at once (each task's, under a time limit).
+_START_LOCK = threading.Lock()
 
 
 @contextmanager
 def _children_allowed():
-    """Let a daemonic process (a Dask worker under its nanny) start processes meanwhile: multiprocessing refuses
-    them there, for they would be left behind when it is ended; the pool's workers exit once it is gone."""
+    """Let a daemonic process (a Dask worker under its nanny) start processes meanwhile (hold ``_START_LOCK``):
+    multiprocessing refuses them there, for they would be left behind when it is ended; the pool's workers exit
+    once it is gone."""
     me = mp.current_process()
     if not me.daemon:
         yield
         return
-    with _DAEMON_LOCK:
-        me.daemon = False
-        try:
-            yield
-        finally:
-            me.daemon = True
+    me.daemon = False
+    try:
+        yield
+    finally:
+        me.daemon = True
 
 
 @dataclass
@@ -321,7 +323,9 @@ class ProcessPool:
         parent, child = self._ctx.Pipe()
         proc = self._ctx.Process(target=_worker_main, args=(child, self.fn), daemon=True,
                                  name="graybox-grid-worker")
-        with _environ(_thread_env(self.threads)), _sigint_ignored(), _children_allowed():
+        # one start at a time: two threads each setting and restoring the variables gave one child the other's
+        # restored value, and left the first's in the process's environment
+        with _START_LOCK, _environ(_thread_env(self.threads)), _sigint_ignored(), _children_allowed():
             proc.start()
         child.close()
         return _Slot(proc, parent)
