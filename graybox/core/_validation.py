@@ -85,15 +85,15 @@ def check_int(value: object, name: str, *, low: int | None = None, high: int | N
     """
     if not _is_number(value):
         raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
-    f = float(value)  # type: ignore[arg-type]
-    if not np.isfinite(f):
-        raise ValueError(f"{name} must be a finite integer, got {value!r}")
     if isinstance(value, (numbers.Integral, np.integer)) or (isinstance(value, np.ndarray) and value.dtype.kind in "iu"):
-        v = int(value)  # type: ignore[arg-type]
-    elif f == int(f):
-        v = int(f)
+        v = int(value)  # type: ignore[arg-type]  (exact: an int beyond any float, 10**400, is no OverflowError)
     else:
-        raise TypeError(f"{name} must be an integer, got {value!r}")
+        f = float(value)  # type: ignore[arg-type]
+        if not np.isfinite(f):
+            raise ValueError(f"{name} must be a finite integer, got {value!r}")
+        if f != int(f):
+            raise TypeError(f"{name} must be an integer, got {value!r}")
+        v = int(f)
     if low is not None and v < low:
         raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
     if high is not None and v > high:
@@ -130,9 +130,14 @@ def check_count(value: object, name: str, *, low: int | None = None, high: int |
     than this machine has, physical and swap, which could never be allocated (numpy's ``MemoryError`` named
     nothing, after the other checks and any work before the allocation)."""
     v = check_int(value, name, low=low, high=high)
-    need, have = float(v) * float(item_bytes), _memory_bytes()
+    have = _memory_bytes()
+    try:
+        need = float(v) * float(item_bytes)
+    except OverflowError:  # a count beyond any float (10**400)
+        need = float("inf")
     if need > have:
-        raise ValueError(f"{name}={v} is too large: it would need at least {_bytes_text(need)} of memory, more than "
+        size = _bytes_text(need) if np.isfinite(need) else "more than 1e308 bytes"
+        raise ValueError(f"{name}={v} is too large: it would need at least {size} of memory, more than "
                          f"this machine has ({_bytes_text(have)})")
     return v
 
