@@ -23,3 +23,29 @@ def test_a_count_beyond_any_float_is_refused_by_name(make, name):
 def test_check_count_still_takes_what_fits():
     assert check_count(10**6, "population") == 10**6
     assert check_count(10**8, "n_samples", item_bytes=8) == 10**8
+
+
+# 2. select_graybox reads SEMP's path, not the structure its criterion chose: semp's warning that this choice came
+# after the pruning budget ran out escaped to the caller (an error under filterwarnings=error) about a choice
+# select_graybox never makes
+
+def test_select_graybox_does_not_pass_on_semps_warning_about_its_own_choice(monkeypatch):
+    import warnings
+
+    import graybox.selection._simulation_error_pruning as sp
+    from graybox.experiments import select_graybox
+
+    monkeypatch.setattr(sp, "_prune_budget", lambda limit: 1)  # the budget spent at the first addition
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(0.5, 2.0, 80), 5)
+    m = gb.Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], [0.2, 0.6, 0.3, 0.05])
+    y = m.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(u.size)
+    n = u.size // 2
+    ds = gb.Dataset(gb.Record(u[:n], y[:n], name="ident"), gb.Record(u[n:], y[n:], name="valid"))
+    cands = gb.Structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "u(k-1)y(k-1)", "y(k-1)^2"])
+    with pytest.warns(RuntimeWarning, match="pruning stopped"):  # semp itself still says it
+        gb.semp(cands, ds.ident, criterion="bic", max_terms=8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sel = select_graybox(cands, ds, estimator="ls", sources=("semp",))
+    assert len(sel.table) >= 1

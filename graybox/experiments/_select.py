@@ -746,6 +746,9 @@ def _searched(candidates: gb.Structure, ident, sizes: list[int], sources, forced
         # still fall there is no news to the caller, who chooses among the sizes on other data
         warnings.filterwarnings("ignore", r".* is smallest at the largest size (looked at|the data allow)",
                                 RuntimeWarning)
+        # nor is the structure semp's criterion chose: its word that this choice came after the pruning budget ran
+        # out is of a choice made here by other rules (its path's rows, size by size)
+        warnings.filterwarnings("ignore", r"semp: pruning stopped after \d+ additions", RuntimeWarning)
         if "semp" in sources:
             # grown by criterion at least as far as the default sizes' path, whatever sizes are asked: a path cut
             # at the largest size asked has no look-ahead there (SEMP's pruning improves a size only once larger
