@@ -49,3 +49,36 @@ def test_select_graybox_does_not_pass_on_semps_warning_about_its_own_choice(monk
         warnings.simplefilter("error")
         sel = select_graybox(cands, ds, estimator="ls", sources=("semp",))
     assert len(sel.table) >= 1
+
+
+# 3. frozen_value: a DataFrame or Series a FrozenMap holds is handed out fresh at each read, but one inside a list
+# or tuple of the map (Dataset.extra = {"tables": [df]}) was handed out as the stored copy: a reader's change stuck
+
+Point = __import__("collections").namedtuple("Point", "table level")
+
+
+def test_a_table_inside_a_list_or_tuple_of_dataset_extra_is_handed_out_fresh():
+    import pandas as pd
+
+    r = gb.Record(np.arange(20.0), 2 * np.arange(20.0), name="a")
+    df, s = pd.DataFrame({"x": [1.0, 2.0]}), pd.Series([1.0, 2.0])
+    ds = gb.Dataset(r, r, extra={"list": [df, s], "tuple": (df, 1), "named": Point(df, 2.0),
+                                 "deep": [[df]], "plain": [1.0, 2.0], "arr": np.arange(3.0)})
+    got = [ds.extra["list"][0], ds.extra["tuple"][0], ds.extra["named"].table, ds.extra["deep"][0][0]]
+    for t in got:  # a reader changes the table it was given (held by a name: no chained assignment)
+        t.loc[0, "x"] = 99.0
+    series = ds.extra["list"][1]
+    series.iloc[0] = 99.0
+    for t in (ds.extra["list"][0], ds.extra["tuple"][0], ds.extra["named"].table, ds.extra["deep"][0][0]):
+        assert t["x"].tolist() == [1.0, 2.0]
+    assert ds.extra["list"][1].tolist() == [1.0, 2.0]
+    assert type(ds.extra["named"]) is Point and isinstance(ds.extra["list"], list)
+    # what holds no table is the one frozen value, as before
+    assert ds.extra["plain"] is ds.extra["plain"] and ds.extra["arr"] is ds.extra["arr"]
+    assert not ds.extra["arr"].flags.writeable
+    import pickle
+
+    back = pickle.loads(pickle.dumps(ds))
+    t = back.extra["list"][0]
+    t.loc[0, "x"] = 99.0
+    assert back.extra["list"][0]["x"].tolist() == [1.0, 2.0]

@@ -514,6 +514,35 @@ def _is_pandas(x: object) -> bool:
     return type(x).__module__.startswith("pandas") and type(x).__name__ in ("DataFrame", "Series")
 
 
+def _holds_pandas(x: object, _seen: set | None = None) -> bool:
+    """Whether ``x`` is a pandas DataFrame or Series or holds one in its lists and tuples (a mapping inside is a
+    FrozenMap of its own, which hands out its own tables fresh); each list or tuple looked at once (one that holds
+    itself, given to a FrozenMap directly, ends)."""
+    if _is_pandas(x):
+        return True
+    if not isinstance(x, (list, tuple)):
+        return False
+    seen = set() if _seen is None else _seen
+    if id(x) in seen:
+        return False
+    seen.add(id(x))
+    return any(_holds_pandas(v, seen) for v in x)
+
+
+def _fresh(x: object) -> object:
+    """``x`` with each pandas table in it (in its lists and tuples) a fresh copy; all else as it is (frozen)."""
+    if _is_pandas(x):
+        return x.copy(deep=True)  # type: ignore[attr-defined]
+    if isinstance(x, FrozenList):
+        return FrozenList(_fresh(v) for v in x)
+    if isinstance(x, list):
+        return [_fresh(v) for v in x]
+    if isinstance(x, tuple):
+        items = [_fresh(v) for v in x]
+        return type(x)._make(items) if hasattr(type(x), "_make") else type(x)(items)
+    return x
+
+
 class FrozenMap(Mapping):
     """A read-only mapping that pickles: how every immutable value in graybox stores a mapping field.
 
@@ -521,18 +550,22 @@ class FrozenMap(Mapping):
     GridRun or ResidualTests holding one could not travel to a process pool or be ``copy.deepcopy``-ed.
     """
 
-    __slots__ = ("_items",)
+    __slots__ = ("_items", "_tables")
 
     def __init__(self, items: Any = ()) -> None:
-        object.__setattr__(self, "_items", dict(items))
+        d = dict(items)
+        object.__setattr__(self, "_items", d)
+        # the keys whose values are or hold (in lists and tuples) a pandas table, handed out fresh at each read
+        object.__setattr__(self, "_tables", frozenset(k for k, v in d.items() if _holds_pandas(v)))
 
     def __setattr__(self, name: str, value: Any) -> None:
         raise AttributeError(f"a {type(self).__name__} cannot be changed")
 
     def __getitem__(self, key: Any) -> Any:
         x = self._items[key]
-        # a pandas table cannot be made read-only (a new column, .loc …): each read is a fresh copy, as FrozenFrame's
-        return x.copy(deep=True) if _is_pandas(x) else x
+        # a pandas table cannot be made read-only (a new column, .loc …): each read is a fresh copy, as FrozenFrame's,
+        # a table inside a list or tuple too (the rest of that value, frozen already, shared)
+        return _fresh(x) if key in self._tables else x
 
     def __iter__(self):
         return iter(self._items)
