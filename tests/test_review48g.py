@@ -82,3 +82,18 @@ def test_a_table_inside_a_list_or_tuple_of_dataset_extra_is_handed_out_fresh():
     t = back.extra["list"][0]
     t.loc[0, "x"] = 99.0
     assert back.extra["list"][0]["x"].tolist() == [1.0, 2.0]
+
+
+# 4. _memory_bytes: os.sysconf answers -1 for a value it does not know; the physical memory then counted as -4096
+# bytes and the swap alone (1 MB here) became the machine's memory, refusing a population of 10**6
+
+def test_an_unknown_physical_memory_is_not_counted_as_negative(monkeypatch):
+    import io
+
+    import graybox.core._validation as v
+
+    real = v.os.sysconf
+    monkeypatch.setattr(v.os, "sysconf", lambda name: -1 if name == "SC_PHYS_PAGES" else real(name))
+    monkeypatch.setattr(v, "open", lambda *a, **k: io.StringIO("MemTotal: 1 kB\nSwapTotal: 1024 kB\n"), raising=False)
+    assert v._memory_bytes() >= 2**40  # not known: no limit any real count meets
+    assert check_count(10**6, "GAOptions: population") == 10**6

@@ -105,7 +105,10 @@ def _memory_bytes() -> int:
     """This machine's memory, physical and swap (bytes): more than any one array graybox makes can ever take."""
     total = 0
     try:
-        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        page, pages = os.sysconf("SC_PAGE_SIZE"), os.sysconf("SC_PHYS_PAGES")
+        if page <= 0 or pages <= 0:  # sysconf's -1: not known here (the swap alone is no machine's memory)
+            return 2**50
+        total = page * pages
         with open("/proc/meminfo") as f:  # Linux: the swap, which an allocation may also use
             for line in f:
                 if line.startswith("SwapTotal:"):
