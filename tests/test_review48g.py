@@ -97,3 +97,29 @@ def test_an_unknown_physical_memory_is_not_counted_as_negative(monkeypatch):
     monkeypatch.setattr(v, "open", lambda *a, **k: io.StringIO("MemTotal: 1 kB\nSwapTotal: 1024 kB\n"), raising=False)
     assert v._memory_bytes() >= 2**40  # not known: no limit any real count meets
     assert check_count(10**6, "GAOptions: population") == 10**6
+
+
+# 5. semp's budget warning named its budget "6·max_terms + 10" and advised "a smaller max_terms" for a search by
+# n_terms too, which takes no max_terms (passing one with n_terms is an error): its limit there is 2·n_terms + 4
+
+def test_semps_budget_warning_speaks_of_the_limit_the_search_had(monkeypatch):
+    import warnings
+
+    import graybox.selection._simulation_error_pruning as sp
+
+    monkeypatch.setattr(sp, "_prune_budget", lambda limit: 1)
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(0.5, 2.0, 40), 5)
+    m = gb.Model(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], [0.2, 0.6, 0.3, 0.05])
+    rec = gb.Record(u, m.simulate(u, np.zeros(1)) + 0.01 * rng.standard_normal(u.size), name="ident")
+    cands = ["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)", "u(k-1)^2", "u(k-1)y(k-1)", "y(k-1)^2"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        gb.semp(cands, rec, n_terms=3)
+    said = [str(w.message) for w in caught if "pruning stopped" in str(w.message)]
+    assert said and "max_terms" not in said[0] and "size limit 8" in said[0]  # min(8 candidates, 2·3 + 4)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        gb.semp(cands, rec, criterion="bic", max_terms=5)
+    said = [str(w.message) for w in caught if "pruning stopped" in str(w.message)]
+    assert said and "size limit 5 " in said[0] and "a smaller max_terms" in said[0]

@@ -329,8 +329,9 @@ def semp(
         ``max_terms`` terms, or the criterion is smallest at ``max_terms`` terms while candidates
         were left (the curve may still be falling), or at the largest size the record's rows allow
         (samples after the largest lag − 1: the structure interpolates the record). When pruning
-        stopped for its budget (6·max_terms + 10 additions; the later steps only add terms) before the
-        step that gave the structure chosen.
+        stopped for its budget (6 × the size limit + 10 additions: the limit is ``max_terms`` or its
+        default, and 2·n_terms + 4 for ``n_terms``; the later steps only add terms) before the step that
+        gave the structure chosen.
     """
     candidates = structure_of(candidates, "candidates")  # a list of terms, a result … (as every structure argument)
     opt = _options(candidates, n_terms, tol, criterion, max_terms, include, prune, prune_tol, rank_tol, threads)
@@ -610,10 +611,14 @@ def _result(run: _Search, stop: str, capped: bool) -> SEMPResult:
     if run.unpruned_from is not None and int(best["step"]) >= run.unpruned_from:
         # said as frols says its caps: the structure chosen was grown by steps that only added terms, not the
         # pruned search the caller asked for (one chosen earlier on the path was pruned as asked: nothing said)
-        warn(f"semp: pruning stopped after {run.prune_budget} additions (its budget, 6·max_terms + 10), at step "
-             f"{run.unpruned_from} of the path; the structure chosen (step {int(best['step'])}) was grown after it "
-             "by steps that only added terms, so it may hold terms pruning would have removed (a smaller max_terms "
-             "keeps the search within the budget)", RuntimeWarning)
+        # the budget follows the search's size limit: max_terms (or its default) for tol and criterion, 2·n_terms + 4
+        # for n_terms, which takes no max_terms (each capped by the candidates and the rows)
+        advice = ("" if run.opt.mode == "n_terms" else
+                  " (a smaller max_terms keeps the search within the budget)")
+        warn(f"semp: pruning stopped after {run.prune_budget} additions (its budget, 6 × the search's size limit "
+             f"{run.opt.limit} + 10), at step {run.unpruned_from} of the path; the structure chosen (step "
+             f"{int(best['step'])}) was grown after it by steps that only added terms, so it may hold terms pruning "
+             f"would have removed{advice}", RuntimeWarning)
     current = list(best["_set"])
     fwd = pd.DataFrame(np.array(run.fwd) if run.fwd else np.zeros((0, len(run.names))), columns=run.names)
     fwd.index.name = "forward step"
