@@ -96,7 +96,7 @@ def test_the_ridges_target_is_the_centred_least_squares_itself_at_a_far_offset()
 HELD = closure(gb.Structure(["y(k-1)", "u1(k-1)", "u2(k-1)", "u1(k-1)u2(k-1)"]))
 
 
-def _held_second_input(oy: float, sy: float) -> gb.Dataset:
+def _held_second_input(oy: float, sy: float, o2: float = 0.0) -> gb.Dataset:
     """u2 held at 1 over the record (its terms constants there: only the static surface tells them apart)."""
     rng = np.random.default_rng(3)
     n = 300
@@ -108,20 +108,21 @@ def _held_second_input(oy: float, sy: float) -> gb.Dataset:
     g1, g2 = np.meshgrid(np.linspace(-0.9, 0.9, 4), np.linspace(0.5, 1.5, 3))
     ub = np.column_stack([g1.ravel(), g2.ravel()])
     yb = (0.3 * ub[:, 0] + 0.2 * ub[:, 1] + 0.1 * ub[:, 0] * ub[:, 1]) / 0.4
-    r = gb.Record(np.column_stack([u1, u2]), sy * y + oy, input_names=["u1", "u2"])
-    return gb.Dataset(r, r, gb.StaticPoints(ub, sy * yb + oy, uncertainty=0.05 * sy, input_names=["u1", "u2"]))
+    r = gb.Record(np.column_stack([u1, u2 + o2]), sy * y + oy, input_names=["u1", "u2"])
+    return gb.Dataset(r, r, gb.StaticPoints(ub + [0.0, o2], sy * yb + oy, uncertainty=0.05 * sy,
+                                            input_names=["u1", "u2"]))
 
 
-@pytest.mark.parametrize("oy", [50.0, 1e4])
-def test_ga_with_an_input_held_over_the_records_is_the_same_at_any_output_offset(oy):
+@pytest.mark.parametrize("oy, o2", [(50.0, 0.0), (1e4, 0.0), (0.0, 3.0), (1e4, -40.0)])
+def test_ga_with_an_input_held_over_the_records_is_the_same_at_any_offset(oy, o2):
     """An input held over the records kept the whole SE problem in raw coordinates: the GA's members at λ1 0.05
-    and 0.95 moved by 0.24 % and 0.5 % of y's spread at y + 50. Now y and the moving input are centred (the held
-    input left at its level)."""
+    and 0.95 moved by 0.24 % and 0.5 % of y's spread at y + 50; left at its own level, by 2.4 % with the held input
+    + 3 (review48e). Now y and the moving input are centred, the held one by its static points."""
     def front(d):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # static-range notes, the same at every offset
             return gb.se_pareto(HELD, d, lambdas=[0.05, 0.5, 0.95], method="ga", seed=2,
                                 options=gb.GAOptions(population=30, generations=15)).models()
-    d0, d1 = _held_second_input(0.0, 1.0), _held_second_input(oy, 1.0)
+    d0, d1 = _held_second_input(0.0, 1.0), _held_second_input(oy, 1.0, o2)
     for a, b in zip(front(d0), front(d1)):
         assert np.max(np.abs(_back(a, d0, 1.0, 0.0) - _back(b, d1, 1.0, oy))) <= 1e-7 * d0.valid.y.std()

@@ -195,10 +195,11 @@ class SEProblem:
         means something else when u moves by 1e4, and the fits differed by up to 35 % in J_S. Records that
         identify θ only with the static points (a two-level input's u(k−1)², which they cannot tell from
         u(k−1) and 1) are centred too: the GA's random least-squares seeds are then the minimum-norm solutions
-        in z, the same model at every offset. An input held over the records is left at its level (offset 0): its
-        centred terms would be round-off of zero, whose RMS would scale z by nothing the units set; its terms are
-        then constants only the static points tell apart, while y and the inputs that move are centred (the GA's
-        fronts at y + 50 moved by 0.5 % of y's spread when a held input kept the whole problem raw).
+        in z, the same model at every offset. An input held over the records is not centred on its mean there (its
+        centred terms would be round-off of zero, whose RMS would scale z by nothing the units set) but by
+        :meth:`_held_offset`, from its static points, the only ones to tell its terms apart (the GA's fronts moved
+        by 0.5 % of y's spread at y + 50, and by 2.4 % with the held input + 3, while a held input kept the
+        problem raw or at its own level).
         """
         self.z_map = self.z_inv = self.z_shift = self.offsets = None
         self.z_psi, self.z_target = self.psi / self.scale, self.target
@@ -210,7 +211,7 @@ class SEProblem:
             self.run_U = self.U
             return
         held = self._held_inputs()
-        off = {k: (0.0 if k in held else v) for k, v in signal_offsets(self.records).items()}
+        off = {k: (self._held_offset(k) if k in held else v) for k, v in signal_offsets(self.records).items()}
         A, t = shift_map(self.structure, off)
         Ainv = shift_map(self.structure, {k: -v for k, v in off.items()})[0]
         centred = centred_data(self.records, off, keep=held)
@@ -243,6 +244,21 @@ class SEProblem:
         """Each record's input products for the structure's kernels (fixed across a sweep)."""
         c = self.code
         return [input_products(c.fptr, c.fsig, c.flag, c.fpow, record_inputs(r, c.input_names), self.L) for r in records]
+
+    def _held_offset(self, name: str) -> float:
+        """Where an input held over the records is centred: its held level less the RMS distance of its static
+        points' levels from it, so that on the records it is that distance (a constant the static points, the only
+        ones to tell its terms apart, scale with the input's unit) whatever the input's zero or unit. Without
+        static points, or with every point at the held level to round-off (its terms then told apart by nothing):
+        0, the input left at its level."""
+        if self.static is None:
+            return 0.0
+        levels = self.static.ubar if self.static.ubar.ndim == 1 else \
+            self.static.ubar[:, list(self.static.input_names).index(name)]
+        held = float(record_inputs(self.records[0], [name]).reshape(-1)[0])
+        if is_held(np.append(levels, held)):
+            return 0.0
+        return held - float(np.sqrt(np.mean((levels - held) ** 2)))
 
     def _held_inputs(self) -> frozenset:
         """The inputs of the structure that hold one value over every record (to round-off: the centring's one
