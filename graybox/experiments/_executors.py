@@ -740,9 +740,10 @@ class DaskCluster:
         waited for. ``None`` waits for ever.
     time_limit : float, optional
         Seconds a cell may run: each task then runs its cells in a child process of its worker (one per worker
-        thread, kept for the run's next tasks and closed at its end), one after another, and a cell past the
-        limit has that process stopped (and replaced) and is a failed row saying so (not retried), as
-        :class:`ProcessPool` does (a second or two more per worker thread: the child's start-up).
+        thread, kept for the run's next tasks and closed at its end or after ``KEPT_IDLE`` = 30 s idle), one
+        after another, and a cell past the limit has that process stopped (and replaced) and is a failed row
+        saying so (not retried), as :class:`ProcessPool` does (a second or two more per worker thread: the
+        child's start-up).
         None: cells run in the worker itself, without a limit.
     """
 
@@ -924,17 +925,58 @@ class DaskCluster:
                     pass
 
 
+#: Seconds a Dask worker's kept child (:class:`_KeptPool`) may wait idle for its run's next task before it is
+#: closed: a driver that died without ending its run (SIGKILL, a lost connection) never unregisters the run's
+#: plugin, whose teardown closes the children; a task of the run after that starts a child again.
+KEPT_IDLE = 30.0
+
+
 class _KeptPool:
     """A one-process :class:`ProcessPool` in a session, kept on a Dask worker for the run's next task (its child
-    and the data sets it was sent reused: starting one per task cost 2 s a task); closed at the run's end."""
+    and the data sets it was sent reused: starting one per task cost 2 s a task); closed at the run's end, or
+    once idle for ``KEPT_IDLE`` s (a run whose driver died never ends on the worker)."""
 
     def __init__(self, fn: CellFn, time_limit: float):
         self.pool = ProcessPool(1, fn, time_limit=time_limit, threads=1)
         self._stack = ExitStack()
         self._stack.enter_context(self.pool.session())
+        self._lock = threading.Lock()
+        self._busy = False
+        self._used = time.monotonic()
+        self.closed = False
+        self._shut = False
+        self._done = threading.Event()
+        threading.Thread(target=self._close_when_idle, daemon=True, name="graybox kept child's idle watch").start()
+
+    def run(self, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset]) -> list[dict] | None:
+        """The cells' rows, or None if the pool was closed meanwhile (idle too long, or the run's end)."""
+        with self._lock:
+            if self.closed:
+                return None
+            self._busy = True
+        try:
+            return list(self.pool.run(cells, datasets))
+        finally:
+            with self._lock:
+                self._busy = False
+                self._used = time.monotonic()
+
+    def _close_when_idle(self) -> None:
+        while not self._done.wait(min(1.0, KEPT_IDLE)):
+            with self._lock:
+                idle = not self._busy and time.monotonic() - self._used >= KEPT_IDLE
+                if idle:
+                    self.closed = True
+            if idle:
+                self.close()
 
     def close(self) -> None:
-        self._stack.close()
+        with self._lock:  # once (the run's end and the idle watch may both come)
+            first, self._shut = not self._shut, True
+            self.closed = True
+        self._done.set()
+        if first:
+            self._stack.close()
 
 
 def _cells_in_a_child(fn: CellFn, time_limit: float, cells: Sequence[Cell], datasets: Mapping[str, gb.Dataset],
@@ -943,9 +985,13 @@ def _cells_in_a_child(fn: CellFn, time_limit: float, cells: Sequence[Cell], data
     (a failed row saying so); their rows in the cells' order. The child is kept in ``kept`` (the run's, on this
     worker) for the next task of the same worker thread."""
     key = ("cells in a child", threading.get_ident())
-    if key not in kept:
-        kept[key] = _KeptPool(fn, time_limit)
-    rows = {r["key"]: r for r in kept[key].pool.run(cells, datasets)}
+    got = None
+    while got is None:
+        pool = kept.get(key)
+        if pool is None or pool.closed:  # the first task of this thread, or its child was closed when idle
+            pool = kept[key] = _KeptPool(fn, time_limit)
+        got = pool.run(cells, datasets)
+    rows = {r["key"]: r for r in got}
     return [rows[c.key] for c in cells]
 
 
