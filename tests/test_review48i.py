@@ -58,3 +58,38 @@ def _serve_then_idle(cells, data, kept):
     # a task of the run after that starts a child again and is served
     rows = _executors._cells_in_a_child(run_cell, 60.0, cells[:1], data, kept)
     assert [r["status"] for r in rows] == ["ok"]
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e9])
+def test_residuals_near_zero_are_not_of_one_magnitude_because_they_are_small_beside_the_output(offset):
+    # 5b18b0a judged |ξ| constant against 1e-10 of max |y| alone: heteroscedastic residuals ξ = 0.035 u² n (a real
+    # φ_(u²)'ξ² of 0.5) on an output near 1e9 (ξ spanning 1.65e-10 of y, 700 000 ulps: no round-off; the residuals
+    # themselves are tested) had φ_(u²)'ξ² left out as 'one magnitude (ξ = ±c)' and the model passed, where the
+    # same data at offset 0 fail it. ±c to round-off of y needs |ξ| away from 0 by more than that round-off
+    import numpy as np
+
+    import graybox as gb
+
+    rng = np.random.default_rng(0)
+    N = 2000
+    u = rng.uniform(-1, 1, N)
+    y = offset + np.r_[0.0, u[:-1]] + 0.035 * u**2 * rng.standard_normal(N)
+    r = gb.residual_tests(gb.Model(gb.Structure(["u(k-1)", "1"]), [1.0, offset]), gb.Record(u, y))
+    assert not r.undefined
+    assert r.failed == ["u2_xi2"] and np.max(np.abs(r["u2_xi2"].phi)) > 0.4
+
+
+def test_residuals_c_times_u_near_zero_beside_the_output_keep_phi_xi_xiu():
+    # the same for ξu' (fc94493): residuals small beside a large output but not c·u' keep φ_ξ(ξu)
+    import numpy as np
+
+    import graybox as gb
+
+    rng = np.random.default_rng(1)
+    N = 2000
+    u = rng.standard_normal(N)
+    # ξ large where |u'| is small: ξu' spans less than 1e-10 max|y| · max|u'| though ξ spans more than 1e-10 max|y|
+    xi = 0.08 * rng.standard_normal(N) / (1 + 4 * u**2)
+    y = 1e9 + np.r_[0.0, u[:-1]] + xi
+    r = gb.residual_tests(gb.Model(gb.Structure(["u(k-1)", "1"]), [1.0, 1e9]), gb.Record(u, y))
+    assert "xi_xiu" in r.tests and not r.undefined

@@ -537,8 +537,11 @@ def residual_tests(
 
 def _flat(x: np.ndarray, scale: float) -> bool:
     """x is constant to round-off: of itself, or of the output (residuals carry round-off of y's size, 1e-10 of
-    it as for constant residuals, whatever their own size)."""
-    return bool(np.ptp(x) <= max(1e-9 * float(np.max(np.abs(x))), 1e-10 * scale))
+    it as for constant residuals, whatever their own size) about a level clear of that round-off (x = ±c, c·u'²
+    with c beyond it: residuals small beside y that come near 0 are not of one magnitude, they are tested)."""
+    tol = 1e-10 * scale
+    ax = np.abs(x)
+    return bool(np.ptp(x) <= 1e-9 * float(np.max(ax)) or (np.ptp(x) <= tol and float(np.min(ax)) > tol))
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
