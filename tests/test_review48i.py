@@ -93,3 +93,26 @@ def test_residuals_c_times_u_near_zero_beside_the_output_keep_phi_xi_xiu():
     y = 1e9 + np.r_[0.0, u[:-1]] + xi
     r = gb.residual_tests(gb.Model(gb.Structure(["u(k-1)", "1"]), [1.0, 1e9]), gb.Record(u, y))
     assert "xi_xiu" in r.tests and not r.undefined
+
+
+@pytest.mark.parametrize("su", [1e160, 1e-300])
+def test_the_correlations_do_not_depend_on_the_input_units(su):
+    # 01e3e8b took ξ in units of its largest magnitude; u' = (u − ū)/std(u) still overflowed (std of u ~ 1e160:
+    # Σu² inf, u' 0) or underflowed (u ~ 1e-300: std 0): φ_uξ NaN at every lag, a failed test 'max |φ| = nan'
+    # (04abe94 lets an all-NaN φ through), and fc94493 read ξ·0 as 'the residuals are c·u'' and left φ_ξ(ξu) out
+    import numpy as np
+
+    import graybox as gb
+
+    rng = np.random.default_rng(0)
+    N = 300
+    u = rng.uniform(-1, 1, N)
+    y = np.zeros(N)
+    for k in range(1, N):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.1 * rng.standard_normal()
+    ref = gb.residual_tests(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0]), gb.Record(u, y))
+    r = gb.residual_tests(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0 / su]), gb.Record(u * su, y))
+    assert not r.undefined and list(r.tests) == list(ref.tests)
+    for k, t in ref.tests.items():
+        np.testing.assert_allclose(r.tests[k].phi, t.phi, atol=1e-12)
+        assert r.tests[k].passed == t.passed

@@ -471,7 +471,7 @@ def residual_tests(
             for key in INPUT_TESTS:
                 undefined[key + tag] = f"input {nm!r} is constant on these data"
             continue
-        u2 = ((allu[:, j] - np.mean(allu[:, j])) / np.std(allu[:, j])) ** 2
+        u2 = _standardised(allu[:, j], allu[:, j]) ** 2
         if np.ptp(u2) <= 1e-9 * np.max(u2):  # round-off of ±1: its correlations would be noise
             for key in U2_TESTS:
                 undefined[key + tag] = (f"input {nm!r} takes two levels equally often: u'² is constant (for any "
@@ -486,7 +486,7 @@ def residual_tests(
     for j, nm in enumerate(names):
         key = "xi_xiu" + ("" if len(names) == 1 else f":{nm}")
         if key not in undefined:
-            uj = (allu[:, j] - np.mean(allu[:, j])) / np.std(allu[:, j])
+            uj = _standardised(allu[:, j], allu[:, j])
             if _flat(allxi * uj, ymax * float(np.max(np.abs(uj)))):
                 undefined[key] = f"the residuals are c·u' of input {nm!r} (u' = ±1): ξu' is constant"
     if len(undefined) == len(INPUT_TESTS) * len(names):
@@ -516,7 +516,7 @@ def residual_tests(
                 continue
             # u in units of its own spread: u² of 1e3 rpm would otherwise lose digits to the mean removal
             col = allu[:, j]
-            uc = [(u[:, j] - np.mean(col)) / np.std(col) for u in us]
+            uc = [_standardised(u[:, j], col) for u in us]
             if key == "xi_xi":
                 phi = _xcorr(xs, xs, lags)
             elif key == "u_xi":
@@ -533,6 +533,18 @@ def residual_tests(
                                      bool(np.all(np.abs(phi) <= limit)))
     return ResidualTests(FrozenMap(out), n, level, rule, getattr(model, "name", ""),
                          tuple(_ro(e) for e in xi), FrozenMap(undefined))
+
+
+def _standardised(x: np.ndarray, col: np.ndarray) -> np.ndarray:
+    """(x − mean(col)) / std(col) for u in any units: the deviations taken in units of the largest before
+    squaring (std of u ~ 1e160 overflowed to inf, of u ~ 1e-300 underflowed to 0); the mean of u itself, lest an
+    offset lose digits (a balanced two-level input about 1e5 must stay u'² = 1 to round-off)."""
+    m = float(np.mean(col))
+    if not np.isfinite(m):  # Σu overflowed (u near the largest float)
+        a = float(np.max(np.abs(col)))
+        m = float(np.mean(col / a)) * a
+    s = float(np.max(np.abs(col - m)))
+    return ((x - m) / s) / float(np.std((col - m) / s))
 
 
 def _flat(x: np.ndarray, scale: float) -> bool:
