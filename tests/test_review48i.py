@@ -116,3 +116,29 @@ def test_the_correlations_do_not_depend_on_the_input_units(su):
     for k, t in ref.tests.items():
         np.testing.assert_allclose(r.tests[k].phi, t.phi, atol=1e-12)
         assert r.tests[k].passed == t.passed
+
+
+def test_a_loaded_file_with_a_0_over_0_test_plots(tmp_path):
+    # 04abe94 loads a file of the previous graybox with φ NaN at every lag (a 0/0 test kept as failed), but
+    # plot_residual_tests then raised 'Axis limits cannot be NaN or Inf' (its y-limit from max |φ|)
+    import json
+
+    import numpy as np
+
+    import graybox as gb
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 300)
+    y = np.r_[0.0, u[:-1]] + 0.1 * rng.standard_normal(300)
+    r = gb.residual_tests(gb.Model(gb.Structure(["u(k-1)"]), [1.0]), gb.Record(u, y))
+    path = tmp_path / "r.json"
+    gb.save(r, path)
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    t = doc["object"]["tests"]["u2_xi2"]
+    t.update(phi=["nan"] * len(t["lags"]), outside=[], passed=False)
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    old = gb.load(path)
+    assert old.failed == ["u2_xi2"]
+    fig = gb.plots.plot_residual_tests(old)
+    lo, hi = fig.axes[4].get_ylim()
+    assert np.isfinite(lo) and np.isfinite(hi) and hi > 0
