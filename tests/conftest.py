@@ -150,8 +150,7 @@ BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.
           "test_readme_api.py::test_selection_example_runs",
           "test_grid_executors.py", "test_select_checkpoint.py", "test_notebooks.py", "test_parallel_map_errors.py",
           "test_bootstrap.py", "test_review44d.py", "test_grid42a.py", "test_gram.py", "test_hunt36a.py",
-          "test_review40d.py", "test_share41a.py", "test_review47e.py", "test_grid_claims.py", "test_review42f.py",
-          "test_review43d.py", "test_dask_scratch.py")
+          "test_review40d.py")
 _BESIDE_ENV = "GRAYBOX_TESTS_BESIDE"  # set in that pytest (to the suite's process id): it runs them itself
 _BESIDE_RUN = pytest.StashKey[dict]()
 #: Seconds the suite waits for the pytest beside it from its start (CI allows 600 for the whole suite): past
