@@ -70,6 +70,17 @@ def two_level_records(names: tuple[str, str] = ("ident", "valid")):
             StaticPoints(ub, (0.2 + 0.4 * ub + 0.1 * ub**2) / 0.5))
 
 
+def first_order_signals(n: int = 300, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """u uniform on [-1, 1] and y(k) = 0.5 y(k-1) + u(k-1) + 0.1 e(k) (e standard normal): the model
+    y(k-1), u(k-1) with θ = (0.5, 1) leaves white residuals."""
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1, 1, n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.1 * rng.standard_normal()
+    return u, y
+
+
 def assert_csv_pair_matches(dyn, sta, committed, ncols: tuple[int, int]) -> None:
     """Regenerated bundled CSVs equal the committed ones: same header and rows, every column but the
     last (pressure) exactly, the pressure to one unit of its 4th decimal (a last-ulp difference on

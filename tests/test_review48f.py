@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from conftest import first_order_signals
 
 
 def test_a_residual_tests_file_with_a_0_over_0_test_from_the_previous_graybox_still_loads(tmp_path):
@@ -70,12 +71,7 @@ def test_residuals_of_one_magnitude_are_judged_against_the_round_off_of_the_outp
 def test_the_correlations_do_not_depend_on_the_output_units(scale):
     # φ's denominator was sqrt(Σa² · Σb²): with y in units 1e-100 of the usual ones Σξ² · Σξ² underflowed to 0
     # (φ_ξξ NaN, a failed test), at 1e154 it overflowed; the same data in other units must give the same φ
-    rng = np.random.default_rng(0)
-    N = 300
-    u = rng.uniform(-1, 1, N)
-    y = np.zeros(N)
-    for k in range(1, N):
-        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.1 * rng.standard_normal()
+    u, y = first_order_signals()
     ref = gb.residual_tests(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0]), gb.Record(u, y))
     r = gb.residual_tests(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, scale]), gb.Record(u, y * scale))
     assert list(r.tests) == list(ref.tests) and not r.undefined

@@ -16,6 +16,7 @@ from test_grid_executors import _death_cells  # noqa: E402
 
 from graybox.experiments import _executors  # noqa: E402
 from graybox.experiments._cell import run_cell  # noqa: E402
+from conftest import first_order_signals  # noqa: E402
 
 
 def _alive(pid: int) -> bool:
@@ -104,12 +105,7 @@ def test_the_correlations_do_not_depend_on_the_input_units(su):
 
     import graybox as gb
 
-    rng = np.random.default_rng(0)
-    N = 300
-    u = rng.uniform(-1, 1, N)
-    y = np.zeros(N)
-    for k in range(1, N):
-        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.1 * rng.standard_normal()
+    u, y = first_order_signals()
     ref = gb.residual_tests(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0]), gb.Record(u, y))
     r = gb.residual_tests(gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0 / su]), gb.Record(u * su, y))
     assert not r.undefined and list(r.tests) == list(ref.tests)
