@@ -465,13 +465,15 @@ def residual_tests(
     allu = np.concatenate(us)
     # tests these data cannot make: left out and named (a held input, a balanced PRBS), not NaN verdicts
     undefined: dict[str, str] = {}
+    std: dict[str, np.ndarray] = {}  # u' of each input that moves, over every record
     for j, nm in enumerate(names):
         tag = "" if len(names) == 1 else f":{nm}"
         if np.ptp(allu[:, j]) == 0.0:
             for key in INPUT_TESTS:
                 undefined[key + tag] = f"input {nm!r} is constant on these data"
             continue
-        u2 = _standardised(allu[:, j], allu[:, j]) ** 2
+        std[nm] = _standardised(allu[:, j], allu[:, j])
+        u2 = std[nm] ** 2
         if np.ptp(u2) <= 1e-9 * np.max(u2):  # round-off of ±1: its correlations would be noise
             for key in U2_TESTS:
                 undefined[key + tag] = (f"input {nm!r} takes two levels equally often: u'² is constant (for any "
@@ -483,10 +485,10 @@ def residual_tests(
             undefined.setdefault("u2_xi2" + ("" if len(names) == 1 else f":{nm}"),
                                  "the residuals have one magnitude (ξ = ±c): ξ² is constant")
     # residuals c·u' of a two-level input taken equally often (u' = ±1): ξu' is constant and φ_ξ(ξu) 0/0
-    for j, nm in enumerate(names):
+    for nm in names:
         key = "xi_xiu" + ("" if len(names) == 1 else f":{nm}")
-        if key not in undefined:
-            uj = _standardised(allu[:, j], allu[:, j])
+        if key not in undefined:  # (a held input's tests are, so its u' was made above)
+            uj = std[nm]
             if _flat(allxi * uj, ymax * float(np.max(np.abs(uj)))):
                 undefined[key] = f"the residuals are c·u' of input {nm!r} (u' = ±1): ξu' is constant"
     if len(undefined) == len(INPUT_TESTS) * len(names):
