@@ -1,4 +1,13 @@
+import os
 import time
+
+# One BLAS thread per process, set before numpy loads its BLAS (the test processes, the pytest beside the suite and
+# the subprocesses they start inherit it): the suite runs two pytests side by side on CI's two cores, and a BLAS of two
+# threads in each then waits for a busy core on every small call (a 6 x 6 triangular solve took 24-51 ms under that
+# load, 0.1 ms on one thread; test_uncertainty and test_convex used 22 s of CPU against 15 s). Tests that need more
+# threads ask for them (threadpool_limits); a value set by hand is kept.
+for _blas in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_blas, "1")
 
 import numpy as np
 import pytest
@@ -8,7 +17,7 @@ from hypothesis import settings
 # HYPOTHESIS_PROFILE=explore to search new examples.
 settings.register_profile("deterministic", derandomize=True, print_blob=True)
 settings.register_profile("explore", derandomize=False, print_blob=True)
-settings.load_profile(__import__("os").environ.get("HYPOTHESIS_PROFILE", "deterministic"))
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "deterministic"))
 
 from graybox import Record
 
