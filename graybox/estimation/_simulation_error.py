@@ -88,6 +88,7 @@ from ..static._surfaces import StaticSurface
 from ..core._files import folder_now, sweep_written_beside, write_atomically, written_path
 from ..core._terms import Structure, default_input_names
 from ..core._validation import (FrozenMap, check_choice, check_count, check_int, check_lambdas, check_real, check_seed, check_sequence,
+                                short_value,
                                 check_path, check_theta, frozen, warn)
 from ._local_models import (SLOW_FACTOR, LocalModels, SlowModeWarning, check_margin, record_points, slow_margin,
                             within_at)
@@ -828,8 +829,13 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None) -> dict
         raise CheckpointError(f"checkpoint {path} was written by an older graybox (it does not record failed "
                               "members); delete it or choose another checkpoint path")
     try:
+        failed = json.loads(str(raw["failures"]))
+        # the sweep writes a mapping of member index to reason: a list, a number or a reason that is no text is
+        # no record of failed members (a list was read by .items(), a bare AttributeError)
+        if not isinstance(failed, dict) or not all(isinstance(v, str) for v in failed.values()):
+            raise TypeError(f"its failed members are {short_value(failed)}, not a mapping of member to reason")
         out = {"thetas": raw["thetas"], "costs": raw["costs"], "done": raw["done"], "nfev": raw["nfev"],
-               "failures": {int(k): str(v) for k, v in json.loads(str(raw["failures"])).items()}}
+               "failures": {int(k): v for k, v in failed.items()}}
     except (ValueError, TypeError) as exc:
         raise unreadable(exc) from None
     K = len(meta["lambdas"])
