@@ -1,5 +1,7 @@
 """hunt49a: simulation-error estimation (GA, gradient, se_dsf), output error and the neural model."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -34,3 +36,14 @@ def test_a_checkpoint_whose_failed_members_are_no_mapping_of_reasons_is_refused_
     np.savez(ck, **arrays)
     with pytest.raises(ValueError, match="not a readable SE checkpoint"):
         se_pareto(OE_STRUCT, r, sp, **kw)
+
+
+def test_se_dsf_from_a_diverging_theta0_says_so_without_a_numpy_overflow_warning():
+    # the start's residuals were squared outside any errstate: "RuntimeWarning: overflow encountered in matmul"
+    # came before (under -W error: instead of) the ValueError naming the start
+    r = oe_record()
+    sp = gb.StaticPoints(oe_static().ubar, oe_static().ybar, uncertainty=0.01)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"no start \(theta0\) has a bounded free run"):
+            gb.se_dsf(OE_STRUCT, r, sp, theta0=[3.0, 0.0, 0.0, 0.0], margin=None)

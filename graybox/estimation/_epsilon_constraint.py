@@ -123,6 +123,12 @@ class _GN:
         self.M = len(problem.static)
 
     def parts(self, z: np.ndarray, jac: bool):
+        # a start whose free run diverges has finite residuals too large to square: J_S is then inf, said by the
+        # caller (no bounded free run), not by numpy's "overflow encountered in matmul" (an error under -W error)
+        with np.errstate(over="ignore", invalid="ignore"):
+            return self._parts(z, jac)
+
+    def _parts(self, z: np.ndarray, jac: bool):
         p = self.p
         th = p.from_z(z)
         ed, es, Jd, Js = p.residuals(th, jacobian=jac)
