@@ -47,3 +47,28 @@ def test_se_dsf_from_a_diverging_theta0_says_so_without_a_numpy_overflow_warning
         warnings.simplefilter("error")
         with pytest.raises(ValueError, match=r"no start \(theta0\) has a bounded free run"):
             gb.se_dsf(OE_STRUCT, r, sp, theta0=[3.0, 0.0, 0.0, 0.0], margin=None)
+
+
+#: A structure closed under shifts (every divisor of every term present): its SE problem is centred.
+CLOSED = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-2)", "u(k-2)^2", "u(k-1)y(k-1)", "y(k-1)^2"])
+
+
+@pytest.mark.parametrize("offset", [1e4, -3e4, 1e5])
+def test_the_optimisers_weighted_cost_does_not_depend_on_the_outputs_zero(offset):
+    # J_SF was solved for the raw model at the raw points, whose polynomial holds the offsets' powers (a constant
+    # of 1e8 at y + 1e4): at the same z the cost was 8e-9 (y + 1e4) to 9e-7 (y + 1e5) off relative, J_S 1e-12
+    from graybox.estimation._simulation_error import SEProblem
+    r0 = oe_record()
+    sp0 = oe_static()
+    p0 = SEProblem(CLOSED, r0, sp0)
+    p1 = SEProblem(CLOSED, gb.Record(r0.u, r0.y + offset), gb.StaticPoints(sp0.ubar, sp0.ybar + offset))
+    z = p0.to_z(p0.ls_theta())
+    Z = z + 0.01 * np.random.default_rng(0).standard_normal((20, z.size)) * np.abs(z)
+    c0 = p0.cost(p0.from_z(Z), 0.5, z=Z)
+    c1 = p1.cost(p1.from_z(Z), 0.5, z=Z)
+    assert np.all(np.isfinite(c0))
+    np.testing.assert_allclose(c1, c0, rtol=1e-10)
+    # the equilibria reached are still reported in output units, at the offset (raw θ itself, holding the offsets'
+    # powers, is the model to some 1e-8 there)
+    np.testing.assert_allclose(p1.static_outputs(p1.from_z(Z[:1])), p0.static_outputs(p0.from_z(Z[:1])) + offset,
+                               rtol=0, atol=1e-6)

@@ -31,7 +31,8 @@ Inside the optimisers J_S is computed by the fused batch kernel (same definition
 for a structure closed under shifts whose inputs all move over the records, on the centred signals with
 the centred parameters, the same errors, so that whether a candidate diverges does not depend on the
 output's zero: :meth:`SEProblem.js`) and J_SF by the package's one static definition
-(:func:`graybox.static._analysis.reached_equilibria`): at each static point the equilibrium a free run
+(:func:`graybox.static._analysis.reached_equilibria`; for such a structure, of the centred model at the centred
+static points, the same errors: :meth:`SEProblem.static_errors`): at each static point the equilibrium a free run
 at constant ū_i from the measured ȳ_i settles on; where it settles on none the cost is infinite — a
 model does not settle on an unstable equilibrium, nor on a stable one whose basin does not hold ȳ_i, so
 matching the static points there would be a false gain. The reported front is re-evaluated by the shared
@@ -203,6 +204,7 @@ class SEProblem:
         problem raw or at its own level).
         """
         self.z_map = self.z_inv = self.z_shift = self.offsets = None
+        self.static_run = None  # the static points (ū, ȳ) the equilibria are solved at, with the runs' θ (None: raw)
         self.z_psi, self.z_target = self.psi / self.scale, self.target
         # the records the optimisers' free runs are made on, their input products, and the divisor of z that gives
         # the parameters of those runs (None: θ, on the records as given)
@@ -225,6 +227,15 @@ class SEProblem:
         # another offset differed (J_SF up to 15 times)
         self.run_records, self.run_scale = centred, s_c
         self.run_U = self._products(centred)
+        if self.static is not None:
+            # the equilibria too are solved for the centred model at the centred points: on the raw ones the
+            # polynomial carries the offsets' powers (a constant of 1e8 at y + 1e4), and the weighted cost of one z
+            # came out 8e-9 (y + 1e4) to 9e-7 (y + 1e5) off relative where J_S is 1e-12 off, the gradient front's
+            # costs 7e-7 at y + 1e5 (now 1e-11)
+            ub = self.static.ubar
+            names = self.records[0].input_names
+            ub_c = ub - (off[names[0]] if ub.ndim == 1 else np.array([off[n] for n in names]))
+            self.static_run = (ub_c, self.static.ybar - off["y"])
         self.offsets, self.z_shift = off, t
         self.z_map = A / s_c  # θ = z_map @ z + z_shift
         self.z_inv = s_c[:, None] * Ainv  # z = z_inv @ (θ − z_shift)
@@ -431,7 +442,17 @@ class SEProblem:
         ``scored``: only J_SF and the residuals it is made of are asked, which are infinite once one point
         is not reached: a row's runs stop there (``until_failure``), so where a row misses a point its
         other points may be NaN too; a row that reaches every point is exactly as without.
+        :meth:`static_errors` less the measured ȳ_i.
         """
+        return self.static_errors(thetas, scored=scored) + self.static.ybar
+
+    def static_errors(self, thetas: np.ndarray, *, scored: bool = False, z: np.ndarray | None = None) -> np.ndarray:
+        """ȳ_model − ȳ_i at each static point (the residuals of J_SF; NaN where nothing is reached), shape (P, M):
+        :meth:`static_outputs` less the measured ȳ_i, ``scored`` as there. For a centred problem (:meth:`_centre_basis`)
+        the equilibria are those of the centred model (:meth:`run_theta`) at the centred points, the same
+        equilibria less the output's offset, so that the errors do not depend on where the units' zeros are (from
+        ``z``, the rows' optimiser coordinates, when given: raw θ holds the offsets' powers, and the round trip
+        through it left J_SF 1e-8 off relative at y + 1e4)."""
         if self.static is None:
             raise ValueError("this problem has no static points")
         thetas = np.atleast_2d(thetas)
@@ -441,18 +462,21 @@ class SEProblem:
         memo = self._static_memo
         if key is not None and memo is not None and memo[0] == key and (scored or memo[2]):
             return memo[1]
-        if self.surface_inputs is not None:
-            yb = reached_surface(self.structure, thetas, self.static.ubar, self.static.ybar,
-                                 inputs=self.surface_inputs, until_failure=scored).ybar
+        if self.static_run is None:
+            th, (ub, yb0) = thetas, (self.static.ubar, self.static.ybar)
         else:
-            yb = reached_equilibria(self.structure, thetas, self.static.ubar, self.static.ybar,
-                                    until_failure=scored).ybar
+            th, (ub, yb0) = np.atleast_2d(self.run_theta(thetas, z)), self.static_run
+        if self.surface_inputs is not None:
+            yb = reached_surface(self.structure, th, ub, yb0, inputs=self.surface_inputs, until_failure=scored).ybar
+        else:
+            yb = reached_equilibria(self.structure, th, ub, yb0, until_failure=scored).ybar
         # a scored row with a point missed may have points left unevaluated: not the full answer
         complete = not scored or bool(np.all(np.isfinite(yb)))
+        err = yb - yb0
         if key is not None:
-            yb.flags.writeable = False
-            self._static_memo = (key, yb, complete)
-        return yb
+            err.flags.writeable = False
+            self._static_memo = (key, err, complete)
+        return err
 
     def static_theta_gradient(self, theta: np.ndarray, ybar: np.ndarray) -> np.ndarray:
         """∂ȳ_i/∂θ at the static points' equilibria ``ybar`` (implicit differentiation), shape (M, n)."""
@@ -462,9 +486,9 @@ class SEProblem:
 
     def jsf(self, thetas: np.ndarray) -> np.ndarray:
         """J_SF of each row (the equilibrium reached from the measured ȳ; inf where none), shape (P,)."""
-        yb = self.static_outputs(thetas, scored=True)
+        e = self.static_errors(thetas, scored=True)
         with np.errstate(all="ignore"):
-            v = np.mean((yb - self.static.ybar) ** 2, axis=1)
+            v = np.mean(e ** 2, axis=1)
         return np.where(np.isfinite(v), v, np.inf)
 
     def cost(self, thetas: np.ndarray, lam1: float, threads: int = 1, *, z: np.ndarray | None = None) -> np.ndarray:
@@ -474,9 +498,10 @@ class SEProblem:
         c = lam1 * js
         yb = None
         if lam1 < 1.0:
-            yb = self.static_outputs(thetas, scored=True)
+            e = self.static_errors(thetas, scored=True, z=z)
+            yb = e + self.static.ybar
             with np.errstate(all="ignore"):
-                jsf = np.mean((yb - self.static.ybar) ** 2, axis=1)
+                jsf = np.mean(e ** 2, axis=1)
             c = c + (1.0 - lam1) * np.where(np.isfinite(jsf), jsf, np.inf)
         if self.ridge > 0:
             zz = self.to_z(np.atleast_2d(thetas)) if z is None else np.atleast_2d(z)
@@ -510,8 +535,8 @@ class SEProblem:
             else:
                 y = simulate_one(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, 1e300)
             e.append(y[L:] - rec.y[L:])
-        yb = self.static_outputs(th)[0]
-        e_static = yb - self.static.ybar
+        e_static = self.static_errors(th)[0]
+        yb = e_static + self.static.ybar
         if not jacobian:
             return np.concatenate(e), e_static, None, None
         with np.errstate(all="ignore"):
@@ -1096,8 +1121,9 @@ def _residuals(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     if M:
         # an unstable equilibrium gives NaN here, hence inf residuals: the solver treats the
         # region as infeasible and shrinks its step, so the front never trades J_SF for stability
-        yb = problem.static_outputs(th, scored=True)[0]
-        r[a:a + M] = np.sqrt((1.0 - lam1) / M) * (yb - problem.static.ybar)
+        e = problem.static_errors(th, scored=True, z=z)[0]
+        yb = e + problem.static.ybar
+        r[a:a + M] = np.sqrt((1.0 - lam1) / M) * e
     if n_ridge:
         r[a + M:] = np.sqrt(problem.ridge / n_ridge) * (z - problem.ridge_ref)
     if not np.all(np.isfinite(r)):
@@ -1140,9 +1166,8 @@ def _r_factor(problem: SEProblem, z: np.ndarray, lam1: float) -> np.ndarray:
     if lam1 < 1.0:
         sp = problem.static
         w2 = np.sqrt((1.0 - lam1) / len(sp))
-        yb = problem.static_outputs(th, scored=True)[0]
-        rows = np.column_stack([problem.jac_z(w2 * problem.static_theta_gradient(th, yb), 1.0),
-                                w2 * (yb - sp.ybar)])
+        e = problem.static_errors(th, scored=True, z=z)[0]
+        rows = np.column_stack([problem.jac_z(w2 * problem.static_theta_gradient(th, e + sp.ybar), 1.0), w2 * e])
         if not np.all(np.isfinite(rows)):
             return np.full((n + 1, n + 1), np.nan)
         T = _triangle(np.vstack([T, rows]))
