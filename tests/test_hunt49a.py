@@ -72,3 +72,18 @@ def test_the_optimisers_weighted_cost_does_not_depend_on_the_outputs_zero(offset
     # powers, is the model to some 1e-8 there)
     np.testing.assert_allclose(p1.static_outputs(p1.from_z(Z[:1])), p0.static_outputs(p0.from_z(Z[:1])) + offset,
                                rtol=0, atol=1e-6)
+
+
+def test_se_dsf_reports_the_same_run_whatever_the_outputs_unit():
+    # a step whose fall of J_S was the cost's rounding was kept or refused by that rounding: in mlc and in
+    # thousandths of them the same model came with other counts of steps, another reason to stop and another start
+    r = oe_record(N=600)
+    sp = oe_static()
+    band = 3e-4
+    a = gb.se_dsf(OE_STRUCT, r, gb.StaticPoints(sp.ubar, sp.ybar + 0.01), band=band, margin=None)
+    b = gb.se_dsf(OE_STRUCT, gb.Record(r.u, 1000.0 * r.y), gb.StaticPoints(sp.ubar, 1000.0 * (sp.ybar + 0.01)),
+                  band=band * 1e6, margin=None)
+    assert a.in_band and b.in_band
+    assert (b.start, b.n_iter, b.message) == (a.start, a.n_iter, a.message)
+    assert b.JS / 1e6 == pytest.approx(a.JS, rel=1e-12)
+    np.testing.assert_allclose(b.model.theta[[0, 3]], a.model.theta[[0, 3]], rtol=1e-9)

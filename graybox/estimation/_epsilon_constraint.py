@@ -216,6 +216,9 @@ _MARGIN_CAP = 0.5
 #: Relative precision of the multiplier μ of the linearised band.
 _MU_RTOL = 1e-4
 
+#: A fall of J_S below this fraction of it is its rounding (a few ulps), not a decrease.
+_ROUNDING = 1e-14
+
 
 def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray, str]:
     th = _pe_members(problem, lambdas)  # NaN rows where the weights do not identify θ (λ1 = 1, a held input)
@@ -358,8 +361,12 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                     break
                 continue
             f_new, g_new, _ = gn.parts(z + d, False)  # the Jacobian only where the step is kept
+            # a decrease within J_S's rounding is none: whether such a step was kept, and so how a converged run went
+            # on and stopped, was decided by the rounding alone, which differs with the output's units (y × 1000
+            # counted other steps, stopped for another reason and named another start of the same model)
+            lower = f_new < f * (1.0 - _ROUNDING)
             if feasible:
-                ok = np.isfinite(f_new) and g_new <= band * (1 + 1e-12) and f_new < f
+                ok = np.isfinite(f_new) and g_new <= band * (1 + 1e-12) and lower
                 gain = (f - f_new) / f if ok else 0.0
             else:
                 ok = np.isfinite(f_new) and np.isfinite(g_new) and g_new < g
@@ -378,7 +385,7 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                                "for 3 steps")
                     if feasible or g > band:
                         break
-            elif feasible and np.isfinite(f_new) and f_new < f and np.isfinite(g_new) and margin < _MARGIN_CAP:
+            elif feasible and np.isfinite(f_new) and lower and np.isfinite(g_new) and margin < _MARGIN_CAP:
                 margin = min(2.0 * margin, _MARGIN_CAP)  # the model was right about J_S: only the band was missed
             else:
                 nu *= 4.0
