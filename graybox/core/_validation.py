@@ -43,6 +43,7 @@ __all__ = [
     "check_sequence",
     "check_path",
     "check_fields",
+    "check_frame_columns",
 ]
 
 # graybox/, not graybox/core/: a frame in any subpackage is graybox's own
@@ -712,6 +713,37 @@ class FrozenFrame:
             raise TypeError(f"{type(obj).__name__}: {self.name} must be a pandas DataFrame, got "
                             f"{reprlib.repr(value)} ({type(value).__name__})")
         obj.__dict__[self.name] = value.copy(deep=True)
+
+
+def _is_integer(value: object) -> bool:
+    return _is_number(value) and bool(np.isfinite(value)) and float(value) == round(float(value))  # type: ignore
+
+
+def check_frame_columns(table: Any, kinds: Mapping[str, str], owner: str) -> None:
+    """``ValueError``/``TypeError`` naming ``owner``'s table and the column, for a table its methods cannot read.
+
+    For a result's ``__post_init__`` (a table built by hand, edited with ``dataclasses.replace`` or loaded from a
+    hand-edited file): every column label once, and each column of ``kinds`` that the table has of its kind,
+    ``"real"`` (real numbers, NaN and inf included, never text, bools or arrays), ``"int"`` (integers, or reals
+    of integer value) or ``"bool"`` (True or False). Columns it lacks are the caller's to require.
+    """
+    labels = list(table.columns)
+    twice = sorted({str(c) for c in labels if labels.count(c) > 1})
+    if twice:
+        raise ValueError(f"{owner}: the table's column(s) {twice} appear more than once")
+    rules = {"real": ("iuf", _is_number, "real numbers (NaN or inf where a row has none)"),
+             "int": ("iu", _is_integer, "integers"), "bool": ("b", _is_bool, "True or False")}
+    for c, kind in kinds.items():
+        if c not in table.columns:
+            continue
+        col = table[c]
+        dtype_kinds, fits, what = rules[kind]
+        if isinstance(col.dtype, np.dtype) and col.dtype.kind in dtype_kinds:
+            continue  # a NumPy column of the kind: every entry fits
+        bad = next((v for v in col if not fits(v)), fits)
+        if bad is not fits:  # text, an array, a bool where a number is meant, a missing value (pd.NA) ...
+            raise TypeError(f"{owner}: the table's column {c!r} must hold {what}, got {reprlib.repr(bad)} "
+                            f"({type(bad).__name__}, column dtype {col.dtype})")
 
 
 def warn(message: str, category: type[Warning]) -> None:

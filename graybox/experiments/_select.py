@@ -58,7 +58,7 @@ from ..core._records import (as_records, carried_from, check_alike, check_compat
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
 from ..core._reprs import beside, bound_text, listed, squared_text, squared_unit
-from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_sequence, warn
+from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_frame_columns, check_int, check_lambdas, check_real, check_sequence, warn
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
@@ -193,12 +193,19 @@ class GrayboxSelection:
 
     #: Columns every table holds (a loaded file is checked against them).
     TABLE_COLUMNS = ("source", "size", "n_terms", "added", "estimator", "JS_valid", "JSF", "in_band", "rank")
+    #: The kind of each column read as numbers or flags, where the table has it.
+    COLUMN_KINDS = {"size": "int", "n_terms": "int", "lambda1": "real", "JS_valid": "real", "JSF": "real",
+                    "in_band": "bool", "JS_test": "real", "JSF_test": "real", "vs_best": "real", "vs_best_se": "real",
+                    "eligible": "bool", "rank": "int"}
 
     def __post_init__(self) -> None:
         check_fields(self)  # types first: the table is a DataFrame, the band a real number
         missing = [c for c in self.TABLE_COLUMNS if c not in self.table.columns]
         if missing:
             raise ValueError(f"the table lacks the column(s) {missing}")
+        # the columns its properties and repr read as numbers and flags (regret, optimism, chosen): text, arrays or
+        # bools there (a dataclasses.replace, a hand-edited file) failed later in NumPy or pandas, or read "False" as True
+        check_frame_columns(self.table, self.COLUMN_KINDS, "GrayboxSelection")
         first = int((self.table["rank"] == 1).sum())
         if first != 1:  # the row ranked 1 is the choice (chosen, repr)
             raise ValueError(f"the table has {first} rows ranked 1; the choice is one row")
