@@ -68,3 +68,52 @@ def test_a_selection_rebuilt_from_its_own_table_and_of_object_columns_of_numbers
     table = sel.table
     table["JS_test"] = table["JS_test"].astype(object)  # numbers all the same
     assert dataclasses.replace(sel, table=table).regret == sel.regret
+
+
+# -- 2. frols gives the same structure in any units where the data are finite ---------------------------------------
+
+from hypothesis import HealthCheck, assume, given, settings, strategies as st  # noqa: E402
+
+
+def _expected_theta(sel: gb.Selection, sy: float, su: float) -> np.ndarray:
+    """θ of the data y·sy, u·su from θ of the data themselves: a term y^a u^b scales as sy^(1-a) su^(-b)."""
+    out = []
+    for t, th in zip(sel.structure, sel.theta):
+        a = sum(p for s, _, p in t.factors if s == "y")
+        b = sum(p for s, _, p in t.factors if s == "u")
+        out.append(th * sy / sy**a / su**b if a <= 1 else th / sy ** (a - 1) / su**b)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("method", ["mgs", "gram"])
+@pytest.mark.parametrize("sy, su", [(1e-200, 1.0), (1e160, 1.0), (1e-300, 1.0), (1e300, 1.0), (1.0, 1e100),
+                                    (1e-200, 1e-150)])
+def test_frols_chooses_the_same_structure_whatever_the_scale_of_finite_data(method, sy, su):
+    """y × 1e-200 was "identically zero" (yᵀy underflowed to 0) and y × 1e160 raised (y² overflowed in the candidate
+    columns), though the columns are scaled to unit RMS so that the result does not depend on units."""
+    r = plant(1)
+    base = gb.frols(CAND, r, n_terms=5, method=method)
+    sel = gb.frols(CAND, gb.Record(r.u * su, r.y * sy, name="scaled"), n_terms=5, method=method)
+    assert list(sel.structure) == list(base.structure)
+    np.testing.assert_allclose(sel.err, base.err, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(sel.theta, _expected_theta(base, sy, su), rtol=1e-10)
+    assert np.all(np.isfinite(sel.criterion_curve))
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(ey=st.integers(-1000, 1000), eu=st.integers(-300, 300), search=st.sampled_from(["greedy", "swap"]))
+def test_frols_on_data_scaled_by_powers_of_two_is_the_same_selection_bit_for_bit(ey, eu, search):
+    """A power of two scales every column exactly: where y·2^ey and u·2^eu are normal numbers, the choice, ERR and the
+    criterion's differences are those of the data themselves, θ theirs times powers of two."""
+    r = plant(1, n=150)
+    y, u = np.ldexp(r.y, ey), np.ldexp(r.u, eu)
+    assume(np.all(np.abs(y[y != 0]) >= np.finfo(float).tiny) and np.all(np.abs(u[u != 0]) >= np.finfo(float).tiny))
+    assume(np.all(np.isfinite(y)) and np.all(np.isfinite(u)))
+    base = gb.frols(CAND, r, criterion="bic", search=search)
+    sel = gb.frols(CAND, gb.Record(u, y, name="scaled"), criterion="bic", search=search)
+    assert list(sel.structure) == list(base.structure)
+    np.testing.assert_array_equal(sel.err_evaluated, base.err_evaluated)
+    shift = [ey - sum(p * (ey if s == "y" else eu) for s, _, p in t.factors) for t in sel.structure]
+    with np.errstate(over="ignore", under="ignore"):
+        np.testing.assert_array_equal(sel.theta, np.ldexp(base.theta, shift))
+    np.testing.assert_allclose(np.diff(sel.criterion_curve), np.diff(base.criterion_curve), rtol=1e-9, atol=1e-9)

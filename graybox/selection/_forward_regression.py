@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field, replace
-from typing import Literal, Sequence
+from typing import Literal, Mapping, Sequence
 
 import numba as nb
 import numpy as np
@@ -718,6 +718,9 @@ def frols(
 
     rule = stop_rule(n_terms, tol, criterion, curve_default="aic")
     check_choice(search, "search", SEARCHES)
+    # the search runs on y and each input times a power of two (exact: the same columns once scaled to unit RMS,
+    # the same ERR), so that neither their products nor yᵀy overflow or underflow where the data are finite
+    given, (data, exps) = data, _binary_scaled(data, process)
     cols = _scaled_columns(process, data, rule, max_terms, method, keep=forced)
     N, yy, active, skipped = cols.n_rows, cols.yy, cols.active, cols.skipped
     # said together with the candidates dropped during the selection: one CandidateWarning per call
@@ -779,7 +782,7 @@ def frols(
     rss = np.maximum(yy - np.cumsum(g**2), _RSS_FLOOR * yy)
     if k_eval >= N:
         raise ValueError(f"{k_eval} terms need more than their {N} regression rows (no error left to fit)")
-    curve = information_criterion(curve_name, rss, N)
+    curve = _unscaled_curve(curve_name, rss, N, exps.get("y", 0))
     if plan is None:
         # every model looked at holds the included terms: none of fewer terms is a candidate
         n0 = max(n_included, 1) - 1
@@ -805,7 +808,7 @@ def frols(
                               f"the {cols.method} form could not tell (noise-free data?); ask for fewer terms"
                               + (", or method='mgs'" if cols.method == "gram" else ""), int(weak[0]))
     theta_scaled = _back_substitute(np.triu(R), g[:n_sel])
-    theta = theta_scaled / cols.scales[idx]
+    theta = _unscaled_theta(theta_scaled / cols.scales[idx], [process[j] for j in idx], exps)
     evaluated = Structure([process[j] for j in chosen])
     return Selection(
         structure=evaluated[:n_sel],
@@ -814,7 +817,7 @@ def frols(
         noise=noise,
         evaluated=evaluated,
         err_evaluated=err_eval,
-        rss=rss,
+        rss=_unscaled_rss(rss, exps),
         criterion=curve_name,
         criterion_curve=curve,
         stop=stop,
@@ -823,9 +826,66 @@ def frols(
         skipped=tuple(skipped),
         search=search,
         subsets=() if plan is None else tuple(Structure([process[j] for j in S]) for S in plan.subsets),
-        subset_rss=() if plan is None else plan.rss,
-        **carried_from(as_gram_records(data)),
+        subset_rss=() if plan is None else _unscaled_rss(plan.rss, exps),
+        **carried_from(as_gram_records(given)),
     )
+
+
+#: The data are scaled (:func:`_binary_scaled`) when a candidate column's square, or y's, could reach 2^±this.
+_SAFE_EXPONENT = 900
+
+
+def _binary_scaled(data: object, process: Structure) -> tuple[object, dict[str, int]]:
+    """The in-memory records with y and each input times 2^-e, e the exponent that brings the signal's largest
+    magnitude over the records into [0.5, 1), and those exponents by signal name; the data as they are, and {},
+    where no candidate column's square (nor y's) can come near the ends of the floating-point range (no copy of
+    ordinary data), and for Dask records.
+
+    A power of two is exact: every candidate column is the data's times a power of two, so once scaled to unit
+    RMS the columns, ERR and the choice are those of the data themselves, bit for bit, while products of large
+    signals (y ≈ 1e160, y²) or yᵀy of small ones (y ≈ 1e-200) no longer leave the floating-point range."""
+    if is_dask_data(data):
+        return data, {}
+    records = as_gram_records(data)
+    names = records[0].input_names
+    us = [np.asarray(r.u, dtype=float).reshape(len(r.y), -1) for r in records]
+    if any(u.shape[1] != len(names) for u in us):
+        return data, {}  # records that do not agree: refused, in their own words, where they are read
+    exps = {}
+    for i, name in enumerate(("y",) + tuple(names)):
+        top = max(float(np.max(np.abs(r.y if i == 0 else u[:, i - 1]), initial=0.0)) for r, u in zip(records, us))
+        exps[name] = int(np.frexp(top)[1]) if np.isfinite(top) and top > 0 else 0
+    reach = max([abs(exps["y"])] + [sum(p * abs(exps.get(s, 0)) for s, _, p in t.factors) for t in process])
+    if 2 * reach <= _SAFE_EXPONENT:
+        return data, {}
+    d = np.array([exps[n] for n in names])
+    scaled = [replace(r, u=np.ldexp(r.u, -d[0] if r.u.ndim == 1 else -d), y=np.ldexp(r.y, -exps["y"]))
+              for r in records]
+    return scaled, exps
+
+
+def _unscaled_theta(theta: np.ndarray, terms: Sequence[Term], exps: Mapping[str, int]) -> np.ndarray:
+    """θ on the data's own signals of a fit on the signals times 2^-e (:func:`_binary_scaled`)."""
+    if not exps:
+        return theta
+    with np.errstate(over="ignore", under="ignore"):  # a θ beyond the range is refused by the Selection, named
+        return np.ldexp(theta, [exps["y"] - sum(p * exps.get(s, 0) for s, _, p in t.factors) for t in terms])
+
+
+def _unscaled_rss(rss: np.ndarray, exps: Mapping[str, int]) -> np.ndarray:
+    """The data's own RSS (output units²: inf or 0 where it leaves the floating-point range, as y² there)."""
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(rss, 2 * exps.get("y", 0))
+
+
+def _unscaled_curve(name: str, rss: np.ndarray, N: int, ey: int) -> np.ndarray:
+    """The criterion of the data's own RSS (``rss`` of the output times 2^-ey): of that RSS where it is a
+    floating-point number, else of ``rss`` plus N ln 4^ey (the same curve, up to rounding)."""
+    with np.errstate(over="ignore", under="ignore"):
+        own = np.ldexp(rss, 2 * ey)
+    if np.all(np.isfinite(own) & (own >= np.finfo(float).tiny)):
+        return information_criterion(name, own, N)
+    return information_criterion(name, rss, N) + N * 2 * ey * math.log(2.0)
 
 
 def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
