@@ -117,3 +117,45 @@ def test_frols_on_data_scaled_by_powers_of_two_is_the_same_selection_bit_for_bit
     with np.errstate(over="ignore", under="ignore"):
         np.testing.assert_array_equal(sel.theta, np.ldexp(base.theta, shift))
     np.testing.assert_allclose(np.diff(sel.criterion_curve), np.diff(base.criterion_curve), rtol=1e-9, atol=1e-9)
+
+
+# -- 3. the reports of a results frame lacking columns they do not read ----------------------------------------------
+
+@pytest.fixture(scope="module")
+def grid_results(tmp_path_factory):
+    from graybox import experiments as gx
+
+    structures = [gx.StructureSpec(f"s{i}", terms=["1", "y(k-1)", "u(k-1)", t]) for i, t in enumerate(["y(k-2)",
+                                                                                                      "u(k-2)"])]
+    grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], structures, [gx.Variant("LS", "ls")], name="few")
+    path = tmp_path_factory.mktemp("mend49d") / "few.sqlite"
+    gx.run_grid(grid, path, progress=False)
+    return gb.load_results(path)
+
+
+@pytest.mark.parametrize("drop", [["key"], ["theta"], ["warnings"], ["key", "theta", "warnings", "worker", "version"]])
+def test_write_report_of_a_frame_without_the_columns_only_cells_csv_copies_writes_the_rest(grid_results, tmp_path,
+                                                                                           drop):
+    """A frame without key, theta or warnings (the leaderboard, heat maps and figures read none of them) failed
+    write_report with a bare KeyError from cells.csv's copy; now cells.csv is written without them."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from graybox import experiments as gx
+
+    written = gx.write_report(grid_results.drop(columns=drop), tmp_path, rule="chosen", html=True)
+    assert {p.name for p in written} >= {"cells.csv", "leaderboard.csv", "summary.txt", "report.html"}
+    head = (tmp_path / "cells.csv").read_text().splitlines()[0].split(",")
+    assert not set(drop) & set(head) and {"data", "structure", "variant", "JS_valid"} <= set(head)
+    full = tmp_path / "full"
+    gx.write_report(grid_results, full, rule="chosen")
+    assert (tmp_path / "leaderboard.csv").read_text() == (full / "leaderboard.csv").read_text()
+
+
+@pytest.mark.parametrize("drop", [["JS_valid"], ["members", "band"]])
+def test_the_reports_refuse_a_frame_without_a_column_they_read_naming_it(grid_results, tmp_path, drop):
+    from graybox import experiments as gx
+
+    for call in (lambda t: gx.leaderboard(t, rule="chosen"), lambda t: gx.write_report(t, tmp_path, rule="chosen")):
+        with pytest.raises(ValueError, match=r"missing columns \[" + ", ".join(f"'{c}'" for c in sorted(drop))):
+            call(grid_results.drop(columns=drop))

@@ -867,12 +867,16 @@ def write_report(
             path.write_text(obj, encoding="utf-8")
         written.append(path)
 
+    # every column the results hold, as they hold it: a frame without the store's key, θ or warnings (the reports
+    # read none of them) writes cells.csv without them, as it would any column it lacks
     flat = df.copy()
     flat["terms"] = [None if t is None else " + ".join(t) for t in flat["terms"]]
     for col in ("theta", "members"):  # as JSON text, as the store holds them
-        flat[col] = [encode_value(col, v) for v in flat[col]]
-    flat["warnings"] = ["; ".join(w) for w in flat["warnings"]]
-    save(o / "cells.csv", flat.set_index("key"))
+        if col in flat.columns:
+            flat[col] = [encode_value(col, v) for v in flat[col]]
+    if "warnings" in flat.columns:
+        flat["warnings"] = ["; ".join(w) for w in flat["warnings"]]
+    save(o / "cells.csv", flat.set_index("key") if "key" in flat.columns else flat)
     save(o / "leaderboard.csv", lb)
     lines = _summary_lines(df, lb, rule, attrs, band)
     for d, slug in _slugs(list(dict.fromkeys(df["data"]))).items():
