@@ -159,3 +159,32 @@ def test_the_reports_refuse_a_frame_without_a_column_they_read_naming_it(grid_re
     for call in (lambda t: gx.leaderboard(t, rule="chosen"), lambda t: gx.write_report(t, tmp_path, rule="chosen")):
         with pytest.raises(ValueError, match=r"missing columns \[" + ", ".join(f"'{c}'" for c in sorted(drop))):
             call(grid_results.drop(columns=drop))
+
+
+# -- 4. pe_pareto: a member whose solve stops at the solver's limit is a failed member --------------------------------
+
+PE_ST = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+
+
+def test_pe_pareto_keeps_a_member_the_solver_did_not_finish_as_a_failed_member():
+    """solver_options={"max_iter": 1} for OSQP stopped the first member short of its optimum, and that one member's
+    ValueError ended the whole sweep; the member solved in one iteration (λ1 = 1, least squares) was lost with it."""
+    data = gb.load_pumping()
+    lam = np.logspace(-4, 0, 5)
+    front = gb.pe_pareto(PE_ST, data, lambdas=lam, solver="osqp", solver_options={"max_iter": 1})
+    full = gb.pe_pareto(PE_ST, data, lambdas=lam, solver="osqp")
+    assert set(front.failures) == {0, 1, 2, 3}
+    assert all(f"λ1 = {lam[i]:g}: solver osqp stopped at its iteration or time limit" in why
+               for i, why in front.failures.items())
+    np.testing.assert_allclose(front.thetas[4], full.thetas[4], rtol=1e-6)
+    assert np.isfinite(front.JS[4]) and np.all(np.isinf(np.asarray(front.JS)[:4]))
+    assert gb.decide_dsf(front, band=1e9).lambda1 == 1.0  # the failed members cannot be chosen
+
+
+def test_pe_pareto_fails_when_every_member_stopped_at_the_solver_limit_naming_them():
+    data = gb.load_pumping()
+    with pytest.raises(ValueError, match=r"λ1 = 0\.1, 0\.01 \(2 members\): solver osqp stopped at its iteration") as e:
+        gb.pe_pareto(PE_ST, data, lambdas=[0.1, 0.01], solver="osqp", solver_options={"max_iter": 1})
+    assert not isinstance(e.value, gb.InfeasibleError)
+    with pytest.raises(ValueError, match="stopped at its iteration"):  # pe_thetas: every λ1 or none, as before
+        gb.pe_thetas(PE_ST, data, lambdas=[1.0, 0.1], solver="osqp", solver_options={"max_iter": 1})

@@ -667,6 +667,14 @@ def _quad(y: cp.Variable, H: np.ndarray) -> cp.Expression:
     return cp.quad_form(y, cp.psd_wrap(H))
 
 
+def _member_failure(exc: ValueError) -> ValueError:
+    """``exc`` marked as one solve's failure (the solver stopped at its limit, failed numerically, or returned no
+    optimum), which a sweep keeps as that member's failure (:func:`pe_members`), not the whole call's; constraints
+    that admit no θ, or options the solver refuses, are the call's."""
+    exc.member = True  # type: ignore[attr-defined]
+    return exc
+
+
 class _QP:
     """min w1 (δᵀH1δ + 2l1ᵀδ) + w2 (δᵀH2δ + 2l2ᵀδ)  s.t.  V δ = g', G δ <= h', user(θ(δ)).
 
@@ -790,10 +798,12 @@ class _QP:
             if self.user_options:
                 # a value the solver refuses at its setup (OSQP's eps_abs = -1: "failed (2)"), said of the options, not
                 # as constraints that admit no θ
-                raise ValueError(f"solver {self.solver} failed ({exc}) with solver_options {self.user_options!r}: check "
-                                 "their values (tolerances > 0, iteration limits >= 1; the solver may have printed "
-                                 "which it refuses), or leave them out for graybox's defaults") from exc
-            raise InfeasibleError(f"solver {self.solver} failed ({exc}) with constraints {list(self.names)}") from exc
+                raise _member_failure(ValueError(
+                    f"solver {self.solver} failed ({exc}) with solver_options {self.user_options!r}: check "
+                    "their values (tolerances > 0, iteration limits >= 1; the solver may have printed "
+                    "which it refuses), or leave them out for graybox's defaults")) from exc
+            raise _member_failure(InfeasibleError(f"solver {self.solver} failed ({exc}) with constraints "
+                                                  f"{list(self.names)}")) from exc
         except (TypeError, ValueError, OverflowError) as exc:
             if not self.user_options:
                 raise
@@ -815,11 +825,13 @@ class _QP:
             what = (f"time_limit = {self.user_options['time_limit']}, max_iter = {limit}" if timed else
                     f"max_iter = {limit}")
             raise_ = "{'max_iter': ...} or a larger time_limit" if timed else "{'max_iter': ...}"
-            raise ValueError(f"solver {self.solver} stopped at its iteration or time limit (status {st!r}, {what}) "
-                             f"before it converged, with constraints {list(self.names)}: raise it with "
-                             f"solver_options={raise_}" + (", or use solver='clarabel'" if self.solver == "osqp" else ""))
+            raise _member_failure(ValueError(
+                f"solver {self.solver} stopped at its iteration or time limit (status {st!r}, {what}) "
+                f"before it converged, with constraints {list(self.names)}: raise it with "
+                f"solver_options={raise_}" + (", or use solver='clarabel'" if self.solver == "osqp" else "")))
         if st not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or self.dy.value is None:
-            raise InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints {list(self.names)}")
+            raise _member_failure(InfeasibleError(f"solver {self.solver} returned status {st!r} with constraints "
+                                                  f"{list(self.names)}"))
         if st == cp.OPTIMAL_INACCURATE:
             self.inaccurate.append((float(w1), float(w2)))
         if self.fixed is not None:
@@ -1322,10 +1334,22 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
         qp = _QP(d, stat, cons, ctx, solver, solver_options, M)
         # sweep from λ1 = 1 (least squares) towards the static end, each solve warm-started from
         # its neighbour; results are returned in the caller's order
+        # one member's solve that stops at the solver's limit or fails numerically is that member's failure: the
+        # sweep goes on (as the SE sweeps' do), and the call fails only when every member failed
+        unsolved: list[ValueError] = []
         for i in np.argsort(-lam, kind="stable"):
             if ok[i]:
-                Z[i] = qp.solve(w1[i], w2[i], warm_start)
+                try:
+                    Z[i] = qp.solve(w1[i], w2[i], warm_start)
+                except ValueError as exc:
+                    if not getattr(exc, "member", False):
+                        raise
+                    failures[int(i)] = f"λ1 = {lam[i]:g}: {exc}"
+                    unsolved.append(exc)
         qp.warn_inaccurate()
+        if len(failures) == lam.size:  # as the one solve's error would be: InfeasibleError where each was one
+            kind = InfeasibleError if all(isinstance(e, InfeasibleError) for e in unsolved) else ValueError
+            raise kind(_every_member_failed(failures, lam)) from unsolved[0]
     thetas = Z / d.s
     # a member the constraints' own checks refuse is a failed member (a free Σ_y of eq. (22) reaches 1 as λ1 → 0,
     # where the points' linear residual (1 − Σ_y)(ȳ − H(ū)) vanishes): the sweep goes on
@@ -1423,7 +1447,9 @@ def pe_pareto(
         in ``extra["JSF_QR"]``, the affine static error the problem trades (output units²). A λ1 whose
         weights do not identify θ (e.g. λ1 = 1 on a record whose input is held constant: the static
         points carry no weight there) is a failed member with the reason in ``failures``, as in
-        :func:`~graybox.se_pareto`; when every λ1 is such, ``ValueError`` (see :func:`pe_thetas`).
+        :func:`~graybox.se_pareto`; so is a λ1 whose solve the solver did not finish (stopped at a
+        ``max_iter`` or ``time_limit`` of ``solver_options``, failed numerically): the sweep goes on. When
+        every λ1 is such, ``ValueError`` naming each reason (see :func:`pe_thetas`).
     """
     threads = check_int(threads, "threads", low=1)
     if eval_static is not None and not isinstance(eval_static, StaticPoints):
