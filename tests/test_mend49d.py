@@ -188,3 +188,39 @@ def test_pe_pareto_fails_when_every_member_stopped_at_the_solver_limit_naming_th
     assert not isinstance(e.value, gb.InfeasibleError)
     with pytest.raises(ValueError, match="stopped at its iteration"):  # pe_thetas: every λ1 or none, as before
         gb.pe_thetas(PE_ST, data, lambdas=[1.0, 0.1], solver="osqp", solver_options={"max_iter": 1})
+
+
+# -- 5. close equilibria: one root when the coefficients cannot tell them apart, two when they can --------------------
+
+def _static_roots_model(roots, scale: float, ys: float = 1.0, us: float = 1.0) -> gb.Model:
+    """ȳ = F(ȳ) + ū/us·us whose static equation at ū = us is scale/ys · ∏ (ȳ − r·ys) = 0 (y in units ys: the same
+    model in other units, F' the same at the roots)."""
+    c = np.polynomial.polynomial.polyfromroots(np.asarray(roots, float) * ys) * (scale / ys)
+    terms = ["y(k-1)"] + [f"y(k-1)^{p}" for p in range(2, len(c))] + ["u(k-1)"]
+    return gb.Model(terms, [c[1] + 1, *c[2:], c[0] / us])
+
+
+@pytest.mark.parametrize("scale", [1.0, 10.0, -1.0])
+@pytest.mark.parametrize("ys", [1.0, 1e-30, 1e40])
+def test_two_distinct_roots_1_2e_7_apart_are_two_equilibria_not_a_fold(scale, ys):
+    """Roots 1 and 1 + 1.2e-7 (y's scale 1) were merged into one 'fold' at their midpoint: the merge read |F(mid)| =
+    F''δ²/8 = 3.6e-15 against Horner's worst-case bound 2 (D + 1) eps Σ|c_p||x|^p = 5.3e-15, a rounding error six times
+    what the coefficients carry; a change within the coefficients' own rounding does not make them one root."""
+    eqs = _static_roots_model([1.0, 1.0 + 1.2e-7], scale, ys).equilibria(1.0)
+    assert len(eqs) == 2, eqs
+    np.testing.assert_allclose([e.ybar / ys for e in eqs], [1.0, 1.0 + 1.2e-7], rtol=1e-8)  # each to its conditioning
+    assert eqs[0].stable != eqs[1].stable  # F' of either sign: one of them attracts (scale < 0: the lower one)
+
+
+@settings(max_examples=60, deadline=None)
+@given(r=st.floats(-3, 3), others=st.lists(st.floats(-3, 3), max_size=3), scale_exp=st.floats(-2, 2),
+       negative=st.booleans(), ys_exp=st.floats(-4, 4), us_exp=st.floats(-2, 2))
+def test_a_double_root_is_at_most_one_equilibrium_and_never_stable(r, others, scale_exp, negative, ys_exp, us_exp):
+    """Rounding splits a double root of the stored coefficients into two roots ~√eps apart (or a complex pair):
+    read against the coefficients' conditioning it stays one equilibrium, a fold (not asymptotically stable)."""
+    assume(all(abs(o - r) > 0.05 for o in others))
+    ys, us = 10.0**ys_exp, 10.0**us_exp
+    model = _static_roots_model([r, r, *others], (-1.0 if negative else 1.0) * 10.0**scale_exp, ys, us)
+    near = [e for e in model.equilibria(us) if abs(e.ybar - r * ys) <= 1e-4 * max(abs(r), 0.05) * ys]
+    assert len(near) <= 1, near
+    assert all(not e.stable for e in near)

@@ -404,11 +404,11 @@ def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np
 
 def _roots_and_folds(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`real_roots`, and which of them are multiple roots (folds of the static curve), shape (P, M, D) each."""
-    coef = static_coefficients(structure, thetas, ubar)
+    coef, size = _static_terms(structure, thetas, ubar)
     roots = real_roots_upto_cubic(coef) if coef.shape[0] <= 4 else _real_roots_companion(coef)
     if roots.shape[-1] < 2:  # a linear equation: one simple root
         return roots, np.zeros(roots.shape, dtype=bool)
-    return merge_multiple_roots(np.ascontiguousarray(coef), np.ascontiguousarray(roots))
+    return merge_multiple_roots(np.ascontiguousarray(coef), np.ascontiguousarray(roots), np.ascontiguousarray(size))
 
 
 def _linear_coefficients(structure: Structure, theta: np.ndarray, ybar: float, ubar: float) -> np.ndarray:
@@ -576,12 +576,12 @@ def multiple_root(structure: Structure, theta: np.ndarray, ub: float, ybar: floa
     A rational structure's eq. (6) is linear in ȳ: never. ``theta`` (n_terms,), ``ub`` and ``ybar`` scalars."""
     if is_rational(structure) or not np.isfinite(ybar):
         return False
-    coef = static_coefficients(structure, np.asarray(theta, float)[None, :], np.array([float(ub)]))
+    coef, size = _static_terms(structure, np.asarray(theta, float)[None, :], np.array([float(ub)]))
     roots = np.full((1, 1, coef.shape[0] - 1), np.nan)
     if roots.shape[-1] < 2:  # a linear equation: one simple root
         return False
     roots[0, 0, 0] = ybar
-    return bool(merge_multiple_roots(np.ascontiguousarray(coef), roots)[1][0, 0, 0])
+    return bool(merge_multiple_roots(np.ascontiguousarray(coef), roots, np.ascontiguousarray(size))[1][0, 0, 0])
 
 
 def folded_equilibria(structure: Structure, theta: np.ndarray, ub: float) -> list[Equilibrium]:

@@ -12,7 +12,7 @@
   coefficients are balanced (the decisions do not depend on the units of y), then Kahan's cubic
   solver (one real root by a monotone Newton iteration, deflation, a stable quadratic formula).
 - :func:`merge_multiple_roots` — one root for each multiple root (a fold of the static curve) and which
-  roots are multiple, from the polynomial's rounding error at and between them.
+  roots are multiple, from the polynomial's conditioning at and between them.
 - :func:`settle_runs` — the one "run until settled" routine: a free run at constant input from a
   constant initial output, stopped and classified (reached a given stable equilibrium / diverged /
   did not settle within the step budget). Two recursions share it: a polynomial model with its
@@ -321,18 +321,73 @@ def _scaled_terms(c, x, t):  # pragma: no cover - compiled
         pw *= xm
 
 
+#: A polynomial's coefficients are taken as known to this many eps of the sizes of the terms each is the sum of
+#: (:func:`merge_multiple_roots`): a θ stored, its products with powers of ū, their sum and the −ȳ of eq. (5).
+ROOT_EPS = 2.0
+
+
 @nb.njit(cache=True, nogil=True)
-def merge_multiple_roots(coef, roots):  # pragma: no cover - compiled
+def _scaled_pair(c, a, x, t, u):  # pragma: no cover - compiled
+    """t[p] = c[p] x^p and u[p] = a[p] x^p (a[p] >= |c[p]|: the sizes of the terms c[p] sums), both scaled by one
+    power of two (exact) where one leaves the float range, as :func:`_scaled_terms` scales its terms."""
+    n = c.shape[0]
+    ok = True
+    pw = 1.0
+    for p in range(n):
+        t[p] = c[p] * pw
+        u[p] = a[p] * pw
+        if not (np.isfinite(u[p]) and np.isfinite(t[p])) or (u[p] == 0.0 and a[p] != 0.0 and x != 0.0):
+            ok = False
+        pw *= x
+    if ok:
+        return
+    xm, xe = math.frexp(x)
+    emax = -(1 << 62)
+    for p in range(n):
+        if a[p] != 0.0:
+            emax = max(emax, math.frexp(a[p])[1] + p * xe)
+    pw = 1.0
+    for p in range(n):
+        t[p] = 0.0
+        u[p] = 0.0
+        if c[p] != 0.0:
+            cm, ce = math.frexp(c[p])
+            t[p] = math.ldexp(cm, max(ce + p * xe - emax, -1100)) * pw
+        if a[p] != 0.0:
+            am, ae = math.frexp(a[p])
+            u[p] = math.ldexp(am, max(ae + p * xe - emax, -1100)) * pw
+        pw *= xm
+
+
+@nb.njit(cache=True, nogil=True)
+def _curvature(t, u):  # pragma: no cover - compiled
+    """x² F''(x) over the size S(x) = Σ a_p |x|^p, from :func:`_scaled_pair`'s terms (0 where S is)."""
+    s = 0.0
+    for p in range(t.shape[0]):
+        s += abs(u[p])
+    if s == 0.0:
+        return 0.0
+    d2 = 0.0
+    for p in range(t.shape[0]):
+        d2 += p * (p - 1) * (t[p] / s)
+    return d2
+
+
+@nb.njit(cache=True, nogil=True)
+def merge_multiple_roots(coef, roots, size):  # pragma: no cover - compiled
     """One root for each multiple root of Σ_p coef[p] y^p, and which roots are multiple (a fold: F'(ȳ) = 0).
 
     A double root comes out of a solver as two equal roots, or as two a rounding error apart (of
-    relative size √eps, a companion matrix's). Adjacent roots x1 < x2 are one when the polynomial at
-    their midpoint is zero to its rounding error (η = 2 (D + 1) eps Σ |c_p| |x|^p, Horner's bound): the
-    coefficients cannot tell them apart from a double root (two distinct roots δ apart leave F''δ²/8
-    there); the midpoint stands for both. A root is multiple when F'(x)² <= 4 (D + 1) eps Σ |c_p| |x|^p
-    |F''(x)|, the same bound read at the root (a root of multiplicity m split by rounding into parts δ apart
-    has F' ~ F^(m) δ^(m−1), F'' ~ F^(m) δ^(m−2), η ~ F^(m) δ^m): so also a triple root whose companions a
-    solver made complex. Units-free: both sides scale alike.
+    relative size √eps, a companion matrix's). The coefficients are known to η = ROOT_EPS eps S(x),
+    S(x) = Σ_p size[p] |x|^p (``size``: the sum of the magnitudes of the terms each coefficient sums,
+    >= |coef|; the polynomial's conditioning). Two distinct roots δ apart leave F''δ²/8 at their
+    midpoint: adjacent roots x1 < x2 are one when |F''| δ²/8 <= η there (a change of the coefficients
+    within η makes them one double root; true double roots that rounding split are far inside it), and the
+    midpoint stands for both; farther apart they are two, however close (1 and 1 + 1.2e-7 at y's scale 1 are).
+    A root is multiple when F'(x)² <= 2 η |F''(x)|, the same bound read at the root (F' = ±F''δ/2 at each
+    of two roots δ apart; a root of multiplicity m split by rounding into parts δ apart has F' ~ F^(m)
+    δ^(m−1), F'' ~ F^(m) δ^(m−2), η ~ F^(m) δ^m): so also a triple root whose companions a solver made
+    complex. Units-free: both sides scale alike.
 
     Parameters
     ----------
@@ -340,6 +395,8 @@ def merge_multiple_roots(coef, roots):  # pragma: no cover - compiled
         Ascending coefficients.
     roots : ndarray, shape (P, M, D)
         Real roots, ascending, NaN-padded.
+    size : ndarray, shape (D + 1, P, M)
+        The sizes of the coefficients' terms (``coef`` itself where the coefficients are given).
 
     Returns
     -------
@@ -352,8 +409,10 @@ def merge_multiple_roots(coef, roots):  # pragma: no cover - compiled
     out = roots.copy()
     fold = np.zeros(roots.shape, dtype=np.bool_)
     c = np.empty(n)
+    a = np.empty(n)
     t = np.empty(n)
-    eps = np.finfo(np.float64).eps
+    u = np.empty(n)
+    eta = ROOT_EPS * np.finfo(np.float64).eps
     for i in range(P):
         for j in range(M):
             m = 0
@@ -363,20 +422,30 @@ def merge_multiple_roots(coef, roots):  # pragma: no cover - compiled
                 continue
             for p in range(n):
                 c[p] = coef[p, i, j]
+                a[p] = max(abs(size[p, i, j]), abs(c[p]))
             k = 0
             while k < m - 1:
                 x1 = out[i, j, k]
                 x2 = out[i, j, k + 1]
                 mid = 0.5 * x1 + 0.5 * x2
+                delta = x2 - x1
                 same = x1 == x2
-                if not same:
-                    _scaled_terms(c, mid, t)
-                    f = 0.0
-                    s = 0.0
+                if not same and abs(mid) < delta:  # about 0 (roots of either sign): F'' and S there, unscaled
+                    f2 = 0.0
+                    sz = 0.0
+                    pw = 1.0
                     for p in range(n):
-                        f += t[p]
-                        s += abs(t[p])
-                    same = abs(f) <= 2 * n * eps * s
+                        sz += a[p] * abs(pw)
+                        pw *= mid
+                    pw = 1.0
+                    for p in range(2, n):
+                        f2 += p * (p - 1) * c[p] * pw
+                        pw *= mid
+                    same = abs(f2) * delta * delta / 8.0 <= eta * sz
+                elif not same:
+                    _scaled_pair(c, a, mid, t, u)
+                    r = delta / mid  # the gap relative to where it is, |r| <= 2
+                    same = abs(_curvature(t, u)) * r * r / 8.0 <= eta
                 if same:  # the pair is one root: the midpoint; the rest move down (and may merge with it in turn)
                     out[i, j, k] = mid
                     for q in range(k + 1, m - 1):
@@ -390,18 +459,18 @@ def merge_multiple_roots(coef, roots):  # pragma: no cover - compiled
                 if x == 0.0:  # x F' and x² F'' vanish there: F'(0) = c_1
                     fold[i, j, k] = c[1] == 0.0
                     continue
-                _scaled_terms(c, x, t)
+                _scaled_pair(c, a, x, t, u)
                 s = 0.0
                 for p in range(n):
-                    s += abs(t[p])
+                    s += abs(u[p])
                 if s == 0.0:
                     continue
                 d1 = 0.0
                 d2 = 0.0
-                for p in range(n):  # x F'(x) and x² F''(x), over the terms' size (no overflow)
+                for p in range(n):  # x F'(x) and x² F''(x), over the size S(x) (no overflow)
                     d1 += p * (t[p] / s)
                     d2 += p * (p - 1) * (t[p] / s)
-                fold[i, j, k] = d1 * d1 <= 4 * n * eps * abs(d2)
+                fold[i, j, k] = d1 * d1 <= 2.0 * eta * abs(d2)
     return out, fold
 
 
