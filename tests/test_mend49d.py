@@ -224,3 +224,64 @@ def test_a_double_root_is_at_most_one_equilibrium_and_never_stable(r, others, sc
     near = [e for e in model.equilibria(us) if abs(e.ybar - r * ys) <= 1e-4 * max(abs(r), 0.05) * ys]
     assert len(near) <= 1, near
     assert all(not e.stable for e in near)
+
+
+# -- 6. the Dask executor's cell time limit says which process it stopped ---------------------------------------------
+
+def _hang_on_ls(marker_dir: str, cell, data, threads):
+    """Run a cell, except: variant "LS" writes its pid and sleeps for ten minutes (a cell that hangs)."""
+    import os
+    import time
+    from pathlib import Path
+
+    from graybox.experiments._cell import run_cell
+
+    if cell.variant == "LS":
+        (Path(marker_dir) / f"{cell.key}.{os.getpid()}").touch()
+        time.sleep(600)
+    return run_cell(cell, data, threads=threads)
+
+
+def test_a_cell_stopped_past_the_time_limit_on_dask_says_its_child_process_was_stopped_not_its_worker(tmp_path):
+    """On Dask a cell under a time limit runs in a child process of its worker, and only that child is stopped and
+    replaced; the failed row said "(its worker was stopped)", which reads as the Dask worker lost."""
+    import os
+    from functools import partial
+
+    from graybox import experiments as gx
+    from graybox.experiments._executors import DaskCluster
+
+    g = gx.Grid([gx.DataSpec("pumping", bundled="pumping")],
+                [gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"])],
+                [gx.Variant("LS", "ls"), gx.Variant("CLS", "cls", constraints=[{"type": "equality"}])], name="limit")
+    datasets = g.load_data()
+    cells = g.cells(datasets)
+    data = {c.data_hash: datasets[c.data] for c in cells}
+    with DaskCluster(workers=1, fn=partial(_hang_on_ls, str(tmp_path)), time_limit=5.0).session() as ex:
+        rows = {r["variant"]: r for r in ex.run(cells, data)}
+        worker_pids = set(ex._kept.run(os.getpid).values())  # the session's client: its LocalCluster's workers
+    msg = rows["LS"]["message"]
+    assert rows["LS"]["status"] == "failed" and "cell time limit of 5 s" in msg
+    assert "its child process on its Dask worker was stopped and replaced; the Dask worker itself runs on" in msg
+    assert "its worker was stopped" not in msg
+    assert rows["CLS"]["status"] == "ok"
+    (marker,) = tmp_path.glob("*.*")
+    assert worker_pids and int(marker.suffix[1:]) not in worker_pids  # it ran in a child, not in the Dask worker
+    with pytest.raises(ProcessLookupError):  # and that child was stopped
+        os.kill(int(marker.suffix[1:]), 0)
+
+
+def test_a_cell_stopped_past_the_time_limit_in_a_process_pool_names_its_worker_process(tmp_path):
+    from functools import partial
+
+    from graybox import experiments as gx
+    from graybox.experiments._executors import ProcessPool
+
+    g = gx.Grid([gx.DataSpec("pumping", bundled="pumping")],
+                [gx.StructureSpec("first-order", terms=["y(k-1)", "u(k-1)", "1"])], [gx.Variant("LS", "ls")],
+                name="limit")
+    datasets = g.load_data()
+    cells = g.cells(datasets)
+    (row,) = ProcessPool(1, partial(_hang_on_ls, str(tmp_path)), time_limit=3.0).run(
+        cells, {c.data_hash: datasets[c.data] for c in cells})
+    assert row["status"] == "failed" and "(its worker process was stopped and replaced)" in row["message"]

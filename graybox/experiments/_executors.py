@@ -285,10 +285,14 @@ class ProcessPool:
         then SIGKILL) and the cell is a failed row saying so (not retried). None: no limit.
     threads : int, optional
         Threads each worker may use; default: the machine's cores shared among the workers.
+    process : str, optional
+        What its failed rows call a worker process (default ``"worker"``; a Dask worker's child under a cell
+        time limit is ``"child process"``: the Dask worker itself is not stopped).
     """
 
     def __init__(self, workers: int, fn: CellFn = run_cell, time_limit: float | None = None,
-                 threads: int | None = None):
+                 threads: int | None = None, process: str = "worker"):
+        self.process = process
         self.workers = int(workers)
         self.threads = threads or worker_threads(self.workers)
         self.fn = fn
@@ -318,6 +322,11 @@ class ProcessPool:
             else:
                 self._stop(s, graceful=False)
         return live
+
+    @property
+    def _process_text(self) -> str:
+        """The process its failed rows name: "worker process", or "child process on its Dask worker"."""
+        return "worker process" if self.process == "worker" else f"{self.process} on its Dask worker"
 
     def _start(self) -> _Slot:
         parent, child = self._ctx.Pipe()
@@ -412,7 +421,7 @@ class ProcessPool:
                     if attempt < 2:
                         queued.appendleft((cell, attempt))  # still this run's: it goes next
                     else:
-                        yield failed_row(cell, f"the worker process died twice while running this cell "
+                        yield failed_row(cell, f"the {self._process_text} died twice while running this cell "
                                                f"(last exit code {code}); it was retried once")
                 for i, s in enumerate(slots):  # past the time limit and still without a row: stopped, not retried
                     if s.cell is None or not self._overdue(s):
@@ -421,9 +430,12 @@ class ProcessPool:
                     s.proc.terminate()  # a clean exit if it returns to Python within _stop's wait, else SIGKILL
                     self._stop(s, graceful=False)
                     slots[i] = self._start()
-                    yield failed_row(cell, f"stopped after the cell time limit of {self.time_limit:g} s (its worker "
-                                           "was stopped); run it again with a larger cell_time_limit and "
-                                           "retry_failed (graybox grid run --cell-time-limit S --retry-failed)")
+                    # on Dask the pool is a worker's child: only that child was stopped, the Dask worker runs on
+                    rest = "" if self.process == "worker" else "; the Dask worker itself runs on"
+                    yield failed_row(cell, f"stopped after the cell time limit of {self.time_limit:g} s (its "
+                                           f"{self._process_text} was stopped and replaced{rest}); run it again "
+                                           "with a larger cell_time_limit and retry_failed (graybox grid run "
+                                           "--cell-time-limit S --retry-failed)")
         except BaseException:  # interrupted (Ctrl-C, the caller stopped): the cells in flight are not waited for
             graceful = False
             raise
@@ -937,7 +949,7 @@ class _KeptPool:
     once idle for ``KEPT_IDLE`` s (a run whose driver died never ends on the worker)."""
 
     def __init__(self, fn: CellFn, time_limit: float):
-        self.pool = ProcessPool(1, fn, time_limit=time_limit, threads=1)
+        self.pool = ProcessPool(1, fn, time_limit=time_limit, threads=1, process="child process")
         self._stack = ExitStack()
         self._stack.enter_context(self.pool.session())
         self._lock = threading.Lock()
