@@ -285,3 +285,23 @@ def test_a_cell_stopped_past_the_time_limit_in_a_process_pool_names_its_worker_p
     (row,) = ProcessPool(1, partial(_hang_on_ls, str(tmp_path)), time_limit=3.0).run(
         cells, {c.data_hash: datasets[c.data] for c in cells})
     assert row["status"] == "failed" and "(its worker process was stopped and replaced)" in row["message"]
+
+
+@pytest.mark.parametrize("scale", [-0.5, -0.005, -5e-4, 0.003])
+def test_a_double_root_of_a_quadratic_whose_y_coefficient_cancels_is_one_equilibrium_not_none(scale):
+    """ȳ = θ1 ȳ + θ2 ȳ² + ū with θ1 = 1 + c1 near 1: the static coefficient c1 = θ1 − 1 is known to eps (of θ1), not
+    to eps of itself, and rounding pushed the discriminant of the double root at 1.5 below 0 by more than its own
+    rounding: at scale −0.005 the model had no equilibrium at all."""
+    c = np.polynomial.polynomial.polyfromroots([1.5, 1.5]) * scale
+    model = gb.Model(["y(k-1)", "y(k-1)^2", "u(k-1)"], [c[1] + 1, c[2], c[0]])
+    eqs = model.equilibria(1.0)
+    assert len(eqs) == 1 and eqs[0].ybar == pytest.approx(1.5, rel=1e-7) and not eqs[0].stable
+
+
+@pytest.mark.parametrize("scale", [-0.5, -0.005, -5e-4, 0.005])
+def test_a_double_root_beside_a_simple_one_of_a_cubic_whose_y_coefficient_cancels_is_kept(scale):
+    """The same in a cubic's deflated quadratic: at scale −0.005, c (ȳ − 1.5)² (ȳ + 1) had only the equilibrium −1."""
+    c = np.polynomial.polynomial.polyfromroots([1.5, 1.5, -1.0]) * scale
+    model = gb.Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "u(k-1)"], [c[1] + 1, *c[2:], c[0]])
+    ys = [e.ybar for e in model.equilibria(1.0)]
+    np.testing.assert_allclose(ys, [-1.0, 1.5], rtol=1e-7)

@@ -60,7 +60,7 @@ from ._equilibrium_kernels import (
     SKIPPED,
     candidate_linearisations,
     merge_multiple_roots,
-    real_roots_upto_cubic,
+    real_roots_upto_cubic_sized,
     schur_stable_rows,
     unit_pole,
     settle_candidates,
@@ -405,7 +405,8 @@ def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np
 def _roots_and_folds(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`real_roots`, and which of them are multiple roots (folds of the static curve), shape (P, M, D) each."""
     coef, size = _static_terms(structure, thetas, ubar)
-    roots = real_roots_upto_cubic(coef) if coef.shape[0] <= 4 else _real_roots_companion(coef)
+    roots = (real_roots_upto_cubic_sized(coef, np.ascontiguousarray(size)) if coef.shape[0] <= 4
+             else _real_roots_companion(coef))
     if roots.shape[-1] < 2:  # a linear equation: one simple root
         return roots, np.zeros(roots.shape, dtype=bool)
     return merge_multiple_roots(np.ascontiguousarray(coef), np.ascontiguousarray(roots), np.ascontiguousarray(size))

@@ -29,7 +29,7 @@ import numba as nb
 import numpy as np
 
 __all__ = [
-    "schur_stable_rows", "unit_pole", "entry_sums", "real_roots_upto_cubic", "merge_multiple_roots", "settle_candidates", "settle_runs",
+    "schur_stable_rows", "unit_pole", "entry_sums", "real_roots_upto_cubic", "real_roots_upto_cubic_sized", "merge_multiple_roots", "settle_candidates", "settle_runs",
     "candidate_linearisations",
     "POLY", "NET", "REACHED", "DIVERGED", "NOT_SETTLED", "SKIPPED",
 ]
@@ -159,8 +159,31 @@ def _eval3(X, A, B, C, D):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _real_roots3(A, B, C, D, r):  # pragma: no cover - compiled
-    """Real roots of A x³ + B x² + C x + D into r (unsorted); returns their number.
+def _disc_slack(a, b1, r, n, sizes):  # pragma: no cover - compiled
+    """How far below 0 the discriminant of the quadratic factor a x² + b1 x + c2 of F (F itself, or F / (x − r[0])
+    after a real root r[0] of a cubic, n = 1) may be for coefficients known to ``ROOT_EPS`` eps of their sizes: F
+    uncertain by η = ROOT_EPS eps Σ sizes_p |x|^p at the would-be double root x = −b1 / (2a) leaves the factor
+    uncertain by η / |x − r[0]|, and its discriminant by 4 |a| that."""
+    x = -b1 / (2.0 * a)
+    eta = 0.0
+    pw = 1.0
+    for p in range(4):
+        eta += sizes[p] * pw
+        pw *= abs(x)
+    eta *= ROOT_EPS * 2.220446049250313e-16
+    if n == 1:
+        if x == r[0]:
+            return 0.0
+        eta /= abs(x - r[0])
+    out = 4.0 * abs(a) * eta
+    return out if np.isfinite(out) else 0.0
+
+
+@nb.njit(cache=True, nogil=True)
+def _real_roots3(A, B, C, D, r, sizes):  # pragma: no cover - compiled
+    """Real roots of A x³ + B x² + C x + D into r (unsorted); returns their number. ``sizes`` (ascending, 4): the
+    sizes of the terms each coefficient sums (:func:`real_roots_upto_cubic_sized`): the quadratic's discriminant
+    may be below 0 by its own rounding and by what those leave uncertain, and still be a double root.
 
     W. Kahan, "To solve a real cubic equation" (1986): one real root by Newton's iteration from
     a start that makes it monotone, deflation (from the end that keeps it accurate), and the
@@ -209,7 +232,7 @@ def _real_roots3(A, B, C, D, r):  # pragma: no cover - compiled
         # within its own rounding error (a few eps of the terms it is the difference of) a negative discriminant is
         # a double root that rounding pushed into the complex plane, as often as it splits one into two reals: it is
         # the double root (merge_multiple_roots reads it as such), in any units
-        if -disc > 8.0 * 2.220446049250313e-16 * (b1 * b1 + 4.0 * abs(a * c2)):
+        if -disc > 8.0 * 2.220446049250313e-16 * (b1 * b1 + 4.0 * abs(a * c2)) + _disc_slack(a, b1, r, n, sizes):
             return n
         disc = 0.0
     qq = -0.5 * (b1 + (np.sqrt(disc) if b1 >= 0.0 else -np.sqrt(disc)))
@@ -224,7 +247,18 @@ def _real_roots3(A, B, C, D, r):  # pragma: no cover - compiled
 
 @nb.njit(cache=True, nogil=True)
 def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
+    """:func:`real_roots_upto_cubic_sized` of coefficients known to their own rounding (sizes |coef|)."""
+    return real_roots_upto_cubic_sized(coef, np.abs(coef))
+
+
+@nb.njit(cache=True, nogil=True)
+def real_roots_upto_cubic_sized(coef, size):  # pragma: no cover - compiled
     """Real roots of Σ_p coef[p] y^p (degree ≤ 3) for every (member, point), sorted, NaN-padded.
+
+    ``size`` (same shape): the sizes of the terms each coefficient sums (:func:`merge_multiple_roots`'s): a
+    quadratic's discriminant below 0 by no more than what the coefficients are known to (``ROOT_EPS`` eps of
+    their sizes) is a double root, as one below 0 by its own rounding is (ȳ − θ1 ȳ of a θ1 near 1 leaves the
+    ȳ coefficient known to eps, not to eps of itself).
 
     Parameters
     ----------
@@ -244,12 +278,14 @@ def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
     W = max(D, 1)
     out = np.full((P, M, W), np.nan)
     c = np.zeros(4)
+    a = np.zeros(4)
     r = np.empty(4)
     for i in range(P):
         for j in range(M):
             ok = True
             for k in range(4):
                 c[k] = coef[k, i, j] if k <= D else 0.0
+                a[k] = max(abs(size[k, i, j]), abs(c[k])) if k <= D else 0.0
                 if not np.isfinite(c[k]):
                     ok = False
             if not ok:
@@ -262,13 +298,15 @@ def real_roots_upto_cubic(coef):  # pragma: no cover - compiled
                 # made an absent cubic coefficient NaN, losing every root, the sane one too
                 for _ in range(k):
                     c[k] *= s
+                    a[k] *= s
                 big = max(big, abs(c[k]))
             if big == 0.0 or not np.isfinite(big):
                 continue
             e = 2.0 ** np.round(np.log2(big))
             for k in range(4):
                 c[k] /= e
-            n = _real_roots3(c[3], c[2], c[1], c[0], r)
+                a[k] /= e
+            n = _real_roots3(c[3], c[2], c[1], c[0], r, a)
             for k in range(n):
                 x = r[k]
                 f = ((c[3] * x + c[2]) * x + c[1]) * x + c[0]
