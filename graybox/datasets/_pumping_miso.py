@@ -69,8 +69,8 @@ import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
 from ..core._validation import as_1d_finite, check_real, real_array
-from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, reference_lengths, regenerate_main, static_samples,
-                      static_speeds, write_csv_pair)
+from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, initial_state, reference_lengths, regenerate_main,
+                      static_samples, static_speeds, write_csv_pair)
 from ..core._reprs import short_repr
 
 #: The plant's inputs, as its records and static points name them: speed references of sets 1 and 2.
@@ -319,9 +319,7 @@ class TwoSpeedPumpingPlant:
         if x0 is None:
             state = self.steady_state(r1[0], r2[0])
         else:
-            state = tuple(float(x) for x in x0)
-            if len(state) != 5 or not all(math.isfinite(x) for x in state) or state[4] < 0.0:
-                raise ValueError(f"x0 must be 5 finite numbers (n_c1, n_1, n_c2, n_2, Q) with Q >= 0 L/s, got {x0!r}")
+            state = initial_state(x0, ("n_c1", "n_1", "n_c2", "n_2", "Q"))  # text or bools are no state
         S = int(rig.substeps)
         dt = rig.Ts / S
         delay = int(round(rig.dead_time / dt))

@@ -232,6 +232,8 @@ STATIC_SPEEDS = tuple(float(s) for s in range(750, 1651, 100))
 DEFAULT_SEED = 2011
 #: Transmitter noise std (mlc): the ±0.175 mlc error read as a 95 % band of Gaussian noise.
 NOISE_STD = 0.175 / 1.96
+#: The state of a one-speed run, as x0 gives it.
+_STATE = ("n_c", "n", "Q")
 
 
 def _reference(out: object, k: int) -> float:
@@ -242,6 +244,17 @@ def _reference(out: object, k: int) -> float:
     if v.size != 1:
         raise ValueError(f"{what} must be one number (rpm), got {v.size} values of shape {v.shape}")
     return float(v.ravel()[0])
+
+
+def initial_state(x0: object, names: tuple[str, ...]) -> tuple[float, ...]:
+    """A rig's initial state ``x0`` as floats, one per state variable ``names`` (the flow last, >= 0 L/s): a
+    ``TypeError`` naming x0 for text, booleans or what is no numbers (a float conversion parsed "40" and read True
+    as a flow of 1 L/s), a ``ValueError`` for another count, a non-finite value or a negative flow (unpacking
+    said only 'too many values to unpack')."""
+    v = real_array(x0, "x0", f"{len(names)} numbers ({', '.join(names)})")
+    if v.shape != (len(names),) or not np.all(np.isfinite(v)) or v[-1] < 0.0:
+        raise ValueError(f"x0 must be {len(names)} finite numbers ({', '.join(names)}) with Q >= 0 L/s, got {x0!r}")
+    return tuple(float(x) for x in v)
 
 
 @dataclass(frozen=True, eq=False)
@@ -560,9 +573,7 @@ class PumpingPlant:
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
             N, seed, noise=noise, process_noise=process_noise)
 
-        nc, n, q = self.steady_state(u[0]) if x0 is None else (float(x) for x in x0)
-        if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
-            raise ValueError(f"x0 must be finite with a flow >= 0 L/s, got {x0!r}")
+        nc, n, q = self.steady_state(u[0]) if x0 is None else initial_state(x0, _STATE)
         S, delay, dt, consts = self._kernel_constants
         out = _integrate(u, eps_w, eps_s, eps_a, float(phi), float(w_gain), float(w0), float(s_phi), float(s_gain),
                          float(a_phi), float(a_gain), nc, n, q, S, delay, dt, consts)
@@ -636,9 +647,7 @@ class PumpingPlant:
         prev = self._one_speed(u0, "u0")
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
             N, seed, noise=noise, process_noise=process_noise, who="closed_loop")
-        nc, n, q = self.steady_state(prev) if x0 is None else (float(x) for x in x0)
-        if not (math.isfinite(nc) and math.isfinite(n) and math.isfinite(q) and q >= 0.0):
-            raise ValueError(f"x0 must be finite with a flow >= 0 L/s, got {x0!r}")
+        nc, n, q = self.steady_state(prev) if x0 is None else initial_state(x0, _STATE)
         S, delay, dt, consts = self._kernel_constants
         out = np.empty((7, N))  # u, y, pressure, speed, flow, surge, air
         w, surge, air = float(w0), 0.0, 0.0
