@@ -12,12 +12,14 @@ Units: u in rpm, y in mlc (metres of liquid column), Ts = 0.05 s.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from .models._model import Model
 from .core._records import StaticPoints
 from .core._terms import Structure
-from .core._validation import real_array
+from .core._validation import check_bool, check_int, frozen_value, real_array
 
 __all__ = [
     "STRUCTURE_15",
@@ -56,7 +58,7 @@ def eq1_points(ubar: np.ndarray | None = None) -> StaticPoints:
 #: than ELS (15), model (17) beats (15) in every criterion, the SE (D_SF) ℓ = 3 model is better
 #: than ELS (17) on identification and statically "but was worse over the dynamic validation data
 #: set", the neural model beats the polynomial black boxes in every criterion).
-TABLE_I: dict[str, dict[str, float]] = {
+TABLE_I: Mapping[str, Mapping[str, float]] = frozen_value({
     name: dict(zip(("JS_ident", "JS_valid", "JSF", "n_params"), row))
     for name, row in {
         "ELS (15)": (2.611, 2.116, 1.6040, 17),
@@ -68,7 +70,7 @@ TABLE_I: dict[str, dict[str, float]] = {
         "SE (D_SF) ℓ=3": (1.208, 1.306, 0.0291, 23),
         "Neural": (1.09, 0.536, 0.0496, 99),
     }.items()
-}
+}, "TABLE_I")  # read-only, as the tables below: the paper's figures are no one's to edit
 
 STRUCTURE_15 = Structure(
     [
@@ -116,12 +118,13 @@ _III = {
            -6.5877],
 }
 
-#: θ of each printed column, engineering units.
-TABLE_II = {k: np.array(v) * _SCALE_II for k, v in _II.items()}
-TABLE_III = {k: np.array(v) * _SCALE_III for k, v in _III.items()}
+#: θ of each printed column, engineering units. Read-only (mappings and arrays): an in-place edit of a writeable
+#: table (``th = TABLE_II["ELS"]; th *= 2``) changed every later :func:`paper_model`.
+TABLE_II: Mapping[str, np.ndarray] = frozen_value({k: np.array(v) * _SCALE_II for k, v in _II.items()}, "TABLE_II")
+TABLE_III: Mapping[str, np.ndarray] = frozen_value({k: np.array(v) * _SCALE_III for k, v in _III.items()}, "TABLE_III")
 
 #: Columns whose printed values are known not to describe the plant (kept for the record only).
-MISPRINTED = {("II", "SE")}
+MISPRINTED = frozenset({("II", "SE")})
 
 
 def paper_model(equation: int, column: str = "ELS", allow_misprinted: bool = False) -> Model:
@@ -136,6 +139,10 @@ def paper_model(equation: int, column: str = "ELS", allow_misprinted: bool = Fal
         Table II's SE column is misprinted (its static curve diverges); asking for it raises
         unless this is True.
     """
+    equation = check_int(equation, "equation")  # 15.0 is 15 (its name said 'ELS (15.0)'); text is no equation
+    allow_misprinted = check_bool(allow_misprinted, "allow_misprinted")  # 'no' is truthy: it let the misprint in
+    if not isinstance(column, str):  # a list was 'unhashable type'
+        raise TypeError(f"column must be a str (a column of Table II or III), got {column!r} ({type(column).__name__})")
     if equation == 15:
         table, structure, tab = TABLE_II, STRUCTURE_15, "II"
     elif equation == 17:

@@ -39,3 +39,45 @@ def test_plant_initial_state_is_three_numbers(x0, error, match):
 def test_two_speed_initial_state_is_five_numbers(x0, error):
     with pytest.raises(error, match="x0"):
         TwoSpeedPumpingPlant().simulate(np.full((5, 2), 1200.0), x0=x0, **QUIET)
+
+
+def test_reference_tables_are_read_only():
+    # TABLE_II's and TABLE_III's arrays were writeable and the tables plain dicts: `th = TABLE_II["ELS"]; th *= 2`
+    # doubled every θ of every later paper_model(15), and TABLE_I's rows could be edited, changing what
+    # graybox reproduce compares against
+    from graybox import reference
+
+    before = reference.paper_model(15).theta.copy()
+    for table in (reference.TABLE_II, reference.TABLE_III):
+        with pytest.raises(ValueError, match="read-only"):
+            table["ELS"] *= 2
+        with pytest.raises(ValueError, match="read-only"):
+            table["ELS"][0] = 1.0
+        with pytest.raises(TypeError):
+            table["ELS"] = np.zeros(3)
+    with pytest.raises(TypeError):
+        reference.TABLE_I["ELS (15)"]["JSF"] = 0.0
+    with pytest.raises(TypeError):
+        reference.TABLE_I["mine"] = {}
+    assert np.array_equal(reference.paper_model(15).theta, before)
+    assert reference.TABLE_I["ELS (15)"]["JSF"] == 1.604
+    assert dict(reference.TABLE_I["Neural"])["n_params"] == 99
+
+
+def test_paper_model_checks_its_arguments():
+    from graybox import reference
+
+    # a switch that is no bool ('no' is truthy) gave the misprinted column the caller meant to refuse
+    with pytest.raises(TypeError, match="allow_misprinted"):
+        reference.paper_model(15, "SE", allow_misprinted="no")
+    with pytest.raises(TypeError, match="column"):  # was 'unhashable type: list'
+        reference.paper_model(15, ["ELS"])
+    with pytest.raises(ValueError, match="Table II has columns"):
+        reference.paper_model(15, "GA")
+    with pytest.raises(ValueError, match="eq. 15 and eq. 17"):
+        reference.paper_model(16)
+    with pytest.raises(TypeError, match="equation"):
+        reference.paper_model("15")
+    assert reference.paper_model(np.int64(17), "PE").name == "PE (17) [paper]"
+    assert reference.paper_model(15.0).name == "ELS (15) [paper]"  # was 'ELS (15.0) [paper]'
+    assert reference.paper_model(15, "SE", allow_misprinted=True).n_params == 17
