@@ -81,3 +81,34 @@ def test_paper_model_checks_its_arguments():
     assert reference.paper_model(np.int64(17), "PE").name == "PE (17) [paper]"
     assert reference.paper_model(15.0).name == "ELS (15) [paper]"  # was 'ELS (15.0) [paper]'
     assert reference.paper_model(15, "SE", allow_misprinted=True).n_params == 17
+
+
+def test_plant_steady_state_is_inside_the_calibrated_range():
+    # steady_state(100) returned a flow from the calibrated formula R Q² = (h0 − β) n² − α n − κ at a speed the rig
+    # refuses (below speed_range[0] its turbine follows the low-flow branch, so that is no equilibrium), and
+    # steady_state('1200') parsed text
+    plant = PumpingPlant()
+    with pytest.raises(ValueError, match="500–1800 rpm"):
+        plant.steady_state(100.0)
+    with pytest.raises(ValueError, match="non-finite"):
+        plant.steady_state(np.nan)
+    with pytest.raises(TypeError, match="speed"):
+        plant.steady_state("1200")
+    with pytest.raises(TypeError, match="speed"):
+        TwoSpeedPumpingPlant().steady_state("1200", 1100.0)
+    with pytest.raises(TypeError, match="speed1"):
+        TwoSpeedPumpingPlant().static_pressure(True, 1100.0)
+    assert plant.steady_state(1200.0)[:2] == (1200.0, 1200.0)
+    run = plant.simulate(np.full(400, 1200.0), **QUIET)
+    assert run.flow[-1] == pytest.approx(plant.steady_state(1200.0)[2], rel=1e-9)
+
+
+def test_step_time_constant_checks_speed_and_horizon():
+    plant = PumpingPlant()
+    with pytest.raises(TypeError, match="speed"):  # was "can only concatenate str (not 'float') to str"
+        plant.step_time_constant("1200")
+    with pytest.raises(ValueError, match="500–1800 rpm"):
+        plant.step_time_constant(100.0)
+    with pytest.raises(ValueError, match="horizon"):  # was numpy's MemoryError for 149 GiB
+        plant.step_time_constant(1200.0, horizon=1e9)
+    assert 0.3 < plant.step_time_constant(1200.0) < 2.0

@@ -199,7 +199,8 @@ class TwoSpeedPumpingPlant:
                          rig.inertance, qj, hj, m])
 
     def _check_speeds(self, speed1: np.ndarray | float, speed2: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
-        n1, n2 = np.broadcast_arrays(np.asarray(speed1, dtype=float), np.asarray(speed2, dtype=float))
+        # text and bools are no speeds (a float conversion parsed '1200' and read True as 1 rpm)
+        n1, n2 = np.broadcast_arrays(real_array(speed1, "speed1"), real_array(speed2, "speed2"))
         lo, hi = self.rig.speed_range
         for i, n in ((1, n1), (2, n2)):
             if not np.all(np.isfinite(n)):
@@ -270,7 +271,7 @@ class TwoSpeedPumpingPlant:
 
     def steady_state(self, speed1: float, speed2: float) -> tuple[float, float, float, float, float]:
         """Equilibrium state (n_c1, n_1, n_c2, n_2, Q) at constant references ``speed1``, ``speed2`` (rpm)."""
-        q = float(self.steady_flow(float(speed1), float(speed2)))
+        q = float(self.steady_flow(speed1, speed2))  # checks both speeds
         return (float(speed1), float(speed1), float(speed2), float(speed2), q)
 
     # -- dynamics -----------------------------------------------------------

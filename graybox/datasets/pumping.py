@@ -490,8 +490,10 @@ class PumpingPlant:
         return self._calibrated_head(q)
 
     def steady_state(self, speed: float) -> tuple[float, float, float]:
-        """Equilibrium state (n_c, n, Q) at constant reference ``speed`` (rpm)."""
-        s = float(speed)
+        """Equilibrium state (n_c, n, Q) at constant reference ``speed`` (rpm), within ``speed_range``."""
+        # the calibrated formula of steady_flow is no equilibrium below speed_range[0] (the turbine's low-flow branch
+        # takes over there), and text is no speed: one speed as simulate takes it
+        s = self._one_speed(speed, "speed")
         return (s, s, float(self.steady_flow(s)))
 
     # -- dynamics -----------------------------------------------------------
@@ -729,13 +731,16 @@ class PumpingPlant:
         step instant (so it includes the dead time and the drive and rotor lags), over a run of
         ``horizon`` seconds after it.
         """
+        speed = self._one_speed(speed, "speed")  # text was concatenated with the step ('can only concatenate str')
         step = check_real(step, "step (rpm)")
         if step == 0:
             raise ValueError("step (rpm) must not be 0: a time constant is read off the response to a step")
         horizon = check_real(horizon, "horizon (s)", low=0, low_open=True)
         n_hold = 10
-        n_total = n_hold + max(1, int(round(horizon / self.Ts)))
-        u = np.r_[np.full(n_hold, float(speed)), np.full(n_total - n_hold, float(speed) + step)]
+        # the run's arrays, about 15 floats a sample: a horizon no memory holds is said, not numpy's MemoryError
+        n_total = n_hold + max(1, check_count(int(round(horizon / self.Ts)), "horizon (in samples of Ts)",
+                                              item_bytes=15 * 8))
+        u = np.r_[np.full(n_hold, speed), np.full(n_total - n_hold, speed + step)]
         y = self.simulate(u, noise=False, process_noise=False).pressure
         frac = (y[n_hold:] - y[n_hold - 1]) / (y[-1] - y[n_hold - 1])
         if abs(frac[-1] - 1) > 1e-6 or abs(self.static_pressure(speed + step) - y[-1]) > 1e-6:
