@@ -112,3 +112,27 @@ def test_step_time_constant_checks_speed_and_horizon():
     with pytest.raises(ValueError, match="horizon"):  # was numpy's MemoryError for 149 GiB
         plant.step_time_constant(1200.0, horizon=1e9)
     assert 0.3 < plant.step_time_constant(1200.0) < 2.0
+
+
+@pytest.mark.parametrize("fields", [
+    (2, (1, 3), 30, 30, 30),        # τ_m = 30 allows 2..3 and advises 2
+    (3, (2, 3), 30, 30, 30),        # the rule's q for τ_m = 30 is round(30 / 15) = 2
+    (1, (1, 1), 30, 30, 30),
+    (5, (4, 7), 90, 90, 90),        # the bundled plant's range and q with another τ_m (90: 5..9, q 6)
+])
+def test_decimation_advice_holds_q_to_the_rule(fields):
+    # DecimationAdvice checked tau_m = min(tau_y, tau_y2) and q inside q_range, but not that q_range and q are the
+    # rule's for tau_m: a hand-edited file (q = 3 where τ_m = 30 gives 2; q_range = (1, 3) for (2, 3)) loaded
+    # as advice the rule never gives
+    q, q_range, ty, ty2, tm = fields
+    with pytest.raises(ValueError, match="rule"):
+        gb.DecimationAdvice(q, q_range, ty, ty2, tm, 0.05)
+
+
+def test_decimation_advice_without_minimum_has_no_tau():
+    with pytest.raises(ValueError, match="rule"):
+        gb.DecimationAdvice(None, None, 30, 30, 30, 0.05, "no minimum")
+    gb.DecimationAdvice(None, None, None, None, None, 0.05, "no minimum")
+    adv = gb.decimation_advice(gb.load_pumping())
+    assert (adv.q, adv.q_range) == (5, (4, 7))
+    assert gb.DecimationAdvice(adv.q, adv.q_range, adv.tau_y, adv.tau_y2, adv.tau_m, adv.Ts) == adv

@@ -76,14 +76,20 @@ class DecimationAdvice:
         if not (self.Ts > 0 and np.isfinite(self.Ts)):
             raise ValueError(f"DecimationAdvice: Ts must be a finite period > 0 (s), got {self.Ts!r}")
         if self.q is None:
-            if self.q_range is not None or not self.reason:
-                raise ValueError("DecimationAdvice: without a q there is no q_range, and the reason says why")
+            if self.q_range is not None or not self.reason or self.tau_m is not None:
+                raise ValueError("DecimationAdvice: without a q there is no q_range and no minimum tau_m (the rule "
+                                 "advises a q wherever it read one), and the reason says why")
             return
         if (self.reason or self.q_range is None or len(self.q_range) != 2
                 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in self.q_range)
                 or not 1 <= self.q_range[0] <= self.q <= self.q_range[1]):
             raise ValueError(f"DecimationAdvice: q={self.q} must lie in q_range, a pair 1 <= low <= high, got "
                              f"{self.q_range!r}, and a q needs no reason")
+        # the rule's figures for tau_m (a hand-edited file held q and q_range to each other only)
+        if self.tau_m is None or (self.q, tuple(self.q_range)) != _rule(self.tau_m):
+            want = "a minimum tau_m" if self.tau_m is None else f"q, q_range = {_rule(self.tau_m)}"
+            raise ValueError(f"DecimationAdvice: the rule gives {want} for tau_m = {self.tau_m}, got q={self.q}, "
+                             f"q_range={self.q_range!r}")
 
     @property
     def Ts_new(self) -> float | None:
@@ -192,10 +198,15 @@ def decimation_advice(data: Record | Dataset | Sequence[Record]) -> DecimationAd
                                 "slowest motion does not turn within it (a drift, or a record too short for its "
                                 "dynamics)")
     tau_m = min(found)
+    q, q_range = _rule(tau_m)
+    return DecimationAdvice(q, q_range, tau_y, tau_y2, tau_m, Ts)
+
+
+def _rule(tau_m: int) -> tuple[int, tuple[int, int]]:
+    """(q, q_range) of the rule for τ_m: 10 ≤ τ_m / q ≤ 20, q = τ_m / 15 rounded, each at least 1."""
     lo, hi = TAU_SAMPLES
     q_range = (max(1, math.ceil(tau_m / hi)), max(1, math.floor(tau_m / lo)))
-    q = min(max(q_range[0], round(tau_m / ((lo + hi) / 2))), q_range[1])
-    return DecimationAdvice(q, q_range, tau_y, tau_y2, tau_m, Ts)
+    return min(max(q_range[0], round(tau_m / ((lo + hi) / 2))), q_range[1]), q_range
 
 
 def decimate(data: Record | Dataset | Sequence[Record], q: int, *, antialias: bool = True
