@@ -136,3 +136,32 @@ def test_decimation_advice_without_minimum_has_no_tau():
     adv = gb.decimation_advice(gb.load_pumping())
     assert (adv.q, adv.q_range) == (5, (4, 7))
     assert gb.DecimationAdvice(adv.q, adv.q_range, adv.tau_y, adv.tau_y2, adv.tau_m, adv.Ts) == adv
+
+
+def test_speed_reference_draws_its_holds_with_a_running_total(monkeypatch):
+    # _staircase summed the growing list of holds at each draw, quadratic in their number: 4·10⁶ samples took 4.7 s
+    # and 4·10⁷ (23 days at 0.05 s) about 8 minutes; the same draws, so every seed gives the reference it gave
+    from graybox.datasets import pumping
+
+    ref = pumping.speed_reference(n_samples=3000, n_ident=2000, seed=7)
+    assert ref.shape == (3000,) and np.all(ref % 10 == 0)
+    assert np.array_equal(ref, pumping.speed_reference(n_samples=3000, n_ident=2000, seed=7))
+    summed = []
+
+    def counted_sum(*args, **kwargs):  # the module's sum, before the builtin
+        summed.append(1)
+        return sum(*args, **kwargs)
+
+    monkeypatch.setattr(pumping, "sum", counted_sum, raising=False)
+    assert np.array_equal(ref, pumping.speed_reference(n_samples=3000, n_ident=2000, seed=7))
+    assert len(summed) <= 2  # not once per hold (37 holds here)
+
+
+def test_bundled_plant_run_is_the_committed_one():
+    # the bundled dynamic record is speed_reference(seed=2011) run on the plant: the running total draws the same
+    from graybox.datasets import pumping
+
+    data = gb.load_pumping()
+    u = pumping.speed_reference()
+    assert np.array_equal(u, np.concatenate([data.ident.u, data.valid.u]))
+

@@ -917,8 +917,10 @@ def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.
         raise ValueError(f"the speed range [{low:g}, {high:g}] rpm must span at least {_MIN_SPAN:g} rpm between whole "
                          "multiples of 10 rpm: the steps are 40–900 rpm")
     holds: list[int] = []
-    while sum(holds) < n:
+    total = 0
+    while total < n:  # a running total: summing the list at each draw was quadratic in the holds (the same draws)
         holds.append(int(rng.integers(80, 181)))  # 4–9 s at Ts = 0.05 s
+        total += holds[-1]
     if len(holds) < 4:
         raise ValueError(f"a part of {n} samples is too short for a staircase; need at least 4 holds")
     sizes = ((40.0, 150.0), (150.0, 400.0), (400.0, 900.0))  # small, medium, large (rpm)
