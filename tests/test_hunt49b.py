@@ -165,3 +165,19 @@ def test_bundled_plant_run_is_the_committed_one():
     u = pumping.speed_reference()
     assert np.array_equal(u, np.concatenate([data.ident.u, data.valid.u]))
 
+
+@pytest.mark.parametrize("call", ["static_experiment", "generate", "static_grid_experiment", "generate_miso"])
+def test_static_experiment_and_generate_name_a_plant_that_is_none(call):
+    # each failed on the object's first missing attribute: AttributeError "'str' object has no attribute 'Ts'"
+    from graybox.datasets import _pumping_miso, pumping
+
+    calls = {"static_experiment": lambda p: pumping.static_experiment(p, seed=1),
+             "generate": lambda p: pumping.generate(plant=p),
+             "static_grid_experiment": lambda p: _pumping_miso.static_grid_experiment(p, seed=1),
+             "generate_miso": lambda p: _pumping_miso.generate_miso(plant=p)}
+    kind = "TwoSpeedPumpingPlant" if "miso" in call or "grid" in call else "PumpingPlant"
+    with pytest.raises(TypeError, match=f"plant must be a {kind}, got str"):
+        calls[call]("rig")
+    other = PumpingPlant() if kind == "TwoSpeedPumpingPlant" else TwoSpeedPumpingPlant()
+    with pytest.raises(TypeError, match=f"plant must be a {kind}"):
+        calls[call](other)

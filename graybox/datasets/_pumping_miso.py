@@ -69,8 +69,8 @@ import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
 from ..core._validation import as_1d_finite, check_real, real_array
-from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, initial_state, reference_lengths, regenerate_main,
-                      static_samples, static_speeds, write_csv_pair)
+from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, check_plant, initial_state, reference_lengths,
+                      regenerate_main, static_samples, static_speeds, write_csv_pair)
 from ..core._reprs import short_repr
 
 #: The plant's inputs, as its records and static points name them: speed references of sets 1 and 2.
@@ -549,6 +549,7 @@ def static_grid_experiment(
         ū = the speed pairs (rpm), shape (K, 2), inputs named ``u1``, ``u2``; ȳ = mean measured
         pressure (mlc), shape (K,).
     """
+    check_plant(plant, TwoSpeedPumpingPlant)
     sp = static_grid() if speeds is None else real_array(speeds, "speeds", "speed pairs (rpm)")
     if sp.ndim != 2 or sp.shape[1] != 2 or sp.shape[0] == 0:
         raise ValueError(f"speeds must have shape (K, 2), got {sp.shape}")
@@ -576,7 +577,7 @@ def generate_miso(*, seed: int = DEFAULT_SEED, plant: TwoSpeedPumpingPlant | Non
     (TwoSpeedRun, StaticPoints)
         The run and the 36 static points (ū in rpm, shape (36, 2); ȳ in mlc).
     """
-    plant = TwoSpeedPumpingPlant() if plant is None else plant
+    plant = TwoSpeedPumpingPlant() if plant is None else check_plant(plant, TwoSpeedPumpingPlant)
     run = plant.simulate(two_speed_reference(seed=seed), seed=np.random.default_rng([seed, 13]))
     static = static_grid_experiment(plant, seed=np.random.default_rng([seed, 14]))
     return run, static

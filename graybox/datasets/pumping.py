@@ -977,12 +977,21 @@ def static_experiment(
     StaticPoints
         ū = ``speeds`` (rpm), ȳ = mean measured pressure (mlc).
     """
+    check_plant(plant)
     sp = static_speeds(speeds, "speeds")
     n_settle, n_avg = static_samples(plant.Ts, settle, average)
     u = np.repeat(sp, n_settle + n_avg)
     run = plant.simulate(u, seed=seed)
     y = run.y.reshape(sp.size, n_settle + n_avg)[:, n_settle:]
     return StaticPoints(sp, y.mean(axis=1), name="pumping static points", units=("rpm", "mlc"))
+
+
+def check_plant(plant: object, kind: type = PumpingPlant) -> "PumpingPlant":
+    """``plant`` if it is a ``kind`` (a :class:`PumpingPlant`, or the two-speed rig), else a ``TypeError`` naming it
+    (another object failed on its first missing attribute, "'str' object has no attribute 'Ts'")."""
+    if not isinstance(plant, kind):
+        raise TypeError(f"plant must be a {kind.__name__}, got {type(plant).__name__}")
+    return plant
 
 
 def static_speeds(speeds: object, name: str) -> np.ndarray:
@@ -1010,7 +1019,7 @@ def generate(seed: int = DEFAULT_SEED, plant: PumpingPlant | None = None) -> tup
     Deterministic for a given ``seed``: the dynamic run uses stream ``[seed, 2]`` and the static
     test stream ``[seed, 3]`` of ``np.random.default_rng`` (the input design uses ``[seed, 1]``).
     """
-    plant = PumpingPlant() if plant is None else plant
+    plant = PumpingPlant() if plant is None else check_plant(plant)
     u = speed_reference(seed=seed)
     run = plant.simulate(u, seed=np.random.default_rng([seed, 2]))
     static = static_experiment(plant, seed=np.random.default_rng([seed, 3]))
