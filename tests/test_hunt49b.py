@@ -181,3 +181,33 @@ def test_static_experiment_and_generate_name_a_plant_that_is_none(call):
     other = PumpingPlant() if kind == "TwoSpeedPumpingPlant" else TwoSpeedPumpingPlant()
     with pytest.raises(TypeError, match=f"plant must be a {kind}"):
         calls[call](other)
+
+
+@pytest.mark.parametrize("seed,error", [(True, TypeError), (-1, ValueError), (1.5, TypeError), ("3", TypeError),
+                                        ([1, 2], TypeError)])
+def test_plant_seed_is_an_int_or_a_generator(seed, error):
+    # the rigs handed seed straight to numpy's default_rng: True ran as seed 1 (and [1, 2] as a seed sequence), and
+    # -1, 1.5 and '3' failed in numpy's words ('expected non-negative integer', 'SeedSequence expects int or
+    # sequence of ints for entropy not 3'), naming no argument
+    from graybox.datasets import pumping
+
+    plant = PumpingPlant()
+    u = np.full(5, 1200.0)
+    with pytest.raises(error, match="seed"):
+        plant.simulate(u, seed=seed)
+    with pytest.raises(error, match="seed"):
+        plant.closed_loop(lambda k, y: 1200.0, 5, u0=1200.0, seed=seed)
+    with pytest.raises(error, match="seed"):
+        TwoSpeedPumpingPlant().simulate(np.full((5, 2), 1200.0), seed=seed)
+    with pytest.raises(error, match="seed"):
+        pumping.static_experiment(plant, seed=seed, settle=1.0, average=1.0)
+
+
+def test_plant_seed_reproduces():
+    plant = PumpingPlant()
+    u = gb.design_input("aprbs", 300, low=800.0, high=1600.0, hold=(10, 40), seed=3)
+    a = plant.simulate(u, seed=5)
+    assert np.array_equal(a.y, plant.simulate(u, seed=np.int64(5)).y)
+    assert np.array_equal(a.y, plant.simulate(u, seed=np.random.default_rng(5)).y)
+    assert np.array_equal(a.y, plant.closed_loop(lambda k, y: u[k], 300, u0=u[0], seed=5).y)
+    assert not np.array_equal(a.y, plant.simulate(u, seed=6).y)

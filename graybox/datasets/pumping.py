@@ -524,6 +524,11 @@ class PumpingPlant:
         if need_rng and rng is None:
             raise ValueError(f"{who}: pass seed (an int or a numpy Generator) or switch the noise off; "
                              "the plant never draws unseeded noise")
+        if rng is not None and not isinstance(rng, np.random.Generator):
+            # numpy takes True for the seed 1 and a list for a seed sequence, and names no argument for -1 or '3'
+            if not isinstance(rng, (int, np.integer)) or isinstance(rng, (bool, np.bool_)):
+                raise TypeError(f"seed must be an int or a numpy Generator, got {rng!r} ({type(rng).__name__})")
+            rng = check_seed(rng)
         gen = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
         # Draw all four noise sequences up front, always in this order, so a seed fixes the run
         # whichever disturbances are switched on.
