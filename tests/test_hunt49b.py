@@ -211,3 +211,18 @@ def test_plant_seed_reproduces():
     assert np.array_equal(a.y, plant.simulate(u, seed=np.random.default_rng(5)).y)
     assert np.array_equal(a.y, plant.closed_loop(lambda k, y: u[k], 300, u0=u[0], seed=5).y)
     assert not np.array_equal(a.y, plant.simulate(u, seed=6).y)
+
+
+def test_frequency_response_at_a_pole_on_the_unit_circle_is_infinite_without_a_warning():
+    # an integrator's response at ω = 0 (its pole at z = 1) divided by zero with numpy's RuntimeWarning, where
+    # dc_gain says inf quietly
+    import warnings
+
+    integ = gb.Model(["1", "y(k-1)", "u(k-1)"], [-0.5, 1.0, 0.5], name="integ")
+    lm = gb.local_model(integ, 1.0, Ts=0.1, y0=3.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        g = lm.frequency_response([0.0, 1.0])
+        assert lm.dc_gain[0] == np.inf
+    assert np.abs(g[0]) == np.inf
+    assert np.isfinite(g[1]) and abs(g[1]) == pytest.approx(abs(0.5 / (np.exp(0.1j) - 1.0)))

@@ -373,7 +373,8 @@ class LocalModel:
         return lfilter(b, np.concatenate([[1.0], -self.a]), np.ones(n))
 
     def frequency_response(self, omega: np.ndarray, input: int | str = 0) -> np.ndarray:
-        """G_i(e^{jωTs}) = B_i / A on the unit circle at the angular frequencies ``omega`` (rad/s), complex, shape (K,).
+        """G_i(e^{jωTs}) = B_i / A on the unit circle at the angular frequencies ``omega`` (rad/s), complex, shape (K,);
+        of infinite modulus at a pole on the unit circle (an integrator's at ω = 0).
 
         Parameters
         ----------
@@ -395,7 +396,8 @@ class LocalModel:
         b = self.b[self._input_index(input)]
         num = np.polynomial.polynomial.polyval(zi, np.concatenate([[0.0], b]))
         den = np.polynomial.polynomial.polyval(zi, np.concatenate([[1.0], -self.a]))
-        return num / den
+        with np.errstate(divide="ignore", invalid="ignore"):  # at a pole on the unit circle: infinite, as dc_gain
+            return num / den
 
     def settling_time(self, input: int | str = 0, band: float = SETTLING_BAND) -> float:
         """Time (s) after which the step response stays within ``band`` of its final value.
