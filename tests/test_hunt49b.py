@@ -226,3 +226,30 @@ def test_frequency_response_at_a_pole_on_the_unit_circle_is_infinite_without_a_w
         assert lm.dc_gain[0] == np.inf
     assert np.abs(g[0]) == np.inf
     assert np.isfinite(g[1]) and abs(g[1]) == pytest.approx(abs(0.5 / (np.exp(0.1j) - 1.0)))
+
+
+@pytest.mark.parametrize("kw,error,match", [
+    ({"Ts": True, "dead_time": 0.0}, TypeError, "Ts"),             # a 1 s period, silently
+    ({"substeps": True, "dead_time": 0.0}, TypeError, "substeps"),
+    ({"inertia": True}, TypeError, "inertia"),
+    ({"ramp_up": True}, ValueError, "ramp_up"),                     # a ramp of 1 rpm/s (a ValueError, as for 'fast')
+    ({"process_noise_pole": True}, TypeError, "process_noise_pole"),
+    ({"static_coefficients": (1.0, 2.0)}, ValueError, "static_coefficients"),  # 'not enough values to unpack'
+    ({"static_coefficients": "abc"}, TypeError, "static_coefficients"),        # 'could not convert string to float'
+    ({"speed_range": (500.0,)}, ValueError, "speed_range"),                    # 'not enough values to unpack'
+    ({"speed_range": ("500", "1800")}, TypeError, "speed_range"),              # "'<' not supported …"
+    ({"speed_range": (500.0, np.inf)}, ValueError, "speed_range"),            # references of any speed above 500 rpm
+])
+def test_pumping_plant_refuses_constants_that_are_no_numbers(kw, error, match):
+    with pytest.raises(error, match=f"PumpingPlant: {match}"):
+        PumpingPlant(**kw)
+
+
+def test_pumping_plant_takes_numpy_numbers():
+    # np.float32(0.15) was refused as 'inertia must be a positive finite number'
+    plant = PumpingPlant(inertia=np.float32(0.15), substeps=np.int64(10), static_coefficients=np.array(PumpingPlant().
+                         static_coefficients), speed_range=[500, 1800])
+    assert plant.speed_range == (500.0, 1800.0) and isinstance(plant.static_coefficients, tuple)
+    hash(plant)
+    u = np.full(20, 1200.0)
+    assert plant.simulate(u, **QUIET).y == pytest.approx(PumpingPlant().simulate(u, **QUIET).y, rel=1e-6)

@@ -388,12 +388,16 @@ class PumpingPlant:
     def __post_init__(self) -> None:
         positive = ("Ts", "drive_lag", "inertia", "speed_stiffness", "pump_torque", "shutoff_head",
                     "pump_drop", "pipe_loss", "pipe_length", "pipe_diameter")
+        # numbers, not bools (Ts=True ran at 1 s); numpy's float32 is one too
         for name in positive:
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"PumpingPlant: {name} must be a positive finite number, got {v!r}")
-        if int(self.substeps) != self.substeps or self.substeps < 1:
-            raise ValueError(f"PumpingPlant: substeps must be a positive integer, got {self.substeps!r}")
+            check_real(getattr(self, name), f"PumpingPlant: {name} (a positive finite number)", low=0, low_open=True)
+        check_int(self.substeps, "PumpingPlant: substeps", low=1)
+        # the curve and the range as tuples of floats (the plant is hashed): their counts and types said, not unpacked
+        for name, n in (("static_coefficients", 3), ("speed_range", 2)):
+            v = real_array(getattr(self, name), f"PumpingPlant: {name}", f"{n} numbers")
+            if v.shape != (n,) or not np.all(np.isfinite(v)):
+                raise ValueError(f"PumpingPlant: {name} must be {n} finite numbers, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, tuple(float(x) for x in v))
         dt = self.Ts / self.substeps
         m = self.dead_time / dt
         if not (0 <= self.dead_time < self.Ts and abs(m - round(m)) < 1e-9):
@@ -409,10 +413,12 @@ class PumpingPlant:
                 raise ValueError(f"PumpingPlant: {name} must be a positive finite number, got {v!r}")
         for name in ("ramp_up", "ramp_down"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and v > 0 and not math.isnan(v)):
+            # a number (numpy's too), not a bool (True was a ramp of 1 rpm/s)
+            if (not isinstance(v, (int, float, np.floating, np.integer)) or isinstance(v, (bool, np.bool_))
+                    or not (v > 0 and not math.isnan(v))):
                 raise ValueError(f"PumpingPlant: {name} must be a positive number of rpm/s (inf: no ramp), got {v!r}")
-        if not 0 <= self.process_noise_pole < 1:
-            raise ValueError(f"PumpingPlant: process_noise_pole must be in [0, 1), got {self.process_noise_pole!r}")
+        check_real(self.process_noise_pole, "PumpingPlant: process_noise_pole (in [0, 1))", low=0, high=1,
+                   high_open=True)
         k, a, b = (float(c) for c in self.static_coefficients)
         if not self.shutoff_head > b:
             raise ValueError(f"PumpingPlant: shutoff_head ({self.shutoff_head:g}) must exceed β = {b:g}, "
