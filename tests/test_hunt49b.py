@@ -253,3 +253,13 @@ def test_pumping_plant_takes_numpy_numbers():
     hash(plant)
     u = np.full(20, 1200.0)
     assert plant.simulate(u, **QUIET).y == pytest.approx(PumpingPlant().simulate(u, **QUIET).y, rel=1e-6)
+
+
+@pytest.mark.parametrize("bad", [["1200", "1100"], [[True, 1200.0]], None, {"a": 1}])
+def test_plant_surface_refuses_what_is_no_speeds(bad):
+    # PlantSurface read ū with np.asarray(dtype=float): text was parsed (['1200', '1100'] gave 9.94 mlc), True was 1 rpm,
+    # None 'must have shape (K, 2), got ()' and a dict numpy's "float() argument must be …"
+    surface = TwoSpeedPumpingPlant().surface()
+    with pytest.raises(TypeError, match="ubar"):
+        surface(bad)
+    assert surface([1200.0, 1100.0]) == pytest.approx(TwoSpeedPumpingPlant().static_pressure([1200.0], [1100.0]))

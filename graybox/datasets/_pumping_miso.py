@@ -350,7 +350,8 @@ class PlantSurface:
 
     def __call__(self, ubar: np.ndarray) -> np.ndarray:
         """p̄ at ``ubar`` of shape (K, 2) (rpm; a DataFrame with columns ``u1``, ``u2`` read by name); returns shape (K,)."""
-        u = np.asarray(frame_inputs(ubar, _INPUTS, "ubar"), dtype=float)  # a DataFrame by its columns u1, u2
+        # a DataFrame by its columns u1, u2; text, bools and None are no speeds (np.asarray parsed '1200')
+        u = real_array(frame_inputs(ubar, _INPUTS, "ubar"), "ubar", "speed pairs (rpm)")
         if u.ndim == 1 and u.size == 2:
             u = u[None, :]
         if u.ndim != 2 or u.shape[1] != 2:
