@@ -263,3 +263,16 @@ def test_plant_surface_refuses_what_is_no_speeds(bad):
     with pytest.raises(TypeError, match="ubar"):
         surface(bad)
     assert surface([1200.0, 1100.0]) == pytest.approx(TwoSpeedPumpingPlant().static_pressure([1200.0], [1100.0]))
+
+
+@pytest.mark.parametrize("kw", [{"settle": 1e9}, {"average": 1e9}, {"average": 1e300}])
+def test_static_experiment_refuses_a_run_no_memory_holds(kw):
+    # settle=1e9 s ended in numpy's MemoryError (1.46 TiB; 10.5 TiB on the two-speed rig) and average=1e300 in
+    # "OverflowError: Python int too large to convert to C long", after the other checks
+    from graybox.datasets import pumping
+    from graybox.datasets._pumping_miso import static_grid_experiment
+
+    with pytest.raises(ValueError, match="settle|average"):
+        pumping.static_experiment(PumpingPlant(), seed=1, **kw)
+    with pytest.raises(ValueError, match="settle|average"):
+        static_grid_experiment(TwoSpeedPumpingPlant(), seed=1, **kw)

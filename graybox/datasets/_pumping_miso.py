@@ -557,7 +557,7 @@ def static_grid_experiment(
     bad = np.flatnonzero(~np.all(np.isfinite(sp), axis=1))
     if bad.size:  # said of the pairs given, not of the run's samples they become
         raise ValueError(f"speeds must be finite (rpm): row {bad[0]} is {sp[bad[0]].tolist()}")
-    n_settle, n_avg = static_samples(plant.Ts, settle, average)
+    n_settle, n_avg = static_samples(plant.Ts, settle, average, sp.shape[0])
     u = np.repeat(sp, n_settle + n_avg, axis=0)
     run = plant.simulate(u, seed=seed)
     y = run.y.reshape(sp.shape[0], n_settle + n_avg)[:, n_settle:]

@@ -990,7 +990,7 @@ def static_experiment(
     """
     check_plant(plant)
     sp = static_speeds(speeds, "speeds")
-    n_settle, n_avg = static_samples(plant.Ts, settle, average)
+    n_settle, n_avg = static_samples(plant.Ts, settle, average, sp.size)
     u = np.repeat(sp, n_settle + n_avg)
     run = plant.simulate(u, seed=seed)
     y = run.y.reshape(sp.size, n_settle + n_avg)[:, n_settle:]
@@ -1013,15 +1013,20 @@ def static_speeds(speeds: object, name: str) -> np.ndarray:
     return sp
 
 
-def static_samples(Ts: float, settle: object, average: object) -> tuple[int, int]:
+def static_samples(Ts: float, settle: object, average: object, levels: int = 1) -> tuple[int, int]:
     """A static test's samples per level: (discarded while settling, averaged), from ``settle`` >= 0 and
-    ``average`` seconds (finite numbers; the average covers at least one sample of ``Ts``)."""
+    ``average`` seconds (finite numbers; the average covers at least one sample of ``Ts``). The run over ``levels``
+    levels must fit in memory (settle = 1e9 s was numpy's MemoryError, average = 1e300 s an OverflowError)."""
     settle = check_real(settle, "settle (s)", low=0)
     average = check_real(average, "average (s)", low=0, low_open=True)
     n_avg = int(round(average / Ts))
     if n_avg < 1:
         raise ValueError(f"average must cover at least one sample of {Ts:g} s, got {average:g} s")
-    return int(round(settle / Ts)), n_avg
+    n_settle = int(round(settle / Ts))
+    # the run's arrays, about 15 floats a sample (two inputs' a few more)
+    check_count(levels * (n_settle + n_avg), f"the static test's samples, {levels} level(s) × (settle + average) / Ts",
+                item_bytes=20 * 8)
+    return n_settle, n_avg
 
 
 def generate(seed: int = DEFAULT_SEED, plant: PumpingPlant | None = None) -> tuple[PlantRun, StaticPoints]:
