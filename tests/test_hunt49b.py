@@ -276,3 +276,11 @@ def test_static_experiment_refuses_a_run_no_memory_holds(kw):
         pumping.static_experiment(PumpingPlant(), seed=1, **kw)
     with pytest.raises(ValueError, match="settle|average"):
         static_grid_experiment(TwoSpeedPumpingPlant(), seed=1, **kw)
+
+
+@pytest.mark.parametrize("kw", [{"seed": 1}, QUIET, {"x0": (1200.0, 1200.0, 40.0), **QUIET}])
+def test_plant_refuses_an_empty_reference(kw):
+    # simulate([]) failed with a bare 'IndexError: index 0 is out of bounds for axis 0 with size 0' (reading u[0] for
+    # the initial equilibrium), and with x0 returned a run of no samples; the two-speed rig refuses N = 0 by name
+    with pytest.raises(ValueError, match="speed reference"):
+        PumpingPlant().simulate([], **kw)

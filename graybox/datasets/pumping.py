@@ -581,6 +581,8 @@ class PumpingPlant:
         PlantRun
         """
         u = as_1d_finite(u, "speed reference")
+        if u.size == 0:  # u[0] gives the initial equilibrium: an IndexError named nothing
+            raise ValueError("speed reference must hold at least one sample (rpm), got none")
         self._check_reference(u)
         N = u.size
         eps_w, eps_s, eps_a, v, (phi, w_gain, w0, s_phi, s_gain, a_phi, a_gain) = self._disturbances(
