@@ -284,3 +284,28 @@ def test_plant_refuses_an_empty_reference(kw):
     # the initial equilibrium), and with x0 returned a run of no samples; the two-speed rig refuses N = 0 by name
     with pytest.raises(ValueError, match="speed reference"):
         PumpingPlant().simulate([], **kw)
+
+
+def test_plant_statics_read_speeds_as_simulate_does():
+    # static_pressure and steady_flow read speed with np.asarray(dtype=float): '1200' was parsed, True was 1 rpm, NaN
+    # gave NaN, and steady_flow below speed_range[0] gave the calibrated formula's flow (no equilibrium there: the
+    # low-flow branch holds) or, lower still, NaN with numpy's 'invalid value encountered in sqrt'
+    import warnings
+
+    plant = PumpingPlant()
+    for f in (plant.static_pressure, plant.steady_flow):
+        with pytest.raises(TypeError, match="speed"):
+            f("1200")
+        with pytest.raises(TypeError, match="speed"):
+            f(True)
+        with pytest.raises(ValueError, match="non-finite"):
+            f([1200.0, np.nan])
+        with pytest.raises(ValueError, match="500–1800 rpm"):
+            f([1200.0, 100.0])
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(ValueError, match="500–1800 rpm"):
+                f(10.0)
+        grid = np.array([[800.0, 1200.0], [1400.0, 1600.0]])
+        assert f(grid).shape == (2, 2) and np.ndim(f(1200.0)) == 0
+    assert plant.static_pressure(1200.0) == pytest.approx(gb.reference.eq1(1200.0))

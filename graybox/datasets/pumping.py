@@ -447,14 +447,24 @@ class PumpingPlant:
     def static_pressure(self, speed: np.ndarray | float) -> np.ndarray:
         """The curve the rig is calibrated to, H(ū) = β ū² + α ū + κ (mlc), same shape as ``speed``."""
         k, a, b = self.static_coefficients
-        n = np.asarray(speed, dtype=float)
+        n = self._speeds(speed)
         return b * n**2 + a * n + k
 
     def steady_flow(self, speed: np.ndarray | float) -> np.ndarray:
         """Equilibrium flow Q̄ (L/s) at constant speed ū (rpm): R Q̄² = (h_0 − β) ū² − α ū − κ."""
         k, a, b = self.static_coefficients
-        n = np.asarray(speed, dtype=float)
+        n = self._speeds(speed)
         return np.sqrt(((self.shutoff_head - b) * n**2 - a * n - k) / self.loss)
+
+    def _speeds(self, speed: object) -> np.ndarray:
+        """Speeds (rpm) of any shape as a float array: numbers (no text, bools or None), finite, within
+        ``speed_range`` (below it the calibrated formula is no equilibrium, the low-flow branch holds there)."""
+        n = real_array(speed, "speed", "speeds (rpm)")
+        bad = ~np.isfinite(n)
+        if bad.any():
+            raise ValueError(f"speed has {int(bad.sum())} non-finite value(s) (NaN or inf)")
+        self._check_reference(n.ravel(), "speed")
+        return n
 
     @cached_property
     def _low_flow(self) -> tuple[float, float, float]:
