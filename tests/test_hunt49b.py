@@ -309,3 +309,11 @@ def test_plant_statics_read_speeds_as_simulate_does():
         grid = np.array([[800.0, 1200.0], [1400.0, 1600.0]])
         assert f(grid).shape == (2, 2) and np.ndim(f(1200.0)) == 0
     assert plant.static_pressure(1200.0) == pytest.approx(gb.reference.eq1(1200.0))
+
+
+@pytest.mark.parametrize("flow,error", [("3", TypeError), (True, TypeError), (None, TypeError), ({}, TypeError),
+                                        (np.inf, ValueError), (np.nan, ValueError), (-1.0, ValueError)])
+def test_turbine_head_takes_a_flow(flow, error):
+    # float(flow) parsed '3' and read True as 1 L/s (None: "float() argument must be …"), and inf returned inf
+    with pytest.raises(error, match="flow"):
+        PumpingPlant().turbine_head(flow)
