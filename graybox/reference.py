@@ -48,6 +48,9 @@ def eq1(u: np.ndarray) -> np.ndarray:
 def eq1_points(ubar: np.ndarray | None = None) -> StaticPoints:
     """Eq. (1) sampled at ū = 750, 850, …, 1650 rpm (or at ``ubar``)."""
     ub = np.arange(750.0, 1651.0, 100.0) if ubar is None else real_array(ubar, "ubar")
+    if ub.ndim > 1:  # speeds of the one input: said of ubar, not of the curve's values at them
+        raise ValueError(f"ubar must be 1-D (speeds, rpm), got shape {ub.shape}")
+    ub = ub.reshape(-1)  # one speed: one point
     return StaticPoints(ub, eq1(ub), name="eq. (1)")
 
 

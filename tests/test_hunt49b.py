@@ -317,3 +317,17 @@ def test_turbine_head_takes_a_flow(flow, error):
     # float(flow) parsed '3' and read True as 1 L/s (None: "float() argument must be …"), and inf returned inf
     with pytest.raises(error, match="flow"):
         PumpingPlant().turbine_head(flow)
+
+
+def test_eq1_points_reads_speeds():
+    # eq1_points([[750, 850]]) said 'eq. (1): ybar must be 1-D, got shape (1, 2)', naming the curve's values for the
+    # speeds given, and one speed (1200.0) was refused as '0-D'
+    from graybox import reference
+
+    with pytest.raises(ValueError, match="ubar must be 1-D"):
+        reference.eq1_points([[750.0, 850.0]])
+    with pytest.raises(ValueError, match="ubar must be 1-D"):
+        reference.eq1_points([[750.0], [850.0]])
+    pts = reference.eq1_points(1200.0)
+    assert pts.ubar.ravel().tolist() == [1200.0] and pts.ybar[0] == pytest.approx(reference.eq1(1200.0))
+    assert len(reference.eq1_points()) == 10
