@@ -331,3 +331,13 @@ def test_eq1_points_reads_speeds():
     pts = reference.eq1_points(1200.0)
     assert pts.ubar.ravel().tolist() == [1200.0] and pts.ybar[0] == pytest.approx(reference.eq1(1200.0))
     assert len(reference.eq1_points()) == 10
+
+
+@pytest.mark.parametrize("rel_step", [1.0, 10.0])
+def test_linearize_refuses_a_step_of_the_whole_level(rel_step):
+    # rel_step=10 stepped the flow to −9 Q̄: C came back NaN and A with a spectral radius of 1.13 (the rig is stable,
+    # 0.89), without a word; a relative step of 1 or more crosses zero
+    with pytest.raises(ValueError, match="rel_step"):
+        PumpingPlant().linearize(1200.0, rel_step=rel_step)
+    A, _, C = PumpingPlant().linearize(1200.0)
+    assert np.isfinite(C).all() and np.max(np.abs(np.linalg.eigvals(A))) < 1.0

@@ -708,7 +708,7 @@ class PumpingPlant:
         speed : float
             Operating reference (rpm), within ``speed_range``.
         rel_step : float
-            Relative finite-difference step (dimensionless).
+            Relative finite-difference step (dimensionless), in (0, 1).
 
         Returns
         -------
@@ -719,7 +719,8 @@ class PumpingPlant:
             mlc per unit of each state.
         """
         s = self._one_speed(speed, "speed")
-        rel_step = check_real(rel_step, "rel_step", low=0, low_open=True)
+        # below 1: a step of the whole level crosses zero (a negative flow: C was NaN, A's radius 1.13 at 10)
+        rel_step = check_real(rel_step, "rel_step", low=0, low_open=True, high=1, high_open=True)
         S, delay, dt, consts = self._kernel_constants
         x_bar = np.array([*self.steady_state(s), s])
 
