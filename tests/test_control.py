@@ -367,7 +367,7 @@ def test_nonlinear_system_with_its_noise_input_reproduces_the_record():
     L = model.max_lag
     xi = gb.one_step_residuals(model, rec)[0]  # ξ(k), k = L … N−1 (0 before L)
     sysm = gb.narx_iosystem(model, Ts=rec.Ts, noise=True)
-    assert sysm.input_labels == ["u", "e"] and sysm.state_labels[-2:] == ["e[k-1]", "e[k-2]"]
+    assert sysm.input_labels == ["u", "noise"] and sysm.state_labels[-2:] == ["noise[k-1]", "noise[k-2]"]
     x0 = gb.narx_initial_state(model, rec, noise=True)
     r = ct.input_output_response(sysm, rec.Ts * np.arange(len(rec) - L), np.vstack([rec.u[L:], xi]), x0)
     np.testing.assert_allclose(r.outputs[0], rec.y[L:], rtol=0, atol=1e-9)
@@ -442,3 +442,21 @@ def test_local_models_of_a_pole_near_one_are_drawn_over_a_bounded_number_of_samp
     assert xs and all(len(x) == MAX_STEP_SAMPLES for x in xs)
     with pytest.raises(ValueError, match="duration"):
         plots.plot_local_models(gb.operating_curve(m, [1.0]), duration=1e9)
+
+
+def test_a_noise_input_is_not_joined_to_a_loop_error_named_e():
+    """The README's PI loop names its error "e": with noise=True the model's noise input must not take it by name
+    (control.interconnect joins signals by name, silently)."""
+    m = Model(["y(k-1)", "u(k-1)"], [0.5, 1.0], noise_structure=["e(k-1)"], noise_theta=[0.3])
+    sysm = gb.narx_iosystem(m, Ts=1.0, noise=True, name="model")
+    pi = ct.ss([[1.0]], [[0.1]], [[1.0]], [[0.5]], dt=1.0, inputs="e", outputs="u", name="pi")
+    loop = ct.interconnect([sysm, pi, ct.summing_junction(["r", "-y"], "e", dt=1.0)],
+                           inputs=["r", "noise"], outputs=["y", "u"])
+    # the loop's error drives the controller only, and the noise is an input of the loop of its own
+    assert loop.ninputs == 2
+    T = np.arange(30.0)
+    quiet = ct.input_output_response(loop, T, np.vstack([np.ones(30), np.zeros(30)]))
+    noisy = ct.input_output_response(loop, T, np.vstack([np.ones(30), np.r_[1.0, np.zeros(29)]]))
+    assert quiet.outputs[0][0] == 0.0 and noisy.outputs[0][0] == 1.0  # e(0) reaches y(0) directly, r does not
+    with pytest.raises(ValueError, match="input of that name"):
+        gb.narx_iosystem(Model(["y(k-1)", "noise(k-1)"], [0.5, 1.0], input_names=["noise"]), Ts=1.0, noise=True)

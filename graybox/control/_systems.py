@@ -66,6 +66,10 @@ def _layout(structure: Structure, inputs: tuple[str, ...]) -> _Layout:
     return _Layout(Ly, Lu, E, np.arange(Ly), u_rows)
 
 
+#: The name of the noise input e(k) of :func:`narx_iosystem` with ``noise=True``, and of its lags in the state.
+NOISE_INPUT = "noise"
+
+
 def _noise_coefficients(model: Model) -> np.ndarray:
     """c_l of the linear MA part Σ c_l e(k−l), shape (n_e,); ``ValueError`` for any other noise term."""
     ne = model.noise_structure.max_lag
@@ -85,7 +89,7 @@ def narx_state_names(model: Model, *, noise: bool = False) -> list[str]:
     model : Model
         A polynomial NARX model.
     noise : bool
-        As for :func:`narx_iosystem`: the noise lags ``e[k-1]`` … come last.
+        As for :func:`narx_iosystem`: the noise lags ``noise[k-1]`` … come last.
     """
     model = check_polynomial(model, "narx_state_names")
     noise = check_bool(noise, "noise")
@@ -94,7 +98,7 @@ def narx_state_names(model: Model, *, noise: bool = False) -> list[str]:
     for n, L in zip(model.input_names, lay.Lu):
         names += [f"{n}[k-{l}]" for l in range(1, L + 1)]
     if noise:
-        names += [f"e[k-{l}]" for l in range(1, _noise_coefficients(model).size + 1)]
+        names += [f"{NOISE_INPUT}[k-{l}]" for l in range(1, _noise_coefficients(model).size + 1)]
     return names
 
 
@@ -206,7 +210,8 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
         Sampling period (s); default the model's own (``model.Ts``, the period it was identified at), as
         for :func:`local_model`. Needed for a model that does not know its period.
     noise : bool
-        Add the noise e(k) as a last system input ``"e"`` (output units) and the model's linear MA
+        Add the noise e(k) as a last system input ``"noise"`` (output units; not ``"e"``, the name a loop's
+        error signal usually has, which ``control.interconnect`` would join to it by name) and the model's linear MA
         part: y(k) = F(x(k)) + Σ_l c_l e(k−l) + e(k), with e(k−1) … e(k−n_e) appended to the
         state (for a NARX model, y(k) = F(x(k)) + e(k)). Fed the model's one-step residuals on a
         record, the system reproduces the record's output; fed white noise of the residuals'
@@ -231,6 +236,9 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
                              f"model's name; got {name!r}")
     Ts = check_Ts(Ts, None, model, takes_data=False)
     c = _noise_coefficients(model) if noise else np.zeros(0)
+    if noise and NOISE_INPUT in model.input_names:
+        raise ValueError(f"noise=True adds a system input named {NOISE_INPUT!r}, and the model has an input of that "
+                         "name: rename the model's input (Model.input_names)")
     ct = require_control()
     lay = _layout(model.structure, model.input_names)
     theta = np.array(model.theta)
@@ -271,6 +279,6 @@ def narx_iosystem(model: Model, *, Ts: float | None = None, noise: bool = False,
             new[n_proc + 1:] = x[n_proc:-1]
         return new
 
-    inputs = list(model.input_names) + (["e"] if noise else [])
+    inputs = list(model.input_names) + ([NOISE_INPUT] if noise else [])
     return ct.nlsys(update, output, inputs=inputs, outputs=["y"], states=narx_state_names(model, noise=noise),
                     dt=Ts, name=label)
