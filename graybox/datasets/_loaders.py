@@ -38,7 +38,8 @@ from ..static._curves import StaticCurve
 from ..core._files import bom_encoding
 from ..core._records import Dataset, Record, StaticPoints, check_same_period, check_units
 from ..core._terms import check_input_names
-from ..core._validation import check_bool, check_choice, check_int, check_ordered, check_path, check_real
+from ..core._validation import (check_bool, check_choice, check_int, check_ordered, check_path, check_real,
+                                check_str)
 from ..reference import EQ1_COEFFICIENTS
 
 __all__ = [
@@ -771,10 +772,12 @@ def load_record_csv(
         ``encoding`` (or one that contradicts the file's byte-order mark), or a binary file (an
         Excel workbook, a compressed CSV, NumPy or Parquet), named as what it is.
     TypeError
-        ``path``, ``u``, ``y``, ``time``, ``Ts``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
+        ``path``, ``u``, ``y``, ``time``, ``name``, ``Ts``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
         type (a column is named by a str; units are a pair of str).
     """
     p = Path(check_path(path, "path", file=True))
+    if name is not None:
+        check_str(name, "name")
     if time is None and Ts is None:
         raise ValueError(f"{p}: give the time-stamp column (time=...) or the sampling period (Ts=... seconds)")
     if Ts is not None and (isinstance(Ts, bool) or not isinstance(Ts, (int, float, np.integer, np.floating))):
@@ -966,10 +969,12 @@ def load_static_csv(
         a δ ≤ 0 in the ``uncertainty`` column, or two lines with the same ū (unless
         ``repeats="mean"``); the file's faults listed in :func:`load_record_csv`.
     TypeError
-        ``path``, ``u``, ``y``, ``uncertainty``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
+        ``path``, ``u``, ``y``, ``name``, ``uncertainty``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows`` or ``units`` of the wrong
         type (a column is named by a str; units are a pair of str).
     """
     p = Path(check_path(path, "path", file=True))
+    if name is not None:
+        check_str(name, "name")
     check_choice(repeats, "repeats", ("error", "mean"))
     skiprows = check_int(skiprows, "skiprows", low=0)
     units = check_units(units, f"{p}")
