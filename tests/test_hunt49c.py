@@ -34,3 +34,79 @@ def test_the_csv_loaders_name_by_the_file_without_a_name(csv_files):
     assert gb.load_static_csv(static, u="u", y="y").name == "points"
     assert gb.load_record_csv(rec, u="u", y="y", time="t", name="a").name == "a"
     assert gb.load_static_csv(static, u="u", y="y", name="b").name == "b"
+
+
+SHARED_SPEC = """\
+name = "shared"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "a"
+terms = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "1"]
+[[structures]]
+name = "b"
+terms = ["y(k-1)", "u(k-1)", "u(k-2)", "u(k-1)^2", "1"]
+[[structures]]
+name = "c"
+terms = ["y(k-1)", "u(k-1)", "y(k-1)^2", "1"]
+[[variants]]
+name = "LS"
+estimator = "ls"
+"""
+
+
+def test_a_run_that_waits_counts_only_the_cells_another_run_still_holds(tmp_path, monkeypatch):
+    """Two in-process runs on one store leapfrog: each skips the cell the other is running and goes on, and
+    at its end said "10 of the cells to run are being run by another run on this store: this one waits for
+    them" when the other had finished nine of those long before and was running one. The line counts the
+    cells still held when it is said."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from graybox import experiments as gx
+    from graybox.experiments import _run
+    from graybox.experiments._cell import run_cell
+    from graybox.experiments._store import ResultStore
+
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SHARED_SPEC, encoding="utf-8")
+    store = tmp_path / "s.sqlite"
+    g = gx.Grid.from_toml(spec)
+    data = g.load_data()
+    cells = g.cells(data)
+    keys = [c.key for c in cells]
+    with ThreadPoolExecutor(1) as pool:  # the other run's connection lives in its own thread
+        def in_other(fn, *args):
+            return pool.submit(fn, *args).result()
+
+        other = in_other(lambda: ResultStore.open(store, grid_name=g.name, fingerprint=g.fingerprint(cells),
+                                                  spec=g.to_dict(), cells=cells, version=gb.__version__))
+        try:
+            assert in_other(other.claim, keys) == {}
+            take = _run._Share.take
+            finished = []
+
+            def take_then_the_other_finishes_two(share, batch):
+                mine = take(share, batch)
+                if not finished and len(share.waiting) == len(cells):  # every cell skipped: the other holds them
+                    for c in cells[:2]:
+                        in_other(other.write, run_cell(c, data[c.data]))
+                    finished.extend(cells[:2])
+                return mine
+
+            monkeypatch.setattr(_run._Share, "take", take_then_the_other_finishes_two)
+            lines = []
+
+            def log(line: str) -> None:
+                lines.append(line)
+                if "waits for them" in line:
+                    in_other(other.close)  # the other run stops: its last cell is free
+
+            run = gx.run_grid(spec, store, log=log)
+        finally:
+            in_other(other.close)
+    said = [x for x in lines if "waits for them" in x]
+    assert finished and len(said) == 1, lines
+    assert said[0].strip().startswith("1 of the cells to run are being run by another run"), said
+    assert run.ran == 1 and any("2 cell(s) were run meanwhile by another run" in n for n in run.notes), run
+    assert len(gx.load_results(store)) == len(cells)

@@ -223,9 +223,13 @@ def run_grid(
                     if not share.waiting:
                         break
                     if not share.said:
-                        share.said = True
-                        say(f"  {len(share.waiting)} of the cells to run are being run by another run on this "
-                            f"store ({', '.join(sorted(share.others))}): this one waits for them")
+                        # the cells skipped as held over the run: most may be finished by now (two in-process
+                        # runs leapfrog), so those still held are counted, by the runs that hold them
+                        held = st.held(list(share.waiting))
+                        if held:
+                            share.said = True
+                            say(f"  {len(held)} of the cells to run are being run by another run on this "
+                                f"store ({', '.join(sorted(set(held.values())))}): this one waits for them")
                     # those released go back to the executor, which takes them as it starts them (another run
                     # may take some first)
                     todo, finished = _wait_for_others(st, share.waiting, marks)
