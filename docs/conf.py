@@ -67,10 +67,8 @@ def _write_api() -> None:
     shutil.rmtree(out, ignore_errors=True)
     out.mkdir()
     index = ["API reference", "=============", "",
-             "Every name below is also exported from :mod:`graybox` itself (``import graybox as gb``), except",
-             "those of :mod:`graybox.plots` and :mod:`graybox.experiments` (and the simulators of",
-             ":mod:`graybox.datasets`), which are used through their subpackage. The subpackages are listed",
-             "bottom layer first: each uses only those before it.", "", ".. toctree::", "   :maxdepth: 1", ""]
+             *_at_the_top(), "", "The subpackages are listed bottom layer first: each uses only those before it.",
+             "", ".. toctree::", "   :maxdepth: 1", ""]
     for unit in API_PACKAGES:
         mod = importlib.import_module(f"graybox.{unit}")
         names = sorted(mod.__all__, key=lambda n: (not n[0].isupper(), n.lower()))
@@ -90,6 +88,25 @@ def _write_api() -> None:
         (out / f"{unit}.rst").write_text("\n".join(lines), encoding="utf-8")
         index.append(f"   {unit}")
     (out / "index.rst").write_text("\n".join(index) + "\n", encoding="utf-8")
+
+
+def _at_the_top() -> list[str]:
+    """Which names below are also exported from :mod:`graybox` itself, read from the package (not written by hand)."""
+    top = set(graybox.__all__)
+    whole, some, none = [], [], []
+    for unit in API_PACKAGES:
+        names = importlib.import_module(f"graybox.{unit}").__all__
+        there = [n for n in names if n in top]
+        (whole if len(there) == len(names) else some if there else none).append((unit, there))
+    mods = ", ".join(f":mod:`graybox.{u}`" for u, _ in whole)
+    lines = [f"Every name of {mods} is also exported from :mod:`graybox` itself (``import graybox as gb``)."]
+    for unit, there in some:
+        lines.append(f"Of :mod:`graybox.{unit}`, only " + ", ".join(f"``{n}``" for n in sorted(there))
+                     + " are; the others are used through the subpackage.")
+    if none:
+        lines.append("The names of " + ", ".join(f":mod:`graybox.{u}`" for u, _ in none)
+                     + " are used through their subpackage.")
+    return lines
 
 
 def _data_doc(unit: str, name: str, obj: object) -> list[str]:

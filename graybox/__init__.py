@@ -6,8 +6,11 @@ with static-curve information, after Barbosa, Aguirre, Martinez & Braga (IEEE TC
 The implementation lives in subpackages by concern (:mod:`graybox.core`, :mod:`graybox.static`,
 :mod:`graybox.models`, :mod:`graybox.selection`, :mod:`graybox.estimation`,
 :mod:`graybox.diagnostics`, :mod:`graybox.control`, :mod:`graybox.io`, :mod:`graybox.datasets`), each of private modules;
-every public name is exported here. :mod:`graybox.plots`, :mod:`graybox.experiments` and
-:mod:`graybox.reproduce` sit above them. Names load on first use, so ``import graybox`` is quick.
+their public names are exported here, but for the plant simulators and data folders of :mod:`graybox.datasets`,
+reached through it (``gb.datasets.PumpingPlant``). :mod:`graybox.reference`, :mod:`graybox.plots`,
+:mod:`graybox.experiments` and :mod:`graybox.reproduce` are used through their subpackage (of the experiments,
+``select_graybox``, ``GrayboxSelection``, ``SelectionWarning`` and ``load_results`` are exported here too).
+Names load on first use, so ``import graybox`` is quick.
 """
 
 from __future__ import annotations
