@@ -142,3 +142,48 @@ def test_what_the_readme_and_the_package_say_is_exported_at_the_top_is():
     for text in (layout, gb.__doc__):
         assert "every public name is exported" not in text
         assert all(f"`{n}`" in text for n in at_top), text
+
+
+ONE_CELL_SPEC = """\
+name = "one"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first-order NARX"
+terms = ["y(k-1)", "u(k-1)", "1"]
+[[variants]]
+name = "least squares fit"
+estimator = "ls"
+"""
+
+
+def test_a_heatmap_of_one_structure_and_one_variant_has_room_for_its_names(tmp_path):
+    """The heat map's size counted cells only (2.3 x 1.9 in for one cell): with a structure named in ten
+    characters or more the labels, the colour bar and the title left the axes no room, matplotlib said
+    "constrained_layout not applied because axes sizes collapsed to zero" (graybox grid report printed it)
+    and the figure came out cramped. The figure now makes room for its labels."""
+    import io
+    import warnings
+
+    from graybox import experiments as gx
+
+    spec = tmp_path / "spec.toml"
+    spec.write_text(ONE_CELL_SPEC, encoding="utf-8")
+    store = tmp_path / "s.sqlite"
+    gx.run_grid(spec, store)
+    df = gx.load_results(store)
+    for name in ("first-order NARX", "a structure with a rather long name, as grids of many have"):
+        fig = gx.plot_heatmap(df.assign(structure=name), data="pumping")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            fig.savefig(io.BytesIO(), format="png", dpi=110)
+        fig.draw_without_rendering()  # laid out at the figure's own dpi, as measured below
+        ax = fig.axes[0]
+        box = ax.get_position()
+        assert box.width > 0.05 and box.height > 0.05, box
+        renderer = fig._get_renderer()
+        page = fig.bbox
+        for label in [*ax.get_xticklabels(), *ax.get_yticklabels()]:
+            extent = label.get_window_extent(renderer)
+            assert extent.x0 >= page.x0 - 1 and extent.y0 >= page.y0 - 1, (label.get_text(), extent, page)

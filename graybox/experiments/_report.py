@@ -739,7 +739,15 @@ def plot_heatmap(
                          "heatmap_table gives it as a table") from None
     sub = df[df["data"] == d]
     run = set(zip(sub["structure"], sub["variant"]))  # pairs of two specs (or stores) may never have run together
-    fig = Figure(figsize=(1.2 + 1.1 * t.shape[1], 1.4 + 0.5 * t.shape[0]), layout="constrained")
+    # room for the names beyond the half inch the cells' size leaves them: the y labels beside the cells, the
+    # x labels (at 35°, right-aligned on their column) below them and out to the left; counted by cells only,
+    # a grid of one structure and variant with names of ten characters left its axes no room ("axes sizes
+    # collapsed to zero")
+    em = 8 * 0.6 / 72  # inches per character of the ticks' 8 pt
+    xl = max((len(_shown(c)) for c in t.columns), default=0) * em
+    yl = max((len(_shown(i)) for i in t.index), default=0) * em
+    fig = Figure(figsize=(1.2 + 1.1 * t.shape[1] + max(0.0, yl - 0.5, 0.82 * xl - 1.05),
+                          1.4 + 0.5 * t.shape[0] + max(0.0, 0.57 * xl - 0.5)), layout="constrained")
     ax = fig.add_subplot()
     pos = np.isfinite(vals) & (vals > 0)
     log = value.startswith("J") and _spans_decades(vals)
