@@ -187,3 +187,28 @@ def test_a_heatmap_of_one_structure_and_one_variant_has_room_for_its_names(tmp_p
         for label in [*ax.get_xticklabels(), *ax.get_yticklabels()]:
             extent = label.get_window_extent(renderer)
             assert extent.x0 >= page.x0 - 1 and extent.y0 >= page.y0 - 1, (label.get_text(), extent, page)
+
+
+def test_grid_status_of_cells_stopped_at_their_time_limit_does_not_say_none_finished(tmp_path):
+    """A cell stopped at --cell-time-limit (or whose worker died twice) is stored as failed without a run time:
+    with only such cells done, graybox grid status said "2 of 2 cells done ..., 0 left; no cell finished yet;
+    last finished 2026-…", contradicting itself."""
+    import sqlite3
+
+    from graybox import experiments as gx
+
+    spec = tmp_path / "spec.toml"
+    spec.write_text(ONE_CELL_SPEC.replace('name = "least squares fit"\nestimator = "ls"',
+                                          'name = "LS"\nestimator = "ls"\n[[variants]]\nname = "ELS"\n'
+                                          'estimator = "els"'), encoding="utf-8")
+    store = tmp_path / "s.sqlite"
+    gx.run_grid(spec, store)
+    with sqlite3.connect(store) as con:  # as the executors write a cell stopped at its time limit
+        con.execute("UPDATE cells SET status = 'failed', wall_time = NULL, message = 'stopped after the cell "
+                    "time limit of 0.5 s (its worker was stopped)'")
+    con.close()
+    status = gx.grid_status(store)
+    assert status.done == 2 and status.left == 0 and np.isnan(status.time_per_cell)
+    text = status.summary()
+    assert "no cell finished yet" not in text and "last finished" in text, text
+    assert "2 of 2 cells done" in text and "no run time" in text, text

@@ -1025,7 +1025,8 @@ class GridStatus:
     counts : mapping str -> int
         Cells by status.
     time_per_cell : float
-        Mean seconds per finished cell (NaN before the first).
+        Mean seconds per finished cell that has its run time (NaN before the first, and while every cell
+        done is one stopped at the cell time limit or whose worker was lost: those have none).
     last_finished : str or None
         When the last cell finished (UTC, ISO 8601).
     best : pandas.DataFrame
@@ -1071,7 +1072,10 @@ class GridStatus:
     def summary(self) -> str:
         """A few lines for a terminal."""
         st = ", ".join(f"{self.counts.get(s, 0)} {s}" for s in STATUSES)
-        tpc = f"{self.time_per_cell:.3g} s per cell" if np.isfinite(self.time_per_cell) else "no cell finished yet"
+        # a cell stopped at its time limit, or whose worker died, is done (failed) with no run time stored
+        tpc = (f"{self.time_per_cell:.3g} s per cell" if np.isfinite(self.time_per_cell) else
+               "no run time recorded for the cells done (stopped at the cell time limit or their worker lost)"
+               if self.done else "no cell finished yet")
         which = f"spec {self.spec} of {self.specs}" if self.spec else f"all {self.specs} specs"
         lines = [f"{self.store}: {which} ({self.grid!r}): {self.done} of {self.cells} cells "
                  f"done ({st}), {self.left} left; {tpc}"
