@@ -212,3 +212,23 @@ def test_grid_status_of_cells_stopped_at_their_time_limit_does_not_say_none_fini
     text = status.summary()
     assert "no cell finished yet" not in text and "last finished" in text, text
     assert "2 of 2 cells done" in text and "no run time" in text, text
+
+
+def test_every_field_of_a_public_value_is_in_its_docstring():
+    """The API reference documents a value's fields from its docstring: OperatingCurve.model_name was in
+    none (test_api checks the functions' arguments, not the values' fields)."""
+    import dataclasses
+    import inspect
+
+    from graybox import experiments as gx
+
+    missing = {}
+    for mod in (gb, gx):
+        for name in mod.__all__:
+            obj = getattr(mod, name)
+            if inspect.isclass(obj) and dataclasses.is_dataclass(obj):
+                doc = inspect.getdoc(obj) or ""
+                gone = [f.name for f in dataclasses.fields(obj) if f.name not in doc]
+                if gone:
+                    missing[f"{mod.__name__}.{name}"] = gone
+    assert not missing, missing

@@ -757,6 +757,8 @@ class OperatingCurve:
         Fraction of draws that reach no stable equilibrium at each ū (left out of the band); NaN,
         with NaN bands, where the model itself reaches none (``status`` not ``"reached"``: no
         draws are made there).
+    model_name : str
+        Name of the model the curve is of (its :attr:`Model.name`; shown by ``repr`` and the plots).
     """
 
     local_models: tuple[LocalModel, ...]
