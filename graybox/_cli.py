@@ -163,6 +163,11 @@ def main(argv: list[str] | None = None) -> int:
     _escape_what_streams_cannot_encode()
     try:
         return _main(argv)
+    except KeyboardInterrupt:
+        # Ctrl-C before a command's own handler says what it kept: while it loads (numpy, scipy, matplotlib take
+        # a second or two), nothing has started
+        print("graybox: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:
         # the reader left (graybox grid init | head): stop quietly, as cat does; stdout goes to the null
         # device so that the flush at exit does not fail on the closed pipe again

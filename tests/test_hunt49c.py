@@ -232,3 +232,19 @@ def test_every_field_of_a_public_value_is_in_its_docstring():
                 if gone:
                     missing[f"{mod.__name__}.{name}"] = gone
     assert not missing, missing
+
+
+@pytest.mark.parametrize("argv", [["reproduce", "--quick"], ["grid", "status", "s.sqlite"]])
+def test_ctrl_c_while_the_command_loads_is_a_line_not_a_traceback(monkeypatch, capsys, argv):
+    """Ctrl-C in the first second of graybox reproduce (or grid ...), while the command imports numpy, scipy and
+    matplotlib before its own handlers are in place, printed a KeyboardInterrupt traceback through importlib
+    and ended the process by the signal; it now says it was interrupted and exits 130, as later."""
+    from graybox import _cli
+
+    def interrupted(*args, **kwargs):  # Ctrl-C as the command starts
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("argparse.ArgumentParser.parse_args", interrupted)
+    assert _cli.main(argv) == 130
+    captured = capsys.readouterr()
+    assert captured.err.strip() == "graybox: interrupted" and not captured.out, captured
