@@ -199,9 +199,9 @@ def _main(argv: list[str] | None) -> int:
     run.add_argument("spec", type=Path, help="the grid's TOML spec")
     run.add_argument("--store", type=Path, required=True, help="SQLite file for the results (created if missing)")
     where = run.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, help="start a Dask LocalCluster of N worker processes")
-    where.add_argument("--scheduler", help="run on the Dask scheduler at this address (e.g. tcp://host:8786)")
-    where.add_argument("--processes", type=int, help="run in N local worker processes (no Dask)")
+    where.add_argument("--workers", type=int, metavar="N", help="start a Dask LocalCluster of N worker processes")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask scheduler at this address (e.g. tcp://host:8786)")
+    where.add_argument("--processes", type=int, metavar="N", help="run in N local worker processes (no Dask)")
     run.add_argument("--retry-failed", action="store_true", help="run the failed cells again")
     run.add_argument("--cell-time-limit", type=float, metavar="S",
                      help="with --processes, --workers or --scheduler: a cell running longer than S seconds is "

@@ -248,3 +248,20 @@ def test_ctrl_c_while_the_command_loads_is_a_line_not_a_traceback(monkeypatch, c
     assert _cli.main(argv) == 130
     captured = capsys.readouterr()
     assert captured.err.strip() == "graybox: interrupted" and not captured.out, captured
+
+
+def test_grid_run_help_names_the_values_its_texts_speak_of(capsys):
+    """graybox grid run --help said "start a Dask LocalCluster of N worker processes" and "run in N local worker
+    processes" beside a usage of --workers WORKERS and --processes PROCESSES (and --scheduler SCHEDULER for "this
+    address"), while the spec that grid init prints and the README write [--workers N | --scheduler ADDRESS]."""
+    from graybox import _cli
+
+    with pytest.raises(SystemExit):
+        _cli.main(["grid", "run", "--help"])
+    text = capsys.readouterr().out
+    assert "[--workers N | --scheduler ADDRESS | --processes N]" in " ".join(text.split()), text
+    for word in ("WORKERS", "PROCESSES", "SCHEDULER"):
+        assert word not in text, text
+    from graybox.experiments import EXAMPLE_SPEC
+
+    assert "[--workers N | --scheduler ADDRESS]" in EXAMPLE_SPEC
