@@ -265,3 +265,21 @@ def test_grid_run_help_names_the_values_its_texts_speak_of(capsys):
     from graybox.experiments import EXAMPLE_SPEC
 
     assert "[--workers N | --scheduler ADDRESS]" in EXAMPLE_SPEC
+
+
+@pytest.mark.parametrize("labels, error", [([1, 2], TypeError), ([None, "b"], TypeError), (["", "b"], ValueError),
+                                           (["a", "  "], ValueError)])
+def test_compare_results_refuses_labels_that_are_not_names(tmp_path, labels, error):
+    """labels=[1, 2] were turned into '1' and '2' without a word (the docstring: a sequence of str), None into
+    'None', and an empty label made the variants ': LS', a store called nothing in every table and figure."""
+    from graybox import experiments as gx
+
+    stores = []
+    for name in ("a", "b"):
+        spec = tmp_path / f"{name}.toml"
+        spec.write_text(ONE_CELL_SPEC, encoding="utf-8")
+        stores.append(tmp_path / f"{name}.sqlite")
+        gx.run_grid(spec, stores[-1])
+    with pytest.raises(error, match="labels"):
+        gx.compare_results(stores, labels=labels)
+    assert sorted(set(gx.compare_results(stores, labels=["x", "y"])["store"])) == ["x", "y"]

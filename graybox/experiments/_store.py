@@ -1172,7 +1172,12 @@ def compare_results(
         labels = [p.stem for p in paths]
         if len(set(labels)) < len(labels):
             labels = [f"{i + 1}:{p.stem}" for i, p in enumerate(paths)]
-    labels = [str(x) for x in check_sequence(labels, "labels", "a sequence of names, one per store")]
+    labels = list(check_sequence(labels, "labels", "a sequence of names, one per store"))
+    for lab in labels:  # each prefixes its store's variants ("label: name") in every table and figure
+        if not isinstance(lab, str):
+            raise TypeError(f"labels must be names (str), one per store; got {lab!r} ({type(lab).__name__})")
+        if not lab.strip():
+            raise ValueError(f"labels must be non-empty names, one per store; got {lab!r}")
     if len(labels) != len(paths) or len(set(labels)) != len(labels):
         raise ValueError(f"labels must be {len(paths)} distinct names, one per store; got {labels}")
     frames = [load_results(p, spec=spec) for p in paths]
