@@ -57,6 +57,7 @@ def _bands(given: list[tuple[str | None, float]] | None) -> float | dict[str, fl
 
 def _grid(args: argparse.Namespace) -> int:
     from . import experiments as gx
+    from .core._validation import check_workers
 
     if args.grid_command == "init":
         sys.stdout.write(gx.EXAMPLE_SPEC)
@@ -66,6 +67,8 @@ def _grid(args: argparse.Namespace) -> int:
             for flag, n in (("--workers", args.workers), ("--processes", args.processes)):
                 if n is not None and n < 1:
                     raise ValueError(f"{flag} must be an integer >= 1, got {n}")
+                if n is not None:
+                    check_workers(n, flag)  # (10**20 processes was taken, and handed on)
             processes = args.processes is not None
             said: set[str] = set()
 

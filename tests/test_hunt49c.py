@@ -283,3 +283,29 @@ def test_compare_results_refuses_labels_that_are_not_names(tmp_path, labels, err
     with pytest.raises(error, match="labels"):
         gx.compare_results(stores, labels=labels)
     assert sorted(set(gx.compare_results(stores, labels=["x", "y"])["store"])) == ["x", "y"]
+
+
+def test_a_count_of_worker_processes_no_machine_could_hold_is_refused_naming_it(tmp_path):
+    """10**20 worker processes was handed to the pool or to Dask's LocalCluster (hunt49c's note)."""
+    import subprocess
+    import sys
+
+    from graybox import experiments as gx
+    from graybox.experiments._executors import make_executor
+    from graybox.experiments._map import parallel_map
+
+    huge = 10**20
+    with pytest.raises(ValueError, match=r"workers=100000000000000000000 is too large"):
+        make_executor("processes", workers=huge)
+    with pytest.raises(ValueError, match="workers=.* is too large"):
+        make_executor("dask", workers=huge)
+    with pytest.raises(ValueError, match="workers=.* is too large"):
+        with parallel_map(executor="processes", workers=huge):
+            pass
+    spec = tmp_path / "spec.toml"
+    spec.write_text(gx.EXAMPLE_SPEC, encoding="utf-8")
+    for flag in ("--processes", "--workers"):
+        r = subprocess.run([sys.executable, "-m", "graybox", "grid", "run", str(spec), "--store",
+                            str(tmp_path / "s.sqlite"), flag, str(huge)], capture_output=True, text=True, timeout=120)
+        assert r.returncode == 2 and f"{flag}={huge} is too large" in r.stderr and "Traceback" not in r.stderr
+        assert not (tmp_path / "s.sqlite").exists()

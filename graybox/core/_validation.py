@@ -27,6 +27,7 @@ __all__ = [
     "check_bool",
     "check_int",
     "check_count",
+    "check_workers",
     "check_real",
     "check_band",
     "check_choice",
@@ -144,6 +145,16 @@ def check_count(value: object, name: str, *, low: int | None = None, high: int |
         raise ValueError(f"{name}={v} is too large: it would need at least {size} of memory, more than "
                          f"this machine has ({_bytes_text(have)})")
     return v
+
+
+#: The least memory one worker process takes (bytes): a Python with graybox imported, before any work (30 MB measured).
+PROCESS_BYTES = 30 * 2**20
+
+
+def check_workers(value: object, name: str = "workers") -> int:
+    """A count of worker processes to start on this machine, as :func:`check_count`: ``ValueError`` for more than
+    its memory could ever hold (:data:`PROCESS_BYTES` each; 10**20 workers was handed to the pool or to Dask)."""
+    return check_count(value, name, low=1, item_bytes=PROCESS_BYTES)
 
 
 def check_real(

@@ -48,7 +48,7 @@ import numpy as np
 from .. import _api as gb
 
 from ..core._files import lock_fd
-from ..core._validation import check_choice, check_int, check_real
+from ..core._validation import check_choice, check_real, check_workers
 from . import _dask_worker
 from ._cell import failed_row, run_cell
 from ._spec import Cell
@@ -1137,7 +1137,7 @@ def make_executor(executor: str | None = None, *, workers: int | None = None, cl
         executor = "dask" if (client is not None or scheduler is not None or workers is not None) else "inprocess"
     check_choice(executor, "executor", EXECUTORS)
     if workers is not None:
-        workers = check_int(workers, "workers", low=1)
+        workers = check_workers(workers)
     check_cluster(client, scheduler)
     if cell_time_limit is not None:
         cell_time_limit = check_real(cell_time_limit, "cell_time_limit", low=0, low_open=True)

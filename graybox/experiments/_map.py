@@ -18,7 +18,7 @@ from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack, contextmanager
 from typing import Any, Callable, Iterable, Iterator
 
-from ..core._validation import check_choice, check_int
+from ..core._validation import check_choice, check_workers
 from ._executors import (EXECUTORS, _environ, _thread_env, check_cluster, ignore_sigint, local_cluster,
                          scheduler_client, worker_threads)
 
@@ -62,7 +62,7 @@ def parallel_map(
     """
     executor = check_choice("dask" if executor is None else executor, "executor", EXECUTORS)
     if workers is not None:
-        workers = check_int(workers, "workers", low=1)
+        workers = check_workers(workers)
     check_cluster(client, scheduler)
     if executor != "dask" and (client is not None or scheduler is not None):
         raise ValueError(f"client and scheduler are for executor='dask', not {executor!r}")

@@ -58,7 +58,7 @@ from ..core._records import (as_records, carried_from, check_alike, check_compat
                              same_record, warn_static_range)
 from ..core._terms import require_inputs
 from ..core._reprs import beside, bound_text, listed, squared_text, squared_unit
-from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_frame_columns, check_int, check_lambdas, check_real, check_sequence, warn
+from ..core._validation import FrozenFrame, check_bool, check_choice, check_fields, check_frame_columns, check_int, check_lambdas, check_real, check_sequence, warn, check_workers
 from ._cell import cell_constraints, warning_texts
 from ._executors import check_cluster
 from ._map import parallel_map
@@ -1435,7 +1435,7 @@ def select_graybox(
     if executor is not None:
         check_choice(executor, "executor", ("inprocess", "processes", "dask"))
     if workers is not None:
-        workers = check_int(workers, "workers", low=1)  # 0 is no count of processes (it read as the default 2)
+        workers = check_workers(workers)  # 0 is no count of processes (it read as the default 2)
     if executor == "inprocess" and (workers is not None or client is not None or scheduler is not None):
         raise ValueError("workers, client and scheduler need executor='processes' or 'dask'")
     for s in sources:
