@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 import graybox as gb
 from graybox.datasets import TwoSpeedPumpingPlant
@@ -372,3 +373,18 @@ def test_multisine_is_computed_in_time_and_memory_linear_in_the_record(monkeypat
     x = gb.design_input("multisine", 20_000, low=0.0, high=1.0, frequencies=(0.005, 0.2), n_inputs=2, seed=1)
     assert x.shape == (20_000, 2) and x.min() == 0.0 and x.max() == 1.0
     assert max(big, default=0) <= 20_000
+
+
+@given(st.lists(st.integers(min_value=0, max_value=300), min_size=1, max_size=6), st.integers(1, 80))
+@settings(max_examples=60, deadline=None)
+def test_record_points_are_at_most_count_over_any_records(lengths, count):
+    """record_points' docstring says up to count points (the README's 64): one stride per record took up to one
+    more per record (hunt49b's note)."""
+    from graybox.estimation._local_models import record_points
+
+    structure = gb.Structure(["y(k-1)", "u(k-2)"])
+    records = [gb.Record(np.arange(n + 2.0), np.arange(n + 2.0) * 0.5) for n in lengths]
+    total = sum(lengths)
+    ubar, ybar = record_points(structure, records, count)
+    assert ubar.shape == ybar.shape and len(ubar) <= count
+    assert len(ubar) == min(total, -(-total // max(1, -(-total // count))))  # evenly spaced over all rows

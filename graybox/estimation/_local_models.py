@@ -90,10 +90,13 @@ def record_points(structure: Structure, records: Sequence[Record], count: int = 
     total = sum(max(len(r) - L, 0) for r in records)
     stride = max(1, -(-total // count))
     us, ys = [], []
-    for r in records:
+    offset = 0  # the samples are every stride-th of all records' rows in turn: at most count in all (a stride per
+    for r in records:  # record took up to one more per record)
         u = record_inputs(r, code.input_names)
-        us.append(u[L::stride])
-        ys.append(r.y[L::stride])
+        first = L + (-offset) % stride
+        us.append(u[first::stride])
+        ys.append(r.y[first::stride])
+        offset += max(len(r) - L, 0)
     return np.concatenate(us), np.concatenate(ys)
 
 
