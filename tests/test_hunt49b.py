@@ -388,3 +388,23 @@ def test_record_points_are_at_most_count_over_any_records(lengths, count):
     ubar, ybar = record_points(structure, records, count)
     assert ubar.shape == ybar.shape and len(ubar) <= count
     assert len(ubar) == min(total, -(-total // max(1, -(-total // count))))  # evenly spaced over all rows
+
+
+def test_a_step_beyond_the_calibrated_range_names_the_step():
+    """step_time_constant(1750, step=100) said 'speed reference … sample 10 is 1850 rpm', naming neither (hunt49b)."""
+    from graybox.datasets.pumping import PumpingPlant
+
+    with pytest.raises(ValueError, match=r"speed \+ step \(1750 \+ 100 rpm\) must stay within 500–1800 rpm"):
+        PumpingPlant().step_time_constant(1750, step=100)
+    with pytest.raises(ValueError, match=r"speed \+ step \(600 \+ -200 rpm\)"):
+        PumpingPlant().step_time_constant(600, step=-200)
+
+
+def test_the_two_speed_rig_steady_state_takes_one_speed_of_each_set():
+    from graybox.datasets._pumping_miso import TwoSpeedPumpingPlant
+
+    rig = TwoSpeedPumpingPlant()
+    with pytest.raises(ValueError, match=r"one speed of each pump set .* shape \(2,\)"):
+        rig.steady_state(np.array([1200.0, 1100.0]), np.array([1000.0, 1100.0]))
+    x = rig.steady_state(np.array([1200.0]), 1000)
+    assert x[:4] == (1200.0, 1200.0, 1000.0, 1000.0) and x[4] == float(rig.steady_flow(1200.0, 1000.0))

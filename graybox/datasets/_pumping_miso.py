@@ -271,8 +271,12 @@ class TwoSpeedPumpingPlant:
 
     def steady_state(self, speed1: float, speed2: float) -> tuple[float, float, float, float, float]:
         """Equilibrium state (n_c1, n_1, n_c2, n_2, Q) at constant references ``speed1``, ``speed2`` (rpm)."""
-        q = float(self.steady_flow(speed1, speed2))  # checks both speeds
-        return (float(speed1), float(speed1), float(speed2), float(speed2), q)
+        n1, n2 = self._check_speeds(speed1, speed2)
+        if n1.size != 1:  # (arrays of speeds failed in numpy's words: 'only length-1 arrays can be converted')
+            raise ValueError(f"steady_state takes one speed of each pump set (rpm), got speeds of shape {n1.shape}; "
+                             "steady_flow takes arrays")
+        n1, n2 = float(n1.reshape(-1)[0]), float(n2.reshape(-1)[0])
+        return (n1, n1, n2, n2, float(self.steady_flow(n1, n2)[()]))
 
     # -- dynamics -----------------------------------------------------------
     def simulate(
