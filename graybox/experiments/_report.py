@@ -1085,6 +1085,7 @@ class GridStatus:
         if self.reasons:
             lines.append("why cells are not ok (the last of each status):")
             lines += [f"  {st}: {why}" for st, why in self.reasons.items()]
+        yet = "" if self.left == 0 and not self.running else " yet"  # (a finished grid waits for nothing)
         if len(self.best):
             lines.append("best so far:")
             lines += ["  " + ln for ln in self.best.reset_index().to_string(index=False).splitlines()]
@@ -1096,10 +1097,10 @@ class GridStatus:
                 lines.append("  (rule chosen: each cell's own choice, for a data set without a band; dsf_valid: D_SF "
                              "on the validation record within the data set's band)")
             if self.waiting:
-                lines.append(f"no model qualifies yet for data set {', '.join(map(repr, self.waiting))} "
+                lines.append(f"no model qualifies{yet} for data set {', '.join(map(repr, self.waiting))} "
                              "(graybox grid report says why)")
         elif self.done:
-            lines.append("best so far: no model qualifies yet (graybox grid report says why)")
+            lines.append(f"best so far: no model qualifies{yet} (graybox grid report says why)")
         else:
             lines.append("best so far: none yet")
         return "\n".join(lines)
