@@ -87,3 +87,20 @@ def test_se_dsf_reports_the_same_run_whatever_the_outputs_unit():
     assert (b.start, b.n_iter, b.message) == (a.start, a.n_iter, a.message)
     assert b.JS / 1e6 == pytest.approx(a.JS, rel=1e-12)
     np.testing.assert_allclose(b.model.theta[[0, 3]], a.model.theta[[0, 3]], rtol=1e-9)
+
+
+def test_output_error_refuses_a_bad_name_or_theta0_before_any_fit(monkeypatch):
+    """output_error checked name after every fit and theta0 after the least-squares and ELS starts (hunt49a's note):
+    checked at the boundary, before ELS runs."""
+    import graybox.estimation._output_error as oe
+
+    def no_els(*args, **kwargs):
+        raise AssertionError("ELS ran before the options were checked")
+
+    monkeypatch.setattr(oe, "els", no_els)
+    rec = gb.load_pumping().ident
+    st = ["y(k-1)", "u(k-1)", "1"]
+    with pytest.raises(TypeError, match="name must be a str"):
+        gb.output_error(st, rec, name=3)
+    with pytest.raises(ValueError, match="theta0"):
+        gb.output_error(st, rec, theta0=[1.0, 2.0])

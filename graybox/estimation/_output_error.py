@@ -49,7 +49,7 @@ from ..core._records import (Dataset, Record, as_records, carried_from, check_al
                              same_record)
 from ..core._terms import Structure
 from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int,
-                                check_margin_value, check_mean_square, check_real, check_seed, check_theta)
+                                check_margin_value, check_mean_square, check_real, check_seed, check_str, check_theta)
 from ..models._coerce import as_structure
 from ..models._model import Model
 from ._extended_least_squares import ELSConvergenceWarning, els
@@ -220,7 +220,10 @@ def output_error(
     check_choice(solver, "solver", _SOLVERS)
     progress = None if progress is None else check_bool(progress, "progress")
     margin = check_margin(margin)
+    check_str(name, "name")
     st = as_structure(structure)
+    if theta0 is not None:  # before the fits, not after the least-squares and ELS starts
+        theta0 = check_theta(len(st), theta0, "theta0")
     problem = SEProblem(st, rec, None, margin=None if margin == "auto" else margin, ridge=ridge)
     problem.check_identified()  # the records alone must identify θ: an input held constant does not
     chooser, chosen_on = None, ""
