@@ -890,9 +890,13 @@ def _unscaled_curve(name: str, rss: np.ndarray, N: int, ey: int) -> np.ndarray:
 
 def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     """frols(centre=True): select on the centred signals, close the choice under shifts, refit (see frols)."""
+    # the whole of it (the search, the closure's told_apart, its fit and the subsets' RSS) on y and each input times
+    # a power of two where the data come near the float range's ends (:func:`_binary_scaled`): the search alone was,
+    # and told_apart on y × 2^-600 took y(k-1) for a linear combination of lower terms, a smaller closure returned
+    given, (data, exps) = data, _binary_scaled(data, candidates.process)
     offsets = _centring.search_offsets(data)
     centred = _centring.centred_data(data, offsets)
-    _centring.check_included(options["include"], candidates.process, data)
+    _centring.check_included(options["include"], candidates.process, given)
     # the search's CandidateWarning is said after the closure, which can bring back a term it left out
     with warnings.catch_warnings(record=True) as heard:
         warnings.simplefilter("always")
@@ -905,7 +909,7 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
     # less what the data cannot tell apart (a two-level input's u^2), or the fit below cannot hold every term
     L = candidates.process.max_lag  # the search's rows, from which the closure is judged and fitted
     closed, dropped = _centring.told_apart(full, centred, rank_tol, L)
-    _centring.check_included(options["include"], candidates.process, data, dropped)
+    _centring.check_included(options["include"], candidates.process, given, dropped)
     _centring.check_closure_rows(closed, centred, len(sel.structure), L)
     skipped = tuple((t, why) for t, why in sel.skipped if t not in set(closed)) + dropped
     if skipped:
@@ -921,10 +925,16 @@ def _frols_centred(candidates: Structure, data: object, **options) -> Selection:
         subsets = tuple(_centring.told_apart(_centring.closure(S).process, centred, rank_tol, L)[0]
                         for S in sel.subsets)
         subset_rss = np.array([_centring.least_squares(S, centred, L)[1] for S in subsets])
-    stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), offsets, dropped)
-    return replace(fit, theta=_centring.raw_theta(closed, fit.theta, offsets), stop=stop,
-                   n_candidates=sel.n_candidates, skipped=skipped, search=sel.search, subsets=subsets,
-                   subset_rss=subset_rss)
+    own = {k: math.ldexp(v, exps.get(k, 0)) for k, v in offsets.items()}  # the data's own offsets
+    stop = _centring.stop_note(sel.stop, len(sel.structure), len(full), own, dropped)
+    theta = _unscaled_theta(_centring.raw_theta(closed, fit.theta, offsets), list(closed), exps)
+    if exps:  # RSS and the criterion curve in the data's own units (the fit's rows: L on, of each record)
+        n_rows = sum(len(r.y) - L for r in as_gram_records(data))
+        fit = replace(fit, rss=_unscaled_rss(fit.rss, exps),
+                      criterion_curve=_unscaled_curve(fit.criterion, fit.rss, n_rows, exps.get("y", 0)))
+        subset_rss = _unscaled_rss(np.asarray(subset_rss), exps) if len(subset_rss) else subset_rss
+    return replace(fit, theta=theta, stop=stop, n_candidates=sel.n_candidates, skipped=skipped, search=sel.search,
+                   subsets=subsets, subset_rss=subset_rss)
 
 
 # --------------------------------------------------------------------------------------
