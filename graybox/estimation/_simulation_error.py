@@ -442,7 +442,8 @@ class SEProblem:
         ``scored``: only J_SF and the residuals it is made of are asked, which are infinite once one point
         is not reached: a row's runs stop there (``until_failure``), so where a row misses a point its
         other points may be NaN too; a row that reaches every point is exactly as without.
-        :meth:`static_errors` less the measured ȳ_i.
+        :meth:`static_errors` plus the measured ȳ_i (for a centred problem the centred model's equilibria, shifted
+        back by the output's offset).
         """
         return self.static_errors(thetas, scored=scored) + self.static.ybar
 
