@@ -305,3 +305,24 @@ def test_a_double_root_beside_a_simple_one_of_a_cubic_whose_y_coefficient_cancel
     model = gb.Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "u(k-1)"], [c[1] + 1, *c[2:], c[0]])
     ys = [e.ybar for e in model.equilibria(1.0)]
     np.testing.assert_allclose(ys, [-1.0, 1.5], rtol=1e-7)
+
+
+def test_options_the_solver_refuses_end_the_sweep_at_its_first_solve(monkeypatch):
+    """a07e3bc kept a solver's refusal of the options as one member's failure: every λ1 was tried, OSQP printing its
+    error twice each (review49e): the options are the call's, refused at the first solve."""
+    import graybox.estimation._prediction_error as pe
+
+    solves = []
+    original = pe._QP.solve
+
+    def counted(self, *args, **kwargs):
+        solves.append(1)
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(pe._QP, "solve", counted)
+    data = gb.load_pumping()
+    st = ["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]
+    with pytest.raises(ValueError, match="solver_options"):
+        gb.pe_pareto(st, data.ident, data.static, lambdas=np.logspace(-3, 0, 10), solver="osqp",
+                     solver_options={"eps_abs": -1})
+    assert len(solves) == 1

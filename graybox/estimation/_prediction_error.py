@@ -798,10 +798,11 @@ class _QP:
             if self.user_options:
                 # a value the solver refuses at its setup (OSQP's eps_abs = -1: "failed (2)"), said of the options, not
                 # as constraints that admit no θ
-                raise _member_failure(ValueError(
+                # (the call's failure, not one member's: every λ1 would fail alike, each printing the solver's error)
+                raise ValueError(
                     f"solver {self.solver} failed ({exc}) with solver_options {self.user_options!r}: check "
                     "their values (tolerances > 0, iteration limits >= 1; the solver may have printed "
-                    "which it refuses), or leave them out for graybox's defaults")) from exc
+                    "which it refuses), or leave them out for graybox's defaults") from exc
             raise _member_failure(InfeasibleError(f"solver {self.solver} failed ({exc}) with constraints "
                                                   f"{list(self.names)}")) from exc
         except (TypeError, ValueError, OverflowError) as exc:
