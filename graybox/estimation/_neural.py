@@ -813,7 +813,8 @@ class NeuralFit:
     epochs : int
         Levenberg–Marquardt trial steps (Norgaard's epochs) over all stages.
     stopped : str
-        Why the last stage ended: "epochs" (its budget), "converged" (a vanishing gradient, a
+        Why the last training stage ended (stage 2, or stage 1 when ``sim_epochs = 0``; the refit of the
+        residual-input weights that follows stage 2 when ``ne > 0`` is not one): "epochs" (its budget), "converged" (a vanishing gradient, a
         step that predicts a decrease within the cost's rounding, or a damping so large that no step
         lowers the cost), "patience" (early stopping: ``patience`` accepted steps without a lower
         held-out cost) or "unstable" (the sensitivity recursion overflowed; the weights reached before are kept).
