@@ -330,35 +330,6 @@ def real_roots_upto_cubic_sized(coef, size):  # pragma: no cover - compiled
     return out
 
 
-@nb.njit(cache=True, nogil=True)
-def _scaled_terms(c, x, t):  # pragma: no cover - compiled
-    """t[p] = c[p] x^p, all scaled by one power of two (exact) where one leaves the float range (roots near 1e200:
-    inf − inf would say nothing; an underflow would drop a term); only ratios of sums of them are used."""
-    n = c.shape[0]
-    ok = True
-    pw = 1.0
-    for p in range(n):
-        t[p] = c[p] * pw
-        if not np.isfinite(t[p]) or (t[p] == 0.0 and c[p] != 0.0 and x != 0.0):
-            ok = False
-        pw *= x
-    if ok:
-        return
-    xm, xe = math.frexp(x)
-    emax = -(1 << 62)
-    for p in range(n):
-        if c[p] != 0.0:
-            emax = max(emax, math.frexp(c[p])[1] + p * xe)
-    pw = 1.0
-    for p in range(n):
-        if c[p] == 0.0:
-            t[p] = 0.0
-        else:
-            cm, ce = math.frexp(c[p])
-            t[p] = math.ldexp(cm, max(ce + p * xe - emax, -1100)) * pw
-        pw *= xm
-
-
 #: A polynomial's coefficients are taken as known to this many eps of the sizes of the terms each is the sum of
 #: (:func:`merge_multiple_roots`): a θ stored, its products with powers of ū, their sum and the −ȳ of eq. (5).
 ROOT_EPS = 2.0
@@ -367,7 +338,8 @@ ROOT_EPS = 2.0
 @nb.njit(cache=True, nogil=True)
 def _scaled_pair(c, a, x, t, u):  # pragma: no cover - compiled
     """t[p] = c[p] x^p and u[p] = a[p] x^p (a[p] >= |c[p]|: the sizes of the terms c[p] sums), both scaled by one
-    power of two (exact) where one leaves the float range, as :func:`_scaled_terms` scales its terms."""
+    power of two (exact) where one leaves the float range (roots near 1e200: inf − inf would say nothing; an underflow
+    would drop a term); only ratios of sums of them are used."""
     n = c.shape[0]
     ok = True
     pw = 1.0
