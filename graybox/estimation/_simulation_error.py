@@ -600,6 +600,11 @@ class SEProblem:
 
     def random_ls(self, rng: np.random.Generator, count: int, samples: int = 30) -> np.ndarray:
         """``count`` θ's, each least squares on ``samples`` randomly chosen rows (the paper's seeds)."""
+        return self.from_z(self.random_z(rng, count, samples))
+
+    def random_z(self, rng: np.random.Generator, count: int, samples: int = 30) -> np.ndarray:
+        """:meth:`random_ls` in the optimisers' coordinates, as solved there (the same draws): a centred problem's
+        GA seeds its population with these, never through raw θ, which holds the offsets' powers."""
         n = self.psi.shape[0]
         if samples > n:
             raise ValueError(f"GAOptions.random_samples = {samples} (the rows of each random individual's least "
@@ -608,7 +613,7 @@ class SEProblem:
         out = np.empty((count, self.psi.shape[1]))
         for i in range(count):
             rows = rng.choice(n, size=samples, replace=False)
-            out[i] = self.from_z(self.z_lstsq(rows))
+            out[i] = self.z_lstsq(rows)
         return out
 
 
@@ -684,18 +689,38 @@ def _ranking_fitness(cost: np.ndarray, sp: float) -> np.ndarray:
     return 2 - sp + 2 * (sp - 1) * rank / max(n - 1, 1)
 
 
+def _genes(problem: SEProblem, thetas: np.ndarray) -> np.ndarray:
+    """The GA's genes of θ's: the optimisers' coordinates z of a centred problem (:meth:`SEProblem.to_z`), θ
+    itself otherwise (a copy)."""
+    return problem.to_z(thetas) if problem.z_map is not None else np.array(thetas, float)
+
+
+def _theta_of(problem: SEProblem, genes: np.ndarray) -> np.ndarray:
+    """θ of the GA's ``genes`` (:func:`_genes`)."""
+    return problem.from_z(genes) if problem.z_map is not None else np.array(genes, float)
+
+
+def _ga_cost(problem: SEProblem, pop: np.ndarray, lam1: float, threads: int = 1) -> np.ndarray:
+    """The cost of the GA's individuals ``pop`` (genes, (P, n)) at λ1, from z where the genes are z."""
+    if problem.z_map is not None:
+        return problem.cost(problem.from_z(pop), lam1, threads, z=pop)
+    return problem.cost(pop, lam1, threads)
+
+
 def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, rng: np.random.Generator,
             threads: int) -> tuple[np.ndarray, float, int]:
-    """One GA run for one λ1; returns (best θ, its cost, generations run).
+    """One GA run for one λ1 from the individuals ``init`` (genes, :func:`_genes`); returns (the best
+    individual's genes, its cost, generations run).
 
     The genes are θ, or for a structure closed under shifts the centred coordinates z
     (:meth:`SEProblem.to_z`): the crossover is linear, but a mutation of 5 % of a raw gene is not the same
-    change of the model at another offset of u or y, and the runs chose other models there."""
-    zs = problem.z_map is not None
-    pop = problem.to_z(init) if zs else init
+    change of the model at another offset of u or y, and the runs chose other models there. The caller keeps
+    them in z from the seeds to the carried member: raw θ holds the offsets' powers, and its round trip lost ~1e-8
+    at y + 1e4, which the runs amplified (fronts 0.5 % apart in cost, 72 % in J_SF)."""
+    pop = np.asarray(init, float)
 
     def cost_of(pop):
-        return problem.cost(problem.from_z(pop), lam1, threads, z=pop) if zs else problem.cost(pop, lam1, threads)
+        return _ga_cost(problem, pop, lam1, threads)
     cost = cost_of(pop)
     best_hist = [np.min(cost)]
     n = opts.population
@@ -727,7 +752,7 @@ def _ga_run(problem: SEProblem, lam1: float, init: np.ndarray, opts: GAOptions, 
             if np.isfinite(old) and old - best_hist[-1] <= 1e-9 * abs(old):
                 break
     i = int(np.argmin(cost))
-    return (problem.from_z(pop[i]) if zs else pop[i].copy()), float(cost[i]), g
+    return pop[i].copy(), float(cost[i]), g
 
 
 # -- results and checkpoints ----------------------------------------------------------------
@@ -810,9 +835,10 @@ def read_npz(path: Path) -> dict[str, np.ndarray]:
             return {k: z[k] for k in z.files}
 
 
-def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None) -> dict | None:
+def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None, coords: bool = False) -> dict | None:
     """The state a checkpoint of a sweep of ``n_terms`` parameters (None: as many as it holds) holds, or None (with
-    a warning) when another graybox version wrote it."""
+    a warning) when another graybox version wrote it. ``coords``: the sweep needs its members in their optimiser's
+    coordinates too (``out["coords"]``; a centred problem's GA)."""
     def unreadable(exc: Exception) -> ValueError:
         return CheckpointError(f"checkpoint {path} is not a readable SE checkpoint ({exc}); delete it or choose "
                                "another checkpoint path")
@@ -854,6 +880,10 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None) -> dict
     if set(raw) != set(_CHECKPOINT_ARRAYS):
         raise CheckpointError(f"checkpoint {path} was written by an older graybox (it does not record failed "
                               "members); delete it or choose another checkpoint path")
+    if coords and "coords" not in arrays:
+        raise CheckpointError(f"checkpoint {path} was written by an older graybox (it does not record the GA's "
+                              "members as its runs hold them, in the centred coordinates, which their θ does not "
+                              "give back exactly); delete it or choose another checkpoint path")
     try:
         failed = json.loads(str(raw["failures"]))
         # the sweep writes a mapping of member index to reason: a list, a number or a reason that is no text is
@@ -887,6 +917,12 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None) -> dict
     if not (np.all(np.isfinite(th[:done][fitted])) and np.all(np.isfinite(costs[:done][fitted]))
             and np.all(costs[:done][fitted] >= 0) and np.all(nfev[:done] >= 0)):
         raise corrupt("a fitted member's θ or cost is not finite, or a cost or count is negative")
+    if coords:
+        z = arrays["coords"]
+        if z.dtype.kind != "f" or z.shape != th.shape or not np.all(np.isfinite(z[:done][fitted])):
+            raise corrupt(f"its members' coordinates, of shape {z.shape}, are not those of its {K} members of "
+                          f"{n_terms} terms, or not finite for a fitted member")
+        out["coords"] = z
     return out
 
 
@@ -898,9 +934,11 @@ def save_npz(path: Path, **arrays: Any) -> None:
 
 
 def _save_checkpoint(path: Path, meta: dict, thetas: np.ndarray, costs: np.ndarray, done: int,
-                     failures: dict, nfev: np.ndarray) -> None:
+                     failures: dict, nfev: np.ndarray, coords: np.ndarray | None = None) -> None:
+    """``coords``: the members in their optimiser's coordinates (:func:`_sweep`), kept only when given."""
+    more = {} if coords is None else {"coords": coords}
     save_npz(path, meta=json.dumps(meta), thetas=thetas, costs=costs, done=done,
-             failures=json.dumps({str(k): v for k, v in failures.items()}), nfev=nfev)
+             failures=json.dumps({str(k): v for k, v in failures.items()}), nfev=nfev, **more)
 
 
 def check_lsq_tol(tol: object) -> float:
@@ -914,14 +952,17 @@ class _Failed(Exception):
 
 
 def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, seed: int | None,
-           checkpoint: str | os.PathLike | None, progress: bool, step, fitted: SEFront | None = None) -> SEFront:
+           checkpoint: str | os.PathLike | None, progress: bool, step, fitted: SEFront | None = None,
+           coords: np.ndarray | None = None) -> SEFront:
     """Run ``step(i, lam1, thetas, rng) -> (θ, cost, nfev)`` over the λ's (descending).
 
     ``thetas`` holds the members so far (NaN rows for failed ones). A step that raises
     :class:`_Failed` leaves a failed member with its reason and the sweep goes on. Each λ is
     checkpointed, failures included, so a resumed sweep gives the uninterrupted one's set.
     ``fitted``: the first members of this very sweep, fitted already (a probe), taken as a
-    checkpoint's are.
+    checkpoint's are. ``coords``: an array (K, n) the step fills with each member as its optimiser holds it
+    (the GA's genes in z, which θ does not give back exactly), checkpointed with the members and filled from
+    a checkpoint on resume, so that a resumed sweep carries on exactly what an uninterrupted one does.
     """
     problem.check_identified()  # refused before any fit when not even the weighted static points identify θ
     K = lam.size
@@ -936,11 +977,13 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
     if problem.input_names() is not None:  # only when said: the default names' checkpoints stay valid
         meta["inputs"] = problem.input_names()
     path = None if checkpoint is None else checkpoint_path(checkpoint)
-    ck = _load_checkpoint(path, meta, n) if path is not None and path.exists() else None
+    ck = _load_checkpoint(path, meta, n, coords is not None) if path is not None and path.exists() else None
     if ck is not None:
         done = ck["done"]
         thetas[:done], costs[:done], nfev[:done] = ck["thetas"][:done], ck["costs"][:done], ck["nfev"][:done]
         failures.update(ck["failures"])
+        if coords is not None:
+            coords[:done] = ck["coords"][:done]
     if fitted is not None and fitted.lambdas.size > done:
         p = fitted.lambdas.size
         if p > K or not np.array_equal(fitted.lambdas, lam[:p]):
@@ -950,7 +993,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
         failures.update(fitted.failures)
         done = p
         if path is not None:
-            _save_checkpoint(path, meta, thetas, costs, done, failures, nfev)
+            _save_checkpoint(path, meta, thetas, costs, done, failures, nfev, coords)
     bar = progress_bar(K, f"SE front ({method})", progress, initial=done)
     # The sweeps make thousands of small BLAS calls (QR of a few thousand rows, 30-row least
     # squares): a multi-threaded BLAS only adds synchronisation, and on a loaded 2-core machine
@@ -967,7 +1010,7 @@ def _sweep(problem: SEProblem, lam: np.ndarray, method: str, settings: dict, see
                 failures[i] = str(why)
                 thetas[i], costs[i] = np.nan, np.inf
             if path is not None:
-                _save_checkpoint(path, meta, thetas, costs, i + 1, failures, nfev)
+                _save_checkpoint(path, meta, thetas, costs, i + 1, failures, nfev, coords)
             bar.update(1)
     finally:
         bar.close()
@@ -1037,42 +1080,54 @@ def ga_front(
         the nearest earlier member that did not fail.
     """
     lam = np.sort(check_lambdas(lambdas))[::-1]
+    zs = problem.z_map is not None  # genes in z (:func:`_genes`): every individual is kept there, never raw θ
     if isinstance(theta0, str):
         if theta0 != "ls":
             raise ValueError(f"theta0 must be an array, 'ls' or None, got {theta0!r}")
         first = problem.ls_theta()
+        first_genes = problem.ls_z() if zs else first
     else:
         first = None if theta0 is None else check_theta(len(problem.structure), theta0, "theta0")
+        first_genes = None if first is None else _genes(problem, first)
     extra = np.array([check_theta(len(problem.structure), s_, f"starts[{k}]") for k, s_ in enumerate(starts)]
                      ).reshape(-1, len(problem.structure))
     if extra.shape[0] > options.population - 1:
         raise ValueError(f"starts: {extra.shape[0]} individuals do not fit a population of {options.population} "
                          "besides the carried one")
+    extra_genes = _genes(problem, extra)
+    # each member's genes, carried on to the next run as they are (checkpointed): its θ, through which a centred
+    # problem's were carried, lost ~1e-8 at y + 1e4, and the runs that followed amplified it
+    carried = np.full((lam.size, len(problem.structure)), np.nan) if zs else None
 
-    def inside(th, lam1):
+    def inside(g, lam1):
         """A given individual outside the margin with its feedback shrunk (as it is where no scaling helps)."""
-        if problem.margin is None or np.isfinite(problem.cost(th[None], lam1)[0]):
-            return th
-        pulled = _pull_inside(problem, th, lam1)
-        return th if pulled is None else pulled[0]
+        if problem.margin is None or np.isfinite(_ga_cost(problem, g[None], lam1)[0]):
+            return g
+        pulled = _pull_inside(problem, _theta_of(problem, g), lam1)
+        return g if pulled is None else _genes(problem, pulled[0])
 
     def step(i, lam1, thetas, rng):
         near = _nearest(thetas, i, "before", 1)
-        carry = thetas[near[0]] if near else first
-        given = [inside(th, lam1) for th in ([] if carry is None else [carry]) + list(extra)]
-        init = problem.random_ls(rng, options.population - len(given), options.random_samples)
+        carry = (carried[near[0]] if zs else thetas[near[0]]) if near else first_genes
+        given = [inside(g, lam1) for g in ([] if carry is None else [carry]) + list(extra_genes)]
+        count = options.population - len(given)
+        init = problem.random_z(rng, count, options.random_samples) if zs else \
+            problem.random_ls(rng, count, options.random_samples)
         if given:
             init = np.vstack([np.array(given), init])
-        th, c, g = _ga_run(problem, lam1, init, options, rng, threads)
+        best, c, g = _ga_run(problem, lam1, init, options, rng, threads)
         if not np.isfinite(c):
             raise _Failed(f"no individual of the GA run at λ1 = {lam1:g} had a finite cost after {g} generation(s); "
-                          f"of its {len(init)} initial individuals {_population_faults(problem, init, lam1)}")
-        return th, c, options.population * (g + 1)
+                          f"of its {len(init)} initial individuals "
+                          f"{_population_faults(problem, _theta_of(problem, init), lam1)}")
+        if zs:
+            carried[i] = best
+        return _theta_of(problem, best), c, options.population * (g + 1)
 
     settings = dict(asdict(options), theta0=None if first is None else [float(v) for v in first])
     if extra.shape[0]:  # only when given: checkpoints of the paper's GA stay valid
         settings["starts"] = extra.tolist()
-    return _sweep(problem, lam, "ga", settings, seed, checkpoint, progress, step)
+    return _sweep(problem, lam, "ga", settings, seed, checkpoint, progress, step, coords=carried)
 
 
 def _population_faults(problem: SEProblem, pop: np.ndarray, lam1: float) -> str:
