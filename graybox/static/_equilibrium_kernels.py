@@ -392,8 +392,10 @@ def merge_multiple_roots(coef, roots, size):  # pragma: no cover - compiled
     S(x) = Σ_p size[p] |x|^p (``size``: the sum of the magnitudes of the terms each coefficient sums,
     >= |coef|; the polynomial's conditioning). Two distinct roots δ apart leave F''δ²/8 at their
     midpoint: adjacent roots x1 < x2 are one when |F''| δ²/8 <= η there (a change of the coefficients
-    within η makes them one double root; true double roots that rounding split are far inside it), and the
-    midpoint stands for both; farther apart they are two, however close (1 and 1 + 1.2e-7 at y's scale 1 are).
+    within η makes them one double root; true double roots that rounding split are far inside it) and F itself
+    is that small there, to η and its own rounding (2 (D + 1) eps S: F'' stands for F only where F is near a
+    parabola; where F'' vanishes between two roots, as s (ȳ⁴ − 1)'s at 0 between −1 and 1, it says nothing), and
+    the midpoint stands for both; farther apart they are two, however close (1 and 1 + 1.2e-7 at y's scale 1 are).
     A root is multiple when F'(x)² <= 2 η |F''(x)|, the same bound read at the root (F' = ±F''δ/2 at each
     of two roots δ apart; a root of multiplicity m split by rounding into parts δ apart has F' ~ F^(m)
     δ^(m−1), F'' ~ F^(m) δ^(m−2), η ~ F^(m) δ^m): so also a triple root whose companions a solver made
@@ -422,7 +424,8 @@ def merge_multiple_roots(coef, roots, size):  # pragma: no cover - compiled
     a = np.empty(n)
     t = np.empty(n)
     u = np.empty(n)
-    eta = ROOT_EPS * np.finfo(np.float64).eps
+    eps = np.finfo(np.float64).eps
+    eta = ROOT_EPS * eps
     for i in range(P):
         for j in range(M):
             m = 0
@@ -440,22 +443,29 @@ def merge_multiple_roots(coef, roots, size):  # pragma: no cover - compiled
                 mid = 0.5 * x1 + 0.5 * x2
                 delta = x2 - x1
                 same = x1 == x2
-                if not same and abs(mid) < delta:  # about 0 (roots of either sign): F'' and S there, unscaled
+                if not same and abs(mid) < delta:  # about 0 (roots of either sign): F, F'' and S there, unscaled
+                    f0 = 0.0
                     f2 = 0.0
                     sz = 0.0
                     pw = 1.0
                     for p in range(n):
                         sz += a[p] * abs(pw)
+                        f0 += c[p] * pw
                         pw *= mid
                     pw = 1.0
                     for p in range(2, n):
                         f2 += p * (p - 1) * c[p] * pw
                         pw *= mid
-                    same = abs(f2) * delta * delta / 8.0 <= eta * sz
+                    same = abs(f2) * delta * delta / 8.0 <= eta * sz and abs(f0) <= (eta + 2 * n * eps) * sz
                 elif not same:
                     _scaled_pair(c, a, mid, t, u)
                     r = delta / mid  # the gap relative to where it is, |r| <= 2
-                    same = abs(_curvature(t, u)) * r * r / 8.0 <= eta
+                    f0 = 0.0
+                    sz = 0.0
+                    for p in range(n):
+                        f0 += t[p]
+                        sz += abs(u[p])
+                    same = abs(_curvature(t, u)) * r * r / 8.0 <= eta and abs(f0) <= (eta + 2 * n * eps) * sz
                 if same:  # the pair is one root: the midpoint; the rest move down (and may merge with it in turn)
                     out[i, j, k] = mid
                     for q in range(k + 1, m - 1):

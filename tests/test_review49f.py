@@ -1,0 +1,24 @@
+"""review49f: equilibria: two distinct roots about an inflection point are not one fold."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+@pytest.mark.parametrize("s", [0.1, -0.1, 0.01, -3.0])
+@pytest.mark.parametrize("c0", [0.0, 0.3, -2.0])
+@pytest.mark.parametrize("ys", [1.0, 1e-30, 1e40])
+def test_two_roots_about_an_inflection_point_are_two_equilibria_not_one_fold(s, c0, ys):
+    """060d79e judged adjacent roots one when |F''(mid)| δ²/8 was within the coefficients' uncertainty, F''(mid)
+    standing for F(mid): where F'' vanishes at the midpoint (s (ȳ² − 1)(ȳ² + 1) = s (ȳ⁴ − 1): F''(0) = 0) the roots
+    −1 and 1 were merged into one 'fold' at 0, an output that is no equilibrium at all (F(0) = −s), and the stable
+    one of them was lost: y(k) = y(k−1) + 0.1 y(k−1)⁴ − 0.1 u(k−1) at ū = 1 had the one equilibrium (0.0, unstable)."""
+    c = np.real(np.polynomial.polynomial.polyfromroots(np.array([c0 - 1, c0 + 1, c0 + 1j, c0 - 1j]) * ys)) * (s / ys**3)
+    model = gb.Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "y(k-1)^4", "u(k-1)"], [c[1] + 1, *c[2:], c[0]])
+    eqs = model.equilibria(1.0)
+    np.testing.assert_allclose([e.ybar / ys for e in eqs], [c0 - 1, c0 + 1], rtol=1e-9, atol=1e-12)
+    for e, fprime in zip(eqs, (-4.0 * s, 4.0 * s)):  # F = s ((ȳ − c0)⁴ − 1) in y's units: F' = ∓4s at c0 ∓ 1
+        assert e.stable == (-2.0 < fprime < 0.0)
