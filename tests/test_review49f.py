@@ -22,3 +22,16 @@ def test_two_roots_about_an_inflection_point_are_two_equilibria_not_one_fold(s, 
     np.testing.assert_allclose([e.ybar / ys for e in eqs], [c0 - 1, c0 + 1], rtol=1e-9, atol=1e-12)
     for e, fprime in zip(eqs, (-4.0 * s, 4.0 * s)):  # F = s ((ȳ − c0)⁴ − 1) in y's units: F' = ∓4s at c0 ∓ 1
         assert e.stable == (-2.0 < fprime < 0.0)
+
+
+@pytest.mark.parametrize("c", [1e-160, 1e-200, 1e-300, -1e-200])
+def test_a_near_root_beside_one_beyond_the_float_square_is_not_merged_with_it(c):
+    """060d79e read a pair whose midpoint is below their gap (1 and 1/c: mid = 1/(2c) < δ) unscaled: F'' δ² and
+    S(mid) = … + |c| mid² both overflowed, inf <= inf, and y = 1 + c y² had the one equilibrium (1/(2c), a 'fold')
+    for c <= ~1e-160 (test_hunt39a failed): the stable ȳ = 1 and the static curve there were lost."""
+    m = gb.Model(["1", "y(k-1)^2"], [1.0, c])
+    eqs = m.equilibria(0.0)
+    want = sorted([2.0 / (1.0 + np.sqrt(1.0 - 4.0 * c)), (1.0 + np.sqrt(1.0 - 4.0 * c)) / (2.0 * c)])
+    np.testing.assert_allclose([e.ybar for e in eqs], want, rtol=1e-9)
+    assert [e.stable for e in eqs] == [abs(2.0 * c * e.ybar) < 1.0 for e in eqs]
+    assert m.static_curve([0.0])[0] == pytest.approx(1.0, rel=1e-12)

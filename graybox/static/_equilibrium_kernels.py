@@ -443,20 +443,27 @@ def merge_multiple_roots(coef, roots, size):  # pragma: no cover - compiled
                 mid = 0.5 * x1 + 0.5 * x2
                 delta = x2 - x1
                 same = x1 == x2
-                if not same and abs(mid) < delta:  # about 0 (roots of either sign): F, F'' and S there, unscaled
+                if not same and abs(mid) < delta:  # about 0 (roots of either sign, or one far beyond the other):
+                    # F, F'' and S at mid in the variable x / g, g the power of two of the gap, whose terms
+                    # c_p g^p _scaled_pair forms (scaled by one power of two): F'' δ² and S(mid) overflowed
+                    # unscaled where the far root is beyond ~1e154 (1 and 1e200 read inf <= inf: one 'fold')
+                    g = math.ldexp(1.0, math.frexp(delta)[1])
+                    _scaled_pair(c, a, g, t, u)
+                    xm = mid / g  # |xm| < 1
+                    dm = delta / g  # in [1/2, 1)
                     f0 = 0.0
                     f2 = 0.0
                     sz = 0.0
                     pw = 1.0
                     for p in range(n):
-                        sz += a[p] * abs(pw)
-                        f0 += c[p] * pw
-                        pw *= mid
+                        sz += abs(u[p]) * abs(pw)
+                        f0 += t[p] * pw
+                        pw *= xm
                     pw = 1.0
                     for p in range(2, n):
-                        f2 += p * (p - 1) * c[p] * pw
-                        pw *= mid
-                    same = abs(f2) * delta * delta / 8.0 <= eta * sz and abs(f0) <= (eta + 2 * n * eps) * sz
+                        f2 += p * (p - 1) * t[p] * pw
+                        pw *= xm
+                    same = abs(f2) * dm * dm / 8.0 <= eta * sz and abs(f0) <= (eta + 2 * n * eps) * sz
                 elif not same:
                     _scaled_pair(c, a, mid, t, u)
                     r = delta / mid  # the gap relative to where it is, |r| <= 2
