@@ -1,4 +1,5 @@
-"""review49f: equilibria: two distinct roots about an inflection point are not one fold."""
+"""review49f: equilibria: two distinct roots about an inflection point, or one beyond 1e154 beside a near one, are not one
+fold; a double root of degree 4 and above whose y coefficient cancels is kept."""
 
 from __future__ import annotations
 
@@ -35,3 +36,32 @@ def test_a_near_root_beside_one_beyond_the_float_square_is_not_merged_with_it(c)
     np.testing.assert_allclose([e.ybar for e in eqs], want, rtol=1e-9)
     assert [e.stable for e in eqs] == [abs(2.0 * c * e.ybar) < 1.0 for e in eqs]
     assert m.static_curve([0.0])[0] == pytest.approx(1.0, rel=1e-12)
+
+
+def _roots_model(roots, scale: float) -> gb.Model:
+    """ȳ = θ1 ȳ + θ2 ȳ² + … + ū whose static equation at ū = 1 is scale · ∏ (ȳ − r) = 0 (θ1 = 1 + c1 near 1)."""
+    c = np.polynomial.polynomial.polyfromroots(np.asarray(roots, float)) * scale
+    terms = ["y(k-1)"] + [f"y(k-1)^{p}" for p in range(2, len(c))] + ["u(k-1)"]
+    return gb.Model(terms, [c[1] + 1, *c[2:], c[0]])
+
+
+@pytest.mark.parametrize("scale", [-0.5, -0.005, -5e-4, 0.005, 5e-4, 5e-5])
+@pytest.mark.parametrize("others", [[-1.0, 2.5], [-1.0, -2.5, 2.5]])
+@pytest.mark.parametrize("r", [1.5, -0.6, 0.75, -2.0])
+def test_a_double_root_of_a_quartic_or_quintic_whose_y_coefficient_cancels_is_kept(r, scale, others):
+    """7bd1e9c kept such a double root for quadratics and cubics only: the companion path (degree >= 4) kept a root
+    only where its imaginary part was below 1e-7 of it, and rounding of c1 = θ1 − 1 splits the double root into a
+    complex pair farther apart: c (ȳ − 1.5)² (ȳ + 1)(ȳ − 2.5) at c = −5e-4 had the equilibria −1 and 2.5 only."""
+    model = _roots_model([r, r, *others], scale)
+    eqs = model.equilibria(1.0)
+    np.testing.assert_allclose([e.ybar for e in eqs], sorted([r, *others]), rtol=1e-6)
+    (fold,) = [e for e in eqs if abs(e.ybar - r) < 1e-6]
+    assert not fold.stable
+
+
+@pytest.mark.parametrize("scale", [-0.5, -0.005, 0.005])
+def test_a_complex_pair_of_a_quartic_is_no_equilibrium(scale):
+    """A complex pair clear of the real axis (1.5 ± 0.01i) stays out: only the real roots are equilibria."""
+    c = np.real(np.polynomial.polynomial.polyfromroots([1.5 + 0.01j, 1.5 - 0.01j, -1.0, 2.5])) * scale
+    model = gb.Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "y(k-1)^4", "u(k-1)"], [c[1] + 1, *c[2:], c[0]])
+    np.testing.assert_allclose([e.ybar for e in model.equilibria(1.0)], [-1.0, 2.5], rtol=1e-9)

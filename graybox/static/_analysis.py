@@ -58,6 +58,7 @@ from ._equilibrium_kernels import (
     POLY,
     REACHED,
     SKIPPED,
+    ROOT_EPS,
     candidate_linearisations,
     merge_multiple_roots,
     real_roots_upto_cubic_sized,
@@ -351,31 +352,45 @@ def _roots_one(c: np.ndarray) -> np.ndarray:
     return np.concatenate([np.array(z0, dtype=complex), z])
 
 
-def _real_roots_companion(coef: np.ndarray) -> np.ndarray:
+def _real_roots_companion(coef: np.ndarray, sizes: np.ndarray | None = None) -> np.ndarray:
     """Real roots (sorted, NaN-padded) of ascending polynomials of degree D >= 4, shape (P, M, D).
 
     Companion-matrix eigenvalues (numpy.roots), computed group by group in the scale of each group
     of roots (the edges of the Newton polygon of the coefficients, scales rounded to powers of
     two), so roots of very different magnitudes all start accurate and a change of units only
     rescales them; Newton steps on the whole polynomial finish them, and a real root is kept
-    only if its backward error is small.
+    only if its backward error is small. ``sizes`` (as ``coef``; default |coef|): the sizes of the terms each
+    coefficient sums, as :func:`~graybox.static._equilibrium_kernels.real_roots_upto_cubic_sized` takes them: a
+    complex pair x ± iy whose F(x) is within what they leave uncertain (``ROOT_EPS`` eps of Σ sizes_p |x|^p) is
+    the double root x that rounding pushed off the real axis (listed twice, read as one fold by
+    :func:`~graybox.static._equilibrium_kernels.merge_multiple_roots`).
     """
     D = coef.shape[0] - 1
     P, M = coef.shape[1:]
     c = np.moveaxis(coef, 0, -1).reshape(-1, D + 1)
+    a = c if sizes is None else np.maximum(np.abs(np.moveaxis(sizes, 0, -1).reshape(-1, D + 1)), np.abs(c))
     K = c.shape[0]
     out = np.full((K, D), np.nan)
     powers = np.arange(D + 1)
+    eps = np.finfo(float).eps
     for k in range(K):
         ck = c[k]
         if not (np.all(np.isfinite(ck)) and np.any(ck != 0)):
             continue
         with np.errstate(all="ignore"):
             z = _roots_one(ck)
-            x = z.real[np.abs(z.imag) <= IMAG_RTOL * np.abs(z)]
+            real = np.abs(z.imag) <= IMAG_RTOL * np.abs(z)
+            x = z.real[real]
             f = np.polynomial.polynomial.polyval(x, ck)
             size = np.abs(x[:, None]) ** powers @ np.abs(ck)
-            x = np.sort(x[np.isfinite(x) & (np.abs(f) <= 1e-8 * size)])
+            x = x[np.isfinite(x) & (np.abs(f) <= 1e-8 * size)]
+            # one of each complex pair (imaginary part > 0): its real part, where F is within the coefficients'
+            # uncertainty there (a double root that rounding of a cancelling coefficient split into the pair)
+            xp = z.real[~real & (z.imag > 0)]
+            fp = np.abs(np.polynomial.polynomial.polyval(xp, ck))
+            eta = ROOT_EPS * eps * (np.abs(xp[:, None]) ** powers @ np.abs(a[k]))
+            xp = xp[np.isfinite(xp) & np.isfinite(eta) & (fp <= eta)]
+            x = np.sort(np.concatenate([x, xp, xp]))
         out[k, : x.size] = x[:D]
     return out.reshape(P, M, D)
 
@@ -406,7 +421,7 @@ def _roots_and_folds(structure: Structure, thetas: np.ndarray, ubar: np.ndarray)
     """:func:`real_roots`, and which of them are multiple roots (folds of the static curve), shape (P, M, D) each."""
     coef, size = _static_terms(structure, thetas, ubar)
     roots = (real_roots_upto_cubic_sized(coef, np.ascontiguousarray(size)) if coef.shape[0] <= 4
-             else _real_roots_companion(coef))
+             else _real_roots_companion(coef, size))
     if roots.shape[-1] < 2:  # a linear equation: one simple root
         return roots, np.zeros(roots.shape, dtype=bool)
     return merge_multiple_roots(np.ascontiguousarray(coef), np.ascontiguousarray(roots), np.ascontiguousarray(size))
