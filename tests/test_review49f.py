@@ -65,3 +65,19 @@ def test_a_complex_pair_of_a_quartic_is_no_equilibrium(scale):
     c = np.real(np.polynomial.polynomial.polyfromroots([1.5 + 0.01j, 1.5 - 0.01j, -1.0, 2.5])) * scale
     model = gb.Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "y(k-1)^4", "u(k-1)"], [c[1] + 1, *c[2:], c[0]])
     np.testing.assert_allclose([e.ybar for e in model.equilibria(1.0)], [-1.0, 2.5], rtol=1e-9)
+
+
+# -- 9f2fe7d: PumpingPlant.turbine_head reads its flow as the library reads one number -------------------------------
+
+def test_turbine_head_takes_a_flow_as_a_zero_dimensional_array_as_steady_state_takes_a_speed():
+    """9f2fe7d read the flow with isinstance(flow, numbers.Real): a 0-d array (np.array(3.0), as np.asarray or a
+    reduction with keepdims=False over an array hands one out) was 'flow must be a number', where float() took it
+    before and every other number check of the plant (check_real, _one_speed: steady_state(np.array(1200.0))) takes it."""
+    from graybox.datasets.pumping import PumpingPlant
+
+    plant = PumpingPlant()
+    assert plant.turbine_head(np.array(3.0)) == plant.turbine_head(3.0)
+    assert plant.turbine_head(np.array(30.0)) == plant.turbine_head(30.0)
+    assert plant.steady_state(np.array(1200.0)) == plant.steady_state(1200.0)
+    with pytest.raises(TypeError, match="flow"):
+        plant.turbine_head(np.array([3.0]))

@@ -191,7 +191,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import numbers
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -498,11 +497,10 @@ class PumpingPlant:
         Below the flow Q_j of the lowest reference of ``speed_range`` (24.2 L/s for the default
         plant) it continues as H_j (Q/Q_j)^m down to H_t(0) = 0 (module docs, "Low flow").
         """
-        if not isinstance(flow, numbers.Real) or isinstance(flow, (bool, np.bool_)):  # float() parsed '3', took True
-            raise TypeError(f"flow must be a number (L/s), got {flow!r} ({type(flow).__name__})")
-        q = float(flow)
-        if not 0.0 <= q < math.inf:
-            raise ValueError(f"flow must be >= 0 L/s (the non-return valves stop a reverse flow) and finite, got {flow!r}")
+        # float() parsed '3' and took True; a 0-d array is one number, as check_real (and steady_state) take it
+        q = check_real(flow, "flow (L/s)")
+        if q < 0.0:
+            raise ValueError(f"flow must be >= 0 L/s (the non-return valves stop a reverse flow), got {flow!r}")
         qj, hj, m = self._low_flow
         if q < qj:
             return hj * (q / qj) ** m
