@@ -81,3 +81,16 @@ def test_turbine_head_takes_a_flow_as_a_zero_dimensional_array_as_steady_state_t
     assert plant.steady_state(np.array(1200.0)) == plant.steady_state(1200.0)
     with pytest.raises(TypeError, match="flow"):
         plant.turbine_head(np.array([3.0]))
+
+
+@pytest.mark.parametrize("speed, step", [(1790.0, 20.0), (505.0, -20.0)])
+def test_step_time_constant_names_a_step_that_leaves_the_speed_range(speed, step):
+    """5744b9b read the speed as simulate does, but a step from it past the range still ended in simulate's words
+    about a reference the caller never gave ('speed reference must stay within 500–1800 rpm …; sample 10 is 1810
+    rpm'): the stepped speed is read as the speed is, naming speed + step."""
+    from graybox.datasets.pumping import PumpingPlant
+
+    with pytest.raises(ValueError, match=r"speed \+ step") as e:
+        PumpingPlant().step_time_constant(speed, step=step)
+    assert "sample 10" not in str(e.value)
+    assert PumpingPlant().step_time_constant(1780.0) > 0  # a step that stays inside is read as before

@@ -760,6 +760,7 @@ class PumpingPlant:
         step = check_real(step, "step (rpm)")
         if step == 0:
             raise ValueError("step (rpm) must not be 0: a time constant is read off the response to a step")
+        self._one_speed(speed + step, f"speed + step ({speed:g} {'+' if step > 0 else '-'} {abs(step):g} rpm)")
         horizon = check_real(horizon, "horizon (s)", low=0, low_open=True)
         self._one_speed(speed + step, f"speed + step ({speed:g} + {step:g} rpm)")  # (said as a reference sample)
         n_hold = 10
