@@ -396,7 +396,7 @@ def test_a_step_beyond_the_calibrated_range_names_the_step():
 
     with pytest.raises(ValueError, match=r"speed \+ step \(1750 \+ 100 rpm\) must stay within 500–1800 rpm"):
         PumpingPlant().step_time_constant(1750, step=100)
-    with pytest.raises(ValueError, match=r"speed \+ step \(600 \+ -200 rpm\)"):
+    with pytest.raises(ValueError, match=r"speed \+ step \(600 - 200 rpm\)"):
         PumpingPlant().step_time_constant(600, step=-200)
 
 

@@ -762,7 +762,6 @@ class PumpingPlant:
             raise ValueError("step (rpm) must not be 0: a time constant is read off the response to a step")
         self._one_speed(speed + step, f"speed + step ({speed:g} {'+' if step > 0 else '-'} {abs(step):g} rpm)")
         horizon = check_real(horizon, "horizon (s)", low=0, low_open=True)
-        self._one_speed(speed + step, f"speed + step ({speed:g} + {step:g} rpm)")  # (said as a reference sample)
         n_hold = 10
         # the run's arrays, about 15 floats a sample: a horizon no memory holds is said, not numpy's MemoryError
         n_total = n_hold + max(1, check_count(int(round(horizon / self.Ts)), "horizon (in samples of Ts)",
