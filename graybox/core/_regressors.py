@@ -67,6 +67,10 @@ def refuse_non_finite_columns(columns: np.ndarray, terms: Sequence, what: str = 
 def input_signals(u: np.ndarray, input_names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
     """Input columns by name: ``u`` of shape (N,) (one input, default name ``"u"``) or (N, m)."""
     if u.ndim == 1:
+        if input_names is not None and len(input_names) != 1:  # else u was silently taken as the first of them
+            raise ValueError(f"u has one input column (shape {u.shape}) but {len(input_names)} input names "
+                             f"{tuple(input_names)} were given: give u one column per input, shape ({u.shape[0]}, "
+                             f"{len(input_names)})")
         return {"u" if input_names is None else input_names[0]: u}
     names = tuple(f"u{i}" for i in range(1, u.shape[1] + 1)) if input_names is None else tuple(input_names)
     if len(names) != u.shape[1]:
