@@ -18,3 +18,24 @@ def test_regressor_matrix_one_column_with_two_input_names_is_refused():
     # one input, one name: as before
     psi = gb.regressor_matrix(st, u, y, input_names=("a",))
     assert np.array_equal(psi[:, 0], u[:-1])
+
+
+def test_dask_record_inf_is_refused_without_numpy_warnings():
+    # the clear ValueError naming the sample came after numpy's RuntimeWarnings (invalid value in multiply, matmul)
+    da = pytest.importorskip("dask.array")
+    import warnings
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 1, 300)
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.5 * y[k - 1] + u[k - 1]
+    y[0] = np.inf
+    rec = gb.DaskRecord(da.from_array(u, chunks=100), da.from_array(y, chunks=100), name="long")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="long: y has 1 non-finite value.*index 0"):
+            gb.frols(gb.Candidates(2, 2, degree=2), rec, n_terms=2)
+        with pytest.raises(ValueError, match="overflow"):
+            big = gb.DaskRecord(da.from_array(u * 1e160, chunks=100), da.from_array(u, chunks=100))
+            gb.frols(gb.Candidates(2, 2, degree=2), big, n_terms=2)

@@ -252,12 +252,15 @@ def _block_reduce(factors: Sequence[tuple], u: np.ndarray, y: np.ndarray, start:
     acc = _Pairwise(np.add if form == "gram" else _r_combine)
     step = chunk_rows(n + 1)
     A = np.empty((min(step, max(N - start, 0)), n + 1), order="F")
-    for k0 in range(start, N, step):
-        k1 = min(k0 + step, N)
-        Ak = A[: k1 - k0]
-        fill_columns(Ak, factors, sig, k0, k1)
-        Ak[:, n] = sig["y"][k0:k1]
-        acc.add(Ak.T @ Ak if form == "gram" else np.linalg.qr(Ak, mode="r"))
+    # a non-finite sum is refused after the reduction, naming its cause (a Dask record's NaN or inf, read here first;
+    # an overflow of a high power): numpy's RuntimeWarnings before that error said nothing of either
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k0 in range(start, N, step):
+            k1 = min(k0 + step, N)
+            Ak = A[: k1 - k0]
+            fill_columns(Ak, factors, sig, k0, k1)
+            Ak[:, n] = sig["y"][k0:k1]
+            acc.add(Ak.T @ Ak if form == "gram" else np.linalg.qr(Ak, mode="r"))
     tot = acc.total()
     if tot is None:
         return np.zeros((n + 1, n + 1))
