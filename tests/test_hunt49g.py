@@ -39,3 +39,18 @@ def test_dask_record_inf_is_refused_without_numpy_warnings():
         with pytest.raises(ValueError, match="overflow"):
             big = gb.DaskRecord(da.from_array(u * 1e160, chunks=100), da.from_array(u, chunks=100))
             gb.frols(gb.Candidates(2, 2, degree=2), big, n_terms=2)
+
+
+def test_dask_records_without_a_name_are_named_in_messages():
+    # two DaskRecords made without name= were both '' in every message: "'' is sampled every 1 s but '' every 2 s"
+    da = pytest.importorskip("dask.array")
+    u = np.random.default_rng(0).uniform(size=100)
+    a = gb.DaskRecord(da.from_array(u, chunks=50), da.from_array(u, chunks=50))
+    b = gb.DaskRecord(da.from_array(u, chunks=50), da.from_array(u, chunks=50), Ts=2.0)
+    with pytest.raises(ValueError) as info:
+        gb.frols(gb.Candidates(1, 1, degree=1), [a, b], n_terms=1)
+    assert "''" not in str(info.value) and "'record' is sampled every 1 s" in str(info.value)
+    with pytest.raises(ValueError) as info:
+        gb.frols(gb.Candidates(1, {"speed": 1}, degree=1), a, n_terms=1)
+    assert str(info.value).startswith("record: the terms use input 'speed'")
+    assert "'record'" in repr(a)

@@ -86,7 +86,7 @@ class DaskRecord:
     Ts : float
         Sampling period, seconds (> 0).
     name : str
-        Label.
+        A label used in messages (default ``"record"``, as :class:`~graybox.Record`'s).
     units : (str, str), optional
         Units of (u, y), as :class:`~graybox.Record`'s: the models fitted on it carry them.
     """
@@ -94,7 +94,7 @@ class DaskRecord:
     u: Any
     y: Any
     Ts: float = 1.0
-    name: str = ""
+    name: str = "record"  # as a Record's: messages said "'' is sampled every 1 s but '' every 2 s"
     units: tuple[str, str] = ("", "")
 
     def __post_init__(self) -> None:
