@@ -54,3 +54,20 @@ def test_dask_records_without_a_name_are_named_in_messages():
         gb.frols(gb.Candidates(1, {"speed": 1}, degree=1), a, n_terms=1)
     assert str(info.value).startswith("record: the terms use input 'speed'")
     assert "'record'" in repr(a)
+
+
+def test_dask_record_neither_aliases_nor_takes_item_assignment():
+    # DaskRecord held the caller's own dask arrays (astype/rechunk return them unchanged) and dask assigns items in
+    # place: u[0] = -99 after construction changed the "frozen" record, and so did record.u[1] = ...
+    da = pytest.importorskip("dask.array")
+    u = da.from_array(np.arange(10.0), chunks=5)
+    y = da.from_array(np.arange(10.0), chunks=5)
+    rec = gb.DaskRecord(u, y, name="long")
+    u[0] = -99.0
+    y[0] = -99.0
+    assert rec.u[0].compute() == 0.0 and rec.y[0].compute() == 0.0
+    with pytest.raises(TypeError, match="read-only"):
+        rec.u[1] = 1234.0
+    with pytest.raises(TypeError, match="read-only"):
+        rec.y[1] = 1234.0
+    assert rec.u[1].compute() == 1.0 and rec.y[1].compute() == 1.0

@@ -19,6 +19,7 @@ record length N (one chunk of the candidate matrix plus a few (n+1)² matrices).
 
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -116,9 +117,12 @@ class DaskRecord:
             raise ValueError(f"DaskRecord: u and y must have the same known length, got {self.u.shape[0]} and "
                              f"{self.y.shape[0]}")
         object.__setattr__(self, "Ts", check_real(self.Ts, "Ts", low=0, low_open=True))  # seconds
-        u = self.u.astype(float)
+        # astype and rechunk hand back the caller's own array objects where nothing changes, and dask assigns items
+        # in place (``u[0] = nan`` rewrites the array's graph): the record held the caller's later edits and took its
+        # own. Its arrays are new objects over the same graph (nothing computed) that refuse item assignment
+        u = _read_only(self.u.astype(float))
         object.__setattr__(self, "u", u)
-        object.__setattr__(self, "y", self.y.astype(float).rechunk(u.chunks))
+        object.__setattr__(self, "y", _read_only(self.y.astype(float).rechunk(u.chunks)))
 
     def __len__(self) -> int:
         return int(self.u.shape[0])
@@ -140,6 +144,26 @@ class DaskRecord:
 
     def __repr__(self) -> str:
         return f"DaskRecord({self.name!r}: {len(self)} samples in {len(self.u.chunks[0])} blocks, Ts = {self.Ts:g} s)"
+
+
+@functools.lru_cache(maxsize=None)
+def _read_only_array_type() -> type:
+    """A dask.array.Array whose item assignment raises (made once, when a DaskRecord first needs it)."""
+    import dask.array as da
+
+    class ReadOnlyDaskArray(da.Array):
+        __slots__ = ()
+
+        def __setitem__(self, key: object, value: object) -> None:
+            raise TypeError("a DaskRecord's samples are read-only: make a new DaskRecord of the changed arrays "
+                            "(e.g. da.where(...))")
+
+    return ReadOnlyDaskArray
+
+
+def _read_only(a: Any) -> Any:
+    """A new read-only Dask array object over ``a``'s graph (the caller's ``a`` is not aliased)."""
+    return _read_only_array_type()(a.dask, a.name, a.chunks, meta=a._meta)
 
 
 def is_dask_data(data: object) -> bool:
