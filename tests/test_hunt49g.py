@@ -53,6 +53,8 @@ def test_dask_records_without_a_name_are_named_in_messages():
     with pytest.raises(ValueError) as info:
         gb.frols(gb.Candidates(1, {"speed": 1}, degree=1), a, n_terms=1)
     assert str(info.value).startswith("record: the terms use input 'speed'")
+    # the hint is a DaskRecord's: it has no input_names to give (Record(..., input_names=...) was the advice)
+    assert "input_names=" not in str(info.value) and "one input, named 'u'" in str(info.value)
     assert "'record'" in repr(a)
 
 

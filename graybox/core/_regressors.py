@@ -48,6 +48,12 @@ def check_record_inputs(inputs: Sequence[str], records: Sequence) -> None:
     anything with ``name`` and ``input_names``) lacks, with how to give them it (:func:`missing_input_hint`)."""
     for r in records:
         missing = [n for n in inputs if n not in r.input_names]
+        if missing and type(r).__name__ == "DaskRecord":  # by name: core._gram imports this module
+            # the hint for a Record (Record(..., input_names=[...])) is no way to name a DaskRecord's input
+            raise ValueError(f"{r.name}: the terms use input {missing[0]!r}, but the record's inputs are ('u',): a "
+                             "DaskRecord holds one input, named 'u' (it takes no input_names): write the terms with u, "
+                             "e.g. Candidates(ny, nu) without input names, or reduce a Record of the named inputs in "
+                             "memory")
         if missing:
             raise ValueError(f"{r.name}: the terms use input {missing[0]!r}, but the record's inputs are "
                              f"{r.input_names}{missing_input_hint(tuple(inputs), r.input_names)}")
