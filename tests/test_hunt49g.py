@@ -73,3 +73,19 @@ def test_dask_record_neither_aliases_nor_takes_item_assignment():
     with pytest.raises(TypeError, match="read-only"):
         rec.y[1] = 1234.0
     assert rec.u[1].compute() == 1.0 and rec.y[1].compute() == 1.0
+
+
+def test_dask_record_where_records_in_memory_are_meant_says_where_it_is_taken():
+    # frols([Record, DaskRecord]) said "data must be a Record, a sequence of Records or a Dataset; got a sequence
+    # holding a DaskRecord", as if frols took no DaskRecord; els(DaskRecord) said "got DaskRecord" and no more
+    da = pytest.importorskip("dask.array")
+    u = np.random.default_rng(0).uniform(size=100)
+    d = gb.DaskRecord(da.from_array(u, chunks=50), da.from_array(u, chunks=50), name="long")
+    r = gb.Record(u, u)
+    st = gb.Structure(["y(k-1)", "u(k-1)"])
+    with pytest.raises(TypeError, match="not among Records: give them all as DaskRecords, or all as Records"):
+        gb.frols(st, [r, d], n_terms=1)
+    with pytest.raises(TypeError, match=r"taken by frols, pe_thetas and cls only.*Record\(r\.u\.compute\(\)"):
+        gb.els(st, d)
+    with pytest.raises(TypeError, match=r"taken by frols, pe_thetas and cls only.*Record\(r\.u\.compute\(\)"):
+        gb.els(st, [d, d])

@@ -646,6 +646,14 @@ def record_hint(data: object) -> str:
     """How to make a Record of what was given where one is meant (a path, a DataFrame, arrays), else ``""``."""
     if isinstance(data, Dataset):  # where one record is meant and the call cannot tell which
         return "; pass one of its records: data.ident or data.valid"
+    # by name: core._gram (DaskRecord's home) imports this module
+    dask = [r for r in (data if isinstance(data, (tuple, list)) else [data]) if type(r).__name__ == "DaskRecord"]
+    if dask:
+        mixed = isinstance(data, (tuple, list)) and len(dask) < len(data)
+        return ("; a DaskRecord (held out of memory) is taken by frols, pe_thetas and cls only, "
+                + ("and not among Records: give them all as DaskRecords, or all as Records" if mixed else
+                   "alone or among DaskRecords only: elsewhere give a Record of its samples, e.g. "
+                   "Record(r.u.compute(), r.y.compute(), Ts=r.Ts, units=r.units)"))
     if isinstance(data, (str, os.PathLike)):
         return ("; read the file first: graybox.load_record_csv(path, u='input column', y='output column', "
                 "time='time column') (or Ts=seconds)")
