@@ -231,7 +231,7 @@ def test_dask_is_imported_only_when_a_dask_record_is_given():
 def test_dask_record_validates_its_arrays():
     da = pytest.importorskip("dask.array")
     u = da.from_array(np.arange(10.0), chunks=4)
-    with pytest.raises(ValueError, match="dask array"):
+    with pytest.raises(TypeError, match="dask array"):  # a wrong type (hunt49g)
         gb.DaskRecord(np.arange(10.0), u)
     with pytest.raises(ValueError, match="same known length"):
         gb.DaskRecord(u, da.from_array(np.arange(9.0), chunks=4))

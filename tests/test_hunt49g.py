@@ -89,3 +89,18 @@ def test_dask_record_where_records_in_memory_are_meant_says_where_it_is_taken():
         gb.els(st, d)
     with pytest.raises(TypeError, match=r"taken by frols, pe_thetas and cls only.*Record\(r\.u\.compute\(\)"):
         gb.els(st, [d, d])
+
+
+def test_dask_record_of_a_wrong_type_is_a_type_error():
+    # an array in memory, a list or complex samples were a ValueError ("must be a dask array, got ndarray")
+    da = pytest.importorskip("dask.array")
+    x = np.arange(10.0)
+    d = da.from_array(x, chunks=5)
+    with pytest.raises(TypeError, match=r"DaskRecord.u must be a dask array, got ndarray.*from_array"):
+        gb.DaskRecord(x, d)
+    with pytest.raises(TypeError, match="DaskRecord.y must be a dask array, got list"):
+        gb.DaskRecord(d, x.tolist())
+    with pytest.raises(TypeError, match="DaskRecord.u must hold real numbers, got dtype complex128"):
+        gb.DaskRecord(d.astype(complex), d)
+    with pytest.raises(ValueError, match="holds one input"):
+        gb.DaskRecord(da.from_array(np.ones((10, 2)), chunks=5), d)

@@ -107,12 +107,15 @@ class DaskRecord:
             raise ImportError("DaskRecord needs dask: pip install 'dask[array]'") from exc
         for nm in ("u", "y"):
             a = getattr(self, nm)
+            # a wrong type (an array in memory, complex samples) is a TypeError, as a Record's
             if not isinstance(a, da.Array):
-                raise ValueError(f"DaskRecord.{nm} must be a dask array, got {type(a).__name__}")
+                raise TypeError(f"DaskRecord.{nm} must be a dask array, got {type(a).__name__}: wrap it, e.g. "
+                                "dask.array.from_array(x, chunks=100_000), or give samples in memory as a Record")
             if a.ndim != 1:
-                raise ValueError(f"DaskRecord.{nm} must be 1-D, got shape {a.shape}")
+                one = " (a DaskRecord holds one input: several are a Record of shape (N, m))" if nm == "u" else ""
+                raise ValueError(f"DaskRecord.{nm} must be 1-D, got shape {a.shape}{one}")
             if not np.issubdtype(a.dtype, np.number) or np.issubdtype(a.dtype, np.complexfloating):
-                raise ValueError(f"DaskRecord.{nm} must hold real numbers, got dtype {a.dtype}")
+                raise TypeError(f"DaskRecord.{nm} must hold real numbers, got dtype {a.dtype}")
         if self.u.shape[0] != self.y.shape[0] or np.isnan(self.u.shape[0]):
             raise ValueError(f"DaskRecord: u and y must have the same known length, got {self.u.shape[0]} and "
                              f"{self.y.shape[0]}")
