@@ -104,3 +104,23 @@ def test_dask_record_of_a_wrong_type_is_a_type_error():
         gb.DaskRecord(d.astype(complex), d)
     with pytest.raises(ValueError, match="holds one input"):
         gb.DaskRecord(da.from_array(np.ones((10, 2)), chunks=5), d)
+
+
+def test_dask_record_nan_where_no_row_reads_is_refused_as_a_records():
+    # u's last sample is read by no regression row (lags >= 1): a NaN there was taken silently from a DaskRecord,
+    # while the same samples as a Record are refused at construction
+    da = pytest.importorskip("dask.array")
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 1, 400)
+    y = np.zeros(400)
+    for k in range(2, 400):
+        y[k] = 0.5 * y[k - 1] + u[k - 2]
+    u[-1] = np.nan
+    with pytest.raises(ValueError, match="u has 1 non-finite value.*index 399"):
+        gb.Record(u, y)
+    rec = gb.DaskRecord(da.from_array(u, chunks=100), da.from_array(y, chunks=100), name="long")
+    with pytest.raises(ValueError, match="long: u has 1 non-finite value.*index 399"):
+        gb.frols(gb.Candidates(2, 2, degree=2), rec, n_terms=2)
+    points = gb.StaticPoints([0.2, 0.5, 0.8], [0.4, 1.0, 1.6])
+    with pytest.raises(ValueError, match="long: u has 1 non-finite value.*index 399"):
+        gb.pe_thetas(gb.Structure(["y(k-1)", "u(k-2)"]), rec, points)

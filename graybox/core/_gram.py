@@ -453,7 +453,13 @@ def _dask_reduce(factors: Sequence[tuple], recs: list[DaskRecord], start: int, f
     while len(parts) > 1:
         parts = [dask.delayed(combine)(parts[i], parts[i + 1]) if i + 1 < len(parts) else parts[i]
                  for i in range(0, len(parts), 2)]
-    (total,) = dask.compute(parts[0])
+    # every sample checked finite in the same pass (the blocks read once for both), as a Record checks its own at
+    # construction: a NaN among samples no row reads (u's last, one before a term's smallest lag) was taken silently
+    import dask.array as da
+
+    total, *finite = dask.compute(parts[0], *(da.isfinite(a).all() for r in recs for a in (r.u, r.y)))
+    if not all(finite):
+        _refuse_non_finite_samples(recs)
     return np.asarray(total, float)
 
 
