@@ -79,6 +79,21 @@ def two_level_records(names: tuple[str, str] = ("ident", "valid")):
             StaticPoints(ub, (0.2 + 0.4 * ub + 0.1 * ub**2) / 0.5))
 
 
+def staircase_plant(seed: int, n: int = 400, noise: float = 0.02):
+    """A record of y(k) = 0.6 y(k-1) + 0.2 y(k-2) + 0.3 u(k-1) + 0.05 u(k-2)² + 0.4 (+ white noise of std
+    ``noise``), u held 25 samples at levels drawn from [0, 3]: the selection tests' small plant (STAIRCASE_TRUE)."""
+    from graybox import Model
+
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 3.0, n // 25 + 1), 25)[:n]
+    y = Model(STAIRCASE_TRUE, STAIRCASE_THETA).simulate(u, np.zeros(2)) + noise * rng.standard_normal(n)
+    return Record(u, y, name=f"r{seed}")
+
+
+STAIRCASE_TRUE = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"]
+STAIRCASE_THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+
+
 def first_order_signals(n: int = 300, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """u uniform on [-1, 1] and y(k) = 0.5 y(k-1) + u(k-1) + 0.1 e(k) (e standard normal): the model
     y(k-1), u(k-1) with θ = (0.5, 1) leaves white residuals."""

@@ -8,17 +8,15 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from conftest import STAIRCASE_THETA, STAIRCASE_TRUE, staircase_plant
 
 CAND = gb.Candidates(2, 2, ne=0, degree=2)
-TRUE = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"])
-THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
+TRUE = gb.Structure(STAIRCASE_TRUE)
+THETA = STAIRCASE_THETA
 
 
 def plant(seed, n=400, noise=0.02):
-    rng = np.random.default_rng(seed)
-    u = np.repeat(rng.uniform(0.0, 3.0, n // 25 + 1), 25)[:n]
-    y = gb.Model(TRUE, THETA).simulate(u, np.zeros(2)) + noise * rng.standard_normal(n)
-    return gb.Record(u, y, name=f"r{seed}")
+    return staircase_plant(seed, n, noise)
 
 
 def _select(**kw):
