@@ -448,19 +448,28 @@ def _dask_reduce(factors: Sequence[tuple], recs: list[DaskRecord], start: int, f
             if k0 >= b:
                 continue
             lo = k0 - start
-            parts.append(dask.delayed(_block_reduce)(factors, r.u[lo:b], r.y[lo:b], start, form))
+            parts.append(dask.delayed(_checked_block_reduce)(factors, r.u[lo:b], r.y[lo:b], start, form))
     combine = np.add if form == "gram" else _r_combine
     while len(parts) > 1:
         parts = [dask.delayed(combine)(parts[i], parts[i + 1]) if i + 1 < len(parts) else parts[i]
                  for i in range(0, len(parts), 2)]
-    # every sample checked finite in the same pass (the blocks read once for both), as a Record checks its own at
-    # construction: a NaN among samples no row reads (u's last, one before a term's smallest lag) was taken silently
-    import dask.array as da
-
-    total, *finite = dask.compute(parts[0], *(da.isfinite(a).all() for r in recs for a in (r.u, r.y)))
-    if not all(finite):
-        _refuse_non_finite_samples(recs)
+    (total,) = dask.compute(parts[0])
     return np.asarray(total, float)
+
+
+def _checked_block_reduce(factors: Sequence[tuple], u: np.ndarray, y: np.ndarray, start: int,
+                          form: str) -> np.ndarray:
+    """:func:`_block_reduce` of one Dask block's stretch, NaN throughout where any of its samples is not finite.
+
+    The stretches cover every sample, so a NaN among samples no row reads (u's last, one before a term's smallest
+    lag), taken silently before, makes the sum non-finite and :func:`_reduce` refuses it naming the sample, as a
+    Record refuses its own at construction. Checked here, in the task that reads the block: a separate
+    ``da.isfinite`` in the same ``dask.compute`` is optimised apart from the delayed reduction and read every
+    block once more."""
+    M = _block_reduce(factors, u, y, start, form)
+    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(y))):
+        M = np.full(M.shape, np.nan)
+    return M
 
 
 def dask_input_range(data: object) -> np.ndarray:

@@ -1,0 +1,51 @@
+"""review49i: checks of the DaskRecord, GA and equilibria commits of round 49."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _counting_record(u: np.ndarray, y: np.ndarray, chunk: int, calls: dict) -> gb.DaskRecord:
+    da = pytest.importorskip("dask.array")
+    lock = threading.Lock()
+
+    def load(block_info=None, src=None):
+        with lock:
+            calls["n"] += 1
+        a, b = block_info[None]["array-location"][0]
+        return src[a:b].copy()
+
+    def mk(src):
+        return da.map_blocks(load, src=src, chunks=((chunk,) * (src.size // chunk),), dtype=float)
+
+    return gb.DaskRecord(mk(u), mk(y), name="long")
+
+
+@pytest.mark.parametrize("nan_at", [None, -1])
+def test_the_finite_check_of_a_dask_record_reads_no_block_again(nan_at):
+    # 27cbb33 checked every sample finite "in the same compute as the reduction (the blocks read once)", but the
+    # array collection's graph is optimised apart from the delayed reduction's: every block was loaded once more
+    # (frols on a record of 10 blocks per signal: 120 block loads where its two reductions alone made 80)
+    dask = pytest.importorskip("dask")
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 1, 1000)
+    y = 0.5 * u + 0.1
+    if nan_at is not None:
+        u[nan_at] = np.nan  # read by no regression row
+    calls = {"n": 0}
+    rec = _counting_record(u, y, 100, calls)
+    with dask.config.set(scheduler="synchronous"):
+        if nan_at is None:
+            gb.frols(gb.Candidates(2, 2, degree=2), rec, n_terms=2)
+        else:
+            with pytest.raises(ValueError, match=r"long: u has 1 non-finite value.*index 999"):
+                gb.frols(gb.Candidates(2, 2, degree=2), rec, n_terms=2)
+    # frols reduces twice; each reduction reads a block for its own stretch and for the next one's (the lags reach
+    # back into it): 2 x 2 x 20 = 80 loads, as before 27cbb33 (the error path's pass naming the sample included)
+    assert calls["n"] <= 80
