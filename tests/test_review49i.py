@@ -49,3 +49,20 @@ def test_the_finite_check_of_a_dask_record_reads_no_block_again(nan_at):
     # frols reduces twice; each reduction reads a block for its own stretch and for the next one's (the lags reach
     # back into it): 2 x 2 x 20 = 80 loads, as before 27cbb33 (the error path's pass naming the sample included)
     assert calls["n"] <= 80
+
+
+def test_a_copied_or_pickled_dask_record_still_refuses_item_assignment():
+    # 5907369 made a DaskRecord's u and y refuse item assignment (dask assigns in place: a frozen record's samples
+    # were rewritten), but dask.array.Array's __reduce__ and copy rebuild a plain Array: pickle.loads(pickle.dumps(
+    # record)) (a record sent to a worker process) or copy.deepcopy(record) gave a record whose u[1] = x was taken
+    import copy
+    import pickle
+
+    da = pytest.importorskip("dask.array")
+    u = da.from_array(np.linspace(0.0, 1.0, 40), chunks=10)
+    rec = gb.DaskRecord(u, 0.5 * u, name="long")
+    for other in (pickle.loads(pickle.dumps(rec)), copy.deepcopy(rec), copy.copy(rec)):
+        for a in (other.u, other.y):
+            with pytest.raises(TypeError, match="read-only"):
+                a[1] = 7.0
+        np.testing.assert_array_equal(other.u.compute(), rec.u.compute())

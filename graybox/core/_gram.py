@@ -161,6 +161,14 @@ def _read_only_array_type() -> type:
             raise TypeError("a DaskRecord's samples are read-only: make a new DaskRecord of the changed arrays "
                             "(e.g. da.where(...))")
 
+        # dask.array.Array rebuilds a plain (writable) Array when pickled or deep-copied: a record sent to a worker
+        # process or copy.deepcopy(record) took item assignment again
+        def __reduce__(self) -> tuple:
+            return _read_only, (da.Array(self.dask, self.name, self.chunks, meta=self._meta),)
+
+        def __deepcopy__(self, memo: dict) -> "ReadOnlyDaskArray":
+            return self
+
     return ReadOnlyDaskArray
 
 
