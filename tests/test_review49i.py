@@ -66,3 +66,30 @@ def test_a_copied_or_pickled_dask_record_still_refuses_item_assignment():
             with pytest.raises(TypeError, match="read-only"):
                 a[1] = 7.0
         np.testing.assert_array_equal(other.u.compute(), rec.u.compute())
+
+
+def test_a_solver_error_after_the_options_were_taken_is_one_members_failure(monkeypatch):
+    # d7d53b4 made a SolverError under solver_options the call's ("check their values"), meaning the options the
+    # solver refuses at setup (every λ1 fails alike); but a numerical failure at one λ1 (a07e3bc: that member's
+    # failure) is a SolverError too: once a solve has taken the options, it ended the whole sweep blaming them
+    import warnings
+
+    cp = pytest.importorskip("cvxpy")
+    real = cp.Problem.solve
+    calls = {"n": 0}
+
+    def flaky(self, *args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise cp.error.SolverError("Solver 'OSQP' failed. Try another solver")
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(cp.Problem, "solve", flaky)
+    data = gb.load_pumping()
+    st = ["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        front = gb.pe_pareto(st, data.ident, data.static, lambdas=np.logspace(-3, 0, 5), solver="osqp",
+                             solver_options={"eps_abs": 1e-7, "eps_rel": 1e-7})
+    assert calls["n"] >= 5
+    assert len(front.failures) == 1, front.failures

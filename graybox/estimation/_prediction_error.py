@@ -772,6 +772,7 @@ class _QP:
         self.options = dict(_SOLVER_DEFAULTS[solver])
         self.options.update(options or {})
         self.user_options = dict(options or {})
+        self.solved = False  # a solve has taken the options: a later SolverError is that member's, not theirs
         #: (w1, w2) of the solves the solver called inaccurate: said once per estimate (warn_inaccurate)
         self.inaccurate: list[tuple[float, float]] = []
 
@@ -795,7 +796,7 @@ class _QP:
                 warnings.filterwarnings("ignore", message="Solution may be inaccurate", category=UserWarning)
                 self.problem.solve(solver=self.solver.upper(), warm_start=warm, **self.options)
         except cp.error.SolverError as exc:
-            if self.user_options:
+            if self.user_options and not self.solved:
                 # a value the solver refuses at its setup (OSQP's eps_abs = -1: "failed (2)"), said of the options, not
                 # as constraints that admit no θ
                 # (the call's failure, not one member's: every λ1 would fail alike, each printing the solver's error)
@@ -803,6 +804,9 @@ class _QP:
                     f"solver {self.solver} failed ({exc}) with solver_options {self.user_options!r}: check "
                     "their values (tolerances > 0, iteration limits >= 1; the solver may have printed "
                     "which it refuses), or leave them out for graybox's defaults") from exc
+            if self.user_options:  # taken by an earlier solve: this λ1's numerical failure (a07e3bc)
+                raise _member_failure(ValueError(f"solver {self.solver} failed ({exc}) with solver_options "
+                                                 f"{self.user_options!r}, which an earlier λ1's solve took")) from exc
             raise _member_failure(InfeasibleError(f"solver {self.solver} failed ({exc}) with constraints "
                                                   f"{list(self.names)}")) from exc
         except (TypeError, ValueError, OverflowError) as exc:
@@ -811,6 +815,7 @@ class _QP:
             # a value the solver's binding refuses (max_iter = -2: an OverflowError), not the constraints
             raise ValueError(f"solver {self.solver} refused solver_options {self.user_options!r}: "
                              f"{type(exc).__name__}: {exc}") from exc
+        self.solved = True
         st = self.problem.status
         if st in (cp.INFEASIBLE, cp.INFEASIBLE_INACCURATE):
             raise InfeasibleError(
