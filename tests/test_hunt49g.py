@@ -124,3 +124,22 @@ def test_dask_record_nan_where_no_row_reads_is_refused_as_a_records():
     points = gb.StaticPoints([0.2, 0.5, 0.8], [0.4, 1.0, 1.6])
     with pytest.raises(ValueError, match="long: u has 1 non-finite value.*index 399"):
         gb.pe_thetas(gb.Structure(["y(k-1)", "u(k-2)"]), rec, points)
+
+
+def test_dask_record_takes_one_input_as_a_column_as_a_record_does():
+    """(N, 1) u was refused with 'holds one input: several are a Record of shape (N, m)', wrong for one input
+    (review49i)."""
+    da = pytest.importorskip("dask.array")
+    rng = np.random.default_rng(1)
+    u = rng.uniform(0, 1, 200)
+    y = np.zeros(200)
+    for k in range(1, 200):
+        y[k] = 0.5 * y[k - 1] + u[k - 1]
+    col = gb.DaskRecord(da.from_array(u[:, None], chunks=50), da.from_array(y, chunks=50), name="c")
+    flat = gb.DaskRecord(da.from_array(u, chunks=50), da.from_array(y, chunks=50), name="c")
+    assert col.u.shape == (200,)
+    cand = gb.Candidates(2, 2, degree=2)
+    a, b = gb.frols(cand, col, n_terms=3), gb.frols(cand, flat, n_terms=3)
+    assert list(a.structure) == list(b.structure) and np.array_equal(a.theta, b.theta)
+    with pytest.raises(ValueError, match="holds one input"):
+        gb.DaskRecord(da.from_array(np.ones((10, 2)), chunks=5), da.from_array(np.ones(10), chunks=5))

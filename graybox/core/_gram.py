@@ -111,6 +111,9 @@ class DaskRecord:
             if not isinstance(a, da.Array):
                 raise TypeError(f"DaskRecord.{nm} must be a dask array, got {type(a).__name__}: wrap it, e.g. "
                                 "dask.array.from_array(x, chunks=100_000), or give samples in memory as a Record")
+            if nm == "u" and a.ndim == 2 and a.shape[1] == 1:  # one input as a column, as a Record takes it
+                a = a[:, 0]
+                object.__setattr__(self, "u", a)
             if a.ndim != 1:
                 one = " (a DaskRecord holds one input: several are a Record of shape (N, m))" if nm == "u" else ""
                 raise ValueError(f"DaskRecord.{nm} must be 1-D, got shape {a.shape}{one}")
