@@ -186,8 +186,8 @@ BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.
           "test_grid_executors.py", "test_select_checkpoint.py", "test_notebooks.py", "test_parallel_map_errors.py",
           "test_bootstrap.py", "test_review44d.py", "test_grid42a.py", "test_gram.py", "test_hunt36a.py",
           "test_review40d.py",
-          # files of one process each, so that the two pytests end together (the suite's tests took 1489 s of CPU
-          # against these' 788 s under load, 2026-11-27): the share they take is one core's, not both
+          # files of one process each, so that the two pytests end together (the suite's tests' times summed to 1489 s
+          # against the beside run's 788 s under load, 2026-11-27): the share they take is one core's, not both
           "test_divergence_bound.py", "test_slow_modes.py", "test_hunt30c.py", "test_constant_output.py",
           "test_uncertainty.py", "test_siso_pins.py", "test_control.py")
 _BESIDE_ENV = "GRAYBOX_TESTS_BESIDE"  # set in that pytest (to the suite's process id): it runs them itself
