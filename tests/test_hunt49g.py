@@ -6,6 +6,15 @@ import pytest
 import graybox as gb
 
 
+def first_order(n: int, delay: int = 1, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """u uniform on [0, 1] and y(k) = 0.5 y(k-1) + u(k-delay), noise-free, y zero before its first update."""
+    u = np.random.default_rng(seed).uniform(0, 1, n)
+    y = np.zeros(n)
+    for k in range(delay, n):
+        y[k] = 0.5 * y[k - 1] + u[k - delay]
+    return u, y
+
+
 def test_regressor_matrix_one_column_with_two_input_names_is_refused():
     # a 1-D u with input_names of two inputs was silently read as the first input alone
     rng = np.random.default_rng(0)
@@ -25,11 +34,7 @@ def test_dask_record_inf_is_refused_without_numpy_warnings():
     da = pytest.importorskip("dask.array")
     import warnings
 
-    rng = np.random.default_rng(0)
-    u = rng.uniform(0, 1, 300)
-    y = np.zeros(300)
-    for k in range(1, 300):
-        y[k] = 0.5 * y[k - 1] + u[k - 1]
+    u, y = first_order(300)
     y[0] = np.inf
     rec = gb.DaskRecord(da.from_array(u, chunks=100), da.from_array(y, chunks=100), name="long")
     with warnings.catch_warnings():
@@ -110,11 +115,7 @@ def test_dask_record_nan_where_no_row_reads_is_refused_as_a_records():
     # u's last sample is read by no regression row (lags >= 1): a NaN there was taken silently from a DaskRecord,
     # while the same samples as a Record are refused at construction
     da = pytest.importorskip("dask.array")
-    rng = np.random.default_rng(0)
-    u = rng.uniform(0, 1, 400)
-    y = np.zeros(400)
-    for k in range(2, 400):
-        y[k] = 0.5 * y[k - 1] + u[k - 2]
+    u, y = first_order(400, delay=2)
     u[-1] = np.nan
     with pytest.raises(ValueError, match="u has 1 non-finite value.*index 399"):
         gb.Record(u, y)
@@ -130,11 +131,7 @@ def test_dask_record_takes_one_input_as_a_column_as_a_record_does():
     """(N, 1) u was refused with 'holds one input: several are a Record of shape (N, m)', wrong for one input
     (review49i)."""
     da = pytest.importorskip("dask.array")
-    rng = np.random.default_rng(1)
-    u = rng.uniform(0, 1, 200)
-    y = np.zeros(200)
-    for k in range(1, 200):
-        y[k] = 0.5 * y[k - 1] + u[k - 1]
+    u, y = first_order(200, seed=1)
     col = gb.DaskRecord(da.from_array(u[:, None], chunks=50), da.from_array(y, chunks=50), name="c")
     flat = gb.DaskRecord(da.from_array(u, chunks=50), da.from_array(y, chunks=50), name="c")
     assert col.u.shape == (200,)
