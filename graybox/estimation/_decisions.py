@@ -48,7 +48,7 @@ def resolve_band(band: object, static: StaticPoints | None, who: str) -> tuple[f
 
 
 #: The rules a :class:`Decision` is made by, and whether each says its member is in the band: D_SF (eq. (14)),
-#: its explicit fallback, the minimal-correlation rule and ``select_graybox``'s black-box choice (no band).
+#: its explicit fallback (J_SF nearest B: the smallest when B = [0, b]), the minimal-correlation rule and ``select_graybox``'s black-box choice (no band).
 DECISION_RULES = {"D_SF": True, "min J_SF": False, "min correlation": True, "min J_S": True}
 
 
@@ -67,13 +67,15 @@ class Decision:
     JS, JSF : float
         Its free-run and static errors as stored in the set (output units²).
     rule : str
-        ``"D_SF"``, ``"min J_SF"`` (D_SF's explicit fallback: no member in the band),
+        ``"D_SF"``, ``"min J_SF"`` (D_SF's explicit fallback: no member in the band, the member
+        whose J_SF is nearest the band taken — the smallest J_SF when B = [0, b]),
         ``"min correlation"`` or ``"min J_S"`` (``select_graybox``'s black box, chosen without a band).
     in_band : bool
         Whether J_SF lies in the band B (always False for the fallback; True for rules without a band).
     score : float
         The value the rule minimised at the chosen member (J_S for D_SF — on the choosing record
-        when there is one —, J_SF for the fallback, ρ for the minimal-correlation rule).
+        when there is one —, J_SF for the fallback (whose distance to B it minimised), ρ for the
+        minimal-correlation rule).
     chosen_on : str
         The choosing records' names when the rule scored the members on data other than the
         set's own (``""``: on the set's J_S, or for the minimal-correlation rule on its record).
@@ -135,10 +137,11 @@ def check_choosable(pareto: ParetoSet, what: str, needs_jsf: bool = True) -> Non
 
 
 def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF", js: np.ndarray | None = None,
-                  on: str = "") -> int:
-    """The member with the smallest J_SF (ties: the smaller J_S, then the lower index);
-    ``InfeasibleError`` naming ``what`` when every member's static curve is undefined. ``js``: J_S
-    on choosing records (``on`` names them), whose free runs must then stay finite there too."""
+                  on: str = "", band: tuple[float, float] | None = None) -> int:
+    """The member with the smallest J_SF or, given ``band`` = (low, high), the member whose J_SF is nearest
+    B = [low, high] (its distance to the interval; for low = 0 that is the smallest J_SF again), ties: the smaller
+    J_S, then the lower index; ``InfeasibleError`` naming ``what`` when every member's static curve is undefined.
+    ``js``: J_S on choosing records (``on`` names them), whose free runs must then stay finite there too."""
     check_choosable(pareto, what)
     jsf = pareto.JSF
     js = pareto.JS if js is None else js
@@ -149,7 +152,23 @@ def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF", js: np.ndarray | No
         ok = ok[np.isfinite(js[ok])]
         if ok.size == 0:
             raise InfeasibleError(f"{what}: every member with a static curve diverges on {on} (free run)")
-    return int(ok[np.lexsort((ok, js[ok], jsf[ok]))[0]])
+    j = jsf[ok]
+    if band is None or band[0] <= 0:  # J_SF >= 0: nearest [0, high] is smallest, with J_SF's own ties
+        return int(ok[np.lexsort((ok, js[ok], j))[0]])
+    low, high = band
+    below = j < low
+    # the distance to B first; among members as far (round-off), the nearer J_SF on its own side
+    dist = np.where(below, low - j, np.maximum(j - high, 0.0))
+    return int(ok[np.lexsort((ok, js[ok], np.where(below, -j, j), dist))[0]])
+
+
+def nearest_jsf(jsf: np.ndarray, low: float, high: float) -> float | None:
+    """The finite J_SF nearest B = [low, high] (the smallest when low = 0), None when there is none."""
+    finite = jsf[np.isfinite(jsf)]
+    if not finite.size:
+        return None
+    dist = np.maximum(np.maximum(low - finite, finite - high), 0.0)
+    return float(finite[np.lexsort((finite, dist))[0]])
 
 
 #: What :func:`decide_dsf` may do when no member lies in the band, if the user says so.
@@ -212,9 +231,12 @@ def decide_dsf(
     fallback : {None, "min_jsf"}
         When no member has J_SF in B (with a finite J_S): None (default) raises
         ``InfeasibleError`` (a ``ValueError``) naming the smallest J_SF reached;
-        ``"min_jsf"`` picks the member with the smallest J_SF (ties: smaller J_S) instead; with
-        ``choose_on``, among the members whose free run stays finite there, ties by J_S there. The
-        choice must be explicit because the result then is *not* a D_SF decision.
+        ``"min_jsf"`` picks the member whose J_SF is nearest B (its distance to the interval:
+        for B = [0, band], the smallest J_SF; for (low, high) with every J_SF below low, the
+        largest), ties: smaller J_S, instead; with ``choose_on``, among the members whose free run
+        stays finite there, ties by J_S there. The choice must be explicit because the result then
+        is *not* a D_SF decision; its rule is ``"min J_SF"`` whatever the band, its model's name
+        says ``"min J_SF (no member in B)"``, or ``"J_SF nearest B (no member in B)"`` when low > 0.
     choose_on : Record or sequence of Record, optional
         Choosing record(s), not the identification data the set was fitted on: the J_S that is
         minimised over the band is the members' free-run MSE there (``.score``; ``.JS`` stays the
@@ -250,9 +272,10 @@ def decide_dsf(
         where = f" on {chosen_on}" if chosen_on else ""
         return _decision(pareto, i, "D_SF", True, js[i], f"{pareto.method} D_SF{where}", chosen_on)
     else:
-        finite = jsf[np.isfinite(jsf)]
-        # with the digits that keep it outside B as B is printed (0.03060003, not "0.0306" beside B = [0, 0.0306])
-        least = float(finite.min()) if finite.size else None
+        # the J_SF nearest B (the smallest when B = [0, b]), with the digits that keep it outside B as B is printed
+        # (0.03060003, not "0.0306" beside B = [0, 0.0306])
+        least = nearest_jsf(jsf, lo, hi)
+        which = "smallest J_SF" if lo <= 0 else "J_SF nearest B"
         best = "inf for every member" if least is None else beside(least, hi if least > hi else lo)
         n_in = int(((jsf >= lo) & (jsf <= hi)).sum())
         if fallback is None and n_in:  # in the band, but no free run to score: a wider band would not help
@@ -261,17 +284,18 @@ def decide_dsf(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
                 f"B = [{bound_text(lo, least)}, {bound_text(hi, least)}] with a finite J_S: the {n_in} member{'s' if n_in > 1 else ''} with J_SF in B "
                 f"{'all diverge' if n_in > 1 else 'diverges'} on {on} (free run). Extend the λ sweep, fit with a "
-                "stability margin, or pass fallback='min_jsf' to take the member with the smallest J_SF"
+                f"stability margin, or pass fallback='min_jsf' to take the member with the {which}"
             )
         if fallback is None:
             raise InfeasibleError(
                 f"no member of the Pareto set ({len(pareto)} members, method {pareto.method!r}) has J_SF in "
-                f"B = [{bound_text(lo, least)}, {bound_text(hi, least)}] with a finite J_S; the smallest J_SF is {best}. Widen the band, extend "
-                "the λ sweep, or pass fallback='min_jsf' to take the member with the smallest J_SF"
+                f"B = [{bound_text(lo, least)}, {bound_text(hi, least)}] with a finite J_S; the {which} is {best}. Widen the band, extend "
+                f"the λ sweep, or pass fallback='min_jsf' to take the member with the {which}"
             )
         # on choosing records, as D_SF would have chosen: a member whose free run diverges there is none
-        i = min_jsf_index(pareto, "fallback 'min_jsf'", js, chosen_on)
-        return _decision(pareto, i, "min J_SF", False, jsf[i], f"{pareto.method} min J_SF (no member in B)", chosen_on)
+        i = min_jsf_index(pareto, "fallback 'min_jsf'", js, chosen_on, (lo, hi))
+        label = "min J_SF" if lo <= 0 else "J_SF nearest B"
+        return _decision(pareto, i, "min J_SF", False, jsf[i], f"{pareto.method} {label} (no member in B)", chosen_on)
 
 
 def decide_min_correlation(

@@ -1352,7 +1352,8 @@ def select_graybox(
         candidates without the constant need ``include=()``).
     fallback : {None, "min_jsf"}
         When no structure meets the band: None raises ``ValueError`` naming the smallest J_SF
-        reached; ``"min_jsf"`` takes the structure with the smallest J_SF and says so.
+        reached; ``"min_jsf"`` takes the structure with the smallest J_SF (the nearest B = [0, band],
+        as :func:`graybox.decide_dsf`'s fallback takes the member nearest its band) and says so.
     centre : bool, optional
         Search the structures on centred signals (default False: on the raw ones): the searches run
         on the identification records' y and inputs minus their means, and each structure they find

@@ -937,7 +937,8 @@ class DecisionRule:
     band : float, optional
         D_SF's band (output units²); default: the data set's band.
     fallback : {"min_jsf"}, optional
-        D_SF only: what to take when no member lies in the band (default: the cell is
+        D_SF only: what to take when no member lies in the band: the member whose J_SF is nearest
+        B = [0, band], the smallest (as :func:`graybox.decide_dsf` takes it; default: the cell is
         ``infeasible``, and its members are still stored).
     output : {"free-run", "one-step"}
         Minimal correlation only: which output the residuals are correlated with.
