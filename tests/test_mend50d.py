@@ -50,3 +50,91 @@ def test_fallback_is_nearest_to_the_band_and_unchanged_for_zero_low(jsf, low, wi
     # B = [0, b]: still the smallest J_SF (ties by J_S: the lower index here)
     assume(not np.any(jsf <= high))
     assert decide_dsf(front(js, jsf), band=high, fallback="min_jsf").index == int(np.argmin(jsf))
+
+
+# 2. a Pareto set saved and loaded still refuses its fitting records as choosing records -----------------------------
+
+ST2 = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+
+
+def _data2(seed: int = 0) -> gb.Dataset:
+    rng = np.random.default_rng(seed)
+    model = gb.Model(ST2, [0.2, 0.6, 0.3, 0.05])
+
+    def rec(n, name):
+        u = np.repeat(rng.uniform(0.5, 2.0, n // 5), 5)
+        return gb.Record(u, model.simulate(u, np.zeros(1)) + 0.02 * rng.standard_normal(u.size), name=name)
+
+    ub = np.linspace(0.5, 2.0, 5)
+    return gb.Dataset(rec(300, "ident"), rec(300, "valid"), gb.StaticPoints(ub, (0.2 + 0.3 * ub + 0.05 * ub**2) / 0.4))
+
+
+def _joined(a: gb.Record, b: gb.Record, name: str) -> gb.Record:
+    return gb.Record(np.concatenate([a.u, b.u]), np.concatenate([a.y, b.y]), name=name)
+
+
+def _fitting_pieces(data: gb.Dataset) -> list[gb.Record]:
+    """Records the fresh set refuses as choosing records: a copy, slices, and the end of one record the start of
+    the fitting one (and the reverse)."""
+    ident, valid = data.ident, data.valid
+    return [gb.Record(ident.u.copy(), ident.y.copy(), name="copy"), ident.slice(50, 250, "middle"),
+            ident.slice(123, None, "tail"), ident.slice(0, 77, "head"),
+            _joined(valid.slice(0, 150), ident.slice(0, 150), "valid then ident"),
+            _joined(ident.slice(200), valid, "ident's end then valid"),
+            _joined(valid.slice(0, 100), _joined(ident, valid.slice(100, 200), "x"), "ident inside")]
+
+
+def test_a_loaded_pareto_set_refuses_what_the_fresh_one_refuses(tmp_path):
+    data = _data2()
+    fresh = gb.pe_pareto(ST2, data, lambdas=np.logspace(-3, 0, 6))
+    gb.save(fresh, tmp_path / "front.json")
+    loaded = gb.load(tmp_path / "front.json")
+    for rec in _fitting_pieces(data):
+        with pytest.raises(ValueError, match="choose_on.*fitting"):
+            gb.decide_dsf(fresh, band=1.0, choose_on=rec)
+        with pytest.raises(ValueError, match="choose_on.*fitting"):
+            gb.decide_dsf(loaded, band=1.0, choose_on=rec)
+    # saved again, and subsets of it, still know
+    gb.save(loaded.subset([0, 2, 4]), tmp_path / "again.json")
+    with pytest.raises(ValueError, match="choose_on.*fitting"):
+        gb.decide_dsf(gb.load(tmp_path / "again.json"), band=1.0, choose_on=data.ident.slice(10, 200))
+    # data the fit did not see: chosen on, the same choice
+    assert gb.decide_dsf(loaded, band=1.0, choose_on=data.valid).index == gb.decide_dsf(
+        fresh, band=1.0, choose_on=data.valid).index
+    # several fitting records: a slice of either is recognised
+    r2 = _data2(1).ident
+    two = gb.pe_pareto(ST2, [data.ident, r2], data.static, lambdas=np.logspace(-3, 0, 4))
+    back = gb.from_json(gb.to_json(two))
+    for rec in (data.ident.slice(30, 230, "first"), r2.slice(40, 280, "second")):
+        with pytest.raises(ValueError, match="choose_on.*fitting"):
+            gb.decide_dsf(back, band=1.0, choose_on=rec)
+    assert gb.decide_dsf(back, band=1.0, choose_on=data.valid).chosen_on == "valid"
+
+
+def test_an_old_file_without_the_prints_loads_and_checks_as_before():
+    import json
+    data = _data2()
+    fresh = gb.pe_pareto(ST2, data, lambdas=np.logspace(-3, 0, 6))
+    doc = json.loads(gb.to_json(fresh))
+    assert len(doc["object"].pop("fitted_on")) == 1
+    old = gb.from_json(json.dumps(doc))
+    np.testing.assert_array_equal(old.thetas, fresh.thetas)
+    with pytest.raises(ValueError, match="choose_on.*fitted on"):  # the whole record: by the set's own J_S
+        gb.decide_dsf(old, band=1.0, choose_on=data.ident)
+    assert gb.decide_dsf(old, band=1.0, choose_on=data.ident.slice(50, 250)).chosen_on == "ident"  # as today
+
+
+@settings(max_examples=60, deadline=None)
+@given(hs.integers(0, 2**32 - 1), hs.integers(40, 400), hs.integers(0, 400), hs.integers(32, 400))
+def test_a_print_refuses_the_slices_the_records_check_refuses(seed, n, start, length):
+    from graybox.core._records import check_overlap, check_print_overlap, record_print
+    rng = np.random.default_rng(seed)
+    f = gb.Record(rng.standard_normal(n), rng.standard_normal(n), name="fit")
+    assume(start + length <= n)
+    c = f.slice(start, start + length, "piece")
+    with pytest.raises(ValueError, match="fitting"):
+        check_overlap(c, f, "choosing", "fitting", "advice")
+    with pytest.raises(ValueError, match="fitting"):
+        check_print_overlap(c, record_print(f), "choosing", "fitting", "advice")
+    other = gb.Record(rng.standard_normal(length), rng.standard_normal(length), name="other")
+    check_print_overlap(other, record_print(f), "choosing", "fitting", "advice")  # no shared samples: nothing

@@ -939,6 +939,131 @@ def _stretch_message(a: Record, b: Record, a_name: str, b_name: str, s: tuple[in
             f"samples {i}..{i + n - 1} are samples {j}..{j + n - 1} of the other")
 
 
+#: Samples in a block of a record's print (:class:`RecordPrint`).
+_PRINT_BLOCK = 16
+#: Alignments of a choosing record against a print tried, at most (the most often matched first).
+_PRINT_TRIES = 32
+_MIX = (np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
+
+
+def _mix(z: np.ndarray) -> np.ndarray:
+    """splitmix64's finaliser on uint64 arrays (wrapping; a bijection that spreads every bit)."""
+    z = z ^ (z >> np.uint64(30))
+    z = z * _MIX[0]
+    z = z ^ (z >> np.uint64(27))
+    z = z * _MIX[1]
+    return z ^ (z >> np.uint64(31))
+
+
+def _row_hashes(rows: np.ndarray) -> np.ndarray:
+    """One uint64 per row of (u, y) samples, from their float64 bits (-0.0 read as 0.0, as ``==`` reads it)."""
+    bits = np.ascontiguousarray(np.asarray(rows, np.float64) + 0.0).view(np.uint64)
+    h = np.zeros(len(rows), np.uint64)
+    for j in range(bits.shape[1]):
+        h = _mix(h ^ bits[:, j] ^ np.uint64(j + 1))
+    return h
+
+
+def _window_hashes(h: np.ndarray, width: int) -> np.ndarray:
+    """The hash of every window of ``width`` consecutive rows (its rows in order), shape (len(h) - width + 1,)."""
+    m = len(h) - width + 1
+    acc = np.zeros(max(m, 0), np.uint64)
+    for t in range(width):
+        acc = acc + _mix(h[t:t + m] ^ np.uint64(0x9E3779B97F4A7C15 * (t + 1) % (1 << 64)))
+    return _mix(acc)
+
+
+@dataclass(frozen=True, eq=False)
+class RecordPrint:
+    """A record's fingerprint, kept where its samples are not (a Pareto set saved to a file): enough to
+    recognise the record, a copy of it and slices of it (:func:`check_print_overlap`) as
+    :func:`same_record` and :func:`check_overlap` recognise them with the samples at hand.
+
+    ``digests`` (uint64): the hash of each whole block of ``block`` samples (u by ``input_names``, then y) from
+    sample 0, then the hash of the last ``block`` samples.
+    """
+
+    name: str
+    length: int
+    input_names: tuple[str, ...]
+    block: int
+    digests: np.ndarray
+
+    def __post_init__(self) -> None:
+        d = np.asarray(self.digests)
+        if d.dtype != np.uint64 or d.ndim != 1:
+            raise TypeError("RecordPrint: digests must be a 1-D uint64 array")
+        if not (isinstance(self.length, int) and isinstance(self.block, int) and 1 <= self.block <= self.length):
+            raise ValueError(f"RecordPrint: need 1 <= block <= length; got block {self.block!r}, length {self.length!r}")
+        if d.size != self.length // self.block + 1:
+            raise ValueError(f"RecordPrint: {d.size} digests for {self.length} samples in blocks of {self.block} "
+                             f"(want {self.length // self.block + 1})")
+        if not self.input_names or not all(isinstance(n, str) for n in self.input_names):
+            raise ValueError("RecordPrint: input_names must name one or more inputs")
+        d = d.copy()
+        d.setflags(write=False)
+        object.__setattr__(self, "digests", d)
+        object.__setattr__(self, "input_names", tuple(self.input_names))
+
+
+def record_print(record: Record) -> RecordPrint:
+    """The :class:`RecordPrint` of ``record``."""
+    names = tuple(record.input_names)
+    h = _row_hashes(np.column_stack([record.input(n) for n in names] + [record.y]))
+    N = len(record)
+    W = min(_PRINT_BLOCK, N)
+    win = _window_hashes(h, W)
+    return RecordPrint(record.name, N, names, W, np.concatenate([win[0:N - W + 1:W][:N // W], win[-1:]]))
+
+
+def check_print_overlap(a: Record, p: RecordPrint, a_name: str, b_name: str, advice: str, prefix: str = "") -> None:
+    """:func:`same_record` and :func:`check_overlap`'s refusal against a record known by its print only.
+
+    ``ValueError`` when ``a`` holds the print's record, or shares with it the samples slicing one record gives
+    (one inside the other, or the end of one the start of the other), seen in the print's whole blocks (a
+    stretch's first and last few samples, inside a block, are not compared); nothing when ``a`` lacks one of
+    the print's inputs, or the shared samples' output does not vary (as the records' own check). A stretch
+    that slicing does not give is not looked for (the records' check warns of one)."""
+    if not all(n in a.input_names for n in p.input_names):
+        return
+    n, N, W = len(a), p.length, p.block
+    if n < W:
+        return
+    z = np.column_stack([a.input(m) for m in p.input_names] + [a.y])
+    hc = _window_hashes(_row_hashes(z), W)
+    blocks, tail = p.digests[:-1], p.digests[-1]
+    # alignments (a[k] is the record's k + off) where one of a's windows is one of the print's blocks or its tail
+    starts = np.concatenate([np.arange(blocks.size) * W, [N - W]])
+    order = np.argsort(p.digests, kind="stable")
+    keys = p.digests[order]
+    lo = np.searchsorted(keys, hc, "left")
+    hi = np.searchsorted(keys, hc, "right")
+    hit = np.flatnonzero(hi > lo)
+    if not hit.size:
+        return
+    offs: dict[int, int] = {}
+    for q in hit[:4096]:
+        for k in order[lo[q]:hi[q]][:_PRINT_TRIES]:
+            off = int(starts[k]) - int(q)
+            offs[off] = offs.get(off, 0) + 1
+    for off in sorted(offs, key=lambda o: (-offs[o], abs(o)))[:_PRINT_TRIES]:
+        s, e = max(0, -off), min(n, N - off)  # the overlap, in a's samples
+        b0, b1 = -(-(s + off) // W), (e + off) // W  # the print's whole blocks inside it
+        idx = np.arange(b0, b1)
+        ok = bool(np.all(hc[idx * W - off] == blocks[idx]))
+        seen = idx.size
+        if e == N - off and N - W - off >= s:  # the record's end is inside a: its last samples too
+            ok = ok and bool(hc[N - W - off] == tail)
+            seen += 1
+        if not (ok and seen and np.ptp(a.y[s:e]) > 0):
+            continue
+        if s == 0 and e == n == N and off == 0:
+            raise ValueError(f"{prefix}the {a_name} record {a.name!r} is a {b_name} record ({p.name!r}): {advice}")
+        raise ValueError(f"{prefix}the {a_name} record ({a.name!r}) shares {e - s} samples with the {b_name} record "
+                         f"({p.name!r}): its samples {s}..{e - 1} are samples {s + off}..{e + off - 1} of the other: "
+                         f"{advice}")
+
+
 def choosing_records(value: object, name: str = "choose_on", example: str = "data.valid") -> list[Record]:
     """Records to choose (or test) on: a Record or a non-empty list or tuple of them (a Dataset is refused:
     as one record it would stand for its ident, the fitting data). ``TypeError`` for anything else, its
@@ -956,4 +1081,5 @@ def choosing_records(value: object, name: str = "choose_on", example: str = "dat
     return recs
 
 
-__all__ += ["outside_range", "rounded_levels", "same_record", "shared_stretch", "sliced", "check_overlap", "RecordOverlapWarning", "choosing_records"]
+__all__ += ["outside_range", "rounded_levels", "same_record", "shared_stretch", "sliced", "check_overlap", "RecordOverlapWarning", "choosing_records",
+            "RecordPrint", "record_print", "check_print_overlap"]

@@ -23,7 +23,8 @@ from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_record
 from ..models._model import Model
 from ._pareto import ParetoSet
-from ..core._records import Record, check_overlap, choosing_records, require_lengths, same_record
+from ..core._records import (Record, check_overlap, check_print_overlap, choosing_records, require_lengths,
+                             same_record)
 from ..core._reprs import beside, bound_text, squared_text
 from ..core._regressors import regressor_matrix
 from ..core._simulation import simulate_many
@@ -188,6 +189,8 @@ def choosing_js(pareto: ParetoSet, records: Record | Sequence[Record]) -> np.nda
             if same_record(c, f):
                 raise ValueError(f"choose_on: the choosing record {c.name!r} is a fitting record ({f.name!r}): {advice}")
             check_overlap(c, f, "choosing", "fitting", advice, prefix="choose_on: ")
+        for p in getattr(pareto, "_fitted_prints", ()):  # a set read from a file: its records' prints
+            check_print_overlap(c, p, "choosing", "fitting", advice, prefix="choose_on: ")
     th = np.where(np.isfinite(pareto.thetas), pareto.thetas, 0.0)
     L = pareto.structure.max_lag
     total = np.zeros(len(pareto))
@@ -242,9 +245,10 @@ def decide_dsf(
         minimised over the band is the members' free-run MSE there (``.score``; ``.JS`` stays the
         set's own). None (default): the paper's rule, on the set's J_S. Report the chosen model on
         a third record: its J_S on the choosing record is optimistic. Records on which every member
-        scores the set's own J_S (to 1e-6) are the fitting records: ``ValueError``; so is, for a set
-        fitted in this session (``pe_pareto``, ``se_pareto``, ``from_thetas``; not one loaded from a
-        file), a record with the samples of one of its fitting records, or a slice of one.
+        scores the set's own J_S (to 1e-6) are the fitting records: ``ValueError``; so is a record with
+        the samples of one of its fitting records, or a slice of one: for a set fitted in this session
+        (``pe_pareto``, ``se_pareto``, ``from_thetas``) by those records' samples, for one loaded from
+        a file by their prints saved with it (files written before prints were kept have none).
 
     Returns
     -------

@@ -17,7 +17,8 @@ import pandas as pd
 from ..models._evaluate import evaluate_thetas
 from ..models._coerce import as_structure
 from ..models._model import Model, model_input_names
-from ..core._records import Dataset, Record, StaticPoints, as_records, carried_from, check_fitted_on, check_units
+from ..core._records import (Dataset, Record, RecordPrint, StaticPoints, as_records, carried_from, check_fitted_on,
+                             check_units, record_print)
 from ..core._validation import (FrozenMap, check_bool, check_fields, check_int, check_mean_square, check_real,
                                 check_weight, frozen, real_array)
 from ..core._terms import Structure
@@ -218,10 +219,19 @@ class ParetoSet:
         out._keep_fitted_on(recs)
         return out
 
-    def _keep_fitted_on(self, records: Sequence[Record]) -> None:
-        """Keep the records the set was fitted on (no field: not compared, saved or shown), that
-        :func:`graybox.decide_dsf` refuses them, a piece of one or one of several as choosing records."""
+    def _keep_fitted_on(self, records: Sequence[Record], prints: Sequence[RecordPrint] = ()) -> None:
+        """Keep the records the set was fitted on (no field: not compared or shown), that
+        :func:`graybox.decide_dsf` refuses them, a piece of one or one of several as choosing records; or,
+        for a set read from a file, their prints (:class:`~graybox.core._records.RecordPrint`, which
+        :mod:`graybox.io` saves), that it refuses the same."""
         object.__setattr__(self, "_fitted_on", tuple(records))
+        object.__setattr__(self, "_fitted_prints", tuple(prints))
+
+    def _prints(self) -> tuple[RecordPrint, ...]:
+        """The prints of the records the set was fitted on: computed from them, or as read from a file (empty:
+        neither, e.g. a set built from its fields or read from a file written before prints were kept)."""
+        recs = getattr(self, "_fitted_on", ())
+        return tuple(record_print(r) for r in recs) if recs else getattr(self, "_fitted_prints", ())
 
     def check_record(self, record: Record) -> None:
         """``ValueError`` when ``record`` (or static points) was sampled at another period than the set was fitted
@@ -282,7 +292,7 @@ class ParetoSet:
         out = ParetoSet(self.structure, self.thetas[idx], self.lambdas[idx], self.J1[idx], self.JS[idx],
                         self.JSF[idx], self.method, {k: v[idx] for k, v in self.extra.items()}, fails,
                         self.input_names, self.Ts, self.units)
-        out._keep_fitted_on(getattr(self, "_fitted_on", ()))
+        out._keep_fitted_on(getattr(self, "_fitted_on", ()), getattr(self, "_fitted_prints", ()))
         return out
 
     def nondominated(self, objectives: Sequence[str] = ("JS", "JSF")) -> "ParetoSet":

@@ -51,6 +51,8 @@ constructor then validates shapes and meaning (e.g. θ's length against the stru
 
 from __future__ import annotations
 
+import base64
+import binascii
 import errno
 import importlib
 import json
@@ -73,7 +75,7 @@ from ..estimation._epsilon_constraint import DSFResult
 from ..estimation._output_error import OEResult
 from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
-from ..core._records import Dataset, Record, StaticPoints, check_units
+from ..core._records import Dataset, Record, RecordPrint, StaticPoints, check_units
 from ..core._files import bom_encoding, write_atomically
 from ..core._validation import MAX_NESTING, FrozenMap, check_path
 from ..core._version import graybox_version
@@ -757,11 +759,48 @@ _RENAMED: dict[str, dict[str, tuple[str, Callable[[Any], Any]]]] = {
 }
 
 
+def _enc_print(p: RecordPrint) -> dict:
+    return {"name": p.name, "length": p.length, "input_names": list(p.input_names), "block": p.block,
+            "digests": base64.b64encode(p.digests.astype("<u8").tobytes()).decode("ascii")}
+
+
+def _dec_print(v: Any, where: str, rd: _Reader) -> RecordPrint:
+    d = rd.dict(v, where)
+    keys = {"name", "length", "input_names", "block", "digests"}
+    if set(d) != keys:
+        raise rd.fail(where, f"a fitting record's print has the fields {sorted(keys)}, got {sorted(d)}")
+    try:
+        raw = base64.b64decode(rd.str(d["digests"], f"{where}.digests"), validate=True)
+    except binascii.Error:
+        raise rd.fail(f"{where}.digests", "not base64 text") from None
+    if len(raw) % 8:
+        raise rd.fail(f"{where}.digests", f"{len(raw)} bytes, not whole 8-byte digests")
+    try:
+        return RecordPrint(rd.str(d["name"], f"{where}.name"), rd.int(d["length"], f"{where}.length"),
+                           tuple(rd.str(n, f"{where}.input_names") for n in rd.list(d["input_names"], f"{where}.input_names")),
+                           rd.int(d["block"], f"{where}.block"), np.frombuffer(raw, "<u8").astype(np.uint64))
+    except (ValueError, TypeError) as exc:
+        raise rd.fail(where, str(exc)) from None
+
+
+#: Values a type keeps that are no constructor field, saved and read back (absent in older files: none kept):
+#: per type, the field's name, how to write it from the value, and how to give it to the value read.
+#: A ParetoSet's fitting records' prints, that the set read refuses them as choosing records (decide_dsf).
+_KEPT: dict[str, tuple[str, Callable[[Any], Any], Callable[[Any, Any, str, "_Reader"], None]]] = {
+    "ParetoSet": ("fitted_on", lambda ps: [_enc_print(p) for p in ps._prints()],
+                  lambda ps, v, where, rd: ps._keep_fitted_on((), tuple(_dec_print(x, f"{where}[{i}]", rd)
+                                                                        for i, x in enumerate(rd.list(v, where))))),
+}
+
+
 def _encode_fields(obj: Any) -> dict:
     name = _TYPES[type(obj)]
     out = {k: _enc(kind, getattr(obj, k), f"{name}.{k}") for k, kind in _CODECS[name][1]}
     if name in _READABLE:
         out.update(_READABLE[name][1](obj))
+    if name in _KEPT:
+        field_name, write, _ = _KEPT[name]
+        out[field_name] = write(obj)
     return out
 
 
@@ -772,6 +811,7 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
         if old in d and new not in d:
             d = {**{k: x for k, x in d.items() if k != old}, new: read(d[old])}
     d = {k: x for k, x in d.items() if k not in _DROPPED.get(name, frozenset())}
+    kept = d.pop(_KEPT[name][0], None) if name in _KEPT else None
     known = {k for k, _ in spec} | set(_READABLE[name][0] if name in _READABLE else ())
     unknown = sorted(set(d) - known)
     if unknown:
@@ -783,9 +823,12 @@ def _decode_fields(name: str, v: Any, where: str, rd: _Reader) -> Any:
     kwargs = {k: _dec(kind, d[k], f"{where}.{k}", rd) if k in d else added[k] for k, kind in spec
               if k in d or added[k] is not _DEFAULT}
     try:
-        return cls(**kwargs)
+        obj = cls(**kwargs)
     except (ValueError, TypeError) as exc:
         raise rd.fail(where, f"not a valid {name}: {exc}") from None
+    if kept is not None:
+        _KEPT[name][2](obj, kept, f"{where}.{_KEPT[name][0]}", rd)
+    return obj
 
 
 # --------------------------------------------------------------------------------------------
