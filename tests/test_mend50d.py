@@ -138,3 +138,72 @@ def test_a_print_refuses_the_slices_the_records_check_refuses(seed, n, start, le
         check_print_overlap(c, record_print(f), "choosing", "fitting", "advice")
     other = gb.Record(rng.standard_normal(length), rng.standard_normal(length), name="other")
     check_print_overlap(other, record_print(f), "choosing", "fitting", "advice")  # no shared samples: nothing
+
+
+# 3. the equilibria of static equations of degree >= 4, every level at once ------------------------------------------
+
+def _roots_both_ways(structure, thetas, ubar):
+    from graybox.static import _analysis
+    together = _analysis._roots_and_folds(structure, thetas, ubar)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_analysis, "_BATCH_FROM", 10**9)  # one polynomial at a time
+        alone = _analysis._roots_and_folds(structure, thetas, ubar)
+    return together, alone
+
+
+def _assert_same_roots(together, alone):
+    (r1, f1), (r2, f2) = together, alone
+    np.testing.assert_array_equal(np.isnan(r1), np.isnan(r2))
+    np.testing.assert_allclose(r1[~np.isnan(r1)], r2[~np.isnan(r2)], rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(f1, f2)
+
+
+def test_many_levels_are_solved_together(monkeypatch):
+    # was one numpy.roots (eigvals) call per polynomial and group: 200 levels, 200 calls
+    from graybox.static import _analysis
+    calls = []
+    eigvals = np.linalg.eigvals
+    monkeypatch.setattr(np.linalg, "eigvals", lambda a: (calls.append(np.shape(a)), eigvals(a))[1])
+    s = gb.Structure(["y(k-1)", "y(k-2)", "y(k-1)^4", "u(k-1)y(k-1)^2", "1"])
+    roots = _analysis.real_roots(s, np.array([[0.3, 0.2, -0.05, 0.001, 0.4]]), np.linspace(-300, 300, 200))
+    assert roots.shape == (1, 200, 4) and np.isfinite(roots).any()
+    assert 0 < len(calls) <= 4, len(calls)
+
+
+def _fold_model_theta(scale: float) -> np.ndarray:
+    c = np.array([1.0, -2.0, 2.0, -2.0, 1.0]) * scale  # ascending: scale (ȳ − 1)² (ȳ² + 1) at ū = 1 (hunt46a's)
+    return np.array([c[1] + 1, c[2], c[3], c[4], c[0]])
+
+
+def test_folds_and_double_roots_are_the_same_together():
+    s = gb.Structure(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "y(k-1)^4", "u(k-1)"])
+    ub = np.concatenate([[1.0, 1.0 + 1e-12, 1.0 - 1e-9], np.linspace(-3.0, 3.0, 301)])
+    th = np.array([_fold_model_theta(k) for k in (1.0, 0.1, 1 / 3, 0.01)])
+    together, alone = _roots_both_ways(s, th, ub)
+    _assert_same_roots(together, alone)
+    roots, fold = together
+    for p in range(th.shape[0]):  # the fold at ū = 1: one double root ȳ = 1, a fold
+        got = roots[p, 0][np.isfinite(roots[p, 0])]
+        np.testing.assert_allclose(got, [1.0], rtol=1e-6)
+        assert fold[p, 0, 0]
+    # a double root beside simple ones (hunt46a's), at many scales of the model
+    c = np.polynomial.polynomial.polyfromroots([1.0, 1.0, 2.0, -3.0]) * 0.05
+    th = np.array([[c[1] + 1, c[2], c[3], c[4], c[0]]]) * np.array([[1.0, 1, 1, 1, 1]])
+    together, alone = _roots_both_ways(s, th, np.linspace(0.0, 2.0, 41))
+    _assert_same_roots(together, alone)
+    assert np.isfinite(together[0][0, 20]).sum() == 3 and together[1][0, 20].sum() == 1  # ū = 1
+
+
+@settings(max_examples=40, deadline=None)
+@given(hs.integers(0, 2**32 - 1), hs.sampled_from([4, 5]), hs.integers(-6, 6))
+def test_random_quartic_and_quintic_models_have_the_same_equilibria_together(seed, degree, decade):
+    rng = np.random.default_rng(seed)
+    terms = ["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)y(k-1)", "u(k-1)^2y(k-1)^2"] + \
+        [f"y(k-1)^{p}" for p in range(2, degree + 1)] + [f"u(k-1)y(k-1)^{degree}"]
+    s = gb.Structure(terms)
+    th = rng.standard_normal((3, len(terms))) * 10.0 ** rng.integers(-3, 2, (3, len(terms)))
+    th[rng.random(th.shape) < 0.2] = 0.0
+    assume(np.any(th[:, -2] != 0))
+    ub = np.linspace(-2.0, 2.0, 97) * 10.0 ** decade
+    together, alone = _roots_both_ways(s, th, ub)
+    _assert_same_roots(together, alone)

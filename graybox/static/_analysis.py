@@ -364,35 +364,164 @@ def _real_roots_companion(coef: np.ndarray, sizes: np.ndarray | None = None) -> 
     complex pair x ± iy whose F(x) is within what they leave uncertain (``ROOT_EPS`` eps of Σ sizes_p |x|^p) is
     the double root x that rounding pushed off the real axis (listed twice, read as one fold by
     :func:`~graybox.static._equilibrium_kernels.merge_multiple_roots`).
+
+    Every polynomial at once (:func:`_roots_batch`: the companion matrices of each kind of group stacked through
+    one ``numpy.linalg.eigvals``, the Newton steps on all of them together); what :func:`_real_roots_row` finds one
+    polynomial at a time, which takes the few whose scaled coefficients leave the float range.
     """
     D = coef.shape[0] - 1
     P, M = coef.shape[1:]
     c = np.moveaxis(coef, 0, -1).reshape(-1, D + 1)
     a = c if sizes is None else np.maximum(np.abs(np.moveaxis(sizes, 0, -1).reshape(-1, D + 1)), np.abs(c))
-    K = c.shape[0]
-    out = np.full((K, D), np.nan)
-    powers = np.arange(D + 1)
-    eps = np.finfo(float).eps
-    for k in range(K):
-        ck = c[k]
-        if not (np.all(np.isfinite(ck)) and np.any(ck != 0)):
-            continue
-        with np.errstate(all="ignore"):
-            z = _roots_one(ck)
-            real = np.abs(z.imag) <= IMAG_RTOL * np.abs(z)
-            x = z.real[real]
-            f = np.polynomial.polynomial.polyval(x, ck)
-            size = np.abs(x[:, None]) ** powers @ np.abs(ck)
-            x = x[np.isfinite(x) & (np.abs(f) <= 1e-8 * size)]
-            # one of each complex pair (imaginary part > 0): its real part, where F is within the coefficients'
-            # uncertainty there (a double root that rounding of a cancelling coefficient split into the pair)
-            xp = z.real[~real & (z.imag > 0)]
-            fp = np.abs(np.polynomial.polynomial.polyval(xp, ck))
-            eta = ROOT_EPS * eps * (np.abs(xp[:, None]) ** powers @ np.abs(a[k]))
-            xp = xp[np.isfinite(xp) & np.isfinite(eta) & (fp <= eta)]
-            x = np.sort(np.concatenate([x, xp, xp]))
-        out[k, : x.size] = x[:D]
+    out = np.full((c.shape[0], D), np.nan)
+    rows = np.flatnonzero(np.all(np.isfinite(c), axis=1) & np.any(c != 0, axis=1))
+    if rows.size < _BATCH_FROM:  # a point or two (equilibria at one ū): the batch's set-up would cost more
+        for k in rows:
+            out[k] = _real_roots_row(c[k], a[k], D)
+    elif rows.size:
+        z, alone = _roots_batch(c[rows])
+        out[rows] = _real_of(z, c[rows], a[rows], D)
+        for k in rows[alone]:
+            out[k] = _real_roots_row(c[k], a[k], D)
     return out.reshape(P, M, D)
+
+
+#: Polynomials from which :func:`_real_roots_companion` solves them together (fewer: one at a time, as fast).
+_BATCH_FROM = 4
+
+
+def _real_roots_row(ck: np.ndarray, ak: np.ndarray, D: int) -> np.ndarray:
+    """:func:`_real_roots_companion` of one polynomial (finite coefficients, not all 0), shape (D,)."""
+    with np.errstate(all="ignore"):
+        return _real_of(_roots_one(ck)[None, :], ck[None, :], ak[None, :], D)[0]
+
+
+def _polyval_rows(x: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """numpy's ``polyval(x[i], c[i])`` for every row i at once (its Horner steps, so the same numbers)."""
+    v = c[:, -1:] + x * 0
+    for i in range(2, c.shape[1] + 1):
+        v = c[:, -i:c.shape[1] - i + 1] + v * x
+    return v
+
+
+def _real_of(z: np.ndarray, c: np.ndarray, a: np.ndarray, D: int) -> np.ndarray:
+    """The real roots among the roots ``z`` (K, n; NaN: none) of the rows of ``c``, sorted, NaN-padded to D: the
+    real ones whose backward error is small, and twice the real part of each complex pair that is a double root to
+    the coefficients' uncertainty (``a``, their terms' sizes)."""
+    powers = np.arange(c.shape[1])
+    eps = np.finfo(float).eps
+    with np.errstate(all="ignore"):
+        live = ~np.isnan(z)
+        real = live & (np.abs(z.imag) <= IMAG_RTOL * np.abs(z))
+        x = np.where(real, z.real, np.nan)
+        f = _polyval_rows(x, c)
+        size = np.abs(x)[..., None] ** powers @ np.abs(c)[:, :, None]
+        x = np.where(np.isfinite(x) & (np.abs(f) <= 1e-8 * size[..., 0]), x, np.nan)
+        # one of each complex pair (imaginary part > 0): its real part, where F is within the coefficients'
+        # uncertainty there (a double root that rounding of a cancelling coefficient split into the pair)
+        xp = np.where(live & ~real & (z.imag > 0), z.real, np.nan)
+        fp = np.abs(_polyval_rows(xp, c))
+        eta = ROOT_EPS * eps * (np.abs(xp)[..., None] ** powers @ np.abs(a)[:, :, None])[..., 0]
+        xp = np.where(np.isfinite(xp) & np.isfinite(eta) & (fp <= eta), xp, np.nan)
+        x = np.sort(np.concatenate([x, xp, xp], axis=1), axis=1)
+    out = np.full((c.shape[0], D), np.nan)
+    n = min(D, x.shape[1])
+    out[:, :n] = x[:, :n]
+    return out
+
+
+def _root_groups_rows(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_root_groups` of every row of ``c`` (K, D + 1) at once: scales, k1, k2, shape (K, D) each (the
+    groups of row i first, in order), and each row's number of groups."""
+    with np.errstate(all="ignore"):  # log2(0) = -inf at the zero coefficients, which take no part
+        return _groups_rows(c)
+
+
+def _groups_rows(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    K, n = c.shape
+    lv = np.log2(np.abs(c))
+    # the upper convex hull of (k, log2|c_k|) over the nonzero c_k, by the same steps as _root_groups'
+    hk = np.zeros((K, n), int)
+    hv = np.zeros((K, n))
+    h = np.zeros(K, int)
+    r = np.arange(K)
+    for k in range(n):
+        on = c[:, k] != 0
+        while True:
+            two = on & (h >= 2)
+            i1, i2 = np.maximum(h - 1, 0), np.maximum(h - 2, 0)
+            pop = two & ((hv[r, i1] - hv[r, i2]) * (k - hk[r, i2]) <= (lv[:, k] - hv[r, i2]) * (hk[r, i1] - hk[r, i2]))
+            if not pop.any():
+                break
+            h = h - pop
+        hk[on, h[on]] = k
+        hv[on, h[on]] = lv[on, k]
+        h = h + on
+    gw = np.zeros((K, n))
+    g1 = np.zeros((K, n), int)
+    g2 = np.zeros((K, n), int)
+    ng = np.zeros(K, int)
+    for j in range(n - 1):  # the hull's edge j, where the row has one
+        has = h >= j + 2
+        k1, k2 = hk[:, j], hk[:, min(j + 1, n - 1)]
+        v1, v2 = hv[:, j], hv[:, min(j + 1, n - 1)]
+        e = (v1 - v2) / (k2 - k1)
+        last = np.maximum(ng - 1, 0)
+        join = has & (ng > 0) & (e - gw[r, last] / (g2[r, last] - g1[r, last]) < 10)
+        new = has & ~join
+        gw[r[join], last[join]] += (e * (k2 - k1))[join]
+        g2[r[join], last[join]] = k2[join]
+        gw[r[new], ng[new]] = (e * (k2 - k1))[new]
+        g1[r[new], ng[new]] = k1[new]
+        g2[r[new], ng[new]] = k2[new]
+        ng = ng + new
+    return 2.0 ** np.round(gw / np.where(g2 > g1, g2 - g1, 1)), g1, g2, ng
+
+
+def _roots_batch(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_roots_one` of every row of ``c`` (K, D + 1; finite, not all 0): the roots, shape (K, D) complex
+    (NaN past a row's own), and the rows left to :func:`_roots_one` (a scaled coefficient outside the float
+    range: numpy.roots would drop it)."""
+    K, n = c.shape
+    D = n - 1
+    tau, g1, g2, ng = _root_groups_rows(c)
+    z = np.full((K, D), np.nan + 0j)
+    fill = np.zeros(K, int)
+    alone = np.zeros(K, bool)
+    for j in range(int(ng.max(initial=0))):
+        for k1, k2 in {(int(p), int(q)) for p, q, g in zip(g1[:, j], g2[:, j], ng) if g > j}:
+            rows = np.flatnonzero((ng > j) & (g1[:, j] == k1) & (g2[:, j] == k2))
+            t = tau[rows, j]
+            with np.errstate(all="ignore"):
+                cs = c[rows, k1:k2 + 1] * t[:, None] ** np.arange(k2 - k1 + 1)  # exact: t is a power of two
+                p = cs[:, ::-1] / np.max(np.abs(cs), axis=1, keepdims=True)
+                top = -p[:, 1:] / p[:, :1]
+            ok = (np.all(np.isfinite(p), axis=1) & (p[:, 0] != 0) & (p[:, -1] != 0) & np.isfinite(t) & (t != 0)
+                  & np.all(np.isfinite(top), axis=1))
+            alone[rows[~ok]] = True
+            rows, top, t = rows[ok], top[ok], t[ok]
+            m = k2 - k1
+            A = np.zeros((rows.size, m, m))
+            A[:, 1:, :-1] = np.eye(m - 1)
+            A[:, 0, :] = top
+            w = np.asarray(np.linalg.eigvals(A), complex)
+            with np.errstate(all="ignore"):
+                z[rows[:, None], fill[rows, None] + np.arange(m)] = t[:, None] * w
+            fill[rows] += m
+    dc = c[:, 1:] * np.arange(1, n)
+    with np.errstate(all="ignore"):
+        for _ in range(30):  # Newton steps on the whole polynomials, each kept only if it reduces |F|
+            f = _polyval_rows(z, c)
+            df = _polyval_rows(z, dc)
+            zn = z - np.where(df != 0, f / np.where(df != 0, df, 1.0), 0.0)
+            better = np.abs(_polyval_rows(zn, c)) < np.abs(f)
+            z = np.where(better, zn, z)
+            if not better.any():
+                break
+    lo = np.argmax(c != 0, axis=1)  # x^lo divides the polynomial: lo roots at 0
+    for k in np.flatnonzero(lo):
+        z[k, fill[k]:fill[k] + lo[k]] = 0.0
+    return z, alone
 
 
 def real_roots(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.ndarray:
