@@ -7,8 +7,10 @@ each (member, level)'s polynomial on its own (numpy.roots per group of roots, th
 stacks the companion matrices of every polynomial with the same groups through one `numpy.linalg.eigvals` and
 takes the Newton steps on all of them together. "one at a time" is that path with the batch switched off (as
 for one or two polynomials, where it is still taken); the roots of both are compared (they are the same numbers).
-Timed: the roots alone for a quartic and a quintic structure, and `Model.static_curve` (the equilibria
-reached, every level at once) for the quartic, at the same levels. Median wall time of `--repeat` runs.
+Timed: the roots alone for a quartic and a quintic structure, `Model.static_curve` (the equilibria reached, every
+level at once) for the quartic, at the same levels, and `operating_curve` (a local model per level; its levels'
+equilibria now found together too, against each point's own `Model.equilibria`) at `--curve-levels` of them.
+Median wall time of `--repeat` runs.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _common import machine, timeit  # noqa: E402
 
 import graybox as gb  # noqa: E402
+from graybox.control import _local  # noqa: E402
 from graybox.static import _analysis  # noqa: E402
 
 QUARTIC = (gb.Structure(["y(k-1)", "y(k-2)", "y(k-1)^4", "u(k-1)y(k-1)^2", "1"]), [0.3, 0.2, -0.05, 0.001, 0.4])
@@ -42,6 +45,7 @@ def _one_at_a_time(fn):
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--levels", type=int, default=20000)
+    ap.add_argument("--curve-levels", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     print(machine())
@@ -63,6 +67,22 @@ def main() -> None:
     same = np.array_equal(curve(), _one_at_a_time(curve), equal_nan=True)
     print(f"quartic static_curve: one at a time {before:.2f} s, together {after:.2f} s ({before / after:.1f}x); "
           f"the same curve: {same}")
+    levels = np.linspace(-300.0, 300.0, args.curve_levels)
+    oc = lambda: gb.operating_curve(model, levels, Ts=1.0)  # noqa: E731
+
+    def each_point():
+        keep = _local._equilibria_at
+        _local._equilibria_at = lambda m, u: [None] * u.shape[0]
+        try:
+            return _one_at_a_time(oc)
+        finally:
+            _local._equilibria_at = keep
+
+    before = timeit(each_point, repeat=args.repeat)
+    after = timeit(oc, repeat=args.repeat)
+    same = gb.to_json(oc()) == gb.to_json(each_point())
+    print(f"quartic operating_curve, {args.curve_levels} levels: each point's own equilibria {before:.2f} s, "
+          f"together {after:.2f} s ({before / after:.1f}x); the same curve: {same}")
 
 
 if __name__ == "__main__":

@@ -207,3 +207,31 @@ def test_random_quartic_and_quintic_models_have_the_same_equilibria_together(see
     ub = np.linspace(-2.0, 2.0, 97) * 10.0 ** decade
     together, alone = _roots_both_ways(s, th, ub)
     _assert_same_roots(together, alone)
+
+
+def _curve_both_ways(model, ub, **kw):
+    from graybox.control import _local
+    together = gb.operating_curve(model, ub, Ts=1.0, **kw)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_local, "_equilibria_at", lambda m, u: [None] * u.shape[0])  # each point's own equilibria()
+        alone = gb.operating_curve(model, ub, Ts=1.0, **kw)
+    return together, alone
+
+
+@pytest.mark.parametrize("model,ub", [
+    (gb.Model(["y(k-1)", "y(k-1)^2", "y(k-1)^3", "y(k-1)^4", "u(k-1)"], _fold_model_theta(1 / 3)),
+     np.concatenate([[1.0], np.linspace(-2.0, 2.0, 41)])),
+    (gb.Model(["y(k-1)", "y(k-2)", "y(k-1)^4", "u(k-1)y(k-1)^2", "1"], [0.3, 0.2, -0.05, 0.001, 0.4]),
+     np.linspace(-300.0, 300.0, 61)),
+    (gb.Model(["y(k-1)", "u(k-1)", "u(k-1)y(k-1)"], [0.5, 1.0, 0.1]), np.linspace(-8.0, 8.0, 33)),  # rational: its pole at ū = 5
+    (gb.Model(["y(k-1)", "u(k-1)", "1"], [1.0, 0.5, -0.5]), np.array([0.0, 1.0, 2.0])),  # ū = 1: a continuum
+])
+def test_an_operating_curve_solves_its_levels_together_with_the_same_local_models(model, ub):
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the continuum's and the no-equilibrium points' notes: the same both ways
+        together, alone = _curve_both_ways(model, ub)
+        assert gb.to_json(together) == gb.to_json(alone)
+        assert together.status == alone.status
+        together, alone = _curve_both_ways(model, ub, y0=np.full(ub.size, 0.5))  # each from a start of its own
+        assert gb.to_json(together) == gb.to_json(alone)

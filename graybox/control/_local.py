@@ -38,8 +38,8 @@ from ..core._validation import (check_count, check_band_finite, check_band_value
                                 check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
 from ..models._model import Model
-from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Reached, continuum, multiple_root,
-                                reached_equilibria, schur_stable, several_stable)
+from ..static._analysis import (CONTINUUM_WHY, NO_EQUILIBRIUM_WHY, REACHED, Equilibrium, Reached, continuum,
+                                equilibria_at_levels, multiple_root, reached_equilibria, schur_stable, several_stable)
 from ..static._linearisation import characteristic_roots, local_coefficients
 from ..static._surface_analysis import _folded, reached_surface
 from ..static._equilibrium_kernels import unit_pole
@@ -575,9 +575,11 @@ def _fold_at(model: Model, u: np.ndarray, ybar: float) -> bool:
     return multiple_root(model.structure, model.theta, float(u[0]), ybar)
 
 
-def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float | None, str, str, bool]:
+def _equilibrium(model: Model, u: np.ndarray, y0: float | None, eqs: list[Equilibrium] | None = None
+                 ) -> tuple[float | None, str, str, bool]:
     """(ȳ, status, reason, fold) at one point u (m,): the reached equilibrium, else the one to linearise around;
-    ``fold``: that equilibrium is a multiple root of the static equation (its pole is at z = 1)."""
+    ``fold``: that equilibrium is a multiple root of the static equation (its pole is at z = 1). ``eqs``: the
+    model's equilibria at u, when the caller found them (:func:`_equilibria_at`)."""
     label = f"{float(u[0]):g}" if u.size == 1 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
     if _continuum_at(model, u):
         # every ȳ is an equilibrium: ū sets none, the output stays where it starts; y0 is then the one to take
@@ -586,7 +588,8 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None) -> tuple[float |
             return None, "continuum of equilibria", why + ("; give y0 (the output level ȳ to linearise at, where the "
                                                            "model stays) for the local model there"), False
         return float(y0), "continuum of equilibria", why + f"; linearised at ȳ = y0 = {y0:.6g}", False
-    eqs = model.equilibria(u if model.n_inputs > 1 else float(u[0]))
+    if eqs is None:
+        eqs = model.equilibria(u if model.n_inputs > 1 else float(u[0]))
     if y0 is None:
         stable = [e for e in eqs if e.stable]
         if len(stable) == 1:
@@ -670,8 +673,24 @@ def _y0s(y0: object, M: int) -> list[float | None]:
     return [float(v) for v in check_per_point(y0, M, "y0 (one per operating point)")]
 
 
-def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float) -> LocalModel:
-    ybar, status, reason, fold = _equilibrium(model, u, y0)
+def _equilibria_at(model: Model, ub: np.ndarray) -> list[list[Equilibrium] | None]:
+    """The equilibria of a one-input model at each point of ``ub`` (M, 1), every level's static equation solved
+    together; None where every ȳ is one (:func:`_equilibrium` says so) and for a model of several inputs."""
+    if model.n_inputs > 1:
+        return [None] * ub.shape[0]
+    levels = ub[:, 0]
+    free = ~continuum(model.structure, model.theta[None, :], levels)[0]
+    out: list[list[Equilibrium] | None] = [None] * levels.size
+    if not free.any():
+        return out
+    for j, eqs in zip(np.flatnonzero(free), equilibria_at_levels(model.structure, model.theta, levels[free])):
+        out[j] = eqs
+    return out
+
+
+def _linearise(model: Model, u: np.ndarray, y0: float | None, Ts: float,
+               eqs: list[Equilibrium] | None = None) -> LocalModel:
+    ybar, status, reason, fold = _equilibrium(model, u, y0, eqs)
     if ybar is None:
         a, b = np.zeros(0), np.zeros((model.n_inputs, 0))
     else:
@@ -958,7 +977,7 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     ub = _as_points(model, ubar)
     Ts_ = check_Ts(Ts, data, model)
     _range_warning(model, ub, data)
-    lms = tuple(_linearise(model, u, y, Ts_) for u, y in zip(ub, _y0s(y0, ub.shape[0])))
+    lms = tuple(_linearise(model, u, y, Ts_, e) for u, y, e in zip(ub, _y0s(y0, ub.shape[0]), _equilibria_at(model, ub)))
     rows = [_summary(lm) for lm in lms]
     single = model.n_inputs == 1
     gain = np.array([r[1] for r in rows])

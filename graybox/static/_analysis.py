@@ -100,6 +100,7 @@ __all__ = [
     "checked_model",
     "several_stable",
     "folded_equilibria",
+    "equilibria_at_levels",
     "multiple_root",
     "continuum",
     "CONTINUUM_WHY",
@@ -731,12 +732,26 @@ def multiple_root(structure: Structure, theta: np.ndarray, ub: float, ybar: floa
 
 def folded_equilibria(structure: Structure, theta: np.ndarray, ub: float) -> list[Equilibrium]:
     """:func:`equilibria` of checked arguments (a folded surface model's θ may exceed the float range)."""
+    return equilibria_at_levels(structure, theta, np.array([ub]))[0]
+
+
+def equilibria_at_levels(structure: Structure, theta: np.ndarray, ubar: np.ndarray) -> list[list[Equilibrium]]:
+    """:func:`folded_equilibria` at each level of ``ubar`` (M,), the static equations of all of them solved together
+    (an operating curve's); the caller refuses a level where every ȳ is an equilibrium (:func:`continuum`)."""
     th = np.asarray(theta, float)[None, :]
+    ub = np.asarray(ubar, float)
     if is_rational(structure):
-        yb = _rational_roots(structure, th, np.array([ub]))[0]
-        fold = np.zeros(yb.shape, dtype=bool)  # eq. (6) is linear in ȳ: one simple root
+        ys = _rational_roots(structure, th, ub)[0][:, None]
+        folds = np.zeros(ys.shape, dtype=bool)  # eq. (6) is linear in ȳ: one simple root
     else:
-        yb, fold = (v[0, 0] for v in _roots_and_folds(structure, th, np.array([ub])))
+        ys, folds = (v[0] for v in _roots_and_folds(structure, th, ub))
+    return [_level_equilibria(structure, th, float(u), yb, fold) for u, yb, fold in zip(ub, ys, folds)]
+
+
+def _level_equilibria(structure: Structure, th: np.ndarray, ub: float, yb: np.ndarray, fold: np.ndarray
+                      ) -> list[Equilibrium]:
+    """The equilibria at one level ``ub`` from the roots ``yb`` of its static equation (NaN-padded) and which are
+    multiple (``fold``)."""
     keep = np.isfinite(yb)
     yb, fold = yb[keep], fold[keep]
     if yb.size == 0:
