@@ -47,6 +47,11 @@ not JSON or not a graybox file, a newer or unknown ``format_version``, an unknow
 than the one expected, a missing or unknown field, a value of the wrong kind; the value's own
 constructor then validates shapes and meaning (e.g. θ's length against the structure). The units
 (of u and y) are written when given and read back with :func:`read_header`.
+
+A :class:`~graybox.ParetoSet` also carries ``fitted_on``: a print of each record it was fitted on (its name, length,
+input names and hashes of its samples in blocks of 16, not the samples), so that the set read back refuses those
+records, copies and slices of them as choosing records (:func:`graybox.decide_dsf`'s ``choose_on``) as the set
+did when it was made; a file written without it loads, with that check left to the set's own J_S.
 """
 
 from __future__ import annotations
