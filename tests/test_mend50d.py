@@ -31,6 +31,10 @@ def test_fallback_takes_the_member_nearest_a_two_sided_band():
     d = decide_dsf(ps, band=(0.1, 0.2), fallback="min_jsf")
     assert d.index == 0 and d.rule == "min J_SF" and not d.in_band
     assert "nearest" in d.model.name
+    # without a fallback the error names the J_SF nearest B (0.09), not the smallest (0.001), and what the fallback takes
+    with pytest.raises(ValueError, match=r"the J_SF nearest B is 0\.09\b.*fallback='min_jsf' to take the member with "
+                                         r"the J_SF nearest B"):
+        decide_dsf(ps, band=(0.1, 0.2))
     # below and above: the nearer side wins (0.25 is 0.05 above, 0.02 is 0.08 below)
     assert decide_dsf(front([1.0, 2.0], [0.02, 0.25]), band=(0.1, 0.2), fallback="min_jsf").index == 1
     # equally far on either side: the smaller J_S, as ties always were

@@ -233,7 +233,8 @@ def decide_dsf(
         points that carry one, pass ``band=data.static.band`` (the mean of δ_i²).
     fallback : {None, "min_jsf"}
         When no member has J_SF in B (with a finite J_S): None (default) raises
-        ``InfeasibleError`` (a ``ValueError``) naming the smallest J_SF reached;
+        ``InfeasibleError`` (a ``ValueError``) naming the smallest J_SF reached (with low > 0: the
+        J_SF nearest B);
         ``"min_jsf"`` picks the member whose J_SF is nearest B (its distance to the interval:
         for B = [0, band], the smallest J_SF; for (low, high) with every J_SF below low, the
         largest), ties: smaller J_S, instead; with ``choose_on``, among the members whose free run
