@@ -239,3 +239,17 @@ def test_an_operating_curve_solves_its_levels_together_with_the_same_local_model
         assert together.status == alone.status
         together, alone = _curve_both_ways(model, ub, y0=np.full(ub.size, 0.5))  # each from a start of its own
         assert gb.to_json(together) == gb.to_json(alone)
+
+
+def test_a_long_records_print_stays_small_and_still_sees_long_slices():
+    """A print holds at most 4096 blocks (a saved Pareto set of a long fit stays small); a slice two blocks long
+    is still refused, one shorter than a block is not looked for."""
+    from graybox.core._records import check_print_overlap, record_print
+    rng = np.random.default_rng(3)
+    N = 200_000
+    r = gb.Record(u=rng.normal(size=N), y=rng.normal(size=N), Ts=1.0, name="long")
+    p = record_print(r)
+    assert p.digests.size <= 4097 and p.block == -(-N // 4096)
+    with pytest.raises(ValueError, match="shares 200 samples"):
+        check_print_overlap(r.slice(1000, 1200), p, "choosing", "fitting", "advice")
+    check_print_overlap(r.slice(1000, 1000 + p.block - 1), p, "choosing", "fitting", "advice")

@@ -939,8 +939,12 @@ def _stretch_message(a: Record, b: Record, a_name: str, b_name: str, s: tuple[in
             f"samples {i}..{i + n - 1} are samples {j}..{j + n - 1} of the other")
 
 
-#: Samples in a block of a record's print (:class:`RecordPrint`).
+#: Samples in a block of a record's print (:class:`RecordPrint`), at least.
 _PRINT_BLOCK = 16
+#: Blocks in a print, at most: longer records take longer blocks, so that a saved Pareto set stays small (about
+#: 44 kB of base64 per fitting record of any length, against 670 kB for 10⁶ samples in blocks of 16); a slice
+#: shorter than two blocks is then not seen after loading.
+_PRINT_BLOCKS = 4096
 #: Alignments of a choosing record against a print tried, at most (the most often matched first).
 _PRINT_TRIES = 32
 _MIX = (np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
@@ -1011,7 +1015,7 @@ def record_print(record: Record) -> RecordPrint:
     names = tuple(record.input_names)
     h = _row_hashes(np.column_stack([record.input(n) for n in names] + [record.y]))
     N = len(record)
-    W = min(_PRINT_BLOCK, N)
+    W = min(max(_PRINT_BLOCK, -(-N // _PRINT_BLOCKS)), N)
     win = _window_hashes(h, W)
     return RecordPrint(record.name, N, names, W, np.concatenate([win[0:N - W + 1:W][:N // W], win[-1:]]))
 

@@ -49,8 +49,8 @@ constructor then validates shapes and meaning (e.g. θ's length against the stru
 (of u and y) are written when given and read back with :func:`read_header`.
 
 A :class:`~graybox.ParetoSet` also carries ``fitted_on``: a print of each record it was fitted on (its name, length,
-input names and hashes of its samples in blocks of 16, not the samples), so that the set read back refuses those
-records, copies and slices of them as choosing records (:func:`graybox.decide_dsf`'s ``choose_on``) as the set
+input names and hashes of its samples in blocks of 16, or of N / 4096 for longer records: not the samples), so that
+the set read back refuses those records, copies and slices of them (at least two blocks long) as choosing records (:func:`graybox.decide_dsf`'s ``choose_on``) as the set
 did when it was made; a file written without it loads, with that check left to the set's own J_S.
 """
 
