@@ -593,13 +593,15 @@ def els(
                      what=what, remedies=(remedy, remedy))
     offsets = (signal_offsets(recs) if is_closed(process) and all(l is not None for l in _pure_lags(ns))
                else None)
+    # the data's round-off is that of the raw levels: centred signals carry it too (y + 1e4: 1e4 ulps)
+    y_rms = np.sqrt(np.mean(reg.y**2))
     if offsets is not None:
         reg = _regression(process, ns, centred_data(recs, offsets))
     theta_ls = scaled_lstsq(reg.psi, reg.y)
     xi = reg.y - reg.psi @ theta_ls
-    # No MA part, or a model that explains the data to round-off: then the MA regressors
-    # would be round-off columns, so the MA part is zero by definition.
-    if len(ns) == 0 or np.sqrt(np.mean(xi**2)) <= 1e-12 * np.sqrt(np.mean(reg.y**2)):
+    # No MA part, or a model that explains the data to round-off (of the raw signals, whatever their zero): then the
+    # MA regressors would be round-off columns, so the MA part is zero by definition.
+    if len(ns) == 0 or np.sqrt(np.mean(xi**2)) <= 1e-12 * y_rms:
         return _result(reg, theta_ls, np.zeros(len(ns)), 0, True, [], xi, theta_ls, name, offsets=offsets)
 
     fit = _ExtendedFit(reg)
