@@ -35,3 +35,37 @@ def test_els_of_data_it_fits_exactly_has_no_ma_part_at_any_zero_of_y(offset):
     assert np.all(res.model.noise_theta == 0.0), res.model.noise_theta
     sim = res.model.simulate(gb.Record(u=u, y=y + offset)) - offset
     assert np.max(np.abs(sim - y)) < 1e-9 * max(1.0, abs(offset))
+
+
+def _els_fit() -> gb.ELSResult:
+    rng = np.random.default_rng(1)
+    u = rng.uniform(0.0, 1.0, 300)
+    y = np.convolve(u, [0.0, 0.5, 0.3])[:300] + 0.05 * rng.standard_normal(300)
+    return gb.els(["y(k-1)", "u(k-1)"], gb.Record(u=u, y=y))
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("n_iter", -5, "n_iter"),
+    ("n_iter", 3, "history"),  # 3 iterations with another number of residual changes
+    ("n_direct", -1, "n_direct"),
+    ("history", (), "history"),
+    ("history", "negative", "history"),
+    ("theta_ls", [1.0], "theta_ls"),
+    ("residuals", (), "residuals"),
+])
+def test_an_els_result_that_no_iteration_gives_is_refused_naming_the_field(field, value, words, tmp_path):
+    # a file edited by hand (or a result built wrong) with n_iter = -5, theta_ls of 1 value for a 2-term model, no
+    # residuals or a history of another length than n_iter loaded silently; NeuralFit, DSFResult and OEResult refuse
+    # theirs
+    res = _els_fit()
+    fields = {f: getattr(res, f) for f in ("model", "n_iter", "converged", "history", "residuals", "theta_ls",
+                                           "n_direct")}
+    assert len(res.history) == res.n_iter > 0
+    if value == "negative":
+        value = (-1.0,) + tuple(res.history[1:])
+    fields[field] = value
+    with pytest.raises(ValueError, match=words):
+        gb.ELSResult(**fields)
+    path = tmp_path / "els.json"
+    gb.save(res, path)
+    assert gb.load(path).n_iter == res.n_iter  # the result itself still round-trips

@@ -92,7 +92,7 @@ from ..core._records import Dataset, Record, carried_from
 from ..core._regressors import regressor_matrix, stacked_regressors
 from ..core._terms import Structure, Term
 from ..core._validation import (check_bool, check_int, check_real, check_fields, check_sequence, check_str, frozen,
-                                warn)
+                                short_value, warn)
 
 __all__ = ["els", "ELSResult", "ELSConvergenceWarning", "noise_terms"]
 
@@ -141,6 +141,21 @@ class ELSResult:
         # read-only copies: what the caller's arrays become afterwards never changes the result
         object.__setattr__(self, "theta_ls", frozen(self.theta_ls))
         object.__setattr__(self, "residuals", tuple(frozen(r) for r in self.residuals))
+        # what an iteration can report (a file edited by hand, a result built wrong is refused, as NeuralFit's)
+        check_int(self.n_iter, "ELSResult: n_iter", low=0)
+        check_int(self.n_direct, "ELSResult: n_direct", low=0)
+        if len(self.history) != self.n_iter:
+            raise ValueError(f"ELSResult: history holds one residual change per iteration, {self.n_iter} (n_iter); got "
+                             f"{len(self.history)}")
+        h = np.asarray(self.history, dtype=float)
+        if np.any(np.isnan(h)) or np.any(h < 0):
+            raise ValueError("ELSResult: history holds relative residual changes, never negative or NaN; got "
+                             f"{short_value(self.history)}")
+        if self.theta_ls.shape != (len(self.model.structure),):
+            raise ValueError(f"ELSResult: theta_ls holds one least-squares parameter per process term "
+                             f"({len(self.model.structure)}); got shape {self.theta_ls.shape}")
+        if not self.residuals:
+            raise ValueError("ELSResult: residuals holds the residuals of each record fitted, at least one")
 
     def __repr__(self) -> str:
         return (f"ELSResult(model={self.model.name!r}, n_params={self.model.n_params}, n_iter={self.n_iter}, "
