@@ -69,3 +69,19 @@ def test_an_els_result_that_no_iteration_gives_is_refused_naming_the_field(field
     path = tmp_path / "els.json"
     gb.save(res, path)
     assert gb.load(path).n_iter == res.n_iter  # the result itself still round-trips
+
+
+@pytest.mark.parametrize("band", ["1", True, b"1", {"B": 1.0}])
+def test_se_dsf_refuses_a_band_that_is_no_number_without_offering_a_pair(band):
+    # se_dsf's band is one number B (a pair is refused: "se_dsf: band must be a number B > 0"); a string, a flag or
+    # a mapping was refused by the shared band check, whose message offered "or a pair (low, high)"
+    rng = np.random.default_rng(1)
+    u = rng.uniform(0.0, 1.0, 100)
+    rec = gb.Record(u=u, y=np.convolve(u, [0.0, 0.5])[:100])
+    sp = gb.StaticPoints(ubar=[0.0, 1.0], ybar=[0.0, 0.5])
+    with pytest.raises(TypeError, match="band must be a number B > 0") as exc:
+        gb.se_dsf(["y(k-1)", "u(k-1)"], rec, sp, band=band, theta0=[0.0, 0.5], max_iter=2)
+    assert "pair" not in str(exc.value)
+    with pytest.raises(TypeError, match="band must be a number B > 0") as exc:
+        gb.se_dsf(["y(k-1)", "u(k-1)"], rec, sp, band=(0.0, 1e-3), theta0=[0.0, 0.5], max_iter=2)
+    assert "pair" not in str(exc.value)

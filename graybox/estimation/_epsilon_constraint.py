@@ -49,8 +49,8 @@ from ._simulation_error import (SEProblem, _Failed, _multistart, _pe_members, _p
 from ..core._terms import Structure
 from ..static._curves import StaticCurve
 from ..static._surfaces import StaticSurface
-from ..core._validation import (check_fields, check_int, check_lambdas, check_margin_value, check_mean_square,
-                                check_real, check_theta, warn)
+from ..core._validation import (_is_number, check_fields, check_int, check_lambdas, check_margin_value,
+                                check_mean_square, check_real, check_theta, warn)
 
 __all__ = ["se_dsf", "DSFResult"]
 
@@ -476,7 +476,7 @@ def se_dsf(
     if band is None and isinstance(static, (StaticCurve, StaticSurface)):
         raise ValueError(f"se_dsf: a {type(static).__name__} carries no uncertainty to take the band from: give band=B "
                          "(output units², the bound on J_SF)")
-    if band is not None and np.ndim(band) != 0:
+    if band is not None and not _is_number(band):  # a pair too: se_dsf takes one bound (check_band offers pairs)
         raise TypeError(f"se_dsf: band must be a number B > 0 (the bound on J_SF, output units²), got {band!r}")
     band = resolve_band(band, sp, "se_dsf")[1]
     max_iter = check_int(max_iter, "max_iter", low=1)
