@@ -85,3 +85,33 @@ def test_se_dsf_refuses_a_band_that_is_no_number_without_offering_a_pair(band):
     with pytest.raises(TypeError, match="band must be a number B > 0") as exc:
         gb.se_dsf(["y(k-1)", "u(k-1)"], rec, sp, band=(0.0, 1e-3), theta0=[0.0, 0.5], max_iter=2)
     assert "pair" not in str(exc.value)
+
+
+def _neural_fit() -> gb.NeuralFit:
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-1.0, 1.0, 120)
+    y = np.zeros(120)
+    for k in range(1, 120):
+        y[k] = 0.6 * y[k - 1] + 0.5 * np.tanh(u[k - 1]) + 0.05 * rng.standard_normal()
+    return gb.neural_narx(gb.Record(u=u, y=y), ny=1, nu=1, ne=1, hidden=2, epochs=3, sim_epochs=3, holdout=0.2,
+                          seed=0)
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(epochs=1), "epochs"),  # fewer trial steps than the accepted ones the costs record
+    (dict(simulation_cost=()), "holdout_cost"),  # the held-out costs of a stage 2 that is not there
+    (dict(holdout_cost=(1.0,)), "holdout_cost"),  # one held-out cost for a stage of several accepted steps
+])
+def test_a_neural_fit_whose_counts_disagree_is_refused(change, words):
+    # NeuralFit checked each field alone: a file saying 1 epoch beside 3 accepted steps in each stage, or held-out
+    # costs of a last stage with another number of steps than its costs, loaded silently
+    fit = _neural_fit()
+    assert len(fit.holdout_cost) == len(fit.simulation_cost) > 1
+    assert fit.epochs >= len(fit.prediction_cost) - 1 + len(fit.simulation_cost) - 1
+    fields = {f: getattr(fit, f) for f in ("model", "prediction_cost", "simulation_cost", "holdout_cost", "best_step",
+                                           "epochs", "stopped", "rmse_train", "rmse_sim", "seconds")}
+    fields.update(change)
+    if "holdout_cost" in change:
+        fields["best_step"] = 0
+    with pytest.raises(ValueError, match=words):
+        gb.NeuralFit(**fields)

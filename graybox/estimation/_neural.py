@@ -852,6 +852,15 @@ class NeuralFit:
             if np.any(np.isnan(v)) or np.any(v < 0):  # inf: a figure beyond the float range in huge output units
                 raise ValueError(f"NeuralFit: {name} holds sums or means of squares, never negative or NaN; got "
                                  f"{short_value(getattr(self, name))}")
+        accepted = len(self.prediction_cost) - 1 + max(len(self.simulation_cost) - 1, 0)
+        if self.epochs < accepted:  # each accepted step is a trial step
+            raise ValueError(f"NeuralFit: epochs counts the trial steps of every stage, at least the {accepted} "
+                             f"accepted ones its costs record; got {self.epochs}")
+        last = self.simulation_cost or self.prediction_cost  # the stage the held-out costs were taken along
+        if self.holdout_cost and len(self.holdout_cost) != len(last):
+            raise ValueError(f"NeuralFit: holdout_cost holds one held-out cost per cost of the last stage "
+                             f"({len(last)}, {'simulation' if self.simulation_cost else 'prediction'}_cost); got "
+                             f"{len(self.holdout_cost)}")
         if self.holdout_cost:
             if self.best_step is None or not 0 <= self.best_step < len(self.holdout_cost):
                 raise ValueError(f"NeuralFit: best_step indexes holdout_cost ({len(self.holdout_cost)} values); got "
