@@ -230,7 +230,7 @@ def _no_convergence_message(max_iter: int, last: float, tol: float, beta: float,
     if direct_failure:
         msg += f"Solving the fixed-point equations directly failed: {direct_failure}. "
     if len(C) == 1:
-        return msg + "Its noise terms are not plain lags e(k-l), so no cause is diagnosed."
+        return msg + "Its noise terms are not all plain lags e(k-l), so no cause is diagnosed."
     why = f"The MA part C(q) = {_ma_text(C)} "
     if b <= 0:
         why += ("is not positive real (Re 1/C(e^jw) <= 0 at some frequency): no relaxation makes the "
@@ -517,8 +517,10 @@ def _warn_not_converged(max_iter: int, hist: list[float], tol: float, relaxation
                         lags: list, fallback: _DirectSolve | None) -> None:
     """The ELSConvergenceWarning saying why, attributed to the caller of :func:`els`."""
     why = fallback.why() if fallback is not None else ""
-    warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, _ma_coefficients(c, lags), why),
-         ELSConvergenceWarning)
+    # the contraction is diagnosed for an MA part of plain lags only: beside other noise terms, C(q) of its lags
+    # would be part of the noise model, named as the whole
+    C = _ma_coefficients(c, lags) if all(l is not None for l in lags) else np.ones(1)
+    warn(_no_convergence_message(max_iter, hist[-1], tol, relaxation, C, why), ELSConvergenceWarning)
 
 
 #: What identifies terms the records leave free, for an estimator that takes no static points.
