@@ -133,3 +133,25 @@ def test_els_warning_diagnoses_no_linear_ma_part_that_is_only_part_of_the_noise_
     msg = str(caught[0].message)
     assert "C(q)" not in msg, msg
     assert "no cause is diagnosed" in msg
+
+
+def test_a_network_whose_output_lags_cancel_in_the_static_equation_still_has_its_stability_tested():
+    # y(k) = tanh(3 y(k-1) - 3 y(k-2) + u(k-1)): the static equation does not depend on ȳ (the lags' weights sum to
+    # 0), so ȳ = 0 at ū = 0 is the one equilibrium, but its local model y(k) = 3 y(k-1) - 3 y(k-2) has roots of
+    # modulus √3. equilibria() said stable=True, spectral_radius=0.0 without looking, and static_curve returned 0
+    # where a free run from next to it swings between ±0.995 for ever (static_curve from y0 said NaN)
+    net = gb.NeuralModel(np.array([[3.0, -3.0, 1.0]]), np.array([0.0]), np.array([1.0]), 0.0, 2, 1, 0)
+    (eq,) = net.equilibria(0.0)
+    assert eq.ybar == 0.0
+    assert not eq.stable
+    assert eq.spectral_radius == pytest.approx(np.sqrt(3.0))
+    with pytest.raises(ValueError, match="ū = 0"):
+        net.static_curve([0.0])
+    assert np.isnan(net.static_curve([0.0], strict=False)[0])
+    run = net.simulate(np.zeros(200), y0=[0.01, 0.0])
+    assert np.max(np.abs(run[-20:])) > 0.9  # the free run does not settle on it
+    # a stable one of the same kind: y(k) = 0.9 tanh(0.3 y(k-1) - 0.3 y(k-2) + u(k-1))
+    calm = gb.NeuralModel(np.array([[0.3, -0.3, 1.0]]), np.array([0.0]), np.array([0.9]), 0.0, 2, 1, 0)
+    (eq,) = calm.equilibria(0.5)
+    assert eq.stable and 0.0 < eq.spectral_radius < 1.0
+    assert calm.static_curve([0.5])[0] == pytest.approx(0.9 * np.tanh(0.5))

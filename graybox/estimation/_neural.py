@@ -655,25 +655,27 @@ class NeuralModel:
     def _equilibria_n(self, un: float) -> list[tuple[float, bool, float]]:
         """All real equilibria (ȳ_n, stable, spectral radius) at normalised input ``un``, sorted."""
         a, c = self._static_parts(un)
-        if self.ny == 0 or not np.any(a):
-            yb = float(np.tanh(c) @ self.w2 + self.b2)
-            return [(yb, True, 0.0)]
+        if self.ny == 0:
+            return [(float(np.tanh(c) @ self.w2 + self.b2), True, 0.0)]
 
         def F(y: np.ndarray | float) -> np.ndarray | float:
             return np.tanh(np.multiply.outer(y, a) + c) @ self.w2 + self.b2 - y
 
-        # every root lies where |ȳ_n - b2| <= Σ|w2| (bounded tanh units); the margin keeps the
-        # end points strictly on the right sides
-        r = float(np.abs(self.w2).sum())
-        lo, hi = self.b2 - r - 1e-6 * (1 + r), self.b2 + r + 1e-6 * (1 + r)
-        n = int(np.clip((hi - lo) / 2e-3, 2001, 200001))
-        grid = np.linspace(lo, hi, n)
-        f = F(grid)
-        roots: list[float] = [float(v) for v in grid[f == 0.0]]
-        idx = np.flatnonzero((f[:-1] * f[1:]) < 0)
-        for i in idx:
-            roots.append(float(brentq(F, grid[i], grid[i + 1], xtol=1e-13, rtol=1e-13, maxiter=200)))
-        roots.sort()
+        if not np.any(a):  # ȳ cancels from the static equation (the lags' weights sum to 0): one root, whose local
+            roots = [float(np.tanh(c) @ self.w2 + self.b2)]  # model may still be unstable (its a_i need not be 0)
+        else:
+            # every root lies where |ȳ_n - b2| <= Σ|w2| (bounded tanh units); the margin keeps the
+            # end points strictly on the right sides
+            r = float(np.abs(self.w2).sum())
+            lo, hi = self.b2 - r - 1e-6 * (1 + r), self.b2 + r + 1e-6 * (1 + r)
+            n = int(np.clip((hi - lo) / 2e-3, 2001, 200001))
+            grid = np.linspace(lo, hi, n)
+            f = F(grid)
+            roots = [float(v) for v in grid[f == 0.0]]
+            idx = np.flatnonzero((f[:-1] * f[1:]) < 0)
+            for i in idx:
+                roots.append(float(brentq(F, grid[i], grid[i + 1], xtol=1e-13, rtol=1e-13, maxiter=200)))
+            roots.sort()
         lin = np.array([self._linearisation_n(yb, un) for yb in roots]).reshape(len(roots), self.ny)
         stable = schur_stable(lin)  # the package's one stability test
         return [(yb, bool(s), spectral_radius(ai)) for yb, s, ai in zip(roots, stable, lin)]
