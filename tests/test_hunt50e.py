@@ -155,3 +155,11 @@ def test_a_network_whose_output_lags_cancel_in_the_static_equation_still_has_its
     (eq,) = calm.equilibria(0.5)
     assert eq.stable and 0.0 < eq.spectral_radius < 1.0
     assert calm.static_curve([0.5])[0] == pytest.approx(0.9 * np.tanh(0.5))
+
+
+def test_a_network_without_output_lags_does_not_print_one():
+    # str() of a network with ny = 0 listed 'y(k-1..0)' among its inputs: it has no output input at all
+    net = gb.NeuralModel(np.ones((2, 3)), np.ones(2), np.ones(2), 0.0, 0, 2, 1)
+    text = str(net)
+    assert "y(k-1" not in text and "u(k-1..2), e(k-1..1)]" in text
+    assert "[y(k-1..2), u(k-1..1)]" in str(gb.NeuralModel(np.ones((2, 3)), np.ones(2), np.ones(2), 0.0, 2, 1, 0))

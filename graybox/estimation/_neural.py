@@ -773,8 +773,9 @@ class NeuralModel:
     def __str__(self) -> str:
         head = f"{self.name}: " if self.name else ""
         kind = "NARMAX" if self.ne else "NARX"
-        return (f"{head}neural {kind} MLP, y(k) = w2ᵀ tanh(W1 [y(k-1..{self.ny}), u(k-1..{self.nu})"
-                + (f", e(k-1..{self.ne})" if self.ne else "") + f"] + b1) + b2, "
+        inputs = ([f"y(k-1..{self.ny})"] if self.ny else []) + [f"u(k-1..{self.nu})"] + (
+            [f"e(k-1..{self.ne})"] if self.ne else [])  # no y(k-1..0) for a network without output lags
+        return (f"{head}neural {kind} MLP, y(k) = w2ᵀ tanh(W1 [{', '.join(inputs)}] + b1) + b2, "
                 f"{self.hidden} tanh hidden nodes, 1 linear output; N_p = {self.n_params}"
                 + (f" (+{self.hidden * self.ne} residual-input weights used in training only)" if self.ne else "")
                 + f"; normalisation u: ({self.u_offset:.6g}, {self.u_scale:.6g}), y: ({self.y_offset:.6g}, {self.y_scale:.6g})")
