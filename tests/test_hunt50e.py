@@ -163,3 +163,13 @@ def test_a_network_without_output_lags_does_not_print_one():
     text = str(net)
     assert "y(k-1" not in text and "u(k-1..2), e(k-1..1)]" in text
     assert "[y(k-1..2), u(k-1..1)]" in str(gb.NeuralModel(np.ones((2, 3)), np.ones(2), np.ones(2), 0.0, 2, 1, 0))
+
+
+def test_the_els_result_says_when_an_ma_part_gets_no_iteration():
+    # noise-free data: ELS returns its MA part zero after 0 iterations; ELSResult said n_iter is 0 "when there is no
+    # MA part" only
+    u, y = _exact()
+    res = gb.els(EXACT, gb.Record(u=u, y=y), noise=2)
+    assert len(res.model.noise_structure) == 2 and res.n_iter == 0 and np.all(res.model.noise_theta == 0.0)
+    doc = " ".join(gb.ELSResult.__doc__.split())
+    assert "0 when there is no MA part, or when least squares fits the data to round-off" in doc

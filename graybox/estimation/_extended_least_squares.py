@@ -114,7 +114,8 @@ class ELSResult:
         Process parameters (engineering units) with the MA part in ``noise_structure`` /
         ``noise_theta`` (used for estimation only, never in simulation).
     n_iter : int
-        Iterations with noise regressors (0 when there is no MA part).
+        Iterations with noise regressors (0 when there is no MA part, or when least squares fits the data to
+        round-off: the MA part is then zero).
     converged : bool
         Whether the stopping rule was met (see the module docstring).
     history : tuple of float
