@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 import graybox as gb
 
@@ -173,3 +175,20 @@ def test_the_els_result_says_when_an_ma_part_gets_no_iteration():
     assert len(res.model.noise_structure) == 2 and res.n_iter == 0 and np.all(res.model.noise_theta == 0.0)
     doc = " ".join(gb.ELSResult.__doc__.split())
     assert "0 when there is no MA part, or when least squares fits the data to round-off" in doc
+
+
+@settings(max_examples=40, deadline=None)
+@given(w=st.lists(st.floats(-4.0, 4.0), min_size=2, max_size=2), wu=st.floats(-2.0, 2.0),
+       b1=st.floats(-1.0, 1.0), w2=st.floats(-2.0, 2.0), ubar=st.floats(-1.0, 1.0))
+def test_a_networks_equilibrium_is_stable_exactly_when_its_local_model_is(w, wu, b1, w2, ubar):
+    # y(k) = w2 tanh(w1 y(k-1) + w2' y(k-2) - (w1 + w2') y(k-3) + wu u(k-1) + b1): the output lags cancel in the static
+    # equation, so its one equilibrium ȳ = w2 tanh(wu ū + b1); stable must be what the local model's roots say
+    w1, w2p = w
+    net = gb.NeuralModel(np.array([[w1, w2p, -(w1 + w2p), wu]]), np.array([b1]), np.array([w2]), 0.0, 3, 1, 0)
+    (eq,) = net.equilibria(ubar)
+    d = w2 * (1.0 - np.tanh(wu * ubar + b1) ** 2)
+    rho = float(np.max(np.abs(np.roots([1.0, -d * w1, -d * w2p, d * (w1 + w2p)]))))
+    assume(abs(rho - 1.0) > 1e-6)  # on the unit circle either answer is round-off
+    assert eq.ybar == pytest.approx(w2 * np.tanh(wu * ubar + b1), abs=1e-12)
+    assert eq.spectral_radius == pytest.approx(rho, rel=1e-6, abs=1e-12)
+    assert eq.stable == (rho < 1.0)
