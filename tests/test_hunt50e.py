@@ -192,3 +192,30 @@ def test_a_networks_equilibrium_is_stable_exactly_when_its_local_model_is(w, wu,
     assert eq.ybar == pytest.approx(w2 * np.tanh(wu * ubar + b1), abs=1e-12)
     assert eq.spectral_radius == pytest.approx(rho, rel=1e-6, abs=1e-12)
     assert eq.stable == (rho < 1.0)
+
+
+def _dsf_problem() -> tuple[gb.Record, gb.StaticPoints]:
+    rng = np.random.default_rng(1)
+    n = 300
+    u, e = rng.uniform(0.0, 1.0, n), 0.05 * rng.standard_normal(n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.4 * u[k - 1] ** 2 + e[k]
+    ub = np.linspace(0.0, 1.0, 5)
+    return gb.Record(u=u, y=y), gb.StaticPoints(ubar=ub, ybar=(0.3 * ub + 0.4 * ub**2) / 0.5 + 0.05)
+
+
+@pytest.mark.parametrize("max_iter", [8, 12, 30])
+def test_se_dsf_says_why_a_run_that_restored_the_band_stopped(max_iter):
+    # a start outside the band whose restoration steps each gained less than tol and whose third step reached the
+    # band: the message was set to "converged: relative decrease of J_SF below tol for 3 steps" there, the run went
+    # on inside the band (J_SF's stall count carried into J_S's) and when it then ran out of iterations the result
+    # still said it had converged on J_SF
+    rec, sp = _dsf_problem()
+    theta0 = [-0.27626025566875984, 0.4647363303387978, 0.10988302778344453, 0.44068965382325526]
+    res = gb.se_dsf(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"], rec, sp, band=1.2795016088905733e-05, theta0=theta0,
+                    max_iter=max_iter, tol=0.6552732859872454, margin=None)
+    assert res.start_JSF > res.band and res.in_band
+    assert "J_SF" not in res.message, res.message
+    if res.n_iter == max_iter:
+        assert res.message == f"{max_iter} iterations reached"

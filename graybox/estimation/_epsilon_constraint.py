@@ -377,14 +377,17 @@ def _edge(gn: _GN, th0: np.ndarray, band: float, max_iter: int, tol: float):
                 nu = max(nu / 3.0, 1e-12)
                 margin = max(margin / 1.5, _MARGIN_FLOOR)
                 stall = stall + 1 if gain < tol else 0
+                if not feasible and g <= band:
+                    # restoration reached the band: J_S's stall count starts now (J_SF's small gains said nothing of
+                    # it, and its "converged" was said of a run that went on, even when it then ran out of steps)
+                    stall = 0
                 if stall >= 3 and feasible and margin > _MARGIN_FLOOR:
                     # small steps while the aim is still well inside the band: aim at its edge first
                     margin, stall = _MARGIN_FLOOR, 0
-                if stall >= 3:
+                if stall >= 3:  # J_S stalls in the band, or J_SF outside it
                     message = (f"converged: relative decrease of {'J_S' if feasible else 'J_SF'} below {tol:g} "
                                "for 3 steps")
-                    if feasible or g > band:
-                        break
+                    break
             elif feasible and np.isfinite(f_new) and lower and np.isfinite(g_new) and margin < _MARGIN_CAP:
                 margin = min(2.0 * margin, _MARGIN_CAP)  # the model was right about J_S: only the band was missed
             else:
