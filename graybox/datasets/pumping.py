@@ -398,6 +398,8 @@ class PumpingPlant:
             if v.shape != (n,) or not np.all(np.isfinite(v)):
                 raise ValueError(f"PumpingPlant: {name} must be {n} finite numbers, got {getattr(self, name)!r}")
             object.__setattr__(self, name, tuple(float(x) for x in v))
+        # a number (text failed in the division below, naming nothing; True was a 1 s dead time, refused as a value)
+        check_real(self.dead_time, "PumpingPlant: dead_time (s)", low=0)
         dt = self.Ts / self.substeps
         m = self.dead_time / dt
         if not (0 <= self.dead_time < self.Ts and abs(m - round(m)) < 1e-9):
@@ -408,9 +410,9 @@ class PumpingPlant:
         for name in ("noise_std", "process_noise_std", "surge_intensity", "air_loss_per_rpm"):
             check_real(getattr(self, name), f"PumpingPlant: {name}", low=0)
         for name in ("surge_time", "air_vent_time"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"PumpingPlant: {name} must be a positive finite number, got {v!r}")
+            # as the positive constants above: True was a decay of 1 s, numpy's float32 was refused, text a ValueError
+            check_real(getattr(self, name), f"PumpingPlant: {name} (a positive finite number of s)", low=0,
+                       low_open=True)
         for name in ("ramp_up", "ramp_down"):
             v = getattr(self, name)
             # a number (numpy's too), not a bool (True was a ramp of 1 rpm/s)
