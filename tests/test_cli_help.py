@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import io
+import json
 
+import numpy as np
 import pytest
 
 from graybox._cli import main
+from graybox.core._version import graybox_version
 
 
 def _help(capsys, *argv: str) -> str:
@@ -41,8 +44,8 @@ def test_reproduce_names_the_checkpoints_it_resumes_and_fresh_deletes_them(tmp_p
     monkeypatch.setattr(rp, "SECTIONS", ())  # the sections themselves are tested elsewhere
     kept = checkpoint_paths(tmp_path, quick=True)[:2]
     other_mode = checkpoint_paths(tmp_path, quick=False)[0]
-    for p in (*kept, other_mode):
-        p.write_bytes(b"checkpoint")
+    for p in (*kept, other_mode):  # as little as a checkpoint holds: the version that wrote it
+        np.savez(p, meta=json.dumps({"graybox": graybox_version()}))
     out = io.StringIO()
     rp.run(quick=True, out=tmp_path, stream=out, fresh=fresh)
     text = out.getvalue()

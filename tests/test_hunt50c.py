@@ -23,3 +23,27 @@ def test_pumping_plant_takes_numpy_times():
     plant = PumpingPlant(surge_time=np.float32(6.0), air_vent_time=np.float32(30.0), dead_time=np.float64(0.02))
     u = np.r_[np.full(40, 1000.0), np.full(40, 1300.0)]
     assert plant.simulate(u, seed=3).y == pytest.approx(PumpingPlant().simulate(u, seed=3).y, rel=1e-6)
+
+
+def test_reproduce_refuses_an_unreadable_checkpoint_before_any_section(tmp_path, monkeypatch):
+    # a checkpoint no graybox wrote (a torn copy, another file under its name) was announced as "resuming from 1
+    # checkpoint(s)", and three sections ran and drew their figures before Table I's sweep refused it
+    import io
+
+    import graybox.reproduce as rp
+    from graybox.estimation._simulation_error import CheckpointError
+    from graybox.reproduce._table1 import checkpoint_paths
+
+    ran = []
+    monkeypatch.setattr(rp, "SECTIONS", (lambda quick, out: ran.append(1) or "a section",))
+    bad = checkpoint_paths(tmp_path, quick=True)[1]
+    bad.write_bytes(b"no checkpoint")
+    out = io.StringIO()
+    with pytest.raises(CheckpointError, match=f"{bad.name}.*not a readable SE checkpoint.*no .npz archive"):
+        rp.run(quick=True, out=tmp_path, stream=out)
+    np.savez(bad, kind="select_graybox")  # another function's archive under the name
+    with pytest.raises(CheckpointError, match="not a readable SE checkpoint.*no SE sweep's metadata"):
+        rp.run(quick=True, out=tmp_path, stream=out)
+    assert not ran and "resuming" not in out.getvalue()
+    rp.run(quick=True, out=tmp_path, stream=out, fresh=True)  # --fresh deletes it and runs
+    assert ran and not bad.exists()

@@ -40,6 +40,18 @@ def _writable_folder(out: Path) -> None:
         raise type(exc)(f"cannot write in the folder {out}: {exc.strerror or exc}") from None
 
 
+def _unreadable_because(path: Path) -> str:
+    """Why a file under a checkpoint's name is no checkpoint: what reading it raised (its mode, a torn or foreign
+    file), or that it holds no sweep's metadata (another function's archive)."""
+    from ..estimation._simulation_error import NPZ_ERRORS, read_npz
+
+    try:
+        read_npz(path)
+    except NPZ_ERRORS as exc:
+        return str(exc)
+    return "it holds no SE sweep's metadata"
+
+
 def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = None, fresh: bool = False) -> None:
     """Run every section in order, printing each as it finishes.
 
@@ -61,7 +73,7 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
     """
     from ..core._validation import check_bool
     from ..core._version import graybox_version
-    from ..estimation._simulation_error import checkpoint_version
+    from ..estimation._simulation_error import CheckpointError, checkpoint_version
     from ._table1 import checkpoint_paths
 
     # flags checked first: "no" is truthy, and fresh deletes checkpoints of hours of sweeps
@@ -84,6 +96,10 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
         elif found:
             this = graybox_version()
             versions = {c: checkpoint_version(c) for c in found}
+            unreadable = [c for c, v in versions.items() if v is None]
+            if unreadable:  # said now: Table I's sweep refuses it, after the other sections have run and drawn
+                raise CheckpointError(f"checkpoint {unreadable[0]} is not a readable SE checkpoint "
+                                      f"({_unreadable_because(unreadable[0])}); delete it or choose another out folder")
             stale = {c: v for c, v in versions.items() if v is not None and v != this}
             if len(stale) < len(found):
                 print(f"resuming from {len(found) - len(stale)} checkpoint(s) in {out}: "
