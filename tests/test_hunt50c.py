@@ -47,3 +47,23 @@ def test_reproduce_refuses_an_unreadable_checkpoint_before_any_section(tmp_path,
     assert not ran and "resuming" not in out.getvalue()
     rp.run(quick=True, out=tmp_path, stream=out, fresh=True)  # --fresh deletes it and runs
     assert ran and not bad.exists()
+
+
+def test_speed_reference_steps_and_holds_are_as_documented_but_at_the_forced_ends():
+    # the docstring promised steps of 40-900 rpm every 4-9 s; the holds forced to the ends of the range break both
+    # (1 part in 8 over seeds 0-199: steps of 10 rpm, or a level repeated into a hold of 15.8 s), which it now says
+    from graybox.datasets import pumping
+
+    assert "whatever step" in pumping.speed_reference.__doc__
+    low, high = 750.0, 1650.0
+    for seed in range(40):
+        u = pumping.speed_reference(seed=seed)
+        for part in (u[:pumping.N_IDENT], u[pumping.N_IDENT:]):
+            starts = np.r_[0, np.flatnonzero(np.diff(part)) + 1]
+            levels, lengths = part[starts], np.diff(np.r_[starts, part.size])
+            near_end = (levels <= low + 30) | (levels >= high - 30)
+            steps = np.abs(np.diff(levels))
+            assert np.all((steps >= 40) | near_end[:-1] | near_end[1:])
+            assert np.all((lengths[:-1] <= 180) | near_end[:-1])  # the last hold is cut where the part ends
+            assert np.all(lengths[:-1] >= 80) and np.all(levels % 10 == 0)
+            assert levels.min() <= low + 30 and levels.max() >= high - 30
