@@ -67,3 +67,32 @@ def test_speed_reference_steps_and_holds_are_as_documented_but_at_the_forced_end
             assert np.all((lengths[:-1] <= 180) | near_end[:-1])  # the last hold is cut where the part ends
             assert np.all(lengths[:-1] >= 80) and np.all(levels % 10 == 0)
             assert levels.min() <= low + 30 and levels.max() >= high - 30
+
+
+@pytest.mark.parametrize("section", ["section_table1", "section_neural"])
+def test_reproduce_sections_check_quick_and_out_before_any_work(section, monkeypatch):
+    # quick="no" is truthy: section_table1 ran the full sweeps (100 λ1 values, hours); out=5 failed inside pathlib
+    # ("argument should be a str or an os.PathLike object ..., not 'int'") after the data were loaded and fitted
+    import graybox.reproduce as rp
+    from graybox.reproduce import _neural, _table1
+
+    def no_data():
+        raise AssertionError("the section started its work")
+
+    for mod in (_neural, _table1):
+        monkeypatch.setattr(mod, "load_pumping", no_data)
+    with pytest.raises(TypeError, match="quick must be True or False"):
+        getattr(rp, section)(quick="no")
+    with pytest.raises(TypeError, match="out must be a file or folder name"):
+        getattr(rp, section)(quick=True, out=5)
+    if section == "section_table1":  # threads was checked by the first SE sweep, after ELS, CLS and PE
+        with pytest.raises(ValueError, match="threads must be an integer >= 1"):
+            rp.section_table1(quick=True, threads=0)
+
+
+def test_reproduce_run_names_an_out_that_is_no_folder_name(monkeypatch):
+    import graybox.reproduce as rp
+
+    monkeypatch.setattr(rp, "SECTIONS", ())
+    with pytest.raises(TypeError, match="out must be a file or folder name"):
+        rp.run(out=5)

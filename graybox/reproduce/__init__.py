@@ -71,7 +71,7 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
     fresh : bool
         Delete this mode's checkpoints under ``out`` first, so every sweep starts over.
     """
-    from ..core._validation import check_bool
+    from ..core._validation import check_bool, check_path
     from ..core._version import graybox_version
     from ..estimation._simulation_error import CheckpointError, checkpoint_version
     from ._table1 import checkpoint_paths
@@ -85,7 +85,7 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
                         f"{stream!r} ({type(stream).__name__})")
 
     if out is not None:
-        _writable_folder(Path(out))
+        _writable_folder(Path(check_path(out, "out")))
         found = [c for c in checkpoint_paths(out, quick) if c.exists()]
         if fresh:
             for c in found:

@@ -9,6 +9,7 @@ import pandas as pd
 from ..models._evaluate import evaluate
 from ..estimation._neural import DEFAULT_EPOCHS, DEFAULT_SIM_EPOCHS, DEFAULT_WEIGHT_DECAY, PAPER_EPOCHS, neural_narx
 from ..core._records import Dataset
+from ..core._validation import check_bool, check_path
 from ..datasets import load_pumping
 from ..plots import plot_free_run
 from ..reference import TABLE_I
@@ -34,6 +35,9 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
     the five initialisations. With ``out`` the default network's validation free run is drawn
     to ``out/neural_free_run.png``.
     """
+    quick = check_bool(quick, "quick")  # "no" is truthy: five seeds
+    if out is not None:
+        check_path(out, "out")  # before the training, not at the figure after it
     if data is None:
         data = load_pumping()
     seeds = (0,) if quick else (0, 1, 2, 3, 4)

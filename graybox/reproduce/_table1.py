@@ -13,6 +13,7 @@ from ..static._curves import StaticCurve
 from ..estimation._decisions import decide_dsf
 from ..models._evaluate import evaluate
 from ..estimation._simulation_error import GAOptions, se_pareto
+from ..core._validation import check_bool, check_int, check_path
 from ..datasets import load_pumping
 from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
 from ..reference import TABLE_I
@@ -92,6 +93,11 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
     ELS's inside the band (BENCHMARKS.md, "SE D_SF against ELS" and "Table I over many draws of the
     stand-in", which measure what blocks it).
     """
+    # checked before the work: "no" is truthy (the full sweeps, hours), and an out of another type failed late
+    quick = check_bool(quick, "quick")
+    threads = check_int(threads, "threads", low=1)
+    if out is not None:
+        check_path(out, "out")
     data = load_pumping()
     curve = StaticCurve.fit(data.static, 2, name="eq. (1) form fitted to the static points")
     n_lam = 10 if quick else 100
