@@ -96,3 +96,15 @@ def test_reproduce_run_names_an_out_that_is_no_folder_name(monkeypatch):
     monkeypatch.setattr(rp, "SECTIONS", ())
     with pytest.raises(TypeError, match="out must be a file or folder name"):
         rp.run(out=5)
+
+
+@pytest.mark.parametrize("section", ["section_black_box", "section_neural"])
+@pytest.mark.parametrize("data", ["record", "pumping"])
+def test_reproduce_sections_name_data_that_is_no_dataset(section, data):
+    # a Record (or a name) failed with a bare AttributeError: "'Record' object has no attribute 'ident'"
+    import graybox as gb
+    import graybox.reproduce as rp
+
+    bad = gb.Record(np.arange(50.0) % 7, np.arange(50.0) % 5, Ts=1.0) if data == "record" else data
+    with pytest.raises(TypeError, match="data must be a Dataset"):
+        getattr(rp, section)(data=bad)

@@ -54,6 +54,8 @@ def section_black_box(quick: bool = True, out: Path | None = None, data: Dataset
     """
     if data is None:
         data = load_pumping()
+    elif not isinstance(data, Dataset):  # a Record failed on its missing .ident, a bare AttributeError
+        raise TypeError(f"data must be a Dataset (ident and valid records, static points), got {type(data).__name__}")
     models = black_box_models(data.ident)
     table = evaluate({k: m for k, (_, m) in models.items()}, data)
     lines = [

@@ -40,6 +40,8 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
         check_path(out, "out")  # before the training, not at the figure after it
     if data is None:
         data = load_pumping()
+    elif not isinstance(data, Dataset):  # a Record failed on its missing .ident, a bare AttributeError
+        raise TypeError(f"data must be a Dataset (ident and valid records, static points), got {type(data).__name__}")
     seeds = (0,) if quick else (0, 1, 2, 3, 4)
     fits = {sd: neural_narx(data.ident, seed=sd, name="Neural") for sd in seeds}
     paper = {sd: neural_narx(data.ident, seed=sd, name="Neural, paper's training", **PAPER_TRAINING).model
