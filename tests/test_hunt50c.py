@@ -108,3 +108,37 @@ def test_reproduce_sections_name_data_that_is_no_dataset(section, data):
     bad = gb.Record(np.arange(50.0) % 7, np.arange(50.0) % 5, Ts=1.0) if data == "record" else data
     with pytest.raises(TypeError, match="data must be a Dataset"):
         getattr(rp, section)(data=bad)
+
+
+@pytest.mark.parametrize("sizes,error,match", [
+    ([(2, 17), (2, 10)], ValueError, "degree 2 twice"),         # the second overwrote the first under "ELS ℓ=2"
+    ((2, 17), TypeError, r"sizes\[0\] must be a pair"),        # "cannot unpack non-iterable int object"
+    ([(2,)], ValueError, r"sizes\[0\] must be a pair"),        # "not enough values to unpack (expected 2, got 1)"
+    ({(2, 17), (3, 23)}, TypeError, "no order"),                # the models' order changed from run to run
+])
+def test_black_box_models_gives_one_model_per_size(sizes, error, match):
+    from graybox.reproduce import black_box_models
+
+    rec = _small_record()
+    with pytest.raises(error, match=match):
+        black_box_models(rec, ny=1, nu=1, ne=0, sizes=sizes)
+
+
+def test_black_box_models_keys_follow_sizes():
+    from graybox.reproduce import black_box_models
+
+    out = black_box_models(_small_record(), ny=1, nu=1, ne=0, sizes=[(2, 3), (1, 2)])
+    assert list(out) == ["ELS ℓ=2", "ELS ℓ=1"] and [len(sel.structure) for sel, _ in out.values()] == [3, 2]
+    rows = black_box_models(_small_record(), ny=1, nu=1, ne=0, sizes=np.array([[2, 3], [1, 2]]))  # rows of an array
+    assert list(rows) == list(out)
+
+
+def _small_record():
+    import graybox as gb
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 200)
+    y = np.zeros(200)
+    for k in range(1, 200):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.3 * u[k - 1] ** 2 + 0.01 * rng.standard_normal()
+    return gb.Record(u, y, Ts=1.0)

@@ -5,12 +5,15 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
+import numpy as np
+
 from ..estimation._extended_least_squares import DEFAULT_NE, els
 from ..models._evaluate import evaluate
 from ..models._model import Model
 from ..core._records import Dataset, Record
 from ..selection._forward_regression import Selection, frols
 from ..core._terms import Candidates
+from ..core._validation import check_sequence
 from ..datasets import load_pumping
 
 __all__ = ["PAPER_BLACK_BOX", "black_box_models", "section_black_box"]
@@ -37,8 +40,21 @@ def black_box_models(
     dict
         ``"ELS ℓ=2"`` → (Selection, Model), … in the order of ``sizes``.
     """
+    pairs = check_sequence(sizes, "sizes", "a sequence of (degree, n_terms) pairs, e.g. ((2, 17), (3, 23))",
+                           ordered="(degree, n_terms) pairs")
+    for i, pair in enumerate(pairs):  # unpacking said "cannot unpack non-iterable int object"
+        if isinstance(pair, (str, bytes)) or not (isinstance(pair, Sequence)
+                                                  or (isinstance(pair, np.ndarray) and pair.ndim == 1)):
+            raise TypeError(f"sizes[{i}] must be a pair (degree, n_terms), got {pair!r} ({type(pair).__name__})")
+        if len(pair) != 2:
+            raise ValueError(f"sizes[{i}] must be a pair (degree, n_terms), got {pair!r}")
+    degrees = [d for d, _ in pairs]
+    twice = next((d for d in degrees if degrees.count(d) > 1), None)
+    if twice is not None:  # the models are keyed by degree: the later one replaced the earlier, silently
+        raise ValueError(f"sizes gives degree {twice} twice; the models are named by degree (\"ELS ℓ={twice}\"): one "
+                         "n_terms per degree")
     out = {}
-    for degree, n_terms in sizes:
+    for degree, n_terms in pairs:
         cand = Candidates(ny=ny, nu=nu, ne=ne, degree=degree, max_y_power=1 if degree == 2 else None)
         sel = frols(cand, ident, n_terms=n_terms, include=["1"])
         out[f"ELS ℓ={degree}"] = (sel, els(sel, ident, name=f"ELS ℓ={degree}").model)
