@@ -142,3 +142,15 @@ def _small_record():
     for k in range(1, 200):
         y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.3 * u[k - 1] ** 2 + 0.01 * rng.standard_normal()
     return gb.Record(u, y, Ts=1.0)
+
+
+def test_static_tests_name_the_level_outside_the_calibrated_range():
+    # the levels became a run's reference first: "speed reference must stay within 500–1800 rpm …; sample 3720 is
+    # 2000 rpm", a sample of a run the caller never made, for speeds=[750, 2000]
+    from graybox.datasets import TwoSpeedPumpingPlant, static_experiment, static_grid_experiment
+
+    with pytest.raises(ValueError, match=r"speeds\[1\] is 2000 rpm, outside .*500–1800 rpm") as exc:
+        static_experiment(PumpingPlant(), speeds=[750.0, 2000.0], seed=1)
+    assert "sample" not in str(exc.value)
+    with pytest.raises(ValueError, match=r"speeds\[1\] is \[1200.0, 2000.0\] rpm, outside .*500–1800 rpm"):
+        static_grid_experiment(TwoSpeedPumpingPlant(), speeds=[[1200.0, 1200.0], [1200.0, 2000.0]], seed=1)

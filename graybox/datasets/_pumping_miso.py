@@ -69,8 +69,8 @@ import numpy as np
 
 from ..core._records import Record, StaticPoints, frame_inputs
 from ..core._validation import as_1d_finite, check_real, real_array
-from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, check_plant, initial_state, reference_lengths,
-                      regenerate_main, static_samples, static_speeds, write_csv_pair)
+from .pumping import (DEFAULT_SEED, PumpingPlant, _staircase, check_plant, check_static_levels, initial_state,
+                      reference_lengths, regenerate_main, static_samples, static_speeds, write_csv_pair)
 from ..core._reprs import short_repr
 
 #: The plant's inputs, as its records and static points name them: speed references of sets 1 and 2.
@@ -561,6 +561,7 @@ def static_grid_experiment(
     bad = np.flatnonzero(~np.all(np.isfinite(sp), axis=1))
     if bad.size:  # said of the pairs given, not of the run's samples they become
         raise ValueError(f"speeds must be finite (rpm): row {bad[0]} is {sp[bad[0]].tolist()}")
+    check_static_levels(sp, plant.rig.speed_range, "speeds")
     n_settle, n_avg = static_samples(plant.Ts, settle, average, sp.shape[0])
     u = np.repeat(sp, n_settle + n_avg, axis=0)
     run = plant.simulate(u, seed=seed)

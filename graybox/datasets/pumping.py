@@ -1009,6 +1009,7 @@ def static_experiment(
     """
     check_plant(plant)
     sp = static_speeds(speeds, "speeds")
+    check_static_levels(sp, plant.speed_range, "speeds")
     n_settle, n_avg = static_samples(plant.Ts, settle, average, sp.size)
     u = np.repeat(sp, n_settle + n_avg)
     run = plant.simulate(u, seed=seed)
@@ -1030,6 +1031,19 @@ def static_speeds(speeds: object, name: str) -> np.ndarray:
     if sp.size == 0:
         raise ValueError(f"{name}: no speed given; a static test needs at least one level (rpm)")
     return sp
+
+
+def check_static_levels(levels: np.ndarray, speed_range: tuple[float, float], name: str) -> None:
+    """``ValueError`` naming the first level (a speed, or a row of speeds) of a static test outside the rig's
+    ``speed_range``: said of the levels given, not of the run's reference they become ("sample 3720")."""
+    lo, hi = speed_range
+    out = (levels < lo) | (levels > hi)
+    bad = np.flatnonzero(out if out.ndim == 1 else out.any(axis=1))
+    if bad.size:
+        i = int(bad[0])
+        level = f"{levels[i]:g}" if levels.ndim == 1 else str(levels[i].tolist())
+        raise ValueError(f"{name}[{i}] is {level} rpm, outside the rig's calibrated range {lo:g}–{hi:g} rpm "
+                         "(speed_range)")
 
 
 def static_samples(Ts: float, settle: object, average: object, levels: int = 1) -> tuple[int, int]:
