@@ -154,3 +154,29 @@ def test_static_tests_name_the_level_outside_the_calibrated_range():
     assert "sample" not in str(exc.value)
     with pytest.raises(ValueError, match=r"speeds\[1\] is \[1200.0, 2000.0\] rpm, outside .*500–1800 rpm"):
         static_grid_experiment(TwoSpeedPumpingPlant(), speeds=[[1200.0, 1200.0], [1200.0, 2000.0]], seed=1)
+
+
+@pytest.mark.parametrize("folder", ["pumping", "pumping_miso"])
+def test_regenerating_another_seed_needs_its_own_folder(folder, capsys):
+    # `python -m graybox.datasets.pumping --seed 7` rewrote the bundled files with seed 7's draw, and load_pumping
+    # went on saying extra["seed"] = 2011 (and the docstrings' and BENCHMARKS' numbers, all of seed 2011's files)
+    from graybox.datasets.pumping import regenerate_main
+
+    calls = []
+    with pytest.raises(SystemExit) as exc:
+        regenerate_main(["--seed", "7"], module="m", folder=folder, write=lambda out, seed: calls.append(seed))
+    assert exc.value.code == 2 and not calls
+    assert "--out" in capsys.readouterr().err
+
+
+def test_regenerating_another_seed_into_a_folder_of_its_own_works(tmp_path):
+    from graybox.datasets.pumping import regenerate_main
+
+    calls = []
+
+    def write(out, seed):
+        calls.append((out, seed))
+        return out / "dynamic.csv", out / "static.csv"
+
+    assert regenerate_main(["--seed", "7", "--out", str(tmp_path)], module="m", folder="pumping", write=write) == 0
+    assert calls == [(tmp_path, 7)]

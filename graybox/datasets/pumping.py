@@ -1111,14 +1111,19 @@ def write_csv_pair(out_dir: str | Path, dynamic_columns: Sequence[str], dynamic_
 def regenerate_main(argv: list[str] | None, *, module: str, folder: str, write) -> int:
     """The command line that regenerates a bundled data set: ``python -m MODULE [--out DIR] [--seed N]``.
 
-    Without ``--out`` it writes into the source checkout's ``data/FOLDER`` (the bundled files);
-    ``write(out_dir, seed)`` writes them.
+    Without ``--out`` it writes into the source checkout's ``data/FOLDER`` (the bundled files), only those of the
+    default seed (another seed's files need ``--out``); ``write(out_dir, seed)`` writes them.
     """
     ap = argparse.ArgumentParser(prog=f"python -m {module}", description=f"Regenerate the bundled data/{folder} CSVs.")
-    ap.add_argument("--out", type=Path, default=None, help=f"output folder (default: <repo>/data/{folder})")
+    ap.add_argument("--out", type=Path, default=None,
+                    help=f"output folder (default: <repo>/data/{folder}, for the default seed only)")
     ap.add_argument("--seed", type=_seed_arg, default=DEFAULT_SEED,
                     help=f"seed, an integer >= 0 (default {DEFAULT_SEED})")
     args = ap.parse_args(argv)
+    if args.out is None and args.seed != DEFAULT_SEED:
+        # the loaders say the bundled files are seed DEFAULT_SEED's (extra["seed"]), and the docs' numbers are theirs
+        ap.error(f"the bundled files are seed {DEFAULT_SEED}'s (the loader's extra['seed'] says so, and the docs' "
+                 f"numbers are theirs): give --out DIR for seed {args.seed}'s files")
     root = Path(__file__).resolve().parents[2]
     out = args.out if args.out is not None else (root / "data" / folder if (root / "pyproject.toml").is_file() else None)
     if out is None:
