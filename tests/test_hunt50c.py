@@ -180,3 +180,20 @@ def test_regenerating_another_seed_into_a_folder_of_its_own_works(tmp_path):
 
     assert regenerate_main(["--seed", "7", "--out", str(tmp_path)], module="m", folder="pumping", write=write) == 0
     assert calls == [(tmp_path, 7)]
+
+
+def test_static_grid_experiment_reads_a_frame_of_speeds_by_its_columns():
+    # simulate and the static surface read a DataFrame's columns u1, u2 by name; the static test read them by
+    # position, so a frame with u2 first put each speed on the other pump set and labelled its points so
+    import pandas as pd
+
+    from graybox.datasets import TwoSpeedPumpingPlant, static_grid_experiment
+
+    frame = pd.DataFrame({"u2": [1650.0, 1400.0], "u1": [1150.0, 1300.0]})
+    quiet = dict(settle=1.0, average=0.5, seed=1)
+    sp = static_grid_experiment(TwoSpeedPumpingPlant(), speeds=frame, **quiet)
+    np.testing.assert_array_equal(sp.ubar, [[1150.0, 1650.0], [1300.0, 1400.0]])
+    same = static_grid_experiment(TwoSpeedPumpingPlant(), speeds=[[1150.0, 1650.0], [1300.0, 1400.0]], **quiet)
+    np.testing.assert_array_equal(sp.ybar, same.ybar)
+    with pytest.raises(ValueError, match="speeds"):
+        static_grid_experiment(TwoSpeedPumpingPlant(), speeds=frame.rename(columns={"u2": "n2"}), **quiet)

@@ -545,8 +545,9 @@ def static_grid_experiment(
 
     As :func:`graybox.datasets.pumping.static_experiment`, one continuous run visiting ``speeds``
     in order (default ``static_grid``), discarding ``settle`` seconds and averaging the next
-    ``average`` seconds of noisy measurements at each pair; ``seed`` (an int or a numpy
-    Generator) is the source of noise.
+    ``average`` seconds of noisy measurements at each pair (``speeds``: shape (K, 2), a DataFrame with
+    columns ``u1`` and ``u2`` read by name, as :meth:`TwoSpeedPumpingPlant.simulate` reads ``u``); ``seed`` (an int
+    or a numpy Generator) is the source of noise.
 
     Returns
     -------
@@ -555,7 +556,9 @@ def static_grid_experiment(
         pressure (mlc), shape (K,).
     """
     check_plant(plant, TwoSpeedPumpingPlant)
-    sp = static_grid() if speeds is None else real_array(speeds, "speeds", "speed pairs (rpm)")
+    # a DataFrame by its columns u1, u2, as simulate reads u (by position it put u2 first on pump set 1)
+    sp = static_grid() if speeds is None else real_array(frame_inputs(speeds, _INPUTS, "speeds"), "speeds",
+                                                         "speed pairs (rpm)")
     if sp.ndim != 2 or sp.shape[1] != 2 or sp.shape[0] == 0:
         raise ValueError(f"speeds must have shape (K, 2), got {sp.shape}")
     bad = np.flatnonzero(~np.all(np.isfinite(sp), axis=1))
