@@ -197,3 +197,18 @@ def test_static_grid_experiment_reads_a_frame_of_speeds_by_its_columns():
     np.testing.assert_array_equal(sp.ybar, same.ybar)
     with pytest.raises(ValueError, match="speeds"):
         static_grid_experiment(TwoSpeedPumpingPlant(), speeds=frame.rename(columns={"u2": "n2"}), **quiet)
+
+
+def test_load_record_csv_reads_ts_as_record_does(tmp_path):
+    # Ts=10**400 escaped as a bare OverflowError from math.isfinite; a 0-d array, one number to Record, was refused
+    import graybox as gb
+
+    p = tmp_path / "r.csv"
+    p.write_text("u,y\n1,2\n2,3\n3,4\n")
+    assert gb.load_record_csv(p, u="u", y="y", Ts=np.array(0.1)).Ts == gb.Record([1, 2], [1, 2], Ts=np.array(0.1)).Ts
+    with pytest.raises(ValueError, match="Ts.*beyond the float range"):
+        gb.load_record_csv(p, u="u", y="y", Ts=10**400)
+    with pytest.raises(TypeError, match="Ts must be a positive number of seconds"):
+        gb.load_record_csv(p, u="u", y="y", Ts=np.array([0.1]))
+    with pytest.raises(ValueError, match="Ts must be a positive number of seconds"):
+        gb.load_record_csv(p, u="u", y="y", Ts=0)

@@ -780,10 +780,14 @@ def load_record_csv(
         check_str(name, "name")
     if time is None and Ts is None:
         raise ValueError(f"{p}: give the time-stamp column (time=...) or the sampling period (Ts=... seconds)")
-    if Ts is not None and (isinstance(Ts, bool) or not isinstance(Ts, (int, float, np.integer, np.floating))):
-        raise TypeError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
-    if Ts is not None and not (math.isfinite(Ts) and Ts > 0):
-        raise ValueError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
+    if Ts is not None:
+        # one number as Record reads it (a 0-d array too); an int beyond the float range was a bare OverflowError
+        try:
+            Ts = check_real(Ts, f"{p}: Ts (seconds)")
+        except TypeError:
+            raise TypeError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}") from None
+        if not Ts > 0:
+            raise ValueError(f"{p}: Ts must be a positive number of seconds, got {Ts!r}")
     if time is not None and not isinstance(time, str):
         raise TypeError(f"time must name the time-stamp column (a str), got {time!r}")
     units = check_units(units, f"{p}")
