@@ -212,3 +212,13 @@ def test_load_record_csv_reads_ts_as_record_does(tmp_path):
         gb.load_record_csv(p, u="u", y="y", Ts=np.array([0.1]))
     with pytest.raises(ValueError, match="Ts must be a positive number of seconds"):
         gb.load_record_csv(p, u="u", y="y", Ts=0)
+
+
+def test_pumping_plant_ramp_beyond_the_float_range_is_a_value_error():
+    # math.isnan(10**400) raised a bare OverflowError
+    with pytest.raises(ValueError, match="ramp_up must be a positive number of rpm/s.*beyond the float range"):
+        PumpingPlant(ramp_up=10**400)
+    assert PumpingPlant(ramp_down=np.int64(150)).ramp_down == 150 and PumpingPlant(ramp_up=np.inf).ramp_up == np.inf
+    for bad in (np.nan, -1.0, 0, True, "fast"):
+        with pytest.raises(ValueError, match="ramp_up"):
+            PumpingPlant(ramp_up=bad)

@@ -416,8 +416,13 @@ class PumpingPlant:
         for name in ("ramp_up", "ramp_down"):
             v = getattr(self, name)
             # a number (numpy's too), not a bool (True was a ramp of 1 rpm/s)
-            if (not isinstance(v, (int, float, np.floating, np.integer)) or isinstance(v, (bool, np.bool_))
-                    or not (v > 0 and not math.isnan(v))):
+            ok = isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, (bool, np.bool_))
+            try:
+                ok = ok and float(v) > 0  # NaN fails, inf (no ramp) passes
+            except OverflowError:  # an int beyond the float range (10**400): math.isnan raised it, bare
+                raise ValueError(f"PumpingPlant: {name} must be a positive number of rpm/s (inf: no ramp), got an "
+                                 "integer beyond the float range") from None
+            if not ok:
                 raise ValueError(f"PumpingPlant: {name} must be a positive number of rpm/s (inf: no ramp), got {v!r}")
         check_real(self.process_noise_pole, "PumpingPlant: process_noise_pole (in [0, 1))", low=0, high=1,
                    high_open=True)
