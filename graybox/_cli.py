@@ -31,6 +31,14 @@ _spec_arg = _count_arg({"latest": "latest", "all": "all"}, "a spec number")
 _max_structures_arg = _count_arg({"all": None}, "a number of structures")
 
 
+def _folder_arg(text: str) -> Path:
+    """``--out`` of reproduce: a folder name, not empty (``Path("")`` is the current folder, which an unset shell
+    variable, ``--out "$DIR"``, named without a word)."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty folder name; give a folder (e.g. reproduce-out; '.' for this one)")
+    return Path(text)
+
+
 def _band_arg(text: str) -> tuple[str | None, float]:
     """``--band``: ``B`` (every data set) or ``NAME=B`` (that data set; a name may hold '=': the last one splits)."""
     name, eq, value = text.rpartition("=")
@@ -186,7 +194,7 @@ def _main(argv: list[str] | None) -> int:
     rp = sub.add_parser("reproduce", help="reproduce the paper's Table I and figures on the bundled plant data",
                         description=_REPRODUCE, formatter_class=argparse.RawDescriptionHelpFormatter)
     rp.add_argument("--quick", action="store_true", help="short searches (minutes, not hours)")
-    rp.add_argument("--out", type=Path, default=Path("reproduce-out"),
+    rp.add_argument("--out", type=_folder_arg, default=Path("reproduce-out"),
                     help="folder for the figures (PNG) and the checkpoints; the tables are printed (default: "
                          "reproduce-out)")
     rp.add_argument("--fresh", action="store_true",

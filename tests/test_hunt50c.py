@@ -222,3 +222,19 @@ def test_pumping_plant_ramp_beyond_the_float_range_is_a_value_error():
     for bad in (np.nan, -1.0, 0, True, "fast"):
         with pytest.raises(ValueError, match="ramp_up"):
             PumpingPlant(ramp_up=bad)
+
+
+def test_reproduce_refuses_an_empty_out_folder_name(monkeypatch, capsys, tmp_path):
+    # Path("") is the current folder: `graybox reproduce --out "$UNSET"` wrote its figures and checkpoints there
+    import graybox.reproduce as rp
+    from graybox._cli import main
+
+    monkeypatch.setattr(rp, "SECTIONS", ())
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ValueError, match="out is empty"):
+        rp.run(out="")
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce", "--quick", "--out", ""])
+    assert exc.value.code == 2 and "--out" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+    rp.run(out=".")  # the current folder, named

@@ -9,6 +9,7 @@ package; the estimators never import it.
 
 from __future__ import annotations
 
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -85,7 +86,9 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
                         f"{stream!r} ({type(stream).__name__})")
 
     if out is not None:
-        _writable_folder(Path(check_path(out, "out")))
+        if not os.fspath(check_path(out, "out")):  # Path("") is the current folder, a folder nobody named
+            raise ValueError("out is empty: give the folder's name ('.' for the current folder)")
+        _writable_folder(Path(out))
         found = [c for c in checkpoint_paths(out, quick) if c.exists()]
         if fresh:
             for c in found:
