@@ -238,3 +238,14 @@ def test_reproduce_refuses_an_empty_out_folder_name(monkeypatch, capsys, tmp_pat
     assert exc.value.code == 2 and "--out" in capsys.readouterr().err
     assert not list(tmp_path.iterdir())
     rp.run(out=".")  # the current folder, named
+
+
+def test_regenerating_into_an_empty_out_name_is_refused(monkeypatch, tmp_path, capsys):
+    # --out "" was Path("") = the current folder: the CSVs were written wherever the command ran
+    from graybox.datasets.pumping import regenerate_main
+
+    monkeypatch.chdir(tmp_path)
+    calls = []
+    with pytest.raises(SystemExit) as exc:
+        regenerate_main(["--out", ""], module="m", folder="pumping", write=lambda out, seed: calls.append(out))
+    assert exc.value.code == 2 and not calls and "--out" in capsys.readouterr().err

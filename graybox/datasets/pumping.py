@@ -1120,7 +1120,7 @@ def regenerate_main(argv: list[str] | None, *, module: str, folder: str, write) 
     default seed (another seed's files need ``--out``); ``write(out_dir, seed)`` writes them.
     """
     ap = argparse.ArgumentParser(prog=f"python -m {module}", description=f"Regenerate the bundled data/{folder} CSVs.")
-    ap.add_argument("--out", type=Path, default=None,
+    ap.add_argument("--out", type=_folder_arg, default=None,
                     help=f"output folder (default: <repo>/data/{folder}, for the default seed only)")
     ap.add_argument("--seed", type=_seed_arg, default=DEFAULT_SEED,
                     help=f"seed, an integer >= 0 (default {DEFAULT_SEED})")
@@ -1141,6 +1141,13 @@ def regenerate_main(argv: list[str] | None, *, module: str, folder: str, write) 
         return 2
     print(f"wrote {dyn} and {sta}")
     return 0
+
+
+def _folder_arg(text: str) -> Path:
+    """``--out``: a folder name, not empty (``Path("")`` is the current folder, which an unset shell variable named)."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty folder name; give a folder ('.' for this one)")
+    return Path(text)
 
 
 def _seed_arg(text: str) -> int:
