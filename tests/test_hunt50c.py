@@ -249,3 +249,13 @@ def test_regenerating_into_an_empty_out_name_is_refused(monkeypatch, tmp_path, c
     with pytest.raises(SystemExit) as exc:
         regenerate_main(["--out", ""], module="m", folder="pumping", write=lambda out, seed: calls.append(out))
     assert exc.value.code == 2 and not calls and "--out" in capsys.readouterr().err
+
+
+def test_the_papers_neural_row_is_read_only():
+    # a plain dict copy of the read-only TABLE_I: an edit changed the "paper" row section_neural prints after it
+    from graybox.reference import TABLE_I
+    from graybox.reproduce import PAPER_NEURAL_ROW
+
+    with pytest.raises(TypeError):
+        PAPER_NEURAL_ROW["JS_valid"] = 0.1  # type: ignore[index]
+    assert dict(PAPER_NEURAL_ROW) == dict(TABLE_I["Neural"])

@@ -9,18 +9,19 @@ import pandas as pd
 from ..models._evaluate import evaluate
 from ..estimation._neural import DEFAULT_EPOCHS, DEFAULT_SIM_EPOCHS, DEFAULT_WEIGHT_DECAY, PAPER_EPOCHS, neural_narx
 from ..core._records import Dataset
-from ..core._validation import check_bool, check_path
+from ..core._validation import check_bool, check_path, frozen_value
 from ..datasets import load_pumping
 from ..plots import plot_free_run
 from ..reference import TABLE_I
 
 __all__ = ["PAPER_NEURAL_ROW", "section_neural"]
 
-#: Table I, "Neural" column, as printed (MSE in mlc²).
-PAPER_NEURAL_ROW = dict(TABLE_I["Neural"])
+#: Table I, "Neural" column, as printed (MSE in mlc²); read-only, as TABLE_I (a dict copy let an edit change the
+#: "paper" row section_neural prints).
+PAPER_NEURAL_ROW = TABLE_I["Neural"]
 
 #: The paper's training: Norgaard's nnnarmax2 alone (one-step prediction error, no weight decay).
-PAPER_TRAINING = {"epochs": PAPER_EPOCHS, "sim_epochs": 0, "weight_decay": 0.0}
+PAPER_TRAINING = frozen_value({"epochs": PAPER_EPOCHS, "sim_epochs": 0, "weight_decay": 0.0}, "PAPER_TRAINING")
 
 
 def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | None = None) -> str:
