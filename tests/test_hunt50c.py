@@ -259,3 +259,28 @@ def test_the_papers_neural_row_is_read_only():
     with pytest.raises(TypeError):
         PAPER_NEURAL_ROW["JS_valid"] = 0.1  # type: ignore[index]
     assert dict(PAPER_NEURAL_ROW) == dict(TABLE_I["Neural"])
+
+
+@pytest.mark.parametrize("make,error", [
+    (lambda tmp: open(tmp / "t.bin", "wb"), TypeError),   # a binary file: "a bytes-like object is required, not 'str'"
+    (lambda tmp: _closed_text(tmp), ValueError),           # "I/O operation on closed file"
+])
+def test_reproduce_run_refuses_a_stream_that_takes_no_text_before_any_section(make, error, monkeypatch, tmp_path):
+    # the stream's write method was enough: a binary or closed file failed at the first print, after a section's work
+    import graybox.reproduce as rp
+
+    ran = []
+    monkeypatch.setattr(rp, "SECTIONS", (lambda quick, out: ran.append(1) or "text",))
+    stream = make(tmp_path)
+    try:
+        with pytest.raises(error, match="stream"):
+            rp.run(stream=stream)
+    finally:
+        stream.close()
+    assert ran == []
+
+
+def _closed_text(tmp):
+    f = open(tmp / "t.txt", "w")
+    f.close()
+    return f

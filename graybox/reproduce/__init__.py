@@ -84,6 +84,13 @@ def run(quick: bool = True, out: Path | None = None, stream: TextIO | None = Non
     elif not callable(getattr(stream, "write", None)):  # said now, not after the first section's minutes
         raise TypeError(f"stream must be a text file (with a write method), e.g. sys.stdout or open(path, 'w'), got "
                         f"{stream!r} ({type(stream).__name__})")
+    try:  # a binary or closed file has a write method too, and failed at the first print, after a section's work
+        stream.write("")
+    except TypeError as exc:
+        raise TypeError(f"stream must be a text file, e.g. sys.stdout or open(path, 'w'), got one that takes no str "
+                        f"({exc})") from None
+    except ValueError as exc:
+        raise ValueError(f"stream cannot be written ({exc}); pass an open text file") from None
 
     if out is not None:
         if not os.fspath(check_path(out, "out")):  # Path("") is the current folder, a folder nobody named
