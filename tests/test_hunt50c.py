@@ -284,3 +284,24 @@ def _closed_text(tmp):
     f = open(tmp / "t.txt", "w")
     f.close()
     return f
+
+
+def test_writing_the_bundled_pair_leaves_the_old_pair_whole_when_it_fails(tmp_path):
+    # dynamic.csv was written (replaced) before static.csv's text was even made: a failure there left a new
+    # dynamic record beside the old static points, a pair of two draws; and a kill mid-write left a torn file
+    from graybox.datasets.pumping import write_csv_pair
+
+    old = write_csv_pair(tmp_path, ("t", "u", "y"), ["0,1,2"], ("u", "y"), ["1,2"])
+    before = [p.read_bytes() for p in old]
+
+    class Failing:
+        def __iter__(self):
+            yield "5,6"
+            raise OSError(28, "No space left on device")
+
+    with pytest.raises(OSError, match="No space left"):
+        write_csv_pair(tmp_path, ("t", "u", "y"), ["0,3,4"], ("u", "y"), Failing())
+    assert [p.read_bytes() for p in old] == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dynamic.csv", "static.csv"]
+    new = write_csv_pair(tmp_path, ("t", "u", "y"), ["0,3,4"], ("u", "y"), ["5,6"])
+    assert [p.read_text() for p in new] == ["t,u,y\n0,3,4\n", "u,y\n5,6\n"]

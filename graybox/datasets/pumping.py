@@ -200,6 +200,7 @@ from typing import Callable, Sequence
 import numba as nb
 import numpy as np
 
+from ..core._files import write_atomically
 from ..core._records import Record, StaticPoints
 from ..core._validation import as_1d_finite, check_bool, check_count, check_int, check_real, check_seed, real_array
 from ..reference import EQ1_COEFFICIENTS
@@ -1108,8 +1109,12 @@ def write_csv_pair(out_dir: str | Path, dynamic_columns: Sequence[str], dynamic_
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = (out / "dynamic.csv", out / "static.csv")
-    for path, cols, lines in zip(paths, (dynamic_columns, static_columns), (dynamic_lines, static_lines)):
-        path.write_text("\n".join([",".join(cols), *lines]) + "\n", encoding="utf-8", newline="\n")
+    # both texts made before either file is touched, and each file written whole or not at all: a failure left a new
+    # dynamic record beside the old static points (two draws), or a torn file
+    texts = [("\n".join([",".join(cols), *lines]) + "\n").encode("utf-8")
+             for cols, lines in ((dynamic_columns, dynamic_lines), (static_columns, static_lines))]
+    for path, text in zip(paths, texts):
+        write_atomically(path, lambda f, text=text: f.write(text))
     return paths
 
 
