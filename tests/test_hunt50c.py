@@ -305,3 +305,20 @@ def test_writing_the_bundled_pair_leaves_the_old_pair_whole_when_it_fails(tmp_pa
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dynamic.csv", "static.csv"]
     new = write_csv_pair(tmp_path, ("t", "u", "y"), ["0,3,4"], ("u", "y"), ["5,6"])
     assert [p.read_text() for p in new] == ["t,u,y\n0,3,4\n", "u,y\n5,6\n"]
+
+
+def test_static_tests_name_a_repeated_level_before_the_run(monkeypatch):
+    # a way up and a way down (speeds=[1000, 1200, 1000]) ran the whole test, then StaticPoints refused it with
+    # "duplicated ubar value(s) [1000.0]; … use StaticPoints.from_repeats", which no caller of the test can use
+    from graybox.datasets import TwoSpeedPumpingPlant, static_experiment, static_grid_experiment
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("the test ran")
+
+    monkeypatch.setattr(PumpingPlant, "simulate", no_run)
+    monkeypatch.setattr(TwoSpeedPumpingPlant, "simulate", no_run)
+    with pytest.raises(ValueError, match=r"speeds\[2\] repeats speeds\[0\] \(1000 rpm\).*two tests"):
+        static_experiment(PumpingPlant(), speeds=[1000.0, 1200.0, 1000.0], seed=1)
+    with pytest.raises(ValueError, match=r"speeds\[2\] repeats speeds\[0\] \(\[1200.0, 1300.0\] rpm\)"):
+        static_grid_experiment(TwoSpeedPumpingPlant(), speeds=[[1200.0, 1300.0], [1300.0, 1300.0], [1200.0, 1300.0]],
+                               seed=1)

@@ -1041,7 +1041,15 @@ def static_speeds(speeds: object, name: str) -> np.ndarray:
 
 def check_static_levels(levels: np.ndarray, speed_range: tuple[float, float], name: str) -> None:
     """``ValueError`` naming the first level (a speed, or a row of speeds) of a static test outside the rig's
-    ``speed_range``: said of the levels given, not of the run's reference they become ("sample 3720")."""
+    ``speed_range``, or repeated: said of the levels given, before the run, not of the run's reference they become
+    ("sample 3720") nor, after it, of the points (StaticPoints holds one point per level)."""
+    seen: dict[object, int] = {}
+    for j, key in enumerate(levels.tolist() if levels.ndim == 1 else map(tuple, levels.tolist())):
+        if key in seen:
+            level = f"{key:g}" if levels.ndim == 1 else str(list(key))
+            raise ValueError(f"{name}[{j}] repeats {name}[{seen[key]}] ({level} rpm): a static test gives one point per "
+                             "level; for a way up and a way down (a hysteresis), run two tests")
+        seen[key] = j
     lo, hi = speed_range
     out = (levels < lo) | (levels > hi)
     bad = np.flatnonzero(out if out.ndim == 1 else out.any(axis=1))
