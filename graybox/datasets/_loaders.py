@@ -348,6 +348,11 @@ _BINARY_SIGNATURES = tuple((re.compile(magic, re.DOTALL), what, advice) for magi
      + _AS_ARRAYS),
 ))
 
+#: The byte order each UTF-16/32 byte-order mark says (UTF-32's little-endian mark starts with UTF-16's: same order).
+_BOM_ORDERS = ((codecs.BOM_UTF32_BE, "-be"), (codecs.BOM_UTF16_LE, "-le"), (codecs.BOM_UTF16_BE, "-be"))
+_ORDER_NAMES = {"-le": "little-endian", "-be": "big-endian"}
+
+
 def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
     """The file's bytes as UTF-8, where its text starts in them (after a UTF-8 byte-order mark), and
     whether they are the file's own bytes (numpy's reader may then read the file itself).
@@ -370,9 +375,13 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
             raise ValueError(f"{p}: encoding {encoding!r} is not a text encoding Python knows (e.g. 'utf-8', "
                              "'utf-16', 'cp1252')") from None
         marked = bom_encoding(raw)
-        if marked is not None and not enc.startswith(marked):  # the mark's bytes would be read as text
-            raise ValueError(f"{p}: the file starts with a {marked.upper()} byte-order mark, but encoding="
-                             f"{encoding!r} was given; omit encoding= (the mark decides) or pass encoding={marked!r}")
+        # the mark's byte order too: UTF-16's little-endian mark read as 'utf-16-be' is mojibake, not an error
+        order = next((o for bom, o in _BOM_ORDERS if raw.startswith(bom)), "")
+        if marked is not None and (not enc.startswith(marked)  # the mark's bytes would be read as text
+                                   or (enc.endswith(("-le", "-be")) and not enc.endswith(order))):
+            said = f"{marked.upper()} ({_ORDER_NAMES[order]})" if order else marked.upper()
+            raise ValueError(f"{p}: the file starts with a {said} byte-order mark, but encoding={encoding!r} was "
+                             f"given; omit encoding= (the mark decides) or pass encoding={marked!r}")
     else:
         enc = bom_encoding(raw) or "utf-8"
     if enc == "utf-8":
