@@ -53,3 +53,45 @@ def test_notebook_06_states_the_input_lags_its_candidates_have():
     assert said is not None, text
     claimed = [str(k) for k in range(int(said.group(1)), int(said.group(2) or said.group(1)) + 1)]
     assert claimed == lags, (text, lags)
+
+
+def test_notebook_05_quotes_the_full_grid_of_the_17_term_structure(tmp_path):
+    # "What the grid says" quotes the full grids (QUICK = False); it said the 17-term structure's qualifying models
+    # sit at J_S valid 1.31–1.70 and SE's own D_SF member at 1.82 with J_SF 0.0009, where the full grid gives
+    # 1.31–1.38 and SE's member 1.38 with J_SF 0.0056 (numbers from before the SE fits' stability margin)
+    import json
+    import re
+    from pathlib import Path
+
+    from graybox import experiments as gx
+
+    cells = json.loads((Path(__file__).parents[1] / "notebooks" / "05_constraint_variants.ipynb").read_text("utf-8"))
+    text = " ".join("".join(c["source"]) for c in cells["cells"] if c["cell_type"] == "markdown")
+    text = re.sub(r"\s+", " ", text)
+    said = re.search(r"17-term structure is the worst place to start: its (?:best )?qualifying models sit at J_S "
+                     r"valid ([\d.]+)–([\d.]+) mlc².{0,40}SE's own D_SF (?:member on it: |picked on it \(J_S valid )"
+                     r"([\d.]+).{0,40}(?:with J_SF|static error of) ([\d.]+)", text)
+    assert said is not None, "the notebook's sentence on the 17-term structure changed: update this test"
+    lo, hi, se_js, se_jsf = (float(g.rstrip(".")) for g in said.groups())
+    # the notebook's full grid for that structure (n_pe, n_band, n_se = 30, 10, 10), the variants that qualify
+    grid = gx.Grid(
+        name="pumping constraint variants",
+        data=[gx.DataSpec("pumping", bundled="pumping")],
+        structures=[gx.StructureSpec("FROLS 17 (lags 6)", candidates={"ny": 6, "nu": 6, "degree": 2, "max_y_power": 1},
+                                     n_terms=17, include=["1"])],
+        variants=[
+            gx.Variant("CLS eq.(22)", "cls", constraints=[{"type": "equality", "curve": "fit"}],
+                       options={"reference": "els"}),
+            gx.Variant("PE", "pe", lambdas=np.logspace(-6, 0, 30), options={"solver": "closed"}),
+            gx.Variant("PE band", "pe", lambdas=np.logspace(-4, 0, 10), constraints=gb.StaticBand(0.175)),
+            gx.Variant("SE gradient", "se-gradient", lambdas=np.logspace(-2, 0, 10), options={"max_nfev": 30}),
+        ],
+    )
+    store = tmp_path / "grid.sqlite"
+    gx.run_grid(grid, store)
+    results = gb.load_results(store)
+    board = gx.leaderboard(results).dropna(subset=["rank"])
+    assert (round(board.JS_valid.min(), 2), round(board.JS_valid.max(), 2)) == (lo, hi)
+    se = results[results.variant == "SE gradient"].iloc[0]
+    assert round(se.JS_valid, 2) == se_js
+    assert float(f"{se.JSF:.1g}") == se_jsf
