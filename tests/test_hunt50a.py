@@ -95,3 +95,21 @@ def test_notebook_05_quotes_the_full_grid_of_the_17_term_structure(tmp_path):
     se = results[results.variant == "SE gradient"].iloc[0]
     assert round(se.JS_valid, 2) == se_js
     assert float(f"{se.JSF:.1g}") == se_jsf
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_a_record_shorter_than_the_lags_is_named_as_such_by_every_free_run(n):
+    # gb.js(model, record) of a 1-sample record said "y0 has 1 samples, the structure needs max lag = 2", of an
+    # argument the caller never passed, and of 2 samples "input has 2 samples", where gb.j1 says the record's name
+    data = gb.load_pumping()
+    model = gb.Model(gb.parse_structure(["1", "y(k-1)", "y(k-2)", "u(k-1)"]), [0.1, 0.5, 0.2, 1e-4])
+    short = data.valid.slice(0, n, name="short run")
+    calls = {"js": lambda: gb.js(model, short), "simulate": lambda: model.simulate(short),
+             "evaluate": lambda: gb.evaluate({"m": model}, gb.Dataset(data.ident, short, data.static)),
+             "plot_free_run": lambda: gb.plots.plot_free_run(short, {"m": model}),
+             "j1": lambda: gb.j1(model, short)}
+    for name, call in calls.items():
+        with pytest.raises(ValueError) as err:
+            call()
+        assert "short run" in str(err.value) and f"has {n} samples" in str(err.value), (name, str(err.value))
+        assert "y0" not in str(err.value), (name, str(err.value))

@@ -110,6 +110,9 @@ def free_run_inputs(
     bound : float or None
     """
     if isinstance(u, Record):  # already validated
+        if len(u) < L + 1:  # named as the record it is: "y0 has 1 samples" spoke of an argument never passed
+            raise ValueError(f"{u.name}: record has {len(u)} samples, fewer than max lag + 1 = {L + 1} (the {what} "
+                             f"needs max lag = {L})")
         if y0 is None:
             y0 = u.y[:L]
         u = u.u
