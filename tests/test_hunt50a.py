@@ -113,3 +113,27 @@ def test_a_record_shorter_than_the_lags_is_named_as_such_by_every_free_run(n):
             call()
         assert "short run" in str(err.value) and f"has {n} samples" in str(err.value), (name, str(err.value))
         assert "y0" not in str(err.value), (name, str(err.value))
+
+
+def _holds_and_steps(part):
+    change = np.flatnonzero(np.diff(part) != 0) + 1
+    holds = np.diff(np.r_[0, change, len(part)])[:-1]  # the last hold is cut by the part's end
+    return holds, np.abs(np.diff(part[np.r_[0, change]]))
+
+
+def test_speed_reference_docstring_says_what_the_forced_ends_do_to_holds_and_steps():
+    # the docstring said "levels change every 4–9 s … by steps of three sizes (small 40–150 …)", but the two holds
+    # forced to the range's ends can land on a neighbour's level (seed 41's identification part holds one level
+    # 12.25 s) or step to it by 10–30 rpm (seed 12: 20 rpm; 68 of 600 parts over seeds 0–299)
+    from graybox.datasets import speed_reference
+
+    long_hold = small_step = False
+    for seed in range(42):
+        u = speed_reference(seed=seed)
+        for part in (u[:3200], u[3200:]):
+            holds, steps = _holds_and_steps(part)
+            long_hold |= bool(holds.max() > 180)
+            small_step |= bool(steps.min() < 40)
+    assert long_hold and small_step
+    doc = " ".join(speed_reference.__doc__.split())
+    assert "less than 40 rpm" in doc and "one longer hold" in doc, doc

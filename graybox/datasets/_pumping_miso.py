@@ -502,7 +502,8 @@ def two_speed_reference(*, n_samples: int = N_SAMPLES_MISO, n_ident: int = N_IDE
     """Two independent staircase speed references (rpm), shape (n_samples, 2).
 
     Each column is designed like the bundled rig's reference (:func:`graybox.datasets.pumping.speed_reference`:
-    holds of 4–9 s, steps of several sizes, levels on whole multiples of 10 rpm, both ends of
+    holds of 4–9 s, or longer where a hold forced to an end merges with a neighbour, steps of several sizes,
+    levels on whole multiples of 10 rpm, both ends of
     [``low``, ``high``] visited in the identification part ``:n_ident`` and in the validation
     part ``n_ident:``), from its own random stream (``[seed, 11]`` and ``[seed, 12]``), so the two
     references change at unrelated instants and to unrelated levels.
