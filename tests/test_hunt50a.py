@@ -137,3 +137,41 @@ def test_speed_reference_docstring_says_what_the_forced_ends_do_to_holds_and_ste
     assert long_hold and small_step
     doc = " ".join(speed_reference.__doc__.split())
     assert "less than 40 rpm" in doc and "one longer hold" in doc, doc
+
+
+def _heater(tmp_path, uncertainty=None):
+    """The README's heater: two runs in 30–60 % and steady states over 0–100 % (no uncertainty unless given)."""
+    rng = np.random.default_rng(1)
+    f = lambda u: 150 * (1 - np.exp(-u / 50))  # noqa: E731
+    recs = []
+    for n in (1500, 600):
+        u = np.repeat(rng.uniform(30, 60, n // 50 + 1), 50)[:n]
+        y = np.full(n, 20 + f(u[0]))
+        for k in range(2, n):
+            y[k] = 1.2 * y[k - 1] - 0.3 * y[k - 2] + 0.1 * f(u[k - 1]) + 2.0
+        recs.append(gb.Record(u, y + 0.2 * rng.standard_normal(n), Ts=0.5, units=("%", "°C")))
+    levels = np.linspace(0, 100, 6)
+    steady = gb.StaticPoints(levels, 20 + f(levels), units=("%", "°C"), uncertainty=uncertainty)
+    return gb.Dataset(recs[0], recs[1], steady)
+
+
+def test_select_graybox_without_a_band_does_not_say_the_static_points_shape_its_black_box(tmp_path):
+    # steady states without an uncertainty and no band= make select_graybox a black box (LS, ELS, OE: the points
+    # only score J_SF), yet its warning said "the model is extrapolated there by the static information"
+    import warnings
+
+    cand = gb.Candidates(2, 2, degree=2, max_y_power=1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sel = gb.select_graybox(cand, _heater(tmp_path), sizes=[4], estimator="ls")
+    assert np.isinf(sel.band)
+    said = [str(w.message) for w in caught if issubclass(w.category, gb.StaticRangeWarning)]
+    assert len(said) == 1, said
+    assert "extrapolated there by the static information" not in said[0], said[0]
+    assert "black box" in said[0] and "band=" in said[0], said[0]
+    # a gray box is extrapolated by them, and says so as before
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        gb.select_graybox(cand, _heater(tmp_path, uncertainty=0.2), sizes=[4], estimator="pe", fallback="min_jsf")
+    said = [str(w.message) for w in caught if issubclass(w.category, gb.StaticRangeWarning)]
+    assert len(said) == 1 and "extrapolated there by the static information" in said[0], said

@@ -770,10 +770,17 @@ def outside_range(u: np.ndarray, lo: np.ndarray | float, hi: np.ndarray | float,
     return (u < lo - tol) | (u > hi + tol)
 
 
-def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "static points") -> None:
+#: What a StaticRangeWarning says of points outside the records' range, for a fit the points shape.
+_EXTRAPOLATED = "the model is extrapolated there by the static information"
+
+
+def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "static points",
+                      consequence: str = _EXTRAPOLATED) -> None:
     """Warn once, in words, which static ū lie well outside the dynamic records' input range (box, per input).
 
-    "Well outside": by more than :data:`RANGE_MARGIN` of the records' span of that input.
+    "Well outside": by more than :data:`RANGE_MARGIN` of the records' span of that input. ``consequence``: what
+    that means for the model (default: the static information extrapolates it; a black box, which the points
+    only score, says otherwise).
     """
     ubar = np.asarray(ubar, float)
     if ubar.ndim == 2 and ubar.shape[1] > 1:
@@ -784,7 +791,7 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
         if out_.size:
             box = " × ".join(f"[{a:.6g}, {b:.6g}]" for a, b in zip(lo_, hi_))
             msg = (f"{what}: ū = {rounded_levels(out_)} lie outside the input box {box} of the dynamic "
-                   "records; the model is extrapolated there by the static information (if the points and the "
+                   f"records; {consequence} (if the points and the "
                    "records should overlap, check their units)")
             warn(msg, StaticRangeWarning)
         return
@@ -794,7 +801,7 @@ def warn_static_range(ubar: np.ndarray, records: list[Record], what: str = "stat
     out = ub[outside_range(ub, lo, hi, RANGE_MARGIN)]
     if out.size:
         msg = (f"{what}: ū = {rounded_levels(out)} lie outside the input range [{lo:.6g}, {hi:.6g}] of the "
-               "dynamic records; the model is extrapolated there by the static information (if the points and the "
+               f"dynamic records; {consequence} (if the points and the "
                "records should overlap, check their units)")
         warn(msg, StaticRangeWarning)
 

@@ -644,8 +644,13 @@ def _inputs(candidates, data, sp, validation, test, band, folds, blocks) -> tupl
         splits = tuple((a, b, np.array([L, len(b)])) for a, b in _folds(idents, folds, L + 2))
     if sp is not None:
         # said here, once, after the errors: every job's fits silence it (a units mix-up must not go unsaid)
+        # a black box (no band) is fitted without them: saying they extrapolate it would say they were used
+        unused = ("this search is a black box (no band: none given, or inf, and none carried by the points' "
+                  "uncertainty), fitted without them: they only score its J_SF; a band B (band=, or the points' "
+                  "uncertainty) makes it a gray box held to them")
         warn_static_range(sp.ubar, list(idents), "static points" if isinstance(given, gb.StaticPoints) else
-                          f"the {type(given).__name__}'s domain")
+                          f"the {type(given).__name__}'s domain", **({} if band is not None else
+                                                                      {"consequence": unused}))
     return _Plan(idents, splits, tests, sp, np.inf if band is None else band, L, extra), form
 
 
