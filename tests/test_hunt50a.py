@@ -136,7 +136,7 @@ def test_speed_reference_docstring_says_what_the_forced_ends_do_to_holds_and_ste
             small_step |= bool(steps.min() < 40)
     assert long_hold and small_step
     doc = " ".join(speed_reference.__doc__.split())
-    assert "less than 40 rpm" in doc and "one longer hold" in doc, doc
+    assert "as little as 10 rpm" in doc and "one longer hold" in doc, doc
 
 
 def _heater(tmp_path, uncertainty=None):
