@@ -150,7 +150,8 @@ def write_atomically(path: str | os.PathLike, write: Callable[[IO[bytes]], objec
     The bytes go to a file of this write's own beside the target (named by host, pid and a random tag: two writers
     of one file at once never move each other's half-written file), which then replaces the target. A symbolic link
     is written through, as ``open(path, "w")`` would: the file it names is replaced, the link kept. An existing
-    file's mode is kept. After the move, the files killed writes left beside the target are swept
+    file's mode is kept. A device or a named pipe (``os.devnull``, a FIFO) is written into, as ``open(path, "w")``
+    would, never replaced. After the move, the files killed writes left beside the target are swept
     (:func:`sweep_leftovers`).
 
     Raises
@@ -162,6 +163,12 @@ def write_atomically(path: str | os.PathLike, write: Callable[[IO[bytes]], objec
     """
     path = Path(path)
     target = written_path(path)
+    if target.exists() and not (target.is_file() or target.is_dir()):
+        # a device or a pipe (os.devnull, a FIFO a reader waits on) is written into, as open(path, "wb") would: the
+        # move below replaced it with a regular file (for root, /dev/null itself, left holding the value)
+        with open(target, "wb") as f:
+            write(f)
+        return
     if target.is_file() and not os.access(target, os.W_OK):
         # open(path, "w") refuses a file its owner made read-only; the move below would replace it all the same
         raise PermissionError(errno.EACCES, _not_writable(target), str(path))
