@@ -975,8 +975,8 @@ def _header(doc: Any, rd: _Reader) -> dict:
             "type": typ, "units": None if units is None else (units.get("u", ""), units.get("y", ""))}
 
 
-class _Twice(ValueError):
-    """A JSON object naming one key twice."""
+class _Refused(ValueError):
+    """What JSON reads but a graybox file may not hold: an object naming one key twice, a number beyond the floats."""
 
 
 def _once(pairs: list[tuple[str, Any]]) -> dict:
@@ -986,15 +986,25 @@ def _once(pairs: list[tuple[str, Any]]) -> dict:
     if len(out) < len(pairs):
         seen: set[str] = set()
         twice = next(k for k, _ in pairs if k in seen or seen.add(k))
-        raise _Twice(f"the field {twice!r} is given twice in one object; keep one of them")
+        raise _Refused(f"the field {twice!r} is given twice in one object; keep one of them")
     return out
+
+
+def _finite_float(text: str) -> float:
+    """A JSON number with a point or an exponent, refused where it is beyond the float range: float() reads 1e400
+    as inf, and a hand-written finite number loaded as an infinite one (an integer that large is refused too)."""
+    x = float(text)
+    if math.isinf(x):
+        raise _Refused(f"the number {text[:30]} is beyond the float range (an infinite value is written \"inf\" or "
+                     "\"-inf\")")
+    return x
 
 
 def _parse(text: str, source: str) -> tuple[dict, Any]:
     rd = _Reader(source)
     try:
-        doc = json.loads(text, object_pairs_hook=_once)
-    except _Twice as exc:
+        doc = json.loads(text, object_pairs_hook=_once, parse_float=_finite_float)
+    except _Refused as exc:
         raise rd.fail("JSON", str(exc)) from None
     except json.JSONDecodeError as exc:
         body = text.lstrip()
