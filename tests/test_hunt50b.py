@@ -1,5 +1,7 @@
 """hunt50b: saving and loading (graybox.io and every result's JSON), and the files they write."""
 
+import dataclasses
+import json
 import os
 import stat
 import sys
@@ -49,3 +51,38 @@ def test_numbers_at_the_float_range_still_load():
     assert big.ybar == sys.float_info.max
     tiny = gb.from_json(text.replace('"ybar": 2.0', '"ybar": 1e-400'))  # below the subnormals: zero, as written
     assert tiny.ybar == 0.0
+
+
+@pytest.fixture(scope="module")
+def pumping():
+    return gb.load_pumping()
+
+
+@pytest.fixture(scope="module")
+def bootstrap(pumping):
+    return gb.bootstrap_decision(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)"], pumping, estimator="pe",
+                                 lambdas=[1e-4, 1e-2, 0.5, 1.0], n_boot=3, options={"solver": "closed"},
+                                 fallback="min_jsf", seed=0)
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, 1.5, "nan", "inf"])
+def test_a_bootstraps_sweep_lambdas_are_checked_as_its_call_checks_them(bootstrap, bad):
+    # _check_values holds a loaded bootstrap to "the settings in range", and bootstrap_decision refuses a λ1
+    # outside (0, 1]; the sweep's own lambdas were never checked: a file whose grid held 0, -1, 1.5, NaN or inf
+    # loaded as a bootstrap of a sweep no call can run
+    doc = json.loads(gb.to_json(bootstrap))
+    lam = doc["object"]["lambdas"]
+    chosen = {float(x) for x in bootstrap.lambda1[bootstrap.ok]}
+    i = next(k for k, x in enumerate(lam) if x not in chosen)  # a λ1 no replicate chose: only its range is wrong
+    lam[i] = bad
+    with pytest.raises(gb.GrayboxFileError, match=r"lambdas.*\(0, 1\]"):
+        gb.from_json(json.dumps(doc), source="boot.json")
+    with pytest.raises(ValueError, match=r"lambdas.*\(0, 1\]"):
+        dataclasses.replace(bootstrap, lambdas=np.array([0.0, *bootstrap.lambdas[1:]]))
+
+
+def test_a_bootstrap_round_trips(bootstrap):
+    back = gb.from_json(gb.to_json(bootstrap))
+    assert np.array_equal(back.lambdas, bootstrap.lambdas) and np.array_equal(back.thetas, bootstrap.thetas,
+                                                                               equal_nan=True)
+    assert back.frequencies().equals(bootstrap.frequencies())

@@ -87,7 +87,7 @@ def values():
     ga = gb.GAOptions(population=10, generations=3, stall=2, mutation_scale=1e-3)
     # every kind of plain value an option or a decision may hold, and a failed replicate
     exotic = gb.DecisionBootstrap(
-        m.structure, "se", np.array([1.0, 0.5, -0.0]), (0.0, 0.25), 40, 10, 7, np.array([1.0, np.nan, 0.5]),
+        m.structure, "se", np.array([1.0, 0.5, 5e-324]), (0.0, 0.25), 40, 10, 7, np.array([1.0, np.nan, 0.5]),
         np.array([np.inf, np.nan, 1e-310]), np.array([0.1, np.nan, 5e300]), np.array([True, False, False]),
         np.vstack([[0.6, 5e-3, 1e-6, 0.3], np.full(4, np.nan), [0.5, 4e-3, -0.0, 0.1]]), ("D_SF", "", "min J_SF"),
         {"failure": "ValueError: no member in the band"}, {1: "DivergenceError: the free run diverged"},

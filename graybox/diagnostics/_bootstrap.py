@@ -268,6 +268,7 @@ class DecisionBootstrap:
         settings in range, each replicate a decision by D_SF or its fallback at one of the sweep's λ1, or a failure
         with its reason."""
         check_choice(self.estimator, "estimator", ESTIMATORS)
+        check_lambdas(self.lambdas, "lambdas")  # the sweep's λ1, as bootstrap_decision takes them
         check_seed(self.seed)
         check_int(self.block_length, "block_length", low=1)
         check_int(self.n_blocks, "n_blocks", low=1)
