@@ -86,3 +86,29 @@ def test_a_bootstrap_round_trips(bootstrap):
     assert np.array_equal(back.lambdas, bootstrap.lambdas) and np.array_equal(back.thetas, bootstrap.thetas,
                                                                                equal_nan=True)
     assert back.frequencies().equals(bootstrap.frequencies())
+
+
+@pytest.fixture(scope="module")
+def els_fit(pumping):
+    return gb.els(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)"], pumping)
+
+
+@pytest.mark.parametrize("edit,match", [
+    (lambda o: o["theta_ls"].pop(), "theta_ls"),                      # 4 least-squares parameters of 5 terms
+    (lambda o: o["theta_ls"].append(0.0), "theta_ls"),
+    (lambda o: o.__setitem__("n_iter", -1), "n_iter"),
+    (lambda o: o.__setitem__("n_direct", -3), "n_direct"),
+])
+def test_an_els_result_holds_its_least_squares_theta_and_counts_as_els_makes_them(els_fit, edit, match):
+    # ELSResult checked its fields' types only: a file whose θ_LS had another length than the model's terms, or a
+    # negative count of iterations or direct solves, loaded as an ELS result
+    doc = json.loads(gb.to_json(els_fit))
+    edit(doc["object"])
+    with pytest.raises(gb.GrayboxFileError, match=match):
+        gb.from_json(json.dumps(doc), source="els.json")
+
+
+def test_an_els_result_round_trips(els_fit, pumping):
+    back = gb.from_json(gb.to_json(els_fit), expect=gb.ELSResult)
+    assert back.theta_ls.tobytes() == els_fit.theta_ls.tobytes() and back.n_iter == els_fit.n_iter
+    np.testing.assert_array_equal(back.model.simulate(pumping.valid), els_fit.model.simulate(pumping.valid))

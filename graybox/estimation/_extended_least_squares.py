@@ -139,8 +139,15 @@ class ELSResult:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # counts as els makes them, held to a result built by hand or read from an edited file
+        check_int(self.n_iter, "ELSResult: n_iter", low=0)
+        check_int(self.n_direct, "ELSResult: n_direct", low=0)
         # read-only copies: what the caller's arrays become afterwards never changes the result
         object.__setattr__(self, "theta_ls", frozen(self.theta_ls))
+        n = len(self.model.structure)
+        if self.theta_ls.shape != (n,):  # the least-squares estimate of the model's own process terms
+            raise ValueError(f"ELSResult: theta_ls must have shape ({n},), one parameter per process term of the "
+                             f"model, got {self.theta_ls.shape}")
         object.__setattr__(self, "residuals", tuple(frozen(r) for r in self.residuals))
         # what an iteration can report (a file edited by hand, a result built wrong is refused, as NeuralFit's)
         check_int(self.n_iter, "ELSResult: n_iter", low=0)
