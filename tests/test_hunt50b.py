@@ -112,3 +112,60 @@ def test_an_els_result_round_trips(els_fit, pumping):
     back = gb.from_json(gb.to_json(els_fit), expect=gb.ELSResult)
     assert back.theta_ls.tobytes() == els_fit.theta_ls.tobytes() and back.n_iter == els_fit.n_iter
     np.testing.assert_array_equal(back.model.simulate(pumping.valid), els_fit.model.simulate(pumping.valid))
+
+
+_SMALL_GRID = """
+name = "small"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first"
+terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"]
+[[variants]]
+name = "PE"
+estimator = "pe"
+lambdas = [0.001, 0.1, 1.0]
+decision = {rule = "dsf"}
+"""
+
+
+@pytest.fixture(scope="module")
+def small_store(tmp_path_factory):
+    from graybox import experiments as gx
+    path = tmp_path_factory.mktemp("store") / "small.sqlite"
+    gx.run_grid(gx.Grid.from_toml_text(_SMALL_GRID), path, progress=False)
+    return path
+
+
+def _members_edited(store, tmp_path, edit):
+    import shutil
+    import sqlite3
+    path = tmp_path / "edited.sqlite"
+    shutil.copy(store, path)
+    with sqlite3.connect(path) as conn:
+        (text,) = conn.execute("SELECT members FROM cells WHERE members IS NOT NULL").fetchone()
+        members = json.loads(text)
+        edit(members)
+        conn.execute("UPDATE cells SET members = ? WHERE members IS NOT NULL", (json.dumps(members),))
+    conn.close()
+    return path
+
+
+@pytest.mark.parametrize("edit", [
+    lambda m: m.pop("JS"),                              # the leaderboard's bare KeyError: 'JS'
+    lambda m: m.__setitem__("JS", 1.0),                 # TypeError: 'float' object is not iterable
+    lambda m: m.__setitem__("JS", [[1.0], [2.0], [3.0]]),  # numpy's 'setting an array element with a sequence'
+    lambda m: m.__setitem__("failure", [""]),           # pandas' 'All arrays must be of the same length'
+    lambda m: m.__setitem__("J1", m["J1"][:2]),          # 2 J_1 for 3 members, read as they were
+    lambda m: m.__setitem__("failure", "abc"),          # read as the failures ['a', 'b', 'c']
+    lambda m: m.clear(),                                # a Pareto cell without members
+])
+def test_a_stores_damaged_members_are_a_store_error_not_a_reports_crash(small_store, tmp_path, edit):
+    # load_results checked the members column was a JSON object, never what it held: a damaged cell's members
+    # loaded, and the leaderboard and write_report then failed with a bare KeyError, TypeError or pandas' words
+    from graybox import experiments as gx
+    assert gx.leaderboard(gb.load_results(small_store)).shape[0] == 1  # the store as run reads and reports
+    path = _members_edited(small_store, tmp_path, edit)
+    with pytest.raises(gx.StoreError, match="members"):
+        gb.load_results(path)

@@ -842,9 +842,32 @@ _FLOAT_COLUMNS = ("lambda1", "band", "J1_ident", "JS_ident", "fit_ident", "J1_va
                   "static_miss", "wall_time")
 
 
+#: The figures every cell's members hold since the first store (``fit_valid`` came later; ``failure`` is text).
+_MEMBER_FIGURES = ("lambda1", "J1", "JS", "JSF", "JS_valid")
+
+
 def _decode_members(d: Mapping[str, Any]) -> dict[str, np.ndarray]:
-    """A cell's members (decoded JSON) as arrays of floats and the list of failures."""
-    return {k: (np.array(v, dtype=float) if k != "failure" else list(v)) for k, v in d.items()}
+    """A cell's members (decoded JSON) as arrays of floats and the list of failures, one entry per member each;
+    ``ValueError`` naming what a damaged cell's members lack (the reports read them all, and failed on one missing or
+    of another length with a bare KeyError, TypeError or pandas' words)."""
+    missing = [k for k in _MEMBER_FIGURES if k not in d]
+    if missing:
+        raise ValueError(f"members without {', '.join(missing)}")
+    out: dict[str, Any] = {}
+    for k, v in d.items():
+        if k == "failure":
+            if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+                raise ValueError("members' failure is not a list of texts, one per member")
+            out[k] = list(v)
+            continue
+        a = np.array(v, dtype=float)
+        if a.ndim != 1:
+            raise ValueError(f"members' {k} is not a list of numbers, one per member")
+        out[k] = a
+    lengths = {k: len(v) for k, v in out.items()}
+    if len(set(lengths.values())) > 1:
+        raise ValueError(f"members' lists have different lengths {lengths}")
+    return out
 
 
 def _open_readonly(path: str | os.PathLike) -> tuple[Path, sqlite3.Connection, dict[str, str]]:
