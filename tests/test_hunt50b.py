@@ -169,3 +169,32 @@ def test_a_stores_damaged_members_are_a_store_error_not_a_reports_crash(small_st
     path = _members_edited(small_store, tmp_path, edit)
     with pytest.raises(gx.StoreError, match="members"):
         gb.load_results(path)
+
+
+def _cells_edited(store, tmp_path, column, value):
+    import shutil
+    import sqlite3
+    path = tmp_path / "edited.sqlite"
+    shutil.copy(store, path)
+    with sqlite3.connect(path) as conn:
+        conn.execute(f"UPDATE cells SET {column} = ?", (value,))
+    conn.close()
+    return path
+
+
+@pytest.mark.parametrize("column,value", [
+    ("terms", json.dumps([1, 2])),          # write_report: 'sequence item 0: expected str instance, int found'
+    ("warnings", json.dumps([1, 2])),       # the same
+    ("theta", json.dumps([[0.5], [0.1]])),  # a (2, 1) θ read as it was
+    ("in_band", "maybe"),                   # bool('maybe'): read as in the band
+    ("in_band", 7),
+    ("seed", 1.5),                          # int(1.5): read as seed 1
+    ("n_params", 2.5),
+])
+def test_a_stores_damaged_cell_columns_are_a_store_error(small_store, tmp_path, column, value):
+    # load_results decoded the JSON columns as lists and converted the numbers with bool() and int(): a damaged cell's
+    # terms or warnings of numbers loaded (write_report then failed joining them), a θ of rows loaded, in_band
+    # 'maybe' read True and seed 1.5 read 1
+    from graybox import experiments as gx
+    with pytest.raises(gx.StoreError, match=f"damaged.*{column}"):
+        gb.load_results(_cells_edited(small_store, tmp_path, column, value))

@@ -1112,11 +1112,22 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
         r["terms"] = None if r["terms"] is None else tuple(_json_of(r["terms"], p, f"{cell}'s terms", list))
         r["theta"] = None if r["theta"] is None else _json_of(r["theta"], p, f"{cell}'s theta", list)
         r["warnings"] = () if r["warnings"] is None else tuple(_json_of(r["warnings"], p, f"{cell}'s warnings", list))
+        for c in ("terms", "warnings"):  # texts, as a cell writes them (the report joins them)
+            if r[c] is not None and not all(isinstance(t, str) for t in r[c]):
+                raise _damaged(p, f"{cell}'s {c} are not all texts", True)
         members = None if r["members"] is None else _json_of(r["members"], p, f"{cell}'s members", dict)
         try:  # numbers where numbers are stored (SQLite keeps whatever a column is given)
             r["theta"] = None if r["theta"] is None else np.array(r["theta"], dtype=float)
+            if r["theta"] is not None and r["theta"].ndim != 1:
+                raise ValueError(f"theta of shape {r['theta'].shape}, not one number per term")
             r["members"] = None if members is None else _decode_members(members)
+            # a flag and counts as a cell writes them: bool() took any text for True, int() cut 1.5 to 1
+            if r["in_band"] is not None and (isinstance(r["in_band"], bool) or r["in_band"] not in (0, 1)):
+                raise ValueError(f"in_band {r['in_band']!r}, not 0 or 1")
             r["in_band"] = None if r["in_band"] is None else bool(r["in_band"])
+            for c in ("seed", "n_params"):
+                if r[c] is not None and (isinstance(r[c], bool) or not isinstance(r[c], int)):
+                    raise ValueError(f"{c} {r[c]!r}, not an integer")
             r["seed"] = None if r["seed"] is None else int(r["seed"])
             r["n_params"] = None if r["n_params"] is None else int(r["n_params"])
             for c in _FLOAT_COLUMNS:
