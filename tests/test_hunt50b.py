@@ -198,3 +198,39 @@ def test_a_stores_damaged_cell_columns_are_a_store_error(small_store, tmp_path, 
     from graybox import experiments as gx
     with pytest.raises(gx.StoreError, match=f"damaged.*{column}"):
         gb.load_results(_cells_edited(small_store, tmp_path, column, value))
+
+
+_SE_ST = ["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)"]
+_SE_GA = dict(lambdas=[0.5, 0.9, 0.99], method="ga", options=gb.GAOptions(population=10, generations=3), seed=1)
+
+
+@pytest.fixture(scope="module")
+def ga_checkpoint(pumping, tmp_path_factory):
+    path = tmp_path_factory.mktemp("ck") / "front.npz"
+    front = gb.se_pareto(_SE_ST, pumping, checkpoint=path, **_SE_GA)
+    with np.load(path, allow_pickle=False) as z:
+        return front, {k: z[k] for k in z.files}
+
+
+@pytest.mark.parametrize("failures", ['{"0": "no start was feasible"}', '{" 1": "x"}', '{"+1": "x"}'])
+def test_an_se_checkpoint_naming_a_fitted_member_failed_is_corrupt(pumping, ga_checkpoint, tmp_path, failures):
+    # the sweep writes a failed member as NaN θ and an infinite cost; a checkpoint naming a member with a finite θ
+    # and cost failed resumed into a front that had lost that member (its θ NaN, its J's inf) without a word, and
+    # int() read the member " 1" or "+1" as member 1
+    front, arrays = ga_checkpoint
+    assert np.all(np.isfinite(front.thetas)) and not front.failures
+    path = tmp_path / "front.npz"
+    np.savez(path, **{**arrays, "failures": np.array(failures)})
+    with pytest.raises(gb.estimation._simulation_error.CheckpointError, match="corrupt|not a readable"):
+        gb.se_pareto(_SE_ST, pumping, checkpoint=path, **_SE_GA)
+
+
+def test_an_se_checkpoint_with_its_failed_members_resumes(pumping, ga_checkpoint, tmp_path):
+    front, arrays = ga_checkpoint
+    th, costs = arrays["thetas"].copy(), arrays["costs"].copy()
+    th[1], costs[1] = np.nan, np.inf
+    path = tmp_path / "front.npz"
+    np.savez(path, **{**arrays, "thetas": th, "costs": costs, "failures": np.array('{"1": "no start was feasible"}')})
+    again = gb.se_pareto(_SE_ST, pumping, checkpoint=path, **_SE_GA)
+    assert dict(again.failures) == {1: "no start was feasible"}
+    assert np.array_equal(again.thetas[[0, 2]], front.thetas[[0, 2]])

@@ -45,6 +45,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import warnings
 import zipfile
 from dataclasses import asdict, dataclass, field
@@ -890,6 +891,8 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None, coords:
         # no record of failed members (a list was read by .items(), a bare AttributeError)
         if not isinstance(failed, dict) or not all(isinstance(v, str) for v in failed.values()):
             raise TypeError(f"its failed members are {short_value(failed)}, not a mapping of member to reason")
+        if not all(re.fullmatch(r"-?[0-9]+", k) for k in failed):  # int() reads " 1" and "+1" as member 1
+            raise ValueError(f"its failed members are {short_value(failed)}, whose keys are not member indices")
         out = {"thetas": raw["thetas"], "costs": raw["costs"], "done": raw["done"], "nfev": raw["nfev"],
                "failures": {int(k): v for k, v in failed.items()}}
     except (ValueError, TypeError) as exc:
@@ -917,6 +920,10 @@ def _load_checkpoint(path: Path, meta: dict, n_terms: int | None = None, coords:
     if not (np.all(np.isfinite(th[:done][fitted])) and np.all(np.isfinite(costs[:done][fitted]))
             and np.all(costs[:done][fitted] >= 0) and np.all(nfev[:done] >= 0)):
         raise corrupt("a fitted member's θ or cost is not finite, or a cost or count is negative")
+    # a failed member as the sweep writes it (θ NaN, cost inf): one with a fitted member's θ and cost, named failed,
+    # resumed into a front that had lost it without a word
+    if not (np.all(np.isnan(th[:done][~fitted])) and np.all(np.isposinf(costs[:done][~fitted]))):
+        raise corrupt("a member named failed has a θ or a finite cost, as only a fitted member has")
     if coords:
         z = arrays["coords"]
         if z.dtype.kind != "f" or z.shape != th.shape or not np.all(np.isfinite(z[:done][fitted])):
