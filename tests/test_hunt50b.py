@@ -234,3 +234,28 @@ def test_an_se_checkpoint_with_its_failed_members_resumes(pumping, ga_checkpoint
     again = gb.se_pareto(_SE_ST, pumping, checkpoint=path, **_SE_GA)
     assert dict(again.failures) == {1: "no start was feasible"}
     assert np.array_equal(again.thetas[[0, 2]], front.thetas[[0, 2]])
+
+
+@pytest.mark.parametrize("edit", [
+    lambda spec: spec.__setitem__("data", 5),                 # _spec_bands: "'int' object is not iterable"
+    lambda spec: spec["data"][0].__setitem__("band", -1.0),   # every cell's band read as -1: no member in it
+    lambda spec: spec["data"][0].__setitem__("band", True),
+])
+def test_a_stores_damaged_spec_data_sets_are_a_store_error(small_store, tmp_path, edit):
+    # _specs checked a stored spec was a JSON object, not its data sets, whose bands every cell's row takes: a spec
+    # whose data was no list failed load_results, grid_status and run_grid with a bare TypeError, and a band of -1
+    # loaded as every cell's band
+    import shutil
+    import sqlite3
+    from graybox import experiments as gx
+    path = tmp_path / "edited.sqlite"
+    shutil.copy(small_store, path)
+    with sqlite3.connect(path) as conn:
+        (text,) = conn.execute("SELECT spec FROM specs").fetchone()
+        spec = json.loads(text)
+        edit(spec)
+        conn.execute("UPDATE specs SET spec = ?", (json.dumps(spec),))
+    conn.close()
+    for read in (gb.load_results, gx.grid_status):
+        with pytest.raises(gx.StoreError, match="damaged.*data sets"):
+            read(path)

@@ -284,6 +284,11 @@ def _json_of(text: Any, p: Path, what: str, kind: type, reading: bool = True) ->
     return v
 
 
+def _stored_band(band: Any) -> bool:
+    """Whether a stored spec's data set band is one a DataSpec holds: None, or a real number > 0."""
+    return band is None or (isinstance(band, (int, float)) and not isinstance(band, bool) and band > 0)
+
+
 def _specs(conn: sqlite3.Connection, meta: Mapping[str, str], p: Path, reading: bool = True) -> list[dict[str, Any]]:
     """The store's specs, oldest first (a first-format store: the one grid its meta names); their JSON checked."""
     if meta.get("format_version") == "1":
@@ -295,7 +300,12 @@ def _specs(conn: sqlite3.Connection, meta: Mapping[str, str], p: Path, reading: 
         cur = conn.execute(f"SELECT {', '.join(SPECS)} FROM specs ORDER BY id")
         specs = [dict(zip(SPECS, r)) for r in cur.fetchall()]
     for s in specs:
-        _json_of(s["spec"], p, f"spec {s['id']}'s canonical form", dict, reading)
+        spec = _json_of(s["spec"], p, f"spec {s['id']}'s canonical form", dict, reading)
+        # its data sets give every cell's row its band (_spec_bands): a list of tables, each band > 0 or none
+        sets = spec.get("data", [])
+        if not isinstance(sets, list) or not all(_stored_band(d.get("band")) for d in sets if isinstance(d, dict)):
+            raise _damaged(p, f"spec {s['id']}'s data sets are not a list of tables whose band is a number > 0 or "
+                           "none", reading)
         data = _json_of(s["data"], p, f"spec {s['id']}'s data set hashes", dict, reading)
         if not all(isinstance(v, str) for v in data.values()):
             raise _damaged(p, f"spec {s['id']}'s data set hashes are not text", reading)
