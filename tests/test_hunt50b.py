@@ -259,3 +259,55 @@ def test_a_stores_damaged_spec_data_sets_are_a_store_error(small_store, tmp_path
     for read in (gb.load_results, gx.grid_status):
         with pytest.raises(gx.StoreError, match="damaged.*data sets"):
             read(path)
+
+
+_SEL = dict(sizes=[4, 6], estimator="pe", lambdas=[0.1, 0.5, 1.0], sources=("frols",), progress=False)
+
+
+@pytest.fixture(scope="module")
+def selection_checkpoint(pumping, tmp_path_factory):
+    path = tmp_path_factory.mktemp("sel") / "sel.npz"
+    cand = gb.Candidates(ny=2, nu=2, ne=0, degree=2, max_y_power=1)
+    chosen = gb.select_graybox(cand, pumping, checkpoint=path, **_SEL)
+    with np.load(path, allow_pickle=False) as z:
+        return cand, chosen, {k: z[k] for k in z.files}
+
+
+def _row_edited(arrays, field, edit):
+    out = dict(arrays)
+    for name in [k for k in arrays if k.endswith("/" + field)]:
+        v = arrays[name].copy()
+        edit(v)
+        out[name] = v
+    return out
+
+
+@pytest.mark.parametrize("field,edit", [
+    ("lambdas", lambda v: v.__setitem__(0, -1.0)),    # 'ParetoSet: lambdas must lie in (0, 1]', no file named
+    ("lambdas", lambda v: v.__setitem__(0, 0.0)),
+    ("lambdas", lambda v: v.__setitem__(0, 2.0)),
+])
+def test_a_selection_checkpoints_damaged_row_is_a_checkpoint_error(pumping, selection_checkpoint, tmp_path, field,
+                                                                    edit):
+    # _row_problem checked the arrays' kinds and shapes, not a λ1 outside (0, 1], which no fit writes: select_graybox
+    # then failed after reading the file with the ValueError of the ParetoSet it built, naming no file
+    from graybox.estimation._simulation_error import CheckpointError
+    cand, _, arrays = selection_checkpoint
+    path = tmp_path / "sel.npz"
+    np.savez(path, **_row_edited(arrays, field, edit))
+    with pytest.raises(CheckpointError, match=f"{path}.*corrupt.*{field}"):
+        gb.select_graybox(cand, pumping, checkpoint=path, **_SEL)
+
+
+def test_a_selection_checkpoint_with_a_failed_member_resumes(pumping, selection_checkpoint, tmp_path):
+    cand, chosen, arrays = selection_checkpoint
+
+    k = chosen.decision.index  # the chosen member of every row had no fit, as the fit writes it: θ NaN, blocks inf
+    edited = _row_edited(_row_edited(arrays, "thetas", lambda v: v.__setitem__(k, np.nan)), "blocks",
+                         lambda v: v.__setitem__(k, np.inf))
+    path = tmp_path / "sel.npz"
+    np.savez(path, **edited)
+    with pytest.warns(gb.SelectionWarning, match="no structure meets the band"):  # none other is in it
+        again = gb.select_graybox(cand, pumping, checkpoint=path, fallback="min_jsf", **_SEL)
+    assert again.decision.lambda1 != chosen.decision.lambda1
+    assert np.all(np.isfinite(again.model.theta))

@@ -225,6 +225,10 @@ def _row_problem(row: Mapping[str, np.ndarray]) -> str:
                 return f"{f} holds {'negative' if np.any(v < 0) else 'NaN'} mean squares"
     if not (np.all(np.isfinite(arrays["weights"])) and np.all(arrays["weights"] > 0)):
         return "weights are not positive numbers"
+    lam = arrays["lambdas"]
+    with np.errstate(invalid="ignore"):
+        if np.any(~np.isnan(lam) & ~((lam > 0) & (lam <= 1))):  # NaN: a member of no weight (a black box)
+            return f"lambdas hold a λ1 outside (0, 1] ({lam.tolist()})"
     return ""
 
 
