@@ -299,6 +299,19 @@ def test_a_selection_checkpoints_damaged_row_is_a_checkpoint_error(pumping, sele
         gb.select_graybox(cand, pumping, checkpoint=path, **_SEL)
 
 
+def test_a_kept_member_without_theta_is_never_chosen(pumping, selection_checkpoint, tmp_path):
+    # the fit gives a member without θ (its refit on all the identification data failed) inf block scores; a kept
+    # row with finite ones for it (an edit, or a graybox before that rule) had it chosen, and select_graybox then
+    # failed with 'member 0 of this set failed: the fit failed at this λ'
+    cand, chosen, arrays = selection_checkpoint
+    k = chosen.decision.index
+    path = tmp_path / "sel.npz"
+    np.savez(path, **_row_edited(arrays, "thetas", lambda v: v.__setitem__((k, 0), np.nan)))
+    with pytest.warns(gb.SelectionWarning, match="no structure meets the band"):  # none other is in it
+        again = gb.select_graybox(cand, pumping, checkpoint=path, fallback="min_jsf", **_SEL)
+    assert again.decision.lambda1 != chosen.decision.lambda1 and np.all(np.isfinite(again.model.theta))
+
+
 def test_a_selection_checkpoint_with_a_failed_member_resumes(pumping, selection_checkpoint, tmp_path):
     cand, chosen, arrays = selection_checkpoint
 

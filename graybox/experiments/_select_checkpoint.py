@@ -169,7 +169,13 @@ class SelectionCheckpoint:
                                   f"{row['blocks'].shape[1]} block(s) and {row['thetas'].shape[1]} parameter(s) where "
                                   f"its job makes {shape[0]}, {shape[1]} and {shape[2]}); delete it or choose another "
                                   "checkpoint path")
-        return {k: (list(v) if k in _ALL_TEXTS else v.copy()) for k, v in row.items()}
+        out = {k: (list(v) if k in _ALL_TEXTS else v.copy()) for k, v in row.items()}
+        # as a fit gives its row: a member without θ (its fit on all the identification data failed) cannot be chosen
+        # (a row kept with finite scores for one, by an edit or a graybox before that rule, had it chosen, and the
+        # selection then failed taking its model)
+        out["blocks"] = out["blocks"].astype(float)
+        out["blocks"][~np.all(np.isfinite(out["thetas"]), axis=1)] = np.inf
+        return out
 
     def put(self, key: str, row: Mapping[str, Any], write: bool = True) -> None:
         """Keep a finished row's scores and rewrite the file (atomically: a kill leaves the old one or the new);
