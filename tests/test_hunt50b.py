@@ -324,3 +324,19 @@ def test_a_selection_checkpoint_with_a_failed_member_resumes(pumping, selection_
         again = gb.select_graybox(cand, pumping, checkpoint=path, fallback="min_jsf", **_SEL)
     assert again.decision.lambda1 != chosen.decision.lambda1
     assert np.all(np.isfinite(again.model.theta))
+
+
+@pytest.mark.parametrize("edit", [
+    lambda o: o["model"]["theta"].__setitem__(0, o["model"]["theta"][0] + 1.0),
+    lambda o: o["decision"]["model"]["theta"].__setitem__(1, 0.0),
+])
+def test_a_graybox_selections_model_is_its_decisions(selection_checkpoint, edit):
+    # select_graybox gives the decision's model as the selection's model; a file whose two differed loaded, and the
+    # selection then simulated one model (.model) and took the other's covariance (.uncertainty uses the decision)
+    _, chosen, _ = selection_checkpoint
+    doc = json.loads(gb.to_json(chosen))
+    edit(doc["object"])
+    with pytest.raises(gb.GrayboxFileError, match="decision"):
+        gb.from_json(json.dumps(doc), source="sel.json")
+    back = gb.from_json(gb.to_json(chosen))
+    assert back.model.theta.tobytes() == chosen.model.theta.tobytes() == back.decision.model.theta.tobytes()

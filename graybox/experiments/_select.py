@@ -211,6 +211,11 @@ class GrayboxSelection:
             raise ValueError(f"the table has {first} rows ranked 1; the choice is one row")
         if list(self.model.structure) != list(self.structure):
             raise ValueError("the model's structure is not the chosen structure")
+        # the model is the decision's (select_graybox gives it so): another one, from an edited file, was simulated by
+        # .model while .uncertainty took the decision's
+        d = self.decision.model
+        if list(d.structure) != list(self.model.structure) or not np.array_equal(d.theta, self.model.theta):
+            raise ValueError("the model is not the decision's model (select_graybox gives the chosen member's)")
         if not self.band > 0:
             raise ValueError(f"band must be > 0 (inf for a black box), got {self.band!r}")
         check_choice(self.rule, "rule", RULES)
