@@ -340,3 +340,35 @@ def test_a_graybox_selections_model_is_its_decisions(selection_checkpoint, edit)
         gb.from_json(json.dumps(doc), source="sel.json")
     back = gb.from_json(gb.to_json(chosen))
     assert back.model.theta.tobytes() == chosen.model.theta.tobytes() == back.decision.model.theta.tobytes()
+
+
+@pytest.mark.parametrize("stable,radius", [(True, 1.5), (True, float("inf")), (True, 1.001), (False, 0.5), (False, 0.0)])
+def test_an_equilibriums_stability_agrees_with_its_spectral_radius(stable, radius):
+    # stable says every root of the linearisation lies strictly inside the unit circle, spectral_radius is the
+    # largest modulus of those roots: an Equilibrium (a hand-edited file) saying stable with a root at 1.5 or inf, or
+    # unstable with every root inside, loaded as it said
+    text = gb.to_json(gb.Equilibrium(ubar=1.0, ybar=2.0, stable=stable, spectral_radius=0.5 if stable else 1.5))
+    doc = json.loads(text)
+    doc["object"]["spectral_radius"] = "inf" if radius == float("inf") else radius
+    with pytest.raises(gb.GrayboxFileError, match="spectral_radius"):
+        gb.from_json(json.dumps(doc), source="eq.json")
+
+
+@pytest.mark.parametrize("stable,radius", [(True, 0.999999999999), (True, 0.0), (True, 1.0 + 1e-9), (False, 1.0),
+                                           (False, float("inf")), (False, 1.0 - 1e-12)])
+def test_an_equilibrium_at_its_rounding_still_builds(stable, radius):
+    # the stability test and the roots' moduli are computed apart: at the unit circle they may differ by rounding (a
+    # root at 1 to rounding is not inside, the Schur-Cohn test's rule; a double root's modulus is good to ~1e-8)
+    assert gb.Equilibrium(1.0, 2.0, stable, radius).stable is stable
+
+
+def test_computed_equilibria_keep_stability_and_radius_together():
+    rng = np.random.default_rng(5)
+    st = gb.Structure(["1", "y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "y(k-1)^2", "y(k-2)^2"])
+    scale = np.array([1, 0.8, 0.5, 0.1, 0.01, 0.05, 0.05, 0.05])
+    count = 0
+    for _ in range(300):
+        for e in gb.equilibria(st, rng.standard_normal(len(st)) * scale, float(rng.uniform(-2, 2))):
+            assert e.stable == (e.spectral_radius < 1)
+            count += 1
+    assert count > 100

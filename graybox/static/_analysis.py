@@ -662,6 +662,20 @@ class Equilibrium:
         check_real(self.ybar, "Equilibrium: ybar")
         if not self.spectral_radius >= 0.0:  # inf is said of a linearisation beyond the float range
             raise ValueError(f"Equilibrium: spectral_radius must be >= 0 (a modulus), got {self.spectral_radius!r}")
+        # stable: every root strictly inside the unit circle, so the largest modulus is below 1 (to the rounding by
+        # which the stability test and the roots, computed apart, may differ at the circle); a hand-edited file said
+        # stable with a root at 1.5 or inf, or unstable with every root inside, and loaded as it said
+        if self.stable and not self.spectral_radius <= 1.0 + _RADIUS_ROUNDING:
+            raise ValueError(f"Equilibrium: stable, but spectral_radius {self.spectral_radius!r} puts a root outside "
+                             "the unit circle")
+        if not self.stable and self.spectral_radius < 1.0 - _RADIUS_ROUNDING:
+            raise ValueError(f"Equilibrium: not stable, but spectral_radius {self.spectral_radius!r} puts every root "
+                             "inside the unit circle")
+
+
+#: How far the roots' largest modulus may lie across the unit circle from the stability test's verdict: the two are
+#: computed apart (numpy's roots of a double root are good to ~1e-8).
+_RADIUS_ROUNDING = 1e-6
 
 
 def spectral_radius(a: np.ndarray) -> float:
