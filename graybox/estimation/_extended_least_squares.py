@@ -150,8 +150,6 @@ class ELSResult:
                              f"model, got {self.theta_ls.shape}")
         object.__setattr__(self, "residuals", tuple(frozen(r) for r in self.residuals))
         # what an iteration can report (a file edited by hand, a result built wrong is refused, as NeuralFit's)
-        check_int(self.n_iter, "ELSResult: n_iter", low=0)
-        check_int(self.n_direct, "ELSResult: n_direct", low=0)
         if len(self.history) != self.n_iter:
             raise ValueError(f"ELSResult: history holds one residual change per iteration, {self.n_iter} (n_iter); got "
                              f"{len(self.history)}")
@@ -159,9 +157,6 @@ class ELSResult:
         if np.any(np.isnan(h)) or np.any(h < 0):
             raise ValueError("ELSResult: history holds relative residual changes, never negative or NaN; got "
                              f"{short_value(self.history)}")
-        if self.theta_ls.shape != (len(self.model.structure),):
-            raise ValueError(f"ELSResult: theta_ls holds one least-squares parameter per process term "
-                             f"({len(self.model.structure)}); got shape {self.theta_ls.shape}")
         if not self.residuals:
             raise ValueError("ELSResult: residuals holds the residuals of each record fitted, at least one")
 
