@@ -253,3 +253,16 @@ def test_a_long_records_print_stays_small_and_still_sees_long_slices():
     with pytest.raises(ValueError, match="shares 200 samples"):
         check_print_overlap(r.slice(1000, 1200), p, "choosing", "fitting", "advice")
     check_print_overlap(r.slice(1000, 1000 + p.block - 1), p, "choosing", "fitting", "advice")
+
+
+def test_a_damaged_print_field_is_named_once():
+    """A print's field of the wrong type in a saved set: the file's error names the place once (it said
+    '<json>: object.fitted_on[0]: <json>: object.fitted_on[0].length: …')."""
+    import json
+    d = _data2()
+    f = gb.pe_pareto(ST2, d, lambdas=np.logspace(-3, 0, 3))
+    doc = json.loads(gb.to_json(f))
+    doc["object"]["fitted_on"][0]["length"] = 3.5
+    with pytest.raises(gb.GrayboxFileError) as err:
+        gb.from_json(json.dumps(doc))
+    assert str(err.value).count("fitted_on[0]") == 1, str(err.value)

@@ -780,10 +780,11 @@ def _dec_print(v: Any, where: str, rd: _Reader) -> RecordPrint:
         raise rd.fail(f"{where}.digests", "not base64 text") from None
     if len(raw) % 8:
         raise rd.fail(f"{where}.digests", f"{len(raw)} bytes, not whole 8-byte digests")
-    try:
-        return RecordPrint(rd.str(d["name"], f"{where}.name"), rd.int(d["length"], f"{where}.length"),
-                           tuple(rd.str(n, f"{where}.input_names") for n in rd.list(d["input_names"], f"{where}.input_names")),
-                           rd.int(d["block"], f"{where}.block"), np.frombuffer(raw, "<u8").astype(np.uint64))
+    fields = (rd.str(d["name"], f"{where}.name"), rd.int(d["length"], f"{where}.length"),
+              tuple(rd.str(n, f"{where}.input_names") for n in rd.list(d["input_names"], f"{where}.input_names")),
+              rd.int(d["block"], f"{where}.block"), np.frombuffer(raw, "<u8").astype(np.uint64))
+    try:  # the fields' own types read above, each naming its place; here what they mean together
+        return RecordPrint(*fields)
     except (ValueError, TypeError) as exc:
         raise rd.fail(where, str(exc)) from None
 
