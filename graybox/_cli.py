@@ -138,7 +138,8 @@ examples:
 _REPRODUCE = """\
 Reproduce the paper on the bundled plant data: the paper's own models as printed,
 the black-box models, the neural baseline and Table I re-estimated, with figures
-written to --out.
+written to --out (fig2_static_curve.png ... fig8_se_free_run_l3.png, neural_free_run.png;
+a --quick run's end in _quick.png, so it leaves a full run's figures alone).
 
 Checkpoints: the simulation-error sweeps of Table I save a checkpoint after each
 lambda in --out (se_ga_l2_margin0.01_pe.npz, se_gradient_l3_margin0.01_quick.npz,

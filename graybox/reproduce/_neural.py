@@ -16,6 +16,13 @@ from ..reference import TABLE_I
 
 __all__ = ["PAPER_NEURAL_ROW", "section_neural"]
 
+
+def figure_name(stem: str, quick: bool) -> str:
+    """The file name of a ``graybox reproduce`` figure: ``<stem>.png`` in the full run, ``<stem>_quick.png`` in the
+    quick one (as the checkpoints), so a quick run in the full run's folder leaves the full run's figures alone."""
+    return f"{stem}{'_quick' if quick else ''}.png"
+
+
 #: Table I, "Neural" column, as printed (MSE in mlc²); read-only, as TABLE_I (a dict copy let an edit change the
 #: "paper" row section_neural prints).
 PAPER_NEURAL_ROW = TABLE_I["Neural"]
@@ -34,7 +41,7 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
     JS_ident, JS_valid, JSF, n_params; MSE in output units²). Each training takes well under a second;
     the full mode adds seeds 1–4 and reports the spread (min / median / max) of both rows over
     the five initialisations. With ``out`` the default network's validation free run is drawn
-    to ``out/neural_free_run.png``.
+    to ``out/neural_free_run.png`` (``neural_free_run_quick.png`` in quick mode).
     """
     quick = check_bool(quick, "quick")  # "no" is truthy: five seeds
     if out is not None:
@@ -76,7 +83,7 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
             lines.append(f"{label}, spread over seeds {list(seeds)}:")
             lines.append(summary.to_string(**fmt))
     if out is not None:
-        path = Path(out) / "neural_free_run.png"
+        path = Path(out) / figure_name("neural_free_run", quick)
         plot_free_run(data.valid, {"Neural": net}, ylabel="Pressure").savefig(path, dpi=120)  # type: ignore[arg-type]
         lines.append(f"figure: [{path}]")
     return "\n".join(lines)

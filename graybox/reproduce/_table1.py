@@ -18,6 +18,7 @@ from ..datasets import load_pumping
 from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
 from ..reference import TABLE_I
 from ._black_box import PAPER_BLACK_BOX, black_box_models
+from ._neural import figure_name
 
 __all__ = ["section_table1", "se_against_els", "PAPER_BAND"]
 
@@ -35,6 +36,7 @@ GA_STARTS = "pe"
 
 
 def _save(fig, out: Path | None, name: str) -> str:
+    """Write ``fig`` to ``out/name`` (``name`` from ``figure_name``: quick and full runs keep separate files)."""
     if out is None:
         return ""
     path = Path(out) / name
@@ -78,6 +80,8 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
     term is always included (eq. (22) needs Σ0 to carry κ). SE fronts
     come from the paper's GA and from the gradient method; quick mode runs 10 λ1 values instead
     of 100 (50 generations each, as in the full run). Long sweeps checkpoint under ``out`` and resume.
+    With ``out`` the figures are written there, ``fig2_static_curve.png`` … ``fig8_se_free_run_l3.png``, each
+    with a ``_quick`` suffix in quick mode (as the checkpoints), so a quick run leaves a full run's figures alone.
 
     Both SE methods keep a stability margin of 0.01 on the local models (spectral radius ≤ 0.99
     along the identification record and at the static points: time constants up to Ts/0.01 = 5 s,
@@ -112,9 +116,9 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
              f"α = {curve.coefficients[1]:.4e}, β = {curve.coefficients[2]:.4e}"]
     if out is not None:
         lines.append("figures:" + _save(plot_static_curve(data.static, curve, xlabel=_SPEED, ylabel=_PRESSURE), out,
-                                        "fig2_static_curve.png")
+                                        figure_name("fig2_static_curve", quick))
                      + _save(plot_record(data.ident, input_label="Pump speed reference", output_label="Pressure"), out,
-                             "fig3_ident_record.png"))
+                             figure_name("fig3_ident_record", quick)))
     models: dict = {}
     for size, eq in zip(PAPER_BLACK_BOX, ("15", "17")):
         degree = size[0]
@@ -142,9 +146,10 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
             fig = plot_pareto(fronts, tab, band=PAPER_BAND, xlabel="J_S (mlc²)", ylabel="J_SF (mlc²)",
                               title=f"Pareto sets, ℓ = {degree} (identification data)")
             best = models[f"SE (D_SF) ℓ={degree}"]
-            lines.append("   figures:" + _save(fig, out, f"fig{5 if degree == 2 else 7}_pareto_l{degree}.png")
+            pareto = figure_name(f"fig{5 if degree == 2 else 7}_pareto_l{degree}", quick)
+            lines.append("   figures:" + _save(fig, out, pareto)
                          + _save(plot_free_run(data.valid, {best.name: best}, ylabel="Pressure"), out,
-                                 f"fig{6 if degree == 2 else 8}_se_free_run_l{degree}.png"))
+                                 figure_name(f"fig{6 if degree == 2 else 8}_se_free_run_l{degree}", quick)))
         dom = _dominance(fronts)
         lines.append("   " + dom)
     if out is not None:
@@ -156,7 +161,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
             ax.plot(ub, models[k].static_curve(ub, y0=np.interp(ub, data.static.ubar, data.static.ybar), strict=False),
                     ":" if k == "ELS (15)" else "--", label=f"static curve of {k}")
         ax.legend(fontsize=8)
-        lines.append("figures:" + _save(fig, out, "fig4_black_box_static_curves.png"))
+        lines.append("figures:" + _save(fig, out, figure_name("fig4_black_box_static_curves", quick)))
     table = evaluate(models, data)
     with pd.option_context("display.width", 140, "display.float_format", "{:.4f}".format):
         lines.append(table.to_string())

@@ -1,0 +1,51 @@
+"""mend50f: the items hunts of session 50 found and left."""
+
+from __future__ import annotations
+
+import pytest
+
+
+# --- 1. a quick reproduce run overwrote the full run's figures --------------------------------------------
+
+class _Stop(Exception):
+    pass
+
+
+@pytest.mark.parametrize("quick, name", [(True, "fig2_static_curve_quick.png"), (False, "fig2_static_curve.png")])
+def test_table1_figures_of_a_quick_run_have_their_own_names(quick, name, monkeypatch, tmp_path):
+    from graybox.reproduce import _table1 as t1
+
+    saved = []
+    real = t1._save
+
+    def first_figure(fig, out, fname):
+        saved.append(real(fig, out, fname))
+        raise _Stop  # the first figure is drawn before the sweeps: stop there
+
+    monkeypatch.setattr(t1, "_save", first_figure)
+    with pytest.raises(_Stop):
+        t1.section_table1(quick=quick, out=tmp_path)
+    assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+def test_figure_names_of_the_two_modes_differ_as_the_checkpoints_do(tmp_path):
+    from graybox.reproduce._table1 import checkpoint_path, figure_name
+
+    for stem in ("fig2_static_curve", "fig5_pareto_l2", "neural_free_run"):
+        assert figure_name(stem, False) == f"{stem}.png"
+        assert figure_name(stem, True) == f"{stem}_quick.png"
+    assert checkpoint_path(tmp_path, "ga", 2, True).stem.endswith("_quick")
+
+
+def test_neural_section_quick_figure_does_not_overwrite_the_full_one(tmp_path):
+    import matplotlib.pyplot as plt
+
+    from graybox.reproduce import section_neural
+
+    full = tmp_path / "neural_free_run.png"
+    full.write_bytes(b"the full run's figure")
+    text = section_neural(quick=True, out=tmp_path)
+    plt.close("all")
+    assert full.read_bytes() == b"the full run's figure"
+    assert (tmp_path / "neural_free_run_quick.png").exists()
+    assert "neural_free_run_quick.png" in text
