@@ -49,3 +49,24 @@ def test_neural_section_quick_figure_does_not_overwrite_the_full_one(tmp_path):
     assert full.read_bytes() == b"the full run's figure"
     assert (tmp_path / "neural_free_run_quick.png").exists()
     assert "neural_free_run_quick.png" in text
+
+
+# --- 2. decimate(q=1): records kept as they are, yet a Dataset's description said "(decimated by 1)" -----
+
+def test_decimate_by_one_is_a_no_op_that_says_so():
+    import graybox as gb
+
+    data = gb.load_pumping()
+    same = gb.decimate(data, 1)
+    assert same.ident.name == data.ident.name and same.valid.name == data.valid.name
+    assert same.description == data.description  # nothing was decimated: nothing said
+    assert "no-op" in gb.decimate.__doc__ or "as they are" in gb.decimate.__doc__
+    assert [r.name for r in gb.decimate([data.ident, data.valid], 1)] == [data.ident.name, data.valid.name]
+
+
+def test_decimate_by_more_than_one_names_records_and_dataset():
+    import graybox as gb
+
+    data = gb.load_pumping()
+    d = gb.decimate(data, 2)
+    assert d.ident.name == f"{data.ident.name} / 2" and "(decimated by 2)" in d.description

@@ -233,7 +233,10 @@ def decimate(data: Record | Dataset | Sequence[Record], q: int, *, antialias: bo
     Returns
     -------
     Record, Dataset or list of Record
-        The same kind as ``data``: samples 0, q, 2q, … of each record, named "<name> / q".
+        The same kind as ``data``: samples 0, q, 2q, … of each record, named "<name> / q" (a Dataset's
+        description ends in "(decimated by q)"). ``q = 1`` is a no-op: the records come back as they are,
+        names and description unchanged (:func:`decimation_advice` says ``q = 1`` when the sampling is
+        already slow enough, and then nothing was decimated).
 
     Raises
     ------
@@ -246,6 +249,8 @@ def decimate(data: Record | Dataset | Sequence[Record], q: int, *, antialias: bo
     q = check_int(q, "q", low=1)
     antialias = check_bool(antialias, "antialias")
     if isinstance(data, Dataset):
+        if q == 1:  # nothing decimated: the records are kept as they are (_decimate), and so is the description
+            return data
         taus = data.extra.get("transient_inputs")
         ident, valid = (_decimate(r, q, antialias, taus if isinstance(taus, Mapping) else None)
                         for r in (data.ident, data.valid))
