@@ -70,3 +70,41 @@ def test_decimate_by_more_than_one_names_records_and_dataset():
     data = gb.load_pumping()
     d = gb.decimate(data, 2)
     assert d.ident.name == f"{data.ident.name} / 2" and "(decimated by 2)" in d.description
+
+
+# --- 3. speed_reference: a short part worked or raised "need at least 4 holds" depending on the seed -------
+
+from hypothesis import HealthCheck, assume, given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(n_ident=st.integers(2, 1200), n_valid=st.integers(2, 1200), seed=st.integers(0, 2**31))
+def test_speed_reference_length_works_for_every_seed_or_for_none(n_ident, n_valid, seed):
+    from graybox.datasets.pumping import speed_reference
+
+    short = min(n_ident, n_valid) < 541
+    assume(short or seed % 4 == 0)  # the long lengths: a quarter of the draws suffice
+    if short:
+        with pytest.raises(ValueError, match="541"):
+            speed_reference(n_samples=n_ident + n_valid, n_ident=n_ident, seed=seed)
+    else:
+        u = speed_reference(n_samples=n_ident + n_valid, n_ident=n_ident, seed=seed)
+        assert u.shape == (n_ident + n_valid,)
+
+
+def test_speed_reference_refuses_800_400_for_every_seed_naming_a_length_that_works():
+    from graybox.datasets.pumping import speed_reference
+
+    for seed in range(40):  # some of these worked, others raised "need at least 4 holds"
+        with pytest.raises(ValueError, match="at least 541"):
+            speed_reference(n_samples=800, n_ident=400, seed=seed)
+    for seed in range(40):
+        assert speed_reference(n_samples=1082, n_ident=541, seed=seed).shape == (1082,)
+
+
+def test_two_speed_reference_follows_the_same_rule():
+    from graybox.datasets._pumping_miso import two_speed_reference
+
+    with pytest.raises(ValueError, match="at least 541"):
+        two_speed_reference(n_samples=1000, n_ident=500, seed=0)
+    assert two_speed_reference(n_samples=1082, n_ident=541, seed=0).shape == (1082, 2)

@@ -912,6 +912,10 @@ def _integrate(u, eps_w, eps_s, eps_a, phi, w_gain, w0, s_phi, s_gain, a_phi, a_
 #: The narrowest speed range a staircase reference is designed over (rpm): its smallest steps (40 rpm) must fit
 #: both ways from its middle.
 _MIN_SPAN = 80.0
+#: A staircase part's holds last 80–180 samples and it needs at least 4 (the first and two forced to the range's
+#: ends among the others): 3 · 180 + 1 samples hold four whatever the seed, 240 or fewer never do, and between
+#: the two it depended on the seed. Refused below it for every seed; the draws of every length it keeps are as before.
+_MIN_PART = 3 * 180 + 1
 
 
 def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed: int = DEFAULT_SEED,
@@ -926,7 +930,8 @@ def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed:
     both ends of the range (one hold is forced to within 30 rpm of ``low``, another of ``high``),
     so both exercise the whole operating range. A hold forced to an end takes whatever step leads
     there: as little as 10 rpm, or none, when a neighbour holds that very level (the two then
-    make one longer hold); over seeds 0–199, 1 part in 8 has such a step.
+    make one longer hold); over seeds 0–199, 1 part in 8 has such a step. Each part needs at least
+    541 samples (27 s: four holds for any seed); a shorter one raises ``ValueError``.
     """
     n_samples, n_ident, seed = reference_lengths(n_samples, n_ident, seed)
     rng = np.random.default_rng([seed, 1])
@@ -935,11 +940,16 @@ def speed_reference(*, n_samples: int = N_SAMPLES, n_ident: int = N_IDENT, seed:
 
 
 def reference_lengths(n_samples: object, n_ident: object, seed: object) -> tuple[int, int, int]:
-    """A reference's (n_samples, n_ident, seed) checked: counts with 0 < n_ident < n_samples, a seed >= 0."""
+    """A reference's (n_samples, n_ident, seed) checked: counts with 0 < n_ident < n_samples, each part
+    (``n_ident`` and ``n_samples - n_ident``) at least ``_MIN_PART`` (541) samples, a seed >= 0."""
     n_samples = check_count(n_samples, "n_samples", low=2)
     n_ident = check_int(n_ident, "n_ident", low=1)
     if not n_ident < n_samples:
         raise ValueError(f"need 0 < n_ident < n_samples, got {n_ident} and {n_samples}")
+    if min(n_ident, n_samples - n_ident) < _MIN_PART:  # said for every seed, not for the seeds that drew long holds
+        raise ValueError(f"each part of a staircase reference needs at least {_MIN_PART} samples (4 holds of 80–180 "
+                         f"samples for every seed), got n_ident = {n_ident} and n_samples − n_ident = "
+                         f"{n_samples - n_ident}; e.g. n_samples = {2 * _MIN_PART}, n_ident = {_MIN_PART}")
     return n_samples, n_ident, check_seed(seed)
 
 
