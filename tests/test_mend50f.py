@@ -108,3 +108,17 @@ def test_two_speed_reference_follows_the_same_rule():
     with pytest.raises(ValueError, match="at least 541"):
         two_speed_reference(n_samples=1000, n_ident=500, seed=0)
     assert two_speed_reference(n_samples=1082, n_ident=541, seed=0).shape == (1082, 2)
+
+
+# --- 4. notebook 07 said the closed-loop responses differ by "at most about a tenth of the step"; its table: 0.145 --
+
+def test_notebook_07_states_the_closed_loop_difference_its_table_shows():
+    import json
+    from pathlib import Path
+
+    nb = next((Path(__file__).resolve().parents[1] / "notebooks").glob("07*.ipynb"))
+    text = " ".join("".join(c["source"]) for c in json.loads(nb.read_text(encoding="utf-8"))["cells"]
+                    if c["cell_type"] == "markdown")
+    assert "at most about a tenth of the step" not in text
+    # the table's largest max |model − plant| is 0.145 mlc (1600 rpm, the PI of 1200 rpm); 0.111 with the local PI
+    assert "0.15 mlc" in text and "0.145" in text
