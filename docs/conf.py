@@ -9,6 +9,7 @@ names each subpackage exports (its ``__all__``), grouped by concern in the layer
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import os
 import shutil
@@ -77,17 +78,23 @@ def _write_api() -> None:
                  + ".", ""]
         for name in names:
             obj = getattr(mod, name)
-            if isinstance(obj, type):
-                directive = "autoexception" if issubclass(obj, BaseException) else "autoclass"
-            elif callable(obj):
-                directive = "autofunction"
-            else:
+            directive = _api_directive(obj)
+            if directive == "py:data":
                 lines += [f".. py:data:: graybox.{unit}.{name}", "", *_data_doc(unit, name, obj), ""]
                 continue
             lines += [f".. {directive}:: graybox.{unit}.{name}", ""]
         (out / f"{unit}.rst").write_text("\n".join(lines), encoding="utf-8")
         index.append(f"   {unit}")
     (out / "index.rst").write_text("\n".join(index) + "\n", encoding="utf-8")
+
+
+def _api_directive(obj: object) -> str:
+    """How the reference shows a public name: a class, an exception, a function, or a constant (``py:data``, with
+    its ``#:`` comment). A callable instance is a constant: ``BUCK_STATIC_CURVE``, a StaticCurve, was shown as a
+    function carrying StaticCurve's docstring."""
+    if isinstance(obj, type):
+        return "autoexception" if issubclass(obj, BaseException) else "autoclass"
+    return "autofunction" if inspect.isroutine(obj) else "py:data"
 
 
 def _at_the_top() -> list[str]:

@@ -122,3 +122,51 @@ def test_notebook_07_states_the_closed_loop_difference_its_table_shows():
     assert "at most about a tenth of the step" not in text
     # the table's largest max |model − plant| is 0.145 mlc (1600 rpm, the PI of 1200 rpm); 0.111 with the local PI
     assert "0.15 mlc" in text and "0.145" in text
+
+
+# --- 5. API pages: DecimationAdvice showed a field as "tau_y2 (tau_y,)"; BUCK_STATIC_CURVE as a function ----
+
+def _ivar_fields(cls) -> dict[str, str]:
+    """The ``:ivar name: text`` fields napoleon makes of a class's Attributes section (docs/conf.py's settings)."""
+    import inspect
+    import re
+
+    from sphinx.ext.napoleon import Config, NumpyDocstring
+
+    cfg = Config(napoleon_use_ivar=True, napoleon_numpy_docstring=True, napoleon_google_docstring=False)
+    lines = str(NumpyDocstring(inspect.getdoc(cls), cfg, what="class")).splitlines()
+    return {m.group(1): m.group(2) for m in (re.match(r":ivar ([^:]+): ?(.*)", ln) for ln in lines) if m}
+
+
+def test_decimation_advice_documents_each_field_under_its_own_name():
+    from graybox import DecimationAdvice
+
+    fields = _ivar_fields(DecimationAdvice)
+    for name in ("q", "q_range", "tau_y", "tau_y2", "tau_m", "Ts", "reason"):
+        assert name in fields and fields[name].strip(), (name, sorted(fields))
+    assert not [k for k in fields if "," in k]  # "tau_y, tau_y2" rendered as the field "tau_y2 (tau_y,)"
+
+
+def _api_directive():
+    """docs/conf.py's choice of directive for a public name, compiled alone (importing conf.py builds the api/)."""
+    import ast
+    from pathlib import Path
+
+    src = (Path(__file__).resolve().parents[1] / "docs" / "conf.py").read_text(encoding="utf-8")
+    fn = next(n for n in ast.parse(src).body if isinstance(n, ast.FunctionDef) and n.name == "_api_directive")
+    import inspect
+
+    ns: dict = {"inspect": inspect}
+    exec(compile(ast.Module([fn], type_ignores=[]), "conf.py", "exec"), ns)
+    return ns["_api_directive"]
+
+
+def test_api_reference_shows_a_callable_constant_as_data():
+    import graybox as gb
+    from graybox.datasets import BUCK_STATIC_CURVE
+
+    directive = _api_directive()
+    assert directive(BUCK_STATIC_CURVE) == "py:data"  # a StaticCurve instance (callable), not a function
+    assert directive(gb.decimate) == "autofunction"
+    assert directive(gb.StaticCurve) == "autoclass" and directive(ValueError) == "autoexception"
+

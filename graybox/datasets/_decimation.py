@@ -44,11 +44,13 @@ class DecimationAdvice:
         when no autocorrelation minimum was found (``reason`` says why): there is nothing to advise.
     q_range : tuple of int or None
         The factors the rule allows, (max(1, ⌈τ_m / 20⌉), max(1, ⌊τ_m / 10⌋)).
-    tau_y, tau_y2 : int or None
-        First minima of the autocorrelations of y' = y − mean(y) and of y'² − mean(y'²) below their 95 %
-        band, or where there is none the lag at which each dies out (enters the band to stay:
-        can no longer be told from zero), in samples of the record (the smallest over several records); None where there
-        is neither within a quarter of the record.
+    tau_y : int or None
+        First minimum of the autocorrelation of y' = y − mean(y) below its 95 % band, or where there is
+        none the lag at which it dies out (enters the band to stay: can no longer be told from zero), in
+        samples of the record (the smallest over several records); None where there is neither within a
+        quarter of the record.
+    tau_y2 : int or None
+        The same for y'² − mean(y'²), the squared deviation (nonlinear correlation).
     tau_m : int or None
         min(tau_y, tau_y2).
     Ts : float

@@ -56,9 +56,9 @@ __all__ = [
 #: Environment variable that points at the folder holding buck_id.csv and buck_valid.csv.
 BUCK_ENV = "GRAYBOX_BUCK_DIR"
 
-#: The buck converter's theoretical static function (supply Vd = 24 V): ȳ = 4 Vd/3 − (Vd/3) ū
-#: = (4 − ū)·8 volts, gain −8 V per unit of input. Its domain ū ∈ [1, 4] is where 0 ≤ ȳ ≤ Vd,
-#: the only outputs a buck converter can produce.
+#: The buck converter's theoretical static function, a :class:`~graybox.StaticCurve`: ȳ = (4 − ū)·8 V.
+#: With supply Vd = 24 V, ȳ = 4 Vd/3 − (Vd/3) ū, gain −8 V per unit of input; its domain ū ∈ [1, 4] is
+#: where 0 ≤ ȳ ≤ Vd, the only outputs a buck converter can produce.
 BUCK_STATIC_CURVE = StaticCurve.polynomial([32.0, -8.0], domain=(1.0, 4.0),
                                            name="buck theoretical static function (4 - u)*8")
 
