@@ -170,3 +170,39 @@ def test_api_reference_shows_a_callable_constant_as_data():
     assert directive(gb.decimate) == "autofunction"
     assert directive(gb.StaticCurve) == "autoclass" and directive(ValueError) == "autoexception"
 
+
+# --- 6. a label naming its unit in words ("Temperature in °C") got the unit again: "Temperature in °C (°C)" ----
+
+from graybox.plots._data import unit_label  # noqa: E402  (imported here, not in the first example's deadline)
+
+UNITS = ["°C", "rpm", "mlc", "V", "%", "Pa/(rad/s)", "m³/h", "s"]
+
+
+@given(unit=st.sampled_from(UNITS), head=st.sampled_from(["Temperature", "Pump speed", "output", "ȳ"]),
+       form=st.sampled_from(["{h} in {u}", "{h}, {u}", "{h} / {u}", "{h} [{u}]", "{h} ({u})", "{h} in {u} (mean)"]))
+def test_a_label_that_names_its_unit_is_used_as_given(unit, head, form):
+    label = form.format(h=head, u=unit)
+    assert unit_label(label, unit) == label
+
+
+@given(unit=st.sampled_from(UNITS), head=st.sampled_from(["Temperature", "Pump speed", "output", "Voltage", "Pass"]))
+def test_a_label_without_its_unit_gets_it(unit, head):
+    assume(unit not in head.split())
+    assert unit_label(head, unit) == f"{head} ({unit})"
+
+
+def test_plot_functions_take_a_label_naming_its_unit_as_given():
+    import numpy as np
+
+    import graybox as gb
+    from graybox import plots
+
+    rec = gb.Record(np.linspace(30, 60, 20), np.linspace(80, 120, 20), Ts=0.5, units=("%", "°C"))
+    pts = gb.StaticPoints([30.0, 45.0, 60.0], [80.0, 100.0, 120.0], units=("%", "°C"))
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)"]), [0.5, 1.0])
+    ax = plots.plot_static_curve(pts, xlabel="Valve opening in %", ylabel="Temperature in °C").axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("Valve opening in %", "Temperature in °C")
+    assert plots.plot_free_run(rec, {"m": model}, ylabel="Temperature in °C").axes[0].get_ylabel() == "Temperature in °C"
+    ax_u, ax_y = plots.plot_record(rec, input_label="Valve, %", output_label="Temperature in °C").axes
+    assert (ax_u.get_ylabel(), ax_y.get_ylabel()) == ("Valve, %", "Temperature in °C")
+    assert plots.plot_static_curve(pts, ylabel="Temperature").axes[0].get_ylabel() == "Temperature (°C)"

@@ -7,6 +7,7 @@ they hold no global state, work with the Agg backend (servers, CI) and never ope
 
 from __future__ import annotations
 
+import re
 from typing import Sequence
 
 import numpy as np
@@ -75,11 +76,13 @@ def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
 
 
 def unit_label(text: str, unit: str) -> str:
-    """An axis label with its unit: ``text (unit)``, or ``text`` when no unit is said or the text
-    already names it (``"Speed (rpm)"``, ``"Speed [rpm]"``). A label that is no text is shown as ``str(text)``
+    """An axis label with its unit: ``text (unit)``, or ``text`` as given when no unit is said or the text
+    already names it, as a word of its own (``"Speed (rpm)"``, ``"Speed [rpm]"``, ``"Temperature in °C"``,
+    ``"Speed, rpm"``; not the V of ``"Voltage"``). A label that is no text is shown as ``str(text)``
     (as matplotlib shows any label; a surface's ``input_labels`` may be any values)."""
     text = str(text)
-    if not unit or f"({unit})" in text or f"[{unit}]" in text:
+    # "Temperature in °C" became "Temperature in °C (°C)": only "(°C)" and "[°C]" counted as naming it
+    if not unit or re.search(rf"(?:^|[\s(\[]){re.escape(unit)}(?=$|[\s)\],;:.])", text):
         return text
     return f"{text} ({unit})"
 
