@@ -206,3 +206,57 @@ def test_plot_functions_take_a_label_naming_its_unit_as_given():
     ax_u, ax_y = plots.plot_record(rec, input_label="Valve, %", output_label="Temperature in °C").axes
     assert (ax_u.get_ylabel(), ax_y.get_ylabel()) == ("Valve, %", "Temperature in °C")
     assert plots.plot_static_curve(pts, ylabel="Temperature").axes[0].get_ylabel() == "Temperature (°C)"
+
+
+# --- 7. a grid spec's CSV hint said decimal=',' (Python) where the user writes TOML: decimal = "," -----------
+
+def _spec_with_files(tmp_path, ident_text, decimal='"."'):
+    import graybox as gb
+    from graybox.experiments import Grid
+
+    data = gb.load_pumping()
+    rows = "\n".join(f"{u:.1f};{y:.4f}" for u, y in zip(data.ident.u[:400], data.ident.y[:400]))
+    lines = rows.splitlines()
+    lines[50] = lines[50].replace(".", ",")  # one line as a spreadsheet in a decimal-comma locale wrote it
+    (tmp_path / "ident.csv").write_text(ident_text or "speed;pressure\n" + "\n".join(lines), encoding="utf-8")
+    (tmp_path / "valid.csv").write_text("speed;pressure\n" + rows, encoding="utf-8")
+    (tmp_path / "static.csv").write_text("speed;pressure\n" + "\n".join(
+        f"{u:.1f};{y:.4f}" for u, y in zip(data.static.ubar, data.static.ybar)), encoding="utf-8")
+    spec = f"""
+[[data]]
+name = "mine"
+ident = {{path = "ident.csv", u = "speed", y = "pressure", Ts = 0.05, decimal = {decimal}}}
+valid = {{path = "valid.csv", u = "speed", y = "pressure", Ts = 0.05}}
+static = {{path = "static.csv", u = "speed", y = "pressure", uncertainty = 0.175}}
+
+[[structures]]
+name = "s"
+terms = ["y(k-1)", "u(k-1)", "1"]
+
+[[variants]]
+name = "ls"
+estimator = "ls"
+"""
+    return Grid.from_toml_text(spec, base_dir=str(tmp_path))
+
+
+def test_grid_spec_loader_hint_is_the_toml_the_user_writes(tmp_path):
+    from graybox.experiments import SpecError
+
+    grid = _spec_with_files(tmp_path, None)
+    with pytest.raises(SpecError) as info:
+        grid.load_data()
+    msg = str(info.value)
+    assert "decimal comma" in msg
+    assert 'decimal = ","' in msg and "decimal=','" not in msg
+
+
+def test_grid_spec_loader_hints_in_toml_for_every_reader_key(tmp_path):
+    from graybox.experiments import SpecError
+
+    data_rows = "1620,0;20,2095\n1610,0;20,1000\n"  # a units row? no: numbers with decimal commas, decimal = "."
+    grid = _spec_with_files(tmp_path, "speed;pressure\n" + data_rows * 200)
+    with pytest.raises(SpecError) as info:
+        grid.load_data()
+    msg = str(info.value)
+    assert "units_row=True" not in msg and "units_row = true" in msg, msg

@@ -203,6 +203,30 @@ _RECORD_KEYS = ("path", "u", "y", "time", "Ts", "input_names", "time_rtol", *_RE
 _STATIC_KEYS = ("path", "u", "y", "repeats", "uncertainty", "input_names", *_READ_KEYS)
 
 
+#: A loader's hint naming one of its keyword options as Python writes it (``decimal=','``, ``units_row=True``,
+#: ``skiprows=3``, a bare ``delimiter=``): what a spec's user writes differently, in TOML.
+_PY_OPTION = re.compile(r"\b(delimiter|decimal|encoding|skiprows|units_row|time_rtol)="
+                        r"('(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"|True\b|False\b|[0-9][0-9.eE+-]*)?")
+
+
+def _toml_hints(text: str) -> str:
+    """A loader's message with its keyword options as a spec's file table takes them: ``decimal=','`` becomes
+    ``decimal = ","``, ``units_row=True`` ``units_row = true``, a bare ``delimiter=`` the key ``delimiter``."""
+    import ast
+
+    def toml(m: re.Match) -> str:
+        key, value = m.group(1), m.group(2)
+        if value is None:
+            return key
+        if value in ("True", "False"):
+            return f"{key} = {value.lower()}"
+        if value[0] in "'\"":
+            return f"{key} = {json.dumps(ast.literal_eval(value), ensure_ascii=False)}"
+        return f"{key} = {value}"
+
+    return _PY_OPTION.sub(toml, text)
+
+
 def _read_options(entry: Mapping[str, Any]) -> dict[str, Any]:
     """The loader's keyword options a file entry gives."""
     return {k: entry[k] for k in ("input_names", "time_rtol", *_READ_KEYS) if k in entry}
@@ -1330,8 +1354,8 @@ class Grid:
                 ds = d.load(self.base_dir)
             except SpecError as e:
                 raise e.within("data", i) from None
-            except (OSError, ValueError) as exc:
-                raise SpecError(f"data set {d.name!r} cannot be loaded: {exc}", ("data", i)) from None
+            except (OSError, ValueError) as exc:  # the loader's hints name its options in Python: said in TOML
+                raise SpecError(f"data set {d.name!r} cannot be loaded: {_toml_hints(str(exc))}", ("data", i)) from None
             names = tuple(ds.input_names)
             for j, v in enumerate(self.variants):
                 for k, c in enumerate(v.constraints):
