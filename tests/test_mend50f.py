@@ -260,3 +260,62 @@ def test_grid_spec_loader_hints_in_toml_for_every_reader_key(tmp_path):
         grid.load_data()
     msg = str(info.value)
     assert "units_row=True" not in msg and "units_row = true" in msg, msg
+
+
+# --- 8. se_dsf's PE start named "PE λ1=1" the least-squares estimate, and scored that θ twice ----------------
+
+@pytest.fixture(scope="module")
+def small_problem():
+    import graybox as gb
+    from graybox.estimation._simulation_error import SEProblem
+
+    data = gb.load_pumping()
+    st = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"])
+    return SEProblem(st, [data.ident], data.static, margin=None)
+
+
+def test_se_dsf_pe_start_names_least_squares_so_and_scores_it_once(small_problem, monkeypatch):
+    import numpy as np
+
+    from graybox.estimation import _epsilon_constraint as ec
+
+    p = small_problem
+    scored = []
+    real_js = type(p).js
+
+    def js(self, th):
+        scored.append(np.array(th, float))
+        return real_js(self, th)
+
+    monkeypatch.setattr(type(p), "js", js)
+    th, name = ec._pe_start(p, 10.0, np.logspace(-6, 0, 60))  # a band least squares meets
+    assert name == "least squares"
+    np.testing.assert_allclose(th, p.ls_theta(), rtol=1e-12, atol=0)
+    rows = np.vstack(scored)
+    near = [(i, j) for i in range(len(rows)) for j in range(i) if np.allclose(rows[i], rows[j], rtol=1e-9, atol=0)]
+    assert not near, f"the same θ scored twice as a start: rows {near}"
+    assert ec._pe_start(p, 10.0, np.array([1.0]))[1] == "least squares"  # λ1 = 1 alone: the same estimate
+
+
+def test_se_dsf_result_unchanged_by_dropping_the_duplicate_start():
+    import warnings
+
+    import numpy as np
+
+    import graybox as gb
+
+    data = gb.load_pumping()
+    st = gb.Structure(["y(k-1)", "y(k-2)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)", "1"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gb.StaticRangeWarning)
+        inside = gb.se_dsf(st, data, band=0.2, margin=None)
+        wide = gb.se_dsf(st, data, band=10.0, margin=None)
+    # before the fix (main at d9eb911), bit for bit where the band binds
+    assert inside.start == "SE λ1=0.3728" and (inside.JS, inside.JSF) == (1.0941981750944973, 0.19995312861258682)
+    # where it does not (J_S's flat minimum), the same minimum: before, the fresh fit at λ1 = 0.95 beat the run from
+    # "PE λ1=1" (least squares) by rounding; now the run from least squares, named so, beats it by rounding
+    assert wide.start in ("least squares", "SE λ1=0.95 (fresh fit)")
+    np.testing.assert_allclose(wide.JS, 0.8129790525213298, rtol=1e-12)
+    np.testing.assert_allclose(wide.model.theta, [1.8515205321476409e+00, -8.5826140015660479e-01,
+                                                  -1.5563267242660583e-04, 1.3103663114863964e-07,
+                                                  -1.2707715751856941e-06, 7.7835451001899258e-02], rtol=1e-6)
