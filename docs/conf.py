@@ -80,7 +80,9 @@ def _write_api() -> None:
             obj = getattr(mod, name)
             directive = _api_directive(obj)
             if directive == "py:data":
-                lines += [f".. py:data:: graybox.{unit}.{name}", "", *_data_doc(unit, name, obj), ""]
+                # the name alone: under ".. module::" a dotted one was taken as relative to it (anchors
+                # "graybox.datasets.graybox.datasets.BUCK_STATIC_CURVE")
+                lines += [f".. py:data:: {name}", "", *_data_doc(unit, name, obj), ""]
                 continue
             lines += [f".. {directive}:: graybox.{unit}.{name}", ""]
         (out / f"{unit}.rst").write_text("\n".join(lines), encoding="utf-8")

@@ -44,6 +44,9 @@ def test_every_public_name_has_a_reference_entry(site):
     assert exported <= anchors, f"not in the API reference: {sorted(exported - anchors)}"
     for sub in ("plots", "experiments"):
         assert set(getattr(gb, sub).__all__) <= anchors, sub
+    # each anchor names its module once (a constant's was "graybox.datasets.graybox.datasets.BUCK_STATIC_CURVE")
+    doubled = re.findall(r'id="(graybox\.[\w.]*graybox\.[\w.]+)"', pages)
+    assert not doubled, doubled[:3]
 
 
 def test_notebooks_are_rendered_with_their_outputs(site):
