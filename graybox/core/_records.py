@@ -1052,6 +1052,9 @@ def check_print_overlap(a: Record, p: RecordPrint, a_name: str, b_name: str, adv
     hit = np.flatnonzero(hi > lo)
     if not hit.size:
         return
+    # the windows whose block is rarest in the print first: a record at rest (or repeating) for long holds one
+    # block many times, each of a's windows there a hit that names none of the alignments the tries look at
+    hit = hit[np.argsort((hi - lo)[hit], kind="stable")]
     offs: dict[int, int] = {}
     for q in hit[:4096]:
         for k in order[lo[q]:hi[q]][:_PRINT_TRIES]:
