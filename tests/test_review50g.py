@@ -32,3 +32,29 @@ def test_a_print_refuses_a_slice_that_begins_in_a_long_rest(rest, start):
     # a record of its own beside the same rest is still not refused
     other = _at_rest_first(rest, seed=1).slice(start, None, "other")
     check_print_overlap(other, record_print(f), "choosing", "fitting", "advice")
+
+
+# 2. ELS's round-off test and tiny noise on a large level -------------------------------------------------------------
+
+@pytest.mark.parametrize("offset, scale", [(1e4, 1e-9), (-1e4, 1e-10), (1e6, 1e-8)])
+def test_els_finds_the_ma_part_of_tiny_noise_on_a_large_level_as_at_y(offset, scale):
+    # noise of 1e-12 of the level and less (here 45-450 ulps of it) was read as round-off: MA part zero, 0
+    # iterations, where at y (and with the former test at y + offset too) ELS finds the same C as at any noise size
+    rng = np.random.default_rng(0)
+    n = 300
+    u = rng.uniform(0.0, 1.0, n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.1 + 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.4 * u[k - 1] ** 2
+    e = rng.standard_normal(n)
+    v = e.copy()
+    v[1:] += 0.5 * e[:-1]
+    terms = ["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]
+    at_y = gb.els(terms, gb.Record(u=u, y=y + scale * v), noise=1)
+    assert at_y.n_iter > 0 and abs(at_y.model.noise_theta[0]) > 0.05
+    res = gb.els(terms, gb.Record(u=u, y=y + offset + scale * v), noise=1)
+    assert res.n_iter > 0
+    np.testing.assert_allclose(res.model.noise_theta, at_y.model.noise_theta, atol=0.01)
+    # noise-free, the same level: still round-off (c94100a's case)
+    exact = gb.els(terms, gb.Record(u=u, y=y + offset), noise=1)
+    assert exact.n_iter == 0 and np.all(exact.model.noise_theta == 0.0)

@@ -531,6 +531,12 @@ _NO_STATIC_REMEDY = ("give a record whose input moves ({who} takes no static poi
                      "records together with static points at several input levels)")
 
 
+#: The raw output's round-off that :func:`els` reads as no residual at all, in ulps of its RMS: noise-free data at
+#: y + 1e4 leave least-squares residuals of about one; noise of 1e-12 of the level (some 4500 ulps) is noise, whose
+#: MA part the iteration finds as at y.
+ROUNDOFF_ULPS = 16
+
+
 def els(
     structure: object,
     data: Record | Sequence[Record] | Dataset,
@@ -613,15 +619,16 @@ def els(
                      what=what, remedies=(remedy, remedy))
     offsets = (signal_offsets(recs) if is_closed(process) and all(l is not None for l in _pure_lags(ns))
                else None)
-    # the data's round-off is that of the raw levels: centred signals carry it too (y + 1e4: 1e4 ulps)
-    y_rms = np.sqrt(np.mean(reg.y**2))
+    # the data's round-off is that of the raw levels: centred signals carry it too (y + 1e4: 1e4 ulps), a few ulps
+    # of the raw output (ROUNDOFF_ULPS of them), beside 1e-12 of the output's RMS as fitted
+    y_raw = ROUNDOFF_ULPS * np.finfo(float).eps * np.sqrt(np.mean(reg.y**2))
     if offsets is not None:
         reg = _regression(process, ns, centred_data(recs, offsets))
     theta_ls = scaled_lstsq(reg.psi, reg.y)
     xi = reg.y - reg.psi @ theta_ls
     # No MA part, or a model that explains the data to round-off (of the raw signals, whatever their zero): then the
     # MA regressors would be round-off columns, so the MA part is zero by definition.
-    if len(ns) == 0 or np.sqrt(np.mean(xi**2)) <= 1e-12 * y_rms:
+    if len(ns) == 0 or np.sqrt(np.mean(xi**2)) <= 1e-12 * np.sqrt(np.mean(reg.y**2)) + y_raw:
         return _result(reg, theta_ls, np.zeros(len(ns)), 0, True, [], xi, theta_ls, name, offsets=offsets)
 
     fit = _ExtendedFit(reg)
