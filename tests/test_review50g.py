@@ -58,3 +58,20 @@ def test_els_finds_the_ma_part_of_tiny_noise_on_a_large_level_as_at_y(offset, sc
     # noise-free, the same level: still round-off (c94100a's case)
     exact = gb.els(terms, gb.Record(u=u, y=y + offset), noise=1)
     assert exact.n_iter == 0 and np.all(exact.model.noise_theta == 0.0)
+
+
+# 3. the roots of a static equation whose groups of roots lie far apart ----------------------------------------------
+
+def test_equilibria_of_roots_beyond_the_float_range_and_far_out_ones():
+    # F(ȳ) = 6.4e-259 ū - (1.26e262 + 1) ȳ + ... + 9.5e-257 ȳ^4: one group of roots near 5e-521 (below the float
+    # range: its scale 2^e was 0), and ȳ³ = 1.32e518 (ȳ = 5.097e172, whose scale cubed, 2^1719, is not a float):
+    # numpy.roots met the NaN of 0 · inf and raised LinAlgError('Array must not contain infs or NaNs'), from
+    # Model.equilibria, static_curve and the batched solver's one-at-a-time path alike
+    th = [6.36279666e-259, -1.26424354e262, -9.99089567e-278, 8.72751169e-290, 9.54740351e-257]
+    m = gb.Model(["u(k-1)", "y(k-1)", "y(k-1)^2", "y(k-1)^3", "y(k-1)^4"], th)
+    eqs = m.equilibria(1.0)
+    curve = m.static_curve(np.linspace(1.0, 2.0, 6), strict=False)
+    assert len(eqs) == 1 and not eqs[0].stable
+    np.testing.assert_allclose(eqs[0].ybar, np.exp((np.log(1.26424354e262 + 1) - np.log(9.54740351e-257)) / 3),
+                               rtol=1e-12)
+    assert curve.shape == (6,)

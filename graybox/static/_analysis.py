@@ -308,7 +308,7 @@ def continuum(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.
 
 
 def _root_groups(c: np.ndarray) -> list[tuple[float, int, int]]:
-    """Groups of roots of Σ c_k x^k of similar magnitude: (scale, k1, k2) for each.
+    """Groups of roots of Σ c_k x^k of similar magnitude: (log2 of the scale, an integer, k1, k2) for each.
 
     The upper convex hull of the points (k, log2|c_k|) (the Newton polygon) has one edge per
     group: the edge from k1 to k2 carries k2 − k1 roots of magnitude near 2^(−slope), the roots of
@@ -330,16 +330,21 @@ def _root_groups(c: np.ndarray) -> list[tuple[float, int, int]]:
             groups[-1][2] = k2
         else:
             groups.append([e * (k2 - k1), k1, k2])
-    return [(2.0 ** np.round(w / (k2 - k1)), int(k1), int(k2)) for w, k1, k2 in groups]
+    return [(int(np.round(w / (k2 - k1))), int(k1), int(k2)) for w, k1, k2 in groups]
 
 
 def _roots_one(c: np.ndarray) -> np.ndarray:
     """Every root (complex) of Σ c_k x^k: group by group in each group's scale, then Newton on the whole."""
     z0 = [0.0] * int(np.argmax(c != 0))  # x^lo divides the polynomial
     z = []
-    for tau, k1, k2 in _root_groups(c):
-        cs = c[k1:k2 + 1] * tau ** np.arange(k2 - k1 + 1)  # exact: tau is a power of two
-        z.extend((tau * np.roots(cs[::-1] / np.max(np.abs(cs)))).tolist())
+    for e, k1, k2 in _root_groups(c):
+        tau = np.ldexp(1.0, e)
+        if not 0 < tau < np.inf:
+            continue  # roots of a scale beyond the float range: no float root to find among them
+        cs = np.ldexp(c[k1:k2 + 1], e * np.arange(k2 - k1 + 1))  # exact (tau ** k may leave the range, cs not)
+        p = cs[::-1] / np.max(np.abs(cs))
+        if np.all(np.isfinite(p)):
+            z.extend((tau * np.roots(p)).tolist())
     z = np.array(z, dtype=complex)
     dc = c[1:] * np.arange(1, c.size)
     for _ in range(30):  # Newton steps on the whole polynomial, each kept only if it reduces |F|
