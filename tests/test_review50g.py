@@ -75,3 +75,47 @@ def test_equilibria_of_roots_beyond_the_float_range_and_far_out_ones():
     np.testing.assert_allclose(eqs[0].ybar, np.exp((np.log(1.26424354e262 + 1) - np.log(9.54740351e-257)) / 3),
                                rtol=1e-12)
     assert curve.shape == (6,)
+
+
+# 4. a damaged print in a Pareto set's file ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("field, value, said", [
+    ("length", 300.0, r"^<json>: object\.fitted_on\[0\]\.length: expected an integer, got 300\.0$"),
+    ("name", 5, r"^<json>: object\.fitted_on\[0\]\.name: expected a string, got int$"),
+    ("input_names", "u", r"^<json>: object\.fitted_on\[0\]\.input_names: expected a list, got str$"),
+    ("block", 0, r"^<json>: object\.fitted_on\[0\]: RecordPrint: need 1 <= block <= length"),
+])
+def test_a_damaged_print_is_named_once(field, value, said):
+    # a field of the wrong kind was said with its place twice: '<json>: object.fitted_on[0]: <json>:
+    # object.fitted_on[0].length: expected an integer, got 300.0'
+    import json
+
+    from graybox.core._terms import parse_structure
+    rng = np.random.default_rng(0)
+    rec = gb.Record(u=rng.standard_normal(300), y=rng.standard_normal(300), name="ident")
+    ps = gb.ParetoSet(parse_structure(["y(k-1)", "u(k-1)"]), np.array([[0.5, 1.0], [0.4, 1.1]]), np.array([1.0, 0.5]),
+                      np.zeros(2), np.array([1.0, 2.0]), np.array([0.1, 0.05]), "PE")
+    ps._keep_fitted_on([rec])
+    doc = json.loads(gb.to_json(ps))
+    doc["object"]["fitted_on"][0][field] = value
+    with pytest.raises(gb.io.GrayboxFileError, match=said):
+        gb.from_json(json.dumps(doc))
+
+
+def test_a_print_does_not_refuse_a_record_that_shares_only_a_held_level():
+    # fit: 200 samples at rest between varying ones; valid: 40 at rest between 10 of its own at each end. The print
+    # matched valid's rest to the fit's (the only whole blocks in that alignment) and, y varying in valid's own
+    # samples at the ends (never compared), refused it: 'its samples 0..59 are samples 97..156 of the other', where
+    # the records' own check (the fresh set's) takes it
+    rng = np.random.default_rng(0)
+    f = gb.Record(u=np.concatenate([rng.standard_normal(100), np.zeros(200), rng.standard_normal(100)]),
+                  y=np.concatenate([rng.standard_normal(100), np.zeros(200), rng.standard_normal(100)]), name="fit")
+    a = gb.Record(u=np.concatenate([rng.standard_normal(10), np.zeros(40), rng.standard_normal(10)]),
+                  y=np.concatenate([rng.standard_normal(10), np.zeros(40), rng.standard_normal(10)]), name="valid")
+    check_overlap(a, f, "choosing", "fitting", "advice")
+    check_print_overlap(a, record_print(f), "choosing", "fitting", "advice")
+    # a true piece across the rest's edge is still refused by both
+    piece = f.slice(90, 150, "piece")
+    for check, other in ((check_overlap, f), (check_print_overlap, record_print(f))):
+        with pytest.raises(ValueError, match="fitting"):
+            check(piece, other, "choosing", "fitting", "advice")

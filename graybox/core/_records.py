@@ -1066,10 +1066,14 @@ def check_print_overlap(a: Record, p: RecordPrint, a_name: str, b_name: str, adv
         idx = np.arange(b0, b1)
         ok = bool(np.all(hc[idx * W - off] == blocks[idx]))
         seen = idx.size
+        v0, v1 = (b0 * W - off, b1 * W - off) if idx.size else (e, s)  # the samples of a compared, in a
         if e == N - off and N - W - off >= s:  # the record's end is inside a: its last samples too
             ok = ok and bool(hc[N - W - off] == tail)
             seen += 1
-        if not (ok and seen and np.ptp(a.y[s:e]) > 0):
+            v0, v1 = min(v0, N - W - off), e
+        # y must vary along the samples compared (not merely the overlap, whose ends are not compared: a record
+        # sharing only a held level with the other, between samples of its own, is no piece of it)
+        if not (ok and seen and np.ptp(a.y[v0:v1]) > 0):
             continue
         if s == 0 and e == n == N and off == 0:
             raise ValueError(f"{prefix}the {a_name} record {a.name!r} is a {b_name} record ({p.name!r}): {advice}")
