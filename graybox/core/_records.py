@@ -1055,11 +1055,15 @@ def check_print_overlap(a: Record, p: RecordPrint, a_name: str, b_name: str, adv
     # the windows whose block is rarest in the print first: a record at rest (or repeating) for long holds one
     # block many times, each of a's windows there a hit that names none of the alignments the tries look at
     hit = hit[np.argsort((hi - lo)[hit], kind="stable")]
-    offs: dict[int, int] = {}
+    # each hit's vote shared among the blocks it matches: one of a block the print holds once outweighs the many
+    # that a held level's windows cast for every alignment of its blocks (counted alike, they tied with the true one
+    # and the nearer alignments went first)
+    offs: dict[int, float] = {}
     for q in hit[:4096]:
+        vote = 1.0 / float(hi[q] - lo[q])
         for k in order[lo[q]:hi[q]][:_PRINT_TRIES]:
             off = int(starts[k]) - int(q)
-            offs[off] = offs.get(off, 0) + 1
+            offs[off] = offs.get(off, 0.0) + vote
     for off in sorted(offs, key=lambda o: (-offs[o], abs(o)))[:_PRINT_TRIES]:
         s, e = max(0, -off), min(n, N - off)  # the overlap, in a's samples
         b0, b1 = -(-(s + off) // W), (e + off) // W  # the print's whole blocks inside it
