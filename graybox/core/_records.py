@@ -1033,8 +1033,11 @@ def check_print_overlap(a: Record, p: RecordPrint, a_name: str, b_name: str, adv
     ``ValueError`` when ``a`` holds the print's record, or shares with it the samples slicing one record gives
     (one inside the other, or the end of one the start of the other), seen in the print's whole blocks (a
     stretch's first and last few samples, inside a block, are not compared); nothing when ``a`` lacks one of
-    the print's inputs, or the shared samples' output does not vary (as the records' own check). A stretch
-    that slicing does not give is not looked for (the records' check warns of one)."""
+    the print's inputs, or the output does not vary along the samples compared (as the records' own check: a
+    held level is no evidence; so a slice whose output varies only in its first or last few samples, at a held
+    level elsewhere, is not seen). A stretch that slicing does not give is not looked for (the records' check
+    warns of one). Records that share samples except a few at an end (separate noise-free runs whose states meet
+    after a step) are refused where the records' own check warns: those samples are not compared."""
     if not all(n in a.input_names for n in p.input_names):
         return
     n, N, W = len(a), p.length, p.block
