@@ -315,6 +315,9 @@ def parse_term(text: str) -> Term:
             raise ValueError(f"cannot parse term {text!r}: {exc}") from None
         factors.append((sig, lag, power))
         pos = m.end()
+        if pos == len(s) and s.endswith("*"):  # 'y(k-1)*' (a truncated 'y(k-1)*u(k-2)') read as y(k-1)
+            raise ValueError(f"cannot parse term {text!r}: it ends in '*', a product missing its last factor"
+                             f"{_syntax_hint(s, len(s))}")
     try:
         return Term(tuple(factors))
     except ValueError as exc:
