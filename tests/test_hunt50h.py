@@ -13,3 +13,29 @@ def test_term_ending_in_a_product_sign_is_refused(text):
         gb.parse_term(text)
     with pytest.raises(ValueError, match="factor"):
         gb.parse_structure(text + " + y(k-2)")
+
+
+def test_inputs_whose_names_differ_only_in_leading_zeros_have_one_order():
+    # a01 and a1 ranked alike in natural name order: one monomial written in two factor orders was two
+    # distinct terms (a structure held both, two equal columns), and a structure's inputs came in the order of a
+    # set's iteration, which a str's hash (PYTHONHASHSEED) sets: a Model's input columns changed between processes
+    a, b = gb.parse_term("a01(k-1)a1(k-1)"), gb.parse_term("a1(k-1)a01(k-1)")
+    assert a == b and str(a) == str(b)
+    with pytest.raises(ValueError, match="duplicated"):
+        gb.Structure([a, b])
+    assert gb.Structure(["a1(k-1)", "a01(k-1)"]).input_names == gb.Structure(["a01(k-1)", "a1(k-1)"]).input_names
+
+
+def test_structure_input_order_does_not_depend_on_the_hash_seed():
+    import os
+    import subprocess
+    import sys
+
+    code = ("import graybox as gb; print(gb.Model(['a1(k-1)', 'a01(k-1)', 'x(k-1)', 'x0(k-1)', 'x00(k-1)'], "
+            "[1, 2, 3, 4, 5]).input_names)")
+    seen = set()
+    for seed in range(6):
+        env = {**os.environ, "PYTHONHASHSEED": str(seed)}
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+        seen.add(out.stdout.strip())
+    assert len(seen) == 1, seen

@@ -41,7 +41,9 @@ def _rank(signal: str) -> tuple:
         return (1,)
     if signal == "e":
         return (2,)
-    return (0, tuple((0, int(p), "") if p.isdigit() else (1, 0, p) for p in _NUM_RE.split(signal) if p))
+    # the name itself breaks ties: a01 and a1 read as one number, and ranked alike they were ordered by the order
+    # given (one monomial, two terms) or by a set's iteration (a structure's inputs, by the hash seed)
+    return (0, tuple((0, int(p), "") if p.isdigit() else (1, 0, p) for p in _NUM_RE.split(signal) if p), signal)
 
 
 def _check_signal(sig: object) -> str:
