@@ -39,3 +39,11 @@ def test_structure_input_order_does_not_depend_on_the_hash_seed():
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
         seen.add(out.stdout.strip())
     assert len(seen) == 1, seen
+
+
+@pytest.mark.parametrize("terms", [{"y(k-1)": 0.5, "u(k-1)": 1.0}, 3, None, b"y(k-1)"])
+def test_structure_refuses_what_is_no_sequence_of_terms(terms):
+    # a dict of term -> value was read as its keys, its values silently dropped (structure_of, parse_structure and
+    # Model refuse a mapping); a number or None was a bare "'int' object is not iterable"
+    with pytest.raises(TypeError, match="sequence of terms"):
+        gb.Structure(terms)

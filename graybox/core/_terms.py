@@ -346,6 +346,10 @@ class Structure:
         if isinstance(terms, str):  # iterated, it would be read character by character
             raise TypeError(f"a structure is a sequence of terms, got the string {terms!r}: pass a list of terms, "
                             "or parse a '+'-joined string with parse_structure")
+        if isinstance(terms, (bytes, Mapping)) or not isinstance(terms, Iterable):
+            # a dict of term -> θ read as its keys (its values dropped), a number a bare "not iterable"
+            raise TypeError(f"a structure is a sequence of terms (str or Term), got {type(terms).__name__}"
+                            + (": pass the terms, list(d), and their values apart" if isinstance(terms, Mapping) else ""))
         check_ordered(terms, "a structure", "terms (the order of θ)")
         ts = tuple(t if isinstance(t, Term) else parse_term(t) for t in terms)
         seen: set[Term] = set()
