@@ -47,3 +47,19 @@ def test_structure_refuses_what_is_no_sequence_of_terms(terms):
     # Model refuse a mapping); a number or None was a bare "'int' object is not iterable"
     with pytest.raises(TypeError, match="sequence of terms"):
         gb.Structure(terms)
+
+
+@pytest.mark.parametrize("bad", [True, False, 1.5, "2"])
+def test_record_slice_refuses_what_is_no_sample_index(bad):
+    # slice(True) was the samples 1: (a bool read as 1), slice(1.5) numpy's "slice indices must be integers"
+    r = gb.Record(np.arange(6.0), np.arange(6.0))
+    with pytest.raises(TypeError, match="start"):
+        r.slice(bad)
+    with pytest.raises(TypeError, match="stop"):
+        r.slice(0, bad)
+
+
+def test_record_slice_keeps_integer_indices():
+    r = gb.Record(np.arange(6.0), np.arange(6.0) * 2)
+    s = r.slice(np.int64(1), -1)
+    assert s.y.tolist() == [2.0, 4.0, 6.0, 8.0] and r.slice(2.0).y.tolist() == [4.0, 6.0, 8.0, 10.0]

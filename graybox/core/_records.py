@@ -19,7 +19,7 @@ import numpy as np
 
 from ._reprs import listed
 from ._terms import check_input_names, default_input_names, transient_source
-from ._validation import (as_1d_finite, check_per_point, check_real, check_str, float_array, frozen_value,
+from ._validation import (as_1d_finite, check_int, check_per_point, check_real, check_str, float_array, frozen_value,
                           refuse_non_real, warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
@@ -259,6 +259,9 @@ class Record:
     def slice(self, start: int | None = None, stop: int | None = None, name: str | None = None) -> "Record":
         """Return the samples ``start:stop`` as a new record named ``name`` (default: this one's name), with
         the same ``Ts``, units and inputs."""
+        # a bool was read as 0 or 1, a float numpy's "slice indices must be integers" naming neither
+        start, stop = (None if v is None else check_int(v, f"{self.name}: slice {what}")
+                       for what, v in (("start", start), ("stop", stop)))
         return Record(self.u[start:stop], self.y[start:stop], self.Ts, name or self.name, self.units, self.input_names)
 
     def require_length(self, max_lag: int) -> None:
