@@ -63,3 +63,19 @@ def test_record_slice_keeps_integer_indices():
     r = gb.Record(np.arange(6.0), np.arange(6.0) * 2)
     s = r.slice(np.int64(1), -1)
     assert s.y.tolist() == [2.0, 4.0, 6.0, 8.0] and r.slice(2.0).y.tolist() == [4.0, 6.0, 8.0, 10.0]
+
+
+def test_model_of_a_result_keeps_the_inputs_of_the_result_model():
+    # Model(res, θ) of a result that carries a model (ELSResult, Decision …) took its structure but not its
+    # inputs: a structure in b alone made a model of the one input b, which read a 2-column array of (a, b) as
+    # (u1, u2) and refused it, and took levels of b alone where res.model takes points (a, b)
+    rng = np.random.default_rng(0)
+    n = 200
+    u = rng.normal(size=(n, 2))
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + u[k - 1, 1] + 0.01 * rng.normal()
+    res = gb.els(["y(k-1)", "b(k-1)"], gb.Record(u, y, input_names=("a", "b")))
+    m = gb.Model(res, res.model.theta)
+    assert m.input_names == res.model.input_names == ("a", "b")
+    np.testing.assert_array_equal(m.simulate(u, y0=y[:1]), res.model.simulate(u, y0=y[:1]))

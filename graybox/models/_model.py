@@ -100,6 +100,10 @@ class Model:
             # reads the data's frames as sel.model does, not by the structure's inputs alone
             carried = getattr(given, "input_names", None)
             names = carried if isinstance(carried, tuple) and getattr(given, "structure", None) is st else None
+            inner = getattr(given, "model", None)  # a result that carries a model (ELSResult, Decision …): its inputs
+            if names is None and isinstance(getattr(inner, "input_names", None), tuple) and \
+                    getattr(inner, "structure", None) is st:
+                names = inner.input_names
         object.__setattr__(self, "input_names", model_input_names(st, names))
 
     # -- basic facts --------------------------------------------------------
