@@ -79,3 +79,22 @@ def test_model_of_a_result_keeps_the_inputs_of_the_result_model():
     m = gb.Model(res, res.model.theta)
     assert m.input_names == res.model.input_names == ("a", "b")
     np.testing.assert_array_equal(m.simulate(u, y0=y[:1]), res.model.simulate(u, y0=y[:1]))
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+_NAMES = ["u", "y", "e", "u1", "u01", "u001", "u10", "u2", "a1", "a01", "y1", "e1", "k1", "x_", "u_tau1em07"]
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(_NAMES), st.integers(1, 2), st.integers(1, 3)), max_size=6),
+       st.randoms(use_true_random=False))
+def test_a_term_does_not_depend_on_the_order_of_its_factors(factors, rnd):
+    # the law behind 97c27d1: one monomial is one term, printed one way, whatever order its factors are given in
+    shuffled = list(factors)
+    rnd.shuffle(shuffled)
+    a, b = gb.Term(tuple(factors)), gb.Term(tuple(shuffled))
+    assert a == b and str(a) == str(b) and gb.parse_term(str(a)) == a
+    terms = [gb.Term(((s, lag, 1),)) for s, lag, _ in factors if s not in ("y", "e")]
+    terms = list(dict.fromkeys(terms))
+    assert gb.Structure(terms).input_names == gb.Structure(terms[::-1]).input_names
