@@ -98,3 +98,21 @@ def test_a_term_does_not_depend_on_the_order_of_its_factors(factors, rnd):
     terms = [gb.Term(((s, lag, 1),)) for s, lag, _ in factors if s not in ("y", "e")]
     terms = list(dict.fromkeys(terms))
     assert gb.Structure(terms).input_names == gb.Structure(terms[::-1]).input_names
+
+
+def test_one_step_prediction_beyond_the_float_range_is_nan_without_numpy_warnings():
+    # predict promised one step ahead is never NaN for finite data: a term beyond the float range made inf − inf,
+    # NaN with numpy's "overflow encountered in power" and "invalid value encountered in matmul"; now NaN where the
+    # prediction leaves the float range, as a prediction further ahead is where its run leaves the bound, said so
+    import warnings
+
+    r = gb.Record(np.ones(5), np.array([1e3, 1e3, 1e3, 2.0, 1e3]))
+    m = gb.Model(["y(k-1)^200", "y(k-2)^200", "u(k-1)"], [1.0, -1.0, 1.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        yhat = m.predict(r)
+        j = gb.j1(m, r)
+    assert yhat[:2].tolist() == [1e3, 1e3] and np.isnan(yhat[2]) and np.isnan(yhat[3]) and np.isnan(yhat[4])
+    assert j == np.inf
+    r2 = gb.Record(np.ones(5), np.array([1.0, 1.1, 0.9, 1.0, 1.2]))
+    np.testing.assert_allclose(m.predict(r2)[2:], r2.y[1:4] ** 200 - r2.y[0:3] ** 200 + 1.0)

@@ -52,7 +52,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
         ŷ in the output's units; the first ``max_lag`` samples are the measured ones. From
         horizon 2 on, NaN where the run behind a prediction leaves :func:`simulate`'s default
         bound (from the measured outputs that run starts from and the record's inputs); one step
-        ahead is never NaN for finite data.
+        ahead, NaN only where the prediction leaves the float range (a high power of a large u or y).
     """
     require_record(record)  # a Dataset: told to pass data.ident or data.valid
     structure = structure_of(structure)
@@ -62,7 +62,10 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
     record.require_length(L)
     if horizon == 1:
         yhat = record.y.copy()
-        yhat[L:] = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
+        # a term beyond the float range (a high power of a large u or y) was inf − inf with numpy's warnings
+        with np.errstate(over="ignore", invalid="ignore"):
+            one = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
+        yhat[L:] = np.where(np.isfinite(one), one, np.nan)
         return yhat
     code = encode(structure, record.input_names)
     # simulate's bound, each run's from the measured outputs it starts from: a horizon of the record's length is
