@@ -116,3 +116,12 @@ def test_one_step_prediction_beyond_the_float_range_is_nan_without_numpy_warning
     assert j == np.inf
     r2 = gb.Record(np.ones(5), np.array([1.0, 1.1, 0.9, 1.0, 1.2]))
     np.testing.assert_allclose(m.predict(r2)[2:], r2.y[1:4] ** 200 - r2.y[0:3] ** 200 + 1.0)
+
+
+def test_regressor_matrix_names_start_when_start_is_what_the_record_is_short_of():
+    # 6 samples, start=6 for y(k-1): the message said "fewer than max lag + 1 = 7", a max lag the structure has not
+    r = gb.Record(u=np.arange(6.0), y=np.arange(6.0) ** 2)
+    with pytest.raises(ValueError, match=r"fewer than start \+ 1 \(start = 6, the structure's max lag 1\) = 7"):
+        gb.regressor_matrix(["y(k-1)"], r.u, r.y, start=6)
+    with pytest.raises(ValueError, match=r"fewer than max lag \+ 1 = 3"):
+        gb.regressor_matrix(["y(k-2)"], r.u[:2], r.y[:2])

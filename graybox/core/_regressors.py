@@ -130,7 +130,8 @@ def regressor_matrix(
     if s < structure.max_lag:
         raise ValueError(f"start ({s}) is smaller than the structure's max lag ({structure.max_lag})")
     if n < s + 1:
-        raise ValueError(f"record has {n} samples, fewer than max lag + 1 = {s + 1}")
+        first = "max lag + 1" if start is None else f"start + 1 (start = {s}, the structure's max lag {structure.max_lag})"
+        raise ValueError(f"record has {n} samples, fewer than {first} = {s + 1}")
     signals = input_signals(u, names)
     signals["y"] = y
     if e is not None:
