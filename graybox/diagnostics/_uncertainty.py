@@ -276,11 +276,14 @@ class ParameterUncertainty:
             return self.cov / np.outer(s, s)
 
     def covers(self, theta: np.ndarray) -> np.ndarray:
-        """Which components of ``theta`` (shape (n_terms,)) lie in their interval, shape (n_terms,) bool (to the
+        """Which components of ``theta`` (shape (n_terms,), finite) lie in their interval, shape (n_terms,) bool (to the
         round-off of the estimate: a constrained parameter's interval has zero width)."""
         th = np.asarray(theta, float)
         if th.shape != self.theta.shape:
             raise ValueError(f"theta must have shape {self.theta.shape} (one value per term), got {th.shape}")
+        if not np.all(np.isfinite(th)):  # NaN compared False: it read as a value outside its interval
+            raise ValueError(f"theta must be finite, got {th[~np.isfinite(th)][0]} for term "
+                             f"{self.model.structure[int(np.flatnonzero(~np.isfinite(th))[0])]}")
         iv = self.intervals
         # a parameter the constraints fix has an interval of zero width, and a value equal to it up to the
         # round-off of the estimate (an ulp or so) is in it, not outside
