@@ -35,3 +35,42 @@ def test_covers_refuses_a_non_finite_theta(bad):
     with pytest.raises(ValueError, match="finite"):
         unc.covers(th)
     assert unc.covers(unc.theta).all()
+
+
+def _rt(**kw):
+    t = gb.residual_tests(MODEL, REC)
+    return dataclasses.replace(t, **kw)
+
+
+@pytest.mark.parametrize("kw, said", [
+    (dict(n=5), "n"),                                          # 399 residuals, said to be 5
+    (dict(residuals=()), "residuals"),                         # no record's residuals at all
+    (dict(residuals=(np.full(399, np.nan),)), "residuals"),    # residuals are numbers
+    (dict(tests={}), "tests"),                                 # no test made, yet 'all passed'
+    (dict(undefined={"u_xi": "edited"}), "undefined"),         # a test both made and left out
+    (dict(undefined={"zzz": "edited"}), "undefined"),          # no such test
+    (dict(undefined={"u2_xi": 3}), "undefined"),               # the reason is words
+])
+def test_residual_tests_that_contradict_themselves_are_refused(kw, said):
+    # ResidualTests checked its level, rule and each test's name, but not the rest against itself: N = 5 beside 399
+    # residuals, NaN residuals, no test at all ('all passed', vacuously), a test both made and said undefined, or an
+    # unknown key left out, all built (and loaded from an edited file) and printed as a verdict
+    with pytest.raises(ValueError, match=said):
+        _rt(**kw)
+
+
+def test_a_correlation_test_of_a_known_name_has_its_kind():
+    t = gb.residual_tests(MODEL, REC)["u_xi"]
+    with pytest.raises(ValueError, match="kind"):
+        dataclasses.replace(t, kind="nonlinear")  # φ_uξ is a linear test: .nonlinear_passed would count it
+    assert dataclasses.replace(t).kind == "linear"
+
+
+def test_an_edited_residual_tests_file_with_another_n_is_refused(tmp_path):
+    path = tmp_path / "r.json"
+    t = gb.residual_tests(MODEL, REC)
+    gb.save(t, path)
+    assert repr(gb.load(path)) == repr(t)
+    path.write_text(path.read_text(encoding="utf-8").replace('"n": 399', '"n": 5'), encoding="utf-8")
+    with pytest.raises(gb.GrayboxFileError, match="n"):
+        gb.load(path)

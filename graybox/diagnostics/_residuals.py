@@ -148,6 +148,9 @@ class CorrelationTest:
         # read-only, and held to what residual_tests makes (one built by hand or read from an edited file too)
         lags, phi, outside = (frozen(self.lags, np.int64), frozen(self.phi), frozen(self.outside, np.int64))
         check_choice(self.kind, "kind", ("linear", "nonlinear"))
+        base = self.name.split(":")[0]
+        if base in TESTS and self.kind != TESTS[base][1]:  # linear_passed / nonlinear_passed count it by its kind
+            raise ValueError(f"kind of test {self.name!r} is {TESTS[base][1]!r}, got {self.kind!r}")
         if lags.ndim != 1 or lags.size == 0 or phi.shape != lags.shape:
             raise ValueError(f"lags and phi must be 1-D, one φ per lag, got shapes {lags.shape} and {phi.shape}")
         # NaN at every lag: a 0/0 test as graybox made it before such tests were left out (its files load, failed)
@@ -220,9 +223,23 @@ class ResidualTests:
             if not isinstance(t, CorrelationTest) or t.name != k or k.split(":")[0] not in TESTS:
                 raise ValueError(f"tests[{k!r}] must be the CorrelationTest named {k!r}, one of {list(TESTS)} "
                                  "(with ':input' for one input's test of several)")
+        if not self.tests:  # xi_xi is always made: no test at all would read 'all passed'
+            raise ValueError("tests must hold at least one CorrelationTest (residual_tests always makes φ_ξξ)")
+        for k, why in self.undefined.items():
+            if not isinstance(k, str) or k.split(":")[0] not in INPUT_TESTS or not isinstance(why, str):
+                raise ValueError(f"undefined must map an input test's key (one of {list(INPUT_TESTS)}, with ':input' "
+                                 f"for one input's of several) to why it was not made, in words; got {k!r}: {why!r}")
+            if k in self.tests:
+                raise ValueError(f"undefined names {k!r}, a test that was made (it is in tests)")
+        residuals = tuple(frozen(e) for e in self.residuals)
+        if not residuals or any(e.ndim != 1 or not np.all(np.isfinite(e)) for e in residuals):
+            raise ValueError("residuals must hold each record's residuals, 1-D and finite (at least one record)")
+        if sum(e.size for e in residuals) != self.n:
+            raise ValueError(f"n must be the number of residuals, {sum(e.size for e in residuals)} over "
+                             f"{len(residuals)} record(s), got {self.n}")
         object.__setattr__(self, "tests", FrozenMap(self.tests))  # not the caller's dict
         object.__setattr__(self, "undefined", FrozenMap(self.undefined))
-        object.__setattr__(self, "residuals", tuple(frozen(e) for e in self.residuals))
+        object.__setattr__(self, "residuals", residuals)
 
     @property
     def passed(self) -> bool:
