@@ -74,3 +74,27 @@ def test_an_edited_residual_tests_file_with_another_n_is_refused(tmp_path):
     path.write_text(path.read_text(encoding="utf-8").replace('"n": 399', '"n": 5'), encoding="utf-8")
     with pytest.raises(gb.GrayboxFileError, match="n"):
         gb.load(path)
+
+
+@pytest.mark.parametrize("level", [1e-20, 1 - 1e-16, 1 - 1e-15])
+def test_residual_tests_at_a_level_whose_band_the_floats_cannot_hold_name_the_level(level):
+    # a level in (0, 1) whose band is 0 (1e-20: 0.5 + level/2 rounds to 0.5) or infinite (1 − 1e-16, or the
+    # Bonferroni quantile of 41 lags at 1 − 1e-15) failed inside CorrelationTest with 'band must lie in (0, inf),
+    # got 0.0' or 'band must be a finite number, got inf', naming no argument the caller gave
+    with pytest.raises(ValueError, match="level"):
+        gb.residual_tests(MODEL, REC, level=level)
+    assert gb.residual_tests(MODEL, REC, level=0.999).level == 0.999
+
+
+@pytest.mark.parametrize("level", [1e-20, 1 - 1e-16])
+def test_parameter_uncertainty_at_a_level_whose_quantile_is_0_or_inf_is_refused(level):
+    # ls_uncertainty(level=1 − 1e-16) gave intervals ±inf, and simulation_band of it failed with numpy's
+    # 'invalid value encountered in multiply' and 'low must hold finite numbers, got nan at index 0'
+    with pytest.raises(ValueError, match="level"):
+        gb.ls_uncertainty(MODEL, REC, level=level)
+    unc = gb.ls_uncertainty(MODEL, REC)
+    with pytest.raises(ValueError, match="level"):
+        unc.with_level(level)
+    with pytest.raises(ValueError, match="level"):
+        dataclasses.replace(unc, level=level)
+    assert np.all(np.isfinite(unc.with_level(1 - 1e-9).intervals))

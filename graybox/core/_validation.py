@@ -29,6 +29,7 @@ __all__ = [
     "check_count",
     "check_workers",
     "check_real",
+    "check_level",
     "check_band",
     "check_choice",
     "check_seed",
@@ -189,6 +190,17 @@ def check_real(
         hi = "inf)" if high is None else f"{high:g}" + (")" if high_open else "]")
         raise ValueError(f"{name} must lie in {lo}, {hi}, got {value!r}")
     return v
+
+
+def check_level(value: object, name: str = "level") -> float:
+    """A confidence ``level`` in (0, 1) whose two-sided quantile the floats hold: ``ValueError`` naming ``name`` where
+    0.5 + level/2 rounds to 0.5 (a band of width 0, level below ~1e-16) or to 1 (an infinite band, level above
+    1 − 2e-16), which a level in (0, 1) alone let through to a band of 0 or ±inf."""
+    level = check_real(value, name, low=0, high=1, low_open=True, high_open=True)
+    if not 0.5 < 0.5 + level / 2 < 1.0:
+        raise ValueError(f"{name} must lie in (0, 1) far enough from its ends that its two-sided quantile is finite and "
+                         f"not 0 (0.5 + {name}/2 strictly between 0.5 and 1 in floats), got {level!r}")
+    return level
 
 
 def check_band(band: object, name: str = "band") -> tuple[float, float]:

@@ -80,7 +80,8 @@ from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
-from ..core._validation import FrozenMap, check_bool, check_choice, check_fields, check_int, check_real, frozen, warn
+from ..core._validation import (FrozenMap, check_bool, check_choice, check_fields, check_int, check_level, check_real,
+                                frozen, warn)
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
@@ -217,7 +218,7 @@ class ResidualTests:
     def __post_init__(self) -> None:
         check_fields(self)
         check_int(self.n, "n", low=1)
-        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
+        check_level(self.level)
         check_choice(self.rule, "rule", RULES)
         for k, t in self.tests.items():
             if not isinstance(t, CorrelationTest) or t.name != k or k.split(":")[0] not in TESTS:
@@ -460,7 +461,7 @@ def residual_tests(
     model = as_model(model, kinds=(Model, NeuralModel), accepted=_ACCEPTED)
     max_lag = check_int(max_lag, "max_lag", low=1)
     moving_average = check_bool(moving_average, "moving_average")
-    level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
+    level = check_level(level)
     check_choice(rule, "rule", RULES)
     recs = records_of(data, "valid")
     names = recs[0].input_names
@@ -515,6 +516,9 @@ def residual_tests(
         warn(f"residual_tests: {len(undefined)} test(s) undefined on these data, left out: "
              + "; ".join(f"{k} ({why})" for k, why in undefined.items()), UserWarning)
     z = stats.norm.ppf(0.5 + level / 2)
+    if rule == "simultaneous" and not np.isfinite(stats.norm.ppf(1 - (1 - level) / (2 * (2 * max_lag + 1)))):
+        raise ValueError(f"level = {level!r} is too close to 1 for the simultaneous rule over {2 * max_lag + 1} lags: "
+                         "its Bonferroni quantile is infinite in floats (a band no correlation can leave)")
     band = float(z / np.sqrt(n))
     out = {}
     # φ is the same for ξ in any units: in units of its largest magnitude, its squares and products neither

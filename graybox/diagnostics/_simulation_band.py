@@ -19,7 +19,7 @@ from ..core._records import check_units, said_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
 from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
-                                check_real, check_seed, frozen, warn)
+                                check_level, check_real, check_seed, frozen, warn)
 from ..models._coerce import as_record
 from ._uncertainty import (BAND_METHODS, MIN_DRAWS, ParameterUncertainty, UncertaintyWarning, check_band_draws,
                            theta_draws)
@@ -81,7 +81,7 @@ class SimulationBand:
             object.__setattr__(self, f, a)
         object.__setattr__(self, "units", check_units(self.units, "SimulationBand"))  # ("rpm", 3) is no unit
         # a value read from a hand-edited file is held to what the band can be
-        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
+        check_level(self.level)
         check_real(self.diverged, "diverged", low=0, high=1)
         check_band_draws(self.method, self.n_samples, self.diverged, "diverged")
         # the samples' times, the record, the estimate's run (refused where it diverges) and the band of at least

@@ -74,7 +74,7 @@ from ..static._analysis import one_input_levels, reached_equilibria
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
 from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface
 from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
-                                check_real, check_seed, frozen, warn)
+                                check_level, check_real, check_seed, frozen, warn)
 
 __all__ = [
     "ParameterUncertainty",
@@ -194,7 +194,7 @@ class ParameterUncertainty:
     def __post_init__(self) -> None:
         check_fields(self)
         # the intervals' t quantile needs both (a file loads through here: graybox.io)
-        check_real(self.level, "level", low=0, high=1, low_open=True, high_open=True)
+        check_level(self.level)
         check_int(self.dof, "dof (degrees of freedom)", low=1)
         n = self.model.n_params
         cov = frozen(self.cov)
@@ -292,7 +292,7 @@ class ParameterUncertainty:
 
     def with_level(self, level: float) -> "ParameterUncertainty":
         """The same covariance with intervals at another confidence level."""
-        level = check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
+        level = check_level(level)
         return ParameterUncertainty(self.model, self.cov, level, self.dof, self.sigma2, self.method,
                                     self.constraints, self.noise_cov, self.static_sigma2, self.cov_factor)
 
@@ -549,7 +549,7 @@ def _size(*parts: np.ndarray) -> float:
 
 
 def _check_level(level: float) -> float:
-    return check_real(level, "level", low=0, high=1, low_open=True, high_open=True)
+    return check_level(level)
 
 
 def _lambda_arg(model: object, lambda1: float | None, what: str) -> float:
@@ -1291,7 +1291,7 @@ def _check_static_band(band, point_shape: tuple[int, ...], gain_shape: tuple[int
         if a.shape != shape:
             raise ValueError(f"{f} must have shape {shape}, got {a.shape}")
         object.__setattr__(band, f, a)
-    check_real(band.level, "level", low=0, high=1, low_open=True, high_open=True)
+    check_level(band.level)
     check_band_draws(band.method, band.n_samples, band.undefined, "undefined")
     check_band_finite(band, ("ubar", "ybar", "gain"))  # the estimate's own curve: it reaches its equilibria
     check_band_finite(band, ("ybar_low", "ybar_high", "ybar_std", "gain_low", "gain_high", "gain_std"),
