@@ -98,3 +98,12 @@ def test_parameter_uncertainty_at_a_level_whose_quantile_is_0_or_inf_is_refused(
     with pytest.raises(ValueError, match="level"):
         dataclasses.replace(unc, level=level)
     assert np.all(np.isfinite(unc.with_level(1 - 1e-9).intervals))
+
+
+def test_els_uncertainty_names_the_record_shorter_than_the_lags():
+    # the LS path named it ("record 2 of 2 ('short') has 1 samples …"); the ELS path said only "record has 1 samples,
+    # fewer than start + 1 (start = 2, the structure's max lag 1) = 3": a max lag of 1 beside a start of 2, no record
+    els = gb.els(STRUCT, REC, noise=2).model
+    with pytest.raises(ValueError, match="short") as info:
+        gb.ls_uncertainty(els, [REC, REC.slice(0, 1, name="short")])
+    assert "max lag 1)" not in str(info.value)

@@ -65,7 +65,7 @@ from ..models._model import Model
 from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
 from ..core._simulation_kernels import free_run_sensitivity_blocks, inverse_ma_filter
 from ..core._terms import check_input_names
-from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units
+from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units, require_lengths
 from ..core._regressors import record_signals, refuse_non_finite_columns, regressor_matrix
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
@@ -670,6 +670,7 @@ def ls_uncertainty(
         return _ls_uncertainty(model, recs, level)
     what = "ls_uncertainty (ELS)"
     L = max(st.max_lag, ns.max_lag)
+    require_lengths(recs, L)  # named, as the LS path names it (regressor_matrix's start = L named no record)
     blocks, grads, targets = [], [], []
     for r in recs:
         with np.errstate(over="ignore", invalid="ignore"):
