@@ -107,3 +107,20 @@ def test_els_uncertainty_names_the_record_shorter_than_the_lags():
     with pytest.raises(ValueError, match="short") as info:
         gb.ls_uncertainty(els, [REC, REC.slice(0, 1, name="short")])
     assert "max lag 1)" not in str(info.value)
+
+
+@pytest.mark.parametrize("diverged", [1.0, 0.9])
+def test_a_simulation_band_of_fewer_than_two_bounded_runs_is_refused(diverged, tmp_path):
+    # simulation_band refuses a band of fewer than two bounded runs, but SimulationBand took one (built by hand or
+    # loaded from an edited file) whose every run, or all but one of its 10, diverged, and printed it as a band
+    unc = gb.ls_uncertainty(MODEL, REC)
+    b = gb.simulation_band(unc, REC, method="monte-carlo", n_samples=10)
+    with pytest.raises(ValueError, match="diverged"):
+        dataclasses.replace(b, diverged=diverged)
+    assert dataclasses.replace(b, diverged=0.8).diverged == 0.8  # two bounded runs of 10 are a band
+    path = tmp_path / "b.json"
+    gb.save(b, path)
+    path.write_text(path.read_text(encoding="utf-8").replace('"diverged": 0.0', f'"diverged": {diverged}'),
+                    encoding="utf-8")
+    with pytest.raises(gb.GrayboxFileError, match="diverged"):
+        gb.load(path)

@@ -84,6 +84,11 @@ class SimulationBand:
         check_level(self.level)
         check_real(self.diverged, "diverged", low=0, high=1)
         check_band_draws(self.method, self.n_samples, self.diverged, "diverged")
+        if self.method == "monte-carlo" and round((1 - self.diverged) * self.n_samples) < 2:
+            # simulation_band refuses a band of fewer than two bounded runs: one that says so is no band
+            raise ValueError(f"diverged = {self.diverged:g} of {self.n_samples} draws leaves "
+                             f"{round((1 - self.diverged) * self.n_samples)} bounded run(s): a Monte Carlo band needs "
+                             "at least two")
         # the samples' times, the record, the estimate's run (refused where it diverges) and the band of at least
         # two bounded runs: all numbers, at one sample or more
         if N == 0:
