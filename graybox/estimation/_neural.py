@@ -137,7 +137,7 @@ from ..core._simulation import DivergenceError, default_bound, free_run_inputs
 from ..core._simulation_kernels import record_inputs
 from ..core._terms import check_input_names
 from ..static._analysis import (NET, Equilibrium, Reached, one_input_levels, only_stable, point_phrases, schur_stable,
-                                settle, spectral_radius)
+                                settle, spectral_radius, verdict_radius)
 from ..core._reprs import point_texts, short_repr
 
 __all__ = ["NeuralModel", "NeuralFit", "neural_narx"]
@@ -678,7 +678,7 @@ class NeuralModel:
             roots.sort()
         lin = np.array([self._linearisation_n(yb, un) for yb in roots]).reshape(len(roots), self.ny)
         stable = schur_stable(lin)  # the package's one stability test
-        return [(yb, bool(s), spectral_radius(ai)) for yb, s, ai in zip(roots, stable, lin)]
+        return [(yb, bool(s), verdict_radius(bool(s), spectral_radius(ai))) for yb, s, ai in zip(roots, stable, lin)]
 
     def _linearisation_n(self, ybn: float, un: float) -> np.ndarray:
         """a_i = ∂f/∂y(k-i) at the equilibrium ȳ_n, i = 1..ny (dimensionless)."""

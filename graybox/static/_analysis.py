@@ -63,7 +63,6 @@ from ._equilibrium_kernels import (
     merge_multiple_roots,
     real_roots_upto_cubic_sized,
     schur_stable_rows,
-    unit_pole,
     settle_candidates,
     settle_runs,
 )
@@ -695,6 +694,15 @@ def spectral_radius(a: np.ndarray) -> float:
     return float(np.max(np.abs(np.roots(np.concatenate(([1.0], -a))))))
 
 
+def verdict_radius(stable: bool, rho: float) -> float:
+    """The spectral radius ``rho`` an :class:`Equilibrium` reports beside its stability verdict, held to the verdict's
+    side of the unit circle: numpy's roots of an m-fold root are good to ~eps^(1/m) only (6e-6 for a triple root),
+    so near the circle they may cross it where the Schur–Cohn test does not (a triple root at z = -(1 - 1e-5) was
+    'not stable' with every root at 0.999993, and its Equilibrium refused). Not stable (a fold, a pole at z = 1 to
+    rounding, a root outside): at least 1; stable: at most 1."""
+    return min(rho, 1.0) if stable else max(rho, 1.0)
+
+
 def equilibria(structure: Structure, theta: np.ndarray, ubar: float) -> list[Equilibrium]:
     """Every real equilibrium at constant input ``ubar``, sorted by ȳ, with its local stability.
 
@@ -776,11 +784,11 @@ def _level_equilibria(structure: Structure, th: np.ndarray, ub: float, yb: np.nd
     if yb.size == 0:
         return []
     stable = stable_mask(structure, th, np.full(yb.size, ub), yb[None, :])[0] & ~fold
-    # a fold's pole is at z = 1 (Σ a_l = 1): its modulus at least 1 whatever rounding made of it; so where the a_l
-    # sum to 1 to rounding (unit_pole, the stability test's rule)
+    # a fold's pole is at z = 1 (Σ a_l = 1), not stable: its modulus at least 1 whatever rounding made of it; so where
+    # the a_l sum to 1 to rounding (unit_pole, the stability test's rule); and every radius on its verdict's side
     a = [_linear_coefficients(structure, th[0], float(y), ub) for y in yb]
-    return [Equilibrium(ub, float(y), bool(s), max(spectral_radius(al), 1.0) if f or unit_pole(al) else spectral_radius(al))
-            for y, s, al, f in zip(yb, stable, a, fold)]
+    return [Equilibrium(ub, float(y), bool(s), verdict_radius(bool(s), spectral_radius(al)))
+            for y, s, al in zip(yb, stable, a)]
 
 
 # -- rational structures: eq. (6) --------------------------------------------------------------------

@@ -1,0 +1,20 @@
+"""review50j: problems found reviewing hunt50b's and mend50f's merges (d9eb911..c59363f)."""
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+@pytest.mark.parametrize("d", [1e-5, 2e-5, 4e-6])
+def test_equilibria_near_circle_with_a_triple_root_construct(d):
+    # fa87ff9 made an Equilibrium refuse a stable flag and a spectral radius more than 1e-6 apart across the unit
+    # circle, saying computed equilibria always agree; a triple root of the linearisation at z = -(1 - d) puts
+    # numpy's roots ~eps^(1/3) ≈ 6e-6 from where the Schur-Cohn verdict puts them, and gb.equilibria of a valid
+    # model raised 'not stable, but spectral_radius 0.99999… puts every root inside the unit circle'
+    st = gb.Structure(["y(k-1)", "y(k-2)", "y(k-3)", "u(k-1)", "1"])
+    r = -(1.0 - d)
+    eqs = gb.equilibria(st, np.array([3 * r, -3 * r * r, r ** 3, 0.5, 0.1]), 1.0)
+    assert len(eqs) == 1
+    e = eqs[0]
+    assert (e.spectral_radius < 1.0 + 1e-6) if e.stable else (e.spectral_radius >= 1.0)
+    assert gb.from_json(gb.to_json(e)) == e
