@@ -18,3 +18,18 @@ def test_equilibria_near_circle_with_a_triple_root_construct(d):
     e = eqs[0]
     assert (e.spectral_radius < 1.0 + 1e-6) if e.stable else (e.spectral_radius >= 1.0)
     assert gb.from_json(gb.to_json(e)) == e
+
+
+def test_an_equilibrium_saved_before_the_verdict_radius_rule_still_loads():
+    # a file written before d0cd32f could hold a triple root's radius computed on the other side of the circle from
+    # its verdict (0.9999934, not stable; review50j's note): such a file loads; a radius clearly across the circle
+    # (a hand edit) is still refused
+    import json
+    text = gb.to_json(gb.Equilibrium(ubar=1.0, ybar=2.0, stable=False, spectral_radius=1.0))
+    doc = json.loads(text)
+    doc["object"]["spectral_radius"] = 0.9999934
+    back = gb.from_json(json.dumps(doc))
+    assert not back.stable and back.spectral_radius == 0.9999934
+    doc["object"]["spectral_radius"] = 0.99
+    with pytest.raises(gb.GrayboxFileError, match="spectral_radius"):
+        gb.from_json(json.dumps(doc))
