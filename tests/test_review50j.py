@@ -33,3 +33,18 @@ def test_an_equilibrium_saved_before_the_verdict_radius_rule_still_loads():
     doc["object"]["spectral_radius"] = 0.99
     with pytest.raises(gb.GrayboxFileError, match="spectral_radius"):
         gb.from_json(json.dumps(doc))
+
+
+def test_se_dsf_pe_start_keeps_least_squares_when_pe_cannot_solve(monkeypatch):
+    # when PE could not solve the weights (_pe_members None) with two or more λ1, _pe_start built a mask of no rows
+    # against the λ list: an IndexError before 8c5d1ca, a broadcast ValueError after (caught: the least-squares start
+    # lost). Now least squares is the start, named so
+    from graybox.estimation import _epsilon_constraint as ec
+    from graybox.estimation._simulation_error import SEProblem
+    data = gb.load_pumping()
+    st = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
+    problem = SEProblem(st, [data.ident], data.static)
+    monkeypatch.setattr(ec, "_pe_members", lambda problem, lambdas: None)
+    th, name = ec._pe_start(problem, 1e6, np.array([0.3, 0.6, 1.0]))
+    assert name == "least squares"
+    np.testing.assert_array_equal(th, problem.ls_theta())

@@ -222,12 +222,14 @@ _ROUNDING = 1e-14
 
 def _pe_start(problem: SEProblem, band: float, lambdas: np.ndarray) -> tuple[np.ndarray, str]:
     th = _pe_members(problem, lambdas)  # NaN rows where the weights do not identify θ (λ1 = 1, a held input)
-    th = np.zeros((0, len(problem.structure))) if th is None else th
+    lambdas = np.asarray(lambdas, float)
+    if th is None:  # PE cannot solve these weights: least squares alone (its rows NaN, as those of unsolved members)
+        th = np.full((lambdas.size, len(problem.structure)), np.nan)
     # the λ1 = 1 member weighs no static point: it is the least-squares estimate, appended below once (it was
     # scored twice, and reported as "PE λ1=1" when chosen)
-    ok = np.all(np.isfinite(th), axis=1) & (np.asarray(lambdas, float) < 1.0)
+    ok = np.all(np.isfinite(th), axis=1) & (lambdas < 1.0)
     th = np.vstack([th[ok], problem.ls_theta()[None, :]])
-    lam = np.r_[np.asarray(lambdas, float)[ok], 1.0]
+    lam = np.r_[lambdas[ok], 1.0]
     js, jsf = problem.js(th), problem.jsf(th)
     inside = np.isfinite(js) & (jsf <= band)
     if inside.any():
