@@ -94,6 +94,26 @@ STAIRCASE_TRUE = ["y(k-1)", "y(k-2)", "u(k-1)", "u(k-2)^2", "1"]
 STAIRCASE_THETA = np.array([0.6, 0.2, 0.3, 0.05, 0.4])
 
 
+#: The quadratic first-order plant of the choosing tests: y(k) = 0.2 + 0.6 y(k-1) + 0.3 u(k-1) + 0.05 u(k-1)².
+QUADRATIC_FIRST_ORDER = ["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]
+
+
+def quadratic_first_order_data(seed: int):
+    """A Dataset of QUADRATIC_FIRST_ORDER (θ = 0.2, 0.6, 0.3, 0.05): ident and valid of 300 samples each, u held 5
+    samples at levels drawn from [0.5, 2], output noise of std 0.02, five exact static points on [0.5, 2]."""
+    import graybox as gb
+
+    rng = np.random.default_rng(seed)
+    model = gb.Model(QUADRATIC_FIRST_ORDER, [0.2, 0.6, 0.3, 0.05])
+
+    def rec(n, name):
+        u = np.repeat(rng.uniform(0.5, 2.0, n // 5), 5)
+        return gb.Record(u, model.simulate(u, np.zeros(1)) + 0.02 * rng.standard_normal(u.size), name=name)
+
+    ub = np.linspace(0.5, 2.0, 5)
+    return gb.Dataset(rec(300, "ident"), rec(300, "valid"), gb.StaticPoints(ub, (0.2 + 0.3 * ub + 0.05 * ub**2) / 0.4))
+
+
 def first_order_signals(n: int = 300, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """u uniform on [-1, 1] and y(k) = 0.5 y(k-1) + u(k-1) + 0.1 e(k) (e standard normal): the model
     y(k-1), u(k-1) with θ = (0.5, 1) leaves white residuals."""

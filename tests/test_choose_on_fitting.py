@@ -6,20 +6,13 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from conftest import quadratic_first_order_data
 
 ST = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
 
 
 def _data(seed: int) -> gb.Dataset:
-    rng = np.random.default_rng(seed)
-    model = gb.Model(ST, [0.2, 0.6, 0.3, 0.05])
-
-    def rec(n, name):
-        u = np.repeat(rng.uniform(0.5, 2.0, n // 5), 5)
-        return gb.Record(u, model.simulate(u, np.zeros(1)) + 0.02 * rng.standard_normal(u.size), name=name)
-
-    ub = np.linspace(0.5, 2.0, 5)
-    return gb.Dataset(rec(300, "ident"), rec(300, "valid"), gb.StaticPoints(ub, (0.2 + 0.3 * ub + 0.05 * ub**2) / 0.4))
+    return quadratic_first_order_data(seed)
 
 
 def test_choosing_on_the_fitting_record_is_refused():

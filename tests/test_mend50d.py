@@ -9,6 +9,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as hs
 
 import graybox as gb
+from conftest import quadratic_first_order_data
 from graybox import reference
 from graybox.estimation._decisions import decide_dsf
 from graybox.estimation._pareto import ParetoSet
@@ -62,15 +63,7 @@ ST2 = gb.Structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])
 
 
 def _data2(seed: int = 0) -> gb.Dataset:
-    rng = np.random.default_rng(seed)
-    model = gb.Model(ST2, [0.2, 0.6, 0.3, 0.05])
-
-    def rec(n, name):
-        u = np.repeat(rng.uniform(0.5, 2.0, n // 5), 5)
-        return gb.Record(u, model.simulate(u, np.zeros(1)) + 0.02 * rng.standard_normal(u.size), name=name)
-
-    ub = np.linspace(0.5, 2.0, 5)
-    return gb.Dataset(rec(300, "ident"), rec(300, "valid"), gb.StaticPoints(ub, (0.2 + 0.3 * ub + 0.05 * ub**2) / 0.4))
+    return quadratic_first_order_data(seed)
 
 
 def _joined(a: gb.Record, b: gb.Record, name: str) -> gb.Record:
