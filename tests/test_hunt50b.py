@@ -138,16 +138,19 @@ def small_store(tmp_path_factory):
     return path
 
 
-def _members_edited(store, tmp_path, edit):
+def _edited(store, tmp_path, table, column, edit=None, value=None, where=""):
+    """A copy of the store whose ``table.column`` (rows ``where``) is ``value``, or its JSON as ``edit`` changes it."""
     import shutil
     import sqlite3
     path = tmp_path / "edited.sqlite"
     shutil.copy(store, path)
     with sqlite3.connect(path) as conn:
-        (text,) = conn.execute("SELECT members FROM cells WHERE members IS NOT NULL").fetchone()
-        members = json.loads(text)
-        edit(members)
-        conn.execute("UPDATE cells SET members = ? WHERE members IS NOT NULL", (json.dumps(members),))
+        if edit is not None:
+            (text,) = conn.execute(f"SELECT {column} FROM {table} {where}").fetchone()
+            obj = json.loads(text)
+            edit(obj)
+            value = json.dumps(obj)
+        conn.execute(f"UPDATE {table} SET {column} = ? {where}", (value,))
     conn.close()
     return path
 
@@ -166,20 +169,9 @@ def test_a_stores_damaged_members_are_a_store_error_not_a_reports_crash(small_st
     # loaded, and the leaderboard and write_report then failed with a bare KeyError, TypeError or pandas' words
     from graybox import experiments as gx
     assert gx.leaderboard(gb.load_results(small_store)).shape[0] == 1  # the store as run reads and reports
-    path = _members_edited(small_store, tmp_path, edit)
+    path = _edited(small_store, tmp_path, "cells", "members", edit, where="WHERE members IS NOT NULL")
     with pytest.raises(gx.StoreError, match="members"):
         gb.load_results(path)
-
-
-def _cells_edited(store, tmp_path, column, value):
-    import shutil
-    import sqlite3
-    path = tmp_path / "edited.sqlite"
-    shutil.copy(store, path)
-    with sqlite3.connect(path) as conn:
-        conn.execute(f"UPDATE cells SET {column} = ?", (value,))
-    conn.close()
-    return path
 
 
 @pytest.mark.parametrize("column,value", [
@@ -197,7 +189,7 @@ def test_a_stores_damaged_cell_columns_are_a_store_error(small_store, tmp_path, 
     # 'maybe' read True and seed 1.5 read 1
     from graybox import experiments as gx
     with pytest.raises(gx.StoreError, match=f"damaged.*{column}"):
-        gb.load_results(_cells_edited(small_store, tmp_path, column, value))
+        gb.load_results(_edited(small_store, tmp_path, "cells", column, value=value))
 
 
 _SE_ST = ["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "u(k-1)y(k-1)"]
@@ -245,17 +237,8 @@ def test_a_stores_damaged_spec_data_sets_are_a_store_error(small_store, tmp_path
     # _specs checked a stored spec was a JSON object, not its data sets, whose bands every cell's row takes: a spec
     # whose data was no list failed load_results, grid_status and run_grid with a bare TypeError, and a band of -1
     # loaded as every cell's band
-    import shutil
-    import sqlite3
     from graybox import experiments as gx
-    path = tmp_path / "edited.sqlite"
-    shutil.copy(small_store, path)
-    with sqlite3.connect(path) as conn:
-        (text,) = conn.execute("SELECT spec FROM specs").fetchone()
-        spec = json.loads(text)
-        edit(spec)
-        conn.execute("UPDATE specs SET spec = ?", (json.dumps(spec),))
-    conn.close()
+    path = _edited(small_store, tmp_path, "specs", "spec", edit)
     for read in (gb.load_results, gx.grid_status):
         with pytest.raises(gx.StoreError, match="damaged.*data sets"):
             read(path)
