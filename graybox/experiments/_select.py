@@ -797,7 +797,10 @@ def _searched(candidates: gb.Structure, ident, sizes: list[int], sources, forced
             for k in sizes:
                 try:
                     sel = gb.frols(candidates, ident, n_terms=k, include=forced, search=src)
-                except FewerTermsError:  # fewer usable or independent candidates: the sizes below are reached
+                except FewerTermsError as e:  # fewer usable or independent candidates: the sizes below are reached
+                    # named as frols names its own (else an unreached size read "reached: {'exact': []}")
+                    n0 = max(len(gb.Structure(list(forced))), 1)
+                    reached[src] |= set(range(n0, (e.reached or 0) + 1))
                     break
                 reached[src].add(k)
                 found[(src, k)] = [str(t) for t in sel.structure]

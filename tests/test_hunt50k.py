@@ -1,0 +1,28 @@
+"""hunt50k: select_graybox and the structure searches on small problems of one's own."""
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _binary_records():
+    # a two-level input: u(k-1)^2 is u(k-1), so Candidates(1, 1, degree=2) holds 5 independent terms of 6
+    rng = np.random.default_rng(0)
+    n = 300
+    u = np.repeat(rng.choice([0.0, 1.0], n // 10 + 1), 10)[:n]
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.6 * y[k - 1] + u[k - 1] + 0.01 * rng.standard_normal()
+    return gb.Record(u[:150], y[:150], name="a"), gb.Record(u[150:], y[150:], name="b")
+
+
+@pytest.mark.parametrize("source", ["swap", "exact"])
+def test_unreached_size_names_the_sizes_a_subset_search_reaches(source):
+    # the message said "reached: {'exact': []}": the search seemed to reach no size at all, where it reaches 1..5
+    a, b = _binary_records()
+    with pytest.raises(ValueError, match=r"no search reached any of the sizes \[6\]") as info:
+        gb.select_graybox(gb.Candidates(1, 1, degree=2), gb.Dataset(a, b), estimator="ls", sizes=[6],
+                          sources=[source])
+    assert f"'{source}': []" not in str(info.value)
+    assert f"'{source}': [1, 2, 3, 4, 5]" in str(info.value)
