@@ -26,3 +26,18 @@ def test_unreached_size_names_the_sizes_a_subset_search_reaches(source):
                           sources=[source])
     assert f"'{source}': []" not in str(info.value)
     assert f"'{source}': [1, 2, 3, 4, 5]" in str(info.value)
+
+
+def test_tolerance_not_reached_with_every_candidate_does_not_advise_raising_max_terms():
+    # with every candidate looked at, a larger max_terms looks at nothing more: the warning said to raise it
+    rng = np.random.default_rng(1)
+    u = rng.uniform(0, 2, 300)
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.7 * y[k - 1] + 0.5 * u[k - 1] + 0.01 * rng.standard_normal()
+    cand = gb.Candidates(2, 2, degree=2)
+    with pytest.warns(RuntimeWarning, match="tolerance 1e-15 not reached") as rec:
+        sel = gb.frols(cand, gb.Record(u, y), tol=1e-15)
+    assert len(sel.structure) == len(cand.process)
+    said = " ".join(str(w.message) for w in rec)
+    assert "raise max_terms" not in said and "raise tol" in said

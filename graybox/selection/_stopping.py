@@ -134,8 +134,10 @@ def choose_model(
             few = reached[sizes[reached] == sizes[reached].min()]
             return int(few[crit[few] == crit[few].min()][-1]), f"{fraction} ≤ {rule.tol:g}"
         last = sizes.size - 1
+        # every candidate looked at: a larger max_terms looks at nothing more
+        advice = "raise max_terms or tol" if can_grow else "every candidate was looked at: raise tol, or add candidates"
         warn(f"tolerance {rule.tol:g} not reached: {fraction} = {unexplained[last]:.3e} after {sizes[last]} terms "
-             "(raise max_terms or tol)", RuntimeWarning)
+             f"({advice})", RuntimeWarning)
         return last, f"tol {rule.tol:g} not reached in {sizes[last]} terms"
     i = int(np.argmin(crit))
     largest = int(sizes.max())
