@@ -41,3 +41,10 @@ def test_tolerance_not_reached_with_every_candidate_does_not_advise_raising_max_
     assert len(sel.structure) == len(cand.process)
     said = " ".join(str(w.message) for w in rec)
     assert "raise max_terms" not in said and "raise tol" in said
+
+
+def test_sizes_named_twice_are_refused_as_sources_are():
+    # sizes=[3, 3] ran and dropped the repeat without a word, where sources and estimator named twice are refused
+    data = gb.load_pumping()
+    with pytest.raises(ValueError, match=r"sizes must be distinct numbers of terms, got \[3, 3\]"):
+        gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2), data, estimator="ls", sizes=[3, 3], progress=False)

@@ -1312,9 +1312,11 @@ def select_graybox(
         whose least-squares polynomial fits them with a mean squared error within B (at most 3);
         lowered, with a :class:`SelectionWarning`, to the degree the candidates carry.
     sizes : sequence of int, optional
-        Structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
-        (fewer for a small candidate set or an identification record of few samples). Sizes a
-        search does not reach are left out with a :class:`SelectionWarning`. The SEMP path grows at
+        Distinct structure sizes (before the static terms); default 4, 6, …, up to min(16, candidates)
+        (fewer for a small candidate set or an identification record of few samples). Sizes asked
+        for that a search does not reach are left out with a :class:`SelectionWarning`; default
+        sizes it does not reach (candidates that are not independent on the records) are left out
+        without one. The SEMP path grows at
         least as far as the default sizes' (its pruning improves a size only once larger structures
         were tried): asking for a few sizes leaves each one's row as the default call makes it.
     sources : sequence of {"semp", "frols", "swap", "exact"}
@@ -1430,6 +1432,8 @@ def select_graybox(
     sources = (sources,) if isinstance(sources, str) else check_sequence(sources, "sources")
     if sizes is not None:
         sizes = [check_int(s, "sizes", low=1) for s in check_sequence(sizes, "sizes")]
+        if len(set(sizes)) != len(sizes):  # as sources and estimator: each named once (a typo, not a wish)
+            raise ValueError(f"sizes must be distinct numbers of terms, got {sizes!r}")
     if include is _INCLUDE and isinstance(candidates, gb.Structure) and gb.Term(()) not in candidates.process:
         # not the caller's word: say which default the candidates refuse, and how to do without it
         raise ValueError("include defaults to the constant '1', which the candidates lack (Candidates(..., "
