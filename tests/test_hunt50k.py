@@ -48,3 +48,22 @@ def test_sizes_named_twice_are_refused_as_sources_are():
     data = gb.load_pumping()
     with pytest.raises(ValueError, match=r"sizes must be distinct numbers of terms, got \[3, 3\]"):
         gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=2), data, estimator="ls", sizes=[3, 3], progress=False)
+
+
+def test_frols_refuses_max_terms_above_the_candidates_as_semp_does():
+    # frols(max_terms=16) of 15 candidates looked at the 15 without a word, where semp refuses it and frols refuses
+    # n_terms = 16: one agreement for the option
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.0, 1.0, 300)
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y)
+    cand = gb.Candidates(1, 1, degree=1)
+    n = len(cand.process)
+    for search in (gb.frols, gb.semp):
+        with pytest.raises(ValueError, match=rf"max_terms must be an integer <= {n}, got {n + 1}"):
+            search(cand, rec, criterion="bic", max_terms=n + 1)
+    with pytest.raises(ValueError, match=rf"max_terms must be an integer <= {n}"):
+        gb.frols(cand, rec, criterion="bic", max_terms=n + 1, centre=True)
+    assert len(gb.frols(cand, rec, criterion="bic", max_terms=n).structure) <= n

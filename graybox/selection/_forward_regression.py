@@ -601,7 +601,8 @@ def frols(
     max_terms : int, optional
         Largest model size looked at for ``tol`` (default: min(candidates, regression rows − 1))
         and ``criterion`` (default: min(50, candidates, regression rows − 1)): what the record
-        carries; a larger explicit one is an error naming it. Not allowed with ``n_terms``.
+        carries; a larger explicit one, or one above the candidates' count, is an error naming it.
+        Not allowed with ``n_terms``.
     rank_tol : float, optional
         A candidate whose orthogonalised norm is below ``rank_tol`` times its original norm
         is treated as a linear combination of the selected terms and dropped.
@@ -692,8 +693,8 @@ def frols(
     # each value first (a wrong type is named as such), then how they combine
     if tol is not None:
         tol = check_real(tol, "tol", low=0, high=1, low_open=True, high_open=True)
-    if max_terms is not None:
-        max_terms = check_int(max_terms, "max_terms", low=1)
+    if max_terms is not None:  # as n_terms here and max_terms in semp: no more than the candidates
+        max_terms = check_int(max_terms, "max_terms", low=1, high=n_cand)
     if n_terms is not None and tol is not None:
         raise ValueError("give either n_terms or tol, not both")
     if n_terms is not None:
