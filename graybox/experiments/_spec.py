@@ -605,10 +605,10 @@ class StructureSpec:
                 kw["input_names"] = tuple(named)
         space = _wrap(lambda: gb.Candidates(**cand, **kw), ("candidates",))
         object.__setattr__(self, "candidates", _freeze(cand))
+        # with one lag count for all inputs the data set decides how many inputs, so how many
+        # candidates there are: FROLS checks n_terms and max_terms against the count in the cell then
+        high = len(space) if isinstance(cand["nu"], Mapping) else None
         if self.n_terms is not None:
-            # with one lag count for all inputs the data set decides how many inputs, so how many
-            # candidates there are: FROLS checks the count in the cell then
-            high = len(space) if isinstance(cand["nu"], Mapping) else None
             object.__setattr__(self, "n_terms", _wrap(check_int, ("n_terms",), self.n_terms, "n_terms", low=1,
                                                       high=high))
         if self.tol is not None:
@@ -617,7 +617,8 @@ class StructureSpec:
         if self.criterion is not None:
             _wrap(check_choice, ("criterion",), self.criterion, "criterion", ("aic", "bic", "fpe"))
         if self.max_terms is not None:
-            object.__setattr__(self, "max_terms", _wrap(check_int, ("max_terms",), self.max_terms, "max_terms", low=1))
+            object.__setattr__(self, "max_terms", _wrap(check_int, ("max_terms",), self.max_terms, "max_terms", low=1,
+                                                        high=high))
         if self.n_terms is not None and self.tol is not None:
             raise SpecError("give n_terms or tol, not both", ("tol",))
         if self.n_terms is not None and self.max_terms is not None:  # FROLS refuses it: said here, not by each cell
