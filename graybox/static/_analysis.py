@@ -678,10 +678,10 @@ class Equilibrium:
 
 
 #: How far the roots' largest modulus may lie across the unit circle from the stability test's verdict: the two are
-#: computed apart, and numpy's roots of a root repeated m times are good to about eps^(1/m) (a triple root's 6e-6, a
-#: fourfold one's 1.2e-4). Computed equilibria keep the two on one side (``verdict_radius``); files written before
-#: that may not, and load.
-_RADIUS_ROUNDING = 1e-4
+#: computed apart, and numpy's roots of a root repeated m times are good to about eps^(1/m) (a triple root's 1.2e-5, a
+#: fourfold one's 2.4e-4 at worst). Computed equilibria keep the two on one side (``verdict_radius``); files written
+#: before that may not, and load.
+_RADIUS_ROUNDING = 5e-4
 
 
 def spectral_radius(a: np.ndarray) -> float:
