@@ -306,13 +306,14 @@ def continuum(structure: Structure, thetas: np.ndarray, ubar: np.ndarray) -> np.
     return np.all(np.abs(coef) <= DENOMINATOR_RTOL * size, axis=0)
 
 
-def _root_groups(c: np.ndarray) -> list[tuple[float, int, int]]:
+def _root_groups(c: np.ndarray) -> list[tuple[int, int, int]]:
     """Groups of roots of Σ c_k x^k of similar magnitude: (log2 of the scale, an integer, k1, k2) for each.
 
     The upper convex hull of the points (k, log2|c_k|) (the Newton polygon) has one edge per
     group: the edge from k1 to k2 carries k2 − k1 roots of magnitude near 2^(−slope), the roots of
     Σ_{k1 ≤ k ≤ k2} c_k x^(k−k1) up to a relative error of the order of the ratio to the next
-    group's scale. Edges whose scales are less than 2^10 apart form one group.
+    group's scale. Edges whose scales are less than 2^10 apart form one group. One polynomial's own steps, as
+    fast as the ones that solve one or two (:func:`_root_groups_rows` takes the same steps on many rows at once).
     """
     pts = [(k, float(np.log2(abs(v)))) for k, v in enumerate(c) if v != 0]
     hull: list[tuple[int, float]] = []
@@ -435,14 +436,10 @@ def _real_of(z: np.ndarray, c: np.ndarray, a: np.ndarray, D: int) -> np.ndarray:
     return out
 
 
+@np.errstate(all="ignore")  # log2(0) = -inf at the zero coefficients, which take no part
 def _root_groups_rows(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_root_groups` of every row of ``c`` (K, D + 1) at once: scales, k1, k2, shape (K, D) each (the
-    groups of row i first, in order), and each row's number of groups."""
-    with np.errstate(all="ignore"):  # log2(0) = -inf at the zero coefficients, which take no part
-        return _groups_rows(c)
-
-
-def _groups_rows(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_root_groups` of every row of ``c`` (K, D + 1) at once: the scales' log2 (integers, as floats), k1,
+    k2, shape (K, D) each (the groups of row i first, in order), and each row's number of groups."""
     K, n = c.shape
     lv = np.log2(np.abs(c))
     # the upper convex hull of (k, log2|c_k|) over the nonzero c_k, by the same steps as _root_groups'
@@ -480,7 +477,7 @@ def _groups_rows(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
         g1[r[new], ng[new]] = k1[new]
         g2[r[new], ng[new]] = k2[new]
         ng = ng + new
-    return 2.0 ** np.round(gw / np.where(g2 > g1, g2 - g1, 1)), g1, g2, ng
+    return np.round(gw / np.where(g2 > g1, g2 - g1, 1)), g1, g2, ng
 
 
 def _roots_batch(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -489,16 +486,18 @@ def _roots_batch(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     range: numpy.roots would drop it)."""
     K, n = c.shape
     D = n - 1
-    tau, g1, g2, ng = _root_groups_rows(c)
+    ex, g1, g2, ng = _root_groups_rows(c)
     z = np.full((K, D), np.nan + 0j)
     fill = np.zeros(K, int)
     alone = np.zeros(K, bool)
     for j in range(int(ng.max(initial=0))):
         for k1, k2 in {(int(p), int(q)) for p, q, g in zip(g1[:, j], g2[:, j], ng) if g > j}:
             rows = np.flatnonzero((ng > j) & (g1[:, j] == k1) & (g2[:, j] == k2))
-            t = tau[rows, j]
-            with np.errstate(all="ignore"):
-                cs = c[rows, k1:k2 + 1] * t[:, None] ** np.arange(k2 - k1 + 1)  # exact: t is a power of two
+            e = ex[rows, j]
+            with np.errstate(all="ignore"):  # a scale beyond the float range (0 or inf): the row goes alone, below
+                t = np.ldexp(1.0, e.astype(int))
+                # exact, as in _roots_one (t ** k may leave the float range where the scaled coefficients do not)
+                cs = np.ldexp(c[rows, k1:k2 + 1], e.astype(int)[:, None] * np.arange(k2 - k1 + 1))
                 p = cs[:, ::-1] / np.max(np.abs(cs), axis=1, keepdims=True)
                 top = -p[:, 1:] / p[:, :1]
             ok = (np.all(np.isfinite(p), axis=1) & (p[:, 0] != 0) & (p[:, -1] != 0) & np.isfinite(t) & (t != 0)
