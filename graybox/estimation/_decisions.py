@@ -49,7 +49,8 @@ def resolve_band(band: object, static: StaticPoints | None, who: str) -> tuple[f
 
 
 #: The rules a :class:`Decision` is made by, and whether each says its member is in the band: D_SF (eq. (14)),
-#: its explicit fallback (J_SF nearest B: the smallest when B = [0, b]), the minimal-correlation rule and ``select_graybox``'s black-box choice (no band).
+#: its explicit fallback (J_SF nearest B: the smallest when B = [0, b]), the minimal-correlation rule and
+#: ``select_graybox``'s black-box choice (no band).
 DECISION_RULES = {"D_SF": True, "min J_SF": False, "min correlation": True, "min J_S": True}
 
 
@@ -157,10 +158,13 @@ def min_jsf_index(pareto: ParetoSet, what: str = "min J_SF", js: np.ndarray | No
     if band is None or band[0] <= 0:  # J_SF >= 0: nearest [0, high] is smallest, with J_SF's own ties
         return int(ok[np.lexsort((ok, js[ok], j))[0]])
     low, high = band
-    below = j < low
     # the distance to B first; among members as far (round-off), the nearer J_SF on its own side
-    dist = np.where(below, low - j, np.maximum(j - high, 0.0))
-    return int(ok[np.lexsort((ok, js[ok], np.where(below, -j, j), dist))[0]])
+    return int(ok[np.lexsort((ok, js[ok], np.where(j < low, -j, j), band_distance(j, low, high)))[0]])
+
+
+def band_distance(jsf: np.ndarray, low: float, high: float) -> np.ndarray:
+    """How far each J_SF lies from B = [low, high] (0 inside it), output units²."""
+    return np.maximum(np.maximum(low - jsf, jsf - high), 0.0)
 
 
 def nearest_jsf(jsf: np.ndarray, low: float, high: float) -> float | None:
@@ -168,8 +172,7 @@ def nearest_jsf(jsf: np.ndarray, low: float, high: float) -> float | None:
     finite = jsf[np.isfinite(jsf)]
     if not finite.size:
         return None
-    dist = np.maximum(np.maximum(low - finite, finite - high), 0.0)
-    return float(finite[np.lexsort((finite, dist))[0]])
+    return float(finite[np.lexsort((finite, band_distance(finite, low, high)))[0]])
 
 
 #: What :func:`decide_dsf` may do when no member lies in the band, if the user says so.
