@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import graybox as gb
+from conftest import first_order_signals
 
 
 def _binary_records():
@@ -53,12 +54,7 @@ def test_sizes_named_twice_are_refused_as_sources_are():
 def test_frols_refuses_max_terms_above_the_candidates_as_semp_does():
     # frols(max_terms=16) of 15 candidates looked at the 15 without a word, where semp refuses it and frols refuses
     # n_terms = 16: one agreement for the option
-    rng = np.random.default_rng(0)
-    u = rng.uniform(0.0, 1.0, 300)
-    y = np.zeros(300)
-    for k in range(1, 300):
-        y[k] = 0.5 * y[k - 1] + u[k - 1] + 0.01 * rng.standard_normal()
-    rec = gb.Record(u, y)
+    rec = gb.Record(*first_order_signals())
     cand = gb.Candidates(1, 1, degree=1)
     n = len(cand.process)
     for search in (gb.frols, gb.semp):
