@@ -77,15 +77,23 @@ def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
 
 def unit_label(text: str, unit: str) -> str:
     """An axis label with its unit: ``text (unit)``, or ``text`` as given when no unit is said or the text
-    already names it, as a word of its own (``"Speed (rpm)"``, ``"Speed [rpm]"``, ``"Temperature in °C"``,
-    ``"Speed, rpm"``; not the V of ``"Voltage"``). A label that is no text is shown as ``str(text)``
-    (as matplotlib shows any label; a surface's ``input_labels`` may be any values)."""
+    already names it where a unit is written: in brackets (``"Speed (rpm)"``, ``"Speed [rpm]"``), or last,
+    after ``in``, a slash, a comma, a colon or an underscore (``"Temperature in °C"``, ``"Speed/rpm"``,
+    ``"Speed, rpm"``, ``"speed_rpm"``), a remark in brackets allowed after it (``"Temperature in °C (mean)"``).
+    A unit that is also a word elsewhere is not its naming: ``"Level in tank"`` in inches is
+    ``"Level in tank (in)"``, ``"Current of pump A"`` in amperes ``"Current of pump A (A)"``. A label that is no
+    text is shown as ``str(text)`` (as matplotlib shows any label; a surface's ``input_labels`` may be any values)."""
     text = str(text)
-    # "Temperature in °C" became "Temperature in °C (°C)": only "(°C)" and "[°C]" counted as naming it
-    if not unit or re.search(rf"(?:^|[\s(\[]){re.escape(unit)}(?=$|[\s)\],;:.])", text):
+    if not unit:
+        return text
+    u = re.escape(unit)
+    # a word rule ("the unit as a word of its own anywhere") took the "in" of "Level in tank" or the "A" of
+    # "A pump" for the unit, and missed "Speed/rpm" and "speed_rpm"
+    bracketed = rf"[(\[]\s*{u}\s*[)\]]"
+    last = rf"(?:(?<![^\W_])in\s+|[/,:_]\s*){u}\s*(?:[(\[][^()\[\]]*[)\]]\s*)?$"
+    if re.search(bracketed, text) or re.search(last, text):
         return text
     return f"{text} ({unit})"
-
 
 
 def check_axes(axes: object, n: int, who: str, what: str = "") -> list[Axes]:
