@@ -50,3 +50,68 @@ def test_a_label_with_its_unit_is_kept_and_a_label_without_it_gets_it_once(head,
     assert unit_label(named, unit) == named
     assert unit_label(unit_label(head, unit), unit) == unit_label(head, unit)  # never doubled
     assert unit_label(head, unit) == f"{head} ({unit})"
+
+
+# --- 4. Decimal and longdouble numbers beyond float64's range were "non-finite (NaN or inf)" ----------------------
+
+import warnings  # noqa: E402
+from decimal import Decimal  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import graybox as gb  # noqa: E402
+from graybox.core._validation import as_1d_finite, check_int, check_real, float_array  # noqa: E402
+
+HUGE = [Decimal("1e400"), Decimal("-2.5e309"), np.longdouble("1e400"), np.longdouble("-1e4000")]
+_HAS_LONG = np.isfinite(np.longdouble("1e400"))  # a longdouble wider than float64 (not on every platform)
+
+
+def _huge():
+    return [v for v in HUGE if _HAS_LONG or not isinstance(v, np.longdouble)]
+
+
+@pytest.mark.parametrize("convert", [
+    lambda v: float_array([1.0, v], "x"),
+    lambda v: as_1d_finite([1.0, v], "x"),
+    lambda v: as_1d_finite(np.array([1.0, v], dtype=object), "x"),
+    lambda v: gb.Record([1.0, v, 2.0], [1.0, 2.0, 3.0]),
+    lambda v: gb.Record([[1.0, 0.0], [v, 1.0], [2.0, 0.0]], [1.0, 2.0, 3.0]),
+    lambda v: gb.Model(gb.Structure(["y(k-1)"]), [v]),
+])
+def test_a_number_beyond_float64s_range_is_said_so_not_non_finite(convert):
+    for v in _huge():
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # numpy's "overflow encountered in cast" is no message
+            with pytest.raises(ValueError, match="beyond the float range") as info:
+                convert(v)
+        assert "non-finite" not in str(info.value) and "NaN" not in str(info.value)
+
+
+@pytest.mark.skipif(not _HAS_LONG, reason="longdouble is float64 here")
+def test_a_longdouble_scalar_beyond_float64s_range_is_said_so():
+    with pytest.raises(ValueError, match="x.*beyond the float range"):
+        check_real(np.longdouble("1e400"), "x")
+    with pytest.raises(ValueError, match="x.*beyond the float range"):
+        check_int(np.longdouble("1e400"), "x")
+    with pytest.raises(ValueError, match="x.*beyond the float range"):
+        float_array(np.array([1.0, 1e300], dtype=np.longdouble) * np.longdouble("1e300"), "x")  # an array of them
+    assert check_real(np.longdouble("1e300"), "x") == 1e300  # within the range: its value
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -np.inf, Decimal("nan"), Decimal("-Infinity"),
+                                 np.longdouble("nan"), np.longdouble("inf")])
+def test_nan_and_inf_keep_their_message(bad):
+    with pytest.raises(ValueError, match="non-finite") as info:
+        as_1d_finite([1.0, bad], "x")
+    assert "beyond" not in str(info.value)
+    with pytest.raises(ValueError, match="non-finite"):
+        gb.Model(gb.Structure(["y(k-1)"]), [bad])
+    if not isinstance(bad, Decimal):
+        with pytest.raises(ValueError, match="finite") as info:
+            check_real(bad, "x")
+        assert "beyond" not in str(info.value)
+
+
+def test_decimals_and_longdoubles_within_the_range_are_their_values():
+    assert float_array([Decimal("1.5"), np.longdouble("2.5")], "x").tolist() == [1.5, 2.5]
+    assert as_1d_finite([Decimal("1e300")], "x")[0] == 1e300

@@ -93,6 +93,8 @@ def check_int(value: object, name: str, *, low: int | None = None, high: int | N
     else:
         f = float(value)  # type: ignore[arg-type]
         if not np.isfinite(f):
+            if _finite_beyond(value):
+                raise _BeyondFloats(f"{name} must be an integer, got one beyond the float range (about 1.8e308)")
             raise ValueError(f"{name} must be a finite integer, got {value!r}")
         if f != int(f):
             raise TypeError(f"{name} must be an integer, got {value!r}")
@@ -182,6 +184,8 @@ def check_real(
         # has none within Python's digit limit)
         raise _BeyondFloats(f"{name} must be a finite number, got one beyond the float range (about 1.8e308)") from None
     if not np.isfinite(v):
+        if _finite_beyond(value):  # a longdouble of 1e400 is a number, not inf
+            raise _BeyondFloats(f"{name} must be a finite number, got one beyond the float range (about 1.8e308)")
         raise ValueError(f"{name} must be a finite number, got {value!r}")
     lo_bad = low is not None and (v <= low if low_open else v < low)
     hi_bad = high is not None and (v >= high if high_open else v > high)
@@ -350,6 +354,40 @@ def refuse_flags(x: object, name: str, what: str = "numbers") -> None:
         raise TypeError(f"{name} must be {what}, got {short_value(x)}")
 
 
+def _finite_beyond(v: object) -> bool:
+    """``v``, which float64 holds as ±inf, is a finite number in its own type (a ``Decimal`` or a NumPy
+    ``longdouble`` beyond 1.8e308): no NaN or inf, a number beyond the float range."""
+    is_finite = getattr(v, "is_finite", None)  # Decimal's own test: float() of it would say inf
+    if callable(is_finite):
+        try:
+            return bool(is_finite())
+        except TypeError:
+            return False
+    try:
+        return bool(np.isfinite(v))  # type: ignore[call-overload]  (a longdouble, in its own precision)
+    except (TypeError, ValueError):
+        return False
+
+
+def _refuse_beyond_floats(x: object, a: np.ndarray, name: str) -> None:
+    """``_BeyondFloats`` naming ``name`` where the float64 array ``a`` converted from ``x`` is ±inf at a number that is
+    finite in ``x`` (a ``Decimal`` or ``longdouble`` beyond the float range): the finite checks that follow would
+    call it non-finite, NaN or inf."""
+    inf = np.isinf(a)
+    if not inf.any():
+        return
+    try:
+        src = np.asarray(x)
+    except (TypeError, ValueError):
+        return
+    if src.shape != a.shape or src.dtype.kind not in "fO":  # float64 itself is inf where it says so
+        return
+    if src.dtype.kind == "f" and src.dtype.itemsize <= 8:
+        return
+    if any(_finite_beyond(v) for v in src[inf].ravel()):
+        raise _BeyondFloats(f"{name} holds a number beyond the float range (about 1.8e308)")
+
+
 class _BadValue(ValueError):
     """A value refused by :func:`float_array` as such, which :func:`real_array` and :func:`check_per_point` do not
     take for a ragged shape (a type error there)."""
@@ -385,11 +423,21 @@ def float_array(x: object, name: str, what: str = "an array of numbers") -> np.n
         # pandas' nullable columns (Int64, Float64) hold pd.NA, which numpy cannot make a float: read as NaN,
         # that the finite checks name it (a Series did, a DataFrame of them was "no array of numbers")
         try:
-            return np.array(x.to_numpy(dtype=float, na_value=np.nan), dtype=float, copy=True)
+            with np.errstate(over="ignore"):  # a longdouble beyond float64's range: said below, no warning
+                a = np.array(x.to_numpy(dtype=float, na_value=np.nan), dtype=float, copy=True)
+            _refuse_beyond_floats(x, a, name)
+            return a
+        except _BadValue:
+            raise
         except (TypeError, ValueError):
             pass  # text, dates …: said below as for any other object
     try:
-        return np.array(x, dtype=float, copy=True)
+        with np.errstate(over="ignore"):  # numpy's "overflow encountered in cast" named nothing: said below
+            a = np.array(x, dtype=float, copy=True)
+        _refuse_beyond_floats(x, a, name)
+        return a
+    except _BadValue:
+        raise
     except TypeError:
         raise TypeError(f"{name} must be {what}, got {type(x).__name__}") from None
     except OverflowError:  # an integer beyond the float range (10**400): numpy's message names nothing
