@@ -54,6 +54,8 @@ def test_a_label_with_its_unit_is_kept_and_a_label_without_it_gets_it_once(head,
 
 # --- 4. Decimal and longdouble numbers beyond float64's range were "non-finite (NaN or inf)" ----------------------
 
+import math  # noqa: E402
+import re  # noqa: E402
 import warnings  # noqa: E402
 from decimal import Decimal  # noqa: E402
 
@@ -115,3 +117,66 @@ def test_nan_and_inf_keep_their_message(bad):
 def test_decimals_and_longdoubles_within_the_range_are_their_values():
     assert float_array([Decimal("1.5"), np.longdouble("2.5")], "x").tolist() == [1.5, 2.5]
     assert as_1d_finite([Decimal("1e300")], "x")[0] == 1e300
+
+
+# --- 3. regressor_matrix: a term's product beyond the float range was an inf column with numpy's warnings ----------
+
+def _huge_record(n=120):
+    rng = np.random.default_rng(3)
+    u = rng.uniform(-1, 1, n)
+    y = 1e200 * (1.0 + 0.1 * rng.standard_normal(n))
+    return gb.Record(u, y)
+
+
+OVER = gb.Structure(["y(k-1)", "u(k-1)", "y(k-1)^2"])
+
+
+def test_regressor_matrix_names_the_term_beyond_the_float_range_without_numpys_warning():
+    rec = _huge_record()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"y\(k-1\)\^2") as info:
+            gb.regressor_matrix(OVER, rec.u, rec.y)
+        assert "u(k-1)," not in str(info.value)  # the finite columns are not named
+        with pytest.raises(ValueError, match=r"y\(k-1\)\^2"):
+            gb.stacked_regressors(OVER, [rec, rec])
+        psi = gb.regressor_matrix(OVER[:2], rec.u, rec.y)  # the terms within the range: their columns
+    assert np.all(np.isfinite(psi)) and psi.shape == (len(rec) - 1, 2)
+
+
+@given(exponent=st.integers(30, 300), power=st.integers(1, 4))
+def test_a_column_is_finite_or_refused_as_its_product_leaves_the_range(exponent, power):
+    # the law: finite columns where every product is within float64's range, else a ValueError naming the term;
+    # never inf, never numpy's warning
+    rec = gb.Record(np.linspace(-1, 1, 20), 10.0 ** exponent * np.linspace(1, 2, 20))
+    structure = gb.Structure(["u(k-1)", f"y(k-1)^{power}" if power > 1 else "y(k-1)"])
+    beyond = power * math.log10(float(np.max(rec.y[:-1]))) > math.log10(np.finfo(float).max)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        if beyond:
+            with pytest.raises(ValueError, match=re.escape(str(structure[1]))):
+                gb.regressor_matrix(structure, rec.u, rec.y)
+        else:
+            assert np.all(np.isfinite(gb.regressor_matrix(structure, rec.u, rec.y)))
+
+
+@pytest.mark.parametrize("fit", [
+    lambda rec: gb.els(OVER, rec, noise=0),
+    lambda rec: gb.els(OVER, rec, noise=2),
+    lambda rec: gb.pe_pareto(OVER, rec, None, lambdas=[1.0]),
+    lambda rec: gb.residual_tests(gb.Model(OVER, [0.1, 1.0, 1e-300]), rec),
+    lambda rec: gb.one_step_residuals(gb.Model(OVER, [0.1, 1.0, 1e-300]), rec),
+])
+def test_the_estimators_refuse_such_data_naming_the_term(fit):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"y\(k-1\)\^2"):
+            fit(_huge_record())
+
+
+def test_a_one_step_prediction_beyond_the_float_range_stays_nan():
+    rec = _huge_record()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        yhat = gb.Model(OVER, [0.1, 1.0, 1.0]).predict(rec)
+    assert np.isnan(yhat[1:]).all() and yhat[0] == rec.y[0]

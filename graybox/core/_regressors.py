@@ -16,7 +16,7 @@ from ._terms import Structure, check_input_names, missing_input_hint, structure_
 from ._validation import as_1d_finite, check_int, check_sequence
 
 __all__ = ["record_signals", "check_structure_inputs", "check_record_inputs", "refuse_non_finite_columns",
-           "input_signals", "regressor_matrix", "stacked_regressors"]
+           "input_signals", "regressor_matrix", "regressor_columns", "stacked_regressors"]
 
 
 def record_signals(record: Record) -> dict[str, np.ndarray]:
@@ -113,8 +113,33 @@ def regressor_matrix(
     Returns
     -------
     ndarray, shape (N - start, len(structure))
-        Ψ, float64, C-contiguous.
+        Ψ, float64, C-contiguous, finite.
+
+    Raises
+    ------
+    ValueError
+        Data that are no record (a bad shape, non-finite samples, too few samples for ``start``), a term whose
+        signal the data lack, or a term whose product leaves the float range on these data (``y(k-1)^2`` of y
+        near 1e200), named.
     """
+    structure = structure_of(structure)  # terms, or what carries a structure (a Model, a Selection)
+    psi = regressor_columns(structure, u, y, e=e, start=start, input_names=input_names)
+    # a term's product beyond the float range (y ~ 1e200, y(k-1)^2) was an inf column with numpy's overflow warning
+    refuse_non_finite_columns(psi, structure)
+    return psi
+
+
+def regressor_columns(
+    structure: Structure,
+    u: np.ndarray,
+    y: np.ndarray,
+    *,
+    e: np.ndarray | None = None,
+    start: int | None = None,
+    input_names: tuple[str, ...] | None = None,
+) -> np.ndarray:
+    """:func:`regressor_matrix` with a term beyond the float range left as it comes (±inf or NaN in its column, no
+    numpy warning): for one-step predictions, where such a prediction is NaN, and scores, where it is inf."""
     structure = structure_of(structure)  # terms, or what carries a structure (a Model, a Selection)
     names = None if input_names is None else check_input_names(input_names)
     # a public entry: lists, text or None were an AttributeError ('list' object has no attribute 'shape'), a u
@@ -140,6 +165,14 @@ def regressor_matrix(
             raise ValueError(f"e has {signals['e'].size} samples, y has {n}")
     rows = n - s
     psi = np.empty((rows, len(structure)))
+    with np.errstate(over="ignore", invalid="ignore"):  # a product beyond the float range: the caller names it
+        _fill_columns(psi, structure, signals, s, n)
+    return psi
+
+
+def _fill_columns(psi: np.ndarray, structure: Structure, signals: dict[str, np.ndarray], s: int, n: int) -> None:
+    """Ψ's columns, in place: each term's product of lagged signals at k = s … n−1."""
+    rows = n - s
     for j, term in enumerate(structure):
         col = np.ones(rows)
         for sig, lag, power in term.factors:
@@ -152,7 +185,6 @@ def regressor_matrix(
             x = signals[sig][s - lag : n - lag]
             col *= x if power == 1 else x**power
         psi[:, j] = col
-    return psi
 
 
 def stacked_regressors(

@@ -17,7 +17,7 @@ from ._simulation_kernels import (BOUND_FACTOR, encode, predict_ahead, record_in
 from ._records import Dataset, Record, as_input_array, is_frame, record_hint, require_record
 from ._terms import check_input_names, default_input_names, require_inputs
 from ._validation import as_1d_finite, check_choice, check_int, check_real, check_theta, real_array
-from ._regressors import regressor_matrix
+from ._regressors import regressor_columns
 from ._terms import Structure, structure_of
 
 __all__ = ["predict", "simulate", "simulate_many", "DivergenceError", "free_run_inputs", "default_bound"]
@@ -64,7 +64,7 @@ def predict(structure: Structure, theta: np.ndarray, record: Record, *, horizon:
         yhat = record.y.copy()
         # a term beyond the float range (a high power of a large u or y) was inf − inf with numpy's warnings
         with np.errstate(over="ignore", invalid="ignore"):
-            one = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
+            one = regressor_columns(structure, record.u, record.y, start=L, input_names=record.input_names) @ th
         yhat[L:] = np.where(np.isfinite(one), one, np.nan)
         return yhat
     code = encode(structure, record.input_names)

@@ -66,7 +66,7 @@ from ..core._least_squares import check_rows, one_blas_thread, rank_tolerance
 from ..core._simulation_kernels import free_run_sensitivity_blocks, inverse_ma_filter
 from ..core._terms import check_input_names
 from ..core._records import Dataset, Record, StaticPoints, StaticRangeWarning, check_units, require_lengths
-from ..core._regressors import record_signals, refuse_non_finite_columns, regressor_matrix
+from ..core._regressors import record_signals, refuse_non_finite_columns, regressor_columns, regressor_matrix
 from ._residuals import _model_residuals
 from ..estimation._simulation_error import SEProblem
 from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
@@ -673,8 +673,7 @@ def ls_uncertainty(
     require_lengths(recs, L)  # named, as the LS path names it (regressor_matrix's start = L named no record)
     blocks, grads, targets = [], [], []
     for r in recs:
-        with np.errstate(over="ignore", invalid="ignore"):
-            proc = regressor_matrix(st, r.u, r.y, start=L, input_names=r.input_names)
+        proc = regressor_columns(st, r.u, r.y, start=L, input_names=r.input_names)
         refuse_non_finite_columns(proc, st, f"{what}: ")
         xi, _ = _model_residuals(model, r, True)
         e = np.zeros(len(r))

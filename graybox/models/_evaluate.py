@@ -28,7 +28,7 @@ from ..core._least_squares import CONSTANT_RTOL, output_spread  # noqa: F401 (th
 from ..core._simulation_kernels import batch_sse, encode, record_inputs
 from ._model import Model
 from ._coerce import as_model, as_record, as_structure, static_info
-from ..core._regressors import regressor_matrix
+from ..core._regressors import regressor_columns
 from ..core._records import Dataset, Record, StaticPoints, static_point_inputs
 from ..core._simulation import DivergenceError
 from ..core._validation import (as_1d_finite, check_bool, check_int, check_per_point, check_sequence, real_array,
@@ -314,13 +314,15 @@ def evaluate_thetas(
         record.require_length(L)
         n_rows = len(record) - L
         if one_step:
-            psi = regressor_matrix(structure, record.u, record.y, start=L, input_names=record.input_names)
+            # a term beyond the float range on these data: inf (or NaN) in its column, every member's J1 inf
+            psi = regressor_columns(structure, record.u, record.y, start=L, input_names=record.input_names)
             # row blocks of at most ~2^20 residuals: no N × P temporary on long records
             step = max(1, (1 << 20) // max(1, th.shape[0]))
             sse1 = np.zeros(th.shape[0])
-            for k in range(0, n_rows, step):
-                r = record.y[L + k : L + k + step, None] - psi[k : k + step] @ th.T
-                sse1 += np.einsum("ij,ij->j", r, r)
+            with np.errstate(over="ignore", invalid="ignore"):
+                for k in range(0, n_rows, step):
+                    r = record.y[L + k : L + k + step, None] - psi[k : k + step] @ th.T
+                    sse1 += np.einsum("ij,ij->j", r, r)
             out["J1"] = np.where(np.isfinite(sse1), sse1 / n_rows, np.inf)  # as J_S: a non-finite member scores inf
         # the compiled kernel sums squared free-run errors as it simulates: no P × N output
         with np.errstate(over="ignore", invalid="ignore"):
