@@ -180,3 +180,77 @@ def test_a_one_step_prediction_beyond_the_float_range_stays_nan():
         warnings.simplefilter("error")
         yhat = gb.Model(OVER, [0.1, 1.0, 1.0]).predict(rec)
     assert np.isnan(yhat[1:]).all() and yhat[0] == rec.y[0]
+
+
+# --- 5. a grid structure listed twice, its terms in another order, was two structures: two cells of one fit -------
+
+from graybox import experiments as gx  # noqa: E402
+from graybox.experiments._spec import StructureSpec  # noqa: E402
+
+TERMS = ["y(k-1)", "u(k-1)", "u(k-1)y(k-1)", "1"]
+
+
+def _grid(structures, variants=None):
+    return gx.Grid([gx.DataSpec("p", bundled="pumping")], structures, variants or [gx.Variant("LS", "ls")])
+
+
+@given(order=st.permutations(range(len(TERMS))))
+def test_a_structure_listed_again_in_another_order_is_refused(order):
+    assume(list(order) != sorted(order))  # in the same order it is 'identical', refused as before
+    again = [TERMS[i] for i in order]
+    with pytest.raises(gx.SpecError, match=r"'b'.*same terms as 'a'"):
+        _grid([gx.StructureSpec("a", terms=TERMS), gx.StructureSpec("b", terms=again)])
+    # the factors of a term in another order are the same term too
+    with pytest.raises(gx.SpecError, match="same terms"):
+        _grid([gx.StructureSpec("a", terms=TERMS), gx.StructureSpec("b", terms=[t.replace("u(k-1)y(k-1)",
+                                                                                           "y(k-1)u(k-1)") for t in again])])
+
+
+def test_a_structure_with_other_terms_and_the_order_given_are_kept():
+    g = _grid([gx.StructureSpec("a", terms=TERMS), gx.StructureSpec("b", terms=TERMS[::-1][1:])])
+    assert [s.name for s in g.structures] == ["a", "b"]
+    assert g.structures[1].content() == {"terms": TERMS[::-1][1:]}  # θ's order, and the cells' keys, as given
+
+
+def test_a_made_structure_with_its_included_terms_in_another_order_is_refused():
+    cand = {"ny": 1, "nu": 1, "degree": 2}
+    with pytest.raises(gx.SpecError, match="'b'.*included terms as 'a'"):
+        _grid([gx.StructureSpec("a", candidates=cand, n_terms=3, include=["1", "u(k-1)"]),
+               gx.StructureSpec("b", candidates=cand, n_terms=3, include=["u(k-1)", "1"])])
+    _grid([gx.StructureSpec("a", candidates=cand, n_terms=3, include=["1", "u(k-1)"]),
+           gx.StructureSpec("b", candidates=cand, n_terms=4, include=["u(k-1)", "1"])])  # another rule: kept
+
+
+def test_a_toml_spec_listing_a_structure_twice_in_another_order_names_its_line():
+    text = '''name = "g"
+[[data]]
+name = "p"
+bundled = "pumping"
+[[structures]]
+name = "a"
+terms = ["y(k-1)", "u(k-1)"]
+[[structures]]
+name = "b"
+terms = ["u(k-1)", "y(k-1)"]
+[[variants]]
+name = "LS"
+estimator = "ls"
+'''
+    with pytest.raises(gx.SpecError, match="same terms") as info:
+        gx.Grid.from_toml_text(text)
+    assert "line" in str(info.value)
+
+
+def test_a_store_written_with_such_a_structure_twice_is_still_read(tmp_path, monkeypatch):
+    # a store written before the check: two structures of one set of terms, two rows each
+    with monkeypatch.context() as m:
+        m.setattr(StructureSpec, "identity", StructureSpec.content)
+        g = _grid([gx.StructureSpec("a", terms=["y(k-1)", "u(k-1)"]), gx.StructureSpec("b", terms=["u(k-1)", "y(k-1)"])])
+        run = gx.run_grid(g, tmp_path / "s.sqlite", executor="inprocess", progress=False)
+    assert run.counts["ok"] == 2
+    df = gx.load_results(tmp_path / "s.sqlite")
+    assert sorted(df["structure"]) == ["a", "b"] and set(df["status"]) == {"ok"}
+    a, b = (df[df["structure"] == s].iloc[0] for s in "ab")
+    assert np.allclose(a["theta"], b["theta"][::-1])
+    assert gx.write_report(tmp_path / "s.sqlite", tmp_path / "r")
+

@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import _api as gb
 
-from ..core._terms import default_input_names
+from ..core._terms import Term, default_input_names, parse_term
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
 from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_path,
                                 check_real, check_sequence, check_str)
@@ -644,6 +644,15 @@ class StructureSpec:
         return {"candidates": _thaw(self.candidates), "n_terms": self.n_terms, "tol": self.tol,
                 "criterion": self.criterion, "max_terms": self.max_terms, "include": list(self.include)}
 
+    def identity(self) -> dict:
+        """:meth:`content` with its terms (given or included) as a set, in the candidates' order
+        (:meth:`graybox.Term.sort_key`): two structures of one identity are one fit, its θ in another order.
+        The content keeps the order given (θ's, and the cells' keys of stores written before)."""
+        c = self.content()
+        key = "terms" if self.terms is not None else "include"
+        c[key] = sorted(c[key], key=lambda t: Term.sort_key(parse_term(t)))
+        return c
+
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
@@ -1241,6 +1250,16 @@ class Grid:
                     raise SpecError(f"{kind[:-1]} {it.name!r} is identical to {seen[c]!r} (same content, same cells)",
                                     (kind, i))
                 seen[c] = it.name
+                if kind == "structures":
+                    # a structure is its set of terms: ["y(k-1)", "u(k-1)"] and ["u(k-1)", "y(k-1)"] were two
+                    # structures, two cells of one fit and two rows in the store and the report
+                    key = "\0" + canonical_json(it.identity())
+                    if key in seen:
+                        which = "terms" if it.terms is not None else "candidates, rule and included terms"
+                        raise SpecError(f"structure {it.name!r} has the same {which} as {seen[key]!r} in another "
+                                        "order: one fit (its θ in another order), the same cells; list it once",
+                                        (kind, i))
+                    seen[key] = it.name
         # what a variant reads from every data set, refused here rather than as a failed cell in every row
         for i, v in enumerate(self.variants):
             nob = [d.name for d in self.data if d.band is None and not _column_uncertainty(d)]
