@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from scipy import stats
 
 import graybox as gb
 
@@ -17,9 +18,13 @@ def _ct(**kw):
     return gb.CorrelationTest(**a)
 
 
+#: The pointwise band (and limit) at 95 % of n = 5 residuals, z/√n: a ResidualTests of n = 5 holds its tests to it.
+BAND5 = float(stats.norm.ppf(0.975) / np.sqrt(5))
+
+
 def test_a_correlation_test_built_by_hand_is_read_only():
     # residual_tests froze the arrays it passed, but the class did not: one built (or loaded) otherwise could be edited
-    t = _ct(lags=[-2, -1, 0, 1, 2], phi=[0.01, -0.02, 0.0, 0.03, 0.0], outside=[])
+    t = _ct(lags=[-2, -1, 0, 1, 2], phi=[0.01, -0.02, 0.0, 0.03, 0.0], outside=[], band=BAND5, limit=BAND5)
     for f in ("lags", "phi", "outside"):
         with pytest.raises(ValueError, match="read-only"):
             getattr(t, f)[...] = 0
@@ -47,7 +52,8 @@ def test_a_correlation_test_that_contradicts_itself_is_refused(kw, said):
                                       (dict(rule="x"), "rule"), (dict(n=-3), "n"),
                                       (dict(tests={"u_xi:u": _ct()}), "u_xi")])
 def test_residual_tests_that_contradict_themselves_are_refused(kw, said):
-    a = dict(tests={"u_xi": _ct()}, n=5, level=0.95, rule="pointwise", model_name="m", residuals=(np.zeros(5),))
+    a = dict(tests={"u_xi": _ct(band=BAND5, limit=BAND5)}, n=5, level=0.95, rule="pointwise", model_name="m",
+             residuals=(np.zeros(5),))
     a.update(kw)
     with pytest.raises(ValueError, match=said):
         gb.ResidualTests(**a)

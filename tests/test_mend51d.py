@@ -254,3 +254,118 @@ def test_a_store_written_with_such_a_structure_twice_is_still_read(tmp_path, mon
     assert np.allclose(a["theta"], b["theta"][::-1])
     assert gx.write_report(tmp_path / "s.sqlite", tmp_path / "r")
 
+
+# --- 1. ResidualTests held its bands to nothing: a band its n and level would not give said "passed" -------------
+
+import dataclasses  # noqa: E402
+import json  # noqa: E402
+
+from scipy import stats  # noqa: E402
+
+from graybox.diagnostics._residuals import TESTS  # noqa: E402
+
+
+def _narx(n=300, seed=0, inputs=1):
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1, 1, (n, inputs)) if inputs > 1 else rng.uniform(-1, 1, n)
+    drive = u.sum(axis=1) if inputs > 1 else u
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + drive[k - 1] + 0.05 * rng.standard_normal()
+    return gb.Record(u, y)
+
+
+REC1 = _narx()
+MODEL1 = gb.els(gb.Structure(["y(k-1)", "u(k-1)", "1"]), REC1, noise=0).model
+
+
+def _bands(n, level, size, rule):
+    band = stats.norm.ppf(0.5 + level / 2) / np.sqrt(n)
+    limit = band if rule == "pointwise" else stats.norm.ppf(1 - (1 - level) / (2 * size)) / np.sqrt(n)
+    return float(band), float(limit)
+
+
+def _test(name, lags, n=5, level=0.95, rule="pointwise", phi=None):
+    lags = np.asarray(lags)
+    band, limit = _bands(n, level, lags.size, rule)
+    phi = np.zeros(lags.size) if phi is None else np.asarray(phi, float)
+    label, kind, _ = TESTS[name.split(":")[0]]
+    return gb.CorrelationTest(name, label, kind, lags, phi, band, limit, lags[np.abs(phi) > band],
+                              bool(np.all(np.abs(phi) <= limit)))
+
+
+@pytest.mark.parametrize("name, lags", [
+    ("u_xi", np.arange(1, 4)),      # an autocorrelation's lags 1 … L for a cross-correlation's −L … L
+    ("xi_xi", np.arange(-3, 4)),    # τ = 0 is φ_ξξ = 1, never tested
+    ("xi_xi", np.arange(0, 4)),
+    ("xi_xiu", np.arange(1, 4)),    # 0 … L
+    ("u2_xi", np.arange(-3, 3)),    # not symmetric
+    ("u2_xi2:u1", np.array([-2, 0, 2])),  # gaps
+    ("xi_xi", np.array([3, 2, 1])),  # out of order
+])
+def test_a_correlation_test_holding_lags_its_name_has_not_is_refused(name, lags):
+    with pytest.raises(ValueError, match="lags"):
+        _test(name, lags)
+
+
+@pytest.mark.parametrize("name, lags", [("xi_xi", np.arange(1, 4)), ("u_xi", np.arange(-3, 4)),
+                                        ("xi_xiu", np.arange(0, 4)), ("u2_xi:u2", np.arange(-1, 2)),
+                                        ("xi_xi", np.arange(1, 2))])
+def test_a_correlation_test_with_its_names_lags_is_built(name, lags):
+    assert _test(name, lags).lags.tolist() == lags.tolist()
+
+
+@pytest.mark.parametrize("edit, said", [
+    (dict(n=398, residuals=(np.zeros(398),)), "band"),  # n that the bands were not made with
+    (dict(level=0.99), "band"),
+    (dict(rule="pointwise"), "limit"),
+])
+def test_residual_tests_whose_bands_their_n_level_or_rule_would_not_give_are_refused(edit, said):
+    rt = gb.residual_tests(MODEL1, REC1)
+    with pytest.raises(ValueError, match=said):
+        dataclasses.replace(rt, **edit)
+
+
+def test_a_hand_built_residual_tests_with_a_band_of_another_n_is_refused():
+    good = _test("u_xi", np.arange(-2, 3), n=5)
+    rt = gb.ResidualTests({"u_xi": good}, 5, 0.95, "pointwise", "m", (np.zeros(5),))
+    assert rt.passed
+    # a band of n = 500 (0.088) beside n = 5 (0.877): |φ| = 0.5 passes at n = 5, fails at 500; said 'failed'
+    wide = _test("u_xi", np.arange(-2, 3), n=500, phi=[0.5, 0, 0, 0, 0])
+    with pytest.raises(ValueError, match=r"band of tests\['u_xi'\]"):
+        gb.ResidualTests({"u_xi": wide}, 5, 0.95, "pointwise", "m", (np.zeros(5),))
+    with pytest.raises(ValueError, match=r"limit of tests\['u_xi'\]"):
+        gb.ResidualTests({"u_xi": _test("u_xi", np.arange(-2, 3), n=5, rule="simultaneous")}, 5, 0.95, "pointwise",
+                         "m", (np.zeros(5),))
+    with pytest.raises(ValueError, match="lags"):  # tests of one call share their max lag
+        gb.ResidualTests({"xi_xi": _test("xi_xi", np.arange(1, 4)), "u_xi": good}, 5, 0.95, "pointwise", "m",
+                         (np.zeros(5),))
+
+
+@given(n=st.integers(5, 10_000), level=st.floats(0.5, 0.999), lag=st.integers(1, 30),
+       rule=st.sampled_from(["pointwise", "simultaneous"]))
+def test_bands_of_their_own_n_level_and_rule_are_taken(n, level, lag, rule):
+    tests = {"xi_xi": _test("xi_xi", np.arange(1, lag + 1), n, level, rule),
+             "u_xi": _test("u_xi", np.arange(-lag, lag + 1), n, level, rule)}
+    rt = gb.ResidualTests(tests, n, level, rule, "m", (np.zeros(n),))
+    assert rt.passed and rt.n == n
+
+
+@pytest.mark.parametrize("rule", ["simultaneous", "pointwise"])
+@pytest.mark.parametrize("inputs", [1, 2])
+def test_residual_tests_files_graybox_writes_still_load(tmp_path, rule, inputs):
+    rec = _narx(inputs=inputs, seed=inputs)
+    terms = ["y(k-1)", "1"] + (["u(k-1)"] if inputs == 1 else ["u1(k-1)", "u2(k-1)"])
+    model = gb.els(gb.Structure(terms), rec, noise=0).model
+    rt = gb.residual_tests(model, rec, rule=rule, level=0.9, max_lag=7)
+    path = tmp_path / "r.json"
+    gb.save(rt, path)
+    back = gb.load(path)
+    assert repr(back) == repr(rt) and list(back.tests) == list(rt.tests)
+    assert all(np.array_equal(back[k].phi, rt[k].phi) and back[k].band == rt[k].band for k in rt.tests)
+    # a band edited in the file (the simultaneous limit of 41 lags where 7 … 15 were made): refused by name
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    doc["object"]["tests"]["xi_xi"]["band"] *= 0.5
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    with pytest.raises(gb.GrayboxFileError, match="band"):
+        gb.load(path)

@@ -27,8 +27,9 @@ def test_a_residual_tests_file_with_a_0_over_0_test_from_the_previous_graybox_st
     # as the previous graybox wrote it: the test made, NaN ('nan') at each lag, failed, nothing undefined
     t = dict(doc["object"]["tests"]["xi_xi"])
     lags = list(range(-20, 21))
+    # (its limit that of 41 lags, as φ_uξ's: φ_ξξ's is of 20)
     t.update(name="u2_xi2", label="φ_(u²)'ξ²(τ)", kind="nonlinear", lags=lags, phi=["nan"] * len(lags),
-             outside=[], passed=False)
+             outside=[], passed=False, limit=doc["object"]["tests"]["u_xi"]["limit"])
     doc["object"]["tests"]["u2_xi2"] = t
     doc["object"]["undefined"] = {}
     path.write_text(json.dumps(doc), encoding="utf-8")
@@ -37,7 +38,7 @@ def test_a_residual_tests_file_with_a_0_over_0_test_from_the_previous_graybox_st
     assert np.all(np.isnan(old["u2_xi2"].phi))
     # a φ partly NaN, or NaN yet passed, is no file graybox wrote
     with pytest.raises(ValueError, match="phi"):
-        gb.CorrelationTest("u_xi", "φ_uξ(τ)", "linear", np.arange(2), np.array([np.nan, 0.1]), 0.2, 0.3,
+        gb.CorrelationTest("u_xi", "φ_uξ(τ)", "linear", np.arange(-1, 2), np.array([np.nan, 0.1, 0.0]), 0.2, 0.3,
                            np.array([], int), False)
 
 

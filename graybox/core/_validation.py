@@ -225,6 +225,14 @@ def check_band(band: object, name: str = "band") -> tuple[float, float]:
     return 0.0, check_real(band, name, low=0, low_open=True)
 
 
+def check_agrees(value: float, expected: float, name: str, said: str, rtol: float = 1e-9) -> None:
+    """``ValueError`` naming ``name`` where a figure a result holds is not the one its own fields give (``said``:
+    which, in words), to ``rtol``: a result built by hand, or read from an edited file, must not carry a band or
+    limit of other data beside its verdict."""
+    if not abs(value - expected) <= rtol * abs(expected):
+        raise ValueError(f"{name} is {value!r}, but {said} give {expected!r}")
+
+
 def check_mean_square(value: object, name: str) -> None:
     """``ValueError`` when a mean square error (J_1, J_S, J_SF: output units²) held by a result is negative.
 

@@ -80,8 +80,8 @@ from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
-from ..core._validation import (FrozenMap, check_bool, check_choice, check_fields, check_int, check_level, check_real,
-                                frozen, warn)
+from ..core._validation import (FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int, check_level,
+                                check_real, frozen, warn)
 
 #: What a model argument of the residual tests may be, in words.
 _ACCEPTED = MODEL_ACCEPTED.replace("a Model or", "a Model, a NeuralModel or").replace(")", ", NeuralFit)")
@@ -159,6 +159,13 @@ class CorrelationTest:
         if not undone and not np.all(np.isfinite(phi) & (np.abs(phi) <= 1 + 1e-12)):
             raise ValueError("phi must hold correlations, finite and in [-1, 1] (or NaN at every lag: a 0/0 test "
                              "an older graybox kept, failed)")
+        if base in TESTS:  # a u-ξ cross-correlation over an autocorrelation's lags 1 … L is no test residual_tests makes
+            side = TESTS[base][2]
+            top = int(np.max(np.abs(lags)))
+            if top < 1 or not np.array_equal(lags, _lags(side, top)):
+                span = {"both": "-L … L", "positive": "1 … L", "nonnegative": "0 … L"}[side]
+                raise ValueError(f"lags of test {self.name!r} must be τ = {span} (every lag, in order, some L >= 1), "
+                                 f"got {_lag_text(lags)}")
         check_real(self.band, "band", low=0, low_open=True)
         check_real(self.limit, "limit", low=0, low_open=True)
         if outside.ndim != 1 or not np.array_equal(outside, lags[np.abs(phi) > self.band]):
@@ -238,6 +245,20 @@ class ResidualTests:
         if sum(e.size for e in residuals) != self.n:
             raise ValueError(f"n must be the number of residuals, {sum(e.size for e in residuals)} over "
                              f"{len(residuals)} record(s), got {self.n}")
+        # the bands and limits are those of n, level and rule (a hand-built or edited one said 'passed' with a band
+        # its n would not give), and the tests of one call share its max_lag
+        tops = {k: int(np.max(np.abs(t.lags))) for k, t in self.tests.items()}
+        if len(set(tops.values())) > 1:
+            raise ValueError(f"lags of the tests must reach one max_lag, as residual_tests makes them; got {tops}")
+        band = float(stats.norm.ppf(0.5 + self.level / 2) / np.sqrt(self.n))
+        for k, t in self.tests.items():
+            check_agrees(t.band, band, f"band of tests[{k!r}]", f"level = {self.level!r} and n = {self.n} (z/√n)")
+            if self.rule == "pointwise":
+                check_agrees(t.limit, band, f"limit of tests[{k!r}]", "the pointwise rule's band and its level and n")
+            else:
+                limit = float(stats.norm.ppf(1 - (1 - self.level) / (2 * t.lags.size)) / np.sqrt(self.n))
+                check_agrees(t.limit, limit, f"limit of tests[{k!r}]", f"the simultaneous rule over its {t.lags.size} "
+                             f"lags at level = {self.level!r} and n = {self.n} (Bonferroni)")
         object.__setattr__(self, "tests", FrozenMap(self.tests))  # not the caller's dict
         object.__setattr__(self, "undefined", FrozenMap(self.undefined))
         object.__setattr__(self, "residuals", residuals)
@@ -385,6 +406,11 @@ def _lags(side: str, max_lag: int) -> np.ndarray:
     if side == "positive":
         return np.arange(1, max_lag + 1)
     return np.arange(0, max_lag + 1)
+
+
+def _lag_text(lags: np.ndarray) -> str:
+    """Lags in a message: all of a few, the ends of many."""
+    return str(lags.tolist()) if lags.size <= 8 else f"[{lags[0]}, {lags[1]}, …, {lags[-1]}] ({lags.size} lags)"
 
 
 def _xcorr(a: list[np.ndarray], b: list[np.ndarray], lags: np.ndarray) -> np.ndarray:
