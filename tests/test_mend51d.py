@@ -369,3 +369,13 @@ def test_residual_tests_files_graybox_writes_still_load(tmp_path, rule, inputs):
     path.write_text(json.dumps(doc), encoding="utf-8")
     with pytest.raises(gb.GrayboxFileError, match="band"):
         gb.load(path)
+
+
+# --- 3b. semp: the same overflow let numpy's warning through and named no candidate ----------------------------
+
+def test_semp_names_the_candidate_beyond_the_float_range_without_numpys_warning():
+    cand = gb.Structure(["u(k-1)", "y(k-1)", "u(k-1)^2", "y(k-1)^2", "1"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"candidate regressors overflow.*\(e\.g\. y\(k-1\)\^2\)"):
+            gb.semp(cand, _huge_record(), n_terms=2)

@@ -40,6 +40,7 @@ import scipy.linalg
 
 from ..core._gram import triangular_factor
 from ..core._least_squares import one_blas_thread, output_scale
+from ..core._regressors import refuse_non_finite_columns
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
 from ..core._records import Dataset, Record, as_records, carried_from, check_units, require_lengths
@@ -146,12 +147,13 @@ class _Scorer:
         for r in records:
             U = input_products(code.fptr, code.fsig, code.flag, code.fpow, record_inputs(r, code.input_names), L)
             self.U.append(U)
-            blocks.append(_psi(code, U, r.y, L))
+            with np.errstate(over="ignore", invalid="ignore"):  # a product beyond the float range: named below
+                blocks.append(_psi(code, U, r.y, L))
             targets.append(r.y[L:])
         psi = np.vstack(blocks)
         y = np.concatenate(targets)
-        if not (np.all(np.isfinite(psi)) and np.all(np.isfinite(y))):
-            raise ValueError("candidate regressors overflow to non-finite values (a high power of u or y?)")
+        # numpy's 'overflow encountered in multiply' escaped, and the message named no candidate
+        refuse_non_finite_columns(psi, process, "candidate ")
         if not np.any(y):
             # every model then scores 0 (its criterion N ln 0): nothing to rank, as for frols
             raise ValueError("the output is identically zero on the scored samples (after the largest lag): "
