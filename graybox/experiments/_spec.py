@@ -1108,6 +1108,8 @@ class Variant:
                 raise SpecError(f"unknown option {k!r} for estimator {est!r}; known: {', '.join(known) or '(none)'}"
                                 + hint, ("options", k))
             clean[k] = _wrap(known[k], ("options", k), v, k)
+        if est == "se-ga":  # GAOptions' checks across its fields (elite < population): here, not by each cell
+            _wrap(lambda: gb.GAOptions(**{k: v for k, v in clean.items() if k in _GA_FIELDS}), ("options",))
         if "patience" in clean and not clean.get("holdout"):  # said here, not by each cell's failure
             raise SpecError("patience applies to early stopping only: give holdout > 0 with it",
                             ("options", "patience"))

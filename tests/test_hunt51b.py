@@ -1,0 +1,29 @@
+"""hunt51b: grids under Dask and the SQLite store, grid specs in TOML."""
+
+from __future__ import annotations
+
+import pytest
+
+import graybox.experiments as gx
+
+_BASE = '''
+name = "t"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first"
+terms = ["y(k-1)", "u(k-1)", "1"]
+'''
+
+
+def _spec(variant: str) -> str:
+    return _BASE + "[[variants]]\n" + variant
+
+
+@pytest.mark.parametrize("options", ["{population = 4, elite = 4}", "{population = 4, elite = 10}"])
+def test_ga_elite_not_below_population_is_a_spec_error(options):
+    # GAOptions refuses elite >= population: the spec accepted it, and every se-ga cell of the grid failed
+    text = _spec(f'name = "GA"\nestimator = "se-ga"\noptions = {options}\n')
+    with pytest.raises(gx.SpecError, match="elite"):
+        gx.Grid.from_toml_text(text)
