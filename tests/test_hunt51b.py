@@ -27,3 +27,12 @@ def test_ga_elite_not_below_population_is_a_spec_error(options):
     text = _spec(f'name = "GA"\nestimator = "se-ga"\noptions = {options}\n')
     with pytest.raises(gx.SpecError, match="elite"):
         gx.Grid.from_toml_text(text)
+
+
+def test_ga_stall_false_is_a_type_error():
+    # stall = 0 is the spec's "never stop early" (TOML has no null); false passed as 0 (False == 0), where every
+    # other count of the spec refuses a bool with a TypeError, and stall = true did too
+    with pytest.raises(gx.SpecTypeError, match="stall"):
+        gx.Grid.from_toml_text(_spec('name = "GA"\nestimator = "se-ga"\noptions = {stall = false}\n'))
+    g = gx.Grid.from_toml_text(_spec('name = "GA"\nestimator = "se-ga"\noptions = {stall = 0}\n'))
+    assert g.variants[0].options["stall"] is None

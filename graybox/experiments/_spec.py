@@ -678,7 +678,8 @@ def _opt_reference(v: object, name: str) -> str | float:
 
 
 def _opt_stall(v: object, name: str) -> int | None:
-    return None if v in (None, 0) else check_int(v, name, low=1)
+    # 0: never stop early (TOML has no null); a bool is no count (False == 0 passed as 0)
+    return None if v is None or (not isinstance(v, bool) and v == 0) else check_int(v, name, low=1)
 
 
 def _opt_margin(v: object, name: str) -> str | float:
