@@ -36,3 +36,27 @@ def test_ga_stall_false_is_a_type_error():
         gx.Grid.from_toml_text(_spec('name = "GA"\nestimator = "se-ga"\noptions = {stall = false}\n'))
     g = gx.Grid.from_toml_text(_spec('name = "GA"\nestimator = "se-ga"\noptions = {stall = 0}\n'))
     assert g.variants[0].options["stall"] is None
+
+
+@pytest.mark.parametrize("estimator, constraint", [
+    ("cls", '{type = "band", b = 0.2}'),
+    ("cls", '{type = "gain", lower = 0.0}'),
+    ("pe", '{type = "band"}'),
+    ("pe", '{type = "clusters", bounds = {Sy = {upper = 0.9}}}'),
+])
+def test_closed_solver_with_inequality_constraints_is_a_spec_error(estimator, constraint):
+    # the closed form solves equality constraints only: the spec accepted solver = "closed" with a band, gain or
+    # cluster bound, and every cell of the variant failed with the estimator's ValueError
+    text = _spec(f'name = "V"\nestimator = "{estimator}"\nconstraints = [{constraint}]\n'
+                 'options = {solver = "closed"}\n')
+    with pytest.raises(gx.SpecError, match="closed") as info:
+        gx.Grid.from_toml_text(text)
+    assert info.value.path == ("variants", 0, "options", "solver")
+
+
+@pytest.mark.parametrize("constraint", ['{type = "equality", sigma_y = 0.5}', '{type = "points"}',
+                                        '{type = "clusters", bounds = {Sy = {lower = 0.5, upper = 0.5}}}'])
+def test_closed_solver_with_equality_constraints_is_accepted(constraint):
+    g = gx.Grid.from_toml_text(_spec(f'name = "V"\nestimator = "cls"\nconstraints = [{constraint}]\n'
+                                     'options = {solver = "closed"}\n'))
+    assert g.variants[0].options["solver"] == "closed"

@@ -1111,6 +1111,13 @@ class Variant:
             clean[k] = _wrap(known[k], ("options", k), v, k)
         if est == "se-ga":  # GAOptions' checks across its fields (elite < population): here, not by each cell
             _wrap(lambda: gb.GAOptions(**{k: v for k, v in clean.items() if k in _GA_FIELDS}), ("options",))
+        if clean.get("solver") == "closed":  # the closed form solves equalities only: said here, not by each cell
+            rows = [c["type"] for c in cons if c["type"] in ("band", "gain")
+                    or (c["type"] == "clusters" and any(lo is None or lo != hi for lo, hi in c["bounds"].values()))]
+            if rows:
+                raise SpecError(f"solver \"closed\" handles equality constraints only (equality, points, clusters of "
+                                f"equal bounds); the {rows[0]!r} constraint has inequality rows: use solver = "
+                                "\"clarabel\" or \"osqp\"", ("options", "solver"))
         if "patience" in clean and not clean.get("holdout"):  # said here, not by each cell's failure
             raise SpecError("patience applies to early stopping only: give holdout > 0 with it",
                             ("options", "patience"))
