@@ -327,6 +327,7 @@ def test_a_band_constraint_that_takes_the_points_uncertainty_is_a_new_cell_when_
     assert not np.allclose(thetas[0], thetas[1], rtol=0.01)  # δ decides the fit
     assert runs[1].ran == 1 and runs[1].skipped == 1  # LS does not read δ: reused
     # one δ whose square is the band (the bundled sets, a CSV file's uncertainty) keeps the key it had
+    structure = [gx.StructureSpec("quadratic", terms=["1", "y(k-1)", "u(k-1)", "u(k-1)^2"])]  # the plant's input u
     grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")], structure, variants[:1])
     from graybox.experiments._spec import _hash
 

@@ -450,6 +450,18 @@ def stored_spec(grid: "Grid", datasets: Mapping[str, gb.Dataset]) -> dict:
     return out
 
 
+def _structure_inputs(st: "StructureSpec") -> list[str]:
+    """The input names a structure spec names itself (its terms; per-input lags and delays, included terms): a made
+    structure with one lag count for all inputs takes the data set's, whatever they are called."""
+    if st.terms is not None:
+        return list(gb.parse_structure(list(st.terms)).input_names)
+    assert st.candidates is not None
+    named = [n for k in ("nu", "delay") if isinstance(st.candidates[k], Mapping) for n in st.candidates[k]]
+    if st.include:
+        named += gb.parse_structure(list(st.include)).input_names
+    return list(dict.fromkeys(named))
+
+
 def _carries_uncertainty(d: DataSpec) -> bool:
     """Whether a data set's static points carry their uncertainty δ (the bundled sets' do)."""
     if d.dataset is not None:
@@ -1387,6 +1399,11 @@ class Grid:
             except (OSError, ValueError) as exc:  # the loader's hints name its options in Python: said in TOML
                 raise SpecError(f"data set {d.name!r} cannot be loaded: {_toml_hints(str(exc))}", ("data", i)) from None
             names = tuple(ds.input_names)
+            for j, st in enumerate(self.structures):  # an input the data lack fails every cell of the structure
+                unknown = [n for n in _structure_inputs(st) if n not in names]
+                if unknown:
+                    raise SpecError(f"structure {st.name!r} names input(s) {', '.join(map(repr, unknown))}, which data "
+                                    f"set {d.name!r} does not have (its inputs: {', '.join(names)})", ("structures", j))
             for j, v in enumerate(self.variants):
                 for k, c in enumerate(v.constraints):
                     if c["type"] == "equality" and c["curve"] == "dataset" and "static_curve" not in ds.extra:
