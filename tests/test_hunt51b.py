@@ -98,3 +98,24 @@ def test_structures_on_a_subset_of_the_inputs_still_run(tmp_path):
                                                           '{u2 = 1}}\nn_terms = 2\ninclude = ["u2(k-1)"]'))
     res = gx.run_grid(g, tmp_path / "r.sqlite")
     assert res.counts["ok"] == 2, res.summary()
+
+
+def test_a_problem_found_when_the_data_load_names_the_spec_file_and_line(tmp_path):
+    # "every problem in [a TOML spec] is a SpecError naming the key and the line it is on": those found once the data
+    # are read (a CSV file missing, a structure or gain bound naming an input the data lack) named neither the file
+    # nor the line (graybox grid run: "structures[1]: …")
+    spec = tmp_path / "spec.toml"
+    spec.write_text(_MISO.replace("STRUCTURE", '[[structures]]\nname = "s"\nterms = ["y(k-1)", "q(k-1)", "1"]'))
+    with pytest.raises(gx.SpecError) as err:
+        gx.run_grid(spec, tmp_path / "r.sqlite")
+    assert err.value.source == str(spec) and err.value.line == 8  # the [[structures]] table of "s"
+    assert str(err.value).startswith(f"{spec}, line 8: structures[1]: ")
+    missing = tmp_path / "csv.toml"
+    missing.write_text('name = "c"\n[[data]]\nname = "mine"\nident = {path = "no.csv", u = "u", y = "y", Ts = 1.0}\n'
+                       'valid = {path = "no.csv", u = "u", y = "y", Ts = 1.0}\n'
+                       'static = {path = "no.csv", u = "u", y = "y", uncertainty = 0.1}\n'
+                       '[[structures]]\nname = "s"\nterms = ["y(k-1)", "u(k-1)", "1"]\n'
+                       '[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    with pytest.raises(gx.SpecError, match="cannot be loaded") as err:
+        gx.Grid.from_toml(missing).load_data()
+    assert err.value.source == str(missing) and err.value.line == 2

@@ -1338,9 +1338,11 @@ class Grid:
             raise SpecError(f"invalid TOML: {exc}", source=source, line=int(at.group(1)) if at else None) from None
         lines = _TomlLines(text)
         try:
-            return cls.from_dict(d, base_dir=base_dir)
+            grid = cls.from_dict(d, base_dir=base_dir)
         except SpecError as e:
             raise type(e)(e.problem, e.path, source, lines.line_of(e.path)) from None
+        object.__setattr__(grid, "_toml", (source, lines))  # the problems found once the data are read say it too
+        return grid
 
     @classmethod
     def from_dict(cls, d: Mapping, base_dir: str | None = None) -> "Grid":
@@ -1390,6 +1392,15 @@ class Grid:
 
     def load_data(self) -> dict[str, gb.Dataset]:
         """Every data set, loaded, by name (CSV paths relative to ``base_dir``)."""
+        try:
+            return self._load_data()
+        except SpecError as e:
+            toml = getattr(self, "_toml", None)  # a grid read from TOML: its problems name the file and the line
+            if toml is None or e.source is not None:
+                raise
+            raise type(e)(e.problem, e.path, toml[0], toml[1].line_of(e.path)) from None
+
+    def _load_data(self) -> dict[str, gb.Dataset]:
         out = {}
         for i, d in enumerate(self.data):
             try:
