@@ -119,3 +119,18 @@ def test_a_problem_found_when_the_data_load_names_the_spec_file_and_line(tmp_pat
     with pytest.raises(gx.SpecError, match="cannot be loaded") as err:
         gx.Grid.from_toml(missing).load_data()
     assert err.value.source == str(missing) and err.value.line == 2
+
+
+@pytest.mark.parametrize("rule, said", [("n_terms = 2", "n_terms"), ("max_terms = 2\ncriterion = \"bic\"", "max_terms"),
+                                        ("max_terms = 2\ntol = 0.01", "max_terms")])
+def test_a_rule_with_fewer_terms_than_included_is_a_spec_error(rule, said):
+    # FROLS refuses n_terms or max_terms below the included terms' count: the spec took them, and every cell of the
+    # structure failed
+    text = ('name = "t"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "s"\n'
+            f'candidates = {{ny = 2, nu = 2, degree = 2}}\n{rule}\ninclude = ["1", "y(k-1)", "u(k-1)"]\n'
+            '[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    with pytest.raises(gx.SpecError, match=f"{said}.*3 included") as err:
+        gx.Grid.from_toml_text(text)
+    assert err.value.path == ("structures", 0, said)
+    ok = text.replace("= 2\n", "= 3\n", 1)
+    assert len(gx.Grid.from_toml_text(ok).structures[0].include) == 3

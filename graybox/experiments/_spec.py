@@ -638,6 +638,11 @@ class StructureSpec:
         missing = [str(t) for t in inc if t not in space]
         if missing:
             raise SpecError(f"included terms {missing} are not among the candidates", ("include",))
+        for k in ("n_terms", "max_terms"):  # FROLS refuses it: said here, not by each cell
+            n = getattr(self, k)
+            if n is not None and n < len(inc):
+                raise SpecError(f"{k} = {n} is fewer than the {len(inc)} included terms {[str(t) for t in inc]}",
+                                (k,))
         object.__setattr__(self, "include", tuple(str(t) for t in inc))
 
     @property
