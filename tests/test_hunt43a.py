@@ -280,7 +280,7 @@ def test_grid_status_says_why_cells_are_not_ok(tmp_path, capsys):
     from graybox._cli import main
 
     grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")],
-                   [gx.StructureSpec("toomany", candidates={"ny": 1, "nu": 1, "degree": 1}, n_terms=5),
+                   [gx.StructureSpec("toolong", terms=["y(k-1)", "u(k-5000)", "1"]),  # lags beyond the records
                     gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)", "y(k-1)u(k-1)", "1"])],
                    [gx.Variant("LS", "ls"), gx.Variant("PE tight", "pe", lambdas=[1e-3, 1.0],
                                                       decision=gx.DecisionRule("dsf", band=1e-9),
@@ -290,11 +290,11 @@ def test_grid_status_says_why_cells_are_not_ok(tmp_path, capsys):
     st = gx.grid_status(store)
     assert dict(st.counts)["failed"] == 2 and dict(st.counts)["infeasible"] == 1
     assert set(st.reasons) == {"failed", "infeasible"}
-    assert "n_terms = 5 is more than the 3 process candidates" in st.reasons["failed"]
+    assert "fewer than max lag + 1 = 5001" in st.reasons["failed"]
     assert "B = [0, 1e-09]" in st.reasons["infeasible"]
     assert main(["grid", "status", str(store)]) == 0
     out = capsys.readouterr().out
-    assert "n_terms = 5 is more than" in out and "B = [0, 1e-09]" in out
+    assert "fewer than max lag + 1" in out and "B = [0, 1e-09]" in out
 
 
 def test_a_near_miss_of_the_band_is_said_with_the_digits_that_show_it(two_data):
@@ -441,7 +441,7 @@ def test_the_heat_map_of_a_grid_with_no_qualifying_model_draws_no_colour_scale(t
     """Every cell failed: the heat map had only dashes and a colour bar from -0.1 to 0.1 for J_S, a scale of values
     nothing has (a mean square is never negative)."""
     grid = gx.Grid([gx.DataSpec("pumping", bundled="pumping")],
-                   [gx.StructureSpec("toomany", candidates={"ny": 1, "nu": 1, "degree": 1}, n_terms=5)],
+                   [gx.StructureSpec("toolong", terms=["y(k-1)", "u(k-5000)", "1"])],  # lags beyond the records
                    [gx.Variant("LS", "ls")], name="allfail")
     store = tmp_path / "af.sqlite"
     gx.run_grid(grid, store, progress=False)

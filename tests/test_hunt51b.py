@@ -134,3 +134,25 @@ def test_a_rule_with_fewer_terms_than_included_is_a_spec_error(rule, said):
     assert err.value.path == ("structures", 0, said)
     ok = text.replace("= 2\n", "= 3\n", 1)
     assert len(gx.Grid.from_toml_text(ok).structures[0].include) == 3
+
+
+@pytest.mark.parametrize("rule, said", [("n_terms = 16", "n_terms"), ("max_terms = 16\ncriterion = \"bic\"", "max_terms")])
+def test_a_rule_with_more_terms_than_the_data_sets_candidates_is_a_spec_error(tmp_path, rule, said):
+    # with one lag count for every input the data set decides how many candidates there are (15 here, one input):
+    # n_terms or max_terms above it was accepted and FROLS refused it in every cell of the structure
+    text = ('name = "t"\n[[data]]\nname = "pumping"\nbundled = "pumping"\n[[structures]]\nname = "s"\n'
+            f'candidates = {{ny = 2, nu = 2, degree = 2}}\n{rule}\n[[variants]]\nname = "LS"\nestimator = "ls"\n')
+    g = gx.Grid.from_toml_text(text)
+    with pytest.raises(gx.SpecError, match=f"{said} = 16.*15 candidates.*'pumping'") as err:
+        gx.run_grid(g, tmp_path / "r.sqlite")
+    assert err.value.path == ("structures", 0, said)
+    assert not (tmp_path / "r.sqlite").exists()
+    g = gx.Grid.from_toml_text(text.replace("= 16", "= 15"))
+    assert g.load_data()["pumping"] is not None
+
+
+def test_a_rule_with_more_terms_than_one_inputs_candidates_runs_on_two_inputs(tmp_path):
+    # 20 terms: more than one input's 15 candidates, fewer than two inputs' 28
+    g = gx.Grid.from_toml_text(_MISO.replace("STRUCTURE", '[[structures]]\nname = "s"\ncandidates = {ny = 2, nu = 2, '
+                                                          'degree = 2}\nn_terms = 20'))
+    assert set(g.load_data()) == {"two"}

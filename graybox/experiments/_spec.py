@@ -1420,6 +1420,14 @@ class Grid:
                 if unknown:
                     raise SpecError(f"structure {st.name!r} names input(s) {', '.join(map(repr, unknown))}, which data "
                                     f"set {d.name!r} does not have (its inputs: {', '.join(names)})", ("structures", j))
+                if st.candidates is not None and not isinstance(st.candidates["nu"], Mapping):
+                    # one lag count for every input: the data set's inputs decide how many candidates FROLS has
+                    n_cand = len(gb.Candidates(**st.candidates, input_names=names))
+                    for k in ("n_terms", "max_terms"):
+                        if getattr(st, k) is not None and getattr(st, k) > n_cand:
+                            raise SpecError(f"structure {st.name!r}: {k} = {getattr(st, k)} is more than the {n_cand} "
+                                            f"candidates it has on data set {d.name!r} (inputs: {', '.join(names)})",
+                                            ("structures", j, k))
             for j, v in enumerate(self.variants):
                 for k, c in enumerate(v.constraints):
                     if c["type"] == "equality" and c["curve"] == "dataset" and "static_curve" not in ds.extra:
