@@ -156,3 +156,27 @@ def test_a_rule_with_more_terms_than_one_inputs_candidates_runs_on_two_inputs(tm
     g = gx.Grid.from_toml_text(_MISO.replace("STRUCTURE", '[[structures]]\nname = "s"\ncandidates = {ny = 2, nu = 2, '
                                                           'degree = 2}\nn_terms = 20'))
     assert set(g.load_data()) == {"two"}
+
+
+def test_a_store_whose_schema_is_damaged_into_bytes_that_are_not_utf8_is_a_store_error(tmp_path):
+    # SQLite's message for a malformed schema quotes the schema's text; where a damaged byte made it other than UTF-8,
+    # Python's sqlite3 raised a bare UnicodeDecodeError (naming no store) from load_results, store_specs, grid status
+    # and run_grid, instead of the StoreError every other damaged store gives
+    import sqlite3
+
+    text = _BASE + '[[variants]]\nname = "LS"\nestimator = "ls"\n'
+    path = tmp_path / "r.sqlite"
+    gx.run_grid(gx.Grid.from_toml_text(text), path)
+    conn = sqlite3.connect(path)
+    conn.execute("PRAGMA writable_schema=ON")
+    conn.execute("UPDATE sqlite_master SET sql = 'CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL' || "
+                 "CAST(x'ff' AS TEXT) WHERE name = 'meta'")
+    conn.commit()
+    conn.close()
+    before = path.read_bytes()
+    for call in (lambda: gx.load_results(path), lambda: gx.store_specs(path), lambda: gx.grid_status(path),
+                 lambda: gx.run_grid(gx.Grid.from_toml_text(text), path)):
+        with pytest.raises(gx.StoreError, match="damaged") as err:
+            call()
+        assert str(path) in str(err.value)
+    assert path.read_bytes() == before  # a refused store is left untouched

@@ -226,8 +226,8 @@ def _wait_for_maker(path: Path) -> None:
             conn.execute("ROLLBACK")
         finally:
             conn.close()
-    except (OSError, sqlite3.Error):  # not SQLite, damaged, locked past the timeout, not writable: the checks say
-        pass
+    except (OSError, sqlite3.Error, UnicodeDecodeError):  # not SQLite, damaged (a schema that is not UTF-8 too),
+        pass                                                # locked past the timeout, not writable: the checks say
 
 
 def _read_meta(conn: sqlite3.Connection, path: Path, reading: bool = False) -> dict[str, str]:
@@ -246,8 +246,10 @@ def _read_meta(conn: sqlite3.Connection, path: Path, reading: bool = False) -> d
                              f"{sorted(tables) or 'none'}); {_not_a_store(reading)}")
         meta = dict(conn.execute("SELECT key, value FROM meta").fetchall())
         cols = [r[1] for r in conn.execute("PRAGMA table_info(cells)")]
-    except sqlite3.DatabaseError as exc:
-        raise StoreError(f"{path} is damaged or not a graybox grid store ({exc}); {written}{damaged}") from None
+    except (sqlite3.DatabaseError, UnicodeDecodeError) as exc:
+        # a schema damaged into bytes that are not UTF-8: SQLite's message quotes them, which Python cannot decode
+        why = exc if isinstance(exc, sqlite3.Error) else f"its schema is not UTF-8 text: {exc}"
+        raise StoreError(f"{path} is damaged or not a graybox grid store ({why}); {written}{damaged}") from None
     if meta.get("format") != FORMAT:
         raise StoreError(f"{path} is an SQLite database but not a graybox grid store (no format mark); "
                          f"{_not_a_store(reading)}")
@@ -365,8 +367,8 @@ def _connect(path: Path, readonly: bool = False) -> sqlite3.Connection:
                              f"{wal.name} holds writes not yet in the store; copy the store and {wal.name} together "
                              "into a folder you can write in and read the copy") from None
         return sqlite3.connect(uri + "?mode=ro&immutable=1", uri=True, timeout=LOCK_TIMEOUT, isolation_level=None)
-    except sqlite3.Error:  # not SQLite, damaged: the caller's checks say so
-        pass
+    except (sqlite3.Error, UnicodeDecodeError):  # not SQLite, damaged (a schema that is not UTF-8): the caller's
+        pass                                      # checks say so (_read_meta)
     return conn
 
 
