@@ -180,3 +180,31 @@ def test_a_store_whose_schema_is_damaged_into_bytes_that_are_not_utf8_is_a_store
             call()
         assert str(path) in str(err.value)
     assert path.read_bytes() == before  # a refused store is left untouched
+
+
+def test_a_csv_entrys_path_may_be_a_path_object(tmp_path):
+    # every other path of graybox (a store, a spec, base_dir, load_record_csv's file) takes str or os.PathLike; a grid
+    # built in Python refused the pathlib.Path of a CSV file with a SpecTypeError ("path must be a non-empty string")
+    from pathlib import Path
+
+    import numpy as np
+    import pandas as pd
+
+    rng = np.random.default_rng(0)
+    for name in ("ident", "valid"):
+        u = rng.uniform(1.0, 2.0, 60)
+        y = np.zeros(60)
+        for k in range(1, 60):
+            y[k] = 0.5 * y[k - 1] + u[k - 1]
+        pd.DataFrame({"u": u, "y": y}).to_csv(tmp_path / f"{name}.csv", index=False)
+    pd.DataFrame({"u": [1.0, 1.5, 2.0], "y": [2.0, 3.0, 4.0]}).to_csv(tmp_path / "static.csv", index=False)
+    entries = {k: {"path": tmp_path / f"{k}.csv", "u": "u", "y": "y", **({"Ts": 1.0} if k != "static" else
+                                                                          {"uncertainty": 0.1})}
+               for k in ("ident", "valid", "static")}
+    by_path = gx.DataSpec("csv", **entries)
+    by_text = gx.DataSpec("csv", **{k: {**e, "path": str(e["path"])} for k, e in entries.items()})
+    assert by_path.to_dict() == by_text.to_dict()  # the same canonical form (JSON text), so the same cells
+    assert isinstance(by_path.ident["path"], str)
+    ds = by_path.load()
+    np.testing.assert_array_equal(ds.ident.y, by_text.load().ident.y)
+    assert isinstance(Path(by_path.static["path"]), Path)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import json
 import numbers
+import os
 import re
 import tomllib
 from dataclasses import dataclass, field
@@ -240,6 +241,8 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
         if k not in d:
             raise SpecError(f"{what} needs {k!r}", path + (k,))
         v = d[k]
+        if k == "path" and isinstance(v, os.PathLike):  # a pathlib.Path, as every other path of graybox takes
+            v = os.fspath(v)
         if k == "u" and isinstance(v, Sequence) and not isinstance(v, str):  # several input columns
             for i, c in enumerate(v):
                 _wrap(check_str, path + (k, i), c, f"{k}[{i}]")
