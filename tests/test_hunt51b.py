@@ -208,3 +208,36 @@ def test_a_csv_entrys_path_may_be_a_path_object(tmp_path):
     ds = by_path.load()
     np.testing.assert_array_equal(ds.ident.y, by_text.load().ident.y)
     assert isinstance(Path(by_path.static["path"]), Path)
+
+
+@pytest.mark.parametrize("estimator, written", [
+    ("pe", '{solver = "clarabel", weights = "mse"}'),
+    ("cls", '{solver = "clarabel"}'),
+    ("se-ga", '{population = 200, generations = 50, elite = 1, theta0 = "ls", margin = "auto"}'),
+    ("se-dsf", '{max_iter = 200, margin = "auto"}'),
+    ("els", '{max_iter = 500, relaxation = 0.5}'),
+])
+def test_a_variant_that_writes_out_its_estimators_defaults_duplicates_the_one_that_leaves_them_out(estimator, written):
+    # the spec refuses a variant identical to another (same cells), but one that wrote the estimator's default options
+    # out was taken as another variant: the same estimates ran twice, under two names, ranked as two
+    more = {"cls": 'constraints = [{type = "band", b = 0.2}]\n', "pe": "lambdas = [0.5, 1.0]\n",
+            "se-ga": "lambdas = [1.0]\n", "se-dsf": "lambdas = [1.0]\n", "els": "options = {noise = 1}\n"}[estimator]
+    plain = f'name = "A"\nestimator = "{estimator}"\n{more}'
+    if estimator == "els":
+        spelt = plain.replace("options = {noise = 1}", "options = " + written.replace("{", "{noise = 1, "))
+    else:
+        spelt = plain + f"options = {written}\n"
+    text = _spec(plain) + "[[variants]]\n" + spelt.replace('name = "A"', 'name = "B"')
+    with pytest.raises(gx.SpecError, match="'B' is identical to 'A'") as err:
+        gx.Grid.from_toml_text(text)
+    assert err.value.path == ("variants", 1)
+    other = text.replace("= 200", "= 100").replace("= 500", "= 50").replace('"clarabel"', '"osqp"')
+    assert len(gx.Grid.from_toml_text(other).variants) == 2  # options other than the defaults: another variant
+
+
+def test_neural_lags_written_out_are_not_taken_for_defaults():
+    # a grid's neural variant takes the structure's lags by default, not neural_narx's ny = nu = 6
+    text = _spec('name = "A"\nestimator = "neural"\n') + '[[variants]]\nname = "B"\nestimator = "neural"\n' \
+        'options = {ny = 6, nu = 6}\n'
+    assert len(gx.Grid.from_toml_text(text).variants) == 2
+

@@ -1171,6 +1171,34 @@ class Variant:
     __repr__ = short_repr  # one line: the fields summarised, arrays by their shape
 
 
+def _default_options(est: str) -> dict[str, Any]:
+    """The options of estimator ``est`` a variant may give (:data:`OPTIONS`) at the values its cells take when they are
+    left out: the graybox function's defaults (GAOptions' for se-ga's GA). A neural cell's lags default to the
+    structure's, not to neural_narx's, and are left out."""
+    import dataclasses
+    import inspect
+
+    if est == "ls":
+        return {}
+    fn = {"els": gb.els, "cls": gb.cls, "pe": gb.pe_pareto, "se-ga": gb.se_pareto, "se-gradient": gb.se_pareto,
+          "se-dsf": gb.se_dsf, "neural": gb.neural_narx}[est]
+    given = {k: p.default for k, p in inspect.signature(fn).parameters.items() if p.default is not p.empty}
+    if est == "se-ga":
+        given.update({f.name: f.default for f in dataclasses.fields(gb.GAOptions)})
+    skip = ("ny", "nu") if est == "neural" else ()
+    return {k: given[k] for k in OPTIONS[est] if k in given and k not in skip}
+
+
+def _meaning(variant_content: Mapping[str, Any]) -> dict:
+    """A variant's content with the options it gives at their defaults left out: what it estimates (two variants of the
+    same meaning run the same cells under two keys)."""
+    out = dict(variant_content)
+    defaults = _default_options(out["estimator"])
+    out["options"] = {k: v for k, v in out["options"].items()
+                      if not (k in defaults and type(v) is not bool and v == defaults[k])}
+    return out
+
+
 # --------------------------------------------------------------------------------------------
 # cells and the grid
 # --------------------------------------------------------------------------------------------
@@ -1273,23 +1301,27 @@ class Grid:
             raise SpecError("seeds must be a non-empty list of distinct integers >= 0", ("seeds",))
         object.__setattr__(self, "seeds", tuple(seeds))
         for kind, items in (("structures", self.structures), ("variants", self.variants)):
-            seen: dict[str, str] = {}
+            seen: dict[str, tuple[str, str]] = {}
             for i, it in enumerate(items):
-                c = canonical_json(it.content())
+                raw = canonical_json(it.content())
+                # a variant's options written out at the estimator's defaults estimate as those left out
+                c = canonical_json(_meaning(it.content())) if kind == "variants" else raw
                 if c in seen:
-                    raise SpecError(f"{kind[:-1]} {it.name!r} is identical to {seen[c]!r} (same content, same cells)",
-                                    (kind, i))
-                seen[c] = it.name
+                    other, other_raw = seen[c]
+                    why = "" if raw == other_raw else ", the options one writes out being the estimator's defaults"
+                    raise SpecError(f"{kind[:-1]} {it.name!r} is identical to {other!r} (same content, same "
+                                    f"cells{why})", (kind, i))
+                seen[c] = (it.name, raw)
                 if kind == "structures":
                     # a structure is its set of terms: ["y(k-1)", "u(k-1)"] and ["u(k-1)", "y(k-1)"] were two
                     # structures, two cells of one fit and two rows in the store and the report
                     key = "\0" + canonical_json(it.identity())
                     if key in seen:
                         which = "terms" if it.terms is not None else "candidates, rule and included terms"
-                        raise SpecError(f"structure {it.name!r} has the same {which} as {seen[key]!r} in another "
+                        raise SpecError(f"structure {it.name!r} has the same {which} as {seen[key][0]!r} in another "
                                         "order: one fit (its θ in another order), the same cells; list it once",
                                         (kind, i))
-                    seen[key] = it.name
+                    seen[key] = (it.name, raw)
         # what a variant reads from every data set, refused here rather than as a failed cell in every row
         for i, v in enumerate(self.variants):
             nob = [d.name for d in self.data if d.band is None and not _column_uncertainty(d)]
