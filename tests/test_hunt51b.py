@@ -241,3 +241,15 @@ def test_neural_lags_written_out_are_not_taken_for_defaults():
         'options = {ny = 6, nu = 6}\n'
     assert len(gx.Grid.from_toml_text(text).variants) == 2
 
+
+def test_cells_of_datasets_that_are_not_datasets_is_a_type_error():
+    # Grid.cells(datasets) documents a mapping name -> Dataset: a Record (or anything else) in it failed with a bare
+    # AttributeError ('Record' object has no attribute 'ident') from the content hash
+    import graybox as gb
+
+    g = gx.Grid.from_toml_text(_spec('name = "LS"\nestimator = "ls"\n'))
+    d = gb.load_pumping()
+    for wrong in (d.ident, 3, None):
+        with pytest.raises(TypeError, match="pumping"):
+            g.cells({"pumping": wrong})
+    assert len(g.cells({"pumping": d})) == 1

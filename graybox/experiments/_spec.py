@@ -1499,6 +1499,10 @@ class Grid:
             missing = [d.name for d in self.data if d.name not in datasets]
             if missing:
                 raise ValueError(f"datasets has no data set named {missing}")
+            for d in self.data:  # (the content hash read their attributes: a bare AttributeError)
+                if not isinstance(datasets[d.name], gb.Dataset):
+                    raise TypeError(f"datasets[{d.name!r}] must be a graybox Dataset, got "
+                                    f"{type(datasets[d.name]).__name__}")
             ds = datasets
         version = gb.__version__
         out: list[Cell] = []
