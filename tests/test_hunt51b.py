@@ -253,3 +253,18 @@ def test_cells_of_datasets_that_are_not_datasets_is_a_type_error():
         with pytest.raises(TypeError, match="pumping"):
             g.cells({"pumping": wrong})
     assert len(g.cells({"pumping": d})) == 1
+
+
+def test_a_store_read_before_its_first_run_registered_its_spec_is_not_said_to_be_stopped(tmp_path):
+    # a run makes its store whole (tables, no spec) and registers its grid a moment later: graybox grid status run in
+    # that moment (just after starting a run in another terminal) said "the run that made it stopped before it
+    # registered its grid", of a run going on
+    import graybox as gb
+    from graybox.experiments._store import _create_whole
+
+    path = tmp_path / "r.sqlite"
+    assert _create_whole(path, gb.__version__)
+    for call in (lambda: gx.load_results(path), lambda: gx.grid_status(path)):
+        with pytest.raises(gx.StoreError, match="holds no spec yet") as err:
+            call()
+        assert "is starting" in str(err.value) and "stopped" in str(err.value)  # both: it cannot tell which

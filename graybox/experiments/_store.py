@@ -904,9 +904,10 @@ def _pick(specs: list[dict[str, Any]], spec: str | int, p: Path) -> dict[str, An
             raise ValueError(f"spec must be 'latest', 'all' or a spec number, got {spec!r}")
     elif isinstance(spec, bool) or not isinstance(spec, (int, np.integer)):
         raise TypeError(f"spec must be 'latest', 'all' or a spec number (int), got {type(spec).__name__}")
-    if not specs:  # made whole, but the run that made it stopped before registering its spec
-        raise StoreError(f"{p} is a grid store that holds no spec yet (the run that made it stopped before it "
-                         "registered its grid): run a spec on it")
+    if not specs:  # made whole, and the run that made it has not registered its spec: yet, or it stopped first
+        raise StoreError(f"{p} is a grid store that holds no spec yet: the run that made it is starting (it registers "
+                         "its grid a moment after it makes the store: look again), or it stopped before it registered "
+                         "it (run a spec on it)")
     if isinstance(spec, str):  # "latest"
         return max(specs, key=lambda s: (s["last_run"], s["id"]))
     for s in specs:
