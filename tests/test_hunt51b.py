@@ -268,3 +268,18 @@ def test_a_store_read_before_its_first_run_registered_its_spec_is_not_said_to_be
         with pytest.raises(gx.StoreError, match="holds no spec yet") as err:
             call()
         assert "is starting" in str(err.value) and "stopped" in str(err.value)  # both: it cannot tell which
+
+
+def test_a_variant_table_without_an_estimator_is_a_spec_error_naming_its_line(tmp_path, capsys):
+    # a [[variants]] table without estimator failed with the dataclass's bare TypeError ("Variant.__init__() missing 1
+    # required positional argument: 'estimator'"), no key nor line, and graybox grid run printed a traceback
+    from graybox._cli import main
+
+    text = _spec('name = "LS"\n')
+    with pytest.raises(gx.SpecError, match="estimator") as err:
+        gx.Grid.from_toml_text(text, source="spec.toml")
+    assert err.value.path == ("variants", 0) and err.value.line == 9  # its [[variants]] header
+    spec = tmp_path / "spec.toml"
+    spec.write_text(text)
+    assert main(["grid", "run", str(spec), "--store", str(tmp_path / "r.sqlite")]) == 2
+    assert "needs an estimator" in capsys.readouterr().err

@@ -1411,6 +1411,9 @@ class Grid:
                 _check_keys(it, allowed, f"a [[{key}]] table", (key, i))
                 if "name" not in it:
                     raise SpecError(f"every [[{key}]] table needs a name", (key, i))
+                if key == "variants" and "estimator" not in it:  # (the dataclass's bare TypeError named no line)
+                    raise SpecError(f"every [[variants]] table needs an estimator, one of {', '.join(ESTIMATORS)}",
+                                    (key, i))
                 try:
                     out.append(cls_(**it))
                 except SpecError as e:
