@@ -283,3 +283,13 @@ def test_a_variant_table_without_an_estimator_is_a_spec_error_naming_its_line(tm
     spec.write_text(text)
     assert main(["grid", "run", str(spec), "--store", str(tmp_path / "r.sqlite")]) == 2
     assert "needs an estimator" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("count", ["1e300", "100000000000000000000"])
+def test_a_lambda_count_beyond_any_memory_is_a_spec_error(count):
+    # lambdas = {logspace = [a, b, n]} with n beyond any machine's memory reached numpy: "ValueError: Maximum allowed
+    # size exceeded" (or a MemoryError) naming no key of the spec
+    text = _spec(f'name = "PE"\nestimator = "pe"\nlambdas = {{logspace = [-3, 0, {count}]}}\n')
+    with pytest.raises(gx.SpecError, match="count.*too large") as err:
+        gx.Grid.from_toml_text(text)
+    assert err.value.path == ("variants", 0, "lambdas", "logspace")

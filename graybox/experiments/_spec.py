@@ -25,8 +25,8 @@ from .. import _api as gb
 
 from ..core._terms import Term, default_input_names, parse_term
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
-from ..core._validation import (check_bool, check_choice, check_fields, check_int, check_lambdas, check_path,
-                                check_real, check_sequence, check_str)
+from ..core._validation import (check_bool, check_choice, check_count, check_fields, check_int, check_lambdas,
+                                check_path, check_real, check_sequence, check_str)
 from ..core._reprs import short_repr
 from ..static._constraints import FREE_SIGMA_Y, check_min_denominator
 from ..static._surfaces import monomial_exponents
@@ -972,7 +972,7 @@ def _lambdas(v: object, path: tuple) -> list[float] | None:
             raise SpecError(f"{kind} needs [start, stop, count], got {args!r}", path + (kind,))
         a = _wrap(check_real, path + (kind,), args[0], "start")
         b = _wrap(check_real, path + (kind,), args[1], "stop")
-        n = _wrap(check_int, path + (kind,), args[2], "count", low=1)
+        n = _wrap(check_count, path + (kind,), args[2], "count", low=1)  # (numpy's refusal named no key)
         lam = np.logspace(a, b, n) if kind == "logspace" else np.linspace(a, b, n)
     else:
         lam = v
