@@ -987,8 +987,11 @@ def _staircase(n: int, rng: np.random.Generator, low: float, high: float) -> np.
         levels.append(float(np.clip(round(nxt / 10) * 10, lo10, hi10)))
     # Force both ends of the range into this part, at two distinct holds away from the first.
     i_lo, i_hi = rng.choice(np.arange(1, len(holds)), size=2, replace=False)
-    levels[i_lo] = float(np.clip(round(rng.uniform(low, low + 30) / 10) * 10, lo10, hi10))
-    levels[i_hi] = float(np.clip(round(rng.uniform(high - 30, high) / 10) * 10, lo10, hi10))
+    # rounded to the grid, held within 30 rpm of the end: a low of 188 rpm rounded 216 up to 220, 32 rpm above it
+    # (the multiples of 10 nearest the ends lie within 30 rpm of them: a range on the grid draws as before)
+    near_lo, near_hi = math.floor((low + 30) / 10) * 10.0, math.ceil((high - 30) / 10) * 10.0
+    levels[i_lo] = float(np.clip(round(rng.uniform(low, low + 30) / 10) * 10, lo10, min(hi10, near_lo)))
+    levels[i_hi] = float(np.clip(round(rng.uniform(high - 30, high) / 10) * 10, max(lo10, near_hi), hi10))
     return np.repeat(levels, holds)[:n]
 
 
