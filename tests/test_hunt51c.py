@@ -25,3 +25,21 @@ def test_speed_reference_end_holds_at_a_range_off_the_10_rpm_grid():
     r = speed_reference(n_samples=2818, n_ident=1495, seed=395, low=188.0, high=1300.0)
     assert r[:1495].min() <= 218.0  # was 220
     assert np.all(r % 10 == 0) and r.min() >= 188.0 and r.max() <= 1300.0
+
+
+@pytest.mark.parametrize("field,value", [
+    ("ubar", ["1"]),        # numpy's "ufunc 'isfinite' not supported for the input types", naming nothing
+    ("a", ["0.5"]),         # parsed as 0.5, silently
+    ("a", [0.5 + 0j]),      # "float() argument must be a string or a real number, not 'complex'"
+    ("a", [True]),          # read as 1.0: a pole at z = 1 said of a coefficient nobody gave
+    ("b", [["1.0"]]),       # parsed, silently
+    ("b", [[None]]),        # read as NaN: "b has non-finite values"
+])
+def test_local_model_fields_refuse_what_is_not_numbers(field, value):
+    from graybox import LocalModel
+
+    kw = dict(ubar=[1.0], ybar=2.0, status="diverged", reason="diverged from y0", a=[0.5], b=[[1.0]], Ts=1.0,
+              input_names=("u",))
+    kw[field] = value
+    with pytest.raises(TypeError, match=rf"\b{field} must"):
+        LocalModel(**kw)

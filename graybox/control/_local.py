@@ -209,7 +209,9 @@ class LocalModel:
         check_fields(self)
         object.__setattr__(self, "units", check_units(self.units, "LocalModel"))
         m = len(check_input_names(self.input_names, what="LocalModel: input_names"))
-        ubar, a, b = np.ravel(self.ubar), np.asarray(self.a, float), np.asarray(self.b, float)
+        # numbers only: numpy's conversion parsed text, read True as 1 and None as NaN (a file's or a caller's fields)
+        ubar = np.ravel(real_array(self.ubar, "LocalModel: ubar"))
+        a, b = real_array(self.a, "LocalModel: a"), real_array(self.b, "LocalModel: b")
         if ubar.size != m:
             raise ValueError(f"ubar has {ubar.size} values for {m} input(s) {self.input_names}")
         if a.ndim != 1:
