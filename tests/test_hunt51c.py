@@ -43,3 +43,19 @@ def test_local_model_fields_refuse_what_is_not_numbers(field, value):
     kw[field] = value
     with pytest.raises(TypeError, match=rf"\b{field} must"):
         LocalModel(**kw)
+
+
+@pytest.mark.parametrize("field", ["ubar", "ybar", "gain", "time_constant", "damping", "spectral_radius",
+                                   "settling_time"])
+@pytest.mark.parametrize("bad", ["text", "none"])
+def test_operating_curve_fields_refuse_what_is_not_numbers(field, bad):
+    # text was parsed (ubar=['1.0', '2.0'] made a curve), and None in settling_time read as NaN, a curve whose
+    # settling times were "not computed" where its local models settle
+    import dataclasses
+
+    import graybox as gb
+
+    curve = gb.operating_curve(gb.Model(["1", "y(k-1)", "u(k-1)"], [1.0, 0.8, 0.5], Ts=0.1), [1.0, 2.0])
+    v = getattr(curve, field)
+    with pytest.raises(TypeError, match=rf"\b{field} must"):
+        dataclasses.replace(curve, **{field: [str(x) for x in v] if bad == "text" else [None] * len(v)})

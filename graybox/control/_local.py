@@ -810,8 +810,8 @@ class OperatingCurve:
         check_fields(self)
         for f in ("ubar", "ybar", "gain", "time_constant", "damping", "spectral_radius", "settling_time", *self.BANDS):
             v = getattr(self, f)
-            if v is not None:
-                object.__setattr__(self, f, frozen(v))
+            if v is not None:  # numbers only: numpy's conversion parsed text and read None as NaN
+                object.__setattr__(self, f, frozen(real_array(v, f"OperatingCurve: {f}")))
         # what the fields say of each other (a file loads through here: graybox.io)
         M = len(self.ubar)
         if not all(isinstance(lm, LocalModel) for lm in self.local_models):
