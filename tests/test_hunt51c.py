@@ -59,3 +59,20 @@ def test_operating_curve_fields_refuse_what_is_not_numbers(field, bad):
     v = getattr(curve, field)
     with pytest.raises(TypeError, match=rf"\b{field} must"):
         dataclasses.replace(curve, **{field: [str(x) for x in v] if bad == "text" else [None] * len(v)})
+
+
+@pytest.mark.parametrize("ybar", [2, np.int64(2), np.float32(2.0), 10**20])
+def test_local_model_keeps_its_equilibrium_as_a_float(ybar):
+    # an int or a numpy scalar was kept as given (LocalModel.ybar typed float), and an integer beyond int64 (10**20,
+    # a finite float) failed with numpy's "ufunc 'isfinite' not supported for the input types"
+    from graybox import LocalModel
+
+    lm = LocalModel([1.0], ybar, "reached", "", [0.5], [[1.0]], 1.0, ("u",))
+    assert type(lm.ybar) is float and lm.ybar == float(ybar)
+
+
+def test_local_model_refuses_an_equilibrium_beyond_the_float_range():
+    from graybox import LocalModel
+
+    with pytest.raises(ValueError, match="ybar must be finite"):
+        LocalModel([1.0], 10**400, "reached", "", [0.5], [[1.0]], 1.0, ("u",))

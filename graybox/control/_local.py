@@ -231,8 +231,14 @@ class LocalModel:
         if not np.isfinite(den) or not np.isfinite(sb).all() or (den != 0 and not np.isfinite(gain).all()):
             raise ValueError(f"a and b overflow: 1 − Σa = {den:g}, Σb = {sb.tolist()} and the DC gain Σb / (1 − Σa) "
                              "must be finite (an integrator's 1 − Σa = 0 excepted)")
-        if self.ybar is not None and not np.isfinite(self.ybar):
-            raise ValueError(f"ybar must be finite or None (no equilibrium), got {self.ybar}")
+        if self.ybar is not None:  # a float, as typed (an int beyond int64 failed numpy's isfinite)
+            try:
+                object.__setattr__(self, "ybar", float(self.ybar))
+            except OverflowError:
+                raise ValueError("ybar must be finite or None (no equilibrium), got an integer beyond the float "
+                                 "range") from None
+            if not np.isfinite(self.ybar):
+                raise ValueError(f"ybar must be finite or None (no equilibrium), got {self.ybar}")
         check_choice(self.status, "status", LOCAL_STATUS)  # a local model evaluates its point
         if self.status == "reached" and self.ybar is None:
             raise ValueError("status 'reached' needs the equilibrium ybar")
