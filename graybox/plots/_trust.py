@@ -52,7 +52,7 @@ def plot_residual_tests(
     items = list(tests.tests.values())
     if axes is None:
         fig = Figure(figsize=(7.0, 1.8 * len(items)), layout="constrained")  # 9 in for the five tests of one input
-        axs = fig.subplots(len(items), 1)
+        axs = list(fig.subplots(len(items), 1, squeeze=False)[:, 0])  # a set of one test: one Axes, not an array
     else:
         axs = check_axes(axes, len(items), "plot_residual_tests")
         fig = axs[0].figure
