@@ -30,3 +30,39 @@ def test_residual_tests_of_one_test_are_drawn():
     fig = plot_residual_tests(one)
     (ax,) = fig.axes
     assert ax.get_title(loc="left").startswith(tests.tests["xi_xi"].label)
+
+
+def _bootstrap(reference: dict):
+    from graybox.diagnostics._bootstrap import DecisionBootstrap
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    lam1 = np.array([0.5, 0.5, 1.0])
+    return DecisionBootstrap(s, "pe", np.array([0.1, 0.5, 1.0]), 0.05, 10, 5, 0, lam1, np.array([1.0, 2.0, 1.5]),
+                             np.array([0.01, 0.02, 0.03]), np.ones(3, bool), np.ones((3, 2)), ("D_SF",) * 3,
+                             reference, {})
+
+
+@pytest.mark.parametrize("js, jsf, said", [(np.inf, 0.2, "J_S = inf"), (1.0, 0.0, "J_SF = 0 on a log axis")])
+def test_a_bootstrap_reference_the_log_axes_cannot_show_is_not_named_as_drawn(js, jsf, said):
+    # the reference decision with J_S = inf (the min_jsf fallback takes a member whose free run diverged) was
+    # "drawn" at inf: the legend named 'original data' with no star in the panel (a J_SF of 0 left it out unsaid)
+    from graybox.plots import plot_decision_bootstrap
+
+    ref = dict(lambda1=0.5, JS=js, JSF=jsf, in_band=False, rule="min J_SF", theta=[1.0, 1.0])
+    fig = plot_decision_bootstrap(_bootstrap(ref))
+    ax = fig.axes[1]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert f"original data (not drawn: {said})" in labels
+    assert "original data" not in labels
+    stars = [ln for ln in ax.lines if ln.get_marker() == "*"]
+    assert all(ln.get_xdata().size == 0 for ln in stars)
+
+
+def test_a_bootstrap_reference_drawn_is_named_plainly():
+    from graybox.plots import plot_decision_bootstrap
+
+    ref = dict(lambda1=0.5, JS=1.2, JSF=0.015, in_band=True, rule="D_SF", theta=[1.0, 1.0])
+    ax = plot_decision_bootstrap(_bootstrap(ref)).axes[1]
+    assert "original data" in [t.get_text() for t in ax.get_legend().get_texts()]
+    (star,) = [ln for ln in ax.lines if ln.get_marker() == "*"]
+    assert list(star.get_xdata()) == [1.2] and list(star.get_ydata()) == [0.015]

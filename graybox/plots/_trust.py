@@ -15,6 +15,7 @@ from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
 from ..core._reprs import level_texts, per_unit
+from ._pareto import _why_not_drawn
 from ._data import check_axes, check_one_input_points, distinct_colours, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
@@ -300,10 +301,13 @@ def plot_decision_bootstrap(
     ax_l.grid(True, which="both", alpha=0.3)
     ok = boot.ok & np.isfinite(boot.JS) & np.isfinite(boot.JSF) & (boot.JS > 0) & (boot.JSF > 0)
     ax_r.plot(boot.JS[ok], boot.JSF[ok], "o", ms=4, alpha=0.6, color="C0", label=f"replicates ({int(ok.sum())})")
-    drew_ref = "JS" in boot.reference and boot.reference["JS"] > 0 and boot.reference["JSF"] > 0
+    ref_js, ref_jsf = (float(boot.reference[k]) if k in boot.reference else np.nan for k in ("JS", "JSF"))
+    drew_ref = bool(np.isfinite(ref_js) and np.isfinite(ref_jsf) and ref_js > 0 and ref_jsf > 0)
     if drew_ref:
-        ax_r.plot([boot.reference["JS"]], [boot.reference["JSF"]], "*", ms=14, mec="k", color="C1",
-                  label="original data", zorder=5)
+        ax_r.plot([ref_js], [ref_jsf], "*", ms=14, mec="k", color="C1", label="original data", zorder=5)
+    elif "JS" in boot.reference:  # a reference the log axes cannot show (a fallback's J_S = inf): said, not a star
+        ax_r.plot([], [], "*", ms=14, mec="k", color="C1",
+                  label=f"original data (not drawn: {_why_not_drawn(ref_js, ref_jsf, True)})")
     ax_r.set_xscale("log")
     ax_r.set_yscale("log")
     band_lo, band_hi = (0.0, boot.band) if np.ndim(boot.band) == 0 else boot.band
