@@ -32,10 +32,11 @@ _max_structures_arg = _count_arg({"all": None}, "a number of structures")
 
 
 def _folder_arg(text: str) -> Path:
-    """``--out`` of reproduce: a folder name, not empty (``Path("")`` is the current folder, which an unset shell
-    variable, ``--out "$DIR"``, named without a word)."""
+    """``--out`` of reproduce and grid report: a folder name, not empty (``Path("")`` is the current folder, which an
+    unset shell variable, ``--out "$DIR"``, named without a word)."""
     if not text:
-        raise argparse.ArgumentTypeError("an empty folder name; give a folder (e.g. reproduce-out; '.' for this one)")
+        raise argparse.ArgumentTypeError("an empty folder name; give a folder (e.g. reproduce-out or report; '.' for "
+                                         "this one)")
     return Path(text)
 
 
@@ -228,7 +229,7 @@ def _main(argv: list[str] | None) -> int:
     rep = gsub.add_parser("report", help="write a store's leaderboard, heat maps and figures (several stores: side "
                                          "by side)")
     rep.add_argument("store", type=Path, nargs="+", help="the SQLite store of a grid; two or more are compared")
-    rep.add_argument("--out", type=Path, required=True, help="folder for the tables (CSV) and figures (PNG)")
+    rep.add_argument("--out", type=_folder_arg, required=True, help="folder for the tables (CSV) and figures (PNG)")
     rep.add_argument("--rule", default="dsf_valid", choices=("dsf_valid", "chosen"),
                      help="ranking: D_SF on the validation record over all members (default), or each cell's choice")
     rep.add_argument("--band", type=_band_arg, action="append", metavar="B | NAME=B",

@@ -66,3 +66,51 @@ def test_a_bootstrap_reference_drawn_is_named_plainly():
     assert "original data" in [t.get_text() for t in ax.get_legend().get_texts()]
     (star,) = [ln for ln in ax.lines if ln.get_marker() == "*"]
     assert list(star.get_xdata()) == [1.2] and list(star.get_ydata()) == [0.015]
+
+
+_GRID = '''name = "p"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first-order"
+terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]
+[[variants]]
+name = "LS"
+estimator = "ls"
+'''
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    import graybox.experiments as gx
+
+    path = tmp_path_factory.mktemp("store") / "r.sqlite"
+    gx.run_grid(gx.Grid.from_toml_text(_GRID), path)
+    return path
+
+
+def test_write_report_refuses_an_empty_folder_name(store, tmp_path, monkeypatch):
+    # write_report(store, "") (an unset variable, out=os.environ.get("OUT", "")) wrote the report into the current
+    # folder, which nobody named (and its manifest then removes files an earlier report there listed)
+    import graybox.experiments as gx
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ValueError, match="out is empty"):
+        gx.write_report(store, "")
+    with pytest.raises(TypeError, match="out must be a file or folder name"):
+        gx.write_report(store, 5)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_grid_report_refuses_an_empty_out(store, tmp_path, monkeypatch, capsys):
+    # graybox grid report r.sqlite --out "$DIR" with DIR unset wrote the report into the current folder (exit 0),
+    # as graybox reproduce --out '' did before 8bcb032
+    from graybox._cli import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exc:
+        main(["grid", "report", str(store), "--out", ""])
+    assert exc.value.code == 2
+    assert "--out" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []

@@ -34,8 +34,8 @@ from matplotlib.figure import Figure
 
 from ..plots._data import distinct_colours
 from ..core._reprs import beside, bound_text, level_texts, squared_unit
-from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_real,
-                                check_sequence, check_str)
+from ..core._validation import (FrozenFrame, FrozenMap, check_bool, check_choice, check_fields, check_int, check_path,
+                                check_real, check_sequence, check_str)
 from ._cell import STATUSES
 from ._store import compare_results, encode_value, load_results, output_units, running_cells
 
@@ -823,7 +823,7 @@ def write_report(
     store : path or sequence of paths
         A grid store; two or more are compared side by side (:func:`compare_results`).
     out : path
-        Folder (created if missing).
+        Folder (created if missing; "." for the current folder, an empty name is a ``ValueError``).
     rule, band
         As for :func:`leaderboard`.
     spec : "latest", "all" or int
@@ -844,6 +844,8 @@ def write_report(
         new report; other files stay.
     """
     band = _checked_options(rule, band)
+    if not os.fspath(check_path(out, "out")):  # Path("") is the current folder, a folder nobody named
+        raise ValueError("out is empty: give the report's folder ('.' for the current folder)")
     html = check_bool(html, "html")
     if max_structures is not None:
         max_structures = check_int(max_structures, "max_structures", low=1)
