@@ -114,3 +114,25 @@ def test_grid_report_refuses_an_empty_out(store, tmp_path, monkeypatch, capsys):
     assert exc.value.code == 2
     assert "--out" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def _legend(ax) -> list[str]:
+    return [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_a_name_with_a_leading_underscore_is_named_in_the_legend():
+    # matplotlib leaves a label starting with "_" out of the legend: a model named "_base" (a mapping's key, a
+    # Model's name) was drawn as a line the legend did not name, and a front or point so named likewise
+    from graybox.plots import plot_free_run, plot_pareto, plot_static_curve
+
+    rec = _first_order_record()
+    m = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 0.1]), Ts=0.1, name="_tuned")
+    assert _legend(plot_free_run(rec, {"_base": m, "other": m}).axes[0]) == ["measured", " _base", "other"]
+    assert _legend(plot_free_run(rec, m).axes[0]) == ["measured", " _tuned"]
+    s = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    ps = gb.ParetoSet(s, np.ones((2, 2)), np.array([0.1, 1.0]), np.ones(2), np.array([1.0, 2.0]),
+                      np.array([0.2, 0.1]), "PE")
+    assert _legend(plot_pareto({"_front": ps}, {"_ELS": (1.5, 0.3)}).axes[0]) == [" _front", " _ELS"]
+    pts = gb.StaticPoints(np.array([1.0, 2.0, 3.0]), np.array([0.2, 0.4, 0.6]), name="_points")
+    curve = gb.StaticCurve.fit(pts, 1, name="_curve")
+    assert _legend(plot_static_curve(pts, curve).axes[0]) == [" _curve", " _points"]

@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 from ..control._local import LocalModel, OperatingCurve
 from ..core._reprs import level_texts, per_unit, point_texts
 from ..core._validation import as_1d_finite, check_count, check_int, check_real, check_sequence
-from ._data import unit_label
+from ._data import legend_text, unit_label
 
 __all__ = ["plot_local_models", "plot_operating_curve"]
 
@@ -179,12 +179,12 @@ def plot_operating_curve(
                                (axes[1], curve.time_constant, curve.time_constant_low, curve.time_constant_high,
                                 "time constant (s)"),
                                (axes[2], curve.damping, None, None, "damping ζ")):
-        ax.plot(u[o], y[o], "-o", ms=3, lw=1.2, label=name)
+        ax.plot(u[o], y[o], "-o", ms=3, lw=1.2, label=legend_text(name))
         if lo is not None:
             ax.fill_between(u[o], lo[o], hi[o], alpha=0.25, label=f"{curve.level:.0%} band")
         ax.set_ylabel(unit_label(lab, _per_input(curve.units)) if lab == "gain" else lab)
     if reference is not None:
-        axes[1].plot(*reference, "s", ms=5, color="black", label=reference_label)
+        axes[1].plot(*reference, "s", ms=5, color="black", label=legend_text(reference_label))
     axes[2].set_ylim(0.0, 1.05)  # ζ of a stable pole lies in [0, 1]
     bad = [t for t, s in zip(level_texts(u), curve.status) if s != "reached"]  # told apart at any offset
     if bad:

@@ -75,6 +75,14 @@ def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
     return (np.abs(held - level) <= 1e-9 * np.maximum(np.abs(level), scale)).all(axis=1)
 
 
+def legend_text(text: object) -> str:
+    """A legend entry named by the caller (a model's, a curve's, an input's name) as ``str(text)``, kept off a
+    leading ``_``: matplotlib leaves a label that starts with one out of the legend, so the line it names was
+    drawn unnamed."""
+    text = str(text)
+    return " " + text if text.startswith("_") else text
+
+
 def unit_label(text: str, unit: str) -> str:
     """An axis label with its unit: ``text (unit)``, or ``text`` as given when no unit is said or the text
     already names it where a unit is written: in brackets (``"Speed (rpm)"``, ``"Speed [rpm]"``), or last,
@@ -178,9 +186,9 @@ def plot_static_curve(
         else:
             raise ValueError(f"plot_static_curve: {c.name} has no domain; give points to set the range")
         ub = np.linspace(lo, hi, n_grid)
-        ax.plot(ub, c(ub), "-", label=c.name)
+        ax.plot(ub, c(ub), "-", label=legend_text(c.name))
     if points is not None:
-        ax.plot(levels, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
+        ax.plot(levels, points.ybar, "*", linestyle="none", markersize=9, color="k", label=legend_text(points.name))
     u_unit, y_unit = ("", "") if points is None else points.units
     ax.set_xlabel(unit_label(xlabel, u_unit))
     ax.set_ylabel(unit_label(ylabel, y_unit))
@@ -239,7 +247,7 @@ def plot_record(
         ax_u.step(t, record.u[start:stop], where="post", label=input_label)
     else:  # several inputs: one line each, named in a legend
         for j, nm in enumerate(record.input_names):
-            ax_u.step(t, record.u[start:stop, j], where="post", label=nm)
+            ax_u.step(t, record.u[start:stop, j], where="post", label=legend_text(nm))
         ax_u.legend(loc="best", fontsize="small")
     ax_y.plot(t, record.y[start:stop], "-", linewidth=0.8, label=output_label)
     u_unit, y_unit = record.units

@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 from ..models._coerce import as_model, as_record
 from ..models._model import Model
 from ..core._records import Dataset, Record
-from ._data import unit_label
+from ._data import legend_text, unit_label
 
 __all__ = ["plot_free_run"]
 
@@ -64,7 +64,7 @@ def plot_free_run(
     for name, m in ms.items():
         y = m.simulate(record, on_diverge="nan")
         diverged = not (y == y).all()
-        ax.plot(t, y, "--", lw=1.0, label=name + (" (diverged)" if diverged else ""))
+        ax.plot(t, y, "--", lw=1.0, label=legend_text(name) + (" (diverged)" if diverged else ""))
     unit = record.units[1]
     ax.set_xlabel("time (s)")
     ax.set_ylabel(unit_label(ylabel, unit))  # "Temperature (°C)" as given, not "Temperature (°C) (°C)"

@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from ..core._reprs import squared_unit
 from ..core._validation import check_bool, check_real, check_sequence
 from ..estimation._pareto import ParetoSet, nondominated_mask
+from ._data import legend_text
 
 __all__ = ["plot_pareto"]
 
@@ -129,7 +130,7 @@ def plot_pareto(
         ok = np.isfinite(js) & np.isfinite(jsf)
         if log:
             ok &= (js > 0) & (jsf > 0)
-        label = name or ps.method or "Pareto set"
+        label = legend_text(name or ps.method or "Pareto set")
         if (~ok).any():  # failed members (J = inf), diverged ones, or J <= 0 on log axes: each reason counted
             whys = ["failed" if i in ps.failures else _why_not_drawn(js[i], jsf[i], log) for i in np.flatnonzero(~ok)]
             label += f" ({int((~ok).sum())} not drawn: " + "; ".join(
@@ -144,9 +145,9 @@ def plot_pareto(
         drawable = np.isfinite(js) and np.isfinite(jsf) and (not log or (js > 0 and jsf > 0))
         if not drawable:  # say so in the legend rather than leave an entry without a marker
             ax.plot([], [], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k",
-                    label=f"{name} (not drawn: {_why_not_drawn(js, jsf, log)})")
+                    label=f"{legend_text(name)} (not drawn: {_why_not_drawn(js, jsf, log)})")
             continue
-        ax.plot([js], [jsf], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k", label=name, zorder=5)
+        ax.plot([js], [jsf], _MARKERS[(j + 3) % len(_MARKERS)], ms=10, mec="k", label=legend_text(name), zorder=5)
         ax.annotate(name, (js, jsf), textcoords="offset points", xytext=(6, 6), fontsize=9)
     drawn = any(ln.get_xdata().size for ln in ax.lines)
     if log:

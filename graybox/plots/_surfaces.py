@@ -21,7 +21,7 @@ from matplotlib.figure import Figure
 
 from ..core._validation import check_count, check_int, check_real, check_sequence
 from ..core._reprs import level_texts
-from ._data import distinct_colours, on_level, unit_label
+from ._data import distinct_colours, legend_text, on_level, unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
@@ -250,7 +250,7 @@ def plot_surface_slices(
             U[:, held] = lev
             label = f"{_name(s, i)}, {input_labels[held]} = {text}" if len(surfaces) > 1 else \
                 f"{input_labels[held]} = {text}"
-            ax.plot(x, _evaluate(s, U, i, names), styles[i % len(styles)], color=col, label=label)
+            ax.plot(x, _evaluate(s, U, i, names), styles[i % len(styles)], color=col, label=legend_text(label))
     if pts is not None:
         ub, yb, pname, _ = pts
         labelled = False
@@ -259,7 +259,7 @@ def plot_surface_slices(
             if on.any():
                 # one legend entry for the points (their colour already names the level)
                 ax.plot(ub[on, against], yb[on], "*", linestyle="none", markersize=9, color=col,
-                        label=None if labelled else pname)
+                        label=None if labelled else legend_text(pname))
                 labelled = True
     u_unit, y_unit = ("", "") if pts is None else pts[3]
     ax.set_xlabel(unit_label(xlabel if xlabel is not None else input_labels[against], u_unit))
@@ -349,7 +349,7 @@ def plot_surface_contours(
     if pts is not None:
         ub, yb, pname, _ = pts
         ax.scatter(ub[:, 0], ub[:, 1], c=yb, cmap=cmap, norm=filled.norm, edgecolors="k", s=40, zorder=3,
-                   label=pname)
+                   label=legend_text(pname))
         ax.legend(loc="upper left", fontsize="small")
     u_unit, y_unit = ("", "") if pts is None else pts[3]
     fig.colorbar(filled, ax=ax, label=unit_label(output_label, y_unit))

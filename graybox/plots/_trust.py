@@ -16,7 +16,7 @@ from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
 from ..core._reprs import level_texts, per_unit
 from ._pareto import _why_not_drawn
-from ._data import check_axes, check_one_input_points, distinct_colours, on_level, unit_label
+from ._data import check_axes, check_one_input_points, distinct_colours, legend_text, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand
@@ -184,7 +184,7 @@ def plot_static_band(
         on = f" ({tag})" if tag else ""
         axs[0].fill_between(x[g], band.ybar_low[g], band.ybar_high[g], color=color, alpha=0.25, lw=0,
                             label=what if j == 0 else None)
-        axs[0].plot(x[g], band.ybar[g], "-", color=color, label=f"{name} static {'surface' if surface else 'curve'}{on}")
+        axs[0].plot(x[g], band.ybar[g], "-", color=color, label=f"{legend_text(name)} static {'surface' if surface else 'curve'}{on}")
         if points is not None and surface:
             lev = band.ubar[g[0], held]
             pu = points.ubar.reshape(points.ybar.size, -1)  # one input's points hold ubar as shape (N,)
@@ -193,9 +193,9 @@ def plot_static_band(
         if gain:
             gcolor = color if surface else "C1"
             axs[1].fill_between(x[g], glo[g], ghi[g], color=gcolor, alpha=0.25, lw=0, label=what if j == 0 else None)
-            axs[1].plot(x[g], gains[g], "-", color=gcolor, label=f"{name} static gain{on}")
+            axs[1].plot(x[g], gains[g], "-", color=gcolor, label=f"{legend_text(name)} static gain{on}")
     if points is not None and not surface:
-        axs[0].plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=points.name)
+        axs[0].plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=legend_text(points.name))
     axs[0].set_xlabel(xlabel)
     axs[0].set_ylabel(unit_label(ylabel, y_unit))
     axs[0].grid(True, alpha=0.3)
@@ -243,7 +243,7 @@ def plot_simulation_band(
     ax.plot(band.t, band.y, "-", color="black", lw=1.0, label="measured")
     ax.fill_between(band.t, band.low, band.high, color="C0", alpha=0.3, lw=0,
                     label=f"{band.level:.0%} band ({band.method})")
-    ax.plot(band.t, band.yhat, "--", color="C0", lw=1.2, label=f"{band.model_name or 'model'} free run")
+    ax.plot(band.t, band.yhat, "--", color="C0", lw=1.2, label=f"{legend_text(band.model_name or 'model')} free run")
     ax.set_xlabel("time (s)")
     ax.set_ylabel(unit_label(ylabel, band.units[1]))
     ax.grid(True, alpha=0.3)
