@@ -136,3 +136,17 @@ def test_a_name_with_a_leading_underscore_is_named_in_the_legend():
     pts = gb.StaticPoints(np.array([1.0, 2.0, 3.0]), np.array([0.2, 0.4, 0.6]), name="_points")
     curve = gb.StaticCurve.fit(pts, 1, name="_curve")
     assert _legend(plot_static_curve(pts, curve).axes[0]) == [" _curve", " _points"]
+
+
+def test_an_empty_front_says_so_in_the_legend():
+    # a ParetoSet of no member (ps.subset([]), ps.nondominated() of a set whose members all failed) was named in the
+    # legend as any drawn front ('PE'), with a marker and no point anywhere; a set of failed members says why
+    from graybox.plots import plot_pareto
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    ps = gb.ParetoSet(s, np.ones((2, 2)), np.array([0.1, 1.0]), np.ones(2), np.array([1.0, 2.0]),
+                      np.array([0.2, 0.1]), "PE")
+    empty = ps.subset([])
+    assert _legend(plot_pareto(empty).axes[0]) == ["PE (no members)"]
+    assert _legend(plot_pareto({"a": ps, "b": empty}, log=False).axes[0]) == ["a", "b (no members)"]
+    assert _legend(plot_pareto(ps).axes[0]) == ["PE"]

@@ -131,6 +131,8 @@ def plot_pareto(
         if log:
             ok &= (js > 0) & (jsf > 0)
         label = legend_text(name or ps.method or "Pareto set")
+        if not len(ps):  # an empty set (a subset of none, the non-dominated of a set whose members all failed)
+            label += " (no members)"
         if (~ok).any():  # failed members (J = inf), diverged ones, or J <= 0 on log axes: each reason counted
             whys = ["failed" if i in ps.failures else _why_not_drawn(js[i], jsf[i], log) for i in np.flatnonzero(~ok)]
             label += f" ({int((~ok).sum())} not drawn: " + "; ".join(
