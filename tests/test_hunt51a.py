@@ -150,3 +150,21 @@ def test_an_empty_front_says_so_in_the_legend():
     assert _legend(plot_pareto(empty).axes[0]) == ["PE (no members)"]
     assert _legend(plot_pareto({"a": ps, "b": empty}, log=False).axes[0]) == ["a", "b (no members)"]
     assert _legend(plot_pareto(ps).axes[0]) == ["PE"]
+
+
+def test_local_models_of_several_inputs_name_the_input_stepped():
+    # plot_local_models(curve, input=1) and input=0 drew two different responses under the same labels ('Δy per
+    # unit step', '|G|'): nothing in the figure said which input was stepped
+    from graybox.plots import plot_local_models
+
+    s = gb.parse_structure(["y(k-1)", "u1(k-1)", "n2(k-1)", "u1(k-1)^2", "1"])
+    m = gb.Model(s, np.array([0.9, 2e-4, 1e-3, 1e-8, 0.1]), Ts=0.05, units=("rpm", "mlc"), input_names=("u1", "n2"))
+    curve = gb.operating_curve(m, np.column_stack([np.linspace(800, 1600, 3), np.zeros(3)]))
+    for given, name in ((0, "u1"), (1, "n2"), ("n2", "n2")):
+        fig = plot_local_models(curve, input=given)
+        assert fig.axes[0].get_ylabel() == f"Δy per unit step of {name} (mlc/rpm)"
+        assert fig.axes[1].get_ylabel() == f"|G| of {name} (mlc/rpm)"
+    one = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)", "1"]), np.array([0.9, 2e-4, 0.1]), Ts=0.05,
+                   units=("rpm", "mlc"))
+    fig = plot_local_models(gb.operating_curve(one, [800.0, 1600.0]))
+    assert fig.axes[0].get_ylabel() == "Δy per unit step (mlc/rpm)"

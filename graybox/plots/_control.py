@@ -68,7 +68,8 @@ def plot_local_models(
     matplotlib.figure.Figure
         Left: Δy per unit step of the input against time; right: magnitude (output units per
         input unit) and phase (degrees) against frequency (rad/s). The models' units, when they
-        say them, label both (e.g. ``|G| (mlc/rpm)``).
+        say them, label both (e.g. ``|G| (mlc/rpm)``); with several inputs the labels name the input stepped
+        (``Δy per unit step of u2``).
     """
     if duration is not None:
         duration = check_real(duration, "duration", low=0, low_open=True)  # seconds
@@ -102,10 +103,13 @@ def plot_local_models(
     # the models' units (output per input) where they all say the same ones
     units = {m.units for m in shown}
     per = _per_input(units.pop()) if len(units) == 1 else ""
+    # with several inputs, which one was stepped (input=0 and input=1 drew figures labelled alike)
+    names = shown[0].input_names
+    of = f" of {names[shown[0]._input_index(input)]}" if len(names) > 1 else ""
     ax_s.set_xlabel("time (s)")
-    ax_s.set_ylabel(unit_label("Δy per unit step", per))
+    ax_s.set_ylabel(unit_label(f"Δy per unit step{of}", per))
     ax_s.legend(fontsize=8, loc="best")
-    ax_m.set_ylabel(unit_label("|G|", per))
+    ax_m.set_ylabel(unit_label(f"|G|{of}", per))
     ax_p.set_ylabel("phase (°)")
     ax_p.set_xlabel("ω (rad/s)")
     if missing:
