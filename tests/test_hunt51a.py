@@ -168,3 +168,29 @@ def test_local_models_of_several_inputs_name_the_input_stepped():
                    units=("rpm", "mlc"))
     fig = plot_local_models(gb.operating_curve(one, [800.0, 1600.0]))
     assert fig.axes[0].get_ylabel() == "Δy per unit step (mlc/rpm)"
+
+
+def _dsf(jsf: float, band: float, in_band: bool):
+    from graybox.estimation._epsilon_constraint import DSFResult
+
+    m = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 0.1]))
+    return DSFResult(m, 1.2, jsf, band, in_band, "PE λ1=0.1", 2.0, 0.1, 10, "converged", np.nan)
+
+
+def _said(text: str, field: str) -> float:
+    import re
+
+    return float(re.search(rf"{field}=([0-9.e+-]+)", text).group(1))
+
+
+@pytest.mark.parametrize("jsf, band, in_band", [
+    (0.0306300004, 0.03063, False),  # a solve ending just outside its band: was 'J_SF=0.03063, band=0.03063'
+    (0.03062501, 0.03062502, True),  # just inside: 4 digits rounded it above the band as printed
+    (0.03063 * (1 + 1e-13), 0.03063, True),  # within se_dsf's round-off of the band: in it
+    (0.5, 0.03063, False),
+    (0.001, 0.03063, True),
+])
+def test_a_dsf_result_prints_its_static_error_on_its_side_of_the_band(jsf, band, in_band):
+    text = repr(_dsf(jsf, band, in_band))
+    shown, b = _said(text, "J_SF"), _said(text, "band")
+    assert (shown <= b) == in_band, text

@@ -109,8 +109,12 @@ class DSFResult:
         check_margin_value(self.margin, "DSFResult: margin")
 
     def __repr__(self) -> str:
-        return (f"DSFResult(J_S={self.JS:.4g}, J_SF={self.JSF:.4g}, band={self.band:g}, in_band={self.in_band}, "
-                f"start={self.start!r}, n_iter={self.n_iter})")
+        # J_SF with the digits that keep it on its side of B as B is printed: a J_SF just above its band (the
+        # solve ends on the constraint J_SF = B) read 'J_SF=0.03063, band=0.03063, in_band=False'; one within the
+        # round-off se_dsf counts as in the band is said at B
+        jsf = min(self.JSF, self.band) if self.in_band else self.JSF
+        return (f"DSFResult(J_S={self.JS:.4g}, J_SF={beside(jsf, self.band)}, band={bound_text(self.band, jsf)}, "
+                f"in_band={self.in_band}, start={self.start!r}, n_iter={self.n_iter})")
 
 
 class _GN:
