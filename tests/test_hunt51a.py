@@ -194,3 +194,27 @@ def test_a_dsf_result_prints_its_static_error_on_its_side_of_the_band(jsf, band,
     text = repr(_dsf(jsf, band, in_band))
     shown, b = _said(text, "J_SF"), _said(text, "band")
     assert (shown <= b) == in_band, text
+
+
+def test_the_degree_warning_prints_the_fit_on_its_side_of_the_band():
+    # 'a degree-1 polynomial fits the points with MSE 0.03063, band B = 0.03063': the fit misses the band (that is
+    # why a higher degree is asked) by less than 4 digits show
+    import re
+    import warnings
+
+    from graybox.experiments._select import _static_points
+    from graybox.static._form_check import static_fit_mse
+
+    ub = np.linspace(0.0, 3.0, 7)
+    sp = gb.StaticPoints(ub, 0.1 * ub**2)
+    fit = static_fit_mse(sp, 1)
+    band = fit * (1 - 1e-7)
+    process = gb.Candidates(1, 1, ne=0, degree=1).process
+    rec = gb.Record(np.linspace(0.0, 3.0, 50), np.zeros(50))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _static_points(sp, process, band, (rec,))
+    text = " ".join(str(w.message) for w in caught)
+    said = re.search(r"fits the points with MSE ([0-9.e+-]+), band B = ([0-9.e+-]+)\)", text)
+    assert said, text
+    assert float(said.group(1)) > float(said.group(2))

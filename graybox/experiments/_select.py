@@ -540,7 +540,8 @@ def _static_points(sp, process: gb.Structure, band: float | None,
                  f"candidates with terms in {', '.join(varied)} up to power {degree} (a lag of at least 1 for each)")
         warn(f"the static information asks for a degree-{degree} curve, the candidates carry degree {top} at most: "
              f"the structures get the clusters of degree {top}" +
-             (f" (a degree-{top} polynomial fits the points with MSE {fit:.4g}, band B = {band:g})"
+             (f" (a degree-{top} polynomial fits the points with MSE {beside(fit, band)}, band B = "
+              f"{bound_text(band, fit)})"
               if fit is not None else "") +
              f"; {carry} would carry it, and the band judges these structures (a rational one can still meet "
              "it: the table's JSF says)", SelectionWarning)
