@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import pytest
@@ -200,7 +201,6 @@ def test_the_degree_warning_prints_the_fit_on_its_side_of_the_band():
     # 'a degree-1 polynomial fits the points with MSE 0.03063, band B = 0.03063': the fit misses the band (that is
     # why a higher degree is asked) by less than 4 digits show
     import re
-    import warnings
 
     from graybox.experiments._select import _static_points
     from graybox.static._form_check import static_fit_mse
@@ -218,3 +218,27 @@ def test_the_degree_warning_prints_the_fit_on_its_side_of_the_band():
     said = re.search(r"fits the points with MSE ([0-9.e+-]+), band B = ([0-9.e+-]+)\)", text)
     assert said, text
     assert float(said.group(1)) > float(said.group(2))
+
+
+def test_table_one_free_run_figures_name_their_row(monkeypatch, tmp_path):
+    # fig6 (ℓ = 2) and fig8 (ℓ = 3) both named their model 'SE (ga) D_SF' (the decision's name): the two figures
+    # of two Table I rows were labelled alike, and unlike the table's rows 'SE (D_SF) ℓ=2' / 'SE (D_SF) ℓ=3'
+    import graybox.reproduce._table1 as t1
+
+    drawn = []
+
+    def se_pareto(structure, data, **kwargs):  # the PE front stands in for the SE sweeps (seconds, not minutes)
+        return t1.pe_pareto(structure, data.ident, data.static, lambdas=kwargs["lambdas"])
+
+    real = t1.plot_free_run
+
+    def plot_free_run(record, models, **kwargs):
+        drawn.append(list(models))
+        return real(record, models, **kwargs)
+
+    monkeypatch.setattr(t1, "se_pareto", se_pareto)
+    monkeypatch.setattr(t1, "plot_free_run", plot_free_run)
+    with warnings.catch_warnings():  # the bundled data's notes (run() says each once)
+        warnings.simplefilter("ignore")
+        t1.section_table1(quick=True, out=tmp_path)
+    assert [names[0].split(" (min J_SF")[0] for names in drawn] == ["SE (D_SF) ℓ=2", "SE (D_SF) ℓ=3"]

@@ -145,10 +145,14 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
         if out is not None:
             fig = plot_pareto(fronts, tab, band=PAPER_BAND, xlabel="J_S (mlc²)", ylabel="J_SF (mlc²)",
                               title=f"Pareto sets, ℓ = {degree} (identification data)")
-            best = models[f"SE (D_SF) ℓ={degree}"]
+            # named as its Table I row (the decision's own name, "SE (ga) D_SF", is the same for ℓ = 2 and 3), with
+            # the fallback said when no member met the band
+            row = f"SE (D_SF) ℓ={degree}"
+            best = models[row]
+            label = row + (" (min J_SF: no member in B)" if "no member in B" in best.name else "")
             pareto = figure_name(f"fig{5 if degree == 2 else 7}_pareto_l{degree}", quick)
             lines.append("   figures:" + _save(fig, out, pareto)
-                         + _save(plot_free_run(data.valid, {best.name: best}, ylabel="Pressure"), out,
+                         + _save(plot_free_run(data.valid, {label: best}, ylabel="Pressure"), out,
                                  figure_name(f"fig{6 if degree == 2 else 8}_se_free_run_l{degree}", quick)))
         dom = _dominance(fronts)
         lines.append("   " + dom)
