@@ -242,3 +242,18 @@ def test_table_one_free_run_figures_name_their_row(monkeypatch, tmp_path):
         warnings.simplefilter("ignore")
         t1.section_table1(quick=True, out=tmp_path)
     assert [names[0].split(" (min J_SF")[0] for names in drawn] == ["SE (D_SF) ℓ=2", "SE (D_SF) ℓ=3"]
+
+
+def test_the_operating_curve_panels_share_one_u_axis():
+    # 'three stacked panels sharing ū': the panels were drawn each on its own, so where τ and ζ are NaN or inf (no
+    # stable equilibrium beyond ū = 1800) their panels spanned 750-1850 rpm under a gain panel of 690-3110 rpm
+    from graybox.plots import plot_operating_curve
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)y(k-1)", "u(k-1)", "1"])
+    m = gb.Model(s, np.array([0.8, 1e-4, 2e-4, 0.1]), Ts=0.05, units=("rpm", "mlc"))
+    curve = gb.operating_curve(m, np.linspace(800.0, 3000.0, 12))
+    assert np.isfinite(curve.gain).sum() > np.isfinite(curve.time_constant).sum()  # the case in point
+    fig = plot_operating_curve(curve)
+    limits = [ax.get_xlim() for ax in fig.axes]
+    assert limits[0][0] < 800.0 and limits[0][1] > 3000.0
+    assert limits[1] == limits[0] and limits[2] == limits[0]

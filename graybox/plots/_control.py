@@ -175,7 +175,10 @@ def plot_operating_curve(
         if reference[0].size != reference[1].size:
             raise ValueError(f"reference holds {reference[0].size} ū and {reference[1].size} time constants")
     fig = Figure(figsize=(7, 7))
-    axes = [fig.add_subplot(3, 1, i + 1) for i in range(3)]
+    # one ū axis for the three (its docstring's "sharing ū"): each drawn on its own, a panel with NaN or inf at some
+    # points (τ of the unstable ones) spanned only its finite ones, a point's ū at another place in each panel
+    axes = [fig.add_subplot(3, 1, 1)]
+    axes += [fig.add_subplot(3, 1, i + 1, sharex=axes[0]) for i in (1, 2)]
     name = curve.model_name or "model"
     # in ū's order: points given unsorted drew each line (and band) back and forth across the panel
     o = np.argsort(u, kind="stable")
