@@ -257,3 +257,29 @@ def test_the_operating_curve_panels_share_one_u_axis():
     limits = [ax.get_xlim() for ax in fig.axes]
     assert limits[0][0] < 800.0 and limits[0][1] > 3000.0
     assert limits[1] == limits[0] and limits[2] == limits[0]
+
+
+def _inside_the_figure(fig, text) -> bool:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    box = text.get_window_extent(renderer=canvas.get_renderer())
+    return box.x0 >= 0 and box.x1 <= fig.bbox.width
+
+
+def test_a_long_list_of_operating_points_in_a_title_stays_on_the_figure():
+    # 'not reached at ū = ' with 40 levels was one line some three times the figure's width, cut at both edges; the
+    # points are listed as messages list them (the first 20 and how many in all) in lines that fit
+    from graybox.plots import plot_local_models, plot_operating_curve
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    m = gb.Model(s, np.array([1.0001, 2e-4, 1e-8, 0.1]), Ts=0.05, units=("rpm", "mlc"))
+    curve = gb.operating_curve(m, np.linspace(800.0, 1600.0, 40) + 0.001)
+    assert not any(st == "reached" for st in curve.status)
+    title = plot_operating_curve(curve).axes[0].title
+    assert "(40 in all)" in title.get_text() and "800.001" in title.get_text()
+    assert _inside_the_figure(title.figure, title)
+    few = gb.operating_curve(m, [800.0, 900.0])
+    assert plot_operating_curve(few).axes[0].get_title() == "not reached at ū = 800, 900"
+    names = [f"ū = {v}" for v in ("800", "900")]
+    assert [t.get_text() for t in plot_local_models(few).axes[0].get_legend().get_texts()][0].startswith(names[0])

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import textwrap
 from typing import Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from ..control._local import LocalModel, OperatingCurve
-from ..core._reprs import level_texts, per_unit, point_texts
+from ..core._reprs import LISTED, level_texts, per_unit, point_texts
 from ..core._validation import as_1d_finite, check_count, check_int, check_real, check_sequence
 from ._data import legend_text, unit_label
 
@@ -34,6 +35,13 @@ def _points(lms: Sequence[LocalModel]) -> list[str]:
 def _per_input(units: tuple[str, str]) -> str:
     """The unit of a gain, output unit per input unit (``"mlc/rpm"``), or empty when neither is said."""
     return per_unit(units[1], units[0])
+
+
+def _points_title(head: str, points: Sequence[str], width: float) -> str:
+    """``head`` and the operating points, the first :data:`~graybox.core._reprs.LISTED` and how many in all, in
+    lines that fit a figure ``width`` inches wide at 9 pt (one line of 40 levels ran off both edges, unread)."""
+    told = ", ".join(points[:LISTED]) + (f", … ({len(points)} in all)" if len(points) > LISTED else "")
+    return textwrap.fill(head + told, max(20, int(width * 72 / (0.6 * 9))), break_long_words=False)
 
 
 #: Most samples of a local model's step response drawn by default (a figure shows a few thousand points).
@@ -113,7 +121,7 @@ def plot_local_models(
     ax_p.set_ylabel("phase (°)")
     ax_p.set_xlabel("ω (rad/s)")
     if missing:
-        fig.suptitle("no equilibrium at ū = " + ", ".join(at[id(m)] for m in missing), fontsize=9)
+        fig.suptitle(_points_title("no equilibrium at ū = ", [at[id(m)] for m in missing], 10.0), fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -195,7 +203,7 @@ def plot_operating_curve(
     axes[2].set_ylim(0.0, 1.05)  # ζ of a stable pole lies in [0, 1]
     bad = [t for t, s in zip(level_texts(u), curve.status) if s != "reached"]  # told apart at any offset
     if bad:
-        axes[0].set_title("not reached at ū = " + ", ".join(bad), fontsize=9)
+        axes[0].set_title(_points_title("not reached at ū = ", bad, 7.0), fontsize=9)
     axes[1].legend(fontsize=8, loc="best")
     axes[2].set_xlabel(unit_label(xlabel, curve.units[0]))
     fig.tight_layout()
