@@ -283,3 +283,20 @@ def test_a_long_list_of_operating_points_in_a_title_stays_on_the_figure():
     assert plot_operating_curve(few).axes[0].get_title() == "not reached at ū = 800, 900"
     names = [f"ū = {v}" for v in ("800", "900")]
     assert [t.get_text() for t in plot_local_models(few).axes[0].get_legend().get_texts()][0].startswith(names[0])
+
+
+@pytest.mark.parametrize("level, said", [(0.95, "95%"), (0.975, "97.5%"), (0.999, "99.9%"), (0.9973, "99.73%")])
+def test_a_confidence_level_is_printed_with_its_digits(level, said):
+    # ':.0%' printed level=0.975 as '98%' and 0.999 as '100%' (a band no model has) in the residual tests' repr and
+    # legends and in the bands' legends
+    from graybox.plots import plot_residual_tests, plot_simulation_band
+
+    rec = _first_order_record()
+    theta = np.linalg.lstsq(np.column_stack([rec.y[:-1], rec.u[:-1]]), rec.y[1:], rcond=None)[0]
+    m = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)"]), theta, Ts=0.1)  # the least-squares fit
+    tests = gb.residual_tests(m, rec, level=level)
+    assert f"simultaneous {said};" in repr(tests)
+    labels = _legend(plot_residual_tests(tests).axes[0])
+    assert any(f"({said} pointwise)" in t for t in labels) and any(f"({said} for the test)" in t for t in labels)
+    band = gb.simulation_band(gb.ls_uncertainty(m, rec, level=level), rec)
+    assert f"{said} band (delta)" in _legend(plot_simulation_band(band).axes[0])

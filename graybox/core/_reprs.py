@@ -13,7 +13,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["beside", "bound_text", "level_texts", "listed", "point_texts", "short_repr", "summary", "LISTED"]
+__all__ = ["beside", "bound_text", "level_texts", "listed", "percent_text", "point_texts", "short_repr", "summary",
+           "LISTED"]
 
 #: A field's text longer than this is summarised.
 WIDTH = 48
@@ -30,6 +31,12 @@ def listed(values: object) -> str:
     if len(items) <= LISTED:
         return str(items)
     return "[" + ", ".join(map(str, items[:LISTED])) + f", …] ({len(items)} in all)"
+
+
+def percent_text(level: float) -> str:
+    """A confidence level as a percentage with the digits it has: "95%", "97.5%", "99.9%" (``:.0%`` printed 0.975 as
+    "98%" and 0.999 as "100%", a band no model has)."""
+    return f"{100 * float(level):.10g}%"
 
 
 def level_texts(levels: np.ndarray) -> list[str]:

@@ -79,6 +79,7 @@ from ..estimation._neural import NeuralModel
 from ..core._records import Dataset, Record
 from ..core._regressors import record_signals, regressor_matrix
 from ..core._simulation_kernels import inverse_ma_filter
+from ..core._reprs import percent_text
 from ..estimation._extended_least_squares import _ma_invertible, _ma_text
 from ..core._validation import (FrozenMap, check_agrees, check_bool, check_choice, check_fields, check_int, check_level,
                                 check_real, frozen, warn)
@@ -309,7 +310,7 @@ class ResidualTests:
         verdict = "all passed" if self.passed else f"failed: {', '.join(self.tests[k].label for k in self.failed)}"
         if self.undefined:
             verdict += f"; {len(self.undefined)} undefined on these data ({', '.join(self.undefined)})"
-        return f"ResidualTests({self.model_name or 'model'}: N = {self.n}, {self.rule} {self.level:.0%}; {verdict})"
+        return f"ResidualTests({self.model_name or 'model'}: N = {self.n}, {self.rule} {percent_text(self.level)}; {verdict})"
 
 
 # --------------------------------------------------------------------------------------------

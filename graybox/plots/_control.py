@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..control._local import LocalModel, OperatingCurve
-from ..core._reprs import LISTED, level_texts, per_unit, point_texts
+from ..core._reprs import LISTED, level_texts, per_unit, percent_text, point_texts
 from ..core._validation import as_1d_finite, check_count, check_int, check_real, check_sequence
 from ._data import legend_text, unit_label
 
@@ -196,7 +196,7 @@ def plot_operating_curve(
                                (axes[2], curve.damping, None, None, "damping ζ")):
         ax.plot(u[o], y[o], "-o", ms=3, lw=1.2, label=legend_text(name))
         if lo is not None:
-            ax.fill_between(u[o], lo[o], hi[o], alpha=0.25, label=f"{curve.level:.0%} band")
+            ax.fill_between(u[o], lo[o], hi[o], alpha=0.25, label=f"{percent_text(curve.level)} band")
         ax.set_ylabel(unit_label(lab, _per_input(curve.units)) if lab == "gain" else lab)
     if reference is not None:
         axes[1].plot(*reference, "s", ms=5, color="black", label=legend_text(reference_label))

@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from ..diagnostics._bootstrap import DecisionBootstrap
 from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
-from ..core._reprs import level_texts, per_unit
+from ..core._reprs import level_texts, per_unit, percent_text
 from ._pareto import _why_not_drawn
 from ._data import check_axes, check_one_input_points, distinct_colours, legend_text, on_level, unit_label
 from ..diagnostics._residuals import ResidualTests
@@ -66,10 +66,10 @@ def plot_residual_tests(
         ax.axhline(0.0, color="k", lw=0.6)
         for s in (-1, 1):
             ax.axhline(s * t.band, color="0.4", ls="--", lw=0.9,
-                       label=f"±{t.band:.3g} ({tests.level:.0%} pointwise)" if s > 0 else None)
+                       label=f"±{t.band:.3g} ({percent_text(tests.level)} pointwise)" if s > 0 else None)
             if t.limit != t.band:
                 ax.axhline(s * t.limit, color="0.4", ls=":", lw=0.9,
-                           label=f"±{t.limit:.3g} ({tests.level:.0%} for the test)" if s > 0 else None)
+                           label=f"±{t.limit:.3g} ({percent_text(tests.level)} for the test)" if s > 0 else None)
         # a φ NaN at every lag (a 0/0 test in a file of an older graybox, kept as failed) draws nothing
         top = max(1.2 * float(np.max(np.abs(t.phi), initial=0.0, where=np.isfinite(t.phi))), 1.5 * t.limit)
         ax.set_ylim(-min(top, 1.05), min(top, 1.05))
@@ -171,7 +171,7 @@ def plot_static_band(
     else:
         axs = check_axes(axes, need, "plot_static_band")
         fig = axs[0].figure
-    what = f"{band.level:.0%} band ({band.method})"
+    what = f"{percent_text(band.level)} band ({band.method})"
     name = band.model_name or "model"
     if points is not None:  # drawn over the band, points in other units would sit at the wrong ū and ȳ
         check_same_units(band.units, "plot_static_band: the band is in", points, "convert the points")
@@ -242,7 +242,7 @@ def plot_simulation_band(
         fig = ax.figure
     ax.plot(band.t, band.y, "-", color="black", lw=1.0, label="measured")
     ax.fill_between(band.t, band.low, band.high, color="C0", alpha=0.3, lw=0,
-                    label=f"{band.level:.0%} band ({band.method})")
+                    label=f"{percent_text(band.level)} band ({band.method})")
     ax.plot(band.t, band.yhat, "--", color="C0", lw=1.2, label=f"{legend_text(band.model_name or 'model')} free run")
     ax.set_xlabel("time (s)")
     ax.set_ylabel(unit_label(ylabel, band.units[1]))
