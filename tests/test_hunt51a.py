@@ -7,6 +7,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 import graybox as gb
 
@@ -300,3 +302,21 @@ def test_a_confidence_level_is_printed_with_its_digits(level, said):
     assert any(f"({said} pointwise)" in t for t in labels) and any(f"({said} for the test)" in t for t in labels)
     band = gb.simulation_band(gb.ls_uncertainty(m, rec, level=level), rec)
     assert f"{said} band (delta)" in _legend(plot_simulation_band(band).axes[0])
+
+
+@given(st.floats(min_value=0.0, max_value=1.0, exclude_min=True, exclude_max=True))
+def test_a_share_of_some_draws_is_printed_neither_none_nor_all(share):
+    # ':.1%' printed 1 run of 10 000 as '0.0%' ('0.0% of the Monte Carlo runs diverged') and 9 995 of them as
+    # '100.0%' beside a band of the others
+    from graybox.core._reprs import share_text
+
+    text = share_text(share)
+    assert text.endswith("%")
+    assert 0.0 < float(text[:-1]) < 100.0
+
+
+def test_the_dropped_draws_warning_says_a_share_above_zero():
+    from graybox.diagnostics._uncertainty import UncertaintyWarning, warn_dropped_draws
+
+    with pytest.warns(UncertaintyWarning, match=r"up to 0\.01% of the Monte Carlo draws"):
+        warn_dropped_draws("static_curve_band", np.array([0.0, 1e-4, np.nan]))

@@ -13,8 +13,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["beside", "bound_text", "level_texts", "listed", "percent_text", "point_texts", "short_repr", "summary",
-           "LISTED"]
+__all__ = ["beside", "bound_text", "level_texts", "listed", "percent_text", "point_texts", "share_text", "short_repr",
+           "summary", "LISTED"]
 
 #: A field's text longer than this is summarised.
 WIDTH = 48
@@ -37,6 +37,20 @@ def percent_text(level: float) -> str:
     """A confidence level as a percentage with the digits it has: "95%", "97.5%", "99.9%" (``:.0%`` printed 0.975 as
     "98%" and 0.999 as "100%", a band no model has)."""
     return f"{100 * float(level):.10g}%"
+
+
+def share_text(share: float) -> str:
+    """A share (of draws, of runs) as a percentage, with at least two significant digits and as many more as keep a
+    share strictly between 0 and 1 off "0%" and "100%" (``:.1%`` printed 1 run of 10 000 as "0.0%" and 9 995 as
+    "100.0%", beside the words that some, or not all, are left out)."""
+    share = float(share)
+    if not 0 < share < 1:
+        return f"{100 * share:g}%"
+    for digits in range(2, 18):
+        text = f"{100 * share:.{digits}g}"
+        if 0 < float(text) < 100:
+            return text + "%"
+    return f"{100 * share!r}%"
 
 
 def level_texts(levels: np.ndarray) -> list[str]:

@@ -18,6 +18,7 @@ from ..core._gram import require_memory
 from ..core._records import check_units, said_units
 from ..core._simulation import simulate_many
 from ..core._simulation_kernels import encode, free_run_sensitivity_blocks, input_products, record_inputs
+from ..core._reprs import share_text
 from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_level, check_real, check_seed, frozen, warn)
 from ..models._coerce import as_record
@@ -217,7 +218,8 @@ def simulation_band(
                          f"{rec.name}: the parameters' uncertainty reaches unstable models along this record; use "
                          "method='delta' for the first-order band, or a longer identification record")
     if diverged > 0:
-        warn(f"simulation_band: {diverged:.1%} of the Monte Carlo runs diverged on {rec.name} and are left out of the "
+        warn(f"simulation_band: {share_text(diverged)} of the Monte Carlo runs diverged on {rec.name} "
+             f"({n_samples - int(ok.sum())} of {n_samples}) and are left out of the "
              "band, which is therefore narrower than the parameters' uncertainty (SimulationBand.diverged)",
              UncertaintyWarning)
     a = (1 - uncertainty.level) / 2

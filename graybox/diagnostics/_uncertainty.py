@@ -73,6 +73,7 @@ from ..estimation._extended_least_squares import _ma_coefficients, _pure_lags
 from ..static._analysis import one_input_levels, reached_equilibria
 from ..static._linearisation import static_gain_gradient, static_gains, static_powers, static_theta_gradient_of
 from ..static._surface_analysis import points_of_inputs, reached_surface, static_surface
+from ..core._reprs import share_text
 from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_level, check_real, check_seed, frozen, warn)
 
@@ -138,7 +139,7 @@ def warn_dropped_draws(what: str, undefined: np.ndarray) -> None:
     worst = float(np.nanmax(shares)) if np.isfinite(shares).any() else 0.0
     if worst > 0:
         where = int(np.sum(shares > 0))
-        warn(f"{what}: up to {worst:.1%} of the Monte Carlo draws reach no equilibrium (at {where} of {shares.size} "
+        warn(f"{what}: up to {share_text(worst)} of the Monte Carlo draws reach no equilibrium (at {where} of {shares.size} "
              "levels) and are left out of the band there, which is therefore narrower than the parameters' "
              "uncertainty (.undefined says how many at each level)", UncertaintyWarning)
 
