@@ -320,3 +320,25 @@ def test_the_dropped_draws_warning_says_a_share_above_zero():
 
     with pytest.warns(UncertaintyWarning, match=r"up to 0\.01% of the Monte Carlo draws"):
         warn_dropped_draws("static_curve_band", np.array([0.0, 1e-4, np.nan]))
+
+
+@pytest.mark.parametrize("n", [12, 200])
+def test_local_models_are_drawn_one_colour_each_with_a_legend_that_fits(n):
+    # 'one colour each': matplotlib's cycle of ten drew the 1st and 11th models alike; and 200 models made a legend of
+    # 200 entries, matplotlib warning 'Tight layout not applied' (an error under the suite's filter)
+    from graybox.plots import plot_local_models
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    m = gb.Model(s, np.array([0.9, 2e-4, 1e-8, 0.1]), Ts=0.05, units=("rpm", "mlc"))
+    curve = gb.operating_curve(m, np.linspace(800.0, 1600.0, n))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = plot_local_models(curve)
+    ax = fig.axes[0]
+    from matplotlib.colors import to_rgba
+
+    colours = {tuple(np.round(to_rgba(ln.get_color()), 6)) for ln in ax.get_lines()}
+    assert len(ax.get_lines()) == n and len(colours) == n
+    legend = ax.get_legend()
+    assert 2 <= len(legend.get_texts()) <= 20
+    assert legend.get_texts()[0].get_text() == "ū = 800"

@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from ..control._local import LocalModel, OperatingCurve
 from ..core._reprs import LISTED, level_texts, per_unit, percent_text, point_texts
 from ..core._validation import as_1d_finite, check_count, check_int, check_real, check_sequence
-from ._data import legend_text, unit_label
+from ._data import distinct_colours, legend_text, unit_label
 
 __all__ = ["plot_local_models", "plot_operating_curve"]
 
@@ -91,10 +91,12 @@ def plot_local_models(
     taus = [m.time_constant for m in shown if np.isfinite(m.time_constant) and m.time_constant > 0]
     T = duration if duration is not None else 6 * max(taus, default=20 * max(m.Ts for m in shown))
     fig = Figure(figsize=(10, 5))
+    # one colour each (matplotlib's cycle of ten drew the 1st and 11th models alike)
+    colours = distinct_colours(len(shown))
     ax_s = fig.add_subplot(1, 2, 1)
     ax_m = fig.add_subplot(2, 2, 2)
     ax_p = fig.add_subplot(2, 2, 4, sharex=ax_m)
-    for m in shown:
+    for m, colour in zip(shown, colours):
         # each model on its own sampling: its samples in time, its frequencies up to its Nyquist π/Ts
         n = max(int(np.ceil(T / m.Ts - 1e-9)) + 1, 2)
         if duration is None:
@@ -104,7 +106,7 @@ def plot_local_models(
                              f"{100 * MAX_STEP_SAMPLES} are drawn; give a shorter duration")
         w = np.logspace(np.log10(np.pi / m.Ts) - 3, np.log10(np.pi / m.Ts), n_frequencies)
         tag = f"ū = {at[id(m)]}" + ("" if m.reached else f" ({m.status})")
-        line, = ax_s.plot(np.arange(n) * m.Ts, m.step(n, input), lw=1.2, label=tag)
+        line, = ax_s.plot(np.arange(n) * m.Ts, m.step(n, input), lw=1.2, color=colour, label=tag)
         G = m.frequency_response(w, input)
         ax_m.loglog(w, np.abs(G), color=line.get_color(), lw=1.0)
         ax_p.semilogx(w, np.degrees(np.unwrap(np.angle(G))), color=line.get_color(), lw=1.0)
@@ -116,7 +118,14 @@ def plot_local_models(
     of = f" of {names[shown[0]._input_index(input)]}" if len(names) > 1 else ""
     ax_s.set_xlabel("time (s)")
     ax_s.set_ylabel(unit_label(f"Δy per unit step{of}", per))
-    ax_s.legend(fontsize=8, loc="best")
+    # a legend of at most LISTED entries: one of 200 models ran off the figure ("Tight layout not applied")
+    lines = ax_s.get_lines()
+    every = -(-len(lines) // LISTED)
+    if every > 1:
+        ax_s.legend(lines[::every], [ln.get_label() for ln in lines[::every]], fontsize=8, loc="best",
+                    title=f"one in {every} of the {len(lines)} models", title_fontsize=8)
+    else:
+        ax_s.legend(fontsize=8, loc="best")
     ax_m.set_ylabel(unit_label(f"|G|{of}", per))
     ax_p.set_ylabel("phase (°)")
     ax_p.set_xlabel("ω (rad/s)")
