@@ -342,3 +342,34 @@ def test_local_models_are_drawn_one_colour_each_with_a_legend_that_fits(n):
     legend = ax.get_legend()
     assert 2 <= len(legend.get_texts()) <= 20
     assert legend.get_texts()[0].get_text() == "ū = 800"
+
+
+def test_slices_of_many_levels_keep_a_legend_that_fits():
+    # 30 slices made a legend of 30 entries that ran off the panel: matplotlib warned 'constrained_layout not applied
+    # because axes sizes collapsed to zero' (plot_surface_slices and plot_static_band of a surface band alike)
+    from graybox.plots import plot_static_band, plot_surface_slices
+
+    s = gb.parse_structure(["y(k-1)", "u1(k-1)", "u2(k-1)", "u1(k-1)^2", "1"])
+    rng = np.random.default_rng(1)
+    u = rng.uniform(1.0, 3.0, (300, 2))
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.5 * y[k - 1] + 0.2 * u[k - 1, 0] + 0.1 * u[k - 1, 1] + 0.05 * u[k - 1, 0] ** 2 + 0.1 \
+            + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1, units=("V", "Pa"))
+    theta = np.linalg.lstsq(gb.regressor_matrix(s, rec.u, rec.y, start=1, input_names=rec.input_names), y[1:],
+                            rcond=None)[0]
+    m = gb.Model(s, theta, Ts=0.1, units=("V", "Pa"))
+    g = np.linspace(1.0, 3.0, 30)
+    grid = np.array([(a, b) for a in g for b in g])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        band = gb.static_surface_band(gb.ls_uncertainty(m, rec), grid)
+        figs = [plot_static_band(band), plot_surface_slices(lambda v: m.static_curve(v, strict=False), at=g,
+                                                            urange=(1.0, 3.0))]
+        for fig in figs:
+            fig.savefig(__import__("io").BytesIO(), format="png")  # laid out as drawn: the warning came here
+    for fig in figs:
+        texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+        assert 2 <= len(texts) <= 21
+        assert fig.axes[0].get_legend().get_title().get_text().startswith("one in 2 of the 30")

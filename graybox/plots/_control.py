@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from ..control._local import LocalModel, OperatingCurve
 from ..core._reprs import LISTED, level_texts, per_unit, percent_text, point_texts
 from ..core._validation import as_1d_finite, check_count, check_int, check_real, check_sequence
-from ._data import distinct_colours, legend_text, unit_label
+from ._data import distinct_colours, legend_every, legend_text, unit_label
 
 __all__ = ["plot_local_models", "plot_operating_curve"]
 
@@ -120,7 +120,7 @@ def plot_local_models(
     ax_s.set_ylabel(unit_label(f"Δy per unit step{of}", per))
     # a legend of at most LISTED entries: one of 200 models ran off the figure ("Tight layout not applied")
     lines = ax_s.get_lines()
-    every = -(-len(lines) // LISTED)
+    every = legend_every(len(lines))
     if every > 1:
         ax_s.legend(lines[::every], [ln.get_label() for ln in lines[::every]], fontsize=8, loc="best",
                     title=f"one in {every} of the {len(lines)} models", title_fontsize=8)

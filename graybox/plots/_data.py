@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 
 from ..static._curves import StaticCurve
 from ..core._records import Dataset, Record, StaticPoints
+from ..core._reprs import LISTED
 from ..core._validation import check_count, check_int, check_real, check_sequence
 
 __all__ = ["plot_static_curve", "plot_record"]
@@ -73,6 +74,13 @@ def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
     level = np.asarray(level, float)
     scale = np.abs(held).max(axis=0, initial=0.0)  # per input: one in MW must not set the tolerance of one in nA
     return (np.abs(held - level) <= 1e-9 * np.maximum(np.abs(level), scale)).all(axis=1)
+
+
+def legend_every(n: int) -> int:
+    """Of ``n`` lines one per level (slices, operating points), name one in this many in the legend: at most
+    :data:`~graybox.core._reprs.LISTED` entries (a legend of 30 slices ran off its panel, matplotlib warning
+    'constrained_layout not applied')."""
+    return max(1, -(-int(n) // LISTED))
 
 
 def legend_text(text: object) -> str:

@@ -21,7 +21,7 @@ from matplotlib.figure import Figure
 
 from ..core._validation import check_count, check_int, check_real, check_sequence
 from ..core._reprs import level_texts
-from ._data import distinct_colours, legend_text, on_level, unit_label
+from ._data import distinct_colours, legend_every, legend_text, on_level, unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
@@ -243,14 +243,16 @@ def plot_surface_slices(
     styles = ["-", "--", ":", "-."]
     x = np.linspace(lo, hi, n_grid)
     texts = level_texts(levels)
+    every = legend_every(levels.size)  # one in this many levels named, beyond 20
     for i, s in enumerate(surfaces):
-        for lev, text, col in zip(levels, texts, colors):
+        for k, (lev, text, col) in enumerate(zip(levels, texts, colors)):
             U = np.empty((n_grid, 2))
             U[:, against] = x
             U[:, held] = lev
             label = f"{_name(s, i)}, {input_labels[held]} = {text}" if len(surfaces) > 1 else \
                 f"{input_labels[held]} = {text}"
-            ax.plot(x, _evaluate(s, U, i, names), styles[i % len(styles)], color=col, label=legend_text(label))
+            ax.plot(x, _evaluate(s, U, i, names), styles[i % len(styles)], color=col,
+                    label=legend_text(label) if k % every == 0 else None)
     if pts is not None:
         ub, yb, pname, _ = pts
         labelled = False
@@ -266,7 +268,8 @@ def plot_surface_slices(
     ax.set_ylabel(unit_label(ylabel, y_unit))
     ax.grid(True, alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="best", fontsize="small")
+        ax.legend(loc="best", fontsize="small",
+                  title=None if every == 1 else f"one in {every} of the {levels.size} levels", title_fontsize="small")
     return fig
 
 

@@ -16,7 +16,8 @@ from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
 from ..core._reprs import level_texts, per_unit, percent_text
 from ._pareto import _why_not_drawn
-from ._data import check_axes, check_one_input_points, distinct_colours, legend_text, on_level, unit_label
+from ._data import (check_axes, check_one_input_points, distinct_colours, legend_every, legend_text, on_level,
+                    unit_label)
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand
@@ -179,12 +180,15 @@ def plot_static_band(
     u_unit, y_unit = (band.units[k] or ("" if points is None else points.units[k]) for k in (0, 1))
     xlabel = unit_label(xlabel, u_unit)
     colours = distinct_colours(len(groups))
+    every = legend_every(len(groups))  # one in this many slices named, beyond 20
     for j, (g, tag) in enumerate(zip(groups, tags)):
+        named = j % every == 0
         color = colours[j] if surface else "C0"
         on = f" ({tag})" if tag else ""
         axs[0].fill_between(x[g], band.ybar_low[g], band.ybar_high[g], color=color, alpha=0.25, lw=0,
                             label=what if j == 0 else None)
-        axs[0].plot(x[g], band.ybar[g], "-", color=color, label=f"{legend_text(name)} static {'surface' if surface else 'curve'}{on}")
+        axs[0].plot(x[g], band.ybar[g], "-", color=color,
+                    label=f"{legend_text(name)} static {'surface' if surface else 'curve'}{on}" if named else None)
         if points is not None and surface:
             lev = band.ubar[g[0], held]
             pu = points.ubar.reshape(points.ybar.size, -1)  # one input's points hold ubar as shape (N,)
@@ -193,18 +197,19 @@ def plot_static_band(
         if gain:
             gcolor = color if surface else "C1"
             axs[1].fill_between(x[g], glo[g], ghi[g], color=gcolor, alpha=0.25, lw=0, label=what if j == 0 else None)
-            axs[1].plot(x[g], gains[g], "-", color=gcolor, label=f"{legend_text(name)} static gain{on}")
+            axs[1].plot(x[g], gains[g], "-", color=gcolor, label=f"{legend_text(name)} static gain{on}" if named else None)
     if points is not None and not surface:
         axs[0].plot(points.ubar, points.ybar, "*", linestyle="none", markersize=9, color="k", label=legend_text(points.name))
     axs[0].set_xlabel(xlabel)
     axs[0].set_ylabel(unit_label(ylabel, y_unit))
     axs[0].grid(True, alpha=0.3)
-    axs[0].legend(fontsize=8, loc="best")
+    slices = None if every == 1 else f"one in {every} of the {len(groups)} slices"
+    axs[0].legend(fontsize=8, loc="best", title=slices, title_fontsize=8)
     if gain:
         axs[1].set_xlabel(xlabel)
         axs[1].set_ylabel(unit_label(gain_label, per_unit(y_unit, u_unit)))
         axs[1].grid(True, alpha=0.3)
-        axs[1].legend(fontsize=8, loc="best")
+        axs[1].legend(fontsize=8, loc="best", title=slices, title_fontsize=8)
     return fig
 
 
