@@ -7,7 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import graybox as gb
@@ -373,3 +373,24 @@ def test_slices_of_many_levels_keep_a_legend_that_fits():
         texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
         assert 2 <= len(texts) <= 21
         assert fig.axes[0].get_legend().get_title().get_text().startswith("one in 2 of the 30")
+
+
+@given(st.floats(min_value=-1e6, max_value=1e6), st.floats(min_value=1e-9, max_value=1e3))
+def test_a_range_that_is_no_single_value_prints_two_ends_apart(low, width):
+    # 'ȳ in [1e+05, 1e+05]' for static points from 100003.9 to 100020.9 (data offset by 1e5) read as constant
+    from graybox.core._reprs import range_text
+
+    high = low + width
+    assume(high > low)
+    a, b = range_text(low, high)[1:-1].split(", ")
+    assert a != b and float(a) <= float(b)
+
+
+def test_records_and_static_points_far_from_zero_print_their_ranges_apart():
+    d = gb.load_pumping()
+    pts = gb.StaticPoints(d.static.ubar, d.static.ybar + 1e5)
+    assert "ȳ in [100004, 100021]" in repr(pts)
+    rec = gb.Record(d.ident.u, d.ident.y * 1e-3 + 1e4, Ts=d.ident.Ts)
+    lo, hi = repr(rec).split("y in [")[1].split("]")[0].split(", ")
+    assert lo != hi
+    assert "ȳ in [3.874, 20.93] mlc" in repr(d.static)  # as before where 4 digits tell the ends apart

@@ -17,7 +17,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ._reprs import listed
+from ._reprs import listed, range_text
 from ._terms import check_input_names, default_input_names, transient_source
 from ._validation import (as_1d_finite, check_int, check_per_point, check_real, check_str, float_array, frozen_value,
                           refuse_non_real, warn)
@@ -245,11 +245,11 @@ class Record:
     def __repr__(self) -> str:
         uu, yu = _unit_suffixes(self.units)
         if self.u.ndim == 1 and self.input_names == ("u",):
-            ins = f"u in [{self.u.min():.4g}, {self.u.max():.4g}]{uu}"
+            ins = f"u in {range_text(self.u.min(), self.u.max())}{uu}"
         else:
-            ins = ", ".join(f"{n} in [{c.min():.4g}, {c.max():.4g}]" for n, c in zip(self.input_names, self.inputs.T))
+            ins = ", ".join(f"{n} in {range_text(c.min(), c.max())}" for n, c in zip(self.input_names, self.inputs.T))
             ins += uu
-        return f"Record({self.name!r}: {len(self)} samples, Ts = {self.Ts:g} s, {ins}, y in [{self.y.min():.4g}, {self.y.max():.4g}]{yu})"
+        return f"Record({self.name!r}: {len(self)} samples, Ts = {self.Ts:g} s, {ins}, y in {range_text(self.y.min(), self.y.max())}{yu})"
 
     @property
     def t(self) -> np.ndarray:
@@ -413,13 +413,13 @@ class StaticPoints:
 
     def __repr__(self) -> str:
         if self.ubar.ndim == 1:
-            ins = f"ū in [{self.ubar.min():.4g}, {self.ubar.max():.4g}]"
+            ins = f"ū in {range_text(self.ubar.min(), self.ubar.max())}"
         else:
-            ins = ", ".join(f"{n} in [{c.min():.4g}, {c.max():.4g}]" for n, c in zip(self.input_names, self.ubar.T))
+            ins = ", ".join(f"{n} in {range_text(c.min(), c.max())}" for n, c in zip(self.input_names, self.ubar.T))
         uu, yu = _unit_suffixes(self.units)
         unc = "" if self.uncertainty is None else f", ±{np.max(self.uncertainty):.4g}{yu}"
-        return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}{uu}, ȳ in [{self.ybar.min():.4g}, "
-                f"{self.ybar.max():.4g}]{yu}{unc})")
+        return (f"StaticPoints({self.name!r}: {len(self)} points, {ins}{uu}, ȳ in "
+                f"{range_text(self.ybar.min(), self.ybar.max())}{yu}{unc})")
 
 
 def require_lengths(records: Sequence[Any], max_lag: int) -> None:

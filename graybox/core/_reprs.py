@@ -13,8 +13,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["beside", "bound_text", "level_texts", "listed", "percent_text", "point_texts", "share_text", "short_repr",
-           "summary", "LISTED"]
+__all__ = ["beside", "bound_text", "level_texts", "listed", "percent_text", "point_texts", "range_text", "share_text",
+           "short_repr", "summary", "LISTED"]
 
 #: A field's text longer than this is summarised.
 WIDTH = 48
@@ -74,6 +74,16 @@ def level_texts(levels: np.ndarray) -> list[str]:
         if len(set(texts)) >= distinct:  # (-0.0 and 0.0 are one level, printed apart)
             return texts
     return [repr(float(x)) for x in v]
+
+
+def range_text(low: float, high: float, digits: int = 4) -> str:
+    """A range as ``[low, high]`` to ``digits`` significant digits, or with as many more as tell its ends apart
+    (:func:`level_texts`) where those print alike: a signal from 10003.9 to 10020.9 read 'y in [1e+04, 1e+04]',
+    as if it were constant."""
+    a, b = f"{float(low):.{digits}g}", f"{float(high):.{digits}g}"
+    if a == b and low != high:
+        a, b = level_texts(np.array([low, high], float))
+    return f"[{a}, {b}]"
 
 
 def bound_text(x: float, value: float | None = None) -> str:
