@@ -394,3 +394,18 @@ def test_records_and_static_points_far_from_zero_print_their_ranges_apart():
     lo, hi = repr(rec).split("y in [")[1].split("]")[0].split(", ")
     assert lo != hi
     assert "ȳ in [3.874, 20.93] mlc" in repr(d.static)  # as before where 4 digits tell the ends apart
+
+
+def test_a_bootstrap_where_one_replicate_disagrees_does_not_print_full_agreement():
+    # 'agreement=1.00' (':.2f') for 999 of 1000 replicates choosing the reference λ1
+    from graybox.diagnostics._bootstrap import DecisionBootstrap
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)"])
+    lam1 = np.full(1000, 0.5)
+    lam1[0] = 1.0
+    ref = dict(lambda1=0.5, JS=1.0, JSF=0.01, in_band=True, rule="D_SF", theta=[1.0, 1.0])
+    boot = DecisionBootstrap(s, "pe", np.array([0.1, 0.5, 1.0]), 0.05, 10, 5, 0, lam1, np.ones(1000),
+                             np.full(1000, 0.01), np.ones(1000, bool), np.ones((1000, 2)), ("D_SF",) * 1000, ref, {})
+    assert boot.agreement == 0.999
+    assert "agreement=99.9%" in repr(boot)
+    assert "agreement=nan" in repr(_bootstrap({"failure": "no member"}))

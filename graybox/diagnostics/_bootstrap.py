@@ -60,7 +60,7 @@ from ..estimation._simulation_error import SE_LAMBDAS, se_pareto
 from ..core._terms import Structure
 from ..core._validation import (FrozenMap, check_band, check_choice, check_count, check_fields, check_int,
                                 check_lambdas, check_mean_square, check_real, check_seed, frozen, frozen_value, warn)
-from ..core._reprs import listed, short_repr
+from ..core._reprs import listed, share_text, short_repr
 from ._uncertainty import UncertaintyWarning
 
 __all__ = ["BootstrapJob", "DecisionBootstrap", "bootstrap_decision", "block_resample"]
@@ -350,8 +350,10 @@ class DecisionBootstrap:
                             index=pd.RangeIndex(self.n_replicates, name="replicate"))
 
     def __repr__(self) -> str:
+        # the share with the digits it needs: ':.2f' read 999 of 1000 replicates agreeing as 'agreement=1.00'
+        agree = "nan" if np.isnan(self.agreement) else share_text(self.agreement)
         return (f"DecisionBootstrap({self.estimator.upper()}, replicates={self.n_replicates}, failed={len(self.failures)}, "
-                f"blocks={self.n_blocks} × {self.block_length}, agreement={self.agreement:.2f})")
+                f"blocks={self.n_blocks} × {self.block_length}, agreement={agree})")
 
 
 def _estimator_options(estimator: str, options: Mapping | None) -> dict:
