@@ -409,3 +409,16 @@ def test_a_bootstrap_where_one_replicate_disagrees_does_not_print_full_agreement
     assert boot.agreement == 0.999
     assert "agreement=99.9%" in repr(boot)
     assert "agreement=nan" in repr(_bootstrap({"failure": "no member"}))
+
+
+def test_table_one_ratio_to_els_stays_on_its_side_of_one():
+    # 'SE (D_SF) validation J_S over ELS's (below 1: SE better): … here SE 1.00' for a ratio of 0.9951
+    import pandas as pd
+
+    from graybox.reproduce._table1 import se_against_els
+
+    rows = {"ELS (15)": 1.0, "SE (D_SF) ℓ=2": 0.9951, "SE-grad (D_SF) ℓ=2": 1.48, "ELS (17)": 2.0,
+            "SE (D_SF) ℓ=3": 2.0 * 1.00049, "SE-grad (D_SF) ℓ=3": 1.0}
+    text = se_against_els(pd.DataFrame({"JS_valid": rows}))
+    assert "here SE 0.995, SE-grad 1.48" in text
+    assert "here SE 1.0005, SE-grad 0.50" in text

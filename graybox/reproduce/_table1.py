@@ -13,6 +13,7 @@ from ..static._curves import StaticCurve
 from ..estimation._decisions import decide_dsf
 from ..models._evaluate import evaluate
 from ..estimation._simulation_error import GAOptions, se_pareto
+from ..core._reprs import beside
 from ..core._validation import check_bool, check_int, check_path
 from ..datasets import load_pumping
 from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
@@ -44,6 +45,15 @@ def _save(fig, out: Path | None, name: str) -> str:
     return f" [{path}]"
 
 
+def _ratio_text(ratio: float) -> str:
+    """A ratio to ELS to two decimals, or with the digits that keep it on its side of 1 (the line says which side
+    is better): ':.2f' printed 0.9951 as '1.00'."""
+    text = f"{ratio:.2f}"
+    if np.isfinite(ratio) and np.sign(float(text) - 1.0) != np.sign(ratio - 1.0):
+        text = beside(ratio, 1.0, 3)
+    return text
+
+
 def se_against_els(table: pd.DataFrame) -> str:
     """Table I's central comparison: each SE (D_SF) model's validation J_S over ELS's, here and in the paper.
 
@@ -66,7 +76,7 @@ def se_against_els(table: pd.DataFrame) -> str:
         paper = TABLE_I[f"SE (D_SF) ℓ={degree}"]["JS_valid"] / TABLE_I[f"ELS ({eq})"]["JS_valid"]
         base = table.loc[f"ELS ({eq})", "JS_valid"]
         ratios = {label: table.loc[f"{label} (D_SF) ℓ={degree}", "JS_valid"] / base for label in ("SE", "SE-grad")}
-        here = "ELS diverges" if not np.isfinite(base) else ", ".join(f"{k} {v:.2f}" for k, v in ratios.items())
+        here = "ELS diverges" if not np.isfinite(base) else ", ".join(f"{k} {_ratio_text(v)}" for k, v in ratios.items())
         parts.append(f"ℓ = {degree}: paper {paper:.2f}, here {here}")
     return "SE (D_SF) validation J_S over ELS's (below 1: SE better): " + "; ".join(parts)
 
