@@ -422,3 +422,41 @@ def test_table_one_ratio_to_els_stays_on_its_side_of_one():
     text = se_against_els(pd.DataFrame({"JS_valid": rows}))
     assert "here SE 0.995, SE-grad 1.48" in text
     assert "here SE 1.0005, SE-grad 0.50" in text
+
+
+@pytest.fixture(scope="module")
+def selection():
+    true = gb.parse_structure(["y(k-1)", "u(k-1)", "u(k-1)^2", "1"])
+    theta = np.array([0.6, 0.5, -0.1, 0.2])
+
+    def record(seed, n=400):
+        rng = np.random.default_rng(seed)
+        u = np.repeat(rng.uniform(0.0, 3.0, n // 25 + 1), 25)[:n]
+        y = gb.Model(true, theta).simulate(u, np.zeros(2)) + 0.02 * rng.standard_normal(n)
+        return gb.Record(u, y, units=("V", "Pa"))
+
+    ub = np.linspace(0.0, 3.0, 7)
+    data = gb.Dataset(record(1), record(2), gb.StaticPoints(ub, gb.Model(true, theta).static_curve(ub),
+                                                            units=("V", "Pa")))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gb.select_graybox(gb.Candidates(2, 2, ne=0, degree=2), data, band=1e-3, sizes=[3, 4], test=record(3),
+                                 estimator=("pe", "ls"))
+
+
+def test_a_regret_above_one_is_not_printed_as_one(selection):
+    # regret 1.0004 (another row did better on the test record) printed 'regret=1' and 'the choice is 1× the best
+    # row it compared', which the docstring reads as no row doing better
+    import graybox.experiments as gx
+
+    t = selection.table.copy()
+    chosen = t["rank"].to_numpy() == 1
+    others = (~chosen) & t["in_band"].to_numpy(bool) & np.isfinite(t["JS_test"].to_numpy(float))
+    assert others.any()
+    t.loc[chosen, "JS_test"] = float(t.loc[others, "JS_test"].min()) * 1.0004
+    sel = dataclasses.replace(selection, table=t)
+    assert 1.0 < sel.regret < 1.001
+    assert "regret=1.0004" in repr(sel)
+    fig = gx.plot_selection(sel)
+    assert "the choice is 1.0004× the best row" in fig.axes[-1].get_title()
+    assert "regret=1," in repr(selection) or "regret=1)" in repr(selection)  # the best row itself: 1

@@ -427,7 +427,7 @@ class GrayboxSelection:
         if "JS_test" in self.table:
             test = f", J_S test={squared_text(row['JS_test'], unit)}"
             try:
-                test += f", regret={self.regret:.3g}"
+                test += f", regret={beside(self.regret, 1.0, 3)}"  # a regret above 1 never printed as 1
             except ValueError:  # every row compared diverged on the test record: no regret to give
                 pass
         # a black box's band is inf, which every row meets: in_band=True there says nothing of the points

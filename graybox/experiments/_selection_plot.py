@@ -107,7 +107,8 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
             _points(ax, est, elig, ok, n, js, mark, color)
             ax.set_ylabel(f"J_S on the test record ({sq})")
             try:
-                said = f"the choice is {selection.regret:.3g}× the best row it compared"
+                # above 1 never printed as 1 ('1×' said no row did better)
+                said = f"the choice is {beside(selection.regret, 1.0, 3)}× the best row it compared"
             except ValueError:
                 said = "every row's free run diverged there"
             ax.set_title(f"test record (not used to choose):\n{said}", fontsize=9)  # one line ran off the figure
