@@ -460,3 +460,31 @@ def test_a_regret_above_one_is_not_printed_as_one(selection):
     fig = gx.plot_selection(sel)
     assert "the choice is 1.0004× the best row" in fig.axes[-1].get_title()
     assert "regret=1," in repr(selection) or "regret=1)" in repr(selection)  # the best row itself: 1
+
+
+@pytest.mark.parametrize("section", ["section_table1", "section_neural"])
+def test_reproduce_sections_refuse_an_empty_out_and_make_a_missing_one_before_any_work(section, tmp_path, monkeypatch):
+    # run(out='') is refused since 8bcb032, but section_table1(out='') and section_neural(out='') still wrote their
+    # figures into the current folder; and a missing folder failed at the first figure (section_neural: after its
+    # trainings) with matplotlib's FileNotFoundError, where run() makes the folder
+    import graybox.reproduce as rp
+    from graybox.reproduce import _neural, _table1
+
+    class Started(Exception):
+        pass
+
+    def started():
+        raise Started
+
+    for mod in (_neural, _table1):
+        monkeypatch.setattr(mod, "load_pumping", started)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ValueError, match="out is empty"):
+        getattr(rp, section)(quick=True, out="")
+    (tmp_path / "a file").write_text("")
+    with pytest.raises(NotADirectoryError, match="a file"):
+        getattr(rp, section)(quick=True, out=tmp_path / "a file")
+    with pytest.raises(Started):  # the folder made, then the work began
+        getattr(rp, section)(quick=True, out=tmp_path / "new" / "figures")
+    assert (tmp_path / "new" / "figures").is_dir()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a file", "new"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pandas as pd
@@ -21,6 +22,20 @@ def figure_name(stem: str, quick: bool) -> str:
     """The file name of a ``graybox reproduce`` figure: ``<stem>.png`` in the full run, ``<stem>_quick.png`` in the
     quick one (as the checkpoints), so a quick run in the full run's folder leaves the full run's figures alone."""
     return f"{stem}{'_quick' if quick else ''}.png"
+
+
+def out_folder(out: object) -> Path:
+    """A section's ``out`` made ready before its work: a folder name (``TypeError`` naming ``out`` otherwise), not
+    empty (``Path("")`` is the current folder, which nobody named: ``ValueError``, as :func:`graybox.reproduce.run`
+    says), created if missing (as ``run`` creates it: a missing folder failed at the first figure, after the
+    section's fits, and an empty name wrote there)."""
+    if not os.fspath(check_path(out, "out")):
+        raise ValueError("out is empty: give the folder's name ('.' for the current folder)")
+    folder = Path(out)  # type: ignore[arg-type]
+    if folder.exists() and not folder.is_dir():
+        raise NotADirectoryError(f"{folder} is a file, not a folder for the figures")
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
 
 
 #: Table I, "Neural" column, as printed (MSE in mlc²); read-only, as TABLE_I (a dict copy let an edit change the
@@ -45,7 +60,7 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
     """
     quick = check_bool(quick, "quick")  # "no" is truthy: five seeds
     if out is not None:
-        check_path(out, "out")  # before the training, not at the figure after it
+        out_folder(out)  # before the training, not at the figure after it
     if data is None:
         data = load_pumping()
     elif not isinstance(data, Dataset):  # a Record failed on its missing .ident, a bare AttributeError

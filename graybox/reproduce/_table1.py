@@ -14,12 +14,12 @@ from ..estimation._decisions import decide_dsf
 from ..models._evaluate import evaluate
 from ..estimation._simulation_error import GAOptions, se_pareto
 from ..core._reprs import beside
-from ..core._validation import check_bool, check_int, check_path
+from ..core._validation import check_bool, check_int
 from ..datasets import load_pumping
 from ..plots import plot_free_run, plot_pareto, plot_record, plot_static_curve
 from ..reference import TABLE_I
 from ._black_box import PAPER_BLACK_BOX, black_box_models
-from ._neural import figure_name
+from ._neural import figure_name, out_folder
 
 __all__ = ["section_table1", "se_against_els", "PAPER_BAND"]
 
@@ -111,7 +111,7 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
     quick = check_bool(quick, "quick")
     threads = check_int(threads, "threads", low=1)
     if out is not None:
-        check_path(out, "out")
+        out_folder(out)  # an empty name, or a folder missing, said (or made) before the fits
     data = load_pumping()
     curve = StaticCurve.fit(data.static, 2, name="eq. (1) form fitted to the static points")
     n_lam = 10 if quick else 100
