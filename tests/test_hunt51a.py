@@ -488,3 +488,18 @@ def test_reproduce_sections_refuse_an_empty_out_and_make_a_missing_one_before_an
         getattr(rp, section)(quick=True, out=tmp_path / "new" / "figures")
     assert (tmp_path / "new" / "figures").is_dir()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a file", "new"]
+
+
+@pytest.mark.parametrize("levels", [[0.5], [2.0, 1.0], []])
+def test_contour_levels_of_fewer_than_two_are_refused_naming_levels(levels):
+    # levels=[0.5] passed the check (only an empty or unsorted sequence was refused) and failed in matplotlib's
+    # contourf: 'Filled contours require at least 2 levels.'
+    from graybox.plots import plot_surface_contours
+
+    def plane(u):
+        return u[:, 0] + u[:, 1]
+
+    plane.domain = ((0.0, 1.0), (0.0, 1.0))
+    with pytest.raises(ValueError, match=r"levels must be two or more increasing output levels"):
+        plot_surface_contours(plane, levels=levels)
+    assert plot_surface_contours(plane, levels=[0.5, 1.5]).axes

@@ -142,8 +142,9 @@ def _levels(levels: object) -> int | np.ndarray:
         return check_int(levels, "levels (a count)", low=1)
     items = check_sequence(levels, "levels", "a count or a sequence of output levels")
     out = np.array([check_real(v, f"levels[{k}]") for k, v in enumerate(items)])
-    if out.size == 0 or np.any(np.diff(out) <= 0):
-        raise ValueError(f"levels must be increasing output levels, got {out.tolist()}")
+    if out.size < 2 or np.any(np.diff(out) <= 0):  # filled contours lie between two levels (one: matplotlib's error)
+        raise ValueError(f"levels must be two or more increasing output levels (filled contours lie between them), "
+                         f"got {out.tolist()}")
     return out
 
 
@@ -298,7 +299,7 @@ def plot_surface_contours(
     points : StaticPoints, optional
         Static points with ``ubar`` of shape (K, 2), drawn as filled circles.
     levels : int or sequence of float
-        Number of contour levels, or the levels (output units).
+        Number of contour levels, or the levels (output units; two or more, increasing).
     ranges : ((float, float), (float, float)), optional
         Ranges of ū₁ and ū₂; default the points' ranges (widened by ``margin``), else the
         surface's domain.
