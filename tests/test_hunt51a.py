@@ -503,3 +503,17 @@ def test_contour_levels_of_fewer_than_two_are_refused_naming_levels(levels):
     with pytest.raises(ValueError, match=r"levels must be two or more increasing output levels"):
         plot_surface_contours(plane, levels=levels)
     assert plot_surface_contours(plane, levels=[0.5, 1.5]).axes
+
+
+def test_static_points_without_a_name_draw_without_a_legend_warning():
+    # StaticPoints(..., name='') drew with matplotlib's 'No artists with labels found to put in legend' (an error
+    # under the suite's filter): the docstring promises a legend only when there is anything to label
+    from graybox.plots import plot_static_curve
+
+    pts = gb.StaticPoints(np.array([1.0, 2.0, 3.0]), np.array([1.0, 2.0, 4.0]), name="")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = plot_static_curve(pts)
+    assert fig.axes[0].get_legend() is None
+    named = plot_static_curve(gb.StaticPoints(np.array([1.0, 2.0, 3.0]), np.array([1.0, 2.0, 4.0]), name="p"))
+    assert _legend(named.axes[0]) == ["p"]

@@ -201,7 +201,8 @@ def plot_static_curve(
     ax.set_xlabel(unit_label(xlabel, u_unit))
     ax.set_ylabel(unit_label(ylabel, y_unit))
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best")
+    if ax.get_legend_handles_labels()[0]:  # points or curves named "": nothing to label (matplotlib warned)
+        ax.legend(loc="best")
     return fig
 
 
