@@ -517,3 +517,19 @@ def test_static_points_without_a_name_draw_without_a_legend_warning():
     assert fig.axes[0].get_legend() is None
     named = plot_static_curve(gb.StaticPoints(np.array([1.0, 2.0, 3.0]), np.array([1.0, 2.0, 4.0]), name="p"))
     assert _legend(named.axes[0]) == ["p"]
+
+
+def test_slices_of_two_surfaces_keep_a_legend_that_fits():
+    from graybox.plots import plot_surface_slices
+
+    def a(u):
+        return u[:, 0] + u[:, 1]
+
+    def b(u):
+        return u[:, 0] - u[:, 1]
+
+    g = np.linspace(0.0, 1.0, 15)  # 2 × 15 lines: 30 entries
+    fig = plot_surface_slices([a, b], at=g, urange=(0.0, 1.0))
+    legend = fig.axes[0].get_legend()
+    assert len(legend.get_texts()) <= 20
+    assert legend.get_title().get_text() == "one in 2 of the 15 levels"

@@ -244,7 +244,7 @@ def plot_surface_slices(
     styles = ["-", "--", ":", "-."]
     x = np.linspace(lo, hi, n_grid)
     texts = level_texts(levels)
-    every = legend_every(levels.size)  # one in this many levels named, beyond 20
+    every = legend_every(levels.size * max(1, len(surfaces)))  # one in this many levels named, beyond 20 lines
     for i, s in enumerate(surfaces):
         for k, (lev, text, col) in enumerate(zip(levels, texts, colors)):
             U = np.empty((n_grid, 2))
