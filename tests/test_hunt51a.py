@@ -533,3 +533,15 @@ def test_slices_of_two_surfaces_keep_a_legend_that_fits():
     legend = fig.axes[0].get_legend()
     assert len(legend.get_texts()) <= 20
     assert legend.get_title().get_text() == "one in 2 of the 15 levels"
+
+
+def test_a_variant_with_nothing_drawn_in_the_fronts_says_so(store):
+    # plot_fronts named every variant in its legend as drawn: one whose every model has J_S or J_SF infinite (each
+    # member diverged on the validation record) had an entry, a colour and no point in any panel
+    import graybox.experiments as gx
+
+    df = gx.load_results(store)
+    assert _legend(gx.plot_fronts(df).axes[0]) == ["LS"]
+    gone = df.copy()
+    gone["JS_valid"] = np.inf
+    assert _legend(gx.plot_fronts(gone).axes[0]) == ["LS (nothing drawn: no finite J_S and J_SF)"]

@@ -639,6 +639,7 @@ def plot_fronts(
     axes = fig.subplots(nrow, ncol, squeeze=False).ravel()
     bands = _bands(sub, band, d)
     shaded = False  # whether a panel shades the band (B inside its J_SF range)
+    seen: set[str] = set()  # the variants with a point in some panel
     for ax, s in zip(axes, names):
         drawn = False
         xs: list[np.ndarray] = []
@@ -659,12 +660,14 @@ def plot_fronts(
                         xs.append(x[ok])
                         ys.append(y[ok])
                         drawn = True
+                        seen.add(v)
                 if r["status"] == "ok" and _finite_pos([r["JS_valid"]])[0] and _finite_pos([r["JSF"]])[0]:
                     ax.plot([r["JS_valid"]], [r["JSF"]], "*" if isinstance(m, Mapping) else "D", ms=11,
                             mec="k", color=colors[v], zorder=5)
                     xs.append(np.array([r["JS_valid"]]))
                     ys.append(np.array([r["JSF"]]))
                     drawn = True
+                    seen.add(v)
             ax.plot([], [], "o-", color=colors[v], label=_shown(v))
         _scale(ax, "x", np.concatenate(xs) if xs else [])
         _scale(ax, "y", np.concatenate(ys) if ys else [])
@@ -681,7 +684,12 @@ def plot_fronts(
         ax.grid(True, which="major", alpha=0.3)
     for ax in axes[len(names):]:
         ax.set_visible(False)
-    axes[0].legend(fontsize=7, loc="best", title="★ chosen, ◆ single model", title_fontsize=7)
+    # a variant with no finite point in any panel (every member diverged, failed or without a static curve) is named
+    # in the legend as the others were, as if drawn: it says so
+    unseen = {_shown(v) for v in variants if v not in seen}
+    handles, labels = axes[0].get_legend_handles_labels()
+    labels = [f"{lab} (nothing drawn: no finite J_S and J_SF)" if lab in unseen else lab for lab in labels]
+    axes[0].legend(handles, labels, fontsize=7, loc="best", title="★ chosen, ◆ single model", title_fontsize=7)
     said = ""
     unit = df.attrs.get("y_units", {}).get(d, "")
     unit = squared_unit(unit)
