@@ -661,7 +661,7 @@ def test_structured_options_refuse_bad_shapes_naming_them():
         gb.pe_pareto(ST, DATA, lambdas=[1.0], solver="closed", reference=[0.5, 0.3])
     with pytest.raises(ValueError, match="input_labels must be a pair"):
         gp.plot_surface_contours(SURFACE, input_labels=("a", "b", "c"))
-    with pytest.raises(ValueError, match="levels must be increasing"):
+    with pytest.raises(ValueError, match="levels must be two or more increasing"):
         gp.plot_surface_contours(SURFACE, levels=[2.0, 1.0])
     with pytest.raises(ValueError, match=r"urange\[1\]"):
         gp.plot_surface_slices(SURFACE, urange=(1.0, 0.5))
