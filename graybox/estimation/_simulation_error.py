@@ -48,7 +48,7 @@ import os
 import re
 import warnings
 import zipfile
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Literal, Mapping, Sequence, TypeVar
 
@@ -1445,14 +1445,24 @@ def _pe_members(problem: SEProblem, lambdas: np.ndarray) -> np.ndarray | None:
     lambdas = np.asarray(lambdas, float)
     key = ("pe", lambdas.tobytes())
     if key not in problem._memo:
+        # a centred problem (:meth:`SEProblem._centre_basis`) solves PE on the signals it runs on, the centred ones,
+        # and maps the centred parameters to θ: the closed form on the raw signals carried y's zero into every start
+        # (at y + 1e4 the starts of a 21-term closure moved by up to 4e-4 of a parameter, so that the GA's and the
+        # gradient's fits depended on the output's zero); the PE member is the same model either way (J_1 and the
+        # static-equation error are unchanged by the shift of a closed structure)
+        records, static = problem.records, problem.static
+        if problem.static_run is not None:
+            records, static = problem.run_records, replace(static, ubar=problem.static_run[0],
+                                                           ybar=problem.static_run[1])
         try:
             with one_blas_thread(), warnings.catch_warnings():
                 warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
                 # a member whose weights do not identify θ (λ1 = 1, an input held constant) is a NaN row
-                th = pe_members(problem.structure, problem.records, problem.static, lambdas=lambdas,
-                                solver="closed")[0]
+                th = pe_members(problem.structure, records, static, lambdas=lambdas, solver="closed")[0]
         except ValueError:  # e.g. not identifiable with the static rows
             th = None
+        if th is not None and problem.static_run is not None:
+            th = problem.from_z(th * problem.run_scale)
         if th is not None:
             th.setflags(write=False)
         problem._memo[key] = th if th is not None and np.any(np.all(np.isfinite(th), axis=1)) else None
