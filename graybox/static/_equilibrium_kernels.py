@@ -180,6 +180,14 @@ def _disc_slack(a, b1, r, n, sizes):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
+def _horner_slack(x, A, B, C, D):  # pragma: no cover - compiled
+    """The rounding error bound of the cubic A x³ + B x² + C x + D evaluated at ``x`` by Horner's rule (:func:`_eval3`):
+    2 · 3 eps of Σ |coefficient| |x|^p. Within it the computed value's sign is rounding's."""
+    ax = abs(x)
+    return 6.0 * 2.220446049250313e-16 * (((abs(A) * ax + abs(B)) * ax + abs(C)) * ax + abs(D))
+
+
+@nb.njit(cache=True, nogil=True)
 def _real_roots3(A, B, C, D, r, sizes):  # pragma: no cover - compiled
     """Real roots of A x³ + B x² + C x + D into r (unsorted); returns their number. ``sizes`` (ascending, 4): the
     sizes of the terms each coefficient sums (:func:`real_roots_upto_cubic_sized`): the quadratic's discriminant
@@ -206,10 +214,17 @@ def _real_roots3(A, B, C, D, r, sizes):  # pragma: no cover - compiled
         if t > 0.0:
             rr = 1.324718 * max(rr, np.sqrt(t))
         x0 = X - s * rr
-        if x0 != X:
+        # F(X) within its own rounding (_horner_slack): X is a root as far as F can be evaluated. Kahan's monotone
+        # Newton iteration takes F's computed sign for its true one; within that bound it is rounding's, and near a
+        # triple root (F' and F'' ~ 0 there too) a step on it went far past the root: the cubic's one real root came
+        # out 1.6 % off, not a root at all, where a change of y's units (× 3.7) or of u's (× 1e4) rounded the
+        # coefficients otherwise, and the fold (a triple root, not stable) was called a stable equilibrium there
+        if x0 != X and abs(q) > _horner_slack(X, A, B, C, D):
             for _ in range(200):
                 X = x0
                 q, dq, b1, c2 = _eval3(X, A, B, C, D)
+                if abs(q) <= _horner_slack(X, A, B, C, D):
+                    break
                 x0 = X if dq == 0.0 else X - (q / dq) / 1.000000000000001
                 if not (s * x0 > s * X):
                     break
