@@ -71,3 +71,45 @@ def test_a_triple_root_is_one_fold_in_any_units(r, c, sign, b, k, m):
     # sizes; |c| down to 0.01 and terms up to 30 make it ~1e-4 of |r|): 1e-3 of |r| says the root is that root
     assert abs(eq[0].ybar / k - r) <= 1e-3 * abs(r)
 
+
+# -- 4. ELS's MA part at y + 1e4 ---------------------------------------------------------------------------------
+def _narmax(n: int = 2000, seed: int = 3) -> gb.Record:
+    """y = 0.5 + 0.6 y1 + 0.3 u1 − 0.05 u1² + 0.02 y1 u1 + e + 0.4 e1 − 0.2 e2 + 0.1 e1 u1, e of std 0.05."""
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1, 1, n)
+    e = 0.05 * rng.standard_normal(n)
+    y = np.zeros(n)
+    for k in range(2, n):
+        y[k] = (0.5 + 0.6 * y[k - 1] + 0.3 * u[k - 1] - 0.05 * u[k - 1] ** 2 + 0.02 * y[k - 1] * u[k - 1] + e[k]
+                + 0.4 * e[k - 1] - 0.2 * e[k - 2] + 0.1 * e[k - 1] * u[k - 1])
+    return gb.Record(u, y)
+
+
+@pytest.mark.parametrize("plant", ["narmax", "pumping"])
+@pytest.mark.parametrize("noise", [2, ["e(k-1)", "e(k-2)", "e(k-1)u(k-1)"], ["e(k-1)", "e(k-1)y(k-1)"]])
+def test_els_with_its_ma_part_is_the_same_model_at_y_plus_1e4(plant, noise):
+    # was: an MA part with products (e(k-1)u(k-1), e(k-1)y(k-1)) kept ELS on the raw signals, where at y + 1e4 the
+    # residuals came out 1.6e-9 to 2.7e-9 of their spread apart from those at y (an MA part of plain lags, fitted on
+    # the centred signals, agreed to 5e-11)
+    from graybox.selection._centring import shift_map
+
+    if plant == "narmax":
+        st, rec = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2", "y(k-1)u(k-1)"]), _narmax()
+    else:
+        st, rec = gb.parse_structure(["1", "y(k-1)", "u(k-1)", "u(k-1)^2"]), gb.load_pumping().ident
+    fits = [gb.els(st, gb.Record(rec.u, rec.y + c), noise=noise) for c in (0.0, 1e4)]
+    assert fits[0].n_iter == fits[1].n_iter and fits[0].converged == fits[1].converged
+    x0, x1 = (np.concatenate(f.residuals) for f in fits)
+    # centred, the two fits see signals that differ by the round-off of y + 1e4, 1e4 eps ≈ 2.2e-12 (output units),
+    # ~4e-11 of the residuals' spread (0.05 to 0.14); measured 1.3e-11 to 5.9e-11: 3e-10 leaves it 5 times
+    assert np.max(np.abs(x1 - x0)) <= 3e-10 * np.std(x0)
+    # the same model: the process and MA parameters at y mapped to y + 1e4 (e(k-1)y(k-1)'s MA coefficient moves
+    # 1e4 times itself onto e(k-1)'s), to 1e-11 of the largest scaled parameter (θ_j times its regressor's RMS;
+    # measured 1e-15 to 1.1e-13)
+    full = gb.Structure(list(st) + list(fits[0].model.noise_structure))
+    A, t = shift_map(full, {"y": 1e4, "u": 0.0})
+    mapped = A @ np.r_[fits[0].model.theta, fits[0].model.noise_theta] + t
+    got = np.r_[fits[1].model.theta, fits[1].model.noise_theta]
+    e = np.r_[np.zeros(rec.y.size - x1.size), x1]  # the residuals from the first regression row on
+    rms = np.sqrt(np.mean(gb.regressor_matrix(full, rec.u, rec.y + 1e4, e=e) ** 2, axis=0))
+    assert np.max(np.abs(mapped - got) * rms) <= 1e-11 * np.max(np.abs(got) * rms)

@@ -183,6 +183,21 @@ def _pure_lags(ns: Structure) -> list[int | None]:
     return out
 
 
+def _shift_offsets(process: Structure, ns: Structure, recs: list[Record]) -> dict[str, float] | None:
+    """The signals' centres (:func:`~graybox.selection._centring.signal_offsets`) where the model is closed under
+    shifts of them, else None: the process terms (:func:`~graybox.selection._centring.is_closed`) and the MA part,
+    each noise term with every divisor of its signal factors beside its e factors (e(k-1)y(k-1) needs e(k-1), as
+    e(k-1)(y(k-1) − c) = e(k-1)y(k-1) − c e(k-1)); plain lags e(k-l) always are."""
+    if not is_closed(process):
+        return None
+    offsets = signal_offsets(recs)
+    try:  # the map to the raw signals' parameters names the divisor a term needs and the structure lacks
+        raw_theta(Structure(list(process) + list(ns)), np.ones(len(process) + len(ns)), offsets)
+    except ValueError:
+        return None
+    return offsets
+
+
 def _ma_coefficients(c: np.ndarray, lags: list[int | None]) -> np.ndarray:
     """[1, c_1, …, c_L] of the linear MA part C(q) = 1 + Σ c_l q^-l (terms e(k-l) only)."""
     L = max([l for l in lags if l is not None], default=0)
@@ -510,7 +525,10 @@ def _result(reg: _Regression, theta: np.ndarray, c: np.ndarray, n_iter: int, con
     """The ELSResult: the model with its MA part and the residuals per record (``offsets``: the signals' centres
     the fit ran on, its θ mapped back to the raw signals; the residuals are the same on both)."""
     if offsets is not None:
-        theta, theta_ls = (raw_theta(reg.process, th, offsets) for th in (theta, theta_ls))
+        n = len(reg.process)
+        # the MA part too: a noise term's other factors were centred (e(k-1)(y(k-1) − c) = e(k-1)y(k-1) − c e(k-1))
+        both = raw_theta(Structure(list(reg.process) + list(reg.ns)), np.r_[theta, c], offsets)
+        theta, c, theta_ls = both[:n], both[n:], raw_theta(reg.process, theta_ls, offsets)
     m = Model(reg.process, theta, noise_structure=reg.ns, noise_theta=c, name=name, **carried_from(reg.recs))
     res = tuple(frozen(a) for a in reg.per_record(x))
     return ELSResult(m, n_iter, conv, tuple(hist), res, frozen(theta_ls), n_direct)
@@ -604,10 +622,12 @@ def els(
     relaxation = check_real(relaxation, "relaxation", low=0, high=1, low_open=True)
     direct = check_bool(direct, "direct")
     recs = records_of(data)
-    # A structure closed under shifts with a plain-lag MA part is fitted on the centred signals and mapped back
-    # (as the SE fits are): the same model, and the same convergence, at any offset of u and y. On the raw ones,
-    # terms near 1e8 at 1e4 spreads put round-off into the residual change the stopping rule reads, and the
-    # iteration ran to max_iter where at offset 0 it converged in 22.
+    # A model closed under shifts (its process terms, and its MA part: plain lags, or products whose divisors it
+    # holds, :func:`_shift_offsets`) is fitted on the centred signals and mapped back (as the SE fits are): the same
+    # model, and the same convergence, at any offset of u and y. On the raw ones, terms near 1e8 at 1e4 spreads put
+    # round-off into the residual change the stopping rule reads, and the iteration ran to max_iter where at offset 0
+    # it converged in 22; an MA part with e(k-1)u(k-1) or e(k-1)y(k-1) kept the raw signals, and its residuals at
+    # y + 1e4 were 2e-9 of their spread off those at y.
     reg = _regression(process, ns, recs)
     # the rule every estimator applies (on the raw signals), so that ELS names the terms left free as CLS, PE and
     # SE do
@@ -617,8 +637,7 @@ def els(
     remedy = _NO_STATIC_REMEDY.format(who=who)
     check_identified([("the identification records", reg.psi, reg.psi.shape[0])], list(process),
                      what=what, remedies=(remedy, remedy))
-    offsets = (signal_offsets(recs) if is_closed(process) and all(l is not None for l in _pure_lags(ns))
-               else None)
+    offsets = _shift_offsets(process, ns, recs)
     # the data's round-off is that of the raw levels: centred signals carry it too (y + 1e4: 1e4 ulps), a few ulps
     # of the raw output (ROUNDOFF_ULPS of them), beside 1e-12 of the output's RMS as fitted
     y_raw = ROUNDOFF_ULPS * np.finfo(float).eps * np.sqrt(np.mean(reg.y**2))
