@@ -39,6 +39,37 @@ def test_pe_starts_of_a_centred_problem_do_not_depend_on_the_output_zero(offset)
     assert np.all(err < 1e-8), err
 
 
+
+# -- 2. a closed structure at y + 1e6 refused as not identifiable --------------------------------------------------
+_QUADRATIC_IN_Y = ["1", "y(k-1)", "y(k-2)", "y(k-1)y(k-2)", "y(k-1)^2", "y(k-2)^2", "u(k-1)"]
+
+
+def test_a_closed_structure_at_y_plus_1e6_is_identified_as_at_y():
+    # was: ELS and the SE problem judged identifiability on the raw regressors, where at y + 1e6 the quadratic
+    # columns in y(k-1), y(k-2) differ from the constant and the linear ones by (spread / level)² ≈ 2.5e-11 only: the
+    # stacked regression read as rank 6 of 7 and both were refused ("not identifiable from the identification
+    # records"), while at y + 0 they fit. A closed structure's rank is the same at every offset; both now judge the
+    # centred regression they fit on (ELS's, SEProblem's z_psi with its centred static points)
+    from graybox.estimation._simulation_error import SEProblem
+
+    data = gb.load_pumping()
+    st = gb.parse_structure(_QUADRATIC_IN_Y)
+    fits, problems = [], []
+    for c in (0.0, 1e6):
+        rec, points = _pumping_at(c, data)
+        fits.append(gb.els(st, rec, noise=0))  # its least squares: the same identifiability rule, no iteration
+        problems.append(SEProblem(st, rec, points))
+        problems[-1].check_identified()
+    x0, x1 = (np.concatenate(f.residuals) for f in fits)
+    # fitted centred, the two see signals that differ by the round-off of y + 1e6, 1e6 eps ≈ 2.2e-10 output units,
+    # 5e-11 of y's spread of 5 (measured 3.8e-11): 1e-9 of it
+    sd = np.std(data.ident.y)
+    assert np.max(np.abs(x1 - x0)) <= 1e-9 * sd
+    # the SE problem's least squares in its (centred) coordinates, the same: measured 3e-11 of its norm
+    z0, z1 = (p.ls_z() for p in problems)
+    assert np.linalg.norm(z1 - z0) <= 1e-9 * np.linalg.norm(z0)
+
+
 # -- 3. a triple root's verdict ----------------------------------------------------------------------------------
 _CUBIC = ["1", "y(k-1)", "y(k-2)", "y(k-1)^2", "y(k-1)^3", "u(k-1)"]
 

@@ -84,7 +84,7 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares
 
 from ..core._simulation_kernels import inverse_ma_filter
-from ..core._least_squares import check_identified, check_rows, column_scales, scaled_lstsq
+from ..core._least_squares import check_identified, check_rows, column_scales, free_directions, scaled_lstsq
 from ..models._coerce import as_structure, records_of
 from ..models._model import Model
 from ..selection._centring import centred_data, is_closed, raw_theta, signal_offsets
@@ -629,20 +629,22 @@ def els(
     # it converged in 22; an MA part with e(k-1)u(k-1) or e(k-1)y(k-1) kept the raw signals, and its residuals at
     # y + 1e4 were 2e-9 of their spread off those at y.
     reg = _regression(process, ns, recs)
-    # the rule every estimator applies (on the raw signals), so that ELS names the terms left free as CLS, PE and
-    # SE do
-    # without noise terms (noise=0) this is plain least squares, and says so (a grid's "ls" cell is this call)
-    what, who = ("the ELS process θ", "ELS") if len(ns) else ("the least-squares θ (ELS with no noise terms)",
-                                                              "least squares")
-    remedy = _NO_STATIC_REMEDY.format(who=who)
-    check_identified([("the identification records", reg.psi, reg.psi.shape[0])], list(process),
-                     what=what, remedies=(remedy, remedy))
     offsets = _shift_offsets(process, ns, recs)
     # the data's round-off is that of the raw levels: centred signals carry it too (y + 1e4: 1e4 ulps), a few ulps
     # of the raw output (ROUNDOFF_ULPS of them), beside 1e-12 of the output's RMS as fitted
     y_raw = ROUNDOFF_ULPS * np.finfo(float).eps * np.sqrt(np.mean(reg.y**2))
-    if offsets is not None:
-        reg = _regression(process, ns, centred_data(recs, offsets))
+    raw, reg = reg, (reg if offsets is None else _regression(process, ns, centred_data(recs, offsets)))
+    # the rule every estimator applies, so that ELS names the terms left free as CLS, PE and SE do (on the raw signals,
+    # as they do); where the model is closed under shifts, θ is identified when the centred regression it is fitted on
+    # has full rank: the same at every offset, where on the raw signals a closed quadratic in y(k-1), y(k-2) at
+    # y + 1e6 read as rank 6 of 7 (its quadratic columns 2.5e-11 from the others) and was refused
+    # without noise terms (noise=0) this is plain least squares, and says so (a grid's "ls" cell is this call)
+    what, who = ("the ELS process θ", "ELS") if len(ns) else ("the least-squares θ (ELS with no noise terms)",
+                                                              "least squares")
+    remedy = _NO_STATIC_REMEDY.format(who=who)
+    if offsets is None or free_directions([(reg.psi, reg.psi.shape[0])]).shape[1]:
+        check_identified([("the identification records", raw.psi, raw.psi.shape[0])], list(process),
+                         what=what, remedies=(remedy, remedy))
     theta_ls = scaled_lstsq(reg.psi, reg.y)
     xi = reg.y - reg.psi @ theta_ls
     # No MA part, or a model that explains the data to round-off (of the raw signals, whatever their zero): then the

@@ -563,13 +563,24 @@ class SEProblem:
         key = ("unidentified", weighted)
         if key not in self._memo:
             what = "θ at λ1 = 1 (no weight on the static points)" if self.static is not None and not weighted else "θ"
+            # judged on the problem the optimisers solve: for a centred one (:meth:`_centre_basis`) its regression
+            # and the static points on the centred signals, the same rank at every offset (on the raw ones a closed
+            # quadratic in y(k-1), y(k-2) at y + 1e6 read as rank 6 of 7, and the sweep was refused)
+            psi = self.psi if self.z_map is None else self.z_psi
             try:
-                identified_by(self.structure, self.psi, self.psi.shape[0], points=self.static if weighted else None,
+                identified_by(self.structure, psi, psi.shape[0], points=self.run_points() if weighted else None,
                               inputs=self.record.input_names, what=what)
                 self._memo[key] = None
             except ValueError as exc:
                 self._memo[key] = str(exc)
         return self._memo[key]
+
+    def run_points(self) -> StaticPoints | None:
+        """The static points as the optimisers' runs see them: on the centred signals for a centred problem
+        (:attr:`static_run`), else as given."""
+        if self.static_run is None:
+            return self.static
+        return replace(self.static, ubar=self.static_run[0], ybar=self.static_run[1])
 
     def ls_theta(self) -> np.ndarray:
         """Least-squares (one-step) estimate on all samples (computed once; a copy). Where the records alone
@@ -1450,10 +1461,8 @@ def _pe_members(problem: SEProblem, lambdas: np.ndarray) -> np.ndarray | None:
         # (at y + 1e4 the starts of a 21-term closure moved by up to 4e-4 of a parameter, so that the GA's and the
         # gradient's fits depended on the output's zero); the PE member is the same model either way (J_1 and the
         # static-equation error are unchanged by the shift of a closed structure)
-        records, static = problem.records, problem.static
-        if problem.static_run is not None:
-            records, static = problem.run_records, replace(static, ubar=problem.static_run[0],
-                                                           ybar=problem.static_run[1])
+        records, static = (problem.records, problem.static) if problem.static_run is None else \
+            (problem.run_records, problem.run_points())
         try:
             with one_blas_thread(), warnings.catch_warnings():
                 warnings.simplefilter("ignore", StaticRangeWarning)  # se_pareto has said it already
