@@ -214,17 +214,15 @@ def _real_roots3(A, B, C, D, r, sizes):  # pragma: no cover - compiled
         if t > 0.0:
             rr = 1.324718 * max(rr, np.sqrt(t))
         x0 = X - s * rr
-        # F(X) within its own rounding (_horner_slack): X is a root as far as F can be evaluated. Kahan's monotone
-        # Newton iteration takes F's computed sign for its true one; within that bound it is rounding's, and near a
-        # triple root (F' and F'' ~ 0 there too) a step on it went far past the root: the cubic's one real root came
-        # out 1.6 % off, not a root at all, where a change of y's units (× 3.7) or of u's (× 1e4) rounded the
-        # coefficients otherwise, and the fold (a triple root, not stable) was called a stable equilibrium there
+        # F at the inflection X within its own rounding (_horner_slack): X is a root as far as F can be evaluated,
+        # and with F'(X) ~ 0 too (a triple root) the start Kahan's iteration takes from F's computed sign there is
+        # rounding's: its Newton steps went far past the root, so that the cubic's one real root came out 1.6 % off,
+        # not a root at all, where a change of y's units (× 3.7) or of u's (× 1e4) rounded the coefficients
+        # otherwise, and the fold (a triple root, not stable) was called a stable equilibrium there
         if x0 != X and abs(q) > _horner_slack(X, A, B, C, D):
             for _ in range(200):
                 X = x0
                 q, dq, b1, c2 = _eval3(X, A, B, C, D)
-                if abs(q) <= _horner_slack(X, A, B, C, D):
-                    break
                 x0 = X if dq == 0.0 else X - (q / dq) / 1.000000000000001
                 if not (s * x0 > s * X):
                     break
