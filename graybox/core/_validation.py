@@ -492,8 +492,10 @@ def check_lambdas(lambdas: Sequence[float] | np.ndarray | float, name: str = "la
         # None became NaN in the float array: [0.5, None] (or its object array) was told "got [nan]"
         where = "" if lambdas is None else f" (at position {[v is None for v in items].index(True)})"
         raise TypeError(f"{name} must be numbers in (0, 1], got None{where}")
-    try:
-        lam = np.atleast_1d(np.asarray(lambdas, dtype=float))
+    try:  # float_array: a Decimal or integer beyond the float range is said as such, not "got [inf]"
+        lam = np.atleast_1d(float_array(lambdas, name))
+    except _BadValue:
+        raise
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be numbers in (0, 1], got {lambdas!r}") from None
     if np.asarray(lambdas).dtype == bool:
