@@ -14,3 +14,21 @@ def test_check_lambdas_beyond_float_range_is_named():
     with pytest.raises(ValueError, match="beyond the float range"):
         check_lambdas([0.5, 10**400])
     assert check_lambdas([Decimal("0.5")]).tolist() == [0.5]
+
+
+def test_section_docstrings_say_out_is_created():
+    from graybox.reproduce import section_neural, section_table1
+    for fn in (section_table1, section_neural):
+        assert "created if missing" in " ".join(fn.__doc__.split()), fn.__name__
+
+
+@pytest.mark.parametrize("path", ["graybox/plots/_control.py", "graybox/diagnostics/_simulation_band.py"])
+def test_no_unused_validation_imports(path):
+    import ast
+    from pathlib import Path
+    src = (Path(__file__).resolve().parents[1] / path).read_text(encoding="utf-8")
+    tree = ast.parse(src)
+    imported = {a.asname or a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)
+                and (n.module or "").endswith("_validation") for a in n.names}
+    used = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+    assert imported - used == set()

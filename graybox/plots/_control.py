@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from ..control._local import LocalModel, OperatingCurve
 from ..core._reprs import LISTED, level_texts, per_unit, percent_text, point_texts
-from ..core._validation import as_1d_finite, check_count, check_int, check_real, check_sequence
+from ..core._validation import as_1d_finite, check_count, check_real, check_sequence
 from ._data import distinct_colours, legend_every, legend_text, unit_label
 
 __all__ = ["plot_local_models", "plot_operating_curve"]

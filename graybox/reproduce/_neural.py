@@ -56,7 +56,8 @@ def section_neural(quick: bool = True, out: Path | None = None, data: Dataset | 
     JS_ident, JS_valid, JSF, n_params; MSE in output units²). Each training takes well under a second;
     the full mode adds seeds 1–4 and reports the spread (min / median / max) of both rows over
     the five initialisations. With ``out`` the default network's validation free run is drawn
-    to ``out/neural_free_run.png`` (``neural_free_run_quick.png`` in quick mode).
+    to ``out/neural_free_run.png`` (``neural_free_run_quick.png`` in quick mode); ``out`` is
+    created if missing, before the training.
     """
     quick = check_bool(quick, "quick")  # "no" is truthy: five seeds
     if out is not None:

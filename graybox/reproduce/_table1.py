@@ -91,7 +91,8 @@ def section_table1(quick: bool = True, out: Path | None = None, threads: int = 2
     come from the paper's GA and from the gradient method; quick mode runs 10 λ1 values instead
     of 100 (50 generations each, as in the full run). Long sweeps checkpoint under ``out`` and resume.
     With ``out`` the figures are written there, ``fig2_static_curve.png`` … ``fig8_se_free_run_l3.png``, each
-    with a ``_quick`` suffix in quick mode (as the checkpoints), so a quick run leaves a full run's figures alone.
+    with a ``_quick`` suffix in quick mode (as the checkpoints), so a quick run leaves a full run's figures alone;
+    ``out`` is created if missing, before the fits.
 
     Both SE methods keep a stability margin of 0.01 on the local models (spectral radius ≤ 0.99
     along the identification record and at the static points: time constants up to Ts/0.01 = 5 s,
