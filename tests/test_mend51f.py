@@ -32,3 +32,13 @@ def test_no_unused_validation_imports(path):
                 and (n.module or "").endswith("_validation") for a in n.names}
     used = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
     assert imported - used == set()
+
+
+def test_local_model_repr_tells_close_points_apart():
+    import graybox as gb
+    from graybox.core._reprs import exact_text
+    assert exact_text(10000.01) == "10000.01" and exact_text(1000.0) == "1000" and exact_text(0.5) == "0.5"
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), [0.5, 0.4, 0.05])
+    a, b = gb.local_model(model, 10000.01, Ts=1.0), gb.local_model(model, 10000.02, Ts=1.0)
+    assert "10000.01" in repr(a) and "10000.02" in repr(b)
+    assert repr(a) != repr(b)

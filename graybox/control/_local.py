@@ -33,7 +33,7 @@ from ..core._records import (Dataset, Record, StaticPoints, StaticRangeWarning, 
                               rounded_levels, static_point_inputs)
 from ..core._terms import Structure, check_input_names
 from ..core._transient import steady_levels
-from ..core._reprs import listed
+from ..core._reprs import exact_text, listed
 from ..core._validation import (check_count, check_band_finite, check_band_values, check_choice, check_fields, check_int,
                                 check_per_point, check_real, check_seed, frozen, real_array, warn)
 from ..models._coerce import as_model
@@ -471,7 +471,7 @@ class LocalModel:
         return local_transfer_function(self)
 
     def __repr__(self) -> str:
-        u = ", ".join(f"{v:g}" for v in self.ubar)
+        u = ", ".join(exact_text(v) for v in self.ubar)  # ū 10000.01 and 10000.02 printed alike with %g
         if self.ybar is None:
             return f"LocalModel(ū = ({u}): {self.reason})"
         g = ", ".join(f"{v:.4g}" for v in self.dc_gain)
@@ -588,7 +588,7 @@ def _equilibrium(model: Model, u: np.ndarray, y0: float | None, eqs: list[Equili
     """(ȳ, status, reason, fold) at one point u (m,): the reached equilibrium, else the one to linearise around;
     ``fold``: that equilibrium is a multiple root of the static equation (its pole is at z = 1). ``eqs``: the
     model's equilibria at u, when the caller found them (:func:`_equilibria_at`)."""
-    label = f"{float(u[0]):g}" if u.size == 1 else "(" + ", ".join(f"{v:g}" for v in u) + ")"
+    label = exact_text(u[0]) if u.size == 1 else "(" + ", ".join(exact_text(v) for v in u) + ")"
     if _continuum_at(model, u):
         # every ȳ is an equilibrium: ū sets none, the output stays where it starts; y0 is then the one to take
         why = f"ū = {label}: {CONTINUUM_WHY}"

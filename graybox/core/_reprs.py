@@ -76,6 +76,14 @@ def level_texts(levels: np.ndarray) -> list[str]:
     return [repr(float(x)) for x in v]
 
 
+def exact_text(x: float) -> str:
+    """A number as ``%g`` where that reads back as it, else the shortest text that does (``repr``): one value said
+    alone, with no others to tell it from (a local model's ū 10000.01 printed '10000', as 10000.02 did)."""
+    x = float(x)
+    text = f"{x:g}"
+    return text if not np.isfinite(x) or float(text) == x else repr(x)
+
+
 def range_text(low: float, high: float, digits: int = 4) -> str:
     """A range as ``[low, high]`` to ``digits`` significant digits, or with as many more as tell its ends apart
     (:func:`level_texts`) where those print alike: a signal from 10003.9 to 10020.9 read 'y in [1e+04, 1e+04]',
