@@ -280,9 +280,9 @@ def test_plots_of_static_points_label_axes_with_their_units():
     assert fig.axes[0].get_ylabel() == "output ȳ (mlc)" and fig.axes[1].get_ylabel() == "static gain dȳ/dū (mlc/rpm)"
     two = gb.StaticPoints([[1.0, 1.0], [2.0, 1.0], [1.0, 2.0], [2.0, 2.0]], [1.0, 2.0, 3.0, 4.0], units=("rpm", "mlc"))
     ax = plots.plot_surface_slices(None, two).axes[0]
-    assert (ax.get_xlabel(), ax.get_ylabel()) == ("input ū₁ (rpm)", "output ȳ (mlc)")
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("input u1 (rpm)", "output ȳ (mlc)")
     fig = plots.plot_surface_contours(lambda U: U[:, 0] + U[:, 1], two)
-    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("input ū₁ (rpm)", "input ū₂ (rpm)")
+    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("input u1 (rpm)", "input u2 (rpm)")
     assert fig.axes[1].get_ylabel() == "output ȳ (mlc)"  # the colour bar
 
 

@@ -45,7 +45,7 @@ def test_slices_draw_one_line_per_level_and_surface_with_the_points(tmp_path):
     assert lines[0].get_color() == lines[6].get_color() == markers[0].get_color()
     np.testing.assert_array_equal(np.sort(markers[2].get_xdata()), static_grid()[:6, 1])
     np.testing.assert_allclose(markers[2].get_ydata(), PLANT.static_pressure(markers[2].get_xdata(), 1350.0) + 0.01)
-    assert ax.get_xlabel() == "input ū₁"  # the defaults name no unit
+    assert ax.get_xlabel() == "input u1"  # the points' input name; the defaults name no unit
     fig.savefig(tmp_path / "s.png", dpi=50)
     assert (tmp_path / "s.png").read_bytes().startswith(PNG_MAGIC)
 
@@ -65,7 +65,7 @@ def test_slices_against_the_second_input_at_chosen_levels():
     fit = StaticSurface.fit(_grid_points(), 2)
     fig = plot_surface_slices(fit, against=1, at=[1200.0, 1600.0], n_grid=11)
     ax = fig.axes[0]
-    assert len(ax.lines) == 2 and ax.get_xlabel() == "input ū₂"
+    assert len(ax.lines) == 2 and ax.get_xlabel() == "input u2"  # the surface's own input name
     x = ax.lines[1].get_xdata()
     np.testing.assert_allclose(ax.lines[1].get_ydata(), fit(np.c_[np.full(11, 1600.0), x]))
     assert x[0] == 1150 and x[-1] == 1650  # the fit's domain
@@ -112,3 +112,19 @@ def test_record_with_two_inputs_has_a_line_and_a_legend_entry_per_input():
     assert len(ax_u.lines) == 2
     assert [t.get_text() for t in ax_u.get_legend().get_texts()] == ["u1", "u2"]
     np.testing.assert_array_equal(ax_u.lines[1].get_ydata()[:300], rec.u[:300, 1])
+
+
+def test_surface_plots_label_their_axes_by_the_points_input_names():
+    """The surface plots labelled their inputs "input ū₁/ū₂" whatever the points named them (plot_static_band uses
+    the names); a pair given keeps its place, and a surface without points or names keeps ū₁ and ū₂."""
+    pts = StaticPoints([[1.0, 1.0], [2.0, 1.0], [1.0, 2.0], [2.0, 2.0]], [1.0, 2.0, 3.0, 4.0],
+                          input_names=("speed", "valve"), units=("rpm", "mlc"))
+    ax = plot_surface_slices(None, pts).axes[0]
+    assert ax.get_xlabel() == "input speed (rpm)"
+    assert plot_surface_slices(None, pts, against=1).axes[0].get_xlabel() == "input valve (rpm)"
+    fig = plot_surface_contours(lambda U: U[:, 0] + U[:, 1], pts)
+    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("input speed (rpm)", "input valve (rpm)")
+    fig = plot_surface_contours(lambda U: U[:, 0] + U[:, 1], pts, input_labels=("a", "b"))
+    assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("a (rpm)", "b (rpm)")
+    bare = plot_surface_slices(lambda U: U[:, 0], None, urange=(0.0, 1.0), at=[0.0, 1.0]).axes[0]
+    assert bare.get_xlabel() == "input ū₁"

@@ -40,8 +40,11 @@ def _surfaces(surface: Surface | Sequence[Surface] | None) -> list[Surface]:
     return out
 
 
-def _input_labels(labels: object) -> tuple:
-    """The two inputs' labels (any values, shown with str()), or an error naming ``input_labels``."""
+def _input_labels(labels: object, names: tuple[str, ...] | None = None) -> tuple:
+    """The two inputs' labels (any values, shown with str()), or an error naming ``input_labels``; None: "input
+    <name>" where the points or a surface name their inputs (as plot_static_band labels them), else ū₁ and ū₂."""
+    if labels is None:
+        return tuple(f"input {n}" for n in names) if names is not None else ("input ū₁", "input ū₂")
     out = tuple(check_sequence(labels, "input_labels", "a pair of labels (ū₁, ū₂)"))
     if len(out) != 2:
         raise ValueError(f"input_labels must be a pair of labels (ū₁, ū₂), got {len(out)}")
@@ -166,7 +169,7 @@ def plot_surface_slices(
     ax: Axes | None = None,
     xlabel: str | None = None,
     ylabel: str = "output ȳ",
-    input_labels: tuple[str, str] = ("input ū₁", "input ū₂"),
+    input_labels: tuple[str, str] | None = None,
     n_grid: int = 100,
     margin: float = 0.0,
 ) -> Figure:
@@ -195,8 +198,9 @@ def plot_surface_slices(
     xlabel, ylabel : str
         Axis labels (default x: the label of input ``against``); the points' ``units`` are
         appended unless a label names them already.
-    input_labels : (str, str)
-        Labels of the two inputs (used for the axis and the legend's levels).
+    input_labels : (str, str), optional
+        Labels of the two inputs (used for the axis and the legend's levels); default "input <name>" with the
+        names the points (else a surface) give their inputs, else "input ū₁" and "input ū₂".
     n_grid : int
         Points per slice.
     margin : float
@@ -215,9 +219,9 @@ def plot_surface_slices(
     n_grid = check_int(n_grid, "n_grid", low=2)
     check_count(n_grid, "n_grid", item_bytes=8 * n_grid)  # a grid of n_grid² points
     margin = check_real(margin, "margin", low=0)
-    input_labels = _input_labels(input_labels)
     held = 1 - against
     names = _plot_inputs(surfaces, points)
+    input_labels = _input_labels(input_labels, names)
     if at is None:
         if pts is not None:
             levels = np.unique(pts[0][:, held])
@@ -281,7 +285,7 @@ def plot_surface_contours(
     levels: int | Sequence[float] = 12,
     ranges: tuple[tuple[float, float], tuple[float, float]] | None = None,
     ax: Axes | None = None,
-    input_labels: tuple[str, str] = ("input ū₁", "input ū₂"),
+    input_labels: tuple[str, str] | None = None,
     output_label: str = "output ȳ",
     n_grid: int = 60,
     margin: float = 0.0,
@@ -305,8 +309,9 @@ def plot_surface_contours(
         surface's domain.
     ax : matplotlib Axes, optional
         Draw here; by default a new 6.0 × 4.8 in figure is made.
-    input_labels : (str, str)
-        Axis labels (the points' input unit appended unless a label names it).
+    input_labels : (str, str), optional
+        Axis labels (the points' input unit appended unless a label names it); default "input <name>" with the
+        names the points (else the surface) give their inputs, else "input ū₁" and "input ū₂".
     output_label : str
         Colour bar label (the points' output unit appended unless it names it).
     n_grid : int
@@ -329,13 +334,15 @@ def plot_surface_contours(
     n_grid = check_int(n_grid, "n_grid", low=2)
     check_count(n_grid, "n_grid", item_bytes=8 * n_grid)  # a grid of n_grid² points
     margin = check_real(margin, "margin", low=0)
-    input_labels = _input_labels(input_labels)
+    if input_labels is not None:
+        _input_labels(input_labels)  # a bad pair refused before any other work, as before
     levels = _levels(levels)
     if ranges is not None:
         ranges = check_sequence(ranges, "ranges", "two (low, high) pairs")
         if len(ranges) != 2:
             raise ValueError(f"ranges must be two (low, high) pairs, got {ranges!r}")
     names = _plot_inputs(surfaces, points)
+    input_labels = _input_labels(input_labels, names)
     r1 = _range(0, surfaces, pts, None if ranges is None else ranges[0], margin, "ranges[0]", names)
     r2 = _range(1, surfaces, pts, None if ranges is None else ranges[1], margin, "ranges[1]", names)
     g1, g2 = np.linspace(*r1, n_grid), np.linspace(*r2, n_grid)
