@@ -973,6 +973,11 @@ def _lambdas(v: object, path: tuple) -> list[float] | None:
         a = _wrap(check_real, path + (kind,), args[0], "start")
         b = _wrap(check_real, path + (kind,), args[1], "stop")
         n = _wrap(check_count, path + (kind,), args[2], "count", low=1)  # (numpy's refusal named no key)
+        if kind == "logspace":  # 10**400 overflowed with numpy's warning, 10**-400 read as λ1 = 0
+            for name, e in (("start", a), ("stop", b)):
+                if not -307 <= e <= 308:
+                    raise SpecError(f"{name} = {e!r}: 10**{name} is beyond the float range (exponents in "
+                                    "[-307, 308]; λ1 = 10**x must lie in (0, 1])", path + (kind,))
         lam = np.logspace(a, b, n) if kind == "logspace" else np.linspace(a, b, n)
     else:
         lam = v
