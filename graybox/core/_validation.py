@@ -90,6 +90,10 @@ def check_int(value: object, name: str, *, low: int | None = None, high: int | N
         raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
     if isinstance(value, (numbers.Integral, np.integer)) or (isinstance(value, np.ndarray) and value.dtype.kind in "iu"):
         v = int(value)  # type: ignore[arg-type]  (exact: an int beyond any float, 10**400, is no OverflowError)
+    elif isinstance(value, numbers.Rational):  # a Fraction, exact: float() of Fraction(10**400) overflowed
+        if value.denominator != 1:
+            raise TypeError(f"{name} must be an integer, got {value!r}")
+        v = int(value)
     else:
         f = float(value)  # type: ignore[arg-type]
         if not np.isfinite(f):
