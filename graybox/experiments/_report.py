@@ -234,6 +234,9 @@ def _no_model_reason(key: tuple, cells: _Columns, members: _Columns | None, b: f
                 why.append(f"every one of the {n} model(s) has an undefined static curve (J_SF = inf)")
         if failures:
             why.append(f"{int(failed.sum())} member fit(s) failed: " + "; ".join(failures[:2]))
+    elif n:
+        why.append(f"the chosen model of every one of the {n} ok cell(s) has no finite J_S on the validation record "
+                   "(it diverges there)")
     # an infeasible cell whose members were judged above: its own D_SF said the same
     why += _cell_reasons(cells.of(key, "status"), cells.of(key, "message"), brief=("infeasible",) if why and n else ())
     return "; ".join(why) or ("no cell is ok" if members is None else "no model qualified")
@@ -281,8 +284,9 @@ def leaderboard(
     cells_np = _Columns(df, ("status", "message", "band", "n_params"))
     # every group's candidates and its best, in one pass; a group with none is revisited for its reasons
     if rule == "chosen":
-        pool = df[df["status"] == "ok"]
-        counted = pool
+        counted = df[df["status"] == "ok"]
+        # a chosen model that diverged on the validation record (J_S inf or NaN) is no model to rank
+        pool = counted[np.isfinite(counted["JS_valid"].to_numpy(float))]
     else:
         # each group by its own cells' band: read with spec="all", a data set's cells carry the band of the
         # spec that holds them, which two specs may give differently
