@@ -30,3 +30,18 @@ def test_chosen_rule_does_not_rank_an_ok_cell_whose_model_has_no_finite_js_valid
     row = lb.iloc[0]
     assert np.isnan(row["rank"]) and np.isnan(row["JS_valid"])
     assert "no finite J_S" in row["reason"] and "1 ok cell" in row["reason"]
+
+
+def test_compare_results_names_the_same_data_stored_under_other_names(tmp_path):
+    """Two stores of the same data under different names were told 'the stores share no data set' though their
+    content hashes match: the message now names those data sets (names are not merged)."""
+    paths = []
+    for name in ("plant", "pump"):
+        grid = gx.Grid([gx.DataSpec(name, bundled="pumping")],
+                       [gx.StructureSpec("fo", terms=["y(k-1)", "u(k-1)", "1"])],
+                       [gx.Variant("LS", "ls")], name=name)
+        paths.append(tmp_path / f"{name}.sqlite")
+        gx.run_grid(grid, paths[-1], progress=False)
+    with pytest.raises(gx.StoreError, match="share no data set") as e:
+        gx.compare_results(paths)
+    assert "same data" in str(e.value) and "'plant'" in str(e.value) and "'pump'" in str(e.value)

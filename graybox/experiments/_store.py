@@ -1172,6 +1172,20 @@ def load_results(path: str | os.PathLike, *, spec: str | int = "latest") -> pd.D
     return df
 
 
+def _same_data_text(paths: Sequence[Path], frames: Sequence[pd.DataFrame]) -> str:
+    """The data sets the stores hold under different names with the same content hash, as a sentence ('' if none)."""
+    by_hash: dict[str, list[tuple[str, Path]]] = {}
+    for p, df in zip(paths, frames):
+        for name, h in df.attrs.get("data_hashes", {}).items():
+            by_hash.setdefault(h, []).append((name, p))
+    pairs = ["; ".join(f"{n!r} in {p}" for n, p in at) for at in by_hash.values()
+             if len({p for _, p in at}) > 1 and len({n for n, _ in at}) > 1]
+    if not pairs:
+        return ""
+    return (". Yet the same data (equal content hashes) are stored under other names: " + " | ".join(pairs)
+            + ". Rename the data set in one spec to compare them")
+
+
 def compare_results(
     stores: Sequence[str | os.PathLike],
     *,
@@ -1240,7 +1254,7 @@ def compare_results(
     if all(n for n in names) and not set.intersection(*names):
         raise StoreError("the stores share no data set ("
                          + "; ".join(f"{p}: {sorted(n)}" for p, n in zip(paths, names))
-                         + "): there is nothing to compare side by side")
+                         + "): there is nothing to compare side by side" + _same_data_text(paths, frames))
     out = []
     for lab, df in zip(labels, frames):
         d = df.copy()
