@@ -128,3 +128,20 @@ def test_surface_plots_label_their_axes_by_the_points_input_names():
     assert (fig.axes[0].get_xlabel(), fig.axes[0].get_ylabel()) == ("a (rpm)", "b (rpm)")
     bare = plot_surface_slices(lambda U: U[:, 0], None, urange=(0.0, 1.0), at=[0.0, 1.0]).axes[0]
     assert bare.get_xlabel() == "input ū₁"
+
+
+def test_slices_refuse_a_bad_label_pair_before_reading_the_surfaces():
+    """A bad input_labels was reported after a surface/points mismatch (review51i): the pair is named first."""
+    pts = StaticPoints([[1.0, 1.0], [2.0, 1.0], [1.0, 2.0], [2.0, 2.0]], [1.0, 2.0, 3.0, 4.0],
+                       input_names=("speed", "valve"))
+    class Other:  # a surface of other inputs than the points'
+        input_names, domain, name = ("a", "b"), None, "other"
+
+        def __call__(self, U):
+            return U[:, 0]
+
+    other = Other()
+    with pytest.raises(ValueError, match="a surface in the inputs"):  # the mismatch alone is still named
+        plot_surface_slices(other, pts)
+    with pytest.raises(ValueError, match="input_labels must be a pair"):
+        plot_surface_slices(other, pts, input_labels=("x",))

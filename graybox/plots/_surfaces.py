@@ -219,6 +219,8 @@ def plot_surface_slices(
     n_grid = check_int(n_grid, "n_grid", low=2)
     check_count(n_grid, "n_grid", item_bytes=8 * n_grid)  # a grid of n_grid² points
     margin = check_real(margin, "margin", low=0)
+    if input_labels is not None:
+        _input_labels(input_labels)  # a bad pair refused before any other work, as plot_surface_contours does
     held = 1 - against
     names = _plot_inputs(surfaces, points)
     input_labels = _input_labels(input_labels, names)
