@@ -35,8 +35,18 @@ def listed(values: object) -> str:
 
 def percent_text(level: float) -> str:
     """A confidence level as a percentage with the digits it has: "95%", "97.5%", "99.9%" (``:.0%`` printed 0.975 as
-    "98%" and 0.999 as "100%", a band no model has)."""
-    return f"{100 * float(level):.10g}%"
+    "98%" and 0.999 as "100%", a band no model has). Six significant digits (``%g``: a float32 0.95 is "95%", not
+    "94.99999881%"), and as many more as keep a level strictly inside (0, 1) off "0%" and "100%"."""
+    level = float(level)
+    text = f"{100 * level:g}"
+    if 0 < level < 1:
+        for digits in range(7, 18):
+            if 0 < float(text) < 100:
+                break
+            text = f"{100 * level:.{digits}g}"
+        else:
+            text = repr(100 * level)
+    return text + "%"
 
 
 def share_text(share: float) -> str:

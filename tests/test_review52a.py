@@ -1,0 +1,47 @@
+"""Review 52a: the plots/reports series (number formatters, legends, titles, shared axes, refused output names)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+
+
+def _first_order_record(n: int = 400, seed: int = 0) -> gb.Record:
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(1.0, 3.0, n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.5 * y[k - 1] + 0.1 * u[k - 1] + 0.05 * rng.standard_normal()
+    return gb.Record(u, y, Ts=0.1)
+
+
+@pytest.mark.parametrize("level, said", [(np.float32(0.95), "95%"), (np.float32(0.99), "99%"),
+                                         (0.9973002039367398, "99.73%"), (0.95, "95%"), (0.975, "97.5%"),
+                                         (0.999, "99.9%"), (0.9973, "99.73%")])
+def test_a_confidence_level_prints_as_a_reader_wrote_it(level, said):
+    # percent_text printed 100·level to ten digits: a level given as np.float32(0.95) (check_level takes it) read
+    # '94.99999881%' in ResidualTests' repr and every band legend where ':.0%' said '95%', and the 3σ level
+    # 2Φ(3) − 1 read '99.73002039%'
+    from graybox.core._reprs import percent_text
+    from graybox.plots import plot_residual_tests
+
+    assert percent_text(level) == said
+    m = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 0.1]), Ts=0.1)
+    tests = gb.residual_tests(m, _first_order_record(), level=level, rule="pointwise")
+    assert f"pointwise {said};" in repr(tests)
+    labels = [t.get_text() for t in plot_residual_tests(tests).axes[0].get_legend().get_texts()]
+    assert any(f"({said} pointwise)" in t for t in labels)
+
+
+@pytest.mark.parametrize("level", [1 - 1e-12, 1 - 1e-15, 1e-12])
+def test_a_confidence_level_check_level_takes_never_prints_as_100_or_0(level):
+    # a level strictly inside (0, 1) that check_level takes (up to 1 − 2e-16) read '100%' to ten digits: the
+    # '100%' band no model has, which percent_text was made to remove
+    from graybox.core._reprs import percent_text
+    from graybox.core._validation import check_level
+
+    check_level(level)
+    text = percent_text(level)
+    assert text.endswith("%") and 0.0 < float(text[:-1]) < 100.0
