@@ -45,3 +45,21 @@ def test_a_confidence_level_check_level_takes_never_prints_as_100_or_0(level):
     check_level(level)
     text = percent_text(level)
     assert text.endswith("%") and 0.0 < float(text[:-1]) < 100.0
+
+
+@pytest.mark.parametrize("share, said", [(0.125, "12.5%"), (0.975, "97.5%"), (0.5, "50.0%"), (0.0123, "1.2%"),
+                                         (1e-4, "0.01%"), (0.9995, "99.95%"), (0.0, "0%"), (1.0, "100%")])
+def test_a_share_prints_as_before_unless_it_reads_none_or_all(share, said):
+    # share_text (94be029, meant to keep a share strictly between 0 and 1 off '0.0%' and '100.0%') printed every
+    # share to two significant digits: 1 of 8 runs diverged read '12%' and 975 of 1000 draws '98%', where ':.1%'
+    # said '12.5%' and '97.5%'
+    from graybox.core._reprs import share_text
+
+    assert share_text(share) == said
+
+
+def test_the_simulation_band_warning_says_an_ordinary_share_as_before():
+    from graybox.diagnostics._uncertainty import UncertaintyWarning, warn_dropped_draws
+
+    with pytest.warns(UncertaintyWarning, match=r"up to 12\.5% of the Monte Carlo draws"):
+        warn_dropped_draws("static_curve_band", np.array([0.0, 0.125, np.nan]))

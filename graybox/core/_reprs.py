@@ -50,12 +50,15 @@ def percent_text(level: float) -> str:
 
 
 def share_text(share: float) -> str:
-    """A share (of draws, of runs) as a percentage, with at least two significant digits and as many more as keep a
-    share strictly between 0 and 1 off "0%" and "100%" (``:.1%`` printed 1 run of 10 000 as "0.0%" and 9 995 as
-    "100.0%", beside the words that some, or not all, are left out)."""
+    """A share (of draws, of runs) as a percentage: ``:.1%`` ("12.5%"), or as many significant digits as keep a
+    share strictly between 0 and 1 off "0%" and "100%" where that reads them (``:.1%`` printed 1 run of 10 000 as
+    "0.0%" and 9 995 as "100.0%", beside the words that some, or not all, are left out)."""
     share = float(share)
     if not 0 < share < 1:
         return f"{100 * share:g}%"
+    text = f"{100 * share:.1f}"  # as shares were printed before
+    if 0 < float(text) < 100:
+        return text + "%"
     for digits in range(2, 18):
         text = f"{100 * share:.{digits}g}"
         if 0 < float(text) < 100:
