@@ -63,3 +63,47 @@ def test_the_simulation_band_warning_says_an_ordinary_share_as_before():
 
     with pytest.warns(UncertaintyWarning, match=r"up to 12\.5% of the Monte Carlo draws"):
         warn_dropped_draws("static_curve_band", np.array([0.0, 0.125, np.nan]))
+
+
+def _legends_inside(fig) -> list[bool]:
+    fig.savefig(__import__("io").BytesIO(), format="png")
+    out = []
+    for ax in fig.axes:
+        if ax.get_legend() is not None:
+            box = ax.bbox  # the panel the legend is drawn in
+            lb = ax.get_legend().get_window_extent()
+            out.append(bool(lb.y0 >= box.y0 - 1 and lb.y1 <= box.y1 + 1 and lb.x0 >= box.x0 - 1 and lb.x1 <= box.x1 + 1))
+    return out
+
+
+@pytest.mark.parametrize("n", [20, 40])
+def test_a_surface_band_of_many_slices_keeps_its_legend_inside_its_panel(n):
+    # 2ccf186 named at most 20 slices: with the band's own entry that is 21, and the legend of a band of 20 (or 40,
+    # one in 2 of them) slices still ran off the bottom of its panel (the promise was a legend that fits)
+    from graybox.plots import plot_static_band
+
+    s = gb.parse_structure(["y(k-1)", "u1(k-1)", "u2(k-1)", "1"])
+    rng = np.random.default_rng(1)
+    u = rng.uniform(1.0, 3.0, (300, 2))
+    y = np.zeros(300)
+    for k in range(1, 300):
+        y[k] = 0.5 * y[k - 1] + 0.2 * u[k - 1, 0] + 0.1 * u[k - 1, 1] + 0.1 + 0.01 * rng.standard_normal()
+    rec = gb.Record(u, y, Ts=0.1)
+    theta = np.linalg.lstsq(gb.regressor_matrix(s, rec.u, rec.y, start=1, input_names=rec.input_names), y[1:],
+                            rcond=None)[0]
+    m = gb.Model(s, theta, Ts=0.1)
+    g = np.linspace(1.0, 3.0, n)
+    band = gb.static_surface_band(gb.ls_uncertainty(m, rec), np.array([(a, b) for a in g for b in g]))
+    assert all(_legends_inside(plot_static_band(band)))
+
+
+@pytest.mark.parametrize("levels, surfaces", [(20, 1), (10, 2), (15, 2), (40, 1), (7, 3)])
+def test_slices_of_many_levels_keep_their_legend_inside_their_panel(levels, surfaces):
+    # 20 levels (or two surfaces of 10) with their static points: 21 entries, the legend ran off the panel's bottom
+    from graybox.plots import plot_surface_slices
+
+    g1, g2 = np.meshgrid(np.linspace(1.0, 3.0, 6), np.linspace(1.0, 2.0, levels))
+    ub = np.column_stack([g1.ravel(), g2.ravel()])
+    sp = gb.StaticPoints(ub, ub[:, 0] + 0.5 * ub[:, 1] ** 2, name="points")
+    fit = gb.StaticSurface.fit(sp, 2, name="fit")
+    assert all(_legends_inside(plot_surface_slices([fit] * surfaces, sp)))

@@ -76,11 +76,16 @@ def on_level(held: np.ndarray, level: np.ndarray) -> np.ndarray:
     return (np.abs(held - level) <= 1e-9 * np.maximum(np.abs(level), scale)).all(axis=1)
 
 
-def legend_every(n: int) -> int:
-    """Of ``n`` lines one per level (slices, operating points), name one in this many in the legend: at most
-    :data:`~graybox.core._reprs.LISTED` entries (a legend of 30 slices ran off its panel, matplotlib warning
-    'constrained_layout not applied')."""
-    return max(1, -(-int(n) // LISTED))
+#: The most slices a surface panel's legend names (plot_surface_slices, plot_static_band of a surface band): 20 and
+#: the points' or the band's own entry (and the title saying one in k) ran off the bottom of the panel.
+SLICES_NAMED = 15
+
+
+def legend_every(n: int, most: int = LISTED) -> int:
+    """Of ``n`` lines one per level (slices, operating points), name one in this many in the legend: about ``most``
+    entries at most (:data:`~graybox.core._reprs.LISTED` by default; a legend of 30 slices ran off its panel,
+    matplotlib warning 'constrained_layout not applied')."""
+    return max(1, -(-int(n) // most))
 
 
 def legend_text(text: object) -> str:

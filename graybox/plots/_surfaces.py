@@ -21,7 +21,7 @@ from matplotlib.figure import Figure
 
 from ..core._validation import check_count, check_int, check_real, check_sequence
 from ..core._reprs import level_texts
-from ._data import distinct_colours, legend_every, legend_text, on_level, unit_label
+from ._data import SLICES_NAMED, distinct_colours, legend_every, legend_text, on_level, unit_label
 
 __all__ = ["plot_surface_slices", "plot_surface_contours"]
 
@@ -250,7 +250,8 @@ def plot_surface_slices(
     styles = ["-", "--", ":", "-."]
     x = np.linspace(lo, hi, n_grid)
     texts = level_texts(levels)
-    every = legend_every(levels.size * max(1, len(surfaces)))  # one in this many levels named, beyond 20 lines
+    # one in this many levels named, beyond SLICES_NAMED lines in all
+    every = legend_every(levels.size * max(1, len(surfaces)), SLICES_NAMED)
     for i, s in enumerate(surfaces):
         for k, (lev, text, col) in enumerate(zip(levels, texts, colors)):
             U = np.empty((n_grid, 2))

@@ -16,8 +16,8 @@ from ..core._records import StaticPoints, check_same_units
 from ..core._validation import check_bool, check_choice, check_int
 from ..core._reprs import level_texts, per_unit, percent_text
 from ._pareto import _why_not_drawn
-from ._data import (check_axes, check_one_input_points, distinct_colours, legend_every, legend_text, on_level,
-                    unit_label)
+from ._data import (SLICES_NAMED, check_axes, check_one_input_points, distinct_colours, legend_every, legend_text,
+                    on_level, unit_label)
 from ..diagnostics._residuals import ResidualTests
 from ..diagnostics._simulation_band import SimulationBand
 from ..diagnostics._uncertainty import StaticCurveBand, StaticSurfaceBand
@@ -180,7 +180,7 @@ def plot_static_band(
     u_unit, y_unit = (band.units[k] or ("" if points is None else points.units[k]) for k in (0, 1))
     xlabel = unit_label(xlabel, u_unit)
     colours = distinct_colours(len(groups))
-    every = legend_every(len(groups))  # one in this many slices named, beyond 20
+    every = legend_every(len(groups), SLICES_NAMED)  # one in this many slices named, beyond SLICES_NAMED
     for j, (g, tag) in enumerate(zip(groups, tags)):
         named = j % every == 0
         color = colours[j] if surface else "C0"
