@@ -107,3 +107,17 @@ def test_slices_of_many_levels_keep_their_legend_inside_their_panel(levels, surf
     sp = gb.StaticPoints(ub, ub[:, 0] + 0.5 * ub[:, 1] ** 2, name="points")
     fit = gb.StaticSurface.fit(sp, 2, name="fit")
     assert all(_legends_inside(plot_surface_slices([fit] * surfaces, sp)))
+
+
+@pytest.mark.parametrize("u, said", [(0.1 * 3, "0.3"), (np.arange(0.1, 1.0, 0.1)[6], "0.7"), (10000.01, "10000.01"),
+                                     (1000.0, "1000"), (0.5, "0.5"), (1 / 3, "0.3333333333333333")])
+def test_a_local_models_point_prints_without_float_noise(u, said):
+    # exact_text (484afd8) printed repr() wherever %g did not read back exactly: a local model at an operating point
+    # of np.arange(0.1, 1, 0.1) said 'ū = (0.30000000000000004)' and 'ū = (0.7000000000000001)', where %g said 0.3
+    # and 0.7, and 0.1 * 3 printed unlike 0.3; the rounding error of the arithmetic that made the point is not a digit
+    # a reader wrote
+    from graybox.core._reprs import exact_text
+
+    assert exact_text(u) == said
+    model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), [0.5, 0.4, 0.05])
+    assert repr(gb.local_model(model, u, Ts=1.0)).startswith(f"LocalModel(ū = ({said}), ")

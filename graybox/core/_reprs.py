@@ -90,11 +90,18 @@ def level_texts(levels: np.ndarray) -> list[str]:
 
 
 def exact_text(x: float) -> str:
-    """A number as ``%g`` where that reads back as it, else the shortest text that does (``repr``): one value said
-    alone, with no others to tell it from (a local model's ū 10000.01 printed '10000', as 10000.02 did)."""
+    """A number as ``%g`` where that reads back as it, else with as many more significant digits as do: one value
+    said alone, with no others to tell it from (a local model's ū 10000.01 printed '10000', as 10000.02 did). A text
+    within a few units in the last place reads back as it: 0.1 * 3 is "0.3", not "0.30000000000000004" (``repr``),
+    the rounding of the arithmetic that made the value."""
     x = float(x)
-    text = f"{x:g}"
-    return text if not np.isfinite(x) or float(text) == x else repr(x)
+    if not np.isfinite(x):
+        return f"{x:g}"
+    for digits in range(6, 18):
+        text = f"{x:.{digits}g}"
+        if abs(float(text) - x) <= 4 * np.spacing(abs(x)):
+            return text
+    return repr(x)
 
 
 def range_text(low: float, high: float, digits: int = 4) -> str:
