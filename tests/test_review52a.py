@@ -121,3 +121,23 @@ def test_a_local_models_point_prints_without_float_noise(u, said):
     assert exact_text(u) == said
     model = gb.Model(gb.Structure(["y(k-1)", "u(k-1)", "1"]), [0.5, 0.4, 0.05])
     assert repr(gb.local_model(model, u, Ts=1.0)).startswith(f"LocalModel(ū = ({said}), ")
+
+
+def test_surface_contours_of_points_without_a_name_draw_without_a_legend_warning():
+    # 627bd55 made plot_static_curve's legend only when something is named; plot_surface_contours still called
+    # legend() for points named '': matplotlib's 'No artists with labels found to put in legend' (an error under the
+    # suite's filter, and in any script that turns warnings into errors)
+    import warnings
+
+    from graybox.plots import plot_surface_contours
+
+    g1, g2 = np.meshgrid(np.linspace(1.0, 3.0, 4), np.linspace(1.0, 2.0, 3))
+    ub = np.column_stack([g1.ravel(), g2.ravel()])
+    sp = gb.StaticPoints(ub, ub[:, 0] + 0.5 * ub[:, 1] ** 2, name="")
+    fit = gb.StaticSurface.fit(sp, 2, name="fit")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = plot_surface_contours(fit, sp)
+    assert fig.axes[0].get_legend() is None
+    named = plot_surface_contours(fit, gb.StaticPoints(ub, sp.ybar, name="points"))
+    assert [t.get_text() for t in named.axes[0].get_legend().get_texts()] == ["points"]

@@ -364,7 +364,9 @@ def plot_surface_contours(
         ub, yb, pname, _ = pts
         ax.scatter(ub[:, 0], ub[:, 1], c=yb, cmap=cmap, norm=filled.norm, edgecolors="k", s=40, zorder=3,
                    label=legend_text(pname))
-        ax.legend(loc="upper left", fontsize="small")
+        if ax.get_legend_handles_labels()[0]:  # points named "": nothing to label (matplotlib warned), as in
+            # plot_static_curve
+            ax.legend(loc="upper left", fontsize="small")
     u_unit, y_unit = ("", "") if pts is None else pts[3]
     fig.colorbar(filled, ax=ax, label=unit_label(output_label, y_unit))
     ax.set_xlabel(unit_label(input_labels[0], u_unit))
