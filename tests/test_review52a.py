@@ -141,3 +141,24 @@ def test_surface_contours_of_points_without_a_name_draw_without_a_legend_warning
     assert fig.axes[0].get_legend() is None
     named = plot_surface_contours(fit, gb.StaticPoints(ub, sp.ybar, name="points"))
     assert [t.get_text() for t in named.axes[0].get_legend().get_texts()] == ["points"]
+
+
+@pytest.mark.parametrize("factor", [1.0, 1 + 1e-13])
+def test_a_dsf_result_on_its_band_prints_the_band_as_written(factor):
+    # the D_SF optimum sits on J_SF = B, and 29bd14b says a J_SF within se_dsf's round-off of B at B: with the
+    # paper's B = 0.175² (the bundled data's band) bound_text(B, B) found no text on the bound's 'side 0' short of
+    # repr, and the repr read 'J_SF=0.030624999999999996, band=0.030624999999999996'
+    from graybox.estimation._epsilon_constraint import DSFResult
+
+    m = gb.Model(gb.parse_structure(["y(k-1)", "u(k-1)"]), np.array([0.5, 0.1]))
+    band = 0.175**2
+    text = repr(DSFResult(m, 1.2, band * factor, band, True, "PE λ1=0.1", 2.0, 0.1, 10, "converged", np.nan))
+    assert "J_SF=0.030625, band=0.030625, in_band=True" in text
+
+
+def test_a_value_at_its_bound_prints_both_as_percent_g():
+    from graybox.core._reprs import beside, bound_text
+
+    band = 0.175**2
+    assert bound_text(band, band) == "0.030625" and beside(band, band) == "0.030625"
+    assert bound_text(band, 0.0306249) == "0.030625" and float(beside(0.0306249, band)) < 0.030625

@@ -119,8 +119,8 @@ def bound_text(x: float, value: float | None = None) -> str:
     bound (a band of 0.03059995 printed "0.0306" would put a J_SF of 0.0305999503 inside it; a band 0.175² is
     0.030625, not 0.030624999999999996)."""
     x = float(x)
-    if value is None or not np.isfinite(value) or not np.isfinite(x):
-        return f"{x:g}"
+    if value is None or not np.isfinite(value) or not np.isfinite(x) or float(value) == x:
+        return f"{x:g}"  # a value at the bound is said at it as printed (repr was the only text "exactly at" 0.175²)
     side = np.sign(float(value) - x)
     for d in range(6, 18):
         text = f"{x:.{d}g}"
