@@ -72,7 +72,8 @@ def _legends_inside(fig) -> list[bool]:
         if ax.get_legend() is not None:
             box = ax.bbox  # the panel the legend is drawn in
             lb = ax.get_legend().get_window_extent()
-            out.append(bool(lb.y0 >= box.y0 - 1 and lb.y1 <= box.y1 + 1 and lb.x0 >= box.x0 - 1 and lb.x1 <= box.x1 + 1))
+            out.append(bool(lb.y0 >= box.y0 - 1 and lb.y1 <= box.y1 + 1
+                            and lb.x0 >= box.x0 - 1 and lb.x1 <= box.x1 + 1))
     return out
 
 
