@@ -163,3 +163,16 @@ def test_a_value_at_its_bound_prints_both_as_percent_g():
     band = 0.175**2
     assert bound_text(band, band) == "0.030625" and beside(band, band) == "0.030625"
     assert bound_text(band, 0.0306249) == "0.030625" and float(beside(0.0306249, band)) < 0.030625
+
+
+def test_ends_a_rounding_apart_print_as_the_values_they_are():
+    # range_text (1fab8ff) tells ends that print alike apart with level_texts, whose last try was '%.17g': a record's
+    # y of 0.3 and 0.1 * 3 read 'y in [0.29999999999999999, 0.30000000000000004]', 0.3 printed as a number below it;
+    # the shortest text that reads back (repr) tells any two floats apart and prints 0.3 as 0.3
+    from graybox.core._reprs import level_texts, range_text
+
+    assert range_text(0.3, 0.1 * 3) == "[0.3, 0.30000000000000004]"
+    assert level_texts(np.array([0.3, 0.1 * 3])) == ["0.3", "0.30000000000000004"]
+    rec = gb.Record(np.ones(5), np.r_[np.full(4, 0.3), 0.1 * 3], Ts=1.0)
+    assert "y in [0.3, 0.30000000000000004]" in repr(rec)
+    assert level_texts(np.array([10000.01, 10000.02])) == ["10000.01", "10000.02"]  # as before

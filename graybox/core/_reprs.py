@@ -82,7 +82,8 @@ def level_texts(levels: np.ndarray) -> list[str]:
     """
     v = np.asarray(levels, float).ravel()
     distinct = np.unique(v).size
-    for digits in range(6, 18):
+    # up to 16 digits, then repr: '%.17g' printed 0.3 beside 0.1 * 3 as '0.29999999999999999', below what it is
+    for digits in range(6, 17):
         texts = [f"{x:.{digits}g}" for x in v]
         if len(set(texts)) >= distinct:  # (-0.0 and 0.0 are one level, printed apart)
             return texts
