@@ -983,6 +983,8 @@ def operating_curve(model: Model, ubar: Sequence[float] | np.ndarray, *, Ts: flo
     model = check_polynomial(model, "operating_curve")
     n_samples, seed = check_count(n_samples, "n_samples", low=10), check_seed(seed)
     ub = _as_points(model, ubar)
+    if uncertainty is not None:  # each draw's rows are M points × n_terms floats (_band): counted before any work
+        check_count(n_samples, "n_samples", each=((ub.shape[0], "points"), (model.theta.size, "terms")))
     Ts_ = check_Ts(Ts, data, model)
     _range_warning(model, ub, data)
     lms = tuple(_linearise(model, u, y, Ts_, e) for u, y, e in zip(ub, _y0s(y0, ub.shape[0]), _equilibria_at(model, ub)))

@@ -136,20 +136,28 @@ def _bytes_text(n: float) -> str:
 
 
 def check_count(value: object, name: str, *, low: int | None = None, high: int | None = None,
-                item_bytes: float = 8) -> int:
+                item_bytes: float = 8, each: Sequence[tuple[int, str]] = ()) -> int:
     """``value`` as an ``int`` in [low, high], as :func:`check_int`, that sizes something allocated in proportion:
     ``ValueError`` naming ``name`` for a count whose memory (``item_bytes`` per unit: 8 for one float) is more
     than this machine has, physical and swap, which could never be allocated (numpy's ``MemoryError`` named
-    nothing, after the other checks and any work before the allocation)."""
+    nothing, after the other checks and any work before the allocation).
+
+    ``each``: the sizes of the array each unit builds, as (size, what) pairs, e.g. ``((M, "points"), (n, "terms"))``
+    for Monte Carlo draws that each hold M × n floats: the memory counted is ``value`` × M × n × ``item_bytes``,
+    and the message names the factors (a count checked at 8 bytes a unit let N × M × n arrays through)."""
     v = check_int(value, name, low=low, high=high)
     have = _memory_bytes()
     try:
         need = float(v) * float(item_bytes)
+        for size, _ in each:
+            need *= float(size)
     except OverflowError:  # a count beyond any float (10**400)
         need = float("inf")
     if need > have:
         size = _bytes_text(need) if np.isfinite(need) else "more than 1e308 bytes"
-        raise ValueError(f"{name}={v} is too large: it would need at least {size} of memory, more than "
+        times = "".join(f" × {int(k)} {what}" for k, what in each)
+        of = f" ({v}{times})" if each else ""
+        raise ValueError(f"{name}={v} is too large: it would need at least {size} of memory{of}, more than "
                          f"this machine has ({_bytes_text(have)})")
     return v
 

@@ -186,6 +186,8 @@ def simulation_band(
     st, th = m.structure, m.theta
     L = st.max_lag
     rec.require_length(L)
+    if method == "monte-carlo":  # the runs, their bounded copy and the quantiles' working copy: 3 × N floats a draw
+        check_count(n_samples, "n_samples", each=((3, "copies"), (len(rec), "samples")))
     yhat = m.simulate(rec, on_diverge="nan")  # refuses a record at another period or in other units
     # the band is in the model's units where the record names none (where it names one, they agree)
     units = said_units([rec, m])

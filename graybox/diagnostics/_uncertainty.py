@@ -1431,6 +1431,8 @@ def static_curve_band(
     if ub.size == 0:
         raise ValueError("ubar must be a non-empty array of finite input levels")
     m = uncertainty.model
+    if method == "monte-carlo":  # each draw's gains are M × n_terms floats (static_gains): counted before any work
+        check_count(n_samples, "n_samples", each=((ub.size, "points"), (m.theta.size, "terms")))
     st, th, cov = m.structure, m.theta, uncertainty.cov
     yb = m.static_curve(ub, y0=y0)
     p, A = static_powers(st, curve=True)
@@ -1513,6 +1515,8 @@ def static_surface_band(
     if ub.shape[0] == 0:
         raise ValueError("ubar must hold at least one point of input levels")
     st, th = m.structure, m.theta
+    if method == "monte-carlo":  # each draw's gains are M × n_terms × m floats (static_gains): counted before any work
+        check_count(n_samples, "n_samples", each=((ub.shape[0], "points"), (th.size, "terms"), (len(names), "inputs")))
     yb = static_surface(st, th, ub, y0, input_names=names)  # ValueError naming the points it reaches nothing at
     p, A = static_powers(st, names)
     gain = static_gains(p, A, th[None], ub, yb[None])[0]

@@ -1,0 +1,74 @@
+"""mend52c: leaderboard across bands, memory of Monte Carlo bands, CorrelationTest labels, stored grid specs,
+duplicate variants with defaults spelled differently, plot_pareto of an empty set."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import graybox as gb
+from graybox.core import _validation
+
+STRUCT = ["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]
+
+
+def _record(seed: int = 0, n: int = 300) -> gb.Record:
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(0, 2, n)
+    e = 0.05 * rng.standard_normal(n)
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.7 * y[k - 1] + 0.8 * u[k - 1] - 0.2 * u[k - 1] ** 2 + 0.1 + e[k]
+    return gb.Record(u, y, name="r")
+
+
+REC = _record()
+MODEL = gb.els(STRUCT, REC, noise=0).model
+
+
+# ---- 2. the Monte Carlo bands' memory is counted as the arrays they build ------------------------------------------
+def _small_machine(monkeypatch, nbytes):
+    monkeypatch.setattr(_validation, "_memory_bytes", lambda: nbytes)
+
+
+@pytest.mark.parametrize("points", [20, 50])
+def test_static_curve_band_counts_points_and_terms(monkeypatch, points):
+    # n_samples was counted at 8 bytes a draw, while each draw builds M points × n_terms floats
+    unc = gb.ls_uncertainty(MODEL, REC)
+    n = 100
+    _small_machine(monkeypatch, 8 * n * 10)  # room for the draws alone, not for M × n_terms floats each
+    with pytest.raises(ValueError, match=rf"n_samples=100 is too large.*{points} points × 4 terms"):
+        gb.static_curve_band(unc, np.linspace(0.2, 1.8, points), method="monte-carlo", n_samples=n)
+    # the delta method draws nothing: the count alone is checked
+    band = gb.static_curve_band(unc, np.linspace(0.2, 1.8, points), n_samples=n)
+    assert band.method == "delta"
+
+
+def test_static_surface_band_counts_points_terms_and_inputs(monkeypatch):
+    unc = gb.ls_uncertainty(MODEL, REC)
+    _small_machine(monkeypatch, 8 * 100 * 10)
+    with pytest.raises(ValueError, match=r"n_samples=100 is too large.*30 points × 4 terms × 1 inputs"):
+        gb.static_surface_band(unc, np.linspace(0.2, 1.8, 30)[:, None], method="monte-carlo", n_samples=100)
+
+
+def test_operating_curve_band_counts_points_and_terms(monkeypatch):
+    unc = gb.ls_uncertainty(MODEL, REC)
+    _small_machine(monkeypatch, 8 * 100 * 10)
+    with pytest.raises(ValueError, match=r"n_samples=100 is too large.*30 points × 4 terms"):
+        gb.operating_curve(MODEL, np.linspace(0.2, 1.8, 30), uncertainty=unc, n_samples=100)
+    # without an uncertainty nothing is drawn: the count alone is checked, and the curve is made
+    curve = gb.operating_curve(MODEL, np.linspace(0.2, 1.8, 30), n_samples=100)
+    assert len(curve.ubar) == 30
+
+
+def test_simulation_band_counts_the_runs(monkeypatch):
+    unc = gb.ls_uncertainty(MODEL, REC)
+    _small_machine(monkeypatch, 8 * 100 * 10)
+    with pytest.raises(ValueError, match=rf"n_samples=100 is too large.*3 copies × {len(REC)} samples"):
+        gb.simulation_band(unc, REC, method="monte-carlo", n_samples=100)
+
+
+def test_bands_still_made_where_they_fit():
+    unc = gb.ls_uncertainty(MODEL, REC)
+    band = gb.static_curve_band(unc, np.linspace(0.2, 1.8, 5), method="monte-carlo", n_samples=50)
+    assert band.n_samples == 50 and np.all(band.ybar_low <= band.ybar_high)
