@@ -262,7 +262,7 @@ import json  # noqa: E402
 
 from scipy import stats  # noqa: E402
 
-from graybox.diagnostics._residuals import TESTS  # noqa: E402
+from graybox.diagnostics._residuals import TESTS, _label_of  # noqa: E402
 
 
 def _narx(n=300, seed=0, inputs=1):
@@ -289,7 +289,8 @@ def _test(name, lags, n=5, level=0.95, rule="pointwise", phi=None):
     lags = np.asarray(lags)
     band, limit = _bands(n, level, lags.size, rule)
     phi = np.zeros(lags.size) if phi is None else np.asarray(phi, float)
-    label, kind, _ = TESTS[name.split(":")[0]]
+    _, kind, _ = TESTS[name.split(":")[0]]
+    label = _label_of(name)  # a test keyed by an input ("u_xi:u1") names it in its label
     return gb.CorrelationTest(name, label, kind, lags, phi, band, limit, lags[np.abs(phi) > band],
                               bool(np.all(np.abs(phi) <= limit)))
 

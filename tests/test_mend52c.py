@@ -72,3 +72,38 @@ def test_bands_still_made_where_they_fit():
     unc = gb.ls_uncertainty(MODEL, REC)
     band = gb.static_curve_band(unc, np.linspace(0.2, 1.8, 5), method="monte-carlo", n_samples=50)
     assert band.n_samples == 50 and np.all(band.ybar_low <= band.ybar_high)
+
+
+# ---- 3. a CorrelationTest's label is held to its name ----------------------------------------------------------------
+def _two_input_tests():
+    rng = np.random.default_rng(1)
+    n = 300
+    u = rng.uniform(0, 2, (n, 2))
+    y = np.zeros(n)
+    for k in range(1, n):
+        y[k] = 0.6 * y[k - 1] + 0.5 * u[k - 1, 0] + 0.3 * u[k - 1, 1] ** 2 + 0.05 * rng.standard_normal()
+    rec = gb.Record(u, y, name="r", input_names=("rpm", "valve"))
+    m = gb.els(["y(k-1)", "rpm(k-1)", "valve(k-1)^2"], rec, noise=0).model
+    return gb.residual_tests(m, rec)
+
+
+@pytest.mark.parametrize("two", [False, True])
+def test_correlation_test_label_must_match_its_name(two):
+    import dataclasses
+
+    tests = (_two_input_tests() if two else gb.residual_tests(MODEL, REC)).tests
+    for name, c in tests.items():
+        dataclasses.replace(c)  # as made: accepted
+        other = next(v.label for k, v in tests.items() if v.label != c.label)
+        with pytest.raises(ValueError, match="label"):
+            dataclasses.replace(c, label=other)  # φ_ξξ(τ) said of a u-ξ test
+    if two:
+        with pytest.raises(ValueError, match="label"):  # the input's name is part of the label
+            dataclasses.replace(tests["u_xi:rpm"], label="φ_uξ(τ)")
+
+
+def test_residual_tests_files_still_load(tmp_path):
+    for t in (gb.residual_tests(MODEL, REC), _two_input_tests()):
+        gb.save(t, tmp_path / "t.json")
+        back = gb.load(tmp_path / "t.json")
+        assert {k: v.label for k, v in back.tests.items()} == {k: v.label for k, v in t.tests.items()}

@@ -106,6 +106,13 @@ U2_TESTS = tuple(k for k in INPUT_TESTS if k.startswith("u2_"))
 RULES = ("simultaneous", "pointwise")
 
 
+def _label_of(name: str) -> str:
+    """The label of the test keyed ``name`` in ``TESTS`` (``"u_xi:rpm"``: the input's name for u, ``"φ_rpmξ(τ)"``)."""
+    base, _, nm = name.partition(":")
+    label = TESTS[base][0]
+    return label.replace("u", nm) if nm else label
+
+
 @dataclass(frozen=True, eq=False)
 class CorrelationTest:
     """One correlation test over its lags.
@@ -116,7 +123,8 @@ class CorrelationTest:
         Key in ``TESTS`` (``"xi_xi"``, ``"u_xi"``, ``"xi_xiu"``, ``"u2_xi"``, ``"u2_xi2"``); with
         several inputs each input test once per input, keyed ``"u_xi:u1"`` and so on.
     label : str
-        As the literature prints it, e.g. ``"φ_(u²)'ξ(τ)"``.
+        As the literature prints it, e.g. ``"φ_(u²)'ξ(τ)"`` (``"φ_(rpm²)'ξ(τ)"`` for the input ``rpm`` of
+        several); held to the name's.
     kind : str
         ``"linear"`` or ``"nonlinear"``.
     lags : ndarray of int, shape (m,)
@@ -153,6 +161,8 @@ class CorrelationTest:
         base = self.name.split(":")[0]
         if base in TESTS and self.kind != TESTS[base][1]:  # linear_passed / nonlinear_passed count it by its kind
             raise ValueError(f"kind of test {self.name!r} is {TESTS[base][1]!r}, got {self.kind!r}")
+        if base in TESTS and self.label != _label_of(self.name):  # reports and plots print the label as the test's
+            raise ValueError(f"label of test {self.name!r} is {_label_of(self.name)!r}, got {self.label!r}")
         if lags.ndim != 1 or lags.size == 0 or phi.shape != lags.shape:
             raise ValueError(f"lags and phi must be 1-D, one φ per lag, got shapes {lags.shape} and {phi.shape}")
         # NaN at every lag: a 0/0 test as graybox made it before such tests were left out (its files load, failed)
@@ -554,7 +564,7 @@ def residual_tests(
     xs = [e / xmax for e in xi]
     # with several inputs every input test is made for each input (keys "u_xi:u1", …)
     per_input = [(None, 0)] if len(names) == 1 else [(nm, j) for j, nm in enumerate(names)]
-    for key, (label, kind, side) in TESTS.items():
+    for key, (_, kind, side) in TESTS.items():
         lags = _lags(side, max_lag)
         if rule == "pointwise":
             limit = band
@@ -577,7 +587,7 @@ def residual_tests(
                 phi = _xcorr([u**2 for u in uc], xs, lags)
             else:
                 phi = _xcorr([u**2 for u in uc], [e**2 for e in xs], lags)
-            lab = label if nm is None else label.replace("u", nm)
+            lab = _label_of(k)
             outside = lags[np.abs(phi) > band]
             out[k] = CorrelationTest(k, lab, kind, _ro(lags), _ro(phi), band, limit, _ro(outside),
                                      bool(np.all(np.abs(phi) <= limit)))
