@@ -107,3 +107,28 @@ def test_residual_tests_files_still_load(tmp_path):
         gb.save(t, tmp_path / "t.json")
         back = gb.load(tmp_path / "t.json")
         assert {k: v.label for k, v in back.tests.items()} == {k: v.label for k, v in t.tests.items()}
+
+
+# ---- 6. plot_pareto of a set with no member ---------------------------------------------------------------------------
+@pytest.mark.parametrize("log", [False, True])
+@pytest.mark.parametrize("band", [None, 0.2])
+def test_plot_pareto_of_an_empty_set_draws_an_empty_labelled_panel(log, band):
+    import warnings
+
+    from graybox.plots import plot_pareto
+
+    s = gb.parse_structure(["y(k-1)", "u(k-1)", "1"])
+    th = np.array([[0.9, 0.01, 0.1]] * 3)
+    js = np.array([1.0, 2.0, 3.0])
+    ps = gb.ParetoSet(s, th, np.array([0.01, 0.1, 1.0]), js, js, js[::-1] / 10, method="PE",
+                      units=("rpm", "mlc")).subset([])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ax = plot_pareto(ps, log=log, band=band).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("J_S (mlc²)", "J_SF (mlc²)")
+    assert ax.get_legend().get_texts()[0].get_text() == "PE (no members)"
+    assert not any(ln.get_xdata().size for ln in ax.lines)
+    # J >= 0: no panel of negative errors (linear axes showed (-0.055, 0.055), the log ones (0.1, 10))
+    assert min(ax.get_xlim()) >= 0 and min(ax.get_ylim()) >= 0
+    if band is not None:
+        assert max(ax.get_ylim()) >= band  # the band's shade is in the panel

@@ -158,6 +158,9 @@ def plot_pareto(
             ax.set_ylim(*((0.1, 10.0) if band is None else (band / 100, band * 10)))
         ax.set_xscale("log")
         ax.set_yscale("log")
+    elif not drawn:  # no member or point drawn: errors from 0, not matplotlib's (-0.055, 0.055) about nothing
+        ax.set_xlim(0.0, 1.0)
+        ax.set_ylim(0.0, 1.0 if band is None else band * 1.5)
     if band is not None:
         band = check_real(band, "band", low=0, low_open=True)
         lo, hi = ax.get_ylim()
