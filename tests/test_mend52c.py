@@ -132,3 +132,26 @@ def test_plot_pareto_of_an_empty_set_draws_an_empty_labelled_panel(log, band):
     assert min(ax.get_xlim()) >= 0 and min(ax.get_ylim()) >= 0
     if band is not None:
         assert max(ax.get_ylim()) >= band  # the band's shade is in the panel
+
+
+# ---- 4. a grid spec stored in a store round-trips through Grid.from_dict ---------------------------------------------
+def test_a_stored_spec_is_a_grid_spec_again(tmp_path):
+    from graybox import experiments as gx
+
+    g = gx.Grid([gx.DataSpec("pumping", bundled="pumping", band=1e-3)],
+                [gx.StructureSpec("one", terms=["y(k-1)", "u(k-1)", "1"])], [gx.Variant("LS", "ls")], name="g")
+    store = tmp_path / "s.sqlite"
+    first = gx.run_grid(g, store)
+    stored = gx.store_specs(store).iloc[-1]["spec"]
+    assert stored["data"][0]["y_unit"] == "mlc"  # the data set names its output's unit: the store keeps it
+    back = gx.Grid.from_dict(stored)  # was: SpecError "unknown key 'y_unit' in a [[data]] table"
+    assert back.to_dict() == g.to_dict()
+    again = gx.run_grid(back, store)
+    assert again.ran == 0 and again.spec == first.spec
+    # the unit is held to the data's, once they are read
+    wrong = dict(stored, data=[dict(stored["data"][0], y_unit="rpm")])
+    with pytest.raises(gx.SpecError, match=r"y_unit.*'rpm'|'rpm'.*y_unit"):
+        gx.Grid.from_dict(wrong).load_data()
+    with pytest.raises(gx.SpecError, match="y_unit"):
+        gx.Grid.from_dict(dict(stored, data=[dict(stored["data"][0], y_unit=3)]))
+

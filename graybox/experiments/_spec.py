@@ -1395,7 +1395,9 @@ class Grid:
         variants); relative data paths are resolved against ``base_dir``."""
         _check_keys(d, ("name", "seeds", "data", "structures", "variants"), "the grid spec")
         parts: dict[str, list] = {}
-        for key, cls_, allowed in (("data", DataSpec, ("name", "bundled", "ident", "valid", "static", "band")),
+        y_units: dict[str, str] = {}  # a stored spec's (stored_spec) output unit of a data set: held to its data's
+        for key, cls_, allowed in (("data", DataSpec, ("name", "bundled", "ident", "valid", "static", "band",
+                                                       "y_unit")),
                                    ("structures", StructureSpec, ("name", "terms", "candidates") + _STRUCTURE_RULE_KEYS),
                                    ("variants", Variant, ("name", "estimator", "constraints", "lambdas", "decision",
                                                           "options"))):
@@ -1419,6 +1421,12 @@ class Grid:
                 if key == "variants" and "estimator" not in it:  # (the dataclass's bare TypeError named no line)
                     raise SpecError(f"every [[variants]] table needs an estimator, one of {', '.join(ESTIMATORS)}",
                                     (key, i))
+                if key == "data" and "y_unit" in it:
+                    if not isinstance(it["y_unit"], str):
+                        raise SpecTypeError(f"y_unit must be a string (the unit of the data's output), got "
+                                            f"{it['y_unit']!r}", (key, i, "y_unit"))
+                    y_units[str(it["name"])] = it["y_unit"]
+                    it = {k: v for k, v in it.items() if k != "y_unit"}
                 try:
                     out.append(cls_(**it))
                 except SpecError as e:
@@ -1427,8 +1435,10 @@ class Grid:
         seeds = d.get("seeds", [0])
         if not isinstance(seeds, list):
             seeds = [seeds]
-        return cls(parts["data"], parts["structures"], parts["variants"], seeds=seeds, name=d.get("name", "grid"),
+        grid = cls(parts["data"], parts["structures"], parts["variants"], seeds=seeds, name=d.get("name", "grid"),
                    base_dir=base_dir)
+        object.__setattr__(grid, "_y_units", y_units)  # checked once the data are read (_load_data)
+        return grid
 
     # -- canonical form, data, cells --------------------------------------------------------
     def to_dict(self) -> dict:
@@ -1457,6 +1467,10 @@ class Grid:
                 raise e.within("data", i) from None
             except (OSError, ValueError) as exc:  # the loader's hints name its options in Python: said in TOML
                 raise SpecError(f"data set {d.name!r} cannot be loaded: {_toml_hints(str(exc))}", ("data", i)) from None
+            said = getattr(self, "_y_units", {}).get(d.name)
+            if said is not None and said != ds.valid.units[1]:  # a stored spec's unit: the data it was run on said it
+                raise SpecError(f"data set {d.name!r} gives its output in {ds.valid.units[1] or 'no unit'!r}, but the "
+                                f"spec says y_unit = {said!r}", ("data", i, "y_unit"))
             names = tuple(ds.input_names)
             for j, st in enumerate(self.structures):  # an input the data lack fails every cell of the structure
                 unknown = [n for n in _structure_inputs(st) if n not in names]
