@@ -129,7 +129,7 @@ def empty_store(tmp_path_factory):
 
 
 _LEADERBOARD_COLUMNS = ["rank", "JS_valid", "JS_ident", "JSF", "fit_valid", "n_params", "seed", "lambda1", "in_band",
-                        "candidates", "cells", "ok", "reason"]
+                        "band", "candidates", "cells", "ok", "reason"]
 
 
 @pytest.mark.parametrize("rule", ["dsf_valid", "chosen"])

@@ -155,3 +155,54 @@ def test_a_stored_spec_is_a_grid_spec_again(tmp_path):
     with pytest.raises(gx.SpecError, match="y_unit"):
         gx.Grid.from_dict(dict(stored, data=[dict(stored["data"][0], y_unit=3)]))
 
+
+# ---- 1. leaderboard over specs whose band differs: each cell judged by its own band ----------------------------------
+_RPM = gb.Model(["1", "y(k-1)", "n(k-1)"], [3.0, 0.5, 2e-5], input_names=("n",))
+
+
+def _rpm_data() -> gb.Dataset:
+    rng = np.random.default_rng(0)
+    recs = []
+    for part in range(2):
+        n_ = np.repeat(rng.uniform(2500.0, 3500.0, 16), 20)[:300]
+        y = _RPM.simulate(n_, np.full(1, 9.0)) + 0.01 * rng.standard_normal(300)
+        recs.append(gb.Record(n_, y, 0.1, input_names=("n",), name=f"run {part}"))
+    levels = np.linspace(2600.0, 3400.0, 5)
+    ybar = _RPM.static_curve(levels) + 0.02 * np.array([1.0, -1.0, 1.0, -1.0, 1.0])
+    return gb.Dataset(*recs, gb.StaticPoints(levels, ybar, input_names=("n",), uncertainty=0.05))
+
+
+def test_leaderboard_of_every_spec_judges_each_cell_by_its_own_band(tmp_path):
+    from graybox import experiments as gx
+
+    data = _rpm_data()
+    structure = [gx.StructureSpec("quadratic", terms=["1", "y(k-1)", "n(k-1)", "n(k-1)^2"])]
+    lambdas = [1e-4, 1e-3, 1e-2, 0.1, 1.0]
+    variants = [gx.Variant("PE D_SF", "pe", lambdas=lambdas, decision={"rule": "dsf", "fallback": "min_jsf"})]
+    front = gb.pe_pareto(structure[0].terms, data, lambdas=lambdas)
+    store = tmp_path / "s.sqlite"
+    # the small band first: its cell is stored first, and its band was the group's, the wide band's cell judged by it
+    small, wide = 1e-5, 1e-3
+    for b in (small, wide):
+        gx.run_grid(gx.Grid([gx.DataSpec("plant", dataset=data, band=b)], structure, variants), store)
+    every = gb.load_results(store, spec="all")
+    assert sorted(every["band"]) == [small, wide]  # one D_SF cell under each band, the same labels
+    key = ("plant", "quadratic", "PE D_SF")
+    by_wide = gx.leaderboard(every[every["band"] == wide]).loc[key]
+    by_small = gx.leaderboard(every[every["band"] == small]).loc[key]
+    assert not by_small["JS_valid"] <= by_wide["JS_valid"]  # the wide band lets a better member in (the small none)
+    row = gx.leaderboard(every).loc[key]
+    # the wide cell's members within its own band: its best is the group's, said with the band it is within
+    assert row["JS_valid"] == by_wide["JS_valid"] and row["JSF"] == by_wide["JSF"]
+    assert bool(row["in_band"]) and row["band"] == wide and row["JSF"] <= wide and row["reason"] == ""
+    assert (by_wide["band"], by_small["band"]) == (wide, small)
+    # no member within either cell's band: the reason says each cell's band, and the smallest J_SF's own
+    tiny = every.assign(band=[1e-9 if b == small else 1e-8 for b in every["band"]])
+    none = gx.leaderboard(tiny).loc[key]
+    assert not bool(none["in_band"]) and np.isnan(none["band"]) and np.isnan(none["JS_valid"])
+    assert "its cell's band (B = 1e-09, 1e-08)" in none["reason"]
+    assert gx.leaderboard(every, rule="chosen")["band"].isna().all()
+    # a band given overrides every cell's
+    given = gx.leaderboard(every, band=small).loc[("plant", "quadratic", "PE D_SF")]
+    assert given["band"] == small and (not bool(given["in_band"]) or given["JSF"] <= small)
+

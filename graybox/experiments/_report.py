@@ -147,7 +147,8 @@ def _given_band(band: float | Mapping[str, float] | None, data: str) -> float | 
 
 def _band_of(rows: pd.DataFrame | np.ndarray, band: float | Mapping[str, float] | None, data: str) -> float:
     """J_SF's bound for ``rows`` of data set ``data`` (a frame, or their stored bands): ``band``'s, else the first
-    band stored on the rows."""
+    band stored on the rows (the leaderboard judges each cell's members by the band stored on their own cell, this
+    one where a cell stored none)."""
     given = _given_band(band, data)
     if given is not None:
         return given
@@ -162,7 +163,7 @@ def _band_of(rows: pd.DataFrame | np.ndarray, band: float | Mapping[str, float] 
 
 
 _CANDIDATE_COLUMNS = (*_KEYS, "seed", "lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "n_params", "chosen",
-                      "status", "failure")
+                      "status", "failure", "band")
 
 
 def _candidates(g: pd.DataFrame) -> pd.DataFrame:
@@ -171,7 +172,7 @@ def _candidates(g: pd.DataFrame) -> pd.DataFrame:
     over every cell: a frame per row, or per group, made the leaderboard's time)."""
     cols: dict[str, list] = {k: [] for k in _CANDIDATE_COLUMNS}
     for r in g[[*_KEYS, "members", "lambda1", "seed", "status", "JS_ident", "JS_valid", "JSF", "fit_valid",
-                "n_params"]].itertuples(index=False):
+                "n_params", "band"]].itertuples(index=False):
         m, n_p = r.members, r.n_params
         if isinstance(m, Mapping) and len(m.get("JSF", ())):
             K = len(m["JSF"])
@@ -187,11 +188,12 @@ def _candidates(g: pd.DataFrame) -> pd.DataFrame:
                      "status": [r.status], "failure": [""]}
         else:
             continue
-        parts.update(data=[r.data] * K, structure=[r.structure] * K, variant=[r.variant] * K)
+        # the band stored on the cell: read with spec="all", one group's cells may hold two specs' bands
+        parts.update(data=[r.data] * K, structure=[r.structure] * K, variant=[r.variant] * K, band=[r.band] * K)
         for k, v in parts.items():
             cols[k].extend(np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
     out = pd.DataFrame(cols, columns=list(_CANDIDATE_COLUMNS))
-    for k in ("lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid"):
+    for k in ("lambda1", "JS_ident", "JS_valid", "JSF", "fit_valid", "band"):
         out[k] = out[k].astype(float)
     return out
 
@@ -217,19 +219,30 @@ def _no_model_reason(key: tuple, cells: _Columns, members: _Columns | None, b: f
         failed = failure != ""
         failures = list(dict.fromkeys(_short(f) for f in failure[failed]))
         jsf = members.of(key, "JSF").astype(float)[~failed]
-        inside = jsf <= b
+        # each member's own cell's band (cells of two specs' bands read together), else the group's
+        bs = members.of(key, "band").astype(float)[~failed] if "band" in members.col else np.full(jsf.size, b)
+        several = np.unique(bs).size > 1
+        inside = jsf <= bs
         if n:
             finite = np.isfinite(jsf)
             if inside.any():
-                why.append(f"every one of the {int(inside.sum())} model(s) with J_SF ≤ B = {b:g} diverges on the "
+                within = (f"its cell's B ({', '.join(f'{x:g}' for x in np.unique(bs[inside]))})" if several else
+                          f"B = {bs[inside][0]:g}")
+                why.append(f"every one of the {int(inside.sum())} model(s) with J_SF ≤ {within} diverges on the "
                            "validation record")
             elif finite.any():
                 i = int(np.flatnonzero(finite)[np.argmin(jsf[finite])])
                 lam1, seed = members.of(key, "lambda1")[~failed][i], members.of(key, "seed")[~failed][i]
                 lam = f", λ1 = {lam1:.3g}" if pd.notna(lam1) else ""
                 seed = f", seed {int(seed)}" if pd.notna(seed) else ""
-                why.append(f"no model has J_SF ≤ B = {bound_text(b, jsf[i])}: the smallest J_SF reached is {beside(jsf[i], b)}"
-                           f"{lam}{seed} ({n} model(s) compared)")
+                bi = float(bs[i])
+                if several:  # the cells' bands differ: each member was judged by its own cell's
+                    why.append(f"no model has J_SF within its cell's band (B = {', '.join(f'{x:g}' for x in np.unique(bs))}): "
+                               f"the smallest J_SF reached is {beside(jsf[i], bi)}, its cell's B = {bound_text(bi, jsf[i])}"
+                               f"{lam}{seed} ({n} model(s) compared)")
+                else:
+                    why.append(f"no model has J_SF ≤ B = {bound_text(bi, jsf[i])}: the smallest J_SF reached is "
+                               f"{beside(jsf[i], bi)}{lam}{seed} ({n} model(s) compared)")
             else:
                 why.append(f"every one of the {n} model(s) has an undefined static curve (J_SF = inf)")
         if failures:
@@ -269,7 +282,10 @@ def leaderboard(
         J_S valid), ``JS_valid``, ``JS_ident``, ``JSF``, ``fit_valid``, ``n_params``, ``seed``,
         ``lambda1`` (of the member, NaN for single models), ``in_band`` (nullable boolean: True or False as
         the band decided, <NA> where none did: under ``"chosen"`` a model whose cell decided no band, such as
-        least squares, and a group with no finished model), ``candidates`` (how many
+        least squares, and a group with no finished model), ``band`` (the B it was judged against under
+        ``"dsf_valid"``: ``band``'s, else the one stored on the model's own cell, each cell's members judged by
+        their cell's where results of several specs hold a group under two bands; NaN under ``"chosen"``, and
+        for a group without a qualifying model whose cells hold several), ``candidates`` (how many
         models were compared), ``cells`` and ``ok`` (cells of the group, cells with status ok),
         ``reason`` (empty for a ranked row). A group with no qualifying model keeps a row with NaN
         figures (rank NaN) and says why in ``reason``: the smallest J_SF reached when no model
@@ -292,16 +308,21 @@ def leaderboard(
         # spec that holds them, which two specs may give differently
         bands = {key: _band_of(cells_np.of(key, "band"), band, key[0]) for key in sizes.index}
         allc = _candidates(df)
+        # each member by the band of its own cell (a group's cells under two specs' bands: each by its own, not the
+        # first's); band= given, or a cell without one, by the group's
+        group_b = (pd.Series(list(bands.values()), index=pd.MultiIndex.from_tuples(list(bands), names=_KEYS))
+                   .reindex(pd.MultiIndex.from_frame(allc[list(_KEYS)])).to_numpy(float)) if len(allc) else np.zeros(0)
+        own = allc["band"].to_numpy(float)
+        given = np.array([_given_band(band, d) is not None for d in allc["data"]], bool) if len(allc) else np.zeros(0, bool)
+        allc["band"] = np.where(given | np.isnan(own), group_b, own)
         counted = allc[allc["failure"] == ""]  # a member whose fit failed is no model: not compared
-        b_of = (pd.Series(list(bands.values()), index=pd.MultiIndex.from_tuples(list(bands), names=_KEYS))
-                .reindex(pd.MultiIndex.from_frame(counted[list(_KEYS)])).to_numpy(float)) if len(counted) else 0.0
-        inside = counted["JSF"].to_numpy(float) <= b_of
+        inside = counted["JSF"].to_numpy(float) <= counted["band"].to_numpy(float)
         pool = counted[inside & np.isfinite(counted["JS_valid"].to_numpy(float))].assign(in_band=True)
     # the first of each group by (J_S valid, J_SF), ties in the cells' order (a stable sort)
     firsts = pool.sort_values(["JS_valid", "JSF"], kind="stable").drop_duplicates(_KEYS)
     best = {(r.data, r.structure, r.variant): r for r in firsts.itertuples(index=False)}
     n_of = counted.groupby(_KEYS, sort=False).size().to_dict()
-    members_np = None if rule == "chosen" else _Columns(allc, ("failure", "JSF", "lambda1", "seed"))
+    members_np = None if rule == "chosen" else _Columns(allc, ("failure", "JSF", "lambda1", "seed", "band"))
     rows = []
     for (d, s, v), cells in sizes.items():
         base = {"data": d, "structure": s, "variant": v, "cells": int(cells),
@@ -310,13 +331,17 @@ def leaderboard(
         hit = best.get((d, s, v))
         if hit is not None:
             base.update({k: getattr(hit, k, np.nan) for k in ("JS_valid", "JS_ident", "JSF", "fit_valid", "n_params",
-                                                             "seed", "lambda1", "in_band")})
+                                                             "seed", "lambda1", "in_band", "band")})
+            if rule == "chosen":  # each cell's own choice: no band of the leaderboard's judged it
+                base["band"] = np.nan
             base["reason"] = ""
         else:
             n_ps = pd.unique(pd.Series(cells_np.of((d, s, v), "n_params")).dropna())
             base.update(JS_valid=np.nan, JS_ident=np.nan, JSF=np.nan, fit_valid=np.nan,
                         n_params=n_ps[0] if len(n_ps) == 1 else pd.NA, seed=pd.NA, lambda1=np.nan,
                         in_band=pd.NA if rule == "chosen" else False)  # "chosen": no model, no band known
+            mine = () if members_np is None else np.unique(members_np.of((d, s, v), "band"))
+            base["band"] = mine[0] if len(mine) == 1 else (np.nan if rule == "chosen" or len(mine) else bands[(d, s, v)])
             base["reason"] = _no_model_reason((d, s, v), cells_np, members_np,
                                               None if rule == "chosen" else bands[(d, s, v)], n)
         base["candidates"] = n
@@ -326,15 +351,15 @@ def leaderboard(
         out = pd.DataFrame({**{k: pd.Series(dtype=str) for k in (*_KEYS, "reason")},
                             **{k: pd.Series(dtype=int) for k in ("cells", "ok", "candidates")},
                             **{k: pd.Series(dtype=float) for k in ("JS_valid", "JS_ident", "JSF", "fit_valid",
-                                                                   "n_params", "seed", "lambda1")},
+                                                                   "n_params", "seed", "lambda1", "band")},
                             "in_band": pd.Series(dtype="boolean")})
-    for c in ("JS_valid", "JS_ident", "JSF", "fit_valid", "lambda1"):
+    for c in ("JS_valid", "JS_ident", "JSF", "fit_valid", "lambda1", "band"):
         out[c] = out[c].astype(float)
     out["in_band"] = pd.array(out["in_band"], dtype="boolean")  # True, False or <NA> (not known): never NaN
     out["n_params"] = pd.array(out["n_params"], dtype="Int64")
     out["seed"] = pd.array(out["seed"], dtype="Int64")
     out["rank"] = out.groupby("data")["JS_valid"].rank(method="min")
-    cols = ["rank", "JS_valid", "JS_ident", "JSF", "fit_valid", "n_params", "seed", "lambda1", "in_band",
+    cols = ["rank", "JS_valid", "JS_ident", "JSF", "fit_valid", "n_params", "seed", "lambda1", "in_band", "band",
             "candidates", "cells", "ok", "reason"]
     return out.set_index(_KEYS)[cols].sort_values(["data", "rank"], kind="stable", na_position="last")
 
