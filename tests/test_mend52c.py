@@ -206,3 +206,39 @@ def test_leaderboard_of_every_spec_judges_each_cell_by_its_own_band(tmp_path):
     given = gx.leaderboard(every, band=small).loc[("plant", "quadratic", "PE D_SF")]
     assert given["band"] == small and (not bool(given["in_band"]) or given["JSF"] <= small)
 
+
+# ---- 5. a variant spelling out its estimator's defaults as the cells take them is a duplicate -----------------------
+def _two_variants(est, a, b, **kw):
+    from graybox import experiments as gx
+
+    return gx.Grid([gx.DataSpec("pumping", bundled="pumping", band=1e-3)],
+                   [gx.StructureSpec("one", terms=["y(k-1)", "u(k-1)", "1"])],
+                   [gx.Variant("a", est, options=a, **kw), gx.Variant("b", est, options=b, **kw)])
+
+
+@pytest.mark.parametrize("est, a, b, kw", [
+    ("els", {"noise": 2}, {}, {}),                       # noise None: the paper's ne = 2 (grid structures carry none)
+    ("els", {"noise": 2.0}, {}, {}),
+    ("els", {"noise": 0}, {"noise": 0.0}, {}),
+    ("els", {"max_iter": 500.0}, {}, {}),                # a float for an int option
+    ("se-gradient", {"max_nfev": 50}, {}, {"lambdas": [0.1, 1.0]}),   # None: gradient_front's 50
+    ("se-gradient", {"tol": 1e-8}, {}, {"lambdas": [0.1, 1.0]}),      # None: 1e-8
+    ("se-gradient", {"max_nfev": 50.0, "tol": 1e-8}, {"max_nfev": 50}, {"lambdas": [0.1, 1.0]}),
+])
+def test_defaults_spelled_out_as_the_cells_take_them_are_duplicates(est, a, b, kw):
+    from graybox import experiments as gx
+
+    with pytest.raises(gx.SpecError, match="identical"):
+        _two_variants(est, a, b, **kw)
+
+
+@pytest.mark.parametrize("est, a, b, kw", [
+    ("els", {"noise": 0}, {}, {}),                       # plain least squares is not the default ne = 2
+    ("els", {"noise": 1}, {}, {}),
+    ("se-gradient", {"solver": "trf"}, {}, {"lambdas": [0.1, 1.0]}),  # the default "auto" fits trf and dogbox
+    ("se-gradient", {"max_nfev": 51}, {}, {"lambdas": [0.1, 1.0]}),
+    ("se-gradient", {"tol": 1e-7}, {}, {"lambdas": [0.1, 1.0]}),
+    ("els", {"tol": 1e-8}, {}, {}),
+])
+def test_variants_that_really_differ_are_kept(est, a, b, kw):
+    assert len(_two_variants(est, a, b, **kw).variants) == 2

@@ -28,6 +28,8 @@ from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAI
 from ..core._validation import (check_bool, check_choice, check_count, check_fields, check_int, check_lambdas,
                                 check_path, check_real, check_sequence, check_str)
 from ..core._reprs import short_repr
+from ..estimation._extended_least_squares import DEFAULT_NE
+from ..estimation._simulation_error import gradient_front
 from ..static._constraints import FREE_SIGMA_Y, check_min_denominator
 from ..static._surfaces import monomial_exponents
 
@@ -1190,6 +1192,14 @@ def _default_options(est: str) -> dict[str, Any]:
     given = {k: p.default for k, p in inspect.signature(fn).parameters.items() if p.default is not p.empty}
     if est == "se-ga":
         given.update({f.name: f.default for f in dataclasses.fields(gb.GAOptions)})
+    # a None that stands for a value: els's noise is the structure's noise terms, else ne = DEFAULT_NE (a grid's
+    # structures carry none); se_pareto's gradient max_nfev and tol are gradient_front's (its solver None is
+    # "auto", which no option spells: "trf" is not it)
+    if est == "els":
+        given["noise"] = DEFAULT_NE
+    if est == "se-gradient":
+        front = inspect.signature(gradient_front).parameters
+        given.update({k: front[k].default for k in ("max_nfev", "tol")})
     skip = ("ny", "nu") if est == "neural" else ()
     return {k: given[k] for k in OPTIONS[est] if k in given and k not in skip}
 
