@@ -109,7 +109,7 @@ def test_residual_tests_files_still_load(tmp_path):
         assert {k: v.label for k, v in back.tests.items()} == {k: v.label for k, v in t.tests.items()}
 
 
-# ---- 6. plot_pareto of a set with no member ---------------------------------------------------------------------------
+# ---- 6. plot_pareto of a set with no member -------------------------------------------------------------------------
 @pytest.mark.parametrize("log", [False, True])
 @pytest.mark.parametrize("band", [None, 0.2])
 def test_plot_pareto_of_an_empty_set_draws_an_empty_labelled_panel(log, band):
