@@ -1402,7 +1402,9 @@ class Grid:
     @classmethod
     def from_dict(cls, d: Mapping, base_dir: str | None = None) -> "Grid":
         """Build from ``d``, nested dicts shaped like the TOML spec (keys: name, seeds, data, structures,
-        variants); relative data paths are resolved against ``base_dir``."""
+        variants); relative data paths are resolved against ``base_dir``. A spec as a store keeps it
+        (:func:`graybox.experiments.store_specs`) is one: a data set's ``y_unit`` there (its output's unit) is held
+        to the data's once they are read, and is no part of the grid's canonical form."""
         _check_keys(d, ("name", "seeds", "data", "structures", "variants"), "the grid spec")
         parts: dict[str, list] = {}
         y_units: dict[str, str] = {}  # a stored spec's (stored_spec) output unit of a data set: held to its data's
