@@ -164,7 +164,8 @@ def simulation_band(
         ``uncertainty`` is not a :class:`ParameterUncertainty`; ``record`` is not a Record or Dataset.
     ValueError
         The estimate's own free run diverges on the record (there is nothing to put a band
-        around); fewer than two Monte Carlo runs stay bounded; a record not longer than the lags.
+        around); fewer than two Monte Carlo runs stay bounded; a record not longer than the lags; an
+        ``n_samples`` whose runs (3 × N floats each) this machine's memory could never hold.
     MemoryError
         The Monte Carlo runs (about 3 × 8 × ``n_samples`` × N bytes) would not fit in the memory available,
         naming the bytes; nothing is allocated.
