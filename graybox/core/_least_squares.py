@@ -44,7 +44,17 @@ def check_rows(rows: int, n: int, what: str = "") -> None:
 
 def column_scales(A: np.ndarray) -> np.ndarray:
     """RMS of each column of ``A`` (1 for an all-zero column), shape (n,)."""
-    s = np.sqrt(np.mean(np.asarray(A) ** 2, axis=0))
+    A = np.asarray(A, dtype=float)
+    with np.errstate(over="ignore", under="ignore"):
+        s = np.sqrt(np.mean(A**2, axis=0))
+    # squaring a large finite column (y(k-1)^2 ~ 1e300) overflowed to an inf scale (a tiny one underflowed to 0):
+    # such columns' RMS is taken through their largest |value| (the others as before, to the bit)
+    far = (~np.isfinite(s) | ((s == 0) & np.any(A, axis=0))) & np.all(np.isfinite(A), axis=0)
+    if np.any(far):
+        B = A[:, far]
+        m = np.max(np.abs(B), axis=0)
+        s = np.array(s, dtype=float, ndmin=1)
+        s[far] = m * np.sqrt(np.mean((B / m) ** 2, axis=0))
     return np.where(s > 0, s, 1.0)
 
 

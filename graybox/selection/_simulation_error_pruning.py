@@ -39,7 +39,7 @@ import pandas as pd
 import scipy.linalg
 
 from ..core._gram import triangular_factor
-from ..core._least_squares import one_blas_thread, output_scale
+from ..core._least_squares import column_scales, one_blas_thread, output_scale
 from ..core._regressors import refuse_non_finite_columns
 from ..core._simulation_kernels import batch_sse, encode, input_products, record_inputs
 from ..models._model import Model, model_input_names
@@ -159,9 +159,8 @@ class _Scorer:
             raise ValueError("the output is identically zero on the scored samples (after the largest lag): "
                              "free-run errors cannot rank structures")
         self.n_rows = y.size
-        s = np.sqrt(np.mean(psi**2, axis=0))
-        self.zero = s == 0.0
-        self.s = np.where(self.zero, 1.0, s)
+        self.zero = ~np.any(psi, axis=0)
+        self.s = column_scales(psi)  # RMS without squaring a large column past the float range
         # the triangular factor of [S, y] (S the unit-RMS candidates): every fit below is a fit of its
         # columns, reduced by QR, with QR's accuracy; a Gram matrix SᵀS squares the conditioning (u in
         # [1000, 1002] put noise-free θ 3 % off, y about 1e6 made the true terms 'collinear')
