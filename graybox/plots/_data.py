@@ -98,7 +98,8 @@ def legend_text(text: object) -> str:
 
 def unit_label(text: str, unit: str) -> str:
     """An axis label with its unit: ``text (unit)``, or ``text`` as given when no unit is said or the text
-    already names it where a unit is written: in brackets (``"Speed (rpm)"``, ``"Speed [rpm]"``, ``"Speed (rpm, mean)"``), or last,
+    already names it where a unit is written: in brackets, alone or as one of its items
+    (``"Speed (rpm)"``, ``"Speed [rpm]"``, ``"Speed (rpm, mean)"``), or last,
     after ``in``, a slash, a comma, a colon or an underscore (``"Temperature in °C"``, ``"Speed/rpm"``,
     ``"Speed, rpm"``, ``"speed_rpm"``), a remark in brackets allowed after it (``"Temperature in °C (mean)"``).
     A unit that is also a word elsewhere is not its naming: ``"Level in tank"`` in inches is
