@@ -27,6 +27,7 @@ from ..core._terms import Term, default_input_names, parse_term
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
 from ..core._validation import (check_bool, check_choice, check_count, check_fields, check_int, check_lambdas,
                                 check_path, check_real, check_sequence, check_str)
+from ..core._records import check_units
 from ..core._reprs import short_repr
 from ..estimation._extended_least_squares import DEFAULT_NE
 from ..estimation._simulation_error import gradient_front
@@ -201,15 +202,15 @@ def _hash(obj: Any, n: int = 16) -> str:
 # --------------------------------------------------------------------------------------------
 #: How a file is read, as the loaders take it (their messages name these options, e.g. "pass skiprows=3"): the
 #: loader checks the values; in the canonical form only when given.
-_READ_KEYS = ("delimiter", "decimal", "encoding", "skiprows", "units_row")
+_READ_KEYS = ("delimiter", "decimal", "encoding", "skiprows", "units_row", "units")
 _RECORD_KEYS = ("path", "u", "y", "time", "Ts", "input_names", "time_rtol", *_READ_KEYS)
 _STATIC_KEYS = ("path", "u", "y", "repeats", "uncertainty", "input_names", *_READ_KEYS)
 
 
 #: A loader's hint naming one of its keyword options as Python writes it (``decimal=','``, ``units_row=True``,
 #: ``skiprows=3``, a bare ``delimiter=``): what a spec's user writes differently, in TOML.
-_PY_OPTION = re.compile(r"\b(delimiter|decimal|encoding|skiprows|units_row|time_rtol)="
-                        r"('(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"|True\b|False\b|[0-9][0-9.eE+-]*)?")
+_PY_OPTION = re.compile(r"\b(delimiter|decimal|encoding|skiprows|units_row|units|time_rtol)="
+                        r"('(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"|True\b|False\b|[0-9][0-9.eE+-]*|\([^()]*\))?")
 
 
 def _toml_hints(text: str) -> str:
@@ -223,6 +224,8 @@ def _toml_hints(text: str) -> str:
             return key
         if value in ("True", "False"):
             return f"{key} = {value.lower()}"
+        if value[0] == "(":  # units=(input unit, output unit): a TOML array
+            return f"{key} = [{value[1:-1]}]"
         if value[0] in "'\"":
             return f"{key} = {json.dumps(ast.literal_eval(value), ensure_ascii=False)}"
         return f"{key} = {value}"
@@ -275,6 +278,8 @@ def _file_entry(d: object, keys: tuple[str, ...], what: str, path: tuple) -> dic
         out["skiprows"] = _wrap(check_int, path + ("skiprows",), d["skiprows"], "skiprows", low=0)
     if d.get("units_row") is not None:
         out["units_row"] = _wrap(check_bool, path + ("units_row",), d["units_row"], "units_row")
+    if d.get("units") is not None:  # absent: the canonical form is as before
+        out["units"] = list(_wrap(check_units, path + ("units",), d["units"], "units"))
     if "time_rtol" in keys and d.get("time_rtol") is not None:
         out["time_rtol"] = _wrap(check_real, path + ("time_rtol",), d["time_rtol"], "time_rtol", low=0, high=1,
                                  low_open=True, high_open=True)
@@ -314,13 +319,15 @@ class DataSpec:
         (the rig with two independent pump speeds: two inputs).
     ident, valid : mapping, optional
         CSV records ``{"path", "u", "y", "time" or "Ts"}`` and optionally ``input_names``,
-        ``time_rtol``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows``, ``units_row`` (see
+        ``time_rtol``, ``delimiter``, ``decimal``, ``encoding``, ``skiprows``, ``units_row``, ``units`` (see
         :func:`graybox.load_record_csv`; ``u`` a column name, or a list of them for several inputs;
+        ``units = ["rpm", "Pa"]`` the (input, output) units, which say which to show when a units row gives
+        the inputs different ones;
         ``input_names`` the names terms use for them, needed when the column names are not
         identifiers, e.g. ``"speed [rpm]"``); relative paths are resolved against the spec file's folder.
     static : mapping, optional
         CSV static points ``{"path", "u", "y", "repeats", "uncertainty"}`` and optionally ``input_names``,
-        ``delimiter``, ``decimal``, ``encoding``, ``skiprows``, ``units_row`` (see
+        ``delimiter``, ``decimal``, ``encoding``, ``skiprows``, ``units_row``, ``units`` (see
         :func:`graybox.load_static_csv`; ``repeats = "mean"`` averages repeated measurements at one
         level; ``uncertainty`` is δ, the static measurements' error in output units, which gives
         the band and the half-width of a ``{type = "band"}`` without ``b``: one number, or the name

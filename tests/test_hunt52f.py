@@ -1,0 +1,39 @@
+"""hunt52f: users' own files (CSV loaders, grid specs that read them)."""
+
+from __future__ import annotations
+
+import pytest
+
+import graybox as gb
+from graybox.experiments import DataSpec
+
+
+def _miso_files(tmp_path):
+    """A logger's two-input files with a units row whose inputs have different units (rpm and %)."""
+    rows = ["t;speed;valve;p", "s;rpm;%;Pa"]
+    rows += [f"{k * 0.1:.1f};{1000 + 100 * (k // 5 % 4)};{20 + 10 * (k // 7 % 3)};{0.5 * k}".replace(".", ",")
+             for k in range(40)]
+    for name in ("id.csv", "va.csv"):
+        (tmp_path / name).write_text("\n".join(rows) + "\n", encoding="utf-8")
+    (tmp_path / "st.csv").write_text("speed;valve;p\nrpm;%;Pa\n1000;20;6\n1500;80;11,5\n1200;50;8,5\n",
+                                     encoding="utf-8")
+
+
+def test_spec_file_tables_take_units_a_units_row_of_mixed_inputs_needs(tmp_path):
+    # the loader refuses inputs of different units in a units row unless units= says which to show; a spec's file
+    # table had no units key, so such files could not be read by a grid at all
+    _miso_files(tmp_path)
+    rec = dict(u=["speed", "valve"], y="p", time="t", units_row=True)
+    d = DataSpec("m", ident=dict(path="id.csv", **rec, units=["rpm", "Pa"]),
+                 valid=dict(path="va.csv", **rec, units=["rpm", "Pa"]),
+                 static=dict(path="st.csv", u=["speed", "valve"], y="p", units_row=True, units=["rpm", "Pa"]))
+    ds = d.load(tmp_path)
+    assert ds.ident.units == ("rpm", "Pa") and ds.valid.units == ("rpm", "Pa") and ds.static.units == ("rpm", "Pa")
+    assert d.to_dict()["ident"]["units"] == ["rpm", "Pa"]
+    # without it the refusal names the key a spec's table takes
+    bare = DataSpec("m", ident=dict(path="id.csv", **rec), valid=dict(path="va.csv", **rec),
+                    static=dict(path="st.csv", u=["speed", "valve"], y="p", units_row=True))
+    assert "units" not in bare.to_dict()["ident"]  # the canonical form of a spec without it is as before
+    with pytest.raises(gb.experiments.SpecError, match="units"):
+        DataSpec("m", ident=dict(path="id.csv", **rec, units="rpm"), valid=dict(path="va.csv", **rec),
+                 static=dict(path="st.csv", u=["speed", "valve"], y="p"))
