@@ -37,3 +37,25 @@ def test_spec_file_tables_take_units_a_units_row_of_mixed_inputs_needs(tmp_path)
     with pytest.raises(gb.experiments.SpecError, match="units"):
         DataSpec("m", ident=dict(path="id.csv", **rec, units="rpm"), valid=dict(path="va.csv", **rec),
                  static=dict(path="st.csv", u=["speed", "valve"], y="p"))
+
+
+def _noted(tmp_path, rows):
+    """A ';' file with a notes column whose quoted cells hold a line break (Alt+Enter in Excel)."""
+    text = "t;u;y;note\r\n" + "".join(f'{t};{u};{y};"checked\nby JS"\r\n' for t, u, y in rows)
+    p = tmp_path / "noted.csv"
+    p.write_bytes(text.encode("utf-8"))
+    return p
+
+
+def test_a_bad_cell_is_named_at_the_line_its_sample_starts_on(tmp_path):
+    # each sample spans two lines (2-3, 4-5, 6-7, 8-9 …): the 'x' of the fourth sample is on line 8, and the
+    # message named line 9, the line its record ends on (csv's line_num), where no 'x' is
+    rows = [(f"{k / 10:.1f}".replace(".", ","), "x" if k == 3 else str(k), str(2 * k)) for k in range(6)]
+    with pytest.raises(ValueError, match=r"line 8, column 'u': 'x' is not a number"):
+        gb.load_record_csv(_noted(tmp_path, rows), u="u", y="y", time="t")
+    rec = gb.load_record_csv(_noted(tmp_path, [(r[0], "1", r[2]) for r in rows]), u="u", y="y", time="t")
+    assert rec.y.tolist() == [0.0, 2.0, 4.0, 6.0, 8.0, 10.0] and rec.Ts == 0.1
+    # the time check names the samples' lines likewise: the uneven step is from line 6 to line 8
+    uneven = [("0", "1", "1"), ("0,1", "1", "1"), ("0,2", "1", "1"), ("0,35", "1", "1"), ("0,4", "1", "1")]
+    with pytest.raises(ValueError, match=r"from line 6 to line 8"):
+        gb.load_record_csv(_noted(tmp_path, uneven), u="u", y="y", time="t")

@@ -174,8 +174,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     need = max(index.values()) + 1
     values: dict[str, list[float]] = {role: [] for role in wanted}
     lines: list[int] = []
+    read = reader.line_num  # lines read so far: a quoted cell may hold line breaks, so a sample may span lines
     for row in reader:
-        line = reader.line_num + first - 1
+        line, read = read + first, reader.line_num  # the line the sample starts on, where its first cells are
         if not row or all(not c.strip() for c in row):
             continue  # blank line (e.g. a trailing newline): not a sample
         if len(row) < need:
