@@ -59,3 +59,13 @@ def test_a_bad_cell_is_named_at_the_line_its_sample_starts_on(tmp_path):
     uneven = [("0", "1", "1"), ("0,1", "1", "1"), ("0,2", "1", "1"), ("0,35", "1", "1"), ("0,4", "1", "1")]
     with pytest.raises(ValueError, match=r"from line 6 to line 8"):
         gb.load_record_csv(_noted(tmp_path, uneven), u="u", y="y", time="t")
+
+
+@pytest.mark.parametrize("cell, char", [("\u22121.5", r"U\+2212"), ("\u20131.5", r"U\+2013"), ("\uff0d1", r"U\+FF0D")])
+def test_a_number_with_a_typographic_minus_names_the_character(tmp_path, cell, char):
+    # '−1.5' with U+2212 MINUS SIGN (what word processors, web pages and some exports write) looks like a number, and
+    # the message said only "'−1.5' is not a number": the character that is not ASCII '-' is now named
+    p = tmp_path / "m.csv"
+    p.write_text(f"t,u,y\n0,1,1\n1,{cell},2\n2,3,3\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=rf"line 3, column 'u': .* is not a number; it holds .*{char}.*'-'"):
+        gb.load_record_csv(p, u="u", y="y", time="t")

@@ -28,6 +28,7 @@ import itertools
 import math
 import os
 import re
+import unicodedata
 from importlib import resources
 from pathlib import Path
 from typing import Callable, Sequence
@@ -440,6 +441,8 @@ _THOUSANDS_HINT = ("; it looks like a number with a thousands separator, which i
                    "without thousands separators")
 _DECIMAL_POINT = re.compile(r"^[+-]?\d*\.\d+(?:[eE][+-]?\d+)?$")
 _INTEGER = re.compile(r"^[+-]?\d+(?:[eE][+-]?\d+)?$")
+#: Dashes that word processors, web pages and some exports write for a minus sign, which float() does not read.
+_DASHES = frozenset("\u2010\u2011\u2012\u2013\u2014\u2015\u2212\ufe63\uff0d")
 
 
 def _name(d: str) -> str:
@@ -582,6 +585,10 @@ def _number(p: Path, line: int, col: str, cell: str, decimal: str, *, time: bool
     except ValueError:
         if _THOUSANDS.match(cell.strip()):  # float() reads no spreadsheet's separator, and none is guessed
             hint += _THOUSANDS_HINT
+        dash = next((ch for ch in cell if ch in _DASHES), None)
+        if dash is not None:  # '−1.5' looks like a number: the character that is not ASCII '-' is named
+            hint += (f"; it holds {dash!r} (U+{ord(dash):04X} {unicodedata.name(dash, 'DASH')}), not the ASCII "
+                     "minus '-' that numbers are read with: replace it with '-'")
         if time and _CLOCK.search(cell):
             hint += ("; time stamps are seconds (numbers), not dates or clock times: leave time= out and give the "
                      "sampling period Ts= (seconds), or convert the column to seconds first")
