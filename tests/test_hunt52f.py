@@ -69,3 +69,18 @@ def test_a_number_with_a_typographic_minus_names_the_character(tmp_path, cell, c
     p.write_text(f"t,u,y\n0,1,1\n1,{cell},2\n2,3,3\n", encoding="utf-8")
     with pytest.raises(ValueError, match=rf"line 3, column 'u': .* is not a number; it holds .*{char}.*'-'"):
         gb.load_record_csv(p, u="u", y="y", time="t")
+
+
+def test_a_mapping_is_no_list_of_input_columns_nor_of_input_names(tmp_path):
+    # u={"a": "rpm", "b": "%"} (columns with their units, say) was read as its keys, the units dropped without a
+    # word; likewise input_names={"n1": ..., "n2": ...}
+    p = tmp_path / "m.csv"
+    p.write_text("t,a,b,y\n0,1,1,1\n1,2,2,2\n2,3,3,3\n", encoding="utf-8")
+    for load, kw in ((gb.load_record_csv, dict(time="t")), (gb.load_static_csv, {})):
+        with pytest.raises(TypeError, match=r"m\.csv: u must .* got a dict"):
+            load(p, u={"a": "rpm", "b": "%"}, y="y", **kw)
+        with pytest.raises(TypeError, match="input_names must be a sequence of names"):
+            load(p, u=["a", "b"], y="y", input_names={"n1": 0, "n2": 1}, **kw)
+    with pytest.raises(TypeError, match="input_names must be a sequence of names"):
+        gb.Record([[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]], [1.0, 2.0, 3.0], Ts=1.0, input_names={"n1": 0, "n2": 1})
+    assert gb.load_record_csv(p, u=("b", "a"), y="y", time="t").input_names == ("b", "a")

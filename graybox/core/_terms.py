@@ -150,7 +150,7 @@ def default_input_names(m: int) -> tuple[str, ...]:
 
 def check_input_names(names: object, m: int | None = None, what: str = "input_names") -> tuple[str, ...]:
     """Validated input names: identifiers, not y/e/k, none given twice (and ``m`` of them when given)."""
-    if isinstance(names, str) or not hasattr(names, "__iter__"):
+    if isinstance(names, (str, Mapping)) or not hasattr(names, "__iter__"):  # a mapping's keys: its values dropped
         raise TypeError(f"{what} must be a sequence of names (strings), got {names!r}")
     check_ordered(names, what, "names (one per input column, in order)")
     out = tuple(names)  # type: ignore[arg-type]

@@ -31,7 +31,7 @@ import re
 import unicodedata
 from importlib import resources
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -840,6 +840,9 @@ def _input_columns(p: Path, u: object, y: object, input_names: object) -> tuple[
     if not isinstance(y, str):
         raise TypeError(f"{p}: y must name the output column (a str), got {y!r}")
     check_ordered(u, f"{p}: u", "input column names (the inputs' order)")  # a set's changes from run to run
+    if isinstance(u, Mapping):  # its keys would be read, its values (units, say) dropped without a word
+        raise TypeError(f"{p}: u must name an input column (a str) or be a list of input column names, got a "
+                        f"{type(u).__name__} ({u!r}); units go in units=(input unit, output unit)")
     if isinstance(u, str):
         ucols = [u]
     elif hasattr(u, "__iter__") and hasattr(u, "__len__") and all(isinstance(c, str) for c in u):  # type: ignore[attr-defined]
