@@ -84,3 +84,19 @@ def test_a_mapping_is_no_list_of_input_columns_nor_of_input_names(tmp_path):
     with pytest.raises(TypeError, match="input_names must be a sequence of names"):
         gb.Record([[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]], [1.0, 2.0, 3.0], Ts=1.0, input_names={"n1": 0, "n2": 1})
     assert gb.load_record_csv(p, u=("b", "a"), y="y", time="t").input_names == ("b", "a")
+
+
+@pytest.mark.parametrize("repeats", ["error", "mean"])
+def test_a_static_files_uncertainty_of_the_wrong_length_names_the_file(tmp_path, repeats):
+    # one δ per line of the file, two given for three lines: the message named only the points ('rig A: uncertainty
+    # must be ...'), not the file whose lines they were to match
+    p = tmp_path / "steady.csv"
+    p.write_text("u,y\n1,2\n2,3\n3,4\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"steady\.csv: .*uncertainty"):
+        gb.load_static_csv(p, u="u", y="y", name="rig A", uncertainty=[0.1, 0.2], repeats=repeats)
+    with pytest.raises(ValueError, match=r"steady\.csv: .*uncertainty"):
+        gb.load_static_csv(p, u="u", y="y", uncertainty=[0.1, 0.2, float("nan")], repeats=repeats)
+    with pytest.raises(TypeError, match=r"steady\.csv: .*uncertainty"):
+        gb.load_static_csv(p, u="u", y="y", uncertainty=[0.1, "x", 0.2], repeats=repeats)
+    pts = gb.load_static_csv(p, u="u", y="y", uncertainty=[0.1, 0.2, 0.3], repeats=repeats)
+    assert pts.uncertainty.tolist() == [0.1, 0.2, 0.3]

@@ -1030,8 +1030,8 @@ def load_static_csv(
             raise ValueError(f"{p}: line {cols['_lines'][i]}, column {wanted['uncertainty']!r}: δ = "
                              f"{uncertainty[i]:g}, but an uncertainty must be > 0 (output units)")
     if repeats == "mean":
-        return StaticPoints.from_repeats(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty,
-                                         units=units)
+        return _in_file(p, lambda: StaticPoints.from_repeats(ub, cols["y"], name=label, input_names=names,
+                                                             uncertainty=uncertainty, units=units))
     seen: dict[object, int] = {}
     for v, line in zip(ub.tolist() if ub.ndim == 1 else map(tuple, ub.tolist()), cols["_lines"].tolist()):
         if v in seen:
@@ -1046,7 +1046,17 @@ def load_static_csv(
             raise ValueError(f"{p}: {where}: lines {seen[v]} and {line} have the same input level {level}; average "
                              "repeated measurements into one point per level (repeats=\"mean\" does it)")
         seen[v] = line
-    return StaticPoints(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty, units=units)
+    return _in_file(p, lambda: StaticPoints(ub, cols["y"], name=label, input_names=names, uncertainty=uncertainty,
+                                            units=units))
+
+
+def _in_file(p: Path, make: Callable[[], StaticPoints]) -> StaticPoints:
+    """``make()``, whose ``ValueError`` or ``TypeError`` (an ``uncertainty`` of one δ per line, but not as many as the
+    file's lines, say) names the file: StaticPoints names only the points (``name=``, else the file's stem)."""
+    try:
+        return make()
+    except (TypeError, ValueError) as exc:
+        raise (TypeError if isinstance(exc, TypeError) else ValueError)(f"{p}: {exc}") from None
 
 
 # ---------------------------------------------------------------------------
