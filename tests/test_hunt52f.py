@@ -100,3 +100,19 @@ def test_a_static_files_uncertainty_of_the_wrong_length_names_the_file(tmp_path,
         gb.load_static_csv(p, u="u", y="y", uncertainty=[0.1, "x", 0.2], repeats=repeats)
     pts = gb.load_static_csv(p, u="u", y="y", uncertainty=[0.1, 0.2, 0.3], repeats=repeats)
     assert pts.uncertainty.tolist() == [0.1, 0.2, 0.3]
+
+
+def test_a_spec_not_in_utf8_is_named_by_its_line_or_its_encoding(tmp_path):
+    # a spec saved by Windows Notepad as "Unicode" (UTF-16) or "ANSI" (cp1252: 'Wärme' in a name) read
+    # "cannot read the spec: it is not UTF-8 text (byte 0)": an offset into the file, which no editor shows
+    from graybox.experiments import Grid, SpecError
+
+    text = 'name = "heater"\n\n[[data]]\nname = "Wärme"\nbundled = "pumping"\n'
+    ansi = tmp_path / "ansi.toml"
+    ansi.write_bytes(text.encode("cp1252"))
+    with pytest.raises(SpecError, match=r"ansi\.toml, line 4: .*not UTF-8 text"):
+        Grid.from_toml(ansi)
+    wide = tmp_path / "wide.toml"
+    wide.write_bytes(text.encode("utf-16"))
+    with pytest.raises(SpecError, match=r"wide\.toml: .*UTF-16 text.*save it as UTF-8"):
+        Grid.from_toml(wide)

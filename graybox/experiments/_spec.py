@@ -27,6 +27,7 @@ from ..core._terms import Term, default_input_names, parse_term
 from ..datasets._loaders import BUCK_STATIC_UNCERTAINTY, PUMPING_STATIC_UNCERTAINTY
 from ..core._validation import (check_bool, check_choice, check_count, check_fields, check_int, check_lambdas,
                                 check_path, check_real, check_sequence, check_str)
+from ..core._files import bom_encoding
 from ..core._records import check_units
 from ..core._reprs import short_repr
 from ..estimation._extended_least_squares import DEFAULT_NE
@@ -1383,10 +1384,17 @@ class Grid:
         try:
             text = raw.decode("utf-8-sig")  # "-sig": a byte-order mark an editor added is not TOML
         except UnicodeDecodeError as exc:
-            what = ("it is a grid store (SQLite), not a spec: graybox grid run SPEC.toml --store STORE"
-                    if raw.startswith(b"SQLite format 3\x00") else
-                    f"it is not UTF-8 text (byte {exc.start}); a spec is a TOML text file (graybox grid init prints one)")
-            raise SpecError(f"cannot read the spec: {what}", source=str(p)) from None
+            line, marked = None, bom_encoding(raw)
+            if raw.startswith(b"SQLite format 3\x00"):
+                what = "it is a grid store (SQLite), not a spec: graybox grid run SPEC.toml --store STORE"
+            elif marked is not None:  # Windows Notepad's "Unicode": every line is unreadable, none is to blame
+                what = (f"it is {marked.upper()} text (its byte-order mark says so), and TOML is UTF-8: save it as "
+                        "UTF-8")
+            else:  # the line of the first bad byte (an offset into the file found no line in an editor)
+                line = raw.count(b"\n", 0, exc.start) + 1
+                what = (f"it is not UTF-8 text (byte {exc.start}); a spec is a TOML text file in UTF-8 (graybox grid "
+                        "init prints one): save it as UTF-8")
+            raise SpecError(f"cannot read the spec: {what}", source=str(p), line=line) from None
         return cls.from_toml_text(text, source=str(p), base_dir=str(p.resolve().parent))
 
     @classmethod
