@@ -116,3 +116,17 @@ def test_a_spec_not_in_utf8_is_named_by_its_line_or_its_encoding(tmp_path):
     wide.write_bytes(text.encode("utf-16"))
     with pytest.raises(SpecError, match=r"wide\.toml: .*UTF-16 text.*save it as UTF-8"):
         Grid.from_toml(wide)
+
+
+def test_a_missing_column_that_differs_by_a_lookalike_character_names_it(tmp_path):
+    # 'Druck μbar' (GREEK SMALL LETTER MU, typed) against the file's 'Druck µbar' (MICRO SIGN, what cp1252 and Excel
+    # write) read "no column 'Druck μbar' ... Did you mean 'Druck µbar'?": two names that print alike
+    p = tmp_path / "mu.csv"
+    p.write_text("t;Druck \u00b5bar;T \u00baC\n0;1;1\n1;2;2\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"Did you mean 'Druck \u00b5bar'\? \(the file's '\u00b5' is U\+00B5 MICRO SIGN, "
+                                         r"the name asked for has '\u03bc', U\+03BC GREEK SMALL LETTER MU"):
+        gb.load_record_csv(p, u="Druck \u03bcbar", y="T \u00baC", Ts=1.0)
+    with pytest.raises(ValueError, match=r"U\+00BA MASCULINE ORDINAL INDICATOR.*U\+00B0 DEGREE SIGN"):
+        gb.load_static_csv(p, u="Druck \u00b5bar", y="T \u00b0C")
+    with pytest.raises(ValueError, match=r"Did you mean 'T \u00baC'\? The columns"):  # an ASCII typo: no such note
+        gb.load_static_csv(p, u="Druck \u00b5bar", y="T \u00baF")

@@ -671,12 +671,25 @@ def _first_row_width(head: str, delimiter: str) -> int | None:
     return next((len(r) for r in rows if r and any(c.strip() for c in r)), None)
 
 
+def _lookalike(asked: str, found: str) -> str:
+    """Where ``found`` differs from ``asked`` only in characters that are not ASCII (``'µ'`` MICRO SIGN for ``'μ'`` GREEK
+    SMALL LETTER MU, ``'º'`` for ``'°'``), which print alike: the first such pair named by code point, else ''."""
+    if len(asked) != len(found):
+        return ""
+    pairs = [(a, f) for a, f in zip(asked, found) if a != f]
+    if not pairs or any(a.isascii() and f.isascii() for a, f in pairs):
+        return ""
+    a, f = pairs[0]
+    return (f" (the file's {f!r} is U+{ord(f):04X} {unicodedata.name(f, '?')}, the name asked for has {a!r}, "
+            f"U+{ord(a):04X} {unicodedata.name(a, '?')}: they print alike)")
+
+
 def _missing_column_message(path: Path, role: str, col: str, header: Sequence[str], delimiter: str = ",") -> str:
     close = difflib.get_close_matches(col, header, n=3, cutoff=0.5)
     # the same name but for case or a unit in brackets ('u' for 'u [%]', 'p' for 'P (kW)'): difflib's ratio
     # misses a short name beside its unit
     close += [h for h in header if _bare(h) == _bare(col) and h not in close]
-    hint = f" Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+    hint = f" Did you mean {' or '.join(repr(c) for c in close)}?{_lookalike(col, close[0])}" if close else ""
     if header and header[0].startswith("#") and (header[0].lstrip("#").strip() == col
                                                  or (len(header) == 1 and col in header[0].lstrip("#").split())):
         # np.savetxt(..., header="t,u,y") writes "# t,u,y": its comments="# " marks the header line as a comment
