@@ -130,3 +130,15 @@ def test_a_missing_column_that_differs_by_a_lookalike_character_names_it(tmp_pat
         gb.load_static_csv(p, u="Druck \u00b5bar", y="T \u00b0C")
     with pytest.raises(ValueError, match=r"Did you mean 'T \u00baC'\? The columns"):  # an ASCII typo: no such note
         gb.load_static_csv(p, u="Druck \u00b5bar", y="T \u00baF")
+
+
+def test_a_mac_csv_not_in_utf8_is_sent_to_mac_roman_not_cp1252(tmp_path):
+    # Excel's "CSV (Macintosh)" ends its lines in CR alone and writes Mac Roman: its '°' (0xa1) was refused with the
+    # hint encoding='cp1252', which reads 0xa1 as '¡', so the units row gave the record the unit '¡C' without a word
+    p = tmp_path / "mac.csv"
+    p.write_bytes("t;P;Temp\rs;W;\u00b0C\r0;1,5;2\r0,5;2,5;3\r1;3,5;4\r".encode("mac_roman"))
+    with pytest.raises(ValueError, match=r"mac\.csv: line 2 is not UTF-8 .*encoding='mac_roman'") as info:
+        gb.load_record_csv(p, u="P", y="Temp", time="t", units_row=True)
+    assert "cp1252" not in str(info.value)
+    rec = gb.load_record_csv(p, u="P", y="Temp", time="t", units_row=True, encoding="mac_roman")
+    assert rec.units == ("W", "\u00b0C") and rec.y.tolist() == [2.0, 3.0, 4.0] and rec.Ts == 0.5

@@ -90,6 +90,15 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     if b"\r" in raw and b"\n" not in raw:
         # lines ended by CR alone (Excel's "CSV (Macintosh)", old Mac exports): the lines skipped, the units row
         # and the header block are found by line feeds, so the file is read with them; its lines keep their numbers
+        if own:  # read as UTF-8: Excel's "CSV (Macintosh)" is Mac Roman, which cp1252 (the usual hint) reads as garbage
+            try:
+                raw.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                line = raw.count(b"\r", 0, exc.start) + 1
+                raise ValueError(f"{p}: line {line} is not UTF-8 text (byte {raw[exc.start]:#04x}); its lines end in CR "
+                                 "alone, as Excel's \"CSV (Macintosh)\" writes them, in Mac Roman: pass "
+                                 "encoding='mac_roman' (or the encoding it was saved in), or save the file as UTF-8 "
+                                 "CSV") from None
         raw, own = raw.replace(b"\r", b"\n"), False
     first = skiprows + 1  # the file's line number of the header
     skipped_from = start
