@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import graybox as gb
 from graybox.experiments import DataSpec
@@ -142,3 +144,25 @@ def test_a_mac_csv_not_in_utf8_is_sent_to_mac_roman_not_cp1252(tmp_path):
     assert "cp1252" not in str(info.value)
     rec = gb.load_record_csv(p, u="P", y="Temp", time="t", units_row=True, encoding="mac_roman")
     assert rec.units == ("W", "\u00b0C") and rec.y.tolist() == [2.0, 3.0, 4.0] and rec.Ts == 0.5
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(breaks=st.lists(st.integers(0, 2), min_size=3, max_size=8), data=st.data(), eol=st.sampled_from(["\n", "\r\n"]),
+       skip=st.integers(0, 2), units=st.booleans(), delim=st.sampled_from([",", ";", "\t"]))
+def test_the_line_named_is_the_one_the_bad_sample_starts_on(tmp_path, breaks, data, eol, skip, units, delim):
+    # samples whose notes hold 0-2 line breaks, a header block skipped, a units row or not: the bad cell's line is
+    # the file's line where its sample starts
+    bad = data.draw(st.integers(0, len(breaks) - 1))
+    lines = [f"logger {i}" for i in range(skip)] + [delim.join(["t", "note", "u", "y"])]
+    if units:
+        lines.append(delim.join(["s", "", "rpm", "Pa"]))
+    line, expected = len(lines) + 1, None
+    for k, b in enumerate(breaks):
+        if k == bad:
+            expected = line
+        lines.append(delim.join([str(k), '"' + "\n".join(["n"] * (b + 1)) + '"', "x" if k == bad else str(k), str(k)]))
+        line += 1 + b
+    p = tmp_path / "f.csv"
+    p.write_bytes((eol.join(lines) + eol).encode())
+    with pytest.raises(ValueError, match=rf"f\.csv: line {expected}, column 'u': 'x' is not a number"):
+        gb.load_record_csv(p, u="u", y="y", time="t", skiprows=skip, units_row=units)
