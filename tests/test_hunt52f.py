@@ -166,3 +166,54 @@ def test_the_line_named_is_the_one_the_bad_sample_starts_on(tmp_path, breaks, da
     p.write_bytes((eol.join(lines) + eol).encode())
     with pytest.raises(ValueError, match=rf"f\.csv: line {expected}, column 'u': 'x' is not a number"):
         gb.load_record_csv(p, u="u", y="y", time="t", skiprows=skip, units_row=units)
+
+
+@pytest.mark.parametrize("kw", [dict(u="", y="y", Ts=1.0), dict(u="u", y="", Ts=1.0), dict(u="u", y="y", time=""),
+                                dict(u="u", y="y", time="  "), dict(u=["u", " "], y="y", Ts=1.0, input_names=["a", "b"])])
+def test_an_empty_column_name_is_refused_not_read_as_the_unnamed_column(tmp_path, kw):
+    # pandas' to_csv writes its index as a first column with no name: u="" (or y, time) read it without a word,
+    # time="" taking the index 0, 1, 2 ... for stamps (Ts = 1 s); a spec refuses an empty name already
+    p = tmp_path / "pandas.csv"
+    p.write_text(",u,y\n0,1.5,2\n1,3.5,4\n2,5.5,6\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"pandas\.csv: .*names no column.*empty"):
+        gb.load_record_csv(p, **kw)
+    rec = gb.load_record_csv(p, u="u", y="y", Ts=0.5)
+    assert rec.u.tolist() == [1.5, 3.5, 5.5] and rec.Ts == 0.5
+
+
+@pytest.mark.parametrize("kw", [dict(u="", y="y"), dict(u="u", y=""), dict(u="u", y="y", uncertainty="")])
+def test_an_empty_column_name_is_refused_by_the_static_loader(tmp_path, kw):
+    p = tmp_path / "pandas.csv"
+    p.write_text(",u,y\n1,1.5,2\n2,3.5,4\n3,5.5,6\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"pandas\.csv: .*names no column.*empty"):
+        gb.load_static_csv(p, **kw)
+    assert gb.load_static_csv(p, u="u", y="y").ybar.tolist() == [2.0, 4.0, 6.0]
+
+
+@pytest.mark.parametrize("col, unit", [("Zeit [10ms]", "10ms"), ("t (0.1 s)", "0.1 s"), ("time [100 \u00b5s]", "100 \u00b5s")])
+def test_a_time_column_in_ticks_of_a_unit_is_not_read_as_seconds(tmp_path, col, unit):
+    # a PLC's 'Zeit [10ms]' counts ticks of 10 ms: its stamps 0, 1, 2 … were read as seconds, Ts = 1 s for 0.01 s
+    # without a word ('t [ms]' and 't_ms' were refused, a tick with a number was not)
+    p = tmp_path / "plc.csv"
+    p.write_text(f"{col};u;y\n" + "".join(f"{k};{k % 3};{k}\n" for k in range(6)), encoding="utf-8")
+    with pytest.raises(ValueError, match=rf"names its unit '{unit}', but time stamps are read as seconds"):
+        gb.load_record_csv(p, u="u", y="y", time=col)
+    for ok in ("t [1 s]", "t [1.0 s]", "time (s)", "Time [sec]"):
+        q = tmp_path / "s.csv"
+        q.write_text(f"{ok};u;y\n" + "".join(f"{k / 2};{k % 3};{k}\n" for k in range(6)), encoding="utf-8")
+        assert gb.load_record_csv(q, u="u", y="y", time=ok).Ts == 0.5
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "UTF-16BE", "utf_32_le"])
+def test_a_utf16_encoding_given_for_a_file_that_is_not_names_the_encoding(tmp_path, encoding):
+    # encoding='utf-16' (Excel's "Unicode text", say) for a file saved as UTF-8 decoded its bytes in pairs into CJK
+    # characters, and the error blamed the delimiter: "no column 'u' ... The header was read as one column, split at
+    # ',': pass delimiter= ... The columns are ['ⱴⱵ...']"
+    p = tmp_path / "run.csv"
+    p.write_text("t,u,y\n0,1,2\n1,3,4\n2,5,6\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"run\.csv: .*encoding=.* no NUL bytes.*not UTF-(16|32)") as info:
+        gb.load_record_csv(p, u="u", y="y", time="t", encoding=encoding)
+    assert "delimiter" not in str(info.value)
+    q = tmp_path / "wide.csv"
+    q.write_bytes("t,u,y\n0,1,2\n1,3,4\n2,5,6\n".encode(encoding.replace("_", "-").lower()))
+    assert gb.load_record_csv(q, u="u", y="y", time="t", encoding=encoding).u.tolist() == [1.0, 3.0, 5.0]

@@ -82,6 +82,10 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     """
     p = Path(path)
     names = list(wanted.values())
+    blank = next((role for role, n in wanted.items() if not n.strip()), None)
+    if blank is not None:  # it would match an unnamed column: pandas' index (to_csv's default), a trailing delimiter's
+        raise ValueError(f"{p}: {blank} names no column, got {wanted[blank]!r} (an empty name); give the column's name "
+                         "as the header line writes it")
     dup = {n for n in names if names.count(n) > 1}
     if dup:
         roles = [r for r, n in wanted.items() if n in dup]
@@ -393,6 +397,12 @@ def _utf8(p: Path, raw: bytes, encoding: str | None) -> tuple[bytes, int, bool]:
             said = f"{marked.upper()} ({_ORDER_NAMES[order]})" if order else marked.upper()
             raise ValueError(f"{p}: the file starts with a {said} byte-order mark, but encoding={encoding!r} was "
                              f"given; omit encoding= (the mark decides) or pass encoding={marked!r}")
+        if enc.startswith(("utf-16", "utf-32")) and raw and b"\x00" not in raw[:4096]:
+            # its bytes read in pairs (fours) as CJK text, and the header's one garbled column blamed the delimiter
+            wide = enc[:6].upper()
+            raise ValueError(f"{p}: encoding={encoding!r} was given, but the file holds no NUL bytes, which {wide} "
+                             f"text of digits and Latin letters has in every character: it is not {wide} (UTF-8, "
+                             "or cp1252?); omit encoding= or pass the encoding it was saved in")
     else:
         enc = bom_encoding(raw) or "utf-8"
     if enc == "utf-8":
@@ -746,7 +756,8 @@ def load_record_csv(
     time : str, optional
         Name of a time-stamp column (seconds, as numbers: dates and clock times such as
         ``2026-11-20 09:14:03.5`` are refused, and so is a column whose name states another unit,
-        e.g. ``t [ms]``, ``time (min)``, ``t_ms``; leave ``time`` out and give ``Ts``). Stamps must
+        e.g. ``t [ms]``, ``time (min)``, ``t_ms``, or ticks of one, ``Zeit [10ms]``; leave ``time`` out and give
+        ``Ts``). Stamps must
         increase strictly and evenly: every
         step within ``time_rtol`` × (median step) of the median step (and of what float64 resolves of
         stamps far from zero, e.g. Unix time). The sampling period is the mean step, rounded to 12
@@ -888,13 +899,16 @@ def _input_columns(p: Path, u: object, y: object, input_names: object) -> tuple[
 
 #: A time column's name that states a unit other than seconds: "t [ms]", "time (min)", "t_ms", "Zeit/h".
 _TIME_UNIT = re.compile(r"(?:[\[(]\s*|[_/ -])(ms|msec|millis(?:econds?)?|us|µs|μs|usec|micros(?:econds?)?|ns|"
-                        r"min|mins|minutes?|h|hr|hrs|hours?|d|days?)\s*[\])]?\s*$", re.IGNORECASE)
+                        r"min|mins|minutes?|h|hr|hrs|hours?|d|days?)\s*[\])]?\s*$"
+                        # a tick of a PLC or logger: "Zeit [10ms]", "t (0.1 s)", "time [100 µs]" (but "[1 s]" is seconds)
+                        r"|[\[(]\s*((?!1(?:[.,]0*)?\s*s)(?:\d+(?:[.,]\d+)?|[.,]\d+)\s*(?:s|sec|secs|seconds?|ms|msec|us|µs|μs|ns|min))"
+                        r"\s*[\])]\s*$", re.IGNORECASE)
 
 
 def _check_time(p: Path, col: str, t: np.ndarray, lines: np.ndarray, Ts: float | None, rtol: float) -> float:
     unit = _TIME_UNIT.search(col)
     if unit:  # read as seconds they would give a sampling period off by 1000 or 60 without a word
-        raise ValueError(f"{p}: column {col!r} names its unit {unit.group(1)!r}, but time stamps are read as seconds: "
+        raise ValueError(f"{p}: column {col!r} names its unit {unit.group(1) or unit.group(2)!r}, but time stamps are read as seconds: "
                          "convert the column to seconds, or leave time= out and give the sampling period Ts= in "
                          "seconds")
     if t.size < 2:
