@@ -217,3 +217,21 @@ def test_a_utf16_encoding_given_for_a_file_that_is_not_names_the_encoding(tmp_pa
     q = tmp_path / "wide.csv"
     q.write_bytes("t,u,y\n0,1,2\n1,3,4\n2,5,6\n".encode(encoding.replace("_", "-").lower()))
     assert gb.load_record_csv(q, u="u", y="y", time="t", encoding=encoding).u.tolist() == [1.0, 3.0, 5.0]
+
+
+def test_a_quote_no_quote_closes_is_refused_not_read_as_the_rest_of_the_file(tmp_path):
+    # an operator's note opening a quote it never closes ('"pump off') made the csv reader take every later line into
+    # that one cell: a record of 10 samples was read as 4, without a word
+    rows = ["t,u,y,note"] + [f"{k},{k % 3},{2 * k}," + ('"pump off' if k == 3 else "ok") for k in range(10)]
+    p = tmp_path / "notes.csv"
+    p.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"notes\.csv: line 5, column 'note': a quote .* no quote closes.*"
+                                         r"lines 5 to 11, the rest"):
+        gb.load_record_csv(p, u="u", y="y", time="t")
+    with pytest.raises(ValueError, match=r"notes\.csv: line 5, column 'note': a quote"):
+        gb.load_static_csv(p, u="t", y="y")
+    # a note spanning lines in a closed quote, and a quote inside a note, are read as before
+    rows[4] = '3,0,6,"pump off\nfor a minute"'
+    rows[6] = '5,2,10,12" pipe'
+    p.write_text("\n".join(rows) + "\n\n", encoding="utf-8")
+    assert gb.load_record_csv(p, u="u", y="y", time="t").y.tolist() == [2.0 * k for k in range(10)]

@@ -189,6 +189,7 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     values: dict[str, list[float]] = {role: [] for role in wanted}
     lines: list[int] = []
     read = reader.line_num  # lines read so far: a quoted cell may hold line breaks, so a sample may span lines
+    last = 0  # the text's lines before the last sample
     for row in reader:
         line, read = read + first, reader.line_num  # the line the sample starts on, where its first cells are
         if not row or all(not c.strip() for c in row):
@@ -208,6 +209,9 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         for role, i in index.items():
             values[role].append(_number(p, line, wanted[role], row[i], dec, time=role == "time"))
         lines.append(line)
+        last = line - first
+    if lines and read - last > 1:
+        _refuse_open_quote(p, text(), last, lines[-1], read + first - 1, header, delim)
     if not lines:
         after = "the header" if units is None else "the header's units row"
         raise ValueError(f"{p}: line {first + 1 + (units is not None)}: no data rows after {after}; expected one sample "
@@ -215,6 +219,25 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
     out = {role: np.array(v) for role, v in values.items()}
     out["_lines"] = np.array(lines)
     return out if units is None else out | {"_units": units}
+
+
+def _refuse_open_quote(p: Path, text: str, last: int, line: int, end: int, header: Sequence[str], delim: str) -> None:
+    """A ``ValueError`` when the last sample (file line ``line``, the text's line ``last`` on) holds a quote that no
+    quote closes: the csv reader takes every later line into that cell (a note's stray '"'), and the samples
+    there would be lost without a word."""
+    tail = "".join(itertools.islice(io.StringIO(text, newline=""), last, None))
+    try:
+        for _ in csv.reader(io.StringIO(tail, newline=""), delimiter=delim, strict=True):
+            pass
+    except csv.Error as exc:
+        if "unexpected end of data" not in str(exc):
+            return  # another irregularity, which the lenient reader read as before
+        row = next(csv.reader(io.StringIO(tail, newline=""), delimiter=delim), [])
+        i = next((k for k, c in enumerate(row) if "\n" in c or "\r" in c), len(row) - 1)
+        col = f", column {header[i]!r}" if i < len(header) else ""
+        raise ValueError(f"{p}: line {line}{col}: a quote (\") opens a field that no quote closes, so lines {line} to "
+                         f"{end}, the rest of the file, would be read as that one cell and their samples lost; close "
+                         "the quote or delete it") from None
 
 
 def _numeric(cell: str, decimal: str) -> bool:
