@@ -169,7 +169,8 @@ def test_the_line_named_is_the_one_the_bad_sample_starts_on(tmp_path, breaks, da
 
 
 @pytest.mark.parametrize("kw", [dict(u="", y="y", Ts=1.0), dict(u="u", y="", Ts=1.0), dict(u="u", y="y", time=""),
-                                dict(u="u", y="y", time="  "), dict(u=["u", " "], y="y", Ts=1.0, input_names=["a", "b"])])
+                                dict(u="u", y="y", time="  "),
+                                dict(u=["u", " "], y="y", Ts=1.0, input_names=["a", "b"])])
 def test_an_empty_column_name_is_refused_not_read_as_the_unnamed_column(tmp_path, kw):
     # pandas' to_csv writes its index as a first column with no name: u="" (or y, time) read it without a word,
     # time="" taking the index 0, 1, 2 ... for stamps (Ts = 1 s); a spec refuses an empty name already
