@@ -236,3 +236,17 @@ def test_a_quote_no_quote_closes_is_refused_not_read_as_the_rest_of_the_file(tmp
     rows[6] = '5,2,10,12" pipe'
     p.write_text("\n".join(rows) + "\n\n", encoding="utf-8")
     assert gb.load_record_csv(p, u="u", y="y", time="t").y.tolist() == [2.0 * k for k in range(10)]
+
+
+def test_a_quote_closed_lines_later_is_refused_not_read_as_one_sample(tmp_path):
+    # a note's stray '"' opened a field that a '"' three lines on closed ('12" pipe'): with Ts given (no time column
+    # to show the gap) a record of 10 samples was read as 7, lines 6 to 8 taken into the note without a word
+    rows = ["u,y,note"] + [f"{k % 3},{2 * k}," + ('"pump off' if k == 3 else '12" pipe' if k == 6 else "ok")
+                           for k in range(10)]
+    p = tmp_path / "notes.csv"
+    p.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"notes\.csv: line 5, column 'note': a quote .* closes only on line 8, so "
+                                         r"lines 6 to 8, which read as samples \('1,8,ok'\)"):
+        gb.load_record_csv(p, u="u", y="y", Ts=0.1)
+    with pytest.raises(ValueError, match=r"notes\.csv: line 5, column 'note': a quote"):
+        gb.load_static_csv(p, u="y", y="u")

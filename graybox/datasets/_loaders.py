@@ -194,6 +194,8 @@ def _read_columns(path: str | os.PathLike, wanted: dict[str, str], *, delimiter:
         line, read = read + first, reader.line_num  # the line the sample starts on, where its first cells are
         if not row or all(not c.strip() for c in row):
             continue  # blank line (e.g. a trailing newline): not a sample
+        if read - (line - first) > 1:  # a quoted cell spans lines: it may hold samples a quote left open took in
+            _refuse_swallowed(p, text(), row, line - first, line, read + first - 1, header, index, delim, dec)
         if len(row) < need:
             raise ValueError(f"{p}: line {line} has {len(row)} field(s), but column "
                              f"{header[need - 1]!r} is field {need}{_other_delimiter_hint(row, delim)}")
@@ -238,6 +240,24 @@ def _refuse_open_quote(p: Path, text: str, last: int, line: int, end: int, heade
         raise ValueError(f"{p}: line {line}{col}: a quote (\") opens a field that no quote closes, so lines {line} to "
                          f"{end}, the rest of the file, would be read as that one cell and their samples lost; close "
                          "the quote or delete it") from None
+
+
+def _refuse_swallowed(p: Path, text: str, row: Sequence[str], start: int, line: int, end: int, header: Sequence[str],
+                      index: dict[str, int], delim: str, decimal: str) -> None:
+    """A ``ValueError`` when a quoted cell of the sample on file lines ``line`` to ``end`` (the text's line ``start``
+    on) holds lines that read as samples: a quote left open (a note's stray '"') took them in, until a quote
+    further on (or the file's end) closed it, and their samples would be lost without a word."""
+    need = max(index.values()) + 1
+    for i, cell in enumerate(row):
+        for piece in cell.splitlines()[1:]:
+            cells = _split(piece, delim)
+            if len(cells) >= need and all(_numeric(cells[j], decimal) for j in index.values()):
+                _refuse_open_quote(p, text, start, line, end, header, delim)
+                col = f", column {header[i]!r}" if i < len(header) else ""
+                raise ValueError(f"{p}: line {line}{col}: a quote (\") opens a field that closes only on line {end}, "
+                                 f"so lines {line + 1} to {end}, which read as samples ({piece.strip()!r}), would be "
+                                 "read as that one cell and their samples lost; close the quote where the cell ends "
+                                 "or delete it")
 
 
 def _numeric(cell: str, decimal: str) -> bool:
