@@ -250,3 +250,10 @@ def test_a_quote_closed_lines_later_is_refused_not_read_as_one_sample(tmp_path):
         gb.load_record_csv(p, u="u", y="y", Ts=0.1)
     with pytest.raises(ValueError, match=r"notes\.csv: line 5, column 'note': a quote"):
         gb.load_static_csv(p, u="y", y="u")
+
+
+def test_a_note_spanning_lines_of_numbers_is_still_read(tmp_path):
+    # a closed note whose second line holds numbers with commas ('3,5\n4,2') is no swallowed sample of a 4-column file
+    p = tmp_path / "notes.csv"
+    p.write_text('u,y,z,note\n1,2,0,"set to\n4,2"\n3,4,0,ok\n5,6,0,"a\n1,2,3"\n', encoding="utf-8")
+    assert gb.load_record_csv(p, u="u", y="y", Ts=1.0).y.tolist() == [2.0, 4.0, 6.0]

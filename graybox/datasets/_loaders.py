@@ -247,11 +247,11 @@ def _refuse_swallowed(p: Path, text: str, row: Sequence[str], start: int, line: 
     """A ``ValueError`` when a quoted cell of the sample on file lines ``line`` to ``end`` (the text's line ``start``
     on) holds lines that read as samples: a quote left open (a note's stray '"') took them in, until a quote
     further on (or the file's end) closed it, and their samples would be lost without a word."""
-    need = max(index.values()) + 1
     for i, cell in enumerate(row):
-        for piece in cell.splitlines()[1:]:
+        for piece in cell.splitlines()[1:]:  # a whole line of the file: as many fields as the header, numbers read
             cells = _split(piece, delim)
-            if len(cells) >= need and all(_numeric(cells[j], decimal) for j in index.values()):
+            if (_width(piece, delim, len(header)) == len(header) > 1
+                    and all(_numeric(cells[j], decimal) for j in index.values())):
                 _refuse_open_quote(p, text, start, line, end, header, delim)
                 col = f", column {header[i]!r}" if i < len(header) else ""
                 raise ValueError(f"{p}: line {line}{col}: a quote (\") opens a field that closes only on line {end}, "
