@@ -99,7 +99,7 @@ def legend_text(text: object) -> str:
 def unit_label(text: str, unit: str) -> str:
     """An axis label with its unit: ``text (unit)``, or ``text`` as given when no unit is said or the text
     already names it where a unit is written: in brackets, alone or as one of its items
-    (``"Speed (rpm)"``, ``"Speed [rpm]"``, ``"Speed (rpm, mean)"``), or last,
+    (``"Speed (rpm)"``, ``"Speed [rpm]"``, ``"Speed (in rpm)"``, ``"Speed (rpm, mean)"``), or last,
     after ``in``, a slash, a comma, a colon or an underscore (``"Temperature in °C"``, ``"Speed/rpm"``,
     ``"Speed, rpm"``, ``"speed_rpm"``), a remark in brackets allowed after it (``"Temperature in °C (mean)"``).
     A unit that is also a word elsewhere is not its naming: ``"Level in tank"`` in inches is
@@ -112,7 +112,7 @@ def unit_label(text: str, unit: str) -> str:
     # a word rule ("the unit as a word of its own anywhere") took the "in" of "Level in tank" or the "A" of
     # "A pump" for the unit, and missed "Speed/rpm" and "speed_rpm"
     # a bracket holding the unit as one of its items, a remark beside it ("Speed (rpm, mean)")
-    bracketed = rf"[(\[](?:[^()\[\]]*[,;])?\s*{u}\s*(?:[,;][^()\[\]]*)?[)\]]"
+    bracketed = rf"[(\[](?:[^()\[\]]*[,;])?\s*(?:in\s+)?{u}\s*(?:[,;][^()\[\]]*)?[)\]]"
     last = rf"(?:(?<![^\W_])in\s+|[/,:_]\s*){u}\s*(?:[(\[][^()\[\]]*[)\]]\s*)?$"
     if re.search(bracketed, text) or re.search(last, text):
         return text
