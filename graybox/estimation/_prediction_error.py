@@ -18,7 +18,11 @@ Numerics. Regressors in engineering units span many decades (u² ≈ 1e6 rpm², 
 every path works in ``z = s ⊙ θ`` with ``s`` the RMS of each column of Ψ (the static rows Q R hold
 the same monomials at steady state, so they come out near unit scale too); constraint rows are
 normalised to unit norm; θ is reported in engineering units. The dynamic data enter through the
-triangular factor of ``[Ψ/s, y]``, so no solve grows with the record length N. The cvxpy problem
+triangular factor of ``[Ψ/s, y]``, so no solve grows with the record length N. A structure closed under shifts
+(every divisor of every term, as ``centre=True`` returns) is fitted, as ELS and SE fit it, on the signals less their
+means over the records, with the static points shifted alike, and θ mapped back (:func:`_data`): the fit is then the
+same model at any zero of y and u (on the raw signals y(k-1)² at y + 1e6 carried the offset's round-off, 1e-4, into
+the fit). The cvxpy problem
 goes one step further (:class:`_Basis`): its variable is the step from the least-squares estimate
 in a basis where both quadratic forms are diagonal (a generalised SVD of the two factors), so the
 ill-conditioning of a sweep down to λ1 = 1e-6 lives in a fixed change of variables rather than in
@@ -29,7 +33,7 @@ sweep compiles once and re-solves (OSQP warm-started from the neighbouring λ).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
 import numpy as np
@@ -42,6 +46,7 @@ from ..static._constraints import (
     CurveEquality,
     InfeasibleError,
     PassesThrough,
+    StaticBand,
     StaticConstraint,
     StaticContext,
     as_constraint_list,
@@ -67,7 +72,7 @@ from ..core._records import (Dataset, Record, StaticPoints, as_records, carried_
 from ..core._gram import as_gram_records, available_memory, is_dask_data, r_factor
 from ..core._regressors import refuse_non_finite_columns, stacked_regressors
 from ..core._terms import Structure
-from ..selection._centring import _centre_of, is_closed, shift_map
+from ..selection._centring import _centre_of, centred_data, is_closed, is_held, shift_map, signal_offsets
 from ..core._validation import check_bool, check_choice, check_fields, check_int, check_lambdas, check_real, check_theta, warn
 
 if TYPE_CHECKING:  # cvxpy (and the scipy.stats it imports) takes seconds to import: loaded by the QP paths only
@@ -257,6 +262,31 @@ class _Data:
     rss: float  # residual sum of squares of the unconstrained LS fit
     N: int  # regression rows
     y_scale: float  # the target's spread about its mean (core._least_squares.output_scale), output units
+    # a structure closed under shifts is fitted on the signals less their ``offsets`` (:func:`_data`): z = s ⊙ θ_c,
+    # θ_c the parameters on the centred signals, θ = A θ_c + t (:func:`~graybox.selection._centring.shift_map`);
+    # None: z = s ⊙ θ on the signals as given
+    A: np.ndarray | None = None
+    t: np.ndarray | None = None
+    offsets: Mapping[str, float] | None = None
+
+    def theta(self, z: np.ndarray) -> np.ndarray:
+        """θ (engineering units, on the signals as given) of z, shape (n,) or (K, n)."""
+        z = np.asarray(z, float)
+        if self.A is None:
+            return z / self.s
+        return (z / self.s) @ self.A.T + self.t
+
+    def run_points(self, points: StaticPoints) -> StaticPoints:
+        """The static points on the signals the fit runs on (less the offsets of a centred fit), on which the
+        static residual Q R θ − ȳ is the same as on the raw ones, without the cancellation of the offsets' powers."""
+        if self.offsets is None:
+            return points
+        off = self.offsets
+        ub = np.asarray(points.ubar, float)
+        # one input: the records' (the points may call it otherwise); several: by name, as the records' (checked)
+        ub = ub - (next(v for k, v in off.items() if k != "y") if ub.ndim == 1 else
+                   np.array([off[nm] for nm in points.input_names]))
+        return replace(points, ubar=ub, ybar=np.asarray(points.ybar, float) - off["y"])
 
 
 def _tri_inv(R: np.ndarray) -> np.ndarray:
@@ -309,6 +339,32 @@ def _dynamic(structure: Structure, records: list) -> _Data:
     return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0], output_scale(y))
 
 
+def _data(structure: Structure, records: list) -> _Data:
+    """The scaled least-squares data of CLS and PE: :func:`_dynamic` on the signals less their means over the records
+    for a structure closed under shifts (:func:`~graybox.selection._centring.is_closed`, records in memory), as ELS
+    and the SE fits are, with the map back to θ (``_Data.A``, ``_Data.t``); for a problem whose constraints are made
+    on the centred signals too (:func:`centrable`), else the raw :func:`_dynamic`. On the raw signals the regressors of a
+    closed quadratic in y at y + 1e6 carry the offset's powers (y(k-1)² ≈ 1e12 for a spread of 25): its round-off,
+    1e-4, was 4e-6 of what the data say, and the fits (one-step predictions, free runs) moved by 4e-6 of y's spread
+    with the output's zero, and PE's closed form called λ1 < 1 singular. A signal held over the records keeps its
+    zero (centred, its terms would be round-off of nothing)."""
+    if is_dask_data(records) or not is_closed(structure):
+        return _dynamic(structure, records)
+    recs = as_records(records)
+    try:
+        off = signal_offsets(recs)
+        ys = np.concatenate([r.y for r in recs])
+        us = np.concatenate([r.u.reshape(len(r.y), -1) for r in recs])
+        names = recs[0].input_names
+        held = frozenset([n for i, n in enumerate(names) if is_held(us[:, i])] + (["y"] if is_held(ys) else []))
+        off = {k: (0.0 if k in held else v) for k, v in off.items()}
+        A, t = shift_map(structure, off)
+    except (ValueError, KeyError, IndexError):  # records that do not fit the structure: _dynamic says so
+        return _dynamic(structure, records)
+    d = _dynamic(structure, centred_data(recs, off, keep=held))
+    return replace(d, A=A, t=t, offsets=off)
+
+
 def _dynamic_chunked(structure: Structure, records: list) -> _Data:
     """As :func:`_dynamic` by TSQR over chunks of rows: for Dask records (the blocks reduced on the
     active Dask scheduler; the record is never held whole) and for records whose dense Ψ would not
@@ -340,6 +396,7 @@ def _target_scale(records: list, L: int) -> float:
 
 def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray, int]:
     """Scaled static rows (R2, c2) with ‖QRθ − ȳ‖² = ‖R2 z − c2‖² + const, and N_SF."""
+    points = d.run_points(points)  # on the centred signals for a centred fit: Q R θ − ȳ is the same there
     Q, R = static_matrices(d.structure, points)
     A2 = (Q @ R) / d.s
     if not np.all(np.isfinite(A2)):
@@ -355,7 +412,7 @@ def _static_part(d: _Data, points: StaticPoints) -> tuple[np.ndarray, np.ndarray
 def _ls_theta(d: _Data, what: str = "the least-squares θ") -> np.ndarray:
     """Unconstrained least squares, engineering units (identifiability checked: :func:`identified_by`)."""
     identified_by(d.structure, d.R1 * d.s, d.N, what=what)
-    return scipy.linalg.solve_triangular(d.R1, d.c1) / d.s
+    return d.theta(scipy.linalg.solve_triangular(d.R1, d.c1))
 
 
 def _sigma_y(d: _Data, records: list[Record], reference: Model | np.ndarray | float | str
@@ -404,18 +461,48 @@ class _Rows:
     names: tuple[str, ...]
 
 
-def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, y_scale: float, T: np.ndarray | None = None,
+#: The constraints a fit on the centred signals (:func:`_data`) takes, each made on the centred signals: their meaning
+#: is the same there (the static equation at the shifted points, a band's half-width, the denominator D = 1 − ∂/∂ȳ);
+#: a problem with any other (a curve's eq. (22), gains along a reference, cluster bounds, cvxpy) is fitted raw.
+_CENTRED_CONSTRAINTS = (PassesThrough, StaticBand)
+
+
+def centrable(cons: Sequence[StaticConstraint]) -> bool:
+    """Whether a problem with constraints ``cons`` is fitted on the centred signals when its structure is closed."""
+    return all(type(c) in _CENTRED_CONSTRAINTS for c in cons)
+
+
+def _centred_context(ctx: StaticContext, d: _Data) -> StaticContext:
+    """``ctx`` on the centred signals of ``d``: its points shifted, its least-squares θ that of the centred fit."""
+    ls = None
+    if ctx.ls_theta is not None:
+        ls = scipy.linalg.solve_triangular(d.R1, d.c1) / d.s
+    return StaticContext(ctx.structure, None if ctx.points is None else d.run_points(ctx.points), None, None,
+                         ctx.inputs, ls)
+
+
+def _centred_constraint(c: StaticConstraint, d: _Data) -> StaticConstraint:
+    """A :data:`_CENTRED_CONSTRAINTS` constraint with its own points (if any) on the centred signals of ``d``."""
+    pts = getattr(c, "points", None)
+    return c if pts is None else replace(c, points=d.run_points(pts))
+
+
+def _rows(cons: list[StaticConstraint], ctx: StaticContext, d: _Data, T: np.ndarray | None = None,
           at: np.ndarray | None = None) -> _Rows:
-    """The rows in y (z = T y); with ``at`` (a z) their right-hand sides are those of the step y − T⁻¹ at,
-    each row's residual at ``at`` formed in z, where no ill-conditioned T has touched it. ``y_scale``: the
-    output's spread (output units), the scale the equalities' consistency is judged on."""
+    """The rows in y (z = T y, z the coordinates of ``d``: θ's, or θ_c's for a centred fit); with ``at`` (a z) their right-hand
+    sides are those of the step y − T⁻¹ at, each row's residual at ``at`` formed in z, where no ill-conditioned T has
+    touched it. The equalities' consistency is judged on the output's spread ``d.y_scale`` (output units)."""
+    y_scale, s = d.y_scale, d.s
     n = s.size
     at = np.zeros(n) if at is None else at
     E, f, G, h, user, eq_names = [np.zeros((0, n))], [np.zeros(0)], [np.zeros((0, n))], [np.zeros(0)], [], []
     eq_cons: list[tuple[StaticConstraint, AffineRows]] = []
+    ctx_c = None if d.A is None else _centred_context(ctx, d)
     for c in cons:
         c.check(ctx)
-        r: AffineRows | None = c.affine(ctx)
+        # a centred fit (its constraints :func:`centrable`) takes the rows the constraint makes on the centred signals,
+        # on θ_c; mapped from the raw rows they would carry the offsets' powers (2e9 ± 100, a curve's 1e9 coefficients)
+        r: AffineRows | None = c.affine(ctx) if ctx_c is None else _centred_constraint(c, d).affine(ctx_c)
         if r is None:
             user.append(c)
             continue
@@ -436,7 +523,7 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, s: np.ndarray, y_sca
     # the hint that points over-determine the static function only where points are imposed
     points = any(isinstance(c, PassesThrough) for c in cons)
     V, g = _reduce_eq(E, f, eq_names, cluster_count=len(ctx.cluster_map.keys) if points else None, scale=y_scale,
-                      centred=_centred_eq_rows(eq_cons, ctx))
+                      centred=_centred_eq_rows(eq_cons, ctx if ctx_c is None else ctx_c))
     if T is not None and V.shape[0]:
         U, S, Vt = np.linalg.svd(V @ T, full_matrices=False)  # the same rows, orthonormal in y, every one kept
         V, g = Vt, (U.T @ (g - V @ at)) / S
@@ -694,7 +781,7 @@ class _QP:
 
         n = d.s.size
         self.fixed_only = False
-        zrows = _rows(cons, ctx, d.s, d.y_scale)  # in z: the equalities reduced, the inequalities of unit norm
+        zrows = _rows(cons, ctx, d)  # in z: the equalities reduced, the inequalities of unit norm
         k = n - zrows.V.shape[0]
         if zrows.V.shape[0] and k:
             # the equalities eliminated in z, z = z_p + N w (as the closed form does), where they are as well
@@ -730,7 +817,7 @@ class _QP:
                                           f"{list(zrows.names)} by {-slack.min():.3g} (output units)")
                 self.fixed_only = True
             self.basis = b = _basis(d, static, None if _full_rank([(d.R1, d.N)]) else zrows, n_static)
-            rows = _rows(cons, ctx, d.s, d.y_scale, b.T, at=b.z0)
+            rows = _rows(cons, ctx, d, b.T, at=b.z0)
             V, g, G, h = rows.V, rows.g, zrows.G, zrows.h
         # the inequalities in the basis, each row's slack at z0 formed where no ill-conditioned T has touched it
         G, h = _normalise_ub(G @ b.T, h - G @ b.z0, zrows.names)
@@ -991,9 +1078,11 @@ def cls(
     solver = _check_solver(solver)
     _check_solver_options(solver_options, solver)
     recs = as_gram_records(data)
-    d = _dynamic(st, recs)
+    d = _data(st, recs)
     cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
-    rows = _rows(cons, ctx, d.s, d.y_scale)  # validates every constraint before any solver runs
+    if d.A is not None and not centrable(cons):  # constraints that are made on the raw signals only
+        d = _dynamic(st, recs)
+    rows = _rows(cons, ctx, d)  # validates every constraint before any solver runs
     _warn_static_range(cons, ctx, curve, recs)  # after: bad input is an error, not a warning and an error
     # the records and the equality constraints must identify θ (an input held constant leaves its terms free)
     identified_by(st, d.R1 * d.s, d.N, equalities=rows.V * d.s, inputs=recs[0].input_names, what="the CLS θ")
@@ -1005,7 +1094,7 @@ def cls(
         qp = _QP(d, None, cons, ctx, solver, solver_options)
         z = qp.solve(1.0, 0.0)
         qp.warn_inaccurate()
-    theta = z / d.s
+    theta = d.theta(z)
     for c in cons:
         c.after_solve(theta, ctx)
     info = static_info(static, data, curves=True)
@@ -1173,19 +1262,21 @@ def _warn_static_range(cons: list[StaticConstraint], ctx: StaticContext, curve: 
         warn_static_range(np.concatenate(ub), recs)
 
 
-def _pe_setup(structure, data, static, constraints, weights, ubar, reference="free"):
+def _pe_setup(structure, data, static, constraints, weights, ubar, reference="free", centre=False):
+    """The PE problem's data; ``centre``: a structure closed under shifts on the centred signals (:func:`_data`, the
+    fit's), else on the signals as given (z = s ⊙ θ, what the covariances of ``diagnostics`` read)."""
     st = _process_structure(structure)
     check_choice(weights, "weights", ("mse", "sum"))
     recs = as_gram_records(data)
-    d = _dynamic(st, recs)
+    cons = as_constraint_list(constraints)
+    d = _data(st, recs) if centre and centrable(cons) else _dynamic(st, recs)
     pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
     curve = static if isinstance(static, (StaticCurve, StaticSurface)) else None
-    cons = as_constraint_list(constraints)
     for p in [pts] + [getattr(c, "points", None) for c in cons]:
         _check_point_inputs(recs, p)
     ctx = StaticContext(st, pts, curve, _needed_sigma_y(cons, d, recs, reference), recs[0].input_names,
                         _needed_ls_theta(cons, d))
-    rows = _rows(cons, ctx, d.s, d.y_scale)
+    rows = _rows(cons, ctx, d)
     _warn_static_range(cons, ctx, curve, recs)
     R2, c2, M = _static_part(d, pts)
     return st, recs, d, pts, ctx, cons, rows, (R2, c2), M
@@ -1304,7 +1395,9 @@ def _unidentified(st: Structure, d: _Data, pts: StaticPoints, rows: _Rows, lam: 
     reasons: dict[bool, str] = {}
     for weighted in sorted(set((lam < 1.0).tolist())):
         try:
-            identified_by(st, d.R1 * d.s, d.N, points=pts if weighted else None, equalities=rows.V * d.s,
+            # judged in the coordinates of the fit (θ on the centred signals for a centred one, :func:`_data`), the
+            # same rank at every offset of the signals
+            identified_by(st, d.R1 * d.s, d.N, points=d.run_points(pts) if weighted else None, equalities=rows.V * d.s,
                           inputs=inputs, what="θ" if weighted else "θ at λ1 = 1 (no weight on the static points)")
         except ValueError as exc:
             reasons[weighted] = str(exc)
@@ -1324,7 +1417,7 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
     warm_start = check_bool(warm_start, "warm_start")
     _check_solver_options(solver_options, solver)
     st, recs, d, pts, ctx, cons, rows, stat, M = _pe_setup(structure, data, static, constraints, weights, ubar,
-                                                            reference)
+                                                            reference, centre=True)
     failures = _unidentified(st, d, pts, rows, lam, recs[0].input_names)
     if len(failures) == lam.size:
         raise ValueError(_every_member_failed(failures, lam))
@@ -1356,7 +1449,7 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
         if len(failures) == lam.size:  # as the one solve's error would be: InfeasibleError where each was one
             kind = InfeasibleError if all(isinstance(e, InfeasibleError) for e in unsolved) else ValueError
             raise kind(_every_member_failed(failures, lam)) from unsolved[0]
-    thetas = Z / d.s
+    thetas = d.theta(Z)
     # a member the constraints' own checks refuse is a failed member (a free Σ_y of eq. (22) reaches 1 as λ1 → 0,
     # where the points' linear residual (1 − Σ_y)(ȳ − H(ū)) vanishes): the sweep goes on
     for i in np.flatnonzero(ok):
