@@ -44,6 +44,7 @@ import scipy.sparse
 from ..static._constraints import (
     AffineRows,
     CurveEquality,
+    GainBounds,
     InfeasibleError,
     PassesThrough,
     StaticBand,
@@ -281,12 +282,17 @@ class _Data:
         static residual Q R θ − ȳ is the same as on the raw ones, without the cancellation of the offsets' powers."""
         if self.offsets is None:
             return points
+        ub, yb = self.run_levels(points.ubar, points.ybar, points.input_names)
+        return replace(points, ubar=ub, ybar=yb)
+
+    def run_levels(self, ubar: np.ndarray, ybar: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """Levels ū (shape (K,), or (K, m) with columns ``names``) and ȳ less the offsets of a centred fit."""
         off = self.offsets
-        ub = np.asarray(points.ubar, float)
+        ub = np.asarray(ubar, float)
         # one input: the records' (the points may call it otherwise); several: by name, as the records' (checked)
         ub = ub - (next(v for k, v in off.items() if k != "y") if ub.ndim == 1 else
-                   np.array([off[nm] for nm in points.input_names]))
-        return replace(points, ubar=ub, ybar=np.asarray(points.ybar, float) - off["y"])
+                   np.array([off[nm] for nm in names]))
+        return ub, np.asarray(ybar, float) - off["y"]
 
 
 def _tri_inv(R: np.ndarray) -> np.ndarray:
@@ -462,9 +468,9 @@ class _Rows:
 
 
 #: The constraints a fit on the centred signals (:func:`_data`) takes, each made on the centred signals: their meaning
-#: is the same there (the static equation at the shifted points, a band's half-width, the denominator D = 1 − ∂/∂ȳ);
-#: a problem with any other (a curve's eq. (22), gains along a reference, cluster bounds, cvxpy) is fitted raw.
-_CENTRED_CONSTRAINTS = (PassesThrough, StaticBand)
+#: is the same there (the static equation at the shifted points, a band's half-width, the denominator D = 1 − ∂/∂ȳ,
+#: the gains on the shifted grid); a problem with any other (a curve's eq. (22), cluster bounds, cvxpy) is fitted raw.
+_CENTRED_CONSTRAINTS = (PassesThrough, StaticBand, GainBounds)
 
 
 def centrable(cons: Sequence[StaticConstraint]) -> bool:
@@ -481,10 +487,15 @@ def _centred_context(ctx: StaticContext, d: _Data) -> StaticContext:
                          ctx.inputs, ls)
 
 
-def _centred_constraint(c: StaticConstraint, d: _Data) -> StaticConstraint:
-    """A :data:`_CENTRED_CONSTRAINTS` constraint with its own points (if any) on the centred signals of ``d``."""
+def _centred_affine(c: StaticConstraint, ctx: StaticContext, ctx_c: StaticContext, d: _Data) -> AffineRows:
+    """The rows of a :data:`_CENTRED_CONSTRAINTS` constraint on θ_c, made on the centred signals of ``d``
+    (``ctx_c``): with its own points (if any) shifted; gains on their grid (taken on the signals as given) shifted."""
+    if isinstance(c, GainBounds):
+        ub, yb = c.grid(ctx)
+        names = ctx_c.cluster_map.input_names if np.ndim(ub) > 1 else ()
+        return c.rows_at(ctx_c, *d.run_levels(ub, yb, names))
     pts = getattr(c, "points", None)
-    return c if pts is None else replace(c, points=d.run_points(pts))
+    return (c if pts is None else replace(c, points=d.run_points(pts))).affine(ctx_c)
 
 
 def _rows(cons: list[StaticConstraint], ctx: StaticContext, d: _Data, T: np.ndarray | None = None,
@@ -502,7 +513,7 @@ def _rows(cons: list[StaticConstraint], ctx: StaticContext, d: _Data, T: np.ndar
         c.check(ctx)
         # a centred fit (its constraints :func:`centrable`) takes the rows the constraint makes on the centred signals,
         # on θ_c; mapped from the raw rows they would carry the offsets' powers (2e9 ± 100, a curve's 1e9 coefficients)
-        r: AffineRows | None = c.affine(ctx) if ctx_c is None else _centred_constraint(c, d).affine(ctx_c)
+        r: AffineRows | None = c.affine(ctx) if ctx_c is None else _centred_affine(c, ctx, ctx_c, d)
         if r is None:
             user.append(c)
             continue

@@ -1250,10 +1250,15 @@ class GainBounds(StaticConstraint):
         return box
 
     def affine(self, ctx: StaticContext) -> AffineRows:
+        return self.rows_at(ctx, *self.grid(ctx))
+
+    def rows_at(self, ctx: StaticContext, ub: np.ndarray, yb: np.ndarray) -> AffineRows:
+        """The bounds' rows at the grid ``ub`` with the reference ``yb`` (:meth:`grid`'s), on the θ of ``ctx``: an
+        estimator fitting on the centred signals gives the grid less the signals' offsets, where G and D are the same
+        (derivatives of the static equation) without the offsets' powers."""
         cm = ctx.cluster_map
         m = n_static_inputs(cm)
         bounds = self._bounds(m, _input_names(ctx))
-        ub, yb = self.grid(ctx)
         one, dR = _denominator_rows(cm, ub, yb)
         rows, rhs = [], []
         # D = 1 − dR θ >= min_denominator   ⇔   dR θ <= 1 − δ
