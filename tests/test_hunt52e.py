@@ -73,3 +73,41 @@ def test_gain_bounds_on_a_closed_quadratic_in_y_do_not_depend_on_the_output_zero
     # as above: the raw model's own evaluation round-off, measured 1.1 of it
     bound = np.finfo(float).eps * (np.abs(X) @ np.abs(fits[1]))
     assert np.all(diff <= 5 * bound), np.max(diff / bound)
+
+
+def test_passes_through_a_point_of_small_slope_at_y_plus_1e6_as_at_y():
+    # was: PassesThrough's check that each point is an isolated equilibrium (D = 1 − ∂(static equation)/∂ȳ not
+    # vanishing) was made on the raw θ, where D is judged against the size of its terms: at y + 1e6 the terms
+    # θ_y(k-1) and 2 θ_y(k-1)² ȳ are 3.7e6 each, and D = −0.0039 fell under 1e-9 of them, so cls refused the fit
+    # ("a vanishing derivative in ȳ") it made at y, 1e3, 1e4 and 1e5. The check is now made again on the centred
+    # signals the fit ran on, the estimate refused only when it fails there too
+    rng = np.random.default_rng(0)
+    rng.uniform(0, 1, 12)
+    u, y = rng.uniform(0, 1, 7), rng.uniform(0, 1, 7)
+    st = gb.parse_structure(_QUADRATIC)
+    fits = []
+    for c in (0.0, 1e6):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.StaticRangeWarning)
+            fits.append(gb.cls(st, gb.Record(u, y + c), gb.StaticPoints([0.2, 0.8], [0.3 + c, 0.6 + c]),
+                               how="points").model.theta)
+    A, t = shift_map(st, {"y": 1e6, "u": 0.0})
+    # the same model: the slope at the points, D = 1 − θ_y − 2 θ_yy ȳ − θ_yu ū, to its round-off at y + 1e6
+    # (eps · 3.7e6 ≈ 1e-9; measured 4e-10)
+    for th, c in ((fits[1], 1e6), (A @ fits[0] + t, 1e6)):
+        D = 1 - th[1] - 2 * th[2] * (np.array([0.3, 0.6]) + c) - th[3] * np.array([0.2, 0.8])
+        assert np.allclose(D, [0.62995, -0.0039208], atol=1e-5)
+
+
+def test_a_degenerate_pass_through_is_still_refused_at_an_offset():
+    # the centred check refuses what it should: Σy = 1 with every other cluster 0 meets any points (0 = 0)
+    rng = np.random.default_rng(3)
+    u = rng.uniform(0, 1, 200)
+    y = np.cumsum(0.01 * rng.standard_normal(200))  # a random walk: y(k) = y(k-1) fits it best
+    st = gb.parse_structure(["1", "y(k-1)", "u(k-1)"])
+    for c in (0.0, 1e6):
+        pts = gb.StaticPoints([0.1, 0.5, 0.9], np.array([0.0, 0.3, 0.1]) + c)  # on no line: only Σy = 1 meets them
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gb.StaticRangeWarning)
+            with pytest.raises(ValueError, match="static function"):
+                gb.cls(st, gb.Record(u, y + c), pts, how="points")

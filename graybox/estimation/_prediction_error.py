@@ -498,6 +498,28 @@ def _centred_affine(c: StaticConstraint, ctx: StaticContext, ctx_c: StaticContex
     return (c if pts is None else replace(c, points=d.run_points(pts))).affine(ctx_c)
 
 
+def _after_solve(cons: Sequence[StaticConstraint], ctx: StaticContext, d: _Data, z: np.ndarray) -> None:
+    """Each constraint's own checks on the estimate θ of z (``ValueError``). For a fit on the centred signals, a check
+    that refuses θ is made again on the centred signals (θ_c = z / s, the constraint's points shifted), where the static
+    equation's terms do not carry the offsets' powers, and the estimate is refused only when it fails there too (with
+    the message of the signals as given): a derivative D = 1 − ∂/∂ȳ of −0.004 at a point, beside terms of 3.7e6 at
+    y + 1e6, read as vanishing (1e-9 of them) at y + 1e6 and not at y + 1e5."""
+    theta = d.theta(z)
+    ctx_c = None
+    for c in cons:
+        try:
+            c.after_solve(theta, ctx)
+        except ValueError as exc:
+            if d.A is None or type(c) not in _CENTRED_CONSTRAINTS:
+                raise
+            ctx_c = _centred_context(ctx, d) if ctx_c is None else ctx_c
+            pts = getattr(c, "points", None)
+            try:
+                (c if pts is None else replace(c, points=d.run_points(pts))).after_solve(z / d.s, ctx_c)
+            except ValueError:
+                raise exc from None
+
+
 def _rows(cons: list[StaticConstraint], ctx: StaticContext, d: _Data, T: np.ndarray | None = None,
           at: np.ndarray | None = None) -> _Rows:
     """The rows in y (z = T y, z the coordinates of ``d``: θ's, or θ_c's for a centred fit); with ``at`` (a z) their right-hand
@@ -1106,8 +1128,7 @@ def cls(
         z = qp.solve(1.0, 0.0)
         qp.warn_inaccurate()
     theta = d.theta(z)
-    for c in cons:
-        c.after_solve(theta, ctx)
+    _after_solve(cons, ctx, d, z)
     info = static_info(static, data, curves=True)
     model = Model(st, theta, name=name, **carried_from(recs, info))  # the records' input order, period and units
     return CLSResult(model, info,
@@ -1467,8 +1488,7 @@ def pe_members(structure, data, static=None, *, lambdas=None, constraints=None, 
         if int(i) in failures:  # the closed form's singular pair: no θ to check
             continue
         try:
-            for c in cons:
-                c.after_solve(thetas[i], ctx)
+            _after_solve(cons, ctx, d, Z[i])
         except ValueError as exc:
             failures[int(i)] = f"λ1 = {lam[i]:g}: {exc}"
             thetas[i] = np.nan
