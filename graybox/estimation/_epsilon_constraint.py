@@ -126,6 +126,15 @@ class _GN:
         self.p = problem
         self.M = len(problem.static)
 
+    def of_theta(self, th: np.ndarray) -> tuple[float, float]:
+        """J_S and J_SF of θ itself, on the records as given (inf where not finite)."""
+        p = self.p
+        with np.errstate(over="ignore", invalid="ignore"):
+            ed, es, _, _ = p.residuals(th, jacobian=False)
+            r1, r2 = ed / np.sqrt(p.n_dyn), es / np.sqrt(self.M)
+            return (float(r1 @ r1) if np.all(np.isfinite(r1)) else np.inf,
+                    float(r2 @ r2) if np.all(np.isfinite(r2)) else np.inf)
+
     def parts(self, z: np.ndarray, jac: bool):
         # a start whose free run diverges has finite residuals too large to square: J_S is then inf, said by the
         # caller (no bounded free run), not by numpy's "overflow encountered in matmul" (an error under -W error)
@@ -135,7 +144,8 @@ class _GN:
     def _parts(self, z: np.ndarray, jac: bool):
         p = self.p
         th = p.from_z(z)
-        ed, es, Jd, Js = p.residuals(th, jacobian=jac)
+        # made from z as the optimisers' runs are (the centred model for a centred problem), not through raw θ
+        ed, es, Jd, Js = p.run_residuals(z, jacobian=jac)
         r1 = ed / np.sqrt(p.n_dyn)
         r2 = es / np.sqrt(self.M)
         f = float(r1 @ r1) if np.all(np.isfinite(r1)) else np.inf
@@ -145,8 +155,8 @@ class _GN:
             return np.inf, np.inf, None  # outside the stability margin: a wall, as a diverging run is
         if not jac or not (np.isfinite(f) and np.isfinite(g)):
             return f, g, None
-        J1 = p.jac_z(Jd, np.sqrt(p.n_dyn))
-        J2 = p.jac_z(Js, np.sqrt(self.M))
+        J1 = Jd / np.sqrt(p.n_dyn)
+        J2 = Js / np.sqrt(self.M)
         if not (np.all(np.isfinite(J1)) and np.all(np.isfinite(J2))):
             return f, g, None
         return f, g, (J1.T @ J1, J1.T @ r1, J2.T @ J2, J2.T @ r2)
@@ -562,6 +572,9 @@ def _solve_one_thread(problem: SEProblem, *, band, theta0, lambdas, max_iter, to
         inside = [t for t in runs if t[1][2] <= g_min * (1 + _JSF_TIE)]
     start, (th, f, g, f0, g0, it, message) = min(inside, key=lambda t: t[1][1])
     it = sum(r[5] for _, r in runs)
+    # J_S and J_SF of the model returned (its θ on the records as given: the shared definitions), where the runs
+    # were judged on their z; the two differ by the round-off of θ (1e-12 relative here, more far from zero)
+    f, g = gn.of_theta(th)
     feasible = bool(g <= band * (1 + 1e-12))
     name = "SE D_SF (direct)" if feasible else "SE min J_SF (band infeasible)"
     # the records' input order (not the structure's name order): an input array's columns as the user has them

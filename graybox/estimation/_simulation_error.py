@@ -545,6 +545,40 @@ class SEProblem:
             Js = self.static_theta_gradient(th, yb)
         return np.concatenate(e), e_static, np.vstack(J), Js
 
+    def run_residuals(self, z: np.ndarray, *, jacobian: bool = True):
+        """:meth:`residuals` of the optimisers' coordinates ``z``, made as the optimisers' runs are, with the
+        Jacobians with respect to z: for a centred problem (:meth:`_centre_basis`) the free runs of the centred model
+        (:meth:`run_theta`) on :attr:`run_records` and its equilibria at the centred points (:attr:`static_run`), the
+        same residuals without the offsets' powers. Through raw θ at y + 1e6 (a constant of 9e7 for a spread of 4)
+        the residuals carried 1e-8 of round-off that moved with z, and se_dsf's steps stopped on it ('no step
+        improves') at other points than at y (J_S 1.1e-5 apart, another start named)."""
+        z = np.asarray(z, float)
+        if self.run_scale is None:
+            ed, es, Jd, Js = self.residuals(self.from_z(z), jacobian=jacobian)
+            return ed, es, (None if Jd is None else Jd / self.scale), (None if Js is None else Js / self.scale)
+        th = z / self.run_scale
+        L = self.L
+        e, J = [], []
+        for rec, U in zip(self.run_records, self.run_U):
+            if jacobian:
+                y, S = free_run_sensitivity(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, U)
+                J.append(S[L:])
+            else:
+                y = simulate_one(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, 1e300)
+            e.append(y[L:] - rec.y[L:])
+        ub, yb0 = self.static_run
+        if self.surface_inputs is not None:
+            yb = reached_surface(self.structure, th[None], ub, yb0, inputs=self.surface_inputs).ybar[0]
+        else:
+            yb = reached_equilibria(self.structure, th[None], ub, yb0).ybar[0]
+        e_static = yb - yb0
+        if not jacobian:
+            return np.concatenate(e), e_static, None, None
+        with np.errstate(all="ignore"):
+            Js = (surface_theta_gradient(self.structure, th, ub, yb, inputs=self.surface_inputs)
+                  if self.surface_inputs is not None else static_theta_gradient(self.structure, th, ub, yb))
+        return np.concatenate(e), e_static, np.vstack(J) / self.run_scale, Js / self.run_scale
+
     def records_identify(self) -> bool:
         """Whether the records alone identify θ (:func:`~graybox.estimation._prediction_error.identified_by`);
         not where an input is held constant, where the static points must (λ1 < 1)."""
