@@ -1387,12 +1387,14 @@ class Grid:
             line, marked = None, bom_encoding(raw)
             if raw.startswith(b"SQLite format 3\x00"):
                 what = "it is a grid store (SQLite), not a spec: graybox grid run SPEC.toml --store STORE"
-            elif marked is not None:  # Windows Notepad's "Unicode": every line is unreadable, none is to blame
+            elif marked not in (None, "utf-8"):  # Notepad's "Unicode": every line is unreadable, none is to blame
                 what = (f"it is {marked.upper()} text (its byte-order mark says so), and TOML is UTF-8: save it as "
                         "UTF-8")
-            else:  # the line of the first bad byte (an offset into the file found no line in an editor)
-                line = raw.count(b"\n", 0, exc.start) + 1
-                what = (f"it is not UTF-8 text (byte {exc.start}); a spec is a TOML text file in UTF-8 (graybox grid "
+            else:  # the line of the first bad byte (an offset into the file found no line in an editor); a UTF-8
+                # byte-order mark says nothing of the bytes after it (utf-8-sig counts them from after the mark)
+                at = exc.start + (3 if marked else 0)  # the byte's offset in the file
+                line = raw.count(b"\n", 0, at) + 1
+                what = (f"it is not UTF-8 text (byte {at}); a spec is a TOML text file in UTF-8 (graybox grid "
                         "init prints one): save it as UTF-8")
             raise SpecError(f"cannot read the spec: {what}", source=str(p), line=line) from None
         return cls.from_toml_text(text, source=str(p), base_dir=str(p.resolve().parent))
