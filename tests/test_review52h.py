@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+import graybox as gb
 from graybox import experiments as gx
 
 
@@ -24,3 +25,30 @@ def test_a_utf8_spec_with_a_byte_order_mark_and_a_bad_byte_names_the_line(tmp_pa
     p.write_bytes('name = "g"\n'.encode("utf-16"))
     with pytest.raises(gx.SpecError, match="UTF-16"):
         gx.Grid.from_toml(p)
+
+
+_PUMPING = '''name = "p"
+[[data]]
+name = "pumping"
+bundled = "pumping"
+[[structures]]
+name = "first-order"
+terms = ["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]
+[[variants]]
+name = "PE band"
+estimator = "pe"
+lambdas = {logspace = [-3, 0, 3]}
+constraints = [{type = "band"}]
+'''
+
+
+def test_the_html_report_says_the_unit_of_the_leaderboards_band_column(tmp_path):
+    # 1435944 gave the leaderboard a 'band' column, B in the output's unit squared as JS_valid, JS_ident and JSF,
+    # which the report's page names the unit of: the page said theirs and not the new column's
+    gx.run_grid(gx.Grid.from_toml_text(_PUMPING), tmp_path / "r.sqlite")
+    written = {p.name: p for p in gx.write_report(tmp_path / "r.sqlite", tmp_path / "rep", html=True)}
+    lb = gx.leaderboard(gb.load_results(tmp_path / "r.sqlite"))
+    assert "band" in lb.columns and (lb["band"] == 0.175 ** 2).all()
+    page = written["report.html"].read_text("utf-8")
+    said = page[page.index("are in the output&#x27;s unit squared") - 400:page.index("are in the output&#x27;s unit squared")]
+    assert "band" in said

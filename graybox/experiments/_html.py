@@ -119,8 +119,9 @@ def report_page(df: pd.DataFrame, lb: pd.DataFrame, *, rule: str, summary: Seque
     units = output_units(attrs) or output_units(df.attrs)
     if units:  # what the figures are in
         parts.append("<p>" + _e("JS_valid and JS_ident (J_S, the free-run simulation's mean squared error on the "
-                                "validation and identification records) and JSF (J_SF, the mean squared static error "
-                                "on the static points) are in the output's unit squared: "
+                                "validation and identification records), JSF (J_SF, the mean squared static error "
+                                "on the static points) and band (B, the bound on J_SF a row's model was judged "
+                                "against) are in the output's unit squared: "
                                 + "; ".join(f"{d}:{squared_unit(u)}" for d, u in units.items()) + "; fit_valid in %.") + "</p>")
     parts.append(_table(lb, text_cols=("data", "structure", "variant", "reason"), why="reason"))
     parts.append("<h2 id=\"figures\">Figures</h2>")
