@@ -517,6 +517,20 @@ class SEProblem:
                 c[np.flatnonzero(fin)[~ok]] = np.inf
         return c
 
+    def _run_errors(self, th: np.ndarray, records, Us, jacobian: bool) -> tuple[list, list]:
+        """Free-run errors ŷ − y of θ ``th`` over ``records`` from sample L on (one array each), and with ``jacobian``
+        their sensitivities to θ (``Us``: the records' input arrays the sensitivity recursion takes)."""
+        L = self.L
+        e, J = [], []
+        for rec, U in zip(records, Us):
+            if jacobian:
+                y, S = free_run_sensitivity(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, U)
+                J.append(S[L:])
+            else:
+                y = simulate_one(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, 1e300)
+            e.append(y[L:] - rec.y[L:])
+        return e, J
+
     def residuals(self, theta: np.ndarray, *, jacobian: bool = True):
         """Free-run and static residuals of one θ and their Jacobians with respect to θ.
 
@@ -528,15 +542,7 @@ class SEProblem:
         stream it instead (:func:`_r_factor`).
         """
         th = np.asarray(theta, float)
-        L = self.L
-        e, J = [], []
-        for rec, U in zip(self.records, self.U):
-            if jacobian:
-                y, S = free_run_sensitivity(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, U)
-                J.append(S[L:])
-            else:
-                y = simulate_one(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, 1e300)
-            e.append(y[L:] - rec.y[L:])
+        e, J = self._run_errors(th, self.records, self.U, jacobian)
         e_static = self.static_errors(th)[0]
         yb = e_static + self.static.ybar
         if not jacobian:
@@ -557,15 +563,7 @@ class SEProblem:
             ed, es, Jd, Js = self.residuals(self.from_z(z), jacobian=jacobian)
             return ed, es, (None if Jd is None else Jd / self.scale), (None if Js is None else Js / self.scale)
         th = z / self.run_scale
-        L = self.L
-        e, J = [], []
-        for rec, U in zip(self.run_records, self.run_U):
-            if jacobian:
-                y, S = free_run_sensitivity(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, U)
-                J.append(S[L:])
-            else:
-                y = simulate_one(self.code, th, record_inputs(rec, self.code.input_names), rec.y[:L], L, 1e300)
-            e.append(y[L:] - rec.y[L:])
+        e, J = self._run_errors(th, self.run_records, self.run_U, jacobian)
         ub, yb0 = self.static_run
         if self.surface_inputs is not None:
             yb = reached_surface(self.structure, th[None], ub, yb0, inputs=self.surface_inputs).ybar[0]
