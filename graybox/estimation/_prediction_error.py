@@ -345,7 +345,17 @@ def _dynamic(structure: Structure, records: list) -> _Data:
     return _Data(structure, s, Raug[:n, :n], Raug[:n, n], float(Raug[n, n] ** 2), psi.shape[0], output_scale(y))
 
 
-def _data(structure: Structure, records: list) -> _Data:
+def _held_level(levels: np.ndarray, held: float) -> float:
+    """Where an input held over the records at ``held`` is centred (as SE's ``SEProblem._held_offset``): its level less
+    the RMS distance of its static points' ``levels`` from it, so that on the records it is that distance (a constant
+    the points, the only ones to tell its terms apart, scale with the input's unit) at any zero of the input; 0 (left
+    at its level) with every point at the held level to round-off."""
+    if is_held(np.append(levels, held)):
+        return 0.0
+    return held - float(np.sqrt(np.mean((levels - held) ** 2)))
+
+
+def _data(structure: Structure, records: list, points: StaticPoints | None = None) -> _Data:
     """The scaled least-squares data of CLS and PE: :func:`_dynamic` on the signals less their means over the records
     for a structure closed under shifts (:func:`~graybox.selection._centring.is_closed`, records in memory), as ELS
     and the SE fits are, with the map back to θ (``_Data.A``, ``_Data.t``); for a problem whose constraints are made
@@ -353,7 +363,9 @@ def _data(structure: Structure, records: list) -> _Data:
     closed quadratic in y at y + 1e6 carry the offset's powers (y(k-1)² ≈ 1e12 for a spread of 25): its round-off,
     1e-4, was 4e-6 of what the data say, and the fits (one-step predictions, free runs) moved by 4e-6 of y's spread
     with the output's zero, and PE's closed form called λ1 < 1 singular. A signal held over the records keeps its
-    zero (centred, its terms would be round-off of nothing)."""
+    zero (centred, its terms would be round-off of nothing) unless static ``points`` tell its terms apart: it is then
+    centred on them (:func:`_held_level`; kept at its zero, its terms carried the offset's powers into what only the
+    points identify: a PE member's static function at u + 1e5 moved by 6e-5 output units)."""
     if is_dask_data(records) or not is_closed(structure):
         return _dynamic(structure, records)
     recs = as_records(records)
@@ -364,6 +376,11 @@ def _data(structure: Structure, records: list) -> _Data:
         names = recs[0].input_names
         held = frozenset([n for i, n in enumerate(names) if is_held(us[:, i])] + (["y"] if is_held(ys) else []))
         off = {k: (0.0 if k in held else v) for k, v in off.items()}
+        if points is not None:
+            ub = np.asarray(points.ubar, float).reshape(len(points), -1)
+            for i, n in enumerate(names):
+                if n in held and ub.shape[1] == len(names):
+                    off[n] = _held_level(ub[:, i], float(us[0, i]))
         A, t = shift_map(structure, off)
     except (ValueError, KeyError, IndexError):  # records that do not fit the structure: _dynamic says so
         return _dynamic(structure, records)
@@ -1111,7 +1128,11 @@ def cls(
     solver = _check_solver(solver)
     _check_solver_options(solver_options, solver)
     recs = as_gram_records(data)
-    d = _data(st, recs)
+    try:  # the points that tell a held input's terms apart (:func:`_data`), if any; refused below, after the records
+        sp = static_info(static, data, curves=True)
+    except (ValueError, TypeError):
+        sp = None
+    d = _data(st, recs, sp if isinstance(sp, StaticPoints) else None)
     cons, ctx, curve = _cls_setup(st, recs, d, data, static, how, reference, constraints)
     if d.A is not None and not centrable(cons):  # constraints that are made on the raw signals only
         d = _dynamic(st, recs)
@@ -1301,7 +1322,14 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="fr
     check_choice(weights, "weights", ("mse", "sum"))
     recs = as_gram_records(data)
     cons = as_constraint_list(constraints)
-    d = _data(st, recs) if centre and centrable(cons) else _dynamic(st, recs)
+    if centre and centrable(cons):
+        try:  # the points that tell a held input's terms apart (:func:`_data`); refused below, after the records
+            held_pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
+        except (ValueError, TypeError):
+            held_pts = None
+        d = _data(st, recs, held_pts)
+    else:
+        d = _dynamic(st, recs)
     pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
     curve = static if isinstance(static, (StaticCurve, StaticSurface)) else None
     for p in [pts] + [getattr(c, "points", None) for c in cons]:
