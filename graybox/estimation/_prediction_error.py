@@ -20,9 +20,11 @@ the same monomials at steady state, so they come out near unit scale too); const
 normalised to unit norm; θ is reported in engineering units. The dynamic data enter through the
 triangular factor of ``[Ψ/s, y]``, so no solve grows with the record length N. A structure closed under shifts
 (every divisor of every term, as ``centre=True`` returns) is fitted, as ELS and SE fit it, on the signals less their
-means over the records, with the static points shifted alike, and θ mapped back (:func:`_data`): the fit is then the
-same model at any zero of y and u (on the raw signals y(k-1)² at y + 1e6 carried the offset's round-off, 1e-4, into
-the fit). The cvxpy problem
+means over the records, with the static points shifted alike, and θ mapped back (:func:`_data`), when its constraints
+are made there too (none, PassesThrough, StaticBand, GainBounds: :func:`centrable`; an input held over the records is
+centred on its static points): the fit is then the same model at any zero of y and u (on the raw signals y(k-1)² at
+y + 1e6 carried the offset's round-off, 1e-4, into the fit). With a curve's eq. (22), cluster bounds or a cvxpy
+constraint the fit stays on the raw signals and carries that round-off. The cvxpy problem
 goes one step further (:class:`_Basis`): its variable is the step from the least-squares estimate
 in a basis where both quadratic forms are diagonal (a generalised SVD of the two factors), so the
 ill-conditioning of a sweep down to λ1 = 1e-6 lives in a fixed change of variables rather than in
