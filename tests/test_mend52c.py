@@ -242,3 +242,21 @@ def test_defaults_spelled_out_as_the_cells_take_them_are_duplicates(est, a, b, k
 ])
 def test_variants_that_really_differ_are_kept(est, a, b, kw):
     assert len(_two_variants(est, a, b, **kw).variants) == 2
+
+
+def test_a_stored_unit_the_data_do_not_name_is_said_as_no_unit(tmp_path):
+    # the mismatch message quoted its fallback words: "gives its output in 'no unit'"
+    from graybox import experiments as gx
+
+    rows = ["t,u,y"] + [f"{k * 0.1:.1f},{1 + k % 3},{0.5 * k}" for k in range(30)]
+    for name in ("id.csv", "va.csv"):
+        (tmp_path / name).write_text("\n".join(rows) + "\n", encoding="utf-8")
+    (tmp_path / "st.csv").write_text("u,y\n1,2\n2,4\n3,6\n", encoding="utf-8")
+    rec = dict(u="u", y="y", time="t")
+    spec = {"name": "g", "data": [{"name": "m", "ident": dict(path="id.csv", **rec),
+                                   "valid": dict(path="va.csv", **rec), "static": dict(path="st.csv", u="u", y="y"),
+                                   "y_unit": "mlc"}],
+            "structures": [{"name": "one", "terms": ["y(k-1)", "u(k-1)", "1"]}],
+            "variants": [{"name": "LS", "estimator": "ls"}]}
+    with pytest.raises(gx.SpecError, match=r"gives its output in no unit, but the spec says y_unit = 'mlc'"):
+        gx.Grid.from_dict(spec, base_dir=tmp_path).load_data()

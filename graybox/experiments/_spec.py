@@ -1498,8 +1498,9 @@ class Grid:
                 raise SpecError(f"data set {d.name!r} cannot be loaded: {_toml_hints(str(exc))}", ("data", i)) from None
             said = getattr(self, "_y_units", {}).get(d.name)
             if said is not None and said != ds.valid.units[1]:  # a stored spec's unit: the data it was run on said it
-                raise SpecError(f"data set {d.name!r} gives its output in {ds.valid.units[1] or 'no unit'!r}, but the "
-                                f"spec says y_unit = {said!r}", ("data", i, "y_unit"))
+                given = repr(ds.valid.units[1]) if ds.valid.units[1] else "no unit"  # (not the quoted words 'no unit')
+                raise SpecError(f"data set {d.name!r} gives its output in {given}, but the spec says y_unit = {said!r}",
+                                ("data", i, "y_unit"))
             names = tuple(ds.input_names)
             for j, st in enumerate(self.structures):  # an input the data lack fails every cell of the structure
                 unknown = [n for n in _structure_inputs(st) if n not in names]
