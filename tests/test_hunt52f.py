@@ -257,3 +257,16 @@ def test_a_note_spanning_lines_of_numbers_is_still_read(tmp_path):
     p = tmp_path / "notes.csv"
     p.write_text('u,y,z,note\n1,2,0,"set to\n4,2"\n3,4,0,ok\n5,6,0,"a\n1,2,3"\n', encoding="utf-8")
     assert gb.load_record_csv(p, u="u", y="y", Ts=1.0).y.tolist() == [2.0, 4.0, 6.0]
+
+
+@pytest.mark.parametrize("col, refused", [("t [1/10 s]", True), ("t [1e-3 s]", True), ("t (2.5e-2 s)", True),
+                                          ("t [1 s]", False), ("Time (s)", False), ("t [1.0 s]", False)])
+def test_a_time_column_in_ticks_written_as_a_fraction_or_a_power_is_refused(tmp_path, col, refused):
+    # 't [1/10 s]' and 't [1e-3 s]' were read as seconds: a sampling period off by 10 or 1000 without a word
+    p = tmp_path / "r.csv"
+    p.write_text(f"{col},u,y\n" + "".join(f"{k},{k % 3},{0.5 * k}\n" for k in range(20)), encoding="utf-8")
+    if refused:
+        with pytest.raises(ValueError, match="time stamps are read as seconds"):
+            gb.load_record_csv(p, u="u", y="y", time=col)
+    else:
+        assert gb.load_record_csv(p, u="u", y="y", time=col).Ts == 1.0

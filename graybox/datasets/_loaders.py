@@ -943,8 +943,10 @@ def _input_columns(p: Path, u: object, y: object, input_names: object) -> tuple[
 #: A time column's name that states a unit other than seconds: "t [ms]", "time (min)", "t_ms", "Zeit/h".
 _TIME_UNIT = re.compile(r"(?:[\[(]\s*|[_/ -])(ms|msec|millis(?:econds?)?|us|µs|μs|usec|micros(?:econds?)?|ns|"
                         r"min|mins|minutes?|h|hr|hrs|hours?|d|days?)\s*[\])]?\s*$"
-                        # a tick of a PLC or logger: "Zeit [10ms]", "t (0.1 s)", "time [100 µs]" (but "[1 s]" is seconds)
-                        r"|[\[(]\s*((?!1(?:[.,]0*)?\s*s)(?:\d+(?:[.,]\d+)?|[.,]\d+)\s*(?:s|sec|secs|seconds?|ms|msec|us|µs|μs|ns|min))"
+                        # a tick of a PLC or logger: "Zeit [10ms]", "t (0.1 s)", "t [1/10 s]", "t [1e-3 s]", "time [100 µs]"
+                        # (but "[1 s]" is seconds)
+                        r"|[\[(]\s*((?!1(?:[.,]0*)?\s*s)(?:\d+(?:[.,]\d+)?|[.,]\d+)(?:e[-+]?\d+)?(?:\s*/\s*\d+(?:[.,]\d+)?)?\s*"
+                        r"(?:s|sec|secs|seconds?|ms|msec|us|µs|μs|ns|min))"
                         r"\s*[\])]\s*$", re.IGNORECASE)
 
 
