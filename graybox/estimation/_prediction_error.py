@@ -513,8 +513,13 @@ def _centred_affine(c: StaticConstraint, ctx: StaticContext, ctx_c: StaticContex
         ub, yb = c.grid(ctx)
         names = ctx_c.cluster_map.input_names if np.ndim(ub) > 1 else ()
         return c.rows_at(ctx_c, *d.run_levels(ub, yb, names))
+    return _centred_constraint(c, d).affine(ctx_c)
+
+
+def _centred_constraint(c: StaticConstraint, d: _Data) -> StaticConstraint:
+    """``c`` with its own points (if any) on the centred signals of ``d``."""
     pts = getattr(c, "points", None)
-    return (c if pts is None else replace(c, points=d.run_points(pts))).affine(ctx_c)
+    return c if pts is None else replace(c, points=d.run_points(pts))
 
 
 def _after_solve(cons: Sequence[StaticConstraint], ctx: StaticContext, d: _Data, z: np.ndarray) -> None:
@@ -532,9 +537,8 @@ def _after_solve(cons: Sequence[StaticConstraint], ctx: StaticContext, d: _Data,
             if d.A is None or type(c) not in _CENTRED_CONSTRAINTS:
                 raise
             ctx_c = _centred_context(ctx, d) if ctx_c is None else ctx_c
-            pts = getattr(c, "points", None)
             try:
-                (c if pts is None else replace(c, points=d.run_points(pts))).after_solve(z / d.s, ctx_c)
+                _centred_constraint(c, d).after_solve(z / d.s, ctx_c)
             except ValueError:
                 raise exc from None
 
@@ -1152,7 +1156,7 @@ def cls(
         qp.warn_inaccurate()
     theta = d.theta(z)
     _after_solve(cons, ctx, d, z)
-    info = static_info(static, data, curves=True)
+    info = sp  # (read above; _cls_setup has raised whatever reading it raises)
     model = Model(st, theta, name=name, **carried_from(recs, info))  # the records' input order, period and units
     return CLSResult(model, info,
                      tuple(c.describe() for c in cons), solver)
@@ -1324,15 +1328,13 @@ def _pe_setup(structure, data, static, constraints, weights, ubar, reference="fr
     check_choice(weights, "weights", ("mse", "sum"))
     recs = as_gram_records(data)
     cons = as_constraint_list(constraints)
-    if centre and centrable(cons):
-        try:  # the points that tell a held input's terms apart (:func:`_data`); refused below, after the records
-            held_pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
-        except (ValueError, TypeError):
-            held_pts = None
-        d = _data(st, recs, held_pts)
-    else:
-        d = _dynamic(st, recs)
-    pts = static_points(static, data, ubar=ubar, needed_by="the PE problem")
+    try:  # read first for the points that tell a held input's terms apart (:func:`_data`); refused after the records
+        pts, late = static_points(static, data, ubar=ubar, needed_by="the PE problem"), None
+    except (ValueError, TypeError) as exc:
+        pts, late = None, exc
+    d = _data(st, recs, pts) if centre and centrable(cons) else _dynamic(st, recs)
+    if late is not None:
+        raise late
     curve = static if isinstance(static, (StaticCurve, StaticSurface)) else None
     for p in [pts] + [getattr(c, "points", None) for c in cons]:
         _check_point_inputs(recs, p)
