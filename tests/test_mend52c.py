@@ -9,20 +9,9 @@ import pytest
 import graybox as gb
 from graybox.core import _validation
 
-STRUCT = ["y(k-1)", "u(k-1)", "u(k-1)^2", "1"]
+from test_hunt50l import STRUCT, _record  # the quadratic first-order plant those diagnostics tests use
 
-
-def _record(seed: int = 0, n: int = 300) -> gb.Record:
-    rng = np.random.default_rng(seed)
-    u = rng.uniform(0, 2, n)
-    e = 0.05 * rng.standard_normal(n)
-    y = np.zeros(n)
-    for k in range(1, n):
-        y[k] = 0.7 * y[k - 1] + 0.8 * u[k - 1] - 0.2 * u[k - 1] ** 2 + 0.1 + e[k]
-    return gb.Record(u, y, name="r")
-
-
-REC = _record()
+REC = _record(n=300)
 MODEL = gb.els(STRUCT, REC, noise=0).model
 
 
