@@ -902,6 +902,10 @@ class DaskCluster:
                         exc = result[1] if isinstance(result, tuple) and len(result) > 1 else result
                         if not isinstance(exc, BaseException):
                             exc = RuntimeError(f"the task ended as {f.status!r}")
+                        if getattr(exc, "reason", None) == "scheduler-connection-lost":
+                            # the client cancels every future once its scheduler is gone: the cluster was lost, the
+                            # cells were not run (failed rows would keep them out of the next run); said below
+                            raise ConnectionError(str(exc)) from exc
                         if isinstance(exc, KilledWorker):
                             # every cell of the batch goes back alone (the one that kills its worker
                             # is then found out); a second death makes a cell a failed row
