@@ -1,4 +1,5 @@
 import os
+import sys
 import time
 
 # One BLAS thread per process, set before numpy loads its BLAS (the test processes, the pytest beside the suite and
@@ -8,6 +9,14 @@ import time
 # threads ask for them (threadpool_limits); a value set by hand is kept.
 for _blas in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_blas, "1")
+
+# Bytecode is written while the suite runs, PYTHONDONTWRITEBYTECODE or not: with it set (as on this project's machines),
+# every process the suite starts (worker processes, Dask workers, notebook kernels, the pytest beside it, the commands
+# it runs) compiled graybox's 43,000 lines again, and pytest rewrote the tests' asserts again in each pytest (17 s of
+# the suite's collection). Measured on 2 cores: 435 s with it set, 420 s without, from a fresh checkout (BENCHMARKS.md).
+# The caches land in the ``__pycache__`` folders the numba kernels' caches already use (git ignores them).
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+sys.dont_write_bytecode = False
 
 import numpy as np
 import pytest
@@ -209,7 +218,9 @@ BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.
           # files of one process each, so that the two pytests end together (the suite's tests' times summed to 1489 s
           # against the beside run's 788 s under load, 2026-11-27): the share they take is one core's, not both
           "test_divergence_bound.py", "test_slow_modes.py", "test_hunt30c.py", "test_constant_output.py",
-          "test_uncertainty.py", "test_siso_pins.py", "test_control.py")
+          "test_uncertainty.py", "test_siso_pins.py", "test_control.py",
+          # mostly waiting (clusters starting, cell time limits, processes killed): their waits overlap the suite's work
+          "test_review47e.py")
 _BESIDE_ENV = "GRAYBOX_TESTS_BESIDE"  # set in that pytest (to the suite's process id): it runs them itself
 _BESIDE_RUN = pytest.StashKey[dict]()
 #: Seconds the suite waits for the pytest beside it from its start (CI allows 600 for the whole suite), or 1.3 times
