@@ -29,3 +29,29 @@ def test_a_time_column_in_seconds_is_still_read(tmp_path, col):
     p = tmp_path / "r.csv"
     p.write_text(f"{col};u;y\n" + "".join(f"{k / 2};{k % 3};{0.5 * k}\n" for k in range(8)), encoding="utf-8")
     assert gb.load_record_csv(p, u="u", y="y", time=col).Ts == 0.5
+
+
+# ---- 5efd509 / 809d665: y_unit in a [[data]] table only checks the unit: the refusal says how to name one -----------
+def test_a_y_unit_the_csv_data_do_not_give_says_how_to_name_their_unit(tmp_path):
+    # 5efd509 took y_unit in a [[data]] table (a stored spec's), held to the data's unit: a spec writing it to give
+    # its CSV data a unit was refused as "gives its output in no unit, but the spec says y_unit = 'mlc'", without
+    # the key that names a unit (the file tables' units, or units_row)
+    from graybox import experiments as gx
+
+    rows = ["t,u,y"] + [f"{k * 0.1:.1f},{1 + k % 3},{0.5 * k}" for k in range(12)]
+    for name in ("id.csv", "va.csv"):
+        (tmp_path / name).write_text("\n".join(rows) + "\n", encoding="utf-8")
+    (tmp_path / "st.csv").write_text("u,y\n1,2\n2,4\n3,6\n", encoding="utf-8")
+    rec = dict(u="u", y="y", time="t")
+    spec = {"name": "g", "data": [{"name": "m", "ident": dict(path="id.csv", **rec), "valid": dict(path="va.csv", **rec),
+                                   "static": dict(path="st.csv", u="u", y="y"), "y_unit": "mlc"}],
+            "structures": [{"name": "one", "terms": ["y(k-1)", "u(k-1)", "1"]}],
+            "variants": [{"name": "LS", "estimator": "ls"}]}
+    with pytest.raises(gx.SpecError, match=r"gives its output in no unit, but the spec says y_unit = 'mlc'.*"
+                                           r"units = \[input unit, output unit\]"):
+        gx.Grid.from_dict(spec, base_dir=tmp_path).load_data()
+    # named as the hint says, the data give the unit y_unit holds them to
+    named = dict(rec, units=["", "mlc"])
+    spec["data"][0].update(ident=dict(path="id.csv", **named), valid=dict(path="va.csv", **named),
+                           static=dict(path="st.csv", u="u", y="y", units=["", "mlc"]))
+    assert gx.Grid.from_dict(spec, base_dir=tmp_path).load_data()["m"].valid.units[1] == "mlc"

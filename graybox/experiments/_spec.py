@@ -1499,8 +1499,12 @@ class Grid:
             said = getattr(self, "_y_units", {}).get(d.name)
             if said is not None and said != ds.valid.units[1]:  # a stored spec's unit: the data it was run on said it
                 given = repr(ds.valid.units[1]) if ds.valid.units[1] else "no unit"  # (not the quoted words 'no unit')
-                raise SpecError(f"data set {d.name!r} gives its output in {given}, but the spec says y_unit = {said!r}",
-                                ("data", i, "y_unit"))
+                # y_unit only checks (a stored spec's record of the unit): CSV data are given theirs in the file tables
+                how = ("; y_unit names no unit, it holds the data to theirs: give the CSV files' units as units = "
+                       "[input unit, output unit] in the ident, valid and static tables (or units_row = true)"
+                       if d.bundled is None and d.dataset is None else "")
+                raise SpecError(f"data set {d.name!r} gives its output in {given}, but the spec says y_unit = {said!r}"
+                                f"{how}", ("data", i, "y_unit"))
             names = tuple(ds.input_names)
             for j, st in enumerate(self.structures):  # an input the data lack fails every cell of the structure
                 unknown = [n for n in _structure_inputs(st) if n not in names]
