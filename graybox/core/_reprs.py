@@ -9,6 +9,7 @@ summarises the rest (an array by its shape, a long sequence by its length), so `
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -100,7 +101,7 @@ def exact_text(x: float) -> str:
         return f"{x:g}"
     for digits in range(6, 18):
         text = f"{x:.{digits}g}"
-        if abs(float(text) - x) <= 4 * np.spacing(abs(x)):
+        if abs(float(text) - x) <= 4 * math.ulp(x):  # (np.spacing of the largest float is inf, and warns)
             return text
     return repr(x)
 
