@@ -42,14 +42,19 @@ def check_rows(rows: int, n: int, what: str = "") -> None:
         raise ValueError(f"{what}{rows} regression rows for {n} parameters: the data are too short")
 
 
+#: The smallest RMS whose mean square is a normal float (below it the squares lose their bits).
+_SQRT_TINY = float(np.sqrt(np.finfo(float).tiny))
+
+
 def column_scales(A: np.ndarray) -> np.ndarray:
     """RMS of each column of ``A`` (1 for an all-zero column), shape (n,)."""
     A = np.asarray(A, dtype=float)
     with np.errstate(over="ignore", under="ignore"):
         s = np.sqrt(np.mean(A**2, axis=0))
-    # squaring a large finite column (y(k-1)^2 ~ 1e300) overflowed to an inf scale (a tiny one underflowed to 0):
-    # such columns' RMS is taken through their largest |value| (the others as before, to the bit)
-    far = (~np.isfinite(s) | ((s == 0) & np.any(A, axis=0))) & np.all(np.isfinite(A), axis=0)
+    # squaring a large finite column (y(k-1)^2 ~ 1e300) overflowed to an inf scale (a tiny one underflowed to 0, or
+    # to a subnormal mean square of a few bits): such columns' RMS is taken through their largest |value| (the others
+    # as before, to the bit)
+    far = (~np.isfinite(s) | ((s < _SQRT_TINY) & np.any(A, axis=0))) & np.all(np.isfinite(A), axis=0)
     if np.any(far):
         B = A[:, far]
         m = np.max(np.abs(B), axis=0)
