@@ -41,3 +41,30 @@ def test_column_scales_of_a_tiny_column_whose_squares_are_subnormal(col):
         warnings.simplefilter("error")
         s = column_scales(A)
     np.testing.assert_allclose(s, [want, np.sqrt(np.mean(A[:, 1] ** 2))], rtol=1e-14)
+
+
+def test_column_scales_of_ordinary_columns_reads_them_no_more_than_their_rms(monkeypatch):
+    # e6da7aa computed np.any(A) and np.all(np.isfinite(A)) over every column of every call, to flag the few columns
+    # whose RMS overflows or underflows: 10× the RMS's own time on a 100000 × 30 regression (77 ms for 7), 14 % of an
+    # ELS fit's time at N = 1e5; only the columns flagged by their RMS are read again
+    import graybox.core._least_squares as least_squares
+
+    sizes = []
+
+    class Counted:
+        def __getattr__(self, name):
+            return getattr(np, name)
+
+        def any(self, a, *args, **kw):
+            sizes.append(np.size(a))
+            return np.any(a, *args, **kw)
+
+        def all(self, a, *args, **kw):
+            sizes.append(np.size(a))
+            return np.all(a, *args, **kw)
+
+    monkeypatch.setattr(least_squares, "np", Counted())
+    A = np.column_stack([np.linspace(1.0, 2.0, 50), np.zeros(50), np.full(50, 1e200)])
+    s = least_squares.column_scales(A)
+    assert max(sizes, default=0) <= 2 * A.shape[0]  # the all-zero and the large column, not all three
+    np.testing.assert_allclose(s, [np.sqrt(np.mean(A[:, 0] ** 2)), 1.0, 1e200], rtol=1e-14)

@@ -54,9 +54,12 @@ def column_scales(A: np.ndarray) -> np.ndarray:
     # squaring a large finite column (y(k-1)^2 ~ 1e300) overflowed to an inf scale (a tiny one underflowed to 0, or
     # to a subnormal mean square of a few bits): such columns' RMS is taken through their largest |value| (the others
     # as before, to the bit)
-    far = (~np.isfinite(s) | ((s < _SQRT_TINY) & np.any(A, axis=0))) & np.all(np.isfinite(A), axis=0)
-    if np.any(far):
+    # (only the columns so flagged are read again: np.any and np.all over the whole of A cost up to 10× the RMS)
+    far = np.flatnonzero(~np.isfinite(s) | (s < _SQRT_TINY))
+    if far.size:
         B = A[:, far]
+        keep = np.all(np.isfinite(B), axis=0) & np.any(B, axis=0)  # not a NaN's or an all-zero column
+        far, B = far[keep], B[:, keep]
         m = np.max(np.abs(B), axis=0)
         s = np.array(s, dtype=float, ndmin=1)
         s[far] = m * np.sqrt(np.mean((B / m) ** 2, axis=0))
