@@ -68,3 +68,32 @@ def test_column_scales_of_ordinary_columns_reads_them_no_more_than_their_rms(mon
     s = least_squares.column_scales(A)
     assert max(sizes, default=0) <= 2 * A.shape[0]  # the all-zero and the large column, not all three
     np.testing.assert_allclose(s, [np.sqrt(np.mean(A[:, 0] ** 2)), 1.0, 1e200], rtol=1e-14)
+
+
+def test_semp_takes_an_input_whose_square_is_subnormal_without_a_warning():
+    # e6da7aa scaled a tiny candidate column by its true RMS where it had been a zero column (its squares underflowed):
+    # an input about 1e-160 made u(k-1)^2 about 1e-320, whose θ (about 1e320) overflowed in the bordered fits, and
+    # numpy warned 'overflow encountered in divide' from semp (an error under warnings-as-errors); such a candidate's
+    # row is inf, scored as a run that diverges
+    rng = np.random.default_rng(3)
+    u = rng.uniform(1, 2, 40)
+    y = np.zeros(40)
+    for k in range(1, 40):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.001 * rng.standard_normal()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sel = gb.semp(gb.Candidates(1, 1, degree=2), gb.Record(u * 1e-160, y, Ts=1.0), n_terms=2)
+    assert sorted(map(str, sel.structure)) == ["u(k-1)", "y(k-1)"]
+
+
+def test_semp_refuses_an_included_term_whose_parameter_is_beyond_the_float_range():
+    rng = np.random.default_rng(3)
+    u = rng.uniform(1, 2, 40)
+    y = np.zeros(40)
+    for k in range(1, 40):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.001 * rng.standard_normal()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] cannot be used on these data: .* beyond the float"):
+            gb.semp(gb.Candidates(1, 1, degree=2), gb.Record(u * 1e-160, y, Ts=1.0), n_terms=2,
+                    include=["u(k-1)^2"])

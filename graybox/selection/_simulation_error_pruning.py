@@ -182,7 +182,8 @@ class _Scorer:
         d = np.abs(np.diag(R))
         if d.min() <= 1e-7 * d.max():
             return None
-        th[S] = scipy.linalg.solve_triangular(R, Q.T @ self.R[:, -1]) / self.s[S]
+        with np.errstate(over="ignore"):  # a θ beyond the float range is inf (scored as a diverging run)
+            th[S] = scipy.linalg.solve_triangular(R, Q.T @ self.R[:, -1]) / self.s[S]
         return th
 
     def bordered(self, S: list[int], cands: np.ndarray, rank_tol: float) -> np.ndarray:
@@ -193,7 +194,9 @@ class _Scorer:
         if not S:
             ok = (Gcc > 0) & ~self.zero[cands]
             bc = self.R[:, cands].T @ self.R[:, -1]
-            with np.errstate(divide="ignore", invalid="ignore"):
+            # (over: a candidate whose θ is beyond the float range, u ~ 1e-160 giving u² ~ 1e-320 and θ ~ 1e320, has an
+            # inf row, scored as a run that diverges)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 out[np.arange(cands.size), cands] = np.where(ok, bc / Gcc, np.nan) / self.s[cands]
             out[~ok] = np.nan
             return out
@@ -210,8 +213,9 @@ class _Scorer:
         dd = np.where(ok, d, 1.0)
         zc = (T[k:].T @ ty[k:]) / dd
         ZS = scipy.linalg.solve_triangular(R, w[:, None] - V * zc[None, :])  # (k, C)
-        out[:, S] = (ZS / self.s[S, None]).T
-        out[np.arange(cands.size), cands] = zc / self.s[cands]
+        with np.errstate(over="ignore"):  # a θ beyond the float range: an inf row, scored as a diverging run
+            out[:, S] = (ZS / self.s[S, None]).T
+            out[np.arange(cands.size), cands] = zc / self.s[cands]
         out[~ok] = np.nan
         return out
 
@@ -469,6 +473,9 @@ class _Search:
         th = sc.fit(self.current)
         if th is None:
             raise ValueError(f"the included terms {[self.names[j] for j in opt.forced]} are collinear on these data")
+        if not np.all(np.isfinite(th)):
+            raise ValueError(f"the included terms {[self.names[j] for j in opt.forced]} cannot be used on these data: "
+                             "their least-squares parameters are beyond the float range")
         self.th = th
         # the empty structure predicts 0: its free-run error is the output's mean square
         self.score = (float(sc.scores(th)[0]) if self.current
