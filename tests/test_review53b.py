@@ -97,3 +97,21 @@ def test_semp_refuses_an_included_term_whose_parameter_is_beyond_the_float_range
         with pytest.raises(ValueError, match=r"\['u\(k-1\)\^2'\] cannot be used on these data: .* beyond the float"):
             gb.semp(gb.Candidates(1, 1, degree=2), gb.Record(u * 1e-160, y, Ts=1.0), n_terms=2,
                     include=["u(k-1)^2"])
+
+
+def test_els_of_a_term_whose_parameter_is_beyond_the_float_range_says_so_without_a_warning():
+    # e6da7aa scaled a column of about 1e-320 (u(k-1)^2 of an input about 1e-160) by its RMS where it had been left
+    # at 1 (its squares underflowed, and ELS refused the structure as not identifiable): its θ, about 5e318, overflowed
+    # in scaled_lstsq's x / s, numpy warned 'overflow encountered in divide' and ELS failed on 'theta has non-finite
+    # values at [2]'; scaled_lstsq refuses such a solve, saying why
+    rng = np.random.default_rng(3)
+    u = rng.uniform(1, 2, 30)
+    y = np.zeros(30)
+    for k in range(1, 30):
+        y[k] = 0.5 * y[k - 1] + 0.3 * u[k - 1] + 0.05 * u[k - 1] ** 2 + 0.001 * rng.standard_normal()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="beyond the float range"):
+            gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], gb.Record(u * 1e-160, y, Ts=1.0), noise=0)
+        theta = gb.els(["y(k-1)", "u(k-1)", "u(k-1)^2"], gb.Record(u * 1e-150, y, Ts=1.0), noise=0).model.theta
+    np.testing.assert_allclose(theta * [1, 1e-150, 1e-300], [0.5, 0.3, 0.05], atol=0.02)

@@ -117,8 +117,8 @@ def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np
     Raises
     ------
     ValueError
-        When A or b has non-finite values, the shapes disagree, or A is rank deficient after
-        scaling (the parameters are not identifiable from these data).
+        When A or b has non-finite values, the shapes disagree, A is rank deficient after
+        scaling (the parameters are not identifiable from these data), or a parameter is beyond the float range.
     """
     A = np.asarray(A, dtype=float)
     b = np.asarray(b, dtype=float)
@@ -133,7 +133,13 @@ def scaled_lstsq(A: np.ndarray, b: np.ndarray, rcond: float | None = None) -> np
             f"least squares: regressor matrix has rank {rank} < {A.shape[1]} columns "
             "(collinear or constant terms: the parameters are not identifiable from these data)"
         )
-    return x / s
+    with np.errstate(over="ignore"):  # a column of 1e-320 for a target of 1 has a θ of 1e320, not a float
+        theta = x / s
+    if not np.all(np.isfinite(theta)):
+        raise ValueError(f"least squares: the parameter(s) of column(s) {np.flatnonzero(~np.isfinite(theta)).tolist()} "
+                         "are beyond the float range (those columns are too small beside the target in these units: "
+                         "rescale the signals)")
+    return theta
 
 
 def rank_tolerance(largest: float, rows: int, n: int = 0) -> float:
