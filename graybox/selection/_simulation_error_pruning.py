@@ -194,8 +194,8 @@ class _Scorer:
         if not S:
             ok = (Gcc > 0) & ~self.zero[cands]
             bc = self.R[:, cands].T @ self.R[:, -1]
-            # (over: a candidate whose θ is beyond the float range, u ~ 1e-160 giving u² ~ 1e-320 and θ ~ 1e320, has an
-            # inf row, scored as a run that diverges)
+            # (over: a candidate whose θ is beyond the float range, u ~ 1e-160 giving u² ~ 1e-320 and θ ~ 1e320,
+            # has an inf row, scored as a run that diverges)
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 out[np.arange(cands.size), cands] = np.where(ok, bc / Gcc, np.nan) / self.s[cands]
             out[~ok] = np.nan
