@@ -206,36 +206,51 @@ def finish_site_build(build: dict) -> tuple[int, str, "object"]:
 
 
 # --- tests run beside the rest of the suite ---------------------------------------------------------------------
-# The suite runs on one core while the second idles once the site build ends; these tests (the README's and the
-# selection guide's select_graybox calls on the bundled plant, 20-27 s each, and the files whose tests start worker
-# processes, Dask clusters or notebook kernels) run in a pytest of their own, started as the suite begins; the
-# suite's items of them run last and take its verdicts. An entry is a file, or a file's test.
+# The suite's tests run one after another in one process; these run in pytests of their own (lanes), started as the
+# suite begins, and the suite's items of them run last and take their verdicts. An entry is a file, or a file's test.
+# BESIDE: work that keeps a core busy (the README's and the selection guide's select_graybox calls on the bundled
+# plant, notebooks, the files of one process each), so that the suite and it end together. WAITING: tests that mostly
+# wait (Dask clusters starting, cell time limits running out, processes killed and replaced): their waits overlap the
+# other lanes' work instead of lengthening one of them. `pytest` says each lane's time at the end; BENCHMARKS.md keeps
+# the measurements the split follows (2026-11-28: the suite 366 s, BESIDE 198 s, WAITING 253 s of tests alone).
 BESIDE = ("test_guide_code.py::test_every_python_block_of_a_page_runs[selection.md]",
           "test_readme_api.py::test_selection_example_runs",
-          "test_grid_executors.py", "test_select_checkpoint.py", "test_notebooks.py", "test_parallel_map_errors.py",
-          "test_bootstrap.py", "test_review44d.py", "test_grid42a.py", "test_gram.py", "test_hunt36a.py",
-          "test_review40d.py",
-          # files of one process each, so that the two pytests end together (the suite's tests' times summed to 1489 s
-          # against the beside run's 788 s under load, 2026-11-27): the share they take is one core's, not both
+          "test_select_checkpoint.py", "test_notebooks.py", "test_bootstrap.py", "test_gram.py", "test_hunt36a.py",
           "test_divergence_bound.py", "test_slow_modes.py", "test_hunt30c.py", "test_constant_output.py",
           "test_uncertainty.py", "test_siso_pins.py", "test_control.py",
-          # mostly waiting (clusters starting, cell time limits, processes killed): their waits overlap the suite's work
-          "test_review47e.py")
+          "test_select_graybox.py", "test_hunt28.py", "test_grid_growth.py")
+WAITING = ("test_grid_executors.py", "test_review44d.py", "test_review40d.py", "test_review47e.py", "test_grid42a.py",
+           "test_parallel_map_errors.py", "test_grid_claims.py", "test_share41a.py", "test_review42f.py",
+           "test_review43d.py", "test_review48i.py", "test_dask_scratch.py", "test_review41e.py",
+           "test_mend49d.py::test_a_cell_stopped_past_the_time_limit_on_dask_says_its_child_process_was_stopped_not_its_worker",
+           "test_mend49d.py::test_a_cell_stopped_past_the_time_limit_in_a_process_pool_names_its_worker_process")
+LANES = {"beside": BESIDE, "waiting": WAITING}
 _BESIDE_ENV = "GRAYBOX_TESTS_BESIDE"  # set in that pytest (to the suite's process id): it runs them itself
-_BESIDE_RUN = pytest.StashKey[dict]()
-#: Seconds the suite waits for the pytest beside it from its start (CI allows 600 for the whole suite), or 1.3 times
+_BESIDE_RUN = pytest.StashKey[dict]()  # lane name -> its run (start_beside)
+_SUITE_START = pytest.StashKey[float]()
+_SUITE_END = pytest.StashKey[float]()
+#: Seconds the suite waits for a pytest beside it from its start (CI allows 600 for the whole suite), or 1.3 times
 #: the suite's own time to its first item of them if that is longer (a loaded machine slows both alike): past them it is
 #: killed and its tests fail with its output, rather than the suite waiting on a hung test for ever.
 BESIDE_LIMIT = 540
 
 
+def lane_of(item) -> str | None:
+    """The name of the lane (:data:`LANES`) that runs ``item`` beside the suite, or None (the suite runs it)."""
+    for name, entries in LANES.items():
+        if item.path.name in entries or f"{item.path.name}::{item.name}" in entries:
+            return name
+    return None
+
+
 def runs_beside(item) -> bool:
-    """Whether ``item`` is one of :data:`BESIDE`'s tests."""
-    return item.path.name in BESIDE or f"{item.path.name}::{item.name}" in BESIDE
+    """Whether ``item`` runs in a pytest beside the suite (one of :data:`LANES`)."""
+    return lane_of(item) is not None
 
 
-def start_beside(items) -> dict:
-    """Start ``python -m pytest`` of ``items`` in its own session, its verdicts in a JUnit XML file."""
+def start_beside(items, lane: str = "beside") -> dict:
+    """Start ``python -m pytest`` of ``items`` in its own session, its verdicts in a JUnit XML file; ``lane`` names it
+    in what the suite says."""
     import os
     import subprocess
     import sys
@@ -251,7 +266,7 @@ def start_beside(items) -> dict:
                                 stdout=out, stderr=subprocess.STDOUT, cwd=items[0].config.rootpath,
                                 stdin=subprocess.DEVNULL, start_new_session=True,
                                 env=dict(os.environ, **{_BESIDE_ENV: str(os.getpid())}))
-    return {"proc": proc, "tmp": tmp, "start": time.monotonic()}
+    return {"proc": proc, "tmp": tmp, "start": time.monotonic(), "lane": lane}
 
 
 def _kill_group(proc) -> None:
@@ -351,10 +366,16 @@ def pytest_collection_modifyitems(session, config, items):
         return
     beside = [] if os.environ.get(_BESIDE_ENV) else [item for item in items if runs_beside(item)]
     if beside:
-        run = config.stash[_BESIDE_RUN] = start_beside(beside)
+        runs = config.stash[_BESIDE_RUN] = {}
+        for lane in LANES:
+            mine = [item for item in beside if lane_of(item) == lane]
+            if mine:
+                runs[lane] = start_beside(mine, lane)
         for item in beside:
+            run = runs[lane_of(item)]
             for when, method in (("setup", "setup"), ("call", "runtest"), ("teardown", "teardown")):
-                setattr(item, method, (lambda it, w: lambda: _verdict_of(it, run, w))(item, when))
+                setattr(item, method, (lambda it, r, w: lambda: _verdict_of(it, r, w))(item, run, when))
+        config.stash[_SUITE_START] = time.monotonic()
     docs = [item for item in items if item.path.name == DOCS_TESTS]
     last = beside + docs
     if not last:
@@ -371,13 +392,36 @@ def site_build(config) -> dict:
     return config.stash[_SITE_BUILD]
 
 
+def pytest_runtest_setup(item):
+    # the first item of a lane's: the suite's own tests have ended
+    if runs_beside(item) and _SUITE_START in item.config.stash and _SUITE_END not in item.config.stash:
+        item.config.stash[_SUITE_END] = time.monotonic()
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    """One line: how long the suite's own tests and each lane beside them took (their verdicts' times), so that a
+    lane that ends long after the others is seen (:data:`LANES`)."""
+    import xml.etree.ElementTree as ET
+
+    runs = config.stash.get(_BESIDE_RUN, None)
+    if not runs or _SUITE_END not in config.stash:
+        return
+    said = [f"the suite's own tests {config.stash[_SUITE_END] - config.stash[_SUITE_START]:.0f} s"]
+    for lane, run in runs.items():
+        try:
+            said.append(f"{lane} {float(ET.parse(run['tmp'] / 'verdicts.xml').getroot()[0].get('time')):.0f} s")
+        except (OSError, ET.ParseError, IndexError, TypeError, ValueError):
+            said.append(f"{lane} (no time)")
+    terminalreporter.write_line("lanes: " + ", ".join(said))
+
+
 def pytest_unconfigure(config):
     import shutil
 
-    for key in (_SITE_BUILD, _BESIDE_RUN):
-        started = config.stash.get(key, None)
-        if started is None:
+    started = [config.stash.get(_SITE_BUILD, None), *config.stash.get(_BESIDE_RUN, {}).values()]
+    for run in started:
+        if run is None:
             continue
-        if started["proc"].poll() is None:  # the suite stopped before its tests waited for it
-            _kill_group(started["proc"])
-        shutil.rmtree(started["tmp"], ignore_errors=True)
+        if run["proc"].poll() is None:  # the suite stopped before its tests waited for it
+            _kill_group(run["proc"])
+        shutil.rmtree(run["tmp"], ignore_errors=True)
