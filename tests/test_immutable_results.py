@@ -166,3 +166,24 @@ def test_a_dataset_s_extra_is_a_read_only_copy():
     import pickle  # a Dataset still travels to worker processes
 
     assert pickle.loads(pickle.dumps(data)).extra["seed"] == 1
+
+
+def test_the_arrays_of_records_models_and_static_points_cannot_be_made_writeable_again(tmp_path):
+    """A read-only array that owns its memory is made writeable by ``a.flags.writeable = True``, and a Record's y or
+    a Model's θ could then be edited in place; their memory is now immutable, so the flag is refused (on the base
+    too), for values made and for values loaded."""
+    rec = gb.Record(np.linspace(0.0, 1.0, 12), np.linspace(1.0, 2.0, 12), name="r")
+    rec2 = gb.Record(np.ones((12, 2)), np.zeros(12), name="two inputs")
+    model = gb.Model(["y(k-1)", "u(k-1)"], [0.5, 1.0])
+    points = gb.StaticPoints([1.0, 2.0], [3.0, 4.0], uncertainty=[0.1, 0.2])
+    loaded = gb.load(gb.save(model, tmp_path / "m.json"))
+    arrays = {"Record.u": rec.u, "Record.y": rec.y, "Record.u (two inputs)": rec2.u, "Model.theta": model.theta,
+              "StaticPoints.ubar": points.ubar, "StaticPoints.ybar": points.ybar,
+              "StaticPoints.uncertainty": points.uncertainty, "loaded Model.theta": loaded.theta}
+    for name, a in arrays.items():
+        for target in (a, a.base):
+            if isinstance(target, np.ndarray):
+                with pytest.raises(ValueError, match="WRITEABLE"):
+                    target.flags.writeable = True
+        assert not a.flags.writeable, name
+    np.testing.assert_array_equal(model.theta, [0.5, 1.0])

@@ -19,7 +19,7 @@ import numpy as np
 
 from ._reprs import listed, range_text
 from ._terms import check_input_names, default_input_names, transient_source
-from ._validation import (as_1d_finite, check_int, check_per_point, check_real, check_str, float_array, frozen_value,
+from ._validation import (as_1d_finite, locked, check_int, check_per_point, check_real, check_str, float_array, frozen_value,
                           refuse_non_real, warn)
 
 __all__ = ["Record", "StaticPoints", "StaticRangeWarning", "warn_static_range"]
@@ -145,9 +145,7 @@ def as_input_array(x: object, name: str, names: Sequence[str] | None = None, *, 
         said = names if names is not None and len(names) == a.shape[1] else default_input_names(a.shape[1])
         raise ValueError(f"{name} has {int(bad.sum())} non-finite value(s) (NaN or inf), first at {row} {r}, input "
                          f"{said[c]!r}")
-    a = np.ascontiguousarray(a)
-    a.setflags(write=False)
-    return a
+    return locked(a)
 
 
 def _lengths(name: str, u_name: str, y_name: str, u: np.ndarray, y: np.ndarray) -> str:
@@ -327,8 +325,7 @@ class StaticPoints:
         object.__setattr__(self, "input_names", names)
         object.__setattr__(self, "units", check_units(self.units, self.name))
         if self.uncertainty is not None:
-            d = _uncertainty(self.uncertainty, y.size, self.name, "point")
-            d.setflags(write=False)
+            d = locked(_uncertainty(self.uncertainty, y.size, self.name, "point"))
             object.__setattr__(self, "uncertainty", d)
 
     def __len__(self) -> int:
@@ -1014,9 +1011,7 @@ class RecordPrint:
                              f"(want {self.length // self.block + 1})")
         if not self.input_names or not all(isinstance(n, str) for n in self.input_names):
             raise ValueError("RecordPrint: input_names must name one or more inputs")
-        d = d.copy()
-        d.setflags(write=False)
-        object.__setattr__(self, "digests", d)
+        object.__setattr__(self, "digests", locked(d))
         object.__setattr__(self, "input_names", tuple(self.input_names))
 
 

@@ -595,15 +595,24 @@ def as_1d_finite(x: object, name: str) -> np.ndarray:
     if bad.any():
         idx = np.flatnonzero(bad)
         raise ValueError(f"{name} has {idx.size} non-finite value(s) (NaN or inf), first at index {idx[0]}")
-    a.setflags(write=False)
-    return a
+    return locked(a)
+
+
+def locked(a: np.ndarray) -> np.ndarray:
+    """A copy of ``a`` (shape and dtype kept) that nothing can make writeable again: its memory is an immutable
+    ``bytes`` object, so ``flags.writeable = True`` is refused on it and on its base (a read-only array that owns its
+    memory could be made writeable, and a value edited in place through it). Object arrays are copied read-only."""
+    a = np.asarray(a)
+    if a.dtype.hasobject:
+        x = a.copy()
+        x.setflags(write=False)
+        return x
+    return np.frombuffer(np.ascontiguousarray(a).tobytes(), dtype=a.dtype).reshape(a.shape)
 
 
 def frozen(a: object, dtype: type = float) -> np.ndarray:
-    """A read-only copy of ``a``: how every immutable value in graybox stores its arrays."""
-    x = np.array(a, dtype=dtype, copy=True)
-    x.setflags(write=False)
-    return x
+    """A read-only copy of ``a`` (:func:`locked`): how every immutable value in graybox stores its arrays."""
+    return locked(np.asarray(a, dtype=dtype))
 
 
 def _is_pandas(x: object) -> bool:

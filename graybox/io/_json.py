@@ -82,7 +82,7 @@ from ..selection._forward_regression import Selection
 from ..selection._simulation_error_pruning import SEMPResult
 from ..core._records import Dataset, Record, RecordPrint, StaticPoints, check_units
 from ..core._files import bom_encoding, write_atomically
-from ..core._validation import MAX_NESTING, FrozenMap, check_path
+from ..core._validation import MAX_NESTING, FrozenMap, check_path, locked
 from ..core._version import graybox_version
 from ..core._terms import Structure, parse_term
 from ..static._analysis import Equilibrium
@@ -180,9 +180,7 @@ class _Reader:
         out = [self.array(r, f"{where}[{i}]", ndim - 1) for i, r in enumerate(rows)]
         if ndim > 1 and len({o.shape for o in out}) > 1:
             raise self.fail(where, "rows of different lengths")
-        a = np.zeros((0,) * ndim) if not out else np.array(out, dtype=float)
-        a.setflags(write=False)  # loaded values are as immutable as computed ones
-        return a
+        return locked(np.zeros((0,) * ndim) if not out else np.array(out, dtype=float))  # as computed ones
 
     def floats(self, v: Any, where: str) -> tuple[float, ...]:
         return tuple(self.float(x, f"{where}[{i}]") for i, x in enumerate(self.list(v, where)))
@@ -449,8 +447,7 @@ _PLAIN_TAGS = ("float", "scalar", "array", "tuple", "list", "map", "type")
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
-    a.setflags(write=False)  # loaded values are as immutable as computed ones
-    return a
+    return locked(a)  # loaded values are as immutable as computed ones
 
 
 def _enc_plain_map(v: Mapping, where: str, depth: int = 0) -> dict:
