@@ -795,12 +795,14 @@ def _searched(candidates: gb.Structure, ident, sizes: list[int], sources, forced
             # the best subset of each size by a non-greedy search (frols(search=...)), one size at a time:
             # a criterion run would cut the sizes its criterion rules out, which the choice here compares
             reached[src] = set()
+            n0 = max(len(gb.Structure(list(forced))), 1)
             for k in sizes:
+                if k < n0:  # every structure holds the included terms: no subset of k, as the paths above reach none
+                    continue
                 try:
                     sel = gb.frols(candidates, ident, n_terms=k, include=forced, search=src)
                 except FewerTermsError as e:  # fewer usable or independent candidates: the sizes below are reached
                     # named as frols names its own (else an unreached size read "reached: {'exact': []}")
-                    n0 = max(len(gb.Structure(list(forced))), 1)
                     reached[src] |= set(range(n0, (e.reached or 0) + 1))
                     break
                 reached[src].add(k)
