@@ -30,3 +30,29 @@ def test_a_size_below_the_included_terms_is_left_out_by_every_source(small, sour
         s = gb.select_graybox(gb.Candidates(ny=1, nu=1, degree=1), small, estimator="ls", include=["1", "y(k-1)"],
                               sizes=[1, 2, 3], sources=sources)
     assert set(s.table["size"]) == {2, 3}
+
+
+def _two_levels_late(first=1.0, second=2.0):
+    # a first-order plant whose input takes two levels in these 12 samples: u(k-1)^2 is a combination of u(k-1) and 1
+    u = np.array([first] * 5 + [second] * 7)
+    y = np.zeros(12)
+    for k in range(1, 12):
+        y[k] = 0.7 * y[k - 1] + 0.2 * u[k - 1] + 0.05 * u[k - 1] ** 2
+    return gb.Record(u, y, name=f"levels {first:g}, {second:g}")
+
+
+@pytest.mark.filterwarnings("ignore:the validation record's 11 error samples:graybox.SelectionWarning")
+@pytest.mark.parametrize("search", ["swap", "exact"])
+def test_a_subset_search_that_cannot_reach_the_size_says_how_many_it_can(search):
+    # greedy frols said "only 2 independent terms could be selected" (FewerTermsError.reached = 2); the swap and exact
+    # searches said "no subset of 3 independent terms" with reached None, so select_graybox reported them as reaching
+    # no size at all: "no search reached any of the sizes [3] (reached: {'frols': [1, 2], 'swap': [], 'exact': []})"
+    from graybox.selection._stopping import FewerTermsError
+
+    cand = gb.Candidates(ny=0, nu=1, degree=2)
+    with pytest.raises(FewerTermsError) as info:
+        gb.frols(cand, _two_levels_late(), n_terms=3, search=search)
+    assert info.value.reached == 2
+    with pytest.raises(ValueError, match=rf"'{search}': \[1, 2\]"):
+        gb.select_graybox(cand, _two_levels_late(), validation=_two_levels_late(2.0, 1.0),
+                          estimator="ls", sources=["frols", search], sizes=[3])

@@ -392,7 +392,11 @@ def swap_search(problem: SubsetProblem, k: int, forced: list[int], extra_starts:
         if best is None or r < best[1] * (1.0 - 1e-12):
             best = (S, r)
     if best is None:
-        raise FewerTermsError(f"no subset of {k} independent terms on these data")
+        # each start is a greedy path grown until no candidate left is independent of it: the longest is the most
+        # independent terms there are (as greedy frols says it, so that a caller asking for several sizes takes those)
+        most = max((len(s) for s in starts), default=f)
+        raise FewerTermsError(f"no subset of {k} independent terms on these data: at most {most} of the candidates "
+                              "are independent there", reached=most)
     return best
 
 
