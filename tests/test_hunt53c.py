@@ -56,3 +56,20 @@ def test_a_subset_search_that_cannot_reach_the_size_says_how_many_it_can(search)
     with pytest.raises(ValueError, match=rf"'{search}': \[1, 2\]"):
         gb.select_graybox(cand, _two_levels_late(), validation=_two_levels_late(2.0, 1.0),
                           estimator="ls", sources=["frols", search], sizes=[3])
+
+
+def _levels(levels, name):
+    u = np.repeat(np.asarray(levels, float), 10)
+    y = np.zeros(u.size)
+    for k in range(1, u.size):
+        y[k] = 0.7 * y[k - 1] + 0.2 * u[k - 1] + 0.05 * u[k - 1] ** 2
+    return gb.Record(u, y + 0.001 * np.sin(np.arange(u.size)), name=name)
+
+
+def test_default_sizes_none_of_which_the_records_reach_take_the_sizes_they_do():
+    # three candidates (1, u(k-1), u(k-1)^2) and a two-level input: the default sizes were [3] alone, which no search
+    # reaches there, and the call failed ("no search reached any of the sizes [3] (reached: {'semp': [1, 2], ...})"),
+    # though the docstring leaves default sizes a search does not reach out without a word
+    data = gb.Dataset(_levels([1, 2, 1, 1, 2, 2, 1, 2, 1, 2], "i"), _levels([2, 1, 2, 2, 1, 1, 2, 2, 1, 1], "v"))
+    s = gb.select_graybox(gb.Candidates(ny=0, nu=1, degree=2), data, estimator="ls")
+    assert set(s.table["size"]) == {2} and len(s.structure) == 2

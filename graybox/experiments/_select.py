@@ -728,6 +728,12 @@ def _structures(candidates: gb.Structure, idents: tuple[gb.Record, ...], sizes, 
                              f"largest lag {process.max_lag}: no structure can be fitted")
         sizes = sorted(set(range(min(4, top), top + 1, 2)) | {top})
     found, reached = _searched(candidates, ident, sizes, sources, forced, top)
+    most = max((max(r) for r in reached.values() if r), default=0)
+    if not found and not asked and most:
+        # the default sizes are of the candidates' count, and none of them is independent on these records (a
+        # two-level input's u(k-1)^2 among three candidates): the same sizes below the most terms the searches reached
+        sizes = sorted(set(range(min(4, most), most + 1, 2)) | {most})
+        found, reached = _searched(candidates, ident, sizes, sources, forced, top)
     if not found:
         raise ValueError(f"no search reached any of the sizes {sizes} (reached: "
                          f"{ {s: sorted(r) for s, r in reached.items()} })")
