@@ -73,3 +73,18 @@ def test_default_sizes_none_of_which_the_records_reach_take_the_sizes_they_do():
     data = gb.Dataset(_levels([1, 2, 1, 1, 2, 2, 1, 2, 1, 2], "i"), _levels([2, 1, 2, 2, 1, 1, 2, 2, 1, 1], "v"))
     s = gb.select_graybox(gb.Candidates(ny=0, nu=1, degree=2), data, estimator="ls")
     assert set(s.table["size"]) == {2} and len(s.structure) == 2
+
+
+@pytest.mark.filterwarnings("ignore::graybox.SelectionWarning", "ignore::graybox.StaticRangeWarning")
+def test_a_shortlist_out_of_the_band_goes_by_js_not_by_the_rows_names():
+    # the docstring: the slow estimators fit the structures the fast ones rank best, "in band first, then by J_S on
+    # the choosing data". Rows out of the band were all ranked inf, so with no PE row in the band the shortlist took
+    # the rows by name: frols-2 got the SE fit though semp-2 had the smaller J_S
+    ub = np.linspace(0.5, 2.0, 6)
+    points = gb.StaticPoints(ub, (0.2 * ub + 0.05 * ub**2) / 0.3 + 0.05 * np.sin(5 * ub))
+    data = gb.Dataset(_first_order(1, 120), _first_order(2, 120), points)
+    s = gb.select_graybox(gb.Candidates(ny=2, nu=2, degree=2), data, band=1e-6, sizes=[2, 4], shortlist=1,
+                          estimator=["pe", "se-gradient"], lambdas=[1.0], fallback="min_jsf")
+    pe = s.table[s.table["estimator"] == "pe"]
+    assert not pe["in_band"].any() and pe["JS_valid"].nunique() == len(pe)
+    assert list(s.table.index[s.table["estimator"] == "se-gradient"]) == [pe["JS_valid"].idxmin()]

@@ -1495,8 +1495,9 @@ def select_graybox(
         if fast and shortlist is not None and len(rows) > shortlist:
             # the slow fronts only for the structures the fast ones rank best (in band first)
             first, _, _ = _table(rows, jobs, results, plan)
-            order = first.assign(_js=np.where(first["in_band"], first["JS_valid"], np.inf)).groupby(level=0)["_js"].min()
-            keep = set(order.sort_values(kind="stable").index[:shortlist])
+            # in band first, then by J_S (out of band too: all rows there tied at inf went by their names)
+            ranked = first.assign(_out=~first["in_band"].to_numpy(bool)).sort_values(["_out", "JS_valid"], kind="stable")
+            keep = set(list(dict.fromkeys(ranked.index))[:shortlist])
             slow_rows = [r for r in rows if r["structure"] in keep]
         more = [make_job(r, e, per_fold) for r in slow_rows for e in estimators if e in SLOW_ESTIMATORS]
         return jobs + more, results + run(more)
