@@ -88,3 +88,18 @@ def test_a_shortlist_out_of_the_band_goes_by_js_not_by_the_rows_names():
     pe = s.table[s.table["estimator"] == "pe"]
     assert not pe["in_band"].any() and pe["JS_valid"].nunique() == len(pe)
     assert list(s.table.index[s.table["estimator"] == "se-gradient"]) == [pe["JS_valid"].idxmin()]
+
+
+def test_rule_min_takes_the_fewest_terms_among_rows_tied_on_the_best_js():
+    """Rows tied on J_S (exact structures on noise-free data) went to the first in table order under rule="min",
+    where one-se takes the fewest terms among the rows it cannot tell apart."""
+    import pandas as pd
+
+    from graybox.experiments._select import _choose
+
+    table = pd.DataFrame({"in_band": [True, True, True], "JS_valid": [1e-6, 1e-6, 2e-6], "n_terms": [6, 4, 3]},
+                         index=["six", "four", "three"])
+    scores = [np.array([1e-6]), np.array([1e-6]), np.array([2e-6])]
+    pos, rule = _choose(table, scores, "min")
+    assert (table.index[pos], rule) == ("four", "min")
+    assert list(table["eligible"]) == [True, True, False]

@@ -1223,8 +1223,9 @@ def _choose(table: pd.DataFrame, scores: list[np.ndarray], rule: str) -> tuple[i
     if rule == "one-se" and scores[best].size < 2:
         rule = "min"
     if rule == "min":
+        # rows tied with the best (exact structures on noise-free data): the fewest terms, as under one-se
         eligible = np.zeros(len(table), bool)
-        eligible[best] = True
+        eligible[ok] = js[ok] == js[best]
     else:
         # within one standard error of the best: the lead is not distinguishable from block noise
         eligible = np.zeros(len(table), bool)
@@ -1355,7 +1356,7 @@ def select_graybox(
     rule : {"one-se", "min"}
         How the row is chosen from the scores on the choosing data: ``"one-se"`` (default) the
         fewest parameters among the rows within one standard error of the best (per-block log
-        ratio of J_S), ``"min"`` the smallest J_S.
+        ratio of J_S), ``"min"`` the smallest J_S (the fewest parameters among rows tied on it).
     blocks : int, optional
         Contiguous blocks each validation record is cut into for the standard errors (>= 2;
         default 5; fewer, with a :class:`SelectionWarning`, when the record is too short for
