@@ -26,9 +26,9 @@ def plot_selection(selection: GrayboxSelection, *, axes: Sequence[Axes] | None =
 
     1. **The rule.** Each row's J_S on the choosing data over the best row's (the mean over the
        blocks of log(J_S / J_S of the best row), as a ratio; dimensionless, 1 = the best row) with
-       ± one standard error of that mean. A row whose bar reaches 1 is within one standard error
-       of the best: eligible, drawn filled (hollow otherwise); ``rule="one-se"`` takes the
-       fewest terms among them. Rows without a qualifying model are left out and counted.
+       ± one standard error of that mean. A row whose bar reaches 1 (or lies below it) is within one
+       standard error of the best: eligible, drawn filled (hollow otherwise); ``rule="one-se"`` takes
+       the fewest terms among them. Rows without a qualifying model are left out and counted.
     2. **The static error.** J_SF of each row's member (output units²), the band B shaded (gray
        boxes; left out when no row has a J_SF, as for a black box without static points).
     3. **The test record**, when the selection was given one: each row's J_S there (output
